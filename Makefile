@@ -1,0 +1,166 @@
+# Makefile — the two commands a user types, `make run` and `make test`, and everything behind
+# them: the dependency check, the core and proto libraries, the isomesh and isomeshd programs,
+# the viewer's npm install, the test suites (also built with ASan+UBSan), benchmarks, fuzzing.
+#
+# Sources are found by directory, so a new .c file needs no edit here:
+#   core/**/*.c            -> libism_core.a   (libc + libm + pthreads only)
+#   proto/**/*.c, *.cc     -> libism_proto.a  (jansson, libsodium, Draco)
+#   server/common/*.c      -> shared by both programs
+#   server/isomesh/*.c     -> isomesh   (CLI and worker)
+#   server/isomeshd/*.c    -> isomeshd  (HTTP daemon)
+#   tests/unit/core/*.c    -> one Criterion binary against core
+#   tests/unit/proto/*.c   -> one Criterion binary against proto + core
+#   tests/unit/server/*.c  -> one Criterion binary against server/common + proto + core
+
+SHELL := /bin/bash
+.DEFAULT_GOAL := all
+
+CC  := gcc
+CXX := g++
+OUT ?= build/release
+SAN ?=
+OPT ?= -O2
+PYTHON ?= python3
+LISTEN ?= 127.0.0.1:8080
+
+WARN     := -Wall -Wextra -Werror
+CPPFLAGS := -I. -D_GNU_SOURCE -MMD -MP
+CFLAGS   := -std=c11 $(OPT) -g $(WARN) -pthread
+CXXFLAGS := -std=c++17 $(OPT) -g $(WARN) -pthread
+LDFLAGS  := -pthread
+ifeq ($(SAN),1)
+  SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
+  CFLAGS   += $(SANFLAGS)
+  CXXFLAGS += $(SANFLAGS)
+  LDFLAGS  += $(SANFLAGS)
+endif
+
+PKG_PROTO  := jansson libsodium
+PKG_SERVER := libmicrohttpd libseccomp hiredis
+pkgcflags = $(shell pkg-config --cflags $(1) 2>/dev/null)
+pkglibs   = $(shell pkg-config --libs $(1) 2>/dev/null)
+
+LIBS_CORE   := -lm
+LIBS_PROTO  := $(call pkglibs,$(PKG_PROTO)) -ldraco -lstdc++ $(LIBS_CORE)
+LIBS_SERVER := $(call pkglibs,$(PKG_SERVER)) $(LIBS_PROTO)
+CPPFLAGS    += $(call pkgcflags,$(PKG_PROTO) $(PKG_SERVER))
+
+find_c  = $(shell find $(1) -name '*.c' 2>/dev/null | sort)
+find_cc = $(shell find $(1) -name '*.cc' 2>/dev/null | sort)
+objs    = $(patsubst %.c,$(OUT)/obj/%.o,$(filter %.c,$(1))) \
+          $(patsubst %.cc,$(OUT)/obj/%.o,$(filter %.cc,$(1)))
+
+CORE_SRC    := $(call find_c,core)
+PROTO_SRC   := $(call find_c,proto) $(call find_cc,proto)
+COMMON_SRC  := $(call find_c,server/common)
+ISOMESH_SRC := $(call find_c,server/isomesh)
+DAEMON_SRC  := $(call find_c,server/isomeshd)
+
+CORE_LIB  := $(OUT)/libism_core.a
+PROTO_LIB := $(OUT)/libism_proto.a
+COMMON_LIB := $(OUT)/libism_common.a
+ISOMESH   := $(OUT)/isomesh
+ISOMESHD  := $(OUT)/isomeshd
+
+UNIT_CORE_SRC   := $(wildcard tests/unit/core/*.c)
+UNIT_PROTO_SRC  := $(wildcard tests/unit/proto/*.c)
+UNIT_SERVER_SRC := $(wildcard tests/unit/server/*.c)
+UNIT_BINS := $(if $(UNIT_CORE_SRC),$(OUT)/tests/unit_core) \
+             $(if $(UNIT_PROTO_SRC),$(OUT)/tests/unit_proto) \
+             $(if $(UNIT_SERVER_SRC),$(OUT)/tests/unit_server)
+PROGRAMS := $(if $(ISOMESH_SRC),$(ISOMESH)) $(if $(DAEMON_SRC),$(ISOMESHD))
+
+# ---------------------------------------------------------------------------------------
+# User-facing targets
+
+.PHONY: all run test deps deps-test deps-bench build unit-bins web-deps test-deps bench fuzz clean
+
+all: deps build web-deps
+
+build: $(PROGRAMS) $(UNIT_BINS)
+
+run: deps build web-deps
+	$(ISOMESHD) --listen $(LISTEN) --web-root web
+
+test: deps-test
+	$(MAKE) build web-deps test-deps
+	$(MAKE) OUT=build/asan SAN=1 OPT=-O1 unit-bins
+	$(PYTHON) tests/run_suites.py --release build/release --asan build/asan
+
+bench: deps-bench build
+	$(PYTHON) tests/bench/run_bench.py --build $(OUT)
+
+fuzz: deps-test
+	$(MAKE) -C . -f tests/fuzz/fuzz.mk
+
+deps:
+	@deploy/install-deps.sh --check run 2>/dev/null || deploy/install-deps.sh run
+
+deps-test:
+	@deploy/install-deps.sh --check test 2>/dev/null || deploy/install-deps.sh test
+
+deps-bench:
+	@deploy/install-deps.sh --check bench 2>/dev/null || deploy/install-deps.sh bench
+
+unit-bins: $(UNIT_BINS) $(PROGRAMS)
+
+# npm ci only when the lockfile changed since the last install.
+web-deps: web/node_modules/.package-lock.json
+web/node_modules/.package-lock.json: web/package-lock.json
+	cd web && npm ci --no-audit --no-fund
+	@touch $@
+
+test-deps: tests/node_modules/.package-lock.json
+tests/node_modules/.package-lock.json: tests/package-lock.json
+	cd tests && npm ci --no-audit --no-fund
+	@touch $@
+
+clean:
+	rm -rf build
+
+# ---------------------------------------------------------------------------------------
+# Objects, libraries, programs
+
+$(OUT)/obj/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -c $< -o $@
+
+$(OUT)/obj/%.o: %.cc
+	@mkdir -p $(dir $@)
+	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -c $< -o $@
+
+$(CORE_LIB): $(call objs,$(CORE_SRC))
+	@mkdir -p $(dir $@)
+	rm -f $@ && ar rcs $@ $^
+
+$(PROTO_LIB): $(call objs,$(PROTO_SRC))
+	@mkdir -p $(dir $@)
+	rm -f $@ && ar rcs $@ $^
+
+$(COMMON_LIB): $(call objs,$(COMMON_SRC))
+	@mkdir -p $(dir $@)
+	rm -f $@ && ar rcs $@ $^
+
+SERVER_LIBS := $(if $(COMMON_SRC),$(COMMON_LIB)) $(if $(PROTO_SRC),$(PROTO_LIB)) $(CORE_LIB)
+
+$(ISOMESH): $(call objs,$(ISOMESH_SRC)) $(SERVER_LIBS)
+	$(CXX) $(LDFLAGS) -o $@ $(call objs,$(ISOMESH_SRC)) $(SERVER_LIBS) $(LIBS_SERVER)
+
+$(ISOMESHD): $(call objs,$(DAEMON_SRC)) $(SERVER_LIBS)
+	$(CXX) $(LDFLAGS) -o $@ $(call objs,$(DAEMON_SRC)) $(SERVER_LIBS) $(LIBS_SERVER)
+
+CRITERION := $(call pkglibs,criterion)
+
+$(OUT)/tests/unit_core: $(call objs,$(UNIT_CORE_SRC)) $(CORE_LIB)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $^ $(CRITERION) $(LIBS_CORE)
+
+$(OUT)/tests/unit_proto: $(call objs,$(UNIT_PROTO_SRC)) $(if $(PROTO_SRC),$(PROTO_LIB)) $(CORE_LIB)
+	@mkdir -p $(dir $@)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(CRITERION) $(LIBS_PROTO)
+
+$(OUT)/tests/unit_server: $(call objs,$(UNIT_SERVER_SRC)) $(SERVER_LIBS)
+	@mkdir -p $(dir $@)
+	$(CXX) $(LDFLAGS) -o $@ $^ $(CRITERION) $(LIBS_SERVER)
+
+-include $(shell find $(OUT)/obj -name '*.d' 2>/dev/null)

@@ -1,0 +1,58 @@
+/* eval.h — evaluating a compiled tape: points in batches, intervals that are guaranteed to
+ * enclose the true range, value + gradient, value + gradient + Hessian, and interval-driven
+ * tape shortening for min/max.
+ *
+ * A workspace holds the registers of one evaluation; give each thread its own. A workspace
+ * made for a tape also serves every tape shortened from it. */
+#ifndef ISM_EVAL_H
+#define ISM_EVAL_H
+
+#include <stddef.h>
+#include <stdbool.h>
+#include "core/expr/expr.h"
+
+/* A closed interval [lo, hi]. lo may be -INFINITY and hi +INFINITY (the whole line). An
+ * interval with lo > hi or a NaN bound never comes out of the evaluator. */
+typedef struct ism_interval {
+    double lo, hi;
+} ism_interval;
+
+/* Points per inner batch; ism_eval_batch takes any n and loops over chunks of this. */
+#define ISM_EVAL_BATCH 256
+
+typedef struct ism_eval_ws ism_eval_ws;
+
+ism_eval_ws *ism_eval_ws_new(const ism_tape *t);
+void ism_eval_ws_free(ism_eval_ws *ws);
+
+/* f at one point. */
+double ism_eval_point(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z);
+
+/* out[i] = f(x[i], y[i], z[i]) for i < n. */
+void ism_eval_batch(const ism_tape *t, ism_eval_ws *ws, const double *x, const double *y,
+                    const double *z, double *out, size_t n);
+
+/* An interval containing f(p) for every p in the box x × y × z (outward rounded). */
+ism_interval ism_eval_interval(const ism_tape *t, ism_eval_ws *ws, ism_interval x,
+                               ism_interval y, ism_interval z);
+
+/* f and its gradient (forward mode). Returns f. */
+double ism_eval_gradient(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
+                         double grad[3]);
+
+/* f, gradient and Hessian (hess = xx, xy, xz, yy, yz, zz). Returns f. */
+double ism_eval_hessian(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
+                        double grad[3], double hess[6]);
+
+/* A tape with room for any shortened version of t (free with ism_tape_free). */
+ism_tape *ism_tape_new_like(const ism_tape *t);
+
+/* Evaluates t over the box by intervals and writes into out (made by ism_tape_new_like(t)
+ * or of a tape t was shortened from) a tape equal to t everywhere inside the box, without
+ * the min/max branches that the box proves dominated. Also returns the box's interval in
+ * *range when range is not NULL. Returns true when out is shorter than t, false when
+ * nothing could be dropped (out is then unchanged and t should be used as it is). */
+bool ism_tape_shorten(const ism_tape *t, ism_eval_ws *ws, ism_interval x, ism_interval y,
+                      ism_interval z, ism_tape *out, ism_interval *range);
+
+#endif

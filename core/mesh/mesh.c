@@ -1,0 +1,96 @@
+/* mesh.c — storage of the indexed triangle mesh: growth of the vertex, normal and triangle
+ * arrays (doubling, so appends are amortised O(1)), and small queries over them. */
+#include "core/mesh/mesh.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+void ism_mesh_init(ism_mesh *m) { memset(m, 0, sizeof *m); }
+
+void ism_mesh_free(ism_mesh *m)
+{
+    free(m->pos);
+    free(m->normal);
+    free(m->tri);
+    ism_mesh_init(m);
+}
+
+static size_t grown(size_t cap, size_t need)
+{
+    size_t c = cap ? cap : 64;
+    while (c < need)
+        c *= 2;
+    return c;
+}
+
+bool ism_mesh_reserve(ism_mesh *m, size_t nverts, size_t ntris)
+{
+    if (nverts > m->cap_verts) {
+        size_t c = grown(m->cap_verts, nverts);
+        double *p = realloc(m->pos, c * 3 * sizeof *p);
+        if (!p)
+            return false;
+        m->pos = p;
+        float *n = realloc(m->normal, c * 3 * sizeof *n);
+        if (!n)
+            return false;
+        m->normal = n;
+        m->cap_verts = c;
+    }
+    if (ntris > m->cap_tris) {
+        size_t c = grown(m->cap_tris, ntris);
+        uint32_t *t = realloc(m->tri, c * 3 * sizeof *t);
+        if (!t)
+            return false;
+        m->tri = t;
+        m->cap_tris = c;
+    }
+    return true;
+}
+
+uint32_t ism_mesh_add_vertex(ism_mesh *m, const double p[3], const float *normal)
+{
+    if (m->nverts >= UINT32_MAX - 1 || !ism_mesh_reserve(m, m->nverts + 1, 0))
+        return UINT32_MAX;
+    size_t i = m->nverts++;
+    memcpy(m->pos + 3 * i, p, 3 * sizeof *p);
+    if (normal)
+        memcpy(m->normal + 3 * i, normal, 3 * sizeof *normal);
+    else
+        memset(m->normal + 3 * i, 0, 3 * sizeof *m->normal);
+    return (uint32_t)i;
+}
+
+bool ism_mesh_add_triangle(ism_mesh *m, uint32_t a, uint32_t b, uint32_t c)
+{
+    if (!ism_mesh_reserve(m, 0, m->ntris + 1))
+        return false;
+    uint32_t *t = m->tri + 3 * m->ntris++;
+    t[0] = a;
+    t[1] = b;
+    t[2] = c;
+    return true;
+}
+
+size_t ism_mesh_bytes(const ism_mesh *m)
+{
+    return m->cap_verts * (3 * sizeof(double) + 3 * sizeof(float)) +
+           m->cap_tris * 3 * sizeof(uint32_t);
+}
+
+bool ism_mesh_bounds(const ism_mesh *m, double lo[3], double hi[3])
+{
+    if (m->nverts == 0)
+        return false;
+    for (int k = 0; k < 3; k++)
+        lo[k] = hi[k] = m->pos[k];
+    for (size_t i = 1; i < m->nverts; i++)
+        for (int k = 0; k < 3; k++) {
+            double v = m->pos[3 * i + k];
+            if (v < lo[k])
+                lo[k] = v;
+            if (v > hi[k])
+                hi[k] = v;
+        }
+    return true;
+}

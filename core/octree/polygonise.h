@@ -1,0 +1,87 @@
+/* polygonise.h — the non-manifold adaptive octree polygoniser of Balsys & Suffern (2005):
+ * one call turns a compiled surface and a search box into a welded, consistently oriented
+ * triangle mesh, with statistics that count every case the algorithm could not resolve. */
+#ifndef ISM_POLYGONISE_H
+#define ISM_POLYGONISE_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdbool.h>
+#include "core/expr/expr.h"
+#include "core/mesh/mesh.h"
+
+/* Hard limits of the octree (cells are addressed by integer coordinates at max depth). */
+#define ISM_MAX_DEPTH_LIMIT 16
+
+typedef struct ism_poly_options {
+    double box[6];          /* xmin ymin zmin xmax ymax zmax: the octree root */
+    int min_depth;          /* subdivide unconditionally to here (default 3) */
+    int max_depth;          /* never deeper than here (default 7) */
+    double gradient_test;   /* paper eq. (1): ĝa·ĝb > this means "same sheet" (0.9) */
+    double double_root_eps; /* |f(c)| below this is a double root (1e-9) */
+    int double_root_iters;  /* bisection steps looking for two roots (25) */
+    double stitch_tol;      /* end points match within this fraction of the node size (1e-3) */
+    double flat_normal;     /* flatness: min cos between gradients in a plotting node (0.8) */
+    double flat_plane;      /* flatness: max distance of polygon points from their plane,
+                               as a fraction of the node size (0.1) */
+    size_t max_triangles;   /* budget: stop with an error beyond this (default 4,000,000) */
+    size_t max_memory;      /* bytes the polygoniser may hold (default 2 GiB) */
+    int threads;            /* worker threads for one request (0 = number of cores, max 64) */
+    /* Optional progress report, fraction in [0, 1], from the calling thread or a worker
+     * thread (serialised by the polygoniser). */
+    void (*progress)(void *ctx, double fraction);
+    void *progress_ctx;
+    /* Optional cancellation: polled often; when it becomes non-zero the call stops with
+     * ISM_POLY_CANCELLED. */
+    const volatile int *cancel;
+} ism_poly_options;
+
+void ism_poly_options_default(ism_poly_options *o);
+
+/* Checks an options struct; false with a message naming the bad field. */
+bool ism_poly_options_check(const ism_poly_options *o, ism_error *err);
+
+enum ism_poly_phase { ISM_PHASE_OCTREE, ISM_PHASE_POLYGONS, ISM_PHASE_CRACKS, ISM_PHASE_MESH,
+                      ISM_PHASE_COUNT };
+
+typedef struct ism_poly_stats {
+    uint64_t nodes_visited;      /* octree nodes examined */
+    uint64_t nodes_excluded;     /* nodes whose interval proved them empty */
+    uint64_t plotting_nodes;     /* leaves that produced polygons */
+    uint64_t unresolved_nodes;   /* leaves at max depth that failed flatness or polygonisation */
+    uint64_t edges_single_root;  /* node edges with one root */
+    uint64_t edges_double_root;  /* node edges with two roots (paper's bisection) */
+    uint64_t edges_touching;     /* edges with a double (tangent) root |f(c)| < eps */
+    uint64_t edges_many_roots;   /* edges suspected to hold more than two roots (paper's
+                                    known failure case: counted, never hidden) */
+    uint64_t zero_vertices;      /* node vertices where f is exactly 0 */
+    uint64_t polygons;           /* polygons made by stitching */
+    uint64_t two_polygon_nodes;  /* plotting nodes with two polygons */
+    uint64_t degenerate_polygons;/* one-edge polygons (kept, paper §4) */
+    uint64_t nonmanifold_lines;  /* face lines shared by two polygons */
+    uint64_t open_chains;        /* line chains that could not be closed into a polygon */
+    uint64_t cracks_repaired;    /* coarse face lines replaced by finer neighbours' lines */
+    uint64_t evals_point;        /* f evaluations */
+    uint64_t evals_interval;     /* interval evaluations */
+    uint64_t evals_gradient;     /* gradient evaluations */
+    uint64_t triangles;
+    uint64_t vertices;
+    int threads;                 /* threads actually used */
+    double time_ms[ISM_PHASE_COUNT];
+    double total_ms;
+} ism_poly_stats;
+
+enum ism_poly_status {
+    ISM_POLY_OK = 0,
+    ISM_POLY_BAD_OPTIONS,   /* err says which */
+    ISM_POLY_TOO_BIG,       /* triangle budget or memory bound exceeded */
+    ISM_POLY_CANCELLED,
+    ISM_POLY_NO_MEMORY,
+};
+
+/* Polygonises f = 0 inside o->box. The mesh is replaced (mesh must be initialised). The
+ * output is deterministic: identical for any number of threads. */
+enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o,
+                                    ism_mesh *mesh, ism_poly_stats *stats, ism_error *err);
+
+#endif
