@@ -65,6 +65,8 @@ ISOMESHD  := $(OUT)/isomeshd
 UNIT_CORE_SRC   := $(wildcard tests/unit/core/*.c)
 UNIT_PROTO_SRC  := $(wildcard tests/unit/proto/*.c)
 UNIT_SERVER_SRC := $(wildcard tests/unit/server/*.c)
+BENCH_SRC := $(wildcard tests/bench/*.c)
+BENCH_BINS := $(patsubst tests/bench/%.c,$(OUT)/bench/%,$(BENCH_SRC))
 UNIT_BINS := $(if $(UNIT_CORE_SRC),$(OUT)/tests/unit_core) \
              $(if $(UNIT_PROTO_SRC),$(OUT)/tests/unit_proto) \
              $(if $(UNIT_SERVER_SRC),$(OUT)/tests/unit_server)
@@ -87,7 +89,7 @@ test: deps-test
 	$(MAKE) OUT=build/asan SAN=1 OPT=-O1 unit-bins
 	$(PYTHON) tests/run_suites.py --release build/release --asan build/asan
 
-bench: deps-bench build
+bench: deps-bench build $(BENCH_BINS)
 	$(PYTHON) tests/bench/run_bench.py --build $(OUT)
 
 fuzz: deps-test
@@ -162,5 +164,10 @@ $(OUT)/tests/unit_proto: $(call objs,$(UNIT_PROTO_SRC)) $(if $(PROTO_SRC),$(PROT
 $(OUT)/tests/unit_server: $(call objs,$(UNIT_SERVER_SRC)) $(SERVER_LIBS)
 	@mkdir -p $(dir $@)
 	$(CXX) $(LDFLAGS) -o $@ $^ $(CRITERION) $(LIBS_SERVER)
+
+# Each tests/bench/NAME.c is one benchmark program linked against everything.
+$(OUT)/bench/%: $(OUT)/obj/tests/bench/%.o $(SERVER_LIBS)
+	@mkdir -p $(dir $@)
+	$(CXX) $(LDFLAGS) -o $@ $< $(SERVER_LIBS) $(LIBS_SERVER)
 
 -include $(shell find $(OUT)/obj -name '*.d' 2>/dev/null)
