@@ -1,0 +1,65 @@
+/* pipeline.h — one surface request from JSON to bytes: decode and validate (proto), compile
+ * the expression, polygonise, analyse (core), encode in the requested format (proto).
+ * Shared by `isomesh request.json -o out.drc` and by the worker processes of isomeshd.
+ *
+ * The cache key names the mesh and its encoding options but not the file format, so one key
+ * has one .drc, .glb, .ply, .obj and .stl; the daemon asks for another format of a known key
+ * by running the key's canonical request again with `format` changed (the output is
+ * deterministic, so it is the same mesh). */
+#ifndef ISM_PIPELINE_H
+#define ISM_PIPELINE_H
+
+#include <stddef.h>
+#include <stdbool.h>
+
+/* A heap byte buffer (free with ism_buf_free). */
+typedef struct ism_buf {
+    unsigned char *data;
+    size_t len, cap;
+} ism_buf;
+
+void ism_buf_free(ism_buf *b);
+
+/* Limits the operator sets on the daemon (flags) or the command line; a request over one
+ * gets status 422 naming the limit. */
+typedef struct ism_pipeline_limits {
+    int max_depth;            /* default 10 */
+    size_t max_triangles;     /* default 4,000,000 */
+    size_t max_memory;        /* bytes for the polygoniser (default 2 GiB) */
+    int threads;              /* polygoniser threads (0 = cores) */
+} ism_pipeline_limits;
+
+void ism_pipeline_limits_default(ism_pipeline_limits *l);
+
+typedef struct ism_pipeline_result {
+    int status;               /* 200 ok; 400 bad request; 422 over a limit; 500 internal */
+    char key[65];             /* hex cache key (set as soon as the request is decoded) */
+    char format[8];           /* "drc", "glb", "ply", "obj", "stl" */
+    const char *content_type; /* MIME type of body */
+    ism_buf body;             /* the mesh file, or the error JSON when status != 200 */
+    ism_buf stats;            /* stats JSON: polygoniser + analysis figures, key, timings */
+    ism_buf features;         /* non-manifold features JSON (curves, points) for the viewer */
+    ism_buf canonical;        /* the canonical request JSON (defaults filled in) */
+} ism_pipeline_result;
+
+void ism_pipeline_result_free(ism_pipeline_result *r);
+
+/* Progress in [0, 1]; cancel polled often (non-zero stops the run with status 499). */
+typedef struct ism_pipeline_hooks {
+    void (*progress)(void *ctx, double fraction);
+    void *ctx;
+    const volatile int *cancel;
+} ism_pipeline_hooks;
+
+/* Runs one request. format_override ("drc", ...) replaces the request's format when not NULL.
+ * Always fills r (status and body say what happened); returns true when status is 200. */
+bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
+                      const ism_pipeline_limits *lim, const ism_pipeline_hooks *hooks,
+                      ism_pipeline_result *r);
+
+/* Decodes and validates only (no geometry): fills key, format, canonical, or status 400/422
+ * with the error JSON in body. Lets the daemon answer cache hits without a worker. */
+bool ism_pipeline_key(const char *json, size_t len, const char *format_override,
+                      const ism_pipeline_limits *lim, ism_pipeline_result *r);
+
+#endif
