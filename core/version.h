@@ -1,0 +1,10 @@
+/* version.h — the version of isomesh's mesher. It is part of every cache key: change
+ * ISM_MESHER_VERSION whenever the polygoniser or the analysis could produce a different mesh
+ * or different attributes for the same request, so a new algorithm never serves old meshes. */
+#ifndef ISM_VERSION_H
+#define ISM_VERSION_H
+
+#define ISM_VERSION "0.1.0"
+#define ISM_MESHER_VERSION "mesher-1"
+
+#endif
