@@ -1,0 +1,248 @@
+/* implicit.c — the figures that need f itself: curvature at every vertex (one Hessian
+ * evaluation each), the singular flag where ∇f vanishes, the distance estimate |f|/|∇f| at
+ * vertices and triangle centroids, and the Newton projection distance. The evaluations run
+ * in blocks on several threads (blocks.c); per-vertex results go to arrays and per-block
+ * partial sums are added in block order, so the figures never depend on the thread count.
+ *
+ * "Vanishing" is relative to the function's own scale: |∇f| <= singular_rel * G where G is
+ * the median of |∇f| over the vertices used by triangles (scaling f by any factor flags the
+ * same vertices). */
+#include "core/analysis/analysis_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define BLOCK 1024
+#define NEWTON_STALL 1e-6 /* stop Newton where |∇f| fell below this fraction of its start */
+
+typedef struct centroid_sums {
+    double sum, max;
+    size_t count, skipped;
+} centroid_sums;
+
+typedef struct implicit_pass {
+    const ism_mesh *m;
+    const ism_tape *f;
+    const ism_analysis_options *o;
+    const ism_vertex_facts *vf;
+    ism_analysis *a;
+    double *fval, *gnorm, *newton; /* per vertex; gnorm NaN where f misbehaves */
+    centroid_sums *csum;           /* per triangle block */
+    double threshold;
+} implicit_pass;
+
+static double norm3(const double *v) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+float ism_finite_float(double x)
+{
+    if (isnan(x))
+        return 0;
+    return (float)(x > 1e30 ? 1e30 : x < -1e30 ? -1e30 : x);
+}
+
+/* Distance moved by up to `steps` Newton steps p -= f ∇f / |∇f|² from p0, where f and g are
+ * already known at p0. */
+static double newton_distance(const implicit_pass *ip, ism_eval_ws *ws, const double p0[3],
+                              double fv, const double g0[3])
+{
+    double p[3] = {p0[0], p0[1], p0[2]}, g[3] = {g0[0], g0[1], g0[2]};
+    double g_start = norm3(g0);
+    for (int i = 0; i < ip->o->newton_steps; i++) {
+        if (i > 0)
+            fv = ism_eval_gradient(ip->f, ws, p[0], p[1], p[2], g);
+        double gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+        if (!isfinite(fv) || !isfinite(gg) || !(sqrt(gg) > NEWTON_STALL * g_start))
+            break;
+        double s = fv / gg, move = fabs(s) * sqrt(gg);
+        for (int k = 0; k < 3; k++)
+            p[k] -= s * g[k];
+        if (move <= 1e-15 * (1 + norm3(p)))
+            break;
+    }
+    double d[3] = {p[0] - p0[0], p[1] - p0[1], p[2] - p0[2]};
+    double dist = norm3(d);
+    return isfinite(dist) ? dist : 0;
+}
+
+static void store_curvature(ism_analysis *a, size_t v, const double g[3], const double h[6],
+                            bool *ok)
+{
+    double mean, gauss, k1, k2;
+    *ok = ism_curvature_from_derivatives(g, h, &mean, &gauss, &k1, &k2) && *ok;
+    a->mean_curvature[v] = ism_finite_float(mean);
+    a->gauss_curvature[v] = ism_finite_float(gauss);
+    a->k1[v] = ism_finite_float(k1);
+    a->k2[v] = ism_finite_float(k2);
+}
+
+static void vertex_block(void *ctx, ism_eval_ws *ws, size_t block)
+{
+    implicit_pass *ip = ctx;
+    size_t end = (block + 1) * BLOCK < ip->m->nverts ? (block + 1) * BLOCK : ip->m->nverts;
+    for (size_t v = block * BLOCK; v < end; v++) {
+        ip->gnorm[v] = NAN;
+        if (ip->vf->corners[v] == 0)
+            continue;
+        const double *p = ip->m->pos + 3 * v;
+        double g[3], h[6], fv;
+        bool ok = true;
+        if (ip->o->curvature) {
+            fv = ism_eval_hessian(ip->f, ws, p[0], p[1], p[2], g, h);
+            store_curvature(ip->a, v, g, h, &ok);
+        } else {
+            fv = ism_eval_gradient(ip->f, ws, p[0], p[1], p[2], g);
+        }
+        double gn = norm3(g);
+        ok = ok && isfinite(fv) && isfinite(gn);
+        ip->fval[v] = fv;
+        ip->gnorm[v] = ok ? gn : NAN;
+        if (ip->o->accuracy && ok)
+            ip->newton[v] = newton_distance(ip, ws, p, fv, g);
+    }
+}
+
+static void centroid_block(void *ctx, ism_eval_ws *ws, size_t block)
+{
+    implicit_pass *ip = ctx;
+    const ism_mesh *m = ip->m;
+    centroid_sums s = {0};
+    size_t end = (block + 1) * BLOCK < m->ntris ? (block + 1) * BLOCK : m->ntris;
+    for (size_t t = block * BLOCK; t < end; t++) {
+        if (ism_tri_collapsed(m->tri, t))
+            continue;
+        double c[3] = {0, 0, 0}, g[3];
+        for (int k = 0; k < 3; k++)
+            for (int i = 0; i < 3; i++)
+                c[i] += m->pos[3 * m->tri[3 * t + k] + i] / 3;
+        double fv = ism_eval_gradient(ip->f, ws, c[0], c[1], c[2], g);
+        double gn = norm3(g), d = fabs(fv) / gn;
+        if (!(gn > ip->threshold) || !isfinite(d)) {
+            s.skipped++;
+            continue;
+        }
+        s.sum += d;
+        s.max = d > s.max ? d : s.max;
+        s.count++;
+    }
+    ip->csum[block] = s;
+}
+
+/* Median of |∇f| over the vertices where it is known: the function's scale. */
+static bool gradient_scale(implicit_pass *ip)
+{
+    size_t nv = ip->m->nverts, n = 0;
+    double *tmp = malloc((nv ? nv : 1) * sizeof *tmp);
+    if (!tmp)
+        return false;
+    for (size_t v = 0; v < nv; v++)
+        if (isfinite(ip->gnorm[v]))
+            tmp[n++] = ip->gnorm[v];
+    ip->a->gradient_scale = n ? ism_select_double(tmp, n, n / 2) : 0;
+    ip->threshold = ip->o->singular_rel * ip->a->gradient_scale;
+    ip->a->singular_threshold = ip->threshold;
+    free(tmp);
+    return true;
+}
+
+static void clear_curvature(ism_analysis *a, size_t v)
+{
+    a->mean_curvature[v] = a->gauss_curvature[v] = a->k1[v] = a->k2[v] = 0;
+}
+
+/* Flags singular vertices and adds up the per-vertex figures, in vertex order. */
+static void vertex_figures(implicit_pass *ip)
+{
+    ism_analysis *a = ip->a;
+    size_t counted = 0;
+    double dist_sum = 0, newton_sum = 0;
+    for (size_t v = 0; v < ip->m->nverts; v++) {
+        if (ip->vf->corners[v] == 0)
+            continue;
+        bool singular = !(ip->gnorm[v] > ip->threshold);
+        a->singular[v] = singular;
+        a->singular_vertices += singular;
+        if (a->mean_curvature && singular)
+            clear_curvature(a, v);
+        if (a->mean_curvature && !singular) {
+            a->total_gauss += a->gauss_curvature[v] * a->vertex_area[v];
+            a->total_abs_gauss += fabs(a->gauss_curvature[v]) * a->vertex_area[v];
+        }
+        if (!a->distance)
+            continue;
+        if (singular) {
+            a->accuracy_skipped++;
+            continue;
+        }
+        double d = fabs(ip->fval[v]) / ip->gnorm[v];
+        a->distance[v] = ism_finite_float(d);
+        dist_sum += d;
+        newton_sum += ip->newton[v];
+        a->max_dist_vertex = fmax(a->max_dist_vertex, d);
+        a->max_newton_dist = fmax(a->max_newton_dist, ip->newton[v]);
+        counted++;
+    }
+    if (counted) {
+        a->mean_dist_vertex = dist_sum / (double)counted;
+        a->mean_newton_dist = newton_sum / (double)counted;
+    }
+}
+
+static void centroid_figures(implicit_pass *ip, size_t nblocks)
+{
+    ism_analysis *a = ip->a;
+    size_t count = 0;
+    double sum = 0;
+    for (size_t b = 0; b < nblocks; b++) {
+        sum += ip->csum[b].sum;
+        count += ip->csum[b].count;
+        a->max_dist_centroid = fmax(a->max_dist_centroid, ip->csum[b].max);
+        a->accuracy_skipped += ip->csum[b].skipped;
+    }
+    a->mean_dist_centroid = count ? sum / (double)count : 0;
+}
+
+static bool allocate_outputs(const ism_mesh *m, const ism_analysis_options *o, ism_analysis *a)
+{
+    size_t n = m->nverts ? m->nverts : 1;
+    a->singular = calloc(n, 1);
+    if (o->curvature) {
+        a->mean_curvature = calloc(n, sizeof(float));
+        a->gauss_curvature = calloc(n, sizeof(float));
+        a->k1 = calloc(n, sizeof(float));
+        a->k2 = calloc(n, sizeof(float));
+        if (!a->mean_curvature || !a->gauss_curvature || !a->k1 || !a->k2)
+            return false;
+    }
+    if (o->accuracy && !(a->distance = calloc(n, sizeof(float))))
+        return false;
+    return a->singular != NULL;
+}
+
+bool ism_implicit_figures(const ism_mesh *m, const ism_tape *f, const ism_analysis_options *o,
+                          const ism_vertex_facts *vf, ism_analysis *a)
+{
+    if (!f || !(o->curvature || o->accuracy))
+        return true;
+    size_t n = m->nverts ? m->nverts : 1;
+    size_t vblocks = (m->nverts + BLOCK - 1) / BLOCK, tblocks = (m->ntris + BLOCK - 1) / BLOCK;
+    implicit_pass ip = {.m = m, .f = f, .o = o, .vf = vf, .a = a};
+    ip.fval = malloc(n * sizeof *ip.fval);
+    ip.gnorm = malloc(n * sizeof *ip.gnorm);
+    ip.newton = calloc(n, sizeof *ip.newton);
+    ip.csum = calloc(tblocks ? tblocks : 1, sizeof *ip.csum);
+    bool ok = ip.fval && ip.gnorm && ip.newton && ip.csum && allocate_outputs(m, o, a) &&
+              ism_run_blocks(f, o->threads, vblocks, vertex_block, &ip) && gradient_scale(&ip);
+    if (ok)
+        vertex_figures(&ip);
+    if (ok && o->accuracy) {
+        ok = ism_run_blocks(f, o->threads, tblocks, centroid_block, &ip);
+        if (ok)
+            centroid_figures(&ip, tblocks);
+    }
+    free(ip.fval);
+    free(ip.gnorm);
+    free(ip.newton);
+    free(ip.csum);
+    return ok;
+}

@@ -1,0 +1,122 @@
+/* quality.c — the shape of the triangles (Farin: "the larger the smallest angle, the better
+ * the triangle"): each triangle's smallest angle, their minimum, median, histogram and the
+ * share under 10 degrees; degenerate triangles; and the area around each vertex (one third
+ * of its triangles' areas), the weights of ∫K dA. */
+#include "core/analysis/analysis_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define DEGENERATE_REL 1e-12
+#define RAD_TO_DEG (180.0 / 3.14159265358979323846)
+
+static void sub3(const double *a, const double *b, double *out)
+{
+    out[0] = a[0] - b[0];
+    out[1] = a[1] - b[1];
+    out[2] = a[2] - b[2];
+}
+
+static double dot3(const double *a, const double *b)
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static double cross_norm(const double *a, const double *b)
+{
+    double c0 = a[1] * b[2] - a[2] * b[1];
+    double c1 = a[2] * b[0] - a[0] * b[2];
+    double c2 = a[0] * b[1] - a[1] * b[0];
+    return sqrt(c0 * c0 + c1 * c1 + c2 * c2);
+}
+
+/* Twice the area of triangle t; *angle its smallest angle in degrees (the one opposite the
+ * shortest side), or -1 when the triangle is degenerate. */
+static double measure_triangle(const ism_mesh *m, size_t t, double *angle)
+{
+    const uint32_t *c = m->tri + 3 * t;
+    *angle = -1;
+    if (ism_tri_collapsed(m->tri, t))
+        return 0;
+    const double *p[3] = {m->pos + 3 * c[0], m->pos + 3 * c[1], m->pos + 3 * c[2]};
+    double side[3][3], len2[3];
+    for (int k = 0; k < 3; k++) { /* side k is opposite corner k */
+        sub3(p[(k + 2) % 3], p[(k + 1) % 3], side[k]);
+        len2[k] = dot3(side[k], side[k]);
+    }
+    double twice_area = cross_norm(side[1], side[2]);
+    int shortest = 0, longest = 0;
+    for (int k = 1; k < 3; k++) {
+        if (len2[k] < len2[shortest])
+            shortest = k;
+        if (len2[k] > len2[longest])
+            longest = k;
+    }
+    if (!(twice_area > DEGENERATE_REL * len2[longest]))
+        return twice_area;
+    /* the angle at the corner opposite the shortest side, between the corner's two sides */
+    double u[3], w[3];
+    sub3(p[(shortest + 1) % 3], p[shortest], u);
+    sub3(p[(shortest + 2) % 3], p[shortest], w);
+    *angle = atan2(twice_area, dot3(u, w)) * RAD_TO_DEG;
+    return twice_area;
+}
+
+static void angle_statistics(ism_analysis *a, float *good, size_t ngood)
+{
+    if (ngood == 0)
+        return;
+    size_t under_10 = 0;
+    for (size_t i = 0; i < ngood; i++) {
+        double d = good[i];
+        under_10 += d < 10;
+        int bin = (int)(d / (90.0 / ISM_ANGLE_BINS));
+        a->angle_hist[bin < ISM_ANGLE_BINS ? bin : ISM_ANGLE_BINS - 1]++;
+    }
+    a->share_under_10 = (double)under_10 / (double)ngood;
+    size_t mid = ngood / 2;
+    double upper = ism_select_float(good, ngood, mid);
+    if (ngood % 2 == 1) {
+        a->median_angle = upper;
+    } else {
+        float lower = good[0]; /* after selection good[0 .. mid) are all <= upper */
+        for (size_t i = 1; i < mid; i++)
+            if (good[i] > lower)
+                lower = good[i];
+        a->median_angle = 0.5 * ((double)lower + upper);
+    }
+}
+
+bool ism_triangle_quality(const ism_mesh *m, ism_analysis *a)
+{
+    size_t nt = m->ntris, nv = m->nverts;
+    a->triangle_min_angle = malloc((nt ? nt : 1) * sizeof *a->triangle_min_angle);
+    a->vertex_area = calloc(nv ? nv : 1, sizeof *a->vertex_area);
+    float *good = malloc((nt ? nt : 1) * sizeof *good);
+    if (!a->triangle_min_angle || !a->vertex_area || !good) {
+        free(good);
+        return false;
+    }
+    size_t ngood = 0;
+    a->min_angle = 0;
+    for (size_t t = 0; t < nt; t++) {
+        double angle, area = 0.5 * measure_triangle(m, t, &angle);
+        a->area += area;
+        if (!ism_tri_collapsed(m->tri, t))
+            for (int k = 0; k < 3; k++)
+                a->vertex_area[m->tri[3 * t + k]] += area / 3;
+        if (angle < 0) {
+            a->degenerate_triangles++;
+            a->triangle_min_angle[t] = 0;
+        } else {
+            a->triangle_min_angle[t] = (float)angle;
+            if (ngood == 0 || angle < a->min_angle)
+                a->min_angle = angle;
+            good[ngood++] = (float)angle;
+        }
+    }
+    angle_statistics(a, good, ngood);
+    free(good);
+    return true;
+}
