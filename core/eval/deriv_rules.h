@@ -1,0 +1,78 @@
+/* deriv_rules.h — first and second derivatives of the one-argument operations, shared by
+ * the gradient and Hessian evaluators: for out = g(u), gives g(u), g'(u) and g''(u). Where
+ * the domain is clipped (sqrt, log, real powers below 0) the function is constant, so both
+ * derivatives are 0 there. */
+#ifndef ISM_DERIV_RULES_H
+#define ISM_DERIV_RULES_H
+
+#include <math.h>
+#include "core/expr/scalar_ops.h"
+#include "core/expr/tape.h"
+
+typedef struct ism_chain {
+    double g, g1, g2;
+} ism_chain;
+
+static inline ism_chain ism_unary_chain(const ism_instr *in, double u)
+{
+    ism_chain r = { 0.0, 0.0, 0.0 };
+    double c = in->imm;
+    switch (in->op) {
+    case ISM_OP_COPY: r.g = u; r.g1 = 1.0; break;
+    case ISM_OP_ADD_RC: r.g = u + c; r.g1 = 1.0; break;
+    case ISM_OP_SUB_CR: r.g = c - u; r.g1 = -1.0; break;
+    case ISM_OP_MUL_RC: r.g = u * c; r.g1 = c; break;
+    case ISM_OP_DIV_RC: r.g = u / c; r.g1 = 1.0 / c; break;
+    case ISM_OP_DIV_CR:
+        r.g = c / u;
+        r.g1 = -r.g / u;
+        r.g2 = -2.0 * r.g1 / u;
+        break;
+    case ISM_OP_MIN_RC: r.g = ism_min(u, c); r.g1 = u < c ? 1.0 : 0.0; break;
+    case ISM_OP_MAX_RC: r.g = ism_max(u, c); r.g1 = u > c ? 1.0 : 0.0; break;
+    case ISM_OP_NEG: r.g = -u; r.g1 = -1.0; break;
+    case ISM_OP_SQUARE: r.g = u * u; r.g1 = 2.0 * u; r.g2 = 2.0; break;
+    case ISM_OP_POWI: {
+        unsigned n = in->b;
+        double p2 = ism_powi(u, n - 2);
+        r.g = ism_powi(u, n);
+        r.g1 = n * (p2 * u);
+        r.g2 = (double)n * (n - 1) * p2;
+        break;
+    }
+    case ISM_OP_POWC:
+        r.g = ism_powc(u, c);
+        if (u > 0.0) {
+            r.g1 = c * pow(u, c - 1.0);
+            r.g2 = c * (c - 1.0) * pow(u, c - 2.0);
+        }
+        break;
+    case ISM_OP_SQRT:
+        r.g = ism_sqrt_clip(u);
+        if (u > 0.0) {
+            r.g1 = 0.5 / r.g;
+            r.g2 = -0.5 * r.g1 / u;
+        }
+        break;
+    case ISM_OP_SIN: r.g = sin(u); r.g1 = cos(u); r.g2 = -r.g; break;
+    case ISM_OP_COS: r.g = cos(u); r.g1 = -sin(u); r.g2 = -r.g; break;
+    case ISM_OP_TAN:
+        r.g = tan(u);
+        r.g1 = 1.0 + r.g * r.g;
+        r.g2 = 2.0 * r.g * r.g1;
+        break;
+    case ISM_OP_EXP: r.g = exp(u); r.g1 = r.g; r.g2 = r.g; break;
+    case ISM_OP_LOG:
+        r.g = ism_log_clip(u);
+        if (u > 0.0) {
+            r.g1 = 1.0 / u;
+            r.g2 = -r.g1 * r.g1;
+        }
+        break;
+    case ISM_OP_ABS: r.g = fabs(u); r.g1 = u < 0.0 ? -1.0 : u > 0.0 ? 1.0 : 0.0; break;
+    default: r.g = NAN; break;
+    }
+    return r;
+}
+
+#endif

@@ -1,0 +1,71 @@
+/* eval_gradient.c — f and its gradient by forward-mode differentiation: each register
+ * carries a value and its three partial derivatives. min and max follow the branch they
+ * take (the derivative of the side that is the result). */
+#include "core/eval/deriv_rules.h"
+#include "core/eval/workspace.h"
+
+static ism_dual dual_binary(int op, ism_dual a, ism_dual b)
+{
+    ism_dual r;
+    switch (op) {
+    case ISM_OP_ADD_RR:
+        r.v = a.v + b.v;
+        for (int k = 0; k < 3; k++)
+            r.d[k] = a.d[k] + b.d[k];
+        return r;
+    case ISM_OP_SUB_RR:
+        r.v = a.v - b.v;
+        for (int k = 0; k < 3; k++)
+            r.d[k] = a.d[k] - b.d[k];
+        return r;
+    case ISM_OP_MUL_RR:
+        r.v = a.v * b.v;
+        for (int k = 0; k < 3; k++)
+            r.d[k] = a.d[k] * b.v + a.v * b.d[k];
+        return r;
+    case ISM_OP_DIV_RR:
+        r.v = a.v / b.v;
+        for (int k = 0; k < 3; k++)
+            r.d[k] = (a.d[k] - r.v * b.d[k]) / b.v;
+        return r;
+    case ISM_OP_MIN_RR:
+        return a.v < b.v ? a : b;
+    default: /* ISM_OP_MAX_RR */
+        return a.v > b.v ? a : b;
+    }
+}
+
+static ism_dual dual_op(const ism_instr *in, const ism_dual *r)
+{
+    if (ism_op_has_reg_b(in->op))
+        return dual_binary(in->op, r[in->a], r[in->b]);
+    if (in->op == ISM_OP_CONST) {
+        ism_dual c = { in->imm, { 0.0, 0.0, 0.0 } };
+        return c;
+    }
+    ism_dual a = r[in->a], out;
+    ism_chain ch = ism_unary_chain(in, a.v);
+    out.v = ch.g;
+    for (int k = 0; k < 3; k++)
+        out.d[k] = ch.g1 == 0.0 ? 0.0 : ch.g1 * a.d[k];
+    return out;
+}
+
+double ism_eval_gradient(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
+                         double grad[3])
+{
+    if (!ism_ws_fits(ws, t)) {
+        grad[0] = grad[1] = grad[2] = NAN;
+        return NAN;
+    }
+    ism_dual *r = ws->dual;
+    r[ISM_REG_X] = (ism_dual){ x, { 1.0, 0.0, 0.0 } };
+    r[ISM_REG_Y] = (ism_dual){ y, { 0.0, 1.0, 0.0 } };
+    r[ISM_REG_Z] = (ism_dual){ z, { 0.0, 0.0, 1.0 } };
+    for (size_t i = 0; i < t->len; i++)
+        r[t->code[i].out] = dual_op(&t->code[i], r);
+    const ism_dual *f = &r[t->result];
+    for (int k = 0; k < 3; k++)
+        grad[k] = f->d[k];
+    return f->v;
+}

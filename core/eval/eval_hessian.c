@@ -1,0 +1,103 @@
+/* eval_hessian.c — f, gradient and Hessian by forward-mode second-order differentiation:
+ * each register carries a value, 3 first and 6 second partial derivatives
+ * (xx xy xz yy yz zz). Product and quotient rules below; one-argument operations use the
+ * chain rule h = g'(u) u'' + g''(u) u' u'^T. */
+#include "core/eval/deriv_rules.h"
+#include "core/eval/workspace.h"
+
+/* The (i, j) index pairs of the six Hessian entries. */
+static const int HI[6] = { 0, 0, 0, 1, 1, 2 };
+static const int HJ[6] = { 0, 1, 2, 1, 2, 2 };
+
+static ism_jet jet_mul(const ism_jet *a, const ism_jet *b)
+{
+    ism_jet r;
+    r.v = a->v * b->v;
+    for (int k = 0; k < 3; k++)
+        r.d[k] = a->d[k] * b->v + a->v * b->d[k];
+    for (int k = 0; k < 6; k++)
+        r.h[k] = a->h[k] * b->v + a->v * b->h[k] + a->d[HI[k]] * b->d[HJ[k]]
+                 + a->d[HJ[k]] * b->d[HI[k]];
+    return r;
+}
+
+/* q = a / b: q' = (a' - q b') / b, q'' = (a'' - q' b'^T - b' q'^T - q b'') / b. */
+static ism_jet jet_div(const ism_jet *a, const ism_jet *b)
+{
+    ism_jet r;
+    r.v = a->v / b->v;
+    for (int k = 0; k < 3; k++)
+        r.d[k] = (a->d[k] - r.v * b->d[k]) / b->v;
+    for (int k = 0; k < 6; k++)
+        r.h[k] = (a->h[k] - r.d[HI[k]] * b->d[HJ[k]] - b->d[HI[k]] * r.d[HJ[k]]
+                  - r.v * b->h[k]) / b->v;
+    return r;
+}
+
+static ism_jet jet_binary(int op, const ism_jet *a, const ism_jet *b)
+{
+    ism_jet r;
+    double s = op == ISM_OP_SUB_RR ? -1.0 : 1.0;
+    switch (op) {
+    case ISM_OP_ADD_RR:
+    case ISM_OP_SUB_RR:
+        r.v = a->v + s * b->v;
+        for (int k = 0; k < 3; k++)
+            r.d[k] = a->d[k] + s * b->d[k];
+        for (int k = 0; k < 6; k++)
+            r.h[k] = a->h[k] + s * b->h[k];
+        return r;
+    case ISM_OP_MUL_RR: return jet_mul(a, b);
+    case ISM_OP_DIV_RR: return jet_div(a, b);
+    case ISM_OP_MIN_RR: return a->v < b->v ? *a : *b;
+    default: return a->v > b->v ? *a : *b; /* ISM_OP_MAX_RR */
+    }
+}
+
+static ism_jet jet_op(const ism_instr *in, const ism_jet *r)
+{
+    if (ism_op_has_reg_b(in->op))
+        return jet_binary(in->op, &r[in->a], &r[in->b]);
+    ism_jet out = { 0 };
+    if (in->op == ISM_OP_CONST) {
+        out.v = in->imm;
+        return out;
+    }
+    const ism_jet *a = &r[in->a];
+    ism_chain ch = ism_unary_chain(in, a->v);
+    out.v = ch.g;
+    if (ch.g1 == 0.0 && ch.g2 == 0.0)
+        return out;
+    for (int k = 0; k < 3; k++)
+        out.d[k] = ch.g1 * a->d[k];
+    for (int k = 0; k < 6; k++)
+        out.h[k] = ch.g1 * a->h[k] + ch.g2 * a->d[HI[k]] * a->d[HJ[k]];
+    return out;
+}
+
+double ism_eval_hessian(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
+                        double grad[3], double hess[6])
+{
+    if (!ism_ws_fits(ws, t)) {
+        for (int k = 0; k < 3; k++)
+            grad[k] = NAN;
+        for (int k = 0; k < 6; k++)
+            hess[k] = NAN;
+        return NAN;
+    }
+    ism_jet *r = ws->jet;
+    const double in[3] = { x, y, z };
+    for (int k = 0; k < 3; k++) {
+        r[k] = (ism_jet){ 0 };
+        r[k].v = in[k];
+        r[k].d[k] = 1.0;
+    }
+    for (size_t i = 0; i < t->len; i++)
+        r[t->code[i].out] = jet_op(&t->code[i], r);
+    const ism_jet *f = &r[t->result];
+    for (int k = 0; k < 3; k++)
+        grad[k] = f->d[k];
+    for (int k = 0; k < 6; k++)
+        hess[k] = f->h[k];
+    return f->v;
+}

@@ -1,0 +1,279 @@
+/* interval_ops.h — interval arithmetic with outward rounding, one inline function per
+ * operation, each returning an interval that encloses the exact range of the operation
+ * over its argument intervals (and so also the double-precision value computed for any
+ * point inside them).
+ *
+ * Outward rounding: every computed bound is pushed outward by at least one ulp with
+ * `x - (|x|*2^-52 + 2^-1074)`, which is always <= the next double below x, without a branch,
+ * a rounding-mode switch or a call (see down1/up1). Results of libm functions (not
+ * correctly rounded) are pushed by four ulps. A NaN bound (inf - inf, 0 * inf) never
+ * escapes: ism_iv_sane turns it into the matching infinity. */
+#ifndef ISM_INTERVAL_OPS_H
+#define ISM_INTERVAL_OPS_H
+
+#include <math.h>
+#include "core/eval/eval.h"
+#include "core/expr/scalar_ops.h"
+
+static inline double down1(double x) { return x - (fabs(x) * 0x1p-52 + 0x1p-1074); }
+static inline double up1(double x) { return x + (fabs(x) * 0x1p-52 + 0x1p-1074); }
+static inline double down4(double x) { return x - (fabs(x) * 0x1p-50 + 0x1p-1072); }
+static inline double up4(double x) { return x + (fabs(x) * 0x1p-50 + 0x1p-1072); }
+
+static inline ism_interval iv(double lo, double hi)
+{
+    ism_interval r = { lo, hi };
+    return r;
+}
+
+static inline ism_interval ism_iv_whole(void) { return iv(-INFINITY, INFINITY); }
+
+/* Replaces NaN bounds by the infinity on their side. */
+static inline ism_interval ism_iv_sane(ism_interval r)
+{
+    if (!(r.lo <= r.hi)) {
+        if (isnan(r.lo))
+            r.lo = -INFINITY;
+        if (isnan(r.hi))
+            r.hi = INFINITY;
+        if (r.lo > r.hi)
+            r = ism_iv_whole();
+    }
+    return r;
+}
+
+static inline ism_interval iv_add(ism_interval a, ism_interval b)
+{
+    return iv(down1(a.lo + b.lo), up1(a.hi + b.hi));
+}
+
+static inline ism_interval iv_add_c(ism_interval a, double c)
+{
+    return iv(down1(a.lo + c), up1(a.hi + c));
+}
+
+static inline ism_interval iv_sub(ism_interval a, ism_interval b)
+{
+    return iv(down1(a.lo - b.hi), up1(a.hi - b.lo));
+}
+
+static inline ism_interval iv_c_sub(double c, ism_interval a)
+{
+    return iv(down1(c - a.hi), up1(c - a.lo));
+}
+
+static inline ism_interval iv_neg(ism_interval a)
+{
+    return iv(-a.hi, -a.lo);
+}
+
+/* x * y where 0 * inf counts as 0 (the bound of a product of reals). */
+static inline double mul0(double x, double y)
+{
+    return (x == 0.0 || y == 0.0) ? 0.0 : x * y;
+}
+
+static inline ism_interval iv_mul(ism_interval a, ism_interval b)
+{
+    double p1 = a.lo * b.lo, p2 = a.lo * b.hi, p3 = a.hi * b.lo, p4 = a.hi * b.hi;
+    if (isnan(p1 + p2 + p3 + p4)) {
+        p1 = mul0(a.lo, b.lo);
+        p2 = mul0(a.lo, b.hi);
+        p3 = mul0(a.hi, b.lo);
+        p4 = mul0(a.hi, b.hi);
+    }
+    double lo = fmin(fmin(p1, p2), fmin(p3, p4));
+    double hi = fmax(fmax(p1, p2), fmax(p3, p4));
+    return iv(down1(lo), up1(hi));
+}
+
+static inline ism_interval iv_mul_c(ism_interval a, double c)
+{
+    if (c >= 0.0)
+        return iv(down1(mul0(a.lo, c)), up1(mul0(a.hi, c)));
+    return iv(down1(mul0(a.hi, c)), up1(mul0(a.lo, c)));
+}
+
+static inline ism_interval iv_div(ism_interval a, ism_interval b)
+{
+    if (!(b.lo > 0.0 || b.hi < 0.0))
+        return ism_iv_whole();
+    double q1 = a.lo / b.lo, q2 = a.lo / b.hi, q3 = a.hi / b.lo, q4 = a.hi / b.hi;
+    double lo = fmin(fmin(q1, q2), fmin(q3, q4));
+    double hi = fmax(fmax(q1, q2), fmax(q3, q4));
+    if (isnan(q1 + q2 + q3 + q4)) /* inf / inf: give up precision, keep the enclosure */
+        return ism_iv_whole();
+    return iv(down1(lo), up1(hi));
+}
+
+static inline ism_interval iv_div_c(ism_interval a, double c)
+{
+    if (c > 0.0)
+        return iv(down1(a.lo / c), up1(a.hi / c));
+    return iv(down1(a.hi / c), up1(a.lo / c));
+}
+
+/* c / a. */
+static inline ism_interval iv_c_div(double c, ism_interval a)
+{
+    if (!(a.lo > 0.0 || a.hi < 0.0))
+        return ism_iv_whole();
+    if (c >= 0.0)
+        return iv(down1(c / a.hi), up1(c / a.lo));
+    return iv(down1(c / a.lo), up1(c / a.hi));
+}
+
+static inline ism_interval iv_min(ism_interval a, ism_interval b)
+{
+    return iv(fmin(a.lo, b.lo), fmin(a.hi, b.hi));
+}
+
+static inline ism_interval iv_max(ism_interval a, ism_interval b)
+{
+    return iv(fmax(a.lo, b.lo), fmax(a.hi, b.hi));
+}
+
+static inline ism_interval iv_abs(ism_interval a)
+{
+    if (a.lo >= 0.0)
+        return a;
+    if (a.hi <= 0.0)
+        return iv(-a.hi, -a.lo);
+    return iv(0.0, fmax(-a.lo, a.hi));
+}
+
+/* Bounds of m^n for m >= 0 with the products of ism_powi, each rounded outward. */
+static inline double powi_down(double m, unsigned n)
+{
+    double r = 1.0, p = m;
+    while (n) {
+        if (n & 1u)
+            r = fmax(down1(r * p), 0.0);
+        n >>= 1;
+        if (n)
+            p = fmax(down1(p * p), 0.0);
+    }
+    return r;
+}
+
+static inline double powi_up(double m, unsigned n)
+{
+    double r = 1.0, p = m;
+    while (n) {
+        if (n & 1u)
+            r = up1(r * p);
+        n >>= 1;
+        if (n)
+            p = up1(p * p);
+    }
+    return r;
+}
+
+/* a^n, n >= 2: even powers are >= 0 and exact at 0 when a holds 0. */
+static inline ism_interval iv_powi(ism_interval a, unsigned n)
+{
+    if (a.lo >= 0.0)
+        return iv(powi_down(a.lo, n), powi_up(a.hi, n));
+    if (n % 2u == 0) {
+        if (a.hi <= 0.0)
+            return iv(powi_down(-a.hi, n), powi_up(-a.lo, n));
+        return iv(0.0, powi_up(fmax(-a.lo, a.hi), n));
+    }
+    double lo = -powi_up(-a.lo, n);
+    double hi = a.hi >= 0.0 ? powi_up(a.hi, n) : -powi_down(-a.hi, n);
+    return iv(lo, hi);
+}
+
+static inline ism_interval iv_square(ism_interval a)
+{
+    if (a.lo >= 0.0)
+        return iv(fmax(down1(a.lo * a.lo), 0.0), up1(a.hi * a.hi));
+    if (a.hi <= 0.0)
+        return iv(fmax(down1(a.hi * a.hi), 0.0), up1(a.lo * a.lo));
+    double m = fmax(-a.lo, a.hi);
+    return iv(0.0, up1(m * m));
+}
+
+static inline ism_interval iv_sqrt(ism_interval a)
+{
+    return iv(fmax(down1(ism_sqrt_clip(a.lo)), 0.0), up1(ism_sqrt_clip(a.hi)));
+}
+
+static inline ism_interval iv_exp(ism_interval a)
+{
+    return iv(fmax(down4(exp(a.lo)), 0.0), up4(exp(a.hi)));
+}
+
+static inline ism_interval iv_log(ism_interval a)
+{
+    double hi = ism_log_clip(a.hi);
+    return iv(down4(ism_log_clip(a.lo)), hi == -INFINITY ? hi : up4(hi));
+}
+
+/* max(a, 0)^c for a non-integer constant c: monotone on [0, inf). */
+static inline ism_interval iv_powc(ism_interval a, double c)
+{
+    double lo = ism_powc(a.lo, c), hi = ism_powc(a.hi, c);
+    if (c < 0.0) {
+        double t = lo;
+        lo = hi;
+        hi = t;
+    }
+    return iv(fmax(down4(lo), 0.0), up4(hi));
+}
+
+/* True when some integer k may satisfy u <= k <= v (u, v carry a rounding margin). */
+static inline int holds_integer(double u, double v)
+{
+    return ceil(u) <= v;
+}
+
+/* Arguments beyond this make sin/cos/tan give their whole range: the periods no longer
+ * resolve. */
+#define ISM_TRIG_LIMIT 1e9
+
+/* Whether [lo, hi] may contain phase + k*period for an integer k, with a margin for the
+ * rounding of the division (answering yes too often only loosens, never breaks, a bound). */
+static inline int may_contain(double lo, double hi, double phase, double period)
+{
+    double tol = 1e-12 + 4e-16 * fmax(fabs(lo), fabs(hi));
+    return holds_integer((lo - phase) / period - tol, (hi - phase) / period + tol);
+}
+
+static inline ism_interval iv_sin(ism_interval a)
+{
+    if (!(a.hi - a.lo < 2.0 * M_PI) || !(fabs(a.lo) < ISM_TRIG_LIMIT)
+        || !(fabs(a.hi) < ISM_TRIG_LIMIT))
+        return iv(-1.0, 1.0);
+    double s1 = sin(a.lo), s2 = sin(a.hi);
+    double lo = fmax(down4(fmin(s1, s2)), -1.0), hi = fmin(up4(fmax(s1, s2)), 1.0);
+    if (may_contain(a.lo, a.hi, M_PI / 2, 2.0 * M_PI))
+        hi = 1.0;
+    if (may_contain(a.lo, a.hi, -M_PI / 2, 2.0 * M_PI))
+        lo = -1.0;
+    return iv(lo, hi);
+}
+
+static inline ism_interval iv_cos(ism_interval a)
+{
+    if (!(a.hi - a.lo < 2.0 * M_PI) || !(fabs(a.lo) < ISM_TRIG_LIMIT)
+        || !(fabs(a.hi) < ISM_TRIG_LIMIT))
+        return iv(-1.0, 1.0);
+    double c1 = cos(a.lo), c2 = cos(a.hi);
+    double lo = fmax(down4(fmin(c1, c2)), -1.0), hi = fmin(up4(fmax(c1, c2)), 1.0);
+    if (may_contain(a.lo, a.hi, 0.0, 2.0 * M_PI))
+        hi = 1.0;
+    if (may_contain(a.lo, a.hi, M_PI, 2.0 * M_PI))
+        lo = -1.0;
+    return iv(lo, hi);
+}
+
+static inline ism_interval iv_tan(ism_interval a)
+{
+    if (!(a.hi - a.lo < M_PI) || !(fabs(a.lo) < ISM_TRIG_LIMIT)
+        || !(fabs(a.hi) < ISM_TRIG_LIMIT) || may_contain(a.lo, a.hi, M_PI / 2, M_PI))
+        return ism_iv_whole();
+    return iv(down4(tan(a.lo)), up4(tan(a.hi)));
+}
+
+#endif

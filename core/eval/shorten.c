@@ -1,0 +1,109 @@
+/* shorten.c — interval-driven tape shortening (the libfive / fidget technique): over a box,
+ * a min or max whose operands' intervals do not overlap always returns the same operand,
+ * so the other operand's instructions are dead there. One interval pass records those
+ * choices, a backward pass keeps only the instructions the result still needs, and the
+ * decided min/max become a copy (or a constant). Register numbers are kept, so the
+ * workspace of the original tape serves the shortened one. */
+#include "core/eval/interval_eval.h"
+#include "core/eval/workspace.h"
+
+#include <math.h>
+#include <string.h>
+
+enum { BOTH = 0, ONLY_A = 1, ONLY_B = 2 };
+
+ism_tape *ism_tape_new_like(const ism_tape *t)
+{
+    if (!t)
+        return NULL;
+    size_t cap = t->origin_len > t->len ? t->origin_len : t->len;
+    ism_tape *out = ism_tape_alloc(cap, t->nregs);
+    if (!out)
+        return NULL;
+    out->result = t->result;
+    out->origin_len = cap;
+    return out;
+}
+
+static int is_min_max(int op)
+{
+    return op == ISM_OP_MIN_RR || op == ISM_OP_MIN_RC || op == ISM_OP_MAX_RR
+        || op == ISM_OP_MAX_RC;
+}
+
+/* The instruction a decided min/max becomes. */
+static ism_instr decided(const ism_instr *in, uint8_t choice)
+{
+    ism_instr r = *in;
+    r.b = 0;
+    if (choice == ONLY_A) {
+        r.op = ISM_OP_COPY;
+        r.imm = 0.0;
+    } else if (in->op == ISM_OP_MIN_RR || in->op == ISM_OP_MAX_RR) {
+        r.op = ISM_OP_COPY;
+        r.a = in->b;
+        r.imm = 0.0;
+    } else {
+        r.op = ISM_OP_CONST;
+        r.a = 0;
+    }
+    return r;
+}
+
+#define KEEP 4u        /* flag bit set in ws->choice[i] when instruction i is kept */
+#define CHOICE_MASK 3u
+
+/* Walks backwards from the result, flagging the instructions it still needs given the
+ * recorded choices; returns how many are kept. */
+static size_t mark_needed(const ism_tape *t, ism_eval_ws *ws)
+{
+    uint8_t *needed = ws->needed;
+    memset(needed, 0, t->nregs);
+    needed[t->result] = 1;
+    size_t kept = 0;
+    for (size_t i = t->len; i-- > 0;) {
+        const ism_instr *in = &t->code[i];
+        if (!needed[in->out])
+            continue;
+        ws->choice[i] |= KEEP;
+        kept++;
+        needed[in->out] = 0;
+        unsigned choice = is_min_max(in->op) ? ws->choice[i] & CHOICE_MASK : BOTH;
+        if (ism_op_has_reg_a(in->op) && choice != ONLY_B)
+            needed[in->a] = 1;
+        if (ism_op_has_reg_b(in->op) && choice != ONLY_A)
+            needed[in->b] = 1;
+    }
+    return kept;
+}
+
+bool ism_tape_shorten(const ism_tape *t, ism_eval_ws *ws, ism_interval x, ism_interval y,
+                      ism_interval z, ism_tape *out, ism_interval *range)
+{
+    if (!ism_ws_fits(ws, t)) {
+        if (range)
+            *range = (ism_interval){ -INFINITY, INFINITY };
+        return false;
+    }
+    memset(ws->choice, BOTH, t->len);
+    ism_interval r = ism_interval_run(t, ws, x, y, z, ws->choice);
+    if (range)
+        *range = r;
+    if (!out || out == t || out->cap < t->len || out->nregs < t->nregs)
+        return false;
+    if (mark_needed(t, ws) == t->len)
+        return false;
+    size_t n = 0;
+    for (size_t i = 0; i < t->len; i++) {
+        if (!(ws->choice[i] & KEEP))
+            continue;
+        const ism_instr *in = &t->code[i];
+        unsigned choice = is_min_max(in->op) ? ws->choice[i] & CHOICE_MASK : BOTH;
+        out->code[n++] = choice == BOTH ? *in : decided(in, (uint8_t)choice);
+    }
+    out->len = n;
+    out->nregs = t->nregs;
+    out->result = t->result;
+    out->origin_len = t->origin_len > t->len ? t->origin_len : t->len;
+    return true;
+}

@@ -1,0 +1,37 @@
+/* workspace.h — the per-thread registers of every evaluator (layout shared by the files of
+ * core/eval; not public). One workspace is sized for a tape and serves every tape
+ * shortened from it, since shortening keeps the register numbering. */
+#ifndef ISM_WORKSPACE_H
+#define ISM_WORKSPACE_H
+
+#include <stdint.h>
+#include "core/eval/eval.h"
+#include "core/expr/tape.h"
+
+typedef struct ism_dual {
+    double v, d[3];           /* value and gradient */
+} ism_dual;
+
+typedef struct ism_jet {
+    double v, d[3], h[6];     /* value, gradient, Hessian (xx xy xz yy yz zz) */
+} ism_jet;
+
+struct ism_eval_ws {
+    uint32_t nregs;           /* registers available */
+    size_t code_cap;          /* longest tape served (for the per-instruction arrays) */
+    double *batch;            /* nregs * ISM_EVAL_BATCH doubles, register-major */
+    double *scalar;           /* nregs */
+    ism_interval *iv;         /* nregs */
+    ism_dual *dual;           /* nregs */
+    ism_jet *jet;             /* nregs */
+    uint8_t *choice;          /* code_cap: min/max branch proved by the last interval pass */
+    uint8_t *needed;          /* nregs: scratch for shortening */
+};
+
+/* True when ws has room for evaluating t. */
+static inline int ism_ws_fits(const ism_eval_ws *ws, const ism_tape *t)
+{
+    return ws && t && ws->nregs >= t->nregs && ws->code_cap >= t->len;
+}
+
+#endif

@@ -1,0 +1,88 @@
+/* tape.h — the compiled tape's layout, shared by the compiler (core/expr) and the evaluators
+ * (core/eval); not part of the public API.
+ *
+ * A tape is a flat list of instructions in evaluation order. Registers 0, 1, 2 hold x, y, z;
+ * every instruction writes one register (never one of its own operands) from at most two
+ * operands, each a register or the instruction's immediate constant. Registers are reused
+ * once their value is dead, so `nregs` is the peak number of live values, not the length. */
+#ifndef ISM_TAPE_H
+#define ISM_TAPE_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include "core/expr/expr.h"
+
+enum ism_opcode {
+    ISM_OP_CONST,   /* out = imm */
+    ISM_OP_COPY,    /* out = a (what a shortened min/max becomes) */
+    ISM_OP_ADD_RR,  /* out = a + b */
+    ISM_OP_ADD_RC,  /* out = a + imm */
+    ISM_OP_SUB_RR,  /* out = a - b */
+    ISM_OP_SUB_CR,  /* out = imm - a */
+    ISM_OP_MUL_RR,  /* out = a * b */
+    ISM_OP_MUL_RC,  /* out = a * imm */
+    ISM_OP_DIV_RR,  /* out = a / b */
+    ISM_OP_DIV_RC,  /* out = a / imm */
+    ISM_OP_DIV_CR,  /* out = imm / a */
+    ISM_OP_MIN_RR,  /* out = min(a, b) */
+    ISM_OP_MIN_RC,  /* out = min(a, imm) */
+    ISM_OP_MAX_RR,  /* out = max(a, b) */
+    ISM_OP_MAX_RC,  /* out = max(a, imm) */
+    ISM_OP_NEG,     /* out = -a */
+    ISM_OP_SQUARE,  /* out = a * a */
+    ISM_OP_POWI,    /* out = a ^ n, n = b >= 3 (negative powers compile to 1 / a^n) */
+    ISM_OP_POWC,    /* out = max(a, 0) ^ imm, imm not an integer */
+    ISM_OP_SQRT,    /* out = sqrt(max(a, 0)) */
+    ISM_OP_SIN,
+    ISM_OP_COS,
+    ISM_OP_TAN,
+    ISM_OP_EXP,
+    ISM_OP_LOG,     /* out = log(max(a, 0)) (-inf at and below 0) */
+    ISM_OP_ABS,
+    ISM_OP_COUNT
+};
+
+typedef struct ism_instr {
+    uint8_t op;
+    uint32_t out;
+    uint32_t a;
+    uint32_t b;     /* second register, or the integer exponent of POWI */
+    double imm;
+} ism_instr;
+
+#define ISM_REG_X 0u
+#define ISM_REG_Y 1u
+#define ISM_REG_Z 2u
+#define ISM_FIRST_FREE_REG 3u
+
+struct ism_tape {
+    size_t len;        /* instructions in use */
+    size_t cap;        /* instructions allocated */
+    uint32_t nregs;    /* registers an evaluation needs (>= 3) */
+    uint32_t result;   /* register holding f after the last instruction */
+    size_t origin_len; /* length of the tape this one was compiled or shortened from */
+    ism_instr code[];
+};
+
+/* Allocates an empty tape with room for cap instructions (NULL when out of memory). */
+ism_tape *ism_tape_alloc(size_t cap, uint32_t nregs);
+
+/* True for opcodes whose second operand is register b. */
+static inline int ism_op_has_reg_b(int op)
+{
+    switch (op) {
+    case ISM_OP_ADD_RR: case ISM_OP_SUB_RR: case ISM_OP_MUL_RR: case ISM_OP_DIV_RR:
+    case ISM_OP_MIN_RR: case ISM_OP_MAX_RR:
+        return 1;
+    default:
+        return 0;
+    }
+}
+
+/* True for opcodes that read register a. */
+static inline int ism_op_has_reg_a(int op)
+{
+    return op != ISM_OP_CONST;
+}
+
+#endif
