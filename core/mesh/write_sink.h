@@ -1,0 +1,37 @@
+/* write_sink.h — a small buffer between the mesh writers and the caller's write callback,
+ * so that a writer can emit a few bytes at a time without one callback call per number.
+ * Internal to core/mesh/write_*.c. */
+#ifndef ISM_WRITE_SINK_H
+#define ISM_WRITE_SINK_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdbool.h>
+#include "core/mesh/write_mesh.h"
+
+typedef struct ism_sink {
+    ism_write_fn write;
+    void *ctx;
+    bool failed;
+    size_t used;
+    unsigned char buf[1 << 16];
+} ism_sink;
+
+void ism_sink_init(ism_sink *s, ism_write_fn write, void *ctx);
+
+/* Appends bytes (flushing as needed). Once a write fails, everything after is dropped. */
+void ism_sink_put(ism_sink *s, const void *p, size_t n);
+
+/* Appends printf-formatted text (each call at most 255 bytes). */
+void ism_sink_printf(ism_sink *s, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/* Little-endian scalars. */
+void ism_sink_u8(ism_sink *s, uint8_t v);
+void ism_sink_u16le(ism_sink *s, uint16_t v);
+void ism_sink_u32le(ism_sink *s, uint32_t v);
+void ism_sink_f32le(ism_sink *s, float v);
+
+/* Flushes what is buffered; true when every byte was accepted by the callback. */
+bool ism_sink_finish(ism_sink *s);
+
+#endif

@@ -1,0 +1,53 @@
+/* write_stl.c — binary STL: an 80-byte header, the triangle count, and per triangle the unit
+ * facet normal from the right-hand rule over its corners (zero for a zero-area triangle),
+ * the three corners as float32, and a zero attribute byte count. */
+#include "core/mesh/write_mesh.h"
+#include "core/mesh/write_sink.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+size_t ism_stl_size(const ism_mesh *m) { return 84 + m->ntris * 50; }
+
+static void facet_normal(const ism_mesh *m, const uint32_t *v, float out[3])
+{
+    const double *a = m->pos + 3 * v[0], *b = m->pos + 3 * v[1], *c = m->pos + 3 * v[2];
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                   u[0] * w[1] - u[1] * w[0]};
+    double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int k = 0; k < 3; k++)
+        out[k] = len > 0 ? (float)(n[k] / len) : 0.0f;
+}
+
+bool ism_write_stl(const ism_mesh *m, ism_write_fn write, void *ctx)
+{
+    if (m->ntris > UINT32_MAX)
+        return false;
+    ism_sink *s = malloc(sizeof *s);
+    if (!s)
+        return false;
+    ism_sink_init(s, write, ctx);
+
+    char header[80];
+    memset(header, ' ', sizeof header);
+    memcpy(header, "isomesh binary STL", 18);
+    ism_sink_put(s, header, sizeof header);
+    ism_sink_u32le(s, (uint32_t)m->ntris);
+    for (size_t t = 0; t < m->ntris; t++) {
+        const uint32_t *v = m->tri + 3 * t;
+        float n[3];
+        facet_normal(m, v, n);
+        for (int k = 0; k < 3; k++)
+            ism_sink_f32le(s, n[k]);
+        for (int c = 0; c < 3; c++)
+            for (int k = 0; k < 3; k++)
+                ism_sink_f32le(s, (float)m->pos[3 * v[c] + k]);
+        ism_sink_u16le(s, 0);
+    }
+    bool ok = ism_sink_finish(s);
+    free(s);
+    return ok;
+}

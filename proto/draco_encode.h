@@ -1,0 +1,73 @@
+/* draco_encode.h — the C face of the project's only C++ file (draco_encode.cc): one indexed
+ * triangle mesh with its per-vertex attributes in, one Draco bitstream out (Debian's
+ * libdraco 1.5.5, edgebreaker). Every C++ exception is caught inside; failures come back as
+ * false with a message.
+ *
+ * Attribute ids — the wire contract with the viewer. Draco reorders and splits vertices, so a
+ * decoder must find each attribute by its unique id (or by the metadata entry "name"), never
+ * by position in the file. The ids are FIXED whatever subset is sent (an attribute that is
+ * not sent is simply absent; the others keep their ids):
+ *
+ *   unique id  metadata name      Draco type  data     components  meaning
+ *   0          "position"         POSITION    float32  3           x y z
+ *   1          "normal"           NORMAL      float32  3           unit ∇f / |∇f|
+ *   2          "mean_curvature"   GENERIC     float32  1           H (analysis.h's sign)
+ *   3          "gauss_curvature"  GENERIC     float32  1           K
+ *   4          "class"            GENERIC     uint8    1           enum ism_vertex_class
+ *
+ * three.js: DRACOLoader finds position and normal by type; for the others use the decoder's
+ * GetAttributeByUniqueId(mesh, id) (glTF: the KHR_draco_mesh_compression "attributes" map
+ * carries the same ids). */
+#ifndef ISM_DRACO_ENCODE_H
+#define ISM_DRACO_ENCODE_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdbool.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+enum ism_draco_id {
+    ISM_DRACO_ID_POSITION = 0,
+    ISM_DRACO_ID_NORMAL = 1,
+    ISM_DRACO_ID_MEAN_CURVATURE = 2,
+    ISM_DRACO_ID_GAUSS_CURVATURE = 3,
+    ISM_DRACO_ID_CLASS = 4,
+};
+
+/* Encoding speed used by the service (see the measurement in draco_encode.cc). */
+#define ISM_DRACO_DEFAULT_SPEED 7
+
+typedef struct ism_draco_input {
+    size_t nverts, ntris;
+    const float *pos;               /* 3 per vertex */
+    const uint32_t *tri;            /* 3 per triangle, indices < nverts */
+    const float *normal;            /* 3 per vertex, unit length; NULL = not sent */
+    const float *mean_curvature;    /* 1 per vertex; NULL = not sent */
+    const float *gauss_curvature;   /* 1 per vertex; NULL = not sent */
+    const uint8_t *vertex_class;    /* 1 per vertex; NULL = not sent */
+    int position_bits;              /* quantisation over the mesh's bounding cube (1..30) */
+    int normal_bits;                /* octahedral quantisation of normals */
+    int curvature_bits;             /* 0 = float32 as given, else quantised */
+    int speed;                      /* 0 (smallest) .. 10 (fastest); < 0 = default */
+} ism_draco_input;
+
+typedef struct ism_draco_output {
+    unsigned char *data;            /* malloc'd bitstream (free()) */
+    size_t len;
+    size_t points, faces;           /* what a decoder will get (after Draco's splits and
+                                       dropped degenerate faces) */
+    char error[200];
+} ism_draco_output;
+
+/* Encodes. The mesh must have at least one triangle whose three indices differ (Draco
+ * refuses a mesh of degenerate triangles: answer empty meshes without calling this). */
+bool ism_draco_encode(const ism_draco_input *in, ism_draco_output *out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,461 @@
+/* glb.c — writes the .glb container by hand: a JSON chunk (built with the JSON writer) and a
+ * BIN chunk holding the Draco bitstream followed by the uncompressed feature arrays, every
+ * bufferView 4-byte aligned, chunks padded as the spec asks (JSON with spaces, BIN with
+ * zeros). */
+#include "proto/glb.h"
+#include "proto/json_writer.h"
+#include "core/version.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum { GL_POINTS = 0, GL_LINES = 1, GL_TRIANGLES = 4 };
+enum { CT_UBYTE = 5121, CT_USHORT = 5123, CT_UINT = 5125, CT_FLOAT = 5126 };
+enum { TARGET_ARRAY = 34962, TARGET_ELEMENTS = 34963 };
+
+/* The BIN chunk under construction. */
+typedef struct bin {
+    unsigned char *data;
+    size_t len, cap;
+    bool failed;
+} bin;
+
+static size_t bin_append(bin *b, const void *p, size_t n)
+{
+    size_t at = (b->len + 3) & ~(size_t)3;
+    if (b->failed)
+        return 0;
+    if (at + n > b->cap) {
+        size_t c = b->cap ? b->cap : 4096;
+        while (c < at + n)
+            c *= 2;
+        unsigned char *d = realloc(b->data, c);
+        if (!d) {
+            b->failed = true;
+            return 0;
+        }
+        b->data = d;
+        b->cap = c;
+    }
+    memset(b->data + b->len, 0, at - b->len);
+    if (n)
+        memcpy(b->data + at, p, n);
+    b->len = at + n;
+    return at;
+}
+
+/* The JSON arrays are written in separate writers and joined at the end, because accessors
+ * and bufferViews are discovered while walking the primitives. */
+typedef struct gltf {
+    ism_jw accessors, views, meshes, nodes;
+    int naccessors, nviews, nmeshes, nnodes;
+    bin bin;
+} gltf;
+
+static int add_view(gltf *g, size_t offset, size_t length, int target)
+{
+    ism_jw *w = &g->views;
+    ism_jw_object(w);
+    ism_jw_key(w, "buffer");
+    ism_jw_int(w, 0);
+    ism_jw_key(w, "byteOffset");
+    ism_jw_uint(w, offset);
+    ism_jw_key(w, "byteLength");
+    ism_jw_uint(w, length);
+    if (target) {
+        ism_jw_key(w, "target");
+        ism_jw_int(w, target);
+    }
+    ism_jw_object_end(w);
+    return g->nviews++;
+}
+
+/* An accessor; view < 0 for one whose data lives in the Draco stream. bounds (6) for
+ * POSITION accessors, else NULL. */
+static int add_accessor(gltf *g, int view, int ctype, size_t count, const char *type,
+                        const double *bounds)
+{
+    ism_jw *w = &g->accessors;
+    ism_jw_object(w);
+    if (view >= 0) {
+        ism_jw_key(w, "bufferView");
+        ism_jw_int(w, view);
+    }
+    ism_jw_key(w, "componentType");
+    ism_jw_int(w, ctype);
+    ism_jw_key(w, "count");
+    ism_jw_uint(w, count);
+    ism_jw_key(w, "type");
+    ism_jw_string(w, type);
+    if (bounds) {
+        ism_jw_key(w, "min");
+        ism_jw_array(w);
+        for (int k = 0; k < 3; k++)
+            ism_jw_float(w, (float)bounds[k]);
+        ism_jw_array_end(w);
+        ism_jw_key(w, "max");
+        ism_jw_array(w);
+        for (int k = 0; k < 3; k++)
+            ism_jw_float(w, (float)bounds[k + 3]);
+        ism_jw_array_end(w);
+    }
+    ism_jw_object_end(w);
+    return g->naccessors++;
+}
+
+static void add_node(gltf *g, const char *name, int mesh, const ism_jw *extras_src)
+{
+    ism_jw *w = &g->nodes;
+    ism_jw_object(w);
+    ism_jw_key(w, "name");
+    ism_jw_string(w, name);
+    ism_jw_key(w, "mesh");
+    ism_jw_int(w, mesh);
+    if (extras_src && extras_src->data) {
+        ism_jw_key(w, "extras");
+        ism_jw_raw(w, extras_src->data, extras_src->len);
+    }
+    ism_jw_object_end(w);
+    g->nnodes++;
+}
+
+/* The Draco primitive of the surface. */
+static void add_surface(gltf *g, const ism_wire_mesh *wm, const ism_draco_output *d)
+{
+    size_t off = bin_append(&g->bin, d->data, d->len);
+    int view = add_view(g, off, d->len, 0);
+    struct {
+        const char *name;
+        bool present;
+        int id, ctype;
+        const char *type;
+    } atts[] = {
+        {"POSITION", true, ISM_DRACO_ID_POSITION, CT_FLOAT, "VEC3"},
+        {"NORMAL", wm->normal != NULL, ISM_DRACO_ID_NORMAL, CT_FLOAT, "VEC3"},
+        {"_MEAN_CURVATURE", wm->mean_curvature != NULL, ISM_DRACO_ID_MEAN_CURVATURE, CT_FLOAT,
+         "SCALAR"},
+        {"_GAUSS_CURVATURE", wm->gauss_curvature != NULL, ISM_DRACO_ID_GAUSS_CURVATURE,
+         CT_FLOAT, "SCALAR"},
+        {"_CLASS", wm->vertex_class != NULL, ISM_DRACO_ID_CLASS, CT_UBYTE, "SCALAR"},
+    };
+    int acc[5];
+    for (int i = 0; i < 5; i++)
+        acc[i] = atts[i].present ? add_accessor(g, -1, atts[i].ctype, d->points, atts[i].type,
+                                                i == 0 ? wm->bounds : NULL)
+                                 : -1;
+    int indices = add_accessor(g, -1, d->points > 65535 ? CT_UINT : CT_USHORT, 3 * d->faces,
+                               "SCALAR", NULL);
+    ism_jw *w = &g->meshes;
+    ism_jw_object(w);
+    ism_jw_key(w, "name");
+    ism_jw_string(w, "surface");
+    ism_jw_key(w, "primitives");
+    ism_jw_array(w);
+    ism_jw_object(w);
+    ism_jw_key(w, "mode");
+    ism_jw_int(w, GL_TRIANGLES);
+    ism_jw_key(w, "material");
+    ism_jw_int(w, 0);
+    ism_jw_key(w, "indices");
+    ism_jw_int(w, indices);
+    ism_jw_key(w, "attributes");
+    ism_jw_object(w);
+    for (int i = 0; i < 5; i++)
+        if (atts[i].present) {
+            ism_jw_key(w, atts[i].name);
+            ism_jw_int(w, acc[i]);
+        }
+    ism_jw_object_end(w);
+    ism_jw_key(w, "extensions");
+    ism_jw_object(w);
+    ism_jw_key(w, "KHR_draco_mesh_compression");
+    ism_jw_object(w);
+    ism_jw_key(w, "bufferView");
+    ism_jw_int(w, view);
+    ism_jw_key(w, "attributes");
+    ism_jw_object(w);
+    for (int i = 0; i < 5; i++)
+        if (atts[i].present) {
+            ism_jw_key(w, atts[i].name);
+            ism_jw_int(w, atts[i].id);
+        }
+    ism_jw_object_end(w);
+    ism_jw_object_end(w);
+    ism_jw_object_end(w);
+    ism_jw_object_end(w);
+    ism_jw_array_end(w);
+    ism_jw_object_end(w);
+    add_node(g, "surface", g->nmeshes++, NULL);
+}
+
+/* One uncompressed primitive from polylines (LINES) or single vertices (POINTS). */
+static bool add_feature_primitive(gltf *g, const ism_mesh *m, const char *name, int mode,
+                                  int material, const ism_polylines *lines,
+                                  const uint32_t *points, size_t npoints, const ism_jw *extras)
+{
+    size_t nv = lines ? (lines->n ? lines->start[lines->n] : 0) : npoints;
+    if (nv == 0)
+        return true;
+    float *pos = malloc(nv * 3 * sizeof *pos);
+    uint32_t *idx = lines ? malloc(2 * nv * sizeof *idx) : NULL;
+    if (!pos || (lines && !idx)) {
+        free(pos);
+        free(idx);
+        return false;
+    }
+    double bounds[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
+    const uint32_t *verts = lines ? lines->verts : points;
+    for (size_t i = 0; i < nv; i++)
+        for (int k = 0; k < 3; k++) {
+            float f = (float)m->pos[3 * (size_t)verts[i] + k];
+            pos[3 * i + k] = f;
+            bounds[k] = fmin(bounds[k], f);
+            bounds[k + 3] = fmax(bounds[k + 3], f);
+        }
+    size_t nidx = 0;
+    if (lines)
+        for (size_t c = 0; c < lines->n; c++)
+            for (uint32_t j = lines->start[c]; j + 1 < lines->start[c + 1]; j++) {
+                idx[nidx++] = j;
+                idx[nidx++] = j + 1;
+            }
+    size_t poff = bin_append(&g->bin, pos, nv * 3 * sizeof *pos);
+    int pacc = add_accessor(g, add_view(g, poff, nv * 3 * sizeof *pos, TARGET_ARRAY), CT_FLOAT,
+                            nv, "VEC3", bounds);
+    int iacc = -1;
+    if (nidx) {
+        size_t ioff = bin_append(&g->bin, idx, nidx * sizeof *idx);
+        iacc = add_accessor(g, add_view(g, ioff, nidx * sizeof *idx, TARGET_ELEMENTS), CT_UINT,
+                            nidx, "SCALAR", NULL);
+    }
+    free(pos);
+    free(idx);
+    if (lines && !nidx)
+        return true; /* no segment to draw (cannot happen for curves of two vertices) */
+    ism_jw *w = &g->meshes;
+    ism_jw_object(w);
+    ism_jw_key(w, "name");
+    ism_jw_string(w, name);
+    ism_jw_key(w, "primitives");
+    ism_jw_array(w);
+    ism_jw_object(w);
+    ism_jw_key(w, "mode");
+    ism_jw_int(w, mode);
+    ism_jw_key(w, "material");
+    ism_jw_int(w, material);
+    ism_jw_key(w, "attributes");
+    ism_jw_object(w);
+    ism_jw_key(w, "POSITION");
+    ism_jw_int(w, pacc);
+    ism_jw_object_end(w);
+    if (iacc >= 0) {
+        ism_jw_key(w, "indices");
+        ism_jw_int(w, iacc);
+    }
+    ism_jw_object_end(w);
+    ism_jw_array_end(w);
+    ism_jw_object_end(w);
+    add_node(g, name, g->nmeshes++, extras);
+    return !g->bin.failed;
+}
+
+static void write_material(ism_jw *w, const char *name, float r, float gr, float b,
+                           bool double_sided)
+{
+    ism_jw_object(w);
+    ism_jw_key(w, "name");
+    ism_jw_string(w, name);
+    ism_jw_key(w, "pbrMetallicRoughness");
+    ism_jw_object(w);
+    ism_jw_key(w, "baseColorFactor");
+    ism_jw_array(w);
+    ism_jw_float(w, r);
+    ism_jw_float(w, gr);
+    ism_jw_float(w, b);
+    ism_jw_float(w, 1);
+    ism_jw_array_end(w);
+    ism_jw_key(w, "metallicFactor");
+    ism_jw_float(w, 0);
+    ism_jw_key(w, "roughnessFactor");
+    ism_jw_float(w, 0.6f);
+    ism_jw_object_end(w);
+    if (double_sided) {
+        ism_jw_key(w, "doubleSided");
+        ism_jw_bool(w, true);
+    }
+    ism_jw_object_end(w);
+}
+
+static char *join_json(gltf *g, const ism_glb_input *in, size_t *len)
+{
+    ism_jw w;
+    ism_jw_init(&w);
+    ism_jw_object(&w);
+    ism_jw_key(&w, "asset");
+    ism_jw_object(&w);
+    ism_jw_key(&w, "version");
+    ism_jw_string(&w, "2.0");
+    ism_jw_key(&w, "generator");
+    ism_jw_string(&w, "isomesh " ISM_VERSION " (" ISM_MESHER_VERSION ")");
+    if (in->key) {
+        ism_jw_key(&w, "extras");
+        ism_jw_object(&w);
+        ism_jw_key(&w, "key");
+        ism_jw_string(&w, in->key);
+        ism_jw_object_end(&w);
+    }
+    ism_jw_object_end(&w);
+    if (in->draco) {
+        ism_jw_key(&w, "extensionsUsed");
+        ism_jw_array(&w);
+        ism_jw_string(&w, "KHR_draco_mesh_compression");
+        ism_jw_array_end(&w);
+        ism_jw_key(&w, "extensionsRequired");
+        ism_jw_array(&w);
+        ism_jw_string(&w, "KHR_draco_mesh_compression");
+        ism_jw_array_end(&w);
+    }
+    ism_jw_key(&w, "scene");
+    ism_jw_int(&w, 0);
+    ism_jw_key(&w, "scenes");
+    ism_jw_array(&w);
+    ism_jw_object(&w);
+    ism_jw_key(&w, "name");
+    ism_jw_string(&w, g->nnodes ? "isomesh surface" : "isomesh surface (empty)");
+    if (g->nnodes) {
+        ism_jw_key(&w, "nodes");
+        ism_jw_array(&w);
+        for (int i = 0; i < g->nnodes; i++)
+            ism_jw_int(&w, i);
+        ism_jw_array_end(&w);
+    }
+    ism_jw_object_end(&w);
+    ism_jw_array_end(&w);
+    if (g->nnodes) {
+        struct {
+            const char *key;
+            ism_jw *items;
+        } arrays[] = {{"nodes", &g->nodes}, {"meshes", &g->meshes},
+                      {"accessors", &g->accessors}, {"bufferViews", &g->views}};
+        for (size_t i = 0; i < 4; i++) {
+            size_t n;
+            char *items = ism_jw_take(arrays[i].items, &n);
+            if (!items) {
+                ism_jw_free(&w);
+                return NULL;
+            }
+            ism_jw_key(&w, arrays[i].key);
+            ism_jw_raw(&w, items, n);
+            free(items);
+        }
+        ism_jw_key(&w, "materials");
+        ism_jw_array(&w);
+        write_material(&w, "surface", 0.80f, 0.80f, 0.85f, true);
+        write_material(&w, "nonmanifold_curves", 0.90f, 0.10f, 0.10f, false);
+        write_material(&w, "nonmanifold_points", 1.00f, 0.85f, 0.10f, false);
+        write_material(&w, "boundaries", 0.10f, 0.35f, 0.95f, false);
+        ism_jw_array_end(&w);
+        ism_jw_key(&w, "buffers");
+        ism_jw_array(&w);
+        ism_jw_object(&w);
+        ism_jw_key(&w, "byteLength");
+        ism_jw_uint(&w, g->bin.len);
+        ism_jw_object_end(&w);
+        ism_jw_array_end(&w);
+    }
+    ism_jw_object_end(&w);
+    return ism_jw_take(&w, len);
+}
+
+static void put_u32(unsigned char *p, uint32_t v)
+{
+    p[0] = (unsigned char)v;
+    p[1] = (unsigned char)(v >> 8);
+    p[2] = (unsigned char)(v >> 16);
+    p[3] = (unsigned char)(v >> 24);
+}
+
+static bool container(const char *json, size_t jlen, const bin *b, unsigned char **out,
+                      size_t *len)
+{
+    size_t jpad = (jlen + 3) & ~(size_t)3, bpad = (b->len + 3) & ~(size_t)3;
+    size_t total = 12 + 8 + jpad + (b->len ? 8 + bpad : 0);
+    if (total > UINT32_MAX)
+        return false;
+    unsigned char *p = malloc(total);
+    if (!p)
+        return false;
+    put_u32(p, 0x46546C67u); /* "glTF" */
+    put_u32(p + 4, 2);
+    put_u32(p + 8, (uint32_t)total);
+    put_u32(p + 12, (uint32_t)jpad);
+    put_u32(p + 16, 0x4E4F534Au); /* "JSON" */
+    memcpy(p + 20, json, jlen);
+    memset(p + 20 + jlen, ' ', jpad - jlen);
+    if (b->len) {
+        unsigned char *q = p + 20 + jpad;
+        put_u32(q, (uint32_t)bpad);
+        put_u32(q + 4, 0x004E4942u); /* "BIN\0" */
+        memcpy(q + 8, b->data, b->len);
+        memset(q + 8 + b->len, 0, bpad - b->len);
+    }
+    *out = p;
+    *len = total;
+    return true;
+}
+
+static void extras_for_points(const ism_features *f, ism_jw *w)
+{
+    ism_jw_object(w);
+    ism_jw_key(w, "class");
+    ism_jw_array(w);
+    for (size_t i = 0; i < f->npoints; i++)
+        ism_jw_int(w, f->point_class[i]);
+    ism_jw_array_end(w);
+    ism_jw_key(w, "kind");
+    ism_jw_array(w);
+    for (size_t i = 0; i < f->npoints; i++)
+        ism_jw_string(w, ism_point_kind_name(f->point_kind[i]));
+    ism_jw_array_end(w);
+    ism_jw_object_end(w);
+}
+
+bool ism_glb_build(const ism_glb_input *in, unsigned char **out, size_t *len)
+{
+    gltf g;
+    memset(&g, 0, sizeof g);
+    ism_jw *arrays[] = {&g.accessors, &g.views, &g.meshes, &g.nodes};
+    for (int i = 0; i < 4; i++) {
+        ism_jw_init(arrays[i]);
+        ism_jw_array(arrays[i]);
+    }
+    ism_jw extras;
+    ism_jw_init(&extras);
+    bool ok = true;
+    if (in->draco && in->draco->len) {
+        add_surface(&g, in->wire, in->draco);
+        const ism_features *f = in->features;
+        if (f) {
+            extras_for_points(f, &extras);
+            ok = add_feature_primitive(&g, in->mesh, "nonmanifold_curves", GL_LINES, 1,
+                                       &f->curves, NULL, 0, NULL) &&
+                 add_feature_primitive(&g, in->mesh, "nonmanifold_points", GL_POINTS, 2, NULL,
+                                       f->points, f->npoints, &extras) &&
+                 add_feature_primitive(&g, in->mesh, "boundaries", GL_LINES, 3, &f->boundaries,
+                                       NULL, 0, NULL);
+        }
+    }
+    for (int i = 0; i < 4; i++)
+        ism_jw_array_end(arrays[i]);
+    size_t jlen = 0;
+    char *json = ok && !g.bin.failed ? join_json(&g, in, &jlen) : NULL;
+    ok = json && container(json, jlen, &g.bin, out, len);
+    free(json);
+    free(g.bin.data);
+    ism_jw_free(&extras);
+    for (int i = 0; i < 4; i++)
+        ism_jw_free(arrays[i]);
+    return ok;
+}

@@ -1,0 +1,32 @@
+/* glb.h — glTF 2.0 binary (.glb) of one surface: the triangles as a Draco-compressed primitive
+ * (KHR_draco_mesh_compression, attribute ids as in draco_encode.h) and, uncompressed beside
+ * them, the features Draco cannot carry: non-manifold curves (LINES), non-manifold points
+ * (POINTS) and boundary chains (LINES). Opens in three.js (GLTFLoader + DRACOLoader) and
+ * Blender.
+ *
+ * Nodes, by name: "surface" (always, unless empty), "nonmanifold_curves",
+ * "nonmanifold_points", "boundaries" (each only when there is something to draw). The
+ * surface's attributes: POSITION, NORMAL, _MEAN_CURVATURE, _GAUSS_CURVATURE, _CLASS (the
+ * ones sent); the points node carries "extras": {"class": [...], "kind": [...]} per point.
+ * An empty surface gives a valid glTF with one empty scene and no buffer. */
+#ifndef ISM_GLB_H
+#define ISM_GLB_H
+
+#include <stddef.h>
+#include <stdbool.h>
+#include "proto/draco_encode.h"
+#include "proto/features.h"
+#include "proto/wire_mesh.h"
+
+typedef struct ism_glb_input {
+    const ism_mesh *mesh;             /* positions of feature vertices */
+    const ism_wire_mesh *wire;        /* which attributes were sent, bounds */
+    const ism_draco_output *draco;    /* NULL for an empty surface */
+    const ism_features *features;     /* may be NULL */
+    const char *key;                  /* cache key for asset.extras; may be NULL */
+} ism_glb_input;
+
+/* Builds the .glb into a malloc'd buffer. False when out of memory (or sizes overflow). */
+bool ism_glb_build(const ism_glb_input *in, unsigned char **out, size_t *len);
+
+#endif

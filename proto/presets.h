@@ -1,0 +1,41 @@
+/* presets.h — the named surfaces a client can ask for by name instead of writing the
+ * expression: the seed paper's non-manifold surfaces (both Kummer cases, horn cyclide, Klein
+ * bottle, Steiner's Roman surface) and the classics of shared/surfaces.json (sphere, torus,
+ * genus-2 pretzel, gyroid ball), each with its parameters, a suggested box and depth, and one
+ * line saying what it shows. GET /v1/presets serves ism_presets_json(). */
+#ifndef ISM_PRESETS_H
+#define ISM_PRESETS_H
+
+#include <stddef.h>
+#include "core/expr/expr.h"
+
+typedef struct ism_preset_param {
+    const char *name;
+    double value;              /* default */
+    double min, max;           /* suggested slider range (not enforced) */
+} ism_preset_param;
+
+typedef struct ism_preset {
+    const char *name;          /* what `"preset"` says */
+    const char *title;
+    const char *about;         /* one line: what the surface shows */
+    const char *expr;
+    const ism_let *lets;
+    size_t nlets;
+    const ism_preset_param *params;
+    size_t nparams;
+    double box[6];
+    int min_depth, max_depth;
+} ism_preset;
+
+size_t ism_preset_count(void);
+const ism_preset *ism_preset_at(size_t i);
+/* The preset called name, or NULL. */
+const ism_preset *ism_preset_find(const char *name);
+
+/* {"presets": [{"name", "title", "about", "expr", "let": [[name, source]...], "params":
+ * [{"name", "default", "min", "max"}...], "box": [6], "depth": {"min", "max"}}...]}.
+ * malloc'd text, NULL when out of memory. */
+char *ism_presets_json(size_t *len);
+
+#endif

@@ -1,0 +1,718 @@
+/* request.c — strict decoding of a surface request: jansson parses (rejecting duplicate keys,
+ * invalid UTF-8, trailing garbage), then each section is walked field by field so that an
+ * unknown field, a wrong type or a value out of range is reported with its JSON path.
+ * Defaults come from the polygoniser (ism_poly_options_default) and from the preset. */
+#include "proto/request.h"
+#include "proto/presets.h"
+#include "proto/json_writer.h"
+
+#include <jansson.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---------------------------------------------------------------------------------------
+ * Errors */
+
+bool ism_req_error_set(ism_req_error *err, int status, const char *code, const char *path,
+                       const char *fmt, ...)
+{
+    if (!err)
+        return false;
+    memset(err, 0, sizeof *err);
+    err->status = status;
+    snprintf(err->code, sizeof err->code, "%s", code);
+    snprintf(err->path, sizeof err->path, "%s", path ? path : "");
+    char reason[sizeof err->message];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(reason, sizeof reason, fmt, ap);
+    va_end(ap);
+    size_t at = 0, cap = sizeof err->message - 1;
+    if (err->path[0]) {
+        for (const char *s = err->path; *s && at < cap; s++)
+            err->message[at++] = *s;
+        for (const char *s = ": "; *s && at < cap; s++)
+            err->message[at++] = *s;
+    }
+    for (const char *s = reason; *s && at < cap; s++)
+        err->message[at++] = *s;
+    err->message[at] = '\0';
+    return false;
+}
+
+static bool bad(ism_req_error *err, const char *path, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+static bool bad(ism_req_error *err, const char *path, const char *fmt, ...)
+{
+    char reason[400];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(reason, sizeof reason, fmt, ap);
+    va_end(ap);
+    return ism_req_error_set(err, 400, "bad_request", path, "%s", reason);
+}
+
+static bool over(ism_req_error *err, const char *path, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+static bool over(ism_req_error *err, const char *path, const char *fmt, ...)
+{
+    char reason[400];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(reason, sizeof reason, fmt, ap);
+    va_end(ap);
+    return ism_req_error_set(err, 422, "over_limit", path, "%s", reason);
+}
+
+/* ---------------------------------------------------------------------------------------
+ * Paths and small readers */
+
+typedef char path_t[160];
+
+static bool is_identifier(const char *s)
+{
+    if (!(*s == '_' || (*s >= 'a' && *s <= 'z') || (*s >= 'A' && *s <= 'Z')))
+        return false;
+    for (s++; *s; s++)
+        if (!(*s == '_' || (*s >= 'a' && *s <= 'z') || (*s >= 'A' && *s <= 'Z') ||
+              (*s >= '0' && *s <= '9')))
+            return false;
+    return true;
+}
+
+/* parent.key, or parent["key"] (shortened) when key is not an identifier. */
+static void path_key(path_t out, const char *parent, const char *key)
+{
+    if (is_identifier(key) && strlen(key) <= 64) {
+        snprintf(out, sizeof(path_t), "%s.%s", parent, key);
+        return;
+    }
+    char shown[48];
+    size_t j = 0;
+    for (const char *s = key; *s && j < 40; s++) {
+        unsigned char c = (unsigned char)*s;
+        shown[j++] = (c < 0x20 || c == '"' || c == '\\') ? '?' : (char)c;
+    }
+    shown[j] = '\0';
+    snprintf(out, sizeof(path_t), "%s[\"%s%s\"]", parent, shown, strlen(key) > 40 ? "..." : "");
+}
+
+static void path_index(path_t out, const char *parent, size_t i)
+{
+    char index[32];
+    snprintf(index, sizeof index, "[%zu]", i);
+    size_t n = strlen(parent), k = strlen(index);
+    if (n + k >= sizeof(path_t))
+        n = sizeof(path_t) - 1 - k;
+    memmove(out, parent, n);
+    memcpy(out + n, index, k + 1);
+}
+
+static const char *type_name(const json_t *v)
+{
+    switch (json_typeof(v)) {
+    case JSON_OBJECT: return "an object";
+    case JSON_ARRAY: return "an array";
+    case JSON_STRING: return "a string";
+    case JSON_INTEGER: return "an integer";
+    case JSON_REAL: return "a number";
+    case JSON_TRUE: return "true";
+    case JSON_FALSE: return "false";
+    default: return "null";
+    }
+}
+
+static const char *num(double v, char *buf) { return ism_jw_format_double(v, buf); }
+
+static bool read_number(const json_t *v, const char *path, double *out, ism_req_error *err)
+{
+    if (!json_is_number(v))
+        return bad(err, path, "expected a number, got %s", type_name(v));
+    double d = json_number_value(v);
+    if (!isfinite(d))
+        return bad(err, path, "numbers must be finite");
+    *out = d;
+    return true;
+}
+
+static bool read_int(const json_t *v, const char *path, int *out, ism_req_error *err)
+{
+    double d;
+    if (!json_is_number(v))
+        return bad(err, path, "expected an integer, got %s", type_name(v));
+    if (!read_number(v, path, &d, err))
+        return false;
+    char b[32];
+    if (d != floor(d))
+        return bad(err, path, "expected an integer, got %s", num(d, b));
+    if (d < -1e9 || d > 1e9)
+        return over(err, path, "%s is out of range", num(d, b));
+    *out = (int)d;
+    return true;
+}
+
+static bool in_range(double v, double lo, double hi, const char *path, ism_req_error *err)
+{
+    char b[32], c[32];
+    if (v < lo)
+        return over(err, path, "%s is below the minimum %s", num(v, b), num(lo, c));
+    if (v > hi)
+        return over(err, path, "%s is above the limit %s", num(v, b), num(hi, c));
+    return true;
+}
+
+static bool read_string(const json_t *v, const char *path, const char **out, ism_req_error *err)
+{
+    if (!json_is_string(v))
+        return bad(err, path, "expected a string, got %s", type_name(v));
+    *out = json_string_value(v);
+    return true;
+}
+
+/* An object whose keys must all be in `known` (NULL-terminated). */
+static bool check_fields(const json_t *obj, const char *path, const char *const *known,
+                         ism_req_error *err)
+{
+    if (!json_is_object(obj))
+        return bad(err, path, "expected an object, got %s", type_name(obj));
+    const char *key;
+    json_t *val;
+    json_object_foreach((json_t *)obj, key, val) {
+        bool ok = false;
+        for (const char *const *k = known; *k; k++)
+            ok = ok || strcmp(*k, key) == 0;
+        if (!ok) {
+            char list[200] = "";
+            for (const char *const *k = known; *k; k++) {
+                strncat(list, *k, sizeof list - strlen(list) - 1);
+                if (k[1])
+                    strncat(list, ", ", sizeof list - strlen(list) - 1);
+            }
+            path_t p;
+            path_key(p, path, key);
+            return bad(err, p, "unknown field (expected one of: %s)", list);
+        }
+    }
+    return true;
+}
+
+static char *dup(const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *d = malloc(n);
+    if (d)
+        memcpy(d, s, n);
+    return d;
+}
+
+static bool no_memory(ism_req_error *err)
+{
+    return ism_req_error_set(err, 500, "no_memory", "", "out of memory decoding the request");
+}
+
+/* ---------------------------------------------------------------------------------------
+ * Sections */
+
+static bool check_name(const char *name, const char *path, const char *what,
+                       ism_req_error *err)
+{
+    if (strlen(name) > ISM_REQ_MAX_NAME)
+        return over(err, path, "%s name is longer than %d bytes", what, ISM_REQ_MAX_NAME);
+    if (!is_identifier(name))
+        return bad(err, path, "%s name must be letters, digits and _, not starting with a digit",
+                   what);
+    return true;
+}
+
+static bool set_param(ism_request *req, const char *name, double value, ism_req_error *err)
+{
+    for (size_t i = 0; i < req->nparams; i++)
+        if (strcmp(req->params[i].name, name) == 0) {
+            req->params[i].value = value;
+            return true;
+        }
+    ism_param *p = realloc(req->params, (req->nparams + 1) * sizeof *p);
+    if (!p)
+        return no_memory(err);
+    req->params = p;
+    char *n = dup(name);
+    if (!n)
+        return no_memory(err);
+    p[req->nparams].name = n;
+    p[req->nparams].value = value;
+    req->nparams++;
+    return true;
+}
+
+static bool decode_params(const json_t *v, const ism_preset *preset, ism_request *req,
+                          ism_req_error *err)
+{
+    if (!json_is_object(v))
+        return bad(err, "$.params", "expected an object of numbers, got %s", type_name(v));
+    if (json_object_size(v) > ISM_REQ_MAX_PARAMS)
+        return over(err, "$.params", "%zu parameters is above the limit %d",
+                    json_object_size(v), ISM_REQ_MAX_PARAMS);
+    const char *key;
+    json_t *val;
+    json_object_foreach((json_t *)v, key, val) {
+        path_t p;
+        path_key(p, "$.params", key);
+        double d;
+        if (!check_name(key, p, "parameter", err) || !read_number(val, p, &d, err))
+            return false;
+        if (preset) {
+            bool known = false;
+            char names[200] = "";
+            for (size_t i = 0; i < preset->nparams; i++) {
+                known = known || strcmp(preset->params[i].name, key) == 0;
+                strncat(names, preset->params[i].name, sizeof names - strlen(names) - 1);
+                if (i + 1 < preset->nparams)
+                    strncat(names, ", ", sizeof names - strlen(names) - 1);
+            }
+            if (!known)
+                return bad(err, p, "preset '%s' has no parameter '%s'%s%s%s", preset->name, key,
+                           preset->nparams ? " (it has " : " (it has none)",
+                           preset->nparams ? names : "", preset->nparams ? ")" : "");
+        }
+        if (!set_param(req, key, d, err))
+            return false;
+    }
+    return true;
+}
+
+static bool add_let(ism_request *req, const char *name, const char *source, const char *path,
+                    ism_req_error *err)
+{
+    if (req->nlets >= ISM_REQ_MAX_LETS)
+        return over(err, "$.let", "more than %d let bindings", ISM_REQ_MAX_LETS);
+    if (strlen(source) > ISM_REQ_MAX_SOURCE)
+        return over(err, path, "the source is longer than %d bytes", ISM_REQ_MAX_SOURCE);
+    for (size_t i = 0; i < req->nlets; i++)
+        if (strcmp(req->lets[i].name, name) == 0)
+            return bad(err, path, "let '%s' is defined twice", name);
+    ism_let *l = realloc(req->lets, (req->nlets + 1) * sizeof *l);
+    if (!l)
+        return no_memory(err);
+    req->lets = l;
+    char **lp = realloc(req->let_paths, (req->nlets + 1) * sizeof *lp);
+    if (!lp)
+        return no_memory(err);
+    req->let_paths = lp;
+    char *n = dup(name), *s = dup(source), *pp = dup(path);
+    if (!n || !s || !pp) {
+        free(n);
+        free(s);
+        free(pp);
+        return no_memory(err);
+    }
+    l[req->nlets].name = n;
+    l[req->nlets].source = s;
+    lp[req->nlets] = pp;
+    req->nlets++;
+    return true;
+}
+
+/* "let": {"p": "...", ...} (in order) or [["p", "..."], ...]. */
+static bool decode_lets(const json_t *v, ism_request *req, ism_req_error *err)
+{
+    if (json_is_object(v)) {
+        if (json_object_size(v) > ISM_REQ_MAX_LETS)
+            return over(err, "$.let", "%zu let bindings is above the limit %d",
+                        json_object_size(v), ISM_REQ_MAX_LETS);
+        const char *key;
+        json_t *val;
+        json_object_foreach((json_t *)v, key, val) {
+            path_t p;
+            path_key(p, "$.let", key);
+            const char *src = NULL;
+            if (!check_name(key, p, "let", err) || !read_string(val, p, &src, err) ||
+                !add_let(req, key, src, p, err))
+                return false;
+        }
+        return true;
+    }
+    if (!json_is_array(v))
+        return bad(err, "$.let", "expected an object {name: source} or an array of "
+                                 "[name, source] pairs, got %s", type_name(v));
+    if (json_array_size(v) > ISM_REQ_MAX_LETS)
+        return over(err, "$.let", "%zu let bindings is above the limit %d", json_array_size(v),
+                    ISM_REQ_MAX_LETS);
+    for (size_t i = 0; i < json_array_size(v); i++) {
+        const json_t *pair = json_array_get(v, i);
+        path_t p, pn, ps;
+        path_index(p, "$.let", i);
+        if (!json_is_array(pair) || json_array_size(pair) != 2)
+            return bad(err, p, "expected a pair [name, source]");
+        path_index(pn, p, 0);
+        path_index(ps, p, 1);
+        const char *name = NULL, *src = NULL;
+        if (!read_string(json_array_get(pair, 0), pn, &name, err) ||
+            !check_name(name, pn, "let", err) ||
+            !read_string(json_array_get(pair, 1), ps, &src, err) ||
+            !add_let(req, name, src, ps, err))
+            return false;
+    }
+    return true;
+}
+
+static bool decode_box(const json_t *v, double box[6], ism_req_error *err)
+{
+    if (!json_is_array(v) || json_array_size(v) != 6)
+        return bad(err, "$.box", "expected [xmin, ymin, zmin, xmax, ymax, zmax], got %s",
+                   json_is_array(v) ? "an array of another length" : type_name(v));
+    for (size_t i = 0; i < 6; i++) {
+        path_t p;
+        path_index(p, "$.box", i);
+        if (!read_number(json_array_get(v, i), p, &box[i], err) ||
+            !in_range(box[i], -ISM_REQ_MAX_COORD, ISM_REQ_MAX_COORD, p, err))
+            return false;
+        if (box[i] == 0)
+            box[i] = 0; /* -0 means 0 */
+    }
+    return true;
+}
+
+static bool check_box(const double box[6], ism_req_error *err)
+{
+    static const char axis[3] = {'x', 'y', 'z'};
+    double big = 1;
+    for (int k = 0; k < 6; k++)
+        big = fmax(big, fabs(box[k]));
+    for (int k = 0; k < 3; k++) {
+        char a[32], b[32];
+        if (!(box[k] < box[k + 3]))
+            return bad(err, "$.box", "%cmin (%s) must be below %cmax (%s)", axis[k],
+                       num(box[k], a), axis[k], num(box[k + 3], b));
+        if (box[k + 3] - box[k] < ISM_REQ_MIN_SIDE_REL * big)
+            return over(err, "$.box", "the box is thinner along %c (%s) than %g of its "
+                        "largest coordinate", axis[k], num(box[k + 3] - box[k], a),
+                        ISM_REQ_MIN_SIDE_REL);
+    }
+    return true;
+}
+
+static bool decode_depth(const json_t *v, ism_request *req, int limit, ism_req_error *err)
+{
+    static const char *const known[] = {"min", "max", NULL};
+    if (!check_fields(v, "$.depth", known, err))
+        return false;
+    const json_t *mn = json_object_get(v, "min"), *mx = json_object_get(v, "max");
+    if (mx) {
+        if (!read_int(mx, "$.depth.max", &req->max_depth, err) ||
+            !in_range(req->max_depth, 1, limit, "$.depth.max", err))
+            return false;
+        if (!mn && req->min_depth > req->max_depth)
+            req->min_depth = req->max_depth;
+    }
+    if (mn) {
+        if (!read_int(mn, "$.depth.min", &req->min_depth, err) ||
+            !in_range(req->min_depth, 0, ISM_REQ_MAX_MIN_DEPTH, "$.depth.min", err))
+            return false;
+        if (!mx && req->max_depth < req->min_depth)
+            req->max_depth = req->min_depth;
+    }
+    if (req->min_depth > req->max_depth)
+        return bad(err, "$.depth", "min (%d) is above max (%d)", req->min_depth,
+                   req->max_depth);
+    return true;
+}
+
+static bool decode_tolerances(const json_t *v, ism_request *req, ism_req_error *err)
+{
+    static const char *const known[] = {"gradient", "double_root_eps", "double_root_iters",
+                                        "stitch", "flat_normal", "flat_plane", NULL};
+    if (!check_fields(v, "$.tolerances", known, err))
+        return false;
+    struct {
+        const char *name;
+        double *out;
+        double lo, hi;
+    } reals[] = {
+        {"gradient", &req->gradient, -1, 1},
+        {"double_root_eps", &req->double_root_eps, 0, 1},
+        {"stitch", &req->stitch, 1e-9, 0.5},
+        {"flat_normal", &req->flat_normal, -1, 1},
+        {"flat_plane", &req->flat_plane, 1e-6, 1},
+    };
+    for (size_t i = 0; i < sizeof reals / sizeof reals[0]; i++) {
+        const json_t *f = json_object_get(v, reals[i].name);
+        path_t p;
+        path_key(p, "$.tolerances", reals[i].name);
+        if (f && (!read_number(f, p, reals[i].out, err) ||
+                  !in_range(*reals[i].out, reals[i].lo, reals[i].hi, p, err)))
+            return false;
+    }
+    const json_t *it = json_object_get(v, "double_root_iters");
+    if (it && (!read_int(it, "$.tolerances.double_root_iters", &req->double_root_iters, err) ||
+               !in_range(req->double_root_iters, 1, ISM_REQ_MAX_ROOT_ITERS,
+                         "$.tolerances.double_root_iters", err)))
+        return false;
+    return true;
+}
+
+static const char *const attr_names[] = {"normal", "mean_curvature", "gauss_curvature",
+                                         "class"};
+
+static bool decode_attributes(const json_t *v, unsigned *out, ism_req_error *err)
+{
+    if (!json_is_array(v))
+        return bad(err, "$.output.attributes", "expected an array of names, got %s",
+                   type_name(v));
+    unsigned set = 0;
+    for (size_t i = 0; i < json_array_size(v); i++) {
+        path_t p;
+        path_index(p, "$.output.attributes", i);
+        const char *name;
+        if (!read_string(json_array_get(v, i), p, &name, err))
+            return false;
+        int found = -1;
+        for (int k = 0; k < 4; k++)
+            if (strcmp(attr_names[k], name) == 0)
+                found = k;
+        if (found < 0)
+            return bad(err, p, "unknown attribute (expected one of: normal, mean_curvature, "
+                               "gauss_curvature, class)");
+        if (set & (1u << found))
+            return bad(err, p, "'%s' is listed twice", name);
+        set |= 1u << found;
+    }
+    *out = set;
+    return true;
+}
+
+static bool decode_output(const json_t *v, ism_request *req, ism_req_error *err)
+{
+    static const char *const known[] = {"format", "position_bits", "normal_bits",
+                                        "curvature_bits", "attributes", NULL};
+    if (!check_fields(v, "$.output", known, err))
+        return false;
+    const json_t *f = json_object_get(v, "format");
+    if (f) {
+        const char *name;
+        if (!read_string(f, "$.output.format", &name, err))
+            return false;
+        int k = ism_format_lookup(name);
+        if (k < 0)
+            return bad(err, "$.output.format",
+                       "unknown format (expected one of: drc, glb, ply, obj, stl)");
+        req->format = (enum ism_format)k;
+    }
+    const json_t *pb = json_object_get(v, "position_bits");
+    if (pb && (!read_int(pb, "$.output.position_bits", &req->position_bits, err) ||
+               !in_range(req->position_bits, 6, 24, "$.output.position_bits", err)))
+        return false;
+    const json_t *nb = json_object_get(v, "normal_bits");
+    if (nb && (!read_int(nb, "$.output.normal_bits", &req->normal_bits, err) ||
+               !in_range(req->normal_bits, 4, 16, "$.output.normal_bits", err)))
+        return false;
+    const json_t *cb = json_object_get(v, "curvature_bits");
+    if (cb) {
+        if (!read_int(cb, "$.output.curvature_bits", &req->curvature_bits, err))
+            return false;
+        if (req->curvature_bits != 0 &&
+            !in_range(req->curvature_bits, 8, 24, "$.output.curvature_bits", err))
+            return false;
+    }
+    const json_t *at = json_object_get(v, "attributes");
+    if (at && !decode_attributes(at, &req->attributes, err))
+        return false;
+    return true;
+}
+
+/* ---------------------------------------------------------------------------------------
+ * The whole request */
+
+static void set_defaults(ism_request *req, int depth_limit)
+{
+    ism_poly_options o;
+    ism_poly_options_default(&o);
+    static const double box[6] = {-2, -2, -2, 2, 2, 2};
+    memcpy(req->box, box, sizeof box);
+    req->max_depth = o.max_depth < depth_limit ? o.max_depth : depth_limit;
+    req->min_depth = o.min_depth < req->max_depth ? o.min_depth : req->max_depth;
+    req->gradient = o.gradient_test;
+    req->double_root_eps = o.double_root_eps;
+    req->double_root_iters = o.double_root_iters;
+    req->stitch = o.stitch_tol;
+    req->flat_normal = o.flat_normal;
+    req->flat_plane = o.flat_plane;
+    req->format = ISM_FORMAT_DRC;
+    req->position_bits = ISM_REQ_DEFAULT_POSITION_BITS;
+    req->normal_bits = ISM_REQ_DEFAULT_NORMAL_BITS;
+    req->curvature_bits = ISM_REQ_DEFAULT_CURVATURE_BITS;
+    req->attributes = ISM_ATTR_ALL;
+}
+
+static bool apply_preset(ism_request *req, const ism_preset *p, int depth_limit,
+                         ism_req_error *err)
+{
+    if (!(req->preset = dup(p->name)) || !(req->expr = dup(p->expr)))
+        return no_memory(err);
+    for (size_t i = 0; i < p->nlets; i++) {
+        path_t path;
+        snprintf(path, sizeof path, "$.preset (let %s)", p->lets[i].name);
+        if (!add_let(req, p->lets[i].name, p->lets[i].source, path, err))
+            return false;
+    }
+    for (size_t i = 0; i < p->nparams; i++)
+        if (!set_param(req, p->params[i].name, p->params[i].value, err))
+            return false;
+    memcpy(req->box, p->box, sizeof req->box);
+    req->max_depth = p->max_depth < depth_limit ? p->max_depth : depth_limit;
+    req->min_depth = p->min_depth < req->max_depth ? p->min_depth : req->max_depth;
+    return true;
+}
+
+static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
+                        ism_req_error *err)
+{
+    static const char *const known[] = {"expr", "preset", "params", "let", "box", "depth",
+                                        "tolerances", "output", NULL};
+    if (!json_is_object(root))
+        return bad(err, "$", "a request is a JSON object, got %s", type_name(root));
+    if (!check_fields(root, "$", known, err))
+        return false;
+
+    const json_t *expr = json_object_get(root, "expr"), *preset = json_object_get(root, "preset");
+    const json_t *lets = json_object_get(root, "let"), *params = json_object_get(root, "params");
+    const ism_preset *p = NULL;
+    if (expr && preset)
+        return bad(err, "$.preset", "give either \"expr\" or \"preset\", not both");
+    if (!expr && !preset)
+        return bad(err, "$", "missing the surface: give \"expr\" (an expression in x, y, z) "
+                             "or \"preset\" (a name from GET /v1/presets)");
+    if (preset) {
+        const char *name;
+        if (!read_string(preset, "$.preset", &name, err))
+            return false;
+        if (!(p = ism_preset_find(name))) {
+            char names[400] = "";
+            for (size_t i = 0; i < ism_preset_count(); i++) {
+                strncat(names, ism_preset_at(i)->name, sizeof names - strlen(names) - 1);
+                if (i + 1 < ism_preset_count())
+                    strncat(names, ", ", sizeof names - strlen(names) - 1);
+            }
+            return bad(err, "$.preset", "unknown preset (known: %s)", names);
+        }
+        if (lets)
+            return bad(err, "$.let", "a preset brings its own let bindings; write the "
+                                     "expression out to change them");
+        if (!apply_preset(req, p, depth_limit, err))
+            return false;
+    } else {
+        const char *src;
+        if (!read_string(expr, "$.expr", &src, err))
+            return false;
+        if (!*src)
+            return bad(err, "$.expr", "the expression is empty");
+        if (strlen(src) > ISM_REQ_MAX_SOURCE)
+            return over(err, "$.expr", "the expression is longer than %d bytes",
+                        ISM_REQ_MAX_SOURCE);
+        if (!(req->expr = dup(src)))
+            return no_memory(err);
+        if (lets && !decode_lets(lets, req, err))
+            return false;
+    }
+    if (params && !decode_params(params, p, req, err))
+        return false;
+
+    const json_t *v;
+    if ((v = json_object_get(root, "box")) && !decode_box(v, req->box, err))
+        return false;
+    if (!check_box(req->box, err))
+        return false;
+    if ((v = json_object_get(root, "depth")) && !decode_depth(v, req, depth_limit, err))
+        return false;
+    if ((v = json_object_get(root, "tolerances")) && !decode_tolerances(v, req, err))
+        return false;
+    if ((v = json_object_get(root, "output")) && !decode_output(v, req, err))
+        return false;
+    return true;
+}
+
+bool ism_request_decode(const char *json, size_t len, const ism_request_limits *lim,
+                        ism_request *req, ism_req_error *err)
+{
+    memset(req, 0, sizeof *req);
+    memset(err, 0, sizeof *err);
+    int depth_limit = lim ? lim->max_depth : ISM_REQ_DEFAULT_MAX_DEPTH_LIMIT;
+    if (depth_limit <= 0 || depth_limit > ISM_MAX_DEPTH_LIMIT)
+        depth_limit = depth_limit <= 0 ? ISM_REQ_DEFAULT_MAX_DEPTH_LIMIT : ISM_MAX_DEPTH_LIMIT;
+    set_defaults(req, depth_limit);
+
+    if (len > ISM_REQ_MAX_BYTES)
+        return ism_req_error_set(err, 422, "too_large", "$", "the request is %zu bytes, above "
+                                 "the limit %d", len, ISM_REQ_MAX_BYTES);
+    json_error_t je;
+    json_t *root = json_loadb(json, len, JSON_REJECT_DUPLICATES, &je);
+    if (!root) {
+        ism_req_error_set(err, 400, "bad_json", "", "invalid JSON at line %d, column %d: %s",
+                          je.line, je.column, je.text);
+        err->line = je.line;
+        err->column = je.column;
+        return false;
+    }
+    bool ok = decode_root(root, req, depth_limit, err);
+    json_decref(root);
+    if (!ok) {
+        ism_request_free(req);
+        return false;
+    }
+    return true;
+}
+
+void ism_request_free(ism_request *req)
+{
+    for (size_t i = 0; i < req->nparams; i++)
+        free((char *)req->params[i].name);
+    for (size_t i = 0; i < req->nlets; i++) {
+        free((char *)req->lets[i].name);
+        free((char *)req->lets[i].source);
+        free(req->let_paths[i]);
+    }
+    free(req->params);
+    free(req->lets);
+    free(req->let_paths);
+    free(req->preset);
+    free(req->expr);
+    memset(req, 0, sizeof *req);
+}
+
+/* ---------------------------------------------------------------------------------------
+ * Formats */
+
+static const char *const format_names[ISM_FORMAT_COUNT] = {"drc", "glb", "ply", "obj", "stl"};
+static const char *const format_mimes[ISM_FORMAT_COUNT] = {
+    "application/vnd.google.draco", "model/gltf-binary", "application/ply", "model/obj",
+    "model/stl"};
+
+const char *ism_format_name(enum ism_format f)
+{
+    return (unsigned)f < ISM_FORMAT_COUNT ? format_names[f] : "?";
+}
+
+const char *ism_format_mime(enum ism_format f)
+{
+    return (unsigned)f < ISM_FORMAT_COUNT ? format_mimes[f] : "application/octet-stream";
+}
+
+int ism_format_lookup(const char *name)
+{
+    for (int i = 0; i < ISM_FORMAT_COUNT; i++)
+        if (strcmp(format_names[i], name) == 0)
+            return i;
+    return -1;
+}
+
+bool ism_request_set_format(ism_request *req, const char *name, ism_req_error *err)
+{
+    int k = ism_format_lookup(name);
+    if (k < 0)
+        return ism_req_error_set(err, 400, "bad_request", "format",
+                                 "unknown format (expected one of: drc, glb, ply, obj, stl)");
+    req->format = (enum ism_format)k;
+    return true;
+}

@@ -1,0 +1,132 @@
+/* request.h — a surface request as it crosses the wire: strict decoding of the JSON body into
+ * typed, validated values (defaults filled in, presets expanded), compiling its expression,
+ * its canonical form and the cache key, and the error JSON a client gets back.
+ *
+ * The request format is described for clients in proto/request.schema.json and
+ * proto/openapi.yaml; keep the three in step. Decoding is strict: unknown fields, duplicate
+ * keys, invalid UTF-8, trailing garbage and non-finite numbers are rejected, and every error
+ * names the JSON path and the reason ("$.depth.max: 14 is above the limit 10").
+ *
+ * Statuses: 400 when the request is malformed (JSON syntax, unknown or missing field, wrong
+ * type, inconsistent values, an expression that does not compile); 422 when a well-formed
+ * value lies outside a published range or limit (depth, box size, bits, sizes). */
+#ifndef ISM_REQUEST_H
+#define ISM_REQUEST_H
+
+#include <stddef.h>
+#include <stdbool.h>
+#include "core/expr/expr.h"
+#include "core/octree/polygonise.h"
+
+/* Published limits (also in request.schema.json and openapi.yaml). */
+#define ISM_REQ_MAX_BYTES       (256 * 1024) /* request body */
+#define ISM_REQ_MAX_MIN_DEPTH   6            /* unconditional subdivision: 8^6 nodes */
+#define ISM_REQ_DEFAULT_MAX_DEPTH_LIMIT 10   /* operator's limit unless set otherwise */
+#define ISM_REQ_MAX_COORD       1e6          /* |box coordinate| */
+#define ISM_REQ_MIN_SIDE_REL    1e-6         /* box side >= this * max(1, largest |coord|) */
+#define ISM_REQ_MAX_NAME        63           /* parameter / let name bytes */
+#define ISM_REQ_MAX_PARAMS      64
+#define ISM_REQ_MAX_LETS        64
+#define ISM_REQ_MAX_SOURCE      16384        /* bytes of one expression or let source */
+#define ISM_REQ_MAX_ROOT_ITERS  60           /* tolerances.double_root_iters */
+
+enum ism_format { ISM_FORMAT_DRC, ISM_FORMAT_GLB, ISM_FORMAT_PLY, ISM_FORMAT_OBJ,
+                  ISM_FORMAT_STL, ISM_FORMAT_COUNT };
+
+/* Per-vertex attributes a client may ask for (bit set). Draco unique ids: draco_encode.h. */
+enum ism_attr {
+    ISM_ATTR_NORMAL = 1 << 0,
+    ISM_ATTR_MEAN_CURVATURE = 1 << 1,
+    ISM_ATTR_GAUSS_CURVATURE = 1 << 2,
+    ISM_ATTR_CLASS = 1 << 3,
+};
+#define ISM_ATTR_ALL (ISM_ATTR_NORMAL | ISM_ATTR_MEAN_CURVATURE | ISM_ATTR_GAUSS_CURVATURE | \
+                      ISM_ATTR_CLASS)
+
+/* Defaults of the output section. */
+#define ISM_REQ_DEFAULT_POSITION_BITS 14
+#define ISM_REQ_DEFAULT_NORMAL_BITS 10
+#define ISM_REQ_DEFAULT_CURVATURE_BITS 0 /* 0 = float32 as computed, no quantisation */
+
+typedef struct ism_request {
+    char *preset;              /* preset name, or NULL when the request wrote an expression */
+    char *expr;                /* the expression (the preset's when preset is set) */
+    ism_param *params;         /* every parameter (a preset's defaults filled in), names owned */
+    size_t nparams;
+    ism_let *lets;             /* in order; names and sources owned */
+    size_t nlets;
+    char **let_paths;          /* JSON path of each let's source, for errors */
+    double box[6];             /* xmin ymin zmin xmax ymax zmax */
+    int min_depth, max_depth;
+    double gradient;           /* the polygoniser's option names: gradient_test ... */
+    double double_root_eps;
+    int double_root_iters;
+    double stitch;
+    double flat_normal;
+    double flat_plane;
+    enum ism_format format;
+    int position_bits;         /* Draco position quantisation (6..24) */
+    int normal_bits;           /* Draco normal quantisation (4..16) */
+    int curvature_bits;        /* 0 (float32) or 8..24 */
+    unsigned attributes;       /* enum ism_attr bits */
+} ism_request;
+
+/* What the operator allows. */
+typedef struct ism_request_limits {
+    int max_depth;             /* highest depth.max accepted (capped at ISM_MAX_DEPTH_LIMIT) */
+} ism_request_limits;
+
+typedef struct ism_req_error {
+    int status;                /* 400, 422 (or, from the pipeline, 499 / 500) */
+    char code[32];             /* bad_json, bad_request, bad_expression, over_limit, ... */
+    char path[160];            /* JSON path like "$.depth.max", "" when none */
+    int line, column;          /* 1-based position in the JSON text or the expression; 0 none */
+    char message[400];         /* one line, starting with the path when there is one */
+} ism_req_error;
+
+/* Decodes and validates a JSON request. lim may be NULL for the default limits. On failure
+ * returns false, fills err, and leaves req empty (safe to free). */
+bool ism_request_decode(const char *json, size_t len, const ism_request_limits *lim,
+                        ism_request *req, ism_req_error *err);
+
+void ism_request_free(ism_request *req);
+
+/* Replaces the format by name ("drc", "glb", "ply", "obj", "stl"); 400 on an unknown name. */
+bool ism_request_set_format(ism_request *req, const char *name, ism_req_error *err);
+
+const char *ism_format_name(enum ism_format f);
+const char *ism_format_mime(enum ism_format f);
+/* The format called name, or -1. */
+int ism_format_lookup(const char *name);
+
+/* Compiles the request's expression (with its params and lets). On failure fills err (400
+ * with the expression's path and the parser's line and column; 422 for a size limit). */
+ism_tape *ism_request_compile(const ism_request *req, ism_req_error *err);
+
+/* The polygoniser's options for this request (budget fields left at their defaults). */
+void ism_request_poly_options(const ism_request *req, ism_poly_options *o);
+
+/* The canonical request: a valid request JSON (expression form, presets written out, every
+ * default filled in, numbers in shortest round-trip form, keys in a fixed order, no format).
+ * Running it again gives the same mesh. Returns malloc'd text, NULL when out of memory. */
+char *ism_request_canonical(const ism_request *req, size_t *len);
+
+/* The text the cache key hashes: ISM_MESHER_VERSION, the compiled tape's canonical text
+ * (parameters folded in, so a preset and its written-out expression agree), box, depths,
+ * tolerances and the encoding options that change the bytes (bits only for attributes that
+ * are sent). Never the format. malloc'd; NULL when out of memory. */
+char *ism_request_key_material(const ism_request *req, const ism_tape *tape, size_t *len);
+
+/* BLAKE2b-256 (libsodium crypto_generichash) of the key material, as 64 hex digits + NUL.
+ * False when out of memory or libsodium fails to start. */
+bool ism_request_key(const ism_request *req, const ism_tape *tape, char hex[65]);
+
+/* Error helpers. ism_req_error_set formats the message; the path, when not empty, is
+ * prefixed to it ("$.box: ..."). Returns false for `return ism_req_error_set(...)`. */
+bool ism_req_error_set(ism_req_error *err, int status, const char *code, const char *path,
+                       const char *fmt, ...) __attribute__((format(printf, 5, 6)));
+
+/* The error JSON: {"error": {"code", "message", "path"?, "line"?, "column"?}}. malloc'd. */
+char *ism_req_error_json(const ism_req_error *err, size_t *len);
+
+#endif

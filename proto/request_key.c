@@ -1,0 +1,171 @@
+/* request_key.c — what a request means, written out twice: the canonical request (a valid
+ * request that any client or the daemon can run again) and the key material that the cache
+ * key hashes (BLAKE2b-256 with libsodium). Both are built from the decoded, typed values with
+ * every default filled in, never from the client's text, so key order, white space, `1` vs
+ * `1.0` and defaults written or left out do not matter; the expression enters the key as the
+ * compiled tape's canonical text, so spacing does not matter and a preset equals its
+ * written-out expression. */
+#include "proto/request.h"
+#include "proto/json_writer.h"
+#include "core/version.h"
+
+#include <sodium.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const attr_names[] = {"normal", "mean_curvature", "gauss_curvature",
+                                         "class"};
+
+static void write_box(ism_jw *w, const double box[6])
+{
+    ism_jw_array(w);
+    for (int k = 0; k < 6; k++)
+        ism_jw_number(w, box[k]);
+    ism_jw_array_end(w);
+}
+
+static void write_tolerances(ism_jw *w, const ism_request *req)
+{
+    ism_jw_object(w);
+    ism_jw_key(w, "gradient");
+    ism_jw_number(w, req->gradient);
+    ism_jw_key(w, "double_root_eps");
+    ism_jw_number(w, req->double_root_eps);
+    ism_jw_key(w, "double_root_iters");
+    ism_jw_int(w, req->double_root_iters);
+    ism_jw_key(w, "stitch");
+    ism_jw_number(w, req->stitch);
+    ism_jw_key(w, "flat_normal");
+    ism_jw_number(w, req->flat_normal);
+    ism_jw_key(w, "flat_plane");
+    ism_jw_number(w, req->flat_plane);
+    ism_jw_object_end(w);
+}
+
+/* The encoding options; with only_effective, bits of attributes that are not sent are left
+ * out (they cannot change the bytes). */
+static void write_output(ism_jw *w, const ism_request *req, bool only_effective)
+{
+    bool curv = req->attributes & (ISM_ATTR_MEAN_CURVATURE | ISM_ATTR_GAUSS_CURVATURE);
+    ism_jw_object(w);
+    ism_jw_key(w, "position_bits");
+    ism_jw_int(w, req->position_bits);
+    if (!only_effective || (req->attributes & ISM_ATTR_NORMAL)) {
+        ism_jw_key(w, "normal_bits");
+        ism_jw_int(w, req->normal_bits);
+    }
+    if (!only_effective || curv) {
+        ism_jw_key(w, "curvature_bits");
+        ism_jw_int(w, req->curvature_bits);
+    }
+    ism_jw_key(w, "attributes");
+    ism_jw_array(w);
+    for (int k = 0; k < 4; k++)
+        if (req->attributes & (1u << k))
+            ism_jw_string(w, attr_names[k]);
+    ism_jw_array_end(w);
+    ism_jw_object_end(w);
+}
+
+static int by_name(const void *a, const void *b)
+{
+    return strcmp(((const ism_param *)a)->name, ((const ism_param *)b)->name);
+}
+
+char *ism_request_canonical(const ism_request *req, size_t *len)
+{
+    ism_param *sorted = malloc((req->nparams ? req->nparams : 1) * sizeof *sorted);
+    if (!sorted)
+        return NULL;
+    if (req->nparams)
+        memcpy(sorted, req->params, req->nparams * sizeof *sorted);
+    qsort(sorted, req->nparams, sizeof *sorted, by_name);
+
+    ism_jw w;
+    ism_jw_init(&w);
+    ism_jw_object(&w);
+    ism_jw_key(&w, "expr");
+    ism_jw_string(&w, req->expr);
+    ism_jw_key(&w, "let");
+    ism_jw_array(&w);
+    for (size_t i = 0; i < req->nlets; i++) {
+        ism_jw_array(&w);
+        ism_jw_string(&w, req->lets[i].name);
+        ism_jw_string(&w, req->lets[i].source);
+        ism_jw_array_end(&w);
+    }
+    ism_jw_array_end(&w);
+    ism_jw_key(&w, "params");
+    ism_jw_object(&w);
+    for (size_t i = 0; i < req->nparams; i++) {
+        ism_jw_key(&w, sorted[i].name);
+        ism_jw_number(&w, sorted[i].value);
+    }
+    ism_jw_object_end(&w);
+    free(sorted);
+    ism_jw_key(&w, "box");
+    write_box(&w, req->box);
+    ism_jw_key(&w, "depth");
+    ism_jw_object(&w);
+    ism_jw_key(&w, "min");
+    ism_jw_int(&w, req->min_depth);
+    ism_jw_key(&w, "max");
+    ism_jw_int(&w, req->max_depth);
+    ism_jw_object_end(&w);
+    ism_jw_key(&w, "tolerances");
+    write_tolerances(&w, req);
+    ism_jw_key(&w, "output");
+    write_output(&w, req, false);
+    ism_jw_object_end(&w);
+    return ism_jw_take(&w, len);
+}
+
+char *ism_request_key_material(const ism_request *req, const ism_tape *tape, size_t *len)
+{
+    size_t n = ism_tape_canonical(tape, NULL, 0);
+    char *text = malloc(n + 1);
+    if (!text)
+        return NULL;
+    ism_tape_canonical(tape, text, n + 1);
+
+    ism_jw w;
+    ism_jw_init(&w);
+    ism_jw_object(&w);
+    ism_jw_key(&w, "key_format");
+    ism_jw_int(&w, 1);
+    ism_jw_key(&w, "mesher");
+    ism_jw_string(&w, ISM_MESHER_VERSION);
+    ism_jw_key(&w, "surface");
+    ism_jw_string_n(&w, text, n);
+    free(text);
+    ism_jw_key(&w, "box");
+    write_box(&w, req->box);
+    ism_jw_key(&w, "depth");
+    ism_jw_array(&w);
+    ism_jw_int(&w, req->min_depth);
+    ism_jw_int(&w, req->max_depth);
+    ism_jw_array_end(&w);
+    ism_jw_key(&w, "tolerances");
+    write_tolerances(&w, req);
+    ism_jw_key(&w, "encoding");
+    write_output(&w, req, true);
+    ism_jw_object_end(&w);
+    return ism_jw_take(&w, len);
+}
+
+bool ism_request_key(const ism_request *req, const ism_tape *tape, char hex[65])
+{
+    if (sodium_init() < 0)
+        return false;
+    size_t n;
+    char *m = ism_request_key_material(req, tape, &n);
+    if (!m)
+        return false;
+    unsigned char h[32];
+    int rc = crypto_generichash(h, sizeof h, (const unsigned char *)m, n, NULL, 0);
+    free(m);
+    if (rc != 0)
+        return false;
+    sodium_bin2hex(hex, 65, h, sizeof h);
+    return true;
+}

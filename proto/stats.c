@@ -1,0 +1,187 @@
+/* stats.c — writes the stats JSON (layout in stats.h) from the polygoniser's and the
+ * analysis's structures, naming every field after its C counterpart so that the numbers can
+ * be traced back to the code that counted them. */
+#include "proto/stats.h"
+#include "proto/json_writer.h"
+#include "core/version.h"
+
+#include <stdio.h>
+
+static void kv_u(ism_jw *w, const char *k, uint64_t v)
+{
+    ism_jw_key(w, k);
+    ism_jw_uint(w, v);
+}
+
+static void kv_d(ism_jw *w, const char *k, double v)
+{
+    ism_jw_key(w, k);
+    ism_jw_number(w, v);
+}
+
+static void write_poly(ism_jw *w, const ism_poly_stats *s)
+{
+    static const char *const phase[ISM_PHASE_COUNT] = {"octree", "polygons", "cracks", "mesh"};
+    ism_jw_object(w);
+    kv_u(w, "nodes_visited", s->nodes_visited);
+    kv_u(w, "nodes_excluded", s->nodes_excluded);
+    kv_u(w, "plotting_nodes", s->plotting_nodes);
+    kv_u(w, "unresolved_nodes", s->unresolved_nodes);
+    kv_u(w, "edges_single_root", s->edges_single_root);
+    kv_u(w, "edges_double_root", s->edges_double_root);
+    kv_u(w, "edges_touching", s->edges_touching);
+    kv_u(w, "edges_many_roots", s->edges_many_roots);
+    kv_u(w, "zero_vertices", s->zero_vertices);
+    kv_u(w, "polygons", s->polygons);
+    kv_u(w, "two_polygon_nodes", s->two_polygon_nodes);
+    kv_u(w, "degenerate_polygons", s->degenerate_polygons);
+    kv_u(w, "nonmanifold_lines", s->nonmanifold_lines);
+    kv_u(w, "open_chains", s->open_chains);
+    kv_u(w, "cracks_repaired", s->cracks_repaired);
+    kv_u(w, "evals_point", s->evals_point);
+    kv_u(w, "evals_interval", s->evals_interval);
+    kv_u(w, "evals_gradient", s->evals_gradient);
+    kv_u(w, "triangles", s->triangles);
+    kv_u(w, "vertices", s->vertices);
+    ism_jw_key(w, "threads");
+    ism_jw_int(w, s->threads);
+    ism_jw_key(w, "time_ms");
+    ism_jw_object(w);
+    for (int i = 0; i < ISM_PHASE_COUNT; i++)
+        kv_d(w, phase[i], s->time_ms[i]);
+    kv_d(w, "total", s->total_ms);
+    ism_jw_object_end(w);
+    ism_jw_object_end(w);
+}
+
+static void write_analysis(ism_jw *w, const ism_analysis *a)
+{
+    static const char *const cls[ISM_VERTEX_CLASSES] = {"manifold", "boundary",
+                                                        "nonmanifold_edge",
+                                                        "nonmanifold_point", "isolated"};
+    ism_jw_object(w);
+    kv_u(w, "edges", a->edges);
+    kv_u(w, "boundary_edges", a->boundary_edges);
+    kv_u(w, "manifold_edges", a->manifold_edges);
+    kv_u(w, "nonmanifold_edges", a->nonmanifold_edges);
+    kv_u(w, "nonmanifold_vertices", a->nonmanifold_vertices);
+    ism_jw_key(w, "vertex_classes");
+    ism_jw_object(w);
+    for (int i = 0; i < ISM_VERTEX_CLASSES; i++)
+        kv_u(w, cls[i], a->class_count[i]);
+    ism_jw_object_end(w);
+    kv_u(w, "nonmanifold_curves", a->ncurves);
+    kv_u(w, "nonmanifold_points", a->npoints);
+    ism_jw_key(w, "euler");
+    ism_jw_int(w, a->euler);
+    kv_u(w, "components", a->components);
+    kv_u(w, "vertex_components", a->vertex_components);
+    kv_u(w, "boundary_loops", a->boundary_loops);
+    kv_u(w, "boundary_chains", a->boundary_chains);
+    ism_jw_key(w, "orientable");
+    ism_jw_bool(w, a->orientable);
+    ism_jw_key(w, "genus");
+    ism_jw_int(w, a->genus);
+    kv_u(w, "vertices_used", a->vertices_used);
+    kv_u(w, "triangles_used", a->triangles_used);
+    kv_u(w, "collapsed_triangles", a->collapsed_triangles);
+    kv_d(w, "area", a->area);
+    kv_d(w, "total_gauss", a->total_gauss);
+    kv_d(w, "total_abs_gauss", a->total_abs_gauss);
+    kv_u(w, "singular_vertices", a->singular_vertices);
+    kv_d(w, "gradient_scale", a->gradient_scale);
+    ism_jw_key(w, "quality");
+    ism_jw_object(w);
+    kv_d(w, "min_angle", a->min_angle);
+    kv_d(w, "median_angle", a->median_angle);
+    kv_d(w, "share_under_10", a->share_under_10);
+    kv_u(w, "degenerate_triangles", a->degenerate_triangles);
+    ism_jw_key(w, "angle_hist");
+    ism_jw_array(w);
+    for (int i = 0; i < ISM_ANGLE_BINS; i++)
+        ism_jw_uint(w, a->angle_hist[i]);
+    ism_jw_array_end(w);
+    ism_jw_object_end(w);
+    ism_jw_key(w, "accuracy");
+    ism_jw_object(w);
+    kv_d(w, "max_dist_vertex", a->max_dist_vertex);
+    kv_d(w, "mean_dist_vertex", a->mean_dist_vertex);
+    kv_d(w, "max_dist_centroid", a->max_dist_centroid);
+    kv_d(w, "mean_dist_centroid", a->mean_dist_centroid);
+    kv_d(w, "max_newton_dist", a->max_newton_dist);
+    kv_d(w, "mean_newton_dist", a->mean_newton_dist);
+    kv_u(w, "skipped", a->accuracy_skipped);
+    ism_jw_object_end(w);
+    ism_jw_object_end(w);
+}
+
+/* What the polygoniser could not resolve, said in words (DESIGN.md: say so in the stats
+ * instead of producing silent garbage). */
+static void write_warnings(ism_jw *w, const ism_poly_stats *s)
+{
+    char msg[200];
+    ism_jw_array(w);
+    if (s && s->edges_many_roots) {
+        snprintf(msg, sizeof msg, "%llu cell edges may hold more than two roots (the paper's "
+                 "known failure case): parts of the surface may be missing there",
+                 (unsigned long long)s->edges_many_roots);
+        ism_jw_string(w, msg);
+    }
+    if (s && s->unresolved_nodes) {
+        snprintf(msg, sizeof msg, "%llu cells at the maximum depth were not flat enough: "
+                 "a larger depth.max may show more detail",
+                 (unsigned long long)s->unresolved_nodes);
+        ism_jw_string(w, msg);
+    }
+    if (s && s->open_chains) {
+        snprintf(msg, sizeof msg, "%llu line chains could not be closed into polygons",
+                 (unsigned long long)s->open_chains);
+        ism_jw_string(w, msg);
+    }
+    ism_jw_array_end(w);
+}
+
+char *ism_stats_json(const ism_stats_input *in, size_t *len)
+{
+    static const char *const timing[ISM_TIME_COUNT] = {"decode", "compile", "polygonise",
+                                                    "analyse", "features", "encode", "total"};
+    ism_jw w;
+    ism_jw_init(&w);
+    ism_jw_object(&w);
+    ism_jw_key(&w, "key");
+    ism_jw_string(&w, in->key ? in->key : "");
+    ism_jw_key(&w, "mesher");
+    ism_jw_string(&w, ISM_MESHER_VERSION);
+    ism_jw_key(&w, "version");
+    ism_jw_string(&w, ISM_VERSION);
+    ism_jw_key(&w, "format");
+    ism_jw_string(&w, in->format ? in->format : "");
+    kv_u(&w, "bytes", in->bytes);
+    kv_u(&w, "features_bytes", in->features_bytes);
+    ism_jw_key(&w, "empty");
+    ism_jw_bool(&w, in->empty);
+    ism_jw_key(&w, "mesh");
+    ism_jw_object(&w);
+    kv_u(&w, "vertices", in->vertices);
+    kv_u(&w, "triangles", in->triangles);
+    kv_u(&w, "encoded_points", in->encoded_points);
+    kv_u(&w, "encoded_faces", in->encoded_faces);
+    ism_jw_object_end(&w);
+    if (in->poly) {
+        ism_jw_key(&w, "polygoniser");
+        write_poly(&w, in->poly);
+    }
+    if (in->analysis) {
+        ism_jw_key(&w, "analysis");
+        write_analysis(&w, in->analysis);
+    }
+    ism_jw_key(&w, "timings_ms");
+    ism_jw_object(&w);
+    for (int i = 0; i < ISM_TIME_COUNT; i++)
+        kv_d(&w, timing[i], in->timings_ms[i]);
+    ism_jw_object_end(&w);
+    ism_jw_key(&w, "warnings");
+    write_warnings(&w, in->poly);
+    ism_jw_object_end(&w);
+    return ism_jw_take(&w, len);
+}

@@ -1,0 +1,38 @@
+/* stats.h — the stats JSON that accompanies every mesh: the key, what was sent (format,
+ * bytes, empty or not), the polygoniser's counters and phase times, the analysis's figures
+ * (edges, classes, topology, curvature integrals, triangle quality, distance to f = 0), the
+ * timings of each pipeline phase, and warnings for the cases the algorithm could not resolve.
+ *
+ *   {"key", "mesher", "version", "format", "bytes", "features_bytes", "empty",
+ *    "mesh": {"vertices", "triangles", "encoded_points", "encoded_faces"},
+ *    "polygoniser": {... ism_poly_stats fields ..., "time_ms": {"octree", "polygons",
+ *                    "cracks", "mesh", "total"}},
+ *    "analysis": {...}, "timings_ms": {"decode", "compile", "polygonise", "analyse",
+ *    "features", "encode", "total"}, "warnings": ["..."]} */
+#ifndef ISM_STATS_H
+#define ISM_STATS_H
+
+#include <stddef.h>
+#include <stdbool.h>
+#include "core/analysis/analysis.h"
+#include "core/octree/polygonise.h"
+
+enum ism_timing { ISM_TIME_DECODE, ISM_TIME_COMPILE, ISM_TIME_POLYGONISE, ISM_TIME_ANALYSE, ISM_TIME_FEATURES,
+                  ISM_TIME_ENCODE, ISM_TIME_TOTAL, ISM_TIME_COUNT };
+
+typedef struct ism_stats_input {
+    const char *key;
+    const char *format;
+    size_t bytes, features_bytes;
+    bool empty;
+    size_t vertices, triangles;           /* of the polygoniser's mesh */
+    size_t encoded_points, encoded_faces; /* what a Draco decoder gets (0 for other formats) */
+    const ism_poly_stats *poly;           /* may be NULL */
+    const ism_analysis *analysis;         /* may be NULL */
+    double timings_ms[ISM_TIME_COUNT];
+} ism_stats_input;
+
+/* malloc'd JSON text; NULL when out of memory. */
+char *ism_stats_json(const ism_stats_input *in, size_t *len);
+
+#endif

@@ -1,0 +1,131 @@
+/* wire_mesh.c — converts the polygoniser's mesh (double positions, normals from ∇f that may
+ * be zero at singular points) and the analysis's per-vertex figures into the arrays the
+ * encoders send. A zero normal would decode as an arbitrary direction (Draco's octahedral
+ * coder) or render black, so it is replaced by the area-weighted normal of the triangles
+ * around the vertex (and +z when even that vanishes). */
+#include "proto/wire_mesh.h"
+#include "proto/request.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static bool is_zero3(const float *v) { return v[0] == 0 && v[1] == 0 && v[2] == 0; }
+
+static void fill_missing_normals(const ism_mesh *m, float *normal)
+{
+    size_t missing = 0;
+    for (size_t i = 0; i < m->nverts; i++) {
+        float *n = normal + 3 * i;
+        if (!isfinite(n[0]) || !isfinite(n[1]) || !isfinite(n[2]))
+            n[0] = n[1] = n[2] = 0;
+        missing += is_zero3(n);
+    }
+    if (!missing)
+        return;
+    double *acc = calloc(m->nverts * 3, sizeof *acc);
+    if (acc) {
+        for (size_t t = 0; t < m->ntris; t++) {
+            const uint32_t *v = m->tri + 3 * t;
+            const double *a = m->pos + 3 * v[0], *b = m->pos + 3 * v[1], *c = m->pos + 3 * v[2];
+            double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+            double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+            double cr[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                            u[0] * w[1] - u[1] * w[0]};
+            for (int k = 0; k < 3; k++)
+                if (is_zero3(normal + 3 * v[k]))
+                    for (int j = 0; j < 3; j++)
+                        acc[3 * v[k] + j] += cr[j]; /* |cross| = 2 area: area weighting */
+        }
+    }
+    for (size_t i = 0; i < m->nverts; i++) {
+        float *n = normal + 3 * i;
+        if (!is_zero3(n))
+            continue;
+        double *s = acc ? acc + 3 * i : NULL;
+        double len = s ? sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]) : 0;
+        if (len > 0 && isfinite(len))
+            for (int k = 0; k < 3; k++)
+                n[k] = (float)(s[k] / len);
+        else
+            n[2] = 1;
+    }
+    free(acc);
+}
+
+static float *clamped_copy(const float *src, size_t n, double limit)
+{
+    float *d = malloc((n ? n : 1) * sizeof *d);
+    if (!d)
+        return NULL;
+    for (size_t i = 0; i < n; i++) {
+        double v = isfinite(src[i]) ? src[i] : 0;
+        if (limit > 0)
+            v = v > limit ? limit : v < -limit ? -limit : v;
+        d[i] = (float)v;
+    }
+    return d;
+}
+
+bool ism_wire_mesh_build(const ism_mesh *m, const ism_analysis *a, unsigned attrs,
+                         double curvature_limit, ism_wire_mesh *w)
+{
+    memset(w, 0, sizeof *w);
+    w->nverts = m->nverts;
+    w->ntris = m->ntris;
+    w->tri = m->tri;
+    for (size_t t = 0; t < m->ntris; t++) {
+        const uint32_t *v = m->tri + 3 * t;
+        w->live_triangles += v[0] != v[1] && v[1] != v[2] && v[0] != v[2];
+    }
+    w->pos = malloc((m->nverts ? m->nverts : 1) * 3 * sizeof *w->pos);
+    if (!w->pos)
+        goto fail;
+    for (int k = 0; k < 3; k++) {
+        w->bounds[k] = INFINITY;
+        w->bounds[k + 3] = -INFINITY;
+    }
+    for (size_t i = 0; i < 3 * m->nverts; i++) {
+        float f = (float)m->pos[i];
+        w->pos[i] = f;
+        int k = (int)(i % 3);
+        w->bounds[k] = fmin(w->bounds[k], f);
+        w->bounds[k + 3] = fmax(w->bounds[k + 3], f);
+    }
+    if (!m->nverts)
+        memset(w->bounds, 0, sizeof w->bounds);
+    if (attrs & ISM_ATTR_NORMAL) {
+        w->normal = malloc((m->nverts ? m->nverts : 1) * 3 * sizeof *w->normal);
+        if (!w->normal)
+            goto fail;
+        if (m->normal && m->nverts)
+            memcpy(w->normal, m->normal, m->nverts * 3 * sizeof *w->normal);
+        else
+            memset(w->normal, 0, m->nverts * 3 * sizeof *w->normal);
+        fill_missing_normals(m, w->normal);
+    }
+    if (a && (attrs & ISM_ATTR_MEAN_CURVATURE) && a->mean_curvature &&
+        !(w->mean_curvature = clamped_copy(a->mean_curvature, m->nverts, curvature_limit)))
+        goto fail;
+    if (a && (attrs & ISM_ATTR_GAUSS_CURVATURE) && a->gauss_curvature &&
+        !(w->gauss_curvature = clamped_copy(a->gauss_curvature, m->nverts,
+                                            curvature_limit > 0
+                                                ? curvature_limit * curvature_limit
+                                                : 0)))
+        goto fail;
+    if (a && (attrs & ISM_ATTR_CLASS))
+        w->vertex_class = a->vertex_class;
+    return true;
+fail:
+    ism_wire_mesh_free(w);
+    return false;
+}
+
+void ism_wire_mesh_free(ism_wire_mesh *w)
+{
+    free(w->pos);
+    free(w->normal);
+    free(w->mean_curvature);
+    free(w->gauss_curvature);
+    memset(w, 0, sizeof *w);
+}

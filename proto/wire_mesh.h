@@ -1,0 +1,35 @@
+/* wire_mesh.h — a mesh as it goes on the wire: float32 positions, unit normals everywhere
+ * (where ∇f vanished, the area-weighted normal of the vertex's triangles), curvature clamped
+ * to what the mesh can resolve, the per-vertex class, and whether anything is left to draw.
+ * Shared by the Draco and glTF encoders. */
+#ifndef ISM_WIRE_MESH_H
+#define ISM_WIRE_MESH_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdbool.h>
+#include "core/mesh/mesh.h"
+#include "core/analysis/analysis.h"
+
+typedef struct ism_wire_mesh {
+    size_t nverts, ntris;
+    const uint32_t *tri;       /* the mesh's triangles (not owned) */
+    float *pos;                /* 3 per vertex */
+    float *normal;             /* 3 per vertex, or NULL when not asked for */
+    float *mean_curvature;     /* NULL when not asked for (or not computed) */
+    float *gauss_curvature;
+    const uint8_t *vertex_class; /* the analysis's (not owned); NULL when not asked for */
+    size_t live_triangles;     /* triangles whose three vertex indices differ */
+    double bounds[6];          /* of the float positions: xmin ymin zmin xmax ymax zmax */
+} ism_wire_mesh;
+
+/* Builds the wire form. attrs is a set of enum ism_attr bits; a may be NULL (then no
+ * curvature and no class are sent). Curvature is clamped to |H| <= curvature_limit and
+ * |K| <= curvature_limit² (pass the mesh's resolution 1 / finest cell size; <= 0 for no
+ * clamping). False when out of memory. */
+bool ism_wire_mesh_build(const ism_mesh *m, const ism_analysis *a, unsigned attrs,
+                         double curvature_limit, ism_wire_mesh *w);
+
+void ism_wire_mesh_free(ism_wire_mesh *w);
+
+#endif

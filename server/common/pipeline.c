@@ -1,0 +1,451 @@
+/* pipeline.c — one surface request from JSON to bytes (contract in pipeline.h): decode and
+ * validate, compile, key; polygonise within the operator's limits, with progress and
+ * cancellation; analyse; gather the non-manifold features; encode in the requested format;
+ * write the stats. Every outcome fills the result: a status, and either the file or the
+ * error JSON in body. No geometry is computed here: core does it, proto encodes it. */
+#include "server/common/pipeline.h"
+
+#include "core/analysis/analysis.h"
+#include "core/mesh/write_mesh.h"
+#include "core/octree/polygonise.h"
+#include "proto/draco_encode.h"
+#include "proto/features.h"
+#include "proto/glb.h"
+#include "proto/request.h"
+#include "proto/stats.h"
+#include "proto/wire_mesh.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+void ism_buf_free(ism_buf *b)
+{
+    free(b->data);
+    memset(b, 0, sizeof *b);
+}
+
+void ism_pipeline_limits_default(ism_pipeline_limits *l)
+{
+    l->max_depth = ISM_REQ_DEFAULT_MAX_DEPTH_LIMIT;
+    l->max_triangles = 4000000;
+    l->max_memory = (size_t)2 << 30;
+    l->threads = 0;
+}
+
+void ism_pipeline_result_free(ism_pipeline_result *r)
+{
+    ism_buf_free(&r->body);
+    ism_buf_free(&r->stats);
+    ism_buf_free(&r->features);
+    ism_buf_free(&r->canonical);
+    memset(r, 0, sizeof *r);
+}
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
+}
+
+/* Moves malloc'd text into a buffer. */
+static void take(ism_buf *b, void *data, size_t len)
+{
+    ism_buf_free(b);
+    b->data = data;
+    b->len = len;
+    b->cap = len;
+}
+
+static size_t buf_write(void *ctx, const void *p, size_t n)
+{
+    ism_buf *b = ctx;
+    if (b->len + n > b->cap) {
+        size_t c = b->cap ? b->cap : 65536;
+        while (c < b->len + n)
+            c *= 2;
+        unsigned char *d = realloc(b->data, c);
+        if (!d)
+            return 0;
+        b->data = d;
+        b->cap = c;
+    }
+    memcpy(b->data + b->len, p, n);
+    b->len += n;
+    return n;
+}
+
+/* Ends the run with an error: status, error JSON body. Returns false. */
+static bool fail(ism_pipeline_result *r, const ism_req_error *e)
+{
+    r->status = e->status ? e->status : 500;
+    r->content_type = "application/json";
+    size_t n;
+    char *json = ism_req_error_json(e, &n);
+    if (json)
+        take(&r->body, json, n);
+    else
+        ism_buf_free(&r->body);
+    return false;
+}
+
+static bool fail_with(ism_pipeline_result *r, int status, const char *code, const char *fmt,
+                      const char *detail)
+{
+    ism_req_error e;
+    ism_req_error_set(&e, status, code, "", fmt, detail);
+    return fail(r, &e);
+}
+
+static ism_request_limits request_limits(const ism_pipeline_limits *lim)
+{
+    ism_request_limits rl = {lim->max_depth};
+    return rl;
+}
+
+/* Decode, override the format, compile, key, canonical form: the part that needs no
+ * geometry. On success the caller owns *req and *tape. */
+static bool prepare(const char *json, size_t len, const char *format_override,
+                    const ism_pipeline_limits *lim, ism_pipeline_result *r, ism_request *req,
+                    ism_tape **tape, double *decode_ms, double *compile_ms)
+{
+    ism_req_error e;
+    double t0 = now_ms();
+    ism_request_limits rl = request_limits(lim);
+    if (!ism_request_decode(json ? json : "", json ? len : 0, &rl, req, &e))
+        return fail(r, &e);
+    if (format_override && !ism_request_set_format(req, format_override, &e)) {
+        ism_request_free(req);
+        return fail(r, &e);
+    }
+    snprintf(r->format, sizeof r->format, "%s", ism_format_name(req->format));
+    double t1 = now_ms();
+    *tape = ism_request_compile(req, &e);
+    if (!*tape) {
+        ism_request_free(req);
+        return fail(r, &e);
+    }
+    size_t n;
+    char *canonical = ism_request_canonical(req, &n);
+    if (!canonical || !ism_request_key(req, *tape, r->key)) {
+        free(canonical);
+        ism_tape_free(*tape);
+        *tape = NULL;
+        ism_request_free(req);
+        return fail_with(r, 500, "no_memory", "%s", "out of memory computing the cache key");
+    }
+    take(&r->canonical, canonical, n);
+    *decode_ms = t1 - t0;
+    *compile_ms = now_ms() - t1;
+    return true;
+}
+
+bool ism_pipeline_key(const char *json, size_t len, const char *format_override,
+                      const ism_pipeline_limits *lim, ism_pipeline_result *r)
+{
+    ism_pipeline_limits dl;
+    if (!lim) {
+        ism_pipeline_limits_default(&dl);
+        lim = &dl;
+    }
+    memset(r, 0, sizeof *r);
+    ism_request req;
+    ism_tape *tape;
+    double d, c;
+    if (!prepare(json, len, format_override, lim, r, &req, &tape, &d, &c))
+        return false;
+    r->status = 200;
+    r->content_type = ism_format_mime(req.format);
+    ism_tape_free(tape);
+    ism_request_free(&req);
+    return true;
+}
+
+/* ---------------------------------------------------------------------------------------
+ * The run */
+
+typedef struct progress_map {
+    const ism_pipeline_hooks *hooks;
+    double lo, hi;
+} progress_map;
+
+static void report(const ism_pipeline_hooks *h, double f)
+{
+    if (h && h->progress)
+        h->progress(h->ctx, f);
+}
+
+static void polygoniser_progress(void *ctx, double f)
+{
+    const progress_map *m = ctx;
+    report(m->hooks, m->lo + (m->hi - m->lo) * (f < 0 ? 0 : f > 1 ? 1 : f));
+}
+
+static bool cancelled(const ism_pipeline_hooks *h) { return h && h->cancel && *h->cancel; }
+
+static bool polygonise_status(ism_pipeline_result *r, enum ism_poly_status st,
+                              const ism_error *err)
+{
+    switch (st) {
+    case ISM_POLY_OK:
+        return true;
+    case ISM_POLY_BAD_OPTIONS:
+        return fail_with(r, 400, "bad_request", "%s", err->message);
+    case ISM_POLY_TOO_BIG:
+        return fail_with(r, 422, "too_big", "%s (lower depth.max or shrink the box)",
+                         err->message);
+    case ISM_POLY_CANCELLED:
+        return fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
+    case ISM_POLY_NO_MEMORY:
+    default:
+        return fail_with(r, 500, "no_memory", "the polygoniser ran out of memory: %s",
+                         err->message);
+    }
+}
+
+/* What the encoders share. */
+typedef struct encode_job {
+    const ism_request *req;
+    const ism_mesh *mesh;
+    const ism_wire_mesh *wire;
+    const ism_features *features;
+    const char *key;
+    bool empty;
+    size_t points, faces;       /* Draco's, for the stats */
+} encode_job;
+
+static bool encode_draco(encode_job *j, ism_draco_output *d, char *why, size_t n)
+{
+    const ism_wire_mesh *w = j->wire;
+    ism_draco_input in = {
+        .nverts = w->nverts,
+        .ntris = w->ntris,
+        .pos = w->pos,
+        .tri = w->tri,
+        .normal = w->normal,
+        .mean_curvature = w->mean_curvature,
+        .gauss_curvature = w->gauss_curvature,
+        .vertex_class = w->vertex_class,
+        .position_bits = j->req->position_bits,
+        .normal_bits = j->req->normal_bits,
+        .curvature_bits = j->req->curvature_bits,
+        .speed = -1,
+    };
+    if (!ism_draco_encode(&in, d)) {
+        snprintf(why, n, "%s", d->error);
+        return false;
+    }
+    j->points = d->points;
+    j->faces = d->faces;
+    return true;
+}
+
+/* Fills body with the file; false with a reason in why. */
+static bool encode_body(encode_job *j, ism_buf *body, char *why, size_t n)
+{
+    ism_mesh none;
+    ism_mesh_init(&none);
+    const ism_mesh *m = j->empty ? &none : j->mesh;
+    ism_draco_output d;
+    memset(&d, 0, sizeof d);
+    bool ok = true;
+    switch (j->req->format) {
+    case ISM_FORMAT_DRC:
+        if (!j->empty && (ok = encode_draco(j, &d, why, n))) {
+            take(body, d.data, d.len);
+            d.data = NULL;
+        }
+        break;
+    case ISM_FORMAT_GLB: {
+        if (!j->empty && !(ok = encode_draco(j, &d, why, n)))
+            break;
+        ism_glb_input gi = {j->mesh, j->wire, j->empty ? NULL : &d, j->features, j->key};
+        unsigned char *glb;
+        size_t len;
+        if ((ok = ism_glb_build(&gi, &glb, &len)))
+            take(body, glb, len);
+        else
+            snprintf(why, n, "out of memory building the glb");
+        break;
+    }
+    case ISM_FORMAT_PLY:
+        ok = ism_write_ply(m, buf_write, body);
+        break;
+    case ISM_FORMAT_OBJ:
+        ok = ism_write_obj(m, buf_write, body);
+        break;
+    case ISM_FORMAT_STL:
+        ok = ism_write_stl(m, buf_write, body);
+        break;
+    default:
+        ok = false;
+    }
+    if (!ok && !why[0])
+        snprintf(why, n, "out of memory writing the %s file", ism_format_name(j->req->format));
+    free(d.data);
+    return ok;
+}
+
+/* Curvature the mesh can show: its finest cells have size box / 2^max_depth. */
+static double curvature_limit(const ism_request *req)
+{
+    double side = 0;
+    for (int k = 0; k < 3; k++)
+        side = fmax(side, req->box[k + 3] - req->box[k]);
+    return ldexp(1.0, req->max_depth) / side;
+}
+
+bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
+                      const ism_pipeline_limits *lim, const ism_pipeline_hooks *hooks,
+                      ism_pipeline_result *r)
+{
+    ism_pipeline_limits dl;
+    if (!lim) {
+        ism_pipeline_limits_default(&dl);
+        lim = &dl;
+    }
+    memset(r, 0, sizeof *r);
+    double t_start = now_ms();
+    ism_stats_input si;
+    memset(&si, 0, sizeof si);
+
+    ism_request req;
+    ism_tape *tape = NULL;
+    if (!prepare(json, len, format_override, lim, r, &req, &tape, &si.timings_ms[ISM_TIME_DECODE],
+                 &si.timings_ms[ISM_TIME_COMPILE]))
+        return false;
+    report(hooks, 0.02);
+
+    ism_mesh mesh;
+    ism_mesh_init(&mesh);
+    ism_analysis an;
+    memset(&an, 0, sizeof an);
+    bool have_analysis = false;
+    ism_wire_mesh wire;
+    memset(&wire, 0, sizeof wire);
+    ism_features feat;
+    memset(&feat, 0, sizeof feat);
+    ism_poly_stats ps;
+    memset(&ps, 0, sizeof ps);
+    bool ok = false;
+    ism_error err;
+    memset(&err, 0, sizeof err);
+
+    /* polygonise */
+    ism_poly_options o;
+    ism_request_poly_options(&req, &o);
+    o.max_triangles = lim->max_triangles;
+    o.max_memory = lim->max_memory;
+    o.threads = lim->threads;
+    progress_map pm = {hooks, 0.02, 0.85};
+    o.progress = polygoniser_progress;
+    o.progress_ctx = &pm;
+    o.cancel = hooks ? hooks->cancel : NULL;
+    double t = now_ms();
+    enum ism_poly_status st = ism_polygonise(tape, &o, &mesh, &ps, &err);
+    si.timings_ms[ISM_TIME_POLYGONISE] = now_ms() - t;
+    if (!polygonise_status(r, st, &err))
+        goto done;
+    if (cancelled(hooks)) {
+        fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
+        goto done;
+    }
+
+    /* analyse */
+    t = now_ms();
+    ism_analysis_options ao;
+    ism_analysis_options_default(&ao);
+    ao.curvature = true;
+    ao.accuracy = true;
+    ao.threads = lim->threads;
+    if (!ism_analyse(&mesh, tape, &ao, &an, &err)) {
+        fail_with(r, 500, "internal", "mesh analysis failed: %s", err.message);
+        goto done;
+    }
+    have_analysis = true;
+    si.timings_ms[ISM_TIME_ANALYSE] = now_ms() - t;
+    report(hooks, 0.92);
+    if (cancelled(hooks)) {
+        fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
+        goto done;
+    }
+
+    /* features */
+    t = now_ms();
+    if (!ism_wire_mesh_build(&mesh, &an, req.attributes, curvature_limit(&req), &wire)) {
+        fail_with(r, 500, "no_memory", "%s", "out of memory preparing the mesh for the wire");
+        goto done;
+    }
+    bool empty = wire.live_triangles == 0;
+    ism_mesh none;
+    ism_mesh_init(&none);
+    if (!ism_features_build(empty ? &none : &mesh, empty ? NULL : &an, &feat)) {
+        fail_with(r, 500, "no_memory", "%s", "out of memory collecting the features");
+        goto done;
+    }
+    size_t flen;
+    char *fjson = ism_features_json(empty ? &none : &mesh, &feat, &flen);
+    if (!fjson) {
+        fail_with(r, 500, "no_memory", "%s", "out of memory writing the features");
+        goto done;
+    }
+    take(&r->features, fjson, flen);
+    si.timings_ms[ISM_TIME_FEATURES] = now_ms() - t;
+
+    /* encode */
+    t = now_ms();
+    encode_job job = {&req, &mesh, &wire, &feat, r->key, empty, 0, 0};
+    char why[200] = "";
+    if (!encode_body(&job, &r->body, why, sizeof why)) {
+        ism_buf_free(&r->body);
+        fail_with(r, 500, "encode_failed", "encoding failed: %s", why);
+        goto done;
+    }
+    si.timings_ms[ISM_TIME_ENCODE] = now_ms() - t;
+    if (cancelled(hooks)) {
+        fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
+        goto done;
+    }
+
+    /* stats */
+    si.key = r->key;
+    si.format = r->format;
+    si.bytes = r->body.len;
+    si.features_bytes = r->features.len;
+    si.empty = empty;
+    si.vertices = mesh.nverts;
+    si.triangles = mesh.ntris;
+    si.encoded_points = job.points;
+    si.encoded_faces = job.faces;
+    si.poly = &ps;
+    si.analysis = &an;
+    si.timings_ms[ISM_TIME_TOTAL] = now_ms() - t_start;
+    size_t slen;
+    char *stats = ism_stats_json(&si, &slen);
+    if (!stats) {
+        fail_with(r, 500, "no_memory", "%s", "out of memory writing the stats");
+        goto done;
+    }
+    take(&r->stats, stats, slen);
+    r->status = 200;
+    r->content_type = ism_format_mime(req.format);
+    report(hooks, 1.0);
+    ok = true;
+
+done:
+    if (!ok) {
+        ism_buf_free(&r->features);
+        ism_buf_free(&r->stats);
+    }
+    ism_features_free(&feat);
+    ism_wire_mesh_free(&wire);
+    if (have_analysis)
+        ism_analysis_free(&an);
+    ism_mesh_free(&mesh);
+    ism_tape_free(tape);
+    ism_request_free(&req);
+    return ok;
+}
