@@ -35,7 +35,7 @@ bool ism_analysis_fail(ism_error *err, const char *fmt, ...)
 }
 
 /* Bad input gets a message naming the first offending vertex or triangle. */
-static bool check_mesh(const ism_mesh *m, ism_error *err)
+bool ism_analysis_check_mesh(const ism_mesh *m, ism_error *err)
 {
     if (m->nverts >= UINT32_MAX)
         return ism_analysis_fail(err, "analysis: %zu vertices, at most %u allowed", m->nverts,
@@ -54,7 +54,7 @@ static bool check_mesh(const ism_mesh *m, ism_error *err)
     return true;
 }
 
-static bool check_options(const ism_analysis_options *o, ism_error *err)
+bool ism_analysis_check_options(const ism_analysis_options *o, ism_error *err)
 {
     if (!(o->singular_rel >= 0 && o->singular_rel < 1))
         return ism_analysis_fail(err, "analysis: singular_rel must be in [0, 1)");
@@ -80,7 +80,7 @@ bool ism_analyse(const ism_mesh *m, const ism_tape *f, const ism_analysis_option
         o = &defaults;
     }
     memset(a, 0, sizeof *a);
-    if (!check_options(o, err) || !check_mesh(m, err))
+    if (!ism_analysis_check_options(o, err) || !ism_analysis_check_mesh(m, err))
         return false;
     a->nverts = m->nverts;
     a->genus = -1;

@@ -72,7 +72,9 @@ typedef struct ism_component {
     size_t boundary_loops;             /* closed boundary loops (see boundary_loops below) */
     size_t boundary_chains;            /* boundary chains ending on non-manifold edges */
     bool closed;                       /* no boundary edge */
-    bool manifold;                     /* no non-manifold edge or vertex (classes 2, 3) */
+    bool manifold;                     /* no non-manifold edge, and no vertex with two of its
+                                          cones in this component (two components may touch
+                                          at a vertex and each still be a manifold) */
     bool orientable;                   /* consistently orientable across its manifold edges */
     long genus;                        /* manifold, orientable and every boundary chain closed:
                                           (2 - euler - boundary_loops) / 2 — for a closed
@@ -113,6 +115,8 @@ typedef struct ism_analysis {
     size_t components;                /* connected by shared edges */
     size_t boundary_loops;
     bool orientable;                  /* every component consistently orientable */
+    size_t inconsistent_edges;        /* manifold edges whose two triangles run the same way
+                                         (a mesh can be orientable yet not oriented) */
     long genus;                       /* for a single closed orientable manifold mesh, else -1 */
     size_t vertices_used, triangles_used; /* V and F of the Euler characteristic */
     size_t collapsed_triangles;       /* triangles with a repeated vertex index (ignored) */

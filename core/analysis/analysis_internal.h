@@ -73,9 +73,9 @@ bool ism_edge_components(const ism_mesh *m, const ism_edge_table *et, uint32_t *
 bool ism_vertex_components(const ism_mesh *m, const ism_vertex_facts *vf, size_t *n);
 
 /* Sets bad[c] for every component c that cannot be oriented consistently across its
- * manifold edges. */
+ * manifold edges; counts the manifold edges whose triangles run the same way. */
 bool ism_orientation(const ism_mesh *m, const ism_edge_table *et, const uint32_t *comp,
-                     uint8_t *bad);
+                     uint8_t *bad, size_t *inconsistent);
 
 /* Chains the boundary edges (walking each end vertex's cone of faces to the next boundary
  * edge): fills a->boundary_loops, a->boundary_chains and component[c].boundary_loops. */
@@ -92,6 +92,10 @@ bool ism_triangle_quality(const ism_mesh *m, ism_analysis *a);
 /* Curvature and accuracy from f (needs vertex_area, corners). */
 bool ism_implicit_figures(const ism_mesh *m, const ism_tape *f, const ism_analysis_options *o,
                           const ism_vertex_facts *vf, ism_analysis *a);
+
+/* Input checks shared by ism_analyse and ism_analysis_project (false with a message). */
+bool ism_analysis_check_mesh(const ism_mesh *m, ism_error *err);
+bool ism_analysis_check_options(const ism_analysis_options *o, ism_error *err);
 
 /* Fills err (may be NULL) with a positionless message; returns false. */
 bool ism_analysis_fail(ism_error *err, const char *fmt, ...)

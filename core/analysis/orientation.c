@@ -48,7 +48,7 @@ static bool relate(parity_sets *s, uint32_t i, uint32_t j, uint8_t rel)
 }
 
 bool ism_orientation(const ism_mesh *m, const ism_edge_table *et, const uint32_t *comp,
-                     uint8_t *bad)
+                     uint8_t *bad, size_t *inconsistent)
 {
     size_t nt = m->ntris ? m->ntris : 1;
     parity_sets s = {malloc(nt * sizeof *s.parent), calloc(nt, 1)};
@@ -64,6 +64,7 @@ bool ism_orientation(const ism_mesh *m, const ism_edge_table *et, const uint32_t
             continue;
         const uint32_t *he = et->edge_he + et->edge_start[e];
         uint8_t same_direction = m->tri[he[0]] == m->tri[he[1]];
+        *inconsistent += same_direction;
         if (!relate(&s, he[0] / 3, he[1] / 3, same_direction))
             bad[comp[he[0] / 3]] = 1;
     }

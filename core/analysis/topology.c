@@ -131,7 +131,7 @@ bool ism_topology(const ism_mesh *m, const ism_edge_table *et, ism_vertex_facts 
     }
     for (size_t i = 0; ok && i < a->components; i++)
         a->component[i].manifold = true;
-    ok = ok && ism_orientation(m, et, comp, bad);
+    ok = ok && ism_orientation(m, et, comp, bad, &a->inconsistent_edges);
     if (ok) {
         count_triangles_and_edges(m, et, comp, a);
         ok = count_vertices(m, vf, comp, a) && ism_boundary_chains(m, et, vf, comp, a) &&
