@@ -178,7 +178,7 @@ static uint32_t parse_call(parser *p, const ism_token *name)
     }
     const ism_func_info *info = ism_func_get(f);
     ism_token open = p->tok;
-    if (!next(p) || !count_node(p, name))
+    if (!enter(p, &open) || !next(p) || !count_node(p, name))
         return ISM_G_NONE;
     uint32_t first = ISM_G_NONE, acc = ISM_G_NONE;
     ism_token second_at = p->tok;
@@ -207,6 +207,7 @@ static uint32_t parse_call(parser *p, const ism_token *name)
                 return ISM_G_NONE;
         }
     }
+    p->depth--;
     if (p->tok.kind != ISM_T_RPAREN) {
         char found[80];
         ism_token_describe(&p->tok, found, sizeof found);
@@ -280,9 +281,10 @@ static uint32_t parse_primary(parser *p)
     case ISM_T_NAME:
         return parse_name(p);
     case ISM_T_LPAREN: {
-        if (!next(p))
+        if (!enter(p, &at) || !next(p))
             return ISM_G_NONE;
         uint32_t e = parse_expr(p);
+        p->depth--;
         if (e == ISM_G_NONE || !expect(p, ISM_T_RPAREN, "')'", &at))
             return ISM_G_NONE;
         return e;
@@ -351,9 +353,6 @@ static uint32_t parse_term(parser *p)
 
 static uint32_t parse_expr(parser *p)
 {
-    ism_token at = p->tok;
-    if (!enter(p, &at))
-        return ISM_G_NONE;
     uint32_t l = parse_term(p);
     while (l != ISM_G_NONE && (p->tok.kind == ISM_T_PLUS || p->tok.kind == ISM_T_MINUS)) {
         ism_token op = p->tok;
@@ -366,7 +365,6 @@ static uint32_t parse_expr(parser *p)
                                              : ISM_G_SUB, l, r),
                     op.kind == ISM_T_PLUS ? "sum" : "difference");
     }
-    p->depth--;
     return l;
 }
 
