@@ -12,6 +12,7 @@ void ism_mesh_free(ism_mesh *m)
     free(m->pos);
     free(m->normal);
     free(m->tri);
+    free(m->seg);
     ism_mesh_init(m);
 }
 
@@ -72,10 +73,26 @@ bool ism_mesh_add_triangle(ism_mesh *m, uint32_t a, uint32_t b, uint32_t c)
     return true;
 }
 
+bool ism_mesh_add_segment(ism_mesh *m, uint32_t a, uint32_t b)
+{
+    if (m->nsegs == m->cap_segs) {
+        size_t c = m->cap_segs ? m->cap_segs * 2 : 16;
+        uint32_t *s = realloc(m->seg, c * 2 * sizeof *s);
+        if (!s)
+            return false;
+        m->seg = s;
+        m->cap_segs = c;
+    }
+    m->seg[2 * m->nsegs] = a;
+    m->seg[2 * m->nsegs + 1] = b;
+    m->nsegs++;
+    return true;
+}
+
 size_t ism_mesh_bytes(const ism_mesh *m)
 {
     return m->cap_verts * (3 * sizeof(double) + 3 * sizeof(float)) +
-           m->cap_tris * 3 * sizeof(uint32_t);
+           m->cap_tris * 3 * sizeof(uint32_t) + m->cap_segs * 2 * sizeof(uint32_t);
 }
 
 bool ism_mesh_bounds(const ism_mesh *m, double lo[3], double hi[3])

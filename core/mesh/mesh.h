@@ -14,6 +14,10 @@ typedef struct ism_mesh {
     double *pos;    /* 3 per vertex */
     float *normal;  /* 3 per vertex, unit length (or 0,0,0 where no normal is known) */
     uint32_t *tri;  /* 3 per triangle, counter-clockwise seen from where ∇f points */
+    /* One-dimensional parts of the surface: the paper's one-edge (degenerate) polygons,
+     * e.g. the parts of Steiner's double lines that no sheet passes through. */
+    size_t nsegs, cap_segs;
+    uint32_t *seg;  /* 2 vertex indices per segment */
 } ism_mesh;
 
 void ism_mesh_init(ism_mesh *m);
@@ -27,6 +31,9 @@ uint32_t ism_mesh_add_vertex(ism_mesh *m, const double p[3], const float *normal
 
 /* Appends a triangle. False when out of memory. */
 bool ism_mesh_add_triangle(ism_mesh *m, uint32_t a, uint32_t b, uint32_t c);
+
+/* Appends a segment (a one-edge polygon). False when out of memory. */
+bool ism_mesh_add_segment(ism_mesh *m, uint32_t a, uint32_t b);
 
 /* Bytes held by the mesh's arrays (for memory budgets). */
 size_t ism_mesh_bytes(const ism_mesh *m);

@@ -9,9 +9,10 @@
 #include <stdbool.h>
 #include "core/expr/expr.h"
 #include "core/mesh/mesh.h"
+#include "core/octree/grid.h"
 
 /* Hard limits of the octree (cells are addressed by integer coordinates at max depth). */
-#define ISM_MAX_DEPTH_LIMIT 16
+#define ISM_MAX_DEPTH_LIMIT ISM_GRID_MAX_DEPTH
 
 typedef struct ism_poly_options {
     double box[6];          /* xmin ymin zmin xmax ymax zmax: the octree root */
@@ -41,6 +42,9 @@ void ism_poly_options_default(ism_poly_options *o);
 /* Checks an options struct; false with a message naming the bad field. */
 bool ism_poly_options_check(const ism_poly_options *o, ism_error *err);
 
+/* Phases timed in the statistics: building the octree; registering leaf corners on lattice
+ * lines (what makes crack repair exact); polygonising the nodes (face lines, stitching,
+ * triangles — crack repair happens here by construction); welding into one mesh. */
 enum ism_poly_phase { ISM_PHASE_OCTREE, ISM_PHASE_POLYGONS, ISM_PHASE_CRACKS, ISM_PHASE_MESH,
                       ISM_PHASE_COUNT };
 

@@ -1,0 +1,134 @@
+/* edge_roots.c — roots of f on a lattice segment: sign test, gradient test (paper eq. 1-2),
+ * regula falsi for a single root, the paper's double-root bisection for two roots or a
+ * tangent root, and a check that counts segments likely to hold more than two roots. */
+#include "core/octree/edge_roots.h"
+
+#include <math.h>
+
+#define FALSI_MAX_ITERS 60
+#define FALSI_TOLERANCE 1e-11 /* bracket width, as a fraction of the segment */
+
+static void lerp(const double a[3], const double b[3], double t, double out[3])
+{
+    for (int k = 0; k < 3; k++)
+        out[k] = a[k] + t * (b[k] - a[k]);
+}
+
+double ism_regula_falsi(ism_sampler *s, const double a[3], const double b[3], double fa,
+                        double fb)
+{
+    double t0 = 0, f0 = fa, t1 = 1, f1 = fb;
+    int side = 0;
+    for (int it = 0; it < FALSI_MAX_ITERS && t1 - t0 > FALSI_TOLERANCE; it++) {
+        double t = (t0 * f1 - t1 * f0) / (f1 - f0);
+        if (!(t > t0 && t < t1))
+            t = 0.5 * (t0 + t1);
+        double p[3];
+        lerp(a, b, t, p);
+        double ft = ism_sample_f(s, p);
+        if (ft == 0)
+            return t;
+        if ((ft < 0) == (f0 < 0)) {
+            t0 = t, f0 = ft;
+            if (side == -1)
+                f1 *= 0.5; /* Illinois: halve the stale end so the bracket keeps shrinking */
+            side = -1;
+        } else {
+            t1 = t, f1 = ft;
+            if (side == +1)
+                f0 *= 0.5;
+            side = +1;
+        }
+    }
+    double t = (t0 * f1 - t1 * f0) / (f1 - f0);
+    if (!(t >= t0 && t <= t1))
+        t = 0.5 * (t0 + t1);
+    return t;
+}
+
+int ism_double_root_search(ism_sampler *s, const ism_root_params *prm, const double a[3],
+                           const double b[3], double fa, double fb, double *t)
+{
+    double ta = 0, tb = 1;
+    for (int k = 0; k < prm->iters; k++) {
+        double tc = 0.5 * (ta + tb), p[3];
+        lerp(a, b, tc, p);
+        double fc = ism_sample_f(s, p);
+        if (fa * fc < 0 || fb * fc < 0) {
+            *t = tc;
+            return 2;
+        }
+        if (fabs(fc) < prm->eps) {
+            *t = tc;
+            return 1;
+        }
+        if (fabs(fa * fc) < fabs(fc * fb))
+            tb = tc, fb = fc;
+        else
+            ta = tc, fa = fc;
+    }
+    return 0;
+}
+
+static void make_root(ism_sampler *s, const double a[3], const double b[3], double t,
+                      enum ism_root_kind kind, ism_root *r)
+{
+    r->t = t;
+    r->kind = kind;
+    lerp(a, b, t, r->p);
+    ism_sample_grad(s, r->p, r->g);
+}
+
+/* Unit-gradient agreement of two points; -2 when either gradient vanishes. */
+static double gradient_agreement(const double ga[3], const double gb[3])
+{
+    double na = ism_norm3(ga), nb = ism_norm3(gb);
+    if (!(na > 0) || !(nb > 0) || !isfinite(na) || !isfinite(nb))
+        return -2;
+    return ism_dot3(ga, gb) / (na * nb);
+}
+
+/* A root whose gradient turns against an end point's hints at further roots between them. */
+static int suspect_more(const double g_end[3], const double g_root[3])
+{
+    return gradient_agreement(g_end, g_root) < -0.5;
+}
+
+void ism_segment_roots(ism_sampler *s, const ism_root_params *prm, const double a[3],
+                       const double b[3], double fa, double fb, const double ga[3],
+                       const double gb[3], ism_seg_roots *out)
+{
+    out->n = 0;
+    out->flags = 0;
+    if (fa == 0 || fb == 0 || !isfinite(fa) || !isfinite(fb))
+        return;
+    if ((fa < 0) != (fb < 0)) {
+        make_root(s, a, b, ism_regula_falsi(s, a, b, fa, fb), ISM_ROOT_CROSS, &out->r[0]);
+        out->n = 1;
+        /* Sign test says one root; if the gradient swings against both ends on the way,
+         * an odd number of three or more is possible. */
+        if (suspect_more(ga, out->r[0].g) && suspect_more(gb, out->r[0].g))
+            out->flags |= ISM_SEG_MANY_ROOTS;
+        return;
+    }
+    if (gradient_agreement(ga, gb) > prm->gradient_test)
+        return; /* same sign, same sheet: no root (paper eq. 2) */
+    out->flags |= ISM_SEG_SEARCHED;
+    double tc;
+    int found = ism_double_root_search(s, prm, a, b, fa, fb, &tc);
+    if (found == 1) {
+        make_root(s, a, b, tc, ISM_ROOT_TOUCH, &out->r[0]);
+        out->n = 1;
+    } else if (found == 2) {
+        double c[3];
+        lerp(a, b, tc, c);
+        double fc = ism_sample_f(s, c);
+        double t1 = ism_regula_falsi(s, a, c, fa, fc) * tc;
+        double t2 = tc + ism_regula_falsi(s, c, b, fc, fb) * (1 - tc);
+        make_root(s, a, b, t1, ISM_ROOT_CROSS, &out->r[0]);
+        make_root(s, a, b, t2, ISM_ROOT_CROSS, &out->r[1]);
+        out->n = 2;
+        if (suspect_more(ga, out->r[0].g) || suspect_more(gb, out->r[1].g))
+            out->flags |= ISM_SEG_MANY_ROOTS;
+    }
+}

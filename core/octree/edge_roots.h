@@ -1,0 +1,56 @@
+/* edge_roots.h — the roots of f on one lattice segment (a piece of an octree node's edge):
+ * the paper's sign test and gradient test, regula falsi for one root, and the paper's
+ * bisection with the |f(c)| < eps double-root rule for two roots or one tangent (double)
+ * root. Callers always pass a segment in its canonical direction (lower lattice coordinate
+ * first), so every cell that shares a segment gets bit-identical roots. */
+#ifndef ISM_EDGE_ROOTS_H
+#define ISM_EDGE_ROOTS_H
+
+#include "core/octree/sampler.h"
+
+enum ism_root_kind {
+    ISM_ROOT_CROSS, /* f changes sign here */
+    ISM_ROOT_TOUCH, /* f touches 0 without changing sign (|f(c)| < eps) */
+};
+
+typedef struct ism_root {
+    double t;           /* 0..1 along the canonical segment */
+    double p[3];
+    double g[3];        /* ∇f at p */
+    enum ism_root_kind kind;
+} ism_root;
+
+enum ism_segment_flags {
+    ISM_SEG_SEARCHED = 1,    /* signs agreed but gradients did not: searched for two roots */
+    ISM_SEG_MANY_ROOTS = 2,  /* more than two roots suspected (paper's failure case) */
+};
+
+typedef struct ism_seg_roots {
+    int n;                /* 0, 1 or 2 roots, ordered by t */
+    int flags;
+    ism_root r[2];
+} ism_seg_roots;
+
+typedef struct ism_root_params {
+    double gradient_test;  /* ĝa·ĝb above this: same sheet, no root when signs agree */
+    double eps;            /* double-root threshold on |f| */
+    int iters;             /* bisection steps of the double-root search */
+} ism_root_params;
+
+/* Roots of f on the segment a→b with f(a) = fa, f(b) = fb and gradients ga, gb. When fa
+ * or fb is exactly 0 the segment reports no interior root: that end point is a root of
+ * its own, handled by whoever owns the lattice point. */
+void ism_segment_roots(ism_sampler *s, const ism_root_params *prm, const double a[3],
+                       const double b[3], double fa, double fb, const double ga[3],
+                       const double gb[3], ism_seg_roots *out);
+
+/* One root of f on a→b by regula falsi (Illinois), given fa·fb < 0. Returns t in (0, 1). */
+double ism_regula_falsi(ism_sampler *s, const double a[3], const double b[3], double fa,
+                        double fb);
+
+/* The paper's double-root bisection on a→b (fa, fb of the same sign): returns 2 and a
+ * split point t (one root each side), 1 and the tangent point t (|f| < eps), or 0. */
+int ism_double_root_search(ism_sampler *s, const ism_root_params *prm, const double a[3],
+                           const double b[3], double fa, double fb, double *t);
+
+#endif

@@ -1,0 +1,463 @@
+/* face_lines.c — the lines of f = 0 on one tile of a node's face (paper §2: LineOnFace,
+ * LineOnFaceAndEdge, DoubleIntersectsOnEdges). The tile's boundary is walked over its
+ * lattice segments; the roots found there (crossings, tangent roots, zero lattice points)
+ * become events with the sign of f on either side, and the events are joined into lines:
+ *   - crossings in pairs: one pair directly; two or more pairs by the paper's gradient dot
+ *     products (a curve's two ends see the same sheet), the face centre's sign breaking
+ *     ties, or as two crossing lines when two sheets intersect inside the tile;
+ *   - tangent roots in pairs along a double line lying in the face (self-intersection on
+ *     the face, paper Fig. 3b), confirmed by the double-root search across its middle;
+ *   - a tangent root or zero point at the apex of a wedge between two sheets joins the two
+ *     crossings around it (paper Fig. 3c);
+ *   - lattice segments where f vanishes are lines of their own (double lines on edges).
+ * Everything here depends only on the tile, so both nodes that share it agree. */
+#include "core/octree/cell.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+bool ism_flines_push(ism_flines *l, const ism_fpoint *a, const ism_fpoint *b, int kind)
+{
+    if (l->n == l->cap) {
+        size_t c = l->cap ? l->cap * 2 : 32;
+        ism_fline *v = realloc(l->v, c * sizeof *v);
+        if (!v)
+            return false;
+        l->v = v;
+        l->cap = c;
+    }
+    ism_fline *ln = &l->v[l->n++];
+    ln->a = *a;
+    ln->b = *b;
+    ln->kind = (uint8_t)kind;
+    return true;
+}
+
+static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3])
+{
+    if (cx->nbp == cx->cap_bp) {
+        size_t c = cx->cap_bp ? cx->cap_bp * 2 : 64;
+        ism_bpoint *v = realloc(cx->bp, c * sizeof *v);
+        if (!v)
+            return false;
+        cx->bp = v;
+        cx->cap_bp = c;
+    }
+    ism_bpoint *b = &cx->bp[cx->nbp++];
+    memcpy(b->ip, ip, sizeof b->ip);
+    ism_grid_point(&cx->tree->grid, (ism_ipt){{ip[0], ip[1], ip[2]}}, b->p);
+    b->f = ism_sample_grad(&cx->s, b->p, b->g);
+    return true;
+}
+
+static bool push_event(ism_cell_ctx *cx, const ism_fpoint *pt, int before, int after)
+{
+    if (cx->nev == cx->cap_ev) {
+        size_t c = cx->cap_ev ? cx->cap_ev * 2 : 64;
+        ism_fevent *v = realloc(cx->ev, c * sizeof *v);
+        if (!v)
+            return false;
+        cx->ev = v;
+        cx->cap_ev = c;
+    }
+    cx->ev[cx->nev++] = (ism_fevent){*pt, before, after};
+    return true;
+}
+
+/* Walks the tile boundary counter-clockwise in (u, v), collecting every break point. */
+static bool tile_boundary(ism_cell_ctx *cx, const ism_tile *t)
+{
+    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    int32_t cu[4] = {t->u0, t->u1, t->u1, t->u0}, cv[4] = {t->v0, t->v0, t->v1, t->v1};
+    cx->nbp = 0;
+    for (int side = 0; side < 4; side++) {
+        int along = side % 2 == 0 ? u : v;
+        int32_t p[3];
+        p[t->axis] = t->plane;
+        p[u] = cu[side];
+        p[v] = cv[side];
+        int32_t from = p[along], to = along == u ? cu[(side + 1) % 4] : cv[(side + 1) % 4];
+        int32_t lo = from < to ? from : to, hi = from < to ? to : from;
+        if (!ism_breaks_on(cx->breaks, along, p, lo, hi, &cx->coords))
+            return false;
+        size_t n = cx->coords.n;
+        for (size_t k = 0; k + 1 < n; k++) { /* the last point starts the next side */
+            p[along] = from < to ? cx->coords.v[k] : cx->coords.v[n - 1 - k];
+            if (!push_bpoint(cx, p))
+                return false;
+        }
+    }
+    return true;
+}
+
+static ism_fpoint root_point(const ism_root *r, uint8_t flags)
+{
+    ism_fpoint q;
+    memcpy(q.p, r->p, sizeof q.p);
+    memcpy(q.g, r->g, sizeof q.g);
+    q.flags = flags;
+    return q;
+}
+
+/* Roots of the segment a→b in walking order, computed in the canonical direction. */
+static void walk_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint *b,
+                         ism_seg_roots *out)
+{
+    bool forward = true;
+    for (int k = 0; k < 3; k++)
+        if (a->ip[k] != b->ip[k]) {
+            forward = a->ip[k] < b->ip[k];
+            break;
+        }
+    const ism_bpoint *lo = forward ? a : b, *hi = forward ? b : a;
+    ism_segment_roots(&cx->s, &cx->roots, lo->p, hi->p, lo->f, hi->f, lo->g, hi->g, out);
+    if (out->n == 2 && out->r[1].t - out->r[0].t < cx->stitch_tol) {
+        /* Two roots closer than the stitching tolerance: one double root (paper Fig. 3b). */
+        ism_root m = out->r[0];
+        m.t = 0.5 * (out->r[0].t + out->r[1].t);
+        for (int k = 0; k < 3; k++)
+            m.p[k] = lo->p[k] + m.t * (hi->p[k] - lo->p[k]);
+        ism_sample_grad(&cx->s, m.p, m.g);
+        m.kind = ISM_ROOT_TOUCH;
+        out->r[0] = m;
+        out->n = 1;
+    }
+    if (!forward && out->n == 2) {
+        ism_root r = out->r[0];
+        out->r[0] = out->r[1];
+        out->r[1] = r;
+    }
+}
+
+/* Sign of f along a segment with no roots whose ends may be zero (0 if f vanishes there). */
+static int rootless_sign(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint *b)
+{
+    if (a->f != 0)
+        return ism_sign(a->f);
+    if (b->f != 0)
+        return ism_sign(b->f);
+    double m[3];
+    for (int k = 0; k < 3; k++)
+        m[k] = 0.5 * (a->p[k] + b->p[k]);
+    double fm = ism_sample_f(&cx->s, m);
+    return fabs(fm) <= cx->roots.eps ? 0 : ism_sign(fm);
+}
+
+/* Turns the boundary into events with the sign of f on both sides of each. */
+static bool tile_events(ism_cell_ctx *cx)
+{
+    cx->nev = 0;
+    size_t n = cx->nbp;
+    int *gap_after_point = malloc(n * sizeof *gap_after_point);
+    if (!gap_after_point)
+        return false;
+    /* first pass: the sign just after each lattice point and the roots on its segment */
+    for (size_t i = 0; i < n; i++) {
+        const ism_bpoint *a = &cx->bp[i], *b = &cx->bp[(i + 1) % n];
+        ism_seg_roots sr;
+        walk_segment(cx, a, b, &sr);
+        int sa = ism_sign(a->f), sb = ism_sign(b->f);
+        uint8_t many = sr.flags & ISM_SEG_MANY_ROOTS ? ISM_FP_MANY : 0;
+        if (sr.n == 0) {
+            gap_after_point[i] = rootless_sign(cx, a, b);
+        } else {
+            gap_after_point[i] = sa;
+        }
+        if (a->f == 0) {
+            ism_fpoint z;
+            memcpy(z.p, a->p, sizeof z.p);
+            memcpy(z.g, a->g, sizeof z.g);
+            z.flags = ISM_FP_ZERO;
+            if (!push_event(cx, &z, 99, gap_after_point[i])) /* before: filled below */
+                goto fail;
+        }
+        if (sr.n == 1 && sr.r[0].kind == ISM_ROOT_CROSS) {
+            ism_fpoint q = root_point(&sr.r[0], many);
+            if (!push_event(cx, &q, sa, sb))
+                goto fail;
+        } else if (sr.n == 1) {
+            ism_fpoint q = root_point(&sr.r[0], ISM_FP_TOUCH | many);
+            if (!push_event(cx, &q, sa, sa))
+                goto fail;
+        } else if (sr.n == 2) {
+            ism_fpoint q0 = root_point(&sr.r[0], ISM_FP_PAIR | many);
+            ism_fpoint q1 = root_point(&sr.r[1], ISM_FP_PAIR | many);
+            if (!push_event(cx, &q0, sa, -sa) || !push_event(cx, &q1, -sa, sa))
+                goto fail;
+        }
+    }
+    /* second pass: a zero point's `before` is the gap after the previous event */
+    for (size_t k = 0; k < cx->nev; k++)
+        if (cx->ev[k].before == 99) {
+            size_t prev = (k + cx->nev - 1) % cx->nev;
+            cx->ev[k].before = cx->ev[prev].after;
+            if (cx->nev == 1)
+                cx->ev[k].before = cx->ev[k].after;
+        }
+    free(gap_after_point);
+    return true;
+fail:
+    free(gap_after_point);
+    return false;
+}
+
+static double unit_dot(const double a[3], const double b[3])
+{
+    double na = ism_norm3(a), nb = ism_norm3(b);
+    if (!(na > 0) || !(nb > 0) || !isfinite(na * nb))
+        return 0;
+    return ism_dot3(a, b) / (na * nb);
+}
+
+static void tile_centre(const ism_cell_ctx *cx, const ism_tile *t, double c[3])
+{
+    const ism_grid *g = &cx->tree->grid;
+    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    c[t->axis] = ism_grid_coord(g, t->axis, t->plane);
+    c[u] = 0.5 * (ism_grid_coord(g, u, t->u0) + ism_grid_coord(g, u, t->u1));
+    c[v] = 0.5 * (ism_grid_coord(g, v, t->v0) + ism_grid_coord(g, v, t->v1));
+}
+
+static double tile_size(const ism_cell_ctx *cx, const ism_tile *t)
+{
+    const ism_grid *g = &cx->tree->grid;
+    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    double su = g->step[u] * (t->u1 - t->u0), sv = g->step[v] * (t->v1 - t->v0);
+    return su < sv ? su : sv;
+}
+
+/* Where segments p0p1 and q0q1 (in the tile's plane) cross; false if they don't. */
+static bool chords_cross(const ism_tile *t, const double p0[3], const double p1[3],
+                         const double q0[3], const double q1[3], double x[3])
+{
+    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    double du = p1[u] - p0[u], dv = p1[v] - p0[v], eu = q1[u] - q0[u], ev = q1[v] - q0[v];
+    double den = du * ev - dv * eu;
+    if (den == 0)
+        return false;
+    double s = ((q0[u] - p0[u]) * ev - (q0[v] - p0[v]) * eu) / den;
+    double r = ((q0[u] - p0[u]) * dv - (q0[v] - p0[v]) * du) / den;
+    if (s <= 0 || s >= 1 || r <= 0 || r >= 1)
+        return false;
+    for (int k = 0; k < 3; k++)
+        x[k] = p0[k] + s * (p1[k] - p0[k]);
+    return true;
+}
+
+/* Two sheets crossing inside the tile (an X): the opposite crossings lie on one sheet each
+ * (parallel or anti-parallel gradients), the adjacent pairs don't, and f vanishes where the
+ * two chords meet. */
+static bool is_crossing_x(ism_cell_ctx *cx, const ism_tile *t, ism_fevent *k[4],
+                          double best_family)
+{
+    double gt = cx->roots.gradient_test;
+    if (fabs(unit_dot(k[0]->pt.g, k[2]->pt.g)) < gt || fabs(unit_dot(k[1]->pt.g, k[3]->pt.g)) < gt)
+        return false;
+    if (best_family >= 2 * gt)
+        return false;
+    double x[3];
+    if (!chords_cross(t, k[0]->pt.p, k[2]->pt.p, k[1]->pt.p, k[3]->pt.p, x))
+        return false;
+    double gbar = 0;
+    for (int i = 0; i < 4; i++)
+        gbar += ism_norm3(k[i]->pt.g) / 4;
+    return fabs(ism_sample_f(&cx->s, x)) <= 0.05 * gbar * tile_size(cx, t);
+}
+
+/* The paper's double-root search across the middle of t1t2: a double line lies on the face
+ * between two tangent roots when f touches 0 there too. */
+static bool double_line_between(ism_cell_ctx *cx, const ism_tile *t, const ism_fpoint *t1,
+                                const ism_fpoint *t2)
+{
+    double d[3], w[3], m[3], a[3], b[3];
+    for (int k = 0; k < 3; k++) {
+        d[k] = t2->p[k] - t1->p[k];
+        m[k] = 0.5 * (t1->p[k] + t2->p[k]);
+    }
+    double len = ism_norm3(d);
+    if (!(len > 0))
+        return false;
+    double nrm[3] = {0, 0, 0};
+    nrm[t->axis] = 1;
+    w[0] = nrm[1] * d[2] - nrm[2] * d[1];
+    w[1] = nrm[2] * d[0] - nrm[0] * d[2];
+    w[2] = nrm[0] * d[1] - nrm[1] * d[0];
+    ism_normalise3(w);
+    double half = 0.25 * len;
+    for (int k = 0; k < 3; k++) {
+        a[k] = m[k] - half * w[k];
+        b[k] = m[k] + half * w[k];
+    }
+    double fa = ism_sample_f(&cx->s, a), fb = ism_sample_f(&cx->s, b);
+    double fm = ism_sample_f(&cx->s, m);
+    if (fabs(fm) < cx->roots.eps)
+        return true;
+    if (fa * fb <= 0)
+        return false;
+    double tc;
+    return ism_double_root_search(&cx->s, &cx->roots, a, b, fa, fb, &tc) == 1;
+}
+
+/* Is the wedge between the curves from apex to c1 and c2 of the other sign? */
+static bool wedge_at(ism_cell_ctx *cx, const ism_tile *t, const ism_fevent *apex,
+                     const ism_fevent *c1, const ism_fevent *c2)
+{
+    double d1[3], d2[3], dir[3];
+    for (int k = 0; k < 3; k++) {
+        d1[k] = c1->pt.p[k] - apex->pt.p[k];
+        d2[k] = c2->pt.p[k] - apex->pt.p[k];
+    }
+    double l1 = ism_normalise3(d1), l2 = ism_normalise3(d2);
+    if (!(l1 > 0) || !(l2 > 0))
+        return false;
+    for (int k = 0; k < 3; k++)
+        dir[k] = d1[k] + d2[k];
+    if (!(ism_normalise3(dir) > 1e-6))
+        return false;
+    double step = 0.02 * tile_size(cx, t);
+    double lim = 0.25 * (l1 < l2 ? l1 : l2);
+    if (step > lim)
+        step = lim;
+    double q[3];
+    for (int k = 0; k < 3; k++)
+        q[k] = apex->pt.p[k] + step * dir[k];
+    return ism_sign(ism_sample_f(&cx->s, q)) == -apex->before;
+}
+
+typedef struct pair {
+    int a, b; /* event indices */
+} pair;
+
+/* Lines of one family: join the two crossings around each arc of sign `cut`. */
+static int family(const ism_cell_ctx *cx, const int *cross, int nc, int cut, pair *out,
+                  double *score)
+{
+    int n = 0;
+    *score = 0;
+    for (int i = 0; i < nc; i++) {
+        const ism_fevent *e = &cx->ev[cross[i]];
+        if (e->after == cut) {
+            int j = cross[(i + 1) % nc];
+            out[n++] = (pair){cross[i], j};
+            *score += unit_dot(e->pt.g, cx->ev[j].pt.g);
+        }
+    }
+    return n;
+}
+
+#define MAX_CROSS 64
+
+/* Joins crossings into lines; writes them to lines[] and returns how many. */
+static int pair_crossings(ism_cell_ctx *cx, const ism_tile *t, const int *cross, int nc,
+                          pair *lines)
+{
+    if (nc == 2) {
+        lines[0] = (pair){cross[0], cross[1]};
+        return 1;
+    }
+    pair fp[MAX_CROSS], fm[MAX_CROSS];
+    double sp, sm;
+    int np = family(cx, cross, nc, +1, fp, &sp);
+    int nm = family(cx, cross, nc, -1, fm, &sm);
+    if (nc == 4) {
+        ism_fevent *k[4] = {&cx->ev[cross[0]], &cx->ev[cross[1]], &cx->ev[cross[2]],
+                            &cx->ev[cross[3]]};
+        if (is_crossing_x(cx, t, k, sp > sm ? sp : sm)) {
+            cx->stats.crossed_faces++;
+            lines[0] = (pair){cross[0], cross[2]};
+            lines[1] = (pair){cross[1], cross[3]};
+            return 2;
+        }
+    }
+    bool plus;
+    if (fabs(sp - sm) > 0.1 * np) {
+        plus = sp > sm;
+    } else {
+        double c[3];
+        tile_centre(cx, t, c);
+        plus = ism_sample_f(&cx->s, c) < 0; /* centre negative: cut off the + arcs */
+    }
+    memcpy(lines, plus ? fp : fm, (size_t)(plus ? np : nm) * sizeof *lines);
+    return plus ? np : nm;
+}
+
+static bool emit(ism_cell_ctx *cx, int a, int b, int kind)
+{
+    return ism_flines_push(&cx->lines, &cx->ev[a].pt, &cx->ev[b].pt, kind);
+}
+
+bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
+{
+    if (!tile_boundary(cx, t) || !tile_events(cx))
+        return false;
+    int ne = (int)cx->nev;
+    int cross[MAX_CROSS], touch[MAX_CROSS], nc = 0, nt = 0;
+    for (int i = 0; i < ne; i++) {
+        ism_fevent *e = &cx->ev[i];
+        if (e->before == 0 || e->after == 0) {
+            /* a zero run: the segment after this event lies in f = 0 */
+            if (e->after == 0 && !emit(cx, i, (i + 1) % ne, ISM_LINE_EDGE))
+                return false;
+        } else if (e->before != e->after) {
+            if (nc < MAX_CROSS)
+                cross[nc++] = i;
+        } else if (nt < MAX_CROSS) {
+            touch[nt++] = i;
+        }
+    }
+    if (nc % 2 == 1) {
+        cx->stats.open_chains++; /* inconsistent signs: drop the last crossing */
+        nc--;
+    }
+    pair lines[MAX_CROSS];
+    int nl = nc ? pair_crossings(cx, t, cross, nc, lines) : 0;
+    bool line_used[MAX_CROSS] = {false};
+
+    /* tangent roots: double lines between pairs of them, else wedge apexes */
+    bool touch_used[MAX_CROSS] = {false};
+    for (int i = 0; i < nt; i++) {
+        for (int j = i + 1; j < nt && !touch_used[i]; j++) {
+            if (touch_used[j])
+                continue;
+            if (double_line_between(cx, t, &cx->ev[touch[i]].pt, &cx->ev[touch[j]].pt)) {
+                touch_used[i] = touch_used[j] = true;
+                cx->stats.double_lines++;
+                if (!emit(cx, touch[i], touch[j], ISM_LINE_DOUBLE) ||
+                    !emit(cx, touch[i], touch[j], ISM_LINE_DOUBLE))
+                    return false;
+            }
+        }
+    }
+    for (int i = 0; i < nt; i++) {
+        if (touch_used[i])
+            continue;
+        const ism_fevent *apex = &cx->ev[touch[i]];
+        for (int l = 0; l < nl; l++) {
+            if (line_used[l])
+                continue;
+            int a = lines[l].a, b = lines[l].b;
+            /* the apex must sit on the arc between the line's two crossings */
+            int lo = a < b ? a : b, hi = a < b ? b : a;
+            bool inside = touch[i] > lo && touch[i] < hi;
+            bool between = true;
+            for (int c = 0; c < nc; c++) {
+                bool cin = cross[c] > lo && cross[c] < hi;
+                if (cin == inside && cross[c] != a && cross[c] != b)
+                    between = false;
+            }
+            if (!between || !wedge_at(cx, t, apex, &cx->ev[a], &cx->ev[b]))
+                continue;
+            line_used[l] = true;
+            touch_used[i] = true;
+            if (!emit(cx, touch[i], a, ISM_LINE_REGULAR) ||
+                !emit(cx, touch[i], b, ISM_LINE_REGULAR))
+                return false;
+            break;
+        }
+    }
+    for (int l = 0; l < nl; l++)
+        if (!line_used[l] && !emit(cx, lines[l].a, lines[l].b, ISM_LINE_REGULAR))
+            return false;
+    return true;
+}

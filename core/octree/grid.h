@@ -1,0 +1,47 @@
+/* grid.h — the integer lattice under the octree. A point of the lattice has integer
+ * coordinates 0..2^depth on each axis (depth = the polygoniser's maximum depth); a cell at
+ * level L spans 2^(depth-L) lattice steps. Every world coordinate of a lattice point comes
+ * from grid_coord(), so the same lattice point always has bit-identical world coordinates
+ * in every cell that mentions it — the basis of exact welding. */
+#ifndef ISM_GRID_H
+#define ISM_GRID_H
+
+#include <stdint.h>
+
+/* Deepest octree level the lattice supports (coordinates stay within 17 bits). */
+#define ISM_GRID_MAX_DEPTH 16
+
+typedef struct ism_grid {
+    int depth;          /* maximum octree depth: lattice has 2^depth steps per axis */
+    double lo[3];       /* world coordinates of lattice point (0,0,0) */
+    double step[3];     /* world size of one lattice step on each axis */
+} ism_grid;
+
+/* A lattice point or a cell origin. */
+typedef struct ism_ipt {
+    int32_t v[3];
+} ism_ipt;
+
+void ism_grid_init(ism_grid *g, const double box[6], int depth);
+
+static inline double ism_grid_coord(const ism_grid *g, int axis, int32_t i)
+{
+    return g->lo[axis] + g->step[axis] * (double)i;
+}
+
+static inline void ism_grid_point(const ism_grid *g, ism_ipt p, double out[3])
+{
+    for (int k = 0; k < 3; k++)
+        out[k] = ism_grid_coord(g, k, p.v[k]);
+}
+
+/* Lattice steps spanned by a cell at this level. */
+static inline int32_t ism_grid_cell_steps(const ism_grid *g, int level)
+{
+    return (int32_t)1 << (g->depth - level);
+}
+
+/* The smallest world size of a cell at this level (over the three axes). */
+double ism_grid_cell_size(const ism_grid *g, int level);
+
+#endif

@@ -1,0 +1,70 @@
+/* octree.c — queries over a built octree: point location and the tiling of a leaf's face
+ * by the leaves across it (what lets a coarse plotting node take in the vertices that finer
+ * neighbours put on their shared face: the paper's FixHoles, done by construction). */
+#include "core/octree/octree.h"
+
+int32_t ism_octree_find(const ism_octree *t, const int32_t o[3], int level)
+{
+    int32_t full = (int32_t)1 << t->grid.depth;
+    for (int a = 0; a < 3; a++)
+        if (o[a] < 0 || o[a] >= full)
+            return -1;
+    int32_t i = 0;
+    while (t->nodes[i].level < level && t->nodes[i].child >= 0) {
+        const ism_node *nd = &t->nodes[i];
+        int32_t half = ism_grid_cell_steps(&t->grid, nd->level + 1);
+        int k = 0;
+        for (int a = 0; a < 3; a++)
+            if (o[a] - nd->org[a] >= half)
+                k |= 1 << a;
+        i = nd->child + k;
+    }
+    return i;
+}
+
+static ism_tile face_of(const ism_octree *t, const ism_node *nd, int axis, int side)
+{
+    int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    int32_t s = ism_grid_cell_steps(&t->grid, nd->level);
+    ism_tile tile = {axis, nd->org[axis] + side * s, nd->org[u], nd->org[u] + s, nd->org[v],
+                     nd->org[v] + s};
+    return tile;
+}
+
+/* Emits the faces (on the plane facing the other node) of the non-empty leaves under
+ * node i; `side` is the side of those leaves' faces that touches the plane. */
+static bool collect_leaves(const ism_octree *t, int32_t i, int axis, int side,
+                           bool (*emit)(void *, const ism_tile *), void *ctx)
+{
+    const ism_node *nd = &t->nodes[i];
+    if (nd->state == ISM_NODE_EMPTY)
+        return true;
+    if (nd->child < 0) {
+        ism_tile tile = face_of(t, nd, axis, side);
+        return emit(ctx, &tile);
+    }
+    for (int k = 0; k < 8; k++)
+        if (((k >> axis) & 1) == side)
+            if (!collect_leaves(t, nd->child + k, axis, side, emit, ctx))
+                return false;
+    return true;
+}
+
+bool ism_octree_face_tiles(const ism_octree *t, int32_t node, int axis, int side,
+                           bool (*emit)(void *ctx, const ism_tile *tile), void *ctx)
+{
+    const ism_node *nd = &t->nodes[node];
+    int32_t s = ism_grid_cell_steps(&t->grid, nd->level);
+    int32_t o[3] = {nd->org[0], nd->org[1], nd->org[2]};
+    o[axis] += side ? s : -s;
+    int32_t j = ism_octree_find(t, o, nd->level);
+    ism_tile own = face_of(t, nd, axis, side);
+    if (j < 0)
+        return emit(ctx, &own); /* the face is on the search box's boundary */
+    const ism_node *nb = &t->nodes[j];
+    if (nb->state == ISM_NODE_EMPTY)
+        return true; /* the face lies in a closed box proven empty */
+    if (nb->child < 0 || nb->level < nd->level)
+        return emit(ctx, &own); /* the other side is as coarse or coarser */
+    return collect_leaves(t, j, axis, 1 - side, emit, ctx);
+}

@@ -1,0 +1,65 @@
+/* octree.h — the adaptive octree over the search box: nodes addressed by lattice origin
+ * and level, built by interval exclusion, unconditional subdivision to the minimum depth and
+ * the flatness test (plot_test.h) up to the maximum depth; and the queries the cell
+ * polygoniser needs: point location and the tiling of a node's face by the leaves on the
+ * other side (the basis of crack repair). */
+#ifndef ISM_OCTREE_H
+#define ISM_OCTREE_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdbool.h>
+#include "core/octree/grid.h"
+
+enum ism_node_state {
+    ISM_NODE_SPLIT = 0,  /* has 8 children */
+    ISM_NODE_EMPTY = 1,  /* leaf proven empty by intervals (closed box) */
+    ISM_NODE_LEAF = 2,   /* leaf that may hold surface: a candidate plotting node */
+};
+
+enum ism_node_flags {
+    ISM_NODE_UNRESOLVED = 1, /* leaf at max depth that failed the flatness test */
+};
+
+typedef struct ism_node {
+    int32_t org[3];  /* lattice origin */
+    int32_t child;   /* index of the first of 8 consecutive children, -1 for leaves */
+    uint8_t level;
+    uint8_t state;
+    uint8_t flags;
+} ism_node;
+
+typedef struct ism_octree {
+    ism_grid grid;
+    ism_node *nodes;
+    size_t n, cap;
+} ism_octree;
+
+/* Child k of a node sits at org + half * (k & 1, k >> 1 & 1, k >> 2 & 1). */
+static inline void ism_child_origin(const ism_grid *g, const ism_node *nd, int k,
+                                    int32_t out[3])
+{
+    int32_t half = ism_grid_cell_steps(g, nd->level + 1);
+    for (int a = 0; a < 3; a++)
+        out[a] = nd->org[a] + ((k >> a) & 1) * half;
+}
+
+/* Index of the deepest node of level <= level that contains the lattice cell with origin o
+ * at that level; -1 when o is outside the root. */
+int32_t ism_octree_find(const ism_octree *t, const int32_t o[3], int level);
+
+/* A rectangle of a lattice plane: the face of one leaf, used as a piece of another node's
+ * face. u = (axis+1)%3, v = (axis+2)%3. */
+typedef struct ism_tile {
+    int axis;
+    int32_t plane;
+    int32_t u0, u1, v0, v1;
+} ism_tile;
+
+/* Tiles the face (axis, side) of leaf `node` by the non-empty leaves on the other side
+ * (or the face itself when the other side is not finer). Calls emit for each tile; a face
+ * that lies in an empty node's closed box yields nothing. Returns false if emit does. */
+bool ism_octree_face_tiles(const ism_octree *t, int32_t node, int axis, int side,
+                           bool (*emit)(void *ctx, const ism_tile *tile), void *ctx);
+
+#endif

@@ -1,0 +1,309 @@
+/* octree_build.c — the subdivision of the search box: the top two levels on the calling
+ * thread, then one task per level-2 node on the worker threads, each growing its subtree
+ * in its own node array; the arrays are joined in task order afterwards. */
+#include "core/octree/octree_build.h"
+#include "core/octree/sampler.h"
+#include "core/util/parallel.h"
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define TOP_LEVEL 2
+
+typedef struct node_vec {
+    ism_node *v;
+    size_t n, cap;
+} node_vec;
+
+typedef struct thread_state {
+    ism_sampler s;
+    ism_tape *tapes[ISM_GRID_MAX_DEPTH + 1];
+    uint64_t visited, excluded, unresolved;
+} thread_state;
+
+typedef struct build {
+    const ism_octree_build_params *p;
+    const ism_grid *grid;
+    thread_state *threads;
+    int shortening;
+    atomic_size_t nodes_total;
+    atomic_int failed;           /* an enum ism_build_status other than OK */
+    size_t *task_nodes;          /* node index (in the top array) of each task */
+    node_vec *task_out;          /* each task's subtree; [0] is the task's node itself */
+    atomic_size_t tasks_done;
+    size_t ntasks;
+    pthread_mutex_t progress_lock;
+} build;
+
+static bool vec_push(node_vec *v, const ism_node *nd)
+{
+    if (v->n == v->cap) {
+        size_t c = v->cap ? v->cap * 2 : 256;
+        ism_node *nv = realloc(v->v, c * sizeof *nv);
+        if (!nv)
+            return false;
+        v->v = nv;
+        v->cap = c;
+    }
+    v->v[v->n++] = *nd;
+    return true;
+}
+
+static void node_box(const ism_grid *g, const ism_node *nd, double lo[3], double hi[3])
+{
+    int32_t s = ism_grid_cell_steps(g, nd->level);
+    for (int a = 0; a < 3; a++) {
+        lo[a] = ism_grid_coord(g, a, nd->org[a]);
+        hi[a] = ism_grid_coord(g, a, nd->org[a] + s);
+    }
+}
+
+/* Interval of f over the node; writes a shortened tape into th->tapes[level] when the box
+ * proves min/max branches dominated, and returns the tape to use below this node. */
+static const ism_tape *node_range(build *b, thread_state *th, const ism_node *nd,
+                                  const ism_tape *tape, ism_interval *range)
+{
+    double lo[3], hi[3];
+    node_box(b->grid, nd, lo, hi);
+    ism_interval x = {lo[0], hi[0]}, y = {lo[1], hi[1]}, z = {lo[2], hi[2]};
+    th->s.n_interval++;
+    if (b->shortening && th->tapes[nd->level] &&
+        ism_tape_shorten(tape, th->s.ws, x, y, z, th->tapes[nd->level], range))
+        return th->tapes[nd->level];
+    *range = ism_eval_interval(tape, th->s.ws, x, y, z);
+    return tape;
+}
+
+static bool fail(build *b, enum ism_build_status st)
+{
+    int expected = ISM_BUILD_OK;
+    atomic_compare_exchange_strong(&b->failed, &expected, (int)st);
+    return false;
+}
+
+/* Decides node v->v[i] and grows its subtree. When defer_level >= 0, nodes at that level
+ * are left for tasks (their index is appended to *deferred). */
+static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_tape *tape,
+                 int defer_level, size_t **deferred, size_t *ndeferred)
+{
+    if (atomic_load(&b->failed) != ISM_BUILD_OK)
+        return false;
+    if (b->p->cancel && *b->p->cancel)
+        return fail(b, ISM_BUILD_CANCELLED);
+    ism_node nd = v->v[i];
+    if (nd.level == defer_level) {
+        size_t *d = realloc(*deferred, (*ndeferred + 1) * sizeof *d);
+        if (!d)
+            return fail(b, ISM_BUILD_NO_MEMORY);
+        d[(*ndeferred)++] = i;
+        *deferred = d;
+        return true;
+    }
+    th->visited++;
+    ism_interval range;
+    const ism_tape *sub = node_range(b, th, &nd, tape, &range);
+    if (!(range.lo <= 0 && range.hi >= 0)) {
+        v->v[i].state = ISM_NODE_EMPTY;
+        th->excluded++;
+        return true;
+    }
+    bool leaf = false;
+    if (nd.level >= b->p->min_depth) {
+        double lo[3], hi[3];
+        node_box(b->grid, &nd, lo, hi);
+        const ism_tape *saved = th->s.tape;
+        th->s.tape = sub;
+        bool flat = ism_plot_test(&th->s, &b->p->flatness, lo, hi);
+        th->s.tape = saved;
+        if (nd.level >= b->p->max_depth) {
+            leaf = true;
+            if (!flat) {
+                v->v[i].flags |= ISM_NODE_UNRESOLVED;
+                th->unresolved++;
+            }
+        } else {
+            leaf = flat;
+        }
+    }
+    if (leaf) {
+        v->v[i].state = ISM_NODE_LEAF;
+        return true;
+    }
+    if (atomic_fetch_add(&b->nodes_total, 8) + 8 > b->p->max_nodes)
+        return fail(b, ISM_BUILD_TOO_BIG);
+    size_t first = v->n;
+    for (int k = 0; k < 8; k++) {
+        ism_node c = {{0, 0, 0}, -1, (uint8_t)(nd.level + 1), ISM_NODE_LEAF, 0};
+        ism_child_origin(b->grid, &nd, k, c.org);
+        if (!vec_push(v, &c))
+            return fail(b, ISM_BUILD_NO_MEMORY);
+    }
+    v->v[i].state = ISM_NODE_SPLIT;
+    v->v[i].child = (int32_t)first;
+    for (int k = 0; k < 8; k++)
+        if (!grow(b, th, v, first + k, sub, defer_level, deferred, ndeferred))
+            return false;
+    return true;
+}
+
+static void report_progress(build *b)
+{
+    if (!b->p->progress)
+        return;
+    size_t done = atomic_fetch_add(&b->tasks_done, 1) + 1;
+    pthread_mutex_lock(&b->progress_lock);
+    b->p->progress(b->p->progress_ctx, (double)done / (double)b->ntasks);
+    pthread_mutex_unlock(&b->progress_lock);
+}
+
+static void run_task(void *ctx, size_t task, int thread)
+{
+    build *b = ctx;
+    thread_state *th = &b->threads[thread];
+    node_vec *out = &b->task_out[task];
+    size_t *none = NULL, nnone = 0;
+    /* The task's tape: shorten from the full tape over the task's own box on the way. */
+    grow(b, th, out, 0, b->p->tape, -1, &none, &nnone);
+    free(none);
+    report_progress(b);
+}
+
+static bool init_threads(build *b, int nthreads)
+{
+    b->threads = calloc((size_t)nthreads, sizeof *b->threads);
+    if (!b->threads)
+        return false;
+    for (int t = 0; t < nthreads; t++) {
+        thread_state *th = &b->threads[t];
+        th->s.tape = b->p->tape;
+        th->s.ws = ism_eval_ws_new(b->p->tape);
+        if (!th->s.ws)
+            return false;
+        if (b->shortening)
+            for (int l = 0; l <= b->p->max_depth; l++)
+                if (!(th->tapes[l] = ism_tape_new_like(b->p->tape)))
+                    return false;
+    }
+    return true;
+}
+
+static void free_threads(build *b, int nthreads, ism_octree_build_stats *st)
+{
+    if (!b->threads)
+        return;
+    for (int t = 0; t < nthreads; t++) {
+        thread_state *th = &b->threads[t];
+        st->visited += th->visited;
+        st->excluded += th->excluded;
+        st->unresolved += th->unresolved;
+        st->n_point += th->s.n_point;
+        st->n_gradient += th->s.n_gradient;
+        st->n_interval += th->s.n_interval;
+        if (th->s.ws)
+            ism_eval_ws_free(th->s.ws);
+        for (int l = 0; l <= ISM_GRID_MAX_DEPTH; l++)
+            if (th->tapes[l])
+                ism_tape_free(th->tapes[l]);
+    }
+    free(b->threads);
+}
+
+/* Appends every task's subtree to the top array, in task order, fixing child indices. */
+static bool join_tasks(build *b, node_vec *top)
+{
+    for (size_t k = 0; k < b->ntasks; k++) {
+        node_vec *sub = &b->task_out[k];
+        size_t offset = top->n - 1; /* local index j > 0 lands at offset + j */
+        ism_node root = sub->v[0];
+        if (root.child >= 0)
+            root.child += (int32_t)offset;
+        top->v[b->task_nodes[k]] = root;
+        for (size_t j = 1; j < sub->n; j++) {
+            ism_node nd = sub->v[j];
+            if (nd.child >= 0)
+                nd.child += (int32_t)offset;
+            if (!vec_push(top, &nd))
+                return false;
+        }
+    }
+    return true;
+}
+
+enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_params *p,
+                                       ism_octree_build_stats *stats)
+{
+    memset(stats, 0, sizeof *stats);
+    build b;
+    memset(&b, 0, sizeof b);
+    b.p = p;
+    b.grid = &t->grid;
+    b.shortening = 1;
+    atomic_init(&b.failed, ISM_BUILD_OK);
+    atomic_init(&b.nodes_total, 1);
+    atomic_init(&b.tasks_done, 0);
+    pthread_mutex_init(&b.progress_lock, NULL);
+    int nthreads = p->threads < 1 ? 1 : p->threads;
+    node_vec top = {0};
+    size_t *deferred = NULL, ndeferred = 0;
+    enum ism_build_status status = ISM_BUILD_OK;
+
+    if (!init_threads(&b, nthreads)) {
+        status = ISM_BUILD_NO_MEMORY;
+        goto done;
+    }
+    ism_node root = {{0, 0, 0}, -1, 0, ISM_NODE_LEAF, 0};
+    if (!vec_push(&top, &root)) {
+        status = ISM_BUILD_NO_MEMORY;
+        goto done;
+    }
+    int defer = p->max_depth < TOP_LEVEL ? p->max_depth : TOP_LEVEL;
+    grow(&b, &b.threads[0], &top, 0, p->tape, defer, &deferred, &ndeferred);
+    if ((status = atomic_load(&b.failed)) != ISM_BUILD_OK)
+        goto done;
+
+    b.ntasks = ndeferred;
+    b.task_nodes = deferred;
+    b.task_out = calloc(ndeferred ? ndeferred : 1, sizeof *b.task_out);
+    if (!b.task_out) {
+        status = ISM_BUILD_NO_MEMORY;
+        goto done;
+    }
+    for (size_t k = 0; k < ndeferred; k++)
+        if (!vec_push(&b.task_out[k], &top.v[deferred[k]])) {
+            status = ISM_BUILD_NO_MEMORY;
+            goto done;
+        }
+    ism_parallel_for(nthreads, ndeferred, run_task, &b);
+    if ((status = atomic_load(&b.failed)) != ISM_BUILD_OK)
+        goto done;
+    if (!join_tasks(&b, &top))
+        status = ISM_BUILD_NO_MEMORY;
+
+done:
+    free_threads(&b, nthreads, stats);
+    if (b.task_out)
+        for (size_t k = 0; k < b.ntasks; k++)
+            free(b.task_out[k].v);
+    free(b.task_out);
+    free(deferred);
+    pthread_mutex_destroy(&b.progress_lock);
+    if (status != ISM_BUILD_OK) {
+        free(top.v);
+        t->nodes = NULL;
+        t->n = t->cap = 0;
+        return status;
+    }
+    t->nodes = top.v;
+    t->n = top.n;
+    t->cap = top.cap;
+    return ISM_BUILD_OK;
+}
+
+void ism_octree_free(ism_octree *t)
+{
+    free(t->nodes);
+    t->nodes = NULL;
+    t->n = t->cap = 0;
+}

@@ -1,0 +1,93 @@
+/* plot_test.c — flatness of an octree node: corner gradient divergence, the sign-and-gradient
+ * edge test, at most one crossing curve per face, planarity of the edge roots and the
+ * distance of their centroid to the surface. */
+#include "core/octree/plot_test.h"
+#include "core/octree/edge_roots.h"
+
+#include <math.h>
+
+/* Corner c of the box: bit 0 = x, bit 1 = y, bit 2 = z. */
+static void corner(const double lo[3], const double hi[3], int c, double p[3])
+{
+    for (int a = 0; a < 3; a++)
+        p[a] = (c >> a) & 1 ? hi[a] : lo[a];
+}
+
+/* The 12 edges as corner pairs, and which faces (axis*2+side) each lies on. */
+static void edge_corners(int e, int *c0, int *c1)
+{
+    int axis = e / 4, rest = e % 4;
+    int o1 = (axis + 1) % 3, o2 = (axis + 2) % 3;
+    int base = ((rest & 1) << o1) | (((rest >> 1) & 1) << o2);
+    *c0 = base;
+    *c1 = base | (1 << axis);
+}
+
+bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
+                   const double hi[3])
+{
+    double p[8][3], f[8], n[8][3];
+    for (int c = 0; c < 8; c++) {
+        corner(lo, hi, c, p[c]);
+        f[c] = ism_sample_grad(s, p[c], n[c]);
+        double len = ism_normalise3(n[c]);
+        if (!(len > 0) || !isfinite(len) || !isfinite(f[c]))
+            return false; /* a singular or undefined corner: look closer */
+    }
+    for (int i = 0; i < 8; i++)
+        for (int j = i + 1; j < 8; j++)
+            if (ism_dot3(n[i], n[j]) < fl->normal_cos)
+                return false;
+
+    double size = hi[0] - lo[0];
+    for (int a = 1; a < 3; a++)
+        if (hi[a] - lo[a] < size)
+            size = hi[a] - lo[a];
+
+    double roots[12][3], centroid[3] = {0, 0, 0};
+    int nroots = 0, face_cross[6] = {0};
+    for (int e = 0; e < 12; e++) {
+        int c0, c1;
+        edge_corners(e, &c0, &c1);
+        bool crosses = (f[c0] < 0) != (f[c1] < 0) || f[c0] == 0 || f[c1] == 0;
+        if (!crosses) {
+            if (ism_dot3(n[c0], n[c1]) <= fl->gradient_test)
+                return false; /* signs agree, gradients do not: maybe two roots */
+            continue;
+        }
+        double t = f[c0] == 0 ? 0 : f[c1] == 0 ? 1 : ism_regula_falsi(s, p[c0], p[c1], f[c0], f[c1]);
+        for (int a = 0; a < 3; a++) {
+            roots[nroots][a] = p[c0][a] + t * (p[c1][a] - p[c0][a]);
+            centroid[a] += roots[nroots][a];
+        }
+        nroots++;
+        int axis = e / 4, rest = e % 4;
+        int o1 = (axis + 1) % 3, o2 = (axis + 2) % 3;
+        face_cross[o1 * 2 + (rest & 1)]++;
+        face_cross[o2 * 2 + ((rest >> 1) & 1)]++;
+    }
+    for (int k = 0; k < 6; k++)
+        if (face_cross[k] > 2)
+            return false; /* a saddle on a face: two curves, look closer */
+    if (nroots == 0)
+        return true;
+    for (int a = 0; a < 3; a++)
+        centroid[a] /= nroots;
+
+    double normal[3] = {0, 0, 0};
+    for (int c = 0; c < 8; c++)
+        for (int a = 0; a < 3; a++)
+            normal[a] += n[c][a];
+    ism_normalise3(normal);
+    double tol = fl->plane_frac * size;
+    for (int r = 0; r < nroots; r++) {
+        double d[3] = {roots[r][0] - centroid[0], roots[r][1] - centroid[1],
+                       roots[r][2] - centroid[2]};
+        if (fabs(ism_dot3(normal, d)) > tol)
+            return false;
+    }
+    double g[3];
+    double fc = ism_sample_grad(s, centroid, g);
+    double gl = ism_norm3(g);
+    return gl > 0 && fabs(fc) / gl <= tol;
+}

@@ -1,0 +1,22 @@
+/* plot_test.h — the flatness test that decides whether an octree node becomes a plotting
+ * node or is subdivided further (paper §2, after Bloomenthal): the gradients at the node's
+ * corners must agree (divergence criterion), every edge must pass the sign-and-gradient
+ * test without suspecting two roots, every face must be crossed at most once, and the
+ * polygon through the edge roots must be planar and close to the surface. */
+#ifndef ISM_PLOT_TEST_H
+#define ISM_PLOT_TEST_H
+
+#include <stdbool.h>
+#include "core/octree/sampler.h"
+
+typedef struct ism_flatness {
+    double gradient_test;  /* paper eq. (1) */
+    double normal_cos;     /* minimum cos between any two corner gradients */
+    double plane_frac;     /* max distance from the plane / of the surface, × node size */
+} ism_flatness;
+
+/* lo, hi: the node's world box. True when the node may be plotted at this size. */
+bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
+                   const double hi[3]);
+
+#endif

@@ -1,0 +1,321 @@
+/* polygonise.c — the polygoniser's driver: checks the options, builds the octree (phase 1),
+ * registers the leaves' corners on their lattice lines, polygonises every candidate node in
+ * parallel chunks (phase 2: face lines, stitching, crack repair, triangles), welds the
+ * chunks in order (phase 3), and fills the statistics. */
+#include "core/octree/polygonise.h"
+#include "core/octree/breaks.h"
+#include "core/octree/cell.h"
+#include "core/octree/octree_build.h"
+#include "core/octree/weld.h"
+#include "core/util/parallel.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define CHUNK_LEAVES 64
+#define MAX_THREADS 64
+#define BYTES_PER_TRIANGLE 256 /* node outputs + welded mesh + analysis, per triangle */
+
+void ism_poly_options_default(ism_poly_options *o)
+{
+    memset(o, 0, sizeof *o);
+    double box[6] = {-1, -1, -1, 1, 1, 1};
+    memcpy(o->box, box, sizeof box);
+    o->min_depth = 3;
+    o->max_depth = 7;
+    o->gradient_test = 0.9;
+    o->double_root_eps = 1e-9;
+    o->double_root_iters = 25;
+    o->stitch_tol = 1e-3;
+    o->flat_normal = 0.9;
+    o->flat_plane = 0.05;
+    o->max_triangles = 4000000;
+    o->max_memory = (size_t)2 << 30;
+    o->threads = 0;
+}
+
+static bool in_range(double v, double lo, double hi) { return isfinite(v) && v >= lo && v <= hi; }
+
+bool ism_poly_options_check(const ism_poly_options *o, ism_error *err)
+{
+    for (int k = 0; k < 6; k++)
+        if (!isfinite(o->box[k]))
+            return ism_error_set(err, "box: coordinate %d is not a finite number", k);
+    for (int k = 0; k < 3; k++)
+        if (!(o->box[3 + k] > o->box[k]))
+            return ism_error_set(err, "box: max must be greater than min on axis %c", "xyz"[k]);
+    if (o->min_depth < 0 || o->min_depth > ISM_MAX_DEPTH_LIMIT)
+        return ism_error_set(err, "depth.min: %d is outside 0..%d", o->min_depth,
+                             ISM_MAX_DEPTH_LIMIT);
+    if (o->max_depth < o->min_depth || o->max_depth > ISM_MAX_DEPTH_LIMIT)
+        return ism_error_set(err, "depth.max: %d is outside %d..%d", o->max_depth, o->min_depth,
+                             ISM_MAX_DEPTH_LIMIT);
+    if (!in_range(o->gradient_test, -1, 1))
+        return ism_error_set(err, "gradient_test: must be in [-1, 1]");
+    if (!in_range(o->double_root_eps, 0, 1e300))
+        return ism_error_set(err, "double_root_eps: must be a finite number >= 0");
+    if (o->double_root_iters < 1 || o->double_root_iters > 200)
+        return ism_error_set(err, "double_root_iters: must be in 1..200");
+    if (!in_range(o->stitch_tol, 0, 0.25))
+        return ism_error_set(err, "stitch_tol: must be in [0, 0.25]");
+    if (!in_range(o->flat_normal, -1, 1))
+        return ism_error_set(err, "flat_normal: must be in [-1, 1]");
+    if (!in_range(o->flat_plane, 1e-6, 10))
+        return ism_error_set(err, "flat_plane: must be in [1e-6, 10]");
+    if (o->threads < 0 || o->threads > MAX_THREADS)
+        return ism_error_set(err, "threads: must be in 0..%d", MAX_THREADS);
+    if (o->max_triangles < 1)
+        return ism_error_set(err, "max_triangles: must be at least 1");
+    return true;
+}
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
+}
+
+/* Progress reports from several threads, mapped into one [0, 1] range. */
+typedef struct progress {
+    const ism_poly_options *o;
+    pthread_mutex_t lock;
+    double from, span;
+} progress;
+
+static void report(void *ctx, double fraction)
+{
+    progress *p = ctx;
+    if (!p->o->progress)
+        return;
+    pthread_mutex_lock(&p->lock);
+    p->o->progress(p->o->progress_ctx, p->from + p->span * fraction);
+    pthread_mutex_unlock(&p->lock);
+}
+
+typedef struct phase2 {
+    const ism_poly_options *o;
+    const ism_octree *tree;
+    const ism_breaks *breaks;
+    int32_t *leaves;
+    size_t nleaves, nchunks;
+    ism_cell_out *out;           /* one per chunk */
+    ism_cell_ctx *ctx;           /* one per thread */
+    size_t max_triangles;
+    atomic_size_t triangles;
+    atomic_size_t chunks_done;
+    atomic_int status;           /* enum ism_poly_status */
+    progress *prog;
+} phase2;
+
+static void run_chunk(void *arg, size_t chunk, int thread)
+{
+    phase2 *p = arg;
+    if (atomic_load(&p->status) != ISM_POLY_OK)
+        return;
+    if (p->o->cancel && *p->o->cancel) {
+        atomic_store(&p->status, ISM_POLY_CANCELLED);
+        return;
+    }
+    ism_cell_ctx *cx = &p->ctx[thread];
+    ism_cell_out *out = &p->out[chunk];
+    size_t first = chunk * CHUNK_LEAVES;
+    size_t last = first + CHUNK_LEAVES < p->nleaves ? first + CHUNK_LEAVES : p->nleaves;
+    for (size_t i = first; i < last; i++)
+        if (!ism_cell_polygonise(cx, p->leaves[i], out)) {
+            atomic_store(&p->status, ISM_POLY_NO_MEMORY);
+            return;
+        }
+    if (atomic_fetch_add(&p->triangles, out->ntris) + out->ntris > p->max_triangles) {
+        atomic_store(&p->status, ISM_POLY_TOO_BIG);
+        return;
+    }
+    size_t done = atomic_fetch_add(&p->chunks_done, 1) + 1;
+    report(p->prog, (double)done / (double)p->nchunks);
+}
+
+static int thread_count(const ism_poly_options *o)
+{
+    int n = o->threads > 0 ? o->threads : ism_cpu_count();
+    return n > MAX_THREADS ? MAX_THREADS : n;
+}
+
+static void add_cell_stats(ism_poly_stats *st, const ism_cell_ctx *cx)
+{
+    st->polygons += cx->stats.polygons;
+    st->two_polygon_nodes += cx->stats.two_polygon_nodes;
+    st->degenerate_polygons += cx->stats.degenerate_polygons;
+    st->nonmanifold_lines += cx->stats.double_lines;
+    st->open_chains += cx->stats.open_chains;
+    st->cracks_repaired += cx->stats.crack_tiles;
+    st->evals_point += cx->s.n_point;
+    st->evals_gradient += cx->s.n_gradient;
+}
+
+/* Phase 2: every candidate leaf polygonised, chunk by chunk, on all threads. */
+static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_options *o,
+                                              const ism_octree *tree, int threads,
+                                              progress *prog, ism_mesh *mesh,
+                                              ism_poly_stats *st, double *t_weld)
+{
+    ism_breaks breaks = {0};
+    phase2 p;
+    memset(&p, 0, sizeof p);
+    p.o = o;
+    p.tree = tree;
+    p.breaks = &breaks;
+    p.prog = prog;
+    size_t by_memory = o->max_memory / BYTES_PER_TRIANGLE;
+    p.max_triangles = o->max_triangles < by_memory ? o->max_triangles : by_memory;
+    atomic_init(&p.status, ISM_POLY_OK);
+    enum ism_poly_status status = ISM_POLY_NO_MEMORY;
+
+    double t0 = now_ms();
+    if (!ism_breaks_build(&breaks, tree))
+        goto done;
+    st->time_ms[ISM_PHASE_CRACKS] = now_ms() - t0;
+    p.leaves = malloc((tree->n ? tree->n : 1) * sizeof *p.leaves);
+    if (!p.leaves)
+        goto done;
+    for (size_t i = 0; i < tree->n; i++)
+        if (tree->nodes[i].state == ISM_NODE_LEAF)
+            p.leaves[p.nleaves++] = (int32_t)i;
+    p.nchunks = (p.nleaves + CHUNK_LEAVES - 1) / CHUNK_LEAVES;
+    p.out = calloc(p.nchunks ? p.nchunks : 1, sizeof *p.out);
+    p.ctx = calloc((size_t)threads, sizeof *p.ctx);
+    if (!p.out || !p.ctx)
+        goto done;
+    ism_root_params roots = {o->gradient_test, o->double_root_eps, o->double_root_iters};
+    for (int t = 0; t < threads; t++) {
+        ism_cell_ctx *cx = &p.ctx[t];
+        cx->s.tape = f;
+        cx->tree = tree;
+        cx->breaks = &breaks;
+        cx->roots = roots;
+        cx->stitch_tol = o->stitch_tol;
+        if (!(cx->s.ws = ism_eval_ws_new(f)))
+            goto done;
+    }
+    ism_parallel_for(threads, p.nchunks, run_chunk, &p);
+    status = atomic_load(&p.status);
+    for (int t = 0; t < threads; t++)
+        add_cell_stats(st, &p.ctx[t]);
+    if (status != ISM_POLY_OK)
+        goto done;
+
+    t0 = now_ms();
+    ism_weld_stats ws;
+    status = ism_weld(p.out, p.nchunks, mesh, &ws) ? ISM_POLY_OK : ISM_POLY_NO_MEMORY;
+    *t_weld = now_ms() - t0;
+    st->zero_vertices = ws.zero_vertices;
+    st->edges_touching = ws.touch_vertices;
+    st->edges_double_root = ws.pair_vertices / 2;
+    st->edges_many_roots = ws.many_vertices;
+done:
+    for (size_t c = 0; p.out && c < p.nchunks; c++)
+        ism_cell_out_free(&p.out[c]);
+    free(p.out);
+    for (int t = 0; p.ctx && t < threads; t++) {
+        if (p.ctx[t].s.ws)
+            ism_eval_ws_free(p.ctx[t].s.ws);
+        ism_cell_ctx_free(&p.ctx[t]);
+    }
+    free(p.ctx);
+    free(p.leaves);
+    ism_breaks_free(&breaks);
+    return status;
+}
+
+static enum ism_poly_status from_build(enum ism_build_status b)
+{
+    switch (b) {
+    case ISM_BUILD_OK: return ISM_POLY_OK;
+    case ISM_BUILD_CANCELLED: return ISM_POLY_CANCELLED;
+    case ISM_BUILD_TOO_BIG: return ISM_POLY_TOO_BIG;
+    default: return ISM_POLY_NO_MEMORY;
+    }
+}
+
+static void count_leaves(const ism_octree *t, ism_poly_stats *st)
+{
+    for (size_t i = 0; i < t->n; i++)
+        st->plotting_nodes += t->nodes[i].state == ISM_NODE_LEAF;
+}
+
+static enum ism_poly_status fail_with(enum ism_poly_status s, const ism_poly_options *o,
+                                      ism_error *err)
+{
+    if (s == ISM_POLY_TOO_BIG)
+        ism_error_set(err, "the mesh would exceed the budget (%zu triangles, %zu MiB)",
+                      o->max_triangles, o->max_memory >> 20);
+    else if (s == ISM_POLY_CANCELLED)
+        ism_error_set(err, "cancelled");
+    else if (s == ISM_POLY_NO_MEMORY)
+        ism_error_set(err, "out of memory");
+    return s;
+}
+
+enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o,
+                                    ism_mesh *mesh, ism_poly_stats *stats, ism_error *err)
+{
+    memset(stats, 0, sizeof *stats);
+    ism_mesh_free(mesh);
+    if (!ism_poly_options_check(o, err))
+        return ISM_POLY_BAD_OPTIONS;
+    double t_start = now_ms();
+    int threads = thread_count(o);
+    stats->threads = threads;
+    progress prog = {o, PTHREAD_MUTEX_INITIALIZER, 0, 0.4};
+
+    ism_octree tree;
+    memset(&tree, 0, sizeof tree);
+    ism_grid_init(&tree.grid, o->box, o->max_depth);
+    ism_octree_build_params bp = {
+        .tape = f,
+        .min_depth = o->min_depth,
+        .max_depth = o->max_depth,
+        .flatness = {o->gradient_test, o->flat_normal, o->flat_plane},
+        .threads = threads,
+        .max_nodes = o->max_memory / 4 / sizeof(ism_node),
+        .cancel = o->cancel,
+        .progress = report,
+        .progress_ctx = &prog,
+    };
+    ism_octree_build_stats bs;
+    enum ism_poly_status status = from_build(ism_octree_build(&tree, &bp, &bs));
+    stats->nodes_visited = bs.visited;
+    stats->nodes_excluded = bs.excluded;
+    stats->unresolved_nodes = bs.unresolved;
+    stats->evals_point = bs.n_point;
+    stats->evals_gradient = bs.n_gradient;
+    stats->evals_interval = bs.n_interval;
+    double t_tree = now_ms();
+    stats->time_ms[ISM_PHASE_OCTREE] = t_tree - t_start;
+    if (status != ISM_POLY_OK)
+        return fail_with(status, o, err);
+    count_leaves(&tree, stats);
+
+    prog.from = 0.4;
+    prog.span = 0.55;
+    double t_weld = 0;
+    status = polygonise_leaves(f, o, &tree, threads, &prog, mesh, stats, &t_weld);
+    ism_octree_free(&tree);
+    double t_end = now_ms();
+    stats->time_ms[ISM_PHASE_POLYGONS] = t_end - t_tree - t_weld - stats->time_ms[ISM_PHASE_CRACKS];
+    stats->time_ms[ISM_PHASE_MESH] = t_weld;
+    stats->total_ms = t_end - t_start;
+    if (status != ISM_POLY_OK) {
+        ism_mesh_free(mesh);
+        return fail_with(status, o, err);
+    }
+    stats->triangles = mesh->ntris;
+    stats->vertices = mesh->nverts;
+    prog.from = 1.0;
+    prog.span = 0;
+    report(&prog, 0);
+    return ISM_POLY_OK;
+}

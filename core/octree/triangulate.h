@@ -1,0 +1,16 @@
+/* triangulate.h — a stitched polygon into triangles whose normals agree with ∇f, and the
+ * growable per-node output (surface points, triangles, one-edge polygons) they go into. */
+#ifndef ISM_TRIANGULATE_H
+#define ISM_TRIANGULATE_H
+
+#include "core/octree/cell.h"
+
+/* Triangulates the closed polygon pts[0..n) (n >= 3) into out. reach bounds how far the
+ * polygon's centre may move when projected onto the surface. */
+bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
+                          ism_cell_out *out);
+
+/* Appends a one-edge (degenerate) polygon. */
+bool ism_cell_out_segment(ism_cell_out *out, const ism_fpoint *a, const ism_fpoint *b);
+
+#endif

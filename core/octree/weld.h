@@ -1,0 +1,19 @@
+/* weld.h — joins the per-node outputs into one indexed mesh. A surface point shared by
+ * several nodes was computed bit-identically by each of them, so welding is an exact match
+ * on position; indices are handed out in node order, so the mesh never depends on how many
+ * threads made the pieces. */
+#ifndef ISM_WELD_H
+#define ISM_WELD_H
+
+#include "core/mesh/mesh.h"
+#include "core/octree/cell.h"
+
+typedef struct ism_weld_stats {
+    uint64_t zero_vertices, touch_vertices, pair_vertices, many_vertices;
+    uint64_t dropped_triangles;  /* triangles that collapsed to an edge when welded */
+} ism_weld_stats;
+
+/* Appends the pieces, in order, to mesh (which must be empty). */
+bool ism_weld(const ism_cell_out *pieces, size_t npieces, ism_mesh *mesh, ism_weld_stats *st);
+
+#endif

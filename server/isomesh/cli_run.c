@@ -1,0 +1,412 @@
+/* cli_run.c — what the `isomesh` command does once its flags are read: find the surface
+ * (flags, a surfaces file, or a built-in preset), compile and polygonise it, analyse the
+ * mesh, write the file atomically and print the statistics; or run a request file through
+ * the service pipeline; or list the built-in surfaces. */
+#include "server/isomesh/cli.h"
+
+#include "core/analysis/analysis.h"
+#include "core/mesh/write_mesh.h"
+#include "proto/presets.h"
+#include "proto/stats.h"
+#include "server/common/pipeline.h"
+
+#include <errno.h>
+#include <jansson.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#define MAX_REQUEST_FILE (1 << 20)
+
+void ism_cli_run_free(ism_cli_run *run)
+{
+    for (size_t i = 0; i < run->nparams; i++)
+        free((char *)run->params[i].name);
+    for (size_t i = 0; i < run->nlets; i++) {
+        free((char *)run->lets[i].name);
+        free((char *)run->lets[i].source);
+    }
+    free(run->params);
+    free(run->lets);
+    if (run->surfaces_json)
+        json_decref(run->surfaces_json);
+    memset(run, 0, sizeof *run);
+}
+
+bool ism_cli_write_file(const char *path, const void *data, size_t len)
+{
+    size_t n = strlen(path) + 16;
+    char *tmp = malloc(n);
+    if (!tmp)
+        return false;
+    snprintf(tmp, n, "%s.tmpXXXXXX", path);
+    int fd = mkstemp(tmp);
+    if (fd < 0) {
+        fprintf(stderr, "isomesh: cannot create %s: %s\n", path, strerror(errno));
+        free(tmp);
+        return false;
+    }
+    const unsigned char *p = data;
+    size_t done = 0;
+    while (done < len) {
+        ssize_t w = write(fd, p + done, len - done);
+        if (w < 0 && errno == EINTR)
+            continue;
+        if (w <= 0)
+            break;
+        done += (size_t)w;
+    }
+    bool ok = done == len && fsync(fd) == 0;
+    ok = close(fd) == 0 && ok;
+    if (ok)
+        ok = chmod(tmp, 0644) == 0 && rename(tmp, path) == 0;
+    if (!ok) {
+        fprintf(stderr, "isomesh: cannot write %s: %s\n", path, strerror(errno));
+        unlink(tmp);
+    }
+    free(tmp);
+    return ok;
+}
+
+/* ---- the surface ------------------------------------------------------------------- */
+
+static bool has_param(const ism_cli_run *run, const char *name)
+{
+    for (size_t i = 0; i < run->nparams; i++)
+        if (strcmp(run->params[i].name, name) == 0)
+            return true;
+    return false;
+}
+
+/* Adds a default that the command line did not set. */
+static bool default_param(ism_cli_run *run, const char *name, double value)
+{
+    if (has_param(run, name))
+        return true;
+    char buf[96];
+    snprintf(buf, sizeof buf, "%s=%.17g", name, value);
+    return ism_cli_add_param(run, buf);
+}
+
+/* Lets given on the command line come after the surface's own (they may use them). */
+static bool prepend_let(ism_cli_run *run, size_t at, const char *name, const char *src)
+{
+    char *buf = malloc(strlen(name) + strlen(src) + 2);
+    if (!buf)
+        return false;
+    sprintf(buf, "%s=%s", name, src);
+    bool ok = ism_cli_add_let(run, buf);
+    free(buf);
+    if (!ok)
+        return false;
+    ism_let last = run->lets[run->nlets - 1];
+    memmove(run->lets + at + 1, run->lets + at, (run->nlets - 1 - at) * sizeof *run->lets);
+    run->lets[at] = last;
+    return true;
+}
+
+static bool use_preset(ism_cli_run *run, const ism_preset *p)
+{
+    run->expr = p->expr;
+    for (size_t i = 0; i < p->nlets; i++)
+        if (!prepend_let(run, i, p->lets[i].name, p->lets[i].source))
+            return false;
+    for (size_t i = 0; i < p->nparams; i++)
+        if (!default_param(run, p->params[i].name, p->params[i].value))
+            return false;
+    if (!run->box_given)
+        memcpy(run->options.box, p->box, sizeof p->box);
+    if (!run->depth_given) {
+        run->options.min_depth = p->min_depth;
+        run->options.max_depth = p->max_depth;
+    }
+    return true;
+}
+
+/* A surface from a file shaped like shared/surfaces.json. */
+static int use_surfaces_file(ism_cli_run *run)
+{
+    json_error_t je;
+    json_t *root = json_load_file(run->surfaces_file, JSON_REJECT_DUPLICATES, &je);
+    if (!root) {
+        fprintf(stderr, "isomesh: %s: line %d, col %d: %s\n", run->surfaces_file, je.line,
+                je.column, je.text);
+        return 2;
+    }
+    run->surfaces_json = root;
+    json_t *list = json_object_get(root, "surfaces"), *s;
+    size_t i;
+    json_array_foreach(list, i, s) {
+        const char *name = json_string_value(json_object_get(s, "name"));
+        if (!name || strcmp(name, run->surface) != 0)
+            continue;
+        run->expr = json_string_value(json_object_get(s, "expr"));
+        if (!run->expr) {
+            fprintf(stderr, "isomesh: %s: surface '%s' has no \"expr\"\n", run->surfaces_file,
+                    run->surface);
+            return 2;
+        }
+        const char *key;
+        json_t *v;
+        size_t at = 0;
+        json_object_foreach(json_object_get(s, "let"), key, v)
+            if (!json_is_string(v) || !prepend_let(run, at++, key, json_string_value(v))) {
+                fprintf(stderr, "isomesh: %s: let '%s' must be a string\n", run->surfaces_file, key);
+                return 2;
+            }
+        json_object_foreach(json_object_get(s, "params"), key, v)
+            if (!json_is_number(v) || !default_param(run, key, json_number_value(v))) {
+                fprintf(stderr, "isomesh: %s: param '%s' must be a number\n", run->surfaces_file, key);
+                return 2;
+            }
+        json_t *box = json_object_get(s, "box");
+        if (!run->box_given && json_array_size(box) == 6)
+            for (int k = 0; k < 6; k++)
+                run->options.box[k] = json_number_value(json_array_get(box, (size_t)k));
+        return 0;
+    }
+    fprintf(stderr, "isomesh: %s: no surface named '%s'\n", run->surfaces_file, run->surface);
+    return 2;
+}
+
+static int resolve_surface(ism_cli_run *run)
+{
+    if (run->surface && run->expr) {
+        fprintf(stderr, "isomesh: give either -e or --surface, not both\n");
+        return 2;
+    }
+    if (run->surface && run->surfaces_file)
+        return use_surfaces_file(run);
+    if (run->surface) {
+        const ism_preset *p = ism_preset_find(run->surface);
+        if (!p) {
+            fprintf(stderr, "isomesh: no built-in surface named '%s' (try --list)\n", run->surface);
+            return 2;
+        }
+        return use_preset(run, p) ? 0 : 1;
+    }
+    if (!run->expr) {
+        fprintf(stderr, "isomesh: no surface: give -e EXPR or --surface NAME (try --help)\n");
+        return 2;
+    }
+    return 0;
+}
+
+/* ---- output -------------------------------------------------------------------------- */
+
+typedef struct membuf {
+    unsigned char *data;
+    size_t len, cap;
+} membuf;
+
+static size_t mem_write(void *ctx, const void *p, size_t n)
+{
+    membuf *b = ctx;
+    if (b->len + n > b->cap) {
+        size_t c = b->cap ? b->cap * 2 : 65536;
+        while (c < b->len + n)
+            c *= 2;
+        unsigned char *d = realloc(b->data, c);
+        if (!d)
+            return 0;
+        b->data = d;
+        b->cap = c;
+    }
+    memcpy(b->data + b->len, p, n);
+    b->len += n;
+    return n;
+}
+
+static const char *extension(const char *path)
+{
+    const char *dot = strrchr(path, '.');
+    const char *slash = strrchr(path, '/');
+    return dot && (!slash || dot > slash) ? dot + 1 : "";
+}
+
+typedef bool (*writer_fn)(const ism_mesh *, ism_write_fn, void *);
+
+static writer_fn writer_for(const char *path)
+{
+    const char *ext = extension(path);
+    if (strcmp(ext, "ply") == 0)
+        return ism_write_ply;
+    if (strcmp(ext, "obj") == 0)
+        return ism_write_obj;
+    if (strcmp(ext, "stl") == 0)
+        return ism_write_stl;
+    return NULL;
+}
+
+static bool write_mesh(const char *path, const ism_mesh *m)
+{
+    membuf b = {0};
+    bool ok = writer_for(path)(m, mem_write, &b) && ism_cli_write_file(path, b.data, b.len);
+    free(b.data);
+    return ok;
+}
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
+}
+
+static void print_stats(const ism_mesh *m, const ism_poly_stats *ps, const ism_analysis *an,
+                        const char *format, size_t bytes, const double *timings)
+{
+    ism_stats_input in;
+    memset(&in, 0, sizeof in);
+    in.key = "";
+    in.format = format;
+    in.bytes = bytes;
+    in.empty = m->ntris == 0;
+    in.vertices = m->nverts;
+    in.triangles = m->ntris;
+    in.poly = ps;
+    in.analysis = an;
+    memcpy(in.timings_ms, timings, sizeof in.timings_ms);
+    size_t len;
+    char *json = ism_stats_json(&in, &len);
+    if (json) {
+        fwrite(json, 1, len, stdout);
+        fputc('\n', stdout);
+        free(json);
+    }
+}
+
+int ism_cli_run_surface(ism_cli_run *run)
+{
+    if (!run->output && !run->print_stats) {
+        fprintf(stderr, "isomesh: nothing to do: give -o FILE and/or --stats\n");
+        return 2;
+    }
+    if (run->output && !writer_for(run->output)) {
+        fprintf(stderr, "isomesh: -o %s: unknown extension '.%s' (use .ply, .obj or .stl)\n",
+                run->output, extension(run->output));
+        return 2;
+    }
+    int st = resolve_surface(run);
+    if (st)
+        return st;
+    double timings[ISM_TIME_COUNT] = {0};
+    double t0 = now_ms();
+    ism_error err;
+    memset(&err, 0, sizeof err);
+    ism_tape *tape = ism_tape_compile(run->expr, run->params, run->nparams, run->lets,
+                                      run->nlets, NULL, &err);
+    char msg[512];
+    if (!tape) {
+        fprintf(stderr, "isomesh: %s\n", ism_error_format(&err, msg, sizeof msg));
+        return 2;
+    }
+    double t1 = now_ms();
+    timings[ISM_TIME_COMPILE] = t1 - t0;
+    ism_mesh mesh;
+    ism_mesh_init(&mesh);
+    ism_poly_stats ps;
+    enum ism_poly_status ps_status = ism_polygonise(tape, &run->options, &mesh, &ps, &err);
+    double t2 = now_ms();
+    timings[ISM_TIME_POLYGONISE] = t2 - t1;
+    int status = 0;
+    if (ps_status != ISM_POLY_OK) {
+        fprintf(stderr, "isomesh: %s\n", ism_error_format(&err, msg, sizeof msg));
+        status = ps_status == ISM_POLY_BAD_OPTIONS ? 2 : 1;
+        goto done;
+    }
+    if (mesh.ntris == 0)
+        fprintf(stderr, "isomesh: the surface does not meet the box: the mesh is empty\n");
+    ism_analysis an;
+    memset(&an, 0, sizeof an);
+    ism_analysis_options ao;
+    ism_analysis_options_default(&ao);
+    bool analysed = ism_analyse(&mesh, tape, &ao, &an, &err);
+    timings[ISM_TIME_ANALYSE] = now_ms() - t2;
+    if (run->output && !write_mesh(run->output, &mesh))
+        status = 1;
+    timings[ISM_TIME_TOTAL] = now_ms() - t0;
+    if (run->print_stats && status == 0)
+        print_stats(&mesh, &ps, analysed ? &an : NULL, extension(run->output ? run->output : ""),
+                    0, timings);
+    if (analysed)
+        ism_analysis_free(&an);
+done:
+    ism_mesh_free(&mesh);
+    ism_tape_free(tape);
+    return status;
+}
+
+/* ---- request files ------------------------------------------------------------------- */
+
+static char *read_file(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        fprintf(stderr, "isomesh: cannot open %s: %s\n", path, strerror(errno));
+        return NULL;
+    }
+    char *buf = malloc(MAX_REQUEST_FILE + 1);
+    size_t n = buf ? fread(buf, 1, MAX_REQUEST_FILE + 1, f) : 0;
+    fclose(f);
+    if (!buf)
+        return NULL;
+    if (n > MAX_REQUEST_FILE) {
+        fprintf(stderr, "isomesh: %s: larger than %d bytes\n", path, MAX_REQUEST_FILE);
+        free(buf);
+        return NULL;
+    }
+    *len = n;
+    return buf;
+}
+
+int ism_cli_run_request_file(ism_cli_run *run, const char *path)
+{
+    if (!run->output && !run->print_stats) {
+        fprintf(stderr, "isomesh: nothing to do: give -o FILE and/or --stats\n");
+        return 2;
+    }
+    const char *format = run->output ? extension(run->output) : NULL;
+    size_t len;
+    char *json = read_file(path, &len);
+    if (!json)
+        return 2;
+    ism_pipeline_limits lim;
+    ism_pipeline_limits_default(&lim);
+    lim.max_depth = ISM_MAX_DEPTH_LIMIT;
+    lim.threads = run->options.threads;
+    ism_pipeline_result r;
+    memset(&r, 0, sizeof r);
+    bool ok = ism_pipeline_run(json, len, format, &lim, NULL, &r);
+    free(json);
+    int status = 0;
+    if (!ok) {
+        json_t *e = json_loadb((const char *)r.body.data, r.body.len, 0, NULL);
+        const char *m = json_string_value(json_object_get(json_object_get(e, "error"), "message"));
+        fprintf(stderr, "isomesh: %s: %s\n", path, m ? m : "the request failed");
+        json_decref(e);
+        status = r.status == 400 || r.status == 422 ? 2 : 1;
+    } else {
+        if (run->output && !ism_cli_write_file(run->output, r.body.data, r.body.len))
+            status = 1;
+        if (run->print_stats && status == 0) {
+            fwrite(r.stats.data, 1, r.stats.len, stdout);
+            fputc('\n', stdout);
+        }
+    }
+    ism_pipeline_result_free(&r);
+    return status;
+}
+
+int ism_cli_list_surfaces(ism_cli_run *run)
+{
+    (void)run;
+    for (size_t i = 0; i < ism_preset_count(); i++) {
+        const ism_preset *p = ism_preset_at(i);
+        printf("%-18s %s\n", p->name, p->about);
+    }
+    return 0;
+}

@@ -1,0 +1,163 @@
+/* main.c — the `isomesh` command: polygonise one surface given on the command line (an
+ * expression or a named surface) into a PLY/OBJ/STL file, run one JSON request file through
+ * the service's pipeline, or serve as a worker process of isomeshd (`--worker`).
+ * Bad input is a one-line error and exit status 2; no partial file is ever left behind. */
+#include <errno.h>
+#include <getopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "server/isomesh/cli.h"
+#include "server/isomesh/worker.h"
+
+static const char usage_text[] =
+    "usage:\n"
+    "  isomesh -e EXPR [-p NAME=VALUE]... [--let NAME=EXPR]... [options] -o FILE\n"
+    "  isomesh --surface NAME [--surfaces FILE] [options] -o FILE\n"
+    "  isomesh REQUEST.json -o FILE       run one service request (any format)\n"
+    "  isomesh --worker                   worker process of isomeshd (framed stdin/stdout)\n"
+    "\n"
+    "Polygonises f(x, y, z) = 0 with the non-manifold adaptive octree algorithm of Balsys &\n"
+    "Suffern and writes binary PLY (with normals), OBJ or binary STL, chosen by the output\n"
+    "file's extension (.ply .obj .stl; a request file may also ask for .drc and .glb).\n"
+    "\n"
+    "surface:\n"
+    "  -e, --expr EXPR          the function: x y z, parameters, + - * / ^n, sqrt sin cos tan\n"
+    "                           exp log abs min max pow, pi e; `let NAME = EXPR` lines first\n"
+    "  -p, --param NAME=VALUE   a parameter (repeatable)\n"
+    "      --let NAME=EXPR      a named sub-expression, may use earlier ones (repeatable)\n"
+    "      --surface NAME       a named surface: built-in presets, or from --surfaces\n"
+    "      --surfaces FILE      a JSON file shaped like shared/surfaces.json\n"
+    "      --list               list the built-in surfaces and exit\n"
+    "octree:\n"
+    "  -b, --box X0,Y0,Z0,X1,Y1,Z1   search box, the octree root (default -1,-1,-1,1,1,1\n"
+    "                           or the surface's own box)\n"
+    "  -d, --depth MIN:MAX      subdivision depths (default 3:7; MAX at most 16)\n"
+    "      --threads N          threads for this run (default: all cores; output identical)\n"
+    "      --gradient-test G    paper eq. (1): same sheet when ĝa·ĝb > G (default 0.9)\n"
+    "      --double-root-eps E  |f(c)| < E is a double root (default 1e-9)\n"
+    "      --double-root-iters N  bisection steps for two roots (default 25)\n"
+    "      --stitch-tol T       roots closer than T × segment are one (default 0.001)\n"
+    "      --flat-normal C      flatness: corner gradients within acos(C) (default 0.9)\n"
+    "      --flat-plane F       flatness: polygon within F × node size of its plane (0.05)\n"
+    "      --max-triangles N    budget; stop with an error beyond it (default 4000000)\n"
+    "output:\n"
+    "  -o, --output FILE        .ply, .obj or .stl (written to a temporary name, renamed)\n"
+    "      --stats              print the statistics as JSON on standard output\n"
+    "  -h, --help               this text\n"
+    "exit status: 0 done, 1 the run failed (budget, memory), 2 bad input.\n";
+
+enum long_only {
+    OPT_LET = 256, OPT_SURFACE, OPT_SURFACES, OPT_LIST, OPT_THREADS, OPT_GRADIENT, OPT_EPS,
+    OPT_ITERS, OPT_STITCH, OPT_FLAT_NORMAL, OPT_FLAT_PLANE, OPT_MAX_TRIS, OPT_STATS, OPT_WORKER,
+};
+
+static const struct option long_options[] = {
+    {"expr", required_argument, 0, 'e'},
+    {"param", required_argument, 0, 'p'},
+    {"let", required_argument, 0, OPT_LET},
+    {"surface", required_argument, 0, OPT_SURFACE},
+    {"surfaces", required_argument, 0, OPT_SURFACES},
+    {"list", no_argument, 0, OPT_LIST},
+    {"box", required_argument, 0, 'b'},
+    {"depth", required_argument, 0, 'd'},
+    {"threads", required_argument, 0, OPT_THREADS},
+    {"gradient-test", required_argument, 0, OPT_GRADIENT},
+    {"double-root-eps", required_argument, 0, OPT_EPS},
+    {"double-root-iters", required_argument, 0, OPT_ITERS},
+    {"stitch-tol", required_argument, 0, OPT_STITCH},
+    {"flat-normal", required_argument, 0, OPT_FLAT_NORMAL},
+    {"flat-plane", required_argument, 0, OPT_FLAT_PLANE},
+    {"max-triangles", required_argument, 0, OPT_MAX_TRIS},
+    {"output", required_argument, 0, 'o'},
+    {"stats", no_argument, 0, OPT_STATS},
+    {"worker", no_argument, 0, OPT_WORKER},
+    {"help", no_argument, 0, 'h'},
+    {0, 0, 0, 0},
+};
+
+/* Applies one option to the run; false (after printing the error) on a bad value. */
+static bool apply_option(ism_cli_run *run, int opt, const char *arg)
+{
+    ism_poly_options *o = &run->options;
+    switch (opt) {
+    case 'e': run->expr = arg; return true;
+    case 'p': return ism_cli_add_param(run, arg);
+    case OPT_LET: return ism_cli_add_let(run, arg);
+    case OPT_SURFACE: run->surface = arg; return true;
+    case OPT_SURFACES: run->surfaces_file = arg; return true;
+    case 'b': return ism_cli_parse_box(arg, o->box) && (run->box_given = true);
+    case 'd': return ism_cli_parse_depth(arg, &o->min_depth, &o->max_depth) &&
+                     (run->depth_given = true);
+    case OPT_THREADS: return ism_cli_parse_int("--threads", arg, 0, 64, &o->threads);
+    case OPT_GRADIENT: return ism_cli_parse_double("--gradient-test", arg, &o->gradient_test);
+    case OPT_EPS: return ism_cli_parse_double("--double-root-eps", arg, &o->double_root_eps);
+    case OPT_ITERS: return ism_cli_parse_int("--double-root-iters", arg, 1, 200,
+                                             &o->double_root_iters);
+    case OPT_STITCH: return ism_cli_parse_double("--stitch-tol", arg, &o->stitch_tol);
+    case OPT_FLAT_NORMAL: return ism_cli_parse_double("--flat-normal", arg, &o->flat_normal);
+    case OPT_FLAT_PLANE: return ism_cli_parse_double("--flat-plane", arg, &o->flat_plane);
+    case OPT_MAX_TRIS: {
+        int n;
+        if (!ism_cli_parse_int("--max-triangles", arg, 1, 2000000000, &n))
+            return false;
+        o->max_triangles = (size_t)n;
+        return true;
+    }
+    case 'o': run->output = arg; return true;
+    case OPT_STATS: run->print_stats = true; return true;
+    default: return false;
+    }
+}
+
+int main(int argc, char **argv)
+{
+    if (argc == 2 && strcmp(argv[1], "--worker") == 0)
+        return ism_worker_main(STDIN_FILENO, STDOUT_FILENO);
+
+    ism_cli_run run;
+    ism_cli_run_init(&run);
+    bool list = false;
+    int opt;
+    opterr = 0;
+    while ((opt = getopt_long(argc, argv, ":e:p:b:d:o:h", long_options, NULL)) != -1) {
+        if (opt == 'h') {
+            fputs(usage_text, stdout);
+            ism_cli_run_free(&run);
+            return 0;
+        }
+        if (opt == OPT_LIST) {
+            list = true;
+            continue;
+        }
+        if (opt == OPT_WORKER) {
+            fprintf(stderr, "isomesh: --worker takes no other arguments\n");
+            ism_cli_run_free(&run);
+            return 2;
+        }
+        if (opt == '?' || opt == ':') {
+            fprintf(stderr, "isomesh: %s option '%s' (try --help)\n",
+                    opt == ':' ? "missing value for" : "unknown", argv[optind - 1]);
+            ism_cli_run_free(&run);
+            return 2;
+        }
+        if (!apply_option(&run, opt, optarg)) {
+            ism_cli_run_free(&run);
+            return 2;
+        }
+    }
+    int status;
+    if (list)
+        status = ism_cli_list_surfaces(&run);
+    else if (optind == argc - 1)
+        status = ism_cli_run_request_file(&run, argv[optind]);
+    else if (optind < argc) {
+        fprintf(stderr, "isomesh: unexpected argument '%s' (try --help)\n", argv[optind]);
+        status = 2;
+    } else
+        status = ism_cli_run_surface(&run);
+    ism_cli_run_free(&run);
+    return status;
+}
