@@ -22,7 +22,7 @@ void ism_analysis_options_default(ism_analysis_options *o)
     o->newton_steps = 4;
 }
 
-bool ism_analysis_fail(ism_error *err, const char *fmt, ...)
+bool ism_an_fail(ism_error *err, const char *fmt, ...)
 {
     if (!err)
         return false;
@@ -35,40 +35,40 @@ bool ism_analysis_fail(ism_error *err, const char *fmt, ...)
 }
 
 /* Bad input gets a message naming the first offending vertex or triangle. */
-bool ism_analysis_check_mesh(const ism_mesh *m, ism_error *err)
+bool ism_an_check_mesh(const ism_mesh *m, ism_error *err)
 {
     if (m->nverts >= UINT32_MAX)
-        return ism_analysis_fail(err, "analysis: %zu vertices, at most %u allowed", m->nverts,
-                                 UINT32_MAX - 1);
+        return ism_an_fail(err, "analysis: %zu vertices, at most %u allowed", m->nverts,
+                           UINT32_MAX - 1);
     if (m->ntris > (UINT32_MAX - 3) / 3)
-        return ism_analysis_fail(err, "analysis: %zu triangles, at most %u allowed", m->ntris,
-                                 (UINT32_MAX - 3) / 3);
+        return ism_an_fail(err, "analysis: %zu triangles, at most %u allowed", m->ntris,
+                           (UINT32_MAX - 3) / 3);
     for (size_t i = 0; i < 3 * m->nverts; i++)
         if (!(fabs(m->pos[i]) <= MAX_COORD))
-            return ism_analysis_fail(err, "analysis: vertex %zu has a coordinate that is not "
-                                     "a finite number below 1e100", i / 3);
+            return ism_an_fail(err, "analysis: vertex %zu has a coordinate that is not "
+                               "a finite number below 1e100", i / 3);
     for (size_t i = 0; i < 3 * m->ntris; i++)
         if (m->tri[i] >= m->nverts)
-            return ism_analysis_fail(err, "analysis: triangle %zu uses vertex %u, but the "
-                                     "mesh has %zu vertices", i / 3, m->tri[i], m->nverts);
+            return ism_an_fail(err, "analysis: triangle %zu uses vertex %u, but the "
+                               "mesh has %zu vertices", i / 3, m->tri[i], m->nverts);
     return true;
 }
 
-bool ism_analysis_check_options(const ism_analysis_options *o, ism_error *err)
+bool ism_an_check_options(const ism_analysis_options *o, ism_error *err)
 {
     if (!(o->singular_rel >= 0 && o->singular_rel < 1))
-        return ism_analysis_fail(err, "analysis: singular_rel must be in [0, 1)");
+        return ism_an_fail(err, "analysis: singular_rel must be in [0, 1)");
     if (o->newton_steps < 0 || o->newton_steps > 100)
-        return ism_analysis_fail(err, "analysis: newton_steps must be in 0..100");
+        return ism_an_fail(err, "analysis: newton_steps must be in 0..100");
     if (o->threads < 0 || o->threads > 64)
-        return ism_analysis_fail(err, "analysis: threads must be in 0..64");
+        return ism_an_fail(err, "analysis: threads must be in 0..64");
     return true;
 }
 
 static void count_collapsed(const ism_mesh *m, ism_analysis *a)
 {
     for (size_t t = 0; t < m->ntris; t++)
-        a->collapsed_triangles += ism_tri_collapsed(m->tri, t);
+        a->collapsed_triangles += ism_an_tri_collapsed(m->tri, t);
 }
 
 bool ism_analyse(const ism_mesh *m, const ism_tape *f, const ism_analysis_options *o,
@@ -80,26 +80,26 @@ bool ism_analyse(const ism_mesh *m, const ism_tape *f, const ism_analysis_option
         o = &defaults;
     }
     memset(a, 0, sizeof *a);
-    if (!ism_analysis_check_options(o, err) || !ism_analysis_check_mesh(m, err))
+    if (!ism_an_check_options(o, err) || !ism_an_check_mesh(m, err))
         return false;
     a->nverts = m->nverts;
     a->genus = -1;
     count_collapsed(m, a);
-    ism_edge_table et;
-    ism_vertex_facts vf = {0};
-    bool ok = ism_edge_table_build(m, &et);
-    ok = ok && ism_classify_vertices(m, &et, &vf, a) && ism_find_curves(m, &et, &vf, a) &&
-         ism_find_points(m, &vf, a) && ism_topology(m, &et, &vf, a) &&
-         ism_triangle_quality(m, a);
-    ism_edge_table_free(&et);
+    ism_an_edge_table et;
+    ism_an_vertex_facts vf = {0};
+    bool ok = ism_an_edge_table_build(m, &et);
+    ok = ok && ism_an_classify_vertices(m, &et, &vf, a) && ism_an_find_curves(m, &et, &vf, a) &&
+         ism_an_find_points(m, &vf, a) && ism_an_topology(m, &et, &vf, a) &&
+         ism_an_triangle_quality(m, a);
+    ism_an_edge_table_free(&et);
     free(vf.cone_sets); /* the rest needs only per-vertex facts */
     vf.cone_sets = NULL;
-    ok = ok && ism_implicit_figures(m, f, o, &vf, a);
-    ism_vertex_facts_free(&vf);
+    ok = ok && ism_an_implicit_figures(m, f, o, &vf, a);
+    ism_an_vertex_facts_free(&vf);
     if (!ok) {
         ism_analysis_free(a);
-        return ism_analysis_fail(err, "analysis: out of memory (mesh of %zu vertices, %zu "
-                                 "triangles)", m->nverts, m->ntris);
+        return ism_an_fail(err, "analysis: out of memory (mesh of %zu vertices, %zu "
+                           "triangles)", m->nverts, m->ntris);
     }
     return true;
 }

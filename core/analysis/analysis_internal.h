@@ -12,114 +12,115 @@
 
 #define ISM_NONE UINT32_MAX
 
-/* Half-edge h = 3t + k runs from tri[h] to tri[ism_he_next(h)]; it is also the corner of
+/* Half-edge h = 3t + k runs from tri[h] to tri[ism_an_he_next(h)]; it is also the corner of
  * triangle t at vertex tri[h]. */
-static inline uint32_t ism_he_next(uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
-static inline uint32_t ism_he_prev(uint32_t h) { return h % 3 == 0 ? h + 2 : h - 1; }
+static inline uint32_t ism_an_he_next(uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
+static inline uint32_t ism_an_he_prev(uint32_t h) { return h % 3 == 0 ? h + 2 : h - 1; }
 
-static inline bool ism_tri_collapsed(const uint32_t *tri, size_t t)
+static inline bool ism_an_tri_collapsed(const uint32_t *tri, size_t t)
 {
     uint32_t a = tri[3 * t], b = tri[3 * t + 1], c = tri[3 * t + 2];
     return a == b || b == c || a == c;
 }
 
-/* Edges of the non-collapsed triangles. Edge e is the vertex pair (edge_lo[e], edge_hi[e])
- * with edge_lo < edge_hi, edges sorted by that pair; its half-edges are
+/* Edges of the non-collapsed triangles. Edge e joins the vertex pair (lo, hi), lo < hi, that
+ * ism_an_edge_ends gives; edges are numbered in order of that pair; its half-edges are
  * edge_he[edge_start[e] .. edge_start[e + 1]) in increasing order. */
-typedef struct ism_edge_table {
+typedef struct ism_an_edge_table {
     size_t nedges;
     uint32_t *he_edge;    /* 3 * ntris: the edge of each half-edge (ISM_NONE if collapsed) */
     uint32_t *edge_start; /* nedges + 1 */
     uint32_t *edge_he;    /* half-edges grouped by edge */
-} ism_edge_table;
+} ism_an_edge_table;
 
-static inline uint32_t ism_edge_count(const ism_edge_table *et, uint32_t e)
+static inline uint32_t ism_an_edge_count(const ism_an_edge_table *et, uint32_t e)
 {
     return et->edge_start[e + 1] - et->edge_start[e];
 }
 
-bool ism_edge_table_build(const ism_mesh *m, ism_edge_table *et);
-void ism_edge_table_free(ism_edge_table *et);
+bool ism_an_edge_table_build(const ism_mesh *m, ism_an_edge_table *et);
+void ism_an_edge_table_free(ism_an_edge_table *et);
 
 /* Both end points of edge e, smaller first. */
-void ism_edge_ends(const ism_mesh *m, const ism_edge_table *et, uint32_t e, uint32_t *lo,
-                   uint32_t *hi);
+void ism_an_edge_ends(const ism_mesh *m, const ism_an_edge_table *et, uint32_t e, uint32_t *lo,
+                      uint32_t *hi);
 
 /* Per-vertex facts shared by the passes. */
-typedef struct ism_vertex_facts {
+typedef struct ism_an_vertex_facts {
     uint32_t *corners;    /* corners of non-collapsed triangles at the vertex */
     uint32_t *cones;      /* cones of faces around the vertex */
     uint32_t *nm_degree;  /* non-manifold edges at the vertex */
     uint32_t *cone_sets;  /* per corner (half-edge): union-find of the corners in one cone */
-} ism_vertex_facts;
+} ism_an_vertex_facts;
 
-void ism_vertex_facts_free(ism_vertex_facts *vf);
+void ism_an_vertex_facts_free(ism_an_vertex_facts *vf);
 
 /* Cones of faces and vertex classes: fills vf and a->vertex_class, class counts. */
-bool ism_classify_vertices(const ism_mesh *m, const ism_edge_table *et, ism_vertex_facts *vf,
-                           ism_analysis *a);
+bool ism_an_classify_vertices(const ism_mesh *m, const ism_an_edge_table *et,
+                              ism_an_vertex_facts *vf, ism_analysis *a);
 
 /* Non-manifold curves and points (needs classes and vf). */
-bool ism_find_curves(const ism_mesh *m, const ism_edge_table *et, const ism_vertex_facts *vf,
-                     ism_analysis *a);
-bool ism_find_points(const ism_mesh *m, const ism_vertex_facts *vf, ism_analysis *a);
+bool ism_an_find_curves(const ism_mesh *m, const ism_an_edge_table *et,
+                        const ism_an_vertex_facts *vf, ism_analysis *a);
+bool ism_an_find_points(const ism_mesh *m, const ism_an_vertex_facts *vf, ism_analysis *a);
 
 /* Numbers the components (triangles joined by shared edges) in order of their smallest
  * triangle: comp[t] for every triangle (ISM_NONE if collapsed). */
-bool ism_edge_components(const ism_mesh *m, const ism_edge_table *et, uint32_t *comp,
-                         size_t *ncomp);
+bool ism_an_edge_components(const ism_mesh *m, const ism_an_edge_table *et, uint32_t *comp,
+                            size_t *ncomp);
 
 /* Components of the graph of vertices joined by triangles (used vertices only). */
-bool ism_vertex_components(const ism_mesh *m, const ism_vertex_facts *vf, size_t *n);
+bool ism_an_vertex_components(const ism_mesh *m, const ism_an_vertex_facts *vf, size_t *n);
 
 /* Sets bad[c] for every component c that cannot be oriented consistently across its
  * manifold edges; counts the manifold edges whose triangles run the same way. */
-bool ism_orientation(const ism_mesh *m, const ism_edge_table *et, const uint32_t *comp,
-                     uint8_t *bad, size_t *inconsistent);
+bool ism_an_orientation(const ism_mesh *m, const ism_an_edge_table *et, const uint32_t *comp,
+                        uint8_t *bad, size_t *inconsistent);
 
 /* Chains the boundary edges (walking each end vertex's cone of faces to the next boundary
  * edge): fills a->boundary_loops, a->boundary_chains and component[c].boundary_loops. */
-bool ism_boundary_chains(const ism_mesh *m, const ism_edge_table *et,
-                         const ism_vertex_facts *vf, const uint32_t *comp, ism_analysis *a);
+bool ism_an_boundary_chains(const ism_mesh *m, const ism_an_edge_table *et,
+                            const ism_an_vertex_facts *vf, const uint32_t *comp, ism_analysis *a);
 
 /* Euler characteristic, components, orientability, boundary loops, genus. */
-bool ism_topology(const ism_mesh *m, const ism_edge_table *et, ism_vertex_facts *vf,
-                  ism_analysis *a);
+bool ism_an_topology(const ism_mesh *m, const ism_an_edge_table *et, ism_an_vertex_facts *vf,
+                     ism_analysis *a);
 
 /* Smallest angles, degenerate triangles, vertex areas, total area. */
-bool ism_triangle_quality(const ism_mesh *m, ism_analysis *a);
+bool ism_an_triangle_quality(const ism_mesh *m, ism_analysis *a);
 
 /* Curvature and accuracy from f (needs vertex_area, corners). */
-bool ism_implicit_figures(const ism_mesh *m, const ism_tape *f, const ism_analysis_options *o,
-                          const ism_vertex_facts *vf, ism_analysis *a);
+bool ism_an_implicit_figures(const ism_mesh *m, const ism_tape *f, const ism_analysis_options *o,
+                             const ism_an_vertex_facts *vf, ism_analysis *a);
 
 /* Input checks shared by ism_analyse and ism_analysis_project (false with a message). */
-bool ism_analysis_check_mesh(const ism_mesh *m, ism_error *err);
-bool ism_analysis_check_options(const ism_analysis_options *o, ism_error *err);
+bool ism_an_check_mesh(const ism_mesh *m, ism_error *err);
+bool ism_an_check_options(const ism_analysis_options *o, ism_error *err);
 
 /* Fills err (may be NULL) with a positionless message; returns false. */
-bool ism_analysis_fail(ism_error *err, const char *fmt, ...)
+bool ism_an_fail(ism_error *err, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 
 /* Union-find over n elements whose roots are always the smallest member: parent[i] <= i. */
-uint32_t ism_uf_find(uint32_t *parent, uint32_t i);
+uint32_t ism_an_uf_find(uint32_t *parent, uint32_t i);
 /* Joins the sets of i and j; true when they were different sets. */
-bool ism_uf_union(uint32_t *parent, uint32_t i, uint32_t j);
+bool ism_an_uf_union(uint32_t *parent, uint32_t i, uint32_t j);
 
 /* The k-th smallest (0-based) of v[0..n), reordering v. n > k. */
-double ism_select_double(double *v, size_t n, size_t k);
-float ism_select_float(float *v, size_t n, size_t k);
+double ism_an_select_double(double *v, size_t n, size_t k);
+float ism_an_select_float(float *v, size_t n, size_t k);
 
 /* Runs fn(ctx, ws, block) for every block < nblocks on up to `threads` threads, each with its
  * own workspace for f. Blocks are independent; results must not depend on which thread ran
  * which block. False when no workspace could be made. */
-typedef void (*ism_block_fn)(void *ctx, ism_eval_ws *ws, size_t block);
-bool ism_run_blocks(const ism_tape *f, int threads, size_t nblocks, ism_block_fn fn, void *ctx);
+typedef void (*ism_an_block_fn)(void *ctx, ism_eval_ws *ws, size_t block);
+bool ism_an_run_blocks(const ism_tape *f, int threads, size_t nblocks, ism_an_block_fn fn,
+                       void *ctx);
 
 /* Threads to use for option value t (0 = online cores), at most 64. */
-int ism_analysis_threads(int t);
+int ism_an_threads(int t);
 
 /* Clamps to ±1e30 and turns NaN into 0, for float outputs. */
-float ism_finite_float(double x);
+float ism_an_finite_float(double x);
 
 #endif

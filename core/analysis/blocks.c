@@ -11,7 +11,7 @@
 #define MAX_THREADS 64
 
 typedef struct block_queue {
-    ism_block_fn fn;
+    ism_an_block_fn fn;
     void *ctx;
     size_t nblocks;
     atomic_size_t next;
@@ -22,7 +22,7 @@ typedef struct worker {
     ism_eval_ws *ws;
 } worker;
 
-int ism_analysis_threads(int t)
+int ism_an_threads(int t)
 {
     if (t <= 0) {
         long n = sysconf(_SC_NPROCESSORS_ONLN);
@@ -48,11 +48,12 @@ static void *worker_main(void *arg)
     return NULL;
 }
 
-bool ism_run_blocks(const ism_tape *f, int threads, size_t nblocks, ism_block_fn fn, void *ctx)
+bool ism_an_run_blocks(const ism_tape *f, int threads, size_t nblocks, ism_an_block_fn fn,
+                       void *ctx)
 {
     block_queue q = {.fn = fn, .ctx = ctx, .nblocks = nblocks};
     atomic_init(&q.next, 0);
-    int nt = ism_analysis_threads(threads);
+    int nt = ism_an_threads(threads);
     if ((size_t)nt > nblocks)
         nt = nblocks ? (int)nblocks : 1;
     worker w[MAX_THREADS];

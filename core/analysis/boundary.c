@@ -10,8 +10,8 @@
 
 typedef struct chain_walk {
     const ism_mesh *m;
-    const ism_edge_table *et;
-    const ism_vertex_facts *vf;
+    const ism_an_edge_table *et;
+    const ism_an_vertex_facts *vf;
     uint8_t *visited; /* per edge */
 } chain_walk;
 
@@ -24,14 +24,14 @@ static uint32_t corner_at(const uint32_t *tri, uint32_t first, uint32_t w)
  * a non-manifold edge first. */
 static uint32_t next_boundary_edge(const chain_walk *cw, uint32_t e, uint32_t w)
 {
-    const ism_edge_table *et = cw->et;
+    const ism_an_edge_table *et = cw->et;
     uint32_t h = et->edge_he[et->edge_start[e]];
     uint32_t first = h - h % 3;
     for (uint32_t steps = 0; steps <= cw->vf->corners[w]; steps++) {
         uint32_t c = corner_at(cw->m->tri, first, w);
-        uint32_t ea = et->he_edge[c], eb = et->he_edge[ism_he_prev(c)];
+        uint32_t ea = et->he_edge[c], eb = et->he_edge[ism_an_he_prev(c)];
         uint32_t out = ea == e ? eb : ea;
-        uint32_t n = ism_edge_count(et, out);
+        uint32_t n = ism_an_edge_count(et, out);
         if (n == 1)
             return out;
         if (n > 2)
@@ -47,7 +47,7 @@ static uint32_t next_boundary_edge(const chain_walk *cw, uint32_t e, uint32_t w)
 static uint32_t far_end(const chain_walk *cw, uint32_t e, uint32_t w)
 {
     uint32_t lo, hi;
-    ism_edge_ends(cw->m, cw->et, e, &lo, &hi);
+    ism_an_edge_ends(cw->m, cw->et, e, &lo, &hi);
     return lo == w ? hi : lo;
 }
 
@@ -67,18 +67,18 @@ static bool follow(chain_walk *cw, uint32_t e0, uint32_t w)
     }
 }
 
-bool ism_boundary_chains(const ism_mesh *m, const ism_edge_table *et,
-                         const ism_vertex_facts *vf, const uint32_t *comp, ism_analysis *a)
+bool ism_an_boundary_chains(const ism_mesh *m, const ism_an_edge_table *et,
+                            const ism_an_vertex_facts *vf, const uint32_t *comp, ism_analysis *a)
 {
     chain_walk cw = {m, et, vf, calloc(et->nedges ? et->nedges : 1, 1)};
     if (!cw.visited)
         return false;
     for (uint32_t e = 0; e < et->nedges; e++) {
-        if (ism_edge_count(et, e) != 1 || cw.visited[e])
+        if (ism_an_edge_count(et, e) != 1 || cw.visited[e])
             continue;
         cw.visited[e] = 1;
         uint32_t lo, hi;
-        ism_edge_ends(m, et, e, &lo, &hi);
+        ism_an_edge_ends(m, et, e, &lo, &hi);
         ism_component *c = &a->component[comp[et->edge_he[et->edge_start[e]] / 3]];
         if (follow(&cw, e, hi)) {
             a->boundary_loops++;

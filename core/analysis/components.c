@@ -6,21 +6,21 @@
 
 #include <stdlib.h>
 
-bool ism_edge_components(const ism_mesh *m, const ism_edge_table *et, uint32_t *comp,
-                         size_t *ncomp)
+bool ism_an_edge_components(const ism_mesh *m, const ism_an_edge_table *et, uint32_t *comp,
+                            size_t *ncomp)
 {
     for (size_t t = 0; t < m->ntris; t++)
         comp[t] = (uint32_t)t;
     for (uint32_t e = 0; e < et->nedges; e++) {
         const uint32_t *he = et->edge_he + et->edge_start[e];
-        for (uint32_t i = 1; i < ism_edge_count(et, e); i++)
-            ism_uf_union(comp, he[0] / 3, he[i] / 3);
+        for (uint32_t i = 1; i < ism_an_edge_count(et, e); i++)
+            ism_an_uf_union(comp, he[0] / 3, he[i] / 3);
     }
     /* Every parent is at most its child, so in ascending order a triangle's parent has
      * already been given its component number. */
     size_t n = 0;
     for (size_t t = 0; t < m->ntris; t++) {
-        if (ism_tri_collapsed(m->tri, t))
+        if (ism_an_tri_collapsed(m->tri, t))
             comp[t] = ISM_NONE;
         else if (comp[t] == t)
             comp[t] = (uint32_t)n++;
@@ -31,7 +31,7 @@ bool ism_edge_components(const ism_mesh *m, const ism_edge_table *et, uint32_t *
     return true;
 }
 
-bool ism_vertex_components(const ism_mesh *m, const ism_vertex_facts *vf, size_t *n)
+bool ism_an_vertex_components(const ism_mesh *m, const ism_an_vertex_facts *vf, size_t *n)
 {
     uint32_t *parent = malloc((m->nverts ? m->nverts : 1) * sizeof *parent);
     if (!parent)
@@ -40,8 +40,8 @@ bool ism_vertex_components(const ism_mesh *m, const ism_vertex_facts *vf, size_t
         parent[v] = (uint32_t)v;
     for (size_t t = 0; t < m->ntris; t++) {
         const uint32_t *c = m->tri + 3 * t;
-        ism_uf_union(parent, c[0], c[1]);
-        ism_uf_union(parent, c[1], c[2]);
+        ism_an_uf_union(parent, c[0], c[1]);
+        ism_an_uf_union(parent, c[1], c[2]);
     }
     *n = 0;
     for (size_t v = 0; v < m->nverts; v++)

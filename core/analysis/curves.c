@@ -10,7 +10,7 @@
 
 typedef struct curve_builder {
     const ism_mesh *m;
-    const ism_edge_table *et;
+    const ism_an_edge_table *et;
     const uint32_t *degree; /* non-manifold edges per vertex */
     uint32_t *adj_start;    /* per vertex: its non-manifold edges adj[adj_start[v] ..] */
     uint32_t *adj;
@@ -22,7 +22,7 @@ typedef struct curve_builder {
 static uint32_t other_end(const curve_builder *cb, uint32_t e, uint32_t v)
 {
     uint32_t lo, hi;
-    ism_edge_ends(cb->m, cb->et, e, &lo, &hi);
+    ism_an_edge_ends(cb->m, cb->et, e, &lo, &hi);
     return lo == v ? hi : lo;
 }
 
@@ -70,9 +70,9 @@ static bool build_adjacency(curve_builder *cb)
         return false;
     memcpy(fill, cb->adj_start, nv * sizeof *fill);
     for (uint32_t e = 0; e < cb->et->nedges; e++)
-        if (ism_edge_count(cb->et, e) >= 3) {
+        if (ism_an_edge_count(cb->et, e) >= 3) {
             uint32_t lo, hi;
-            ism_edge_ends(cb->m, cb->et, e, &lo, &hi);
+            ism_an_edge_ends(cb->m, cb->et, e, &lo, &hi);
             cb->adj[fill[lo]++] = e;
             cb->adj[fill[hi]++] = e;
         }
@@ -91,15 +91,15 @@ static void chain_all(curve_builder *cb)
     /* what is left are closed loops through degree-2 vertices only; the first edge left in
      * edge order starts at its loop's smallest vertex */
     for (uint32_t e = 0; e < cb->et->nedges; e++)
-        if (ism_edge_count(cb->et, e) >= 3 && !cb->visited[e]) {
+        if (ism_an_edge_count(cb->et, e) >= 3 && !cb->visited[e]) {
             uint32_t lo, hi;
-            ism_edge_ends(cb->m, cb->et, e, &lo, &hi);
+            ism_an_edge_ends(cb->m, cb->et, e, &lo, &hi);
             walk_curve(cb, lo, e);
         }
 }
 
-bool ism_find_curves(const ism_mesh *m, const ism_edge_table *et, const ism_vertex_facts *vf,
-                     ism_analysis *a)
+bool ism_an_find_curves(const ism_mesh *m, const ism_an_edge_table *et,
+                        const ism_an_vertex_facts *vf, ism_analysis *a)
 {
     size_t nm = a->nonmanifold_edges;
     a->ncurves = 0;
@@ -120,7 +120,7 @@ bool ism_find_curves(const ism_mesh *m, const ism_edge_table *et, const ism_vert
     return ok;
 }
 
-static int point_kind(const ism_analysis *a, const ism_vertex_facts *vf, size_t v)
+static int point_kind(const ism_analysis *a, const ism_an_vertex_facts *vf, size_t v)
 {
     if (a->vertex_class[v] == ISM_VERTEX_NONMANIFOLD_POINT)
         return ISM_POINT_CONES;
@@ -131,7 +131,7 @@ static int point_kind(const ism_analysis *a, const ism_vertex_facts *vf, size_t 
     return -1;
 }
 
-bool ism_find_points(const ism_mesh *m, const ism_vertex_facts *vf, ism_analysis *a)
+bool ism_an_find_points(const ism_mesh *m, const ism_an_vertex_facts *vf, ism_analysis *a)
 {
     size_t n = 0;
     for (size_t v = 0; v < m->nverts; v++)

@@ -11,13 +11,13 @@
 
 static uint32_t he_lo(const uint32_t *tri, uint32_t h)
 {
-    uint32_t a = tri[h], b = tri[ism_he_next(h)];
+    uint32_t a = tri[h], b = tri[ism_an_he_next(h)];
     return a < b ? a : b;
 }
 
 static uint32_t he_hi(const uint32_t *tri, uint32_t h)
 {
-    uint32_t a = tri[h], b = tri[ism_he_next(h)];
+    uint32_t a = tri[h], b = tri[ism_an_he_next(h)];
     return a < b ? b : a;
 }
 
@@ -67,7 +67,7 @@ static size_t bucket_half_edges(const ism_mesh *m, uint32_t *start, uint32_t *ed
     size_t nv = m->nverts, nt = m->ntris;
     memset(start, 0, (nv + 1) * sizeof *start);
     for (size_t t = 0; t < nt; t++)
-        if (!ism_tri_collapsed(m->tri, t))
+        if (!ism_an_tri_collapsed(m->tri, t))
             for (uint32_t h = (uint32_t)(3 * t); h < 3 * t + 3; h++)
                 start[he_lo(m->tri, h) + 1]++;
     for (size_t v = 0; v < nv; v++)
@@ -75,7 +75,7 @@ static size_t bucket_half_edges(const ism_mesh *m, uint32_t *start, uint32_t *ed
     size_t total = start[nv];
     /* fill using start[v] as a cursor, then shift back */
     for (size_t t = 0; t < nt; t++)
-        if (!ism_tri_collapsed(m->tri, t))
+        if (!ism_an_tri_collapsed(m->tri, t))
             for (uint32_t h = (uint32_t)(3 * t); h < 3 * t + 3; h++)
                 edge_he[start[he_lo(m->tri, h)]++] = h;
     memmove(start + 1, start, nv * sizeof *start);
@@ -84,7 +84,7 @@ static size_t bucket_half_edges(const ism_mesh *m, uint32_t *start, uint32_t *ed
 }
 
 /* Numbers the runs of equal (lo, hi) in the bucketed, sorted half-edges. */
-static bool number_edges(const ism_mesh *m, size_t total, ism_edge_table *et)
+static bool number_edges(const ism_mesh *m, size_t total, ism_an_edge_table *et)
 {
     size_t n = 0;
     for (size_t i = 0; i < total; i++)
@@ -107,7 +107,7 @@ static bool number_edges(const ism_mesh *m, size_t total, ism_edge_table *et)
     return true;
 }
 
-bool ism_edge_table_build(const ism_mesh *m, ism_edge_table *et)
+bool ism_an_edge_table_build(const ism_mesh *m, ism_an_edge_table *et)
 {
     memset(et, 0, sizeof *et);
     size_t nh = 3 * m->ntris;
@@ -128,11 +128,11 @@ bool ism_edge_table_build(const ism_mesh *m, ism_edge_table *et)
     return true;
 fail:
     free(start);
-    ism_edge_table_free(et);
+    ism_an_edge_table_free(et);
     return false;
 }
 
-void ism_edge_table_free(ism_edge_table *et)
+void ism_an_edge_table_free(ism_an_edge_table *et)
 {
     free(et->he_edge);
     free(et->edge_start);
@@ -140,8 +140,8 @@ void ism_edge_table_free(ism_edge_table *et)
     memset(et, 0, sizeof *et);
 }
 
-void ism_edge_ends(const ism_mesh *m, const ism_edge_table *et, uint32_t e, uint32_t *lo,
-                   uint32_t *hi)
+void ism_an_edge_ends(const ism_mesh *m, const ism_an_edge_table *et, uint32_t e, uint32_t *lo,
+                      uint32_t *hi)
 {
     uint32_t h = et->edge_he[et->edge_start[e]];
     *lo = he_lo(m->tri, h);

@@ -25,7 +25,7 @@ typedef struct implicit_pass {
     const ism_mesh *m;
     const ism_tape *f;
     const ism_analysis_options *o;
-    const ism_vertex_facts *vf;
+    const ism_an_vertex_facts *vf;
     ism_analysis *a;
     double *fval, *gnorm, *newton; /* per vertex; gnorm NaN where f misbehaves */
     centroid_sums *csum;           /* per triangle block */
@@ -34,7 +34,7 @@ typedef struct implicit_pass {
 
 static double norm3(const double *v) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
-float ism_finite_float(double x)
+float ism_an_finite_float(double x)
 {
     if (isnan(x))
         return 0;
@@ -70,10 +70,10 @@ static void store_curvature(ism_analysis *a, size_t v, const double g[3], const 
 {
     double mean, gauss, k1, k2;
     *ok = ism_curvature_from_derivatives(g, h, &mean, &gauss, &k1, &k2) && *ok;
-    a->mean_curvature[v] = ism_finite_float(mean);
-    a->gauss_curvature[v] = ism_finite_float(gauss);
-    a->k1[v] = ism_finite_float(k1);
-    a->k2[v] = ism_finite_float(k2);
+    a->mean_curvature[v] = ism_an_finite_float(mean);
+    a->gauss_curvature[v] = ism_an_finite_float(gauss);
+    a->k1[v] = ism_an_finite_float(k1);
+    a->k2[v] = ism_an_finite_float(k2);
 }
 
 static void vertex_block(void *ctx, ism_eval_ws *ws, size_t block)
@@ -109,7 +109,7 @@ static void centroid_block(void *ctx, ism_eval_ws *ws, size_t block)
     centroid_sums s = {0};
     size_t end = (block + 1) * BLOCK < m->ntris ? (block + 1) * BLOCK : m->ntris;
     for (size_t t = block * BLOCK; t < end; t++) {
-        if (ism_tri_collapsed(m->tri, t))
+        if (ism_an_tri_collapsed(m->tri, t))
             continue;
         double c[3] = {0, 0, 0}, g[3];
         for (int k = 0; k < 3; k++)
@@ -138,7 +138,7 @@ static bool gradient_scale(implicit_pass *ip)
     for (size_t v = 0; v < nv; v++)
         if (isfinite(ip->gnorm[v]))
             tmp[n++] = ip->gnorm[v];
-    ip->a->gradient_scale = n ? ism_select_double(tmp, n, n / 2) : 0;
+    ip->a->gradient_scale = n ? ism_an_select_double(tmp, n, n / 2) : 0;
     ip->threshold = ip->o->singular_rel * ip->a->gradient_scale;
     ip->a->singular_threshold = ip->threshold;
     free(tmp);
@@ -175,7 +175,7 @@ static void vertex_figures(implicit_pass *ip)
             continue;
         }
         double d = fabs(ip->fval[v]) / ip->gnorm[v];
-        a->distance[v] = ism_finite_float(d);
+        a->distance[v] = ism_an_finite_float(d);
         dist_sum += d;
         newton_sum += ip->newton[v];
         a->max_dist_vertex = fmax(a->max_dist_vertex, d);
@@ -219,8 +219,8 @@ static bool allocate_outputs(const ism_mesh *m, const ism_analysis_options *o, i
     return a->singular != NULL;
 }
 
-bool ism_implicit_figures(const ism_mesh *m, const ism_tape *f, const ism_analysis_options *o,
-                          const ism_vertex_facts *vf, ism_analysis *a)
+bool ism_an_implicit_figures(const ism_mesh *m, const ism_tape *f, const ism_analysis_options *o,
+                             const ism_an_vertex_facts *vf, ism_analysis *a)
 {
     if (!f || !(o->curvature || o->accuracy))
         return true;
@@ -232,11 +232,11 @@ bool ism_implicit_figures(const ism_mesh *m, const ism_tape *f, const ism_analys
     ip.newton = calloc(n, sizeof *ip.newton);
     ip.csum = calloc(tblocks ? tblocks : 1, sizeof *ip.csum);
     bool ok = ip.fval && ip.gnorm && ip.newton && ip.csum && allocate_outputs(m, o, a) &&
-              ism_run_blocks(f, o->threads, vblocks, vertex_block, &ip) && gradient_scale(&ip);
+              ism_an_run_blocks(f, o->threads, vblocks, vertex_block, &ip) && gradient_scale(&ip);
     if (ok)
         vertex_figures(&ip);
     if (ok && o->accuracy) {
-        ok = ism_run_blocks(f, o->threads, tblocks, centroid_block, &ip);
+        ok = ism_an_run_blocks(f, o->threads, tblocks, centroid_block, &ip);
         if (ok)
             centroid_figures(&ip, tblocks);
     }

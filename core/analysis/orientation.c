@@ -47,8 +47,8 @@ static bool relate(parity_sets *s, uint32_t i, uint32_t j, uint8_t rel)
     return true;
 }
 
-bool ism_orientation(const ism_mesh *m, const ism_edge_table *et, const uint32_t *comp,
-                     uint8_t *bad, size_t *inconsistent)
+bool ism_an_orientation(const ism_mesh *m, const ism_an_edge_table *et, const uint32_t *comp,
+                        uint8_t *bad, size_t *inconsistent)
 {
     size_t nt = m->ntris ? m->ntris : 1;
     parity_sets s = {malloc(nt * sizeof *s.parent), calloc(nt, 1)};
@@ -60,7 +60,7 @@ bool ism_orientation(const ism_mesh *m, const ism_edge_table *et, const uint32_t
     for (size_t t = 0; t < m->ntris; t++)
         s.parent[t] = (uint32_t)t;
     for (uint32_t e = 0; e < et->nedges; e++) {
-        if (ism_edge_count(et, e) != 2)
+        if (ism_an_edge_count(et, e) != 2)
             continue;
         const uint32_t *he = et->edge_he + et->edge_start[e];
         uint8_t same_direction = m->tri[he[0]] == m->tri[he[1]];

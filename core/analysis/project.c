@@ -65,13 +65,13 @@ static bool find_threshold(project_pass *pp, const ism_analysis_options *o)
     }
     size_t nv = pp->m->nverts, n = 0;
     pp->gnorm = malloc((nv ? nv : 1) * sizeof *pp->gnorm);
-    if (!pp->gnorm || !ism_run_blocks(pp->f, o->threads, (nv + BLOCK - 1) / BLOCK,
-                                      gnorm_block, pp))
+    if (!pp->gnorm || !ism_an_run_blocks(pp->f, o->threads, (nv + BLOCK - 1) / BLOCK,
+                                         gnorm_block, pp))
         return false;
     for (size_t v = 0; v < nv; v++)
         if (pp->a->vertex_class[v] != ISM_VERTEX_ISOLATED && isfinite(pp->gnorm[v]))
             pp->gnorm[n++] = pp->gnorm[v];
-    pp->threshold = n ? o->singular_rel * ism_select_double(pp->gnorm, n, n / 2) : 0;
+    pp->threshold = n ? o->singular_rel * ism_an_select_double(pp->gnorm, n, n / 2) : 0;
     return true;
 }
 
@@ -146,10 +146,10 @@ bool ism_analysis_project(ism_mesh *m, const ism_tape *f, const ism_analysis *a,
         o = &defaults;
     }
     if (!f)
-        return ism_analysis_fail(err, "projection: no function to project onto");
+        return ism_an_fail(err, "projection: no function to project onto");
     if (!a->vertex_class || a->nverts != m->nverts)
-        return ism_analysis_fail(err, "projection: the analysis is not of this mesh");
-    if (!ism_analysis_check_options(o, err) || !ism_analysis_check_mesh(m, err))
+        return ism_an_fail(err, "projection: the analysis is not of this mesh");
+    if (!ism_an_check_options(o, err) || !ism_an_check_mesh(m, err))
         return false;
     size_t n = m->nverts ? m->nverts : 1;
     project_pass pp = {.m = m, .f = f, .a = a, .steps = o->newton_steps};
@@ -159,7 +159,7 @@ bool ism_analysis_project(ism_mesh *m, const ism_tape *f, const ism_analysis *a,
     bool ok = pp.shortest && pp.outcome && pp.move && find_threshold(&pp, o);
     if (ok) {
         shortest_edges(m, pp.shortest);
-        ok = ism_run_blocks(f, o->threads, (m->nverts + BLOCK - 1) / BLOCK, project_block, &pp);
+        ok = ism_an_run_blocks(f, o->threads, (m->nverts + BLOCK - 1) / BLOCK, project_block, &pp);
     }
     if (ok && out)
         tally(&pp, out);
@@ -167,5 +167,5 @@ bool ism_analysis_project(ism_mesh *m, const ism_tape *f, const ism_analysis *a,
     free(pp.outcome);
     free(pp.move);
     free(pp.gnorm);
-    return ok ? true : ism_analysis_fail(err, "projection: out of memory");
+    return ok ? true : ism_an_fail(err, "projection: out of memory");
 }

@@ -37,7 +37,7 @@ static double measure_triangle(const ism_mesh *m, size_t t, double *angle)
 {
     const uint32_t *c = m->tri + 3 * t;
     *angle = -1;
-    if (ism_tri_collapsed(m->tri, t))
+    if (ism_an_tri_collapsed(m->tri, t))
         return 0;
     const double *p[3] = {m->pos + 3 * c[0], m->pos + 3 * c[1], m->pos + 3 * c[2]};
     double side[3][3], len2[3];
@@ -76,7 +76,7 @@ static void angle_statistics(ism_analysis *a, float *good, size_t ngood)
     }
     a->share_under_10 = (double)under_10 / (double)ngood;
     size_t mid = ngood / 2;
-    double upper = ism_select_float(good, ngood, mid);
+    double upper = ism_an_select_float(good, ngood, mid);
     if (ngood % 2 == 1) {
         a->median_angle = upper;
     } else {
@@ -88,7 +88,7 @@ static void angle_statistics(ism_analysis *a, float *good, size_t ngood)
     }
 }
 
-bool ism_triangle_quality(const ism_mesh *m, ism_analysis *a)
+bool ism_an_triangle_quality(const ism_mesh *m, ism_analysis *a)
 {
     size_t nt = m->ntris, nv = m->nverts;
     a->triangle_min_angle = malloc((nt ? nt : 1) * sizeof *a->triangle_min_angle);
@@ -103,7 +103,7 @@ bool ism_triangle_quality(const ism_mesh *m, ism_analysis *a)
     for (size_t t = 0; t < nt; t++) {
         double angle, area = 0.5 * measure_triangle(m, t, &angle);
         a->area += area;
-        if (!ism_tri_collapsed(m->tri, t))
+        if (!ism_an_tri_collapsed(m->tri, t))
             for (int k = 0; k < 3; k++)
                 a->vertex_area[m->tri[3 * t + k]] += area / 3;
         if (angle < 0) {

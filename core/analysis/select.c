@@ -35,5 +35,5 @@
         return v[k];                                                            \
     }
 
-DEFINE_SELECT(ism_select_double, double)
-DEFINE_SELECT(ism_select_float, float)
+DEFINE_SELECT(ism_an_select_double, double)
+DEFINE_SELECT(ism_an_select_float, float)

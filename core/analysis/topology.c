@@ -22,7 +22,7 @@ static int cmp_place(const void *x, const void *y)
     return (a->cone > b->cone) - (a->cone < b->cone);
 }
 
-static void count_triangles_and_edges(const ism_mesh *m, const ism_edge_table *et,
+static void count_triangles_and_edges(const ism_mesh *m, const ism_an_edge_table *et,
                                       const uint32_t *comp, ism_analysis *a)
 {
     for (size_t t = 0; t < m->ntris; t++)
@@ -33,7 +33,7 @@ static void count_triangles_and_edges(const ism_mesh *m, const ism_edge_table *e
         }
     for (uint32_t e = 0; e < et->nedges; e++) {
         ism_component *c = &a->component[comp[et->edge_he[et->edge_start[e]] / 3]];
-        uint32_t n = ism_edge_count(et, e);
+        uint32_t n = ism_an_edge_count(et, e);
         c->edges++;
         c->boundary_edges += n == 1;
         c->nonmanifold_edges += n > 2;
@@ -45,7 +45,7 @@ static void count_triangles_and_edges(const ism_mesh *m, const ism_edge_table *e
  * components) are sorted by (vertex, component, cone) and the vertex counts once per
  * component; a component holding two cones of one vertex is not a manifold (a component
  * that meets another only at a vertex may still be one). */
-static bool count_vertices(const ism_mesh *m, ism_vertex_facts *vf, const uint32_t *comp,
+static bool count_vertices(const ism_mesh *m, ism_an_vertex_facts *vf, const uint32_t *comp,
                            ism_analysis *a)
 {
     size_t nv = m->nverts, nplaces = 0;
@@ -71,7 +71,7 @@ static bool count_vertices(const ism_mesh *m, ism_vertex_facts *vf, const uint32
     for (uint32_t h = 0; h < 3 * m->ntris; h++) {
         uint32_t v = m->tri[h], c = comp[h / 3];
         if (c != ISM_NONE && vf->cones[v] > 1)
-            place[k++] = (corner_place){v, c, ism_uf_find(vf->cone_sets, h)};
+            place[k++] = (corner_place){v, c, ism_an_uf_find(vf->cone_sets, h)};
     }
     qsort(place, nplaces, sizeof *place, cmp_place);
     for (size_t i = 0; i < nplaces; i++) {
@@ -96,7 +96,7 @@ static long component_genus(const ism_component *c)
     return twice >= 0 && twice % 2 == 0 ? twice / 2 : -1;
 }
 
-static void summarise(const ism_mesh *m, const ism_vertex_facts *vf, const uint8_t *bad,
+static void summarise(const ism_mesh *m, const ism_an_vertex_facts *vf, const uint8_t *bad,
                       ism_analysis *a)
 {
     for (size_t v = 0; v < m->nverts; v++)
@@ -116,13 +116,13 @@ static void summarise(const ism_mesh *m, const ism_vertex_facts *vf, const uint8
     a->genus = a->components == 1 && a->component[0].closed ? a->component[0].genus : -1;
 }
 
-bool ism_topology(const ism_mesh *m, const ism_edge_table *et, ism_vertex_facts *vf,
-                  ism_analysis *a)
+bool ism_an_topology(const ism_mesh *m, const ism_an_edge_table *et, ism_an_vertex_facts *vf,
+                     ism_analysis *a)
 {
     size_t nt = m->ntris ? m->ntris : 1;
     uint32_t *comp = malloc(nt * sizeof *comp);
     uint8_t *bad = NULL;
-    bool ok = comp && ism_edge_components(m, et, comp, &a->components);
+    bool ok = comp && ism_an_edge_components(m, et, comp, &a->components);
     if (ok) {
         size_t nc = a->components ? a->components : 1;
         a->component = calloc(nc, sizeof *a->component);
@@ -131,11 +131,11 @@ bool ism_topology(const ism_mesh *m, const ism_edge_table *et, ism_vertex_facts 
     }
     for (size_t i = 0; ok && i < a->components; i++)
         a->component[i].manifold = true;
-    ok = ok && ism_orientation(m, et, comp, bad, &a->inconsistent_edges);
+    ok = ok && ism_an_orientation(m, et, comp, bad, &a->inconsistent_edges);
     if (ok) {
         count_triangles_and_edges(m, et, comp, a);
-        ok = count_vertices(m, vf, comp, a) && ism_boundary_chains(m, et, vf, comp, a) &&
-             ism_vertex_components(m, vf, &a->vertex_components);
+        ok = count_vertices(m, vf, comp, a) && ism_an_boundary_chains(m, et, vf, comp, a) &&
+             ism_an_vertex_components(m, vf, &a->vertex_components);
     }
     if (ok)
         summarise(m, vf, bad, a);

@@ -3,7 +3,7 @@
  * a set's root is its smallest member (which makes numbering the sets deterministic). */
 #include "core/analysis/analysis_internal.h"
 
-uint32_t ism_uf_find(uint32_t *parent, uint32_t i)
+uint32_t ism_an_uf_find(uint32_t *parent, uint32_t i)
 {
     while (parent[i] != i) {
         parent[i] = parent[parent[i]];
@@ -12,9 +12,9 @@ uint32_t ism_uf_find(uint32_t *parent, uint32_t i)
     return i;
 }
 
-bool ism_uf_union(uint32_t *parent, uint32_t i, uint32_t j)
+bool ism_an_uf_union(uint32_t *parent, uint32_t i, uint32_t j)
 {
-    uint32_t ri = ism_uf_find(parent, i), rj = ism_uf_find(parent, j);
+    uint32_t ri = ism_an_uf_find(parent, i), rj = ism_an_uf_find(parent, j);
     if (ri == rj)
         return false;
     if (ri < rj)

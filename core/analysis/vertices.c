@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-void ism_vertex_facts_free(ism_vertex_facts *vf)
+void ism_an_vertex_facts_free(ism_an_vertex_facts *vf)
 {
     free(vf->corners);
     free(vf->cones);
@@ -24,7 +24,7 @@ void ism_vertex_facts_free(ism_vertex_facts *vf)
 static void count_corners(const ism_mesh *m, uint32_t *corners)
 {
     for (size_t t = 0; t < m->ntris; t++)
-        if (!ism_tri_collapsed(m->tri, t))
+        if (!ism_an_tri_collapsed(m->tri, t))
             for (int k = 0; k < 3; k++)
                 corners[m->tri[3 * t + k]]++;
 }
@@ -34,19 +34,19 @@ static void count_corners(const ism_mesh *m, uint32_t *corners)
 static void join_across(const uint32_t *tri, uint32_t *parent, uint32_t h1, uint32_t h2,
                         uint32_t *merges)
 {
-    uint32_t u = tri[h1], w = tri[ism_he_next(h1)];
+    uint32_t u = tri[h1], w = tri[ism_an_he_next(h1)];
     bool same_way = tri[h2] == u;
-    uint32_t c2u = same_way ? h2 : ism_he_next(h2);
-    uint32_t c2w = same_way ? ism_he_next(h2) : h2;
-    if (ism_uf_union(parent, h1, c2u))
+    uint32_t c2u = same_way ? h2 : ism_an_he_next(h2);
+    uint32_t c2w = same_way ? ism_an_he_next(h2) : h2;
+    if (ism_an_uf_union(parent, h1, c2u))
         merges[u]++;
-    if (ism_uf_union(parent, ism_he_next(h1), c2w))
+    if (ism_an_uf_union(parent, ism_an_he_next(h1), c2w))
         merges[w]++;
 }
 
 /* Walks the edges once: marks boundary vertices, counts non-manifold edges per vertex and
  * joins corners across manifold edges. */
-static bool scan_edges(const ism_mesh *m, const ism_edge_table *et, ism_vertex_facts *vf,
+static bool scan_edges(const ism_mesh *m, const ism_an_edge_table *et, ism_an_vertex_facts *vf,
                        uint8_t *on_boundary, uint32_t *merges, ism_analysis *a)
 {
     size_t nh = 3 * m->ntris;
@@ -56,8 +56,8 @@ static bool scan_edges(const ism_mesh *m, const ism_edge_table *et, ism_vertex_f
     for (size_t h = 0; h < nh; h++)
         parent[h] = (uint32_t)h;
     for (uint32_t e = 0; e < et->nedges; e++) {
-        uint32_t n = ism_edge_count(et, e), lo, hi;
-        ism_edge_ends(m, et, e, &lo, &hi);
+        uint32_t n = ism_an_edge_count(et, e), lo, hi;
+        ism_an_edge_ends(m, et, e, &lo, &hi);
         if (n == 1) {
             a->boundary_edges++;
             on_boundary[lo] = on_boundary[hi] = 1;
@@ -75,7 +75,7 @@ static bool scan_edges(const ism_mesh *m, const ism_edge_table *et, ism_vertex_f
     return true;
 }
 
-static uint8_t vertex_class(const ism_vertex_facts *vf, const uint8_t *on_boundary, size_t v)
+static uint8_t vertex_class(const ism_an_vertex_facts *vf, const uint8_t *on_boundary, size_t v)
 {
     if (vf->corners[v] == 0)
         return ISM_VERTEX_ISOLATED;
@@ -88,8 +88,8 @@ static uint8_t vertex_class(const ism_vertex_facts *vf, const uint8_t *on_bounda
     return ISM_VERTEX_MANIFOLD;
 }
 
-bool ism_classify_vertices(const ism_mesh *m, const ism_edge_table *et, ism_vertex_facts *vf,
-                           ism_analysis *a)
+bool ism_an_classify_vertices(const ism_mesh *m, const ism_an_edge_table *et,
+                              ism_an_vertex_facts *vf, ism_analysis *a)
 {
     size_t nv = m->nverts, n = nv ? nv : 1;
     memset(vf, 0, sizeof *vf);
