@@ -205,6 +205,13 @@ uint32_t ism_graph_binary(ism_graph *g, int op, uint32_t a, uint32_t b)
         if (ca && va == 0.0)
             return ism_graph_unary(g, ISM_G_NEG, b);
     }
+    /* a + (-b) and (-b) + a are a - b; a - (-b) is a + b */
+    if (op == ISM_G_ADD && g->nodes[b].op == ISM_G_NEG)
+        return ism_graph_binary(g, ISM_G_SUB, a, g->nodes[b].a);
+    if (op == ISM_G_ADD && g->nodes[a].op == ISM_G_NEG)
+        return ism_graph_binary(g, ISM_G_SUB, b, g->nodes[a].a);
+    if (op == ISM_G_SUB && g->nodes[b].op == ISM_G_NEG)
+        return ism_graph_binary(g, ISM_G_ADD, a, g->nodes[b].a);
     if (commutative(op) && operands_out_of_order(g, a, b)) {
         uint32_t t = a; a = b; b = t;
         double tv = va; va = vb; vb = tv;

@@ -1,0 +1,157 @@
+/* test_eval_deriv.c — gradient and Hessian against central differences: the gradient
+ * against differences of f, the Hessian against differences of the gradient (a separate
+ * evaluator) and its diagonal against second differences of f, at random points of every
+ * smooth example surface and of expressions using every operation. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+
+#include "test_eval_surfaces.h"
+
+typedef struct deriv_case {
+    const char *expr;
+    double box[6];
+} deriv_case;
+
+/* Smooth expressions over boxes where they are smooth (no clipping edge, pole or kink). */
+static const deriv_case CASES[] = {
+    { "sin(3*x)*cos(2*y) + sin(y*z)", { -2, -2, -2, 2, 2, 2 } },
+    { "exp(x/2 - y^2) * z", { -1, -1, -1, 1, 1, 1 } },
+    { "log(x^2 + y^2 + 1) - z^3", { -2, -2, -2, 2, 2, 2 } },
+    { "sqrt(x + 3) * (y - z)^2", { -2, -2, -2, 2, 2, 2 } },
+    { "(x + y) / (z^2 + 1) - 1/(x + 5)", { -2, -2, -2, 2, 2, 2 } },
+    { "tan(x/2) + y*z", { -1, -1, -1, 1, 1, 1 } },
+    { "pow(x + 2, 1.5) + pow(y + 3, -0.5) - z", { -1, -1, -1, 1, 1, 1 } },
+    { "pow(x^2 + 1, y) + x^-2", { 0.5, -1, -1, 2, 1, 1 } },
+    { "3/(x + 4) - 2*y/(z + 3)", { -1, -1, -1, 1, 1, 1 } },
+    { "x^5 - 3*x^3*y^2 + y^4*z - z^7/5", { -1.5, -1.5, -1.5, 1.5, 1.5, 1.5 } },
+    { "sin(4*x)*cos(4*y) + sin(4*y)*cos(4*z) + sin(4*z)*cos(4*x)", { -1.5, -1.5, -1.5, 1.5, 1.5, 1.5 } },
+    { "let p = x - y\nlet q = p*p + z*x\nq*p/(1 + q^2)", { -1, -1, -1, 1, 1, 1 } },
+};
+
+static double scale_of(const double *box)
+{
+    return fmax(box[3] - box[0], fmax(box[4] - box[1], box[5] - box[2]));
+}
+
+/* Checks one tape at npoints random points of box. */
+static void check_tape(const char *name, const ism_tape *t, const double *box, size_t npoints,
+                       uint64_t seed)
+{
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    cr_assert_not_null(ws);
+    test_rng rng = { seed };
+    double s = scale_of(box);
+    double hg = 1e-6 * s, hh = 1e-4 * s;
+    for (size_t n = 0; n < npoints; n++) {
+        double p[3];
+        for (int k = 0; k < 3; k++) /* keep the stencils inside the box */
+            p[k] = test_uniform(&rng, box[k] + hh, box[k + 3] - hh);
+        double g[3], gh[3], h[6];
+        double f = ism_eval_gradient(t, ws, p[0], p[1], p[2], g);
+        double fh = ism_eval_hessian(t, ws, p[0], p[1], p[2], gh, h);
+        cr_assert_eq(f, ism_eval_point(t, ws, p[0], p[1], p[2]), "%s: value", name);
+        cr_assert_eq(fh, f, "%s: Hessian evaluator value", name);
+        double gscale = 1.0 + fabs(g[0]) + fabs(g[1]) + fabs(g[2]) + fabs(f) / s;
+        for (int k = 0; k < 3; k++) {
+            double a[3] = { p[0], p[1], p[2] }, b[3] = { p[0], p[1], p[2] };
+            a[k] += hg;
+            b[k] -= hg;
+            double fd = (ism_eval_point(t, ws, a[0], a[1], a[2])
+                         - ism_eval_point(t, ws, b[0], b[1], b[2])) / (2 * hg);
+            cr_assert(fabs(g[k] - fd) <= 1e-6 * gscale,
+                      "%s at (%g,%g,%g): df/d%c = %.12g, central difference %.12g", name, p[0],
+                      p[1], p[2], 'x' + k, g[k], fd);
+            cr_assert(fabs(gh[k] - g[k]) <= 1e-12 * gscale, "%s: gradients of the two "
+                      "evaluators differ", name);
+        }
+        /* Hessian (xx xy xz yy yz zz) against central differences of the gradient */
+        static const int HI[6] = { 0, 0, 0, 1, 1, 2 }, HJ[6] = { 0, 1, 2, 1, 2, 2 };
+        double hscale = gscale / s + fabs(h[0]) + fabs(h[3]) + fabs(h[5]) + fabs(h[1])
+                        + fabs(h[2]) + fabs(h[4]);
+        for (int e = 0; e < 6; e++) {
+            int i = HI[e], j = HJ[e];
+            double a[3] = { p[0], p[1], p[2] }, b[3] = { p[0], p[1], p[2] };
+            a[j] += hg;
+            b[j] -= hg;
+            double ga[3], gb[3];
+            ism_eval_gradient(t, ws, a[0], a[1], a[2], ga);
+            ism_eval_gradient(t, ws, b[0], b[1], b[2], gb);
+            double fd = (ga[i] - gb[i]) / (2 * hg);
+            cr_assert(fabs(h[e] - fd) <= 1e-5 * hscale,
+                      "%s at (%g,%g,%g): H[%c%c] = %.12g, central difference %.12g", name,
+                      p[0], p[1], p[2], 'x' + i, 'x' + j, h[e], fd);
+        }
+        /* diagonal against second differences of f itself */
+        static const int DIAG[3] = { 0, 3, 5 };
+        for (int k = 0; k < 3; k++) {
+            double a[3] = { p[0], p[1], p[2] }, b[3] = { p[0], p[1], p[2] };
+            a[k] += hh;
+            b[k] -= hh;
+            double fd = (ism_eval_point(t, ws, a[0], a[1], a[2]) - 2 * f
+                         + ism_eval_point(t, ws, b[0], b[1], b[2])) / (hh * hh);
+            cr_assert(fabs(h[DIAG[k]] - fd) <= 1e-4 * (hscale + fabs(f) / (s * s)),
+                      "%s: H[%c%c] = %.12g, second difference %.12g", name, 'x' + k, 'x' + k,
+                      h[DIAG[k]], fd);
+        }
+    }
+    ism_eval_ws_free(ws);
+}
+
+Test(eval_deriv, smooth_expressions)
+{
+    size_t npoints = test_scaled(300);
+    for (size_t i = 0; i < sizeof CASES / sizeof CASES[0]; i++) {
+        ism_error err;
+        ism_tape *t = ism_tape_compile(CASES[i].expr, NULL, 0, NULL, 0, NULL, &err);
+        cr_assert_not_null(t, "%s: %s", CASES[i].expr, err.message);
+        check_tape(CASES[i].expr, t, CASES[i].box, npoints, 31 + i);
+        ism_tape_free(t);
+    }
+}
+
+Test(eval_deriv, example_surfaces)
+{
+    size_t npoints = test_scaled(300);
+    for (size_t s = 0; s < TEST_NSURFACES; s++) {
+        if (!TEST_SURFACES[s].polynomial) /* the gyroid ball has a crease (max) */
+            continue;
+        ism_tape *t = test_surface_compile(&TEST_SURFACES[s]);
+        check_tape(TEST_SURFACES[s].name, t, TEST_SURFACES[s].box, npoints, 500 + s);
+        ism_tape_free(t);
+    }
+}
+
+/* Exact values where the answer is known in closed form. */
+Test(eval_deriv, closed_forms)
+{
+    ism_error err;
+    ism_tape *t = ism_tape_compile("x^2*y + sin(z)", NULL, 0, NULL, 0, NULL, &err);
+    cr_assert_not_null(t);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    double g[3], h[6];
+    double f = ism_eval_hessian(t, ws, 2.0, 3.0, 0.5, g, h);
+    cr_expect_float_eq(f, 12.0 + sin(0.5), 1e-15);
+    cr_expect_float_eq(g[0], 12.0, 1e-15);
+    cr_expect_float_eq(g[1], 4.0, 1e-15);
+    cr_expect_float_eq(g[2], cos(0.5), 1e-15);
+    cr_expect_float_eq(h[0], 6.0, 1e-15);  /* xx = 2y */
+    cr_expect_float_eq(h[1], 4.0, 1e-15);  /* xy = 2x */
+    cr_expect_eq(h[2], 0.0);               /* xz */
+    cr_expect_eq(h[3], 0.0);               /* yy */
+    cr_expect_eq(h[4], 0.0);               /* yz */
+    cr_expect_float_eq(h[5], -sin(0.5), 1e-15);
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+    /* where the domain is clipped the function is constant: zero derivatives, no NaN */
+    t = ism_tape_compile("sqrt(x) + log(y)", NULL, 0, NULL, 0, NULL, &err);
+    ws = ism_eval_ws_new(t);
+    f = ism_eval_hessian(t, ws, -1.0, 1.0, 0.0, g, h);
+    cr_expect_eq(f, 0.0);
+    cr_expect_eq(g[0], 0.0);
+    cr_expect_float_eq(g[1], 1.0, 1e-15);
+    cr_expect_eq(h[0], 0.0);
+    cr_expect_float_eq(h[3], -1.0, 1e-15);
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+}
