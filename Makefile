@@ -9,7 +9,7 @@
 #   server/isomesh/*.c     -> isomesh   (CLI and worker)
 #   server/isomeshd/*.c    -> isomeshd  (HTTP daemon)
 #   tests/unit/core/*.c    -> one Criterion binary against core
-#   tests/unit/proto/*.c   -> one Criterion binary against proto + core
+#   tests/unit/proto/*.c   -> one Criterion binary against proto + core (+ *.cc helpers)
 #   tests/unit/server/*.c  -> one Criterion binary against server/common + proto + core
 
 SHELL := /bin/bash
@@ -63,7 +63,7 @@ ISOMESH   := $(OUT)/isomesh
 ISOMESHD  := $(OUT)/isomeshd
 
 UNIT_CORE_SRC   := $(wildcard tests/unit/core/*.c)
-UNIT_PROTO_SRC  := $(wildcard tests/unit/proto/*.c)
+UNIT_PROTO_SRC  := $(wildcard tests/unit/proto/*.c tests/unit/proto/*.cc)
 UNIT_SERVER_SRC := $(wildcard tests/unit/server/*.c)
 BENCH_SRC := $(wildcard tests/bench/*.c)
 BENCH_BINS := $(patsubst tests/bench/%.c,$(OUT)/bench/%,$(BENCH_SRC))

@@ -387,8 +387,8 @@ static bool check_box(const double box[6], ism_req_error *err)
             return bad(err, "$.box", "%cmin (%s) must be below %cmax (%s)", axis[k],
                        num(box[k], a), axis[k], num(box[k + 3], b));
         if (box[k + 3] - box[k] < ISM_REQ_MIN_SIDE_REL * big)
-            return over(err, "$.box", "the box is thinner along %c (%s) than %g of its "
-                        "largest coordinate", axis[k], num(box[k + 3] - box[k], a),
+            return over(err, "$.box", "the box is thinner along %c (%.3g) than %g of its "
+                        "largest coordinate", axis[k], box[k + 3] - box[k],
                         ISM_REQ_MIN_SIDE_REL);
     }
     return true;
@@ -433,7 +433,7 @@ static bool decode_tolerances(const json_t *v, ism_request *req, ism_req_error *
     } reals[] = {
         {"gradient", &req->gradient, -1, 1},
         {"double_root_eps", &req->double_root_eps, 0, 1},
-        {"stitch", &req->stitch, 1e-9, 0.5},
+        {"stitch", &req->stitch, 1e-9, 0.25},
         {"flat_normal", &req->flat_normal, -1, 1},
         {"flat_plane", &req->flat_plane, 1e-6, 1},
     };
@@ -529,8 +529,7 @@ static void set_defaults(ism_request *req, int depth_limit)
 {
     ism_poly_options o;
     ism_poly_options_default(&o);
-    static const double box[6] = {-2, -2, -2, 2, 2, 2};
-    memcpy(req->box, box, sizeof box);
+    memcpy(req->box, o.box, sizeof req->box);
     req->max_depth = o.max_depth < depth_limit ? o.max_depth : depth_limit;
     req->min_depth = o.min_depth < req->max_depth ? o.min_depth : req->max_depth;
     req->gradient = o.gradient_test;

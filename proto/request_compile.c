@@ -6,6 +6,22 @@
 #include <stdio.h>
 #include <string.h>
 
+/* The parameter a positionless message is about ("parameter 'x' would shadow ..."), or -1. */
+static long param_named_in(const ism_request *req, const char *message)
+{
+    if (strncmp(message, "parameter", 9) != 0)
+        return -1;
+    const char *q = strchr(message, '\'');
+    const char *e = q ? strchr(q + 1, '\'') : NULL;
+    if (!e)
+        return -1;
+    for (size_t i = 0; i < req->nparams; i++)
+        if (strlen(req->params[i].name) == (size_t)(e - q - 1) &&
+            strncmp(req->params[i].name, q + 1, (size_t)(e - q - 1)) == 0)
+            return (long)i;
+    return -1;
+}
+
 /* Where in the request the failing source was written. */
 static void error_path(const ism_request *req, const ism_error *e, char *path, size_t n)
 {
@@ -15,21 +31,20 @@ static void error_path(const ism_request *req, const ism_error *e, char *path, s
                 snprintf(path, n, "%s", req->let_paths[i]);
                 return;
             }
-        for (size_t i = 0; i < req->nparams; i++)
-            if (strcmp(req->params[i].name, e->where) == 0) {
-                snprintf(path, n, "$.params.%s", e->where);
-                return;
-            }
+    }
+    long p = e->where[0] ? -1 : param_named_in(req, e->message);
+    if (p >= 0) {
+        snprintf(path, n, "$.params.%s", req->params[p].name);
+        return;
     }
     snprintf(path, n, "%s", req->preset ? "$.preset" : "$.expr");
 }
 
-/* A compile error without a position is a bound on the whole expression (its size, its
- * node count, its nesting), which is a limit (422); everything else is a mistake in the
- * text (400). */
+/* The parser says "(limit ...)" for every bound on size, nesting, exponent and counts: those
+ * are limits (422); everything else is a mistake in the text (400). */
 static bool is_limit(const ism_error *e)
 {
-    return e->line == 0 && e->column == 0;
+    return strstr(e->message, "limit") != NULL;
 }
 
 ism_tape *ism_request_compile(const ism_request *req, ism_req_error *err)
@@ -46,15 +61,21 @@ ism_tape *ism_request_compile(const ism_request *req, ism_req_error *err)
         return t;
     char path[160];
     error_path(req, &e, path, sizeof path);
-    if (is_limit(&e)) {
-        ism_req_error_set(err, 422, "over_limit", path, "%s", e.message);
+    if (strstr(e.message, "out of memory")) {
+        ism_req_error_set(err, 500, "no_memory", path, "%s", e.message);
+    } else if (e.line == 0 && e.column == 0) {
+        ism_req_error_set(err, is_limit(&e) ? 422 : 400,
+                          is_limit(&e) ? "over_limit" : "bad_expression", path, "%s",
+                          e.message);
     } else {
         char where[48] = "";
         if (e.line > 1)
             snprintf(where, sizeof where, "line %d, column %d", e.line, e.column);
         else
             snprintf(where, sizeof where, "column %d", e.column);
-        ism_req_error_set(err, 400, "bad_expression", path, "%s: %s", where, e.message);
+        ism_req_error_set(err, is_limit(&e) ? 422 : 400,
+                          is_limit(&e) ? "over_limit" : "bad_expression", path, "%s: %s",
+                          where, e.message);
         err->line = e.line;
         err->column = e.column;
     }

@@ -123,10 +123,11 @@ char *ism_request_canonical(const ism_request *req, size_t *len)
 char *ism_request_key_material(const ism_request *req, const ism_tape *tape, size_t *len)
 {
     size_t n = ism_tape_canonical(tape, NULL, 0);
-    char *text = malloc(n + 1);
-    if (!text)
+    char *text = n ? malloc(n + 1) : NULL; /* 0: the tape writer ran out of memory */
+    if (!text || ism_tape_canonical(tape, text, n + 1) != n) {
+        free(text);
         return NULL;
-    ism_tape_canonical(tape, text, n + 1);
+    }
 
     ism_jw w;
     ism_jw_init(&w);

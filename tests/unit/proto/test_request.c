@@ -1,0 +1,427 @@
+/* test_request.c — strict request decoding: a table of bad requests with their exact status,
+ * code, JSON path and message; defaults filled from the polygoniser; presets expanded; both
+ * let forms; the error JSON document. */
+#include <criterion/criterion.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/octree/polygonise.h"
+#include "proto/presets.h"
+#include "proto/request.h"
+
+typedef struct bad_case {
+    const char *json;
+    int status;
+    const char *code;
+    const char *path;
+    const char *message; /* exact, or a prefix when it ends with '*' */
+} bad_case;
+
+static const bad_case bad_cases[] = {
+    /* JSON itself (jansson flags: duplicates, UTF-8, trailing garbage, NaN, overflow) */
+    {"{\"expr\": \"x\",", 400, "bad_json", "", "invalid JSON at line 1, column *"},
+    {"{\"expr\": \"x\", \"expr\": \"y\"}", 400, "bad_json", "", "invalid JSON at line 1*"},
+    {"{\"expr\": \"x\xff\"}", 400, "bad_json", "", "invalid JSON at line 1*"},
+    {"{\"expr\": \"x\"} x", 400, "bad_json", "", "invalid JSON at line 1*"},
+    {"{\"expr\": \"x\", \"box\": [NaN, 0, 0, 1, 1, 1]}", 400, "bad_json", "", "invalid JSON*"},
+    {"{\"expr\": \"x\", \"box\": [1e999, 0, 0, 1, 1, 1]}", 400, "bad_json", "", "invalid JSON*"},
+    {"", 400, "bad_json", "", "invalid JSON*"},
+    /* shape */
+    {"[1]", 400, "bad_request", "$", "$: a request is a JSON object, got an array"},
+    {"{}", 400, "bad_request", "$",
+     "$: missing the surface: give \"expr\" (an expression in x, y, z) or \"preset\" (a name "
+     "from GET /v1/presets)"},
+    {"{\"expr\": \"x\", \"colour\": 1}", 400, "bad_request", "$.colour",
+     "$.colour: unknown field (expected one of: expr, preset, params, let, box, depth, "
+     "tolerances, output)"},
+    {"{\"expr\": \"x\", \"tolerances\": {\"gradiant\": 0.9}}", 400, "bad_request",
+     "$.tolerances.gradiant",
+     "$.tolerances.gradiant: unknown field (expected one of: gradient, double_root_eps, "
+     "double_root_iters, stitch, flat_normal, flat_plane)"},
+    {"{\"expr\": \"x\", \"depth\": {\"maximum\": 5}}", 400, "bad_request", "$.depth.maximum",
+     "$.depth.maximum: unknown field (expected one of: min, max)"},
+    {"{\"expr\": \"x\", \"output\": {\"fromat\": \"glb\"}}", 400, "bad_request",
+     "$.output.fromat",
+     "$.output.fromat: unknown field (expected one of: format, position_bits, normal_bits, "
+     "curvature_bits, attributes)"},
+    {"{\"expr\": \"x\", \"a b\": 1}", 400, "bad_request", "$[\"a b\"]",
+     "$[\"a b\"]: unknown field (expected one of: expr, preset, params, let, box, depth, "
+     "tolerances, output)"},
+    /* surface */
+    {"{\"expr\": 3}", 400, "bad_request", "$.expr", "$.expr: expected a string, got an integer"},
+    {"{\"expr\": \"\"}", 400, "bad_request", "$.expr", "$.expr: the expression is empty"},
+    {"{\"expr\": \"x\", \"preset\": \"torus\"}", 400, "bad_request", "$.preset",
+     "$.preset: give either \"expr\" or \"preset\", not both"},
+    {"{\"preset\": \"tours\"}", 400, "bad_request", "$.preset",
+     "$.preset: unknown preset (known: sphere, torus, pretzel-genus2, gyroid-ball, "
+     "kummer-4-nodes, kummer-16-nodes, horn-cyclide, klein-bottle, steiner-roman)"},
+    {"{\"preset\": \"torus\", \"params\": {\"q\": 1}}", 400, "bad_request", "$.params.q",
+     "$.params.q: preset 'torus' has no parameter 'q' (it has R, r)"},
+    {"{\"preset\": \"klein-bottle\", \"params\": {\"q\": 1}}", 400, "bad_request",
+     "$.params.q", "$.params.q: preset 'klein-bottle' has no parameter 'q' (it has none)"},
+    {"{\"preset\": \"torus\", \"let\": {\"p\": \"x\"}}", 400, "bad_request", "$.let",
+     "$.let: a preset brings its own let bindings; write the expression out to change them"},
+    {"{\"expr\": \"r\", \"params\": {\"r\": \"1\"}}", 400, "bad_request", "$.params.r",
+     "$.params.r: expected a number, got a string"},
+    {"{\"expr\": \"r\", \"params\": [1]}", 400, "bad_request", "$.params",
+     "$.params: expected an object of numbers, got an array"},
+    {"{\"expr\": \"x\", \"params\": {\"2r\": 1}}", 400, "bad_request", "$.params[\"2r\"]",
+     "$.params[\"2r\"]: parameter name must be letters, digits and _, not starting with a "
+     "digit"},
+    {"{\"expr\": \"p\", \"let\": {\"p\": 1}}", 400, "bad_request", "$.let.p",
+     "$.let.p: expected a string, got an integer"},
+    {"{\"expr\": \"p\", \"let\": [[\"p\"]]}", 400, "bad_request", "$.let[0]",
+     "$.let[0]: expected a pair [name, source]"},
+    {"{\"expr\": \"p\", \"let\": [[\"p\", \"x\"], [\"p\", \"y\"]]}", 400, "bad_request",
+     "$.let[1][1]", "$.let[1][1]: let 'p' is defined twice"},
+    {"{\"expr\": \"p\", \"let\": \"p = x\"}", 400, "bad_request", "$.let",
+     "$.let: expected an object {name: source} or an array of [name, source] pairs, got a "
+     "string"},
+    /* box */
+    {"{\"expr\": \"x\", \"box\": [0, 0, 0, 1, 1]}", 400, "bad_request", "$.box",
+     "$.box: expected [xmin, ymin, zmin, xmax, ymax, zmax], got an array of another length"},
+    {"{\"expr\": \"x\", \"box\": {\"min\": 0}}", 400, "bad_request", "$.box",
+     "$.box: expected [xmin, ymin, zmin, xmax, ymax, zmax], got an object"},
+    {"{\"expr\": \"x\", \"box\": [0, 0, \"0\", 1, 1, 1]}", 400, "bad_request", "$.box[2]",
+     "$.box[2]: expected a number, got a string"},
+    {"{\"expr\": \"x\", \"box\": [0, 0, 0, 1, 0, 1]}", 400, "bad_request", "$.box",
+     "$.box: ymin (0) must be below ymax (0)"},
+    {"{\"expr\": \"x\", \"box\": [2, 0, 0, 1, 1, 1]}", 400, "bad_request", "$.box",
+     "$.box: xmin (2) must be below xmax (1)"},
+    {"{\"expr\": \"x\", \"box\": [-1e7, 0, 0, 1, 1, 1]}", 422, "over_limit", "$.box[0]",
+     "$.box[0]: -10000000 is below the minimum -1000000"},
+    {"{\"expr\": \"x\", \"box\": [0, 0, 0, 1, 1, 2e6]}", 422, "over_limit", "$.box[5]",
+     "$.box[5]: 2000000 is above the limit 1000000"},
+    {"{\"expr\": \"x\", \"box\": [1000, 0, 0, 1000.0000001, 1, 1]}", 422, "over_limit", "$.box",
+     "$.box: the box is thinner along x (1e-07) than 1e-06 of its largest "
+     "coordinate"},
+    /* depth */
+    {"{\"expr\": \"x\", \"depth\": {\"max\": 14}}", 422, "over_limit", "$.depth.max",
+     "$.depth.max: 14 is above the limit 10"},
+    {"{\"expr\": \"x\", \"depth\": {\"max\": 0}}", 422, "over_limit", "$.depth.max",
+     "$.depth.max: 0 is below the minimum 1"},
+    {"{\"expr\": \"x\", \"depth\": {\"min\": 7, \"max\": 8}}", 422, "over_limit", "$.depth.min",
+     "$.depth.min: 7 is above the limit 6"},
+    {"{\"expr\": \"x\", \"depth\": {\"min\": 5, \"max\": 4}}", 400, "bad_request", "$.depth",
+     "$.depth: min (5) is above max (4)"},
+    {"{\"expr\": \"x\", \"depth\": {\"max\": 7.5}}", 400, "bad_request", "$.depth.max",
+     "$.depth.max: expected an integer, got 7.5"},
+    {"{\"expr\": \"x\", \"depth\": {\"max\": \"7\"}}", 400, "bad_request", "$.depth.max",
+     "$.depth.max: expected an integer, got a string"},
+    {"{\"expr\": \"x\", \"depth\": 7}", 400, "bad_request", "$.depth",
+     "$.depth: expected an object, got an integer"},
+    /* tolerances */
+    {"{\"expr\": \"x\", \"tolerances\": {\"gradient\": 2}}", 422, "over_limit",
+     "$.tolerances.gradient", "$.tolerances.gradient: 2 is above the limit 1"},
+    {"{\"expr\": \"x\", \"tolerances\": {\"double_root_iters\": 0}}", 422, "over_limit",
+     "$.tolerances.double_root_iters",
+     "$.tolerances.double_root_iters: 0 is below the minimum 1"},
+    {"{\"expr\": \"x\", \"tolerances\": {\"double_root_iters\": 61}}", 422, "over_limit",
+     "$.tolerances.double_root_iters",
+     "$.tolerances.double_root_iters: 61 is above the limit 60"},
+    {"{\"expr\": \"x\", \"tolerances\": {\"stitch\": 0}}", 422, "over_limit",
+     "$.tolerances.stitch", "$.tolerances.stitch: 0 is below the minimum 1e-09"},
+    {"{\"expr\": \"x\", \"tolerances\": {\"flat_plane\": null}}", 400, "bad_request",
+     "$.tolerances.flat_plane", "$.tolerances.flat_plane: expected a number, got null"},
+    /* output */
+    {"{\"expr\": \"x\", \"output\": {\"format\": \"gltf\"}}", 400, "bad_request",
+     "$.output.format",
+     "$.output.format: unknown format (expected one of: drc, glb, ply, obj, stl)"},
+    {"{\"expr\": \"x\", \"output\": {\"position_bits\": 30}}", 422, "over_limit",
+     "$.output.position_bits", "$.output.position_bits: 30 is above the limit 24"},
+    {"{\"expr\": \"x\", \"output\": {\"normal_bits\": 2}}", 422, "over_limit",
+     "$.output.normal_bits", "$.output.normal_bits: 2 is below the minimum 4"},
+    {"{\"expr\": \"x\", \"output\": {\"curvature_bits\": 4}}", 422, "over_limit",
+     "$.output.curvature_bits", "$.output.curvature_bits: 4 is below the minimum 8"},
+    {"{\"expr\": \"x\", \"output\": {\"attributes\": [\"normal\", \"normal\"]}}", 400,
+     "bad_request", "$.output.attributes[1]",
+     "$.output.attributes[1]: 'normal' is listed twice"},
+    {"{\"expr\": \"x\", \"output\": {\"attributes\": [\"normals\"]}}", 400, "bad_request",
+     "$.output.attributes[0]",
+     "$.output.attributes[0]: unknown attribute (expected one of: normal, mean_curvature, "
+     "gauss_curvature, class)"},
+    {"{\"expr\": \"x\", \"output\": {\"attributes\": \"normal\"}}", 400, "bad_request",
+     "$.output.attributes", "$.output.attributes: expected an array of names, got a string"},
+};
+
+static bool matches(const char *got, const char *want)
+{
+    size_t n = strlen(want);
+    if (n && want[n - 1] == '*')
+        return strncmp(got, want, n - 1) == 0;
+    return strcmp(got, want) == 0;
+}
+
+Test(request, bad_requests_have_exact_status_path_and_message)
+{
+    for (size_t i = 0; i < sizeof bad_cases / sizeof bad_cases[0]; i++) {
+        const bad_case *c = &bad_cases[i];
+        ism_request req;
+        ism_req_error err;
+        bool ok = ism_request_decode(c->json, strlen(c->json), NULL, &req, &err);
+        cr_expect(!ok, "accepted: %s", c->json);
+        if (ok) {
+            ism_request_free(&req);
+            continue;
+        }
+        cr_expect_eq(err.status, c->status, "%s: status %d", c->json, err.status);
+        cr_expect_str_eq(err.code, c->code, "%s", c->json);
+        cr_expect_str_eq(err.path, c->path, "%s", c->json);
+        cr_expect(matches(err.message, c->message), "%s\n got: %s\nwant: %s", c->json,
+                  err.message, c->message);
+        ism_request_free(&req); /* must be safe after a failure */
+    }
+}
+
+Test(request, json_syntax_errors_carry_line_and_column)
+{
+    const char *json = "{\n  \"expr\": \"x\",\n  \"box\": [1, 2,, 3]\n}";
+    ism_request req;
+    ism_req_error err;
+    cr_assert(!ism_request_decode(json, strlen(json), NULL, &req, &err));
+    cr_expect_eq(err.line, 3);
+    cr_expect_gt(err.column, 10);
+}
+
+/* Expression errors: the parser's column, the path of the text it was in. */
+typedef struct expr_case {
+    const char *json;
+    int status;
+    const char *code;
+    const char *path;
+    int column;
+} expr_case;
+
+Test(request, expression_errors_name_the_source_and_column)
+{
+    static const expr_case cases[] = {
+        {"{\"expr\": \"x^2 + sinn(y)\"}", 400, "bad_expression", "$.expr", 7},
+        {"{\"expr\": \"p\", \"let\": {\"p\": \"x +* y\"}}", 400, "bad_expression", "$.let.p", 4},
+        {"{\"expr\": \"p + q\", \"let\": [[\"p\", \"x\"], [\"q\", \"x +\"]]}", 400,
+         "bad_expression", "$.let[1][1]", 4},
+        {"{\"expr\": \"x\", \"params\": {\"x\": 1}}", 400, "bad_expression", "$.params.x", 0},
+        {"{\"expr\": \"x^1000\"}", 422, "over_limit", "$.expr", 2},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        const expr_case *c = &cases[i];
+        ism_request req;
+        ism_req_error err;
+        cr_assert(ism_request_decode(c->json, strlen(c->json), NULL, &req, &err), "%s: %s",
+                  c->json, err.message);
+        ism_tape *t = ism_request_compile(&req, &err);
+        cr_expect_null(t, "%s compiled", c->json);
+        if (t) {
+            ism_tape_free(t);
+            ism_request_free(&req);
+            continue;
+        }
+        cr_expect_eq(err.status, c->status, "%s: %d %s", c->json, err.status, err.message);
+        cr_expect_str_eq(err.code, c->code, "%s", c->json);
+        cr_expect_str_eq(err.path, c->path, "%s", c->json);
+        if (c->column) {
+            cr_expect_geq(err.column, c->column, "%s: column %d", c->json, err.column);
+            cr_expect_leq(err.column, c->column + 1, "%s: column %d", c->json, err.column);
+            char prefix[64];
+            snprintf(prefix, sizeof prefix, "%s: column %d: ", c->path, err.column);
+            cr_expect(strncmp(err.message, prefix, strlen(prefix)) == 0, "%s", err.message);
+        } else {
+            cr_expect(strncmp(err.message, c->path, strlen(c->path)) == 0, "%s", err.message);
+        }
+        ism_request_free(&req);
+    }
+}
+
+Test(request, over_long_sources_and_bodies_are_limits)
+{
+    size_t n = ISM_REQ_MAX_SOURCE + 1;
+    char *json = malloc(n + 32);
+    strcpy(json, "{\"expr\": \"");
+    memset(json + 10, 'x', n);
+    strcpy(json + 10 + n, "\"}");
+    ism_request req;
+    ism_req_error err;
+    cr_assert(!ism_request_decode(json, strlen(json), NULL, &req, &err));
+    cr_expect_eq(err.status, 422);
+    cr_expect_str_eq(err.message, "$.expr: the expression is longer than 16384 bytes");
+    free(json);
+
+    size_t big = ISM_REQ_MAX_BYTES + 1;
+    char *body = malloc(big);
+    memset(body, ' ', big);
+    body[0] = '{';
+    body[big - 1] = '}';
+    cr_assert(!ism_request_decode(body, big, NULL, &req, &err));
+    cr_expect_eq(err.status, 422);
+    cr_expect_str_eq(err.code, "too_large");
+    free(body);
+}
+
+Test(request, operator_depth_limit_applies)
+{
+    ism_request_limits lim = {6};
+    const char *json = "{\"expr\": \"x\", \"depth\": {\"max\": 7}}";
+    ism_request req;
+    ism_req_error err;
+    cr_assert(!ism_request_decode(json, strlen(json), &lim, &req, &err));
+    cr_expect_str_eq(err.message, "$.depth.max: 7 is above the limit 6");
+    /* the default depth is clamped to the limit instead of being refused */
+    const char *plain = "{\"expr\": \"x\"}";
+    lim.max_depth = 5;
+    cr_assert(ism_request_decode(plain, strlen(plain), &lim, &req, &err));
+    cr_expect_eq(req.max_depth, 5);
+    ism_request_free(&req);
+}
+
+Test(request, defaults_come_from_the_polygoniser)
+{
+    const char *json = "{\"expr\": \"x^2 + y^2 + z^2 - 1\"}";
+    ism_request req;
+    ism_req_error err;
+    cr_assert(ism_request_decode(json, strlen(json), NULL, &req, &err), "%s", err.message);
+    ism_poly_options o;
+    ism_poly_options_default(&o);
+    for (int k = 0; k < 6; k++)
+        cr_expect_eq(req.box[k], o.box[k]);
+    cr_expect_eq(req.min_depth, o.min_depth);
+    cr_expect_eq(req.max_depth, o.max_depth);
+    cr_expect_eq(req.gradient, o.gradient_test);
+    cr_expect_eq(req.double_root_eps, o.double_root_eps);
+    cr_expect_eq(req.double_root_iters, o.double_root_iters);
+    cr_expect_eq(req.stitch, o.stitch_tol);
+    cr_expect_eq(req.flat_normal, o.flat_normal);
+    cr_expect_eq(req.flat_plane, o.flat_plane);
+    cr_expect_eq(req.format, ISM_FORMAT_DRC);
+    cr_expect_eq(req.position_bits, 14);
+    cr_expect_eq(req.normal_bits, 10);
+    cr_expect_eq(req.attributes, (unsigned)ISM_ATTR_ALL);
+    cr_expect_null(req.preset);
+
+    ism_poly_options p;
+    ism_request_poly_options(&req, &p);
+    ism_error e;
+    cr_expect(ism_poly_options_check(&p, &e), "%s", e.message);
+    ism_request_free(&req);
+}
+
+Test(request, every_preset_decodes_compiles_and_passes_the_polygonisers_check)
+{
+    for (size_t i = 0; i < ism_preset_count(); i++) {
+        const ism_preset *p = ism_preset_at(i);
+        char json[128];
+        snprintf(json, sizeof json, "{\"preset\": \"%s\"}", p->name);
+        ism_request req;
+        ism_req_error err;
+        cr_assert(ism_request_decode(json, strlen(json), NULL, &req, &err), "%s: %s", p->name,
+                  err.message);
+        cr_expect_str_eq(req.preset, p->name);
+        cr_expect_eq(req.nparams, p->nparams);
+        cr_expect_eq(req.nlets, p->nlets);
+        cr_expect_eq(req.max_depth, p->max_depth);
+        for (size_t k = 0; k < p->nparams; k++) {
+            cr_expect_leq(p->params[k].min, p->params[k].value, "%s", p->name);
+            cr_expect_geq(p->params[k].max, p->params[k].value, "%s", p->name);
+        }
+        ism_tape *t = ism_request_compile(&req, &err);
+        cr_expect_not_null(t, "%s: %s", p->name, err.message);
+        ism_tape_free(t);
+        ism_poly_options o;
+        ism_request_poly_options(&req, &o);
+        ism_error e;
+        cr_expect(ism_poly_options_check(&o, &e), "%s: %s", p->name, e.message);
+        ism_request_free(&req);
+    }
+}
+
+Test(request, preset_params_override_defaults)
+{
+    const char *json = "{\"preset\": \"torus\", \"params\": {\"r\": 0.25}, \"depth\": {\"max\": 5}}";
+    ism_request req;
+    ism_req_error err;
+    cr_assert(ism_request_decode(json, strlen(json), NULL, &req, &err), "%s", err.message);
+    for (size_t i = 0; i < req.nparams; i++) {
+        if (strcmp(req.params[i].name, "r") == 0)
+            cr_expect_eq(req.params[i].value, 0.25);
+        if (strcmp(req.params[i].name, "R") == 0)
+            cr_expect_eq(req.params[i].value, 1.0);
+    }
+    cr_expect_eq(req.max_depth, 5);
+    cr_expect_eq(req.min_depth, 3);
+    cr_expect_eq(req.box[0], -1.5);
+    ism_request_free(&req);
+}
+
+Test(request, let_object_keeps_order_and_equals_the_pair_form)
+{
+    const char *obj = "{\"expr\": \"b\", \"let\": {\"a\": \"x\", \"b\": \"a*a\"}}";
+    const char *arr = "{\"expr\": \"b\", \"let\": [[\"a\", \"x\"], [\"b\", \"a*a\"]]}";
+    ism_request r1, r2;
+    ism_req_error err;
+    cr_assert(ism_request_decode(obj, strlen(obj), NULL, &r1, &err), "%s", err.message);
+    cr_assert(ism_request_decode(arr, strlen(arr), NULL, &r2, &err), "%s", err.message);
+    cr_assert_eq(r1.nlets, 2);
+    cr_assert_eq(r2.nlets, 2);
+    for (int i = 0; i < 2; i++) {
+        cr_expect_str_eq(r1.lets[i].name, r2.lets[i].name);
+        cr_expect_str_eq(r1.lets[i].source, r2.lets[i].source);
+    }
+    cr_expect_str_eq(r1.lets[0].name, "a");
+    ism_tape *t = ism_request_compile(&r1, &err);
+    cr_expect_not_null(t, "%s", err.message);
+    ism_tape_free(t);
+    ism_request_free(&r1);
+    ism_request_free(&r2);
+}
+
+Test(request, integral_reals_are_integers_and_negative_zero_is_zero)
+{
+    const char *json = "{\"expr\": \"x\", \"depth\": {\"min\": 2.0, \"max\": 6e0}, "
+                       "\"box\": [-0.0, -1, -1, 1, 1, 1]}";
+    ism_request req;
+    ism_req_error err;
+    cr_assert(ism_request_decode(json, strlen(json), NULL, &req, &err), "%s", err.message);
+    cr_expect_eq(req.min_depth, 2);
+    cr_expect_eq(req.max_depth, 6);
+    cr_expect(!signbit(req.box[0]));
+    ism_request_free(&req);
+}
+
+Test(request, format_names_and_override)
+{
+    const char *json = "{\"expr\": \"x\", \"output\": {\"format\": \"glb\"}}";
+    ism_request req;
+    ism_req_error err;
+    cr_assert(ism_request_decode(json, strlen(json), NULL, &req, &err), "%s", err.message);
+    cr_expect_eq(req.format, ISM_FORMAT_GLB);
+    cr_expect(ism_request_set_format(&req, "stl", &err));
+    cr_expect_eq(req.format, ISM_FORMAT_STL);
+    cr_expect(!ism_request_set_format(&req, "fbx", &err));
+    cr_expect_eq(err.status, 400);
+    for (int f = 0; f < ISM_FORMAT_COUNT; f++)
+        cr_expect_eq(ism_format_lookup(ism_format_name((enum ism_format)f)), f);
+    ism_request_free(&req);
+}
+
+Test(request, error_json_is_the_documented_document)
+{
+    const char *json = "{\"expr\": \"x\", \"depth\": {\"max\": 14}}";
+    ism_request req;
+    ism_req_error err;
+    cr_assert(!ism_request_decode(json, strlen(json), NULL, &req, &err));
+    size_t n;
+    char *text = ism_req_error_json(&err, &n);
+    cr_assert_not_null(text);
+    json_error_t je;
+    json_t *doc = json_loadb(text, n, JSON_REJECT_DUPLICATES, &je);
+    cr_assert_not_null(doc, "%s", je.text);
+    json_t *e = json_object_get(doc, "error");
+    cr_expect_str_eq(json_string_value(json_object_get(e, "code")), "over_limit");
+    cr_expect_str_eq(json_string_value(json_object_get(e, "path")), "$.depth.max");
+    cr_expect_str_eq(json_string_value(json_object_get(e, "message")),
+                     "$.depth.max: 14 is above the limit 10");
+    cr_expect_null(json_object_get(e, "column"));
+    json_decref(doc);
+    free(text);
+}
