@@ -90,7 +90,7 @@ bool ism_analyse(const ism_mesh *m, const ism_tape *f, const ism_analysis_option
     bool ok = ism_an_edge_table_build(m, &et);
     ok = ok && ism_an_classify_vertices(m, &et, &vf, a) && ism_an_find_curves(m, &et, &vf, a) &&
          ism_an_find_points(m, &vf, a) && ism_an_topology(m, &et, &vf, a) &&
-         ism_an_triangle_quality(m, a);
+         ism_an_count_duplicates(m, &et, a) && ism_an_triangle_quality(m, a);
     ism_an_edge_table_free(&et);
     free(vf.cone_sets); /* the rest needs only per-vertex facts */
     vf.cone_sets = NULL;

@@ -120,6 +120,9 @@ typedef struct ism_analysis {
     long genus;                       /* for a single closed orientable manifold mesh, else -1 */
     size_t vertices_used, triangles_used; /* V and F of the Euler characteristic */
     size_t collapsed_triangles;       /* triangles with a repeated vertex index (ignored) */
+    size_t duplicate_triangles;       /* triangles with the same three vertices as another
+                                         (counted once per extra copy; they do take part in
+                                         the topology and make their edges non-manifold) */
     size_t vertex_components;         /* connected by shared vertices (a Kummer node joins) */
     size_t boundary_chains;           /* boundary chains that end on a non-manifold edge
                                          instead of closing into a loop. Boundary edges are

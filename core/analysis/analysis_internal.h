@@ -82,6 +82,9 @@ bool ism_an_orientation(const ism_mesh *m, const ism_an_edge_table *et, const ui
 bool ism_an_boundary_chains(const ism_mesh *m, const ism_an_edge_table *et,
                             const ism_an_vertex_facts *vf, const uint32_t *comp, ism_analysis *a);
 
+/* Counts triangles with the same three vertices as an earlier one. */
+bool ism_an_count_duplicates(const ism_mesh *m, const ism_an_edge_table *et, ism_analysis *a);
+
 /* Euler characteristic, components, orientability, boundary loops, genus. */
 bool ism_an_topology(const ism_mesh *m, const ism_an_edge_table *et, ism_an_vertex_facts *vf,
                      ism_analysis *a);

@@ -585,3 +585,24 @@ Test(analysis_quality, vertex_areas_are_thirds_of_triangle_areas)
     ism_analysis_free(&a);
     ism_mesh_free(&m);
 }
+
+Test(analysis, duplicate_triangles_are_counted)
+{
+    ism_mesh m;
+    ism_mesh_init(&m);
+    ta_cube(&m);
+    ta_triangle(&m, m.tri[2], m.tri[1], m.tri[0]); /* triangle 0 again, flipped */
+    ta_triangle(&m, m.tri[3], m.tri[4], m.tri[5]); /* triangle 1 again */
+    ta_triangle(&m, m.tri[4], m.tri[5], m.tri[3]); /* and once more, rotated */
+    ism_analysis a = analyse(&m);
+    cr_expect_eq(a.duplicate_triangles, 3);
+    /* triangles 0 and 1 share the face diagonal: 2 + 3 copies on it; the other four edges
+     * of the face carry one cube triangle from elsewhere plus the copies */
+    cr_expect_eq(a.nonmanifold_edges, 5);
+    ism_analysis_free(&a);
+    ta_cube(&m); /* a second, separate cube: no duplicates across distinct vertices */
+    a = analyse(&m);
+    cr_expect_eq(a.duplicate_triangles, 3);
+    ism_analysis_free(&a);
+    ism_mesh_free(&m);
+}
