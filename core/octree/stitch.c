@@ -1,13 +1,15 @@
 /* stitch.c — StitchPolygon (paper §3): joins a node's face lines into closed polygons.
  * End points match exactly (every node computes a shared point bit for bit the same), so
- * the lines form a graph; where more than two line ends meet (two sheets through one point)
- * they are paired so that a polygon never turns from one sheet onto the other:
- *   - a line of one polygon pairs first with a copy of a line shared by two polygons
- *     (`nonManLine`: a double line on the face or a zero edge);
- *   - two lines of single polygons pair when the gradients at their far ends agree most;
- *   - leftover shared copies pair with each other: a one-edge (degenerate) polygon.
- * Then each polygon is walked once. Up to two polygons per node are the paper's cases; more
- * are kept and counted. */
+ * the lines form a graph. As in the paper, the lines of single polygons (`line`) are chained
+ * first, and a chain is closed by lines shared by two polygons (`nonManLine`: double lines on
+ * a face, zero edges) joining its two ends, so each sheet through a self-intersection gets
+ * its own polygon:
+ *   - a point with shared lines ends the chains that reach it;
+ *   - elsewhere, where more than two single-polygon lines meet (two sheets through one
+ *     point), they pair so that the gradients at their far ends agree most;
+ *   - a chain is closed by a path of unused shared lines between its ends (one copy each);
+ *   - shared lines left over are one-edge (degenerate) polygons.
+ * Up to two polygons per node are the paper's cases; more are kept and counted. */
 #include "core/octree/stitch.h"
 
 #include <math.h>
@@ -18,6 +20,15 @@ typedef struct end_ref {
     double p[3];
     int end; /* 2 * line + (0 for a, 1 for b) */
 } end_ref;
+
+typedef struct graph {
+    const ism_flines *l;
+    int *node;      /* per end: its point's index */
+    int *partner;   /* per end: the single-polygon end it continues into, or -1 */
+    bool *terminal; /* per point: some shared line ends here */
+    bool *used;     /* per line */
+    int npoints;
+} graph;
 
 static int cmp_end(const void *x, const void *y)
 {
@@ -51,29 +62,14 @@ static double far_agreement(const ism_flines *l, int e1, int e2)
     return fabs(ism_dot3(g1, g2)) / (n1 * n2);
 }
 
-/* Pairs the line ends meeting at one point (partner[] gets each end's mate, or -1). */
-static void pair_node(const ism_flines *l, const end_ref *group, int n, int *partner)
+/* Pairs the single-polygon ends meeting at a point without shared lines. */
+static void pair_point(graph *g, const end_ref *group, int n)
 {
-    int reg[64], shr[64], nr = 0, ns = 0;
-    for (int i = 0; i < n && i < 64; i++) {
-        if (is_shared(l, group[i].end))
-            shr[ns++] = group[i].end;
-        else
-            reg[nr++] = group[i].end;
-    }
-    int r = 0, s = 0;
-    if (n == 2) {
-        partner[group[0].end] = group[1].end;
-        partner[group[1].end] = group[0].end;
-        return;
-    }
-    for (; r < nr && s < ns; r++, s++) {
-        partner[reg[r]] = shr[s];
-        partner[shr[s]] = reg[r];
-    }
-    /* remaining single-polygon lines: greedy by agreement of their far-end gradients */
+    int reg[64], nr = 0;
+    for (int i = 0; i < n && nr < 64; i++)
+        reg[nr++] = group[i].end;
     bool used[64] = {false};
-    for (int i = r; i < nr; i++) {
+    for (int i = 0; i < nr; i++) {
         if (used[i])
             continue;
         int best = -1;
@@ -81,21 +77,64 @@ static void pair_node(const ism_flines *l, const end_ref *group, int n, int *par
         for (int j = i + 1; j < nr; j++) {
             if (used[j])
                 continue;
-            double a = far_agreement(l, reg[i], reg[j]);
+            double a = far_agreement(g->l, reg[i], reg[j]);
             if (a > best_a)
                 best_a = a, best = j;
         }
         used[i] = true;
         if (best >= 0) {
             used[best] = true;
-            partner[reg[i]] = reg[best];
-            partner[reg[best]] = reg[i];
+            g->partner[reg[i]] = reg[best];
+            g->partner[reg[best]] = reg[i];
         }
     }
-    for (; s + 1 < ns; s += 2) {
-        partner[shr[s]] = shr[s + 1];
-        partner[shr[s + 1]] = shr[s];
+}
+
+static bool build_graph(graph *g, const ism_flines *l)
+{
+    size_t ne = 2 * l->n;
+    end_ref *refs = malloc(ne * sizeof *refs);
+    g->l = l;
+    g->node = malloc(ne * sizeof *g->node);
+    g->partner = malloc(ne * sizeof *g->partner);
+    g->terminal = calloc(ne, sizeof *g->terminal);
+    g->used = calloc(l->n, sizeof *g->used);
+    if (!refs || !g->node || !g->partner || !g->terminal || !g->used) {
+        free(refs);
+        return false;
     }
+    for (size_t e = 0; e < ne; e++) {
+        memcpy(refs[e].p, end_point(l, (int)e)->p, sizeof refs[e].p);
+        refs[e].end = (int)e;
+        g->partner[e] = -1;
+    }
+    qsort(refs, ne, sizeof *refs, cmp_end);
+    g->npoints = 0;
+    for (size_t i = 0; i < ne;) {
+        size_t j = i + 1;
+        while (j < ne && memcmp(refs[j].p, refs[i].p, sizeof refs[i].p) == 0)
+            j++;
+        int pt = g->npoints++;
+        bool shared = false;
+        for (size_t k = i; k < j; k++) {
+            g->node[refs[k].end] = pt;
+            shared |= is_shared(l, refs[k].end);
+        }
+        g->terminal[pt] = shared;
+        if (!shared)
+            pair_point(g, refs + i, (int)(j - i));
+        i = j;
+    }
+    free(refs);
+    return true;
+}
+
+static void free_graph(graph *g)
+{
+    free(g->node);
+    free(g->partner);
+    free(g->terminal);
+    free(g->used);
 }
 
 static bool push_loop_point(ism_loops *out, const ism_fpoint *p)
@@ -126,25 +165,113 @@ static bool close_loop(ism_loops *out, size_t start, bool closed)
     return true;
 }
 
-/* Walks from end e0 along lines and pairings until the walk returns or dead-ends. */
-static bool walk(const ism_flines *l, const int *partner, bool *used, int e0, ism_loops *out)
+/* Walks single-polygon lines from end e0 until the walk returns to e0 (*closed) or stops at
+ * a terminal point or a dangling end; appends the points; returns the last end reached. */
+static int walk_chain(graph *g, int e0, ism_loops *out, bool *closed, bool *ok)
 {
-    size_t start = out->npts;
     int e = e0;
-    if (!push_loop_point(out, end_point(l, e)))
-        return false;
+    *closed = false;
+    *ok = push_loop_point(out, end_point(g->l, e));
     for (;;) {
-        used[e >> 1] = true;
+        g->used[e >> 1] = true;
         int o = e ^ 1;
-        int p = partner[o];
-        if (p == e0)
-            return close_loop(out, start, true);
-        if (!push_loop_point(out, end_point(l, o)))
-            return false;
-        if (p < 0 || used[p >> 1])
-            return close_loop(out, start, false);
+        int p = g->partner[o];
+        if (p == e0) {
+            *closed = true;
+            return o;
+        }
+        if (!(*ok = *ok && push_loop_point(out, end_point(g->l, o))))
+            return o;
+        if (p < 0 || g->used[p >> 1])
+            return o;
         e = p;
     }
+}
+
+/* Finds a path of unused shared lines from point `from` to point `to` (breadth first);
+ * marks them used and appends the inner points; false when there is none. */
+static bool close_with_shared(graph *g, int from, int to, ism_loops *out, bool *ok)
+{
+    if (from == to)
+        return true;
+    size_t nl = g->l->n;
+    int *via = malloc((size_t)g->npoints * sizeof *via); /* end used to reach each point */
+    int *queue = malloc((size_t)g->npoints * sizeof *queue);
+    if (!via || !queue) {
+        free(via);
+        free(queue);
+        *ok = false;
+        return false;
+    }
+    for (int i = 0; i < g->npoints; i++)
+        via[i] = -2;
+    via[from] = -1;
+    int head = 0, tail = 0;
+    queue[tail++] = from;
+    while (head < tail && via[to] == -2) {
+        int pt = queue[head++];
+        for (size_t k = 0; k < nl; k++) {
+            if (g->used[k] || g->l->v[k].kind == ISM_LINE_REGULAR)
+                continue;
+            for (int s = 0; s < 2; s++) {
+                int e = (int)(2 * k) + s;
+                if (g->node[e] == pt && via[g->node[e ^ 1]] == -2) {
+                    via[g->node[e ^ 1]] = e;
+                    queue[tail++] = g->node[e ^ 1];
+                }
+            }
+        }
+    }
+    bool found = via[to] != -2;
+    if (found) {
+        /* collect the path backwards from `to`, then append its inner points in order */
+        int path[256], np = 0;
+        for (int pt = to; pt != from && np < 256; pt = g->node[via[pt]])
+            path[np++] = via[pt];
+        for (int i = np - 1; i >= 0; i--) {
+            g->used[path[i] >> 1] = true;
+            if (i > 0)
+                *ok = *ok && push_loop_point(out, end_point(g->l, path[i] ^ 1));
+        }
+    }
+    free(via);
+    free(queue);
+    return found;
+}
+
+/* A chain from a terminal (or dangling) end, closed through shared lines when possible. */
+static bool stitch_chain(graph *g, int e0, ism_loops *out)
+{
+    size_t start = out->npts;
+    bool closed, ok;
+    int last = walk_chain(g, e0, out, &closed, &ok);
+    if (!ok)
+        return false;
+    if (!closed)
+        closed = close_with_shared(g, g->node[last], g->node[e0], out, &ok);
+    return ok && close_loop(out, start, closed);
+}
+
+/* Shared lines no chain used: one-edge polygons, one per distinct pair of end points. */
+static bool leftover_shared(graph *g, ism_loops *out)
+{
+    for (size_t k = 0; k < g->l->n; k++) {
+        if (g->used[k] || g->l->v[k].kind == ISM_LINE_REGULAR)
+            continue;
+        g->used[k] = true;
+        int a = g->node[2 * k], b = g->node[2 * k + 1];
+        for (size_t j = k + 1; j < g->l->n; j++) { /* its copies */
+            int c = g->node[2 * j], d = g->node[2 * j + 1];
+            if (!g->used[j] && g->l->v[j].kind != ISM_LINE_REGULAR &&
+                ((c == a && d == b) || (c == b && d == a)))
+                g->used[j] = true;
+        }
+        size_t start = out->npts;
+        if (!push_loop_point(out, &g->l->v[k].a) || !push_loop_point(out, &g->l->v[k].b) ||
+            !close_loop(out, start, true))
+            return false;
+    }
+    return true;
 }
 
 bool ism_stitch(const ism_flines *l, ism_loops *out)
@@ -153,36 +280,21 @@ bool ism_stitch(const ism_flines *l, ism_loops *out)
     size_t ne = 2 * l->n;
     if (ne == 0)
         return true;
-    end_ref *refs = malloc(ne * sizeof *refs);
-    int *partner = malloc(ne * sizeof *partner);
-    bool *used = calloc(l->n, sizeof *used);
-    bool ok = refs && partner && used;
-    if (!ok)
-        goto done;
-    for (size_t e = 0; e < ne; e++) {
-        memcpy(refs[e].p, end_point(l, (int)e)->p, sizeof refs[e].p);
-        refs[e].end = (int)e;
-        partner[e] = -1;
-    }
-    qsort(refs, ne, sizeof *refs, cmp_end);
-    for (size_t i = 0; i < ne;) {
-        size_t j = i + 1;
-        while (j < ne && memcmp(refs[j].p, refs[i].p, sizeof refs[i].p) == 0)
-            j++;
-        pair_node(l, refs + i, (int)(j - i), partner);
-        i = j;
-    }
-    /* open chains first, from a dangling end, so each is walked whole */
+    graph g;
+    memset(&g, 0, sizeof g);
+    bool ok = build_graph(&g, l);
+    /* chains that start at a terminal point or a dangling end */
     for (size_t e = 0; e < ne && ok; e++)
-        if (partner[e] < 0 && !used[e >> 1])
-            ok = walk(l, partner, used, (int)e, out);
+        if (!is_shared(l, (int)e) && !g.used[e >> 1] &&
+            (g.terminal[g.node[e]] || g.partner[e] < 0))
+            ok = stitch_chain(&g, (int)e, out);
+    /* closed loops of single-polygon lines */
     for (size_t k = 0; k < l->n && ok; k++)
-        if (!used[k])
-            ok = walk(l, partner, used, (int)(2 * k), out);
-done:
-    free(refs);
-    free(partner);
-    free(used);
+        if (!g.used[k] && l->v[k].kind == ISM_LINE_REGULAR)
+            ok = stitch_chain(&g, (int)(2 * k), out);
+    if (ok)
+        ok = leftover_shared(&g, out);
+    free_graph(&g);
     return ok;
 }
 

@@ -83,8 +83,9 @@ static bool reversed(const ism_fpoint *p, size_t n)
     return ism_dot3(nrm, g) < 0;
 }
 
-/* The polygon's centre moved onto f = 0 (when Newton converges close by). */
-static void centre_point(ism_sampler *s, const ism_fpoint *p, size_t n, double reach,
+/* The polygon's centre moved onto f = 0; false when Newton does not land on the surface
+ * within reach (near singular points), and the polygon is then fanned from a corner. */
+static bool centre_point(ism_sampler *s, const ism_fpoint *p, size_t n, double reach,
                          ism_fpoint *c)
 {
     double m[3] = {0, 0, 0};
@@ -101,10 +102,53 @@ static void centre_point(ism_sampler *s, const ism_fpoint *p, size_t n, double r
             q[k] -= f * g[k] / gg;
     }
     double moved = ism_dist3(q, m);
-    bool ok = isfinite(moved) && moved <= reach;
-    memcpy(c->p, ok ? q : m, sizeof c->p);
-    ism_sample_grad(s, c->p, c->g);
+    if (!isfinite(moved) || moved > reach)
+        return false;
+    memcpy(c->p, q, sizeof c->p);
+    double f = ism_sample_grad(s, c->p, c->g);
+    double gl = ism_norm3(c->g);
     c->flags = ISM_FP_INTERIOR;
+    return gl > 0 && fabs(f) / gl <= 1e-6 * reach;
+}
+
+static double min_angle_cos(const double *a, const double *b, const double *c)
+{
+    const double *v[3] = {a, b, c};
+    double worst = -1;
+    for (int k = 0; k < 3; k++) {
+        const double *o = v[k], *p = v[(k + 1) % 3], *q = v[(k + 2) % 3];
+        double u[3] = {p[0] - o[0], p[1] - o[1], p[2] - o[2]};
+        double w[3] = {q[0] - o[0], q[1] - o[1], q[2] - o[2]};
+        double nu = ism_norm3(u), nw = ism_norm3(w);
+        double cs = nu > 0 && nw > 0 ? ism_dot3(u, w) / (nu * nw) : 1;
+        if (cs > worst)
+            worst = cs;
+    }
+    return worst; /* cos of the smallest angle: larger is worse */
+}
+
+/* Fans the polygon from the corner whose fan has the largest smallest angle. */
+static bool fan_from_best_corner(ism_cell_out *out, size_t base, size_t n)
+{
+    const ism_fpoint *q = out->verts + base;
+    size_t best = 0;
+    double best_cos = 2;
+    for (size_t c = 0; c < n; c++) {
+        double worst = -1;
+        for (size_t i = 1; i + 1 < n; i++) {
+            double w = min_angle_cos(q[c].p, q[(c + i) % n].p, q[(c + i + 1) % n].p);
+            if (w > worst)
+                worst = w;
+        }
+        if (worst < best_cos)
+            best_cos = worst, best = c;
+    }
+    uint32_t b = (uint32_t)base;
+    for (size_t i = 1; i + 1 < n; i++)
+        if (!push_tri(out, b + (uint32_t)best, b + (uint32_t)((best + i) % n),
+                      b + (uint32_t)((best + i + 1) % n)))
+            return false;
+    return true;
 }
 
 bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
@@ -129,7 +173,8 @@ bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, doubl
         return push_tri(out, b + 1, b + 2, b + 3) && push_tri(out, b + 1, b + 3, b);
     }
     ism_fpoint c;
-    centre_point(s, out->verts + base, n, reach, &c);
+    if (!centre_point(s, out->verts + base, n, reach, &c))
+        return fan_from_best_corner(out, base, n);
     uint32_t ci;
     if (!push_vert(out, &c, &ci))
         return false;

@@ -1,0 +1,155 @@
+/* poly_fixture.c — mesh measurements for the polygoniser tests, written independently of the
+ * analysis module: sorted edge lists, union-find, triangle areas, f at every vertex. */
+#include "poly_fixture.h"
+
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "core/eval/eval.h"
+
+int pf_quick(void)
+{
+    const char *q = getenv("ISOMESH_TEST_QUICK");
+    return q && *q && strcmp(q, "0") != 0;
+}
+
+ism_tape *pf_compile(const pf_surface *s)
+{
+    ism_error err;
+    ism_tape *t = ism_tape_compile(s->expr, s->params, s->nparams, s->lets, s->nlets, NULL, &err);
+    cr_assert(t, "compile %s: %s (col %d)", s->expr, err.message, err.column);
+    return t;
+}
+
+void pf_run(const ism_tape *t, const double box[6], int dmin, int dmax, int threads,
+            ism_mesh *m, ism_poly_stats *st)
+{
+    ism_poly_options o;
+    ism_poly_options_default(&o);
+    memcpy(o.box, box, sizeof o.box);
+    o.min_depth = dmin;
+    o.max_depth = dmax;
+    o.threads = threads;
+    ism_error err;
+    ism_mesh_init(m);
+    enum ism_poly_status s = ism_polygonise(t, &o, m, st, &err);
+    cr_assert_eq(s, ISM_POLY_OK, "polygonise failed: %s", err.message);
+}
+
+double pf_cell(const double box[6], int d)
+{
+    double s = box[3] - box[0];
+    for (int k = 1; k < 3; k++)
+        if (box[3 + k] - box[k] < s)
+            s = box[3 + k] - box[k];
+    return ldexp(s, -d);
+}
+
+typedef struct edge {
+    uint32_t a, b;
+} edge;
+
+static int cmp_edge(const void *x, const void *y)
+{
+    const edge *p = x, *q = y;
+    if (p->a != q->a)
+        return p->a < q->a ? -1 : 1;
+    return (p->b > q->b) - (p->b < q->b);
+}
+
+static edge *sorted_edges(const ism_mesh *m)
+{
+    edge *e = malloc((m->ntris * 3 + 1) * sizeof *e);
+    cr_assert(e);
+    for (size_t t = 0; t < m->ntris; t++)
+        for (int k = 0; k < 3; k++) {
+            uint32_t a = m->tri[3 * t + k], b = m->tri[3 * t + (k + 1) % 3];
+            e[3 * t + k] = a < b ? (edge){a, b} : (edge){b, a};
+        }
+    qsort(e, m->ntris * 3, sizeof *e, cmp_edge);
+    return e;
+}
+
+static uint32_t find(uint32_t *p, uint32_t x)
+{
+    while (p[x] != x)
+        x = p[x] = p[p[x]];
+    return x;
+}
+
+void pf_measure(const ism_mesh *m, const ism_tape *t, pf_props *p)
+{
+    memset(p, 0, sizeof *p);
+    p->faces = m->ntris;
+    edge *e = sorted_edges(m);
+    uint32_t *parent = malloc((m->nverts + 1) * sizeof *parent);
+    bool *used = calloc(m->nverts + 1, 1);
+    cr_assert(parent && used);
+    for (uint32_t v = 0; v < m->nverts; v++)
+        parent[v] = v;
+    size_t n = m->ntris * 3;
+    for (size_t i = 0; i < n;) {
+        size_t j = i;
+        while (j < n && e[j].a == e[i].a && e[j].b == e[i].b)
+            j++;
+        size_t c = j - i;
+        p->edges++;
+        if (c == 1)
+            p->boundary_edges++;
+        else if (c == 2)
+            p->manifold_edges++;
+        else
+            p->nonmanifold_edges++;
+        parent[find(parent, e[i].a)] = find(parent, e[i].b);
+        i = j;
+    }
+    for (size_t k = 0; k < m->ntris * 3; k++)
+        used[m->tri[k]] = true;
+    for (uint32_t v = 0; v < m->nverts; v++)
+        if (used[v]) {
+            p->verts_used++;
+            if (find(parent, v) == v)
+                p->components++;
+        }
+    p->euler = (long)p->verts_used - (long)p->edges + (long)p->faces;
+    for (size_t k = 0; k < m->ntris; k++) {
+        const double *a = m->pos + 3 * m->tri[3 * k], *b = m->pos + 3 * m->tri[3 * k + 1],
+                     *c = m->pos + 3 * m->tri[3 * k + 2];
+        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+        double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        double x[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+        p->area += 0.5 * sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+    }
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    for (uint32_t v = 0; v < m->nverts; v++) {
+        double g[3];
+        const double *q = m->pos + 3 * v;
+        double f = ism_eval_gradient(t, ws, q[0], q[1], q[2], g);
+        double gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        if (fabs(f) > p->max_abs_f)
+            p->max_abs_f = fabs(f);
+        if (gl > 1e-9 && fabs(f) / gl > p->max_dist)
+            p->max_dist = fabs(f) / gl;
+    }
+    ism_eval_ws_free(ws);
+    free(e);
+    free(parent);
+    free(used);
+}
+
+size_t pf_count_nm_edges(const ism_mesh *m, bool (*pred)(const double a[3], const double b[3]))
+{
+    edge *e = sorted_edges(m);
+    size_t n = m->ntris * 3, count = 0;
+    for (size_t i = 0; i < n;) {
+        size_t j = i;
+        while (j < n && e[j].a == e[i].a && e[j].b == e[i].b)
+            j++;
+        if (j - i > 2 && pred(m->pos + 3 * e[i].a, m->pos + 3 * e[i].b))
+            count++;
+        i = j;
+    }
+    free(e);
+    return count;
+}

@@ -1,0 +1,48 @@
+/* poly_fixture.h — helpers for the polygoniser tests: compile a surface, polygonise it, and
+ * measure the mesh independently of core/analysis (edge incidence, Euler characteristic,
+ * components, area, distance of vertices to the surface). */
+#ifndef POLY_FIXTURE_H
+#define POLY_FIXTURE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include "core/expr/expr.h"
+#include "core/mesh/mesh.h"
+#include "core/octree/polygonise.h"
+
+typedef struct pf_surface {
+    const char *expr;
+    const ism_param *params;
+    size_t nparams;
+    const ism_let *lets;
+    size_t nlets;
+} pf_surface;
+
+typedef struct pf_props {
+    size_t verts_used, edges, faces;
+    size_t boundary_edges, manifold_edges, nonmanifold_edges;
+    long euler;
+    size_t components;          /* connected through shared edges */
+    double area;
+    double max_dist;            /* max over vertices of |f| / |∇f| (vertices with ∇f != 0) */
+    double max_abs_f;           /* max |f| over all vertices */
+} pf_props;
+
+/* 1 when ISOMESH_TEST_QUICK is set (sanitizer runs): tests lower their depths by this. */
+int pf_quick(void);
+
+ism_tape *pf_compile(const pf_surface *s);
+
+/* Polygonises with the given box and depths (other options default); asserts success. */
+void pf_run(const ism_tape *t, const double box[6], int dmin, int dmax, int threads,
+            ism_mesh *m, ism_poly_stats *st);
+
+void pf_measure(const ism_mesh *m, const ism_tape *t, pf_props *p);
+
+/* Non-manifold edges (more than two triangles) whose two end points satisfy pred. */
+size_t pf_count_nm_edges(const ism_mesh *m, bool (*pred)(const double a[3], const double b[3]));
+
+/* Finest cell size of the box at depth d (the smallest side / 2^d). */
+double pf_cell(const double box[6], int d);
+
+#endif

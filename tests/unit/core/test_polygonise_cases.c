@@ -1,0 +1,159 @@
+/* test_polygonise_cases.c — behaviour around the edges of the polygoniser: near-touching
+ * parts stay apart, an empty box gives an empty mesh, adaptivity pays, output is
+ * deterministic and independent of the thread count, budgets and bad options fail clearly. */
+#include <criterion/criterion.h>
+#include <string.h>
+#include "poly_fixture.h"
+
+static const pf_surface two_spheres = {
+    "min((x - 1.0005)^2 + y^2 + z^2 - 1, (x + 1.0005)^2 + y^2 + z^2 - 1)", NULL, 0, NULL, 0};
+static const double two_box[6] = {-2.3, -1.3, -1.2, 2.4, 1.4, 1.3};
+static const pf_surface gyroid = {
+    "max(sin(4*x)*cos(4*y) + sin(4*y)*cos(4*z) + sin(4*z)*cos(4*x), x^2 + y^2 + z^2 - 1.96)",
+    NULL, 0, NULL, 0};
+static const double cube15[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
+
+Test(cases, spheres_a_thousandth_apart_stay_two)
+{
+    ism_tape *t = pf_compile(&two_spheres);
+    for (int d = 6; d <= 8 - pf_quick(); d++) {
+        ism_mesh m;
+        ism_poly_stats st;
+        pf_run(t, two_box, 3, d, 0, &m, &st);
+        pf_props p;
+        pf_measure(&m, t, &p);
+        cr_expect_eq(p.components, 2, "depth %d: %zu components", d, p.components);
+        cr_expect_eq(p.euler, 4, "depth %d: Euler characteristic %ld (two spheres: 4)", d, p.euler);
+        cr_expect_eq(p.boundary_edges + p.nonmanifold_edges, 0, "depth %d: open or joined", d);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
+
+Test(cases, empty_box_gives_empty_mesh)
+{
+    const pf_surface s = {"x^2 + y^2 + z^2 - 1", NULL, 0, NULL, 0};
+    const double box[6] = {2, 2, 2, 3, 3, 3};
+    ism_tape *t = pf_compile(&s);
+    ism_mesh m;
+    ism_poly_stats st;
+    pf_run(t, box, 3, 7, 0, &m, &st);
+    cr_expect_eq(m.ntris, 0);
+    cr_expect_eq(m.nverts, 0);
+    cr_expect_eq(st.plotting_nodes, 0, "no node may survive the interval test");
+    cr_expect_eq(st.nodes_excluded, 1, "the root alone is excluded");
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+}
+
+Test(cases, adaptive_beats_uniform)
+{
+    const pf_surface s = {"x^2 + y^2 + z^2 - 1", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    int d = 7 - pf_quick();
+    ism_mesh a, u;
+    ism_poly_stats sa, su;
+    pf_run(t, cube15, 3, d, 0, &a, &sa);
+    pf_run(t, cube15, d, d, 0, &u, &su);
+    cr_expect_lt(a.ntris * 4, u.ntris, "adaptive %zu triangles vs uniform %zu", a.ntris, u.ntris);
+    ism_mesh_free(&a);
+    ism_mesh_free(&u);
+    ism_tape_free(t);
+}
+
+static void expect_same_mesh(const ism_mesh *a, const ism_mesh *b, const char *what)
+{
+    cr_assert_eq(a->nverts, b->nverts, "%s: %zu vs %zu vertices", what, a->nverts, b->nverts);
+    cr_assert_eq(a->ntris, b->ntris, "%s: %zu vs %zu triangles", what, a->ntris, b->ntris);
+    cr_expect(memcmp(a->pos, b->pos, a->nverts * 3 * sizeof *a->pos) == 0, "%s: positions", what);
+    cr_expect(memcmp(a->normal, b->normal, a->nverts * 3 * sizeof *a->normal) == 0, "%s: normals",
+              what);
+    cr_expect(memcmp(a->tri, b->tri, a->ntris * 3 * sizeof *a->tri) == 0, "%s: triangles", what);
+}
+
+Test(cases, deterministic_and_thread_independent)
+{
+    ism_tape *t = pf_compile(&gyroid);
+    int d = 6 - pf_quick();
+    ism_mesh a, b, c;
+    ism_poly_stats st;
+    pf_run(t, cube15, 3, d, 2, &a, &st);
+    pf_run(t, cube15, 3, d, 2, &b, &st);
+    pf_run(t, cube15, 3, d, 1, &c, &st);
+    cr_assert_gt(a.ntris, 1000);
+    expect_same_mesh(&a, &b, "two runs");
+    expect_same_mesh(&a, &c, "one thread vs two");
+    ism_mesh_free(&a);
+    ism_mesh_free(&b);
+    ism_mesh_free(&c);
+    ism_tape_free(t);
+}
+
+Test(cases, triangle_budget_is_a_clear_error)
+{
+    ism_tape *t = pf_compile(&gyroid);
+    ism_poly_options o;
+    ism_poly_options_default(&o);
+    memcpy(o.box, cube15, sizeof o.box);
+    o.max_depth = 6;
+    o.max_triangles = 1000;
+    ism_mesh m;
+    ism_mesh_init(&m);
+    ism_poly_stats st;
+    ism_error err;
+    cr_expect_eq(ism_polygonise(t, &o, &m, &st, &err), ISM_POLY_TOO_BIG);
+    cr_expect(strstr(err.message, "budget") != NULL, "message: %s", err.message);
+    cr_expect_eq(m.ntris, 0, "no partial mesh");
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+}
+
+Test(cases, cancellation_stops_the_run)
+{
+    ism_tape *t = pf_compile(&gyroid);
+    ism_poly_options o;
+    ism_poly_options_default(&o);
+    memcpy(o.box, cube15, sizeof o.box);
+    volatile int cancel = 1;
+    o.cancel = &cancel;
+    ism_mesh m;
+    ism_mesh_init(&m);
+    ism_poly_stats st;
+    ism_error err;
+    cr_expect_eq(ism_polygonise(t, &o, &m, &st, &err), ISM_POLY_CANCELLED);
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+}
+
+Test(cases, bad_options_name_the_field)
+{
+    const pf_surface s = {"x^2 + y^2 + z^2 - 1", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    ism_poly_options o;
+    ism_error err;
+    ism_mesh m;
+    ism_poly_stats st;
+    ism_mesh_init(&m);
+
+    ism_poly_options_default(&o);
+    o.box[3] = o.box[0];
+    cr_expect_eq(ism_polygonise(t, &o, &m, &st, &err), ISM_POLY_BAD_OPTIONS);
+    cr_expect(strstr(err.message, "box") != NULL, "%s", err.message);
+
+    ism_poly_options_default(&o);
+    o.max_depth = 17;
+    cr_expect_eq(ism_polygonise(t, &o, &m, &st, &err), ISM_POLY_BAD_OPTIONS);
+    cr_expect(strstr(err.message, "depth.max") != NULL, "%s", err.message);
+
+    ism_poly_options_default(&o);
+    o.min_depth = 5;
+    o.max_depth = 4;
+    cr_expect_eq(ism_polygonise(t, &o, &m, &st, &err), ISM_POLY_BAD_OPTIONS);
+
+    ism_poly_options_default(&o);
+    o.gradient_test = 2;
+    cr_expect_eq(ism_polygonise(t, &o, &m, &st, &err), ISM_POLY_BAD_OPTIONS);
+    cr_expect(strstr(err.message, "gradient_test") != NULL, "%s", err.message);
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+}

@@ -1,0 +1,126 @@
+/* test_polygonise_nonmanifold.c — the seed paper's surfaces: the polygoniser survives them,
+ * keeps every vertex on the surface, and puts non-manifold edges (more than two triangles)
+ * where the mathematics puts the self-intersections: Steiner's surface along the three
+ * coordinate axes, the Klein bottle along its curve in the plane z = 0. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include "poly_fixture.h"
+
+static const ism_let kummer_lets[] = {
+    {"lambda", "(3*mu2 - 1)/(3 - mu2)"}, {"p", "w - z - sqrt(2)*x"}, {"q", "w - z + sqrt(2)*x"},
+    {"r", "w + z + sqrt(2)*y"}, {"s", "w + z - sqrt(2)*y"}};
+static const char kummer_expr[] = "(x^2 + y^2 + z^2 - mu2)^2 - lambda*p*q*r*s";
+static const ism_param kummer4[] = {{"mu2", 0.6667}, {"w", 1}};
+static const ism_param kummer16[] = {{"mu2", 2}, {"w", 1}};
+static const ism_param cyclide_p[] = {{"a", 10}, {"r", 2}, {"f", 2}};
+static const char cyclide_expr[] =
+    "(x^2 + y^2 + z^2 + a^2 - f^2 - r^2)^2 - 4*(a*x - f*r)^2 - 4*(a^2 - f^2)*y^2";
+static const char klein_expr[] =
+    "(x^2 + y^2 + z^2 + 2*y - 1)*((x^2 + y^2 + z^2 - 2*y - 1)^2 - 8*z^2) + "
+    "16*x*z*(x^2 + y^2 + z^2 - 2*y - 1)";
+static const char steiner_expr[] = "x^2*y^2 + y^2*z^2 + z^2*x^2 + x*y*z";
+
+/* Polygonises, checks that vertices lie on the surface (|f| / |∇f| within a fraction of
+ * the finest cell where ∇f does not vanish, |f| tiny where it does) and returns the mesh. */
+static ism_tape *run_paper(const pf_surface *s, const double box[6], int dmax, ism_mesh *m)
+{
+    dmax -= pf_quick();
+    ism_tape *t = pf_compile(s);
+    ism_poly_stats st;
+    pf_run(t, box, 3, dmax, 0, m, &st);
+    pf_props p;
+    pf_measure(m, t, &p);
+    cr_assert_gt(p.faces, 500, "%s: only %zu triangles", s->expr, p.faces);
+    double cell = pf_cell(box, dmax);
+    cr_expect_leq(p.max_dist, 0.05 * cell, "%s: vertex %g off the surface (cell %g)", s->expr,
+                  p.max_dist, cell);
+    cr_expect_eq(st.open_chains, 0, "%s: %llu open chains", s->expr,
+                 (unsigned long long)st.open_chains);
+    return t;
+}
+
+static bool on_x_axis(const double a[3], const double b[3])
+{
+    return fabs(a[1]) + fabs(a[2]) + fabs(b[1]) + fabs(b[2]) < 1e-12;
+}
+static bool on_y_axis(const double a[3], const double b[3])
+{
+    return fabs(a[0]) + fabs(a[2]) + fabs(b[0]) + fabs(b[2]) < 1e-12;
+}
+static bool on_z_axis(const double a[3], const double b[3])
+{
+    return fabs(a[0]) + fabs(a[1]) + fabs(b[0]) + fabs(b[1]) < 1e-12;
+}
+static bool in_plane_z0(const double a[3], const double b[3])
+{
+    return fabs(a[2]) < 1e-9 && fabs(b[2]) < 1e-9;
+}
+static bool anywhere(const double a[3], const double b[3])
+{
+    (void)a, (void)b;
+    return true;
+}
+
+Test(paper, steiner_double_lines_on_the_axes)
+{
+    const pf_surface s = {steiner_expr, NULL, 0, NULL, 0};
+    const double box[6] = {-1, -1, -1, 1, 1, 1};
+    ism_mesh m;
+    ism_tape *t = run_paper(&s, box, 6, &m);
+    size_t nx = pf_count_nm_edges(&m, on_x_axis), ny = pf_count_nm_edges(&m, on_y_axis),
+           nz = pf_count_nm_edges(&m, on_z_axis);
+    /* the double lines run from the triple point to the pinch points at ±1/2 */
+    double cell = pf_cell(box, 6 - pf_quick());
+    size_t expect = (size_t)(2 * 0.5 / cell) - 4;
+    cr_expect_geq(nx, expect, "x axis: %zu non-manifold edges, expected >= %zu", nx, expect);
+    cr_expect_geq(ny, expect, "y axis: %zu non-manifold edges, expected >= %zu", ny, expect);
+    cr_expect_geq(nz, expect, "z axis: %zu non-manifold edges, expected >= %zu", nz, expect);
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+}
+
+Test(paper, klein_bottle_self_intersection_in_z0)
+{
+    const pf_surface s = {klein_expr, NULL, 0, NULL, 0};
+    const double box[6] = {-4, -4, -4, 4, 4, 4};
+    ism_mesh m;
+    ism_tape *t = run_paper(&s, box, 7, &m);
+    size_t in_plane = pf_count_nm_edges(&m, in_plane_z0), all = pf_count_nm_edges(&m, anywhere);
+    /* the curve x² + y² - 2y - 1 = 0, z = 0 is a circle of radius √2: length 2π√2 */
+    double cell = pf_cell(box, 7 - pf_quick());
+    double expect = 0.5 * 2 * M_PI * sqrt(2) / cell;
+    cr_expect_geq((double)in_plane, expect, "%zu non-manifold edges in z = 0, expected >= %g",
+                  in_plane, expect);
+    cr_expect_geq((double)in_plane, 0.8 * (double)all,
+                  "only %zu of %zu non-manifold edges lie in z = 0", in_plane, all);
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+}
+
+Test(paper, horn_cyclide_one_piece)
+{
+    const pf_surface s = {cyclide_expr, cyclide_p, 3, NULL, 0};
+    const double box[6] = {-14, -16, -16, 18, 16, 16};
+    ism_mesh m;
+    ism_tape *t = run_paper(&s, box, 7, &m);
+    pf_props p;
+    pf_measure(&m, t, &p);
+    cr_expect_eq(p.components, 1, "the horn cyclide fell into %zu pieces", p.components);
+    cr_expect_eq(p.boundary_edges, 0, "%zu boundary edges on a closed surface", p.boundary_edges);
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+}
+
+Test(paper, kummer_both_cases)
+{
+    const double box[6] = {-3, -3, -3, 3, 3, 3};
+    const pf_surface k4 = {kummer_expr, kummer4, 2, kummer_lets, 5};
+    const pf_surface k16 = {kummer_expr, kummer16, 2, kummer_lets, 5};
+    ism_mesh m;
+    ism_tape *t = run_paper(&k4, box, 7, &m);
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+    t = run_paper(&k16, box, 7, &m);
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+}
