@@ -1,0 +1,101 @@
+/* cache.c — the tier stack of cache.h: lookups that fall through and promote, stores that go
+ * everywhere, and the entry-name rules every tier relies on (no tier ever sees a name that
+ * could escape a directory). */
+#include "server/common/cache.h"
+
+#include <stdio.h>
+#include <string.h>
+
+static const char *const KINDS[] = {"drc", "glb", "ply", "obj", "stl",
+                                    "stats.json", "features.json", "request.json"};
+
+bool ism_cache_key_valid(const char *key)
+{
+    size_t i = 0;
+    for (; key[i]; i++)
+        if (!((key[i] >= '0' && key[i] <= '9') || (key[i] >= 'a' && key[i] <= 'f')))
+            return false;
+    return i == 64;
+}
+
+bool ism_cache_name_valid(const char *name)
+{
+    if (strlen(name) < 66 || name[64] != '.')
+        return false;
+    char key[65];
+    memcpy(key, name, 64);
+    key[64] = 0;
+    if (!ism_cache_key_valid(key))
+        return false;
+    for (size_t i = 0; i < sizeof KINDS / sizeof KINDS[0]; i++)
+        if (strcmp(name + 65, KINDS[i]) == 0)
+            return true;
+    return false;
+}
+
+bool ism_cache_name(char out[ISM_CACHE_NAME_MAX], const char *key, const char *ext)
+{
+    int n = snprintf(out, ISM_CACHE_NAME_MAX, "%s.%s", key, ext);
+    return n > 0 && n < ISM_CACHE_NAME_MAX && ism_cache_name_valid(out);
+}
+
+bool ism_cache_add_tier(ism_cache *c, ism_cache_tier *t)
+{
+    if (!t || c->ntiers >= ISM_CACHE_MAX_TIERS)
+        return false;
+    c->tiers[c->ntiers++] = t;
+    return true;
+}
+
+ism_blob *ism_cache_get(ism_cache *c, const char *name, int *tier)
+{
+    if (tier)
+        *tier = -1;
+    if (!ism_cache_name_valid(name))
+        return NULL;
+    for (size_t i = 0; i < c->ntiers; i++) {
+        ism_blob *b = c->tiers[i]->get(c->tiers[i], name);
+        if (b) {
+            atomic_fetch_add(&c->tiers[i]->counters.hits, 1);
+            for (size_t j = 0; j < i; j++)
+                c->tiers[j]->put(c->tiers[j], name, b);
+            if (tier)
+                *tier = (int)i;
+            return b;
+        }
+        atomic_fetch_add(&c->tiers[i]->counters.misses, 1);
+    }
+    return NULL;
+}
+
+ism_blob *ism_cache_get_fast(ism_cache *c, const char *name)
+{
+    if (c->ntiers == 0 || !ism_cache_name_valid(name))
+        return NULL;
+    return c->tiers[0]->get(c->tiers[0], name);
+}
+
+bool ism_cache_has(ism_cache *c, const char *name)
+{
+    if (!ism_cache_name_valid(name))
+        return false;
+    for (size_t i = 0; i < c->ntiers; i++)
+        if (c->tiers[i]->has(c->tiers[i], name))
+            return true;
+    return false;
+}
+
+void ism_cache_put(ism_cache *c, const char *name, ism_blob *b)
+{
+    if (!b || !ism_cache_name_valid(name))
+        return;
+    for (size_t i = 0; i < c->ntiers; i++)
+        c->tiers[i]->put(c->tiers[i], name, b);
+}
+
+void ism_cache_close(ism_cache *c)
+{
+    for (size_t i = c->ntiers; i-- > 0;)
+        c->tiers[i]->close(c->tiers[i]);
+    c->ntiers = 0;
+}

@@ -1,0 +1,393 @@
+/* cache_disk.c — the disk tier (cache_disk.h): checked reads on the caller's thread, atomic
+ * checksummed writes on one background writer thread fed by a byte-bounded queue. */
+#include "server/common/cache_disk.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <pthread.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "proto/frame.h"
+#include "server/common/log.h"
+
+#define HEADER_SIZE 24
+#define FILE_VERSION 1
+#define MAX_ENTRY ((uint64_t)2 << 30) /* 2 GiB: larger files are not ours */
+#define FAILURE_LOG_INTERVAL_S 10
+
+typedef struct pending {
+    struct pending *next;
+    ism_blob *blob;
+    char name[ISM_CACHE_NAME_MAX];
+} pending;
+
+typedef struct disk_tier {
+    ism_cache_tier base;
+    int root_fd;            /* <dir>/v1, or -1 when unusable */
+    char root_path[4096];
+    bool usable;
+    pthread_t writer;
+    bool writer_started;
+    pthread_mutex_t lock;
+    pthread_cond_t wake, idle;
+    pending *head, *tail;
+    size_t pending_bytes, max_pending;
+    bool writing, stopping;
+    time_t last_failure_log;
+    unsigned long long tmp_seq;
+} disk_tier;
+
+/* ---- helpers ------------------------------------------------------------------------- */
+
+static void put32(unsigned char *p, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+
+static uint32_t get32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+static bool rel_path(char out[ISM_CACHE_NAME_MAX + 4], const char *name)
+{
+    if (!ism_cache_name_valid(name))
+        return false;
+    snprintf(out, ISM_CACHE_NAME_MAX + 4, "%.2s/%s", name, name);
+    return true;
+}
+
+static bool mkdir_p(const char *path)
+{
+    char buf[4096];
+    if (snprintf(buf, sizeof buf, "%s", path) >= (int)sizeof buf)
+        return false;
+    for (char *p = buf + 1; *p; p++) {
+        if (*p == '/') {
+            *p = 0;
+            if (mkdir(buf, 0755) != 0 && errno != EEXIST)
+                return false;
+            *p = '/';
+        }
+    }
+    return mkdir(buf, 0755) == 0 || errno == EEXIST;
+}
+
+static bool pread_all(int fd, void *buf, size_t n, off_t off)
+{
+    unsigned char *p = buf;
+    while (n) {
+        ssize_t got = pread(fd, p, n, off);
+        if (got < 0 && errno == EINTR)
+            continue;
+        if (got <= 0)
+            return false;
+        p += got;
+        n -= (size_t)got;
+        off += got;
+    }
+    return true;
+}
+
+static bool write_all(int fd, const void *buf, size_t n)
+{
+    const unsigned char *p = buf;
+    while (n) {
+        ssize_t w = write(fd, p, n);
+        if (w < 0 && errno == EINTR)
+            continue;
+        if (w <= 0)
+            return false;
+        p += w;
+        n -= (size_t)w;
+    }
+    return true;
+}
+
+static void log_store_failure(disk_tier *d, const char *name, const char *what, int err)
+{
+    atomic_fetch_add(&d->base.counters.store_failures, 1);
+    time_t now = time(NULL);
+    pthread_mutex_lock(&d->lock);
+    bool quiet = d->last_failure_log && now - d->last_failure_log < FAILURE_LOG_INTERVAL_S;
+    if (!quiet)
+        d->last_failure_log = now;
+    pthread_mutex_unlock(&d->lock);
+    if (quiet)
+        return;
+    ism_log_field f[] = {ISM_LS("name", name), ISM_LS("what", what),
+                         ISM_LS("error", err ? strerror(err) : "-"),
+                         ISM_LS("dir", d->root_path)};
+    ism_log_fields(ISM_LOG_WARN, "cache_store_failed", f, sizeof f / sizeof f[0]);
+}
+
+/* ---- reads --------------------------------------------------------------------------- */
+
+static void drop_corrupt(disk_tier *d, const char *rel, const char *name, const char *why)
+{
+    unlinkat(d->root_fd, rel, 0);
+    atomic_fetch_add(&d->base.counters.corrupt, 1);
+    ism_log_field f[] = {ISM_LS("name", name), ISM_LS("why", why), ISM_LS("dir", d->root_path)};
+    ism_log_fields(ISM_LOG_WARN, "cache_corrupt_entry_dropped", f, sizeof f / sizeof f[0]);
+}
+
+static ism_blob *disk_get(ism_cache_tier *t, const char *name)
+{
+    disk_tier *d = (disk_tier *)t;
+    char rel[ISM_CACHE_NAME_MAX + 4];
+    if (d->root_fd < 0 || !rel_path(rel, name))
+        return NULL;
+    int fd = openat(d->root_fd, rel, O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+    if (fd < 0)
+        return NULL;
+    ism_blob *b = NULL;
+    const char *why = NULL;
+    struct stat st;
+    unsigned char hdr[HEADER_SIZE];
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        why = "not a regular file";
+    } else if ((uint64_t)st.st_size < HEADER_SIZE || (uint64_t)st.st_size > MAX_ENTRY + HEADER_SIZE) {
+        why = "bad size";
+    } else if (!pread_all(fd, hdr, HEADER_SIZE, 0)) {
+        why = "short read";
+    } else if (memcmp(hdr, "ISMC", 4) != 0 || get32(hdr + 4) != FILE_VERSION || get32(hdr + 20) != 0) {
+        why = "bad header";
+    } else {
+        uint64_t len = (uint64_t)get32(hdr + 8) | (uint64_t)get32(hdr + 12) << 32;
+        if (len != (uint64_t)st.st_size - HEADER_SIZE) {
+            why = "length does not match the file size";
+        } else if (!(b = ism_blob_new((size_t)len))) {
+            why = NULL; /* out of memory: a miss, not corruption */
+        } else if (!pread_all(fd, b->data, (size_t)len, HEADER_SIZE)) {
+            why = "short read";
+        } else if (ism_crc32c(ism_crc32c(0, hdr, 16), b->data, (size_t)len) != get32(hdr + 16)) {
+            why = "checksum mismatch";
+        }
+    }
+    close(fd);
+    if (why) {
+        ism_blob_unref(b);
+        drop_corrupt(d, rel, name, why);
+        return NULL;
+    }
+    return b;
+}
+
+static bool disk_has(ism_cache_tier *t, const char *name)
+{
+    disk_tier *d = (disk_tier *)t;
+    char rel[ISM_CACHE_NAME_MAX + 4];
+    struct stat st;
+    return d->root_fd >= 0 && rel_path(rel, name) &&
+           fstatat(d->root_fd, rel, &st, AT_SYMLINK_NOFOLLOW) == 0 && S_ISREG(st.st_mode);
+}
+
+/* ---- writes -------------------------------------------------------------------------- */
+
+static void disk_put(ism_cache_tier *t, const char *name, ism_blob *b)
+{
+    disk_tier *d = (disk_tier *)t;
+    if (!d->usable) {
+        log_store_failure(d, name, "cache directory unusable", 0);
+        return;
+    }
+    pending *p = calloc(1, sizeof *p);
+    if (!p) {
+        log_store_failure(d, name, "out of memory", ENOMEM);
+        return;
+    }
+    snprintf(p->name, sizeof p->name, "%s", name);
+    pthread_mutex_lock(&d->lock);
+    if (d->stopping || d->pending_bytes + b->len > d->max_pending) {
+        pthread_mutex_unlock(&d->lock);
+        free(p);
+        log_store_failure(d, name, "write queue full", 0);
+        return;
+    }
+    p->blob = ism_blob_ref(b);
+    d->pending_bytes += b->len;
+    if (d->tail)
+        d->tail->next = p;
+    else
+        d->head = p;
+    d->tail = p;
+    pthread_cond_signal(&d->wake);
+    pthread_mutex_unlock(&d->lock);
+}
+
+static bool fsync_dir(int parent, const char *rel)
+{
+    int fd = openat(parent, rel, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0)
+        return false;
+    bool ok = fsync(fd) == 0;
+    close(fd);
+    return ok;
+}
+
+/* Writes one entry: temporary file, fsync, rename into its shard directory, fsync that. */
+static void store_entry(disk_tier *d, const char *name, const ism_blob *b)
+{
+    char rel[ISM_CACHE_NAME_MAX + 4];
+    if (!rel_path(rel, name))
+        return;
+    struct stat st;
+    if (fstatat(d->root_fd, rel, &st, AT_SYMLINK_NOFOLLOW) == 0)
+        return; /* content-addressed: already there */
+    unsigned char hdr[HEADER_SIZE] = {0};
+    memcpy(hdr, "ISMC", 4);
+    put32(hdr + 4, FILE_VERSION);
+    put32(hdr + 8, (uint32_t)b->len);
+    put32(hdr + 12, (uint32_t)((uint64_t)b->len >> 32));
+    put32(hdr + 16, ism_crc32c(ism_crc32c(0, hdr, 16), b->data, b->len));
+
+    char tmp[ISM_CACHE_NAME_MAX + 64];
+    snprintf(tmp, sizeof tmp, "tmp/%s.%ld.%llu.tmp", name, (long)getpid(), ++d->tmp_seq);
+    int fd = openat(d->root_fd, tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0644);
+    if (fd < 0) {
+        log_store_failure(d, name, "create", errno);
+        return;
+    }
+    const char *what = NULL;
+    int err = 0;
+    if (!write_all(fd, hdr, HEADER_SIZE) || !write_all(fd, b->data, b->len))
+        what = "write", err = errno;
+    else if (fsync(fd) != 0)
+        what = "fsync", err = errno;
+    if (close(fd) != 0 && !what)
+        what = "close", err = errno;
+    char shard[3] = {name[0], name[1], 0};
+    if (!what && mkdirat(d->root_fd, shard, 0755) != 0 && errno != EEXIST)
+        what = "mkdir", err = errno;
+    if (!what && renameat(d->root_fd, tmp, d->root_fd, rel) != 0)
+        what = "rename", err = errno;
+    if (what) {
+        unlinkat(d->root_fd, tmp, 0);
+        log_store_failure(d, name, what, err);
+        return;
+    }
+    fsync_dir(d->root_fd, shard);
+    atomic_fetch_add(&d->base.counters.stores, 1);
+}
+
+static void *writer_main(void *arg)
+{
+    disk_tier *d = arg;
+    pthread_mutex_lock(&d->lock);
+    for (;;) {
+        while (!d->head && !d->stopping)
+            pthread_cond_wait(&d->wake, &d->lock);
+        if (!d->head)
+            break; /* stopping and drained */
+        pending *p = d->head;
+        d->head = p->next;
+        if (!d->head)
+            d->tail = NULL;
+        d->writing = true;
+        pthread_mutex_unlock(&d->lock);
+        store_entry(d, p->name, p->blob);
+        pthread_mutex_lock(&d->lock);
+        d->writing = false;
+        d->pending_bytes -= p->blob->len;
+        ism_blob_unref(p->blob);
+        free(p);
+        if (!d->head)
+            pthread_cond_broadcast(&d->idle);
+    }
+    pthread_cond_broadcast(&d->idle);
+    pthread_mutex_unlock(&d->lock);
+    return NULL;
+}
+
+void ism_cache_disk_flush(ism_cache_tier *t)
+{
+    disk_tier *d = (disk_tier *)t;
+    pthread_mutex_lock(&d->lock);
+    while (d->writer_started && (d->head || d->writing))
+        pthread_cond_wait(&d->idle, &d->lock);
+    pthread_mutex_unlock(&d->lock);
+}
+
+bool ism_cache_disk_usable(const ism_cache_tier *t)
+{
+    return ((const disk_tier *)t)->usable;
+}
+
+static void disk_close(ism_cache_tier *t)
+{
+    disk_tier *d = (disk_tier *)t;
+    pthread_mutex_lock(&d->lock);
+    d->stopping = true;
+    pthread_cond_broadcast(&d->wake);
+    pthread_mutex_unlock(&d->lock);
+    if (d->writer_started)
+        pthread_join(d->writer, NULL);
+    while (d->head) { /* only when the writer never started */
+        pending *p = d->head;
+        d->head = p->next;
+        ism_blob_unref(p->blob);
+        free(p);
+    }
+    if (d->root_fd >= 0)
+        close(d->root_fd);
+    pthread_mutex_destroy(&d->lock);
+    pthread_cond_destroy(&d->wake);
+    pthread_cond_destroy(&d->idle);
+    free(d);
+}
+
+/* Opens <dir>/v1 and proves it writable with a probe file. */
+static bool open_root(disk_tier *d, const char *dir)
+{
+    char tmpdir[4096 + 8];
+    if (snprintf(d->root_path, sizeof d->root_path, "%s/v1", dir) >= (int)sizeof d->root_path)
+        return false;
+    snprintf(tmpdir, sizeof tmpdir, "%s/tmp", d->root_path);
+    if (!mkdir_p(tmpdir))
+        return false;
+    d->root_fd = open(d->root_path, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (d->root_fd < 0)
+        return false;
+    char probe[64];
+    snprintf(probe, sizeof probe, "tmp/probe.%ld", (long)getpid());
+    int fd = openat(d->root_fd, probe, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0)
+        return false;
+    close(fd);
+    unlinkat(d->root_fd, probe, 0);
+    return true;
+}
+
+ism_cache_tier *ism_cache_disk_new(const char *dir, size_t max_pending)
+{
+    disk_tier *d = calloc(1, sizeof *d);
+    if (!d)
+        return NULL;
+    d->root_fd = -1;
+    d->max_pending = max_pending;
+    pthread_mutex_init(&d->lock, NULL);
+    pthread_cond_init(&d->wake, NULL);
+    pthread_cond_init(&d->idle, NULL);
+    d->base.name = "disk";
+    d->base.get = disk_get;
+    d->base.has = disk_has;
+    d->base.put = disk_put;
+    d->base.close = disk_close;
+    d->usable = open_root(d, dir);
+    if (!d->usable) {
+        ism_log_field f[] = {ISM_LS("dir", dir), ISM_LS("error", strerror(errno))};
+        ism_log_fields(ISM_LOG_WARN, "cache_dir_unusable", f, 2);
+    } else if (pthread_create(&d->writer, NULL, writer_main, d) == 0) {
+        d->writer_started = true;
+    } else {
+        d->usable = false;
+    }
+    return &d->base;
+}

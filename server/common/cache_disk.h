@@ -1,0 +1,33 @@
+/* cache_disk.h — the disk tier: content-addressed files that survive restarts.
+ *
+ * Layout: <dir>/v1/<first two hex digits of the key>/<name>, written by a background thread
+ * to <dir>/v1/tmp/, fsynced, then renamed into place (and the directory fsynced), so a crash
+ * leaves either the whole entry or none. Each file is a 24-byte header — magic "ISMC", u32
+ * version 1, u64 payload length, u32 CRC-32C of header bytes 0..15 and the payload, u32 zero —
+ * then the payload. Every read checks all of it; a bad file is deleted, logged and counted
+ * (counters.corrupt) and reads as a miss, so the entry is recomputed.
+ *
+ * A directory that cannot be created or written, a full disk, or a write queue over its byte
+ * budget never fails a request: the entry is simply not stored (logged, counted in
+ * counters.store_failures). There is no size bound on the directory itself: prune it with
+ * `find DIR -atime +N -delete` if it grows too big. */
+#ifndef ISM_CACHE_DISK_H
+#define ISM_CACHE_DISK_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "server/common/cache.h"
+
+/* A disk tier under dir (created if missing). max_pending bounds the bytes queued for writing.
+ * Returns a working tier even when dir is unusable (it then stores nothing); NULL only when
+ * out of memory. */
+ism_cache_tier *ism_cache_disk_new(const char *dir, size_t max_pending);
+
+/* Whether the directory was usable at start-up. */
+bool ism_cache_disk_usable(const ism_cache_tier *t);
+
+/* Waits until every queued write is on disk (or failed). */
+void ism_cache_disk_flush(ism_cache_tier *t);
+
+#endif

@@ -1,0 +1,193 @@
+/* log.c — structured log lines (log.h): a fixed-size line buffer per call, text or JSON
+ * escaping, UTC timestamps with milliseconds, one write(2) to stderr. */
+#include "server/common/log.h"
+
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#define LINE_MAX_BYTES 4096
+
+static const char *log_program = "isomesh";
+static ism_log_format log_format = ISM_LOG_TEXT;
+
+void ism_log_setup(const char *program, ism_log_format format)
+{
+    log_program = program;
+    log_format = format;
+}
+
+bool ism_log_parse_format(const char *s, ism_log_format *out)
+{
+    if (strcmp(s, "text") == 0)
+        *out = ISM_LOG_TEXT;
+    else if (strcmp(s, "json") == 0)
+        *out = ISM_LOG_JSON;
+    else
+        return false;
+    return true;
+}
+
+typedef struct line {
+    char buf[LINE_MAX_BYTES];
+    size_t len;
+} line;
+
+static void add_raw(line *l, const char *s, size_t n)
+{
+    size_t room = sizeof l->buf - 2 - l->len; /* keep room for '\n' */
+    if (n > room)
+        n = room;
+    memcpy(l->buf + l->len, s, n);
+    l->len += n;
+}
+
+static void add(line *l, const char *s)
+{
+    add_raw(l, s, strlen(s));
+}
+
+static void addf(line *l, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void addf(line *l, const char *fmt, ...)
+{
+    char tmp[128];
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(tmp, sizeof tmp, fmt, ap);
+    va_end(ap);
+    if (n > 0)
+        add_raw(l, tmp, (size_t)n < sizeof tmp ? (size_t)n : sizeof tmp - 1);
+}
+
+/* JSON string body (without quotes): escapes quotes, backslashes and control bytes. */
+static void add_json_escaped(line *l, const char *s)
+{
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\') {
+            char e[2] = {'\\', (char)c};
+            add_raw(l, e, 2);
+        } else if (c < 0x20 || c == 0x7f) {
+            addf(l, "\\u%04x", c);
+        } else {
+            add_raw(l, (const char *)&c, 1);
+        }
+    }
+}
+
+/* Text value: bare when it is one safe word, quoted and escaped otherwise. */
+static void add_text_value(line *l, const char *s)
+{
+    bool bare = *s != 0;
+    for (const char *p = s; *p; p++)
+        if ((unsigned char)*p <= ' ' || *p == '"' || *p == '=' || *p == '\\' || (unsigned char)*p == 0x7f)
+            bare = false;
+    if (bare) {
+        add(l, s);
+        return;
+    }
+    add(l, "\"");
+    add_json_escaped(l, s);
+    add(l, "\"");
+}
+
+static const char *level_name(ism_log_level level)
+{
+    switch (level) {
+    case ISM_LOG_DEBUG: return "debug";
+    case ISM_LOG_INFO: return "info";
+    case ISM_LOG_WARN: return "warn";
+    case ISM_LOG_ERROR: return "error";
+    }
+    return "info";
+}
+
+static void add_time(line *l)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    struct tm tm;
+    gmtime_r(&ts.tv_sec, &tm);
+    addf(l, "%04d-%02d-%02dT%02d:%02d:%02d.%03ldZ", tm.tm_year + 1900, tm.tm_mon + 1,
+         tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, ts.tv_nsec / 1000000);
+}
+
+static void emit(line *l)
+{
+    l->buf[l->len++] = '\n';
+    const char *p = l->buf;
+    size_t left = l->len;
+    while (left) {
+        ssize_t w = write(STDERR_FILENO, p, left);
+        if (w < 0 && errno == EINTR)
+            continue;
+        if (w <= 0)
+            return;
+        p += w;
+        left -= (size_t)w;
+    }
+}
+
+void ism_log_fields(ism_log_level level, const char *event, const ism_log_field *fields,
+                    size_t n)
+{
+    line l = {.len = 0};
+    if (log_format == ISM_LOG_JSON) {
+        add(&l, "{\"ts\":\"");
+        add_time(&l);
+        addf(&l, "\",\"level\":\"%s\",\"program\":\"", level_name(level));
+        add_json_escaped(&l, log_program);
+        add(&l, "\",\"event\":\"");
+        add_json_escaped(&l, event);
+        add(&l, "\"");
+        for (size_t i = 0; i < n; i++) {
+            add(&l, ",\"");
+            add_json_escaped(&l, fields[i].name);
+            add(&l, "\":");
+            switch (fields[i].kind) {
+            case ISM_LF_STR:
+                if (fields[i].s) {
+                    add(&l, "\"");
+                    add_json_escaped(&l, fields[i].s);
+                    add(&l, "\"");
+                } else {
+                    add(&l, "null");
+                }
+                break;
+            case ISM_LF_INT: addf(&l, "%lld", fields[i].i); break;
+            case ISM_LF_NUM: addf(&l, "%.3f", fields[i].d); break;
+            }
+        }
+        if (l.len >= sizeof l.buf - 3)
+            l.len = sizeof l.buf - 3; /* truncated: still close the object */
+        add_raw(&l, "}", 1);
+    } else {
+        add_time(&l);
+        addf(&l, " %s %s: %s", level_name(level), log_program, event);
+        for (size_t i = 0; i < n; i++) {
+            add(&l, " ");
+            add(&l, fields[i].name);
+            add(&l, "=");
+            switch (fields[i].kind) {
+            case ISM_LF_STR: add_text_value(&l, fields[i].s ? fields[i].s : "-"); break;
+            case ISM_LF_INT: addf(&l, "%lld", fields[i].i); break;
+            case ISM_LF_NUM: addf(&l, "%.3f", fields[i].d); break;
+            }
+        }
+    }
+    emit(&l);
+}
+
+void ism_logf(ism_log_level level, const char *event, const char *fmt, ...)
+{
+    char msg[2048];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    ism_log_field f = ISM_LS("msg", msg);
+    ism_log_fields(level, event, &f, 1);
+}

@@ -1,0 +1,203 @@
+/* worker.c — the `isomesh --worker` loop: one job at a time from the daemon's REQUEST frames
+ * to RESULT frames, with rate-limited PROGRESS frames in between. Any framing problem ends
+ * the process: the daemon sees the pipe close, fails the job and starts a fresh worker. */
+#include "server/isomesh/worker.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "core/version.h"
+#include "proto/frame.h"
+#include "server/common/pipeline.h"
+
+/* A request frame holds one JSON request: the daemon caps bodies far below this. */
+#define WORKER_MAX_REQUEST (64u * 1024u * 1024u)
+/* Progress frames at most this often (plus the first one). */
+#define PROGRESS_INTERVAL_NS 50000000LL
+
+typedef struct progress_state {
+    int fd;
+    uint64_t job;
+    long long last_ns;
+    uint32_t last_millionths;
+    bool failed;
+    pthread_mutex_t lock;
+} progress_state;
+
+static long long now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (long long)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
+static void put_le32(unsigned char *p, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+
+static void on_progress(void *ctx, double fraction)
+{
+    progress_state *ps = ctx;
+    if (!(fraction >= 0))
+        fraction = 0;
+    if (fraction > 1)
+        fraction = 1;
+    uint32_t m = (uint32_t)(fraction * 1e6);
+    pthread_mutex_lock(&ps->lock);
+    long long t = now_ns();
+    if (!ps->failed && m != ps->last_millionths &&
+        (ps->last_ns == 0 || t - ps->last_ns >= PROGRESS_INTERVAL_NS)) {
+        unsigned char p[4];
+        put_le32(p, m);
+        ism_frame_part part = {p, 4};
+        if (ism_frame_write_fd(ps->fd, ISM_FRAME_PROGRESS, ps->job, &part, 1) != ISM_FRAME_OK)
+            ps->failed = true;
+        ps->last_ns = t;
+        ps->last_millionths = m;
+    }
+    pthread_mutex_unlock(&ps->lock);
+}
+
+/* Sends an ERROR frame: status and an error JSON of the house format. */
+static bool send_error(int fd, uint64_t job, unsigned status, const char *code, const char *msg)
+{
+    char json[512];
+    snprintf(json, sizeof json, "{\"error\": {\"code\": \"%s\", \"message\": \"%s\"}}", code, msg);
+    ism_frame_builder b = {0};
+    ism_frame_put_u32(&b, status);
+    ism_frame_put_str(&b, json);
+    bool ok = !b.failed;
+    if (ok) {
+        ism_frame_part part = {b.data, b.len};
+        ok = ism_frame_write_fd(fd, ISM_FRAME_ERROR, job, &part, 1) == ISM_FRAME_OK;
+    }
+    ism_frame_builder_free(&b);
+    return ok;
+}
+
+static bool send_hello(int fd)
+{
+    ism_frame_builder b = {0};
+    ism_frame_put_u32(&b, (uint32_t)getpid());
+    ism_frame_put_str(&b, ISM_VERSION " " ISM_MESHER_VERSION);
+    bool ok = !b.failed;
+    if (ok) {
+        ism_frame_part part = {b.data, b.len};
+        ok = ism_frame_write_fd(fd, ISM_FRAME_HELLO, 0, &part, 1) == ISM_FRAME_OK;
+    }
+    ism_frame_builder_free(&b);
+    return ok;
+}
+
+static bool send_result(int fd, uint64_t job, const ism_pipeline_result *pr, long long start_ns)
+{
+    ism_frame_result r = {0};
+    r.status = (uint32_t)pr->status;
+    long long us = (now_ns() - start_ns) / 1000;
+    r.worker_us = us > (long long)UINT32_MAX ? UINT32_MAX : (uint32_t)us;
+    snprintf(r.key, sizeof r.key, "%s", pr->key);
+    snprintf(r.format, sizeof r.format, "%s", pr->format);
+    snprintf(r.content_type, sizeof r.content_type, "%s",
+             pr->content_type ? pr->content_type : "application/octet-stream");
+    r.body = pr->body.data;
+    r.body_len = pr->body.len;
+    r.stats = pr->stats.data;
+    r.stats_len = pr->stats.len;
+    r.features = pr->features.data;
+    r.features_len = pr->features.len;
+    r.canonical = pr->canonical.data;
+    r.canonical_len = pr->canonical.len;
+    ism_frame_builder head = {0};
+    bool ok = ism_frame_result_encode(&r, &head);
+    if (ok) {
+        ism_frame_part parts[2] = {{head.data, head.len}, {r.body, r.body_len}};
+        ok = ism_frame_write_fd(fd, ISM_FRAME_RESULT, job, parts, 2) == ISM_FRAME_OK;
+    } else {
+        ok = send_error(fd, job, 500, "result_too_large", "the result does not fit in a frame");
+    }
+    ism_frame_builder_free(&head);
+    return ok;
+}
+
+static bool run_job(int out_fd, const ism_frame *f)
+{
+    ism_frame_job job;
+    if (!ism_frame_job_decode(f, &job)) {
+        fprintf(stderr, "isomesh worker: malformed request frame for job %llu\n",
+                (unsigned long long)f->job);
+        send_error(out_fd, f->job, 500, "bad_frame", "the worker received a malformed request");
+        return false;
+    }
+    ism_pipeline_limits lim;
+    ism_pipeline_limits_default(&lim);
+    if (job.max_depth)
+        lim.max_depth = (int)job.max_depth;
+    if (job.max_triangles)
+        lim.max_triangles = (size_t)job.max_triangles;
+    if (job.max_memory)
+        lim.max_memory = (size_t)job.max_memory;
+    lim.threads = (int)job.threads;
+
+    progress_state ps = {.fd = out_fd, .job = f->job};
+    pthread_mutex_init(&ps.lock, NULL);
+    ism_pipeline_hooks hooks = {.progress = on_progress, .ctx = &ps, .cancel = NULL};
+    ism_pipeline_result pr;
+    memset(&pr, 0, sizeof pr);
+    long long start = now_ns();
+    ism_pipeline_run((const char *)job.json, job.json_len, job.format[0] ? job.format : NULL,
+                     &lim, &hooks, &pr);
+    bool ok = !ps.failed && send_result(out_fd, f->job, &pr, start);
+    ism_pipeline_result_free(&pr);
+    pthread_mutex_destroy(&ps.lock);
+    return ok;
+}
+
+int ism_worker_main(int in_fd, int out_fd)
+{
+    signal(SIGPIPE, SIG_IGN);
+    if (out_fd == STDOUT_FILENO) {
+        int chan = fcntl(out_fd, F_DUPFD_CLOEXEC, 3);
+        if (chan < 0 || dup2(STDERR_FILENO, STDOUT_FILENO) < 0) {
+            perror("isomesh worker: moving the channel off stdout");
+            return 1;
+        }
+        out_fd = chan;
+    }
+    if (!send_hello(out_fd)) {
+        perror("isomesh worker: writing hello");
+        return 1;
+    }
+    ism_frame_reader rd;
+    ism_frame_reader_init(&rd, WORKER_MAX_REQUEST);
+    for (;;) {
+        ism_frame f = {0};
+        ism_frame_status st = ism_frame_read_fd(&rd, in_fd, &f);
+        if (st == ISM_FRAME_EOF) {
+            ism_frame_reader_free(&rd);
+            return 0;
+        }
+        if (st != ISM_FRAME_OK) {
+            fprintf(stderr, "isomesh worker: reading a request: %s%s%s\n",
+                    ism_frame_status_name(st), st == ISM_FRAME_IO_ERROR ? ": " : "",
+                    st == ISM_FRAME_IO_ERROR ? strerror(errno) : "");
+            ism_frame_reader_free(&rd);
+            return 1;
+        }
+        bool ok = f.type == ISM_FRAME_REQUEST && run_job(out_fd, &f);
+        if (f.type != ISM_FRAME_REQUEST)
+            fprintf(stderr, "isomesh worker: unexpected frame type %d\n", (int)f.type);
+        ism_frame_free(&f);
+        if (!ok) {
+            ism_frame_reader_free(&rd);
+            return 1;
+        }
+    }
+}

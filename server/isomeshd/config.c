@@ -1,0 +1,457 @@
+/* config.c — isomeshd's flag table (config.h): names, defaults, value parsers (counts, byte
+ * sizes with K/M/G suffixes, durations with ms/s/m/h), the `--config FILE` reader and --help.
+ * One table drives all three, so a flag cannot exist in one and be missing in another. */
+#include "server/isomeshd/config.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "core/version.h"
+
+typedef enum kind { K_LISTEN, K_INT, K_SIZE, K_DURATION, K_PATH, K_STRING, K_LOGFMT } kind;
+
+typedef struct flag {
+    const char *name;
+    kind kind;
+    long long min, max;     /* K_INT, K_SIZE bounds */
+    const char *arg;        /* placeholder in --help */
+    const char *help;
+} flag;
+
+static const flag FLAGS[] = {
+    {"listen", K_LISTEN, 0, 0, "HOST:PORT",
+     "address to serve HTTP on; port 0 picks a free port (logged) [127.0.0.1:8080]"},
+    {"workers", K_INT, 1, 256, "N", "worker processes computing meshes [one per online core]"},
+    {"queue", K_INT, 0, 100000, "N",
+     "computations waiting for a worker before new ones get 503 [64]"},
+    {"client-jobs", K_INT, 1, 100000, "N",
+     "computations one client address may have queued or running before 429 [32]"},
+    {"cache-dir", K_PATH, 0, 0, "DIR",
+     "disk cache directory [$XDG_CACHE_HOME/isomesh, else $HOME/.cache/isomesh]"},
+    {"cache-mem", K_SIZE, 0, (long long)1 << 40, "BYTES",
+     "in-memory cache size, e.g. 512M; 0 disables it [256M]"},
+    {"job-timeout", K_DURATION, 0, 0, "TIME",
+     "deadline of one computation from submission, e.g. 90s, 500ms [60s]"},
+    {"job-memory", K_SIZE, 0, (long long)1 << 42, "BYTES",
+     "address-space limit of each worker process; 0 = none [4G]"},
+    {"max-body", K_SIZE, 1024, (long long)64 << 20, "BYTES", "largest request body [256K]"},
+    {"max-depth", K_INT, 1, 16, "N", "deepest octree a request may ask for [10]"},
+    {"max-triangles", K_INT, 1, 1000000000LL, "N",
+     "most triangles a request may produce [4000000]"},
+    {"web-root", K_PATH, 0, 0, "DIR",
+     "the viewer's directory, served at /; \"\" serves no files [web/ of the source tree]"},
+    {"data-dir", K_PATH, 0, 0, "DIR",
+     "directory with openapi.yaml and request.schema.json [proto/ of the source tree]"},
+    {"cors-origin", K_STRING, 0, 0, "ORIGIN",
+     "value of Access-Control-Allow-Origin, e.g. * or https://example.org [none]"},
+    {"log-format", K_LOGFMT, 0, 0, "text|json", "log line format on stderr [text]"},
+};
+#define NFLAGS (sizeof FLAGS / sizeof FLAGS[0])
+
+/* ---- value parsers ------------------------------------------------------------------- */
+
+static bool parse_ll(const char *s, long long *out)
+{
+    if (!*s || isspace((unsigned char)*s))
+        return false;
+    char *end;
+    errno = 0;
+    long long v = strtoll(s, &end, 10);
+    if (errno || *end)
+        return false;
+    *out = v;
+    return true;
+}
+
+/* "512", "64K", "256M", "4G", "1T", also with "B" or "iB" after the letter. */
+static bool parse_size(const char *s, long long *out)
+{
+    if (!isdigit((unsigned char)*s))
+        return false;
+    char *end;
+    errno = 0;
+    unsigned long long v = strtoull(s, &end, 10);
+    if (errno)
+        return false;
+    unsigned shift = 0;
+    switch (toupper((unsigned char)*end)) {
+    case 'K': shift = 10, end++; break;
+    case 'M': shift = 20, end++; break;
+    case 'G': shift = 30, end++; break;
+    case 'T': shift = 40, end++; break;
+    default: break;
+    }
+    if (shift && (*end == 'i' || *end == 'I'))
+        end++;
+    if (*end == 'B' || *end == 'b')
+        end++;
+    if (*end || (shift && v > (ULLONG_MAX >> shift)) || (v << shift) > (unsigned long long)LLONG_MAX)
+        return false;
+    *out = (long long)(v << shift);
+    return true;
+}
+
+/* "60", "60s", "500ms", "2m", "1h" -> seconds. */
+static bool parse_duration(const char *s, double *out)
+{
+    if (!isdigit((unsigned char)*s) && *s != '.')
+        return false;
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (errno || !isfinite(v) || v < 0)
+        return false;
+    double scale;
+    if (!*end || strcmp(end, "s") == 0)
+        scale = 1;
+    else if (strcmp(end, "ms") == 0)
+        scale = 1e-3;
+    else if (strcmp(end, "m") == 0 || strcmp(end, "min") == 0)
+        scale = 60;
+    else if (strcmp(end, "h") == 0)
+        scale = 3600;
+    else
+        return false;
+    *out = v * scale;
+    return *out >= 0.001 && *out <= 7 * 86400.0;
+}
+
+/* "HOST:PORT", "[V6]:PORT", ":PORT" (all interfaces), "PORT" (loopback). */
+static bool parse_listen(const char *s, ismd_config *cfg)
+{
+    const char *colon = strrchr(s, ':');
+    const char *port = colon ? colon + 1 : s;
+    char host[256] = "127.0.0.1";
+    if (colon) {
+        size_t n = (size_t)(colon - s);
+        if (n >= sizeof host)
+            return false;
+        memcpy(host, s, n);
+        host[n] = 0;
+        if (n >= 2 && host[0] == '[' && host[n - 1] == ']') {
+            memmove(host, host + 1, n - 2);
+            host[n - 2] = 0;
+        } else if (strchr(host, ':') || strchr(host, '[') || strchr(host, ']')) {
+            return false; /* an IPv6 address needs brackets */
+        }
+        if (n == 0)
+            strcpy(host, "0.0.0.0");
+    }
+    long long p;
+    if (!parse_ll(port, &p) || p < 0 || p > 65535)
+        return false;
+    snprintf(cfg->listen_host, sizeof cfg->listen_host, "%s", host);
+    cfg->listen_port = (unsigned short)p;
+    return true;
+}
+
+static const char *describe(const flag *f)
+{
+    static char buf[160];
+    switch (f->kind) {
+    case K_LISTEN: return "expected HOST:PORT, [IPV6]:PORT, :PORT or PORT";
+    case K_INT:
+        snprintf(buf, sizeof buf, "expected a whole number from %lld to %lld", f->min, f->max);
+        return buf;
+    case K_SIZE:
+        snprintf(buf, sizeof buf, "expected a size like 65536, 64K, 256M or 4G, at least %lld bytes", f->min);
+        return buf;
+    case K_DURATION: return "expected a duration like 60, 90s, 500ms, 2m (1 ms to 7 days)";
+    case K_PATH: return "expected a path shorter than 4096 bytes";
+    case K_STRING: return "expected a short string without control characters";
+    case K_LOGFMT: return "expected text or json";
+    }
+    return "bad value";
+}
+
+static bool set_path(char *dst, size_t cap, const char *v)
+{
+    return snprintf(dst, cap, "%s", v) < (int)cap;
+}
+
+/* Applies one name=value; false when the value is bad. */
+static bool apply(ismd_config *cfg, const flag *f, const char *v)
+{
+    long long n;
+    double d;
+    const char *name = f->name;
+    switch (f->kind) {
+    case K_LISTEN: return parse_listen(v, cfg);
+    case K_INT:
+        if (!parse_ll(v, &n) || n < f->min || n > f->max)
+            return false;
+        if (!strcmp(name, "workers")) cfg->workers = (int)n;
+        else if (!strcmp(name, "queue")) cfg->queue = (int)n;
+        else if (!strcmp(name, "client-jobs")) cfg->client_jobs = (int)n;
+        else if (!strcmp(name, "max-depth")) cfg->max_depth = (int)n;
+        else if (!strcmp(name, "max-triangles")) cfg->max_triangles = (size_t)n;
+        return true;
+    case K_SIZE:
+        if (!parse_size(v, &n) || n < f->min || n > f->max)
+            return false;
+        if (!strcmp(name, "cache-mem")) cfg->cache_mem = (size_t)n;
+        else if (!strcmp(name, "job-memory")) cfg->job_memory = (size_t)n;
+        else if (!strcmp(name, "max-body")) cfg->max_body = (size_t)n;
+        return true;
+    case K_DURATION:
+        if (!parse_duration(v, &d))
+            return false;
+        cfg->job_timeout_s = d;
+        return true;
+    case K_PATH:
+        if (!strcmp(name, "cache-dir"))
+            return *v && set_path(cfg->cache_dir, sizeof cfg->cache_dir, v);
+        if (!strcmp(name, "web-root"))
+            return set_path(cfg->web_root, sizeof cfg->web_root, v);
+        if (!strcmp(name, "data-dir"))
+            return set_path(cfg->data_dir, sizeof cfg->data_dir, v);
+        return false;
+    case K_STRING:
+        for (const char *p = v; *p; p++)
+            if ((unsigned char)*p < 0x20 || *p == 0x7f)
+                return false;
+        return set_path(cfg->cors_origin, sizeof cfg->cors_origin, v);
+    case K_LOGFMT: return ism_log_parse_format(v, &cfg->log_format);
+    }
+    return false;
+}
+
+static const flag *find_flag(const char *name, size_t len)
+{
+    for (size_t i = 0; i < NFLAGS; i++)
+        if (strlen(FLAGS[i].name) == len && strncmp(FLAGS[i].name, name, len) == 0)
+            return &FLAGS[i];
+    return NULL;
+}
+
+/* ---- defaults ------------------------------------------------------------------------ */
+
+static bool is_dir(const char *p)
+{
+    struct stat st;
+    return stat(p, &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+/* The directory holding this executable ("" when unknown). */
+static void exe_dir(char *out, size_t cap)
+{
+    char buf[4096];
+    ssize_t n = readlink("/proc/self/exe", buf, sizeof buf - 1);
+    out[0] = 0;
+    if (n <= 0)
+        return;
+    buf[n] = 0;
+    char *slash = strrchr(buf, '/');
+    if (!slash)
+        return;
+    *slash = 0;
+    snprintf(out, cap, "%s", buf);
+}
+
+/* First existing directory among <exe>/../../<name> (the source tree, build/<kind>/isomeshd)
+ * and ./<name>; "" when none. */
+static void source_tree_dir(char *out, size_t cap, const char *exe, const char *name)
+{
+    char cand[8192];
+    out[0] = 0;
+    if (*exe) {
+        snprintf(cand, sizeof cand, "%s/../../%s", exe, name);
+        if (is_dir(cand) && realpath(cand, out) && strlen(out) < cap)
+            return;
+        out[0] = 0;
+    }
+    if (is_dir(name))
+        snprintf(out, cap, "%s", name);
+}
+
+static void set_defaults(ismd_config *cfg)
+{
+    memset(cfg, 0, sizeof *cfg);
+    strcpy(cfg->listen_host, "127.0.0.1");
+    cfg->listen_port = 8080;
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    cfg->workers = cores < 1 ? 1 : cores > 256 ? 256 : (int)cores;
+    cfg->queue = 64;
+    cfg->client_jobs = 32;
+    const char *xdg = getenv("XDG_CACHE_HOME");
+    const char *home = getenv("HOME");
+    if (xdg && *xdg == '/')
+        snprintf(cfg->cache_dir, sizeof cfg->cache_dir, "%s/isomesh", xdg);
+    else if (home && *home == '/')
+        snprintf(cfg->cache_dir, sizeof cfg->cache_dir, "%s/.cache/isomesh", home);
+    else
+        snprintf(cfg->cache_dir, sizeof cfg->cache_dir, "/tmp/isomesh-cache-%ld", (long)getuid());
+    cfg->cache_mem = (size_t)256 << 20;
+    cfg->job_timeout_s = 60;
+    cfg->job_memory = (size_t)4 << 30;
+    cfg->max_body = (size_t)256 << 10;
+    cfg->max_depth = 10;
+    cfg->max_triangles = 4000000;
+    cfg->log_format = ISM_LOG_TEXT;
+    char exe[4096];
+    exe_dir(exe, sizeof exe);
+    source_tree_dir(cfg->web_root, sizeof cfg->web_root, exe, "web");
+    source_tree_dir(cfg->data_dir, sizeof cfg->data_dir, exe, "proto");
+    snprintf(cfg->worker_path, sizeof cfg->worker_path, "%s/isomesh", *exe ? exe : ".");
+}
+
+/* ---- help, config file, argv --------------------------------------------------------- */
+
+static void print_help(void)
+{
+    printf("usage: isomeshd [--config FILE] [--FLAG VALUE | --FLAG=VALUE]...\n\n"
+           "isomeshd serves meshes of implicit surfaces f(x,y,z) = 0 over HTTP, computed by a\n"
+           "pool of `isomesh --worker` processes (the isomesh program next to isomeshd) and\n"
+           "cached in memory and on disk. Every flag has a default; --config FILE reads lines\n"
+           "`name = value` with the flag names below (# starts a comment); flags given on the\n"
+           "command line override the file.\n\nflags:\n");
+    for (size_t i = 0; i < NFLAGS; i++) {
+        char left[64];
+        snprintf(left, sizeof left, "--%s %s", FLAGS[i].name, FLAGS[i].arg);
+        printf("  %-28s %s\n", left, FLAGS[i].help);
+    }
+    printf("  %-28s %s\n", "--config FILE", "read settings from FILE first");
+    printf("  %-28s %s\n", "--help, --version", "print this or the version and exit");
+    printf("\nroutes: POST /v1/mesh, POST /v1/jobs, GET|DELETE /v1/jobs/{id},\n"
+           "GET /v1/jobs/{id}/events, GET /v1/meshes/{key}.{drc,glb,ply,obj,stl},\n"
+           "GET /v1/meshes/{key}/stats, GET /v1/meshes/{key}/features, GET /v1/presets,\n"
+           "GET /v1/openapi.yaml, GET /v1/request.schema.json, GET /healthz, GET /readyz,\n"
+           "GET /metrics, the viewer at / and three.js under /vendor/three/.\n"
+           "SIGTERM or SIGINT: stop accepting, finish or cancel running jobs, exit.\n");
+}
+
+static char *trim(char *s)
+{
+    while (isspace((unsigned char)*s))
+        s++;
+    char *e = s + strlen(s);
+    while (e > s && isspace((unsigned char)e[-1]))
+        *--e = 0;
+    return s;
+}
+
+static int load_file(ismd_config *cfg, const char *path)
+{
+    FILE *fp = fopen(path, "r");
+    if (!fp) {
+        fprintf(stderr, "isomeshd: --config %s: %s\n", path, strerror(errno));
+        return 2;
+    }
+    char line[8192];
+    int lineno = 0;
+    while (fgets(line, sizeof line, fp)) {
+        lineno++;
+        if (!strchr(line, '\n') && !feof(fp)) {
+            fprintf(stderr, "isomeshd: %s:%d: line too long\n", path, lineno);
+            fclose(fp);
+            return 2;
+        }
+        char *hash = strchr(line, '#');
+        if (hash)
+            *hash = 0;
+        char *s = trim(line);
+        if (!*s)
+            continue;
+        char *eq = strchr(s, '=');
+        if (!eq) {
+            fprintf(stderr, "isomeshd: %s:%d: expected `name = value`\n", path, lineno);
+            fclose(fp);
+            return 2;
+        }
+        *eq = 0;
+        char *name = trim(s), *value = trim(eq + 1);
+        size_t vl = strlen(value);
+        if (vl >= 2 && value[0] == '"' && value[vl - 1] == '"') {
+            value[vl - 1] = 0;
+            value++;
+        }
+        const flag *f = find_flag(name, strlen(name));
+        if (!f) {
+            fprintf(stderr, "isomeshd: %s:%d: unknown setting '%s' (see --help)\n", path, lineno, name);
+            fclose(fp);
+            return 2;
+        }
+        if (!apply(cfg, f, value)) {
+            fprintf(stderr, "isomeshd: %s:%d: %s: bad value '%s': %s\n", path, lineno, name,
+                    value, describe(f));
+            fclose(fp);
+            return 2;
+        }
+    }
+    fclose(fp);
+    return 0;
+}
+
+/* Splits argv[i] into a flag name and value ("--name=value" or "--name value"). */
+static int next_flag(int argc, char **argv, int *i, const char **name, size_t *nlen,
+                     const char **value)
+{
+    const char *a = argv[*i];
+    if (strncmp(a, "--", 2) != 0) {
+        fprintf(stderr, "isomeshd: unexpected argument '%s' (see --help)\n", a);
+        return 2;
+    }
+    *name = a + 2;
+    const char *eq = strchr(*name, '=');
+    if (eq) {
+        *nlen = (size_t)(eq - *name);
+        *value = eq + 1;
+        return 0;
+    }
+    *nlen = strlen(*name);
+    if (*i + 1 >= argc) {
+        fprintf(stderr, "isomeshd: %s needs a value (see --help)\n", a);
+        return 2;
+    }
+    *value = argv[++*i];
+    return 0;
+}
+
+int ismd_config_load(ismd_config *cfg, int argc, char **argv)
+{
+    set_defaults(cfg);
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            print_help();
+            return 1;
+        }
+        if (!strcmp(argv[i], "--version")) {
+            printf("isomeshd %s (%s)\n", ISM_VERSION, ISM_MESHER_VERSION);
+            return 1;
+        }
+    }
+    /* The config file first, wherever --config appears. */
+    for (int i = 1; i < argc; i++) {
+        const char *name, *value;
+        size_t nlen;
+        int rc = next_flag(argc, argv, &i, &name, &nlen, &value);
+        if (rc)
+            return rc;
+        if (nlen == 6 && !strncmp(name, "config", 6) && (rc = load_file(cfg, value)))
+            return rc;
+    }
+    for (int i = 1; i < argc; i++) {
+        const char *name, *value;
+        size_t nlen;
+        next_flag(argc, argv, &i, &name, &nlen, &value);
+        if (nlen == 6 && !strncmp(name, "config", 6))
+            continue;
+        const flag *f = find_flag(name, nlen);
+        if (!f) {
+            fprintf(stderr, "isomeshd: unknown flag --%.*s (see --help)\n", (int)nlen, name);
+            return 2;
+        }
+        if (!apply(cfg, f, value)) {
+            fprintf(stderr, "isomeshd: --%s: bad value '%s': %s\n", f->name, value, describe(f));
+            return 2;
+        }
+    }
+    return 0;
+}

@@ -1,0 +1,36 @@
+/* config.h — isomeshd's settings: every flag with its default, `--config FILE` (lines
+ * `name = value` using the flag names), and --help. Command-line flags win over the file. */
+#ifndef ISMD_CONFIG_H
+#define ISMD_CONFIG_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "server/common/log.h"
+
+typedef struct ismd_config {
+    char listen_host[256];
+    unsigned short listen_port;
+    int workers;              /* worker processes (default: online cores) */
+    int queue;                /* jobs waiting for a worker before 503 */
+    int client_jobs;          /* computations one client address may have queued or running */
+    char cache_dir[4096];
+    size_t cache_mem;         /* bytes of the in-memory LRU */
+    double job_timeout_s;     /* deadline of one computation, from submission */
+    size_t job_memory;        /* RLIMIT_AS of a worker process (0 = unlimited) */
+    size_t max_body;          /* request body bytes */
+    int max_depth;
+    size_t max_triangles;
+    char web_root[4096];      /* "" = no viewer */
+    char data_dir[4096];      /* openapi.yaml, request.schema.json */
+    char cors_origin[512];    /* "" = no CORS headers */
+    ism_log_format log_format;
+    char worker_path[4096];   /* the isomesh binary */
+} ismd_config;
+
+/* Fills cfg from defaults, then --config FILE, then the flags. Returns 0 to run, 1 when
+ * --help or --version printed something (exit 0), 2 on a bad flag or value (a one-line
+ * message was printed to stderr). */
+int ismd_config_load(ismd_config *cfg, int argc, char **argv);
+
+#endif

@@ -1,0 +1,603 @@
+/* http.c — the request life cycle of http.h: libmicrohttpd set-up, routing on the first call
+ * (404, 405, 413 from Content-Length, 415), reading the body within --max-body, answering on a
+ * later call, suspending for flights and resuming when they end, one log line and the metrics
+ * per request when MHD reports it complete, and the common response headers. */
+#include "server/isomeshd/http.h"
+
+#include <arpa/inet.h>
+#include <ctype.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "server/common/log.h"
+#include "server/isomeshd/errors.h"
+#include "server/isomeshd/jobs.h"
+
+#define DISCARD_FACTOR 4 /* body bytes we swallow before giving up on a rejected request */
+
+/* ---- headers and responses ----------------------------------------------------------- */
+
+const char *ismd_header(ismd_req *r, const char *name)
+{
+    return MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, name);
+}
+
+const char *ismd_query(ismd_req *r, const char *name)
+{
+    return MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, name);
+}
+
+static void free_blob_cb(void *cls)
+{
+    ism_blob_unref(cls);
+}
+
+struct MHD_Response *ismd_response_blob(ism_blob *b, const char *content_type)
+{
+    struct MHD_Response *resp = MHD_create_response_from_buffer_with_free_callback_cls(
+        b->len, b->data, free_blob_cb, ism_blob_ref(b));
+    if (!resp) {
+        ism_blob_unref(b);
+        return NULL;
+    }
+    if (content_type)
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, content_type);
+    return resp;
+}
+
+struct MHD_Response *ismd_response_text(const char *text, const char *content_type)
+{
+    ism_blob *b = ism_blob_from_str(text);
+    if (!b)
+        return NULL;
+    struct MHD_Response *resp = ismd_response_blob(b, content_type);
+    ism_blob_unref(b);
+    return resp;
+}
+
+enum MHD_Result ismd_send(ismd_req *r, unsigned status, struct MHD_Response *resp)
+{
+    if (!resp)
+        return MHD_NO;
+    const ismd_config *cfg = r->srv->cfg;
+    if (cfg->cors_origin[0]) {
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_ACCESS_CONTROL_ALLOW_ORIGIN, cfg->cors_origin);
+        MHD_add_response_header(resp, "Access-Control-Expose-Headers",
+                                "ETag, Location, X-Cache, Server-Timing, Retry-After");
+        if (strcmp(cfg->cors_origin, "*") != 0)
+            MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY, "Origin");
+    }
+    MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
+    r->status = status;
+    enum MHD_Result ok = MHD_queue_response(r->conn, status, resp);
+    MHD_destroy_response(resp);
+    return ok;
+}
+
+static enum MHD_Result respond_blob_sized(ismd_req *r, unsigned status, ism_blob *b,
+                                          const char *ctype)
+{
+    struct MHD_Response *resp = ismd_response_blob(b, ctype);
+    r->bytes = b->len;
+    if (resp && (status == 503 || status == 429))
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, "5");
+    if (resp && status == 405 && r->allow)
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, r->allow);
+    if (resp && status >= 400)
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
+    return ismd_send(r, status, resp);
+}
+
+enum MHD_Result ismd_respond_error_blob(ismd_req *r, unsigned status, ism_blob *json)
+{
+    return respond_blob_sized(r, status, json, "application/json");
+}
+
+enum MHD_Result ismd_respond_error(ismd_req *r, unsigned status, const char *code,
+                                   const char *message)
+{
+    ism_blob *b = ismd_error_json(code, message, NULL);
+    if (!b)
+        return MHD_NO;
+    enum MHD_Result ok = ismd_respond_error_blob(r, status, b);
+    ism_blob_unref(b);
+    return ok;
+}
+
+enum MHD_Result ismd_respond_json(ismd_req *r, unsigned status, const char *json)
+{
+    ism_blob *b = ism_blob_from_str(json);
+    if (!b)
+        return MHD_NO;
+    enum MHD_Result ok = respond_blob_sized(r, status, b, "application/json");
+    ism_blob_unref(b);
+    return ok;
+}
+
+/* ---- waiting for a flight ------------------------------------------------------------ */
+
+static void conn_done(ismd_waiter *w, const ismd_result *res)
+{
+    ismd_req *r = (ismd_req *)((char *)w - offsetof(ismd_req, waiter));
+    r->r_status = res->status;
+    ism_blob_set(&r->r_body, res->body);
+    ism_blob_set(&r->r_stats, res->stats);
+    ism_blob_set(&r->r_features, res->features);
+    r->r_ctype = res->content_type;
+    r->queue_ms = res->queue_ms;
+    r->worker_ms = res->worker_ms;
+    snprintf(r->timing, sizeof r->timing, "%s", res->timing);
+    r->ready = true;
+    if (r->suspended) {
+        r->suspended = false;
+        atomic_fetch_sub(&r->srv->metrics.suspended_connections, 1);
+        MHD_resume_connection(r->conn);
+    }
+}
+
+enum MHD_Result ismd_wait_for(ismd_req *r, const char *key, const char *fmt,
+                              ism_blob *request, ismd_handler on_ready)
+{
+    ismd_server *s = r->srv;
+    char wanted[ISM_CACHE_NAME_MAX];
+    const char *ext = r->want == ISMD_WANT_STATS      ? "stats.json"
+                      : r->want == ISMD_WANT_FEATURES ? "features.json"
+                                                      : fmt;
+    if (!ism_cache_name(wanted, key, ext))
+        return ismd_respond_error(r, 500, "internal", "bad cache name");
+    r->on_ready = on_ready;
+    r->waiter.done = conn_done;
+    r->waiter.progress = NULL;
+    ismd_sched_lock(&s->sched);
+    /* The flight may have ended between the caller's cache lookup and this lock. */
+    ism_blob *hit = ism_cache_get_fast(&s->cache, wanted);
+    if (hit) {
+        ismd_sched_unlock(&s->sched);
+        r->r_status = 200;
+        ism_blob **slot = r->want == ISMD_WANT_STATS      ? &r->r_stats
+                          : r->want == ISMD_WANT_FEATURES ? &r->r_features
+                                                          : &r->r_body;
+        ism_blob_set(slot, hit);
+        ism_blob_unref(hit);
+        r->r_ctype = r->want == ISMD_WANT_MESH ? NULL : "application/json";
+        r->cache = "hit";
+        return on_ready(r);
+    }
+    ismd_submit st = ismd_sched_submit(&s->sched, key, fmt, request, r->client, &r->waiter);
+    if (st == ISMD_SUBMIT_NEW || st == ISMD_SUBMIT_JOINED) {
+        r->suspended = true;
+        r->cache = "miss";
+        atomic_fetch_add(&s->metrics.suspended_connections, 1);
+        MHD_suspend_connection(r->conn);
+        ismd_sched_unlock(&s->sched);
+        return MHD_YES;
+    }
+    ismd_sched_unlock(&s->sched);
+    switch (st) {
+    case ISMD_SUBMIT_QUEUE_FULL:
+        return ismd_respond_error(r, 503, "queue_full",
+                                  "every worker is busy and the queue is full; retry later");
+    case ISMD_SUBMIT_CLIENT_LIMIT:
+        return ismd_respond_error(r, 429, "too_many_requests",
+                                  "too many computations of yours are queued or running "
+                                  "(--client-jobs); wait for one to finish");
+    case ISMD_SUBMIT_DRAINING:
+        return ismd_respond_error(r, 503, "shutting_down", "the server is shutting down");
+    default:
+        return ismd_respond_error(r, 500, "out_of_memory", "the server ran out of memory");
+    }
+}
+
+/* ---- routing ------------------------------------------------------------------------- */
+
+static bool is_hex(const char *s, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        if (!((s[i] >= '0' && s[i] <= '9') || (s[i] >= 'a' && s[i] <= 'f')))
+            return false;
+    return true;
+}
+
+static bool is_mesh_format(const char *f)
+{
+    return !strcmp(f, "drc") || !strcmp(f, "glb") || !strcmp(f, "ply") || !strcmp(f, "obj") ||
+           !strcmp(f, "stl");
+}
+
+static void set_route(ismd_req *r, ismd_route route, const char *allow, ismd_handler h)
+{
+    r->route = route;
+    r->allow = allow;
+    r->handler = h;
+}
+
+static void not_found(ismd_req *r, ismd_route route)
+{
+    set_route(r, route, NULL, NULL);
+    r->early_status = 404;
+    r->early_code = "not_found";
+    snprintf(r->early_msg, sizeof r->early_msg, "nothing here");
+}
+
+/* /v1/... */
+static void route_v1(ismd_req *r, const char *p)
+{
+    if (!strcmp(p, "mesh")) {
+        set_route(r, ISMD_R_MESH, "POST, OPTIONS", ismd_route_mesh_post);
+        r->wants_body = true;
+    } else if (!strcmp(p, "jobs")) {
+        set_route(r, ISMD_R_JOBS, "POST, OPTIONS", ismd_route_jobs_post);
+        r->wants_body = true;
+    } else if (!strncmp(p, "jobs/", 5)) {
+        const char *id = p + 5;
+        size_t n = strcspn(id, "/");
+        if (n != 32 || !is_hex(id, n))
+            return not_found(r, ISMD_R_JOB);
+        memcpy(r->id, id, n);
+        r->id[n] = 0;
+        if (!id[n])
+            set_route(r, ISMD_R_JOB, "GET, HEAD, DELETE, OPTIONS", NULL);
+        else if (!strcmp(id + n, "/events"))
+            set_route(r, ISMD_R_JOB_EVENTS, "GET, OPTIONS", ismd_route_job_events);
+        else
+            not_found(r, ISMD_R_JOB);
+    } else if (!strncmp(p, "meshes/", 7)) {
+        const char *k = p + 7;
+        if (strlen(k) < 66 || !is_hex(k, 64))
+            return not_found(r, ISMD_R_MESH_FILE);
+        memcpy(r->key, k, 64);
+        r->key[64] = 0;
+        const char *rest = k + 64;
+        if (rest[0] == '.' && strlen(rest + 1) < sizeof r->fmt && is_mesh_format(rest + 1)) {
+            strcpy(r->fmt, rest + 1);
+            set_route(r, ISMD_R_MESH_FILE, "GET, HEAD, OPTIONS", ismd_route_mesh_get);
+        } else if (!strcmp(rest, "/stats")) {
+            r->want = ISMD_WANT_STATS;
+            set_route(r, ISMD_R_MESH_STATS, "GET, HEAD, OPTIONS", ismd_route_mesh_json);
+        } else if (!strcmp(rest, "/features")) {
+            r->want = ISMD_WANT_FEATURES;
+            set_route(r, ISMD_R_MESH_FEATURES, "GET, HEAD, OPTIONS", ismd_route_mesh_json);
+        } else {
+            not_found(r, ISMD_R_MESH_FILE);
+        }
+    } else if (!strcmp(p, "presets")) {
+        set_route(r, ISMD_R_PRESETS, "GET, HEAD, OPTIONS", ismd_route_doc);
+    } else if (!strcmp(p, "openapi.yaml")) {
+        set_route(r, ISMD_R_OPENAPI, "GET, HEAD, OPTIONS", ismd_route_doc);
+    } else if (!strcmp(p, "request.schema.json")) {
+        set_route(r, ISMD_R_SCHEMA, "GET, HEAD, OPTIONS", ismd_route_doc);
+    } else {
+        not_found(r, ISMD_R_OTHER);
+    }
+}
+
+static void route(ismd_req *r, const char *url)
+{
+    if (!strncmp(url, "/v1/", 4))
+        route_v1(r, url + 4);
+    else if (!strcmp(url, "/healthz"))
+        set_route(r, ISMD_R_HEALTHZ, "GET, HEAD, OPTIONS", ismd_route_health);
+    else if (!strcmp(url, "/readyz"))
+        set_route(r, ISMD_R_READYZ, "GET, HEAD, OPTIONS", ismd_route_health);
+    else if (!strcmp(url, "/metrics"))
+        set_route(r, ISMD_R_METRICS, "GET, HEAD, OPTIONS", ismd_route_metrics);
+    else if (!strncmp(url, "/vendor/three/", 14))
+        set_route(r, ISMD_R_VENDOR, "GET, HEAD, OPTIONS", ismd_route_static);
+    else if (url[0] == '/')
+        set_route(r, ISMD_R_STATIC, "GET, HEAD, OPTIONS", ismd_route_static);
+    else
+        not_found(r, ISMD_R_OTHER);
+}
+
+static bool method_allowed(const char *allow, const char *method)
+{
+    size_t n = strlen(method);
+    for (const char *p = allow; p && *p;) {
+        size_t len = strcspn(p, ",");
+        if (len == n && !strncmp(p, method, n))
+            return true;
+        p += len;
+        while (*p == ',' || *p == ' ')
+            p++;
+    }
+    return false;
+}
+
+static void early(ismd_req *r, unsigned status, const char *code, const char *msg)
+{
+    r->early_status = status;
+    r->early_code = code;
+    snprintf(r->early_msg, sizeof r->early_msg, "%s", msg);
+}
+
+/* Content-Type must be JSON (a missing one is taken as JSON). */
+static bool json_content_type(const char *ct)
+{
+    if (!ct)
+        return true;
+    while (*ct == ' ')
+        ct++;
+    size_t n = strcspn(ct, "; ");
+    return n == 16 && strncasecmp(ct, "application/json", 16) == 0;
+}
+
+static void client_of(struct MHD_Connection *c, char *out, size_t cap)
+{
+    const union MHD_ConnectionInfo *ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+    snprintf(out, cap, "-");
+    if (!ci || !ci->client_addr)
+        return;
+    const struct sockaddr *sa = ci->client_addr;
+    if (sa->sa_family == AF_INET)
+        inet_ntop(AF_INET, &((const struct sockaddr_in *)sa)->sin_addr, out, (socklen_t)cap);
+    else if (sa->sa_family == AF_INET6)
+        inet_ntop(AF_INET6, &((const struct sockaddr_in6 *)sa)->sin6_addr, out, (socklen_t)cap);
+}
+
+/* The first call: build the context, route, and reject what can be rejected before the body
+ * arrives. Only a 413 from Content-Length is answered now (the body is never read). */
+static enum MHD_Result first_call(ismd_server *s, struct MHD_Connection *conn, const char *url,
+                                  const char *method, void **con_cls)
+{
+    ismd_req *r = calloc(1, sizeof *r);
+    if (!r)
+        return MHD_NO;
+    r->srv = s;
+    r->conn = conn;
+    r->t0_ns = ismd_now_ns();
+    snprintf(r->method, sizeof r->method, "%s", method);
+    snprintf(r->path, sizeof r->path, "%s", url);
+    for (char *p = r->path; *p; p++)
+        if ((unsigned char)*p < 0x20 || (unsigned char)*p == 0x7f)
+            *p = '?';
+    client_of(conn, r->client, sizeof r->client);
+    *con_cls = r;
+    atomic_fetch_add(&s->open_requests, 1);
+
+    route(r, url);
+    if (r->early_status)
+        return MHD_YES;
+    if (!strcmp(method, "OPTIONS"))
+        return MHD_YES;
+    if (!method_allowed(r->allow, method) &&
+        !(!strcmp(method, "HEAD") && method_allowed(r->allow, "GET"))) {
+        early(r, 405, "method_not_allowed", "this method is not allowed here (see Allow)");
+        r->wants_body = false;
+        return MHD_YES;
+    }
+    if (r->route == ISMD_R_JOB)
+        r->handler = !strcmp(method, "DELETE") ? ismd_route_job_delete : ismd_route_job_get;
+    if (!r->wants_body)
+        return MHD_YES;
+    const char *cl = ismd_header(r, MHD_HTTP_HEADER_CONTENT_LENGTH);
+    if (cl) {
+        char *end;
+        unsigned long long n = strtoull(cl, &end, 10);
+        if (n > s->cfg->max_body) {
+            char msg[128];
+            snprintf(msg, sizeof msg, "the request body is over the limit of %zu bytes (--max-body)",
+                     s->cfg->max_body);
+            ism_blob *b = ismd_error_json("body_too_large", msg, NULL);
+            enum MHD_Result ok = b ? ismd_respond_error_blob(r, 413, b) : MHD_NO;
+            ism_blob_unref(b);
+            return ok;
+        }
+    }
+    if (!json_content_type(ismd_header(r, MHD_HTTP_HEADER_CONTENT_TYPE))) {
+        early(r, 415, "unsupported_media_type",
+              "send the request as Content-Type: application/json");
+        r->wants_body = false;
+    }
+    return MHD_YES;
+}
+
+static enum MHD_Result take_body(ismd_req *r, const char *data, size_t *size)
+{
+    size_t n = *size;
+    *size = 0;
+    size_t max = r->srv->cfg->max_body;
+    if (!r->wants_body || r->body_too_big || r->status) {
+        r->discarded += n;
+        return r->discarded > DISCARD_FACTOR * max ? MHD_NO : MHD_YES;
+    }
+    if (r->body_len + n > max) {
+        r->body_too_big = true;
+        r->discarded += r->body_len + n;
+        free(r->body);
+        r->body = NULL;
+        r->body_len = r->body_cap = 0;
+        return MHD_YES;
+    }
+    if (r->body_len + n + 1 > r->body_cap) {
+        size_t cap = r->body_cap ? r->body_cap : 1024;
+        while (cap < r->body_len + n + 1)
+            cap *= 2;
+        if (cap > max + 1)
+            cap = max + 1;
+        char *b = realloc(r->body, cap);
+        if (!b)
+            return MHD_NO;
+        r->body = b;
+        r->body_cap = cap;
+    }
+    memcpy(r->body + r->body_len, data, n);
+    r->body_len += n;
+    r->body[r->body_len] = 0;
+    return MHD_YES;
+}
+
+static enum MHD_Result preflight(ismd_req *r)
+{
+    struct MHD_Response *resp = MHD_create_response_from_buffer(0, "", MHD_RESPMEM_PERSISTENT);
+    if (!resp)
+        return MHD_NO;
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, r->allow);
+    if (r->srv->cfg->cors_origin[0]) {
+        MHD_add_response_header(resp, "Access-Control-Allow-Methods", r->allow);
+        MHD_add_response_header(resp, "Access-Control-Allow-Headers", "Content-Type, If-None-Match");
+        MHD_add_response_header(resp, "Access-Control-Max-Age", "600");
+    }
+    return ismd_send(r, 204, resp);
+}
+
+static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const char *url,
+                                  const char *method, const char *version,
+                                  const char *upload_data, size_t *upload_size, void **con_cls)
+{
+    (void)version;
+    ismd_server *s = cls;
+    ismd_req *r = *con_cls;
+    if (!r)
+        return first_call(s, conn, url, method, con_cls);
+    if (*upload_size)
+        return take_body(r, upload_data, upload_size);
+    if (r->status)
+        return MHD_YES; /* already answered (a 413 on the first call) */
+    if (r->ready) {
+        r->ready = false;
+        return r->on_ready(r);
+    }
+    if (r->early_status)
+        return ismd_respond_error(r, r->early_status, r->early_code, r->early_msg);
+    if (!strcmp(r->method, "OPTIONS"))
+        return preflight(r);
+    if (r->body_too_big) {
+        char msg[128];
+        snprintf(msg, sizeof msg, "the request body is over the limit of %zu bytes (--max-body)",
+                 s->cfg->max_body);
+        return ismd_respond_error(r, 413, "body_too_large", msg);
+    }
+    return r->handler(r);
+}
+
+/* ---- completion: log line, metrics, cleanup ------------------------------------------ */
+
+static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
+                         enum MHD_RequestTerminationCode toe)
+{
+    (void)conn;
+    ismd_server *s = cls;
+    ismd_req *r = *con_cls;
+    if (!r)
+        return;
+    *con_cls = NULL;
+    if (r->waiter.flight) { /* never expected: a completed request is not suspended */
+        ismd_sched_lock(&s->sched);
+        ismd_sched_detach(&s->sched, &r->waiter);
+        ismd_sched_unlock(&s->sched);
+    }
+    double secs = (ismd_now_ns() - r->t0_ns) / 1e9;
+    unsigned status = r->status ? r->status : 499; /* the client left before an answer */
+    ismd_metrics_request(&s->metrics, r->route, status, secs, r->bytes);
+    ism_log_field f[] = {
+        ISM_LS("method", r->method),
+        ISM_LS("path", r->path),
+        ISM_LI("status", status),
+        ISM_LI("bytes", r->bytes),
+        ISM_LN("ms", secs * 1e3),
+        ISM_LS("cache", r->cache),
+        ISM_LS("key", r->key[0] ? r->key : NULL),
+        ISM_LS("client", r->client),
+        ISM_LS("end", toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? "ok" : "aborted"),
+    };
+    ism_log_fields(ISM_LOG_INFO, "request", f, sizeof f / sizeof f[0]);
+    ism_blob_unref(r->r_body);
+    ism_blob_unref(r->r_stats);
+    ism_blob_unref(r->r_features);
+    free(r->body);
+    free(r);
+    atomic_fetch_sub(&s->open_requests, 1);
+}
+
+/* ---- URL unescaping: %XX, but an encoded NUL, '/' or '\' becomes a byte no route or path
+ * check accepts (0x01), so such URLs always end in 404. ----------------------------------- */
+
+static int hexval(char c)
+{
+    if (c >= '0' && c <= '9')
+        return c - '0';
+    c = (char)tolower((unsigned char)c);
+    return c >= 'a' && c <= 'f' ? c - 'a' + 10 : -1;
+}
+
+static size_t unescape(void *cls, struct MHD_Connection *c, char *s)
+{
+    (void)cls;
+    (void)c;
+    char *w = s;
+    for (const char *p = s; *p; p++) {
+        int hi, lo;
+        if (*p == '%' && (hi = hexval(p[1])) >= 0 && (lo = hexval(p[2])) >= 0) {
+            int v = hi * 16 + lo;
+            *w++ = (v == 0 || v == '/' || v == '\\') ? 1 : (char)v;
+            p += 2;
+        } else if (*p == '%') {
+            *w++ = 1; /* a stray '%' */
+        } else {
+            *w++ = *p;
+        }
+    }
+    *w = 0;
+    return (size_t)(w - s);
+}
+
+static void mhd_log(void *cls, const char *fmt, va_list ap)
+{
+    (void)cls;
+    char msg[512];
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    size_t n = strlen(msg);
+    while (n && (msg[n - 1] == '\n' || msg[n - 1] == ' '))
+        msg[--n] = 0;
+    ism_logf(ISM_LOG_WARN, "http_library", "%s", msg);
+}
+
+bool ismd_http_start(ismd_server *s, int listen_fd)
+{
+    s->listen_fd = listen_fd;
+    s->mhd = MHD_start_daemon(
+        MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME |
+            MHD_USE_ERROR_LOG,
+        0, NULL, NULL, on_request, s,
+        MHD_OPTION_EXTERNAL_LOGGER, mhd_log, s,
+        MHD_OPTION_LISTEN_SOCKET, listen_fd,
+        MHD_OPTION_NOTIFY_COMPLETED, on_completed, s,
+        MHD_OPTION_UNESCAPE_CALLBACK, unescape, s,
+        MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)60,
+        MHD_OPTION_CONNECTION_LIMIT, (unsigned)4000,
+        MHD_OPTION_LISTEN_BACKLOG_SIZE, (unsigned)1024,
+        MHD_OPTION_SIGPIPE_HANDLED_BY_APP, 1,
+        MHD_OPTION_END);
+    if (!s->mhd) {
+        ism_logf(ISM_LOG_ERROR, "http_start_failed", "libmicrohttpd did not start");
+        return false;
+    }
+    return true;
+}
+
+void ismd_http_quiesce(ismd_server *s)
+{
+    if (!s->mhd)
+        return;
+    MHD_socket fd = MHD_quiesce_daemon(s->mhd);
+    if (fd != MHD_INVALID_SOCKET)
+        shutdown(fd, SHUT_RDWR); /* refuse new connections now; closed after the stop */
+}
+
+void ismd_http_stop(ismd_server *s, double max_s)
+{
+    if (!s->mhd)
+        return;
+    long long until = ismd_now_ns() + (long long)(max_s * 1e9);
+    while (atomic_load(&s->open_requests) > 0 && ismd_now_ns() < until)
+        usleep(10000);
+    MHD_stop_daemon(s->mhd);
+    s->mhd = NULL;
+    if (s->listen_fd >= 0)
+        close(s->listen_fd);
+    s->listen_fd = -1;
+}

@@ -1,0 +1,133 @@
+/* http.h — isomeshd's HTTP front: the server state every route sees, the per-request context,
+ * libmicrohttpd set-up (one epoll polling thread, suspend/resume), the request life cycle
+ * (first call: route, 413/415 checks; body calls; answer on a later call), and the response
+ * helpers that add the common headers, record the status for the log and the metrics.
+ *
+ * A request that needs a computation joins or starts a flight (sched.h) and suspends its
+ * connection; the flight's end resumes it and the handler's next call answers. Nothing in the
+ * MHD thread ever blocks on a worker. */
+#ifndef ISMD_HTTP_H
+#define ISMD_HTTP_H
+
+#include <microhttpd.h>
+#include <stdatomic.h>
+#include <stdbool.h>
+
+#include "server/common/blob.h"
+#include "server/common/cache.h"
+#include "server/common/pipeline.h"
+#include "server/isomeshd/config.h"
+#include "server/isomeshd/metrics.h"
+#include "server/isomeshd/sched.h"
+#include "server/isomeshd/static_files.h"
+
+typedef struct ismd_pool ismd_pool;
+typedef struct ismd_jobs ismd_jobs;
+
+typedef struct ismd_server {
+    const ismd_config *cfg;
+    ismd_metrics metrics;
+    ism_cache cache;
+    ism_cache_tier *disk;
+    ismd_sched sched;
+    ismd_pool *pool;
+    ismd_jobs *jobs;
+    ism_pipeline_limits limits;
+    ismd_static web, vendor;
+    ism_blob *openapi, *schema, *presets;
+    struct MHD_Daemon *mhd;
+    atomic_bool draining;
+    atomic_long open_requests;   /* contexts created and not yet completed */
+    int listen_fd;
+} ismd_server;
+
+/* What a suspended request does when its flight ends. */
+typedef enum ismd_want { ISMD_WANT_MESH, ISMD_WANT_STATS, ISMD_WANT_FEATURES } ismd_want;
+
+typedef struct ismd_req ismd_req;
+typedef enum MHD_Result (*ismd_handler)(ismd_req *r);
+
+struct ismd_req {
+    ismd_server *srv;
+    struct MHD_Connection *conn;
+    ismd_route route;
+    char method[8];
+    char path[512];            /* URL path, truncated for the log */
+    char client[64];
+    long long t0_ns;
+    /* body */
+    char *body;
+    size_t body_len, body_cap, discarded;
+    bool wants_body, body_too_big;
+    /* an error decided on the first call, answered once the body is read */
+    unsigned early_status;
+    const char *early_code;
+    char early_msg[256];
+    const char *allow;         /* Allow header for 405 / OPTIONS */
+    /* route parameters */
+    char key[65];
+    char fmt[8];
+    char id[40];
+    ismd_want want;
+    ismd_handler handler;      /* the route's answer, run once the body is in */
+    ismd_handler on_ready;     /* answers after a flight resumed us */
+    /* waiting for a flight */
+    ismd_waiter waiter;
+    bool suspended, ready;
+    unsigned r_status;
+    ism_blob *r_body, *r_stats, *r_features;
+    const char *r_ctype;
+    double queue_ms, worker_ms, parse_ms;
+    char timing[256];
+    /* for the log line */
+    unsigned status;
+    size_t bytes;
+    const char *cache;         /* "hit", "miss", NULL */
+};
+
+/* Starts MHD on an already listening socket. False on failure (logged). */
+bool ismd_http_start(ismd_server *s, int listen_fd);
+/* Stops accepting new connections (closes the listening socket). */
+void ismd_http_quiesce(ismd_server *s);
+/* Waits up to max_s seconds for open requests to finish, then stops MHD. */
+void ismd_http_stop(ismd_server *s, double max_s);
+
+/* ---- response helpers (queue the response; return what the handler returns) ---------- */
+
+/* Adds CORS and nosniff headers, records status and size, queues and releases resp. */
+enum MHD_Result ismd_send(ismd_req *r, unsigned status, struct MHD_Response *resp);
+/* A response sharing b's bytes (b gets one more reference, dropped when MHD is done). */
+struct MHD_Response *ismd_response_blob(ism_blob *b, const char *content_type);
+struct MHD_Response *ismd_response_text(const char *text, const char *content_type);
+enum MHD_Result ismd_respond_error(ismd_req *r, unsigned status, const char *code,
+                                   const char *message);
+/* An error whose JSON body is already made (e.g. the pipeline's). */
+enum MHD_Result ismd_respond_error_blob(ismd_req *r, unsigned status, ism_blob *json);
+enum MHD_Result ismd_respond_json(ismd_req *r, unsigned status, const char *json);
+
+/* Joins or starts the flight for key.fmt (request = canonical request JSON) and suspends
+ * the connection; on_ready answers once it ends. A memory-cache hit found under the lock
+ * answers at once through on_ready as well. Errors (429, 503) are answered here. */
+enum MHD_Result ismd_wait_for(ismd_req *r, const char *key, const char *fmt,
+                              ism_blob *request, ismd_handler on_ready);
+
+/* A request header value or NULL. */
+const char *ismd_header(ismd_req *r, const char *name);
+/* A query argument or NULL. */
+const char *ismd_query(ismd_req *r, const char *name);
+
+/* ---- routes (routes_*.c) ------------------------------------------------------------- */
+
+enum MHD_Result ismd_route_mesh_post(ismd_req *r);       /* POST /v1/mesh */
+enum MHD_Result ismd_route_mesh_get(ismd_req *r);        /* GET /v1/meshes/{key}.{fmt} */
+enum MHD_Result ismd_route_mesh_json(ismd_req *r);       /* GET /v1/meshes/{key}/stats|features */
+enum MHD_Result ismd_route_jobs_post(ismd_req *r);       /* POST /v1/jobs */
+enum MHD_Result ismd_route_job_get(ismd_req *r);         /* GET /v1/jobs/{id} */
+enum MHD_Result ismd_route_job_delete(ismd_req *r);      /* DELETE /v1/jobs/{id} */
+enum MHD_Result ismd_route_job_events(ismd_req *r);      /* GET /v1/jobs/{id}/events */
+enum MHD_Result ismd_route_doc(ismd_req *r);             /* presets, openapi, schema */
+enum MHD_Result ismd_route_health(ismd_req *r);          /* /healthz, /readyz */
+enum MHD_Result ismd_route_metrics(ismd_req *r);         /* /metrics */
+enum MHD_Result ismd_route_static(ismd_req *r);          /* the viewer and /vendor/three */
+
+#endif

@@ -1,0 +1,54 @@
+/* jobs.h — asynchronous jobs (POST /v1/jobs): a job is a waiter on a flight (sched.h) with an
+ * id, a state (queued, running, done, failed, canceled), a progress fraction and, at the end,
+ * the mesh's stats or the error. Server-sent event streams (GET /v1/jobs/{id}/events) follow
+ * a job: each change resumes the suspended stream, which sends the latest state (progress
+ * events coalesce when a client reads slowly) and ends after the final state.
+ *
+ * Finished jobs are kept for a while (JOB_TTL in jobs.c) and the table is bounded. All calls
+ * below need the scheduler's lock (ismd_sched_lock) unless they say otherwise. */
+#ifndef ISMD_JOBS_H
+#define ISMD_JOBS_H
+
+#include <jansson.h>
+#include <microhttpd.h>
+#include <stdbool.h>
+
+#include "server/common/blob.h"
+#include "server/isomeshd/metrics.h"
+#include "server/isomeshd/sched.h"
+
+typedef struct ismd_jobs ismd_jobs;
+typedef struct ismd_job ismd_job;
+
+typedef enum ismd_job_state {
+    ISMD_JOB_QUEUED, ISMD_JOB_RUNNING, ISMD_JOB_DONE, ISMD_JOB_FAILED, ISMD_JOB_CANCELED
+} ismd_job_state;
+
+/* Lock not needed. */
+ismd_jobs *ismd_jobs_new(ismd_metrics *metrics);
+void ismd_jobs_free(ismd_jobs *j);
+
+/* A new queued job for key.fmt (NULL when the table is full of live jobs). Its waiter is
+ * ismd_job_waiter(job); submit it to the scheduler, then call ismd_jobs_submitted. */
+ismd_job *ismd_jobs_create(ismd_jobs *j, const char *key, const char *fmt);
+ismd_waiter *ismd_job_waiter(ismd_job *job);
+/* Drops a job whose submission failed. */
+void ismd_jobs_discard(ismd_jobs *j, ismd_job *job);
+/* Marks a job done at once (its mesh was cached); stats may be NULL. */
+void ismd_jobs_complete_cached(ismd_jobs *j, ismd_job *job, ism_blob *stats);
+
+ismd_job *ismd_jobs_find(ismd_jobs *j, const char *id);
+const char *ismd_job_id(const ismd_job *job);
+/* The job as JSON (caller owns the reference). */
+json_t *ismd_job_json(const ismd_job *job);
+/* Cancels a live job (no effect on a finished one). */
+void ismd_jobs_cancel(ismd_jobs *j, ismd_sched *s, ismd_job *job);
+
+/* An event-stream response following job (NULL when out of memory). conn is the connection
+ * the response will be queued on; sched is the lock's owner. */
+struct MHD_Response *ismd_jobs_stream(ismd_jobs *j, ismd_sched *s, ismd_job *job,
+                                      struct MHD_Connection *conn);
+/* Shutdown: every stream sends its last event and ends; new streams end at once. */
+void ismd_jobs_close_streams(ismd_jobs *j);
+
+#endif

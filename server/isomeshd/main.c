@@ -1,0 +1,243 @@
+/* main.c — isomeshd's start-up and shutdown: settings, logging, cache tiers, scheduler, jobs,
+ * documents and static roots, the listening socket, the worker pool and the HTTP front; then
+ * it waits for SIGTERM/SIGINT and stops in order: refuse new connections, finish or cancel
+ * computations within a bound, end event streams, let answers drain, stop HTTP, flush and
+ * close the cache. */
+#include <errno.h>
+#include <fcntl.h>
+#include <netdb.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "core/version.h"
+#include "proto/presets.h"
+#include "server/common/cache_disk.h"
+#include "server/common/cache_mem.h"
+#include "server/common/log.h"
+#include "server/isomeshd/config.h"
+#include "server/isomeshd/http.h"
+#include "server/isomeshd/jobs.h"
+#include "server/isomeshd/worker_pool.h"
+
+#define DOC_MAX (8u << 20)
+#define DISK_WRITE_QUEUE ((size_t)256 << 20)
+#define MAX_STOP_GRACE_S 10.0
+
+/* Reads a whole small file into a blob (NULL when missing or too big). */
+static ism_blob *load_doc(const char *dir, const char *name)
+{
+    if (!*dir)
+        return NULL;
+    char path[8192];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return NULL;
+    struct stat st;
+    ism_blob *b = NULL;
+    if (fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && (size_t)st.st_size <= DOC_MAX &&
+        (b = ism_blob_new((size_t)st.st_size))) {
+        size_t got = 0;
+        while (got < b->len) {
+            ssize_t n = read(fd, b->data + got, b->len - got);
+            if (n < 0 && errno == EINTR)
+                continue;
+            if (n <= 0)
+                break;
+            got += (size_t)n;
+        }
+        if (got != b->len) {
+            ism_blob_unref(b);
+            b = NULL;
+        }
+    }
+    close(fd);
+    return b;
+}
+
+static void load_docs(ismd_server *s, const ismd_config *cfg)
+{
+    s->openapi = load_doc(cfg->data_dir, "openapi.yaml");
+    s->schema = load_doc(cfg->data_dir, "request.schema.json");
+    size_t plen = 0;
+    char *presets = ism_presets_json(&plen);
+    s->presets = presets ? ism_blob_copy(presets, plen) : NULL;
+    free(presets);
+    const char *missing[2];
+    int n = 0;
+    if (!s->openapi)
+        missing[n++] = "openapi.yaml";
+    if (!s->schema)
+        missing[n++] = "request.schema.json";
+    for (int i = 0; i < n; i++)
+        ism_logf(ISM_LOG_WARN, "document_missing", "%s not found in --data-dir '%s'", missing[i],
+                 cfg->data_dir);
+}
+
+static void open_static(ismd_server *s, const ismd_config *cfg)
+{
+    s->web.root_fd = s->vendor.root_fd = -1;
+    if (!cfg->web_root[0])
+        return;
+    if (!ismd_static_open(&s->web, cfg->web_root)) {
+        ism_logf(ISM_LOG_WARN, "web_root_unusable", "--web-root '%s': %s; serving no viewer",
+                 cfg->web_root, strerror(errno));
+        return;
+    }
+    char three[8192];
+    snprintf(three, sizeof three, "%s/node_modules/three", s->web.root);
+    if (!ismd_static_open(&s->vendor, three))
+        ism_logf(ISM_LOG_WARN, "vendor_missing", "%s not found (run `make web-deps`)", three);
+}
+
+/* A listening TCP socket for host:port; -1 with a logged reason. */
+static int listen_on(const char *host, unsigned short port, unsigned short *bound)
+{
+    struct addrinfo hints = {.ai_family = AF_UNSPEC, .ai_socktype = SOCK_STREAM,
+                             .ai_flags = AI_PASSIVE | AI_NUMERICSERV};
+    struct addrinfo *res = NULL;
+    char portstr[8];
+    snprintf(portstr, sizeof portstr, "%u", port);
+    int rc = getaddrinfo(host, portstr, &hints, &res);
+    if (rc != 0) {
+        ism_logf(ISM_LOG_ERROR, "listen_failed", "--listen %s:%u: %s", host, port, gai_strerror(rc));
+        return -1;
+    }
+    int fd = -1, err = 0;
+    for (struct addrinfo *ai = res; ai; ai = ai->ai_next) {
+        fd = socket(ai->ai_family, ai->ai_socktype | SOCK_CLOEXEC, ai->ai_protocol);
+        if (fd < 0) {
+            err = errno;
+            continue;
+        }
+        int one = 1;
+        setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+        if (bind(fd, ai->ai_addr, ai->ai_addrlen) == 0 && listen(fd, 1024) == 0)
+            break;
+        err = errno;
+        close(fd);
+        fd = -1;
+    }
+    freeaddrinfo(res);
+    if (fd < 0) {
+        ism_logf(ISM_LOG_ERROR, "listen_failed", "--listen %s:%u: %s", host, port, strerror(err));
+        return -1;
+    }
+    struct sockaddr_storage ss;
+    socklen_t len = sizeof ss;
+    *bound = port;
+    if (getsockname(fd, (struct sockaddr *)&ss, &len) == 0) {
+        if (ss.ss_family == AF_INET)
+            *bound = ntohs(((struct sockaddr_in *)&ss)->sin_port);
+        else if (ss.ss_family == AF_INET6)
+            *bound = ntohs(((struct sockaddr_in6 *)&ss)->sin6_port);
+    }
+    return fd;
+}
+
+static void raise_fd_limit(void)
+{
+    struct rlimit rl;
+    if (getrlimit(RLIMIT_NOFILE, &rl) == 0 && rl.rlim_cur < rl.rlim_max) {
+        rl.rlim_cur = rl.rlim_max;
+        setrlimit(RLIMIT_NOFILE, &rl);
+    }
+}
+
+static bool setup_cache(ismd_server *s, const ismd_config *cfg)
+{
+    if (cfg->cache_mem) {
+        ism_cache_tier *mem = ism_cache_mem_new(cfg->cache_mem);
+        if (!mem || !ism_cache_add_tier(&s->cache, mem))
+            return false;
+    }
+    s->disk = ism_cache_disk_new(cfg->cache_dir, DISK_WRITE_QUEUE);
+    return s->disk && ism_cache_add_tier(&s->cache, s->disk);
+}
+
+int main(int argc, char **argv)
+{
+    static ismd_config cfg;
+    int rc = ismd_config_load(&cfg, argc, argv);
+    if (rc)
+        return rc == 1 ? 0 : 2;
+    ism_log_setup("isomeshd", cfg.log_format);
+    signal(SIGPIPE, SIG_IGN);
+    signal(SIGHUP, SIG_IGN);
+    sigset_t stop_signals;
+    sigemptyset(&stop_signals);
+    sigaddset(&stop_signals, SIGTERM);
+    sigaddset(&stop_signals, SIGINT);
+    pthread_sigmask(SIG_BLOCK, &stop_signals, NULL); /* every thread inherits this */
+    raise_fd_limit();
+
+    static ismd_server s;
+    s.cfg = &cfg;
+    s.listen_fd = -1;
+    ismd_metrics_init(&s.metrics);
+    ism_pipeline_limits_default(&s.limits);
+    s.limits.max_depth = cfg.max_depth;
+    s.limits.max_triangles = cfg.max_triangles;
+    if (!setup_cache(&s, &cfg) ||
+        !ismd_sched_init(&s.sched, ismd_queue_fifo_new((size_t)cfg.queue), cfg.job_timeout_s,
+                         cfg.client_jobs, &s.metrics) ||
+        !(s.jobs = ismd_jobs_new(&s.metrics))) {
+        ism_logf(ISM_LOG_ERROR, "startup_failed", "out of memory");
+        return 1;
+    }
+    load_docs(&s, &cfg);
+    open_static(&s, &cfg);
+
+    unsigned short port = 0;
+    int lfd = listen_on(cfg.listen_host, cfg.listen_port, &port);
+    if (lfd < 0)
+        return 1;
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    int threads = cores > cfg.workers ? (int)(cores / cfg.workers) : 1;
+    ismd_pool_config pc = {
+        .workers = cfg.workers,
+        .worker_path = cfg.worker_path,
+        .job_memory = cfg.job_memory,
+        .max_depth = cfg.max_depth,
+        .max_triangles = cfg.max_triangles,
+        .threads = threads,
+    };
+    s.pool = ismd_pool_start(&pc, &s.sched, &s.cache, &s.metrics);
+    if (!s.pool || !ismd_http_start(&s, lfd))
+        return 1;
+    ism_log_field f[] = {
+        ISM_LS("host", cfg.listen_host), ISM_LI("port", port), ISM_LI("workers", cfg.workers),
+        ISM_LS("cache_dir", cfg.cache_dir), ISM_LS("web_root", s.web.root_fd >= 0 ? s.web.root : NULL),
+        ISM_LS("data_dir", cfg.data_dir), ISM_LS("version", ISM_VERSION " " ISM_MESHER_VERSION),
+    };
+    ism_log_fields(ISM_LOG_INFO, "listening", f, sizeof f / sizeof f[0]);
+
+    int sig = 0;
+    while (sigwait(&stop_signals, &sig) != 0)
+        ;
+    ism_logf(ISM_LOG_INFO, "stopping", "signal %d: finishing in-flight work", sig);
+    atomic_store(&s.draining, true);
+    ismd_http_quiesce(&s);
+    double grace = cfg.job_timeout_s < MAX_STOP_GRACE_S ? cfg.job_timeout_s : MAX_STOP_GRACE_S;
+    ismd_pool_stop(s.pool, grace);
+    ismd_sched_lock(&s.sched);
+    ismd_jobs_close_streams(s.jobs);
+    ismd_sched_unlock(&s.sched);
+    ismd_http_stop(&s, 3.0);
+    ismd_jobs_free(s.jobs);
+    ismd_sched_destroy(&s.sched);
+    ism_cache_close(&s.cache);
+    ism_blob_unref(s.openapi);
+    ism_blob_unref(s.schema);
+    ism_blob_unref(s.presets);
+    ismd_static_close(&s.web);
+    ismd_static_close(&s.vendor);
+    ism_logf(ISM_LOG_INFO, "stopped", "clean shutdown");
+    return 0;
+}

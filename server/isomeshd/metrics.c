@@ -1,0 +1,262 @@
+/* metrics.c — the figures of metrics.h: recording (relaxed atomics, no locks) and the
+ * Prometheus text rendering (HELP/TYPE lines, cumulative histogram buckets). */
+#include "server/isomeshd/metrics.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const ROUTE_LABELS[ISMD_R_COUNT] = {
+    "/v1/mesh", "/v1/jobs", "/v1/jobs/{id}", "/v1/jobs/{id}/events",
+    "/v1/meshes/{key}.{format}", "/v1/meshes/{key}/stats", "/v1/meshes/{key}/features",
+    "/v1/presets", "/v1/openapi.yaml", "/v1/request.schema.json", "/healthz", "/readyz",
+    "/metrics", "static", "/vendor/three", "other",
+};
+
+static const unsigned STATUSES[ISMD_NSTATUS - 1] = {200, 202, 204, 206, 304, 400, 403, 404,
+                                                    405, 408, 413, 415, 422, 429, 431, 499,
+                                                    500, 503, 504};
+
+static const double LAT_BOUNDS[ISMD_LAT_BUCKETS - 1] = {
+    0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 30, 60};
+static const double POLY_BOUNDS[ISMD_POLY_BUCKETS - 1] = {
+    0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 30, 60, 300};
+
+static const char *const RESTART_LABELS[ISMD_RESTART_COUNT] = {"crash", "deadline", "cancel",
+                                                                "protocol"};
+static const char *const OUTCOME_LABELS[ISMD_OUT_COUNT] = {"ok", "rejected", "error",
+                                                           "deadline", "crash", "canceled"};
+
+const char *ismd_route_label(ismd_route r)
+{
+    return r < ISMD_R_COUNT ? ROUTE_LABELS[r] : "other";
+}
+
+void ismd_metrics_init(ismd_metrics *m)
+{
+    memset(m, 0, sizeof *m);
+}
+
+static size_t status_slot(unsigned status)
+{
+    for (size_t i = 0; i < ISMD_NSTATUS - 1; i++)
+        if (STATUSES[i] == status)
+            return i;
+    return ISMD_NSTATUS - 1;
+}
+
+static void observe(ismd_histogram *h, const double *bounds, size_t nb, double seconds)
+{
+    size_t i = 0;
+    while (i < nb && seconds > bounds[i])
+        i++;
+    atomic_fetch_add_explicit(&h->bucket[i], 1, memory_order_relaxed);
+    atomic_fetch_add_explicit(&h->count, 1, memory_order_relaxed);
+    double us = seconds * 1e6;
+    atomic_fetch_add_explicit(&h->sum_us, us > 0 ? (unsigned long long)us : 0, memory_order_relaxed);
+}
+
+void ismd_metrics_request(ismd_metrics *m, ismd_route r, unsigned status, double seconds,
+                          size_t bytes)
+{
+    if (r >= ISMD_R_COUNT)
+        r = ISMD_R_OTHER;
+    atomic_fetch_add_explicit(&m->requests[r][status_slot(status)], 1, memory_order_relaxed);
+    observe(&m->latency[r], LAT_BOUNDS, ISMD_LAT_BUCKETS - 1, seconds);
+    atomic_fetch_add_explicit(&m->response_bytes, bytes, memory_order_relaxed);
+}
+
+void ismd_metrics_polygonise(ismd_metrics *m, double seconds)
+{
+    observe(&m->polygonise, POLY_BOUNDS, ISMD_POLY_BUCKETS - 1, seconds);
+}
+
+/* ---- rendering ----------------------------------------------------------------------- */
+
+typedef struct out {
+    char *s;
+    size_t len, cap;
+    int failed;
+} out;
+
+static void emit(out *o, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void emit(out *o, const char *fmt, ...)
+{
+    if (o->failed)
+        return;
+    for (;;) {
+        va_list ap;
+        va_start(ap, fmt);
+        int n = vsnprintf(o->s + o->len, o->cap - o->len, fmt, ap);
+        va_end(ap);
+        if (n < 0) {
+            o->failed = 1;
+            return;
+        }
+        if ((size_t)n < o->cap - o->len) {
+            o->len += (size_t)n;
+            return;
+        }
+        size_t cap = o->cap * 2 + (size_t)n;
+        char *s = realloc(o->s, cap);
+        if (!s) {
+            o->failed = 1;
+            return;
+        }
+        o->s = s;
+        o->cap = cap;
+    }
+}
+
+static unsigned long long ld(atomic_ullong *a)
+{
+    return atomic_load_explicit(a, memory_order_relaxed);
+}
+
+static void header(out *o, const char *name, const char *type, const char *help)
+{
+    emit(o, "# HELP %s %s\n# TYPE %s %s\n", name, help, name, type);
+}
+
+static void histogram(out *o, const char *name, const char *labels, ismd_histogram *h,
+                      const double *bounds, size_t nb)
+{
+    unsigned long long cum = 0;
+    const char *sep = *labels ? "," : "";
+    for (size_t i = 0; i <= nb; i++) {
+        cum += ld(&h->bucket[i]);
+        if (i < nb)
+            emit(o, "%s_bucket{%s%sle=\"%g\"} %llu\n", name, labels, sep, bounds[i], cum);
+        else
+            emit(o, "%s_bucket{%s%sle=\"+Inf\"} %llu\n", name, labels, sep, cum);
+    }
+    const char *open = *labels ? "{" : "", *close = *labels ? "}" : "";
+    emit(o, "%s_sum%s%s%s %.6f\n", name, open, labels, close, ld(&h->sum_us) / 1e6);
+    emit(o, "%s_count%s%s%s %llu\n", name, open, labels, close, ld(&h->count));
+}
+
+static void gauge(out *o, const char *name, const char *help, long long v)
+{
+    header(o, name, "gauge", help);
+    emit(o, "%s %lld\n", name, v);
+}
+
+static void render_cache(out *o, const ism_cache *cache)
+{
+    static const struct {
+        const char *name, *type, *help;
+        size_t off;
+    } F[] = {
+        {"isomesh_cache_tier_hits_total", "counter", "Lookups answered by this cache tier.",
+         offsetof(ism_cache_counters, hits)},
+        {"isomesh_cache_tier_misses_total", "counter", "Lookups this cache tier could not answer.",
+         offsetof(ism_cache_counters, misses)},
+        {"isomesh_cache_tier_stores_total", "counter", "Entries written to this cache tier.",
+         offsetof(ism_cache_counters, stores)},
+        {"isomesh_cache_store_failures_total", "counter",
+         "Entries not stored (disk full or unwritable, write queue full).",
+         offsetof(ism_cache_counters, store_failures)},
+        {"isomesh_cache_corrupt_total", "counter",
+         "Cache entries that failed their checksum and were dropped.",
+         offsetof(ism_cache_counters, corrupt)},
+        {"isomesh_cache_evictions_total", "counter", "Entries evicted to stay within budget.",
+         offsetof(ism_cache_counters, evictions)},
+        {"isomesh_cache_bytes", "gauge", "Bytes held by the cache tier (where known).",
+         offsetof(ism_cache_counters, bytes)},
+        {"isomesh_cache_entries", "gauge", "Entries held by the cache tier (where known).",
+         offsetof(ism_cache_counters, entries)},
+    };
+    for (size_t f = 0; f < sizeof F / sizeof F[0]; f++) {
+        header(o, F[f].name, F[f].type, F[f].help);
+        for (size_t t = 0; t < cache->ntiers; t++) {
+            ism_cache_tier *tier = cache->tiers[t];
+            atomic_ullong *v = (atomic_ullong *)((char *)&tier->counters + F[f].off);
+            emit(o, "%s{tier=\"%s\"} %llu\n", F[f].name, tier->name, ld(v));
+        }
+    }
+}
+
+char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
+{
+    out o = {.cap = 16384};
+    o.s = malloc(o.cap);
+    if (!o.s)
+        return NULL;
+    o.s[0] = 0;
+
+    header(&o, "isomesh_http_requests_total", "counter", "HTTP requests by route and status.");
+    for (int r = 0; r < ISMD_R_COUNT; r++)
+        for (int s = 0; s < ISMD_NSTATUS; s++) {
+            unsigned long long v = ld(&m->requests[r][s]);
+            if (!v)
+                continue;
+            if (s < ISMD_NSTATUS - 1)
+                emit(&o, "isomesh_http_requests_total{route=\"%s\",status=\"%u\"} %llu\n",
+                     ROUTE_LABELS[r], STATUSES[s], v);
+            else
+                emit(&o, "isomesh_http_requests_total{route=\"%s\",status=\"other\"} %llu\n",
+                     ROUTE_LABELS[r], v);
+        }
+    header(&o, "isomesh_http_request_duration_seconds", "histogram",
+           "Time from request to response sent, by route.");
+    for (int r = 0; r < ISMD_R_COUNT; r++) {
+        if (!ld(&m->latency[r].count))
+            continue;
+        char labels[96];
+        snprintf(labels, sizeof labels, "route=\"%s\"", ROUTE_LABELS[r]);
+        histogram(&o, "isomesh_http_request_duration_seconds", labels, &m->latency[r],
+                  LAT_BOUNDS, ISMD_LAT_BUCKETS - 1);
+    }
+    header(&o, "isomesh_http_response_bytes_total", "counter", "Response bytes queued.");
+    emit(&o, "isomesh_http_response_bytes_total %llu\n", ld(&m->response_bytes));
+
+    header(&o, "isomesh_cache_hits_total", "counter",
+           "Mesh, stats and features lookups answered from the cache.");
+    emit(&o, "isomesh_cache_hits_total %llu\n", ld(&m->mesh_hits));
+    header(&o, "isomesh_cache_misses_total", "counter",
+           "Mesh, stats and features lookups that needed a computation.");
+    emit(&o, "isomesh_cache_misses_total %llu\n", ld(&m->mesh_misses));
+    render_cache(&o, cache);
+
+    header(&o, "isomesh_computations_started_total", "counter",
+           "Computations started (identical requests in flight share one).");
+    emit(&o, "isomesh_computations_started_total %llu\n", ld(&m->computations_started));
+    header(&o, "isomesh_computations_total", "counter", "Finished computations by outcome.");
+    for (int i = 0; i < ISMD_OUT_COUNT; i++)
+        emit(&o, "isomesh_computations_total{outcome=\"%s\"} %llu\n", OUTCOME_LABELS[i],
+             ld(&m->computations[i]));
+    header(&o, "isomesh_singleflight_joins_total", "counter",
+           "Requests that joined an identical computation already in flight.");
+    emit(&o, "isomesh_singleflight_joins_total %llu\n", ld(&m->singleflight_joins));
+    header(&o, "isomesh_polygonise_seconds", "histogram",
+           "Worker wall time per finished computation (polygonise, analyse, encode).");
+    histogram(&o, "isomesh_polygonise_seconds", "", &m->polygonise, POLY_BOUNDS,
+              ISMD_POLY_BUCKETS - 1);
+    header(&o, "isomesh_rejected_total", "counter", "Computations refused before queueing.");
+    emit(&o, "isomesh_rejected_total{reason=\"queue_full\"} %llu\n", ld(&m->rejected_queue_full));
+    emit(&o, "isomesh_rejected_total{reason=\"client_limit\"} %llu\n", ld(&m->rejected_client_limit));
+
+    header(&o, "isomesh_worker_restarts_total", "counter", "Worker processes replaced, by reason.");
+    for (int i = 0; i < ISMD_RESTART_COUNT; i++)
+        emit(&o, "isomesh_worker_restarts_total{reason=\"%s\"} %llu\n", RESTART_LABELS[i],
+             ld(&m->worker_restarts[i]));
+    header(&o, "isomesh_worker_spawn_failures_total", "counter", "Failed worker starts.");
+    emit(&o, "isomesh_worker_spawn_failures_total %llu\n", ld(&m->worker_spawn_failures));
+
+    gauge(&o, "isomesh_queue_depth", "Computations waiting for a worker.", m->queue_depth);
+    gauge(&o, "isomesh_queue_capacity", "Most computations that may wait.", m->queue_capacity);
+    gauge(&o, "isomesh_workers", "Worker process slots.", m->workers_total);
+    gauge(&o, "isomesh_workers_ready", "Workers running and ready.", m->workers_ready);
+    gauge(&o, "isomesh_workers_busy", "Workers computing a mesh.", m->workers_busy);
+    gauge(&o, "isomesh_jobs_active", "Jobs (POST /v1/jobs) queued or running.", m->jobs_active);
+    gauge(&o, "isomesh_event_streams", "Open job event streams.", m->event_streams);
+    gauge(&o, "isomesh_suspended_connections", "Connections waiting for a computation.",
+          m->suspended_connections);
+    if (o.failed) {
+        free(o.s);
+        return NULL;
+    }
+    *len = o.len;
+    return o.s;
+}

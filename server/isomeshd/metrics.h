@@ -1,0 +1,68 @@
+/* metrics.h — isomeshd's counters, gauges and histograms (lock-free atomics, updated from any
+ * thread) and their rendering in the Prometheus text exposition format for GET /metrics. */
+#ifndef ISMD_METRICS_H
+#define ISMD_METRICS_H
+
+#include <stdatomic.h>
+#include <stddef.h>
+
+#include "server/common/cache.h"
+
+/* Routes as they appear in the "route" label. */
+typedef enum ismd_route {
+    ISMD_R_MESH, ISMD_R_JOBS, ISMD_R_JOB, ISMD_R_JOB_EVENTS, ISMD_R_MESH_FILE,
+    ISMD_R_MESH_STATS, ISMD_R_MESH_FEATURES, ISMD_R_PRESETS, ISMD_R_OPENAPI, ISMD_R_SCHEMA,
+    ISMD_R_HEALTHZ, ISMD_R_READYZ, ISMD_R_METRICS, ISMD_R_STATIC, ISMD_R_VENDOR, ISMD_R_OTHER,
+    ISMD_R_COUNT
+} ismd_route;
+
+const char *ismd_route_label(ismd_route r);
+
+#define ISMD_NSTATUS 20       /* tracked status codes + "other" */
+#define ISMD_LAT_BUCKETS 17   /* request latency buckets incl. +Inf */
+#define ISMD_POLY_BUCKETS 14  /* computation time buckets incl. +Inf */
+
+typedef enum ismd_restart_reason {
+    ISMD_RESTART_CRASH, ISMD_RESTART_DEADLINE, ISMD_RESTART_CANCEL, ISMD_RESTART_PROTOCOL,
+    ISMD_RESTART_COUNT
+} ismd_restart_reason;
+
+typedef enum ismd_outcome {
+    ISMD_OUT_OK, ISMD_OUT_REJECTED, ISMD_OUT_ERROR, ISMD_OUT_DEADLINE, ISMD_OUT_CRASH,
+    ISMD_OUT_CANCELED, ISMD_OUT_COUNT
+} ismd_outcome;
+
+typedef struct ismd_histogram {
+    atomic_ullong bucket[ISMD_LAT_BUCKETS]; /* non-cumulative counts */
+    atomic_ullong count;
+    atomic_ullong sum_us;
+} ismd_histogram;
+
+typedef struct ismd_metrics {
+    atomic_ullong requests[ISMD_R_COUNT][ISMD_NSTATUS];
+    ismd_histogram latency[ISMD_R_COUNT];
+    atomic_ullong response_bytes;
+    atomic_ullong mesh_hits, mesh_misses;    /* mesh lookups answered from cache or not */
+    atomic_ullong computations_started;      /* worker jobs dispatched to a new computation */
+    atomic_ullong computations[ISMD_OUT_COUNT];
+    atomic_ullong singleflight_joins;        /* requests that joined a computation in flight */
+    atomic_ullong worker_restarts[ISMD_RESTART_COUNT];
+    atomic_ullong worker_spawn_failures;
+    ismd_histogram polygonise;               /* worker wall time per finished computation */
+    atomic_ullong rejected_queue_full, rejected_client_limit;
+    /* gauges */
+    atomic_llong queue_depth, queue_capacity;
+    atomic_llong workers_total, workers_ready, workers_busy;
+    atomic_llong jobs_active, event_streams, suspended_connections;
+} ismd_metrics;
+
+void ismd_metrics_init(ismd_metrics *m);
+void ismd_metrics_request(ismd_metrics *m, ismd_route r, unsigned status, double seconds,
+                          size_t bytes);
+void ismd_metrics_polygonise(ismd_metrics *m, double seconds);
+
+/* Renders everything (and the cache tiers' counters) as Prometheus text into a malloc'd
+ * string; *len gets its length. NULL when out of memory. */
+char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len);
+
+#endif

@@ -1,0 +1,147 @@
+/* routes_jobs.c — the job routes: POST /v1/jobs (202 with the job), GET /v1/jobs/{id},
+ * DELETE /v1/jobs/{id} (cancel), GET /v1/jobs/{id}/events (server-sent events). */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "server/isomeshd/http.h"
+#include "server/isomeshd/jobs.h"
+
+/* Answers with the job's JSON (lock held by the caller: the JSON is built under it). */
+static enum MHD_Result answer_job_locked(ismd_req *r, unsigned status, ismd_job *job,
+                                         bool location)
+{
+    json_t *o = ismd_job_json(job);
+    char *text = o ? json_dumps(o, JSON_COMPACT) : NULL;
+    json_decref(o);
+    char loc[80];
+    snprintf(loc, sizeof loc, "/v1/jobs/%s", ismd_job_id(job));
+    ismd_sched_unlock(&r->srv->sched);
+    if (!text)
+        return MHD_NO;
+    ism_blob *b = ism_blob_from_str(text);
+    free(text);
+    if (!b)
+        return MHD_NO;
+    struct MHD_Response *resp = ismd_response_blob(b, "application/json");
+    r->bytes = b->len;
+    ism_blob_unref(b);
+    if (!resp)
+        return MHD_NO;
+    if (location)
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_LOCATION, loc);
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
+    return ismd_send(r, status, resp);
+}
+
+static enum MHD_Result job_not_found(ismd_req *r)
+{
+    return ismd_respond_error(r, 404, "unknown_job", "no job with this id (finished jobs are "
+                                                     "kept for 30 minutes)");
+}
+
+enum MHD_Result ismd_route_jobs_post(ismd_req *r)
+{
+    ismd_server *s = r->srv;
+    ism_pipeline_result pr;
+    memset(&pr, 0, sizeof pr);
+    bool ok = ism_pipeline_key(r->body ? r->body : "", r->body_len, ismd_query(r, "format"),
+                               &s->limits, &pr);
+    if (!ok) {
+        unsigned status = pr.status >= 400 && pr.status <= 599 ? (unsigned)pr.status : 400;
+        ism_blob *b = pr.body.len ? ism_blob_copy(pr.body.data, pr.body.len) : NULL;
+        enum MHD_Result ret = b ? ismd_respond_error_blob(r, status, b)
+                                : ismd_respond_error(r, status, "bad_request", "the request was not accepted");
+        ism_blob_unref(b);
+        ism_pipeline_result_free(&pr);
+        return ret;
+    }
+    snprintf(r->key, sizeof r->key, "%s", pr.key);
+    snprintf(r->fmt, sizeof r->fmt, "%s", pr.format);
+    ism_blob *canonical = ism_blob_copy(pr.canonical.data, pr.canonical.len);
+    ism_pipeline_result_free(&pr);
+    if (!canonical)
+        return MHD_NO;
+
+    char name[ISM_CACHE_NAME_MAX], sname[ISM_CACHE_NAME_MAX];
+    ism_cache_name(name, r->key, r->fmt);
+    ism_cache_name(sname, r->key, "stats.json");
+    ism_blob *hit = ism_cache_get(&s->cache, name, NULL);
+    ism_blob *stats = hit ? ism_cache_get(&s->cache, sname, NULL) : NULL;
+    atomic_fetch_add(hit ? &s->metrics.mesh_hits : &s->metrics.mesh_misses, 1);
+    r->cache = hit ? "hit" : "miss";
+
+    ismd_sched_lock(&s->sched);
+    ismd_job *job = ismd_jobs_create(s->jobs, r->key, r->fmt);
+    if (!job) {
+        ismd_sched_unlock(&s->sched);
+        ism_blob_unref(hit);
+        ism_blob_unref(stats);
+        ism_blob_unref(canonical);
+        return ismd_respond_error(r, 503, "too_many_jobs", "the job table is full; retry later");
+    }
+    if (hit) {
+        ismd_jobs_complete_cached(s->jobs, job, stats);
+        ism_blob_unref(hit);
+        ism_blob_unref(stats);
+        ism_blob_unref(canonical);
+        return answer_job_locked(r, 202, job, true);
+    }
+    ismd_submit st = ismd_sched_submit(&s->sched, r->key, r->fmt, canonical, r->client,
+                                       ismd_job_waiter(job));
+    ism_blob_unref(canonical);
+    if (st == ISMD_SUBMIT_NEW || st == ISMD_SUBMIT_JOINED)
+        return answer_job_locked(r, 202, job, true);
+    ismd_jobs_discard(s->jobs, job);
+    ismd_sched_unlock(&s->sched);
+    switch (st) {
+    case ISMD_SUBMIT_QUEUE_FULL:
+        return ismd_respond_error(r, 503, "queue_full",
+                                  "every worker is busy and the queue is full; retry later");
+    case ISMD_SUBMIT_CLIENT_LIMIT:
+        return ismd_respond_error(r, 429, "too_many_requests",
+                                  "too many computations of yours are queued or running "
+                                  "(--client-jobs); wait for one to finish");
+    case ISMD_SUBMIT_DRAINING:
+        return ismd_respond_error(r, 503, "shutting_down", "the server is shutting down");
+    default:
+        return ismd_respond_error(r, 500, "out_of_memory", "the server ran out of memory");
+    }
+}
+
+enum MHD_Result ismd_route_job_get(ismd_req *r)
+{
+    ismd_sched_lock(&r->srv->sched);
+    ismd_job *job = ismd_jobs_find(r->srv->jobs, r->id);
+    if (!job) {
+        ismd_sched_unlock(&r->srv->sched);
+        return job_not_found(r);
+    }
+    return answer_job_locked(r, 200, job, false);
+}
+
+enum MHD_Result ismd_route_job_delete(ismd_req *r)
+{
+    ismd_sched_lock(&r->srv->sched);
+    ismd_job *job = ismd_jobs_find(r->srv->jobs, r->id);
+    if (!job) {
+        ismd_sched_unlock(&r->srv->sched);
+        return job_not_found(r);
+    }
+    ismd_jobs_cancel(r->srv->jobs, &r->srv->sched, job);
+    return answer_job_locked(r, 200, job, false);
+}
+
+enum MHD_Result ismd_route_job_events(ismd_req *r)
+{
+    ismd_server *s = r->srv;
+    ismd_sched_lock(&s->sched);
+    ismd_job *job = ismd_jobs_find(s->jobs, r->id);
+    struct MHD_Response *resp = job ? ismd_jobs_stream(s->jobs, &s->sched, job, r->conn) : NULL;
+    ismd_sched_unlock(&s->sched);
+    if (!job)
+        return job_not_found(r);
+    if (!resp)
+        return MHD_NO;
+    return ismd_send(r, 200, resp);
+}

@@ -1,0 +1,73 @@
+/* routes_misc.c — the small routes: GET /v1/presets, /v1/openapi.yaml, /v1/request.schema.json
+ * (documents loaded from --data-dir at start-up), /healthz (the process answers), /readyz (a
+ * worker is ready and we are not shutting down), /metrics (Prometheus text). */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "server/isomeshd/http.h"
+
+enum MHD_Result ismd_route_doc(ismd_req *r)
+{
+    ismd_server *s = r->srv;
+    ism_blob *b;
+    const char *type;
+    switch (r->route) {
+    case ISMD_R_OPENAPI:
+        b = s->openapi;
+        type = "application/yaml";
+        break;
+    case ISMD_R_SCHEMA:
+        b = s->schema;
+        type = "application/schema+json";
+        break;
+    default:
+        b = s->presets;
+        type = "application/json";
+        break;
+    }
+    if (!b)
+        return ismd_respond_error(r, 404, "not_installed",
+                                  "this document was not found in --data-dir at start-up");
+    struct MHD_Response *resp = ismd_response_blob(b, type);
+    if (!resp)
+        return MHD_NO;
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "public, max-age=300");
+    r->bytes = b->len;
+    return ismd_send(r, 200, resp);
+}
+
+enum MHD_Result ismd_route_health(ismd_req *r)
+{
+    ismd_server *s = r->srv;
+    char body[256];
+    if (r->route == ISMD_R_HEALTHZ)
+        return ismd_respond_json(r, 200, "{\"status\":\"ok\"}");
+    long long ready = atomic_load(&s->metrics.workers_ready);
+    long long total = atomic_load(&s->metrics.workers_total);
+    bool draining = atomic_load(&s->draining);
+    bool ok = ready > 0 && !draining;
+    snprintf(body, sizeof body,
+             "{\"status\":\"%s\",\"workers_ready\":%lld,\"workers\":%lld,\"draining\":%s}",
+             ok ? "ready" : "not_ready", ready, total, draining ? "true" : "false");
+    return ismd_respond_json(r, ok ? 200 : 503, body);
+}
+
+enum MHD_Result ismd_route_metrics(ismd_req *r)
+{
+    size_t len;
+    char *text = ismd_metrics_render(&r->srv->metrics, &r->srv->cache, &len);
+    if (!text)
+        return MHD_NO;
+    ism_blob *b = ism_blob_copy(text, len);
+    free(text);
+    if (!b)
+        return MHD_NO;
+    struct MHD_Response *resp = ismd_response_blob(b, "text/plain; version=0.0.4; charset=utf-8");
+    r->bytes = b->len;
+    ism_blob_unref(b);
+    if (!resp)
+        return MHD_NO;
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
+    return ismd_send(r, 200, resp);
+}

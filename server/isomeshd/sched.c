@@ -1,0 +1,343 @@
+/* sched.c — single flight and its bookkeeping (sched.h): the name table of flights in
+ * progress, waiter lists, per-client counts, deadlines and the draining state. */
+#include "server/isomeshd/sched.h"
+
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "server/isomeshd/errors.h"
+
+struct ismd_client_count {
+    ismd_client_count *next;
+    int count;
+    char client[64];
+};
+
+long long ismd_now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (long long)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
+static uint64_t hash_name(const char *s)
+{
+    uint64_t h = 1469598103934665603ULL;
+    for (; *s; s++) {
+        h ^= (unsigned char)*s;
+        h *= 1099511628211ULL;
+    }
+    return h;
+}
+
+bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s, int client_jobs,
+                     ismd_metrics *metrics)
+{
+    memset(s, 0, sizeof *s);
+    s->nbuckets = 256;
+    s->table = calloc(s->nbuckets, sizeof *s->table);
+    if (!s->table || !queue)
+        return false;
+    pthread_mutex_init(&s->lock, NULL);
+    s->queue = queue;
+    s->job_timeout_s = job_timeout_s;
+    s->client_jobs = client_jobs;
+    s->metrics = metrics;
+    s->next_id = 1;
+    atomic_store(&metrics->queue_capacity, (long long)queue->capacity);
+    return true;
+}
+
+void ismd_sched_destroy(ismd_sched *s)
+{
+    while (s->clients) {
+        ismd_client_count *c = s->clients;
+        s->clients = c->next;
+        free(c);
+    }
+    free(s->table);
+    if (s->queue)
+        s->queue->ops->destroy(s->queue);
+    pthread_mutex_destroy(&s->lock);
+}
+
+void ismd_sched_lock(ismd_sched *s)
+{
+    pthread_mutex_lock(&s->lock);
+}
+
+void ismd_sched_unlock(ismd_sched *s)
+{
+    pthread_mutex_unlock(&s->lock);
+}
+
+/* ---- per-client counts --------------------------------------------------------------- */
+
+static ismd_client_count **client_slot(ismd_sched *s, const char *client)
+{
+    ismd_client_count **c = &s->clients;
+    while (*c && strcmp((*c)->client, client) != 0)
+        c = &(*c)->next;
+    return c;
+}
+
+static int client_count(ismd_sched *s, const char *client)
+{
+    ismd_client_count *c = *client_slot(s, client);
+    return c ? c->count : 0;
+}
+
+static bool client_add(ismd_sched *s, const char *client, int delta)
+{
+    ismd_client_count **slot = client_slot(s, client);
+    if (!*slot) {
+        if (delta <= 0)
+            return true;
+        ismd_client_count *c = calloc(1, sizeof *c);
+        if (!c)
+            return false;
+        snprintf(c->client, sizeof c->client, "%s", client);
+        *slot = c;
+    }
+    (*slot)->count += delta;
+    if ((*slot)->count <= 0) {
+        ismd_client_count *dead = *slot;
+        *slot = dead->next;
+        free(dead);
+    }
+    return true;
+}
+
+/* ---- flights ------------------------------------------------------------------------- */
+
+static ismd_flight **flight_slot(ismd_sched *s, const char *name)
+{
+    ismd_flight **f = &s->table[hash_name(name) & (s->nbuckets - 1)];
+    while (*f && strcmp((*f)->name, name) != 0)
+        f = &(*f)->hnext;
+    return f;
+}
+
+static void waiter_append(ismd_flight *f, ismd_waiter *w)
+{
+    w->flight = f;
+    w->prev = f->waiters.prev;
+    w->next = &f->waiters;
+    f->waiters.prev->next = w;
+    f->waiters.prev = w;
+    f->nwaiters++;
+}
+
+static void waiter_unlink(ismd_waiter *w)
+{
+    ismd_flight *f = w->flight;
+    w->prev->next = w->next;
+    w->next->prev = w->prev;
+    w->prev = w->next = NULL;
+    w->flight = NULL;
+    f->nwaiters--;
+}
+
+static void publish_queue(ismd_sched *s)
+{
+    atomic_store(&s->metrics->queue_depth, (long long)s->queue->ops->length(s->queue));
+}
+
+static void wake_pool(ismd_sched *s)
+{
+    if (s->wake)
+        s->wake(s->wake_ctx);
+}
+
+ismd_submit ismd_sched_submit(ismd_sched *s, const char *key, const char *fmt,
+                              ism_blob *request, const char *client, ismd_waiter *w)
+{
+    char name[ISM_CACHE_NAME_MAX];
+    if (!ism_cache_name(name, key, fmt))
+        return ISMD_SUBMIT_NO_MEMORY;
+    ismd_flight **slot = flight_slot(s, name);
+    if (*slot) {
+        waiter_append(*slot, w);
+        atomic_fetch_add(&s->metrics->singleflight_joins, 1);
+        return ISMD_SUBMIT_JOINED;
+    }
+    if (s->draining)
+        return ISMD_SUBMIT_DRAINING;
+    if (client_count(s, client) >= s->client_jobs) {
+        atomic_fetch_add(&s->metrics->rejected_client_limit, 1);
+        return ISMD_SUBMIT_CLIENT_LIMIT;
+    }
+    ismd_flight *f = calloc(1, sizeof *f);
+    if (!f)
+        return ISMD_SUBMIT_NO_MEMORY;
+    snprintf(f->name, sizeof f->name, "%s", name);
+    snprintf(f->key, sizeof f->key, "%s", key);
+    snprintf(f->fmt, sizeof f->fmt, "%s", fmt);
+    snprintf(f->client, sizeof f->client, "%s", client);
+    f->waiters.prev = f->waiters.next = &f->waiters;
+    if (!s->queue->ops->push(s->queue, f)) {
+        free(f);
+        atomic_fetch_add(&s->metrics->rejected_queue_full, 1);
+        return ISMD_SUBMIT_QUEUE_FULL;
+    }
+    if (!client_add(s, client, 1)) {
+        s->queue->ops->remove(s->queue, f);
+        free(f);
+        return ISMD_SUBMIT_NO_MEMORY;
+    }
+    f->request = ism_blob_ref(request);
+    f->id = s->next_id++;
+    f->submitted_ns = ismd_now_ns();
+    f->deadline_ns = f->submitted_ns + (long long)(s->job_timeout_s * 1e9);
+    f->hnext = NULL;
+    *slot = f;
+    f->aprev = s->all_tail;
+    if (s->all_tail)
+        s->all_tail->anext = f;
+    else
+        s->all_head = f;
+    s->all_tail = f;
+    s->nflights++;
+    waiter_append(f, w);
+    publish_queue(s);
+    wake_pool(s);
+    return ISMD_SUBMIT_NEW;
+}
+
+/* Takes f out of the table, the all-flights list and its client's count, and frees it. */
+static void flight_free(ismd_sched *s, ismd_flight *f)
+{
+    ismd_flight **slot = flight_slot(s, f->name);
+    if (*slot == f)
+        *slot = f->hnext;
+    if (f->aprev)
+        f->aprev->anext = f->anext;
+    else
+        s->all_head = f->anext;
+    if (f->anext)
+        f->anext->aprev = f->aprev;
+    else
+        s->all_tail = f->aprev;
+    s->nflights--;
+    client_add(s, f->client, -1);
+    ism_blob_unref(f->request);
+    free(f);
+}
+
+void ismd_sched_detach(ismd_sched *s, ismd_waiter *w)
+{
+    ismd_flight *f = w->flight;
+    if (!f)
+        return;
+    waiter_unlink(w);
+    if (f->nwaiters > 0)
+        return;
+    if (f->queued) {
+        s->queue->ops->remove(s->queue, f);
+        atomic_fetch_add(&s->metrics->computations[ISMD_OUT_CANCELED], 1);
+        publish_queue(s);
+        flight_free(s, f);
+    } else {
+        wake_pool(s); /* running without waiters: the pool stops it */
+    }
+}
+
+void ismd_sched_finish(ismd_sched *s, ismd_flight *f, const ismd_result *r, ismd_outcome o)
+{
+    if (f->queued) {
+        s->queue->ops->remove(s->queue, f);
+        publish_queue(s);
+    }
+    atomic_fetch_add(&s->metrics->computations[o], 1);
+    while (f->waiters.next != &f->waiters) {
+        ismd_waiter *w = f->waiters.next;
+        waiter_unlink(w);
+        w->done(w, r);
+    }
+    flight_free(s, f);
+}
+
+void ismd_sched_fail(ismd_sched *s, ismd_flight *f, unsigned status, const char *code,
+                     const char *message, ismd_outcome o)
+{
+    ismd_result r = {.status = status, .content_type = "application/json"};
+    r.body = ismd_error_json(code, message, NULL);
+    long long now = ismd_now_ns();
+    if (f->running) {
+        r.queue_ms = (f->started_ns - f->submitted_ns) / 1e6;
+        r.worker_ms = (now - f->started_ns) / 1e6;
+    } else {
+        r.queue_ms = (now - f->submitted_ns) / 1e6;
+    }
+    ismd_sched_finish(s, f, &r, o);
+    ism_blob_unref(r.body);
+}
+
+void ismd_sched_progress(ismd_sched *s, ismd_flight *f, double fraction)
+{
+    (void)s;
+    f->progress = fraction;
+    for (ismd_waiter *w = f->waiters.next; w != &f->waiters; w = w->next)
+        if (w->progress)
+            w->progress(w, fraction, f->running);
+}
+
+ismd_flight *ismd_sched_next(ismd_sched *s)
+{
+    ismd_flight *f = s->queue->ops->pop(s->queue);
+    if (!f)
+        return NULL;
+    publish_queue(s);
+    f->running = true;
+    f->started_ns = ismd_now_ns();
+    atomic_fetch_add(&s->metrics->computations_started, 1);
+    ismd_sched_progress(s, f, 0);
+    return f;
+}
+
+size_t ismd_sched_expire(ismd_sched *s, long long now_ns, ismd_flight **expired, size_t max)
+{
+    size_t n = 0;
+    ismd_flight *f = s->all_head;
+    while (f) {
+        ismd_flight *next = f->anext;
+        if (f->deadline_ns <= now_ns) {
+            if (f->running) {
+                if (n < max)
+                    expired[n++] = f;
+            } else {
+                ismd_sched_fail(s, f, 504, "deadline_exceeded",
+                                "the computation waited past its deadline (--job-timeout) "
+                                "for a free worker", ISMD_OUT_DEADLINE);
+            }
+        }
+        f = next;
+    }
+    return n;
+}
+
+long long ismd_sched_next_deadline(const ismd_sched *s)
+{
+    long long best = LLONG_MAX;
+    for (const ismd_flight *f = s->all_head; f; f = f->anext)
+        if (f->deadline_ns < best)
+            best = f->deadline_ns;
+    return best;
+}
+
+void ismd_sched_drain(ismd_sched *s)
+{
+    s->draining = true;
+    ismd_flight *f = s->all_head;
+    while (f) {
+        ismd_flight *next = f->anext;
+        if (f->queued)
+            ismd_sched_fail(s, f, 503, "shutting_down",
+                            "the server is shutting down; retry on another instance",
+                            ISMD_OUT_CANCELED);
+        f = next;
+    }
+}

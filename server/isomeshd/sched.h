@@ -1,0 +1,131 @@
+/* sched.h — single flight: every computation in progress is one "flight", named by the cache
+ * entry it will produce ("<key>.<format>"). A request for a name already in flight joins it as
+ * one more waiter instead of computing again. Flights wait in the job queue (job_queue.h),
+ * run on a worker (worker_pool.h) and finish exactly once, handing every waiter the same
+ * result. Also enforces the per-client limit and the draining state at shutdown.
+ *
+ * One mutex (ismd_sched_lock) guards flights, waiters, the queue and the jobs table (jobs.h);
+ * HTTP handlers suspend their connection while holding it, and everything that resumes one
+ * (a waiter's done callback) runs with it held, so a resume can never overtake a suspend.
+ * Only the pool thread finishes running flights. */
+#ifndef ISMD_SCHED_H
+#define ISMD_SCHED_H
+
+#include <pthread.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "server/common/blob.h"
+#include "server/common/cache.h"
+#include "server/isomeshd/job_queue.h"
+#include "server/isomeshd/metrics.h"
+
+/* What a finished flight hands its waiters (they take references to what they keep). */
+typedef struct ismd_result {
+    unsigned status;           /* 200, or the error status */
+    ism_blob *body;            /* the mesh bytes, or the error JSON */
+    const char *content_type;  /* of body (static string) */
+    ism_blob *stats, *features;/* status 200 only; may be NULL */
+    double queue_ms, worker_ms;/* time waiting for a worker, time on it */
+    char timing[256];          /* extra Server-Timing entries from the pipeline's stats */
+} ismd_result;
+
+typedef struct ismd_waiter ismd_waiter;
+struct ismd_waiter {
+    ismd_waiter *prev, *next;
+    ismd_flight *flight;       /* NULL once finished or detached */
+    /* Called once, lock held, when the flight finishes. */
+    void (*done)(ismd_waiter *w, const ismd_result *r);
+    /* Optional, lock held: the flight started running or reported progress. */
+    void (*progress)(ismd_waiter *w, double fraction, bool running);
+};
+
+struct ismd_flight {
+    char name[ISM_CACHE_NAME_MAX];
+    char key[65];
+    char fmt[8];
+    ism_blob *request;         /* canonical request JSON sent to the worker */
+    uint64_t id;               /* job id in worker frames */
+    bool queued, running;
+    double progress;
+    long long submitted_ns, started_ns, deadline_ns;
+    ismd_waiter waiters;       /* list sentinel */
+    size_t nwaiters;
+    char client[64];           /* who started it (per-client limit) */
+    ismd_flight *hnext;        /* name table chain */
+    ismd_flight *qprev, *qnext;/* queue links (owned by the queue implementation) */
+    ismd_flight *aprev, *anext;/* list of all flights, oldest first */
+};
+
+typedef enum ismd_submit {
+    ISMD_SUBMIT_NEW,           /* a new flight was queued */
+    ISMD_SUBMIT_JOINED,        /* joined a flight in progress */
+    ISMD_SUBMIT_QUEUE_FULL,    /* 503 */
+    ISMD_SUBMIT_CLIENT_LIMIT,  /* 429 */
+    ISMD_SUBMIT_DRAINING,      /* 503, shutting down */
+    ISMD_SUBMIT_NO_MEMORY,     /* 500 */
+} ismd_submit;
+
+typedef struct ismd_client_count ismd_client_count;
+
+typedef struct ismd_sched {
+    pthread_mutex_t lock;
+    ismd_flight **table;
+    size_t nbuckets;
+    ismd_flight *all_head, *all_tail;
+    size_t nflights;
+    ismd_queue *queue;
+    ismd_client_count *clients;
+    uint64_t next_id;
+    bool draining;
+    double job_timeout_s;
+    int client_jobs;
+    ismd_metrics *metrics;
+    void (*wake)(void *ctx);   /* tells the pool thread to look again (set by the pool) */
+    void *wake_ctx;
+} ismd_sched;
+
+bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s, int client_jobs,
+                     ismd_metrics *metrics);
+void ismd_sched_destroy(ismd_sched *s);
+void ismd_sched_lock(ismd_sched *s);
+void ismd_sched_unlock(ismd_sched *s);
+
+/* --- lock held for everything below --- */
+
+/* Adds waiter w to the flight for key.fmt, creating and queueing it when there is none.
+ * request is the canonical request JSON (referenced, not copied); client names the caller. */
+ismd_submit ismd_sched_submit(ismd_sched *s, const char *key, const char *fmt,
+                              ism_blob *request, const char *client, ismd_waiter *w);
+
+/* Takes w off its flight (a canceled job). A queued flight left without waiters is dropped;
+ * a running one is stopped by the pool (its worker is replaced). */
+void ismd_sched_detach(ismd_sched *s, ismd_waiter *w);
+
+/* Hands r to every waiter and frees the flight (must not be queued). */
+void ismd_sched_finish(ismd_sched *s, ismd_flight *f, const ismd_result *r, ismd_outcome o);
+
+/* Finishes a queued or running flight with an error JSON {"error": {code, message}}. */
+void ismd_sched_fail(ismd_sched *s, ismd_flight *f, unsigned status, const char *code,
+                     const char *message, ismd_outcome o);
+
+/* Records progress (running) and tells the waiters. */
+void ismd_sched_progress(ismd_sched *s, ismd_flight *f, double fraction);
+
+/* The next queued flight, now marked running (NULL when none). */
+ismd_flight *ismd_sched_next(ismd_sched *s);
+
+/* Finishes every flight past its deadline with 504 that is queued; running ones are
+ * returned through expired[] (up to max) for the pool to kill. Returns how many. */
+size_t ismd_sched_expire(ismd_sched *s, long long now_ns, ismd_flight **expired, size_t max);
+
+/* Earliest deadline of any flight (LLONG_MAX when none). */
+long long ismd_sched_next_deadline(const ismd_sched *s);
+
+/* Stops accepting flights and fails every queued one with 503. */
+void ismd_sched_drain(ismd_sched *s);
+
+/* CLOCK_MONOTONIC in nanoseconds. */
+long long ismd_now_ns(void);
+
+#endif

@@ -1,0 +1,783 @@
+/* worker_pool.c — the worker processes and the pool thread of worker_pool.h: spawning with
+ * limits, non-blocking frame I/O over pipes driven by epoll, dispatch from the queue, results
+ * into the cache, deadlines, cancellation, crash detection, respawn with back-off, shutdown. */
+#include "server/isomeshd/worker_pool.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/epoll.h>
+#include <sys/eventfd.h>
+#include <sys/prctl.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "proto/frame.h"
+#include "server/common/log.h"
+#include "server/isomeshd/errors.h"
+
+#define RESULT_PIPE_SIZE (1 << 20)
+#define QUICK_DEATH_NS 1000000000LL       /* a worker dying sooner than this backs off */
+#define MAX_BACKOFF_NS 5000000000LL
+#define STOP_WAIT_NS 2000000000LL          /* workers get this long to exit on EOF */
+#define MAX_EXPIRED 64
+
+typedef enum wstate { W_EMPTY, W_STARTING, W_IDLE, W_BUSY, W_DYING } wstate;
+
+typedef struct worker {
+    int slot;
+    wstate state;
+    pid_t pid;
+    int to_fd, from_fd;        /* daemon's ends: requests in, results out */
+    bool want_out;             /* EPOLLOUT registered on to_fd */
+    ism_frame_reader rd;
+    ismd_flight *flight;
+    unsigned char *out;        /* request frame being written */
+    size_t out_len, out_off;
+    long long spawned_ns, respawn_at_ns;
+    int quick_deaths;
+} worker;
+
+struct ismd_pool {
+    ismd_pool_config cfg;
+    ismd_sched *sched;
+    ism_cache *cache;
+    ismd_metrics *metrics;
+    worker *w;
+    int n;
+    int epfd, evfd;
+    pthread_t thread;
+    atomic_bool stopping;
+    long long stop_deadline_ns;
+};
+
+#define EV_WAKE UINT64_MAX
+#define EV_READ(slot) ((uint64_t)(slot) << 1)
+#define EV_WRITE(slot) (((uint64_t)(slot) << 1) | 1)
+
+const char *ismd_format_content_type(const char *fmt)
+{
+    if (!strcmp(fmt, "glb"))
+        return "model/gltf-binary";
+    if (!strcmp(fmt, "ply"))
+        return "application/x-ply";
+    if (!strcmp(fmt, "obj"))
+        return "model/obj";
+    if (!strcmp(fmt, "stl"))
+        return "model/stl";
+    return "application/octet-stream"; /* drc (Draco has no registered type) */
+}
+
+/* ---- bookkeeping --------------------------------------------------------------------- */
+
+static void publish_workers(ismd_pool *p)
+{
+    long long ready = 0, busy = 0;
+    for (int i = 0; i < p->n; i++) {
+        ready += p->w[i].state == W_IDLE || p->w[i].state == W_BUSY;
+        busy += p->w[i].state == W_BUSY;
+    }
+    atomic_store(&p->metrics->workers_ready, ready);
+    atomic_store(&p->metrics->workers_busy, busy);
+}
+
+static void wake(void *ctx)
+{
+    ismd_pool *p = ctx;
+    uint64_t one = 1;
+    ssize_t r = write(p->evfd, &one, sizeof one);
+    (void)r; /* EAGAIN means a wake-up is already pending */
+}
+
+static void set_nonblock(int fd)
+{
+    int fl = fcntl(fd, F_GETFL);
+    if (fl >= 0)
+        fcntl(fd, F_SETFL, fl | O_NONBLOCK);
+}
+
+/* ---- spawning ------------------------------------------------------------------------ */
+
+/* In the child between fork and exec: async-signal-safe calls only. */
+static void child_exec(const ismd_pool_config *cfg, pid_t parent, int in_fd, int out_fd)
+{
+    sigset_t none;
+    sigemptyset(&none);
+    sigprocmask(SIG_SETMASK, &none, NULL);
+    struct sigaction dfl = {.sa_handler = SIG_DFL};
+    sigaction(SIGPIPE, &dfl, NULL);
+    if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != parent)
+        _exit(126);
+    if (cfg->job_memory) {
+        struct rlimit rl = {cfg->job_memory, cfg->job_memory};
+        if (setrlimit(RLIMIT_AS, &rl) != 0)
+            _exit(126);
+    }
+    if (dup2(in_fd, STDIN_FILENO) < 0 || dup2(out_fd, STDOUT_FILENO) < 0)
+        _exit(126);
+    syscall(SYS_close_range, 3u, ~0u, 0); /* everything else is O_CLOEXEC anyway */
+    char *const argv[] = {"isomesh", "--worker", NULL};
+    execv(cfg->worker_path, argv);
+    _exit(127);
+}
+
+static bool spawn(ismd_pool *p, worker *w)
+{
+    int req[2], res[2];
+    if (pipe2(req, O_CLOEXEC) != 0)
+        return false;
+    if (pipe2(res, O_CLOEXEC) != 0) {
+        close(req[0]);
+        close(req[1]);
+        return false;
+    }
+    pid_t parent = getpid();
+    pid_t pid = fork();
+    if (pid == 0)
+        child_exec(&p->cfg, parent, req[0], res[1]);
+    close(req[0]);
+    close(res[1]);
+    if (pid < 0) {
+        close(req[1]);
+        close(res[0]);
+        return false;
+    }
+    fcntl(res[0], F_SETPIPE_SZ, RESULT_PIPE_SIZE); /* fewer wake-ups for big results */
+    set_nonblock(req[1]);
+    set_nonblock(res[0]);
+    w->pid = pid;
+    w->to_fd = req[1];
+    w->from_fd = res[0];
+    w->want_out = false;
+    w->state = W_STARTING;
+    w->flight = NULL;
+    w->spawned_ns = ismd_now_ns();
+    ism_frame_reader_init(&w->rd, ISM_FRAME_MAX_PAYLOAD);
+    struct epoll_event ev = {.events = EPOLLIN, .data.u64 = EV_READ(w->slot)};
+    epoll_ctl(p->epfd, EPOLL_CTL_ADD, w->from_fd, &ev);
+    return true;
+}
+
+static void respawn_due(ismd_pool *p, long long now)
+{
+    for (int i = 0; i < p->n; i++) {
+        worker *w = &p->w[i];
+        if (w->state != W_EMPTY || w->respawn_at_ns > now)
+            continue;
+        if (!spawn(p, w)) {
+            atomic_fetch_add(&p->metrics->worker_spawn_failures, 1);
+            ism_logf(ISM_LOG_ERROR, "worker_spawn_failed", "%s: %s", p->cfg.worker_path,
+                     strerror(errno));
+            w->respawn_at_ns = now + MAX_BACKOFF_NS;
+        }
+    }
+    publish_workers(p);
+}
+
+/* ---- ending a worker ----------------------------------------------------------------- */
+
+static void close_to_fd(ismd_pool *p, worker *w)
+{
+    if (w->to_fd < 0)
+        return;
+    if (w->want_out)
+        epoll_ctl(p->epfd, EPOLL_CTL_DEL, w->to_fd, NULL);
+    close(w->to_fd);
+    w->to_fd = -1;
+    w->want_out = false;
+    free(w->out);
+    w->out = NULL;
+    w->out_len = w->out_off = 0;
+}
+
+/* Kills w (its flight, if any, must already be finished); EOF on its pipe completes it. */
+static void kill_worker(ismd_pool *p, worker *w, ismd_restart_reason why)
+{
+    if (w->state == W_EMPTY || w->state == W_DYING)
+        return;
+    kill(w->pid, SIGKILL);
+    close_to_fd(p, w);
+    w->state = W_DYING;
+    w->flight = NULL;
+    atomic_fetch_add(&p->metrics->worker_restarts[why], 1);
+    static const char *const names[] = {"crash", "deadline", "cancel", "protocol"};
+    ism_log_field f[] = {ISM_LI("pid", w->pid), ISM_LS("reason", names[why])};
+    ism_log_fields(ISM_LOG_WARN, "worker_killed", f, 2);
+    publish_workers(p);
+}
+
+static void describe_exit(int status, char *buf, size_t cap)
+{
+    if (WIFSIGNALED(status))
+        snprintf(buf, cap, "killed by signal %d (%s)", WTERMSIG(status), strsignal(WTERMSIG(status)));
+    else if (WIFEXITED(status))
+        snprintf(buf, cap, "exited with status %d", WEXITSTATUS(status));
+    else
+        snprintf(buf, cap, "ended");
+}
+
+/* The worker's result pipe closed: reap it, fail its flight, schedule the replacement. */
+static void worker_gone(ismd_pool *p, worker *w)
+{
+    epoll_ctl(p->epfd, EPOLL_CTL_DEL, w->from_fd, NULL);
+    close(w->from_fd);
+    w->from_fd = -1;
+    close_to_fd(p, w);
+    ism_frame_reader_free(&w->rd);
+    int status = 0;
+    while (waitpid(w->pid, &status, 0) < 0 && errno == EINTR)
+        ;
+    char how[128];
+    describe_exit(status, how, sizeof how);
+    long long now = ismd_now_ns();
+    bool intended = w->state == W_DYING;
+    if (!intended) {
+        atomic_fetch_add(&p->metrics->worker_restarts[ISMD_RESTART_CRASH], 1);
+        ism_log_field f[] = {ISM_LI("pid", w->pid), ISM_LS("how", how),
+                             ISM_LS("job", w->flight ? w->flight->name : NULL)};
+        ism_log_fields(ISM_LOG_ERROR, "worker_died", f, 3);
+    }
+    if (w->flight) {
+        char msg[256];
+        snprintf(msg, sizeof msg, "the worker computing this mesh %s; it has been replaced",
+                 how);
+        ismd_sched_lock(p->sched);
+        ismd_sched_fail(p->sched, w->flight, 500, "worker_crashed", msg, ISMD_OUT_CRASH);
+        ismd_sched_unlock(p->sched);
+        w->flight = NULL;
+    }
+    bool quick = !intended && now - w->spawned_ns < QUICK_DEATH_NS;
+    w->quick_deaths = quick ? w->quick_deaths + 1 : 0;
+    long long backoff = 0;
+    if (w->quick_deaths) {
+        backoff = 50000000LL << (w->quick_deaths < 7 ? w->quick_deaths : 7);
+        if (backoff > MAX_BACKOFF_NS)
+            backoff = MAX_BACKOFF_NS;
+    }
+    w->respawn_at_ns = now + backoff;
+    w->state = W_EMPTY;
+    w->pid = 0;
+    publish_workers(p);
+}
+
+/* ---- frames from a worker ------------------------------------------------------------ */
+
+static void protocol_error(ismd_pool *p, worker *w, const char *what)
+{
+    ism_log_field f[] = {ISM_LI("pid", w->pid), ISM_LS("error", what)};
+    ism_log_fields(ISM_LOG_ERROR, "worker_protocol_error", f, 2);
+    if (w->flight) {
+        ismd_sched_lock(p->sched);
+        ismd_sched_fail(p->sched, w->flight, 500, "worker_protocol",
+                        "the worker sent a malformed answer; it has been replaced",
+                        ISMD_OUT_CRASH);
+        ismd_sched_unlock(p->sched);
+        w->flight = NULL;
+    }
+    kill_worker(p, w, ISMD_RESTART_PROTOCOL);
+}
+
+/* Pulls "phase;dur=ms" pairs for Server-Timing out of the stats JSON's "timings_ms" object
+ * when the pipeline provides one (a flat object of numbers); leaves out empty otherwise. */
+static void stats_timing(const ism_blob *stats, char *out, size_t cap);
+
+static void cache_result(ismd_pool *p, const ismd_flight *f, ism_blob *body, ism_blob *stats,
+                         ism_blob *features, ism_blob *canonical)
+{
+    char name[ISM_CACHE_NAME_MAX];
+    if (ism_cache_name(name, f->key, f->fmt))
+        ism_cache_put(p->cache, name, body);
+    if (stats && ism_cache_name(name, f->key, "stats.json"))
+        ism_cache_put(p->cache, name, stats);
+    if (features && ism_cache_name(name, f->key, "features.json"))
+        ism_cache_put(p->cache, name, features);
+    if (canonical && ism_cache_name(name, f->key, "request.json"))
+        ism_cache_put(p->cache, name, canonical);
+}
+
+static void finish_busy(ismd_pool *p, worker *w, ismd_result *r, ismd_outcome o)
+{
+    ismd_flight *f = w->flight;
+    ismd_sched_lock(p->sched);
+    r->queue_ms = (f->started_ns - f->submitted_ns) / 1e6;
+    ismd_sched_finish(p->sched, f, r, o);
+    ismd_sched_unlock(p->sched);
+    w->flight = NULL;
+    w->state = W_IDLE;
+    publish_workers(p);
+}
+
+static void on_result(ismd_pool *p, worker *w, const ism_frame *fr)
+{
+    ism_frame_result fres;
+    if (!ism_frame_result_decode(fr, &fres)) {
+        protocol_error(p, w, "undecodable result");
+        return;
+    }
+    ismd_flight *f = w->flight;
+    ismd_result r = {.status = fres.status, .worker_ms = fres.worker_us / 1000.0};
+    ismd_metrics_polygonise(p->metrics, fres.worker_us / 1e6);
+    ism_blob *stats = NULL, *features = NULL, *canonical = NULL;
+    ismd_outcome o = ISMD_OUT_OK;
+    if (fres.status == 200 && (strcmp(fres.key, f->key) != 0 || strcmp(fres.format, f->fmt) != 0)) {
+        ism_logf(ISM_LOG_ERROR, "worker_key_mismatch", "asked for %s, got %s.%s", f->name,
+                 fres.key, fres.format);
+        r.status = 500;
+        r.body = ismd_error_json("key_mismatch",
+                                 "the worker computed a different mesh than the one asked for",
+                                 NULL);
+        r.content_type = "application/json";
+        o = ISMD_OUT_ERROR;
+    } else if (fres.status == 200) {
+        r.body = ism_blob_copy(fres.body, fres.body_len);
+        r.content_type = ismd_format_content_type(f->fmt);
+        if (fres.stats_len)
+            stats = ism_blob_copy(fres.stats, fres.stats_len);
+        if (fres.features_len)
+            features = ism_blob_copy(fres.features, fres.features_len);
+        if (fres.canonical_len)
+            canonical = ism_blob_copy(fres.canonical, fres.canonical_len);
+        if (!r.body) {
+            r.status = 500;
+            r.body = ismd_error_json("out_of_memory", "the server ran out of memory", NULL);
+            r.content_type = "application/json";
+            o = ISMD_OUT_ERROR;
+        } else {
+            cache_result(p, f, r.body, stats, features, canonical ? canonical : f->request);
+            r.stats = stats;
+            r.features = features;
+            stats_timing(stats, r.timing, sizeof r.timing);
+        }
+    } else {
+        r.body = ism_blob_copy(fres.body, fres.body_len);
+        r.content_type = "application/json";
+        o = fres.status == 400 || fres.status == 422 ? ISMD_OUT_REJECTED : ISMD_OUT_ERROR;
+    }
+    finish_busy(p, w, &r, o);
+    ism_blob_unref(r.body);
+    ism_blob_unref(stats);
+    ism_blob_unref(features);
+    ism_blob_unref(canonical);
+}
+
+static void on_error_frame(ismd_pool *p, worker *w, const ism_frame *fr)
+{
+    ism_frame_cursor c;
+    ism_frame_cursor_init(&c, fr->payload, fr->len);
+    uint32_t status = ism_frame_get_u32(&c);
+    size_t len;
+    const unsigned char *json = ism_frame_get_bytes(&c, &len);
+    if (c.failed || status < 400 || status > 599) {
+        protocol_error(p, w, "undecodable error frame");
+        return;
+    }
+    ismd_result r = {.status = status, .content_type = "application/json"};
+    r.body = ism_blob_copy(json, len);
+    finish_busy(p, w, &r, ISMD_OUT_ERROR);
+    ism_blob_unref(r.body);
+}
+
+static void on_frame(ismd_pool *p, worker *w, const ism_frame *fr)
+{
+    switch (fr->type) {
+    case ISM_FRAME_HELLO:
+        if (w->state != W_STARTING) {
+            protocol_error(p, w, "unexpected hello");
+            return;
+        }
+        w->state = W_IDLE;
+        publish_workers(p);
+        return;
+    case ISM_FRAME_PROGRESS: {
+        if (w->state != W_BUSY || fr->job != w->flight->id || fr->len != 4) {
+            protocol_error(p, w, "progress for no running job");
+            return;
+        }
+        ism_frame_cursor c;
+        ism_frame_cursor_init(&c, fr->payload, fr->len);
+        double frac = ism_frame_get_u32(&c) / 1e6;
+        ismd_sched_lock(p->sched);
+        ismd_sched_progress(p->sched, w->flight, frac > 1 ? 1 : frac);
+        ismd_sched_unlock(p->sched);
+        return;
+    }
+    case ISM_FRAME_RESULT:
+    case ISM_FRAME_ERROR:
+        if (w->state != W_BUSY || fr->job != w->flight->id) {
+            protocol_error(p, w, "answer for no running job");
+            return;
+        }
+        if (fr->type == ISM_FRAME_RESULT)
+            on_result(p, w, fr);
+        else
+            on_error_frame(p, w, fr);
+        return;
+    default:
+        protocol_error(p, w, "unexpected frame type");
+    }
+}
+
+static void on_readable(ismd_pool *p, worker *w)
+{
+    for (;;) {
+        if (w->state == W_EMPTY)
+            return;
+        ism_frame fr = {0};
+        ism_frame_status st = ism_frame_read_fd(&w->rd, w->from_fd, &fr);
+        if (st == ISM_FRAME_AGAIN)
+            return;
+        if (st == ISM_FRAME_OK) {
+            if (w->state != W_DYING)
+                on_frame(p, w, &fr);
+            ism_frame_free(&fr);
+            continue;
+        }
+        if (st == ISM_FRAME_EOF || st == ISM_FRAME_TRUNCATED || st == ISM_FRAME_IO_ERROR ||
+            w->state == W_DYING) {
+            worker_gone(p, w);
+            return;
+        }
+        protocol_error(p, w, ism_frame_status_name(st));
+        /* keep reading: the next read sees EOF once the killed worker is gone */
+    }
+}
+
+/* ---- requests to a worker ------------------------------------------------------------ */
+
+static void flush_out(ismd_pool *p, worker *w)
+{
+    while (w->out && w->out_off < w->out_len) {
+        ssize_t n = write(w->to_fd, w->out + w->out_off, w->out_len - w->out_off);
+        if (n > 0) {
+            w->out_off += (size_t)n;
+            continue;
+        }
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+            if (!w->want_out) {
+                struct epoll_event ev = {.events = EPOLLOUT, .data.u64 = EV_WRITE(w->slot)};
+                epoll_ctl(p->epfd, EPOLL_CTL_ADD, w->to_fd, &ev);
+                w->want_out = true;
+            }
+            return;
+        }
+        /* EPIPE: the worker is gone; its result pipe reports EOF next. */
+        close_to_fd(p, w);
+        return;
+    }
+    free(w->out);
+    w->out = NULL;
+    w->out_len = w->out_off = 0;
+    if (w->want_out) {
+        epoll_ctl(p->epfd, EPOLL_CTL_DEL, w->to_fd, NULL);
+        w->want_out = false;
+    }
+}
+
+static bool encode_request(ismd_pool *p, worker *w, const ismd_flight *f)
+{
+    ism_frame_job job = {
+        .max_depth = (uint32_t)p->cfg.max_depth,
+        .threads = (uint32_t)p->cfg.threads,
+        .max_triangles = p->cfg.max_triangles,
+        .max_memory = p->cfg.job_memory ? p->cfg.job_memory / 4 * 3 : 0,
+        .json = f->request->data,
+        .json_len = f->request->len,
+    };
+    snprintf(job.format, sizeof job.format, "%s", f->fmt);
+    ism_frame_builder b = {0};
+    bool ok = ism_frame_job_encode(&job, &b);
+    if (ok) {
+        ism_frame_part part = {b.data, b.len};
+        ok = ism_frame_encode(ISM_FRAME_REQUEST, f->id, &part, 1, &w->out, &w->out_len);
+        w->out_off = 0;
+    }
+    ism_frame_builder_free(&b);
+    return ok;
+}
+
+static void dispatch(ismd_pool *p)
+{
+    for (int i = 0; i < p->n; i++) {
+        worker *w = &p->w[i];
+        if (w->state != W_IDLE)
+            continue;
+        ismd_sched_lock(p->sched);
+        ismd_flight *f = ismd_sched_next(p->sched);
+        bool ok = f && encode_request(p, w, f);
+        if (f && !ok)
+            ismd_sched_fail(p->sched, f, 500, "out_of_memory", "the server ran out of memory",
+                            ISMD_OUT_ERROR);
+        ismd_sched_unlock(p->sched);
+        if (!f)
+            break;
+        if (!ok)
+            continue;
+        w->flight = f;
+        w->state = W_BUSY;
+        flush_out(p, w);
+    }
+    publish_workers(p);
+}
+
+/* ---- deadlines and cancellation ------------------------------------------------------ */
+
+static worker *worker_of(ismd_pool *p, const ismd_flight *f)
+{
+    for (int i = 0; i < p->n; i++)
+        if (p->w[i].state == W_BUSY && p->w[i].flight == f)
+            return &p->w[i];
+    return NULL;
+}
+
+static void enforce(ismd_pool *p, long long now)
+{
+    ismd_flight *expired[MAX_EXPIRED];
+    worker *doomed[MAX_EXPIRED + 256];
+    ismd_restart_reason why[MAX_EXPIRED + 256];
+    size_t nd = 0;
+    ismd_sched_lock(p->sched);
+    size_t ne = ismd_sched_expire(p->sched, now, expired, MAX_EXPIRED);
+    for (size_t i = 0; i < ne; i++) {
+        worker *w = worker_of(p, expired[i]);
+        char msg[160];
+        snprintf(msg, sizeof msg, "the computation ran past its deadline of %g s "
+                 "(--job-timeout); its worker was stopped", p->sched->job_timeout_s);
+        ismd_sched_fail(p->sched, expired[i], 504, "deadline_exceeded", msg, ISMD_OUT_DEADLINE);
+        if (w) {
+            w->flight = NULL;
+            doomed[nd] = w;
+            why[nd++] = ISMD_RESTART_DEADLINE;
+        }
+    }
+    for (int i = 0; i < p->n && nd < sizeof doomed / sizeof doomed[0]; i++) {
+        worker *w = &p->w[i];
+        if (w->state == W_BUSY && w->flight && w->flight->nwaiters == 0) {
+            ismd_sched_finish(p->sched, w->flight, &(ismd_result){.status = 499},
+                              ISMD_OUT_CANCELED);
+            w->flight = NULL;
+            doomed[nd] = w;
+            why[nd++] = ISMD_RESTART_CANCEL;
+        }
+    }
+    ismd_sched_unlock(p->sched);
+    for (size_t i = 0; i < nd; i++)
+        kill_worker(p, doomed[i], why[i]);
+}
+
+/* ---- the thread ---------------------------------------------------------------------- */
+
+static int next_timeout_ms(ismd_pool *p, long long now)
+{
+    long long next = now + 1000000000LL;
+    ismd_sched_lock(p->sched);
+    long long d = ismd_sched_next_deadline(p->sched);
+    ismd_sched_unlock(p->sched);
+    if (d < next)
+        next = d;
+    for (int i = 0; i < p->n; i++)
+        if (p->w[i].state == W_EMPTY && p->w[i].respawn_at_ns < next)
+            next = p->w[i].respawn_at_ns;
+    if (atomic_load(&p->stopping) && next > now + 50000000LL)
+        next = now + 50000000LL;
+    long long ms = (next - now + 999999) / 1000000;
+    return ms < 0 ? 0 : ms > 1000 ? 1000 : (int)ms;
+}
+
+static int busy_count(ismd_pool *p)
+{
+    int n = 0;
+    for (int i = 0; i < p->n; i++)
+        n += p->w[i].state == W_BUSY;
+    return n;
+}
+
+static int alive_count(ismd_pool *p)
+{
+    int n = 0;
+    for (int i = 0; i < p->n; i++)
+        n += p->w[i].state != W_EMPTY;
+    return n;
+}
+
+/* Stop: fail what still runs, close every request pipe (workers exit on EOF), wait a little,
+ * then SIGKILL the stragglers. */
+static void stop_all(ismd_pool *p)
+{
+    for (int i = 0; i < p->n; i++) {
+        worker *w = &p->w[i];
+        if (w->state == W_BUSY && w->flight) {
+            ismd_sched_lock(p->sched);
+            ismd_sched_fail(p->sched, w->flight, 503, "shutting_down",
+                            "the server is shutting down; retry on another instance",
+                            ISMD_OUT_CANCELED);
+            ismd_sched_unlock(p->sched);
+            w->flight = NULL;
+            kill_worker(p, w, ISMD_RESTART_CANCEL);
+        } else if (w->state != W_EMPTY) {
+            close_to_fd(p, w);
+            w->state = W_DYING; /* exits on EOF; not counted as a restart */
+        }
+    }
+    long long until = ismd_now_ns() + STOP_WAIT_NS;
+    struct epoll_event evs[64];
+    while (alive_count(p) > 0) {
+        long long now = ismd_now_ns();
+        if (now >= until) {
+            for (int i = 0; i < p->n; i++)
+                if (p->w[i].state != W_EMPTY)
+                    kill(p->w[i].pid, SIGKILL);
+            until = LLONG_MAX;
+        }
+        int n = epoll_wait(p->epfd, evs, 64, 100);
+        for (int k = 0; k < n; k++) {
+            uint64_t d = evs[k].data.u64;
+            if (d != EV_WAKE && !(d & 1) && (int)(d >> 1) < p->n)
+                on_readable(p, &p->w[d >> 1]);
+        }
+    }
+}
+
+static void *pool_main(void *arg)
+{
+    ismd_pool *p = arg;
+    struct epoll_event evs[64];
+    for (;;) {
+        long long now = ismd_now_ns();
+        bool stopping = atomic_load(&p->stopping);
+        if (!stopping)
+            respawn_due(p, now);
+        int n = epoll_wait(p->epfd, evs, 64, next_timeout_ms(p, now));
+        for (int k = 0; k < n; k++) {
+            uint64_t d = evs[k].data.u64;
+            if (d == EV_WAKE) {
+                uint64_t v;
+                ssize_t r = read(p->evfd, &v, sizeof v);
+                (void)r;
+                continue;
+            }
+            worker *w = &p->w[d >> 1];
+            if (d & 1)
+                flush_out(p, w);
+            else
+                on_readable(p, w);
+        }
+        now = ismd_now_ns();
+        enforce(p, now);
+        if (atomic_load(&p->stopping) && (busy_count(p) == 0 || now >= p->stop_deadline_ns)) {
+            stop_all(p);
+            return NULL;
+        }
+        dispatch(p);
+    }
+}
+
+ismd_pool *ismd_pool_start(const ismd_pool_config *cfg, ismd_sched *sched, ism_cache *cache,
+                           ismd_metrics *metrics)
+{
+    if (access(cfg->worker_path, X_OK) != 0) {
+        ism_logf(ISM_LOG_ERROR, "worker_missing", "%s: %s (build it with `make build`)",
+                 cfg->worker_path, strerror(errno));
+        return NULL;
+    }
+    ismd_pool *p = calloc(1, sizeof *p);
+    if (!p)
+        return NULL;
+    p->cfg = *cfg;
+    p->sched = sched;
+    p->cache = cache;
+    p->metrics = metrics;
+    p->n = cfg->workers;
+    p->w = calloc((size_t)p->n, sizeof *p->w);
+    p->epfd = epoll_create1(EPOLL_CLOEXEC);
+    p->evfd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+    if (!p->w || p->epfd < 0 || p->evfd < 0)
+        goto fail;
+    for (int i = 0; i < p->n; i++) {
+        p->w[i].slot = i;
+        p->w[i].state = W_EMPTY;
+        p->w[i].to_fd = p->w[i].from_fd = -1;
+    }
+    struct epoll_event ev = {.events = EPOLLIN, .data.u64 = EV_WAKE};
+    epoll_ctl(p->epfd, EPOLL_CTL_ADD, p->evfd, &ev);
+    atomic_store(&metrics->workers_total, p->n);
+    ismd_sched_lock(sched);
+    sched->wake = wake;
+    sched->wake_ctx = p;
+    ismd_sched_unlock(sched);
+    if (pthread_create(&p->thread, NULL, pool_main, p) != 0)
+        goto fail;
+    return p;
+fail:
+    if (p->epfd >= 0)
+        close(p->epfd);
+    if (p->evfd >= 0)
+        close(p->evfd);
+    free(p->w);
+    free(p);
+    return NULL;
+}
+
+void ismd_pool_stop(ismd_pool *p, double grace_s)
+{
+    ismd_sched_lock(p->sched);
+    ismd_sched_drain(p->sched);
+    ismd_sched_unlock(p->sched);
+    p->stop_deadline_ns = ismd_now_ns() + (long long)(grace_s * 1e9);
+    atomic_store(&p->stopping, true);
+    wake(p);
+    pthread_join(p->thread, NULL);
+    ismd_sched_lock(p->sched);
+    p->sched->wake = NULL;
+    ismd_sched_unlock(p->sched);
+    close(p->epfd);
+    close(p->evfd);
+    free(p->w);
+    free(p);
+}
+
+/* ---- Server-Timing from stats -------------------------------------------------------- */
+
+#include <jansson.h>
+
+static void stats_timing(const ism_blob *stats, char *out, size_t cap)
+{
+    out[0] = 0;
+    if (!stats)
+        return;
+    json_t *root = json_loadb((const char *)stats->data, stats->len, 0, NULL);
+    json_t *t = root ? json_object_get(root, "timings_ms") : NULL;
+    size_t used = 0;
+    const char *k;
+    json_t *v;
+    if (json_is_object(t)) {
+        json_object_foreach(t, k, v) {
+            if (!json_is_number(v) || !strcmp(k, "total"))
+                continue; /* the daemon adds its own total */
+            bool token = *k != 0;
+            for (const char *c = k; *c; c++)
+                if (!((*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') ||
+                      (*c >= '0' && *c <= '9') || *c == '_' || *c == '-'))
+                    token = false;
+            if (!token)
+                continue;
+            int n = snprintf(out + used, cap - used, "%s%s;dur=%.3f", used ? ", " : "", k,
+                             json_number_value(v));
+            if (n < 0 || (size_t)n >= cap - used) {
+                out[used] = 0;
+                break;
+            }
+            used += (size_t)n;
+        }
+    }
+    json_decref(root);
+}
