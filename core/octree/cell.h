@@ -8,6 +8,7 @@
 #include <stdint.h>
 #include <stdbool.h>
 #include "core/octree/breaks.h"
+#include "core/octree/cell_cache.h"
 #include "core/octree/edge_roots.h"
 #include "core/octree/octree.h"
 #include "core/octree/sampler.h"
@@ -98,6 +99,7 @@ typedef struct ism_cell_ctx {
     size_t nev, cap_ev;
     ism_flines lines;
     ism_loops loops;
+    ism_cell_cache cache;     /* must be initialised (ism_cell_cache_init) */
     ism_cell_stats stats;
 } ism_cell_ctx;
 

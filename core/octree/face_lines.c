@@ -47,7 +47,15 @@ static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3])
     ism_bpoint *b = &cx->bp[cx->nbp++];
     memcpy(b->ip, ip, sizeof b->ip);
     ism_grid_point(&cx->tree->grid, (ism_ipt){{ip[0], ip[1], ip[2]}}, b->p);
-    b->f = ism_sample_grad(&cx->s, b->p, b->g);
+    uint64_t key = ism_lattice_key(ip);
+    ism_point_entry *e =
+        &cx->cache.points[ism_cache_mix(key) & (((uint64_t)1 << ISM_POINT_CACHE_BITS) - 1)];
+    if (e->key != key) {
+        e->key = key;
+        e->f = ism_sample_grad(&cx->s, b->p, e->g);
+    }
+    b->f = e->f;
+    memcpy(b->g, e->g, sizeof b->g);
     return true;
 }
 
@@ -100,6 +108,9 @@ static ism_fpoint root_point(const ism_root *r, uint8_t flags)
     return q;
 }
 
+static void compute_segment(ism_cell_ctx *cx, const ism_bpoint *lo, const ism_bpoint *hi,
+                            ism_seg_roots *out);
+
 /* Roots of the segment a→b in walking order, computed in the canonical direction. */
 static void walk_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint *b,
                          ism_seg_roots *out)
@@ -111,6 +122,29 @@ static void walk_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint
             break;
         }
     const ism_bpoint *lo = forward ? a : b, *hi = forward ? b : a;
+    uint64_t ka = ism_lattice_key(lo->ip), kb = ism_lattice_key(hi->ip);
+    ism_segment_entry *e =
+        &cx->cache.segments[ism_cache_mix(ka * 31 + kb) & (((uint64_t)1 << ISM_SEGMENT_CACHE_BITS) - 1)];
+    if (e->a == ka && e->b == kb) {
+        *out = e->roots;
+    } else {
+        compute_segment(cx, lo, hi, out);
+        e->a = ka;
+        e->b = kb;
+        e->roots = *out;
+    }
+    if (!forward && out->n == 2) {
+        ism_root r = out->r[0];
+        out->r[0] = out->r[1];
+        out->r[1] = r;
+    }
+}
+
+/* The roots of the canonical segment lo→hi, with roots closer than the stitching tolerance
+ * merged into one double root (paper Fig. 3b). */
+static void compute_segment(ism_cell_ctx *cx, const ism_bpoint *lo, const ism_bpoint *hi,
+                            ism_seg_roots *out)
+{
     ism_segment_roots(&cx->s, &cx->roots, lo->p, hi->p, lo->f, hi->f, lo->g, hi->g, out);
     if (out->n == 2 && out->r[1].t - out->r[0].t < cx->stitch_tol) {
         /* Two roots closer than the stitching tolerance: one double root (paper Fig. 3b). */
@@ -122,11 +156,6 @@ static void walk_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint
         m.kind = ISM_ROOT_TOUCH;
         out->r[0] = m;
         out->n = 1;
-    }
-    if (!forward && out->n == 2) {
-        ism_root r = out->r[0];
-        out->r[0] = out->r[1];
-        out->r[1] = r;
     }
 }
 

@@ -197,7 +197,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         cx->breaks = &breaks;
         cx->roots = roots;
         cx->stitch_tol = o->stitch_tol;
-        if (!(cx->s.ws = ism_eval_ws_new(f)))
+        if (!(cx->s.ws = ism_eval_ws_new(f)) || !ism_cell_cache_init(&cx->cache))
             goto done;
     }
     ism_parallel_for(threads, p.nchunks, run_chunk, &p);
@@ -222,6 +222,7 @@ done:
     for (int t = 0; p.ctx && t < threads; t++) {
         if (p.ctx[t].s.ws)
             ism_eval_ws_free(p.ctx[t].s.ws);
+        ism_cell_cache_free(&p.ctx[t].cache);
         ism_cell_ctx_free(&p.ctx[t]);
     }
     free(p.ctx);

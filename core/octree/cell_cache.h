@@ -1,0 +1,45 @@
+/* cell_cache.h — per-thread memo of what neighbouring nodes compute again and again: f and
+ * ∇f at lattice points, and the roots of lattice segments. Both are pure functions of their
+ * lattice coordinates, so a hit returns exactly what a recomputation would: the cache only
+ * saves time, never changes the mesh. Direct-mapped: a collision simply overwrites. */
+#ifndef ISM_CELL_CACHE_H
+#define ISM_CELL_CACHE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+#include "core/octree/edge_roots.h"
+
+#define ISM_POINT_CACHE_BITS 15
+#define ISM_SEGMENT_CACHE_BITS 14
+
+typedef struct ism_point_entry {
+    uint64_t key; /* 0: empty (lattice keys are stored + 1) */
+    double f, g[3];
+} ism_point_entry;
+
+typedef struct ism_segment_entry {
+    uint64_t a, b; /* lattice keys of the end points (+1), 0: empty */
+    ism_seg_roots roots;
+} ism_segment_entry;
+
+typedef struct ism_cell_cache {
+    ism_point_entry *points;
+    ism_segment_entry *segments;
+} ism_cell_cache;
+
+bool ism_cell_cache_init(ism_cell_cache *c);
+void ism_cell_cache_free(ism_cell_cache *c);
+
+static inline uint64_t ism_lattice_key(const int32_t p[3])
+{
+    return (((uint64_t)p[0] << 34) | ((uint64_t)p[1] << 17) | (uint64_t)p[2]) + 1;
+}
+
+static inline uint64_t ism_cache_mix(uint64_t k)
+{
+    k ^= k >> 31;
+    k *= 0x9e3779b97f4a7c15ull;
+    return k ^ (k >> 29);
+}
+
+#endif
