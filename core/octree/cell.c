@@ -10,25 +10,95 @@
 
 typedef struct face_walk {
     ism_cell_ctx *cx;
+    ism_cell_out *out;
+    bool owner;           /* this node emits the face's planar pieces (see below) */
     size_t tiles;
     bool ok;
 } face_walk;
+
+/* A tile lying in f = 0 is one polygon of the surface, emitted once: by the node below
+ * it along its axis (or above it on the search box's lower boundary). */
+static bool emit_zero_tile(face_walk *w, const ism_tile *tile)
+{
+    ism_cell_ctx *cx = w->cx;
+    if (cx->nzero == cx->cap_zero) {
+        size_t c = cx->cap_zero ? cx->cap_zero * 2 : 8;
+        ism_tile *v = realloc(cx->zero, c * sizeof *v);
+        if (!v)
+            return false;
+        cx->zero = v;
+        cx->cap_zero = c;
+    }
+    cx->zero[cx->nzero++] = *tile;
+    if (!w->owner)
+        return true;
+    ism_fpoint *pts = malloc(cx->nbp * sizeof *pts);
+    if (!pts)
+        return false;
+    for (size_t i = 0; i < cx->nbp; i++) {
+        memcpy(pts[i].p, cx->bp[i].p, sizeof pts[i].p);
+        memcpy(pts[i].g, cx->bp[i].g, sizeof pts[i].g);
+        pts[i].flags = ISM_FP_ZERO;
+    }
+    double reach = 0;
+    bool ok = ism_triangulate_loop(&cx->s, pts, cx->nbp, reach, w->out);
+    free(pts);
+    cx->stats.polygons++;
+    return ok;
+}
 
 static bool on_tile(void *ctx, const ism_tile *tile)
 {
     face_walk *w = ctx;
     w->tiles++;
-    if (!ism_tile_lines(w->cx, tile))
+    if (!ism_tile_lines(w->cx, tile) || (w->cx->zero_tile && !emit_zero_tile(w, tile)))
         w->ok = false;
     return w->ok;
+}
+
+/* Is the segment ab on the boundary of tile t (world coordinates)? */
+static bool on_tile_boundary(const ism_grid *g, const ism_tile *t, const double a[3],
+                             const double b[3])
+{
+    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    double w = ism_grid_coord(g, t->axis, t->plane);
+    double u0 = ism_grid_coord(g, u, t->u0), u1 = ism_grid_coord(g, u, t->u1);
+    double v0 = ism_grid_coord(g, v, t->v0), v1 = ism_grid_coord(g, v, t->v1);
+    if (a[t->axis] != w || b[t->axis] != w)
+        return false;
+    for (int k = 0; k < 2; k++) {
+        const double *p = k ? b : a;
+        if (p[u] < u0 || p[u] > u1 || p[v] < v0 || p[v] > v1)
+            return false;
+    }
+    return (a[u] == b[u] && (a[u] == u0 || a[u] == u1)) ||
+           (a[v] == b[v] && (a[v] == v0 || a[v] == v1));
+}
+
+/* Zero edges along a planar piece of the surface belong to that piece, not to a
+ * one-edge polygon of their own. */
+static void drop_edges_of_zero_tiles(ism_cell_ctx *cx)
+{
+    size_t kept = 0;
+    for (size_t i = 0; i < cx->lines.n; i++) {
+        ism_fline *l = &cx->lines.v[i];
+        bool covered = false;
+        for (size_t z = 0; z < cx->nzero && l->kind == ISM_LINE_EDGE && !covered; z++)
+            covered = on_tile_boundary(&cx->tree->grid, &cx->zero[z], l->a.p, l->b.p);
+        if (!covered)
+            cx->lines.v[kept++] = *l;
+    }
+    cx->lines.n = kept;
 }
 
 bool ism_cell_polygonise(ism_cell_ctx *cx, int32_t node, ism_cell_out *out)
 {
     cx->lines.n = 0;
+    cx->nzero = 0;
+    const ism_node *nd = &cx->tree->nodes[node];
     for (int axis = 0; axis < 3; axis++)
         for (int side = 0; side < 2; side++) {
-            face_walk w = {cx, 0, true};
+            face_walk w = {cx, out, side == 1 || nd->org[axis] == 0, 0, true};
             size_t before = cx->lines.n;
             ism_octree_face_tiles(cx->tree, node, axis, side, on_tile, &w);
             if (!w.ok)
@@ -36,12 +106,13 @@ bool ism_cell_polygonise(ism_cell_ctx *cx, int32_t node, ism_cell_out *out)
             if (w.tiles > 1 && cx->lines.n > before)
                 cx->stats.crack_tiles++;
         }
+    if (cx->nzero)
+        drop_edges_of_zero_tiles(cx);
     if (cx->lines.n == 0)
         return true;
     if (!ism_stitch(&cx->lines, &cx->loops))
         return false;
 
-    const ism_node *nd = &cx->tree->nodes[node];
     double reach = 0.5 * ism_grid_cell_size(&cx->tree->grid, nd->level);
     size_t polygons = 0;
     for (size_t k = 0; k < cx->loops.nloops; k++) {
@@ -76,6 +147,8 @@ void ism_cell_ctx_free(ism_cell_ctx *cx)
     free(cx->ev);
     free(cx->lines.v);
     ism_loops_free(&cx->loops);
+    free(cx->zero);
+    cx->zero = NULL;
     cx->bp = NULL;
     cx->ev = NULL;
     cx->lines.v = NULL;

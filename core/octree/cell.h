@@ -100,6 +100,9 @@ typedef struct ism_cell_ctx {
     ism_flines lines;
     ism_loops loops;
     ism_cell_cache cache;     /* must be initialised (ism_cell_cache_init) */
+    bool zero_tile;           /* set by ism_tile_lines: f vanishes on the whole tile */
+    ism_tile *zero;           /* the current node's tiles lying in f = 0 */
+    size_t nzero, cap_zero;
     ism_cell_stats stats;
 } ism_cell_ctx;
 
@@ -107,7 +110,9 @@ void ism_cell_ctx_free(ism_cell_ctx *cx);
 
 bool ism_flines_push(ism_flines *l, const ism_fpoint *a, const ism_fpoint *b, int kind);
 
-/* Appends to cx->lines the lines of f = 0 on one tile (a face or part of a face). */
+/* Appends to cx->lines the lines of f = 0 on one tile (a face or part of a face). When f
+ * vanishes on the whole tile (a plane of the surface lying in the lattice), sets
+ * cx->zero_tile, leaves cx->bp holding its boundary and adds no lines. */
 bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *tile);
 
 /* Polygonises leaf `node`: face lines of all its tiles, stitched into polygons,

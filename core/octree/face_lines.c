@@ -416,9 +416,27 @@ static bool emit(ism_cell_ctx *cx, int a, int b, int kind)
     return ism_flines_push(&cx->lines, &cx->ev[a].pt, &cx->ev[b].pt, kind);
 }
 
+/* f = 0 on the whole tile: at every boundary point and at the centre. */
+static bool is_zero_tile(ism_cell_ctx *cx, const ism_tile *t)
+{
+    for (size_t i = 0; i < cx->nbp; i++)
+        if (cx->bp[i].f != 0)
+            return false;
+    double c[3];
+    tile_centre(cx, t, c);
+    return fabs(ism_sample_f(&cx->s, c)) <= cx->roots.eps;
+}
+
 bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
 {
-    if (!tile_boundary(cx, t) || !tile_events(cx))
+    cx->zero_tile = false;
+    if (!tile_boundary(cx, t))
+        return false;
+    if (is_zero_tile(cx, t)) {
+        cx->zero_tile = true;
+        return true;
+    }
+    if (!tile_events(cx))
         return false;
     int ne = (int)cx->nev;
     int cross[MAX_CROSS], touch[MAX_CROSS], nc = 0, nt = 0;

@@ -49,6 +49,8 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
     for (int e = 0; e < 12; e++) {
         int c0, c1;
         edge_corners(e, &c0, &c1);
+        if (f[c0] == 0 && f[c1] == 0)
+            continue; /* the edge lies in f = 0 (a plane of the surface on the lattice) */
         bool crosses = (f[c0] < 0) != (f[c1] < 0) || f[c0] == 0 || f[c1] == 0;
         if (!crosses) {
             if (ism_dot3(n[c0], n[c1]) <= fl->gradient_test)

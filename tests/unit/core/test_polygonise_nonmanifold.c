@@ -124,3 +124,28 @@ Test(paper, kummer_both_cases)
     ism_mesh_free(&m);
     ism_tape_free(t);
 }
+
+/* f = xyz in a box symmetric about 0: the three coordinate planes lie on the lattice. Each
+ * must come out once (area 3 × 4, no boundary except the box's), meeting along the axes. */
+Test(paper, coordinate_planes_on_the_lattice)
+{
+    const pf_surface s = {"x*y*z", NULL, 0, NULL, 0};
+    const double box[6] = {-1, -1, -1, 1, 1, 1};
+    ism_tape *t = pf_compile(&s);
+    ism_mesh m;
+    ism_poly_stats st;
+    int d = 5 - pf_quick();
+    pf_run(t, box, 2, d, 0, &m, &st);
+    pf_props p;
+    pf_measure(&m, t, &p);
+    cr_expect_float_eq(p.area, 12.0, 1e-9, "area %g: each plane once", p.area);
+    cr_expect_eq(p.max_abs_f, 0, "vertices lie exactly on the planes");
+    size_t per_axis = (size_t)1 << d; /* lattice edges along one axis inside the box */
+    cr_expect_eq(pf_count_nm_edges(&m, on_x_axis), per_axis);
+    cr_expect_eq(pf_count_nm_edges(&m, on_y_axis), per_axis);
+    cr_expect_eq(pf_count_nm_edges(&m, on_z_axis), per_axis);
+    /* the box cuts each plane along a square of side 2: 4 · 2^d boundary edges per plane */
+    cr_expect_eq(p.boundary_edges, 3 * 4 * per_axis);
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+}
