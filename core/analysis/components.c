@@ -39,6 +39,8 @@ bool ism_an_vertex_components(const ism_mesh *m, const ism_an_vertex_facts *vf, 
     for (size_t v = 0; v < m->nverts; v++)
         parent[v] = (uint32_t)v;
     for (size_t t = 0; t < m->ntris; t++) {
+        if (ism_an_tri_collapsed(m->tri, t))
+            continue;
         const uint32_t *c = m->tri + 3 * t;
         ism_an_uf_union(parent, c[0], c[1]);
         ism_an_uf_union(parent, c[1], c[2]);

@@ -606,3 +606,21 @@ Test(analysis, duplicate_triangles_are_counted)
     ism_analysis_free(&a);
     ism_mesh_free(&m);
 }
+
+Test(analysis, vertex_only_in_collapsed_triangles_joins_nothing)
+{
+    ism_mesh m;
+    ism_mesh_init(&m);
+    uint32_t lone = ta_vertex(&m, 9, 9, 9);
+    uint32_t a = ta_vertex(&m, 0, 0, 0), b = ta_vertex(&m, 1, 0, 0), c = ta_vertex(&m, 0, 1, 0);
+    ta_triangle(&m, lone, lone, a); /* collapsed: ignored by the topology */
+    ta_triangle(&m, a, b, c);
+    ism_analysis an = analyse(&m);
+    cr_expect_eq(an.vertex_class[lone], ISM_VERTEX_ISOLATED);
+    cr_expect_eq(an.vertices_used, 3);
+    cr_expect_eq(an.components, 1);
+    cr_expect_eq(an.vertex_components, 1);
+    cr_expect_eq(an.euler, 1);
+    ism_analysis_free(&an);
+    ism_mesh_free(&m);
+}
