@@ -36,6 +36,13 @@ void ism_eval_batch(const ism_tape *t, ism_eval_ws *ws, const double *x, const d
 ism_interval ism_eval_interval(const ism_tape *t, ism_eval_ws *ws, ism_interval x,
                                ism_interval y, ism_interval z);
 
+/* The intervals of n boxes at once: out[i] encloses f over x[i] × y[i] × z[i], the same
+ * bounds ism_eval_interval gives for that box, computed in vectorised loops over the boxes
+ * (added for the octree's eight children; several times faster per box). */
+void ism_eval_interval_batch(const ism_tape *t, ism_eval_ws *ws, const ism_interval *x,
+                             const ism_interval *y, const ism_interval *z, ism_interval *out,
+                             size_t n);
+
 /* f and its gradient (forward mode). Returns f. */
 double ism_eval_gradient(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
                          double grad[3]);

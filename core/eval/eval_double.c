@@ -9,7 +9,7 @@
 #include <math.h>
 #include <string.h>
 
-#define LANES 8
+#define LANES 32
 
 static double point_op(const ism_instr *in, const double *r)
 {
@@ -64,18 +64,21 @@ double ism_eval_point(const ism_tape *t, ism_eval_ws *ws, double x, double y, do
     static inline void NAME(double *restrict o, const double *restrict a,              \
                             const double *restrict b)                                  \
     {                                                                                  \
+        _Pragma("GCC unroll 32")                                                        \
         for (size_t j = 0; j < LANES; j++)                                             \
             o[j] = EXPR;                                                               \
     }
 #define KERNEL_R(NAME, EXPR)                                                           \
     static inline void NAME(double *restrict o, const double *restrict a)              \
     {                                                                                  \
+        _Pragma("GCC unroll 32")                                                        \
         for (size_t j = 0; j < LANES; j++)                                             \
             o[j] = EXPR;                                                               \
     }
 #define KERNEL_RC(NAME, EXPR)                                                          \
     static inline void NAME(double *restrict o, const double *restrict a, double c)    \
     {                                                                                  \
+        _Pragma("GCC unroll 32")                                                        \
         for (size_t j = 0; j < LANES; j++)                                             \
             o[j] = EXPR;                                                               \
     }
@@ -130,6 +133,7 @@ static void powi_lanes(double *restrict out, const double *restrict ra, unsigned
     }
 }
 
+__attribute__((target_clones("avx2", "default")))
 static void batch_op(const ism_instr *in, double *regs, size_t ngroups)
 {
     double *out = regs + (size_t)in->out * ISM_EVAL_BATCH;

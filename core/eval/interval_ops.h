@@ -7,7 +7,11 @@
  * `x - (|x|*2^-52 + 2^-1074)`, which is always <= the next double below x, without a branch,
  * a rounding-mode switch or a call (see down1/up1). Results of libm functions (not
  * correctly rounded) are pushed by four ulps. A NaN bound (inf - inf, 0 * inf) never
- * escapes: ism_iv_sane turns it into the matching infinity. */
+ * escapes: ism_iv_sane turns it into the matching infinity.
+ *
+ * The common operations are written without branches (selects only) so that the batched
+ * interval evaluator, which runs them lane by lane, vectorises; both evaluators share them
+ * and so compute the same bounds. */
 #ifndef ISM_INTERVAL_OPS_H
 #define ISM_INTERVAL_OPS_H
 
@@ -28,18 +32,13 @@ static inline ism_interval iv(double lo, double hi)
 
 static inline ism_interval ism_iv_whole(void) { return iv(-INFINITY, INFINITY); }
 
-/* Replaces NaN bounds by the infinity on their side. */
+static inline double nan_to(double v, double instead) { return v == v ? v : instead; }
+
+/* Replaces NaN bounds by the infinity on their side (every operation keeps lo <= hi
+ * otherwise). */
 static inline ism_interval ism_iv_sane(ism_interval r)
 {
-    if (!(r.lo <= r.hi)) {
-        if (isnan(r.lo))
-            r.lo = -INFINITY;
-        if (isnan(r.hi))
-            r.hi = INFINITY;
-        if (r.lo > r.hi)
-            r = ism_iv_whole();
-    }
-    return r;
+    return iv(nan_to(r.lo, -INFINITY), nan_to(r.hi, INFINITY));
 }
 
 static inline ism_interval iv_add(ism_interval a, ism_interval b)
@@ -67,79 +66,94 @@ static inline ism_interval iv_neg(ism_interval a)
     return iv(-a.hi, -a.lo);
 }
 
-/* x * y where 0 * inf counts as 0 (the bound of a product of reals). */
+/* A product bound: 0 * inf (the only NaN a product of non-NaN bounds can give) counts as
+ * 0, the bound of a product of reals. */
 static inline double mul0(double x, double y)
 {
-    return (x == 0.0 || y == 0.0) ? 0.0 : x * y;
+    return nan_to(x * y, 0.0);
+}
+
+static inline double min4(double a, double b, double c, double d)
+{
+    return ism_min(ism_min(a, b), ism_min(c, d));
+}
+
+static inline double max4(double a, double b, double c, double d)
+{
+    return ism_max(ism_max(a, b), ism_max(c, d));
 }
 
 static inline ism_interval iv_mul(ism_interval a, ism_interval b)
 {
-    double p1 = a.lo * b.lo, p2 = a.lo * b.hi, p3 = a.hi * b.lo, p4 = a.hi * b.hi;
-    if (isnan(p1 + p2 + p3 + p4)) {
-        p1 = mul0(a.lo, b.lo);
-        p2 = mul0(a.lo, b.hi);
-        p3 = mul0(a.hi, b.lo);
-        p4 = mul0(a.hi, b.hi);
-    }
-    double lo = fmin(fmin(p1, p2), fmin(p3, p4));
-    double hi = fmax(fmax(p1, p2), fmax(p3, p4));
-    return iv(down1(lo), up1(hi));
+    double p1 = mul0(a.lo, b.lo), p2 = mul0(a.lo, b.hi), p3 = mul0(a.hi, b.lo),
+           p4 = mul0(a.hi, b.hi);
+    return iv(down1(min4(p1, p2, p3, p4)), up1(max4(p1, p2, p3, p4)));
+}
+
+/* a * c for a finite constant c != 0 of known sign (the batched evaluator picks one per
+ * instruction); no product can be NaN. */
+static inline ism_interval iv_mul_cpos(ism_interval a, double c)
+{
+    return iv(down1(a.lo * c), up1(a.hi * c));
+}
+
+static inline ism_interval iv_mul_cneg(ism_interval a, double c)
+{
+    return iv(down1(a.hi * c), up1(a.lo * c));
 }
 
 static inline ism_interval iv_mul_c(ism_interval a, double c)
 {
-    if (c >= 0.0)
-        return iv(down1(mul0(a.lo, c)), up1(mul0(a.hi, c)));
-    return iv(down1(mul0(a.hi, c)), up1(mul0(a.lo, c)));
+    if (c == 0.0)
+        return iv(0.0, 0.0);
+    return c > 0.0 ? iv_mul_cpos(a, c) : iv_mul_cneg(a, c);
 }
 
+/* a / b: the whole line when b holds 0, or when inf / inf leaves a bound undefined. */
 static inline ism_interval iv_div(ism_interval a, ism_interval b)
 {
-    if (!(b.lo > 0.0 || b.hi < 0.0))
-        return ism_iv_whole();
     double q1 = a.lo / b.lo, q2 = a.lo / b.hi, q3 = a.hi / b.lo, q4 = a.hi / b.hi;
-    double lo = fmin(fmin(q1, q2), fmin(q3, q4));
-    double hi = fmax(fmax(q1, q2), fmax(q3, q4));
-    if (isnan(q1 + q2 + q3 + q4)) /* inf / inf: give up precision, keep the enclosure */
-        return ism_iv_whole();
-    return iv(down1(lo), up1(hi));
+    double s = q1 + q2 + q3 + q4;
+    double side = b.lo > 0.0 ? 1.0 : b.hi < 0.0 ? 1.0 : 0.0; /* b excludes 0 */
+    double lo = down1(min4(q1, q2, q3, q4)), hi = up1(max4(q1, q2, q3, q4));
+    lo = side == 1.0 ? lo : -INFINITY;
+    hi = side == 1.0 ? hi : INFINITY;
+    return iv(nan_to(s, -INFINITY) == s ? lo : -INFINITY, s == s ? hi : INFINITY);
 }
 
 static inline ism_interval iv_div_c(ism_interval a, double c)
 {
-    if (c > 0.0)
-        return iv(down1(a.lo / c), up1(a.hi / c));
-    return iv(down1(a.hi / c), up1(a.lo / c));
+    double p = a.lo / c, q = a.hi / c;
+    int pos = c > 0.0;
+    double lo = pos ? p : q, hi = pos ? q : p;
+    return iv(down1(lo), up1(hi));
 }
 
-/* c / a. */
+/* c / a: monotone on each side of 0. */
 static inline ism_interval iv_c_div(double c, ism_interval a)
 {
-    if (!(a.lo > 0.0 || a.hi < 0.0))
-        return ism_iv_whole();
-    if (c >= 0.0)
-        return iv(down1(c / a.hi), up1(c / a.lo));
-    return iv(down1(c / a.lo), up1(c / a.hi));
+    double p = c / a.hi, q = c / a.lo;
+    double lo = down1(c >= 0.0 ? p : q), hi = up1(c >= 0.0 ? q : p);
+    int excludes0 = a.lo > 0.0 || a.hi < 0.0;
+    return excludes0 ? iv(lo, hi) : ism_iv_whole();
 }
 
 static inline ism_interval iv_min(ism_interval a, ism_interval b)
 {
-    return iv(fmin(a.lo, b.lo), fmin(a.hi, b.hi));
+    return iv(ism_min(a.lo, b.lo), ism_min(a.hi, b.hi));
 }
 
 static inline ism_interval iv_max(ism_interval a, ism_interval b)
 {
-    return iv(fmax(a.lo, b.lo), fmax(a.hi, b.hi));
+    return iv(ism_max(a.lo, b.lo), ism_max(a.hi, b.hi));
 }
 
 static inline ism_interval iv_abs(ism_interval a)
 {
-    if (a.lo >= 0.0)
-        return a;
-    if (a.hi <= 0.0)
-        return iv(-a.hi, -a.lo);
-    return iv(0.0, fmax(-a.lo, a.hi));
+    int nonneg = a.lo >= 0.0, nonpos = a.hi <= 0.0;
+    double inner = nonpos ? -a.hi : 0.0;
+    double lo = nonneg ? a.lo : inner;
+    return iv(lo, ism_max(fabs(a.lo), fabs(a.hi)));
 }
 
 /* Bounds of m^n for m >= 0 with the products of ism_powi, each rounded outward. */
@@ -148,10 +162,10 @@ static inline double powi_down(double m, unsigned n)
     double r = 1.0, p = m;
     while (n) {
         if (n & 1u)
-            r = fmax(down1(r * p), 0.0);
+            r = ism_max(down1(r * p), 0.0);
         n >>= 1;
         if (n)
-            p = fmax(down1(p * p), 0.0);
+            p = ism_max(down1(p * p), 0.0);
     }
     return r;
 }
@@ -177,7 +191,7 @@ static inline ism_interval iv_powi(ism_interval a, unsigned n)
     if (n % 2u == 0) {
         if (a.hi <= 0.0)
             return iv(powi_down(-a.hi, n), powi_up(-a.lo, n));
-        return iv(0.0, powi_up(fmax(-a.lo, a.hi), n));
+        return iv(0.0, powi_up(ism_max(-a.lo, a.hi), n));
     }
     double lo = -powi_up(-a.lo, n);
     double hi = a.hi >= 0.0 ? powi_up(a.hi, n) : -powi_down(-a.hi, n);
@@ -186,22 +200,21 @@ static inline ism_interval iv_powi(ism_interval a, unsigned n)
 
 static inline ism_interval iv_square(ism_interval a)
 {
-    if (a.lo >= 0.0)
-        return iv(fmax(down1(a.lo * a.lo), 0.0), up1(a.hi * a.hi));
-    if (a.hi <= 0.0)
-        return iv(fmax(down1(a.hi * a.hi), 0.0), up1(a.lo * a.lo));
-    double m = fmax(-a.lo, a.hi);
-    return iv(0.0, up1(m * m));
+    double l2 = a.lo * a.lo, h2 = a.hi * a.hi;
+    int nonneg = a.lo >= 0.0, nonpos = a.hi <= 0.0; /* both tested: no branch */
+    double inner = nonpos ? h2 : 0.0;
+    double lo = nonneg ? l2 : inner;
+    return iv(ism_max(down1(lo), 0.0), up1(ism_max(l2, h2)));
 }
 
 static inline ism_interval iv_sqrt(ism_interval a)
 {
-    return iv(fmax(down1(ism_sqrt_clip(a.lo)), 0.0), up1(ism_sqrt_clip(a.hi)));
+    return iv(ism_max(down1(ism_sqrt_clip(a.lo)), 0.0), up1(ism_sqrt_clip(a.hi)));
 }
 
 static inline ism_interval iv_exp(ism_interval a)
 {
-    return iv(fmax(down4(exp(a.lo)), 0.0), up4(exp(a.hi)));
+    return iv(ism_max(down4(exp(a.lo)), 0.0), up4(exp(a.hi)));
 }
 
 static inline ism_interval iv_log(ism_interval a)
@@ -219,7 +232,7 @@ static inline ism_interval iv_powc(ism_interval a, double c)
         lo = hi;
         hi = t;
     }
-    return iv(fmax(down4(lo), 0.0), up4(hi));
+    return iv(ism_max(down4(lo), 0.0), up4(hi));
 }
 
 /* True when some integer k may satisfy u <= k <= v (u, v carry a rounding margin). */
@@ -236,7 +249,7 @@ static inline int holds_integer(double u, double v)
  * rounding of the division (answering yes too often only loosens, never breaks, a bound). */
 static inline int may_contain(double lo, double hi, double phase, double period)
 {
-    double tol = 1e-12 + 4e-16 * fmax(fabs(lo), fabs(hi));
+    double tol = 1e-12 + 4e-16 * ism_max(fabs(lo), fabs(hi));
     return holds_integer((lo - phase) / period - tol, (hi - phase) / period + tol);
 }
 
@@ -246,7 +259,7 @@ static inline ism_interval iv_sin(ism_interval a)
         || !(fabs(a.hi) < ISM_TRIG_LIMIT))
         return iv(-1.0, 1.0);
     double s1 = sin(a.lo), s2 = sin(a.hi);
-    double lo = fmax(down4(fmin(s1, s2)), -1.0), hi = fmin(up4(fmax(s1, s2)), 1.0);
+    double lo = ism_max(down4(ism_min(s1, s2)), -1.0), hi = ism_min(up4(ism_max(s1, s2)), 1.0);
     if (may_contain(a.lo, a.hi, M_PI / 2, 2.0 * M_PI))
         hi = 1.0;
     if (may_contain(a.lo, a.hi, -M_PI / 2, 2.0 * M_PI))
@@ -260,7 +273,7 @@ static inline ism_interval iv_cos(ism_interval a)
         || !(fabs(a.hi) < ISM_TRIG_LIMIT))
         return iv(-1.0, 1.0);
     double c1 = cos(a.lo), c2 = cos(a.hi);
-    double lo = fmax(down4(fmin(c1, c2)), -1.0), hi = fmin(up4(fmax(c1, c2)), 1.0);
+    double lo = ism_max(down4(ism_min(c1, c2)), -1.0), hi = ism_min(up4(ism_max(c1, c2)), 1.0);
     if (may_contain(a.lo, a.hi, 0.0, 2.0 * M_PI))
         hi = 1.0;
     if (may_contain(a.lo, a.hi, M_PI, 2.0 * M_PI))

@@ -18,11 +18,13 @@ ism_eval_ws *ism_eval_ws_new(const ism_tape *t)
     ws->batch = aligned_alloc(64, ((n * ISM_EVAL_BATCH * sizeof(double)) + 63) / 64 * 64);
     ws->scalar = malloc(n * sizeof *ws->scalar);
     ws->iv = malloc(n * sizeof *ws->iv);
+    ws->iv_lo = aligned_alloc(64, n * ISM_IV_CHUNK * sizeof(double));
+    ws->iv_hi = aligned_alloc(64, n * ISM_IV_CHUNK * sizeof(double));
     ws->dual = malloc(n * sizeof *ws->dual);
     ws->jet = malloc(n * sizeof *ws->jet);
     ws->choice = malloc(cap ? cap : 1);
     ws->needed = malloc(n);
-    if (!ws->batch || !ws->scalar || !ws->iv || !ws->dual || !ws->jet || !ws->choice
+    if (!ws->batch || !ws->scalar || !ws->iv || !ws->iv_lo || !ws->iv_hi || !ws->dual || !ws->jet || !ws->choice
         || !ws->needed) {
         ism_eval_ws_free(ws);
         return NULL;
@@ -38,6 +40,8 @@ void ism_eval_ws_free(ism_eval_ws *ws)
     free(ws->batch);
     free(ws->scalar);
     free(ws->iv);
+    free(ws->iv_lo);
+    free(ws->iv_hi);
     free(ws->dual);
     free(ws->jet);
     free(ws->choice);

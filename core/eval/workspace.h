@@ -8,6 +8,9 @@
 #include "core/eval/eval.h"
 #include "core/expr/tape.h"
 
+/* Boxes per inner chunk of the batched interval evaluator. */
+#define ISM_IV_CHUNK 64
+
 typedef struct ism_dual {
     double v, d[3];           /* value and gradient */
 } ism_dual;
@@ -22,6 +25,7 @@ struct ism_eval_ws {
     double *batch;            /* nregs * ISM_EVAL_BATCH doubles, register-major */
     double *scalar;           /* nregs */
     ism_interval *iv;         /* nregs */
+    double *iv_lo, *iv_hi;    /* nregs * ISM_IV_CHUNK each: batched interval bounds */
     ism_dual *dual;           /* nregs */
     ism_jet *jet;             /* nregs */
     uint8_t *choice;          /* code_cap: min/max branch proved by the last interval pass */

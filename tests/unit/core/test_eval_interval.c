@@ -79,6 +79,66 @@ static size_t check_enclosure(const char *name, const ism_tape *t, const double 
     return checked;
 }
 
+/* The batched interval evaluator gives exactly the single-box bounds, box by box, for
+ * chunks of every size (also past its internal chunk and with a partial last group). */
+static void check_batch_matches_single(const char *name, const ism_tape *t, const double *within,
+                                       size_t nboxes, uint64_t seed)
+{
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    test_rng rng = { seed };
+    ism_interval *bx = malloc(nboxes * sizeof *bx), *by = malloc(nboxes * sizeof *by),
+                 *bz = malloc(nboxes * sizeof *bz), *out = malloc(nboxes * sizeof *out);
+    cr_assert(ws && bx && by && bz && out);
+    for (size_t b = 0; b < nboxes; b++) {
+        box r = random_box(&rng, within);
+        bx[b] = r.x;
+        by[b] = r.y;
+        bz[b] = r.z;
+    }
+    size_t done = 0, step = 1;
+    while (done < nboxes) {
+        size_t n = step < nboxes - done ? step : nboxes - done;
+        ism_eval_interval_batch(t, ws, bx + done, by + done, bz + done, out + done, n);
+        done += n;
+        step = step * 3 + 1; /* 1, 4, 13, 40, 121, ... */
+    }
+    for (size_t b = 0; b < nboxes; b++) {
+        ism_interval r = ism_eval_interval(t, ws, bx[b], by[b], bz[b]);
+        cr_assert(sane(out[b]), "%s: batch box %zu [%g, %g]", name, b, out[b].lo, out[b].hi);
+        cr_assert(r.lo == out[b].lo && r.hi == out[b].hi,
+                  "%s: box %zu single [%.17g, %.17g] batch [%.17g, %.17g]", name, b, r.lo, r.hi,
+                  out[b].lo, out[b].hi);
+    }
+    free(bx);
+    free(by);
+    free(bz);
+    free(out);
+    ism_eval_ws_free(ws);
+}
+
+Test(eval_interval, batch_equals_single_boxes)
+{
+    size_t nboxes = test_scaled(1500);
+    for (size_t s = 0; s < TEST_NSURFACES; s++) {
+        ism_tape *t = test_surface_compile(&TEST_SURFACES[s]);
+        check_batch_matches_single(TEST_SURFACES[s].name, t, TEST_SURFACES[s].box, nboxes, 70 + s);
+        ism_tape_free(t);
+    }
+    static const char *exprs[] = {
+        "1 / x + y / (z - 0.5) - 2/(x*y)", "-3*x + 2*y - z/3 + 7/z", "abs(x) - abs(y*z) + min(x, 1) * max(y, -1)",
+        "sqrt(x) + log(y) * exp(z) + sin(x) * cos(y) - tan(z)", "x^5 - y^-3 + pow(abs(z), 1.5)",
+        "(x - y) / (x + y + 0.1)", "0*x + x*0.0 - y*(-0.5)",
+    };
+    const double within[6] = { -3, -3, -3, 3, 3, 3 };
+    for (size_t i = 0; i < sizeof exprs / sizeof exprs[0]; i++) {
+        ism_error err;
+        ism_tape *t = ism_tape_compile(exprs[i], NULL, 0, NULL, 0, NULL, &err);
+        cr_assert_not_null(t, "%s: %s", exprs[i], err.message);
+        check_batch_matches_single(exprs[i], t, within, nboxes, 7 + i);
+        ism_tape_free(t);
+    }
+}
+
 Test(eval_interval, encloses_every_example_surface)
 {
     size_t nboxes = test_scaled(2000);
