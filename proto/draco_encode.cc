@@ -3,11 +3,17 @@
 // triangles for the same bytes) and encodes it with edgebreaker. The only C++ in isomesh;
 // nothing escapes it but a C struct and a message.
 //
-// Speed: ISM_DRACO_DEFAULT_SPEED (7, encoding and decoding) was chosen by measurement with
-// tests/bench/bench_wire (see its table): speeds 5-7 select the same edgebreaker + parallelogram
-// tools and give the same size within 1%, speed 7 is the fastest of them; speed 0-4 adds the
-// constrained multi-parallelogram predictor (a few % smaller at 2-3x the time) and speeds 8-10
-// drop to simpler predictors / the sequential coder (up to 3-4x larger).
+// Encoding speed (ISM_DRACO_DEFAULT_SPEED = 4, for encoding and decoding), chosen by
+// measurement with tests/bench/bench_wire on polygoniser meshes (torus, sphere, gyroid, Klein
+// bottle; 14 position bits, 10 normal bits):
+//   speeds 5-7   identical tools and sizes: positions 1.42-1.86 B/triangle;
+//   speed 4      Draco's costlier tools for positions and connectivity: 6-11% smaller
+//                (1.26-1.75 B/tri) at about the same encode rate (3-5 Mtri/s positions
+//                only, 2.5-3 Mtri/s with normals);
+//   speeds 0-3   normals another 6-8% smaller, but encoding with normals falls to
+//                1.4-2.4 Mtri/s, under the service's goal of 2 Mtri/s;
+//   speeds 8-10  weaker prediction, then the sequential coder (4-7x larger).
+// So 4 is the smallest output that keeps encoding comfortably above 2 Mtri/s.
 #include "proto/draco_encode.h"
 
 #include <cstdio>

@@ -46,7 +46,7 @@ enum ism_attr {
 /* Defaults of the output section. */
 #define ISM_REQ_DEFAULT_POSITION_BITS 14
 #define ISM_REQ_DEFAULT_NORMAL_BITS 10
-#define ISM_REQ_DEFAULT_CURVATURE_BITS 0 /* 0 = float32 as computed, no quantisation */
+#define ISM_REQ_DEFAULT_CURVATURE_BITS 14 /* 0 = float32 as computed (~2 B/triangle each) */
 
 typedef struct ism_request {
     char *preset;              /* preset name, or NULL when the request wrote an expression */

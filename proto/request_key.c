@@ -6,6 +6,7 @@
  * compiled tape's canonical text, so spacing does not matter and a preset equals its
  * written-out expression. */
 #include "proto/request.h"
+#include "proto/draco_encode.h"
 #include "proto/json_writer.h"
 #include "core/version.h"
 
@@ -150,6 +151,8 @@ char *ism_request_key_material(const ism_request *req, const ism_tape *tape, siz
     write_tolerances(&w, req);
     ism_jw_key(&w, "encoding");
     write_output(&w, req, true);
+    ism_jw_key(&w, "draco_speed"); /* the encoder's setting changes the bytes too */
+    ism_jw_int(&w, ISM_DRACO_DEFAULT_SPEED);
     ism_jw_object_end(&w);
     return ism_jw_take(&w, len);
 }

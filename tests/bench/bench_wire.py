@@ -1,0 +1,145 @@
+#!/usr/bin/env python3
+"""bench_wire.py — bytes on the wire and encode time of isomesh's Draco encoder, beside
+reference figures measured in the same run: the raw arrays (float32 positions + uint32
+indices), the binary PLY, the binary PLY through zlib (level 6), and Debian's own
+`draco_encoder` program on the same PLY (same library, its own defaults for everything but the
+quantisation; its time includes reading the PLY).
+
+Meshes come from the polygoniser (bench_wire.c: torus ~16k triangles, sphere ~85k, gyroid
+ball ~1M, plus Klein bottle, Steiner and Kummer for the non-manifold side data).
+
+  bench_wire.py --build build/release [--quick]   (--quick: skip the 1M-triangle mesh)
+
+Goals (from the tracker): at 14 position bits <= 1.5 B/triangle for positions and
+connectivity, <= 2.5 with normals; non-manifold side data <= 10% of the payload; >= 2M
+triangles/s at the default speed. Printed beside the figures, never asserted."""
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import zlib
+
+
+def run_bench(build, out_dir, quick):
+    exe = os.path.join(build, "bench", "bench_wire")
+    if not os.path.exists(exe):
+        sys.exit(f"bench_wire.py: {exe} is missing (make bench builds it)")
+    argv = [exe, "--out", out_dir] + (["--quick"] if quick else [])
+    proc = subprocess.run(argv, stdout=subprocess.PIPE, text=True, timeout=1800, check=True)
+    return [json.loads(line) for line in proc.stdout.splitlines() if line.strip()]
+
+
+def draco_cli(ply, bits, normals):
+    """Debian's draco_encoder on the PLY: (bytes, seconds), or None when it is missing."""
+    tool = shutil.which("draco_encoder")
+    if not tool:
+        return None
+    out = ply + f".{bits}.{int(normals)}.drc"
+    argv = [tool, "-i", ply, "-o", out, "-qp", str(bits), "-qn", "10" if normals else "-1"]
+    t0 = time.perf_counter()
+    subprocess.run(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=600,
+                   check=True)
+    dt = time.perf_counter() - t0
+    size = os.path.getsize(out)
+    os.unlink(out)
+    return size, dt
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--build", default="build/release")
+    ap.add_argument("--quick", action="store_true",
+                    default=os.environ.get("ISOMESH_BENCH_QUICK") == "1")
+    args = ap.parse_args()
+    tmp = tempfile.mkdtemp(prefix="isomesh-bench-wire-")
+    try:
+        rows = run_bench(args.build, tmp, args.quick)
+        meshes = {r["case"]: r for r in rows if r["kind"] == "mesh"}
+        by = {}
+        for r in rows:
+            if r["kind"] == "bits":
+                by[(r["case"], r["bits"], r["attributes"])] = r
+
+        print("Draco encoding of polygoniser meshes (isomesh speed "
+              "= default; B/tri = bytes per triangle; Mtri/s = triangles per second of the "
+              "fastest of several runs)")
+        head = (f"{'mesh':<12}{'tris':>9}{'bits':>5} | {'pos':>6}{'+nrm':>6}{'+all':>6}"
+                f"{'Mtri/s':>8} | {'raw':>6}{'PLY':>6}{'PLY+z':>7} | {'cli pos':>8}{'cli +nrm':>9}"
+                f"{'cli s':>7}")
+        print(head)
+        print("-" * len(head))
+        for name, m in meshes.items():
+            t = m["triangles"]
+            ply = os.path.join(tmp, name + ".ply")
+            with open(ply, "rb") as f:
+                zbytes = len(zlib.compress(f.read(), 6))
+            for bits in (11, 14, 16):
+                p = by[(name, bits, "positions")]
+                n = by[(name, bits, "normals")]
+                a = by[(name, bits, "default")]
+                cli_p = draco_cli(ply, bits, False)
+                cli_n = draco_cli(ply, bits, True)
+                cli = (f"{cli_p[0] / t:8.3f}{cli_n[0] / t:9.3f}{cli_n[1]:7.2f}"
+                       if cli_p and cli_n else f"{'-':>8}{'-':>9}{'-':>7}")
+                print(f"{name:<12}{t:>9}{bits:>5} | {p['bytes'] / t:6.3f}{n['bytes'] / t:6.3f}"
+                      f"{a['bytes'] / t:6.3f}{t / n['ms'] / 1000:8.2f} | "
+                      f"{m['raw_bytes'] / t:6.2f}{m['ply_bytes'] / t:6.2f}{zbytes / t:7.2f} | {cli}")
+        print("  pos = positions + connectivity; +nrm = with 10-bit normals; +all = the default "
+              "attributes (normals, 14-bit mean and Gaussian curvature, class); Mtri/s for +nrm;\n"
+              "  raw = float32 xyz + uint32 indices; PLY+z = binary PLY through zlib -6; cli = "
+              "Debian draco_encoder on the PLY (its -cl 7, i.e. speed 3; time incl. PLY read)")
+
+        print("\nEncoder speed setting (14 position bits): B/tri and Mtri/s, positions | +normals")
+        speeds = sorted({r["speed"] for r in rows if r["kind"] == "speed"})
+        print(f"{'mesh':<12}" + "".join(f"{'speed ' + str(s):>18}" for s in speeds))
+        for name, m in meshes.items():
+            t = m["triangles"]
+            cells = []
+            for s in speeds:
+                p = next(r for r in rows if r["kind"] == "speed" and r["case"] == name
+                         and r["speed"] == s and r["attributes"] == "positions")
+                n = next(r for r in rows if r["kind"] == "speed" and r["case"] == name
+                         and r["speed"] == s and r["attributes"] == "normals")
+                cells.append(f"{p['bytes'] / t:.2f}/{t / p['ms'] / 1000:.1f}|"
+                             f"{n['bytes'] / t:.2f}/{t / n['ms'] / 1000:.1f}")
+            print(f"{name:<12}" + "".join(f"{c:>18}" for c in cells))
+
+        print("\nCurvature quantisation (14 position bits, all attributes): B/tri")
+        cb = sorted({r["curvature_bits"] for r in rows if r["kind"] == "curvature"})
+        print(f"{'mesh':<12}" + "".join(f"{('float' if b == 0 else str(b) + ' bits'):>10}"
+                                        for b in cb))
+        for name, m in meshes.items():
+            t = m["triangles"]
+            vals = [next(r["bytes"] for r in rows if r["kind"] == "curvature"
+                         and r["case"] == name and r["curvature_bits"] == b) / t for b in cb]
+            print(f"{name:<12}" + "".join(f"{v:>10.3f}" for v in vals))
+
+        print("\nNon-manifold side data beside the default Draco payload (14 bits, all "
+              "attributes)")
+        print(f"{'mesh':<12}{'nm edges':>9}{'points':>7}{'bnd edges':>10}{'payload':>10}"
+              f"{'features':>10}{'share':>7}{'glb side':>10}{'share':>7}")
+        for name, m in meshes.items():
+            payload = by[(name, 14, "default")]["bytes"]
+            fj, gs = m["features_json_bytes"], m["glb_side_bytes"]
+            print(f"{name:<12}{m['nonmanifold_edges']:>9}{m['nonmanifold_points']:>7}"
+                  f"{m['boundary_edges']:>10}{payload:>10}{fj:>10}{100 * fj / payload:>6.1f}%"
+                  f"{gs:>10}{100 * gs / payload:>6.1f}%")
+
+        print("\nGoals at 14 bits, default speed:")
+        for name, m in meshes.items():
+            t = m["triangles"]
+            p = by[(name, 14, "positions")]["bytes"] / t
+            n = by[(name, 14, "normals")]
+            print(f"  {name:<12} positions {p:.2f} B/tri (goal 1.5), with normals "
+                  f"{n['bytes'] / t:.2f} (goal 2.5), {t / n['ms'] / 1000:.2f} Mtri/s (goal 2)")
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,132 @@
+/* test_features.c — boundary chains and the features JSON: a grid's boundary is one closed
+ * loop that follows the triangles' winding; crossing planes' boundaries are closed chains of
+ * real boundary edges; a closed torus has none; the JSON agrees with the analysis. */
+#include <criterion/criterion.h>
+#include <jansson.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/analysis/analysis.h"
+#include "proto/features.h"
+#include "tests/unit/proto/meshes_for_tests.h"
+
+/* Number of triangles that use the undirected edge a-b, and whether one runs it a -> b. */
+static int edge_use(const ism_mesh *m, uint32_t a, uint32_t b, bool *forward)
+{
+    int n = 0;
+    *forward = false;
+    for (size_t t = 0; t < m->ntris; t++)
+        for (int k = 0; k < 3; k++) {
+            uint32_t u = m->tri[3 * t + k], v = m->tri[3 * t + (k + 1) % 3];
+            if ((u == a && v == b) || (u == b && v == a))
+                n++;
+            if (u == a && v == b)
+                *forward = true;
+        }
+    return n;
+}
+
+Test(features, grid_boundary_is_one_loop_along_the_winding)
+{
+    ism_mesh m;
+    test_mesh_grid(&m, 6);
+    ism_polylines p;
+    cr_assert(ism_boundary_chains(&m, &p));
+    cr_assert_eq(p.n, 1);
+    cr_expect_eq(p.start[1] - p.start[0], 24 + 1, "24 edges, first vertex repeated");
+    cr_expect_eq(p.verts[0], p.verts[24], "closed");
+    for (uint32_t i = 0; i + 1 < p.start[1]; i++) {
+        bool fwd;
+        cr_expect_eq(edge_use(&m, p.verts[i], p.verts[i + 1], &fwd), 1);
+        cr_expect(fwd, "the chain follows its triangle's winding");
+        const double *q = m.pos + 3 * p.verts[i];
+        cr_expect(q[0] == 0 || q[0] == 1 || q[1] == 0 || q[1] == 1, "on the square's rim");
+    }
+    ism_polylines_free(&p);
+    ism_mesh_free(&m);
+}
+
+Test(features, crossing_planes_boundaries_are_closed_chains_of_boundary_edges)
+{
+    ism_mesh m;
+    test_mesh_crossing_planes(&m, 4);
+    ism_analysis a;
+    ism_error err;
+    cr_assert(ism_analyse(&m, NULL, NULL, &a, &err));
+    ism_polylines p;
+    cr_assert(ism_boundary_chains(&m, &p));
+    size_t edges = 0;
+    for (size_t c = 0; c < p.n; c++) {
+        uint32_t s = p.start[c], e = p.start[c + 1];
+        cr_expect_eq(p.verts[s], p.verts[e - 1], "chain %zu is closed", c);
+        for (uint32_t i = s; i + 1 < e; i++, edges++) {
+            bool fwd;
+            cr_expect_eq(edge_use(&m, p.verts[i], p.verts[i + 1], &fwd), 1);
+        }
+    }
+    cr_expect_eq(edges, a.boundary_edges);
+    cr_expect_eq(edges, 2 * 16);
+    ism_polylines_free(&p);
+    ism_analysis_free(&a);
+    ism_mesh_free(&m);
+}
+
+Test(features, json_agrees_with_the_analysis)
+{
+    ism_mesh meshes[3];
+    test_mesh_torus(&meshes[0], 24, 12, 1, 0.3);
+    test_mesh_crossing_planes(&meshes[1], 6);
+    test_mesh_touching_tetrahedra(&meshes[2]);
+    for (int i = 0; i < 3; i++) {
+        ism_mesh *m = &meshes[i];
+        ism_analysis a;
+        ism_error err;
+        cr_assert(ism_analyse(m, NULL, NULL, &a, &err));
+        ism_features f;
+        cr_assert(ism_features_build(m, &a, &f));
+        size_t n;
+        char *text = ism_features_json(m, &f, &n);
+        json_error_t je;
+        json_t *doc = json_loadb(text, n, JSON_REJECT_DUPLICATES, &je);
+        cr_assert_not_null(doc, "%s", je.text);
+        cr_expect_eq(json_integer_value(json_object_get(doc, "version")), 1);
+        json_t *counts = json_object_get(doc, "counts");
+        cr_expect_eq(json_array_size(json_object_get(doc, "curves")), a.ncurves);
+        cr_expect_eq(json_integer_value(json_object_get(counts, "curve_edges")),
+                     (json_int_t)a.nonmanifold_edges);
+        cr_expect_eq(json_array_size(json_object_get(doc, "points")), a.npoints);
+        cr_expect_eq(json_integer_value(json_object_get(counts, "boundary_edges")),
+                     (json_int_t)a.boundary_edges);
+        json_t *classes = json_object_get(doc, "classes");
+        cr_expect_str_eq(json_string_value(json_array_get(classes, ISM_VERTEX_NONMANIFOLD_POINT)),
+                         "nonmanifold_point");
+        if (i == 2) {
+            json_t *p = json_array_get(json_object_get(doc, "points"), 0);
+            cr_expect_eq(json_integer_value(json_object_get(p, "class")),
+                         ISM_VERTEX_NONMANIFOLD_POINT);
+            cr_expect_str_eq(json_string_value(json_object_get(p, "kind")), "cones");
+        }
+        json_decref(doc);
+        free(text);
+        ism_features_free(&f);
+        ism_analysis_free(&a);
+        ism_mesh_free(m);
+    }
+}
+
+Test(features, empty_mesh_has_empty_features)
+{
+    ism_mesh m;
+    ism_mesh_init(&m);
+    ism_features f;
+    cr_assert(ism_features_build(&m, NULL, &f));
+    size_t n;
+    char *text = ism_features_json(&m, &f, &n);
+    cr_expect_str_eq(text, "{\"version\":1,\"classes\":[\"manifold\",\"boundary\","
+                           "\"nonmanifold_edge\",\"nonmanifold_point\",\"isolated\"],"
+                           "\"curves\":[],\"points\":[],\"boundaries\":[],\"counts\":"
+                           "{\"curves\":0,\"curve_edges\":0,\"points\":0,\"boundaries\":0,"
+                           "\"boundary_edges\":0}}");
+    free(text);
+    ism_features_free(&f);
+}
