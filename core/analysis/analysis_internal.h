@@ -10,7 +10,7 @@
 #include "core/analysis/analysis.h"
 #include "core/eval/eval.h"
 
-#define ISM_NONE UINT32_MAX
+#define ISM_AN_NONE UINT32_MAX
 
 /* Half-edge h = 3t + k runs from tri[h] to tri[ism_an_he_next(h)]; it is also the corner of
  * triangle t at vertex tri[h]. */
@@ -28,7 +28,7 @@ static inline bool ism_an_tri_collapsed(const uint32_t *tri, size_t t)
  * edge_he[edge_start[e] .. edge_start[e + 1]) in increasing order. */
 typedef struct ism_an_edge_table {
     size_t nedges;
-    uint32_t *he_edge;    /* 3 * ntris: the edge of each half-edge (ISM_NONE if collapsed) */
+    uint32_t *he_edge;    /* 3 * ntris: the edge of each half-edge (ISM_AN_NONE if collapsed) */
     uint32_t *edge_start; /* nedges + 1 */
     uint32_t *edge_he;    /* half-edges grouped by edge */
 } ism_an_edge_table;
@@ -65,7 +65,7 @@ bool ism_an_find_curves(const ism_mesh *m, const ism_an_edge_table *et,
 bool ism_an_find_points(const ism_mesh *m, const ism_an_vertex_facts *vf, ism_analysis *a);
 
 /* Numbers the components (triangles joined by shared edges) in order of their smallest
- * triangle: comp[t] for every triangle (ISM_NONE if collapsed). */
+ * triangle: comp[t] for every triangle (ISM_AN_NONE if collapsed). */
 bool ism_an_edge_components(const ism_mesh *m, const ism_an_edge_table *et, uint32_t *comp,
                             size_t *ncomp);
 

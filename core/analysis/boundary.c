@@ -20,7 +20,7 @@ static uint32_t corner_at(const uint32_t *tri, uint32_t first, uint32_t w)
     return tri[first] == w ? first : tri[first + 1] == w ? first + 1 : first + 2;
 }
 
-/* The boundary edge after e at its end vertex w, or ISM_NONE when w's cone of faces ends on
+/* The boundary edge after e at its end vertex w, or ISM_AN_NONE when w's cone of faces ends on
  * a non-manifold edge first. */
 static uint32_t next_boundary_edge(const chain_walk *cw, uint32_t e, uint32_t w)
 {
@@ -35,13 +35,13 @@ static uint32_t next_boundary_edge(const chain_walk *cw, uint32_t e, uint32_t w)
         if (n == 1)
             return out;
         if (n > 2)
-            return ISM_NONE;
+            return ISM_AN_NONE;
         const uint32_t *he = et->edge_he + et->edge_start[out];
         uint32_t across = he[0] - he[0] % 3 == first ? he[1] : he[0];
         first = across - across % 3;
         e = out;
     }
-    return ISM_NONE; /* unreachable for a consistent edge table */
+    return ISM_AN_NONE; /* unreachable for a consistent edge table */
 }
 
 static uint32_t far_end(const chain_walk *cw, uint32_t e, uint32_t w)
@@ -59,7 +59,7 @@ static bool follow(chain_walk *cw, uint32_t e0, uint32_t w)
         uint32_t n = next_boundary_edge(cw, e, w);
         if (n == e0)
             return true;
-        if (n == ISM_NONE || cw->visited[n])
+        if (n == ISM_AN_NONE || cw->visited[n])
             return false;
         cw->visited[n] = 1;
         w = far_end(cw, n, w);

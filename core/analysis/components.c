@@ -21,7 +21,7 @@ bool ism_an_edge_components(const ism_mesh *m, const ism_an_edge_table *et, uint
     size_t n = 0;
     for (size_t t = 0; t < m->ntris; t++) {
         if (ism_an_tri_collapsed(m->tri, t))
-            comp[t] = ISM_NONE;
+            comp[t] = ISM_AN_NONE;
         else if (comp[t] == t)
             comp[t] = (uint32_t)n++;
         else

@@ -95,7 +95,7 @@ static bool number_edges(const ism_mesh *m, size_t total, ism_an_edge_table *et)
     et->edge_start = malloc((n + 1) * sizeof *et->edge_start);
     if (!et->edge_start)
         return false;
-    uint32_t e = ISM_NONE;
+    uint32_t e = ISM_AN_NONE;
     for (size_t i = 0; i < total; i++) {
         uint32_t h = et->edge_he[i];
         if (i == 0 || he_lo(m->tri, h) != he_lo(m->tri, et->edge_he[i - 1]) ||
@@ -117,7 +117,7 @@ bool ism_an_edge_table_build(const ism_mesh *m, ism_an_edge_table *et)
     if (!start || !et->edge_he || !et->he_edge)
         goto fail;
     for (size_t h = 0; h < nh; h++)
-        et->he_edge[h] = ISM_NONE;
+        et->he_edge[h] = ISM_AN_NONE;
     size_t total = bucket_half_edges(m, start, et->edge_he);
     for (size_t v = 0; v < m->nverts; v++)
         if (!sort_bucket(m->tri, et->edge_he + start[v], start[v + 1] - start[v]))

@@ -26,7 +26,7 @@ static void count_triangles_and_edges(const ism_mesh *m, const ism_an_edge_table
                                       const uint32_t *comp, ism_analysis *a)
 {
     for (size_t t = 0; t < m->ntris; t++)
-        if (comp[t] != ISM_NONE) {
+        if (comp[t] != ISM_AN_NONE) {
             ism_component *c = &a->component[comp[t]];
             if (c->triangles++ == 0)
                 c->first_triangle = (uint32_t)t;
@@ -54,7 +54,7 @@ static bool count_vertices(const ism_mesh *m, ism_an_vertex_facts *vf, const uin
         return false;
     for (size_t h = 0; h < 3 * m->ntris; h++) {
         uint32_t v = m->tri[h], c = comp[h / 3];
-        if (c == ISM_NONE)
+        if (c == ISM_AN_NONE)
             continue;
         if (vf->cones[v] > 1)
             nplaces++;
@@ -70,7 +70,7 @@ static bool count_vertices(const ism_mesh *m, ism_an_vertex_facts *vf, const uin
     size_t k = 0;
     for (uint32_t h = 0; h < 3 * m->ntris; h++) {
         uint32_t v = m->tri[h], c = comp[h / 3];
-        if (c != ISM_NONE && vf->cones[v] > 1)
+        if (c != ISM_AN_NONE && vf->cones[v] > 1)
             place[k++] = (corner_place){v, c, ism_an_uf_find(vf->cone_sets, h)};
     }
     qsort(place, nplaces, sizeof *place, cmp_place);
