@@ -1,0 +1,217 @@
+"""test_isomesh.py — the `isomesh` command as a user meets it: output files in every format
+read back and checked (closed sphere: every edge in two triangles, Euler characteristic 2),
+one-line errors with exit status 2 for bad input and the column of an expression error, no
+partial file ever, surfaces from a file and from the built-in list, identical output for one
+and two threads, request files through the service pipeline."""
+import json
+import os
+import struct
+import subprocess
+import tempfile
+import unittest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
+ISOMESH = os.path.join(BUILD, "isomesh")
+FIXTURE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "surfaces_fixture.json")
+
+
+def run(*args, timeout=120):
+    return subprocess.run([ISOMESH, *args], capture_output=True, text=True, timeout=timeout)
+
+
+def slurp(path, mode="rb"):
+    with open(path, mode) as f:
+        return f.read()
+
+
+def read_ply(path):
+    data = slurp(path)
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    header = data[:end].decode()
+    assert "format binary_little_endian 1.0" in header
+    nv = int(header.split("element vertex ")[1].split()[0])
+    nf = int(header.split("element face ")[1].split()[0])
+    verts = [struct.unpack_from("<6f", data, end + 24 * i) for i in range(nv)]
+    off = end + 24 * nv
+    faces = []
+    for i in range(nf):
+        n, a, b, c = struct.unpack_from("<Biii", data, off + 13 * i)
+        assert n == 3
+        faces.append((a, b, c))
+    return verts, faces
+
+
+def read_obj(path):
+    verts, faces = [], []
+    for line in slurp(path, "r").splitlines():
+        if line.startswith("v "):
+            verts.append(tuple(map(float, line.split()[1:4])))
+        elif line.startswith("f "):
+            faces.append(tuple(int(t.split("/")[0]) - 1 for t in line.split()[1:4]))
+    return verts, faces
+
+
+def read_stl(path):
+    data = slurp(path)
+    n = struct.unpack_from("<I", data, 80)[0]
+    assert len(data) == 84 + 50 * n, "binary STL size"
+    return [struct.unpack_from("<12f", data, 84 + 50 * i) for i in range(n)]
+
+
+def edge_counts(faces):
+    counts = {}
+    for a, b, c in faces:
+        for u, v in ((a, b), (b, c), (c, a)):
+            k = (min(u, v), max(u, v))
+            counts[k] = counts.get(k, 0) + 1
+    return counts
+
+
+class TestIsomesh(unittest.TestCase):
+    def setUp(self):
+        self.tmp = tempfile.TemporaryDirectory()
+        self.dir = self.tmp.name
+
+    def tearDown(self):
+        self.tmp.cleanup()
+
+    def out(self, name):
+        return os.path.join(self.dir, name)
+
+    def assert_closed_sphere(self, verts, faces, r):
+        counts = edge_counts(faces)
+        self.assertTrue(all(c == 2 for c in counts.values()), "every edge in two triangles")
+        used = {i for f in faces for i in f}
+        self.assertEqual(len(used) - len(counts) + len(faces), 2, "Euler characteristic")
+        for i in used:
+            x, y, z = verts[i][:3]
+            self.assertAlmostEqual((x * x + y * y + z * z) ** 0.5, r, delta=0.02 * r)
+
+    def test_ply_obj_stl_of_a_sphere(self):
+        for ext in ("ply", "obj", "stl"):
+            path = self.out("s." + ext)
+            p = run("-e", "x^2 + y^2 + z^2 - 1", "-b", "-1.5,-1.5,-1.5,1.5,1.5,1.5",
+                    "-d", "3:6", "-o", path)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            if ext == "ply":
+                verts, faces = read_ply(path)
+                self.assert_closed_sphere(verts, faces, 1.0)
+                for x, y, z, nx, ny, nz in verts:  # normals from ∇f point outwards
+                    self.assertGreater(x * nx + y * ny + z * nz, 0.9)
+            elif ext == "obj":
+                verts, faces = read_obj(path)
+                self.assert_closed_sphere(verts, faces, 1.0)
+            else:
+                tris = read_stl(path)
+                self.assertGreater(len(tris), 500)
+                for t in tris:  # facet normal agrees with the outward direction
+                    n, c = t[0:3], [sum(t[3 + 3 * k + j] for k in range(3)) / 3 for j in range(3)]
+                    self.assertGreater(sum(n[j] * c[j] for j in range(3)), 0)
+
+    def test_stats_json(self):
+        p = run("-e", "x^2 + y^2 + z^2 - 1", "-b", "-1.5,-1.5,-1.5,1.5,1.5,1.5", "-d", "3:6",
+                "--stats")
+        self.assertEqual(p.returncode, 0, p.stderr)
+        s = json.loads(p.stdout)
+        self.assertEqual(s["analysis"]["euler"], 2)
+        self.assertEqual(s["analysis"]["boundary_edges"], 0)
+        self.assertGreater(s["polygoniser"]["triangles"], 500)
+        self.assertEqual(s["polygoniser"]["triangles"], s["mesh"]["triangles"])
+        for k in ("nodes_visited", "nodes_excluded", "plotting_nodes", "unresolved_nodes",
+                  "edges_double_root", "edges_many_roots", "polygons", "degenerate_polygons",
+                  "cracks_repaired", "evals_point", "evals_interval", "evals_gradient"):
+            self.assertIn(k, s["polygoniser"])
+
+    def test_expression_error_names_the_column(self):
+        path = self.out("bad.ply")
+        p = run("-e", "x^2 + sinn(y)", "-o", path)
+        self.assertEqual(p.returncode, 2)
+        self.assertEqual(len(p.stderr.strip().splitlines()), 1, p.stderr)
+        self.assertIn("col 7", p.stderr)
+        self.assertIn("sinn", p.stderr)
+        self.assertFalse(os.path.exists(path))
+        self.assertEqual(os.listdir(self.dir), [], "no temporary file left behind")
+
+    def test_bad_flags_are_one_line_errors(self):
+        cases = [
+            (["-e", "x", "-b", "1,2,3", "-o", "a.ply"], "--box"),
+            (["-e", "x", "-b", "1,1,1,0,2,2", "-o", "a.ply"], "--box"),
+            (["-e", "x", "-d", "5:3", "-o", "a.ply"], "--depth"),
+            (["-e", "x", "-d", "3:17", "-o", "a.ply"], "--depth"),
+            (["-e", "x", "-p", "r", "-o", "a.ply"], "--param"),
+            (["-e", "x", "-p", "r=nan", "-o", "a.ply"], "--param"),
+            (["-e", "x", "-o", "a.xyz"], "extension"),
+            (["-e", "x"], "nothing to do"),
+            (["--surface", "nope", "-o", "a.ply"], "nope"),
+            (["--frobnicate"], "unknown option"),
+            (["-e", "x", "--threads", "-1", "-o", "a.ply"], "--threads"),
+        ]
+        for args, needle in cases:
+            p = run(*[a if not a.startswith("a.") else self.out(a) for a in args])
+            self.assertEqual(p.returncode, 2, f"{args}: {p.stderr}")
+            self.assertEqual(len(p.stderr.strip().splitlines()), 1, f"{args}: {p.stderr}")
+            self.assertIn(needle, p.stderr, args)
+        self.assertEqual(os.listdir(self.dir), [])
+
+    def test_budget_failure_leaves_no_file(self):
+        path = self.out("big.ply")
+        p = run("--surface", "gyroid-ball", "-d", "3:8", "--max-triangles", "1000", "-o", path)
+        self.assertEqual(p.returncode, 1)
+        self.assertIn("budget", p.stderr)
+        self.assertEqual(os.listdir(self.dir), [])
+
+    def test_surfaces_file(self):
+        path = self.out("ring.ply")
+        p = run("--surface", "ring", "--surfaces", FIXTURE, "-d", "3:6", "-o", path)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        verts, faces = read_ply(path)
+        counts = edge_counts(faces)
+        used = {i for f in faces for i in f}
+        self.assertEqual(len(used) - len(counts) + len(faces), 0, "a torus")
+        p = run("--surface", "ball", "--surfaces", FIXTURE, "-p", "r=0.5", "-d", "3:6", "-o", path)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        verts, faces = read_ply(path)
+        self.assert_closed_sphere(verts, faces, 0.5)  # -p overrides the file's parameter
+        p = run("--surface", "broken", "--surfaces", FIXTURE, "-o", path)
+        self.assertEqual(p.returncode, 2)
+        self.assertIn("sinn", p.stderr)
+
+    def test_builtin_surfaces_listed(self):
+        p = run("--list")
+        self.assertEqual(p.returncode, 0)
+        for name in ("kummer-4-nodes", "kummer-16-nodes", "horn-cyclide", "klein-bottle",
+                     "steiner-roman", "sphere", "torus", "gyroid-ball"):
+            self.assertIn(name, p.stdout)
+
+    def test_one_and_two_threads_write_the_same_file(self):
+        a, b = self.out("a.ply"), self.out("b.ply")
+        self.assertEqual(run("--surface", "klein-bottle", "-d", "3:6", "--threads", "1", "-o", a).returncode, 0)
+        self.assertEqual(run("--surface", "klein-bottle", "-d", "3:6", "--threads", "2", "-o", b).returncode, 0)
+        self.assertEqual(slurp(a), slurp(b))
+
+    def test_request_file_through_the_pipeline(self):
+        req = self.out("req.json")
+        with open(req, "w") as f:
+            json.dump({"preset": "sphere", "depth": {"min": 3, "max": 5}}, f)
+        path = self.out("s.ply")
+        p = run(req, "-o", path)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        verts, faces = read_ply(path)
+        self.assert_closed_sphere(verts, faces, 1.0)
+        with open(req, "w") as f:
+            json.dump({"preset": "sphere", "depht": {"min": 3}}, f)
+        p = run(req, "-o", path)
+        self.assertEqual(p.returncode, 2)
+        self.assertIn("depht", p.stderr)
+
+    def test_help(self):
+        p = run("--help")
+        self.assertEqual(p.returncode, 0)
+        for flag in ("--expr", "--param", "--let", "--box", "--depth", "--surface", "--surfaces",
+                     "--stats", "--output", "--worker", "--threads"):
+            self.assertIn(flag, p.stdout)
+
+
+if __name__ == "__main__":
+    unittest.main()
