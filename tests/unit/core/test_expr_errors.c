@@ -303,7 +303,7 @@ Test(expr_errors, counts_of_lets_and_params)
 Test(expr_errors, let_chain_is_shared_not_expanded)
 {
     enum { N = 200 };
-    static char names[N][8], sources[N][40];
+    static char names[N][16], sources[N][40];
     ism_let lets[N];
     for (int i = 0; i < N; i++) {
         snprintf(names[i], sizeof names[i], "a%d", i);
