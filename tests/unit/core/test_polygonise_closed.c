@@ -19,6 +19,8 @@ static void check_closed(const pf_surface *s, const double box[6], int dmin, int
                          long euler, double area_expect)
 {
     dmax -= pf_quick();
+    if (dmin > dmax)
+        dmin = dmax;
     ism_tape *t = pf_compile(s);
     ism_mesh m;
     ism_poly_stats st;
