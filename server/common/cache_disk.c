@@ -38,7 +38,8 @@ typedef struct disk_tier {
     pthread_cond_t wake, idle;
     pending *head, *tail;
     size_t pending_bytes, max_pending;
-    bool writing, stopping;
+    pending *writing;       /* the entry being written now (popped from the queue) */
+    bool stopping;
     time_t last_failure_log;
     unsigned long long tmp_seq;
 } disk_tier;
@@ -138,12 +139,30 @@ static void drop_corrupt(disk_tier *d, const char *rel, const char *name, const 
     ism_log_fields(ISM_LOG_WARN, "cache_corrupt_entry_dropped", f, sizeof f / sizeof f[0]);
 }
 
+/* An entry queued for writing (or being written) answers reads before it reaches the disk,
+ * so a tier without memory above it never misses what it was just given. */
+static ism_blob *pending_get(disk_tier *d, const char *name)
+{
+    ism_blob *b = NULL;
+    pthread_mutex_lock(&d->lock);
+    if (d->writing && !strcmp(d->writing->name, name))
+        b = ism_blob_ref(d->writing->blob);
+    for (pending *p = d->head; p && !b; p = p->next)
+        if (!strcmp(p->name, name))
+            b = ism_blob_ref(p->blob);
+    pthread_mutex_unlock(&d->lock);
+    return b;
+}
+
 static ism_blob *disk_get(ism_cache_tier *t, const char *name)
 {
     disk_tier *d = (disk_tier *)t;
     char rel[ISM_CACHE_NAME_MAX + 4];
     if (d->root_fd < 0 || !rel_path(rel, name))
         return NULL;
+    ism_blob *queued = pending_get(d, name);
+    if (queued)
+        return queued;
     int fd = openat(d->root_fd, rel, O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
     if (fd < 0)
         return NULL;
@@ -185,8 +204,14 @@ static bool disk_has(ism_cache_tier *t, const char *name)
     disk_tier *d = (disk_tier *)t;
     char rel[ISM_CACHE_NAME_MAX + 4];
     struct stat st;
-    return d->root_fd >= 0 && rel_path(rel, name) &&
-           fstatat(d->root_fd, rel, &st, AT_SYMLINK_NOFOLLOW) == 0 && S_ISREG(st.st_mode);
+    if (d->root_fd < 0 || !rel_path(rel, name))
+        return false;
+    ism_blob *queued = pending_get(d, name);
+    if (queued) {
+        ism_blob_unref(queued);
+        return true;
+    }
+    return fstatat(d->root_fd, rel, &st, AT_SYMLINK_NOFOLLOW) == 0 && S_ISREG(st.st_mode);
 }
 
 /* ---- writes -------------------------------------------------------------------------- */
@@ -290,11 +315,11 @@ static void *writer_main(void *arg)
         d->head = p->next;
         if (!d->head)
             d->tail = NULL;
-        d->writing = true;
+        d->writing = p;
         pthread_mutex_unlock(&d->lock);
         store_entry(d, p->name, p->blob);
         pthread_mutex_lock(&d->lock);
-        d->writing = false;
+        d->writing = NULL;
         d->pending_bytes -= p->blob->len;
         ism_blob_unref(p->blob);
         free(p);

@@ -1,0 +1,239 @@
+"""harness.py — a real isomeshd for the HTTP tests: started on 127.0.0.1 with a free port (it
+binds port 0 and logs the port it got), with its own temporary cache directory, its stderr
+collected line by line, bounded waits everywhere, and always stopped (SIGTERM, then SIGKILL
+after a bound). Plus small helpers: requests with http.client, /metrics parsing, Draco
+decoding with Debian's draco_decoder, the daemon's worker processes from /proc."""
+import http.client
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import tempfile
+import threading
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
+ISOMESHD = os.path.join(BUILD, "isomeshd")
+QUICK = os.environ.get("ISOMESH_TEST_QUICK") == "1"
+
+# Requests used across the tests. SLOW takes seconds on one core at depth 8 (gyroid ball:
+# about 2.6 s with every core), far beyond the deadlines the tests set.
+SPHERE = {"preset": "sphere"}
+SLOW = {"preset": "gyroid-ball", "depth": {"max": 8}}
+
+
+def sphere(r):
+    """A distinct small request per radius (a distinct cache key)."""
+    return {"expr": "x^2 + y^2 + z^2 - r^2", "params": {"r": r},
+            "box": [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5]}
+
+
+class Response:
+    def __init__(self, status, headers, body):
+        self.status = status
+        self.headers = headers
+        self.body = body
+
+    def header(self, name):
+        for k, v in self.headers:
+            if k.lower() == name.lower():
+                return v
+        return None
+
+    def json(self):
+        return json.loads(self.body)
+
+
+class Daemon:
+    def __init__(self, *args, cache_dir=None, web_root=None, log_format="text"):
+        self.tmp = tempfile.mkdtemp(prefix="isomeshd_test_")
+        self.cache_dir = cache_dir or os.path.join(self.tmp, "cache")
+        self.args = list(args)
+        self.web_root = web_root if web_root is not None else os.path.join(ROOT, "web")
+        self.log_format = log_format
+        self.lines = []
+        self.lock = threading.Lock()
+        self.proc = None
+        self.port = None
+
+    # ---- life cycle ------------------------------------------------------------------
+    def start(self, timeout=15):
+        cmd = [ISOMESHD, "--listen", "127.0.0.1:0", "--cache-dir", self.cache_dir,
+               "--web-root", self.web_root, "--log-format", self.log_format] + self.args
+        self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                     stderr=subprocess.PIPE, text=True, errors="replace")
+        self.reader = threading.Thread(target=self._read_stderr, daemon=True)
+        self.reader.start()
+        deadline = time.time() + timeout
+        while time.time() < deadline and self.port is None:
+            if self.proc.poll() is not None:
+                raise RuntimeError("isomeshd exited at start:\n" + self.log())
+            with self.lock:
+                for line in self.lines:
+                    m = re.search(r'"event":"listening".*"port":(\d+)|listening .*port=(\d+)', line)
+                    if m:
+                        self.port = int(m.group(1) or m.group(2))
+            time.sleep(0.02)
+        if self.port is None:
+            self.stop()
+            raise RuntimeError("isomeshd did not report its port:\n" + self.log())
+        self.wait_ready(timeout=max(1, deadline - time.time()))
+        return self
+
+    def wait_ready(self, timeout=15):
+        deadline = time.time() + timeout
+        while time.time() < deadline:
+            try:
+                if self.get("/readyz").status == 200:
+                    return
+            except OSError:
+                pass
+            time.sleep(0.02)
+        raise RuntimeError("isomeshd never became ready:\n" + self.log())
+
+    def _read_stderr(self):
+        for line in self.proc.stderr:
+            with self.lock:
+                self.lines.append(line.rstrip("\n"))
+
+    def log(self):
+        with self.lock:
+            return "\n".join(self.lines[-200:])
+
+    def stop(self, timeout=20):
+        """SIGTERM, wait (bounded), SIGKILL if need be. Returns the exit status."""
+        if self.proc is None:
+            return None
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(timeout=10)
+        self.reader.join(timeout=5)
+        self.proc.stderr.close()
+        rc = self.proc.returncode
+        self.proc = None
+        return rc
+
+    def cleanup(self):
+        self.stop()
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def __enter__(self):
+        return self.start()
+
+    def __exit__(self, *exc):
+        self.cleanup()
+
+    # ---- requests --------------------------------------------------------------------
+    def request(self, method, path, body=None, headers=None, timeout=60):
+        conn = http.client.HTTPConnection("127.0.0.1", self.port, timeout=timeout)
+        try:
+            hdrs = dict(headers or {})
+            if isinstance(body, (dict, list)):
+                body = json.dumps(body).encode()
+                hdrs.setdefault("Content-Type", "application/json")
+            conn.request(method, path, body=body, headers=hdrs)
+            r = conn.getresponse()
+            return Response(r.status, r.getheaders(), r.read())
+        finally:
+            conn.close()
+
+    def get(self, path, headers=None, timeout=60):
+        return self.request("GET", path, headers=headers, timeout=timeout)
+
+    def post(self, path, body, headers=None, timeout=120):
+        return self.request("POST", path, body=body, headers=headers, timeout=timeout)
+
+    def raw(self, data, timeout=10):
+        """Sends raw bytes (one request) and returns the status code of the answer."""
+        import socket
+        with socket.create_connection(("127.0.0.1", self.port), timeout=timeout) as s:
+            s.sendall(data)
+            got = b""
+            while b"\r\n" not in got:
+                chunk = s.recv(4096)
+                if not chunk:
+                    break
+                got += chunk
+        m = re.match(rb"HTTP/1\.[01] (\d{3})", got)
+        return int(m.group(1)) if m else None
+
+    # ---- introspection ---------------------------------------------------------------
+    def metrics(self):
+        return parse_metrics(self.get("/metrics").body.decode())
+
+    def metric(self, name, **labels):
+        return self.metrics().get(metric_key(name, labels), 0.0)
+
+    def wait_metric(self, name, value, timeout=30, **labels):
+        deadline = time.time() + timeout
+        while time.time() < deadline:
+            if self.metric(name, **labels) >= value:
+                return True
+            time.sleep(0.02)
+        return False
+
+    def workers(self):
+        """Pids of the daemon's child processes (its workers)."""
+        pids = []
+        task_dir = "/proc/%d/task" % self.proc.pid
+        for tid in os.listdir(task_dir):
+            try:
+                with open(os.path.join(task_dir, tid, "children")) as f:
+                    pids += [int(p) for p in f.read().split()]
+            except OSError:
+                pass
+        return pids
+
+
+def metric_key(name, labels):
+    if not labels:
+        return name
+    inner = ",".join('%s="%s"' % (k, labels[k]) for k in sorted(labels))
+    return "%s{%s}" % (name, inner)
+
+
+_SAMPLE = re.compile(r'^([a-zA-Z_:][a-zA-Z0-9_:]*)(\{((?:[^"}]|"(?:[^"\\]|\\.)*")*)\})? '
+                     r'(-?[0-9.eE+-]+|\+Inf|NaN)$')
+
+
+def parse_metrics(text):
+    """Prometheus text format -> {name or name{k="v",...} (labels sorted): value}. Raises on a
+    line that is not a comment or a sample."""
+    out = {}
+    for line in text.splitlines():
+        if not line or line.startswith("#"):
+            continue
+        m = _SAMPLE.match(line)
+        if not m:
+            raise ValueError("bad metrics line: %r" % line)
+        labels = {}
+        if m.group(3):
+            for part in re.findall(r'([a-zA-Z_][a-zA-Z0-9_]*)="((?:[^"\\]|\\.)*)"', m.group(3)):
+                labels[part[0]] = part[1]
+        out[metric_key(m.group(1), labels)] = float(m.group(4))
+    return out
+
+
+def draco_counts(data):
+    """Decodes Draco bytes with draco_decoder; returns (vertices, faces) from the PLY it
+    writes."""
+    with tempfile.TemporaryDirectory() as d:
+        src, dst = os.path.join(d, "m.drc"), os.path.join(d, "m.ply")
+        with open(src, "wb") as f:
+            f.write(data)
+        r = subprocess.run(["draco_decoder", "-i", src, "-o", dst], stdout=subprocess.PIPE,
+                           stderr=subprocess.STDOUT, text=True, timeout=60)
+        if r.returncode != 0 or not os.path.exists(dst):
+            raise AssertionError("draco_decoder failed: " + r.stdout)
+        with open(dst, "rb") as f:
+            head = f.read(4096)
+        v = re.search(rb"element vertex (\d+)", head)
+        t = re.search(rb"element face (\d+)", head)
+        return int(v.group(1)) if v else 0, int(t.group(1)) if t else 0

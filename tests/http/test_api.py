@@ -1,0 +1,366 @@
+"""test_api.py — isomeshd's API against one real daemon: the mesh routes (miss then hit, ETag,
+Location, immutable permanent URLs, 304, other formats computed from the stored request, stats
+and features), every client-error status, jobs with polling, server-sent events and
+cancellation, presets and documents, health, CORS, /metrics, and single flight (eight
+identical concurrent requests compute once)."""
+import json
+import os
+import struct
+import sys
+import threading
+import time
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from harness import ROOT, SLOW, SPHERE, Daemon, draco_counts, parse_metrics, sphere  # noqa: E402
+
+ORIGIN = "https://viewer.example"
+
+
+class ApiTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.d = Daemon("--workers", "2", "--cors-origin", ORIGIN, "--max-body", "64K",
+                       "--max-depth", "9")
+        try:
+            cls.d.start()
+        except Exception:
+            cls.d.cleanup()
+            raise
+
+    @classmethod
+    def tearDownClass(cls):
+        rc = cls.d.stop()
+        cls.d.cleanup()
+        assert rc == 0, "isomeshd did not stop cleanly (exit %r)" % rc
+
+    def error_of(self, r, status):
+        self.assertEqual(r.status, status, r.body[:300])
+        self.assertEqual(r.header("Content-Type"), "application/json")
+        err = r.json()["error"]
+        self.assertIsInstance(err["code"], str)
+        self.assertTrue(err["message"])
+        return err
+
+    # ---- meshes ----------------------------------------------------------------------
+    def test_mesh_miss_then_hit_with_headers_and_decodable_draco(self):
+        req = sphere(0.91)
+        first = self.d.post("/v1/mesh", req)
+        self.assertEqual(first.status, 200, first.body[:300])
+        self.assertEqual(first.header("X-Cache"), "miss")
+        etag = first.header("ETag")
+        self.assertRegex(etag, r'^"[0-9a-f]{64}"$')
+        key = etag.strip('"')
+        self.assertEqual(first.header("Location"), "/v1/meshes/%s.drc" % key)
+        timing = first.header("Server-Timing")
+        for phase in ("parse;dur=", "queue;dur=", "worker;dur=", "total;dur="):
+            self.assertIn(phase, timing)
+        verts, faces = draco_counts(first.body)
+        self.assertGreater(verts, 100)
+        self.assertGreater(faces, 100)
+
+        second = self.d.post("/v1/mesh", req)
+        self.assertEqual(second.status, 200)
+        self.assertEqual(second.header("X-Cache"), "hit")
+        self.assertEqual(second.header("ETag"), etag)
+        self.assertEqual(second.body, first.body)
+
+        # the same request written differently is the same mesh
+        same = dict(req)
+        same["params"] = {"r": 0.910}
+        self.assertEqual(self.d.post("/v1/mesh", same).header("X-Cache"), "hit")
+
+        perm = self.d.get(first.header("Location"))
+        self.assertEqual(perm.status, 200)
+        self.assertEqual(perm.body, first.body)
+        self.assertEqual(perm.header("Cache-Control"), "public, max-age=31536000, immutable")
+        self.assertEqual(perm.header("ETag"), etag)
+        not_modified = self.d.get(first.header("Location"), headers={"If-None-Match": etag})
+        self.assertEqual(not_modified.status, 304)
+        self.assertEqual(not_modified.body, b"")
+        other = self.d.get(first.header("Location"), headers={"If-None-Match": '"%s"' % ("0" * 64)})
+        self.assertEqual(other.status, 200)
+
+    def test_other_formats_of_a_known_key(self):
+        first = self.d.post("/v1/mesh", sphere(0.77))
+        key = first.header("ETag").strip('"')
+        glb = self.d.get("/v1/meshes/%s.glb" % key)
+        self.assertEqual(glb.status, 200, glb.body[:300])
+        self.assertEqual(glb.header("X-Cache"), "miss")
+        self.assertEqual(glb.header("Content-Type"), "model/gltf-binary")
+        self.assertEqual(glb.body[:4], b"glTF")
+        self.assertEqual(struct.unpack("<I", glb.body[8:12])[0], len(glb.body))
+        self.assertEqual(self.d.get("/v1/meshes/%s.glb" % key).header("X-Cache"), "hit")
+        ply = self.d.get("/v1/meshes/%s.ply" % key)
+        self.assertEqual(ply.status, 200)
+        self.assertTrue(ply.body.startswith(b"ply\n"))
+        stl = self.d.get("/v1/meshes/%s.stl" % key)
+        self.assertEqual(stl.status, 200)
+        ntri = struct.unpack("<I", stl.body[80:84])[0]
+        self.assertGreater(ntri, 0)
+        self.assertEqual(len(stl.body), 84 + 50 * ntri)
+        obj = self.d.get("/v1/meshes/%s.obj" % key)
+        self.assertEqual(obj.status, 200)
+        lines = obj.body.decode().splitlines()
+        self.assertTrue(any(l.startswith("v ") for l in lines))
+        self.assertTrue(any(l.startswith("f ") for l in lines))
+        # the format query parameter of POST picks a format too
+        r = self.d.post("/v1/mesh?format=stl", sphere(0.77))
+        self.assertEqual(r.status, 200)
+        self.assertEqual(r.header("X-Cache"), "hit")
+        self.assertEqual(r.body, stl.body)
+
+    def test_stats_and_features(self):
+        key = self.d.post("/v1/mesh", sphere(0.66)).header("ETag").strip('"')
+        stats = self.d.get("/v1/meshes/%s/stats" % key)
+        self.assertEqual(stats.status, 200)
+        s = stats.json()
+        self.assertEqual(s["key"], key)
+        self.assertGreater(s["mesh"]["triangles"], 0)
+        self.assertEqual(s["analysis"]["euler"], 2)
+        feats = self.d.get("/v1/meshes/%s/features" % key)
+        self.assertEqual(feats.status, 200)
+        self.assertIsInstance(feats.json(), dict)
+
+    def test_unknown_meshes_are_404(self):
+        self.error_of(self.d.get("/v1/meshes/%s.drc" % ("ab" * 32)), 404)
+        self.error_of(self.d.get("/v1/meshes/%s/stats" % ("cd" * 32)), 404)
+        self.error_of(self.d.get("/v1/meshes/xyz.drc"), 404)
+        self.error_of(self.d.get("/v1/meshes/%s.exe" % ("ab" * 32)), 404)
+        self.error_of(self.d.get("/v1/meshes/%s.DRC" % ("ab" * 32)), 404)
+
+    # ---- errors ----------------------------------------------------------------------
+    def test_bad_json_is_400_with_a_position(self):
+        err = self.error_of(self.d.post("/v1/mesh", b'{"expr": "x",'), 400)
+        self.assertIn("line", err["message"])
+
+    def test_bad_expression_is_400_with_path_and_column(self):
+        err = self.error_of(self.d.post("/v1/mesh", {"expr": "x^2 + * y"}), 400)
+        self.assertEqual(err.get("path"), "$.expr")
+        self.assertIn("column", err)
+
+    def test_unknown_field_is_400(self):
+        err = self.error_of(self.d.post("/v1/mesh", {"expr": "x", "colour": 1}), 400)
+        self.assertEqual(err.get("path"), "$.colour")
+
+    def test_over_the_depth_limit_is_422(self):
+        err = self.error_of(self.d.post("/v1/mesh", {"preset": "sphere", "depth": {"max": 12}}), 422)
+        self.assertIn("depth", err.get("path", "") + err["message"])
+
+    def test_body_too_large_is_413(self):
+        big = b'{"expr": "' + b"x+" * 40000 + b'x"}'
+        self.error_of(self.d.post("/v1/mesh", big, headers={"Content-Type": "application/json"}), 413)
+        # a chunked body (no Content-Length) over the limit as well
+        import http.client
+        conn = http.client.HTTPConnection("127.0.0.1", self.d.port, timeout=30)
+        try:
+            conn.request("POST", "/v1/mesh", body=iter([big[i:i + 8192] for i in range(0, len(big), 8192)]),
+                         headers={"Content-Type": "application/json"}, encode_chunked=True)
+            r = conn.getresponse()
+            self.assertEqual(r.status, 413)
+            r.read()
+        finally:
+            conn.close()
+
+    def test_wrong_content_type_is_415(self):
+        err = self.error_of(self.d.post("/v1/mesh", b'{"preset": "sphere"}',
+                                        headers={"Content-Type": "text/plain"}), 415)
+        self.assertIn("application/json", err["message"])
+        self.error_of(self.d.post("/v1/jobs", b'{"preset": "sphere"}',
+                                  headers={"Content-Type": "application/x-www-form-urlencoded"}), 415)
+        ok = self.d.post("/v1/mesh", b'{"preset": "sphere"}',
+                         headers={"Content-Type": "application/json; charset=utf-8"})
+        self.assertEqual(ok.status, 200)
+
+    def test_wrong_method_is_405_with_allow(self):
+        r = self.d.get("/v1/mesh")
+        self.error_of(r, 405)
+        self.assertIn("POST", r.header("Allow"))
+        r = self.d.request("PUT", "/v1/meshes/%s.drc" % ("ab" * 32), body=b"x")
+        self.error_of(r, 405)
+        self.assertIn("GET", r.header("Allow"))
+        self.error_of(self.d.request("DELETE", "/healthz"), 405)
+        self.error_of(self.d.post("/index.html", {"a": 1}), 405)
+
+    def test_unknown_routes_are_404(self):
+        for path in ("/v1/nope", "/v1/", "/v1/jobs/zzz", "/v1/jobs/%s/other" % ("a" * 32),
+                     "/v1/meshes/", "/v2/mesh"):
+            self.error_of(self.d.get(path), 404)
+
+    def test_empty_surface_answers_cleanly(self):
+        # a surface that misses the box: the daemon answers, whatever the pipeline decides
+        r = self.d.post("/v1/mesh", {"expr": "x^2 + y^2 + z^2 + 1"})
+        self.assertIn(r.status, (200, 422))
+        if r.status != 200:
+            self.error_of(r, r.status)
+
+    # ---- jobs ------------------------------------------------------------------------
+    def wait_job(self, url, states=("done", "failed", "canceled"), timeout=60):
+        deadline = time.time() + timeout
+        while time.time() < deadline:
+            j = self.d.get(url).json()
+            if j["state"] in states:
+                return j
+            time.sleep(0.02)
+        self.fail("job %s never reached %s" % (url, states))
+
+    def test_job_lifecycle_with_polling(self):
+        r = self.d.post("/v1/jobs", sphere(0.55))
+        self.assertEqual(r.status, 202, r.body[:300])
+        job = r.json()
+        self.assertRegex(job["id"], r"^[0-9a-f]{32}$")
+        self.assertEqual(r.header("Location"), "/v1/jobs/" + job["id"])
+        self.assertIn(job["state"], ("queued", "running", "done"))
+        done = self.wait_job(r.header("Location"))
+        self.assertEqual(done["state"], "done")
+        self.assertEqual(done["progress"], 1.0)
+        self.assertGreater(done["stats"]["mesh"]["triangles"], 0)
+        mesh = self.d.get(done["mesh_url"])
+        self.assertEqual(mesh.status, 200)
+        self.assertEqual(mesh.header("X-Cache"), "hit")
+        self.assertGreater(draco_counts(mesh.body)[1], 0)
+        # a job for a cached mesh is done at once
+        again = self.d.post("/v1/jobs", sphere(0.55)).json()
+        self.assertEqual(again["state"], "done")
+        self.assertNotEqual(again["id"], job["id"])
+
+    def test_job_events_stream_progress_then_done(self):
+        r = self.d.post("/v1/jobs", {"preset": "torus", "depth": {"max": 8}})
+        self.assertEqual(r.status, 202)
+        job = r.json()
+        import http.client
+        conn = http.client.HTTPConnection("127.0.0.1", self.d.port, timeout=60)
+        try:
+            conn.request("GET", job["events_url"])
+            resp = conn.getresponse()
+            self.assertEqual(resp.status, 200)
+            self.assertEqual(resp.getheader("Content-Type"), "text/event-stream")
+            text = resp.read().decode()  # the stream ends after the final event
+        finally:
+            conn.close()
+        events = []
+        for block in text.strip().split("\n\n"):
+            fields = dict(line.split(": ", 1) for line in block.splitlines())
+            events.append((fields["event"], json.loads(fields["data"])))
+        self.assertGreaterEqual(len(events), 2)
+        self.assertEqual(events[-1][0], "done")
+        self.assertEqual(events[-1][1]["state"], "done")
+        self.assertIn("mesh_url", events[-1][1])
+        progress = [e[1]["progress"] for e in events[:-1]]
+        self.assertTrue(all(e[0] == "progress" for e in events[:-1]))
+        self.assertTrue(all(0 <= p <= 1 for p in progress))
+        self.assertEqual(progress, sorted(progress))
+
+    def test_events_of_a_finished_job_end_at_once(self):
+        job = self.d.post("/v1/jobs", SPHERE).json()
+        self.wait_job(job["url"])
+        r = self.d.get(job["events_url"], timeout=10)
+        self.assertEqual(r.status, 200)
+        self.assertEqual(r.body.decode().count("event: "), 1)
+        self.assertIn("event: done", r.body.decode())
+
+    def test_cancel_a_running_job(self):
+        before = self.d.metric("isomesh_worker_restarts_total", reason="cancel")
+        job = self.d.post("/v1/jobs", SLOW).json()
+        self.wait_job(job["url"], states=("running",))
+        r = self.d.request("DELETE", job["url"])
+        self.assertEqual(r.status, 200)
+        self.assertEqual(r.json()["state"], "canceled")
+        self.assertEqual(self.d.get(job["url"]).json()["state"], "canceled")
+        self.assertTrue(self.d.wait_metric("isomesh_worker_restarts_total", before + 1, reason="cancel"))
+        self.d.wait_ready()
+        self.assertEqual(self.d.post("/v1/mesh", sphere(0.44)).status, 200)
+
+    def test_unknown_job_is_404(self):
+        self.error_of(self.d.get("/v1/jobs/" + "0" * 32), 404)
+        self.error_of(self.d.request("DELETE", "/v1/jobs/" + "0" * 32), 404)
+        self.error_of(self.d.get("/v1/jobs/%s/events" % ("0" * 32)), 404)
+
+    def test_bad_job_request_is_400(self):
+        self.error_of(self.d.post("/v1/jobs", {"expr": "x +"}), 400)
+
+    # ---- the rest --------------------------------------------------------------------
+    def test_presets(self):
+        r = self.d.get("/v1/presets")
+        self.assertEqual(r.status, 200)
+        names = [p["name"] for p in r.json()["presets"]]
+        self.assertIn("sphere", names)
+        self.assertIn("klein-bottle", names)
+
+    def test_documents(self):
+        for route, name, ctype in (("/v1/openapi.yaml", "openapi.yaml", "application/yaml"),
+                                   ("/v1/request.schema.json", "request.schema.json",
+                                    "application/schema+json")):
+            path = os.path.join(ROOT, "proto", name)
+            r = self.d.get(route)
+            if os.path.exists(path):
+                self.assertEqual(r.status, 200)
+                self.assertEqual(r.header("Content-Type"), ctype)
+                with open(path, "rb") as f:
+                    self.assertEqual(r.body, f.read())
+            else:
+                self.error_of(r, 404)
+
+    def test_health(self):
+        self.assertEqual(self.d.get("/healthz").json()["status"], "ok")
+        ready = self.d.get("/readyz")
+        self.assertEqual(ready.status, 200)
+        self.assertEqual(ready.json()["workers"], 2)
+        self.assertEqual(self.d.request("HEAD", "/healthz").status, 200)
+
+    def test_cors(self):
+        r = self.d.get("/healthz")
+        self.assertEqual(r.header("Access-Control-Allow-Origin"), ORIGIN)
+        pre = self.d.request("OPTIONS", "/v1/mesh", headers={
+            "Origin": ORIGIN, "Access-Control-Request-Method": "POST",
+            "Access-Control-Request-Headers": "content-type"})
+        self.assertEqual(pre.status, 204)
+        self.assertIn("POST", pre.header("Access-Control-Allow-Methods"))
+        self.assertIn("Content-Type", pre.header("Access-Control-Allow-Headers"))
+        self.assertEqual(pre.header("Access-Control-Allow-Origin"), ORIGIN)
+        hit = self.d.post("/v1/mesh", SPHERE)
+        self.assertIn("ETag", hit.header("Access-Control-Expose-Headers"))
+
+    def test_metrics_format_and_content(self):
+        self.d.post("/v1/mesh", SPHERE)
+        self.d.get("/v1/nope")
+        r = self.d.get("/metrics")
+        self.assertEqual(r.status, 200)
+        self.assertTrue(r.header("Content-Type").startswith("text/plain; version=0.0.4"))
+        m = parse_metrics(r.body.decode())
+        self.assertGreaterEqual(m['isomesh_http_requests_total{route="/v1/mesh",status="200"}'], 1)
+        self.assertGreaterEqual(m['isomesh_http_requests_total{route="other",status="404"}'], 1)
+        self.assertGreater(m['isomesh_http_request_duration_seconds_count{route="/v1/mesh"}'], 0)
+        self.assertEqual(m['isomesh_http_request_duration_seconds_bucket{le="+Inf",route="/v1/mesh"}'],
+                         m['isomesh_http_request_duration_seconds_count{route="/v1/mesh"}'])
+        for name in ("isomesh_cache_hits_total", "isomesh_cache_misses_total", "isomesh_queue_depth",
+                     "isomesh_workers_busy", "isomesh_polygonise_seconds_count",
+                     "isomesh_computations_started_total"):
+            self.assertIn(name, m)
+        self.assertIn('isomesh_worker_restarts_total{reason="crash"}', m)
+        self.assertEqual(m["isomesh_workers"], 2)
+        self.assertGreater(m["isomesh_polygonise_seconds_count"], 0)
+
+    def test_eight_identical_concurrent_requests_compute_once(self):
+        req = {"preset": "torus", "depth": {"max": 8}, "params": {"R": 1, "r": 0.31}}
+        before = self.d.metric("isomesh_computations_started_total")
+        results = [None] * 8
+        start = threading.Barrier(8)
+
+        def one(i):
+            start.wait()
+            results[i] = self.d.post("/v1/mesh", req)
+
+        threads = [threading.Thread(target=one, args=(i,)) for i in range(8)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(120)
+        self.assertTrue(all(r is not None and r.status == 200 for r in results))
+        self.assertEqual(len({r.body for r in results}), 1)
+        self.assertEqual(self.d.metric("isomesh_computations_started_total") - before, 1)
+        self.assertGreaterEqual(sum(r.header("X-Cache") == "miss" for r in results), 1)
+
+
+if __name__ == "__main__":
+    unittest.main()

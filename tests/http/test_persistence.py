@@ -1,0 +1,112 @@
+"""test_persistence.py — the disk cache through daemon restarts: a mesh computed before a
+restart is served from disk after it without computing (also another format of it, computed
+from the stored request); a flipped byte in a cache file is detected, the entry dropped and
+counted, and the mesh recomputed and correct; an unwritable cache directory still serves
+every request and counts the failed stores."""
+import glob
+import os
+import shutil
+import sys
+import tempfile
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from harness import Daemon, draco_counts, sphere  # noqa: E402
+
+
+class PersistenceTest(unittest.TestCase):
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="isomeshd_persist_")
+        self.cache = os.path.join(self.tmp, "cache")
+
+    def tearDown(self):
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def cache_file(self, key, ext):
+        hits = glob.glob(os.path.join(self.cache, "**", "%s.%s" % (key, ext)), recursive=True)
+        self.assertEqual(len(hits), 1, "cache file %s.%s not found once" % (key, ext))
+        return hits[0]
+
+    def test_restart_serves_from_disk_and_detects_a_flipped_byte(self):
+        req = sphere(0.93)
+        with Daemon("--workers", "1", cache_dir=self.cache) as d:
+            first = d.post("/v1/mesh", req)
+            self.assertEqual(first.status, 200)
+            self.assertEqual(first.header("X-Cache"), "miss")
+            key = first.header("ETag").strip('"')
+            stats = d.get("/v1/meshes/%s/stats" % key).json()
+            rc = d.stop()
+            self.assertEqual(rc, 0)
+
+        # restart: served from disk, nothing computed
+        with Daemon("--workers", "1", cache_dir=self.cache) as d:
+            got = d.get("/v1/meshes/%s.drc" % key)
+            self.assertEqual(got.status, 200)
+            self.assertEqual(got.header("X-Cache"), "hit")
+            self.assertEqual(got.body, first.body)
+            again = d.post("/v1/mesh", req)
+            self.assertEqual(again.header("X-Cache"), "hit")
+            self.assertEqual(d.get("/v1/meshes/%s/stats" % key).json(), stats)
+            self.assertEqual(d.metric("isomesh_computations_started_total"), 0)
+            self.assertGreaterEqual(d.metric("isomesh_cache_tier_hits_total", tier="disk"), 1)
+            # a format never asked for before the restart: computed from the stored request
+            glb = d.get("/v1/meshes/%s.glb" % key)
+            self.assertEqual(glb.status, 200)
+            self.assertEqual(glb.header("X-Cache"), "miss")
+            self.assertEqual(glb.body[:4], b"glTF")
+            self.assertEqual(d.metric("isomesh_computations_started_total"), 1)
+            self.assertEqual(d.stop(), 0)
+
+        # flip one byte in the middle of the stored Draco file
+        path = self.cache_file(key, "drc")
+        with open(path, "r+b") as f:
+            f.seek(os.path.getsize(path) // 2)
+            b = f.read(1)
+            f.seek(-1, os.SEEK_CUR)
+            f.write(bytes([b[0] ^ 0x01]))
+        with Daemon("--workers", "1", cache_dir=self.cache) as d:
+            got = d.get("/v1/meshes/%s.drc" % key)
+            self.assertEqual(got.status, 200)
+            self.assertEqual(got.header("X-Cache"), "miss")
+            self.assertEqual(got.body, first.body)  # recomputed, deterministic
+            verts, faces = draco_counts(got.body)
+            self.assertGreater(verts, 0)
+            self.assertGreater(faces, 0)
+            self.assertEqual(d.metric("isomesh_cache_corrupt_total", tier="disk"), 1)
+            self.assertEqual(d.metric("isomesh_computations_started_total"), 1)
+            self.assertIn("cache_corrupt_entry_dropped", d.log())
+            self.assertEqual(d.get("/v1/meshes/%s.drc" % key).header("X-Cache"), "hit")
+            self.assertEqual(d.stop(), 0)
+        # and the rewritten file is whole again
+        with Daemon("--workers", "1", cache_dir=self.cache) as d:
+            self.assertEqual(d.get("/v1/meshes/%s.drc" % key).header("X-Cache"), "hit")
+            self.assertEqual(d.metric("isomesh_cache_corrupt_total", tier="disk"), 0)
+
+    def test_unwritable_cache_dir_still_serves(self):
+        blocker = os.path.join(self.tmp, "file")
+        with open(blocker, "w") as f:
+            f.write("a file where the cache directory should be\n")
+        with Daemon("--workers", "1", cache_dir=os.path.join(blocker, "cache")) as d:
+            first = d.post("/v1/mesh", sphere(0.94))
+            self.assertEqual(first.status, 200)
+            self.assertGreater(draco_counts(first.body)[1], 0)
+            self.assertEqual(d.post("/v1/mesh", sphere(0.94)).header("X-Cache"), "hit")  # memory
+            self.assertGreater(d.metric("isomesh_cache_store_failures_total", tier="disk"), 0)
+            self.assertIn("cache_dir_unusable", d.log())
+
+    def test_no_memory_tier_reads_disk_every_time(self):
+        with Daemon("--workers", "1", "--cache-mem", "0", cache_dir=self.cache) as d:
+            first = d.post("/v1/mesh", sphere(0.95))
+            key = first.header("ETag").strip('"')
+            for _ in range(3):
+                r = d.get("/v1/meshes/%s.drc" % key)
+                self.assertEqual(r.header("X-Cache"), "hit")
+                self.assertEqual(r.body, first.body)
+            self.assertGreaterEqual(d.metric("isomesh_cache_tier_hits_total", tier="disk"), 3)
+            self.assertEqual(d.metric("isomesh_computations_started_total"), 1)
+            self.assertEqual(d.stop(), 0)  # a clean stop flushes the writes
+        self.cache_file(key, "drc")
+
+
+if __name__ == "__main__":
+    unittest.main()

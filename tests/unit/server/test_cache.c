@@ -1,0 +1,257 @@
+/* test_cache.c — the cache tiers (server/common/cache*.h): entry-name rules, the memory LRU's
+ * byte bound and recency order, promotion from disk to memory, the disk tier's persistence
+ * across instances, its detection of damaged files (any flipped byte, truncation) and its
+ * refusal to fail when the directory cannot be written. */
+#include <criterion/criterion.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "server/common/cache.h"
+#include "server/common/cache_disk.h"
+#include "server/common/cache_mem.h"
+
+#define KEY_A "aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa"
+#define KEY_B "0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef"
+
+static ism_blob *filled(size_t n, unsigned char seed)
+{
+    ism_blob *b = ism_blob_new(n);
+    for (size_t i = 0; i < n; i++)
+        b->data[i] = (unsigned char)(seed + i * 13);
+    return b;
+}
+
+static char *temp_dir(void)
+{
+    char *d = strdup("/tmp/ism_cache_test_XXXXXX");
+    cr_assert_not_null(mkdtemp(d));
+    return d;
+}
+
+static void remove_tree(const char *dir)
+{
+    /* test-owned temporary directory; exec with argv, no shell */
+    pid_t pid = fork();
+    if (pid == 0) {
+        execlp("rm", "rm", "-rf", dir, (char *)NULL);
+        _exit(127);
+    }
+    int st;
+    waitpid(pid, &st, 0);
+}
+
+Test(cache_names, only_keys_and_known_kinds)
+{
+    char name[ISM_CACHE_NAME_MAX];
+    cr_assert(ism_cache_name(name, KEY_A, "drc"));
+    cr_assert_str_eq(name, KEY_A ".drc");
+    cr_assert(ism_cache_name_valid(KEY_B ".stats.json"));
+    cr_assert(ism_cache_name_valid(KEY_B ".request.json"));
+    cr_assert_not(ism_cache_name_valid(KEY_B ".exe"));
+    cr_assert_not(ism_cache_name_valid(KEY_B ".drc/../x"));
+    cr_assert_not(ism_cache_name_valid("../" KEY_B ".drc"));
+    cr_assert_not(ism_cache_name_valid("AAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA.drc"));
+    cr_assert_not(ism_cache_name(name, "abc", "drc"));
+    cr_assert(ism_cache_key_valid(KEY_A));
+    cr_assert_not(ism_cache_key_valid(KEY_A "a"));
+}
+
+static void name_n(char out[ISM_CACHE_NAME_MAX], int i)
+{
+    char key[65];
+    for (int k = 0; k < 64; k++)
+        key[k] = "0123456789abcdef"[(i >> (4 * (k % 4))) & 15];
+    key[64] = 0;
+    cr_assert(ism_cache_name(out, key, "drc"));
+}
+
+Test(cache_mem, bounded_in_bytes_least_recent_goes_first)
+{
+    ism_cache_tier *m = ism_cache_mem_new(10 * 1024);
+    char names[12][ISM_CACHE_NAME_MAX];
+    for (int i = 0; i < 12; i++)
+        name_n(names[i], i);
+    /* 1000-byte entries (+ overhead): about eight fit */
+    for (int i = 0; i < 8; i++) {
+        ism_blob *b = filled(1000, (unsigned char)i);
+        m->put(m, names[i], b);
+        ism_blob_unref(b);
+    }
+    ism_blob *first = m->get(m, names[0]); /* now the most recent */
+    cr_assert_not_null(first);
+    ism_blob_unref(first);
+    for (int i = 8; i < 12; i++) {
+        ism_blob *b = filled(1000, (unsigned char)i);
+        m->put(m, names[i], b);
+        ism_blob_unref(b);
+    }
+    cr_assert_leq(atomic_load(&m->counters.bytes), 10 * 1024);
+    cr_assert_gt(atomic_load(&m->counters.evictions), 0);
+    cr_assert(m->has(m, names[0]), "the entry used recently was evicted");
+    cr_assert_not(m->has(m, names[1]), "the least recent entry survived");
+    for (int i = 8; i < 12; i++) {
+        ism_blob *b = m->get(m, names[i]);
+        cr_assert_not_null(b);
+        cr_assert_eq(b->len, 1000);
+        cr_assert_eq(b->data[1], (unsigned char)(i + 13));
+        ism_blob_unref(b);
+    }
+    /* one entry over half the budget is never kept */
+    ism_blob *huge = filled(6000, 1);
+    m->put(m, names[1], huge);
+    cr_assert_not(m->has(m, names[1]));
+    ism_blob_unref(huge);
+    m->close(m);
+}
+
+Test(cache_mem, blob_outlives_eviction_while_referenced)
+{
+    ism_cache_tier *m = ism_cache_mem_new(3000);
+    char a[ISM_CACHE_NAME_MAX], b[ISM_CACHE_NAME_MAX], c[ISM_CACHE_NAME_MAX];
+    name_n(a, 1);
+    name_n(b, 2);
+    name_n(c, 3);
+    ism_blob *x = filled(900, 5);
+    m->put(m, a, x);
+    ism_blob_unref(x);
+    ism_blob *held = m->get(m, a);
+    ism_blob *y = filled(900, 6);
+    m->put(m, b, y);
+    m->put(m, c, y); /* three do not fit: evicts a, the least recent */
+    ism_blob_unref(y);
+    cr_assert_not(m->has(m, a));
+    cr_assert(m->has(m, b) && m->has(m, c));
+    cr_assert_eq(held->len, 900);
+    cr_assert_eq(held->data[2], (unsigned char)(5 + 26));
+    ism_blob_unref(held);
+    m->close(m);
+}
+
+static char *file_of(const char *dir, const char *name)
+{
+    char *p = malloc(4096);
+    snprintf(p, 4096, "%s/v1/%.2s/%s", dir, name, name);
+    return p;
+}
+
+Test(cache_disk, survives_a_new_instance_and_promotes_to_memory)
+{
+    char *dir = temp_dir();
+    ism_cache_tier *d = ism_cache_disk_new(dir, 1 << 20);
+    cr_assert(ism_cache_disk_usable(d));
+    ism_blob *b = filled(50000, 9);
+    d->put(d, KEY_A ".glb", b);
+    ism_cache_disk_flush(d);
+    cr_assert_eq(atomic_load(&d->counters.stores), 1);
+    d->close(d);
+
+    ism_cache c = {0};
+    ism_cache_add_tier(&c, ism_cache_mem_new(1 << 20));
+    ism_cache_add_tier(&c, ism_cache_disk_new(dir, 1 << 20));
+    int tier = -2;
+    ism_blob *got = ism_cache_get(&c, KEY_A ".glb", &tier);
+    cr_assert_not_null(got);
+    cr_assert_eq(tier, 1, "expected a disk hit");
+    cr_assert_eq(got->len, b->len);
+    cr_assert_eq(memcmp(got->data, b->data, b->len), 0);
+    ism_blob_unref(got);
+    got = ism_cache_get(&c, KEY_A ".glb", &tier);
+    cr_assert_eq(tier, 0, "the disk hit was not promoted to memory");
+    ism_blob_unref(got);
+    cr_assert_null(ism_cache_get(&c, KEY_B ".glb", &tier));
+    cr_assert_eq(tier, -1);
+    cr_assert_eq(atomic_load(&c.tiers[1]->counters.hits), 1);
+    ism_cache_close(&c);
+    ism_blob_unref(b);
+    remove_tree(dir);
+    free(dir);
+}
+
+Test(cache_disk, any_damage_is_dropped_and_counted)
+{
+    char *dir = temp_dir();
+    ism_blob *b = filled(3000, 3);
+    char *path = file_of(dir, KEY_B ".drc");
+    /* flip one byte at several places: header, checksum, payload start, middle, end */
+    long offsets[] = {0, 5, 9, 17, 21, 24, 1500, 3023};
+    for (size_t i = 0; i < sizeof offsets / sizeof offsets[0]; i++) {
+        ism_cache_tier *d = ism_cache_disk_new(dir, 1 << 20);
+        d->put(d, KEY_B ".drc", b);
+        ism_cache_disk_flush(d);
+        int fd = open(path, O_RDWR);
+        cr_assert_geq(fd, 0);
+        unsigned char c;
+        cr_assert_eq(pread(fd, &c, 1, offsets[i]), 1);
+        c ^= 0x10;
+        cr_assert_eq(pwrite(fd, &c, 1, offsets[i]), 1);
+        close(fd);
+        cr_assert_null(d->get(d, KEY_B ".drc"), "flip at %ld not detected", offsets[i]);
+        cr_assert_eq(atomic_load(&d->counters.corrupt), 1);
+        cr_assert_neq(access(path, F_OK), 0, "the damaged file was kept");
+        d->close(d);
+    }
+    /* truncated file */
+    ism_cache_tier *d = ism_cache_disk_new(dir, 1 << 20);
+    d->put(d, KEY_B ".drc", b);
+    ism_cache_disk_flush(d);
+    cr_assert_eq(truncate(path, 1000), 0);
+    cr_assert_null(d->get(d, KEY_B ".drc"));
+    cr_assert_eq(atomic_load(&d->counters.corrupt), 1);
+    /* and a fresh store works again */
+    d->put(d, KEY_B ".drc", b);
+    ism_cache_disk_flush(d);
+    ism_blob *got = d->get(d, KEY_B ".drc");
+    cr_assert_not_null(got);
+    cr_assert_eq(memcmp(got->data, b->data, b->len), 0);
+    ism_blob_unref(got);
+    d->close(d);
+    free(path);
+    ism_blob_unref(b);
+    remove_tree(dir);
+    free(dir);
+}
+
+Test(cache_disk, unwritable_directory_stores_nothing_and_says_so)
+{
+    /* a path under a regular file can never be created, even by root */
+    char *dir = temp_dir();
+    char blocker[4200];
+    snprintf(blocker, sizeof blocker, "%s/file", dir);
+    int fd = open(blocker, O_WRONLY | O_CREAT, 0644);
+    cr_assert_geq(fd, 0);
+    close(fd);
+    char sub[4300];
+    snprintf(sub, sizeof sub, "%s/cache", blocker);
+    ism_cache_tier *d = ism_cache_disk_new(sub, 1 << 20);
+    cr_assert_not_null(d);
+    cr_assert_not(ism_cache_disk_usable(d));
+    ism_blob *b = filled(100, 1);
+    d->put(d, KEY_A ".drc", b);
+    ism_cache_disk_flush(d);
+    cr_assert_eq(atomic_load(&d->counters.store_failures), 1);
+    cr_assert_null(d->get(d, KEY_A ".drc"));
+    ism_blob_unref(b);
+    d->close(d);
+    remove_tree(dir);
+    free(dir);
+}
+
+Test(cache_disk, write_queue_over_budget_skips_and_counts)
+{
+    char *dir = temp_dir();
+    ism_cache_tier *d = ism_cache_disk_new(dir, 1000);
+    ism_blob *big = filled(5000, 2);
+    d->put(d, KEY_A ".ply", big);
+    ism_cache_disk_flush(d);
+    cr_assert_eq(atomic_load(&d->counters.store_failures), 1);
+    cr_assert_not(d->has(d, KEY_A ".ply"));
+    ism_blob_unref(big);
+    d->close(d);
+    remove_tree(dir);
+    free(dir);
+}
