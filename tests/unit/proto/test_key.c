@@ -41,7 +41,7 @@ static const char *const same[][6] = {
      "{\"expr\": \"x^2 + y^2 - 0.25\", \"depth\": {\"min\": 3, \"max\": 7}, "
      "\"tolerances\": {\"gradient\": 0.9, \"double_root_eps\": 1e-9, \"double_root_iters\": 25, "
      "\"stitch\": 0.001}, \"output\": {\"format\": \"glb\", \"position_bits\": 14, "
-     "\"normal_bits\": 10, \"curvature_bits\": 0, \"attributes\": [\"class\", \"normal\", "
+     "\"normal_bits\": 10, \"curvature_bits\": 14, \"attributes\": [\"class\", \"normal\", "
      "\"gauss_curvature\", \"mean_curvature\"]}}",
      "{\"expr\": \"x^2 + y^2 - 0.25\", \"box\": [-1, -1, -1, 1, 1, 1], \"output\": {\"format\": \"stl\"}}",
      "{\"expr\": \"x^2 + y^2 - 0.25\", \"box\": [-1, -1, -1.0, 1, 1, 1], \"depth\": {\"min\": 3}}",

@@ -1,0 +1,204 @@
+/* test_schema.c — the published documents stay in step with the decoder: every field of
+ * proto/request.schema.json is one the decoder knows (and no other), its defaults are the
+ * decoder's, its limits are where the decoder draws the line, its preset list is the preset
+ * table; proto/openapi.yaml documents the fixed Draco attribute ids. Run from the repository
+ * root (the test runner does). */
+#include <criterion/criterion.h>
+#include <jansson.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/octree/polygonise.h"
+#include "proto/draco_encode.h"
+#include "proto/presets.h"
+#include "proto/request.h"
+
+static json_t *schema(void)
+{
+    json_error_t je;
+    json_t *s = json_load_file("proto/request.schema.json", JSON_REJECT_DUPLICATES, &je);
+    cr_assert_not_null(s, "proto/request.schema.json: %s (line %d)", je.text, je.line);
+    return s;
+}
+
+static int decode_status(const char *json, ism_req_error *err)
+{
+    ism_request req;
+    if (ism_request_decode(json, strlen(json), NULL, &req, err)) {
+        ism_request_free(&req);
+        return 200;
+    }
+    return err->status;
+}
+
+/* Every property of the schema object at `props` (under the request path `where`) is a field
+ * the decoder knows: giving it a value of a silly type is not "unknown field". */
+static void known_fields(json_t *props, const char *section)
+{
+    const char *name;
+    json_t *v;
+    json_object_foreach(props, name, v) {
+        char json[256];
+        if (section)
+            snprintf(json, sizeof json, "{\"expr\": \"x\", \"%s\": {\"%s\": [true]}}",
+                     section, name);
+        else
+            snprintf(json, sizeof json, "{\"expr\": \"x\", \"%s\": [true]}", name);
+        ism_req_error err;
+        decode_status(json, &err);
+        cr_expect_null(strstr(err.message, "unknown field"), "%s: %s", json, err.message);
+    }
+    /* and a name the schema does not list is refused */
+    char json[256];
+    if (section)
+        snprintf(json, sizeof json, "{\"expr\": \"x\", \"%s\": {\"not_in_schema\": 1}}", section);
+    else
+        snprintf(json, sizeof json, "{\"expr\": \"x\", \"not_in_schema\": 1}");
+    ism_req_error err;
+    cr_expect_eq(decode_status(json, &err), 400);
+    cr_expect_not_null(strstr(err.message, "unknown field"), "%s", err.message);
+}
+
+Test(schema, fields_are_the_decoders)
+{
+    json_t *s = schema();
+    json_t *props = json_object_get(s, "properties");
+    cr_expect_eq(json_object_size(props), 8);
+    known_fields(props, NULL);
+    const char *sections[] = {"depth", "tolerances", "output"};
+    for (int i = 0; i < 3; i++)
+        known_fields(json_object_get(json_object_get(props, sections[i]), "properties"),
+                     sections[i]);
+    json_decref(s);
+}
+
+static double def(json_t *props, const char *section, const char *name)
+{
+    json_t *d = json_object_get(json_object_get(json_object_get(json_object_get(props, section),
+                                                                "properties"), name), "default");
+    cr_assert_not_null(d, "%s.%s has no default", section, name);
+    return json_number_value(d);
+}
+
+Test(schema, defaults_are_the_decoders)
+{
+    json_t *s = schema();
+    json_t *props = json_object_get(s, "properties");
+    ism_request req;
+    ism_req_error err;
+    cr_assert(ism_request_decode("{\"expr\": \"x\"}", 13, NULL, &req, &err));
+    cr_expect_eq(def(props, "depth", "min"), req.min_depth);
+    cr_expect_eq(def(props, "depth", "max"), req.max_depth);
+    cr_expect_eq(def(props, "tolerances", "gradient"), req.gradient);
+    cr_expect_eq(def(props, "tolerances", "double_root_eps"), req.double_root_eps);
+    cr_expect_eq(def(props, "tolerances", "double_root_iters"), req.double_root_iters);
+    cr_expect_eq(def(props, "tolerances", "stitch"), req.stitch);
+    cr_expect_eq(def(props, "tolerances", "flat_normal"), req.flat_normal);
+    cr_expect_eq(def(props, "tolerances", "flat_plane"), req.flat_plane);
+    cr_expect_eq(def(props, "output", "position_bits"), req.position_bits);
+    cr_expect_eq(def(props, "output", "normal_bits"), req.normal_bits);
+    cr_expect_eq(def(props, "output", "curvature_bits"), req.curvature_bits);
+    json_t *box = json_object_get(json_object_get(props, "box"), "default");
+    for (int k = 0; k < 6; k++)
+        cr_expect_eq(json_number_value(json_array_get(box, (size_t)k)), req.box[k]);
+    cr_expect_str_eq(json_string_value(json_object_get(
+                         json_object_get(json_object_get(json_object_get(props, "output"),
+                                                         "properties"), "format"), "default")),
+                     ism_format_name(req.format));
+    ism_request_free(&req);
+    json_decref(s);
+}
+
+/* The decoder accepts the schema's maximum and refuses one past it (and the same at the
+ * minimum). */
+static void limit(json_t *props, const char *section, const char *name, double step)
+{
+    json_t *p = json_object_get(json_object_get(json_object_get(props, section), "properties"),
+                                name);
+    const char *bounds[2] = {"minimum", "maximum"};
+    for (int b = 0; b < 2; b++) {
+        json_t *v = json_object_get(p, bounds[b]);
+        if (!v)
+            continue;
+        double at = json_number_value(v), past = b ? at + step : at - step;
+        char json[256];
+        ism_req_error err;
+        snprintf(json, sizeof json, "{\"expr\": \"x\", \"%s\": {\"%s\": %.17g}}", section, name, at);
+        cr_expect_eq(decode_status(json, &err), 200, "%s: %s", json, err.message);
+        snprintf(json, sizeof json, "{\"expr\": \"x\", \"%s\": {\"%s\": %.17g}}", section, name, past);
+        cr_expect_eq(decode_status(json, &err), 422, "%s", json);
+    }
+}
+
+Test(schema, limits_are_where_the_decoder_draws_the_line)
+{
+    json_t *s = schema();
+    json_t *props = json_object_get(s, "properties");
+    limit(props, "depth", "min", 1);
+    limit(props, "tolerances", "gradient", 0.01);
+    limit(props, "tolerances", "double_root_eps", 0.01);
+    limit(props, "tolerances", "double_root_iters", 1);
+    limit(props, "tolerances", "stitch", 1e-10);
+    limit(props, "tolerances", "flat_normal", 0.01);
+    limit(props, "tolerances", "flat_plane", 1e-7);
+    limit(props, "output", "position_bits", 1);
+    limit(props, "output", "normal_bits", 1);
+    json_t *items = json_object_get(json_object_get(props, "box"), "items");
+    cr_expect_eq(json_number_value(json_object_get(items, "maximum")), ISM_REQ_MAX_COORD);
+    cr_expect_eq(json_number_value(json_object_get(json_object_get(props, "expr"), "maxLength")),
+                 ISM_REQ_MAX_SOURCE);
+    json_t *dmax = json_object_get(json_object_get(json_object_get(props, "depth"), "properties"),
+                                   "max");
+    cr_expect_eq(json_integer_value(json_object_get(dmax, "maximum")), ISM_MAX_DEPTH_LIMIT);
+    json_decref(s);
+}
+
+Test(schema, presets_are_the_table)
+{
+    json_t *s = schema();
+    json_t *e = json_object_get(json_object_get(json_object_get(s, "properties"), "preset"), "enum");
+    cr_assert_eq(json_array_size(e), ism_preset_count());
+    for (size_t i = 0; i < ism_preset_count(); i++)
+        cr_expect_str_eq(json_string_value(json_array_get(e, i)), ism_preset_at(i)->name);
+    json_decref(s);
+
+    size_t n;
+    char *text = ism_presets_json(&n);
+    json_error_t je;
+    json_t *doc = json_loadb(text, n, JSON_REJECT_DUPLICATES, &je);
+    cr_assert_not_null(doc, "%s", je.text);
+    json_t *list = json_object_get(doc, "presets");
+    cr_expect_eq(json_array_size(list), ism_preset_count());
+    for (size_t i = 0; i < json_array_size(list); i++) {
+        json_t *p = json_array_get(list, i);
+        cr_expect_gt(strlen(json_string_value(json_object_get(p, "about"))), 10);
+        cr_expect_eq(json_array_size(json_object_get(p, "box")), 6);
+    }
+    json_decref(doc);
+    free(text);
+}
+
+Test(schema, openapi_documents_the_attribute_ids)
+{
+    FILE *f = fopen("proto/openapi.yaml", "r");
+    cr_assert_not_null(f);
+    static char text[1 << 17];
+    size_t n = fread(text, 1, sizeof text - 1, f);
+    fclose(f);
+    text[n] = '\0';
+    const struct {
+        int id;
+        const char *name;
+    } ids[] = {{ISM_DRACO_ID_POSITION, "position"},
+               {ISM_DRACO_ID_NORMAL, "normal"},
+               {ISM_DRACO_ID_MEAN_CURVATURE, "mean_curvature"},
+               {ISM_DRACO_ID_GAUSS_CURVATURE, "gauss_curvature"},
+               {ISM_DRACO_ID_CLASS, "class"}};
+    for (size_t i = 0; i < 5; i++) {
+        char row[64];
+        snprintf(row, sizeof row, "| %d         | %-16s|", ids[i].id, ids[i].name);
+        cr_expect_not_null(strstr(text, row), "openapi.yaml lacks the row '%s'", row);
+    }
+    cr_expect_not_null(strstr(text, "$ref: 'request.schema.json'"));
+}
