@@ -5,6 +5,7 @@
 #include "proto/json_writer.h"
 #include "core/version.h"
 
+#include <math.h>
 #include <stdio.h>
 
 static void kv_u(ism_jw *w, const char *k, uint64_t v)
@@ -17,6 +18,13 @@ static void kv_d(ism_jw *w, const char *k, double v)
 {
     ism_jw_key(w, k);
     ism_jw_number(w, v);
+}
+
+/* Milliseconds to the microsecond (more digits would be noise). */
+static void kv_ms(ism_jw *w, const char *k, double v)
+{
+    ism_jw_key(w, k);
+    ism_jw_number(w, round(v * 1e3) / 1e3);
 }
 
 static void write_poly(ism_jw *w, const ism_poly_stats *s)
@@ -48,8 +56,8 @@ static void write_poly(ism_jw *w, const ism_poly_stats *s)
     ism_jw_key(w, "time_ms");
     ism_jw_object(w);
     for (int i = 0; i < ISM_PHASE_COUNT; i++)
-        kv_d(w, phase[i], s->time_ms[i]);
-    kv_d(w, "total", s->total_ms);
+        kv_ms(w, phase[i], s->time_ms[i]);
+    kv_ms(w, "total", s->total_ms);
     ism_jw_object_end(w);
     ism_jw_object_end(w);
 }
@@ -178,7 +186,7 @@ char *ism_stats_json(const ism_stats_input *in, size_t *len)
     ism_jw_key(&w, "timings_ms");
     ism_jw_object(&w);
     for (int i = 0; i < ISM_TIME_COUNT; i++)
-        kv_d(&w, timing[i], in->timings_ms[i]);
+        kv_ms(&w, timing[i], in->timings_ms[i]);
     ism_jw_object_end(&w);
     ism_jw_key(&w, "warnings");
     write_warnings(&w, in->poly);

@@ -95,7 +95,7 @@ def main():
 
         print("\nEncoder speed setting (14 position bits): B/tri and Mtri/s, positions | +normals")
         speeds = sorted({r["speed"] for r in rows if r["kind"] == "speed"})
-        print(f"{'mesh':<12}" + "".join(f"{'speed ' + str(s):>18}" for s in speeds))
+        print(f"{'mesh':<12}" + "".join(f"{'speed ' + str(s):>21}" for s in speeds))
         for name, m in meshes.items():
             t = m["triangles"]
             cells = []
@@ -106,7 +106,7 @@ def main():
                          and r["speed"] == s and r["attributes"] == "normals")
                 cells.append(f"{p['bytes'] / t:.2f}/{t / p['ms'] / 1000:.1f}|"
                              f"{n['bytes'] / t:.2f}/{t / n['ms'] / 1000:.1f}")
-            print(f"{name:<12}" + "".join(f"{c:>18}" for c in cells))
+            print(f"{name:<12}" + "".join(f"{c:>21}" for c in cells))
 
         print("\nCurvature quantisation (14 position bits, all attributes): B/tri")
         cb = sorted({r["curvature_bits"] for r in rows if r["kind"] == "curvature"})
