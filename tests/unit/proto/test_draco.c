@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "core/analysis/analysis.h"
+#include "core/octree/polygonise.h"
 #include "proto/draco_encode.h"
 #include "proto/features.h"
 #include "proto/request.h"
@@ -323,6 +324,12 @@ static bool same_point(const float *a, const float *b, double tol)
     return fabs(a[0] - b[0]) <= tol && fabs(a[1] - b[1]) <= tol && fabs(a[2] - b[2]) <= tol;
 }
 
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
 /* Non-manifold edges of a triangle list over n vertices (pairs lo < hi, sorted), counted
  * independently of the analysis: an undirected edge in more than two triangles. */
 static size_t nonmanifold_edges(const uint32_t *tri, size_t ntris, uint64_t **out)
@@ -338,12 +345,7 @@ static size_t nonmanifold_edges(const uint32_t *tri, size_t ntris, uint64_t **ou
             e[n++] = a < b ? a << 32 | b : b << 32 | a;
         }
     }
-    for (size_t i = 1; i < n; i++) /* insertion sort is fine at test sizes */
-        for (size_t j = i; j > 0 && e[j - 1] > e[j]; j--) {
-            uint64_t x = e[j];
-            e[j] = e[j - 1];
-            e[j - 1] = x;
-        }
+    qsort(e, n, sizeof *e, cmp_u64);
     size_t k = 0;
     for (size_t i = 0; i < n;) {
         size_t j = i;
@@ -357,18 +359,23 @@ static size_t nonmanifold_edges(const uint32_t *tri, size_t ntris, uint64_t **ou
     return k;
 }
 
-static void check_arrival(ism_mesh *m, size_t want_nm_edges, size_t want_points)
+/* bits: position quantisation; fine enough that no two vertices share a quantisation cell,
+ * so that welding by position is unambiguous (the polygoniser places vertices as close as
+ * 1e-5 of the box: 14 bits would merge some). */
+static void check_arrival(ism_mesh *m, size_t want_nm_edges, size_t want_points, int bits)
 {
     ism_analysis a;
     ism_error err;
     cr_assert(ism_analyse(m, NULL, NULL, &a, &err), "%s", err.message);
-    cr_expect_eq(a.nonmanifold_edges, want_nm_edges);
-    cr_expect_eq(a.npoints, want_points);
+    if (want_nm_edges != SIZE_MAX) {
+        cr_expect_eq(a.nonmanifold_edges, want_nm_edges);
+        cr_expect_eq(a.npoints, want_points);
+    }
 
     ism_wire_mesh w;
     cr_assert(ism_wire_mesh_build(m, &a, ISM_ATTR_ALL, 0, &w));
     ism_draco_output d;
-    encode(&w, 14, 10, 0, &d);
+    encode(&w, bits, 10, 0, &d);
     test_draco_mesh dm;
     char why[200];
     cr_assert(test_draco_decode(d.data, d.len, &dm, why, sizeof why), "%s", why);
@@ -386,7 +393,7 @@ static void check_arrival(ism_mesh *m, size_t want_nm_edges, size_t want_points)
     /* Weld the decoded points back by position (Draco split them along the non-manifold
      * edges) and count edges: the same non-manifold edges as an independent count over the
      * original mesh, and as many as the analysis says. */
-    double tol = position_tolerance(&w, 14);
+    double tol = position_tolerance(&w, bits);
     uint32_t *map = match_points(w.pos, w.nverts, dm.pos, dm.npoints, tol);
     uint32_t *welded = malloc(dm.nfaces * 3 * sizeof *welded);
     for (size_t i = 0; i < dm.nfaces * 3; i++)
@@ -472,7 +479,7 @@ Test(draco, crossing_planes_arrive_with_their_nonmanifold_line)
     test_mesh_crossing_planes(&m, 8);
     ism_mesh_add_triangle(&m, 5, 5, 6); /* a collapsed triangle Draco drops */
     /* 8 non-manifold edges along the x axis; its two ends are curve ends */
-    check_arrival(&m, 8, 2);
+    check_arrival(&m, 8, 2, 14);
     ism_mesh_free(&m);
 }
 
@@ -480,6 +487,49 @@ Test(draco, touching_tetrahedra_arrive_with_their_nonmanifold_point)
 {
     ism_mesh m;
     test_mesh_touching_tetrahedra(&m);
-    check_arrival(&m, 0, 1);
+    check_arrival(&m, 0, 1, 14);
     ism_mesh_free(&m);
+}
+
+/* The polygoniser's own non-manifold surfaces (smaller depths under the sanitizers). */
+static void polygonised(const char *preset, int depth, size_t *nm_edges)
+{
+    char json[128];
+    bool quick = getenv("ISOMESH_TEST_QUICK") != NULL;
+    snprintf(json, sizeof json, "{\"preset\": \"%s\", \"depth\": {\"max\": %d}}", preset,
+             quick ? depth - 1 : depth);
+    ism_request req;
+    ism_req_error rerr;
+    cr_assert(ism_request_decode(json, strlen(json), NULL, &req, &rerr), "%s", rerr.message);
+    ism_tape *t = ism_request_compile(&req, &rerr);
+    cr_assert_not_null(t, "%s", rerr.message);
+    ism_poly_options o;
+    ism_request_poly_options(&req, &o);
+    ism_mesh m;
+    ism_mesh_init(&m);
+    ism_poly_stats ps;
+    ism_error err;
+    cr_assert_eq(ism_polygonise(t, &o, &m, &ps, &err), ISM_POLY_OK, "%s", err.message);
+    ism_analysis a;
+    cr_assert(ism_analyse(&m, NULL, NULL, &a, &err));
+    *nm_edges = a.nonmanifold_edges;
+    ism_analysis_free(&a);
+    check_arrival(&m, SIZE_MAX, SIZE_MAX, 20);
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+    ism_request_free(&req);
+}
+
+Test(draco, polygonised_klein_bottle_arrives_with_its_self_intersection, .timeout = 120)
+{
+    size_t nm;
+    polygonised("klein-bottle", 6, &nm);
+    cr_expect_gt(nm, 0, "the Klein bottle self-intersects");
+}
+
+Test(draco, polygonised_steiner_surface_arrives_with_its_double_lines, .timeout = 120)
+{
+    size_t nm;
+    polygonised("steiner-roman", 6, &nm);
+    cr_expect_gt(nm, 0, "Steiner's surface has three double lines");
 }
