@@ -5,7 +5,13 @@
  * The cache key names the mesh and its encoding options but not the file format, so one key
  * has one .drc, .glb, .ply, .obj and .stl; the daemon asks for another format of a known key
  * by running the key's canonical request again with `format` changed (the output is
- * deterministic, so it is the same mesh). */
+ * deterministic, so it is the same mesh).
+ *
+ * An empty surface (no triangle) is status 200 with: an empty body for drc, a valid glTF with
+ * one empty scene for glb, PLY/OBJ/STL files with no vertex, and "empty": true in the stats.
+ * The features JSON (format: proto/features.h) comes with every successful run, whatever the
+ * format. Error bodies: {"error": {"code", "message", "path"?, "line"?, "column"?}}
+ * (proto/request.h). */
 #ifndef ISM_PIPELINE_H
 #define ISM_PIPELINE_H
 
