@@ -299,7 +299,9 @@ static void set_defaults(ismd_config *cfg)
     exe_dir(exe, sizeof exe);
     source_tree_dir(cfg->web_root, sizeof cfg->web_root, exe, "web");
     source_tree_dir(cfg->data_dir, sizeof cfg->data_dir, exe, "proto");
-    snprintf(cfg->worker_path, sizeof cfg->worker_path, "%s/isomesh", *exe ? exe : ".");
+    if (snprintf(cfg->worker_path, sizeof cfg->worker_path, "%s/isomesh", *exe ? exe : ".") >=
+        (int)sizeof cfg->worker_path)
+        strcpy(cfg->worker_path, "./isomesh");
 }
 
 /* ---- help, config file, argv --------------------------------------------------------- */

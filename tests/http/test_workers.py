@@ -130,8 +130,13 @@ class WorkerTest(unittest.TestCase):
             self.assertEqual(rc, 0, d.log())
             self.assertLess(time.time() - t0, 20)
             t.join(30)
-            if "result" in box:  # answered before the socket closed: 503 or 504, never 200
-                self.assertIn(box["result"].status, (503, 504))
+            if "result" in box:  # finished within the grace period, or stopped
+                r = box["result"]
+                self.assertIn(r.status, (200, 503, 504))
+                if r.status == 200:
+                    self.assertGreater(draco_counts(r.body)[1], 0)
+                else:
+                    self.assertIn(r.json()["error"]["code"], ("shutting_down", "deadline_exceeded"))
             for pid in workers:
                 self.assertFalse(os.path.exists("/proc/%d" % pid) and
                                  open("/proc/%d/stat" % pid).read().split()[2] != "Z",
@@ -140,8 +145,13 @@ class WorkerTest(unittest.TestCase):
         finally:
             d.cleanup()
 
+    def skip_without_rlimit(self, d):
+        if "job_memory_ignored" in d.log():
+            self.skipTest("sanitizer build: workers run without RLIMIT_AS")
+
     def test_workers_run_under_the_memory_limit(self):
         with Daemon("--workers", "2", "--job-memory", "3G") as d:
+            self.skip_without_rlimit(d)
             pids = d.workers()
             self.assertEqual(len(pids), 2)
             for pid in pids:
@@ -156,9 +166,10 @@ class WorkerTest(unittest.TestCase):
         # the job fails with an error answer (the polygoniser's budget is 3/4 of the limit, or
         # the worker dies), and the daemon keeps serving.
         with Daemon("--workers", "1", "--job-memory", "128M", "--job-timeout", "60s") as d:
+            self.skip_without_rlimit(d)
             r = d.post("/v1/mesh", {"preset": "gyroid-ball", "depth": {"max": 10}})
             self.assertIn(r.status, (422, 500), r.body[:300])
-            self.assertIn("memory", r.json()["error"]["message"] + r.json()["error"]["code"])
+            self.assertIn(r.json()["error"]["code"], ("no_memory", "too_big", "worker_crashed"))
             d.wait_ready()
             self.assertEqual(d.post("/v1/mesh", sphere(0.5)).status, 200)
 
