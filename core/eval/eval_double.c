@@ -61,7 +61,7 @@ double ism_eval_point(const ism_tape *t, ism_eval_ws *ws, double x, double y, do
 /* Lane kernels: one group of LANES lanes each, restrict parameters so that gcc knows the
  * output aliases no input (gcc honours restrict reliably on parameters, also once inlined). */
 #define KERNEL_RR(NAME, EXPR)                                                          \
-    static inline void NAME(double *restrict o, const double *restrict a,              \
+    static inline __attribute__((always_inline)) void NAME(double *restrict o, const double *restrict a,              \
                             const double *restrict b)                                  \
     {                                                                                  \
         _Pragma("GCC unroll 32")                                                        \
@@ -69,14 +69,14 @@ double ism_eval_point(const ism_tape *t, ism_eval_ws *ws, double x, double y, do
             o[j] = EXPR;                                                               \
     }
 #define KERNEL_R(NAME, EXPR)                                                           \
-    static inline void NAME(double *restrict o, const double *restrict a)              \
+    static inline __attribute__((always_inline)) void NAME(double *restrict o, const double *restrict a)              \
     {                                                                                  \
         _Pragma("GCC unroll 32")                                                        \
         for (size_t j = 0; j < LANES; j++)                                             \
             o[j] = EXPR;                                                               \
     }
 #define KERNEL_RC(NAME, EXPR)                                                          \
-    static inline void NAME(double *restrict o, const double *restrict a, double c)    \
+    static inline __attribute__((always_inline)) void NAME(double *restrict o, const double *restrict a, double c)    \
     {                                                                                  \
         _Pragma("GCC unroll 32")                                                        \
         for (size_t j = 0; j < LANES; j++)                                             \
@@ -133,8 +133,7 @@ static void powi_lanes(double *restrict out, const double *restrict ra, unsigned
     }
 }
 
-__attribute__((target_clones("avx2", "default")))
-static void batch_op(const ism_instr *in, double *regs, size_t ngroups)
+static inline __attribute__((always_inline)) void batch_op(const ism_instr *in, double *regs, size_t ngroups)
 {
     double *out = regs + (size_t)in->out * ISM_EVAL_BATCH;
     const double *ra = regs + (size_t)in->a * ISM_EVAL_BATCH;
@@ -178,6 +177,37 @@ static void batch_op(const ism_instr *in, double *regs, size_t ngroups)
 #undef RUN_R
 }
 
+/* The tape over one chunk, compiled twice: for AVX2 (4 lanes per vector) and for the
+ * x86-64 baseline (SSE2, 2 lanes); chosen at run time by what the CPU supports. (An
+ * explicit choice rather than ifunc target_clones, whose resolvers run before sanitizer
+ * and coverage runtimes start.) */
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx2")))
+static void run_tape_avx2(const ism_tape *t, double *regs, size_t ngroups)
+{
+    for (size_t i = 0; i < t->len; i++)
+        batch_op(&t->code[i], regs, ngroups);
+}
+#define HAVE_AVX2_PATH 1
+#endif
+
+static void run_tape_base(const ism_tape *t, double *regs, size_t ngroups)
+{
+    for (size_t i = 0; i < t->len; i++)
+        batch_op(&t->code[i], regs, ngroups);
+}
+
+static void run_tape(const ism_tape *t, double *regs, size_t ngroups)
+{
+#ifdef HAVE_AVX2_PATH
+    if (__builtin_cpu_supports("avx2")) {
+        run_tape_avx2(t, regs, ngroups);
+        return;
+    }
+#endif
+    run_tape_base(t, regs, ngroups);
+}
+
 /* Evaluates n <= ISM_EVAL_BATCH points; lanes past n (up to a whole group) repeat the
  * last point so that they compute harmless values. */
 static void eval_chunk(const ism_tape *t, double *regs, const double *x, const double *y,
@@ -192,8 +222,7 @@ static void eval_chunk(const ism_tape *t, double *regs, const double *x, const d
         for (size_t j = n; j < ngroups * LANES; j++)
             in[k][j] = src[k][n - 1];
     }
-    for (size_t i = 0; i < t->len; i++)
-        batch_op(&t->code[i], regs, ngroups);
+    run_tape(t, regs, ngroups);
     memcpy(out, regs + (size_t)t->result * ISM_EVAL_BATCH, n * sizeof(double));
 }
 

@@ -11,7 +11,7 @@
 #define LANES 8
 
 #define IV_KERNEL_RR(NAME, FN)                                                          \
-    static inline void NAME(double *restrict ol, double *restrict oh,                   \
+    static inline __attribute__((always_inline)) void NAME(double *restrict ol, double *restrict oh,                   \
                             const double *restrict al, const double *restrict ah,       \
                             const double *restrict bl, const double *restrict bh)       \
     {                                                                                   \
@@ -22,7 +22,7 @@
         }                                                                               \
     }
 #define IV_KERNEL_RC(NAME, FN)                                                          \
-    static inline void NAME(double *restrict ol, double *restrict oh,                   \
+    static inline __attribute__((always_inline)) void NAME(double *restrict ol, double *restrict oh,                   \
                             const double *restrict al, const double *restrict ah,       \
                             double c)                                                   \
     {                                                                                   \
@@ -78,8 +78,7 @@ static ism_interval scalar_op(const ism_instr *in, ism_interval a)
     }
 }
 
-__attribute__((target_clones("avx2", "default")))
-static void chunk_op(const ism_instr *in, double *lo, double *hi, size_t ngroups)
+static inline __attribute__((always_inline)) void chunk_op(const ism_instr *in, double *lo, double *hi, size_t ngroups)
 {
     size_t o = (size_t)in->out * ISM_IV_CHUNK, a = (size_t)in->a * ISM_IV_CHUNK;
     size_t b = (size_t)(ism_op_has_reg_b(in->op) ? in->b : in->a) * ISM_IV_CHUNK;
@@ -132,6 +131,35 @@ static void chunk_op(const ism_instr *in, double *lo, double *hi, size_t ngroups
 #undef RUN_SCALAR
 }
 
+/* The tape over one chunk, compiled for AVX2 and for the x86-64 baseline, chosen at run
+ * time (see eval_double.c). */
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx2")))
+static void run_tape_avx2(const ism_tape *t, double *lo, double *hi, size_t ngroups)
+{
+    for (size_t i = 0; i < t->len; i++)
+        chunk_op(&t->code[i], lo, hi, ngroups);
+}
+#define HAVE_AVX2_PATH 1
+#endif
+
+static void run_tape_base(const ism_tape *t, double *lo, double *hi, size_t ngroups)
+{
+    for (size_t i = 0; i < t->len; i++)
+        chunk_op(&t->code[i], lo, hi, ngroups);
+}
+
+static void run_tape(const ism_tape *t, double *lo, double *hi, size_t ngroups)
+{
+#ifdef HAVE_AVX2_PATH
+    if (__builtin_cpu_supports("avx2")) {
+        run_tape_avx2(t, lo, hi, ngroups);
+        return;
+    }
+#endif
+    run_tape_base(t, lo, hi, ngroups);
+}
+
 static double sane_lo(ism_interval v) { return v.lo <= v.hi ? v.lo : -INFINITY; }
 static double sane_hi(ism_interval v) { return v.lo <= v.hi ? v.hi : INFINITY; }
 
@@ -150,8 +178,7 @@ static void eval_chunk(const ism_tape *t, ism_eval_ws *ws, const ism_interval *x
             hi[j] = sane_hi(v);
         }
     }
-    for (size_t i = 0; i < t->len; i++)
-        chunk_op(&t->code[i], ws->iv_lo, ws->iv_hi, ngroups);
+    run_tape(t, ws->iv_lo, ws->iv_hi, ngroups);
     const double *lo = ws->iv_lo + (size_t)t->result * ISM_IV_CHUNK;
     const double *hi = ws->iv_hi + (size_t)t->result * ISM_IV_CHUNK;
     for (size_t j = 0; j < n; j++)

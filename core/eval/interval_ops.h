@@ -4,7 +4,7 @@
  * point inside them).
  *
  * Outward rounding: every computed bound is pushed outward by at least one ulp with
- * `x - (|x|*2^-52 + 2^-1074)`, which is always <= the next double below x, without a branch,
+ * `(x - 2^-1074) - |x|*2^-52`, which is always <= the next double below x, without a branch,
  * a rounding-mode switch or a call (see down1/up1). Results of libm functions (not
  * correctly rounded) are pushed by four ulps. A NaN bound (inf - inf, 0 * inf) never
  * escapes: ism_iv_sane turns it into the matching infinity.
@@ -19,10 +19,13 @@
 #include "core/eval/eval.h"
 #include "core/expr/scalar_ops.h"
 
-static inline double down1(double x) { return x - (fabs(x) * 0x1p-52 + 0x1p-1074); }
-static inline double up1(double x) { return x + (fabs(x) * 0x1p-52 + 0x1p-1074); }
-static inline double down4(double x) { return x - (fabs(x) * 0x1p-50 + 0x1p-1072); }
-static inline double up4(double x) { return x + (fabs(x) * 0x1p-50 + 0x1p-1072); }
+/* (x - 2^-1074) is x itself for a normal x and exact below; subtracting |x| * 2^-52 (at
+ * least one ulp of x) then lands at or below the next double under x. The two halves are
+ * independent, which keeps the latency of the single-box evaluator's chain short. */
+static inline double down1(double x) { return (x - 0x1p-1074) - fabs(x) * 0x1p-52; }
+static inline double up1(double x) { return (x + 0x1p-1074) + fabs(x) * 0x1p-52; }
+static inline double down4(double x) { return (x - 0x1p-1072) - fabs(x) * 0x1p-50; }
+static inline double up4(double x) { return (x + 0x1p-1072) + fabs(x) * 0x1p-50; }
 
 static inline ism_interval iv(double lo, double hi)
 {

@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "core/eval/interval_ops.h"
 #include "test_eval_surfaces.h"
 
 enum { PTS = 256 };
@@ -77,6 +78,32 @@ static size_t check_enclosure(const char *name, const ism_tape *t, const double 
     }
     ism_eval_ws_free(ws);
     return checked;
+}
+
+/* The outward-rounding primitive moves every finite double by at least one ulp: down1(x)
+ * <= nextafter(x, -inf) and up1(x) >= nextafter(x, +inf), over all magnitudes. */
+Test(eval_interval, outward_rounding_moves_at_least_one_ulp)
+{
+    test_rng rng = { 5 };
+    const double special[] = { 0.0, -0.0, 1.0, -1.0, 2.0, 0.5, 0x1p-1022, -0x1p-1022, 0x1p-1074,
+                               -0x1p-1074, 0x1.fffffffffffffp-1023, 0x1.fffffffffffffp0,
+                               0x1.0000000000001p0, 0x1p1023, -0x1p1023, 3.0, 1e-300, 1e300 };
+    size_t n = test_scaled(200000);
+    for (size_t i = 0; i < n + sizeof special / sizeof special[0]; i++) {
+        double x;
+        if (i < sizeof special / sizeof special[0]) {
+            x = special[i];
+        } else {
+            x = ldexp(test_uniform(&rng, 1.0, 2.0), (int)test_uniform(&rng, -1074, 1023));
+            if (test_uniform(&rng, 0, 1) < 0.5)
+                x = -x;
+        }
+        cr_assert(down1(x) <= nextafter(x, -INFINITY), "down1(%a) = %a", x, down1(x));
+        cr_assert(up1(x) >= nextafter(x, INFINITY) || x >= 0x1p1023, "up1(%a) = %a", x, up1(x));
+        cr_assert(down4(x) <= down1(x) && up4(x) >= up1(x));
+    }
+    cr_expect_eq(down1(-INFINITY), -INFINITY);
+    cr_expect_eq(up1(INFINITY), INFINITY);
 }
 
 /* The batched interval evaluator gives exactly the single-box bounds, box by box, for
