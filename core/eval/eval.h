@@ -57,8 +57,10 @@ ism_tape *ism_tape_new_like(const ism_tape *t);
 /* Evaluates t over the box by intervals and writes into out (made by ism_tape_new_like(t)
  * or of a tape t was shortened from) a tape equal to t everywhere inside the box, without
  * the min/max branches that the box proves dominated. Also returns the box's interval in
- * *range when range is not NULL. Returns true when out is shorter than t, false when
- * nothing could be dropped (out is then unchanged and t should be used as it is). */
+ * *range when range is not NULL — always, whether or not anything was dropped (it is the
+ * ism_eval_interval result; no need to evaluate the box again). Returns true when out is
+ * shorter than t, false when nothing could be dropped (out is then unchanged and t should
+ * be used as it is). out must not be t. */
 bool ism_tape_shorten(const ism_tape *t, ism_eval_ws *ws, ism_interval x, ism_interval y,
                       ism_interval z, ism_tape *out, ism_interval *range);
 
