@@ -16,33 +16,6 @@
 /* ---------------------------------------------------------------------------------------
  * Errors */
 
-bool ism_req_error_set(ism_req_error *err, int status, const char *code, const char *path,
-                       const char *fmt, ...)
-{
-    if (!err)
-        return false;
-    memset(err, 0, sizeof *err);
-    err->status = status;
-    snprintf(err->code, sizeof err->code, "%s", code);
-    snprintf(err->path, sizeof err->path, "%s", path ? path : "");
-    char reason[sizeof err->message];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(reason, sizeof reason, fmt, ap);
-    va_end(ap);
-    size_t at = 0, cap = sizeof err->message - 1;
-    if (err->path[0]) {
-        for (const char *s = err->path; *s && at < cap; s++)
-            err->message[at++] = *s;
-        for (const char *s = ": "; *s && at < cap; s++)
-            err->message[at++] = *s;
-    }
-    for (const char *s = reason; *s && at < cap; s++)
-        err->message[at++] = *s;
-    err->message[at] = '\0';
-    return false;
-}
-
 static bool bad(ism_req_error *err, const char *path, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 static bool bad(ism_req_error *err, const char *path, const char *fmt, ...)
@@ -678,40 +651,4 @@ void ism_request_free(ism_request *req)
     free(req->preset);
     free(req->expr);
     memset(req, 0, sizeof *req);
-}
-
-/* ---------------------------------------------------------------------------------------
- * Formats */
-
-static const char *const format_names[ISM_FORMAT_COUNT] = {"drc", "glb", "ply", "obj", "stl"};
-static const char *const format_mimes[ISM_FORMAT_COUNT] = {
-    "application/vnd.google.draco", "model/gltf-binary", "application/ply", "model/obj",
-    "model/stl"};
-
-const char *ism_format_name(enum ism_format f)
-{
-    return (unsigned)f < ISM_FORMAT_COUNT ? format_names[f] : "?";
-}
-
-const char *ism_format_mime(enum ism_format f)
-{
-    return (unsigned)f < ISM_FORMAT_COUNT ? format_mimes[f] : "application/octet-stream";
-}
-
-int ism_format_lookup(const char *name)
-{
-    for (int i = 0; i < ISM_FORMAT_COUNT; i++)
-        if (strcmp(format_names[i], name) == 0)
-            return i;
-    return -1;
-}
-
-bool ism_request_set_format(ism_request *req, const char *name, ism_req_error *err)
-{
-    int k = ism_format_lookup(name);
-    if (k < 0)
-        return ism_req_error_set(err, 400, "bad_request", "format",
-                                 "unknown format (expected one of: drc, glb, ply, obj, stl)");
-    req->format = (enum ism_format)k;
-    return true;
 }

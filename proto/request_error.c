@@ -1,8 +1,40 @@
-/* request_error.c — the error document every non-200 answer carries:
+/* request_error.c — request errors: setting one (the path leads its message) and the error
+ * document every non-200 answer carries:
  * {"error": {"code": "...", "message": "...", "path": "$.x", "line": L, "column": C}}
  * (path, line and column only when known). */
 #include "proto/request.h"
 #include "proto/json_writer.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+bool ism_req_error_set(ism_req_error *err, int status, const char *code, const char *path,
+                       const char *fmt, ...)
+{
+    if (!err)
+        return false;
+    memset(err, 0, sizeof *err);
+    err->status = status;
+    snprintf(err->code, sizeof err->code, "%s", code);
+    snprintf(err->path, sizeof err->path, "%s", path ? path : "");
+    char reason[sizeof err->message];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(reason, sizeof reason, fmt, ap);
+    va_end(ap);
+    size_t at = 0, cap = sizeof err->message - 1;
+    if (err->path[0]) {
+        for (const char *s = err->path; *s && at < cap; s++)
+            err->message[at++] = *s;
+        for (const char *s = ": "; *s && at < cap; s++)
+            err->message[at++] = *s;
+    }
+    for (const char *s = reason; *s && at < cap; s++)
+        err->message[at++] = *s;
+    err->message[at] = '\0';
+    return false;
+}
 
 char *ism_req_error_json(const ism_req_error *err, size_t *len)
 {
