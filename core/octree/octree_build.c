@@ -69,9 +69,10 @@ static const ism_tape *node_range(build *b, thread_state *th, const ism_node *nd
     node_box(b->grid, nd, lo, hi);
     ism_interval x = {lo[0], hi[0]}, y = {lo[1], hi[1]}, z = {lo[2], hi[2]};
     th->s.n_interval++;
-    if (b->shortening && th->tapes[nd->level] &&
-        ism_tape_shorten(tape, th->s.ws, x, y, z, th->tapes[nd->level], range))
-        return th->tapes[nd->level];
+    if (b->shortening && th->tapes[nd->level]) /* fills *range whether or not it shortens */
+        return ism_tape_shorten(tape, th->s.ws, x, y, z, th->tapes[nd->level], range)
+                   ? th->tapes[nd->level]
+                   : tape;
     *range = ism_eval_interval(tape, th->s.ws, x, y, z);
     return tape;
 }
