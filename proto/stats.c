@@ -46,6 +46,8 @@ static void write_poly(ism_jw *w, const ism_poly_stats *s)
     kv_u(w, "nonmanifold_lines", s->nonmanifold_lines);
     kv_u(w, "open_chains", s->open_chains);
     kv_u(w, "cracks_repaired", s->cracks_repaired);
+    kv_u(w, "singular_points", s->singular_points);
+    kv_u(w, "crossed_faces", s->crossed_faces);
     kv_u(w, "evals_point", s->evals_point);
     kv_u(w, "evals_interval", s->evals_interval);
     kv_u(w, "evals_gradient", s->evals_gradient);

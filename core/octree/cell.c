@@ -2,6 +2,7 @@
  * (finer neighbours' tiles where they exist — crack repair), stitched into polygons, each
  * polygon triangulated; one-edge polygons are kept as segments. */
 #include "core/octree/cell.h"
+#include "core/octree/singular.h"
 #include "core/octree/stitch.h"
 #include "core/octree/triangulate.h"
 
@@ -114,12 +115,30 @@ bool ism_cell_polygonise(ism_cell_ctx *cx, int32_t node, ism_cell_out *out)
         return false;
 
     double reach = 0.5 * ism_grid_cell_size(&cx->tree->grid, nd->level);
+    ism_fpoint apex;
+    bool has_apex = false;
+    if (nd->flags & ISM_NODE_UNRESOLVED) {
+        double lo[3], hi[3];
+        int32_t steps = ism_grid_cell_steps(&cx->tree->grid, nd->level);
+        for (int a = 0; a < 3; a++) {
+            lo[a] = ism_grid_coord(&cx->tree->grid, a, nd->org[a]);
+            hi[a] = ism_grid_coord(&cx->tree->grid, a, nd->org[a] + steps);
+        }
+        has_apex = ism_find_singular_point(&cx->s, lo, hi, &apex);
+        cx->stats.singular_points += has_apex;
+    }
     size_t polygons = 0;
     for (size_t k = 0; k < cx->loops.nloops; k++) {
         const ism_loop *lp = &cx->loops.loops[k];
         const ism_fpoint *p = cx->loops.pts + lp->first;
         if (!lp->closed)
             cx->stats.open_chains++;
+        if (has_apex && lp->n >= 3) {
+            polygons++;
+            if (!ism_triangulate_fan(p, lp->n, &apex, out))
+                return false;
+            continue;
+        }
         if (lp->n == 2) {
             cx->stats.degenerate_polygons++;
             if (!ism_cell_out_segment(out, &p[0], &p[1]))

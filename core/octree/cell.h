@@ -20,6 +20,7 @@ enum ism_fpoint_flags {
     ISM_FP_PAIR = 4,       /* one of two roots on a segment */
     ISM_FP_MANY = 8,       /* on a segment suspected of more than two roots */
     ISM_FP_INTERIOR = 16,  /* a polygon's centre (not on the node boundary) */
+    ISM_FP_SINGULAR = 32,  /* an isolated singular point inside the node (see singular.h) */
 };
 
 typedef struct ism_fpoint {
@@ -82,7 +83,7 @@ typedef struct ism_cell_out {
 
 typedef struct ism_cell_stats {
     uint64_t polygons, two_polygon_nodes, many_polygon_nodes, degenerate_polygons;
-    uint64_t double_lines, open_chains, crossed_faces, crack_tiles;
+    uint64_t double_lines, open_chains, crossed_faces, crack_tiles, singular_points;
 } ism_cell_stats;
 
 typedef struct ism_cell_ctx {

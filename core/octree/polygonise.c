@@ -152,6 +152,8 @@ static void add_cell_stats(ism_poly_stats *st, const ism_cell_ctx *cx)
     st->nonmanifold_lines += cx->stats.double_lines;
     st->open_chains += cx->stats.open_chains;
     st->cracks_repaired += cx->stats.crack_tiles;
+    st->singular_points += cx->stats.singular_points;
+    st->crossed_faces += cx->stats.crossed_faces;
     st->evals_point += cx->s.n_point;
     st->evals_gradient += cx->s.n_gradient;
 }

@@ -65,6 +65,10 @@ typedef struct ism_poly_stats {
     uint64_t nonmanifold_lines;  /* face lines shared by two polygons */
     uint64_t open_chains;        /* line chains that could not be closed into a polygon */
     uint64_t cracks_repaired;    /* coarse face lines replaced by finer neighbours' lines */
+    uint64_t singular_points;    /* isolated singular points found inside nodes (cone apexes,
+                                    Kummer nodes): the node's polygons meet there */
+    uint64_t crossed_faces;      /* faces where two sheets cross inside (an X of face lines):
+                                    the node's polygons intersect (paper Fig. 1a) */
     uint64_t evals_point;        /* f evaluations */
     uint64_t evals_interval;     /* interval evaluations */
     uint64_t evals_gradient;     /* gradient evaluations */

@@ -183,3 +183,26 @@ bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, doubl
             return false;
     return true;
 }
+
+bool ism_triangulate_fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex,
+                         ism_cell_out *out)
+{
+    if (n < 2)
+        return true;
+    bool flip = n >= 3 && reversed(pts, n);
+    size_t base = out->nverts;
+    for (size_t i = 0; i < n; i++) {
+        uint32_t idx;
+        if (!push_vert(out, &pts[flip ? n - 1 - i : i], &idx))
+            return false;
+    }
+    uint32_t a;
+    if (!push_vert(out, apex, &a))
+        return false;
+    uint32_t b = (uint32_t)base;
+    size_t edges = n == 2 ? 1 : n; /* a one-edge polygon gives one triangle */
+    for (size_t i = 0; i < edges; i++)
+        if (!push_tri(out, a, b + (uint32_t)i, b + (uint32_t)((i + 1) % n)))
+            return false;
+    return true;
+}

@@ -10,6 +10,11 @@
 bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
                           ism_cell_out *out);
 
+/* Triangulates the closed polygon pts[0..n) (n >= 2) as a fan around apex, a point inside
+ * the node where the polygon's sheet meets other sheets. */
+bool ism_triangulate_fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex,
+                         ism_cell_out *out);
+
 /* Appends a one-edge (degenerate) polygon. */
 bool ism_cell_out_segment(ism_cell_out *out, const ism_fpoint *a, const ism_fpoint *b);
 

@@ -1,0 +1,103 @@
+/* singular.c — Newton's method on ∇f = 0 (with the Hessian from the tape) to find an
+ * isolated singular point of f = 0 inside a node, and the tests that accept it: inside the
+ * node, on the surface, Hessian non-degenerate and indefinite. A double line (Steiner's
+ * axes, the Klein bottle's self-intersection) has a degenerate Hessian and is left to the
+ * face-line machinery. */
+#include "core/octree/singular.h"
+
+#include <math.h>
+#include <string.h>
+
+#define NEWTON_STEPS 12
+
+/* hess = xx xy xz yy yz zz */
+static void full(const double h[6], double m[3][3])
+{
+    m[0][0] = h[0], m[0][1] = m[1][0] = h[1], m[0][2] = m[2][0] = h[2];
+    m[1][1] = h[3], m[1][2] = m[2][1] = h[4], m[2][2] = h[5];
+}
+
+static double det3(double m[3][3])
+{
+    return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+           m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+}
+
+static double frobenius(double m[3][3])
+{
+    double s = 0;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            s += m[i][j] * m[i][j];
+    return sqrt(s);
+}
+
+/* Solves m d = r by Cramer's rule (m known to be well conditioned by the caller). */
+static void solve3(double m[3][3], const double r[3], double d[3])
+{
+    double det = det3(m);
+    for (int k = 0; k < 3; k++) {
+        double c[3][3];
+        memcpy(c, m, sizeof c);
+        for (int i = 0; i < 3; i++)
+            c[i][k] = r[i];
+        d[k] = det3(c) / det;
+    }
+}
+
+/* Indefinite: the quadratic form takes both signs (a cone, not an isolated point). With a
+ * non-zero determinant this holds unless all three eigenvalues share a sign, i.e. unless
+ * the leading minors are all positive or alternate starting negative. */
+static bool indefinite(double m[3][3])
+{
+    double d1 = m[0][0], d2 = m[0][0] * m[1][1] - m[0][1] * m[1][0], d3 = det3(m);
+    bool positive = d1 > 0 && d2 > 0 && d3 > 0;
+    bool negative = d1 < 0 && d2 > 0 && d3 < 0;
+    return !positive && !negative;
+}
+
+bool ism_find_singular_point(ism_sampler *smp, const double lo[3], const double hi[3],
+                             ism_fpoint *s)
+{
+    double p[3], size = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        p[k] = 0.5 * (lo[k] + hi[k]);
+        if (hi[k] - lo[k] < size)
+            size = hi[k] - lo[k];
+    }
+    double g[3], h[6], m[3][3], f = 0;
+    for (int it = 0; it < NEWTON_STEPS; it++) {
+        smp->n_gradient++;
+        f = ism_eval_hessian(smp->tape, smp->ws, p[0], p[1], p[2], g, h);
+        full(h, m);
+        double hn = frobenius(m);
+        if (!(hn > 0) || !isfinite(hn) || fabs(det3(m)) < 1e-3 * hn * hn * hn)
+            return false; /* degenerate: a double line, a ridge, or no singularity at all */
+        double step[3], minus_g[3] = {-g[0], -g[1], -g[2]};
+        solve3(m, minus_g, step);
+        for (int k = 0; k < 3; k++) {
+            p[k] += step[k];
+            if (!(p[k] > lo[k] - size && p[k] < hi[k] + size))
+                return false;
+        }
+        if (ism_norm3(step) < 1e-14 * size)
+            break;
+    }
+    smp->n_gradient++;
+    f = ism_eval_hessian(smp->tape, smp->ws, p[0], p[1], p[2], g, h);
+    full(h, m);
+    double hn = frobenius(m);
+    double margin = 1e-9 * size;
+    for (int k = 0; k < 3; k++)
+        if (!(p[k] > lo[k] + margin && p[k] < hi[k] - margin))
+            return false; /* on or outside the boundary: the neighbours could not agree */
+    if (!(fabs(f) <= 1e-8 * hn * size * size) || !(ism_norm3(g) <= 1e-6 * hn * size))
+        return false;
+    if (fabs(det3(m)) < 1e-3 * hn * hn * hn || !indefinite(m))
+        return false;
+    memcpy(s->p, p, sizeof s->p);
+    memset(s->g, 0, sizeof s->g);
+    s->flags = ISM_FP_INTERIOR | ISM_FP_SINGULAR;
+    return true;
+}

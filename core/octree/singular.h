@@ -1,0 +1,18 @@
+/* singular.h — isolated singular points of the surface inside a node (f = 0 and ∇f = 0 with
+ * a non-degenerate Hessian: the nodes of Kummer's surfaces, cone apexes). Where the paper
+ * leaves two separate caps of the two cones in such a node, the polygoniser fans every
+ * polygon of the node from the singular point, so the cones meet there in one vertex: a
+ * non-manifold point the analysis can find. */
+#ifndef ISM_SINGULAR_H
+#define ISM_SINGULAR_H
+
+#include <stdbool.h>
+#include "core/octree/cell.h"
+
+/* Newton on ∇f = 0 from the centre of the box lo..hi. True, with the point in *s, when it
+ * converges strictly inside the box to a point of f = 0 whose Hessian is non-degenerate
+ * and indefinite (two cones meet there). */
+bool ism_find_singular_point(ism_sampler *smp, const double lo[3], const double hi[3],
+                             ism_fpoint *s);
+
+#endif
