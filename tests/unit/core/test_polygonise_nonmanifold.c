@@ -149,3 +149,41 @@ Test(paper, coordinate_planes_on_the_lattice)
     ism_mesh_free(&m);
     ism_tape_free(t);
 }
+
+/* A double cone whose apex lies inside a node (off every lattice plane): the paper's
+ * algorithm leaves two separate caps there; the polygoniser finds the singular point and
+ * both cones meet in one vertex at the apex. */
+Test(paper, cone_apex_inside_a_node_is_one_vertex)
+{
+    const pf_surface s = {"z^2 - x^2 - y^2", NULL, 0, NULL, 0};
+    const double box[6] = {-0.9, -1.13, -0.97, 1.1, 1.07, 1.01};
+    ism_tape *t = pf_compile(&s);
+    ism_mesh m;
+    ism_poly_stats st;
+    pf_run(t, box, 2, 6, 0, &m, &st);
+    pf_props p;
+    pf_measure(&m, t, &p);
+    cr_expect_eq(st.singular_points, 1);
+    size_t at_apex = 0;
+    uint32_t apex = UINT32_MAX;
+    for (uint32_t v = 0; v < m.nverts; v++)
+        if (fabs(m.pos[3 * v]) + fabs(m.pos[3 * v + 1]) + fabs(m.pos[3 * v + 2]) < 1e-9)
+            at_apex++, apex = v;
+    cr_assert_eq(at_apex, 1, "%zu vertices at the apex", at_apex);
+    /* the apex touches triangles above and below it */
+    bool above = false, below = false;
+    for (size_t k = 0; k < m.ntris; k++)
+        for (int j = 0; j < 3; j++)
+            if (m.tri[3 * k + j] == apex) {
+                double zc = 0;
+                for (int i = 0; i < 3; i++)
+                    zc += m.pos[3 * m.tri[3 * k + i] + 2];
+                above |= zc > 0;
+                below |= zc < 0;
+            }
+    cr_expect(above && below, "both cones reach the apex");
+    cr_expect_eq(p.components, 2, "two cones, joined only at the apex");
+    cr_expect_eq(p.nonmanifold_edges, 0);
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+}
