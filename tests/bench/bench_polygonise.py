@@ -148,7 +148,9 @@ def measure(argv, timeout=RUN_TIMEOUT_S, max_reps=3):
     minimum time and that run's output, the largest peak RSS. Stops at the first failure."""
     runs = [run_once(argv, timeout)]
     first = runs[0]
-    reps = 1 if first.status != "ok" or first.seconds > 30 else 3 if first.seconds < 1 else 2
+    if first.status != "ok":
+        return first
+    reps = 1 if first.seconds > 30 else 3 if first.seconds < 1 else 2
     for _ in range(min(reps, max_reps) - 1):
         r = run_once(argv, timeout)
         runs.append(r)
@@ -300,9 +302,11 @@ def run_cgal(tools, s, area, target, target_depth, timeout):
         os.unlink(out)
     note = f"size {size:.3g}, approx {approx:.2g} (aimed at d{target_depth}: {target} tri.)"
     if r.status == "timeout":
-        note = f"timeout after {timeout} s; " + note
+        note = f"after {timeout} s (hard limit); " + note
     elif r.status == "failed":
-        note = "failed: " + (r.err.strip().splitlines() or ["?"])[-1][:120]
+        lines = [x.strip() for x in r.err.splitlines() if x.strip()]
+        why = [x for x in lines if x.startswith("Explanation:")] or lines[-1:] or ["?"]
+        note = f"{lines[0][:60] if lines else ''} {why[0][:100]}"
     return row("CGAL", f"~d{target_depth}", r, a, inner["mesh_s"] if inner else None, note)
 
 
