@@ -1,0 +1,44 @@
+// page.mjs — small helpers over a viewer page: wait for the next mesh, read the stats panel,
+// screenshot the 3D view, count the API requests the page made.
+import fs from 'node:fs';
+import { decodePng } from './png.mjs';
+import { artifact, watchErrors } from './harness.mjs';
+
+export async function loads(page) {
+  return page.evaluate(() => Number(document.body.dataset.loads || 0));
+}
+
+// Waits until the page has shown more than `after` meshes and is idle; returns the mesh key.
+export async function waitForMesh(page, after, timeout = 60000) {
+  await page.waitForFunction((n) => Number(document.body.dataset.loads || 0) > n && document.body.dataset.busy !== '1',
+    after, { timeout, polling: 50 });
+  return page.evaluate(() => document.body.dataset.meshKey);
+}
+
+export async function openViewer(context, url) {
+  const page = await context.newPage();
+  const requests = [];
+  const errors = watchErrors(page);
+  page.on('request', (r) => requests.push({ method: r.method(), url: r.url(), headers: r.headers() }));
+  await page.goto(url);
+  await waitForMesh(page, 0);
+  return { page, requests, errors };
+}
+
+export function jobPosts(requests) {
+  return requests.filter((r) => r.method === 'POST' && new URL(r.url).pathname === '/v1/jobs').length;
+}
+
+// The panel's cells: {name: {text, value}}.
+export async function statsPanel(page) {
+  return page.evaluate(() => Object.fromEntries([...document.querySelectorAll('#stats dd')]
+    .map((d) => [d.dataset.stat, { text: d.textContent, value: d.dataset.value }])));
+}
+
+// A PNG screenshot of the 3D view, decoded; saved under tests/artifacts/ when name is given.
+export async function viewShot(page, name) {
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  const buf = await page.locator('#view').screenshot();
+  if (name) fs.writeFileSync(artifact(name), buf);
+  return decodePng(buf);
+}

@@ -1,0 +1,445 @@
+// viewer.test.mjs — the isomesh viewer end to end: a real isomeshd (its own port and cache
+// directory) and headless Chromium. Load the page, pick the Kummer surface, check the canvas
+// really shows a surface, the stats panel against the stats endpoint, a slider that computes a
+// new mesh and comes back from the page's cache, expression errors at their column (the
+// viewer's own check and the server's), curvature colours against the decoded attributes,
+// the clipping plane, each download, a shared link, keyboard access, a narrow screen, and
+// screenshots of the paper's four surfaces under tests/artifacts/.
+import { describe, it, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import fs from 'node:fs';
+import { createRequire } from 'node:module';
+import { startDaemon, stopDaemon, startBrowser, stopBrowser, watchErrors } from './lib/harness.mjs';
+import { waitForMesh, loads, openViewer, jobPosts, statsPanel, viewShot } from './lib/page.mjs';
+import { pixelStats, changedShare } from './lib/png.mjs';
+import { decodeDraco, ATTRIBUTE_IDS } from './lib/draco.mjs';
+import { checkExpression } from '../../web/js/expr.js';
+
+const require = createRequire(import.meta.url);
+const gltfValidator = require('gltf-validator');
+
+let daemon = null;
+let browser = null;
+let page = null;
+let requests = [];
+let errors = [];
+
+async function api(path, init) {
+  const r = await fetch(daemon.base + path, init);
+  return r;
+}
+
+async function getJSON(path) {
+  const r = await api(path);
+  assert.equal(r.status, 200, `${path}: HTTP ${r.status}`);
+  return r.json();
+}
+
+async function meshKey() {
+  return page.evaluate(() => document.body.dataset.meshKey);
+}
+
+function assertRendered(img, what) {
+  const s = pixelStats(img);
+  assert.ok(s.foreground > 0.04, `${what}: only ${(100 * s.foreground).toFixed(1)}% of the view differs from the background`);
+  assert.ok(s.distinct > 40, `${what}: only ${s.distinct} distinct colours (flat or blank canvas)`);
+  assert.ok(s.lumaStd > 8, `${what}: luminance spread ${s.lumaStd.toFixed(1)} (no shading)`);
+  return s;
+}
+
+async function choosePreset(name) {
+  const before = await loads(page);
+  await page.selectOption('#preset', name);
+  return waitForMesh(page, before);
+}
+
+function finiteRange(values) {
+  let min = Infinity, max = -Infinity;
+  for (const v of values) if (Number.isFinite(v)) { min = Math.min(min, v); max = Math.max(max, v); }
+  return [min, max];
+}
+
+describe('isomesh viewer', { timeout: 240000 }, () => {
+  before(async () => {
+    daemon = await startDaemon();
+    browser = await startBrowser();
+    ({ page, requests, errors } = await openViewer(browser.context, daemon.base + '/'));
+  });
+
+  after(async () => {
+    try {
+      await stopBrowser(browser);
+    } finally {
+      await stopDaemon(daemon);
+    }
+  });
+
+  it('loads everything from the daemon itself (three.js under /vendor, no CDN)', async () => {
+    const origins = new Set(requests.map((r) => new URL(r.url).origin));
+    assert.deepEqual([...origins], [daemon.base]);
+    const paths = requests.map((r) => new URL(r.url).pathname);
+    assert.ok(paths.includes('/vendor/three/build/three.module.js'));
+    assert.ok(paths.includes('/vendor/three/examples/jsm/controls/OrbitControls.js'));
+    assert.ok(paths.includes('/vendor/three/examples/jsm/libs/draco/draco_decoder.wasm'));
+    const map = await page.evaluate(() => JSON.parse(document.querySelector('script[type=importmap]').textContent));
+    assert.equal(map.imports.three, '/vendor/three/build/three.module.js');
+    const presets = await getJSON('/v1/presets');
+    const options = await page.$$eval('#preset option', (os) => os.map((o) => [o.value, o.title]));
+    for (const p of presets.presets) assert.ok(options.some(([v, t]) => v === p.name && t === p.about), `preset ${p.name} listed with its description`);
+  });
+
+  it('renders the Kummer surface on the canvas', async () => {
+    const key = await choosePreset('kummer-16-nodes');
+    assert.match(key, /^[0-9a-f]{64}$/);
+    const img = await viewShot(page, 'kummer-16-nodes.png');
+    assertRendered(img, 'Kummer surface');
+    const about = await page.textContent('#preset-about');
+    assert.match(about, /Kummer/);
+    const sliders = await page.$$eval('#params input[type=range]', (s) => s.map((e) => e.dataset.param));
+    assert.deepEqual(sliders, ['mu2', 'w']);
+  });
+
+  it('shows the stats of the stats endpoint, and the features of the features endpoint', async () => {
+    const key = await meshKey();
+    const stats = await getJSON(`/v1/meshes/${key}/stats`);
+    const panel = await statsPanel(page);
+    const int = (name) => Number(panel[name].text.replace(/,/g, ''));
+    assert.equal(int('triangles'), stats.mesh.triangles);
+    assert.equal(int('vertices'), stats.mesh.vertices);
+    assert.equal(int('euler'), stats.analysis.euler);
+    assert.equal(int('components'), stats.analysis.components);
+    assert.equal(int('nonmanifold_edges'), stats.analysis.nonmanifold_edges);
+    assert.equal(int('nonmanifold_points'), stats.analysis.nonmanifold_points);
+    assert.equal(int('nonmanifold_curves'), stats.analysis.nonmanifold_curves);
+    assert.equal(int('boundary_edges'), stats.analysis.boundary_edges);
+    const close = (text, want) => {
+      const got = Number(text.replace(/[^0-9eE+.-]/g, ''));
+      assert.ok(Math.abs(got - want) <= 0.006 * Math.abs(want) + 1e-300, `${text} vs ${want}`);
+    };
+    close(panel.min_angle.text, stats.analysis.quality.min_angle);
+    close(panel.max_dist.text, stats.analysis.accuracy.max_dist_vertex);
+    assert.equal(Number(panel.compute_ms.value), stats.timings_ms.total);
+    assert.equal(Number(panel.draco_bytes.value), stats.bytes);
+    assert.equal(panel.cache.value, 'miss');
+    assert.ok(Number(panel.bytes.value) >= stats.bytes, 'at least the mesh was transferred');
+
+    const features = await getJSON(`/v1/meshes/${key}/features`);
+    const segs = (lines) => lines.reduce((n, l) => n + l.xyz.length / 3 - 1, 0);
+    const counts = await page.$$eval('#feature-key [data-count]', (es) => Object.fromEntries(es.map((e) => [e.className, Number(e.dataset.count)])));
+    assert.equal(counts['key-edges'], segs(features.curves));
+    assert.equal(counts['key-edges'], features.counts.curve_edges);
+    assert.equal(counts['key-points'], features.points.length);
+    assert.equal(counts['key-boundary'], features.counts.boundary_edges);
+  });
+
+  it('moving a slider computes a new mesh; moving it back is instant, from the page', async () => {
+    const first = await meshKey();
+    const slider = page.locator('#param-mu2');
+    const v0 = Number(await page.inputValue('#param-mu2-value'));
+    await slider.focus();
+    let before = await loads(page);
+    for (let i = 0; i < 5; i++) await page.keyboard.press('ArrowRight');
+    const second = await waitForMesh(page, before);
+    const v1 = Number(await page.inputValue('#param-mu2-value'));
+    assert.ok(v1 > v0, `mu2 went from ${v0} to ${v1}`);
+    assert.notEqual(second, first);
+    assert.match(await page.evaluate(() => location.hash), new RegExp(`p\\.mu2=${v1}`));
+    const stats = await getJSON(`/v1/meshes/${second}/stats`);
+    assert.equal(Number((await statsPanel(page)).triangles.value), stats.mesh.triangles);
+
+    const posts = jobPosts(requests);
+    before = await loads(page);
+    for (let i = 0; i < 5; i++) await page.keyboard.press('ArrowLeft');
+    const third = await waitForMesh(page, before);
+    assert.equal(third, first);
+    assert.equal(Number(await page.inputValue('#param-mu2-value')), v0);
+    assert.equal((await statsPanel(page)).cache.value, 'viewer');
+    await page.waitForTimeout(400); // past the debounce: nothing may be sent late either
+    assert.equal(jobPosts(requests), posts, 'no request for a result the page holds');
+  });
+
+  it('points at a syntax error before sending anything, at the column the server gives', async () => {
+    const expr = 'x^2 + y^2 + sinn(z) - 1';
+    const posts = jobPosts(requests);
+    await page.fill('#expr', expr);
+    await page.waitForSelector('#expr-error:not([hidden])');
+    const shown = await page.$eval('#expr-error', (e) => ({ ...e.dataset, text: e.textContent }));
+    assert.equal(shown.source, 'client');
+    assert.equal(Number(shown.column), expr.indexOf('sinn') + 1);
+    assert.match(shown.text, /unknown function 'sinn'/);
+    assert.match(shown.text, /\n {12}\^/, 'a caret under the column');
+    await page.click('#render');
+    await page.keyboard.press('Control+Enter');
+    await page.waitForTimeout(300);
+    assert.equal(jobPosts(requests), posts, 'nothing sent');
+    assert.equal(await page.getAttribute('#expr', 'aria-invalid'), 'true');
+    const r = await api('/v1/mesh', { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify({ expr }) });
+    assert.equal(r.status, 400);
+    const err = (await r.json()).error;
+    assert.equal(err.column, Number(shown.column));
+    assert.equal(err.line, Number(shown.line));
+  });
+
+  it("shows the server's error at its column when the viewer's check passes", async () => {
+    const expr = '('.repeat(201) + 'x' + ')'.repeat(201) + '^2 + y^2 + z^2 - 1';
+    assert.equal(checkExpression(expr).ok, true, 'the viewer does not check nesting');
+    await page.fill('#expr', expr);
+    await page.click('#render');
+    await page.waitForSelector('#expr-error[data-source=server]');
+    const shown = await page.$eval('#expr-error', (e) => ({ ...e.dataset, text: e.textContent }));
+    assert.equal(Number(shown.column), 201);
+    assert.match(shown.text, /nests too deeply/);
+  });
+
+  it('the viewer and the server agree on where expressions go wrong', async () => {
+    const bad = ['x^2 + y^2 +', '2x + y', 'sin x', 'x**2', 'x^2.5 + y', '(x + 1', 'x + $', 'y = 3', 'max(x)',
+      'let a = 1', 'let x = 2\nx', 'let a = b\nlet b = 1\na + x', 'let a = 2\nx^2 + y^2 - a b', '1/0 + x',
+      'foo(x)', 'x(2)', 'x^y', 'let s = 2*z - y\n(x^2 + y^2 - 1)^2 - s'];
+    for (const expr of bad) {
+      const mine = checkExpression(expr);
+      assert.equal(mine.ok, false, `viewer accepts ${JSON.stringify(expr)}`);
+      const r = await api('/v1/mesh', { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify({ expr }) });
+      const body = await r.json();
+      assert.equal(r.status, 400, `${JSON.stringify(expr)}: ${JSON.stringify(body)}`);
+      assert.deepEqual([mine.line, mine.column], [body.error.line, body.error.column], `${JSON.stringify(expr)}: ${mine.message} / ${body.error.message}`);
+    }
+    const good = ['x^2 + y^2 + z^2 - r^2', 'let s = w + z - y;\n(x^2 + y^2 - 1)^2 - s', 'sqrt(-1) + x', 'let p = x*x\nlet q = p + y^2; q + z^2 - 1', 'pow(x, 2) + abs(y) - exp(-z)',
+      'min(x, y, z) + max(x, 1) - pi + e', '-x^2 + 2^3^2*y - x^-2'];
+    for (const expr of good) {
+      const mine = checkExpression(expr);
+      assert.equal(mine.ok, true, `${JSON.stringify(expr)}: ${mine.message}`);
+      const params = Object.fromEntries(mine.params.map((n) => [n, 0.7]));
+      const r = await api('/v1/mesh', { method: 'POST', headers: { 'Content-Type': 'application/json' },
+        body: JSON.stringify({ expr, params, depth: { min: 1, max: 2 } }) });
+      assert.equal(r.status, 200, `${JSON.stringify(expr)}: ${await r.text()}`);
+    }
+  });
+
+  it('a typed expression gets a slider for each new name and computes', async () => {
+    const before = await loads(page);
+    await page.fill('#expr', 'let rho = x^2 + y^2 + z^2\n(rho + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)');
+    await page.waitForSelector('#expr-error', { state: 'hidden' });
+    const sliders = await page.$$eval('#params input[type=range]', (s) => s.map((e) => e.dataset.param));
+    assert.deepEqual(sliders, ['R', 'r']);
+    assert.equal(await page.inputValue('#preset'), '');
+    await page.fill('#param-R-value', '1');
+    await page.fill('#param-r-value', '0.4');
+    await page.locator('#param-r-value').press('Enter');
+    await page.keyboard.press('Tab');
+    await page.focus('#expr');
+    await page.keyboard.press('Control+Enter');
+    await waitForMesh(page, before);
+    const an = (await getJSON(`/v1/meshes/${await meshKey()}/stats`)).analysis;
+    assert.equal(an.euler, 0, 'a torus');
+    assert.equal(Number((await statsPanel(page)).euler.value), 0);
+  });
+
+  it('says clearly when a request is over a limit (422)', async () => {
+    await page.click('#box-section summary');
+    await page.fill('#depth-max', '12');
+    await page.locator('#depth-max').press('Tab');
+    await page.waitForSelector('#message.error:not([hidden])');
+    const text = await page.textContent('#message');
+    assert.match(text, /Over a limit/);
+    assert.match(text, /depth\.max: 12 is above the limit 10/);
+    const before = await loads(page);
+    await page.fill('#depth-max', '7');
+    await page.locator('#depth-max').press('Tab');
+    await waitForMesh(page, before);
+    assert.equal(await page.isHidden('#message'), true);
+  });
+
+  it('curvature colours change the canvas and their legend is the decoded attribute', async () => {
+    await choosePreset('kummer-16-nodes');
+    const key = await meshKey();
+    const shaded = await viewShot(page);
+    const sShaded = pixelStats(shaded);
+    const drc = await api(`/v1/meshes/${key}.drc`);
+    const decoded = await decodeDraco(Buffer.from(await drc.arrayBuffer()));
+    for (const [mode, attr, file] of [['mean', 'mean_curvature', 'kummer-16-nodes-mean.png'], ['gauss', 'gauss_curvature', 'kummer-16-nodes-gauss.png']]) {
+      await page.selectOption('#color-mode', mode);
+      await page.waitForSelector(`#legend[data-mode=${mode}]:not([hidden])`);
+      const img = await viewShot(page, file);
+      const s = assertRendered(img, `${mode} curvature`);
+      assert.ok(changedShare(shaded, img) > 0.03, `${mode}: the canvas changed`);
+      assert.ok(s.saturated > sShaded.saturated + 0.03, `${mode}: colours appear (${s.saturated} vs ${sShaded.saturated})`);
+      const legend = await page.$eval('#legend', (e) => ({ ...e.dataset }));
+      const [lo, hi] = finiteRange(decoded.attributes[attr].values);
+      assert.equal(decoded.attributes[attr].uniqueId, ATTRIBUTE_IDS[attr]);
+      assert.ok(Math.abs(Number(legend.min) - lo) <= 1e-6 * Math.max(1, Math.abs(lo)), `${mode} min ${legend.min} vs ${lo}`);
+      assert.ok(Math.abs(Number(legend.max) - hi) <= 1e-6 * Math.max(1, Math.abs(hi)), `${mode} max ${legend.max} vs ${hi}`);
+      assert.ok(Number(legend.lo) < Number(legend.hi));
+      assert.ok(Number(legend.lo) >= lo && Number(legend.hi) <= hi, 'the bar lies within the data');
+    }
+    const [mlo, mhi] = finiteRange(decoded.attributes.mean_curvature.values);
+    const [glo, ghi] = finiteRange(decoded.attributes.gauss_curvature.values);
+    assert.ok(mlo !== glo || mhi !== ghi, 'H and K differ, so swapped ids would show');
+    await page.selectOption('#color-mode', 'shaded');
+    await page.waitForSelector('#legend', { state: 'hidden' });
+  });
+
+  it('the clipping plane cuts the surface open', async () => {
+    const whole = await viewShot(page);
+    await page.check('#clip-on');
+    await page.selectOption('#clip-axis', 'y');
+    const cut = await viewShot(page, 'kummer-16-nodes-cut.png');
+    assertRendered(cut, 'cut Kummer surface');
+    assert.ok(changedShare(whole, cut) > 0.02, 'the cut changed the view');
+    assert.ok(pixelStats(cut).foreground < pixelStats(whole).foreground, 'less surface is drawn');
+    await page.check('#clip-flip');
+    const flipped = await viewShot(page);
+    assert.ok(changedShare(cut, flipped) > 0.02, 'flipping shows the other half');
+    assert.match(await page.evaluate(() => location.hash), /clip=y,0,flip/);
+    await page.uncheck('#clip-flip');
+    await page.uncheck('#clip-on');
+  });
+
+  it('every download link gives a valid file of this mesh', async () => {
+    const key = await meshKey();
+    const stats = await getJSON(`/v1/meshes/${key}/stats`);
+    const formats = await page.$$eval('#downloads a[data-format]', (as) => as.map((a) => [a.dataset.format, a.getAttribute('href')]));
+    assert.deepEqual(formats.map((f) => f[0]), ['drc', 'glb', 'ply', 'obj', 'stl']);
+    for (const [fmt, href] of formats) {
+      assert.equal(href, `/v1/meshes/${key}.${fmt}`);
+      const [download] = await Promise.all([page.waitForEvent('download'), page.click(`#downloads a[data-format=${fmt}]`)]);
+      assert.match(download.suggestedFilename(), new RegExp(`^kummer-16-nodes-[0-9a-f]{8}\\.${fmt}$`));
+      const bytes = fs.readFileSync(await download.path());
+      if (fmt === 'drc') {
+        const d = await decodeDraco(bytes);
+        assert.equal(d.faces, stats.mesh.encoded_faces);
+        assert.equal(d.points, stats.mesh.encoded_points);
+        for (const [name, id] of Object.entries(ATTRIBUTE_IDS)) assert.equal(d.attributes[name].uniqueId, id, name);
+      } else if (fmt === 'glb') {
+        const report = await gltfValidator.validateBytes(new Uint8Array(bytes));
+        assert.equal(report.issues.numErrors, 0, JSON.stringify(report.issues.messages.slice(0, 5)));
+        const json = JSON.parse(bytes.subarray(20, 20 + bytes.readUInt32LE(12)).toString('utf8'));
+        const prim = json.meshes[0].primitives.find((p) => p.extensions && p.extensions.KHR_draco_mesh_compression);
+        const view = json.bufferViews[prim.extensions.KHR_draco_mesh_compression.bufferView];
+        const binStart = 20 + bytes.readUInt32LE(12) + 8;
+        const d = await decodeDraco(bytes.subarray(binStart + (view.byteOffset || 0), binStart + (view.byteOffset || 0) + view.byteLength));
+        assert.equal(d.faces, stats.mesh.triangles);
+      } else if (fmt === 'ply') {
+        const head = bytes.subarray(0, 600).toString('latin1');
+        assert.match(head, /^ply\n/);
+        assert.match(head, new RegExp(`element vertex ${stats.mesh.vertices}\n`));
+        assert.match(head, new RegExp(`element face ${stats.mesh.triangles}\n`));
+      } else if (fmt === 'obj') {
+        const text = bytes.toString('utf8');
+        assert.equal((text.match(/^v /gm) || []).length, stats.mesh.vertices);
+        assert.equal((text.match(/^f /gm) || []).length, stats.mesh.triangles);
+      } else if (fmt === 'stl') {
+        assert.equal(bytes.readUInt32LE(80), stats.mesh.triangles);
+        assert.equal(bytes.length, 84 + 50 * stats.mesh.triangles);
+      }
+    }
+  });
+
+  it('a shared link reopens the same surface, parameters, view, colours and cut', async () => {
+    let before = await loads(page);
+    await page.fill('#param-w-value', '1.2');
+    await page.locator('#param-w-value').press('Enter');
+    await waitForMesh(page, before);
+    await page.selectOption('#color-mode', 'gauss');
+    await page.check('#clip-on');
+    await page.selectOption('#clip-axis', 'x');
+    await page.$eval('#clip-offset', (e) => { e.value = '0.5'; e.dispatchEvent(new Event('input', { bubbles: true })); });
+    await page.uncheck('#show-boundary');
+    await page.check('#wireframe');
+    await page.focus('#view');
+    for (let i = 0; i < 6; i++) await page.keyboard.press('Shift+ArrowLeft');
+    await page.keyboard.press('+');
+    await page.waitForTimeout(400); // the URL follows the view after a short pause
+    const url = await page.evaluate(() => location.href);
+    assert.match(url, /cam=/);
+    assert.match(url, /p\.w=1\.2/);
+    const key = await meshKey();
+    await page.evaluate(() => document.activeElement.blur());
+    const original = await viewShot(page, 'shared-original.png');
+
+    const twin = await browser.context.newPage();
+    const twinErrors = watchErrors(twin);
+    try {
+      await twin.goto(url);
+      await waitForMesh(twin, 0);
+      assert.equal(await twin.evaluate(() => document.body.dataset.meshKey), key);
+      assert.equal(await twin.inputValue('#preset'), 'kummer-16-nodes');
+      assert.equal(await twin.inputValue('#param-w-value'), '1.2');
+      assert.equal(await twin.inputValue('#color-mode'), 'gauss');
+      assert.equal(await twin.isChecked('#clip-on'), true);
+      assert.equal(await twin.inputValue('#clip-axis'), 'x');
+      assert.equal(Number(await twin.inputValue('#clip-offset')), 0.5);
+      assert.equal(await twin.isChecked('#show-boundary'), false);
+      assert.equal(await twin.isChecked('#wireframe'), true);
+      await twin.waitForTimeout(400);
+      const cam = (u) => new URL(u).hash.match(/cam=([^&]*)/)[1];
+      assert.equal(cam(await twin.evaluate(() => location.href)), cam(url));
+      const copy = await viewShot(twin, 'shared-reopened.png');
+      assert.ok(changedShare(original, copy) < 0.01, `the reopened view matches (${changedShare(original, copy)})`);
+      assert.deepEqual(twinErrors, []);
+    } finally {
+      await twin.close();
+    }
+    await page.uncheck('#wireframe');
+    await page.uncheck('#clip-on');
+    await page.check('#show-boundary');
+    await page.selectOption('#color-mode', 'shaded');
+  });
+
+  it('every control can be reached and used from the keyboard', async () => {
+    await page.$$eval('details', (ds) => ds.forEach((d) => { d.open = true; }));
+    const unreachable = await page.$$eval('input, select, textarea, button, a[href], summary, #view', (els) => els
+      .filter((e) => e.offsetParent !== null && !e.disabled)
+      .filter((e) => { e.focus(); return document.activeElement !== e; })
+      .map((e) => e.id || e.outerHTML.slice(0, 60)));
+    assert.deepEqual(unreachable, []);
+    await page.focus('body');
+    const seen = new Set();
+    for (let i = 0; i < 60; i++) {
+      await page.keyboard.press('Tab');
+      seen.add(await page.evaluate(() => document.activeElement.id || document.activeElement.dataset.format || document.activeElement.tagName));
+    }
+    for (const id of ['view', 'preset', 'expr', 'render', 'param-mu2', 'color-mode', 'show-edges', 'wireframe', 'clip-on', 'fit', 'drc']) {
+      assert.ok(seen.has(id), `Tab reaches ${id}`);
+    }
+    const hash0 = await page.evaluate(() => location.hash);
+    await page.focus('#view');
+    await page.keyboard.press('Shift+ArrowUp');
+    await page.keyboard.press('-');
+    await page.waitForTimeout(300);
+    assert.notEqual(await page.evaluate(() => location.hash), hash0, 'the keyboard moved the camera');
+  });
+
+  it("saves the paper's four surfaces as screenshots", async () => {
+    for (const [name, extra] of [['horn-cyclide'], ['klein-bottle', 'y'], ['steiner-roman', 'z'], ['kummer-4-nodes']]) {
+      await choosePreset(name);
+      assertRendered(await viewShot(page, `${name}.png`), name);
+      if (extra) {
+        await page.check('#clip-on');
+        await page.selectOption('#clip-axis', extra);
+        assertRendered(await viewShot(page, `${name}-cut-${extra}.png`), `${name} cut`);
+        await page.uncheck('#clip-on');
+      }
+    }
+    assert.deepEqual(errors, []);
+  });
+
+  it('works on a narrow screen', async () => {
+    const narrow = await browser.context.newPage();
+    try {
+      await narrow.setViewportSize({ width: 390, height: 844 });
+      await narrow.goto(daemon.base + '/#preset=steiner-roman');
+      await waitForMesh(narrow, 0);
+      const view = await narrow.locator('#view').boundingBox();
+      const panel = await narrow.locator('#panel').boundingBox();
+      assert.ok(view.width <= 390 && view.width > 300, `view width ${view.width}`);
+      assert.ok(view.height > 250, `view height ${view.height}`);
+      assert.ok(panel.y >= view.y + view.height - 1, 'the panel is below the view');
+      assert.ok(await narrow.evaluate(() => document.documentElement.scrollWidth <= window.innerWidth + 1), 'no sideways scrolling');
+      assertRendered(await viewShot(narrow, 'narrow-steiner-roman.png'), 'narrow view');
+      await narrow.locator('#downloads a[data-format=glb]').scrollIntoViewIfNeeded();
+      assert.equal(await narrow.locator('#downloads a[data-format=glb]').isVisible(), true);
+    } finally {
+      await narrow.close();
+    }
+  });
+});

@@ -1,0 +1,114 @@
+// loader.js — from a request body to a decoded mesh with its stats and features. Every
+// request goes through POST /v1/jobs: a cached result comes back as a job already "done"
+// (one small round trip), anything else streams progress over the job's events and can be
+// canceled with DELETE, which frees the worker (a dropped POST /v1/mesh would not). The mesh
+// itself is then fetched from its immutable URL /v1/meshes/{key}.drc (browser-cacheable),
+// decoded in a worker, and kept in a small in-page LRU so that dragging a slider back over
+// values already seen redraws with no network at all.
+import * as api from './api.js';
+
+const MESH_LRU = 12;
+
+let worker = null;
+let nextId = 1;
+const pending = new Map();
+
+function decodeWorker() {
+  if (!worker) {
+    worker = new Worker(new URL('./draco_worker.js', import.meta.url));
+    worker.onmessage = (e) => {
+      const p = pending.get(e.data.id);
+      if (!p) return;
+      pending.delete(e.data.id);
+      if (e.data.error) p.reject(new Error(e.data.error));
+      else p.resolve(e.data.result);
+    };
+    worker.onerror = (e) => {
+      for (const p of pending.values()) p.reject(new Error('the Draco decoder failed to start: ' + e.message));
+      pending.clear();
+    };
+  }
+  return worker;
+}
+
+export function decodeDraco(bytes) {
+  return new Promise((resolve, reject) => {
+    const id = nextId++;
+    pending.set(id, { resolve, reject });
+    decodeWorker().postMessage({ id, bytes }, [bytes]);
+  });
+}
+
+const keyOfRequest = new Map();   // request body text -> mesh key
+const meshes = new Map();         // mesh key -> loaded result (insertion order = LRU order)
+
+function remember(result) {
+  meshes.delete(result.key);
+  meshes.set(result.key, result);
+  while (meshes.size > MESH_LRU) meshes.delete(meshes.keys().next().value);
+}
+
+// The result for body if this page already holds it (no network), else null.
+export function cached(body) {
+  const key = keyOfRequest.get(body);
+  const hit = key && meshes.get(key);
+  if (!hit) return null;
+  remember(hit);
+  return { ...hit, viewerCache: true, transferred: 0, wallMs: 0 };
+}
+
+// Loads body (the request JSON text). onProgress(fraction, state) while the server works.
+// Rejects with api.ApiError for HTTP errors, an AbortError when signal fires (the job is then
+// canceled on the server).
+export async function load(body, signal, onProgress) {
+  const hit = cached(body);
+  if (hit) return hit;
+  const t0 = performance.now();
+  const { job: submitted, bytes: jobBytes } = await api.submitJob(body, signal);
+  let job = submitted;
+  let transferred = jobBytes;
+  const serverCache = job.state === 'done' ? 'hit' : 'miss';
+  if (!['done', 'failed', 'canceled'].includes(job.state)) {
+    onProgress(job.progress || 0, job.state);
+    const abort = () => api.cancelJob(job.id);
+    signal.addEventListener('abort', abort, { once: true });
+    try {
+      job = await api.followJob(job, signal, (name, data) => {
+        if (name === 'progress') onProgress(data.progress || 0, data.state);
+      });
+    } finally {
+      signal.removeEventListener('abort', abort);
+    }
+  }
+  if (job.state === 'failed') {
+    throw new api.ApiError(job.status || 500, job.error || { message: 'the computation failed' }, null);
+  }
+  if (job.state === 'canceled') {
+    throw new api.ApiError(499, { code: 'canceled', message: 'the computation was canceled' }, null);
+  }
+  if (job.state !== 'done') throw new api.ApiError(500, { message: 'the job stream ended early' }, null);
+  onProgress(1, 'done');
+
+  const key = job.key;
+  const meshUrl = job.mesh_url || `/v1/meshes/${key}.drc`;
+  const [mesh, features, stats] = await Promise.all([
+    api.getBytes(meshUrl, signal),
+    api.getJSON(job.features_url || `/v1/meshes/${key}/features`, signal),
+    job.stats ? Promise.resolve({ json: job.stats, transferred: 0 })
+      : api.getJSON(job.stats_url || `/v1/meshes/${key}/stats`, signal),
+  ]);
+  transferred += mesh.transferred + features.transferred + stats.transferred;
+  const drcBytes = mesh.bytes.byteLength;
+  const decoded = drcBytes > 0 ? await decodeDraco(mesh.bytes) : null;
+  if (decoded && stats.json.mesh && stats.json.mesh.encoded_faces !== undefined &&
+      decoded.faces !== stats.json.mesh.encoded_faces) {
+    throw new Error(`decoded ${decoded.faces} triangles, the server encoded ${stats.json.mesh.encoded_faces}`);
+  }
+  const result = {
+    key, mesh: decoded, features: features.json, stats: stats.json, drcBytes,
+    serverCache, viewerCache: false, transferred, wallMs: performance.now() - t0,
+  };
+  keyOfRequest.set(body, key);
+  remember(result);
+  return result;
+}

@@ -1,0 +1,674 @@
+// main.js — the viewer's wiring: state from the URL (or the default preset), the controls,
+// when to compute (Compute / Ctrl+Enter for the editor, debounced slider and box changes,
+// instantly for results this page already holds), what to show when the mesh arrives, and
+// how each server error reads (inline expression errors with their column, limits, busy
+// with its retry time, the token prompt on 401).
+import { Viewer } from './viewer.js';
+import * as api from './api.js';
+import * as loader from './loader.js';
+import { checkExpression, presetSource } from './expr.js';
+import { defaultState, requestBody, encodeState, decodeState, sensibleRange, COLOR_MODES } from './state.js';
+import { renderParams } from './params_ui.js';
+import { showStats, clearStats, showLegend } from './stats_ui.js';
+import { niceStep, sig } from './format.js';
+
+const DEFAULT_PRESET = 'steiner-roman';
+const DEBOUNCE_MS = 250;
+const BUSY_DELAY_MS = 120;
+const MAX_AUTO_RETRIES = 3;
+const AXIS_INDEX = { x: 0, y: 1, z: 2 };
+
+const $ = (id) => document.getElementById(id);
+
+let viewer = null;
+let presets = [];
+let state = defaultState();
+let paramNames = [];         // the parameters the current expression uses, in order
+let ranges = {};             // name -> [min, max] of its slider
+let exprOk = true;
+let running = null;          // {controller, body}
+let debounceTimer = 0;
+let busyTimer = 0;
+let retry = { timer: 0, count: 0, body: null };
+let pendingView = null;      // a view from the URL, applied to the first mesh
+let shownIdentity = null;    // what the mesh on screen is (refit when it changes)
+let afterToken = null;       // the request to resend once a token is given
+let loads = 0;
+let basePreset = null;       // the preset last chosen (the editor may drift from its text)
+
+const presetByName = (name) => presets.find((p) => p.name === name) || null;
+
+// ---- messages -------------------------------------------------------------------------
+
+function message(text, kind = 'info', action = null) {
+  const box = $('message');
+  box.textContent = text;
+  box.className = `message ${kind}`;
+  box.setAttribute('role', kind === 'error' ? 'alert' : 'status');
+  if (action) {
+    const b = document.createElement('button');
+    b.type = 'button';
+    b.textContent = action.label;
+    b.addEventListener('click', action.run);
+    box.append(b);
+  }
+  box.hidden = !text;
+}
+
+function clearMessage() {
+  message('');
+}
+
+function setBusy(on) {
+  clearTimeout(busyTimer);
+  document.body.dataset.busy = on ? '1' : '0';
+  if (!on) {
+    $('busy').hidden = true;
+    return;
+  }
+  $('progress').value = 0;
+  $('progress-label').textContent = 'Sending…';
+  busyTimer = setTimeout(() => { $('busy').hidden = false; }, BUSY_DELAY_MS);
+}
+
+function setProgress(fraction, jobState) {
+  $('progress').value = fraction;
+  $('progress-label').textContent = jobState === 'queued' ? 'Queued: waiting for a worker…'
+    : `Computing… ${Math.round(100 * fraction)}%`;
+}
+
+// ---- expression and parameters --------------------------------------------------------
+
+function showExprError(err, fromServer) {
+  const box = $('expr-error');
+  const editor = $('expr');
+  if (!err) {
+    box.hidden = true;
+    box.textContent = '';
+    editor.removeAttribute('aria-invalid');
+    delete box.dataset.line;
+    delete box.dataset.column;
+    return;
+  }
+  editor.setAttribute('aria-invalid', 'true');
+  box.hidden = false;
+  box.textContent = '';
+  box.dataset.line = String(err.line || 0);
+  box.dataset.column = String(err.column || 0);
+  box.dataset.source = fromServer ? 'server' : 'client';
+  const head = document.createElement('div');
+  head.className = 'where';
+  const where = err.line ? (err.line > 1 || state.expr.includes('\n') ? `line ${err.line}, column ${err.column}` : `column ${err.column}`) : '';
+  head.textContent = (where ? `${where}: ` : '') + err.message;
+  box.append(head);
+  if (err.line) {
+    const lines = state.expr.split('\n');
+    const text = lines[err.line - 1] ?? '';
+    const pre = document.createElement('pre');
+    const caret = document.createElement('span');
+    caret.className = 'caret';
+    caret.textContent = ' '.repeat(Math.max(0, err.column - 1)) + '^';
+    pre.append(document.createTextNode(text + '\n'), caret);
+    box.append(pre);
+  }
+  if (fromServer) {
+    const src = document.createElement('div');
+    src.className = 'source';
+    src.textContent = 'reported by the server';
+    box.append(src);
+  }
+}
+
+// Re-reads the editor's text: error or parameter list; rebuilds sliders when the names change.
+function refreshExpression() {
+  const preset = presetByName(state.preset);
+  const check = checkExpression(state.expr, state.params);
+  exprOk = check.ok;
+  if (!check.ok) {
+    showExprError(check, false);
+    return false;
+  }
+  showExprError(null);
+  const names = check.params;
+  for (const n of names) {
+    const pp = preset && preset.params.find((q) => q.name === n);
+    if (!Number.isFinite(state.params[n])) state.params[n] = pp ? pp.default : 1;
+    if (!ranges[n]) ranges[n] = pp ? [pp.min, pp.max] : sensibleRange(state.params[n]);
+  }
+  if (names.join('\n') !== paramNames.join('\n')) {
+    paramNames = names;
+    renderSliders();
+  }
+  return true;
+}
+
+function renderSliders() {
+  const list = paramNames.map((n) => ({ name: n, value: state.params[n], min: ranges[n][0], max: ranges[n][1] }));
+  renderParams($('params'), list, (name, value) => {
+    state.params[name] = value;
+    requestChanged();
+  });
+}
+
+// ---- presets --------------------------------------------------------------------------
+
+function fillPresetMenu() {
+  const sel = $('preset');
+  sel.textContent = '';
+  for (const p of presets) {
+    const o = document.createElement('option');
+    o.value = p.name;
+    o.textContent = p.title;
+    o.title = p.about;
+    sel.append(o);
+  }
+  const custom = document.createElement('option');
+  custom.value = '';
+  custom.textContent = 'Custom expression';
+  sel.append(custom);
+}
+
+function usePreset(name) {
+  const p = presetByName(name);
+  if (!p) return false;
+  state.preset = p.name;
+  state.expr = presetSource(p);
+  state.params = Object.fromEntries(p.params.map((q) => [q.name, q.default]));
+  ranges = Object.fromEntries(p.params.map((q) => [q.name, [q.min, q.max]]));
+  paramNames = [];
+  state.box = p.box.slice();
+  state.depth = { min: p.depth.min, max: p.depth.max };
+  return true;
+}
+
+function showPresetChoice() {
+  const p = presetByName(state.preset);
+  $('preset').value = p ? p.name : '';
+  $('preset-about').textContent = p ? p.about : 'Your own expression: every name that is not x, y, z, a function, a constant or a let is a parameter.';
+  $('reset-box').disabled = !p;
+}
+
+// ---- controls <-> state ---------------------------------------------------------------
+
+const BOX_IDS = ['box-xmin', 'box-ymin', 'box-zmin', 'box-xmax', 'box-ymax', 'box-zmax'];
+
+function syncControls() {
+  showPresetChoice();
+  if ($('expr').value !== state.expr) $('expr').value = state.expr;
+  BOX_IDS.forEach((id, i) => { $(id).value = String(state.box[i]); $(id).removeAttribute('aria-invalid'); });
+  $('depth-min').value = String(state.depth.min);
+  $('depth-max').value = String(state.depth.max);
+  $('color-mode').value = state.color;
+  $('show-edges').checked = state.show.edges;
+  $('show-points').checked = state.show.points;
+  $('show-boundary').checked = state.show.boundary;
+  $('wireframe').checked = state.wire;
+  $('clip-on').checked = state.clip.on;
+  $('clip-axis').value = state.clip.axis;
+  $('clip-flip').checked = state.clip.flip;
+  syncClipSlider();
+  syncFeatureKey();
+}
+
+function syncClipSlider() {
+  const k = AXIS_INDEX[state.clip.axis];
+  const lo = state.box[k], hi = state.box[k + 3];
+  const s = $('clip-offset');
+  s.min = String(lo);
+  s.max = String(hi);
+  s.step = String(niceStep(lo, hi));
+  s.value = String(state.clip.offset);
+  s.disabled = !state.clip.on;
+  $('clip-axis').disabled = !state.clip.on;
+  $('clip-flip').disabled = !state.clip.on;
+  $('clip-offset-value').textContent = state.clip.on ? `${state.clip.axis} = ${sig(state.clip.offset)}` : 'off';
+}
+
+const FEATURE_LABELS = { edges: 'non-manifold edges', points: 'non-manifold points', boundary: 'boundary edges' };
+
+function syncFeatureKey(counts) {
+  const key = $('feature-key');
+  for (const k of Object.keys(FEATURE_LABELS)) {
+    const item = key.querySelector(`.key-${k}`);
+    if (counts) {
+      item.dataset.count = String(counts[k]);
+      item.textContent = `${FEATURE_LABELS[k]} (${counts[k].toLocaleString('en-US')})`;
+    }
+    item.hidden = !state.show[k];
+  }
+}
+
+function applyDisplay() {
+  const legend = viewer.setColorMode(state.color);
+  showLegend(state.color, legend);
+  viewer.setVisibility(state.show);
+  viewer.setWireframe(state.wire);
+  viewer.setClip(state.clip);
+}
+
+function updateUrl() {
+  const frag = encodeState(state, paramNames);
+  history.replaceState(null, '', `#${frag}`);
+  $('share-url').value = location.href;
+}
+
+// ---- computing ------------------------------------------------------------------------
+
+function identity() {
+  return `${state.preset || state.expr}|${state.box.join(',')}`;
+}
+
+function currentBody() {
+  if (!exprOk) return null;
+  return requestBody(state, paramNames);
+}
+
+// The request changed (slider, box, depth, preset, Compute). Cached results show at once;
+// others wait for the debounce unless now.
+function requestChanged({ now = false } = {}) {
+  updateUrl();
+  if (!exprOk) {
+    message('Fix the expression first: nothing was sent.', 'error');
+    return;
+  }
+  const body = currentBody();
+  clearTimeout(debounceTimer);
+  const hit = loader.cached(body);
+  if (hit) {
+    stopRunning();
+    show(hit, body);
+    return;
+  }
+  if (now) compute(body);
+  else debounceTimer = setTimeout(() => compute(body), DEBOUNCE_MS);
+}
+
+function stopRunning() {
+  if (running) {
+    running.controller.abort();
+    running = null;
+  }
+  setBusy(false);
+}
+
+function clearRetry() {
+  clearTimeout(retry.timer);
+  retry.timer = 0;
+}
+
+async function compute(body) {
+  stopRunning();
+  clearRetry();
+  if (retry.body !== body) retry = { timer: 0, count: 0, body };
+  const controller = new AbortController();
+  const mine = { controller, body };
+  running = mine;
+  setBusy(true);
+  try {
+    const result = await loader.load(body, controller.signal, setProgress);
+    if (running !== mine) return;
+    retry.count = 0;
+    show(result, body);
+  } catch (e) {
+    if (running !== mine) return;
+    if (e.name === 'AbortError') message('Canceled.');
+    else failed(e, body);
+  } finally {
+    if (running === mine) {
+      running = null;
+      setBusy(false);
+    }
+  }
+}
+
+function show(result, body) {
+  clearMessage();
+  if (!result.mesh) message('The surface does not cross this box: the mesh is empty.');
+  viewer.setMesh(result, JSON.parse(body).box);
+  const id = identity();
+  if (pendingView) {
+    viewer.setView(pendingView);
+    pendingView = null;
+  } else if (id !== shownIdentity) {
+    viewer.fit();
+  }
+  shownIdentity = id;
+  applyDisplay();
+  syncFeatureKey(viewer.features ? viewer.features.counts : { edges: 0, points: 0, boundary: 0 });
+  showStats(result);
+  setDownloads(result);
+  if (exprOk) showExprError(null);
+  loads++;
+  document.body.dataset.meshKey = result.key;
+  document.body.dataset.loads = String(loads);
+  document.body.dataset.frames = String(viewer.frames);
+}
+
+function failed(e, body) {
+  if (!(e instanceof api.ApiError)) {
+    message(`Could not show the mesh: ${e.message}`, 'error');
+    return;
+  }
+  if (e.status === 401) {
+    afterToken = body;
+    askToken('This server needs an access token to compute meshes.');
+    message('An access token is needed.', 'error', { label: 'Enter token', run: () => askToken() });
+    return;
+  }
+  if ((e.status === 400 || e.status === 422) && e.column && /^\$\.(expr|let)/.test(e.path)) {
+    const msg = e.message.replace(/^\$\.[^:]*: (line \d+, )?column \d+: /, '');
+    showExprError({ line: e.line || 1, column: e.column, message: msg }, true);
+    message('The server did not accept the expression (see the editor).', 'error');
+    return;
+  }
+  if (e.status === 422) {
+    message(`Over a limit: ${e.message}`, 'error');
+    return;
+  }
+  if (e.status === 503 || e.status === 429) {
+    const wait = e.retryAfter || 5;
+    const what = e.status === 503 ? 'The server is busy' : 'You have too many computations running';
+    if (retry.count < MAX_AUTO_RETRIES) {
+      retry.count++;
+      countdown(`${what} (${e.message}).`, wait, body);
+    } else {
+      message(`${what} (${e.message}). Try again in ${wait} s.`, 'error', { label: 'Retry', run: () => compute(body) });
+    }
+    return;
+  }
+  if (e.status === 0) {
+    message('The server cannot be reached.', 'error', { label: 'Retry', run: () => compute(body) });
+    return;
+  }
+  message(`The server answered ${e.status}: ${e.message}`, 'error');
+}
+
+function countdown(text, seconds, body) {
+  let left = seconds;
+  const tick = () => {
+    if (left <= 0) {
+      compute(body);
+      return;
+    }
+    message(`${text} Retrying in ${left} s…`, 'error', { label: 'Retry now', run: () => { clearRetry(); compute(body); } });
+    left--;
+    retry.timer = setTimeout(tick, 1000);
+  };
+  tick();
+}
+
+// ---- downloads ------------------------------------------------------------------------
+
+function setDownloads(result) {
+  const base = state.preset || 'surface';
+  for (const a of document.querySelectorAll('#downloads a')) {
+    const fmt = a.dataset.format;
+    if (!result.mesh) {
+      a.removeAttribute('href');
+      a.setAttribute('aria-disabled', 'true');
+      continue;
+    }
+    a.href = `/v1/meshes/${result.key}.${fmt}`;
+    a.download = `${base}-${result.key.slice(0, 8)}.${fmt}`;
+    a.setAttribute('aria-disabled', 'false');
+  }
+}
+
+// With a token set, a plain link would go without it: fetch with the header instead.
+async function downloadWithToken(event) {
+  const a = event.target.closest('a[data-format]');
+  if (!a || !a.href || !api.token.get()) return;
+  event.preventDefault();
+  try {
+    const { bytes } = await api.getBytes(a.getAttribute('href'));
+    const url = URL.createObjectURL(new Blob([bytes]));
+    const tmp = document.createElement('a');
+    tmp.href = url;
+    tmp.download = a.download;
+    document.body.append(tmp);
+    tmp.click();
+    tmp.remove();
+    setTimeout(() => URL.revokeObjectURL(url), 10000);
+  } catch (e) {
+    failed(e, null);
+  }
+}
+
+// ---- token ----------------------------------------------------------------------------
+
+function askToken(why) {
+  const dlg = $('token-dialog');
+  $('token-why').textContent = why || 'Set the bearer token sent with compute requests, or forget the stored one.';
+  $('token-input').value = api.token.get();
+  if (!dlg.open) dlg.showModal();
+}
+
+function tokenClosed() {
+  const dlg = $('token-dialog');
+  if (dlg.returnValue === 'save') api.token.set($('token-input').value.trim());
+  else if (dlg.returnValue === 'clear') api.token.set('');
+  $('token-input').value = '';
+  if (afterToken && dlg.returnValue === 'save') {
+    const body = afterToken;
+    afterToken = null;
+    compute(body);
+  }
+}
+
+// ---- URL state ------------------------------------------------------------------------
+
+function applyFragment(fragment) {
+  const s = decodeState(fragment || '');
+  const fresh = defaultState();
+  state = fresh;
+  ranges = {};
+  paramNames = [];
+  let note = '';
+  if (s.preset && presetByName(s.preset)) {
+    usePreset(s.preset);
+  } else if (s.expr !== undefined) {
+    state.preset = null;
+    state.expr = s.expr;
+  } else {
+    if (s.preset) note = `Unknown preset '${s.preset}': showing ${DEFAULT_PRESET}.`;
+    if (!usePreset(DEFAULT_PRESET) && presets.length) usePreset(presets[0].name);
+  }
+  if (s.params) {
+    for (const [k, v] of Object.entries(s.params)) {
+      state.params[k] = v;
+      if (ranges[k]) ranges[k] = [Math.min(ranges[k][0], v), Math.max(ranges[k][1], v)];
+    }
+  }
+  for (const k of ['box', 'depth', 'color', 'clip', 'show', 'wire']) if (s[k] !== undefined) state[k] = s[k];
+  pendingView = s.view || null;
+  state.view = s.view || null;
+  shownIdentity = null;
+  basePreset = state.preset;
+  if (s.problems.length) note += ` Ignored unreadable link parts: ${s.problems.join(', ')}.`;
+  $('expr').value = state.expr;
+  refreshExpression();
+  renderSliders();
+  syncControls();
+  applyDisplay();
+  if (note.trim()) message(note.trim(), 'error');
+  requestChanged({ now: true });
+}
+
+// ---- events ---------------------------------------------------------------------------
+
+function readBox() {
+  const v = BOX_IDS.map((id) => Number($(id).value));
+  let ok = true;
+  BOX_IDS.forEach((id, i) => {
+    const bad = $(id).value.trim() === '' || !Number.isFinite(v[i]) || (i < 3 ? v[i] >= v[i + 3] : v[i] <= v[i - 3]);
+    $(id).toggleAttribute('aria-invalid', bad);
+    if (bad) ok = false;
+  });
+  return ok ? v : null;
+}
+
+function wire() {
+  $('preset').addEventListener('change', () => {
+    const name = $('preset').value;
+    if (!name) {
+      state.preset = null;
+      showPresetChoice();
+      return;
+    }
+    usePreset(name);
+    basePreset = name;
+    refreshExpression();
+    renderSliders();
+    syncControls();
+    requestChanged({ now: true });
+  });
+
+  $('expr').addEventListener('input', () => {
+    state.expr = $('expr').value;
+    const p = presetByName(basePreset);
+    state.preset = p && presetSource(p) === state.expr ? p.name : null;
+    showPresetChoice();
+    refreshExpression();
+    updateUrl();
+  });
+  $('expr').addEventListener('keydown', (e) => {
+    if (e.key === 'Enter' && (e.ctrlKey || e.metaKey)) {
+      e.preventDefault();
+      requestChanged({ now: true });
+    }
+  });
+  $('render').addEventListener('click', () => requestChanged({ now: true }));
+
+  for (const id of BOX_IDS) {
+    $(id).addEventListener('change', () => {
+      const box = readBox();
+      if (!box) {
+        message('Each min must be below its max.', 'error');
+        return;
+      }
+      state.box = box;
+      syncClipSlider();
+      requestChanged();
+    });
+  }
+  for (const id of ['depth-min', 'depth-max']) {
+    $(id).addEventListener('change', () => {
+      const min = Number($('depth-min').value), max = Number($('depth-max').value);
+      if (!Number.isInteger(min) || !Number.isInteger(max)) return;
+      state.depth = { min, max };
+      requestChanged();
+    });
+  }
+  $('reset-box').addEventListener('click', () => {
+    const p = presetByName(state.preset);
+    if (!p) return;
+    state.box = p.box.slice();
+    state.depth = { ...p.depth };
+    syncControls();
+    requestChanged({ now: true });
+  });
+
+  $('color-mode').addEventListener('change', () => {
+    state.color = COLOR_MODES.includes($('color-mode').value) ? $('color-mode').value : 'shaded';
+    showLegend(state.color, viewer.setColorMode(state.color));
+    updateUrl();
+  });
+  for (const k of ['edges', 'points', 'boundary']) {
+    $(`show-${k}`).addEventListener('change', () => {
+      state.show[k] = $(`show-${k}`).checked;
+      viewer.setVisibility(state.show);
+      syncFeatureKey();
+      updateUrl();
+    });
+  }
+  $('wireframe').addEventListener('change', () => {
+    state.wire = $('wireframe').checked;
+    viewer.setWireframe(state.wire);
+    updateUrl();
+  });
+  const clipChanged = () => {
+    viewer.setClip(state.clip);
+    syncClipSlider();
+    updateUrl();
+  };
+  $('clip-on').addEventListener('change', () => {
+    state.clip.on = $('clip-on').checked;
+    const k = AXIS_INDEX[state.clip.axis];
+    if (state.clip.on && (state.clip.offset < state.box[k] || state.clip.offset > state.box[k + 3])) {
+      state.clip.offset = (state.box[k] + state.box[k + 3]) / 2;
+    }
+    clipChanged();
+  });
+  $('clip-axis').addEventListener('change', () => {
+    state.clip.axis = $('clip-axis').value;
+    const k = AXIS_INDEX[state.clip.axis];
+    state.clip.offset = (state.box[k] + state.box[k + 3]) / 2;
+    clipChanged();
+  });
+  $('clip-flip').addEventListener('change', () => {
+    state.clip.flip = $('clip-flip').checked;
+    clipChanged();
+  });
+  $('clip-offset').addEventListener('input', () => {
+    state.clip.offset = Number($('clip-offset').value);
+    clipChanged();
+  });
+  $('fit').addEventListener('click', () => viewer.fit());
+
+  $('cancel').addEventListener('click', () => {
+    clearTimeout(debounceTimer);
+    stopRunning();
+    message('Canceled.');
+  });
+  document.addEventListener('keydown', (e) => {
+    if (e.key === 'Escape' && running && !$('token-dialog').open) {
+      stopRunning();
+      message('Canceled.');
+    }
+  });
+
+  $('copy-link').addEventListener('click', async () => {
+    updateUrl();
+    try {
+      await navigator.clipboard.writeText(location.href);
+      message('Link copied.');
+    } catch {
+      $('share-url').focus();
+      $('share-url').select();
+      message('Copy the selected link (Ctrl+C).');
+    }
+  });
+  $('share-url').addEventListener('focus', () => $('share-url').select());
+  $('token-button').addEventListener('click', () => askToken());
+  $('token-dialog').addEventListener('close', tokenClosed);
+  $('downloads').addEventListener('click', downloadWithToken);
+
+  window.addEventListener('hashchange', () => applyFragment(location.hash));
+  performance.setResourceTimingBufferSize(1000);
+  performance.addEventListener('resourcetimingbufferfull', () => performance.clearResourceTimings());
+}
+
+async function start() {
+  viewer = new Viewer($('view'));
+  let urlTimer = 0;
+  viewer.onViewChange = () => {
+    clearTimeout(urlTimer);
+    urlTimer = setTimeout(() => {
+      state.view = viewer.getView();
+      updateUrl();
+    }, 150);
+  };
+  wire();
+  clearStats();
+  try {
+    presets = await api.getPresets();
+  } catch (e) {
+    presets = [];
+    message(`The presets could not be loaded: ${e.message}`, 'error');
+  }
+  fillPresetMenu();
+  applyFragment(location.hash);
+  document.body.dataset.ready = '1';
+}
+
+start();

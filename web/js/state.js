@@ -1,0 +1,127 @@
+// state.js — the viewer's whole state as plain data, the request body it implies, and its
+// round trip through the URL fragment, so that a shared link reopens the same surface,
+// parameters, box, depth, view, colour mode, clipping and toggles.
+//
+// Fragment keys (URLSearchParams): preset=NAME | expr=TEXT, p.NAME=VALUE per parameter,
+// box=xmin,ymin,zmin,xmax,ymax,zmax, depth=MIN,MAX, cam=px,py,pz,tx,ty,tz,
+// color=shaded|mean|gauss, clip=AXIS,OFFSET[,flip], hide=edges,points,boundary, wire=1.
+
+export const COLOR_MODES = ['shaded', 'mean', 'gauss'];
+const FEATURES = ['edges', 'points', 'boundary'];
+const DEFAULT_BOX = [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5];
+
+export function defaultState() {
+  return {
+    preset: null,           // preset name when the expression is the preset's own text
+    expr: '',
+    params: {},             // name -> value
+    box: DEFAULT_BOX.slice(),
+    depth: { min: 3, max: 7 },
+    view: null,             // {pos: [3], target: [3]}
+    color: 'shaded',
+    clip: { on: false, axis: 'z', offset: 0, flip: false },
+    show: { edges: true, points: true, boundary: true },
+    wire: false,
+  };
+}
+
+// The request JSON text for state (params: only the names the expression uses).
+export function requestBody(state, paramNames) {
+  const body = {};
+  if (state.preset) body.preset = state.preset;
+  else body.expr = state.expr;
+  const params = {};
+  for (const n of paramNames) if (Number.isFinite(state.params[n])) params[n] = state.params[n];
+  if (Object.keys(params).length) body.params = params;
+  body.box = state.box.slice();
+  body.depth = { min: state.depth.min, max: state.depth.max };
+  return JSON.stringify(body);
+}
+
+// Shortest text that reads back as the same double.
+function num(v) {
+  return String(v);
+}
+
+function short(v) {
+  return String(Number(v.toPrecision(7)));
+}
+
+export function encodeState(state, paramNames) {
+  const q = new URLSearchParams();
+  if (state.preset) q.set('preset', state.preset);
+  else q.set('expr', state.expr);
+  for (const n of paramNames) if (Number.isFinite(state.params[n])) q.set('p.' + n, num(state.params[n]));
+  q.set('box', state.box.map(num).join(','));
+  q.set('depth', `${state.depth.min},${state.depth.max}`);
+  if (state.view) q.set('cam', [...state.view.pos, ...state.view.target].map(short).join(','));
+  if (state.color !== 'shaded') q.set('color', state.color);
+  if (state.clip.on) q.set('clip', [state.clip.axis, short(state.clip.offset)].concat(state.clip.flip ? ['flip'] : []).join(','));
+  const hidden = FEATURES.filter((k) => !state.show[k]);
+  if (hidden.length) q.set('hide', hidden.join(','));
+  if (state.wire) q.set('wire', '1');
+  return q.toString().replace(/%2C/g, ',');  // commas read fine in a fragment
+}
+
+function numbers(text, count) {
+  if (typeof text !== 'string') return null;
+  const parts = text.split(',');
+  if (parts.length !== count) return null;
+  const v = parts.map((s) => (s.trim() === '' ? NaN : Number(s)));
+  return v.every(Number.isFinite) ? v : null;
+}
+
+// Reads a fragment (with or without '#') into a partial state: only what it says, validated;
+// unreadable entries are left out (and listed in .problems).
+export function decodeState(fragment) {
+  const q = new URLSearchParams(fragment.replace(/^#/, ''));
+  const s = { problems: [] };
+  if (q.has('preset')) s.preset = q.get('preset');
+  else if (q.has('expr')) s.expr = q.get('expr');
+  const params = {};
+  for (const [k, v] of q) {
+    if (!k.startsWith('p.')) continue;
+    const x = Number(v);
+    if (v.trim() !== '' && Number.isFinite(x)) params[k.slice(2)] = x;
+    else s.problems.push(`parameter ${k.slice(2)}`);
+  }
+  if (Object.keys(params).length) s.params = params;
+  if (q.has('box')) {
+    const b = numbers(q.get('box'), 6);
+    if (b) s.box = b; else s.problems.push('box');
+  }
+  if (q.has('depth')) {
+    const d = numbers(q.get('depth'), 2);
+    if (d && d.every(Number.isInteger)) s.depth = { min: d[0], max: d[1] }; else s.problems.push('depth');
+  }
+  if (q.has('cam')) {
+    const c = numbers(q.get('cam'), 6);
+    if (c) s.view = { pos: c.slice(0, 3), target: c.slice(3) }; else s.problems.push('cam');
+  }
+  if (q.has('color')) {
+    if (COLOR_MODES.includes(q.get('color'))) s.color = q.get('color'); else s.problems.push('color');
+  }
+  if (q.has('clip')) {
+    const parts = q.get('clip').split(',');
+    const off = Number(parts[1]);
+    if (['x', 'y', 'z'].includes(parts[0]) && parts[1] !== undefined && Number.isFinite(off) &&
+        (parts.length === 2 || (parts.length === 3 && parts[2] === 'flip'))) {
+      s.clip = { on: true, axis: parts[0], offset: off, flip: parts[2] === 'flip' };
+    } else {
+      s.problems.push('clip');
+    }
+  }
+  if (q.has('hide')) {
+    const hidden = q.get('hide').split(',');
+    s.show = Object.fromEntries(FEATURES.map((k) => [k, !hidden.includes(k)]));
+  }
+  if (q.has('wire')) s.wire = q.get('wire') === '1';
+  return s;
+}
+
+// A slider range for a parameter the user typed (no preset range): around its value.
+export function sensibleRange(value) {
+  if (value > 0) return [0, 2 * value];
+  if (value < 0) return [2 * value, 0];
+  return [-1, 1];
+}

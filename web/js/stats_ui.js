@@ -1,0 +1,86 @@
+// stats_ui.js — the stats panel (from the stats JSON of proto/stats.h plus what this page
+// measured: cache, bytes transferred) and the curvature legend. Every value cell also carries
+// its raw number in data-value.
+import * as fmt from './format.js';
+import { cssGradient, valueAt } from './colormap.js';
+
+function cell(name) {
+  return document.querySelector(`#stats [data-stat="${name}"]`);
+}
+
+function put(name, text, raw) {
+  const c = cell(name);
+  if (!c) return;
+  c.textContent = text;
+  if (raw === undefined || raw === null) delete c.dataset.value;
+  else c.dataset.value = String(raw);
+}
+
+export function clearStats() {
+  for (const c of document.querySelectorAll('#stats dd')) {
+    c.textContent = '–';
+    delete c.dataset.value;
+  }
+  document.getElementById('warnings').textContent = '';
+}
+
+// result: loader.js's result.
+export function showStats(result) {
+  const s = result.stats || {};
+  const mesh = s.mesh || {};
+  const an = s.analysis || {};
+  const q = an.quality || {};
+  const acc = an.accuracy || {};
+  const t = s.timings_ms || {};
+  put('triangles', fmt.count(mesh.triangles), mesh.triangles);
+  put('vertices', fmt.count(mesh.vertices), mesh.vertices);
+  put('euler', Number.isFinite(an.euler) ? String(an.euler) : '–', an.euler);
+  put('components', fmt.count(an.components), an.components);
+  put('nonmanifold_edges', fmt.count(an.nonmanifold_edges), an.nonmanifold_edges);
+  put('nonmanifold_points', fmt.count(an.nonmanifold_points), an.nonmanifold_points);
+  put('nonmanifold_curves', fmt.count(an.nonmanifold_curves), an.nonmanifold_curves);
+  put('boundary_edges', fmt.count(an.boundary_edges), an.boundary_edges);
+  put('min_angle', Number.isFinite(q.min_angle) ? `${fmt.sig(q.min_angle)}°` : '–', q.min_angle);
+  put('max_dist', fmt.sig(acc.max_dist_vertex), acc.max_dist_vertex);
+  put('compute_ms', fmt.ms(t.total), t.total);
+  const cache = result.viewerCache ? 'viewer (no request)' : `server ${result.serverCache}`;
+  put('cache', cache, result.viewerCache ? 'viewer' : result.serverCache);
+  put('bytes', fmt.bytes(result.transferred), result.transferred);
+  put('draco_bytes', fmt.bytes(result.drcBytes), result.drcBytes);
+  const list = document.getElementById('warnings');
+  list.textContent = '';
+  for (const w of s.warnings || []) {
+    const li = document.createElement('li');
+    li.textContent = w;
+    list.append(li);
+  }
+}
+
+const TITLES = { mean: 'Mean curvature H', gauss: 'Gaussian curvature K' };
+
+// range: colormap.curvatureRange's result, or null to hide the legend.
+export function showLegend(mode, range) {
+  const legend = document.getElementById('legend');
+  if (!range || !TITLES[mode]) {
+    legend.hidden = true;
+    return;
+  }
+  legend.hidden = false;
+  legend.dataset.mode = mode;
+  legend.dataset.min = String(range.min);
+  legend.dataset.max = String(range.max);
+  legend.dataset.lo = String(range.lo);
+  legend.dataset.hi = String(range.hi);
+  document.getElementById('legend-title').textContent = TITLES[mode];
+  document.getElementById('legend-bar').style.background = cssGradient(range);
+  document.getElementById('legend-min').textContent = fmt.sig(valueAt(range, 0));
+  document.getElementById('legend-mid').textContent = fmt.sig(valueAt(range, 0.5));
+  document.getElementById('legend-max').textContent = fmt.sig(valueAt(range, 1));
+  legend.dataset.scale = range.scale;
+  const sym = mode === 'mean' ? 'H' : 'K';
+  const scale = { linear: 'linear scale', log: 'logarithmic scale', symlog: `symmetric log scale (linear within ±${fmt.sig(range.s)})` }[range.scale];
+  let note = `${scale}; ${sym} from ${fmt.sig(range.min)} to ${fmt.sig(range.max)}`;
+  if (range.clamped) note += `; ${range.clamped.toLocaleString('en-US')} vertices beyond the bar take its end colours`;
+  if (range.nonfinite) note += `; ${range.nonfinite} vertices undefined (grey)`;
+  document.getElementById('legend-note').textContent = note;
+}

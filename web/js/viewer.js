@@ -1,0 +1,263 @@
+// viewer.js — the three.js scene: z-up perspective camera with OrbitControls (orbit, pan, zoom,
+// keyboard), two-sided lighting (a headlight riding with the camera plus a hemisphere light,
+// on a DoubleSide material whose back faces get flipped normals, so a self-intersecting or
+// one-sided surface is lit the same from either side), the surface with its colour modes, the
+// wireframe overlay, the non-manifold features, one clipping plane, fit-to-view. Renders on
+// demand, not in a loop.
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { buildFeatures, disposeFeatures, setLineResolution } from './features.js';
+import { curvatureColors, curvatureRange } from './colormap.js';
+
+const SURFACE_RGB = 0xb9c6d8;
+const AXES = { x: new THREE.Vector3(1, 0, 0), y: new THREE.Vector3(0, 1, 0), z: new THREE.Vector3(0, 0, 1) };
+const DEFAULT_DIRECTION = new THREE.Vector3(1.5, -2.1, 1.25).normalize();
+
+export class Viewer {
+  constructor(canvas) {
+    this.canvas = canvas;
+    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+    this.renderer.localClippingEnabled = true;
+    this.renderer.setClearColor(0x000000, 0);
+
+    this.scene = new THREE.Scene();
+    this.camera = new THREE.PerspectiveCamera(35, 1, 0.01, 1000);
+    this.camera.up.set(0, 0, 1);
+    this.camera.position.copy(DEFAULT_DIRECTION).multiplyScalar(5);
+    this.scene.add(this.camera);
+
+    this.scene.add(new THREE.HemisphereLight(0xf2f5ff, 0x39404c, 1.1));
+    const head = new THREE.DirectionalLight(0xffffff, 1.9);
+    head.position.set(0.35, 0.55, 1);      // camera space: above and right of the eye
+    this.camera.add(head);
+    this.camera.add(head.target);
+    head.target.position.set(0, 0, -1);
+    const fill = new THREE.DirectionalLight(0xcfd8ff, 0.45);
+    fill.position.set(-0.6, -0.3, 0.4);
+    this.camera.add(fill);
+    this.camera.add(fill.target);
+    fill.target.position.set(0, 0, -1);
+
+    this.controls = new OrbitControls(this.camera, canvas);
+    this.controls.enableDamping = false;
+    this.controls.screenSpacePanning = true;
+    this.controls.listenToKeyEvents(canvas);
+    this.controls.addEventListener('change', () => {
+      this.render();
+      if (this.onViewChange) this.onViewChange();
+    });
+    canvas.addEventListener('keydown', (e) => this.onKey(e));
+
+    this.clipPlane = new THREE.Plane(new THREE.Vector3(0, 0, -1), 0);
+    this.clipping = [];
+    this.material = new THREE.MeshStandardMaterial({
+      color: SURFACE_RGB, side: THREE.DoubleSide, roughness: 0.55, metalness: 0.05,
+      polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
+    });
+    this.wireMaterial = new THREE.MeshBasicMaterial({
+      color: 0x0c1016, wireframe: true, transparent: true, opacity: 0.45, depthWrite: false,
+    });
+    this.surface = null;
+    this.wire = null;
+    this.features = null;
+    this.data = null;
+    this.colorMode = 'shaded';
+    this.show = { edges: true, points: true, boundary: true };
+    this.wireframe = false;
+    this.bounds = new THREE.Box3(new THREE.Vector3(-1, -1, -1), new THREE.Vector3(1, 1, 1));
+    this.frames = 0;
+
+    new ResizeObserver(() => this.resize()).observe(canvas);
+    this.resize();
+  }
+
+  resize() {
+    const w = Math.max(1, this.canvas.clientWidth);
+    const h = Math.max(1, this.canvas.clientHeight);
+    this.renderer.setSize(w, h, false);
+    this.camera.aspect = w / h;
+    this.camera.updateProjectionMatrix();
+    if (this.features) setLineResolution(this.features, w, h);
+    this.render();
+  }
+
+  render() {
+    this.updateClipRange();
+    this.renderer.render(this.scene, this.camera);
+    this.frames++;
+  }
+
+  onKey(e) {
+    // OrbitControls' "dolly out" shrinks the orbit radius: closer, a zoom in.
+    if (e.key === '+' || e.key === '=') this.controls.dollyOut(1.15);
+    else if (e.key === '-' || e.key === '_') this.controls.dollyIn(1.15);
+    else if (e.key === 'f' || e.key === 'F') this.fit();
+    else return;
+    e.preventDefault();
+    this.controls.update();
+  }
+
+  // Shows a decoded mesh (loader.js) with its features; box: the request's search box.
+  setMesh(result, box) {
+    this.clearMesh();
+    this.data = result;
+    this.bounds = new THREE.Box3(new THREE.Vector3(box[0], box[1], box[2]), new THREE.Vector3(box[3], box[4], box[5]));
+    const m = result.mesh;
+    if (m) {
+      const g = new THREE.BufferGeometry();
+      g.setAttribute('position', new THREE.BufferAttribute(m.attributes.position, 3));
+      if (m.attributes.normal) g.setAttribute('normal', new THREE.BufferAttribute(m.attributes.normal, 3));
+      else g.computeVertexNormals();
+      g.setIndex(new THREE.BufferAttribute(m.index, 1));
+      g.computeBoundingBox();
+      g.computeBoundingSphere();
+      this.surface = new THREE.Mesh(g, this.material);
+      this.surface.name = 'surface';
+      this.wire = new THREE.Mesh(g, this.wireMaterial);
+      this.wire.name = 'wireframe';
+      this.wire.renderOrder = 1;
+      this.scene.add(this.surface, this.wire);
+      if (!g.boundingBox.isEmpty()) this.bounds = g.boundingBox.clone();
+    }
+    const size = this.bounds.getSize(new THREE.Vector3()).length();
+    this.features = buildFeatures(result.features, 0.009 * size, this.clipping);
+    this.features.group.traverse((o) => { o.frustumCulled = false; });
+    setLineResolution(this.features, Math.max(1, this.canvas.clientWidth), Math.max(1, this.canvas.clientHeight));
+    this.scene.add(this.features.group);
+    this.applyColor();
+    this.applyVisibility();
+    this.applyClip();
+    this.render();
+  }
+
+  clearMesh() {
+    if (this.surface) {
+      this.scene.remove(this.surface, this.wire);
+      this.surface.geometry.dispose();
+    }
+    if (this.features) {
+      this.scene.remove(this.features.group);
+      disposeFeatures(this.features);
+    }
+    this.surface = this.wire = this.features = this.data = null;
+  }
+
+  // Colour mode 'shaded' | 'mean' | 'gauss'. Returns the legend's range (null when shaded or
+  // when the mesh carries no such attribute).
+  setColorMode(mode) {
+    this.colorMode = mode;
+    const legend = this.applyColor();
+    this.render();
+    return legend;
+  }
+
+  applyColor() {
+    if (!this.surface) return null;
+    const g = this.surface.geometry;
+    const attr = { mean: 'mean_curvature', gauss: 'gauss_curvature' }[this.colorMode];
+    const values = attr && this.data.mesh.attributes[attr];
+    if (!values) {
+      g.deleteAttribute('color');
+      this.material.vertexColors = false;
+      this.material.color.setHex(SURFACE_RGB);
+      this.material.needsUpdate = true;
+      return null;
+    }
+    const cache = this.data.mesh.colors || (this.data.mesh.colors = {});
+    if (!cache[attr]) {
+      const range = curvatureRange(values);
+      cache[attr] = { range, rgb: curvatureColors(values, range) };
+    }
+    g.setAttribute('color', new THREE.BufferAttribute(cache[attr].rgb, 3));
+    this.material.vertexColors = true;
+    this.material.color.setHex(0xffffff);
+    this.material.needsUpdate = true;
+    return cache[attr].range;
+  }
+
+  setVisibility(show) {
+    this.show = { ...show };
+    this.applyVisibility();
+    this.render();
+  }
+
+  applyVisibility() {
+    if (!this.features) return;
+    for (const k of ['edges', 'points', 'boundary']) if (this.features[k]) this.features[k].visible = !!this.show[k];
+  }
+
+  setWireframe(on) {
+    this.wireframe = on;
+    if (this.wire) this.wire.visible = on;
+    this.render();
+  }
+
+  // clip: {on, axis 'x'|'y'|'z', offset (world units), flip}. Keeps the side where the
+  // coordinate is below the offset (above with flip).
+  setClip(clip) {
+    this.clip = { ...clip };
+    this.applyClip();
+    this.render();
+  }
+
+  applyClip() {
+    const c = this.clip || { on: false };
+    this.clipping.length = 0;
+    if (c.on) {
+      const n = AXES[c.axis] || AXES.z;
+      if (c.flip) this.clipPlane.set(n.clone(), -c.offset);
+      else this.clipPlane.set(n.clone().negate(), c.offset);
+      this.clipping.push(this.clipPlane);
+    }
+    this.material.clippingPlanes = this.clipping.length ? this.clipping : null;
+    this.wireMaterial.clippingPlanes = this.material.clippingPlanes;
+    if (this.wire) this.wire.visible = this.wireframe;
+    if (this.features) {
+      this.features.group.traverse((o) => {
+        if (o.material) {
+          o.material.clippingPlanes = this.material.clippingPlanes;
+          o.material.needsUpdate = true;
+        }
+      });
+    }
+    this.material.needsUpdate = true;
+    this.wireMaterial.needsUpdate = true;
+  }
+
+  updateClipRange() {
+    const d = this.camera.position.distanceTo(this.controls.target);
+    const r = Math.max(1e-6, this.bounds.getSize(new THREE.Vector3()).length() / 2);
+    this.camera.near = Math.max(d - 4 * r, d / 1000, 1e-4);
+    this.camera.far = d + 4 * r;
+    this.camera.updateProjectionMatrix();
+  }
+
+  // Frames the surface (or the box when empty), keeping the current viewing direction.
+  fit() {
+    const sphere = this.bounds.getBoundingSphere(new THREE.Sphere());
+    const dir = this.camera.position.clone().sub(this.controls.target);
+    if (dir.lengthSq() < 1e-12) dir.copy(DEFAULT_DIRECTION);
+    dir.normalize();
+    const fov = THREE.MathUtils.degToRad(this.camera.fov);
+    const fovMin = Math.min(fov, 2 * Math.atan(Math.tan(fov / 2) * this.camera.aspect));
+    const dist = (sphere.radius / Math.sin(fovMin / 2)) * 1.02;
+    this.controls.target.copy(sphere.center);
+    this.camera.position.copy(sphere.center).addScaledVector(dir, dist);
+    this.controls.update();
+  }
+
+  resetDirection() {
+    this.camera.position.copy(this.controls.target).addScaledVector(DEFAULT_DIRECTION, 1);
+  }
+
+  getView() {
+    return { pos: this.camera.position.toArray(), target: this.controls.target.toArray() };
+  }
+
+  setView(view) {
+    this.camera.position.fromArray(view.pos);
+    this.controls.target.fromArray(view.target);
+    this.controls.update();
+  }
+}
