@@ -1,5 +1,5 @@
 /* http.h — isomeshd's HTTP front: the server state every route sees, the per-request context,
- * libmicrohttpd set-up (one epoll polling thread, suspend/resume), the request life cycle
+ * libmicrohttpd set-up (one internal polling thread, suspend/resume), the request life cycle
  * (first call: route, 413/415 checks; body calls; answer on a later call), and the response
  * helpers that add the common headers, record the status for the log and the metrics.
  *

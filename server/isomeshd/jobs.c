@@ -212,6 +212,15 @@ ismd_waiter *ismd_job_waiter(ismd_job *job)
     return &job->waiter;
 }
 
+void ismd_jobs_submitted(ismd_job *job)
+{
+    const ismd_flight *f = job->waiter.flight;
+    if (f && f->running) {
+        job->state = ISMD_JOB_RUNNING;
+        job->progress = f->progress;
+    }
+}
+
 void ismd_jobs_discard(ismd_jobs *j, ismd_job *job)
 {
     if (!finished(job))

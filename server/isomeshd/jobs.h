@@ -32,6 +32,9 @@ void ismd_jobs_free(ismd_jobs *j);
  * ismd_job_waiter(job); submit it to the scheduler, then call ismd_jobs_submitted. */
 ismd_job *ismd_jobs_create(ismd_jobs *j, const char *key, const char *fmt);
 ismd_waiter *ismd_job_waiter(ismd_job *job);
+/* After a successful submission: takes the flight's current state (a joined flight may
+ * already be running). */
+void ismd_jobs_submitted(ismd_job *job);
 /* Drops a job whose submission failed. */
 void ismd_jobs_discard(ismd_jobs *j, ismd_job *job);
 /* Marks a job done at once (its mesh was cached); stats may be NULL. */

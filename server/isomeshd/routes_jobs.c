@@ -90,8 +90,10 @@ enum MHD_Result ismd_route_jobs_post(ismd_req *r)
     ismd_submit st = ismd_sched_submit(&s->sched, r->key, r->fmt, canonical, r->client,
                                        ismd_job_waiter(job));
     ism_blob_unref(canonical);
-    if (st == ISMD_SUBMIT_NEW || st == ISMD_SUBMIT_JOINED)
+    if (st == ISMD_SUBMIT_NEW || st == ISMD_SUBMIT_JOINED) {
+        ismd_jobs_submitted(job);
         return answer_job_locked(r, 202, job, true);
+    }
     ismd_jobs_discard(s->jobs, job);
     ismd_sched_unlock(&s->sched);
     switch (st) {

@@ -29,6 +29,7 @@
 #define MAX_BACKOFF_NS 5000000000LL
 #define STOP_WAIT_NS 2000000000LL          /* workers get this long to exit on EOF */
 #define MAX_EXPIRED 64
+#define START_TIMEOUT_NS 15000000000LL     /* a worker silent this long after exec is killed */
 
 /* AddressSanitizer reserves terabytes of address space for its shadow memory, so a build
  * with it cannot run under RLIMIT_AS: such builds skip the limit (and say so at start-up). */
@@ -580,6 +581,12 @@ static void enforce(ismd_pool *p, long long now)
     ismd_sched_unlock(p->sched);
     for (size_t i = 0; i < nd; i++)
         kill_worker(p, doomed[i], why[i]);
+    for (int i = 0; i < p->n; i++)
+        if (p->w[i].state == W_STARTING && now - p->w[i].spawned_ns > START_TIMEOUT_NS) {
+            ism_log_field f = ISM_LI("pid", p->w[i].pid);
+            ism_log_fields(ISM_LOG_ERROR, "worker_start_timeout", &f, 1);
+            kill_worker(p, &p->w[i], ISMD_RESTART_PROTOCOL);
+        }
 }
 
 /* ---- the thread ---------------------------------------------------------------------- */
