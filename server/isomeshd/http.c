@@ -438,7 +438,8 @@ static enum MHD_Result preflight(ismd_req *r)
     MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, r->allow);
     if (r->srv->cfg->cors_origin[0]) {
         MHD_add_response_header(resp, "Access-Control-Allow-Methods", r->allow);
-        MHD_add_response_header(resp, "Access-Control-Allow-Headers", "Content-Type, If-None-Match");
+        MHD_add_response_header(resp, "Access-Control-Allow-Headers",
+                                "Content-Type, If-None-Match, Authorization, Accept");
         MHD_add_response_header(resp, "Access-Control-Max-Age", "600");
     }
     return ismd_send(r, 204, resp);
