@@ -82,6 +82,8 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
             normal[a] += n[c][a];
     ism_normalise3(normal);
     double tol = fl->plane_frac * size;
+    if (tol > fl->abs_tol)
+        tol = fl->abs_tol;
     for (int r = 0; r < nroots; r++) {
         double d[3] = {roots[r][0] - centroid[0], roots[r][1] - centroid[1],
                        roots[r][2] - centroid[2]};

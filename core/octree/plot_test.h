@@ -13,6 +13,8 @@ typedef struct ism_flatness {
     double gradient_test;  /* paper eq. (1) */
     double normal_cos;     /* minimum cos between any two corner gradients */
     double plane_frac;     /* max distance from the plane / of the surface, × node size */
+    double abs_tol;        /* and never more than this (world units): the maximum depth's
+                              resolution, so a deeper request gives a finer mesh */
 } ism_flatness;
 
 /* lo, hi: the node's world box. True when the node may be plotted at this size. */

@@ -17,6 +17,9 @@
 #include <time.h>
 
 #define CHUNK_LEAVES 64
+#ifndef ISM_FLAT_ABS_FRACTION
+#define ISM_FLAT_ABS_FRACTION 0.25
+#endif
 #define MAX_THREADS 64
 #define BYTES_PER_TRIANGLE 256 /* node outputs + welded mesh + analysis, per triangle */
 
@@ -281,7 +284,8 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
         .tape = f,
         .min_depth = o->min_depth,
         .max_depth = o->max_depth,
-        .flatness = {o->gradient_test, o->flat_normal, o->flat_plane},
+        .flatness = {o->gradient_test, o->flat_normal, o->flat_plane,
+                     ISM_FLAT_ABS_FRACTION * ism_grid_cell_size(&tree.grid, o->max_depth)},
         .threads = threads,
         .max_nodes = o->max_memory / 4 / sizeof(ism_node),
         .cancel = o->cancel,
