@@ -3,6 +3,7 @@
  * in its own node array; the arrays are joined in task order afterwards. */
 #include "core/octree/octree_build.h"
 #include "core/octree/sampler.h"
+#include "core/octree/cell_cache.h"
 #include "core/util/parallel.h"
 
 #include <pthread.h>
@@ -19,6 +20,7 @@ typedef struct node_vec {
 
 typedef struct thread_state {
     ism_sampler s;
+    ism_point_entry *corners; /* memo of f and ∇f at lattice points (pure: never stale) */
     ism_tape *tapes[ISM_GRID_MAX_DEPTH + 1];
     uint64_t visited, excluded, unresolved;
 } thread_state;
@@ -77,6 +79,35 @@ static const ism_tape *node_range(build *b, thread_state *th, const ism_node *nd
     return tape;
 }
 
+#define CORNER_CACHE_BITS 16
+
+/* f and ∇f at the node's corners, through the thread's memo (neighbours share corners). */
+static void node_corners(const ism_grid *g, thread_state *th, const ism_tape *tape,
+                         const ism_node *nd, ism_corners *k)
+{
+    int32_t s = ism_grid_cell_steps(g, nd->level);
+    const ism_tape *saved = th->s.tape;
+    th->s.tape = tape;
+    for (int c = 0; c < 8; c++) {
+        int32_t ip[3];
+        for (int a = 0; a < 3; a++) {
+            ip[a] = nd->org[a] + ((c >> a) & 1) * s;
+            k->p[c][a] = ism_grid_coord(g, a, ip[a]);
+        }
+        uint64_t key = ism_lattice_key(ip);
+        ism_point_entry *e =
+            &th->corners[ism_cache_mix(key) & (((uint64_t)1 << CORNER_CACHE_BITS) - 1)];
+        if (e->key != key) {
+            /* the full tape and a shortened one agree inside the node: either will do */
+            e->key = key;
+            e->f = ism_sample_grad(&th->s, k->p[c], e->g);
+        }
+        k->f[c] = e->f;
+        memcpy(k->g[c], e->g, sizeof k->g[c]);
+    }
+    th->s.tape = saved;
+}
+
 static bool fail(build *b, enum ism_build_status st)
 {
     int expected = ISM_BUILD_OK;
@@ -114,9 +145,11 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     if (nd.level >= b->p->min_depth) {
         double lo[3], hi[3];
         node_box(b->grid, &nd, lo, hi);
+        ism_corners k;
+        node_corners(b->grid, th, b->p->tape, &nd, &k);
         const ism_tape *saved = th->s.tape;
         th->s.tape = sub;
-        bool flat = ism_plot_test(&th->s, &b->p->flatness, lo, hi);
+        bool flat = ism_plot_test(&th->s, &b->p->flatness, lo, hi, &k);
         th->s.tape = saved;
         if (nd.level >= b->p->max_depth) {
             leaf = true;
@@ -180,7 +213,8 @@ static bool init_threads(build *b, int nthreads)
         thread_state *th = &b->threads[t];
         th->s.tape = b->p->tape;
         th->s.ws = ism_eval_ws_new(b->p->tape);
-        if (!th->s.ws)
+        th->corners = calloc((size_t)1 << CORNER_CACHE_BITS, sizeof *th->corners);
+        if (!th->s.ws || !th->corners)
             return false;
         if (b->shortening)
             for (int l = 0; l <= b->p->max_depth; l++)
@@ -204,6 +238,7 @@ static void free_threads(build *b, int nthreads, ism_octree_build_stats *st)
         st->n_interval += th->s.n_interval;
         if (th->s.ws)
             ism_eval_ws_free(th->s.ws);
+        free(th->corners);
         for (int l = 0; l <= ISM_GRID_MAX_DEPTH; l++)
             if (th->tapes[l])
                 ism_tape_free(th->tapes[l]);

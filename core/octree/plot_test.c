@@ -5,13 +5,7 @@
 #include "core/octree/edge_roots.h"
 
 #include <math.h>
-
-/* Corner c of the box: bit 0 = x, bit 1 = y, bit 2 = z. */
-static void corner(const double lo[3], const double hi[3], int c, double p[3])
-{
-    for (int a = 0; a < 3; a++)
-        p[a] = (c >> a) & 1 ? hi[a] : lo[a];
-}
+#include <string.h>
 
 /* The 12 edges as corner pairs, and which faces (axis*2+side) each lies on. */
 static void edge_corners(int e, int *c0, int *c1)
@@ -24,12 +18,13 @@ static void edge_corners(int e, int *c0, int *c1)
 }
 
 bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
-                   const double hi[3])
+                   const double hi[3], const ism_corners *k)
 {
     double p[8][3], f[8], n[8][3];
+    memcpy(p, k->p, sizeof p);
+    memcpy(f, k->f, sizeof f);
+    memcpy(n, k->g, sizeof n);
     for (int c = 0; c < 8; c++) {
-        corner(lo, hi, c, p[c]);
-        f[c] = ism_sample_grad(s, p[c], n[c]);
         double len = ism_normalise3(n[c]);
         if (!(len > 0) || !isfinite(len) || !isfinite(f[c]))
             return false; /* a singular or undefined corner: look closer */

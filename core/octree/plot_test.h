@@ -17,8 +17,14 @@ typedef struct ism_flatness {
                               resolution, so a deeper request gives a finer mesh */
 } ism_flatness;
 
-/* lo, hi: the node's world box. True when the node may be plotted at this size. */
+/* f and ∇f at a node's 8 corners (corner c: bit 0 = x, bit 1 = y, bit 2 = z). */
+typedef struct ism_corners {
+    double p[8][3], f[8], g[8][3];
+} ism_corners;
+
+/* lo, hi: the node's world box; k: its corner values. True when the node may be plotted
+ * at this size. */
 bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
-                   const double hi[3]);
+                   const double hi[3], const ism_corners *k);
 
 #endif

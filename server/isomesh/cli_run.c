@@ -324,7 +324,7 @@ int ism_cli_run_surface(ism_cli_run *run)
     memset(&an, 0, sizeof an);
     ism_analysis_options ao;
     ism_analysis_options_default(&ao);
-    bool analysed = ism_analyse(&mesh, tape, &ao, &an, &err);
+    bool analysed = run->print_stats && ism_analyse(&mesh, tape, &ao, &an, &err);
     timings[ISM_TIME_ANALYSE] = now_ms() - t2;
     if (run->output && !write_mesh(run->output, &mesh))
         status = 1;
