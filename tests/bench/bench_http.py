@@ -4,9 +4,11 @@ same run:
 
 1. Cached mesh throughput: wrk (Debian) fetching a cached ~100k-triangle Draco mesh
    (kummer-16-nodes at depth 8) from /v1/meshes/{key}.drc at 1, 16, 64 and 256 connections
-   — requests per second and latency percentiles — beside nginx serving the same bytes as a
-   static file (one worker process, like isomeshd's one polling thread). Also POST /v1/mesh
-   of the same request (decode + key + cache hit) at 16 connections.
+   — requests per second and latency percentiles — beside libmicrohttpd alone serving the
+   same bytes from memory (build/bench/http_ceiling, the ceiling of the library isomeshd is
+   built on) and nginx serving them as a static file (one worker process, like isomeshd's one
+   polling thread). Also the same mesh with positions only (~100 KB), and POST /v1/mesh of the
+   request (decode + key + cache hit) at 16 connections.
 2. Cold requests: the daemon's wall time for a new computation beside the `isomesh` command's
    for the same request file (process start to exit, same thread count), and the worker's
    own time: the service's overhead.
@@ -168,13 +170,49 @@ def row(name, conns, r):
           r["p99"], "  (%d non-2xx)" % r["bad"] if r["bad"] else ""))
 
 
+def free_port():
+    import socket
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port
+
+
+def start_ceiling(build, tmp, body):
+    """build/bench/http_ceiling: libmicrohttpd alone serving the same bytes."""
+    prog = os.path.join(build, "bench", "http_ceiling")
+    if not os.path.exists(prog):
+        return None, None
+    path = os.path.join(tmp, "ceiling.drc")
+    with open(path, "wb") as f:
+        f.write(body)
+    port = free_port()
+    p = subprocess.Popen([prog, str(port), path], stdout=subprocess.DEVNULL)
+    deadline = time.time() + 10
+    while time.time() < deadline:
+        try:
+            c = http.client.HTTPConnection("127.0.0.1", port, timeout=2)
+            c.request("GET", "/")
+            ok = c.getresponse().status == 200
+            c.close()
+            if ok:
+                return p, "http://127.0.0.1:%d/" % port
+        except OSError:
+            time.sleep(0.05)
+    p.kill()
+    p.wait()
+    return None, None
+
+
 def throughput(build, tmp):
     d = Daemon(build, tmp, "--workers", "2")
-    nginx = None
+    nginx = ceiling = None
     try:
         url, body = cached_url(d, MESH_REQ)
         url_pos, _ = cached_url(d, MESH_REQ_POSITIONS)
         nginx, nurl = start_nginx(tmp, body)
+        ceiling, curl = start_ceiling(build, tmp, body)
         secs = 2 if QUICK else 5
         print("\n%-40s %6s %10s %9s %9s %9s" % ("server / route", "conns", "req/s", "p50 ms",
                                                 "p90 ms", "p99 ms"))
@@ -182,6 +220,8 @@ def throughput(build, tmp):
         for conns in (1, 16, 64, 256):
             results[conns] = wrk(url, conns, secs)
             row("isomeshd GET mesh (all attributes)", conns, results[conns])
+            if curl:
+                row("libmicrohttpd alone, same bytes", conns, wrk(curl, conns, secs))
             if nurl:
                 row("nginx (1 worker) the same file", conns, wrk(nurl, conns, secs))
         pos = {}
@@ -200,6 +240,9 @@ def throughput(build, tmp):
                                     "NOT met", res[64]["p99"],
                                     "met" if res[64]["p99"] < 10 else "NOT met"))
     finally:
+        if ceiling:
+            ceiling.terminate()
+            ceiling.wait(timeout=10)
         if nginx:
             nginx.send_signal(signal.SIGQUIT)
             try:
