@@ -192,6 +192,15 @@ class Daemon:
         return pids
 
 
+def process_alive(pid):
+    """True while pid runs (a zombie, already dead but not reaped, counts as gone)."""
+    try:
+        with open("/proc/%d/stat" % pid) as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
 def metric_key(name, labels):
     if not labels:
         return name

@@ -11,7 +11,7 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from harness import SLOW, Daemon, draco_counts, sphere  # noqa: E402
+from harness import SLOW, Daemon, draco_counts, process_alive, sphere  # noqa: E402
 
 
 def in_background(fn):
@@ -138,12 +138,23 @@ class WorkerTest(unittest.TestCase):
                 else:
                     self.assertIn(r.json()["error"]["code"], ("shutting_down", "deadline_exceeded"))
             for pid in workers:
-                self.assertFalse(os.path.exists("/proc/%d" % pid) and
-                                 open("/proc/%d/stat" % pid).read().split()[2] != "Z",
-                                 "worker %d outlived the daemon" % pid)
+                self.assertFalse(process_alive(pid), "worker %d outlived the daemon" % pid)
             self.assertIn("stopped", d.log())
         finally:
             d.cleanup()
+
+    def test_workers_die_with_a_killed_daemon(self):
+        with Daemon("--workers", "2") as d:
+            pids = d.workers()
+            self.assertEqual(len(pids), 2)
+            d.proc.kill()  # SIGKILL: no clean-up code runs, PR_SET_PDEATHSIG must act
+            d.proc.wait(timeout=10)
+            deadline = time.time() + 10
+            alive = pids
+            while alive and time.time() < deadline:
+                alive = [p for p in pids if process_alive(p)]
+                time.sleep(0.02)
+            self.assertEqual(alive, [], "workers outlived a SIGKILLed daemon")
 
     def skip_without_rlimit(self, d):
         if "job_memory_ignored" in d.log():
