@@ -48,7 +48,8 @@ export function curvatureRange(values) {
   if (p2 < 0 && p98 > 0) {
     const L = Math.max(-p2, p98);
     const abs = Float64Array.from(finite, Math.abs).sort();
-    const s = quantile(abs, 0.5) || L / LOG_SPAN;
+    // The knee sits well below the typical magnitude, so that most of the surface is coloured.
+    const s = 0.1 * quantile(abs, 0.5) || L / LOG_SPAN;
     Object.assign(r, { kind: 'diverging', lo: -L, hi: L, s, scale: L / s > LOG_SPAN ? 'symlog' : 'linear' });
   } else {
     if (p2 === p98) { p2 = min; p98 = max; }

@@ -341,7 +341,6 @@ function show(result, body) {
   loads++;
   document.body.dataset.meshKey = result.key;
   document.body.dataset.loads = String(loads);
-  document.body.dataset.frames = String(viewer.frames);
 }
 
 function failed(e, body) {
@@ -591,18 +590,27 @@ function wire() {
     syncClipSlider();
     updateUrl();
   };
+  // A new cut removes the half nearer the camera, so that it opens the surface towards you.
+  const cutAway = () => {
+    const k = AXIS_INDEX[state.clip.axis];
+    state.clip.flip = viewer.camera.position.getComponent(k) < state.clip.offset;
+  };
   $('clip-on').addEventListener('change', () => {
     state.clip.on = $('clip-on').checked;
     const k = AXIS_INDEX[state.clip.axis];
     if (state.clip.on && (state.clip.offset < state.box[k] || state.clip.offset > state.box[k + 3])) {
       state.clip.offset = (state.box[k] + state.box[k + 3]) / 2;
     }
+    if (state.clip.on) cutAway();
+    $('clip-flip').checked = state.clip.flip;
     clipChanged();
   });
   $('clip-axis').addEventListener('change', () => {
     state.clip.axis = $('clip-axis').value;
     const k = AXIS_INDEX[state.clip.axis];
     state.clip.offset = (state.box[k] + state.box[k + 3]) / 2;
+    cutAway();
+    $('clip-flip').checked = state.clip.flip;
     clipChanged();
   });
   $('clip-flip').addEventListener('change', () => {
@@ -653,9 +661,11 @@ async function start() {
   let urlTimer = 0;
   viewer.onViewChange = () => {
     clearTimeout(urlTimer);
+    document.body.dataset.viewPending = '1';
     urlTimer = setTimeout(() => {
       state.view = viewer.getView();
       updateUrl();
+      document.body.dataset.viewPending = '0';
     }, 150);
   };
   wire();

@@ -2,8 +2,8 @@
 // keyboard), two-sided lighting (a headlight riding with the camera plus a hemisphere light,
 // on a DoubleSide material whose back faces get flipped normals, so a self-intersecting or
 // one-sided surface is lit the same from either side), the surface with its colour modes, the
-// wireframe overlay, the non-manifold features, one clipping plane, fit-to-view. Renders on
-// demand, not in a loop.
+// wireframe overlay, the non-manifold features, one clipping plane, fit-to-view. Draws on
+// demand (at most once per animation frame), not in a loop.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { buildFeatures, disposeFeatures, setLineResolution } from './features.js';
@@ -67,6 +67,7 @@ export class Viewer {
     this.wireframe = false;
     this.bounds = new THREE.Box3(new THREE.Vector3(-1, -1, -1), new THREE.Vector3(1, 1, 1));
     this.frames = 0;
+    this.framePending = false;
 
     new ResizeObserver(() => this.resize()).observe(canvas);
     this.resize();
@@ -82,7 +83,17 @@ export class Viewer {
     this.render();
   }
 
+  // Asks for a frame; any number of changes within one animation frame draw once.
   render() {
+    if (this.framePending) return;
+    this.framePending = true;
+    requestAnimationFrame(() => {
+      this.framePending = false;
+      this.draw();
+    });
+  }
+
+  draw() {
     this.updateClipRange();
     this.renderer.render(this.scene, this.camera);
     this.frames++;

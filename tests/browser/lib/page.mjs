@@ -42,3 +42,18 @@ export async function viewShot(page, name) {
   if (name) fs.writeFileSync(artifact(name), buf);
   return decodePng(buf);
 }
+
+// Waits until the page has written the current view into the URL (it does so shortly after
+// the camera stops moving) and the URL holds still; returns it.
+export async function settledHref(page, timeout = 20000) {
+  const deadline = Date.now() + timeout;
+  let last = null;
+  for (;;) {
+    await page.waitForFunction(() => document.body.dataset.viewPending !== '1', null, { timeout: Math.max(1000, deadline - Date.now()) });
+    const now = await page.evaluate(() => location.href);
+    if (now === last) return now;
+    if (Date.now() > deadline) throw new Error('the URL kept changing');
+    last = now;
+    await page.waitForTimeout(300);
+  }
+}
