@@ -49,12 +49,21 @@ double ism_regula_falsi(ism_sampler *s, const double a[3], const double b[3], do
 int ism_double_root_search(ism_sampler *s, const ism_root_params *prm, const double a[3],
                            const double b[3], double fa, double fb, double *t)
 {
+    /* The paper halves [A, B] toward the end with the smaller |f|; that picks the wrong half
+     * whenever the double root sits near the middle (|f| at the ends says nothing about
+     * which side of c it is on). Here the half is chosen by the slope of f at c instead:
+     * |f| falls toward the double root, so the root lies on the side where |f| decreases.
+     * The paper's tests on f(c) are kept: a sign change means two roots, |f(c)| < eps one
+     * double root. */
+    double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double side = fa < 0 ? -1 : 1; /* sign of f at both ends */
     double ta = 0, tb = 1;
+    (void)fb;
     for (int k = 0; k < prm->iters; k++) {
-        double tc = 0.5 * (ta + tb), p[3];
+        double tc = 0.5 * (ta + tb), p[3], g[3];
         lerp(a, b, tc, p);
-        double fc = ism_sample_f(s, p);
-        if (fa * fc < 0 || fb * fc < 0) {
+        double fc = ism_sample_grad(s, p, g);
+        if (side * fc < 0) {
             *t = tc;
             return 2;
         }
@@ -62,10 +71,10 @@ int ism_double_root_search(ism_sampler *s, const ism_root_params *prm, const dou
             *t = tc;
             return 1;
         }
-        if (fabs(fa * fc) < fabs(fc * fb))
-            tb = tc, fb = fc;
+        if (side * ism_dot3(g, d) > 0)
+            tb = tc; /* |f| grows toward b: the minimum is in [ta, tc] */
         else
-            ta = tc, fa = fc;
+            ta = tc;
     }
     return 0;
 }

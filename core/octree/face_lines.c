@@ -12,6 +12,7 @@
  *   - lattice segments where f vanishes are lines of their own (double lines on edges).
  * Everything here depends only on the tile, so both nodes that share it agree. */
 #include "core/octree/cell.h"
+#include "core/octree/singular.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -275,23 +276,35 @@ static bool chords_cross(const ism_tile *t, const double p0[3], const double p1[
 }
 
 /* Two sheets crossing inside the tile (an X): the opposite crossings lie on one sheet each
- * (parallel or anti-parallel gradients), the adjacent pairs don't, and f vanishes where the
- * two chords meet. */
-static bool is_crossing_x(ism_cell_ctx *cx, const ism_tile *t, ism_fevent *k[4],
-                          double best_family)
+ * (parallel or anti-parallel gradients), and where the two chords meet f vanishes and so
+ * does its gradient (where two sheets cross, f is singular). Two parallel sheets close
+ * together pass the first tests but not the last: between them ∇f is as large as anywhere. */
+static bool is_crossing_x(ism_cell_ctx *cx, const ism_tile *t, ism_fevent *k[4], double x[3])
 {
     double gt = cx->roots.gradient_test;
     if (fabs(unit_dot(k[0]->pt.g, k[2]->pt.g)) < gt || fabs(unit_dot(k[1]->pt.g, k[3]->pt.g)) < gt)
         return false;
-    if (best_family >= 2 * gt)
-        return false;
-    double x[3];
     if (!chords_cross(t, k[0]->pt.p, k[2]->pt.p, k[1]->pt.p, k[3]->pt.p, x))
         return false;
     double gbar = 0;
     for (int i = 0; i < 4; i++)
         gbar += ism_norm3(k[i]->pt.g) / 4;
-    return fabs(ism_sample_f(&cx->s, x)) <= 0.05 * gbar * tile_size(cx, t);
+    double g[3];
+    double f = ism_sample_grad(&cx->s, x, g);
+    return fabs(f) <= 0.05 * gbar * tile_size(cx, t) && ism_norm3(g) <= 0.25 * gbar;
+}
+
+/* A singular point of f on the tile (f = 0, ∇f = 0, a cone's apex lying in the face),
+ * searched from where the crossing lines meet; the same tile gives the same point to both
+ * nodes that share it. */
+static bool find_tile_singular_point(ism_cell_ctx *cx, const ism_tile *t, const double x[3],
+                                     ism_fpoint *s)
+{
+    const ism_grid *g = &cx->tree->grid;
+    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    double lo[2] = {ism_grid_coord(g, u, t->u0), ism_grid_coord(g, v, t->v0)};
+    double hi[2] = {ism_grid_coord(g, u, t->u1), ism_grid_coord(g, v, t->v1)};
+    return ism_find_singular_point_on_plane(&cx->s, t->axis, x, lo, hi, s);
 }
 
 /* The paper's double-root search across the middle of t1t2: a double line lies on the face
@@ -377,10 +390,12 @@ static int family(const ism_cell_ctx *cx, const int *cross, int nc, int cut, pai
 
 #define MAX_CROSS 64
 
-/* Joins crossings into lines; writes them to lines[] and returns how many. */
+/* Joins crossings into lines; writes them to lines[] and returns how many. When two sheets
+ * cross inside the tile, *x is set to where their lines meet and *crossed to true. */
 static int pair_crossings(ism_cell_ctx *cx, const ism_tile *t, const int *cross, int nc,
-                          pair *lines)
+                          pair *lines, bool *crossed, double x[3])
 {
+    *crossed = false;
     if (nc == 2) {
         lines[0] = (pair){cross[0], cross[1]};
         return 1;
@@ -392,8 +407,9 @@ static int pair_crossings(ism_cell_ctx *cx, const ism_tile *t, const int *cross,
     if (nc == 4) {
         ism_fevent *k[4] = {&cx->ev[cross[0]], &cx->ev[cross[1]], &cx->ev[cross[2]],
                             &cx->ev[cross[3]]};
-        if (is_crossing_x(cx, t, k, sp > sm ? sp : sm)) {
+        if (is_crossing_x(cx, t, k, x)) {
             cx->stats.crossed_faces++;
+            *crossed = true;
             lines[0] = (pair){cross[0], cross[2]};
             lines[1] = (pair){cross[1], cross[3]};
             return 2;
@@ -458,8 +474,21 @@ bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
         nc--;
     }
     pair lines[MAX_CROSS];
-    int nl = nc ? pair_crossings(cx, t, cross, nc, lines) : 0;
+    bool crossed = false;
+    double x[3];
+    int nl = nc ? pair_crossings(cx, t, cross, nc, lines, &crossed, x) : 0;
     bool line_used[MAX_CROSS] = {false};
+    ism_fpoint apex;
+    if (crossed && find_tile_singular_point(cx, t, x, &apex)) {
+        /* the two sheets cross at a singular point of the face: all four lines meet there */
+        cx->stats.singular_points++;
+        for (int l = 0; l < 2; l++) {
+            line_used[l] = true;
+            if (!ism_flines_push(&cx->lines, &cx->ev[lines[l].a].pt, &apex, ISM_LINE_REGULAR) ||
+                !ism_flines_push(&cx->lines, &apex, &cx->ev[lines[l].b].pt, ISM_LINE_REGULAR))
+                return false;
+        }
+    }
 
     /* tangent roots: double lines between pairs of them, else wedge apexes */
     bool touch_used[MAX_CROSS] = {false};

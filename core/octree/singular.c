@@ -57,6 +57,27 @@ static bool indefinite(double m[3][3])
     return !positive && !negative;
 }
 
+/* Accepts p as a singular point: on the surface, gradient vanishing, Hessian non-degenerate
+ * and indefinite (relative to the Hessian's size and the node size). */
+static bool accept(ism_sampler *smp, const double p[3], double size, ism_fpoint *s)
+{
+    double g[3], h[6], m[3][3];
+    smp->n_gradient++;
+    double f = ism_eval_hessian(smp->tape, smp->ws, p[0], p[1], p[2], g, h);
+    full(h, m);
+    double hn = frobenius(m);
+    if (!(hn > 0) || !isfinite(hn))
+        return false;
+    if (!(fabs(f) <= 1e-8 * hn * size * size) || !(ism_norm3(g) <= 1e-6 * hn * size))
+        return false;
+    if (fabs(det3(m)) < 1e-3 * hn * hn * hn || !indefinite(m))
+        return false;
+    memcpy(s->p, p, sizeof s->p);
+    memset(s->g, 0, sizeof s->g);
+    s->flags = ISM_FP_INTERIOR | ISM_FP_SINGULAR;
+    return true;
+}
+
 bool ism_find_singular_point(ism_sampler *smp, const double lo[3], const double hi[3],
                              ism_fpoint *s)
 {
@@ -66,10 +87,10 @@ bool ism_find_singular_point(ism_sampler *smp, const double lo[3], const double 
         if (hi[k] - lo[k] < size)
             size = hi[k] - lo[k];
     }
-    double g[3], h[6], m[3][3], f = 0;
+    double g[3], h[6], m[3][3];
     for (int it = 0; it < NEWTON_STEPS; it++) {
         smp->n_gradient++;
-        f = ism_eval_hessian(smp->tape, smp->ws, p[0], p[1], p[2], g, h);
+        ism_eval_hessian(smp->tape, smp->ws, p[0], p[1], p[2], g, h);
         full(h, m);
         double hn = frobenius(m);
         if (!(hn > 0) || !isfinite(hn) || fabs(det3(m)) < 1e-3 * hn * hn * hn)
@@ -84,20 +105,40 @@ bool ism_find_singular_point(ism_sampler *smp, const double lo[3], const double 
         if (ism_norm3(step) < 1e-14 * size)
             break;
     }
-    smp->n_gradient++;
-    f = ism_eval_hessian(smp->tape, smp->ws, p[0], p[1], p[2], g, h);
-    full(h, m);
-    double hn = frobenius(m);
     double margin = 1e-9 * size;
     for (int k = 0; k < 3; k++)
         if (!(p[k] > lo[k] + margin && p[k] < hi[k] - margin))
             return false; /* on or outside the boundary: the neighbours could not agree */
-    if (!(fabs(f) <= 1e-8 * hn * size * size) || !(ism_norm3(g) <= 1e-6 * hn * size))
+    return accept(smp, p, size, s);
+}
+
+bool ism_find_singular_point_on_plane(ism_sampler *smp, int axis, const double start[3],
+                                      const double lo[2], const double hi[2], ism_fpoint *s)
+{
+    int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    double p[3] = {start[0], start[1], start[2]};
+    double size = hi[0] - lo[0] < hi[1] - lo[1] ? hi[0] - lo[0] : hi[1] - lo[1];
+    double g[3], h[6], m[3][3];
+    for (int it = 0; it < NEWTON_STEPS; it++) {
+        smp->n_gradient++;
+        ism_eval_hessian(smp->tape, smp->ws, p[0], p[1], p[2], g, h);
+        full(h, m);
+        double a = m[u][u], b = m[u][v], d = m[v][v];
+        double det = a * d - b * b, scale = fabs(a) + fabs(b) + fabs(d);
+        if (!(scale > 0) || !isfinite(det) || fabs(det) < 1e-6 * scale * scale)
+            return false;
+        double su = -(d * g[u] - b * g[v]) / det, sv = -(a * g[v] - b * g[u]) / det;
+        p[u] += su;
+        p[v] += sv;
+        if (!(p[u] > lo[0] - size && p[u] < hi[0] + size && p[v] > lo[1] - size &&
+              p[v] < hi[1] + size))
+            return false;
+        if (fabs(su) + fabs(sv) < 1e-14 * size)
+            break;
+    }
+    double margin = 1e-9 * size;
+    if (!(p[u] > lo[0] + margin && p[u] < hi[0] - margin && p[v] > lo[1] + margin &&
+          p[v] < hi[1] - margin))
         return false;
-    if (fabs(det3(m)) < 1e-3 * hn * hn * hn || !indefinite(m))
-        return false;
-    memcpy(s->p, p, sizeof s->p);
-    memset(s->g, 0, sizeof s->g);
-    s->flags = ISM_FP_INTERIOR | ISM_FP_SINGULAR;
-    return true;
+    return accept(smp, p, size, s);
 }

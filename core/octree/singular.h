@@ -15,4 +15,11 @@
 bool ism_find_singular_point(ism_sampler *smp, const double lo[3], const double hi[3],
                              ism_fpoint *s);
 
+/* The same on the lattice plane through start perpendicular to `axis` (start[axis] stays
+ * as it is, exactly): Newton on the in-plane gradient from start; accepted strictly inside
+ * the rectangle lo..hi (in the plane's two other axes, in order (axis+1)%3, (axis+2)%3),
+ * with the full gradient vanishing and the Hessian non-degenerate and indefinite. */
+bool ism_find_singular_point_on_plane(ism_sampler *smp, int axis, const double start[3],
+                                      const double lo[2], const double hi[2], ism_fpoint *s);
+
 #endif

@@ -119,6 +119,8 @@ static bool build_graph(graph *g, const ism_flines *l)
         for (size_t k = i; k < j; k++) {
             g->node[refs[k].end] = pt;
             shared |= is_shared(l, refs[k].end);
+            /* a singular point ends chains too: each sheet's polygon passes it once */
+            shared |= (end_point(l, refs[k].end)->flags & ISM_FP_SINGULAR) != 0;
         }
         g->terminal[pt] = shared;
         if (!shared)
