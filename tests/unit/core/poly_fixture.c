@@ -153,3 +153,77 @@ size_t pf_count_nm_edges(const ism_mesh *m, bool (*pred)(const double a[3], cons
     free(e);
     return count;
 }
+
+size_t pf_vertex_cones(const ism_mesh *m, uint32_t v)
+{
+    size_t n = 0, cap = 64;
+    size_t *tris = malloc(cap * sizeof *tris);
+    cr_assert(tris);
+    for (size_t t = 0; t < m->ntris; t++)
+        for (int k = 0; k < 3; k++)
+            if (m->tri[3 * t + k] == v) {
+                if (n == cap)
+                    cr_assert(tris = realloc(tris, (cap *= 2) * sizeof *tris));
+                tris[n++] = t;
+            }
+    uint32_t *parent = malloc((n + 1) * sizeof *parent);
+    cr_assert(parent);
+    for (uint32_t i = 0; i < n; i++)
+        parent[i] = i;
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = i + 1; j < n; j++) {
+            int shared = 0; /* vertices other than v common to both triangles */
+            for (int a = 0; a < 3; a++)
+                for (int b = 0; b < 3; b++) {
+                    uint32_t p = m->tri[3 * tris[i] + a], q = m->tri[3 * tris[j] + b];
+                    shared += p == q && p != v;
+                }
+            if (shared >= 1)
+                parent[find(parent, (uint32_t)i)] = find(parent, (uint32_t)j);
+        }
+    size_t cones = 0;
+    for (uint32_t i = 0; i < n; i++)
+        cones += find(parent, i) == i;
+    free(tris);
+    free(parent);
+    return cones;
+}
+
+bool pf_nm_edges_one_closed_curve(const ism_mesh *m, size_t *nedges)
+{
+    edge *e = sorted_edges(m);
+    size_t n = m->ntris * 3;
+    uint32_t *deg = calloc(m->nverts + 1, sizeof *deg);
+    uint32_t *parent = malloc((m->nverts + 1) * sizeof *parent);
+    cr_assert(deg && parent);
+    for (uint32_t v = 0; v < m->nverts; v++)
+        parent[v] = v;
+    *nedges = 0;
+    for (size_t i = 0; i < n;) {
+        size_t j = i;
+        while (j < n && e[j].a == e[i].a && e[j].b == e[i].b)
+            j++;
+        if (j - i > 2) {
+            (*nedges)++;
+            deg[e[i].a]++;
+            deg[e[i].b]++;
+            parent[find(parent, e[i].a)] = find(parent, e[i].b);
+        }
+        i = j;
+    }
+    bool ok = *nedges > 0;
+    uint32_t root = UINT32_MAX;
+    for (uint32_t v = 0; v < m->nverts && ok; v++) {
+        if (!deg[v])
+            continue;
+        ok = deg[v] == 2;
+        uint32_t r = find(parent, v);
+        if (root == UINT32_MAX)
+            root = r;
+        ok = ok && r == root;
+    }
+    free(e);
+    free(deg);
+    free(parent);
+    return ok;
+}

@@ -42,6 +42,14 @@ void pf_measure(const ism_mesh *m, const ism_tape *t, pf_props *p);
 /* Non-manifold edges (more than two triangles) whose two end points satisfy pred. */
 size_t pf_count_nm_edges(const ism_mesh *m, bool (*pred)(const double a[3], const double b[3]));
 
+/* Number of fans of triangles around vertex v (triangles containing v, joined when they
+ * share an edge through v): 1 for a manifold vertex, 2 where two cones meet. */
+size_t pf_vertex_cones(const ism_mesh *m, uint32_t v);
+
+/* True when the non-manifold edges form exactly one closed curve (every vertex on them
+ * meets two of them, and they are connected). */
+bool pf_nm_edges_one_closed_curve(const ism_mesh *m, size_t *nedges);
+
 /* Finest cell size of the box at depth d (the smallest side / 2^d). */
 double pf_cell(const double box[6], int d);
 
