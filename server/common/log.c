@@ -3,7 +3,10 @@
 #include "server/common/log.h"
 
 #include <errno.h>
+#include <pthread.h>
 #include <stdarg.h>
+#include <stdatomic.h>
+#include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -115,11 +118,8 @@ static void add_time(line *l)
          tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, ts.tv_nsec / 1000000);
 }
 
-static void emit(line *l)
+static void write_all(const char *p, size_t left)
 {
-    l->buf[l->len++] = '\n';
-    const char *p = l->buf;
-    size_t left = l->len;
     while (left) {
         ssize_t w = write(STDERR_FILENO, p, left);
         if (w < 0 && errno == EINTR)
@@ -129,6 +129,110 @@ static void emit(line *l)
         p += w;
         left -= (size_t)w;
     }
+}
+
+/* ---- the background writer ------------------------------------------------------------ */
+
+#define ASYNC_CAPACITY (1u << 20)
+
+static struct {
+    pthread_mutex_t lock;
+    pthread_cond_t wake;
+    char *ring;
+    size_t head, len;          /* queued bytes start at head (mod capacity) */
+    bool running, stopping;
+    pthread_t thread;
+} async = {.lock = PTHREAD_MUTEX_INITIALIZER, .wake = PTHREAD_COND_INITIALIZER};
+static atomic_ullong dropped;
+
+/* Queues one whole line; false when the writer is not running. */
+static bool enqueue(const char *p, size_t n)
+{
+    pthread_mutex_lock(&async.lock);
+    if (!async.running) {
+        pthread_mutex_unlock(&async.lock);
+        return false;
+    }
+    if (ASYNC_CAPACITY - async.len < n) {
+        atomic_fetch_add(&dropped, 1);
+    } else {
+        size_t tail = (async.head + async.len) % ASYNC_CAPACITY;
+        size_t first = n < ASYNC_CAPACITY - tail ? n : ASYNC_CAPACITY - tail;
+        memcpy(async.ring + tail, p, first);
+        memcpy(async.ring, p + first, n - first);
+        async.len += n;
+        pthread_cond_signal(&async.wake);
+    }
+    pthread_mutex_unlock(&async.lock);
+    return true;
+}
+
+static void *writer_main(void *arg)
+{
+    (void)arg;
+    char chunk[LINE_MAX_BYTES];
+    pthread_mutex_lock(&async.lock);
+    for (;;) {
+        while (!async.len && !async.stopping)
+            pthread_cond_wait(&async.wake, &async.lock);
+        if (!async.len)
+            break;
+        /* whole lines only, at most one pipe-atomic write */
+        size_t n = async.len < sizeof chunk ? async.len : sizeof chunk;
+        for (size_t i = 0; i < n; i++)
+            chunk[i] = async.ring[(async.head + i) % ASYNC_CAPACITY];
+        while (n > 0 && chunk[n - 1] != '\n')
+            n--;
+        if (n == 0) /* cannot happen: lines are shorter than a chunk */
+            n = async.len < sizeof chunk ? async.len : sizeof chunk;
+        async.head = (async.head + n) % ASYNC_CAPACITY;
+        async.len -= n;
+        pthread_mutex_unlock(&async.lock);
+        write_all(chunk, n);
+        pthread_mutex_lock(&async.lock);
+    }
+    pthread_mutex_unlock(&async.lock);
+    return NULL;
+}
+
+void ism_log_async(bool on)
+{
+    pthread_mutex_lock(&async.lock);
+    if (on && !async.running) {
+        async.ring = malloc(ASYNC_CAPACITY);
+        async.head = async.len = 0;
+        async.stopping = false;
+        async.running = async.ring && pthread_create(&async.thread, NULL, writer_main, NULL) == 0;
+        if (!async.running) {
+            free(async.ring);
+            async.ring = NULL;
+        }
+        pthread_mutex_unlock(&async.lock);
+        return;
+    }
+    if (!on && async.running) {
+        async.stopping = true;
+        pthread_cond_signal(&async.wake);
+        pthread_mutex_unlock(&async.lock);
+        pthread_join(async.thread, NULL);
+        pthread_mutex_lock(&async.lock);
+        async.running = false;
+        free(async.ring);
+        async.ring = NULL;
+    }
+    pthread_mutex_unlock(&async.lock);
+}
+
+unsigned long long ism_log_dropped(void)
+{
+    return atomic_load(&dropped);
+}
+
+static void emit(line *l)
+{
+    l->buf[l->len++] = '\n';
+    if (!enqueue(l->buf, l->len))
+        write_all(l->buf, l->len);
 }
 
 void ism_log_fields(ism_log_level level, const char *event, const ism_log_field *fields,

@@ -1,5 +1,6 @@
 /* log.h — one line per event on stderr, as `key=value` text or as one JSON object per line,
- * written with a single write(2) so lines from several threads and processes never mix. */
+ * written with a single write(2) so lines from several threads and processes never mix
+ * (or queued for a writer thread, see ism_log_async). */
 #ifndef ISM_LOG_H
 #define ISM_LOG_H
 
@@ -31,6 +32,14 @@ typedef struct ism_log_field {
 /* One line: time, level, event name, then the fields in order. */
 void ism_log_fields(ism_log_level level, const char *event, const ism_log_field *fields,
                     size_t n);
+
+/* Background writing (for a server's event loop): lines go into a bounded in-memory queue
+ * that one thread writes out, in writes of whole lines of at most 4096 bytes (so they never
+ * mix with other processes' lines on a shared pipe). A full queue drops the line instead of
+ * blocking the caller (a stuck log reader must not stall the service); ism_log_dropped counts
+ * them. ism_log_async(false) writes out everything queued and stops the thread. */
+void ism_log_async(bool on);
+unsigned long long ism_log_dropped(void);
 
 /* One line with a free-text message (printf format) in the field "msg". */
 void ism_logf(ism_log_level level, const char *event, const char *fmt, ...)

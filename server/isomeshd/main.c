@@ -168,6 +168,7 @@ int main(int argc, char **argv)
     if (rc)
         return rc == 1 ? 0 : 2;
     ism_log_setup("isomeshd", cfg.log_format);
+    ism_log_async(true); /* the HTTP thread never blocks on a slow log reader */
     signal(SIGPIPE, SIG_IGN);
     signal(SIGHUP, SIG_IGN);
     sigset_t stop_signals;
@@ -189,6 +190,7 @@ int main(int argc, char **argv)
                          cfg.client_jobs, &s.metrics) ||
         !(s.jobs = ismd_jobs_new(&s.metrics))) {
         ism_logf(ISM_LOG_ERROR, "startup_failed", "out of memory");
+        ism_log_async(false);
         return 1;
     }
     load_docs(&s, &cfg);
@@ -196,8 +198,10 @@ int main(int argc, char **argv)
 
     unsigned short port = 0;
     int lfd = listen_on(cfg.listen_host, cfg.listen_port, &port);
-    if (lfd < 0)
+    if (lfd < 0) {
+        ism_log_async(false);
         return 1;
+    }
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     int threads = cores > cfg.workers ? (int)(cores / cfg.workers) : 1;
     ismd_pool_config pc = {
@@ -209,8 +213,10 @@ int main(int argc, char **argv)
         .threads = threads,
     };
     s.pool = ismd_pool_start(&pc, &s.sched, &s.cache, &s.metrics);
-    if (!s.pool || !ismd_http_start(&s, lfd))
+    if (!s.pool || !ismd_http_start(&s, lfd)) {
+        ism_log_async(false);
         return 1;
+    }
     ism_log_field f[] = {
         ISM_LS("host", cfg.listen_host), ISM_LI("port", port), ISM_LI("workers", cfg.workers),
         ISM_LS("cache_dir", cfg.cache_dir), ISM_LS("web_root", s.web.root_fd >= 0 ? s.web.root : NULL),
@@ -239,5 +245,6 @@ int main(int argc, char **argv)
     ismd_static_close(&s.web);
     ismd_static_close(&s.vendor);
     ism_logf(ISM_LOG_INFO, "stopped", "clean shutdown");
+    ism_log_async(false);
     return 0;
 }

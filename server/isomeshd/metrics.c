@@ -2,6 +2,8 @@
  * Prometheus text rendering (HELP/TYPE lines, cumulative histogram buckets). */
 #include "server/isomeshd/metrics.h"
 
+#include "server/common/log.h"
+
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -243,6 +245,10 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
              ld(&m->worker_restarts[i]));
     header(&o, "isomesh_worker_spawn_failures_total", "counter", "Failed worker starts.");
     emit(&o, "isomesh_worker_spawn_failures_total %llu\n", ld(&m->worker_spawn_failures));
+
+    header(&o, "isomesh_log_lines_dropped_total", "counter",
+           "Log lines dropped because the log reader fell behind.");
+    emit(&o, "isomesh_log_lines_dropped_total %llu\n", ism_log_dropped());
 
     gauge(&o, "isomesh_queue_depth", "Computations waiting for a worker.", m->queue_depth);
     gauge(&o, "isomesh_queue_capacity", "Most computations that may wait.", m->queue_capacity);

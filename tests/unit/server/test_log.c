@@ -1,0 +1,157 @@
+/* test_log.c — structured log lines (server/common/log.h): JSON lines parse and keep every
+ * field, awkward values are escaped, background writing keeps every line whole and in order,
+ * and a log reader that stops reading never blocks the caller (lines are dropped and
+ * counted instead). */
+#include <criterion/criterion.h>
+#include <jansson.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "server/common/log.h"
+
+typedef struct capture {
+    int read_fd, saved_stderr;
+    char *text;
+    size_t len, cap;
+    pthread_t thread;
+} capture;
+
+static void *drain(void *arg)
+{
+    capture *c = arg;
+    char buf[8192];
+    ssize_t n;
+    while ((n = read(c->read_fd, buf, sizeof buf)) > 0) {
+        if (c->len + (size_t)n + 1 > c->cap) {
+            c->cap = (c->len + (size_t)n + 1) * 2;
+            c->text = realloc(c->text, c->cap);
+        }
+        memcpy(c->text + c->len, buf, (size_t)n);
+        c->len += (size_t)n;
+        c->text[c->len] = 0;
+    }
+    return NULL;
+}
+
+/* Points stderr at a pipe read by a thread. */
+static void capture_start(capture *c)
+{
+    memset(c, 0, sizeof *c);
+    int p[2];
+    cr_assert_eq(pipe(p), 0);
+    c->read_fd = p[0];
+    c->saved_stderr = dup(STDERR_FILENO);
+    dup2(p[1], STDERR_FILENO);
+    close(p[1]);
+    pthread_create(&c->thread, NULL, drain, c);
+}
+
+static void capture_stop(capture *c)
+{
+    dup2(c->saved_stderr, STDERR_FILENO);
+    close(c->saved_stderr);
+    pthread_join(c->thread, NULL);
+    close(c->read_fd);
+    if (!c->text)
+        c->text = calloc(1, 1);
+}
+
+Test(log, json_lines_parse_and_escape)
+{
+    ism_log_setup("test", ISM_LOG_JSON);
+    capture c;
+    capture_start(&c);
+    ism_log_field f[] = {ISM_LS("path", "/a \"quoted\"\\path\n\x01"), ISM_LI("status", 404),
+                         ISM_LN("ms", 1.25), ISM_LS("key", NULL)};
+    ism_log_fields(ISM_LOG_WARN, "request", f, 4);
+    capture_stop(&c);
+    cr_assert_eq(strchr(c.text, '\n'), c.text + c.len - 1, "not exactly one line: %s", c.text);
+    json_error_t err;
+    json_t *o = json_loads(c.text, 0, &err);
+    cr_assert_not_null(o, "%s: %s", err.text, c.text);
+    cr_assert_str_eq(json_string_value(json_object_get(o, "path")), "/a \"quoted\"\\path\n\x01");
+    cr_assert_eq(json_integer_value(json_object_get(o, "status")), 404);
+    cr_assert_float_eq(json_number_value(json_object_get(o, "ms")), 1.25, 1e-9);
+    cr_assert(json_is_null(json_object_get(o, "key")));
+    cr_assert_str_eq(json_string_value(json_object_get(o, "level")), "warn");
+    cr_assert_str_eq(json_string_value(json_object_get(o, "event")), "request");
+    json_decref(o);
+    free(c.text);
+}
+
+Test(log, text_values_with_spaces_are_quoted)
+{
+    ism_log_setup("test", ISM_LOG_TEXT);
+    capture c;
+    capture_start(&c);
+    ism_log_field f[] = {ISM_LS("a", "plain"), ISM_LS("b", "two words"), ISM_LS("c", "")};
+    ism_log_fields(ISM_LOG_INFO, "thing", f, 3);
+    capture_stop(&c);
+    cr_assert(strstr(c.text, " a=plain "), "%s", c.text);
+    cr_assert(strstr(c.text, " b=\"two words\" "), "%s", c.text);
+    cr_assert(strstr(c.text, " c=\"\"\n"), "%s", c.text);
+    free(c.text);
+}
+
+Test(log, background_writer_keeps_lines_whole_and_in_order)
+{
+    ism_log_setup("test", ISM_LOG_JSON);
+    capture c;
+    capture_start(&c);
+    ism_log_async(true);
+    char pad[1500];
+    memset(pad, 'x', sizeof pad - 1);
+    pad[sizeof pad - 1] = 0;
+    for (int i = 0; i < 3000; i++) {
+        /* under 1 MiB in all, so nothing may be dropped even if the writer never ran */
+        ism_log_field f[] = {ISM_LI("i", i), ISM_LS("pad", i % 10 ? "" : pad)};
+        ism_log_fields(ISM_LOG_INFO, "n", f, 2);
+    }
+    ism_log_async(false);
+    capture_stop(&c);
+    cr_assert_eq(ism_log_dropped(), 0);
+    int next = 0;
+    for (char *line = strtok(c.text, "\n"); line; line = strtok(NULL, "\n")) {
+        json_t *o = json_loads(line, 0, NULL);
+        cr_assert_not_null(o, "a broken line: %.80s", line);
+        cr_assert_eq(json_integer_value(json_object_get(o, "i")), next);
+        next++;
+        json_decref(o);
+    }
+    cr_assert_eq(next, 3000);
+    free(c.text);
+}
+
+static void give_up(int sig)
+{
+    (void)sig;
+    _exit(3); /* the caller blocked: the test fails as a crash */
+}
+
+Test(log, a_stuck_reader_never_blocks_the_caller)
+{
+    signal(SIGPIPE, SIG_IGN);
+    signal(SIGALRM, give_up);
+    ism_log_setup("test", ISM_LOG_TEXT);
+    int p[2];
+    cr_assert_eq(pipe(p), 0); /* nobody reads p[0] */
+    int saved = dup(STDERR_FILENO);
+    dup2(p[1], STDERR_FILENO);
+    ism_log_async(true);
+    alarm(20);
+    for (int i = 0; i < 40000; i++) { /* ~4 MB of lines into a 64 KB pipe */
+        ism_log_field f[] = {ISM_LI("i", i), ISM_LS("filler", "0123456789012345678901234567890123456789012345678901234567890123456789")};
+        ism_log_fields(ISM_LOG_INFO, "flood", f, 2);
+    }
+    alarm(0);
+    unsigned long long lost = ism_log_dropped();
+    close(p[0]); /* the writer's blocked write now fails and it can finish */
+    dup2(saved, STDERR_FILENO);
+    close(p[1]);
+    ism_log_async(false);
+    cr_assert_gt(lost, 0, "a full queue must drop lines");
+}
