@@ -20,8 +20,7 @@ ORIGIN = "https://viewer.example"
 class ApiTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
-        cls.d = Daemon("--workers", "2", "--cors-origin", ORIGIN, "--max-body", "64K",
-                       "--max-depth", "9")
+        cls.d = Daemon("--workers", "2", "--cors-origin", ORIGIN, "--max-body", "64K")
         try:
             cls.d.start()
         except Exception:

@@ -115,8 +115,11 @@ class WorkerTest(unittest.TestCase):
             self.assertTrue(int(r.header("Retry-After")) > 0)
             self.assert_error(d.post("/v1/jobs", sphere(0.62)), 429, "too_many_requests")
             # joining the computation already in flight is not a new one
-            self.assertEqual(d.post("/v1/jobs", SLOW).status, 202)
+            joined = d.post("/v1/jobs", SLOW)
+            self.assertEqual(joined.status, 202)
             self.assertEqual(d.metric("isomesh_rejected_total", reason="client_limit"), 2)
+            for job in (first.json(), joined.json()):
+                d.request("DELETE", job["url"])
 
     def test_sigterm_with_a_running_computation_exits_cleanly(self):
         d = Daemon("--workers", "1", "--job-timeout", "2s")
