@@ -6,7 +6,7 @@
 #include <math.h>
 
 #define FALSI_MAX_ITERS 60
-#define FALSI_TOLERANCE 1e-11 /* bracket width, as a fraction of the segment */
+#define FALSI_TOLERANCE 1e-10 /* bracket width, as a fraction of the segment */
 
 static void lerp(const double a[3], const double b[3], double t, double out[3])
 {
@@ -97,6 +97,19 @@ static double gradient_agreement(const double ga[3], const double gb[3])
     return ism_dot3(ga, gb) / (na * nb);
 }
 
+/* Can f vanish on the segment a→b? Intervals over its bounding box say no rigorously. */
+static bool may_vanish(ism_sampler *s, const double a[3], const double b[3])
+{
+    ism_interval box[3];
+    for (int k = 0; k < 3; k++) {
+        box[k].lo = a[k] < b[k] ? a[k] : b[k];
+        box[k].hi = a[k] < b[k] ? b[k] : a[k];
+    }
+    s->n_interval++;
+    ism_interval r = ism_eval_interval(s->tape, s->ws, box[0], box[1], box[2]);
+    return r.lo <= 0 && r.hi >= 0;
+}
+
 /* A root whose gradient turns against an end point's hints at further roots between them. */
 static int suspect_more(const double g_end[3], const double g_root[3])
 {
@@ -122,6 +135,8 @@ void ism_segment_roots(ism_sampler *s, const ism_root_params *prm, const double 
     }
     if (gradient_agreement(ga, gb) > prm->gradient_test)
         return; /* same sign, same sheet: no root (paper eq. 2) */
+    if (!may_vanish(s, a, b))
+        return; /* the interval over the segment proves it: no root to search for */
     out->flags |= ISM_SEG_SEARCHED;
     double tc;
     int found = ism_double_root_search(s, prm, a, b, fa, fb, &tc);

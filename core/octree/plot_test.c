@@ -2,7 +2,6 @@
  * edge test, at most one crossing curve per face, planarity of the edge roots and the
  * distance of their centroid to the surface. */
 #include "core/octree/plot_test.h"
-#include "core/octree/edge_roots.h"
 
 #include <math.h>
 #include <string.h>
@@ -52,7 +51,8 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
                 return false; /* signs agree, gradients do not: maybe two roots */
             continue;
         }
-        double t = f[c0] == 0 ? 0 : f[c1] == 0 ? 1 : ism_regula_falsi(s, p[c0], p[c1], f[c0], f[c1]);
+        /* One secant step is enough to judge flatness: the exact roots come later. */
+        double t = f[c0] == 0 ? 0 : f[c1] == 0 ? 1 : f[c0] / (f[c0] - f[c1]);
         for (int a = 0; a < 3; a++) {
             roots[nroots][a] = p[c0][a] + t * (p[c1][a] - p[c0][a]);
             centroid[a] += roots[nroots][a];

@@ -159,6 +159,7 @@ static void add_cell_stats(ism_poly_stats *st, const ism_cell_ctx *cx)
     st->crossed_faces += cx->stats.crossed_faces;
     st->evals_point += cx->s.n_point;
     st->evals_gradient += cx->s.n_gradient;
+    st->evals_interval += cx->s.n_interval;
 }
 
 /* Phase 2: every candidate leaf polygonised, chunk by chunk, on all threads. */
