@@ -48,6 +48,51 @@ static bool radix_sort(uint64_t *a, size_t n)
     return true;
 }
 
+#define LINE_MASK (~(((uint64_t)1 << COORD_BITS) - 1))
+
+static size_t line_slot(const ism_breaks *b, uint64_t line)
+{
+    uint64_t h = (line >> COORD_BITS) * 0x9e3779b97f4a7c15ull;
+    return (size_t)(h ^ (h >> 29)) & b->line_mask;
+}
+
+/* Indexes the first key of every line, so a query costs one probe instead of a binary
+ * search over every break point of the tree. */
+static bool index_lines(ism_breaks *b)
+{
+    size_t lines = 0;
+    for (size_t i = 0; i < b->n; i++)
+        lines += i == 0 || (b->keys[i] & LINE_MASK) != (b->keys[i - 1] & LINE_MASK);
+    size_t cap = 16;
+    while (cap < 2 * lines)
+        cap *= 2;
+    b->line_first = calloc(cap, sizeof *b->line_first);
+    if (!b->line_first || b->n >= UINT32_MAX)
+        return false;
+    b->line_mask = cap - 1;
+    for (size_t i = 0; i < b->n; i++) {
+        if (i > 0 && (b->keys[i] & LINE_MASK) == (b->keys[i - 1] & LINE_MASK))
+            continue;
+        size_t slot = line_slot(b, b->keys[i] & LINE_MASK);
+        while (b->line_first[slot])
+            slot = (slot + 1) & b->line_mask;
+        b->line_first[slot] = (uint32_t)(i + 1);
+    }
+    return true;
+}
+
+/* Index of the first key on `line`, or b->n when the line has no break points. */
+static size_t first_on_line(const ism_breaks *b, uint64_t line)
+{
+    for (size_t slot = line_slot(b, line);; slot = (slot + 1) & b->line_mask) {
+        uint32_t f = b->line_first[slot];
+        if (!f)
+            return b->n;
+        if ((b->keys[f - 1] & LINE_MASK) == line)
+            return f - 1;
+    }
+}
+
 bool ism_breaks_build(ism_breaks *b, const ism_octree *t)
 {
     size_t leaves = 0;
@@ -80,27 +125,16 @@ bool ism_breaks_build(ism_breaks *b, const ism_octree *t)
             k[m++] = k[i];
     b->keys = k;
     b->n = m;
-    return true;
+    return index_lines(b);
 }
 
 void ism_breaks_free(ism_breaks *b)
 {
     free(b->keys);
+    free(b->line_first);
     b->keys = NULL;
+    b->line_first = NULL;
     b->n = 0;
-}
-
-static size_t lower_bound(const uint64_t *a, size_t n, uint64_t key)
-{
-    size_t lo = 0, hi = n;
-    while (lo < hi) {
-        size_t mid = lo + (hi - lo) / 2;
-        if (a[mid] < key)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo;
 }
 
 static bool push(ism_coords *c, int32_t v)
@@ -124,11 +158,13 @@ bool ism_breaks_on(const ism_breaks *b, int axis, const int32_t p[3], int32_t lo
     uint64_t line = line_key(axis, p);
     if (!push(out, lo))
         return false;
-    for (size_t i = lower_bound(b->keys, b->n, line | (uint64_t)(lo + 1)); i < b->n; i++) {
+    for (size_t i = first_on_line(b, line); i < b->n; i++) {
         uint64_t k = b->keys[i];
-        if ((k & ~(((uint64_t)1 << COORD_BITS) - 1)) != line)
+        if ((k & LINE_MASK) != line)
             break;
-        int32_t c = (int32_t)(k & (((uint64_t)1 << COORD_BITS) - 1));
+        int32_t c = (int32_t)(k & ~LINE_MASK);
+        if (c <= lo)
+            continue;
         if (c >= hi)
             break;
         if (!push(out, c))

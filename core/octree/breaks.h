@@ -13,6 +13,8 @@
 typedef struct ism_breaks {
     uint64_t *keys;  /* sorted, unique: line (axis and the two other coordinates) + position */
     size_t n;
+    uint32_t *line_first; /* open-addressing table: line -> index of its first key (+1) */
+    size_t line_mask;
 } ism_breaks;
 
 /* Collects the corners of every non-empty leaf on the three lattice lines through them. */
