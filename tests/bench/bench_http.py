@@ -291,9 +291,13 @@ def cold(build, tmp):
         print("(overhead = daemon wall - command wall, where the command also starts a process;\n"
               " daemon wall - worker time, the service's own part (HTTP, queue, framing, copies): %s ms)"
               % ", ".join("%.2f" % r[4] for r in rows))
-        worst = max(max(r[2] - r[1], r[4]) for r in rows)
-        print("goal: cold-request overhead over the bare command <= 5 ms: worst %.2f ms (%s)" %
-              (worst, "met" if worst <= 5 else "NOT met"))
+        vs_cmd = max(r[2] - r[1] for r in rows)
+        own = max(r[4] for r in rows)
+        print("goal: cold-request overhead <= 5 ms: daemon - command worst %.2f ms (%s); the "
+              "service's own part worst %.2f ms (%s)" % (vs_cmd, "met" if vs_cmd <= 5 else "NOT met",
+                                                         own, "met" if own <= 5 else "NOT met"))
+        print("(the command and the daemon run one after the other: on a loaded machine their "
+              "difference is mostly noise; the service's own part is measured inside one request)")
     finally:
         d.stop()
 
