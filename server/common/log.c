@@ -134,6 +134,7 @@ static void write_all(const char *p, size_t left)
 /* ---- the background writer ------------------------------------------------------------ */
 
 #define ASYNC_CAPACITY (1u << 20)
+#define BATCH_NS 10000000L /* 10 ms */
 
 static struct {
     pthread_mutex_t lock;
@@ -156,12 +157,14 @@ static bool enqueue(const char *p, size_t n)
     if (ASYNC_CAPACITY - async.len < n) {
         atomic_fetch_add(&dropped, 1);
     } else {
+        bool was_empty = async.len == 0;
         size_t tail = (async.head + async.len) % ASYNC_CAPACITY;
         size_t first = n < ASYNC_CAPACITY - tail ? n : ASYNC_CAPACITY - tail;
         memcpy(async.ring + tail, p, first);
         memcpy(async.ring, p + first, n - first);
         async.len += n;
-        pthread_cond_signal(&async.wake);
+        if (was_empty) /* the writer sleeps only on an empty queue */
+            pthread_cond_signal(&async.wake);
     }
     pthread_mutex_unlock(&async.lock);
     return true;
@@ -177,6 +180,14 @@ static void *writer_main(void *arg)
             pthread_cond_wait(&async.wake, &async.lock);
         if (!async.len)
             break;
+        if (!async.stopping && async.len < sizeof chunk) {
+            /* gather a batch: under load, one wake-up and a few writes per BATCH_NS instead
+             * of one per line */
+            pthread_mutex_unlock(&async.lock);
+            struct timespec ts = {0, BATCH_NS};
+            nanosleep(&ts, NULL);
+            pthread_mutex_lock(&async.lock);
+        }
         /* whole lines only, at most one pipe-atomic write */
         size_t n = async.len < sizeof chunk ? async.len : sizeof chunk;
         for (size_t i = 0; i < n; i++)
