@@ -143,7 +143,7 @@ describe('isomesh viewer', { timeout: 240000 }, () => {
     const v1 = Number(await page.inputValue('#param-mu2-value'));
     assert.ok(v1 > v0, `mu2 went from ${v0} to ${v1}`);
     assert.notEqual(second, first);
-    assert.match(await page.evaluate(() => location.hash), new RegExp(`p\\.mu2=${v1}`));
+    assert.match(await settledHref(page), new RegExp(`p\\.mu2=${v1}`));
     const stats = await getJSON(`/v1/meshes/${second}/stats`);
     assert.equal(Number((await statsPanel(page)).triangles.value), stats.mesh.triangles);
 
@@ -249,6 +249,17 @@ describe('isomesh viewer', { timeout: 240000 }, () => {
     assert.equal(await page.isHidden('#message'), true);
   });
 
+  it('says so when the surface does not cross the box', async () => {
+    const before = await loads(page);
+    await page.fill('#expr', 'x^2 + y^2 + z^2 + 1');
+    await page.click('#render');
+    await waitForMesh(page, before);
+    assert.match(await page.textContent('#message'), /does not cross this box/);
+    assert.equal(Number((await statsPanel(page)).triangles.value), 0);
+    assert.equal(await page.getAttribute('#downloads a[data-format=glb]', 'aria-disabled'), 'true');
+    assert.equal(await page.getAttribute('#downloads a[data-format=glb]', 'href'), null);
+  });
+
   it('curvature colours change the canvas and their legend is the decoded attribute', async () => {
     await choosePreset('kummer-16-nodes');
     const key = await meshKey();
@@ -288,11 +299,11 @@ describe('isomesh viewer', { timeout: 240000 }, () => {
     assert.ok(pixelStats(cut).foreground < pixelStats(whole).foreground, 'less surface is drawn');
     // The cut removes the half nearer the camera (here at y < 0), opening the surface towards us.
     assert.equal(await page.isChecked('#clip-flip'), true);
-    assert.match(await page.evaluate(() => location.hash), /clip=y,0,flip/);
+    assert.match(await settledHref(page), /clip=y,0,flip/);
     await page.uncheck('#clip-flip');
     const flipped = await viewShot(page);
     assert.ok(changedShare(cut, flipped) > 0.02, 'flipping shows the other half');
-    assert.match(await page.evaluate(() => location.hash), /clip=y,0(&|$)/);
+    assert.match(await settledHref(page), /clip=y,0(&|$)/);
     await page.uncheck('#clip-on');
   });
 

@@ -246,10 +246,30 @@ function applyDisplay() {
   viewer.setClip(state.clip);
 }
 
+// The URL follows the state, at most once every URL_INTERVAL_MS (browsers refuse a flood of
+// history updates while a slider or the camera is dragged); body[data-url-pending] says a
+// write is due.
+const URL_INTERVAL_MS = 150;
+let urlTimer = 0;
+let lastUrlWrite = -Infinity;
+
 function updateUrl() {
-  const frag = encodeState(state, paramNames);
-  history.replaceState(null, '', `#${frag}`);
+  clearTimeout(urlTimer);
+  const wait = URL_INTERVAL_MS - (performance.now() - lastUrlWrite);
+  if (wait <= 0) {
+    writeUrl();
+  } else {
+    document.body.dataset.urlPending = '1';
+    urlTimer = setTimeout(writeUrl, wait);
+  }
+}
+
+function writeUrl() {
+  lastUrlWrite = performance.now();
+  if (shownIdentity !== null) state.view = viewer.getView();
+  history.replaceState(null, '', `#${encodeState(state, paramNames)}`);
   $('share-url').value = location.href;
+  document.body.dataset.urlPending = '0';
 }
 
 // ---- computing ------------------------------------------------------------------------
@@ -326,19 +346,21 @@ function show(result, body) {
   if (!result.mesh) message('The surface does not cross this box: the mesh is empty.');
   viewer.setMesh(result, JSON.parse(body).box);
   const id = identity();
+  const refit = id !== shownIdentity;
+  shownIdentity = id;
   if (pendingView) {
     viewer.setView(pendingView);
     pendingView = null;
-  } else if (id !== shownIdentity) {
+  } else if (refit) {
     viewer.fit();
   }
-  shownIdentity = id;
   applyDisplay();
   syncFeatureKey(viewer.features ? viewer.features.counts : { edges: 0, points: 0, boundary: 0 });
   showStats(result);
   setDownloads(result);
   if (exprOk) showExprError(null);
   loads++;
+  updateUrl();
   document.body.dataset.meshKey = result.key;
   document.body.dataset.loads = String(loads);
 }
@@ -658,16 +680,7 @@ function wire() {
 
 async function start() {
   viewer = new Viewer($('view'));
-  let urlTimer = 0;
-  viewer.onViewChange = () => {
-    clearTimeout(urlTimer);
-    document.body.dataset.viewPending = '1';
-    urlTimer = setTimeout(() => {
-      state.view = viewer.getView();
-      updateUrl();
-      document.body.dataset.viewPending = '0';
-    }, 150);
-  };
+  viewer.onViewChange = updateUrl;
   wire();
   clearStats();
   try {

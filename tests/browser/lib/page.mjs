@@ -49,7 +49,7 @@ export async function settledHref(page, timeout = 20000) {
   const deadline = Date.now() + timeout;
   let last = null;
   for (;;) {
-    await page.waitForFunction(() => document.body.dataset.viewPending !== '1', null, { timeout: Math.max(1000, deadline - Date.now()) });
+    await page.waitForFunction(() => document.body.dataset.urlPending !== '1', null, { timeout: Math.max(1000, deadline - Date.now()) });
     const now = await page.evaluate(() => location.href);
     if (now === last) return now;
     if (Date.now() > deadline) throw new Error('the URL kept changing');
