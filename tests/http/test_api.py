@@ -166,10 +166,18 @@ class ApiTest(unittest.TestCase):
                                         headers={"Content-Type": "text/plain"}), 415)
         self.assertIn("application/json", err["message"])
         self.error_of(self.d.post("/v1/jobs", b'{"preset": "sphere"}',
-                                  headers={"Content-Type": "application/x-www-form-urlencoded"}), 415)
+                                  headers={"Content-Type": "multipart/form-data; boundary=x"}), 415)
         ok = self.d.post("/v1/mesh", b'{"preset": "sphere"}',
                          headers={"Content-Type": "application/json; charset=utf-8"})
         self.assertEqual(ok.status, 200)
+
+    def test_curl_d_default_content_type_is_read_as_json(self):
+        # `curl -d @req.json` sends application/x-www-form-urlencoded: still strict JSON
+        ok = self.d.post("/v1/mesh", b'{"preset": "sphere"}',
+                         headers={"Content-Type": "application/x-www-form-urlencoded"})
+        self.assertEqual(ok.status, 200)
+        self.error_of(self.d.post("/v1/mesh", b'preset=sphere',
+                                  headers={"Content-Type": "application/x-www-form-urlencoded"}), 400)
 
     def test_wrong_method_is_405_with_allow(self):
         r = self.d.get("/v1/mesh")
