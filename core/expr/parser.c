@@ -25,6 +25,8 @@ typedef struct parser {
     int prev_line;     /* line of the last consumed token */
     const char *where;
     int depth;
+    bool in_let;       /* parsing the value of a `let NAME = EXPR` line */
+    int open_parens;   /* parentheses (groups and calls) open at this point */
 } parser;
 
 __attribute__((format(printf, 3, 4)))
@@ -180,6 +182,7 @@ static uint32_t parse_call(parser *p, const ism_token *name)
     ism_token open = p->tok;
     if (!enter(p, &open) || !next(p) || !count_node(p, name))
         return ISM_G_NONE;
+    p->open_parens++;
     uint32_t first = ISM_G_NONE, acc = ISM_G_NONE;
     ism_token second_at = p->tok;
     int nargs = 0;
@@ -208,6 +211,7 @@ static uint32_t parse_call(parser *p, const ism_token *name)
         }
     }
     p->depth--;
+    p->open_parens--;
     if (p->tok.kind != ISM_T_RPAREN) {
         char found[80];
         ism_token_describe(&p->tok, found, sizeof found);
@@ -245,7 +249,10 @@ static uint32_t parse_name(parser *p)
     ism_token name = p->tok;
     if (!next(p))
         return ISM_G_NONE;
-    if (p->tok.kind == ISM_T_LPAREN)
+    /* NAME ( is a call, except that a let's value ends at the end of its line: a '(' that
+     * starts the next line begins the next statement (`let p = w - x` then `(p + 1)^2`). */
+    bool next_statement = p->in_let && p->open_parens == 0 && p->tok.line > name.end_line;
+    if (p->tok.kind == ISM_T_LPAREN && !next_statement)
         return parse_call(p, &name);
     if (!count_node(p, &name))
         return ISM_G_NONE;
@@ -283,7 +290,9 @@ static uint32_t parse_primary(parser *p)
     case ISM_T_LPAREN: {
         if (!enter(p, &at) || !next(p))
             return ISM_G_NONE;
+        p->open_parens++;
         uint32_t e = parse_expr(p);
+        p->open_parens--;
         p->depth--;
         if (e == ISM_G_NONE || !expect(p, ISM_T_RPAREN, "')'", &at))
             return ISM_G_NONE;
@@ -397,7 +406,9 @@ static bool parse_let_statement(parser *p)
     }
     if (!next(p) || !expect(p, ISM_T_ASSIGN, "'=' after 'let NAME'", NULL))
         return false;
+    p->in_let = true;
     uint32_t value = parse_expr(p);
+    p->in_let = false;
     if (value == ISM_G_NONE)
         return false;
     if (!ism_names_add(p->c->names, name.text, name.len, ISM_N_LET, value)) {

@@ -80,6 +80,10 @@ static const valid_case VALID[] = {
     { "(x^2 + y^2 + z^2 + 1 - 0.3^2)^2 - 4*(x^2 + y^2)", c_torus },
     { "let p = x - y\nlet q = p*p + z\nq*p - 1", c_lets },
     { "let p = x - y; let q = p*p + z; q*p - 1", c_lets },
+    /* a let's value ends with its line: '(' on the next line starts the final expression,
+     * an operator on the next line continues the value */
+    { "let p = x - y\n(p*p + z)*p - 1", c_lets },
+    { "let p = x\n  - y\nlet q = p*p + z\nq*p - 1", c_lets },
     { "x^6 + y^5 - z^7", c_high },
     { "sqrt(x)", c_sqrt_clip },
     { "x/2/(y*y + 1)*z", c_div_chain },
