@@ -9,6 +9,40 @@
 #include <stdio.h>
 #include <string.h>
 
+/* Length of the valid UTF-8 sequence starting at s (1 to 4), or 0 when none starts there
+ * (a stray continuation byte, an overlong form, a surrogate, above U+10FFFF, cut short). */
+static size_t utf8_sequence(const unsigned char *s)
+{
+    unsigned c = s[0];
+    if (c < 0x80)
+        return 1;
+    if (c < 0xc2 || c > 0xf4)
+        return 0;
+    size_t n = c >= 0xf0 ? 4 : c >= 0xe0 ? 3 : 2;
+    for (size_t i = 1; i < n; i++)
+        if ((s[i] & 0xc0) != 0x80) /* also stops at the terminating NUL */
+            return 0;
+    if ((c == 0xe0 && s[1] < 0xa0) || (c == 0xed && s[1] > 0x9f) ||
+        (c == 0xf0 && s[1] < 0x90) || (c == 0xf4 && s[1] > 0x8f))
+        return 0;
+    return n;
+}
+
+/* Replaces each byte that is not part of valid UTF-8 by '?': messages quote the client's
+ * bytes (jansson's "near '...'", JSON keys in paths) and cutting a message or a path short
+ * can split a character, but the error document must stay valid JSON text. */
+static void utf8_repair(char *s)
+{
+    unsigned char *p = (unsigned char *)s;
+    while (*p) {
+        size_t n = utf8_sequence(p);
+        if (n)
+            p += n;
+        else
+            *p++ = '?';
+    }
+}
+
 bool ism_req_error_set(ism_req_error *err, int status, const char *code, const char *path,
                        const char *fmt, ...)
 {
@@ -33,6 +67,8 @@ bool ism_req_error_set(ism_req_error *err, int status, const char *code, const c
     for (const char *s = reason; *s && at < cap; s++)
         err->message[at++] = *s;
     err->message[at] = '\0';
+    utf8_repair(err->path);
+    utf8_repair(err->message);
     return false;
 }
 
