@@ -54,6 +54,8 @@ ism_blob *ism_cache_get(ism_cache *c, const char *name, int *tier)
     if (!ism_cache_name_valid(name))
         return NULL;
     for (size_t i = 0; i < c->ntiers; i++) {
+        if (c->tiers[i]->remote)
+            continue;
         ism_blob *b = c->tiers[i]->get(c->tiers[i], name);
         if (b) {
             atomic_fetch_add(&c->tiers[i]->counters.hits, 1);
@@ -80,7 +82,7 @@ bool ism_cache_has(ism_cache *c, const char *name)
     if (!ism_cache_name_valid(name))
         return false;
     for (size_t i = 0; i < c->ntiers; i++)
-        if (c->tiers[i]->has(c->tiers[i], name))
+        if (!c->tiers[i]->remote && c->tiers[i]->has(c->tiers[i], name))
             return true;
     return false;
 }
@@ -91,6 +93,15 @@ void ism_cache_put(ism_cache *c, const char *name, ism_blob *b)
         return;
     for (size_t i = 0; i < c->ntiers; i++)
         c->tiers[i]->put(c->tiers[i], name, b);
+}
+
+void ism_cache_put_local(ism_cache *c, const char *name, ism_blob *b)
+{
+    if (!b || !ism_cache_name_valid(name))
+        return;
+    for (size_t i = 0; i < c->ntiers; i++)
+        if (!c->tiers[i]->remote)
+            c->tiers[i]->put(c->tiers[i], name, b);
 }
 
 void ism_cache_close(ism_cache *c)

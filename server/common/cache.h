@@ -1,6 +1,8 @@
-/* cache.h — the mesh cache as an ordered stack of tiers (memory, disk, later a shared Redis),
- * each behind the same small interface. A lookup walks the tiers from the fastest and copies a
- * hit into the faster tiers it missed; a store goes to every tier.
+/* cache.h — the mesh cache as an ordered stack of tiers (memory, disk, a shared Redis), each
+ * behind the same small interface. A lookup walks the local tiers from the fastest and copies
+ * a hit into the faster tiers it missed; a store goes to every tier. A remote tier (Redis) is
+ * never read by a lookup: its reads are network calls that the daemon makes off the HTTP
+ * thread, on the computation's path (server/isomeshd/shared_cache.h).
  *
  * Entries are named "<key>.<ext>": the 64-hex-digit cache key of a request (pipeline.h) and
  * what the bytes are: a mesh file ("drc", "glb", "ply", "obj", "stl"), its statistics
@@ -30,6 +32,7 @@ typedef struct ism_cache_counters {
 typedef struct ism_cache_tier ism_cache_tier;
 struct ism_cache_tier {
     const char *name; /* "memory", "disk", ... */
+    bool remote;      /* reads go over the network: ism_cache_get and _has skip it */
     ism_cache_counters counters;
     /* A new reference to the entry's bytes, or NULL on a miss (ism_cache_get counts). */
     ism_blob *(*get)(ism_cache_tier *t, const char *name);
@@ -48,13 +51,15 @@ typedef struct ism_cache {
 
 /* Appends a tier below the existing ones (the first added is the fastest). */
 bool ism_cache_add_tier(ism_cache *c, ism_cache_tier *t);
-/* Looks name up, fastest tier first; *tier gets the index of the tier that hit (or -1).
+/* Looks name up in the local tiers, fastest first; *tier gets the index of the tier that hit (or -1).
  * A hit below the first tier is copied into the tiers above it. */
 ism_blob *ism_cache_get(ism_cache *c, const char *name, int *tier);
 /* Looks name up in the first tier only, without counting (cheap; used under locks). */
 ism_blob *ism_cache_get_fast(ism_cache *c, const char *name);
 bool ism_cache_has(ism_cache *c, const char *name);
 void ism_cache_put(ism_cache *c, const char *name, ism_blob *b);
+/* Stores into the local tiers only (an entry that came from a remote tier). */
+void ism_cache_put_local(ism_cache *c, const char *name, ism_blob *b);
 /* Closes every tier, slowest last. */
 void ism_cache_close(ism_cache *c);
 
