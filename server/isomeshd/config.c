@@ -15,7 +15,9 @@
 
 #include "core/version.h"
 
-typedef enum kind { K_LISTEN, K_INT, K_SIZE, K_DURATION, K_PATH, K_STRING, K_LOGFMT } kind;
+typedef enum kind {
+    K_LISTEN, K_INT, K_SIZE, K_DURATION, K_PATH, K_STRING, K_LOGFMT, K_BOOL, K_ORDER
+} kind;
 
 typedef struct flag {
     const char *name;
@@ -31,8 +33,21 @@ static const flag FLAGS[] = {
     {"workers", K_INT, 1, 256, "N", "worker processes computing meshes [one per online core]"},
     {"queue", K_INT, 0, 100000, "N",
      "computations waiting for a worker before new ones get 503 [64]"},
-    {"client-jobs", K_INT, 1, 100000, "N",
-     "computations one client address may have queued or running before 429 [32]"},
+    {"user-jobs", K_INT, 1, 100000, "N",
+     "computations one user (token user, else client address) may have queued or running "
+     "before 429 [32]"},
+    {"client-jobs", K_INT, 1, 100000, "N", "old name of --user-jobs"},
+    {"user-running", K_INT, 0, 256, "N",
+     "computations of one user on workers at once, the rest wait; 0 = no limit [0]"},
+    {"queue-order", K_ORDER, 0, 0, "fair|fifo",
+     "fair: waiting computations are served round robin across users; fifo: oldest first "
+     "[fair]"},
+    {"tokens", K_PATH, 0, 0, "FILE",
+     "bearer tokens file (`isomeshd token add NAME`): computing needs a token; re-read on "
+     "SIGHUP [none: open to all]"},
+    {"private", K_BOOL, 0, 0, "",
+     "with --tokens, reading (meshes, jobs, presets, documents, /metrics) needs a token too; "
+     "the viewer's files, /healthz and /readyz stay open"},
     {"cache-dir", K_PATH, 0, 0, "DIR",
      "disk cache directory [$XDG_CACHE_HOME/isomesh, else $HOME/.cache/isomesh]"},
     {"cache-mem", K_SIZE, 0, (long long)1 << 40, "BYTES",
@@ -167,6 +182,8 @@ static const char *describe(const flag *f)
     case K_PATH: return "expected a path shorter than 4096 bytes";
     case K_STRING: return "expected a short string without control characters";
     case K_LOGFMT: return "expected text or json";
+    case K_BOOL: return "expected true or false";
+    case K_ORDER: return "expected fair or fifo";
     }
     return "bad value";
 }
@@ -189,7 +206,8 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
             return false;
         if (!strcmp(name, "workers")) cfg->workers = (int)n;
         else if (!strcmp(name, "queue")) cfg->queue = (int)n;
-        else if (!strcmp(name, "client-jobs")) cfg->client_jobs = (int)n;
+        else if (!strcmp(name, "user-jobs") || !strcmp(name, "client-jobs")) cfg->user_jobs = (int)n;
+        else if (!strcmp(name, "user-running")) cfg->user_running = (int)n;
         else if (!strcmp(name, "max-depth")) cfg->max_depth = (int)n;
         else if (!strcmp(name, "max-triangles")) cfg->max_triangles = (size_t)n;
         return true;
@@ -212,6 +230,8 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
             return set_path(cfg->web_root, sizeof cfg->web_root, v);
         if (!strcmp(name, "data-dir"))
             return set_path(cfg->data_dir, sizeof cfg->data_dir, v);
+        if (!strcmp(name, "tokens"))
+            return set_path(cfg->tokens, sizeof cfg->tokens, v);
         return false;
     case K_STRING:
         for (const char *p = v; *p; p++)
@@ -219,6 +239,19 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
                 return false;
         return set_path(cfg->cors_origin, sizeof cfg->cors_origin, v);
     case K_LOGFMT: return ism_log_parse_format(v, &cfg->log_format);
+    case K_BOOL:
+        if (!strcmp(v, "true") || !strcmp(v, "yes") || !strcmp(v, "1") || !strcmp(v, "on"))
+            cfg->private_mode = true;
+        else if (!strcmp(v, "false") || !strcmp(v, "no") || !strcmp(v, "0") || !strcmp(v, "off"))
+            cfg->private_mode = false;
+        else
+            return false;
+        return true;
+    case K_ORDER:
+        if (strcmp(v, "fair") != 0 && strcmp(v, "fifo") != 0)
+            return false;
+        cfg->queue_fifo = !strcmp(v, "fifo");
+        return true;
     }
     return false;
 }
@@ -279,7 +312,7 @@ static void set_defaults(ismd_config *cfg)
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     cfg->workers = cores < 1 ? 1 : cores > 256 ? 256 : (int)cores;
     cfg->queue = 64;
-    cfg->client_jobs = 32;
+    cfg->user_jobs = 32;
     const char *xdg = getenv("XDG_CACHE_HOME");
     const char *home = getenv("HOME");
     if (xdg && *xdg == '/')
@@ -308,7 +341,8 @@ static void set_defaults(ismd_config *cfg)
 
 static void print_help(void)
 {
-    printf("usage: isomeshd [--config FILE] [--FLAG VALUE | --FLAG=VALUE]...\n\n"
+    printf("usage: isomeshd [--config FILE] [--FLAG VALUE | --FLAG=VALUE]...\n"
+           "       isomeshd token add|remove|list ... (bearer tokens; see the end)\n\n"
            "isomeshd serves meshes of implicit surfaces f(x,y,z) = 0 over HTTP, computed by a\n"
            "pool of `isomesh --worker` processes (the isomesh program next to isomeshd) and\n"
            "cached in memory and on disk. Every flag has a default; --config FILE reads lines\n"
@@ -321,12 +355,15 @@ static void print_help(void)
     }
     printf("  %-28s %s\n", "--config FILE", "read settings from FILE first");
     printf("  %-28s %s\n", "--help, --version", "print this or the version and exit");
-    printf("\nroutes: POST /v1/mesh, POST /v1/jobs, GET|DELETE /v1/jobs/{id},\n"
+    printf("\nroutes: POST /v1/mesh, POST|GET /v1/jobs, GET|DELETE /v1/jobs/{id},\n"
            "GET /v1/jobs/{id}/events, GET /v1/meshes/{key}.{drc,glb,ply,obj,stl},\n"
            "GET /v1/meshes/{key}/stats, GET /v1/meshes/{key}/features, GET /v1/presets,\n"
            "GET /v1/openapi.yaml, GET /v1/request.schema.json, GET /healthz, GET /readyz,\n"
            "GET /metrics, the viewer at / and three.js under /vendor/three/.\n"
-           "SIGTERM or SIGINT: stop accepting, finish or cancel running jobs, exit.\n");
+           "SIGTERM or SIGINT: stop accepting, finish or cancel running jobs, exit.\n"
+           "SIGHUP: re-read the --tokens file (a file that does not parse keeps the old one).\n"
+           "\nisomeshd token add NAME [--file FILE] [--jobs N] [--running N] [--admin] prints a\n"
+           "new token once and appends its hash to FILE; `token remove NAME`, `token list`.\n");
 }
 
 static char *trim(char *s)
@@ -408,6 +445,11 @@ static int next_flag(int argc, char **argv, int *i, const char **name, size_t *n
         return 0;
     }
     *nlen = strlen(*name);
+    const flag *f = find_flag(*name, *nlen);
+    if (f && f->kind == K_BOOL) { /* --private alone means true */
+        *value = "true";
+        return 0;
+    }
     if (*i + 1 >= argc) {
         fprintf(stderr, "isomeshd: %s needs a value (see --help)\n", a);
         return 2;
@@ -454,6 +496,10 @@ int ismd_config_load(ismd_config *cfg, int argc, char **argv)
             fprintf(stderr, "isomeshd: --%s: bad value '%s': %s\n", f->name, value, describe(f));
             return 2;
         }
+    }
+    if (cfg->private_mode && !cfg->tokens[0]) {
+        fprintf(stderr, "isomeshd: --private needs --tokens FILE\n");
+        return 2;
     }
     return 0;
 }

@@ -13,7 +13,11 @@ typedef struct ismd_config {
     unsigned short listen_port;
     int workers;              /* worker processes (default: online cores) */
     int queue;                /* jobs waiting for a worker before 503 */
-    int client_jobs;          /* computations one client address may have queued or running */
+    int user_jobs;            /* computations one user may have queued or running (429 beyond) */
+    int user_running;         /* computations of one user on workers at once (0 = no limit) */
+    bool queue_fifo;          /* --queue-order fifo (the reference); else fair round robin */
+    char tokens[4096];        /* bearer tokens file; "" = no access control */
+    bool private_mode;        /* --private: reading needs a token too */
     char cache_dir[4096];
     size_t cache_mem;         /* bytes of the in-memory LRU */
     double job_timeout_s;     /* deadline of one computation, from submission */

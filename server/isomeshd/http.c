@@ -67,7 +67,8 @@ enum MHD_Result ismd_send(ismd_req *r, unsigned status, struct MHD_Response *res
     if (cfg->cors_origin[0]) {
         MHD_add_response_header(resp, MHD_HTTP_HEADER_ACCESS_CONTROL_ALLOW_ORIGIN, cfg->cors_origin);
         MHD_add_response_header(resp, "Access-Control-Expose-Headers",
-                                "ETag, Location, X-Cache, Server-Timing, Retry-After");
+                                "ETag, Location, X-Cache, Server-Timing, Retry-After, "
+                                "WWW-Authenticate");
         if (strcmp(cfg->cors_origin, "*") != 0)
             MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY, "Origin");
     }
@@ -87,6 +88,9 @@ static enum MHD_Result respond_blob_sized(ismd_req *r, unsigned status, ism_blob
         MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, "5");
     if (resp && status == 405 && r->allow)
         MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, r->allow);
+    if (resp && status == 401)
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_WWW_AUTHENTICATE,
+                                ismd_auth_challenge(&r->who));
     if (resp && status >= 400)
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
     return ismd_send(r, status, resp);
@@ -116,6 +120,26 @@ enum MHD_Result ismd_respond_json(ismd_req *r, unsigned status, const char *json
     enum MHD_Result ok = respond_blob_sized(r, status, b, "application/json");
     ism_blob_unref(b);
     return ok;
+}
+
+/* The code and message of a 401 for this caller; counts the rejection. */
+static const char *unauthorized(ismd_req *r, const char **message)
+{
+    atomic_fetch_add(&r->srv->metrics.rejected_unauthorized, 1);
+    if (r->who.state == ISMD_AUTH_INVALID) {
+        *message = "this bearer token is not valid here (mistyped, or revoked)";
+        return "invalid_token";
+    }
+    *message = "this server needs a bearer token: send `Authorization: Bearer TOKEN` "
+               "(its administrator makes one with `isomeshd token add NAME`)";
+    return "unauthorized";
+}
+
+enum MHD_Result ismd_respond_unauthorized(ismd_req *r)
+{
+    const char *message;
+    const char *code = unauthorized(r, &message);
+    return ismd_respond_error(r, 401, code, message);
 }
 
 /* ---- waiting for a flight ------------------------------------------------------------ */
@@ -149,6 +173,7 @@ enum MHD_Result ismd_wait_for(ismd_req *r, const char *key, const char *fmt,
                                                       : fmt;
     if (!ism_cache_name(wanted, key, ext))
         return ismd_respond_error(r, 500, "internal", "bad cache name");
+    bool may_compute = !ismd_auth_lacking(s->auth, &r->who);
     r->on_ready = on_ready;
     r->waiter.done = conn_done;
     r->waiter.progress = NULL;
@@ -167,7 +192,12 @@ enum MHD_Result ismd_wait_for(ismd_req *r, const char *key, const char *fmt,
         r->cache = "hit";
         return on_ready(r);
     }
-    ismd_submit st = ismd_sched_submit(&s->sched, key, fmt, request, r->client, &r->waiter);
+    if (!may_compute) { /* not cached: computing it needs a token */
+        ismd_sched_unlock(&s->sched);
+        return ismd_respond_unauthorized(r);
+    }
+    ismd_user_limits lim = {r->who.max_jobs, r->who.max_running};
+    ismd_submit st = ismd_sched_submit(&s->sched, key, fmt, request, r->who.user, &lim, &r->waiter);
     if (st == ISMD_SUBMIT_NEW || st == ISMD_SUBMIT_JOINED) {
         r->suspended = true;
         r->cache = "miss";
@@ -184,7 +214,7 @@ enum MHD_Result ismd_wait_for(ismd_req *r, const char *key, const char *fmt,
     case ISMD_SUBMIT_CLIENT_LIMIT:
         return ismd_respond_error(r, 429, "too_many_requests",
                                   "too many computations of yours are queued or running "
-                                  "(--client-jobs); wait for one to finish");
+                                  "(--user-jobs); wait for one to finish");
     case ISMD_SUBMIT_DRAINING:
         return ismd_respond_error(r, 503, "shutting_down", "the server is shutting down");
     default:
@@ -230,7 +260,7 @@ static void route_v1(ismd_req *r, const char *p)
         set_route(r, ISMD_R_MESH, "POST, OPTIONS", ismd_route_mesh_post);
         r->wants_body = true;
     } else if (!strcmp(p, "jobs")) {
-        set_route(r, ISMD_R_JOBS, "POST, OPTIONS", ismd_route_jobs_post);
+        set_route(r, ISMD_R_JOBS, "GET, HEAD, POST, OPTIONS", ismd_route_jobs_post);
         r->wants_body = true;
     } else if (!strncmp(p, "jobs/", 5)) {
         const char *id = p + 5;
@@ -358,6 +388,7 @@ static enum MHD_Result first_call(ismd_server *s, struct MHD_Connection *conn, c
         if ((unsigned char)*p < 0x20 || (unsigned char)*p == 0x7f)
             *p = '?';
     client_of(conn, r->client, sizeof r->client);
+    ismd_auth_identify(s->auth, ismd_header(r, MHD_HTTP_HEADER_AUTHORIZATION), r->client, &r->who);
     *con_cls = r;
     atomic_fetch_add(&s->open_requests, 1);
 
@@ -374,6 +405,18 @@ static enum MHD_Result first_call(ismd_server *s, struct MHD_Connection *conn, c
     }
     if (r->route == ISMD_R_JOB)
         r->handler = !strcmp(method, "DELETE") ? ismd_route_job_delete : ismd_route_job_get;
+    if (r->route == ISMD_R_JOBS && strcmp(method, "POST") != 0) {
+        r->handler = ismd_route_jobs_list;
+        r->wants_body = false;
+    }
+    if (ismd_auth_route_needs_token(s->auth, r->route, method) &&
+        ismd_auth_lacking(s->auth, &r->who)) {
+        const char *message;
+        const char *code = unauthorized(r, &message);
+        early(r, 401, code, message); /* the body is never read */
+        r->wants_body = false;
+        return MHD_YES;
+    }
     if (!r->wants_body)
         return MHD_YES;
     const char *cl = ismd_header(r, MHD_HTTP_HEADER_CONTENT_LENGTH);
@@ -506,6 +549,7 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
         ISM_LS("cache", r->cache),
         ISM_LS("key", r->key[0] ? r->key : NULL),
         ISM_LS("client", r->client),
+        ISM_LS("user", r->who.state == ISMD_AUTH_OK ? r->who.user : NULL),
         ISM_LS("end", toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? "ok" : "aborted"),
     };
     ism_log_fields(ISM_LOG_INFO, "request", f, sizeof f / sizeof f[0]);

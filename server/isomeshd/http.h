@@ -16,6 +16,7 @@
 #include "server/common/blob.h"
 #include "server/common/cache.h"
 #include "server/common/pipeline.h"
+#include "server/isomeshd/auth.h"
 #include "server/isomeshd/config.h"
 #include "server/isomeshd/metrics.h"
 #include "server/isomeshd/sched.h"
@@ -32,6 +33,7 @@ typedef struct ismd_server {
     ismd_sched sched;
     ismd_pool *pool;
     ismd_jobs *jobs;
+    ismd_auth *auth;             /* bearer tokens (auth.h); disabled without --tokens */
     ism_pipeline_limits limits;
     ismd_static web, vendor;
     ism_blob *openapi, *schema, *presets;
@@ -54,6 +56,7 @@ struct ismd_req {
     char method[8];
     char path[512];            /* URL path, truncated for the log */
     char client[64];
+    ismd_identity who;         /* the caller: token user or client address (auth.h) */
     long long t0_ns;
     /* body */
     char *body;
@@ -104,6 +107,8 @@ enum MHD_Result ismd_respond_error(ismd_req *r, unsigned status, const char *cod
 /* An error whose JSON body is already made (e.g. the pipeline's). */
 enum MHD_Result ismd_respond_error_blob(ismd_req *r, unsigned status, ism_blob *json);
 enum MHD_Result ismd_respond_json(ismd_req *r, unsigned status, const char *json);
+/* 401 with WWW-Authenticate: the caller needs a (valid) bearer token. */
+enum MHD_Result ismd_respond_unauthorized(ismd_req *r);
 
 /* Joins or starts the flight for key.fmt (request = canonical request JSON) and suspends
  * the connection; on_ready answers once it ends. A memory-cache hit found under the lock
@@ -122,6 +127,7 @@ enum MHD_Result ismd_route_mesh_post(ismd_req *r);       /* POST /v1/mesh */
 enum MHD_Result ismd_route_mesh_get(ismd_req *r);        /* GET /v1/meshes/{key}.{fmt} */
 enum MHD_Result ismd_route_mesh_json(ismd_req *r);       /* GET /v1/meshes/{key}/stats|features */
 enum MHD_Result ismd_route_jobs_post(ismd_req *r);       /* POST /v1/jobs */
+enum MHD_Result ismd_route_jobs_list(ismd_req *r);       /* GET /v1/jobs */
 enum MHD_Result ismd_route_job_get(ismd_req *r);         /* GET /v1/jobs/{id} */
 enum MHD_Result ismd_route_job_delete(ismd_req *r);      /* DELETE /v1/jobs/{id} */
 enum MHD_Result ismd_route_job_events(ismd_req *r);      /* GET /v1/jobs/{id}/events */

@@ -1,86 +1,245 @@
-/* job_queue.c — the bounded FIFO implementation of job_queue.h, threaded through the
- * flights' own queue links (no allocation per push). */
+/* job_queue.c — the per-user queue of job_queue.h: a line per user (flights threaded through
+ * their own queue links, no allocation per push), a name table of lines, and the two orders.
+ * A line exists while its user has anything queued or running, so the lines are bounded by
+ * the queue's capacity plus the workers, and pop scans them (a few dozen on a lab server). */
 #include "server/isomeshd/job_queue.h"
 
+#include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "server/isomeshd/sched.h"
 
-typedef struct fifo {
-    ismd_queue base;
-    ismd_flight *head, *tail;
-    size_t len;
-} fifo;
+#define NBUCKETS 256
 
-static bool fifo_push(ismd_queue *q, ismd_flight *f)
+struct ismd_qline {
+    char user[ISMD_QUEUE_USER_MAX];
+    int queued, running;
+    int max_jobs, max_running;     /* as given by the user's latest push */
+    unsigned long long last_turn;  /* when this user last got a worker (0 = not yet) */
+    ismd_flight *head, *tail;      /* waiting flights, oldest first */
+    ismd_qline *hnext;             /* name table chain */
+    ismd_qline *prev, *next;       /* every line */
+};
+
+typedef struct uqueue {
+    ismd_queue base;
+    ismd_queue_order order;
+    int user_jobs, user_running;
+    ismd_qline *buckets[NBUCKETS];
+    ismd_qline *lines;
+    size_t len;
+    unsigned long long turns;
+} uqueue;
+
+static uint64_t hash_user(const char *s)
 {
-    fifo *x = (fifo *)q;
-    if (x->len >= q->capacity)
-        return false;
-    f->qnext = NULL;
-    f->qprev = x->tail;
-    if (x->tail)
-        x->tail->qnext = f;
-    else
-        x->head = f;
-    x->tail = f;
-    x->len++;
-    f->queued = true;
-    return true;
+    uint64_t h = 1469598103934665603ULL;
+    for (; *s; s++) {
+        h ^= (unsigned char)*s;
+        h *= 1099511628211ULL;
+    }
+    return h;
 }
 
-static void fifo_remove(ismd_queue *q, ismd_flight *f)
+static ismd_qline **line_slot(uqueue *x, const char *user)
 {
-    fifo *x = (fifo *)q;
-    if (!f->queued)
+    ismd_qline **l = &x->buckets[hash_user(user) % NBUCKETS];
+    while (*l && strcmp((*l)->user, user) != 0)
+        l = &(*l)->hnext;
+    return l;
+}
+
+static ismd_qline *line_get(uqueue *x, const char *user)
+{
+    ismd_qline **slot = line_slot(x, user);
+    if (*slot)
+        return *slot;
+    ismd_qline *l = calloc(1, sizeof *l);
+    if (!l)
+        return NULL;
+    snprintf(l->user, sizeof l->user, "%s", user);
+    *slot = l;
+    l->next = x->lines;
+    if (x->lines)
+        x->lines->prev = l;
+    x->lines = l;
+    return l;
+}
+
+/* Frees a line with nothing queued or running. */
+static void line_release(uqueue *x, ismd_qline *l)
+{
+    if (l->queued > 0 || l->running > 0)
         return;
+    ismd_qline **slot = line_slot(x, l->user);
+    if (*slot == l)
+        *slot = l->hnext;
+    if (l->prev)
+        l->prev->next = l->next;
+    else
+        x->lines = l->next;
+    if (l->next)
+        l->next->prev = l->prev;
+    free(l);
+}
+
+static ismd_push q_push(ismd_queue *q, ismd_flight *f, const ismd_user_limits *lim)
+{
+    uqueue *x = (uqueue *)q;
+    ismd_qline *l = line_get(x, f->user);
+    if (!l)
+        return ISMD_PUSH_NO_MEMORY;
+    l->max_jobs = lim && lim->max_jobs > 0 ? lim->max_jobs : x->user_jobs;
+    l->max_running = lim && lim->max_running > 0 ? lim->max_running : x->user_running;
+    if (l->queued + l->running >= l->max_jobs) {
+        line_release(x, l);
+        return ISMD_PUSH_USER_LIMIT;
+    }
+    if (x->len >= q->capacity) {
+        line_release(x, l);
+        return ISMD_PUSH_FULL;
+    }
+    f->qline = l;
+    f->qnext = NULL;
+    f->qprev = l->tail;
+    if (l->tail)
+        l->tail->qnext = f;
+    else
+        l->head = f;
+    l->tail = f;
+    l->queued++;
+    x->len++;
+    f->queued = true;
+    return ISMD_PUSH_OK;
+}
+
+static void unlink_queued(uqueue *x, ismd_flight *f)
+{
+    ismd_qline *l = f->qline;
     if (f->qprev)
         f->qprev->qnext = f->qnext;
     else
-        x->head = f->qnext;
+        l->head = f->qnext;
     if (f->qnext)
         f->qnext->qprev = f->qprev;
     else
-        x->tail = f->qprev;
+        l->tail = f->qprev;
     f->qprev = f->qnext = NULL;
     f->queued = false;
+    l->queued--;
     x->len--;
+}
+
+static void q_drop(ismd_queue *q, ismd_flight *f)
+{
+    uqueue *x = (uqueue *)q;
+    ismd_qline *l = f->qline;
+    if (!l)
+        return;
+    if (f->queued)
+        unlink_queued(x, f);
+    else if (f->running)
+        l->running--;
+    f->qline = NULL;
+    line_release(x, l);
+}
+
+static bool may_run(const ismd_qline *l)
+{
+    return l->head && (l->max_running <= 0 || l->running < l->max_running);
+}
+
+/* fair: fewest running first, then the user served longest ago. */
+static bool fair_before(const ismd_qline *a, const ismd_qline *b)
+{
+    if (a->running != b->running)
+        return a->running < b->running;
+    return a->last_turn < b->last_turn;
+}
+
+/* fifo: the oldest waiting flight (ids grow with arrival). */
+static bool fifo_before(const ismd_qline *a, const ismd_qline *b)
+{
+    return a->head->id < b->head->id;
+}
+
+static ismd_flight *pop_with(ismd_queue *q, bool (*before)(const ismd_qline *, const ismd_qline *))
+{
+    uqueue *x = (uqueue *)q;
+    ismd_qline *best = NULL;
+    for (ismd_qline *l = x->lines; l; l = l->next)
+        if (may_run(l) && (!best || before(l, best)))
+            best = l;
+    if (!best)
+        return NULL;
+    ismd_flight *f = best->head;
+    unlink_queued(x, f);
+    best->running++;
+    best->last_turn = ++x->turns;
+    return f;
+}
+
+static ismd_flight *fair_pop(ismd_queue *q)
+{
+    return pop_with(q, fair_before);
 }
 
 static ismd_flight *fifo_pop(ismd_queue *q)
 {
-    fifo *x = (fifo *)q;
-    ismd_flight *f = x->head;
-    if (f)
-        fifo_remove(q, f);
-    return f;
+    return pop_with(q, fifo_before);
 }
 
-static size_t fifo_length(const ismd_queue *q)
+static size_t q_length(const ismd_queue *q)
 {
-    return ((const fifo *)q)->len;
+    return ((const uqueue *)q)->len;
 }
 
-static void fifo_destroy(ismd_queue *q)
+static size_t q_users(const ismd_queue *q, ismd_user_load *out, size_t max)
 {
-    free(q);
+    const uqueue *x = (const uqueue *)q;
+    size_t n = 0;
+    for (const ismd_qline *l = x->lines; l; l = l->next, n++)
+        if (n < max) {
+            snprintf(out[n].user, sizeof out[n].user, "%s", l->user);
+            out[n].queued = l->queued;
+            out[n].running = l->running;
+        }
+    return n;
 }
 
-static const ismd_queue_ops FIFO_OPS = {
-    .name = "fifo",
-    .push = fifo_push,
-    .pop = fifo_pop,
-    .remove = fifo_remove,
-    .length = fifo_length,
-    .destroy = fifo_destroy,
+static void q_destroy(ismd_queue *q)
+{
+    uqueue *x = (uqueue *)q;
+    while (x->lines) {
+        ismd_qline *l = x->lines;
+        x->lines = l->next;
+        free(l);
+    }
+    free(x);
+}
+
+static const ismd_queue_ops FAIR_OPS = {
+    .name = "fair", .push = q_push, .pop = fair_pop, .drop = q_drop,
+    .length = q_length, .users = q_users, .destroy = q_destroy,
 };
 
-ismd_queue *ismd_queue_fifo_new(size_t capacity)
+static const ismd_queue_ops FIFO_OPS = {
+    .name = "fifo", .push = q_push, .pop = fifo_pop, .drop = q_drop,
+    .length = q_length, .users = q_users, .destroy = q_destroy,
+};
+
+ismd_queue *ismd_queue_new(size_t capacity, ismd_queue_order order, int user_jobs,
+                           int user_running)
 {
-    fifo *x = calloc(1, sizeof *x);
+    uqueue *x = calloc(1, sizeof *x);
     if (!x)
         return NULL;
-    x->base.ops = &FIFO_OPS;
+    x->base.ops = order == ISMD_ORDER_FIFO ? &FIFO_OPS : &FAIR_OPS;
     x->base.capacity = capacity;
+    x->order = order;
+    x->user_jobs = user_jobs > 0 ? user_jobs : 1;
+    x->user_running = user_running;
     return &x->base;
 }

@@ -1,6 +1,15 @@
-/* job_queue.h — where computations wait for a free worker: a small interface (push, pop,
- * remove, length) so the policy can change without touching the pool — today a bounded FIFO;
- * fair per-user scheduling later is another implementation of the same operations.
+/* job_queue.h — where computations wait for a free worker: a small interface (push, pop, drop,
+ * length, per-user loads) so the policy can change without touching the pool.
+ *
+ * Every flight belongs to the user who started it (a token's user, or a client address) and
+ * waits in that user's own line. The queue keeps each user's counts and enforces the per-user
+ * limits: at most max_jobs computations queued or running (more is refused: 429), at most
+ * max_running of them on workers at once (the rest wait even when a worker is free). Two
+ * orders serve the lines:
+ *   fair  the user with the fewest computations running goes next, ties to the user served
+ *         longest ago (round robin): a user with a hundred queued jobs gets one worker turn at
+ *         a time while everyone else with work waiting gets theirs;
+ *   fifo  the oldest flight of any user goes next (kept as the reference for benchmarks).
  * Not thread-safe by itself: the scheduler's lock (sched.h) guards every call. */
 #ifndef ISMD_JOB_QUEUE_H
 #define ISMD_JOB_QUEUE_H
@@ -8,18 +17,44 @@
 #include <stdbool.h>
 #include <stddef.h>
 
+#define ISMD_QUEUE_USER_MAX 64   /* user name, NUL included */
+
 typedef struct ismd_flight ismd_flight;
 typedef struct ismd_queue ismd_queue;
+typedef struct ismd_qline ismd_qline; /* one user's line (private to the queue) */
+
+typedef enum ismd_queue_order { ISMD_ORDER_FAIR, ISMD_ORDER_FIFO } ismd_queue_order;
+
+/* One user's limits for a push; 0 = the queue's defaults. */
+typedef struct ismd_user_limits {
+    int max_jobs, max_running;
+} ismd_user_limits;
+
+typedef enum ismd_push {
+    ISMD_PUSH_OK,
+    ISMD_PUSH_FULL,          /* the whole queue is at capacity (503) */
+    ISMD_PUSH_USER_LIMIT,    /* this user has max_jobs queued or running (429) */
+    ISMD_PUSH_NO_MEMORY,
+} ismd_push;
+
+/* A user with computations queued or running. */
+typedef struct ismd_user_load {
+    char user[ISMD_QUEUE_USER_MAX];
+    int queued, running;
+} ismd_user_load;
 
 typedef struct ismd_queue_ops {
     const char *name;
-    /* False when the queue is full (the caller answers 503). */
-    bool (*push)(ismd_queue *q, ismd_flight *f);
-    /* The next flight to run, or NULL. */
+    /* Queues f in the line of f->user. */
+    ismd_push (*push)(ismd_queue *q, ismd_flight *f, const ismd_user_limits *lim);
+    /* The next flight to run (now counted as running for its user), or NULL. */
     ismd_flight *(*pop)(ismd_queue *q);
-    /* Takes out a flight that is still queued (canceled or past its deadline). */
-    void (*remove)(ismd_queue *q, ismd_flight *f);
+    /* f leaves the queue's books for good (finished, canceled, past its deadline): a queued
+     * flight leaves its line, a running one stops counting against its user. */
+    void (*drop)(ismd_queue *q, ismd_flight *f);
     size_t (*length)(const ismd_queue *q);
+    /* Fills up to max users with work; returns how many there are in all. */
+    size_t (*users)(const ismd_queue *q, ismd_user_load *out, size_t max);
     void (*destroy)(ismd_queue *q);
 } ismd_queue_ops;
 
@@ -28,7 +63,9 @@ struct ismd_queue {
     size_t capacity;
 };
 
-/* First come, first served, at most capacity flights. */
-ismd_queue *ismd_queue_fifo_new(size_t capacity);
+/* At most capacity flights waiting; user_jobs and user_running are the default per-user
+ * limits (user_running 0 = no limit but the workers). */
+ismd_queue *ismd_queue_new(size_t capacity, ismd_queue_order order, int user_jobs,
+                           int user_running);
 
 #endif

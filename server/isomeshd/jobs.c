@@ -19,11 +19,13 @@ struct ismd_job {
     ismd_waiter waiter;
     ismd_jobs *owner;
     char id[33], key[65], fmt[8];
+    char user[64];             /* who created it */
     ismd_job_state state;
     double progress;
     unsigned status;
     ism_blob *stats, *error;
     long long created_ns, finished_ns;
+    long long started_ns;      /* when its computation began running (0: not yet, or cached) */
     time_t created_unix;
     unsigned version;
     int refs;                  /* the table + each stream */
@@ -144,6 +146,8 @@ static void mark_finished(ismd_job *job)
 static void job_progress(ismd_waiter *w, double fraction, bool running)
 {
     ismd_job *job = (ismd_job *)w;
+    if (running && !job->started_ns)
+        job->started_ns = w->flight && w->flight->started_ns ? w->flight->started_ns : ismd_now_ns();
     job->state = running ? ISMD_JOB_RUNNING : ISMD_JOB_QUEUED;
     job->progress = fraction;
     notify(job);
@@ -166,7 +170,7 @@ static void job_done(ismd_waiter *w, const ismd_result *r)
     mark_finished(job);
 }
 
-ismd_job *ismd_jobs_create(ismd_jobs *j, const char *key, const char *fmt)
+ismd_job *ismd_jobs_create(ismd_jobs *j, const char *key, const char *fmt, const char *user)
 {
     long long now = ismd_now_ns();
     sweep(j, now);
@@ -184,6 +188,7 @@ ismd_job *ismd_jobs_create(ismd_jobs *j, const char *key, const char *fmt)
         snprintf(job->id + 2 * i, 3, "%02x", rnd[i]);
     snprintf(job->key, sizeof job->key, "%s", key);
     snprintf(job->fmt, sizeof job->fmt, "%s", fmt);
+    snprintf(job->user, sizeof job->user, "%s", user);
     job->owner = j;
     job->state = ISMD_JOB_QUEUED;
     job->created_ns = now;
@@ -218,6 +223,7 @@ void ismd_jobs_submitted(ismd_job *job)
     if (f && f->running) {
         job->state = ISMD_JOB_RUNNING;
         job->progress = f->progress;
+        job->started_ns = f->started_ns;
     }
 }
 
@@ -251,6 +257,11 @@ const char *ismd_job_id(const ismd_job *job)
     return job->id;
 }
 
+const char *ismd_job_user(const ismd_job *job)
+{
+    return job->user;
+}
+
 void ismd_jobs_cancel(ismd_jobs *j, ismd_sched *s, ismd_job *job)
 {
     (void)j;
@@ -282,6 +293,21 @@ json_t *ismd_job_json(const ismd_job *job)
     gmtime_r(&job->created_unix, &tm);
     strftime(created, sizeof created, "%Y-%m-%dT%H:%M:%SZ", &tm);
     json_object_set_new(o, "created", json_string(created));
+    json_object_set_new(o, "user", json_string(job->user));
+    if (job->started_ns) {
+        /* wall-clock time of a monotonic instant: now minus how long ago it was */
+        struct timespec rt;
+        clock_gettime(CLOCK_REALTIME, &rt);
+        long long ago_ns = ismd_now_ns() - job->started_ns;
+        long long ms = ((long long)rt.tv_sec * 1000000000LL + rt.tv_nsec - ago_ns) / 1000000;
+        time_t secs = (time_t)(ms / 1000);
+        char started[40], whole[32];
+        gmtime_r(&secs, &tm);
+        strftime(whole, sizeof whole, "%Y-%m-%dT%H:%M:%S", &tm);
+        snprintf(started, sizeof started, "%s.%03dZ", whole, (int)(ms % 1000));
+        json_object_set_new(o, "started", json_string(started));
+        json_object_set_new(o, "queue_ms", json_real((job->started_ns - job->created_ns) / 1e6));
+    }
     snprintf(url, sizeof url, "/v1/jobs/%s", job->id);
     json_object_set_new(o, "url", json_string(url));
     snprintf(url, sizeof url, "/v1/jobs/%s/events", job->id);
@@ -305,6 +331,32 @@ json_t *ismd_job_json(const ismd_job *job)
             json_object_set(o, "error", inner);
         json_decref(err);
     }
+    return o;
+}
+
+json_t *ismd_jobs_list_json(const ismd_jobs *j, const char *user, size_t max)
+{
+    json_t *list = json_array();
+    json_t *o = list ? json_pack("{s:o}", "jobs", list) : NULL;
+    if (!o)
+        return NULL;
+    bool truncated = false;
+    for (const ismd_job *job = j->newest; job; job = job->lprev) {
+        if (user && strcmp(job->user, user) != 0)
+            continue;
+        if (json_array_size(list) == max) {
+            truncated = true;
+            break;
+        }
+        json_t *one = ismd_job_json(job);
+        if (one)
+            json_object_del(one, "stats");
+        if (!one || json_array_append_new(list, one) != 0) {
+            json_decref(o);
+            return NULL;
+        }
+    }
+    json_object_set_new(o, "truncated", json_boolean(truncated));
     return o;
 }
 

@@ -28,9 +28,9 @@ typedef enum ismd_job_state {
 ismd_jobs *ismd_jobs_new(ismd_metrics *metrics);
 void ismd_jobs_free(ismd_jobs *j);
 
-/* A new queued job for key.fmt (NULL when the table is full of live jobs). Its waiter is
- * ismd_job_waiter(job); submit it to the scheduler, then call ismd_jobs_submitted. */
-ismd_job *ismd_jobs_create(ismd_jobs *j, const char *key, const char *fmt);
+/* A new queued job of user for key.fmt (NULL when the table is full of live jobs). Its waiter
+ * is ismd_job_waiter(job); submit it to the scheduler, then call ismd_jobs_submitted. */
+ismd_job *ismd_jobs_create(ismd_jobs *j, const char *key, const char *fmt, const char *user);
 ismd_waiter *ismd_job_waiter(ismd_job *job);
 /* After a successful submission: takes the flight's current state (a joined flight may
  * already be running). */
@@ -42,8 +42,13 @@ void ismd_jobs_complete_cached(ismd_jobs *j, ismd_job *job, ism_blob *stats);
 
 ismd_job *ismd_jobs_find(ismd_jobs *j, const char *id);
 const char *ismd_job_id(const ismd_job *job);
+/* Who created the job (a token's user or a client address). */
+const char *ismd_job_user(const ismd_job *job);
 /* The job as JSON (caller owns the reference). */
 json_t *ismd_job_json(const ismd_job *job);
+/* {"jobs": [...]}: the jobs of user (NULL: everyone's), newest first, at most max, without
+ * their stats; "truncated": true when more were left out. */
+json_t *ismd_jobs_list_json(const ismd_jobs *j, const char *user, size_t max);
 /* Cancels a live job (no effect on a finished one). */
 void ismd_jobs_cancel(ismd_jobs *j, ismd_sched *s, ismd_job *job);
 

@@ -1,8 +1,8 @@
 /* main.c — isomeshd's start-up and shutdown: settings, logging, cache tiers, scheduler, jobs,
  * documents and static roots, the listening socket, the worker pool and the HTTP front; then
- * it waits for SIGTERM/SIGINT and stops in order: refuse new connections, finish or cancel
- * computations within a bound, end event streams, let answers drain, stop HTTP, flush and
- * close the cache. */
+ * it waits for signals (SIGHUP re-reads the tokens file) and on SIGTERM/SIGINT stops in
+ * order: refuse new connections, finish or cancel computations within a bound, end event
+ * streams, let answers drain, stop HTTP, flush and close the cache. */
 #include <errno.h>
 #include <fcntl.h>
 #include <netdb.h>
@@ -23,6 +23,7 @@
 #include "server/isomeshd/config.h"
 #include "server/isomeshd/http.h"
 #include "server/isomeshd/jobs.h"
+#include "server/isomeshd/token_cmd.h"
 #include "server/isomeshd/worker_pool.h"
 
 #define DOC_MAX (8u << 20)
@@ -163,6 +164,8 @@ static bool setup_cache(ismd_server *s, const ismd_config *cfg)
 
 int main(int argc, char **argv)
 {
+    if (argc >= 2 && !strcmp(argv[1], "token"))
+        return ismd_token_command(argc - 1, argv + 1);
     static ismd_config cfg;
     int rc = ismd_config_load(&cfg, argc, argv);
     if (rc)
@@ -170,24 +173,35 @@ int main(int argc, char **argv)
     ism_log_setup("isomeshd", cfg.log_format);
     ism_log_async(true); /* the HTTP thread never blocks on a slow log reader */
     signal(SIGPIPE, SIG_IGN);
-    signal(SIGHUP, SIG_IGN);
     sigset_t stop_signals;
     sigemptyset(&stop_signals);
     sigaddset(&stop_signals, SIGTERM);
     sigaddset(&stop_signals, SIGINT);
+    sigaddset(&stop_signals, SIGHUP); /* taken by sigwait below: reload, not stop */
     pthread_sigmask(SIG_BLOCK, &stop_signals, NULL); /* every thread inherits this */
     raise_fd_limit();
 
     static ismd_server s;
+    static ismd_auth auth;
     s.cfg = &cfg;
     s.listen_fd = -1;
+    s.auth = &auth;
+    char auth_err[600];
+    if (!ismd_auth_init(&auth, cfg.tokens, cfg.private_mode, auth_err, sizeof auth_err)) {
+        ism_log_field f = ISM_LS("error", auth_err);
+        ism_log_fields(ISM_LOG_ERROR, "tokens_unusable", &f, 1);
+        ism_log_async(false);
+        return 1;
+    }
     ismd_metrics_init(&s.metrics);
     ism_pipeline_limits_default(&s.limits);
     s.limits.max_depth = cfg.max_depth;
     s.limits.max_triangles = cfg.max_triangles;
     if (!setup_cache(&s, &cfg) ||
-        !ismd_sched_init(&s.sched, ismd_queue_fifo_new((size_t)cfg.queue), cfg.job_timeout_s,
-                         cfg.client_jobs, &s.metrics) ||
+        !ismd_sched_init(&s.sched,
+                         ismd_queue_new((size_t)cfg.queue, cfg.queue_fifo ? ISMD_ORDER_FIFO : ISMD_ORDER_FAIR,
+                                        cfg.user_jobs, cfg.user_running),
+                         cfg.job_timeout_s, &s.metrics) ||
         !(s.jobs = ismd_jobs_new(&s.metrics))) {
         ism_logf(ISM_LOG_ERROR, "startup_failed", "out of memory");
         ism_log_async(false);
@@ -224,9 +238,19 @@ int main(int argc, char **argv)
     };
     ism_log_fields(ISM_LOG_INFO, "listening", f, sizeof f / sizeof f[0]);
 
+    if (auth.enabled) {
+        ism_log_field af[] = {ISM_LS("file", auth.path), ISM_LI("tokens", auth.table.n),
+                              ISM_LS("private", cfg.private_mode ? "yes" : "no")};
+        ism_log_fields(ISM_LOG_INFO, "access_control", af, 3);
+    }
     int sig = 0;
-    while (sigwait(&stop_signals, &sig) != 0)
-        ;
+    for (;;) {
+        if (sigwait(&stop_signals, &sig) != 0)
+            continue;
+        if (sig != SIGHUP)
+            break;
+        ismd_auth_reload(&auth); /* connections and computations carry on */
+    }
     ism_logf(ISM_LOG_INFO, "stopping", "signal %d: finishing in-flight work", sig);
     atomic_store(&s.draining, true);
     ismd_http_quiesce(&s);
@@ -244,6 +268,7 @@ int main(int argc, char **argv)
     ism_blob_unref(s.presets);
     ismd_static_close(&s.web);
     ismd_static_close(&s.vendor);
+    ismd_auth_destroy(&auth);
     ism_logf(ISM_LOG_INFO, "stopped", "clean shutdown");
     ism_log_async(false);
     return 0;

@@ -16,7 +16,7 @@ static const char *const ROUTE_LABELS[ISMD_R_COUNT] = {
     "/metrics", "static", "/vendor/three", "other",
 };
 
-static const unsigned STATUSES[ISMD_NSTATUS - 1] = {200, 202, 204, 206, 304, 400, 403, 404,
+static const unsigned STATUSES[ISMD_NSTATUS - 1] = {200, 202, 204, 206, 304, 400, 401, 403, 404,
                                                     405, 408, 413, 415, 422, 429, 431, 499,
                                                     500, 503, 504};
 
@@ -235,9 +235,12 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
            "Worker wall time per finished computation (polygonise, analyse, encode).");
     histogram(&o, "isomesh_polygonise_seconds", "", &m->polygonise, POLY_BOUNDS,
               ISMD_POLY_BUCKETS - 1);
-    header(&o, "isomesh_rejected_total", "counter", "Computations refused before queueing.");
+    header(&o, "isomesh_rejected_total", "counter",
+           "Requests refused before queueing: queue_full (503), client_limit (a user's "
+           "--user-jobs, 429), unauthorized (401).");
     emit(&o, "isomesh_rejected_total{reason=\"queue_full\"} %llu\n", ld(&m->rejected_queue_full));
     emit(&o, "isomesh_rejected_total{reason=\"client_limit\"} %llu\n", ld(&m->rejected_client_limit));
+    emit(&o, "isomesh_rejected_total{reason=\"unauthorized\"} %llu\n", ld(&m->rejected_unauthorized));
 
     header(&o, "isomesh_worker_restarts_total", "counter", "Worker processes replaced, by reason.");
     for (int i = 0; i < ISMD_RESTART_COUNT; i++)

@@ -18,7 +18,7 @@ typedef enum ismd_route {
 
 const char *ismd_route_label(ismd_route r);
 
-#define ISMD_NSTATUS 20       /* tracked status codes + "other" */
+#define ISMD_NSTATUS 21       /* tracked status codes + "other" */
 #define ISMD_LAT_BUCKETS 17   /* request latency buckets incl. +Inf */
 #define ISMD_POLY_BUCKETS 14  /* computation time buckets incl. +Inf */
 
@@ -49,7 +49,7 @@ typedef struct ismd_metrics {
     atomic_ullong worker_restarts[ISMD_RESTART_COUNT];
     atomic_ullong worker_spawn_failures;
     ismd_histogram polygonise;               /* worker wall time per finished computation */
-    atomic_ullong rejected_queue_full, rejected_client_limit;
+    atomic_ullong rejected_queue_full, rejected_client_limit, rejected_unauthorized;
     /* gauges */
     atomic_llong queue_depth, queue_capacity;
     atomic_llong workers_total, workers_ready, workers_busy;

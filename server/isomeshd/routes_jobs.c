@@ -1,11 +1,15 @@
-/* routes_jobs.c — the job routes: POST /v1/jobs (202 with the job), GET /v1/jobs/{id},
- * DELETE /v1/jobs/{id} (cancel), GET /v1/jobs/{id}/events (server-sent events). */
+/* routes_jobs.c — the job routes: POST /v1/jobs (202 with the job), GET /v1/jobs (the
+ * caller's jobs; every job for an admin token), GET /v1/jobs/{id}, DELETE /v1/jobs/{id}
+ * (cancel: its owner or an admin when tokens are on), GET /v1/jobs/{id}/events (server-sent
+ * events). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "server/isomeshd/http.h"
 #include "server/isomeshd/jobs.h"
+
+#define JOBS_LIST_MAX 500 /* newest jobs shown by GET /v1/jobs */
 
 /* Answers with the job's JSON (lock held by the caller: the JSON is built under it). */
 static enum MHD_Result answer_job_locked(ismd_req *r, unsigned status, ismd_job *job,
@@ -72,7 +76,7 @@ enum MHD_Result ismd_route_jobs_post(ismd_req *r)
     r->cache = hit ? "hit" : "miss";
 
     ismd_sched_lock(&s->sched);
-    ismd_job *job = ismd_jobs_create(s->jobs, r->key, r->fmt);
+    ismd_job *job = ismd_jobs_create(s->jobs, r->key, r->fmt, r->who.user);
     if (!job) {
         ismd_sched_unlock(&s->sched);
         ism_blob_unref(hit);
@@ -87,7 +91,8 @@ enum MHD_Result ismd_route_jobs_post(ismd_req *r)
         ism_blob_unref(canonical);
         return answer_job_locked(r, 202, job, true);
     }
-    ismd_submit st = ismd_sched_submit(&s->sched, r->key, r->fmt, canonical, r->client,
+    ismd_user_limits lim = {r->who.max_jobs, r->who.max_running};
+    ismd_submit st = ismd_sched_submit(&s->sched, r->key, r->fmt, canonical, r->who.user, &lim,
                                        ismd_job_waiter(job));
     ism_blob_unref(canonical);
     if (st == ISMD_SUBMIT_NEW || st == ISMD_SUBMIT_JOINED) {
@@ -103,12 +108,52 @@ enum MHD_Result ismd_route_jobs_post(ismd_req *r)
     case ISMD_SUBMIT_CLIENT_LIMIT:
         return ismd_respond_error(r, 429, "too_many_requests",
                                   "too many computations of yours are queued or running "
-                                  "(--client-jobs); wait for one to finish");
+                                  "(--user-jobs); wait for one to finish");
     case ISMD_SUBMIT_DRAINING:
         return ismd_respond_error(r, 503, "shutting_down", "the server is shutting down");
     default:
         return ismd_respond_error(r, 500, "out_of_memory", "the server ran out of memory");
     }
+}
+
+enum MHD_Result ismd_route_jobs_list(ismd_req *r)
+{
+    ismd_server *s = r->srv;
+    bool all = s->auth->enabled && r->who.admin;
+    ismd_sched_lock(&s->sched);
+    json_t *o = ismd_jobs_list_json(s->jobs, all ? NULL : r->who.user, JOBS_LIST_MAX);
+    ismd_sched_unlock(&s->sched);
+    if (o) {
+        json_object_set_new(o, "user", json_string(r->who.user));
+        json_object_set_new(o, "admin", json_boolean(all));
+    }
+    char *text = o ? json_dumps(o, JSON_COMPACT) : NULL;
+    json_decref(o);
+    if (!text)
+        return MHD_NO;
+    ism_blob *b = ism_blob_from_str(text);
+    free(text);
+    struct MHD_Response *resp = b ? ismd_response_blob(b, "application/json") : NULL;
+    r->bytes = b ? b->len : 0;
+    ism_blob_unref(b);
+    if (!resp)
+        return MHD_NO;
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
+    return ismd_send(r, 200, resp);
+}
+
+/* Under --private a job is seen only by its owner or an admin; canceling needs that always
+ * (with tokens on). Answers the 403 itself (lock released) and returns false. */
+static bool may_touch(ismd_req *r, ismd_job *job, bool cancel, enum MHD_Result *ret)
+{
+    ismd_auth *a = r->srv->auth;
+    if ((cancel || a->private_mode) && !ismd_auth_owns(a, &r->who, ismd_job_user(job))) {
+        ismd_sched_unlock(&r->srv->sched);
+        *ret = ismd_respond_error(r, 403, "not_your_job",
+                                  "this job belongs to another user (an admin token may touch it)");
+        return false;
+    }
+    return true;
 }
 
 enum MHD_Result ismd_route_job_get(ismd_req *r)
@@ -119,6 +164,9 @@ enum MHD_Result ismd_route_job_get(ismd_req *r)
         ismd_sched_unlock(&r->srv->sched);
         return job_not_found(r);
     }
+    enum MHD_Result ret;
+    if (!may_touch(r, job, false, &ret))
+        return ret;
     return answer_job_locked(r, 200, job, false);
 }
 
@@ -130,6 +178,9 @@ enum MHD_Result ismd_route_job_delete(ismd_req *r)
         ismd_sched_unlock(&r->srv->sched);
         return job_not_found(r);
     }
+    enum MHD_Result ret;
+    if (!may_touch(r, job, true, &ret))
+        return ret;
     ismd_jobs_cancel(r->srv->jobs, &r->srv->sched, job);
     return answer_job_locked(r, 200, job, false);
 }
@@ -139,6 +190,9 @@ enum MHD_Result ismd_route_job_events(ismd_req *r)
     ismd_server *s = r->srv;
     ismd_sched_lock(&s->sched);
     ismd_job *job = ismd_jobs_find(s->jobs, r->id);
+    enum MHD_Result ret;
+    if (job && !may_touch(r, job, false, &ret))
+        return ret;
     struct MHD_Response *resp = job ? ismd_jobs_stream(s->jobs, &s->sched, job, r->conn) : NULL;
     ismd_sched_unlock(&s->sched);
     if (!job)

@@ -1,11 +1,13 @@
 /* routes_misc.c — the small routes: GET /v1/presets, /v1/openapi.yaml, /v1/request.schema.json
  * (documents loaded from --data-dir at start-up), /healthz (the process answers), /readyz (a
- * worker is ready and we are not shutting down), /metrics (Prometheus text). */
+ * worker is ready and we are not shutting down), /metrics (Prometheus text, with the per-user
+ * gauges of user_metrics.h). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "server/isomeshd/http.h"
+#include "server/isomeshd/user_metrics.h"
 
 enum MHD_Result ismd_route_doc(ismd_req *r)
 {
@@ -55,12 +57,16 @@ enum MHD_Result ismd_route_health(ismd_req *r)
 
 enum MHD_Result ismd_route_metrics(ismd_req *r)
 {
-    size_t len;
+    size_t len, ulen = 0;
     char *text = ismd_metrics_render(&r->srv->metrics, &r->srv->cache, &len);
-    if (!text)
-        return MHD_NO;
-    ism_blob *b = ism_blob_copy(text, len);
+    char *users = ismd_user_metrics_render(&r->srv->sched, &ulen);
+    ism_blob *b = text && users ? ism_blob_new(len + ulen) : NULL;
+    if (b) {
+        memcpy(b->data, text, len);
+        memcpy(b->data + len, users, ulen);
+    }
     free(text);
+    free(users);
     if (!b)
         return MHD_NO;
     struct MHD_Response *resp = ismd_response_blob(b, "text/plain; version=0.0.4; charset=utf-8");

@@ -1,5 +1,6 @@
 /* sched.c — single flight and its bookkeeping (sched.h): the name table of flights in
- * progress, waiter lists, per-client counts, deadlines and the draining state. */
+ * progress, waiter lists, deadlines and the draining state; per-user counts and limits are
+ * the queue's (job_queue.h). */
 #include "server/isomeshd/sched.h"
 
 #include <limits.h>
@@ -9,12 +10,6 @@
 #include <time.h>
 
 #include "server/isomeshd/errors.h"
-
-struct ismd_client_count {
-    ismd_client_count *next;
-    int count;
-    char client[64];
-};
 
 long long ismd_now_ns(void)
 {
@@ -33,7 +28,7 @@ static uint64_t hash_name(const char *s)
     return h;
 }
 
-bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s, int client_jobs,
+bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s,
                      ismd_metrics *metrics)
 {
     memset(s, 0, sizeof *s);
@@ -44,7 +39,6 @@ bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s, int
     pthread_mutex_init(&s->lock, NULL);
     s->queue = queue;
     s->job_timeout_s = job_timeout_s;
-    s->client_jobs = client_jobs;
     s->metrics = metrics;
     s->next_id = 1;
     atomic_store(&metrics->queue_capacity, (long long)queue->capacity);
@@ -53,11 +47,6 @@ bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s, int
 
 void ismd_sched_destroy(ismd_sched *s)
 {
-    while (s->clients) {
-        ismd_client_count *c = s->clients;
-        s->clients = c->next;
-        free(c);
-    }
     free(s->table);
     if (s->queue)
         s->queue->ops->destroy(s->queue);
@@ -72,43 +61,6 @@ void ismd_sched_lock(ismd_sched *s)
 void ismd_sched_unlock(ismd_sched *s)
 {
     pthread_mutex_unlock(&s->lock);
-}
-
-/* ---- per-client counts --------------------------------------------------------------- */
-
-static ismd_client_count **client_slot(ismd_sched *s, const char *client)
-{
-    ismd_client_count **c = &s->clients;
-    while (*c && strcmp((*c)->client, client) != 0)
-        c = &(*c)->next;
-    return c;
-}
-
-static int client_count(ismd_sched *s, const char *client)
-{
-    ismd_client_count *c = *client_slot(s, client);
-    return c ? c->count : 0;
-}
-
-static bool client_add(ismd_sched *s, const char *client, int delta)
-{
-    ismd_client_count **slot = client_slot(s, client);
-    if (!*slot) {
-        if (delta <= 0)
-            return true;
-        ismd_client_count *c = calloc(1, sizeof *c);
-        if (!c)
-            return false;
-        snprintf(c->client, sizeof c->client, "%s", client);
-        *slot = c;
-    }
-    (*slot)->count += delta;
-    if ((*slot)->count <= 0) {
-        ismd_client_count *dead = *slot;
-        *slot = dead->next;
-        free(dead);
-    }
-    return true;
 }
 
 /* ---- flights ------------------------------------------------------------------------- */
@@ -153,7 +105,8 @@ static void wake_pool(ismd_sched *s)
 }
 
 ismd_submit ismd_sched_submit(ismd_sched *s, const char *key, const char *fmt,
-                              ism_blob *request, const char *client, ismd_waiter *w)
+                              ism_blob *request, const char *user,
+                              const ismd_user_limits *lim, ismd_waiter *w)
 {
     char name[ISM_CACHE_NAME_MAX];
     if (!ism_cache_name(name, key, fmt))
@@ -166,30 +119,32 @@ ismd_submit ismd_sched_submit(ismd_sched *s, const char *key, const char *fmt,
     }
     if (s->draining)
         return ISMD_SUBMIT_DRAINING;
-    if (client_count(s, client) >= s->client_jobs) {
-        atomic_fetch_add(&s->metrics->rejected_client_limit, 1);
-        return ISMD_SUBMIT_CLIENT_LIMIT;
-    }
     ismd_flight *f = calloc(1, sizeof *f);
     if (!f)
         return ISMD_SUBMIT_NO_MEMORY;
     snprintf(f->name, sizeof f->name, "%s", name);
     snprintf(f->key, sizeof f->key, "%s", key);
     snprintf(f->fmt, sizeof f->fmt, "%s", fmt);
-    snprintf(f->client, sizeof f->client, "%s", client);
+    snprintf(f->user, sizeof f->user, "%s", user);
     f->waiters.prev = f->waiters.next = &f->waiters;
-    if (!s->queue->ops->push(s->queue, f)) {
+    f->id = s->next_id; /* before the push: the fifo order reads it */
+    switch (s->queue->ops->push(s->queue, f, lim)) {
+    case ISMD_PUSH_OK:
+        break;
+    case ISMD_PUSH_USER_LIMIT:
+        free(f);
+        atomic_fetch_add(&s->metrics->rejected_client_limit, 1);
+        return ISMD_SUBMIT_CLIENT_LIMIT;
+    case ISMD_PUSH_FULL:
         free(f);
         atomic_fetch_add(&s->metrics->rejected_queue_full, 1);
         return ISMD_SUBMIT_QUEUE_FULL;
-    }
-    if (!client_add(s, client, 1)) {
-        s->queue->ops->remove(s->queue, f);
+    default:
         free(f);
         return ISMD_SUBMIT_NO_MEMORY;
     }
+    s->next_id++;
     f->request = ism_blob_ref(request);
-    f->id = s->next_id++;
     f->submitted_ns = ismd_now_ns();
     f->deadline_ns = f->submitted_ns + (long long)(s->job_timeout_s * 1e9);
     f->hnext = NULL;
@@ -207,7 +162,7 @@ ismd_submit ismd_sched_submit(ismd_sched *s, const char *key, const char *fmt,
     return ISMD_SUBMIT_NEW;
 }
 
-/* Takes f out of the table, the all-flights list and its client's count, and frees it. */
+/* Takes f out of the table, the all-flights list and the queue's books, and frees it. */
 static void flight_free(ismd_sched *s, ismd_flight *f)
 {
     ismd_flight **slot = flight_slot(s, f->name);
@@ -222,7 +177,7 @@ static void flight_free(ismd_sched *s, ismd_flight *f)
     else
         s->all_tail = f->aprev;
     s->nflights--;
-    client_add(s, f->client, -1);
+    s->queue->ops->drop(s->queue, f);
     ism_blob_unref(f->request);
     free(f);
 }
@@ -236,10 +191,9 @@ void ismd_sched_detach(ismd_sched *s, ismd_waiter *w)
     if (f->nwaiters > 0)
         return;
     if (f->queued) {
-        s->queue->ops->remove(s->queue, f);
         atomic_fetch_add(&s->metrics->computations[ISMD_OUT_CANCELED], 1);
-        publish_queue(s);
         flight_free(s, f);
+        publish_queue(s);
     } else {
         wake_pool(s); /* running without waiters: the pool stops it */
     }
@@ -247,10 +201,7 @@ void ismd_sched_detach(ismd_sched *s, ismd_waiter *w)
 
 void ismd_sched_finish(ismd_sched *s, ismd_flight *f, const ismd_result *r, ismd_outcome o)
 {
-    if (f->queued) {
-        s->queue->ops->remove(s->queue, f);
-        publish_queue(s);
-    }
+    bool was_queued = f->queued;
     atomic_fetch_add(&s->metrics->computations[o], 1);
     while (f->waiters.next != &f->waiters) {
         ismd_waiter *w = f->waiters.next;
@@ -258,6 +209,8 @@ void ismd_sched_finish(ismd_sched *s, ismd_flight *f, const ismd_result *r, ismd
         w->done(w, r);
     }
     flight_free(s, f);
+    if (was_queued)
+        publish_queue(s);
 }
 
 void ismd_sched_fail(ismd_sched *s, ismd_flight *f, unsigned status, const char *code,

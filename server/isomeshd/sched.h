@@ -2,7 +2,9 @@
  * entry it will produce ("<key>.<format>"). A request for a name already in flight joins it as
  * one more waiter instead of computing again. Flights wait in the job queue (job_queue.h),
  * run on a worker (worker_pool.h) and finish exactly once, handing every waiter the same
- * result. Also enforces the per-client limit and the draining state at shutdown.
+ * result. A flight belongs to the user who started it (the queue serves users fairly and
+ * holds their limits); a user asking for a name in flight joins it whoever started it, so
+ * identical requests compute once across users. Also the draining state at shutdown.
  *
  * One mutex (ismd_sched_lock) guards flights, waiters, the queue and the jobs table (jobs.h);
  * HTTP handlers suspend their connection while holding it, and everything that resumes one
@@ -51,9 +53,10 @@ struct ismd_flight {
     long long submitted_ns, started_ns, deadline_ns;
     ismd_waiter waiters;       /* list sentinel */
     size_t nwaiters;
-    char client[64];           /* who started it (per-client limit) */
+    char user[ISMD_QUEUE_USER_MAX]; /* who started it (its queue line and limits) */
     ismd_flight *hnext;        /* name table chain */
-    ismd_flight *qprev, *qnext;/* queue links (owned by the queue implementation) */
+    ismd_qline *qline;         /* queue links (owned by the queue implementation) */
+    ismd_flight *qprev, *qnext;
     ismd_flight *aprev, *anext;/* list of all flights, oldest first */
 };
 
@@ -61,12 +64,10 @@ typedef enum ismd_submit {
     ISMD_SUBMIT_NEW,           /* a new flight was queued */
     ISMD_SUBMIT_JOINED,        /* joined a flight in progress */
     ISMD_SUBMIT_QUEUE_FULL,    /* 503 */
-    ISMD_SUBMIT_CLIENT_LIMIT,  /* 429 */
+    ISMD_SUBMIT_CLIENT_LIMIT,  /* 429: the user's --user-jobs (or tokens file jobs=N) */
     ISMD_SUBMIT_DRAINING,      /* 503, shutting down */
     ISMD_SUBMIT_NO_MEMORY,     /* 500 */
 } ismd_submit;
-
-typedef struct ismd_client_count ismd_client_count;
 
 typedef struct ismd_sched {
     pthread_mutex_t lock;
@@ -75,17 +76,15 @@ typedef struct ismd_sched {
     ismd_flight *all_head, *all_tail;
     size_t nflights;
     ismd_queue *queue;
-    ismd_client_count *clients;
     uint64_t next_id;
     bool draining;
     double job_timeout_s;
-    int client_jobs;
     ismd_metrics *metrics;
     void (*wake)(void *ctx);   /* tells the pool thread to look again (set by the pool) */
     void *wake_ctx;
 } ismd_sched;
 
-bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s, int client_jobs,
+bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s,
                      ismd_metrics *metrics);
 void ismd_sched_destroy(ismd_sched *s);
 void ismd_sched_lock(ismd_sched *s);
@@ -93,10 +92,12 @@ void ismd_sched_unlock(ismd_sched *s);
 
 /* --- lock held for everything below --- */
 
-/* Adds waiter w to the flight for key.fmt, creating and queueing it when there is none.
- * request is the canonical request JSON (referenced, not copied); client names the caller. */
+/* Adds waiter w to the flight for key.fmt, creating and queueing it in user's line when there
+ * is none. request is the canonical request JSON (referenced, not copied); lim holds the
+ * user's own limits (NULL or zeros: the defaults). */
 ismd_submit ismd_sched_submit(ismd_sched *s, const char *key, const char *fmt,
-                              ism_blob *request, const char *client, ismd_waiter *w);
+                              ism_blob *request, const char *user,
+                              const ismd_user_limits *lim, ismd_waiter *w);
 
 /* Takes w off its flight (a canceled job). A queued flight left without waiters is dropped;
  * a running one is stopped by the pool (its worker is replaced). */
