@@ -42,7 +42,7 @@ static bool emit_zero_tile(face_walk *w, const ism_tile *tile)
         pts[i].flags = ISM_FP_ZERO;
     }
     double reach = 0;
-    bool ok = ism_triangulate_loop(&cx->s, pts, cx->nbp, reach, w->out);
+    bool ok = ism_triangulate_loop(&cx->s, pts, cx->nbp, reach, NULL, w->out);
     free(pts);
     cx->stats.polygons++;
     return ok;
@@ -115,16 +115,16 @@ bool ism_cell_polygonise(ism_cell_ctx *cx, int32_t node, ism_cell_out *out)
         return false;
 
     double reach = 0.5 * ism_grid_cell_size(&cx->tree->grid, nd->level);
+    double box[6]; /* the node: lo xyz, hi xyz */
+    int32_t steps = ism_grid_cell_steps(&cx->tree->grid, nd->level);
+    for (int a = 0; a < 3; a++) {
+        box[a] = ism_grid_coord(&cx->tree->grid, a, nd->org[a]);
+        box[3 + a] = ism_grid_coord(&cx->tree->grid, a, nd->org[a] + steps);
+    }
     ism_fpoint apex;
     bool has_apex = false;
     if (nd->flags & ISM_NODE_UNRESOLVED) {
-        double lo[3], hi[3];
-        int32_t steps = ism_grid_cell_steps(&cx->tree->grid, nd->level);
-        for (int a = 0; a < 3; a++) {
-            lo[a] = ism_grid_coord(&cx->tree->grid, a, nd->org[a]);
-            hi[a] = ism_grid_coord(&cx->tree->grid, a, nd->org[a] + steps);
-        }
-        has_apex = ism_find_singular_point(&cx->s, lo, hi, &apex);
+        has_apex = ism_find_singular_point(&cx->s, box, box + 3, &apex);
         cx->stats.singular_points += has_apex;
     }
     size_t polygons = 0;
@@ -148,7 +148,7 @@ bool ism_cell_polygonise(ism_cell_ctx *cx, int32_t node, ism_cell_out *out)
         if (lp->n < 2)
             continue;
         polygons++;
-        if (!ism_triangulate_loop(&cx->s, p, lp->n, reach, out))
+        if (!ism_triangulate_loop(&cx->s, p, lp->n, reach, box, out))
             return false;
     }
     cx->stats.polygons += polygons;

@@ -84,9 +84,10 @@ static bool reversed(const ism_fpoint *p, size_t n)
 }
 
 /* The polygon's centre moved onto f = 0; false when Newton does not land on the surface
- * within reach (near singular points), and the polygon is then fanned from a corner. */
+ * within reach (near singular points) or inside the node, and the polygon is then fanned
+ * from a corner. */
 static bool centre_point(ism_sampler *s, const ism_fpoint *p, size_t n, double reach,
-                         ism_fpoint *c)
+                         const double node[6], ism_fpoint *c)
 {
     double m[3] = {0, 0, 0};
     for (size_t i = 0; i < n; i++)
@@ -104,6 +105,9 @@ static bool centre_point(ism_sampler *s, const ism_fpoint *p, size_t n, double r
     double moved = ism_dist3(q, m);
     if (!isfinite(moved) || moved > reach)
         return false;
+    for (int k = 0; node && k < 3; k++)
+        if (!(q[k] >= node[k] && q[k] <= node[3 + k]))
+            return false; /* its fan would cover the neighbour's part of the surface */
     memcpy(c->p, q, sizeof c->p);
     double f = ism_sample_grad(s, c->p, c->g);
     double gl = ism_norm3(c->g);
@@ -152,7 +156,7 @@ static bool fan_from_best_corner(ism_cell_out *out, size_t base, size_t n)
 }
 
 bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
-                          ism_cell_out *out)
+                          const double node[6], ism_cell_out *out)
 {
     if (n < 3)
         return true;
@@ -173,7 +177,7 @@ bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, doubl
         return push_tri(out, b + 1, b + 2, b + 3) && push_tri(out, b + 1, b + 3, b);
     }
     ism_fpoint c;
-    if (!centre_point(s, out->verts + base, n, reach, &c))
+    if (!centre_point(s, out->verts + base, n, reach, node, &c))
         return fan_from_best_corner(out, base, n);
     uint32_t ci;
     if (!push_vert(out, &c, &ci))

@@ -6,9 +6,10 @@
 #include "core/octree/cell.h"
 
 /* Triangulates the closed polygon pts[0..n) (n >= 3) into out. reach bounds how far the
- * polygon's centre may move when projected onto the surface. */
+ * polygon's centre may move when projected onto the surface; node (lo xyz, hi xyz; NULL for
+ * no bound) is the box the projected centre must stay in. */
 bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
-                          ism_cell_out *out);
+                          const double node[6], ism_cell_out *out);
 
 /* Triangulates the closed polygon pts[0..n) (n >= 2) as a fan around apex, a point inside
  * the node where the polygon's sheet meets other sheets. */
