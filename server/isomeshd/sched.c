@@ -143,6 +143,15 @@ ismd_submit ismd_sched_submit(ismd_sched *s, const char *key, const char *fmt,
         free(f);
         return ISMD_SUBMIT_NO_MEMORY;
     }
+    if (s->shared_begin) { /* admitted; the shared cache is asked before the queue */
+        s->queue->ops->drop(s->queue, f);
+        f->lim = lim ? *lim : (ismd_user_limits){0};
+        if (!s->shared_begin(s->shared_ctx, f)) {
+            free(f);
+            return ISMD_SUBMIT_NO_MEMORY;
+        }
+        f->shared = true;
+    }
     s->next_id++;
     f->request = ism_blob_ref(request);
     f->submitted_ns = ismd_now_ns();
@@ -190,7 +199,7 @@ void ismd_sched_detach(ismd_sched *s, ismd_waiter *w)
     waiter_unlink(w);
     if (f->nwaiters > 0)
         return;
-    if (f->queued) {
+    if (f->queued || f->shared) {
         atomic_fetch_add(&s->metrics->computations[ISMD_OUT_CANCELED], 1);
         flight_free(s, f);
         publish_queue(s);
@@ -287,10 +296,56 @@ void ismd_sched_drain(ismd_sched *s)
     ismd_flight *f = s->all_head;
     while (f) {
         ismd_flight *next = f->anext;
-        if (f->queued)
+        if (f->queued || f->shared)
             ismd_sched_fail(s, f, 503, "shutting_down",
                             "the server is shutting down; retry on another instance",
                             ISMD_OUT_CANCELED);
         f = next;
     }
+}
+
+/* ---- the shared cache's side (shared_cache.h) ---------------------------------------- */
+
+ismd_flight *ismd_sched_find(ismd_sched *s, const char *name)
+{
+    return *flight_slot(s, name);
+}
+
+bool ismd_sched_enqueue(ismd_sched *s, ismd_flight *f)
+{
+    f->shared = false;
+    ismd_push p = s->queue->ops->push(s->queue, f, &f->lim);
+    if (p == ISMD_PUSH_OK) {
+        publish_queue(s);
+        wake_pool(s);
+        return true;
+    }
+    ismd_result r = {.status = 500, .content_type = "application/json"};
+    if (p == ISMD_PUSH_USER_LIMIT) {
+        atomic_fetch_add(&s->metrics->rejected_client_limit, 1);
+        r.status = 429;
+        r.body = ismd_error_json("too_many_requests",
+                                 "too many computations of yours are queued or running "
+                                 "(--user-jobs); wait for one to finish", NULL);
+    } else if (p == ISMD_PUSH_FULL) {
+        atomic_fetch_add(&s->metrics->rejected_queue_full, 1);
+        r.status = 503;
+        r.body = ismd_error_json("queue_full",
+                                 "every worker is busy and the queue is full; retry later", NULL);
+    } else {
+        r.body = ismd_error_json("out_of_memory", "the server ran out of memory", NULL);
+    }
+    ismd_sched_answer(s, f, &r);
+    ism_blob_unref(r.body);
+    return false;
+}
+
+void ismd_sched_answer(ismd_sched *s, ismd_flight *f, const ismd_result *r)
+{
+    while (f->waiters.next != &f->waiters) {
+        ismd_waiter *w = f->waiters.next;
+        waiter_unlink(w);
+        w->done(w, r);
+    }
+    flight_free(s, f);
 }

@@ -30,6 +30,7 @@ typedef struct ismd_result {
     ism_blob *stats, *features;/* status 200 only; may be NULL */
     double queue_ms, worker_ms;/* time waiting for a worker, time on it */
     char timing[256];          /* extra Server-Timing entries from the pipeline's stats */
+    const char *cache;         /* "shared": computed by another daemon (shared_cache.h) */
 } ismd_result;
 
 typedef struct ismd_waiter ismd_waiter;
@@ -49,6 +50,8 @@ struct ismd_flight {
     ism_blob *request;         /* canonical request JSON sent to the worker */
     uint64_t id;               /* job id in worker frames */
     bool queued, running;
+    bool shared;               /* asking the shared cache first: neither queued nor running */
+    ismd_user_limits lim;      /* the user's limits, for queueing after the shared cache */
     double progress;
     long long submitted_ns, started_ns, deadline_ns;
     ismd_waiter waiters;       /* list sentinel */
@@ -82,6 +85,10 @@ typedef struct ismd_sched {
     ismd_metrics *metrics;
     void (*wake)(void *ctx);   /* tells the pool thread to look again (set by the pool) */
     void *wake_ctx;
+    /* Optional (shared_cache.h): takes each new flight before the queue; false when out of
+     * memory. The flight is admitted first (limits checked), then waits there (f->shared). */
+    bool (*shared_begin)(void *ctx, ismd_flight *f);
+    void *shared_ctx;
 } ismd_sched;
 
 bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s,
@@ -125,6 +132,15 @@ long long ismd_sched_next_deadline(const ismd_sched *s);
 
 /* Stops accepting flights and fails every queued one with 503. */
 void ismd_sched_drain(ismd_sched *s);
+
+/* The flight for name ("<key>.<fmt>"), or NULL. */
+ismd_flight *ismd_sched_find(ismd_sched *s, const char *name);
+/* Moves a flight from the shared cache to the queue. False when the queue refused it (the
+ * flight is then answered 429 or 503 and freed). */
+bool ismd_sched_enqueue(ismd_sched *s, ismd_flight *f);
+/* Hands r to every waiter and frees the flight, without counting a computation (an answer
+ * from the shared cache, or an error found there). */
+void ismd_sched_answer(ismd_sched *s, ismd_flight *f, const ismd_result *r);
 
 /* CLOCK_MONOTONIC in nanoseconds. */
 long long ismd_now_ns(void);
