@@ -1,0 +1,406 @@
+/* shared_cache.c — the shared stage of shared_cache.h: one task per new flight, run on the
+ * Redis tier's thread, stepping through look / wait / lock / hold. The task never keeps a
+ * pointer to its flight: it finds it again by name and id under the scheduler's lock each
+ * time (the flight may have ended, been canceled or have passed its deadline meanwhile), and
+ * never holds that lock across a Redis call. */
+#include "server/isomeshd/shared_cache.h"
+
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/random.h>
+#include <unistd.h>
+
+#include "server/common/cache_redis.h"
+#include "server/common/log.h"
+#include "server/isomeshd/errors.h"
+#include "server/isomeshd/worker_pool.h"
+
+#define POLL_MIN_NS 20000000LL        /* first look after finding the lock taken */
+#define POLL_MAX_NS 250000000LL       /* then every 1.5x longer, up to this */
+#define HOLD_TICK_NS 50000000LL       /* how often a holder checks whether its flight ended */
+#define RENEW_RETRY_NS 200000000LL    /* a failed extension is retried this soon */
+#define STOP_WAIT_NS 3000000000LL     /* ismd_shared_stop waits this long for its tasks */
+
+typedef enum tstate { T_LOOK, T_WAIT, T_HOLD } tstate;
+
+struct ismd_shared {
+    ismd_sched *sched;
+    ism_cache *cache;
+    ism_cache_tier *redis;
+    ism_redis_counters *counters;
+    const ism_pipeline_limits *limits;
+    long ttl_ms;
+    char instance[128];           /* host/pid/random: this daemon in lock tokens */
+    pthread_mutex_t lock;         /* guards the fields below */
+    pthread_cond_t changed;
+    int ntasks, inside;           /* tasks alive; tasks using the scheduler now */
+    bool stopping, detached;      /* no more scheduler use; owner gone (last task frees) */
+};
+
+typedef struct task {
+    ism_redis_task base;          /* first: the tier hands this back */
+    ismd_shared *sh;
+    char name[ISM_CACHE_NAME_MAX];
+    char key[65], fmt[8];
+    uint64_t flight_id;
+    tstate state;
+    bool missed, lock_lost;
+    long long poll_ns, renew_at_ns;
+    char token[192];
+} task;
+
+/* ---- the scheduler, entered only while not stopping ---------------------------------- */
+
+static bool enter(ismd_shared *sh)
+{
+    pthread_mutex_lock(&sh->lock);
+    bool ok = !sh->stopping;
+    if (ok)
+        sh->inside++;
+    pthread_mutex_unlock(&sh->lock);
+    if (ok)
+        ismd_sched_lock(sh->sched);
+    return ok;
+}
+
+static void leave(ismd_shared *sh)
+{
+    ismd_sched_unlock(sh->sched);
+    pthread_mutex_lock(&sh->lock);
+    sh->inside--;
+    pthread_cond_broadcast(&sh->changed);
+    pthread_mutex_unlock(&sh->lock);
+}
+
+/* The task's flight if it still exists (lock held); shared_only: still in this stage. */
+static ismd_flight *my_flight(task *k, bool shared_only)
+{
+    ismd_flight *f = ismd_sched_find(k->sh->sched, k->name);
+    if (!f || f->id != k->flight_id || (shared_only && !f->shared))
+        return NULL;
+    return f;
+}
+
+/* ---- ending a task ------------------------------------------------------------------- */
+
+static void free_shared(ismd_shared *sh)
+{
+    pthread_mutex_destroy(&sh->lock);
+    pthread_cond_destroy(&sh->changed);
+    free(sh);
+}
+
+/* Releases what the task holds (its flight's results are written out before its lock goes)
+ * and frees it. Returns 0 for the tier ("finished"). */
+static long long task_end(task *k, ism_cache_tier *t)
+{
+    ismd_shared *sh = k->sh;
+    if (k->state == T_HOLD && !k->lock_lost) {
+        ism_cache_redis_flush(t);
+        ism_cache_redis_unlock(t, k->name, k->token);
+    }
+    free(k);
+    pthread_mutex_lock(&sh->lock);
+    bool last = --sh->ntasks == 0 && sh->detached;
+    pthread_cond_broadcast(&sh->changed);
+    pthread_mutex_unlock(&sh->lock);
+    if (last)
+        free_shared(sh);
+    return 0;
+}
+
+/* ---- answers ------------------------------------------------------------------------- */
+
+static void answer(task *k, const ismd_result *r)
+{
+    ismd_shared *sh = k->sh;
+    if (!enter(sh))
+        return;
+    ismd_flight *f = my_flight(k, true);
+    if (f) {
+        ismd_result copy = *r;
+        copy.queue_ms = (ismd_now_ns() - f->submitted_ns) / 1e6;
+        ismd_sched_answer(sh->sched, f, &copy);
+    }
+    leave(sh);
+}
+
+static void answer_error(task *k, unsigned status, const char *code, const char *message)
+{
+    ismd_result r = {.status = status, .content_type = "application/json"};
+    r.body = ismd_error_json(code, message, NULL);
+    if (r.body)
+        answer(k, &r);
+    ism_blob_unref(r.body);
+}
+
+/* Moves the flight on to the local queue. False when it is gone (or the queue refused it). */
+static bool to_queue(task *k)
+{
+    ismd_shared *sh = k->sh;
+    if (!enter(sh))
+        return false;
+    ismd_flight *f = my_flight(k, true);
+    bool queued = f && ismd_sched_enqueue(sh->sched, f);
+    leave(sh);
+    return queued;
+}
+
+/* Redis could not help: compute here. */
+static long long go_local(task *k, ism_cache_tier *t)
+{
+    atomic_fetch_add(&k->sh->counters->fallbacks, 1);
+    to_queue(k);
+    return task_end(k, t);
+}
+
+/* ---- steps --------------------------------------------------------------------------- */
+
+static long long wait_more(task *k, long long now)
+{
+    if (k->state != T_WAIT) {
+        k->state = T_WAIT;
+        k->poll_ns = POLL_MIN_NS;
+        atomic_fetch_add(&k->sh->counters->lock_waits, 1);
+    } else {
+        k->poll_ns = k->poll_ns * 3 / 2 > POLL_MAX_NS ? POLL_MAX_NS : k->poll_ns * 3 / 2;
+    }
+    return now + k->poll_ns;
+}
+
+/* Whether the flight still waits here; *need_request when it has no canonical request. */
+static bool still_wanted(task *k, bool *need_request)
+{
+    if (!enter(k->sh))
+        return false;
+    ismd_flight *f = my_flight(k, true);
+    if (f)
+        *need_request = f->request == NULL;
+    leave(k->sh);
+    return f != NULL;
+}
+
+/* A stored request is used only if it still gives its key (a new mesher gives new keys). */
+static bool request_gives_key(ismd_shared *sh, const ism_blob *req, const task *k)
+{
+    ism_pipeline_result pr;
+    memset(&pr, 0, sizeof pr);
+    bool same = ism_pipeline_key((const char *)req->data, req->len, k->fmt, sh->limits, &pr) &&
+                !strcmp(pr.key, k->key);
+    ism_pipeline_result_free(&pr);
+    return same;
+}
+
+static void attach_request(task *k, ism_blob *req)
+{
+    if (!enter(k->sh))
+        return;
+    ismd_flight *f = my_flight(k, true);
+    if (f && !f->request)
+        f->request = ism_blob_ref(req);
+    leave(k->sh);
+}
+
+static void unref_all(ism_blob **b, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        ism_blob_unref(b[i]);
+}
+
+/* Look in Redis; answer, wait, or take the lock and queue the flight. */
+static long long look(task *k, ism_cache_tier *t, long long now)
+{
+    ismd_shared *sh = k->sh;
+    bool need_request = false;
+    if (!still_wanted(k, &need_request))
+        return task_end(k, t);
+    if (!ism_cache_redis_up(t))
+        return go_local(k, t);
+    int locked = ism_cache_redis_locked(t, k->name);
+    if (locked < 0)
+        return go_local(k, t);
+    if (locked)
+        return wait_more(k, now); /* computing elsewhere (or writing its results out) */
+
+    char names[4][ISM_CACHE_NAME_MAX];
+    const char *exts[4] = {k->fmt, "stats.json", "features.json", "request.json"};
+    const char *argv[4];
+    size_t n = need_request ? 4 : 3;
+    for (size_t i = 0; i < n; i++) {
+        ism_cache_name(names[i], k->key, exts[i]);
+        argv[i] = names[i];
+    }
+    ism_blob *got[4] = {0};
+    if (ism_cache_redis_fetch(t, argv, n, got) < 0)
+        return go_local(k, t);
+    if (got[0]) {
+        atomic_fetch_add(&t->counters.hits, 1);
+        for (size_t i = 0; i < n; i++)
+            if (got[i])
+                ism_cache_put_local(sh->cache, names[i], got[i]);
+        ismd_result r = {.status = 200, .body = got[0], .stats = got[1], .features = got[2],
+                         .content_type = ismd_format_content_type(k->fmt), .cache = "shared"};
+        answer(k, &r);
+        unref_all(got, n);
+        return task_end(k, t);
+    }
+    if (!k->missed) {
+        k->missed = true;
+        atomic_fetch_add(&t->counters.misses, 1);
+    }
+    if (need_request) {
+        if (!got[3] || !request_gives_key(sh, got[3], k)) {
+            unref_all(got, n);
+            answer_error(k, 404, "unknown_mesh",
+                         "no mesh with this key is known to this service; POST its request to "
+                         "/v1/mesh");
+            return task_end(k, t);
+        }
+        ism_cache_put_local(sh->cache, names[3], got[3]);
+        attach_request(k, got[3]);
+    }
+    unref_all(got, n);
+
+    int acquired = ism_cache_redis_lock(t, k->name, k->token, sh->ttl_ms);
+    if (acquired < 0)
+        return go_local(k, t);
+    if (!acquired)
+        return wait_more(k, now);
+    /* Someone may have finished it between the look and the lock: look again. */
+    int there = ism_cache_redis_exists(t, k->name);
+    if (there != 0) {
+        ism_cache_redis_unlock(t, k->name, k->token);
+        return there > 0 ? now : go_local(k, t);
+    }
+    atomic_fetch_add(&sh->counters->locks_acquired, 1);
+    if (k->state == T_WAIT)
+        atomic_fetch_add(&sh->counters->lock_takeovers, 1);
+    k->state = T_HOLD;
+    k->renew_at_ns = now + sh->ttl_ms * 1000000LL / 3;
+    if (!to_queue(k))
+        return task_end(k, t); /* gone meanwhile, or refused by the queue: release the lock */
+    return now + HOLD_TICK_NS;
+}
+
+/* Holding the lock while the flight computes here: extend it; release it when it ends. */
+static long long hold(task *k, ism_cache_tier *t, long long now)
+{
+    ismd_shared *sh = k->sh;
+    if (!enter(sh))
+        return task_end(k, t);
+    bool running = my_flight(k, false) != NULL;
+    leave(sh);
+    if (!running)
+        return task_end(k, t);
+    if (!k->lock_lost && now >= k->renew_at_ns) {
+        int kept = ism_cache_redis_renew(t, k->name, k->token, sh->ttl_ms);
+        if (kept == 0) {
+            k->lock_lost = true;
+            atomic_fetch_add(&sh->counters->locks_lost, 1);
+            ism_log_field f = ISM_LS("name", k->name);
+            ism_log_fields(ISM_LOG_WARN, "redis_lock_lost", &f, 1);
+        }
+        k->renew_at_ns = kept < 0 ? now + RENEW_RETRY_NS : now + sh->ttl_ms * 1000000LL / 3;
+    }
+    return now + HOLD_TICK_NS;
+}
+
+static long long task_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
+{
+    task *k = (task *)base;
+    pthread_mutex_lock(&k->sh->lock);
+    bool stop = stopping || k->sh->stopping;
+    pthread_mutex_unlock(&k->sh->lock);
+    if (stop)
+        return task_end(k, t);
+    long long now = ism_redis_now_ns();
+    return k->state == T_HOLD ? hold(k, t, now) : look(k, t, now);
+}
+
+/* ---- the hook ------------------------------------------------------------------------ */
+
+/* sched.h's shared_begin: called with the scheduler's lock held for each new flight. */
+static bool begin(void *ctx, ismd_flight *f)
+{
+    ismd_shared *sh = ctx;
+    task *k = calloc(1, sizeof *k);
+    if (!k)
+        return false;
+    k->sh = sh;
+    k->base.run = task_run;
+    k->state = T_LOOK;
+    k->flight_id = f->id;
+    snprintf(k->name, sizeof k->name, "%s", f->name);
+    snprintf(k->key, sizeof k->key, "%s", f->key);
+    snprintf(k->fmt, sizeof k->fmt, "%s", f->fmt);
+    snprintf(k->token, sizeof k->token, "%s/%llu", sh->instance, (unsigned long long)f->id);
+    pthread_mutex_lock(&sh->lock);
+    bool ok = !sh->stopping;
+    if (ok)
+        sh->ntasks++;
+    pthread_mutex_unlock(&sh->lock);
+    if (!ok) {
+        free(k);
+        return false;
+    }
+    ism_cache_redis_schedule(sh->redis, &k->base, 0);
+    return true;
+}
+
+ismd_shared *ismd_shared_start(ismd_sched *sched, ism_cache *cache, ism_cache_tier *redis,
+                               const ism_pipeline_limits *limits, double lock_ttl_s)
+{
+    ismd_shared *sh = calloc(1, sizeof *sh);
+    if (!sh)
+        return NULL;
+    sh->sched = sched;
+    sh->cache = cache;
+    sh->redis = redis;
+    sh->counters = ism_cache_redis_counters(redis);
+    sh->limits = limits;
+    sh->ttl_ms = (long)(lock_ttl_s * 1000);
+    char host[64] = "host";
+    gethostname(host, sizeof host - 1);
+    host[sizeof host - 1] = 0;
+    unsigned long long nonce = 0;
+    if (getrandom(&nonce, sizeof nonce, 0) != (ssize_t)sizeof nonce)
+        nonce = (unsigned long long)ismd_now_ns();
+    snprintf(sh->instance, sizeof sh->instance, "%s/%ld/%016llx", host, (long)getpid(), nonce);
+    pthread_mutex_init(&sh->lock, NULL);
+    pthread_cond_init(&sh->changed, NULL);
+    ismd_sched_lock(sched);
+    sched->shared_begin = begin;
+    sched->shared_ctx = sh;
+    ismd_sched_unlock(sched);
+    return sh;
+}
+
+void ismd_shared_stop(ismd_shared *sh)
+{
+    ismd_sched_lock(sh->sched);
+    sh->sched->shared_begin = NULL;
+    sh->sched->shared_ctx = NULL;
+    ismd_sched_unlock(sh->sched);
+    pthread_mutex_lock(&sh->lock);
+    sh->stopping = true;
+    while (sh->inside > 0) /* short: nobody waits on the network inside */
+        pthread_cond_wait(&sh->changed, &sh->lock);
+    long long until = ismd_now_ns() + STOP_WAIT_NS;
+    while (sh->ntasks > 0 && ismd_now_ns() < until) {
+        struct timespec ts;
+        clock_gettime(CLOCK_REALTIME, &ts);
+        ts.tv_nsec += 20000000;
+        if (ts.tv_nsec >= 1000000000) {
+            ts.tv_sec++;
+            ts.tv_nsec -= 1000000000;
+        }
+        pthread_cond_timedwait(&sh->changed, &sh->lock, &ts);
+    }
+    bool free_now = sh->ntasks == 0;
+    sh->detached = true; /* otherwise the last task frees it (when the tier closes) */
+    pthread_mutex_unlock(&sh->lock);
+    if (free_now)
+        free_shared(sh);
+}

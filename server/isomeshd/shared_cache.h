@@ -1,0 +1,38 @@
+/* shared_cache.h — the shared cache on a computation's path. With --redis, every new flight
+ * (sched.h) stops here before the queue, and a task on the Redis tier's thread
+ * (cache_redis.h) decides, without ever blocking an HTTP thread:
+ *
+ *   1. Someone holds the entry's lock (another daemon is computing it): wait, polling Redis
+ *      every 20 ms growing to 250 ms, until the lock goes (released, or expired because its
+ *      holder died), then look again.
+ *   2. The mesh is in Redis: copy it (with its stats, features) into the local tiers and
+ *      answer every waiter ("X-Cache: shared"). Nothing is computed here.
+ *   3. Otherwise take the lock (SET NX PX, a token naming this daemon and flight) and queue
+ *      the flight for a local worker; while it computes, the lock is extended every third of
+ *      its lifetime; when the flight ends, the results already stored (cache_result puts them
+ *      in every tier) are written out and the lock is released.
+ *   A GET of a key unknown here (no local request.json) fetches the canonical request from
+ *   Redis in step 2, checks that it still gives its key, and computes the other format.
+ *   Redis unreachable at any step: the flight is queued at once and computed here (counted as
+ *   a fallback); the daemon keeps serving from its own tiers.
+ *
+ * Waiting is bounded by the flight's deadline (--job-timeout); a dead holder by the lock's
+ * lifetime (--redis-lock-ttl). */
+#ifndef ISMD_SHARED_CACHE_H
+#define ISMD_SHARED_CACHE_H
+
+#include "server/common/cache.h"
+#include "server/common/pipeline.h"
+#include "server/isomeshd/sched.h"
+
+typedef struct ismd_shared ismd_shared;
+
+/* Hooks the shared stage into sched (new flights go through it). NULL when out of memory. */
+ismd_shared *ismd_shared_start(ismd_sched *sched, ism_cache *cache, ism_cache_tier *redis,
+                               const ism_pipeline_limits *limits, double lock_ttl_s);
+
+/* Unhooks and waits (bounded) for the tasks to finish, releasing the locks they hold. Call
+ * after the pool has stopped and before the scheduler is destroyed; frees sh. */
+void ismd_shared_stop(ismd_shared *sh);
+
+#endif
