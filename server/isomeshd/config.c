@@ -14,9 +14,10 @@
 #include <unistd.h>
 
 #include "core/version.h"
+#include "server/common/cache_redis.h"
 
 typedef enum kind {
-    K_LISTEN, K_INT, K_SIZE, K_DURATION, K_PATH, K_STRING, K_LOGFMT, K_BOOL, K_ORDER
+    K_LISTEN, K_INT, K_SIZE, K_DURATION, K_PATH, K_STRING, K_LOGFMT, K_BOOL, K_ORDER, K_REDIS
 } kind;
 
 typedef struct flag {
@@ -52,6 +53,12 @@ static const flag FLAGS[] = {
      "disk cache directory [$XDG_CACHE_HOME/isomesh, else $HOME/.cache/isomesh]"},
     {"cache-mem", K_SIZE, 0, (long long)1 << 40, "BYTES",
      "in-memory cache size, e.g. 512M; 0 disables it [256M]"},
+    {"redis", K_REDIS, 0, 0, "HOST:PORT",
+     "shared cache in this Redis server: daemons using the same one serve each other's "
+     "meshes and compute identical requests once (deploy/README.md) [none]"},
+    {"redis-lock-ttl", K_DURATION, 0, 0, "TIME",
+     "lifetime of a computation's lock in Redis, extended while it runs: the longest wait "
+     "for a daemon that died mid-computation; at least 500ms [10s]"},
     {"job-timeout", K_DURATION, 0, 0, "TIME",
      "deadline of one computation from submission, e.g. 90s, 500ms [60s]"},
     {"job-memory", K_SIZE, 0, (long long)1 << 42, "BYTES",
@@ -184,6 +191,7 @@ static const char *describe(const flag *f)
     case K_LOGFMT: return "expected text or json";
     case K_BOOL: return "expected true or false";
     case K_ORDER: return "expected fair or fifo";
+    case K_REDIS: return "expected HOST:PORT, [IPV6]:PORT or HOST (port 6379), or \"\" for none";
     }
     return "bad value";
 }
@@ -221,7 +229,13 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
     case K_DURATION:
         if (!parse_duration(v, &d))
             return false;
-        cfg->job_timeout_s = d;
+        if (!strcmp(name, "redis-lock-ttl")) {
+            if (d < 0.5)
+                return false;
+            cfg->redis_lock_ttl_s = d;
+        } else {
+            cfg->job_timeout_s = d;
+        }
         return true;
     case K_PATH:
         if (!strcmp(name, "cache-dir"))
@@ -252,6 +266,13 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
             return false;
         cfg->queue_fifo = !strcmp(v, "fifo");
         return true;
+    case K_REDIS: {
+        char host[256];
+        unsigned short port;
+        if (*v && !ism_redis_parse_address(v, host, &port))
+            return false;
+        return set_path(cfg->redis, sizeof cfg->redis, v);
+    }
     }
     return false;
 }
@@ -313,6 +334,7 @@ static void set_defaults(ismd_config *cfg)
     cfg->workers = cores < 1 ? 1 : cores > 256 ? 256 : (int)cores;
     cfg->queue = 64;
     cfg->user_jobs = 32;
+    cfg->redis_lock_ttl_s = 10;
     const char *xdg = getenv("XDG_CACHE_HOME");
     const char *home = getenv("HOME");
     if (xdg && *xdg == '/')

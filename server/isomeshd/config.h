@@ -28,6 +28,8 @@ typedef struct ismd_config {
     char web_root[4096];      /* "" = no viewer */
     char data_dir[4096];      /* openapi.yaml, request.schema.json */
     char cors_origin[512];    /* "" = no CORS headers */
+    char redis[300];          /* HOST:PORT of the shared cache (shared_cache.h); "" = none */
+    double redis_lock_ttl_s;  /* lifetime of a computation's lock in Redis */
     ism_log_format log_format;
     char worker_path[4096];   /* the isomesh binary */
 } ismd_config;
