@@ -137,14 +137,14 @@ static size_t split_words(char *line, char **words, size_t max)
     size_t n = 0;
     char *p = line;
     for (;;) {
-        while (*p == ' ' || *p == '\t' || *p == '\r')
+        while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n')
             p++;
         if (!*p)
             return n;
         if (n == max)
             return max + 1;
         words[n++] = p;
-        while (*p && *p != ' ' && *p != '\t' && *p != '\r')
+        while (*p && *p != ' ' && *p != '\t' && *p != '\r' && *p != '\n')
             p++;
         if (*p)
             *p++ = 0;
