@@ -117,6 +117,8 @@ class Parser {
     this.letOrder = [];
     this.free = [];              // free names in order of first use (the parameters)
     this.declared = new Set();   // every let name written anywhere (for "defined later")
+    this.inLet = false;          // parsing the value of a let line
+    this.openParens = 0;         // parentheses (groups and calls) open here
     for (let k = 0; k + 1 < this.toks.length; k++) {
       if (this.toks[k].kind === 'NAME' && this.toks[k].text === 'let' && this.toks[k + 1].kind === 'NAME') {
         this.declared.add(this.toks[k + 1].text);
@@ -149,7 +151,9 @@ class Parser {
       throw new ExprError(this.tok, `expected '=' after 'let NAME', found ${describe(this.tok)}`);
     }
     this.next();
+    this.inLet = true;
     const value = this.expr();
+    this.inLet = false;
     this.lets.set(name.text, value);
     this.letOrder.push(name.text);
     if (this.tok.kind === 'SEMI') { this.next(); return; }
@@ -253,7 +257,9 @@ class Parser {
         return this.name();
       case 'LPAREN': {
         this.next();
+        this.openParens++;
         const v = this.expr();
+        this.openParens--;
         if (this.tok.kind !== 'RPAREN') {
           throw new ExprError(this.tok, `expected ')' to close the '(' at line ${at.line}, col ${at.column}, ` +
             `found ${describe(this.tok)}`);
@@ -270,7 +276,10 @@ class Parser {
     const t = this.tok;
     const n = t.text;
     this.next();
-    if (this.tok.kind === 'LPAREN') return this.call(t);
+    // NAME ( is a call, except that a let's value ends with its line: a '(' starting the
+    // next line begins the next statement (as in core/expr/parser.c).
+    const nextStatement = this.inLet && this.openParens === 0 && this.tok.line > t.endLine;
+    if (this.tok.kind === 'LPAREN' && !nextStatement) return this.call(t);
     if (VARIABLES.has(n)) return null;
     if (n in CONSTANTS) return CONSTANTS[n];
     if (this.lets.has(n)) return this.lets.get(n);
@@ -296,6 +305,7 @@ class Parser {
     }
     const open = this.tok;
     this.next();
+    this.openParens++;
     const args = [];
     let secondAt = this.tok;
     if (this.tok.kind !== 'RPAREN') {
@@ -307,6 +317,7 @@ class Parser {
         this.next();
       }
     }
+    this.openParens--;
     if (this.tok.kind !== 'RPAREN') {
       throw new ExprError(this.tok, `expected ',' or ')' in the call to ${n}( at col ${open.column}, ` +
         `found ${describe(this.tok)}`);
