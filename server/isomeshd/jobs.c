@@ -26,6 +26,7 @@ struct ismd_job {
     ism_blob *stats, *error;
     long long created_ns, finished_ns;
     long long started_ns;      /* when its computation began running (0: not yet, or cached) */
+    long long started_unix_ms; /* the same instant on the wall clock */
     time_t created_unix;
     unsigned version;
     int refs;                  /* the table + each stream */
@@ -146,8 +147,10 @@ static void mark_finished(ismd_job *job)
 static void job_progress(ismd_waiter *w, double fraction, bool running)
 {
     ismd_job *job = (ismd_job *)w;
-    if (running && !job->started_ns)
-        job->started_ns = w->flight && w->flight->started_ns ? w->flight->started_ns : ismd_now_ns();
+    if (running && !job->started_ns && w->flight) {
+        job->started_ns = w->flight->started_ns;
+        job->started_unix_ms = w->flight->started_unix_ms;
+    }
     job->state = running ? ISMD_JOB_RUNNING : ISMD_JOB_QUEUED;
     job->progress = fraction;
     notify(job);
@@ -224,6 +227,7 @@ void ismd_jobs_submitted(ismd_job *job)
         job->state = ISMD_JOB_RUNNING;
         job->progress = f->progress;
         job->started_ns = f->started_ns;
+        job->started_unix_ms = f->started_unix_ms;
     }
 }
 
@@ -295,11 +299,7 @@ json_t *ismd_job_json(const ismd_job *job)
     json_object_set_new(o, "created", json_string(created));
     json_object_set_new(o, "user", json_string(job->user));
     if (job->started_ns) {
-        /* wall-clock time of a monotonic instant: now minus how long ago it was */
-        struct timespec rt;
-        clock_gettime(CLOCK_REALTIME, &rt);
-        long long ago_ns = ismd_now_ns() - job->started_ns;
-        long long ms = ((long long)rt.tv_sec * 1000000000LL + rt.tv_nsec - ago_ns) / 1000000;
+        long long ms = job->started_unix_ms;
         time_t secs = (time_t)(ms / 1000);
         char started[40], whole[32];
         gmtime_r(&secs, &tm);

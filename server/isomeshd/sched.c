@@ -255,6 +255,9 @@ ismd_flight *ismd_sched_next(ismd_sched *s)
     publish_queue(s);
     f->running = true;
     f->started_ns = ismd_now_ns();
+    struct timespec wall;
+    clock_gettime(CLOCK_REALTIME, &wall);
+    f->started_unix_ms = (long long)wall.tv_sec * 1000 + wall.tv_nsec / 1000000;
     atomic_fetch_add(&s->metrics->computations_started, 1);
     ismd_sched_progress(s, f, 0);
     return f;

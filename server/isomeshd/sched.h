@@ -54,6 +54,7 @@ struct ismd_flight {
     ismd_user_limits lim;      /* the user's limits, for queueing after the shared cache */
     double progress;
     long long submitted_ns, started_ns, deadline_ns;
+    long long started_unix_ms; /* wall-clock start (for job views), set with started_ns */
     ismd_waiter waiters;       /* list sentinel */
     size_t nwaiters;
     char user[ISMD_QUEUE_USER_MAX]; /* who started it (its queue line and limits) */
