@@ -155,6 +155,8 @@ static void conn_done(ismd_waiter *w, const ismd_result *res)
     r->queue_ms = res->queue_ms;
     r->worker_ms = res->worker_ms;
     snprintf(r->timing, sizeof r->timing, "%s", res->timing);
+    if (res->cache)
+        r->cache = res->cache; /* "shared": another daemon computed it */
     r->ready = true;
     if (r->suspended) {
         r->suspended = false;

@@ -24,12 +24,15 @@
 
 typedef struct ismd_pool ismd_pool;
 typedef struct ismd_jobs ismd_jobs;
+typedef struct ismd_shared ismd_shared;
 
 typedef struct ismd_server {
     const ismd_config *cfg;
     ismd_metrics metrics;
     ism_cache cache;
     ism_cache_tier *disk;
+    ism_cache_tier *redis;       /* the shared tier (cache_redis.h); NULL without --redis */
+    ismd_shared *shared;         /* its stage on the computation path (shared_cache.h) */
     ismd_sched sched;
     ismd_pool *pool;
     ismd_jobs *jobs;

@@ -19,15 +19,18 @@
 #include "proto/presets.h"
 #include "server/common/cache_disk.h"
 #include "server/common/cache_mem.h"
+#include "server/common/cache_redis.h"
 #include "server/common/log.h"
 #include "server/isomeshd/config.h"
 #include "server/isomeshd/http.h"
 #include "server/isomeshd/jobs.h"
+#include "server/isomeshd/shared_cache.h"
 #include "server/isomeshd/token_cmd.h"
 #include "server/isomeshd/worker_pool.h"
 
 #define DOC_MAX (8u << 20)
 #define DISK_WRITE_QUEUE ((size_t)256 << 20)
+#define REDIS_MAX_ENTRY ((size_t)128 << 20) /* larger meshes stay on the daemon that made them */
 #define MAX_STOP_GRACE_S 10.0
 
 /* Reads a whole small file into a blob (NULL when missing or too big). */
@@ -159,7 +162,18 @@ static bool setup_cache(ismd_server *s, const ismd_config *cfg)
             return false;
     }
     s->disk = ism_cache_disk_new(cfg->cache_dir, DISK_WRITE_QUEUE);
-    return s->disk && ism_cache_add_tier(&s->cache, s->disk);
+    if (!s->disk || !ism_cache_add_tier(&s->cache, s->disk))
+        return false;
+    if (!cfg->redis[0])
+        return true;
+    ism_redis_settings rs = {.max_pending = DISK_WRITE_QUEUE, .max_entry = REDIS_MAX_ENTRY};
+    if (!ism_redis_parse_address(cfg->redis, rs.host, &rs.port)) /* checked by config.c */
+        return false;
+    s->redis = ism_cache_redis_new(&rs);
+    if (!s->redis || !ism_cache_add_tier(&s->cache, s->redis))
+        return false;
+    s->metrics.redis = ism_cache_redis_counters(s->redis);
+    return true;
 }
 
 int main(int argc, char **argv)
@@ -207,6 +221,12 @@ int main(int argc, char **argv)
         ism_log_async(false);
         return 1;
     }
+    if (s.redis && !(s.shared = ismd_shared_start(&s.sched, &s.cache, s.redis, &s.limits,
+                                                  cfg.redis_lock_ttl_s))) {
+        ism_logf(ISM_LOG_ERROR, "startup_failed", "out of memory");
+        ism_log_async(false);
+        return 1;
+    }
     load_docs(&s, &cfg);
     open_static(&s, &cfg);
 
@@ -235,6 +255,7 @@ int main(int argc, char **argv)
         ISM_LS("host", cfg.listen_host), ISM_LI("port", port), ISM_LI("workers", cfg.workers),
         ISM_LS("cache_dir", cfg.cache_dir), ISM_LS("web_root", s.web.root_fd >= 0 ? s.web.root : NULL),
         ISM_LS("data_dir", cfg.data_dir), ISM_LS("version", ISM_VERSION " " ISM_MESHER_VERSION),
+        ISM_LS("redis", cfg.redis[0] ? cfg.redis : NULL),
     };
     ism_log_fields(ISM_LOG_INFO, "listening", f, sizeof f / sizeof f[0]);
 
@@ -256,6 +277,8 @@ int main(int argc, char **argv)
     ismd_http_quiesce(&s);
     double grace = cfg.job_timeout_s < MAX_STOP_GRACE_S ? cfg.job_timeout_s : MAX_STOP_GRACE_S;
     ismd_pool_stop(s.pool, grace);
+    if (s.shared)
+        ismd_shared_stop(s.shared); /* releases the Redis locks this daemon holds */
     ismd_sched_lock(&s.sched);
     ismd_jobs_close_streams(s.jobs);
     ismd_sched_unlock(&s.sched);

@@ -2,6 +2,7 @@
  * Prometheus text rendering (HELP/TYPE lines, cumulative histogram buckets). */
 #include "server/isomeshd/metrics.h"
 
+#include "server/common/cache_redis.h"
 #include "server/common/log.h"
 
 #include <stdarg.h>
@@ -179,6 +180,40 @@ static void render_cache(out *o, const ism_cache *cache)
     }
 }
 
+/* The shared tier (cache_redis.h); its hits, misses and stores are in the tier="redis" lines. */
+static void render_redis(out *o, struct ism_redis_counters *c)
+{
+    gauge(o, "isomesh_redis_up", "1 while the shared Redis cache is connected.", c->up);
+    static const struct {
+        const char *name, *help;
+        size_t off;
+    } F[] = {
+        {"isomesh_redis_connects_total", "Connections made to Redis.",
+         offsetof(ism_redis_counters, connects)},
+        {"isomesh_redis_outages_total", "Times Redis became unreachable (each logged once).",
+         offsetof(ism_redis_counters, outages)},
+        {"isomesh_redis_errors_total", "Failed Redis connects and commands.",
+         offsetof(ism_redis_counters, errors)},
+        {"isomesh_redis_locks_acquired_total", "Computations this daemon took on for the service.",
+         offsetof(ism_redis_counters, locks_acquired)},
+        {"isomesh_redis_lock_waits_total",
+         "Computations found running on another daemon and awaited.",
+         offsetof(ism_redis_counters, lock_waits)},
+        {"isomesh_redis_lock_takeovers_total",
+         "Awaited computations taken over (the lock was released or expired).",
+         offsetof(ism_redis_counters, lock_takeovers)},
+        {"isomesh_redis_locks_lost_total", "Locks that expired while their computation ran.",
+         offsetof(ism_redis_counters, locks_lost)},
+        {"isomesh_redis_fallbacks_total",
+         "Computations done here without asking Redis (it was unreachable).",
+         offsetof(ism_redis_counters, fallbacks)},
+    };
+    for (size_t i = 0; i < sizeof F / sizeof F[0]; i++) {
+        header(o, F[i].name, "counter", F[i].help);
+        emit(o, "%s %llu\n", F[i].name, ld((atomic_ullong *)((char *)c + F[i].off)));
+    }
+}
+
 char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
 {
     out o = {.cap = 16384};
@@ -220,6 +255,8 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
            "Mesh, stats and features lookups that needed a computation.");
     emit(&o, "isomesh_cache_misses_total %llu\n", ld(&m->mesh_misses));
     render_cache(&o, cache);
+    if (m->redis)
+        render_redis(&o, m->redis);
 
     header(&o, "isomesh_computations_started_total", "counter",
            "Computations started (identical requests in flight share one).");

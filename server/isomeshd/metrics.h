@@ -54,6 +54,7 @@ typedef struct ismd_metrics {
     atomic_llong queue_depth, queue_capacity;
     atomic_llong workers_total, workers_ready, workers_busy;
     atomic_llong jobs_active, event_streams, suspended_connections;
+    struct ism_redis_counters *redis;        /* the shared tier's figures (NULL: no --redis) */
 } ismd_metrics;
 
 void ismd_metrics_init(ismd_metrics *m);

@@ -178,6 +178,8 @@ enum MHD_Result ismd_route_mesh_get(ismd_req *r)
         return answer_mesh(r);
     }
     ism_blob *req = stored_request(r, r->fmt);
+    if (!req && s->shared) /* maybe known to the service: the shared cache fetches it */
+        return ismd_wait_for(r, r->key, r->fmt, NULL, answer_mesh);
     if (!req)
         return ismd_respond_error(r, 404, "unknown_mesh",
                                   "no mesh with this key is known here; POST its request to /v1/mesh");
@@ -216,6 +218,10 @@ enum MHD_Result ismd_route_mesh_json(ismd_req *r)
         return answer_json(r);
     }
     ism_blob *req = stored_request(r, "drc");
+    if (!req && r->srv->shared) { /* maybe known to the service: the shared cache fetches it */
+        snprintf(r->fmt, sizeof r->fmt, "drc");
+        return ismd_wait_for(r, r->key, "drc", NULL, answer_json);
+    }
     if (!req)
         return ismd_respond_error(r, 404, "unknown_mesh",
                                   "no mesh with this key is known here; POST its request to /v1/mesh");

@@ -17,9 +17,9 @@
 #include "server/isomeshd/errors.h"
 #include "server/isomeshd/worker_pool.h"
 
-#define POLL_MIN_NS 20000000LL        /* first look after finding the lock taken */
-#define POLL_MAX_NS 250000000LL       /* then every 1.5x longer, up to this */
-#define HOLD_TICK_NS 50000000LL       /* how often a holder checks whether its flight ended */
+#define POLL_MIN_NS 10000000LL        /* first look after finding the lock taken */
+#define POLL_MAX_NS 100000000LL       /* then every 1.5x longer, up to this */
+#define HOLD_TICK_NS 10000000LL       /* how often a holder checks whether its flight ended */
 #define RENEW_RETRY_NS 200000000LL    /* a failed extension is retried this soon */
 #define STOP_WAIT_NS 3000000000LL     /* ismd_shared_stop waits this long for its tasks */
 

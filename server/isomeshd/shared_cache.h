@@ -3,7 +3,7 @@
  * (cache_redis.h) decides, without ever blocking an HTTP thread:
  *
  *   1. Someone holds the entry's lock (another daemon is computing it): wait, polling Redis
- *      every 20 ms growing to 250 ms, until the lock goes (released, or expired because its
+ *      every 10 ms growing to 100 ms, until the lock goes (released, or expired because its
  *      holder died), then look again.
  *   2. The mesh is in Redis: copy it (with its stats, features) into the local tiers and
  *      answer every waiter ("X-Cache: shared"). Nothing is computed here.
