@@ -9,8 +9,9 @@
  *
  * Checks: ism_frame_parse over the buffer and ism_frame_read_fd over a non-blocking pipe fed
  * in pieces (partial headers and payloads) see the same frames and stop with matching
- * statuses; a parsed frame re-encodes to exactly its bytes; a decoded REQUEST or RESULT
- * payload re-encodes to exactly its payload.
+ * statuses; a parsed frame re-encodes to exactly its bytes and survives ism_frame_write_fd
+ * (in two parts) and a blocking read; a decoded REQUEST or RESULT payload re-encodes to
+ * exactly its payload.
  *
  * The regression tests include this file with ISM_FUZZ_NO_ENTRY defined and call
  * ism_fuzz_frame on every committed input. */
@@ -104,6 +105,30 @@ static void frame_check_payload(const unsigned char *p, size_t n, uint64_t job)
     free(copy);
 }
 
+/* The frame written in two parts by ism_frame_write_fd to a pipe and read back. */
+static void frame_check_write(const ism_frame *f, size_t limit)
+{
+    int fds[2];
+    FUZZ_CHECK(pipe2(fds, O_CLOEXEC) == 0, "pipe2 failed");
+    size_t cut = f->len / 3;
+    ism_frame_part parts[2] = {{f->payload, cut}, {f->payload + cut, f->len - cut}};
+    FUZZ_CHECK(ism_frame_write_fd(fds[1], f->type, f->job, parts, 2) == ISM_FRAME_OK,
+               "write_fd failed");
+    ism_frame_reader r;
+    ism_frame_reader_init(&r, limit);
+    ism_frame back;
+    ism_frame_status st = ism_frame_read_fd(&r, fds[0], &back);
+    FUZZ_CHECK(st == ISM_FRAME_OK, "a written frame reads back as '%s'",
+               ism_frame_status_name(st));
+    FUZZ_CHECK(back.type == f->type && back.job == f->job && back.len == f->len &&
+               (f->len == 0 || memcmp(back.payload, f->payload, f->len) == 0),
+               "a written frame reads back different");
+    ism_frame_free(&back);
+    ism_frame_reader_free(&r);
+    close(fds[0]);
+    close(fds[1]);
+}
+
 /* Whole-buffer parsing: the frames in order and the status that ended the walk. */
 static ism_frame_status frame_parse_all(const unsigned char *buf, size_t n, size_t limit,
                                         frame_seen *seen, size_t *nseen, size_t *end)
@@ -131,6 +156,7 @@ static ism_frame_status frame_parse_all(const unsigned char *buf, size_t n, size
         FUZZ_CHECK(again_len == used && memcmp(again, buf + at, used) == 0,
                    "frame re-encodes to other bytes");
         free(again);
+        frame_check_write(&f, limit);
         if (f.type == ISM_FRAME_REQUEST)
             frame_check_job(&f);
         if (f.type == ISM_FRAME_RESULT)
