@@ -1,0 +1,347 @@
+"""stack.py — the service of deploy/ on loopback for the deploy tests: a redis-server started
+with deploy/redis/isomesh.conf (its own port and directory, nothing saved), isomeshd daemons
+(tests/http/harness.py's Daemon, each with its own port and cache directory) and nginx with a
+configuration generated from deploy/nginx/isomesh.conf (the upstreams pointed at the daemons,
+its own prefix, pid, logs and temporary directories). Every process is started and stopped
+here, with bounded waits. Plus a minimal Redis client (RESP over a socket, stdlib only)."""
+import gzip
+import http.client
+import os
+import pwd
+import re
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "tests", "http"))
+import harness  # noqa: E402  (the HTTP tests' daemon harness)
+
+DEPLOY = os.path.join(ROOT, "deploy")
+NGINX_CONF = os.path.join(DEPLOY, "nginx", "isomesh.conf")
+REDIS_CONF = os.path.join(DEPLOY, "redis", "isomesh.conf")
+
+
+def which(name, extra=("/usr/sbin", "/sbin", "/usr/bin")):
+    found = shutil.which(name)
+    if found:
+        return found
+    for d in extra:
+        p = os.path.join(d, name)
+        if os.access(p, os.X_OK):
+            return p
+    return None
+
+
+REDIS_SERVER = which("redis-server")
+NGINX = which("nginx")
+SYSTEMD_ANALYZE = which("systemd-analyze")
+OPENSSL = which("openssl")
+
+
+def free_port():
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def wait_until(predicate, timeout, step=0.02):
+    """Polls predicate until it is true or timeout seconds pass; returns its last value."""
+    deadline = time.time() + timeout
+    while True:
+        value = predicate()
+        if value or time.time() >= deadline:
+            return value
+        time.sleep(step)
+
+
+def stop_process(proc, sig=signal.SIGTERM, timeout=10):
+    if proc is None or proc.poll() is not None:
+        return
+    proc.send_signal(sig)
+    try:
+        proc.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait(timeout=10)
+
+
+# ---- Redis ------------------------------------------------------------------------------
+
+class RedisError(Exception):
+    pass
+
+
+def _read_reply(f):
+    line = f.readline()
+    if not line:
+        raise ConnectionError("redis closed the connection")
+    kind, rest = line[:1], line[1:-2]
+    if kind == b"+":
+        return rest.decode()
+    if kind == b"-":
+        raise RedisError(rest.decode())
+    if kind == b":":
+        return int(rest)
+    if kind == b"$":
+        n = int(rest)
+        if n < 0:
+            return None
+        data = f.read(n + 2)
+        return data[:-2]
+    if kind == b"*":
+        n = int(rest)
+        return None if n < 0 else [_read_reply(f) for _ in range(n)]
+    raise RedisError("unexpected reply %r" % line)
+
+
+def redis_command(port, *args, timeout=5):
+    """Runs one Redis command on 127.0.0.1:port and returns its reply."""
+    parts = [b"*%d\r\n" % len(args)]
+    for a in args:
+        b = a if isinstance(a, bytes) else str(a).encode()
+        parts.append(b"$%d\r\n%s\r\n" % (len(b), b))
+    with socket.create_connection(("127.0.0.1", port), timeout=timeout) as s:
+        s.sendall(b"".join(parts))
+        with s.makefile("rb") as f:
+            return _read_reply(f)
+
+
+class Redis:
+    """redis-server with deploy/redis/isomesh.conf, on its own port and directory."""
+
+    def __init__(self, port=None):
+        self.tmp = tempfile.mkdtemp(prefix="isomesh_redis_")
+        self.port = port or free_port()
+        self.proc = None
+
+    def start(self, timeout=10):
+        cmd = [REDIS_SERVER, REDIS_CONF, "--port", str(self.port), "--bind", "127.0.0.1",
+               "--dir", self.tmp, "--save", "", "--appendonly", "no",
+               "--logfile", os.path.join(self.tmp, "redis.log"), "--daemonize", "no"]
+        self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                     stderr=subprocess.DEVNULL)
+
+        def ready():
+            if self.proc.poll() is not None:
+                raise RuntimeError("redis-server exited:\n" + self.log())
+            try:
+                return redis_command(self.port, "PING", timeout=1) == "PONG"
+            except OSError:
+                return False
+        if not wait_until(ready, timeout):
+            self.stop()
+            raise RuntimeError("redis-server did not answer:\n" + self.log())
+        return self
+
+    def log(self):
+        try:
+            with open(os.path.join(self.tmp, "redis.log"), errors="replace") as f:
+                return f.read()[-4000:]
+        except OSError:
+            return ""
+
+    def command(self, *args):
+        return redis_command(self.port, *args)
+
+    def stop(self):
+        stop_process(self.proc)
+        self.proc = None
+
+    def cleanup(self):
+        if self.proc is not None and self.proc.poll() is None:
+            try:
+                os.kill(self.proc.pid, signal.SIGCONT)  # in case a test paused it
+            except OSError:
+                pass
+        self.stop()
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+
+# ---- nginx ------------------------------------------------------------------------------
+
+def nginx_site(daemon_ports, listen_port, tls=None):
+    """deploy/nginx/isomesh.conf with every upstream listing daemon_ports, listening on
+    127.0.0.1:listen_port (and, with tls=(port, cert, key), its TLS lines enabled)."""
+    with open(NGINX_CONF) as f:
+        text = f.read()
+    servers = re.findall(r"^(\s*)server 127\.0\.0\.1:8080 (.*);\n", text, re.M)
+    if len(servers) != 2:
+        raise AssertionError("expected two upstream server lines in " + NGINX_CONF)
+
+    def upstream(m):
+        return "".join("%sserver 127.0.0.1:%d %s;\n" % (m.group(1), p, m.group(2))
+                       for p in daemon_ports)
+    text = re.sub(r"^(\s*)server 127\.0\.0\.1:8080 (.*);\n", upstream, text, flags=re.M)
+    text = re.sub(r"^(\s*)listen 80;$", r"\1listen 127.0.0.1:%d;" % listen_port, text, flags=re.M)
+    text = re.sub(r"^\s*listen \[::\]:80;\n", "", text, flags=re.M)
+    if tls:
+        port, cert, key = tls
+        text = re.sub(r"^(\s*)# listen 443 ssl http2;$", r"\1listen 127.0.0.1:%d ssl http2;" % port,
+                      text, flags=re.M)
+        text = re.sub(r"^\s*# listen \[::\]:443 ssl http2;\n", "", text, flags=re.M)
+        text = re.sub(r"^(\s*)# ssl_certificate (\s*)\S+;$", r"\1ssl_certificate \2%s;" % cert,
+                      text, flags=re.M)
+        text = re.sub(r"^(\s*)# ssl_certificate_key \S+;$", r"\1ssl_certificate_key %s;" % key,
+                      text, flags=re.M)
+        text = re.sub(r"^(\s*)# (ssl_\w+|add_header) ", r"\1\2 ", text, flags=re.M)
+    return text
+
+
+def nginx_main(prefix, site_path):
+    """A whole nginx.conf for a test instance: everything under prefix, the site included."""
+    user = ""
+    if os.geteuid() == 0:  # workers would otherwise drop to nobody and miss the temp dirs
+        user = "user %s;\n" % pwd.getpwuid(0).pw_name
+    p = prefix
+    return (
+        "%sworker_processes 1;\npid %s/nginx.pid;\nerror_log %s/error.log notice;\n"
+        "events { worker_connections 512; }\n"
+        "http {\n"
+        "    include /etc/nginx/mime.types;\n"
+        "    default_type application/octet-stream;\n"
+        "    access_log %s/access.log;\n"
+        "    client_body_temp_path %s/tmp/body;\n    proxy_temp_path %s/tmp/proxy;\n"
+        "    fastcgi_temp_path %s/tmp/fastcgi;\n    uwsgi_temp_path %s/tmp/uwsgi;\n"
+        "    scgi_temp_path %s/tmp/scgi;\n"
+        "    include %s;\n"
+        "}\n" % (user, p, p, p, p, p, p, p, p, site_path))
+
+
+def nginx_test(prefix, conf):
+    """`nginx -t` on conf; returns (exit status, output)."""
+    r = subprocess.run([NGINX, "-t", "-p", prefix, "-c", conf], stdout=subprocess.PIPE,
+                       stderr=subprocess.STDOUT, text=True, timeout=30)
+    return r.returncode, r.stdout
+
+
+class Nginx:
+    """nginx in the foreground with a generated configuration (see nginx_site)."""
+
+    def __init__(self, daemon_ports, tls=None):
+        self.prefix = tempfile.mkdtemp(prefix="isomesh_nginx_")
+        os.makedirs(os.path.join(self.prefix, "tmp"))
+        self.port = free_port()
+        self.site = os.path.join(self.prefix, "isomesh.conf")
+        self.conf = os.path.join(self.prefix, "nginx.conf")
+        with open(self.site, "w") as f:
+            f.write(nginx_site(daemon_ports, self.port, tls))
+        with open(self.conf, "w") as f:
+            f.write(nginx_main(self.prefix, self.site))
+        self.proc = None
+
+    def start(self, timeout=10):
+        rc, out = nginx_test(self.prefix, self.conf)
+        if rc != 0:
+            raise RuntimeError("nginx -t failed:\n" + out)
+        self.proc = subprocess.Popen([NGINX, "-p", self.prefix, "-c", self.conf, "-g",
+                                      "daemon off;"], stdin=subprocess.DEVNULL,
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+        def ready():
+            if self.proc.poll() is not None:
+                raise RuntimeError("nginx exited:\n" + self.error_log())
+            try:
+                return self.get("/healthz", timeout=2).status == 200
+            except OSError:
+                return False
+        if not wait_until(ready, timeout):
+            self.stop()
+            raise RuntimeError("nginx never answered /healthz:\n" + self.error_log())
+        return self
+
+    def error_log(self):
+        try:
+            with open(os.path.join(self.prefix, "error.log"), errors="replace") as f:
+                return f.read()[-4000:]
+        except OSError:
+            return ""
+
+    def request(self, method, path, body=None, headers=None, timeout=60, source="127.0.0.1"):
+        conn = http.client.HTTPConnection("127.0.0.1", self.port, timeout=timeout,
+                                          source_address=(source, 0))
+        try:
+            hdrs = dict(headers or {})
+            if isinstance(body, (dict, list)):
+                import json
+                body = json.dumps(body).encode()
+                hdrs.setdefault("Content-Type", "application/json")
+            conn.request(method, path, body=body, headers=hdrs)
+            r = conn.getresponse()
+            return harness.Response(r.status, r.getheaders(), r.read())
+        finally:
+            conn.close()
+
+    def get(self, path, headers=None, timeout=60, source="127.0.0.1"):
+        return self.request("GET", path, headers=headers, timeout=timeout, source=source)
+
+    def post(self, path, body, headers=None, timeout=120, source="127.0.0.1"):
+        return self.request("POST", path, body=body, headers=headers, timeout=timeout,
+                            source=source)
+
+    def stop(self):
+        stop_process(self.proc, signal.SIGQUIT)
+        self.proc = None
+
+    def cleanup(self):
+        self.stop()
+        shutil.rmtree(self.prefix, ignore_errors=True)
+
+
+def gunzip(data):
+    return gzip.decompress(data)
+
+
+# ---- the whole service --------------------------------------------------------------------
+
+class Stack:
+    """Redis, n daemons sharing it, nginx in front. Stopped by cleanup() whatever happened."""
+
+    def __init__(self, n=2, daemon_args=(), with_nginx=True):
+        self.redis = Redis()
+        self.daemons = []
+        self.nginx = None
+        self.n = n
+        self.daemon_args = list(daemon_args)
+        self.with_nginx = with_nginx
+
+    def start(self):
+        try:
+            self.redis.start()
+            for _ in range(self.n):
+                d = harness.Daemon("--redis", "127.0.0.1:%d" % self.redis.port,
+                                   "--workers", "2", *self.daemon_args)
+                self.daemons.append(d)
+                d.start()
+            for d in self.daemons:
+                if not wait_until(lambda: d.metric("isomesh_redis_up") == 1, 10):
+                    raise RuntimeError("a daemon never connected to Redis:\n" + d.log())
+            if self.with_nginx:
+                self.nginx = Nginx([d.port for d in self.daemons]).start()
+        except BaseException:
+            self.cleanup()
+            raise
+        return self
+
+    def cleanup(self):
+        if self.nginx:
+            self.nginx.cleanup()
+        for d in self.daemons:
+            d.cleanup()
+        self.redis.cleanup()
+
+
+def missing_programs():
+    """A sentence naming what the deploy tests need and cannot find, or None."""
+    missing = [name for name, path in (("redis-server", REDIS_SERVER), ("nginx", NGINX))
+               if not path]
+    if not os.access(harness.ISOMESHD, os.X_OK):
+        missing.append(harness.ISOMESHD + " (make build)")
+    if not missing:
+        return None
+    return "missing: %s (deploy/install-deps.sh test installs the packages)" % ", ".join(missing)
