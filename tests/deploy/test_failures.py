@@ -1,0 +1,164 @@
+"""test_failures.py — the service of deploy/ when parts of it fail, each case with its own
+Redis, two daemons and nginx on loopback (all started and stopped here):
+
+* a daemon killed with SIGKILL: requests through nginx keep succeeding (new computations,
+  cached meshes, GETs by key), the survivor serves what the dead one computed;
+* Redis stopped: both daemons keep answering (from their caches, and computing the rest
+  themselves), each logs the outage once and counts it; Redis back: both reconnect by
+  themselves and share again;
+* Redis frozen (SIGSTOP, connections accepted but never answered): both daemons keep
+  answering, bounded by their short Redis timeouts;
+* the daemon computing a mesh that another awaits is killed: the lock expires and the waiter
+  takes the computation over."""
+import os
+import signal
+import sys
+import threading
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import stack  # noqa: E402
+from stack import harness  # noqa: E402
+
+SKIP = stack.missing_programs()
+
+
+def sphere(r):
+    return harness.sphere(r)
+
+
+def slow(tag):
+    shift = 0.001 * tag
+    return {"preset": "gyroid-ball", "depth": {"max": 9},
+            "box": [-1.5, -1.5 - shift, -1.5, 1.5, 1.5, 1.5]}
+
+
+def started(d):
+    return d.metric("isomesh_computations_started_total")
+
+
+def log_count(d, event):
+    return sum(1 for line in d.log().splitlines() if (" %s " % event) in line)
+
+
+@unittest.skipIf(SKIP, SKIP)
+class FailureTest(unittest.TestCase):
+    def setUp(self):
+        self.s = stack.Stack(n=2, daemon_args=("--redis-lock-ttl", "1s")).start()
+        self.a, self.b = self.s.daemons
+        self.ng = self.s.nginx
+
+    def tearDown(self):
+        self.s.cleanup()
+
+    def test_requests_through_nginx_survive_a_killed_daemon(self):
+        keys = []
+        for i in range(4):
+            r = self.ng.post("/v1/mesh", sphere(0.5 + i / 100))
+            self.assertEqual(r.status, 200)
+            keys.append(r.header("ETag").strip('"'))
+        self.a.proc.send_signal(signal.SIGKILL)
+        self.a.proc.wait(timeout=10)
+        for i in range(4):  # the same requests: served by b (its memory, or Redis)
+            r = self.ng.post("/v1/mesh", sphere(0.5 + i / 100))
+            self.assertEqual(r.status, 200, r.body[:300])
+            self.assertIn(r.header("X-Cache"), ("hit", "shared"))
+        for k in keys:
+            r = self.ng.get("/v1/meshes/%s.drc" % k)
+            self.assertEqual(r.status, 200)
+            r = self.ng.get("/v1/meshes/%s/stats" % k)
+            self.assertEqual(r.status, 200)
+        for i in range(6):  # new computations
+            r = self.ng.post("/v1/mesh", sphere(0.7 + i / 100))
+            self.assertEqual(r.status, 200, r.body[:300])
+            self.assertEqual(r.header("X-Cache"), "miss")
+            self.assertGreater(harness.draco_counts(r.body)[1], 0)
+        job = self.ng.post("/v1/jobs", sphere(0.8))
+        self.assertEqual(job.status, 202)
+        self.assertEqual(self.ng.get(job.json()["url"]).status, 200)
+        self.assertEqual(self.ng.get("/readyz").status, 200)
+
+    def test_daemons_keep_answering_without_redis_and_take_it_back(self):
+        shared = self.a.post("/v1/mesh", sphere(0.51))
+        self.assertEqual(shared.status, 200)
+        port = self.s.redis.port
+        self.s.redis.cleanup()
+        for d in (self.a, self.b):
+            for i in range(3):
+                r = d.post("/v1/mesh", sphere(0.52 + i / 100))  # computed on each daemon
+                self.assertEqual(r.status, 200, r.body[:300])
+                self.assertEqual(r.header("X-Cache"), "miss")
+            self.assertEqual(d.post("/v1/mesh", sphere(0.52)).header("X-Cache"), "hit")
+        self.assertEqual(self.a.post("/v1/mesh", sphere(0.51)).header("X-Cache"), "hit")
+        r = self.ng.post("/v1/mesh", sphere(0.59))
+        self.assertEqual(r.status, 200)
+        for d in (self.a, self.b):
+            self.assertEqual(d.metric("isomesh_redis_up"), 0)
+            self.assertEqual(d.metric("isomesh_redis_outages_total"), 1)
+            self.assertGreaterEqual(d.metric("isomesh_redis_fallbacks_total"), 3)
+            self.assertGreater(d.metric("isomesh_cache_store_failures_total", tier="redis"), 0)
+            self.assertEqual(log_count(d, "redis_unavailable"), 1, "one line per outage")
+
+        self.s.redis = stack.Redis(port=port).start()  # an empty Redis on the same port
+        for d in (self.a, self.b):
+            self.assertTrue(stack.wait_until(lambda: d.metric("isomesh_redis_up") == 1, 15),
+                            "no reconnection:\n" + d.log())
+            self.assertEqual(d.metric("isomesh_redis_outages_total"), 1)
+            self.assertTrue(stack.wait_until(lambda: log_count(d, "redis_recovered") == 1, 5))
+        first = self.a.post("/v1/mesh", sphere(0.58))
+        self.assertEqual(first.header("X-Cache"), "miss")
+        second = self.b.post("/v1/mesh", sphere(0.58))
+        self.assertEqual(second.header("X-Cache"), "shared")
+        self.assertEqual(second.body, first.body)
+
+    def test_a_frozen_redis_does_not_stall_the_daemons(self):
+        self.assertEqual(self.a.post("/v1/mesh", sphere(0.41)).status, 200)
+        os.kill(self.s.redis.proc.pid, signal.SIGSTOP)
+        try:
+            for i in range(4):
+                for d in (self.a, self.b):
+                    r = d.post("/v1/mesh", sphere(0.42 + i / 100), timeout=30)
+                    self.assertEqual(r.status, 200, r.body[:300])
+            self.assertEqual(self.a.post("/v1/mesh", sphere(0.41), timeout=30).header("X-Cache"),
+                             "hit")
+            self.assertEqual(self.ng.get("/healthz", timeout=30).status, 200)
+            for d in (self.a, self.b):
+                self.assertEqual(d.metric("isomesh_redis_up"), 0)
+                self.assertEqual(d.metric("isomesh_redis_outages_total"), 1)
+        finally:
+            os.kill(self.s.redis.proc.pid, signal.SIGCONT)
+        for d in (self.a, self.b):
+            self.assertTrue(stack.wait_until(lambda: d.metric("isomesh_redis_up") == 1, 15))
+
+    def test_a_dead_holder_s_computation_is_taken_over(self):
+        req = slow(3)
+        box = {}
+
+        def ask(d, slot):
+            try:
+                box[slot] = d.post("/v1/mesh", req, timeout=120)
+            except OSError as e:
+                box[slot] = e
+        holder = threading.Thread(target=ask, args=(self.a, "a"), daemon=True)
+        holder.start()
+        self.assertTrue(stack.wait_until(
+            lambda: self.a.metric("isomesh_redis_locks_acquired_total") == 1, 30))
+        waiter = threading.Thread(target=ask, args=(self.b, "b"), daemon=True)
+        waiter.start()
+        self.assertTrue(stack.wait_until(
+            lambda: self.b.metric("isomesh_redis_lock_waits_total") == 1, 30))
+        self.a.proc.send_signal(signal.SIGKILL)
+        self.a.proc.wait(timeout=10)
+        waiter.join(120)
+        holder.join(30)
+        self.assertFalse(waiter.is_alive())
+        r = box["b"]
+        self.assertEqual(r.status, 200, getattr(r, "body", b"")[:300])
+        self.assertGreater(harness.draco_counts(r.body)[1], 0)
+        self.assertEqual(self.b.metric("isomesh_redis_lock_takeovers_total"), 1)
+        self.assertEqual(started(self.b), 1)
+        self.assertIsInstance(box["a"], Exception, "the killed daemon never answered")
+
+
+if __name__ == "__main__":
+    unittest.main()
