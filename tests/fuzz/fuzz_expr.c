@@ -71,6 +71,9 @@ static void expr_check_canonical(const ism_tape *t)
     free(full);
 }
 
+static int expr_defined_at(const ism_tape *t, ism_eval_ws *ws, const double p[3], double *v,
+                           int undefined);
+
 static void expr_check_points(const ism_tape *t, ism_eval_ws *ws)
 {
     double x[EXPR_NPOINTS], y[EXPR_NPOINTS], z[EXPR_NPOINTS], out[EXPR_NPOINTS];
@@ -95,6 +98,16 @@ static void expr_check_points(const ism_tape *t, ism_eval_ws *ws)
         for (int k = 0; exact && k < 3; k++)
             FUZZ_CHECK(fuzz_same(gh[k], g[k]), "point %d: Hessian's gradient[%d] %.17g, "
                        "gradient's %.17g", i, k, gh[k], g[k]);
+
+        /* The interval of the box that is just this point holds f there (rounding is
+         * outward, so the tightest intervals test it hardest). */
+        ism_interval px = {x[i], x[i]}, py = {y[i], y[i]}, pz = {z[i], z[i]};
+        ism_interval r = ism_eval_interval(t, ws, px, py, pz);
+        double fv;
+        int defined = expr_defined_at(t, ws, expr_points[i], &fv, FE_INVALID);
+        FUZZ_CHECK(!isnan(r.lo) && !isnan(r.hi) && r.lo <= r.hi && (!defined ||
+                   (r.lo <= fv && fv <= r.hi)), "point %d: interval [%.17g, %.17g] of the "
+                   "point misses f = %.17g", i, r.lo, r.hi, fv);
     }
 }
 
