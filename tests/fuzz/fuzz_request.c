@@ -3,7 +3,8 @@
  * polygoniser — compile, canonical request, key material and key — checking that:
  *   - every failure has a status, a code and a message, and its error document is valid
  *     JSON (jansson reads it back: UTF-8 included) carrying that message;
- *   - a decoded request gives polygoniser options that ism_poly_options_check accepts;
+ *   - a decoded request gives polygoniser options that ism_poly_options_check accepts, and
+ *     key material that is JSON;
  *   - the canonical request decodes again, to the same canonical text, and (when the
  *     expression compiles) to the same cache key.
  *
@@ -61,6 +62,10 @@ static ism_tape *request_compile_key(const ism_request *req, char hex[65], const
     size_t n = 0;
     char *material = ism_request_key_material(req, t, &n);
     FUZZ_CHECK(material && strlen(material) == n, "%s: key material", stage);
+    json_error_t je;
+    json_t *doc = json_loadb(material, n, JSON_REJECT_DUPLICATES, &je);
+    FUZZ_CHECK(doc != NULL, "%s: key material is not JSON (%s): %s", stage, je.text, material);
+    json_decref(doc);
     free(material);
     return t;
 }
