@@ -45,6 +45,7 @@ typedef struct ism_redis_settings {
 /* Figures beside the tier's cache counters (read by /metrics). */
 typedef struct ism_redis_counters {
     atomic_llong up;                     /* 1 while connected */
+    atomic_llong asking;                 /* computations asking Redis or awaiting another daemon */
     atomic_ullong connects;              /* successful connections */
     atomic_ullong outages;               /* times Redis became unreachable */
     atomic_ullong errors;                /* failed connects and commands */

@@ -184,6 +184,8 @@ static void render_cache(out *o, const ism_cache *cache)
 static void render_redis(out *o, struct ism_redis_counters *c)
 {
     gauge(o, "isomesh_redis_up", "1 while the shared Redis cache is connected.", c->up);
+    gauge(o, "isomesh_redis_asking", "Computations asking Redis or awaiting another daemon's.",
+          c->asking);
     static const struct {
         const char *name, *help;
         size_t off;

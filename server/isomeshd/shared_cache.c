@@ -101,6 +101,8 @@ static long long task_end(task *k, ism_cache_tier *t)
         ism_cache_redis_flush(t);
         ism_cache_redis_unlock(t, k->name, k->token);
     }
+    if (k->state != T_HOLD)
+        atomic_fetch_sub(&sh->counters->asking, 1);
     free(k);
     pthread_mutex_lock(&sh->lock);
     bool last = --sh->ntasks == 0 && sh->detached;
@@ -278,6 +280,7 @@ static long long look(task *k, ism_cache_tier *t, long long now)
     if (k->state == T_WAIT)
         atomic_fetch_add(&sh->counters->lock_takeovers, 1);
     k->state = T_HOLD;
+    atomic_fetch_sub(&sh->counters->asking, 1);
     k->renew_at_ns = now + sh->ttl_ms * 1000000LL / 3;
     if (!to_queue(k))
         return task_end(k, t); /* gone meanwhile, or refused by the queue: release the lock */
@@ -345,6 +348,7 @@ static bool begin(void *ctx, ismd_flight *f)
         free(k);
         return false;
     }
+    atomic_fetch_add(&sh->counters->asking, 1);
     ism_cache_redis_schedule(sh->redis, &k->base, 0);
     return true;
 }

@@ -329,11 +329,21 @@ class Stack:
         return self
 
     def cleanup(self):
+        """Stops everything; returns the sanitizer or crash reports found in the daemons'
+        logs (a sanitizer build reports leaks and memory errors when the daemon exits)."""
         if self.nginx:
             self.nginx.cleanup()
+        reports = []
         for d in self.daemons:
+            d.stop()
+            with d.lock:
+                lines = list(d.lines)
+            reports += [line for line in lines
+                        if "ERROR: AddressSanitizer" in line or "ERROR: LeakSanitizer" in line
+                        or "runtime error:" in line]
             d.cleanup()
         self.redis.cleanup()
+        return reports
 
 
 def missing_programs():

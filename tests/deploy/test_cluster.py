@@ -72,7 +72,9 @@ class ClusterTest(unittest.TestCase):
 
     @classmethod
     def tearDownClass(cls):
-        cls.s.cleanup()
+        reports = cls.s.cleanup()
+        if reports:
+            raise AssertionError("sanitizer reports:\n" + "\n".join(reports))
 
     def computed_by(self, before):
         """The daemons whose started-computations count grew since before (a list)."""

@@ -49,7 +49,7 @@ class FailureTest(unittest.TestCase):
         self.ng = self.s.nginx
 
     def tearDown(self):
-        self.s.cleanup()
+        self.assertEqual(self.s.cleanup(), [], "sanitizer reports")
 
     def test_requests_through_nginx_survive_a_killed_daemon(self):
         keys = []
