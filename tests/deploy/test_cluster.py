@@ -232,6 +232,36 @@ class ClusterTest(unittest.TestCase):
         mesh = self.ng.get(json.loads(events[-1]["data"])["mesh_url"])
         self.assertEqual(mesh.status, 200)
 
+    def test_open_requests_are_limited_per_client_address(self):
+        src = "127.0.0.10"
+        job = self.ng.post("/v1/jobs", slow(4), source=src).json()
+        statuses, lock = [], threading.Lock()
+        opened = threading.Barrier(41, timeout=60)
+
+        def stream():
+            conn = http.client.HTTPConnection("127.0.0.1", self.ng.port, timeout=120,
+                                              source_address=(src, 0))
+            try:
+                conn.request("GET", job["events_url"])
+                resp = conn.getresponse()
+                with lock:
+                    statuses.append(resp.status)
+                opened.wait()  # every answer is in while the streams are still open
+                resp.read()
+            finally:
+                conn.close()
+        threads = [threading.Thread(target=stream, daemon=True) for _ in range(40)]
+        for t in threads:
+            t.start()
+        opened.wait()
+        for t in threads:
+            t.join(120)
+        self.assertEqual(len(statuses), 40)
+        self.assertEqual(statuses.count(200), 32, "limit_conn isomesh_conn 32")
+        self.assertEqual(statuses.count(429), 8)
+        # another address is not affected meanwhile
+        self.assertEqual(self.ng.get("/v1/presets", source="127.0.0.11").status, 200)
+
     def test_a_damaged_entry_in_redis_is_dropped_and_recomputed(self):
         req = sphere(0.66)
         first = self.a.post("/v1/mesh", req)
