@@ -253,6 +253,7 @@ class InstallTest(unittest.TestCase):
         d.port = port
         try:
             d.wait_ready(timeout=30)
+            self.assertTrue(stack.wait_until(lambda: " listening " in d.log(), 10), d.log())
             log = d.log()
             self.assertIn("cache_dir=%s/isomesh" % state, log)
             self.assertNotIn("document_missing", log)
