@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "server/isomesh/cli.h"
+#include "server/isomesh/sandbox.h"
 #include "server/isomesh/worker.h"
 
 static const char usage_text[] =
@@ -18,6 +19,8 @@ static const char usage_text[] =
     "  isomesh --surface NAME [--surfaces FILE] [options] -o FILE\n"
     "  isomesh REQUEST.json -o FILE       run one service request (any format)\n"
     "  isomesh --worker                   worker process of isomeshd (framed stdin/stdout)\n"
+    "  isomesh --worker --sandbox-selftest open|create|socket|exec|fork|exec-memory|write-fd|allowed\n"
+    "                                     enter the worker's sandbox, try one thing, report\n"
     "\n"
     "Polygonises f(x, y, z) = 0 with the non-manifold adaptive octree algorithm of Balsys &\n"
     "Suffern and writes binary PLY (with normals), OBJ or binary STL, chosen by the output\n"
@@ -116,6 +119,9 @@ int main(int argc, char **argv)
 {
     if (argc == 2 && strcmp(argv[1], "--worker") == 0)
         return ism_worker_main(STDIN_FILENO, STDOUT_FILENO);
+    if (argc == 4 && strcmp(argv[1], "--worker") == 0 &&
+        strcmp(argv[2], "--sandbox-selftest") == 0)
+        return ism_sandbox_selftest(argv[3]);
 
     ism_cli_run run;
     ism_cli_run_init(&run);

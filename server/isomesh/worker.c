@@ -1,6 +1,7 @@
 /* worker.c — the `isomesh --worker` loop: one job at a time from the daemon's REQUEST frames
  * to RESULT frames, with rate-limited PROGRESS frames in between. Any framing problem ends
- * the process: the daemon sees the pipe close, fails the job and starts a fresh worker. */
+ * the process: the daemon sees the pipe close, fails the job and starts a fresh worker.
+ * Before its HELLO the worker enters the seccomp sandbox (sandbox.h); it never runs without. */
 #include "server/isomesh/worker.h"
 
 #include <errno.h>
@@ -14,12 +15,18 @@
 
 #include "core/version.h"
 #include "proto/frame.h"
+#include "core/util/parallel.h"
 #include "server/common/pipeline.h"
+#include "server/isomesh/sandbox.h"
 
 /* A request frame holds one JSON request: the daemon caps bodies far below this. */
 #define WORKER_MAX_REQUEST (64u * 1024u * 1024u)
 /* Progress frames at most this often (plus the first one). */
 #define PROGRESS_INTERVAL_NS 50000000LL
+
+/* Polygoniser threads for a job that names none: counted before the sandbox, because counting
+ * cores reads /sys. */
+static int default_threads = 1;
 
 typedef struct progress_state {
     int fd;
@@ -144,7 +151,7 @@ static bool run_job(int out_fd, const ism_frame *f)
         lim.max_triangles = (size_t)job.max_triangles;
     if (job.max_memory)
         lim.max_memory = (size_t)job.max_memory;
-    lim.threads = (int)job.threads;
+    lim.threads = job.threads ? (int)job.threads : default_threads;
 
     progress_state ps = {.fd = out_fd, .job = f->job};
     pthread_mutex_init(&ps.lock, NULL);
@@ -160,6 +167,34 @@ static bool run_job(int out_fd, const ism_frame *f)
     return ok;
 }
 
+/* Runs a tiny surface through the pipeline in every format before the sandbox closes, so that
+ * whatever the libraries set up on first use (random seeds, tables, a sanitizer's runtime) is
+ * set up while files can still be read. */
+static void warm_up(void)
+{
+    static const char req[] = "{\"expr\": \"x^2 + y^2 + z^2 - 0.5\", \"depth\": {\"min\": 2, \"max\": 3}}";
+    static const char *const formats[] = {"drc", "glb", "ply", "obj", "stl"};
+    ism_pipeline_limits lim;
+    ism_pipeline_limits_default(&lim);
+    lim.threads = default_threads;
+    for (size_t i = 0; i < sizeof formats / sizeof formats[0]; i++) {
+        ism_pipeline_result pr;
+        memset(&pr, 0, sizeof pr);
+        ism_pipeline_run(req, sizeof req - 1, formats[i], &lim, NULL, &pr);
+        ism_pipeline_result_free(&pr);
+    }
+}
+
+/* A sandboxed worker ends with _exit: exit handlers of libraries (a sanitizer's leak check
+ * among them) may need system calls the sandbox refuses. */
+static int worker_exit(int status)
+{
+    fflush(NULL);
+    if (ism_sandbox_active())
+        _exit(status);
+    return status;
+}
+
 int ism_worker_main(int in_fd, int out_fd)
 {
     signal(SIGPIPE, SIG_IGN);
@@ -171,9 +206,16 @@ int ism_worker_main(int in_fd, int out_fd)
         }
         out_fd = chan;
     }
+    default_threads = ism_cpu_count();
+    warm_up();
+    char why[256];
+    if (!ism_sandbox_enter(in_fd, out_fd, why, sizeof why)) {
+        fprintf(stderr, "isomesh worker: cannot enter the sandbox: %s\n", why);
+        return 1;
+    }
     if (!send_hello(out_fd)) {
         perror("isomesh worker: writing hello");
-        return 1;
+        return worker_exit(1);
     }
     ism_frame_reader rd;
     ism_frame_reader_init(&rd, WORKER_MAX_REQUEST);
@@ -182,14 +224,14 @@ int ism_worker_main(int in_fd, int out_fd)
         ism_frame_status st = ism_frame_read_fd(&rd, in_fd, &f);
         if (st == ISM_FRAME_EOF) {
             ism_frame_reader_free(&rd);
-            return 0;
+            return worker_exit(0);
         }
         if (st != ISM_FRAME_OK) {
             fprintf(stderr, "isomesh worker: reading a request: %s%s%s\n",
                     ism_frame_status_name(st), st == ISM_FRAME_IO_ERROR ? ": " : "",
                     st == ISM_FRAME_IO_ERROR ? strerror(errno) : "");
             ism_frame_reader_free(&rd);
-            return 1;
+            return worker_exit(1);
         }
         bool ok = f.type == ISM_FRAME_REQUEST && run_job(out_fd, &f);
         if (f.type != ISM_FRAME_REQUEST)
@@ -197,7 +239,7 @@ int ism_worker_main(int in_fd, int out_fd)
         ism_frame_free(&f);
         if (!ok) {
             ism_frame_reader_free(&rd);
-            return 1;
+            return worker_exit(1);
         }
     }
 }
