@@ -48,7 +48,13 @@ class Response:
 
 
 class Daemon:
-    def __init__(self, *args, cache_dir=None, web_root=None, log_format="text"):
+    def __init__(self, *args, cache_dir=None, web_root=None, log_format="text", binary=None,
+                 prefix=(), env=None):
+        """binary: another isomeshd (default: ISOMESH_BUILD's); prefix: a command to run it
+        under (valgrind, unshare); env: its environment (default: this process's)."""
+        self.binary = binary or ISOMESHD
+        self.prefix = list(prefix)
+        self.env = env
         self.tmp = tempfile.mkdtemp(prefix="isomeshd_test_")
         self.cache_dir = cache_dir or os.path.join(self.tmp, "cache")
         self.args = list(args)
@@ -61,10 +67,11 @@ class Daemon:
 
     # ---- life cycle ------------------------------------------------------------------
     def start(self, timeout=15):
-        cmd = [ISOMESHD, "--listen", "127.0.0.1:0", "--cache-dir", self.cache_dir,
-               "--web-root", self.web_root, "--log-format", self.log_format] + self.args
+        cmd = self.prefix + [self.binary, "--listen", "127.0.0.1:0", "--cache-dir", self.cache_dir,
+                             "--web-root", self.web_root, "--log-format", self.log_format] + self.args
         self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                     stderr=subprocess.PIPE, text=True, errors="replace")
+                                     stderr=subprocess.PIPE, text=True, errors="replace",
+                                     env=self.env)
         self.reader = threading.Thread(target=self._read_stderr, daemon=True)
         self.reader.start()
         deadline = time.time() + timeout
