@@ -154,6 +154,31 @@ class TokenCommandTest(unittest.TestCase):
             self.assertIn(blake2b_hex(r.stdout.strip()) + " dave", f.read())
 
 
+class AuthConfigTest(unittest.TestCase):
+    def test_help_documents_the_sharing_flags_and_the_token_command(self):
+        r = subprocess.run([ISOMESHD, "--help"], stdout=subprocess.PIPE, text=True, timeout=10)
+        self.assertEqual(r.returncode, 0)
+        for flag in ("--tokens FILE", "--private", "--user-jobs N", "--user-running N",
+                     "--queue-order fair|fifo", "--client-jobs", "SIGHUP", "token add NAME"):
+            self.assertIn(flag, r.stdout)
+
+    def test_private_in_a_config_file_and_bad_values(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            tokens = os.path.join(tmp, "tokens")
+            add_token(tokens, "alice")
+            conf = os.path.join(tmp, "isomeshd.conf")
+            with open(conf, "w") as f:
+                f.write("tokens = %s\nprivate = yes\nuser-jobs = 2\nqueue-order = fifo\n" % tokens)
+            with Daemon("--workers", "1", "--config", conf) as d:
+                self.assertEqual(d.get("/v1/presets").status, 401)
+                self.assertIn("private=yes", d.log())
+            for args in (["--private=maybe"], ["--queue-order", "lifo"], ["--user-jobs", "0"],
+                         ["--user-running", "-1"]):
+                r = subprocess.run([ISOMESHD] + args, stderr=subprocess.PIPE, text=True, timeout=10)
+                self.assertEqual(r.returncode, 2, args)
+                self.assertEqual(len(r.stderr.strip().splitlines()), 1, r.stderr)
+
+
 class AuthDaemonTest(unittest.TestCase):
     def setUp(self):
         self.tmp = tempfile.TemporaryDirectory()

@@ -469,6 +469,12 @@ function tokenClosed() {
   if (dlg.returnValue === 'save') api.token.set($('token-input').value.trim());
   else if (dlg.returnValue === 'clear') api.token.set('');
   $('token-input').value = '';
+  if (beginAfterToken && dlg.returnValue === 'save') {
+    beginAfterToken = false;
+    clearMessage();
+    begin();
+    return;
+  }
   if (afterToken && dlg.returnValue === 'save') {
     const body = afterToken;
     afterToken = null;
@@ -678,20 +684,34 @@ function wire() {
   performance.addEventListener('resourcetimingbufferfull', () => performance.clearResourceTimings());
 }
 
-async function start() {
-  viewer = new Viewer($('view'));
-  viewer.onViewChange = updateUrl;
-  wire();
-  clearStats();
+// A private server (isomeshd --private) refuses even the presets without a token: ask for it
+// first, and begin once it is given.
+let beginAfterToken = false;
+
+async function begin() {
   try {
     presets = await api.getPresets();
   } catch (e) {
     presets = [];
+    if (e.status === 401) {
+      beginAfterToken = true;
+      askToken('This server is private: it needs an access token.');
+      message('An access token is needed.', 'error', { label: 'Enter token', run: () => askToken() });
+      return;
+    }
     message(`The presets could not be loaded: ${e.message}`, 'error');
   }
   fillPresetMenu();
   applyFragment(location.hash);
   document.body.dataset.ready = '1';
+}
+
+async function start() {
+  viewer = new Viewer($('view'));
+  viewer.onViewChange = updateUrl;
+  wire();
+  clearStats();
+  await begin();
 }
 
 start();
