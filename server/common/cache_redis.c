@@ -438,25 +438,32 @@ static long long int_command(redis_tier *rt, const char *what, int argc, const c
     return v;
 }
 
-static int exists(redis_tier *rt, const char *prefix, const char *name)
+/* EXISTS over names[0..n) with prefix: how many exist, or -1. */
+static int exists(redis_tier *rt, const char *prefix, const char *const *names, size_t n)
 {
-    char key[KEY_MAX];
-    if (!rt->ctx || !entry_key(key, prefix, name))
+    char keys[FETCH_MAX][KEY_MAX];
+    const char *argv[FETCH_MAX + 1] = {"EXISTS"};
+    size_t lens[FETCH_MAX + 1] = {6};
+    if (!rt->ctx || n == 0 || n > FETCH_MAX)
         return -1;
-    const char *argv[] = {"EXISTS", key};
-    size_t lens[] = {6, strlen(key)};
-    long long v = int_command(rt, "exists", 2, argv, lens);
-    return v < 0 ? -1 : v > 0;
+    for (size_t i = 0; i < n; i++) {
+        if (!entry_key(keys[i], prefix, names[i]))
+            return -1;
+        argv[i + 1] = keys[i];
+        lens[i + 1] = strlen(keys[i]);
+    }
+    long long v = int_command(rt, "exists", (int)n + 1, argv, lens);
+    return v < 0 || v > (long long)n ? -1 : (int)v;
 }
 
-int ism_cache_redis_exists(ism_cache_tier *t, const char *name)
+int ism_cache_redis_count(ism_cache_tier *t, const char *const *names, size_t n)
 {
-    return exists((redis_tier *)t, KEY_PREFIX, name);
+    return exists((redis_tier *)t, KEY_PREFIX, names, n);
 }
 
 int ism_cache_redis_locked(ism_cache_tier *t, const char *name)
 {
-    return exists((redis_tier *)t, LOCK_PREFIX, name);
+    return exists((redis_tier *)t, LOCK_PREFIX, &name, 1);
 }
 
 int ism_cache_redis_lock(ism_cache_tier *t, const char *name, const char *token, long ttl_ms)

@@ -88,8 +88,8 @@ bool ism_cache_redis_up(ism_cache_tier *t);
 /* Reads names[0..n): out[i] gets the checked payload or NULL. 0 on success, -1 otherwise
  * (out all NULL). Does not count hits or misses (the caller knows what it asked for). */
 int ism_cache_redis_fetch(ism_cache_tier *t, const char *const *names, size_t n, ism_blob **out);
-/* 1 when an entry exists, 0 when not. */
-int ism_cache_redis_exists(ism_cache_tier *t, const char *name);
+/* How many of names[0..n) exist (n at most 8). */
+int ism_cache_redis_count(ism_cache_tier *t, const char *const *names, size_t n);
 /* 1 when someone holds the lock of name, 0 when nobody does. */
 int ism_cache_redis_locked(ism_cache_tier *t, const char *name);
 /* 1 when the lock of name was free and is now held with token for ttl_ms, 0 when taken. */

@@ -237,7 +237,7 @@ static long long look(task *k, ism_cache_tier *t, long long now)
     ism_blob *got[4] = {0};
     if (ism_cache_redis_fetch(t, argv, n, got) < 0)
         return go_local(k, t);
-    if (got[0]) {
+    if (got[0] && got[1] && got[2]) { /* complete: a crashed writer may have left less */
         atomic_fetch_add(&t->counters.hits, 1);
         for (size_t i = 0; i < n; i++)
             if (got[i])
@@ -271,10 +271,10 @@ static long long look(task *k, ism_cache_tier *t, long long now)
     if (!acquired)
         return wait_more(k, now);
     /* Someone may have finished it between the look and the lock: look again. */
-    int there = ism_cache_redis_exists(t, k->name);
-    if (there != 0) {
+    int there = ism_cache_redis_count(t, argv, 3);
+    if (there < 0 || there == 3) {
         ism_cache_redis_unlock(t, k->name, k->token);
-        return there > 0 ? now : go_local(k, t);
+        return there == 3 ? now : go_local(k, t);
     }
     atomic_fetch_add(&sh->counters->locks_acquired, 1);
     if (k->state == T_WAIT)

@@ -5,8 +5,9 @@
  *   1. Someone holds the entry's lock (another daemon is computing it): wait, polling Redis
  *      every 10 ms growing to 100 ms, until the lock goes (released, or expired because its
  *      holder died), then look again.
- *   2. The mesh is in Redis: copy it (with its stats, features) into the local tiers and
- *      answer every waiter ("X-Cache: shared"). Nothing is computed here.
+ *   2. The mesh, its stats and its features are in Redis (a daemon that died while writing
+ *      them may have left only some: that counts as missing): copy them into the local tiers
+ *      and answer every waiter ("X-Cache: shared"). Nothing is computed here.
  *   3. Otherwise take the lock (SET NX PX, a token naming this daemon and flight) and queue
  *      the flight for a local worker; while it computes, the lock is extended every third of
  *      its lifetime; when the flight ends, the results already stored (cache_result puts them

@@ -262,13 +262,31 @@ class ClusterTest(unittest.TestCase):
         # another address is not affected meanwhile
         self.assertEqual(self.ng.get("/v1/presets", source="127.0.0.11").status, 200)
 
+    def test_an_incomplete_result_in_redis_is_recomputed(self):
+        """A daemon that dies while writing a result leaves part of it: never served."""
+        req = sphere(0.67)
+        first = self.a.post("/v1/mesh", req)
+        self.assertEqual(first.status, 200)
+        key = first.header("ETag").strip('"')
+        stats = "isomesh:v1:%s.stats.json" % key
+        self.assertTrue(stack.wait_until(lambda: self.s.redis.command("EXISTS", stats) == 1, 10))
+        self.assertEqual(self.s.redis.command("DEL", stats), 1)
+        n_b = started(self.b)
+        second = self.b.post("/v1/mesh", req)
+        self.assertEqual(second.status, 200)
+        self.assertEqual(second.header("X-Cache"), "miss")
+        self.assertEqual(started(self.b), n_b + 1)
+        st = self.b.get("/v1/meshes/%s/stats" % key)
+        self.assertEqual(st.status, 200)
+        self.assertTrue(stack.wait_until(lambda: self.s.redis.command("EXISTS", stats) == 1, 10))
+
     def test_a_damaged_entry_in_redis_is_dropped_and_recomputed(self):
         req = sphere(0.66)
         first = self.a.post("/v1/mesh", req)
         self.assertEqual(first.status, 200)
         key = first.header("ETag").strip('"')
         name = "isomesh:v1:%s.drc" % key
-        value = self.s.redis.command("GET", name)
+        value = stack.wait_until(lambda: self.s.redis.command("GET", name), 10)  # written after
         self.assertIsNotNone(value)
         damaged = bytearray(value)
         damaged[len(damaged) // 2] ^= 0x20

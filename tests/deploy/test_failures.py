@@ -57,6 +57,11 @@ class FailureTest(unittest.TestCase):
             r = self.ng.post("/v1/mesh", sphere(0.5 + i / 100))
             self.assertEqual(r.status, 200)
             keys.append(r.header("ETag").strip('"'))
+        # Redis is written after the answer: wait for the 4 x 4 entries (mesh, stats,
+        # features, request) before the kill, so the survivor can find what a computed.
+        self.assertTrue(stack.wait_until(lambda: sum(
+            d.metric("isomesh_cache_tier_stores_total", tier="redis") for d in (self.a, self.b))
+            >= 16, 10))
         self.a.proc.send_signal(signal.SIGKILL)
         self.a.proc.wait(timeout=10)
         for i in range(4):  # the same requests: served by b (its memory, or Redis)
