@@ -147,6 +147,32 @@ class ClusterTest(unittest.TestCase):
             sum(d.metric("isomesh_redis_lock_waits_total") for d in self.s.daemons), waits + 1)
         self.assertEqual(sorted(r.header("X-Cache") for r in answers).count("shared"), 2)
 
+    def test_a_mixed_load_computes_each_distinct_mesh_once_in_the_whole_service(self):
+        distinct = [sphere(0.3 + i / 50) for i in range(12)]
+        work = [(i, target) for i in range(len(distinct)) for target in ("a", "b", "ng", "a")]
+        work = work[1::2] + work[0::2]  # spread copies apart
+        before = sum(started(d) for d in self.s.daemons)
+        targets = {"a": self.a, "b": self.b, "ng": self.ng}
+        results, lock = {}, threading.Lock()
+
+        def worker(items):
+            for i, t in items:
+                r = targets[t].post("/v1/mesh", distinct[i])
+                with lock:
+                    results.setdefault(i, []).append(r)
+        threads = [threading.Thread(target=worker, args=(work[k::8],), daemon=True)
+                   for k in range(8)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(120)
+        self.assertEqual(sum(len(v) for v in results.values()), len(work))
+        for i, answers in results.items():
+            for r in answers:
+                self.assertEqual(r.status, 200, r.body[:300])
+                self.assertEqual(r.body, answers[0].body)
+        self.assertEqual(sum(started(d) for d in self.s.daemons), before + len(distinct))
+
     def test_nginx_keeps_the_immutable_caching_headers_and_answers_304(self):
         first = self.ng.post("/v1/mesh", sphere(0.63))
         self.assertEqual(first.status, 200)
