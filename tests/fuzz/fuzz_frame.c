@@ -105,11 +105,10 @@ static void frame_check_payload(const unsigned char *p, size_t n, uint64_t job)
     free(copy);
 }
 
-/* The frame written in two parts by ism_frame_write_fd to a pipe and read back. */
-static void frame_check_write(const ism_frame *f, size_t limit)
+/* The frame written in two parts by ism_frame_write_fd to a (blocking, empty) pipe and read
+ * back; the pipe is empty again afterwards. */
+static void frame_check_write(const ism_frame *f, size_t limit, const int fds[2])
 {
-    int fds[2];
-    FUZZ_CHECK(pipe2(fds, O_CLOEXEC) == 0, "pipe2 failed");
     size_t cut = f->len / 3;
     ism_frame_part parts[2] = {{f->payload, cut}, {f->payload + cut, f->len - cut}};
     FUZZ_CHECK(ism_frame_write_fd(fds[1], f->type, f->job, parts, 2) == ISM_FRAME_OK,
@@ -125,8 +124,6 @@ static void frame_check_write(const ism_frame *f, size_t limit)
                "a written frame reads back different");
     ism_frame_free(&back);
     ism_frame_reader_free(&r);
-    close(fds[0]);
-    close(fds[1]);
 }
 
 /* Whole-buffer parsing: the frames in order and the status that ended the walk. */
@@ -135,11 +132,15 @@ static ism_frame_status frame_parse_all(const unsigned char *buf, size_t n, size
 {
     size_t at = 0;
     *nseen = 0;
+    int echo[2];
+    FUZZ_CHECK(pipe2(echo, O_CLOEXEC) == 0, "pipe2 failed");
     for (;;) {
         ism_frame f;
         size_t used = 0;
         ism_frame_status st = ism_frame_parse(buf + at, n - at, limit, &f, &used);
         if (st != ISM_FRAME_OK) {
+            close(echo[0]);
+            close(echo[1]);
             *end = at;
             return st;
         }
@@ -156,7 +157,7 @@ static ism_frame_status frame_parse_all(const unsigned char *buf, size_t n, size
         FUZZ_CHECK(again_len == used && memcmp(again, buf + at, used) == 0,
                    "frame re-encodes to other bytes");
         free(again);
-        frame_check_write(&f, limit);
+        frame_check_write(&f, limit, echo);
         if (f.type == ISM_FRAME_REQUEST)
             frame_check_job(&f);
         if (f.type == ISM_FRAME_RESULT)
