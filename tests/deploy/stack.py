@@ -215,7 +215,8 @@ def nginx_main(prefix, site_path):
 
 def nginx_test(prefix, conf):
     """`nginx -t` on conf; returns (exit status, output)."""
-    r = subprocess.run([NGINX, "-t", "-p", prefix, "-c", conf], stdout=subprocess.PIPE,
+    r = subprocess.run([NGINX, "-t", "-p", prefix, "-e", os.path.join(prefix, "error.log"),
+                        "-c", conf], stdout=subprocess.PIPE,
                        stderr=subprocess.STDOUT, text=True, timeout=30)
     return r.returncode, r.stdout
 
@@ -239,8 +240,9 @@ class Nginx:
         rc, out = nginx_test(self.prefix, self.conf)
         if rc != 0:
             raise RuntimeError("nginx -t failed:\n" + out)
-        self.proc = subprocess.Popen([NGINX, "-p", self.prefix, "-c", self.conf, "-g",
-                                      "daemon off;"], stdin=subprocess.DEVNULL,
+        self.proc = subprocess.Popen([NGINX, "-p", self.prefix, "-e",
+                                      os.path.join(self.prefix, "error.log"), "-c", self.conf,
+                                      "-g", "daemon off;"], stdin=subprocess.DEVNULL,
                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
         def ready():
