@@ -5,7 +5,8 @@ fifo order, the reference, makes it wait for the whole flood); a user over the p
 (--user-jobs, or jobs=N in the tokens file) gets 429 with Retry-After while another user is
 still accepted; running=N holds a user's extra jobs back while another user's job takes the
 free worker; two users asking for the same mesh compute it once; cache hits are answered
-during a flood without queueing; /metrics shows each user's queued and running jobs.
+during a flood without queueing; /metrics shows each user's queued and running jobs, ten
+users by name at most and the rest summed as "other".
 
 Every check is an order or a count read from the daemon (job start times from GET /v1/jobs,
 metrics), never a duration. The flood starts behind a slow "blocker" job of the flooding user
@@ -186,8 +187,9 @@ class FairnessTest(unittest.TestCase):
             self.assertEqual(d.metric("isomesh_user_jobs", user="alice", state="running"), 1)
             self.assertEqual(d.metric("isomesh_user_jobs", user="alice", state="queued"), 1)
             self.assertEqual(d.metric("isomesh_user_jobs", user="bob", state="queued"), 3)
-            # once one of hers ends, alice may submit again
+            # once one of hers ends (the pool stops the canceled computation), alice may submit
             a.cancel(blocker)
+            self.assertTrue(d.wait_metric("isomesh_worker_restarts_total", 1, reason="cancel"))
             self.assertEqual(a.call("POST", "/v1/jobs", flood_request(2)).status, 202)
             for j in bobs + [second]:
                 self.assertIn(a.wait_done(j)["state"], ("done",))
@@ -227,6 +229,27 @@ class FairnessTest(unittest.TestCase):
             self.assertEqual(done_a["started"], done_b["started"])
             self.assertEqual(d.metric("isomesh_computations_started_total"), 2)  # blocker + one
             self.assertEqual(d.metric("isomesh_computations_total", outcome="ok"), 1)
+
+    def test_user_labels_in_metrics_are_capped_with_the_rest_as_other(self):
+        with Daemon("--workers", "1") as d:
+            a = Client(d)
+            blocker = a.submit(SLOW)
+            wait_until("the blocker running", lambda: a.job(blocker)["state"] == "running")
+            others = [Client(d, source="127.0.0.%d" % (i + 2)) for i in range(12)]
+            jobs = [(c, c.submit(flood_request(i))) for i, c in enumerate(others)]
+            m = d.metrics()
+            users = {k.split('user="')[1].split('"')[0] for k in m if k.startswith("isomesh_user_jobs{")}
+            self.assertEqual(len(users), 11, users)  # the top 10, and "other"
+            self.assertIn("other", users)
+            self.assertIn("127.0.0.1", users)  # the heaviest: one running
+            queued = sum(v for k, v in m.items() if k.startswith("isomesh_user_jobs{") and 'state="queued"' in k)
+            running = sum(v for k, v in m.items() if k.startswith("isomesh_user_jobs{") and 'state="running"' in k)
+            self.assertEqual((queued, running), (12, 1))
+            self.assertEqual(m['isomesh_user_jobs{state="queued",user="other"}'], 3)
+            self.assertEqual(m["isomesh_users_active"], 13)
+            a.cancel(blocker)
+            for c, j in jobs:
+                c.cancel(j)
 
     def test_cache_hits_are_served_during_a_flood_without_queueing(self):
         with Daemon("--workers", "1", "--queue", "100", "--user-jobs", "100") as d:
