@@ -166,8 +166,9 @@ class Redis:
 # ---- nginx ------------------------------------------------------------------------------
 
 def nginx_site(daemon_ports, listen_port, tls=None):
-    """deploy/nginx/isomesh.conf with every upstream listing daemon_ports, listening on
-    127.0.0.1:listen_port (and, with tls=(port, cert, key), its TLS lines enabled)."""
+    """deploy/nginx/isomesh.conf with every upstream listing daemon_ports (None: as shipped),
+    listening on 127.0.0.1:listen_port (and, with tls=(port, cert, key), its TLS lines
+    enabled)."""
     with open(NGINX_CONF) as f:
         text = f.read()
     servers = re.findall(r"^(\s*)server 127\.0\.0\.1:8080 (.*);\n", text, re.M)
@@ -177,7 +178,8 @@ def nginx_site(daemon_ports, listen_port, tls=None):
     def upstream(m):
         return "".join("%sserver 127.0.0.1:%d %s;\n" % (m.group(1), p, m.group(2))
                        for p in daemon_ports)
-    text = re.sub(r"^(\s*)server 127\.0\.0\.1:8080 (.*);\n", upstream, text, flags=re.M)
+    if daemon_ports is not None:
+        text = re.sub(r"^(\s*)server 127\.0\.0\.1:8080 (.*);\n", upstream, text, flags=re.M)
     text = re.sub(r"^(\s*)listen 80;$", r"\1listen 127.0.0.1:%d;" % listen_port, text, flags=re.M)
     text = re.sub(r"^\s*listen \[::\]:80;\n", "", text, flags=re.M)
     if tls:
