@@ -3,6 +3,7 @@
  * One table drives all three, so a flag cannot exist in one and be missing in another. */
 #include "server/isomeshd/config.h"
 
+#include <arpa/inet.h>
 #include <ctype.h>
 #include <errno.h>
 #include <limits.h>
@@ -73,11 +74,30 @@ static const flag FLAGS[] = {
      "directory with openapi.yaml and request.schema.json [proto/ of the source tree]"},
     {"cors-origin", K_STRING, 0, 0, "ORIGIN",
      "value of Access-Control-Allow-Origin, e.g. * or https://example.org [none]"},
+    {"trusted-proxy", K_STRING, 0, 0, "ADDR[,ADDR]",
+     "reverse proxies (e.g. nginx at 127.0.0.1) whose X-Real-IP header names the client for "
+     "per-user limits and fair scheduling without tokens [none]"},
     {"log-format", K_LOGFMT, 0, 0, "text|json", "log line format on stderr [text]"},
 };
 #define NFLAGS (sizeof FLAGS / sizeof FLAGS[0])
 
 /* ---- value parsers ------------------------------------------------------------------- */
+
+/* "ADDR[,ADDR...]": IPv4 or IPv6 literals. */
+static bool valid_address_list(const char *v)
+{
+    char buf[512];
+    if (!*v || strlen(v) >= sizeof buf)
+        return false;
+    snprintf(buf, sizeof buf, "%s", v);
+    char *save = NULL;
+    for (char *a = strtok_r(buf, ",", &save); a; a = strtok_r(NULL, ",", &save)) {
+        unsigned char bin[16];
+        if (inet_pton(AF_INET, a, bin) != 1 && inet_pton(AF_INET6, a, bin) != 1)
+            return false;
+    }
+    return true;
+}
 
 static bool parse_ll(const char *s, long long *out)
 {
@@ -251,6 +271,9 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
         for (const char *p = v; *p; p++)
             if ((unsigned char)*p < 0x20 || *p == 0x7f)
                 return false;
+        if (!strcmp(name, "trusted-proxy"))
+            return valid_address_list(v) &&
+                   set_path(cfg->trusted_proxy, sizeof cfg->trusted_proxy, v);
         return set_path(cfg->cors_origin, sizeof cfg->cors_origin, v);
     case K_LOGFMT: return ism_log_parse_format(v, &cfg->log_format);
     case K_BOOL:

@@ -28,6 +28,8 @@ typedef struct ismd_config {
     char web_root[4096];      /* "" = no viewer */
     char data_dir[4096];      /* openapi.yaml, request.schema.json */
     char cors_origin[512];    /* "" = no CORS headers */
+    char trusted_proxy[512];  /* addresses (comma-separated) whose X-Real-IP names the
+                                 client; "" = the peer address is the client */
     char redis[300];          /* HOST:PORT of the shared cache (shared_cache.h); "" = none */
     double redis_lock_ttl_s;  /* lifetime of a computation's lock in Redis */
     ism_log_format log_format;

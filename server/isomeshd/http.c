@@ -360,7 +360,7 @@ static bool json_content_type(const char *ct)
            (n == 33 && strncasecmp(ct, "application/x-www-form-urlencoded", 33) == 0);
 }
 
-static void client_of(struct MHD_Connection *c, char *out, size_t cap)
+static void peer_of(struct MHD_Connection *c, char *out, size_t cap)
 {
     const union MHD_ConnectionInfo *ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
     snprintf(out, cap, "-");
@@ -371,6 +371,33 @@ static void client_of(struct MHD_Connection *c, char *out, size_t cap)
         inet_ntop(AF_INET, &((const struct sockaddr_in *)sa)->sin_addr, out, (socklen_t)cap);
     else if (sa->sa_family == AF_INET6)
         inet_ntop(AF_INET6, &((const struct sockaddr_in6 *)sa)->sin6_addr, out, (socklen_t)cap);
+}
+
+/* Is addr one of the comma-separated addresses in list? */
+static bool in_address_list(const char *list, const char *addr)
+{
+    size_t n = strlen(addr);
+    for (const char *p = list; *p;) {
+        size_t len = strcspn(p, ",");
+        if (len == n && !strncmp(p, addr, n))
+            return true;
+        p += len + (p[len] == ',');
+    }
+    return false;
+}
+
+/* The client: the peer address, or behind a trusted reverse proxy the address it names in
+ * X-Real-IP (only a well-formed IP literal is taken; anything else keeps the proxy's). */
+static void client_of(const ismd_server *s, ismd_req *r, char *out, size_t cap)
+{
+    peer_of(r->conn, out, cap);
+    if (!s->cfg->trusted_proxy[0] || !in_address_list(s->cfg->trusted_proxy, out))
+        return;
+    const char *real = ismd_header(r, "X-Real-IP");
+    unsigned char bin[16];
+    if (real && strlen(real) < cap &&
+        (inet_pton(AF_INET, real, bin) == 1 || inet_pton(AF_INET6, real, bin) == 1))
+        snprintf(out, cap, "%s", real);
 }
 
 /* The first call: build the context, route, and reject what can be rejected before the body
@@ -389,7 +416,7 @@ static enum MHD_Result first_call(ismd_server *s, struct MHD_Connection *conn, c
     for (char *p = r->path; *p; p++)
         if ((unsigned char)*p < 0x20 || (unsigned char)*p == 0x7f)
             *p = '?';
-    client_of(conn, r->client, sizeof r->client);
+    client_of(s, r, r->client, sizeof r->client);
     ismd_auth_identify(s->auth, ismd_header(r, MHD_HTTP_HEADER_AUTHORIZATION), r->client, &r->who);
     *con_cls = r;
     atomic_fetch_add(&s->open_requests, 1);
