@@ -185,7 +185,6 @@ int main(int argc, char **argv)
     if (rc)
         return rc == 1 ? 0 : 2;
     ism_log_setup("isomeshd", cfg.log_format);
-    ism_log_async(true); /* the HTTP thread never blocks on a slow log reader */
     signal(SIGPIPE, SIG_IGN);
     sigset_t stop_signals;
     sigemptyset(&stop_signals);
@@ -193,6 +192,8 @@ int main(int argc, char **argv)
     sigaddset(&stop_signals, SIGINT);
     sigaddset(&stop_signals, SIGHUP); /* taken by sigwait below: reload, not stop */
     pthread_sigmask(SIG_BLOCK, &stop_signals, NULL); /* every thread inherits this */
+    /* after the mask: a thread started earlier would take SIGTERM/SIGHUP's default action */
+    ism_log_async(true); /* the HTTP thread never blocks on a slow log reader */
     raise_fd_limit();
 
     static ismd_server s;
