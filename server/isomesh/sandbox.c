@@ -168,6 +168,14 @@ static void build_rules(rule_ctx *r, int in_fd, int out_fd)
     struct scmp_arg_cmp self = SCMP_A0(SCMP_CMP_EQ, (scmp_datum_t)sandbox_pid);
     add(r, SCMP_ACT_ALLOW, "tgkill", 1, &self);
 
+    /* Opening a file fails with EACCES rather than killing: glibc itself probes files now and
+     * then and copes without them (malloc reads /proc/sys/vm/overcommit_memory the first time
+     * it shrinks a thread's heap; counting cores reads /sys). Nothing is opened either way. */
+    add(r, SCMP_ACT_ERRNO(EACCES), "open", 0, NULL);
+    add(r, SCMP_ACT_ERRNO(EACCES), "openat", 0, NULL);
+    add(r, SCMP_ACT_ERRNO(EACCES), "creat", 0, NULL);
+    add(r, SCMP_ACT_ERRNO(ENOSYS), "openat2", 0, NULL);
+
 #if defined(__SANITIZE_ADDRESS__)
     /* AddressSanitizer probes whether memory is readable by writing it into a pipe; refused
      * with an error it takes the memory as unreadable. Creating a pipe grants no access. */

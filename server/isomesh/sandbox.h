@@ -5,12 +5,14 @@
  * executable.
  *
  * A refused system call kills the worker with SIGSYS after one line on stderr naming the call
- * ("isomesh worker: the sandbox refused system call 257 (openat)"), so the daemon logs "killed by
+ * ("isomesh worker: the sandbox refused system call 41 (socket)"), so the daemon logs "killed by
  * signal 31 (Bad system call)" and answers the job 500; a library quietly failing on EPERM would
- * surface as a misleading error much later (an mmap refusal reads as "out of memory"). clone3
- * alone answers ENOSYS, so glibc falls back to clone, whose flags the filter can check (threads
- * only). PR_SET_NO_NEW_PRIVS is set first; the core size limit is 0 (a worker's memory holds
- * other users' requests). */
+ * surface as a misleading error much later (an mmap refusal reads as "out of memory"). Two
+ * exceptions answer an error instead: opening a file fails with EACCES, because glibc probes
+ * /proc and /sys on its own now and then and copes without them (nothing is opened either way),
+ * and clone3 answers ENOSYS, so glibc falls back to clone, whose flags the filter can check
+ * (threads only). PR_SET_NO_NEW_PRIVS is set first; the core size limit is 0 (a worker's memory
+ * holds other users' requests). */
 #ifndef ISM_SANDBOX_H
 #define ISM_SANDBOX_H
 
@@ -30,9 +32,9 @@ bool ism_sandbox_active(void);
  * tries WHAT and reports on stdout: open (read an existing file), create (a new file in /tmp),
  * socket, exec, fork, exec-memory (map memory executable), write-fd (write to a descriptor
  * other than the worker's own), or allowed (threads, a large allocation, the clock, a write to
- * stdout: what the pipeline needs). Exit status 0 when WHAT behaved as the sandbox promises
- * and the process is still alive to say so (allowed), 1 when a forbidden WHAT succeeded; a
- * forbidden WHAT normally never returns (SIGSYS). */
+ * stdout: what the pipeline needs). Prints "refused: <errno text>" and exits 0 when WHAT
+ * failed (open, create: EACCES), exits 0 after "allowed" works, exits 1 when a forbidden WHAT
+ * succeeded; the other forbidden checks never return (SIGSYS). */
 int ism_sandbox_selftest(const char *what);
 
 #endif
