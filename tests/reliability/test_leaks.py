@@ -103,8 +103,9 @@ def run_mix(t, d):
     t.assertEqual(request(port, "GET", "/../../etc/passwd")[0], 404)
     t.assertEqual(request(port, "OPTIONS", "/v1/mesh", headers={"Origin": ORIGIN})[0], 204)
     # static files, documents, health, metrics
+    d.wait_ready()
     for path in ("/", "/v1/presets", "/v1/openapi.yaml", "/v1/request.schema.json",
-                 "/healthz", "/readyz", "/metrics"):
+                 "/healthz", "/metrics"):
         t.assertEqual(request(port, "GET", path)[0], 200, path)
     # still computing when SIGTERM comes (once the daemon has started this computation)
     started = d.metric("isomesh_computations_started_total")
