@@ -6,6 +6,9 @@ Suites, found by location so that adding a test file needs no edit here:
   <release>/tests/unit_*        Criterion binaries (core, proto, server)
   <asan>/tests/unit_*           the same built with AddressSanitizer + UndefinedBehaviorSanitizer
   tests/{cli,http,deploy,reliability}/test_*.py   Python unittest files (real programs, real sockets)
+  tests/{http,reliability}/test_*.py [asan+ubsan]  the same against the --asan build: any
+                                report a sanitized daemon or worker writes (a leak at exit, an
+                                error) fails the suite
   tests/browser/*.test.mjs      node:test files driving headless Chromium
 
 Each suite's own output is shown as it runs. Exit status is 0 only when nothing failed.
@@ -19,6 +22,8 @@ import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PY_DIRS = ["cli", "http", "deploy", "reliability"]
+# Also run against the --asan build (isomeshd and isomesh with ASan+UBSan, LeakSanitizer at exit).
+SAN_PY_DIRS = ["http", "reliability"]
 
 
 def count_criterion(out):
@@ -56,7 +61,18 @@ def count_node(out):
     return int(p[-1]), int(f[-1]) if f else 0
 
 
-def run(name, cmd, counter, env, timeout):
+def sanitizer_reports(report_dir):
+    """Text of the reports sanitized programs wrote into report_dir (log_path), then removed."""
+    out = []
+    for f in sorted(os.listdir(report_dir)) if report_dir and os.path.isdir(report_dir) else []:
+        path = os.path.join(report_dir, f)
+        with open(path, errors="replace") as fh:
+            out.append(f"--- {f}\n" + fh.read())
+        os.remove(path)
+    return "\n".join(out)
+
+
+def run(name, cmd, counter, env, timeout, report_dir=None):
     print(f"\n=== {name}: {' '.join(cmd)}", flush=True)
     t0 = time.time()
     try:
@@ -75,6 +91,10 @@ def run(name, cmd, counter, env, timeout):
     passed, failed = counts
     if rc != 0 and failed == 0:
         failed = 1  # the suite failed outside any single test (crash, build, leak report)
+    reports = sanitizer_reports(report_dir)
+    if reports:  # a daemon or worker of the suite reported a leak or an error
+        print(f"{name}: sanitizer reports:\n{reports}")
+        failed += 1
     print(f"=== {name}: {passed} passed, {failed} failed ({time.time() - t0:.1f} s)", flush=True)
     return passed, failed
 
@@ -110,6 +130,25 @@ def main():
                 suites.append((f"{sub}/{f}", [sys.executable, "-m", "unittest", "-v",
                                               os.path.join("tests", sub, f)],
                                count_unittest, env, 900))
+    if args.asan:
+        report_dir = os.path.join(ROOT, args.asan, "sanitizer-reports")
+        os.makedirs(report_dir, exist_ok=True)
+        sanitizer_reports(report_dir)  # left over from an interrupted run
+        senv = dict(env)
+        senv["ISOMESH_BUILD"] = os.path.join(ROOT, args.asan)
+        senv["ISOMESH_TEST_QUICK"] = "1"
+        senv["ASAN_OPTIONS"] = ("detect_leaks=1:abort_on_error=0:strict_string_checks=1:"
+                                "log_path=" + os.path.join(report_dir, "asan"))
+        senv["UBSAN_OPTIONS"] = ("print_stacktrace=1:halt_on_error=1:"
+                                 "log_path=" + os.path.join(report_dir, "ubsan"))
+        for sub in SAN_PY_DIRS:
+            d = os.path.join(ROOT, "tests", sub)
+            for f in sorted(os.listdir(d)) if os.path.isdir(d) else []:
+                if f.startswith("test_") and f.endswith(".py"):
+                    suites.append((f"{sub}/{f} [asan+ubsan]",
+                                   [sys.executable, "-m", "unittest", "-v",
+                                    os.path.join("tests", sub, f)],
+                                   count_unittest, senv, 900, report_dir))
     d = os.path.join(ROOT, "tests", "browser")
     for f in sorted(os.listdir(d)) if os.path.isdir(d) else []:
         if f.endswith(".test.mjs"):
@@ -120,8 +159,8 @@ def main():
         suites = [s for s in suites if args.only in s[0]]
     total_p = total_f = 0
     failed_suites = []
-    for name, cmd, counter, senv, timeout in suites:
-        p, f = run(name, cmd, counter, senv, timeout)
+    for name, cmd, counter, senv, timeout, *report_dir in suites:
+        p, f = run(name, cmd, counter, senv, timeout, *report_dir)
         total_p += p
         total_f += f
         if f:
