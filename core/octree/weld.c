@@ -11,6 +11,21 @@ typedef struct slot {
     uint32_t vertex; /* UINT32_MAX: empty */
 } slot;
 
+/* g scaled to unit length, or 0 0 0 when g is zero or not finite. Dividing by the largest
+ * component first keeps the squared length from underflowing (∇f ~ 1e-160 where f = g^64
+ * nears its zero gave normals of length 1.015) or overflowing. */
+static void unit_normal(const double g[3], float n[3])
+{
+    double big = fmax(fabs(g[0]), fmax(fabs(g[1]), fabs(g[2]))), s[3] = {0, 0, 0}, len = 0;
+    if (big > 0 && isfinite(big)) {
+        for (int k = 0; k < 3; k++)
+            s[k] = g[k] / big;
+        len = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+    }
+    for (int k = 0; k < 3; k++)
+        n[k] = len > 0 ? (float)(s[k] / len) : 0.0f; /* NaN len: no normal */
+}
+
 static uint64_t hash_point(const double p[3])
 {
     uint64_t h = 0x9e3779b97f4a7c15ull;
@@ -48,10 +63,7 @@ static uint32_t find_or_add(table *t, ism_mesh *m, const ism_fpoint *p, bool *ad
         i = (i + 1) & t->mask;
     }
     float n[3];
-    double g[3] = {p->g[0], p->g[1], p->g[2]};
-    double len = ism_normalise3(g);
-    for (int k = 0; k < 3; k++)
-        n[k] = len > 0 && isfinite(len) ? (float)g[k] : 0.0f;
+    unit_normal(p->g, n);
     uint32_t v = ism_mesh_add_vertex(m, p->p, n);
     if (v != UINT32_MAX)
         t->s[i].vertex = v;
@@ -88,10 +100,7 @@ static void fill_missing_normals(ism_mesh *m)
         float *vn = m->normal + 3 * i;
         if (vn[0] != 0 || vn[1] != 0 || vn[2] != 0)
             continue;
-        double n[3] = {acc[3 * i], acc[3 * i + 1], acc[3 * i + 2]};
-        if (ism_normalise3(n) > 0)
-            for (int j = 0; j < 3; j++)
-                vn[j] = (float)n[j];
+        unit_normal(acc + 3 * i, vn);
     }
     free(acc);
 }
