@@ -49,6 +49,10 @@ MAXLEN_expr       := 4096
 MAXLEN_polygonise := 1024
 MAXLEN_request    := 8192
 MAXLEN_frame      := 4096
+DICT_expr         := tests/fuzz/expr.dict
+DICT_polygonise   := tests/fuzz/expr.dict
+DICT_request      := tests/fuzz/request.dict
+DICT_frame        :=
 
 FUZZ_BINS := $(foreach t,$(FUZZ_TARGETS),$(FUZZ_OUT)/fuzz_$(t))
 
@@ -68,24 +72,24 @@ $(FUZZ_OUT)/obj/%.o: %.c
 $(FUZZ_OUT)/fuzz_%: $(FUZZ_OUT)/obj/tests/fuzz/fuzz_%.o $$(call fz_objs,$$(SRC_$$*))
 	$(FUZZ_CC) $(LD_FLAGS) -o $@ $^ $(LIBS_$*)
 
-# One run per target, one after the other (the machine has two cores and other users).
+# One bounded run of target $(1) (shell text; sets status=1 when libFuzzer fails): a scratch
+# corpus from the committed seeds and regression inputs, crashes into artifacts/.
+run_target = run=$(FUZZ_OUT)/run/$(1); \
+	if [ -z "$(FUZZ_KEEP)" ]; then rm -rf $$run; fi; \
+	mkdir -p $$run/corpus $$run/artifacts; rm -f $$run/artifacts/*; \
+	for d in tests/fuzz/corpus/$(1) tests/fuzz/regressions/$(1); do \
+	  if [ -d $$d ]; then cp -n $$d/* $$run/corpus/ 2>/dev/null || true; fi; \
+	done; \
+	echo "fuzz: $(1) for $(FUZZ_SECONDS) s (log: $$run/log)"; \
+	$(FUZZ_OUT)/fuzz_$(1) $$run/corpus $(if $(DICT_$(1)),-dict=$(DICT_$(1))) \
+	  -max_len=$(MAXLEN_$(1)) -timeout=10 -rss_limit_mb=2048 \
+	  -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 \
+	  -artifact_prefix=$$run/artifacts/ > $$run/log 2>&1 || status=1;
+
+# The targets one after the other (the machine has two cores and other users), then the table.
 fuzz-run: $(FUZZ_BINS)
 	@status=0; \
-	for t in $(FUZZ_TARGETS); do \
-	  run=$(FUZZ_OUT)/run/$$t; \
-	  if [ -z "$(FUZZ_KEEP)" ]; then rm -rf $$run; fi; \
-	  mkdir -p $$run/corpus $$run/artifacts; rm -f $$run/artifacts/*; \
-	  for d in tests/fuzz/corpus/$$t tests/fuzz/regressions/$$t; do \
-	    if [ -d $$d ]; then cp -n $$d/* $$run/corpus/ 2>/dev/null || true; fi; \
-	  done; \
-	  dict=; if [ -f tests/fuzz/$$t.dict ]; then dict=-dict=tests/fuzz/$$t.dict; fi; \
-	  maxlen=$$(case $$t in expr) echo $(MAXLEN_expr);; polygonise) echo $(MAXLEN_polygonise);; \
-	            request) echo $(MAXLEN_request);; frame) echo $(MAXLEN_frame);; *) echo 4096;; esac); \
-	  echo "fuzz: $$t for $(FUZZ_SECONDS) s (log: $$run/log)"; \
-	  $(FUZZ_OUT)/fuzz_$$t $$run/corpus $$dict -max_len=$$maxlen -timeout=10 \
-	    -rss_limit_mb=2048 -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 \
-	    -artifact_prefix=$$run/artifacts/ > $$run/log 2>&1 || status=1; \
-	done; \
+	$(foreach t,$(FUZZ_TARGETS),$(call run_target,$(t))) \
 	$(PYTHON) tests/fuzz/fuzz_summary.py $(FUZZ_OUT)/run $(FUZZ_TARGETS) || status=1; \
 	exit $$status
 
