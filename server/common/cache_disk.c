@@ -1,10 +1,13 @@
 /* cache_disk.c — the disk tier (cache_disk.h): checked reads on the caller's thread, atomic
- * checksummed writes on one background writer thread fed by a byte-bounded queue. */
+ * checksummed writes on one background writer thread fed by a byte-bounded queue, and a pruner
+ * thread that keeps the directory under its size bound (least recently used first). */
 #include "server/common/cache_disk.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <pthread.h>
+#include <signal.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -20,6 +23,8 @@
 #define FILE_VERSION 1
 #define MAX_ENTRY ((uint64_t)2 << 30) /* 2 GiB: larger files are not ours */
 #define FAILURE_LOG_INTERVAL_S 10
+#define PRUNE_LOW_WATER(max) ((max) / 10 * 9) /* a prune frees down to 90% of the bound */
+#define PRUNE_RETRY_S 1                       /* still over after a pass: wait this long */
 
 typedef struct pending {
     struct pending *next;
@@ -42,6 +47,12 @@ typedef struct disk_tier {
     bool stopping;
     time_t last_failure_log;
     unsigned long long tmp_seq;
+    /* size bound: counters.bytes and counters.entries hold what the directory holds (a scan
+     * at start, then every store and removal); the pruner wakes when bytes pass max_bytes */
+    unsigned long long max_bytes; /* 0 = no bound */
+    pthread_t pruner;
+    bool pruner_started;
+    pthread_cond_t prune_wake;
 } disk_tier;
 
 /* ---- helpers ------------------------------------------------------------------------- */
@@ -131,9 +142,18 @@ static void log_store_failure(disk_tier *d, const char *name, const char *what, 
 
 /* ---- reads --------------------------------------------------------------------------- */
 
-static void drop_corrupt(disk_tier *d, const char *rel, const char *name, const char *why)
+static void forget(disk_tier *d, unsigned long long bytes)
 {
-    unlinkat(d->root_fd, rel, 0);
+    atomic_fetch_sub(&d->base.counters.bytes, bytes);
+    atomic_fetch_sub(&d->base.counters.entries, 1);
+}
+
+/* counted: the file's size when it is a regular file the tier counts, else -1 */
+static void drop_corrupt(disk_tier *d, const char *rel, const char *name, const char *why,
+                         long long counted)
+{
+    if (unlinkat(d->root_fd, rel, 0) == 0 && counted >= 0)
+        forget(d, (unsigned long long)counted);
     atomic_fetch_add(&d->base.counters.corrupt, 1);
     ism_log_field f[] = {ISM_LS("name", name), ISM_LS("why", why), ISM_LS("dir", d->root_path)};
     ism_log_fields(ISM_LOG_WARN, "cache_corrupt_entry_dropped", f, sizeof f / sizeof f[0]);
@@ -170,8 +190,11 @@ static ism_blob *disk_get(ism_cache_tier *t, const char *name)
     const char *why = NULL;
     struct stat st;
     unsigned char hdr[HEADER_SIZE];
+    long long counted = -1;
     if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
         why = "not a regular file";
+    } else if ((counted = (long long)st.st_size) < 0) {
+        why = "bad size";
     } else if ((uint64_t)st.st_size < HEADER_SIZE || (uint64_t)st.st_size > MAX_ENTRY + HEADER_SIZE) {
         why = "bad size";
     } else if (!pread_all(fd, hdr, HEADER_SIZE, 0)) {
@@ -190,10 +213,12 @@ static ism_blob *disk_get(ism_cache_tier *t, const char *name)
             why = "checksum mismatch";
         }
     }
+    if (!why && b)
+        futimens(fd, NULL); /* used now: the pruner removes the least recently used first */
     close(fd);
     if (why) {
         ism_blob_unref(b);
-        drop_corrupt(d, rel, name, why);
+        drop_corrupt(d, rel, name, why, counted);
         return NULL;
     }
     return b;
@@ -300,6 +325,12 @@ static void store_entry(disk_tier *d, const char *name, const ism_blob *b)
     }
     fsync_dir(d->root_fd, shard);
     atomic_fetch_add(&d->base.counters.stores, 1);
+    atomic_fetch_add(&d->base.counters.bytes, (unsigned long long)HEADER_SIZE + b->len);
+    atomic_fetch_add(&d->base.counters.entries, 1);
+    pthread_mutex_lock(&d->lock);
+    if (d->max_bytes && atomic_load(&d->base.counters.bytes) > d->max_bytes)
+        pthread_cond_signal(&d->prune_wake);
+    pthread_mutex_unlock(&d->lock);
 }
 
 static void *writer_main(void *arg)
@@ -331,6 +362,223 @@ static void *writer_main(void *arg)
     return NULL;
 }
 
+/* ---- the size bound ------------------------------------------------------------------ */
+
+typedef struct entry_info {
+    long long used_ns; /* mtime: the last store or read */
+    unsigned long long size;
+    char name[ISM_CACHE_NAME_MAX];
+} entry_info;
+
+typedef struct entry_list {
+    entry_info *v;
+    size_t n, cap;
+    bool failed;
+} entry_list;
+
+static void list_add(entry_list *l, const char *name, const struct stat *st)
+{
+    if (l->failed)
+        return;
+    if (l->n == l->cap) {
+        size_t cap = l->cap ? l->cap * 2 : 1024;
+        entry_info *v = realloc(l->v, cap * sizeof *v);
+        if (!v) {
+            l->failed = true;
+            return;
+        }
+        l->v = v;
+        l->cap = cap;
+    }
+    entry_info *e = &l->v[l->n++];
+    e->used_ns = (long long)st->st_mtim.tv_sec * 1000000000LL + st->st_mtim.tv_nsec;
+    e->size = (unsigned long long)st->st_size;
+    size_t n = strnlen(name, sizeof e->name - 1); /* valid names are shorter */
+    memcpy(e->name, name, n);
+    e->name[n] = 0;
+}
+
+static bool is_shard(const char *n)
+{
+    return strlen(n) == 2 && strspn(n, "0123456789abcdef") == 2;
+}
+
+/* Every entry file under the root (regular files with valid names in shard directories):
+ * their total size and count, and, when list is not NULL, each of them. */
+static void scan(disk_tier *d, entry_list *list, unsigned long long *bytes,
+                 unsigned long long *entries)
+{
+    *bytes = *entries = 0;
+    int rfd = openat(d->root_fd, ".", O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    DIR *root = rfd >= 0 ? fdopendir(rfd) : NULL;
+    if (!root) {
+        if (rfd >= 0)
+            close(rfd);
+        return;
+    }
+    struct dirent *de;
+    while ((de = readdir(root))) {
+        if (!is_shard(de->d_name))
+            continue;
+        int sfd = openat(d->root_fd, de->d_name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+        DIR *shard = sfd >= 0 ? fdopendir(sfd) : NULL;
+        if (!shard) {
+            if (sfd >= 0)
+                close(sfd);
+            continue;
+        }
+        struct dirent *fe;
+        while ((fe = readdir(shard))) {
+            struct stat st;
+            if (!ism_cache_name_valid(fe->d_name) || strncmp(fe->d_name, de->d_name, 2) != 0 ||
+                fstatat(dirfd(shard), fe->d_name, &st, AT_SYMLINK_NOFOLLOW) != 0 ||
+                !S_ISREG(st.st_mode))
+                continue;
+            *bytes += (unsigned long long)st.st_size;
+            *entries += 1;
+            if (list)
+                list_add(list, fe->d_name, &st);
+        }
+        closedir(shard);
+    }
+    closedir(root);
+}
+
+/* The writer's pid in a temporary file's name ("<name>.<pid>.<seq>.tmp", "probe.<pid>"); 0 when
+ * the name is not one of ours. */
+static long tmp_owner(const char *p)
+{
+    char buf[256];
+    size_t n = strlen(p);
+    if (!strncmp(p, "probe.", 6)) {
+        snprintf(buf, sizeof buf, "%s", p + 6);
+    } else {
+        if (n < 4 || n >= sizeof buf || strcmp(p + n - 4, ".tmp") != 0)
+            return 0;
+        memcpy(buf, p, n - 4);
+        buf[n - 4] = 0;
+        char *seq = strrchr(buf, '.');
+        if (!seq)
+            return 0;
+        *seq = 0;
+        char *pid = strrchr(buf, '.');
+        if (!pid)
+            return 0;
+        memmove(buf, pid + 1, strlen(pid + 1) + 1);
+    }
+    char *end;
+    long v = strtol(buf, &end, 10);
+    return *end == 0 && v > 0 ? v : 0;
+}
+
+/* Temporary files of writers that are gone (a daemon killed mid-write) will never be renamed
+ * into place: remove them. Those of live processes (another daemon on the same directory)
+ * stay. */
+static void clean_tmp(disk_tier *d)
+{
+    int tfd = openat(d->root_fd, "tmp", O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+    DIR *tmp = tfd >= 0 ? fdopendir(tfd) : NULL;
+    if (!tmp) {
+        if (tfd >= 0)
+            close(tfd);
+        return;
+    }
+    long long removed = 0;
+    struct dirent *de;
+    while ((de = readdir(tmp))) {
+        long pid = tmp_owner(de->d_name);
+        if (pid <= 0 || pid == (long)getpid() || kill((pid_t)pid, 0) == 0 || errno != ESRCH)
+            continue; /* not ours, or its writer may still be at work */
+        if (unlinkat(dirfd(tmp), de->d_name, 0) == 0)
+            removed++;
+    }
+    closedir(tmp);
+    if (removed) {
+        ism_log_field f[] = {ISM_LI("files", removed), ISM_LS("dir", d->root_path)};
+        ism_log_fields(ISM_LOG_INFO, "cache_tmp_cleaned", f, 2);
+    }
+}
+
+static int by_use(const void *a, const void *b)
+{
+    const entry_info *x = a, *y = b;
+    return x->used_ns < y->used_ns ? -1 : x->used_ns > y->used_ns;
+}
+
+/* One pass: the least recently used entries go until the directory is at the low-water mark. */
+static void prune(disk_tier *d, unsigned long long max)
+{
+    entry_list l = {0};
+    unsigned long long bytes, entries;
+    scan(d, &l, &bytes, &entries);
+    unsigned long long low = PRUNE_LOW_WATER(max), freed = 0, removed = 0;
+    if (!l.failed && bytes > max) {
+        qsort(l.v, l.n, sizeof *l.v, by_use);
+        for (size_t i = 0; i < l.n && bytes - freed > low; i++) {
+            char rel[ISM_CACHE_NAME_MAX + 4];
+            snprintf(rel, sizeof rel, "%.2s/%s", l.v[i].name, l.v[i].name);
+            if (unlinkat(d->root_fd, rel, 0) == 0) {
+                freed += l.v[i].size;
+                removed++;
+            }
+        }
+    }
+    free(l.v);
+    /* the scan is the truth: stores since it began are added again by the writer */
+    atomic_store(&d->base.counters.bytes, bytes - freed);
+    atomic_store(&d->base.counters.entries, entries - removed);
+    atomic_fetch_add(&d->base.counters.evictions, removed);
+    if (removed) {
+        ism_log_field f[] = {ISM_LI("removed", (long long)removed), ISM_LI("freed", (long long)freed),
+                             ISM_LI("bytes", (long long)(bytes - freed)),
+                             ISM_LI("limit", (long long)max), ISM_LS("dir", d->root_path)};
+        ism_log_fields(ISM_LOG_INFO, "cache_pruned", f, sizeof f / sizeof f[0]);
+    }
+}
+
+static bool over_limit(disk_tier *d)
+{
+    return d->max_bytes && atomic_load(&d->base.counters.bytes) > d->max_bytes;
+}
+
+static void *pruner_main(void *arg)
+{
+    disk_tier *d = arg;
+    clean_tmp(d);
+    unsigned long long bytes, entries;
+    scan(d, NULL, &bytes, &entries);
+    atomic_store(&d->base.counters.bytes, bytes);
+    atomic_store(&d->base.counters.entries, entries);
+    pthread_mutex_lock(&d->lock);
+    while (!d->stopping) {
+        if (!over_limit(d)) {
+            pthread_cond_wait(&d->prune_wake, &d->lock);
+            continue;
+        }
+        unsigned long long max = d->max_bytes;
+        pthread_mutex_unlock(&d->lock);
+        prune(d, max);
+        pthread_mutex_lock(&d->lock);
+        if (!d->stopping && over_limit(d)) { /* stores kept coming, or unlink failed */
+            struct timespec until;
+            clock_gettime(CLOCK_REALTIME, &until);
+            until.tv_sec += PRUNE_RETRY_S;
+            pthread_cond_timedwait(&d->prune_wake, &d->lock, &until);
+        }
+    }
+    pthread_mutex_unlock(&d->lock);
+    return NULL;
+}
+
+void ism_cache_disk_set_max(ism_cache_tier *t, unsigned long long max_bytes)
+{
+    disk_tier *d = (disk_tier *)t;
+    pthread_mutex_lock(&d->lock);
+    d->max_bytes = max_bytes;
+    pthread_cond_signal(&d->prune_wake);
+    pthread_mutex_unlock(&d->lock);
+}
+
 void ism_cache_disk_flush(ism_cache_tier *t)
 {
     disk_tier *d = (disk_tier *)t;
@@ -351,9 +599,12 @@ static void disk_close(ism_cache_tier *t)
     pthread_mutex_lock(&d->lock);
     d->stopping = true;
     pthread_cond_broadcast(&d->wake);
+    pthread_cond_broadcast(&d->prune_wake);
     pthread_mutex_unlock(&d->lock);
     if (d->writer_started)
         pthread_join(d->writer, NULL);
+    if (d->pruner_started)
+        pthread_join(d->pruner, NULL);
     while (d->head) { /* only when the writer never started */
         pending *p = d->head;
         d->head = p->next;
@@ -365,6 +616,7 @@ static void disk_close(ism_cache_tier *t)
     pthread_mutex_destroy(&d->lock);
     pthread_cond_destroy(&d->wake);
     pthread_cond_destroy(&d->idle);
+    pthread_cond_destroy(&d->prune_wake);
     free(d);
 }
 
@@ -400,6 +652,7 @@ ism_cache_tier *ism_cache_disk_new(const char *dir, size_t max_pending)
     pthread_mutex_init(&d->lock, NULL);
     pthread_cond_init(&d->wake, NULL);
     pthread_cond_init(&d->idle, NULL);
+    pthread_cond_init(&d->prune_wake, NULL);
     d->base.name = "disk";
     d->base.get = disk_get;
     d->base.has = disk_has;
@@ -411,6 +664,7 @@ ism_cache_tier *ism_cache_disk_new(const char *dir, size_t max_pending)
         ism_log_fields(ISM_LOG_WARN, "cache_dir_unusable", f, 2);
     } else if (pthread_create(&d->writer, NULL, writer_main, d) == 0) {
         d->writer_started = true;
+        d->pruner_started = pthread_create(&d->pruner, NULL, pruner_main, d) == 0;
     } else {
         d->usable = false;
     }

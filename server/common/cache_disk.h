@@ -9,8 +9,13 @@
  *
  * A directory that cannot be created or written, a full disk, or a write queue over its byte
  * budget never fails a request: the entry is simply not stored (logged, counted in
- * counters.store_failures). There is no size bound on the directory itself: prune it with
- * `find DIR -atime +N -delete` if it grows too big. */
+ * counters.store_failures).
+ *
+ * Size bound: counters.bytes and counters.entries say what the directory holds (a scan at start,
+ * then every store and removal). Past the bound set with ism_cache_disk_set_max, a background
+ * thread removes the least recently used entries (a read or a store sets a file's mtime) until
+ * 90% of the bound is left, counting them in counters.evictions and logging `cache_pruned`.
+ * At start it also removes temporary files left by writers that died mid-write. */
 #ifndef ISM_CACHE_DISK_H
 #define ISM_CACHE_DISK_H
 
@@ -26,6 +31,9 @@ ism_cache_tier *ism_cache_disk_new(const char *dir, size_t max_pending);
 
 /* Whether the directory was usable at start-up. */
 bool ism_cache_disk_usable(const ism_cache_tier *t);
+
+/* Bounds the directory's size in bytes (0: no bound); prunes in the background when over. */
+void ism_cache_disk_set_max(ism_cache_tier *t, unsigned long long max_bytes);
 
 /* Waits until every queued write is on disk (or failed). */
 void ism_cache_disk_flush(ism_cache_tier *t);
