@@ -54,6 +54,9 @@ static const flag FLAGS[] = {
      "disk cache directory [$XDG_CACHE_HOME/isomesh, else $HOME/.cache/isomesh]"},
     {"cache-mem", K_SIZE, 0, (long long)1 << 40, "BYTES",
      "in-memory cache size, e.g. 512M; 0 disables it [256M]"},
+    {"cache-disk-max", K_SIZE, 0, (long long)1 << 50, "BYTES",
+     "disk cache size; past it the least recently used entries are removed; 0 = no bound "
+     "[4G]"},
     {"redis", K_REDIS, 0, 0, "HOST:PORT",
      "shared cache in this Redis server: daemons using the same one serve each other's "
      "meshes and compute identical requests once (deploy/README.md) [none]"},
@@ -65,6 +68,12 @@ static const flag FLAGS[] = {
     {"job-memory", K_SIZE, 0, (long long)1 << 42, "BYTES",
      "address-space limit of each worker process; 0 = none [4G]"},
     {"max-body", K_SIZE, 1024, (long long)64 << 20, "BYTES", "largest request body [256K]"},
+    {"conn-timeout", K_DURATION, 0, 0, "TIME",
+     "close a connection idle this long (one waiting for its computation never is); at "
+     "least 1s [30s]"},
+    {"client-conns", K_INT, 0, 100000, "N",
+     "connections one address may hold open at once; behind a proxy keep it above the "
+     "proxy's connections; 0 = no limit [512]"},
     {"max-depth", K_INT, 1, 16, "N", "deepest octree a request may ask for [10]"},
     {"max-triangles", K_INT, 1, 1000000000LL, "N",
      "most triangles a request may produce [4000000]"},
@@ -238,6 +247,7 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
         else if (!strcmp(name, "user-running")) cfg->user_running = (int)n;
         else if (!strcmp(name, "max-depth")) cfg->max_depth = (int)n;
         else if (!strcmp(name, "max-triangles")) cfg->max_triangles = (size_t)n;
+        else if (!strcmp(name, "client-conns")) cfg->client_conns = (int)n;
         return true;
     case K_SIZE:
         if (!parse_size(v, &n) || n < f->min || n > f->max)
@@ -245,6 +255,7 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
         if (!strcmp(name, "cache-mem")) cfg->cache_mem = (size_t)n;
         else if (!strcmp(name, "job-memory")) cfg->job_memory = (size_t)n;
         else if (!strcmp(name, "max-body")) cfg->max_body = (size_t)n;
+        else if (!strcmp(name, "cache-disk-max")) cfg->cache_disk_max = (unsigned long long)n;
         return true;
     case K_DURATION:
         if (!parse_duration(v, &d))
@@ -253,6 +264,10 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
             if (d < 0.5)
                 return false;
             cfg->redis_lock_ttl_s = d;
+        } else if (!strcmp(name, "conn-timeout")) {
+            if (d < 1)
+                return false;
+            cfg->conn_timeout_s = (unsigned)(d + 0.5);
         } else {
             cfg->job_timeout_s = d;
         }
@@ -367,6 +382,9 @@ static void set_defaults(ismd_config *cfg)
     else
         snprintf(cfg->cache_dir, sizeof cfg->cache_dir, "/tmp/isomesh-cache-%ld", (long)getuid());
     cfg->cache_mem = (size_t)256 << 20;
+    cfg->cache_disk_max = 4ULL << 30;
+    cfg->conn_timeout_s = 30;
+    cfg->client_conns = 512;
     cfg->job_timeout_s = 60;
     cfg->job_memory = (size_t)4 << 30;
     cfg->max_body = (size_t)256 << 10;

@@ -20,9 +20,12 @@ typedef struct ismd_config {
     bool private_mode;        /* --private: reading needs a token too */
     char cache_dir[4096];
     size_t cache_mem;         /* bytes of the in-memory LRU */
+    unsigned long long cache_disk_max; /* bytes the disk cache may hold (0 = no bound) */
     double job_timeout_s;     /* deadline of one computation, from submission */
     size_t job_memory;        /* RLIMIT_AS of a worker process (0 = unlimited) */
     size_t max_body;          /* request body bytes */
+    unsigned conn_timeout_s;  /* an idle connection (not waiting for a computation) is closed */
+    int client_conns;         /* connections from one address at once (0 = no limit) */
     int max_depth;
     size_t max_triangles;
     char web_root[4096];      /* "" = no viewer */

@@ -162,6 +162,8 @@ static bool setup_cache(ismd_server *s, const ismd_config *cfg)
             return false;
     }
     s->disk = ism_cache_disk_new(cfg->cache_dir, DISK_WRITE_QUEUE);
+    if (s->disk)
+        ism_cache_disk_set_max(s->disk, cfg->cache_disk_max);
     if (!s->disk || !ism_cache_add_tier(&s->cache, s->disk))
         return false;
     if (!cfg->redis[0])
