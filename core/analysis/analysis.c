@@ -22,17 +22,6 @@ void ism_analysis_options_default(ism_analysis_options *o)
     o->newton_steps = 4;
 }
 
-bool ism_an_fail(ism_error *err, const char *fmt, ...)
-{
-    if (!err)
-        return false;
-    memset(err, 0, sizeof *err);
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err->message, sizeof err->message, fmt, ap);
-    va_end(ap);
-    return false;
-}
 
 /* Bad input gets a message naming the first offending vertex or triangle. */
 bool ism_an_check_mesh(const ism_mesh *m, ism_error *err)

@@ -100,9 +100,9 @@ bool ism_an_implicit_figures(const ism_mesh *m, const ism_tape *f, const ism_ana
 bool ism_an_check_mesh(const ism_mesh *m, ism_error *err);
 bool ism_an_check_options(const ism_analysis_options *o, ism_error *err);
 
-/* Fills err (may be NULL) with a positionless message; returns false. */
-bool ism_an_fail(ism_error *err, const char *fmt, ...)
-    __attribute__((format(printf, 2, 3)));
+/* Fills err (may be NULL) with a positionless message; returns false (the expression
+ * engine's ism_error_set). */
+#define ism_an_fail ism_error_set
 
 /* Union-find over n elements whose roots are always the smallest member: parent[i] <= i. */
 uint32_t ism_an_uf_find(uint32_t *parent, uint32_t i);
