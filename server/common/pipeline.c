@@ -60,7 +60,7 @@ static void take(ism_buf *b, void *data, size_t len)
     b->cap = len;
 }
 
-static size_t buf_write(void *ctx, const void *p, size_t n)
+size_t ism_buf_write(void *ctx, const void *p, size_t n)
 {
     ism_buf *b = ctx;
     if (b->len + n > b->cap) {
@@ -272,13 +272,13 @@ static bool encode_body(encode_job *j, ism_buf *body, char *why, size_t n)
         break;
     }
     case ISM_FORMAT_PLY:
-        ok = ism_write_ply(m, buf_write, body);
+        ok = ism_write_ply(m, ism_buf_write, body);
         break;
     case ISM_FORMAT_OBJ:
-        ok = ism_write_obj(m, buf_write, body);
+        ok = ism_write_obj(m, ism_buf_write, body);
         break;
     case ISM_FORMAT_STL:
-        ok = ism_write_stl(m, buf_write, body);
+        ok = ism_write_stl(m, ism_buf_write, body);
         break;
     default:
         ok = false;

@@ -26,6 +26,10 @@ typedef struct ism_buf {
 
 void ism_buf_free(ism_buf *b);
 
+/* Appends n bytes to the buffer ctx (an ism_buf *), growing it; returns n, or 0 when out of
+ * memory. Shaped as core's ism_write_fn, so mesh writers can fill a buffer. */
+size_t ism_buf_write(void *ctx, const void *p, size_t n);
+
 /* Limits the operator sets on the daemon (flags) or the command line; a request over one
  * gets status 422 naming the limit. */
 typedef struct ism_pipeline_limits {

@@ -8,6 +8,7 @@
 #include "core/mesh/write_mesh.h"
 #include "proto/presets.h"
 #include "proto/stats.h"
+#include "server/common/fd_io.h"
 #include "server/common/pipeline.h"
 
 #include <errno.h>
@@ -49,17 +50,7 @@ bool ism_cli_write_file(const char *path, const void *data, size_t len)
         free(tmp);
         return false;
     }
-    const unsigned char *p = data;
-    size_t done = 0;
-    while (done < len) {
-        ssize_t w = write(fd, p + done, len - done);
-        if (w < 0 && errno == EINTR)
-            continue;
-        if (w <= 0)
-            break;
-        done += (size_t)w;
-    }
-    bool ok = done == len && fsync(fd) == 0;
+    bool ok = ism_write_all(fd, data, len) && fsync(fd) == 0;
     ok = close(fd) == 0 && ok;
     if (ok)
         ok = chmod(tmp, 0644) == 0 && rename(tmp, path) == 0;
@@ -197,29 +188,6 @@ static int resolve_surface(ism_cli_run *run)
 
 /* ---- output -------------------------------------------------------------------------- */
 
-typedef struct membuf {
-    unsigned char *data;
-    size_t len, cap;
-} membuf;
-
-static size_t mem_write(void *ctx, const void *p, size_t n)
-{
-    membuf *b = ctx;
-    if (b->len + n > b->cap) {
-        size_t c = b->cap ? b->cap * 2 : 65536;
-        while (c < b->len + n)
-            c *= 2;
-        unsigned char *d = realloc(b->data, c);
-        if (!d)
-            return 0;
-        b->data = d;
-        b->cap = c;
-    }
-    memcpy(b->data + b->len, p, n);
-    b->len += n;
-    return n;
-}
-
 static const char *extension(const char *path)
 {
     const char *dot = strrchr(path, '.');
@@ -243,9 +211,9 @@ static writer_fn writer_for(const char *path)
 
 static bool write_mesh(const char *path, const ism_mesh *m)
 {
-    membuf b = {0};
-    bool ok = writer_for(path)(m, mem_write, &b) && ism_cli_write_file(path, b.data, b.len);
-    free(b.data);
+    ism_buf b = {0};
+    bool ok = writer_for(path)(m, ism_buf_write, &b) && ism_cli_write_file(path, b.data, b.len);
+    ism_buf_free(&b);
     return ok;
 }
 

@@ -6,6 +6,7 @@
  * takes the old file's permissions, and is renamed over FILE; then the directory is fsync'd.
  * A reader (the daemon on SIGHUP) sees the old file or the new one, never half of one.
  * Comments and the order of lines are kept. A file that does not parse is left alone. */
+#include "server/common/fd_io.h"
 #include "server/isomeshd/token_cmd.h"
 
 #include <errno.h>
@@ -110,19 +111,6 @@ static bool read_text(const char *path, char **text, size_t *len, bool *exists, 
     return true;
 }
 
-static bool write_all(int fd, const char *p, size_t n)
-{
-    while (n) {
-        ssize_t w = write(fd, p, n);
-        if (w < 0 && errno == EINTR)
-            continue;
-        if (w <= 0)
-            return false;
-        p += w;
-        n -= (size_t)w;
-    }
-    return true;
-}
 
 static void fsync_dir_of(const char *path)
 {
@@ -171,7 +159,7 @@ static int change_file(const char *path, editor edit, void *ctx)
     }
     if (!edit(old, oldlen, &parsed, ctx, &text, &len))
         goto out;
-    if (!write_all(fd, text, len) || fsync(fd) != 0 || (exists && fchmod(fd, mode) != 0)) {
+    if (!ism_write_all(fd, text, len) || fsync(fd) != 0 || (exists && fchmod(fd, mode) != 0)) {
         fprintf(stderr, "isomeshd token: writing %s: %s\n", tmp, strerror(errno));
         goto out;
     }
