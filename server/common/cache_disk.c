@@ -499,22 +499,51 @@ static void clean_tmp(disk_tier *d)
     }
 }
 
+static int by_key(const void *a, const void *b)
+{
+    return strncmp(((const entry_info *)a)->name, ((const entry_info *)b)->name, 64);
+}
+
 static int by_use(const void *a, const void *b)
 {
     const entry_info *x = a, *y = b;
-    return x->used_ns < y->used_ns ? -1 : x->used_ns > y->used_ns;
+    if (x->used_ns != y->used_ns)
+        return x->used_ns < y->used_ns ? -1 : 1;
+    return by_key(a, b);
 }
 
-/* One pass: the least recently used entries go until the directory is at the low-water mark. */
+/* The files of one key (its mesh formats, stats, features, request) go together: each gets the
+ * key's latest use, so a mesh read every minute keeps the request its other formats need. */
+static void group_by_key(entry_list *l)
+{
+    qsort(l->v, l->n, sizeof *l->v, by_key);
+    for (size_t i = 0; i < l->n;) {
+        size_t j = i;
+        long long used = 0;
+        while (j < l->n && by_key(&l->v[i], &l->v[j]) == 0)
+            used = l->v[j].used_ns > used ? l->v[j].used_ns : used, j++;
+        for (size_t k = i; k < j; k++)
+            l->v[k].used_ns = used;
+        i = j;
+    }
+    qsort(l->v, l->n, sizeof *l->v, by_use);
+}
+
+/* One pass: the least recently used keys go until the directory is at the low-water mark. */
 static void prune(disk_tier *d, unsigned long long max)
 {
     entry_list l = {0};
     unsigned long long bytes, entries;
+    unsigned long long counted_bytes = atomic_load(&d->base.counters.bytes);
+    unsigned long long counted_entries = atomic_load(&d->base.counters.entries);
     scan(d, &l, &bytes, &entries);
     unsigned long long low = PRUNE_LOW_WATER(max), freed = 0, removed = 0;
     if (!l.failed && bytes > max) {
-        qsort(l.v, l.n, sizeof *l.v, by_use);
-        for (size_t i = 0; i < l.n && bytes - freed > low; i++) {
+        group_by_key(&l);
+        for (size_t i = 0; i < l.n; i++) {
+            bool same_key = i > 0 && by_key(&l.v[i], &l.v[i - 1]) == 0;
+            if (bytes - freed <= low && !same_key)
+                break;
             char rel[ISM_CACHE_NAME_MAX + 4];
             snprintf(rel, sizeof rel, "%.2s/%s", l.v[i].name, l.v[i].name);
             if (unlinkat(d->root_fd, rel, 0) == 0) {
@@ -524,9 +553,10 @@ static void prune(disk_tier *d, unsigned long long max)
         }
     }
     free(l.v);
-    /* the scan is the truth: stores since it began are added again by the writer */
-    atomic_store(&d->base.counters.bytes, bytes - freed);
-    atomic_store(&d->base.counters.entries, entries - removed);
+    /* the scan corrects what the counters believed (files removed by hand, say); stores during
+     * the scan stay counted by the writer */
+    atomic_fetch_add(&d->base.counters.bytes, bytes - counted_bytes - freed);
+    atomic_fetch_add(&d->base.counters.entries, entries - counted_entries - removed);
     atomic_fetch_add(&d->base.counters.evictions, removed);
     if (removed) {
         ism_log_field f[] = {ISM_LI("removed", (long long)removed), ISM_LI("freed", (long long)freed),

@@ -13,8 +13,9 @@
  *
  * Size bound: counters.bytes and counters.entries say what the directory holds (a scan at start,
  * then every store and removal). Past the bound set with ism_cache_disk_set_max, a background
- * thread removes the least recently used entries (a read or a store sets a file's mtime) until
- * 90% of the bound is left, counting them in counters.evictions and logging `cache_pruned`.
+ * thread removes the least recently used keys, all files of a key together (a read or a store
+ * sets a file's mtime), until 90% of the bound is left, counting the files in
+ * counters.evictions and logging `cache_pruned`.
  * At start it also removes temporary files left by writers that died mid-write. */
 #ifndef ISM_CACHE_DISK_H
 #define ISM_CACHE_DISK_H
