@@ -400,6 +400,30 @@ static void client_of(const ismd_server *s, ismd_req *r, char *out, size_t cap)
         snprintf(out, cap, "%s", real);
 }
 
+typedef struct framing {
+    int content_length, transfer_encoding;
+} framing;
+
+static enum MHD_Result count_framing(void *cls, enum MHD_ValueKind kind, const char *key,
+                                     const char *value)
+{
+    (void)kind;
+    (void)value;
+    framing *f = cls;
+    f->content_length += strcasecmp(key, MHD_HTTP_HEADER_CONTENT_LENGTH) == 0;
+    f->transfer_encoding += strcasecmp(key, MHD_HTTP_HEADER_TRANSFER_ENCODING) == 0;
+    return MHD_YES;
+}
+
+/* Two Content-Length headers, or one beside Transfer-Encoding: a proxy in front may frame the
+ * body otherwise than libmicrohttpd does (request smuggling), so such a request is refused. */
+static bool framing_conflict(struct MHD_Connection *c)
+{
+    framing f = {0, 0};
+    MHD_get_connection_values(c, MHD_HEADER_KIND, count_framing, &f);
+    return f.content_length > 1 || (f.content_length && f.transfer_encoding);
+}
+
 /* The first call: build the context, route, and reject what can be rejected before the body
  * arrives. Only a 413 from Content-Length is answered now (the body is never read). */
 static enum MHD_Result first_call(ismd_server *s, struct MHD_Connection *conn, const char *url,
@@ -448,6 +472,12 @@ static enum MHD_Result first_call(ismd_server *s, struct MHD_Connection *conn, c
     }
     if (!r->wants_body)
         return MHD_YES;
+    if (framing_conflict(conn)) {
+        early(r, 400, "bad_request",
+              "conflicting Content-Length or Transfer-Encoding headers: send one of them");
+        r->wants_body = false;
+        return MHD_YES;
+    }
     const char *cl = ismd_header(r, MHD_HTTP_HEADER_CONTENT_LENGTH);
     if (cl) {
         char *end;
