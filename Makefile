@@ -75,7 +75,7 @@ PROGRAMS := $(if $(ISOMESH_SRC),$(ISOMESH)) $(if $(DAEMON_SRC),$(ISOMESHD))
 # ---------------------------------------------------------------------------------------
 # User-facing targets
 
-.PHONY: all run test deps deps-test deps-bench build unit-bins web-deps test-deps bench fuzz clean
+.PHONY: all run test deps deps-test deps-bench build unit-bins web-deps test-deps bench soak fuzz clean
 
 all: deps build web-deps
 
@@ -91,6 +91,10 @@ test: deps-test
 
 bench: deps-bench build $(BENCH_BINS)
 	$(PYTHON) tests/bench/run_bench.py --build $(OUT)
+
+# The load/soak benchmark alone (wrk mix for 60 s, RSS series, slowloris): tests/bench/bench_load.py
+soak: deps-test build
+	$(PYTHON) tests/bench/run_bench.py --build $(OUT) --only bench_load
 
 fuzz: deps-test
 	$(MAKE) -C . -f tests/fuzz/fuzz.mk
