@@ -1,8 +1,9 @@
 /* cache_disk.h — the disk tier: content-addressed files that survive restarts.
  *
  * Layout: <dir>/v1/<first two hex digits of the key>/<name>, written by a background thread
- * to <dir>/v1/tmp/, fsynced, then renamed into place (and the directory fsynced), so a crash
- * leaves either the whole entry or none. Each file is a 24-byte header — magic "ISMC", u32
+ * to <dir>/v1/tmp/, then renamed into place, so a killed daemon leaves either the whole entry
+ * or none (never fsynced: a cache may lose its latest entries to a power loss, and what such a
+ * loss tears fails the checksum below). Each file is a 24-byte header — magic "ISMC", u32
  * version 1, u64 payload length, u32 CRC-32C of header bytes 0..15 and the payload, u32 zero —
  * then the payload. Every read checks all of it; a bad file is deleted, logged and counted
  * (counters.corrupt) and reads as a miss, so the entry is recomputed.
