@@ -9,7 +9,8 @@
    against the same daemon with cached GETs only (what the mix costs the cached path).
 2. Memory: the daemon's resident set (VmRSS, /proc) sampled every 2 s from start to end of
    the mix, printed as a series with its growth after the first quarter (the memory cache is
-   capped at --cache-mem 32M so that a full cache is not mistaken for a leak).
+   capped at --cache-mem 8M, full within seconds, so that a filling cache is not mistaken for
+   a leak).
 3. Slowloris: latency of a normal client (sequential GETs of a cached mesh, and POSTs of new
    surfaces) alone, then while 400 connections from four other loopback addresses trickle
    request headers a byte at a time (--client-conns 64).
@@ -281,7 +282,7 @@ def main():
               "%d cached keys (wrk -t2 --timeout 60s -s load_mix.lua)"
               % (args.conns, args.seconds, round(args.new_share * 100), CACHED_KEYS))
         ref = soak(args.build, tmp, max(10, args.seconds // 4), args.conns, 0.0)
-        mix = soak(args.build, tmp, args.seconds, args.conns, args.new_share)
+        mix = soak(args.build, tmp, args.seconds, args.conns, args.new_share, cache_mem="8M")
         print("\n%-34s %9s %9s %8s %8s %8s %8s  %s" % ("run", "requests", "req/s", "p50 ms",
                                                       "p90 ms", "p99 ms", "errors",
                                                       "statuses"))
