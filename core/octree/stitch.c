@@ -108,7 +108,16 @@ static bool build_graph(graph *g, const ism_flines *l)
         refs[e].end = (int)e;
         g->partner[e] = -1;
     }
-    qsort(refs, ne, sizeof *refs, cmp_end);
+    if (ne <= 32) { /* a node has a handful of lines: insertion sort beats qsort's calls */
+        for (size_t i = 1; i < ne; i++)
+            for (size_t j = i; j > 0 && cmp_end(&refs[j - 1], &refs[j]) > 0; j--) {
+                end_ref t = refs[j];
+                refs[j] = refs[j - 1];
+                refs[j - 1] = t;
+            }
+    } else {
+        qsort(refs, ne, sizeof *refs, cmp_end);
+    }
     g->npoints = 0;
     for (size_t i = 0; i < ne;) {
         size_t j = i + 1;

@@ -93,26 +93,30 @@ static bool centre_point(ism_sampler *s, const ism_fpoint *p, size_t n, double r
     for (size_t i = 0; i < n; i++)
         for (int k = 0; k < 3; k++)
             m[k] += p[i].p[k] / (double)n;
-    double q[3] = {m[0], m[1], m[2]}, g[3];
-    for (int it = 0; it < 4; it++) {
-        double f = ism_sample_grad(s, q, g);
+    double q[3] = {m[0], m[1], m[2]}, g[3], f = 0;
+    bool landed = false;
+    for (int it = 0; it < 5; it++) {
+        f = ism_sample_grad(s, q, g);
         double gg = ism_dot3(g, g);
         if (!(gg > 0) || !isfinite(f) || !isfinite(gg))
+            return false;
+        if (fabs(f) <= 1e-6 * reach * sqrt(gg)) {
+            landed = true; /* q is on the surface and g is its gradient there */
             break;
+        }
         for (int k = 0; k < 3; k++)
             q[k] -= f * g[k] / gg;
     }
     double moved = ism_dist3(q, m);
-    if (!isfinite(moved) || moved > reach)
+    if (!landed || !isfinite(moved) || moved > reach)
         return false;
     for (int k = 0; node && k < 3; k++)
         if (!(q[k] >= node[k] && q[k] <= node[3 + k]))
             return false; /* its fan would cover the neighbour's part of the surface */
     memcpy(c->p, q, sizeof c->p);
-    double f = ism_sample_grad(s, c->p, c->g);
-    double gl = ism_norm3(c->g);
+    memcpy(c->g, g, sizeof c->g);
     c->flags = ISM_FP_INTERIOR;
-    return gl > 0 && fabs(f) / gl <= 1e-6 * reach;
+    return true;
 }
 
 static double min_angle_cos(const double *a, const double *b, const double *c)
