@@ -97,7 +97,7 @@ static ismd_push q_push(ismd_queue *q, ismd_flight *f, const ismd_user_limits *l
         line_release(x, l);
         return ISMD_PUSH_USER_LIMIT;
     }
-    if (x->len >= q->capacity) {
+    if (x->len >= q->capacity + q->slack) {
         line_release(x, l);
         return ISMD_PUSH_FULL;
     }

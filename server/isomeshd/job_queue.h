@@ -61,6 +61,9 @@ typedef struct ismd_queue_ops {
 struct ismd_queue {
     const ismd_queue_ops *ops;
     size_t capacity;
+    size_t slack;       /* idle workers when a flight is pushed: that many will not wait, so
+                           they do not count against capacity (a --queue 0 daemon still runs
+                           one computation per idle worker) */
 };
 
 /* At most capacity flights waiting; user_jobs and user_running are the default per-user

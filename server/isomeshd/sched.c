@@ -103,6 +103,14 @@ static void wake_pool(ismd_sched *s)
     if (s->wake)
         s->wake(s->wake_ctx);
 }
+/* Workers ready and not computing: flights that would start at once, not wait. */
+static size_t idle_workers(const ismd_sched *s)
+{
+    long long idle = atomic_load(&s->metrics->workers_ready) - atomic_load(&s->metrics->workers_busy) -
+                     (long long)s->queue->ops->length(s->queue);
+    return idle > 0 ? (size_t)idle : 0;
+}
+
 
 ismd_submit ismd_sched_submit(ismd_sched *s, const char *key, const char *fmt,
                               ism_blob *request, const char *user,
@@ -128,6 +136,7 @@ ismd_submit ismd_sched_submit(ismd_sched *s, const char *key, const char *fmt,
     snprintf(f->user, sizeof f->user, "%s", user);
     f->waiters.prev = f->waiters.next = &f->waiters;
     f->id = s->next_id; /* before the push: the fifo order reads it */
+    s->queue->slack = idle_workers(s);
     switch (s->queue->ops->push(s->queue, f, lim)) {
     case ISMD_PUSH_OK:
         break;
@@ -317,6 +326,7 @@ ismd_flight *ismd_sched_find(ismd_sched *s, const char *name)
 bool ismd_sched_enqueue(ismd_sched *s, ismd_flight *f)
 {
     f->shared = false;
+    s->queue->slack = idle_workers(s);
     ismd_push p = s->queue->ops->push(s->queue, f, &f->lim);
     if (p == ISMD_PUSH_OK) {
         publish_queue(s);

@@ -106,6 +106,17 @@ class WorkerTest(unittest.TestCase):
             self.assertEqual(d.post("/v1/mesh", sphere(0.71)).status, 200)
             self.assertEqual(d.metric("isomesh_queue_depth"), 0)
 
+    def test_queue_of_zero_still_runs_one_computation_per_idle_worker(self):
+        with Daemon("--workers", "1", "--queue", "0") as d:
+            self.assertEqual(d.post("/v1/mesh", sphere(0.73)).status, 200)
+            running = d.post("/v1/jobs", SLOW)
+            self.assertEqual(running.status, 202)
+            self.assertTrue(d.wait_metric("isomesh_workers_busy", 1))
+            self.assert_error(d.post("/v1/jobs", sphere(0.74)), 503, "queue_full")
+            self.assertEqual(d.request("DELETE", running.json()["url"]).json()["state"], "canceled")
+            d.wait_ready()
+            self.assertEqual(d.post("/v1/mesh", sphere(0.74)).status, 200)
+
     def test_one_client_over_its_share_is_429(self):
         with Daemon("--workers", "1", "--queue", "8", "--client-jobs", "1") as d:
             first = d.post("/v1/jobs", SLOW)
