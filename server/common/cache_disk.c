@@ -53,6 +53,10 @@ typedef struct disk_tier {
     pthread_t pruner;
     bool pruner_started;
     pthread_cond_t prune_wake;
+    /* Held while files appear in or leave the directory together with the counters' update
+     * (writer: rename + count; reader: drop + uncount; pruner: scan + unlink + correction), so
+     * the pruner's correction never counts a file twice or drops one it never saw. */
+    pthread_mutex_t dir_lock;
 } disk_tier;
 
 /* ---- helpers ------------------------------------------------------------------------- */
@@ -152,8 +156,10 @@ static void forget(disk_tier *d, unsigned long long bytes)
 static void drop_corrupt(disk_tier *d, const char *rel, const char *name, const char *why,
                          long long counted)
 {
+    pthread_mutex_lock(&d->dir_lock);
     if (unlinkat(d->root_fd, rel, 0) == 0 && counted >= 0)
         forget(d, (unsigned long long)counted);
+    pthread_mutex_unlock(&d->dir_lock);
     atomic_fetch_add(&d->base.counters.corrupt, 1);
     ism_log_field f[] = {ISM_LS("name", name), ISM_LS("why", why), ISM_LS("dir", d->root_path)};
     ism_log_fields(ISM_LOG_WARN, "cache_corrupt_entry_dropped", f, sizeof f / sizeof f[0]);
@@ -308,16 +314,20 @@ static void store_entry(disk_tier *d, const char *name, const ism_blob *b)
     char shard[3] = {name[0], name[1], 0};
     if (!what && mkdirat(d->root_fd, shard, 0755) != 0 && errno != EEXIST)
         what = "mkdir", err = errno;
+    pthread_mutex_lock(&d->dir_lock);
     if (!what && renameat(d->root_fd, tmp, d->root_fd, rel) != 0)
         what = "rename", err = errno;
+    if (!what) {
+        atomic_fetch_add(&d->base.counters.bytes, (unsigned long long)HEADER_SIZE + b->len);
+        atomic_fetch_add(&d->base.counters.entries, 1);
+    }
+    pthread_mutex_unlock(&d->dir_lock);
     if (what) {
         unlinkat(d->root_fd, tmp, 0);
         log_store_failure(d, name, what, err);
         return;
     }
     atomic_fetch_add(&d->base.counters.stores, 1);
-    atomic_fetch_add(&d->base.counters.bytes, (unsigned long long)HEADER_SIZE + b->len);
-    atomic_fetch_add(&d->base.counters.entries, 1);
     pthread_mutex_lock(&d->lock);
     if (d->max_bytes && atomic_load(&d->base.counters.bytes) > d->max_bytes)
         pthread_cond_signal(&d->prune_wake);
@@ -525,6 +535,7 @@ static void prune(disk_tier *d, unsigned long long max)
 {
     entry_list l = {0};
     unsigned long long bytes, entries;
+    pthread_mutex_lock(&d->dir_lock);
     unsigned long long counted_bytes = atomic_load(&d->base.counters.bytes);
     unsigned long long counted_entries = atomic_load(&d->base.counters.entries);
     scan(d, &l, &bytes, &entries);
@@ -544,10 +555,11 @@ static void prune(disk_tier *d, unsigned long long max)
         }
     }
     free(l.v);
-    /* the scan corrects what the counters believed (files removed by hand, say); stores during
-     * the scan stay counted by the writer */
+    /* the scan corrects what the counters believed (files removed by hand, say); no store or
+     * drop happens meanwhile (dir_lock), so the correction is exact */
     atomic_fetch_add(&d->base.counters.bytes, bytes - counted_bytes - freed);
     atomic_fetch_add(&d->base.counters.entries, entries - counted_entries - removed);
+    pthread_mutex_unlock(&d->dir_lock);
     atomic_fetch_add(&d->base.counters.evictions, removed);
     if (removed) {
         ism_log_field f[] = {ISM_LI("removed", (long long)removed), ISM_LI("freed", (long long)freed),
@@ -567,9 +579,11 @@ static void *pruner_main(void *arg)
     disk_tier *d = arg;
     clean_tmp(d);
     unsigned long long bytes, entries;
+    pthread_mutex_lock(&d->dir_lock);
     scan(d, NULL, &bytes, &entries);
     atomic_store(&d->base.counters.bytes, bytes);
     atomic_store(&d->base.counters.entries, entries);
+    pthread_mutex_unlock(&d->dir_lock);
     pthread_mutex_lock(&d->lock);
     while (!d->stopping) {
         if (!over_limit(d)) {
@@ -635,6 +649,7 @@ static void disk_close(ism_cache_tier *t)
     if (d->root_fd >= 0)
         close(d->root_fd);
     pthread_mutex_destroy(&d->lock);
+    pthread_mutex_destroy(&d->dir_lock);
     pthread_cond_destroy(&d->wake);
     pthread_cond_destroy(&d->idle);
     pthread_cond_destroy(&d->prune_wake);
@@ -671,6 +686,7 @@ ism_cache_tier *ism_cache_disk_new(const char *dir, size_t max_pending)
     d->root_fd = -1;
     d->max_pending = max_pending;
     pthread_mutex_init(&d->lock, NULL);
+    pthread_mutex_init(&d->dir_lock, NULL);
     pthread_cond_init(&d->wake, NULL);
     pthread_cond_init(&d->idle, NULL);
     pthread_cond_init(&d->prune_wake, NULL);
