@@ -2,6 +2,7 @@
  * checksummed writes on one background writer thread fed by a byte-bounded queue, and a pruner
  * thread that keeps the directory under its size bound (least recently used first). */
 #include "server/common/cache_disk.h"
+#include "server/common/fd_io.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -108,21 +109,6 @@ static bool pread_all(int fd, void *buf, size_t n, off_t off)
         p += got;
         n -= (size_t)got;
         off += got;
-    }
-    return true;
-}
-
-static bool write_all(int fd, const void *buf, size_t n)
-{
-    const unsigned char *p = buf;
-    while (n) {
-        ssize_t w = write(fd, p, n);
-        if (w < 0 && errno == EINTR)
-            continue;
-        if (w <= 0)
-            return false;
-        p += w;
-        n -= (size_t)w;
     }
     return true;
 }
@@ -307,7 +293,7 @@ static void store_entry(disk_tier *d, const char *name, const ism_blob *b)
     }
     const char *what = NULL;
     int err = 0;
-    if (!write_all(fd, hdr, HEADER_SIZE) || !write_all(fd, b->data, b->len))
+    if (!ism_write_all(fd, hdr, HEADER_SIZE) || !ism_write_all(fd, b->data, b->len))
         what = "write", err = errno;
     if (close(fd) != 0 && !what)
         what = "close", err = errno;
