@@ -101,6 +101,21 @@ class Daemon:
             time.sleep(0.02)
         raise RuntimeError("isomeshd never became ready:\n" + self.log())
 
+    def wait_idle(self, timeout=30):
+        """Ready, and no worker computing. After a cancel or a deadline the pool kills the old
+        worker on its own thread, a moment after the answer: until then /readyz still counts it,
+        busy, and a request that needs an idle worker (--queue 0) would be refused."""
+        deadline = time.time() + timeout
+        while time.time() < deadline:
+            try:
+                m = self.metrics()  # one scrape: both gauges from the same moment
+                if m.get("isomesh_workers_ready", 0) >= 1 and m.get("isomesh_workers_busy", 0) == 0:
+                    return
+            except OSError:
+                pass
+            time.sleep(0.02)
+        raise RuntimeError("isomeshd never became idle:\n" + self.log())
+
     def _read_stderr(self):
         for line in self.proc.stderr:
             with self.lock:

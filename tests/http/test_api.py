@@ -275,7 +275,7 @@ class ApiTest(unittest.TestCase):
         self.assertEqual(r.json()["state"], "canceled")
         self.assertEqual(self.d.get(job["url"]).json()["state"], "canceled")
         self.assertTrue(self.d.wait_metric("isomesh_worker_restarts_total", before + 1, reason="cancel"))
-        self.d.wait_ready()
+        self.d.wait_idle()
         self.assertEqual(self.d.post("/v1/mesh", sphere(0.44)).status, 200)
 
     def test_unknown_job_is_404(self):

@@ -102,7 +102,7 @@ class WorkerTest(unittest.TestCase):
             # a cached mesh is still served while the queue is full
             for job in (running.json(), queued.json(), joined.json()):
                 self.assertEqual(d.request("DELETE", job["url"]).json()["state"], "canceled")
-            d.wait_ready()
+            d.wait_idle()
             self.assertEqual(d.post("/v1/mesh", sphere(0.71)).status, 200)
             self.assertEqual(d.metric("isomesh_queue_depth"), 0)
 
@@ -114,7 +114,7 @@ class WorkerTest(unittest.TestCase):
             self.assertTrue(d.wait_metric("isomesh_workers_busy", 1))
             self.assert_error(d.post("/v1/jobs", sphere(0.74)), 503, "queue_full")
             self.assertEqual(d.request("DELETE", running.json()["url"]).json()["state"], "canceled")
-            d.wait_ready()
+            d.wait_idle()
             self.assertEqual(d.post("/v1/mesh", sphere(0.74)).status, 200)
 
     def test_one_client_over_its_share_is_429(self):
