@@ -4,6 +4,7 @@
  * count and restrict pointers (no instruction writes a register it reads), which is what
  * lets gcc -O2 vectorise them without run-time alias or remainder checks. */
 #include "core/eval/workspace.h"
+#include "core/eval/trig_pair.h"
 #include "core/expr/scalar_ops.h"
 
 #include <math.h>
@@ -53,8 +54,17 @@ double ism_eval_point(const ism_tape *t, ism_eval_ws *ws, double x, double y, do
     r[ISM_REG_X] = x;
     r[ISM_REG_Y] = y;
     r[ISM_REG_Z] = z;
-    for (size_t i = 0; i < t->len; i++)
-        r[t->code[i].out] = point_op(&t->code[i], r);
+    ism_trig_memo trig = {.n = 0};
+    for (size_t i = 0; i < t->len; i++) {
+        const ism_instr *in = &t->code[i];
+        if (in->op == ISM_OP_SIN || in->op == ISM_OP_COS) {
+            double s, c;
+            ism_trig_pair(&trig, r[in->a], &s, &c);
+            r[in->out] = in->op == ISM_OP_SIN ? s : c;
+        } else {
+            r[in->out] = point_op(in, r);
+        }
+    }
     return r[t->result];
 }
 

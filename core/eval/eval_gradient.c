@@ -2,6 +2,7 @@
  * carries a value and its three partial derivatives. min and max follow the branch they
  * take (the derivative of the side that is the result). */
 #include "core/eval/deriv_rules.h"
+#include "core/eval/trig_pair.h"
 #include "core/eval/workspace.h"
 
 static ism_dual dual_binary(int op, ism_dual a, ism_dual b)
@@ -35,7 +36,7 @@ static ism_dual dual_binary(int op, ism_dual a, ism_dual b)
     }
 }
 
-static ism_dual dual_op(const ism_instr *in, const ism_dual *r)
+static ism_dual dual_op(const ism_instr *in, const ism_dual *r, ism_trig_memo *trig)
 {
     if (ism_op_has_reg_b(in->op))
         return dual_binary(in->op, r[in->a], r[in->b]);
@@ -44,7 +45,15 @@ static ism_dual dual_op(const ism_instr *in, const ism_dual *r)
         return c;
     }
     ism_dual a = r[in->a], out;
-    ism_chain ch = ism_unary_chain(in, a.v);
+    ism_chain ch;
+    if (in->op == ISM_OP_SIN || in->op == ISM_OP_COS) {
+        double s, c;
+        ism_trig_pair(trig, a.v, &s, &c);
+        ch.g = in->op == ISM_OP_SIN ? s : c;
+        ch.g1 = in->op == ISM_OP_SIN ? c : -s;
+    } else {
+        ch = ism_unary_chain(in, a.v);
+    }
     out.v = ch.g;
     for (int k = 0; k < 3; k++)
         out.d[k] = ch.g1 == 0.0 ? 0.0 : ch.g1 * a.d[k];
@@ -62,8 +71,9 @@ double ism_eval_gradient(const ism_tape *t, ism_eval_ws *ws, double x, double y,
     r[ISM_REG_X] = (ism_dual){ x, { 1.0, 0.0, 0.0 } };
     r[ISM_REG_Y] = (ism_dual){ y, { 0.0, 1.0, 0.0 } };
     r[ISM_REG_Z] = (ism_dual){ z, { 0.0, 0.0, 1.0 } };
+    ism_trig_memo trig = {.n = 0};
     for (size_t i = 0; i < t->len; i++)
-        r[t->code[i].out] = dual_op(&t->code[i], r);
+        r[t->code[i].out] = dual_op(&t->code[i], r, &trig);
     const ism_dual *f = &r[t->result];
     for (int k = 0; k < 3; k++)
         grad[k] = f->d[k];

@@ -35,6 +35,15 @@ bool ism_flines_push(ism_flines *l, const ism_fpoint *a, const ism_fpoint *b, in
     return true;
 }
 
+static ism_point_entry *point_entry(ism_cell_ctx *cx, const int32_t ip[3])
+{
+    uint64_t key = ism_lattice_key(ip);
+    return &cx->cache.points[ism_cache_mix(key) & (((uint64_t)1 << ISM_POINT_CACHE_BITS) - 1)];
+}
+
+/* Appends a lattice point of the boundary; its f and ∇f come later (sample_bpoints), once
+ * every memo entry the walk needs has been asked for: the lookups are cache misses, and
+ * issuing them together overlaps their latency. */
 static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3])
 {
     if (cx->nbp == cx->cap_bp) {
@@ -48,16 +57,24 @@ static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3])
     ism_bpoint *b = &cx->bp[cx->nbp++];
     memcpy(b->ip, ip, sizeof b->ip);
     ism_grid_point(&cx->tree->grid, (ism_ipt){{ip[0], ip[1], ip[2]}}, b->p);
-    uint64_t key = ism_lattice_key(ip);
-    ism_point_entry *e =
-        &cx->cache.points[ism_cache_mix(key) & (((uint64_t)1 << ISM_POINT_CACHE_BITS) - 1)];
-    if (e->key != key) {
-        e->key = key;
-        e->f = ism_sample_grad(&cx->s, b->p, e->g);
-    }
-    b->f = e->f;
-    memcpy(b->g, e->g, sizeof b->g);
+    __builtin_prefetch(point_entry(cx, ip), 1);
     return true;
+}
+
+/* f and ∇f at every boundary point, through the thread's memo. */
+static void sample_bpoints(ism_cell_ctx *cx)
+{
+    for (size_t i = 0; i < cx->nbp; i++) {
+        ism_bpoint *b = &cx->bp[i];
+        uint64_t key = ism_lattice_key(b->ip);
+        ism_point_entry *e = point_entry(cx, b->ip);
+        if (e->key != key) {
+            e->key = key;
+            e->f = ism_sample_grad(&cx->s, b->p, e->g);
+        }
+        b->f = e->f;
+        memcpy(b->g, e->g, sizeof b->g);
+    }
 }
 
 static bool push_event(ism_cell_ctx *cx, const ism_fpoint *pt, int before, int after)
@@ -97,6 +114,7 @@ static bool tile_boundary(ism_cell_ctx *cx, const ism_tile *t)
                 return false;
         }
     }
+    sample_bpoints(cx);
     return true;
 }
 
@@ -112,20 +130,36 @@ static ism_fpoint root_point(const ism_root *r, uint8_t flags)
 static void compute_segment(ism_cell_ctx *cx, const ism_bpoint *lo, const ism_bpoint *hi,
                             ism_seg_roots *out);
 
+/* Is a→b the segment's canonical direction (increasing lattice coordinate)? */
+static bool is_forward(const ism_bpoint *a, const ism_bpoint *b)
+{
+    for (int k = 0; k < 3; k++)
+        if (a->ip[k] != b->ip[k])
+            return a->ip[k] < b->ip[k];
+    return true;
+}
+
+static ism_segment_entry *segment_entry(ism_cell_ctx *cx, uint64_t ka, uint64_t kb)
+{
+    return &cx->cache.segments[ism_cache_mix(ka * 31 + kb) &
+                               (((uint64_t)1 << ISM_SEGMENT_CACHE_BITS) - 1)];
+}
+
+static void prefetch_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint *b)
+{
+    bool forward = is_forward(a, b);
+    const ism_bpoint *lo = forward ? a : b, *hi = forward ? b : a;
+    __builtin_prefetch(segment_entry(cx, ism_lattice_key(lo->ip), ism_lattice_key(hi->ip)), 1);
+}
+
 /* Roots of the segment a→b in walking order, computed in the canonical direction. */
 static void walk_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint *b,
                          ism_seg_roots *out)
 {
-    bool forward = true;
-    for (int k = 0; k < 3; k++)
-        if (a->ip[k] != b->ip[k]) {
-            forward = a->ip[k] < b->ip[k];
-            break;
-        }
+    bool forward = is_forward(a, b);
     const ism_bpoint *lo = forward ? a : b, *hi = forward ? b : a;
     uint64_t ka = ism_lattice_key(lo->ip), kb = ism_lattice_key(hi->ip);
-    ism_segment_entry *e =
-        &cx->cache.segments[ism_cache_mix(ka * 31 + kb) & (((uint64_t)1 << ISM_SEGMENT_CACHE_BITS) - 1)];
+    ism_segment_entry *e = segment_entry(cx, ka, kb);
     if (e->a == ka && e->b == kb) {
         *out = e->roots;
     } else {
@@ -182,6 +216,8 @@ static bool tile_events(ism_cell_ctx *cx)
     int *gap_after_point = malloc(n * sizeof *gap_after_point);
     if (!gap_after_point)
         return false;
+    for (size_t i = 0; i < n; i++)
+        prefetch_segment(cx, &cx->bp[i], &cx->bp[(i + 1) % n]);
     /* first pass: the sign just after each lattice point and the roots on its segment */
     for (size_t i = 0; i < n; i++) {
         const ism_bpoint *a = &cx->bp[i], *b = &cx->bp[(i + 1) % n];

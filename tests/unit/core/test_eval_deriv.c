@@ -155,3 +155,33 @@ Test(eval_deriv, closed_forms)
     ism_eval_ws_free(ws);
     ism_tape_free(t);
 }
+
+/* Sines and cosines of more arguments than the evaluators' sincos memo holds, some repeated
+ * far apart: each argument's pair is computed once per evaluation, and every term must
+ * still get its own argument's value and derivative. */
+Test(eval_deriv, sines_and_cosines_of_many_arguments)
+{
+    ism_error err;
+    const char *src = "sin(x) + cos(x) + sin(2*x)*cos(y) + cos(3*x) + sin(y) + cos(z) + sin(4*z)"
+                      " + cos(2*x) + 10*sin(-0*x) + 100*cos(-y) + sin(x)";
+    ism_tape *t = ism_tape_compile(src, NULL, 0, NULL, 0, NULL, &err);
+    cr_assert_not_null(t, "%s", err.message);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    const double pts[][3] = {{0.3, -1.2, 0.7}, {0, 0, 0}, {-2.5, 1.5, 3.25}, {1e-3, 40, -7}};
+    for (size_t i = 0; i < sizeof pts / sizeof pts[0]; i++) {
+        double x = pts[i][0], y = pts[i][1], z = pts[i][2];
+        double want = sin(x) + cos(x) + sin(2 * x) * cos(y) + cos(3 * x) + sin(y) + cos(z) +
+                      sin(4 * z) + cos(2 * x) + 10 * sin(-0.0 * x) + 100 * cos(-y) + sin(x);
+        double gx = 2 * cos(x) - sin(x) + 2 * cos(2 * x) * cos(y) - 3 * sin(3 * x) - 2 * sin(2 * x);
+        double gy = -sin(2 * x) * sin(y) + cos(y) - 100 * sin(y);
+        double gz = -sin(z) + 4 * cos(4 * z);
+        double g[3];
+        cr_expect_float_eq(ism_eval_point(t, ws, x, y, z), want, 1e-12, "point %zu", i);
+        cr_expect_float_eq(ism_eval_gradient(t, ws, x, y, z, g), want, 1e-12, "point %zu", i);
+        cr_expect_float_eq(g[0], gx, 1e-12, "d/dx at point %zu", i);
+        cr_expect_float_eq(g[1], gy, 1e-12, "d/dy at point %zu", i);
+        cr_expect_float_eq(g[2], gz, 1e-12, "d/dz at point %zu", i);
+    }
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+}
