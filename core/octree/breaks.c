@@ -93,6 +93,30 @@ static size_t first_on_line(const ism_breaks *b, uint64_t line)
     }
 }
 
+/* Index of the first key above `key` at or after `from` (keys are sorted): a galloping
+ * search, so a query near the start of a long line costs a few probes, not a scan of it. */
+static size_t first_above(const ism_breaks *b, size_t from, uint64_t key)
+{
+    size_t lo = from, step = 1;
+    while (lo < b->n && b->keys[lo] <= key) {
+        size_t next = lo + step;
+        if (next >= b->n || b->keys[next] > key) {
+            size_t hi = next < b->n ? next : b->n; /* the answer is in (lo, hi] */
+            while (hi - lo > 1) {
+                size_t mid = lo + (hi - lo) / 2;
+                if (b->keys[mid] <= key)
+                    lo = mid;
+                else
+                    hi = mid;
+            }
+            return hi;
+        }
+        lo = next;
+        step *= 2;
+    }
+    return lo;
+}
+
 bool ism_breaks_build(ism_breaks *b, const ism_octree *t)
 {
     size_t leaves = 0;
@@ -158,13 +182,11 @@ bool ism_breaks_on(const ism_breaks *b, int axis, const int32_t p[3], int32_t lo
     uint64_t line = line_key(axis, p);
     if (!push(out, lo))
         return false;
-    for (size_t i = first_on_line(b, line); i < b->n; i++) {
+    for (size_t i = first_above(b, first_on_line(b, line), line | (uint64_t)lo); i < b->n; i++) {
         uint64_t k = b->keys[i];
         if ((k & LINE_MASK) != line)
             break;
         int32_t c = (int32_t)(k & ~LINE_MASK);
-        if (c <= lo)
-            continue;
         if (c >= hi)
             break;
         if (!push(out, c))
