@@ -5,18 +5,18 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define COORD_BITS 18
-#define FIXED_BITS 17
-
-static uint64_t line_key(int axis, const int32_t p[3])
+/* A key is axis | u | v | position, each coordinate in b->cbits bits (depth + 1: lattice
+ * coordinates run from 0 to 2^depth), so that shallow trees sort in fewer radix passes. */
+static uint64_t line_key(const ism_breaks *b, int axis, const int32_t p[3])
 {
-    int u = (axis + 1) % 3, v = (axis + 2) % 3;
-    return ((uint64_t)axis << (COORD_BITS + 2 * FIXED_BITS)) |
-           ((uint64_t)p[u] << (COORD_BITS + FIXED_BITS)) | ((uint64_t)p[v] << COORD_BITS);
+    int u = (axis + 1) % 3, v = (axis + 2) % 3, cb = b->cbits;
+    return ((((uint64_t)axis << (2 * cb)) | ((uint64_t)p[u] << cb) | (uint64_t)p[v]) << cb);
 }
 
-/* LSD radix sort of 64-bit keys using 16-bit digits (the keys use 54 bits). */
-static bool radix_sort(uint64_t *a, size_t n)
+static uint64_t line_mask(const ism_breaks *b) { return ~(((uint64_t)1 << b->cbits) - 1); }
+
+/* LSD radix sort of keys of `bits` bits, 16 bits per pass. */
+static bool radix_sort(uint64_t *a, size_t n, int bits)
 {
     uint64_t *tmp = malloc((n ? n : 1) * sizeof *tmp);
     size_t *count = malloc(65536 * sizeof *count);
@@ -26,7 +26,7 @@ static bool radix_sort(uint64_t *a, size_t n)
         return false;
     }
     uint64_t *src = a, *dst = tmp;
-    for (int shift = 0; shift < 64; shift += 16) {
+    for (int shift = 0; shift < bits; shift += 16) {
         memset(count, 0, 65536 * sizeof *count);
         for (size_t i = 0; i < n; i++)
             count[(src[i] >> shift) & 0xffff]++;
@@ -42,17 +42,16 @@ static bool radix_sort(uint64_t *a, size_t n)
         src = dst;
         dst = s;
     }
-    /* four passes: the result is back in a */
+    if (src != a) /* an odd number of passes */
+        memcpy(a, src, n * sizeof *a);
     free(tmp);
     free(count);
     return true;
 }
 
-#define LINE_MASK (~(((uint64_t)1 << COORD_BITS) - 1))
-
 static size_t line_slot(const ism_breaks *b, uint64_t line)
 {
-    uint64_t h = (line >> COORD_BITS) * 0x9e3779b97f4a7c15ull;
+    uint64_t h = (line >> b->cbits) * 0x9e3779b97f4a7c15ull;
     return (size_t)(h ^ (h >> 29)) & b->line_mask;
 }
 
@@ -60,9 +59,10 @@ static size_t line_slot(const ism_breaks *b, uint64_t line)
  * search over every break point of the tree. */
 static bool index_lines(ism_breaks *b)
 {
+    uint64_t mask = line_mask(b);
     size_t lines = 0;
     for (size_t i = 0; i < b->n; i++)
-        lines += i == 0 || (b->keys[i] & LINE_MASK) != (b->keys[i - 1] & LINE_MASK);
+        lines += i == 0 || (b->keys[i] & mask) != (b->keys[i - 1] & mask);
     size_t cap = 16;
     while (cap < 2 * lines)
         cap *= 2;
@@ -71,9 +71,9 @@ static bool index_lines(ism_breaks *b)
         return false;
     b->line_mask = cap - 1;
     for (size_t i = 0; i < b->n; i++) {
-        if (i > 0 && (b->keys[i] & LINE_MASK) == (b->keys[i - 1] & LINE_MASK))
+        if (i > 0 && (b->keys[i] & mask) == (b->keys[i - 1] & mask))
             continue;
-        size_t slot = line_slot(b, b->keys[i] & LINE_MASK);
+        size_t slot = line_slot(b, b->keys[i] & mask);
         while (b->line_first[slot])
             slot = (slot + 1) & b->line_mask;
         b->line_first[slot] = (uint32_t)(i + 1);
@@ -88,7 +88,7 @@ static size_t first_on_line(const ism_breaks *b, uint64_t line)
         uint32_t f = b->line_first[slot];
         if (!f)
             return b->n;
-        if ((b->keys[f - 1] & LINE_MASK) == line)
+        if ((b->keys[f - 1] & line_mask(b)) == line)
             return f - 1;
     }
 }
@@ -119,6 +119,7 @@ static size_t first_above(const ism_breaks *b, size_t from, uint64_t key)
 
 bool ism_breaks_build(ism_breaks *b, const ism_octree *t)
 {
+    b->cbits = t->grid.depth + 1;
     size_t leaves = 0;
     for (size_t i = 0; i < t->n; i++)
         leaves += t->nodes[i].state == ISM_NODE_LEAF;
@@ -136,10 +137,10 @@ bool ism_breaks_build(ism_breaks *b, const ism_octree *t)
             for (int a = 0; a < 3; a++)
                 p[a] = nd->org[a] + ((c >> a) & 1) * s;
             for (int axis = 0; axis < 3; axis++)
-                k[n++] = line_key(axis, p) | (uint64_t)p[axis];
+                k[n++] = line_key(b, axis, p) | (uint64_t)p[axis];
         }
     }
-    if (!radix_sort(k, n)) {
+    if (!radix_sort(k, n, 2 + 3 * b->cbits)) {
         free(k);
         return false;
     }
@@ -179,14 +180,14 @@ bool ism_breaks_on(const ism_breaks *b, int axis, const int32_t p[3], int32_t lo
                    ism_coords *out)
 {
     out->n = 0;
-    uint64_t line = line_key(axis, p);
+    uint64_t line = line_key(b, axis, p), mask = line_mask(b);
     if (!push(out, lo))
         return false;
     for (size_t i = first_above(b, first_on_line(b, line), line | (uint64_t)lo); i < b->n; i++) {
         uint64_t k = b->keys[i];
-        if ((k & LINE_MASK) != line)
+        if ((k & mask) != line)
             break;
-        int32_t c = (int32_t)(k & ~LINE_MASK);
+        int32_t c = (int32_t)(k & ~mask);
         if (c >= hi)
             break;
         if (!push(out, c))

@@ -15,6 +15,7 @@ typedef struct ism_breaks {
     size_t n;
     uint32_t *line_first; /* open-addressing table: line -> index of its first key (+1) */
     size_t line_mask;
+    int cbits;            /* bits per lattice coordinate in a key */
 } ism_breaks;
 
 /* Collects the corners of every non-empty leaf on the three lattice lines through them. */
