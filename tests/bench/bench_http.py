@@ -29,6 +29,10 @@ import sys
 import tempfile
 import time
 
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "http"))
+import harness  # noqa: E402
+
 QUICK = os.environ.get("ISOMESH_TEST_QUICK") == "1"
 # ~100k triangles with every attribute (normals, two curvatures, vertex class): ~310 KB;
 # the same mesh with positions only: the size the 12,000 req/s goal was set for (~100 KB).
@@ -37,50 +41,17 @@ MESH_REQ_POSITIONS = {"preset": "kummer-16-nodes", "depth": {"max": 8},
                       "output": {"attributes": []}}
 
 
-class Daemon:
-    def __init__(self, build, tmp, *args):
-        self.log_path = os.path.join(tmp, "isomeshd-%d.log" % len(os.listdir(tmp)))
-        self.log = open(self.log_path, "w")
-        self.proc = subprocess.Popen(
-            [os.path.join(build, "isomeshd"), "--listen", "127.0.0.1:0", "--cache-dir",
-             os.path.join(tmp, "cache"), "--web-root", ""] + list(args),
-            stdout=subprocess.DEVNULL, stderr=self.log)
-        self.port = None
-        deadline = time.time() + 15
-        while self.port is None and time.time() < deadline:
-            with open(self.log_path) as f:
-                m = re.search(r"listening .*port=(\d+)", f.read())
-            if m:
-                self.port = int(m.group(1))
-            else:
-                time.sleep(0.02)
-        if self.port is None:
-            self.stop()
-            raise RuntimeError("isomeshd did not start")
-        while time.time() < deadline:
-            if self.request("GET", "/readyz")[0] == 200:
-                break
-            time.sleep(0.02)
-
-    def request(self, method, path, body=None):
-        c = http.client.HTTPConnection("127.0.0.1", self.port, timeout=300)
-        try:
-            c.request(method, path, body=json.dumps(body).encode() if body else None,
-                      headers={"Content-Type": "application/json"} if body else {})
-            r = c.getresponse()
-            return r.status, dict(r.getheaders()), r.read()
-        finally:
-            c.close()
-
-    def stop(self):
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-            try:
-                self.proc.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-        self.log.close()
+def start_daemon(build, tmp, *args):
+    """A started isomeshd (tests/http/harness.py) with its log in a file under tmp: a wrk run
+    logs 100k+ lines, which a reader thread would take CPU from the benchmark to collect."""
+    log = os.path.join(tmp, "isomeshd-%d.log" % len(os.listdir(tmp)))
+    d = harness.Daemon(*args, binary=os.path.join(build, "isomeshd"), web_root="",
+                       log_file=log, cache_dir=os.path.join(tmp, "cache"))
+    try:
+        return d.start()
+    except BaseException:
+        d.cleanup()
+        raise
 
 
 def wrk(url, conns, seconds, script=None):
@@ -156,13 +127,13 @@ http {
 
 
 def cached_url(d, req):
-    status, hdrs, body = d.request("POST", "/v1/mesh", req)
-    assert status == 200, body[:200]
-    key = hdrs["ETag"].strip('"')
-    _, _, stats = d.request("GET", "/v1/meshes/%s/stats" % key)
-    tris = json.loads(stats)["mesh"]["triangles"]
-    print("cached mesh: %s: %d triangles, %d bytes of Draco" % (json.dumps(req), tris, len(body)))
-    return "http://127.0.0.1:%d/v1/meshes/%s.drc" % (d.port, key), body
+    r = d.post("/v1/mesh", req, timeout=300)
+    assert r.status == 200, r.body[:200]
+    key = r.header("ETag").strip('"')
+    tris = d.get("/v1/meshes/%s/stats" % key, timeout=300).json()["mesh"]["triangles"]
+    print("cached mesh: %s: %d triangles, %d bytes of Draco" % (json.dumps(req), tris,
+                                                              len(r.body)))
+    return "http://127.0.0.1:%d/v1/meshes/%s.drc" % (d.port, key), r.body
 
 
 def row(name, conns, r):
@@ -206,7 +177,7 @@ def start_ceiling(build, tmp, body):
 
 
 def throughput(build, tmp):
-    d = Daemon(build, tmp, "--workers", "2")
+    d = start_daemon(build, tmp, "--workers", "2")
     nginx = ceiling = None
     try:
         url, body = cached_url(d, MESH_REQ)
@@ -249,12 +220,13 @@ def throughput(build, tmp):
                 nginx.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 nginx.kill()
-        d.stop()
+        d.stop(timeout=30)
+        d.cleanup()
 
 
 def cold(build, tmp):
     """Distinct requests (so every one computes) through the daemon and through the command."""
-    d = Daemon(build, tmp, "--workers", "1", "--job-timeout", "10m")
+    d = start_daemon(build, tmp, "--workers", "1", "--job-timeout", "10m")
     rows = []
     try:
         n = 3 if QUICK else 11
@@ -264,7 +236,7 @@ def cold(build, tmp):
                              "box": [-2 - i * 1e-4, -2, -2, 2, 2, 2]})]
         print("\n%-36s %12s %12s %12s %12s" % ("cold request (median of %d)" % n, "command ms",
                                                "daemon ms", "worker ms", "overhead ms"))
-        d.request("POST", "/v1/mesh", {"preset": "sphere", "params": {"r": 0.5}})  # warm-up
+        d.post("/v1/mesh", {"preset": "sphere", "params": {"r": 0.5}}, timeout=300)  # warm-up
         for name, make in cases:
             cmd_t, dmn_t, wrk_t = [], [], []
             for i in range(n):
@@ -279,10 +251,10 @@ def cold(build, tmp):
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
                 cmd_t.append((time.perf_counter() - t0) * 1e3)
                 t0 = time.perf_counter()
-                status, hdrs, body = d.request("POST", "/v1/mesh", req_dmn)
+                r = d.post("/v1/mesh", req_dmn, timeout=300)
                 dmn_t.append((time.perf_counter() - t0) * 1e3)
-                assert status == 200 and hdrs.get("X-Cache") == "miss", (status, body[:200])
-                m = re.search(r"worker;dur=([\d.]+)", hdrs.get("Server-Timing", ""))
+                assert r.status == 200 and r.header("X-Cache") == "miss", (r.status, r.body[:200])
+                m = re.search(r"worker;dur=([\d.]+)", r.header("Server-Timing") or "")
                 wrk_t.append(float(m.group(1)) if m else float("nan"))
             c, dm, w = statistics.median(cmd_t), statistics.median(dmn_t), statistics.median(wrk_t)
             inside = statistics.median(a - b for a, b in zip(dmn_t, wrk_t))
@@ -299,7 +271,8 @@ def cold(build, tmp):
         print("(the command and the daemon run one after the other: on a loaded machine their "
               "difference is mostly noise; the service's own part is measured inside one request)")
     finally:
-        d.stop()
+        d.stop(timeout=30)
+        d.cleanup()
 
 
 def main():

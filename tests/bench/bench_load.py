@@ -19,14 +19,10 @@
 test_load.py runs the mix for 10 s and asserts what can be asserted robustly (no errors beside
 designed refusals, bounded RSS growth). Prints figures; asserts nothing."""
 import argparse
-import http.client
-import json
 import os
 import re
 import shutil
-import signal
 import socket
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -34,68 +30,26 @@ import threading
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "http"))
+import harness  # noqa: E402
+
 MIX = os.path.join(HERE, "load_mix.lua")
 DESIGNED = {503, 429}
 CACHED_KEYS = 64
 
 
-class Daemon:
-    def __init__(self, build, tmp, *args):
-        self.log_path = os.path.join(tmp, "isomeshd-%d.log" % len(os.listdir(tmp)))
-        self.log = open(self.log_path, "w")
-        self.proc = subprocess.Popen(
-            [os.path.join(build, "isomeshd"), "--listen", "127.0.0.1:0", "--cache-dir",
-             os.path.join(tmp, "cache-%d" % len(os.listdir(tmp))), "--web-root", ""] + list(args),
-            stdout=subprocess.DEVNULL, stderr=self.log)
-        self.port = None
-        deadline = time.time() + 30
-        while self.port is None and time.time() < deadline:
-            with open(self.log_path) as f:
-                m = re.search(r"listening .*port=(\d+)", f.read())
-            if m:
-                self.port = int(m.group(1))
-            else:
-                time.sleep(0.02)
-        if self.port is None:
-            self.stop()
-            raise RuntimeError("isomeshd did not start")
-        while time.time() < deadline:
-            try:
-                if self.request("GET", "/readyz")[0] == 200:
-                    break
-            except OSError:
-                pass
-            time.sleep(0.02)
-
-    def request(self, method, path, body=None, source=None):
-        c = http.client.HTTPConnection("127.0.0.1", self.port, timeout=120,
-                                       source_address=(source, 0) if source else None)
-        try:
-            c.request(method, path, body=json.dumps(body).encode() if body else None,
-                      headers={"Content-Type": "application/json"} if body else {})
-            r = c.getresponse()
-            return r.status, dict(r.getheaders()), r.read()
-        finally:
-            c.close()
-
-    def rss_mib(self):
-        with open("/proc/%d/status" % self.proc.pid) as f:
-            for line in f:
-                if line.startswith("VmRSS:"):
-                    return int(line.split()[1]) / 1024.0
-        return float("nan")
-
-    def stop(self):
-        rc = None
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-            try:
-                rc = self.proc.wait(timeout=60)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-        self.log.close()
-        return rc
+def start_daemon(build, tmp, *args):
+    """A started isomeshd (tests/http/harness.py) with its log and cache in files under tmp: a
+    soak logs 100k+ lines, which a reader thread would take CPU and memory to collect."""
+    n = len(os.listdir(tmp))
+    d = harness.Daemon(*args, binary=os.path.join(build, "isomeshd"), web_root="",
+                       log_file=os.path.join(tmp, "isomeshd-%d.log" % n),
+                       cache_dir=os.path.join(tmp, "cache-%d" % n))
+    try:
+        return d.start(timeout=30)
+    except BaseException:
+        d.cleanup()
+        raise
 
 
 def sphere(r):
@@ -147,10 +101,10 @@ def errors_of(result):
 def warm(d, tmp, n=CACHED_KEYS):
     keys = []
     for i in range(n):
-        status, h, _ = d.request("POST", "/v1/mesh", sphere(round(0.5 + i / 200, 4)))
-        if status != 200:
-            raise RuntimeError("warm-up request failed with %d" % status)
-        keys.append(h["ETag"].strip('"'))
+        r = d.post("/v1/mesh", sphere(round(0.5 + i / 200, 4)))
+        if r.status != 200:
+            raise RuntimeError("warm-up request failed with %d" % r.status)
+        keys.append(r.header("ETag").strip('"'))
     path = os.path.join(tmp, "keys-%d.txt" % len(os.listdir(tmp)))
     with open(path, "w") as f:
         f.write("\n".join(keys) + "\n")
@@ -159,8 +113,8 @@ def warm(d, tmp, n=CACHED_KEYS):
 
 def soak(build, tmp, seconds, conns, new_share, sample_s=2.0, cache_mem="32M"):
     """Runs the mix against a fresh daemon; returns the wrk figures and the RSS series."""
-    d = Daemon(build, tmp, "--workers", "2", "--queue", "64", "--user-jobs", "100000",
-               "--cache-mem", cache_mem, "--client-conns", "0")
+    d = start_daemon(build, tmp, "--workers", "2", "--queue", "64", "--user-jobs", "100000",
+                     "--cache-mem", cache_mem, "--client-conns", "0")
     try:
         keys_file = warm(d, tmp)
         series = [(0.0, d.rss_mib())]
@@ -174,13 +128,13 @@ def soak(build, tmp, seconds, conns, new_share, sample_s=2.0, cache_mem="32M"):
             series.append((time.time() - t0, d.rss_mib()))
         result = box.get("r") or {"statuses": {}, "socket_errors": {"wrk": 1}, "rps": 0,
                                   "requests": 0, "raw": "wrk did not finish"}
-        status, _, body = d.request("GET", "/metrics")
-        result["metrics"] = body.decode() if status == 200 else ""
+        m = d.get("/metrics", timeout=120)
+        result["metrics"] = m.body.decode() if m.status == 200 else ""
         result["rss"] = series
-        result["exit"] = d.stop()
+        result["exit"] = d.stop(timeout=60)
         return result
     finally:
-        d.stop()
+        d.cleanup()
 
 
 def rss_growth(series):
@@ -200,17 +154,16 @@ def percentiles(samples):
 def normal_client(d, n, tag):
     """Latencies (ms) of n sequential cached GETs and n/10 new computations."""
     gets, posts = [], []
-    status, h, _ = d.request("POST", "/v1/mesh", sphere(0.777))
-    key = h["ETag"].strip('"')
+    key = d.post("/v1/mesh", sphere(0.777)).header("ETag").strip('"')
     for i in range(n):
         t = time.perf_counter()
-        status, _, _ = d.request("GET", "/v1/meshes/%s.drc" % key)
+        status = d.get("/v1/meshes/%s.drc" % key, timeout=120).status
         gets.append((time.perf_counter() - t) * 1e3)
         if status != 200:
             raise RuntimeError("normal GET failed: %d" % status)
         if i % 10 == 0:
             t = time.perf_counter()
-            status, _, _ = d.request("POST", "/v1/mesh", sphere(round(0.3 + tag + i / 1e5, 6)))
+            status = d.post("/v1/mesh", sphere(round(0.3 + tag + i / 1e5, 6))).status
             posts.append((time.perf_counter() - t) * 1e3)
             if status != 200:
                 raise RuntimeError("normal POST failed: %d" % status)
@@ -218,7 +171,7 @@ def normal_client(d, n, tag):
 
 
 def slowloris(build, tmp, n):
-    d = Daemon(build, tmp, "--workers", "2", "--client-conns", "64", "--conn-timeout", "30s")
+    d = start_daemon(build, tmp, "--workers", "2", "--client-conns", "64", "--conn-timeout", "30s")
     socks = []
     stop = threading.Event()
     try:
@@ -263,7 +216,8 @@ def slowloris(build, tmp, n):
         stop.set()
         for s in socks:
             s.close()
-        d.stop()
+        d.stop(timeout=60)
+        d.cleanup()
 
 
 def main():

@@ -1,8 +1,10 @@
 """harness.py — a real isomeshd for the HTTP tests: started on 127.0.0.1 with a free port (it
 binds port 0 and logs the port it got), with its own temporary cache directory, its stderr
-collected line by line, bounded waits everywhere, and always stopped (SIGTERM, then SIGKILL
-after a bound). Plus small helpers: requests with http.client, /metrics parsing, Draco
-decoding with Debian's draco_decoder, the daemon's worker processes from /proc."""
+collected line by line (or, for the benchmarks, written to a file: log_file=), bounded waits
+everywhere, and always stopped (SIGTERM, then SIGKILL after a bound). Plus small helpers:
+requests with http.client, /metrics parsing, Draco decoding with Debian's draco_decoder, the
+daemon's worker processes and resident memory from /proc."""
+import collections
 import http.client
 import json
 import os
@@ -49,9 +51,12 @@ class Response:
 
 class Daemon:
     def __init__(self, *args, cache_dir=None, web_root=None, log_format="text", binary=None,
-                 prefix=(), env=None):
+                 prefix=(), env=None, log_file=None):
         """binary: another isomeshd (default: ISOMESH_BUILD's); prefix: a command to run it
-        under (valgrind, unshare); env: its environment (default: this process's)."""
+        under (valgrind, unshare); env: its environment (default: this process's); log_file:
+        a path to write its stderr to instead of collecting it through a pipe and a reader
+        thread (benchmarks: one log line per request, no Python thread taking CPU from the
+        measurement, no log growing in memory)."""
         self.binary = binary or ISOMESHD
         self.prefix = list(prefix)
         self.env = env
@@ -60,6 +65,9 @@ class Daemon:
         self.args = list(args)
         self.web_root = web_root if web_root is not None else os.path.join(ROOT, "web")
         self.log_format = log_format
+        self.log_file = log_file
+        self.log_fh = None
+        self.reader = None
         self.lines = []
         self.lock = threading.Lock()
         self.proc = None
@@ -69,20 +77,18 @@ class Daemon:
     def start(self, timeout=15):
         cmd = self.prefix + [self.binary, "--listen", "127.0.0.1:0", "--cache-dir", self.cache_dir,
                              "--web-root", self.web_root, "--log-format", self.log_format] + self.args
-        self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                     stderr=subprocess.PIPE, text=True, errors="replace",
-                                     env=self.env)
-        self.reader = threading.Thread(target=self._read_stderr, daemon=True)
-        self.reader.start()
+        if self.log_file is None:
+            self._spawn_piped(cmd)
+        else:
+            self._spawn_to_file(cmd)
         deadline = time.time() + timeout
         while time.time() < deadline and self.port is None:
             if self.proc.poll() is not None:
                 raise RuntimeError("isomeshd exited at start:\n" + self.log())
-            with self.lock:
-                for line in self.lines:
-                    m = re.search(r'"event":"listening".*"port":(\d+)|listening .*port=(\d+)', line)
-                    if m:
-                        self.port = int(m.group(1) or m.group(2))
+            for line in self._log_lines():
+                m = re.search(r'"event":"listening".*"port":(\d+)|listening .*port=(\d+)', line)
+                if m:
+                    self.port = int(m.group(1) or m.group(2))
             time.sleep(0.02)
         if self.port is None:
             self.stop()
@@ -116,14 +122,38 @@ class Daemon:
             time.sleep(0.02)
         raise RuntimeError("isomeshd never became idle:\n" + self.log())
 
+    def _spawn_piped(self, cmd):
+        """stderr through a pipe, read line by line into self.lines by a thread."""
+        self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                     stderr=subprocess.PIPE, text=True, errors="replace",
+                                     env=self.env)
+        self.reader = threading.Thread(target=self._read_stderr, daemon=True)
+        self.reader.start()
+
+    def _spawn_to_file(self, cmd):
+        """stderr straight into log_file: no thread, nothing kept in memory."""
+        self.log_fh = open(self.log_file, "w")
+        self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                     stderr=self.log_fh, env=self.env)
+
     def _read_stderr(self):
         for line in self.proc.stderr:
             with self.lock:
                 self.lines.append(line.rstrip("\n"))
 
+    def _log_lines(self, last=None):
+        """The log so far (its last lines only, when last is given), as a list of lines."""
+        if self.log_file is None:
+            with self.lock:
+                return self.lines[-last:] if last else list(self.lines)
+        try:
+            with open(self.log_file, errors="replace") as f:
+                return [line.rstrip("\n") for line in collections.deque(f, last)]
+        except OSError:
+            return []
+
     def log(self):
-        with self.lock:
-            return "\n".join(self.lines[-200:])
+        return "\n".join(self._log_lines(last=200))
 
     def stop(self, timeout=20):
         """SIGTERM, wait (bounded), SIGKILL if need be. Returns the exit status."""
@@ -136,8 +166,12 @@ class Daemon:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait(timeout=10)
-        self.reader.join(timeout=5)
-        self.proc.stderr.close()
+        if self.reader is not None:
+            self.reader.join(timeout=5)
+            self.proc.stderr.close()
+        if self.log_fh is not None:
+            self.log_fh.close()
+            self.log_fh = None
         rc = self.proc.returncode
         self.proc = None
         return rc
@@ -212,6 +246,14 @@ class Daemon:
             except OSError:
                 pass
         return pids
+
+    def rss_mib(self):
+        """Resident set of the process started (VmRSS of /proc/PID/status), in MiB."""
+        with open("/proc/%d/status" % self.proc.pid) as f:
+            for line in f:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) / 1024.0
+        return float("nan")
 
 
 def process_alive(pid):
