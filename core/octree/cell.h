@@ -69,6 +69,7 @@ typedef struct ism_bpoint {
 typedef struct ism_fevent {
     ism_fpoint pt;
     int before, after;
+    int seg; /* the boundary segment it lies on: from bp[seg] to bp[seg + 1] */
 } ism_fevent;
 
 /* The triangles and degenerate polygons one or more nodes emit, before welding. */

@@ -77,7 +77,7 @@ static void sample_bpoints(ism_cell_ctx *cx)
     }
 }
 
-static bool push_event(ism_cell_ctx *cx, const ism_fpoint *pt, int before, int after)
+static bool push_event(ism_cell_ctx *cx, const ism_fpoint *pt, int before, int after, size_t seg)
 {
     if (cx->nev == cx->cap_ev) {
         size_t c = cx->cap_ev ? cx->cap_ev * 2 : 64;
@@ -87,7 +87,7 @@ static bool push_event(ism_cell_ctx *cx, const ism_fpoint *pt, int before, int a
         cx->ev = v;
         cx->cap_ev = c;
     }
-    cx->ev[cx->nev++] = (ism_fevent){*pt, before, after};
+    cx->ev[cx->nev++] = (ism_fevent){*pt, before, after, (int)seg};
     return true;
 }
 
@@ -235,21 +235,21 @@ static bool tile_events(ism_cell_ctx *cx)
             memcpy(z.p, a->p, sizeof z.p);
             memcpy(z.g, a->g, sizeof z.g);
             z.flags = ISM_FP_ZERO;
-            if (!push_event(cx, &z, 99, gap_after_point[i])) /* before: filled below */
+            if (!push_event(cx, &z, 99, gap_after_point[i], i)) /* before: filled below */
                 goto fail;
         }
         if (sr.n == 1 && sr.r[0].kind == ISM_ROOT_CROSS) {
             ism_fpoint q = root_point(&sr.r[0], many);
-            if (!push_event(cx, &q, sa, sb))
+            if (!push_event(cx, &q, sa, sb, i))
                 goto fail;
         } else if (sr.n == 1) {
             ism_fpoint q = root_point(&sr.r[0], ISM_FP_TOUCH | many);
-            if (!push_event(cx, &q, sa, sa))
+            if (!push_event(cx, &q, sa, sa, i))
                 goto fail;
         } else if (sr.n == 2) {
             ism_fpoint q0 = root_point(&sr.r[0], ISM_FP_PAIR | many);
             ism_fpoint q1 = root_point(&sr.r[1], ISM_FP_PAIR | many);
-            if (!push_event(cx, &q0, sa, -sa) || !push_event(cx, &q1, -sa, sa))
+            if (!push_event(cx, &q0, sa, -sa, i) || !push_event(cx, &q1, -sa, sa, i))
                 goto fail;
         }
     }
@@ -333,14 +333,29 @@ static bool is_crossing_x(ism_cell_ctx *cx, const ism_tile *t, ism_fevent *k[4],
 /* A singular point of f on the tile (f = 0, ∇f = 0, a cone's apex lying in the face),
  * searched from where the crossing lines meet; the same tile gives the same point to both
  * nodes that share it. */
-static bool find_tile_singular_point(ism_cell_ctx *cx, const ism_tile *t, const double x[3],
-                                     ism_fpoint *s)
+static void tile_rect(const ism_cell_ctx *cx, const ism_tile *t, double lo[2], double hi[2])
 {
     const ism_grid *g = &cx->tree->grid;
     int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
-    double lo[2] = {ism_grid_coord(g, u, t->u0), ism_grid_coord(g, v, t->v0)};
-    double hi[2] = {ism_grid_coord(g, u, t->u1), ism_grid_coord(g, v, t->v1)};
+    lo[0] = ism_grid_coord(g, u, t->u0);
+    lo[1] = ism_grid_coord(g, v, t->v0);
+    hi[0] = ism_grid_coord(g, u, t->u1);
+    hi[1] = ism_grid_coord(g, v, t->v1);
+}
+
+static bool find_tile_singular_point(ism_cell_ctx *cx, const ism_tile *t, const double x[3],
+                                     ism_fpoint *s)
+{
+    double lo[2], hi[2];
+    tile_rect(cx, t, lo, hi);
     return ism_find_singular_point_on_plane(&cx->s, t->axis, x, lo, hi, s);
+}
+
+static int tile_apex_off_plane_sign(ism_cell_ctx *cx, const ism_tile *t, const double x[3])
+{
+    double lo[2], hi[2];
+    tile_rect(cx, t, lo, hi);
+    return ism_apex_off_plane_sign(&cx->s, t->axis, x, lo, hi);
 }
 
 /* The paper's double-root search across the middle of t1t2: a double line lies on the face
@@ -425,6 +440,43 @@ static int family(const ism_cell_ctx *cx, const int *cross, int nc, int cut, pai
 }
 
 #define MAX_CROSS 64
+#define JOIN_SAMPLES 15
+
+/* A point of the boundary arc that starts at crossing event a and ends at event b: a lattice
+ * point between them, or, when both lie on one segment, the middle of the two. */
+static const double *arc_point(const ism_cell_ctx *cx, const ism_fevent *a, const ism_fevent *b,
+                               double mid[3])
+{
+    if (a->seg == b->seg) {
+        for (int k = 0; k < 3; k++)
+            mid[k] = 0.5 * (a->pt.p[k] + b->pt.p[k]);
+        return mid;
+    }
+    return cx->bp[((size_t)a->seg + 1) % cx->nbp].p;
+}
+
+/* Four crossings leave two boundary arcs of each sign, and the two lines either cut off the
+ * two + arcs (the − region crosses the tile and joins its arcs) or the two − arcs; the signs
+ * alone cannot tell (a saddle, or a small ellipse near a corner, as where a cone's nappe pokes
+ * through a node's edges). Returns true when f keeps the sign of the arcs starting at
+ * cross[first] and cross[first + 2] all along the straight path between points of the two:
+ * that sign's region is connected inside the tile, so the lines cut off the other sign's arcs. */
+static bool arcs_joined(ism_cell_ctx *cx, const int *cross, int first)
+{
+    const ism_fevent *e = cx->ev;
+    int sign = e[cross[first]].after;
+    double m1[3], m2[3];
+    const double *p1 = arc_point(cx, &e[cross[first]], &e[cross[first + 1]], m1);
+    const double *p2 = arc_point(cx, &e[cross[first + 2]], &e[cross[(first + 3) % 4]], m2);
+    for (int k = 1; k <= JOIN_SAMPLES; k++) {
+        double t = (double)k / (JOIN_SAMPLES + 1), q[3];
+        for (int a = 0; a < 3; a++)
+            q[a] = p1[a] + t * (p2[a] - p1[a]);
+        if (ism_sign(ism_sample_f(&cx->s, q)) != sign)
+            return false;
+    }
+    return true;
+}
 
 /* Joins crossings into lines; writes them to lines[] and returns how many. When two sheets
  * cross inside the tile, *x is set to where their lines meet and *crossed to true. */
@@ -452,7 +504,13 @@ static int pair_crossings(ism_cell_ctx *cx, const ism_tile *t, const int *cross,
         }
     }
     bool plus;
-    if (fabs(sp - sm) > 0.1 * np) {
+    bool joined0 = nc == 4 && arcs_joined(cx, cross, 0);
+    bool joined1 = nc == 4 && arcs_joined(cx, cross, 1);
+    if (joined0 != joined1) {
+        /* the region of the joined arcs' sign crosses the tile: cut off the other sign's arcs */
+        int joined_sign = cx->ev[cross[joined0 ? 0 : 1]].after;
+        plus = joined_sign < 0;
+    } else if (fabs(sp - sm) > 0.1 * np) {
         plus = sp > sm;
     } else {
         double c[3];
@@ -515,7 +573,15 @@ bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
     int nl = nc ? pair_crossings(cx, t, cross, nc, lines, &crossed, x) : 0;
     bool line_used[MAX_CROSS] = {false};
     ism_fpoint apex;
-    if (crossed && find_tile_singular_point(cx, t, x, &apex)) {
+    bool face_apex = crossed && find_tile_singular_point(cx, t, x, &apex);
+    int near_apex = crossed && !face_apex ? tile_apex_off_plane_sign(cx, t, x) : 0;
+    if (near_apex) {
+        /* not two lines but a hyperbola: its branches part the arcs of the other sign */
+        double score;
+        nl = family(cx, cross, nc, -near_apex, lines, &score);
+        crossed = false;
+        cx->stats.crossed_faces--;
+    } else if (face_apex) {
         /* the two sheets cross at a singular point of the face: all four lines meet there */
         cx->stats.singular_points++;
         for (int l = 0; l < 2; l++) {

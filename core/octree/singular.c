@@ -57,6 +57,12 @@ static bool indefinite(double m[3][3])
     return !positive && !negative;
 }
 
+/* A cone's Hessian: non-degenerate and indefinite (relative to its own size). */
+static bool cone_hessian(double m[3][3], double hn)
+{
+    return hn > 0 && isfinite(hn) && fabs(det3(m)) >= 1e-3 * hn * hn * hn && indefinite(m);
+}
+
 /* Accepts p as a singular point: on the surface, gradient vanishing, Hessian non-degenerate
  * and indefinite (relative to the Hessian's size and the node size). */
 static bool accept(ism_sampler *smp, const double p[3], double size, ism_fpoint *s)
@@ -70,7 +76,7 @@ static bool accept(ism_sampler *smp, const double p[3], double size, ism_fpoint 
         return false;
     if (!(fabs(f) <= 1e-8 * hn * size * size) || !(ism_norm3(g) <= 1e-6 * hn * size))
         return false;
-    if (fabs(det3(m)) < 1e-3 * hn * hn * hn || !indefinite(m))
+    if (!cone_hessian(m, hn))
         return false;
     memcpy(s->p, p, sizeof s->p);
     memset(s->g, 0, sizeof s->g);
@@ -112,12 +118,15 @@ bool ism_find_singular_point(ism_sampler *smp, const double lo[3], const double 
     return accept(smp, p, size, s);
 }
 
-bool ism_find_singular_point_on_plane(ism_sampler *smp, int axis, const double start[3],
-                                      const double lo[2], const double hi[2], ism_fpoint *s)
+/* Newton on the in-plane gradient from start, keeping p[axis]; true when it converges
+ * strictly inside the rectangle lo..hi. *size is the rectangle's smaller side. */
+static bool plane_critical_point(ism_sampler *smp, int axis, const double start[3],
+                                 const double lo[2], const double hi[2], double p[3],
+                                 double *size)
 {
     int u = (axis + 1) % 3, v = (axis + 2) % 3;
-    double p[3] = {start[0], start[1], start[2]};
-    double size = hi[0] - lo[0] < hi[1] - lo[1] ? hi[0] - lo[0] : hi[1] - lo[1];
+    memcpy(p, start, 3 * sizeof *p);
+    *size = hi[0] - lo[0] < hi[1] - lo[1] ? hi[0] - lo[0] : hi[1] - lo[1];
     double g[3], h[6], m[3][3];
     for (int it = 0; it < NEWTON_STEPS; it++) {
         smp->n_gradient++;
@@ -130,15 +139,35 @@ bool ism_find_singular_point_on_plane(ism_sampler *smp, int axis, const double s
         double su = -(d * g[u] - b * g[v]) / det, sv = -(a * g[v] - b * g[u]) / det;
         p[u] += su;
         p[v] += sv;
-        if (!(p[u] > lo[0] - size && p[u] < hi[0] + size && p[v] > lo[1] - size &&
-              p[v] < hi[1] + size))
+        if (!(p[u] > lo[0] - *size && p[u] < hi[0] + *size && p[v] > lo[1] - *size &&
+              p[v] < hi[1] + *size))
             return false;
-        if (fabs(su) + fabs(sv) < 1e-14 * size)
+        if (fabs(su) + fabs(sv) < 1e-14 * *size)
             break;
     }
-    double margin = 1e-9 * size;
-    if (!(p[u] > lo[0] + margin && p[u] < hi[0] - margin && p[v] > lo[1] + margin &&
-          p[v] < hi[1] - margin))
-        return false;
-    return accept(smp, p, size, s);
+    double margin = 1e-9 * *size;
+    return p[u] > lo[0] + margin && p[u] < hi[0] - margin && p[v] > lo[1] + margin &&
+           p[v] < hi[1] - margin;
+}
+
+bool ism_find_singular_point_on_plane(ism_sampler *smp, int axis, const double start[3],
+                                      const double lo[2], const double hi[2], ism_fpoint *s)
+{
+    double p[3], size;
+    return plane_critical_point(smp, axis, start, lo, hi, p, &size) && accept(smp, p, size, s);
+}
+
+int ism_apex_off_plane_sign(ism_sampler *smp, int axis, const double start[3],
+                            const double lo[2], const double hi[2])
+{
+    double p[3], size, g[3], h[6], m[3][3];
+    if (!plane_critical_point(smp, axis, start, lo, hi, p, &size))
+        return 0;
+    smp->n_gradient++;
+    double f = ism_eval_hessian(smp->tape, smp->ws, p[0], p[1], p[2], g, h);
+    full(h, m);
+    double hn = frobenius(m);
+    if (!cone_hessian(m, hn) || !(fabs(f) > 1e-8 * hn * size * size) || !isfinite(f))
+        return 0; /* on the surface (a singular point of the face), or not a cone */
+    return f > 0 ? 1 : -1;
 }

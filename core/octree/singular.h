@@ -22,4 +22,13 @@ bool ism_find_singular_point(ism_sampler *smp, const double lo[3], const double 
 bool ism_find_singular_point_on_plane(ism_sampler *smp, int axis, const double start[3],
                                       const double lo[2], const double hi[2], ism_fpoint *s);
 
+/* Two crossing lines on a tile whose crossing is no singular point: where f restricted to the
+ * plane has its critical point (Newton from start, strictly inside lo..hi) f does not vanish,
+ * but the Hessian there is a cone's — a cone's apex lies close to the plane, off it, and the
+ * plane cuts the cone in a hyperbola, not in two lines. Returns the sign of f at that point
+ * (the region of that sign runs between the hyperbola's branches), or 0 when this is not the
+ * case (a double line crossing the plane has a degenerate Hessian). */
+int ism_apex_off_plane_sign(ism_sampler *smp, int axis, const double start[3],
+                            const double lo[2], const double hi[2]);
+
 #endif

@@ -114,44 +114,73 @@ Test(paper, horn_cyclide_one_piece)
     ism_tape_free(t);
 }
 
+/* The vertices of m where f and ∇f vanish (the surface's nodes); each must be where exactly
+ * two cones of triangles meet. Returns how many there are. */
+static size_t node_vertices_with_two_cones(const ism_mesh *m, const ism_tape *t, int depth)
+{
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    size_t nodes = 0;
+    for (uint32_t v = 0; v < m->nverts; v++) {
+        const double *p = m->pos + 3 * v;
+        double g[3];
+        double f = ism_eval_gradient(t, ws, p[0], p[1], p[2], g);
+        if (fabs(f) < 1e-9 && fabs(g[0]) + fabs(g[1]) + fabs(g[2]) < 1e-6) {
+            nodes++;
+            cr_expect_eq(pf_vertex_cones(m, v), 2, "depth %d, node (%g, %g, %g): %zu cones", depth,
+                         p[0], p[1], p[2], pf_vertex_cones(m, v));
+        }
+    }
+    ism_eval_ws_free(ws);
+    return nodes;
+}
+
 /* Kummer's surface with four nodes: each node, a point where f and ∇f vanish, is one vertex
  * of the mesh where two cones of triangles meet. */
 Test(paper, kummer_nodes_are_vertices_where_two_cones_meet)
 {
     const double box[6] = {-3, -3, -3, 3, 3, 3};
     const pf_surface k4 = {kummer_expr, kummer4, 2, kummer_lets, 5};
-    ism_mesh m;
-    ism_tape *t = run_paper(&k4, box, 6, &m);
-    ism_eval_ws *ws = ism_eval_ws_new(t);
-    size_t nodes = 0;
-    for (uint32_t v = 0; v < m.nverts; v++) {
-        const double *p = m.pos + 3 * v;
-        double g[3];
-        double f = ism_eval_gradient(t, ws, p[0], p[1], p[2], g);
-        if (fabs(f) < 1e-9 && fabs(g[0]) + fabs(g[1]) + fabs(g[2]) < 1e-6) {
-            nodes++;
-            cr_expect_eq(pf_vertex_cones(&m, v), 2, "node (%g, %g, %g): %zu cones", p[0], p[1],
-                         p[2], pf_vertex_cones(&m, v));
-        }
+    for (int d = 6; d <= 7; d++) {
+        ism_mesh m;
+        ism_tape *t = run_paper(&k4, box, d, &m);
+        size_t nodes = node_vertices_with_two_cones(&m, t, d);
+        cr_expect_eq(nodes, 4, "depth %d: %zu vertices at nodes of the surface", d, nodes);
+        ism_mesh_free(&m);
+        ism_tape_free(t);
     }
-    cr_expect_eq(nodes, 4, "%zu vertices at nodes of the surface", nodes);
-    ism_eval_ws_free(ws);
-    ism_mesh_free(&m);
-    ism_tape_free(t);
 }
 
-Test(paper, kummer_both_cases)
+/* Kummer's surface with sixteen nodes (paper Fig. 5b). Eight of them lie off every lattice
+ * plane, where a node's cell is cut by both nappes of the cone: the face pairings must keep
+ * the nappes apart (a small ellipse near a corner, a hyperbola when the apex is close to a
+ * face), or the cell fans one loop through the apex and the cones fuse into one sheet. Every
+ * node is then a vertex of two cones, and the surface's pieces come out the same at each
+ * depth: the Euler characteristic and the components do not depend on the lattice. */
+Test(paper, kummer_16_nodes_two_cones_each_at_every_depth)
 {
     const double box[6] = {-3, -3, -3, 3, 3, 3};
-    const pf_surface k4 = {kummer_expr, kummer4, 2, kummer_lets, 5};
     const pf_surface k16 = {kummer_expr, kummer16, 2, kummer_lets, 5};
-    ism_mesh m;
-    ism_tape *t = run_paper(&k4, box, 7, &m);
-    ism_mesh_free(&m);
-    ism_tape_free(t);
-    t = run_paper(&k16, box, 7, &m);
-    ism_mesh_free(&m);
-    ism_tape_free(t);
+    pf_props first = {0};
+    int first_depth = 0;
+    for (int d = 7; d <= 8; d++) { /* depth 6 is too coarse for the nodes off the lattice */
+        ism_mesh m;
+        ism_tape *t = run_paper(&k16, box, d + pf_quick(), &m); /* exactly d, also when quick */
+        size_t nodes = node_vertices_with_two_cones(&m, t, d);
+        cr_expect_eq(nodes, 16, "depth %d: %zu vertices at nodes of the surface", d, nodes);
+        pf_props p;
+        pf_measure(&m, t, &p);
+        if (!first_depth) {
+            first = p;
+            first_depth = d;
+        } else {
+            cr_expect_eq(p.euler, first.euler, "Euler characteristic %ld at depth %d, %ld at %d",
+                         p.euler, d, first.euler, first_depth);
+            cr_expect_eq(p.components, first.components, "%zu components at depth %d, %zu at %d",
+                         p.components, d, first.components, first_depth);
+        }
+        ism_mesh_free(&m);
+        ism_tape_free(t);
+    }
 }
 
 /* f = xyz in a box symmetric about 0: the three coordinate planes lie on the lattice. Each
