@@ -131,6 +131,9 @@ describe('viewer and jobs', { timeout: 150000 }, () => {
       await page.fill('#token-input', 'test-token-42');
       await page.click('#token-dialog button[value=save]');
       await page.waitForSelector('#token-dialog', { state: 'hidden' });
+      // The dialog's close event (which stores the token) is a task queued after it hides.
+      await page.waitForFunction((v) => localStorage.getItem('isomesh.token') === v, 'test-token-42', { timeout: 5000 })
+        .catch(() => {});
       assert.equal(await page.evaluate(() => localStorage.getItem('isomesh.token')), 'test-token-42');
 
       seen.length = 0;
@@ -156,6 +159,8 @@ describe('viewer and jobs', { timeout: 150000 }, () => {
       await page.click('#token-button');
       await page.click('#token-dialog button[value=clear]');
       await page.waitForSelector('#token-dialog', { state: 'hidden' });
+      await page.waitForFunction(() => localStorage.getItem('isomesh.token') === null, null, { timeout: 5000 })
+        .catch(() => {});
       assert.equal(await page.evaluate(() => localStorage.getItem('isomesh.token')), null);
     } finally {
       await page.close();
