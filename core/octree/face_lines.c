@@ -526,75 +526,6 @@ static bool emit(ism_cell_ctx *cx, int a, int b, int kind)
     return ism_flines_push(&cx->lines, &cx->ev[a].pt, &cx->ev[b].pt, kind);
 }
 
-#define ARC_STEPS 16
-#define ARC_BISECTIONS 40
-
-/* Two roots on one side of the tile joined to each other: the curve is an arc that leaves
- * the side and comes back, bulging into the tile. Its chord would lie on the side itself,
- * where the tile across that side can draw the same chord for its own arc: a small closed
- * curve cut by a lattice line (a cone's nappe just past its apex) would collapse onto one
- * segment shared by four triangles. Finds the arc's point straight in from the middle of
- * the two roots (f changes sign there, within the tile); false when there is none. */
-static bool arc_point_inside(ism_cell_ctx *cx, const ism_tile *t, const ism_fpoint *a,
-                             const ism_fpoint *b, ism_fpoint *out)
-{
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
-    double lo[2], hi[2], m[3], dir[3] = {0, 0, 0};
-    tile_rect(cx, t, lo, hi);
-    for (int k = 0; k < 3; k++)
-        m[k] = 0.5 * (a->p[k] + b->p[k]);
-    /* the side both lie on, and the inward direction across it */
-    if (a->p[u] == b->p[u] && (a->p[u] == lo[0] || a->p[u] == hi[0]))
-        dir[u] = a->p[u] == lo[0] ? 1 : -1;
-    else if (a->p[v] == b->p[v] && (a->p[v] == lo[1] || a->p[v] == hi[1]))
-        dir[v] = a->p[v] == lo[1] ? 1 : -1;
-    else
-        return false;
-    double depth = dir[u] != 0 ? hi[0] - lo[0] : hi[1] - lo[1];
-    double fm = ism_sample_f(&cx->s, m);
-    if (!(fm != 0) || !isfinite(fm))
-        return false;
-    double inside = 0, outside = -1;
-    for (int j = 1; j <= ARC_STEPS && outside < 0; j++) {
-        double d = depth * j / ARC_STEPS, q[3];
-        for (int k = 0; k < 3; k++)
-            q[k] = m[k] + d * dir[k];
-        double fq = ism_sample_f(&cx->s, q);
-        if (ism_sign(fq) == ism_sign(fm))
-            inside = d;
-        else
-            outside = d;
-    }
-    if (outside < 0)
-        return false;
-    for (int it = 0; it < ARC_BISECTIONS; it++) {
-        double d = 0.5 * (inside + outside), q[3];
-        for (int k = 0; k < 3; k++)
-            q[k] = m[k] + d * dir[k];
-        if (ism_sign(ism_sample_f(&cx->s, q)) == ism_sign(fm))
-            inside = d;
-        else
-            outside = d;
-    }
-    for (int k = 0; k < 3; k++) /* dir[t->axis] is 0: the point stays in the tile's plane */
-        out->p[k] = m[k] + outside * dir[k];
-    ism_sample_grad(&cx->s, out->p, out->g);
-    out->flags = 0;
-    return true;
-}
-
-/* A regular line between events a and b; through the arc's inner point when both lie on
- * one side of the tile. */
-static bool emit_regular(ism_cell_ctx *cx, const ism_tile *t, int a, int b)
-{
-    const ism_fevent *ea = &cx->ev[a], *eb = &cx->ev[b];
-    ism_fpoint mid;
-    if (ea->seg == eb->seg && arc_point_inside(cx, t, &ea->pt, &eb->pt, &mid))
-        return ism_flines_push(&cx->lines, &ea->pt, &mid, ISM_LINE_REGULAR) &&
-               ism_flines_push(&cx->lines, &mid, &eb->pt, ISM_LINE_REGULAR);
-    return emit(cx, a, b, ISM_LINE_REGULAR);
-}
-
 /* f = 0 on the whole tile: at every boundary point and at the centre. */
 static bool is_zero_tile(ism_cell_ctx *cx, const ism_tile *t)
 {
@@ -704,7 +635,7 @@ bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
         }
     }
     for (int l = 0; l < nl; l++)
-        if (!line_used[l] && !emit_regular(cx, t, lines[l].a, lines[l].b))
+        if (!line_used[l] && !emit(cx, lines[l].a, lines[l].b, ISM_LINE_REGULAR))
             return false;
     return true;
 }
