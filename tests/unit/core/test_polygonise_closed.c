@@ -4,6 +4,8 @@
  * centre is off the surface's symmetry planes (so lattice and surface never line up). */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <stdint.h>
+#include <stdio.h>
 #include "poly_fixture.h"
 
 static const ism_param sphere_r[] = {{"r", 1}};
@@ -76,4 +78,71 @@ Test(closed, pretzel_genus2)
 {
     check_closed(&pretzel, pretzel_box, 3, 7, -2, 0);
     check_closed(&pretzel, skew_pretzel, 3, 8, -2, 0);
+}
+
+/* splitmix64: a fixed, portable stream of pseudo-random numbers for the cases below. */
+static uint64_t next_random(uint64_t *state)
+{
+    uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+static double uniform(uint64_t *state, double lo, double hi)
+{
+    return lo + (hi - lo) * (double)(next_random(state) >> 11) / 9007199254740992.0;
+}
+
+/* Writes 0.5 - (sum of 2..5 Gaussian bumps) with random centres and widths: blobs that merge,
+ * part, form necks and thin bridges, and pierce lattice lines and faces at every angle. */
+static void random_blobs(uint64_t *state, char *out, size_t cap)
+{
+    int n = 2 + (int)(next_random(state) % 4);
+    size_t len = (size_t)snprintf(out, cap, "0.5 - (");
+    for (int i = 0; i < n && len < cap; i++) {
+        double c[3], s = uniform(state, 0.15, 0.5);
+        for (int k = 0; k < 3; k++)
+            c[k] = uniform(state, -0.6, 0.6);
+        len += (size_t)snprintf(out + len, cap - len, "%sexp(-((x-%.3f)^2+(y-%.3f)^2+(z-%.3f)^2)/%.4f)",
+                                i ? " + " : "", c[0], c[1], c[2], s * s);
+    }
+    if (len < cap)
+        snprintf(out + len, cap - len, ")");
+}
+
+/* The level set of a smooth function with no critical point on it is a closed manifold,
+ * whatever its shape: no boundary edge, no edge in three or more triangles, an even Euler
+ * characteristic, vertices on the surface. Random blobs at depths 5 to 8, and one case that
+ * once broke it (a bump through a lattice line made a wedge polygon on two faces). */
+Test(closed, random_blobs_are_closed_manifolds, .timeout = 120)
+{
+    char src[1024];
+    uint64_t state = 20261122;
+    for (int i = 0; i <= 30; i++) {
+        if (i < 30)
+            random_blobs(&state, src, sizeof src);
+        else
+            snprintf(src, sizeof src, "0.5 - (exp(-((x-0.299)^2+(y-0.431)^2+(z-0.067)^2)/0.027) + "
+                     "exp(-((x-0.372)^2+(y+0.366)^2+(z+0.364)^2)/0.188) + "
+                     "exp(-((x-0.512)^2+(y-0.578)^2+(z-0.328)^2)/0.116))");
+        int depth = i < 30 ? 5 + i % 4 - pf_quick() : 5;
+        const pf_surface s = {src, NULL, 0, NULL, 0};
+        ism_tape *t = pf_compile(&s);
+        ism_mesh m;
+        ism_poly_stats st;
+        pf_run(t, cube15, 3, depth, 0, &m, &st);
+        pf_props p;
+        pf_measure(&m, t, &p);
+        cr_expect_eq(p.boundary_edges, 0, "case %d depth %d: %zu boundary edges (%s)", i, depth,
+                     p.boundary_edges, src);
+        cr_expect_eq(p.nonmanifold_edges, 0, "case %d depth %d: %zu non-manifold edges (%s)", i,
+                     depth, p.nonmanifold_edges, src);
+        cr_expect_eq(p.euler % 2, 0, "case %d depth %d: odd Euler characteristic %ld (%s)", i,
+                     depth, p.euler, src);
+        cr_expect_leq(p.max_dist, 0.05 * pf_cell(cube15, depth), "case %d: vertex %g off (%s)", i,
+                      p.max_dist, src);
+        ism_mesh_free(&m);
+        ism_tape_free(t);
+    }
 }
