@@ -35,12 +35,6 @@ bool ism_flines_push(ism_flines *l, const ism_fpoint *a, const ism_fpoint *b, in
     return true;
 }
 
-static ism_point_entry *point_entry(ism_cell_ctx *cx, const int32_t ip[3])
-{
-    uint64_t key = ism_lattice_key(ip);
-    return &cx->cache.points[ism_cache_mix(key) & (((uint64_t)1 << ISM_POINT_CACHE_BITS) - 1)];
-}
-
 /* Appends a lattice point of the boundary; its f and ∇f come later (sample_bpoints), once
  * every memo entry the walk needs has been asked for: the lookups are cache misses, and
  * issuing them together overlaps their latency. */
@@ -57,7 +51,7 @@ static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3])
     ism_bpoint *b = &cx->bp[cx->nbp++];
     memcpy(b->ip, ip, sizeof b->ip);
     ism_grid_point(&cx->tree->grid, (ism_ipt){{ip[0], ip[1], ip[2]}}, b->p);
-    __builtin_prefetch(point_entry(cx, ip), 1);
+    __builtin_prefetch(ism_point_slot(cx->cache.points, ISM_POINT_CACHE_BITS, ip), 1);
     return true;
 }
 
@@ -66,12 +60,8 @@ static void sample_bpoints(ism_cell_ctx *cx)
 {
     for (size_t i = 0; i < cx->nbp; i++) {
         ism_bpoint *b = &cx->bp[i];
-        uint64_t key = ism_lattice_key(b->ip);
-        ism_point_entry *e = point_entry(cx, b->ip);
-        if (e->key != key) {
-            e->key = key;
-            e->f = ism_sample_grad(&cx->s, b->p, e->g);
-        }
+        const ism_point_entry *e =
+            ism_point_memo(cx->cache.points, ISM_POINT_CACHE_BITS, b->ip, b->p, &cx->s);
         b->f = e->f;
         memcpy(b->g, e->g, sizeof b->g);
     }
@@ -330,32 +320,17 @@ static bool is_crossing_x(ism_cell_ctx *cx, const ism_tile *t, ism_fevent *k[4],
     return fabs(f) <= 0.05 * gbar * tile_size(cx, t) && ism_norm3(g) <= 0.25 * gbar;
 }
 
-/* A singular point of f on the tile (f = 0, ∇f = 0, a cone's apex lying in the face),
- * searched from where the crossing lines meet; the same tile gives the same point to both
- * nodes that share it. */
-static void tile_rect(const ism_cell_ctx *cx, const ism_tile *t, double lo[2], double hi[2])
+/* Where the X's lines meet (x): a singular point of the face (the same tile gives the same
+ * point to both nodes that share it), a cone's apex just off the face, or neither — see
+ * ism_plane_crossing. */
+static int tile_plane_crossing(ism_cell_ctx *cx, const ism_tile *t, const double x[3],
+                               ism_fpoint *apex)
 {
     const ism_grid *g = &cx->tree->grid;
     int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
-    lo[0] = ism_grid_coord(g, u, t->u0);
-    lo[1] = ism_grid_coord(g, v, t->v0);
-    hi[0] = ism_grid_coord(g, u, t->u1);
-    hi[1] = ism_grid_coord(g, v, t->v1);
-}
-
-static bool find_tile_singular_point(ism_cell_ctx *cx, const ism_tile *t, const double x[3],
-                                     ism_fpoint *s)
-{
-    double lo[2], hi[2];
-    tile_rect(cx, t, lo, hi);
-    return ism_find_singular_point_on_plane(&cx->s, t->axis, x, lo, hi, s);
-}
-
-static int tile_apex_off_plane_sign(ism_cell_ctx *cx, const ism_tile *t, const double x[3])
-{
-    double lo[2], hi[2];
-    tile_rect(cx, t, lo, hi);
-    return ism_apex_off_plane_sign(&cx->s, t->axis, x, lo, hi);
+    double lo[2] = {ism_grid_coord(g, u, t->u0), ism_grid_coord(g, v, t->v0)};
+    double hi[2] = {ism_grid_coord(g, u, t->u1), ism_grid_coord(g, v, t->v1)};
+    return ism_plane_crossing(&cx->s, t->axis, x, lo, hi, apex);
 }
 
 /* The paper's double-root search across the middle of t1t2: a double line lies on the face
@@ -479,11 +454,12 @@ static bool arcs_joined(ism_cell_ctx *cx, const int *cross, int first)
 }
 
 /* Joins crossings into lines; writes them to lines[] and returns how many. When two sheets
- * cross inside the tile, *x is set to where their lines meet and *crossed to true. */
+ * cross at a singular point of the tile, the two lines are the X's and *has_apex is set with
+ * the point in *apex: the lines go through it. */
 static int pair_crossings(ism_cell_ctx *cx, const ism_tile *t, const int *cross, int nc,
-                          pair *lines, bool *crossed, double x[3])
+                          pair *lines, ism_fpoint *apex, bool *has_apex)
 {
-    *crossed = false;
+    *has_apex = false;
     if (nc == 2) {
         lines[0] = (pair){cross[0], cross[1]};
         return 1;
@@ -492,12 +468,19 @@ static int pair_crossings(ism_cell_ctx *cx, const ism_tile *t, const int *cross,
     double sp, sm;
     int np = family(cx, cross, nc, +1, fp, &sp);
     int nm = family(cx, cross, nc, -1, fm, &sm);
+    double x[3];
     if (nc == 4) {
         ism_fevent *k[4] = {&cx->ev[cross[0]], &cx->ev[cross[1]], &cx->ev[cross[2]],
                             &cx->ev[cross[3]]};
         if (is_crossing_x(cx, t, k, x)) {
+            int kind = tile_plane_crossing(cx, t, x, apex);
+            if (kind == 1 || kind == -1) {
+                /* not two lines but a hyperbola: its branches part the arcs of the other sign */
+                memcpy(lines, kind > 0 ? fm : fp, (size_t)(kind > 0 ? nm : np) * sizeof *lines);
+                return kind > 0 ? nm : np;
+            }
             cx->stats.crossed_faces++;
-            *crossed = true;
+            *has_apex = kind == ISM_PLANE_APEX;
             lines[0] = (pair){cross[0], cross[2]};
             lines[1] = (pair){cross[1], cross[3]};
             return 2;
@@ -568,20 +551,11 @@ bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
         nc--;
     }
     pair lines[MAX_CROSS];
-    bool crossed = false;
-    double x[3];
-    int nl = nc ? pair_crossings(cx, t, cross, nc, lines, &crossed, x) : 0;
-    bool line_used[MAX_CROSS] = {false};
     ism_fpoint apex;
-    bool face_apex = crossed && find_tile_singular_point(cx, t, x, &apex);
-    int near_apex = crossed && !face_apex ? tile_apex_off_plane_sign(cx, t, x) : 0;
-    if (near_apex) {
-        /* not two lines but a hyperbola: its branches part the arcs of the other sign */
-        double score;
-        nl = family(cx, cross, nc, -near_apex, lines, &score);
-        crossed = false;
-        cx->stats.crossed_faces--;
-    } else if (face_apex) {
+    bool has_apex = false;
+    int nl = nc ? pair_crossings(cx, t, cross, nc, lines, &apex, &has_apex) : 0;
+    bool line_used[MAX_CROSS] = {false};
+    if (has_apex) {
         /* the two sheets cross at a singular point of the face: all four lines meet there */
         cx->stats.singular_points++;
         for (int l = 0; l < 2; l++) {

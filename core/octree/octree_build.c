@@ -94,14 +94,9 @@ static void node_corners(const ism_grid *g, thread_state *th, const ism_tape *ta
             ip[a] = nd->org[a] + ((c >> a) & 1) * s;
             k->p[c][a] = ism_grid_coord(g, a, ip[a]);
         }
-        uint64_t key = ism_lattice_key(ip);
-        ism_point_entry *e =
-            &th->corners[ism_cache_mix(key) & (((uint64_t)1 << CORNER_CACHE_BITS) - 1)];
-        if (e->key != key) {
-            /* the full tape and a shortened one agree inside the node: either will do */
-            e->key = key;
-            e->f = ism_sample_grad(&th->s, k->p[c], e->g);
-        }
+        /* the full tape and a shortened one agree inside the node: either will do */
+        const ism_point_entry *e =
+            ism_point_memo(th->corners, CORNER_CACHE_BITS, ip, k->p[c], &th->s);
         k->f[c] = e->f;
         memcpy(k->g[c], e->g, sizeof k->g[c]);
     }

@@ -63,24 +63,42 @@ static bool cone_hessian(double m[3][3], double hn)
     return hn > 0 && isfinite(hn) && fabs(det3(m)) >= 1e-3 * hn * hn * hn && indefinite(m);
 }
 
-/* Accepts p as a singular point: on the surface, gradient vanishing, Hessian non-degenerate
- * and indefinite (relative to the Hessian's size and the node size). */
-static bool accept(ism_sampler *smp, const double p[3], double size, ism_fpoint *s)
+/* Is p, with f, ∇f and Hessian m there, a singular point of the surface: on it, gradient
+ * vanishing, Hessian non-degenerate and indefinite (relative to the Hessian's size and the
+ * node size)? */
+static bool is_singular(double f, const double g[3], double m[3][3], double hn, double size)
 {
-    double g[3], h[6], m[3][3];
-    smp->n_gradient++;
-    double f = ism_eval_hessian(smp->tape, smp->ws, p[0], p[1], p[2], g, h);
-    full(h, m);
-    double hn = frobenius(m);
-    if (!(hn > 0) || !isfinite(hn))
-        return false;
-    if (!(fabs(f) <= 1e-8 * hn * size * size) || !(ism_norm3(g) <= 1e-6 * hn * size))
-        return false;
-    if (!cone_hessian(m, hn))
-        return false;
+    return fabs(f) <= 1e-8 * hn * size * size && ism_norm3(g) <= 1e-6 * hn * size &&
+           cone_hessian(m, hn);
+}
+
+static void singular_point(const double p[3], ism_fpoint *s)
+{
     memcpy(s->p, p, sizeof s->p);
     memset(s->g, 0, sizeof s->g);
     s->flags = ISM_FP_INTERIOR | ISM_FP_SINGULAR;
+}
+
+/* f, ∇f and the Hessian at p, with the Hessian's size. */
+static double jet_at(ism_sampler *smp, const double p[3], double g[3], double m[3][3],
+                     double *hn)
+{
+    double h[6];
+    smp->n_gradient++;
+    double f = ism_eval_hessian(smp->tape, smp->ws, p[0], p[1], p[2], g, h);
+    full(h, m);
+    *hn = frobenius(m);
+    return f;
+}
+
+/* Accepts p as a singular point (see is_singular). */
+static bool accept(ism_sampler *smp, const double p[3], double size, ism_fpoint *s)
+{
+    double g[3], m[3][3], hn;
+    double f = jet_at(smp, p, g, m, &hn);
+    if (!is_singular(f, g, m, hn, size))
+        return false;
+    singular_point(p, s);
     return true;
 }
 
@@ -150,24 +168,18 @@ static bool plane_critical_point(ism_sampler *smp, int axis, const double start[
            p[v] < hi[1] - margin;
 }
 
-bool ism_find_singular_point_on_plane(ism_sampler *smp, int axis, const double start[3],
-                                      const double lo[2], const double hi[2], ism_fpoint *s)
+int ism_plane_crossing(ism_sampler *smp, int axis, const double start[3], const double lo[2],
+                       const double hi[2], ism_fpoint *s)
 {
-    double p[3], size;
-    return plane_critical_point(smp, axis, start, lo, hi, p, &size) && accept(smp, p, size, s);
-}
-
-int ism_apex_off_plane_sign(ism_sampler *smp, int axis, const double start[3],
-                            const double lo[2], const double hi[2])
-{
-    double p[3], size, g[3], h[6], m[3][3];
+    double p[3], size, g[3], m[3][3], hn;
     if (!plane_critical_point(smp, axis, start, lo, hi, p, &size))
         return 0;
-    smp->n_gradient++;
-    double f = ism_eval_hessian(smp->tape, smp->ws, p[0], p[1], p[2], g, h);
-    full(h, m);
-    double hn = frobenius(m);
+    double f = jet_at(smp, p, g, m, &hn);
+    if (is_singular(f, g, m, hn, size)) {
+        singular_point(p, s);
+        return ISM_PLANE_APEX;
+    }
     if (!cone_hessian(m, hn) || !(fabs(f) > 1e-8 * hn * size * size) || !isfinite(f))
-        return 0; /* on the surface (a singular point of the face), or not a cone */
+        return 0; /* a double line crossing the plane (degenerate Hessian), or no cone */
     return f > 0 ? 1 : -1;
 }

@@ -15,20 +15,20 @@
 bool ism_find_singular_point(ism_sampler *smp, const double lo[3], const double hi[3],
                              ism_fpoint *s);
 
-/* The same on the lattice plane through start perpendicular to `axis` (start[axis] stays
- * as it is, exactly): Newton on the in-plane gradient from start; accepted strictly inside
- * the rectangle lo..hi (in the plane's two other axes, in order (axis+1)%3, (axis+2)%3),
- * with the full gradient vanishing and the Hessian non-degenerate and indefinite. */
-bool ism_find_singular_point_on_plane(ism_sampler *smp, int axis, const double start[3],
-                                      const double lo[2], const double hi[2], ism_fpoint *s);
-
-/* Two crossing lines on a tile whose crossing is no singular point: where f restricted to the
- * plane has its critical point (Newton from start, strictly inside lo..hi) f does not vanish,
- * but the Hessian there is a cone's — a cone's apex lies close to the plane, off it, and the
- * plane cuts the cone in a hyperbola, not in two lines. Returns the sign of f at that point
- * (the region of that sign runs between the hyperbola's branches), or 0 when this is not the
- * case (a double line crossing the plane has a degenerate Hessian). */
-int ism_apex_off_plane_sign(ism_sampler *smp, int axis, const double start[3],
-                            const double lo[2], const double hi[2]);
+/* Where two crossing lines meet on a tile (start), on the lattice plane through start
+ * perpendicular to `axis` (start[axis] stays as it is, exactly): Newton on the in-plane
+ * gradient to f's critical point on the plane, strictly inside the rectangle lo..hi (in the
+ * plane's two other axes, in order (axis+1)%3, (axis+2)%3). Returns
+ *   ISM_PLANE_APEX, with the point in *s, when it is a singular point of the surface (full
+ *     gradient vanishing, Hessian non-degenerate and indefinite: a cone's apex in the face,
+ *     where the four lines meet);
+ *   +1 or -1, the sign of f there, when f does not vanish but the Hessian is a cone's: the
+ *     apex lies just off the plane, which cuts the cone in a hyperbola, not in two lines —
+ *     the region of that sign runs between its branches;
+ *   0 otherwise (two sheets crossing along a double line, whose Hessian is degenerate, or no
+ *     critical point in the rectangle). */
+#define ISM_PLANE_APEX 2
+int ism_plane_crossing(ism_sampler *smp, int axis, const double start[3], const double lo[2],
+                       const double hi[2], ism_fpoint *s);
 
 #endif
