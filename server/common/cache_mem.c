@@ -2,6 +2,7 @@
  * doubly linked recency list; a hit moves the entry to the front, a store evicts from the
  * back until the byte budget holds. One mutex; blobs are released outside it. */
 #include "server/common/cache_mem.h"
+#include "server/common/text_hash.h"
 
 #include <pthread.h>
 #include <stdint.h>
@@ -27,19 +28,9 @@ typedef struct mem_tier {
     size_t used, capacity;
 } mem_tier;
 
-static uint64_t hash_name(const char *s)
-{
-    uint64_t h = 1469598103934665603ULL;
-    for (; *s; s++) {
-        h ^= (unsigned char)*s;
-        h *= 1099511628211ULL;
-    }
-    return h;
-}
-
 static entry **slot_of(mem_tier *m, const char *name)
 {
-    entry **e = &m->buckets[hash_name(name) & (m->nbuckets - 1)];
+    entry **e = &m->buckets[ism_text_hash(name) & (m->nbuckets - 1)];
     while (*e && strcmp((*e)->name, name) != 0)
         e = &(*e)->hnext;
     return e;
@@ -79,7 +70,7 @@ static void grow_table(mem_tier *m)
         entry *e = m->buckets[i];
         while (e) {
             entry *next = e->hnext;
-            entry **s = &nb[hash_name(e->name) & (n - 1)];
+            entry **s = &nb[ism_text_hash(e->name) & (n - 1)];
             e->hnext = *s;
             *s = e;
             e = next;

@@ -209,6 +209,12 @@ enum MHD_Result ismd_wait_for(ismd_req *r, const char *key, const char *fmt,
         return MHD_YES;
     }
     ismd_sched_unlock(&s->sched);
+    return ismd_respond_refused(r, st);
+}
+
+/* The answer to a computation the scheduler would not take (anything but NEW or JOINED). */
+enum MHD_Result ismd_respond_refused(ismd_req *r, ismd_submit st)
+{
     switch (st) {
     case ISMD_SUBMIT_QUEUE_FULL:
         return ismd_respond_error(r, 503, "queue_full",

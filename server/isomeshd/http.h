@@ -112,6 +112,8 @@ enum MHD_Result ismd_respond_error_blob(ismd_req *r, unsigned status, ism_blob *
 enum MHD_Result ismd_respond_json(ismd_req *r, unsigned status, const char *json);
 /* 401 with WWW-Authenticate: the caller needs a (valid) bearer token. */
 enum MHD_Result ismd_respond_unauthorized(ismd_req *r);
+/* 503, 429 or 500 for a computation the scheduler refused (ismd_sched_submit's answer). */
+enum MHD_Result ismd_respond_refused(ismd_req *r, ismd_submit st);
 
 /* Joins or starts the flight for key.fmt (request = canonical request JSON) and suspends
  * the connection; on_ready answers once it ends. A memory-cache hit found under the lock

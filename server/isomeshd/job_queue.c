@@ -3,6 +3,7 @@
  * A line exists while its user has anything queued or running, so the lines are bounded by
  * the queue's capacity plus the workers, and pop scans them (a few dozen on a lab server). */
 #include "server/isomeshd/job_queue.h"
+#include "server/common/text_hash.h"
 
 #include <stdint.h>
 #include <stdio.h>
@@ -33,19 +34,9 @@ typedef struct uqueue {
     unsigned long long turns;
 } uqueue;
 
-static uint64_t hash_user(const char *s)
-{
-    uint64_t h = 1469598103934665603ULL;
-    for (; *s; s++) {
-        h ^= (unsigned char)*s;
-        h *= 1099511628211ULL;
-    }
-    return h;
-}
-
 static ismd_qline **line_slot(uqueue *x, const char *user)
 {
-    ismd_qline **l = &x->buckets[hash_user(user) % NBUCKETS];
+    ismd_qline **l = &x->buckets[ism_text_hash(user) % NBUCKETS];
     while (*l && strcmp((*l)->user, user) != 0)
         l = &(*l)->hnext;
     return l;

@@ -101,19 +101,7 @@ enum MHD_Result ismd_route_jobs_post(ismd_req *r)
     }
     ismd_jobs_discard(s->jobs, job);
     ismd_sched_unlock(&s->sched);
-    switch (st) {
-    case ISMD_SUBMIT_QUEUE_FULL:
-        return ismd_respond_error(r, 503, "queue_full",
-                                  "every worker is busy and the queue is full; retry later");
-    case ISMD_SUBMIT_CLIENT_LIMIT:
-        return ismd_respond_error(r, 429, "too_many_requests",
-                                  "too many computations of yours are queued or running "
-                                  "(--user-jobs); wait for one to finish");
-    case ISMD_SUBMIT_DRAINING:
-        return ismd_respond_error(r, 503, "shutting_down", "the server is shutting down");
-    default:
-        return ismd_respond_error(r, 500, "out_of_memory", "the server ran out of memory");
-    }
+    return ismd_respond_refused(r, st);
 }
 
 enum MHD_Result ismd_route_jobs_list(ismd_req *r)
@@ -156,30 +144,32 @@ static bool may_touch(ismd_req *r, ismd_job *job, bool cancel, enum MHD_Result *
     return true;
 }
 
-enum MHD_Result ismd_route_job_get(ismd_req *r)
+/* The request's job with the scheduler locked: returns it with the lock held, or NULL with
+ * the lock released and *ret the answer given (404 unknown, 403 not the caller's). */
+static ismd_job *touch_job(ismd_req *r, bool cancel, enum MHD_Result *ret)
 {
     ismd_sched_lock(&r->srv->sched);
     ismd_job *job = ismd_jobs_find(r->srv->jobs, r->id);
     if (!job) {
         ismd_sched_unlock(&r->srv->sched);
-        return job_not_found(r);
+        *ret = job_not_found(r);
+        return NULL;
     }
+    return may_touch(r, job, cancel, ret) ? job : NULL;
+}
+
+enum MHD_Result ismd_route_job_get(ismd_req *r)
+{
     enum MHD_Result ret;
-    if (!may_touch(r, job, false, &ret))
-        return ret;
-    return answer_job_locked(r, 200, job, false);
+    ismd_job *job = touch_job(r, false, &ret);
+    return job ? answer_job_locked(r, 200, job, false) : ret;
 }
 
 enum MHD_Result ismd_route_job_delete(ismd_req *r)
 {
-    ismd_sched_lock(&r->srv->sched);
-    ismd_job *job = ismd_jobs_find(r->srv->jobs, r->id);
-    if (!job) {
-        ismd_sched_unlock(&r->srv->sched);
-        return job_not_found(r);
-    }
     enum MHD_Result ret;
-    if (!may_touch(r, job, true, &ret))
+    ismd_job *job = touch_job(r, true, &ret);
+    if (!job)
         return ret;
     ismd_jobs_cancel(r->srv->jobs, &r->srv->sched, job);
     return answer_job_locked(r, 200, job, false);
@@ -188,15 +178,12 @@ enum MHD_Result ismd_route_job_delete(ismd_req *r)
 enum MHD_Result ismd_route_job_events(ismd_req *r)
 {
     ismd_server *s = r->srv;
-    ismd_sched_lock(&s->sched);
-    ismd_job *job = ismd_jobs_find(s->jobs, r->id);
     enum MHD_Result ret;
-    if (job && !may_touch(r, job, false, &ret))
-        return ret;
-    struct MHD_Response *resp = job ? ismd_jobs_stream(s->jobs, &s->sched, job, r->conn) : NULL;
-    ismd_sched_unlock(&s->sched);
+    ismd_job *job = touch_job(r, false, &ret);
     if (!job)
-        return job_not_found(r);
+        return ret;
+    struct MHD_Response *resp = ismd_jobs_stream(s->jobs, &s->sched, job, r->conn);
+    ismd_sched_unlock(&s->sched);
     if (!resp)
         return MHD_NO;
     return ismd_send(r, 200, resp);

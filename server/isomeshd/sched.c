@@ -2,6 +2,7 @@
  * progress, waiter lists, deadlines and the draining state; per-user counts and limits are
  * the queue's (job_queue.h). */
 #include "server/isomeshd/sched.h"
+#include "server/common/text_hash.h"
 
 #include <limits.h>
 #include <stdio.h>
@@ -16,16 +17,6 @@ long long ismd_now_ns(void)
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (long long)ts.tv_sec * 1000000000LL + ts.tv_nsec;
-}
-
-static uint64_t hash_name(const char *s)
-{
-    uint64_t h = 1469598103934665603ULL;
-    for (; *s; s++) {
-        h ^= (unsigned char)*s;
-        h *= 1099511628211ULL;
-    }
-    return h;
 }
 
 bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s,
@@ -67,7 +58,7 @@ void ismd_sched_unlock(ismd_sched *s)
 
 static ismd_flight **flight_slot(ismd_sched *s, const char *name)
 {
-    ismd_flight **f = &s->table[hash_name(name) & (s->nbuckets - 1)];
+    ismd_flight **f = &s->table[ism_text_hash(name) & (s->nbuckets - 1)];
     while (*f && strcmp((*f)->name, name) != 0)
         f = &(*f)->hnext;
     return f;

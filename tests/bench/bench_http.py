@@ -74,6 +74,26 @@ def wrk(url, conns, seconds, script=None):
             "bad": int(errors.group(1)) if errors else 0, "sock": sock.group(1) if sock else ""}
 
 
+def wait_serving(p, port, path):
+    """(p, its URL) once process p answers GET path with 200 on 127.0.0.1:port (10 s at
+    most); else p is killed and (None, None) returned."""
+    deadline = time.time() + 10
+    while time.time() < deadline:
+        try:
+            c = http.client.HTTPConnection("127.0.0.1", port, timeout=2)
+            c.request("GET", path)
+            ok = c.getresponse().status == 200
+            c.close()
+            if ok:
+                return p, "http://127.0.0.1:%d%s" % (port, path)
+        except OSError:
+            pass
+        time.sleep(0.05)
+    p.kill()
+    p.wait()
+    return None, None
+
+
 def start_nginx(tmp, body):
     if not shutil.which("nginx"):
         return None, None
@@ -110,20 +130,7 @@ http {
 """ % {"root": root, "port": port})
     p = subprocess.Popen(["nginx", "-c", conf, "-p", root, "-g", "daemon off;"],
                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    deadline = time.time() + 10
-    while time.time() < deadline:
-        try:
-            c = http.client.HTTPConnection("127.0.0.1", port, timeout=2)
-            c.request("GET", "/m.drc")
-            ok = c.getresponse().status == 200
-            c.close()
-            if ok:
-                return p, "http://127.0.0.1:%d/m.drc" % port
-        except OSError:
-            time.sleep(0.05)
-    p.kill()
-    p.wait()
-    return None, None
+    return wait_serving(p, port, "/m.drc")
 
 
 def cached_url(d, req):
@@ -160,20 +167,7 @@ def start_ceiling(build, tmp, body):
         f.write(body)
     port = free_port()
     p = subprocess.Popen([prog, str(port), path], stdout=subprocess.DEVNULL)
-    deadline = time.time() + 10
-    while time.time() < deadline:
-        try:
-            c = http.client.HTTPConnection("127.0.0.1", port, timeout=2)
-            c.request("GET", "/")
-            ok = c.getresponse().status == 200
-            c.close()
-            if ok:
-                return p, "http://127.0.0.1:%d/" % port
-        except OSError:
-            time.sleep(0.05)
-    p.kill()
-    p.wait()
-    return None, None
+    return wait_serving(p, port, "/")
 
 
 def throughput(build, tmp):

@@ -5,7 +5,6 @@ configuration generated from deploy/nginx/isomesh.conf (the upstreams pointed at
 its own prefix, pid, logs and temporary directories). Every process is started and stopped
 here, with bounded waits. Plus a minimal Redis client (RESP over a socket, stdlib only)."""
 import gzip
-import http.client
 import os
 import pwd
 import re
@@ -267,19 +266,7 @@ class Nginx:
             return ""
 
     def request(self, method, path, body=None, headers=None, timeout=60, source="127.0.0.1"):
-        conn = http.client.HTTPConnection("127.0.0.1", self.port, timeout=timeout,
-                                          source_address=(source, 0))
-        try:
-            hdrs = dict(headers or {})
-            if isinstance(body, (dict, list)):
-                import json
-                body = json.dumps(body).encode()
-                hdrs.setdefault("Content-Type", "application/json")
-            conn.request(method, path, body=body, headers=hdrs)
-            r = conn.getresponse()
-            return harness.Response(r.status, r.getheaders(), r.read())
-        finally:
-            conn.close()
+        return harness.http_request(self.port, method, path, body, headers, timeout, source)
 
     def get(self, path, headers=None, timeout=60, source="127.0.0.1"):
         return self.request("GET", path, headers=headers, timeout=timeout, source=source)

@@ -14,7 +14,6 @@ import json
 import os
 import sys
 import threading
-import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -33,20 +32,6 @@ def slow(tag):
     shift = 0.001 * tag
     return {"preset": "gyroid-ball", "depth": {"max": 9},
             "box": [-1.5 - shift, -1.5, -1.5, 1.5, 1.5, 1.5]}
-
-
-def in_background(fn):
-    box = {}
-
-    def run():
-        try:
-            box["result"] = fn()
-        except Exception as e:  # reported by the test that joins
-            box["error"] = e
-
-    t = threading.Thread(target=run, daemon=True)
-    t.start()
-    return t, box
 
 
 def joined(t, box, timeout=120):
@@ -136,7 +121,7 @@ class ClusterTest(unittest.TestCase):
         req = slow(1)
         before = sum(started(d) for d in self.s.daemons)
         waits = sum(d.metric("isomesh_redis_lock_waits_total") for d in self.s.daemons)
-        jobs = [in_background(lambda d=d: d.post("/v1/mesh", req))
+        jobs = [harness.in_background(lambda d=d: d.post("/v1/mesh", req))
                 for d in (self.a, self.b, self.a, self.b)]
         answers = [joined(*j) for j in jobs]
         for r in answers:

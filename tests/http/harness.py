@@ -49,6 +49,24 @@ class Response:
         return json.loads(self.body)
 
 
+def http_request(port, method, path, body=None, headers=None, timeout=60, source=None):
+    """One request on its own connection to 127.0.0.1:port -> Response. A dict or list body
+    goes as JSON; source: the local address to send from (another client, as the daemon
+    sees it)."""
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=timeout,
+                                      source_address=(source, 0) if source else None)
+    try:
+        hdrs = dict(headers or {})
+        if isinstance(body, (dict, list)):
+            body = json.dumps(body).encode()
+            hdrs.setdefault("Content-Type", "application/json")
+        conn.request(method, path, body=body, headers=hdrs)
+        r = conn.getresponse()
+        return Response(r.status, r.getheaders(), r.read())
+    finally:
+        conn.close()
+
+
 class Daemon:
     def __init__(self, *args, cache_dir=None, web_root=None, log_format="text", binary=None,
                  prefix=(), env=None, log_file=None):
@@ -188,17 +206,7 @@ class Daemon:
 
     # ---- requests --------------------------------------------------------------------
     def request(self, method, path, body=None, headers=None, timeout=60):
-        conn = http.client.HTTPConnection("127.0.0.1", self.port, timeout=timeout)
-        try:
-            hdrs = dict(headers or {})
-            if isinstance(body, (dict, list)):
-                body = json.dumps(body).encode()
-                hdrs.setdefault("Content-Type", "application/json")
-            conn.request(method, path, body=body, headers=hdrs)
-            r = conn.getresponse()
-            return Response(r.status, r.getheaders(), r.read())
-        finally:
-            conn.close()
+        return http_request(self.port, method, path, body, headers, timeout)
 
     def get(self, path, headers=None, timeout=60):
         return self.request("GET", path, headers=headers, timeout=timeout)
@@ -248,12 +256,33 @@ class Daemon:
         return pids
 
     def rss_mib(self):
-        """Resident set of the process started (VmRSS of /proc/PID/status), in MiB."""
-        with open("/proc/%d/status" % self.proc.pid) as f:
-            for line in f:
-                if line.startswith("VmRSS:"):
-                    return int(line.split()[1]) / 1024.0
-        return float("nan")
+        """Resident set of the process started, in MiB."""
+        return rss_kib(self.proc.pid) / 1024.0
+
+
+def rss_kib(pid):
+    """Resident set size of pid in KiB (VmRSS of /proc/PID/status)."""
+    with open("/proc/%d/status" % pid) as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1])
+    return 0
+
+
+def in_background(fn):
+    """Runs fn() on a daemon thread -> (thread, box): after joining, box holds "result" or
+    the "error" it raised."""
+    box = {}
+
+    def run():
+        try:
+            box["result"] = fn()
+        except Exception as e:  # reported by the test that joins
+            box["error"] = e
+
+    t = threading.Thread(target=run, daemon=True)
+    t.start()
+    return t, box
 
 
 def process_alive(pid):

@@ -6,26 +6,11 @@ running ends it within the bound and exits 0; workers are started with the memor
 import os
 import signal
 import sys
-import threading
 import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from harness import SLOW, Daemon, draco_counts, process_alive, sphere  # noqa: E402
-
-
-def in_background(fn):
-    box = {}
-
-    def run():
-        try:
-            box["result"] = fn()
-        except Exception as e:  # reported by the test that joins
-            box["error"] = e
-
-    t = threading.Thread(target=run, daemon=True)
-    t.start()
-    return t, box
+from harness import SLOW, Daemon, draco_counts, in_background, process_alive, sphere  # noqa: E402
 
 
 class WorkerTest(unittest.TestCase):

@@ -1,9 +1,7 @@
 """reltools.py — helpers shared by the reliability tests (tests/reliability/test_*.py): the HTTP
 harness of tests/http (a real isomeshd on a free port, always stopped), a background "other
 user" who keeps asking for meshes while a test attacks the daemon and records every answer,
-raw sockets, the daemon's resident memory from /proc, and checks that a served mesh decodes."""
-import http.client
-import json
+raw sockets, and checks that a served mesh decodes."""
 import os
 import socket
 import struct
@@ -14,7 +12,7 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "http"))
-from harness import (BUILD, QUICK, ROOT, SLOW, Daemon, draco_counts,  # noqa: E402,F401
+from harness import (BUILD, QUICK, ROOT, SLOW, Daemon, draco_counts, http_request,  # noqa: E402,F401
                      metric_key, parse_metrics, process_alive, sphere)
 
 ISOMESH = os.path.join(BUILD, "isomesh")
@@ -30,15 +28,6 @@ def sanitizer_build(path):
     except (OSError, subprocess.TimeoutExpired):
         return False
     return b"__asan_init" in out
-
-
-def rss_kib(pid):
-    """Resident set size of pid in KiB (VmRSS of /proc/PID/status)."""
-    with open("/proc/%d/status" % pid) as f:
-        for line in f:
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1])
-    return 0
 
 
 def raw_status(port, data, timeout=10):
@@ -62,17 +51,8 @@ def raw_status(port, data, timeout=10):
 
 def request(port, method, path, body=None, headers=None, timeout=60):
     """One request on its own connection -> (status, headers dict lowercased, body bytes)."""
-    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=timeout)
-    try:
-        hdrs = dict(headers or {})
-        if isinstance(body, (dict, list)):
-            body = json.dumps(body).encode()
-            hdrs.setdefault("Content-Type", "application/json")
-        conn.request(method, path, body=body, headers=hdrs)
-        r = conn.getresponse()
-        return r.status, {k.lower(): v for k, v in r.getheaders()}, r.read()
-    finally:
-        conn.close()
+    r = http_request(port, method, path, body, headers, timeout)
+    return r.status, {k.lower(): v for k, v in r.headers}, r.body
 
 
 class OtherUser:
