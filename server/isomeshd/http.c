@@ -212,6 +212,31 @@ enum MHD_Result ismd_wait_for(ismd_req *r, const char *key, const char *fmt,
     return ismd_respond_refused(r, st);
 }
 
+ism_blob *ismd_keyed_request(ismd_req *r, enum MHD_Result *ret)
+{
+    long long t0 = ismd_now_ns();
+    ism_pipeline_result pr;
+    memset(&pr, 0, sizeof pr);
+    bool ok = ism_pipeline_key(r->body ? r->body : "", r->body_len, ismd_query(r, "format"),
+                               &r->srv->limits, &pr);
+    r->parse_ms = (ismd_now_ns() - t0) / 1e6;
+    if (!ok) {
+        unsigned status = pr.status >= 400 && pr.status <= 599 ? (unsigned)pr.status : 400;
+        ism_blob *b = pr.body.len ? ism_blob_copy(pr.body.data, pr.body.len) : NULL;
+        *ret = b ? ismd_respond_error_blob(r, status, b)
+                 : ismd_respond_error(r, status, "bad_request", "the request was not accepted");
+        ism_blob_unref(b);
+        ism_pipeline_result_free(&pr);
+        return NULL;
+    }
+    snprintf(r->key, sizeof r->key, "%s", pr.key);
+    snprintf(r->fmt, sizeof r->fmt, "%s", pr.format);
+    ism_blob *canonical = ism_blob_copy(pr.canonical.data, pr.canonical.len);
+    ism_pipeline_result_free(&pr);
+    *ret = MHD_NO;
+    return canonical;
+}
+
 /* The answer to a computation the scheduler would not take (anything but NEW or JOINED). */
 enum MHD_Result ismd_respond_refused(ismd_req *r, ismd_submit st)
 {

@@ -112,6 +112,10 @@ enum MHD_Result ismd_respond_error_blob(ismd_req *r, unsigned status, ism_blob *
 enum MHD_Result ismd_respond_json(ismd_req *r, unsigned status, const char *json);
 /* 401 with WWW-Authenticate: the caller needs a (valid) bearer token. */
 enum MHD_Result ismd_respond_unauthorized(ismd_req *r);
+/* The body of POST /v1/mesh or /v1/jobs parsed, checked and keyed (?format= too): fills
+ * r->key and r->fmt and returns the canonical request; NULL when it was refused (answered,
+ * *ret what to return) or memory ran out (*ret MHD_NO). */
+ism_blob *ismd_keyed_request(ismd_req *r, enum MHD_Result *ret);
 /* 503, 429 or 500 for a computation the scheduler refused (ismd_sched_submit's answer). */
 enum MHD_Result ismd_respond_refused(ismd_req *r, ismd_submit st);
 

@@ -47,25 +47,10 @@ static enum MHD_Result job_not_found(ismd_req *r)
 enum MHD_Result ismd_route_jobs_post(ismd_req *r)
 {
     ismd_server *s = r->srv;
-    ism_pipeline_result pr;
-    memset(&pr, 0, sizeof pr);
-    bool ok = ism_pipeline_key(r->body ? r->body : "", r->body_len, ismd_query(r, "format"),
-                               &s->limits, &pr);
-    if (!ok) {
-        unsigned status = pr.status >= 400 && pr.status <= 599 ? (unsigned)pr.status : 400;
-        ism_blob *b = pr.body.len ? ism_blob_copy(pr.body.data, pr.body.len) : NULL;
-        enum MHD_Result ret = b ? ismd_respond_error_blob(r, status, b)
-                                : ismd_respond_error(r, status, "bad_request", "the request was not accepted");
-        ism_blob_unref(b);
-        ism_pipeline_result_free(&pr);
-        return ret;
-    }
-    snprintf(r->key, sizeof r->key, "%s", pr.key);
-    snprintf(r->fmt, sizeof r->fmt, "%s", pr.format);
-    ism_blob *canonical = ism_blob_copy(pr.canonical.data, pr.canonical.len);
-    ism_pipeline_result_free(&pr);
+    enum MHD_Result ret;
+    ism_blob *canonical = ismd_keyed_request(r, &ret);
     if (!canonical)
-        return MHD_NO;
+        return ret;
 
     char name[ISM_CACHE_NAME_MAX], sname[ISM_CACHE_NAME_MAX];
     ism_cache_name(name, r->key, r->fmt);

@@ -74,32 +74,10 @@ static ism_blob *lookup(ismd_req *r, const char *ext)
 
 enum MHD_Result ismd_route_mesh_post(ismd_req *r)
 {
-    ismd_server *s = r->srv;
-    long long t0 = ismd_now_ns();
-    ism_pipeline_result pr;
-    memset(&pr, 0, sizeof pr);
-    bool ok = ism_pipeline_key(r->body ? r->body : "", r->body_len, ismd_query(r, "format"),
-                               &s->limits, &pr);
-    r->parse_ms = (ismd_now_ns() - t0) / 1e6;
     enum MHD_Result ret;
-    if (!ok) {
-        unsigned status = pr.status >= 400 && pr.status <= 599 ? (unsigned)pr.status : 400;
-        if (pr.body.len) {
-            ism_blob *b = ism_blob_copy(pr.body.data, pr.body.len);
-            ret = b ? ismd_respond_error_blob(r, status, b) : MHD_NO;
-            ism_blob_unref(b);
-        } else {
-            ret = ismd_respond_error(r, status, "bad_request", "the request was not accepted");
-        }
-        ism_pipeline_result_free(&pr);
-        return ret;
-    }
-    snprintf(r->key, sizeof r->key, "%s", pr.key);
-    snprintf(r->fmt, sizeof r->fmt, "%s", pr.format);
-    ism_blob *canonical = ism_blob_copy(pr.canonical.data, pr.canonical.len);
-    ism_pipeline_result_free(&pr);
+    ism_blob *canonical = ismd_keyed_request(r, &ret);
     if (!canonical)
-        return MHD_NO;
+        return ret;
     ism_blob *hit = lookup(r, r->fmt);
     if (hit) {
         r->r_status = 200;
