@@ -233,6 +233,16 @@ static void describe_exit(int status, char *buf, size_t cap)
         snprintf(buf, cap, "ended");
 }
 
+/* Fails the flight w computes (its waiters get the error) and forgets it. */
+static void fail_flight(ismd_pool *p, worker *w, unsigned status, const char *code,
+                        const char *message, ismd_outcome outcome)
+{
+    ismd_sched_lock(p->sched);
+    ismd_sched_fail(p->sched, w->flight, status, code, message, outcome);
+    ismd_sched_unlock(p->sched);
+    w->flight = NULL;
+}
+
 /* The worker's result pipe closed: reap it, fail its flight, schedule the replacement. */
 static void worker_gone(ismd_pool *p, worker *w)
 {
@@ -258,10 +268,7 @@ static void worker_gone(ismd_pool *p, worker *w)
         char msg[256];
         snprintf(msg, sizeof msg, "the worker computing this mesh %s; it has been replaced",
                  how);
-        ismd_sched_lock(p->sched);
-        ismd_sched_fail(p->sched, w->flight, 500, "worker_crashed", msg, ISMD_OUT_CRASH);
-        ismd_sched_unlock(p->sched);
-        w->flight = NULL;
+        fail_flight(p, w, 500, "worker_crashed", msg, ISMD_OUT_CRASH);
     }
     bool quick = !intended && now - w->spawned_ns < QUICK_DEATH_NS;
     w->quick_deaths = quick ? w->quick_deaths + 1 : 0;
@@ -283,14 +290,9 @@ static void protocol_error(ismd_pool *p, worker *w, const char *what)
 {
     ism_log_field f[] = {ISM_LI("pid", w->pid), ISM_LS("error", what)};
     ism_log_fields(ISM_LOG_ERROR, "worker_protocol_error", f, 2);
-    if (w->flight) {
-        ismd_sched_lock(p->sched);
-        ismd_sched_fail(p->sched, w->flight, 500, "worker_protocol",
-                        "the worker sent a malformed answer; it has been replaced",
-                        ISMD_OUT_CRASH);
-        ismd_sched_unlock(p->sched);
-        w->flight = NULL;
-    }
+    if (w->flight)
+        fail_flight(p, w, 500, "worker_protocol",
+                    "the worker sent a malformed answer; it has been replaced", ISMD_OUT_CRASH);
     kill_worker(p, w, ISMD_RESTART_PROTOCOL);
 }
 
@@ -631,12 +633,9 @@ static void stop_all(ismd_pool *p)
     for (int i = 0; i < p->n; i++) {
         worker *w = &p->w[i];
         if (w->state == W_BUSY && w->flight) {
-            ismd_sched_lock(p->sched);
-            ismd_sched_fail(p->sched, w->flight, 503, "shutting_down",
-                            "the server is shutting down; retry on another instance",
-                            ISMD_OUT_CANCELED);
-            ismd_sched_unlock(p->sched);
-            w->flight = NULL;
+            fail_flight(p, w, 503, "shutting_down",
+                        "the server is shutting down; retry on another instance",
+                        ISMD_OUT_CANCELED);
             kill_worker(p, w, ISMD_RESTART_CANCEL);
         } else if (w->state != W_EMPTY) {
             close_to_fd(p, w);
