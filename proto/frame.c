@@ -2,6 +2,7 @@
  * an incremental fd reader that survives partial reads, an fd writer that survives short
  * writes, and the payload layouts of the REQUEST and RESULT messages. */
 #include "proto/frame.h"
+#include "core/util/le_bytes.h"
 
 #include <errno.h>
 #include <pthread.h>
@@ -116,28 +117,6 @@ uint32_t ism_crc32c(uint32_t crc, const void *data, size_t len)
 
 /* ---- little-endian fields ------------------------------------------------------------ */
 
-static void put32(unsigned char *p, uint32_t v)
-{
-    for (int i = 0; i < 4; i++)
-        p[i] = (unsigned char)(v >> (8 * i));
-}
-
-static void put64(unsigned char *p, uint64_t v)
-{
-    for (int i = 0; i < 8; i++)
-        p[i] = (unsigned char)(v >> (8 * i));
-}
-
-static uint32_t get32(const unsigned char *p)
-{
-    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
-
-static uint64_t get64(const unsigned char *p)
-{
-    return (uint64_t)get32(p) | (uint64_t)get32(p + 4) << 32;
-}
-
 /* ---- header -------------------------------------------------------------------------- */
 
 static size_t parts_len(const ism_frame_part *parts, size_t nparts)
@@ -155,12 +134,12 @@ void ism_frame_header_encode(unsigned char hdr[ISM_FRAME_HEADER_SIZE], ism_frame
     hdr[4] = ISM_FRAME_VERSION;
     hdr[5] = (unsigned char)type;
     hdr[6] = hdr[7] = 0;
-    put64(hdr + 8, job);
-    put32(hdr + 16, (uint32_t)parts_len(parts, nparts));
+    ism_put_le64(hdr + 8, job);
+    ism_put_le32(hdr + 16, (uint32_t)parts_len(parts, nparts));
     uint32_t crc = ism_crc32c(0, hdr, 20);
     for (size_t i = 0; i < nparts; i++)
         crc = ism_crc32c(crc, parts[i].data, parts[i].len);
-    put32(hdr + 20, crc);
+    ism_put_le32(hdr + 20, crc);
 }
 
 static bool known_type(unsigned t)
@@ -176,13 +155,13 @@ static ism_frame_status header_check(const unsigned char *hdr, size_t max_payloa
         return ISM_FRAME_BAD_MAGIC;
     if (!known_type(hdr[5]))
         return ISM_FRAME_BAD_TYPE;
-    uint32_t len = get32(hdr + 16);
+    uint32_t len = ism_get_le32(hdr + 16);
     if (len > max_payload || len > ISM_FRAME_MAX_PAYLOAD)
         return ISM_FRAME_TOO_BIG;
     f->type = (ism_frame_type)hdr[5];
-    f->job = get64(hdr + 8);
+    f->job = ism_get_le64(hdr + 8);
     f->len = len;
-    *crc = get32(hdr + 20);
+    *crc = ism_get_le32(hdr + 20);
     return ISM_FRAME_OK;
 }
 
@@ -386,14 +365,14 @@ void ism_frame_put_u32(ism_frame_builder *b, uint32_t v)
 {
     unsigned char *p = builder_grow(b, 4);
     if (p)
-        put32(p, v);
+        ism_put_le32(p, v);
 }
 
 void ism_frame_put_u64(ism_frame_builder *b, uint64_t v)
 {
     unsigned char *p = builder_grow(b, 8);
     if (p)
-        put64(p, v);
+        ism_put_le64(p, v);
 }
 
 void ism_frame_put_bytes(ism_frame_builder *b, const void *data, size_t len)
@@ -435,13 +414,13 @@ static const unsigned char *cursor_take(ism_frame_cursor *c, size_t n)
 uint32_t ism_frame_get_u32(ism_frame_cursor *c)
 {
     const unsigned char *p = cursor_take(c, 4);
-    return p ? get32(p) : 0;
+    return p ? ism_get_le32(p) : 0;
 }
 
 uint64_t ism_frame_get_u64(ism_frame_cursor *c)
 {
     const unsigned char *p = cursor_take(c, 8);
-    return p ? get64(p) : 0;
+    return p ? ism_get_le64(p) : 0;
 }
 
 const unsigned char *ism_frame_get_bytes(ism_frame_cursor *c, size_t *len)

@@ -3,6 +3,7 @@
  * bufferView 4-byte aligned, chunks padded as the spec asks (JSON with spaces, BIN with
  * zeros). */
 #include "proto/glb.h"
+#include "core/util/le_bytes.h"
 #include "proto/json_writer.h"
 #include "core/version.h"
 
@@ -369,14 +370,6 @@ static char *join_json(gltf *g, const ism_glb_input *in, size_t *len)
     return ism_jw_take(&w, len);
 }
 
-static void put_u32(unsigned char *p, uint32_t v)
-{
-    p[0] = (unsigned char)v;
-    p[1] = (unsigned char)(v >> 8);
-    p[2] = (unsigned char)(v >> 16);
-    p[3] = (unsigned char)(v >> 24);
-}
-
 static bool container(const char *json, size_t jlen, const bin *b, unsigned char **out,
                       size_t *len)
 {
@@ -387,17 +380,17 @@ static bool container(const char *json, size_t jlen, const bin *b, unsigned char
     unsigned char *p = malloc(total);
     if (!p)
         return false;
-    put_u32(p, 0x46546C67u); /* "glTF" */
-    put_u32(p + 4, 2);
-    put_u32(p + 8, (uint32_t)total);
-    put_u32(p + 12, (uint32_t)jpad);
-    put_u32(p + 16, 0x4E4F534Au); /* "JSON" */
+    ism_put_le32(p, 0x46546C67u); /* "glTF" */
+    ism_put_le32(p + 4, 2);
+    ism_put_le32(p + 8, (uint32_t)total);
+    ism_put_le32(p + 12, (uint32_t)jpad);
+    ism_put_le32(p + 16, 0x4E4F534Au); /* "JSON" */
     memcpy(p + 20, json, jlen);
     memset(p + 20 + jlen, ' ', jpad - jlen);
     if (b->len) {
         unsigned char *q = p + 20 + jpad;
-        put_u32(q, (uint32_t)bpad);
-        put_u32(q + 4, 0x004E4942u); /* "BIN\0" */
+        ism_put_le32(q, (uint32_t)bpad);
+        ism_put_le32(q + 4, 0x004E4942u); /* "BIN\0" */
         memcpy(q + 8, b->data, b->len);
         memset(q + 8 + b->len, 0, bpad - b->len);
     }

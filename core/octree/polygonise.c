@@ -3,6 +3,7 @@
  * parallel chunks (phase 2: face lines, stitching, crack repair, triangles), welds the
  * chunks in order (phase 3), and fills the statistics. */
 #include "core/octree/polygonise.h"
+#include "core/util/clock.h"
 #include "core/octree/breaks.h"
 #include "core/octree/cell.h"
 #include "core/octree/octree_build.h"
@@ -81,13 +82,6 @@ bool ism_poly_options_check(const ism_poly_options *o, ism_error *err)
     if (o->max_triangles < 1)
         return ism_error_set(err, "max_triangles: must be at least 1");
     return true;
-}
-
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
 }
 
 /* Progress reports from several threads, mapped into one [0, 1] range. */
@@ -187,10 +181,10 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     atomic_init(&p.status, ISM_POLY_OK);
     enum ism_poly_status status = ISM_POLY_NO_MEMORY;
 
-    double t0 = now_ms();
+    double t0 = ism_now_ms();
     if (!ism_breaks_build(&breaks, tree))
         goto done;
-    st->time_ms[ISM_PHASE_CRACKS] = now_ms() - t0;
+    st->time_ms[ISM_PHASE_CRACKS] = ism_now_ms() - t0;
     p.leaves = malloc((tree->n ? tree->n : 1) * sizeof *p.leaves);
     if (!p.leaves)
         goto done;
@@ -223,10 +217,10 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     if (status != ISM_POLY_OK)
         goto done;
 
-    t0 = now_ms();
+    t0 = ism_now_ms();
     ism_weld_stats ws;
     status = ism_weld(p.out, p.nchunks, mesh, &ws) ? ISM_POLY_OK : ISM_POLY_NO_MEMORY;
-    *t_weld = now_ms() - t0;
+    *t_weld = ism_now_ms() - t0;
     st->zero_vertices = ws.zero_vertices;
     st->edges_touching = ws.touch_vertices;
     st->edges_double_root = ws.pair_vertices / 2;
@@ -283,7 +277,7 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
     ism_mesh_free(mesh);
     if (!ism_poly_options_check(o, err))
         return ISM_POLY_BAD_OPTIONS;
-    double t_start = now_ms();
+    double t_start = ism_now_ms();
     int threads = thread_count(o);
     stats->threads = threads;
     progress prog = {o, PTHREAD_MUTEX_INITIALIZER, 0, 0.4};
@@ -311,7 +305,7 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
     stats->evals_point = bs.n_point;
     stats->evals_gradient = bs.n_gradient;
     stats->evals_interval = bs.n_interval;
-    double t_tree = now_ms();
+    double t_tree = ism_now_ms();
     stats->time_ms[ISM_PHASE_OCTREE] = t_tree - t_start;
     if (status != ISM_POLY_OK)
         return fail_with(status, o, err);
@@ -322,7 +316,7 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
     double t_weld = 0;
     status = polygonise_leaves(f, o, &tree, threads, &prog, mesh, stats, &t_weld);
     ism_octree_free(&tree);
-    double t_end = now_ms();
+    double t_end = ism_now_ms();
     stats->time_ms[ISM_PHASE_POLYGONS] = t_end - t_tree - t_weld - stats->time_ms[ISM_PHASE_CRACKS];
     stats->time_ms[ISM_PHASE_MESH] = t_weld;
     stats->total_ms = t_end - t_start;

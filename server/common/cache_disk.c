@@ -2,6 +2,7 @@
  * checksummed writes on one background writer thread fed by a byte-bounded queue, and a pruner
  * thread that keeps the directory under its size bound (least recently used first). */
 #include "server/common/cache_disk.h"
+#include "core/util/le_bytes.h"
 #include "server/common/fd_io.h"
 
 #include <dirent.h>
@@ -61,17 +62,6 @@ typedef struct disk_tier {
 } disk_tier;
 
 /* ---- helpers ------------------------------------------------------------------------- */
-
-static void put32(unsigned char *p, uint32_t v)
-{
-    for (int i = 0; i < 4; i++)
-        p[i] = (unsigned char)(v >> (8 * i));
-}
-
-static uint32_t get32(const unsigned char *p)
-{
-    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
 
 static bool rel_path(char out[ISM_CACHE_NAME_MAX + 4], const char *name)
 {
@@ -191,17 +181,17 @@ static ism_blob *disk_get(ism_cache_tier *t, const char *name)
         why = "bad size";
     } else if (!pread_all(fd, hdr, HEADER_SIZE, 0)) {
         why = "short read";
-    } else if (memcmp(hdr, "ISMC", 4) != 0 || get32(hdr + 4) != FILE_VERSION || get32(hdr + 20) != 0) {
+    } else if (memcmp(hdr, "ISMC", 4) != 0 || ism_get_le32(hdr + 4) != FILE_VERSION || ism_get_le32(hdr + 20) != 0) {
         why = "bad header";
     } else {
-        uint64_t len = (uint64_t)get32(hdr + 8) | (uint64_t)get32(hdr + 12) << 32;
+        uint64_t len = (uint64_t)ism_get_le32(hdr + 8) | (uint64_t)ism_get_le32(hdr + 12) << 32;
         if (len != (uint64_t)st.st_size - HEADER_SIZE) {
             why = "length does not match the file size";
         } else if (!(b = ism_blob_new((size_t)len))) {
             why = NULL; /* out of memory: a miss, not corruption */
         } else if (!pread_all(fd, b->data, (size_t)len, HEADER_SIZE)) {
             why = "short read";
-        } else if (ism_crc32c(ism_crc32c(0, hdr, 16), b->data, (size_t)len) != get32(hdr + 16)) {
+        } else if (ism_crc32c(ism_crc32c(0, hdr, 16), b->data, (size_t)len) != ism_get_le32(hdr + 16)) {
             why = "checksum mismatch";
         }
     }
@@ -279,10 +269,10 @@ static void store_entry(disk_tier *d, const char *name, const ism_blob *b)
         return; /* content-addressed: already there */
     unsigned char hdr[HEADER_SIZE] = {0};
     memcpy(hdr, "ISMC", 4);
-    put32(hdr + 4, FILE_VERSION);
-    put32(hdr + 8, (uint32_t)b->len);
-    put32(hdr + 12, (uint32_t)((uint64_t)b->len >> 32));
-    put32(hdr + 16, ism_crc32c(ism_crc32c(0, hdr, 16), b->data, b->len));
+    ism_put_le32(hdr + 4, FILE_VERSION);
+    ism_put_le32(hdr + 8, (uint32_t)b->len);
+    ism_put_le32(hdr + 12, (uint32_t)((uint64_t)b->len >> 32));
+    ism_put_le32(hdr + 16, ism_crc32c(ism_crc32c(0, hdr, 16), b->data, b->len));
 
     char tmp[ISM_CACHE_NAME_MAX + 64];
     snprintf(tmp, sizeof tmp, "tmp/%s.%ld.%llu.tmp", name, (long)getpid(), ++d->tmp_seq);

@@ -3,6 +3,7 @@
  * the task list, and the calls tasks make (fetch, locks). Only the tier's thread touches the
  * hiredis context. */
 #include "server/common/cache_redis.h"
+#include "core/util/le_bytes.h"
 
 #include <errno.h>
 #include <hiredis/hiredis.h>
@@ -60,25 +61,7 @@ typedef struct redis_tier {
     bool stopping, closed;
 } redis_tier;
 
-long long ism_redis_now_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (long long)ts.tv_sec * 1000000000LL + ts.tv_nsec;
-}
-
 /* ---- the stored form ----------------------------------------------------------------- */
-
-static void put32(unsigned char *p, uint32_t v)
-{
-    for (int i = 0; i < 4; i++)
-        p[i] = (unsigned char)(v >> (8 * i));
-}
-
-static uint32_t get32(const unsigned char *p)
-{
-    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
 
 static uint32_t value_crc(const char *name, const unsigned char *hdr, const void *data, size_t len)
 {
@@ -95,11 +78,11 @@ unsigned char *ism_redis_value_encode(const char *name, const ism_blob *b, size_
     if (!v)
         return NULL;
     memcpy(v, "ISMR", 4);
-    put32(v + 4, VALUE_VERSION);
-    put32(v + 8, (uint32_t)b->len);
-    put32(v + 12, (uint32_t)((uint64_t)b->len >> 32));
-    put32(v + 16, value_crc(name, v, b->data, b->len));
-    put32(v + 20, 0);
+    ism_put_le32(v + 4, VALUE_VERSION);
+    ism_put_le32(v + 8, (uint32_t)b->len);
+    ism_put_le32(v + 12, (uint32_t)((uint64_t)b->len >> 32));
+    ism_put_le32(v + 16, value_crc(name, v, b->data, b->len));
+    ism_put_le32(v + 20, 0);
     memcpy(v + ISM_REDIS_HEADER_SIZE, b->data, b->len);
     *len = ISM_REDIS_HEADER_SIZE + b->len;
     return v;
@@ -114,16 +97,16 @@ ism_blob *ism_redis_value_decode(const char *name, const void *data, size_t len,
         *why = "shorter than its header";
         return NULL;
     }
-    if (memcmp(v, "ISMR", 4) != 0 || get32(v + 4) != VALUE_VERSION || get32(v + 20) != 0) {
+    if (memcmp(v, "ISMR", 4) != 0 || ism_get_le32(v + 4) != VALUE_VERSION || ism_get_le32(v + 20) != 0) {
         *why = "bad header";
         return NULL;
     }
-    uint64_t n = (uint64_t)get32(v + 8) | (uint64_t)get32(v + 12) << 32;
+    uint64_t n = (uint64_t)ism_get_le32(v + 8) | (uint64_t)ism_get_le32(v + 12) << 32;
     if (n != len - ISM_REDIS_HEADER_SIZE) {
         *why = "length does not match the value";
         return NULL;
     }
-    if (value_crc(name, v, v + ISM_REDIS_HEADER_SIZE, (size_t)n) != get32(v + 16)) {
+    if (value_crc(name, v, v + ISM_REDIS_HEADER_SIZE, (size_t)n) != ism_get_le32(v + 16)) {
         *why = "checksum mismatch";
         return NULL;
     }
@@ -193,7 +176,7 @@ static void conn_failed(redis_tier *rt, const char *what)
         rt->ctx = NULL;
     }
     atomic_fetch_add(&rt->counters.errors, 1);
-    long long now = ism_redis_now_ns();
+    long long now = ism_now_ns();
     if (!rt->outage_logged) {
         rt->outage_logged = true;
         rt->down_since_ns = now;
@@ -228,7 +211,7 @@ static void connect_now(redis_tier *rt)
         conn_failed(rt, "ping");
         return;
     }
-    long long now = ism_redis_now_ns();
+    long long now = ism_now_ns();
     rt->last_used_ns = now;
     rt->backoff_ns = BACKOFF_MIN_NS;
     atomic_store(&rt->counters.up, 1);
@@ -257,7 +240,7 @@ static redisReply *command(redis_tier *rt, const char *what, int argc, const cha
         conn_failed(rt, what);
         return NULL;
     }
-    rt->last_used_ns = ism_redis_now_ns();
+    rt->last_used_ns = ism_now_ns();
     if (r->type == REDIS_REPLY_ERROR) {
         /* Redis answered but refused (OOM, scripting disabled, ...): count and log, keep
          * the connection; the caller treats it as unavailable for this call. */
@@ -315,7 +298,7 @@ static void write_puts(redis_tier *rt, long long deadline_ns)
         pthread_mutex_unlock(&rt->lock);
         if (!p)
             return;
-        if (deadline_ns && ism_redis_now_ns() > deadline_ns)
+        if (deadline_ns && ism_now_ns() > deadline_ns)
             atomic_fetch_add(&rt->base.counters.store_failures, 1);
         else
             store_one(rt, p);
@@ -590,7 +573,7 @@ static void *redis_main(void *arg)
     redis_tier *rt = arg;
     pthread_mutex_lock(&rt->lock);
     while (!rt->stopping) {
-        long long now = ism_redis_now_ns();
+        long long now = ism_now_ns();
         long long wake_at = next_wake(rt, now);
         if (!rt->puts_head && wake_at > now) {
             struct timespec ts = {.tv_sec = wake_at / 1000000000LL, .tv_nsec = wake_at % 1000000000LL};
@@ -603,12 +586,12 @@ static void *redis_main(void *arg)
             connect_now(rt);
         write_puts(rt, 0);
         run_tasks(rt, due, false);
-        health_check(rt, ism_redis_now_ns());
+        health_check(rt, ism_now_ns());
         pthread_mutex_lock(&rt->lock);
     }
     pthread_mutex_unlock(&rt->lock);
     /* Closing: queued writes get a bounded time, then every task cleans up (locks go). */
-    write_puts(rt, ism_redis_now_ns() + CLOSE_FLUSH_NS);
+    write_puts(rt, ism_now_ns() + CLOSE_FLUSH_NS);
     pthread_mutex_lock(&rt->lock);
     ism_redis_task *all = take_due(rt, 0, true);
     rt->closed = true;

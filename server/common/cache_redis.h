@@ -30,6 +30,7 @@
 #include <stddef.h>
 
 #include "server/common/cache.h"
+#include "core/util/clock.h"
 
 #define ISM_REDIS_CONNECT_TIMEOUT_MS 250
 #define ISM_REDIS_COMMAND_TIMEOUT_MS 250
@@ -78,9 +79,6 @@ struct ism_redis_task {
 
 /* Runs task on the tier's thread at due_ns (0 = now). Thread-safe, never blocks on I/O. */
 void ism_cache_redis_schedule(ism_cache_tier *t, ism_redis_task *task, long long due_ns);
-
-/* CLOCK_MONOTONIC in nanoseconds. */
-long long ism_redis_now_ns(void);
 
 /* The calls below are for tasks only (the tier's thread). -1 means Redis is unavailable. */
 

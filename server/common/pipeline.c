@@ -4,6 +4,7 @@
  * write the stats. Every outcome fills the result: a status, and either the file or the
  * error JSON in body. No geometry is computed here: core does it, proto encodes it. */
 #include "server/common/pipeline.h"
+#include "core/util/clock.h"
 
 #include "core/analysis/analysis.h"
 #include "core/mesh/write_mesh.h"
@@ -42,13 +43,6 @@ void ism_pipeline_result_free(ism_pipeline_result *r)
     ism_buf_free(&r->features);
     ism_buf_free(&r->canonical);
     memset(r, 0, sizeof *r);
-}
-
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
 }
 
 /* Moves malloc'd text into a buffer. */
@@ -113,7 +107,7 @@ static bool prepare(const char *json, size_t len, const char *format_override,
                     ism_tape **tape, double *decode_ms, double *compile_ms)
 {
     ism_req_error e;
-    double t0 = now_ms();
+    double t0 = ism_now_ms();
     ism_request_limits rl = request_limits(lim);
     if (!ism_request_decode(json ? json : "", json ? len : 0, &rl, req, &e))
         return fail(r, &e);
@@ -122,7 +116,7 @@ static bool prepare(const char *json, size_t len, const char *format_override,
         return fail(r, &e);
     }
     snprintf(r->format, sizeof r->format, "%s", ism_format_name(req->format));
-    double t1 = now_ms();
+    double t1 = ism_now_ms();
     *tape = ism_request_compile(req, &e);
     if (!*tape) {
         ism_request_free(req);
@@ -139,7 +133,7 @@ static bool prepare(const char *json, size_t len, const char *format_override,
     }
     take(&r->canonical, canonical, n);
     *decode_ms = t1 - t0;
-    *compile_ms = now_ms() - t1;
+    *compile_ms = ism_now_ms() - t1;
     return true;
 }
 
@@ -308,7 +302,7 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
         lim = &dl;
     }
     memset(r, 0, sizeof *r);
-    double t_start = now_ms();
+    double t_start = ism_now_ms();
     ism_stats_input si;
     memset(&si, 0, sizeof si);
 
@@ -344,9 +338,9 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
     o.progress = polygoniser_progress;
     o.progress_ctx = &pm;
     o.cancel = hooks ? hooks->cancel : NULL;
-    double t = now_ms();
+    double t = ism_now_ms();
     enum ism_poly_status st = ism_polygonise(tape, &o, &mesh, &ps, &err);
-    si.timings_ms[ISM_TIME_POLYGONISE] = now_ms() - t;
+    si.timings_ms[ISM_TIME_POLYGONISE] = ism_now_ms() - t;
     if (!polygonise_status(r, st, &err))
         goto done;
     if (cancelled(hooks)) {
@@ -355,7 +349,7 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
     }
 
     /* analyse */
-    t = now_ms();
+    t = ism_now_ms();
     ism_analysis_options ao;
     ism_analysis_options_default(&ao);
     ao.curvature = true;
@@ -366,7 +360,7 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
         goto done;
     }
     have_analysis = true;
-    si.timings_ms[ISM_TIME_ANALYSE] = now_ms() - t;
+    si.timings_ms[ISM_TIME_ANALYSE] = ism_now_ms() - t;
     report(hooks, 0.92);
     if (cancelled(hooks)) {
         fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
@@ -374,7 +368,7 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
     }
 
     /* features */
-    t = now_ms();
+    t = ism_now_ms();
     if (!ism_wire_mesh_build(&mesh, &an, req.attributes, curvature_limit(&req), &wire)) {
         fail_with(r, 500, "no_memory", "%s", "out of memory preparing the mesh for the wire");
         goto done;
@@ -393,10 +387,10 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
         goto done;
     }
     take(&r->features, fjson, flen);
-    si.timings_ms[ISM_TIME_FEATURES] = now_ms() - t;
+    si.timings_ms[ISM_TIME_FEATURES] = ism_now_ms() - t;
 
     /* encode */
-    t = now_ms();
+    t = ism_now_ms();
     encode_job job = {&req, &mesh, &wire, &feat, r->key, empty, 0, 0};
     char why[200] = "";
     if (!encode_body(&job, &r->body, why, sizeof why)) {
@@ -404,7 +398,7 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
         fail_with(r, 500, "encode_failed", "encoding failed: %s", why);
         goto done;
     }
-    si.timings_ms[ISM_TIME_ENCODE] = now_ms() - t;
+    si.timings_ms[ISM_TIME_ENCODE] = ism_now_ms() - t;
     if (cancelled(hooks)) {
         fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
         goto done;
@@ -422,7 +416,7 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
     si.encoded_faces = job.faces;
     si.poly = &ps;
     si.analysis = &an;
-    si.timings_ms[ISM_TIME_TOTAL] = now_ms() - t_start;
+    si.timings_ms[ISM_TIME_TOTAL] = ism_now_ms() - t_start;
     size_t slen;
     char *stats = ism_stats_json(&si, &slen);
     if (!stats) {

@@ -3,6 +3,7 @@
  * mesh, write the file atomically and print the statistics; or run a request file through
  * the service pipeline; or list the built-in surfaces. */
 #include "server/isomesh/cli.h"
+#include "core/util/clock.h"
 
 #include "core/analysis/analysis.h"
 #include "core/mesh/write_mesh.h"
@@ -217,13 +218,6 @@ static bool write_mesh(const char *path, const ism_mesh *m)
     return ok;
 }
 
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
-}
-
 static void print_stats(const ism_mesh *m, const ism_poly_stats *ps, const ism_analysis *an,
                         const char *format, size_t bytes, const double *timings)
 {
@@ -262,7 +256,7 @@ int ism_cli_run_surface(ism_cli_run *run)
     if (st)
         return st;
     double timings[ISM_TIME_COUNT] = {0};
-    double t0 = now_ms();
+    double t0 = ism_now_ms();
     ism_error err;
     memset(&err, 0, sizeof err);
     ism_tape *tape = ism_tape_compile(run->expr, run->params, run->nparams, run->lets,
@@ -272,13 +266,13 @@ int ism_cli_run_surface(ism_cli_run *run)
         fprintf(stderr, "isomesh: %s\n", ism_error_format(&err, msg, sizeof msg));
         return 2;
     }
-    double t1 = now_ms();
+    double t1 = ism_now_ms();
     timings[ISM_TIME_COMPILE] = t1 - t0;
     ism_mesh mesh;
     ism_mesh_init(&mesh);
     ism_poly_stats ps;
     enum ism_poly_status ps_status = ism_polygonise(tape, &run->options, &mesh, &ps, &err);
-    double t2 = now_ms();
+    double t2 = ism_now_ms();
     timings[ISM_TIME_POLYGONISE] = t2 - t1;
     int status = 0;
     if (ps_status != ISM_POLY_OK) {
@@ -293,10 +287,10 @@ int ism_cli_run_surface(ism_cli_run *run)
     ism_analysis_options ao;
     ism_analysis_options_default(&ao);
     bool analysed = run->print_stats && ism_analyse(&mesh, tape, &ao, &an, &err);
-    timings[ISM_TIME_ANALYSE] = now_ms() - t2;
+    timings[ISM_TIME_ANALYSE] = ism_now_ms() - t2;
     if (run->output && !write_mesh(run->output, &mesh))
         status = 1;
-    timings[ISM_TIME_TOTAL] = now_ms() - t0;
+    timings[ISM_TIME_TOTAL] = ism_now_ms() - t0;
     if (run->print_stats && status == 0)
         print_stats(&mesh, &ps, analysed ? &an : NULL, extension(run->output ? run->output : ""),
                     0, timings);

@@ -3,6 +3,8 @@
  * the process: the daemon sees the pipe close, fails the job and starts a fresh worker.
  * Before its HELLO the worker enters the seccomp sandbox (sandbox.h); it never runs without. */
 #include "server/isomesh/worker.h"
+#include "core/util/clock.h"
+#include "core/util/le_bytes.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -37,19 +39,6 @@ typedef struct progress_state {
     pthread_mutex_t lock;
 } progress_state;
 
-static long long now_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (long long)ts.tv_sec * 1000000000LL + ts.tv_nsec;
-}
-
-static void put_le32(unsigned char *p, uint32_t v)
-{
-    for (int i = 0; i < 4; i++)
-        p[i] = (unsigned char)(v >> (8 * i));
-}
-
 static void on_progress(void *ctx, double fraction)
 {
     progress_state *ps = ctx;
@@ -59,11 +48,11 @@ static void on_progress(void *ctx, double fraction)
         fraction = 1;
     uint32_t m = (uint32_t)(fraction * 1e6);
     pthread_mutex_lock(&ps->lock);
-    long long t = now_ns();
+    long long t = ism_now_ns();
     if (!ps->failed && m != ps->last_millionths &&
         (ps->last_ns == 0 || t - ps->last_ns >= PROGRESS_INTERVAL_NS)) {
         unsigned char p[4];
-        put_le32(p, m);
+        ism_put_le32(p, m);
         ism_frame_part part = {p, 4};
         if (ism_frame_write_fd(ps->fd, ISM_FRAME_PROGRESS, ps->job, &part, 1) != ISM_FRAME_OK)
             ps->failed = true;
@@ -108,7 +97,7 @@ static bool send_result(int fd, uint64_t job, const ism_pipeline_result *pr, lon
 {
     ism_frame_result r = {0};
     r.status = (uint32_t)pr->status;
-    long long us = (now_ns() - start_ns) / 1000;
+    long long us = (ism_now_ns() - start_ns) / 1000;
     r.worker_us = us > (long long)UINT32_MAX ? UINT32_MAX : (uint32_t)us;
     snprintf(r.key, sizeof r.key, "%s", pr->key);
     snprintf(r.format, sizeof r.format, "%s", pr->format);
@@ -158,7 +147,7 @@ static bool run_job(int out_fd, const ism_frame *f)
     ism_pipeline_hooks hooks = {.progress = on_progress, .ctx = &ps, .cancel = NULL};
     ism_pipeline_result pr;
     memset(&pr, 0, sizeof pr);
-    long long start = now_ns();
+    long long start = ism_now_ns();
     ism_pipeline_run((const char *)job.json, job.json_len, job.format[0] ? job.format : NULL,
                      &lim, &hooks, &pr);
     bool ok = !ps.failed && send_result(out_fd, f->job, &pr, start);

@@ -214,12 +214,12 @@ enum MHD_Result ismd_wait_for(ismd_req *r, const char *key, const char *fmt,
 
 ism_blob *ismd_keyed_request(ismd_req *r, enum MHD_Result *ret)
 {
-    long long t0 = ismd_now_ns();
+    long long t0 = ism_now_ns();
     ism_pipeline_result pr;
     memset(&pr, 0, sizeof pr);
     bool ok = ism_pipeline_key(r->body ? r->body : "", r->body_len, ismd_query(r, "format"),
                                &r->srv->limits, &pr);
-    r->parse_ms = (ismd_now_ns() - t0) / 1e6;
+    r->parse_ms = (ism_now_ns() - t0) / 1e6;
     if (!ok) {
         unsigned status = pr.status >= 400 && pr.status <= 599 ? (unsigned)pr.status : 400;
         ism_blob *b = pr.body.len ? ism_blob_copy(pr.body.data, pr.body.len) : NULL;
@@ -465,7 +465,7 @@ static enum MHD_Result first_call(ismd_server *s, struct MHD_Connection *conn, c
         return MHD_NO;
     r->srv = s;
     r->conn = conn;
-    r->t0_ns = ismd_now_ns();
+    r->t0_ns = ism_now_ns();
     snprintf(r->method, sizeof r->method, "%s", method);
     snprintf(r->path, sizeof r->path, "%s", url);
     for (char *p = r->path; *p; p++)
@@ -627,7 +627,7 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
         ismd_sched_detach(&s->sched, &r->waiter);
         ismd_sched_unlock(&s->sched);
     }
-    double secs = (ismd_now_ns() - r->t0_ns) / 1e9;
+    double secs = (ism_now_ns() - r->t0_ns) / 1e9;
     unsigned status = r->status ? r->status : 499; /* the client left before an answer */
     ismd_metrics_request(&s->metrics, r->route, status, secs, r->bytes);
     ism_log_field f[] = {
@@ -735,8 +735,8 @@ void ismd_http_stop(ismd_server *s, double max_s)
 {
     if (!s->mhd)
         return;
-    long long until = ismd_now_ns() + (long long)(max_s * 1e9);
-    while (atomic_load(&s->open_requests) > 0 && ismd_now_ns() < until)
+    long long until = ism_now_ns() + (long long)(max_s * 1e9);
+    while (atomic_load(&s->open_requests) > 0 && ism_now_ns() < until)
         usleep(10000);
     MHD_stop_daemon(s->mhd);
     s->mhd = NULL;

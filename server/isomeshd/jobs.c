@@ -139,7 +139,7 @@ static void notify(ismd_job *job)
 
 static void mark_finished(ismd_job *job)
 {
-    job->finished_ns = ismd_now_ns();
+    job->finished_ns = ism_now_ns();
     atomic_fetch_sub(&job->owner->metrics->jobs_active, 1);
     notify(job);
 }
@@ -175,7 +175,7 @@ static void job_done(ismd_waiter *w, const ismd_result *r)
 
 ismd_job *ismd_jobs_create(ismd_jobs *j, const char *key, const char *fmt, const char *user)
 {
-    long long now = ismd_now_ns();
+    long long now = ism_now_ns();
     sweep(j, now);
     if (j->count >= MAX_JOBS)
         return NULL;

@@ -17,7 +17,7 @@
 static void add_timing(ismd_req *r, struct MHD_Response *resp)
 {
     char t[512];
-    double total = (ismd_now_ns() - r->t0_ns) / 1e6;
+    double total = (ism_now_ns() - r->t0_ns) / 1e6;
     if (r->cache && !strcmp(r->cache, "hit"))
         snprintf(t, sizeof t, "parse;dur=%.3f, cache;desc=\"hit\", total;dur=%.3f", r->parse_ms,
                  total);

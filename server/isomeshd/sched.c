@@ -12,13 +12,6 @@
 
 #include "server/isomeshd/errors.h"
 
-long long ismd_now_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (long long)ts.tv_sec * 1000000000LL + ts.tv_nsec;
-}
-
 bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s,
                      ismd_metrics *metrics)
 {
@@ -154,7 +147,7 @@ ismd_submit ismd_sched_submit(ismd_sched *s, const char *key, const char *fmt,
     }
     s->next_id++;
     f->request = ism_blob_ref(request);
-    f->submitted_ns = ismd_now_ns();
+    f->submitted_ns = ism_now_ns();
     f->deadline_ns = f->submitted_ns + (long long)(s->job_timeout_s * 1e9);
     f->hnext = NULL;
     *slot = f;
@@ -227,7 +220,7 @@ void ismd_sched_fail(ismd_sched *s, ismd_flight *f, unsigned status, const char 
 {
     ismd_result r = {.status = status, .content_type = "application/json"};
     r.body = ismd_error_json(code, message, NULL);
-    long long now = ismd_now_ns();
+    long long now = ism_now_ns();
     if (f->running) {
         r.queue_ms = (f->started_ns - f->submitted_ns) / 1e6;
         r.worker_ms = (now - f->started_ns) / 1e6;
@@ -254,7 +247,7 @@ ismd_flight *ismd_sched_next(ismd_sched *s)
         return NULL;
     publish_queue(s);
     f->running = true;
-    f->started_ns = ismd_now_ns();
+    f->started_ns = ism_now_ns();
     struct timespec wall;
     clock_gettime(CLOCK_REALTIME, &wall);
     f->started_unix_ms = (long long)wall.tv_sec * 1000 + wall.tv_nsec / 1000000;

@@ -21,6 +21,7 @@
 #include "server/common/cache.h"
 #include "server/isomeshd/job_queue.h"
 #include "server/isomeshd/metrics.h"
+#include "core/util/clock.h"
 
 /* What a finished flight hands its waiters (they take references to what they keep). */
 typedef struct ismd_result {
@@ -142,8 +143,5 @@ bool ismd_sched_enqueue(ismd_sched *s, ismd_flight *f);
 /* Hands r to every waiter and frees the flight, without counting a computation (an answer
  * from the shared cache, or an error found there). */
 void ismd_sched_answer(ismd_sched *s, ismd_flight *f, const ismd_result *r);
-
-/* CLOCK_MONOTONIC in nanoseconds. */
-long long ismd_now_ns(void);
 
 #endif

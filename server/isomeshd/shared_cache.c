@@ -123,7 +123,7 @@ static void answer(task *k, const ismd_result *r)
     ismd_flight *f = my_flight(k, true);
     if (f) {
         ismd_result copy = *r;
-        copy.queue_ms = (ismd_now_ns() - f->submitted_ns) / 1e6;
+        copy.queue_ms = (ism_now_ns() - f->submitted_ns) / 1e6;
         ismd_sched_answer(sh->sched, f, &copy);
     }
     leave(sh);
@@ -318,7 +318,7 @@ static long long task_run(ism_redis_task *base, ism_cache_tier *t, bool stopping
     pthread_mutex_unlock(&k->sh->lock);
     if (stop)
         return task_end(k, t);
-    long long now = ism_redis_now_ns();
+    long long now = ism_now_ns();
     return k->state == T_HOLD ? hold(k, t, now) : look(k, t, now);
 }
 
@@ -370,7 +370,7 @@ ismd_shared *ismd_shared_start(ismd_sched *sched, ism_cache *cache, ism_cache_ti
     host[sizeof host - 1] = 0;
     unsigned long long nonce = 0;
     if (getrandom(&nonce, sizeof nonce, 0) != (ssize_t)sizeof nonce)
-        nonce = (unsigned long long)ismd_now_ns();
+        nonce = (unsigned long long)ism_now_ns();
     snprintf(sh->instance, sizeof sh->instance, "%s/%ld/%016llx", host, (long)getpid(), nonce);
     pthread_mutex_init(&sh->lock, NULL);
     pthread_cond_init(&sh->changed, NULL);
@@ -391,8 +391,8 @@ void ismd_shared_stop(ismd_shared *sh)
     sh->stopping = true;
     while (sh->inside > 0) /* short: nobody waits on the network inside */
         pthread_cond_wait(&sh->changed, &sh->lock);
-    long long until = ismd_now_ns() + STOP_WAIT_NS;
-    while (sh->ntasks > 0 && ismd_now_ns() < until) {
+    long long until = ism_now_ns() + STOP_WAIT_NS;
+    while (sh->ntasks > 0 && ism_now_ns() < until) {
         struct timespec ts;
         clock_gettime(CLOCK_REALTIME, &ts);
         ts.tv_nsec += 20000000;

@@ -168,7 +168,7 @@ static bool spawn(ismd_pool *p, worker *w)
     w->want_out = false;
     w->state = W_STARTING;
     w->flight = NULL;
-    w->spawned_ns = ismd_now_ns();
+    w->spawned_ns = ism_now_ns();
     ism_frame_reader_init(&w->rd, ISM_FRAME_MAX_PAYLOAD);
     struct epoll_event ev = {.events = EPOLLIN, .data.u64 = EV_READ(w->slot)};
     epoll_ctl(p->epfd, EPOLL_CTL_ADD, w->from_fd, &ev);
@@ -256,7 +256,7 @@ static void worker_gone(ismd_pool *p, worker *w)
         ;
     char how[128];
     describe_exit(status, how, sizeof how);
-    long long now = ismd_now_ns();
+    long long now = ism_now_ns();
     bool intended = w->state == W_DYING;
     if (!intended) {
         atomic_fetch_add(&p->metrics->worker_restarts[ISMD_RESTART_CRASH], 1);
@@ -642,10 +642,10 @@ static void stop_all(ismd_pool *p)
             w->state = W_DYING; /* exits on EOF; not counted as a restart */
         }
     }
-    long long until = ismd_now_ns() + STOP_WAIT_NS;
+    long long until = ism_now_ns() + STOP_WAIT_NS;
     struct epoll_event evs[64];
     while (alive_count(p) > 0) {
-        long long now = ismd_now_ns();
+        long long now = ism_now_ns();
         if (now >= until) {
             for (int i = 0; i < p->n; i++)
                 if (p->w[i].state != W_EMPTY)
@@ -666,7 +666,7 @@ static void *pool_main(void *arg)
     ismd_pool *p = arg;
     struct epoll_event evs[64];
     for (;;) {
-        long long now = ismd_now_ns();
+        long long now = ism_now_ns();
         bool stopping = atomic_load(&p->stopping);
         if (!stopping)
             respawn_due(p, now);
@@ -685,7 +685,7 @@ static void *pool_main(void *arg)
             else
                 on_readable(p, w);
         }
-        now = ismd_now_ns();
+        now = ism_now_ns();
         enforce(p, now);
         if (atomic_load(&p->stopping) && (busy_count(p) == 0 || now >= p->stop_deadline_ns)) {
             stop_all(p);
@@ -749,7 +749,7 @@ void ismd_pool_stop(ismd_pool *p, double grace_s)
     ismd_sched_lock(p->sched);
     ismd_sched_drain(p->sched);
     ismd_sched_unlock(p->sched);
-    p->stop_deadline_ns = ismd_now_ns() + (long long)(grace_s * 1e9);
+    p->stop_deadline_ns = ism_now_ns() + (long long)(grace_s * 1e9);
     atomic_store(&p->stopping, true);
     wake(p);
     pthread_join(p->thread, NULL);

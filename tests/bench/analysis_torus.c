@@ -12,15 +12,9 @@
 
 #include "core/analysis/analysis.h"
 #include "core/expr/expr.h"
+#include "core/util/clock.h"
 
 #define PI 3.14159265358979323846
-
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + (double)t.tv_nsec * 1e-9;
-}
 
 static bool torus_grid(ism_mesh *m, int nu, int nv, double R, double r)
 {
@@ -49,12 +43,12 @@ static bool run(const char *what, const ism_mesh *m, const ism_tape *f, int thre
     o.threads = threads;
     ism_analysis a;
     ism_error err;
-    double t0 = now();
+    double t0 = ism_now_s();
     if (!ism_analyse(m, f, &o, &a, &err)) {
         fprintf(stderr, "analysis failed: %s\n", err.message);
         return false;
     }
-    double ms = (now() - t0) * 1e3;
+    double ms = (ism_now_s() - t0) * 1e3;
     printf("%-34s %9.1f ms   chi %ld  genus %ld  edges %zu  intK %+.2e  max|f|/|grad f| %.2e\n",
            what, ms, a.euler, a.genus, a.edges, a.total_gauss, a.max_dist_vertex);
     ism_analysis_free(&a);

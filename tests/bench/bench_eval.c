@@ -16,6 +16,7 @@
 
 #include "core/eval/eval.h"
 #include "core/expr/tape.h"
+#include "core/util/clock.h"
 
 #define NPOINTS (1u << 16)
 #define NBOXES 4096
@@ -45,13 +46,6 @@ static const surface SURFACES[] = {
                 "(1 + 2*phi)*(x^2 + y^2 + z^2 - 1)^2",
       { { "phi", 1.6180339887498949 } }, 1, { { 0 } }, 0, 2.0 },
 };
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
 
 /* The same point generator as the generated C reference (bench_eval.py). */
 static double next_unit(unsigned long long *s)
@@ -145,11 +139,11 @@ static double time_batch(const ism_tape *t, ism_eval_ws *ws, const points *p, do
     double best = 0.0;
     for (int run = 0; run < 3; run++) {
         size_t evals = 0;
-        double t0 = now(), t1;
+        double t0 = ism_now_s(), t1;
         do {
             ism_eval_batch(t, ws, p->x, p->y, p->z, p->out, NPOINTS);
             evals += NPOINTS;
-        } while ((t1 = now()) - t0 < MIN_SECONDS);
+        } while ((t1 = ism_now_s()) - t0 < MIN_SECONDS);
         best = fmax(best, evals / (t1 - t0));
     }
     *sum = 0.0;
@@ -163,12 +157,12 @@ static double time_tree(const tnode *root, const points *p)
     double best = 0.0;
     for (int run = 0; run < 3; run++) {
         size_t evals = 0;
-        double t0 = now(), t1;
+        double t0 = ism_now_s(), t1;
         do {
             for (size_t i = 0; i < NPOINTS; i++)
                 p->out[i] = walk(root, p->x[i], p->y[i], p->z[i]);
             evals += NPOINTS;
-        } while ((t1 = now()) - t0 < MIN_SECONDS);
+        } while ((t1 = ism_now_s()) - t0 < MIN_SECONDS);
         best = fmax(best, evals / (t1 - t0));
     }
     return best;
@@ -189,14 +183,14 @@ static double time_interval(const ism_tape *t, ism_eval_ws *ws, double half, dou
     double best = 0.0, acc = 0.0;
     for (int run = 0; run < 3; run++) {
         size_t evals = 0;
-        double t0 = now(), t1;
+        double t0 = ism_now_s(), t1;
         do {
             for (int b = 0; b < NBOXES; b++) {
                 ism_interval r = ism_eval_interval(t, ws, boxes[b][0], boxes[b][1], boxes[b][2]);
                 __asm__ volatile("" : : "x"(r.lo), "x"(r.hi));
             }
             evals += NBOXES;
-        } while ((t1 = now()) - t0 < MIN_SECONDS);
+        } while ((t1 = ism_now_s()) - t0 < MIN_SECONDS);
         best = fmax(best, evals / (t1 - t0));
     }
     for (int b = 0; b < NBOXES; b++) {
@@ -223,11 +217,11 @@ static double time_interval_batch(const ism_tape *t, ism_eval_ws *ws, double hal
     double best = 0.0, acc = 0.0;
     for (int run = 0; run < 3; run++) {
         size_t evals = 0;
-        double t0 = now(), t1;
+        double t0 = ism_now_s(), t1;
         do {
             ism_eval_interval_batch(t, ws, bx, by, bz, out, NBOXES);
             evals += NBOXES;
-        } while ((t1 = now()) - t0 < MIN_SECONDS);
+        } while ((t1 = ism_now_s()) - t0 < MIN_SECONDS);
         best = fmax(best, evals / (t1 - t0));
     }
     for (int b = 0; b < NBOXES; b++)
@@ -247,22 +241,22 @@ static void time_rounding(void)
     double best_w = 0.0, best_n = 0.0;
     for (int run = 0; run < 3; run++) {
         size_t ops = 0;
-        double t0 = now(), t1;
+        double t0 = ism_now_s(), t1;
         do {
             for (int i = 0; i < N; i++)
                 o[i] = v[i] - (fabs(v[i]) * 0x1p-52 + 0x1p-1074);
             ops += N;
             __asm__ volatile("" : : "r"(o) : "memory");
-        } while ((t1 = now()) - t0 < 0.1);
+        } while ((t1 = ism_now_s()) - t0 < 0.1);
         best_w = fmax(best_w, ops / (t1 - t0));
         ops = 0;
-        t0 = now();
+        t0 = ism_now_s();
         do {
             for (int i = 0; i < N; i++)
                 o[i] = nextafter(v[i], -INFINITY);
             ops += N;
             __asm__ volatile("" : : "r"(o) : "memory");
-        } while ((t1 = now()) - t0 < 0.1);
+        } while ((t1 = ism_now_s()) - t0 < 0.1);
         best_n = fmax(best_n, ops / (t1 - t0));
     }
     printf("rounding widen %.6g\nrounding nextafter %.6g\n", best_w, best_n);

@@ -13,6 +13,7 @@
 #include <time.h>
 
 #include "core/analysis/analysis.h"
+#include "core/util/clock.h"
 #include "core/mesh/write_mesh.h"
 #include "core/octree/polygonise.h"
 #include "proto/draco_encode.h"
@@ -39,13 +40,6 @@ static const bench_case cases[] = {
     {"kummer-16", "{\"preset\": \"kummer-16-nodes\", \"depth\": {\"max\": 8}}", 5},
 };
 
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
-}
-
 static int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
@@ -59,12 +53,12 @@ static bool measure(const ism_draco_input *in, int repeats, size_t *bytes, doubl
     double t[16];
     for (int r = 0; r < repeats && r < 16; r++) {
         ism_draco_output d;
-        double t0 = now_ms();
+        double t0 = ism_now_ms();
         if (!ism_draco_encode(in, &d)) {
             fprintf(stderr, "bench_wire: %s\n", d.error);
             return false;
         }
-        t[r] = now_ms() - t0;
+        t[r] = ism_now_ms() - t0;
         *bytes = d.len;
         free(d.data);
     }
@@ -122,12 +116,12 @@ static bool run_case(const bench_case *c, const char *out_dir)
     ism_mesh_init(&m);
     ism_poly_stats ps;
     ism_error err;
-    double t0 = now_ms();
+    double t0 = ism_now_ms();
     if (!tape || ism_polygonise(tape, &o, &m, &ps, &err) != ISM_POLY_OK) {
         fprintf(stderr, "bench_wire: %s: %s\n", c->name, tape ? err.message : rerr.message);
         return false;
     }
-    double poly_ms = now_ms() - t0;
+    double poly_ms = ism_now_ms() - t0;
     ism_analysis a;
     if (!ism_analyse(&m, tape, NULL, &a, &err)) {
         fprintf(stderr, "bench_wire: %s: %s\n", c->name, err.message);

@@ -14,15 +14,9 @@
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
+#include "core/util/clock.h"
 
 extern char **environ;
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + ts.tv_nsec / 1e9;
-}
 
 int test_run(char *const argv[], int timeout_s, char **out, size_t *len)
 {
@@ -43,10 +37,10 @@ int test_run(char *const argv[], int timeout_s, char **out, size_t *len)
     }
     size_t n = 0, cap = 4096;
     char *buf = malloc(cap);
-    double deadline = now_s() + timeout_s;
+    double deadline = ism_now_s() + timeout_s;
     bool killed = false;
     for (;;) {
-        double left = deadline - now_s();
+        double left = deadline - ism_now_s();
         if (left <= 0) {
             kill(pid, SIGKILL);
             killed = true;

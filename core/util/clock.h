@@ -1,0 +1,19 @@
+/* clock.h — the monotonic clock every timing, deadline and back-off reads: nanoseconds (or
+ * milliseconds, seconds) from an arbitrary start, never going back when the wall clock is set. */
+#ifndef ISM_CLOCK_H
+#define ISM_CLOCK_H
+
+#include <time.h>
+
+static inline long long ism_now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (long long)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
+static inline double ism_now_ms(void) { return (double)ism_now_ns() / 1e6; }
+
+static inline double ism_now_s(void) { return (double)ism_now_ns() / 1e9; }
+
+#endif
