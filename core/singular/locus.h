@@ -1,0 +1,140 @@
+/* locus.h — the singular locus of f = 0 inside a box, found from f itself (never from a mesh):
+ * certified singular points, traced singular curves (double curves, whiskers) and double
+ * sheets (zero sets where f does not change sign). These are the types the stages of
+ * core/singular/ share:
+ *
+ *     search.c   interval subdivision of the box: cells where F and ∇F may both hold 0
+ *        │       ─▶ candidate boxes, each with the rank of the Hessian at its centre's
+ *        │          projection onto ∇f = 0
+ *     points.c   rank-3 (and isolated) clusters ─▶ Newton on ∇f, Krawczyk certificate,
+ *        │       type from the Hessian's eigenvalues
+ *     curves.c   rank-2 boxes ─▶ predictor–corrector polylines on f = ∇f = 0, ends typed
+ *        │       (pinch, triple point, box exit) or closed
+ *     sheets.c   rank-1 boxes ─▶ a mesh of the double sheet
+ *        ▼
+ *     conform.c  the polygoniser's mesh is made to conform: a node is one vertex shared by
+ *                its cones, a double curve a chain of mesh edges
+ *
+ * Sizes and tolerances are relative to the box diagonal unless a field says otherwise. */
+#ifndef ISM_LOCUS_H
+#define ISM_LOCUS_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdbool.h>
+
+/* What a singular point is, from the Hessian H of f there (eigenvalues λ1 ≤ λ2 ≤ λ3). */
+enum ism_sing_type {
+    ISM_SING_NODE = 0,       /* H non-degenerate, indefinite: a real cone of two nappes */
+    ISM_SING_ISOLATED = 1,   /* H definite: f = 0 only at the point */
+    ISM_SING_CUSP = 2,       /* H of rank 2 at an isolated zero of ∇f (x² + z² − y³) */
+    ISM_SING_DEGENERATE = 3, /* isolated, H of rank ≤ 1 (two spheres touching), or rank 2
+                                not recognised as a cusp */
+    ISM_SING_PINCH = 4,      /* a double curve turns into a whisker (Whitney umbrella) */
+    ISM_SING_TRIPLE = 5,     /* three or more branches of singular curves meet */
+    ISM_SING_TYPES
+};
+
+typedef struct ism_sing_point {
+    double p[3];
+    double radius;        /* half-width of the enclosure: the Krawczyk box when certified,
+                             else of the candidate cluster */
+    int type;             /* enum ism_sing_type */
+    bool certified;       /* Krawczyk proved one zero of ∇f in p ± radius, and the interval
+                             of f over that box contains 0 */
+    double eig[3];        /* Hessian eigenvalues at p, ascending */
+    double residual_f;    /* |f(p)| */
+    double residual_grad; /* |∇f(p)| */
+    int cones;            /* cones of faces meeting at the point's mesh vertex (set by the
+                             conformance pass; -1 until then, 0 when it has no vertex) */
+} ism_sing_point;
+
+enum ism_curve_kind {
+    ISM_CURVE_DOUBLE = 0,  /* two real sheets cross along it (Hessian indefinite across) */
+    ISM_CURVE_WHISKER = 1, /* a 1-D real set with no sheet (Hessian definite across) */
+    ISM_CURVE_KINDS
+};
+
+enum ism_end_type {
+    ISM_END_BOX = 0,     /* leaves the search box */
+    ISM_END_PINCH = 1,   /* at a pinch point (the curve changes kind there) */
+    ISM_END_TRIPLE = 2,  /* at a triple point (branches meet) */
+    ISM_END_POINT = 3,   /* at another singular point of the list */
+    ISM_END_LOST = 4,    /* tracing stopped (budget, deadline, no convergence): say so */
+    ISM_END_TYPES
+};
+
+typedef struct ism_sing_curve {
+    int kind;              /* enum ism_curve_kind */
+    bool closed;           /* a loop: xyz's last point joins its first (not repeated) */
+    size_t n;              /* points */
+    double *xyz;           /* 3 per point, each within 1e-9 × diagonal of f = ∇f = 0 */
+    int end_type[2];       /* enum ism_end_type of the first and last point (unused when
+                              closed) */
+    int end_point[2];      /* index into ism_locus.points of the point it ends at, or -1 */
+} ism_sing_curve;
+
+/* A candidate box of the search: neither excluded by intervals nor certified as one point. */
+enum ism_lbox_flags {
+    ISM_LBOX_PROJECTED = 1, /* q holds a point of ∇f = 0 (Gauss–Newton converged in the box
+                               grown by half its width) */
+    ISM_LBOX_USED = 2,      /* explained by a point, a curve or a sheet */
+};
+
+typedef struct ism_lbox {
+    double lo[3], hi[3];
+    double q[3];            /* the centre projected onto ∇f = 0 (when PROJECTED) */
+    uint8_t rank;           /* numerical rank of the Hessian at q (0..3) */
+    uint8_t flags;          /* enum ism_lbox_flags */
+} ism_lbox;
+
+/* A double sheet: a 2-D zero set of f without a sign change (f = g²), meshed as triangles
+ * first_triangle .. first_triangle + triangles of the final mesh. */
+typedef struct ism_double_sheet {
+    size_t first_triangle, triangles;
+    double area;
+} ism_double_sheet;
+
+typedef struct ism_locus_options {
+    double box[6];             /* xmin ymin zmin xmax ymax zmax */
+    int max_depth;             /* search cells no smaller than box side / 2^max_depth */
+    size_t max_boxes;          /* budget of candidate boxes kept (beyond: incomplete) */
+    int threads;               /* 0 = online cores */
+    const volatile int *cancel;/* polled; non-zero stops the search (incomplete) */
+    double deadline_ms;        /* ism_now_ms() past which the stage stops (0 = none) */
+} ism_locus_options;
+
+void ism_locus_options_default(ism_locus_options *o);
+
+typedef struct ism_locus {
+    ism_sing_point *points;
+    size_t npoints, cap_points;
+    ism_sing_curve *curves;
+    size_t ncurves, cap_curves;
+    ism_lbox *boxes;
+    size_t nboxes, cap_boxes;
+    ism_double_sheet *sheets;
+    size_t nsheets, cap_sheets;
+    bool incomplete;            /* cut short (budget, deadline, cancel): what is listed is
+                                   right, but something may be missing */
+    char incomplete_why[96];
+    uint64_t boxes_visited, evals_interval, evals_jet;
+    double time_ms;
+} ism_locus;
+
+void ism_locus_init(ism_locus *l);
+void ism_locus_free(ism_locus *l);
+
+/* Appenders (false when out of memory). The curve takes ownership of xyz (malloc'd). */
+bool ism_locus_add_point(ism_locus *l, const ism_sing_point *p);
+bool ism_locus_add_curve(ism_locus *l, const ism_sing_curve *c);
+bool ism_locus_add_box(ism_locus *l, const ism_lbox *b);
+bool ism_locus_add_sheet(ism_locus *l, const ism_double_sheet *s);
+
+/* Names used in JSON and stats: "node", "isolated", "cusp", "degenerate", "pinch",
+ * "triple"; "double", "whisker"; "box", "pinch", "triple", "point", "lost". */
+const char *ism_sing_type_name(int type);
+const char *ism_curve_kind_name(int kind);
+const char *ism_end_type_name(int type);
+
+#endif
