@@ -1,0 +1,78 @@
+/* sym3.c — cyclic Jacobi for symmetric 3×3 matrices (see sym3.h). Each rotation zeroes one
+ * off-diagonal entry; sweeps repeat until the off-diagonal part is negligible against the
+ * diagonal. Convergence is quadratic, so a handful of sweeps always suffice. */
+#include "core/util/sym3.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Sweeps of three rotations: Jacobi converges quadratically, 3×3 needs at most ~6; the cap
+ * only guards against NaN input. */
+#define SYM3_MAX_SWEEPS 32
+
+static void rotate(double a[3][3], double v[3][3], int p, int q)
+{
+    if (a[p][q] == 0.0)
+        return;
+    double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+    double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1.0));
+    double c = 1.0 / sqrt(t * t + 1.0), s = t * c;
+    for (int k = 0; k < 3; k++) { /* columns p, q of a */
+        double akp = a[k][p], akq = a[k][q];
+        a[k][p] = c * akp - s * akq;
+        a[k][q] = s * akp + c * akq;
+    }
+    for (int k = 0; k < 3; k++) { /* rows p, q of a */
+        double apk = a[p][k], aqk = a[q][k];
+        a[p][k] = c * apk - s * aqk;
+        a[q][k] = s * apk + c * aqk;
+    }
+    a[p][q] = a[q][p] = 0.0;
+    for (int k = 0; k < 3; k++) { /* v's columns are the eigenvectors */
+        double vkp = v[k][p], vkq = v[k][q];
+        v[k][p] = c * vkp - s * vkq;
+        v[k][q] = s * vkp + c * vkq;
+    }
+}
+
+void ism_sym3_eigen(const double h[6], double eig[3], double vec[3][3])
+{
+    double a[3][3] = {{h[0], h[1], h[2]}, {h[1], h[3], h[4]}, {h[2], h[4], h[5]}};
+    double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (int sweep = 0; sweep < SYM3_MAX_SWEEPS; sweep++) {
+        double off = fabs(a[0][1]) + fabs(a[0][2]) + fabs(a[1][2]);
+        double diag = fabs(a[0][0]) + fabs(a[1][1]) + fabs(a[2][2]);
+        if (!(off > 1e-300) || off <= 1e-18 * diag)
+            break;
+        rotate(a, v, 0, 1);
+        rotate(a, v, 0, 2);
+        rotate(a, v, 1, 2);
+    }
+    int order[3] = {0, 1, 2};
+    for (int i = 0; i < 3; i++) /* three-element insertion sort by eigenvalue */
+        for (int j = i; j > 0 && a[order[j]][order[j]] < a[order[j - 1]][order[j - 1]]; j--) {
+            int t = order[j];
+            order[j] = order[j - 1];
+            order[j - 1] = t;
+        }
+    for (int i = 0; i < 3; i++) {
+        eig[i] = a[order[i]][order[i]];
+        if (vec)
+            for (int k = 0; k < 3; k++)
+                vec[i][k] = v[k][order[i]];
+    }
+    for (int i = 0; i < 6; i++)
+        if (!isfinite(h[i])) {
+            eig[0] = eig[1] = eig[2] = NAN;
+            break;
+        }
+}
+
+int ism_sym3_rank(const double eig[3], double rel)
+{
+    double m = fmax(fabs(eig[0]), fmax(fabs(eig[1]), fabs(eig[2])));
+    int r = 0;
+    for (int i = 0; i < 3; i++)
+        r += m > 0 && fabs(eig[i]) > rel * m;
+    return r;
+}
