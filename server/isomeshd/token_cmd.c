@@ -69,46 +69,23 @@ static bool default_path(char *out, size_t cap, bool create)
     return true;
 }
 
-/* Reads the whole file (bounded). A missing file gives an empty text and *exists = false. */
+/* Reads the whole file (checked and bounded: ismd_tokens_read_file). A missing file gives an
+ * empty text and *exists = false. */
 static bool read_text(const char *path, char **text, size_t *len, bool *exists, mode_t *mode)
 {
-    *text = NULL;
-    *len = 0;
-    *exists = false;
-    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOCTTY);
-    if (fd < 0) {
-        if (errno == ENOENT) {
-            *text = calloc(1, 1);
-            return *text != NULL;
-        }
-        fprintf(stderr, "isomeshd token: %s: %s\n", path, strerror(errno));
+    char err[600];
+    unsigned m = 0;
+    int got = ismd_tokens_read_file(path, text, len, &m, err, sizeof err);
+    *exists = got > 0;
+    if (got < 0) {
+        fprintf(stderr, "isomeshd token: %s\n", err);
         return false;
     }
-    struct stat st;
-    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size > (off_t)ISMD_TOKENS_FILE_MAX) {
-        fprintf(stderr, "isomeshd token: %s: not a regular file of at most 1 MiB\n", path);
-        close(fd);
-        return false;
-    }
-    *exists = true;
-    *mode = st.st_mode & 07777;
-    char *buf = malloc((size_t)st.st_size + 1);
-    size_t got = 0;
-    while (buf && got < (size_t)st.st_size) {
-        ssize_t n = read(fd, buf + got, (size_t)st.st_size - got);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n <= 0)
-            break;
-        got += (size_t)n;
-    }
-    close(fd);
-    if (!buf)
-        return false;
-    buf[got] = 0;
-    *text = buf;
-    *len = got;
-    return true;
+    if (got == 0)
+        *text = calloc(1, 1);
+    else
+        *mode = (mode_t)m;
+    return *text != NULL;
 }
 
 

@@ -275,42 +275,74 @@ bool ismd_tokens_parse(const char *text, size_t len, const char *path, ismd_toke
     return true;
 }
 
-bool ismd_tokens_load(const char *path, bool missing_ok, ismd_tokens *out, char *err,
-                      size_t errcap)
+/* Opening never blocks (a FIFO or device put at the path would hang the reader: the daemon
+ * re-reads on SIGHUP in the thread that also takes SIGTERM), and the checks are made on the
+ * opened file itself (fstat), so a path swapped between a check and the open cannot slip by.
+ * Symbolic links are followed: secret stores (Kubernetes volumes) publish files as links;
+ * what is checked is the file they lead to. */
+int ismd_tokens_read_file(const char *path, char **text, size_t *len, unsigned *mode,
+                          char *err, size_t errcap)
 {
-    memset(out, 0, sizeof *out);
-    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOCTTY);
+    *text = NULL;
+    *len = 0;
+    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
     if (fd < 0) {
-        if (errno == ENOENT && missing_ok)
-            return true;
+        if (errno == ENOENT)
+            return 0;
         snprintf(err, errcap, "%s: %s", path, strerror(errno));
-        return false;
+        return -1;
     }
     struct stat st;
-    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size > (off_t)ISMD_TOKENS_FILE_MAX) {
-        snprintf(err, errcap, "%s: not a regular file of at most 1 MiB", path);
-        close(fd);
-        return false;
-    }
-    char *text = malloc((size_t)st.st_size + 1);
+    const char *why = NULL;
+    if (fstat(fd, &st) != 0)
+        why = strerror(errno);
+    else if (!S_ISREG(st.st_mode))
+        why = "not a regular file (a FIFO, device or directory is refused)";
+    else if (st.st_mode & (S_IWGRP | S_IWOTH))
+        why = "writable by group or others: anyone who can write it can give themselves a "
+              "token (chmod go-w it)";
+    else if (st.st_size > (off_t)ISMD_TOKENS_FILE_MAX)
+        why = "larger than 1 MiB";
+    char *buf = why ? NULL : malloc((size_t)st.st_size + 1);
+    if (!why && !buf)
+        why = "out of memory";
     size_t got = 0;
-    bool ok = text != NULL;
-    while (ok && got < (size_t)st.st_size) {
-        ssize_t n = read(fd, text + got, (size_t)st.st_size - got);
+    while (!why && got < (size_t)st.st_size) {
+        ssize_t n = read(fd, buf + got, (size_t)st.st_size - got);
         if (n < 0 && errno == EINTR)
             continue;
-        if (n < 0) {
-            snprintf(err, errcap, "%s: %s", path, strerror(errno));
-            ok = false;
-        }
+        if (n < 0)
+            why = strerror(errno);
         if (n <= 0)
             break;
         got += (size_t)n;
     }
     close(fd);
-    if (!text)
-        snprintf(err, errcap, "%s: out of memory", path);
-    ok = ok && ismd_tokens_parse(text, got, path, out, err, errcap);
+    if (why) {
+        free(buf);
+        snprintf(err, errcap, "%s: %s", path, why);
+        return -1;
+    }
+    buf[got] = 0;
+    *text = buf;
+    *len = got;
+    *mode = (unsigned)(st.st_mode & 07777);
+    return 1;
+}
+
+bool ismd_tokens_load(const char *path, bool missing_ok, ismd_tokens *out, char *err,
+                      size_t errcap)
+{
+    memset(out, 0, sizeof *out);
+    char *text;
+    size_t len;
+    unsigned mode;
+    int got = ismd_tokens_read_file(path, &text, &len, &mode, err, errcap);
+    if (got == 0 && !missing_ok)
+        snprintf(err, errcap, "%s: %s", path, strerror(ENOENT));
+    if (got <= 0)
+        return got == 0 && missing_ok;
+    bool ok = ismd_tokens_parse(text, len, path, out, err, errcap);
     free(text);
     return ok;
 }

@@ -39,6 +39,12 @@ typedef struct ismd_tokens {
  * (out is left empty). */
 bool ismd_tokens_parse(const char *text, size_t len, const char *path, ismd_tokens *out,
                        char *err, size_t errcap);
+/* Reads a whole tokens file without ever blocking: it must be a regular file (a FIFO or
+ * device is refused), not writable by group or others, of at most ISMD_TOKENS_FILE_MAX bytes.
+ * 1: *text (malloc'd, NUL-terminated), *len and *mode (permission bits) are set; 0: there is
+ * no such file; -1: refused or unreadable, err says why ("PATH: what"). */
+int ismd_tokens_read_file(const char *path, char **text, size_t *len, unsigned *mode,
+                          char *err, size_t errcap);
 /* Reads and parses path (bounded by ISMD_TOKENS_FILE_MAX). A missing file is an error unless
  * missing_ok, which gives an empty table. */
 bool ismd_tokens_load(const char *path, bool missing_ok, ismd_tokens *out, char *err,

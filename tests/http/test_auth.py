@@ -9,6 +9,7 @@ import hashlib
 import http.client
 import os
 import re
+import shutil
 import signal
 import stat
 import subprocess
@@ -296,6 +297,49 @@ class AuthDaemonTest(unittest.TestCase):
         self.assertIn("frobnicate", subprocess.run(
             [ISOMESHD, "--listen", "127.0.0.1:0", "--tokens", bad], stderr=subprocess.PIPE,
             text=True, timeout=30).stderr)
+
+    def test_a_fifo_or_a_writable_tokens_file_is_refused_and_sigterm_still_works(self):
+        # at start: a FIFO (nobody ever writes it: a blocking open would hang forever) and a
+        # file others may write are refused at once with a line saying why
+        fifo = os.path.join(self.tmp.name, "fifo")
+        os.mkfifo(fifo)
+        loose = os.path.join(self.tmp.name, "loose")
+        with open(self.path) as f, open(loose, "w") as g:
+            g.write(f.read())
+        for mode, what in ((0o666, "writable by group or others"), (0o620, "writable by group")):
+            os.chmod(loose, mode)
+            for path, expect in ((fifo, "not a regular file"), (loose, what)):
+                t0 = time.monotonic()
+                r = subprocess.run([ISOMESHD, "--listen", "127.0.0.1:0", "--workers", "1",
+                                    "--cache-dir", os.path.join(self.tmp.name, "c"), "--tokens", path],
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, timeout=30)
+                self.assertLess(time.monotonic() - t0, 10)
+                self.assertEqual(r.returncode, 1, r.stderr)
+                self.assertIn(expect, r.stderr)
+        # `token add` refuses to edit them too (it would hang on the FIFO otherwise)
+        self.assertNotEqual(token_cmd("add", "eve", "--file", fifo).returncode, 0)
+        self.assertNotEqual(token_cmd("add", "eve", "--file", loose).returncode, 0)
+        # while running: a FIFO swapped in, then a writable file; SIGHUP keeps the old tokens
+        with Daemon("--workers", "1", "--tokens", self.path) as d:
+            os.rename(self.path, self.path + ".good")
+            os.mkfifo(self.path)
+            sighup(d, "tokens_reload_failed")
+            self.assertIn("not a regular file", d.log())
+            self.assertEqual(d.post("/v1/mesh", sphere(0.65), headers=bearer(self.alice)).status, 200)
+            os.unlink(self.path)
+            shutil.copy(self.path + ".good", self.path)
+            os.chmod(self.path, 0o646)
+            sighup(d, "tokens_reload_failed", count=2)
+            self.assertEqual(d.post("/v1/mesh", sphere(0.66), headers=bearer(self.bob)).status, 200)
+            # and SIGTERM after all that stops it promptly
+            os.unlink(self.path)
+            os.mkfifo(self.path)
+            sighup(d, "tokens_reload_failed", count=3)
+            t0 = time.monotonic()
+            d.proc.send_signal(signal.SIGTERM)
+            d.proc.wait(timeout=10)
+            self.assertLess(time.monotonic() - t0, 2.0)
+            self.assertEqual(d.proc.returncode, 0)
 
     def test_private_mode_closes_reading_but_not_the_viewer_or_health(self):
         with Daemon("--workers", "1", "--tokens", self.path, "--private") as d:
