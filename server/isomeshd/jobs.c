@@ -10,10 +10,20 @@
 #include <time.h>
 
 #define NBUCKETS 1024
-#define MAX_JOBS 10000
+#define USER_BUCKETS 256
+#define MAX_JOBS 10000       /* job records of all users together */
+#define USER_JOBS_KEPT 1000  /* records of one user: a flood of posts by one user evicts only
+                                its own finished records, never anybody else's */
 #define JOB_TTL_NS (30LL * 60 * 1000000000LL) /* finished jobs are kept 30 minutes */
 
 typedef struct stream stream;
+
+/* How many records one user has in the table (exists while it has any). */
+typedef struct juser {
+    struct juser *next;
+    size_t n;
+    char user[64];
+} juser;
 
 struct ismd_job {
     ismd_waiter waiter;
@@ -52,6 +62,7 @@ struct ismd_jobs {
     ismd_job *buckets[NBUCKETS];
     ismd_job *oldest, *newest;
     size_t count;
+    juser *users[USER_BUCKETS];
     bool closing;
 };
 
@@ -82,8 +93,52 @@ static size_t bucket_of(const char *id)
     return h % NBUCKETS;
 }
 
+static juser **juser_slot(ismd_jobs *j, const char *user)
+{
+    juser **u = &j->users[bucket_of(user) % USER_BUCKETS];
+    while (*u && strcmp((*u)->user, user) != 0)
+        u = &(*u)->next;
+    return u;
+}
+
+static size_t user_records(ismd_jobs *j, const char *user)
+{
+    juser *u = *juser_slot(j, user);
+    return u ? u->n : 0;
+}
+
+/* Counts one record more (+1) or less (-1) for user; false when out of memory. */
+static bool user_count(ismd_jobs *j, const char *user, int delta)
+{
+    juser **slot = juser_slot(j, user);
+    if (!*slot) {
+        if (delta < 0 || !(*slot = calloc(1, sizeof **slot)))
+            return false;
+        snprintf((*slot)->user, sizeof (*slot)->user, "%s", user);
+    }
+    juser *u = *slot;
+    u->n = delta < 0 ? u->n - 1 : u->n + 1;
+    if (u->n == 0) {
+        *slot = u->next;
+        free(u);
+    }
+    return true;
+}
+
+/* The user with the most records (NULL when the table is empty). */
+static const char *heaviest_user(const ismd_jobs *j)
+{
+    const juser *best = NULL;
+    for (size_t b = 0; b < USER_BUCKETS; b++)
+        for (const juser *u = j->users[b]; u; u = u->next)
+            if (!best || u->n > best->n)
+                best = u;
+    return best ? best->user : NULL;
+}
+
 static void table_remove(ismd_jobs *j, ismd_job *job)
 {
+    user_count(j, job->user, -1);
     ismd_job **p = &j->buckets[bucket_of(job->id)];
     while (*p && *p != job)
         p = &(*p)->hnext;
@@ -114,16 +169,42 @@ static bool finished(const ismd_job *job)
     return job->state >= ISMD_JOB_DONE;
 }
 
-/* Drops expired finished jobs; when full, the oldest finished ones. */
+/* Drops expired finished jobs. */
 static void sweep(ismd_jobs *j, long long now)
 {
     ismd_job *job = j->oldest;
     while (job) {
         ismd_job *next = job->lnext;
-        if (finished(job) && (now - job->finished_ns > JOB_TTL_NS || j->count >= MAX_JOBS))
+        if (finished(job) && now - job->finished_ns > JOB_TTL_NS)
             table_remove(j, job);
         job = next;
     }
+}
+
+/* Drops the oldest finished record of user; false when all of its records are live. */
+static bool evict_oldest_of(ismd_jobs *j, const char *user)
+{
+    for (ismd_job *job = j->oldest; job; job = job->lnext)
+        if (finished(job) && !strcmp(job->user, user)) {
+            table_remove(j, job);
+            return true;
+        }
+    return false;
+}
+
+/* Makes room for one more record of user: past its own cap, its own oldest finished record
+ * goes; with the whole table full, one of the user holding the most records (the one who
+ * filled it). Live (queued or running) records are never dropped. */
+static ismd_jobs_refusal make_room(ismd_jobs *j, const char *user)
+{
+    if (user_records(j, user) >= USER_JOBS_KEPT && !evict_oldest_of(j, user))
+        return ISMD_JOBS_USER_FULL;
+    if (j->count >= MAX_JOBS) {
+        const char *heavy = heaviest_user(j);
+        if (!heavy || !evict_oldest_of(j, heavy))
+            return ISMD_JOBS_TABLE_FULL;
+    }
+    return ISMD_JOBS_OK;
 }
 
 /* Wakes every suspended stream of job. */
@@ -173,20 +254,23 @@ static void job_done(ismd_waiter *w, const ismd_result *r)
     mark_finished(job);
 }
 
-ismd_job *ismd_jobs_create(ismd_jobs *j, const char *key, const char *fmt, const char *user)
+ismd_job *ismd_jobs_create(ismd_jobs *j, const char *key, const char *fmt, const char *user,
+                           ismd_jobs_refusal *why)
 {
     long long now = ism_now_ns();
     sweep(j, now);
-    if (j->count >= MAX_JOBS)
+    if ((*why = make_room(j, user)) != ISMD_JOBS_OK)
         return NULL;
+    *why = ISMD_JOBS_TABLE_FULL; /* out of memory from here on */
     ismd_job *job = calloc(1, sizeof *job);
     if (!job)
         return NULL;
     unsigned char rnd[16];
-    if (getrandom(rnd, sizeof rnd, 0) != (ssize_t)sizeof rnd) {
+    if (getrandom(rnd, sizeof rnd, 0) != (ssize_t)sizeof rnd || !user_count(j, user, +1)) {
         free(job);
         return NULL;
     }
+    *why = ISMD_JOBS_OK;
     for (int i = 0; i < 16; i++)
         snprintf(job->id + 2 * i, 3, "%02x", rnd[i]);
     snprintf(job->key, sizeof job->key, "%s", key);

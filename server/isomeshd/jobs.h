@@ -4,7 +4,9 @@
  * a job: each change resumes the suspended stream, which sends the latest state (progress
  * events coalesce when a client reads slowly) and ends after the final state.
  *
- * Finished jobs are kept for a while (JOB_TTL in jobs.c) and the table is bounded. All calls
+ * Finished jobs are kept for a while (JOB_TTL in jobs.c) and the table is bounded, per user
+ * and in all (USER_JOBS_KEPT, MAX_JOBS): one user's flood of posts evicts that user's own
+ * oldest finished records, never another user's, and never a live one. All calls
  * below need the scheduler's lock (ismd_sched_lock) unless they say otherwise. */
 #ifndef ISMD_JOBS_H
 #define ISMD_JOBS_H
@@ -28,9 +30,16 @@ typedef enum ismd_job_state {
 ismd_jobs *ismd_jobs_new(ismd_metrics *metrics);
 void ismd_jobs_free(ismd_jobs *j);
 
-/* A new queued job of user for key.fmt (NULL when the table is full of live jobs). Its waiter
- * is ismd_job_waiter(job); submit it to the scheduler, then call ismd_jobs_submitted. */
-ismd_job *ismd_jobs_create(ismd_jobs *j, const char *key, const char *fmt, const char *user);
+typedef enum ismd_jobs_refusal {
+    ISMD_JOBS_OK,
+    ISMD_JOBS_USER_FULL,   /* every record the user may keep is a live job (429) */
+    ISMD_JOBS_TABLE_FULL,  /* the table is full of live jobs, or out of memory (503) */
+} ismd_jobs_refusal;
+
+/* A new queued job of user for key.fmt, or NULL with *why. Its waiter is
+ * ismd_job_waiter(job); submit it to the scheduler, then call ismd_jobs_submitted. */
+ismd_job *ismd_jobs_create(ismd_jobs *j, const char *key, const char *fmt, const char *user,
+                           ismd_jobs_refusal *why);
 ismd_waiter *ismd_job_waiter(ismd_job *job);
 /* After a successful submission: takes the flight's current state (a joined flight may
  * already be running). */

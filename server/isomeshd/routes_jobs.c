@@ -61,12 +61,17 @@ enum MHD_Result ismd_route_jobs_post(ismd_req *r)
     r->cache = hit ? "hit" : "miss";
 
     ismd_sched_lock(&s->sched);
-    ismd_job *job = ismd_jobs_create(s->jobs, r->key, r->fmt, r->who.user);
+    ismd_jobs_refusal why;
+    ismd_job *job = ismd_jobs_create(s->jobs, r->key, r->fmt, r->who.user, &why);
     if (!job) {
         ismd_sched_unlock(&s->sched);
         ism_blob_unref(hit);
         ism_blob_unref(stats);
         ism_blob_unref(canonical);
+        if (why == ISMD_JOBS_USER_FULL)
+            return ismd_respond_error(r, 429, "too_many_jobs",
+                                      "every job record you may keep is a live job; wait for "
+                                      "one to finish");
         return ismd_respond_error(r, 503, "too_many_jobs", "the job table is full; retry later");
     }
     if (hit) {
