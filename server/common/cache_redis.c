@@ -32,6 +32,14 @@
 static const char RENEW_LUA[] =
     "if redis.call('get', KEYS[1]) == ARGV[1] then "
     "return redis.call('pexpire', KEYS[1], ARGV[2]) else return 0 end";
+/* A lock without expiry, or with more of it left than any daemon ever gives (left by a bug,
+ * an older version or an operator), would stop every daemon from computing that entry
+ * forever: it is removed, and the caller told (2). Else 1 held, 0 free. */
+static const char LOCKED_LUA[] =
+    "local t = redis.call('pttl', KEYS[1]) "
+    "if t == -2 then return 0 end "
+    "if t == -1 or t > tonumber(ARGV[1]) then redis.call('del', KEYS[1]) return 2 end "
+    "return 1";
 static const char UNLOCK_LUA[] =
     "if redis.call('get', KEYS[1]) == ARGV[1] then "
     "return redis.call('del', KEYS[1]) else return 0 end";
@@ -444,10 +452,6 @@ int ism_cache_redis_count(ism_cache_tier *t, const char *const *names, size_t n)
     return exists((redis_tier *)t, KEY_PREFIX, names, n);
 }
 
-int ism_cache_redis_locked(ism_cache_tier *t, const char *name)
-{
-    return exists((redis_tier *)t, LOCK_PREFIX, &name, 1);
-}
 
 int ism_cache_redis_lock(ism_cache_tier *t, const char *name, const char *token, long ttl_ms)
 {
@@ -476,6 +480,19 @@ static int script(redis_tier *rt, const char *what, const char *lua, const char 
     size_t lens[] = {4, strlen(lua), 1, strlen(key), strlen(token), extra ? strlen(extra) : 0};
     long long v = int_command(rt, what, extra ? 6 : 5, argv, lens);
     return v < 0 ? -1 : v > 0;
+}
+
+int ism_cache_redis_locked(ism_cache_tier *t, const char *name, long max_ttl_ms)
+{
+    redis_tier *rt = (redis_tier *)t;
+    char key[KEY_MAX], ttl[24];
+    if (!rt->ctx || !entry_key(key, LOCK_PREFIX, name))
+        return -1;
+    snprintf(ttl, sizeof ttl, "%ld", max_ttl_ms);
+    const char *argv[] = {"EVAL", LOCKED_LUA, "1", key, ttl};
+    size_t lens[] = {4, strlen(LOCKED_LUA), 1, strlen(key), strlen(ttl)};
+    long long v = int_command(rt, "locked", 5, argv, lens);
+    return v < 0 ? -1 : (int)v;
 }
 
 int ism_cache_redis_renew(ism_cache_tier *t, const char *name, const char *token, long ttl_ms)

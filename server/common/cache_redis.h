@@ -54,6 +54,7 @@ typedef struct ism_redis_counters {
     atomic_ullong lock_waits;            /* computations found running elsewhere and awaited */
     atomic_ullong lock_takeovers;        /* awaited computations taken over (lock freed or expired) */
     atomic_ullong locks_lost;            /* locks that expired while still computing */
+    atomic_ullong stale_locks;           /* locks without a daemon's expiry found and removed */
     atomic_ullong fallbacks;             /* computations done locally because Redis was down */
 } ism_redis_counters;
 
@@ -88,8 +89,9 @@ bool ism_cache_redis_up(ism_cache_tier *t);
 int ism_cache_redis_fetch(ism_cache_tier *t, const char *const *names, size_t n, ism_blob **out);
 /* How many of names[0..n) exist (n at most 8). */
 int ism_cache_redis_count(ism_cache_tier *t, const char *const *names, size_t n);
-/* 1 when someone holds the lock of name, 0 when nobody does. */
-int ism_cache_redis_locked(ism_cache_tier *t, const char *name);
+/* 1 when someone holds the lock of name, 0 when nobody does, 2 when a stale lock was found
+ * and removed: one without expiry or lasting longer than max_ttl_ms (no daemon sets such). */
+int ism_cache_redis_locked(ism_cache_tier *t, const char *name, long max_ttl_ms);
 /* 1 when the lock of name was free and is now held with token for ttl_ms, 0 when taken. */
 int ism_cache_redis_lock(ism_cache_tier *t, const char *name, const char *token, long ttl_ms);
 /* 1 when token still held the lock and it now lasts ttl_ms more, 0 when it was lost. */

@@ -64,7 +64,10 @@ static const flag FLAGS[] = {
      "lifetime of a computation's lock in Redis, extended while it runs: the longest wait "
      "for a daemon that died mid-computation; at least 500ms [10s]"},
     {"job-timeout", K_DURATION, 0, 0, "TIME",
-     "deadline of one computation from submission, e.g. 90s, 500ms [60s]"},
+     "deadline of one computation from its start on a worker, e.g. 90s, 500ms [60s]"},
+    {"queue-timeout", K_DURATION, 0, 0, "TIME",
+     "longest wait of a computation for a free worker; past it the request gets 503 "
+     "queue_timeout (a synchronous request waits at most queue-timeout + job-timeout) [60s]"},
     {"job-memory", K_SIZE, 0, (long long)1 << 42, "BYTES",
      "address-space limit of each worker process; 0 = none [4G]"},
     {"max-body", K_SIZE, 1024, (long long)64 << 20, "BYTES", "largest request body [256K]"},
@@ -268,6 +271,8 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
             if (d < 1)
                 return false;
             cfg->conn_timeout_s = (unsigned)(d + 0.5);
+        } else if (!strcmp(name, "queue-timeout")) {
+            cfg->queue_timeout_s = d;
         } else {
             cfg->job_timeout_s = d;
         }
@@ -386,6 +391,7 @@ static void set_defaults(ismd_config *cfg)
     cfg->conn_timeout_s = 30;
     cfg->client_conns = 512;
     cfg->job_timeout_s = 60;
+    cfg->queue_timeout_s = 60;
     cfg->job_memory = (size_t)4 << 30;
     cfg->max_body = (size_t)256 << 10;
     cfg->max_depth = 10;

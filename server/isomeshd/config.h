@@ -21,7 +21,8 @@ typedef struct ismd_config {
     char cache_dir[4096];
     size_t cache_mem;         /* bytes of the in-memory LRU */
     unsigned long long cache_disk_max; /* bytes the disk cache may hold (0 = no bound) */
-    double job_timeout_s;     /* deadline of one computation, from submission */
+    double job_timeout_s;     /* deadline of one computation, from its start on a worker */
+    double queue_timeout_s;   /* longest wait for a worker (503 queue_timeout beyond) */
     size_t job_memory;        /* RLIMIT_AS of a worker process (0 = unlimited) */
     size_t max_body;          /* request body bytes */
     unsigned conn_timeout_s;  /* an idle connection (not waiting for a computation) is closed */

@@ -182,6 +182,45 @@ static ismd_flight *fifo_pop(ismd_queue *q)
     return pop_with(q, fifo_before);
 }
 
+static bool fair_starving(const ismd_queue *q)
+{
+    for (const ismd_qline *l = ((const uqueue *)q)->lines; l; l = l->next)
+        if (l->running == 0 && may_run(l))
+            return true;
+    return false;
+}
+
+static bool fifo_starving(const ismd_queue *q)
+{
+    (void)q;
+    return false; /* the reference order: served as it came, nobody preempted */
+}
+
+static int q_user_running(const ismd_queue *q, const ismd_flight *f)
+{
+    (void)q;
+    return f->qline ? f->qline->running : 0;
+}
+
+static void q_requeue(ismd_queue *q, ismd_flight *f)
+{
+    uqueue *x = (uqueue *)q;
+    ismd_qline *l = f->qline;
+    if (!l || !f->running)
+        return;
+    l->running--;
+    f->qprev = NULL;
+    f->qnext = l->head;
+    if (l->head)
+        l->head->qprev = f;
+    else
+        l->tail = f;
+    l->head = f;
+    l->queued++;
+    x->len++;
+    f->queued = true;
+}
+
 static size_t q_length(const ismd_queue *q)
 {
     return ((const uqueue *)q)->len;
@@ -213,12 +252,14 @@ static void q_destroy(ismd_queue *q)
 
 static const ismd_queue_ops FAIR_OPS = {
     .name = "fair", .push = q_push, .pop = fair_pop, .drop = q_drop,
-    .length = q_length, .users = q_users, .destroy = q_destroy,
+    .length = q_length, .starving = fair_starving, .user_running = q_user_running,
+    .requeue = q_requeue, .users = q_users, .destroy = q_destroy,
 };
 
 static const ismd_queue_ops FIFO_OPS = {
     .name = "fifo", .push = q_push, .pop = fifo_pop, .drop = q_drop,
-    .length = q_length, .users = q_users, .destroy = q_destroy,
+    .length = q_length, .starving = fifo_starving, .user_running = q_user_running,
+    .requeue = q_requeue, .users = q_users, .destroy = q_destroy,
 };
 
 ismd_queue *ismd_queue_new(size_t capacity, ismd_queue_order order, int user_jobs,

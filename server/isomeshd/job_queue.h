@@ -53,6 +53,13 @@ typedef struct ismd_queue_ops {
      * flight leaves its line, a running one stops counting against its user. */
     void (*drop)(ismd_queue *q, ismd_flight *f);
     size_t (*length)(const ismd_queue *q);
+    /* True when a user with nothing running has a flight waiting that may run (fair order
+     * only: the pool then frees a worker from a user holding several, see sched.h). */
+    bool (*starving)(const ismd_queue *q);
+    /* Computations of f's user running now. */
+    int (*user_running)(const ismd_queue *q, const ismd_flight *f);
+    /* A running f goes back to the head of its user's line (it was preempted). */
+    void (*requeue)(ismd_queue *q, ismd_flight *f);
     /* Fills up to max users with work; returns how many there are in all. */
     size_t (*users)(const ismd_queue *q, ismd_user_load *out, size_t max);
     void (*destroy)(ismd_queue *q);

@@ -27,7 +27,7 @@ static const double POLY_BOUNDS[ISMD_POLY_BUCKETS - 1] = {
     0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 30, 60, 300};
 
 static const char *const RESTART_LABELS[ISMD_RESTART_COUNT] = {"crash", "deadline", "cancel",
-                                                                "protocol"};
+                                                                "protocol", "preempt"};
 static const char *const OUTCOME_LABELS[ISMD_OUT_COUNT] = {"ok", "rejected", "error",
                                                            "deadline", "crash", "canceled"};
 
@@ -206,6 +206,9 @@ static void render_redis(out *o, struct ism_redis_counters *c)
          offsetof(ism_redis_counters, lock_takeovers)},
         {"isomesh_redis_locks_lost_total", "Locks that expired while their computation ran.",
          offsetof(ism_redis_counters, locks_lost)},
+        {"isomesh_redis_stale_locks_total",
+         "Locks without a daemon's expiry (set by hand or a bug) found and removed.",
+         offsetof(ism_redis_counters, stale_locks)},
         {"isomesh_redis_fallbacks_total",
          "Computations done here without asking Redis (it was unreachable).",
          offsetof(ism_redis_counters, fallbacks)},
@@ -270,6 +273,10 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
     header(&o, "isomesh_singleflight_joins_total", "counter",
            "Requests that joined an identical computation already in flight.");
     emit(&o, "isomesh_singleflight_joins_total %llu\n", ld(&m->singleflight_joins));
+    header(&o, "isomesh_preemptions_total", "counter",
+           "Computations sent back to their user's line so that a user with nothing running "
+           "got a worker.");
+    emit(&o, "isomesh_preemptions_total %llu\n", ld(&m->preemptions));
     header(&o, "isomesh_polygonise_seconds", "histogram",
            "Worker wall time per finished computation (polygonise, analyse, encode).");
     histogram(&o, "isomesh_polygonise_seconds", "", &m->polygonise, POLY_BOUNDS,

@@ -24,6 +24,7 @@ const char *ismd_route_label(ismd_route r);
 
 typedef enum ismd_restart_reason {
     ISMD_RESTART_CRASH, ISMD_RESTART_DEADLINE, ISMD_RESTART_CANCEL, ISMD_RESTART_PROTOCOL,
+    ISMD_RESTART_PREEMPT,
     ISMD_RESTART_COUNT
 } ismd_restart_reason;
 
@@ -46,6 +47,8 @@ typedef struct ismd_metrics {
     atomic_ullong computations_started;      /* worker jobs dispatched to a new computation */
     atomic_ullong computations[ISMD_OUT_COUNT];
     atomic_ullong singleflight_joins;        /* requests that joined a computation in flight */
+    atomic_ullong preemptions;               /* computations sent back to their user's line so
+                                                a user with nothing running got a worker */
     atomic_ullong worker_restarts[ISMD_RESTART_COUNT];
     atomic_ullong worker_spawn_failures;
     ismd_histogram polygonise;               /* worker wall time per finished computation */

@@ -13,7 +13,7 @@
 #include "server/isomeshd/errors.h"
 
 bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s,
-                     ismd_metrics *metrics)
+                     double queue_timeout_s, ismd_metrics *metrics)
 {
     memset(s, 0, sizeof *s);
     s->nbuckets = 256;
@@ -23,6 +23,7 @@ bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s,
     pthread_mutex_init(&s->lock, NULL);
     s->queue = queue;
     s->job_timeout_s = job_timeout_s;
+    s->queue_timeout_s = queue_timeout_s;
     s->metrics = metrics;
     s->next_id = 1;
     atomic_store(&metrics->queue_capacity, (long long)queue->capacity);
@@ -75,6 +76,11 @@ static void waiter_unlink(ismd_waiter *w)
     w->prev = w->next = NULL;
     w->flight = NULL;
     f->nwaiters--;
+}
+
+static long long seconds_ns(double s)
+{
+    return (long long)(s * 1e9);
 }
 
 static void publish_queue(ismd_sched *s)
@@ -148,7 +154,9 @@ ismd_submit ismd_sched_submit(ismd_sched *s, const char *key, const char *fmt,
     s->next_id++;
     f->request = ism_blob_ref(request);
     f->submitted_ns = ism_now_ns();
-    f->deadline_ns = f->submitted_ns + (long long)(s->job_timeout_s * 1e9);
+    /* awaiting another daemon: its wait for a worker and its computation */
+    f->deadline_ns = f->submitted_ns + seconds_ns(s->queue_timeout_s) +
+                     (f->shared ? seconds_ns(s->job_timeout_s) : 0);
     f->hnext = NULL;
     *slot = f;
     f->aprev = s->all_tail;
@@ -248,6 +256,7 @@ ismd_flight *ismd_sched_next(ismd_sched *s)
     publish_queue(s);
     f->running = true;
     f->started_ns = ism_now_ns();
+    f->deadline_ns = f->started_ns + seconds_ns(s->job_timeout_s);
     struct timespec wall;
     clock_gettime(CLOCK_REALTIME, &wall);
     f->started_unix_ms = (long long)wall.tv_sec * 1000 + wall.tv_nsec / 1000000;
@@ -259,6 +268,7 @@ ismd_flight *ismd_sched_next(ismd_sched *s)
 size_t ismd_sched_expire(ismd_sched *s, long long now_ns, ismd_flight **expired, size_t max)
 {
     size_t n = 0;
+    char msg[200];
     ismd_flight *f = s->all_head;
     while (f) {
         ismd_flight *next = f->anext;
@@ -266,10 +276,15 @@ size_t ismd_sched_expire(ismd_sched *s, long long now_ns, ismd_flight **expired,
             if (f->running) {
                 if (n < max)
                     expired[n++] = f;
-            } else {
+            } else if (f->shared) {
                 ismd_sched_fail(s, f, 504, "deadline_exceeded",
-                                "the computation waited past its deadline (--job-timeout) "
-                                "for a free worker", ISMD_OUT_DEADLINE);
+                                "the computation on another daemon did not finish in time "
+                                "(--queue-timeout + --job-timeout)", ISMD_OUT_DEADLINE);
+            } else {
+                snprintf(msg, sizeof msg, "no worker became free for this computation within "
+                         "%g s (--queue-timeout); every worker is busy, retry later",
+                         s->queue_timeout_s);
+                ismd_sched_fail(s, f, 503, "queue_timeout", msg, ISMD_OUT_DEADLINE);
             }
         }
         f = next;
@@ -284,6 +299,35 @@ long long ismd_sched_next_deadline(const ismd_sched *s)
         if (f->deadline_ns < best)
             best = f->deadline_ns;
     return best;
+}
+
+ismd_flight *ismd_sched_preempt_victim(ismd_sched *s)
+{
+    const ismd_queue_ops *q = s->queue->ops;
+    if (!q->starving(s->queue))
+        return NULL;
+    ismd_flight *best = NULL;
+    int best_n = 1; /* a user must hold at least two workers to lose one */
+    for (ismd_flight *f = s->all_head; f; f = f->anext) {
+        if (!f->running)
+            continue;
+        int n = q->user_running(s->queue, f);
+        if (n > best_n || (best && n == best_n && f->started_ns >= best->started_ns)) {
+            best = f;
+            best_n = n;
+        }
+    }
+    return best;
+}
+
+void ismd_sched_requeue(ismd_sched *s, ismd_flight *f)
+{
+    s->queue->ops->requeue(s->queue, f);
+    f->running = false;
+    f->deadline_ns = ism_now_ns() + seconds_ns(s->queue_timeout_s);
+    atomic_fetch_add(&s->metrics->preemptions, 1);
+    publish_queue(s);
+    ismd_sched_progress(s, f, 0);
 }
 
 void ismd_sched_drain(ismd_sched *s)
@@ -310,6 +354,7 @@ ismd_flight *ismd_sched_find(ismd_sched *s, const char *name)
 bool ismd_sched_enqueue(ismd_sched *s, ismd_flight *f)
 {
     f->shared = false;
+    f->deadline_ns = ism_now_ns() + seconds_ns(s->queue_timeout_s);
     s->queue->slack = idle_workers(s);
     ismd_push p = s->queue->ops->push(s->queue, f, &f->lim);
     if (p == ISMD_PUSH_OK) {

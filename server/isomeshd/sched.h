@@ -54,7 +54,9 @@ struct ismd_flight {
     bool shared;               /* asking the shared cache first: neither queued nor running */
     ismd_user_limits lim;      /* the user's limits, for queueing after the shared cache */
     double progress;
-    long long submitted_ns, started_ns, deadline_ns;
+    long long submitted_ns, started_ns;
+    long long deadline_ns;     /* queued: the end of its wait (--queue-timeout); running: of
+                                  its computation (--job-timeout, from its start) */
     long long started_unix_ms; /* wall-clock start (for job views), set with started_ns */
     ismd_waiter waiters;       /* list sentinel */
     size_t nwaiters;
@@ -83,7 +85,8 @@ typedef struct ismd_sched {
     ismd_queue *queue;
     uint64_t next_id;
     bool draining;
-    double job_timeout_s;
+    double job_timeout_s;      /* a computation's time on a worker */
+    double queue_timeout_s;    /* a computation's wait for a worker */
     ismd_metrics *metrics;
     void (*wake)(void *ctx);   /* tells the pool thread to look again (set by the pool) */
     void *wake_ctx;
@@ -94,7 +97,7 @@ typedef struct ismd_sched {
 } ismd_sched;
 
 bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s,
-                     ismd_metrics *metrics);
+                     double queue_timeout_s, ismd_metrics *metrics);
 void ismd_sched_destroy(ismd_sched *s);
 void ismd_sched_lock(ismd_sched *s);
 void ismd_sched_unlock(ismd_sched *s);
@@ -125,12 +128,22 @@ void ismd_sched_progress(ismd_sched *s, ismd_flight *f, double fraction);
 /* The next queued flight, now marked running (NULL when none). */
 ismd_flight *ismd_sched_next(ismd_sched *s);
 
-/* Finishes every flight past its deadline with 504 that is queued; running ones are
- * returned through expired[] (up to max) for the pool to kill. Returns how many. */
+/* Finishes every flight past its deadline that is not running: 503 queue_timeout when it
+ * waited for a worker, 504 when it awaited another daemon's computation. Running ones are
+ * returned through expired[] (up to max) for the pool to kill (504). Returns how many. */
 size_t ismd_sched_expire(ismd_sched *s, long long now_ns, ismd_flight **expired, size_t max);
 
 /* Earliest deadline of any flight (LLONG_MAX when none). */
 long long ismd_sched_next_deadline(const ismd_sched *s);
+
+/* Preemption, so that users who each hold a worker with endless work cannot keep another
+ * user's request from one: when a user with nothing running waits (fair order) and every
+ * worker is busy, the flight to take back is the latest started of the user holding the
+ * most workers, if that user holds at least two. NULL when none should be. */
+ismd_flight *ismd_sched_preempt_victim(ismd_sched *s);
+/* A running flight goes back to the head of its user's line, its waiters told it is queued
+ * again (the pool stops its worker). */
+void ismd_sched_requeue(ismd_sched *s, ismd_flight *f);
 
 /* Stops accepting flights and fails every queued one with 503. */
 void ismd_sched_drain(ismd_sched *s);

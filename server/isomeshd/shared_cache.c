@@ -211,6 +211,14 @@ static void unref_all(ism_blob **b, size_t n)
         ism_blob_unref(b[i]);
 }
 
+/* A lock no daemon would have set (no expiry, or a longer one) was removed: say so once. */
+static void stale_lock_removed(task *k)
+{
+    atomic_fetch_add(&k->sh->counters->stale_locks, 1);
+    ism_log_field f[] = {ISM_LS("name", k->name), ISM_LI("max_ttl_ms", k->sh->ttl_ms)};
+    ism_log_fields(ISM_LOG_WARN, "redis_stale_lock_removed", f, 2);
+}
+
 /* Look in Redis; answer, wait, or take the lock and queue the flight. */
 static long long look(task *k, ism_cache_tier *t, long long now)
 {
@@ -220,10 +228,12 @@ static long long look(task *k, ism_cache_tier *t, long long now)
         return task_end(k, t);
     if (!ism_cache_redis_up(t))
         return go_local(k, t);
-    int locked = ism_cache_redis_locked(t, k->name);
+    int locked = ism_cache_redis_locked(t, k->name, sh->ttl_ms);
     if (locked < 0)
         return go_local(k, t);
-    if (locked)
+    if (locked == 2)
+        stale_lock_removed(k);
+    else if (locked)
         return wait_more(k, now); /* computing elsewhere (or writing its results out) */
 
     char names[4][ISM_CACHE_NAME_MAX];

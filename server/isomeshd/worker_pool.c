@@ -217,7 +217,7 @@ static void kill_worker(ismd_pool *p, worker *w, ismd_restart_reason why)
     w->state = W_DYING;
     w->flight = NULL;
     atomic_fetch_add(&p->metrics->worker_restarts[why], 1);
-    static const char *const names[] = {"crash", "deadline", "cancel", "protocol"};
+    static const char *const names[] = {"crash", "deadline", "cancel", "protocol", "preempt"};
     ism_log_field f[] = {ISM_LI("pid", w->pid), ISM_LS("reason", names[why])};
     ism_log_fields(ISM_LOG_WARN, "worker_killed", f, 2);
     publish_workers(p);
@@ -550,6 +550,25 @@ static worker *worker_of(ismd_pool *p, const ismd_flight *f)
     return NULL;
 }
 
+/* Every worker busy and a user with nothing running waits: the scheduler names a flight of a
+ * user holding several workers; it goes back to its line and its worker is returned (to be
+ * stopped). Scheduler lock held. */
+static worker *preempt(ismd_pool *p)
+{
+    for (int i = 0; i < p->n; i++)
+        if (p->w[i].state != W_BUSY || !p->w[i].flight)
+            return NULL; /* a worker is or will soon be free */
+    ismd_flight *f = ismd_sched_preempt_victim(p->sched);
+    worker *w = f ? worker_of(p, f) : NULL;
+    if (!w)
+        return NULL;
+    ism_log_field lf[] = {ISM_LS("job", f->name), ISM_LS("user", f->user)};
+    ism_log_fields(ISM_LOG_INFO, "computation_preempted", lf, 2);
+    ismd_sched_requeue(p->sched, f);
+    w->flight = NULL;
+    return w;
+}
+
 static void enforce(ismd_pool *p, long long now)
 {
     ismd_flight *expired[MAX_EXPIRED];
@@ -579,6 +598,11 @@ static void enforce(ismd_pool *p, long long now)
             doomed[nd] = w;
             why[nd++] = ISMD_RESTART_CANCEL;
         }
+    }
+    worker *taken = preempt(p);
+    if (taken && nd < sizeof doomed / sizeof doomed[0]) {
+        doomed[nd] = taken;
+        why[nd++] = ISMD_RESTART_PREEMPT;
     }
     ismd_sched_unlock(p->sched);
     for (size_t i = 0; i < nd; i++)

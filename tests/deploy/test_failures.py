@@ -9,11 +9,14 @@ Redis, two daemons and nginx on loopback (all started and stopped here):
 * Redis frozen (SIGSTOP, connections accepted but never answered): both daemons keep
   answering, bounded by their short Redis timeouts;
 * the daemon computing a mesh that another awaits is killed: the lock expires and the waiter
-  takes the computation over."""
+  takes the computation over;
+* a lock key left in Redis without expiry (or with one no daemon gives) by hand or a bug: the
+  next request for that entry removes it, logs it and computes at once."""
 import os
 import signal
 import sys
 import threading
+import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -163,6 +166,27 @@ class FailureTest(unittest.TestCase):
         self.assertEqual(self.b.metric("isomesh_redis_lock_takeovers_total"), 1)
         self.assertEqual(started(self.b), 1)
         self.assertIsInstance(box["a"], Exception, "the killed daemon never answered")
+
+    def test_a_lock_without_expiry_is_removed_and_the_mesh_computed(self):
+        r = self.a.post("/v1/mesh", sphere(0.71))
+        self.assertEqual(r.status, 200)
+        key = r.header("ETag").strip('"')
+        redis = self.s.redis
+        # the formats nobody computed yet: locked by hand, forever and for a day
+        redis.command("SET", "isomesh:v1:lock:%s.ply" % key, "operator")
+        redis.command("SET", "isomesh:v1:lock:%s.obj" % key, "operator", "EX", "86400")
+        for fmt, n in (("ply", 1), ("obj", 2)):
+            t0 = time.monotonic()
+            got = self.b.get("/v1/meshes/%s.%s" % (key, fmt), timeout=60)
+            took = time.monotonic() - t0
+            self.assertEqual(got.status, 200, got.body[:300])
+            self.assertTrue(got.body.startswith(b"ply") if fmt == "ply" else b"\nf " in got.body)
+            self.assertLess(took, 5.0)  # not the 60 s deadline a stuck lock used to cost
+            self.assertEqual(self.b.metric("isomesh_redis_stale_locks_total"), n)
+            self.assertEqual(log_count(self.b, "redis_stale_lock_removed"), n)
+        # the daemons' own locks are gone once their computations end
+        self.assertTrue(stack.wait_until(
+            lambda: redis.command("EXISTS", "isomesh:v1:lock:%s.ply" % key) == 0, 10))
 
 
 if __name__ == "__main__":

@@ -1,0 +1,166 @@
+"""test_lockout.py — a daemon that a few users cannot lock (issue 17), each red-team case on a
+real isomeshd: one user's flood of job posts evicts only that user's own finished job records
+(another user's record stays readable); hopeless requests from several users do not keep a
+small request of another user from a worker; a request's deadline counts its time on a worker,
+and its wait for one has its own bound (--queue-timeout) answered with a clear 503.
+
+Bounded everywhere: the hopeless requests are stopped by the daemon's shutdown, every wait has
+a deadline, and no assertion depends on how fast this machine computes except the generous
+bound on the small request (a sphere at depth 5 takes milliseconds; the bound is seconds)."""
+import http.client
+import json
+import os
+import sys
+import threading
+import time
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from reltools import Daemon, http_request, sphere  # noqa: E402
+
+USER_JOBS_KEPT = 1000  # jobs.c: records one user keeps
+
+
+def hopeless(k):
+    """Cheap to send, never resolves: the zero set oscillates below any cell size, so the
+    octree refines everywhere up to the deadline. Distinct k, distinct computations."""
+    return {"expr": "sin(1e300*x) + %g*y" % k, "depth": {"max": 10}}
+
+
+def post_from(port, source, path, body, timeout=60):
+    return http_request(port, "POST", path, body, timeout=timeout, source=source)
+
+
+def wait_until(what, check, timeout=30):
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        v = check()
+        if v:
+            return v
+        time.sleep(0.02)
+    raise AssertionError("timed out waiting for " + what)
+
+
+class JobRecordsTest(unittest.TestCase):
+    def test_one_users_flood_of_job_posts_keeps_other_users_records(self):
+        with Daemon("--workers", "1") as d:
+            bob = post_from(d.port, "127.0.0.2", "/v1/jobs", sphere(0.5)).json()
+            wait_until("bob's job", lambda: http_request(d.port, "GET", bob["url"],
+                                                          source="127.0.0.2").json()["state"] == "done")
+            # alice: more posts than one user's records, on one keep-alive connection (the
+            # mesh is cached by now, so every job is finished at once)
+            conn = http.client.HTTPConnection("127.0.0.1", d.port, timeout=60)
+            ids = []
+            body = json.dumps(sphere(0.5)).encode()
+            try:
+                for _ in range(USER_JOBS_KEPT + 100):
+                    conn.request("POST", "/v1/jobs", body=body,
+                                 headers={"Content-Type": "application/json"})
+                    r = conn.getresponse()
+                    self.assertEqual(r.status, 202)
+                    ids.append(json.loads(r.read())["id"])
+            finally:
+                conn.close()
+            # bob's record is still there, alice's own oldest are the ones that went
+            again = http_request(d.port, "GET", bob["url"], source="127.0.0.2")
+            self.assertEqual(again.status, 200)
+            self.assertEqual(again.json()["state"], "done")
+            self.assertEqual(d.get("/v1/jobs/" + ids[0]).status, 404)
+            self.assertEqual(d.get("/v1/jobs/" + ids[99]).status, 404)
+            self.assertEqual(d.get("/v1/jobs/" + ids[100]).status, 200)
+            self.assertEqual(d.get("/v1/jobs/" + ids[-1]).status, 200)
+
+
+def server_timing(r, name):
+    """The duration (ms) of one Server-Timing entry."""
+    for part in (r.header("Server-Timing") or "").split(","):
+        k, _, v = part.strip().partition(";dur=")
+        if k == name:
+            return float(v)
+    return None
+
+
+class HopelessUsersTest(unittest.TestCase):
+    def test_hopeless_requests_of_three_users_leave_a_worker_for_a_fourth(self):
+        # 4 workers; 3 users (3 addresses) send 2 hopeless jobs each: one user ends up with 2
+        # workers, the others with 1 each (a user with nothing running who finds every worker
+        # busy takes one back from a user holding two) -- every worker busy until its deadline
+        with Daemon("--workers", "4", "--job-timeout", "60s") as d:
+            jobs = []
+            for user in ("127.0.0.2", "127.0.0.3", "127.0.0.4"):
+                for i in range(2):
+                    r = post_from(d.port, user, "/v1/jobs", hopeless(len(jobs) + 1))
+                    self.assertEqual(r.status, 202, r.body[:200])
+                    jobs.append((user, r.json()))
+            wait_until("every worker busy, 2 jobs queued",
+                       lambda: d.metric("isomesh_workers_busy") == 4
+                       and d.metric("isomesh_queue_depth") == 2)
+            before = d.metric("isomesh_preemptions_total")
+            try:
+                running = [u for u, j in jobs if http_request(d.port, "GET", j["url"], source=u)
+                           .json()["state"] == "running"]
+                self.assertEqual(len(running), 4)
+                self.assertEqual(set(running), {"127.0.0.2", "127.0.0.3", "127.0.0.4"})
+                t0 = time.monotonic()
+                small = post_from(d.port, "127.0.0.5", "/v1/mesh",
+                                  {"expr": "x^2 + y^2 + z^2 - 0.25", "depth": {"max": 5}})
+                took = time.monotonic() - t0
+                self.assertEqual(small.status, 200, small.body[:300])
+                self.assertLess(took, 5.0)
+                # one computation of the user holding two workers went back to its line
+                self.assertEqual(d.metric("isomesh_preemptions_total"), before + 1)
+                self.assertEqual(d.metric("isomesh_worker_restarts_total", reason="preempt"),
+                                 before + 1)
+                states = [http_request(d.port, "GET", j["url"], source=u).json()["state"]
+                          for u, j in jobs]
+                self.assertEqual(states.count("running") + states.count("queued"), 6, states)
+                # and gets its worker back once the small request is done
+                wait_until("the hopeless jobs all running again",
+                           lambda: d.metric("isomesh_workers_busy") == 4
+                           and d.metric("isomesh_queue_depth") == 2)
+            finally:
+                for u, j in jobs:
+                    http_request(d.port, "DELETE", j["url"], source=u)
+
+
+class QueueDeadlineTest(unittest.TestCase):
+    def test_the_deadline_counts_time_on_a_worker_not_the_wait_for_one(self):
+        # one worker held by a hopeless job until its 3 s deadline; a small request queued
+        # behind it waits about that long, then computes in milliseconds: answered, not 504
+        with Daemon("--workers", "1", "--job-timeout", "3s", "--queue-timeout", "30s") as d:
+            blocker = d.post("/v1/jobs", hopeless(1)).json()
+            wait_until("the blocker running", lambda: d.get(blocker["url"]).json()["state"] == "running")
+            small = post_from(d.port, "127.0.0.2", "/v1/mesh",
+                              {"expr": "x^2 + y^2 + z^2 - 0.25", "depth": {"max": 5}})
+            self.assertEqual(small.status, 200, small.body[:300])
+            self.assertGreater(server_timing(small, "queue"), 1000)  # it did wait
+            self.assertEqual(d.get(blocker["url"]).json()["error"]["code"], "deadline_exceeded")
+
+    def test_a_wait_past_the_queue_timeout_is_a_clear_503(self):
+        with Daemon("--workers", "1", "--job-timeout", "60s", "--queue-timeout", "1s") as d:
+            blocker = d.post("/v1/jobs", hopeless(1)).json()
+            try:
+                wait_until("the blocker running",
+                           lambda: d.get(blocker["url"]).json()["state"] == "running")
+                t0 = time.monotonic()
+                r = post_from(d.port, "127.0.0.2", "/v1/mesh", sphere(0.4))
+                took = time.monotonic() - t0
+                self.assertEqual(r.status, 503, r.body[:300])
+                self.assertEqual(r.json()["error"]["code"], "queue_timeout")
+                self.assertIn("--queue-timeout", r.json()["error"]["message"])
+                self.assertIsNotNone(r.header("Retry-After"))
+                self.assertGreater(took, 0.9)
+                self.assertLess(took, 10)
+                # the same for a job: failed with that error, the blocker untouched
+                job = post_from(d.port, "127.0.0.2", "/v1/jobs", sphere(0.41)).json()
+                got = wait_until("the job failing", lambda: (lambda j: j if j["state"] == "failed"
+                                                             else None)(
+                    http_request(d.port, "GET", job["url"], source="127.0.0.2").json()))
+                self.assertEqual((got["status"], got["error"]["code"]), (503, "queue_timeout"))
+                self.assertEqual(d.get(blocker["url"]).json()["state"], "running")
+            finally:
+                d.request("DELETE", blocker["url"])
+
+
+if __name__ == "__main__":
+    unittest.main()
