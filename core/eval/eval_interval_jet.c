@@ -1,0 +1,429 @@
+/* eval_interval_jet.c — interval forward-mode differentiation (interval_jet.h): every register
+ * carries interval enclosures of a value, its 3 first and (second order only) its 6 second
+ * partial derivatives over the box. The rules are those of eval_hessian.c written with the
+ * outward-rounded operations of interval_ops.h; one-argument operations go through the chain
+ * rule d = g'(U) u', h = g'(U) u'' + g''(U) u' u'^T with interval g'(U), g''(U). */
+#include "core/eval/interval_jet.h"
+#include "core/eval/interval_ops.h"
+#include "core/expr/tape.h"
+
+#include <stdbool.h>
+#include <stdlib.h>
+
+struct ism_ivjet_ws {
+    uint32_t nregs;
+    ism_ivjet *r;
+};
+
+/* The (i, j) index pairs of the six Hessian entries. */
+static const int HI[6] = { 0, 0, 0, 1, 1, 2 };
+static const int HJ[6] = { 0, 1, 2, 1, 2, 2 };
+
+ism_ivjet_ws *ism_ivjet_ws_new(const ism_tape *t)
+{
+    if (!t)
+        return NULL;
+    ism_ivjet_ws *ws = malloc(sizeof *ws);
+    if (!ws)
+        return NULL;
+    ws->nregs = t->nregs;
+    ws->r = malloc(t->nregs * sizeof *ws->r);
+    if (!ws->r) {
+        free(ws);
+        return NULL;
+    }
+    return ws;
+}
+
+void ism_ivjet_ws_free(ism_ivjet_ws *ws)
+{
+    if (!ws)
+        return;
+    free(ws->r);
+    free(ws);
+}
+
+/* One evaluation: second = 0 leaves the Hessian entries untouched (unused). */
+typedef struct pass {
+    ism_ivjet *r;
+    int second;
+} pass;
+
+static ism_interval ivc(double c) { return iv(c, c); }
+
+/* Exact zeros stay exact (outward rounding would widen 0 to ±2^-1074): a derivative that is
+ * exactly 0 says the register does not depend on that variable, which the kink rule uses. */
+static bool is_zero(ism_interval u) { return u.lo == 0.0 && u.hi == 0.0; }
+
+static ism_interval mulz(ism_interval a, ism_interval b)
+{
+    return is_zero(a) || is_zero(b) ? ivc(0.0) : iv_mul(a, b);
+}
+
+static ism_interval addz(ism_interval a, ism_interval b)
+{
+    return is_zero(a) ? b : is_zero(b) ? a : iv_add(a, b);
+}
+
+static ism_interval subz(ism_interval a, ism_interval b)
+{
+    return is_zero(b) ? a : is_zero(a) ? iv_neg(b) : iv_sub(a, b);
+}
+
+/* Whole-line derivatives of a result of a and b that is not differentiable in the box (a
+ * kink, a pole), except in the variables on which neither a nor b depends (derivatives
+ * exactly 0): there the result does not change either. */
+static void set_whole_derivs(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, int second)
+{
+    bool flat[3];
+    for (int k = 0; k < 3; k++) {
+        flat[k] = is_zero(a->d[k]) && is_zero(b->d[k]);
+        o->d[k] = flat[k] ? ivc(0.0) : ism_iv_whole();
+    }
+    for (int e = 0; second && e < 6; e++) {
+        bool zero = flat[HI[e]] && flat[HJ[e]] && is_zero(a->h[e]) && is_zero(b->h[e]);
+        o->h[e] = zero ? ivc(0.0) : ism_iv_whole();
+    }
+}
+
+static void set_zero_derivs(ism_ivjet *o, int second)
+{
+    for (int k = 0; k < 3; k++)
+        o->d[k] = ivc(0.0);
+    for (int k = 0; second && k < 6; k++)
+        o->h[k] = ivc(0.0);
+}
+
+/* u'_i u'_j, the square when i = j (tighter: never negative). */
+static ism_interval dd(const ism_ivjet *a, int e)
+{
+    int i = HI[e], j = HJ[e];
+    if (is_zero(a->d[i]) || is_zero(a->d[j]))
+        return ivc(0.0);
+    return i == j ? iv_square(a->d[i]) : iv_mul(a->d[i], a->d[j]);
+}
+
+/* The chain rule for out = g(a) given g(U), g'(U), g''(U). */
+static void chain(ism_ivjet *o, const ism_ivjet *a, ism_interval g, ism_interval g1,
+                  ism_interval g2, int second)
+{
+    o->v = g;
+    for (int k = 0; k < 3; k++)
+        o->d[k] = mulz(g1, a->d[k]);
+    for (int e = 0; second && e < 6; e++)
+        o->h[e] = addz(mulz(g1, a->h[e]), mulz(g2, dd(a, e)));
+}
+
+static ism_interval lin_copy(ism_interval u, double c) { (void)c; return u; }
+static ism_interval lin_neg(ism_interval u, double c) { (void)c; return iv_neg(u); }
+static ism_interval lin_mul(ism_interval u, double c) { return iv_mul_c(u, c); }
+static ism_interval lin_div(ism_interval u, double c) { return iv_div_c(u, c); }
+
+/* Applies fn(., c) to the value and every derivative of a. */
+static void each(ism_ivjet *o, const ism_ivjet *a, ism_interval (*fn)(ism_interval, double),
+                 double c, int second)
+{
+    o->v = fn(a->v, c);
+    for (int k = 0; k < 3; k++)
+        o->d[k] = is_zero(a->d[k]) ? a->d[k] : fn(a->d[k], c);
+    for (int e = 0; second && e < 6; e++)
+        o->h[e] = is_zero(a->h[e]) ? a->h[e] : fn(a->h[e], c);
+}
+
+/* out = s * a + shift for a constant factor s: derivatives scale exactly as the value. */
+static void affine(ism_ivjet *o, const ism_ivjet *a, int op, double c, int second)
+{
+    switch (op) {
+    case ISM_OP_NEG: each(o, a, lin_neg, c, second); break;
+    case ISM_OP_SUB_CR: each(o, a, lin_neg, c, second); o->v = iv_c_sub(c, a->v); break;
+    case ISM_OP_MUL_RC: each(o, a, lin_mul, c, second); break;
+    case ISM_OP_DIV_RC: each(o, a, lin_div, c, second); break;
+    case ISM_OP_ADD_RC: each(o, a, lin_copy, c, second); o->v = iv_add_c(a->v, c); break;
+    default: each(o, a, lin_copy, c, second); break; /* COPY */
+    }
+}
+
+/* c(c-1) for the second derivative of u^c, as an interval (c(c-1) is not exact in double). */
+static ism_interval falling2(double c)
+{
+    return iv_mul(ivc(c), iv_add_c(ivc(c), -1.0));
+}
+
+/* max(u, 0)^c, c not an integer: smooth for u > 0, constant for u < 0, and at 0 the first
+ * derivative is continuous only for c > 1, the second only for c > 2. */
+static void op_powc(ism_ivjet *o, const ism_ivjet *a, double c, int second)
+{
+    ism_interval u = a->v;
+    ism_interval g = iv_powc(u, c);
+    if (u.hi <= 0.0) {
+        o->v = g;
+        set_zero_derivs(o, second);
+        return;
+    }
+    ism_interval whole = ism_iv_whole();
+    ism_interval g1 = c > 1.0 || u.lo > 0.0 ? iv_mul_c(iv_powc(u, c - 1.0), c) : whole;
+    ism_interval g2 = c > 2.0 || u.lo > 0.0 ? iv_mul(falling2(c), iv_powc(u, c - 2.0)) : whole;
+    chain(o, a, g, g1, g2, second);
+}
+
+/* sqrt(max(u, 0)) and log(max(u, 0)): constant below 0, unbounded derivatives at 0+. */
+static void op_sqrt_log(ism_ivjet *o, const ism_ivjet *a, int is_log, int second)
+{
+    ism_interval u = a->v;
+    ism_interval g = is_log ? iv_log(u) : iv_sqrt(u);
+    if (u.hi <= 0.0) {
+        o->v = g;
+        set_zero_derivs(o, second);
+        return;
+    }
+    if (!(u.lo > 0.0)) {
+        o->v = g;
+        set_whole_derivs(o, a, a, second);
+        return;
+    }
+    ism_interval g1, g2;
+    if (is_log) {
+        g1 = iv_c_div(1.0, u);
+        g2 = iv_neg(iv_square(g1));
+    } else {
+        g1 = iv_c_div(0.5, g);                       /* 1 / (2 sqrt u) */
+        g2 = iv_mul_c(iv_div(g1, u), -0.5);          /* -1 / (4 u sqrt u) */
+    }
+    chain(o, a, g, g1, g2, second);
+}
+
+/* One-argument operations other than the affine ones and the branches. */
+static void op_unary(ism_ivjet *o, const ism_instr *in, const ism_ivjet *a, int second)
+{
+    ism_interval u = a->v, g, g1, g2;
+    double c = in->imm;
+    switch (in->op) {
+    case ISM_OP_SQUARE:
+        g = iv_square(u);
+        g1 = iv_mul_c(u, 2.0);
+        g2 = ivc(2.0);
+        break;
+    case ISM_OP_POWI: {
+        unsigned n = in->b;
+        g = iv_powi(u, n);
+        g1 = iv_mul_c(iv_powi(u, n - 1), (double)n);
+        g2 = iv_mul_c(iv_powi(u, n - 2), (double)n * (double)(n - 1));
+        break;
+    }
+    case ISM_OP_DIV_CR: /* c / u: -c / u^2, 2c / u^3 (whole when U holds the pole) */
+        g = iv_c_div(c, u);
+        g1 = iv_c_div(-c, iv_square(u));
+        g2 = iv_c_div(2.0 * c, iv_powi(u, 3));
+        break;
+    case ISM_OP_SIN:
+        g = iv_sin(u);
+        g1 = iv_cos(u);
+        g2 = iv_neg(g);
+        break;
+    case ISM_OP_COS:
+        g = iv_cos(u);
+        g1 = iv_neg(iv_sin(u));
+        g2 = iv_neg(g);
+        break;
+    case ISM_OP_TAN: /* 1 + tan^2, 2 tan (1 + tan^2); whole across a pole */
+        g = iv_tan(u);
+        g1 = iv_add_c(iv_square(g), 1.0);
+        g2 = iv_mul_c(iv_mul(g, g1), 2.0);
+        break;
+    case ISM_OP_EXP:
+        g = iv_exp(u);
+        g1 = g;
+        g2 = g;
+        break;
+    case ISM_OP_POWC: op_powc(o, a, c, second); return;
+    case ISM_OP_SQRT: op_sqrt_log(o, a, 0, second); return;
+    case ISM_OP_LOG: op_sqrt_log(o, a, 1, second); return;
+    default:
+        o->v = ism_iv_whole();
+        set_whole_derivs(o, a, a, second);
+        return;
+    }
+    chain(o, a, g, g1, g2, second);
+}
+
+static void op_add(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, int sub, int second)
+{
+    ism_interval (*fn)(ism_interval, ism_interval) = sub ? subz : addz;
+    o->v = sub ? iv_sub(a->v, b->v) : iv_add(a->v, b->v);
+    for (int k = 0; k < 3; k++)
+        o->d[k] = fn(a->d[k], b->d[k]);
+    for (int e = 0; second && e < 6; e++)
+        o->h[e] = fn(a->h[e], b->h[e]);
+}
+
+/* (ab)' = a'b + ab', (ab)'' = a''b + ab'' + a'b'^T + b'a'^T. */
+static void op_mul(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, int second)
+{
+    o->v = iv_mul(a->v, b->v);
+    for (int k = 0; k < 3; k++)
+        o->d[k] = addz(mulz(a->d[k], b->v), mulz(a->v, b->d[k]));
+    for (int e = 0; second && e < 6; e++) {
+        int i = HI[e], j = HJ[e];
+        ism_interval cross = addz(mulz(a->d[i], b->d[j]), mulz(a->d[j], b->d[i]));
+        o->h[e] = addz(addz(mulz(a->h[e], b->v), mulz(a->v, b->h[e])), cross);
+    }
+}
+
+/* q = a / b: q' = (a' - q b') / b, q'' = (a'' - q' b'^T - b' q'^T - q b'') / b. */
+static void op_div(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, int second)
+{
+    ism_interval q = iv_div(a->v, b->v);
+    o->v = q;
+    if (!(b->v.lo > 0.0 || b->v.hi < 0.0)) {
+        set_whole_derivs(o, a, b, second);
+        return;
+    }
+    for (int k = 0; k < 3; k++) {
+        ism_interval num = subz(a->d[k], mulz(q, b->d[k]));
+        o->d[k] = is_zero(num) ? num : iv_div(num, b->v);
+    }
+    for (int e = 0; second && e < 6; e++) {
+        int i = HI[e], j = HJ[e];
+        ism_interval cross = addz(mulz(o->d[i], b->d[j]), mulz(b->d[i], o->d[j]));
+        ism_interval num = subz(subz(a->h[e], cross), mulz(q, b->h[e]));
+        o->h[e] = is_zero(num) ? num : iv_div(num, b->v);
+    }
+}
+
+/* Copies the derivatives of src into o (the value of o is set by the caller). */
+static void take_derivs(ism_ivjet *o, const ism_ivjet *src, int second)
+{
+    for (int k = 0; k < 3; k++)
+        o->d[k] = src->d[k];
+    for (int e = 0; second && e < 6; e++)
+        o->h[e] = src->h[e];
+}
+
+/* Which branch of a min/max/abs the box decides: A, B, or FREE when both may be active.
+ * Strict comparisons: where the operands tie the point evaluators may take either side. */
+static int decided_branch(const ism_instr *in, ism_interval a, ism_interval b)
+{
+    switch (in->op) {
+    case ISM_OP_MIN_RR: case ISM_OP_MIN_RC:
+        return a.hi < b.lo ? ISM_BRANCH_A : b.hi < a.lo ? ISM_BRANCH_B : ISM_BRANCH_FREE;
+    case ISM_OP_MAX_RR: case ISM_OP_MAX_RC:
+        return a.lo > b.hi ? ISM_BRANCH_A : b.lo > a.hi ? ISM_BRANCH_B : ISM_BRANCH_FREE;
+    default: /* ABS */
+        return a.lo > 0.0 ? ISM_BRANCH_A : a.hi < 0.0 ? ISM_BRANCH_B : ISM_BRANCH_FREE;
+    }
+}
+
+/* min, max, abs: the value is always the natural enclosure; the derivatives are those of
+ * the decided (or forced) branch, the whole line at a free kink. Returns 1 at a free kink. */
+static int op_branch(ism_ivjet *o, const ism_instr *in, const ism_ivjet *r, uint8_t force,
+                     int second)
+{
+    const ism_ivjet *a = &r[in->a];
+    ism_ivjet cst = { 0 };
+    const ism_ivjet *b = &cst;
+    if (in->op == ISM_OP_MIN_RR || in->op == ISM_OP_MAX_RR)
+        b = &r[in->b];
+    else if (in->op != ISM_OP_ABS)
+        cst.v = ivc(in->imm);
+    switch (in->op) {
+    case ISM_OP_MIN_RR: case ISM_OP_MIN_RC: o->v = iv_min(a->v, b->v); break;
+    case ISM_OP_MAX_RR: case ISM_OP_MAX_RC: o->v = iv_max(a->v, b->v); break;
+    default: o->v = iv_abs(a->v); break;
+    }
+    int side = decided_branch(in, a->v, b->v);
+    if (side == ISM_BRANCH_FREE)
+        side = force;
+    if (side == ISM_BRANCH_FREE) {
+        set_whole_derivs(o, a, b, second);
+        return 1;
+    }
+    if (in->op != ISM_OP_ABS) {
+        take_derivs(o, side == ISM_BRANCH_A ? a : b, second);
+        return 0;
+    }
+    ism_interval v = o->v;
+    affine(o, a, side == ISM_BRANCH_A ? ISM_OP_COPY : ISM_OP_NEG, 0.0, second);
+    o->v = v;
+    return 0;
+}
+
+/* One instruction; returns 1 when it is a free kink. */
+static int jet_op(const ism_instr *in, ism_ivjet *r, uint8_t force, int second)
+{
+    ism_ivjet *o = &r[in->out];
+    const ism_ivjet *a = &r[in->a];
+    switch (in->op) {
+    case ISM_OP_CONST:
+        o->v = ivc(in->imm);
+        set_zero_derivs(o, second);
+        return 0;
+    case ISM_OP_COPY: case ISM_OP_ADD_RC: case ISM_OP_SUB_CR: case ISM_OP_MUL_RC:
+    case ISM_OP_DIV_RC: case ISM_OP_NEG:
+        affine(o, a, in->op, in->imm, second);
+        return 0;
+    case ISM_OP_ADD_RR: op_add(o, a, &r[in->b], 0, second); return 0;
+    case ISM_OP_SUB_RR: op_add(o, a, &r[in->b], 1, second); return 0;
+    case ISM_OP_MUL_RR: op_mul(o, a, &r[in->b], second); return 0;
+    case ISM_OP_DIV_RR: op_div(o, a, &r[in->b], second); return 0;
+    case ISM_OP_MIN_RR: case ISM_OP_MIN_RC: case ISM_OP_MAX_RR: case ISM_OP_MAX_RC:
+    case ISM_OP_ABS:
+        return op_branch(o, in, r, force, second);
+    default:
+        op_unary(o, in, a, second);
+        return 0;
+    }
+}
+
+static void sanitize(ism_ivjet *o, int second)
+{
+    o->v = ism_iv_sane(o->v);
+    for (int k = 0; k < 3; k++)
+        o->d[k] = ism_iv_sane(o->d[k]);
+    for (int e = 0; second && e < 6; e++)
+        o->h[e] = ism_iv_sane(o->h[e]);
+}
+
+static size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
+                  const uint8_t *force, uint8_t *kinks, int second, ism_ivjet *out)
+{
+    if (!ws || !t || ws->nregs < t->nregs) {
+        ism_ivjet any = { .d = { { -1.0, 1.0 } } }; /* depends on x: whole everywhere */
+        out->v = ism_iv_whole();
+        set_whole_derivs(out, &any, &any, second);
+        return (size_t)-1;
+    }
+    ism_ivjet *r = ws->r;
+    for (int k = 0; k < 3; k++) {
+        r[k].v = box[k].lo <= box[k].hi ? box[k] : ism_iv_whole();
+        set_zero_derivs(&r[k], second);
+        r[k].d[k] = ivc(1.0);
+    }
+    size_t nkinks = 0;
+    for (size_t i = 0; i < t->len; i++) {
+        const ism_instr *in = &t->code[i];
+        int kink = jet_op(in, r, force ? force[i] : ISM_BRANCH_FREE, second);
+        sanitize(&r[in->out], second);
+        nkinks += (size_t)kink;
+        if (kinks)
+            kinks[i] = (uint8_t)kink;
+    }
+    *out = r[t->result];
+    return nkinks;
+}
+
+size_t ism_eval_interval_grad(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
+                              const uint8_t *force, uint8_t *kinks, ism_ivgrad *out)
+{
+    ism_ivjet j;
+    size_t n = run(t, ws, box, force, kinks, 0, &j);
+    out->v = j.v;
+    for (int k = 0; k < 3; k++)
+        out->d[k] = j.d[k];
+    return n;
+}
+
+size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
+                             const uint8_t *force, uint8_t *kinks, ism_ivjet *out)
+{
+    return run(t, ws, box, force, kinks, 1, out);
+}

@@ -1,0 +1,53 @@
+/* interval_jet.h — interval forward-mode derivatives: over a box, outward-rounded enclosures
+ * of f, its gradient and (optionally) its Hessian, for interval Newton / Krawczyk tests and
+ * for excluding boxes where ∇f cannot vanish.
+ *
+ * Where the box holds a point at which f is not differentiable (a min/max whose operands may
+ * cross, abs of an interval holding 0, sqrt/log/real powers at the clipping edge 0, a pole),
+ * the derivatives that are not bounded there are the whole line. min, max and abs can instead
+ * be forced onto one branch: the enclosures then hold the derivatives of f at every point of
+ * the box where that branch is the active one (the value stays the natural enclosure of f).
+ * This lets a caller search each smooth piece of f separately. */
+#ifndef ISM_INTERVAL_JET_H
+#define ISM_INTERVAL_JET_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include "core/eval/eval.h"
+
+/* f and ∇f over a box. */
+typedef struct ism_ivgrad {
+    ism_interval v, d[3];
+} ism_ivgrad;
+
+/* f, ∇f and the Hessian (h = xx xy xz yy yz zz) over a box. */
+typedef struct ism_ivjet {
+    ism_interval v, d[3], h[6];
+} ism_ivjet;
+
+/* Branch of a min, max or abs instruction (one byte per instruction of the tape). */
+enum ism_branch {
+    ISM_BRANCH_FREE = 0, /* whichever the box allows: a kink when both may be active */
+    ISM_BRANCH_A = 1,    /* min/max: the first operand; abs(a): +a */
+    ISM_BRANCH_B = 2,    /* min/max: the second operand (or the constant); abs(a): -a */
+};
+
+/* Registers of one evaluation (one per thread; serves t and every tape shortened from t). */
+typedef struct ism_ivjet_ws ism_ivjet_ws;
+
+ism_ivjet_ws *ism_ivjet_ws_new(const ism_tape *t);
+void ism_ivjet_ws_free(ism_ivjet_ws *ws);
+
+/* Encloses f and ∇f over box[0] × box[1] × box[2] (outward rounded; no NaN bound).
+ * force: NULL (all free) or t's length of enum ism_branch bytes. kinks: NULL, or t's length
+ * of bytes set to 1 at every free min/max/abs instruction whose both branches the box allows
+ * (0 elsewhere). Returns the number of such kinks; (size_t)-1 when ws does not fit t (out is
+ * then the whole line). */
+size_t ism_eval_interval_grad(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
+                              const uint8_t *force, uint8_t *kinks, ism_ivgrad *out);
+
+/* The same with the Hessian. For a degenerate box [c, c] this encloses the exact jet at c. */
+size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
+                             const uint8_t *force, uint8_t *kinks, ism_ivjet *out);
+
+#endif

@@ -1,0 +1,282 @@
+/* test_eval_interval_jet.c — the interval jet's promises: over random boxes (and degenerate
+ * ones) its enclosures of f, ∇f and the Hessian hold the point jets of ism_eval_hessian at
+ * every sampled point, for every example surface (Kummer's included) and expressions using
+ * every operation; derivatives are the whole line only where f is not differentiable in the
+ * box; forced branches give the branch's derivatives; affine gradients come out exact. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+
+#include "core/eval/interval_jet.h"
+#include "test_eval_surfaces.h"
+
+enum { PTS = 48 };
+
+/* A random box inside `within`, each side 2^-U(0, 14) of the whole, or (one in eight) a
+ * single point. */
+static void random_box(test_rng *rng, const double *within, ism_interval b[3])
+{
+    int degenerate = test_uniform(rng, 0.0, 1.0) < 0.125;
+    for (int k = 0; k < 3; k++) {
+        double lo = within[k], hi = within[k + 3];
+        double w = degenerate ? 0.0 : (hi - lo) * exp2(-test_uniform(rng, 0.0, 14.0));
+        double a = test_uniform(rng, lo, hi - w);
+        b[k] = (ism_interval){ a, a + w };
+    }
+}
+
+/* The double-precision point jet carries its own rounding errors; the enclosure holds the
+ * exact jet. Allow a few hundred ulps of the bounds' magnitude (far below the widths of
+ * non-degenerate boxes). */
+static bool holds(ism_interval r, double v)
+{
+    if (!isfinite(v))
+        return true;
+    double tol = 1e-13 * (1.0 + fmax(fabs(isfinite(r.lo) ? r.lo : 0), fabs(isfinite(r.hi) ? r.hi : 0)));
+    return r.lo - tol <= v && v <= r.hi + tol;
+}
+
+static bool sane(ism_interval r)
+{
+    return !isnan(r.lo) && !isnan(r.hi) && r.lo <= r.hi;
+}
+
+/* Checks nboxes random boxes of `within`; returns the points checked. */
+static size_t check_jets(const char *name, const ism_tape *t, const double *within,
+                         size_t nboxes, uint64_t seed)
+{
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+    cr_assert(ws && jw);
+    test_rng rng = { seed };
+    size_t checked = 0;
+    for (size_t n = 0; n < nboxes; n++) {
+        ism_interval b[3];
+        random_box(&rng, within, b);
+        ism_ivjet J;
+        ism_ivgrad G;
+        size_t k1 = ism_eval_interval_jet(t, jw, b, NULL, NULL, &J);
+        size_t k2 = ism_eval_interval_grad(t, jw, b, NULL, NULL, &G);
+        cr_assert_eq(k1, k2, "%s: kink counts differ", name);
+        cr_assert(sane(J.v), "%s: value [%g, %g]", name, J.v.lo, J.v.hi);
+        for (int k = 0; k < 3; k++) {
+            cr_assert(sane(J.d[k]) && sane(J.h[k]) && sane(J.h[k + 3]), "%s: NaN bound", name);
+            cr_assert(G.d[k].lo == J.d[k].lo && G.d[k].hi == J.d[k].hi,
+                      "%s: gradient of the two variants differs", name);
+        }
+        cr_assert(G.v.lo == J.v.lo && G.v.hi == J.v.hi, "%s: value of the variants", name);
+        for (int i = 0; i < PTS; i++) {
+            double p[3];
+            for (int k = 0; k < 3; k++)
+                p[k] = i < 8 ? ((i >> k) & 1 ? b[k].hi : b[k].lo)
+                             : test_uniform(&rng, b[k].lo, b[k].hi);
+            double g[3], h[6];
+            double f = ism_eval_hessian(t, ws, p[0], p[1], p[2], g, h);
+            if (!isfinite(f))
+                continue;
+            checked++;
+            cr_assert(holds(J.v, f), "%s: f(%.17g, %.17g, %.17g) = %.17g outside [%.17g, %.17g]",
+                      name, p[0], p[1], p[2], f, J.v.lo, J.v.hi);
+            for (int k = 0; k < 3; k++)
+                cr_assert(holds(J.d[k], g[k]),
+                          "%s at (%.17g, %.17g, %.17g): df/d%c = %.17g outside [%.17g, %.17g]",
+                          name, p[0], p[1], p[2], 'x' + k, g[k], J.d[k].lo, J.d[k].hi);
+            for (int e = 0; e < 6; e++)
+                cr_assert(holds(J.h[e], h[e]),
+                          "%s at (%.17g, %.17g, %.17g): hess[%d] = %.17g outside [%.17g, %.17g]",
+                          name, p[0], p[1], p[2], e, h[e], J.h[e].lo, J.h[e].hi);
+        }
+    }
+    ism_ivjet_ws_free(jw);
+    ism_eval_ws_free(ws);
+    return checked;
+}
+
+static ism_tape *compile(const char *src)
+{
+    ism_error err;
+    ism_tape *t = ism_tape_compile(src, NULL, 0, NULL, 0, NULL, &err);
+    cr_assert_not_null(t, "%s: %s", src, err.message);
+    return t;
+}
+
+Test(eval_interval_jet, encloses_point_jets_of_example_surfaces)
+{
+    size_t nboxes = test_scaled(600);
+    for (size_t s = 0; s < TEST_NSURFACES; s++) {
+        ism_tape *t = test_surface_compile(&TEST_SURFACES[s]);
+        size_t n = check_jets(TEST_SURFACES[s].name, t, TEST_SURFACES[s].box, nboxes, 300 + s);
+        cr_expect_geq(n, nboxes * PTS * 9 / 10, "%s: too few finite samples",
+                      TEST_SURFACES[s].name);
+        ism_tape_free(t);
+    }
+}
+
+/* Every operation, including domain edges, poles and kinks. */
+Test(eval_interval_jet, encloses_point_jets_of_every_operation)
+{
+    static const char *exprs[] = {
+        "x^2 + 2*y^2 - 3*z^2 + 0.5*x*z", "x^2 + z^2 - y^3", "x*y*z - x/(1 + y^2)",
+        "sin(3*x)*cos(2*y) + sin(y*z)", "exp(x/2 - y^2) * z", "exp(-x^2 - y^2) - 0.5",
+        "(x + y) / (z^2 + 1) - 1/(x + 5)", "(x - y) / (x + y + 0.1)", "1 / x + y / (z - 0.5)",
+        "3/(x + 4) - 2*y/(z + 3)", "tan(x + y)", "tan(x/2) + y*z", "log(x^2 + y^2 + 1) - z^3",
+        "log(x) * y", "sqrt(x) + sqrt(y - z)", "sqrt(x + 3) * (y - z)^2",
+        "pow(abs(x), 0.7) - pow(y, 2.5)", "pow(x, 1.5) * z", "pow(x, -1.5)",
+        "pow(x^2 + 0.1, y)", "x^5 - 3*x^3*y^2 + y^4*z - z^7/5", "x^-3 + y^-2",
+        "abs(x) - abs(y*z)", "min(x, y, z) * max(x, -y)", "max(x^2 - 1, -z) / (2 - sin(y))",
+        "min(x, 0.25) + max(y*z, -0.5)", "(x^2 + y^2 + z^2 - 0.5)^2", "-x^2 - y^4 + 7",
+        "((x-1)^2 + y^2 + z^2 - 1)*((x+1)^2 + y^2 + z^2 - 1)",
+        "sin(4*x)*cos(4*y) + sin(4*y)*cos(4*z) + sin(4*z)*cos(4*x)",
+    };
+    const double within[6] = { -2, -2, -2, 2, 2, 2 };
+    size_t nboxes = test_scaled(300);
+    for (size_t i = 0; i < sizeof exprs / sizeof exprs[0]; i++) {
+        ism_tape *t = compile(exprs[i]);
+        check_jets(exprs[i], t, within, nboxes, 17 + i);
+        ism_tape_free(t);
+    }
+}
+
+static ism_ivjet jet_over(const char *src, double x0, double x1, double y0, double y1,
+                          double z0, double z1, const uint8_t *force, size_t *kinks)
+{
+    ism_tape *t = compile(src);
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+    ism_interval b[3] = { { x0, x1 }, { y0, y1 }, { z0, z1 } };
+    ism_ivjet J;
+    size_t n = ism_eval_interval_jet(t, jw, b, force, NULL, &J);
+    if (kinks)
+        *kinks = n;
+    ism_ivjet_ws_free(jw);
+    ism_tape_free(t);
+    return J;
+}
+
+/* r holds v and is at most a few ulps wide. */
+static bool near(ism_interval r, double v)
+{
+    return r.lo <= v && v <= r.hi && r.hi - r.lo <= 1e-15 * (1.0 + fabs(v));
+}
+
+static bool whole(ism_interval r) { return r.lo == -INFINITY && r.hi == INFINITY; }
+static bool bounded(ism_interval r) { return isfinite(r.lo) && isfinite(r.hi); }
+
+/* sqrt, log and real powers: whole derivatives exactly where the box reaches the clipping
+ * edge and the derivative is unbounded there; zero on the clipped side; finite inside. */
+Test(eval_interval_jet, domain_edges)
+{
+    ism_ivjet J = jet_over("sqrt(x)", -1, 1, 0, 0, 0, 0, NULL, NULL);
+    cr_expect(whole(J.d[0]) && whole(J.h[0]));
+    cr_expect(J.d[1].lo == 0 && J.d[1].hi == 0, "no dependence on y");
+    J = jet_over("sqrt(x)", 0.25, 1, 0, 0, 0, 0, NULL, NULL);
+    cr_expect(J.d[0].lo <= 0.5 && J.d[0].hi >= 1.0 && J.d[0].hi < 1.0 + 1e-12, "1/(2 sqrt x)");
+    J = jet_over("sqrt(x) + log(y)", -2, -1, -3, -2, 0, 0, NULL, NULL);
+    cr_expect(J.d[0].lo == 0 && J.d[0].hi == 0 && J.d[1].lo == 0 && J.d[1].hi == 0);
+    J = jet_over("log(x)", 0, 1, 0, 0, 0, 0, NULL, NULL);
+    cr_expect(whole(J.d[0]), "log at the edge 0");
+    J = jet_over("pow(x, 2.5)", -1, 1, 0, 0, 0, 0, NULL, NULL);
+    cr_expect(bounded(J.d[0]) && bounded(J.h[0]), "C2 at 0 for c > 2");
+    cr_expect(J.d[0].lo <= 0 && J.d[0].hi >= 2.5 && J.h[0].hi >= 3.75);
+    J = jet_over("pow(x, 1.5)", -1, 1, 0, 0, 0, 0, NULL, NULL);
+    cr_expect(bounded(J.d[0]) && whole(J.h[0]), "C1 only for 1 < c < 2");
+    J = jet_over("pow(x, 0.5)", -1, 1, 0, 0, 0, 0, NULL, NULL);
+    cr_expect(whole(J.d[0]));
+    J = jet_over("1/x", -1, 1, 0, 0, 0, 0, NULL, NULL);
+    cr_expect(whole(J.v) && whole(J.d[0]) && whole(J.h[0]), "pole");
+    J = jet_over("y/x", -1, 1, 1, 2, 0, 0, NULL, NULL);
+    cr_expect(whole(J.d[1]), "quotient across a pole");
+    J = jet_over("tan(x)", 1.5, 1.6, 0, 0, 0, 0, NULL, NULL);
+    cr_expect(J.d[0].lo <= 1 && J.d[0].hi == INFINITY && whole(J.h[0]),
+              "tan across pi/2: tan' >= 1 still holds");
+}
+
+/* min/max/abs: kinks counted and whole derivatives when both branches may be active; a
+ * forced branch gives exactly that branch's derivatives; decided branches are no kink. */
+Test(eval_interval_jet, kinks_and_forced_branches)
+{
+    size_t nk;
+    ism_ivjet J = jet_over("max(x, 2*y)", -1, 1, -1, 1, 0, 0, NULL, &nk);
+    cr_expect_eq(nk, 1);
+    cr_expect(whole(J.d[0]) && whole(J.d[1]) && whole(J.h[0]));
+    cr_expect(J.v.lo <= -1 && J.v.hi >= 2 && J.v.hi < 2 + 1e-12);
+    /* find the max instruction: the only one that is a kink */
+    ism_tape *t = compile("max(x, 2*y)");
+    size_t len = ism_tape_length(t);
+    uint8_t *kinks = calloc(len, 1), *force = calloc(len, 1);
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+    ism_interval b[3] = { { -1, 1 }, { -1, 1 }, { 0, 0 } };
+    cr_assert_eq(ism_eval_interval_jet(t, jw, b, NULL, kinks, &J), 1);
+    for (size_t i = 0; i < len; i++)
+        force[i] = kinks[i] ? ISM_BRANCH_A : ISM_BRANCH_FREE;
+    cr_assert_eq(ism_eval_interval_jet(t, jw, b, force, NULL, &J), 0);
+    cr_expect(J.d[0].lo == 1 && J.d[0].hi == 1 && J.d[1].lo == 0 && J.d[1].hi == 0);
+    for (size_t i = 0; i < len; i++)
+        force[i] = kinks[i] ? ISM_BRANCH_B : ISM_BRANCH_FREE;
+    ism_eval_interval_jet(t, jw, b, force, NULL, &J);
+    cr_expect(J.d[0].lo == 0 && J.d[0].hi == 0 && near(J.d[1], 2.0));
+    ism_ivjet_ws_free(jw);
+    free(kinks);
+    free(force);
+    ism_tape_free(t);
+
+    J = jet_over("max(x, 2*y)", 2.5, 3, -1, 1, 0, 0, NULL, &nk);
+    cr_expect(nk == 0 && J.d[0].lo == 1 && J.d[0].hi == 1, "decided branch");
+    J = jet_over("abs(x - y)", -1, 1, -1, 1, 0, 0, NULL, &nk);
+    cr_expect(nk == 1 && whole(J.d[0]));
+    J = jet_over("abs(x - y)", 2, 3, -1, 1, 0, 0, NULL, &nk);
+    cr_expect(nk == 0 && near(J.d[0], 1.0) && near(J.d[1], -1.0));
+    J = jet_over("abs(x - y)", -3, -2, -1, 1, 0, 0, NULL, &nk);
+    cr_expect(nk == 0 && near(J.d[0], -1.0) && near(J.d[1], 1.0));
+    J = jet_over("min(x, 0.5)", -1, 0.25, 0, 0, 0, 0, NULL, &nk);
+    cr_expect(nk == 0 && J.d[0].lo == 1 && J.d[0].hi == 1);
+}
+
+/* A quadratic's gradient is affine in each variable once: the natural enclosure is the
+ * exact range (up to rounding), i.e. the extremes over the box's corners; the Hessian is the
+ * constant matrix of the closed form. */
+Test(eval_interval_jet, affine_gradient_exact)
+{
+    ism_ivjet J = jet_over("x^2 + 2*y^2 - 3*z^2 + 0.5*x*z", 0.1, 0.3, -0.2, 0.4, 0.5, 0.7,
+                           NULL, NULL);
+    /* df/dx = 2x + 0.5z over the box: [0.2 + 0.25, 0.6 + 0.35] */
+    cr_expect(fabs(J.d[0].lo - 0.45) < 1e-14 && fabs(J.d[0].hi - 0.95) < 1e-14);
+    /* df/dy = 4y: [-0.8, 1.6]; df/dz = -6z + 0.5x: [-4.2 + 0.05, -3 + 0.15] */
+    cr_expect(fabs(J.d[1].lo + 0.8) < 1e-14 && fabs(J.d[1].hi - 1.6) < 1e-14);
+    cr_expect(fabs(J.d[2].lo + 4.15) < 1e-14 && fabs(J.d[2].hi + 2.85) < 1e-14);
+    const double H[6] = { 2, 0, 0.5, 4, 0, -6 };
+    for (int e = 0; e < 6; e++)
+        cr_expect(J.h[e].lo <= H[e] && H[e] <= J.h[e].hi && J.h[e].hi - J.h[e].lo < 1e-13,
+                  "hess[%d] = [%.17g, %.17g]", e, J.h[e].lo, J.h[e].hi);
+}
+
+/* On a degenerate box the enclosure is the point jet up to rounding: narrow, not just
+ * correct (Krawczyk needs ∇f(c) as a tight interval). */
+Test(eval_interval_jet, degenerate_box_is_tight)
+{
+    const test_surface *s = &TEST_SURFACES[5]; /* kummer-16-nodes */
+    ism_tape *t = test_surface_compile(s);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+    test_rng rng = { 4242 };
+    for (int n = 0; n < 200; n++) {
+        double p[3], g[3], h[6];
+        for (int k = 0; k < 3; k++)
+            p[k] = test_uniform(&rng, s->box[k], s->box[k + 3]);
+        ism_interval b[3] = { { p[0], p[0] }, { p[1], p[1] }, { p[2], p[2] } };
+        ism_ivjet J;
+        ism_eval_interval_jet(t, jw, b, NULL, NULL, &J);
+        ism_eval_hessian(t, ws, p[0], p[1], p[2], g, h);
+        double scale = 1.0 + fabs(J.v.lo);
+        for (int k = 0; k < 3; k++)
+            scale += fabs(g[k]) + fabs(h[k]) + fabs(h[k + 3]);
+        scale *= 1.0 + p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+        cr_expect(J.v.hi - J.v.lo < 1e-12 * scale);
+        for (int k = 0; k < 3; k++)
+            cr_expect(J.d[k].hi - J.d[k].lo < 1e-12 * scale, "width %g", J.d[k].hi - J.d[k].lo);
+        for (int e = 0; e < 6; e++)
+            cr_expect(J.h[e].hi - J.h[e].lo < 1e-12 * scale);
+    }
+    ism_ivjet_ws_free(jw);
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+}
