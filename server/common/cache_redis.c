@@ -19,8 +19,8 @@
 #include "server/common/log.h"
 
 #define VALUE_VERSION 1
-#define KEY_PREFIX "isomesh:v1:"
-#define LOCK_PREFIX "isomesh:v1:lock:"
+#define KEY_PREFIX ISM_REDIS_KEY_PREFIX
+#define LOCK_PREFIX ISM_REDIS_KEY_PREFIX "lock:"
 #define KEY_MAX (ISM_CACHE_NAME_MAX + 32)
 #define BACKOFF_MIN_NS 100000000LL       /* first reconnect 100 ms after a failure */
 #define BACKOFF_MAX_NS 2000000000LL      /* then doubling up to 2 s */
@@ -260,6 +260,12 @@ static redisReply *command(redis_tier *rt, const char *what, int argc, const cha
         return NULL;
     }
     return r;
+}
+
+struct redisReply *ism_cache_redis_call(ism_cache_tier *t, const char *what, int argc,
+                                       const char **argv, const size_t *lens)
+{
+    return command((redis_tier *)t, what, argc, argv, lens);
 }
 
 static bool entry_key(char out[KEY_MAX], const char *prefix, const char *name)

@@ -35,6 +35,7 @@
 #define ISM_REDIS_CONNECT_TIMEOUT_MS 250
 #define ISM_REDIS_COMMAND_TIMEOUT_MS 250
 #define ISM_REDIS_HEADER_SIZE 24
+#define ISM_REDIS_KEY_PREFIX "isomesh:v1:"  /* every key of the service starts with it */
 
 typedef struct ism_redis_settings {
     char host[256];
@@ -98,6 +99,11 @@ int ism_cache_redis_lock(ism_cache_tier *t, const char *name, const char *token,
 int ism_cache_redis_renew(ism_cache_tier *t, const char *name, const char *token, long ttl_ms);
 /* 1 when token held the lock and released it, 0 when it was not the holder. */
 int ism_cache_redis_unlock(ism_cache_tier *t, const char *name, const char *token);
+/* Any one command (argv/lens as hiredis's redisCommandArgv): its reply, to free with
+ * freeReplyObject, or NULL when Redis is unavailable or answered an error (counted, logged,
+ * and an I/O failure marks Redis down like any other call). */
+struct redisReply *ism_cache_redis_call(ism_cache_tier *t, const char *what, int argc,
+                                       const char **argv, const size_t *lens);
 /* Writes every queued put now (so what a computation stored is in Redis before its lock goes). */
 void ism_cache_redis_flush(ism_cache_tier *t);
 

@@ -60,6 +60,11 @@ static const flag FLAGS[] = {
     {"redis", K_REDIS, 0, 0, "HOST:PORT",
      "shared cache in this Redis server: daemons using the same one serve each other's "
      "meshes and compute identical requests once (deploy/README.md) [none]"},
+    {"cluster", K_BOOL, 0, 0, "",
+     "with --redis, one queue for every daemon sharing that Redis: computations wait in "
+     "per-user Redis streams and run on whichever daemon has an idle worker (users served in "
+     "turn, --user-jobs and --user-running held cluster-wide); a daemon that dies has its "
+     "computations re-run elsewhere after --redis-lock-ttl (deploy/README.md)"},
     {"redis-lock-ttl", K_DURATION, 0, 0, "TIME",
      "lifetime of a computation's lock in Redis, extended while it runs: the longest wait "
      "for a daemon that died mid-computation; at least 500ms [10s]"},
@@ -296,14 +301,16 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
                    set_path(cfg->trusted_proxy, sizeof cfg->trusted_proxy, v);
         return set_path(cfg->cors_origin, sizeof cfg->cors_origin, v);
     case K_LOGFMT: return ism_log_parse_format(v, &cfg->log_format);
-    case K_BOOL:
+    case K_BOOL: {
+        bool *b = !strcmp(name, "cluster") ? &cfg->cluster : &cfg->private_mode;
         if (!strcmp(v, "true") || !strcmp(v, "yes") || !strcmp(v, "1") || !strcmp(v, "on"))
-            cfg->private_mode = true;
+            *b = true;
         else if (!strcmp(v, "false") || !strcmp(v, "no") || !strcmp(v, "0") || !strcmp(v, "off"))
-            cfg->private_mode = false;
+            *b = false;
         else
             return false;
         return true;
+    }
     case K_ORDER:
         if (strcmp(v, "fair") != 0 && strcmp(v, "fifo") != 0)
             return false;
@@ -568,6 +575,10 @@ int ismd_config_load(ismd_config *cfg, int argc, char **argv)
     }
     if (cfg->private_mode && !cfg->tokens[0]) {
         fprintf(stderr, "isomeshd: --private needs --tokens FILE\n");
+        return 2;
+    }
+    if (cfg->cluster && !cfg->redis[0]) {
+        fprintf(stderr, "isomeshd: --cluster needs --redis HOST:PORT\n");
         return 2;
     }
     return 0;

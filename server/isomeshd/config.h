@@ -36,6 +36,7 @@ typedef struct ismd_config {
                                  client; "" = the peer address is the client */
     char redis[300];          /* HOST:PORT of the shared cache (shared_cache.h); "" = none */
     double redis_lock_ttl_s;  /* lifetime of a computation's lock in Redis */
+    bool cluster;             /* --cluster: one queue in Redis for every daemon (cluster.h) */
     ism_log_format log_format;
     char worker_path[4096];   /* the isomesh binary */
 } ismd_config;

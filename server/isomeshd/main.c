@@ -224,8 +224,10 @@ int main(int argc, char **argv)
         ism_log_async(false);
         return 1;
     }
+    ismd_cluster_settings cluster = {cfg.user_jobs, cfg.user_running};
     if (s.redis && !(s.shared = ismd_shared_start(&s.sched, &s.cache, s.redis, &s.limits,
-                                                  cfg.redis_lock_ttl_s))) {
+                                                  cfg.redis_lock_ttl_s,
+                                                  cfg.cluster ? &cluster : NULL))) {
         ism_logf(ISM_LOG_ERROR, "startup_failed", "out of memory");
         ism_log_async(false);
         return 1;

@@ -273,6 +273,15 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
     header(&o, "isomesh_singleflight_joins_total", "counter",
            "Requests that joined an identical computation already in flight.");
     emit(&o, "isomesh_singleflight_joins_total %llu\n", ld(&m->singleflight_joins));
+    header(&o, "isomesh_cluster_submitted_total", "counter",
+           "Computations this daemon put on the cluster queue (--cluster).");
+    emit(&o, "isomesh_cluster_submitted_total %llu\n", ld(&m->cluster_submitted));
+    header(&o, "isomesh_cluster_taken_total", "counter",
+           "Cluster queue entries this daemon took to compute.");
+    emit(&o, "isomesh_cluster_taken_total %llu\n", ld(&m->cluster_taken));
+    header(&o, "isomesh_cluster_reclaimed_total", "counter",
+           "Cluster queue entries taken over from a daemon that stopped heart-beating.");
+    emit(&o, "isomesh_cluster_reclaimed_total %llu\n", ld(&m->cluster_reclaimed));
     header(&o, "isomesh_preemptions_total", "counter",
            "Computations sent back to their user's line so that a user with nothing running "
            "got a worker.");

@@ -47,6 +47,9 @@ typedef struct ismd_metrics {
     atomic_ullong computations_started;      /* worker jobs dispatched to a new computation */
     atomic_ullong computations[ISMD_OUT_COUNT];
     atomic_ullong singleflight_joins;        /* requests that joined a computation in flight */
+    atomic_ullong cluster_submitted;         /* computations put on the cluster queue here */
+    atomic_ullong cluster_taken;             /* entries of the cluster queue computed here */
+    atomic_ullong cluster_reclaimed;         /* of them, re-claimed from a silent daemon */
     atomic_ullong preemptions;               /* computations sent back to their user's line so
                                                 a user with nothing running got a worker */
     atomic_ullong worker_restarts[ISMD_RESTART_COUNT];

@@ -102,17 +102,22 @@ static size_t idle_workers(const ismd_sched *s)
 }
 
 
-ismd_submit ismd_sched_submit(ismd_sched *s, const char *key, const char *fmt,
-                              ism_blob *request, const char *user,
-                              const ismd_user_limits *lim, ismd_waiter *w)
+/* The submission of both entry points; ask_shared: a new flight goes to the shared stage
+ * first (when there is one), else straight to the queue. */
+static ismd_submit submit(ismd_sched *s, const char *key, const char *fmt, ism_blob *request,
+                          const char *user, const ismd_user_limits *lim, ismd_waiter *w,
+                          bool ask_shared)
 {
     char name[ISM_CACHE_NAME_MAX];
     if (!ism_cache_name(name, key, fmt))
         return ISMD_SUBMIT_NO_MEMORY;
     ismd_flight **slot = flight_slot(s, name);
     if (*slot) {
-        waiter_append(*slot, w);
+        ismd_flight *f = *slot;
+        waiter_append(f, w);
         atomic_fetch_add(&s->metrics->singleflight_joins, 1);
+        if (!ask_shared && f->shared)
+            ismd_sched_enqueue(s, f); /* computed here now (or answered, refused) */
         return ISMD_SUBMIT_JOINED;
     }
     if (s->draining)
@@ -142,7 +147,7 @@ ismd_submit ismd_sched_submit(ismd_sched *s, const char *key, const char *fmt,
         free(f);
         return ISMD_SUBMIT_NO_MEMORY;
     }
-    if (s->shared_begin) { /* admitted; the shared cache is asked before the queue */
+    if (ask_shared && s->shared_begin) { /* admitted; the shared cache is asked first */
         s->queue->ops->drop(s->queue, f);
         f->lim = lim ? *lim : (ismd_user_limits){0};
         if (!s->shared_begin(s->shared_ctx, f)) {
@@ -170,6 +175,20 @@ ismd_submit ismd_sched_submit(ismd_sched *s, const char *key, const char *fmt,
     publish_queue(s);
     wake_pool(s);
     return ISMD_SUBMIT_NEW;
+}
+
+ismd_submit ismd_sched_submit(ismd_sched *s, const char *key, const char *fmt,
+                              ism_blob *request, const char *user,
+                              const ismd_user_limits *lim, ismd_waiter *w)
+{
+    return submit(s, key, fmt, request, user, lim, w, true);
+}
+
+ismd_submit ismd_sched_submit_here(ismd_sched *s, const char *key, const char *fmt,
+                                   ism_blob *request, const char *user,
+                                   const ismd_user_limits *lim, ismd_waiter *w)
+{
+    return submit(s, key, fmt, request, user, lim, w, false);
 }
 
 /* Takes f out of the table, the all-flights list and the queue's books, and frees it. */
@@ -245,7 +264,7 @@ void ismd_sched_progress(ismd_sched *s, ismd_flight *f, double fraction)
     f->progress = fraction;
     for (ismd_waiter *w = f->waiters.next; w != &f->waiters; w = w->next)
         if (w->progress)
-            w->progress(w, fraction, f->running);
+            w->progress(w, fraction, f->running || f->elsewhere);
 }
 
 ismd_flight *ismd_sched_next(ismd_sched *s)
@@ -354,6 +373,7 @@ ismd_flight *ismd_sched_find(ismd_sched *s, const char *name)
 bool ismd_sched_enqueue(ismd_sched *s, ismd_flight *f)
 {
     f->shared = false;
+    f->elsewhere = false;
     f->deadline_ns = ism_now_ns() + seconds_ns(s->queue_timeout_s);
     s->queue->slack = idle_workers(s);
     ismd_push p = s->queue->ops->push(s->queue, f, &f->lim);

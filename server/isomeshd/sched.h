@@ -52,6 +52,7 @@ struct ismd_flight {
     uint64_t id;               /* job id in worker frames */
     bool queued, running;
     bool shared;               /* asking the shared cache first: neither queued nor running */
+    bool elsewhere;            /* shared, and running on another daemon (cluster.h) */
     ismd_user_limits lim;      /* the user's limits, for queueing after the shared cache */
     double progress;
     long long submitted_ns, started_ns;
@@ -110,6 +111,13 @@ void ismd_sched_unlock(ismd_sched *s);
 ismd_submit ismd_sched_submit(ismd_sched *s, const char *key, const char *fmt,
                               ism_blob *request, const char *user,
                               const ismd_user_limits *lim, ismd_waiter *w);
+
+/* The same, but a new flight goes straight to the local queue, and a flight of that name
+ * still in the shared stage moves there: the cluster queue (cluster.h) chose this daemon to
+ * compute it. */
+ismd_submit ismd_sched_submit_here(ismd_sched *s, const char *key, const char *fmt,
+                                   ism_blob *request, const char *user,
+                                   const ismd_user_limits *lim, ismd_waiter *w);
 
 /* Takes w off its flight (a canceled job). A queued flight left without waiters is dropped;
  * a running one is stopped by the pool (its worker is replaced). */

@@ -14,6 +14,7 @@
 
 #include "server/common/cache_redis.h"
 #include "server/common/log.h"
+#include "server/isomeshd/cluster.h"
 #include "server/isomeshd/errors.h"
 #include "server/isomeshd/worker_pool.h"
 
@@ -22,8 +23,9 @@
 #define HOLD_TICK_NS 10000000LL       /* how often a holder checks whether its flight ended */
 #define RENEW_RETRY_NS 200000000LL    /* a failed extension is retried this soon */
 #define STOP_WAIT_NS 3000000000LL     /* ismd_shared_stop waits this long for its tasks */
+#define REMOTE_POLL_NS 20000000LL     /* a computation on the cluster queue is looked at */
 
-typedef enum tstate { T_LOOK, T_WAIT, T_HOLD } tstate;
+typedef enum tstate { T_LOOK, T_WAIT, T_HOLD, T_REMOTE } tstate;
 
 struct ismd_shared {
     ismd_sched *sched;
@@ -33,6 +35,7 @@ struct ismd_shared {
     const ism_pipeline_limits *limits;
     long ttl_ms;
     char instance[128];           /* host/pid/random: this daemon in lock tokens */
+    ismd_cluster *cluster;        /* --cluster: computations go to the cluster queue */
     pthread_mutex_t lock;         /* guards the fields below */
     pthread_cond_t changed;
     int ntasks, inside;           /* tasks alive; tasks using the scheduler now */
@@ -49,11 +52,13 @@ typedef struct task {
     bool missed, lock_lost;
     long long poll_ns, renew_at_ns;
     char token[192];
+    char user[ISMD_QUEUE_USER_MAX];     /* T_REMOTE: the flight's user and its entry */
+    char entry[ISMD_CLUSTER_ID_MAX];
 } task;
 
 /* ---- the scheduler, entered only while not stopping ---------------------------------- */
 
-static bool enter(ismd_shared *sh)
+bool ismd_shared_enter(ismd_shared *sh)
 {
     pthread_mutex_lock(&sh->lock);
     bool ok = !sh->stopping;
@@ -65,7 +70,7 @@ static bool enter(ismd_shared *sh)
     return ok;
 }
 
-static void leave(ismd_shared *sh)
+void ismd_shared_leave(ismd_shared *sh)
 {
     ismd_sched_unlock(sh->sched);
     pthread_mutex_lock(&sh->lock);
@@ -87,6 +92,7 @@ static ismd_flight *my_flight(task *k, bool shared_only)
 
 static void free_shared(ismd_shared *sh)
 {
+    free(sh->cluster);
     pthread_mutex_destroy(&sh->lock);
     pthread_cond_destroy(&sh->changed);
     free(sh);
@@ -97,20 +103,37 @@ static void free_shared(ismd_shared *sh)
 static long long task_end(task *k, ism_cache_tier *t)
 {
     ismd_shared *sh = k->sh;
-    if (k->state == T_HOLD && !k->lock_lost) {
+    if (k->state == T_REMOTE)
+        ismd_cluster_cancel(sh->cluster, k->name, k->user, k->entry);
+    if ((k->state == T_HOLD || k->state == T_REMOTE) && !k->lock_lost) {
         ism_cache_redis_flush(t);
         ism_cache_redis_unlock(t, k->name, k->token);
     }
-    if (k->state != T_HOLD)
+    if (k->state != T_HOLD && k->state != T_REMOTE)
         atomic_fetch_sub(&sh->counters->asking, 1);
     free(k);
+    ismd_shared_task_ended(sh);
+    return 0;
+}
+
+bool ismd_shared_task_added(ismd_shared *sh)
+{
+    pthread_mutex_lock(&sh->lock);
+    bool ok = !sh->stopping;
+    if (ok)
+        sh->ntasks++;
+    pthread_mutex_unlock(&sh->lock);
+    return ok;
+}
+
+void ismd_shared_task_ended(ismd_shared *sh)
+{
     pthread_mutex_lock(&sh->lock);
     bool last = --sh->ntasks == 0 && sh->detached;
     pthread_cond_broadcast(&sh->changed);
     pthread_mutex_unlock(&sh->lock);
     if (last)
         free_shared(sh);
-    return 0;
 }
 
 /* ---- answers ------------------------------------------------------------------------- */
@@ -118,7 +141,7 @@ static long long task_end(task *k, ism_cache_tier *t)
 static void answer(task *k, const ismd_result *r)
 {
     ismd_shared *sh = k->sh;
-    if (!enter(sh))
+    if (!ismd_shared_enter(sh))
         return;
     ismd_flight *f = my_flight(k, true);
     if (f) {
@@ -126,7 +149,7 @@ static void answer(task *k, const ismd_result *r)
         copy.queue_ms = (ism_now_ns() - f->submitted_ns) / 1e6;
         ismd_sched_answer(sh->sched, f, &copy);
     }
-    leave(sh);
+    ismd_shared_leave(sh);
 }
 
 static void answer_error(task *k, unsigned status, const char *code, const char *message)
@@ -142,11 +165,11 @@ static void answer_error(task *k, unsigned status, const char *code, const char 
 static bool to_queue(task *k)
 {
     ismd_shared *sh = k->sh;
-    if (!enter(sh))
+    if (!ismd_shared_enter(sh))
         return false;
     ismd_flight *f = my_flight(k, true);
     bool queued = f && ismd_sched_enqueue(sh->sched, f);
-    leave(sh);
+    ismd_shared_leave(sh);
     return queued;
 }
 
@@ -175,12 +198,12 @@ static long long wait_more(task *k, long long now)
 /* Whether the flight still waits here; *need_request when it has no canonical request. */
 static bool still_wanted(task *k, bool *need_request)
 {
-    if (!enter(k->sh))
+    if (!ismd_shared_enter(k->sh))
         return false;
     ismd_flight *f = my_flight(k, true);
     if (f)
         *need_request = f->request == NULL;
-    leave(k->sh);
+    ismd_shared_leave(k->sh);
     return f != NULL;
 }
 
@@ -197,12 +220,12 @@ static bool request_gives_key(ismd_shared *sh, const ism_blob *req, const task *
 
 static void attach_request(task *k, ism_blob *req)
 {
-    if (!enter(k->sh))
+    if (!ismd_shared_enter(k->sh))
         return;
     ismd_flight *f = my_flight(k, true);
     if (f && !f->request)
         f->request = ism_blob_ref(req);
-    leave(k->sh);
+    ismd_shared_leave(k->sh);
 }
 
 static void unref_all(ism_blob **b, size_t n)
@@ -218,6 +241,45 @@ static void stale_lock_removed(task *k)
     ism_log_field f[] = {ISM_LS("name", k->name), ISM_LI("max_ttl_ms", k->sh->ttl_ms)};
     ism_log_fields(ISM_LOG_WARN, "redis_stale_lock_removed", f, 2);
 }
+
+/* What Redis holds of an entry: the mesh, its stats, its features (and its request). */
+typedef struct stored {
+    char names[4][ISM_CACHE_NAME_MAX];
+    const char *argv[4];
+    ism_blob *got[4];
+} stored;
+
+/* Reads the first n parts. 0, or -1 when Redis is unavailable. */
+static int fetch_stored(const task *k, ism_cache_tier *t, size_t n, stored *st)
+{
+    const char *exts[4] = {k->fmt, "stats.json", "features.json", "request.json"};
+    memset(st->got, 0, sizeof st->got);
+    for (size_t i = 0; i < n; i++) {
+        ism_cache_name(st->names[i], k->key, exts[i]);
+        st->argv[i] = st->names[i];
+    }
+    return ism_cache_redis_fetch(t, st->argv, n, st->got);
+}
+
+/* Mesh, stats and features all there: copied into the local tiers, every waiter answered,
+ * and true (the parts are released); else false (the caller still owns them). */
+static bool answer_stored(task *k, ism_cache_tier *t, stored *st, size_t n)
+{
+    ism_blob **got = st->got;
+    if (!got[0] || !got[1] || !got[2])
+        return false;
+    atomic_fetch_add(&t->counters.hits, 1);
+    for (size_t i = 0; i < n; i++)
+        if (got[i])
+            ism_cache_put_local(k->sh->cache, st->names[i], got[i]);
+    ismd_result r = {.status = 200, .body = got[0], .stats = got[1], .features = got[2],
+                     .content_type = ismd_format_content_type(k->fmt), .cache = "shared"};
+    answer(k, &r);
+    unref_all(got, n);
+    return true;
+}
+
+static long long to_cluster(task *k, ism_cache_tier *t, long long now);
 
 /* Look in Redis; answer, wait, or take the lock and queue the flight. */
 static long long look(task *k, ism_cache_tier *t, long long now)
@@ -236,28 +298,15 @@ static long long look(task *k, ism_cache_tier *t, long long now)
     else if (locked)
         return wait_more(k, now); /* computing elsewhere (or writing its results out) */
 
-    char names[4][ISM_CACHE_NAME_MAX];
-    const char *exts[4] = {k->fmt, "stats.json", "features.json", "request.json"};
-    const char *argv[4];
+    stored st;
     size_t n = need_request ? 4 : 3;
-    for (size_t i = 0; i < n; i++) {
-        ism_cache_name(names[i], k->key, exts[i]);
-        argv[i] = names[i];
-    }
-    ism_blob *got[4] = {0};
-    if (ism_cache_redis_fetch(t, argv, n, got) < 0)
+    if (fetch_stored(k, t, n, &st) < 0)
         return go_local(k, t);
-    if (got[0] && got[1] && got[2]) { /* complete: a crashed writer may have left less */
-        atomic_fetch_add(&t->counters.hits, 1);
-        for (size_t i = 0; i < n; i++)
-            if (got[i])
-                ism_cache_put_local(sh->cache, names[i], got[i]);
-        ismd_result r = {.status = 200, .body = got[0], .stats = got[1], .features = got[2],
-                         .content_type = ismd_format_content_type(k->fmt), .cache = "shared"};
-        answer(k, &r);
-        unref_all(got, n);
+    if (answer_stored(k, t, &st, n)) /* complete: a crashed writer may have left less */
         return task_end(k, t);
-    }
+    char (*names)[ISM_CACHE_NAME_MAX] = st.names;
+    const char **argv = st.argv;
+    ism_blob **got = st.got;
     if (!k->missed) {
         k->missed = true;
         atomic_fetch_add(&t->counters.misses, 1);
@@ -292,21 +341,17 @@ static long long look(task *k, ism_cache_tier *t, long long now)
     k->state = T_HOLD;
     atomic_fetch_sub(&sh->counters->asking, 1);
     k->renew_at_ns = now + sh->ttl_ms * 1000000LL / 3;
+    if (sh->cluster)
+        return to_cluster(k, t, now);
     if (!to_queue(k))
         return task_end(k, t); /* gone meanwhile, or refused by the queue: release the lock */
     return now + HOLD_TICK_NS;
 }
 
-/* Holding the lock while the flight computes here: extend it; release it when it ends. */
-static long long hold(task *k, ism_cache_tier *t, long long now)
+/* Extends the lock every third of its lifetime. */
+static void renew_lock(task *k, ism_cache_tier *t, long long now)
 {
     ismd_shared *sh = k->sh;
-    if (!enter(sh))
-        return task_end(k, t);
-    bool running = my_flight(k, false) != NULL;
-    leave(sh);
-    if (!running)
-        return task_end(k, t);
     if (!k->lock_lost && now >= k->renew_at_ns) {
         int kept = ism_cache_redis_renew(t, k->name, k->token, sh->ttl_ms);
         if (kept == 0) {
@@ -317,7 +362,137 @@ static long long hold(task *k, ism_cache_tier *t, long long now)
         }
         k->renew_at_ns = kept < 0 ? now + RENEW_RETRY_NS : now + sh->ttl_ms * 1000000LL / 3;
     }
+}
+
+/* Holding the lock while the flight computes here: extend it; release it when it ends. */
+static long long hold(task *k, ism_cache_tier *t, long long now)
+{
+    ismd_shared *sh = k->sh;
+    if (!ismd_shared_enter(sh))
+        return task_end(k, t);
+    bool running = my_flight(k, false) != NULL;
+    ismd_shared_leave(sh);
+    if (!running)
+        return task_end(k, t);
+    renew_lock(k, t, now);
     return now + HOLD_TICK_NS;
+}
+
+/* ---- the cluster queue (cluster.h) ---------------------------------------------------- */
+
+/* Holding the lock: the computation goes on its user's stream instead of the local queue. */
+static long long to_cluster(task *k, ism_cache_tier *t, long long now)
+{
+    ismd_shared *sh = k->sh;
+    if (!ismd_shared_enter(sh))
+        return task_end(k, t);
+    ismd_flight *f = my_flight(k, true);
+    ism_blob *req = f ? ism_blob_ref(f->request) : NULL;
+    ismd_user_limits lim = f ? f->lim : (ismd_user_limits){0};
+    if (f)
+        snprintf(k->user, sizeof k->user, "%s", f->user);
+    ismd_shared_leave(sh);
+    if (!req)
+        return task_end(k, t);
+    int rc = ismd_cluster_enqueue(sh->cluster, k->name, k->key, k->fmt, k->user, &lim, req,
+                                  k->entry);
+    ism_blob_unref(req);
+    if (rc < 0) { /* Redis failed just now: compute here */
+        atomic_fetch_add(&sh->counters->fallbacks, 1);
+        return to_queue(k) ? now + HOLD_TICK_NS : task_end(k, t);
+    }
+    if (rc == 0) {
+        answer_error(k, 429, "too_many_requests",
+                     "too many computations of yours are queued or running in the service "
+                     "(--user-jobs, counted over every daemon); wait for one to finish");
+        return task_end(k, t);
+    }
+    atomic_fetch_add(&sh->sched->metrics->cluster_submitted, 1);
+    k->state = T_REMOTE;
+    return now + REMOTE_POLL_NS;
+}
+
+/* Running on another daemon: tell the waiters (progress events, the job's state). */
+static void running_elsewhere(task *k, double progress)
+{
+    if (!ismd_shared_enter(k->sh))
+        return;
+    ismd_flight *f = my_flight(k, true);
+    if (f && (!f->elsewhere || f->progress != progress)) {
+        if (!f->elsewhere) {
+            struct timespec wall;
+            clock_gettime(CLOCK_REALTIME, &wall);
+            f->elsewhere = true;
+            f->started_ns = ism_now_ns();
+            f->started_unix_ms = (long long)wall.tv_sec * 1000 + wall.tv_nsec / 1000000;
+        }
+        ismd_sched_progress(k->sh->sched, f, progress);
+    }
+    ismd_shared_leave(k->sh);
+}
+
+/* Computed elsewhere: answered from Redis, or (the results did not fit there) computed here. */
+static long long remote_done(task *k, ism_cache_tier *t, long long now)
+{
+    stored st;
+    int rc = fetch_stored(k, t, 3, &st);
+    k->state = T_HOLD; /* no cancel from here on; the lock is still ours to release */
+    if (rc == 0 && answer_stored(k, t, &st, 3))
+        return task_end(k, t);
+    unref_all(st.got, 3);
+    return to_queue(k) ? now + HOLD_TICK_NS : task_end(k, t);
+}
+
+static long long remote_failed(task *k, ism_cache_tier *t, ismd_cj_view *v)
+{
+    ismd_result r = {.status = v->status >= 400 ? v->status : 500,
+                     .content_type = "application/json", .body = v->error};
+    if (!r.body)
+        r.body = ismd_error_json("cluster_error", "the computation failed on another daemon",
+                                 NULL);
+    if (r.body)
+        answer(k, &r);
+    ism_blob_unref(r.body);
+    k->state = T_HOLD;
+    return task_end(k, t);
+}
+
+/* Following the computation on the cluster queue. */
+static long long remote(task *k, ism_cache_tier *t, long long now)
+{
+    ismd_shared *sh = k->sh;
+    if (!ismd_shared_enter(sh))
+        return task_end(k, t);
+    ismd_flight *f = my_flight(k, false);
+    bool here = f && !f->shared;
+    ismd_shared_leave(sh);
+    if (!f)
+        return task_end(k, t); /* nobody waits any more (or past its deadline): cancel */
+    if (here) {                /* this daemon's executor took it */
+        k->state = T_HOLD;
+        return now + HOLD_TICK_NS;
+    }
+    renew_lock(k, t, now);
+    ismd_cj_view v;
+    if (!ism_cache_redis_up(t) || ismd_cluster_view(sh->cluster, k->name, k->entry, &v) < 0)
+        return go_local(k, t);
+    switch (v.state) {
+    case ISMD_CJ_QUEUED:
+        return now + REMOTE_POLL_NS;
+    case ISMD_CJ_RUNNING:
+        running_elsewhere(k, v.progress);
+        return now + REMOTE_POLL_NS;
+    case ISMD_CJ_DONE:
+        return remote_done(k, t, now);
+    case ISMD_CJ_FAILED:
+        return remote_failed(k, t, &v);
+    default: /* its record is gone: start over */
+        if (!k->lock_lost)
+            ism_cache_redis_unlock(t, k->name, k->token);
+        k->state = T_LOOK;
+        atomic_fetch_add(&sh->counters->asking, 1);
+        return now;
+    }
 }
 
 static long long task_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
@@ -329,7 +504,9 @@ static long long task_run(ism_redis_task *base, ism_cache_tier *t, bool stopping
     if (stop)
         return task_end(k, t);
     long long now = ism_now_ns();
-    return k->state == T_HOLD ? hold(k, t, now) : look(k, t, now);
+    return k->state == T_HOLD     ? hold(k, t, now)
+           : k->state == T_REMOTE ? remote(k, t, now)
+                                  : look(k, t, now);
 }
 
 /* ---- the hook ------------------------------------------------------------------------ */
@@ -349,12 +526,7 @@ static bool begin(void *ctx, ismd_flight *f)
     snprintf(k->key, sizeof k->key, "%s", f->key);
     snprintf(k->fmt, sizeof k->fmt, "%s", f->fmt);
     snprintf(k->token, sizeof k->token, "%s/%llu", sh->instance, (unsigned long long)f->id);
-    pthread_mutex_lock(&sh->lock);
-    bool ok = !sh->stopping;
-    if (ok)
-        sh->ntasks++;
-    pthread_mutex_unlock(&sh->lock);
-    if (!ok) {
+    if (!ismd_shared_task_added(sh)) {
         free(k);
         return false;
     }
@@ -364,7 +536,8 @@ static bool begin(void *ctx, ismd_flight *f)
 }
 
 ismd_shared *ismd_shared_start(ismd_sched *sched, ism_cache *cache, ism_cache_tier *redis,
-                               const ism_pipeline_limits *limits, double lock_ttl_s)
+                               const ism_pipeline_limits *limits, double lock_ttl_s,
+                               const ismd_cluster_settings *cluster)
 {
     ismd_shared *sh = calloc(1, sizeof *sh);
     if (!sh)
@@ -384,6 +557,12 @@ ismd_shared *ismd_shared_start(ismd_sched *sched, ism_cache *cache, ism_cache_ti
     snprintf(sh->instance, sizeof sh->instance, "%s/%ld/%016llx", host, (long)getpid(), nonce);
     pthread_mutex_init(&sh->lock, NULL);
     pthread_cond_init(&sh->changed, NULL);
+    if (cluster && !(sh->cluster = ismd_cluster_start(sh, sched, redis, sh->instance, sh->ttl_ms,
+                                                      cluster->user_jobs,
+                                                      cluster->user_running))) {
+        free_shared(sh);
+        return NULL;
+    }
     ismd_sched_lock(sched);
     sched->shared_begin = begin;
     sched->shared_ctx = sh;

@@ -17,8 +17,8 @@
  *   Redis unreachable at any step: the flight is queued at once and computed here (counted as
  *   a fallback); the daemon keeps serving from its own tiers.
  *
- * Waiting is bounded by the flight's deadline (--job-timeout); a dead holder by the lock's
- * lifetime (--redis-lock-ttl). */
+ * Waiting is bounded by the flight's deadline (--queue-timeout + --job-timeout); a dead
+ * holder by the lock's lifetime (--redis-lock-ttl). */
 #ifndef ISMD_SHARED_CACHE_H
 #define ISMD_SHARED_CACHE_H
 
@@ -28,9 +28,25 @@
 
 typedef struct ismd_shared ismd_shared;
 
-/* Hooks the shared stage into sched (new flights go through it). NULL when out of memory. */
+/* --cluster: the default per-user limits, held over the whole service. */
+typedef struct ismd_cluster_settings {
+    int user_jobs, user_running;
+} ismd_cluster_settings;
+
+/* Hooks the shared stage into sched (new flights go through it). With cluster (not NULL), a
+ * computation step 3 would queue here goes to the cluster queue instead (cluster.h), and this
+ * daemon's executor takes work from it. NULL when out of memory. */
 ismd_shared *ismd_shared_start(ismd_sched *sched, ism_cache *cache, ism_cache_tier *redis,
-                               const ism_pipeline_limits *limits, double lock_ttl_s);
+                               const ism_pipeline_limits *limits, double lock_ttl_s,
+                               const ismd_cluster_settings *cluster);
+
+/* For tasks that live and stop with the stage (cluster.c). enter: the scheduler is locked,
+ * false (not locked) once stopping; leave unlocks it. task_added: one task more (false once
+ * stopping); task_ended: one less (the last one after stop frees the stage). */
+bool ismd_shared_enter(ismd_shared *sh);
+void ismd_shared_leave(ismd_shared *sh);
+bool ismd_shared_task_added(ismd_shared *sh);
+void ismd_shared_task_ended(ismd_shared *sh);
 
 /* Unhooks and waits (bounded) for the tasks to finish, releasing the locks they hold. Call
  * after the pool has stopped and before the scheduler is destroyed; frees sh. */

@@ -1,0 +1,486 @@
+/* cluster.c — the cluster queue of cluster.h: its Lua scripts (enqueue, take, heartbeat,
+ * finish, cancel), the origin's calls, and the executor: a take task that turns stream entries
+ * into local flights while workers are idle, and a task per taken entry that heart-beats it
+ * and reports its end. Tasks run on the Redis tier's thread and enter the scheduler only
+ * through the shared stage (ismd_shared_enter), never holding its lock across a Redis call. */
+#include "server/isomeshd/cluster.h"
+
+#include <hiredis/hiredis.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "server/common/cache_redis.h"
+#include "server/common/log.h"
+#include "server/isomeshd/shared_cache.h"
+
+#define P ISM_REDIS_KEY_PREFIX
+#define KEY_MAX 512
+#define TAKE_TICK_NS 25000000LL      /* an idle daemon looks for work this often */
+#define TAKE_MAX_PER_TICK 8          /* entries taken in one look at most */
+#define CJ_TICK_NS 20000000LL        /* a taken entry's task checks for its flight's end */
+#define HEARTBEAT_MAX_NS 500000000LL /* and heart-beats (progress too) at least this often */
+#define STATE_TTL_MS "3600000"       /* a job hash outlives its last change by an hour */
+
+/* ---- scripts ------------------------------------------------------------------------- */
+
+/* KEYS stream, users, job hash, ulim; ARGV user, max entries, name, key, fmt, req, max
+ * running, ttl. The entry's id, or false when the user already has max entries. */
+static const char ENQUEUE_LUA[] =
+    "if redis.call('exists', KEYS[1]) == 0 then "
+    "  redis.call('xgroup', 'create', KEYS[1], 'workers', '0', 'MKSTREAM') end "
+    "if redis.call('xlen', KEYS[1]) >= tonumber(ARGV[2]) then return false end "
+    "local id = redis.call('xadd', KEYS[1], '*', 'name', ARGV[3], 'key', ARGV[4], "
+    "  'fmt', ARGV[5], 'user', ARGV[1], 'req', ARGV[6]) "
+    "redis.call('sadd', KEYS[2], ARGV[1]) "
+    "redis.call('hset', KEYS[4], ARGV[1], ARGV[7]) "
+    "redis.call('del', KEYS[3]) "
+    "redis.call('hset', KEYS[3], 'state', 'queued', 'progress', '0', 'id', id, "
+    "  'stream', KEYS[1]) "
+    "redis.call('pexpire', KEYS[3], ARGV[8]) "
+    "return id";
+
+/* KEYS users, ulim; ARGV stream prefix, consumer, min idle ms, turn, job prefix, now ms,
+ * ttl. {user, stream, id, fields, claimed} or false. Re-claims a dead daemon's entry first,
+ * else reads a new one from the user with the fewest running, below its limit. Streams with
+ * nothing left are removed with their users. */
+static const char TAKE_LUA[] =
+    "local function start(u, s, e, claimed) "
+    "  local name = nil "
+    "  for i = 1, #e[2], 2 do if e[2][i] == 'name' then name = e[2][i + 1] end end "
+    "  if name then "
+    "    local jk = ARGV[5] .. name "
+    "    if redis.call('hget', jk, 'id') == e[1] then "
+    "      redis.call('hset', jk, 'state', 'running', 'daemon', ARGV[2], 'started_ms', ARGV[6]) "
+    "      redis.call('pexpire', jk, ARGV[7]) end end "
+    "  return {u, s, e[1], e[2], claimed} end "
+    "local users = redis.call('smembers', KEYS[1]) "
+    "local n = #users "
+    "local cands = {} "
+    "for i = 1, n do "
+    "  local u = users[i] "
+    "  local s = ARGV[1] .. u "
+    "  if redis.call('exists', s) == 0 then redis.call('srem', KEYS[1], u) "
+    "  else "
+    "    local pend = redis.call('xpending', s, 'workers')[1] "
+    "    if pend > 0 then "
+    "      local c = redis.call('xautoclaim', s, 'workers', ARGV[2], ARGV[3], '0-0', 'COUNT', 1) "
+    "      if c[2][1] and c[2][1][2] then return start(u, s, c[2][1], 1) end "
+    "    end "
+    "    if pend == 0 and redis.call('xlen', s) == 0 then "
+    "      redis.call('del', s) redis.call('srem', KEYS[1], u) "
+    "    else "
+    "      local lim = tonumber(redis.call('hget', KEYS[2], u) or '0') or 0 "
+    "      if lim <= 0 or pend < lim then "
+    "        cands[#cands + 1] = {u, pend, (i + tonumber(ARGV[4])) % n} end "
+    "    end "
+    "  end "
+    "end "
+    "table.sort(cands, function(a, b) "
+    "  if a[2] ~= b[2] then return a[2] < b[2] end return a[3] < b[3] end) "
+    "for _, c in ipairs(cands) do "
+    "  local s = ARGV[1] .. c[1] "
+    "  local r = redis.call('xreadgroup', 'group', 'workers', ARGV[2], 'count', 1, "
+    "    'streams', s, '>') "
+    "  if r then return start(c[1], s, r[1][2][1], 0) end "
+    "end "
+    "return false";
+
+/* KEYS stream, job hash; ARGV consumer, id, progress, ttl. 1: still ours (idle time reset,
+ * progress published); 0: taken over by another daemon, or canceled (then acknowledged). */
+static const char HEARTBEAT_LUA[] =
+    "local p = redis.call('xpending', KEYS[1], 'workers', ARGV[2], ARGV[2], 1)[1] "
+    "if not p or p[2] ~= ARGV[1] then return 0 end "
+    "if redis.call('hget', KEYS[2], 'id') ~= ARGV[2] or redis.call('hget', KEYS[2], 'cancel') then "
+    "  redis.call('xack', KEYS[1], 'workers', ARGV[2]) redis.call('xdel', KEYS[1], ARGV[2]) "
+    "  return 0 end "
+    "redis.call('xclaim', KEYS[1], 'workers', ARGV[1], 0, ARGV[2], 'JUSTID') "
+    "redis.call('hset', KEYS[2], 'progress', ARGV[3]) "
+    "redis.call('pexpire', KEYS[2], ARGV[4]) "
+    "return 1";
+
+/* KEYS stream, job hash; ARGV id, state, status, error, ttl. */
+static const char FINISH_LUA[] =
+    "redis.call('xack', KEYS[1], 'workers', ARGV[1]) "
+    "redis.call('xdel', KEYS[1], ARGV[1]) "
+    "if redis.call('hget', KEYS[2], 'id') == ARGV[1] then "
+    "  redis.call('hset', KEYS[2], 'state', ARGV[2], 'status', ARGV[3], 'error', ARGV[4], "
+    "    'progress', '1') "
+    "  redis.call('pexpire', KEYS[2], ARGV[5]) end "
+    "return 1";
+
+/* KEYS stream, job hash; ARGV id. A waiting entry goes; a running one is flagged. */
+static const char CANCEL_LUA[] =
+    "if redis.call('hget', KEYS[2], 'id') == ARGV[1] then "
+    "  redis.call('hset', KEYS[2], 'cancel', '1') end "
+    "if not redis.call('xpending', KEYS[1], 'workers', ARGV[1], ARGV[1], 1)[1] then "
+    "  redis.call('xdel', KEYS[1], ARGV[1]) end "
+    "return 1";
+
+struct ismd_cluster {
+    ismd_shared *sh;
+    ismd_sched *sched;
+    ism_cache_tier *redis;
+    char consumer[128];        /* this daemon in the consumer group */
+    long ttl_ms;               /* a silent daemon's entries are re-claimed after this */
+    int user_jobs, user_running;
+    unsigned long turn;        /* rotates the order among users with equal load */
+    ism_redis_task take;
+};
+
+/* One taken entry: the local flight's waiter and the task that heart-beats it. */
+typedef struct cjob {
+    ism_redis_task base;       /* first: the tier hands this back */
+    ismd_waiter waiter;
+    ismd_cluster *c;
+    char stream[KEY_MAX], job[KEY_MAX];
+    char id[ISMD_CLUSTER_ID_MAX];
+    long long beat_at_ns;
+    /* set under the scheduler's lock by the flight */
+    bool finished;
+    unsigned status;
+    ism_blob *error;
+    double progress;
+} cjob;
+
+static int run_script(ismd_cluster *c, const char *what, const char *lua, int nkeys,
+                      const char **args, int nargs, redisReply **out)
+{
+    const char *argv[24] = {"EVAL", lua, NULL};
+    size_t lens[24] = {4, strlen(lua), 0};
+    char nk[8];
+    snprintf(nk, sizeof nk, "%d", nkeys);
+    argv[2] = nk;
+    lens[2] = strlen(nk);
+    for (int i = 0; i < nargs && i < 21; i++) {
+        argv[3 + i] = args[i];
+        lens[3 + i] = strlen(args[i]);
+    }
+    redisReply *r = ism_cache_redis_call(c->redis, what, 3 + nargs, argv, lens);
+    if (!r)
+        return -1;
+    if (out)
+        *out = r;
+    else
+        freeReplyObject(r);
+    return 0;
+}
+
+static void job_key(char out[KEY_MAX], const char *name)
+{
+    snprintf(out, KEY_MAX, "%sjob:%s", P, name);
+}
+
+static void stream_key(char out[KEY_MAX], const char *user)
+{
+    snprintf(out, KEY_MAX, "%sq:%s", P, user);
+}
+
+/* ---- the origin ---------------------------------------------------------------------- */
+
+int ismd_cluster_enqueue(ismd_cluster *c, const char *name, const char *key, const char *fmt,
+                         const char *user, const ismd_user_limits *lim, const ism_blob *request,
+                         char id[ISMD_CLUSTER_ID_MAX])
+{
+    char stream[KEY_MAX], job[KEY_MAX], jobs[16], running[16];
+    char *req = malloc(request->len + 1);
+    if (!req)
+        return -1;
+    memcpy(req, request->data, request->len);
+    req[request->len] = 0;
+    stream_key(stream, user);
+    job_key(job, name);
+    snprintf(jobs, sizeof jobs, "%d", lim && lim->max_jobs > 0 ? lim->max_jobs : c->user_jobs);
+    snprintf(running, sizeof running, "%d",
+             lim && lim->max_running > 0 ? lim->max_running : c->user_running);
+    const char *args[] = {stream, P "users", job, P "ulim", user, jobs, name, key, fmt, req,
+                          running, STATE_TTL_MS};
+    redisReply *r = NULL;
+    int rc = run_script(c, "cluster_enqueue", ENQUEUE_LUA, 4, args, 12, &r);
+    free(req);
+    if (rc < 0)
+        return -1;
+    int got = r->type == REDIS_REPLY_STRING ? 1 : r->type == REDIS_REPLY_NIL ? 0 : -1;
+    if (got == 1)
+        snprintf(id, ISMD_CLUSTER_ID_MAX, "%s", r->str);
+    freeReplyObject(r);
+    return got;
+}
+
+static const char *reply_str(const redisReply *e)
+{
+    return e && e->type == REDIS_REPLY_STRING ? e->str : NULL;
+}
+
+int ismd_cluster_view(ismd_cluster *c, const char *name, const char *id, ismd_cj_view *v)
+{
+    char job[KEY_MAX];
+    job_key(job, name);
+    memset(v, 0, sizeof *v);
+    const char *argv[] = {"HMGET", job, "id", "state", "progress", "status", "error"};
+    size_t lens[7];
+    for (int i = 0; i < 7; i++)
+        lens[i] = strlen(argv[i]);
+    redisReply *r = ism_cache_redis_call(c->redis, "cluster_view", 7, argv, lens);
+    if (!r)
+        return -1;
+    if (r->type != REDIS_REPLY_ARRAY || r->elements != 5) {
+        freeReplyObject(r);
+        return -1;
+    }
+    const char *got_id = reply_str(r->element[0]), *state = reply_str(r->element[1]);
+    if (got_id && state && !strcmp(got_id, id)) {
+        v->state = !strcmp(state, "queued")    ? ISMD_CJ_QUEUED
+                   : !strcmp(state, "running") ? ISMD_CJ_RUNNING
+                   : !strcmp(state, "done")    ? ISMD_CJ_DONE
+                                               : ISMD_CJ_FAILED;
+        const char *p = reply_str(r->element[2]), *st = reply_str(r->element[3]);
+        const char *err = reply_str(r->element[4]);
+        v->progress = p ? strtod(p, NULL) : 0;
+        v->status = st ? (unsigned)strtoul(st, NULL, 10) : 500;
+        if (v->state == ISMD_CJ_FAILED && err)
+            v->error = ism_blob_from_str(err);
+    }
+    freeReplyObject(r);
+    return 0;
+}
+
+void ismd_cluster_cancel(ismd_cluster *c, const char *name, const char *user, const char *id)
+{
+    char stream[KEY_MAX], job[KEY_MAX];
+    stream_key(stream, user);
+    job_key(job, name);
+    const char *args[] = {stream, job, id};
+    run_script(c, "cluster_cancel", CANCEL_LUA, 2, args, 3, NULL);
+}
+
+/* ---- a taken entry ------------------------------------------------------------------- */
+
+static void cj_done(ismd_waiter *w, const ismd_result *r)
+{
+    cjob *j = (cjob *)((char *)w - offsetof(cjob, waiter));
+    j->finished = true;
+    j->status = r->status;
+    if (r->status != 200)
+        ism_blob_set(&j->error, r->body);
+}
+
+static void cj_progress(ismd_waiter *w, double fraction, bool running)
+{
+    (void)running;
+    cjob *j = (cjob *)((char *)w - offsetof(cjob, waiter));
+    j->progress = fraction;
+}
+
+static long long cj_end(cjob *j)
+{
+    ismd_shared *sh = j->c->sh;
+    ism_blob_unref(j->error);
+    free(j);
+    ismd_shared_task_ended(sh);
+    return 0;
+}
+
+/* The flight ended: its results are in Redis before the job hash says so. A refusal by this
+ * daemon (shutting down, queue full) is not the computation's answer: the entry is left
+ * pending, and another daemon re-claims it one lock lifetime later. */
+static void cj_report(cjob *j, ism_cache_tier *t)
+{
+    if (j->status == 503 || j->status == 429)
+        return;
+    ism_cache_redis_flush(t);
+    char status[16];
+    snprintf(status, sizeof status, "%u", j->status);
+    char *err = NULL;
+    if (j->error) {
+        err = malloc(j->error->len + 1);
+        if (err) {
+            memcpy(err, j->error->data, j->error->len);
+            err[j->error->len] = 0;
+        }
+    }
+    const char *args[] = {j->stream, j->job, j->id, j->status == 200 ? "done" : "failed",
+                          status, err ? err : "", STATE_TTL_MS};
+    run_script(j->c, "cluster_finish", FINISH_LUA, 2, args, 7, NULL);
+    free(err);
+}
+
+/* Still ours and wanted: 1; taken over or canceled: 0; Redis unavailable: -1. */
+static int cj_beat(cjob *j, double progress)
+{
+    char p[32];
+    snprintf(p, sizeof p, "%.4f", progress);
+    const char *args[] = {j->stream, j->job, j->c->consumer, j->id, p, STATE_TTL_MS};
+    redisReply *r = NULL;
+    if (run_script(j->c, "cluster_heartbeat", HEARTBEAT_LUA, 2, args, 6, &r) < 0)
+        return -1;
+    int v = r->type == REDIS_REPLY_INTEGER ? (int)r->integer : -1;
+    freeReplyObject(r);
+    return v;
+}
+
+static long long cj_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
+{
+    cjob *j = (cjob *)base;
+    ismd_shared *sh = j->c->sh;
+    if (stopping || !ismd_shared_enter(sh)) {
+        /* the pool has stopped: the flight is over. Left pending for another daemon. */
+        if (j->finished)
+            return cj_end(j);
+        ismd_shared_task_ended(sh); /* still a waiter of a flight: leaked, never freed twice */
+        return 0;
+    }
+    bool finished = j->finished;
+    double progress = j->progress;
+    ismd_shared_leave(sh);
+    if (finished) {
+        cj_report(j, t);
+        return cj_end(j);
+    }
+    long long now = ism_now_ns();
+    if (now < j->beat_at_ns)
+        return now + CJ_TICK_NS;
+    long long every = j->c->ttl_ms * 1000000LL / 3;
+    j->beat_at_ns = now + (every < HEARTBEAT_MAX_NS ? every : HEARTBEAT_MAX_NS);
+    if (cj_beat(j, progress) != 0)
+        return now + CJ_TICK_NS;
+    /* canceled, or another daemon took it over: stop computing it here */
+    if (!ismd_shared_enter(sh))
+        return now + CJ_TICK_NS;
+    finished = j->finished;
+    if (!finished)
+        ismd_sched_detach(j->c->sched, &j->waiter);
+    ismd_shared_leave(sh);
+    ism_log_field f[] = {ISM_LS("job", j->job + strlen(P "job:")), ISM_LS("entry", j->id)};
+    ism_log_fields(ISM_LOG_INFO, "cluster_job_dropped", f, 2);
+    return cj_end(j);
+}
+
+/* ---- taking entries ------------------------------------------------------------------ */
+
+static const char *field(const redisReply *fields, const char *name)
+{
+    for (size_t i = 0; i + 1 < fields->elements; i += 2)
+        if (reply_str(fields->element[i]) && !strcmp(fields->element[i]->str, name))
+            return reply_str(fields->element[i + 1]);
+    return NULL;
+}
+
+/* Workers that would start a flight now. Scheduler lock held. */
+static long long idle_capacity(const ismd_sched *s)
+{
+    const ismd_metrics *m = s->metrics;
+    return atomic_load(&m->workers_ready) - atomic_load(&m->workers_busy) -
+           (long long)s->queue->ops->length(s->queue);
+}
+
+/* Makes a taken entry a local flight. False when it could not (left pending). */
+static bool start_entry(ismd_cluster *c, const redisReply *r)
+{
+    const redisReply *fields = r->element[3];
+    const char *stream = reply_str(r->element[1]), *id = reply_str(r->element[2]);
+    const char *name = field(fields, "name"), *key = field(fields, "key");
+    const char *fmt = field(fields, "fmt"), *user = field(fields, "user");
+    const char *req = field(fields, "req");
+    if (!stream || !id || !name || !key || !fmt || !user || !req)
+        return false;
+    cjob *j = calloc(1, sizeof *j);
+    ism_blob *request = ism_blob_from_str(req);
+    if (!j || !request || !ismd_shared_task_added(c->sh)) {
+        free(j);
+        ism_blob_unref(request);
+        return false;
+    }
+    j->c = c;
+    j->base.run = cj_run;
+    j->waiter.done = cj_done;
+    j->waiter.progress = cj_progress;
+    snprintf(j->stream, sizeof j->stream, "%s", stream);
+    job_key(j->job, name);
+    snprintf(j->id, sizeof j->id, "%s", id);
+    bool ok = false;
+    if (ismd_shared_enter(c->sh)) {
+        ismd_submit st = ismd_sched_submit_here(c->sched, key, fmt, request, user, NULL,
+                                                &j->waiter);
+        ok = st == ISMD_SUBMIT_NEW || st == ISMD_SUBMIT_JOINED;
+        if (ok)
+            atomic_fetch_add(r->element[4]->integer ? &c->sched->metrics->cluster_reclaimed
+                                                    : &c->sched->metrics->cluster_taken, 1);
+        ismd_shared_leave(c->sh);
+    }
+    ism_blob_unref(request);
+    if (!ok) {
+        cj_end(j);
+        return false;
+    }
+    if (r->element[4]->integer) {
+        ism_log_field f[] = {ISM_LS("job", name), ISM_LS("entry", id), ISM_LS("user", user)};
+        ism_log_fields(ISM_LOG_WARN, "cluster_job_reclaimed", f, 3);
+    }
+    ism_cache_redis_schedule(c->redis, &j->base, 0);
+    return true;
+}
+
+/* One entry for this daemon: 1 taken, 0 none, -1 Redis unavailable. */
+static int take_one(ismd_cluster *c)
+{
+    char idle_ms[24], turn[24], now_ms[24];
+    snprintf(idle_ms, sizeof idle_ms, "%ld", c->ttl_ms);
+    snprintf(turn, sizeof turn, "%lu", c->turn++);
+    struct timespec wall;
+    clock_gettime(CLOCK_REALTIME, &wall);
+    snprintf(now_ms, sizeof now_ms, "%lld", (long long)wall.tv_sec * 1000 + wall.tv_nsec / 1000000);
+    const char *args[] = {P "users", P "ulim", P "q:", c->consumer, idle_ms, turn, P "job:",
+                          now_ms, STATE_TTL_MS};
+    redisReply *r = NULL;
+    if (run_script(c, "cluster_take", TAKE_LUA, 2, args, 9, &r) < 0)
+        return -1;
+    int got = 0;
+    if (r->type == REDIS_REPLY_ARRAY && r->elements == 5 &&
+        r->element[3]->type == REDIS_REPLY_ARRAY && r->element[4]->type == REDIS_REPLY_INTEGER)
+        got = start_entry(c, r) ? 1 : 0;
+    freeReplyObject(r);
+    return got;
+}
+
+static long long take_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
+{
+    ismd_cluster *c = (ismd_cluster *)((char *)base - offsetof(ismd_cluster, take));
+    if (stopping || !ismd_shared_enter(c->sh)) {
+        ismd_shared_task_ended(c->sh);
+        return 0; /* c is freed with the stage */
+    }
+    long long idle = idle_capacity(c->sched);
+    bool draining = c->sched->draining;
+    ismd_shared_leave(c->sh);
+    for (long long i = 0; !draining && ism_cache_redis_up(t) && i < idle && i < TAKE_MAX_PER_TICK;
+         i++)
+        if (take_one(c) <= 0)
+            break;
+    return ism_now_ns() + TAKE_TICK_NS;
+}
+
+ismd_cluster *ismd_cluster_start(ismd_shared *sh, ismd_sched *sched, ism_cache_tier *redis,
+                                 const char *instance, long ttl_ms, int user_jobs,
+                                 int user_running)
+{
+    ismd_cluster *c = calloc(1, sizeof *c);
+    if (!c)
+        return NULL;
+    c->sh = sh;
+    c->sched = sched;
+    c->redis = redis;
+    snprintf(c->consumer, sizeof c->consumer, "%s", instance);
+    c->ttl_ms = ttl_ms;
+    c->user_jobs = user_jobs > 0 ? user_jobs : 1;
+    c->user_running = user_running;
+    c->take.run = take_run;
+    if (!ismd_shared_task_added(sh)) {
+        free(c);
+        return NULL;
+    }
+    ism_cache_redis_schedule(redis, &c->take, 0);
+    return c;
+}

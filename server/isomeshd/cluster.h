@@ -1,0 +1,73 @@
+/* cluster.h — the cluster queue (--cluster, with --redis): every daemon that shares one Redis
+ * is a front end and a worker host of one queue kept in Redis Streams.
+ *
+ * Keys (P = ISM_REDIS_KEY_PREFIX):
+ *   P q:<user>    one stream per user: an entry per computation waiting or running (fields
+ *                 name, key, fmt, user, req = its canonical request); consumer group
+ *                 "workers", one consumer per daemon
+ *   P users       the set of users with a stream
+ *   P ulim        hash user -> the user's running limit (0: none), from its latest entry
+ *   P job:<name>  hash: state (queued, running, done, failed), progress, status and error
+ *                 (failed), the daemon running it, its entry's id and stream; expires
+ *
+ * The origin (shared_cache.c, on the Redis thread) adds a computation it holds the lock of to
+ * its user's stream (refused when the user already has its --user-jobs there: cluster-wide),
+ * then follows its job hash until it is done (the mesh is then read from the shared cache) or
+ * failed (the error is answered), and cancels it when nobody waits for it any more.
+ *
+ * The executor (a task per daemon, on the Redis thread) takes entries while this daemon has
+ * idle workers: first one pending on a daemon that has not heart-beaten for a lock lifetime
+ * (XAUTOCLAIM: its daemon died), else a new one (XREADGROUP) from the user with the fewest
+ * entries running cluster-wide, below that user's running limit, ties taken in turn. The entry
+ * becomes a local flight (or joins one of the same name here); while it runs, its own task
+ * re-claims the entry every heartbeat (resetting its idle time), publishes progress and
+ * watches for a cancel; when it ends, the results are flushed to Redis before the job hash
+ * says so, and the entry is acknowledged and deleted. Every step is one Lua script, so a
+ * crash between two commands never leaves half a change. */
+#ifndef ISMD_CLUSTER_H
+#define ISMD_CLUSTER_H
+
+#include <stdbool.h>
+
+#include "server/common/blob.h"
+#include "server/common/cache.h"
+#include "server/isomeshd/sched.h"
+
+#define ISMD_CLUSTER_ID_MAX 48   /* a stream entry id, NUL included */
+
+typedef struct ismd_cluster ismd_cluster;
+typedef struct ismd_shared ismd_shared;
+
+typedef enum ismd_cj_state {
+    ISMD_CJ_MISSING, ISMD_CJ_QUEUED, ISMD_CJ_RUNNING, ISMD_CJ_DONE, ISMD_CJ_FAILED
+} ismd_cj_state;
+
+/* A computation as its job hash tells it. */
+typedef struct ismd_cj_view {
+    ismd_cj_state state;      /* MISSING: no hash, or one for another entry */
+    double progress;
+    unsigned status;          /* FAILED: the HTTP status */
+    ism_blob *error;          /* FAILED: the error JSON (the caller unrefs it) */
+} ismd_cj_view;
+
+/* Starts the executor of sh's daemon (its tasks live and stop with sh). user_jobs and
+ * user_running are the default per-user limits. NULL when out of memory. */
+ismd_cluster *ismd_cluster_start(ismd_shared *sh, ismd_sched *sched, ism_cache_tier *redis,
+                                 const char *instance, long ttl_ms, int user_jobs,
+                                 int user_running);
+
+/* ---- the origin's calls, Redis thread only ------------------------------------------- */
+
+/* Adds flight f's computation (copied: name, key, format, user, limits, request) to its
+ * user's stream; id gets the entry's id. 1 added, 0 the user has its limit of entries
+ * there, -1 Redis unavailable. */
+int ismd_cluster_enqueue(ismd_cluster *c, const char *name, const char *key, const char *fmt,
+                         const char *user, const ismd_user_limits *lim, const ism_blob *request,
+                         char id[ISMD_CLUSTER_ID_MAX]);
+/* Reads the job hash of name for entry id. 0, or -1 when Redis is unavailable. */
+int ismd_cluster_view(ismd_cluster *c, const char *name, const char *id, ismd_cj_view *v);
+/* Nobody waits for entry id any more: a waiting entry is deleted, a running one is told to
+ * stop (its executor sees the cancel at its next heartbeat). */
+void ismd_cluster_cancel(ismd_cluster *c, const char *name, const char *user, const char *id);
+
+#endif

@@ -1,0 +1,127 @@
+"""test_cluster_queue.py — --cluster: one queue in Redis Streams for every daemon, on loopback
+with Redis, daemons of one worker each and (for the failure case) nginx:
+
+* one user's jobs, all posted to one daemon, are computed by every daemon (each starts some,
+  together exactly as many as were posted), and the origin reports each one done;
+* a second user's job posted after a first user's backlog starts before most of it (users are
+  served in turn cluster-wide: the fewest running first);
+* the daemon computing a synchronous request is killed with SIGKILL mid-computation: the
+  request, sent through nginx, still gets a 200 whose mesh is byte for byte the one a fresh
+  daemon computes (the entry is re-claimed by a surviving daemon after --redis-lock-ttl, or
+  nginx retries the idempotent POST on the next daemon, which joins the computation).
+
+Every wait is bounded; no assertion depends on the machine's speed beyond the bounds."""
+import os
+import signal
+import sys
+import threading
+import time
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import stack  # noqa: E402
+from stack import harness  # noqa: E402
+
+SKIP = stack.missing_programs()
+
+
+def work(i):
+    """A distinct computation per i, a fraction of a second each."""
+    return {"expr": "x^2 + y^2 + z^2 - r^2", "params": {"r": 0.5 + i / 1000},
+            "box": [-1, -1, -1, 1, 1, 1], "depth": {"max": 7}}
+
+
+def slow_work(i):
+    """Seconds of work: long enough to kill its daemon in the middle."""
+    return {"preset": "gyroid-ball", "params": {"k": 4 + i / 1000}, "depth": {"max": 7}}
+
+
+def wait_job(d, job, source="127.0.0.1", timeout=120):
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        j = harness.http_request(d.port, "GET", job["url"], source=source).json()
+        if j["state"] not in ("queued", "running"):
+            return j
+        time.sleep(0.05)
+    raise AssertionError("job never finished: %r" % job)
+
+
+def started(d):
+    return d.metric("isomesh_computations_started_total")
+
+
+@unittest.skipIf(SKIP, SKIP)
+class ClusterQueueTest(unittest.TestCase):
+    def test_one_users_jobs_posted_to_one_daemon_run_on_every_daemon(self):
+        s = stack.Stack(n=3, daemon_args=("--cluster", "--workers", "1"), with_nginx=False).start()
+        try:
+            a = s.daemons[0]
+            jobs = [a.post("/v1/jobs", work(i)).json() for i in range(6)]
+            for j in jobs:
+                self.assertEqual(wait_job(a, j)["state"], "done")
+            counts = [started(d) for d in s.daemons]
+            self.assertEqual(sum(counts), 6, counts)
+            self.assertTrue(all(c >= 1 for c in counts), counts)
+            self.assertEqual(a.metric("isomesh_cluster_submitted_total"), 6)
+            self.assertEqual(sum(d.metric("isomesh_cluster_taken_total") for d in s.daemons), 6)
+            # the meshes are served by any daemon, and the queue is empty again
+            for d in s.daemons:
+                self.assertEqual(d.get("/v1/meshes/%s.drc" % jobs[0]["key"]).status, 200)
+            self.assertEqual(s.redis.command("XLEN", "isomesh:v1:q:127.0.0.1"), 0)
+        finally:
+            self.assertEqual(s.cleanup(), [], "sanitizer reports")
+
+    def test_a_second_user_is_served_before_the_first_users_backlog(self):
+        s = stack.Stack(n=2, daemon_args=("--cluster", "--workers", "1"), with_nginx=False).start()
+        try:
+            a, b = s.daemons
+            backlog = [harness.http_request(a.port, "POST", "/v1/jobs", work(100 + i),
+                                            source="127.0.0.2").json() for i in range(8)]
+            stack.wait_until(lambda: sum(d.metric("isomesh_workers_busy") for d in s.daemons) == 2, 30)
+            other = harness.http_request(b.port, "POST", "/v1/jobs", work(200),
+                                         source="127.0.0.3").json()
+            mine = wait_job(b, other, source="127.0.0.3")
+            self.assertEqual(mine["state"], "done")
+            done = [wait_job(a, j, source="127.0.0.2") for j in backlog]
+            self.assertTrue(all(j["state"] == "done" for j in done))
+            before = [j for j in done if j["started"] < mine["started"]]
+            # the two running when it came, and at most one more that started meanwhile
+            self.assertLessEqual(len(before), 3, [j["started"] for j in done] + [mine["started"]])
+        finally:
+            self.assertEqual(s.cleanup(), [], "sanitizer reports")
+
+    def test_a_killed_daemon_s_computation_finishes_elsewhere_for_the_client(self):
+        req = slow_work(300)
+        s = stack.Stack(n=2, daemon_args=("--cluster", "--workers", "1", "--redis-lock-ttl", "1s")).start()
+        try:
+            box = {}
+
+            def ask():
+                try:
+                    box["r"] = s.nginx.post("/v1/mesh", req, timeout=120)
+                except OSError as e:
+                    box["r"] = e
+            t = threading.Thread(target=ask, daemon=True)
+            t.start()
+            busy = stack.wait_until(
+                lambda: [d for d in s.daemons if d.metric("isomesh_workers_busy") == 1], 30)
+            self.assertEqual(len(busy), 1)
+            victim = busy[0]
+            survivor = [d for d in s.daemons if d is not victim][0]
+            victim.proc.send_signal(signal.SIGKILL)
+            victim.proc.wait(timeout=10)
+            t.join(120)
+            self.assertFalse(t.is_alive())
+            r = box["r"]
+            self.assertEqual(getattr(r, "status", r), 200, getattr(r, "body", b"")[:300])
+            self.assertGreaterEqual(started(survivor), 1)
+        finally:
+            s.cleanup()
+        with harness.Daemon("--workers", "1") as fresh:
+            again = fresh.post("/v1/mesh", req)
+            self.assertEqual(again.status, 200)
+            self.assertEqual(again.body, r.body)
+
+
+if __name__ == "__main__":
+    unittest.main()
