@@ -4,6 +4,7 @@
 #include "proto/features.h"
 #include "proto/json_writer.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -89,7 +90,17 @@ static void write_xyz(ism_jw *w, const ism_mesh *m, uint32_t v)
         ism_jw_float(w, (float)m->pos[3 * (size_t)v + k]);
 }
 
-static size_t write_lines(ism_jw *w, const ism_mesh *m, const ism_polylines *p)
+static void write_point3(ism_jw *w, const double p[3])
+{
+    ism_jw_array(w);
+    for (int k = 0; k < 3; k++)
+        ism_jw_number(w, p[k]);
+    ism_jw_array_end(w);
+}
+
+/* Polylines of mesh vertices; on (may be NULL) gives each line's "on_locus". Returns edges. */
+static size_t write_lines(ism_jw *w, const ism_mesh *m, const ism_polylines *p,
+                          const uint8_t *on)
 {
     size_t edges = 0;
     ism_jw_array(w);
@@ -98,6 +109,10 @@ static size_t write_lines(ism_jw *w, const ism_mesh *m, const ism_polylines *p)
         ism_jw_object(w);
         ism_jw_key(w, "closed");
         ism_jw_bool(w, e - s > 1 && p->verts[s] == p->verts[e - 1]);
+        if (on) {
+            ism_jw_key(w, "on_locus");
+            ism_jw_bool(w, on[i]);
+        }
         ism_jw_key(w, "xyz");
         ism_jw_array(w);
         for (uint32_t j = s; j < e; j++)
@@ -110,45 +125,195 @@ static size_t write_lines(ism_jw *w, const ism_mesh *m, const ism_polylines *p)
     return edges;
 }
 
+static void write_singular_point(ism_jw *w, const ism_sing_point *p, int cones)
+{
+    ism_jw_object(w);
+    ism_jw_key(w, "xyz");
+    write_point3(w, p->p);
+    ism_jw_key(w, "radius");
+    ism_jw_number(w, p->radius);
+    ism_jw_key(w, "type");
+    ism_jw_string(w, ism_sing_type_name(p->type));
+    ism_jw_key(w, "certified");
+    ism_jw_bool(w, p->certified);
+    ism_jw_key(w, "hessian_eigenvalues");
+    write_point3(w, p->eig);
+    ism_jw_key(w, "residual_f");
+    ism_jw_number(w, p->residual_f);
+    ism_jw_key(w, "residual_grad");
+    ism_jw_number(w, p->residual_grad);
+    ism_jw_key(w, "cones");
+    ism_jw_int(w, cones);
+    ism_jw_object_end(w);
+}
+
+static void write_curve_end(ism_jw *w, const ism_sing_curve *c, int e, const ism_locus *l)
+{
+    size_t at = e == 0 ? 0 : c->n - 1;
+    ism_jw_object(w);
+    ism_jw_key(w, "type");
+    ism_jw_string(w, ism_end_type_name(c->end_type[e]));
+    ism_jw_key(w, "xyz");
+    write_point3(w, c->xyz + 3 * at);
+    ism_jw_key(w, "point");
+    if (c->end_point[e] >= 0 && (size_t)c->end_point[e] < l->npoints)
+        ism_jw_int(w, c->end_point[e]);
+    else
+        ism_jw_null(w);
+    ism_jw_object_end(w);
+}
+
+static void write_singular_curve(ism_jw *w, const ism_sing_curve *c, const ism_locus *l)
+{
+    ism_jw_object(w);
+    ism_jw_key(w, "kind");
+    ism_jw_string(w, ism_curve_kind_name(c->kind));
+    ism_jw_key(w, "closed");
+    ism_jw_bool(w, c->closed);
+    ism_jw_key(w, "xyz");
+    ism_jw_array(w);
+    for (size_t i = 0; i < 3 * c->n; i++)
+        ism_jw_number(w, c->xyz[i]);
+    ism_jw_array_end(w);
+    ism_jw_key(w, "ends");
+    ism_jw_array(w);
+    for (int e = 0; e < 2 && !c->closed && c->n; e++)
+        write_curve_end(w, c, e, l);
+    ism_jw_array_end(w);
+    ism_jw_object_end(w);
+}
+
+/* The locus's counts: points by type and certification, curves by kind, sheets. */
+void ism_locus_counts_json(ism_jw *w, const ism_locus *l)
+{
+    size_t by_type[ISM_SING_TYPES] = {0}, certified = 0, by_kind[ISM_CURVE_KINDS] = {0};
+    for (size_t i = 0; l && i < l->npoints; i++) {
+        if (l->points[i].type >= 0 && l->points[i].type < ISM_SING_TYPES)
+            by_type[l->points[i].type]++;
+        certified += l->points[i].certified;
+    }
+    for (size_t i = 0; l && i < l->ncurves; i++)
+        if (l->curves[i].kind >= 0 && l->curves[i].kind < ISM_CURVE_KINDS)
+            by_kind[l->curves[i].kind]++;
+    ism_jw_key(w, "singular_points");
+    ism_jw_uint(w, l ? l->npoints : 0);
+    ism_jw_key(w, "certified");
+    ism_jw_uint(w, certified);
+    ism_jw_key(w, "uncertified");
+    ism_jw_uint(w, (l ? l->npoints : 0) - certified);
+    ism_jw_key(w, "by_type");
+    ism_jw_object(w);
+    for (int t = 0; t < ISM_SING_TYPES; t++) {
+        ism_jw_key(w, ism_sing_type_name(t));
+        ism_jw_uint(w, by_type[t]);
+    }
+    ism_jw_object_end(w);
+    ism_jw_key(w, "curves");
+    ism_jw_uint(w, l ? l->ncurves : 0);
+    for (int k = 0; k < ISM_CURVE_KINDS; k++) {
+        char key[32];
+        snprintf(key, sizeof key, "%s_curves", ism_curve_kind_name(k));
+        ism_jw_key(w, key);
+        ism_jw_uint(w, by_kind[k]);
+    }
+    ism_jw_key(w, "double_sheets");
+    ism_jw_uint(w, l ? l->nsheets : 0);
+}
+
+static void write_locus(ism_jw *w, const ism_features *f)
+{
+    const ism_locus *l = f->locus;
+    ism_jw_key(w, "singular_points");
+    ism_jw_array(w);
+    for (size_t i = 0; l && i < l->npoints; i++) {
+        int cones = f->check ? f->check->point_cones[i] : l->points[i].cones;
+        write_singular_point(w, &l->points[i], cones);
+    }
+    ism_jw_array_end(w);
+    ism_jw_key(w, "curves");
+    ism_jw_array(w);
+    for (size_t i = 0; l && i < l->ncurves; i++)
+        write_singular_curve(w, &l->curves[i], l);
+    ism_jw_array_end(w);
+    ism_jw_key(w, "double_sheets");
+    ism_jw_array(w);
+    for (size_t i = 0; l && i < l->nsheets; i++) {
+        ism_jw_object(w);
+        ism_jw_key(w, "first_triangle");
+        ism_jw_uint(w, l->sheets[i].first_triangle);
+        ism_jw_key(w, "triangles");
+        ism_jw_uint(w, l->sheets[i].triangles);
+        ism_jw_key(w, "area");
+        ism_jw_number(w, l->sheets[i].area);
+        ism_jw_object_end(w);
+    }
+    ism_jw_array_end(w);
+}
+
+static void write_mesh_points(ism_jw *w, const ism_mesh *m, const ism_features *f)
+{
+    ism_jw_array(w);
+    for (size_t i = 0; i < f->npoints; i++) {
+        ism_jw_object(w);
+        ism_jw_key(w, "xyz");
+        ism_jw_array(w);
+        write_xyz(w, m, f->points[i]);
+        ism_jw_array_end(w);
+        ism_jw_key(w, "class");
+        ism_jw_int(w, f->point_class[i]);
+        ism_jw_key(w, "kind");
+        ism_jw_string(w, ism_point_kind_name(f->point_kind[i]));
+        if (f->check) {
+            ism_jw_key(w, "on_locus");
+            ism_jw_bool(w, f->check->point_on[i]);
+        }
+        ism_jw_object_end(w);
+    }
+    ism_jw_array_end(w);
+}
+
 char *ism_features_json(const ism_mesh *m, const ism_features *f, size_t *len)
 {
     ism_jw w;
     ism_jw_init(&w);
     ism_jw_object(&w);
     ism_jw_key(&w, "version");
-    ism_jw_int(&w, 1);
+    ism_jw_int(&w, ISM_FEATURES_VERSION);
     ism_jw_key(&w, "classes");
     ism_jw_array(&w);
     for (size_t i = 0; i < sizeof class_names / sizeof class_names[0]; i++)
         ism_jw_string(&w, class_names[i]);
     ism_jw_array_end(&w);
-    ism_jw_key(&w, "curves");
-    size_t curve_edges = write_lines(&w, m, &f->curves);
-    ism_jw_key(&w, "points");
-    ism_jw_array(&w);
-    for (size_t i = 0; i < f->npoints; i++) {
-        ism_jw_object(&w);
-        ism_jw_key(&w, "xyz");
-        ism_jw_array(&w);
-        write_xyz(&w, m, f->points[i]);
-        ism_jw_array_end(&w);
-        ism_jw_key(&w, "class");
-        ism_jw_int(&w, f->point_class[i]);
-        ism_jw_key(&w, "kind");
-        ism_jw_string(&w, ism_point_kind_name(f->point_kind[i]));
-        ism_jw_object_end(&w);
-    }
-    ism_jw_array_end(&w);
+    write_locus(&w, f);
+    ism_jw_key(&w, "nonmanifold_edges");
+    const ism_locus_check *chk = f->check;
+    bool check_fits = chk && chk->curve_on && chk->point_on;
+    size_t curve_edges = write_lines(&w, m, &f->curves, check_fits ? chk->curve_on : NULL);
+    ism_jw_key(&w, "nonmanifold_points");
+    write_mesh_points(&w, m, f);
     ism_jw_key(&w, "boundaries");
-    size_t boundary_edges = write_lines(&w, m, &f->boundaries);
+    size_t boundary_edges = write_lines(&w, m, &f->boundaries, NULL);
+    bool incomplete = f->locus && f->locus->incomplete;
+    ism_jw_key(&w, "incomplete");
+    ism_jw_bool(&w, incomplete);
+    if (incomplete) {
+        ism_jw_key(&w, "incomplete_why");
+        ism_jw_string(&w, f->locus->incomplete_why);
+    }
     ism_jw_key(&w, "counts");
     ism_jw_object(&w);
-    ism_jw_key(&w, "curves");
+    ism_locus_counts_json(&w, f->locus);
+    ism_jw_key(&w, "nonmanifold_chains");
     ism_jw_uint(&w, f->curves.n);
-    ism_jw_key(&w, "curve_edges");
+    ism_jw_key(&w, "nonmanifold_edges");
     ism_jw_uint(&w, curve_edges);
-    ism_jw_key(&w, "points");
+    ism_jw_key(&w, "nonmanifold_points");
     ism_jw_uint(&w, f->npoints);
+    ism_jw_key(&w, "artefacts");
+    if (chk)
+        ism_jw_uint(&w, chk->artefacts);
+    else
+        ism_jw_null(&w);
     ism_jw_key(&w, "boundaries");
     ism_jw_uint(&w, f->boundaries.n);
     ism_jw_key(&w, "boundary_edges");

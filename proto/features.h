@@ -1,26 +1,39 @@
-/* features.h — the non-manifold structure that must travel beside the triangles, because
- * Draco splits vertices along non-manifold edges and drops degenerate faces: the analysis's
- * non-manifold curves and points (with their vertex class), and the boundary chains. The
- * viewer gets it as the "features" JSON next to a .drc (GET /v1/meshes/{key}/features) and as
- * LINES / POINTS primitives inside a .glb.
+/* features.h — the singular structure that travels beside the triangles: the singular locus
+ * found from f (certified points, singular curves, double sheets), the mesh's own
+ * non-manifold edges and points checked against it (Draco splits vertices along non-manifold
+ * edges and drops degenerate faces, so none of this can be re-derived from a .drc), and the
+ * boundary chains. The viewer gets it as the "features" JSON next to a .drc
+ * (GET /v1/meshes/{key}/features, `isomesh --features FILE`) and as LINES / POINTS
+ * primitives inside a .glb.
  *
- * Features JSON (version 1; coordinates are the float32 positions before quantisation):
- *   {"version": 1,
+ * Features JSON (version 2; locus coordinates in full double precision, mesh coordinates as
+ * the float32 positions before quantisation):
+ *   {"version": 2,
  *    "classes": ["manifold", "boundary", "nonmanifold_edge", "nonmanifold_point", "isolated"],
- *    "curves":     [{"closed": bool, "xyz": [x0, y0, z0, x1, y1, z1, ...]}, ...],
- *    "points":     [{"xyz": [x, y, z], "class": 2|3, "kind": "cones"|"curve_end"|"junction"}],
- *    "boundaries": [{"closed": bool, "xyz": [...]}, ...],
- *    "counts": {"curves", "curve_edges", "points", "boundaries", "boundary_edges"}}
+ *    "singular_points": [{"xyz", "radius", "type", "certified", "hessian_eigenvalues",
+ *                         "residual_f", "residual_grad", "cones"}],
+ *    "curves": [{"kind": "double"|"whisker", "closed", "xyz": [x0, y0, z0, ...],
+ *                "ends": [{"type", "xyz", "point"}]}],        (ends: [] when closed)
+ *    "double_sheets": [{"first_triangle", "triangles", "area"}],
+ *    "nonmanifold_edges": [{"closed", "on_locus", "xyz"}],   chains of mesh edges of > 2 triangles
+ *    "nonmanifold_points": [{"xyz", "class", "kind", "on_locus"}],
+ *    "boundaries": [{"closed", "xyz"}],
+ *    "incomplete": bool, "incomplete_why": string (only when incomplete),
+ *    "counts": {...}}
  * "class" is the vertex class (index into "classes", the same numbers as the Draco "class"
- * attribute); a curve's consecutive points are joined by non-manifold edges. */
+ * attribute). An element with "on_locus": false is an artefact of the polygoniser. */
 #ifndef ISM_FEATURES_H
 #define ISM_FEATURES_H
+
+#define ISM_FEATURES_VERSION 2
 
 #include <stddef.h>
 #include <stdint.h>
 #include <stdbool.h>
 #include "core/mesh/mesh.h"
 #include "core/analysis/analysis.h"
+#include "core/singular/check.h"
+#include "core/singular/locus.h"
 
 /* Polylines over vertex indices: line i is verts[start[i] .. start[i+1]); closed when its
  * first and last vertex are the same. */
@@ -45,6 +58,8 @@ typedef struct ism_features {
     uint32_t *points;          /* non-manifold points (vertex indices) */
     uint8_t *point_kind;       /* enum ism_point_kind per point */
     uint8_t *point_class;      /* vertex class per point */
+    const ism_locus *locus;    /* the singular locus found from f (not owned; may be NULL) */
+    const ism_locus_check *check; /* the mesh checked against it (not owned; may be NULL) */
 } ism_features;
 
 /* Collects the features of m from its analysis a (a may be NULL: curves and points then
@@ -53,8 +68,15 @@ typedef struct ism_features {
 bool ism_features_build(const ism_mesh *m, const ism_analysis *a, ism_features *f);
 void ism_features_free(ism_features *f);
 
-/* The features JSON above. malloc'd, NULL when out of memory. */
+/* The features JSON above (f->locus and f->check are read when set). malloc'd, NULL when out
+ * of memory. */
 char *ism_features_json(const ism_mesh *m, const ism_features *f, size_t *len);
+
+/* The locus's counts as members of the open JSON object w: "singular_points", "certified",
+ * "uncertified", "by_type" {node, isolated, ...}, "curves", "double_curves",
+ * "whisker_curves", "double_sheets" (l may be NULL: all 0). Shared by features and stats. */
+struct ism_jw;
+void ism_locus_counts_json(struct ism_jw *w, const ism_locus *l);
 
 /* Name of a point kind ("cones", "curve_end", "junction"). */
 const char *ism_point_kind_name(int kind);

@@ -2,6 +2,7 @@
  * analysis's structures, naming every field after its C counterpart so that the numbers can
  * be traced back to the code that counted them. */
 #include "proto/stats.h"
+#include "proto/features.h"
 #include "proto/json_writer.h"
 #include "core/version.h"
 
@@ -125,12 +126,59 @@ static void write_analysis(ism_jw *w, const ism_analysis *a)
     ism_jw_object_end(w);
 }
 
+static void write_singular(ism_jw *w, const ism_locus *l, const ism_locus_check *c)
+{
+    ism_jw_object(w);
+    ism_locus_counts_json(w, l);
+    ism_jw_key(w, "artefacts");
+    if (c)
+        ism_jw_uint(w, c->artefacts);
+    else
+        ism_jw_null(w);
+    kv_u(w, "nonmanifold_edges_off", c ? c->nonmanifold_edges_off : 0);
+    kv_u(w, "nonmanifold_points_off", c ? c->nonmanifold_points_off : 0);
+    ism_jw_key(w, "incomplete");
+    ism_jw_bool(w, l->incomplete);
+    kv_u(w, "boxes_visited", l->boxes_visited);
+    kv_u(w, "evals_interval", l->evals_interval);
+    kv_u(w, "evals_jet", l->evals_jet);
+    kv_ms(w, "time_ms", l->time_ms);
+    ism_jw_object_end(w);
+}
+
+/* What the singular stage could not do, or where the mesh disagrees with it. */
+static void singular_warnings(ism_jw *w, const ism_locus *l, const ism_locus_check *c)
+{
+    char msg[240];
+    size_t uncertified = 0;
+    for (size_t i = 0; l && i < l->npoints; i++)
+        uncertified += !l->points[i].certified;
+    if (l && l->incomplete) {
+        snprintf(msg, sizeof msg, "the singular locus is incomplete (%s): singular points or "
+                 "curves may be missing", l->incomplete_why);
+        ism_jw_string(w, msg);
+    }
+    if (uncertified) {
+        snprintf(msg, sizeof msg, "%zu singular points could not be certified (see their "
+                 "residuals in the features)", uncertified);
+        ism_jw_string(w, msg);
+    }
+    if (c && c->artefacts) {
+        snprintf(msg, sizeof msg, "%zu non-manifold mesh edges and %zu non-manifold mesh points "
+                 "are not on the singular locus found from f: artefacts of the polygoniser",
+                 c->nonmanifold_edges_off, c->nonmanifold_points_off);
+        ism_jw_string(w, msg);
+    }
+}
+
 /* What the polygoniser could not resolve, said in words (DESIGN.md: say so in the stats
  * instead of producing silent garbage). */
-static void write_warnings(ism_jw *w, const ism_poly_stats *s)
+static void write_warnings(ism_jw *w, const ism_poly_stats *s, const ism_locus *l,
+                           const ism_locus_check *c)
 {
     char msg[200];
     ism_jw_array(w);
+    singular_warnings(w, l, c);
     if (s && s->edges_many_roots) {
         snprintf(msg, sizeof msg, "%llu cell edges may hold more than two roots (the paper's "
                  "known failure case): parts of the surface may be missing there",
@@ -153,7 +201,7 @@ static void write_warnings(ism_jw *w, const ism_poly_stats *s)
 
 char *ism_stats_json(const ism_stats_input *in, size_t *len)
 {
-    static const char *const timing[ISM_TIME_COUNT] = {"decode", "compile", "polygonise",
+    static const char *const timing[ISM_TIME_COUNT] = {"decode", "compile", "singular", "polygonise",
                                                     "analyse", "features", "encode", "total"};
     ism_jw w;
     ism_jw_init(&w);
@@ -185,13 +233,17 @@ char *ism_stats_json(const ism_stats_input *in, size_t *len)
         ism_jw_key(&w, "analysis");
         write_analysis(&w, in->analysis);
     }
+    if (in->locus) {
+        ism_jw_key(&w, "singular");
+        write_singular(&w, in->locus, in->check);
+    }
     ism_jw_key(&w, "timings_ms");
     ism_jw_object(&w);
     for (int i = 0; i < ISM_TIME_COUNT; i++)
         kv_ms(&w, timing[i], in->timings_ms[i]);
     ism_jw_object_end(&w);
     ism_jw_key(&w, "warnings");
-    write_warnings(&w, in->poly);
+    write_warnings(&w, in->poly, in->locus, in->check);
     ism_jw_object_end(&w);
     return ism_jw_take(&w, len);
 }

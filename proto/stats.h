@@ -7,8 +7,12 @@
  *    "mesh": {"vertices", "triangles", "encoded_points", "encoded_faces"},
  *    "polygoniser": {... ism_poly_stats fields ..., "time_ms": {"octree", "polygons",
  *                    "cracks", "mesh", "total"}},
- *    "analysis": {...}, "timings_ms": {"decode", "compile", "polygonise", "analyse",
- *    "features", "encode", "total"}, "warnings": ["..."]} */
+ *    "analysis": {...},
+ *    "singular": {locus counts (features.h), "artefacts", "nonmanifold_edges_off",
+ *                 "nonmanifold_points_off", "incomplete", "boxes_visited", "evals_interval",
+ *                 "evals_jet", "time_ms"},
+ *    "timings_ms": {"decode", "compile", "singular", "polygonise", "analyse", "features",
+ *    "encode", "total"}, "warnings": ["..."]} */
 #ifndef ISM_STATS_H
 #define ISM_STATS_H
 
@@ -16,8 +20,10 @@
 #include <stdbool.h>
 #include "core/analysis/analysis.h"
 #include "core/octree/polygonise.h"
+#include "core/singular/check.h"
+#include "core/singular/locus.h"
 
-enum ism_timing { ISM_TIME_DECODE, ISM_TIME_COMPILE, ISM_TIME_POLYGONISE, ISM_TIME_ANALYSE, ISM_TIME_FEATURES,
+enum ism_timing { ISM_TIME_DECODE, ISM_TIME_COMPILE, ISM_TIME_SINGULAR, ISM_TIME_POLYGONISE, ISM_TIME_ANALYSE, ISM_TIME_FEATURES,
                   ISM_TIME_ENCODE, ISM_TIME_TOTAL, ISM_TIME_COUNT };
 
 typedef struct ism_stats_input {
@@ -29,6 +35,8 @@ typedef struct ism_stats_input {
     size_t encoded_points, encoded_faces; /* what a Draco decoder gets (0 for other formats) */
     const ism_poly_stats *poly;           /* may be NULL */
     const ism_analysis *analysis;         /* may be NULL */
+    const ism_locus *locus;               /* the singular locus from f (may be NULL) */
+    const ism_locus_check *check;         /* the mesh checked against it (may be NULL) */
     double timings_ms[ISM_TIME_COUNT];
 } ism_stats_input;
 

@@ -9,6 +9,8 @@
 #include "core/analysis/analysis.h"
 #include "core/mesh/write_mesh.h"
 #include "core/octree/polygonise.h"
+#include "core/singular/check.h"
+#include "core/singular/surface.h"
 #include "proto/draco_encode.h"
 #include "proto/features.h"
 #include "proto/glb.h"
@@ -324,6 +326,10 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
     memset(&feat, 0, sizeof feat);
     ism_poly_stats ps;
     memset(&ps, 0, sizeof ps);
+    ism_locus locus;
+    ism_locus_init(&locus);
+    ism_locus_check check;
+    memset(&check, 0, sizeof check);
     bool ok = false;
     ism_error err;
     memset(&err, 0, sizeof err);
@@ -338,9 +344,10 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
     o.progress = polygoniser_progress;
     o.progress_ctx = &pm;
     o.cancel = hooks ? hooks->cancel : NULL;
-    double t = ism_now_ms();
-    enum ism_poly_status st = ism_polygonise(tape, &o, &mesh, &ps, &err);
-    si.timings_ms[ISM_TIME_POLYGONISE] = ism_now_ms() - t;
+    ism_surface_times times;
+    enum ism_poly_status st = ism_mesh_surface(tape, &o, &mesh, &locus, &ps, &times, &err);
+    si.timings_ms[ISM_TIME_SINGULAR] = times.singular_ms;
+    si.timings_ms[ISM_TIME_POLYGONISE] = times.polygonise_ms;
     if (!polygonise_status(r, st, &err))
         goto done;
     if (cancelled(hooks)) {
@@ -348,8 +355,8 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
         goto done;
     }
 
-    /* analyse */
-    t = ism_now_ms();
+    /* analyse, and check the mesh against the locus */
+    double t = ism_now_ms();
     ism_analysis_options ao;
     ism_analysis_options_default(&ao);
     ao.curvature = true;
@@ -360,6 +367,10 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
         goto done;
     }
     have_analysis = true;
+    if (!ism_locus_check_mesh(&locus, req.box, &mesh, &an, &check, &err)) {
+        fail_with(r, 500, "no_memory", "%s", err.message);
+        goto done;
+    }
     si.timings_ms[ISM_TIME_ANALYSE] = ism_now_ms() - t;
     report(hooks, 0.92);
     if (cancelled(hooks)) {
@@ -380,6 +391,8 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
         fail_with(r, 500, "no_memory", "%s", "out of memory collecting the features");
         goto done;
     }
+    feat.locus = &locus;
+    feat.check = empty ? NULL : &check;
     size_t flen;
     char *fjson = ism_features_json(empty ? &none : &mesh, &feat, &flen);
     if (!fjson) {
@@ -416,6 +429,8 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
     si.encoded_faces = job.faces;
     si.poly = &ps;
     si.analysis = &an;
+    si.locus = &locus;
+    si.check = &check;
     si.timings_ms[ISM_TIME_TOTAL] = ism_now_ms() - t_start;
     size_t slen;
     char *stats = ism_stats_json(&si, &slen);
@@ -435,6 +450,8 @@ done:
         ism_buf_free(&r->stats);
     }
     ism_features_free(&feat);
+    ism_locus_check_free(&check);
+    ism_locus_free(&locus);
     ism_wire_mesh_free(&wire);
     if (have_analysis)
         ism_analysis_free(&an);

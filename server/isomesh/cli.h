@@ -15,6 +15,7 @@ typedef struct ism_cli_run {
     const char *surface;        /* --surface */
     const char *surfaces_file;  /* --surfaces */
     const char *output;         /* -o */
+    const char *features_output;/* --features */
     bool box_given, depth_given, print_stats;
     ism_param *params;          /* names owned */
     size_t nparams;

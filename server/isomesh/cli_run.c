@@ -8,7 +8,10 @@
 #include "core/analysis/analysis.h"
 #include "core/mesh/write_mesh.h"
 #include "proto/presets.h"
+#include "proto/features.h"
 #include "proto/stats.h"
+#include "core/singular/check.h"
+#include "core/singular/surface.h"
 #include "server/common/fd_io.h"
 #include "server/common/pipeline.h"
 
@@ -218,19 +221,28 @@ static bool write_mesh(const char *path, const ism_mesh *m)
     return ok;
 }
 
-static void print_stats(const ism_mesh *m, const ism_poly_stats *ps, const ism_analysis *an,
-                        const char *format, size_t bytes, const double *timings)
+/* What one command-line run produced, for its stats and features. */
+typedef struct run_products {
+    const ism_mesh *mesh;
+    const ism_poly_stats *poly;
+    const ism_analysis *analysis;  /* NULL when not analysed */
+    const ism_locus *locus;
+    const ism_locus_check *check;  /* NULL when not analysed */
+} run_products;
+
+static void print_stats(const run_products *p, const char *format, const double *timings)
 {
     ism_stats_input in;
     memset(&in, 0, sizeof in);
     in.key = "";
     in.format = format;
-    in.bytes = bytes;
-    in.empty = m->ntris == 0;
-    in.vertices = m->nverts;
-    in.triangles = m->ntris;
-    in.poly = ps;
-    in.analysis = an;
+    in.empty = p->mesh->ntris == 0;
+    in.vertices = p->mesh->nverts;
+    in.triangles = p->mesh->ntris;
+    in.poly = p->poly;
+    in.analysis = p->analysis;
+    in.locus = p->locus;
+    in.check = p->check;
     memcpy(in.timings_ms, timings, sizeof in.timings_ms);
     size_t len;
     char *json = ism_stats_json(&in, &len);
@@ -241,12 +253,65 @@ static void print_stats(const ism_mesh *m, const ism_poly_stats *ps, const ism_a
     }
 }
 
+/* The features JSON (proto/features.h) written atomically to path. */
+static bool write_features(const char *path, const run_products *p)
+{
+    ism_mesh none;
+    ism_mesh_init(&none);
+    bool empty = p->mesh->ntris == 0 || !p->analysis;
+    const ism_mesh *m = empty ? &none : p->mesh;
+    ism_features f;
+    if (!ism_features_build(m, empty ? NULL : p->analysis, &f))
+        return false;
+    f.locus = p->locus;
+    f.check = empty ? NULL : p->check;
+    size_t len;
+    char *json = ism_features_json(m, &f, &len);
+    bool ok = json && ism_cli_write_file(path, json, len);
+    free(json);
+    ism_features_free(&f);
+    return ok;
+}
+
+/* Says what an empty mesh means: nothing at all, or only lower-dimensional parts. */
+static void explain_empty(const ism_locus *l)
+{
+    if (l->npoints == 0 && l->ncurves == 0)
+        fprintf(stderr, "isomesh: the surface does not meet the box: the mesh is empty\n");
+    else
+        fprintf(stderr, "isomesh: no sheet of the surface in the box, only %zu singular points "
+                "and %zu singular curves (see --features)\n", l->npoints, l->ncurves);
+}
+
+static bool nothing_to_do(const ism_cli_run *run)
+{
+    if (run->output || run->print_stats || run->features_output)
+        return false;
+    fprintf(stderr, "isomesh: nothing to do: give -o FILE, --stats and/or --features FILE\n");
+    return true;
+}
+
+/* Analysis and the check against the locus, when stats or features are asked for. */
+static bool analyse_run(const ism_cli_run *run, const ism_mesh *mesh, const ism_tape *tape,
+                        const ism_locus *locus, ism_analysis *an, ism_locus_check *chk)
+{
+    if (!run->print_stats && !run->features_output)
+        return false;
+    ism_analysis_options ao;
+    ism_analysis_options_default(&ao);
+    ism_error err;
+    if (!ism_analyse(mesh, tape, &ao, an, &err))
+        return false;
+    if (ism_locus_check_mesh(locus, run->options.box, mesh, an, chk, &err))
+        return true;
+    ism_analysis_free(an);
+    return false;
+}
+
 int ism_cli_run_surface(ism_cli_run *run)
 {
-    if (!run->output && !run->print_stats) {
-        fprintf(stderr, "isomesh: nothing to do: give -o FILE and/or --stats\n");
+    if (nothing_to_do(run))
         return 2;
-    }
     if (run->output && !writer_for(run->output)) {
         fprintf(stderr, "isomesh: -o %s: unknown extension '.%s' (use .ply, .obj or .stl)\n",
                 run->output, extension(run->output));
@@ -270,10 +335,15 @@ int ism_cli_run_surface(ism_cli_run *run)
     timings[ISM_TIME_COMPILE] = t1 - t0;
     ism_mesh mesh;
     ism_mesh_init(&mesh);
+    ism_locus locus;
+    ism_locus_init(&locus);
     ism_poly_stats ps;
-    enum ism_poly_status ps_status = ism_polygonise(tape, &run->options, &mesh, &ps, &err);
+    ism_surface_times times;
+    enum ism_poly_status ps_status = ism_mesh_surface(tape, &run->options, &mesh, &locus, &ps,
+                                                      &times, &err);
+    timings[ISM_TIME_SINGULAR] = times.singular_ms;
+    timings[ISM_TIME_POLYGONISE] = times.polygonise_ms;
     double t2 = ism_now_ms();
-    timings[ISM_TIME_POLYGONISE] = t2 - t1;
     int status = 0;
     if (ps_status != ISM_POLY_OK) {
         fprintf(stderr, "isomesh: %s\n", ism_error_format(&err, msg, sizeof msg));
@@ -281,22 +351,27 @@ int ism_cli_run_surface(ism_cli_run *run)
         goto done;
     }
     if (mesh.ntris == 0)
-        fprintf(stderr, "isomesh: the surface does not meet the box: the mesh is empty\n");
+        explain_empty(&locus);
     ism_analysis an;
     memset(&an, 0, sizeof an);
-    ism_analysis_options ao;
-    ism_analysis_options_default(&ao);
-    bool analysed = run->print_stats && ism_analyse(&mesh, tape, &ao, &an, &err);
+    ism_locus_check chk;
+    memset(&chk, 0, sizeof chk);
+    bool analysed = analyse_run(run, &mesh, tape, &locus, &an, &chk);
     timings[ISM_TIME_ANALYSE] = ism_now_ms() - t2;
     if (run->output && !write_mesh(run->output, &mesh))
         status = 1;
+    run_products prod = {&mesh, &ps, analysed ? &an : NULL, &locus, analysed ? &chk : NULL};
+    if (run->features_output && status == 0 && !write_features(run->features_output, &prod))
+        status = 1;
     timings[ISM_TIME_TOTAL] = ism_now_ms() - t0;
     if (run->print_stats && status == 0)
-        print_stats(&mesh, &ps, analysed ? &an : NULL, extension(run->output ? run->output : ""),
-                    0, timings);
-    if (analysed)
+        print_stats(&prod, extension(run->output ? run->output : ""), timings);
+    if (analysed) {
+        ism_locus_check_free(&chk);
         ism_analysis_free(&an);
+    }
 done:
+    ism_locus_free(&locus);
     ism_mesh_free(&mesh);
     ism_tape_free(tape);
     return status;
@@ -327,10 +402,8 @@ static char *read_file(const char *path, size_t *len)
 
 int ism_cli_run_request_file(ism_cli_run *run, const char *path)
 {
-    if (!run->output && !run->print_stats) {
-        fprintf(stderr, "isomesh: nothing to do: give -o FILE and/or --stats\n");
+    if (nothing_to_do(run))
         return 2;
-    }
     const char *format = run->output ? extension(run->output) : NULL;
     size_t len;
     char *json = read_file(path, &len);
@@ -353,6 +426,9 @@ int ism_cli_run_request_file(ism_cli_run *run, const char *path)
         status = r.status == 400 || r.status == 422 ? 2 : 1;
     } else {
         if (run->output && !ism_cli_write_file(run->output, r.body.data, r.body.len))
+            status = 1;
+        if (run->features_output && status == 0 &&
+            !ism_cli_write_file(run->features_output, r.features.data, r.features.len))
             status = 1;
         if (run->print_stats && status == 0) {
             fwrite(r.stats.data, 1, r.stats.len, stdout);

@@ -49,12 +49,16 @@ static const char usage_text[] =
     "output:\n"
     "  -o, --output FILE        .ply, .obj or .stl (written to a temporary name, renamed)\n"
     "      --stats              print the statistics as JSON on standard output\n"
+    "      --features FILE      write the features JSON: the singular locus found from f\n"
+    "                           (certified points, singular curves, double sheets) and the\n"
+    "                           mesh's non-manifold edges and points checked against it\n"
     "  -h, --help               this text\n"
     "exit status: 0 done, 1 the run failed (budget, memory), 2 bad input.\n";
 
 enum long_only {
     OPT_LET = 256, OPT_SURFACE, OPT_SURFACES, OPT_LIST, OPT_THREADS, OPT_GRADIENT, OPT_EPS,
     OPT_ITERS, OPT_STITCH, OPT_FLAT_NORMAL, OPT_FLAT_PLANE, OPT_MAX_TRIS, OPT_STATS, OPT_WORKER,
+    OPT_FEATURES,
 };
 
 static const struct option long_options[] = {
@@ -76,6 +80,7 @@ static const struct option long_options[] = {
     {"max-triangles", required_argument, 0, OPT_MAX_TRIS},
     {"output", required_argument, 0, 'o'},
     {"stats", no_argument, 0, OPT_STATS},
+    {"features", required_argument, 0, OPT_FEATURES},
     {"worker", no_argument, 0, OPT_WORKER},
     {"help", no_argument, 0, 'h'},
     {0, 0, 0, 0},
@@ -111,6 +116,7 @@ static bool apply_option(ism_cli_run *run, int opt, const char *arg)
     }
     case 'o': run->output = arg; return true;
     case OPT_STATS: run->print_stats = true; return true;
+    case OPT_FEATURES: run->features_output = arg; return true;
     default: return false;
     }
 }
