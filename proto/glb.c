@@ -191,37 +191,19 @@ static void add_surface(gltf *g, const ism_wire_mesh *wm, const ism_draco_output
     add_node(g, "surface", g->nmeshes++, NULL);
 }
 
-/* One uncompressed primitive from polylines (LINES) or single vertices (POINTS). */
-static bool add_feature_primitive(gltf *g, const ism_mesh *m, const char *name, int mode,
-                                  int material, const ism_polylines *lines,
-                                  const uint32_t *points, size_t npoints, const ism_jw *extras)
+/* One uncompressed primitive: nv float positions (3 each) and, for LINES, nidx indices (two
+ * per segment). Takes neither array. */
+static bool emit_primitive(gltf *g, const char *name, int mode, int material, const float *pos,
+                           size_t nv, const uint32_t *idx, size_t nidx, const ism_jw *extras)
 {
-    size_t nv = lines ? (lines->n ? lines->start[lines->n] : 0) : npoints;
-    if (nv == 0)
-        return true;
-    float *pos = malloc(nv * 3 * sizeof *pos);
-    uint32_t *idx = lines ? malloc(2 * nv * sizeof *idx) : NULL;
-    if (!pos || (lines && !idx)) {
-        free(pos);
-        free(idx);
-        return false;
-    }
+    if (nv == 0 || (mode == GL_LINES && nidx == 0))
+        return true; /* nothing to draw */
     double bounds[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
-    const uint32_t *verts = lines ? lines->verts : points;
     for (size_t i = 0; i < nv; i++)
         for (int k = 0; k < 3; k++) {
-            float f = (float)m->pos[3 * (size_t)verts[i] + k];
-            pos[3 * i + k] = f;
-            bounds[k] = fmin(bounds[k], f);
-            bounds[k + 3] = fmax(bounds[k + 3], f);
+            bounds[k] = fmin(bounds[k], pos[3 * i + k]);
+            bounds[k + 3] = fmax(bounds[k + 3], pos[3 * i + k]);
         }
-    size_t nidx = 0;
-    if (lines)
-        for (size_t c = 0; c < lines->n; c++)
-            for (uint32_t j = lines->start[c]; j + 1 < lines->start[c + 1]; j++) {
-                idx[nidx++] = j;
-                idx[nidx++] = j + 1;
-            }
     size_t poff = bin_append(&g->bin, pos, nv * 3 * sizeof *pos);
     int pacc = add_accessor(g, add_view(g, poff, nv * 3 * sizeof *pos, TARGET_ARRAY), CT_FLOAT,
                             nv, "VEC3", bounds);
@@ -231,10 +213,6 @@ static bool add_feature_primitive(gltf *g, const ism_mesh *m, const char *name, 
         iacc = add_accessor(g, add_view(g, ioff, nidx * sizeof *idx, TARGET_ELEMENTS), CT_UINT,
                             nidx, "SCALAR", NULL);
     }
-    free(pos);
-    free(idx);
-    if (lines && !nidx)
-        return true; /* no segment to draw (cannot happen for curves of two vertices) */
     ism_jw *w = &g->meshes;
     ism_jw_object(w);
     ism_jw_key(w, "name");
@@ -260,6 +238,117 @@ static bool add_feature_primitive(gltf *g, const ism_mesh *m, const char *name, 
     ism_jw_object_end(w);
     add_node(g, name, g->nmeshes++, extras);
     return !g->bin.failed;
+}
+
+/* One uncompressed primitive from polylines (LINES) or single vertices (POINTS) of the mesh. */
+static bool add_feature_primitive(gltf *g, const ism_mesh *m, const char *name, int mode,
+                                  int material, const ism_polylines *lines,
+                                  const uint32_t *points, size_t npoints, const ism_jw *extras)
+{
+    size_t nv = lines ? (lines->n ? lines->start[lines->n] : 0) : npoints;
+    if (nv == 0)
+        return true;
+    float *pos = malloc(nv * 3 * sizeof *pos);
+    uint32_t *idx = lines ? malloc(2 * nv * sizeof *idx) : NULL;
+    bool ok = pos && (!lines || idx);
+    const uint32_t *verts = lines ? lines->verts : points;
+    for (size_t i = 0; ok && i < nv; i++)
+        for (int k = 0; k < 3; k++)
+            pos[3 * i + k] = (float)m->pos[3 * (size_t)verts[i] + k];
+    size_t nidx = 0;
+    if (ok && lines)
+        for (size_t c = 0; c < lines->n; c++)
+            for (uint32_t j = lines->start[c]; j + 1 < lines->start[c + 1]; j++) {
+                idx[nidx++] = j;
+                idx[nidx++] = j + 1;
+            }
+    ok = ok && emit_primitive(g, name, mode, material, pos, nv, idx, nidx, extras);
+    free(pos);
+    free(idx);
+    return ok;
+}
+
+/* The singular points of the locus as POINTS, their types etc. in extras. */
+static bool add_singular_points(gltf *g, const ism_features *f, int material)
+{
+    const ism_locus *l = f->locus;
+    if (!l || !l->npoints)
+        return true;
+    float *pos = malloc(l->npoints * 3 * sizeof *pos);
+    if (!pos)
+        return false;
+    ism_jw ex;
+    ism_jw_init(&ex);
+    ism_jw_object(&ex);
+    ism_jw_key(&ex, "type");
+    ism_jw_array(&ex);
+    for (size_t i = 0; i < l->npoints; i++) {
+        for (int k = 0; k < 3; k++)
+            pos[3 * i + k] = (float)l->points[i].p[k];
+        ism_jw_string(&ex, ism_sing_type_name(l->points[i].type));
+    }
+    ism_jw_array_end(&ex);
+    ism_jw_key(&ex, "certified");
+    ism_jw_array(&ex);
+    for (size_t i = 0; i < l->npoints; i++)
+        ism_jw_bool(&ex, l->points[i].certified);
+    ism_jw_array_end(&ex);
+    ism_jw_key(&ex, "xyz");
+    ism_jw_array(&ex);
+    for (size_t i = 0; i < 3 * l->npoints; i++)
+        ism_jw_number(&ex, l->points[i / 3].p[i % 3]);
+    ism_jw_array_end(&ex);
+    ism_jw_object_end(&ex);
+    bool ok = emit_primitive(g, "singular_points", GL_POINTS, material, pos, l->npoints, NULL,
+                             0, &ex);
+    ism_jw_free(&ex);
+    free(pos);
+    return ok;
+}
+
+/* The singular curves of one kind as LINES (a closed curve also joins its ends). */
+static bool add_singular_curves(gltf *g, const ism_features *f, int kind, const char *name,
+                                int material)
+{
+    const ism_locus *l = f->locus;
+    size_t nv = 0, nseg = 0, ncurves = 0;
+    for (size_t c = 0; l && c < l->ncurves; c++)
+        if (l->curves[c].kind == kind && l->curves[c].n > 1) {
+            nv += l->curves[c].n;
+            nseg += l->curves[c].n - 1 + l->curves[c].closed;
+            ncurves++;
+        }
+    if (!nseg)
+        return true;
+    float *pos = malloc(nv * 3 * sizeof *pos);
+    uint32_t *idx = malloc(2 * nseg * sizeof *idx);
+    bool ok = pos && idx;
+    size_t v = 0, ni = 0;
+    for (size_t c = 0; ok && c < l->ncurves; c++) {
+        const ism_sing_curve *cv = &l->curves[c];
+        if (cv->kind != kind || cv->n < 2)
+            continue;
+        for (size_t i = 0; i < 3 * cv->n; i++)
+            pos[3 * v + i] = (float)cv->xyz[i];
+        for (size_t i = 0; i + 1 < cv->n + cv->closed; i++) {
+            idx[ni++] = (uint32_t)(v + i);
+            idx[ni++] = (uint32_t)(v + (i + 1) % cv->n);
+        }
+        v += cv->n;
+    }
+    ism_jw ex;
+    ism_jw_init(&ex);
+    ism_jw_object(&ex);
+    ism_jw_key(&ex, "kind");
+    ism_jw_string(&ex, ism_curve_kind_name(kind));
+    ism_jw_key(&ex, "curves");
+    ism_jw_uint(&ex, ncurves);
+    ism_jw_object_end(&ex);
+    ok = ok && emit_primitive(g, name, GL_LINES, material, pos, nv, idx, ni, &ex);
+    ism_jw_free(&ex);
+    free(pos);
+    free(idx);
+    return ok;
 }
 
 static void write_material(ism_jw *w, const char *name, float r, float gr, float b,
@@ -357,6 +446,9 @@ static char *join_json(gltf *g, const ism_glb_input *in, size_t *len)
         write_material(&w, "nonmanifold_curves", 0.90f, 0.10f, 0.10f, false);
         write_material(&w, "nonmanifold_points", 1.00f, 0.85f, 0.10f, false);
         write_material(&w, "boundaries", 0.10f, 0.35f, 0.95f, false);
+        write_material(&w, "singular_points", 1.00f, 0.82f, 0.12f, false);
+        write_material(&w, "double_curves", 0.22f, 0.89f, 0.42f, false);
+        write_material(&w, "whiskers", 0.13f, 0.83f, 0.93f, false);
         ism_jw_array_end(&w);
         ism_jw_key(&w, "buffers");
         ism_jw_array(&w);
@@ -437,7 +529,10 @@ bool ism_glb_build(const ism_glb_input *in, unsigned char **out, size_t *len)
                  add_feature_primitive(&g, in->mesh, "nonmanifold_points", GL_POINTS, 2, NULL,
                                        f->points, f->npoints, &extras) &&
                  add_feature_primitive(&g, in->mesh, "boundaries", GL_LINES, 3, &f->boundaries,
-                                       NULL, 0, NULL);
+                                       NULL, 0, NULL) &&
+                 add_singular_points(&g, f, 4) &&
+                 add_singular_curves(&g, f, ISM_CURVE_DOUBLE, "double_curves", 5) &&
+                 add_singular_curves(&g, f, ISM_CURVE_WHISKER, "whiskers", 6);
         }
     }
     for (int i = 0; i < 4; i++)

@@ -5,7 +5,10 @@
  * Blender.
  *
  * Nodes, by name: "surface" (always, unless empty), "nonmanifold_curves",
- * "nonmanifold_points", "boundaries" (each only when there is something to draw). The
+ * "nonmanifold_points", "boundaries", and from the singular locus found from f
+ * "singular_points" (POINTS; extras {"type": [...], "certified": [...], "xyz": [full
+ * precision]}), "double_curves" and "whiskers" (LINES; extras {"kind", "curves"}) — each only
+ * when there is something to draw. The
  * surface's attributes: POSITION, NORMAL, _MEAN_CURVATURE, _GAUSS_CURVATURE, _CLASS (the
  * ones sent); the points node carries "extras": {"class": [...], "kind": [...]} per point.
  * An empty surface gives a valid glTF with one empty scene and no buffer. */

@@ -126,10 +126,14 @@ describe('isomesh viewer', { timeout: 240000 }, () => {
     const features = await getJSON(`/v1/meshes/${key}/features`);
     const segs = (lines) => lines.reduce((n, l) => n + l.xyz.length / 3 - 1, 0);
     const counts = await page.$$eval('#feature-key [data-count]', (es) => Object.fromEntries(es.map((e) => [e.className, Number(e.dataset.count)])));
-    assert.equal(counts['key-edges'], segs(features.curves));
-    assert.equal(counts['key-edges'], features.counts.curve_edges);
-    assert.equal(counts['key-points'], features.points.length);
+    const closing = features.curves.filter((c) => c.closed).length;
+    assert.equal(counts['key-edges'], segs(features.curves) + closing);
+    assert.equal(counts['key-points'], features.singular_points.length);
+    assert.equal(counts['key-points'], features.counts.singular_points);
     assert.equal(counts['key-boundary'], features.counts.boundary_edges);
+    const off = features.nonmanifold_points.filter((p) => !p.on_locus).length +
+      segs(features.nonmanifold_edges.filter((c) => !c.on_locus));
+    assert.equal(counts['key-artefacts'], off);
   });
 
   it('moving a slider computes a new mesh; moving it back is instant, from the page', async () => {

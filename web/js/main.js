@@ -4,6 +4,7 @@
 // how each server error reads (inline expression errors with their column, limits, busy
 // with its retry time, the token prompt on 401).
 import { Viewer } from './viewer.js';
+import { POINT_TYPE_COLORS, CURVE_KIND_COLORS } from './features.js';
 import * as api from './api.js';
 import * as loader from './loader.js';
 import { checkExpression, presetSource } from './expr.js';
@@ -224,9 +225,16 @@ function syncClipSlider() {
   $('clip-offset-value').textContent = state.clip.on ? `${state.clip.axis} = ${sig(state.clip.offset)}` : 'off';
 }
 
-const FEATURE_LABELS = { edges: 'non-manifold edges', points: 'non-manifold points', boundary: 'boundary edges' };
+const FEATURE_LABELS = { edges: 'singular curve segments', points: 'singular points', boundary: 'boundary edges' };
+const TYPE_LABELS = {
+  node: 'nodes', isolated: 'isolated points', cusp: 'cusps', degenerate: 'degenerate points',
+  pinch: 'pinch points', triple: 'triple points', double: 'double curves', whisker: 'whiskers',
+};
+const hex = (c) => `#${c.toString(16).padStart(6, '0')}`;
 
-function syncFeatureKey(counts) {
+// The feature key: counts per layer, the point types and curve kinds present (each with its
+// colour), and the artefacts (mesh structure off the locus) when there are any.
+function syncFeatureKey(counts, made) {
   const key = $('feature-key');
   for (const k of Object.keys(FEATURE_LABELS)) {
     const item = key.querySelector(`.key-${k}`);
@@ -236,6 +244,52 @@ function syncFeatureKey(counts) {
     }
     item.hidden = !state.show[k];
   }
+  const art = key.querySelector('.key-artefacts');
+  if (counts) {
+    art.dataset.count = String(counts.artefacts || 0);
+    art.textContent = `off the locus (${(counts.artefacts || 0).toLocaleString('en-US')})`;
+    art.hidden = !counts.artefacts;
+  }
+  if (made) {
+    const types = $('key-types');
+    types.replaceChildren();
+    const entries = [
+      ...Object.entries(made.types).map(([t, n]) => [t, n, POINT_TYPE_COLORS[t]]),
+      ...Object.entries(made.kinds).map(([t, n]) => [t, n, CURVE_KIND_COLORS[t]]),
+    ];
+    for (const [t, n, color] of entries) {
+      const span = document.createElement('span');
+      span.className = `key-type-${t}`;
+      span.dataset.count = String(n);
+      span.style.setProperty('--swatch', hex(color ?? 0xffffff));
+      span.textContent = `${n} ${TYPE_LABELS[t] || t}`;
+      types.append(span);
+    }
+  }
+}
+
+// Clicking near a singular point or curve says what it is.
+function pickAt(e) {
+  const info = $('pick-info');
+  const r = $('view').getBoundingClientRect();
+  const hit = viewer.pick(e.clientX - r.left, e.clientY - r.top);
+  if (!hit) {
+    info.hidden = true;
+    return;
+  }
+  const xyz = hit.xyz.map((v) => sig(v)).join(', ');
+  if (hit.what === 'point') {
+    const p = hit.p;
+    const eig = (p.hessian_eigenvalues || []).map((v) => sig(v)).join(', ');
+    info.textContent = `${p.type} point${p.certified ? ' (certified)' : ' (not certified)'}\n(${xyz})\n` +
+      `Hessian eigenvalues ${eig}; ${p.cones} cone${p.cones === 1 ? '' : 's'} of faces`;
+  } else {
+    const c = hit.p;
+    const ends = c.closed ? 'closed' : (c.ends || []).map((e) => e.type).join(' – ');
+    info.textContent = `${c.kind} curve, ${c.xyz.length / 3} points, ${ends}\nnear (${xyz})`;
+  }
+  info.dataset.what = hit.what;
+  info.hidden = false;
 }
 
 function applyDisplay() {
@@ -355,7 +409,8 @@ function show(result, body) {
     viewer.fit();
   }
   applyDisplay();
-  syncFeatureKey(viewer.features ? viewer.features.counts : { edges: 0, points: 0, boundary: 0 });
+  syncFeatureKey(viewer.features ? viewer.features.counts : { edges: 0, points: 0, boundary: 0, artefacts: 0 }, viewer.features);
+  $('pick-info').hidden = true;
   showStats(result);
   setDownloads(result);
   if (exprOk) showExprError(null);
@@ -708,6 +763,7 @@ async function begin() {
 
 async function start() {
   viewer = new Viewer($('view'));
+  $('view').addEventListener('click', pickAt);
   viewer.onViewChange = updateUrl;
   wire();
   clearStats();

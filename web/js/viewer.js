@@ -6,7 +6,7 @@
 // demand (at most once per animation frame), not in a loop.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
-import { buildFeatures, disposeFeatures, setLineResolution } from './features.js';
+import { buildFeatures, disposeFeatures, pickFeature, setLineResolution } from './features.js';
 import { curvatureColors, curvatureRange } from './colormap.js';
 
 const SURFACE_RGB = 0xb9c6d8;
@@ -196,6 +196,12 @@ export class Viewer {
   applyVisibility() {
     if (!this.features) return;
     for (const k of ['edges', 'points', 'boundary']) if (this.features[k]) this.features[k].visible = !!this.show[k];
+  }
+
+  // The singular point or curve under canvas pixel (x, y), or null (features.js pickFeature).
+  pick(x, y) {
+    if (!this.features) return null;
+    return pickFeature(this.features, this.camera, this.canvas.clientWidth, this.canvas.clientHeight, x, y);
   }
 
   setWireframe(on) {

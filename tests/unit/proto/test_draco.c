@@ -405,8 +405,8 @@ static void check_arrival(ism_mesh *m, size_t want_nm_edges, size_t want_points,
     cr_assert_eq(n_dec, n_orig);
     cr_expect(memcmp(e_dec, e_orig, n_orig * sizeof *e_orig) == 0);
 
-    /* The features' curves are exactly those edges, as coordinate pairs. */
-    json_t *curves = json_object_get(doc, "curves");
+    /* The features' non-manifold edge chains are exactly those edges, as coordinate pairs. */
+    json_t *curves = json_object_get(doc, "nonmanifold_edges");
     size_t curve_edges = 0;
     for (size_t c = 0; c < json_array_size(curves); c++) {
         json_t *xyz = json_object_get(json_array_get(curves, c), "xyz");
@@ -437,7 +437,7 @@ static void check_arrival(ism_mesh *m, size_t want_nm_edges, size_t want_points,
     cr_expect_eq(curve_edges, n_orig);
 
     /* The features' points are the analysis's points, with the decoded class. */
-    json_t *points = json_object_get(doc, "points");
+    json_t *points = json_object_get(doc, "nonmanifold_points");
     cr_assert_eq(json_array_size(points), a.npoints);
     for (size_t i = 0; i < a.npoints; i++) {
         json_t *p = json_array_get(points, i);
