@@ -59,7 +59,7 @@ function finiteRange(values) {
   return [min, max];
 }
 
-describe('isomesh viewer', { timeout: 240000 }, () => {
+describe('isomesh viewer', { timeout: 600000 }, () => {
   before(async () => {
     daemon = await startDaemon();
     browser = await startBrowser();
