@@ -22,6 +22,10 @@ SAN ?=
 OPT ?= -O2
 PYTHON ?= python3
 LISTEN ?= 127.0.0.1:8080
+# The daemon `make run` starts keeps its cache here (one per checkout, not one per user).
+CACHE_DIR ?= $(OUT)/cache
+# Parallel jobs for the builds behind `make run` and `make test` (all online cores).
+JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
 WARN     := -Wall -Wextra -Werror
 CPPFLAGS := -I. -D_GNU_SOURCE -MMD -MP
@@ -75,18 +79,22 @@ PROGRAMS := $(if $(ISOMESH_SRC),$(ISOMESH)) $(if $(DAEMON_SRC),$(ISOMESHD))
 # ---------------------------------------------------------------------------------------
 # User-facing targets
 
-.PHONY: all run test deps deps-test deps-bench build unit-bins web-deps test-deps bench soak fuzz clean
+.PHONY: all programs run test deps deps-test deps-bench build unit-bins web-deps test-deps bench soak fuzz clean
 
 all: deps build web-deps
 
 build: $(PROGRAMS) $(UNIT_BINS)
 
-run: deps build web-deps
-	$(ISOMESHD) --listen $(LISTEN) --web-root web
+programs: $(PROGRAMS)
+
+# Only what it runs (the two programs, the viewer's npm packages), on every core.
+run: deps web-deps
+	$(MAKE) -j$(JOBS) programs
+	$(ISOMESHD) --listen $(LISTEN) --web-root web --cache-dir $(CACHE_DIR)
 
 test: deps-test
-	$(MAKE) build web-deps test-deps
-	$(MAKE) OUT=build/asan SAN=1 OPT=-O1 unit-bins
+	$(MAKE) -j$(JOBS) build web-deps test-deps
+	$(MAKE) -j$(JOBS) OUT=build/asan SAN=1 OPT=-O1 unit-bins
 	$(PYTHON) tests/run_suites.py --release build/release --asan build/asan
 
 bench: deps-bench build $(BENCH_BINS)
