@@ -1,0 +1,319 @@
+/* curves.c — the singular-curve stage: seeds from the search's rank-2 boxes, a trace both
+ * ways from each (curve_trace.c), the two halves joined and split at pinch points into
+ * curves of one kind each, and the ends typed once every branch is known (a collapse point
+ * where three or more branches end is a triple point). See curves.h. */
+#include "core/singular/curves.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "core/eval/eval.h"
+#include "core/singular/curve_trace.h"
+
+/* Newton's tolerance (× box diagonal): a step this small leaves the point far inside the
+ * 1e-9 × diagonal the locus promises (the iteration is quadratic). */
+#define CURVES_NEWTON_TOL_REL 1e-12
+
+/* Step bounds in finest search cells: at most half a cell (every box the curve crosses gets
+ * a vertex or a segment through it; chords stay close), at least 1e-6 of one (below, the
+ * corrector is failing for good). */
+#define CURVES_HMAX_CELLS 0.5
+#define CURVES_HMIN_CELLS 1e-6
+
+/* A box is explained by a traced segment passing within this many cells of its projected
+ * point; a seed within it of a traced curve is that curve. A sixteenth of a cell is far
+ * above the chord's deviation (h/40) and Newton's error, far below the gap between two
+ * curves that separate cells can tell apart. */
+#define CURVES_DELTA_CELLS 0.0625
+
+/* A path ends at an existing point it passes this close to (cells): a collapse point found
+ * by one branch is met by the others within their extrapolation error (~1e-10 × diagonal),
+ * far below this, long before they would approach it step by step. */
+#define CURVES_SNAP_CELLS 1e-3
+
+/* Vertices closer than this (cells) to the previous one are dropped (pinch points and ends
+ * stay): the approach to a collapse point halves its steps down to 1e-10 × diagonal, and
+ * that many vertices on a few hundredths of a cell serve no mesh. */
+#define CURVES_MIN_GAP_CELLS 0.05
+
+/* Newton iterations projecting a seed onto its curve (it starts up to a cell away). */
+#define CURVES_SEED_IT 30
+
+/* A seed's curve is on the zero set when |f| ≤ this × Hessian scale × diagonal²: f is
+ * constant along a curve of critical points, and a critical curve at that level lies within
+ * ~√(2·1e-14) ≈ 1.4e-7 × diagonal of the surface — below any mesh's resolution, while
+ * rounding of f is ~1e-16 of its terms. */
+#define CURVES_F_REL 1e-14
+
+/* Work budget: vertices over all curves (24 bytes each), and step attempts (each a few
+ * Hessian evaluations) per vertex allowed. */
+#define CURVES_MAX_VERTICES ((size_t)1 << 20)
+#define CURVES_ATTEMPTS_PER_VERTEX 8
+
+/* Deepest search the stage accepts (cells a side fit the index's 21-bit coordinates). */
+#define CURVES_MAX_DEPTH 20
+
+/* Branches meeting at a collapse point that make it a triple point. */
+#define CURVES_TRIPLE_BRANCHES 3
+
+static bool options_ok(const ism_locus_options *o, ism_error *err)
+{
+    for (int k = 0; k < 3; k++)
+        if (!(isfinite(o->box[k]) && isfinite(o->box[k + 3]) && o->box[k] < o->box[k + 3]))
+            return ism_error_set(err, "singular curves: the box is empty or not finite");
+    if (o->max_depth < 0 || o->max_depth > CURVES_MAX_DEPTH)
+        return ism_error_set(err, "singular curves: max_depth %d is outside 0..%d",
+                             o->max_depth, CURVES_MAX_DEPTH);
+    return true;
+}
+
+static void tracer_init(ism_ctracer *tr, const ism_locus_options *o, ism_locus *io)
+{
+    memset(tr, 0, sizeof *tr);
+    tr->io = io;
+    tr->o = o;
+    memcpy(tr->box, o->box, sizeof tr->box);
+    double side = INFINITY, d2 = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double s = o->box[k + 3] - o->box[k];
+        side = fmin(side, s);
+        d2 += s * s;
+    }
+    tr->diag = sqrt(d2);
+    tr->cell = ldexp(side, -o->max_depth);
+    tr->hmax = CURVES_HMAX_CELLS * tr->cell;
+    tr->hmin = CURVES_HMIN_CELLS * tr->cell;
+    tr->delta = CURVES_DELTA_CELLS * tr->cell;
+    tr->snap = CURVES_SNAP_CELLS * tr->cell;
+    tr->jet.tol = CURVES_NEWTON_TOL_REL * tr->diag;
+    tr->vertices_left = CURVES_MAX_VERTICES;
+    tr->attempts_left = CURVES_MAX_VERTICES * CURVES_ATTEMPTS_PER_VERTEX;
+}
+
+/* The kind of the part v[0..n): the sign of the normal-plane determinant at most of its
+ * inner vertices, or at its chord's middle when it has none. */
+static int part_kind(ism_ctracer *tr, const ism_cvert *v, size_t n)
+{
+    long neg = 0, pos = 0;
+    for (size_t i = 1; i + 1 < n; i++)
+        neg += v[i].D < 0, pos += v[i].D > 0;
+    if (neg == pos) {
+        double m[3], t[3];
+        for (int k = 0; k < 3; k++) {
+            m[k] = 0.5 * (v[0].p[k] + v[n - 1].p[k]);
+            t[k] = v[n - 1].p[k] - v[0].p[k];
+        }
+        double l = sqrt(ism_dot3(t, t));
+        ism_cpoint c;
+        ism_cjet_frame(&tr->jet, m, l > 0 ? (double[3]){t[0] / l, t[1] / l, t[2] / l} : NULL,
+                       &c);
+        neg = c.D < 0, pos = c.D > 0;
+    }
+    return neg > pos ? ISM_CURVE_DOUBLE : ISM_CURVE_WHISKER;
+}
+
+/* Adds the curve v[0..n) with its two ends (type, point), or a closed loop. */
+static void add_part(ism_ctracer *tr, const ism_cvert *v, size_t n, const int type[2],
+                     const int point[2], bool closed)
+{
+    ism_sing_curve c = {.kind = part_kind(tr, v, n), .closed = closed, .n = n};
+    c.xyz = malloc(3 * n * sizeof *c.xyz);
+    if (!c.xyz) {
+        tr->oom = true;
+        return;
+    }
+    for (size_t i = 0; i < n; i++)
+        memcpy(c.xyz + 3 * i, v[i].p, 3 * sizeof *c.xyz);
+    for (int e = 0; e < 2; e++) {
+        c.end_type[e] = closed ? ISM_END_BOX : type[e];
+        c.end_point[e] = closed ? -1 : point[e];
+    }
+    if (!ism_locus_add_curve(tr->io, &c)) {
+        free(c.xyz);
+        tr->oom = true;
+    }
+}
+
+/* Splits the chain v[0..n) (ends typed) at its pinch vertices into curves of one kind. */
+static void split_chain(ism_ctracer *tr, const ism_cvert *v, size_t n, const int type[2],
+                        const int point[2])
+{
+    size_t a = 0;
+    for (size_t i = 1; i < n && !tr->oom; i++) {
+        bool last = i == n - 1;
+        if (!last && v[i].point < 0)
+            continue;
+        int t[2] = {a == 0 ? type[0] : ISM_END_PINCH, last ? type[1] : ISM_END_PINCH};
+        int p[2] = {a == 0 ? point[0] : v[a].point, last ? point[1] : v[i].point};
+        add_part(tr, v + a, i - a + 1, t, p, false);
+        a = i;
+    }
+}
+
+/* Drops the vertices of v[0..*n) within gap of the previous vertex kept, or of the next
+ * anchor (the ends, pinch points), so that anchors stay. A loop's last vertex must also
+ * keep its distance from the first. */
+static void thin(ism_cvert *v, size_t *n, double gap, bool closed)
+{
+    size_t m = 0;
+    for (size_t i = 0; i < *n; i++) {
+        bool anchor = i == 0 || (i == *n - 1 && !closed) || v[i].point >= 0;
+        if (!anchor) {
+            if (m && ism_dist3(v[m - 1].p, v[i].p) < gap)
+                continue;
+            if (closed && i == *n - 1 && ism_dist3(v[0].p, v[i].p) < gap)
+                continue;
+        } else { /* an anchor displaces the vertices just before it */
+            while (m > 1 && v[m - 1].point < 0 && ism_dist3(v[m - 1].p, v[i].p) < gap)
+                m--;
+        }
+        v[m++] = v[i];
+    }
+    *n = m;
+}
+
+/* Joins the backward path (reversed) and the forward one into the seed's chain and emits
+ * it: one closed curve, or curves split at pinch points (a loop with pinch points is cut
+ * open at its first). */
+static void emit(ism_ctracer *tr, const ism_cpath *fw, const ism_cpath *bw)
+{
+    size_t n = fw->n + (fw->closed ? 1 : bw->n);
+    ism_cvert *v = malloc(n * sizeof *v);
+    if (!v) {
+        tr->oom = true;
+        return;
+    }
+    size_t m = 0, first_pinch = n;
+    if (!fw->closed)
+        for (size_t i = bw->n; i-- > 1;)
+            v[m++] = bw->v[i];
+    for (size_t i = 0; i < fw->n; i++)
+        v[m++] = fw->v[i];
+    thin(v, &m, CURVES_MIN_GAP_CELLS * tr->cell, fw->closed);
+    for (size_t i = 0; i < m && first_pinch == n; i++)
+        if (v[i].point >= 0)
+            first_pinch = i;
+    if (!fw->closed) {
+        int type[2] = {bw->end_type, fw->end_type}, point[2] = {bw->end_point, fw->end_point};
+        split_chain(tr, v, m, type, point);
+    } else if (first_pinch == n) {
+        int none[2] = {-1, -1};
+        add_part(tr, v, m, none, none, true);
+    } else { /* rotate so the loop starts and ends at its first pinch point */
+        ism_cvert *r = malloc((m + 1) * sizeof *r);
+        if (!r) {
+            tr->oom = true;
+        } else {
+            for (size_t i = 0; i <= m; i++)
+                r[i] = v[(first_pinch + i) % m];
+            int type[2] = {ISM_END_PINCH, ISM_END_PINCH};
+            int point[2] = {v[first_pinch].point, v[first_pinch].point};
+            split_chain(tr, r, m + 1, type, point);
+            free(r);
+        }
+    }
+    free(v);
+}
+
+/* Projects the seed box's q onto its curve; false when it does not lead onto a curve of the
+ * zero set inside the box. */
+static bool seed_point(ism_ctracer *tr, const ism_lbox *bx, ism_cpoint *s)
+{
+    double p0[3];
+    ism_cjet_frame(&tr->jet, bx->q, NULL, s);
+    if (!ism_cjet_correct(&tr->jet, bx->q, s->n, s->n, tr->cell, CURVES_SEED_IT, p0, NULL) ||
+        !ism_ctracer_inside(tr, p0))
+        return false;
+    double t[3];
+    memcpy(t, s->t, sizeof t);
+    ism_cjet_frame(&tr->jet, p0, t, s);
+    double fscale = s->hnorm * tr->diag * tr->diag;
+    return s->sigma > 0 && fabs(s->f) <= CURVES_F_REL * fscale &&
+           s->grad <= ISM_CURVE_GRAD_REL * s->hnorm * tr->diag;
+}
+
+static void trace_seed(ism_ctracer *tr, ism_lbox *bx)
+{
+    ism_cpoint s;
+    if (!seed_point(tr, bx, &s))
+        return;
+    if (ism_cindex_near_segment(&tr->idx, s.p, tr->delta)) {
+        bx->flags |= ISM_LBOX_USED; /* on a curve traced already */
+        return;
+    }
+    ism_cpath fw = {0}, bw = {0};
+    ism_ctrace(tr, &s, -1, true, &fw);
+    if (!fw.closed && !tr->oom) {
+        ism_cpoint r = s;
+        ism_cjet_reverse(&r);
+        ism_ctrace(tr, &r, -1, false, &bw);
+    }
+    bx->flags |= ISM_LBOX_USED;
+    if (!tr->oom)
+        emit(tr, &fw, &bw);
+    free(fw.v);
+    free(bw.v);
+}
+
+/* Types the ends at points, now that every branch is known: a point where ≥ 3 branches end
+ * (and that is no pinch) is a triple point. */
+static void type_ends(ism_ctracer *tr, size_t first_curve)
+{
+    ism_locus *io = tr->io;
+    int *count = calloc(io->npoints + 1, sizeof *count);
+    if (!count) {
+        tr->oom = true;
+        return;
+    }
+    for (size_t c = first_curve; c < io->ncurves; c++)
+        for (int e = 0; e < 2; e++)
+            if (!io->curves[c].closed && io->curves[c].end_point[e] >= 0)
+                count[io->curves[c].end_point[e]]++;
+    for (size_t j = 0; j < io->npoints; j++)
+        if (count[j] >= CURVES_TRIPLE_BRANCHES && io->points[j].type != ISM_SING_PINCH)
+            io->points[j].type = ISM_SING_TRIPLE;
+    for (size_t c = first_curve; c < io->ncurves; c++)
+        for (int e = 0; e < 2; e++) {
+            int j = io->curves[c].end_point[e];
+            if (io->curves[c].closed || j < 0)
+                continue;
+            int type = io->points[j].type;
+            io->curves[c].end_type[e] = type == ISM_SING_TRIPLE  ? ISM_END_TRIPLE
+                                        : type == ISM_SING_PINCH ? ISM_END_PINCH
+                                                                 : ISM_END_POINT;
+        }
+    free(count);
+}
+
+bool ism_sing_trace_curves(const ism_tape *f, const ism_locus_options *o, ism_locus *io,
+                           ism_error *err)
+{
+    if (!options_ok(o, err))
+        return false;
+    ism_ctracer tr;
+    tracer_init(&tr, o, io);
+    tr.jet.f = f;
+    tr.jet.ws = ism_eval_ws_new(f);
+    if (!tr.jet.ws || !ism_cindex_build(&tr.idx, io->boxes, io->nboxes, o->box, tr.cell)) {
+        ism_eval_ws_free(tr.jet.ws);
+        return ism_error_set(err, "singular curves: out of memory");
+    }
+    size_t first_curve = io->ncurves;
+    for (size_t b = 0; b < io->nboxes && !tr.stop && !tr.oom; b++) {
+        ism_lbox *bx = &io->boxes[b];
+        if ((bx->flags & ISM_LBOX_PROJECTED) && bx->rank == 2 && !(bx->flags & ISM_LBOX_USED))
+            trace_seed(&tr, bx);
+    }
+    if (!tr.oom)
+        type_ends(&tr, first_curve);
+    if (tr.stop && !io->incomplete) {
+        io->incomplete = true;
+        snprintf(io->incomplete_why, sizeof io->incomplete_why, "%s", tr.why);
+    }
+    io->evals_jet += tr.jet.evals;
+    ism_cindex_free(&tr.idx);
+    ism_eval_ws_free(tr.jet.ws);
+    if (tr.oom)
+        return ism_error_set(err, "singular curves: out of memory");
+    return true;
+}

@@ -1,0 +1,32 @@
+/* curves.h — the singular curves of f = 0 in a box: the 1-D parts of f = ∇f = 0, traced
+ * from the search's candidate boxes as polylines, each a double curve or a whisker, with its
+ * ends typed, and the pinch and triple points they meet. */
+#ifndef ISM_CURVES_H
+#define ISM_CURVES_H
+
+#include <stdbool.h>
+#include "core/expr/expr.h"
+#include "core/singular/locus.h"
+
+/* Traces every singular curve through the seed boxes of io->boxes (ISM_LBOX_PROJECTED,
+ * rank 2, not ISM_LBOX_USED) inside o->box, both ways from each seed, and appends to
+ * io->curves:
+ *   - polylines whose points lie within 1e-9 × box diagonal of f = ∇f = 0, steps at most
+ *     half a finest search cell (smallest box side / 2^max_depth);
+ *   - kind DOUBLE where the Hessian across the curve is indefinite, WHISKER where definite;
+ *     a curve changing kind is split at the pinch point between (located to 1e-10 ×
+ *     diagonal), which is added to io->points as ISM_SING_PINCH, uncertified;
+ *   - ends: BOX (the last point exactly on the box's face), closed loops (closed = true),
+ *     PINCH, TRIPLE (where ≥ 3 branches end at a collapse of the Hessian: the point is added
+ *     once as ISM_SING_TRIPLE, or an existing point there is retyped so), POINT (an existing
+ *     point, or a collapse point where < 3 branches end, added as ISM_SING_DEGENERATE), LOST.
+ * Boxes the curves and their points explain are marked ISM_LBOX_USED. Seeds whose projected
+ * point does not lead onto a curve of the zero set (|f| not ~0, an isolated critical point)
+ * are left unmarked. Stops at o->deadline_ms, *o->cancel or the work budget with
+ * io->incomplete set and a reason (what was traced stays valid). o->threads is not used
+ * (tracing is a small, sequential part of the stage). False (err set) only on invalid
+ * options or out of memory. */
+bool ism_sing_trace_curves(const ism_tape *f, const ism_locus_options *o, ism_locus *io,
+                           ism_error *err);
+
+#endif
