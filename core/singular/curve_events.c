@@ -124,9 +124,14 @@ int ism_cevent_hit_point(const ism_ctracer *tr, const double a[3], const double 
 
 int ism_cevent_point(ism_ctracer *tr, const ism_cpoint *c, int type, double radius)
 {
-    for (size_t j = 0; j < tr->io->npoints; j++)
-        if (ism_dist3(tr->io->points[j].p, c->p) <= snap_radius(tr, &tr->io->points[j]))
+    for (size_t j = 0; j < tr->io->npoints; j++) {
+        ism_sing_point *q = &tr->io->points[j];
+        if (ism_dist3(q->p, c->p) <= snap_radius(tr, q)) {
+            if (type == ISM_SING_PINCH && !q->certified) /* a candidate the search could not */
+                q->type = ISM_SING_PINCH;                 /* type: it is on a curve */
             return (int)j;
+        }
+    }
     ism_sing_point sp = {
         .radius = radius,
         .type = type,

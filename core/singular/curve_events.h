@@ -23,8 +23,9 @@ void ism_cevent_locate_pinch(ism_ctracer *tr, const ism_cpoint *a, const ism_cpo
 int ism_cevent_hit_point(const ism_ctracer *tr, const double a[3], const double b[3],
                          int ignore);
 
-/* The index of the locus point within snap distance of c->p, else of a new uncertified
- * point of this type at c (eigenvalues and residuals from c). -1 when out of memory. */
+/* The index of the locus point within snap distance of c->p (an uncertified one becomes a
+ * pinch point when type is ISM_SING_PINCH), else of a new uncertified point of this type at
+ * c (eigenvalues and residuals from c). -1 when out of memory. */
 int ism_cevent_point(ism_ctracer *tr, const ism_cpoint *c, int type, double radius);
 
 #endif

@@ -45,6 +45,11 @@
  * rounding of f is ~1e-16 of its terms. */
 #define CURVES_F_REL 1e-14
 
+/* A seed must show the Hessian's rank 2: its smaller eigenvalue across the curve at least
+ * this fraction of the larger. Rank 1 is a double sheet (f = g²: a plane of null
+ * directions, no curve to follow) or a pinch point (seeds a little off it serve). */
+#define CURVES_SEED_RANK_REL 1e-6
+
 /* Work budget: vertices over all curves (24 bytes each), and step attempts (each a few
  * Hessian evaluations) per vertex allowed. */
 #define CURVES_MAX_VERTICES ((size_t)1 << 20)
@@ -228,7 +233,8 @@ static bool seed_point(ism_ctracer *tr, const ism_lbox *bx, ism_cpoint *s)
     memcpy(t, s->t, sizeof t);
     ism_cjet_frame(&tr->jet, p0, t, s);
     double fscale = s->hnorm * tr->diag * tr->diag;
-    return s->sigma > 0 && fabs(s->f) <= CURVES_F_REL * fscale &&
+    return s->sigma > 0 && fabs(s->D) >= CURVES_SEED_RANK_REL * s->sigma * s->sigma &&
+           fabs(s->f) <= CURVES_F_REL * fscale &&
            s->grad <= ISM_CURVE_GRAD_REL * s->hnorm * tr->diag;
 }
 
@@ -248,7 +254,8 @@ static void trace_seed(ism_ctracer *tr, ism_lbox *bx)
         ism_cjet_reverse(&r);
         ism_ctrace(tr, &r, -1, false, &bw);
     }
-    bx->flags |= ISM_LBOX_USED;
+    if (fw.n + bw.n > 2) /* it went somewhere: a curve through the seed */
+        bx->flags |= ISM_LBOX_USED;
     if (!tr->oom)
         emit(tr, &fw, &bw);
     free(fw.v);
