@@ -96,6 +96,12 @@ void ism_cjet_normal_basis(const double t[3], double n[2][3])
     n[1][2] = t[0] * n[0][1] - t[1] * n[0][0];
 }
 
+double ism_cjet_normal_dot(const ism_cpoint *a, const ism_cpoint *b)
+{
+    const double *x = a->hn, *y = b->hn;
+    return x[0] * y[0] + x[3] * y[3] + x[5] * y[5] + 2.0 * (x[1] * y[1] + x[2] * y[2] + x[4] * y[4]);
+}
+
 void ism_cjet_reverse(ism_cpoint *c)
 {
     for (int k = 0; k < 3; k++)
@@ -151,5 +157,14 @@ void ism_cjet_frame(ism_cjet *j, const double p[3], const double *prev_t, ism_cp
     double a = ism_dot3(out->n[0], h0), b = ism_dot3(out->n[0], h1);
     double d = ism_dot3(out->n[1], h1);
     out->D = a * d - b * b;
+    /* (I − ttᵀ) H (I − ttᵀ) = H − t uᵀ − u tᵀ + (tᵀHt) t tᵀ with u = Ht */
+    double u[3], tht;
+    hess_mul(h, out->t, u);
+    tht = ism_dot3(out->t, u);
+    static const int row[6] = {0, 0, 0, 1, 1, 2}, col[6] = {0, 1, 2, 1, 2, 2};
+    for (int e = 0; e < 6; e++) {
+        int i = row[e], k = col[e];
+        out->hn[e] = h[e] - out->t[i] * u[k] - u[i] * out->t[k] + tht * out->t[i] * out->t[k];
+    }
     out->sigma = 0.5 * fabs(a + d) + sqrt(0.25 * (a - d) * (a - d) + b * b);
 }

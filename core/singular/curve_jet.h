@@ -34,6 +34,8 @@ typedef struct ism_cpoint {
     double D;         /* determinant of the Hessian restricted to the normal plane */
     double sigma;     /* largest |eigenvalue| of that restriction */
     double eig[3];    /* Hessian eigenvalues, ascending */
+    double hn[6];     /* the Hessian restricted to the normal plane, as a 3×3 matrix
+                         (I − ttᵀ) H (I − ttᵀ): xx xy xz yy yz zz */
 } ism_cpoint;
 
 /* Newton on E₀·∇f = E₁·∇f = 0 for p in the plane start + span(P₀, P₁) (a "station"): the
@@ -48,6 +50,11 @@ bool ism_cjet_correct(ism_cjet *j, const double start[3], const double P[2][3],
  * smallest |eigenvalue|, sign arbitrary); near a pinch point, where two eigenvalues are
  * both small, it is prev_t projected onto their eigenvectors, so it never jumps. */
 void ism_cjet_frame(ism_cjet *j, const double p[3], const double *prev_t, ism_cpoint *out);
+
+/* The Frobenius inner product of a's and b's normal-plane Hessians (independent of the
+ * bases chosen). Negative when the Hessian across the curve flipped between them: the curve
+ * passed through a point where it vanishes. */
+double ism_cjet_normal_dot(const ism_cpoint *a, const ism_cpoint *b);
 
 /* An orthonormal basis n[0], n[1] of the plane normal to the unit vector t. */
 void ism_cjet_normal_basis(const double t[3], double n[2][3]);

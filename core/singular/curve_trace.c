@@ -170,6 +170,8 @@ static bool attempt(ism_ctracer *tr, const ism_cpoint *cur, double h, ism_cpoint
         return false;
     if (ism_dot3(cur->t, nxt->t) < cos(CTRACE_TURN_MAX))
         return false;
+    if (ism_cjet_normal_dot(cur, nxt) < 0) /* stepped over a collapse: approach it instead */
+        return false;
     return !(nxt->sigma < CTRACE_SIGMA_DROP * cur->sigma) || cur->D * nxt->D < 0;
 }
 

@@ -137,26 +137,27 @@ static void seed_cell(fixture *fx, const double p[3])
     cr_assert(ism_locus_add_box(&fx->l, &b));
 }
 
-typedef void (*curve_fn)(double s, double out[3]);
+typedef void (*curve_fn)(const void *ctx, double s, double out[3]);
 
 /* Seeds every search cell the curve g(s), s in [s0, s1], passes through (sampled at an
  * eighth of a cell; speed bounds |g'|). */
-static void cover(fixture *fx, curve_fn g, double s0, double s1, double speed)
+static void cover(fixture *fx, curve_fn g, const void *ctx, double s0, double s1, double speed)
 {
     double ds = fx->cell / (8.0 * speed);
     for (double s = s0; s <= s1; s += ds) {
         double p[3];
-        g(s, p);
+        g(ctx, s, p);
         seed_cell(fx, p);
     }
 }
 
-static void x_axis(double s, double p[3]) { p[0] = s, p[1] = 0, p[2] = 0; }
-static void y_axis(double s, double p[3]) { p[0] = 0, p[1] = s, p[2] = 0; }
-static void z_axis(double s, double p[3]) { p[0] = 0, p[1] = 0, p[2] = s; }
-static void whisker_circle(double s, double p[3]) { p[0] = 0.5 * cos(s), p[1] = 0.5 * sin(s), p[2] = 0; }
-static void spheres_circle(double s, double p[3])
+static void x_axis(const void *ctx, double s, double p[3]) { (void)ctx, p[0] = s, p[1] = 0, p[2] = 0; }
+static void y_axis(const void *ctx, double s, double p[3]) { (void)ctx, p[0] = 0, p[1] = s, p[2] = 0; }
+static void z_axis(const void *ctx, double s, double p[3]) { (void)ctx, p[0] = 0, p[1] = 0, p[2] = s; }
+static void whisker_circle(const void *ctx, double s, double p[3]) { (void)ctx, p[0] = 0.5 * cos(s), p[1] = 0.5 * sin(s), p[2] = 0; }
+static void spheres_circle(const void *ctx, double s, double p[3])
 {
+    (void)ctx;
     double r = sqrt(0.75);
     p[0] = 0, p[1] = r * cos(s), p[2] = r * sin(s);
 }
@@ -249,7 +250,7 @@ Test(singular_curves, whisker_circle)
     for (int s = 0; s < NSHIFTS; s++) {
         fixture fx;
         double sh = setup(&fx, "(x^2 + y^2 - 0.25)^2 + z^2", box, s);
-        cover(&fx, whisker_circle, 0, 2 * PI, 0.5);
+        cover(&fx, whisker_circle, NULL, 0, 2 * PI, 0.5);
         run(&fx);
         cr_assert_eq(fx.l.ncurves, 1, "shift %g: %zu curves", sh, fx.l.ncurves);
         cr_assert_eq(fx.l.npoints, 0, "shift %g: %zu points", sh, fx.l.npoints);
@@ -278,7 +279,7 @@ Test(singular_curves, two_spheres_cross_in_a_double_circle)
     for (int s = 0; s < NSHIFTS; s++) {
         fixture fx;
         double sh = setup(&fx, expr, box, s);
-        cover(&fx, spheres_circle, 0, 2 * PI, sqrt(0.75));
+        cover(&fx, spheres_circle, NULL, 0, 2 * PI, sqrt(0.75));
         run(&fx);
         cr_assert_eq(fx.l.ncurves, 1, "shift %g: %zu curves", sh, fx.l.ncurves);
         cr_assert_eq(fx.l.npoints, 0, "shift %g: %zu points", sh, fx.l.npoints);
@@ -293,6 +294,39 @@ Test(singular_curves, two_spheres_cross_in_a_double_circle)
             rsum += hypot(c->xyz[3 * i + 1], c->xyz[3 * i + 2]);
         cr_assert_lt(fabs(rsum / (double)c->n - sqrt(0.75)), 1e-6, "shift %g: radius", sh);
         cr_assert_lt(fabs(curve_length(c) - 2 * PI * sqrt(0.75)), 0.005 * 2 * PI, "shift %g", sh);
+        assert_boxes_used(&fx);
+        assert_all_steps(&fx);
+        teardown(&fx);
+    }
+}
+
+/* ---- the seed paper's figure-8 Klein bottle h·(g² − 8z²) + 16xz·g, g = x² + y² + z² − 2y − 1,
+ * h = g + 4y: on g = z = 0 (the circle x² + (y − 1)² = 2 in z = 0) ∇f = 0, and the Hessian
+ * across, the quadratic form h·g² − 8h·z² + 16x·z·g in (g, z), has determinant
+ * −8h² − 64x² < 0 (never both 0 on the circle): one closed double curve. */
+
+static double klein_dist(const double p[3]) { return hypot(p[2], hypot(p[0], p[1] - 1) - sqrt(2)); }
+static void klein_circle(const void *ctx, double s, double p[3]) { (void)ctx, p[0] = sqrt(2) * cos(s), p[1] = 1 + sqrt(2) * sin(s), p[2] = 0; }
+
+Test(singular_curves, klein_bottle_double_circle)
+{
+    static const double box[6] = {-4, -4, -4, 4, 4, 4};
+    static const char expr[] = "(x^2 + y^2 + z^2 + 2*y - 1)*((x^2 + y^2 + z^2 - 2*y - 1)^2 - 8*z^2)"
+                               " + 16*x*z*(x^2 + y^2 + z^2 - 2*y - 1)";
+    for (int s = 0; s < NSHIFTS; s++) {
+        fixture fx;
+        double sh = setup(&fx, expr, box, s);
+        cover(&fx, klein_circle, NULL, 0, 2 * PI, sqrt(2));
+        run(&fx);
+        cr_assert_eq(fx.l.ncurves, 1, "shift %g: %zu curves", sh, fx.l.ncurves);
+        cr_assert_eq(fx.l.npoints, 0, "shift %g: %zu points", sh, fx.l.npoints);
+        const ism_sing_curve *c = &fx.l.curves[0];
+        cr_assert(c->closed && c->kind == ISM_CURVE_DOUBLE, "shift %g", sh);
+        double vert, mid;
+        curve_error(c, klein_dist, &vert, &mid);
+        cr_assert_leq(vert, ON_LOCUS * fx.diag, "shift %g: vertex %g off the circle", sh, vert);
+        cr_assert_leq(mid, chord_bound(&fx, sqrt(2)), "shift %g: midpoint %g off", sh, mid);
+        cr_assert_lt(fabs(curve_length(c) - 2 * PI * sqrt(2)), 0.005 * 2 * PI * sqrt(2), "shift %g", sh);
         assert_boxes_used(&fx);
         assert_all_steps(&fx);
         teardown(&fx);
@@ -368,9 +402,9 @@ static int point_at(const fixture *fx, int type, const double p[3], double tol)
 
 static void cover_axes(fixture *fx, double reach)
 {
-    cover(fx, x_axis, -reach, reach, 1);
-    cover(fx, y_axis, -reach, reach, 1);
-    cover(fx, z_axis, -reach, reach, 1);
+    cover(fx, x_axis, NULL, -reach, reach, 1);
+    cover(fx, y_axis, NULL, -reach, reach, 1);
+    cover(fx, z_axis, NULL, -reach, reach, 1);
 }
 
 /* The curve's BOX end lies exactly on a face of the box. */
@@ -412,6 +446,157 @@ Test(singular_curves, xyz_six_branches_meet_at_one_triple_point)
             seen |= 1 << (2 * a.axis + (a.sign > 0));
         }
         cr_assert_eq(seen, 63, "shift %g: half-axes covered %#x", sh, seen);
+        assert_boxes_used(&fx);
+        assert_all_steps(&fx);
+        teardown(&fx);
+    }
+}
+
+/* ---- three spheres f = g₁g₂g₃ (centres cᵢ, radii rᵢ, in general position): each pair crosses
+ * in a circle (a double curve: there f is a non-zero multiple of gᵢgⱼ); the three circles
+ * pass through the two points common to all three spheres, where the Hessian vanishes (it is
+ * a sum of terms each with a factor g) — two triple points, six branches each: six arcs. */
+
+typedef struct sphere3 { double c[3], r; } sphere3;
+static const sphere3 SPHERES[3] = {
+    {{0.5, 0.1, 0.0}, 1.0}, {{-0.3, 0.4, 0.1}, 0.9}, {{-0.2, -0.45, -0.05}, 1.1}};
+
+typedef struct circle3 { double o[3], n[3], r; } circle3;
+
+/* The circle where spheres i and j cross: centre, unit normal, radius. */
+static circle3 circle_of(int i, int j)
+{
+    const sphere3 *a = &SPHERES[i], *b = &SPHERES[j];
+    double d[3] = {b->c[0] - a->c[0], b->c[1] - a->c[1], b->c[2] - a->c[2]};
+    double len = hypot(d[0], hypot(d[1], d[2]));
+    double h = (len * len + a->r * a->r - b->r * b->r) / (2 * len);
+    circle3 c;
+    for (int k = 0; k < 3; k++) {
+        c.n[k] = d[k] / len;
+        c.o[k] = a->c[k] + h * c.n[k];
+    }
+    c.r = sqrt(a->r * a->r - h * h);
+    return c;
+}
+
+static double circle_dist(const circle3 *c, const double p[3])
+{
+    double w[3] = {p[0] - c->o[0], p[1] - c->o[1], p[2] - c->o[2]};
+    double along = w[0] * c->n[0] + w[1] * c->n[1] + w[2] * c->n[2];
+    double radial = sqrt(fmax(0, w[0] * w[0] + w[1] * w[1] + w[2] * w[2] - along * along));
+    return hypot(along, radial - c->r);
+}
+
+/* The two points on all three spheres: on the line where the radical planes of (1, 2) and
+ * (1, 3) meet, at distance r₁ from c₁. */
+static void triple_points(double out[2][3])
+{
+    double A[3][3], k[3];
+    for (int j = 1; j < 3; j++) {
+        const double *ci = SPHERES[0].c, *cj = SPHERES[j].c;
+        k[j - 1] = SPHERES[0].r * SPHERES[0].r - SPHERES[j].r * SPHERES[j].r;
+        for (int m = 0; m < 3; m++) {
+            A[j - 1][m] = 2 * (cj[m] - ci[m]);
+            k[j - 1] += cj[m] * cj[m] - ci[m] * ci[m];
+        }
+    }
+    /* the line's direction, and its point where m·p = 0 (Cramer's rule) */
+    double *u = A[0], *v = A[1];
+    double m[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    for (int c = 0; c < 3; c++)
+        A[2][c] = m[c];
+    k[2] = 0;
+    double det = A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
+                 A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
+                 A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
+    double p0[3];
+    for (int c = 0; c < 3; c++) {
+        double B[3][3];
+        memcpy(B, A, sizeof B);
+        for (int r = 0; r < 3; r++)
+            B[r][c] = k[r];
+        p0[c] = (B[0][0] * (B[1][1] * B[2][2] - B[1][2] * B[2][1]) -
+                 B[0][1] * (B[1][0] * B[2][2] - B[1][2] * B[2][0]) +
+                 B[0][2] * (B[1][0] * B[2][1] - B[1][1] * B[2][0])) / det;
+    }
+    double ml = hypot(m[0], hypot(m[1], m[2])), w[3], b = 0, cc = -SPHERES[0].r * SPHERES[0].r;
+    for (int c = 0; c < 3; c++) {
+        m[c] /= ml;
+        w[c] = p0[c] - SPHERES[0].c[c];
+        b += 2 * w[c] * m[c];
+        cc += w[c] * w[c];
+    }
+    for (int s = 0; s < 2; s++) {
+        double t = (-b + (s ? 1 : -1) * sqrt(b * b - 4 * cc)) / 2;
+        for (int c = 0; c < 3; c++)
+            out[s][c] = p0[c] + t * m[c];
+    }
+}
+
+static void seed_circle(const void *ctx, double s, double p[3])
+{
+    const circle3 *c = ctx;
+    /* e: a unit vector normal to n (n × the axis least along n), f = n × e */
+    int a = fabs(c->n[0]) < fabs(c->n[1]) ? (fabs(c->n[0]) < fabs(c->n[2]) ? 0 : 2)
+                                          : (fabs(c->n[1]) < fabs(c->n[2]) ? 1 : 2);
+    double ax[3] = {a == 0, a == 1, a == 2}, e[3], f[3];
+    e[0] = c->n[1] * ax[2] - c->n[2] * ax[1];
+    e[1] = c->n[2] * ax[0] - c->n[0] * ax[2];
+    e[2] = c->n[0] * ax[1] - c->n[1] * ax[0];
+    double l = hypot(e[0], hypot(e[1], e[2]));
+    for (int k = 0; k < 3; k++)
+        e[k] /= l;
+    f[0] = c->n[1] * e[2] - c->n[2] * e[1];
+    f[1] = c->n[2] * e[0] - c->n[0] * e[2];
+    f[2] = c->n[0] * e[1] - c->n[1] * e[0];
+    for (int k = 0; k < 3; k++)
+        p[k] = c->o[k] + c->r * (cos(s) * e[k] + sin(s) * f[k]);
+}
+
+Test(singular_curves, three_spheres_two_triple_points_six_arcs)
+{
+    static const double box[6] = {-2, -2, -2, 2, 2, 2};
+    char expr[512];
+    size_t len = 0;
+    for (int i = 0; i < 3; i++)
+        len += (size_t)snprintf(expr + len, sizeof expr - len, "%s((x - %.17g)^2 + (y - %.17g)^2 + (z - %.17g)^2 - %.17g)",
+                                i ? "*" : "", SPHERES[i].c[0], SPHERES[i].c[1], SPHERES[i].c[2],
+                                SPHERES[i].r * SPHERES[i].r);
+    double tp[2][3];
+    triple_points(tp);
+    circle3 circles[3] = {circle_of(0, 1), circle_of(0, 2), circle_of(1, 2)};
+    for (int s = 0; s < NSHIFTS; s++) {
+        fixture fx;
+        double sh = setup(&fx, expr, box, s);
+        for (int c = 0; c < 3; c++)
+            cover(&fx, seed_circle, &circles[c], 0, 2 * PI, circles[c].r);
+        run(&fx);
+        double tol = ON_LOCUS * fx.diag;
+        cr_assert_eq(fx.l.npoints, 2, "shift %g: %zu points", sh, fx.l.npoints);
+        int t0 = point_at(&fx, ISM_SING_TRIPLE, tp[0], tol), t1 = point_at(&fx, ISM_SING_TRIPLE, tp[1], tol);
+        cr_assert(t0 >= 0 && t1 >= 0, "shift %g: triple points at %g %g %g and %g %g %g?", sh,
+                  tp[0][0], tp[0][1], tp[0][2], tp[1][0], tp[1][1], tp[1][2]);
+        cr_assert_eq(fx.l.ncurves, 6, "shift %g: %zu curves", sh, fx.l.ncurves);
+        int arcs[3] = {0, 0, 0};
+        for (size_t i = 0; i < fx.l.ncurves; i++) {
+            const ism_sing_curve *c = &fx.l.curves[i];
+            cr_assert_eq(c->kind, ISM_CURVE_DOUBLE, "shift %g: curve %zu", sh, i);
+            cr_assert(ends_are(c, ISM_END_TRIPLE, ISM_END_TRIPLE), "shift %g: curve %zu", sh, i);
+            cr_assert_neq(c->end_point[0], c->end_point[1], "shift %g: curve %zu", sh, i);
+            int best = 0;
+            double err[3];
+            for (int k = 0; k < 3; k++) {
+                err[k] = 0;
+                for (size_t j = 0; j < c->n; j++)
+                    err[k] = fmax(err[k], circle_dist(&circles[k], c->xyz + 3 * j));
+                if (err[k] < err[best])
+                    best = k;
+            }
+            cr_assert_leq(err[best], tol, "shift %g: curve %zu %g off its circle", sh, i, err[best]);
+            arcs[best]++;
+        }
+        cr_assert(arcs[0] == 2 && arcs[1] == 2 && arcs[2] == 2, "shift %g: arcs %d %d %d", sh,
+                  arcs[0], arcs[1], arcs[2]);
         assert_boxes_used(&fx);
         assert_all_steps(&fx);
         teardown(&fx);
@@ -516,7 +701,7 @@ Test(singular_curves, whitney_umbrella_pinch_double_and_whisker)
     for (int s = 0; s < NSHIFTS; s++) {
         fixture fx;
         double sh = setup(&fx, "x^2 - y^2*z", box, s);
-        cover(&fx, z_axis, -2, 2, 1);
+        cover(&fx, z_axis, NULL, -2, 2, 1);
         run(&fx);
         double tol = ON_LOCUS * fx.diag;
         cr_assert_eq(fx.l.npoints, 1, "shift %g: %zu points", sh, fx.l.npoints);
@@ -544,7 +729,7 @@ Test(singular_curves, whitney_umbrella_pinch_double_and_whisker)
 /* The umbrella bent: (x − z²)² − y²z is Whitney's X² − Y²Z in the coordinates X = x − z²,
  * Y = y, Z = z (a diffeomorphism), so its singular curve is the parabola x = z², y = 0: a
  * double curve for z > 0, a whisker for z < 0, the pinch point at the origin. */
-static void parabola(double s, double p[3]) { p[0] = s * s, p[1] = 0, p[2] = s; }
+static void parabola(const void *ctx, double s, double p[3]) { (void)ctx, p[0] = s * s, p[1] = 0, p[2] = s; }
 
 /* An upper bound of the distance to the parabola: to its point at the same z. */
 static double parabola_dist(const double p[3]) { return hypot(p[0] - p[2] * p[2], p[1]); }
@@ -556,7 +741,7 @@ Test(singular_curves, bent_umbrella_pinch_on_a_parabola)
     for (int s = 0; s < NSHIFTS; s++) {
         fixture fx;
         double sh = setup(&fx, "(x - z^2)^2 - y^2*z", box, s);
-        cover(&fx, parabola, -1.3, 1.3, 2.7);
+        cover(&fx, parabola, NULL, -1.3, 1.3, 2.7);
         run(&fx);
         double tol = ON_LOCUS * fx.diag;
         cr_assert_eq(fx.l.npoints, 1, "shift %g: %zu points", sh, fx.l.npoints);
@@ -597,7 +782,7 @@ Test(singular_curves, cross_cap_double_segment_between_two_pinch_points)
     for (int s = 0; s < NSHIFTS; s++) {
         fixture fx;
         double sh = setup(&fx, expr, box, s);
-        cover(&fx, z_axis, -2, 2, 1);
+        cover(&fx, z_axis, NULL, -2, 2, 1);
         run(&fx);
         double tol = ON_LOCUS * fx.diag;
         cr_assert_eq(fx.l.npoints, 3, "shift %g: %zu points", sh, fx.l.npoints);
@@ -642,8 +827,9 @@ Test(singular_curves, cross_cap_double_segment_between_two_pinch_points)
  * critical points at level f = 0.01 (no point of f = 0 there), a sphere counted twice
  * ((x² + y² + z² − 0.5)²: ∇f = 0 on a whole sheet, Hessian of rank 1 — seeded here as if
  * rank 2), and an isolated cusp x² + z² − y³ (∇f = 0 only at the origin). */
-static void sphere_circle(double s, double p[3])
+static void sphere_circle(const void *ctx, double s, double p[3])
 {
+    (void)ctx;
     double r = sqrt(0.5);
     p[0] = r * cos(s), p[1] = r * sin(s), p[2] = 0;
 }
@@ -660,7 +846,7 @@ Test(singular_curves, no_curve_where_there_is_none)
         for (int s = 0; s < NSHIFTS; s++) {
             fixture fx;
             double sh = setup(&fx, cases[i].expr, box, s);
-            cover(&fx, cases[i].g, cases[i].s0, cases[i].s1, cases[i].speed);
+            cover(&fx, cases[i].g, NULL, cases[i].s0, cases[i].s1, cases[i].speed);
             size_t seeds = 0;
             for (size_t b = 0; b < fx.l.nboxes; b++)
                 if (fx.l.boxes[b].flags & ISM_LBOX_PROJECTED) {
