@@ -313,9 +313,17 @@ bool ism_sing_trace_curves(const ism_tape *f, const ism_locus_options *o, ism_lo
     }
     if (!tr.oom)
         type_ends(&tr, first_curve);
-    if (tr.stop && !io->incomplete) {
+    size_t lost = 0;
+    for (size_t c = first_curve; c < io->ncurves; c++)
+        for (int e = 0; e < 2; e++)
+            lost += !io->curves[c].closed && io->curves[c].end_type[e] == ISM_END_LOST;
+    if ((tr.stop || lost) && !io->incomplete) {
         io->incomplete = true;
-        snprintf(io->incomplete_why, sizeof io->incomplete_why, "%s", tr.why);
+        if (tr.stop)
+            snprintf(io->incomplete_why, sizeof io->incomplete_why, "%s", tr.why);
+        else
+            snprintf(io->incomplete_why, sizeof io->incomplete_why,
+                     "singular curves: %zu curve ends lost (the corrector did not converge)", lost);
     }
     io->evals_jet += tr.jet.evals;
     ism_cindex_free(&tr.idx);

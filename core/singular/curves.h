@@ -23,7 +23,7 @@
  * Boxes the curves and their points explain are marked ISM_LBOX_USED. Seeds whose projected
  * point does not lead onto a curve of the zero set (|f| not ~0, an isolated critical point)
  * are left unmarked. Stops at o->deadline_ms, *o->cancel or the work budget with
- * io->incomplete set and a reason (what was traced stays valid). o->threads is not used
+ * io->incomplete set and a reason (what was traced stays valid); a LOST end also sets it. o->threads is not used
  * (tracing is a small, sequential part of the stage). False (err set) only on invalid
  * options or out of memory. */
 bool ism_sing_trace_curves(const ism_tape *f, const ism_locus_options *o, ism_locus *io,
