@@ -84,6 +84,10 @@ if [ -d /etc/nginx ] || [ -n "$destdir" ]; then
     install -d -m 0755 "$destdir/etc/nginx/sites-available" "$destdir/etc/nginx/sites-enabled"
     install_config "$src/deploy/nginx/isomesh.conf" "$destdir/etc/nginx/sites-available/isomesh"
     ln -sf ../sites-available/isomesh "$destdir/etc/nginx/sites-enabled/isomesh"
+    # nginx's copy of the meshes served by key (proxy_cache_path in the site); its workers
+    # (www-data on Debian) write it
+    install -d -m 0700 "$destdir/var/cache/nginx/isomesh"
+    [ -n "$destdir" ] || chown www-data: /var/cache/nginx/isomesh 2>/dev/null || true
     # Debian's example site also claims port 80.
     if [ -L "$destdir/etc/nginx/sites-enabled/default" ]; then
         rm -f "$destdir/etc/nginx/sites-enabled/default"

@@ -164,10 +164,10 @@ class Redis:
 
 # ---- nginx ------------------------------------------------------------------------------
 
-def nginx_site(daemon_ports, listen_port, tls=None):
+def nginx_site(daemon_ports, listen_port, tls=None, cache_dir=None):
     """deploy/nginx/isomesh.conf with every upstream listing daemon_ports (None: as shipped),
     listening on 127.0.0.1:listen_port (and, with tls=(port, cert, key), its TLS lines
-    enabled)."""
+    enabled), its mesh cache in cache_dir (None: as shipped)."""
     with open(NGINX_CONF) as f:
         text = f.read()
     servers = re.findall(r"^(\s*)server 127\.0\.0\.1:8080 (.*);\n", text, re.M)
@@ -180,6 +180,8 @@ def nginx_site(daemon_ports, listen_port, tls=None):
     if daemon_ports is not None:
         text = re.sub(r"^(\s*)server 127\.0\.0\.1:8080 (.*);\n", upstream, text, flags=re.M)
     text = re.sub(r"^(\s*)listen 80;$", r"\1listen 127.0.0.1:%d;" % listen_port, text, flags=re.M)
+    if cache_dir:
+        text = text.replace("/var/cache/nginx/isomesh", cache_dir)
     text = re.sub(r"^\s*listen \[::\]:80;\n", "", text, flags=re.M)
     if tls:
         port, cert, key = tls
@@ -232,7 +234,8 @@ class Nginx:
         self.site = os.path.join(self.prefix, "isomesh.conf")
         self.conf = os.path.join(self.prefix, "nginx.conf")
         with open(self.site, "w") as f:
-            f.write(nginx_site(daemon_ports, self.port, tls))
+            f.write(nginx_site(daemon_ports, self.port, tls,
+                               os.path.join(self.prefix, "tmp", "meshes")))
         with open(self.conf, "w") as f:
             f.write(nginx_main(self.prefix, self.site))
         self.proc = None

@@ -177,6 +177,43 @@ class ClusterTest(unittest.TestCase):
         self.assertIsNone(glb.header("Content-Encoding"), "glb is not gzipped")
         self.assertEqual(glb.body[:4], b"glTF")
 
+    def test_nginx_keeps_meshes_served_by_key_and_never_rate_limits_reading_them(self):
+        first = self.ng.post("/v1/mesh", sphere(0.66))
+        self.assertEqual(first.status, 200)
+        location = first.header("Location")
+        route = "/v1/meshes/{key}.{format}"
+
+        def served_by_daemons():
+            return sum(d.metric("isomesh_http_requests_total", route=route, status="200")
+                       for d in self.s.daemons)
+        r = self.ng.get(location)
+        self.assertEqual((r.status, r.header("X-Cache-Status")), (200, "MISS"))
+        self.assertEqual(r.body, first.body)
+        before = served_by_daemons()
+        # far past any rate limit's burst, from one address: every answer nginx's own copy
+        conn = http.client.HTTPConnection("127.0.0.1", self.ng.port, timeout=30,
+                                          source_address=("127.0.0.12", 0))
+        try:
+            for _ in range(400):
+                conn.request("GET", location)
+                resp = conn.getresponse()
+                body = resp.read()
+                self.assertEqual((resp.status, resp.getheader("X-Cache-Status")), (200, "HIT"))
+                self.assertEqual(body, first.body)
+        finally:
+            conn.close()
+        self.assertEqual(served_by_daemons(), before)
+        # a request with a token (--private) always reaches a daemon, and is never kept
+        bearer = {"Authorization": "Bearer ism_" + "A" * 43}
+        other = self.ng.get(location.replace(".drc", ".ply"), headers=bearer)
+        self.assertEqual((other.status, other.header("X-Cache-Status")), (200, "BYPASS"))
+        self.assertEqual(self.ng.get(location.replace(".drc", ".ply")).header("X-Cache-Status"),
+                         "MISS")
+        # errors are not kept either
+        missing = "/v1/meshes/%s.drc" % ("0" * 64)
+        self.assertEqual(self.ng.get(missing).status, 404)
+        self.assertNotEqual(self.ng.get(missing).header("X-Cache-Status"), "HIT")
+
     def test_nginx_gzips_text_only(self):
         gz = {"Accept-Encoding": "gzip"}
         for path, ctype in (("/v1/presets", "application/json"),

@@ -129,10 +129,12 @@ class NginxTest(unittest.TestCase):
 
     def test_the_site_as_shipped_passes_nginx_t(self):
         # As shipped but for the listening port (nginx -t binds it: port 80 needs root and
-        # may be taken on the test machine).
+        # may be taken on the test machine) and the mesh cache's directory (nginx -t creates
+        # it; install.sh does on a server).
         site = os.path.join(self.tmp, "site.conf")
         with open(site, "w") as f:
-            f.write(stack.nginx_site(None, stack.free_port()))
+            f.write(stack.nginx_site(None, stack.free_port(),
+                                     cache_dir=os.path.join(self.tmp, "meshes")))
         rc, out = self.nginx_t(site)
         self.assertEqual(rc, 0, out)
         self.assertIn("syntax is ok", out)
