@@ -1,0 +1,57 @@
+/* conform.h — makes the polygoniser's mesh conform to a singular locus found from f: every
+ * sheet-carrying singular point (node, cusp, degenerate contact) becomes one mesh vertex at
+ * its certified position shared by all its cones, and every double curve a chain of mesh
+ * edges on the curve's polyline with the crossing sheets' triangles on it (four per edge).
+ *
+ * Method: surgery. The triangles within a ball (point) or tube (curve) of a few cells around
+ * the locus are removed, the hole's boundary edges chained into loops (one per cone or sheet
+ * side), and each loop refilled: fanned to the point, or zipped to the curve's vertices, with
+ * rings of intermediate vertices projected onto f = 0 so the new triangles are as close to
+ * the surface as the polygoniser's. */
+#ifndef ISM_CONFORM_H
+#define ISM_CONFORM_H
+
+#include <stddef.h>
+#include <stdbool.h>
+#include "core/expr/expr.h"
+#include "core/mesh/mesh.h"
+#include "core/singular/locus.h"
+
+typedef struct ism_conform_stats {
+    size_t points_conformed;   /* points made one vertex with at least one cone of faces */
+    size_t points_failed;      /* sheet-carrying points with no hole loop around them (no
+                                  mesh there), or out of the box: cones = 0 */
+    size_t points_short_cones; /* nodes with fewer than the 2 cones their Hessian promises
+                                  (a nappe the polygoniser lost beyond the ball) */
+    size_t points_skipped;     /* isolated points (no sheet), pinch and triple points (made
+                                  vertices as ends of their curves) */
+    size_t curves_conformed;   /* double curves zipped into the mesh */
+    size_t curves_failed;      /* double curves with no hole loop along them */
+    size_t curves_skipped;     /* whiskers (no sheet; they stay in the locus) */
+    size_t loops_fallback;     /* hole loops that could not be zipped to their curve and were
+                                  closed by a fan to their projected centroid instead (no
+                                  crack, but not conforming there) */
+    size_t triangles_removed, triangles_added;
+    size_t vertices_added, vertices_removed;
+    /* Non-manifold elements of the final mesh farther than ISM_CONFORM_ARTEFACT_TOL ×
+     * box diagonal from every point and curve of the locus: invented structure. */
+    size_t artefact_edges;     /* edges with more than two triangles */
+    size_t artefact_vertices;  /* vertices where several cones meet (no non-manifold edge) */
+    double time_ms;
+} ism_conform_stats;
+
+/* "On the locus" for the artefact count: a relative distance, far above the 1e-9 × diagonal
+ * the locus is certified to and far below any cell. */
+#define ISM_CONFORM_ARTEFACT_TOL 1e-6
+
+/* Makes mesh conform to locus (o->box and o->max_depth give the finest cell, the scale of
+ * the surgery; o->cancel and o->deadline_ms are polled between items). Sets each point's
+ * `cones` (cones of faces at its vertex; 0 when it got none). The mesh stays welded and
+ * consistently oriented per sheet; vertices that lost all their triangles are removed.
+ * False only on bad input or allocation failure (err says which): the mesh is then still
+ * valid and crack-free, the item being worked on when memory ran out left as it was. st may
+ * be NULL. */
+bool ism_conform_mesh(const ism_tape *f, const ism_locus_options *o, ism_locus *locus,
+                      ism_mesh *mesh, ism_conform_stats *st, ism_error *err);
+
+#endif

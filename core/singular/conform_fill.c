@@ -1,0 +1,145 @@
+/* conform_fill.c — refilling a hole loop around a singular point: rings of vertices between
+ * the loop and the point, each moved onto f = 0 by Newton along ∇f, joined row to row by
+ * ladders of triangles and fanned to the point's vertex at the last ring.
+ *
+ *     loop  v0 ──── v1 ──── v2        each ring vertex: apex + t (v_i − apex), projected;
+ *            │ ╲     │ ╲     │        rows joined (v_i, v_i+1, r_i+1), (v_i, r_i+1, r_i)
+ *     ring  r0 ──── r1 ──── r2
+ *              ╲     |     ╱
+ *                  apex
+ */
+#include "core/singular/conform_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+/* Newton steps projecting a ring vertex (quadratic convergence from a fraction of a cell:
+ * a handful suffices; more would only wander near a singular point). */
+#define PROJECT_STEPS 6
+/* Rings at most (each one more row of triangles; the strip is a few cells wide). */
+#define MAX_RINGS 6
+/* A ring's spacing relative to the loop's mean edge: rows about as far apart as the rim's
+ * vertices, so the new triangles are about as large as the polygoniser's around them. */
+#define RING_SPACING 1.0
+
+static double dist(const double *a, const double *b)
+{
+    double d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = a[2] - b[2];
+    return sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+}
+
+/* |f| / |∇f| at p (INFINITY where ∇f vanishes). */
+static double distance_estimate(cf_ctx *c, const double p[3], double g[3], double *fv)
+{
+    *fv = ism_eval_gradient(c->f, c->ws, p[0], p[1], p[2], g);
+    double gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    return gl > 0 ? fabs(*fv) / gl : INFINITY;
+}
+
+void cf_project(cf_ctx *c, double p[3], double max_move)
+{
+    double q[3] = {p[0], p[1], p[2]}, g[3], fv;
+    double d0 = distance_estimate(c, q, g, &fv), d = d0;
+    for (int it = 0; it < PROJECT_STEPS && d > 0 && isfinite(d); it++) {
+        double gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+        for (int k = 0; k < 3; k++)
+            q[k] -= fv * g[k] / gg;
+        d = distance_estimate(c, q, g, &fv);
+    }
+    if (isfinite(d) && d < d0 && dist(p, q) <= max_move)
+        for (int k = 0; k < 3; k++)
+            p[k] = q[k];
+}
+
+int cf_ring_count(double width, double edge)
+{
+    if (!(edge > 0) || !(width > 0))
+        return 0;
+    double r = ceil(width / (RING_SPACING * edge)) - 1;
+    return r < 0 ? 0 : r > MAX_RINGS ? MAX_RINGS : (int)r;
+}
+
+double cf_loop_mean_edge(const cf_ctx *c, const cf_loop *l)
+{
+    size_t ne = l->closed ? l->n : l->n - 1;
+    if (ne == 0)
+        return 0;
+    double sum = 0;
+    for (size_t i = 0; i < ne; i++)
+        sum += dist(c->m->pos + 3 * (size_t)l->v[i], c->m->pos + 3 * (size_t)l->v[(i + 1) % l->n]);
+    return sum / (double)ne;
+}
+
+bool cf_ladder(cf_ctx *c, const uint32_t *a, const uint32_t *b, size_t n, bool closed)
+{
+    size_t ne = closed ? n : n - 1;
+    for (size_t i = 0; i < ne; i++) {
+        size_t j = (i + 1) % n;
+        if (!cf_add_triangle(c, a[i], a[j], b[j]) || !cf_add_triangle(c, a[i], b[j], b[i]))
+            return false;
+    }
+    return true;
+}
+
+static bool fan_row(cf_ctx *c, const uint32_t *r, size_t n, bool closed, uint32_t apex)
+{
+    size_t ne = closed ? n : n - 1;
+    for (size_t i = 0; i < ne; i++)
+        if (!cf_add_triangle(c, r[i], r[(i + 1) % n], apex))
+            return false;
+    return true;
+}
+
+/* The ring at fraction t of the way from the apex to the loop, projected onto f = 0 (moves
+ * bounded by half the ring's distance to the apex: never onto another sheet). */
+static bool make_ring(cf_ctx *c, const cf_loop *l, const double apex[3], double t, uint32_t *r)
+{
+    for (size_t i = 0; i < l->n; i++) {
+        const double *v = c->m->pos + 3 * (size_t)l->v[i];
+        double p[3];
+        for (int k = 0; k < 3; k++)
+            p[k] = apex[k] + t * (v[k] - apex[k]);
+        cf_project(c, p, 0.5 * t * dist(v, apex));
+        r[i] = cf_add_vertex(c, p, false);
+        if (r[i] == CF_NONE)
+            return false;
+        c->st->vertices_added++;
+    }
+    return true;
+}
+
+bool cf_fan(cf_ctx *c, const cf_loop *l, uint32_t apex, const double apex_pos[3], int rings)
+{
+    uint32_t *rows = malloc(2 * l->n * sizeof *rows);
+    if (!rows)
+        return false;
+    uint32_t *outer = rows, *inner = rows + l->n;
+    for (size_t i = 0; i < l->n; i++)
+        outer[i] = l->v[i];
+    bool ok = true;
+    for (int r = rings; ok && r >= 1; r--) {
+        ok = make_ring(c, l, apex_pos, (double)r / (rings + 1), inner) &&
+             cf_ladder(c, outer, inner, l->n, l->closed);
+        uint32_t *t = outer;
+        outer = inner;
+        inner = t;
+    }
+    ok = ok && fan_row(c, outer, l->n, l->closed, apex);
+    free(rows);
+    return ok;
+}
+
+bool cf_fan_centroid(cf_ctx *c, const cf_loop *l)
+{
+    double p[3] = {0, 0, 0};
+    for (size_t i = 0; i < l->n; i++)
+        for (int k = 0; k < 3; k++)
+            p[k] += c->m->pos[3 * (size_t)l->v[i] + k] / (double)l->n;
+    cf_project(c, p, cf_loop_mean_edge(c, l));
+    uint32_t v = cf_add_vertex(c, p, false);
+    if (v == CF_NONE)
+        return false;
+    c->st->vertices_added++;
+    c->st->loops_fallback++;
+    return fan_row(c, l->v, l->n, l->closed, v);
+}

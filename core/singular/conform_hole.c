@@ -1,0 +1,370 @@
+/* conform_hole.c — cutting a hole into the mesh around a piece of the locus and finding its
+ * rim: the triangles a predicate selects are marked dead, the edges left with exactly one
+ * live triangle (that lost one) are the rim, chained into loops — one per cone of a node,
+ * one per side of each sheet along a double curve — and oriented against their live
+ * triangle so the refill continues each sheet's orientation.
+ *
+ *        live  ╲  ╱  live         rim edge a→b of a live triangle: the refill uses b→a
+ *      ─────────●────────
+ *        dead  (hole)  dead
+ */
+#include "core/singular/conform_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct rim_edge {
+    uint32_t from, to;   /* the direction new triangles traverse */
+    uint32_t lo, hi;     /* sorted ends (for removing duplicates) */
+} rim_edge;
+
+void cf_loops_free(cf_loops *ls)
+{
+    for (size_t i = 0; i < ls->n; i++)
+        free(ls->l[i].v);
+    free(ls->l);
+    memset(ls, 0, sizeof *ls);
+}
+
+static double dot3(const double *a, const double *b)
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+double cf_point_triangle_d2(const double q[3], const double a[3], const double b[3],
+                            const double c[3])
+{
+    /* closest point by Voronoi regions of the triangle (vertices, edges, face) */
+    double ab[3], ac[3], ap[3], r[3];
+    for (int k = 0; k < 3; k++) {
+        ab[k] = b[k] - a[k];
+        ac[k] = c[k] - a[k];
+        ap[k] = q[k] - a[k];
+    }
+    double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+    double bp[3], cp[3];
+    for (int k = 0; k < 3; k++) {
+        bp[k] = q[k] - b[k];
+        cp[k] = q[k] - c[k];
+    }
+    double d3 = dot3(ab, bp), d4 = dot3(ac, bp), d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+    double u = 0, v = 0; /* r = a + u ab + v ac */
+    double va = d3 * d6 - d5 * d4, vb = d5 * d2 - d1 * d6, vc = d1 * d4 - d3 * d2;
+    if (d1 <= 0 && d2 <= 0) {
+        u = v = 0;
+    } else if (d3 >= 0 && d4 <= d3) {
+        u = 1;
+    } else if (d6 >= 0 && d5 <= d6) {
+        v = 1;
+    } else if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+        u = d1 / (d1 - d3);
+    } else if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+        v = d2 / (d2 - d6);
+    } else if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
+        double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        u = 1 - w;
+        v = w;
+    } else {
+        double den = va + vb + vc;
+        if (!(fabs(den) > 0))
+            return fmin(dot3(ap, ap), fmin(dot3(bp, bp), dot3(cp, cp)));
+        u = vb / den;
+        v = vc / den;
+    }
+    for (int k = 0; k < 3; k++)
+        r[k] = a[k] + u * ab[k] + v * ac[k] - q[k];
+    return dot3(r, r);
+}
+
+/* Live triangles containing both a and b, and the last one found. */
+static int live_on_edge(const cf_ctx *c, uint32_t a, uint32_t b, uint32_t *which)
+{
+    int n = 0;
+    for (uint32_t i = c->inc_start[a]; i < c->inc_start[a + 1]; i++) {
+        uint32_t t = c->inc_tri[i];
+        const uint32_t *v = c->m->tri + 3 * (size_t)t;
+        if (c->dead[t] || (v[0] != b && v[1] != b && v[2] != b))
+            continue;
+        n++;
+        *which = t;
+    }
+    return n;
+}
+
+static int cmp_rim(const void *pa, const void *pb)
+{
+    const rim_edge *a = pa, *b = pb;
+    if (a->lo != b->lo)
+        return a->lo < b->lo ? -1 : 1;
+    return a->hi < b->hi ? -1 : a->hi > b->hi;
+}
+
+/* The rim edges of the dead triangles, each once, directed for the refill. */
+static bool rim_edges(const cf_ctx *c, const uint32_t *rm, size_t nrm, rim_edge **out,
+                      size_t *nout)
+{
+    rim_edge *e = malloc((3 * nrm + 1) * sizeof *e);
+    if (!e)
+        return false;
+    size_t n = 0;
+    for (size_t i = 0; i < nrm; i++) {
+        const uint32_t *v = c->m->tri + 3 * (size_t)rm[i];
+        for (int k = 0; k < 3; k++) {
+            uint32_t a = v[k], b = v[(k + 1) % 3], t = 0;
+            if (live_on_edge(c, a, b, &t) != 1)
+                continue;
+            const uint32_t *w = c->m->tri + 3 * (size_t)t;
+            bool ab = (w[0] == a && w[1] == b) || (w[1] == a && w[2] == b) ||
+                      (w[2] == a && w[0] == b);
+            e[n].from = ab ? b : a;
+            e[n].to = ab ? a : b;
+            e[n].lo = a < b ? a : b;
+            e[n].hi = a < b ? b : a;
+            n++;
+        }
+    }
+    qsort(e, n, sizeof *e, cmp_rim);
+    size_t u = 0;
+    for (size_t i = 0; i < n; i++)
+        if (u == 0 || cmp_rim(&e[u - 1], &e[i]) != 0)
+            e[u++] = e[i];
+    *out = e;
+    *nout = u;
+    return true;
+}
+
+/* Rim edges by vertex: for each end vertex, the edges at it (CSR over a sorted key list). */
+typedef struct rim_adj {
+    uint32_t *vert;   /* sorted distinct vertices */
+    size_t nvert;
+    uint32_t *start;  /* nvert + 1 */
+    uint32_t *edge;
+} rim_adj;
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+static bool rim_adj_build(const rim_edge *e, size_t n, rim_adj *ad)
+{
+    uint64_t *key = malloc((2 * n + 1) * sizeof *key);
+    ad->vert = malloc((2 * n + 1) * sizeof *ad->vert);
+    ad->start = malloc((2 * n + 2) * sizeof *ad->start);
+    ad->edge = malloc((2 * n + 1) * sizeof *ad->edge);
+    if (!key || !ad->vert || !ad->start || !ad->edge) {
+        free(key);
+        return false;
+    }
+    for (size_t i = 0; i < n; i++) {
+        key[2 * i] = (uint64_t)e[i].from << 32 | i;
+        key[2 * i + 1] = (uint64_t)e[i].to << 32 | i;
+    }
+    qsort(key, 2 * n, sizeof *key, cmp_u64);
+    ad->nvert = 0;
+    for (size_t i = 0; i < 2 * n; i++) {
+        uint32_t v = (uint32_t)(key[i] >> 32);
+        if (ad->nvert == 0 || ad->vert[ad->nvert - 1] != v) {
+            ad->vert[ad->nvert] = v;
+            ad->start[ad->nvert++] = (uint32_t)i;
+        }
+        ad->edge[i] = (uint32_t)key[i];
+    }
+    ad->start[ad->nvert] = (uint32_t)(2 * n);
+    free(key);
+    return true;
+}
+
+static void rim_adj_free(rim_adj *ad)
+{
+    free(ad->vert);
+    free(ad->start);
+    free(ad->edge);
+}
+
+static size_t rim_slot(const rim_adj *ad, uint32_t v)
+{
+    size_t lo = 0, hi = ad->nvert;
+    while (lo < hi) {
+        size_t mid = (lo + hi) / 2;
+        if (ad->vert[mid] < v)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* The next unused rim edge at vertex v: one leaving v in the refill direction if any. */
+static long next_edge(const rim_edge *e, const rim_adj *ad, const uint8_t *used, uint32_t v)
+{
+    size_t s = rim_slot(ad, v);
+    long any = -1;
+    for (uint32_t i = ad->start[s]; i < ad->start[s + 1]; i++) {
+        uint32_t k = ad->edge[i];
+        if (used[k])
+            continue;
+        if (e[k].from == v)
+            return k;
+        if (any < 0)
+            any = k;
+    }
+    return any;
+}
+
+static bool push_loop(cf_loops *ls, uint32_t *v, size_t n, bool closed)
+{
+    if (ls->n == ls->cap) {
+        size_t cap = ls->cap ? 2 * ls->cap : 8;
+        cf_loop *p = realloc(ls->l, cap * sizeof *p);
+        if (!p)
+            return false;
+        ls->l = p;
+        ls->cap = cap;
+    }
+    ls->l[ls->n++] = (cf_loop){v, n, closed};
+    return true;
+}
+
+/* Walks unused rim edges from v0 until stuck or back at v0; orients the chain by the
+ * majority of its edges' refill directions. */
+static bool walk(const rim_edge *e, size_t ne, const rim_adj *ad, uint8_t *used, uint32_t v0,
+                 cf_loops *ls)
+{
+    uint32_t *seq = malloc((ne + 2) * sizeof *seq);
+    if (!seq)
+        return false;
+    size_t n = 0;
+    long vote = 0;
+    uint32_t cur = v0;
+    seq[n++] = cur;
+    bool closed = false;
+    for (long k; (k = next_edge(e, ad, used, cur)) >= 0;) {
+        used[k] = 1;
+        vote += e[k].from == cur ? 1 : -1;
+        cur = e[k].from == cur ? e[k].to : e[k].from;
+        if (cur == v0) {
+            closed = true;
+            break;
+        }
+        seq[n++] = cur;
+    }
+    if (vote < 0)
+        for (size_t i = 0; i < n / 2; i++) {
+            uint32_t t = seq[i];
+            seq[i] = seq[n - 1 - i];
+            seq[n - 1 - i] = t;
+        }
+    if (n < 2 || (closed && n < 3)) {
+        free(seq); /* a lone edge or a digon: nothing to refill */
+        return true;
+    }
+    if (!push_loop(ls, seq, n, closed)) {
+        free(seq);
+        return false;
+    }
+    return true;
+}
+
+static bool chain_rim(const rim_edge *e, size_t ne, cf_loops *ls)
+{
+    rim_adj ad = {0};
+    uint8_t *used = calloc(ne + 1, 1);
+    bool ok = used && rim_adj_build(e, ne, &ad);
+    /* open chains first, from the vertices with an odd number of rim edges (the box) */
+    for (size_t s = 0; ok && s < ad.nvert; s++)
+        if ((ad.start[s + 1] - ad.start[s]) % 2 == 1)
+            while (ok && next_edge(e, &ad, used, ad.vert[s]) >= 0)
+                ok = walk(e, ne, &ad, used, ad.vert[s], ls);
+    for (size_t k = 0; ok && k < ne; k++)
+        if (!used[k])
+            ok = walk(e, ne, &ad, used, e[k].from, ls);
+    rim_adj_free(&ad);
+    free(used);
+    return ok;
+}
+
+bool cf_cut_hole(cf_ctx *c, cf_tri_pred near, const void *arg, cf_loops *out,
+                 uint32_t **removed, size_t *nremoved)
+{
+    memset(out, 0, sizeof *out);
+    *removed = NULL;
+    *nremoved = 0;
+    size_t n = 0, cap = 0;
+    uint32_t *rm = NULL;
+    for (size_t t = 0; t < c->m->ntris; t++) {
+        if (c->dead[t] || !near(c, (uint32_t)t, arg))
+            continue;
+        if (n == cap) {
+            cap = cap ? 2 * cap : 256;
+            uint32_t *p = realloc(rm, cap * sizeof *p);
+            if (!p) {
+                free(rm);
+                return false;
+            }
+            rm = p;
+        }
+        rm[n++] = (uint32_t)t;
+    }
+    for (size_t i = 0; i < n; i++)
+        c->dead[rm[i]] = 1;
+    rim_edge *e = NULL;
+    size_t ne = 0;
+    if (!rim_edges(c, rm, n, &e, &ne) || !chain_rim(e, ne, out)) {
+        free(e);
+        cf_loops_free(out);
+        for (size_t i = 0; i < n; i++)
+            c->dead[rm[i]] = 0;
+        free(rm);
+        return false;
+    }
+    free(e);
+    *removed = rm;
+    *nremoved = n;
+    return true;
+}
+
+void cf_undo(cf_ctx *c, const uint32_t *removed, size_t nremoved, size_t ntris, size_t nverts)
+{
+    for (size_t i = 0; i < nremoved; i++)
+        c->dead[removed[i]] = 0;
+    c->m->ntris = ntris;
+    c->m->nverts = nverts;
+}
+
+/* Samples of f per side along a rim vertex's normal when looking for another sheet. */
+#define CLEAR_SAMPLES 8
+
+/* True when f changes sign along p + t n for t in (0, len] (beyond the first sample). */
+static bool sheet_along(cf_ctx *c, const double p[3], const double n[3], double len)
+{
+    double prev = 0;
+    for (int k = 1; k <= CLEAR_SAMPLES; k++) {
+        double t = len * k / CLEAR_SAMPLES;
+        double v = ism_eval_point(c->f, c->ws, p[0] + t * n[0], p[1] + t * n[1], p[2] + t * n[2]);
+        if (k > 1 && ((v > 0 && prev < 0) || (v < 0 && prev > 0)))
+            return true;
+        if (v != 0)
+            prev = v;
+    }
+    return false;
+}
+
+bool cf_rim_clear(cf_ctx *c, const cf_loops *ls, double clearance)
+{
+    for (size_t i = 0; i < ls->n; i++)
+        for (size_t j = 0; j < ls->l[i].n; j++) {
+            const double *p = c->m->pos + 3 * (size_t)ls->l[i].v[j];
+            double g[3];
+            ism_eval_gradient(c->f, c->ws, p[0], p[1], p[2], g);
+            double gl = sqrt(dot3(g, g));
+            if (!(gl > 0) || !isfinite(gl))
+                return false; /* the rim runs through a singular point */
+            double n[3] = {g[0] / gl, g[1] / gl, g[2] / gl}, m[3] = {-n[0], -n[1], -n[2]};
+            if (sheet_along(c, p, n, clearance) || sheet_along(c, p, m, clearance))
+                return false;
+        }
+    return true;
+}

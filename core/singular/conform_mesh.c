@@ -1,0 +1,201 @@
+/* conform_mesh.c — the mesh bookkeeping of the conformance pass: per-triangle dead marks,
+ * the vertex→live-triangle incidence rebuilt before each surgery, appending vertices and
+ * triangles, and the final compaction (dead triangles and orphaned vertices dropped, normals
+ * of the vertices where ∇f vanishes taken from their triangles as the welder does). */
+#include "core/singular/conform_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static bool grow(void **v, size_t *cap, size_t need, size_t sz)
+{
+    if (need <= *cap)
+        return true;
+    size_t c = *cap ? *cap : 64;
+    while (c < need)
+        c *= 2;
+    void *p = realloc(*v, c * sz);
+    if (!p)
+        return false;
+    memset((char *)p + *cap * sz, 0, (c - *cap) * sz);
+    *v = p;
+    *cap = c;
+    return true;
+}
+
+bool cf_ctx_prepare(cf_ctx *c)
+{
+    const ism_mesh *m = c->m;
+    if (!grow((void **)&c->dead, &c->cap_dead, m->ntris, 1) ||
+        !grow((void **)&c->singular, &c->cap_singular, m->nverts, 1) ||
+        !grow((void **)&c->inc_start, &c->cap_inc_start, m->nverts + 1, sizeof(uint32_t)) ||
+        !grow((void **)&c->inc_tri, &c->cap_inc_tri, 3 * m->ntris + 1, sizeof(uint32_t)))
+        return false;
+    uint32_t *st = c->inc_start;
+    memset(st, 0, (m->nverts + 1) * sizeof *st);
+    for (size_t t = 0; t < m->ntris; t++)
+        if (!c->dead[t])
+            for (int k = 0; k < 3; k++)
+                st[m->tri[3 * t + k] + 1]++;
+    for (size_t v = 0; v < m->nverts; v++)
+        st[v + 1] += st[v];
+    for (size_t t = 0; t < m->ntris; t++)
+        if (!c->dead[t])
+            for (int k = 0; k < 3; k++)
+                c->inc_tri[st[m->tri[3 * t + k]]++] = (uint32_t)t;
+    for (size_t v = m->nverts; v > 0; v--)
+        st[v] = st[v - 1];
+    st[0] = 0;
+    c->inc_nverts = m->nverts;
+    return true;
+}
+
+void cf_ctx_free(cf_ctx *c)
+{
+    free(c->dead);
+    free(c->singular);
+    free(c->inc_start);
+    free(c->inc_tri);
+}
+
+bool cf_add_triangle(cf_ctx *c, uint32_t a, uint32_t b, uint32_t d)
+{
+    if (a == b || b == d || a == d)
+        return true; /* a ring that collapsed onto its neighbour: nothing to fill */
+    if (!grow((void **)&c->dead, &c->cap_dead, c->m->ntris + 1, 1) ||
+        !ism_mesh_add_triangle(c->m, a, b, d))
+        return false;
+    c->dead[c->m->ntris - 1] = 0;
+    return true;
+}
+
+uint32_t cf_add_vertex(cf_ctx *c, const double p[3], bool singular)
+{
+    if (!grow((void **)&c->singular, &c->cap_singular, c->m->nverts + 1, 1))
+        return CF_NONE;
+    float n[3] = {0, 0, 0};
+    if (!singular) {
+        double g[3];
+        ism_eval_gradient(c->f, c->ws, p[0], p[1], p[2], g);
+        double len = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        if (len > 0 && isfinite(len))
+            for (int k = 0; k < 3; k++)
+                n[k] = (float)(g[k] / len);
+        else
+            singular = true;
+    }
+    uint32_t v = ism_mesh_add_vertex(c->m, p, n);
+    if (v != CF_NONE)
+        c->singular[v] = singular;
+    return v;
+}
+
+static double dist2(const double *a, const double *b)
+{
+    double d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = a[2] - b[2];
+    return d0 * d0 + d1 * d1 + d2 * d2;
+}
+
+double cf_vertex_longest_edge(const cf_ctx *c, uint32_t v)
+{
+    const ism_mesh *m = c->m;
+    double best = 0;
+    for (uint32_t i = c->inc_start[v]; i < c->inc_start[v + 1]; i++) {
+        const uint32_t *t = m->tri + 3 * (size_t)c->inc_tri[i];
+        for (int k = 0; k < 3; k++) {
+            double e = dist2(m->pos + 3 * (size_t)t[k], m->pos + 3 * (size_t)t[(k + 1) % 3]);
+            if (e > best)
+                best = e;
+        }
+    }
+    return sqrt(best);
+}
+
+double cf_longest_edge_near(const cf_ctx *c, const double p[3], double r)
+{
+    double best = 0;
+    for (size_t v = 0; v < c->inc_nverts; v++)
+        if (dist2(c->m->pos + 3 * v, p) <= r * r)
+            best = fmax(best, cf_vertex_longest_edge(c, (uint32_t)v));
+    return best;
+}
+
+/* Normal of a vertex where ∇f vanishes: the area-weighted mean of its triangles' normals. */
+static void singular_normals(cf_ctx *c)
+{
+    ism_mesh *m = c->m;
+    double *acc = calloc(m->nverts ? 3 * m->nverts : 1, sizeof *acc);
+    if (!acc)
+        return; /* normals stay 0: "no normal known" */
+    for (size_t t = 0; t < m->ntris; t++) {
+        const uint32_t *v = m->tri + 3 * t;
+        if (!c->singular[v[0]] && !c->singular[v[1]] && !c->singular[v[2]])
+            continue;
+        const double *a = m->pos + 3 * (size_t)v[0], *b = m->pos + 3 * (size_t)v[1],
+                     *d = m->pos + 3 * (size_t)v[2];
+        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+        double w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+        double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                       u[0] * w[1] - u[1] * w[0]};
+        for (int k = 0; k < 3; k++)
+            if (c->singular[v[k]])
+                for (int j = 0; j < 3; j++)
+                    acc[3 * (size_t)v[k] + j] += n[j];
+    }
+    for (size_t v = 0; v < m->nverts; v++) {
+        if (!c->singular[v])
+            continue;
+        double len = sqrt(dist2(acc + 3 * v, (const double[3]){0, 0, 0}));
+        for (int j = 0; j < 3; j++)
+            m->normal[3 * v + j] = len > 0 ? (float)(acc[3 * v + j] / len) : 0.0f;
+    }
+    free(acc);
+}
+
+bool cf_compact(cf_ctx *c)
+{
+    ism_mesh *m = c->m;
+    /* a vertex is kept when a live triangle or a segment uses it, or when no triangle
+     * used it before the pass either (the polygoniser's own isolated vertices) */
+    uint8_t *use = calloc(m->nverts ? m->nverts : 1, 1);
+    uint32_t *map = malloc((m->nverts ? m->nverts : 1) * sizeof *map);
+    if (!use || !map) {
+        free(use);
+        free(map);
+        return false;
+    }
+    for (size_t t = 0; t < m->ntris; t++)
+        for (int k = 0; k < 3; k++)
+            use[m->tri[3 * t + k]] |= c->dead[t] ? 1 : 2;
+    for (size_t s = 0; s < 2 * m->nsegs; s++)
+        use[m->seg[s]] |= 2;
+    size_t nt = 0;
+    for (size_t t = 0; t < m->ntris; t++)
+        if (!c->dead[t])
+            memmove(m->tri + 3 * nt++, m->tri + 3 * t, 3 * sizeof *m->tri);
+    m->ntris = nt;
+    memset(c->dead, 0, nt);
+    size_t nv = 0;
+    for (size_t v = 0; v < m->nverts; v++) {
+        if (use[v] == 1) {
+            map[v] = CF_NONE;
+            continue;
+        }
+        map[v] = (uint32_t)nv;
+        memmove(m->pos + 3 * nv, m->pos + 3 * v, 3 * sizeof *m->pos);
+        memmove(m->normal + 3 * nv, m->normal + 3 * v, 3 * sizeof *m->normal);
+        c->singular[nv] = c->singular[v];
+        nv++;
+    }
+    c->st->vertices_removed += m->nverts - nv;
+    m->nverts = nv;
+    for (size_t i = 0; i < 3 * m->ntris; i++)
+        m->tri[i] = map[m->tri[i]];
+    for (size_t i = 0; i < 2 * m->nsegs; i++)
+        m->seg[i] = map[m->seg[i]];
+    free(use);
+    free(map);
+    singular_normals(c);
+    return true;
+}

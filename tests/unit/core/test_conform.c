@@ -1,0 +1,412 @@
+/* test_conform.c — the conformance pass (core/singular/conform.h) on closed forms, each in a
+ * symmetric box and in boxes shifted off the octree lattice by 1e-3 and by 0.37 of a finest
+ * cell: a node becomes one vertex with two cones, two spheres touching one vertex with two
+ * cones, two spheres crossing one component whose only non-manifold edges lie on the circle
+ * (four triangles each) with χ = 2 + 2 − 0 = 4; nothing else non-manifold, and the refilled
+ * triangles no farther from f = 0 (at their centroids) than twice the rest of the mesh. The
+ * loci are built here from the closed forms (Kummer's nodes by Newton on ∇f from a grid). */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "poly_fixture.h"
+#include "core/analysis/analysis.h"
+#include "core/eval/eval.h"
+#include "core/singular/conform.h"
+
+/* The refilled strip is at most this many finest cells from the locus (the cut's radius is
+ * 2.5 cells, or 1.25 × the longest edge there): centroids this close are "near". */
+#define NEAR_CELLS 4.0
+
+/* Box shifts: none, 1e-3, and 0.37 of a finest cell, along an oblique direction. */
+static const double shift_dir[3] = {1.0, 0.61, -0.83};
+
+static void shifted_box(const double base[6], double s, double box[6])
+{
+    for (int k = 0; k < 3; k++) {
+        box[k] = base[k] + s * shift_dir[k];
+        box[k + 3] = base[k + 3] + s * shift_dir[k];
+    }
+}
+
+static double shift_amount(int which, const double base[6], int dmax)
+{
+    return which == 0 ? 0 : which == 1 ? 1e-3 : 0.37 * pf_cell(base, dmax);
+}
+
+static void add_point(ism_locus *l, double x, double y, double z, int type)
+{
+    ism_sing_point p = {.p = {x, y, z}, .radius = 1e-12, .type = type, .certified = true,
+                        .cones = -1};
+    cr_assert(ism_locus_add_point(l, &p));
+}
+
+typedef double (*locus_dist_fn)(const double p[3], const void *arg);
+
+typedef struct run_result {
+    ism_analysis a;
+    ism_conform_stats st;
+    double max_near, max_far; /* |f| / |∇f| at triangle centroids */
+} run_result;
+
+/* Centroid distances near the locus (within NEAR_CELLS) and elsewhere. */
+static void centroid_distances(const ism_mesh *m, const ism_tape *t, double cell,
+                               locus_dist_fn dist, const void *arg, run_result *r)
+{
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    r->max_near = r->max_far = 0;
+    for (size_t i = 0; i < m->ntris; i++) {
+        double c[3] = {0, 0, 0}, g[3];
+        for (int k = 0; k < 3; k++)
+            for (int j = 0; j < 3; j++)
+                c[j] += m->pos[3 * (size_t)m->tri[3 * i + k] + j] / 3;
+        double fv = ism_eval_gradient(t, ws, c[0], c[1], c[2], g);
+        double gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        if (!(gl > 0))
+            continue;
+        double d = fabs(fv) / gl;
+        if (dist(c, arg) < NEAR_CELLS * cell)
+            r->max_near = fmax(r->max_near, d);
+        else
+            r->max_far = fmax(r->max_far, d);
+    }
+    ism_eval_ws_free(ws);
+}
+
+/* Polygonises t in box to dmax, conforms to l, analyses the result. */
+static void run(const ism_tape *t, const double box[6], int dmax, ism_locus *l,
+                locus_dist_fn dist, const void *arg, ism_mesh *m, run_result *r)
+{
+    ism_poly_stats ps;
+    pf_run(t, box, 3, dmax, 1, m, &ps);
+    ism_locus_options o;
+    ism_locus_options_default(&o);
+    memcpy(o.box, box, sizeof o.box);
+    o.max_depth = dmax;
+    ism_error err;
+    cr_assert(ism_conform_mesh(t, &o, l, m, &r->st, &err), "conform: %s", err.message);
+    ism_analysis_options ao;
+    ism_analysis_options_default(&ao);
+    ao.curvature = ao.accuracy = false;
+    ao.threads = 1;
+    cr_assert(ism_analyse(m, t, &ao, &r->a, &err), "analyse: %s", err.message);
+    centroid_distances(m, t, pf_cell(box, dmax), dist, arg, r);
+}
+
+static uint32_t vertex_at(const ism_mesh *m, const double p[3])
+{
+    for (size_t v = 0; v < m->nverts; v++)
+        if (m->pos[3 * v] == p[0] && m->pos[3 * v + 1] == p[1] && m->pos[3 * v + 2] == p[2])
+            return (uint32_t)v;
+    return UINT32_MAX;
+}
+
+/* Every point of l is one vertex with `cones` cones of faces; no other non-manifold
+ * element; one vertex-component. */
+static void expect_points(const ism_mesh *m, const ism_locus *l, const run_result *r,
+                          int cones, const char *what)
+{
+    cr_expect_eq(r->st.points_conformed, l->npoints, "%s: %zu of %zu points conformed", what,
+                 r->st.points_conformed, l->npoints);
+    for (size_t i = 0; i < l->npoints; i++) {
+        uint32_t v = vertex_at(m, l->points[i].p);
+        cr_expect_neq(v, UINT32_MAX, "%s: no vertex at point %zu", what, i);
+        if (v == UINT32_MAX)
+            continue;
+        cr_expect_eq(r->a.vertex_class[v], ISM_VERTEX_NONMANIFOLD_POINT, "%s: point %zu class %d",
+                     what, i, r->a.vertex_class[v]);
+        cr_expect_eq(pf_vertex_cones(m, v), (size_t)cones, "%s: point %zu has %zu cones", what,
+                     i, pf_vertex_cones(m, v));
+        cr_expect_eq(l->points[i].cones, cones, "%s: point %zu reports %d cones", what, i,
+                     l->points[i].cones);
+    }
+    cr_expect_eq(r->a.class_count[ISM_VERTEX_NONMANIFOLD_POINT], l->npoints,
+                 "%s: %zu non-manifold points, expected %zu", what,
+                 r->a.class_count[ISM_VERTEX_NONMANIFOLD_POINT], l->npoints);
+    cr_expect_eq(r->a.nonmanifold_edges, 0, "%s: %zu non-manifold edges", what,
+                 r->a.nonmanifold_edges);
+    cr_expect_eq(r->a.vertex_components, 1, "%s: %zu vertex-components", what,
+                 r->a.vertex_components);
+    cr_expect_eq(r->st.artefact_edges + r->st.artefact_vertices, 0, "%s: artefacts %zu + %zu",
+                 what, r->st.artefact_edges, r->st.artefact_vertices);
+    cr_expect_eq(r->st.points_short_cones, 0, "%s: %zu nodes short of cones", what,
+                 r->st.points_short_cones);
+}
+
+static void expect_accuracy(const run_result *r, const char *what)
+{
+    cr_expect_leq(r->max_near, 2 * r->max_far, "%s: centroids near the locus %g off f = 0, "
+                  "elsewhere %g", what, r->max_near, r->max_far);
+}
+
+static double dist_to_points(const double p[3], const void *arg)
+{
+    const ism_locus *l = arg;
+    double best = INFINITY;
+    for (size_t i = 0; i < l->npoints; i++) {
+        const double *q = l->points[i].p;
+        best = fmin(best, sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                               (p[2] - q[2]) * (p[2] - q[2])));
+    }
+    return best;
+}
+
+/* ---- a tilted cone ---- */
+
+Test(conform, tilted_cone_one_vertex_two_cones)
+{
+    const pf_surface s = {"x^2 + 2*y^2 - 3*z^2 + 0.5*x*z", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double base[6] = {-1, -1, -1, 1, 1, 1};
+    int dmax = 6 - pf_quick();
+    for (int w = 0; w < 3; w++) {
+        double box[6];
+        shifted_box(base, shift_amount(w, base, dmax), box);
+        ism_locus l;
+        ism_locus_init(&l);
+        add_point(&l, 0, 0, 0, ISM_SING_NODE);
+        ism_mesh m;
+        run_result r;
+        run(t, box, dmax, &l, dist_to_points, &l, &m, &r);
+        char what[64];
+        snprintf(what, sizeof what, "tilted cone, shift %d", w);
+        expect_points(&m, &l, &r, 2, what);
+        expect_accuracy(&r, what);
+        ism_analysis_free(&r.a);
+        ism_mesh_free(&m);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
+
+/* The cone of the issue: 0 non-manifold vertices and 2 components before the pass. */
+Test(conform, upright_cone_island_nappe_joined)
+{
+    const pf_surface s = {"x^2 + y^2 - z^2", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double box[6] = {-1.0013, -0.9987, -1.0007, 0.9987, 1.0013, 0.9993};
+    ism_locus l;
+    ism_locus_init(&l);
+    add_point(&l, 0, 0, 0, ISM_SING_NODE);
+    ism_mesh m;
+    run_result r;
+    run(t, box, 7 - pf_quick(), &l, dist_to_points, &l, &m, &r);
+    expect_points(&m, &l, &r, 2, "upright cone");
+    cr_expect_eq(r.a.components, 2, "the two nappes: %zu edge-components", r.a.components);
+    expect_accuracy(&r, "upright cone");
+    ism_analysis_free(&r.a);
+    ism_mesh_free(&m);
+    ism_locus_free(&l);
+    ism_tape_free(t);
+}
+
+/* ---- Kummer's quartic with 4 real nodes ---- */
+
+static const ism_let kummer_lets[] = {
+    {"lambda", "(3*mu2 - 1)/(3 - mu2)"}, {"p", "w - z - sqrt(2)*x"}, {"q", "w - z + sqrt(2)*x"},
+    {"r", "w + z + sqrt(2)*y"}, {"s", "w + z - sqrt(2)*y"}};
+static const ism_param kummer4[] = {{"mu2", 0.6667}, {"w", 1}};
+
+/* Solves H d = -g (3x3, Cramer); false when H is singular. */
+static bool newton_step(const double g[3], const double h[6], double d[3])
+{
+    double a = h[0], b = h[1], c = h[2], e = h[3], f = h[4], i = h[5];
+    double det = a * (e * i - f * f) - b * (b * i - f * c) + c * (b * f - e * c);
+    if (!(fabs(det) > 1e-300))
+        return false;
+    double inv[9] = {e * i - f * f, c * f - b * i, b * f - c * e, c * f - b * i, a * i - c * c,
+                     b * c - a * f, b * f - c * e, b * c - a * f, a * e - b * b};
+    for (int r = 0; r < 3; r++)
+        d[r] = -(inv[3 * r] * g[0] + inv[3 * r + 1] * g[1] + inv[3 * r + 2] * g[2]) / det;
+    return true;
+}
+
+/* Singular points of t = 0 in [-2, 2]^3: Newton on ∇f = 0 (the Hessian as Jacobian) from a
+ * grid of starts, kept where f and ∇f vanish. */
+static void find_nodes(const ism_tape *t, ism_locus *l)
+{
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    const int n = 9;
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++)
+            for (int k = 0; k < n; k++) {
+                double p[3] = {-2 + 4.0 * i / (n - 1), -2 + 4.0 * j / (n - 1),
+                               -2 + 4.0 * k / (n - 1)};
+                double g[3], h[6], d[3] = {1, 1, 1}, fv = 0;
+                for (int it = 0; it < 60 && fabs(d[0]) + fabs(d[1]) + fabs(d[2]) > 1e-15; it++) {
+                    ism_eval_hessian(t, ws, p[0], p[1], p[2], g, h);
+                    if (!newton_step(g, h, d))
+                        break;
+                    for (int m = 0; m < 3; m++)
+                        p[m] += d[m];
+                }
+                fv = ism_eval_hessian(t, ws, p[0], p[1], p[2], g, h);
+                double gl = fabs(g[0]) + fabs(g[1]) + fabs(g[2]);
+                if (!(fabs(fv) < 1e-12 && gl < 1e-10) || fabs(p[0]) > 2.5 || fabs(p[1]) > 2.5 ||
+                    fabs(p[2]) > 2.5 || dist_to_points(p, l) < 1e-6)
+                    continue;
+                add_point(l, p[0], p[1], p[2], ISM_SING_NODE);
+            }
+    ism_eval_ws_free(ws);
+}
+
+Test(conform, kummer_four_nodes)
+{
+    const pf_surface s = {"(x^2 + y^2 + z^2 - mu2)^2 - lambda*p*q*r*s", kummer4, 2, kummer_lets, 5};
+    ism_tape *t = pf_compile(&s);
+    ism_locus nodes;
+    ism_locus_init(&nodes);
+    find_nodes(t, &nodes);
+    cr_assert_eq(nodes.npoints, 4, "Newton found %zu nodes, the surface has 4", nodes.npoints);
+    const double base[6] = {-3, -3, -3, 3, 3, 3};
+    for (int dmax = 6 - pf_quick(); dmax <= 7 - pf_quick(); dmax++)
+        for (int w = 0; w < 3; w++) {
+            double box[6];
+            shifted_box(base, shift_amount(w, base, dmax), box);
+            ism_locus l;
+            ism_locus_init(&l);
+            for (size_t i = 0; i < nodes.npoints; i++)
+                cr_assert(ism_locus_add_point(&l, &nodes.points[i]));
+            ism_mesh m;
+            run_result r;
+            run(t, box, dmax, &l, dist_to_points, &l, &m, &r);
+            char what[64];
+            snprintf(what, sizeof what, "kummer-4 depth %d shift %d", dmax, w);
+            expect_points(&m, &l, &r, 2, what);
+            expect_accuracy(&r, what);
+            ism_analysis_free(&r.a);
+            ism_mesh_free(&m);
+            ism_locus_free(&l);
+        }
+    ism_locus_free(&nodes);
+    ism_tape_free(t);
+}
+
+/* ---- two unit spheres touching at the origin ---- */
+
+Test(conform, touching_spheres_one_vertex_two_cones)
+{
+    const pf_surface s = {"((x-1)^2 + y^2 + z^2 - 1)*((x+1)^2 + y^2 + z^2 - 1)", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double base[6] = {-2.2, -1.2, -1.2, 2.2, 1.2, 1.2};
+    int dmax = 6 - pf_quick();
+    for (int w = 0; w < 3; w++) {
+        double box[6];
+        shifted_box(base, shift_amount(w, base, dmax), box);
+        ism_locus l;
+        ism_locus_init(&l);
+        add_point(&l, 0, 0, 0, ISM_SING_DEGENERATE);
+        ism_mesh m;
+        run_result r;
+        run(t, box, dmax, &l, dist_to_points, &l, &m, &r);
+        char what[64];
+        snprintf(what, sizeof what, "touching spheres, shift %d", w);
+        expect_points(&m, &l, &r, 2, what);
+        /* two spheres sharing one point: χ = 2 + 2 − 1 */
+        cr_expect_eq(r.a.euler, 3, "%s: χ = %ld, expected 3", what, r.a.euler);
+        cr_expect_eq(r.a.boundary_edges, 0, "%s: %zu boundary edges", what, r.a.boundary_edges);
+        expect_accuracy(&r, what);
+        ism_analysis_free(&r.a);
+        ism_mesh_free(&m);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
+
+/* ---- two unit spheres at x = ±1/2 crossing in the circle x = 0, r = √3/2 ---- */
+
+#define CIRCLE_R 0.86602540378443864676 /* sqrt(0.75) */
+#define CIRCLE_POINTS 128
+
+static double dist_to_circle(const double p[3], const void *arg)
+{
+    (void)arg;
+    double rho = sqrt(p[1] * p[1] + p[2] * p[2]) - CIRCLE_R;
+    return sqrt(p[0] * p[0] + rho * rho);
+}
+
+static int cmp_edge(const void *a, const void *b)
+{
+    const uint64_t *x = a, *y = b;
+    return *x < *y ? -1 : *x > *y;
+}
+
+/* Edges with more than two triangles: how many, how many with exactly four, and the largest
+ * distance of their vertices from the circle. */
+static void nm_edges_on_circle(const ism_mesh *m, size_t *n, size_t *four, double *far)
+{
+    uint64_t *e = malloc(3 * m->ntris * sizeof *e);
+    cr_assert(e);
+    for (size_t t = 0; t < m->ntris; t++)
+        for (int k = 0; k < 3; k++) {
+            uint64_t a = m->tri[3 * t + k], b = m->tri[3 * t + (k + 1) % 3];
+            e[3 * t + k] = a < b ? a << 32 | b : b << 32 | a;
+        }
+    qsort(e, 3 * m->ntris, sizeof *e, cmp_edge);
+    *n = *four = 0;
+    *far = 0;
+    for (size_t i = 0, j; i < 3 * m->ntris; i = j) {
+        for (j = i; j < 3 * m->ntris && e[j] == e[i]; j++)
+            ;
+        if (j - i <= 2)
+            continue;
+        (*n)++;
+        *four += j - i == 4;
+        uint32_t v[2] = {(uint32_t)(e[i] >> 32), (uint32_t)e[i]};
+        for (int k = 0; k < 2; k++)
+            *far = fmax(*far, dist_to_circle(m->pos + 3 * (size_t)v[k], NULL));
+    }
+    free(e);
+}
+
+Test(conform, crossing_spheres_zipped_along_the_circle)
+{
+    const pf_surface s = {"((x-0.5)^2 + y^2 + z^2 - 1)*((x+0.5)^2 + y^2 + z^2 - 1)", NULL, 0,
+                          NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double base[6] = {-1.7, -1.2, -1.2, 1.7, 1.2, 1.2};
+    int dmax = 6 - pf_quick();
+    for (int w = 0; w < 3; w++) {
+        double box[6];
+        shifted_box(base, shift_amount(w, base, dmax), box);
+        ism_locus l;
+        ism_locus_init(&l);
+        ism_sing_curve c = {.kind = ISM_CURVE_DOUBLE, .closed = true, .n = CIRCLE_POINTS,
+                            .end_type = {ISM_END_BOX, ISM_END_BOX}, .end_point = {-1, -1}};
+        cr_assert(c.xyz = malloc(3 * CIRCLE_POINTS * sizeof *c.xyz));
+        for (int i = 0; i < CIRCLE_POINTS; i++) {
+            double a = 2 * M_PI * i / CIRCLE_POINTS;
+            c.xyz[3 * i] = 0;
+            c.xyz[3 * i + 1] = CIRCLE_R * cos(a);
+            c.xyz[3 * i + 2] = CIRCLE_R * sin(a);
+        }
+        cr_assert(ism_locus_add_curve(&l, &c));
+        ism_mesh m;
+        run_result r;
+        run(t, box, dmax, &l, dist_to_circle, NULL, &m, &r);
+        char what[64];
+        snprintf(what, sizeof what, "crossing spheres, shift %d", w);
+        size_t n, four;
+        double far;
+        nm_edges_on_circle(&m, &n, &four, &far);
+        cr_expect_eq(r.st.curves_conformed, 1, "%s: curve not conformed", what);
+        cr_expect_eq(n, CIRCLE_POINTS, "%s: %zu non-manifold edges, expected the circle's %d",
+                     what, n, CIRCLE_POINTS);
+        cr_expect_eq(four, n, "%s: %zu of %zu non-manifold edges have 4 triangles", what, four, n);
+        cr_expect_leq(far, 1e-9, "%s: a non-manifold edge's vertex %g from the circle", what, far);
+        cr_expect_eq(r.a.components, 1, "%s: %zu components", what, r.a.components);
+        /* χ(S1 ∪ S2) = χ(S1) + χ(S2) − χ(circle) = 2 + 2 − 0 */
+        cr_expect_eq(r.a.euler, 4, "%s: χ = %ld, expected 4", what, r.a.euler);
+        cr_expect_eq(r.a.boundary_edges, 0, "%s: %zu boundary edges", what, r.a.boundary_edges);
+        cr_expect_eq(r.a.class_count[ISM_VERTEX_NONMANIFOLD_POINT], 0, "%s: %zu cone points",
+                     what, r.a.class_count[ISM_VERTEX_NONMANIFOLD_POINT]);
+        cr_expect_eq(r.st.artefact_edges + r.st.artefact_vertices, 0, "%s: artefacts %zu + %zu",
+                     what, r.st.artefact_edges, r.st.artefact_vertices);
+        expect_accuracy(&r, what);
+        ism_analysis_free(&r.a);
+        ism_mesh_free(&m);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
