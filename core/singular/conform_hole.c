@@ -368,3 +368,25 @@ bool cf_rim_clear(cf_ctx *c, const cf_loops *ls, double clearance)
         }
     return true;
 }
+
+/* The rim must lie where no other sheet comes within this many cells along its normals
+ * (two spheres touching stay closer than a cell out to about √(cell × radius)); until then
+ * the cut grows by GROW, at most MAX_GROW times. */
+#define CLEAR_CELLS 1.5
+#define GROW 1.4
+#define MAX_GROW 6
+
+bool cf_cut_clean(cf_ctx *c, cf_tri_pred pred, const void *arg, double *radius, cf_loops *ls,
+                  uint32_t **removed, size_t *nremoved)
+{
+    for (int k = 0;; k++) {
+        if (!cf_cut_hole(c, pred, arg, ls, removed, nremoved))
+            return false;
+        if (k == MAX_GROW || ls->n == 0 || cf_rim_clear(c, ls, CLEAR_CELLS * c->cell))
+            return true;
+        cf_undo(c, *removed, *nremoved, c->m->ntris, c->m->nverts);
+        free(*removed);
+        cf_loops_free(ls);
+        *radius *= GROW;
+    }
+}

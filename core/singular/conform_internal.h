@@ -30,6 +30,23 @@ typedef struct cf_ctx {
     ism_conform_stats *st;
 } cf_ctx;
 
+/* Radius of the ball or tube cut around the locus, in finest cells: the polygoniser's
+ * confusion (digon loops, island caps in a neighbour cell, polygons crossing without a shared
+ * edge) stays in the cells that hold the singularity and their neighbours, within about
+ * 2√3 cells; a triangle is cut when any part of it comes this close. */
+#define CF_RHO_CELLS 2.5
+/* ... and at least this many times the longest edge of the triangles there, where the
+ * octree did not reach its finest depth. */
+#define CF_RHO_EDGES 1.25
+
+/* One run of the pass: the context, the locus and the mesh vertex given to each point. */
+typedef struct cf_run {
+    cf_ctx c;
+    ism_locus *l;
+    const ism_locus_options *o;
+    uint32_t *point_vertex; /* per locus point: its mesh vertex, or CF_NONE */
+} cf_run;
+
 /* A chain of hole-boundary vertices, oriented so that new triangles traverse v[i] → v[i+1]
  * (opposite to the kept triangle on that edge). closed: v[n-1] → v[0] is an edge too. */
 typedef struct cf_loop {
@@ -79,6 +96,10 @@ bool cf_compact(cf_ctx *c);
 typedef bool (*cf_tri_pred)(const cf_ctx *c, uint32_t t, const void *arg);
 bool cf_cut_hole(cf_ctx *c, cf_tri_pred near, const void *arg, cf_loops *out,
                  uint32_t **removed, size_t *nremoved);
+/* cf_cut_hole, grown (*radius, which pred reads through arg, times a factor) until the rim
+ * is clear of other sheets (cf_rim_clear), a bounded number of times. */
+bool cf_cut_clean(cf_ctx *c, cf_tri_pred pred, const void *arg, double *radius, cf_loops *ls,
+                  uint32_t **removed, size_t *nremoved);
 /* Undoes a cut whose refilling failed: revives the triangles, drops everything appended
  * since (ntris, nverts). */
 void cf_undo(cf_ctx *c, const uint32_t *removed, size_t nremoved, size_t ntris, size_t nverts);
@@ -114,10 +135,19 @@ double cf_polyline_nearest(const cf_polyline *pl, const double q[3], double with
                            double foot[3]);
 
 /* ---- conform_zip.c: zipping loops to a curve ---- */
-/* Refills the hole loops of a double curve: each loop (through rings) is stitched to the
- * curve's vertices cv (one per polyline point) by arclength. */
-bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv, const cf_loops *ls,
-                  double rho);
+/* Refills the hole loops cut around a group of npl double curves (meeting at shared end
+ * points): each loop (through rings) is stitched to the vertices cv[k] (one per polyline
+ * point) of the curves it runs along, by arclength. */
+bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, size_t npl,
+                  const cf_loops *ls, double rho);
+
+/* ---- conform_point.c, conform_tube.c: the two surgeries ---- */
+/* Point i of the locus made one vertex shared by its cones. False only when out of memory
+ * (the mesh is then as before). */
+bool cf_conform_point(cf_run *r, size_t i);
+/* The double curves idx[0..n) (a group meeting at shared end points) made chains of mesh
+ * edges. False only when out of memory (the mesh is then as before). */
+bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n);
 
 /* ---- conform_artefacts.c ---- */
 bool cf_count_artefacts(const ism_mesh *m, const ism_locus *l, double tol, size_t *edges,

@@ -18,6 +18,10 @@
 
 /* The rim lies about rho from the curve; its feet are searched this many rho away. */
 #define FOOT_SEARCH_RHO 4.0
+/* A run's end parameter this many rho from an end of an open curve is taken to that end:
+ * the tube's rounded cap (a box exit, a pinch point, a junction of curves, where a rim
+ * vertex on the bisector of two curves lies about rho along each). */
+#define END_SNAP_RHO 2.0
 
 typedef struct zip_run {
     const uint32_t *row;  /* the innermost row of the whole loop */
@@ -210,38 +214,117 @@ static bool zip_loop(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv, const
         double a = u[0], b = u[l->n - 1];
         size_t split = fmin(a, b) - u[imin] > rho ? imin : u[imax] - fmax(a, b) > rho ? imax : 0;
         if (split == 0 || split == l->n - 1)
-            return zip_open_run(c, pl, cv, &r, rho);
+            return zip_open_run(c, pl, cv, &r, END_SNAP_RHO * rho);
         r.len = split + 1;
         zip_run r2 = {row, u, l->n, split, l->n - split, 0};
-        return zip_open_run(c, pl, cv, &r, rho) && zip_open_run(c, pl, cv, &r2, rho);
+        return zip_open_run(c, pl, cv, &r, END_SNAP_RHO * rho) &&
+               zip_open_run(c, pl, cv, &r2, END_SNAP_RHO * rho);
     }
     size_t imin = argext(u, l->n, -1), imax = argext(u, l->n, 1);
     if (imin == imax)
         return cf_fan_centroid(c, l);
     zip_run r1 = {row, u, l->n, imin, (imax + l->n - imin) % l->n + 1, 0};
     zip_run r2 = {row, u, l->n, imax, (imin + l->n - imax) % l->n + 1, 0};
-    return zip_open_run(c, pl, cv, &r1, rho) && zip_open_run(c, pl, cv, &r2, rho);
+    return zip_open_run(c, pl, cv, &r1, END_SNAP_RHO * rho) &&
+           zip_open_run(c, pl, cv, &r2, END_SNAP_RHO * rho);
 }
 
-bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv, const cf_loops *ls,
-                  double rho)
+/* Nearest curve of the group to p: its index (or -1 when none lies within reach), the
+ * parameter and the foot. */
+static int nearest_curve(const cf_polyline *pl, size_t npl, const double p[3], double reach,
+                         double *u, double foot[3])
+{
+    int best = -1;
+    double bd = INFINITY;
+    for (size_t k = 0; k < npl; k++) {
+        double uk, fk[3], d = cf_polyline_nearest(&pl[k], p, reach, &uk, fk);
+        if (d < bd) {
+            bd = d;
+            best = (int)k;
+            *u = uk;
+            for (int j = 0; j < 3; j++)
+                foot[j] = fk[j];
+        }
+    }
+    return best;
+}
+
+/* A loop along several curves of a group (they meet at junctions): split into runs of
+ * vertices nearest the same curve (consecutive runs share their boundary vertex), each
+ * zipped to its curve as an open loop. */
+static bool zip_multi(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv,
+                      const cf_loop *l, const int *cid, const uint32_t *row, double rho)
+{
+    size_t n = l->n, start = 0;
+    if (l->closed) /* begin at a change of curve */
+        while (start < n && cid[start] == cid[(start + n - 1) % n])
+            start++;
+    size_t total = l->closed ? n : n - 1; /* edges to cover */
+    uint32_t *v = malloc((n + 1) * sizeof *v), *rw = malloc((n + 1) * sizeof *rw);
+    double *u = malloc((n + 1) * sizeof *u), foot[3];
+    bool ok = v && rw && u;
+    for (size_t done = 0; ok && done < total;) {
+        size_t i0 = (start + done) % n, len = 1;
+        int k = cid[i0];
+        while (done + len < total && cid[(i0 + len) % n] == k)
+            len++;
+        len++; /* the boundary vertex, shared with the next run */
+        bool feet = true;
+        for (size_t j = 0; j < len; j++) {
+            size_t i = (i0 + j) % n;
+            v[j] = l->v[i];
+            rw[j] = row[i];
+            feet = feet && isfinite(cf_polyline_nearest(&pl[k], c->m->pos + 3 * (size_t)v[j],
+                                                        FOOT_SEARCH_RHO * rho, &u[j], foot));
+        }
+        cf_loop sub = {v, len, false};
+        ok = feet ? zip_loop(c, &pl[k], cv[k], &sub, u, rw, rho) : cf_fan_centroid(c, &sub);
+        done += len - 1;
+    }
+    free(v);
+    free(rw);
+    free(u);
+    return ok;
+}
+
+/* A vertex claimed by another curve than both its neighbours (which agree) follows them. */
+static void smooth_ids(int *cid, size_t n, bool closed)
+{
+    for (size_t i = 0; i < n; i++) {
+        if (!closed && (i == 0 || i == n - 1))
+            continue;
+        int a = cid[(i + n - 1) % n], b = cid[(i + 1) % n];
+        if (a == b && cid[i] != a)
+            cid[i] = a;
+    }
+}
+
+bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, size_t npl,
+                  const cf_loops *ls, double rho)
 {
     for (size_t k = 0; k < ls->n; k++) {
         const cf_loop *l = &ls->l[k];
         double *u = malloc(l->n * sizeof *u), *foot = malloc(3 * l->n * sizeof *foot);
-        bool found = u && foot, ok = found;
-        for (size_t i = 0; found && i < l->n; i++)
-            found = isfinite(cf_polyline_nearest(pl, c->m->pos + 3 * (size_t)l->v[i],
-                                                 FOOT_SEARCH_RHO * rho, &u[i], foot + 3 * i));
+        int *cid = malloc(l->n * sizeof *cid);
+        bool found = u && foot && cid, ok = found, multi = false;
+        for (size_t i = 0; found && i < l->n; i++) {
+            cid[i] = nearest_curve(pl, npl, c->m->pos + 3 * (size_t)l->v[i],
+                                   FOOT_SEARCH_RHO * rho, &u[i], foot + 3 * i);
+            found = cid[i] >= 0;
+            multi |= cid[i] != cid[0];
+        }
         if (ok && !found) {
             ok = cf_fan_centroid(c, l);
         } else if (ok) {
             uint32_t *row = make_rows(c, l, foot);
-            ok = row && zip_loop(c, pl, cv, l, u, row, rho);
+            smooth_ids(cid, l->n, l->closed);
+            ok = row && (multi ? zip_multi(c, pl, cv, l, cid, row, rho)
+                               : zip_loop(c, &pl[cid[0]], cv[cid[0]], l, u, row, rho));
             free(row);
         }
         free(u);
         free(foot);
+        free(cid);
         if (!ok)
             return false;
     }

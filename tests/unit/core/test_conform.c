@@ -141,6 +141,8 @@ static void expect_points(const ism_mesh *m, const ism_locus *l, const run_resul
 
 static void expect_accuracy(const run_result *r, const char *what)
 {
+    cr_expect_eq(r->a.inconsistent_edges, 0, "%s: %zu manifold edges wound the same way by "
+                 "both triangles", what, r->a.inconsistent_edges);
     cr_expect_leq(r->max_near, 2 * r->max_far, "%s: centroids near the locus %g off f = 0, "
                   "elsewhere %g", what, r->max_near, r->max_far);
 }
@@ -338,8 +340,8 @@ static int cmp_edge(const void *a, const void *b)
 }
 
 /* Edges with more than two triangles: how many, how many with exactly four, and the largest
- * distance of their vertices from the circle. */
-static void nm_edges_on_circle(const ism_mesh *m, size_t *n, size_t *four, double *far)
+ * distance of their vertices from the locus. */
+static void nm_edges(const ism_mesh *m, locus_dist_fn dist, size_t *n, size_t *four, double *far)
 {
     uint64_t *e = malloc(3 * m->ntris * sizeof *e);
     cr_assert(e);
@@ -360,7 +362,7 @@ static void nm_edges_on_circle(const ism_mesh *m, size_t *n, size_t *four, doubl
         *four += j - i == 4;
         uint32_t v[2] = {(uint32_t)(e[i] >> 32), (uint32_t)e[i]};
         for (int k = 0; k < 2; k++)
-            *far = fmax(*far, dist_to_circle(m->pos + 3 * (size_t)v[k], NULL));
+            *far = fmax(*far, dist(m->pos + 3 * (size_t)v[k], NULL));
     }
     free(e);
 }
@@ -394,7 +396,7 @@ Test(conform, crossing_spheres_zipped_along_the_circle)
         snprintf(what, sizeof what, "crossing spheres, shift %d", w);
         size_t n, four;
         double far;
-        nm_edges_on_circle(&m, &n, &four, &far);
+        nm_edges(&m, dist_to_circle, &n, &four, &far);
         cr_expect_eq(r.st.curves_conformed, 1, "%s: curve not conformed", what);
         cr_expect_eq(n, CIRCLE_POINTS, "%s: %zu non-manifold edges, expected the circle's %d",
                      what, n, CIRCLE_POINTS);
@@ -404,6 +406,76 @@ Test(conform, crossing_spheres_zipped_along_the_circle)
         /* χ(S1 ∪ S2) = χ(S1) + χ(S2) − χ(circle) = 2 + 2 − 0 */
         cr_expect_eq(r.a.euler, 4, "%s: χ = %ld, expected 4", what, r.a.euler);
         cr_expect_eq(r.a.boundary_edges, 0, "%s: %zu boundary edges", what, r.a.boundary_edges);
+        cr_expect_eq(r.a.class_count[ISM_VERTEX_NONMANIFOLD_POINT], 0, "%s: %zu cone points",
+                     what, r.a.class_count[ISM_VERTEX_NONMANIFOLD_POINT]);
+        cr_expect_eq(r.st.artefact_edges + r.st.artefact_vertices, 0, "%s: artefacts %zu + %zu",
+                     what, r.st.artefact_edges, r.st.artefact_vertices);
+        expect_accuracy(&r, what);
+        ism_analysis_free(&r.a);
+        ism_mesh_free(&m);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
+
+/* ---- a cylinder cut by a plane: two double lines leaving the box ---- */
+
+#define LINE_X 0.3
+#define LINE_POINTS 48
+
+static double line_y(int side)
+{
+    return (side ? -1 : 1) * sqrt(0.5 - LINE_X * LINE_X);
+}
+
+static double dist_to_lines(const double p[3], const void *arg)
+{
+    (void)arg;
+    double best = INFINITY;
+    for (int s = 0; s < 2; s++)
+        best = fmin(best, hypot(p[0] - LINE_X, p[1] - line_y(s)));
+    return best;
+}
+
+Test(conform, cylinder_and_plane_lines_to_the_box)
+{
+    const pf_surface s = {"(x^2 + y^2 - 0.5)*(x - 0.3)", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double base[6] = {-1, -1, -1, 1, 1, 1};
+    int dmax = 6 - pf_quick();
+    for (int w = 0; w < 3; w++) {
+        double box[6];
+        shifted_box(base, shift_amount(w, base, dmax), box);
+        ism_locus l;
+        ism_locus_init(&l);
+        for (int side = 0; side < 2; side++) {
+            ism_sing_curve c = {.kind = ISM_CURVE_DOUBLE, .closed = false, .n = LINE_POINTS,
+                                .end_type = {ISM_END_BOX, ISM_END_BOX}, .end_point = {-1, -1}};
+            cr_assert(c.xyz = malloc(3 * LINE_POINTS * sizeof *c.xyz));
+            for (int i = 0; i < LINE_POINTS; i++) {
+                c.xyz[3 * i] = LINE_X;
+                c.xyz[3 * i + 1] = line_y(side);
+                c.xyz[3 * i + 2] = box[2] + (box[5] - box[2]) * i / (LINE_POINTS - 1);
+            }
+            cr_assert(ism_locus_add_curve(&l, &c));
+        }
+        ism_mesh m;
+        run_result r;
+        run(t, box, dmax, &l, dist_to_lines, NULL, &m, &r);
+        char what[64];
+        snprintf(what, sizeof what, "cylinder and plane, shift %d", w);
+        size_t n, four;
+        double far;
+        nm_edges(&m, dist_to_lines, &n, &four, &far);
+        cr_expect_eq(r.st.curves_conformed, 2, "%s: %zu curves conformed", what,
+                     r.st.curves_conformed);
+        cr_expect_eq(n, 2 * (LINE_POINTS - 1), "%s: %zu non-manifold edges, expected %d", what,
+                     n, 2 * (LINE_POINTS - 1));
+        cr_expect_eq(four, n, "%s: %zu of %zu non-manifold edges have 4 triangles", what, four, n);
+        cr_expect_leq(far, 1e-9, "%s: a non-manifold edge's vertex %g from the lines", what, far);
+        cr_expect_eq(r.a.components, 1, "%s: %zu components", what, r.a.components);
+        /* χ(annulus ∪ rectangle) = 0 + 1 − χ(two segments) = −1 */
+        cr_expect_eq(r.a.euler, -1, "%s: χ = %ld, expected -1", what, r.a.euler);
         cr_expect_eq(r.a.class_count[ISM_VERTEX_NONMANIFOLD_POINT], 0, "%s: %zu cone points",
                      what, r.a.class_count[ISM_VERTEX_NONMANIFOLD_POINT]);
         cr_expect_eq(r.st.artefact_edges + r.st.artefact_vertices, 0, "%s: artefacts %zu + %zu",

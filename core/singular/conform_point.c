@@ -1,0 +1,96 @@
+/* conform_point.c — the surgery at a sheet-carrying singular point (node, cusp, degenerate
+ * contact): the triangles within a ball around it are cut (the ball grows until its rim is
+ * clear of other sheets), and every rim loop — one per cone or nappe, found again even where
+ * the polygoniser had left a nappe as an island — is fanned through projected rings to ONE
+ * vertex at the point's position. */
+#include "core/singular/conform_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+/* A point counts as inside the box within this fraction of a cell. */
+#define BOX_SLACK 1e-6
+
+static double d2(const double *a, const double *b)
+{
+    double x = a[0] - b[0], y = a[1] - b[1], z = a[2] - b[2];
+    return x * x + y * y + z * z;
+}
+
+static bool in_box(const double box[6], const double p[3], double slack)
+{
+    for (int k = 0; k < 3; k++)
+        if (!(p[k] >= box[k] - slack && p[k] <= box[k + 3] + slack))
+            return false;
+    return true;
+}
+
+typedef struct ball {
+    double p[3], r;
+} ball;
+
+static bool tri_in_ball(const cf_ctx *c, uint32_t t, const void *arg)
+{
+    const ball *b = arg;
+    const uint32_t *v = c->m->tri + 3 * (size_t)t;
+    const double *P = c->m->pos;
+    return cf_point_triangle_d2(b->p, P + 3 * (size_t)v[0], P + 3 * (size_t)v[1],
+                                P + 3 * (size_t)v[2]) < b->r * b->r;
+}
+
+static double loop_mean_dist(const cf_ctx *c, const cf_loop *l, const double p[3])
+{
+    double s = 0;
+    for (size_t i = 0; i < l->n; i++)
+        s += sqrt(d2(c->m->pos + 3 * (size_t)l->v[i], p)) / (double)l->n;
+    return s;
+}
+
+bool cf_conform_point(cf_run *r, size_t i)
+{
+    cf_ctx *c = &r->c;
+    ism_sing_point *pt = &r->l->points[i];
+    if (!in_box(r->o->box, pt->p, BOX_SLACK * c->cell)) {
+        pt->cones = 0;
+        c->st->points_failed++;
+        return true;
+    }
+    if (!cf_ctx_prepare(c))
+        return false;
+    double r0 = CF_RHO_CELLS * c->cell;
+    ball b = {{pt->p[0], pt->p[1], pt->p[2]}, fmax(r0, CF_RHO_EDGES * cf_longest_edge_near(c, pt->p, r0))};
+    size_t nt0 = c->m->ntris, nv0 = c->m->nverts, nrm;
+    uint32_t *rm;
+    cf_loops ls;
+    if (!cf_cut_clean(c, tri_in_ball, &b, &b.r, &ls, &rm, &nrm))
+        return false;
+    if (ls.n == 0) { /* no mesh around the point: nothing to join */
+        cf_undo(c, rm, nrm, nt0, nv0);
+        free(rm);
+        cf_loops_free(&ls);
+        pt->cones = 0;
+        c->st->points_failed++;
+        return true;
+    }
+    uint32_t apex = cf_add_vertex(c, pt->p, true);
+    bool ok = apex != CF_NONE;
+    for (size_t k = 0; ok && k < ls.n; k++)
+        ok = cf_fan(c, &ls.l[k], apex, pt->p,
+                    cf_ring_count(loop_mean_dist(c, &ls.l[k], pt->p), cf_loop_mean_edge(c, &ls.l[k])));
+    if (!ok) {
+        cf_undo(c, rm, nrm, nt0, nv0);
+    } else {
+        r->point_vertex[i] = apex;
+        pt->cones = (int)ls.n;
+        c->st->vertices_added++;
+        c->st->points_conformed++;
+        c->st->triangles_removed += nrm;
+        c->st->triangles_added += c->m->ntris - nt0;
+        if (pt->type == ISM_SING_NODE && ls.n < 2)
+            c->st->points_short_cones++;
+    }
+    free(rm);
+    cf_loops_free(&ls);
+    return ok;
+}
+

@@ -1,0 +1,205 @@
+/* conform_tube.c — the surgery along double curves: the triangles within a tube around a
+ * group of curves (those meeting at shared end points: pinch and triple points, one vertex
+ * for all) are cut, the tube growing until its rim is clear of other sheets; the curves'
+ * points become mesh vertices, and every rim loop — one per side of each sheet — is zipped
+ * to them (conform_zip.c), so each curve edge ends up with the crossing sheets' triangles. */
+#include "core/singular/conform_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Curve points closer than this many finest cells to the previous kept one are skipped (a
+ * tracer's fine steps would only make slivers). */
+#define CURVE_MIN_SPACING 0.5
+
+typedef struct tube {
+    const cf_polyline *pl;
+    size_t n;
+    double r;
+} tube;
+
+static double d2(const double *a, const double *b)
+{
+    double x = a[0] - b[0], y = a[1] - b[1], z = a[2] - b[2];
+    return x * x + y * y + z * z;
+}
+
+static bool tri_in_tube(const cf_ctx *c, uint32_t t, const void *arg)
+{
+    const tube *tb = arg;
+    const uint32_t *v = c->m->tri + 3 * (size_t)t;
+    const double *a = c->m->pos + 3 * (size_t)v[0], *b = c->m->pos + 3 * (size_t)v[1],
+                 *d = c->m->pos + 3 * (size_t)v[2];
+    /* the corners, the edge midpoints and the centroid: a triangle the curve passes through
+     * has one of them within half its longest edge of the curve */
+    double q[7][3];
+    for (int k = 0; k < 3; k++) {
+        q[0][k] = a[k];
+        q[1][k] = b[k];
+        q[2][k] = d[k];
+        q[3][k] = (a[k] + b[k]) / 2;
+        q[4][k] = (b[k] + d[k]) / 2;
+        q[5][k] = (d[k] + a[k]) / 2;
+        q[6][k] = (a[k] + b[k] + d[k]) / 3;
+    }
+    for (size_t i = 0; i < tb->n; i++)
+        for (int j = 0; j < 7; j++)
+            if (isfinite(cf_polyline_nearest(&tb->pl[i], q[j], tb->r, NULL, NULL)))
+                return true;
+    return false;
+}
+
+/* The curve's points spaced at least min_step apart (the ends of an open curve kept). */
+static double *thin_curve(const ism_sing_curve *cu, double min_step, size_t *n)
+{
+    double *p = malloc(3 * (cu->n + 1) * sizeof *p), m2 = min_step * min_step;
+    if (!p)
+        return NULL;
+    size_t k = 0;
+    for (size_t i = 0; i < cu->n; i++) {
+        const double *q = cu->xyz + 3 * i;
+        bool last = i == cu->n - 1, near_prev = k > 0 && d2(q, p + 3 * (k - 1)) < m2;
+        if (near_prev && !last)
+            continue;
+        if (last && cu->closed && k > 1 && (near_prev || d2(q, p) < m2))
+            continue;
+        if (last && !cu->closed && near_prev && k > 1)
+            k--; /* the true end replaces the kept point just before it */
+        for (int j = 0; j < 3; j++)
+            p[3 * k + j] = q[j];
+        k++;
+    }
+    *n = k;
+    return p;
+}
+
+/* Longest edge of the live triangles at vertices within r of the polyline. */
+static double longest_edge_near_curve(const cf_ctx *c, const cf_polyline *pl, double r)
+{
+    double best = 0;
+    for (size_t v = 0; v < c->inc_nverts; v++)
+        if (isfinite(cf_polyline_nearest(pl, c->m->pos + 3 * v, r, NULL, NULL)))
+            best = fmax(best, cf_vertex_longest_edge(c, (uint32_t)v));
+    return best;
+}
+
+/* The mesh vertex of the curve's point i: a locus point's shared vertex at an end. */
+static uint32_t curve_point_vertex(cf_run *r, const ism_sing_curve *cu, const double *p,
+                                   size_t i, size_t n)
+{
+    int e = cu->closed ? -1 : i == 0 ? cu->end_point[0] : i == n - 1 ? cu->end_point[1] : -1;
+    if (e >= 0 && (size_t)e < r->l->npoints) {
+        if (r->point_vertex[e] == CF_NONE) {
+            r->point_vertex[e] = cf_add_vertex(&r->c, r->l->points[e].p, true);
+            r->c.st->vertices_added += r->point_vertex[e] != CF_NONE;
+        }
+        return r->point_vertex[e];
+    }
+    uint32_t v = cf_add_vertex(&r->c, p + 3 * i, true);
+    r->c.st->vertices_added += v != CF_NONE;
+    return v;
+}
+
+/* The group's polylines (thinned copies of the curves' points). */
+typedef struct group {
+    size_t n;
+    const ism_sing_curve **cu;
+    double **pts;
+    size_t *npts;
+    cf_polyline *pl;
+    uint32_t **cv;
+} group;
+
+static void group_free(group *g)
+{
+    for (size_t k = 0; k < g->n; k++) {
+        if (g->pl)
+            cf_polyline_free(&g->pl[k]);
+        if (g->pts)
+            free(g->pts[k]);
+        if (g->cv)
+            free(g->cv[k]);
+    }
+    free(g->cu);
+    free(g->pts);
+    free(g->npts);
+    free(g->pl);
+    free(g->cv);
+}
+
+/* False when out of memory; curves of fewer than two points are left out (counted failed). */
+static bool group_init(cf_run *r, const size_t *idx, size_t n, group *g)
+{
+    memset(g, 0, sizeof *g);
+    g->cu = calloc(n, sizeof *g->cu);
+    g->pts = calloc(n, sizeof *g->pts);
+    g->npts = calloc(n, sizeof *g->npts);
+    g->pl = calloc(n, sizeof *g->pl);
+    g->cv = calloc(n, sizeof *g->cv);
+    if (!g->cu || !g->pts || !g->npts || !g->pl || !g->cv)
+        return false;
+    double r0 = CF_RHO_CELLS * r->c.cell;
+    for (size_t i = 0; i < n; i++) {
+        const ism_sing_curve *cu = &r->l->curves[idx[i]];
+        size_t k = g->n, m;
+        if (!(g->pts[k] = thin_curve(cu, CURVE_MIN_SPACING * r->c.cell, &m)))
+            return false;
+        g->n++;
+        if (m < 2) {
+            r->c.st->curves_failed++;
+            free(g->pts[k]);
+            g->pts[k] = NULL;
+            g->n--;
+            continue;
+        }
+        g->cu[k] = cu;
+        g->npts[k] = m;
+        if (!cf_polyline_init(&g->pl[k], g->pts[k], m, cu->closed && m >= 3, r0) ||
+            !(g->cv[k] = malloc(m * sizeof *g->cv[k])))
+            return false;
+    }
+    return true;
+}
+
+bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
+{
+    cf_ctx *c = &r->c;
+    group g;
+    bool ok = cf_ctx_prepare(c) && group_init(r, idx, n, &g);
+    if (!ok || g.n == 0) {
+        group_free(&g);
+        return ok;
+    }
+    double r0 = CF_RHO_CELLS * c->cell, longest = 0;
+    for (size_t k = 0; k < g.n; k++)
+        longest = fmax(longest, longest_edge_near_curve(c, &g.pl[k], r0));
+    tube tb = {g.pl, g.n, fmax(r0, CF_RHO_EDGES * longest)};
+    size_t nt0 = c->m->ntris, nv0 = c->m->nverts, nrm = 0;
+    uint32_t *rm = NULL;
+    cf_loops ls = {0};
+    ok = cf_cut_clean(c, tri_in_tube, &tb, &tb.r, &ls, &rm, &nrm);
+    if (ok && ls.n == 0) {
+        cf_undo(c, rm, nrm, nt0, nv0);
+        c->st->curves_failed += g.n;
+    } else if (ok) {
+        for (size_t k = 0; k < g.n; k++)
+            for (size_t i = 0; ok && i < g.npts[k]; i++)
+                ok = (g.cv[k][i] = curve_point_vertex(r, g.cu[k], g.pts[k], i, g.npts[k])) != CF_NONE;
+        ok = ok && cf_zip_loops(c, g.pl, (const uint32_t *const *)g.cv, g.n, &ls, tb.r);
+        if (!ok) {
+            cf_undo(c, rm, nrm, nt0, nv0);
+            for (size_t i = 0; i < r->l->npoints; i++)
+                if (r->point_vertex[i] != CF_NONE && r->point_vertex[i] >= nv0)
+                    r->point_vertex[i] = CF_NONE;
+        } else {
+            c->st->curves_conformed += g.n;
+            c->st->triangles_removed += nrm;
+            c->st->triangles_added += c->m->ntris - nt0;
+        }
+    }
+    free(rm);
+    cf_loops_free(&ls);
+    group_free(&g);
+    return ok;
+}
