@@ -487,3 +487,70 @@ Test(conform, cylinder_and_plane_lines_to_the_box)
     }
     ism_tape_free(t);
 }
+
+/* ---- three coordinate planes: six half-axes meeting at a triple point ---- */
+
+#define HALF_AXIS_STEP 0.05
+
+static double dist_to_axes(const double p[3], const void *arg)
+{
+    (void)arg;
+    return fmin(hypot(p[1], p[2]), fmin(hypot(p[0], p[2]), hypot(p[0], p[1])));
+}
+
+/* Half-axis k (0..5: +x, -x, +y, -y, +z, -z) from the triple point (point 0) to the box. */
+static size_t add_half_axis(ism_locus *l, const double box[6], int k)
+{
+    int axis = k / 2;
+    double end = k % 2 ? box[axis] : box[axis + 3];
+    size_t n = (size_t)ceil(fabs(end) / HALF_AXIS_STEP) + 1;
+    ism_sing_curve c = {.kind = ISM_CURVE_DOUBLE, .closed = false, .n = n,
+                        .end_type = {ISM_END_TRIPLE, ISM_END_BOX}, .end_point = {0, -1}};
+    cr_assert(c.xyz = calloc(3 * n, sizeof *c.xyz));
+    for (size_t i = 0; i < n; i++)
+        c.xyz[3 * i + axis] = end * (double)i / (double)(n - 1);
+    cr_assert(ism_locus_add_curve(l, &c));
+    return n - 1;
+}
+
+Test(conform, three_planes_triple_point)
+{
+    const pf_surface s = {"x*y*z", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double base[6] = {-1, -1, -1, 1, 1, 1};
+    int dmax = 5 - pf_quick();
+    for (int w = 1; w < 3; w++) { /* symmetric: the planes lie on the lattice */
+        double box[6];
+        shifted_box(base, shift_amount(w, base, dmax), box);
+        ism_locus l;
+        ism_locus_init(&l);
+        add_point(&l, 0, 0, 0, ISM_SING_TRIPLE);
+        size_t edges = 0;
+        for (int k = 0; k < 6; k++)
+            edges += add_half_axis(&l, box, k);
+        ism_mesh m;
+        run_result r;
+        run(t, box, dmax, &l, dist_to_axes, NULL, &m, &r);
+        char what[64];
+        snprintf(what, sizeof what, "xyz = 0, shift %d", w);
+        size_t n, four;
+        double far;
+        nm_edges(&m, dist_to_axes, &n, &four, &far);
+        cr_expect_eq(r.st.curves_conformed, 6, "%s: %zu curves conformed", what,
+                     r.st.curves_conformed);
+        cr_expect_eq(n, edges, "%s: %zu non-manifold edges, expected %zu", what, n, edges);
+        cr_expect_eq(four, n, "%s: %zu of %zu non-manifold edges have 4 triangles", what, four, n);
+        cr_expect_leq(far, 1e-9, "%s: a non-manifold edge's vertex %g off the axes", what, far);
+        cr_expect_neq(vertex_at(&m, (const double[3]){0, 0, 0}), UINT32_MAX,
+                      "%s: no vertex at the triple point", what);
+        cr_expect_eq(r.a.components, 1, "%s: %zu components", what, r.a.components);
+        /* three squares crossing pairwise in segments, all three at a point: 3 − 3 + 1 */
+        cr_expect_eq(r.a.euler, 1, "%s: χ = %ld, expected 1", what, r.a.euler);
+        cr_expect_eq(r.st.artefact_edges + r.st.artefact_vertices, 0, "%s: artefacts %zu + %zu",
+                     what, r.st.artefact_edges, r.st.artefact_vertices);
+        ism_analysis_free(&r.a);
+        ism_mesh_free(&m);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
