@@ -1,4 +1,4 @@
-/* conform_zip.c — refilling the tube cut around a double curve: each rim loop (one per side
+/* conform_zip.c — refilling the tube cut around double curves: each rim loop (one per side
  * of each sheet) gets rings of vertices projected onto f = 0 between it and its foot points
  * on the curve, and its innermost row is zipped to the curve's vertices by arclength, so each
  * curve edge receives one triangle from every sheet side: four where two sheets cross.
@@ -7,10 +7,18 @@
  *          │ ╲    │ ╲       ╱│ ╲  │          advance the row:   (a_i, a_i+1, c_j)
  *   curve c0 ─── c1 ─── c2 ──── c3           advance the curve: (a_i, c_j+1, c_j)
  *
- * A rim loop that winds once around a closed curve is zipped cyclically; any other loop is
- * split at its extreme parameters into runs that are each zipped to the stretch of curve
- * they span (extended to an end of an open curve within the tube's radius: box exits, pinch
- * points). */
+ * Parameters are "unfolded" so that one merge covers a whole loop: along a closed curve they
+ * wrap with period L (a loop winding once round it is zipped cyclically); along an open curve
+ * they reflect at its ends with period 2L, so a rim that runs up one side of a double segment,
+ * round its end (a pinch point, where the sheets fold into each other) and back down the other
+ * side is zipped in one pass, each side getting its own triangles on the last curve edge:
+ *
+ *      unfolded   0 ──────── L ──────── 2L        curve index j, then 2(n−1) − j
+ *      curve     c0 ─ … ─ c(n−1) ─ … ─ c0
+ *
+ * A loop that does not turn at an end of its curve is split at its extreme parameters into
+ * runs, each zipped to the stretch of curve it spans, its ends taken to an end of the curve
+ * within END_SNAP_RHO (box exits, junctions of curves). */
 #include "core/singular/conform_internal.h"
 
 #include <math.h>
@@ -18,18 +26,11 @@
 
 /* The rim lies about rho from the curve; its feet are searched this many rho away. */
 #define FOOT_SEARCH_RHO 4.0
-/* A run's end parameter this many rho from an end of an open curve is taken to that end:
- * the tube's rounded cap (a box exit, a pinch point, a junction of curves, where a rim
- * vertex on the bisector of two curves lies about rho along each). */
+/* A run's end parameter this many rho from an end of an open curve is taken to that end,
+ * and a loop whose extreme parameter is that close turns round that end: the tube's rounded
+ * cap (a box exit, a pinch point, a junction of curves, where a rim vertex on the bisector of
+ * two curves lies about rho along each). */
 #define END_SNAP_RHO 2.0
-
-typedef struct zip_run {
-    const uint32_t *row;  /* the innermost row of the whole loop */
-    const double *u;      /* unwrapped parameters of the row */
-    size_t n;             /* row length */
-    size_t first, len;    /* the run: row[(first + i) % n], i < len */
-    double end_shift;     /* added to u of the run's last vertex (a cyclic run's L) */
-} zip_run;
 
 static double dist(const double *a, const double *b)
 {
@@ -37,24 +38,52 @@ static double dist(const double *a, const double *b)
     return sqrt(d0 * d0 + d1 * d1 + d2 * d2);
 }
 
-/* Parameter of unwrapped curve index J (closed curves wrap with period length). */
-static double curve_param(const cf_polyline *pl, long J)
+/* Index steps in one period of the unfolded curve. */
+static long period_steps(const cf_polyline *pl)
 {
-    if (!pl->closed)
-        return pl->s[J];
-    long n = (long)pl->n, w = J >= 0 ? J / n : -((-J + n - 1) / n);
-    return pl->s[J - w * n] + (double)w * pl->length;
+    return pl->closed ? (long)pl->n : 2 * ((long)pl->n - 1);
 }
 
-/* The unwrapped curve index whose parameter is nearest x. */
-static long curve_index_near(const cf_polyline *pl, double x)
+static double period_length(const cf_polyline *pl)
 {
-    double w = 0;
-    size_t top = pl->closed ? pl->n : pl->n - 1;
-    if (pl->closed) {
-        w = floor(x / pl->length);
-        x -= w * pl->length;
+    return pl->closed ? pl->length : 2 * pl->length;
+}
+
+static long floor_div(long a, long b)
+{
+    return a >= 0 ? a / b : -((-a + b - 1) / b);
+}
+
+/* The curve point of unfolded index J, and J's unfolded parameter. */
+static size_t fold_index(const cf_polyline *pl, long J, double *param)
+{
+    long P = period_steps(pl), w = floor_div(J, P), k = J - w * P;
+    double base = (double)w * period_length(pl);
+    if (pl->closed || k <= (long)pl->n - 1) {
+        *param = base + pl->s[k];
+        return (size_t)k % pl->n;
     }
+    k = P - k; /* the way back along an open curve */
+    *param = base + 2 * pl->length - pl->s[k];
+    return (size_t)k;
+}
+
+static double curve_param(const cf_polyline *pl, long J)
+{
+    double p;
+    fold_index(pl, J, &p);
+    return p;
+}
+
+static uint32_t curve_vertex(const cf_polyline *pl, const uint32_t *cv, long J)
+{
+    double p;
+    return cv[fold_index(pl, J, &p)];
+}
+
+/* The index among s[0..top] whose parameter is nearest x. */
+static long nearest_point(const cf_polyline *pl, size_t top, double x)
+{
     size_t lo = 0, hi = top;
     while (lo < hi) {
         size_t mid = (lo + hi) / 2;
@@ -65,73 +94,70 @@ static long curve_index_near(const cf_polyline *pl, double x)
     }
     if (lo > 0 && x - pl->s[lo - 1] < pl->s[lo] - x)
         lo--;
-    return (long)lo + (long)w * (long)pl->n;
+    return (long)lo;
 }
 
-static uint32_t curve_vertex(const cf_polyline *pl, const uint32_t *cv, long J)
+/* The unfolded curve index whose parameter is nearest the unfolded parameter x. */
+static long curve_index_near(const cf_polyline *pl, double x)
 {
-    long n = (long)pl->n;
-    return cv[((J % n) + n) % n];
+    double per = period_length(pl), w = floor(x / per), y = x - w * per;
+    long base = (long)w * period_steps(pl);
+    if (pl->closed)
+        return base + nearest_point(pl, pl->n, y);
+    if (y <= pl->length)
+        return base + nearest_point(pl, pl->n - 1, y);
+    return base + period_steps(pl) - nearest_point(pl, pl->n - 1, 2 * pl->length - y);
 }
 
-static double run_u(const zip_run *r, size_t i)
+/* Zips row[0..len) (unfolded parameters U) to the curve's unfolded indices Ja .. Jb. */
+static bool zip_seq(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv, const uint32_t *row,
+                    const double *U, size_t len, long Ja, long Jb)
 {
-    return r->u[(r->first + i) % r->n] + (i == r->len - 1 ? r->end_shift : 0);
-}
-
-/* Zips one run to the curve indices Ja .. Jb (stepping towards Jb). */
-static bool zip_run_to(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv, const zip_run *r,
-                       long Ja, long Jb)
-{
-    int dir = Jb >= Ja ? 1 : -1;
-    if (Ja == Jb) /* a run shorter than a curve edge: lean on the nearer direction */
-        dir = run_u(r, r->len - 1) >= run_u(r, 0) ? 1 : -1;
-    size_t i = 0, m = r->len - 1;
+    int dir = Jb > Ja || (Jb == Ja && U[len - 1] >= U[0]) ? 1 : -1;
+    size_t i = 0, m = len - 1;
     long J = Ja;
-    double key = -INFINITY; /* the row's keys, made monotone */
+    double key = dir * U[0]; /* the row's keys, made monotone */
+    bool curve_moved = false;
     while (i < m || J != Jb) {
-        bool adv_row;
-        if (i == m)
-            adv_row = false;
-        else if (J == Jb)
+        bool adv_row = J == Jb || (i < m && fmax(key, dir * U[i + 1]) <= dir * curve_param(pl, J + dir));
+        /* round a fold with one row vertex the next triangle would repeat the last one
+         * backwards (a, c_j−1, c_j) after (a, c_j, c_j−1): the row moves first */
+        if (!adv_row && i < m && curve_moved &&
+            curve_vertex(pl, cv, J + dir) == curve_vertex(pl, cv, J - dir))
             adv_row = true;
-        else {
-            double kr = fmax(key, dir * run_u(r, i + 1)), kc = dir * curve_param(pl, J + dir);
-            adv_row = kr <= kc;
-        }
-        uint32_t a = r->row[(r->first + i) % r->n], cj = curve_vertex(pl, cv, J);
+        uint32_t cj = curve_vertex(pl, cv, J);
         if (adv_row) {
-            key = fmax(key, dir * run_u(r, i + 1));
-            if (!cf_add_triangle(c, a, r->row[(r->first + i + 1) % r->n], cj))
+            key = fmax(key, dir * U[i + 1]);
+            if (!cf_add_triangle(c, row[i], row[i + 1], cj))
                 return false;
             i++;
         } else {
-            if (!cf_add_triangle(c, a, curve_vertex(pl, cv, J + dir), cj))
+            if (!cf_add_triangle(c, row[i], curve_vertex(pl, cv, J + dir), cj))
                 return false;
             J += dir;
         }
+        curve_moved = !adv_row;
     }
     return true;
 }
 
-/* A run's stretch of curve: nearest indices to its end parameters, extended to an open
- * curve's end within ext. */
-static bool zip_open_run(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv, const zip_run *r,
-                         double ext)
+/* An open stretch: its end parameters within ext of a fold (an end of an open curve) are
+ * taken there. */
+static bool zip_open_seq(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv,
+                         const uint32_t *row, double *U, size_t len, double ext)
 {
-    double ua = run_u(r, 0), ub = run_u(r, r->len - 1);
-    if (!pl->closed) {
-        double *lo = ua <= ub ? &ua : &ub, *hi = ua <= ub ? &ub : &ua;
-        if (*lo < ext)
-            *lo = 0;
-        if (*hi > pl->length - ext)
-            *hi = pl->length;
-    }
-    return zip_run_to(c, pl, cv, r, curve_index_near(pl, ua), curve_index_near(pl, ub));
+    if (!pl->closed)
+        for (size_t e = 0; e < len; e += len - 1) {
+            double end = round(U[e] / pl->length) * pl->length;
+            if (fabs(U[e] - end) < ext)
+                U[e] = end;
+            if (len == 1)
+                break;
+        }
+    return zip_seq(c, pl, cv, row, U, len, curve_index_near(pl, U[0]),
+                   curve_index_near(pl, U[len - 1]));
 }
 
-/* Rings between the rim and the curve, projected; returns the innermost row (the loop's own
- * vertices when no ring is needed). */
 static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot)
 {
     double width = 0;
@@ -198,35 +224,73 @@ static size_t argext(const double *u, size_t n, int sign)
     return k;
 }
 
-static bool zip_loop(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv, const cf_loop *l,
-                     const double *u, const uint32_t *row, double rho)
+/* Copies the loop's stretch first .. first + len − 1 (cyclically) into row/U, unfolding the
+ * parameters after index `turn` (relative; len when none) about the curve end `end`. */
+static void take(const uint32_t *row_in, const double *u, size_t n, size_t first, size_t len,
+                 size_t turn, double end, uint32_t *row, double *U)
 {
-    long wind = unwrap(pl, l, (double *)u);
-    zip_run r = {row, u, l->n, 0, l->n, 0};
+    for (size_t i = 0; i < len; i++) {
+        size_t k = (first + i) % n;
+        row[i] = row_in[k];
+        U[i] = i <= turn ? u[k] : 2 * end - u[k];
+    }
+}
+
+static bool zip_loop(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv, const cf_loop *l,
+                     double *u, const uint32_t *row_in, double rho)
+{
+    size_t n = l->n;
+    double ext = END_SNAP_RHO * rho, L = pl->length;
+    uint32_t *row = malloc((n + 1) * sizeof *row);
+    double *U = malloc((n + 1) * sizeof *U);
+    if (!row || !U) {
+        free(row);
+        free(U);
+        return false;
+    }
+    bool ok;
+    long wind = unwrap(pl, l, u);
+    size_t imin = argext(u, n, -1), imax = argext(u, n, 1);
     if (wind == 1 || wind == -1) { /* once round a closed curve: one cyclic run */
-        r.len = l->n + 1;
-        r.end_shift = (double)wind * pl->length;
+        take(row_in, u, n, 0, n + 1, n + 1, 0, row, U);
+        U[n] = u[0] + (double)wind * L;
         long Ja = curve_index_near(pl, u[0]);
-        return zip_run_to(c, pl, cv, &r, Ja, Ja + wind * (long)pl->n);
+        ok = zip_seq(c, pl, cv, row, U, n + 1, Ja, Ja + wind * (long)pl->n);
+    } else if (l->closed && !pl->closed && u[imin] < ext && u[imax] > L - ext) {
+        /* round a double segment, turning at both ends: one cycle of the unfolded curve */
+        size_t up = (imax + n - imin) % n; /* steps from imin to imax going forward */
+        take(row_in, u, n, imin, n + 1, up, L, row, U);
+        U[0] = 0;
+        U[up] = L;
+        U[n] = 2 * L;
+        ok = zip_seq(c, pl, cv, row, U, n + 1, 0, period_steps(pl));
+    } else if (l->closed) {
+        size_t a = (imax + n - imin) % n + 1, b = (imin + n - imax) % n + 1;
+        take(row_in, u, n, imin, a, a, 0, row, U);
+        ok = zip_open_seq(c, pl, cv, row, U, a, ext);
+        take(row_in, u, n, imax, b, b, 0, row, U);
+        ok = ok && zip_open_seq(c, pl, cv, row, U, b, ext);
+    } else {
+        /* an open chain: does it turn (an extreme beyond both ends by more than rho)? */
+        double lo = fmin(u[0], u[n - 1]), hi = fmax(u[0], u[n - 1]);
+        size_t turn = lo - u[imin] > rho ? imin : u[imax] - hi > rho ? imax : n;
+        bool at_end = turn < n && !pl->closed && (turn == imin ? u[imin] < ext : u[imax] > L - ext);
+        if (turn == n || at_end) { /* one run, unfolded round the end it turns at */
+            take(row_in, u, n, 0, n, at_end ? turn : n, turn == imin ? 0 : L, row, U);
+            if (at_end && turn == imin)
+                for (size_t i = 0; i < n; i++)
+                    U[i] = -U[i]; /* reflected at 0: the way down first */
+            ok = zip_open_seq(c, pl, cv, row, U, n, ext);
+        } else { /* turns away from the curve's ends: two runs */
+            take(row_in, u, n, 0, turn + 1, n, 0, row, U);
+            ok = zip_open_seq(c, pl, cv, row, U, turn + 1, ext);
+            take(row_in, u, n, turn, n - turn, n, 0, row, U);
+            ok = ok && zip_open_seq(c, pl, cv, row, U, n - turn, ext);
+        }
     }
-    if (!l->closed) {
-        size_t imin = argext(u, l->n, -1), imax = argext(u, l->n, 1);
-        double a = u[0], b = u[l->n - 1];
-        size_t split = fmin(a, b) - u[imin] > rho ? imin : u[imax] - fmax(a, b) > rho ? imax : 0;
-        if (split == 0 || split == l->n - 1)
-            return zip_open_run(c, pl, cv, &r, END_SNAP_RHO * rho);
-        r.len = split + 1;
-        zip_run r2 = {row, u, l->n, split, l->n - split, 0};
-        return zip_open_run(c, pl, cv, &r, END_SNAP_RHO * rho) &&
-               zip_open_run(c, pl, cv, &r2, END_SNAP_RHO * rho);
-    }
-    size_t imin = argext(u, l->n, -1), imax = argext(u, l->n, 1);
-    if (imin == imax)
-        return cf_fan_centroid(c, l);
-    zip_run r1 = {row, u, l->n, imin, (imax + l->n - imin) % l->n + 1, 0};
-    zip_run r2 = {row, u, l->n, imax, (imin + l->n - imax) % l->n + 1, 0};
-    return zip_open_run(c, pl, cv, &r1, END_SNAP_RHO * rho) &&
-           zip_open_run(c, pl, cv, &r2, END_SNAP_RHO * rho);
+    free(row);
+    free(U);
+    return ok;
 }
 
 /* Nearest curve of the group to p: its index (or -1 when none lies within reach), the

@@ -147,6 +147,12 @@ static void expect_accuracy(const run_result *r, const char *what)
                   "elsewhere %g", what, r->max_near, r->max_far);
 }
 
+static double d2_test(const double *a, const double *b)
+{
+    return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+           (a[2] - b[2]) * (a[2] - b[2]);
+}
+
 static double dist_to_points(const double p[3], const void *arg)
 {
     const ism_locus *l = arg;
@@ -324,7 +330,6 @@ Test(conform, touching_spheres_one_vertex_two_cones)
 /* ---- two unit spheres at x = ±1/2 crossing in the circle x = 0, r = √3/2 ---- */
 
 #define CIRCLE_R 0.86602540378443864676 /* sqrt(0.75) */
-#define CIRCLE_POINTS 128
 
 static double dist_to_circle(const double p[3], const void *arg)
 {
@@ -361,6 +366,10 @@ static void nm_edges(const ism_mesh *m, locus_dist_fn dist, size_t *n, size_t *f
         (*n)++;
         *four += j - i == 4;
         uint32_t v[2] = {(uint32_t)(e[i] >> 32), (uint32_t)e[i]};
+        if (getenv("CONFORM_DEBUG") && fmax(dist(m->pos + 3 * (size_t)v[0], NULL), dist(m->pos + 3 * (size_t)v[1], NULL)) > 1e-9)
+            for (size_t tt = 0; tt < m->ntris && getenv("CF_TRIS"); tt++) { const uint32_t *q = m->tri + 3 * tt; int hit = 0; for (int z = 0; z < 3; z++) hit += q[z] == v[0] || q[z] == v[1]; if (hit == 2) fprintf(stderr, "    tri %zu: %u %u %u\n", tt, q[0], q[1], q[2]); }
+        if (getenv("CONFORM_DEBUG") && fmax(dist(m->pos + 3 * (size_t)v[0], NULL), dist(m->pos + 3 * (size_t)v[1], NULL)) > 1e-9)
+            fprintf(stderr, "  nm edge %u %u x%zu (%g %g %g)-(%g %g %g)\n", v[0], v[1], j - i, m->pos[3*(size_t)v[0]], m->pos[3*(size_t)v[0]+1], m->pos[3*(size_t)v[0]+2], m->pos[3*(size_t)v[1]], m->pos[3*(size_t)v[1]+1], m->pos[3*(size_t)v[1]+2]);
         for (int k = 0; k < 2; k++)
             *far = fmax(*far, dist(m->pos + 3 * (size_t)v[k], NULL));
     }
@@ -379,11 +388,13 @@ Test(conform, crossing_spheres_zipped_along_the_circle)
         shifted_box(base, shift_amount(w, base, dmax), box);
         ism_locus l;
         ism_locus_init(&l);
-        ism_sing_curve c = {.kind = ISM_CURVE_DOUBLE, .closed = true, .n = CIRCLE_POINTS,
+        /* points about a finest cell apart (the pass keeps points half a cell apart) */
+        const int npts = (int)ceil(2 * M_PI * CIRCLE_R / pf_cell(box, dmax));
+        ism_sing_curve c = {.kind = ISM_CURVE_DOUBLE, .closed = true, .n = (size_t)npts,
                             .end_type = {ISM_END_BOX, ISM_END_BOX}, .end_point = {-1, -1}};
-        cr_assert(c.xyz = malloc(3 * CIRCLE_POINTS * sizeof *c.xyz));
-        for (int i = 0; i < CIRCLE_POINTS; i++) {
-            double a = 2 * M_PI * i / CIRCLE_POINTS;
+        cr_assert(c.xyz = malloc(3 * (size_t)npts * sizeof *c.xyz));
+        for (int i = 0; i < npts; i++) {
+            double a = 2 * M_PI * i / npts;
             c.xyz[3 * i] = 0;
             c.xyz[3 * i + 1] = CIRCLE_R * cos(a);
             c.xyz[3 * i + 2] = CIRCLE_R * sin(a);
@@ -398,8 +409,8 @@ Test(conform, crossing_spheres_zipped_along_the_circle)
         double far;
         nm_edges(&m, dist_to_circle, &n, &four, &far);
         cr_expect_eq(r.st.curves_conformed, 1, "%s: curve not conformed", what);
-        cr_expect_eq(n, CIRCLE_POINTS, "%s: %zu non-manifold edges, expected the circle's %d",
-                     what, n, CIRCLE_POINTS);
+        cr_expect_eq(n, (size_t)npts, "%s: %zu non-manifold edges, expected the circle's %d",
+                     what, n, npts);
         cr_expect_eq(four, n, "%s: %zu of %zu non-manifold edges have 4 triangles", what, four, n);
         cr_expect_leq(far, 1e-9, "%s: a non-manifold edge's vertex %g from the circle", what, far);
         cr_expect_eq(r.a.components, 1, "%s: %zu components", what, r.a.components);
@@ -490,8 +501,6 @@ Test(conform, cylinder_and_plane_lines_to_the_box)
 
 /* ---- three coordinate planes: six half-axes meeting at a triple point ---- */
 
-#define HALF_AXIS_STEP 0.05
-
 static double dist_to_axes(const double p[3], const void *arg)
 {
     (void)arg;
@@ -499,11 +508,11 @@ static double dist_to_axes(const double p[3], const void *arg)
 }
 
 /* Half-axis k (0..5: +x, -x, +y, -y, +z, -z) from the triple point (point 0) to the box. */
-static size_t add_half_axis(ism_locus *l, const double box[6], int k)
+static size_t add_half_axis(ism_locus *l, const double box[6], int k, double step)
 {
     int axis = k / 2;
     double end = k % 2 ? box[axis] : box[axis + 3];
-    size_t n = (size_t)ceil(fabs(end) / HALF_AXIS_STEP) + 1;
+    size_t n = (size_t)ceil(fabs(end) / step) + 1;
     ism_sing_curve c = {.kind = ISM_CURVE_DOUBLE, .closed = false, .n = n,
                         .end_type = {ISM_END_TRIPLE, ISM_END_BOX}, .end_point = {0, -1}};
     cr_assert(c.xyz = calloc(3 * n, sizeof *c.xyz));
@@ -527,7 +536,7 @@ Test(conform, three_planes_triple_point)
         add_point(&l, 0, 0, 0, ISM_SING_TRIPLE);
         size_t edges = 0;
         for (int k = 0; k < 6; k++)
-            edges += add_half_axis(&l, box, k);
+            edges += add_half_axis(&l, box, k, pf_cell(box, dmax));
         ism_mesh m;
         run_result r;
         run(t, box, dmax, &l, dist_to_axes, NULL, &m, &r);
@@ -548,6 +557,87 @@ Test(conform, three_planes_triple_point)
         cr_expect_eq(r.a.euler, 1, "%s: χ = %ld, expected 1", what, r.a.euler);
         cr_expect_eq(r.st.artefact_edges + r.st.artefact_vertices, 0, "%s: artefacts %zu + %zu",
                      what, r.st.artefact_edges, r.st.artefact_vertices);
+        ism_analysis_free(&r.a);
+        ism_mesh_free(&m);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
+
+/* ---- Steiner's Roman surface: double segments from a triple point to six pinch points ---- */
+
+static double dist_to_segments(const double p[3], const void *arg)
+{
+    (void)arg;
+    double best = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        double t = fmax(-0.5, fmin(0.5, p[a])), q[3] = {0, 0, 0};
+        q[a] = t;
+        best = fmin(best, sqrt(d2_test(p, q)));
+    }
+    return best;
+}
+
+/* Segment from the origin (point 0) to the pinch point 1 + k at ±1/2 on axis k / 2. */
+static size_t add_segment(ism_locus *l, int k, bool whisker, const double box[6], double step)
+{
+    int axis = k / 2;
+    double sign = k % 2 ? -1 : 1, a = whisker ? 0.5 : 0, b = whisker ? fabs(box[axis + (k % 2 ? 0 : 3)]) : 0.5;
+    size_t n = (size_t)ceil((b - a) / step) + 1;
+    ism_sing_curve c = {.kind = whisker ? ISM_CURVE_WHISKER : ISM_CURVE_DOUBLE, .n = n,
+                        .end_type = {whisker ? ISM_END_PINCH : ISM_END_TRIPLE,
+                                     whisker ? ISM_END_BOX : ISM_END_PINCH},
+                        .end_point = {whisker ? 1 + k : 0, whisker ? -1 : 1 + k}};
+    cr_assert(c.xyz = calloc(3 * n, sizeof *c.xyz));
+    for (size_t i = 0; i < n; i++)
+        c.xyz[3 * i + axis] = sign * (a + (b - a) * (double)i / (double)(n - 1));
+    cr_assert(ism_locus_add_curve(l, &c));
+    return n - 1;
+}
+
+Test(conform, steiner_roman_pinch_and_triple_points)
+{
+    const pf_surface s = {"x^2*y^2 + y^2*z^2 + z^2*x^2 + x*y*z", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double base[6] = {-1, -1, -1, 1, 1, 1};
+    int dmax = 6 - pf_quick();
+    for (int w = 0; w < 3; w++) {
+        double box[6];
+        shifted_box(base, shift_amount(w, base, dmax), box);
+        ism_locus l;
+        ism_locus_init(&l);
+        add_point(&l, 0, 0, 0, ISM_SING_TRIPLE);
+        for (int k = 0; k < 6; k++) {
+            double p[3] = {0, 0, 0};
+            p[k / 2] = k % 2 ? -0.5 : 0.5;
+            add_point(&l, p[0], p[1], p[2], ISM_SING_PINCH);
+        }
+        size_t edges = 0;
+        for (int k = 0; k < 6; k++) {
+            edges += add_segment(&l, k, false, box, pf_cell(box, dmax));
+            add_segment(&l, k, true, box, pf_cell(box, dmax));
+        }
+        ism_mesh m;
+        run_result r;
+        run(t, box, dmax, &l, dist_to_segments, NULL, &m, &r);
+        char what[64];
+        snprintf(what, sizeof what, "steiner, shift %d", w);
+        size_t n, four;
+        double far;
+        nm_edges(&m, dist_to_segments, &n, &four, &far);
+        cr_expect_eq(r.st.curves_conformed, 6, "%s: %zu curves conformed", what,
+                     r.st.curves_conformed);
+        cr_expect_eq(n, edges, "%s: %zu non-manifold edges, expected %zu", what, n, edges);
+        cr_expect_eq(four, n, "%s: %zu of %zu non-manifold edges have 4 triangles", what, four, n);
+        cr_expect_leq(far, 1e-9, "%s: a non-manifold edge's vertex %g off the segments", what, far);
+        cr_expect_eq(r.a.components, 1, "%s: %zu components", what, r.a.components);
+        /* RP² immersed: χ(image) = χ(RP²) − Σ (preimages − 1) χ(stratum) over the double
+         * set = 1 − (6 open half-segments × 1 × (−1) + triple point × 2 × 1) = 5 */
+        cr_expect_eq(r.a.euler, 5, "%s: χ = %ld, expected 5", what, r.a.euler);
+        cr_expect_eq(r.a.boundary_edges, 0, "%s: %zu boundary edges", what, r.a.boundary_edges);
+        cr_expect_eq(r.st.artefact_edges + r.st.artefact_vertices, 0, "%s: artefacts %zu + %zu",
+                     what, r.st.artefact_edges, r.st.artefact_vertices);
+        expect_accuracy(&r, what);
         ism_analysis_free(&r.a);
         ism_mesh_free(&m);
         ism_locus_free(&l);
