@@ -376,13 +376,16 @@ bool cf_rim_clear(cf_ctx *c, const cf_loops *ls, double clearance)
 #define GROW 1.4
 #define MAX_GROW 6
 
-bool cf_cut_clean(cf_ctx *c, cf_tri_pred pred, const void *arg, double *radius, cf_loops *ls,
-                  uint32_t **removed, size_t *nremoved)
+bool cf_cut_clean(cf_ctx *c, cf_tri_pred pred, const void *arg, double *radius,
+                  double max_radius, cf_loops *ls, uint32_t **removed, size_t *nremoved)
 {
+    if (*radius > max_radius)
+        *radius = max_radius;
     for (int k = 0;; k++) {
         if (!cf_cut_hole(c, pred, arg, ls, removed, nremoved))
             return false;
-        if (k == MAX_GROW || ls->n == 0 || cf_rim_clear(c, ls, CLEAR_CELLS * c->cell))
+        if (k == MAX_GROW || ls->n == 0 || *radius * GROW > max_radius ||
+            cf_rim_clear(c, ls, CLEAR_CELLS * c->cell))
             return true;
         cf_undo(c, *removed, *nremoved, c->m->ntris, c->m->nverts);
         free(*removed);

@@ -97,9 +97,10 @@ typedef bool (*cf_tri_pred)(const cf_ctx *c, uint32_t t, const void *arg);
 bool cf_cut_hole(cf_ctx *c, cf_tri_pred near, const void *arg, cf_loops *out,
                  uint32_t **removed, size_t *nremoved);
 /* cf_cut_hole, grown (*radius, which pred reads through arg, times a factor) until the rim
- * is clear of other sheets (cf_rim_clear), a bounded number of times. */
-bool cf_cut_clean(cf_ctx *c, cf_tri_pred pred, const void *arg, double *radius, cf_loops *ls,
-                  uint32_t **removed, size_t *nremoved);
+ * is clear of other sheets (cf_rim_clear), a bounded number of times and never beyond
+ * max_radius. */
+bool cf_cut_clean(cf_ctx *c, cf_tri_pred pred, const void *arg, double *radius,
+                  double max_radius, cf_loops *ls, uint32_t **removed, size_t *nremoved);
 /* Undoes a cut whose refilling failed: revives the triangles, drops everything appended
  * since (ntris, nverts). */
 void cf_undo(cf_ctx *c, const uint32_t *removed, size_t nremoved, size_t ntris, size_t nverts);

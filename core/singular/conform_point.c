@@ -10,6 +10,10 @@
 
 /* A point counts as inside the box within this fraction of a cell. */
 #define BOX_SLACK 1e-6
+/* The ball never reaches past this fraction of the distance to the nearest other point or
+ * curve of the locus: two balls never overlap, and a small part of the surface between two
+ * nodes is never swallowed whole. */
+#define RHO_SEPARATION 0.45
 
 static double d2(const double *a, const double *b)
 {
@@ -46,6 +50,20 @@ static double loop_mean_dist(const cf_ctx *c, const cf_loop *l, const double p[3
     return s;
 }
 
+/* Distance from point i to the rest of the locus (other points, curves' points). */
+static double locus_clearance(const cf_run *r, size_t i)
+{
+    const double *p = r->l->points[i].p;
+    double best = INFINITY;
+    for (size_t k = 0; k < r->l->npoints; k++)
+        if (k != i)
+            best = fmin(best, d2(p, r->l->points[k].p));
+    for (size_t k = 0; k < r->l->ncurves; k++)
+        for (size_t j = 0; j < r->l->curves[k].n; j++)
+            best = fmin(best, d2(p, r->l->curves[k].xyz + 3 * j));
+    return sqrt(best);
+}
+
 bool cf_conform_point(cf_run *r, size_t i)
 {
     cf_ctx *c = &r->c;
@@ -62,7 +80,7 @@ bool cf_conform_point(cf_run *r, size_t i)
     size_t nt0 = c->m->ntris, nv0 = c->m->nverts, nrm;
     uint32_t *rm;
     cf_loops ls;
-    if (!cf_cut_clean(c, tri_in_ball, &b, &b.r, &ls, &rm, &nrm))
+    if (!cf_cut_clean(c, tri_in_ball, &b, &b.r, RHO_SEPARATION * locus_clearance(r, i), &ls, &rm, &nrm))
         return false;
     if (ls.n == 0) { /* no mesh around the point: nothing to join */
         cf_undo(c, rm, nrm, nt0, nv0);

@@ -178,7 +178,7 @@ bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
     size_t nt0 = c->m->ntris, nv0 = c->m->nverts, nrm = 0;
     uint32_t *rm = NULL;
     cf_loops ls = {0};
-    ok = cf_cut_clean(c, tri_in_tube, &tb, &tb.r, &ls, &rm, &nrm);
+    ok = cf_cut_clean(c, tri_in_tube, &tb, &tb.r, INFINITY, &ls, &rm, &nrm);
     if (ok && ls.n == 0) {
         cf_undo(c, rm, nrm, nt0, nv0);
         c->st->curves_failed += g.n;

@@ -31,6 +31,9 @@
  * cap (a box exit, a pinch point, a junction of curves, where a rim vertex on the bisector of
  * two curves lies about rho along each). */
 #define END_SNAP_RHO 2.0
+/* A chain whose extreme parameter near an end of its curve exceeds both its own ends by this
+ * many rho turns round that end (a rim's parameters wiggle by less along a tube's side). */
+#define TURN_MIN_RHO 0.25
 
 static double dist(const double *a, const double *b)
 {
@@ -141,19 +144,21 @@ static bool zip_seq(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv, const 
     return true;
 }
 
-/* An open stretch: its end parameters within ext of a fold (an end of an open curve) are
- * taken there. */
+/* An open stretch: an end parameter within ext of a fold (an end of an open curve) beyond
+ * it is taken there — the stretch grows to the curve's end, never shrinks towards it. */
 static bool zip_open_seq(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv,
                          const uint32_t *row, double *U, size_t len, double ext)
 {
-    if (!pl->closed)
-        for (size_t e = 0; e < len; e += len - 1) {
-            double end = round(U[e] / pl->length) * pl->length;
-            if (fabs(U[e] - end) < ext)
-                U[e] = end;
-            if (len == 1)
-                break;
-        }
+    if (!pl->closed && len > 1) {
+        double L = pl->length, *first = &U[0], *last = &U[len - 1];
+        bool up = *last >= *first;
+        double a = (up ? floor(*first / L) : ceil(*first / L)) * L;
+        double b = (up ? ceil(*last / L) : floor(*last / L)) * L;
+        if (fabs(*first - a) < ext)
+            *first = a;
+        if (fabs(*last - b) < ext)
+            *last = b;
+    }
     return zip_seq(c, pl, cv, row, U, len, curve_index_near(pl, U[0]),
                    curve_index_near(pl, U[len - 1]));
 }
@@ -271,10 +276,14 @@ static bool zip_loop(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv, const
         take(row_in, u, n, imax, b, b, 0, row, U);
         ok = ok && zip_open_seq(c, pl, cv, row, U, b, ext);
     } else {
-        /* an open chain: does it turn (an extreme beyond both ends by more than rho)? */
-        double lo = fmin(u[0], u[n - 1]), hi = fmax(u[0], u[n - 1]);
-        size_t turn = lo - u[imin] > rho ? imin : u[imax] - hi > rho ? imax : n;
-        bool at_end = turn < n && !pl->closed && (turn == imin ? u[imin] < ext : u[imax] > L - ext);
+        /* an open chain: does it turn round an end of the curve (an extreme near it, beyond
+         * both ends of the chain), or away from the ends (beyond both by more than rho)? */
+        double lo = fmin(u[0], u[n - 1]), hi = fmax(u[0], u[n - 1]), m = TURN_MIN_RHO * rho;
+        bool fold_lo = !pl->closed && lo - u[imin] > m && u[imin] < ext;
+        bool fold_hi = !pl->closed && u[imax] - hi > m && u[imax] > L - ext;
+        size_t turn = fold_hi ? imax : fold_lo ? imin : lo - u[imin] > rho ? imin
+                    : u[imax] - hi > rho ? imax : n;
+        bool at_end = fold_lo || fold_hi;
         if (turn == n || at_end) { /* one run, unfolded round the end it turns at */
             take(row_in, u, n, 0, n, at_end ? turn : n, turn == imin ? 0 : L, row, U);
             if (at_end && turn == imin)

@@ -366,10 +366,10 @@ static void nm_edges(const ism_mesh *m, locus_dist_fn dist, size_t *n, size_t *f
         (*n)++;
         *four += j - i == 4;
         uint32_t v[2] = {(uint32_t)(e[i] >> 32), (uint32_t)e[i]};
-        if (getenv("CONFORM_DEBUG") && fmax(dist(m->pos + 3 * (size_t)v[0], NULL), dist(m->pos + 3 * (size_t)v[1], NULL)) > 1e-9)
-            for (size_t tt = 0; tt < m->ntris && getenv("CF_TRIS"); tt++) { const uint32_t *q = m->tri + 3 * tt; int hit = 0; for (int z = 0; z < 3; z++) hit += q[z] == v[0] || q[z] == v[1]; if (hit == 2) fprintf(stderr, "    tri %zu: %u %u %u\n", tt, q[0], q[1], q[2]); }
-        if (getenv("CONFORM_DEBUG") && fmax(dist(m->pos + 3 * (size_t)v[0], NULL), dist(m->pos + 3 * (size_t)v[1], NULL)) > 1e-9)
-            fprintf(stderr, "  nm edge %u %u x%zu (%g %g %g)-(%g %g %g)\n", v[0], v[1], j - i, m->pos[3*(size_t)v[0]], m->pos[3*(size_t)v[0]+1], m->pos[3*(size_t)v[0]+2], m->pos[3*(size_t)v[1]], m->pos[3*(size_t)v[1]+1], m->pos[3*(size_t)v[1]+2]);
+        const double *a = m->pos + 3 * (size_t)v[0], *b = m->pos + 3 * (size_t)v[1];
+        if (getenv("CONFORM_DEBUG") && (j - i != 4 || fmax(dist(a, NULL), dist(b, NULL)) > 1e-9))
+            fprintf(stderr, "  edge %u-%u with %zu triangles: (%g %g %g)-(%g %g %g)\n", v[0],
+                    v[1], j - i, a[0], a[1], a[2], b[0], b[1], b[2]);
         for (int k = 0; k < 2; k++)
             *far = fmax(*far, dist(m->pos + 3 * (size_t)v[k], NULL));
     }
