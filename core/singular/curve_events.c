@@ -32,12 +32,14 @@ bool ism_cevent_clip(ism_ctracer *tr, const ism_cpoint *cur, ism_cpoint *nxt)
         int axis = -1;
         double lam = 2.0, face = 0.0;
         for (int k = 0; k < 3; k++) {
-            double lo = tr->box[k], hi = tr->box[k + 3], l;
-            if (b[k] < lo && (l = (lo - a[k]) / (b[k] - a[k])) < lam)
-                lam = l, axis = k, face = lo;
-            if (b[k] > hi && (l = (hi - a[k]) / (b[k] - a[k])) < lam)
-                lam = l, axis = k, face = hi;
+            int side = ism_ctracer_side(tr, k, b[k]);
+            double f = tr->box[side < 0 ? k : k + 3];
+            double l = side ? (f - a[k]) / (b[k] - a[k]) : 2.0;
+            if (l < lam)
+                lam = fmax(l, 0.0), axis = k, face = f;
         }
+        if (axis < 0)
+            return false; /* NaN */
         double s[3], P[2][3] = {{0, 0, 0}, {0, 0, 0}}, r[3];
         for (int k = 0; k < 3; k++)
             s[k] = a[k] + lam * (b[k] - a[k]);

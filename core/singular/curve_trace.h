@@ -57,6 +57,12 @@ typedef struct ism_ctracer {
 void ism_ctrace(ism_ctracer *tr, const ism_cpoint *start, int ignore_point, bool closable,
                 ism_cpath *path);
 
+/* Whether p is in the box, up to Newton's tolerance (a curve lying in a face of the box, as
+ * the axes of xyz = 0 in [0, 1]³, stays inside). */
 bool ism_ctracer_inside(const ism_ctracer *tr, const double p[3]);
+
+/* -1 / +1 when coordinate k of a point, v, is beyond the box's low / high face (with the
+ * same tolerance), else 0. */
+int ism_ctracer_side(const ism_ctracer *tr, int k, double v);
 
 #endif

@@ -603,6 +603,37 @@ Test(singular_curves, three_spheres_two_triple_points_six_arcs)
     }
 }
 
+/* The same in the octant [0, 1]³: the axes now run along the box's edges (in two faces each),
+ * which rounding puts a hair outside; three branches meet at the corner. Deliberately
+ * lattice-aligned: that is the case. */
+Test(singular_curves, xyz_axes_along_the_edges_of_the_box)
+{
+    static const double box[6] = {0, 0, 0, 1, 1, 1};
+    static const double origin[3] = {0, 0, 0};
+    fixture fx;
+    setup(&fx, "x*y*z", box, 0);
+    cover_axes(&fx, 2);
+    run(&fx);
+    double tol = ON_LOCUS * fx.diag;
+    cr_assert_eq(fx.l.npoints, 1, "%zu points", fx.l.npoints);
+    cr_assert_eq(point_at(&fx, ISM_SING_TRIPLE, origin, tol), 0);
+    cr_assert_eq(fx.l.ncurves, 3, "%zu curves", fx.l.ncurves);
+    int seen = 0;
+    for (size_t i = 0; i < 3; i++) {
+        const ism_sing_curve *c = &fx.l.curves[i];
+        axis_part a = axis_summary(c);
+        cr_assert(c->kind == ISM_CURVE_DOUBLE && ends_are(c, ISM_END_TRIPLE, ISM_END_BOX));
+        cr_assert_leq(a.off, tol);
+        cr_assert_leq(fabs(a.lo), tol);
+        cr_assert_eq(a.hi, 1.0);
+        seen |= 1 << a.axis;
+    }
+    cr_assert_eq(seen, 7);
+    assert_boxes_used(&fx);
+    assert_all_steps(&fx);
+    teardown(&fx);
+}
+
 /* Seeds the cells along the lines through 0 in the directions dirs[k] (unit), |s| ≤ reach. */
 static void cover_lines(fixture *fx, const double dirs[3][3], double reach)
 {
