@@ -11,8 +11,9 @@
 /* Traces every singular curve through the seed boxes of io->boxes (ISM_LBOX_PROJECTED,
  * rank 2, not ISM_LBOX_USED) inside o->box, both ways from each seed, and appends to
  * io->curves:
- *   - polylines whose points lie within 1e-9 × box diagonal of f = ∇f = 0, steps at most
- *     half a finest search cell (smallest box side / 2^max_depth);
+ *   - polylines whose points lie within 1e-9 × box diagonal of f = ∇f = 0, consecutive
+ *     points between 0.05 and ~0.55 of a finest search cell (smallest box side /
+ *     2^max_depth) apart, except next to pinch points and ends;
  *   - kind DOUBLE where the Hessian across the curve is indefinite, WHISKER where definite;
  *     a curve changing kind is split at the pinch point between (located to 1e-10 ×
  *     diagonal), which is added to io->points as ISM_SING_PINCH, uncertified;
@@ -20,9 +21,10 @@
  *     PINCH, TRIPLE (where ≥ 3 branches end at a collapse of the Hessian: the point is added
  *     once as ISM_SING_TRIPLE, or an existing point there is retyped so), POINT (an existing
  *     point, or a collapse point where < 3 branches end, added as ISM_SING_DEGENERATE), LOST.
- * Boxes the curves and their points explain are marked ISM_LBOX_USED. Seeds whose projected
- * point does not lead onto a curve of the zero set (|f| not ~0, an isolated critical point)
- * are left unmarked. Stops at o->deadline_ms, *o->cancel or the work budget with
+ * Boxes the curves and their points explain are marked ISM_LBOX_USED (any rank: those the
+ * polylines pass through, and those whose q lies within 1/16 cell of one). Seeds whose q
+ * does not lead onto a curve of the zero set inside the box (|f| not ~0, an isolated
+ * critical point, Hessian rank 1, a point beyond the box's face) are left unmarked. Stops at o->deadline_ms, *o->cancel or the work budget with
  * io->incomplete set and a reason (what was traced stays valid); a LOST end also sets it. o->threads is not used
  * (tracing is a small, sequential part of the stage). False (err set) only on invalid
  * options or out of memory. */
