@@ -8,7 +8,7 @@
 #include "core/singular/curve_jet.h"
 
 /* Grid coordinates per axis: 21 bits, so a cell key packs into 63 bits (a search of depth
- * ≤ 20 has ≤ 2^20 cells a side). */
+ * ≤ 20 has ≤ 2^20 cells a side). Each box is filed once, under the cell of its centre. */
 #define CINDEX_AXIS_BITS 21
 #define CINDEX_AXIS_MAX ((1 << CINDEX_AXIS_BITS) - 1)
 
@@ -47,7 +47,7 @@ bool ism_cindex_build(ism_cindex *x, ism_lbox *boxes, size_t n, const double box
         for (int k = 0; k < 3; k++)
             x->cell = fmax(x->cell, boxes[b].hi[k] - boxes[b].lo[k]);
     memcpy(x->origin, box, sizeof x->origin);
-    ism_cindex_key *keys = malloc((8 * n + 1) * sizeof *keys);
+    ism_cindex_key *keys = malloc((n + 1) * sizeof *keys);
     x->stamp = calloc(n + 1, sizeof *x->stamp);
     x->head = malloc((n + 1) * sizeof *x->head);
     if (!keys || !x->stamp || !x->head) {
@@ -56,19 +56,12 @@ bool ism_cindex_build(ism_cindex *x, ism_lbox *boxes, size_t n, const double box
         return false;
     }
     size_t m = 0;
-    for (size_t b = 0; b < n; b++) {
+    for (size_t b = 0; b < n; b++) { /* each box in the cell of its centre */
         x->head[b] = -1;
-        int lo[3], hi[3];
-        for (int k = 0; k < 3; k++) {
-            lo[k] = axis_cell(x, k, boxes[b].lo[k]);
-            hi[k] = axis_cell(x, k, boxes[b].hi[k]);
-            if (hi[k] > lo[k] + 1) /* only a NaN box could: keep the bound */
-                hi[k] = lo[k] + 1;
-        }
-        for (int i = lo[0]; i <= hi[0]; i++)
-            for (int j = lo[1]; j <= hi[1]; j++)
-                for (int k = lo[2]; k <= hi[2]; k++)
-                    keys[m++] = (ism_cindex_key){cell_key(i, j, k), (uint32_t)b};
+        int c[3];
+        for (int k = 0; k < 3; k++)
+            c[k] = axis_cell(x, k, 0.5 * (boxes[b].lo[k] + boxes[b].hi[k]));
+        keys[m++] = (ism_cindex_key){cell_key(c[0], c[1], c[2]), (uint32_t)b};
     }
     qsort(keys, m, sizeof *keys, cmp_key);
     x->keys = keys;
@@ -88,14 +81,15 @@ void ism_cindex_free(ism_cindex *x)
 
 typedef void (*visit_fn)(ism_cindex *x, uint32_t box, void *ctx);
 
-/* Calls fn once for every box whose grid cells meet the axis-aligned box [lo, hi] (a range
- * of at most a few cells: callers pass segments of at most a cell, grown by ≤ a cell). */
+/* Calls fn once for every box that may meet the axis-aligned box [lo, hi]: those whose centre
+ * is within half a grid cell of it (a box's side is at most a cell). Callers pass regions of
+ * at most a cell or so; the range is capped at four cells a side. */
 static void visit(ism_cindex *x, const double lo[3], const double hi[3], visit_fn fn, void *ctx)
 {
     int a[3], b[3];
     for (int k = 0; k < 3; k++) {
-        a[k] = axis_cell(x, k, lo[k]);
-        b[k] = axis_cell(x, k, hi[k]);
+        a[k] = axis_cell(x, k, lo[k] - 0.5 * x->cell);
+        b[k] = axis_cell(x, k, hi[k] + 0.5 * x->cell);
         if (b[k] > a[k] + 3)
             b[k] = a[k] + 3;
     }

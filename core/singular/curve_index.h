@@ -13,8 +13,9 @@
 typedef struct ism_cindex {
     ism_lbox *boxes;       /* the locus's boxes (flags are updated in place) */
     size_t nboxes;
-    double origin[3], cell;/* grid: cell ≥ every box's side, so a box meets ≤ 8 cells */
-    struct ism_cindex_key { uint64_t key; uint32_t box; } *keys; /* sorted by cell key */
+    double origin[3], cell;/* grid: cell ≥ every box's side */
+    struct ism_cindex_key { uint64_t key; uint32_t box; } *keys; /* by the cell of the box's
+                                                                     centre, sorted */
     size_t nkeys;
     uint32_t *stamp;       /* per box: last query that visited it (no double visits) */
     uint32_t query;
