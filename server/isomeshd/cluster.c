@@ -14,6 +14,7 @@
 
 #include "server/common/cache_redis.h"
 #include "server/common/log.h"
+#include "server/isomeshd/jobs.h"
 #include "server/isomeshd/shared_cache.h"
 
 #define P ISM_REDIS_KEY_PREFIX
@@ -483,4 +484,172 @@ ismd_cluster *ismd_cluster_start(ismd_shared *sh, ismd_sched *sched, ism_cache_t
     }
     ism_cache_redis_schedule(redis, &c->take, 0);
     return c;
+}
+
+/* ---- jobs seen through any daemon ---------------------------------------------------- */
+
+#define JOBREC_TTL_MS "7200000" /* outlives a finished job's 30 minutes and its longest run */
+
+typedef struct jobtask {
+    ism_redis_task base;       /* first: the tier hands this back */
+    ismd_cluster *c;
+    ismd_waiter *w;            /* lookup: who gets the answer; NULL: a record to write */
+    char id[40], user[ISMD_QUEUE_USER_MAX], key[65], fmt[8];
+    long long created_unix;
+} jobtask;
+
+static long long jobtask_end(jobtask *j)
+{
+    ismd_shared *sh = j->c->sh;
+    free(j);
+    ismd_shared_task_ended(sh);
+    return 0;
+}
+
+static void write_record(jobtask *j)
+{
+    char rec[KEY_MAX], created[24];
+    snprintf(rec, sizeof rec, "%sjobrec:%s", P, j->id);
+    snprintf(created, sizeof created, "%lld", j->created_unix);
+    const char *argv[] = {"HSET", rec, "user", j->user, "key", j->key, "fmt", j->fmt,
+                          "created", created};
+    size_t lens[10];
+    for (int i = 0; i < 10; i++)
+        lens[i] = strlen(argv[i]);
+    redisReply *r = ism_cache_redis_call(j->c->redis, "jobrec_write", 10, argv, lens);
+    if (r)
+        freeReplyObject(r);
+    const char *exp[] = {"PEXPIRE", rec, JOBREC_TTL_MS};
+    size_t elens[] = {7, strlen(rec), strlen(JOBREC_TTL_MS)};
+    if ((r = ism_cache_redis_call(j->c->redis, "jobrec_expire", 3, exp, elens)))
+        freeReplyObject(r);
+}
+
+/* HMGET key fields... into out[] (copies, "" when missing). 1 found (first field set), 0 not,
+ * -1 Redis unavailable. */
+static int hash_fields(ismd_cluster *c, const char *key, const char *const *fields, int n,
+                       char out[][256])
+{
+    const char *argv[8] = {"HMGET", key};
+    size_t lens[8] = {5, strlen(key)};
+    for (int i = 0; i < n && i < 6; i++) {
+        argv[2 + i] = fields[i];
+        lens[2 + i] = strlen(fields[i]);
+    }
+    redisReply *r = ism_cache_redis_call(c->redis, "hmget", 2 + n, argv, lens);
+    if (!r)
+        return -1;
+    int found = 0;
+    for (int i = 0; i < n; i++) {
+        const char *v = r->type == REDIS_REPLY_ARRAY && (size_t)i < r->elements
+                            ? reply_str(r->element[i]) : NULL;
+        snprintf(out[i], 256, "%s", v ? v : "");
+        found |= i == 0 && v != NULL;
+    }
+    freeReplyObject(r);
+    return found;
+}
+
+/* The job's view from Redis into a JSON blob; status 200, 404 or 503. */
+static unsigned lookup(jobtask *j, ism_blob **json)
+{
+    char rec[KEY_MAX], job[KEY_MAX], name[ISM_CACHE_NAME_MAX];
+    char r[4][256], h[5][256];
+    snprintf(rec, sizeof rec, "%sjobrec:%s", P, j->id);
+    static const char *const RF[] = {"user", "key", "fmt", "created"};
+    int got = hash_fields(j->c, rec, RF, 4, r);
+    if (got <= 0)
+        return got < 0 ? 503 : 404;
+    if (!ism_cache_name(name, r[1], r[2]))
+        return 404;
+    job_key(job, name);
+    static const char *const HF[] = {"state", "progress", "status", "error", "started_ms"};
+    if (hash_fields(j->c, job, HF, 5, h) < 0)
+        return 503;
+    ismd_job_view v = {.id = j->id, .user = r[0], .key = r[1], .fmt = r[2],
+                       .created_unix = (time_t)strtoll(r[3], NULL, 10),
+                       .state = ISMD_JOB_QUEUED};
+    char parts[3][ISM_CACHE_NAME_MAX];
+    const char *names[3] = {parts[0], parts[1], parts[2]};
+    ism_cache_name(parts[0], r[1], r[2]);
+    ism_cache_name(parts[1], r[1], "stats.json");
+    ism_cache_name(parts[2], r[1], "features.json");
+    if (!ismd_job_state_parse(h[0], &v.state) && ism_cache_redis_count(j->c->redis, names, 3) == 3)
+        v.state = ISMD_JOB_DONE; /* no computation on record: the mesh was there already */
+    v.progress = v.state == ISMD_JOB_DONE ? 1 : strtod(h[1], NULL);
+    v.status = (unsigned)strtoul(h[2], NULL, 10);
+    v.started_unix_ms = strtoll(h[4], NULL, 10);
+    v.queue_ms = v.started_unix_ms ? (double)(v.started_unix_ms - v.created_unix * 1000) : 0;
+    ism_blob *stats = NULL, *error = h[3][0] ? ism_blob_from_str(h[3]) : NULL;
+    if (v.state == ISMD_JOB_DONE)
+        ism_cache_redis_fetch(j->c->redis, &names[1], 1, &stats);
+    v.stats = stats;
+    v.error = error;
+    json_t *o = ismd_job_view_json(&v);
+    char *text = o ? json_dumps(o, JSON_COMPACT) : NULL;
+    json_decref(o);
+    ism_blob_unref(stats);
+    ism_blob_unref(error);
+    *json = text ? ism_blob_from_str(text) : NULL;
+    free(text);
+    return *json ? 200 : 503;
+}
+
+static long long jobtask_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
+{
+    jobtask *j = (jobtask *)base;
+    (void)t;
+    if (stopping)
+        return jobtask_end(j); /* the tier is closing: the scheduler may be gone */
+    if (!j->w) {
+        write_record(j);
+        return jobtask_end(j);
+    }
+    ism_blob *json = NULL;
+    ismd_result r = {.status = lookup(j, &json), .content_type = "application/json"};
+    r.body = json;
+    if (ismd_shared_enter(j->c->sh)) {
+        j->w->done(j->w, &r);
+        ismd_shared_leave(j->c->sh);
+    }
+    ism_blob_unref(json);
+    return jobtask_end(j);
+}
+
+static jobtask *jobtask_new(ismd_cluster *c, const char *id)
+{
+    jobtask *j = calloc(1, sizeof *j);
+    if (!j)
+        return NULL;
+    if (!ismd_shared_task_added(c->sh)) {
+        free(j);
+        return NULL;
+    }
+    j->c = c;
+    j->base.run = jobtask_run;
+    snprintf(j->id, sizeof j->id, "%s", id);
+    return j;
+}
+
+void ismd_cluster_job_created(ismd_cluster *c, const char *id, const char *user,
+                              const char *key, const char *fmt, long long created_unix)
+{
+    jobtask *j = jobtask_new(c, id);
+    if (!j)
+        return;
+    snprintf(j->user, sizeof j->user, "%s", user);
+    snprintf(j->key, sizeof j->key, "%s", key);
+    snprintf(j->fmt, sizeof j->fmt, "%s", fmt);
+    j->created_unix = created_unix;
+    ism_cache_redis_schedule(c->redis, &j->base, 0);
+}
+
+bool ismd_cluster_job_lookup(ismd_cluster *c, const char *id, ismd_waiter *w)
+{
+    jobtask *j = jobtask_new(c, id);
+    if (!j)
+        return false;
+    j->w = w;
+    ism_cache_redis_schedule(c->redis, &j->base, 0);
+    return true;
 }

@@ -9,6 +9,8 @@
  *   P ulim        hash user -> the user's running limit (0: none), from its latest entry
  *   P job:<name>  hash: state (queued, running, done, failed), progress, status and error
  *                 (failed), the daemon running it, its entry's id and stream; expires
+ *   P jobrec:<id> hash: a job (POST /v1/jobs) of any daemon: user, key, fmt, created, so
+ *                 that every daemon answers GET /v1/jobs/{id}; expires
  *
  * The origin (shared_cache.c, on the Redis thread) adds a computation it holds the lock of to
  * its user's stream (refused when the user already has its --user-jobs there: cluster-wide),
@@ -69,5 +71,17 @@ int ismd_cluster_view(ismd_cluster *c, const char *name, const char *id, ismd_cj
 /* Nobody waits for entry id any more: a waiting entry is deleted, a running one is told to
  * stop (its executor sees the cancel at its next heartbeat). */
 void ismd_cluster_cancel(ismd_cluster *c, const char *name, const char *user, const char *id);
+
+/* ---- jobs seen through any daemon (called from HTTP threads; never block) ---------- */
+
+/* Records job id (of user, for key.fmt, created at created_unix) in Redis, so that any
+ * daemon can answer for it. Fire and forget. */
+void ismd_cluster_job_created(ismd_cluster *c, const char *id, const char *user,
+                              const char *key, const char *fmt, long long created_unix);
+/* Looks job id up in Redis and calls w->done once, scheduler lock held, with status 200 and
+ * the job's JSON (jobs.h's form, its state from the computation's job hash or, without one,
+ * done when the mesh is in the shared cache), 404 when no daemon recorded it, or 503 when
+ * Redis is unavailable. False (w never called) when out of memory or stopping. */
+bool ismd_cluster_job_lookup(ismd_cluster *c, const char *id, ismd_waiter *w);
 
 #endif

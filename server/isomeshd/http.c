@@ -144,7 +144,7 @@ enum MHD_Result ismd_respond_unauthorized(ismd_req *r)
 
 /* ---- waiting for a flight ------------------------------------------------------------ */
 
-static void conn_done(ismd_waiter *w, const ismd_result *res)
+void ismd_req_done(ismd_waiter *w, const ismd_result *res)
 {
     ismd_req *r = (ismd_req *)((char *)w - offsetof(ismd_req, waiter));
     r->r_status = res->status;
@@ -177,7 +177,7 @@ enum MHD_Result ismd_wait_for(ismd_req *r, const char *key, const char *fmt,
         return ismd_respond_error(r, 500, "internal", "bad cache name");
     bool may_compute = !ismd_auth_lacking(s->auth, &r->who);
     r->on_ready = on_ready;
-    r->waiter.done = conn_done;
+    r->waiter.done = ismd_req_done;
     r->waiter.progress = NULL;
     ismd_sched_lock(&s->sched);
     /* The flight may have ended between the caller's cache lookup and this lock. */

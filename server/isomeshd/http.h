@@ -125,6 +125,11 @@ enum MHD_Result ismd_respond_refused(ismd_req *r, ismd_submit st);
 enum MHD_Result ismd_wait_for(ismd_req *r, const char *key, const char *fmt,
                               ism_blob *request, ismd_handler on_ready);
 
+/* The done callback of a request's waiter (r->waiter): keeps the result in r (r_status,
+ * r_body, ...) and resumes the suspended connection, whose next call runs r->on_ready.
+ * Scheduler lock held. For waits other than a flight's (a lookup in Redis: cluster.h). */
+void ismd_req_done(ismd_waiter *w, const ismd_result *res);
+
 /* A request header value or NULL. */
 const char *ismd_header(ismd_req *r, const char *name);
 /* A query argument or NULL. */

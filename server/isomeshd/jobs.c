@@ -68,6 +68,16 @@ struct ismd_jobs {
 
 static const char *const STATE_NAMES[] = {"queued", "running", "done", "failed", "canceled"};
 
+bool ismd_job_state_parse(const char *s, ismd_job_state *out)
+{
+    for (int i = 0; i <= ISMD_JOB_CANCELED; i++)
+        if (!strcmp(s, STATE_NAMES[i])) {
+            *out = (ismd_job_state)i;
+            return true;
+        }
+    return false;
+}
+
 ismd_jobs *ismd_jobs_new(ismd_metrics *metrics)
 {
     ismd_jobs *j = calloc(1, sizeof *j);
@@ -365,57 +375,69 @@ static json_t *json_from_blob(const ism_blob *b)
     return b ? json_loadb((const char *)b->data, b->len, 0, NULL) : NULL;
 }
 
-json_t *ismd_job_json(const ismd_job *job)
+json_t *ismd_job_view_json(const ismd_job_view *v)
 {
     char url[128];
     json_t *o = json_object();
     if (!o)
         return NULL;
-    json_object_set_new(o, "id", json_string(job->id));
-    json_object_set_new(o, "state", json_string(STATE_NAMES[job->state]));
-    json_object_set_new(o, "progress", json_real(job->progress));
-    json_object_set_new(o, "key", json_string(job->key));
-    json_object_set_new(o, "format", json_string(job->fmt));
+    json_object_set_new(o, "id", json_string(v->id));
+    json_object_set_new(o, "state", json_string(STATE_NAMES[v->state]));
+    json_object_set_new(o, "progress", json_real(v->progress));
+    json_object_set_new(o, "key", json_string(v->key));
+    json_object_set_new(o, "format", json_string(v->fmt));
     char created[32];
     struct tm tm;
-    gmtime_r(&job->created_unix, &tm);
+    gmtime_r(&v->created_unix, &tm);
     strftime(created, sizeof created, "%Y-%m-%dT%H:%M:%SZ", &tm);
     json_object_set_new(o, "created", json_string(created));
-    json_object_set_new(o, "user", json_string(job->user));
-    if (job->started_ns) {
-        long long ms = job->started_unix_ms;
+    json_object_set_new(o, "user", json_string(v->user));
+    if (v->started_unix_ms) {
+        long long ms = v->started_unix_ms;
         time_t secs = (time_t)(ms / 1000);
         char started[40], whole[32];
         gmtime_r(&secs, &tm);
         strftime(whole, sizeof whole, "%Y-%m-%dT%H:%M:%S", &tm);
         snprintf(started, sizeof started, "%s.%03dZ", whole, (int)(ms % 1000));
         json_object_set_new(o, "started", json_string(started));
-        json_object_set_new(o, "queue_ms", json_real((job->started_ns - job->created_ns) / 1e6));
+        json_object_set_new(o, "queue_ms", json_real(v->queue_ms));
     }
-    snprintf(url, sizeof url, "/v1/jobs/%s", job->id);
+    snprintf(url, sizeof url, "/v1/jobs/%s", v->id);
     json_object_set_new(o, "url", json_string(url));
-    snprintf(url, sizeof url, "/v1/jobs/%s/events", job->id);
+    snprintf(url, sizeof url, "/v1/jobs/%s/events", v->id);
     json_object_set_new(o, "events_url", json_string(url));
-    if (job->state == ISMD_JOB_DONE) {
-        snprintf(url, sizeof url, "/v1/meshes/%s.%s", job->key, job->fmt);
+    if (v->state == ISMD_JOB_DONE) {
+        snprintf(url, sizeof url, "/v1/meshes/%s.%s", v->key, v->fmt);
         json_object_set_new(o, "mesh_url", json_string(url));
-        snprintf(url, sizeof url, "/v1/meshes/%s/stats", job->key);
+        snprintf(url, sizeof url, "/v1/meshes/%s/stats", v->key);
         json_object_set_new(o, "stats_url", json_string(url));
-        snprintf(url, sizeof url, "/v1/meshes/%s/features", job->key);
+        snprintf(url, sizeof url, "/v1/meshes/%s/features", v->key);
         json_object_set_new(o, "features_url", json_string(url));
-        json_t *stats = json_from_blob(job->stats);
+        json_t *stats = json_from_blob(v->stats);
         if (stats)
             json_object_set_new(o, "stats", stats);
     }
-    if (job->state == ISMD_JOB_FAILED) {
-        json_object_set_new(o, "status", json_integer(job->status));
-        json_t *err = json_from_blob(job->error);
+    if (v->state == ISMD_JOB_FAILED) {
+        json_object_set_new(o, "status", json_integer(v->status));
+        json_t *err = json_from_blob(v->error);
         json_t *inner = err ? json_object_get(err, "error") : NULL;
         if (inner)
             json_object_set(o, "error", inner);
         json_decref(err);
     }
     return o;
+}
+
+json_t *ismd_job_json(const ismd_job *job)
+{
+    ismd_job_view v = {
+        .id = job->id, .key = job->key, .fmt = job->fmt, .user = job->user,
+        .state = job->state, .progress = job->progress, .created_unix = job->created_unix,
+        .started_unix_ms = job->started_ns ? job->started_unix_ms : 0,
+        .queue_ms = (job->started_ns - job->created_ns) / 1e6,
+        .status = job->status, .stats = job->stats, .error = job->error,
+    };
+    return ismd_job_view_json(&v);
 }
 
 json_t *ismd_jobs_list_json(const ismd_jobs *j, const char *user, size_t max)

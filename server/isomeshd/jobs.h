@@ -14,6 +14,7 @@
 #include <jansson.h>
 #include <microhttpd.h>
 #include <stdbool.h>
+#include <time.h>
 
 #include "server/common/blob.h"
 #include "server/isomeshd/metrics.h"
@@ -55,6 +56,23 @@ const char *ismd_job_id(const ismd_job *job);
 const char *ismd_job_user(const ismd_job *job);
 /* The job as JSON (caller owns the reference). */
 json_t *ismd_job_json(const ismd_job *job);
+
+/* What the JSON of a job says, wherever it comes from (this daemon's table, or a job of
+ * another daemon read from Redis: cluster.h). Lock not needed. */
+typedef struct ismd_job_view {
+    const char *id, *key, *fmt, *user;
+    ismd_job_state state;
+    double progress;
+    time_t created_unix;
+    long long started_unix_ms;  /* 0: not started (or unknown) */
+    double queue_ms;            /* from creation to start, when started */
+    unsigned status;            /* failed: the HTTP status */
+    const ism_blob *stats;      /* done: may be NULL */
+    const ism_blob *error;      /* failed: the error JSON, may be NULL */
+} ismd_job_view;
+json_t *ismd_job_view_json(const ismd_job_view *v);
+/* The state named s ("queued", "running", ...); false when none is. */
+bool ismd_job_state_parse(const char *s, ismd_job_state *out);
 /* {"jobs": [...]}: the jobs of user (NULL: everyone's), newest first, at most max, without
  * their stats; "truncated": true when more were left out. */
 json_t *ismd_jobs_list_json(const ismd_jobs *j, const char *user, size_t max);

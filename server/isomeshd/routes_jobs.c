@@ -1,15 +1,21 @@
 /* routes_jobs.c — the job routes: POST /v1/jobs (202 with the job), GET /v1/jobs (the
  * caller's jobs; every job for an admin token), GET /v1/jobs/{id}, DELETE /v1/jobs/{id}
  * (cancel: its owner or an admin when tokens are on), GET /v1/jobs/{id}/events (server-sent
- * events). */
+ * events). With --cluster, a job this daemon does not hold is looked up in Redis (cluster.h):
+ * GET /v1/jobs/{id} and its events work through any daemon of the service. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
+#include "server/isomeshd/cluster.h"
 #include "server/isomeshd/http.h"
 #include "server/isomeshd/jobs.h"
+#include "server/isomeshd/shared_cache.h"
 
 #define JOBS_LIST_MAX 500 /* newest jobs shown by GET /v1/jobs */
+#define REMOTE_EVENTS_RETRY_MS 1000 /* an event stream of another daemon's job is one event
+                                       (its state now); the browser asks again this soon */
 
 /* Answers with the job's JSON (lock held by the caller: the JSON is built under it). */
 static enum MHD_Result answer_job_locked(ismd_req *r, unsigned status, ismd_job *job,
@@ -74,6 +80,10 @@ enum MHD_Result ismd_route_jobs_post(ismd_req *r)
                                       "one to finish");
         return ismd_respond_error(r, 503, "too_many_jobs", "the job table is full; retry later");
     }
+    ismd_cluster *cluster = ismd_shared_cluster(s->shared);
+    if (cluster)
+        ismd_cluster_job_created(cluster, ismd_job_id(job), r->who.user, r->key, r->fmt,
+                                 (long long)time(NULL));
     if (hit) {
         ismd_jobs_complete_cached(s->jobs, job, stats);
         ism_blob_unref(hit);
@@ -134,13 +144,95 @@ static bool may_touch(ismd_req *r, ismd_job *job, bool cancel, enum MHD_Result *
     return true;
 }
 
+/* ---- another daemon's job (--cluster) ----------------------------------------------- */
+
+/* One server-sent event with the job's state now, and a retry delay: the client's
+ * EventSource reconnects, through any daemon, until the final event. */
+static enum MHD_Result answer_remote_events(ismd_req *r, json_t *o)
+{
+    const char *state = json_string_value(json_object_get(o, "state"));
+    bool final = state && strcmp(state, "queued") != 0 && strcmp(state, "running") != 0;
+    char *data = json_dumps(o, JSON_COMPACT);
+    size_t cap = (data ? strlen(data) : 0) + 96;
+    char *text = data ? malloc(cap) : NULL;
+    if (text)
+        snprintf(text, cap, "retry: %d\nevent: %s\ndata: %s\n\n", REMOTE_EVENTS_RETRY_MS,
+                 final ? state : "progress", data);
+    free(data);
+    struct MHD_Response *resp = text ? ismd_response_text(text, "text/event-stream") : NULL;
+    r->bytes = text ? strlen(text) : 0;
+    free(text);
+    if (!resp)
+        return MHD_NO;
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
+    return ismd_send(r, 200, resp);
+}
+
+/* The lookup in Redis answered (r->r_status, r->r_body). */
+static enum MHD_Result remote_job_ready(ismd_req *r)
+{
+    if (r->r_status == 404 || !r->r_body)
+        return r->r_status == 503 ? ismd_respond_error(r, 503, "redis_unavailable",
+                                                       "the service's Redis did not answer; "
+                                                       "retry later")
+                                  : job_not_found(r);
+    json_t *o = json_loadb((const char *)r->r_body->data, r->r_body->len, 0, NULL);
+    const char *user = json_string_value(json_object_get(o, "user"));
+    ismd_auth *a = r->srv->auth;
+    enum MHD_Result ret;
+    if (!o)
+        ret = MHD_NO;
+    else if (a->private_mode && !(user && ismd_auth_owns(a, &r->who, user)))
+        ret = ismd_respond_error(r, 403, "not_your_job",
+                                 "this job belongs to another user (an admin token may touch it)");
+    else if (r->route == ISMD_R_JOB_EVENTS)
+        ret = answer_remote_events(r, o);
+    else {
+        struct MHD_Response *resp = ismd_response_blob(r->r_body, "application/json");
+        r->bytes = r->r_body->len;
+        if (resp)
+            MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
+        ret = resp ? ismd_send(r, 200, resp) : MHD_NO;
+    }
+    json_decref(o);
+    return ret;
+}
+
+/* Not a job of this daemon: with --cluster, suspends the request while Redis is asked (lock
+ * held on entry, released here). False without a cluster (nothing done, lock still held). */
+static bool ask_cluster(ismd_req *r, enum MHD_Result *ret)
+{
+    ismd_server *s = r->srv;
+    ismd_cluster *c = ismd_shared_cluster(s->shared);
+    if (!c)
+        return false;
+    r->on_ready = remote_job_ready;
+    r->waiter.done = ismd_req_done;
+    r->waiter.progress = NULL;
+    if (!ismd_cluster_job_lookup(c, r->id, &r->waiter)) {
+        ismd_sched_unlock(&s->sched);
+        *ret = ismd_respond_error(r, 503, "shutting_down", "the server is shutting down");
+        return true;
+    }
+    /* the lookup answers under the lock: never before this suspension */
+    r->suspended = true;
+    atomic_fetch_add(&s->metrics.suspended_connections, 1);
+    MHD_suspend_connection(r->conn);
+    ismd_sched_unlock(&s->sched);
+    *ret = MHD_YES;
+    return true;
+}
+
 /* The request's job with the scheduler locked: returns it with the lock held, or NULL with
- * the lock released and *ret the answer given (404 unknown, 403 not the caller's). */
-static ismd_job *touch_job(ismd_req *r, bool cancel, enum MHD_Result *ret)
+ * the lock released and *ret the answer given (404 unknown, 403 not the caller's; with
+ * remote: another daemon's job asked for through Redis). */
+static ismd_job *touch_job(ismd_req *r, bool cancel, bool remote, enum MHD_Result *ret)
 {
     ismd_sched_lock(&r->srv->sched);
     ismd_job *job = ismd_jobs_find(r->srv->jobs, r->id);
     if (!job) {
+        if (remote && ask_cluster(r, ret))
+            return NULL;
         ismd_sched_unlock(&r->srv->sched);
         *ret = job_not_found(r);
         return NULL;
@@ -151,14 +243,14 @@ static ismd_job *touch_job(ismd_req *r, bool cancel, enum MHD_Result *ret)
 enum MHD_Result ismd_route_job_get(ismd_req *r)
 {
     enum MHD_Result ret;
-    ismd_job *job = touch_job(r, false, &ret);
+    ismd_job *job = touch_job(r, false, true, &ret);
     return job ? answer_job_locked(r, 200, job, false) : ret;
 }
 
 enum MHD_Result ismd_route_job_delete(ismd_req *r)
 {
     enum MHD_Result ret;
-    ismd_job *job = touch_job(r, true, &ret);
+    ismd_job *job = touch_job(r, true, false, &ret);
     if (!job)
         return ret;
     ismd_jobs_cancel(r->srv->jobs, &r->srv->sched, job);
@@ -169,7 +261,7 @@ enum MHD_Result ismd_route_job_events(ismd_req *r)
 {
     ismd_server *s = r->srv;
     enum MHD_Result ret;
-    ismd_job *job = touch_job(r, false, &ret);
+    ismd_job *job = touch_job(r, false, true, &ret);
     if (!job)
         return ret;
     struct MHD_Response *resp = ismd_jobs_stream(s->jobs, &s->sched, job, r->conn);

@@ -116,6 +116,11 @@ static long long task_end(task *k, ism_cache_tier *t)
     return 0;
 }
 
+ismd_cluster *ismd_shared_cluster(ismd_shared *sh)
+{
+    return sh ? sh->cluster : NULL;
+}
+
 bool ismd_shared_task_added(ismd_shared *sh)
 {
     pthread_mutex_lock(&sh->lock);

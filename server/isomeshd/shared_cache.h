@@ -27,6 +27,7 @@
 #include "server/isomeshd/sched.h"
 
 typedef struct ismd_shared ismd_shared;
+typedef struct ismd_cluster ismd_cluster;
 
 /* --cluster: the default per-user limits, held over the whole service. */
 typedef struct ismd_cluster_settings {
@@ -39,6 +40,9 @@ typedef struct ismd_cluster_settings {
 ismd_shared *ismd_shared_start(ismd_sched *sched, ism_cache *cache, ism_cache_tier *redis,
                                const ism_pipeline_limits *limits, double lock_ttl_s,
                                const ismd_cluster_settings *cluster);
+
+/* The cluster queue (cluster.h) when started with one, else NULL. */
+ismd_cluster *ismd_shared_cluster(ismd_shared *sh);
 
 /* For tasks that live and stop with the stage (cluster.c). enter: the scheduler is locked,
  * false (not locked) once stopping; leave unlocks it. task_added: one task more (false once

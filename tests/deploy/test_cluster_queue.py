@@ -8,7 +8,10 @@ with Redis, daemons of one worker each and (for the failure case) nginx:
 * the daemon computing a synchronous request is killed with SIGKILL mid-computation: the
   request, sent through nginx, still gets a 200 whose mesh is byte for byte the one a fresh
   daemon computes (the entry is re-claimed by a surviving daemon after --redis-lock-ttl, or
-  nginx retries the idempotent POST on the next daemon, which joins the computation).
+  nginx retries the idempotent POST on the next daemon, which joins the computation);
+* a job is seen through any daemon (GET /v1/jobs/{id}, its events as one event per
+  connection with a retry delay), also after the daemon it was posted to is killed: its
+  computation goes on elsewhere and the job reads done, its mesh served by the survivor.
 
 Every wait is bounded; no assertion depends on the machine's speed beyond the bounds."""
 import os
@@ -121,6 +124,40 @@ class ClusterQueueTest(unittest.TestCase):
             again = fresh.post("/v1/mesh", req)
             self.assertEqual(again.status, 200)
             self.assertEqual(again.body, r.body)
+
+    def test_a_job_is_seen_through_any_daemon_even_after_its_daemon_died(self):
+        s = stack.Stack(n=2, daemon_args=("--cluster", "--workers", "1", "--redis-lock-ttl", "1s"),
+                        with_nginx=False).start()
+        try:
+            a, b = s.daemons
+            quick = a.post("/v1/jobs", work(400)).json()
+            self.assertEqual(wait_job(a, quick)["state"], "done")
+            seen = stack.wait_until(lambda: (lambda j: j if j["state"] == "done" else None)(
+                b.get(quick["url"]).json()), 10)
+            self.assertTrue(seen, "the job never read done through the other daemon")
+            mine = a.get(quick["url"]).json()
+            for field in ("id", "key", "format", "user", "created", "mesh_url"):
+                self.assertEqual(seen[field], mine[field], field)
+            self.assertEqual(seen["stats"], mine["stats"])
+            ev = b.get(quick["events_url"])
+            self.assertEqual(ev.status, 200)
+            self.assertEqual(ev.header("Content-Type"), "text/event-stream")
+            text = ev.body.decode()
+            self.assertTrue(text.startswith("retry: "), text[:80])
+            self.assertIn("event: done\n", text)
+            self.assertEqual(b.get("/v1/jobs/" + "0" * 32).status, 404)
+            # a slow job; its daemon killed while it computes (there, or on b)
+            slow = a.post("/v1/jobs", slow_work(401)).json()
+            self.assertTrue(stack.wait_until(
+                lambda: b.get(slow["url"]).json()["state"] == "running", 30))
+            a.proc.send_signal(signal.SIGKILL)
+            a.proc.wait(timeout=10)
+            done = stack.wait_until(lambda: (lambda j: j if j["state"] == "done" else None)(
+                b.get(slow["url"]).json()), 60)
+            self.assertTrue(done, b.get(slow["url"]).body[:300])
+            self.assertEqual(b.get(done["mesh_url"]).status, 200)
+        finally:
+            s.cleanup()
 
 
 if __name__ == "__main__":
