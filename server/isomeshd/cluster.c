@@ -44,8 +44,10 @@ static const char ENQUEUE_LUA[] =
     "return id";
 
 /* KEYS users, ulim; ARGV stream prefix, consumer, min idle ms, turn, job prefix, now ms,
- * ttl. {user, stream, id, fields, claimed} or false. Re-claims a dead daemon's entry first,
- * else reads a new one from the user with the fewest running, below its limit. Streams with
+ * ttl. {user, stream, id, fields, claimed} or false. Re-claims a dead daemon's entry first
+ * (the oldest pending entry idle for a lock lifetime: XPENDING IDLE scans the whole list,
+ * where XAUTOCLAIM would look at its first few only; a deleted one is acknowledged), else
+ * reads a new one from the user with the fewest running, below its limit. Streams with
  * nothing left are removed with their users. */
 static const char TAKE_LUA[] =
     "local function start(u, s, e, claimed) "
@@ -67,8 +69,12 @@ static const char TAKE_LUA[] =
     "  else "
     "    local pend = redis.call('xpending', s, 'workers')[1] "
     "    if pend > 0 then "
-    "      local c = redis.call('xautoclaim', s, 'workers', ARGV[2], ARGV[3], '0-0', 'COUNT', 1) "
-    "      if c[2][1] and c[2][1][2] then return start(u, s, c[2][1], 1) end "
+    "      local p = redis.call('xpending', s, 'workers', 'IDLE', ARGV[3], '-', '+', 1)[1] "
+    "      if p then "
+    "        local c = redis.call('xclaim', s, 'workers', ARGV[2], ARGV[3], p[1]) "
+    "        if c[1] and c[1][2] then return start(u, s, c[1], 1) end "
+    "        redis.call('xack', s, 'workers', p[1]) "
+    "      end "
     "    end "
     "    if pend == 0 and redis.call('xlen', s) == 0 then "
     "      redis.call('del', s) redis.call('srem', KEYS[1], u) "

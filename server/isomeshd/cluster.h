@@ -19,7 +19,7 @@
  *
  * The executor (a task per daemon, on the Redis thread) takes entries while this daemon has
  * idle workers: first one pending on a daemon that has not heart-beaten for a lock lifetime
- * (XAUTOCLAIM: its daemon died), else a new one (XREADGROUP) from the user with the fewest
+ * (XPENDING IDLE + XCLAIM: its daemon died), else a new one (XREADGROUP) from the user with the fewest
  * entries running cluster-wide, below that user's running limit, ties taken in turn. The entry
  * becomes a local flight (or joins one of the same name here); while it runs, its own task
  * re-claims the entry every heartbeat (resetting its idle time), publishes progress and
