@@ -21,6 +21,9 @@
 /* A ring's spacing relative to the loop's mean edge: rows about as far apart as the rim's
  * vertices, so the new triangles are about as large as the polygoniser's around them. */
 #define RING_SPACING 1.0
+/* A loop of fewer vertices than this (a thin sheet round a cusp) gets twice as many on its
+ * rings: a ring of a few chords sags far off a thin, round sheet. */
+#define FINE_RING_MIN 8
 
 static double dist(const double *a, const double *b)
 {
@@ -92,10 +95,11 @@ static bool fan_row(cf_ctx *c, const uint32_t *r, size_t n, bool closed, uint32_
 
 /* The ring at fraction t of the way from the apex to the loop, projected onto f = 0 (moves
  * bounded by half the ring's distance to the apex: never onto another sheet). */
-static bool make_ring(cf_ctx *c, const cf_loop *l, const double apex[3], double t, uint32_t *r)
+static bool make_ring(cf_ctx *c, const double *dirs, size_t m, const double apex[3], double t,
+                      uint32_t *r)
 {
-    for (size_t i = 0; i < l->n; i++) {
-        const double *v = c->m->pos + 3 * (size_t)l->v[i];
+    for (size_t i = 0; i < m; i++) {
+        const double *v = dirs + 3 * i;
         double p[3];
         for (int k = 0; k < 3; k++)
             p[k] = apex[k] + t * (v[k] - apex[k]);
@@ -108,24 +112,68 @@ static bool make_ring(cf_ctx *c, const cf_loop *l, const double apex[3], double 
     return true;
 }
 
+/* The rings' directions: the loop's vertices, and between them the midpoints of its edges
+ * when the loop has few vertices (a thin sheet: a cusp). Returns the count. */
+static size_t ring_dirs(const cf_ctx *c, const cf_loop *l, bool split, double *d)
+{
+    size_t m = 0, ne = l->closed ? l->n : l->n - 1;
+    for (size_t i = 0; i < l->n; i++) {
+        const double *a = c->m->pos + 3 * (size_t)l->v[i];
+        for (int k = 0; k < 3; k++)
+            d[3 * m + k] = a[k];
+        m++;
+        if (!split || i >= ne)
+            continue;
+        const double *b = c->m->pos + 3 * (size_t)l->v[(i + 1) % l->n];
+        for (int k = 0; k < 3; k++)
+            d[3 * m + k] = (a[k] + b[k]) / 2;
+        m++;
+    }
+    return m;
+}
+
+/* Triangles between the loop and a ring with a vertex at each loop vertex and one between
+ * (inner[2i] below l->v[i], inner[2i+1] below the edge's middle). */
+static bool ladder_split(cf_ctx *c, const cf_loop *l, const uint32_t *inner, size_t m)
+{
+    size_t ne = l->closed ? l->n : l->n - 1;
+    for (size_t i = 0; i < ne; i++) {
+        uint32_t a = l->v[i], b = l->v[(i + 1) % l->n];
+        uint32_t p = inner[2 * i], q = inner[2 * i + 1], r = inner[(2 * i + 2) % m];
+        if (!cf_add_triangle(c, a, b, q) || !cf_add_triangle(c, a, q, p) ||
+            !cf_add_triangle(c, b, r, q))
+            return false;
+    }
+    return true;
+}
+
 bool cf_fan(cf_ctx *c, const cf_loop *l, uint32_t apex, const double apex_pos[3], int rings)
 {
-    uint32_t *rows = malloc(2 * l->n * sizeof *rows);
-    if (!rows)
+    bool split = rings > 0 && l->n < FINE_RING_MIN;
+    size_t cap = 2 * l->n;
+    uint32_t *rows = malloc(2 * cap * sizeof *rows);
+    double *dirs = malloc(3 * cap * sizeof *dirs);
+    if (!rows || !dirs) {
+        free(rows);
+        free(dirs);
         return false;
-    uint32_t *outer = rows, *inner = rows + l->n;
+    }
+    size_t m = ring_dirs(c, l, split, dirs), n = l->n;
+    uint32_t *outer = rows, *inner = rows + cap;
     for (size_t i = 0; i < l->n; i++)
         outer[i] = l->v[i];
     bool ok = true;
     for (int r = rings; ok && r >= 1; r--) {
-        ok = make_ring(c, l, apex_pos, (double)r / (rings + 1), inner) &&
-             cf_ladder(c, outer, inner, l->n, l->closed);
+        ok = make_ring(c, dirs, m, apex_pos, (double)r / (rings + 1), inner) &&
+             (n == m ? cf_ladder(c, outer, inner, m, l->closed) : ladder_split(c, l, inner, m));
+        n = m;
         uint32_t *t = outer;
         outer = inner;
         inner = t;
     }
-    ok = ok && fan_row(c, outer, l->n, l->closed, apex);
+    ok = ok && fan_row(c, outer, n, l->closed, apex);
     free(rows);
+    free(dirs);
     return ok;
 }
 

@@ -644,3 +644,111 @@ Test(conform, steiner_roman_pinch_and_triple_points)
     }
     ism_tape_free(t);
 }
+
+/* ---- an A2 cusp: one sheet whose tip is the point ---- */
+
+Test(conform, cusp_tip_is_a_vertex)
+{
+    const pf_surface s = {"x^2 + z^2 - y^3", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double base[6] = {-1, -1, -1, 1, 1, 1};
+    int dmax = 6 - pf_quick();
+    for (int w = 0; w < 3; w++) {
+        double box[6];
+        shifted_box(base, shift_amount(w, base, dmax), box);
+        ism_locus l;
+        ism_locus_init(&l);
+        add_point(&l, 0, 0, 0, ISM_SING_CUSP);
+        ism_mesh m;
+        run_result r;
+        run(t, box, dmax, &l, dist_to_points, &l, &m, &r);
+        char what[64];
+        snprintf(what, sizeof what, "cusp, shift %d", w);
+        uint32_t v = vertex_at(&m, l.points[0].p);
+        cr_expect_neq(v, UINT32_MAX, "%s: no vertex at the tip", what);
+        if (v != UINT32_MAX)
+            cr_expect_eq(pf_vertex_cones(&m, v), 1, "%s: %zu cones at the tip", what,
+                         pf_vertex_cones(&m, v));
+        cr_expect_eq(l.points[0].cones, 1, "%s: reports %d cones", what, l.points[0].cones);
+        cr_expect_eq(r.a.nonmanifold_vertices, 0, "%s: %zu non-manifold vertices", what,
+                     r.a.nonmanifold_vertices);
+        cr_expect_eq(r.a.components, 1, "%s: %zu components", what, r.a.components);
+        /* a disc (the cusp's sheet, cut by the box at y = 1) */
+        cr_expect_eq(r.a.euler, 1, "%s: χ = %ld, expected 1", what, r.a.euler);
+        expect_accuracy(&r, what);
+        ism_analysis_free(&r.a);
+        ism_mesh_free(&m);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
+
+/* ---- the cross-cap: a double segment between two pinch points, whiskers beyond ---- */
+
+static double dist_to_unit_segment(const double p[3], const void *arg)
+{
+    (void)arg;
+    double z = fmax(0, fmin(1, p[2]));
+    return sqrt(p[0] * p[0] + p[1] * p[1] + (p[2] - z) * (p[2] - z));
+}
+
+static void add_z_curve(ism_locus *l, double z0, double z1, int kind, const int ends[2],
+                        const int types[2], double step)
+{
+    size_t n = (size_t)ceil(fabs(z1 - z0) / step) + 1;
+    ism_sing_curve c = {.kind = kind, .n = n, .end_type = {types[0], types[1]},
+                        .end_point = {ends[0], ends[1]}};
+    cr_assert(c.xyz = calloc(3 * n, sizeof *c.xyz));
+    for (size_t i = 0; i < n; i++)
+        c.xyz[3 * i + 2] = z0 + (z1 - z0) * (double)i / (double)(n - 1);
+    cr_assert(ism_locus_add_curve(l, &c));
+}
+
+Test(conform, cross_cap_double_segment_between_pinch_points)
+{
+    const pf_surface s = {"4*x^2*(x^2 + y^2 + z^2 + z) + y^2*(y^2 + z^2 - 1)", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double base[6] = {-1.2, -1.2, -1.2, 1.2, 1.2, 1.6};
+    int dmax = 6 - pf_quick();
+    for (int w = 0; w < 3; w++) {
+        double box[6];
+        shifted_box(base, shift_amount(w, base, dmax), box);
+        double step = pf_cell(box, dmax);
+        ism_locus l;
+        ism_locus_init(&l);
+        add_point(&l, 0, 0, 0, ISM_SING_PINCH);
+        add_point(&l, 0, 0, 1, ISM_SING_PINCH);
+        /* the z axis: double where 4(z² + z) and z² − 1 differ in sign, 0 < z < 1 */
+        add_z_curve(&l, 0, 1, ISM_CURVE_DOUBLE, (const int[2]){0, 1},
+                    (const int[2]){ISM_END_PINCH, ISM_END_PINCH}, step);
+        add_z_curve(&l, 0, box[2], ISM_CURVE_WHISKER, (const int[2]){0, -1},
+                    (const int[2]){ISM_END_PINCH, ISM_END_BOX}, step);
+        add_z_curve(&l, 1, box[5], ISM_CURVE_WHISKER, (const int[2]){1, -1},
+                    (const int[2]){ISM_END_PINCH, ISM_END_BOX}, step);
+        size_t edges = l.curves[0].n - 1;
+        ism_mesh m;
+        run_result r;
+        run(t, box, dmax, &l, dist_to_unit_segment, NULL, &m, &r);
+        char what[64];
+        snprintf(what, sizeof what, "cross-cap, shift %d", w);
+        size_t n, four;
+        double far;
+        nm_edges(&m, dist_to_unit_segment, &n, &four, &far);
+        cr_expect_eq(r.st.curves_conformed, 1, "%s: %zu curves conformed", what,
+                     r.st.curves_conformed);
+        cr_expect_eq(n, edges, "%s: %zu non-manifold edges, expected %zu", what, n, edges);
+        cr_expect_eq(four, n, "%s: %zu of %zu non-manifold edges have 4 triangles", what, four, n);
+        cr_expect_leq(far, 1e-9, "%s: a non-manifold edge's vertex %g off the segment", what, far);
+        cr_expect_eq(r.a.components, 1, "%s: %zu components", what, r.a.components);
+        /* RP² immersed with one double segment: χ = 1 − (2 − 1) χ(open segment) = 2 */
+        cr_expect_eq(r.a.euler, 2, "%s: χ = %ld, expected 2", what, r.a.euler);
+        cr_expect_eq(r.a.boundary_edges, 0, "%s: %zu boundary edges", what, r.a.boundary_edges);
+        cr_expect_eq(r.st.artefact_edges + r.st.artefact_vertices, 0, "%s: artefacts %zu + %zu",
+                     what, r.st.artefact_edges, r.st.artefact_vertices);
+        expect_accuracy(&r, what);
+        ism_analysis_free(&r.a);
+        ism_mesh_free(&m);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
