@@ -229,15 +229,112 @@ static size_t argext(const double *u, size_t n, int sign)
     return k;
 }
 
-/* Copies the loop's stretch first .. first + len − 1 (cyclically) into row/U, unfolding the
- * parameters after index `turn` (relative; len when none) about the curve end `end`. */
-static void take(const uint32_t *row_in, const double *u, size_t n, size_t first, size_t len,
-                 size_t turn, double end, uint32_t *row, double *U)
+/* Turns of the parameter sequence u[0..N) (a zigzag with hysteresis m): turn[k] is the index
+ * of the k-th extreme, up[k] whether it is a maximum. Returns their number. */
+static size_t find_turns(const double *u, size_t N, double m, size_t *turn, bool *up)
 {
-    for (size_t i = 0; i < len; i++) {
-        size_t k = (first + i) % n;
-        row[i] = row_in[k];
-        U[i] = i <= turn ? u[k] : 2 * end - u[k];
+    size_t nt = 0, ext = 0, lo = 0, hi = 0;
+    int dir = 0;
+    for (size_t i = 1; i < N; i++) {
+        if (dir == 0) {
+            hi = u[i] > u[hi] ? i : hi;
+            lo = u[i] < u[lo] ? i : lo;
+            if (u[hi] - u[lo] <= m)
+                continue;
+            dir = hi > lo ? 1 : -1;
+            size_t first = dir > 0 ? lo : hi; /* an extreme before the first real move */
+            if (first > 0 && fabs(u[first] - u[0]) > m) {
+                up[nt] = dir < 0;
+                turn[nt++] = first;
+            }
+            ext = dir > 0 ? hi : lo;
+        } else if ((u[i] - u[ext]) * dir > 0) {
+            ext = i;
+        } else if ((u[ext] - u[i]) * dir > m) {
+            up[nt] = dir > 0;
+            turn[nt++] = ext;
+            dir = -dir;
+            ext = i;
+        }
+    }
+    return nt;
+}
+
+/* A turn near the end of the open curve it points to: the rim goes round that end (a pinch
+ * point) rather than turning away from the curve. */
+static bool is_fold(const cf_polyline *pl, double u, bool up, double ext)
+{
+    return up ? u > pl->length - ext : u < ext;
+}
+
+/* Zips row/u[0..N) along an open curve: split into runs at turns away from the curve's ends,
+ * unfolded at turns round them (U = base + sigma u, reflected at each fold). cyclic: the
+ * sequence's last vertex is its first, and it starts at a fold at the curve's start. */
+static bool zip_open_curve(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv,
+                           const uint32_t *row, const double *u, size_t N, double rho,
+                           bool cyclic, double *U, size_t *turn, bool *up)
+{
+    double ext = END_SNAP_RHO * rho, L = pl->length;
+    size_t nt = find_turns(u, N, TURN_MIN_RHO * rho, turn, up), rs = 0, k = 0;
+    bool any_split = false;
+    for (size_t t = 0; t < nt; t++)
+        any_split |= !is_fold(pl, u[turn[t]], up[t], ext);
+    if (cyclic && !any_split) { /* round a double segment, k times over its unfolded cycle */
+        double base = 0, sigma = 1;
+        for (size_t i = 0; i < N; i++) {
+            U[i] = base + sigma * u[i];
+            if (k < nt && turn[k] == i) {
+                double end = up[k] ? L : 0;
+                base += 2 * sigma * end;
+                sigma = -sigma;
+                k++;
+            }
+        }
+        long cycles = lround(U[N - 1] / (2 * L));
+        if (cycles >= 1) {
+            U[0] = 0;
+            U[N - 1] = (double)cycles * 2 * L;
+            return zip_seq(c, pl, cv, row, U, N, 0, cycles * period_steps(pl));
+        }
+    }
+    bool ok = true;
+    while (ok && rs < N - 1) {
+        /* one run: from rs to the next split (or the end), unfolded at the folds between */
+        size_t re = N - 1, kk = k;
+        while (kk < nt && turn[kk] <= rs)
+            kk++;
+        k = kk;
+        for (; kk < nt; kk++)
+            if (!is_fold(pl, u[turn[kk]], up[kk], ext)) {
+                re = turn[kk];
+                break;
+            }
+        size_t probe = k < nt && turn[k] < re ? turn[k] : re;
+        double sigma = u[probe] >= u[rs] ? 1 : -1, base = 0;
+        if (k < nt && turn[k] < re && u[probe] == u[rs])
+            sigma = up[k] ? 1 : -1;
+        for (size_t i = rs; i <= re; i++) {
+            U[i - rs] = base + sigma * u[i];
+            if (k < nt && turn[k] == i && i != re) {
+                base += 2 * sigma * (up[k] ? L : 0);
+                sigma = -sigma;
+                k++;
+            }
+        }
+        ok = zip_open_seq(c, pl, cv, row + rs, U, re - rs + 1, ext);
+        rs = re;
+    }
+    return ok;
+}
+
+/* Rotates the closed loop's row and parameters to start at index s, closing it by repeating
+ * that vertex at the end. */
+static void rotate(const uint32_t *row_in, const double *u, size_t n, size_t s, uint32_t *row,
+                   double *v)
+{
+    for (size_t i = 0; i <= n; i++) {
+        row[i] = row_in[(s + i) % n];
+        v[i] = u[(s + i) % n];
     }
 }
 
@@ -245,60 +342,50 @@ static bool zip_loop(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv, const
                      double *u, const uint32_t *row_in, double rho)
 {
     size_t n = l->n;
-    double ext = END_SNAP_RHO * rho, L = pl->length;
+    double L = pl->length;
     uint32_t *row = malloc((n + 1) * sizeof *row);
-    double *U = malloc((n + 1) * sizeof *U);
-    if (!row || !U) {
-        free(row);
-        free(U);
-        return false;
-    }
-    bool ok;
+    double *U = malloc((n + 1) * sizeof *U), *v = malloc((n + 1) * sizeof *v);
+    size_t *turn = malloc((n + 1) * sizeof *turn);
+    bool *up = malloc((n + 1) * sizeof *up), ok = row && U && v && turn && up;
+    if (!ok)
+        goto done;
     long wind = unwrap(pl, l, u);
     size_t imin = argext(u, n, -1), imax = argext(u, n, 1);
     if (wind == 1 || wind == -1) { /* once round a closed curve: one cyclic run */
-        take(row_in, u, n, 0, n + 1, n + 1, 0, row, U);
+        rotate(row_in, u, n, 0, row, U);
         U[n] = u[0] + (double)wind * L;
         long Ja = curve_index_near(pl, u[0]);
         ok = zip_seq(c, pl, cv, row, U, n + 1, Ja, Ja + wind * (long)pl->n);
-    } else if (l->closed && !pl->closed && u[imin] < ext && u[imax] > L - ext) {
-        /* round a double segment, turning at both ends: one cycle of the unfolded curve */
-        size_t up = (imax + n - imin) % n; /* steps from imin to imax going forward */
-        take(row_in, u, n, imin, n + 1, up, L, row, U);
-        U[0] = 0;
-        U[up] = L;
-        U[n] = 2 * L;
-        ok = zip_seq(c, pl, cv, row, U, n + 1, 0, period_steps(pl));
-    } else if (l->closed) {
+    } else if (pl->closed && l->closed) { /* a closed loop beside a stretch: split at extremes */
         size_t a = (imax + n - imin) % n + 1, b = (imin + n - imax) % n + 1;
-        take(row_in, u, n, imin, a, a, 0, row, U);
-        ok = zip_open_seq(c, pl, cv, row, U, a, ext);
-        take(row_in, u, n, imax, b, b, 0, row, U);
-        ok = ok && zip_open_seq(c, pl, cv, row, U, b, ext);
-    } else {
-        /* an open chain: does it turn round an end of the curve (an extreme near it, beyond
-         * both ends of the chain), or away from the ends (beyond both by more than rho)? */
-        double lo = fmin(u[0], u[n - 1]), hi = fmax(u[0], u[n - 1]), m = TURN_MIN_RHO * rho;
-        bool fold_lo = !pl->closed && lo - u[imin] > m && u[imin] < ext;
-        bool fold_hi = !pl->closed && u[imax] - hi > m && u[imax] > L - ext;
-        size_t turn = fold_hi ? imax : fold_lo ? imin : lo - u[imin] > rho ? imin
-                    : u[imax] - hi > rho ? imax : n;
-        bool at_end = fold_lo || fold_hi;
-        if (turn == n || at_end) { /* one run, unfolded round the end it turns at */
-            take(row_in, u, n, 0, n, at_end ? turn : n, turn == imin ? 0 : L, row, U);
-            if (at_end && turn == imin)
-                for (size_t i = 0; i < n; i++)
-                    U[i] = -U[i]; /* reflected at 0: the way down first */
-            ok = zip_open_seq(c, pl, cv, row, U, n, ext);
-        } else { /* turns away from the curve's ends: two runs */
-            take(row_in, u, n, 0, turn + 1, n, 0, row, U);
-            ok = zip_open_seq(c, pl, cv, row, U, turn + 1, ext);
-            take(row_in, u, n, turn, n - turn, n, 0, row, U);
-            ok = ok && zip_open_seq(c, pl, cv, row, U, n - turn, ext);
+        rotate(row_in, u, n, imin, row, U);
+        ok = zip_open_seq(c, pl, cv, row, U, a, 0);
+        rotate(row_in, u, n, imax, row, U);
+        ok = ok && zip_open_seq(c, pl, cv, row, U, b, 0);
+    } else if (pl->closed) {
+        ok = zip_open_seq(c, pl, cv, row_in, u, n, 0);
+    } else if (l->closed) { /* from the global minimum round to it again */
+        rotate(row_in, u, n, imin, row, v);
+        bool cyclic = v[0] < END_SNAP_RHO * rho;
+        if (cyclic) { /* a split elsewhere: start there instead, the minimum is a fold */
+            size_t nt = find_turns(v, n + 1, TURN_MIN_RHO * rho, turn, up);
+            for (size_t t = 0; t < nt; t++)
+                if (!is_fold(pl, v[turn[t]], up[t], END_SNAP_RHO * rho)) {
+                    rotate(row_in, u, n, (imin + turn[t]) % n, row, v);
+                    cyclic = false;
+                    break;
+                }
         }
+        ok = zip_open_curve(c, pl, cv, row, v, n + 1, rho, cyclic, U, turn, up);
+    } else {
+        ok = zip_open_curve(c, pl, cv, row_in, u, n, rho, false, U, turn, up);
     }
+done:
     free(row);
     free(U);
+    free(v);
+    free(turn);
+    free(up);
     return ok;
 }
 
