@@ -50,7 +50,8 @@ static double loop_mean_dist(const cf_ctx *c, const cf_loop *l, const double p[3
     return s;
 }
 
-/* Distance from point i to the rest of the locus (other points, curves' points). */
+/* Distance from point i to the rest of the locus: other points, and the points of curves
+ * that do not end at it. */
 static double locus_clearance(const cf_run *r, size_t i)
 {
     const double *p = r->l->points[i].p;
@@ -58,9 +59,13 @@ static double locus_clearance(const cf_run *r, size_t i)
     for (size_t k = 0; k < r->l->npoints; k++)
         if (k != i)
             best = fmin(best, d2(p, r->l->points[k].p));
-    for (size_t k = 0; k < r->l->ncurves; k++)
-        for (size_t j = 0; j < r->l->curves[k].n; j++)
-            best = fmin(best, d2(p, r->l->curves[k].xyz + 3 * j));
+    for (size_t k = 0; k < r->l->ncurves; k++) {
+        const ism_sing_curve *cu = &r->l->curves[k];
+        if (!cu->closed && (cu->end_point[0] == (int)i || cu->end_point[1] == (int)i))
+            continue;
+        for (size_t j = 0; j < cu->n; j++)
+            best = fmin(best, d2(p, cu->xyz + 3 * j));
+    }
     return sqrt(best);
 }
 
