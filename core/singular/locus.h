@@ -79,6 +79,9 @@ enum ism_lbox_flags {
     ISM_LBOX_PROJECTED = 1, /* q holds a point of ∇f = 0 (Gauss–Newton converged in the box
                                grown by half its width) */
     ISM_LBOX_USED = 2,      /* explained by a point, a curve or a sheet */
+    ISM_LBOX_UNIQUE = 4,    /* Krawczyk proved exactly one zero of ∇f in the box (which may
+                               then be larger than the finest cells); the points stage
+                               certifies or drops it */
 };
 
 typedef struct ism_lbox {

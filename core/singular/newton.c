@@ -1,0 +1,99 @@
+/* newton.c — pseudo-inverse Newton on ∇f = 0 (newton.h). */
+#include "core/singular/newton.h"
+#include "core/util/sym3.h"
+
+#include <math.h>
+
+static double norm3(const double v[3]) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+bool ism_sing_pinv_step(const double g[3], const double h[6], double rel, double trust,
+                        double step[3])
+{
+    double eig[3], vec[3][3];
+    ism_sym3_eigen(h, eig, vec);
+    double big = fmax(fabs(eig[0]), fmax(fabs(eig[1]), fabs(eig[2])));
+    if (!(big > 0.0) || !isfinite(big))
+        return false;
+    /* directions by decreasing |λ| */
+    int order[3] = { 0, 1, 2 };
+    for (int i = 0; i < 3; i++)
+        for (int j = i + 1; j < 3; j++)
+            if (fabs(eig[order[j]]) > fabs(eig[order[i]])) {
+                int t = order[i];
+                order[i] = order[j];
+                order[j] = t;
+            }
+    double part[3][3] = { { 0 } }; /* part[i]: the step along the i-th largest direction */
+    int kept = 0;
+    for (int r = 0; r < 3; r++) {
+        int i = order[r];
+        if (!(fabs(eig[i]) > rel * big))
+            break;
+        double c = -(vec[i][0] * g[0] + vec[i][1] * g[1] + vec[i][2] * g[2]) / eig[i];
+        for (int k = 0; k < 3; k++)
+            part[r][k] = c * vec[i][k];
+        kept++;
+    }
+    for (; kept > 0; kept--) {
+        for (int k = 0; k < 3; k++)
+            step[k] = part[0][k] + (kept > 1 ? part[1][k] : 0.0) + (kept > 2 ? part[2][k] : 0.0);
+        if (!(norm3(step) > trust))
+            break;
+    }
+    if (kept == 0)
+        for (int k = 0; k < 3; k++)
+            step[k] = part[0][k];
+    return isfinite(step[0]) && isfinite(step[1]) && isfinite(step[2]);
+}
+
+static bool inside(const double p[3], const double lo[3], const double hi[3])
+{
+    for (int k = 0; k < 3; k++)
+        if ((lo && !(p[k] >= lo[k])) || (hi && !(p[k] <= hi[k])))
+            return false;
+    return true;
+}
+
+static double jet_at(const ism_tape *t, ism_eval_ws *ws, const double p[3], double g[3],
+                     double h[6], uint64_t *evals)
+{
+    ism_eval_hessian(t, ws, p[0], p[1], p[2], g, h);
+    if (evals)
+        ++*evals;
+    return sqrt(h[0] * h[0] + h[3] * h[3] + h[5] * h[5]
+                + 2.0 * (h[1] * h[1] + h[2] * h[2] + h[4] * h[4]));
+}
+
+ism_newton_result ism_sing_newton(const ism_tape *t, ism_eval_ws *ws, double p[3],
+                                  const ism_newton_opts *o, uint64_t *evals)
+{
+    ism_newton_result r = { false, 0, INFINITY };
+    double g[3], h[6], step[3];
+    jet_at(t, ws, p, g, h, evals);
+    r.grad_norm = norm3(g);
+    while (r.iterations < o->max_iter) {
+        if (r.grad_norm == 0.0) {
+            r.converged = true;
+            return r;
+        }
+        if (!ism_sing_pinv_step(g, h, o->rel, o->trust, step))
+            return r;
+        double q[3] = { p[0] + step[0], p[1] + step[1], p[2] + step[2] };
+        if (!inside(q, o->lo, o->hi))
+            return r;
+        for (int k = 0; k < 3; k++)
+            p[k] = q[k];
+        r.iterations++;
+        double hnorm = jet_at(t, ws, p, g, h, evals);
+        r.grad_norm = norm3(g);
+        if (!(r.grad_norm < INFINITY))
+            return r;
+        if (norm3(step) < o->tol) {
+            /* a short step is convergence only with a small gradient: a step truncated to
+               directions the gradient does not point along is also short */
+            r.converged = r.grad_norm <= ISM_SING_NEWTON_RESID * o->tol * hnorm;
+            return r;
+        }
+    }
+    return r;
+}

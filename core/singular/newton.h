@@ -1,0 +1,56 @@
+/* newton.h — Newton's method on ∇f = 0 with the Hessian as Jacobian, through its
+ * pseudo-inverse: quadratic convergence at a non-degenerate critical point, and at a
+ * degenerate one (a cusp, a double sheet, two spheres touching) a step that moves only along
+ * the Hessian's well-determined directions — Gauss–Newton onto the set ∇f = 0. */
+#ifndef ISM_SING_NEWTON_H
+#define ISM_SING_NEWTON_H
+
+#include <stdbool.h>
+#include <stdint.h>
+#include "core/eval/eval.h"
+
+/* Eigenvalues below this fraction of the largest in magnitude are treated as 0 by the
+ * pseudo-inverse when projecting onto curves and sheets of zeros of ∇f: far above double
+ * rounding of a Hessian (~1e-16 relative), so that the tiny eigenvalues along the set do not
+ * throw the point along it; far below any curvature ratio of a surface a person writes. */
+#define ISM_SING_PINV_REL 1e-9
+/* The same for converging onto an isolated but degenerate zero (cusp, touching spheres),
+ * where an eigenvalue fades as the zero is approached: a few ulps of the largest. */
+#define ISM_SING_PINV_REL_POINT 1e-15
+
+/* step = -H⁺ g (h = xx xy xz yy yz zz) over the eigen-directions of H whose eigenvalues are
+ * above ISM_SING_PINV_REL of the largest — and, while the step is longer than trust, over
+ * one direction fewer (smallest |λ| dropped first): near a curve or sheet of zeros of ∇f,
+ * H's eigenvalues along the set are small but not 0, and stepping along them would throw
+ * the point far along the set; the truncated step goes to the set across it. False when H
+ * is zero or not finite. */
+bool ism_sing_pinv_step(const double g[3], const double h[6], double rel, double trust,
+                        double step[3]);
+
+/* Converged means a step below tol and |∇f| <= this × tol × |H| (Frobenius): the gradient
+ * a few thousand step tolerances of curvature would give — far below where a truncated
+ * step stalls off the set (|∇f| ~ |H| × distance), far above rounding. */
+#define ISM_SING_NEWTON_RESID 1e4
+
+typedef struct ism_newton_result {
+    bool converged;   /* the last step was below tol */
+    int iterations;
+    double grad_norm; /* |∇f| at the final point */
+} ism_newton_result;
+
+typedef struct ism_newton_opts {
+    double rel;          /* pseudo-inverse threshold (ISM_SING_PINV_REL or _POINT) */
+    double trust;        /* longest step before directions are dropped */
+    double tol;          /* a step shorter than this ends the iteration */
+    int max_iter;
+    const double *lo, *hi; /* the iterates must stay in [lo, hi] (NULL: unbounded) */
+} ism_newton_opts;
+
+/* Iterates p <- p - H⁺∇f from p (steps truncated as above), at most o->max_iter times,
+ * until a step is shorter than o->tol. Stops (converged = false) when an iterate leaves
+ * [lo, hi] or the jet is not finite; p is then the last point inside. *evals (may be NULL)
+ * counts the Hessian evaluations. */
+ism_newton_result ism_sing_newton(const ism_tape *t, ism_eval_ws *ws, double p[3],
+                                  const ism_newton_opts *o, uint64_t *evals);
+
+#endif

@@ -1,0 +1,429 @@
+/* points.c — candidates of the search to certified, typed singular points (points.h). */
+#include "core/singular/points.h"
+#include "core/singular/clusters.h"
+#include "core/singular/krawczyk.h"
+#include "core/singular/newton.h"
+#include "core/singular/search.h"
+#include "core/eval/interval_jet.h"
+#include "core/eval/interval_ops.h"
+#include "core/util/clock.h"
+#include "core/util/sym3.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* A cluster is one point when the projections of its boxes lie within this many finest
+ * cells of each other (a curve's or sheet's projections spread along it). */
+#define POINT_SPREAD_CELLS 1.0
+/* Newton towards a point: steps at most (degenerate zeros converge linearly, by 1/2 to
+ * 4/5 a step), and the step (× box diagonal) that ends it — a few ulps of the position. */
+#define POINT_NEWTON_ITERS 200
+#define POINT_NEWTON_TOL 1e-15
+/* Certificate boxes are tried from CERT_FIRST × the largest allowed half-width, growing by
+ * CERT_GROWTH: the smallest box that works is the best enclosure. */
+#define CERT_FIRST 1e-6
+#define CERT_GROWTH 10.0
+/* f is sampled this far (× finest cell) each way along the Hessian's null direction to tell
+ * a cusp (sign change) from an isolated or degenerate point. */
+#define TYPE_PROBE_CELLS 0.25
+/* Newton steps across the range plane at each probe (quadratic there: a few suffice). */
+#define TYPE_ACROSS_STEPS 4
+/* Uncertified candidates closer than this (× finest cell) to another point are the same. */
+#define MERGE_CELLS 1.0
+/* Rank-3 projections tried as starts inside one extended cluster (a node on or near a
+ * curve); beyond this the cluster is left to the curve stage as it is. */
+#define EXTENDED_STARTS_MAX 64
+
+enum { NOT_FOUND = 0, FOUND = 1, OFF_SURFACE = 2 };
+
+typedef struct cand {
+    ism_sing_point pt;
+    uint32_t cluster; /* its cluster, or UINT32_MAX */
+    size_t box;       /* its ISM_LBOX_UNIQUE box, or SIZE_MAX */
+    size_t order;     /* discovery order (ties of the quality sort) */
+} cand;
+
+typedef struct ctx {
+    const ism_tape *t;
+    ism_eval_ws *ws;
+    ism_ivjet_ws *jw;
+    double cell, diag;
+    ism_locus *out;
+    cand *c;
+    size_t nc, capc;
+} ctx;
+
+static double dist3(const double a[3], const double b[3])
+{
+    double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+    return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+/* Krawczyk on p ± r for growing r up to the allowed half-width. On success writes the
+ * radius and the interval of f over that box. */
+static bool certify(ctx *x, const double p[3], double *radius, ism_interval *fbox)
+{
+    double rmax = ISM_SING_CERT_REL * x->diag;
+    ism_interval c[3];
+    for (int k = 0; k < 3; k++)
+        c[k] = iv(p[k], p[k]);
+    ism_ivgrad gc;
+    ism_eval_interval_grad(x->t, x->jw, c, NULL, NULL, &gc);
+    x->out->evals_interval++;
+    for (double r = CERT_FIRST * rmax; r <= rmax * (1.0 + 1e-12); r *= CERT_GROWTH) {
+        ism_interval b[3];
+        for (int k = 0; k < 3; k++)
+            b[k] = iv(down1(p[k] - r), up1(p[k] + r));
+        ism_ivjet j;
+        ism_eval_interval_jet(x->t, x->jw, b, NULL, NULL, &j);
+        x->out->evals_jet++;
+        if (ism_krawczyk(b, p, gc.d, j.h, NULL) == ISM_KRAWCZYK_UNIQUE) {
+            *radius = r;
+            *fbox = j.v;
+            return true;
+        }
+    }
+    return false;
+}
+
+/* The lowest (or, for an indefinite pair, the critical) value of f across the plane of
+ * H's two range directions e[0], e[1] through q: a few Newton steps in that plane. */
+static double across_value(ctx *x, const double q0[3], double e[2][3])
+{
+    double q[3] = { q0[0], q0[1], q0[2] }, g[3], h[6];
+    static const int S[3][3] = { { 0, 1, 2 }, { 1, 3, 4 }, { 2, 4, 5 } };
+    for (int it = 0; it < TYPE_ACROSS_STEPS; it++) {
+        ism_eval_hessian(x->t, x->ws, q[0], q[1], q[2], g, h);
+        x->out->evals_jet++;
+        double r[2], m[2][2];
+        for (int a = 0; a < 2; a++) {
+            r[a] = e[a][0] * g[0] + e[a][1] * g[1] + e[a][2] * g[2];
+            for (int b = 0; b < 2; b++) {
+                double v = 0.0;
+                for (int i = 0; i < 3; i++)
+                    for (int j = 0; j < 3; j++)
+                        v += e[a][i] * h[S[i][j]] * e[b][j];
+                m[a][b] = v;
+            }
+        }
+        double det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+        if (!(det != 0.0) || !isfinite(det))
+            break;
+        double s0 = -(m[1][1] * r[0] - m[0][1] * r[1]) / det;
+        double s1 = -(m[0][0] * r[1] - m[1][0] * r[0]) / det;
+        for (int k = 0; k < 3; k++)
+            q[k] += s0 * e[0][k] + s1 * e[1][k];
+    }
+    return ism_eval_point(x->t, x->ws, q[0], q[1], q[2]);
+}
+
+/* The type from the Hessian's eigen-decomposition at p (see points.h). For rank 2, f is
+ * followed a little way each side along the null direction, taking at each side the value
+ * across the range plane: a sign change is a cusp (x² + z² − y³); the sign of a definite
+ * pair on both sides an isolated point (x² + z² + y⁴); anything else (the horn cyclide's
+ * touching horns, 384u² + 40uy² + y⁴, dips below 0 across) is degenerate. */
+static int point_type(ctx *x, const double p[3], const double eig[3], double vec[3][3])
+{
+    int rank = ism_sym3_rank(eig, ISM_SING_RANK_REL);
+    if (rank == 3)
+        return (eig[0] > 0.0) == (eig[2] > 0.0) ? ISM_SING_ISOLATED : ISM_SING_NODE;
+    if (rank < 2)
+        return ISM_SING_DEGENERATE;
+    int null = 0; /* the eigenvalue nearest 0 */
+    for (int i = 1; i < 3; i++)
+        if (fabs(eig[i]) < fabs(eig[null]))
+            null = i;
+    int a = (null + 1) % 3, b = (null + 2) % 3;
+    double e[2][3];
+    memcpy(e[0], vec[a], sizeof e[0]);
+    memcpy(e[1], vec[b], sizeof e[1]);
+    double d = TYPE_PROBE_CELLS * x->cell, s[2];
+    for (int m = 0; m < 2; m++) {
+        double q[3];
+        for (int k = 0; k < 3; k++)
+            q[k] = p[k] + (m ? -d : d) * vec[null][k];
+        s[m] = across_value(x, q, e);
+    }
+    if ((s[0] > 0.0 && s[1] < 0.0) || (s[0] < 0.0 && s[1] > 0.0))
+        return ISM_SING_CUSP;
+    bool up = eig[a] > 0.0;
+    bool definite = up == (eig[b] > 0.0);
+    bool same = s[0] != 0.0 && s[1] != 0.0 && (s[0] > 0.0) == up && (s[1] > 0.0) == up;
+    return definite && same ? ISM_SING_ISOLATED : ISM_SING_DEGENERATE;
+}
+
+/* Newton from start within [lo, hi], certificate, off-surface check, type. */
+static int resolve(ctx *x, const double start[3], const double lo[3], const double hi[3],
+                   double trust, double half_width, ism_sing_point *pt)
+{
+    memset(pt, 0, sizeof *pt);
+    memcpy(pt->p, start, sizeof pt->p);
+    ism_newton_opts no = { ISM_SING_PINV_REL_POINT, trust, POINT_NEWTON_TOL * x->diag,
+                           POINT_NEWTON_ITERS, lo, hi };
+    ism_sing_newton(x->t, x->ws, pt->p, &no, &x->out->evals_jet);
+    ism_interval f;
+    pt->certified = certify(x, pt->p, &pt->radius, &f);
+    if (pt->certified && !(f.lo <= 0.0 && f.hi >= 0.0))
+        return OFF_SURFACE;
+    if (!pt->certified) {
+        ism_interval b[3];
+        for (int k = 0; k < 3; k++)
+            b[k] = iv(pt->p[k] - 0.5 * x->cell, pt->p[k] + 0.5 * x->cell);
+        f = ism_eval_interval(x->t, x->ws, b[0], b[1], b[2]);
+        x->out->evals_interval++;
+        if (!(f.lo <= 0.0 && f.hi >= 0.0))
+            return OFF_SURFACE;
+        pt->radius = half_width;
+    }
+    double g[3], h[6], vec[3][3];
+    pt->residual_f = fabs(ism_eval_hessian(x->t, x->ws, pt->p[0], pt->p[1], pt->p[2], g, h));
+    x->out->evals_jet++;
+    pt->residual_grad = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    ism_sym3_eigen(h, pt->eig, vec);
+    pt->type = point_type(x, pt->p, pt->eig, vec);
+    pt->cones = -1;
+    return FOUND;
+}
+
+static bool add_cand(ctx *x, const ism_sing_point *pt, uint32_t cluster, size_t box)
+{
+    if (x->nc == x->capc) {
+        size_t c = x->capc ? 2 * x->capc : 16;
+        cand *p = realloc(x->c, c * sizeof *p);
+        if (!p)
+            return false;
+        x->c = p;
+        x->capc = c;
+    }
+    x->c[x->nc] = (cand){ *pt, cluster, box, x->nc };
+    x->nc++;
+    return true;
+}
+
+/* Bounds of a cluster's boxes and of its boxes' projections. */
+typedef struct cluster_info {
+    double lo[3], hi[3];   /* boxes */
+    double qlo[3], qhi[3]; /* projections */
+    size_t first_projected, projected;
+    uint8_t fate;          /* 0 left alone, 1 explained (USED), 2 removed */
+} cluster_info;
+
+static void gather(const ism_locus *l, const uint32_t *label, cluster_info *ci, size_t nclusters)
+{
+    for (size_t c = 0; c < nclusters; c++) {
+        ci[c] = (cluster_info){ .first_projected = SIZE_MAX };
+        for (int k = 0; k < 3; k++) {
+            ci[c].lo[k] = ci[c].qlo[k] = INFINITY;
+            ci[c].hi[k] = ci[c].qhi[k] = -INFINITY;
+        }
+    }
+    for (size_t i = 0; i < l->nboxes; i++) {
+        const ism_lbox *b = &l->boxes[i];
+        cluster_info *c = &ci[label[i]];
+        for (int k = 0; k < 3; k++) {
+            c->lo[k] = fmin(c->lo[k], b->lo[k]);
+            c->hi[k] = fmax(c->hi[k], b->hi[k]);
+        }
+        if (!(b->flags & ISM_LBOX_PROJECTED))
+            continue;
+        if (c->projected++ == 0)
+            c->first_projected = i;
+        for (int k = 0; k < 3; k++) {
+            c->qlo[k] = fmin(c->qlo[k], b->q[k]);
+            c->qhi[k] = fmax(c->qhi[k], b->q[k]);
+        }
+    }
+}
+
+static bool is_point_cluster(const ctx *x, const cluster_info *c)
+{
+    if (!c->projected)
+        return false;
+    for (int k = 0; k < 3; k++)
+        if (c->qhi[k] - c->qlo[k] > POINT_SPREAD_CELLS * x->cell)
+            return false;
+    return true;
+}
+
+/* A Krawczyk box of the search: Newton inside it (grown by half), certify. */
+static bool from_unique_box(ctx *x, size_t i, uint8_t *box_fate)
+{
+    const ism_lbox *b = &x->out->boxes[i];
+    double lo[3], hi[3], w = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double half = 0.5 * (b->hi[k] - b->lo[k]);
+        lo[k] = b->lo[k] - half;
+        hi[k] = b->hi[k] + half;
+        w = fmax(w, 2.0 * half);
+    }
+    ism_sing_point pt;
+    int r = resolve(x, b->q, lo, hi, w, 0.5 * w, &pt);
+    box_fate[i] = r == FOUND ? 1 : 2;
+    return r != FOUND || add_cand(x, &pt, UINT32_MAX, i);
+}
+
+/* An isolated cluster: Newton from its first projection, within the cluster grown by a
+ * cell. Rank-3 projections of an extended cluster: only certified points are kept. */
+static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint32_t *label,
+                         uint8_t *fate)
+{
+    const ism_locus *l = x->out;
+    double lo[3], hi[3], half = 0.0;
+    for (int k = 0; k < 3; k++) {
+        lo[k] = c->lo[k] - x->cell;
+        hi[k] = c->hi[k] + x->cell;
+        half = fmax(half, 0.5 * (c->hi[k] - c->lo[k]));
+    }
+    ism_sing_point pt;
+    if (is_point_cluster(x, c)) {
+        int r = resolve(x, l->boxes[c->first_projected].q, lo, hi, x->cell, half, &pt);
+        *fate = r == FOUND ? 1 : r == OFF_SURFACE ? 2 : 0;
+        return r != FOUND || add_cand(x, &pt, id, SIZE_MAX);
+    }
+    size_t tried = 0;
+    double starts[EXTENDED_STARTS_MAX][3];
+    for (size_t i = c->first_projected; i < l->nboxes && tried < EXTENDED_STARTS_MAX; i++) {
+        const ism_lbox *b = &l->boxes[i];
+        if (label[i] != id || !(b->flags & ISM_LBOX_PROJECTED) || b->rank != 3)
+            continue;
+        bool seen = false;
+        for (size_t s = 0; s < tried && !seen; s++)
+            seen = dist3(starts[s], b->q) <= MERGE_CELLS * x->cell;
+        if (seen)
+            continue;
+        memcpy(starts[tried++], b->q, sizeof starts[0]);
+        if (resolve(x, b->q, lo, hi, x->cell, half, &pt) == FOUND && pt.certified
+            && !add_cand(x, &pt, UINT32_MAX, SIZE_MAX))
+            return false;
+    }
+    return true;
+}
+
+static bool same_point(const ctx *x, const ism_sing_point *a, const ism_sing_point *b)
+{
+    if (a->certified && b->certified) {
+        for (int k = 0; k < 3; k++)
+            if (fabs(a->p[k] - b->p[k]) > a->radius + b->radius)
+                return false;
+        return true;
+    }
+    return dist3(a->p, b->p) <= MERGE_CELLS * x->cell;
+}
+
+/* Best first: certified, then the smaller gradient residual, then the earlier. */
+static int by_quality(const void *pa, const void *pb)
+{
+    const cand *a = pa, *b = pb;
+    if (a->pt.certified != b->pt.certified)
+        return a->pt.certified ? -1 : 1;
+    if (a->pt.residual_grad != b->pt.residual_grad)
+        return a->pt.residual_grad < b->pt.residual_grad ? -1 : 1;
+    return a->order < b->order ? -1 : a->order > b->order;
+}
+
+static int by_position(const void *pa, const void *pb)
+{
+    const ism_sing_point *a = pa, *b = pb;
+    for (int k = 2; k >= 0; k--)
+        if (a->p[k] != b->p[k])
+            return a->p[k] < b->p[k] ? -1 : 1;
+    return 0;
+}
+
+/* Merges duplicates and appends the survivors to out->points in position order. */
+static bool publish(ctx *x)
+{
+    cand *sorted = malloc((x->nc ? x->nc : 1) * sizeof *sorted);
+    ism_sing_point *keep = malloc((x->nc ? x->nc : 1) * sizeof *keep);
+    if (!sorted || !keep) {
+        free(sorted);
+        free(keep);
+        return false;
+    }
+    memcpy(sorted, x->c, x->nc * sizeof *sorted);
+    qsort(sorted, x->nc, sizeof *sorted, by_quality);
+    size_t nk = 0;
+    for (size_t i = 0; i < x->nc; i++) {
+        bool dup = false;
+        for (size_t j = 0; j < nk && !dup; j++)
+            dup = same_point(x, &sorted[i].pt, &keep[j]);
+        if (!dup)
+            keep[nk++] = sorted[i].pt;
+    }
+    qsort(keep, nk, sizeof *keep, by_position);
+    bool ok = true;
+    for (size_t i = 0; ok && i < nk; i++)
+        ok = ism_locus_add_point(x->out, &keep[i]);
+    free(sorted);
+    free(keep);
+    return ok;
+}
+
+/* Flags explained boxes USED and removes boxes explained by off-surface critical points. */
+static void settle_boxes(ism_locus *l, const uint32_t *label, const uint8_t *cluster_fate,
+                         const uint8_t *box_fate)
+{
+    size_t n = 0;
+    for (size_t i = 0; i < l->nboxes; i++) {
+        uint8_t fate = box_fate[i] ? box_fate[i] : cluster_fate[label[i]];
+        if (fate == 2)
+            continue;
+        l->boxes[n] = l->boxes[i];
+        if (fate == 1)
+            l->boxes[n].flags |= ISM_LBOX_USED;
+        n++;
+    }
+    l->nboxes = n;
+}
+
+static bool run(ctx *x, const ism_locus_options *o)
+{
+    ism_locus *l = x->out;
+    size_t n = l->nboxes;
+    uint32_t *label = malloc((n ? n : 1) * sizeof *label);
+    uint8_t *box_fate = calloc(n ? n : 1, 1);
+    size_t nclusters = label ? ism_sing_clusters(o, l->boxes, n, label) : (size_t)-1;
+    cluster_info *ci = nclusters != (size_t)-1 ? malloc((nclusters ? nclusters : 1) * sizeof *ci) : NULL;
+    uint8_t *fate = ci ? calloc(nclusters ? nclusters : 1, 1) : NULL;
+    bool ok = label && box_fate && fate;
+    if (ok)
+        gather(l, label, ci, nclusters);
+    for (size_t i = 0; ok && i < n; i++)
+        if (l->boxes[i].flags & ISM_LBOX_UNIQUE)
+            ok = from_unique_box(x, i, box_fate);
+    for (size_t c = 0; ok && c < nclusters; c++)
+        if (ci[c].projected)
+            ok = from_cluster(x, &ci[c], (uint32_t)c, label, &fate[c]);
+    ok = ok && publish(x);
+    if (ok)
+        settle_boxes(l, label, fate, box_fate);
+    free(label);
+    free(box_fate);
+    free(ci);
+    free(fate);
+    return ok;
+}
+
+bool ism_sing_points(const ism_tape *f, const ism_locus_options *o, ism_locus *out,
+                     ism_error *err)
+{
+    double t0 = ism_now_ms();
+    ctx x = { .t = f, .out = out };
+    double cells = ldexp(1.0, o->max_depth), d2 = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double ext = o->box[k + 3] - o->box[k];
+        x.cell = fmax(x.cell, ext / cells);
+        d2 += ext * ext;
+    }
+    x.diag = sqrt(d2);
+    x.ws = ism_eval_ws_new(f);
+    x.jw = ism_ivjet_ws_new(f);
+    bool ok = x.ws && x.jw && run(&x, o);
+    ism_eval_ws_free(x.ws);
+    ism_ivjet_ws_free(x.jw);
+    free(x.c);
+    out->time_ms += ism_now_ms() - t0;
+    if (!ok)
+        return ism_error_set(err, "singular points: out of memory");
+    return true;
+}

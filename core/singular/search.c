@@ -1,0 +1,479 @@
+/* search.c — the interval subdivision of the singular-locus search (search.h).
+ *
+ * Level by level: the surviving cells of one level (the frontier) are cut in eight, and each
+ * child is tested, in parallel over chunks of the frontier; chunk outputs are joined in chunk
+ * order, so the result never depends on the thread count. A child is tested cheapest first:
+ *
+ *   F(X) ∌ 0 (batched over the 8 children)  ─▶ dropped
+ *   ∂F/∂xi(X) ∌ 0 for some i, for every smooth piece of a min/max/abs kink ─▶ dropped
+ *   (smooth cells only) f(c) + ∇F(X)·(X − c) ∌ 0, ∇f(c) + H(X)(X − c) ∌ 0 for some row,
+ *   or Krawczyk's K(X) ∩ X = ∅  ─▶ dropped;   K(X) ⊂ int X  ─▶ one zero of ∇f: kept whole
+ *
+ * Cells reaching the finest size are the candidates (projected onto ∇f = 0 and ranked). */
+#include "core/singular/search.h"
+#include "core/singular/krawczyk.h"
+#include "core/singular/newton.h"
+#include "core/eval/interval_jet.h"
+#include "core/eval/interval_ops.h"
+#include "core/util/clock.h"
+#include "core/util/parallel.h"
+#include "core/util/sym3.h"
+
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Deepest subdivision: lattice coordinates keep 17 bits each in the sort key (the
+ * polygoniser's own limit is 16). */
+#define SEARCH_MAX_DEPTH 16
+/* A cell with more undecided min/max/abs kinks than this is kept without testing its 2^n
+ * smooth pieces (each piece costs one gradient pass). */
+#define SEARCH_MAX_SPLIT 3
+/* Newton projection of a candidate's centre: steps at most, and the step (× cell width)
+ * below which it has converged — degenerate zeros (cusp, touching spheres) converge only
+ * linearly, by a factor 1/2 to 2/3 a step, hence the generous cap. */
+#define SEARCH_GN_ITERS 64
+#define SEARCH_GN_TOL 1e-10
+/* Frontier cells per parallel task, and tasks between two looks at the clock. */
+#define SEARCH_CELLS_PER_TASK 16
+/* Below this many frontier cells a level runs on the calling thread (thread start-up
+ * costs more than the work). */
+#define SEARCH_PARALLEL_MIN 64
+
+enum { EXCLUDED = 0, SURVIVES = 1, UNIQUE = 2 };
+
+typedef struct scell {
+    uint32_t i[3];
+    uint32_t level;
+} scell;
+
+typedef struct keyed_box {
+    uint64_t key; /* z, y, x lattice coordinates of the lower corner, then the level */
+    ism_lbox box;
+} keyed_box;
+
+/* A growable array of one element type. */
+typedef struct vec {
+    void *p;
+    size_t n, cap;
+} vec;
+
+static bool vec_push(vec *v, const void *e, size_t sz)
+{
+    if (v->n == v->cap) {
+        size_t c = v->cap ? 2 * v->cap : 64;
+        void *q = realloc(v->p, c * sz);
+        if (!q)
+            return false;
+        v->p = q;
+        v->cap = c;
+    }
+    memcpy((char *)v->p + v->n * sz, e, sz);
+    v->n++;
+    return true;
+}
+
+/* Per-thread evaluation state and counters. */
+typedef struct worker {
+    ism_eval_ws *ws;
+    ism_ivjet_ws *jw;
+    uint8_t *kinks, *force;
+    uint64_t visited, evals_interval, evals_jet;
+} worker;
+
+/* One task's output: surviving children and boxes, in the order of its parents. */
+typedef struct task_out {
+    vec cells, boxes;
+    bool oom;
+} task_out;
+
+typedef struct search {
+    const ism_tape *t;
+    const ism_locus_options *o;
+    int depth;
+    double lo[3], hi[3], ext[3];
+    worker *workers;
+    int threads;
+    /* the level being expanded */
+    const scell *frontier;
+    size_t nfrontier;
+    task_out *outs;
+    atomic_int stop;        /* 1 deadline, 2 cancel, 3 budget */
+    atomic_size_t kept;     /* cells and boxes kept so far in this level */
+} search;
+
+static double coord(const search *s, int k, uint32_t i)
+{
+    return i >= (1u << s->depth) ? s->hi[k] : s->lo[k] + s->ext[k] * ldexp((double)i, -s->depth);
+}
+
+static void cell_box(const search *s, const scell *c, ism_interval x[3])
+{
+    uint32_t size = 1u << (s->depth - (int)c->level);
+    for (int k = 0; k < 3; k++)
+        x[k] = iv(coord(s, k, c->i[k]), coord(s, k, c->i[k] + size));
+}
+
+static bool holds0(ism_interval r) { return r.lo <= 0.0 && r.hi >= 0.0; }
+
+static bool grad_may_vanish(const ism_interval d[3])
+{
+    return holds0(d[0]) && holds0(d[1]) && holds0(d[2]);
+}
+
+/* Some smooth piece of a cell with nk (<= SEARCH_MAX_SPLIT) free kinks may have ∇f = 0:
+ * each kink forced to each of its branches in turn. Forcing leaves every value enclosure as
+ * it was, so the set of kinks does not change. */
+static bool some_piece_may_vanish(const search *s, worker *w, const ism_interval x[3], size_t nk)
+{
+    size_t at[SEARCH_MAX_SPLIT], n = 0;
+    for (size_t i = 0; i < ism_tape_length(s->t) && n < nk; i++)
+        if (w->kinks[i])
+            at[n++] = i;
+    bool any = false;
+    for (unsigned m = 0; m < (1u << n) && !any; m++) {
+        for (size_t j = 0; j < n; j++)
+            w->force[at[j]] = (m >> j) & 1u ? ISM_BRANCH_B : ISM_BRANCH_A;
+        ism_ivgrad g;
+        ism_eval_interval_grad(s->t, w->jw, x, w->force, NULL, &g);
+        w->evals_interval++;
+        any = grad_may_vanish(g.d);
+    }
+    for (size_t j = 0; j < n; j++)
+        w->force[at[j]] = ISM_BRANCH_FREE;
+    return any;
+}
+
+/* Σ_j a_j (x_j − c_j) added to base. */
+static ism_interval add_linear(ism_interval base, const ism_interval a[3], const ism_interval dx[3])
+{
+    for (int j = 0; j < 3; j++)
+        base = iv_add(base, iv_mul(a[j], dx[j]));
+    return base;
+}
+
+/* The tests that need f smooth on the cell: mean-value forms of F and ∇F, and Krawczyk. */
+static int smooth_tests(const search *s, worker *w, const ism_interval x[3], const ism_ivgrad *g)
+{
+    double c[3];
+    ism_interval cx[3], dx[3];
+    for (int k = 0; k < 3; k++) {
+        c[k] = 0.5 * x[k].lo + 0.5 * x[k].hi;
+        cx[k] = iv(c[k], c[k]);
+        dx[k] = iv_sub(x[k], cx[k]);
+    }
+    ism_ivgrad gc;
+    ism_eval_interval_grad(s->t, w->jw, cx, NULL, NULL, &gc);
+    w->evals_interval++;
+    if (!holds0(add_linear(gc.v, g->d, dx)))
+        return EXCLUDED;
+    ism_ivjet j;
+    ism_eval_interval_jet(s->t, w->jw, x, NULL, NULL, &j);
+    w->evals_jet++;
+    static const int row[3][3] = { { 0, 1, 2 }, { 1, 3, 4 }, { 2, 4, 5 } };
+    for (int i = 0; i < 3; i++) {
+        ism_interval hrow[3] = { j.h[row[i][0]], j.h[row[i][1]], j.h[row[i][2]] };
+        if (!holds0(add_linear(gc.d[i], hrow, dx)))
+            return EXCLUDED;
+    }
+    int k = ism_krawczyk(x, c, gc.d, j.h, NULL);
+    return k == ISM_KRAWCZYK_EMPTY ? EXCLUDED : k == ISM_KRAWCZYK_UNIQUE ? UNIQUE : SURVIVES;
+}
+
+/* Whether a cell (whose F interval is f) may hold a singular point. */
+static int classify(const search *s, worker *w, const ism_interval x[3], ism_interval f)
+{
+    w->visited++;
+    if (!holds0(f))
+        return EXCLUDED;
+    ism_ivgrad g;
+    size_t nk = ism_eval_interval_grad(s->t, w->jw, x, NULL, w->kinks, &g);
+    w->evals_interval++;
+    if (nk == 0)
+        return grad_may_vanish(g.d) ? smooth_tests(s, w, x, &g) : EXCLUDED;
+    if (nk > SEARCH_MAX_SPLIT)
+        return SURVIVES;
+    return some_piece_may_vanish(s, w, x, nk) ? SURVIVES : EXCLUDED;
+}
+
+/* A finest candidate: the centre projected onto ∇f = 0, the Hessian's rank there. */
+static ism_lbox candidate(const search *s, worker *w, const ism_interval x[3])
+{
+    ism_lbox b = { .rank = 0, .flags = 0 };
+    double lo[3], hi[3], width = 0.0;
+    for (int k = 0; k < 3; k++) {
+        b.lo[k] = x[k].lo;
+        b.hi[k] = x[k].hi;
+        double half = 0.5 * (x[k].hi - x[k].lo);
+        width = fmax(width, x[k].hi - x[k].lo);
+        b.q[k] = x[k].lo + half;
+        lo[k] = x[k].lo - half;
+        hi[k] = x[k].hi + half;
+    }
+    ism_newton_opts no = { ISM_SING_PINV_REL, width, SEARCH_GN_TOL * width, SEARCH_GN_ITERS,
+                           lo, hi };
+    ism_newton_result r = ism_sing_newton(s->t, w->ws, b.q, &no, &w->evals_jet);
+    if (r.converged)
+        b.flags |= ISM_LBOX_PROJECTED;
+    else
+        for (int k = 0; k < 3; k++)
+            b.q[k] = x[k].lo + 0.5 * (x[k].hi - x[k].lo);
+    double g[3], h[6], eig[3];
+    ism_eval_hessian(s->t, w->ws, b.q[0], b.q[1], b.q[2], g, h);
+    w->evals_jet++;
+    ism_sym3_eigen(h, eig, NULL);
+    b.rank = (uint8_t)ism_sym3_rank(eig, ISM_SING_RANK_REL);
+    return b;
+}
+
+static uint64_t cell_key(const scell *c)
+{
+    return (uint64_t)c->i[2] << 39 | (uint64_t)c->i[1] << 22 | (uint64_t)c->i[0] << 5 | c->level;
+}
+
+/* Keeps a tested child: a frontier cell, a finest candidate or a UNIQUE box. */
+static void keep(search *s, worker *w, task_out *out, const scell *c, const ism_interval x[3],
+                 int verdict)
+{
+    bool ok;
+    if (verdict == SURVIVES && (int)c->level < s->depth) {
+        ok = vec_push(&out->cells, c, sizeof *c);
+    } else {
+        keyed_box kb = { cell_key(c), { .rank = 0 } };
+        if (verdict == SURVIVES) {
+            kb.box = candidate(s, w, x);
+        } else {
+            for (int k = 0; k < 3; k++) {
+                kb.box.lo[k] = x[k].lo;
+                kb.box.hi[k] = x[k].hi;
+                kb.box.q[k] = x[k].lo + 0.5 * (x[k].hi - x[k].lo);
+            }
+            kb.box.rank = 3; /* Krawczyk: every Hessian in the box is non-singular */
+            kb.box.flags = ISM_LBOX_UNIQUE;
+        }
+        ok = vec_push(&out->boxes, &kb, sizeof kb);
+    }
+    out->oom |= !ok;
+    if (atomic_fetch_add(&s->kept, 1) + 1 > s->o->max_boxes)
+        atomic_store(&s->stop, 3);
+}
+
+/* Deadline and cancel, looked at between tasks. */
+static bool should_stop(search *s)
+{
+    if (atomic_load(&s->stop))
+        return true;
+    if (s->o->cancel && *s->o->cancel) {
+        atomic_store(&s->stop, 2);
+        return true;
+    }
+    if (s->o->deadline_ms > 0 && ism_now_ms() > s->o->deadline_ms) {
+        atomic_store(&s->stop, 1);
+        return true;
+    }
+    return false;
+}
+
+static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
+{
+    ism_interval bx[8], by[8], bz[8], f[8];
+    scell kids[8];
+    uint32_t half = 1u << (s->depth - (int)p->level - 1);
+    for (int m = 0; m < 8; m++) {
+        kids[m] = *p;
+        kids[m].level = p->level + 1;
+        for (int k = 0; k < 3; k++)
+            kids[m].i[k] += (m >> k) & 1u ? half : 0u;
+        ism_interval x[3];
+        cell_box(s, &kids[m], x);
+        bx[m] = x[0];
+        by[m] = x[1];
+        bz[m] = x[2];
+    }
+    ism_eval_interval_batch(s->t, w->ws, bx, by, bz, f, 8);
+    w->evals_interval += 8;
+    for (int m = 0; m < 8; m++) {
+        ism_interval x[3] = { bx[m], by[m], bz[m] };
+        int v = classify(s, w, x, f[m]);
+        if (v != EXCLUDED)
+            keep(s, w, out, &kids[m], x, v);
+    }
+}
+
+static void expand_task(void *ctx, size_t task, int thread)
+{
+    search *s = ctx;
+    if (should_stop(s))
+        return;
+    size_t a = task * SEARCH_CELLS_PER_TASK, b = a + SEARCH_CELLS_PER_TASK;
+    if (b > s->nfrontier)
+        b = s->nfrontier;
+    for (size_t i = a; i < b; i++)
+        expand_cell(s, &s->workers[thread], &s->outs[task], &s->frontier[i]);
+}
+
+static void free_workers(search *s)
+{
+    for (int i = 0; s->workers && i < s->threads; i++) {
+        ism_eval_ws_free(s->workers[i].ws);
+        ism_ivjet_ws_free(s->workers[i].jw);
+        free(s->workers[i].kinks);
+        free(s->workers[i].force);
+    }
+    free(s->workers);
+}
+
+static bool make_workers(search *s)
+{
+    s->workers = calloc((size_t)s->threads, sizeof *s->workers);
+    if (!s->workers)
+        return false;
+    size_t len = ism_tape_length(s->t) ? ism_tape_length(s->t) : 1;
+    for (int i = 0; i < s->threads; i++) {
+        worker *w = &s->workers[i];
+        w->ws = ism_eval_ws_new(s->t);
+        w->jw = ism_ivjet_ws_new(s->t);
+        w->kinks = calloc(len, 1);
+        w->force = calloc(len, 1);
+        if (!w->ws || !w->jw || !w->kinks || !w->force)
+            return false;
+    }
+    return true;
+}
+
+/* Runs one level: expands the frontier into *next and appends boxes to *boxes. */
+static bool run_level(search *s, vec *next, vec *boxes)
+{
+    size_t ntasks = (s->nfrontier + SEARCH_CELLS_PER_TASK - 1) / SEARCH_CELLS_PER_TASK;
+    s->outs = calloc(ntasks ? ntasks : 1, sizeof *s->outs);
+    if (!s->outs)
+        return false;
+    int threads = s->nfrontier < SEARCH_PARALLEL_MIN ? 1 : s->threads;
+    ism_parallel_for(threads, ntasks, expand_task, s);
+    bool ok = true;
+    for (size_t t = 0; t < ntasks; t++) {
+        task_out *o = &s->outs[t];
+        ok = ok && !o->oom;
+        for (size_t i = 0; ok && i < o->cells.n; i++)
+            ok = vec_push(next, (scell *)o->cells.p + i, sizeof(scell));
+        for (size_t i = 0; ok && i < o->boxes.n; i++)
+            ok = vec_push(boxes, (keyed_box *)o->boxes.p + i, sizeof(keyed_box));
+        free(o->cells.p);
+        free(o->boxes.p);
+    }
+    free(s->outs);
+    s->outs = NULL;
+    return ok;
+}
+
+static int by_key(const void *a, const void *b)
+{
+    uint64_t x = ((const keyed_box *)a)->key, y = ((const keyed_box *)b)->key;
+    return x < y ? -1 : x > y;
+}
+
+static const char *stop_reason(int why)
+{
+    switch (why) {
+    case 1: return "deadline reached during the singular-point search";
+    case 2: return "cancelled during the singular-point search";
+    default: return "candidate-box budget (max_boxes) exhausted in the singular-point search";
+    }
+}
+
+/* The root cell: tested like any child (its F interval computed alone). */
+static bool seed(search *s, vec *frontier, vec *boxes)
+{
+    scell root = { { 0, 0, 0 }, 0 };
+    ism_interval x[3];
+    cell_box(s, &root, x);
+    worker *w = &s->workers[0];
+    ism_interval f = ism_eval_interval(s->t, w->ws, x[0], x[1], x[2]);
+    w->evals_interval++;
+    int v = classify(s, w, x, f);
+    if (v == EXCLUDED)
+        return true;
+    task_out out = { { 0 }, { 0 }, false };
+    keep(s, w, &out, &root, x, v);
+    bool ok = !out.oom;
+    for (size_t i = 0; ok && i < out.cells.n; i++)
+        ok = vec_push(frontier, (scell *)out.cells.p + i, sizeof(scell));
+    for (size_t i = 0; ok && i < out.boxes.n; i++)
+        ok = vec_push(boxes, (keyed_box *)out.boxes.p + i, sizeof(keyed_box));
+    free(out.cells.p);
+    free(out.boxes.p);
+    return ok;
+}
+
+static bool check_options(const ism_locus_options *o, ism_error *err)
+{
+    if (o->max_depth < 0 || o->max_depth > SEARCH_MAX_DEPTH)
+        return ism_error_set(err, "singular search: depth %d outside 0..%d", o->max_depth,
+                             SEARCH_MAX_DEPTH);
+    for (int k = 0; k < 3; k++)
+        if (!(o->box[k] < o->box[k + 3]) || !isfinite(o->box[k]) || !isfinite(o->box[k + 3]))
+            return ism_error_set(err, "singular search: empty or non-finite box");
+    return true;
+}
+
+/* Runs the levels; returns false on out of memory. */
+static bool subdivide(search *s, vec *boxes)
+{
+    vec frontier = { 0 }, next = { 0 };
+    bool ok = seed(s, &frontier, boxes);
+    for (int level = 0; ok && level < s->depth && frontier.n && !atomic_load(&s->stop); level++) {
+        s->frontier = frontier.p;
+        s->nfrontier = frontier.n;
+        atomic_store(&s->kept, boxes->n);
+        next.n = 0;
+        ok = run_level(s, &next, boxes);
+        vec t = frontier;
+        frontier = next;
+        next = t;
+    }
+    free(frontier.p);
+    free(next.p);
+    return ok;
+}
+
+bool ism_sing_search(const ism_tape *f, const ism_locus_options *o, ism_locus *out,
+                     ism_error *err)
+{
+    double t0 = ism_now_ms();
+    if (!check_options(o, err))
+        return false;
+    search s = { .t = f, .o = o, .depth = o->max_depth };
+    for (int k = 0; k < 3; k++) {
+        s.lo[k] = o->box[k];
+        s.hi[k] = o->box[k + 3];
+        s.ext[k] = s.hi[k] - s.lo[k];
+    }
+    s.threads = o->threads > 0 ? o->threads : ism_cpu_count();
+    atomic_init(&s.stop, 0);
+    atomic_init(&s.kept, 0);
+    vec boxes = { 0 };
+    bool ok = make_workers(&s) && subdivide(&s, &boxes);
+    if (ok) {
+        qsort(boxes.p, boxes.n, sizeof(keyed_box), by_key);
+        size_t n = boxes.n < o->max_boxes ? boxes.n : o->max_boxes;
+        for (size_t i = 0; ok && i < n; i++)
+            ok = ism_locus_add_box(out, &((keyed_box *)boxes.p)[i].box);
+    }
+    int why = atomic_load(&s.stop);
+    if (ok && why) {
+        out->incomplete = true;
+        snprintf(out->incomplete_why, sizeof out->incomplete_why, "%s", stop_reason(why));
+    }
+    for (int i = 0; s.workers && i < s.threads; i++) {
+        out->boxes_visited += s.workers[i].visited;
+        out->evals_interval += s.workers[i].evals_interval;
+        out->evals_jet += s.workers[i].evals_jet;
+    }
+    free(boxes.p);
+    free_workers(&s);
+    out->time_ms += ism_now_ms() - t0;
+    if (!ok)
+        return ism_error_set(err, "singular search: out of memory");
+    return true;
+}
