@@ -340,7 +340,8 @@ static bool publish(ctx *x)
         free(keep);
         return false;
     }
-    memcpy(sorted, x->c, x->nc * sizeof *sorted);
+    if (x->nc)
+        memcpy(sorted, x->c, x->nc * sizeof *sorted);
     qsort(sorted, x->nc, sizeof *sorted, by_quality);
     size_t nk = 0;
     for (size_t i = 0; i < x->nc; i++) {

@@ -455,7 +455,8 @@ bool ism_sing_search(const ism_tape *f, const ism_locus_options *o, ism_locus *o
     vec boxes = { 0 };
     bool ok = make_workers(&s) && subdivide(&s, &boxes);
     if (ok) {
-        qsort(boxes.p, boxes.n, sizeof(keyed_box), by_key);
+        if (boxes.n)
+            qsort(boxes.p, boxes.n, sizeof(keyed_box), by_key);
         size_t n = boxes.n < o->max_boxes ? boxes.n : o->max_boxes;
         for (size_t i = 0; ok && i < n; i++)
             ok = ism_locus_add_box(out, &((keyed_box *)boxes.p)[i].box);

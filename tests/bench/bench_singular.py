@@ -1,0 +1,37 @@
+#!/usr/bin/env python3
+"""bench_singular.py — the singular-locus stage's time beside the polygoniser's on every preset
+at its default box and depth (bench_singular.c; same thread count, shortest of 3 runs each).
+The issue's goal: the stage adds at most 25% to polygonise time on every preset. Printed,
+never asserted (speed is not a unit test on a shared machine).
+
+  bench_singular.py --build build/release [--threads N]"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--build", default="build/release")
+    ap.add_argument("--threads", type=int, default=0)
+    args = ap.parse_args()
+    exe = os.path.join(args.build, "bench", "bench_singular")
+    if not os.path.exists(exe):
+        sys.exit(f"bench_singular.py: {exe} is missing (make bench builds it)")
+    proc = subprocess.run([exe, "--threads", str(args.threads)], stdout=subprocess.PIPE,
+                          text=True, timeout=1800, check=True)
+    rows = [json.loads(line) for line in proc.stdout.splitlines() if line.strip()]
+    print(f"{'preset':<18}{'depth':>6}{'polygonise ms':>15}{'singular ms':>13}{'ratio':>8}"
+          f"{'points':>8}{'cert':>6}{'boxes':>7}  goal <= 25%")
+    for r in rows:
+        flag = "" if r["ratio"] <= 0.25 else "  OVER"
+        print(f"{r['preset']:<18}{r['depth']:>6}{r['polygonise_ms']:>15.1f}"
+              f"{r['singular_ms']:>13.1f}{100 * r['ratio']:>7.1f}%{r['points']:>8}"
+              f"{r['certified']:>6}{r['boxes']:>7}{flag}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

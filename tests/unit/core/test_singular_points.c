@@ -1,0 +1,363 @@
+/* test_singular_points.c — the singular-point stage (core/singular/find.h) against closed
+ * forms, each run in the symmetric box and in boxes shifted off the search lattice by 1e-3
+ * and by 0.37 of a finest cell: the tilted cone's node, Kummer's 4 and 16 nodes (positions
+ * from a separate long-double Newton on hand-written derivatives), an isolated point, a
+ * cusp, a sphere (nothing), two touching spheres (one degenerate point), the horn cyclide
+ * (its one singular point, derived below); plus a double sheet (boxes, no point), the box
+ * budget, cancel, and identical output for 1 and 2 threads. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <string.h>
+
+#include "core/singular/find.h"
+#include "core/singular/search.h"
+#include "test_eval_surfaces.h"
+
+/* The three placements of a box: as given, shifted by 1e-3, shifted by 0.37 of a finest
+ * cell (an irrational-looking fraction: no lattice plane of one is a plane of another). */
+static void placed_box(const double *box, int depth, int placement, double out[6])
+{
+    for (int k = 0; k < 3; k++) {
+        double cell = (box[k + 3] - box[k]) / ldexp(1.0, depth);
+        double shift = placement == 0 ? 0.0 : placement == 1 ? 1e-3 : 0.37 * cell;
+        out[k] = box[k] + shift;
+        out[k + 3] = box[k + 3] + shift;
+    }
+}
+
+static void find(const ism_tape *t, const double *box, int depth, int placement, int threads,
+                 ism_locus *l)
+{
+    ism_locus_options o;
+    ism_locus_options_default(&o);
+    placed_box(box, depth, placement, o.box);
+    o.max_depth = depth;
+    o.threads = threads;
+    ism_locus_init(l);
+    ism_error err;
+    cr_assert(ism_locus_find(t, &o, l, &err), "%s", err.message);
+    cr_assert(!l->incomplete, "%s", l->incomplete_why);
+}
+
+static ism_tape *compile(const char *src)
+{
+    ism_error err;
+    ism_tape *t = ism_tape_compile(src, NULL, 0, NULL, 0, NULL, &err);
+    cr_assert_not_null(t, "%s: %s", src, err.message);
+    return t;
+}
+
+static double dist(const double *a, const double *b)
+{
+    return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1])
+                + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+/* Exactly n points, the i-th expected one matched by exactly one found point within tol,
+ * each of the given type (and certified when asked). */
+static void expect_points(const char *name, int placement, const ism_locus *l,
+                          const double *box, const double (*want)[3], size_t n, double tol,
+                          int type, bool certified)
+{
+    double diag = dist(box, box + 3);
+    cr_assert_eq(l->npoints, n, "%s (placement %d): %zu points, want %zu", name, placement,
+                 l->npoints, n);
+    for (size_t i = 0; i < n; i++) {
+        size_t hits = 0;
+        for (size_t j = 0; j < l->npoints; j++) {
+            const ism_sing_point *p = &l->points[j];
+            if (dist(p->p, want[i]) > tol)
+                continue;
+            hits++;
+            cr_expect_eq(p->type, type, "%s (placement %d): point %zu is %s", name, placement,
+                         i, ism_sing_type_name(p->type));
+            if (certified)
+                cr_expect(p->certified && p->radius > 0 && p->radius <= 0.5e-9 * diag,
+                          "%s (placement %d): point %zu not certified", name, placement, i);
+            cr_expect_eq(p->cones, -1);
+        }
+        cr_expect_eq(hits, 1, "%s (placement %d): (%g, %g, %g) matched %zu times", name,
+                     placement, want[i][0], want[i][1], want[i][2], hits);
+    }
+}
+
+static void check_surface(const char *src, const double *box, int depth,
+                          const double (*want)[3], size_t n, double tol, int type,
+                          bool certified)
+{
+    ism_tape *t = compile(src);
+    for (int placement = 0; placement < 3; placement++) {
+        ism_locus l;
+        find(t, box, depth, placement, 0, &l);
+        expect_points(src, placement, &l, box, want, n, tol, type, certified);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
+
+static const double UNIT[6] = { -1, -1, -1, 1, 1, 1 };
+static const double ORIGIN[1][3] = { { 0, 0, 0 } };
+
+/* ∇f = (2x + 0.5z, 4y, 0.5x − 6z) vanishes only at 0 (det ≠ 0); H = [[2,0,.5],[0,4,0],
+ * [.5,0,−6]] has eigenvalues of both signs: one node. */
+Test(singular_points, tilted_cone_one_node)
+{
+    check_surface("x^2 + 2*y^2 - 3*z^2 + 0.5*x*z", UNIT, 6, ORIGIN, 1, 1e-9, ISM_SING_NODE, true);
+}
+
+/* f = |p|²: zero only at 0, H = 2I definite: one isolated point. */
+Test(singular_points, isolated_point)
+{
+    check_surface("x^2 + y^2 + z^2", UNIT, 6, ORIGIN, 1, 1e-9, ISM_SING_ISOLATED, true);
+}
+
+/* ∇f = (2x, −3y², 2z) = 0 only at 0, where f = 0 and H = diag(2, 0, 2): the A2 cusp
+ * (f changes sign along y). Newton converges linearly here; the certificate cannot hold. */
+Test(singular_points, cusp)
+{
+    check_surface("x^2 + z^2 - y^3", UNIT, 6, ORIGIN, 1, 1e-6, ISM_SING_CUSP, false);
+}
+
+/* The unit sphere is smooth; its centre is a critical point with f = −1. */
+Test(singular_points, sphere_has_none)
+{
+    check_surface("x^2 + y^2 + z^2 - 1", (const double[6]){ -1.5, -1.5, -1.5, 1.5, 1.5, 1.5 },
+                  6, NULL, 0, 0, 0, false);
+}
+
+/* s1 s2 with s1, s2 the unit spheres about (±1, 0, 0): they touch at 0 only, where
+ * ∇f = s2∇s1 + s1∇s2 = 0 and H = ∇s1∇s2ᵀ + ∇s2∇s1ᵀ = diag(−8, 0, 0) (rank 1); along y,
+ * f = y⁴, so the zero of ∇f is isolated but degenerate. */
+Test(singular_points, touching_spheres_degenerate)
+{
+    check_surface("((x-1)^2 + y^2 + z^2 - 1)*((x+1)^2 + y^2 + z^2 - 1)",
+                  (const double[6]){ -2, -2, -2, 2, 2, 2 }, 6, ORIGIN, 1, 1e-6,
+                  ISM_SING_DEGENERATE, false);
+}
+
+/* Horn cyclide (a = 10, r = f = 2): with S = x² + y² + z² + 92,
+ *   f_z = 4zS, f_y = 4y(S − 192), f_x = 4xS − 80(10x − 4).
+ * S > 0, so z = 0. If y = 0: f = S² − 4(10x − 4)² = (x − 10)²(x² + 20x + 84), zero at
+ * x = 10, −6, −14, and f_x = 0 only at x = 10. If S = 192 (x² + y² = 100):
+ * f = −16(x − 10)², zero only at x = 10, y = 0. So (10, 0, 0) is the only singular point.
+ * There f = 384u² + 384z² + 40uy² + y⁴ + ... (u = x − 10): rank 2, and f < 0 between the
+ * horns u = −y²/24 and u = −y²/16 — degenerate, not isolated, not a cusp. */
+Test(singular_points, horn_cyclide_one_point)
+{
+    static const double want[1][3] = { { 10, 0, 0 } };
+    const test_surface *s = &TEST_SURFACES[6];
+    cr_assert_str_eq(s->name, "horn-cyclide");
+    ism_tape *t = test_surface_compile(s);
+    for (int placement = 0; placement < 3; placement++) {
+        ism_locus l;
+        find(t, s->box, 7, placement, 0, &l);
+        expect_points(s->name, placement, &l, s->box, want, 1, 1e-4, ISM_SING_DEGENERATE, false);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
+
+/* Kummer's quartic (x²+y²+z²−μ²)² − λ p q r s written out with its derivatives by hand, in
+ * long double: an evaluation independent of the tape and its evaluators. */
+typedef struct kummer {
+    long double mu2, lambda, w;
+} kummer;
+
+static void kummer_jet(const kummer *k, const long double x[3], long double *f,
+                       long double g[3], long double h[3][3])
+{
+    const long double r2 = sqrtl(2.0L);
+    /* the four planes: value and (constant) gradient */
+    long double v[4] = { k->w - x[2] - r2 * x[0], k->w - x[2] + r2 * x[0],
+                         k->w + x[2] + r2 * x[1], k->w + x[2] - r2 * x[1] };
+    const long double d[4][3] = { { -r2, 0, -1 }, { r2, 0, -1 }, { 0, r2, 1 }, { 0, -r2, 1 } };
+    long double q = x[0] * x[0] + x[1] * x[1] + x[2] * x[2] - k->mu2;
+    long double prod = v[0] * v[1] * v[2] * v[3];
+    *f = q * q - k->lambda * prod;
+    for (int i = 0; i < 3; i++) {
+        long double gp = 0; /* ∂(pqrs)/∂xi */
+        for (int a = 0; a < 4; a++) {
+            long double others = 1;
+            for (int b = 0; b < 4; b++)
+                if (b != a)
+                    others *= v[b];
+            gp += others * d[a][i];
+        }
+        g[i] = 4.0L * q * x[i] - k->lambda * gp;
+        for (int j = 0; j < 3; j++) {
+            long double hp = 0; /* ∂²(pqrs)/∂xi∂xj */
+            for (int a = 0; a < 4; a++)
+                for (int b = 0; b < 4; b++) {
+                    if (a == b)
+                        continue;
+                    long double others = 1;
+                    for (int c = 0; c < 4; c++)
+                        if (c != a && c != b)
+                            others *= v[c];
+                    hp += others * d[a][i] * d[b][j];
+                }
+            h[i][j] = 8.0L * x[i] * x[j] + (i == j ? 4.0L * q : 0.0L) - k->lambda * hp;
+        }
+    }
+}
+
+/* Newton on ∇f = 0 in long double from a start, by Cramer's rule; asserts it lands on a
+ * singular point (f and ∇f at rounding level). */
+static void kummer_node(const kummer *k, const double start[3], double out[3])
+{
+    long double x[3] = { start[0], start[1], start[2] }, f, g[3], h[3][3];
+    for (int it = 0; it < 60; it++) {
+        kummer_jet(k, x, &f, g, h);
+        long double det = h[0][0] * (h[1][1] * h[2][2] - h[1][2] * h[2][1])
+                          - h[0][1] * (h[1][0] * h[2][2] - h[1][2] * h[2][0])
+                          + h[0][2] * (h[1][0] * h[2][1] - h[1][1] * h[2][0]);
+        cr_assert(fabsl(det) > 1e-12L, "Kummer Hessian singular at a start");
+        long double s[3];
+        for (int c = 0; c < 3; c++) {
+            long double m[3][3];
+            memcpy(m, h, sizeof m);
+            for (int r = 0; r < 3; r++)
+                m[r][c] = -g[r];
+            s[c] = (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+                    - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+                    + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])) / det;
+        }
+        for (int c = 0; c < 3; c++)
+            x[c] += s[c];
+    }
+    kummer_jet(k, x, &f, g, h);
+    cr_assert(fabsl(f) < 1e-15L && fabsl(g[0]) + fabsl(g[1]) + fabsl(g[2]) < 1e-15L,
+              "no singular point near (%g, %g, %g): f = %Lg", start[0], start[1], start[2], f);
+    for (int c = 0; c < 3; c++)
+        out[c] = (double)x[c];
+}
+
+static void check_kummer(const test_surface *s, const double (*starts)[3], size_t n)
+{
+    kummer k = { s->params[0].value, 0, s->params[1].value };
+    k.lambda = (3 * k.mu2 - 1) / (3 - k.mu2);
+    double want[16][3];
+    for (size_t i = 0; i < n; i++)
+        kummer_node(&k, starts[i], want[i]);
+    for (size_t i = 0; i < n; i++) /* the starts lead to n distinct nodes */
+        for (size_t j = 0; j < i; j++)
+            cr_assert(dist(want[i], want[j]) > 1e-3, "%s: starts %zu, %zu meet", s->name, i, j);
+    ism_tape *t = test_surface_compile(s);
+    for (int placement = 0; placement < 3; placement++) {
+        ism_locus l;
+        find(t, s->box, 7, placement, 0, &l);
+        expect_points(s->name, placement, &l, s->box, want, n, 1e-9, ISM_SING_NODE, true);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
+
+/* μ² = 0.6667 (the preset's value, λ ≈ 0.4286): four real nodes, two on the plane x = 0
+ * and two on y = 0 (the quartic is even in x and in y, and the swap x <-> y, z <-> -z maps
+ * it to itself). Starts: the published picture's node positions to two digits. */
+Test(singular_points, kummer_4_nodes)
+{
+    static const double starts[4][3] = {
+        { 0, 0.24, -0.17 }, { 0, -0.24, -0.17 }, { 0.24, 0, 0.17 }, { -0.24, 0, 0.17 },
+    };
+    cr_assert_str_eq(TEST_SURFACES[4].name, "kummer-4-nodes");
+    check_kummer(&TEST_SURFACES[4], starts, 4);
+}
+
+/* μ² = 2 (λ = 5): the 16 nodes in closed form, each checked a singular point by the
+ * long-double Newton above (which leaves an exact node where it is): (±1, 0, −1),
+ * (0, ±1, 1), (±1/√2, 0, −1/2), (0, ±1/√2, 1/2), (±(√2+1)/2, ±(√2−1)/2, −1/√2),
+ * (±(√2−1)/2, ±(√2+1)/2, 1/√2). */
+Test(singular_points, kummer_16_nodes)
+{
+    const double a = (sqrt(2.0) + 1) / 2, b = (sqrt(2.0) - 1) / 2, c = 1 / sqrt(2.0);
+    const double starts[16][3] = {
+        { 1, 0, -1 },   { -1, 0, -1 },  { 0, 1, 1 },    { 0, -1, 1 },
+        { c, 0, -0.5 }, { -c, 0, -0.5 }, { 0, c, 0.5 }, { 0, -c, 0.5 },
+        { a, b, -c },   { a, -b, -c },  { -a, b, -c },  { -a, -b, -c },
+        { b, a, c },    { b, -a, c },   { -b, a, c },   { -b, -a, c },
+    };
+    cr_assert_str_eq(TEST_SURFACES[5].name, "kummer-16-nodes");
+    check_kummer(&TEST_SURFACES[5], starts, 16);
+}
+
+/* Same points, same boxes, bit for bit, on 1 and 2 threads. */
+Test(singular_points, thread_count_does_not_matter)
+{
+    const test_surface *s = &TEST_SURFACES[5];
+    ism_tape *t = test_surface_compile(s);
+    ism_locus a, b;
+    find(t, s->box, 7, 2, 1, &a);
+    find(t, s->box, 7, 2, 2, &b);
+    cr_assert_eq(a.npoints, b.npoints);
+    cr_assert_eq(a.nboxes, b.nboxes);
+    for (size_t i = 0; i < a.npoints; i++) { /* field by field: structs have padding */
+        const ism_sing_point *p = &a.points[i], *q = &b.points[i];
+        cr_expect(memcmp(p->p, q->p, sizeof p->p) == 0 && p->radius == q->radius
+                  && p->type == q->type && p->certified == q->certified
+                  && memcmp(p->eig, q->eig, sizeof p->eig) == 0
+                  && p->residual_f == q->residual_f && p->residual_grad == q->residual_grad,
+                  "point %zu differs", i);
+    }
+    for (size_t i = 0; i < a.nboxes; i++) {
+        const ism_lbox *p = &a.boxes[i], *q = &b.boxes[i];
+        cr_expect(memcmp(p->lo, q->lo, sizeof p->lo) == 0 && memcmp(p->hi, q->hi, sizeof p->hi) == 0
+                  && memcmp(p->q, q->q, sizeof p->q) == 0 && p->rank == q->rank
+                  && p->flags == q->flags, "box %zu differs", i);
+    }
+    cr_expect_eq(a.boxes_visited, b.boxes_visited);
+    ism_locus_free(&a);
+    ism_locus_free(&b);
+    ism_tape_free(t);
+}
+
+/* (|p|² − 1/2)²: ∇f = 0 on the whole sphere of radius 1/√2, a double sheet. No point; the
+ * candidate boxes are rank 1, their projections on the sphere. */
+Test(singular_points, double_sheet_boxes)
+{
+    ism_tape *t = compile("(x^2 + y^2 + z^2 - 0.5)^2");
+    ism_locus l;
+    find(t, UNIT, 5, 2, 0, &l);
+    cr_expect_eq(l.npoints, 0);
+    cr_assert_gt(l.nboxes, 100);
+    size_t projected = 0;
+    for (size_t i = 0; i < l.nboxes; i++) {
+        const ism_lbox *b = &l.boxes[i];
+        if (!(b->flags & ISM_LBOX_PROJECTED))
+            continue;
+        projected++;
+        double r = sqrt(b->q[0] * b->q[0] + b->q[1] * b->q[1] + b->q[2] * b->q[2]);
+        cr_expect(fabs(r - sqrt(0.5)) < 1e-9, "projection at radius %.17g", r);
+        cr_expect_eq(b->rank, 1);
+        cr_expect(!(b->flags & ISM_LBOX_USED));
+    }
+    cr_expect_geq(projected, l.nboxes * 9 / 10);
+    ism_locus_free(&l);
+    ism_tape_free(t);
+}
+
+/* A budget of 50 boxes or a raised cancel flag: incomplete, saying why, nothing false. */
+Test(singular_points, budget_and_cancel)
+{
+    ism_tape *t = compile("(x^2 + y^2 + z^2 - 0.5)^2");
+    ism_locus_options o;
+    ism_locus_options_default(&o);
+    o.max_depth = 6;
+    o.max_boxes = 50;
+    ism_locus l;
+    ism_locus_init(&l);
+    ism_error err;
+    cr_assert(ism_locus_find(t, &o, &l, &err));
+    cr_expect(l.incomplete && strstr(l.incomplete_why, "budget"), "%s", l.incomplete_why);
+    cr_expect_leq(l.nboxes, 50);
+    cr_expect_eq(l.npoints, 0);
+    ism_locus_free(&l);
+    volatile int cancel = 1;
+    ism_locus_options_default(&o);
+    o.cancel = &cancel;
+    ism_locus_init(&l);
+    cr_assert(ism_locus_find(t, &o, &l, &err));
+    cr_expect(l.incomplete && strstr(l.incomplete_why, "cancel"), "%s", l.incomplete_why);
+    ism_locus_free(&l);
+    ism_tape_free(t);
+}
