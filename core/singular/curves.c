@@ -36,6 +36,10 @@
  * that many vertices on a few hundredths of a cell serve no mesh. */
 #define CURVES_MIN_GAP_CELLS 0.05
 
+/* ... where the polyline without them stays within this (cells) of the one with them: a
+ * loop smaller than a cell keeps the vertices its turning needs. */
+#define CURVES_THIN_SAG_CELLS 1e-3
+
 /* Newton iterations projecting a seed onto its curve (it starts up to a cell away). */
 #define CURVES_SEED_IT 30
 
@@ -155,21 +159,32 @@ static void split_chain(ism_ctracer *tr, const ism_cvert *v, size_t n, const int
     }
 }
 
-/* Drops the vertices of v[0..*n) within gap of the previous vertex kept, or of the next
- * anchor (the ends, pinch points), so that anchors stay. A loop's last vertex must also
- * keep its distance from the first. */
-static void thin(ism_cvert *v, size_t *n, double gap, bool closed)
+/* May the vertex x go, its neighbours being a and b? Only when it is within gap of one of
+ * them and within sag of the chord a–b (thinning never bends the polyline). */
+static bool droppable(const double *a, const double *x, const double *b, double gap, double sag)
+{
+    return (ism_dist3(a, x) < gap || ism_dist3(x, b) < gap) &&
+           ism_dist_segment(x, a, b, NULL) <= sag;
+}
+
+/* Drops the vertices of v[0..*n) that crowd the previous vertex kept or the next anchor
+ * (the ends, pinch points, which stay) where the curve is straight. A loop's last vertex
+ * must also keep its distance from the first. */
+static void thin(ism_cvert *v, size_t *n, double gap, double sag, bool closed)
 {
     size_t m = 0;
     for (size_t i = 0; i < *n; i++) {
         bool anchor = i == 0 || (i == *n - 1 && !closed) || v[i].point >= 0;
         if (!anchor) {
-            if (m && ism_dist3(v[m - 1].p, v[i].p) < gap)
+            const double *next = i + 1 < *n ? v[i + 1].p : v[0].p;
+            bool near_prev = ism_dist3(v[m - 1].p, v[i].p) < gap;
+            bool near_next = (i + 1 < *n ? v[i + 1].point >= 0 || (i + 1 == *n - 1 && !closed)
+                                         : closed) && ism_dist3(v[i].p, next) < gap;
+            if ((near_prev || near_next) && droppable(v[m - 1].p, v[i].p, next, gap, sag))
                 continue;
-            if (closed && i == *n - 1 && ism_dist3(v[0].p, v[i].p) < gap)
-                continue;
-        } else { /* an anchor displaces the vertices just before it */
-            while (m > 1 && v[m - 1].point < 0 && ism_dist3(v[m - 1].p, v[i].p) < gap)
+        } else { /* an anchor displaces the crowding vertices just before it */
+            while (m > 1 && v[m - 1].point < 0 && ism_dist3(v[m - 1].p, v[i].p) < gap &&
+                   ism_dist_segment(v[m - 1].p, v[m - 2].p, v[i].p, NULL) <= sag)
                 m--;
         }
         v[m++] = v[i];
@@ -194,7 +209,7 @@ static void emit(ism_ctracer *tr, const ism_cpath *fw, const ism_cpath *bw)
             v[m++] = bw->v[i];
     for (size_t i = 0; i < fw->n; i++)
         v[m++] = fw->v[i];
-    thin(v, &m, CURVES_MIN_GAP_CELLS * tr->cell, fw->closed);
+    thin(v, &m, CURVES_MIN_GAP_CELLS * tr->cell, CURVES_THIN_SAG_CELLS * tr->cell, fw->closed);
     for (size_t i = 0; i < m && first_pinch == n; i++)
         if (v[i].point >= 0)
             first_pinch = i;

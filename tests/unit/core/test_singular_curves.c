@@ -305,6 +305,61 @@ Test(singular_curves, whisker_circle)
     }
 }
 
+/* ---- whisker loops smaller than a search cell, ((x − a)² + (y − b)² − r²)² + (z − c)², r = 0.15
+ * and 0.45 of a cell, off every lattice plane: one closed whisker each, every vertex on the
+ * circle, the length 2πr within 0.5% (the polyline keeps the vertices its turning needs).
+ * Their Hessian across is diag(8r², 2): a relative rank test of 1e-3 calls it rank 1 below
+ * r ≈ 0.016, so the seeds are made here from the closed form (q: the circle's point nearest
+ * the cell's centre, 1e-4 r off it), rank 2. */
+
+typedef struct small_loop { double c[3], r; } small_loop;
+
+static void small_loop_at(const void *ctx, double s, double p[3])
+{
+    const small_loop *l = ctx;
+    p[0] = l->c[0] + l->r * cos(s), p[1] = l->c[1] + l->r * sin(s), p[2] = l->c[2];
+}
+
+Test(singular_curves, whisker_loops_smaller_than_a_cell)
+{
+    static const double box[6] = {-1, -1, -1, 1, 1, 1};
+    for (int k = 0; k < 2; k++)
+        for (int s = 0; s < NSHIFTS; s++) {
+            fixture fx;
+            double cell = ldexp(2.0, -DEPTH);
+            small_loop l = {{0.1037, 0.2011, 0.0529}, (k ? 0.45 : 0.15) * cell};
+            char expr[256];
+            snprintf(expr, sizeof expr, "((x - %.17g)^2 + (y - %.17g)^2 - %.17g)^2 + (z - %.17g)^2",
+                     l.c[0], l.c[1], l.r * l.r, l.c[2]);
+            double sh = setup(&fx, expr, box, s);
+            cover(&fx, small_loop_at, &l, 0, 2 * PI, l.r);
+            for (size_t b = 0; b < fx.l.nboxes; b++) {
+                ism_lbox *x = &fx.l.boxes[b];
+                double d[2] = {0.5 * (x->lo[0] + x->hi[0]) - l.c[0], 0.5 * (x->lo[1] + x->hi[1]) - l.c[1]};
+                double len = hypot(d[0], d[1]);
+                x->q[0] = l.c[0] + l.r * d[0] / len + 1e-4 * l.r;
+                x->q[1] = l.c[1] + l.r * d[1] / len;
+                x->q[2] = l.c[2] - 1e-4 * l.r;
+                x->rank = 2;
+                x->flags = ISM_LBOX_PROJECTED;
+            }
+            run(&fx);
+            cr_assert_eq(fx.l.ncurves, 1, "r %g, shift %g: %zu curves", l.r, sh, fx.l.ncurves);
+            const ism_sing_curve *c = &fx.l.curves[0];
+            cr_assert(c->closed && c->kind == ISM_CURVE_WHISKER, "r %g, shift %g", l.r, sh);
+            double err = 0;
+            for (size_t i = 0; i < c->n; i++) {
+                const double *p = c->xyz + 3 * i;
+                err = fmax(err, hypot(hypot(p[0] - l.c[0], p[1] - l.c[1]) - l.r, p[2] - l.c[2]));
+            }
+            cr_assert_leq(err, ON_LOCUS * fx.diag, "r %g, shift %g: vertex %g off", l.r, sh, err);
+            double len = curve_length(c);
+            cr_assert_lt(fabs(len - 2 * PI * l.r), 0.005 * 2 * PI * l.r, "r %g, shift %g: length %g",
+                         l.r, sh, len);
+            teardown(&fx);
+        }
+}
+
 /* ---- two unit spheres centred at x = ±0.5 cross in the circle x = 0, y² + z² = 0.75 */
 
 static double spheres_dist(const double p[3]) { return hypot(p[0], hypot(p[1], p[2]) - sqrt(0.75)); }
