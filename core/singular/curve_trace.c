@@ -71,8 +71,7 @@ static void stop(ism_ctracer *tr, const char *why)
     tr->stop = true;
 }
 
-/* False (and stops the stage) when the budget, the deadline or a cancel says so. */
-static bool may_continue(ism_ctracer *tr)
+bool ism_ctracer_go(ism_ctracer *tr)
 {
     if (tr->stop || tr->oom)
         return false;
@@ -212,7 +211,7 @@ void ism_ctrace(ism_ctracer *tr, const ism_cpoint *start, int ignore, bool closa
     if (!push(tr, path, cur.p, cur.D, -1))
         return;
     double h = tr->hmax, dcol = INFINITY; /* step; extrapolated distance to a collapse */
-    while (may_continue(tr)) {
+    while (ism_ctracer_go(tr)) {
         int iters = CTRACE_NEWTON_IT;
         if (!attempt(tr, &cur, h, &nxt, &iters)) {
             h *= 0.5;

@@ -57,6 +57,10 @@ typedef struct ism_ctracer {
 void ism_ctrace(ism_ctracer *tr, const ism_cpoint *start, int ignore_point, bool closable,
                 ism_cpath *path);
 
+/* Spends one unit of work (a step attempt, a seed): false, and tr->stop set with a reason,
+ * when the budget is spent, the deadline passed or the caller cancelled. */
+bool ism_ctracer_go(ism_ctracer *tr);
+
 /* Whether p is in the box, up to Newton's tolerance (a curve lying in a face of the box, as
  * the axes of xyz = 0 in [0, 1]³, stays inside). */
 bool ism_ctracer_inside(const ism_ctracer *tr, const double p[3]);

@@ -54,8 +54,8 @@
  * directions, no curve to follow) or a pinch point (seeds a little off it serve). */
 #define CURVES_SEED_RANK_REL 1e-6
 
-/* Work budget: vertices over all curves (24 bytes each), and step attempts (each a few
- * Hessian evaluations) per vertex allowed. */
+/* Work budget: vertices over all curves (24 bytes each), and units of work — a step attempt
+ * or a seed tried, each a few Hessian evaluations — per vertex allowed. */
 #define CURVES_MAX_VERTICES ((size_t)1 << 20)
 #define CURVES_ATTEMPTS_PER_VERTEX 8
 
@@ -323,7 +323,8 @@ bool ism_sing_trace_curves(const ism_tape *f, const ism_locus_options *o, ism_lo
     size_t first_curve = io->ncurves;
     for (size_t b = 0; b < io->nboxes && !tr.stop && !tr.oom; b++) {
         ism_lbox *bx = &io->boxes[b];
-        if ((bx->flags & ISM_LBOX_PROJECTED) && bx->rank == 2 && !(bx->flags & ISM_LBOX_USED))
+        if ((bx->flags & ISM_LBOX_PROJECTED) && bx->rank == 2 && !(bx->flags & ISM_LBOX_USED) &&
+            ism_ctracer_go(&tr))
             trace_seed(&tr, bx);
     }
     if (!tr.oom)
