@@ -361,3 +361,40 @@ Test(singular_points, budget_and_cancel)
     ism_locus_free(&l);
     ism_tape_free(t);
 }
+
+/* Smooth surfaces leave nothing: no point and no candidate box — the gyroid ball's crease
+ * (max of two smooth functions) included, each smooth piece being excluded on its own. */
+Test(singular_points, smooth_surfaces_leave_no_box)
+{
+    static const size_t which[] = { 0, 1, 2, 3 }; /* sphere, torus, pretzel, gyroid-ball */
+    for (size_t i = 0; i < sizeof which / sizeof which[0]; i++) {
+        const test_surface *s = &TEST_SURFACES[which[i]];
+        ism_tape *t = test_surface_compile(s);
+        for (int placement = 0; placement < 3; placement += 2) {
+            ism_locus l;
+            find(t, s->box, 6, placement, 0, &l);
+            cr_expect_eq(l.npoints, 0, "%s: %zu points", s->name, l.npoints);
+            cr_expect_eq(l.nboxes, 0, "%s: %zu boxes", s->name, l.nboxes);
+            ism_locus_free(&l);
+        }
+        ism_tape_free(t);
+    }
+}
+
+/* A deadline already past: incomplete, saying so. */
+Test(singular_points, deadline)
+{
+    const test_surface *s = &TEST_SURFACES[5];
+    ism_tape *t = test_surface_compile(s);
+    ism_locus_options o;
+    ism_locus_options_default(&o);
+    memcpy(o.box, s->box, sizeof o.box);
+    o.deadline_ms = 1e-3; /* the monotonic clock is past it */
+    ism_locus l;
+    ism_locus_init(&l);
+    ism_error err;
+    cr_assert(ism_locus_find(t, &o, &l, &err));
+    cr_expect(l.incomplete && strstr(l.incomplete_why, "deadline"), "%s", l.incomplete_why);
+    ism_locus_free(&l);
+    ism_tape_free(t);
+}
