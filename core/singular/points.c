@@ -33,6 +33,9 @@
 /* Rank-3 projections tried as starts inside one extended cluster (a node on or near a
  * curve); beyond this the cluster is left to the curve stage as it is. */
 #define EXTENDED_STARTS_MAX 64
+/* Box-to-point distance checks explaining boxes by published points (points × boxes): a
+ * bound on the work, far above any real case (16 nodes × a few thousand boxes). */
+#define EXPLAIN_WORK_MAX 1e8
 
 enum { NOT_FOUND = 0, FOUND = 1, OFF_SURFACE = 2 };
 
@@ -360,6 +363,37 @@ static bool publish(ctx *x)
     return ok;
 }
 
+/* Boxes of clusters that are not one point but whose projections landed on published points
+ * (a cluster holding two nodes' halos at a coarse depth) are explained by those points: each
+ * such box, and the whole cluster when all its projections are explained. */
+static void explain_by_points(const ctx *x, const uint32_t *label, size_t nclusters,
+                              uint8_t *cluster_fate, uint8_t *box_fate)
+{
+    const ism_locus *l = x->out;
+    if (!l->npoints || (double)l->npoints * (double)l->nboxes > EXPLAIN_WORK_MAX)
+        return;
+    uint8_t *all = malloc(nclusters ? nclusters : 1);
+    if (!all)
+        return;
+    memset(all, 1, nclusters ? nclusters : 1);
+    for (size_t i = 0; i < l->nboxes; i++) {
+        const ism_lbox *b = &l->boxes[i];
+        if (!(b->flags & ISM_LBOX_PROJECTED) || cluster_fate[label[i]] || box_fate[i])
+            continue;
+        bool near = false;
+        for (size_t j = 0; j < l->npoints && !near; j++)
+            near = dist3(b->q, l->points[j].p) <= MERGE_CELLS * x->cell;
+        if (near)
+            box_fate[i] = 1;
+        else
+            all[label[i]] = 0;
+    }
+    for (size_t c = 0; c < nclusters; c++)
+        if (!cluster_fate[c] && all[c])
+            cluster_fate[c] = 1;
+    free(all);
+}
+
 /* Flags explained boxes USED and removes boxes explained by off-surface critical points. */
 static void settle_boxes(ism_locus *l, const uint32_t *label, const uint8_t *cluster_fate,
                          const uint8_t *box_fate)
@@ -396,8 +430,10 @@ static bool run(ctx *x, const ism_locus_options *o)
         if (ci[c].projected)
             ok = from_cluster(x, &ci[c], (uint32_t)c, label, &fate[c]);
     ok = ok && publish(x);
-    if (ok)
+    if (ok) {
+        explain_by_points(x, label, nclusters, fate, box_fate);
         settle_boxes(l, label, fate, box_fate);
+    }
     free(label);
     free(box_fate);
     free(ci);
