@@ -126,7 +126,23 @@ static void write_analysis(ism_jw *w, const ism_analysis *a)
     ism_jw_object_end(w);
 }
 
-static void write_singular(ism_jw *w, const ism_locus *l, const ism_locus_check *c)
+static void write_conform(ism_jw *w, const ism_conform_stats *s)
+{
+    ism_jw_object(w);
+    kv_u(w, "points_conformed", s->points_conformed);
+    kv_u(w, "points_failed", s->points_failed);
+    kv_u(w, "points_short_cones", s->points_short_cones);
+    kv_u(w, "curves_conformed", s->curves_conformed);
+    kv_u(w, "curves_failed", s->curves_failed);
+    kv_u(w, "loops_fallback", s->loops_fallback);
+    kv_u(w, "triangles_removed", s->triangles_removed);
+    kv_u(w, "triangles_added", s->triangles_added);
+    kv_ms(w, "time_ms", s->time_ms);
+    ism_jw_object_end(w);
+}
+
+static void write_singular(ism_jw *w, const ism_locus *l, const ism_locus_check *c,
+                           const ism_conform_stats *cs)
 {
     ism_jw_object(w);
     ism_locus_counts_json(w, l);
@@ -143,6 +159,10 @@ static void write_singular(ism_jw *w, const ism_locus *l, const ism_locus_check 
     kv_u(w, "evals_interval", l->evals_interval);
     kv_u(w, "evals_jet", l->evals_jet);
     kv_ms(w, "time_ms", l->time_ms);
+    if (cs) {
+        ism_jw_key(w, "conform");
+        write_conform(w, cs);
+    }
     ism_jw_object_end(w);
 }
 
@@ -235,7 +255,7 @@ char *ism_stats_json(const ism_stats_input *in, size_t *len)
     }
     if (in->locus) {
         ism_jw_key(&w, "singular");
-        write_singular(&w, in->locus, in->check);
+        write_singular(&w, in->locus, in->check, in->conform);
     }
     ism_jw_key(&w, "timings_ms");
     ism_jw_object(&w);

@@ -10,7 +10,9 @@
  *    "analysis": {...},
  *    "singular": {locus counts (features.h), "artefacts", "nonmanifold_edges_off",
  *                 "nonmanifold_points_off", "incomplete", "boxes_visited", "evals_interval",
- *                 "evals_jet", "time_ms"},
+ *                 "evals_jet", "time_ms", "conform": {points_conformed, points_failed,
+ *                 points_short_cones, curves_conformed, curves_failed, loops_fallback,
+ *                 triangles_removed, triangles_added, time_ms}},
  *    "timings_ms": {"decode", "compile", "singular", "polygonise", "analyse", "features",
  *    "encode", "total"}, "warnings": ["..."]} */
 #ifndef ISM_STATS_H
@@ -21,6 +23,7 @@
 #include "core/analysis/analysis.h"
 #include "core/octree/polygonise.h"
 #include "core/singular/check.h"
+#include "core/singular/conform.h"
 #include "core/singular/locus.h"
 
 enum ism_timing { ISM_TIME_DECODE, ISM_TIME_COMPILE, ISM_TIME_SINGULAR, ISM_TIME_POLYGONISE, ISM_TIME_ANALYSE, ISM_TIME_FEATURES,
@@ -37,6 +40,7 @@ typedef struct ism_stats_input {
     const ism_analysis *analysis;         /* may be NULL */
     const ism_locus *locus;               /* the singular locus from f (may be NULL) */
     const ism_locus_check *check;         /* the mesh checked against it (may be NULL) */
+    const ism_conform_stats *conform;     /* what the conformance pass did (may be NULL) */
     double timings_ms[ISM_TIME_COUNT];
 } ism_stats_input;
 

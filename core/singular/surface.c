@@ -1,6 +1,8 @@
 /* surface.c — the phases of one surface in order (see surface.h). Each phase is its own
  * module; this file only sequences them and times them. */
 #include "core/singular/surface.h"
+#include "core/singular/conform.h"
+#include "core/singular/find.h"
 #include "core/util/clock.h"
 
 #include <string.h>
@@ -16,14 +18,29 @@ void ism_locus_options_from_poly(const ism_poly_options *po, ism_locus_options *
 
 enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options *po,
                                       ism_mesh *mesh, ism_locus *locus, ism_poly_stats *ps,
-                                      ism_surface_times *times, ism_error *err)
+                                      ism_conform_stats *cs, ism_surface_times *times,
+                                      ism_error *err)
 {
     memset(times, 0, sizeof *times);
+    memset(cs, 0, sizeof *cs);
+    if (!ism_poly_options_check(po, err))
+        return ISM_POLY_BAD_OPTIONS;
     ism_locus_options lo;
     ism_locus_options_from_poly(po, &lo);
-    (void)locus;
     double t0 = ism_now_ms();
+    if (!ism_locus_find(f, &lo, locus, err))
+        return ISM_POLY_NO_MEMORY;
+    double t1 = ism_now_ms();
     enum ism_poly_status st = ism_polygonise(f, po, mesh, ps, err);
-    times->polygonise_ms = ism_now_ms() - t0;
-    return st;
+    double t2 = ism_now_ms();
+    times->polygonise_ms = t2 - t1;
+    if (st != ISM_POLY_OK)
+        return st;
+    if (po->cancel && *po->cancel)
+        return ISM_POLY_CANCELLED;
+    if (!ism_conform_mesh(f, &lo, locus, mesh, cs, err))
+        return ISM_POLY_NO_MEMORY;
+    times->singular_ms = (t1 - t0) + (ism_now_ms() - t2);
+    locus->time_ms = times->singular_ms;
+    return ISM_POLY_OK;
 }

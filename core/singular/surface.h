@@ -10,6 +10,7 @@
 
 #include "core/mesh/mesh.h"
 #include "core/octree/polygonise.h"
+#include "core/singular/conform.h"
 #include "core/singular/locus.h"
 
 typedef struct ism_surface_times {
@@ -22,11 +23,13 @@ typedef struct ism_surface_times {
 void ism_locus_options_from_poly(const ism_poly_options *po, ism_locus_options *lo);
 
 /* Meshes f = 0 in po->box: mesh (initialised by the caller) gets the conforming mesh, locus
- * (initialised by the caller) what was found from f. Returns the polygoniser's status; a
+ * (initialised by the caller) what was found from f, cs what the conformance pass did.
+ * Returns the polygoniser's status (BAD_OPTIONS, NO_MEMORY also for the locus stages); a
  * locus stage cut short by cancellation or its budget marks locus->incomplete and the mesh
  * is still returned. */
 enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options *po,
                                       ism_mesh *mesh, ism_locus *locus, ism_poly_stats *ps,
-                                      ism_surface_times *times, ism_error *err);
+                                      ism_conform_stats *cs, ism_surface_times *times,
+                                      ism_error *err);
 
 #endif

@@ -345,7 +345,8 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
     o.progress_ctx = &pm;
     o.cancel = hooks ? hooks->cancel : NULL;
     ism_surface_times times;
-    enum ism_poly_status st = ism_mesh_surface(tape, &o, &mesh, &locus, &ps, &times, &err);
+    ism_conform_stats cs;
+    enum ism_poly_status st = ism_mesh_surface(tape, &o, &mesh, &locus, &ps, &cs, &times, &err);
     si.timings_ms[ISM_TIME_SINGULAR] = times.singular_ms;
     si.timings_ms[ISM_TIME_POLYGONISE] = times.polygonise_ms;
     if (!polygonise_status(r, st, &err))
@@ -431,6 +432,7 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
     si.analysis = &an;
     si.locus = &locus;
     si.check = &check;
+    si.conform = &cs;
     si.timings_ms[ISM_TIME_TOTAL] = ism_now_ms() - t_start;
     size_t slen;
     char *stats = ism_stats_json(&si, &slen);

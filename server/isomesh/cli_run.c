@@ -228,6 +228,7 @@ typedef struct run_products {
     const ism_analysis *analysis;  /* NULL when not analysed */
     const ism_locus *locus;
     const ism_locus_check *check;  /* NULL when not analysed */
+    const ism_conform_stats *conform;
 } run_products;
 
 static void print_stats(const run_products *p, const char *format, const double *timings)
@@ -243,6 +244,7 @@ static void print_stats(const run_products *p, const char *format, const double 
     in.analysis = p->analysis;
     in.locus = p->locus;
     in.check = p->check;
+    in.conform = p->conform;
     memcpy(in.timings_ms, timings, sizeof in.timings_ms);
     size_t len;
     char *json = ism_stats_json(&in, &len);
@@ -339,8 +341,9 @@ int ism_cli_run_surface(ism_cli_run *run)
     ism_locus_init(&locus);
     ism_poly_stats ps;
     ism_surface_times times;
+    ism_conform_stats cs;
     enum ism_poly_status ps_status = ism_mesh_surface(tape, &run->options, &mesh, &locus, &ps,
-                                                      &times, &err);
+                                                      &cs, &times, &err);
     timings[ISM_TIME_SINGULAR] = times.singular_ms;
     timings[ISM_TIME_POLYGONISE] = times.polygonise_ms;
     double t2 = ism_now_ms();
@@ -360,7 +363,7 @@ int ism_cli_run_surface(ism_cli_run *run)
     timings[ISM_TIME_ANALYSE] = ism_now_ms() - t2;
     if (run->output && !write_mesh(run->output, &mesh))
         status = 1;
-    run_products prod = {&mesh, &ps, analysed ? &an : NULL, &locus, analysed ? &chk : NULL};
+    run_products prod = {&mesh, &ps, analysed ? &an : NULL, &locus, analysed ? &chk : NULL, &cs};
     if (run->features_output && status == 0 && !write_features(run->features_output, &prod))
         status = 1;
     timings[ISM_TIME_TOTAL] = ism_now_ms() - t0;
