@@ -19,7 +19,9 @@ class WorkerTest(unittest.TestCase):
         self.assertEqual(r.json()["error"]["code"], code)
 
     def test_deadline_gives_504_and_a_fresh_worker(self):
-        with Daemon("--workers", "1", "--job-timeout", "300ms") as d:
+        # 5 s: far below the slow request's time (gyroid at depth 10: tens of seconds), far
+        # above the small sphere's even on a machine busy with other work.
+        with Daemon("--workers", "1", "--job-timeout", "5s") as d:
             old = d.workers()
             self.assertEqual(len(old), 1)
             t0 = time.time()

@@ -1,0 +1,158 @@
+"""test_singular.py — the singular structure found from f, end to end through `isomesh
+--features --stats`, in boxes shifted off the octree lattice (by 1e-3 and by 0.37 of a finest
+cell), never only in symmetric ones. Every expected value comes from the closed form of the
+surface: node positions, curve radii, counts, and the mesh's own structure (one vertex with
+two cones of faces at a node, one component where two spheres cross, no non-manifold element
+off the locus)."""
+import json
+import math
+import os
+import subprocess
+import tempfile
+import unittest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
+ISOMESH = os.path.join(BUILD, "isomesh")
+
+MAX_DEPTH = 6
+
+
+def shifted_boxes(half):
+    """The symmetric box [-half, half]^3 and two shifted copies: by 1e-3 (x up, y down, z up
+    by 0.7e-3) and by 0.37 of a finest cell (different fractions per axis, so no lattice plane
+    of any depth passes through the origin)."""
+    cell = 2 * half / 2 ** MAX_DEPTH
+    out = []
+    for sx, sy, sz in [(0, 0, 0), (1e-3, -1e-3, 0.7e-3), (0.37 * cell, -0.23 * cell, 0.41 * cell)]:
+        out.append([-half + sx, -half + sy, -half + sz, half + sx, half + sy, half + sz])
+    return out
+
+
+def diagonal(box):
+    return math.dist(box[:3], box[3:])
+
+
+def mesh(expr, box, extra=()):
+    """(stats, features) of one run; extra: more command-line arguments."""
+    with tempfile.TemporaryDirectory() as tmp:
+        feats = os.path.join(tmp, "f.json")
+        r = subprocess.run([ISOMESH, "-e", expr, *extra, "-b", ",".join(repr(v) for v in box),
+                            "-d", f"3:{MAX_DEPTH}", "--stats", "--features", feats],
+                           capture_output=True, text=True, timeout=300)
+        if r.returncode != 0:
+            raise AssertionError(f"isomesh failed ({r.returncode}): {r.stderr}")
+        with open(feats) as f:
+            return json.loads(r.stdout), json.load(f)
+
+
+def f_and_grad(f, p, h=1e-6):
+    """f and its gradient by central differences: a check of a closed form that shares
+    nothing with the code under test."""
+    g = []
+    for k in range(3):
+        a, b = list(p), list(p)
+        a[k] += h
+        b[k] -= h
+        g.append((f(*a) - f(*b)) / (2 * h))
+    return f(*p), g
+
+
+class SingularPointsTest(unittest.TestCase):
+    def assert_nodes(self, stats, feats, box, expected):
+        pts = feats["singular_points"]
+        self.assertEqual(len(pts), len(expected), pts)
+        for want in expected:
+            near = [p for p in pts if math.dist(p["xyz"], want) < 1e-9 * diagonal(box)]
+            self.assertEqual(len(near), 1, f"no node at {want}: {[p['xyz'] for p in pts]}")
+            p = near[0]
+            self.assertEqual(p["type"], "node")
+            self.assertTrue(p["certified"])
+            self.assertLessEqual(p["radius"], 1e-9 * diagonal(box))
+            self.assertEqual(p["cones"], 2, "a node is one vertex where two cones of faces meet")
+        an = stats["analysis"]
+        self.assertEqual(an["nonmanifold_vertices"], len(expected))
+        self.assertEqual(an["nonmanifold_edges"], 0)
+        self.assertEqual(stats["singular"]["artefacts"], 0)
+
+    def test_tilted_cone_has_one_node_at_the_origin(self):
+        expr = "x^2 + 2*y^2 - 3*z^2 + 0.5*x*z"
+        for box in shifted_boxes(1.0):
+            with self.subTest(box=box):
+                stats, feats = mesh(expr, box)
+                self.assert_nodes(stats, feats, box, [[0.0, 0.0, 0.0]])
+                self.assertEqual(stats["analysis"]["vertex_components"], 1,
+                                 "both nappes meet at the apex")
+
+    def test_kummer_four_nodes_where_the_closed_form_puts_them(self):
+        # (x²+y²+z²−μ²)² − λ p q r s with the tetrahedron p, q, r, s of w = 1: the nodes lie at
+        # (±√2 b, 0, b) and (0, ±√2 b, −b), b = (1 − μ²) / 2 (checked below to be critical
+        # zeros of f by finite differences).
+        mu2, w = 0.6667, 1.0
+        lam = (3 * mu2 - 1) / (3 - mu2)
+        s2 = math.sqrt(2)
+
+        def f(x, y, z):
+            p, q = w - z - s2 * x, w - z + s2 * x
+            r, s = w + z + s2 * y, w + z - s2 * y
+            return (x * x + y * y + z * z - mu2) ** 2 - lam * p * q * r * s
+
+        b = (1 - mu2) / 2
+        nodes = [[s2 * b, 0, b], [-s2 * b, 0, b], [0, s2 * b, -b], [0, -s2 * b, -b]]
+        for n in nodes:
+            v, g = f_and_grad(f, n)
+            self.assertLess(abs(v), 1e-12)
+            self.assertLess(max(map(abs, g)), 1e-8)
+        expr = ("(x^2 + y^2 + z^2 - mu2)^2 - lambda*p*q*r*s")
+        lets = {"lambda": "(3*mu2 - 1)/(3 - mu2)", "p": "w - z - sqrt(2)*x",
+                "q": "w - z + sqrt(2)*x", "r": "w + z + sqrt(2)*y", "s": "w + z - sqrt(2)*y"}
+        for box in shifted_boxes(1.0):
+            with self.subTest(box=box):
+                args = []
+                for k, v in lets.items():
+                    args += ["--let", f"{k}={v}"]
+                stats, feats = mesh(expr, box, args + ["-p", f"mu2={mu2}", "-p", f"w={w}"])
+                self.assert_nodes(stats, feats, box, nodes)
+
+
+class SingularCurvesTest(unittest.TestCase):
+    def test_two_spheres_crossing_share_one_circle(self):
+        # Spheres of radius 1 centred at x = ±0.5 cross in the circle x = 0, r = √0.75.
+        expr = "((x-0.5)^2 + y^2 + z^2 - 1)*((x+0.5)^2 + y^2 + z^2 - 1)"
+        for box in shifted_boxes(1.6):
+            with self.subTest(box=box):
+                stats, feats = mesh(expr, box)
+                curves = feats["curves"]
+                self.assertEqual(len(curves), 1, [c["kind"] for c in curves])
+                c = curves[0]
+                self.assertEqual(c["kind"], "double")
+                self.assertTrue(c["closed"])
+                xyz = c["xyz"]
+                for i in range(0, len(xyz), 3):
+                    self.assertLess(abs(xyz[i]), 1e-6)
+                    self.assertLess(abs(math.hypot(xyz[i + 1], xyz[i + 2]) - math.sqrt(0.75)), 1e-6)
+                an = stats["analysis"]
+                self.assertEqual(an["components"], 1, "the spheres are joined along the circle")
+                self.assertGreater(an["nonmanifold_edges"], 0)
+                self.assertEqual(stats["singular"]["artefacts"], 0)
+                self.assertEqual(an["boundary_edges"], 0)
+
+    def test_a_whisker_circle_has_no_sheet_and_length_pi(self):
+        expr = "(x^2 + y^2 - 0.25)^2 + z^2"
+        for box in shifted_boxes(1.0):
+            with self.subTest(box=box):
+                stats, feats = mesh(expr, box)
+                curves = feats["curves"]
+                self.assertEqual(len(curves), 1)
+                c = curves[0]
+                self.assertEqual(c["kind"], "whisker")
+                self.assertTrue(c["closed"])
+                xyz = c["xyz"]
+                pts = [xyz[i:i + 3] for i in range(0, len(xyz), 3)]
+                length = sum(math.dist(pts[i], pts[(i + 1) % len(pts)]) for i in range(len(pts)))
+                self.assertLess(abs(length - math.pi) / math.pi, 0.005)
+                self.assertEqual(stats["mesh"]["triangles"], 0)
+
+
+if __name__ == "__main__":
+    unittest.main()
