@@ -232,9 +232,12 @@ static uint64_t cell_key(const scell *c)
     return (uint64_t)c->i[2] << 39 | (uint64_t)c->i[1] << 22 | (uint64_t)c->i[0] << 5 | c->level;
 }
 
-/* Keeps a tested child: a frontier cell, a finest candidate or a UNIQUE box. */
+/* Keeps a tested child (whose F interval is f): a frontier cell, a finest candidate or a
+ * UNIQUE box. A finest cell where f is unbounded (a pole: 1/(x² + y² + z² − 1/4) would
+ * otherwise leave the whole pole sphere) and Newton finds no zero of ∇f is not kept: nothing
+ * finer than a cell can be said there, and no later stage could use it. */
 static void keep(search *s, worker *w, task_out *out, const scell *c, const ism_interval x[3],
-                 int verdict)
+                 ism_interval f, int verdict)
 {
     bool ok;
     if (verdict == SURVIVES && (int)c->level < s->depth) {
@@ -243,6 +246,8 @@ static void keep(search *s, worker *w, task_out *out, const scell *c, const ism_
         keyed_box kb = { cell_key(c), { .rank = 0 } };
         if (verdict == SURVIVES) {
             kb.box = candidate(s, w, x);
+            if (!(kb.box.flags & ISM_LBOX_PROJECTED) && !(isfinite(f.lo) && isfinite(f.hi)))
+                return;
         } else {
             for (int k = 0; k < 3; k++) {
                 kb.box.lo[k] = x[k].lo;
@@ -297,7 +302,7 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
         ism_interval x[3] = { bx[m], by[m], bz[m] };
         int v = classify(s, w, x, f[m]);
         if (v != EXCLUDED)
-            keep(s, w, out, &kids[m], x, v);
+            keep(s, w, out, &kids[m], x, f[m], v);
     }
 }
 
@@ -395,7 +400,7 @@ static bool seed(search *s, vec *frontier, vec *boxes)
     if (v == EXCLUDED)
         return true;
     task_out out = { { 0 }, { 0 }, false };
-    keep(s, w, &out, &root, x, v);
+    keep(s, w, &out, &root, x, f, v);
     bool ok = !out.oom;
     for (size_t i = 0; ok && i < out.cells.n; i++)
         ok = vec_push(frontier, (scell *)out.cells.p + i, sizeof(scell));

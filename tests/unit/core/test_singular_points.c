@@ -398,3 +398,19 @@ Test(singular_points, deadline)
     ism_locus_free(&l);
     ism_tape_free(t);
 }
+
+/* A pole sphere: f = 1/(|p|² − 1/4) is unbounded there and never 0, ∇f = −2p/(|p|² − 1/4)²
+ * vanishes only at 0 (f = −4): no point and no box (without the pole rule, every finest
+ * cell along the sphere was kept: 19304 boxes at depth 7). */
+Test(singular_points, pole_leaves_no_box)
+{
+    ism_tape *t = compile("1/(x^2 + y^2 + z^2 - 0.25)");
+    for (int placement = 0; placement < 3; placement += 2) {
+        ism_locus l;
+        find(t, UNIT, 5, placement, 0, &l);
+        cr_expect_eq(l.nboxes, 0, "%zu boxes", l.nboxes);
+        cr_expect_eq(l.npoints, 0);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
