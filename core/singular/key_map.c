@@ -95,8 +95,3 @@ uint32_t ism_key_map_add(ism_key_map *m, uint64_t key, bool *added)
     *added = true;
     return (uint32_t)m->n++;
 }
-
-size_t ism_key_map_bytes(const ism_key_map *m)
-{
-    return m->cap_keys * sizeof *m->keys + (m->slots ? (m->mask + 1) * sizeof *m->slots : 0);
-}

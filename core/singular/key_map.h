@@ -26,7 +26,4 @@ uint32_t ism_key_map_add(ism_key_map *m, uint64_t key, bool *added);
 /* The index of key, or ISM_KEY_NONE when it was never added. */
 uint32_t ism_key_map_find(const ism_key_map *m, uint64_t key);
 
-/* Bytes held (for budgets). */
-size_t ism_key_map_bytes(const ism_key_map *m);
-
 #endif

@@ -12,7 +12,7 @@
 
 /* Vertices per task of a parallel evaluation: large enough to amortise a task, small
  * enough to balance two to eight threads. */
-#define SF_CHUNK 1024
+#define SF_CHUNK 256
 /* A private bit of ism_sheet_vertex.have: listed for the evaluation under way. */
 #define SF_QUEUED 0x80
 
@@ -89,52 +89,29 @@ typedef struct need_job {
     int what;
 } need_job;
 
-static void eval_values(ism_sheet_field *sf, ism_eval_ws *ws, const uint32_t *todo, size_t n)
-{
-    double x[SF_CHUNK] = {0}, y[SF_CHUNK] = {0}, z[SF_CHUNK] = {0}, out[SF_CHUNK], p[3];
-    for (size_t i = 0; i < n; i++) {
-        ism_sheet_field_point(sf, todo[i], p);
-        x[i] = p[0];
-        y[i] = p[1];
-        z[i] = p[2];
-    }
-    ism_eval_batch(sf->f, ws, x, y, z, out, n);
-    for (size_t i = 0; i < n; i++) {
-        sf->v[todo[i]].f = out[i];
-        sf->v[todo[i]].have |= ISM_SF_F;
-    }
-}
+typedef struct jet_job {
+    ism_sheet_field *sf;
+    const uint32_t *todo;
+    size_t n;
+} jet_job;
 
-static void eval_derivatives(ism_sheet_field *sf, ism_eval_ws *ws, const uint32_t *todo,
-                             size_t n, int what)
+static void jet_task(void *ctx, size_t task, int thread)
 {
+    jet_job *j = ctx;
+    ism_sheet_field *sf = j->sf;
+    size_t end = (task + 1) * SF_CHUNK < j->n ? (task + 1) * SF_CHUNK : j->n;
     double p[3], h[6];
-    for (size_t i = 0; i < n; i++) {
-        ism_sheet_vertex *v = &sf->v[todo[i]];
-        ism_sheet_field_point(sf, todo[i], p);
-        if (what == ISM_SF_GRAD) {
-            v->f = ism_eval_gradient(sf->f, ws, p[0], p[1], p[2], v->g);
-            v->have |= ISM_SF_F | ISM_SF_GRAD;
-            continue;
-        }
-        v->f = ism_eval_hessian(sf->f, ws, p[0], p[1], p[2], v->g, h);
-        v->have |= ISM_SF_F | ISM_SF_GRAD | ISM_SF_JET;
+    for (size_t i = task * SF_CHUNK; i < end; i++) {
+        ism_sheet_vertex *v = &sf->v[j->todo[i]];
+        ism_sheet_field_point(sf, j->todo[i], p);
+        v->f = ism_eval_hessian(sf->f, sf->ws[thread], p[0], p[1], p[2], v->g, h);
+        v->have |= ISM_SF_JET;
         if (!ism_sheet_dominant(h, v->n, &v->lam))
             v->have |= ISM_SF_NO_DIR;
     }
 }
 
-static void need_task(void *ctx, size_t task, int thread)
-{
-    need_job *j = ctx;
-    size_t first = task * SF_CHUNK, n = j->n - first < SF_CHUNK ? j->n - first : SF_CHUNK;
-    if (j->what == ISM_SF_F)
-        eval_values(j->sf, j->sf->ws[thread], j->todo + first, n);
-    else
-        eval_derivatives(j->sf, j->sf->ws[thread], j->todo + first, n, j->what);
-}
-
-bool ism_sheet_field_need(ism_sheet_field *sf, const uint32_t *idx, size_t n, int what)
+bool ism_sheet_field_jets(ism_sheet_field *sf, const uint32_t *idx, size_t n)
 {
     uint32_t *todo = malloc((n ? n : 1) * sizeof *todo);
     if (!todo)
@@ -142,26 +119,16 @@ bool ism_sheet_field_need(ism_sheet_field *sf, const uint32_t *idx, size_t n, in
     size_t m = 0;
     for (size_t i = 0; i < n; i++) {
         ism_sheet_vertex *v = &sf->v[idx[i]];
-        if (v->have & (what | SF_QUEUED))
+        if (v->have & (ISM_SF_JET | SF_QUEUED))
             continue;
         v->have |= SF_QUEUED; /* a vertex listed twice is evaluated once */
         todo[m++] = idx[i];
     }
     for (size_t i = 0; i < m; i++)
         sf->v[todo[i]].have &= (uint8_t)~SF_QUEUED;
-    need_job j = {sf, todo, m, what};
-    ism_parallel_for(sf->threads, (m + SF_CHUNK - 1) / SF_CHUNK, need_task, &j);
-    if (what == ISM_SF_F)
-        sf->evals_point += m;
-    else if (what == ISM_SF_GRAD)
-        sf->evals_grad += m;
-    else
-        sf->evals_jet += m;
+    jet_job j = {sf, todo, m};
+    ism_parallel_for(sf->threads, (m + SF_CHUNK - 1) / SF_CHUNK, jet_task, &j);
+    sf->evals_jet += m;
     free(todo);
     return true;
-}
-
-size_t ism_sheet_field_bytes(const ism_sheet_field *sf)
-{
-    return ism_key_map_bytes(&sf->map) + sf->cap * sizeof *sf->v;
 }

@@ -1,8 +1,10 @@
 /* sheet_field.h — the lattice vertices the double-sheet stage looks at, and what it knows at
  * each: f, ∇f, the Hessian's dominant eigenpair (n, λ), and, once n is oriented consistently
- * between neighbours (sheet_orient.h), ψ = ∇f·n — the field that changes sign across a
- * double sheet f = g² (there ∇f = 2g∇g and n = ±∇g/|∇g|, so ψ = ±2g|∇g|). Evaluations run
- * on several threads, each vertex at most once per quantity. */
+ * between neighbours (sheet_orient.h), ψ = (∇f·n)/λ — minus the Newton step to the stationary
+ * point of f along n, the field that changes sign across a double sheet. Near f = g²·k
+ * (k ≠ 0, either sign), ∇f ≈ 2gk∇g and H ≈ 2k∇g∇gᵀ, so n = ±∇g/|∇g| and ψ = ±g/|∇g|: the
+ * signed distance to the sheet, whatever the sign of k (∇f·n alone would flip where k does).
+ * Evaluations run on several threads, each vertex once. */
 #ifndef ISM_SHEET_FIELD_H
 #define ISM_SHEET_FIELD_H
 
@@ -15,17 +17,15 @@
 
 /* What a vertex knows (bits of ism_sheet_vertex.have). */
 enum ism_sf_have {
-    ISM_SF_F = 1,        /* f */
-    ISM_SF_GRAD = 2,     /* f and ∇f */
-    ISM_SF_JET = 4,      /* f, ∇f, n, λ (n unoriented) */
-    ISM_SF_NO_DIR = 8,   /* the Hessian has no dominant direction here (zero or not finite) */
-    ISM_SF_ORIENTED = 16 /* n oriented against its neighbours, psi set */
+    ISM_SF_JET = 1,      /* f, ∇f, n, λ (n unoriented) */
+    ISM_SF_NO_DIR = 2,   /* the Hessian has no dominant direction here (zero or not finite) */
+    ISM_SF_ORIENTED = 4  /* n oriented against its neighbours, psi set */
 };
 
 typedef struct ism_sheet_vertex {
     double f, g[3];
     double n[3], lam;    /* unit eigenvector of the Hessian's eigenvalue of largest |λ| */
-    double psi;          /* ∇f·n once oriented */
+    double psi;          /* (∇f·n)/λ once oriented */
     uint8_t have;        /* enum ism_sf_have */
 } ism_sheet_vertex;
 
@@ -37,7 +37,7 @@ typedef struct ism_sheet_field {
     ism_key_map map;     /* lattice key -> vertex index */
     ism_sheet_vertex *v;
     size_t cap;
-    uint64_t evals_point, evals_grad, evals_jet;
+    uint64_t evals_jet;
 } ism_sheet_field;
 
 /* False when out of memory (the field is then freed). */
@@ -52,15 +52,12 @@ uint32_t ism_sheet_field_vertex(ism_sheet_field *sf, uint64_t key);
 /* World position of vertex i (bit-identical to the octree's lattice points). */
 void ism_sheet_field_point(const ism_sheet_field *sf, uint32_t i, double p[3]);
 
-/* Makes every listed vertex (duplicates allowed) know `what` (ISM_SF_F, ISM_SF_GRAD or
- * ISM_SF_JET). False when out of memory. */
-bool ism_sheet_field_need(ism_sheet_field *sf, const uint32_t *idx, size_t n, int what);
+/* Makes every listed vertex (duplicates allowed) know its jet (ISM_SF_JET), each evaluated
+ * once. False when out of memory. */
+bool ism_sheet_field_jets(ism_sheet_field *sf, const uint32_t *idx, size_t n);
 
 /* The Hessian's eigenpair of largest |λ| at a point: false when it has none (H zero or not
  * finite). */
 bool ism_sheet_dominant(const double h[6], double n[3], double *lam);
-
-/* Bytes held (for budgets). */
-size_t ism_sheet_field_bytes(const ism_sheet_field *sf);
 
 #endif

@@ -72,7 +72,7 @@ static void settle(ism_sheet_vertex *v, const double ref[3])
     if (ref && dot3(v->n, ref) < 0)
         for (int k = 0; k < 3; k++)
             v->n[k] = -v->n[k];
-    v->psi = dot3(v->g, v->n);
+    v->psi = dot3(v->g, v->n) / v->lam;
     v->have |= ISM_SF_ORIENTED;
 }
 

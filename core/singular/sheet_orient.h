@@ -1,6 +1,6 @@
 /* sheet_orient.h — gives the Hessian directions n of the field's vertices one consistent
- * sign between lattice neighbours, so that ψ = ∇f·n changes sign across a double sheet and
- * nowhere else along a lattice edge. */
+ * sign between lattice neighbours, so that ψ = (∇f·n)/λ changes sign across a double sheet
+ * and nowhere else along a lattice edge. */
 #ifndef ISM_SHEET_ORIENT_H
 #define ISM_SHEET_ORIENT_H
 

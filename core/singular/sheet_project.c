@@ -72,9 +72,6 @@ bool ism_sheet_project(const ism_tape *f, ism_eval_ws *ws, const double p0[3],
     }
     if (!(fabs(step) <= SHEET_STALL_TOL * cell))
         return false;
-    if (lam < 0)
-        for (int k = 0; k < 3; k++)
-            n[k] = -n[k];
     /* fv was taken one step back: f only falls along a Newton step toward the minimum, so
        this is the stricter test */
     return fabs(fv) <= SHEET_F_REL * fabs(lam) * cell * cell;

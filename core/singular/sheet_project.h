@@ -10,9 +10,8 @@
 /* From p0, with nref the direction to orient n by and cell the finest cell's diagonal:
  * true when Newton settles within SHEET_MAX_MOVE cells of p0 at a point p where
  * |f(p)| ≤ SHEET_F_REL·|λ|·cell² (f's minimum along n is 0 there, not a positive valley
- * bottom or a point where ∇f ⟂ n); writes p, and in n the unit normal there: the Hessian's
- * direction oriented like nref, times the sign of its eigenvalue (the side toward which
- * ψ = ∇f·n grows). */
+ * bottom or a point where ∇f ⟂ n); writes p, and in n the Hessian's direction there,
+ * oriented like nref. */
 bool ism_sheet_project(const ism_tape *f, ism_eval_ws *ws, const double p0[3],
                        const double nref[3], double cell, double p[3], double n[3]);
 

@@ -1,7 +1,8 @@
 /* sheets.h — double sheets: the 2-D parts of f = 0 across which f does not change sign
  * (f = g²·k, k ≠ 0: a sphere counted twice, a plane x² = 0), found from f on the lattice of
- * the finest search cells and meshed as the zero set of ψ = ∇f·n (n the Hessian's dominant
- * direction) where f itself vanishes. The polygoniser sees no sign change there and meshes
+ * the finest search cells and meshed as the zero set of ψ = (∇f·n)/λ ((n, λ) the Hessian's
+ * dominant eigenpair: ψ is the signed Newton distance to the sheet) where f itself
+ * vanishes. The polygoniser sees no sign change there and meshes
  * nothing; sign-changing surfaces are left to it. */
 #ifndef ISM_SHEETS_H
 #define ISM_SHEETS_H

@@ -310,3 +310,110 @@ Test(sheets, sign_change_is_no_double_sheet)
     check_none("(x^2 + y^2 + z^2 - 0.5)^2 + 1e-4", cube1, 6);
     check_none("x^2 + 1e-6", b, 6);
 }
+
+/* −(g²)·(2 + x): the same sphere where f ≤ 0 and a positive factor varies; the mesh is
+ * closed, its normals agree with its winding. */
+Test(sheets, negative_double_sphere)
+{
+    double b[6];
+    shifted_box(cube1, 5, 0.37, true, b);
+    run r;
+    run_sheets(&r, "-(x^2 + y^2 + z^2 - 0.5)^2 * (2 + x)", b, 5);
+    pf_props p;
+    pf_measure(&r.m, r.t, &p);
+    cr_expect_eq(r.l.nsheets, 1);
+    cr_expect_eq(p.boundary_edges + p.nonmanifold_edges, 0);
+    cr_expect_eq(p.euler, 2);
+    cr_expect_eq(misoriented_edges(&r.m), 0);
+    cr_expect_eq(normals_against_winding(&r.m), 0);
+    free_run(&r);
+}
+
+/* Appending to a mesh that already holds triangles: the sheet's range starts after them
+ * and its vertices are its own. */
+Test(sheets, appends_after_existing_triangles)
+{
+    ism_tape *t = pf_compile(&(pf_surface){"x^2", NULL, 0, NULL, 0});
+    ism_locus_options o;
+    ism_locus_options_default(&o);
+    o.max_depth = 4;
+    ism_locus l;
+    ism_locus_init(&l);
+    ism_mesh m;
+    ism_mesh_init(&m);
+    double p[3] = {0, 0, 0};
+    for (int i = 0; i < 3; i++)
+        ism_mesh_add_vertex(&m, p, NULL);
+    ism_mesh_add_triangle(&m, 0, 1, 2);
+    ism_error err = {0};
+    cr_assert(ism_sing_double_sheets(t, &o, &l, &m, &err), "%s", err.message);
+    cr_assert_eq(l.nsheets, 1);
+    cr_expect_eq(l.sheets[0].first_triangle, 1);
+    cr_expect_eq(l.sheets[0].triangles, m.ntris - 1);
+    for (size_t i = 3; i < 3 * m.ntris; i++)
+        cr_expect_geq(m.tri[i], 3, "a sheet triangle uses a vertex that was there before");
+    ism_mesh_free(&m);
+    ism_locus_free(&l);
+    ism_tape_free(t);
+}
+
+/* Cut short by cancel, an expired deadline or the cell budget: incomplete with the reason,
+ * nothing appended, no error. */
+static void check_cut_short(const volatile int *cancel, double deadline_ms, size_t budget,
+                            const char *why)
+{
+    ism_tape *t = pf_compile(&(pf_surface){"(x^2 + y^2 + z^2 - 0.5)^2", NULL, 0, NULL, 0});
+    ism_locus_options o;
+    ism_locus_options_default(&o);
+    o.max_depth = 5;
+    o.cancel = cancel;
+    o.deadline_ms = deadline_ms;
+    o.max_boxes = budget;
+    ism_locus l;
+    ism_locus_init(&l);
+    ism_mesh m;
+    ism_mesh_init(&m);
+    ism_error err = {0};
+    cr_assert(ism_sing_double_sheets(t, &o, &l, &m, &err), "%s", err.message);
+    cr_expect(l.incomplete, "%s: not marked incomplete", why);
+    cr_expect(strstr(l.incomplete_why, why), "reason '%s', expected '%s'", l.incomplete_why, why);
+    cr_expect_eq(m.ntris, 0);
+    cr_expect_eq(l.nsheets, 0);
+    ism_mesh_free(&m);
+    ism_locus_free(&l);
+    ism_tape_free(t);
+}
+
+Test(sheets, cut_short)
+{
+    static const volatile int cancelled = 1;
+    check_cut_short(&cancelled, 0, 1000000, "cancelled");
+    check_cut_short(NULL, 1, 1000000, "deadline"); /* 1 ms after the clock's origin: past */
+    check_cut_short(NULL, 0, 10, "budget");
+}
+
+/* The same mesh, bit for bit, whatever the number of threads. */
+Test(sheets, threads_do_not_change_the_mesh)
+{
+    ism_tape *t = pf_compile(&(pf_surface){"(x^2 + y^2 + z^2 - 0.5)^2", NULL, 0, NULL, 0});
+    ism_mesh m[2];
+    for (int i = 0; i < 2; i++) {
+        ism_locus_options o;
+        ism_locus_options_default(&o);
+        o.max_depth = 5;
+        o.threads = i ? 3 : 1;
+        ism_locus l;
+        ism_locus_init(&l);
+        ism_mesh_init(&m[i]);
+        ism_error err = {0};
+        cr_assert(ism_sing_double_sheets(t, &o, &l, &m[i], &err));
+        ism_locus_free(&l);
+    }
+    cr_assert_eq(m[0].nverts, m[1].nverts);
+    cr_assert_eq(m[0].ntris, m[1].ntris);
+    cr_expect(!memcmp(m[0].pos, m[1].pos, 3 * m[0].nverts * sizeof *m[0].pos));
+    cr_expect(!memcmp(m[0].tri, m[1].tri, 3 * m[0].ntris * sizeof *m[0].tri));
+    ism_mesh_free(&m[0]);
+    ism_mesh_free(&m[1]);
+    ism_tape_free(t);
+}
