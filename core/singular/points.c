@@ -48,6 +48,7 @@ typedef struct cand {
 
 typedef struct ctx {
     const ism_tape *t;
+    const double *box;  /* the search box: points outside it are not reported */
     ism_eval_ws *ws;
     ism_ivjet_ws *jw;
     double cell, diag;
@@ -164,6 +165,9 @@ static int resolve(ctx *x, const double start[3], const double lo[3], const doub
     ism_newton_opts no = { ISM_SING_PINV_REL_POINT, trust, POINT_NEWTON_TOL * x->diag,
                            POINT_NEWTON_ITERS, lo, hi };
     ism_sing_newton(x->t, x->ws, pt->p, &no, &x->out->evals_jet);
+    for (int k = 0; k < 3; k++)
+        if (!(pt->p[k] >= x->box[k] && pt->p[k] <= x->box[k + 3]))
+            return NOT_FOUND; /* a neighbour's point seen through a boundary cell */
     ism_interval f;
     pt->certified = certify(x, pt->p, &pt->radius, &f);
     if (pt->certified && !(f.lo <= 0.0 && f.hi >= 0.0))
@@ -445,7 +449,7 @@ bool ism_sing_points(const ism_tape *f, const ism_locus_options *o, ism_locus *o
                      ism_error *err)
 {
     double t0 = ism_now_ms();
-    ctx x = { .t = f, .out = out };
+    ctx x = { .t = f, .box = o->box, .out = out };
     double cells = ldexp(1.0, o->max_depth), d2 = 0.0;
     for (int k = 0; k < 3; k++) {
         double ext = o->box[k + 3] - o->box[k];
