@@ -49,6 +49,18 @@ class Response:
         return json.loads(self.body)
 
 
+def wait_until(what, check, timeout=60):
+    """Polls check until it gives something true (returned) or timeout seconds pass (an
+    AssertionError naming what)."""
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        v = check()
+        if v:
+            return v
+        time.sleep(0.02)
+    raise AssertionError("timed out waiting for " + what)
+
+
 def http_request(port, method, path, body=None, headers=None, timeout=60, source=None):
     """One request on its own connection to 127.0.0.1:port -> Response. A dict or list body
     goes as JSON; source: the local address to send from (another client, as the daemon

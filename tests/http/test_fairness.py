@@ -17,11 +17,10 @@ import os
 import subprocess
 import sys
 import tempfile
-import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from harness import ISOMESHD, SLOW, Daemon, Response, sphere  # noqa: E402
+from harness import ISOMESHD, SLOW, Daemon, Response, sphere, wait_until  # noqa: E402
 
 FLOOD = 50
 
@@ -52,16 +51,6 @@ def request_from(d, source, method, path, body=None, headers=None):
         return Response(r.status, r.getheaders(), r.read())
     finally:
         conn.close()
-
-
-def wait_until(what, check, timeout=60):
-    deadline = time.time() + timeout
-    while time.time() < deadline:
-        v = check()
-        if v:
-            return v
-        time.sleep(0.02)
-    raise AssertionError("timed out waiting for " + what)
 
 
 class Client:

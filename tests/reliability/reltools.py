@@ -13,7 +13,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "http"))
 from harness import (BUILD, QUICK, ROOT, SLOW, Daemon, draco_counts, http_request,  # noqa: E402,F401
-                     metric_key, parse_metrics, process_alive, sphere)
+                     metric_key, parse_metrics, process_alive, sphere, wait_until)
 
 ISOMESH = os.path.join(BUILD, "isomesh")
 

@@ -11,12 +11,11 @@ import http.client
 import json
 import os
 import sys
-import threading
 import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from reltools import Daemon, http_request, sphere  # noqa: E402
+from reltools import Daemon, http_request, sphere, wait_until  # noqa: E402
 
 USER_JOBS_KEPT = 1000  # jobs.c: records one user keeps
 
@@ -29,16 +28,6 @@ def hopeless(k):
 
 def post_from(port, source, path, body, timeout=60):
     return http_request(port, "POST", path, body, timeout=timeout, source=source)
-
-
-def wait_until(what, check, timeout=30):
-    deadline = time.time() + timeout
-    while time.time() < deadline:
-        v = check()
-        if v:
-            return v
-        time.sleep(0.02)
-    raise AssertionError("timed out waiting for " + what)
 
 
 class JobRecordsTest(unittest.TestCase):
