@@ -6,27 +6,29 @@
 #include "core/util/le_bytes.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <hiredis/hiredis.h>
 #include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/time.h>
+#include <unistd.h>
 #include <time.h>
 
 #include "proto/frame.h"
 #include "server/common/log.h"
 
 #define VALUE_VERSION 1
-#define KEY_PREFIX ISM_REDIS_KEY_PREFIX
-#define LOCK_PREFIX ISM_REDIS_KEY_PREFIX "lock:"
 #define KEY_MAX (ISM_CACHE_NAME_MAX + 32)
 #define BACKOFF_MIN_NS 100000000LL       /* first reconnect 100 ms after a failure */
 #define BACKOFF_MAX_NS 2000000000LL      /* then doubling up to 2 s */
 #define HEALTH_INTERVAL_NS 1000000000LL  /* an idle connection is pinged once a second */
 #define CLOSE_FLUSH_NS 2000000000LL      /* at close, queued writes get this long */
 #define CORRUPT_LOG_INTERVAL_S 10
+#define PASSWORD_FILE_MAX 512
 
 /* Compare-and-act scripts: only the holder's token may extend or release a lock. */
 static const char RENEW_LUA[] =
@@ -55,6 +57,8 @@ typedef struct redis_tier {
     ism_redis_settings cfg;
     ism_redis_counters counters;
     char addr[280];                 /* host:port for log lines */
+    char prefix[ISM_REDIS_PREFIX_MAX];       /* "<namespace>:v1:" */
+    char lock_prefix[ISM_REDIS_PREFIX_MAX + 8];
     redisContext *ctx;              /* the tier's thread only */
     long long retry_at_ns, backoff_ns, down_since_ns, last_used_ns;
     bool outage_logged;
@@ -196,6 +200,25 @@ static void conn_failed(redis_tier *rt, const char *what)
     rt->backoff_ns = rt->backoff_ns * 2 > BACKOFF_MAX_NS ? BACKOFF_MAX_NS : rt->backoff_ns * 2;
 }
 
+/* AUTH [user] password on a new connection (never logged). */
+static bool authenticate(redis_tier *rt)
+{
+    const char *argv[3] = {"AUTH"};
+    size_t lens[3] = {4};
+    int argc = 1;
+    if (rt->cfg.username[0]) {
+        argv[argc] = rt->cfg.username;
+        lens[argc++] = strlen(rt->cfg.username);
+    }
+    argv[argc] = rt->cfg.password;
+    lens[argc++] = strlen(rt->cfg.password);
+    redisReply *r = redisCommandArgv(rt->ctx, argc, argv, lens);
+    bool ok = r && r->type == REDIS_REPLY_STATUS && !strcmp(r->str, "OK");
+    if (r)
+        freeReplyObject(r);
+    return ok;
+}
+
 static void connect_now(redis_tier *rt)
 {
     redisContext *c = redisConnectWithTimeout(rt->cfg.host, rt->cfg.port,
@@ -211,6 +234,10 @@ static void connect_now(redis_tier *rt)
     }
     redisSetTimeout(c, ms_tv(ISM_REDIS_COMMAND_TIMEOUT_MS));
     redisEnableKeepAlive(c);
+    if (rt->cfg.password[0] && !authenticate(rt)) {
+        conn_failed(rt, "auth");
+        return;
+    }
     redisReply *r = redisCommand(c, "PING");
     bool ok = r && r->type == REDIS_REPLY_STATUS && !strcmp(r->str, "PONG");
     if (r)
@@ -262,6 +289,49 @@ static redisReply *command(redis_tier *rt, const char *what, int argc, const cha
     return r;
 }
 
+const char *ism_cache_redis_prefix(const ism_cache_tier *t)
+{
+    return ((const redis_tier *)t)->prefix;
+}
+
+bool ism_redis_load_password(const char *path, ism_redis_settings *s, char *err, size_t cap)
+{
+    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
+    if (fd < 0) {
+        snprintf(err, cap, "%s: %s", path, strerror(errno));
+        return false;
+    }
+    struct stat st;
+    char text[PASSWORD_FILE_MAX + 1];
+    ssize_t n = -1;
+    const char *why = NULL;
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode))
+        why = "not a regular file";
+    else if (st.st_mode & (S_IROTH | S_IWOTH))
+        why = "readable or writable by others (chmod o-rw it)";
+    else if ((n = read(fd, text, PASSWORD_FILE_MAX + 1)) < 0 || n > PASSWORD_FILE_MAX)
+        why = n < 0 ? strerror(errno) : "longer than 512 bytes";
+    close(fd);
+    if (why) {
+        snprintf(err, cap, "%s: %s", path, why);
+        return false;
+    }
+    text[n] = 0;
+    text[strcspn(text, "\r\n")] = 0; /* the first line: "PASSWORD" or "USER PASSWORD" */
+    char *space = strchr(text, ' ');
+    const char *user = space ? text : "", *pass = space ? space + 1 : text;
+    if (space)
+        *space = 0;
+    if (!*pass || strlen(pass) >= sizeof s->password || strlen(user) >= sizeof s->username) {
+        snprintf(err, cap, "%s: expected one line, PASSWORD or USER PASSWORD", path);
+        return false;
+    }
+    snprintf(s->username, sizeof s->username, "%s", user);
+    snprintf(s->password, sizeof s->password, "%s", pass);
+    explicit_bzero(text, sizeof text);
+    return true;
+}
+
 struct redisReply *ism_cache_redis_call(ism_cache_tier *t, const char *what, int argc,
                                        const char **argv, const size_t *lens)
 {
@@ -279,7 +349,7 @@ static void store_one(redis_tier *rt, const put *p)
 {
     char key[KEY_MAX];
     size_t vlen = 0;
-    unsigned char *v = entry_key(key, KEY_PREFIX, p->name)
+    unsigned char *v = entry_key(key, rt->prefix, p->name)
                            ? ism_redis_value_encode(p->name, p->blob, &vlen) : NULL;
     if (!v || !rt->ctx) {
         free(v);
@@ -397,7 +467,7 @@ int ism_cache_redis_fetch(ism_cache_tier *t, const char *const *names, size_t n,
     if (n == 0 || n > FETCH_MAX || !rt->ctx)
         return -1;
     for (size_t i = 0; i < n; i++) {
-        if (!entry_key(keys[i], KEY_PREFIX, names[i]))
+        if (!entry_key(keys[i], rt->prefix, names[i]))
             return -1;
         argv[i + 1] = keys[i];
         lens[i + 1] = strlen(keys[i]);
@@ -455,7 +525,7 @@ static int exists(redis_tier *rt, const char *prefix, const char *const *names, 
 
 int ism_cache_redis_count(ism_cache_tier *t, const char *const *names, size_t n)
 {
-    return exists((redis_tier *)t, KEY_PREFIX, names, n);
+    return exists((redis_tier *)t, ((redis_tier *)t)->prefix, names, n);
 }
 
 
@@ -463,7 +533,7 @@ int ism_cache_redis_lock(ism_cache_tier *t, const char *name, const char *token,
 {
     redis_tier *rt = (redis_tier *)t;
     char key[KEY_MAX], ttl[24];
-    if (!rt->ctx || !entry_key(key, LOCK_PREFIX, name))
+    if (!rt->ctx || !entry_key(key, rt->lock_prefix, name))
         return -1;
     snprintf(ttl, sizeof ttl, "%ld", ttl_ms);
     const char *argv[] = {"SET", key, token, "NX", "PX", ttl};
@@ -480,7 +550,7 @@ static int script(redis_tier *rt, const char *what, const char *lua, const char 
                   const char *token, const char *extra)
 {
     char key[KEY_MAX];
-    if (!rt->ctx || !entry_key(key, LOCK_PREFIX, name))
+    if (!rt->ctx || !entry_key(key, rt->lock_prefix, name))
         return -1;
     const char *argv[] = {"EVAL", lua, "1", key, token, extra};
     size_t lens[] = {4, strlen(lua), 1, strlen(key), strlen(token), extra ? strlen(extra) : 0};
@@ -492,7 +562,7 @@ int ism_cache_redis_locked(ism_cache_tier *t, const char *name, long max_ttl_ms)
 {
     redis_tier *rt = (redis_tier *)t;
     char key[KEY_MAX], ttl[24];
-    if (!rt->ctx || !entry_key(key, LOCK_PREFIX, name))
+    if (!rt->ctx || !entry_key(key, rt->lock_prefix, name))
         return -1;
     snprintf(ttl, sizeof ttl, "%ld", max_ttl_ms);
     const char *argv[] = {"EVAL", LOCKED_LUA, "1", key, ttl};
@@ -671,6 +741,9 @@ ism_cache_tier *ism_cache_redis_new(const ism_redis_settings *settings)
     if (!rt)
         return NULL;
     rt->cfg = *settings;
+    snprintf(rt->prefix, sizeof rt->prefix, "%s:v1:",
+             settings->namespace_[0] ? settings->namespace_ : ISM_REDIS_DEFAULT_NAMESPACE);
+    snprintf(rt->lock_prefix, sizeof rt->lock_prefix, "%slock:", rt->prefix);
     snprintf(rt->addr, sizeof rt->addr, strchr(rt->cfg.host, ':') ? "[%s]:%u" : "%s:%u",
              rt->cfg.host, rt->cfg.port);
     rt->backoff_ns = BACKOFF_MIN_NS;

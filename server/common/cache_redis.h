@@ -2,7 +2,8 @@
  * service reads and writes, so a mesh computed by one daemon is served by all of them, plus
  * the per-entry locks with which daemons agree on who computes a missing mesh.
  *
- * Keys: "isomesh:v1:<name>" holds an entry (<name> as in cache.h: "<key>.<ext>"), and
+ * Keys ("isomesh" is the default namespace; another lets two services share one Redis):
+ * "isomesh:v1:<name>" holds an entry (<name> as in cache.h: "<key>.<ext>"), and
  * "isomesh:v1:lock:<name>" the lock of a computation in progress (a random token, SET NX PX,
  * released or extended only by its holder through a compare-and-act script). Entries carry no
  * expiry: bound Redis with maxmemory and an LRU policy (deploy/README.md).
@@ -35,13 +36,17 @@
 #define ISM_REDIS_CONNECT_TIMEOUT_MS 250
 #define ISM_REDIS_COMMAND_TIMEOUT_MS 250
 #define ISM_REDIS_HEADER_SIZE 24
-#define ISM_REDIS_KEY_PREFIX "isomesh:v1:"  /* every key of the service starts with it */
+#define ISM_REDIS_DEFAULT_NAMESPACE "isomesh" /* keys start "<namespace>:v1:" */
+#define ISM_REDIS_PREFIX_MAX 80
 
 typedef struct ism_redis_settings {
     char host[256];
     unsigned short port;
     size_t max_pending;      /* bytes queued for writing before puts are skipped */
     size_t max_entry;        /* larger entries are not shared */
+    char namespace_[64];     /* keys start "<namespace_>:v1:"; "" = ISM_REDIS_DEFAULT_NAMESPACE */
+    char username[128];      /* AUTH on every connection when password is set */
+    char password[256];
 } ism_redis_settings;
 
 /* Figures beside the tier's cache counters (read by /metrics). */
@@ -61,6 +66,10 @@ typedef struct ism_redis_counters {
 
 /* Parses "HOST:PORT", "[IPV6]:PORT" or "HOST" (port 6379). False on anything else. */
 bool ism_redis_parse_address(const char *s, char host[256], unsigned short *port);
+
+/* Reads the first line of path, "PASSWORD" or "USER PASSWORD" (Redis ACL), into s. The file
+ * must be a regular file nobody but its owner and group may read. False with err on error. */
+bool ism_redis_load_password(const char *path, ism_redis_settings *s, char *err, size_t cap);
 
 /* A tier for the Redis server in settings, with its thread started (it connects in the
  * background: the tier works, as down, until it can). NULL when out of memory. */
@@ -99,6 +108,8 @@ int ism_cache_redis_lock(ism_cache_tier *t, const char *name, const char *token,
 int ism_cache_redis_renew(ism_cache_tier *t, const char *name, const char *token, long ttl_ms);
 /* 1 when token held the lock and released it, 0 when it was not the holder. */
 int ism_cache_redis_unlock(ism_cache_tier *t, const char *name, const char *token);
+/* "<namespace>:v1:": what every key of this tier starts with. */
+const char *ism_cache_redis_prefix(const ism_cache_tier *t);
 /* Any one command (argv/lens as hiredis's redisCommandArgv): its reply, to free with
  * freeReplyObject, or NULL when Redis is unavailable or answered an error (counted, logged,
  * and an I/O failure marks Redis down like any other call). */

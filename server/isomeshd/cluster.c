@@ -17,7 +17,6 @@
 #include "server/isomeshd/jobs.h"
 #include "server/isomeshd/shared_cache.h"
 
-#define P ISM_REDIS_KEY_PREFIX
 #define KEY_MAX 512
 #define TAKE_TICK_NS 25000000LL      /* an idle daemon looks for work this often */
 #define TAKE_MAX_PER_TICK 8          /* entries taken in one look at most */
@@ -175,14 +174,10 @@ static int run_script(ismd_cluster *c, const char *what, const char *lua, int nk
     return 0;
 }
 
-static void job_key(char out[KEY_MAX], const char *name)
+/* "<namespace>:v1:<kind><name>" (kind "job:", "q:", "users", ...). */
+static void ckey(const ismd_cluster *c, char out[KEY_MAX], const char *kind, const char *name)
 {
-    snprintf(out, KEY_MAX, "%sjob:%s", P, name);
-}
-
-static void stream_key(char out[KEY_MAX], const char *user)
-{
-    snprintf(out, KEY_MAX, "%sq:%s", P, user);
+    snprintf(out, KEY_MAX, "%s%s%s", ism_cache_redis_prefix(c->redis), kind, name);
 }
 
 /* ---- the origin ---------------------------------------------------------------------- */
@@ -197,12 +192,15 @@ int ismd_cluster_enqueue(ismd_cluster *c, const char *name, const char *key, con
         return -1;
     memcpy(req, request->data, request->len);
     req[request->len] = 0;
-    stream_key(stream, user);
-    job_key(job, name);
+    ckey(c, stream, "q:", user);
+    ckey(c, job, "job:", name);
     snprintf(jobs, sizeof jobs, "%d", lim && lim->max_jobs > 0 ? lim->max_jobs : c->user_jobs);
     snprintf(running, sizeof running, "%d",
              lim && lim->max_running > 0 ? lim->max_running : c->user_running);
-    const char *args[] = {stream, P "users", job, P "ulim", user, jobs, name, key, fmt, req,
+    char users[KEY_MAX], ulim[KEY_MAX];
+    ckey(c, users, "users", "");
+    ckey(c, ulim, "ulim", "");
+    const char *args[] = {stream, users, job, ulim, user, jobs, name, key, fmt, req,
                           running, STATE_TTL_MS};
     redisReply *r = NULL;
     int rc = run_script(c, "cluster_enqueue", ENQUEUE_LUA, 4, args, 12, &r);
@@ -224,7 +222,7 @@ static const char *reply_str(const redisReply *e)
 int ismd_cluster_view(ismd_cluster *c, const char *name, const char *id, ismd_cj_view *v)
 {
     char job[KEY_MAX];
-    job_key(job, name);
+    ckey(c, job, "job:", name);
     memset(v, 0, sizeof *v);
     const char *argv[] = {"HMGET", job, "id", "state", "progress", "status", "error"};
     size_t lens[7];
@@ -257,8 +255,8 @@ int ismd_cluster_view(ismd_cluster *c, const char *name, const char *id, ismd_cj
 void ismd_cluster_cancel(ismd_cluster *c, const char *name, const char *user, const char *id)
 {
     char stream[KEY_MAX], job[KEY_MAX];
-    stream_key(stream, user);
-    job_key(job, name);
+    ckey(c, stream, "q:", user);
+    ckey(c, job, "job:", name);
     const char *args[] = {stream, job, id};
     run_script(c, "cluster_cancel", CANCEL_LUA, 2, args, 3, NULL);
 }
@@ -360,7 +358,7 @@ static long long cj_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
     if (!finished)
         ismd_sched_detach(j->c->sched, &j->waiter);
     ismd_shared_leave(sh);
-    ism_log_field f[] = {ISM_LS("job", j->job + strlen(P "job:")), ISM_LS("entry", j->id)};
+    ism_log_field f[] = {ISM_LS("job", strstr(j->job, ":v1:job:") + 8), ISM_LS("entry", j->id)};
     ism_log_fields(ISM_LOG_INFO, "cluster_job_dropped", f, 2);
     return cj_end(j);
 }
@@ -405,7 +403,7 @@ static bool start_entry(ismd_cluster *c, const redisReply *r)
     j->waiter.done = cj_done;
     j->waiter.progress = cj_progress;
     snprintf(j->stream, sizeof j->stream, "%s", stream);
-    job_key(j->job, name);
+    ckey(c, j->job, "job:", name);
     snprintf(j->id, sizeof j->id, "%s", id);
     bool ok = false;
     if (ismd_shared_enter(c->sh)) {
@@ -439,7 +437,12 @@ static int take_one(ismd_cluster *c)
     struct timespec wall;
     clock_gettime(CLOCK_REALTIME, &wall);
     snprintf(now_ms, sizeof now_ms, "%lld", (long long)wall.tv_sec * 1000 + wall.tv_nsec / 1000000);
-    const char *args[] = {P "users", P "ulim", P "q:", c->consumer, idle_ms, turn, P "job:",
+    char users[KEY_MAX], ulim[KEY_MAX], streams[KEY_MAX], jobs[KEY_MAX];
+    ckey(c, users, "users", "");
+    ckey(c, ulim, "ulim", "");
+    ckey(c, streams, "q:", "");
+    ckey(c, jobs, "job:", "");
+    const char *args[] = {users, ulim, streams, c->consumer, idle_ms, turn, jobs,
                           now_ms, STATE_TTL_MS};
     redisReply *r = NULL;
     if (run_script(c, "cluster_take", TAKE_LUA, 2, args, 9, &r) < 0)
@@ -515,7 +518,7 @@ static long long jobtask_end(jobtask *j)
 static void write_record(jobtask *j)
 {
     char rec[KEY_MAX], created[24];
-    snprintf(rec, sizeof rec, "%sjobrec:%s", P, j->id);
+    ckey(j->c, rec, "jobrec:", j->id);
     snprintf(created, sizeof created, "%lld", j->created_unix);
     const char *argv[] = {"HSET", rec, "user", j->user, "key", j->key, "fmt", j->fmt,
                           "created", created};
@@ -561,14 +564,14 @@ static unsigned lookup(jobtask *j, ism_blob **json)
 {
     char rec[KEY_MAX], job[KEY_MAX], name[ISM_CACHE_NAME_MAX];
     char r[4][256], h[5][256];
-    snprintf(rec, sizeof rec, "%sjobrec:%s", P, j->id);
+    ckey(j->c, rec, "jobrec:", j->id);
     static const char *const RF[] = {"user", "key", "fmt", "created"};
     int got = hash_fields(j->c, rec, RF, 4, r);
     if (got <= 0)
         return got < 0 ? 503 : 404;
     if (!ism_cache_name(name, r[1], r[2]))
         return 404;
-    job_key(job, name);
+    ckey(j->c, job, "job:", name);
     static const char *const HF[] = {"state", "progress", "status", "error", "started_ms"};
     if (hash_fields(j->c, job, HF, 5, h) < 0)
         return 503;

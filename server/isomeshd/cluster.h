@@ -1,7 +1,7 @@
 /* cluster.h — the cluster queue (--cluster, with --redis): every daemon that shares one Redis
  * is a front end and a worker host of one queue kept in Redis Streams.
  *
- * Keys (P = ISM_REDIS_KEY_PREFIX):
+ * Keys (P = "<namespace>:v1:", ism_cache_redis_prefix):
  *   P q:<user>    one stream per user: an entry per computation waiting or running (fields
  *                 name, key, fmt, user, req = its canonical request); consumer group
  *                 "workers", one consumer per daemon

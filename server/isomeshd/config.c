@@ -60,6 +60,13 @@ static const flag FLAGS[] = {
     {"redis", K_REDIS, 0, 0, "HOST:PORT",
      "shared cache in this Redis server: daemons using the same one serve each other's "
      "meshes and compute identical requests once (deploy/README.md) [none]"},
+    {"redis-namespace", K_STRING, 0, 0, "NAME",
+     "first part of every Redis key (NAME:v1:...): services with different names share one "
+     "Redis without seeing each other's meshes, locks or queue; 1-48 of A-Z a-z 0-9 . _ - "
+     "[isomesh]"},
+    {"redis-password-file", K_PATH, 0, 0, "FILE",
+     "AUTH to Redis with the first line of FILE, PASSWORD or USER PASSWORD (a Redis ACL "
+     "user); FILE must not be readable by others [none]"},
     {"cluster", K_BOOL, 0, 0, "",
      "with --redis, one queue for every daemon sharing that Redis: computations wait in "
      "per-user Redis streams and run on whichever daemon has an idle worker (users served in "
@@ -113,6 +120,18 @@ static bool valid_address_list(const char *v)
         if (inet_pton(AF_INET, a, bin) != 1 && inet_pton(AF_INET6, a, bin) != 1)
             return false;
     }
+    return true;
+}
+
+/* A Redis key namespace: 1-48 of A-Z a-z 0-9 . _ - (no ':' : it separates the key's parts). */
+static bool valid_namespace(const char *v)
+{
+    size_t n = strlen(v);
+    if (n == 0 || n > 48)
+        return false;
+    for (const char *p = v; *p; p++)
+        if (!isalnum((unsigned char)*p) && *p != '.' && *p != '_' && *p != '-')
+            return false;
     return true;
 }
 
@@ -291,11 +310,15 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
             return set_path(cfg->data_dir, sizeof cfg->data_dir, v);
         if (!strcmp(name, "tokens"))
             return set_path(cfg->tokens, sizeof cfg->tokens, v);
+        if (!strcmp(name, "redis-password-file"))
+            return set_path(cfg->redis_password_file, sizeof cfg->redis_password_file, v);
         return false;
     case K_STRING:
         for (const char *p = v; *p; p++)
             if ((unsigned char)*p < 0x20 || *p == 0x7f)
                 return false;
+        if (!strcmp(name, "redis-namespace"))
+            return valid_namespace(v) && set_path(cfg->redis_namespace, sizeof cfg->redis_namespace, v);
         if (!strcmp(name, "trusted-proxy"))
             return valid_address_list(v) &&
                    set_path(cfg->trusted_proxy, sizeof cfg->trusted_proxy, v);

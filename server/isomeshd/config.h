@@ -37,6 +37,8 @@ typedef struct ismd_config {
     char redis[300];          /* HOST:PORT of the shared cache (shared_cache.h); "" = none */
     double redis_lock_ttl_s;  /* lifetime of a computation's lock in Redis */
     bool cluster;             /* --cluster: one queue in Redis for every daemon (cluster.h) */
+    char redis_namespace[64]; /* keys start "<namespace>:v1:"; "" = isomesh */
+    char redis_password_file[4096]; /* AUTH with its first line; "" = none */
     ism_log_format log_format;
     char worker_path[4096];   /* the isomesh binary */
 } ismd_config;

@@ -171,7 +171,16 @@ static bool setup_cache(ismd_server *s, const ismd_config *cfg)
     ism_redis_settings rs = {.max_pending = DISK_WRITE_QUEUE, .max_entry = REDIS_MAX_ENTRY};
     if (!ism_redis_parse_address(cfg->redis, rs.host, &rs.port)) /* checked by config.c */
         return false;
+    snprintf(rs.namespace_, sizeof rs.namespace_, "%s", cfg->redis_namespace);
+    char err[600];
+    if (cfg->redis_password_file[0] &&
+        !ism_redis_load_password(cfg->redis_password_file, &rs, err, sizeof err)) {
+        ism_log_field f = ISM_LS("error", err);
+        ism_log_fields(ISM_LOG_ERROR, "redis_password_unusable", &f, 1);
+        return false;
+    }
     s->redis = ism_cache_redis_new(&rs);
+    explicit_bzero(rs.password, sizeof rs.password);
     if (!s->redis || !ism_cache_add_tier(&s->cache, s->redis))
         return false;
     s->metrics.redis = ism_cache_redis_counters(s->redis);
