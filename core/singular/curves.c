@@ -307,11 +307,21 @@ static void type_ends(ism_ctracer *tr, size_t first_curve)
     free(count);
 }
 
+static bool is_seed(const ism_lbox *b)
+{
+    return (b->flags & ISM_LBOX_PROJECTED) && b->rank == 2 && !(b->flags & ISM_LBOX_USED);
+}
+
 bool ism_sing_trace_curves(const ism_tape *f, const ism_locus_options *o, ism_locus *io,
                            ism_error *err)
 {
     if (!options_ok(o, err))
         return false;
+    size_t seeds = 0;
+    for (size_t b = 0; b < io->nboxes; b++)
+        seeds += is_seed(&io->boxes[b]);
+    if (seeds == 0)
+        return true; /* nothing to trace (a double sheet's 10⁵ rank-1 boxes: no index built) */
     ism_ctracer tr;
     tracer_init(&tr, o, io);
     tr.jet.f = f;
@@ -323,8 +333,7 @@ bool ism_sing_trace_curves(const ism_tape *f, const ism_locus_options *o, ism_lo
     size_t first_curve = io->ncurves;
     for (size_t b = 0; b < io->nboxes && !tr.stop && !tr.oom; b++) {
         ism_lbox *bx = &io->boxes[b];
-        if ((bx->flags & ISM_LBOX_PROJECTED) && bx->rank == 2 && !(bx->flags & ISM_LBOX_USED) &&
-            ism_ctracer_go(&tr))
+        if (is_seed(bx) && ism_ctracer_go(&tr))
             trace_seed(&tr, bx);
     }
     if (!tr.oom)

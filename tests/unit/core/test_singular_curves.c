@@ -13,6 +13,7 @@
 
 #include "core/eval/eval.h"
 #include "core/singular/curves.h"
+#include "core/singular/find.h"
 #include "core/util/sym3.h"
 
 #define DEPTH 6
@@ -988,6 +989,47 @@ Test(singular_curves, no_curve_where_there_is_none)
                          fx.l.npoints);
             for (size_t b = 0; b < fx.l.nboxes; b++)
                 cr_assert_not(fx.l.boxes[b].flags & ISM_LBOX_USED, "%s: box %zu", cases[i].expr, b);
+            teardown(&fx);
+        }
+}
+
+/* The same structures from the interval search's own candidate boxes (ism_locus_find) instead
+ * of the boxes made here: every rank-2 box it leaves is explained, and the counts are the
+ * closed forms' (derived in the tests above). */
+Test(singular_curves, from_the_interval_search)
+{
+    static const struct {
+        const char *expr;
+        double lo, hi;
+        size_t doubles, whiskers, pinch, triple, degenerate;
+    } cases[] = {
+        {"x^2 - y^2*z", -1, 1, 1, 1, 1, 0, 0},
+        {"4*x^2*(x^2 + y^2 + z^2 + z) + y^2*(y^2 + z^2 - 1)", -1.5, 1.5, 1, 3, 2, 0, 1},
+        {"x*y*z", -1, 1, 6, 0, 0, 1, 0},
+        {"(x^2 + y^2 - 0.25)^2 + z^2", -1, 1, 0, 1, 0, 0, 0},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++)
+        for (int s = 0; s < NSHIFTS; s++) {
+            fixture fx;
+            const double box[6] = {cases[i].lo, cases[i].lo, cases[i].lo, cases[i].hi, cases[i].hi, cases[i].hi};
+            double sh = setup(&fx, cases[i].expr, box, s);
+            ism_error err;
+            cr_assert(ism_locus_find(fx.t, &fx.o, &fx.l, &err), "%s", err.message);
+            run(&fx);
+            size_t kinds[2] = {0, 0};
+            for (size_t c = 0; c < fx.l.ncurves; c++)
+                kinds[fx.l.curves[c].kind]++;
+            cr_assert(kinds[ISM_CURVE_DOUBLE] == cases[i].doubles &&
+                          kinds[ISM_CURVE_WHISKER] == cases[i].whiskers,
+                      "%s, shift %g: %zu double, %zu whisker curves", cases[i].expr, sh,
+                      kinds[ISM_CURVE_DOUBLE], kinds[ISM_CURVE_WHISKER]);
+            cr_assert(count_points(&fx, ISM_SING_PINCH) == cases[i].pinch &&
+                          count_points(&fx, ISM_SING_TRIPLE) == cases[i].triple &&
+                          count_points(&fx, ISM_SING_DEGENERATE) == cases[i].degenerate &&
+                          fx.l.npoints == cases[i].pinch + cases[i].triple + cases[i].degenerate,
+                      "%s, shift %g: %zu points", cases[i].expr, sh, fx.l.npoints);
+            assert_boxes_used(&fx);
+            assert_all_steps(&fx);
             teardown(&fx);
         }
 }
