@@ -6,6 +6,9 @@
 
 #include <arpa/inet.h>
 #include <ctype.h>
+#include <errno.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -694,13 +697,34 @@ static void mhd_log(void *cls, const char *fmt, va_list ap)
     ism_logf(ISM_LOG_WARN, "http_library", "%s", msg);
 }
 
+/* Unsent bytes one connection may leave queued in the kernel: a send stops there, and the
+ * socket polls writable again only below it. Without a bound, autotuning lets every slow
+ * reader's socket take up to tcp_wmem's maximum (4 MB here) per send: 450 slow readers of a
+ * 7 MB mesh parked ~1.8 GB in the kernel (past the host's TCP memory-pressure mark) and the
+ * polling thread spent seconds copying it. Bytes in flight (the congestion window) are not
+ * limited by this, so fast clients on long links keep their speed. */
+#define NOTSENT_LOWAT (256u << 10)
+/* Connections the daemon holds at once (split evenly among the polling threads). */
+#define CONNECTION_LIMIT 4000u
+/* Kernel queue of connections not yet accepted (a burst of new clients waits here). */
+#define LISTEN_BACKLOG 1024u
+
+/* The thread model. libmicrohttpd's thread pool, each thread polling its share of the
+ * connections with poll(). Not epoll: in 0.9.75 (and upstream since), MHD_epoll() drains
+ * events in a loop `while (epoll_wait(.., 128, timeout) == 128)` with the same timeout on
+ * every call; when a call returns exactly 128 events and nothing new is pending, the next
+ * call sleeps (up to the connection timeout) with those 128 connections queued but not
+ * served. A burst of >= 128 ready connections met that (strace: epoll_wait = 128, 128,
+ * then a 2.9 s sleep until the clients gave up). poll() serves whatever is ready on every
+ * pass. Threads, not one loop: a connection in a long copy, or a pass over hundreds of
+ * ready connections, holds up only its thread's share. */
 bool ismd_http_start(ismd_server *s, int listen_fd)
 {
     s->listen_fd = listen_fd;
-    /* poll(), not epoll: libmicrohttpd 0.9.75's epoll loop stops answering after a burst of
-     * 128 or more simultaneous new connections (measured: 0 of 256 burst connections ever
-     * answered, wrk at 256 connections fell to ~300 req/s), while its poll loop serves them
-     * all (~40k req/s for a small body at 256 connections on 2 cores). */
+    unsigned lowat = NOTSENT_LOWAT; /* inherited by every accepted socket */
+    if (setsockopt(listen_fd, IPPROTO_TCP, TCP_NOTSENT_LOWAT, &lowat, sizeof lowat) != 0)
+        ism_logf(ISM_LOG_WARN, "socket_option", "TCP_NOTSENT_LOWAT: %s", strerror(errno));
+    unsigned threads = s->cfg->http_threads > 1 ? (unsigned)s->cfg->http_threads : 0;
     s->mhd = MHD_start_daemon(
         MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_POLL | MHD_ALLOW_SUSPEND_RESUME |
             MHD_USE_ERROR_LOG,
@@ -710,10 +734,12 @@ bool ismd_http_start(ismd_server *s, int listen_fd)
         MHD_OPTION_NOTIFY_COMPLETED, on_completed, s,
         MHD_OPTION_UNESCAPE_CALLBACK, unescape, s,
         MHD_OPTION_CONNECTION_TIMEOUT, s->cfg->conn_timeout_s,
-        MHD_OPTION_CONNECTION_LIMIT, (unsigned)4000,
+        MHD_OPTION_CONNECTION_LIMIT, CONNECTION_LIMIT,
         MHD_OPTION_PER_IP_CONNECTION_LIMIT, (unsigned)s->cfg->client_conns,
-        MHD_OPTION_LISTEN_BACKLOG_SIZE, (unsigned)1024,
+        MHD_OPTION_LISTEN_BACKLOG_SIZE, LISTEN_BACKLOG,
         MHD_OPTION_SIGPIPE_HANDLED_BY_APP, 1,
+        /* one thread: no pool (libmicrohttpd warns about a pool of one) */
+        threads ? MHD_OPTION_THREAD_POOL_SIZE : MHD_OPTION_END, threads,
         MHD_OPTION_END);
     if (!s->mhd) {
         ism_logf(ISM_LOG_ERROR, "http_start_failed", "libmicrohttpd did not start");

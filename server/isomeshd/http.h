@@ -1,11 +1,12 @@
 /* http.h — isomeshd's HTTP front: the server state every route sees, the per-request context,
- * libmicrohttpd set-up (one internal polling thread, suspend/resume), the request life cycle
+ * libmicrohttpd set-up (--http-threads polling threads, suspend/resume), the request life cycle
  * (first call: route, 413/415 checks; body calls; answer on a later call), and the response
  * helpers that add the common headers, record the status for the log and the metrics.
  *
  * A request that needs a computation joins or starts a flight (sched.h) and suspends its
  * connection; the flight's end resumes it and the handler's next call answers. Nothing in the
- * MHD thread ever blocks on a worker. */
+ * MHD threads ever blocks on a worker. Handlers run on any of the polling threads at once:
+ * what they share is behind the scheduler lock, the cache tiers' locks or atomics. */
 #ifndef ISMD_HTTP_H
 #define ISMD_HTTP_H
 
