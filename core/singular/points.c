@@ -9,6 +9,7 @@
 #include "core/util/clock.h"
 #include "core/util/sym3.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -415,6 +416,19 @@ static void settle_boxes(ism_locus *l, const uint32_t *label, const uint8_t *clu
     l->nboxes = n;
 }
 
+/* Deadline or cancel: the points found so far are kept, the rest is reported missing. */
+static bool out_of_time(const ism_locus_options *o, ism_locus *l)
+{
+    bool stop = (o->cancel && *o->cancel) || (o->deadline_ms > 0 && ism_now_ms() > o->deadline_ms);
+    if (stop && !l->incomplete) {
+        l->incomplete = true;
+        snprintf(l->incomplete_why, sizeof l->incomplete_why, "%s",
+                 o->cancel && *o->cancel ? "cancelled during the singular-point certification"
+                                         : "deadline reached during the singular-point certification");
+    }
+    return stop;
+}
+
 static bool run(ctx *x, const ism_locus_options *o)
 {
     ism_locus *l = x->out;
@@ -427,10 +441,10 @@ static bool run(ctx *x, const ism_locus_options *o)
     bool ok = label && box_fate && fate;
     if (ok)
         gather(l, label, ci, nclusters);
-    for (size_t i = 0; ok && i < n; i++)
+    for (size_t i = 0; ok && i < n && !out_of_time(o, l); i++)
         if (l->boxes[i].flags & ISM_LBOX_UNIQUE)
             ok = from_unique_box(x, i, box_fate);
-    for (size_t c = 0; ok && c < nclusters; c++)
+    for (size_t c = 0; ok && c < nclusters && !out_of_time(o, l); c++)
         if (ci[c].projected)
             ok = from_cluster(x, &ci[c], (uint32_t)c, label, &fate[c]);
     ok = ok && publish(x);

@@ -31,7 +31,9 @@
 
 /* Adds the points found from out->boxes (the search's output for the same f and o) to
  * out->points, sorted by position (z, y, x), and updates the boxes as described above.
- * Adds its time and Hessian evaluations to out. False only when out of memory. */
+ * Adds its time and Hessian evaluations to out. Past o->deadline_ms or with *o->cancel set it
+ * stops between candidates, keeps what it found and sets out->incomplete. False only when
+ * out of memory. */
 bool ism_sing_points(const ism_tape *f, const ism_locus_options *o, ism_locus *out,
                      ism_error *err);
 
