@@ -121,8 +121,10 @@ void cf_polyline_free(cf_polyline *pl)
     memset(pl, 0, sizeof *pl);
 }
 
-double cf_polyline_nearest(const cf_polyline *pl, const double q[3], double within, double *s,
-                           double foot[3])
+/* The nearest point of the segments filed in the cells within `within` of q (INFINITY when
+ * none lies that close). */
+static double nearest_within(const cf_polyline *pl, const double q[3], double within, double *s,
+                             double foot[3])
 {
     double lo[3], hi[3];
     for (int k = 0; k < 3; k++) {
@@ -165,4 +167,17 @@ double cf_polyline_nearest(const cf_polyline *pl, const double q[3], double with
             }
     best = sqrt(best);
     return best <= within ? best : INFINITY;
+}
+
+double cf_polyline_nearest(const cf_polyline *pl, const double q[3], double within, double *s,
+                           double foot[3])
+{
+    /* widening searches: a point found within w is the nearest of all (every segment within
+     * w was seen), so a far `within` costs only where nothing is near */
+    for (double w = pl->step; w < within; w *= 2) {
+        double d = nearest_within(pl, q, w, s, foot);
+        if (isfinite(d))
+            return d;
+    }
+    return nearest_within(pl, q, within, s, foot);
 }

@@ -391,5 +391,6 @@ bool cf_cut_clean(cf_ctx *c, cf_tri_pred pred, const void *arg, double *radius,
         free(*removed);
         cf_loops_free(ls);
         *radius *= GROW;
+        c->st->cuts_widened++;
     }
 }

@@ -26,7 +26,6 @@ typedef struct cf_ctx {
                                the adjacent triangles at the end) */
     size_t cap_singular;
     double cell;            /* finest octree cell: the scale of the surgery */
-    double diag;            /* box diagonal */
     ism_conform_stats *st;
 } cf_ctx;
 
@@ -151,7 +150,8 @@ bool cf_conform_point(cf_run *r, size_t i);
 bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n);
 
 /* ---- conform_artefacts.c ---- */
-bool cf_count_artefacts(const ism_mesh *m, const ism_locus *l, double tol, size_t *edges,
-                        size_t *verts, ism_error *err);
+/* Non-manifold edges and points of m off the locus l (check.h's rule). */
+bool cf_count_artefacts(const ism_mesh *m, const ism_locus *l, const double box[6],
+                        size_t *edges, size_t *verts, ism_error *err);
 
 #endif

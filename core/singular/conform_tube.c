@@ -17,6 +17,7 @@ typedef struct tube {
     const cf_polyline *pl;
     size_t n;
     double r;
+    double lo[3], hi[3]; /* the curves' bounding box */
 } tube;
 
 static double d2(const double *a, const double *b)
@@ -31,6 +32,22 @@ static bool tri_in_tube(const cf_ctx *c, uint32_t t, const void *arg)
     const uint32_t *v = c->m->tri + 3 * (size_t)t;
     const double *a = c->m->pos + 3 * (size_t)v[0], *b = c->m->pos + 3 * (size_t)v[1],
                  *d = c->m->pos + 3 * (size_t)v[2];
+    /* first a cheap test: nothing of the triangle is nearer than its centroid's distance
+     * less its longest reach from the centroid */
+    double g[3], reach = 0;
+    for (int k = 0; k < 3; k++)
+        g[k] = (a[k] + b[k] + d[k]) / 3;
+    reach = sqrt(fmax(d2(a, g), fmax(d2(b, g), d2(d, g))));
+    for (int k = 0; k < 3; k++)
+        if (g[k] + reach < tb->lo[k] - tb->r || g[k] - reach > tb->hi[k] + tb->r)
+            return false;
+    double dg = INFINITY;
+    for (size_t i = 0; i < tb->n; i++)
+        dg = fmin(dg, cf_polyline_nearest(&tb->pl[i], g, tb->r + reach, NULL, NULL));
+    if (dg <= tb->r)
+        return true;
+    if (!isfinite(dg))
+        return false;
     /* the corners, the edge midpoints and the centroid: a triangle the curve passes through
      * has one of them within half its longest edge of the curve */
     double q[7][3];
@@ -174,7 +191,14 @@ bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
     double r0 = CF_RHO_CELLS * c->cell, longest = 0;
     for (size_t k = 0; k < g.n; k++)
         longest = fmax(longest, longest_edge_near_curve(c, &g.pl[k], r0));
-    tube tb = {g.pl, g.n, fmax(r0, CF_RHO_EDGES * longest)};
+    tube tb = {g.pl, g.n, fmax(r0, CF_RHO_EDGES * longest), {INFINITY, INFINITY, INFINITY},
+               {-INFINITY, -INFINITY, -INFINITY}};
+    for (size_t k = 0; k < g.n; k++)
+        for (size_t i = 0; i < g.npts[k]; i++)
+            for (int j = 0; j < 3; j++) {
+                tb.lo[j] = fmin(tb.lo[j], g.pts[k][3 * i + j]);
+                tb.hi[j] = fmax(tb.hi[j], g.pts[k][3 * i + j]);
+            }
     size_t nt0 = c->m->ntris, nv0 = c->m->nverts, nrm = 0;
     uint32_t *rm = NULL;
     cf_loops ls = {0};

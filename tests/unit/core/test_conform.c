@@ -86,6 +86,8 @@ static void run(const ism_tape *t, const double box[6], int dmax, ism_locus *l,
     o.max_depth = dmax;
     ism_error err;
     cr_assert(ism_conform_mesh(t, &o, l, m, &r->st, &err), "conform: %s", err.message);
+    cr_assert(ism_conform_count_artefacts(m, l, box, &r->st, &err), "artefacts: %s",
+              err.message);
     ism_analysis_options ao;
     ism_analysis_options_default(&ao);
     ao.curvature = ao.accuracy = false;
