@@ -6,7 +6,10 @@
  * by less than CTRACE_TURN_MAX and the normal-plane Hessian does not collapse. Near a point
  * where it does (a triple point: every branch's Hessian → 0 linearly), its largest
  * eigenvalue σ extrapolates linearly to 0 at distance d; steps are capped at d/2, so the
- * walk closes in geometrically and stops when d is below CTRACE_DEG_STOP_REL × diagonal. */
+ * walk closes in geometrically and stops when d is below CTRACE_DEG_STOP_REL × diagonal. The
+ * smaller eigenvalue is approached the same way, then stepped across: a sign change of the
+ * determinant is a pinch point; none (it touched 0: two whiskers crossing, z² + x²y²) is a
+ * point where the Hessian degenerates, ended at like a collapse. */
 #include "core/singular/curve_trace.h"
 
 #include <stdlib.h>
@@ -38,6 +41,15 @@
 /* The approach to a collapse stops when the extrapolated distance is below this × box
  * diagonal (a tenth of the promised 1e-9), and the point is placed there. */
 #define CTRACE_DEG_STOP_REL 1e-10
+
+/* The normal Hessian's smaller eigenvalue μ is approached until it is below this fraction of
+ * the larger (or its zero extrapolates within the stop distance), then stepped across: D
+ * changes sign (a pinch, located by regula falsi) or not (μ touched 0: where branches meet,
+ * as two whiskers crossing in z² + x²y², or where the curve's transversal structure
+ * degenerates). 1e-12 keeps 10⁴ above μ's rounding noise (~1e-16 of the Hessian), and a
+ * touch (μ ~ s²) is then 1e-6 of the curve's scale away, where extrapolating √μ errs by
+ * ~1e-12. */
+#define CTRACE_MU_BAND 1e-12
 
 /* When steps keep failing this close (× diagonal) to an extrapolated collapse, rounding has
  * won: the collapse point is placed at the extrapolation, its radius the distance. */
@@ -200,6 +212,19 @@ static bool pinch(ism_ctracer *tr, ism_cpath *path, const ism_cpoint *cur, ism_c
     return true;
 }
 
+/* Where a quantity falling from a to b over a step extrapolates linearly to 0 (∞ when it
+ * does not fall). */
+static double zero_ahead(double a, double b, double step)
+{
+    return b < a ? b * step / (a - b) : INFINITY;
+}
+
+/* The smaller eigenvalue of the normal-plane Hessian, in magnitude. */
+static double mu_small(const ism_cpoint *c)
+{
+    return c->sigma > 0 ? fabs(c->D) / c->sigma : 0.0;
+}
+
 void ism_ctrace(ism_ctracer *tr, const ism_cpoint *start, int ignore, bool closable,
                 ism_cpath *path)
 {
@@ -210,15 +235,23 @@ void ism_ctrace(ism_ctracer *tr, const ism_cpoint *start, int ignore, bool closa
     path->end_point = -1;
     if (!push(tr, path, cur.p, cur.D, -1))
         return;
-    double h = tr->hmax, dcol = INFINITY; /* step; extrapolated distance to a collapse */
+    /* step; extrapolated distances to a collapse of the normal Hessian and to a zero of its
+     * smaller eigenvalue; probing: this step crosses that zero to see whether D changes
+     * sign, the zero being dprobe ahead of cur */
+    double h = tr->hmax, dcol = INFINITY, dmin = INFINITY, dprobe = 0.0;
+    bool probing = false;
     while (ism_ctracer_go(tr)) {
         int iters = CTRACE_NEWTON_IT;
         if (!attempt(tr, &cur, h, &nxt, &iters)) {
+            if (probing) { /* cannot step past it: the Hessian degenerates there */
+                end_at_collapse(tr, path, &cur, dprobe);
+                return;
+            }
             h *= 0.5;
             if (h >= tr->hmin)
                 continue;
-            if (dcol <= CTRACE_DEG_GIVEUP_REL * tr->diag)
-                end_at_collapse(tr, path, &cur, dcol);
+            if (fmin(dcol, dmin) <= CTRACE_DEG_GIVEUP_REL * tr->diag)
+                end_at_collapse(tr, path, &cur, fmin(dcol, dmin));
             return; /* else: lost (no convergence) */
         }
         bool leaving = !ism_ctracer_inside(tr, nxt.p);
@@ -226,10 +259,14 @@ void ism_ctrace(ism_ctracer *tr, const ism_cpoint *start, int ignore, bool closa
             path->end_type = ISM_END_BOX; /* runs along the face: ends at its last point inside */
             return;
         }
-        bool nxt_done = false;
-        if ((cur.D * nxt.D < 0 || (nxt.D == 0.0 && cur.D != 0.0)) &&
-            !pinch(tr, path, &cur, &nxt, &ignore, &nxt_done))
+        bool nxt_done = false, pinched = cur.D * nxt.D < 0 || (nxt.D == 0.0 && cur.D != 0.0);
+        if (pinched && !pinch(tr, path, &cur, &nxt, &ignore, &nxt_done))
             return;
+        if (probing && !pinched) { /* the eigenvalue touched 0 and came back: no pinch */
+            end_at_collapse(tr, path, &cur, dprobe);
+            return;
+        }
+        probing = false;
         int j = ism_cevent_hit_point(tr, path->v[path->n - 1].p, nxt.p, ignore);
         if (j >= 0) {
             end_at(tr, path, j);
@@ -249,13 +286,24 @@ void ism_ctrace(ism_ctracer *tr, const ism_cpoint *start, int ignore, bool closa
             return;
         }
         double step = ism_dist3(cur.p, nxt.p);
-        dcol = nxt.sigma < cur.sigma ? nxt.sigma * step / (cur.sigma - nxt.sigma) : INFINITY;
+        dcol = zero_ahead(cur.sigma, nxt.sigma, step);
+        dmin = pinched ? INFINITY : zero_ahead(mu_small(&cur), mu_small(&nxt), step);
         if (dcol <= CTRACE_DEG_STOP_REL * tr->diag) {
             end_at_collapse(tr, path, &nxt, dcol);
             return;
         }
         h = iters <= CTRACE_EASY_IT ? h * CTRACE_GROW : iters >= CTRACE_HARD_IT ? h * CTRACE_SHRINK : h;
-        h = fmin(fmin(h, tr->hmax), 0.5 * dcol);
+        h = fmin(fmin(h, tr->hmax), 0.5 * fmin(dcol, dmin));
+        double mc = mu_small(&cur), mn = mu_small(&nxt);
+        if (!pinched && mn < mc &&
+            (mn <= CTRACE_MU_BAND * nxt.sigma || dmin <= CTRACE_DEG_STOP_REL * tr->diag)) {
+            /* a pinch (D changes sign) or a touch (it does not)? √μ extrapolates to the zero
+             * exactly where μ is quadratic (a touch), to twice its distance where linear (a
+             * pinch): stepping 2× that lands beyond it either way, out of the noise */
+            probing = true;
+            dprobe = zero_ahead(sqrt(mc), sqrt(mn), step);
+            h = 2.0 * dprobe + tr->jet.tol;
+        }
         cur = nxt;
     }
 }

@@ -18,9 +18,11 @@
  *     a curve changing kind is split at the pinch point between (located to 1e-10 ×
  *     diagonal), which is added to io->points as ISM_SING_PINCH, uncertified;
  *   - ends: BOX (the last point exactly on the box's face), closed loops (closed = true),
- *     PINCH, TRIPLE (where ≥ 3 branches end at a collapse of the Hessian: the point is added
- *     once as ISM_SING_TRIPLE, or an existing point there is retyped so), POINT (an existing
- *     point, or a collapse point where < 3 branches end, added as ISM_SING_DEGENERATE), LOST.
+ *     PINCH, TRIPLE (where ≥ 3 branches end at a point where the Hessian across the curve
+ *     degenerates — rank 0 as at xyz = 0's origin, or rank 1 without a pinch as where two
+ *     whiskers cross in z² + x²y² —: added once as ISM_SING_TRIPLE within 1e-9 × diagonal,
+ *     or an existing point there retyped so), POINT (an existing point, or such a point where
+ *     < 3 branches end, added as ISM_SING_DEGENERATE), LOST.
  * Boxes the curves and their points explain are marked ISM_LBOX_USED (any rank: those the
  * polylines pass through, and those whose q lies within 1/16 cell of one). Seeds whose q
  * does not lead onto a curve of the zero set inside the box (|f| not ~0, an isolated

@@ -738,6 +738,71 @@ static void cover_lines(fixture *fx, const double dirs[3][3], double reach)
         }
 }
 
+/* Whiskers meeting where the Hessian keeps rank 1. f = L² + (A·B)² with the plane L = z − 0.3x
+ * + 0.2y = 0 and the planes A = x + 0.1y, B = y − 0.2x + 0.1z: f = 0 on the two lines L = A = 0
+ * (direction (−0.1, 1, −0.23)) and L = B = 0 (direction (1, 0.17/0.98, 0.3 − 0.2·0.17/0.98)),
+ * whiskers (f ≥ 0). On one line the Hessian across is 2∇L∇Lᵀ + 2B²∇A∇Aᵀ: its second
+ * eigenvalue vanishes like the square of the distance to 0, where the other line crosses
+ * (four branches: a triple point, though the Hessian has rank 1 there). Then z² + y²(x² + y²):
+ * the x axis only (∇f = (2xy², 2x²y + 4y³, 2z)), the Hessian across diag(2x², 2) degenerate
+ * at 0 with one branch through: a degenerate point splitting the whisker, not a triple point. */
+Test(singular_curves, whiskers_meeting_where_the_hessian_has_rank_one)
+{
+    static const double box[6] = {-1, -1, -1, 1, 1, 1};
+    static const double origin[3] = {0, 0, 0};
+    double m = 0.17 / 0.98, dirs[3][3] = {{-0.1, 1, -0.23}, {1, m, 0.3 - 0.2 * m}, {0, 0, 0}};
+    for (int k = 0; k < 2; k++) {
+        double l = hypot(dirs[k][0], hypot(dirs[k][1], dirs[k][2]));
+        for (int c = 0; c < 3; c++)
+            dirs[k][c] /= l;
+    }
+    dirs[2][0] = dirs[0][1] * dirs[1][2] - dirs[0][2] * dirs[1][1]; /* a third direction, */
+    dirs[2][1] = dirs[0][2] * dirs[1][0] - dirs[0][0] * dirs[1][2]; /* on no curve */
+    dirs[2][2] = dirs[0][0] * dirs[1][1] - dirs[0][1] * dirs[1][0];
+    for (int s = 0; s < NSHIFTS; s++) {
+        fixture fx;
+        double sh = setup(&fx, "(z - 0.3*x + 0.2*y)^2 + ((x + 0.1*y)*(y - 0.2*x + 0.1*z))^2", box, s);
+        double two[3][3];
+        memcpy(two, dirs, sizeof two);
+        memcpy(two[2], dirs[0], sizeof two[2]); /* seed the two lines only */
+        cover_lines(&fx, two, 2);
+        run(&fx);
+        double tol = ON_LOCUS * fx.diag;
+        cr_assert_eq(fx.l.npoints, 1, "shift %g: %zu points", sh, fx.l.npoints);
+        int tp = point_at(&fx, ISM_SING_TRIPLE, origin, tol);
+        cr_assert_eq(tp, 0, "shift %g: %s at %g %g %g", sh, ism_sing_type_name(fx.l.points[0].type),
+                     fx.l.points[0].p[0], fx.l.points[0].p[1], fx.l.points[0].p[2]);
+        cr_assert_eq(fx.l.ncurves, 4, "shift %g: %zu curves", sh, fx.l.ncurves);
+        int seen = 0;
+        for (size_t i = 0; i < 4; i++) {
+            const ism_sing_curve *c = &fx.l.curves[i];
+            axis_part a = line_summary(c, dirs);
+            cr_assert(c->kind == ISM_CURVE_WHISKER && ends_are(c, ISM_END_TRIPLE, ISM_END_BOX),
+                      "shift %g: curve %zu", sh, i);
+            cr_assert_lt(a.axis, 2);
+            cr_assert_leq(a.off, tol, "shift %g: curve %zu %g off its line", sh, i, a.off);
+            seen |= 1 << (2 * a.axis + (a.sign > 0));
+        }
+        cr_assert_eq(seen, 15, "shift %g", sh);
+        assert_boxes_used(&fx);
+        assert_all_steps(&fx);
+        teardown(&fx);
+
+        sh = setup(&fx, "z^2 + y^2*(x^2 + y^2)", box, s);
+        cover(&fx, x_axis, NULL, -2, 2, 1);
+        run(&fx);
+        cr_assert_eq(fx.l.npoints, 1, "shift %g: %zu points", sh, fx.l.npoints);
+        cr_assert_eq(point_at(&fx, ISM_SING_DEGENERATE, origin, tol), 0, "shift %g", sh);
+        cr_assert_eq(fx.l.ncurves, 2, "shift %g: %zu curves", sh, fx.l.ncurves);
+        for (size_t i = 0; i < 2; i++) {
+            const ism_sing_curve *c = &fx.l.curves[i];
+            cr_assert(c->kind == ISM_CURVE_WHISKER && ends_are(c, ISM_END_POINT, ISM_END_BOX));
+            cr_assert_leq(axis_summary(c).off, tol);
+        }
+        teardown(&fx);
+    }
+}
+
 /* Steiner's Roman surface x²y² + y²z² + z²x² + xyz. On the x axis the Hessian across is
  * [[2x², x], [x, 2x²]]: eigenvalues 2x² ± x, indefinite for |x| < 1/2 (a double line), definite
  * beyond (a whisker), one eigenvalue crossing 0 at x = ±1/2 (pinch points); it vanishes at
