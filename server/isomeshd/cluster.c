@@ -23,6 +23,7 @@
 #define CJ_TICK_NS 20000000LL        /* a taken entry's task checks for its flight's end */
 #define HEARTBEAT_MAX_NS 500000000LL /* and heart-beats (progress too) at least this often */
 #define STATE_TTL_MS "3600000"       /* a job hash outlives its last change by an hour */
+#define DEPTH_TICK_NS 1000000000LL   /* the service-wide queue depth is counted this often */
 
 /* ---- scripts ------------------------------------------------------------------------- */
 
@@ -94,6 +95,16 @@ static const char TAKE_LUA[] =
     "end "
     "return false";
 
+/* KEYS users; ARGV stream prefix. Entries waiting (not yet taken) over every user's stream. */
+static const char DEPTH_LUA[] =
+    "local n = 0 "
+    "for _, u in ipairs(redis.call('smembers', KEYS[1])) do "
+    "  local s = ARGV[1] .. u "
+    "  if redis.call('exists', s) == 1 then "
+    "    n = n + redis.call('xlen', s) - redis.call('xpending', s, 'workers')[1] end "
+    "end "
+    "return n";
+
 /* KEYS stream, job hash; ARGV consumer, id, progress, ttl. 1: still ours (idle time reset,
  * progress published); 0: taken over by another daemon, or canceled (then acknowledged). */
 static const char HEARTBEAT_LUA[] =
@@ -133,6 +144,7 @@ struct ismd_cluster {
     long ttl_ms;               /* a silent daemon's entries are re-claimed after this */
     int user_jobs, user_running;
     unsigned long turn;        /* rotates the order among users with equal load */
+    long long depth_at_ns;     /* when to count the service-wide queue next */
     ism_redis_task take;
 };
 
@@ -455,6 +467,21 @@ static int take_one(ismd_cluster *c)
     return got;
 }
 
+/* Publishes how many entries wait in the whole service (isomesh_cluster_queue_depth). */
+static void count_waiting(ismd_cluster *c)
+{
+    char users[KEY_MAX], streams[KEY_MAX];
+    ckey(c, users, "users", "");
+    ckey(c, streams, "q:", "");
+    const char *args[] = {users, streams};
+    redisReply *r = NULL;
+    if (run_script(c, "cluster_depth", DEPTH_LUA, 1, args, 2, &r) < 0)
+        return;
+    if (r->type == REDIS_REPLY_INTEGER)
+        atomic_store(&c->sched->metrics->cluster_queue_depth, r->integer);
+    freeReplyObject(r);
+}
+
 static long long take_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
 {
     ismd_cluster *c = (ismd_cluster *)((char *)base - offsetof(ismd_cluster, take));
@@ -469,7 +496,12 @@ static long long take_run(ism_redis_task *base, ism_cache_tier *t, bool stopping
          i++)
         if (take_one(c) <= 0)
             break;
-    return ism_now_ns() + TAKE_TICK_NS;
+    long long now = ism_now_ns();
+    if (now >= c->depth_at_ns && ism_cache_redis_up(t)) {
+        c->depth_at_ns = now + DEPTH_TICK_NS;
+        count_waiting(c);
+    }
+    return now + TAKE_TICK_NS;
 }
 
 ismd_cluster *ismd_cluster_start(ismd_shared *sh, ismd_sched *sched, ism_cache_tier *redis,

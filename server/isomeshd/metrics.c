@@ -309,6 +309,9 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
     emit(&o, "isomesh_log_lines_dropped_total %llu\n", ism_log_dropped());
 
     gauge(&o, "isomesh_queue_depth", "Computations waiting for a worker.", m->queue_depth);
+    gauge(&o, "isomesh_cluster_queue_depth",
+          "--cluster: computations waiting in the whole service's queue (Redis), counted "
+          "every second.", m->cluster_queue_depth);
     gauge(&o, "isomesh_queue_capacity", "Most computations that may wait.", m->queue_capacity);
     gauge(&o, "isomesh_workers", "Worker process slots.", m->workers_total);
     gauge(&o, "isomesh_workers_ready", "Workers running and ready.", m->workers_ready);

@@ -58,6 +58,7 @@ typedef struct ismd_metrics {
     atomic_ullong rejected_queue_full, rejected_client_limit, rejected_unauthorized;
     /* gauges */
     atomic_llong queue_depth, queue_capacity;
+    atomic_llong cluster_queue_depth;        /* --cluster: entries waiting in the whole service */
     atomic_llong workers_total, workers_ready, workers_busy;
     atomic_llong jobs_active, event_streams, suspended_connections;
     struct ism_redis_counters *redis;        /* the shared tier's figures (NULL: no --redis) */

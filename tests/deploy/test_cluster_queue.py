@@ -125,6 +125,27 @@ class ClusterQueueTest(unittest.TestCase):
             self.assertEqual(again.status, 200)
             self.assertEqual(again.body, r.body)
 
+    def test_the_service_wide_queue_depth_is_published_by_every_daemon(self):
+        s = stack.Stack(n=2, daemon_args=("--cluster", "--workers", "1"), with_nginx=False).start()
+        try:
+            a, b = s.daemons
+            blockers = [a.post("/v1/jobs", slow_work(500 + i)).json() for i in range(2)]
+            self.assertTrue(stack.wait_until(
+                lambda: sum(d.metric("isomesh_workers_busy") for d in s.daemons) == 2, 30))
+            waiting = [a.post("/v1/jobs", work(510 + i)).json() for i in range(3)]
+            for d in s.daemons:  # counted every second while both workers are held
+                self.assertTrue(stack.wait_until(
+                    lambda: d.metric("isomesh_cluster_queue_depth") == 3, 5), d.metric(
+                        "isomesh_cluster_queue_depth"))
+                self.assertEqual(d.metric("isomesh_queue_depth"), 0)  # nothing waits locally
+            for j in blockers + waiting:
+                self.assertEqual(wait_job(a, j)["state"], "done")
+            for d in s.daemons:
+                self.assertTrue(stack.wait_until(
+                    lambda: d.metric("isomesh_cluster_queue_depth") == 0, 5))
+        finally:
+            self.assertEqual(s.cleanup(), [], "sanitizer reports")
+
     def test_a_job_is_seen_through_any_daemon_even_after_its_daemon_died(self):
         s = stack.Stack(n=2, daemon_args=("--cluster", "--workers", "1", "--redis-lock-ttl", "1s"),
                         with_nginx=False).start()
