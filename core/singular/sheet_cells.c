@@ -30,6 +30,8 @@
  * |f(c)| ≤ spread exactly, so excluding only past (1 + 1e-6)·spread keeps every such node
  * while the spurious ones (|f(c)| several times the spread) still go. */
 #define SC_MEAN_VALUE_SLACK 1e-6
+/* Blocks of given cells per task (ism_sheet_cells_filter). */
+#define SC_GIVEN_CHUNK 64
 /* Kinks in one box up to which each choice of branches is tried (2^3 evaluations). */
 #define SC_MAX_FORCED_KINKS 3
 /* Gradients remembered per thread (direct-mapped by lattice point, 1 MiB): neighbouring
@@ -60,10 +62,18 @@ typedef struct sc_task {
     uint64_t intervals, gradient_boxes, zero_cells, points, gradients;
 } sc_task;
 
+/* A block of the lattice (level depth - 1) and which of its eight cells were given. */
+typedef struct sc_given {
+    uint64_t key;  /* lattice key of its lowest corner */
+    uint8_t mask;
+} sc_given;
+
 typedef struct sc_run {
     const ism_sheet_cells_params *p;
     sc_thread *threads;
-    sc_node *roots;
+    sc_node *roots;           /* the task roots of a search, or */
+    sc_given *blocks;         /* the blocks of given cells, SC_GIVEN_CHUNK a task */
+    size_t nblocks;
     sc_task *tasks;
     atomic_size_t kept;       /* cells listed so far, all tasks (the budget) */
     atomic_int status;        /* first enum ism_sc_status other than OK */
@@ -414,27 +424,83 @@ static bool join_tasks(sc_run *r, size_t ntasks, ism_sheet_cells *out)
     return true;
 }
 
+/* Runs ntasks tasks of fn over r (roots or given blocks set by the caller) and joins their
+ * cells into out. */
+static enum ism_sc_status run_all(sc_run *r, size_t ntasks, void (*fn)(void *, size_t, int),
+                                  ism_sheet_cells *out)
+{
+    const ism_sheet_cells_params *p = r->p;
+    atomic_init(&r->kept, 0);
+    atomic_init(&r->status, ISM_SC_OK);
+    r->threads = make_threads(p);
+    r->tasks = calloc(ntasks ? ntasks : 1, sizeof *r->tasks);
+    if (r->threads && r->tasks)
+        ism_parallel_for(p->threads, ntasks, fn, r);
+    else
+        stop(r, ISM_SC_NO_MEMORY);
+    if (r->tasks && !join_tasks(r, ntasks, out))
+        stop(r, ISM_SC_NO_MEMORY);
+    for (size_t i = 0; r->tasks && i < ntasks; i++)
+        free(r->tasks[i].cells);
+    free(r->tasks);
+    free_threads(r->threads, p->threads);
+    return (enum ism_sc_status)atomic_load(&r->status);
+}
+
 enum ism_sc_status ism_sheet_cells_find(const ism_sheet_cells_params *p, ism_sheet_cells *out)
 {
     memset(out, 0, sizeof *out);
     int top = p->grid->depth - 1 < SC_TOP_LEVEL ? p->grid->depth - 1 : SC_TOP_LEVEL;
     sc_node roots[1 << (3 * SC_TOP_LEVEL)];
-    sc_run r = {.p = p};
-    atomic_init(&r.kept, 0);
-    atomic_init(&r.status, ISM_SC_OK);
-    size_t ntasks = make_roots(top, p->grid, roots);
-    r.roots = roots;
-    r.threads = make_threads(p);
-    r.tasks = calloc(ntasks, sizeof *r.tasks);
-    if (r.threads && r.tasks)
-        ism_parallel_for(p->threads, ntasks, run_task, &r);
-    else
-        stop(&r, ISM_SC_NO_MEMORY);
-    if (r.tasks && !join_tasks(&r, ntasks, out))
-        stop(&r, ISM_SC_NO_MEMORY);
-    for (size_t i = 0; r.tasks && i < ntasks; i++)
-        free(r.tasks[i].cells);
-    free(r.tasks);
-    free_threads(r.threads, p->threads);
-    return (enum ism_sc_status)atomic_load(&r.status);
+    sc_run r = {.p = p, .roots = roots};
+    return run_all(&r, make_roots(top, p->grid, roots), run_task, out);
+}
+
+static void given_task(void *ctx, size_t task, int thread)
+{
+    sc_run *r = ctx;
+    size_t end = (task + 1) * SC_GIVEN_CHUNK < r->nblocks ? (task + 1) * SC_GIVEN_CHUNK
+                                                          : r->nblocks;
+    if (!keep_going(r))
+        return;
+    for (size_t i = task * SC_GIVEN_CHUNK; i < end; i++) {
+        sc_node nd = {{0, 0, 0}, r->p->grid->depth - 1};
+        ism_lkey_unpack(r->blocks[i].key, nd.org);
+        if (!filter_block(r, &r->threads[thread], &nd, r->p->f, r->blocks[i].mask,
+                          &r->tasks[task]))
+            return;
+    }
+}
+
+static int cmp_block(const void *a, const void *b)
+{
+    const sc_given *x = a, *y = b;
+    return (x->key > y->key) - (x->key < y->key);
+}
+
+enum ism_sc_status ism_sheet_cells_filter(const ism_sheet_cells_params *p, const uint64_t *cells,
+                                          size_t n, ism_sheet_cells *out)
+{
+    memset(out, 0, sizeof *out);
+    sc_given *b = malloc((n ? n : 1) * sizeof *b);
+    if (!b)
+        return ISM_SC_NO_MEMORY;
+    const uint64_t even = ~(((uint64_t)1 << (2 * ISM_LKEY_BITS)) | ((uint64_t)1 << ISM_LKEY_BITS) | 1);
+    for (size_t i = 0; i < n; i++) { /* the block (level depth - 1) and child of each cell */
+        int32_t v[3];
+        ism_lkey_unpack(cells[i], v);
+        b[i] = (sc_given){cells[i] & even, (uint8_t)(1u << ((v[0] & 1) | (v[1] & 1) << 1 | (v[2] & 1) << 2))};
+    }
+    qsort(b, n, sizeof *b, cmp_block);
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (m && b[m - 1].key == b[i].key)
+            b[m - 1].mask |= b[i].mask;
+        else
+            b[m++] = b[i];
+    }
+    sc_run r = {.p = p, .blocks = b, .nblocks = m};
+    enum ism_sc_status st = run_all(&r, (m + SC_GIVEN_CHUNK - 1) / SC_GIVEN_CHUNK, given_task, out);
+    free(b);
+    return st;
 }

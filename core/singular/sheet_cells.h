@@ -39,4 +39,10 @@ typedef struct ism_sheet_cells {
  * Free out->cells with free(). */
 enum ism_sc_status ism_sheet_cells_find(const ism_sheet_cells_params *p, ism_sheet_cells *out);
 
+/* The same filter (without the octree) on n given finest cells (lattice keys, any order,
+ * no duplicates), for instance the candidates an earlier interval search kept: lists those
+ * that pass, grouped by block. */
+enum ism_sc_status ism_sheet_cells_filter(const ism_sheet_cells_params *p, const uint64_t *cells,
+                                          size_t n, ism_sheet_cells *out);
+
 #endif

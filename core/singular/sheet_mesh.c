@@ -258,8 +258,10 @@ static bool push_tri(ism_sheet_tris *t, const uint32_t v[3])
     return true;
 }
 
-/* Emits the cell's triangles when all its crossings landed on the sheet. */
-static bool emit_cell(const ism_sheet_field *sf, const uint32_t c[8], ism_sheet_tris *t)
+/* Emits the cell's triangles when all its crossings landed on the sheet (*emitted says
+ * whether it did). */
+static bool emit_cell(const ism_sheet_field *sf, const uint32_t c[8], ism_sheet_tris *t,
+                      uint8_t *emitted)
 {
     ctri tris[CELL_TRIS];
     uint32_t idx[CELL_TRIS][3];
@@ -273,6 +275,7 @@ static bool emit_cell(const ism_sheet_field *sf, const uint32_t c[8], ism_sheet_
             }
         }
     t->cells_meshed++;
+    *emitted = n > 0;
     for (int i = 0; i < n; i++)
         if (idx[i][0] != idx[i][1] && idx[i][1] != idx[i][2] && idx[i][2] != idx[i][0]
             && !push_tri(t, idx[i]))
@@ -281,8 +284,10 @@ static bool emit_cell(const ism_sheet_field *sf, const uint32_t c[8], ism_sheet_
 }
 
 bool ism_sheet_mesh_cells(const ism_sheet_field *sf, const uint32_t (*corners)[8], size_t n,
-                          double cell, ism_sheet_tris *t)
+                          double cell, ism_sheet_tris *t, uint8_t *emitted)
 {
+    if (emitted)
+        memset(emitted, 0, n);
     size_t *keep = malloc((n ? n : 1) * sizeof *keep), nkeep = 0;
     if (!keep)
         return false;
@@ -304,8 +309,9 @@ bool ism_sheet_mesh_cells(const ism_sheet_field *sf, const uint32_t (*corners)[8
         for (size_t i = 0; i < t->xmap.n; i++)
             t->crossings_refused += !t->x[i].ok;
     }
+    uint8_t dummy;
     for (size_t i = 0; ok && i < nkeep; i++)
-        ok = emit_cell(sf, corners[keep[i]], t);
+        ok = emit_cell(sf, corners[keep[i]], t, emitted ? &emitted[keep[i]] : &dummy);
     free(keep);
     return ok;
 }

@@ -33,8 +33,9 @@ void ism_sheet_tris_free(ism_sheet_tris *t);
 
 /* Cells that may hold a sheet, each as its 8 corner vertex indices (corner c at offset
  * (c & 1, c >> 1 & 1, c >> 2 & 1)), all oriented (ISM_SF_ORIENTED). cell is the finest
- * cell's diagonal. Appends their triangles to t. False when out of memory. */
+ * cell's diagonal. Appends their triangles to t; when emitted is not NULL, sets emitted[i]
+ * to 1 for each cell that gave triangles (0 for the others). False when out of memory. */
 bool ism_sheet_mesh_cells(const ism_sheet_field *sf, const uint32_t (*corners)[8], size_t n,
-                          double cell, ism_sheet_tris *t);
+                          double cell, ism_sheet_tris *t, uint8_t *emitted);
 
 #endif

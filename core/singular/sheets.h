@@ -24,4 +24,13 @@
 bool ism_sing_double_sheets(const ism_tape *f, const ism_locus_options *o, ism_locus *io,
                             ism_mesh *mesh, ism_error *err);
 
+/* The same, without an octree of its own: the candidate cells are the finest-size boxes
+ * that ism_sing_search, run with the same box and depth, left in io->boxes (those not
+ * flagged ISM_LBOX_USED). That search keeps every cell where f = ∇f = 0 may hold, hence
+ * every cell of a double sheet, so nothing is lost, and a surface without any costs
+ * next to nothing. Both functions flag ISM_LBOX_USED on the finest boxes of io->boxes
+ * whose cells gave sheet triangles. */
+bool ism_sing_double_sheets_from_search(const ism_tape *f, const ism_locus_options *o,
+                                        ism_locus *io, ism_mesh *mesh, ism_error *err);
+
 #endif

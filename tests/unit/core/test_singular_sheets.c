@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include "core/singular/search.h"
 #include "core/singular/sheets.h"
 #include "poly_fixture.h"
 
@@ -311,16 +312,22 @@ Test(sheets, sign_change_is_no_double_sheet)
     check_none("x^2 + 1e-6", b, 6);
 }
 
+/* Runs expr at depth 5 in the unit cube shifted by 0.37 of a cell, and measures the mesh. */
+static void run_shifted_5(run *r, pf_props *p, const char *expr)
+{
+    double b[6];
+    shifted_box(cube1, 5, 0.37, true, b);
+    run_sheets(r, expr, b, 5);
+    pf_measure(&r->m, r->t, p);
+}
+
 /* −(g²)·(2 + x): the same sphere where f ≤ 0 and a positive factor varies; the mesh is
  * closed, its normals agree with its winding. */
 Test(sheets, negative_double_sphere)
 {
-    double b[6];
-    shifted_box(cube1, 5, 0.37, true, b);
     run r;
-    run_sheets(&r, "-(x^2 + y^2 + z^2 - 0.5)^2 * (2 + x)", b, 5);
     pf_props p;
-    pf_measure(&r.m, r.t, &p);
+    run_shifted_5(&r, &p, "-(x^2 + y^2 + z^2 - 0.5)^2 * (2 + x)");
     cr_expect_eq(r.l.nsheets, 1);
     cr_expect_eq(p.boundary_edges + p.nonmanifold_edges, 0);
     cr_expect_eq(p.euler, 2);
@@ -416,4 +423,39 @@ Test(sheets, threads_do_not_change_the_mesh)
     ism_mesh_free(&m[0]);
     ism_mesh_free(&m[1]);
     ism_tape_free(t);
+}
+
+/* Candidates from the singular search instead of the stage's own octree: the same sheet
+ * (triangles, area), and the search boxes it meshed are flagged as explained. */
+Test(sheets, from_search_boxes)
+{
+    run r;
+    pf_props p;
+    run_shifted_5(&r, &p, "(x^2 + y^2 + z^2 - 0.5)^2");
+    ism_locus_options o;
+    ism_locus_options_default(&o);
+    memcpy(o.box, r.box, sizeof o.box);
+    o.max_depth = 5;
+    ism_locus l;
+    ism_locus_init(&l);
+    ism_mesh m;
+    ism_mesh_init(&m);
+    ism_error err = {0};
+    cr_assert(ism_sing_search(r.t, &o, &l, &err), "%s", err.message);
+    cr_assert_gt(l.nboxes, 0);
+    cr_assert(ism_sing_double_sheets_from_search(r.t, &o, &l, &m, &err), "%s", err.message);
+    cr_expect_eq(l.nsheets, 1);
+    cr_expect_eq(m.ntris, r.m.ntris);
+    pf_props q;
+    pf_measure(&m, r.t, &q);
+    cr_expect_leq(fabs(q.area - p.area), 1e-12 * p.area, "area %.15g, own octree %.15g", q.area,
+                  p.area);
+    cr_expect_eq(q.euler, 2);
+    size_t used = 0;
+    for (size_t i = 0; i < l.nboxes; i++)
+        used += (l.boxes[i].flags & ISM_LBOX_USED) != 0;
+    cr_expect_gt(used, l.nboxes / 2, "%zu of %zu boxes explained", used, l.nboxes);
+    ism_mesh_free(&m);
+    ism_locus_free(&l);
+    free_run(&r);
 }
