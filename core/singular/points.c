@@ -266,7 +266,7 @@ static bool from_unique_box(ctx *x, size_t i, uint8_t *box_fate)
     }
     ism_sing_point pt;
     int r = resolve(x, b->q, lo, hi, w, 0.5 * w, &pt);
-    box_fate[i] = r == FOUND ? 1 : 2;
+    box_fate[i] = r == FOUND ? 1 : r == OFF_SURFACE ? 2 : 0;
     return r != FOUND || add_cand(x, &pt, UINT32_MAX, i);
 }
 
