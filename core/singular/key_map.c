@@ -34,16 +34,16 @@ void ism_key_map_free(ism_key_map *m)
 
 static bool rehash(ism_key_map *m, size_t nslots)
 {
-    uint32_t *s = malloc(nslots * sizeof *s);
+    ism_key_slot *s = malloc(nslots * sizeof *s);
     if (!s)
         return false;
     for (size_t i = 0; i < nslots; i++)
-        s[i] = ISM_KEY_NONE;
+        s[i].index = ISM_KEY_NONE;
     for (size_t i = 0; i < m->n; i++) {
         size_t j = slot_of(m->keys[i], nslots - 1);
-        while (s[j] != ISM_KEY_NONE)
+        while (s[j].index != ISM_KEY_NONE)
             j = (j + 1) & (nslots - 1);
-        s[j] = (uint32_t)i;
+        s[j] = (ism_key_slot){m->keys[i], (uint32_t)i};
     }
     free(m->slots);
     m->slots = s;
@@ -73,9 +73,9 @@ uint32_t ism_key_map_find(const ism_key_map *m, uint64_t key)
     if (!m->slots)
         return ISM_KEY_NONE;
     for (size_t j = slot_of(key, m->mask);; j = (j + 1) & m->mask) {
-        uint32_t i = m->slots[j];
-        if (i == ISM_KEY_NONE || m->keys[i] == key)
-            return i;
+        const ism_key_slot *s = &m->slots[j];
+        if (s->index == ISM_KEY_NONE || s->key == key)
+            return s->index;
     }
 }
 
@@ -88,9 +88,9 @@ uint32_t ism_key_map_add(ism_key_map *m, uint64_t key, bool *added)
     if (m->n >= (size_t)UINT32_MAX - 1 || !grow(m))
         return ISM_KEY_NONE;
     size_t j = slot_of(key, m->mask);
-    while (m->slots[j] != ISM_KEY_NONE)
+    while (m->slots[j].index != ISM_KEY_NONE)
         j = (j + 1) & m->mask;
-    m->slots[j] = (uint32_t)m->n;
+    m->slots[j] = (ism_key_slot){key, (uint32_t)m->n};
     m->keys[m->n] = key;
     *added = true;
     return (uint32_t)m->n++;

@@ -10,9 +10,14 @@
 
 #define ISM_KEY_NONE UINT32_MAX
 
+typedef struct ism_key_slot {
+    uint64_t key;
+    uint32_t index;  /* ISM_KEY_NONE: empty */
+} ism_key_slot;
+
 typedef struct ism_key_map {
-    uint64_t *keys;  /* by index: the key that index stands for */
-    uint32_t *slots; /* hash slots: an index, or ISM_KEY_NONE */
+    uint64_t *keys;        /* by index: the key that index stands for */
+    ism_key_slot *slots;   /* hash slots (the key beside its index: one cache line a probe) */
     size_t n, cap_keys, mask;
 } ism_key_map;
 

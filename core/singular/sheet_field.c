@@ -59,15 +59,11 @@ uint32_t ism_sheet_field_vertex(ism_sheet_field *sf, uint64_t key)
         sf->cap = c;
     }
     memset(&sf->v[i], 0, sizeof sf->v[i]);
-    return i;
-}
-
-void ism_sheet_field_point(const ism_sheet_field *sf, uint32_t i, double p[3])
-{
     int32_t ip[3];
-    ism_lkey_unpack(sf->map.keys[i], ip);
+    ism_lkey_unpack(key, ip);
     for (int a = 0; a < 3; a++)
-        p[a] = ism_grid_coord(sf->grid, a, ip[a]);
+        sf->v[i].p[a] = ism_grid_coord(sf->grid, a, ip[a]);
+    return i;
 }
 
 bool ism_sheet_dominant(const double h[6], double n[3], double *lam)
@@ -100,11 +96,10 @@ static void jet_task(void *ctx, size_t task, int thread)
     jet_job *j = ctx;
     ism_sheet_field *sf = j->sf;
     size_t end = (task + 1) * SF_CHUNK < j->n ? (task + 1) * SF_CHUNK : j->n;
-    double p[3], h[6];
+    double h[6];
     for (size_t i = task * SF_CHUNK; i < end; i++) {
         ism_sheet_vertex *v = &sf->v[j->todo[i]];
-        ism_sheet_field_point(sf, j->todo[i], p);
-        v->f = ism_eval_hessian(sf->f, sf->ws[thread], p[0], p[1], p[2], v->g, h);
+        v->f = ism_eval_hessian(sf->f, sf->ws[thread], v->p[0], v->p[1], v->p[2], v->g, h);
         v->have |= ISM_SF_JET;
         if (!ism_sheet_dominant(h, v->n, &v->lam))
             v->have |= ISM_SF_NO_DIR;

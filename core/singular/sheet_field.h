@@ -23,6 +23,7 @@ enum ism_sf_have {
 };
 
 typedef struct ism_sheet_vertex {
+    double p[3];         /* world position (ism_grid_coord of its lattice point) */
     double f, g[3];
     double n[3], lam;    /* unit eigenvector of the Hessian's eigenvalue of largest |λ| */
     double psi;          /* (∇f·n)/λ once oriented */
@@ -50,7 +51,10 @@ void ism_sheet_field_free(ism_sheet_field *sf);
 uint32_t ism_sheet_field_vertex(ism_sheet_field *sf, uint64_t key);
 
 /* World position of vertex i (bit-identical to the octree's lattice points). */
-void ism_sheet_field_point(const ism_sheet_field *sf, uint32_t i, double p[3]);
+static inline const double *ism_sheet_field_point(const ism_sheet_field *sf, uint32_t i)
+{
+    return sf->v[i].p;
+}
 
 /* Makes every listed vertex (duplicates allowed) know its jet (ISM_SF_JET), each evaluated
  * once. False when out of memory. */

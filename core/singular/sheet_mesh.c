@@ -69,13 +69,12 @@ static uint64_t xedge_key(const ism_sheet_field *sf, xedge e)
 /* Where ψ interpolated linearly along the edge vanishes. */
 static void xedge_point(const ism_sheet_field *sf, xedge e, double q[3])
 {
-    double pa[3], pb[3], sa = sf->v[e.a].psi, sb = sf->v[e.b].psi;
-    ism_sheet_field_point(sf, e.b, pb);
+    double sa = sf->v[e.a].psi, sb = sf->v[e.b].psi;
+    const double *pa = ism_sheet_field_point(sf, e.a), *pb = ism_sheet_field_point(sf, e.b);
     if (sb == 0) {
-        memcpy(q, pb, sizeof pb);
+        memcpy(q, pb, 3 * sizeof *pb);
         return;
     }
-    ism_sheet_field_point(sf, e.a, pa);
     double t = sa / (sa - sb);
     for (int k = 0; k < 3; k++)
         q[k] = pa[k] + t * (pb[k] - pa[k]);
@@ -107,9 +106,7 @@ static void add_ctri(const ism_sheet_field *sf, xedge e0, xedge e1, xedge e2, co
 
 static void lattice_diff(const ism_sheet_field *sf, uint32_t to, uint32_t from, double d[3])
 {
-    double a[3], b[3];
-    ism_sheet_field_point(sf, to, a);
-    ism_sheet_field_point(sf, from, b);
+    const double *a = ism_sheet_field_point(sf, to), *b = ism_sheet_field_point(sf, from);
     for (int k = 0; k < 3; k++)
         d[k] = a[k] - b[k];
 }
@@ -200,25 +197,25 @@ static int cell_triangles(const ism_sheet_field *sf, const uint32_t c[8], ctri *
     return n;
 }
 
-static bool add_crossing(const ism_sheet_field *sf, ism_sheet_tris *t, xedge e)
+/* The index of edge e's crossing, listed (not yet projected) when new; ISM_KEY_NONE when
+ * out of memory. */
+static uint32_t add_crossing(const ism_sheet_field *sf, ism_sheet_tris *t, xedge e)
 {
     bool added;
     uint32_t i = ism_key_map_add(&t->xmap, xedge_key(sf, e), &added);
-    if (i == ISM_KEY_NONE)
-        return false;
-    if (!added)
-        return true;
+    if (i == ISM_KEY_NONE || !added)
+        return i;
     if (i >= t->cap_x) {
         size_t c = t->cap_x ? 2 * t->cap_x : 1024;
         ism_sheet_crossing *x = realloc(t->x, c * sizeof *x);
         if (!x)
-            return false;
+            return ISM_KEY_NONE;
         t->x = x;
         t->cap_x = c;
     }
     bool at_vertex = sf->v[e.b].psi == 0;
     t->x[i] = (ism_sheet_crossing){{0, 0, 0}, {0, 0, 0}, at_vertex ? e.b : e.a, e.b, false};
-    return true;
+    return i;
 }
 
 typedef struct project_job {
@@ -244,41 +241,69 @@ static void project_task(void *ctx, size_t task, int thread)
     }
 }
 
-static bool push_tri(ism_sheet_tris *t, const uint32_t v[3])
+/* Appends triangle v (3 indices) to a growable index array of *n triangles. */
+static bool push_tri(uint32_t **tri, size_t *n, size_t *cap, const uint32_t v[3])
 {
-    if (t->ntris == t->cap_tris) {
-        size_t c = t->cap_tris ? 2 * t->cap_tris : 1024;
-        uint32_t *tri = realloc(t->tri, 3 * c * sizeof *tri);
-        if (!tri)
+    if (*n == *cap) {
+        size_t c = *cap ? 2 * *cap : 1024;
+        uint32_t *p = realloc(*tri, 3 * c * sizeof *p);
+        if (!p)
             return false;
-        t->tri = tri;
-        t->cap_tris = c;
+        *tri = p;
+        *cap = c;
     }
-    memcpy(t->tri + 3 * t->ntris++, v, 3 * sizeof *v);
+    memcpy(*tri + 3 * (*n)++, v, 3 * sizeof *v);
     return true;
 }
 
-/* Emits the cell's triangles when all its crossings landed on the sheet (*emitted says
- * whether it did). */
-static bool emit_cell(const ism_sheet_field *sf, const uint32_t c[8], ism_sheet_tris *t,
-                      uint8_t *emitted)
+/* The triangles of the candidate cells on crossing indices: cell k of the kept list has
+ * triangles start[k] .. start[k + 1] of tri. */
+typedef struct cell_list {
+    size_t *keep, *start, nkeep;
+    uint32_t *tri;
+    size_t ntri, cap;
+} cell_list;
+
+/* Lists the cells where ψ is usable and changes sign, with their triangles' crossings. */
+static bool list_cells(const ism_sheet_field *sf, const uint32_t (*corners)[8], size_t n,
+                       ism_sheet_tris *t, cell_list *cl)
 {
-    ctri tris[CELL_TRIS];
-    uint32_t idx[CELL_TRIS][3];
-    int n = cell_triangles(sf, c, tris);
-    for (int i = 0; i < n; i++)
-        for (int k = 0; k < 3; k++) {
-            idx[i][k] = ism_key_map_find(&t->xmap, xedge_key(sf, tris[i].e[k]));
-            if (!t->x[idx[i][k]].ok) {
-                t->cells_refused++;
-                return true;
-            }
+    for (size_t i = 0; i < n; i++) {
+        if (!cell_candidate(sf, corners[i]))
+            continue;
+        cl->start[cl->nkeep] = cl->ntri;
+        cl->keep[cl->nkeep++] = i;
+        ctri tris[CELL_TRIS];
+        int m = cell_triangles(sf, corners[i], tris);
+        for (int j = 0; j < m; j++) {
+            uint32_t v[3];
+            for (int k = 0; k < 3; k++)
+                if ((v[k] = add_crossing(sf, t, tris[j].e[k])) == ISM_KEY_NONE)
+                    return false;
+            if (!push_tri(&cl->tri, &cl->ntri, &cl->cap, v))
+                return false;
+        }
+    }
+    cl->start[cl->nkeep] = cl->ntri;
+    return true;
+}
+
+/* Emits the triangles of kept cell k when all its crossings landed on the sheet (*emitted
+ * says whether it did). */
+static bool emit_cell(const cell_list *cl, size_t k, ism_sheet_tris *t, uint8_t *emitted)
+{
+    const uint32_t *v = cl->tri + 3 * cl->start[k];
+    size_t n = cl->start[k + 1] - cl->start[k];
+    for (size_t i = 0; i < 3 * n; i++)
+        if (!t->x[v[i]].ok) {
+            t->cells_refused++;
+            return true;
         }
     t->cells_meshed++;
     *emitted = n > 0;
-    for (int i = 0; i < n; i++)
-        if (idx[i][0] != idx[i][1] && idx[i][1] != idx[i][2] && idx[i][2] != idx[i][0]
-            && !push_tri(t, idx[i]))
+    for (size_t i = 0; i < n; i++, v += 3)
+        if (v[0] != v[1] && v[1] != v[2] && v[2] != v[0]
+            && !push_tri(&t->tri, &t->ntris, &t->cap_tris, v))
             return false;
     return true;
 }
@@ -288,20 +313,9 @@ bool ism_sheet_mesh_cells(const ism_sheet_field *sf, const uint32_t (*corners)[8
 {
     if (emitted)
         memset(emitted, 0, n);
-    size_t *keep = malloc((n ? n : 1) * sizeof *keep), nkeep = 0;
-    if (!keep)
-        return false;
-    bool ok = true;
-    for (size_t i = 0; ok && i < n; i++) {
-        if (!cell_candidate(sf, corners[i]))
-            continue;
-        keep[nkeep++] = i;
-        ctri tris[CELL_TRIS];
-        int m = cell_triangles(sf, corners[i], tris);
-        for (int j = 0; ok && j < m; j++)
-            for (int k = 0; ok && k < 3; k++)
-                ok = add_crossing(sf, t, tris[j].e[k]);
-    }
+    cell_list cl = {malloc((n ? n : 1) * sizeof *cl.keep), malloc((n + 1) * sizeof *cl.start),
+                    0, NULL, 0, 0};
+    bool ok = cl.keep && cl.start && list_cells(sf, corners, n, t, &cl);
     if (ok) {
         project_job job = {sf, t, cell};
         ism_parallel_for(sf->threads, (t->xmap.n + SHEET_CHUNK - 1) / SHEET_CHUNK, project_task,
@@ -310,8 +324,10 @@ bool ism_sheet_mesh_cells(const ism_sheet_field *sf, const uint32_t (*corners)[8
             t->crossings_refused += !t->x[i].ok;
     }
     uint8_t dummy;
-    for (size_t i = 0; ok && i < nkeep; i++)
-        ok = emit_cell(sf, corners[keep[i]], t, emitted ? &emitted[keep[i]] : &dummy);
-    free(keep);
+    for (size_t k = 0; ok && k < cl.nkeep; k++)
+        ok = emit_cell(&cl, k, t, emitted ? &emitted[cl.keep[k]] : &dummy);
+    free(cl.keep);
+    free(cl.start);
+    free(cl.tri);
     return ok;
 }
