@@ -883,23 +883,30 @@ Test(singular_curves, steiner_turned_off_the_lattice_directions)
     check_steiner(R, true);
 }
 
+/* An umbrella's points: one pinch point, at the origin, and two curves. */
+static void assert_umbrella_points(const fixture *fx, double sh)
+{
+    static const double origin[3] = {0, 0, 0};
+    cr_assert_eq(fx->l.npoints, 1, "shift %g: %zu points", sh, fx->l.npoints);
+    cr_assert_eq(point_at(fx, ISM_SING_PINCH, origin, ON_LOCUS * fx->diag), 0,
+                 "shift %g: pinch at %g %g %g", sh, fx->l.points[0].p[0], fx->l.points[0].p[1],
+                 fx->l.points[0].p[2]);
+    cr_assert_eq(fx->l.ncurves, 2, "shift %g: %zu curves", sh, fx->l.ncurves);
+}
+
 /* Whitney's umbrella x² − y²z. On the z axis ∇f = 0 and the Hessian across is
  * diag(2, −2z): indefinite for z > 0 (the two sheets y = ±x/√z cross: a double half-line),
  * definite for z < 0 (the handle: a whisker), the crossing at the origin a pinch point. */
 Test(singular_curves, whitney_umbrella_pinch_double_and_whisker)
 {
     static const double box[6] = {-1, -1, -1, 1, 1, 1};
-    static const double origin[3] = {0, 0, 0};
     for (int s = 0; s < NSHIFTS; s++) {
         fixture fx;
         double sh = setup(&fx, "x^2 - y^2*z", box, s);
         cover(&fx, z_axis, NULL, -2, 2, 1);
         run(&fx);
         double tol = ON_LOCUS * fx.diag;
-        cr_assert_eq(fx.l.npoints, 1, "shift %g: %zu points", sh, fx.l.npoints);
-        cr_assert_eq(point_at(&fx, ISM_SING_PINCH, origin, tol), 0, "shift %g: pinch at %g %g %g",
-                     sh, fx.l.points[0].p[0], fx.l.points[0].p[1], fx.l.points[0].p[2]);
-        cr_assert_eq(fx.l.ncurves, 2, "shift %g: %zu curves", sh, fx.l.ncurves);
+        assert_umbrella_points(&fx, sh);
         for (size_t i = 0; i < 2; i++) {
             const ism_sing_curve *c = &fx.l.curves[i];
             axis_part a = axis_summary(c);
@@ -929,16 +936,13 @@ static double parabola_dist(const double p[3]) { return hypot(p[0] - p[2] * p[2]
 Test(singular_curves, bent_umbrella_pinch_on_a_parabola)
 {
     static const double box[6] = {-1.2, -1.2, -1.2, 1.2, 1.2, 1.2};
-    static const double origin[3] = {0, 0, 0};
     for (int s = 0; s < NSHIFTS; s++) {
         fixture fx;
         double sh = setup(&fx, "(x - z^2)^2 - y^2*z", box, s);
         cover(&fx, parabola, NULL, -1.3, 1.3, 2.7);
         run(&fx);
         double tol = ON_LOCUS * fx.diag;
-        cr_assert_eq(fx.l.npoints, 1, "shift %g: %zu points", sh, fx.l.npoints);
-        cr_assert_eq(point_at(&fx, ISM_SING_PINCH, origin, tol), 0, "shift %g", sh);
-        cr_assert_eq(fx.l.ncurves, 2, "shift %g: %zu curves", sh, fx.l.ncurves);
+        assert_umbrella_points(&fx, sh);
         for (size_t i = 0; i < 2; i++) {
             const ism_sing_curve *c = &fx.l.curves[i];
             double vert, mid, zsum = 0;
