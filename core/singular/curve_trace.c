@@ -225,6 +225,36 @@ static double mu_small(const ism_cpoint *c)
     return c->sigma > 0 ? fabs(c->D) / c->sigma : 0.0;
 }
 
+/* The step control's state: the next step; the extrapolated distances to a collapse of the
+ * normal Hessian and to a zero of its smaller eigenvalue; probing: the next step crosses that
+ * zero (dprobe ahead) to see whether D changes sign. */
+typedef struct ctrace_plan {
+    double h, dcol, dmin, dprobe;
+    bool probing;
+} ctrace_plan;
+
+/* Plans the step after the accepted one cur→nxt (Newton took iters). */
+static void plan_step(const ism_ctracer *tr, ctrace_plan *pl, const ism_cpoint *cur,
+                      const ism_cpoint *nxt, bool pinched, int iters)
+{
+    double step = ism_dist3(cur->p, nxt->p), mc = mu_small(cur), mn = mu_small(nxt);
+    pl->dcol = zero_ahead(cur->sigma, nxt->sigma, step);
+    pl->dmin = pinched ? INFINITY : zero_ahead(mc, mn, step);
+    double h = pl->h;
+    h = iters <= CTRACE_EASY_IT ? h * CTRACE_GROW : iters >= CTRACE_HARD_IT ? h * CTRACE_SHRINK : h;
+    pl->h = fmin(fmin(h, tr->hmax), 0.5 * fmin(pl->dcol, pl->dmin));
+    pl->probing = false;
+    if (!pinched && mn < mc &&
+        (mn <= CTRACE_MU_BAND * nxt->sigma || pl->dmin <= CTRACE_DEG_STOP_REL * tr->diag)) {
+        /* a pinch (D changes sign) or a touch (it does not)? √μ extrapolates to the zero
+         * exactly where μ is quadratic (a touch), to twice its distance where linear (a
+         * pinch): stepping 2× that lands beyond it either way, out of the noise */
+        pl->probing = true;
+        pl->dprobe = zero_ahead(sqrt(mc), sqrt(mn), step);
+        pl->h = 2.0 * pl->dprobe + tr->jet.tol;
+    }
+}
+
 void ism_ctrace(ism_ctracer *tr, const ism_cpoint *start, int ignore, bool closable,
                 ism_cpath *path)
 {
@@ -235,23 +265,19 @@ void ism_ctrace(ism_ctracer *tr, const ism_cpoint *start, int ignore, bool closa
     path->end_point = -1;
     if (!push(tr, path, cur.p, cur.D, -1))
         return;
-    /* step; extrapolated distances to a collapse of the normal Hessian and to a zero of its
-     * smaller eigenvalue; probing: this step crosses that zero to see whether D changes
-     * sign, the zero being dprobe ahead of cur */
-    double h = tr->hmax, dcol = INFINITY, dmin = INFINITY, dprobe = 0.0;
-    bool probing = false;
+    ctrace_plan pl = {tr->hmax, INFINITY, INFINITY, 0.0, false};
     while (ism_ctracer_go(tr)) {
         int iters = CTRACE_NEWTON_IT;
-        if (!attempt(tr, &cur, h, &nxt, &iters)) {
-            if (probing) { /* cannot step past it: the Hessian degenerates there */
-                end_at_collapse(tr, path, &cur, dprobe);
+        if (!attempt(tr, &cur, pl.h, &nxt, &iters)) {
+            if (pl.probing) { /* cannot step past it: the Hessian degenerates there */
+                end_at_collapse(tr, path, &cur, pl.dprobe);
                 return;
             }
-            h *= 0.5;
-            if (h >= tr->hmin)
+            pl.h *= 0.5;
+            if (pl.h >= tr->hmin)
                 continue;
-            if (fmin(dcol, dmin) <= CTRACE_DEG_GIVEUP_REL * tr->diag)
-                end_at_collapse(tr, path, &cur, fmin(dcol, dmin));
+            if (fmin(pl.dcol, pl.dmin) <= CTRACE_DEG_GIVEUP_REL * tr->diag)
+                end_at_collapse(tr, path, &cur, fmin(pl.dcol, pl.dmin));
             return; /* else: lost (no convergence) */
         }
         bool leaving = !ism_ctracer_inside(tr, nxt.p);
@@ -262,11 +288,10 @@ void ism_ctrace(ism_ctracer *tr, const ism_cpoint *start, int ignore, bool closa
         bool nxt_done = false, pinched = cur.D * nxt.D < 0 || (nxt.D == 0.0 && cur.D != 0.0);
         if (pinched && !pinch(tr, path, &cur, &nxt, &ignore, &nxt_done))
             return;
-        if (probing && !pinched) { /* the eigenvalue touched 0 and came back: no pinch */
-            end_at_collapse(tr, path, &cur, dprobe);
+        if (pl.probing && !pinched) { /* the eigenvalue touched 0 and came back: no pinch */
+            end_at_collapse(tr, path, &cur, pl.dprobe);
             return;
         }
-        probing = false;
         int j = ism_cevent_hit_point(tr, path->v[path->n - 1].p, nxt.p, ignore);
         if (j >= 0) {
             end_at(tr, path, j);
@@ -285,24 +310,10 @@ void ism_ctrace(ism_ctracer *tr, const ism_cpoint *start, int ignore, bool closa
             path->end_type = ISM_END_BOX;
             return;
         }
-        double step = ism_dist3(cur.p, nxt.p);
-        dcol = zero_ahead(cur.sigma, nxt.sigma, step);
-        dmin = pinched ? INFINITY : zero_ahead(mu_small(&cur), mu_small(&nxt), step);
-        if (dcol <= CTRACE_DEG_STOP_REL * tr->diag) {
-            end_at_collapse(tr, path, &nxt, dcol);
+        plan_step(tr, &pl, &cur, &nxt, pinched, iters);
+        if (pl.dcol <= CTRACE_DEG_STOP_REL * tr->diag) {
+            end_at_collapse(tr, path, &nxt, pl.dcol);
             return;
-        }
-        h = iters <= CTRACE_EASY_IT ? h * CTRACE_GROW : iters >= CTRACE_HARD_IT ? h * CTRACE_SHRINK : h;
-        h = fmin(fmin(h, tr->hmax), 0.5 * fmin(dcol, dmin));
-        double mc = mu_small(&cur), mn = mu_small(&nxt);
-        if (!pinched && mn < mc &&
-            (mn <= CTRACE_MU_BAND * nxt.sigma || dmin <= CTRACE_DEG_STOP_REL * tr->diag)) {
-            /* a pinch (D changes sign) or a touch (it does not)? √μ extrapolates to the zero
-             * exactly where μ is quadratic (a touch), to twice its distance where linear (a
-             * pinch): stepping 2× that lands beyond it either way, out of the noise */
-            probing = true;
-            dprobe = zero_ahead(sqrt(mc), sqrt(mn), step);
-            h = 2.0 * dprobe + tr->jet.tol;
         }
         cur = nxt;
     }
