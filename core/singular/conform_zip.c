@@ -16,7 +16,9 @@
  *      unfolded   0 ──────── L ──────── 2L        curve index j, then 2(n−1) − j
  *      curve     c0 ─ … ─ c(n−1) ─ … ─ c0
  *
- * A loop that does not turn at an end of its curve is split at its extreme parameters into
+ * A rim may go round a closed curve more than once (the figure-8 Klein bottle's sheets swap
+ * sides along its double circle: two rims, each twice round). A loop that does not turn at an
+ * end of its curve is split at its extreme parameters into
  * runs, each zipped to the stretch of curve it spans, its ends taken to an end of the curve
  * within END_SNAP_RHO (box exits, junctions of curves). */
 #include "core/singular/conform_internal.h"
@@ -351,7 +353,8 @@ static bool zip_loop(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv, const
         goto done;
     long wind = unwrap(pl, l, u);
     size_t imin = argext(u, n, -1), imax = argext(u, n, 1);
-    if (wind == 1 || wind == -1) { /* once round a closed curve: one cyclic run */
+    if (wind != 0) { /* round a closed curve: one cyclic run, |wind| times round (twice on
+                        a Klein bottle, whose sheets swap sides along the curve) */
         rotate(row_in, u, n, 0, row, U);
         U[n] = u[0] + (double)wind * L;
         long Ja = curve_index_near(pl, u[0]);

@@ -66,8 +66,12 @@ static void centroid_distances(const ism_mesh *m, const ism_tape *t, double cell
         if (!(gl > 0))
             continue;
         double d = fabs(fv) / gl;
-        if (dist(c, arg) < NEAR_CELLS * cell)
+        if (dist(c, arg) < NEAR_CELLS * cell) {
+            if (d > r->max_near && getenv("CONFORM_DEBUG"))
+                fprintf(stderr, "  near max %g at (%g %g %g), %g from the locus, tri %zu\n", d,
+                        c[0], c[1], c[2], dist(c, arg), i);
             r->max_near = fmax(r->max_near, d);
+        }
         else
             r->max_far = fmax(r->max_far, d);
     }
@@ -773,6 +777,65 @@ Test(conform, cross_cap_double_segment_between_pinch_points)
         cr_expect_eq(r.a.components, 1, "%s: %zu components", what, r.a.components);
         /* RP² immersed with one double segment: χ = 1 − (2 − 1) χ(open segment) = 2 */
         cr_expect_eq(r.a.euler, 2, "%s: χ = %ld, expected 2", what, r.a.euler);
+        cr_expect_eq(r.a.boundary_edges, 0, "%s: %zu boundary edges", what, r.a.boundary_edges);
+        cr_expect_eq(r.st.artefact_edges + r.st.artefact_vertices, 0, "%s: artefacts %zu + %zu",
+                     what, r.st.artefact_edges, r.st.artefact_vertices);
+        expect_accuracy(&r, what);
+        ism_analysis_free(&r.a);
+        ism_mesh_free(&m);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
+
+/* ---- the figure-8 Klein bottle: double circle x² + (y − 1)² = 2 in z = 0, its sheets
+ * swapping sides along it ---- */
+
+static double dist_to_klein_circle(const double p[3], const void *arg)
+{
+    (void)arg;
+    double rho = hypot(p[0], p[1] - 1) - M_SQRT2;
+    return hypot(rho, p[2]);
+}
+
+Test(conform, klein_bottle_double_circle)
+{
+    const pf_surface s = {"(x^2 + y^2 + z^2 + 2*y - 1)*((x^2 + y^2 + z^2 - 2*y - 1)^2 - 8*z^2)"
+                          " + 16*x*z*(x^2 + y^2 + z^2 - 2*y - 1)", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double base[6] = {-4, -4, -4, 4, 4, 4};
+    int dmax = 6; /* at depth 5 (cells of 1/4) the strip is 2.5x as far from f = 0 */
+    for (int w = 0; w < 3; w++) {
+        double box[6];
+        shifted_box(base, shift_amount(w, base, dmax), box);
+        const int npts = (int)ceil(2 * M_PI * M_SQRT2 / pf_cell(box, dmax));
+        ism_locus l;
+        ism_locus_init(&l);
+        ism_sing_curve c = {.kind = ISM_CURVE_DOUBLE, .closed = true, .n = (size_t)npts,
+                            .end_type = {ISM_END_BOX, ISM_END_BOX}, .end_point = {-1, -1}};
+        cr_assert(c.xyz = malloc(3 * (size_t)npts * sizeof *c.xyz));
+        for (int i = 0; i < npts; i++) {
+            double a = 2 * M_PI * i / npts;
+            c.xyz[3 * i] = M_SQRT2 * cos(a);
+            c.xyz[3 * i + 1] = 1 + M_SQRT2 * sin(a);
+            c.xyz[3 * i + 2] = 0;
+        }
+        cr_assert(ism_locus_add_curve(&l, &c));
+        ism_mesh m;
+        run_result r;
+        run(t, box, dmax, &l, dist_to_klein_circle, NULL, &m, &r);
+        char what[64];
+        snprintf(what, sizeof what, "klein bottle, shift %d", w);
+        size_t n, four;
+        double far;
+        nm_edges(&m, dist_to_klein_circle, &n, &four, &far);
+        cr_expect_eq(n, (size_t)npts, "%s: %zu non-manifold edges, expected the circle's %d",
+                     what, n, npts);
+        cr_expect_eq(four, n, "%s: %zu of %zu non-manifold edges have 4 triangles", what, four, n);
+        cr_expect_leq(far, 1e-9, "%s: a non-manifold edge's vertex %g off the circle", what, far);
+        cr_expect_eq(r.a.components, 1, "%s: %zu components", what, r.a.components);
+        /* χ(image) = χ(Klein bottle) − (2 − 1) χ(circle) = 0 */
+        cr_expect_eq(r.a.euler, 0, "%s: χ = %ld, expected 0", what, r.a.euler);
         cr_expect_eq(r.a.boundary_edges, 0, "%s: %zu boundary edges", what, r.a.boundary_edges);
         cr_expect_eq(r.st.artefact_edges + r.st.artefact_vertices, 0, "%s: artefacts %zu + %zu",
                      what, r.st.artefact_edges, r.st.artefact_vertices);
