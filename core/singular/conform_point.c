@@ -14,6 +14,10 @@
  * curve of the locus: two balls never overlap, and a small part of the surface between two
  * nodes is never swallowed whole. */
 #define RHO_SEPARATION 0.45
+/* With no mesh within the ball (sheets thinner than a cell near the point, lost by the
+ * polygoniser), the ball grows by SEEK_GROW up to SEEK_CELLS cells looking for their rims. */
+#define SEEK_GROW 1.5
+#define SEEK_CELLS 8.0
 
 static double d2(const double *a, const double *b)
 {
@@ -81,12 +85,24 @@ bool cf_conform_point(cf_run *r, size_t i)
     if (!cf_ctx_prepare(c))
         return false;
     double r0 = CF_RHO_CELLS * c->cell;
-    ball b = {{pt->p[0], pt->p[1], pt->p[2]}, fmax(r0, CF_RHO_EDGES * cf_longest_edge_near(c, pt->p, r0))};
+    ball b = {{pt->p[0], pt->p[1], pt->p[2]},
+              fmax(r0, CF_RHO_EDGES * cf_longest_edge_near(c, pt->p, r0))};
     size_t nt0 = c->m->ntris, nv0 = c->m->nverts, nrm;
     uint32_t *rm;
     cf_loops ls;
-    if (!cf_cut_clean(c, tri_in_ball, &b, &b.r, RHO_SEPARATION * locus_clearance(r, i), &ls, &rm, &nrm))
-        return false;
+    double max_r = RHO_SEPARATION * locus_clearance(r, i);
+    double seek_r = fmin(max_r, SEEK_CELLS * c->cell);
+    for (;;) {
+        if (!cf_cut_clean(c, tri_in_ball, &b, &b.r, max_r, &ls, &rm, &nrm))
+            return false;
+        if (ls.n > 0 || b.r * SEEK_GROW > seek_r)
+            break;
+        /* nothing round the point yet (thin horns the polygoniser lost): look further */
+        cf_undo(c, rm, nrm, nt0, nv0);
+        free(rm);
+        cf_loops_free(&ls);
+        b.r *= SEEK_GROW;
+    }
     if (ls.n == 0) { /* no mesh around the point: nothing to join */
         cf_undo(c, rm, nrm, nt0, nv0);
         free(rm);
