@@ -17,8 +17,34 @@ typedef struct face_walk {
     bool ok;
 } face_walk;
 
+/* How far off the tile f is sampled on either side, as a fraction of the tile's smaller
+ * side: inside both nodes that share the tile (each at least as large as the tile). */
+#define ZERO_TILE_PROBE 0.25
+
+/* Does f take opposite signs just off the tile on its two sides? A plane of the surface on
+ * the lattice (x = 0 of xyz) does; a double sheet (x² = 0: no sign change) does not, and is
+ * left to core/singular's double-sheet stage, which records it as such. */
+static bool sign_changes_across(ism_cell_ctx *cx, const ism_tile *t)
+{
+    const ism_grid *g = &cx->tree->grid;
+    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    double c[3];
+    c[t->axis] = ism_grid_coord(g, t->axis, t->plane);
+    c[u] = 0.5 * (ism_grid_coord(g, u, t->u0) + ism_grid_coord(g, u, t->u1));
+    c[v] = 0.5 * (ism_grid_coord(g, v, t->v0) + ism_grid_coord(g, v, t->v1));
+    double du = ism_grid_coord(g, u, t->u1) - ism_grid_coord(g, u, t->u0);
+    double dv = ism_grid_coord(g, v, t->v1) - ism_grid_coord(g, v, t->v0);
+    double d = ZERO_TILE_PROBE * (du < dv ? du : dv);
+    double a[3] = {c[0], c[1], c[2]}, b[3] = {c[0], c[1], c[2]};
+    a[t->axis] -= d;
+    b[t->axis] += d;
+    double fa = ism_sample_f(&cx->s, a), fb = ism_sample_f(&cx->s, b);
+    return (fa < 0 && fb > 0) || (fa > 0 && fb < 0);
+}
+
 /* A tile lying in f = 0 is one polygon of the surface, emitted once: by the node below
- * it along its axis (or above it on the search box's lower boundary). */
+ * it along its axis (or above it on the search box's lower boundary) — unless f keeps its
+ * sign across it (a double sheet, not the polygoniser's). */
 static bool emit_zero_tile(face_walk *w, const ism_tile *tile)
 {
     ism_cell_ctx *cx = w->cx;
@@ -31,7 +57,7 @@ static bool emit_zero_tile(face_walk *w, const ism_tile *tile)
         cx->cap_zero = c;
     }
     cx->zero[cx->nzero++] = *tile;
-    if (!w->owner)
+    if (!w->owner || !sign_changes_across(cx, tile))
         return true;
     ism_fpoint *pts = malloc(cx->nbp * sizeof *pts);
     if (!pts)

@@ -2,7 +2,9 @@
  * module; this file only sequences them and times them. */
 #include "core/singular/surface.h"
 #include "core/singular/conform.h"
+#include "core/singular/covered.h"
 #include "core/singular/find.h"
+#include "core/singular/sheets.h"
 #include "core/util/clock.h"
 
 #include <string.h>
@@ -38,7 +40,12 @@ enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options 
         return st;
     if (po->cancel && *po->cancel)
         return ISM_POLY_CANCELLED;
-    if (!ism_conform_mesh(f, &lo, locus, mesh, cs, err))
+    /* Conform first: it may remove and renumber the polygoniser's triangles, while the
+     * double sheets are appended after them and recorded as triangle ranges; they leave out
+     * the boxes the polygoniser already meshed (a double sheet on a lattice plane). */
+    if (!ism_conform_mesh(f, &lo, locus, mesh, cs, err) ||
+        !ism_locus_mark_covered(locus, &lo, mesh) ||
+        !ism_sing_double_sheets_from_search(f, &lo, locus, mesh, err))
         return ISM_POLY_NO_MEMORY;
     times->singular_ms = (t1 - t0) + (ism_now_ms() - t2);
     locus->time_ms = times->singular_ms;

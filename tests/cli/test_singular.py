@@ -154,5 +154,31 @@ class SingularCurvesTest(unittest.TestCase):
                 self.assertEqual(stats["mesh"]["triangles"], 0)
 
 
+class DoubleSheetTest(unittest.TestCase):
+    def test_a_squared_sphere_is_a_closed_double_sheet(self):
+        # (x²+y²+z²−0.5)² never changes sign: no edge of the octree sees a crossing, yet its
+        # zero set is the sphere of radius √0.5, area 4π·0.5.
+        for box in shifted_boxes(1.0):
+            with self.subTest(box=box):
+                stats, feats = mesh("(x^2 + y^2 + z^2 - 0.5)^2", box)
+                sheets = feats["double_sheets"]
+                self.assertEqual(len(sheets), 1)
+                self.assertEqual(sheets[0]["triangles"], stats["mesh"]["triangles"])
+                self.assertLess(abs(sheets[0]["area"] - 2 * math.pi) / (2 * math.pi), 0.01)
+                an = stats["analysis"]
+                self.assertEqual(an["euler"], 2)
+                self.assertEqual(an["boundary_edges"], 0)
+                self.assertLess(an["accuracy"]["max_dist_vertex"], 1e-9)
+
+    def test_x_squared_is_the_plane_x_0_cut_by_the_box(self):
+        for box in shifted_boxes(1.0):
+            with self.subTest(box=box):
+                stats, feats = mesh("x^2", box)
+                area = (box[4] - box[1]) * (box[5] - box[2])
+                self.assertEqual(len(feats["double_sheets"]), 1)
+                self.assertLess(abs(stats["analysis"]["area"] - area) / area, 1e-9)
+                self.assertEqual(stats["analysis"]["euler"], 1)
+
+
 if __name__ == "__main__":
     unittest.main()
