@@ -326,8 +326,8 @@ bool ism_redis_load_password(const char *path, ism_redis_settings *s, char *err,
         snprintf(err, cap, "%s: expected one line, PASSWORD or USER PASSWORD", path);
         return false;
     }
-    snprintf(s->username, sizeof s->username, "%s", user);
-    snprintf(s->password, sizeof s->password, "%s", pass);
+    memcpy(s->username, user, strlen(user) + 1); /* lengths checked above */
+    memcpy(s->password, pass, strlen(pass) + 1);
     explicit_bzero(text, sizeof text);
     return true;
 }
