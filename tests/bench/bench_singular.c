@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "core/octree/polygonise.h"
-#include "core/singular/find.h"
+#include "core/singular/surface.h"
 #include "core/util/clock.h"
 #include "proto/presets.h"
 
@@ -29,7 +29,10 @@ static ism_tape *compile_preset(const ism_preset *p)
     return t;
 }
 
-static double polygonise_ms(const ism_tape *t, const ism_preset *p, int threads)
+/* One run of the whole surface (core/singular/surface.c): the polygoniser's time and the
+ * singular stage's (locus from f, conformance, double sheets), measured inside one call. */
+static bool surface_ms(const ism_tape *t, const ism_preset *p, int threads, ism_locus *l,
+                       ism_surface_times *times, ism_conform_stats *cs)
 {
     ism_poly_options o;
     ism_poly_options_default(&o);
@@ -39,28 +42,12 @@ static double polygonise_ms(const ism_tape *t, const ism_preset *p, int threads)
     o.threads = threads;
     ism_mesh mesh;
     ism_mesh_init(&mesh);
+    ism_locus_init(l);
     ism_poly_stats st;
     ism_error err;
-    double t0 = ism_now_ms();
-    enum ism_poly_status s = ism_polygonise(t, &o, &mesh, &st, &err);
-    double ms = ism_now_ms() - t0;
+    enum ism_poly_status s = ism_mesh_surface(t, &o, &mesh, l, &st, cs, times, &err);
     ism_mesh_free(&mesh);
-    return s == ISM_POLY_OK ? ms : -1.0;
-}
-
-static double locus_ms(const ism_tape *t, const ism_preset *p, int threads, ism_locus *l)
-{
-    ism_locus_options o;
-    ism_locus_options_default(&o);
-    memcpy(o.box, p->box, sizeof o.box);
-    o.max_depth = p->max_depth;
-    o.threads = threads;
-    ism_locus_init(l);
-    ism_error err;
-    double t0 = ism_now_ms();
-    bool ok = ism_locus_find(t, &o, l, &err);
-    double ms = ism_now_ms() - t0;
-    return ok ? ms : -1.0;
+    return s == ISM_POLY_OK;
 }
 
 int main(int argc, char **argv)
@@ -77,24 +64,29 @@ int main(int argc, char **argv)
         ism_tape *t = compile_preset(p);
         if (!t)
             return 1;
-        double poly = -1, stage = -1;
+        double poly = -1, stage = -1, conform = -1;
         ism_locus l = { 0 };
         for (int r = 0; r < repeats; r++) {
-            double a = polygonise_ms(t, p, threads);
-            if (a >= 0 && (poly < 0 || a < poly))
-                poly = a;
+            ism_surface_times tm;
+            ism_conform_stats cs;
             ism_locus_free(&l);
-            double b = locus_ms(t, p, threads, &l);
-            if (b >= 0 && (stage < 0 || b < stage))
-                stage = b;
+            if (!surface_ms(t, p, threads, &l, &tm, &cs))
+                continue;
+            if (poly < 0 || tm.polygonise_ms < poly)
+                poly = tm.polygonise_ms;
+            if (stage < 0 || tm.singular_ms < stage) {
+                stage = tm.singular_ms;
+                conform = cs.time_ms;
+            }
         }
         size_t certified = 0;
         for (size_t k = 0; k < l.npoints; k++)
             certified += l.points[k].certified;
         printf("{\"preset\": \"%s\", \"depth\": %d, \"polygonise_ms\": %.2f, \"singular_ms\": %.2f, "
+               "\"conform_ms\": %.2f, "
                "\"ratio\": %.4f, \"points\": %zu, \"certified\": %zu, \"boxes\": %zu, "
                "\"boxes_visited\": %llu, \"incomplete\": %s}\n",
-               p->name, p->max_depth, poly, stage, poly > 0 ? stage / poly : -1.0, l.npoints,
+               p->name, p->max_depth, poly, stage, conform, poly > 0 ? stage / poly : -1.0, l.npoints,
                certified, l.nboxes, (unsigned long long)l.boxes_visited,
                l.incomplete ? "true" : "false");
         fflush(stdout);
