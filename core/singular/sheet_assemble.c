@@ -16,9 +16,8 @@ static uint32_t find_root(uint32_t *parent, uint32_t i)
     return i;
 }
 
-static double triangle_area(const ism_mesh *m, const uint32_t v[3])
+static double triangle_area(const double *a, const double *b, const double *c)
 {
-    const double *a = m->pos + 3 * v[0], *b = m->pos + 3 * v[1], *c = m->pos + 3 * v[2];
     double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
     double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
     double x = u[1] * w[2] - u[2] * w[1], y = u[2] * w[0] - u[0] * w[2],
@@ -77,12 +76,60 @@ static double append_component(const ism_sheet_tris *t, const size_t *order, siz
         }
         if (!ism_mesh_add_triangle(mesh, v[0], v[1], v[2]))
             return -1;
-        area += triangle_area(mesh, v);
+        area += triangle_area(mesh->pos + 3 * v[0], mesh->pos + 3 * v[1], mesh->pos + 3 * v[2]);
     }
     return area;
 }
 
-bool ism_sheet_assemble(const ism_sheet_tris *t, ism_mesh *mesh, ism_locus *io)
+static uint64_t edge_key(uint32_t a, uint32_t b)
+{
+    return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+}
+
+/* Marks in drop[c] the components that are scraps: a boundary edge (an edge of one
+ * triangle) and an area below min_area. False when out of memory. */
+static bool find_scraps(const ism_sheet_tris *t, const uint32_t *comp, size_t ncomp,
+                        double min_area, uint8_t *drop)
+{
+    ism_key_map edges;
+    ism_key_map_init(&edges);
+    uint8_t *uses = NULL;
+    double *area = calloc(ncomp ? ncomp : 1, sizeof *area);
+    size_t cap = 0;
+    bool ok = area != NULL;
+    for (size_t i = 0; ok && i < t->ntris; i++) {
+        const uint32_t *v = t->tri + 3 * i;
+        area[comp[i]] += triangle_area(t->x[v[0]].p, t->x[v[1]].p, t->x[v[2]].p);
+        for (int k = 0; ok && k < 3; k++) {
+            bool added;
+            uint32_t e = ism_key_map_add(&edges, edge_key(v[k], v[(k + 1) % 3]), &added);
+            if (e != ISM_KEY_NONE && e >= cap) {
+                uint8_t *u = realloc(uses, (cap = 2 * e + 1024));
+                ok = u != NULL;
+                uses = u ? u : uses;
+            }
+            ok = ok && e != ISM_KEY_NONE;
+            if (ok)
+                uses[e] = added ? 1 : 2;
+        }
+    }
+    for (size_t c = 0; ok && c < ncomp; c++)
+        drop[c] = 0;
+    for (size_t i = 0; ok && i < t->ntris; i++)
+        for (int k = 0; k < 3; k++) {
+            const uint32_t *v = t->tri + 3 * i;
+            uint32_t e = ism_key_map_find(&edges, edge_key(v[k], v[(k + 1) % 3]));
+            if (uses[e] == 1 && area[comp[i]] < min_area)
+                drop[comp[i]] = 1;
+        }
+    ism_key_map_free(&edges);
+    free(uses);
+    free(area);
+    return ok;
+}
+
+bool ism_sheet_assemble(const ism_sheet_tris *t, double min_area, ism_mesh *mesh,
+                        ism_locus *io)
 {
     size_t nt = t->ntris, nx = t->xmap.n;
     uint32_t *comp = malloc((nt ? nt : 1) * sizeof *comp);
@@ -90,7 +137,9 @@ bool ism_sheet_assemble(const ism_sheet_tris *t, ism_mesh *mesh, ism_locus *io)
     size_t *order = malloc((nt ? nt : 1) * sizeof *order);
     size_t ncomp = comp ? label_components(t, comp) : SIZE_MAX;
     size_t *start = ncomp != SIZE_MAX ? calloc(ncomp + 1, sizeof *start) : NULL;
-    bool ok = comp && vertex_of && order && start
+    uint8_t *drop = ncomp != SIZE_MAX ? malloc(ncomp + 1) : NULL;
+    bool ok = comp && vertex_of && order && start && drop
+           && find_scraps(t, comp, ncomp, min_area, drop)
            && ism_mesh_reserve(mesh, mesh->nverts + nx, mesh->ntris + nt);
     if (ok) {
         for (size_t i = 0; i < nx; i++)
@@ -107,6 +156,8 @@ bool ism_sheet_assemble(const ism_sheet_tris *t, ism_mesh *mesh, ism_locus *io)
         start[0] = 0;
     }
     for (size_t c = 0; ok && c < ncomp; c++) {
+        if (drop[c])
+            continue;
         ism_double_sheet s = {mesh->ntris, start[c + 1] - start[c], 0};
         s.area = append_component(t, order, start[c], start[c + 1], vertex_of, mesh);
         ok = s.area >= 0 && ism_locus_add_sheet(io, &s);
@@ -115,5 +166,6 @@ bool ism_sheet_assemble(const ism_sheet_tris *t, ism_mesh *mesh, ism_locus *io)
     free(vertex_of);
     free(order);
     free(start);
+    free(drop);
     return ok;
 }

@@ -30,6 +30,12 @@
  * within this fraction of a step (both are computed as lo + i·step, so they agree to a few
  * ulps). */
 #define SHEET_BOX_MATCH 1e-9
+/* Open pieces of a sheet smaller than this many cell faces (a 4 × 4 patch) are below the
+ * lattice's resolution and left out: the scraps of one to a few cells that appear along a
+ * crossing with a sign-changing surface (g²·h by h = 0, where the Hessian's direction turns
+ * within two cells of the crossing, from ∇g toward ∇h). A closed sheet of any size, and
+ * any larger piece, stays. */
+#define SHEET_SCRAP_CELLS 16.0
 
 typedef struct stage {
     const ism_locus_options *o;
@@ -150,6 +156,12 @@ static int find_cells(stage *s, const ism_tape *f, int threads, bool from_boxes)
     return r;
 }
 
+static double min_face(const ism_grid *g)
+{
+    double a = g->step[0] * g->step[1], b = g->step[1] * g->step[2], c = g->step[0] * g->step[2];
+    return fmin(a, fmin(b, c));
+}
+
 static double cell_diagonal(const ism_grid *g)
 {
     return sqrt(g->step[0] * g->step[0] + g->step[1] * g->step[1] + g->step[2] * g->step[2]);
@@ -180,7 +192,7 @@ static bool mesh_sheets(stage *s, ism_mesh *mesh)
     bool ok = emitted && ism_sheet_mesh_cells(&s->sf, (const uint32_t(*)[8])s->corners,
                                               s->ncells, cell_diagonal(&s->grid), &t, emitted);
     if (ok && !interrupted(s)) {
-        ok = ism_sheet_assemble(&t, mesh, s->io);
+        ok = ism_sheet_assemble(&t, SHEET_SCRAP_CELLS * min_face(&s->grid), mesh, s->io);
         mark_boxes(s, emitted);
     }
     free(emitted);

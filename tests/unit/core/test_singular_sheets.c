@@ -281,15 +281,18 @@ static void check_double_torus(const double box[6], int depth)
     free_run(&r);
 }
 
-Test(sheets, double_torus)
+/* Runs check at depth 6 in the unit cube, and in it shifted by 1e-3 and by 0.37 cell. */
+static void in_three_boxes(void (*check)(const double box[6], int depth))
 {
     double b[6];
-    check_double_torus(cube1, 6);
+    check(cube1, 6);
     shifted_box(cube1, 6, 1e-3, false, b);
-    check_double_torus(b, 6);
+    check(b, 6);
     shifted_box(cube1, 6, 0.37, true, b);
-    check_double_torus(b, 6);
+    check(b, 6);
 }
+
+Test(sheets, double_torus) { in_three_boxes(check_double_torus); }
 
 /* No double sheet: a sphere where f changes sign (the polygoniser's), and a valley whose
  * bottom stays above 0. */
@@ -459,3 +462,45 @@ Test(sheets, from_search_boxes)
     ism_locus_free(&l);
     free_run(&r);
 }
+
+/* g²·(z − 0.3): the sphere stays a double sheet above and below the plane z = 0.3, where f
+ * changes sign (the polygoniser's plane). Within two cells of the plane the Hessian's
+ * direction turns from ∇g toward ∇h and the sheet's border there is ragged (holes of a
+ * cell), so what is asserted is: vertices on the sphere, a manifold, consistently oriented
+ * mesh; the sheets above z₀ cover the cap minus at most a band of two cells,
+ * 2πR(R − z₀) − 4πR·cell ≤ area ≤ 2πR(R − z₀), likewise below; and it is one sheet on
+ * each side (no scraps of a few cells along the plane). */
+static void check_sphere_cut_by_plane(const double box[6], int depth)
+{
+    run r;
+    run_sheets(&r, "(x^2 + y^2 + z^2 - 0.5)^2 * (z - 0.3)", box, depth);
+    double R = sqrt(SPHERE_R2), z0 = 0.3, cell = pf_cell(box, depth);
+    double side[2] = {0, 0}, vmax = 0;
+    int count[2] = {0, 0};
+    for (size_t s = 0; s < r.l.nsheets; s++) {
+        const ism_double_sheet *d = &r.l.sheets[s];
+        int up = r.m.pos[3 * r.m.tri[3 * d->first_triangle] + 2] > z0;
+        side[up] += d->area;
+        count[up]++;
+    }
+    for (size_t v = 0; v < r.m.nverts; v++) {
+        const double *q = r.m.pos + 3 * v;
+        vmax = fmax(vmax, fabs(sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]) - R));
+    }
+    double full[2] = {2 * M_PI * R * (R + z0), 2 * M_PI * R * (R - z0)};
+    double band = 2 * M_PI * R * 2 * cell;
+    for (int up = 0; up < 2; up++) {
+        cr_expect(side[up] <= full[up] && side[up] >= full[up] - band,
+                  "%s: area %g, expected %g less at most %g", up ? "above" : "below", side[up],
+                  full[up], band);
+        cr_expect_eq(count[up], 1, "%s: %d sheets", up ? "above" : "below", count[up]);
+    }
+    cr_expect_leq(vmax, 1e-9);
+    pf_props p;
+    pf_measure(&r.m, r.t, &p);
+    cr_expect_eq(p.nonmanifold_edges, 0);
+    cr_expect_eq(misoriented_edges(&r.m), 0);
+    free_run(&r);
+}
+
+Test(sheets, sphere_cut_by_a_sign_change) { in_three_boxes(check_sphere_cut_by_plane); }
