@@ -22,7 +22,8 @@ typedef struct thread_state {
     ism_sampler s;
     ism_point_entry *corners; /* memo of f and ∇f at lattice points (pure: never stale) */
     ism_tape *tapes[ISM_GRID_MAX_DEPTH + 1];
-    uint64_t visited, excluded, unresolved;
+    uint64_t visited, excluded, unresolved, error_missed;
+    double error_worst;
 } thread_state;
 
 typedef struct build {
@@ -144,13 +145,18 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         node_corners(b->grid, th, b->p->tape, &nd, &k);
         const ism_tape *saved = th->s.tape;
         th->s.tape = sub;
-        bool flat = ism_plot_test(&th->s, &b->p->flatness, lo, hi, &k);
+        double error;
+        bool flat = ism_plot_test(&th->s, &b->p->flatness, lo, hi, &k, &error);
         th->s.tape = saved;
         if (nd.level >= b->p->max_depth) {
             leaf = true;
             if (!flat) {
                 v->v[i].flags |= ISM_NODE_UNRESOLVED;
                 th->unresolved++;
+            }
+            if (error > b->p->flatness.max_error) { /* false for NaN: not measured */
+                th->error_missed++;
+                th->error_worst = error > th->error_worst ? error : th->error_worst;
             }
         } else {
             leaf = flat;
@@ -228,6 +234,9 @@ static void free_threads(build *b, int nthreads, ism_octree_build_stats *st)
         st->visited += th->visited;
         st->excluded += th->excluded;
         st->unresolved += th->unresolved;
+        st->error_missed += th->error_missed;
+        if (th->error_worst > st->error_worst)
+            st->error_worst = th->error_worst;
         st->n_point += th->s.n_point;
         st->n_gradient += th->s.n_gradient;
         st->n_interval += th->s.n_interval;

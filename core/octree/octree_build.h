@@ -23,6 +23,8 @@ typedef struct ism_octree_build_params {
 
 typedef struct ism_octree_build_stats {
     uint64_t visited, excluded, unresolved;
+    uint64_t error_missed;   /* leaves at max_depth measured above flatness.max_error */
+    double error_worst;      /* the largest error measured on those (0 when none) */
     uint64_t n_point, n_gradient, n_interval;
 } ism_octree_build_stats;
 

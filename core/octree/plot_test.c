@@ -1,24 +1,29 @@
 /* plot_test.c — flatness of an octree node: corner gradient divergence, the sign-and-gradient
- * edge test, at most one crossing curve per face, planarity of the edge roots and the
- * distance of their centroid to the surface. */
+ * edge test, at most one crossing curve per face, then either planarity of the edge roots
+ * and the distance of their centroid to the surface (the paper), or, under an error bound,
+ * the distance of the node's would-be triangles to the surface (cell_error.h). */
 #include "core/octree/plot_test.h"
+#include "core/octree/cell_error.h"
 
 #include <math.h>
 #include <string.h>
 
-/* The 12 edges as corner pairs, and which faces (axis*2+side) each lies on. */
-static void edge_corners(int e, int *c0, int *c1)
+void ism_cube_edge(int e, int *c0, int *c1, int faces[2])
 {
     int axis = e / 4, rest = e % 4;
     int o1 = (axis + 1) % 3, o2 = (axis + 2) % 3;
     int base = ((rest & 1) << o1) | (((rest >> 1) & 1) << o2);
     *c0 = base;
     *c1 = base | (1 << axis);
+    faces[0] = o1 * 2 + (rest & 1);
+    faces[1] = o2 * 2 + ((rest >> 1) & 1);
 }
 
 bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
-                   const double hi[3], const ism_corners *k)
+                   const double hi[3], const ism_corners *k, double *error)
 {
+    if (error)
+        *error = NAN;
     double p[8][3], f[8], n[8][3];
     memcpy(p, k->p, sizeof p);
     memcpy(f, k->f, sizeof f);
@@ -41,8 +46,8 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
     double roots[12][3], centroid[3] = {0, 0, 0};
     int nroots = 0, face_cross[6] = {0};
     for (int e = 0; e < 12; e++) {
-        int c0, c1;
-        edge_corners(e, &c0, &c1);
+        int c0, c1, faces[2];
+        ism_cube_edge(e, &c0, &c1, faces);
         if (f[c0] == 0 && f[c1] == 0)
             continue; /* the edge lies in f = 0 (a plane of the surface on the lattice) */
         bool crosses = (f[c0] < 0) != (f[c1] < 0) || f[c0] == 0 || f[c1] == 0;
@@ -58,16 +63,20 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
             centroid[a] += roots[nroots][a];
         }
         nroots++;
-        int axis = e / 4, rest = e % 4;
-        int o1 = (axis + 1) % 3, o2 = (axis + 2) % 3;
-        face_cross[o1 * 2 + (rest & 1)]++;
-        face_cross[o2 * 2 + ((rest >> 1) & 1)]++;
+        face_cross[faces[0]]++;
+        face_cross[faces[1]]++;
     }
     for (int k = 0; k < 6; k++)
         if (face_cross[k] > 2)
             return false; /* a saddle on a face: two curves, look closer */
     if (nroots == 0)
         return true;
+    double err;
+    if (fl->max_error > 0 && ism_cell_error(s, k, &err)) {
+        if (error)
+            *error = err;
+        return err <= fl->max_error;
+    }
     for (int a = 0; a < 3; a++)
         centroid[a] /= nroots;
 
@@ -79,6 +88,8 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
     double tol = fl->plane_frac * size;
     if (tol > fl->abs_tol)
         tol = fl->abs_tol;
+    if (fl->max_error > 0)
+        tol = fl->max_error; /* polygons cell_error cannot follow: the paper's tests at E */
     for (int r = 0; r < nroots; r++) {
         double d[3] = {roots[r][0] - centroid[0], roots[r][1] - centroid[1],
                        roots[r][2] - centroid[2]};

@@ -15,6 +15,10 @@ typedef struct ism_flatness {
     double plane_frac;     /* max distance from the plane / of the surface, × node size */
     double abs_tol;        /* and never more than this (world units): the maximum depth's
                               resolution, so a deeper request gives a finer mesh */
+    double max_error;      /* > 0: instead of the plane and centroid tests, the triangles the
+                              node would emit must lie within this distance of the surface,
+                              measured at their centroids and edge midpoints (cell_error.h);
+                              0: the paper's tests above */
 } ism_flatness;
 
 /* f and ∇f at a node's 8 corners (corner c: bit 0 = x, bit 1 = y, bit 2 = z). */
@@ -22,9 +26,14 @@ typedef struct ism_corners {
     double p[8][3], f[8], g[8][3];
 } ism_corners;
 
+/* Edge e (0..11) of a node: its corners c0 -> c1 (c1 one step along axis e / 4) and the two
+ * faces it lies on (face = axis * 2 + side). */
+void ism_cube_edge(int e, int *c0, int *c1, int faces[2]);
+
 /* lo, hi: the node's world box; k: its corner values. True when the node may be plotted
- * at this size. */
+ * at this size. Under max_error, *error (when not NULL) receives the distance measured on
+ * the node's would-be triangles, or NaN when the test decided before measuring. */
 bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
-                   const double hi[3], const ism_corners *k);
+                   const double hi[3], const ism_corners *k, double *error);
 
 #endif

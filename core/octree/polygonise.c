@@ -77,6 +77,8 @@ bool ism_poly_options_check(const ism_poly_options *o, ism_error *err)
         return ism_error_set(err, "flat_normal: must be in [-1, 1]");
     if (!in_range(o->flat_plane, 1e-6, 10))
         return ism_error_set(err, "flat_plane: must be in [1e-6, 10]");
+    if (!in_range(o->max_error, 0, 1e300))
+        return ism_error_set(err, "max_error: must be a finite number >= 0 (0: off)");
     if (o->threads < 0 || o->threads > MAX_THREADS)
         return ism_error_set(err, "threads: must be in 0..%d", MAX_THREADS);
     if (o->max_triangles < 1)
@@ -290,7 +292,8 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
         .min_depth = o->min_depth,
         .max_depth = o->max_depth,
         .flatness = {o->gradient_test, o->flat_normal, o->flat_plane,
-                     ISM_FLAT_ABS_FRACTION * ism_grid_cell_size(&tree.grid, o->max_depth)},
+                     ISM_FLAT_ABS_FRACTION * ism_grid_cell_size(&tree.grid, o->max_depth),
+                     o->max_error},
         .threads = threads,
         .max_nodes = o->max_memory / 4 / sizeof(ism_node),
         .cancel = o->cancel,
@@ -302,6 +305,8 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
     stats->nodes_visited = bs.visited;
     stats->nodes_excluded = bs.excluded;
     stats->unresolved_nodes = bs.unresolved;
+    stats->error_missed_nodes = bs.error_missed;
+    stats->error_worst = bs.error_worst;
     stats->evals_point = bs.n_point;
     stats->evals_gradient = bs.n_gradient;
     stats->evals_interval = bs.n_interval;

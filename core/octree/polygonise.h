@@ -25,6 +25,10 @@ typedef struct ism_poly_options {
     double flat_normal;     /* flatness: min cos between gradients in a plotting node (0.8) */
     double flat_plane;      /* flatness: max distance of polygon points from their plane,
                                as a fraction of the node size (0.1) */
+    double max_error;       /* > 0: subdivide until the triangles of each node lie within this
+                               distance of the surface (world units, measured at triangle
+                               centroids and edge midpoints); max_depth is then only a safety
+                               limit, and flat_plane is not used. 0 (default): flat_plane */
     size_t max_triangles;   /* budget: stop with an error beyond this (default 4,000,000) */
     size_t max_memory;      /* bytes the polygoniser may hold (default 2 GiB) */
     int threads;            /* worker threads for one request (0 = number of cores, max 64) */
@@ -53,6 +57,9 @@ typedef struct ism_poly_stats {
     uint64_t nodes_excluded;     /* nodes whose interval proved them empty */
     uint64_t plotting_nodes;     /* leaves that produced polygons */
     uint64_t unresolved_nodes;   /* leaves at max depth that failed flatness or polygonisation */
+    uint64_t error_missed_nodes; /* under max_error: leaves at max depth whose triangles were
+                                    measured farther than max_error from the surface */
+    double error_worst;          /* the largest such distance (0 when none) */
     uint64_t edges_single_root;  /* node edges with one root */
     uint64_t edges_double_root;  /* node edges with two roots (paper's bisection) */
     uint64_t edges_touching;     /* edges with a double (tangent) root |f(c)| < eps */

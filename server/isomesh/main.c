@@ -45,6 +45,10 @@ static const char usage_text[] =
     "      --stitch-tol T       roots closer than T × segment are one (default 0.001)\n"
     "      --flat-normal C      flatness: corner gradients within acos(C) (default 0.9)\n"
     "      --flat-plane F       flatness: polygon within F × node size of its plane (0.05)\n"
+    "      --max-error E        subdivide until the triangles lie within E of the surface\n"
+    "                           (model units, measured at centroids and edge midpoints);\n"
+    "                           depth MAX is then only a safety limit. Default: off, the\n"
+    "                           flatness test (--flat-plane) decides\n"
     "      --max-triangles N    budget; stop with an error beyond it (default 4000000)\n"
     "output:\n"
     "  -o, --output FILE        .ply, .obj or .stl (written to a temporary name, renamed)\n"
@@ -57,8 +61,8 @@ static const char usage_text[] =
 
 enum long_only {
     OPT_LET = 256, OPT_SURFACE, OPT_SURFACES, OPT_LIST, OPT_THREADS, OPT_GRADIENT, OPT_EPS,
-    OPT_ITERS, OPT_STITCH, OPT_FLAT_NORMAL, OPT_FLAT_PLANE, OPT_MAX_TRIS, OPT_STATS, OPT_WORKER,
-    OPT_FEATURES,
+    OPT_ITERS, OPT_STITCH, OPT_FLAT_NORMAL, OPT_FLAT_PLANE, OPT_MAX_TRIS, OPT_MAX_ERROR,
+    OPT_STATS, OPT_WORKER, OPT_FEATURES,
 };
 
 static const struct option long_options[] = {
@@ -78,6 +82,7 @@ static const struct option long_options[] = {
     {"flat-normal", required_argument, 0, OPT_FLAT_NORMAL},
     {"flat-plane", required_argument, 0, OPT_FLAT_PLANE},
     {"max-triangles", required_argument, 0, OPT_MAX_TRIS},
+    {"max-error", required_argument, 0, OPT_MAX_ERROR},
     {"output", required_argument, 0, 'o'},
     {"stats", no_argument, 0, OPT_STATS},
     {"features", required_argument, 0, OPT_FEATURES},
@@ -107,6 +112,7 @@ static bool apply_option(ism_cli_run *run, int opt, const char *arg)
     case OPT_STITCH: return ism_cli_parse_double("--stitch-tol", arg, &o->stitch_tol);
     case OPT_FLAT_NORMAL: return ism_cli_parse_double("--flat-normal", arg, &o->flat_normal);
     case OPT_FLAT_PLANE: return ism_cli_parse_double("--flat-plane", arg, &o->flat_plane);
+    case OPT_MAX_ERROR: return ism_cli_parse_double("--max-error", arg, &o->max_error);
     case OPT_MAX_TRIS: {
         int n;
         if (!ism_cli_parse_int("--max-triangles", arg, 1, 2000000000, &n))

@@ -1,0 +1,142 @@
+/* cell_error.c — the distance to f = 0 of the triangles a node would emit, measured at their
+ * centroids and edge midpoints (see cell_error.h). */
+#include "core/octree/cell_error.h"
+#include "core/octree/edge_roots.h"
+
+#include <math.h>
+#include <string.h>
+
+#define MAX_ROOTS 12
+/* Newton steps that move a large polygon's centre onto f = 0 (triangulate.c uses up to 5
+ * and stops at 1e-6 of the node: after 3 the remaining step is far below any useful error
+ * bound on a smooth surface, and a centre that has not landed is measured where it is). */
+#define CENTRE_NEWTON_STEPS 3
+
+typedef struct root_pt {
+    double p[3];
+    int face[2];
+} root_pt;
+
+/* |f| / |∇f| at p: the first-order distance to the surface; +inf where it is undefined. */
+static double dist_at(ism_sampler *s, const double p[3])
+{
+    double g[3];
+    double f = ism_sample_grad(s, p, g);
+    double gl = ism_norm3(g);
+    if (!isfinite(f) || !isfinite(gl) || !(gl > 0))
+        return INFINITY;
+    return fabs(f) / gl;
+}
+
+static double midpoint_dist(ism_sampler *s, const double *a, const double *b)
+{
+    double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
+    return dist_at(s, m);
+}
+
+static double centroid_dist(ism_sampler *s, const double *a, const double *b, const double *c)
+{
+    double m[3];
+    for (int k = 0; k < 3; k++)
+        m[k] = (a[k] + b[k] + c[k]) / 3;
+    return dist_at(s, m);
+}
+
+/* The polygon's centre moved toward f = 0 along ∇f, as triangulate.c fans from it. */
+static void centre_on_surface(ism_sampler *s, const double (*p)[3], int n, double c[3])
+{
+    memset(c, 0, 3 * sizeof *c);
+    for (int i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++)
+            c[k] += p[i][k] / n;
+    for (int it = 0; it < CENTRE_NEWTON_STEPS; it++) {
+        double g[3];
+        double f = ism_sample_grad(s, c, g), gg = ism_dot3(g, g);
+        if (!isfinite(f) || !isfinite(gg) || !(gg > 0))
+            return;
+        for (int k = 0; k < 3; k++)
+            c[k] -= f * g[k] / gg;
+    }
+}
+
+/* The worst distance on one polygon p[0..n), triangulated as triangulate.c does. */
+static double loop_error(ism_sampler *s, const double (*p)[3], int n)
+{
+    double worst = 0;
+    for (int i = 0; i < n; i++)
+        worst = fmax(worst, midpoint_dist(s, p[i], p[(i + 1) % n]));
+    if (n == 3)
+        return fmax(worst, centroid_dist(s, p[0], p[1], p[2]));
+    if (n == 4) {
+        int a = ism_dist3(p[0], p[2]) <= ism_dist3(p[1], p[3]) ? 0 : 1;
+        const double *d0 = p[a], *d1 = p[a + 2];
+        worst = fmax(worst, midpoint_dist(s, d0, d1));
+        worst = fmax(worst, centroid_dist(s, d0, p[a + 1], d1));
+        return fmax(worst, centroid_dist(s, d0, d1, p[(a + 3) % 4]));
+    }
+    double c[3];
+    centre_on_surface(s, p, n, c);
+    worst = fmax(worst, dist_at(s, c));
+    for (int i = 0; i < n; i++) {
+        worst = fmax(worst, midpoint_dist(s, c, p[i]));
+        worst = fmax(worst, centroid_dist(s, c, p[i], p[(i + 1) % n]));
+    }
+    return worst;
+}
+
+/* The node's edge roots, each with the two faces its edge lies on; false when a corner is
+ * exactly on the surface (its roots are shared by several edges). */
+static bool edge_roots(ism_sampler *s, const ism_corners *k, root_pt *r, int *n)
+{
+    *n = 0;
+    for (int c = 0; c < 8; c++)
+        if (k->f[c] == 0)
+            return false;
+    for (int e = 0; e < 12; e++) {
+        int c0, c1;
+        ism_cube_edge(e, &c0, &c1, r[*n].face);
+        if ((k->f[c0] < 0) == (k->f[c1] < 0))
+            continue;
+        double t = ism_regula_falsi(s, k->p[c0], k->p[c1], k->f[c0], k->f[c1]);
+        for (int a = 0; a < 3; a++)
+            r[*n].p[a] = k->p[c0][a] + t * (k->p[c1][a] - k->p[c0][a]);
+        (*n)++;
+    }
+    return true;
+}
+
+bool ism_cell_error(ism_sampler *s, const ism_corners *k, double *err)
+{
+    root_pt r[MAX_ROOTS];
+    int n;
+    if (!edge_roots(s, k, r, &n))
+        return false;
+    /* on_face[f]: the roots on face f; exactly two or none make clean polygons */
+    int on_face[6][2], count[6] = {0};
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < 2; j++) {
+            int f = r[i].face[j];
+            if (count[f] == 2)
+                return false;
+            on_face[f][count[f]++] = i;
+        }
+    for (int f = 0; f < 6; f++)
+        if (count[f] == 1)
+            return false;
+    bool used[MAX_ROOTS] = {false};
+    double worst = 0, loop[MAX_ROOTS][3];
+    for (int start = 0; start < n; start++) {
+        if (used[start])
+            continue;
+        int m = 0, cur = start, via = r[start].face[0];
+        while (!used[cur]) {
+            used[cur] = true;
+            memcpy(loop[m++], r[cur].p, sizeof loop[0]);
+            via = r[cur].face[0] == via ? r[cur].face[1] : r[cur].face[0];
+            cur = on_face[via][0] == cur ? on_face[via][1] : on_face[via][0];
+        }
+        worst = fmax(worst, loop_error(s, (const double (*)[3])loop, m));
+    }
+    *err = worst;
+    return true;
+}

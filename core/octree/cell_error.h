@@ -1,0 +1,20 @@
+/* cell_error.h — how far the mesh an octree node would emit lies from the surface, measured
+ * before the node is accepted: its edge roots (exact, by regula falsi) joined face by face
+ * into polygons, each polygon triangulated as triangulate.c does it (a triangle as is, a
+ * quad along its shorter diagonal, a larger polygon fanned from its centre projected onto
+ * f = 0), and the first-order distance |f| / |∇f| taken at every triangle's centroid and
+ * every edge's midpoint. This is what the max_error criterion of the octree decides on. */
+#ifndef ISM_CELL_ERROR_H
+#define ISM_CELL_ERROR_H
+
+#include <stdbool.h>
+#include "core/octree/plot_test.h"
+
+/* The largest distance measured on the polygons through the node's edge roots; corners
+ * k of the node lo..hi. Returns false (and leaves *err alone) when the roots do not form
+ * clean polygons — a corner exactly on the surface, a face crossed at one or more than two
+ * points — so that the caller decides by another rule. *err is +inf when f or ∇f is not
+ * finite at a measuring point. */
+bool ism_cell_error(ism_sampler *s, const ism_corners *k, double *err);
+
+#endif
