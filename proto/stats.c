@@ -36,6 +36,8 @@ static void write_poly(ism_jw *w, const ism_poly_stats *s)
     kv_u(w, "nodes_excluded", s->nodes_excluded);
     kv_u(w, "plotting_nodes", s->plotting_nodes);
     kv_u(w, "unresolved_nodes", s->unresolved_nodes);
+    kv_u(w, "error_missed_nodes", s->error_missed_nodes);
+    kv_d(w, "error_worst", s->error_worst);
     kv_u(w, "edges_single_root", s->edges_single_root);
     kv_u(w, "edges_double_root", s->edges_double_root);
     kv_u(w, "edges_touching", s->edges_touching);
@@ -65,7 +67,42 @@ static void write_poly(ism_jw *w, const ism_poly_stats *s)
     ism_jw_object_end(w);
 }
 
-static void write_analysis(ism_jw *w, const ism_analysis *a)
+/* The largest distance measured anywhere on the mesh: vertices, edge midpoints, centroids. */
+static double worst_distance(const ism_analysis *a)
+{
+    return fmax(a->max_dist_vertex, fmax(a->max_dist_midpoint, a->max_dist_centroid));
+}
+
+static void write_accuracy(ism_jw *w, const ism_analysis *a, double max_error)
+{
+    ism_jw_key(w, "accuracy");
+    ism_jw_object(w);
+    kv_d(w, "max_dist_vertex", a->max_dist_vertex);
+    kv_d(w, "mean_dist_vertex", a->mean_dist_vertex);
+    kv_d(w, "p99_dist_vertex", a->p99_dist_vertex);
+    kv_d(w, "max_dist_midpoint", a->max_dist_midpoint);
+    kv_d(w, "mean_dist_midpoint", a->mean_dist_midpoint);
+    kv_d(w, "p99_dist_midpoint", a->p99_dist_midpoint);
+    kv_d(w, "max_dist_centroid", a->max_dist_centroid);
+    kv_d(w, "mean_dist_centroid", a->mean_dist_centroid);
+    kv_d(w, "p99_dist_centroid", a->p99_dist_centroid);
+    kv_d(w, "max_newton_dist", a->max_newton_dist);
+    kv_d(w, "mean_newton_dist", a->mean_newton_dist);
+    kv_u(w, "skipped", a->accuracy_skipped);
+    ism_jw_key(w, "max_error");
+    if (max_error > 0)
+        ism_jw_number(w, max_error);
+    else
+        ism_jw_null(w);
+    ism_jw_key(w, "met");
+    if (max_error > 0)
+        ism_jw_bool(w, worst_distance(a) <= max_error);
+    else
+        ism_jw_null(w);
+    ism_jw_object_end(w);
+}
+
+static void write_analysis(ism_jw *w, const ism_analysis *a, double max_error)
 {
     static const char *const cls[ISM_VERTEX_CLASSES] = {"manifold", "boundary",
                                                         "nonmanifold_edge",
@@ -113,16 +150,7 @@ static void write_analysis(ism_jw *w, const ism_analysis *a)
         ism_jw_uint(w, a->angle_hist[i]);
     ism_jw_array_end(w);
     ism_jw_object_end(w);
-    ism_jw_key(w, "accuracy");
-    ism_jw_object(w);
-    kv_d(w, "max_dist_vertex", a->max_dist_vertex);
-    kv_d(w, "mean_dist_vertex", a->mean_dist_vertex);
-    kv_d(w, "max_dist_centroid", a->max_dist_centroid);
-    kv_d(w, "mean_dist_centroid", a->mean_dist_centroid);
-    kv_d(w, "max_newton_dist", a->max_newton_dist);
-    kv_d(w, "mean_newton_dist", a->mean_newton_dist);
-    kv_u(w, "skipped", a->accuracy_skipped);
-    ism_jw_object_end(w);
+    write_accuracy(w, a, max_error);
     ism_jw_object_end(w);
 }
 
@@ -191,21 +219,46 @@ static void singular_warnings(ism_jw *w, const ism_locus *l, const ism_locus_che
     }
 }
 
+/* Under an error bound, one warning and only when the bound was not met: by the measured
+ * mesh when it was analysed, else by the octree's own measurements at depth.max. */
+static void write_error_warning(ism_jw *w, const ism_stats_input *in)
+{
+    const ism_poly_stats *s = in->poly;
+    uint64_t cells = s ? s->error_missed_nodes : 0;
+    double worst = in->analysis ? worst_distance(in->analysis) : s ? s->error_worst : 0;
+    if (worst <= in->max_error && (in->analysis || cells == 0))
+        return;
+    char msg[300], e[32], x[32];
+    ism_jw_format_double(in->max_error, e);
+    ism_jw_format_double(worst, x);
+    if (cells)
+        snprintf(msg, sizeof msg, "max_error %s was not met: the mesh is up to %s from the "
+                 "surface; %llu cells stopped at depth.max before reaching it (a larger "
+                 "depth.max lets them subdivide further)", e, x, (unsigned long long)cells);
+    else
+        snprintf(msg, sizeof msg, "max_error %s was not met: the mesh is up to %s from the "
+                 "surface where the octree's estimate per cell was below it (finer neighbours' "
+                 "tiles or crossing sheets changed a cell's polygons)", e, x);
+    ism_jw_string(w, msg);
+}
+
 /* What the polygoniser could not resolve, said in words (DESIGN.md: say so in the stats
  * instead of producing silent garbage). */
-static void write_warnings(ism_jw *w, const ism_poly_stats *s, const ism_locus *l,
-                           const ism_locus_check *c)
+static void write_warnings(ism_jw *w, const ism_stats_input *in)
 {
+    const ism_poly_stats *s = in->poly;
     char msg[200];
     ism_jw_array(w);
-    singular_warnings(w, l, c);
+    singular_warnings(w, in->locus, in->check);
     if (s && s->edges_many_roots) {
         snprintf(msg, sizeof msg, "%llu cell edges may hold more than two roots (the paper's "
                  "known failure case): parts of the surface may be missing there",
                  (unsigned long long)s->edges_many_roots);
         ism_jw_string(w, msg);
     }
-    if (s && s->unresolved_nodes) {
+    if (in->max_error > 0)
+        write_error_warning(w, in);
+    else if (s && s->unresolved_nodes) {
         snprintf(msg, sizeof msg, "%llu cells at the maximum depth were not flat enough: "
                  "a larger depth.max may show more detail",
                  (unsigned long long)s->unresolved_nodes);
@@ -251,7 +304,7 @@ char *ism_stats_json(const ism_stats_input *in, size_t *len)
     }
     if (in->analysis) {
         ism_jw_key(&w, "analysis");
-        write_analysis(&w, in->analysis);
+        write_analysis(&w, in->analysis, in->max_error);
     }
     if (in->locus) {
         ism_jw_key(&w, "singular");
@@ -263,7 +316,7 @@ char *ism_stats_json(const ism_stats_input *in, size_t *len)
         kv_ms(&w, timing[i], in->timings_ms[i]);
     ism_jw_object_end(&w);
     ism_jw_key(&w, "warnings");
-    write_warnings(&w, in->poly, in->locus, in->check);
+    write_warnings(&w, in);
     ism_jw_object_end(&w);
     return ism_jw_take(&w, len);
 }

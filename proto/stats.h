@@ -7,7 +7,7 @@
  *    "mesh": {"vertices", "triangles", "encoded_points", "encoded_faces"},
  *    "polygoniser": {... ism_poly_stats fields ..., "time_ms": {"octree", "polygons",
  *                    "cracks", "mesh", "total"}},
- *    "analysis": {...},
+ *    "analysis": {..., "accuracy": {"max_dist_vertex", ..., "max_error", "met"}},
  *    "singular": {locus counts (features.h), "artefacts", "nonmanifold_edges_off",
  *                 "nonmanifold_points_off", "incomplete", "boxes_visited", "evals_interval",
  *                 "evals_jet", "time_ms", "conform": {points_conformed, points_failed,
@@ -41,6 +41,7 @@ typedef struct ism_stats_input {
     const ism_locus *locus;               /* the singular locus from f (may be NULL) */
     const ism_locus_check *check;         /* the mesh checked against it (may be NULL) */
     const ism_conform_stats *conform;     /* what the conformance pass did (may be NULL) */
+    double max_error;                     /* the requested error bound; 0 when none */
     double timings_ms[ISM_TIME_COUNT];
 } ism_stats_input;
 

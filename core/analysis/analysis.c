@@ -80,10 +80,12 @@ bool ism_analyse(const ism_mesh *m, const ism_tape *f, const ism_analysis_option
     ok = ok && ism_an_classify_vertices(m, &et, &vf, a) && ism_an_find_curves(m, &et, &vf, a) &&
          ism_an_find_points(m, &vf, a) && ism_an_topology(m, &et, &vf, a) &&
          ism_an_count_duplicates(m, &et, a) && ism_an_triangle_quality(m, a);
-    ism_an_edge_table_free(&et);
-    free(vf.cone_sets); /* the rest needs only per-vertex facts */
+    free(vf.cone_sets); /* the rest needs only per-vertex facts and the edges */
     vf.cone_sets = NULL;
     ok = ok && ism_an_implicit_figures(m, f, o, &vf, a);
+    if (ok && f && o->accuracy)
+        ok = ism_an_between_vertices(m, f, &et, o->threads, a);
+    ism_an_edge_table_free(&et);
     ism_an_vertex_facts_free(&vf);
     if (!ok) {
         ism_analysis_free(a);

@@ -166,12 +166,15 @@ typedef struct ism_analysis {
     size_t degenerate_triangles;      /* zero area */
     float *triangle_min_angle;        /* ntris entries (0 for degenerate triangles) */
 
-    /* accuracy: distance estimates |f| / |∇f| and Newton projection distance. Vertices and
-     * centroids where |∇f| vanishes are left out (counted in accuracy_skipped). The Newton
-     * distance iterates p -= f ∇f / |∇f|² (newton_steps times, stopping early where ∇f
-     * vanishes) and measures how far p moved. */
-    double max_dist_vertex, mean_dist_vertex;
-    double max_dist_centroid, mean_dist_centroid;
+    /* accuracy: distance estimates |f| / |∇f| at vertices, edge midpoints and triangle
+     * centroids (the mesh between its vertices), each with its maximum, mean and 99th
+     * percentile (the value at rank floor(0.99 (n - 1)) in ascending order), and the Newton
+     * projection distance. Points where |∇f| vanishes are left out (counted in
+     * accuracy_skipped). The Newton distance iterates p -= f ∇f / |∇f|² (newton_steps times,
+     * stopping early where ∇f vanishes) and measures how far p moved. */
+    double max_dist_vertex, mean_dist_vertex, p99_dist_vertex;
+    double max_dist_midpoint, mean_dist_midpoint, p99_dist_midpoint;
+    double max_dist_centroid, mean_dist_centroid, p99_dist_centroid;
     double max_newton_dist, mean_newton_dist;
     size_t accuracy_skipped;
     float *distance;                  /* nverts: |f|/|∇f| at each vertex (0 where singular);

@@ -96,6 +96,19 @@ bool ism_an_triangle_quality(const ism_mesh *m, ism_analysis *a);
 bool ism_an_implicit_figures(const ism_mesh *m, const ism_tape *f, const ism_analysis_options *o,
                              const ism_an_vertex_facts *vf, ism_analysis *a);
 
+/* Maximum, mean and 99th percentile of the distances that are not NaN (reorders dist);
+ * skipped: how many were NaN. */
+typedef struct ism_an_distances {
+    double max, mean, p99;
+    size_t skipped;
+} ism_an_distances;
+void ism_an_distance_figures(double *dist, size_t n, ism_an_distances *out);
+
+/* Distances at triangle centroids and edge midpoints (after ism_an_implicit_figures, which
+ * sets the singular threshold). */
+bool ism_an_between_vertices(const ism_mesh *m, const ism_tape *f, const ism_an_edge_table *et,
+                             int threads, ism_analysis *a);
+
 /* Input checks shared by ism_analyse and ism_analysis_project (false with a message). */
 bool ism_an_check_mesh(const ism_mesh *m, ism_error *err);
 bool ism_an_check_options(const ism_analysis_options *o, ism_error *err);

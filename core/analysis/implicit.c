@@ -1,6 +1,6 @@
 /* implicit.c — the figures that need f itself: curvature at every vertex (one Hessian
  * evaluation each), the singular flag where ∇f vanishes, the distance estimate |f|/|∇f| at
- * vertices and triangle centroids, and the Newton projection distance. The evaluations run
+ * vertices (between vertices: accuracy.c), and the Newton projection distance. The evaluations run
  * in blocks on several threads (blocks.c); per-vertex results go to arrays and per-block
  * partial sums are added in block order, so the figures never depend on the thread count.
  *
@@ -16,11 +16,6 @@
 #define BLOCK 1024
 #define NEWTON_STALL 1e-6 /* stop Newton where |∇f| fell below this fraction of its start */
 
-typedef struct centroid_sums {
-    double sum, max;
-    size_t count, skipped;
-} centroid_sums;
-
 typedef struct implicit_pass {
     const ism_mesh *m;
     const ism_tape *f;
@@ -28,7 +23,6 @@ typedef struct implicit_pass {
     const ism_an_vertex_facts *vf;
     ism_analysis *a;
     double *fval, *gnorm, *newton; /* per vertex; gnorm NaN where f misbehaves */
-    centroid_sums *csum;           /* per triangle block */
     double threshold;
 } implicit_pass;
 
@@ -102,32 +96,6 @@ static void vertex_block(void *ctx, ism_eval_ws *ws, size_t block)
     }
 }
 
-static void centroid_block(void *ctx, ism_eval_ws *ws, size_t block)
-{
-    implicit_pass *ip = ctx;
-    const ism_mesh *m = ip->m;
-    centroid_sums s = {0};
-    size_t end = (block + 1) * BLOCK < m->ntris ? (block + 1) * BLOCK : m->ntris;
-    for (size_t t = block * BLOCK; t < end; t++) {
-        if (ism_an_tri_collapsed(m->tri, t))
-            continue;
-        double c[3] = {0, 0, 0}, g[3];
-        for (int k = 0; k < 3; k++)
-            for (int i = 0; i < 3; i++)
-                c[i] += m->pos[3 * m->tri[3 * t + k] + i] / 3;
-        double fv = ism_eval_gradient(ip->f, ws, c[0], c[1], c[2], g);
-        double gn = norm3(g), d = fabs(fv) / gn;
-        if (!(gn > ip->threshold) || !isfinite(d)) {
-            s.skipped++;
-            continue;
-        }
-        s.sum += d;
-        s.max = d > s.max ? d : s.max;
-        s.count++;
-    }
-    ip->csum[block] = s;
-}
-
 /* Median of |∇f| over the vertices where it is known: the function's scale. */
 static bool gradient_scale(implicit_pass *ip)
 {
@@ -155,8 +123,10 @@ static void vertex_figures(implicit_pass *ip)
 {
     ism_analysis *a = ip->a;
     size_t counted = 0;
-    double dist_sum = 0, newton_sum = 0;
+    double newton_sum = 0;
     for (size_t v = 0; v < ip->m->nverts; v++) {
+        double f = ip->fval[v];
+        ip->fval[v] = NAN; /* from here on: the vertex's distance, NaN when not measured */
         if (ip->vf->corners[v] == 0)
             continue;
         bool singular = !(ip->gnorm[v] > ip->threshold);
@@ -174,32 +144,20 @@ static void vertex_figures(implicit_pass *ip)
             a->accuracy_skipped++;
             continue;
         }
-        double d = fabs(ip->fval[v]) / ip->gnorm[v];
+        double d = fabs(f) / ip->gnorm[v];
         a->distance[v] = ism_an_finite_float(d);
-        dist_sum += d;
+        ip->fval[v] = d;
         newton_sum += ip->newton[v];
-        a->max_dist_vertex = fmax(a->max_dist_vertex, d);
         a->max_newton_dist = fmax(a->max_newton_dist, ip->newton[v]);
         counted++;
     }
-    if (counted) {
-        a->mean_dist_vertex = dist_sum / (double)counted;
+    if (counted)
         a->mean_newton_dist = newton_sum / (double)counted;
-    }
-}
-
-static void centroid_figures(implicit_pass *ip, size_t nblocks)
-{
-    ism_analysis *a = ip->a;
-    size_t count = 0;
-    double sum = 0;
-    for (size_t b = 0; b < nblocks; b++) {
-        sum += ip->csum[b].sum;
-        count += ip->csum[b].count;
-        a->max_dist_centroid = fmax(a->max_dist_centroid, ip->csum[b].max);
-        a->accuracy_skipped += ip->csum[b].skipped;
-    }
-    a->mean_dist_centroid = count ? sum / (double)count : 0;
+    ism_an_distances vd;
+    ism_an_distance_figures(ip->fval, ip->m->nverts, &vd);
+    a->max_dist_vertex = vd.max;
+    a->mean_dist_vertex = vd.mean;
+    a->p99_dist_vertex = vd.p99;
 }
 
 static bool allocate_outputs(const ism_mesh *m, const ism_analysis_options *o, ism_analysis *a)
@@ -225,24 +183,17 @@ bool ism_an_implicit_figures(const ism_mesh *m, const ism_tape *f, const ism_ana
     if (!f || !(o->curvature || o->accuracy))
         return true;
     size_t n = m->nverts ? m->nverts : 1;
-    size_t vblocks = (m->nverts + BLOCK - 1) / BLOCK, tblocks = (m->ntris + BLOCK - 1) / BLOCK;
+    size_t vblocks = (m->nverts + BLOCK - 1) / BLOCK;
     implicit_pass ip = {.m = m, .f = f, .o = o, .vf = vf, .a = a};
     ip.fval = malloc(n * sizeof *ip.fval);
     ip.gnorm = malloc(n * sizeof *ip.gnorm);
     ip.newton = calloc(n, sizeof *ip.newton);
-    ip.csum = calloc(tblocks ? tblocks : 1, sizeof *ip.csum);
-    bool ok = ip.fval && ip.gnorm && ip.newton && ip.csum && allocate_outputs(m, o, a) &&
+    bool ok = ip.fval && ip.gnorm && ip.newton && allocate_outputs(m, o, a) &&
               ism_an_run_blocks(f, o->threads, vblocks, vertex_block, &ip) && gradient_scale(&ip);
     if (ok)
         vertex_figures(&ip);
-    if (ok && o->accuracy) {
-        ok = ism_an_run_blocks(f, o->threads, tblocks, centroid_block, &ip);
-        if (ok)
-            centroid_figures(&ip, tblocks);
-    }
     free(ip.fval);
     free(ip.gnorm);
     free(ip.newton);
-    free(ip.csum);
     return ok;
 }

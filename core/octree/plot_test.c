@@ -4,6 +4,7 @@
  * the distance of the node's would-be triangles to the surface (cell_error.h). */
 #include "core/octree/plot_test.h"
 #include "core/octree/cell_error.h"
+#include "core/octree/edge_roots.h"
 
 #include <math.h>
 #include <string.h>
@@ -17,6 +18,31 @@ void ism_cube_edge(int e, int *c0, int *c1, int faces[2])
     *c1 = base | (1 << axis);
     faces[0] = o1 * 2 + (rest & 1);
     faces[1] = o2 * 2 + ((rest >> 1) & 1);
+}
+
+/* Under an error bound, a node at most this many times the bound across is judged by its
+ * measured error: its corner gradients may disagree (a crease, as where a max() joins two
+ * surfaces, is never flat and would otherwise be refined to depth.max whatever the bound),
+ * and an edge whose gradients disagree is searched for two roots instead of assumed to
+ * hold them. Whatever a node this small could hide is about as small as the bound. */
+#define CREASE_CELL_ERRORS 4.0
+
+static bool normals_agree(const double (*n)[3], double normal_cos)
+{
+    for (int i = 0; i < 8; i++)
+        for (int j = i + 1; j < 8; j++)
+            if (ism_dot3(n[i], n[j]) < normal_cos)
+                return false;
+    return true;
+}
+
+/* The paper's double-root search along edge c0-c1 found nothing. */
+static bool no_roots(ism_sampler *s, const ism_flatness *fl, const ism_corners *k, int c0,
+                     int c1)
+{
+    ism_root_params prm = {fl->gradient_test, fl->double_root_eps, fl->double_root_iters};
+    double t;
+    return ism_double_root_search(s, &prm, k->p[c0], k->p[c1], k->f[c0], k->f[c1], &t) == 0;
 }
 
 bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
@@ -33,15 +59,13 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
         if (!(len > 0) || !isfinite(len) || !isfinite(f[c]))
             return false; /* a singular or undefined corner: look closer */
     }
-    for (int i = 0; i < 8; i++)
-        for (int j = i + 1; j < 8; j++)
-            if (ism_dot3(n[i], n[j]) < fl->normal_cos)
-                return false;
-
     double size = hi[0] - lo[0];
     for (int a = 1; a < 3; a++)
         if (hi[a] - lo[a] < size)
             size = hi[a] - lo[a];
+    bool measured_only = fl->max_error > 0 && size <= CREASE_CELL_ERRORS * fl->max_error;
+    if (!measured_only && !normals_agree(n, fl->normal_cos))
+        return false;
 
     double roots[12][3], centroid[3] = {0, 0, 0};
     int nroots = 0, face_cross[6] = {0};
@@ -52,8 +76,11 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
             continue; /* the edge lies in f = 0 (a plane of the surface on the lattice) */
         bool crosses = (f[c0] < 0) != (f[c1] < 0) || f[c0] == 0 || f[c1] == 0;
         if (!crosses) {
-            if (ism_dot3(n[c0], n[c1]) <= fl->gradient_test)
-                return false; /* signs agree, gradients do not: maybe two roots */
+            /* signs agree, gradients do not: maybe two roots (a small node under an error
+             * bound looks for them, as the edge roots will) */
+            if (ism_dot3(n[c0], n[c1]) <= fl->gradient_test &&
+                !(measured_only && no_roots(s, fl, k, c0, c1)))
+                return false;
             continue;
         }
         /* One secant step is enough to judge flatness: the exact roots come later. */

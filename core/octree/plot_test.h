@@ -15,6 +15,8 @@ typedef struct ism_flatness {
     double plane_frac;     /* max distance from the plane / of the surface, × node size */
     double abs_tol;        /* and never more than this (world units): the maximum depth's
                               resolution, so a deeper request gives a finer mesh */
+    double double_root_eps;/* the edge roots' double-root search (edge_roots.h), used under */
+    int double_root_iters; /* max_error on small nodes whose edge gradients disagree */
     double max_error;      /* > 0: instead of the plane and centroid tests, the triangles the
                               node would emit must lie within this distance of the surface,
                               measured at their centroids and edge midpoints (cell_error.h);

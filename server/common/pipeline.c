@@ -433,6 +433,7 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
     si.locus = &locus;
     si.check = &check;
     si.conform = &cs;
+    si.max_error = o.max_error;
     si.timings_ms[ISM_TIME_TOTAL] = ism_now_ms() - t_start;
     size_t slen;
     char *stats = ism_stats_json(&si, &slen);

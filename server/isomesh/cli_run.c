@@ -229,6 +229,7 @@ typedef struct run_products {
     const ism_locus *locus;
     const ism_locus_check *check;  /* NULL when not analysed */
     const ism_conform_stats *conform;
+    double max_error;              /* the requested bound, 0 when none */
 } run_products;
 
 static void print_stats(const run_products *p, const char *format, const double *timings)
@@ -245,6 +246,7 @@ static void print_stats(const run_products *p, const char *format, const double 
     in.locus = p->locus;
     in.check = p->check;
     in.conform = p->conform;
+    in.max_error = p->max_error;
     memcpy(in.timings_ms, timings, sizeof in.timings_ms);
     size_t len;
     char *json = ism_stats_json(&in, &len);
@@ -363,7 +365,8 @@ int ism_cli_run_surface(ism_cli_run *run)
     timings[ISM_TIME_ANALYSE] = ism_now_ms() - t2;
     if (run->output && !write_mesh(run->output, &mesh))
         status = 1;
-    run_products prod = {&mesh, &ps, analysed ? &an : NULL, &locus, analysed ? &chk : NULL, &cs};
+    run_products prod = {&mesh, &ps, analysed ? &an : NULL, &locus, analysed ? &chk : NULL, &cs,
+                         run->options.max_error};
     if (run->features_output && status == 0 && !write_features(run->features_output, &prod))
         status = 1;
     timings[ISM_TIME_TOTAL] = ism_now_ms() - t0;
