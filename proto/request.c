@@ -426,6 +426,34 @@ static bool decode_tolerances(const json_t *v, ism_request *req, ism_req_error *
     return true;
 }
 
+/* "max_error": E > 0 in model units, at least ISM_REQ_MIN_ERROR_REL of the box diagonal and
+ * at most the diagonal. Without an explicit depth.max, the operator's depth limit becomes
+ * the safety limit: the bound, not the preset's depth, decides. */
+static bool decode_max_error(const json_t *v, const json_t *depth, ism_request *req,
+                             int depth_limit, ism_req_error *err)
+{
+    double e, d2 = 0;
+    if (!read_number(v, "$.max_error", &e, err))
+        return false;
+    for (int k = 0; k < 3; k++)
+        d2 += (req->box[k + 3] - req->box[k]) * (req->box[k + 3] - req->box[k]);
+    char b[32], c[32];
+    if (!(e > 0))
+        return over(err, "$.max_error", "%s must be above 0 (a distance in model units)",
+                    num(e, b));
+    if (!in_range(e, ISM_REQ_MIN_ERROR_REL * sqrt(d2), sqrt(d2), "$.max_error", err)) {
+        snprintf(err->message + strlen(err->message),
+                 sizeof err->message - strlen(err->message),
+                 " (%s of the box diagonal %s .. the diagonal)", num(ISM_REQ_MIN_ERROR_REL, b),
+                 num(sqrt(d2), c));
+        return false;
+    }
+    req->max_error = e;
+    if (!(depth && json_object_get(depth, "max")))
+        req->max_depth = depth_limit;
+    return true;
+}
+
 static const char *const attr_names[] = {"normal", "mean_curvature", "gauss_curvature",
                                          "class"};
 
@@ -542,7 +570,7 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
                         ism_req_error *err)
 {
     static const char *const known[] = {"expr", "preset", "params", "let", "box", "depth",
-                                        "tolerances", "output", NULL};
+                                        "max_error", "tolerances", "output", NULL};
     if (!json_is_object(root))
         return bad(err, "$", "a request is a JSON object, got %s", type_name(root));
     if (!check_fields(root, "$", known, err))
@@ -596,7 +624,11 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
         return false;
     if (!check_box(req->box, err))
         return false;
-    if ((v = json_object_get(root, "depth")) && !decode_depth(v, req, depth_limit, err))
+    const json_t *depth = json_object_get(root, "depth");
+    if (depth && !decode_depth(depth, req, depth_limit, err))
+        return false;
+    if ((v = json_object_get(root, "max_error")) &&
+        !decode_max_error(v, depth, req, depth_limit, err))
         return false;
     if ((v = json_object_get(root, "tolerances")) && !decode_tolerances(v, req, err))
         return false;

@@ -29,6 +29,8 @@
 #define ISM_REQ_MAX_LETS        64
 #define ISM_REQ_MAX_SOURCE      16384        /* bytes of one expression or let source */
 #define ISM_REQ_MAX_ROOT_ITERS  60           /* tolerances.double_root_iters */
+#define ISM_REQ_MIN_ERROR_REL   1e-9         /* max_error >= this * the box diagonal: finer
+                                                is below what doubles resolve there */
 
 enum ism_format { ISM_FORMAT_DRC, ISM_FORMAT_GLB, ISM_FORMAT_PLY, ISM_FORMAT_OBJ,
                   ISM_FORMAT_STL, ISM_FORMAT_COUNT };
@@ -58,6 +60,8 @@ typedef struct ism_request {
     char **let_paths;          /* JSON path of each let's source, for errors */
     double box[6];             /* xmin ymin zmin xmax ymax zmax */
     int min_depth, max_depth;
+    double max_error;          /* the error bound (model units); 0 when not given: then the
+                                  flatness tolerances and depth.max decide */
     double gradient;           /* the polygoniser's option names: gradient_test ... */
     double double_root_eps;
     int double_root_iters;

@@ -94,4 +94,5 @@ void ism_request_poly_options(const ism_request *req, ism_poly_options *o)
     o->stitch_tol = req->stitch;
     o->flat_normal = req->flat_normal;
     o->flat_plane = req->flat_plane;
+    o->max_error = req->max_error;
 }

@@ -43,6 +43,15 @@ static void write_tolerances(ism_jw *w, const ism_request *req)
     ism_jw_object_end(w);
 }
 
+/* The error bound, only when one was given (keys of requests without it stay as they were). */
+static void write_max_error(ism_jw *w, const ism_request *req)
+{
+    if (!(req->max_error > 0))
+        return;
+    ism_jw_key(w, "max_error");
+    ism_jw_number(w, req->max_error);
+}
+
 /* The encoding options; with only_effective, bits of attributes that are not sent are left
  * out (they cannot change the bytes). */
 static void write_output(ism_jw *w, const ism_request *req, bool only_effective)
@@ -113,6 +122,7 @@ char *ism_request_canonical(const ism_request *req, size_t *len)
     ism_jw_key(&w, "max");
     ism_jw_int(&w, req->max_depth);
     ism_jw_object_end(&w);
+    write_max_error(&w, req);
     ism_jw_key(&w, "tolerances");
     write_tolerances(&w, req);
     ism_jw_key(&w, "output");
@@ -147,6 +157,7 @@ char *ism_request_key_material(const ism_request *req, const ism_tape *tape, siz
     ism_jw_int(&w, req->min_depth);
     ism_jw_int(&w, req->max_depth);
     ism_jw_array_end(&w);
+    write_max_error(&w, req);
     ism_jw_key(&w, "tolerances");
     write_tolerances(&w, req);
     ism_jw_key(&w, "encoding");

@@ -9,6 +9,7 @@
 #include "core/mesh/write_mesh.h"
 #include "proto/presets.h"
 #include "proto/features.h"
+#include "proto/request.h"
 #include "proto/stats.h"
 #include "core/singular/check.h"
 #include "core/singular/surface.h"
@@ -324,6 +325,8 @@ int ism_cli_run_surface(ism_cli_run *run)
     int st = resolve_surface(run);
     if (st)
         return st;
+    if (run->options.max_error > 0 && !run->depth_given) /* as a request does: the bound */
+        run->options.max_depth = ISM_REQ_DEFAULT_MAX_DEPTH_LIMIT; /* decides, not the depth */
     double timings[ISM_TIME_COUNT] = {0};
     double t0 = ism_now_ms();
     ism_error err;

@@ -36,7 +36,7 @@ static const bad_case bad_cases[] = {
      "from GET /v1/presets)"},
     {"{\"expr\": \"x\", \"colour\": 1}", 400, "bad_request", "$.colour",
      "$.colour: unknown field (expected one of: expr, preset, params, let, box, depth, "
-     "tolerances, output)"},
+     "max_error, tolerances, output)"},
     {"{\"expr\": \"x\", \"tolerances\": {\"gradiant\": 0.9}}", 400, "bad_request",
      "$.tolerances.gradiant",
      "$.tolerances.gradiant: unknown field (expected one of: gradient, double_root_eps, "
@@ -49,7 +49,7 @@ static const bad_case bad_cases[] = {
      "curvature_bits, attributes)"},
     {"{\"expr\": \"x\", \"a b\": 1}", 400, "bad_request", "$[\"a b\"]",
      "$[\"a b\"]: unknown field (expected one of: expr, preset, params, let, box, depth, "
-     "tolerances, output)"},
+     "max_error, tolerances, output)"},
     /* surface */
     {"{\"expr\": 3}", 400, "bad_request", "$.expr", "$.expr: expected a string, got an integer"},
     {"{\"expr\": \"\"}", 400, "bad_request", "$.expr", "$.expr: the expression is empty"},
@@ -113,6 +113,19 @@ static const bad_case bad_cases[] = {
      "$.depth.max: expected an integer, got a string"},
     {"{\"expr\": \"x\", \"depth\": 7}", 400, "bad_request", "$.depth",
      "$.depth: expected an object, got an integer"},
+    /* max_error: above 0, within 1e-9 .. 1 of the box diagonal (default box: 2 sqrt 3) */
+    {"{\"expr\": \"x\", \"max_error\": 0}", 422, "over_limit", "$.max_error",
+     "$.max_error: 0 must be above 0 (a distance in model units)"},
+    {"{\"expr\": \"x\", \"max_error\": -0.1}", 422, "over_limit", "$.max_error",
+     "$.max_error: -0.1 must be above 0*"},
+    {"{\"expr\": \"x\", \"max_error\": 3e-9}", 422, "over_limit", "$.max_error",
+     "$.max_error: 3e-09 is below the minimum 3.46*"},
+    {"{\"expr\": \"x\", \"max_error\": 3.5}", 422, "over_limit", "$.max_error",
+     "$.max_error: 3.5 is above the limit 3.46*"},
+    {"{\"expr\": \"x\", \"max_error\": \"1e-3\"}", 400, "bad_request", "$.max_error",
+     "$.max_error: expected a number, got a string"},
+    {"{\"expr\": \"x\", \"max_error\": null}", 400, "bad_request", "$.max_error",
+     "$.max_error: expected a number, got null"},
     /* tolerances */
     {"{\"expr\": \"x\", \"tolerances\": {\"gradient\": 2}}", 422, "over_limit",
      "$.tolerances.gradient", "$.tolerances.gradient: 2 is above the limit 1"},
@@ -272,6 +285,36 @@ Test(request, operator_depth_limit_applies)
     lim.max_depth = 5;
     cr_assert(ism_request_decode(plain, strlen(plain), &lim, &req, &err));
     cr_expect_eq(req.max_depth, 5);
+    ism_request_free(&req);
+}
+
+/* max_error reaches the polygoniser; without depth.max the operator's limit is the safety
+ * limit, an explicit depth.max stays; a request without it keeps the depth-driven test. */
+Test(request, max_error_decodes_and_sets_the_safety_depth)
+{
+    ism_request_limits lim = {9};
+    ism_request req;
+    ism_req_error err;
+    ism_poly_options o;
+    const char *bound = "{\"preset\": \"torus\", \"max_error\": 0.002}";
+    cr_assert(ism_request_decode(bound, strlen(bound), &lim, &req, &err), "%s", err.message);
+    cr_expect_eq(req.max_error, 0.002);
+    cr_expect_eq(req.max_depth, 9);
+    ism_request_poly_options(&req, &o);
+    cr_expect_eq(o.max_error, 0.002);
+    cr_expect_eq(o.max_depth, 9);
+    ism_request_free(&req);
+
+    const char *both = "{\"preset\": \"torus\", \"max_error\": 0.002, \"depth\": {\"max\": 6}}";
+    cr_assert(ism_request_decode(both, strlen(both), &lim, &req, &err), "%s", err.message);
+    cr_expect_eq(req.max_depth, 6);
+    ism_request_free(&req);
+
+    const char *plain = "{\"preset\": \"torus\"}";
+    cr_assert(ism_request_decode(plain, strlen(plain), &lim, &req, &err), "%s", err.message);
+    cr_expect_eq(req.max_error, 0);
+    ism_request_poly_options(&req, &o);
+    cr_expect_eq(o.max_error, 0);
     ism_request_free(&req);
 }
 
