@@ -1,0 +1,148 @@
+/* test_polygonise_accuracy.c — the max_error bound: on the sphere and the torus the mesh lies
+ * within E of the surface between its vertices (at every triangle centroid and every edge
+ * midpoint, distances from the closed forms, not from f), in boxes on the octree lattice and
+ * shifted off it by 1e-3 and 0.37 of a finest cell; the cost grows like area / E (halving E
+ * about doubles the triangles, never 4x); depth.max stops the refinement and the octree then
+ * counts the cells that missed E; without max_error the mesh is what it was. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <string.h>
+#include "poly_fixture.h"
+
+static const ism_param sphere_r[] = {{"r", 1}};
+static const pf_surface sphere = {"x^2 + y^2 + z^2 - r^2", sphere_r, 1, NULL, 0};
+static const ism_param torus_rr[] = {{"R", 1}, {"r", 0.3}};
+static const pf_surface torus = {"(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)",
+                                 torus_rr, 2, NULL, 0};
+
+/* Exact distances to the two surfaces. */
+static double sphere_dist(const double p[3])
+{
+    return fabs(sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 1);
+}
+
+static double torus_dist(const double p[3])
+{
+    double ring = sqrt(p[0] * p[0] + p[1] * p[1]) - 1;
+    return fabs(sqrt(ring * ring + p[2] * p[2]) - 0.3);
+}
+
+/* The safety depth of these runs: cells of 3 / 2^10, far below what E needs on them. */
+#define SAFETY_DEPTH 10
+/* Finest cell of the safety depth over a side of 3 (the box shifts are fractions of it). */
+#define FINEST (3.0 / (1 << SAFETY_DEPTH))
+
+static void run_bounded(const ism_tape *t, double shift, double e, int max_depth, ism_mesh *m,
+                        ism_poly_stats *st)
+{
+    ism_poly_options o;
+    ism_poly_options_default(&o);
+    for (int k = 0; k < 3; k++) {
+        o.box[k] = -1.5 + shift;
+        o.box[3 + k] = 1.5 + shift;
+    }
+    o.min_depth = 3;
+    o.max_depth = max_depth;
+    o.max_error = e;
+    ism_error err;
+    ism_mesh_init(m);
+    cr_assert_eq(ism_polygonise(t, &o, m, st, &err), ISM_POLY_OK, "%s", err.message);
+}
+
+/* The largest distance at triangle centroids and at edge midpoints. */
+static void between_vertices(const ism_mesh *m, double (*dist)(const double *), double *cen,
+                             double *mid)
+{
+    *cen = *mid = 0;
+    for (size_t t = 0; t < m->ntris; t++) {
+        const double *v[3];
+        for (int k = 0; k < 3; k++)
+            v[k] = m->pos + 3 * (size_t)m->tri[3 * t + k];
+        double c[3];
+        for (int a = 0; a < 3; a++)
+            c[a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
+        *cen = fmax(*cen, dist(c));
+        for (int k = 0; k < 3; k++) {
+            const double *p = v[k], *q = v[(k + 1) % 3];
+            double h[3] = {(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2};
+            *mid = fmax(*mid, dist(h));
+        }
+    }
+}
+
+static void check_bound(const pf_surface *s, double (*dist)(const double *), double e)
+{
+    static const double shifts[] = {0, 1e-3 * FINEST, 0.37 * FINEST};
+    ism_tape *t = pf_compile(s);
+    for (size_t i = 0; i < sizeof shifts / sizeof shifts[0]; i++) {
+        ism_mesh m;
+        ism_poly_stats st;
+        run_bounded(t, shifts[i], e, SAFETY_DEPTH, &m, &st);
+        cr_assert_gt(m.ntris, 1000, "%s: %zu triangles", s->expr, m.ntris);
+        double cen, mid;
+        between_vertices(&m, dist, &cen, &mid);
+        cr_expect_leq(cen, e, "%s E %g shift %g: a centroid is %g from the surface", s->expr,
+                      e, shifts[i], cen);
+        cr_expect_leq(mid, e, "%s E %g shift %g: an edge midpoint is %g from the surface",
+                      s->expr, e, shifts[i], mid);
+        cr_expect_eq(st.error_missed_nodes, 0, "%s: the safety depth stopped a cell", s->expr);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
+
+Test(accuracy, sphere_within_the_bound) { check_bound(&sphere, sphere_dist, 1e-3); }
+
+Test(accuracy, torus_within_the_bound) { check_bound(&torus, torus_dist, 1e-3); }
+
+Test(accuracy, sphere_tight_bound) { check_bound(&sphere, sphere_dist, 2.5e-4); }
+
+/* Triangles of size h on a curved surface are about h² / R from it, so their number grows
+ * like area / E: halving E about doubles it (a volume-like cost would be 2^1.5 or more). */
+Test(accuracy, halving_the_bound_about_doubles_the_triangles)
+{
+    ism_tape *t = pf_compile(&sphere);
+    size_t prev = 0;
+    for (double e = 4e-3; e >= 1e-3; e /= 2) {
+        ism_mesh m;
+        ism_poly_stats st;
+        run_bounded(t, 0.37 * FINEST, e, SAFETY_DEPTH, &m, &st);
+        if (prev)
+            cr_expect(m.ntris <= 4 * prev && m.ntris > prev,
+                      "E %g: %zu triangles after %zu at 2E", e, m.ntris, prev);
+        prev = m.ntris;
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
+
+/* A bound the safety depth cannot reach: the cells stopped there are counted, with the
+ * worst distance the octree measured on them, and that distance is above E. */
+Test(accuracy, safety_depth_counts_what_it_stopped)
+{
+    ism_tape *t = pf_compile(&torus);
+    ism_mesh m;
+    ism_poly_stats st;
+    run_bounded(t, 0.37 * FINEST, 1e-4, 5, &m, &st);
+    cr_expect_gt(st.error_missed_nodes, 0);
+    cr_expect_gt(st.error_worst, 1e-4);
+    double cen, mid;
+    between_vertices(&m, torus_dist, &cen, &mid);
+    cr_expect_gt(fmax(cen, mid), 1e-4, "the mesh met a bound the octree said it missed");
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+}
+
+/* max_error = 0 is the depth-driven flatness test, bit for bit as before the bound existed:
+ * the sphere at depth 3:7 in the +-1.5 box (5,192 triangles, the count the issue reported). */
+Test(accuracy, no_bound_keeps_the_depth_driven_mesh)
+{
+    ism_tape *t = pf_compile(&sphere);
+    ism_mesh m;
+    ism_poly_stats st;
+    run_bounded(t, 0, 0, 7, &m, &st);
+    cr_expect_eq(m.ntris, 5192);
+    cr_expect_eq(st.error_missed_nodes, 0);
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+}
