@@ -205,11 +205,58 @@ class TestIsomesh(unittest.TestCase):
         self.assertEqual(p.returncode, 2)
         self.assertIn("depht", p.stderr)
 
+    def sphere_between_vertices(self, path):
+        """The largest exact distance |p| - 1 at triangle centroids and edge midpoints."""
+        verts, faces = read_ply(path)
+        worst = 0.0
+        for f in faces:
+            v = [verts[i][:3] for i in f]
+            pts = [[sum(c) / 3 for c in zip(*v)]]
+            pts += [[(a + b) / 2 for a, b in zip(v[k], v[(k + 1) % 3])] for k in range(3)]
+            for x, y, z in pts:
+                worst = max(worst, abs((x * x + y * y + z * z) ** 0.5 - 1))
+        return worst
+
+    def test_max_error_met_and_missed(self):
+        sphere = ["-e", "x^2 + y^2 + z^2 - 1", "-b", "-1.5,-1.5,-1.5,1.5,1.5,1.5"]
+        path = self.out("s.ply")
+        # met: no warning, and the mesh is within E (measured here, from the closed form)
+        p = run(*sphere, "--max-error", "0.01", "-o", path, "--stats")
+        self.assertEqual(p.returncode, 0, p.stderr)
+        s = json.loads(p.stdout)
+        acc = s["analysis"]["accuracy"]
+        self.assertEqual(acc["max_error"], 0.01)
+        self.assertIs(acc["met"], True)
+        self.assertEqual(s["warnings"], [])
+        worst = self.sphere_between_vertices(path)
+        self.assertLessEqual(worst, 0.01 + 1e-6)  # float32 positions in the PLY
+        self.assertAlmostEqual(max(acc["max_dist_centroid"], acc["max_dist_midpoint"]), worst,
+                               delta=0.05 * worst)
+        for k in ("vertex", "midpoint", "centroid"):
+            self.assertLessEqual(acc[f"p99_dist_{k}"], acc[f"max_dist_{k}"])
+        # missed: depth 4 cannot reach 1e-3; one warning with the count and the worst
+        p = run(*sphere, "--max-error", "0.001", "-d", "3:4", "-o", path, "--stats")
+        s = json.loads(p.stdout)
+        acc = s["analysis"]["accuracy"]
+        self.assertIs(acc["met"], False)
+        worst = self.sphere_between_vertices(path)
+        self.assertGreater(worst, 0.001)
+        self.assertEqual(len(s["warnings"]), 1, s["warnings"])
+        self.assertIn("max_error 0.001 was not met", s["warnings"][0])
+        self.assertIn(f"{s['polygoniser']['error_missed_nodes']} cells stopped at depth.max",
+                      s["warnings"][0])
+        self.assertGreater(s["polygoniser"]["error_missed_nodes"], 0)
+        # no bound: met and max_error are null
+        p = run(*sphere, "-d", "3:5", "--stats")
+        acc = json.loads(p.stdout)["analysis"]["accuracy"]
+        self.assertIsNone(acc["max_error"])
+        self.assertIsNone(acc["met"])
+
     def test_help(self):
         p = run("--help")
         self.assertEqual(p.returncode, 0)
         for flag in ("--expr", "--param", "--let", "--box", "--depth", "--surface", "--surfaces",
-                     "--stats", "--output", "--worker", "--threads"):
+                     "--stats", "--output", "--worker", "--threads", "--max-error"):
             self.assertIn(flag, p.stdout)
 
 

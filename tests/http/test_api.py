@@ -146,6 +146,25 @@ class ApiTest(unittest.TestCase):
         err = self.error_of(self.d.post("/v1/mesh", {"preset": "sphere", "depth": {"max": 12}}), 422)
         self.assertIn("depth", err.get("path", "") + err["message"])
 
+    def test_max_error_request_and_its_stats(self):
+        r = self.d.post("/v1/mesh", {"preset": "torus", "max_error": 0.004})
+        self.assertEqual(r.status, 200)
+        key = r.header("ETag").strip('"')
+        s = self.d.get("/v1/meshes/%s/stats" % key).json()
+        acc = s["analysis"]["accuracy"]
+        self.assertEqual(acc["max_error"], 0.004)
+        worst = max(acc["max_dist_vertex"], acc["max_dist_midpoint"], acc["max_dist_centroid"])
+        self.assertEqual(acc["met"], worst <= 0.004)
+        self.assertEqual(s["warnings"] == [], acc["met"])
+        # the bound is part of the key: another bound is another mesh
+        other = self.d.post("/v1/mesh", {"preset": "torus", "max_error": 0.008})
+        self.assertNotEqual(other.header("ETag"), r.header("ETag"))
+        for bad in (0, -1, 1e-12):
+            err = self.error_of(self.d.post("/v1/mesh", {"preset": "torus", "max_error": bad}), 422)
+            self.assertEqual(err.get("path"), "$.max_error")
+        err = self.error_of(self.d.post("/v1/mesh", {"preset": "torus", "max_error": "x"}), 400)
+        self.assertEqual(err.get("path"), "$.max_error")
+
     def test_body_too_large_is_413(self):
         big = b'{"expr": "' + b"x+" * 40000 + b'x"}'
         self.error_of(self.d.post("/v1/mesh", big, headers={"Content-Type": "application/json"}), 413)
