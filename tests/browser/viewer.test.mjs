@@ -254,6 +254,31 @@ describe('isomesh viewer', { timeout: 600000 }, () => {
     assert.equal(await page.isHidden('#message'), true);
   });
 
+  it('asks for a max error and shows what was reached', async () => {
+    await choosePreset('sphere');
+    await page.evaluate(() => { document.getElementById('box-section').open = true; });
+    const before = await loads(page);
+    await page.fill('#max-error', '0.004');
+    await page.locator('#max-error').press('Tab');
+    await waitForMesh(page, before);
+    assert.equal(await page.isDisabled('#depth-max'), true, 'depth max is only a safety limit');
+    const s = await getJSON(`/v1/meshes/${await meshKey()}/stats`);
+    const acc = s.analysis.accuracy;
+    assert.equal(acc.max_error, 0.004);
+    assert.equal(acc.met, Math.max(acc.max_dist_midpoint, acc.max_dist_centroid, acc.max_dist_vertex) <= 0.004);
+    const panel = await statsPanel(page);
+    assert.equal(Number(panel.max_error.value), 0.004);
+    assert.match(panel.max_error.text, acc.met ? /\(met\)/ : /\(not met\)/);
+    assert.equal(Number(panel.max_dist_between.value), Math.max(acc.max_dist_midpoint, acc.max_dist_centroid));
+    assert.match(await settledHref(page), /err=0\.004/);
+    const back = await loads(page);
+    await page.fill('#max-error', '');
+    await page.locator('#max-error').press('Tab');
+    await waitForMesh(page, back);
+    assert.equal(await page.isDisabled('#depth-max'), false);
+    assert.equal((await statsPanel(page)).max_error.text, 'off');
+  });
+
   it('says so when the surface does not cross the box', async () => {
     const before = await loads(page);
     await page.fill('#expr', 'x^2 + y^2 + z^2 + 1');

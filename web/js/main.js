@@ -199,6 +199,8 @@ function syncControls() {
   BOX_IDS.forEach((id, i) => { $(id).value = String(state.box[i]); $(id).removeAttribute('aria-invalid'); });
   $('depth-min').value = String(state.depth.min);
   $('depth-max').value = String(state.depth.max);
+  $('max-error').value = state.maxError > 0 ? String(state.maxError) : '';
+  $('depth-max').disabled = state.maxError > 0;
   $('color-mode').value = state.color;
   $('show-edges').checked = state.show.edges;
   $('show-points').checked = state.show.points;
@@ -561,7 +563,7 @@ function applyFragment(fragment) {
       if (ranges[k]) ranges[k] = [Math.min(ranges[k][0], v), Math.max(ranges[k][1], v)];
     }
   }
-  for (const k of ['box', 'depth', 'color', 'clip', 'show', 'wire']) if (s[k] !== undefined) state[k] = s[k];
+  for (const k of ['box', 'depth', 'maxError', 'color', 'clip', 'show', 'wire']) if (s[k] !== undefined) state[k] = s[k];
   pendingView = s.view || null;
   state.view = s.view || null;
   shownIdentity = null;
@@ -641,6 +643,18 @@ function wire() {
       requestChanged();
     });
   }
+  $('max-error').addEventListener('change', () => {
+    const text = $('max-error').value.trim(), e = Number(text);
+    if (text !== '' && !(e > 0)) {
+      $('max-error').setAttribute('aria-invalid', 'true');
+      message('Max error must be a positive distance (or empty).', 'error');
+      return;
+    }
+    $('max-error').removeAttribute('aria-invalid');
+    state.maxError = text === '' ? null : e;
+    $('depth-max').disabled = state.maxError > 0;
+    requestChanged();
+  });
   $('reset-box').addEventListener('click', () => {
     const p = presetByName(state.preset);
     if (!p) return;

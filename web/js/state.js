@@ -3,7 +3,7 @@
 // parameters, box, depth, view, colour mode, clipping and toggles.
 //
 // Fragment keys (URLSearchParams): preset=NAME | expr=TEXT, p.NAME=VALUE per parameter,
-// box=xmin,ymin,zmin,xmax,ymax,zmax, depth=MIN,MAX, cam=px,py,pz,tx,ty,tz,
+// box=xmin,ymin,zmin,xmax,ymax,zmax, depth=MIN,MAX, err=MAX_ERROR, cam=px,py,pz,tx,ty,tz,
 // color=shaded|mean|gauss, clip=AXIS,OFFSET[,flip], hide=edges,points,boundary, wire=1.
 
 export const COLOR_MODES = ['shaded', 'mean', 'gauss'];
@@ -17,6 +17,7 @@ export function defaultState() {
     params: {},             // name -> value
     box: DEFAULT_BOX.slice(),
     depth: { min: 3, max: 7 },
+    maxError: null,         // the error bound (model units), null: the depth decides
     view: null,             // {pos: [3], target: [3]}
     color: 'shaded',
     clip: { on: false, axis: 'z', offset: 0, flip: false },
@@ -34,7 +35,12 @@ export function requestBody(state, paramNames) {
   for (const n of paramNames) if (Number.isFinite(state.params[n])) params[n] = state.params[n];
   if (Object.keys(params).length) body.params = params;
   body.box = state.box.slice();
-  body.depth = { min: state.depth.min, max: state.depth.max };
+  if (state.maxError > 0) {
+    body.depth = { min: state.depth.min };  // depth.max: the server's limit, a safety net
+    body.max_error = state.maxError;
+  } else {
+    body.depth = { min: state.depth.min, max: state.depth.max };
+  }
   return JSON.stringify(body);
 }
 
@@ -54,6 +60,7 @@ export function encodeState(state, paramNames) {
   for (const n of paramNames) if (Number.isFinite(state.params[n])) q.set('p.' + n, num(state.params[n]));
   q.set('box', state.box.map(num).join(','));
   q.set('depth', `${state.depth.min},${state.depth.max}`);
+  if (state.maxError > 0) q.set('err', num(state.maxError));
   if (state.view) q.set('cam', [...state.view.pos, ...state.view.target].map(short).join(','));
   if (state.color !== 'shaded') q.set('color', state.color);
   if (state.clip.on) q.set('clip', [state.clip.axis, short(state.clip.offset)].concat(state.clip.flip ? ['flip'] : []).join(','));
@@ -93,6 +100,10 @@ export function decodeState(fragment) {
   if (q.has('depth')) {
     const d = numbers(q.get('depth'), 2);
     if (d && d.every(Number.isInteger)) s.depth = { min: d[0], max: d[1] }; else s.problems.push('depth');
+  }
+  if (q.has('err')) {
+    const e = Number(q.get('err'));
+    if (e > 0 && Number.isFinite(e)) s.maxError = e; else s.problems.push('err');
   }
   if (q.has('cam')) {
     const c = numbers(q.get('cam'), 6);

@@ -42,6 +42,12 @@ export function showStats(result) {
   put('boundary_edges', fmt.count(an.boundary_edges), an.boundary_edges);
   put('min_angle', Number.isFinite(q.min_angle) ? `${fmt.sig(q.min_angle)}°` : '–', q.min_angle);
   put('max_dist', fmt.sig(acc.max_dist_vertex), acc.max_dist_vertex);
+  const between = Math.max(acc.max_dist_midpoint, acc.max_dist_centroid);
+  const p99 = Math.max(acc.p99_dist_midpoint, acc.p99_dist_centroid);
+  put('max_dist_between', Number.isFinite(between) ? `${fmt.sig(between)}, ${fmt.sig(p99)}` : '–',
+      Number.isFinite(between) ? between : null);
+  const met = acc.met === true ? ' (met)' : acc.met === false ? ' (not met)' : '';
+  put('max_error', acc.max_error > 0 ? `${fmt.sig(acc.max_error)}${met}` : 'off', acc.max_error);
   put('compute_ms', fmt.ms(t.total), t.total);
   const cache = result.viewerCache ? 'viewer (no request)' : `server ${result.serverCache}`;
   put('cache', cache, result.viewerCache ? 'viewer' : result.serverCache);
