@@ -3,6 +3,7 @@
  * into chunks handed to threads, each with its own workspace. */
 #include "core/singular/sheet_field.h"
 #include "core/singular/lattice_key.h"
+#include "core/util/clock.h"
 #include "core/util/parallel.h"
 #include "core/util/sym3.h"
 
@@ -22,6 +23,7 @@ bool ism_sheet_field_init(ism_sheet_field *sf, const ism_tape *f, const ism_grid
     sf->f = f;
     sf->grid = g;
     sf->threads = threads < 1 ? 1 : threads;
+    atomic_init(&sf->stopped, 0);
     ism_key_map_init(&sf->map);
     sf->ws = calloc((size_t)sf->threads, sizeof *sf->ws);
     if (!sf->ws)
@@ -42,6 +44,17 @@ void ism_sheet_field_free(ism_sheet_field *sf)
     ism_key_map_free(&sf->map);
     free(sf->v);
     memset(sf, 0, sizeof *sf);
+}
+
+bool ism_sheet_field_should_stop(ism_sheet_field *sf)
+{
+    if (atomic_load(&sf->stopped))
+        return true;
+    if ((sf->cancel && *sf->cancel) || (sf->deadline_ms > 0 && ism_now_ms() > sf->deadline_ms)) {
+        atomic_store(&sf->stopped, 1);
+        return true;
+    }
+    return false;
 }
 
 uint32_t ism_sheet_field_vertex(ism_sheet_field *sf, uint64_t key)
@@ -97,6 +110,8 @@ static void jet_task(void *ctx, size_t task, int thread)
     ism_sheet_field *sf = j->sf;
     size_t end = (task + 1) * SF_CHUNK < j->n ? (task + 1) * SF_CHUNK : j->n;
     double h[6];
+    if (ism_sheet_field_should_stop(sf))
+        return;
     for (size_t i = task * SF_CHUNK; i < end; i++) {
         ism_sheet_vertex *v = &sf->v[j->todo[i]];
         v->f = ism_eval_hessian(sf->f, sf->ws[thread], v->p[0], v->p[1], v->p[2], v->g, h);

@@ -8,6 +8,7 @@
 #ifndef ISM_SHEET_FIELD_H
 #define ISM_SHEET_FIELD_H
 
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -39,11 +40,18 @@ typedef struct ism_sheet_field {
     ism_sheet_vertex *v;
     size_t cap;
     uint64_t evals_jet;
+    const volatile int *cancel; /* polled by each parallel task (may be NULL) */
+    double deadline_ms;         /* ism_now_ms() past which tasks stop (0 = none) */
+    atomic_int stopped;         /* set once a task saw cancel or the deadline */
 } ism_sheet_field;
 
 /* False when out of memory (the field is then freed). */
 bool ism_sheet_field_init(ism_sheet_field *sf, const ism_tape *f, const ism_grid *g,
                           int threads);
+
+/* True (and sf->stopped set) when cancel is set or the deadline has passed: parallel tasks
+ * then skip their work, leaving it undone (jets unknown, crossings not landed). */
+bool ism_sheet_field_should_stop(ism_sheet_field *sf);
 void ism_sheet_field_free(ism_sheet_field *sf);
 
 /* The index of the lattice point with this key (lattice_key.h), added knowing nothing when

@@ -219,7 +219,7 @@ static uint32_t add_crossing(const ism_sheet_field *sf, ism_sheet_tris *t, xedge
 }
 
 typedef struct project_job {
-    const ism_sheet_field *sf;
+    ism_sheet_field *sf;
     ism_sheet_tris *t;
     double cell;
 } project_job;
@@ -227,7 +227,9 @@ typedef struct project_job {
 static void project_task(void *ctx, size_t task, int thread)
 {
     project_job *j = ctx;
-    const ism_sheet_field *sf = j->sf;
+    ism_sheet_field *sf = j->sf;
+    if (ism_sheet_field_should_stop(sf))
+        return;
     size_t end = (task + 1) * SHEET_CHUNK;
     if (end > j->t->xmap.n)
         end = j->t->xmap.n;
@@ -317,7 +319,7 @@ bool ism_sheet_mesh_cells(const ism_sheet_field *sf, const uint32_t (*corners)[8
                     0, NULL, 0, 0};
     bool ok = cl.keep && cl.start && list_cells(sf, corners, n, t, &cl);
     if (ok) {
-        project_job job = {sf, t, cell};
+        project_job job = {(ism_sheet_field *)sf, t, cell}; /* tasks may set sf->stopped */
         ism_parallel_for(sf->threads, (t->xmap.n + SHEET_CHUNK - 1) / SHEET_CHUNK, project_task,
                          &job);
         for (size_t i = 0; i < t->xmap.n; i++)

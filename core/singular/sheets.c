@@ -72,14 +72,16 @@ static void set_incomplete(ism_locus *io, const char *why)
     snprintf(io->incomplete_why, sizeof io->incomplete_why, "double sheets: %s", why);
 }
 
-/* True when the stage must stop (cancel or deadline); says so in io. */
+/* True when the stage must stop (cancel or deadline, now or seen by a task); says so in
+ * io. */
 static bool interrupted(stage *s)
 {
+    ism_sheet_field_should_stop(&s->sf);
     if (s->o->cancel && *s->o->cancel) {
         set_incomplete(s->io, "cancelled");
         return true;
     }
-    if (s->o->deadline_ms > 0 && ism_now_ms() > s->o->deadline_ms) {
+    if (atomic_load(&s->sf.stopped)) {
         set_incomplete(s->io, "deadline passed");
         return true;
     }
@@ -214,6 +216,8 @@ static bool run_stage(const ism_tape *f, const ism_locus_options *o, ism_locus *
     /* one finest cell per box is no lattice to contour on: depth 0 runs as depth 1 */
     ism_grid_init(&s.grid, o->box, o->max_depth < 1 ? 1 : o->max_depth);
     bool ok = ism_sheet_field_init(&s.sf, f, &s.grid, threads) && map_boxes(&s);
+    s.sf.cancel = o->cancel;
+    s.sf.deadline_ms = o->deadline_ms;
     if (ok) {
         int r = find_cells(&s, f, threads, from_boxes);
         ok = r != CELLS_NO_MEMORY && (r == CELLS_CUT || mesh_sheets(&s, mesh));
