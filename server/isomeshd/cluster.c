@@ -6,6 +6,7 @@
 #include "server/isomeshd/cluster.h"
 
 #include <hiredis/hiredis.h>
+#include <limits.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -106,13 +107,15 @@ static const char DEPTH_LUA[] =
     "return n";
 
 /* KEYS stream, job hash; ARGV consumer, id, progress, ttl. 1: still ours (idle time reset,
- * progress published); 0: taken over by another daemon, or canceled (then acknowledged). */
+ * progress published); 0: taken over by another daemon, or its record is gone; 2: canceled
+ * (both acknowledged and deleted). */
 static const char HEARTBEAT_LUA[] =
     "local p = redis.call('xpending', KEYS[1], 'workers', ARGV[2], ARGV[2], 1)[1] "
     "if not p or p[2] ~= ARGV[1] then return 0 end "
-    "if redis.call('hget', KEYS[2], 'id') ~= ARGV[2] or redis.call('hget', KEYS[2], 'cancel') then "
+    "local mine = redis.call('hget', KEYS[2], 'id') == ARGV[2] "
+    "if not mine or redis.call('hget', KEYS[2], 'cancel') then "
     "  redis.call('xack', KEYS[1], 'workers', ARGV[2]) redis.call('xdel', KEYS[1], ARGV[2]) "
-    "  return 0 end "
+    "  if mine then return 2 end return 0 end "
     "redis.call('xclaim', KEYS[1], 'workers', ARGV[1], 0, ARGV[2], 'JUSTID') "
     "redis.call('hset', KEYS[2], 'progress', ARGV[3]) "
     "redis.call('pexpire', KEYS[2], ARGV[4]) "
@@ -126,6 +129,18 @@ static const char FINISH_LUA[] =
     "  redis.call('hset', KEYS[2], 'state', ARGV[2], 'status', ARGV[3], 'error', ARGV[4], "
     "    'progress', '1') "
     "  redis.call('pexpire', KEYS[2], ARGV[5]) end "
+    "return 1";
+
+/* KEYS job hash. The computation of that name, unless it has ended, is canceled: flagged
+ * (its origin answers its waiters, its executor stops), and deleted while still waiting. */
+static const char CANCEL_NAME_LUA[] =
+    "local id = redis.call('hget', KEYS[1], 'id') "
+    "local state = redis.call('hget', KEYS[1], 'state') "
+    "if not id or state == 'done' or state == 'failed' then return 0 end "
+    "redis.call('hset', KEYS[1], 'cancel', '1') "
+    "local s = redis.call('hget', KEYS[1], 'stream') "
+    "if s and not redis.call('xpending', s, 'workers', id, id, 1)[1] then "
+    "  redis.call('xdel', s, id) end "
     "return 1";
 
 /* KEYS stream, job hash; ARGV id. A waiting entry goes; a running one is flagged. */
@@ -236,14 +251,14 @@ int ismd_cluster_view(ismd_cluster *c, const char *name, const char *id, ismd_cj
     char job[KEY_MAX];
     ckey(c, job, "job:", name);
     memset(v, 0, sizeof *v);
-    const char *argv[] = {"HMGET", job, "id", "state", "progress", "status", "error"};
-    size_t lens[7];
-    for (int i = 0; i < 7; i++)
+    const char *argv[] = {"HMGET", job, "id", "state", "progress", "status", "error", "cancel"};
+    size_t lens[8];
+    for (int i = 0; i < 8; i++)
         lens[i] = strlen(argv[i]);
-    redisReply *r = ism_cache_redis_call(c->redis, "cluster_view", 7, argv, lens);
+    redisReply *r = ism_cache_redis_call(c->redis, "cluster_view", 8, argv, lens);
     if (!r)
         return -1;
-    if (r->type != REDIS_REPLY_ARRAY || r->elements != 5) {
+    if (r->type != REDIS_REPLY_ARRAY || r->elements != 6) {
         freeReplyObject(r);
         return -1;
     }
@@ -259,6 +274,8 @@ int ismd_cluster_view(ismd_cluster *c, const char *name, const char *id, ismd_cj
         v->status = st ? (unsigned)strtoul(st, NULL, 10) : 500;
         if (v->state == ISMD_CJ_FAILED && err)
             v->error = ism_blob_from_str(err);
+        if (v->state < ISMD_CJ_DONE && reply_str(r->element[5]))
+            v->state = ISMD_CJ_CANCELED; /* DELETE through another daemon */
     }
     freeReplyObject(r);
     return 0;
@@ -302,10 +319,11 @@ static long long cj_end(cjob *j)
 
 /* The flight ended: its results are in Redis before the job hash says so. A refusal by this
  * daemon (shutting down, queue full) is not the computation's answer: the entry is left
- * pending, and another daemon re-claims it one lock lifetime later. */
+ * pending, and another daemon re-claims it one lock lifetime later. A cancel (499) leaves
+ * the hash as the cancel left it. */
 static void cj_report(cjob *j, ism_cache_tier *t)
 {
-    if (j->status == 503 || j->status == 429)
+    if (j->status == 503 || j->status == 429 || j->status == 499)
         return;
     ism_cache_redis_flush(t);
     char status[16];
@@ -324,7 +342,7 @@ static void cj_report(cjob *j, ism_cache_tier *t)
     free(err);
 }
 
-/* Still ours and wanted: 1; taken over or canceled: 0; Redis unavailable: -1. */
+/* Still ours and wanted: 1; taken over: 0; canceled: 2; Redis unavailable: -1. */
 static int cj_beat(cjob *j, double progress)
 {
     char p[32];
@@ -361,13 +379,20 @@ static long long cj_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
         return now + CJ_TICK_NS;
     long long every = j->c->ttl_ms * 1000000LL / 3;
     j->beat_at_ns = now + (every < HEARTBEAT_MAX_NS ? every : HEARTBEAT_MAX_NS);
-    if (cj_beat(j, progress) != 0)
+    int beat = cj_beat(j, progress);
+    if (beat == 1 || beat < 0)
         return now + CJ_TICK_NS;
-    /* canceled, or another daemon took it over: stop computing it here */
     if (!ismd_shared_enter(sh))
         return now + CJ_TICK_NS;
-    finished = j->finished;
-    if (!finished)
+    if (beat == 2 && !j->finished && j->waiter.flight) {
+        /* canceled: for every waiter here too; the flight answers us when it stops */
+        ismd_sched_cancel(j->c->sched, j->waiter.flight);
+        ismd_shared_leave(sh);
+        j->beat_at_ns = LLONG_MAX;
+        return now + CJ_TICK_NS;
+    }
+    /* another daemon took it over: stop computing it here (unless others wait for it) */
+    if (!j->finished)
         ismd_sched_detach(j->c->sched, &j->waiter);
     ismd_shared_leave(sh);
     ism_log_field f[] = {ISM_LS("job", strstr(j->job, ":v1:job:") + 8), ISM_LS("entry", j->id)};
@@ -535,6 +560,7 @@ typedef struct jobtask {
     ism_redis_task base;       /* first: the tier hands this back */
     ismd_cluster *c;
     ismd_waiter *w;            /* lookup: who gets the answer; NULL: a record to write */
+    bool cancel;               /* without w: cancel key.fmt's computation instead */
     char id[40], user[ISMD_QUEUE_USER_MAX], key[65], fmt[8];
     long long created_unix;
 } jobtask;
@@ -566,6 +592,16 @@ static void write_record(jobtask *j)
         freeReplyObject(r);
 }
 
+static void cancel_by_name(jobtask *j)
+{
+    char name[ISM_CACHE_NAME_MAX], job[KEY_MAX];
+    if (!ism_cache_name(name, j->key, j->fmt))
+        return;
+    ckey(j->c, job, "job:", name);
+    const char *args[] = {job};
+    run_script(j->c, "cluster_cancel_name", CANCEL_NAME_LUA, 1, args, 1, NULL);
+}
+
 /* HMGET key fields... into out[] (copies, "" when missing). 1 found (first field set), 0 not,
  * -1 Redis unavailable. */
 static int hash_fields(ismd_cluster *c, const char *key, const char *const *fields, int n,
@@ -595,7 +631,7 @@ static int hash_fields(ismd_cluster *c, const char *key, const char *const *fiel
 static unsigned lookup(jobtask *j, ism_blob **json)
 {
     char rec[KEY_MAX], job[KEY_MAX], name[ISM_CACHE_NAME_MAX];
-    char r[4][256], h[5][256];
+    char r[4][256], h[6][256];
     ckey(j->c, rec, "jobrec:", j->id);
     static const char *const RF[] = {"user", "key", "fmt", "created"};
     int got = hash_fields(j->c, rec, RF, 4, r);
@@ -604,8 +640,9 @@ static unsigned lookup(jobtask *j, ism_blob **json)
     if (!ism_cache_name(name, r[1], r[2]))
         return 404;
     ckey(j->c, job, "job:", name);
-    static const char *const HF[] = {"state", "progress", "status", "error", "started_ms"};
-    if (hash_fields(j->c, job, HF, 5, h) < 0)
+    static const char *const HF[] = {"state", "progress", "status", "error", "started_ms",
+                                     "cancel"};
+    if (hash_fields(j->c, job, HF, 6, h) < 0)
         return 503;
     ismd_job_view v = {.id = j->id, .user = r[0], .key = r[1], .fmt = r[2],
                        .created_unix = (time_t)strtoll(r[3], NULL, 10),
@@ -617,6 +654,8 @@ static unsigned lookup(jobtask *j, ism_blob **json)
     ism_cache_name(parts[2], r[1], "features.json");
     if (!ismd_job_state_parse(h[0], &v.state) && ism_cache_redis_count(j->c->redis, names, 3) == 3)
         v.state = ISMD_JOB_DONE; /* no computation on record: the mesh was there already */
+    if (v.state < ISMD_JOB_DONE && h[5][0])
+        v.state = ISMD_JOB_CANCELED;
     v.progress = v.state == ISMD_JOB_DONE ? 1 : strtod(h[1], NULL);
     v.status = (unsigned)strtoul(h[2], NULL, 10);
     v.started_unix_ms = strtoll(h[4], NULL, 10);
@@ -643,7 +682,10 @@ static long long jobtask_run(ism_redis_task *base, ism_cache_tier *t, bool stopp
     if (stopping)
         return jobtask_end(j); /* the tier is closing: the scheduler may be gone */
     if (!j->w) {
-        write_record(j);
+        if (j->cancel)
+            cancel_by_name(j);
+        else
+            write_record(j);
         return jobtask_end(j);
     }
     ism_blob *json = NULL;
@@ -693,4 +735,15 @@ bool ismd_cluster_job_lookup(ismd_cluster *c, const char *id, ismd_waiter *w)
     j->w = w;
     ism_cache_redis_schedule(c->redis, &j->base, 0);
     return true;
+}
+
+void ismd_cluster_job_cancel(ismd_cluster *c, const char *id, const char *key, const char *fmt)
+{
+    jobtask *j = jobtask_new(c, id);
+    if (!j)
+        return;
+    j->cancel = true;
+    snprintf(j->key, sizeof j->key, "%s", key);
+    snprintf(j->fmt, sizeof j->fmt, "%s", fmt);
+    ism_cache_redis_schedule(c->redis, &j->base, 0);
 }

@@ -41,7 +41,8 @@ typedef struct ismd_cluster ismd_cluster;
 typedef struct ismd_shared ismd_shared;
 
 typedef enum ismd_cj_state {
-    ISMD_CJ_MISSING, ISMD_CJ_QUEUED, ISMD_CJ_RUNNING, ISMD_CJ_DONE, ISMD_CJ_FAILED
+    ISMD_CJ_MISSING, ISMD_CJ_QUEUED, ISMD_CJ_RUNNING, ISMD_CJ_DONE, ISMD_CJ_FAILED,
+    ISMD_CJ_CANCELED
 } ismd_cj_state;
 
 /* A computation as its job hash tells it. */
@@ -83,5 +84,9 @@ void ismd_cluster_job_created(ismd_cluster *c, const char *id, const char *user,
  * done when the mesh is in the shared cache), 404 when no daemon recorded it, or 503 when
  * Redis is unavailable. False (w never called) when out of memory or stopping. */
 bool ismd_cluster_job_lookup(ismd_cluster *c, const char *id, ismd_waiter *w);
+/* DELETE of job id (for key.fmt) through a daemon that does not hold it: its computation is
+ * canceled service-wide (for every job sharing it; the daemon holding the job answers its
+ * waiters "canceled"). Fire and forget; the caller checked who may. */
+void ismd_cluster_job_cancel(ismd_cluster *c, const char *id, const char *key, const char *fmt);
 
 #endif

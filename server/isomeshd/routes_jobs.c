@@ -168,6 +168,29 @@ static enum MHD_Result answer_remote_events(ismd_req *r, json_t *o)
     return ismd_send(r, 200, resp);
 }
 
+/* DELETE of another daemon's job: a live one is canceled service-wide, and answered as
+ * canceled (a finished one as it is, like a local one). */
+static enum MHD_Result cancel_remote(ismd_req *r, json_t *o)
+{
+    const char *state = json_string_value(json_object_get(o, "state"));
+    const char *key = json_string_value(json_object_get(o, "key"));
+    const char *fmt = json_string_value(json_object_get(o, "format"));
+    if (state && key && fmt && (!strcmp(state, "queued") || !strcmp(state, "running"))) {
+        ismd_cluster_job_cancel(ismd_shared_cluster(r->srv->shared), r->id, key, fmt);
+        json_object_set_new(o, "state", json_string("canceled"));
+    }
+    char *text = json_dumps(o, JSON_COMPACT);
+    ism_blob *b = text ? ism_blob_from_str(text) : NULL;
+    free(text);
+    struct MHD_Response *resp = b ? ismd_response_blob(b, "application/json") : NULL;
+    r->bytes = b ? b->len : 0;
+    ism_blob_unref(b);
+    if (!resp)
+        return MHD_NO;
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
+    return ismd_send(r, 200, resp);
+}
+
 /* The lookup in Redis answered (r->r_status, r->r_body). */
 static enum MHD_Result remote_job_ready(ismd_req *r)
 {
@@ -178,15 +201,18 @@ static enum MHD_Result remote_job_ready(ismd_req *r)
                                   : job_not_found(r);
     json_t *o = json_loadb((const char *)r->r_body->data, r->r_body->len, 0, NULL);
     const char *user = json_string_value(json_object_get(o, "user"));
+    bool cancel = !strcmp(r->method, "DELETE");
     ismd_auth *a = r->srv->auth;
     enum MHD_Result ret;
     if (!o)
         ret = MHD_NO;
-    else if (a->private_mode && !(user && ismd_auth_owns(a, &r->who, user)))
+    else if ((cancel || a->private_mode) && !(user && ismd_auth_owns(a, &r->who, user)))
         ret = ismd_respond_error(r, 403, "not_your_job",
                                  "this job belongs to another user (an admin token may touch it)");
     else if (r->route == ISMD_R_JOB_EVENTS)
         ret = answer_remote_events(r, o);
+    else if (cancel)
+        ret = cancel_remote(r, o);
     else {
         struct MHD_Response *resp = ismd_response_blob(r->r_body, "application/json");
         r->bytes = r->r_body->len;
@@ -250,7 +276,7 @@ enum MHD_Result ismd_route_job_get(ismd_req *r)
 enum MHD_Result ismd_route_job_delete(ismd_req *r)
 {
     enum MHD_Result ret;
-    ismd_job *job = touch_job(r, true, false, &ret);
+    ismd_job *job = touch_job(r, true, true, &ret);
     if (!job)
         return ret;
     ismd_jobs_cancel(r->srv->jobs, &r->srv->sched, job);

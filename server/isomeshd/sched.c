@@ -258,6 +258,16 @@ void ismd_sched_fail(ismd_sched *s, ismd_flight *f, unsigned status, const char 
     ism_blob_unref(r.body);
 }
 
+void ismd_sched_cancel(ismd_sched *s, ismd_flight *f)
+{
+    if (f->running) {
+        f->canceled = true;
+        wake_pool(s);
+        return;
+    }
+    ismd_sched_fail(s, f, 499, "canceled", "the job was canceled", ISMD_OUT_CANCELED);
+}
+
 void ismd_sched_progress(ismd_sched *s, ismd_flight *f, double fraction)
 {
     (void)s;

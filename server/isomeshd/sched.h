@@ -53,6 +53,7 @@ struct ismd_flight {
     bool queued, running;
     bool shared;               /* asking the shared cache first: neither queued nor running */
     bool elsewhere;            /* shared, and running on another daemon (cluster.h) */
+    bool canceled;             /* running: to be stopped by the pool, waiters answered 499 */
     ismd_user_limits lim;      /* the user's limits, for queueing after the shared cache */
     double progress;
     long long submitted_ns, started_ns;
@@ -122,6 +123,10 @@ ismd_submit ismd_sched_submit_here(ismd_sched *s, const char *key, const char *f
 /* Takes w off its flight (a canceled job). A queued flight left without waiters is dropped;
  * a running one is stopped by the pool (its worker is replaced). */
 void ismd_sched_detach(ismd_sched *s, ismd_waiter *w);
+
+/* Cancels f for every waiter (a cancel through another daemon: cluster.h): answered 499
+ * now when it waits, by the pool (which stops its worker) when it runs. */
+void ismd_sched_cancel(ismd_sched *s, ismd_flight *f);
 
 /* Hands r to every waiter and frees the flight (must not be queued). */
 void ismd_sched_finish(ismd_sched *s, ismd_flight *f, const ismd_result *r, ismd_outcome o);

@@ -450,7 +450,7 @@ static long long remote_done(task *k, ism_cache_tier *t, long long now)
 
 static long long remote_failed(task *k, ism_cache_tier *t, ismd_cj_view *v)
 {
-    ismd_result r = {.status = v->status >= 400 ? v->status : 500,
+    ismd_result r = {.status = v->status >= 400 ? v->status : 500, /* 499: canceled */
                      .content_type = "application/json", .body = v->error};
     if (!r.body)
         r.body = ismd_error_json("cluster_error", "the computation failed on another daemon",
@@ -490,6 +490,11 @@ static long long remote(task *k, ism_cache_tier *t, long long now)
     case ISMD_CJ_DONE:
         return remote_done(k, t, now);
     case ISMD_CJ_FAILED:
+        return remote_failed(k, t, &v);
+    case ISMD_CJ_CANCELED:
+        v.status = 499;
+        v.error = ismd_error_json("canceled", "the job was canceled (DELETE /v1/jobs/{id} "
+                                  "through another daemon)", NULL);
         return remote_failed(k, t, &v);
     default: /* its record is gone: start over */
         if (!k->lock_lost)

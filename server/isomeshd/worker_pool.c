@@ -591,9 +591,13 @@ static void enforce(ismd_pool *p, long long now)
     }
     for (int i = 0; i < p->n && nd < sizeof doomed / sizeof doomed[0]; i++) {
         worker *w = &p->w[i];
-        if (w->state == W_BUSY && w->flight && w->flight->nwaiters == 0) {
-            ismd_sched_finish(p->sched, w->flight, &(ismd_result){.status = 499},
-                              ISMD_OUT_CANCELED);
+        if (w->state == W_BUSY && w->flight && (w->flight->nwaiters == 0 || w->flight->canceled)) {
+            if (w->flight->nwaiters == 0)
+                ismd_sched_finish(p->sched, w->flight, &(ismd_result){.status = 499},
+                                  ISMD_OUT_CANCELED);
+            else
+                ismd_sched_fail(p->sched, w->flight, 499, "canceled", "the job was canceled",
+                                ISMD_OUT_CANCELED);
             w->flight = NULL;
             doomed[nd] = w;
             why[nd++] = ISMD_RESTART_CANCEL;

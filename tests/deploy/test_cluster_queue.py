@@ -11,7 +11,8 @@ with Redis, daemons of one worker each and (for the failure case) nginx:
   nginx retries the idempotent POST on the next daemon, which joins the computation);
 * a job is seen through any daemon (GET /v1/jobs/{id}, its events as one event per
   connection with a retry delay), also after the daemon it was posted to is killed: its
-  computation goes on elsewhere and the job reads done, its mesh served by the survivor.
+  computation goes on elsewhere and the job reads done, its mesh served by the survivor;
+  a DELETE through another daemon cancels it everywhere (the worker computing it stops).
 
 Every wait is bounded; no assertion depends on the machine's speed beyond the bounds."""
 import os
@@ -143,6 +144,28 @@ class ClusterQueueTest(unittest.TestCase):
             for d in s.daemons:
                 self.assertTrue(stack.wait_until(
                     lambda: d.metric("isomesh_cluster_queue_depth") == 0, 5))
+        finally:
+            self.assertEqual(s.cleanup(), [], "sanitizer reports")
+
+    def test_a_job_canceled_through_another_daemon_stops_everywhere(self):
+        s = stack.Stack(n=2, daemon_args=("--cluster", "--workers", "1"), with_nginx=False).start()
+        try:
+            a, b = s.daemons
+            job = a.post("/v1/jobs", slow_work(600)).json()
+            self.assertTrue(stack.wait_until(
+                lambda: b.get(job["url"]).json().get("state") == "running", 30))
+            gone = b.request("DELETE", job["url"])
+            self.assertEqual(gone.status, 200, gone.body[:300])
+            self.assertEqual(gone.json()["state"], "canceled")
+            # the daemon holding the job says so too, and the worker computing it stops
+            self.assertTrue(stack.wait_until(
+                lambda: a.get(job["url"]).json()["state"] == "canceled", 10), a.get(job["url"]).body)
+            self.assertEqual(b.get(job["url"]).json()["state"], "canceled")
+            self.assertTrue(stack.wait_until(
+                lambda: sum(d.metric("isomesh_worker_restarts_total", reason="cancel")
+                            for d in s.daemons) == 1, 10))
+            self.assertEqual(sum(d.metric("isomesh_computations_total", outcome="ok")
+                                 for d in s.daemons), 0)
         finally:
             self.assertEqual(s.cleanup(), [], "sanitizer reports")
 
