@@ -10,6 +10,8 @@
 /* Grid cells per axis at most (the cell grows beyond the asked step for long curves; the
  * grid's memory stays bounded by about 1 MiB of counts). */
 #define GRID_MAX_DIM 64
+/* Queries reaching at most this many grid cells are answered in one search. */
+#define NEAR_STEPS 4
 
 static size_t nseg(const cf_polyline *pl)
 {
@@ -173,7 +175,10 @@ double cf_polyline_nearest(const cf_polyline *pl, const double q[3], double with
                            double foot[3])
 {
     /* widening searches: a point found within w is the nearest of all (every segment within
-     * w was seen), so a far `within` costs only where nothing is near */
+     * w was seen), so a far `within` costs little where something is near; a near `within`
+     * is searched at once (a miss would pay for every widening) */
+    if (within <= NEAR_STEPS * pl->step)
+        return nearest_within(pl, q, within, s, foot);
     for (double w = pl->step; w < within; w *= 2) {
         double d = nearest_within(pl, q, w, s, foot);
         if (isfinite(d))

@@ -286,7 +286,7 @@ static bool chain_rim(const rim_edge *e, size_t ne, cf_loops *ls)
     return ok;
 }
 
-bool cf_cut_hole(cf_ctx *c, cf_tri_pred near, const void *arg, cf_loops *out,
+bool cf_cut_hole(cf_ctx *c, cf_tri_pred near, void *arg, cf_loops *out,
                  uint32_t **removed, size_t *nremoved)
 {
     memset(out, 0, sizeof *out);
@@ -376,7 +376,7 @@ bool cf_rim_clear(cf_ctx *c, const cf_loops *ls, double clearance)
 #define GROW 1.4
 #define MAX_GROW 6
 
-bool cf_cut_clean(cf_ctx *c, cf_tri_pred pred, const void *arg, double *radius,
+bool cf_cut_clean(cf_ctx *c, cf_tri_pred pred, void *arg, double *radius,
                   double max_radius, cf_loops *ls, uint32_t **removed, size_t *nremoved)
 {
     if (*radius > max_radius)

@@ -92,13 +92,13 @@ bool cf_compact(cf_ctx *c);
  * hole's boundary edges (edges left with one live triangle that lost at least one) into
  * loops. Returns false on allocation failure (nothing marked then). *removed counts the
  * triangles marked. */
-typedef bool (*cf_tri_pred)(const cf_ctx *c, uint32_t t, const void *arg);
-bool cf_cut_hole(cf_ctx *c, cf_tri_pred near, const void *arg, cf_loops *out,
+typedef bool (*cf_tri_pred)(const cf_ctx *c, uint32_t t, void *arg);
+bool cf_cut_hole(cf_ctx *c, cf_tri_pred near, void *arg, cf_loops *out,
                  uint32_t **removed, size_t *nremoved);
 /* cf_cut_hole, grown (*radius, which pred reads through arg, times a factor) until the rim
  * is clear of other sheets (cf_rim_clear), a bounded number of times and never beyond
  * max_radius. */
-bool cf_cut_clean(cf_ctx *c, cf_tri_pred pred, const void *arg, double *radius,
+bool cf_cut_clean(cf_ctx *c, cf_tri_pred pred, void *arg, double *radius,
                   double max_radius, cf_loops *ls, uint32_t **removed, size_t *nremoved);
 /* Undoes a cut whose refilling failed: revives the triangles, drops everything appended
  * since (ntris, nverts). */

@@ -37,7 +37,7 @@ typedef struct ball {
     double p[3], r;
 } ball;
 
-static bool tri_in_ball(const cf_ctx *c, uint32_t t, const void *arg)
+static bool tri_in_ball(const cf_ctx *c, uint32_t t, void *arg)
 {
     const ball *b = arg;
     const uint32_t *v = c->m->tri + 3 * (size_t)t;

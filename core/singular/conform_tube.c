@@ -18,7 +18,28 @@ typedef struct tube {
     size_t n;
     double r;
     double lo[3], hi[3]; /* the curves' bounding box */
+    double reach;        /* edges up to this long are judged from vd alone */
+    double *vd;          /* per vertex: distance to the nearest curve, INFINITY beyond
+                            vd_r + reach */
+    double vd_r;         /* the radius vd was computed for (0: not yet) */
 } tube;
+
+/* Each vertex's distance to the group's curves, as far as r + reach (one query a vertex,
+ * instead of several a triangle). */
+static void vertex_distances(const cf_ctx *c, tube *tb)
+{
+    for (size_t v = 0; v < c->m->nverts; v++) {
+        const double *p = c->m->pos + 3 * v;
+        double d = INFINITY;
+        bool in = true;
+        for (int k = 0; k < 3; k++)
+            in = in && p[k] >= tb->lo[k] - tb->r - tb->reach && p[k] <= tb->hi[k] + tb->r + tb->reach;
+        for (size_t i = 0; in && i < tb->n; i++)
+            d = fmin(d, cf_polyline_nearest(&tb->pl[i], p, tb->r + tb->reach, NULL, NULL));
+        tb->vd[v] = d;
+    }
+    tb->vd_r = tb->r;
+}
 
 static double d2(const double *a, const double *b)
 {
@@ -26,27 +47,20 @@ static double d2(const double *a, const double *b)
     return x * x + y * y + z * z;
 }
 
-static bool tri_in_tube(const cf_ctx *c, uint32_t t, const void *arg)
+static bool tri_in_tube(const cf_ctx *c, uint32_t t, void *arg)
 {
-    const tube *tb = arg;
+    tube *tb = arg;
+    if (tb->vd_r != tb->r)
+        vertex_distances(c, tb);
     const uint32_t *v = c->m->tri + 3 * (size_t)t;
     const double *a = c->m->pos + 3 * (size_t)v[0], *b = c->m->pos + 3 * (size_t)v[1],
                  *d = c->m->pos + 3 * (size_t)v[2];
-    /* first a cheap test: nothing of the triangle is nearer than its centroid's distance
-     * less its longest reach from the centroid */
-    double g[3], reach = 0;
-    for (int k = 0; k < 3; k++)
-        g[k] = (a[k] + b[k] + d[k]) / 3;
-    reach = sqrt(fmax(d2(a, g), fmax(d2(b, g), d2(d, g))));
-    for (int k = 0; k < 3; k++)
-        if (g[k] + reach < tb->lo[k] - tb->r || g[k] - reach > tb->hi[k] + tb->r)
-            return false;
-    double dg = INFINITY;
-    for (size_t i = 0; i < tb->n; i++)
-        dg = fmin(dg, cf_polyline_nearest(&tb->pl[i], g, tb->r + reach, NULL, NULL));
-    if (dg <= tb->r)
+    /* a corner within r, or every corner farther than r + the longest edge: decided */
+    double dmin = fmin(tb->vd[v[0]], fmin(tb->vd[v[1]], tb->vd[v[2]]));
+    double edge = sqrt(fmax(d2(a, b), fmax(d2(b, d), d2(d, a))));
+    if (dmin <= tb->r)
         return true;
-    if (!isfinite(dg))
+    if (edge <= tb->reach && !(dmin <= tb->r + edge))
         return false;
     /* the corners, the edge midpoints and the centroid: a triangle the curve passes through
      * has one of them within half its longest edge of the curve */
@@ -192,7 +206,11 @@ bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
     for (size_t k = 0; k < g.n; k++)
         longest = fmax(longest, longest_edge_near_curve(c, &g.pl[k], r0));
     tube tb = {g.pl, g.n, fmax(r0, CF_RHO_EDGES * longest), {INFINITY, INFINITY, INFINITY},
-               {-INFINITY, -INFINITY, -INFINITY}};
+               {-INFINITY, -INFINITY, -INFINITY}, fmax(longest, r0), NULL, 0};
+    if (!(tb.vd = malloc((c->m->nverts + 1) * sizeof *tb.vd))) {
+        group_free(&g);
+        return false;
+    }
     for (size_t k = 0; k < g.n; k++)
         for (size_t i = 0; i < g.npts[k]; i++)
             for (int j = 0; j < 3; j++) {
@@ -223,6 +241,7 @@ bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
         }
     }
     free(rm);
+    free(tb.vd);
     cf_loops_free(&ls);
     group_free(&g);
     return ok;

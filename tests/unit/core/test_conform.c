@@ -100,9 +100,9 @@ static void run(const ism_tape *t, const double box[6], int dmax, ism_locus *l,
     centroid_distances(m, t, pf_cell(box, dmax), dist, arg, r);
     if (getenv("CONFORM_DEBUG"))
         fprintf(stderr, "poly %.0f ms conform %.0f ms: removed %zu added %zu tris, %zu verts; "
-                "fallback %zu; near %g far %g; tris %zu\n", ps.total_ms, r->st.time_ms,
+                "fallback %zu widened %zu; near %g far %g; tris %zu\n", ps.total_ms, r->st.time_ms,
                 r->st.triangles_removed, r->st.triangles_added, r->st.vertices_added,
-                r->st.loops_fallback, r->max_near, r->max_far, m->ntris);
+                r->st.loops_fallback, r->st.cuts_widened, r->max_near, r->max_far, m->ntris);
 }
 
 static uint32_t vertex_at(const ism_mesh *m, const double p[3])
