@@ -17,11 +17,6 @@
 #include "core/version.h"
 #include "server/common/cache_redis.h"
 
-/* HTTP threads on a machine with fewer cores: a second thread keeps answering while one is in
- * a long copy to a slow reader or a burst of new connections (measured: one thread, 450 slow
- * readers of a 7 MB mesh held /healthz for 6-11 s). */
-#define HTTP_THREADS_MIN 2
-
 typedef enum kind {
     K_LISTEN, K_INT, K_SIZE, K_DURATION, K_PATH, K_STRING, K_LOGFMT, K_BOOL, K_ORDER, K_REDIS
 } kind;
@@ -94,9 +89,9 @@ static const flag FLAGS[] = {
     {"client-conns", K_INT, 0, 100000, "N",
      "connections one address may hold open at once; behind a proxy keep it above the "
      "proxy's connections; 0 = no limit [512]"},
-    {"http-threads", K_INT, 1, 64, "N",
-     "threads serving HTTP connections (each polls its share); a slow reader occupies one "
-     "for a copy at most [max(2, online cores)]"},
+    {"http-threads", K_INT, 1, 256, "N",
+     "threads serving HTTP connections, each with its share (at most 124); more are started "
+     "when the connection limit needs them [33]"},
     {"max-depth", K_INT, 1, 16, "N", "deepest octree a request may ask for [10]"},
     {"max-triangles", K_INT, 1, 1000000000LL, "N",
      "most triangles a request may produce [4000000]"},
@@ -429,7 +424,7 @@ static void set_defaults(ismd_config *cfg)
     cfg->cache_disk_max = 4ULL << 30;
     cfg->conn_timeout_s = 30;
     cfg->client_conns = 512;
-    cfg->http_threads = cores < HTTP_THREADS_MIN ? HTTP_THREADS_MIN : cores > 64 ? 64 : (int)cores;
+    cfg->http_threads = 1; /* at least; http.c starts as many as its connection limit needs */
     cfg->job_timeout_s = 60;
     cfg->queue_timeout_s = 60;
     cfg->job_memory = (size_t)4 << 30;

@@ -27,7 +27,7 @@ typedef struct ismd_config {
     size_t max_body;          /* request body bytes */
     unsigned conn_timeout_s;  /* an idle connection (not waiting for a computation) is closed */
     int client_conns;         /* connections from one address at once (0 = no limit) */
-    int http_threads;         /* libmicrohttpd polling threads (its thread pool) */
+    int http_threads;         /* at least this many HTTP threads (http.c may start more) */
     int max_depth;
     size_t max_triangles;
     char web_root[4096];      /* "" = no viewer */
