@@ -1,15 +1,42 @@
 /* http_ceiling.c — the reference bench_http.py measures isomeshd against: libmicrohttpd alone,
- * configured as isomeshd configures it (one internal poll thread, suspend/resume allowed,
- * answer on the handler's second call), answering every GET with one file's bytes from
- * memory. Whatever isomeshd adds (routing, cache lookup, headers, log line, metrics) shows up
+ * configured as isomeshd configures it (a pool of epoll threads holding at most 124
+ * connections each, 256 KB of unsent bytes per socket, suspend/resume allowed, answer on the
+ * handler's second call),
+ * answering every GET with one file's bytes from memory. Whatever isomeshd adds (routing, cache lookup, headers, log line, metrics) shows up
  * as the difference.
  *
  *   http_ceiling PORT FILE     serves until SIGTERM/SIGINT */
+#include <arpa/inet.h>
 #include <microhttpd.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#define CONNECTION_LIMIT 4000u   /* as isomeshd's http.c */
+#define CONNS_PER_THREAD 124u     /* as isomeshd's http.c (below libmicrohttpd's epoll batch) */
+#define NOTSENT_LOWAT (256 << 10) /* as isomeshd's http.c */
+
+/* A listening socket on 127.0.0.1:port with isomeshd's socket options; -1 on failure. */
+static int listen_on(int port)
+{
+    int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    int one = 1, lowat = NOTSENT_LOWAT;
+    struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((unsigned short)port)};
+    sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (fd < 0 || setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) != 0 ||
+        setsockopt(fd, IPPROTO_TCP, TCP_NOTSENT_LOWAT, &lowat, sizeof lowat) != 0 ||
+        bind(fd, (struct sockaddr *)&sa, sizeof sa) != 0 || listen(fd, 1024) != 0) {
+        if (fd >= 0)
+            close(fd);
+        return -1;
+    }
+    return fd;
+}
 
 static unsigned char *body;
 static size_t body_len;
@@ -55,10 +82,13 @@ int main(int argc, char **argv)
     sigaddset(&stop, SIGINT);
     pthread_sigmask(SIG_BLOCK, &stop, NULL);
     signal(SIGPIPE, SIG_IGN);
-    struct MHD_Daemon *d = MHD_start_daemon(
-        MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_POLL | MHD_ALLOW_SUSPEND_RESUME,
-        (unsigned short)atoi(argv[1]), NULL, NULL, answer, NULL,
-        MHD_OPTION_CONNECTION_LIMIT, (unsigned)4000, MHD_OPTION_END);
+    unsigned threads = (CONNECTION_LIMIT + CONNS_PER_THREAD - 1) / CONNS_PER_THREAD;
+    int lfd = listen_on(atoi(argv[1]));
+    struct MHD_Daemon *d = lfd < 0 ? NULL : MHD_start_daemon(
+        MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME,
+        0, NULL, NULL, answer, NULL, MHD_OPTION_LISTEN_SOCKET, lfd,
+        MHD_OPTION_CONNECTION_LIMIT, CONNECTION_LIMIT, MHD_OPTION_THREAD_POOL_SIZE, threads,
+        MHD_OPTION_END);
     if (!d) {
         fprintf(stderr, "http_ceiling: cannot listen on port %s\n", argv[1]);
         return 1;
