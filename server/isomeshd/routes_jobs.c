@@ -44,10 +44,36 @@ static enum MHD_Result answer_job_locked(ismd_req *r, unsigned status, ismd_job 
     return ismd_send(r, status, resp);
 }
 
+/* 200 with o as the body, never cached. */
+static enum MHD_Result send_json(ismd_req *r, const json_t *o)
+{
+    char *text = json_dumps(o, JSON_COMPACT);
+    ism_blob *b = text ? ism_blob_from_str(text) : NULL;
+    free(text);
+    struct MHD_Response *resp = b ? ismd_response_blob(b, "application/json") : NULL;
+    r->bytes = b ? b->len : 0;
+    ism_blob_unref(b);
+    if (!resp)
+        return MHD_NO;
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
+    return ismd_send(r, 200, resp);
+}
+
 static enum MHD_Result job_not_found(ismd_req *r)
 {
     return ismd_respond_error(r, 404, "unknown_job", "no job with this id (finished jobs are "
                                                      "kept for 30 minutes)");
+}
+
+/* 202 for a new job (lock held, released); with --cluster it is recorded in Redis too, so
+ * that every daemon can answer for it. */
+static enum MHD_Result accepted_locked(ismd_req *r, ismd_job *job)
+{
+    ismd_cluster *cluster = ismd_shared_cluster(r->srv->shared);
+    if (cluster)
+        ismd_cluster_job_created(cluster, ismd_job_id(job), r->who.user, r->key, r->fmt,
+                                 (long long)time(NULL));
+    return answer_job_locked(r, 202, job, true);
 }
 
 enum MHD_Result ismd_route_jobs_post(ismd_req *r)
@@ -80,16 +106,12 @@ enum MHD_Result ismd_route_jobs_post(ismd_req *r)
                                       "one to finish");
         return ismd_respond_error(r, 503, "too_many_jobs", "the job table is full; retry later");
     }
-    ismd_cluster *cluster = ismd_shared_cluster(s->shared);
-    if (cluster)
-        ismd_cluster_job_created(cluster, ismd_job_id(job), r->who.user, r->key, r->fmt,
-                                 (long long)time(NULL));
     if (hit) {
         ismd_jobs_complete_cached(s->jobs, job, stats);
         ism_blob_unref(hit);
         ism_blob_unref(stats);
         ism_blob_unref(canonical);
-        return answer_job_locked(r, 202, job, true);
+        return accepted_locked(r, job);
     }
     ismd_user_limits lim = {r->who.max_jobs, r->who.max_running};
     ismd_submit st = ismd_sched_submit(&s->sched, r->key, r->fmt, canonical, r->who.user, &lim,
@@ -97,7 +119,7 @@ enum MHD_Result ismd_route_jobs_post(ismd_req *r)
     ism_blob_unref(canonical);
     if (st == ISMD_SUBMIT_NEW || st == ISMD_SUBMIT_JOINED) {
         ismd_jobs_submitted(job);
-        return answer_job_locked(r, 202, job, true);
+        return accepted_locked(r, job);
     }
     ismd_jobs_discard(s->jobs, job);
     ismd_sched_unlock(&s->sched);
@@ -115,19 +137,9 @@ enum MHD_Result ismd_route_jobs_list(ismd_req *r)
         json_object_set_new(o, "user", json_string(r->who.user));
         json_object_set_new(o, "admin", json_boolean(all));
     }
-    char *text = o ? json_dumps(o, JSON_COMPACT) : NULL;
+    enum MHD_Result ret = o ? send_json(r, o) : MHD_NO;
     json_decref(o);
-    if (!text)
-        return MHD_NO;
-    ism_blob *b = ism_blob_from_str(text);
-    free(text);
-    struct MHD_Response *resp = b ? ismd_response_blob(b, "application/json") : NULL;
-    r->bytes = b ? b->len : 0;
-    ism_blob_unref(b);
-    if (!resp)
-        return MHD_NO;
-    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
-    return ismd_send(r, 200, resp);
+    return ret;
 }
 
 /* Under --private a job is seen only by its owner or an admin; canceling needs that always
@@ -179,16 +191,7 @@ static enum MHD_Result cancel_remote(ismd_req *r, json_t *o)
         ismd_cluster_job_cancel(ismd_shared_cluster(r->srv->shared), r->id, key, fmt);
         json_object_set_new(o, "state", json_string("canceled"));
     }
-    char *text = json_dumps(o, JSON_COMPACT);
-    ism_blob *b = text ? ism_blob_from_str(text) : NULL;
-    free(text);
-    struct MHD_Response *resp = b ? ismd_response_blob(b, "application/json") : NULL;
-    r->bytes = b ? b->len : 0;
-    ism_blob_unref(b);
-    if (!resp)
-        return MHD_NO;
-    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
-    return ismd_send(r, 200, resp);
+    return send_json(r, o);
 }
 
 /* The lookup in Redis answered (r->r_status, r->r_body). */
