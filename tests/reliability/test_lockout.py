@@ -15,9 +15,15 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from reltools import Daemon, http_request, sphere, wait_until  # noqa: E402
+from reltools import Daemon, http_request, sanitizer_build, sphere, wait_until  # noqa: E402
+from harness import ISOMESHD  # noqa: E402
 
 USER_JOBS_KEPT = 1000  # jobs.c: records one user keeps
+# The small request beside hopeless ones: the issue's bound (about 1 s measured here: a
+# worker respawn and milliseconds of work), or under AddressSanitizer, whose workers start
+# and compute several times slower, a looser one; without the fix it waits out the hopeless
+# requests' 60 s deadline either way.
+SMALL_BOUND_S = 30.0 if sanitizer_build(ISOMESHD) else 5.0
 
 
 def hopeless(k):
@@ -95,7 +101,7 @@ class HopelessUsersTest(unittest.TestCase):
                                   {"expr": "x^2 + y^2 + z^2 - 0.25", "depth": {"max": 5}})
                 took = time.monotonic() - t0
                 self.assertEqual(small.status, 200, small.body[:300])
-                self.assertLess(took, 5.0)
+                self.assertLess(took, SMALL_BOUND_S)
                 # one computation of the user holding two workers went back to its line
                 self.assertEqual(d.metric("isomesh_preemptions_total"), before + 1)
                 self.assertEqual(d.metric("isomesh_worker_restarts_total", reason="preempt"),
