@@ -111,3 +111,30 @@ bool ism_mesh_bounds(const ism_mesh *m, double lo[3], double hi[3])
         }
     return true;
 }
+
+bool ism_mesh_drop_loose(ism_mesh *m)
+{
+    uint32_t *map = malloc((m->nverts ? m->nverts : 1) * sizeof *map);
+    if (!map)
+        return false;
+    for (size_t v = 0; v < m->nverts; v++)
+        map[v] = UINT32_MAX;
+    for (size_t i = 0; i < 3 * m->ntris; i++)
+        map[m->tri[i]] = 0;
+    size_t nv = 0;
+    for (size_t v = 0; v < m->nverts; v++) {
+        if (map[v] == UINT32_MAX)
+            continue;
+        map[v] = (uint32_t)nv;
+        memmove(m->pos + 3 * nv, m->pos + 3 * v, 3 * sizeof *m->pos);
+        if (m->normal)
+            memmove(m->normal + 3 * nv, m->normal + 3 * v, 3 * sizeof *m->normal);
+        nv++;
+    }
+    m->nverts = nv;
+    for (size_t i = 0; i < 3 * m->ntris; i++)
+        m->tri[i] = map[m->tri[i]];
+    m->nsegs = 0;
+    free(map);
+    return true;
+}

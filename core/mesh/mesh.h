@@ -38,6 +38,11 @@ bool ism_mesh_add_segment(ism_mesh *m, uint32_t a, uint32_t b);
 /* Bytes held by the mesh's arrays (for memory budgets). */
 size_t ism_mesh_bytes(const ism_mesh *m);
 
+/* Drops the segments and every vertex no triangle uses, keeping the others in order
+ * (triangles renumbered). For a mesh whose one-dimensional parts travel elsewhere (the
+ * singular locus carries whiskers as curves). False when out of memory (m unchanged). */
+bool ism_mesh_drop_loose(ism_mesh *m);
+
 /* Axis-aligned bounds of the vertices; false for an empty mesh. */
 bool ism_mesh_bounds(const ism_mesh *m, double lo[3], double hi[3]);
 

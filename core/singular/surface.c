@@ -45,7 +45,8 @@ enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options 
      * the boxes the polygoniser already meshed (a double sheet on a lattice plane). */
     if (!ism_conform_mesh(f, &lo, locus, mesh, cs, err) ||
         !ism_locus_mark_covered(locus, &lo, mesh) ||
-        !ism_sing_double_sheets_from_search(f, &lo, locus, mesh, err))
+        !ism_sing_double_sheets_from_search(f, &lo, locus, mesh, err) ||
+        !ism_mesh_drop_loose(mesh))
         return ISM_POLY_NO_MEMORY;
     times->singular_ms = (t1 - t0) + (ism_now_ms() - t2);
     locus->time_ms = times->singular_ms;
