@@ -6,8 +6,8 @@ same run:
    (kummer-16-nodes at depth 8, ~310 KB) from /v1/meshes/{key}.drc at 1, 16, 64 and 256
    connections — requests per second, latency percentiles, requests over wrk's 2 s timeout,
    errors — beside libmicrohttpd alone serving the same bytes from memory with isomeshd's
-   thread model (build/bench/http_ceiling) and nginx serving them as a static file (one
-   worker process, sendfile). Then isomeshd's figures as ratios of nginx's. Also the same mesh
+   thread model (build/bench/http_ceiling) and nginx serving them as a static file (sendfile;
+   one worker process, and one per core). Then isomeshd's figures as ratios of both. Also the same mesh
    with positions only (~100 KB), and POST /v1/mesh of the request (decode + key + cache
    hit) at 16 connections.
 2. Slow readers: 450 connections fetching the same mesh as OBJ (~7 MB) and reading 16 KB per
@@ -60,32 +60,38 @@ def start_daemon(build, tmp, *args):
         raise
 
 
-def cpu_seconds(pid):
-    """User + system CPU seconds process pid (all its threads) has used; 0 when unknown."""
-    try:
-        with open("/proc/%d/stat" % pid) as f:
-            fields = f.read().rsplit(")", 1)[1].split()
-        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-    except (OSError, ValueError, IndexError):
-        return 0.0
+def cpu_seconds(pids):
+    """User + system CPU seconds the processes pids (all their threads) have used."""
+    total = 0.0
+    for pid in pids:
+        try:
+            with open("/proc/%d/stat" % pid) as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            total += (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+        except (OSError, ValueError, IndexError):
+            pass
+    return total
 
 
-def nginx_worker(master):
-    """The pid of nginx's worker process (the child of master), else master's."""
+def nginx_workers(master):
+    """The pids of nginx's worker processes (the children of master), else [master]."""
+    found = []
     for d in os.listdir("/proc"):
         if d.isdigit():
             try:
                 with open("/proc/%s/stat" % d) as f:
                     if int(f.read().rsplit(")", 1)[1].split()[1]) == master:
-                        return int(d)
+                        found.append(int(d))
             except (OSError, ValueError, IndexError):
                 pass
-    return master
+    return found or [master]
 
 
 def wrk(url, conns, seconds, script=None, pid=None):
-    """wrk's figures for url; with pid, also the server's CPU microseconds per request (less
-    sensitive to a loaded machine than req/s: the server's own cost)."""
+    """wrk's figures for url; with pid (one, or a list of the server's processes), also the
+    server's CPU microseconds per request (less sensitive to a loaded machine than req/s:
+    the server's own cost)."""
+    pid = [pid] if isinstance(pid, int) else pid
     threads = 1 if conns == 1 else 2
     cmd = ["wrk", "-t%d" % threads, "-c%d" % conns, "-d%ds" % seconds, "--latency"]
     if script:
@@ -111,31 +117,37 @@ def wrk(url, conns, seconds, script=None, pid=None):
             "over2s": counts[3], "cpu_us": cpu_us}
 
 
+def get_ok(port, path, timeout):
+    """True when GET path on 127.0.0.1:port answers 200 within timeout seconds."""
+    try:
+        c = http.client.HTTPConnection("127.0.0.1", port, timeout=timeout)
+        c.request("GET", path)
+        ok = c.getresponse().status == 200
+        c.close()
+        return ok
+    except OSError:
+        return False
+
+
 def wait_serving(p, port, path):
     """(p, its URL) once process p answers GET path with 200 on 127.0.0.1:port (10 s at
     most); else p is killed and (None, None) returned."""
     deadline = time.time() + 10
     while time.time() < deadline:
-        try:
-            c = http.client.HTTPConnection("127.0.0.1", port, timeout=2)
-            c.request("GET", path)
-            ok = c.getresponse().status == 200
-            c.close()
-            if ok:
-                return p, "http://127.0.0.1:%d%s" % (port, path)
-        except OSError:
-            pass
+        if get_ok(port, path, 2):
+            return p, "http://127.0.0.1:%d%s" % (port, path)
         time.sleep(0.05)
     p.kill()
     p.wait()
     return None, None
 
 
-def start_nginx(tmp, files):
-    """nginx serving files ({name: bytes}) from its root; (process, URL of the first)."""
+def start_nginx(tmp, files, workers="1"):
+    """nginx with `workers` worker processes serving files ({name: bytes}) from its root;
+    (process, URL of the first)."""
     if not shutil.which("nginx"):
         return None, None
-    root = os.path.join(tmp, "nginx")
+    root = os.path.join(tmp, "nginx-" + workers)
     os.makedirs(os.path.join(root, "html"))
     os.chmod(tmp, 0o755)
     os.chmod(root, 0o755)
@@ -150,7 +162,7 @@ def start_nginx(tmp, files):
     s.close()
     conf = os.path.join(root, "nginx.conf")
     with open(conf, "w") as f:
-        f.write("""worker_processes 1;
+        f.write("""worker_processes %(workers)s;
 pid %(root)s/nginx.pid;
 error_log %(root)s/error.log;
 events { worker_connections 1024; }
@@ -166,7 +178,7 @@ http {
   keepalive_requests 1000000;
   server { listen 127.0.0.1:%(port)d; root %(root)s/html; }
 }
-""" % {"root": root, "port": port})
+""" % {"root": root, "port": port, "workers": workers})
     p = subprocess.Popen(["nginx", "-c", conf, "-p", root, "-g", "daemon off;"],
                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     return wait_serving(p, port, "/" + next(iter(files)))
@@ -189,9 +201,10 @@ def row(name, conns, r):
                 if r[k])))
 
 
-def versus_nginx(results, nginx):
+def versus_nginx(results, nginx, which):
     """isomeshd's figures as ratios of nginx's, per connection count, and the issue-16 goals."""
-    print("\nisomeshd / nginx, same run (req/s: higher is better; p99: lower is better)")
+    print("\nisomeshd / nginx (%s), same run (req/s: higher is better; p99: lower is better)"
+          % which)
     print("%6s %12s %12s %16s %14s" % ("conns", "req/s ratio", "p99 ratio", "over 2 s (nginx)",
                                        "CPU/req ratio"))
     met = True
@@ -202,8 +215,8 @@ def versus_nginx(results, nginx):
                                                        i["cpu_us"] / n["cpu_us"]))
         if conns >= 16:
             met = met and rr >= 1.0 and pr <= 1.5 and i["over2s"] == 0 and not i["errors"]
-    print("goal (issue 16): req/s >= nginx's, p99 <= 1.5x nginx's, no request over 2 s at 16, 64 "
-          "and 256 connections: %s" % ("met" if met else "NOT met"))
+    print("goal (issue 16) beside nginx (%s): req/s >= nginx's, p99 <= 1.5x nginx's, no request "
+          "over 2 s at 16, 64 and 256 connections: %s" % (which, "met" if met else "NOT met"))
 
 
 SLOW_READERS = 450
@@ -252,14 +265,7 @@ def slow_readers(port, path, probe):
     try:
         while time.time() < end:
             t0 = time.perf_counter()
-            try:
-                c = http.client.HTTPConnection("127.0.0.1", port, timeout=30)
-                c.request("GET", probe)
-                ok = c.getresponse().status == 200
-                c.close()
-            except OSError:
-                ok = False
-            if ok:
+            if get_ok(port, probe, 30):
                 lat.append((time.perf_counter() - t0) * 1e3)
             else:
                 failed += 1
@@ -304,13 +310,15 @@ def start_ceiling(build, tmp, body):
 
 def throughput(build, tmp):
     d = start_daemon(build, tmp, "--workers", "2")
-    nginx = ceiling = None
+    nginx = nginx_all = ceiling = None
     try:
         url, body = cached_url(d, MESH_REQ)
         url_pos, _ = cached_url(d, MESH_REQ_POSITIONS)
         obj_url = url[:-len("drc")] + "obj"
         obj = http_get(obj_url)
-        nginx, nurl = start_nginx(tmp, {"m.drc": body, "m.obj": obj, "healthz": b"ok\n"})
+        files = {"m.drc": body, "m.obj": obj, "healthz": b"ok\n"}
+        nginx, nurl = start_nginx(tmp, files)
+        nginx_all, nurl_all = start_nginx(tmp, files, "auto")
         ceiling, curl = start_ceiling(build, tmp, body)
         secs = 2 if QUICK else 10
         short = 2 if QUICK else 5
@@ -322,15 +330,19 @@ def throughput(build, tmp):
                                                         "p50 ms", "p90 ms", "p99 ms", ">2 s",
                                                         "CPU/req"))
         print("(CPU/req: the server process's CPU microseconds per request, all its threads)")
-        results, nginx_results = {}, {}
+        results, nginx_results, nginx_all_results = {}, {}, {}
         for conns in (1, 16, 64, 256):
             results[conns] = wrk(url, conns, secs, pid=d.proc.pid)
             row("isomeshd GET mesh (all attributes)", conns, results[conns])
             if curl:
                 row("libmicrohttpd alone, same bytes", conns, wrk(curl, conns, secs, pid=ceiling.pid))
             if nurl:
-                nginx_results[conns] = wrk(nurl, conns, secs, pid=nginx_worker(nginx.pid))
+                nginx_results[conns] = wrk(nurl, conns, secs, pid=nginx_workers(nginx.pid))
                 row("nginx (1 worker) the same file", conns, nginx_results[conns])
+            if nurl_all:
+                nginx_all_results[conns] = wrk(nurl_all, conns, secs,
+                                               pid=nginx_workers(nginx_all.pid))
+                row("nginx (a worker per core) the same file", conns, nginx_all_results[conns])
         pos = {}
         for conns in (1, 16, 64, 256):
             pos[conns] = wrk(url_pos, conns, short, pid=d.proc.pid)
@@ -342,7 +354,9 @@ def throughput(build, tmp):
         row("isomeshd POST /v1/mesh (cache hit)", 16,
             wrk("http://127.0.0.1:%d/v1/mesh" % d.port, 16, short, script=lua, pid=d.proc.pid))
         if nginx_results:
-            versus_nginx(results, nginx_results)
+            versus_nginx(results, nginx_results, "1 worker")
+        if nginx_all_results:
+            versus_nginx(results, nginx_all_results, "a worker per core")
         print("\n/healthz every 50 ms while %d slow readers fetch the %.1f MB OBJ (16 KB per "
               "0.2 s each)" % (SLOW_READERS, len(obj) / 1e6))
         print("%-40s %8s %8s %8s %8s" % ("server", "answers", "p50 ms", "p99 ms", "max ms"))
@@ -363,12 +377,13 @@ def throughput(build, tmp):
         if ceiling:
             ceiling.terminate()
             ceiling.wait(timeout=10)
-        if nginx:
-            nginx.send_signal(signal.SIGQUIT)
-            try:
-                nginx.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                nginx.kill()
+        for p in (nginx, nginx_all):
+            if p:
+                p.send_signal(signal.SIGQUIT)
+                try:
+                    p.wait(timeout=10)
+                except subprocess.TimeoutExpired:
+                    p.kill()
         d.stop(timeout=30)
         d.cleanup()
 
