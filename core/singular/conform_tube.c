@@ -21,6 +21,7 @@ typedef struct tube {
     double reach;        /* edges up to this long are judged from vd alone */
     double *vd;          /* per vertex: distance to the nearest curve, INFINITY beyond
                             vd_r + reach */
+    uint32_t *vc;        /* per vertex: that curve (when vd is finite) */
     double vd_r;         /* the radius vd was computed for (0: not yet) */
 } tube;
 
@@ -34,8 +35,14 @@ static void vertex_distances(const cf_ctx *c, tube *tb)
         bool in = true;
         for (int k = 0; k < 3; k++)
             in = in && p[k] >= tb->lo[k] - tb->r - tb->reach && p[k] <= tb->hi[k] + tb->r + tb->reach;
-        for (size_t i = 0; in && i < tb->n; i++)
-            d = fmin(d, cf_polyline_nearest(&tb->pl[i], p, tb->r + tb->reach, NULL, NULL));
+        tb->vc[v] = 0;
+        for (size_t i = 0; in && i < tb->n; i++) {
+            double di = cf_polyline_nearest(&tb->pl[i], p, tb->r + tb->reach, NULL, NULL);
+            if (di < d) {
+                d = di;
+                tb->vc[v] = (uint32_t)i;
+            }
+        }
         tb->vd[v] = d;
     }
     tb->vd_r = tb->r;
@@ -74,10 +81,16 @@ static bool tri_in_tube(const cf_ctx *c, uint32_t t, void *arg)
         q[5][k] = (d[k] + a[k]) / 2;
         q[6][k] = (a[k] + b[k] + d[k]) / 3;
     }
-    for (size_t i = 0; i < tb->n; i++)
+    /* near the rim of the cut only: the curves nearest its corners (all of them when a
+     * corner is beyond vd's reach, a triangle longer than reach) */
+    bool all = !(isfinite(tb->vd[v[0]]) && isfinite(tb->vd[v[1]]) && isfinite(tb->vd[v[2]]));
+    for (size_t i = 0; i < tb->n; i++) {
+        if (!all && tb->vc[v[0]] != i && tb->vc[v[1]] != i && tb->vc[v[2]] != i)
+            continue;
         for (int j = 0; j < 7; j++)
             if (isfinite(cf_polyline_nearest(&tb->pl[i], q[j], tb->r, NULL, NULL)))
                 return true;
+    }
     return false;
 }
 
@@ -206,8 +219,12 @@ bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
     for (size_t k = 0; k < g.n; k++)
         longest = fmax(longest, longest_edge_near_curve(c, &g.pl[k], r0));
     tube tb = {g.pl, g.n, fmax(r0, CF_RHO_EDGES * longest), {INFINITY, INFINITY, INFINITY},
-               {-INFINITY, -INFINITY, -INFINITY}, fmax(longest, r0), NULL, 0};
-    if (!(tb.vd = malloc((c->m->nverts + 1) * sizeof *tb.vd))) {
+               {-INFINITY, -INFINITY, -INFINITY}, fmax(longest, r0), NULL, NULL, 0};
+    tb.vd = malloc((c->m->nverts + 1) * sizeof *tb.vd);
+    tb.vc = malloc((c->m->nverts + 1) * sizeof *tb.vc);
+    if (!tb.vd || !tb.vc) {
+        free(tb.vd);
+        free(tb.vc);
         group_free(&g);
         return false;
     }
@@ -242,6 +259,7 @@ bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
     }
     free(rm);
     free(tb.vd);
+    free(tb.vc);
     cf_loops_free(&ls);
     group_free(&g);
     return ok;
