@@ -3,7 +3,9 @@
  * mean and the 99th percentile of each (and of the vertex distances implicit.c measured).
  * Points where |∇f| vanishes are left out and counted as skipped. Per-item distances go to
  * arrays and are summed in item order, so the figures never depend on the thread count. */
-#include "core/analysis/analysis_internal.h"
+#include "core/analysis/accuracy.h"
+#include "core/analysis/blocks.h"
+#include "core/analysis/select.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,58 +1,22 @@
 /* analysis.c — the analysis as one call: checks the mesh, builds the edge table, then runs
  * the passes in order (vertex classes by cones of faces, non-manifold curves and points,
- * topology, triangle quality, the figures from f) and releases everything on failure. */
-#include "core/analysis/analysis_internal.h"
+ * topology, triangle quality, the figures from f) and releases everything on failure.
+ * Each pass has its own header, included below and only here; the passes include the
+ * low-level headers (edges.h, vertices.h, analysis_types.h, ...), never this driver's. */
+#include "core/analysis/analysis.h"
+#include "core/analysis/checks.h"
+#include "core/analysis/options.h"
+#include "core/analysis/edges.h"
+#include "core/analysis/vertices.h"
+#include "core/analysis/curves.h"
+#include "core/analysis/topology.h"
+#include "core/analysis/duplicates.h"
+#include "core/analysis/quality.h"
+#include "core/analysis/implicit.h"
+#include "core/analysis/accuracy.h"
 
-#include <math.h>
-#include <stdarg.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-#define MAX_COORD 1e100 /* larger coordinates would overflow squared lengths */
-
-void ism_analysis_options_default(ism_analysis_options *o)
-{
-    memset(o, 0, sizeof *o);
-    o->curvature = true;
-    o->accuracy = true;
-    o->project = false;
-    o->threads = 0;
-    o->singular_rel = 1e-6;
-    o->newton_steps = 4;
-}
-
-
-/* Bad input gets a message naming the first offending vertex or triangle. */
-bool ism_an_check_mesh(const ism_mesh *m, ism_error *err)
-{
-    if (m->nverts >= UINT32_MAX)
-        return ism_an_fail(err, "analysis: %zu vertices, at most %u allowed", m->nverts,
-                           UINT32_MAX - 1);
-    if (m->ntris > (UINT32_MAX - 3) / 3)
-        return ism_an_fail(err, "analysis: %zu triangles, at most %u allowed", m->ntris,
-                           (UINT32_MAX - 3) / 3);
-    for (size_t i = 0; i < 3 * m->nverts; i++)
-        if (!(fabs(m->pos[i]) <= MAX_COORD))
-            return ism_an_fail(err, "analysis: vertex %zu has a coordinate that is not "
-                               "a finite number below 1e100", i / 3);
-    for (size_t i = 0; i < 3 * m->ntris; i++)
-        if (m->tri[i] >= m->nverts)
-            return ism_an_fail(err, "analysis: triangle %zu uses vertex %u, but the "
-                               "mesh has %zu vertices", i / 3, m->tri[i], m->nverts);
-    return true;
-}
-
-bool ism_an_check_options(const ism_analysis_options *o, ism_error *err)
-{
-    if (!(o->singular_rel >= 0 && o->singular_rel < 1))
-        return ism_an_fail(err, "analysis: singular_rel must be in [0, 1)");
-    if (o->newton_steps < 0 || o->newton_steps > 100)
-        return ism_an_fail(err, "analysis: newton_steps must be in 0..100");
-    if (o->threads < 0 || o->threads > 64)
-        return ism_an_fail(err, "analysis: threads must be in 0..64");
-    return true;
-}
 
 static void count_collapsed(const ism_mesh *m, ism_analysis *a)
 {

@@ -2,7 +2,7 @@
  * evaluate f) on a few threads, each with its own evaluation workspace, handing out blocks
  * from an atomic counter. Results land in per-block slots, so they never depend on which
  * thread ran what. */
-#include "core/analysis/analysis_internal.h"
+#include "core/analysis/blocks.h"
 
 #include <pthread.h>
 #include <stdatomic.h>

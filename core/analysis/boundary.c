@@ -4,7 +4,7 @@
  * chain ends there: the boundary arcs of crossing planes end on the crossing line). Walking
  * cones, not "the other boundary edge at w", keeps two discs that touch at a boundary vertex
  * two loops. Each cone is walked at most twice: linear. */
-#include "core/analysis/analysis_internal.h"
+#include "core/analysis/boundary.h"
 
 #include <stdlib.h>
 

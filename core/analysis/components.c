@@ -2,7 +2,8 @@
  * kind: a non-manifold edge joins its sheets), numbered in order of their smallest triangle;
  * and the coarser components of vertices joined by triangles (two cones meeting at a Kummer
  * node are two edge components but one vertex component). Union-find, near-linear. */
-#include "core/analysis/analysis_internal.h"
+#include "core/analysis/components.h"
+#include "core/analysis/unionfind.h"
 
 #include <stdlib.h>
 

@@ -5,7 +5,7 @@
  * with M's sign chosen so that x²+y²+z²-r² has M = +1/r; principal curvatures from M ± √(M²-K).
  * Computed with the unit normal n = g/|g| so that neither |g|⁴ nor |g|³ under- or overflows
  * before the division. */
-#include "core/analysis/analysis_internal.h"
+#include "core/analysis/curvature.h"
 
 #include <math.h>
 

@@ -3,7 +3,7 @@
  * other vertex: a free end (one edge) or a junction (three or more, such as the triple point
  * of Steiner's surface), which become points beside the class-3 vertices where several cones
  * of faces meet. Linear in the number of non-manifold edges (plus one pass over vertices). */
-#include "core/analysis/analysis_internal.h"
+#include "core/analysis/curves.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -4,7 +4,7 @@
  * mesher's duplicate output. Found edge by edge: two triangles with the same vertices share
  * all three edges and have the same opposite vertex on each; each triangle is looked at only
  * on its lowest-numbered edge, where its group's opposite vertices are sorted. */
-#include "core/analysis/analysis_internal.h"
+#include "core/analysis/duplicates.h"
 
 #include <stdlib.h>
 

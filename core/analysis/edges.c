@@ -2,7 +2,7 @@
  * numbered in (smaller, larger) order, with the half-edges that lie on it. Built in linear
  * time by bucketing the half-edges on their smaller vertex (a counting sort) and sorting each
  * small bucket on the larger vertex; only a vertex of huge degree costs a real sort. */
-#include "core/analysis/analysis_internal.h"
+#include "core/analysis/edges.h"
 
 #include <stdlib.h>
 #include <string.h>

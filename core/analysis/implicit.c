@@ -7,7 +7,11 @@
  * "Vanishing" is relative to the function's own scale: |∇f| <= singular_rel * G where G is
  * the median of |∇f| over the vertices used by triangles (scaling f by any factor flags the
  * same vertices). */
-#include "core/analysis/analysis_internal.h"
+#include "core/analysis/implicit.h"
+#include "core/analysis/curvature.h"
+#include "core/analysis/accuracy.h"
+#include "core/analysis/blocks.h"
+#include "core/analysis/select.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -4,7 +4,7 @@
  * root") finds the first contradiction in each component: a Möbius strip has one.
  * Non-manifold edges are not crossed (which sheets continue each other there is geometry,
  * not connectivity). */
-#include "core/analysis/analysis_internal.h"
+#include "core/analysis/orientation.h"
 
 #include <stdlib.h>
 

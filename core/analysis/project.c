@@ -3,7 +3,11 @@
  * non-manifold feature), never where ∇f vanishes, never further than half the vertex's
  * shortest edge (so no triangle folds over), and only when Newton converged. The normal is
  * re-aimed along ∇f at the new place, on the old normal's side. */
-#include "core/analysis/analysis_internal.h"
+#include "core/analysis/project.h"
+#include "core/analysis/checks.h"
+#include "core/analysis/options.h"
+#include "core/analysis/blocks.h"
+#include "core/analysis/select.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -2,7 +2,9 @@
  * the triangle"): each triangle's smallest angle, their minimum, median, histogram and the
  * share under 10 degrees; degenerate triangles; and the area around each vertex (one third
  * of its triangles' areas), the weights of ∫K dA. */
-#include "core/analysis/analysis_internal.h"
+#include "core/analysis/quality.h"
+#include "core/analysis/edges.h"
+#include "core/analysis/select.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -2,7 +2,7 @@
  * median-of-three pivot and a three-way partition, so runs of equal values cost nothing),
  * for medians of angles and gradient norms. Deterministic: no random pivots. Callers pass
  * finite values only. */
-#include "core/analysis/analysis_internal.h"
+#include "core/analysis/select.h"
 
 #define DEFINE_SELECT(name, T)                                                  \
     T name(T *v, size_t n, size_t k)                                            \

@@ -2,7 +2,11 @@
  * characteristic, boundary, orientability and genus), boundary loops, vertex components.
  * A vertex shared by two components (a Kummer node between two edge components) counts once
  * in each of them. */
-#include "core/analysis/analysis_internal.h"
+#include "core/analysis/topology.h"
+#include "core/analysis/boundary.h"
+#include "core/analysis/components.h"
+#include "core/analysis/orientation.h"
+#include "core/analysis/unionfind.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -1,7 +1,7 @@
 /* unionfind.c — disjoint sets over integer ids for the analysis (cones of faces, components):
  * path halving, and the smaller root always wins, so every parent is at most its child and
  * a set's root is its smallest member (which makes numbering the sets deterministic). */
-#include "core/analysis/analysis_internal.h"
+#include "core/analysis/unionfind.h"
 
 uint32_t ism_an_uf_find(uint32_t *parent, uint32_t i)
 {

@@ -7,7 +7,8 @@
  * Instead of walking each vertex's fan, every manifold edge joins the corners of its two
  * triangles at each of its two end points in one union-find over all corners; a vertex then
  * has (its corners) - (successful joins at it) cones. Linear in the mesh size. */
-#include "core/analysis/analysis_internal.h"
+#include "core/analysis/vertices.h"
+#include "core/analysis/unionfind.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -1,0 +1,26 @@
+/* accuracy.h — how far the mesh lies from f = 0 between its vertices (accuracy.c), and the
+ * summary figures of a list of distances. */
+#ifndef ISM_AN_ACCURACY_H
+#define ISM_AN_ACCURACY_H
+
+#include <stddef.h>
+#include <stdbool.h>
+#include "core/mesh/mesh.h"
+#include "core/expr/expr.h"
+#include "core/analysis/analysis_types.h"
+#include "core/analysis/edges.h"
+
+/* Maximum, mean and 99th percentile of the distances that are not NaN (reorders dist);
+ * skipped: how many were NaN. */
+typedef struct ism_an_distances {
+    double max, mean, p99;
+    size_t skipped;
+} ism_an_distances;
+void ism_an_distance_figures(double *dist, size_t n, ism_an_distances *out);
+
+/* Distances at triangle centroids and edge midpoints (after ism_an_implicit_figures, which
+ * sets the singular threshold); false when out of memory. */
+bool ism_an_between_vertices(const ism_mesh *m, const ism_tape *f, const ism_an_edge_table *et,
+                             int threads, ism_analysis *a);
+
+#endif

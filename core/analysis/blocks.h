@@ -1,0 +1,20 @@
+/* blocks.h — the block-parallel runner (blocks.c) the passes that evaluate f use. */
+#ifndef ISM_AN_BLOCKS_H
+#define ISM_AN_BLOCKS_H
+
+#include <stddef.h>
+#include <stdbool.h>
+#include "core/expr/expr.h"
+#include "core/eval/eval.h"
+
+/* Runs fn(ctx, ws, block) for every block < nblocks on up to `threads` threads, each with its
+ * own workspace for f. Blocks are independent; results must not depend on which thread ran
+ * which block. False when no workspace could be made. */
+typedef void (*ism_an_block_fn)(void *ctx, ism_eval_ws *ws, size_t block);
+bool ism_an_run_blocks(const ism_tape *f, int threads, size_t nblocks, ism_an_block_fn fn,
+                       void *ctx);
+
+/* Threads to use for option value t (0 = online cores), at most 64. */
+int ism_an_threads(int t);
+
+#endif

@@ -1,0 +1,12 @@
+/* quality.h — the triangle-quality pass (quality.c). */
+#ifndef ISM_AN_QUALITY_H
+#define ISM_AN_QUALITY_H
+
+#include <stdbool.h>
+#include "core/mesh/mesh.h"
+#include "core/analysis/analysis_types.h"
+
+/* Smallest angles, degenerate triangles, vertex areas, total area; false when out of memory. */
+bool ism_an_triangle_quality(const ism_mesh *m, ism_analysis *a);
+
+#endif
