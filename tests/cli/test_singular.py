@@ -180,5 +180,90 @@ class DoubleSheetTest(unittest.TestCase):
                 self.assertEqual(stats["analysis"]["euler"], 1)
 
 
+def preset_boxes(box, depth):
+    """The preset's own box and two copies shifted off its lattice (see shifted_boxes)."""
+    side = max(box[3] - box[0], box[4] - box[1], box[5] - box[2])
+    cell = side / 2 ** depth
+    out = []
+    for sx, sy, sz in [(0, 0, 0), (1e-3, -1e-3, 0.7e-3), (0.37 * cell, -0.23 * cell, 0.41 * cell)]:
+        out.append([box[0] + sx, box[1] + sy, box[2] + sz, box[3] + sx, box[4] + sy, box[5] + sz])
+    return out
+
+
+def preset(name, box, depth):
+    with tempfile.TemporaryDirectory() as tmp:
+        feats = os.path.join(tmp, "f.json")
+        r = subprocess.run([ISOMESH, "--surface", name, "-b", ",".join(repr(v) for v in box),
+                            "-d", f"3:{depth}", "--stats", "--features", feats],
+                           capture_output=True, text=True, timeout=600)
+        if r.returncode != 0:
+            raise AssertionError(f"isomesh failed ({r.returncode}): {r.stderr}")
+        with open(feats) as f:
+            return json.loads(r.stdout), json.load(f)
+
+
+PRESET_BOXES = {"kummer-4-nodes": [-3, -3, -3, 3, 3, 3], "kummer-16-nodes": [-3, -3, -3, 3, 3, 3],
+                "steiner-roman": [-1, -1, -1, 1, 1, 1], "klein-bottle": [-4, -4, -4, 4, 4, 4],
+                "sphere": [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5], "torus": [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5]}
+
+
+class PresetsOffTheLatticeTest(unittest.TestCase):
+    """The presets' singular structure, the same in their own boxes and in boxes moved off
+    the lattice, with nothing non-manifold off the locus."""
+
+    def run_preset(self, name, depth):
+        for box in preset_boxes(PRESET_BOXES[name], depth):
+            with self.subTest(preset=name, box=box, depth=depth):
+                stats, feats = preset(name, box, depth)
+                self.assertEqual(stats["singular"]["artefacts"], 0)
+                self.assertFalse(feats["incomplete"])
+                yield stats, feats
+
+    def test_smooth_presets_have_no_singular_structure(self):
+        for name, chi in (("sphere", 2), ("torus", 0)):
+            for stats, feats in self.run_preset(name, 6):
+                self.assertEqual(feats["singular_points"], [])
+                self.assertEqual(feats["curves"], [])
+                self.assertEqual(stats["analysis"]["euler"], chi)
+
+    def test_kummer_nodes(self):
+        for name, nodes, depth in (("kummer-4-nodes", 4, 7), ("kummer-16-nodes", 16, 6)):
+            for stats, feats in self.run_preset(name, depth):
+                pts = feats["singular_points"]
+                self.assertEqual(len(pts), nodes)
+                self.assertTrue(all(p["type"] == "node" and p["certified"] and p["cones"] == 2
+                                    for p in pts))
+                self.assertEqual(stats["analysis"]["nonmanifold_vertices"], nodes)
+
+    def test_steiner_double_lines_pinch_and_triple_points(self):
+        # x²y² + y²z² + z²x² + xyz: the axes are double lines from the triple point at the
+        # origin to pinch points at ±1/2, whiskers beyond them.
+        want_pinch = {(sx * 0.5 if k == 0 else 0, sx * 0.5 if k == 1 else 0, sx * 0.5 if k == 2 else 0)
+                      for k in range(3) for sx in (-1, 1)}
+        for stats, feats in self.run_preset("steiner-roman", 6):
+            pts = feats["singular_points"]
+            pinch = [p["xyz"] for p in pts if p["type"] == "pinch"]
+            triple = [p["xyz"] for p in pts if p["type"] == "triple"]
+            self.assertEqual(len(pinch), 6)
+            for w in want_pinch:
+                self.assertTrue(any(math.dist(w, p) < 1e-6 for p in pinch), w)
+            self.assertEqual(len(triple), 1)
+            self.assertLess(math.dist(triple[0], (0, 0, 0)), 1e-6)
+            kinds = sorted(c["kind"] for c in feats["curves"])
+            self.assertEqual(kinds, ["double"] * 6 + ["whisker"] * 6)
+            self.assertEqual(stats["analysis"]["euler"], 5)
+
+    def test_klein_bottle_self_intersection_circle(self):
+        # The figure-8 Klein bottle crosses itself along x² + (y − 1)² = 2 in z = 0.
+        for stats, feats in self.run_preset("klein-bottle", 6):
+            curves = feats["curves"]
+            self.assertEqual([(c["kind"], c["closed"]) for c in curves], [("double", True)])
+            xyz = curves[0]["xyz"]
+            for i in range(0, len(xyz), 3):
+                self.assertLess(abs(xyz[i + 2]), 1e-6)
+                self.assertLess(abs(math.hypot(xyz[i], xyz[i + 1] - 1) - math.sqrt(2)), 1e-6)
+            self.assertEqual(stats["analysis"]["euler"], 0)
+
+
 if __name__ == "__main__":
     unittest.main()
