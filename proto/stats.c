@@ -38,6 +38,7 @@ static void write_poly(ism_jw *w, const ism_poly_stats *s)
     kv_u(w, "unresolved_nodes", s->unresolved_nodes);
     kv_u(w, "error_missed_nodes", s->error_missed_nodes);
     kv_d(w, "error_worst", s->error_worst);
+    kv_u(w, "error_rounds", s->error_rounds);
     kv_u(w, "edges_single_root", s->edges_single_root);
     kv_u(w, "edges_double_root", s->edges_double_root);
     kv_u(w, "edges_touching", s->edges_touching);
@@ -219,8 +220,9 @@ static void singular_warnings(ism_jw *w, const ism_locus *l, const ism_locus_che
     }
 }
 
-/* Under an error bound, one warning and only when the bound was not met: by the measured
- * mesh when it was analysed, else by the octree's own measurements at depth.max. */
+/* Under an error bound, one warning and only when the bound was not met: by the analysed
+ * mesh when there is an analysis, else by the polygoniser's measurements of the cells it
+ * could not split further. */
 static void write_error_warning(ism_jw *w, const ism_stats_input *in)
 {
     const ism_poly_stats *s = in->poly;
@@ -231,14 +233,10 @@ static void write_error_warning(ism_jw *w, const ism_stats_input *in)
     char msg[300], e[32], x[32];
     ism_jw_format_double(in->max_error, e);
     ism_jw_format_double(worst, x);
-    if (cells)
-        snprintf(msg, sizeof msg, "max_error %s was not met: the mesh is up to %s from the "
-                 "surface; %llu cells stopped at depth.max before reaching it (a larger "
-                 "depth.max lets them subdivide further)", e, x, (unsigned long long)cells);
-    else
-        snprintf(msg, sizeof msg, "max_error %s was not met: the mesh is up to %s from the "
-                 "surface where the octree's estimate per cell was below it (finer neighbours' "
-                 "tiles or crossing sheets changed a cell's polygons)", e, x);
+    snprintf(msg, sizeof msg, "max_error %s was not met: the mesh is up to %s from the "
+             "surface; %llu cells could not be split further (at depth.max, or after the last "
+             "refinement round): a larger depth.max may reach it", e, x,
+             (unsigned long long)cells);
     ism_jw_string(w, msg);
 }
 

@@ -22,8 +22,7 @@ typedef struct thread_state {
     ism_sampler s;
     ism_point_entry *corners; /* memo of f and ∇f at lattice points (pure: never stale) */
     ism_tape *tapes[ISM_GRID_MAX_DEPTH + 1];
-    uint64_t visited, excluded, unresolved, error_missed;
-    double error_worst;
+    uint64_t visited, excluded, unresolved;
 } thread_state;
 
 typedef struct build {
@@ -138,25 +137,22 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         return true;
     }
     bool leaf = false;
-    if (nd.level >= b->p->min_depth) {
+    bool forced = nd.level < b->p->max_depth &&
+                  ism_split_set_has(b->p->force_split, ism_node_key(&nd));
+    if (nd.level >= b->p->min_depth && !forced) {
         double lo[3], hi[3];
         node_box(b->grid, &nd, lo, hi);
         ism_corners k;
         node_corners(b->grid, th, b->p->tape, &nd, &k);
         const ism_tape *saved = th->s.tape;
         th->s.tape = sub;
-        double error;
-        bool flat = ism_plot_test(&th->s, &b->p->flatness, lo, hi, &k, &error);
+        bool flat = ism_plot_test(&th->s, &b->p->flatness, lo, hi, &k);
         th->s.tape = saved;
         if (nd.level >= b->p->max_depth) {
             leaf = true;
             if (!flat) {
                 v->v[i].flags |= ISM_NODE_UNRESOLVED;
                 th->unresolved++;
-            }
-            if (error > b->p->flatness.max_error) { /* false for NaN: not measured */
-                th->error_missed++;
-                th->error_worst = error > th->error_worst ? error : th->error_worst;
             }
         } else {
             leaf = flat;
@@ -234,9 +230,6 @@ static void free_threads(build *b, int nthreads, ism_octree_build_stats *st)
         st->visited += th->visited;
         st->excluded += th->excluded;
         st->unresolved += th->unresolved;
-        st->error_missed += th->error_missed;
-        if (th->error_worst > st->error_worst)
-            st->error_worst = th->error_worst;
         st->n_point += th->s.n_point;
         st->n_gradient += th->s.n_gradient;
         st->n_interval += th->s.n_interval;

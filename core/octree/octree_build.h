@@ -9,6 +9,7 @@
 #include "core/expr/expr.h"
 #include "core/octree/octree.h"
 #include "core/octree/plot_test.h"
+#include "core/octree/refine.h"
 
 typedef struct ism_octree_build_params {
     const ism_tape *tape;
@@ -16,6 +17,8 @@ typedef struct ism_octree_build_params {
     ism_flatness flatness;
     int threads;
     size_t max_nodes;                 /* stop with ISM_BUILD_TOO_BIG beyond this */
+    const ism_split_set *force_split; /* nodes split whatever the flatness test says (their
+                                         emitted triangles missed max_error): NULL for none */
     const volatile int *cancel;
     void (*progress)(void *ctx, double fraction); /* fraction of subtrees done */
     void *progress_ctx;
@@ -23,8 +26,6 @@ typedef struct ism_octree_build_params {
 
 typedef struct ism_octree_build_stats {
     uint64_t visited, excluded, unresolved;
-    uint64_t error_missed;   /* leaves at max_depth measured above flatness.max_error */
-    double error_worst;      /* the largest error measured on those (0 when none) */
     uint64_t n_point, n_gradient, n_interval;
 } ism_octree_build_stats;
 

@@ -46,10 +46,8 @@ static bool no_roots(ism_sampler *s, const ism_flatness *fl, const ism_corners *
 }
 
 bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
-                   const double hi[3], const ism_corners *k, double *error)
+                   const double hi[3], const ism_corners *k)
 {
-    if (error)
-        *error = NAN;
     double p[8][3], f[8], n[8][3];
     memcpy(p, k->p, sizeof p);
     memcpy(f, k->f, sizeof f);
@@ -99,11 +97,8 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
     if (nroots == 0)
         return true;
     double err;
-    if (fl->max_error > 0 && ism_cell_error(s, k, &err)) {
-        if (error)
-            *error = err;
+    if (fl->max_error > 0 && ism_cell_error(s, k, &err))
         return err <= fl->max_error;
-    }
     for (int a = 0; a < 3; a++)
         centroid[a] /= nroots;
 

@@ -33,9 +33,8 @@ typedef struct ism_corners {
 void ism_cube_edge(int e, int *c0, int *c1, int faces[2]);
 
 /* lo, hi: the node's world box; k: its corner values. True when the node may be plotted
- * at this size. Under max_error, *error (when not NULL) receives the distance measured on
- * the node's would-be triangles, or NaN when the test decided before measuring. */
+ * at this size. */
 bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
-                   const double hi[3], const ism_corners *k, double *error);
+                   const double hi[3], const ism_corners *k);
 
 #endif

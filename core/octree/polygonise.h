@@ -57,9 +57,12 @@ typedef struct ism_poly_stats {
     uint64_t nodes_excluded;     /* nodes whose interval proved them empty */
     uint64_t plotting_nodes;     /* leaves that produced polygons */
     uint64_t unresolved_nodes;   /* leaves at max depth that failed flatness or polygonisation */
-    uint64_t error_missed_nodes; /* under max_error: leaves at max depth whose triangles were
-                                    measured farther than max_error from the surface */
+    uint64_t error_missed_nodes; /* under max_error: leaves whose emitted triangles were
+                                    measured farther than max_error from the surface (at
+                                    centroids and edge midpoints) and could not be split:
+                                    at max depth, or after the last round */
     double error_worst;          /* the largest such distance (0 when none) */
+    uint64_t error_rounds;       /* rounds after the first, each splitting such leaves */
     uint64_t edges_single_root;  /* node edges with one root */
     uint64_t edges_double_root;  /* node edges with two roots (paper's bisection) */
     uint64_t edges_touching;     /* edges with a double (tangent) root |f(c)| < eps */

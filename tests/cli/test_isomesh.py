@@ -243,7 +243,7 @@ class TestIsomesh(unittest.TestCase):
         self.assertGreater(worst, 0.001)
         self.assertEqual(len(s["warnings"]), 1, s["warnings"])
         self.assertIn("max_error 0.001 was not met", s["warnings"][0])
-        self.assertIn(f"{s['polygoniser']['error_missed_nodes']} cells stopped at depth.max",
+        self.assertIn(f"{s['polygoniser']['error_missed_nodes']} cells could not be split further",
                       s["warnings"][0])
         self.assertGreater(s["polygoniser"]["error_missed_nodes"], 0)
         # no bound: met and max_error are null

@@ -1,0 +1,86 @@
+/* refine.c — measuring a leaf's emitted triangles and the split set (see refine.h). */
+#include "core/octree/refine.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+static double dist_at(ism_sampler *s, const double p[3])
+{
+    double g[3];
+    double f = ism_sample_grad(s, p, g);
+    double gl = ism_norm3(g), d = fabs(f) / gl;
+    return gl > 0 && isfinite(d) ? d : 0;
+}
+
+double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_tri)
+{
+    double worst = 0;
+    for (size_t t = first_tri; t < out->ntris; t++) {
+        const double *v[3];
+        for (int k = 0; k < 3; k++)
+            v[k] = out->verts[out->tris[3 * t + k]].p;
+        double c[3];
+        for (int a = 0; a < 3; a++)
+            c[a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
+        worst = fmax(worst, dist_at(s, c));
+        for (int k = 0; k < 3; k++) {
+            const double *p = v[k], *q = v[(k + 1) % 3];
+            double m[3] = {(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2};
+            worst = fmax(worst, dist_at(s, m));
+        }
+    }
+    return worst;
+}
+
+/* Lattice coordinates fit in 17 bits (ISM_GRID_MAX_DEPTH 16), the level in 5. */
+uint64_t ism_node_key(const ism_node *nd)
+{
+    return (uint64_t)nd->level << 57 | (uint64_t)(uint32_t)nd->org[0] << 38 |
+           (uint64_t)(uint32_t)nd->org[1] << 19 | (uint64_t)(uint32_t)nd->org[2];
+}
+
+bool ism_split_set_add(ism_split_set *s, uint64_t key)
+{
+    if (s->n == s->cap) {
+        size_t c = s->cap ? s->cap * 2 : 64;
+        uint64_t *k = realloc(s->keys, c * sizeof *k);
+        if (!k)
+            return false;
+        s->keys = k;
+        s->cap = c;
+    }
+    s->keys[s->n++] = key;
+    return true;
+}
+
+static int by_key(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+void ism_split_set_sort(ism_split_set *s)
+{
+    if (s->n)
+        qsort(s->keys, s->n, sizeof *s->keys, by_key);
+}
+
+bool ism_split_set_has(const ism_split_set *s, uint64_t key)
+{
+    size_t lo = 0, hi = s ? s->n : 0;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (s->keys[mid] < key)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return s && lo < s->n && s->keys[lo] == key;
+}
+
+void ism_split_set_free(ism_split_set *s)
+{
+    free(s->keys);
+    s->keys = NULL;
+    s->n = s->cap = 0;
+}

@@ -1,0 +1,31 @@
+/* refine.h — the a-posteriori half of the max_error bound: the distance to f = 0 of the
+ * triangles a leaf really emitted (its polygons depend on its neighbours' tiles, which the
+ * octree's estimate cannot see), and the set of nodes the next round of the octree must
+ * split because their triangles were measured farther than the bound. */
+#ifndef ISM_REFINE_H
+#define ISM_REFINE_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdbool.h>
+#include "core/octree/cell.h"
+
+/* The largest |f| / |∇f| at the centroids and edge midpoints of out's triangles from
+ * first_tri on; points where ∇f vanishes or f is not finite are left out. */
+double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_tri);
+
+/* A node's identity across rounds (its level and lattice origin). */
+uint64_t ism_node_key(const ism_node *nd);
+
+/* Nodes to split whatever the flatness test says: keys sorted ascending. */
+typedef struct ism_split_set {
+    uint64_t *keys;
+    size_t n, cap;
+} ism_split_set;
+
+bool ism_split_set_add(ism_split_set *s, uint64_t key);
+void ism_split_set_sort(ism_split_set *s);          /* after adding, before lookups */
+bool ism_split_set_has(const ism_split_set *s, uint64_t key);
+void ism_split_set_free(ism_split_set *s);
+
+#endif
