@@ -19,6 +19,11 @@ const char *ism_format_mime(enum ism_format f)
     return (unsigned)f < ISM_FORMAT_COUNT ? format_mimes[f] : "application/octet-stream";
 }
 
+const char *ism_format_mime_of(const char *name)
+{
+    return ism_format_mime((enum ism_format)ism_format_lookup(name));
+}
+
 int ism_format_lookup(const char *name)
 {
     for (int i = 0; i < ISM_FORMAT_COUNT; i++)

@@ -455,6 +455,7 @@ bool ism_frame_job_encode(const ism_frame_job *j, ism_frame_builder *b)
     ism_frame_put_u64(b, j->max_memory);
     ism_frame_put_str(b, j->format);
     ism_frame_put_bytes(b, j->json, j->json_len);
+    ism_frame_put_bytes(b, j->computed, j->computed_len);
     return !b->failed;
 }
 
@@ -471,14 +472,18 @@ bool ism_frame_job_decode(const ism_frame *f, ism_frame_job *j)
     j->max_memory = ism_frame_get_u64(&c);
     ism_frame_get_str(&c, j->format, sizeof j->format);
     j->json = ism_frame_get_bytes(&c, &j->json_len);
+    j->computed = ism_frame_get_bytes(&c, &j->computed_len);
     return !c.failed && c.left == 0;
 }
 
-bool ism_frame_result_encode(const ism_frame_result *r, ism_frame_builder *head)
+bool ism_frame_result_encode(const ism_frame_result *r, ism_frame_builder *head,
+                             unsigned char tail[4])
 {
     ism_frame_put_u32(head, r->status);
     ism_frame_put_u32(head, r->worker_us);
     ism_frame_put_str(head, r->key);
+    ism_frame_put_str(head, r->surface_key);
+    ism_frame_put_u32(head, r->polygonised);
     ism_frame_put_str(head, r->format);
     ism_frame_put_str(head, r->content_type);
     ism_frame_put_bytes(head, r->stats, r->stats_len);
@@ -487,6 +492,9 @@ bool ism_frame_result_encode(const ism_frame_result *r, ism_frame_builder *head)
     if (r->body_len > UINT32_MAX)
         head->failed = true;
     ism_frame_put_u32(head, (uint32_t)r->body_len); /* the body itself is the second part */
+    if (r->computed_len > UINT32_MAX)
+        head->failed = true;
+    ism_put_le32(tail, (uint32_t)r->computed_len); /* then this, then the computed surface */
     return !head->failed;
 }
 
@@ -500,11 +508,14 @@ bool ism_frame_result_decode(const ism_frame *f, ism_frame_result *r)
     r->status = ism_frame_get_u32(&c);
     r->worker_us = ism_frame_get_u32(&c);
     ism_frame_get_str(&c, r->key, sizeof r->key);
+    ism_frame_get_str(&c, r->surface_key, sizeof r->surface_key);
+    r->polygonised = ism_frame_get_u32(&c);
     ism_frame_get_str(&c, r->format, sizeof r->format);
     ism_frame_get_str(&c, r->content_type, sizeof r->content_type);
     r->stats = ism_frame_get_bytes(&c, &r->stats_len);
     r->features = ism_frame_get_bytes(&c, &r->features_len);
     r->canonical = ism_frame_get_bytes(&c, &r->canonical_len);
     r->body = ism_frame_get_bytes(&c, &r->body_len);
+    r->computed = ism_frame_get_bytes(&c, &r->computed_len);
     return !c.failed && c.left == 0 && r->status >= 100 && r->status <= 599;
 }

@@ -154,6 +154,10 @@ typedef struct ism_frame_job {
     char format[8];            /* "" = the request's own format */
     const unsigned char *json; /* the request JSON (points into the payload when decoded) */
     size_t json_len;
+    /* The stored computed surface of the request (proto/computed.h) to encode from instead
+     * of polygonising; empty when there is none. */
+    const unsigned char *computed;
+    size_t computed_len;
 } ism_frame_job;
 
 bool ism_frame_job_encode(const ism_frame_job *j, ism_frame_builder *b);
@@ -165,15 +169,21 @@ typedef struct ism_frame_result {
     uint32_t status;           /* HTTP-like: 200, 400, 422, 499, 500 */
     uint32_t worker_us;        /* wall time the worker spent on the job */
     char key[65];
+    char surface_key[65];      /* the surface's key (request.h) */
+    uint32_t polygonised;      /* 1: computed from scratch; 0: encoded from a stored surface */
     char format[8];
     char content_type[64];
     const unsigned char *body, *stats, *features, *canonical;
     size_t body_len, stats_len, features_len, canonical_len;
+    const unsigned char *computed; /* the computed surface's entry when newly computed */
+    size_t computed_len;
 } ism_frame_result;
 
-/* RESULT frames are written in two parts so the mesh body is never copied: fills head with
- * every field up to and including the body's length; the frame is then {head, body}. */
-bool ism_frame_result_encode(const ism_frame_result *r, ism_frame_builder *head);
+/* RESULT frames are written in four parts so neither the mesh body nor the computed surface
+ * is copied: fills head with every field up to and including the body's length, and tail
+ * with the computed surface's length; the frame is then {head, body, tail, computed}. */
+bool ism_frame_result_encode(const ism_frame_result *r, ism_frame_builder *head,
+                             unsigned char tail[4]);
 bool ism_frame_result_decode(const ism_frame *f, ism_frame_result *r);
 
 #endif

@@ -218,6 +218,22 @@ void ism_jw_raw(ism_jw *w, const char *json, size_t n)
     put(w, json, n);
 }
 
+void ism_jw_members(ism_jw *w, const char *object, size_t n)
+{
+    while (n && (*object == ' ' || *object == '\n'))
+        object++, n--;
+    while (n && (object[n - 1] == ' ' || object[n - 1] == '\n'))
+        n--;
+    if (n < 2 || object[0] != '{' || object[n - 1] != '}' || w->after_key) {
+        w->failed = true;
+        return;
+    }
+    if (n == 2)
+        return; /* {} */
+    before_value(w);
+    put(w, object + 1, n - 2);
+}
+
 char *ism_jw_take(ism_jw *w, size_t *len)
 {
     if (w->failed || w->depth != 0 || !w->data) {

@@ -38,6 +38,9 @@ void ism_jw_uint(ism_jw *w, uint64_t v);
 void ism_jw_bool(ism_jw *w, bool v);
 void ism_jw_null(ism_jw *w);
 void ism_jw_raw(ism_jw *w, const char *json, size_t n); /* an already-encoded JSON value */
+/* The members of an already-encoded JSON object, spliced into the open object (failed when
+ * the text is not braced). */
+void ism_jw_members(ism_jw *w, const char *object, size_t n);
 
 /* Writes the shortest decimal form of v that strtod reads back to v into buf (at least 32
  * bytes); "null" when v is not finite. Returns buf. */

@@ -102,6 +102,9 @@ const char *ism_format_name(enum ism_format f);
 const char *ism_format_mime(enum ism_format f);
 /* The format called name, or -1. */
 int ism_format_lookup(const char *name);
+/* The MIME type of the format called name (application/octet-stream when unknown). The one
+ * list of formats and their types is proto/format.c. */
+const char *ism_format_mime_of(const char *name);
 
 /* Compiles the request's expression (with its params and lets). On failure fills err (400
  * with the expression's path and the parser's line and column; 422 for a size limit). */
@@ -121,9 +124,22 @@ char *ism_request_canonical(const ism_request *req, size_t *len);
  * are sent). Never the format. malloc'd; NULL when out of memory. */
 char *ism_request_key_material(const ism_request *req, const ism_tape *tape, size_t *len);
 
+/* Digits of every key (mesh and surface keys): BLAKE2b-256 in lowercase hex. */
+#define ISM_KEY_HEX_LEN 64
+
 /* BLAKE2b-256 (libsodium crypto_generichash) of the key material, as 64 hex digits + NUL.
  * False when out of memory or libsodium fails to start. */
-bool ism_request_key(const ism_request *req, const ism_tape *tape, char hex[65]);
+bool ism_request_key(const ism_request *req, const ism_tape *tape, char hex[ISM_KEY_HEX_LEN + 1]);
+
+/* The surface key: the same without the encoding options (bits, attributes, Draco speed).
+ * It names the computed surface (proto/computed.h) that every encoding is made from. */
+char *ism_request_surface_key_material(const ism_request *req, const ism_tape *tape,
+                                       size_t *len);
+bool ism_request_surface_key(const ism_request *req, const ism_tape *tape,
+                             char hex[ISM_KEY_HEX_LEN + 1]);
+
+/* True for exactly ISM_KEY_HEX_LEN lowercase hex digits (the one key check). */
+bool ism_key_valid(const char *key);
 
 /* Error helpers. ism_req_error_set formats the message; the path, when not empty, is
  * prefixed to it ("$.box: ..."). Returns false for `return ism_req_error_set(...)`. */

@@ -131,7 +131,9 @@ char *ism_request_canonical(const ism_request *req, size_t *len)
     return ism_jw_take(&w, len);
 }
 
-char *ism_request_key_material(const ism_request *req, const ism_tape *tape, size_t *len)
+/* The key material; with_encoding adds what changes the bytes but not the surface. */
+static char *key_material(const ism_request *req, const ism_tape *tape, bool with_encoding,
+                          size_t *len)
 {
     size_t n = ism_tape_canonical(tape, NULL, 0);
     char *text = n ? malloc(n + 1) : NULL; /* 0: the tape writer ran out of memory */
@@ -160,27 +162,63 @@ char *ism_request_key_material(const ism_request *req, const ism_tape *tape, siz
     write_max_error(&w, req);
     ism_jw_key(&w, "tolerances");
     write_tolerances(&w, req);
-    ism_jw_key(&w, "encoding");
-    write_output(&w, req, true);
-    ism_jw_key(&w, "draco_speed"); /* the encoder's setting changes the bytes too */
-    ism_jw_int(&w, ISM_DRACO_DEFAULT_SPEED);
+    if (with_encoding) {
+        ism_jw_key(&w, "encoding");
+        write_output(&w, req, true);
+        ism_jw_key(&w, "draco_speed"); /* the encoder's setting changes the bytes too */
+        ism_jw_int(&w, ISM_DRACO_DEFAULT_SPEED);
+    }
     ism_jw_object_end(&w);
     return ism_jw_take(&w, len);
 }
 
-bool ism_request_key(const ism_request *req, const ism_tape *tape, char hex[65])
+char *ism_request_key_material(const ism_request *req, const ism_tape *tape, size_t *len)
+{
+    return key_material(req, tape, true, len);
+}
+
+char *ism_request_surface_key_material(const ism_request *req, const ism_tape *tape,
+                                       size_t *len)
+{
+    return key_material(req, tape, false, len);
+}
+
+bool ism_key_valid(const char *key)
+{
+    size_t i = 0;
+    for (; key[i]; i++)
+        if (!((key[i] >= '0' && key[i] <= '9') || (key[i] >= 'a' && key[i] <= 'f')))
+            return false;
+    return i == ISM_KEY_HEX_LEN;
+}
+
+/* BLAKE2b-256 of the material as hex. */
+static bool hash_hex(char *m, size_t n, char hex[ISM_KEY_HEX_LEN + 1])
+{
+    unsigned char h[ISM_KEY_HEX_LEN / 2];
+    int rc = crypto_generichash(h, sizeof h, (const unsigned char *)m, n, NULL, 0);
+    free(m);
+    if (rc != 0)
+        return false;
+    sodium_bin2hex(hex, ISM_KEY_HEX_LEN + 1, h, sizeof h);
+    return true;
+}
+
+bool ism_request_key(const ism_request *req, const ism_tape *tape, char hex[ISM_KEY_HEX_LEN + 1])
 {
     if (sodium_init() < 0)
         return false;
     size_t n;
     char *m = ism_request_key_material(req, tape, &n);
-    if (!m)
+    return m && hash_hex(m, n, hex);
+}
+
+bool ism_request_surface_key(const ism_request *req, const ism_tape *tape,
+                             char hex[ISM_KEY_HEX_LEN + 1])
+{
+    if (sodium_init() < 0)
         return false;
-    unsigned char h[32];
-    int rc = crypto_generichash(h, sizeof h, (const unsigned char *)m, n, NULL, 0);
-    free(m);
-    if (rc != 0)
-        return false;
-    sodium_bin2hex(hex, 65, h, sizeof h);
-    return true;
+    size_t n;
+    char *m = ism_request_surface_key_material(req, tape, &n);
+    return m && hash_hex(m, n, hex);
 }

@@ -8,6 +8,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 
 static void kv_u(ism_jw *w, const char *k, uint64_t v)
 {
@@ -270,10 +271,38 @@ static void write_warnings(ism_jw *w, const ism_stats_input *in)
     ism_jw_array_end(w);
 }
 
+char *ism_stats_surface_json(const ism_stats_input *in, size_t *len)
+{
+    ism_jw w;
+    ism_jw_init(&w);
+    ism_jw_object(&w);
+    if (in->poly) {
+        ism_jw_key(&w, "polygoniser");
+        write_poly(&w, in->poly);
+    }
+    if (in->analysis) {
+        ism_jw_key(&w, "analysis");
+        write_analysis(&w, in->analysis, in->max_error);
+    }
+    if (in->locus) {
+        ism_jw_key(&w, "singular");
+        write_singular(&w, in->locus, in->check, in->conform);
+    }
+    ism_jw_key(&w, "warnings");
+    write_warnings(&w, in);
+    ism_jw_object_end(&w);
+    return ism_jw_take(&w, len);
+}
+
 char *ism_stats_json(const ism_stats_input *in, size_t *len)
 {
     static const char *const timing[ISM_TIME_COUNT] = {"decode", "compile", "singular", "polygonise",
                                                     "analyse", "features", "encode", "total"};
+    size_t slen = in->surface_len;
+    char *own = in->surface ? NULL : ism_stats_surface_json(in, &slen);
+    const char *surface = in->surface ? in->surface : own;
+    if (!surface)
+        return NULL;
     ism_jw w;
     ism_jw_init(&w);
     ism_jw_object(&w);
@@ -296,25 +325,13 @@ char *ism_stats_json(const ism_stats_input *in, size_t *len)
     kv_u(&w, "encoded_points", in->encoded_points);
     kv_u(&w, "encoded_faces", in->encoded_faces);
     ism_jw_object_end(&w);
-    if (in->poly) {
-        ism_jw_key(&w, "polygoniser");
-        write_poly(&w, in->poly);
-    }
-    if (in->analysis) {
-        ism_jw_key(&w, "analysis");
-        write_analysis(&w, in->analysis, in->max_error);
-    }
-    if (in->locus) {
-        ism_jw_key(&w, "singular");
-        write_singular(&w, in->locus, in->check, in->conform);
-    }
     ism_jw_key(&w, "timings_ms");
     ism_jw_object(&w);
     for (int i = 0; i < ISM_TIME_COUNT; i++)
         kv_ms(&w, timing[i], in->timings_ms[i]);
     ism_jw_object_end(&w);
-    ism_jw_key(&w, "warnings");
-    write_warnings(&w, in);
+    ism_jw_members(&w, surface, slen);
     ism_jw_object_end(&w);
+    free(own);
     return ism_jw_take(&w, len);
 }

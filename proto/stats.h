@@ -14,7 +14,10 @@
  *                 points_short_cones, curves_conformed, curves_failed, loops_fallback,
  *                 triangles_removed, triangles_added, time_ms}},
  *    "timings_ms": {"decode", "compile", "singular", "polygonise", "analyse", "features",
- *    "encode", "total"}, "warnings": ["..."]} */
+ *    "encode", "total"}, "warnings": ["..."]}
+ * (timings_ms comes right after "mesh"; the members from "polygoniser" on are the surface's,
+ * the same for every encoding of it; the timings of a mesh encoded from a stored computed
+ * surface are the computation's, with its own "encode"). */
 #ifndef ISM_STATS_H
 #define ISM_STATS_H
 
@@ -43,9 +46,17 @@ typedef struct ism_stats_input {
     const ism_conform_stats *conform;     /* what the conformance pass did (may be NULL) */
     double max_error;                     /* the requested error bound; 0 when none */
     double timings_ms[ISM_TIME_COUNT];
+    const char *surface;                  /* ism_stats_surface_json's text, or NULL: then */
+    size_t surface_len;                   /* it is written from poly ... conform */
 } ism_stats_input;
 
-/* malloc'd JSON text; NULL when out of memory. */
+/* The members that do not depend on the encoding ("polygoniser", "analysis", "singular",
+ * "warnings") as one JSON object: kept with the computed surface (proto/computed.h) and
+ * spliced into the stats of each encoding of it. malloc'd; NULL when out of memory. */
+char *ism_stats_surface_json(const ism_stats_input *in, size_t *len);
+
+/* The whole stats JSON: key ... mesh, timings_ms, then the surface members. malloc'd JSON
+ * text; NULL when out of memory. */
 char *ism_stats_json(const ism_stats_input *in, size_t *len);
 
 #endif

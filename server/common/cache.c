@@ -2,33 +2,30 @@
  * everywhere, and the entry-name rules every tier relies on (no tier ever sees a name that
  * could escape a directory). */
 #include "server/common/cache.h"
+#include "proto/computed.h"
+#include "proto/request.h"
 
 #include <stdio.h>
 #include <string.h>
 
-static const char *const KINDS[] = {"drc", "glb", "ply", "obj", "stl",
-                                    "stats.json", "features.json", "request.json"};
-
-bool ism_cache_key_valid(const char *key)
-{
-    size_t i = 0;
-    for (; key[i]; i++)
-        if (!((key[i] >= '0' && key[i] <= '9') || (key[i] >= 'a' && key[i] <= 'f')))
-            return false;
-    return i == 64;
-}
+/* What else an entry can be besides a mesh file (the formats are proto/format.c's). */
+static const char *const DOCUMENTS[] = {"stats.json", "features.json", "request.json",
+                                        ISM_COMPUTED_EXT};
 
 bool ism_cache_name_valid(const char *name)
 {
-    if (strlen(name) < 66 || name[64] != '.')
+    if (strlen(name) < ISM_KEY_HEX_LEN + 2 || name[ISM_KEY_HEX_LEN] != '.')
         return false;
-    char key[65];
-    memcpy(key, name, 64);
-    key[64] = 0;
-    if (!ism_cache_key_valid(key))
+    char key[ISM_KEY_HEX_LEN + 1];
+    memcpy(key, name, ISM_KEY_HEX_LEN);
+    key[ISM_KEY_HEX_LEN] = 0;
+    const char *ext = name + ISM_KEY_HEX_LEN + 1;
+    if (!ism_key_valid(key))
         return false;
-    for (size_t i = 0; i < sizeof KINDS / sizeof KINDS[0]; i++)
-        if (strcmp(name + 65, KINDS[i]) == 0)
+    if (ism_format_lookup(ext) >= 0)
+        return true;
+    for (size_t i = 0; i < sizeof DOCUMENTS / sizeof DOCUMENTS[0]; i++)
+        if (strcmp(ext, DOCUMENTS[i]) == 0)
             return true;
     return false;
 }

@@ -7,7 +7,9 @@
  * Entries are named "<key>.<ext>": the 64-hex-digit cache key of a request (pipeline.h) and
  * what the bytes are: a mesh file ("drc", "glb", "ply", "obj", "stl"), its statistics
  * ("stats.json"), its non-manifold features ("features.json") or the canonical request that
- * produced it ("request.json"). Content-addressed: one name always means the same bytes. */
+ * produced it ("request.json"); or, under a surface key, the computed surface every encoding
+ * is made from ("mesh", versioned format in proto/computed.h). Content-addressed: one name
+ * always means the same bytes. */
 #ifndef ISM_CACHE_H
 #define ISM_CACHE_H
 
@@ -67,7 +69,5 @@ void ism_cache_close(ism_cache *c);
 bool ism_cache_name_valid(const char *name);
 /* Writes "<key>.<ext>" into out (ISM_CACHE_NAME_MAX bytes); false when it would be invalid. */
 bool ism_cache_name(char out[ISM_CACHE_NAME_MAX], const char *key, const char *ext);
-/* True for 64 lowercase hex digits. */
-bool ism_cache_key_valid(const char *key);
 
 #endif

@@ -11,6 +11,7 @@
 #include "core/octree/polygonise.h"
 #include "core/singular/check.h"
 #include "core/singular/surface.h"
+#include "proto/computed.h"
 #include "proto/draco_encode.h"
 #include "proto/features.h"
 #include "proto/glb.h"
@@ -38,12 +39,23 @@ void ism_pipeline_limits_default(ism_pipeline_limits *l)
     l->threads = 0;
 }
 
+/* Defaults for a NULL limits pointer. */
+static const ism_pipeline_limits *limits_or_default(const ism_pipeline_limits *lim,
+                                                    ism_pipeline_limits *dl)
+{
+    if (lim)
+        return lim;
+    ism_pipeline_limits_default(dl);
+    return dl;
+}
+
 void ism_pipeline_result_free(ism_pipeline_result *r)
 {
     ism_buf_free(&r->body);
     ism_buf_free(&r->stats);
     ism_buf_free(&r->features);
     ism_buf_free(&r->canonical);
+    ism_buf_free(&r->computed);
     memset(r, 0, sizeof *r);
 }
 
@@ -126,7 +138,8 @@ static bool prepare(const char *json, size_t len, const char *format_override,
     }
     size_t n;
     char *canonical = ism_request_canonical(req, &n);
-    if (!canonical || !ism_request_key(req, *tape, r->key)) {
+    if (!canonical || !ism_request_key(req, *tape, r->key) ||
+        !ism_request_surface_key(req, *tape, r->surface_key)) {
         free(canonical);
         ism_tape_free(*tape);
         *tape = NULL;
@@ -143,10 +156,7 @@ bool ism_pipeline_key(const char *json, size_t len, const char *format_override,
                       const ism_pipeline_limits *lim, ism_pipeline_result *r)
 {
     ism_pipeline_limits dl;
-    if (!lim) {
-        ism_pipeline_limits_default(&dl);
-        lim = &dl;
-    }
+    lim = limits_or_default(lim, &dl);
     memset(r, 0, sizeof *r);
     ism_request req;
     ism_tape *tape;
@@ -205,17 +215,15 @@ static bool polygonise_status(ism_pipeline_result *r, enum ism_poly_status st,
 /* What the encoders share. */
 typedef struct encode_job {
     const ism_request *req;
-    const ism_mesh *mesh;
-    const ism_wire_mesh *wire;
-    const ism_features *features;
+    const ism_computed *c;
+    ism_wire_mesh wire;         /* the attributes this request sends */
     const char *key;
-    bool empty;
     size_t points, faces;       /* Draco's, for the stats */
 } encode_job;
 
 static bool encode_draco(encode_job *j, ism_draco_output *d, char *why, size_t n)
 {
-    const ism_wire_mesh *w = j->wire;
+    const ism_wire_mesh *w = &j->wire;
     ism_draco_input in = {
         .nverts = w->nverts,
         .ntris = w->ntris,
@@ -244,21 +252,22 @@ static bool encode_body(encode_job *j, ism_buf *body, char *why, size_t n)
 {
     ism_mesh none;
     ism_mesh_init(&none);
-    const ism_mesh *m = j->empty ? &none : j->mesh;
+    bool empty = j->c->empty;
+    const ism_mesh *m = empty ? &none : &j->c->mesh;
     ism_draco_output d;
     memset(&d, 0, sizeof d);
     bool ok = true;
     switch (j->req->format) {
     case ISM_FORMAT_DRC:
-        if (!j->empty && (ok = encode_draco(j, &d, why, n))) {
+        if (!empty && (ok = encode_draco(j, &d, why, n))) {
             take(body, d.data, d.len);
             d.data = NULL;
         }
         break;
     case ISM_FORMAT_GLB: {
-        if (!j->empty && !(ok = encode_draco(j, &d, why, n)))
+        if (!empty && !(ok = encode_draco(j, &d, why, n)))
             break;
-        ism_glb_input gi = {j->mesh, j->wire, j->empty ? NULL : &d, j->features, j->key};
+        ism_glb_input gi = {&j->c->mesh, &j->wire, empty ? NULL : &d, &j->c->features, j->key};
         unsigned char *glb;
         size_t len;
         if ((ok = ism_glb_build(&gi, &glb, &len)))
@@ -294,49 +303,73 @@ static double curvature_limit(const ism_request *req)
     return ldexp(1.0, req->max_depth) / side;
 }
 
-bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
-                      const ism_pipeline_limits *lim, const ism_pipeline_hooks *hooks,
-                      ism_pipeline_result *r)
+/* The encoding of c that req asks for: body, stats, features; status 200. */
+static bool encode(const ism_request *req, const ism_computed *c, double t_start,
+                   const ism_pipeline_hooks *hooks, ism_pipeline_result *r)
 {
-    ism_pipeline_limits dl;
-    if (!lim) {
-        ism_pipeline_limits_default(&dl);
-        lim = &dl;
+    double t = ism_now_ms();
+    encode_job job = {.req = req, .c = c, .key = r->key};
+    ism_computed_wire(c, req->attributes, &job.wire);
+    char why[200] = "";
+    if (!encode_body(&job, &r->body, why, sizeof why)) {
+        ism_buf_free(&r->body);
+        return fail_with(r, 500, "encode_failed", "encoding failed: %s", why);
     }
-    memset(r, 0, sizeof *r);
-    double t_start = ism_now_ms();
+    if (cancelled(hooks))
+        return fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
     ism_stats_input si;
     memset(&si, 0, sizeof si);
+    memcpy(si.timings_ms, c->timings_ms, sizeof si.timings_ms);
+    si.timings_ms[ISM_TIME_ENCODE] = ism_now_ms() - t;
+    si.timings_ms[ISM_TIME_TOTAL] = ism_now_ms() - t_start;
+    si.key = r->key;
+    si.format = r->format;
+    si.bytes = r->body.len;
+    si.features_bytes = c->features_len;
+    si.empty = c->empty;
+    si.vertices = c->mesh.nverts;
+    si.triangles = c->mesh.ntris;
+    si.encoded_points = job.points;
+    si.encoded_faces = job.faces;
+    si.surface = c->stats_json;
+    si.surface_len = c->stats_len;
+    size_t slen;
+    char *stats = ism_stats_json(&si, &slen);
+    char *features = malloc(c->features_len + 1);
+    if (!stats || !features) {
+        free(stats);
+        free(features);
+        return fail_with(r, 500, "no_memory", "%s", "out of memory writing the stats");
+    }
+    take(&r->stats, stats, slen);
+    memcpy(features, c->features_json, c->features_len);
+    features[c->features_len] = 0;
+    take(&r->features, features, c->features_len);
+    r->status = 200;
+    r->content_type = ism_format_mime(req->format);
+    report(hooks, 1.0);
+    return true;
+}
 
-    ism_request req;
-    ism_tape *tape = NULL;
-    if (!prepare(json, len, format_override, lim, r, &req, &tape, &si.timings_ms[ISM_TIME_DECODE],
-                 &si.timings_ms[ISM_TIME_COMPILE]))
-        return false;
-    report(hooks, 0.02);
-
-    ism_mesh mesh;
-    ism_mesh_init(&mesh);
+/* What the computation keeps only until the computed surface is made. */
+typedef struct scratch {
     ism_analysis an;
-    memset(&an, 0, sizeof an);
-    bool have_analysis = false;
-    ism_wire_mesh wire;
-    memset(&wire, 0, sizeof wire);
-    ism_features feat;
-    memset(&feat, 0, sizeof feat);
-    ism_poly_stats ps;
-    memset(&ps, 0, sizeof ps);
-    ism_locus locus;
-    ism_locus_init(&locus);
+    bool have_analysis;
     ism_locus_check check;
-    memset(&check, 0, sizeof check);
-    bool ok = false;
+    ism_poly_stats ps;
+    ism_conform_stats cs;
+} scratch;
+
+/* Polygonises and analyses req's surface into c->mesh (locus into c->locus). */
+static bool polygonise_and_analyse(const ism_request *req, const ism_tape *tape,
+                                   const ism_pipeline_limits *lim,
+                                   const ism_pipeline_hooks *hooks, ism_pipeline_result *r,
+                                   ism_computed *c, scratch *s)
+{
     ism_error err;
     memset(&err, 0, sizeof err);
-
-    /* polygonise */
     ism_poly_options o;
-    ism_request_poly_options(&req, &o);
+    ism_request_poly_options(req, &o);
     o.max_triangles = lim->max_triangles;
     o.max_memory = lim->max_memory;
     o.threads = lim->threads;
@@ -345,120 +378,162 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
     o.progress_ctx = &pm;
     o.cancel = hooks ? hooks->cancel : NULL;
     ism_surface_times times;
-    ism_conform_stats cs;
-    enum ism_poly_status st = ism_mesh_surface(tape, &o, &mesh, &locus, &ps, &cs, &times, &err);
-    si.timings_ms[ISM_TIME_SINGULAR] = times.singular_ms;
-    si.timings_ms[ISM_TIME_POLYGONISE] = times.polygonise_ms;
+    enum ism_poly_status st =
+        ism_mesh_surface(tape, &o, &c->mesh, &c->locus, &s->ps, &s->cs, &times, &err);
+    c->timings_ms[ISM_TIME_SINGULAR] = times.singular_ms;
+    c->timings_ms[ISM_TIME_POLYGONISE] = times.polygonise_ms;
     if (!polygonise_status(r, st, &err))
-        goto done;
-    if (cancelled(hooks)) {
-        fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
-        goto done;
-    }
+        return false;
+    if (cancelled(hooks))
+        return fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
+    r->polygonised = true;
 
-    /* analyse, and check the mesh against the locus */
     double t = ism_now_ms();
     ism_analysis_options ao;
     ism_analysis_options_default(&ao);
     ao.curvature = true;
     ao.accuracy = true;
     ao.threads = lim->threads;
-    if (!ism_analyse(&mesh, tape, &ao, &an, &err)) {
-        fail_with(r, 500, "internal", "mesh analysis failed: %s", err.message);
-        goto done;
-    }
-    have_analysis = true;
-    if (!ism_locus_check_mesh(&locus, req.box, &mesh, &an, &check, &err)) {
-        fail_with(r, 500, "no_memory", "%s", err.message);
-        goto done;
-    }
-    si.timings_ms[ISM_TIME_ANALYSE] = ism_now_ms() - t;
+    if (!ism_analyse(&c->mesh, tape, &ao, &s->an, &err))
+        return fail_with(r, 500, "internal", "mesh analysis failed: %s", err.message);
+    s->have_analysis = true;
+    if (!ism_locus_check_mesh(&c->locus, req->box, &c->mesh, &s->an, &s->check, &err))
+        return fail_with(r, 500, "no_memory", "%s", err.message);
+    c->timings_ms[ISM_TIME_ANALYSE] = ism_now_ms() - t;
     report(hooks, 0.92);
-    if (cancelled(hooks)) {
-        fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
-        goto done;
-    }
+    if (cancelled(hooks))
+        return fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
+    return true;
+}
 
-    /* features */
-    t = ism_now_ms();
-    if (!ism_wire_mesh_build(&mesh, &an, req.attributes, curvature_limit(&req), &wire)) {
-        fail_with(r, 500, "no_memory", "%s", "out of memory preparing the mesh for the wire");
-        goto done;
+/* Wire attributes, features and the surface's stats into c. */
+static bool gather(const ism_request *req, ism_pipeline_result *r, ism_computed *c, scratch *s)
+{
+    double t = ism_now_ms();
+    if (!ism_wire_mesh_build(&c->mesh, &s->an, ISM_ATTR_ALL, curvature_limit(req), &c->wire))
+        return fail_with(r, 500, "no_memory", "%s", "out of memory preparing the mesh for the wire");
+    if (s->an.vertex_class && c->mesh.nverts) {
+        c->vertex_class = malloc(c->mesh.nverts);
+        if (!c->vertex_class)
+            return fail_with(r, 500, "no_memory", "%s", "out of memory keeping the classes");
+        memcpy(c->vertex_class, s->an.vertex_class, c->mesh.nverts);
     }
-    bool empty = wire.live_triangles == 0;
+    c->wire.vertex_class = c->vertex_class;
+    c->empty = c->wire.live_triangles == 0;
     ism_mesh none;
     ism_mesh_init(&none);
-    if (!ism_features_build(empty ? &none : &mesh, empty ? NULL : &an, &feat)) {
-        fail_with(r, 500, "no_memory", "%s", "out of memory collecting the features");
-        goto done;
-    }
-    feat.locus = &locus;
-    feat.check = empty ? NULL : &check;
-    size_t flen;
-    char *fjson = ism_features_json(empty ? &none : &mesh, &feat, &flen);
-    if (!fjson) {
-        fail_with(r, 500, "no_memory", "%s", "out of memory writing the features");
-        goto done;
-    }
-    take(&r->features, fjson, flen);
-    si.timings_ms[ISM_TIME_FEATURES] = ism_now_ms() - t;
+    const ism_mesh *fm = c->empty ? &none : &c->mesh;
+    if (!ism_features_build(fm, c->empty ? NULL : &s->an, &c->features))
+        return fail_with(r, 500, "no_memory", "%s", "out of memory collecting the features");
+    c->features.locus = &c->locus;
+    c->features.check = c->empty ? NULL : &s->check;
+    c->features_json = ism_features_json(fm, &c->features, &c->features_len);
+    c->features.check = NULL; /* the check does not outlive the computation */
+    if (!c->features_json)
+        return fail_with(r, 500, "no_memory", "%s", "out of memory writing the features");
+    c->timings_ms[ISM_TIME_FEATURES] = ism_now_ms() - t;
+    ism_stats_input si;
+    memset(&si, 0, sizeof si);
+    si.poly = &s->ps;
+    si.analysis = &s->an;
+    si.locus = &c->locus;
+    si.check = &s->check;
+    si.conform = &s->cs;
+    si.max_error = req->max_error;
+    c->stats_json = ism_stats_surface_json(&si, &c->stats_len);
+    if (!c->stats_json)
+        return fail_with(r, 500, "no_memory", "%s", "out of memory writing the stats");
+    return true;
+}
 
-    /* encode */
-    t = ism_now_ms();
-    encode_job job = {&req, &mesh, &wire, &feat, r->key, empty, 0, 0};
-    char why[200] = "";
-    if (!encode_body(&job, &r->body, why, sizeof why)) {
+/* The computed surface of a prepared request (c->surface_key set by the caller). */
+static bool compute(const ism_request *req, const ism_tape *tape, const ism_pipeline_limits *lim,
+                    const ism_pipeline_hooks *hooks, ism_pipeline_result *r, ism_computed *c)
+{
+    scratch s;
+    memset(&s, 0, sizeof s);
+    bool ok = polygonise_and_analyse(req, tape, lim, hooks, r, c, &s) && gather(req, r, c, &s);
+    ism_locus_check_free(&s.check);
+    if (s.have_analysis)
+        ism_analysis_free(&s.an);
+    return ok;
+}
+
+/* The computed surface's entry bytes into r->computed. */
+static bool keep_computed(const ism_computed *c, ism_pipeline_result *r)
+{
+    ism_frame_builder b = {0};
+    if (!ism_computed_write(c, &b)) {
+        ism_frame_builder_free(&b);
+        return fail_with(r, 500, "no_memory", "%s", "out of memory storing the computed mesh");
+    }
+    take(&r->computed, b.data, b.len);
+    return true;
+}
+
+bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
+                      const ism_pipeline_limits *lim, const ism_pipeline_hooks *hooks,
+                      ism_pipeline_result *r)
+{
+    ism_pipeline_limits dl;
+    lim = limits_or_default(lim, &dl);
+    memset(r, 0, sizeof *r);
+    double t_start = ism_now_ms();
+    double decode_ms, compile_ms;
+    ism_request req;
+    ism_tape *tape = NULL;
+    if (!prepare(json, len, format_override, lim, r, &req, &tape, &decode_ms, &compile_ms))
+        return false;
+    report(hooks, 0.02);
+    ism_computed c;
+    ism_computed_init(&c);
+    snprintf(c.surface_key, sizeof c.surface_key, "%s", r->surface_key);
+    c.timings_ms[ISM_TIME_DECODE] = decode_ms;
+    c.timings_ms[ISM_TIME_COMPILE] = compile_ms;
+    bool ok = compute(&req, tape, lim, hooks, r, &c) &&
+              (!hooks || !hooks->keep_computed || keep_computed(&c, r)) &&
+              encode(&req, &c, t_start, hooks, r);
+    if (!ok) {
+        ism_buf_free(&r->features);
+        ism_buf_free(&r->stats);
+        ism_buf_free(&r->computed);
+    }
+    ism_computed_free(&c);
+    ism_tape_free(tape);
+    ism_request_free(&req);
+    return ok;
+}
+
+bool ism_pipeline_encode_stored(const char *json, size_t len, const char *format_override,
+                                const ism_pipeline_limits *lim, const void *stored,
+                                size_t stored_len, ism_pipeline_result *r)
+{
+    ism_pipeline_limits dl;
+    lim = limits_or_default(lim, &dl);
+    memset(r, 0, sizeof *r);
+    double t_start = ism_now_ms();
+    double decode_ms, compile_ms;
+    ism_request req;
+    ism_tape *tape = NULL;
+    if (!prepare(json, len, format_override, lim, r, &req, &tape, &decode_ms, &compile_ms))
+        return false;
+    ism_computed c;
+    char why[96];
+    bool ok = false;
+    if (!ism_computed_read(stored, stored_len, &c, why, sizeof why)) {
+        r->status = 0; /* not usable: the caller computes */
         ism_buf_free(&r->body);
-        fail_with(r, 500, "encode_failed", "encoding failed: %s", why);
-        goto done;
+    } else if (strcmp(c.surface_key, r->surface_key) != 0) {
+        r->status = 0;
+        ism_computed_free(&c);
+    } else {
+        ok = encode(&req, &c, t_start, NULL, r);
+        ism_computed_free(&c);
     }
-    si.timings_ms[ISM_TIME_ENCODE] = ism_now_ms() - t;
-    if (cancelled(hooks)) {
-        fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
-        goto done;
-    }
-
-    /* stats */
-    si.key = r->key;
-    si.format = r->format;
-    si.bytes = r->body.len;
-    si.features_bytes = r->features.len;
-    si.empty = empty;
-    si.vertices = mesh.nverts;
-    si.triangles = mesh.ntris;
-    si.encoded_points = job.points;
-    si.encoded_faces = job.faces;
-    si.poly = &ps;
-    si.analysis = &an;
-    si.locus = &locus;
-    si.check = &check;
-    si.conform = &cs;
-    si.max_error = o.max_error;
-    si.timings_ms[ISM_TIME_TOTAL] = ism_now_ms() - t_start;
-    size_t slen;
-    char *stats = ism_stats_json(&si, &slen);
-    if (!stats) {
-        fail_with(r, 500, "no_memory", "%s", "out of memory writing the stats");
-        goto done;
-    }
-    take(&r->stats, stats, slen);
-    r->status = 200;
-    r->content_type = ism_format_mime(req.format);
-    report(hooks, 1.0);
-    ok = true;
-
-done:
     if (!ok) {
         ism_buf_free(&r->features);
         ism_buf_free(&r->stats);
     }
-    ism_features_free(&feat);
-    ism_locus_check_free(&check);
-    ism_locus_free(&locus);
-    ism_wire_mesh_free(&wire);
-    if (have_analysis)
-        ism_analysis_free(&an);
-    ism_mesh_free(&mesh);
     ism_tape_free(tape);
     ism_request_free(&req);
     return ok;

@@ -3,9 +3,12 @@
  * Shared by `isomesh request.json -o out.drc` and by the worker processes of isomeshd.
  *
  * The cache key names the mesh and its encoding options but not the file format, so one key
- * has one .drc, .glb, .ply, .obj and .stl; the daemon asks for another format of a known key
- * by running the key's canonical request again with `format` changed (the output is
- * deterministic, so it is the same mesh).
+ * has one .drc, .glb, .ply, .obj and .stl. The surface key names the surface and its accuracy
+ * only: a run computes the surface once (polygonise, analyse, features: proto/computed.h),
+ * then encodes it; with keep_computed the computed surface comes back too, and
+ * ism_pipeline_encode_stored makes any other format, quantisation or attribute set of that
+ * surface from it without polygonising (the daemon's cache entry "<surface key>.mesh").
+ * Both paths share the encoder, so the bytes are the same either way.
  *
  * An empty surface (no triangle) is status 200 with: an empty body for drc, a valid glTF with
  * one empty scene for glb, PLY/OBJ/STL files with no vertex, and "empty": true in the stats.
@@ -44,12 +47,15 @@ void ism_pipeline_limits_default(ism_pipeline_limits *l);
 typedef struct ism_pipeline_result {
     int status;               /* 200 ok; 400 bad request; 422 over a limit; 500 internal */
     char key[65];             /* hex cache key (set as soon as the request is decoded) */
+    char surface_key[65];     /* hex key of the surface alone (no encoding options) */
+    bool polygonised;         /* this run polygonised (not encoded from a stored surface) */
     char format[8];           /* "drc", "glb", "ply", "obj", "stl" */
     const char *content_type; /* MIME type of body */
     ism_buf body;             /* the mesh file, or the error JSON when status != 200 */
     ism_buf stats;            /* stats JSON: polygoniser + analysis figures, key, timings */
     ism_buf features;         /* non-manifold features JSON (curves, points) for the viewer */
     ism_buf canonical;        /* the canonical request JSON (defaults filled in) */
+    ism_buf computed;         /* the computed surface's entry (hooks->keep_computed only) */
 } ism_pipeline_result;
 
 void ism_pipeline_result_free(ism_pipeline_result *r);
@@ -59,6 +65,7 @@ typedef struct ism_pipeline_hooks {
     void (*progress)(void *ctx, double fraction);
     void *ctx;
     const volatile int *cancel;
+    bool keep_computed;       /* fill result.computed (proto/computed.h's entry) */
 } ism_pipeline_hooks;
 
 /* Runs one request. format_override ("drc", ...) replaces the request's format when not NULL.
@@ -66,6 +73,14 @@ typedef struct ism_pipeline_hooks {
 bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
                       const ism_pipeline_limits *lim, const ism_pipeline_hooks *hooks,
                       ism_pipeline_result *r);
+
+/* Encodes the request from a stored computed surface (an entry ism_pipeline_run returned in
+ * computed) instead of polygonising. Status 0 (false, nothing else filled but the keys) when
+ * the entry is not usable — another version, damaged, or another surface: the caller then
+ * runs ism_pipeline_run. Otherwise like ism_pipeline_run. */
+bool ism_pipeline_encode_stored(const char *json, size_t len, const char *format_override,
+                                const ism_pipeline_limits *lim, const void *stored,
+                                size_t stored_len, ism_pipeline_result *r);
 
 /* Decodes and validates only (no geometry): fills key, format, canonical, or status 400/422
  * with the error JSON in body. Lets the daemon answer cache hits without a worker. */

@@ -17,12 +17,15 @@
 
 #include "core/version.h"
 #include "proto/frame.h"
+#include "proto/request.h"
 #include "core/util/parallel.h"
 #include "server/common/pipeline.h"
 #include "server/isomesh/sandbox.h"
 
-/* A request frame holds one JSON request: the daemon caps bodies far below this. */
-#define WORKER_MAX_REQUEST (64u * 1024u * 1024u)
+/* A request frame holds one JSON request (the daemon caps bodies far below 1 MB) and maybe
+ * a stored computed surface, as large as the daemon's triangle limit makes it: the frame
+ * ceiling. */
+#define WORKER_MAX_REQUEST ISM_FRAME_MAX_PAYLOAD
 /* Progress frames at most this often (plus the first one). */
 #define PROGRESS_INTERVAL_NS 50000000LL
 
@@ -100,6 +103,10 @@ static bool send_result(int fd, uint64_t job, const ism_pipeline_result *pr, lon
     long long us = (ism_now_ns() - start_ns) / 1000;
     r.worker_us = us > (long long)UINT32_MAX ? UINT32_MAX : (uint32_t)us;
     snprintf(r.key, sizeof r.key, "%s", pr->key);
+    snprintf(r.surface_key, sizeof r.surface_key, "%s", pr->surface_key);
+    r.polygonised = pr->polygonised;
+    r.computed = pr->computed.data;
+    r.computed_len = pr->computed.len;
     snprintf(r.format, sizeof r.format, "%s", pr->format);
     snprintf(r.content_type, sizeof r.content_type, "%s",
              pr->content_type ? pr->content_type : "application/octet-stream");
@@ -112,10 +119,12 @@ static bool send_result(int fd, uint64_t job, const ism_pipeline_result *pr, lon
     r.canonical = pr->canonical.data;
     r.canonical_len = pr->canonical.len;
     ism_frame_builder head = {0};
-    bool ok = ism_frame_result_encode(&r, &head);
+    unsigned char tail[4];
+    bool ok = ism_frame_result_encode(&r, &head, tail);
     if (ok) {
-        ism_frame_part parts[2] = {{head.data, head.len}, {r.body, r.body_len}};
-        ok = ism_frame_write_fd(fd, ISM_FRAME_RESULT, job, parts, 2) == ISM_FRAME_OK;
+        ism_frame_part parts[4] = {{head.data, head.len}, {r.body, r.body_len}, {tail, 4},
+                                   {r.computed, r.computed_len}};
+        ok = ism_frame_write_fd(fd, ISM_FRAME_RESULT, job, parts, 4) == ISM_FRAME_OK;
     } else {
         ok = send_error(fd, job, 500, "result_too_large", "the result does not fit in a frame");
     }
@@ -144,12 +153,19 @@ static bool run_job(int out_fd, const ism_frame *f)
 
     progress_state ps = {.fd = out_fd, .job = f->job};
     pthread_mutex_init(&ps.lock, NULL);
-    ism_pipeline_hooks hooks = {.progress = on_progress, .ctx = &ps, .cancel = NULL};
+    ism_pipeline_hooks hooks = {.progress = on_progress, .ctx = &ps, .cancel = NULL,
+                                .keep_computed = true};
     ism_pipeline_result pr;
     memset(&pr, 0, sizeof pr);
     long long start = ism_now_ns();
-    ism_pipeline_run((const char *)job.json, job.json_len, job.format[0] ? job.format : NULL,
-                     &lim, &hooks, &pr);
+    const char *json = (const char *)job.json, *format = job.format[0] ? job.format : NULL;
+    /* From the stored surface when there is one that fits; computed otherwise. */
+    if (!job.computed_len ||
+        (!ism_pipeline_encode_stored(json, job.json_len, format, &lim, job.computed,
+                                     job.computed_len, &pr) && pr.status == 0)) {
+        ism_pipeline_result_free(&pr);
+        ism_pipeline_run(json, job.json_len, format, &lim, &hooks, &pr);
+    }
     bool ok = !ps.failed && send_result(out_fd, f->job, &pr, start);
     ism_pipeline_result_free(&pr);
     pthread_mutex_destroy(&ps.lock);
@@ -162,14 +178,14 @@ static bool run_job(int out_fd, const ism_frame *f)
 static void warm_up(void)
 {
     static const char req[] = "{\"expr\": \"x^2 + y^2 + z^2 - 0.5\", \"depth\": {\"min\": 2, \"max\": 3}}";
-    static const char *const formats[] = {"drc", "glb", "ply", "obj", "stl"};
     ism_pipeline_limits lim;
     ism_pipeline_limits_default(&lim);
     lim.threads = default_threads;
-    for (size_t i = 0; i < sizeof formats / sizeof formats[0]; i++) {
+    for (int i = 0; i < ISM_FORMAT_COUNT; i++) {
         ism_pipeline_result pr;
         memset(&pr, 0, sizeof pr);
-        ism_pipeline_run(req, sizeof req - 1, formats[i], &lim, NULL, &pr);
+        ism_pipeline_run(req, sizeof req - 1, ism_format_name((enum ism_format)i), &lim, NULL,
+                         &pr);
         ism_pipeline_result_free(&pr);
     }
 }

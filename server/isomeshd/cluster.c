@@ -442,6 +442,7 @@ static bool start_entry(ismd_cluster *c, const redisReply *r)
     snprintf(j->stream, sizeof j->stream, "%s", stream);
     ckey(c, j->job, "job:", name);
     snprintf(j->id, sizeof j->id, "%s", id);
+    ismd_shared_prefetch_surface(c->sh, c->redis, request); /* encode, not polygonise */
     bool ok = false;
     if (ismd_shared_enter(c->sh)) {
         ismd_submit st = ismd_sched_submit_here(c->sched, key, fmt, request, user, NULL,

@@ -16,6 +16,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include "proto/request.h"
 #include "server/common/log.h"
 #include "server/isomeshd/errors.h"
 #include "server/isomeshd/jobs.h"
@@ -268,12 +269,6 @@ static bool is_hex(const char *s, size_t n)
     return true;
 }
 
-static bool is_mesh_format(const char *f)
-{
-    return !strcmp(f, "drc") || !strcmp(f, "glb") || !strcmp(f, "ply") || !strcmp(f, "obj") ||
-           !strcmp(f, "stl");
-}
-
 static void set_route(ismd_req *r, ismd_route route, const char *allow, ismd_handler h)
 {
     r->route = route;
@@ -313,12 +308,14 @@ static void route_v1(ismd_req *r, const char *p)
             not_found(r, ISMD_R_JOB);
     } else if (!strncmp(p, "meshes/", 7)) {
         const char *k = p + 7;
-        if (strlen(k) < 66 || !is_hex(k, 64))
+        if (strlen(k) < ISM_KEY_HEX_LEN)
             return not_found(r, ISMD_R_MESH_FILE);
-        memcpy(r->key, k, 64);
-        r->key[64] = 0;
-        const char *rest = k + 64;
-        if (rest[0] == '.' && strlen(rest + 1) < sizeof r->fmt && is_mesh_format(rest + 1)) {
+        memcpy(r->key, k, ISM_KEY_HEX_LEN);
+        r->key[ISM_KEY_HEX_LEN] = 0;
+        if (!ism_key_valid(r->key))
+            return not_found(r, ISMD_R_MESH_FILE);
+        const char *rest = k + ISM_KEY_HEX_LEN;
+        if (rest[0] == '.' && strlen(rest + 1) < sizeof r->fmt && ism_format_lookup(rest + 1) >= 0) {
             strcpy(r->fmt, rest + 1);
             set_route(r, ISMD_R_MESH_FILE, "GET, HEAD, OPTIONS", ismd_route_mesh_get);
         } else if (!strcmp(rest, "/stats")) {

@@ -290,6 +290,13 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
            "Worker wall time per finished computation (polygonise, analyse, encode).");
     histogram(&o, "isomesh_polygonise_seconds", "", &m->polygonise, POLY_BOUNDS,
               ISMD_POLY_BUCKETS - 1);
+    header(&o, "isomesh_polygonisations_total", "counter",
+           "Finished computations that polygonised their surface (one per surface and "
+           "accuracy; other formats, bits and attributes are encoded from the stored surface).");
+    emit(&o, "isomesh_polygonisations_total %llu\n", ld(&m->polygonisations));
+    header(&o, "isomesh_stored_encodings_total", "counter",
+           "Finished computations encoded from a stored computed surface (no polygonisation).");
+    emit(&o, "isomesh_stored_encodings_total %llu\n", ld(&m->stored_encodings));
     header(&o, "isomesh_rejected_total", "counter",
            "Requests refused before queueing: queue_full (503), client_limit (a user's "
            "--user-jobs, 429), unauthorized (401).");

@@ -55,6 +55,8 @@ typedef struct ismd_metrics {
     atomic_ullong worker_restarts[ISMD_RESTART_COUNT];
     atomic_ullong worker_spawn_failures;
     ismd_histogram polygonise;               /* worker wall time per finished computation */
+    atomic_ullong polygonisations;           /* computations that polygonised a surface */
+    atomic_ullong stored_encodings;          /* computations encoded from a stored surface */
     atomic_ullong rejected_queue_full, rejected_client_limit, rejected_unauthorized;
     /* gauges */
     atomic_llong queue_depth, queue_capacity;

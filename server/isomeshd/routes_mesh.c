@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "proto/request.h"
 #include "server/common/log.h"
 #include "server/isomeshd/errors.h"
 #include "server/isomeshd/http.h"
@@ -40,7 +41,7 @@ static enum MHD_Result answer_mesh(ismd_req *r)
 {
     if (r->r_status != 200 || !r->r_body)
         return answer_failure(r);
-    struct MHD_Response *resp = ismd_response_blob(r->r_body, ismd_format_content_type(r->fmt));
+    struct MHD_Response *resp = ismd_response_blob(r->r_body, ism_format_mime_of(r->fmt));
     if (!resp)
         return MHD_NO;
     char etag[80], loc[128];

@@ -12,7 +12,9 @@
 #include <sys/random.h>
 #include <unistd.h>
 
+#include "proto/computed.h"
 #include "server/common/cache_redis.h"
+#include "proto/request.h"
 #include "server/common/log.h"
 #include "server/isomeshd/cluster.h"
 #include "server/isomeshd/errors.h"
@@ -278,13 +280,43 @@ static bool answer_stored(task *k, ism_cache_tier *t, stored *st, size_t n)
         if (got[i])
             ism_cache_put_local(k->sh->cache, st->names[i], got[i]);
     ismd_result r = {.status = 200, .body = got[0], .stats = got[1], .features = got[2],
-                     .content_type = ismd_format_content_type(k->fmt), .cache = "shared"};
+                     .content_type = ism_format_mime_of(k->fmt), .cache = "shared"};
     answer(k, &r);
     unref_all(got, n);
     return true;
 }
 
 static long long to_cluster(task *k, ism_cache_tier *t, long long now);
+
+void ismd_shared_prefetch_surface(ismd_shared *sh, ism_cache_tier *t, const ism_blob *request)
+{
+    if (!request)
+        return;
+    ism_pipeline_result pr;
+    char name[ISM_CACHE_NAME_MAX];
+    bool keyed = ism_pipeline_key((const char *)request->data, request->len, NULL, sh->limits,
+                                  &pr) &&
+                 ism_cache_name(name, pr.surface_key, ISM_COMPUTED_EXT);
+    ism_pipeline_result_free(&pr);
+    if (!keyed || ism_cache_has(sh->cache, name))
+        return;
+    const char *argv[1] = {name};
+    ism_blob *got = NULL;
+    if (ism_cache_redis_fetch(t, argv, 1, &got) == 0 && got)
+        ism_cache_put_local(sh->cache, name, got);
+    ism_blob_unref(got);
+}
+
+/* The request of the task's flight (a new reference), or NULL. */
+static ism_blob *flight_request(task *k)
+{
+    if (!ismd_shared_enter(k->sh))
+        return NULL;
+    ismd_flight *f = my_flight(k, true);
+    ism_blob *req = f ? ism_blob_ref(f->request) : NULL;
+    ismd_shared_leave(k->sh);
+    return req;
+}
 
 /* Look in Redis; answer, wait, or take the lock and queue the flight. */
 static long long look(task *k, ism_cache_tier *t, long long now)
@@ -348,6 +380,9 @@ static long long look(task *k, ism_cache_tier *t, long long now)
     k->renew_at_ns = now + sh->ttl_ms * 1000000LL / 3;
     if (sh->cluster)
         return to_cluster(k, t, now);
+    ism_blob *req = flight_request(k); /* computed here: from the stored surface if any */
+    ismd_shared_prefetch_surface(sh, t, req);
+    ism_blob_unref(req);
     if (!to_queue(k))
         return task_end(k, t); /* gone meanwhile, or refused by the queue: release the lock */
     return now + HOLD_TICK_NS;

@@ -9,7 +9,8 @@
  *      them may have left only some: that counts as missing): copy them into the local tiers
  *      and answer every waiter ("X-Cache: shared"). Nothing is computed here.
  *   3. Otherwise take the lock (SET NX PX, a token naming this daemon and flight) and queue
- *      the flight for a local worker; while it computes, the lock is extended every third of
+ *      the flight for a local worker (first copying the surface's stored computed mesh from
+ *      Redis, when there is one, so the worker only encodes it); while it computes, the lock is extended every third of
  *      its lifetime; when the flight ends, the results already stored (cache_result puts them
  *      in every tier) are written out and the lock is released.
  *   A GET of a key unknown here (no local request.json) fetches the canonical request from
@@ -51,6 +52,11 @@ bool ismd_shared_enter(ismd_shared *sh);
 void ismd_shared_leave(ismd_shared *sh);
 bool ismd_shared_task_added(ismd_shared *sh);
 void ismd_shared_task_ended(ismd_shared *sh);
+
+/* Before a computation starts here (Redis thread): copies the stored computed surface of
+ * request ("<surface key>.mesh", proto/computed.h) from Redis into the local tiers when only
+ * Redis has it, so the worker encodes from it instead of polygonising. */
+void ismd_shared_prefetch_surface(ismd_shared *sh, ism_cache_tier *t, const ism_blob *request);
 
 /* Unhooks and waits (bounded) for the tasks to finish, releasing the locks they hold. Call
  * after the pool has stopped and before the scheduler is destroyed; frees sh. */

@@ -20,7 +20,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "proto/computed.h"
 #include "proto/frame.h"
+#include "proto/request.h"
+#include "server/common/pipeline.h"
 #include "server/common/log.h"
 #include "server/isomeshd/errors.h"
 
@@ -71,19 +74,6 @@ struct ismd_pool {
 #define EV_WAKE UINT64_MAX
 #define EV_READ(slot) ((uint64_t)(slot) << 1)
 #define EV_WRITE(slot) (((uint64_t)(slot) << 1) | 1)
-
-const char *ismd_format_content_type(const char *fmt)
-{
-    if (!strcmp(fmt, "glb"))
-        return "model/gltf-binary";
-    if (!strcmp(fmt, "ply"))
-        return "application/x-ply";
-    if (!strcmp(fmt, "obj"))
-        return "model/obj";
-    if (!strcmp(fmt, "stl"))
-        return "model/stl";
-    return "application/octet-stream"; /* drc (Draco has no registered type) */
-}
 
 /* ---- bookkeeping --------------------------------------------------------------------- */
 
@@ -300,6 +290,18 @@ static void protocol_error(ismd_pool *p, worker *w, const char *what)
  * when the pipeline provides one (a flat object of numbers); leaves out empty otherwise. */
 static void stats_timing(const ism_blob *stats, char *out, size_t cap);
 
+/* A newly computed surface goes into every tier under its surface key, so any format of it,
+ * on any daemon sharing the tiers, is encoded from it. */
+static void cache_computed(ismd_pool *p, const ism_frame_result *fres)
+{
+    char name[ISM_CACHE_NAME_MAX];
+    if (!fres->computed_len || !ism_cache_name(name, fres->surface_key, ISM_COMPUTED_EXT))
+        return;
+    ism_blob *b = ism_blob_copy(fres->computed, fres->computed_len);
+    ism_cache_put(p->cache, name, b);
+    ism_blob_unref(b);
+}
+
 static void cache_result(ismd_pool *p, const ismd_flight *f, ism_blob *body, ism_blob *stats,
                          ism_blob *features, ism_blob *canonical)
 {
@@ -336,6 +338,9 @@ static void on_result(ismd_pool *p, worker *w, const ism_frame *fr)
     ismd_flight *f = w->flight;
     ismd_result r = {.status = fres.status, .worker_ms = fres.worker_us / 1000.0};
     ismd_metrics_polygonise(p->metrics, fres.worker_us / 1e6);
+    if (fres.status == 200)
+        atomic_fetch_add(fres.polygonised ? &p->metrics->polygonisations
+                                          : &p->metrics->stored_encodings, 1);
     ism_blob *stats = NULL, *features = NULL, *canonical = NULL;
     ismd_outcome o = ISMD_OUT_OK;
     if (fres.status == 200 && (strcmp(fres.key, f->key) != 0 || strcmp(fres.format, f->fmt) != 0)) {
@@ -349,7 +354,8 @@ static void on_result(ismd_pool *p, worker *w, const ism_frame *fr)
         o = ISMD_OUT_ERROR;
     } else if (fres.status == 200) {
         r.body = ism_blob_copy(fres.body, fres.body_len);
-        r.content_type = ismd_format_content_type(f->fmt);
+        r.content_type = ism_format_mime_of(f->fmt);
+        cache_computed(p, &fres);
         if (fres.stats_len)
             stats = ism_blob_copy(fres.stats, fres.stats_len);
         if (fres.features_len)
@@ -494,8 +500,26 @@ static void flush_out(ismd_pool *p, worker *w)
     }
 }
 
+/* The stored computed surface of a flight's request (its surface key's entry), or NULL. */
+static ism_blob *stored_surface(ismd_pool *p, const ismd_flight *f)
+{
+    if (!f->request)
+        return NULL;
+    ism_pipeline_limits lim;
+    ism_pipeline_limits_default(&lim);
+    lim.max_depth = p->cfg.max_depth;
+    ism_pipeline_result pr;
+    char name[ISM_CACHE_NAME_MAX];
+    bool keyed = ism_pipeline_key((const char *)f->request->data, f->request->len, f->fmt, &lim,
+                                  &pr) &&
+                 ism_cache_name(name, pr.surface_key, ISM_COMPUTED_EXT);
+    ism_pipeline_result_free(&pr);
+    return keyed ? ism_cache_get(p->cache, name, NULL) : NULL;
+}
+
 static bool encode_request(ismd_pool *p, worker *w, const ismd_flight *f)
 {
+    ism_blob *stored = stored_surface(p, f);
     ism_frame_job job = {
         .max_depth = (uint32_t)p->cfg.max_depth,
         .threads = (uint32_t)p->cfg.threads,
@@ -503,6 +527,8 @@ static bool encode_request(ismd_pool *p, worker *w, const ismd_flight *f)
         .max_memory = p->cfg.job_memory ? p->cfg.job_memory / 4 * 3 : 0,
         .json = f->request->data,
         .json_len = f->request->len,
+        .computed = stored ? stored->data : NULL,
+        .computed_len = stored ? stored->len : 0,
     };
     snprintf(job.format, sizeof job.format, "%s", f->fmt);
     ism_frame_builder b = {0};
@@ -513,6 +539,7 @@ static bool encode_request(ismd_pool *p, worker *w, const ismd_flight *f)
         w->out_off = 0;
     }
     ism_frame_builder_free(&b);
+    ism_blob_unref(stored);
     return ok;
 }
 

@@ -3,7 +3,9 @@
  * RLIMIT_AS memory limit, and speaks proto/frame.h over two pipes. The pool thread takes
  * flights from the scheduler's queue for idle workers, turns their PROGRESS frames into
  * progress, their RESULT frames into cache entries and finished flights, and enforces
- * deadlines. A worker that crashes, breaks the protocol, passes its deadline or loses all its
+ * deadlines. A flight whose surface is stored ("<surface key>.mesh", proto/computed.h) sends
+ * it with the request, and the worker encodes from it instead of polygonising; a newly
+ * computed surface comes back with the result and is stored in every tier. A worker that crashes, breaks the protocol, passes its deadline or loses all its
  * waiters is killed (if need be) and replaced; its flight is answered 500, 504 or dropped. */
 #ifndef ISMD_WORKER_POOL_H
 #define ISMD_WORKER_POOL_H
@@ -32,8 +34,5 @@ ismd_pool *ismd_pool_start(const ismd_pool_config *cfg, ismd_sched *sched, ism_c
 /* Drains the scheduler (queued flights get 503), lets running flights finish for up to
  * grace_s seconds, then fails the rest with 503, stops every worker and joins the thread. */
 void ismd_pool_stop(ismd_pool *p, double grace_s);
-
-/* Content type of a mesh format ("drc" -> application/octet-stream ...). */
-const char *ismd_format_content_type(const char *fmt);
 
 #endif

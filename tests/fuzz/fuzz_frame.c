@@ -79,10 +79,14 @@ static void frame_check_result(const ism_frame *f)
         return;
     FUZZ_CHECK(r.status >= 100 && r.status <= 599, "result status %u", r.status);
     ism_frame_builder head = {0};
-    FUZZ_CHECK(ism_frame_result_encode(&r, &head), "result re-encode failed");
-    FUZZ_CHECK(head.len + r.body_len == f->len &&
+    unsigned char tail[4];
+    FUZZ_CHECK(ism_frame_result_encode(&r, &head, tail), "result re-encode failed");
+    size_t at = head.len + r.body_len;
+    FUZZ_CHECK(at + 4 + r.computed_len == f->len &&
                memcmp(head.data, f->payload, head.len) == 0 &&
-               (r.body_len == 0 || memcmp(r.body, f->payload + head.len, r.body_len) == 0),
+               (r.body_len == 0 || memcmp(r.body, f->payload + head.len, r.body_len) == 0) &&
+               memcmp(tail, f->payload + at, 4) == 0 &&
+               (r.computed_len == 0 || memcmp(r.computed, f->payload + at + 4, r.computed_len) == 0),
                "result re-encodes to other bytes");
     ism_frame_builder_free(&head);
 }

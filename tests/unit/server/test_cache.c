@@ -13,6 +13,7 @@
 
 #include "server/common/cache.h"
 #include "server/common/cache_disk.h"
+#include "proto/request.h"
 #include "server/common/cache_mem.h"
 
 #define KEY_A "aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa"
@@ -57,8 +58,8 @@ Test(cache_names, only_keys_and_known_kinds)
     cr_assert_not(ism_cache_name_valid("../" KEY_B ".drc"));
     cr_assert_not(ism_cache_name_valid("AAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA.drc"));
     cr_assert_not(ism_cache_name(name, "abc", "drc"));
-    cr_assert(ism_cache_key_valid(KEY_A));
-    cr_assert_not(ism_cache_key_valid(KEY_A "a"));
+    cr_assert(ism_key_valid(KEY_A));
+    cr_assert_not(ism_key_valid(KEY_A "a"));
 }
 
 static void name_n(char out[ISM_CACHE_NAME_MAX], int i)

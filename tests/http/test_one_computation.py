@@ -1,0 +1,101 @@
+"""test_one_computation.py — one polygonisation per surface and accuracy (issue 18, item 5):
+drc, then ply, obj and a 12-bit drc with other attributes of the same surface are encoded
+from the stored computed surface ("<surface key>.mesh"): isomesh_polygonisations_total moves
+by exactly one, isomesh_stored_encodings_total by three. The encodings made from the stored
+surface are the very bytes a fresh daemon computes for the same requests, their vertex counts
+agree with the stats, and every answer carries proto/format.c's Content-Type. A second
+accuracy (depth) is a second polygonisation."""
+import os
+import struct
+import sys
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from harness import Daemon, draco_counts  # noqa: E402
+
+# proto/format.c's table, written out independently.
+MIME = {"drc": "application/vnd.google.draco", "glb": "model/gltf-binary",
+        "ply": "application/ply", "obj": "model/obj", "stl": "model/stl"}
+
+BASE = {"expr": "x^2 + y^2 - z^2 - 0.3 + a*x*y*z", "params": {"a": 1.7},
+        "box": [-1.1, -1.1, -1.1, 1.1, 1.1, 1.1], "depth": {"min": 3, "max": 6}}
+
+
+def with_(**kw):
+    r = dict(BASE)
+    r.update(kw)
+    return r
+
+
+def ply_vertex_count(body):
+    head = body[:body.index(b"end_header")].decode()
+    for line in head.splitlines():
+        if line.startswith("element vertex"):
+            return int(line.split()[2])
+    raise AssertionError("no vertex element")
+
+
+class OneComputationTest(unittest.TestCase):
+    def counters(self, d):
+        return (d.metric("isomesh_polygonisations_total") or 0,
+                d.metric("isomesh_stored_encodings_total") or 0)
+
+    def test_four_encodings_one_polygonisation(self):
+        twelve = with_(output={"position_bits": 12, "attributes": ["normal", "class"]})
+        asks = [(BASE, "drc"), (BASE, "ply"), (BASE, "obj"), (twelve, "drc"), (BASE, "stl"),
+                (BASE, "glb")]
+        with Daemon("--workers", "1") as d:
+            p0, s0 = self.counters(d)
+            bodies = []
+            for req, fmt in asks:
+                r = d.post("/v1/mesh?format=" + fmt, req)
+                self.assertEqual(r.status, 200, r.body[:300])
+                self.assertEqual(r.header("Content-Type"), MIME[fmt])
+                self.assertEqual(r.header("X-Cache"), "miss")
+                bodies.append((r.header("ETag").strip('"'), fmt, r.body))
+            p1, s1 = self.counters(d)
+            self.assertEqual(p1 - p0, 1, "one polygonisation for one surface")
+            self.assertEqual(s1 - s0, len(asks) - 1)
+            # the 12-bit drc has its own key and fewer bytes than the 14-bit one
+            self.assertNotEqual(bodies[0][0], bodies[3][0])
+            self.assertLess(len(bodies[3][2]), len(bodies[0][2]))
+            # vertex counts agree with the stats of each key
+            stats = d.get("/v1/meshes/%s/stats" % bodies[1][0]).json()
+            self.assertEqual(ply_vertex_count(bodies[1][2]), stats["mesh"]["vertices"])
+            self.assertIn("polygoniser", stats)
+            self.assertGreater(stats["mesh"]["triangles"], 100)
+            verts, faces = draco_counts(bodies[3][2])
+            st12 = d.get("/v1/meshes/%s/stats" % bodies[3][0]).json()
+            self.assertEqual(verts, st12["mesh"]["encoded_points"])
+            self.assertEqual(faces, st12["mesh"]["encoded_faces"])
+            self.assertEqual(st12["analysis"], stats["analysis"])
+            stl = bodies[4][2]
+            self.assertEqual(struct.unpack("<I", stl[80:84])[0], stats["mesh"]["triangles"])
+            # another accuracy is another surface
+            r = d.post("/v1/mesh?format=ply", with_(depth={"min": 3, "max": 5}))
+            self.assertEqual(r.status, 200)
+            self.assertEqual(self.counters(d)[0] - p0, 2)
+        # a fresh daemon computes each of them from scratch: the same bytes
+        with Daemon("--workers", "1") as fresh:
+            for (req, fmt), (key, _, body) in zip(asks, bodies):
+                if fmt in ("drc", "ply") or req is twelve:
+                    r = fresh.post("/v1/mesh?format=" + fmt, req)
+                    self.assertEqual(r.status, 200)
+                    self.assertEqual(r.body, body, "%s of %s differs" % (fmt, key))
+
+    def test_get_of_another_format_is_encoded_not_polygonised(self):
+        with Daemon("--workers", "1") as d:
+            r = d.post("/v1/mesh", with_(params={"a": 0.9}))
+            self.assertEqual(r.status, 200)
+            key = r.header("ETag").strip('"')
+            p0, _ = self.counters(d)
+            for fmt in ("glb", "obj", "stl"):
+                g = d.get("/v1/meshes/%s.%s" % (key, fmt))
+                self.assertEqual(g.status, 200)
+                self.assertEqual(g.header("Content-Type"), MIME[fmt])
+            self.assertEqual(self.counters(d)[0], p0)
+            self.assertEqual(d.get("/v1/meshes/%s.drc" % key).header("Content-Type"), MIME["drc"])
+
+
+if __name__ == "__main__":
+    unittest.main()
