@@ -1,0 +1,191 @@
+/* arr_faces.c — the arrangement's faces: triangles joined across every mesh edge that lies on
+ * no curve are one face; faces are numbered by their first triangle and the mesh's triangles
+ * reordered so each face is one range; per face its area, closed and open Euler
+ * characteristics and the number of boundary cycles. */
+#include "core/curves/arr_internal.h"
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define NONE UINT32_MAX
+
+static double tri_area(const ism_mesh *m, const uint32_t *t)
+{
+    const double *a = m->pos + 3 * (size_t)t[0], *b = m->pos + 3 * (size_t)t[1],
+                 *c = m->pos + 3 * (size_t)t[2];
+    double u[3], v[3];
+    for (int i = 0; i < 3; i++) {
+        u[i] = b[i] - a[i];
+        v[i] = c[i] - a[i];
+    }
+    double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2],
+           z = u[0] * v[1] - u[1] * v[0];
+    return 0.5 * sqrt(x * x + y * y + z * z);
+}
+
+/* Dense ids 0.. for the roots of parent, in order of each set's smallest member. */
+static size_t number_sets(uint32_t *parent, size_t n, uint32_t *id)
+{
+    size_t k = 0;
+    for (size_t i = 0; i < n; i++)
+        id[i] = arr_uf_find(parent, (uint32_t)i) == i ? (uint32_t)k++ : NONE;
+    for (size_t i = 0; i < n; i++)
+        id[i] = id[arr_uf_find(parent, (uint32_t)i)];
+    return k;
+}
+
+/* Cell and component union-finds over the triangles. */
+static bool join_triangles(const ism_mesh *m, const arr_mesh_edges *e, uint32_t *cell,
+                           uint32_t *comp)
+{
+    uint32_t *first = malloc((e->n + 1) * sizeof *first);
+    if (!first)
+        return false;
+    memset(first, 0xff, (e->n + 1) * sizeof *first);
+    for (size_t t = 0; t < m->ntris; t++)
+        cell[t] = comp[t] = (uint32_t)t;
+    for (size_t t = 0; t < m->ntris; t++)
+        for (int i = 0; i < 3; i++) {
+            uint32_t k = e->tri_edge[3 * t + i];
+            if (first[k] == NONE) {
+                first[k] = (uint32_t)t;
+                continue;
+            }
+            arr_uf_union(comp, first[k], (uint32_t)t);
+            if (!e->on_curve[k])
+                arr_uf_union(cell, first[k], (uint32_t)t);
+        }
+    free(first);
+    return true;
+}
+
+/* Moves triangle data into face order (stable counting sort by face id). */
+static bool reorder(ism_mesh *m, arr_mesh_edges *e, const uint32_t *fid, size_t nf,
+                    uint32_t *comp, ism_arrangement *a)
+{
+    size_t nt = m->ntris;
+    size_t *start = calloc(nf + 1, sizeof *start);
+    uint32_t *tri = malloc((3 * nt + 1) * sizeof *tri), *te = malloc((3 * nt + 1) * sizeof *te);
+    uint32_t *cp = malloc((nt + 1) * sizeof *cp);
+    bool ok = start && tri && te && cp;
+    if (ok) {
+        for (size_t t = 0; t < nt; t++)
+            start[fid[t] + 1]++;
+        for (size_t f = 0; f < nf; f++)
+            start[f + 1] += start[f];
+        for (size_t f = 0; f < nf; f++) {
+            a->faces[f].first = start[f];
+            a->faces[f].ntris = start[f + 1] - start[f];
+        }
+        for (size_t t = 0; t < nt; t++) {
+            size_t d = start[fid[t]]++;
+            memcpy(tri + 3 * d, m->tri + 3 * t, 3 * sizeof *tri);
+            memcpy(te + 3 * d, e->tri_edge + 3 * t, 3 * sizeof *te);
+            cp[d] = comp[t];
+            a->tri_face[d] = fid[t];
+        }
+        memcpy(m->tri, tri, 3 * nt * sizeof *tri);
+        memcpy(e->tri_edge, te, 3 * nt * sizeof *te);
+        memcpy(comp, cp, nt * sizeof *cp);
+    }
+    free(start);
+    free(tri);
+    free(te);
+    free(cp);
+    return ok;
+}
+
+typedef struct face_scratch {
+    uint32_t *vstamp, *estamp, *rstamp, *vpar, *touched;
+} face_scratch;
+
+/* Area, Euler characteristics and boundary cycles of face f. */
+static void measure_face(const ism_mesh *m, const arr_mesh_edges *e, face_scratch *s,
+                         uint32_t f, ism_arr_face *face)
+{
+    long V = 0, E = 0, Vin = 0, Ein = 0;
+    size_t ntouched = 0;
+    face->area = 0;
+    for (size_t t = face->first; t < face->first + face->ntris; t++) {
+        const uint32_t *tv = m->tri + 3 * t;
+        face->area += tri_area(m, tv);
+        for (int i = 0; i < 3; i++) {
+            uint32_t v = tv[i], k = e->tri_edge[3 * t + i];
+            if (s->vstamp[v] != f + 1) {
+                s->vstamp[v] = f + 1;
+                V++;
+                Vin += !e->v_on_curve[v];
+            }
+            if (s->estamp[k] == f + 1)
+                continue;
+            s->estamp[k] = f + 1;
+            E++;
+            Ein += !e->on_curve[k];
+            if (e->on_curve[k] || e->ntri[k] == 1) {
+                uint32_t b = tv[(i + 1) % 3];
+                s->touched[ntouched++] = v;
+                s->touched[ntouched++] = b;
+                arr_uf_union(s->vpar, v, b);
+            }
+        }
+    }
+    face->euler = V - E + (long)face->ntris;
+    face->euler_open = Vin - Ein + (long)face->ntris;
+    face->boundary = 0;
+    for (size_t i = 0; i < ntouched; i++) { /* one count per root */
+        uint32_t r = arr_uf_find(s->vpar, s->touched[i]);
+        if (s->rstamp[r] != f + 1) {
+            s->rstamp[r] = f + 1;
+            face->boundary++;
+        }
+    }
+    for (size_t i = 0; i < ntouched; i++)
+        s->vpar[s->touched[i]] = s->touched[i];
+}
+
+static bool measure_faces(const ism_mesh *m, const arr_mesh_edges *e, ism_arrangement *a)
+{
+    face_scratch s = {
+        .vstamp = calloc(m->nverts + 1, sizeof(uint32_t)),
+        .estamp = calloc(e->n + 1, sizeof(uint32_t)),
+        .rstamp = calloc(m->nverts + 1, sizeof(uint32_t)),
+        .vpar = malloc((m->nverts + 1) * sizeof(uint32_t)),
+        .touched = malloc((6 * m->ntris + 1) * sizeof(uint32_t)),
+    };
+    bool ok = s.vstamp && s.estamp && s.rstamp && s.vpar && s.touched;
+    if (ok) {
+        for (size_t v = 0; v < m->nverts; v++)
+            s.vpar[v] = (uint32_t)v;
+        for (size_t f = 0; f < a->nfaces; f++)
+            measure_face(m, e, &s, (uint32_t)f, &a->faces[f]);
+    }
+    free(s.vstamp);
+    free(s.estamp);
+    free(s.rstamp);
+    free(s.vpar);
+    free(s.touched);
+    return ok;
+}
+
+bool arr_build_faces(ism_mesh *m, arr_mesh_edges *e, ism_arrangement *a, uint32_t *comp)
+{
+    size_t nt = m->ntris;
+    uint32_t *cell = malloc((nt + 1) * sizeof *cell), *fid = malloc((nt + 1) * sizeof *fid);
+    uint32_t *cid = malloc((nt + 1) * sizeof *cid);
+    a->tri_face = malloc((nt + 1) * sizeof *a->tri_face);
+    bool ok = cell && fid && cid && a->tri_face && join_triangles(m, e, cell, comp);
+    if (ok) {
+        a->nfaces = number_sets(cell, nt, fid);
+        a->ncomponents = number_sets(comp, nt, cid);
+        memcpy(comp, cid, nt * sizeof *comp);
+        a->faces = calloc(a->nfaces + 1, sizeof *a->faces);
+        ok = a->faces && reorder(m, e, fid, a->nfaces, comp, a) && measure_faces(m, e, a);
+    }
+    if (ok)
+        for (size_t f = 0; f < a->nfaces; f++)
+            a->faces[f].component = comp[a->faces[f].first];
+    free(cell);
+    free(fid);
+    free(cid);
+    return ok;
+}

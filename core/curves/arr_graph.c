@@ -1,0 +1,233 @@
+/* arr_graph.c — the arrangement's vertices, edges and curves from the cut edges: a mesh
+ * vertex is an arrangement vertex where curves of two functions meet, where one curve has
+ * other than two cut edges (a branch or an end), and once on each closed curve that meets
+ * nothing; edges are the chains of cut edges between them; a curve is the arcs of one
+ * function joined through its own vertices. */
+#include "core/curves/arr_internal.h"
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define NONE UINT32_MAX
+
+typedef struct graph {
+    const ism_mesh *m;
+    const ism_cut *c;
+    ism_arrangement *a;
+    uint32_t *start, *adj;  /* per vertex: its cut edges adj[start[v] .. start[v+1]) */
+    uint32_t *fn1;          /* per vertex: the function of its first cut edge */
+    uint8_t *multi;         /* per vertex: cut edges of two functions meet */
+    uint32_t *avid;         /* per vertex: arrangement vertex or NONE */
+    uint8_t *seen;          /* per cut edge */
+    size_t cap_v, cap_e, cap_chain;
+} graph;
+
+static bool grow(void **p, size_t *cap, size_t need, size_t elem)
+{
+    if (need <= *cap)
+        return true;
+    size_t n = *cap ? *cap : 64;
+    while (n < need)
+        n *= 2;
+    void *q = realloc(*p, n * elem);
+    if (!q)
+        return false;
+    *p = q;
+    *cap = n;
+    return true;
+}
+
+static bool build_adjacency(graph *g)
+{
+    size_t nv = g->m->nverts, ne = g->c->nedges;
+    g->start = calloc(nv + 2, sizeof *g->start);
+    g->adj = malloc((2 * ne + 1) * sizeof *g->adj);
+    g->fn1 = malloc((nv + 1) * sizeof *g->fn1);
+    g->multi = calloc(nv + 1, 1);
+    g->avid = malloc((nv + 1) * sizeof *g->avid);
+    g->seen = calloc(ne + 1, 1);
+    if (!g->start || !g->adj || !g->fn1 || !g->multi || !g->avid || !g->seen)
+        return false;
+    memset(g->fn1, 0xff, (nv + 1) * sizeof *g->fn1);
+    memset(g->avid, 0xff, (nv + 1) * sizeof *g->avid);
+    for (size_t i = 0; i < ne; i++) {
+        const ism_cut_edge *e = &g->c->edges[i];
+        g->start[e->a + 2]++;
+        g->start[e->b + 2]++;
+        for (int k = 0; k < 2; k++) {
+            uint32_t v = k ? e->b : e->a;
+            if (g->fn1[v] == NONE)
+                g->fn1[v] = e->fn;
+            else if (g->fn1[v] != e->fn)
+                g->multi[v] = 1;
+        }
+    }
+    for (size_t v = 0; v < nv; v++)
+        g->start[v + 2] += g->start[v + 1];
+    for (size_t i = 0; i < ne; i++) {
+        g->adj[g->start[g->c->edges[i].a + 1]++] = (uint32_t)i;
+        g->adj[g->start[g->c->edges[i].b + 1]++] = (uint32_t)i;
+    }
+    return true;
+}
+
+static bool add_vertex(graph *g, uint32_t v, int type)
+{
+    ism_arrangement *a = g->a;
+    if (!grow((void **)&a->vertices, &g->cap_v, a->nvertices + 1, sizeof *a->vertices))
+        return false;
+    g->avid[v] = (uint32_t)a->nvertices;
+    a->vertices[a->nvertices++] =
+        (ism_arr_vertex){.v = v, .degree = (int)(g->start[v + 1] - g->start[v]), .type = type};
+    return true;
+}
+
+static bool push_chain(graph *g, uint32_t v)
+{
+    ism_arrangement *a = g->a;
+    if (!grow((void **)&a->chain, &g->cap_chain, a->nchain + 1, sizeof *a->chain))
+        return false;
+    a->chain[a->nchain++] = v;
+    return true;
+}
+
+static double seg_length(const ism_mesh *m, uint32_t a, uint32_t b)
+{
+    double d = 0;
+    for (int i = 0; i < 3; i++) {
+        double e = m->pos[3 * (size_t)a + i] - m->pos[3 * (size_t)b + i];
+        d += e * e;
+    }
+    return sqrt(d);
+}
+
+/* The arc leaving arrangement vertex at mesh vertex v through cut edge ce. */
+static bool walk(graph *g, uint32_t v, uint32_t ce)
+{
+    ism_arr_edge e = {.from = g->avid[v], .fn = g->c->edges[ce].fn, .first = g->a->nchain};
+    if (!push_chain(g, v))
+        return false;
+    for (;;) {
+        g->seen[ce] = 1;
+        const ism_cut_edge *c = &g->c->edges[ce];
+        uint32_t w = c->a == v ? c->b : c->a;
+        e.length += seg_length(g->m, v, w);
+        if (!push_chain(g, w))
+            return false;
+        v = w;
+        if (g->avid[v] != NONE)
+            break;
+        uint32_t next = NONE;
+        for (uint32_t i = g->start[v]; i < g->start[v + 1]; i++)
+            if (!g->seen[g->adj[i]])
+                next = g->adj[i];
+        if (next == NONE) /* cannot happen on a degree-2 vertex unless revisited */
+            break;
+        ce = next;
+    }
+    e.to = g->avid[v] != NONE ? g->avid[v] : e.from;
+    e.count = g->a->nchain - e.first;
+    ism_arrangement *a = g->a;
+    if (!grow((void **)&a->edges, &g->cap_e, a->nedges + 1, sizeof *a->edges))
+        return false;
+    a->edges[a->nedges++] = e;
+    return true;
+}
+
+static bool walk_from(graph *g, uint32_t v)
+{
+    for (uint32_t i = g->start[v]; i < g->start[v + 1]; i++)
+        if (!g->seen[g->adj[i]] && !walk(g, v, g->adj[i]))
+            return false;
+    return true;
+}
+
+static bool vertices_and_edges(graph *g)
+{
+    for (size_t v = 0; v < g->m->nverts; v++) {
+        uint32_t deg = g->start[v + 1] - g->start[v];
+        if (deg == 0 || (deg == 2 && !g->multi[v]))
+            continue;
+        int type = g->multi[v] ? ISM_ARR_CROSSING : deg == 1 ? ISM_ARR_END : ISM_ARR_BRANCH;
+        if (!add_vertex(g, (uint32_t)v, type))
+            return false;
+    }
+    for (size_t i = 0; i < g->a->nvertices; i++)
+        if (!walk_from(g, g->a->vertices[i].v))
+            return false;
+    for (size_t i = 0; i < g->c->nedges; i++) /* closed curves meeting nothing */
+        if (!g->seen[i]) {
+            uint32_t v = g->c->edges[i].a;
+            if (!add_vertex(g, v, ISM_ARR_LOOP) || !walk_from(g, v))
+                return false;
+        }
+    return true;
+}
+
+typedef struct end_ref {
+    uint32_t vertex, fn, edge;
+} end_ref;
+
+static int cmp_end(const void *x, const void *y)
+{
+    const end_ref *a = x, *b = y;
+    if (a->vertex != b->vertex)
+        return a->vertex < b->vertex ? -1 : 1;
+    if (a->fn != b->fn)
+        return a->fn < b->fn ? -1 : 1;
+    return (a->edge > b->edge) - (a->edge < b->edge);
+}
+
+/* Curves: arcs of one function sharing an arrangement vertex are one curve. */
+static bool curves(ism_arrangement *a)
+{
+    size_t ne = a->nedges;
+    end_ref *r = malloc((2 * ne + 1) * sizeof *r);
+    uint32_t *par = malloc((ne + 1) * sizeof *par), *id = malloc((ne + 1) * sizeof *id);
+    bool ok = r && par && id;
+    if (ok) {
+        for (size_t i = 0; i < ne; i++) {
+            par[i] = (uint32_t)i;
+            r[2 * i] = (end_ref){a->edges[i].from, a->edges[i].fn, (uint32_t)i};
+            r[2 * i + 1] = (end_ref){a->edges[i].to, a->edges[i].fn, (uint32_t)i};
+        }
+        qsort(r, 2 * ne, sizeof *r, cmp_end);
+        for (size_t i = 1; i < 2 * ne; i++)
+            if (r[i].vertex == r[i - 1].vertex && r[i].fn == r[i - 1].fn)
+                arr_uf_union(par, r[i].edge, r[i - 1].edge);
+        a->ncurves = 0;
+        for (size_t i = 0; i < ne; i++)
+            id[i] = arr_uf_find(par, (uint32_t)i) == i ? (uint32_t)a->ncurves++ : NONE;
+        a->curves = calloc(a->ncurves + 1, sizeof *a->curves);
+        ok = a->curves != NULL;
+    }
+    for (size_t i = 0; ok && i < ne; i++) {
+        ism_arr_edge *e = &a->edges[i];
+        e->curve = id[arr_uf_find(par, (uint32_t)i)];
+        ism_arr_curve *c = &a->curves[e->curve];
+        if (!c->nedges)
+            c->closed = true;
+        c->fn = e->fn;
+        c->length += e->length;
+        c->nedges++;
+        if (a->vertices[e->from].type == ISM_ARR_END || a->vertices[e->to].type == ISM_ARR_END)
+            c->closed = false;
+    }
+    free(r);
+    free(par);
+    free(id);
+    return ok;
+}
+
+bool arr_build_graph(const ism_mesh *m, const ism_cut *c, ism_arrangement *a)
+{
+    graph g = {.m = m, .c = c, .a = a};
+    bool ok = build_adjacency(&g) && vertices_and_edges(&g) && curves(a);
+    free(g.start);
+    free(g.adj);
+    free(g.fn1);
+    free(g.multi);
+    free(g.avid);
+    free(g.seen);
+    return ok;
+}

@@ -1,0 +1,33 @@
+/* arr_internal.h — what the arrangement's files share (not public): the mesh's edges with
+ * their triangles and whether they lie on a curve, and a small union-find. */
+#ifndef ISM_ARR_INTERNAL_H
+#define ISM_ARR_INTERNAL_H
+
+#include "core/curves/arrangement.h"
+#include "core/singular/key_map.h"
+
+typedef struct arr_mesh_edges {
+    ism_key_map map;      /* edge key -> edge index */
+    uint32_t *tri_edge;   /* 3 per triangle: its edges (v0v1, v1v2, v2v0) */
+    uint32_t *ntri;       /* per edge: triangles using it */
+    uint8_t *on_curve;    /* per edge */
+    uint8_t *v_on_curve;  /* per vertex */
+    uint8_t *v_used;      /* per vertex: some triangle uses it */
+    size_t n;
+} arr_mesh_edges;
+
+uint64_t arr_edge_key(uint32_t a, uint32_t b);
+bool arr_mesh_edges_build(const ism_mesh *m, const ism_cut *c, arr_mesh_edges *e);
+void arr_mesh_edges_free(arr_mesh_edges *e);
+
+uint32_t arr_uf_find(uint32_t *parent, uint32_t i);
+void arr_uf_union(uint32_t *parent, uint32_t i, uint32_t j);
+
+/* Faces: triangles reordered, tri_face and faces filled; comp gets each triangle's mesh
+ * component (in the new order) and a->ncomponents is set. */
+bool arr_build_faces(ism_mesh *m, arr_mesh_edges *e, ism_arrangement *a, uint32_t *comp);
+
+/* Vertices, edges and curves from the cut edges. */
+bool arr_build_graph(const ism_mesh *m, const ism_cut *c, ism_arrangement *a);
+
+#endif

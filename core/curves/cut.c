@@ -1,0 +1,290 @@
+/* cut.c — splitting the mesh along g = 0, one function after another. A triangle whose
+ * corners take both signs of g is split at its crossed edges (the split point of an edge is
+ * shared by both its triangles through a map keyed by the edge, so the cut is crack-free);
+ * the crossing is first interpolated linearly, then moved onto f = g = 0 by Newton. An edge
+ * already lying on an earlier curve is split at the crossing of the two curves (Newton on
+ * f, g₁, g₂), and its cut edge replaced by the two halves. */
+#include "core/curves/cut.h"
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "core/singular/key_map.h"
+
+#define NONE UINT32_MAX
+/* Newton may move a split point at most this many lengths of its edge (further means it
+ * ran to another part of the curve). */
+#define CUT_MAX_MOVE_EDGES 2.0
+
+typedef struct cut_state {
+    ism_cut_eval *ev;
+    ism_mesh *m;
+    ism_cut *c;
+    double tol;
+    ism_key_map split;       /* edge key -> index into split_v */
+    uint32_t *split_v;
+    size_t cap_split;
+    ism_key_map onmap;       /* cut edge key -> index into c->edges (fn NONE: replaced) */
+    uint32_t *vcurve;        /* per vertex: the first function it lies on, NONE when none */
+    size_t cap_vcurve;
+    size_t cap_edges;
+    double *gv;              /* g at the vertices of the current function */
+    signed char *sg;
+} cut_state;
+
+static uint64_t edge_key(uint32_t a, uint32_t b)
+{
+    return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
+}
+
+void ism_cut_free(ism_cut *c)
+{
+    free(c->edges);
+    memset(c, 0, sizeof *c);
+}
+
+static bool grow(void **p, size_t *cap, size_t need, size_t elem)
+{
+    if (need <= *cap)
+        return true;
+    size_t n = *cap ? *cap : 256;
+    while (n < need)
+        n *= 2;
+    void *q = realloc(*p, n * elem);
+    if (!q)
+        return false;
+    *p = q;
+    *cap = n;
+    return true;
+}
+
+static bool set_vcurve(cut_state *s, uint32_t v, uint32_t fn)
+{
+    size_t old = s->cap_vcurve;
+    if (!grow((void **)&s->vcurve, &s->cap_vcurve, (size_t)v + 1, sizeof *s->vcurve))
+        return false;
+    for (size_t i = old; i < s->cap_vcurve; i++)
+        s->vcurve[i] = NONE;
+    if (s->vcurve[v] == NONE)
+        s->vcurve[v] = fn;
+    return true;
+}
+
+static uint32_t vcurve_of(const cut_state *s, uint32_t v)
+{
+    return v < s->cap_vcurve ? s->vcurve[v] : NONE;
+}
+
+/* Records edge a-b as lying on curve fn (once). */
+static bool add_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t fn)
+{
+    bool added;
+    uint32_t i = ism_key_map_add(&s->onmap, edge_key(a, b), &added);
+    if (i == ISM_KEY_NONE)
+        return false;
+    if (!added)
+        return true;
+    if (!grow((void **)&s->c->edges, &s->cap_edges, (size_t)i + 1, sizeof *s->c->edges))
+        return false;
+    s->c->edges[i] = (ism_cut_edge){a, b, fn};
+    s->c->nedges = (size_t)i + 1;
+    return true;
+}
+
+/* The earlier curve edge a-b lies on, or NONE. */
+static uint32_t edge_curve(const cut_state *s, uint32_t a, uint32_t b)
+{
+    uint32_t i = ism_key_map_find(&s->onmap, edge_key(a, b));
+    return i == ISM_KEY_NONE ? NONE : s->c->edges[i].fn;
+}
+
+static void normal_at(cut_state *s, const double p[3], const float ref[3], float out[3])
+{
+    double g[3];
+    ism_eval_gradient(s->ev->f, s->ev->fws, p[0], p[1], p[2], g);
+    double n = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    double d = g[0] * ref[0] + g[1] * ref[1] + g[2] * ref[2];
+    double k = n > 0 ? (d < 0 ? -1 / n : 1 / n) : 0;
+    for (int i = 0; i < 3; i++)
+        out[i] = (float)(g[i] * k);
+}
+
+/* Puts point p (on or near edge u-w of length len) on curve k, and on curve j too when it is
+ * not NONE. Counts a failure and keeps p. */
+static void refine_point(cut_state *s, uint32_t j, size_t k, double len, double p[3])
+{
+    size_t ks[2] = {k, j};
+    int nk = 1;
+    if (j != NONE && j != k) {
+        ks[0] = j;
+        ks[1] = k;
+        nk = 2;
+    }
+    if (!ism_cut_refine(s->ev, ks, nk, s->tol, CUT_MAX_MOVE_EDGES * len, p))
+        s->c->unrefined++;
+}
+
+/* The vertex where g_k = 0 splits edge u-w (made once per edge). NONE when out of memory. */
+static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
+{
+    bool added;
+    uint32_t i = ism_key_map_add(&s->split, edge_key(u, w), &added);
+    if (i == ISM_KEY_NONE)
+        return NONE;
+    if (!added)
+        return s->split_v[i];
+    if (!grow((void **)&s->split_v, &s->cap_split, (size_t)i + 1, sizeof *s->split_v))
+        return NONE;
+    const double *a = s->m->pos + 3 * (size_t)u, *b = s->m->pos + 3 * (size_t)w;
+    double t = s->gv[u] / (s->gv[u] - s->gv[w]), p[3], len2 = 0;
+    for (int c = 0; c < 3; c++) {
+        p[c] = a[c] + t * (b[c] - a[c]);
+        len2 += (b[c] - a[c]) * (b[c] - a[c]);
+    }
+    uint32_t j = edge_curve(s, u, w);
+    refine_point(s, j, k, sqrt(len2), p);
+    float nrm[3];
+    normal_at(s, p, s->m->normal + 3 * (size_t)u, nrm);
+    uint32_t v = ism_mesh_add_vertex(s->m, p, nrm);
+    if (v == NONE || !set_vcurve(s, v, (uint32_t)k))
+        return NONE;
+    if (j != NONE) { /* the earlier curve's edge is now two */
+        uint32_t e = ism_key_map_find(&s->onmap, edge_key(u, w));
+        s->c->edges[e].fn = NONE;
+        if (!add_cut_edge(s, u, v, j) || !add_cut_edge(s, v, w, j))
+            return NONE;
+    }
+    s->split_v[i] = v;
+    return v;
+}
+
+static double dist2(const ism_mesh *m, uint32_t a, uint32_t b)
+{
+    double d = 0;
+    for (int c = 0; c < 3; c++) {
+        double e = m->pos[3 * (size_t)a + c] - m->pos[3 * (size_t)b + c];
+        d += e * e;
+    }
+    return d;
+}
+
+static bool emit(ism_mesh *m, uint32_t a, uint32_t b, uint32_t c)
+{
+    return ism_mesh_add_triangle(m, a, b, c);
+}
+
+/* Splits triangle t = (v0 v1 v2) by g_k, appending the pieces to the mesh. */
+static bool split_triangle(cut_state *s, size_t k, const uint32_t t[3])
+{
+    const signed char sg[3] = {s->sg[t[0]], s->sg[t[1]], s->sg[t[2]]};
+    int pos = (sg[0] > 0) + (sg[1] > 0) + (sg[2] > 0);
+    int neg = (sg[0] < 0) + (sg[1] < 0) + (sg[2] < 0);
+    uint32_t fn = (uint32_t)k;
+    if (!pos || !neg) {
+        for (int i = 0; i < 3; i++)
+            if (sg[i] == 0 && sg[(i + 1) % 3] == 0 && sg[(i + 2) % 3] != 0 &&
+                !add_cut_edge(s, t[i], t[(i + 1) % 3], fn))
+                return false;
+        return emit(s->m, t[0], t[1], t[2]);
+    }
+    for (int i = 0; i < 3; i++) /* one corner on the curve, the other two apart */
+        if (sg[i] == 0) {
+            uint32_t z = t[i], u = t[(i + 1) % 3], w = t[(i + 2) % 3];
+            uint32_t p = split_vertex(s, k, u, w);
+            return p != NONE && add_cut_edge(s, z, p, fn) && emit(s->m, z, u, p) &&
+                   emit(s->m, z, p, w);
+        }
+    for (int i = 0; i < 3; i++) /* the lone corner on its side */
+        if (sg[i] != sg[(i + 1) % 3] && sg[i] != sg[(i + 2) % 3]) {
+            uint32_t l = t[i], u = t[(i + 1) % 3], w = t[(i + 2) % 3];
+            uint32_t p = split_vertex(s, k, l, u), q = split_vertex(s, k, l, w);
+            if (p == NONE || q == NONE || !add_cut_edge(s, p, q, fn) || !emit(s->m, l, p, q))
+                return false;
+            if (dist2(s->m, p, w) <= dist2(s->m, u, q)) /* the shorter diagonal */
+                return emit(s->m, p, u, w) && emit(s->m, p, w, q);
+            return emit(s->m, p, u, q) && emit(s->m, u, w, q);
+        }
+    return false;
+}
+
+/* Signs of g_k at the vertices; those on the curve are put on it (and on an earlier curve
+ * they lie on). */
+static bool classify(cut_state *s, size_t k)
+{
+    ism_mesh *m = s->m;
+    free(s->gv);
+    free(s->sg);
+    s->gv = malloc((m->nverts ? m->nverts : 1) * sizeof *s->gv);
+    s->sg = malloc(m->nverts ? m->nverts : 1);
+    if (!s->gv || !s->sg)
+        return false;
+    for (size_t v = 0; v < m->nverts; v++) {
+        double g = ism_cut_g(s->ev, k, m->pos + 3 * v, NULL);
+        s->gv[v] = g;
+        s->sg[v] = (signed char)((g > 0) - (g < 0));
+        if (g == 0) {
+            uint32_t j = vcurve_of(s, (uint32_t)v);
+            refine_point(s, j, k, s->tol * 1e6, m->pos + 3 * v);
+            if (!set_vcurve(s, (uint32_t)v, (uint32_t)k))
+                return false;
+        }
+    }
+    return true;
+}
+
+static bool cut_one(cut_state *s, size_t k)
+{
+    if (!classify(s, k))
+        return false;
+    ism_mesh *m = s->m;
+    size_t nt = m->ntris;
+    uint32_t *old = malloc((nt ? nt : 1) * 3 * sizeof *old);
+    if (!old)
+        return false;
+    memcpy(old, m->tri, nt * 3 * sizeof *old);
+    m->ntris = 0;
+    ism_key_map_free(&s->split);
+    ism_key_map_init(&s->split);
+    bool ok = true;
+    for (size_t t = 0; t < nt && ok; t++)
+        ok = split_triangle(s, k, old + 3 * t);
+    free(old);
+    return ok;
+}
+
+/* Drops the replaced cut edges and measures how close the curve vertices are. */
+static void finish(cut_state *s)
+{
+    ism_cut *c = s->c;
+    size_t n = 0;
+    for (size_t i = 0; i < c->nedges; i++)
+        if (c->edges[i].fn != NONE)
+            c->edges[n++] = c->edges[i];
+    c->nedges = n;
+    for (size_t i = 0; i < n; i++)
+        for (int e = 0; e < 2; e++) {
+            uint32_t v = e ? c->edges[i].b : c->edges[i].a;
+            double df, dg;
+            ism_cut_residuals(s->ev, c->edges[i].fn, s->m->pos + 3 * (size_t)v, &df, &dg);
+            c->worst_f = df > c->worst_f ? df : c->worst_f;
+            c->worst_g = dg > c->worst_g ? dg : c->worst_g;
+        }
+}
+
+bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
+{
+    cut_state s = {.ev = ev, .m = m, .c = c, .tol = tol};
+    ism_key_map_init(&s.split);
+    ism_key_map_init(&s.onmap);
+    bool ok = true;
+    for (size_t k = 0; k < ev->nfns && ok; k++)
+        ok = cut_one(&s, k);
+    if (ok)
+        finish(&s);
+    ism_key_map_free(&s.split);
+    ism_key_map_free(&s.onmap);
+    free(s.split_v);
+    free(s.vcurve);
+    free(s.gv);
+    free(s.sg);
+    return ok;
+}

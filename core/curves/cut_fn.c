@@ -1,0 +1,146 @@
+/* cut_fn.c — evaluating a curve's second function g and Newton on (f, g) that puts points on
+ * the curve: the minimum-norm step dx = −Jᵀ (J Jᵀ)⁻¹ r with J the rows ∇f, ∇g (and ∇g₂ at a
+ * crossing of two curves, where the system is square). */
+#include "core/curves/cut_fn.h"
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Newton steps before giving up (quadratic convergence needs a handful from a mesh point). */
+#define CUT_NEWTON_ITERS 30
+/* J Jᵀ with a determinant below this × the product of its diagonal is singular (the two
+ * surfaces are tangent there): no reliable step. */
+#define CUT_SINGULAR_REL 1e-14
+
+bool ism_cut_eval_init(ism_cut_eval *ev, const ism_tape *f, const ism_cut_fn *fns, size_t n)
+{
+    memset(ev, 0, sizeof *ev);
+    ev->f = f;
+    ev->fns = fns;
+    ev->nfns = n;
+    ev->fws = ism_eval_ws_new(f);
+    ev->gws = calloc(n ? n : 1, sizeof *ev->gws);
+    if (!ev->fws || !ev->gws) {
+        ism_cut_eval_free(ev);
+        return false;
+    }
+    for (size_t k = 0; k < n; k++)
+        if (fns[k].tape && !(ev->gws[k] = ism_eval_ws_new(fns[k].tape))) {
+            ism_cut_eval_free(ev);
+            return false;
+        }
+    return true;
+}
+
+void ism_cut_eval_free(ism_cut_eval *ev)
+{
+    ism_eval_ws_free(ev->fws);
+    if (ev->gws)
+        for (size_t k = 0; k < ev->nfns; k++)
+            ism_eval_ws_free(ev->gws[k]);
+    free(ev->gws);
+    memset(ev, 0, sizeof *ev);
+}
+
+double ism_cut_g(ism_cut_eval *ev, size_t k, const double p[3], double grad[3])
+{
+    const ism_cut_fn *fn = &ev->fns[k];
+    double v = fn->n[0] * p[0] + fn->n[1] * p[1] + fn->n[2] * p[2] - fn->c, g[3] = {0, 0, 0};
+    if (fn->tape)
+        v += grad ? ism_eval_gradient(fn->tape, ev->gws[k], p[0], p[1], p[2], g)
+                  : ism_eval_point(fn->tape, ev->gws[k], p[0], p[1], p[2]);
+    if (grad)
+        for (int i = 0; i < 3; i++)
+            grad[i] = g[i] + fn->n[i];
+    return v;
+}
+
+static double dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/* Solves the m × m system (m = 2 or 3) A y = r, A symmetric given as rows. False when singular. */
+static bool solve_sym(int m, double a[3][3], const double r[3], double y[3])
+{
+    if (m == 2) {
+        double det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+        if (!(fabs(det) > CUT_SINGULAR_REL * a[0][0] * a[1][1]))
+            return false;
+        y[0] = (r[0] * a[1][1] - a[0][1] * r[1]) / det;
+        y[1] = (a[0][0] * r[1] - a[1][0] * r[0]) / det;
+        return true;
+    }
+    double c0 = a[1][1] * a[2][2] - a[1][2] * a[2][1];
+    double c1 = a[1][2] * a[2][0] - a[1][0] * a[2][2];
+    double c2 = a[1][0] * a[2][1] - a[1][1] * a[2][0];
+    double det = a[0][0] * c0 + a[0][1] * c1 + a[0][2] * c2;
+    if (!(fabs(det) > CUT_SINGULAR_REL * a[0][0] * a[1][1] * a[2][2]))
+        return false;
+    double b[3][3];
+    for (int col = 0; col < 3; col++) {
+        memcpy(b, a, sizeof b);
+        for (int row = 0; row < 3; row++)
+            b[row][col] = r[row];
+        double d = b[0][0] * (b[1][1] * b[2][2] - b[1][2] * b[2][1]) -
+                   b[0][1] * (b[1][0] * b[2][2] - b[1][2] * b[2][0]) +
+                   b[0][2] * (b[1][0] * b[2][1] - b[1][1] * b[2][0]);
+        y[col] = d / det;
+    }
+    return true;
+}
+
+/* Values and gradient rows of f and the functions ks at p; the worst |value| / |gradient|. */
+static double system_at(ism_cut_eval *ev, const size_t *ks, int nk, const double p[3],
+                        double r[3], double J[3][3])
+{
+    r[0] = ism_eval_gradient(ev->f, ev->fws, p[0], p[1], p[2], J[0]);
+    for (int i = 0; i < nk; i++)
+        r[i + 1] = ism_cut_g(ev, ks[i], p, J[i + 1]);
+    double worst = 0;
+    for (int i = 0; i <= nk; i++) {
+        double n = sqrt(dot3(J[i], J[i]));
+        double d = n > 0 ? fabs(r[i]) / n : (r[i] == 0 ? 0 : INFINITY);
+        worst = d > worst ? d : worst;
+    }
+    return worst;
+}
+
+bool ism_cut_refine(ism_cut_eval *ev, const size_t *ks, int nk, double tol, double max_move,
+                    double p[3])
+{
+    double x[3] = {p[0], p[1], p[2]}, r[3], J[3][3];
+    int m = nk + 1;
+    for (int it = 0; it <= CUT_NEWTON_ITERS; it++) {
+        double worst = system_at(ev, ks, nk, x, r, J);
+        if (!isfinite(worst))
+            return false;
+        if (worst <= tol) {
+            double d[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
+            if (dot3(d, d) > max_move * max_move)
+                return false;
+            memcpy(p, x, sizeof x);
+            return true;
+        }
+        double A[3][3], y[3];
+        for (int i = 0; i < m; i++)
+            for (int j = 0; j < m; j++)
+                A[i][j] = dot3(J[i], J[j]);
+        if (!solve_sym(m, A, r, y))
+            return false;
+        for (int c = 0; c < 3; c++)
+            for (int i = 0; i < m; i++)
+                x[c] -= J[i][c] * y[i];
+    }
+    return false;
+}
+
+void ism_cut_residuals(ism_cut_eval *ev, size_t k, const double p[3], double *df, double *dg)
+{
+    double g[3];
+    double f = ism_eval_gradient(ev->f, ev->fws, p[0], p[1], p[2], g);
+    double nf = sqrt(dot3(g, g));
+    *df = nf > 0 ? fabs(f) / nf : fabs(f);
+    double v = ism_cut_g(ev, k, p, g), ng = sqrt(dot3(g, g));
+    *dg = ng > 0 ? fabs(v) / ng : fabs(v);
+}

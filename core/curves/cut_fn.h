@@ -1,0 +1,47 @@
+/* cut_fn.h — the second function g of a curve on f = 0 (the curve is f = 0, g = 0): a plane
+ * n·p − c, a level g − c of an expression, or a second surface g = 0; and Newton on the
+ * 2 × 3 system (f, g) (3 × 3 where two curves cross) that puts a point on the curve. */
+#ifndef ISM_CUT_FN_H
+#define ISM_CUT_FN_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include "core/eval/eval.h"
+
+enum ism_curve_kind { ISM_CURVE_SECTION, ISM_CURVE_LEVEL, ISM_CURVE_INTERSECTION,
+                      ISM_CURVE_SILHOUETTE, ISM_CURVE_KIND_COUNT };
+
+/* g(p) = tape(p) + n·p − c (tape NULL: the linear part alone). */
+typedef struct ism_cut_fn {
+    const ism_tape *tape;
+    double n[3];
+    double c;
+    int kind;            /* enum ism_curve_kind */
+    int source, index;   /* the request's curve entry and its offset / value number */
+} ism_cut_fn;
+
+/* Evaluation state for f and the cut functions (one thread). */
+typedef struct ism_cut_eval {
+    const ism_tape *f;
+    ism_eval_ws *fws;
+    const ism_cut_fn *fns;
+    ism_eval_ws **gws;   /* per function, NULL for a plane */
+    size_t nfns;
+} ism_cut_eval;
+
+bool ism_cut_eval_init(ism_cut_eval *ev, const ism_tape *f, const ism_cut_fn *fns, size_t n);
+void ism_cut_eval_free(ism_cut_eval *ev);
+
+/* g_k at p, with its gradient when grad is not NULL. */
+double ism_cut_g(ism_cut_eval *ev, size_t k, const double p[3], double grad[3]);
+
+/* Moves p onto f = 0 and g_k = 0 for each of the nk functions in ks (nk is 1 or 2) by
+ * minimum-norm Newton steps. True when it ends with every |value| / |gradient| ≤ tol and
+ * moved at most max_move; p is left unchanged otherwise. */
+bool ism_cut_refine(ism_cut_eval *ev, const size_t *ks, int nk, double tol, double max_move,
+                    double p[3]);
+
+/* The largest |value| / |gradient| of f and of g_k at p (the distance to each set). */
+void ism_cut_residuals(ism_cut_eval *ev, size_t k, const double p[3], double *df, double *dg);
+
+#endif
