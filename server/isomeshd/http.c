@@ -221,8 +221,10 @@ ism_blob *ismd_keyed_request(ismd_req *r, enum MHD_Result *ret)
     long long t0 = ism_now_ns();
     ism_pipeline_result pr;
     memset(&pr, 0, sizeof pr);
-    bool ok = ism_pipeline_key(r->body ? r->body : "", r->body_len, ismd_query(r, "format"),
-                               &r->srv->limits, &pr);
+    const char *fmt = ismd_query(r, "format");
+    if (fmt && !strcmp(fmt, "json"))
+        fmt = NULL; /* links to every format (routes_mesh.c); the mesh is the request's own */
+    bool ok = ism_pipeline_key(r->body ? r->body : "", r->body_len, fmt, &r->srv->limits, &pr);
     r->parse_ms = (ism_now_ns() - t0) / 1e6;
     if (!ok) {
         unsigned status = pr.status >= 400 && pr.status <= 599 ? (unsigned)pr.status : 400;
@@ -289,6 +291,9 @@ static void route_v1(ismd_req *r, const char *p)
 {
     if (!strcmp(p, "mesh")) {
         set_route(r, ISMD_R_MESH, "POST, OPTIONS", ismd_route_mesh_post);
+        r->wants_body = true;
+    } else if (!strcmp(p, "sweep")) {
+        set_route(r, ISMD_R_SWEEP, "POST, OPTIONS", ismd_route_sweep);
         r->wants_body = true;
     } else if (!strcmp(p, "jobs")) {
         set_route(r, ISMD_R_JOBS, "GET, HEAD, POST, OPTIONS", ismd_route_jobs_post);

@@ -76,6 +76,7 @@ struct ismd_req {
     char fmt[8];
     char id[40];
     ismd_want want;
+    bool links;                /* answer with the key and URLs (JSON), not the mesh */
     ismd_handler handler;      /* the route's answer, run once the body is in */
     ismd_handler on_ready;     /* answers after a flight resumed us */
     /* waiting for a flight */
@@ -136,6 +137,21 @@ const char *ismd_header(ismd_req *r, const char *name);
 /* A query argument or NULL. */
 const char *ismd_query(ismd_req *r, const char *name);
 
+/* Why ismd_job_start refused a job. */
+typedef struct ismd_job_refusal {
+    bool table_full;           /* the jobs table (submit: CLIENT_LIMIT = the user's share) */
+    ismd_submit submit;        /* else the scheduler's answer */
+} ismd_job_refusal;
+
+/* Starts a job for r->key.r->fmt (canonical: its request): answered from the cache, or its
+ * computation joined or queued, and recorded in Redis with --cluster. Returns the job with
+ * the scheduler's lock held (the caller answers, then unlocks), or NULL (lock not held) with
+ * the reason in why (routes_jobs.c). */
+struct ismd_job;
+struct ismd_job *ismd_job_start(ismd_req *r, ism_blob *canonical, ismd_job_refusal *why);
+/* The 429 or 503 for a refused job. */
+enum MHD_Result ismd_respond_job_refused(ismd_req *r, const ismd_job_refusal *why);
+
 /* ---- routes (routes_*.c) ------------------------------------------------------------- */
 
 enum MHD_Result ismd_route_mesh_post(ismd_req *r);       /* POST /v1/mesh */
@@ -143,6 +159,7 @@ enum MHD_Result ismd_route_mesh_get(ismd_req *r);        /* GET /v1/meshes/{key}
 enum MHD_Result ismd_route_mesh_json(ismd_req *r);       /* GET /v1/meshes/{key}/stats|features */
 enum MHD_Result ismd_route_jobs_post(ismd_req *r);       /* POST /v1/jobs */
 enum MHD_Result ismd_route_jobs_list(ismd_req *r);       /* GET /v1/jobs */
+enum MHD_Result ismd_route_sweep(ismd_req *r);           /* POST /v1/sweep */
 enum MHD_Result ismd_route_job_get(ismd_req *r);         /* GET /v1/jobs/{id} */
 enum MHD_Result ismd_route_job_delete(ismd_req *r);      /* DELETE /v1/jobs/{id} */
 enum MHD_Result ismd_route_job_events(ismd_req *r);      /* GET /v1/jobs/{id}/events */

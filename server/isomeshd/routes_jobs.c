@@ -69,21 +69,12 @@ static enum MHD_Result job_not_found(ismd_req *r)
  * that every daemon can answer for it. */
 static enum MHD_Result accepted_locked(ismd_req *r, ismd_job *job)
 {
-    ismd_cluster *cluster = ismd_shared_cluster(r->srv->shared);
-    if (cluster)
-        ismd_cluster_job_created(cluster, ismd_job_id(job), r->who.user, r->key, r->fmt,
-                                 (long long)time(NULL));
     return answer_job_locked(r, 202, job, true);
 }
 
-enum MHD_Result ismd_route_jobs_post(ismd_req *r)
+ismd_job *ismd_job_start(ismd_req *r, ism_blob *canonical, ismd_job_refusal *why)
 {
     ismd_server *s = r->srv;
-    enum MHD_Result ret;
-    ism_blob *canonical = ismd_keyed_request(r, &ret);
-    if (!canonical)
-        return ret;
-
     char name[ISM_CACHE_NAME_MAX], sname[ISM_CACHE_NAME_MAX];
     ism_cache_name(name, r->key, r->fmt);
     ism_cache_name(sname, r->key, "stats.json");
@@ -93,37 +84,63 @@ enum MHD_Result ismd_route_jobs_post(ismd_req *r)
     r->cache = hit ? "hit" : "miss";
 
     ismd_sched_lock(&s->sched);
-    ismd_jobs_refusal why;
-    ismd_job *job = ismd_jobs_create(s->jobs, r->key, r->fmt, r->who.user, &why);
+    ismd_jobs_refusal full;
+    ismd_job *job = ismd_jobs_create(s->jobs, r->key, r->fmt, r->who.user, &full);
     if (!job) {
         ismd_sched_unlock(&s->sched);
         ism_blob_unref(hit);
         ism_blob_unref(stats);
-        ism_blob_unref(canonical);
-        if (why == ISMD_JOBS_USER_FULL)
-            return ismd_respond_error(r, 429, "too_many_jobs",
-                                      "every job record you may keep is a live job; wait for "
-                                      "one to finish");
-        return ismd_respond_error(r, 503, "too_many_jobs", "the job table is full; retry later");
+        why->submit = full == ISMD_JOBS_USER_FULL ? ISMD_SUBMIT_CLIENT_LIMIT : ISMD_SUBMIT_QUEUE_FULL;
+        why->table_full = true;
+        return NULL;
     }
     if (hit) {
         ismd_jobs_complete_cached(s->jobs, job, stats);
-        ism_blob_unref(hit);
-        ism_blob_unref(stats);
-        ism_blob_unref(canonical);
-        return accepted_locked(r, job);
-    }
-    ismd_user_limits lim = {r->who.max_jobs, r->who.max_running};
-    ismd_submit st = ismd_sched_submit(&s->sched, r->key, r->fmt, canonical, r->who.user, &lim,
-                                       ismd_job_waiter(job));
-    ism_blob_unref(canonical);
-    if (st == ISMD_SUBMIT_NEW || st == ISMD_SUBMIT_JOINED) {
+    } else {
+        ismd_user_limits lim = {r->who.max_jobs, r->who.max_running};
+        ismd_submit st = ismd_sched_submit(&s->sched, r->key, r->fmt, canonical, r->who.user,
+                                           &lim, ismd_job_waiter(job));
+        if (st != ISMD_SUBMIT_NEW && st != ISMD_SUBMIT_JOINED) {
+            ismd_jobs_discard(s->jobs, job);
+            ismd_sched_unlock(&s->sched);
+            why->submit = st;
+            why->table_full = false;
+            return NULL;
+        }
         ismd_jobs_submitted(job);
-        return accepted_locked(r, job);
     }
-    ismd_jobs_discard(s->jobs, job);
-    ismd_sched_unlock(&s->sched);
-    return ismd_respond_refused(r, st);
+    ism_blob_unref(hit);
+    ism_blob_unref(stats);
+    ismd_cluster *cluster = ismd_shared_cluster(s->shared);
+    if (cluster)
+        ismd_cluster_job_created(cluster, ismd_job_id(job), r->who.user, r->key, r->fmt,
+                                 (long long)time(NULL));
+    return job;
+}
+
+enum MHD_Result ismd_respond_job_refused(ismd_req *r, const ismd_job_refusal *why)
+{
+    if (!why->table_full)
+        return ismd_respond_refused(r, why->submit);
+    if (why->submit == ISMD_SUBMIT_CLIENT_LIMIT)
+        return ismd_respond_error(r, 429, "too_many_jobs",
+                                  "every job record you may keep is a live job; wait for "
+                                  "one to finish");
+    return ismd_respond_error(r, 503, "too_many_jobs", "the job table is full; retry later");
+}
+
+enum MHD_Result ismd_route_jobs_post(ismd_req *r)
+{
+    enum MHD_Result ret;
+    ism_blob *canonical = ismd_keyed_request(r, &ret);
+    if (!canonical)
+        return ret;
+    ismd_job_refusal why;
+    ismd_job *job = ismd_job_start(r, canonical, &why);
+    ism_blob_unref(canonical);
+    if (!job)
+        return ismd_respond_job_refused(r, &why);
+    return accepted_locked(r, job);
 }
 
 enum MHD_Result ismd_route_jobs_list(ismd_req *r)

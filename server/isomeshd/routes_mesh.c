@@ -1,5 +1,6 @@
 /* routes_mesh.c — the mesh routes: POST /v1/mesh (decode, key, cache or compute, answer with
- * the mesh), GET /v1/meshes/{key}.{fmt} (immutable, 304 on If-None-Match, another format of a
+ * the mesh, or with ?format=json / Accept: application/json its key, the URLs of every
+ * format, stats and features, and the stats), GET /v1/meshes/{key}.{fmt} (immutable, 304 on If-None-Match, another format of a
  * known key computed from its stored canonical request), GET /v1/meshes/{key}/stats and
  * /features. Requests are decoded and keyed here, in the HTTP thread, without geometry, so
  * cache hits never wait for a worker. */
@@ -7,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "proto/json_writer.h"
 #include "proto/request.h"
 #include "server/common/log.h"
 #include "server/isomeshd/errors.h"
@@ -36,11 +38,65 @@ static enum MHD_Result answer_failure(ismd_req *r)
     return ismd_respond_error_blob(r, r->r_status, r->r_body);
 }
 
+/* Looks name up in every cache tier; counts the hit or miss. */
+static ism_blob *lookup(ismd_req *r, const char *ext);
+
+/* Writes "/v1/meshes/<key><tail>" as the value of k. */
+static void url_member(ism_jw *w, const char *k, const char *key, const char *tail)
+{
+    char url[160];
+    snprintf(url, sizeof url, "/v1/meshes/%s%s", key, tail);
+    ism_jw_key(w, k);
+    ism_jw_string(w, url);
+}
+
+/* The JSON answer for scripts (?format=json, Accept: application/json): the key, the URL of
+ * every format, of the stats and the features, and the stats themselves. */
+static enum MHD_Result answer_links(ismd_req *r)
+{
+    ism_blob *stats = r->r_stats ? ism_blob_ref(r->r_stats) : lookup(r, "stats.json");
+    ism_jw w;
+    ism_jw_init(&w);
+    ism_jw_object(&w);
+    ism_jw_key(&w, "key");
+    ism_jw_string(&w, r->key);
+    ism_jw_key(&w, "format");
+    ism_jw_string(&w, r->fmt);
+    char tail[16];
+    snprintf(tail, sizeof tail, ".%s", r->fmt);
+    url_member(&w, "url", r->key, tail);
+    ism_jw_key(&w, "urls");
+    ism_jw_object(&w);
+    for (int i = 0; i < ISM_FORMAT_COUNT; i++) {
+        const char *name = ism_format_name((enum ism_format)i);
+        snprintf(tail, sizeof tail, ".%s", name);
+        url_member(&w, name, r->key, tail);
+    }
+    url_member(&w, "stats", r->key, "/stats");
+    url_member(&w, "features", r->key, "/features");
+    ism_jw_object_end(&w);
+    ism_jw_key(&w, "stats");
+    if (stats)
+        ism_jw_raw(&w, (const char *)stats->data, stats->len);
+    else
+        ism_jw_null(&w);
+    ism_jw_object_end(&w);
+    ism_blob_unref(stats);
+    char *json = ism_jw_take(&w, NULL);
+    if (!json)
+        return ismd_respond_error(r, 500, "out_of_memory", "the server ran out of memory");
+    enum MHD_Result ret = ismd_respond_json(r, 200, json);
+    free(json);
+    return ret;
+}
+
 /* Answers with the mesh in r->r_body (hit or fresh). */
 static enum MHD_Result answer_mesh(ismd_req *r)
 {
     if (r->r_status != 200 || !r->r_body)
         return answer_failure(r);
+    if (r->links)
+        return answer_links(r);
     struct MHD_Response *resp = ismd_response_blob(r->r_body, ism_format_mime_of(r->fmt));
     if (!resp)
         return MHD_NO;
@@ -60,7 +116,6 @@ static enum MHD_Result answer_mesh(ismd_req *r)
     return ismd_send(r, 200, resp);
 }
 
-/* Looks name up in every cache tier; counts the hit or miss. */
 static ism_blob *lookup(ismd_req *r, const char *ext)
 {
     char name[ISM_CACHE_NAME_MAX];
@@ -79,6 +134,8 @@ enum MHD_Result ismd_route_mesh_post(ismd_req *r)
     ism_blob *canonical = ismd_keyed_request(r, &ret);
     if (!canonical)
         return ret;
+    const char *q = ismd_query(r, "format"), *accept = ismd_header(r, MHD_HTTP_HEADER_ACCEPT);
+    r->links = (q && !strcmp(q, "json")) || (accept && strstr(accept, "application/json"));
     ism_blob *hit = lookup(r, r->fmt);
     if (hit) {
         r->r_status = 200;
