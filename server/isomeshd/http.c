@@ -703,8 +703,9 @@ static void mhd_log(void *cls, const char *fmt, va_list ap)
  * socket polls writable again only below it. Without a bound, autotuning lets every slow
  * reader's socket take up to tcp_wmem's maximum (4 MB here) per send: 450 slow readers of a
  * 7 MB mesh parked ~1.8 GB in the kernel (past the host's TCP memory-pressure mark) and the
- * polling thread spent seconds copying it (/healthz waited 5-11 s). Bytes in flight (the congestion window) are not
- * limited by this, so fast clients on long links keep their speed. */
+ * polling thread spent seconds copying it (/healthz waited 5-11 s). Bytes in flight (the
+ * congestion window) are not limited by this, so fast clients on long links keep their
+ * speed. */
 #define NOTSENT_LOWAT (256u << 10)
 /* Connections the daemon holds at once (split evenly among the polling threads). */
 #define CONNECTION_LIMIT 4000u
@@ -713,7 +714,7 @@ static void mhd_log(void *cls, const char *fmt, va_list ap)
 /* Events one epoll_wait() of libmicrohttpd 0.9.75 takes (its MAX_EVENTS). */
 #define MHD_EPOLL_BATCH 128u
 /* Connections one polling thread may hold: with its listening socket and its wake-up pipe
- * (and one spare) its epoll set stays below MHD_EPOLL_BATCH (see ismd_http_start). */
+ * (and two spare) its epoll set stays below MHD_EPOLL_BATCH (see ismd_http_start). */
 #define CONNS_PER_THREAD (MHD_EPOLL_BATCH - 4u)
 
 /* The thread model: libmicrohttpd's thread pool, each thread with its own epoll set and at

@@ -7,9 +7,9 @@ same run:
    connections — requests per second, latency percentiles, requests over wrk's 2 s timeout,
    errors — beside libmicrohttpd alone serving the same bytes from memory with isomeshd's
    thread model (build/bench/http_ceiling) and nginx serving them as a static file (sendfile;
-   one worker process, and one per core). Then isomeshd's figures as ratios of both. Also the same mesh
-   with positions only (~100 KB), and POST /v1/mesh of the request (decode + key + cache
-   hit) at 16 connections.
+   one worker process, and one per core). Then isomeshd's figures as ratios of both. Also the
+   same mesh with positions only (~100 KB), and POST /v1/mesh of the request (decode + key +
+   cache hit) at 16 connections.
 2. Slow readers: 450 connections fetching the same mesh as OBJ (~7 MB) and reading 16 KB per
    0.2 s, while one client asks for /healthz every 50 ms: its latency (p50, p99, max),
    isomeshd beside nginx (a static /healthz file, the same OBJ).
@@ -197,8 +197,8 @@ def cached_url(d, req):
 def row(name, conns, r):
     print("%-40s %6d %10.0f %9.3f %9.3f %9.3f %7d %8.0f%s" % (
         name, conns, r["rps"], r["p50"], r["p90"], r["p99"], r["over2s"], r["cpu_us"],
-        "".join("  (%d %s)" % (r[k], what) for k, what in (("bad", "non-2xx"), ("errors", "socket errors"))
-                if r[k])))
+        "".join("  (%d %s)" % (r[k], what)
+                for k, what in (("bad", "non-2xx"), ("errors", "socket errors")) if r[k])))
 
 
 def versus_nginx(results, nginx, which):
@@ -276,7 +276,8 @@ def slow_readers(port, path, probe):
         for s in socks:
             s.close()
     lat.sort()
-    pick = (lambda q: lat[min(len(lat) - 1, int(q * len(lat)))]) if lat else (lambda q: float("nan"))
+    def pick(q):
+        return lat[min(len(lat) - 1, int(q * len(lat)))] if lat else float("nan")
     return {"n": len(lat), "failed": failed, "p50": pick(0.5), "p99": pick(0.99),
             "max": lat[-1] if lat else float("nan")}
 

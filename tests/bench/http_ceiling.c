@@ -1,9 +1,9 @@
 /* http_ceiling.c — the reference bench_http.py measures isomeshd against: libmicrohttpd alone,
  * configured as isomeshd configures it (a pool of epoll threads holding at most 124
  * connections each, 256 KB of unsent bytes per socket, suspend/resume allowed, answer on the
- * handler's second call),
- * answering every GET with one file's bytes from memory. Whatever isomeshd adds (routing, cache lookup, headers, log line, metrics) shows up
- * as the difference.
+ * handler's second call), answering every GET with one file's bytes from memory. Whatever
+ * isomeshd adds (routing, cache lookup, headers, log line, metrics) shows up as the
+ * difference.
  *
  *   http_ceiling PORT FILE     serves until SIGTERM/SIGINT */
 #include <arpa/inet.h>
