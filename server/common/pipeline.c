@@ -15,6 +15,7 @@
 #include "proto/draco_encode.h"
 #include "proto/features.h"
 #include "proto/glb.h"
+#include "proto/mesh_files.h"
 #include "proto/request.h"
 #include "proto/stats.h"
 #include "proto/wire_mesh.h"
@@ -277,10 +278,11 @@ static bool encode_body(encode_job *j, ism_buf *body, char *why, size_t n)
         break;
     }
     case ISM_FORMAT_PLY:
-        ok = ism_write_ply(m, ism_buf_write, body);
+        ok = empty ? ism_write_ply(m, ism_buf_write, body)
+                   : ism_write_ply_wire(m, &j->wire, ism_buf_write, body);
         break;
     case ISM_FORMAT_OBJ:
-        ok = ism_write_obj(m, ism_buf_write, body);
+        ok = ism_write_obj_features(m, empty ? NULL : &j->c->features, ism_buf_write, body);
         break;
     case ISM_FORMAT_STL:
         ok = ism_write_stl(m, ism_buf_write, body);

@@ -122,47 +122,104 @@ static bool use_preset(ism_cli_run *run, const ism_preset *p)
     return true;
 }
 
-/* A surface from a file shaped like shared/surfaces.json. */
+/* Reports a surfaces file of the wrong shape (what was expected where) and returns 2. */
+static int shape_error(const ism_cli_run *run, const char *where, const char *expected)
+{
+    fprintf(stderr, "isomesh: %s: %s: expected %s (see examples/surfaces.json)\n",
+            run->surfaces_file, where, expected);
+    return 2;
+}
+
+/* The entry's let (an object of strings, in order) and params (an object of numbers). */
+static int surface_lets_and_params(ism_cli_run *run, json_t *s, const char *where)
+{
+    char at[160];
+    json_t *let = json_object_get(s, "let"), *params = json_object_get(s, "params"), *v;
+    const char *key;
+    if (let && !json_is_object(let)) {
+        snprintf(at, sizeof at, "%s.let", where);
+        return shape_error(run, at, "an object of named expressions (strings)");
+    }
+    if (params && !json_is_object(params)) {
+        snprintf(at, sizeof at, "%s.params", where);
+        return shape_error(run, at, "an object of numbers");
+    }
+    size_t n = 0;
+    json_object_foreach(let, key, v) {
+        snprintf(at, sizeof at, "%s.let.%.60s", where, key);
+        if (!json_is_string(v))
+            return shape_error(run, at, "a string (an expression)");
+        if (!prepend_let(run, n++, key, json_string_value(v)))
+            return shape_error(run, at, "a name of letters, digits and _ (at most 63 bytes)");
+    }
+    json_object_foreach(params, key, v) {
+        snprintf(at, sizeof at, "%s.params.%.60s", where, key);
+        if (!json_is_number(v))
+            return shape_error(run, at, "a number");
+        if (!default_param(run, key, json_number_value(v)))
+            return shape_error(run, at, "a name of letters, digits and _ (at most 63 bytes)");
+    }
+    return 0;
+}
+
+/* The entry's box: six numbers, each min below its max. */
+static int surface_box(ism_cli_run *run, json_t *s, const char *where)
+{
+    json_t *box = json_object_get(s, "box");
+    if (!box)
+        return 0;
+    char at[160];
+    snprintf(at, sizeof at, "%s.box", where);
+    bool ok = json_array_size(box) == 6;
+    for (size_t k = 0; ok && k < 6; k++)
+        ok = json_is_number(json_array_get(box, k));
+    for (size_t k = 0; ok && k < 3; k++)
+        ok = json_number_value(json_array_get(box, k)) <
+             json_number_value(json_array_get(box, k + 3));
+    if (!ok)
+        return shape_error(run, at, "six numbers xmin ymin zmin xmax ymax zmax, each min < max");
+    if (!run->box_given)
+        for (int k = 0; k < 6; k++)
+            run->options.box[k] = json_number_value(json_array_get(box, (size_t)k));
+    return 0;
+}
+
+/* A surface from a file shaped like examples/surfaces.json (and shared/surfaces.json):
+ * {"surfaces": [{"name", "expr", "params"?, "let"?, "box"?}, ...]}. */
 static int use_surfaces_file(ism_cli_run *run)
 {
     json_error_t je;
     json_t *root = json_load_file(run->surfaces_file, JSON_REJECT_DUPLICATES, &je);
+    if (!root && je.line < 1) { /* not read at all: no position to give */
+        fprintf(stderr, "isomesh: %s: cannot read the surfaces file: %s\n", run->surfaces_file,
+                je.text);
+        return 2;
+    }
     if (!root) {
-        fprintf(stderr, "isomesh: %s: line %d, col %d: %s\n", run->surfaces_file, je.line,
+        fprintf(stderr, "isomesh: %s: line %d, column %d: %s\n", run->surfaces_file, je.line,
                 je.column, je.text);
         return 2;
     }
     run->surfaces_json = root;
     json_t *list = json_object_get(root, "surfaces"), *s;
+    if (!json_is_object(root) || !json_is_array(list))
+        return shape_error(run, "$", "an object with a \"surfaces\" array");
     size_t i;
     json_array_foreach(list, i, s) {
+        char where[64];
+        snprintf(where, sizeof where, "$.surfaces[%zu]", i);
         const char *name = json_string_value(json_object_get(s, "name"));
-        if (!name || strcmp(name, run->surface) != 0)
+        if (!json_is_object(s) || !name)
+            return shape_error(run, where, "an object with a \"name\" string");
+        if (strcmp(name, run->surface) != 0)
             continue;
         run->expr = json_string_value(json_object_get(s, "expr"));
         if (!run->expr) {
-            fprintf(stderr, "isomesh: %s: surface '%s' has no \"expr\"\n", run->surfaces_file,
-                    run->surface);
-            return 2;
+            strncat(where, ".expr", sizeof where - strlen(where) - 1);
+            return shape_error(run, where, "a string (the expression of f)");
         }
-        const char *key;
-        json_t *v;
-        size_t at = 0;
-        json_object_foreach(json_object_get(s, "let"), key, v)
-            if (!json_is_string(v) || !prepend_let(run, at++, key, json_string_value(v))) {
-                fprintf(stderr, "isomesh: %s: let '%s' must be a string\n", run->surfaces_file, key);
-                return 2;
-            }
-        json_object_foreach(json_object_get(s, "params"), key, v)
-            if (!json_is_number(v) || !default_param(run, key, json_number_value(v))) {
-                fprintf(stderr, "isomesh: %s: param '%s' must be a number\n", run->surfaces_file, key);
-                return 2;
-            }
-        json_t *box = json_object_get(s, "box");
-        if (!run->box_given && json_array_size(box) == 6)
-            for (int k = 0; k < 6; k++)
-                run->options.box[k] = json_number_value(json_array_get(box, (size_t)k));
-        return 0;
+        int rc = surface_lets_and_params(run, s, where);
+        return rc ? rc : surface_box(run, s, where);
     }
     fprintf(stderr, "isomesh: %s: no surface named '%s'\n", run->surfaces_file, run->surface);
     return 2;

@@ -32,8 +32,13 @@ def read_ply(path):
     assert "format binary_little_endian 1.0" in header
     nv = int(header.split("element vertex ")[1].split()[0])
     nf = int(header.split("element face ")[1].split()[0])
-    verts = [struct.unpack_from("<6f", data, end + 24 * i) for i in range(nv)]
-    off = end + 24 * nv
+    # vertex properties: x y z nx ny nz first (floats), then maybe more (request files:
+    # curvature floats and a uchar class)
+    vprops = header.split("element vertex ")[1].split("element face")[0]
+    stride = sum({"float": 4, "uchar": 1}[w.split()[1]] for w in vprops.splitlines()
+                 if w.startswith("property "))
+    verts = [struct.unpack_from("<6f", data, end + stride * i) for i in range(nv)]
+    off = end + stride * nv
     faces = []
     for i in range(nf):
         n, a, b, c = struct.unpack_from("<Biii", data, off + 13 * i)

@@ -100,6 +100,47 @@ class PythonClientTest(unittest.TestCase):
             self.c.sweep(dict(SPHERE, depth={"min": 3, "max": 40}), {"r": [0.5]})
         self.assertEqual(e.exception.status, 422)
 
+    def test_ply_attributes_and_obj_features(self):
+        # a cylinder of radius r cut by the box (off the octree lattice): two boundary circles
+        r = math.sqrt(0.5)
+        cyl = {"expr": "x^2 + y^2 - 0.5", "box": [-1.0037, -0.9963, -1.0013, 0.9971, 1.0029, 0.9987],
+               "depth": {"min": 3, "max": 6}}
+        m = self.c.mesh(cyl, format="ply")
+        ply = m.load("ply")
+        self.assertEqual(sorted(ply.props), ["class", "gauss_curvature", "mean_curvature",
+                                             "nx", "ny", "nz"])
+        h = sorted(abs(v) for v in ply.props["mean_curvature"])
+        self.assertAlmostEqual(h[len(h) // 2], 1 / (2 * r), delta=0.05 / (2 * r))
+        k = sorted(abs(v) for v in ply.props["gauss_curvature"])
+        self.assertLess(k[len(k) // 2], 0.05)
+        obj = m.load("obj")
+        self.assertEqual(len(obj.vertices), len(ply.vertices))
+        self.assertEqual(len(obj.lines), 2)
+        on_lines = set()
+        for line in obj.lines:
+            self.assertEqual(line[0], line[-1])  # closed circles
+            zs = [obj.vertices[i][2] for i in line]
+            self.assertAlmostEqual(min(zs), max(zs), delta=1e-6)
+            for i in line:
+                x, y, _ = obj.vertices[i]
+                self.assertAlmostEqual(math.hypot(x, y), r, delta=2e-3)
+            on_lines.update(line)
+        boundary = {i for i, c in enumerate(ply.props["class"]) if c == 1}
+        self.assertEqual(on_lines, boundary)
+        # two planes crossing along the z axis: one non-manifold curve, on x = y = 0
+        planes = self.c.mesh({"expr": "x*y", "box": cyl["box"], "depth": {"min": 3, "max": 5}},
+                             format="obj")
+        obj = planes.load("obj")
+        text = planes.fetch().decode()
+        self.assertIn("g nonmanifold_curves", text)
+        curve = obj.lines[0]
+        for i in curve:
+            x, y, _ = obj.vertices[i]
+            self.assertLess(math.hypot(x, y), 1e-6)
+        zs = sorted(obj.vertices[i][2] for i in curve)
+        self.assertAlmostEqual(zs[0], cyl["box"][2], delta=1e-6)
+        self.assertAlmostEqual(zs[-1], cyl["box"][5], delta=1e-6)
+
 
 if __name__ == "__main__":
     unittest.main()

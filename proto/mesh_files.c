@@ -1,0 +1,88 @@
+/* mesh_files.c — the service's PLY (attributes as extra vertex properties) and OBJ (features
+ * as `l` lines) of mesh_files.h, streamed through core's sink. */
+#include "proto/mesh_files.h"
+#include "core/mesh/write_sink.h"
+
+#include <stdlib.h>
+
+static void ply_header(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w)
+{
+    ism_sink_printf(s, "ply\nformat binary_little_endian 1.0\ncomment isomesh\n"
+                       "element vertex %zu\n"
+                       "property float x\nproperty float y\nproperty float z\n", m->nverts);
+    if (w->normal)
+        ism_sink_printf(s, "property float nx\nproperty float ny\nproperty float nz\n");
+    if (w->mean_curvature)
+        ism_sink_printf(s, "property float mean_curvature\n");
+    if (w->gauss_curvature)
+        ism_sink_printf(s, "property float gauss_curvature\n");
+    if (w->vertex_class)
+        ism_sink_printf(s, "property uchar class\n");
+    ism_sink_printf(s, "element face %zu\nproperty list uchar int vertex_indices\nend_header\n",
+                    m->ntris);
+}
+
+bool ism_write_ply_wire(const ism_mesh *m, const ism_wire_mesh *w, ism_write_fn write,
+                        void *ctx)
+{
+    if (m->nverts > INT32_MAX || w->nverts != m->nverts)
+        return false; /* PLY's int indices could not address every vertex */
+    ism_sink *s = malloc(sizeof *s);
+    if (!s)
+        return false;
+    ism_sink_init(s, write, ctx);
+    ply_header(s, m, w);
+    for (size_t i = 0; i < m->nverts; i++) {
+        for (int k = 0; k < 3; k++)
+            ism_sink_f32le(s, (float)m->pos[3 * i + k]);
+        for (int k = 0; w->normal && k < 3; k++)
+            ism_sink_f32le(s, w->normal[3 * i + k]);
+        if (w->mean_curvature)
+            ism_sink_f32le(s, w->mean_curvature[i]);
+        if (w->gauss_curvature)
+            ism_sink_f32le(s, w->gauss_curvature[i]);
+        if (w->vertex_class)
+            ism_sink_u8(s, w->vertex_class[i]);
+    }
+    for (size_t t = 0; t < m->ntris; t++) {
+        ism_sink_u8(s, 3);
+        for (int k = 0; k < 3; k++)
+            ism_sink_u32le(s, m->tri[3 * t + k]);
+    }
+    bool ok = ism_sink_finish(s);
+    free(s);
+    return ok;
+}
+
+static void obj_lines(ism_sink *s, const char *group, const ism_polylines *p)
+{
+    if (!p->n)
+        return;
+    ism_sink_printf(s, "g %s\n", group);
+    for (size_t c = 0; c < p->n; c++) {
+        if (p->start[c + 1] - p->start[c] < 2)
+            continue;
+        ism_sink_printf(s, "l");
+        for (uint32_t j = p->start[c]; j < p->start[c + 1]; j++)
+            ism_sink_printf(s, " %u", p->verts[j] + 1);
+        ism_sink_printf(s, "\n");
+    }
+}
+
+bool ism_write_obj_features(const ism_mesh *m, const ism_features *f, ism_write_fn write,
+                            void *ctx)
+{
+    if (!ism_write_obj(m, write, ctx))
+        return false;
+    if (!f)
+        return true;
+    ism_sink *s = malloc(sizeof *s);
+    if (!s)
+        return false;
+    ism_sink_init(s, write, ctx);
+    obj_lines(s, "nonmanifold_curves", &f->curves);
+    obj_lines(s, "boundaries", &f->boundaries);
+    bool ok = ism_sink_finish(s);
+    free(s);
+    return ok;
+}

@@ -1,0 +1,25 @@
+/* mesh_files.h — the PLY and OBJ the service sends: like core's writers (core/mesh/
+ * write_mesh.h), plus what the wire carries. PLY: binary little endian, per vertex float x y z,
+ * then the attributes the request asked for — float nx ny nz (unit everywhere), float
+ * mean_curvature, float gauss_curvature (clamped as in Draco's), uchar class (features.h's
+ * classes) — and faces as uchar 3 + int indices. OBJ: core's v / vn / f lines, then the
+ * features as `l` polylines over the same 1-based vertices: a group `g nonmanifold_curves`
+ * and a group `g boundaries` (closed ones repeat their first vertex). */
+#ifndef ISM_MESH_FILES_H
+#define ISM_MESH_FILES_H
+
+#include <stdbool.h>
+
+#include "core/mesh/write_mesh.h"
+#include "proto/features.h"
+#include "proto/wire_mesh.h"
+
+/* PLY of m with w's attributes (those not NULL). False on a short write. */
+bool ism_write_ply_wire(const ism_mesh *m, const ism_wire_mesh *w, ism_write_fn write,
+                        void *ctx);
+
+/* OBJ of m with f's curves and boundaries as `l` lines (f may be NULL). */
+bool ism_write_obj_features(const ism_mesh *m, const ism_features *f, ism_write_fn write,
+                            void *ctx);
+
+#endif
