@@ -220,7 +220,7 @@ void ism_locus_counts_json(ism_jw *w, const ism_locus *l)
     ism_jw_uint(w, l ? l->nsheets : 0);
 }
 
-static void write_locus(ism_jw *w, const ism_features *f)
+static void write_locus(ism_jw *w, const ism_mesh *m, const ism_features *f)
 {
     const ism_locus *l = f->locus;
     ism_jw_key(w, "singular_points");
@@ -234,6 +234,7 @@ static void write_locus(ism_jw *w, const ism_features *f)
     ism_jw_array(w);
     for (size_t i = 0; l && i < l->ncurves; i++)
         write_singular_curve(w, &l->curves[i], l);
+    ism_features_cut_curves_json(w, m, f->arrangement, f->cut_fns);
     ism_jw_array_end(w);
     ism_jw_key(w, "double_sheets");
     ism_jw_array(w);
@@ -284,7 +285,7 @@ char *ism_features_json(const ism_mesh *m, const ism_features *f, size_t *len)
     for (size_t i = 0; i < sizeof class_names / sizeof class_names[0]; i++)
         ism_jw_string(&w, class_names[i]);
     ism_jw_array_end(&w);
-    write_locus(&w, f);
+    write_locus(&w, m, f);
     ism_jw_key(&w, "nonmanifold_edges");
     const ism_locus_check *chk = f->check;
     bool check_fits = chk && chk->curve_on && chk->point_on;
@@ -293,6 +294,10 @@ char *ism_features_json(const ism_mesh *m, const ism_features *f, size_t *len)
     write_mesh_points(&w, m, f);
     ism_jw_key(&w, "boundaries");
     size_t boundary_edges = write_lines(&w, m, &f->boundaries, NULL);
+    if (f->arrangement) {
+        ism_jw_key(&w, "arrangement");
+        ism_features_arrangement_json(&w, m, f->arrangement);
+    }
     bool incomplete = f->locus && f->locus->incomplete;
     ism_jw_key(&w, "incomplete");
     ism_jw_bool(&w, incomplete);

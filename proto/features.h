@@ -14,6 +14,10 @@
  *                         "residual_f", "residual_grad", "cones"}],
  *    "curves": [{"kind": "double"|"whisker", "closed", "xyz": [x0, y0, z0, ...],
  *                "ends": [{"type", "xyz", "point"}]}],        (ends: [] when closed)
+ *              then the requested curves: {"kind": "section"|"level"|"intersection"|
+ *                "silhouette", "source", "index", "closed", "length", "edges", "arcs",
+ *                "ends": [{"type": "box", "xyz", "vertex"}]}
+ *    "arrangement": {...} (only when curves were requested; features_curves.c),
  *    "double_sheets": [{"first_triangle", "triangles", "area"}],
  *    "nonmanifold_edges": [{"closed", "on_locus", "xyz"}],   chains of mesh edges of > 2 triangles
  *    "nonmanifold_points": [{"xyz", "class", "kind", "on_locus"}],
@@ -34,6 +38,7 @@
 #include "core/analysis/analysis.h"
 #include "core/singular/check.h"
 #include "core/singular/locus.h"
+#include "core/curves/arrangement.h"
 
 /* Polylines over vertex indices: line i is verts[start[i] .. start[i+1]); closed when its
  * first and last vertex are the same. */
@@ -60,6 +65,9 @@ typedef struct ism_features {
     uint8_t *point_class;      /* vertex class per point */
     const ism_locus *locus;    /* the singular locus found from f (not owned; may be NULL) */
     const ism_locus_check *check; /* the mesh checked against it (not owned; may be NULL) */
+    const ism_arrangement *arrangement; /* requested curves cut into the mesh (not owned;
+                                           NULL when none were asked) */
+    const ism_cut_fn *cut_fns;  /* the functions arrangement's curves come from */
 } ism_features;
 
 /* Collects the features of m from its analysis a (a may be NULL: curves and points then
@@ -76,6 +84,14 @@ char *ism_features_json(const ism_mesh *m, const ism_features *f, size_t *len);
  * "uncertified", "by_type" {node, isolated, ...}, "curves", "double_curves",
  * "whisker_curves", "double_sheets" (l may be NULL: all 0). Shared by features and stats. */
 struct ism_jw;
+/* features_curves.c: the requested curves as items of the open "curves" array (kinds
+ * section, level, intersection, silhouette; "arcs" polylines in full precision, "ends"), and
+ * the "arrangement" object (vertices, edges, faces with triangle ranges of m's order, area,
+ * euler, boundary cycles; components; euler {mesh, arrangement, ok}). */
+void ism_features_cut_curves_json(struct ism_jw *w, const ism_mesh *m,
+                                  const ism_arrangement *a, const ism_cut_fn *fns);
+void ism_features_arrangement_json(struct ism_jw *w, const ism_mesh *m,
+                                   const ism_arrangement *a);
 void ism_locus_counts_json(struct ism_jw *w, const ism_locus *l);
 
 /* Name of a point kind ("cones", "curve_end", "junction"). */

@@ -3,6 +3,7 @@
  * unknown field, a wrong type or a value out of range is reported with its JSON path.
  * Defaults come from the polygoniser (ism_poly_options_default) and from the preset. */
 #include "proto/request.h"
+#include "proto/request_internal.h"
 #include "proto/presets.h"
 #include "proto/json_writer.h"
 
@@ -570,7 +571,7 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
                         ism_req_error *err)
 {
     static const char *const known[] = {"expr", "preset", "params", "let", "box", "depth",
-                                        "max_error", "tolerances", "output", NULL};
+                                        "max_error", "tolerances", "output", "curves", NULL};
     if (!json_is_object(root))
         return bad(err, "$", "a request is a JSON object, got %s", type_name(root));
     if (!check_fields(root, "$", known, err))
@@ -634,6 +635,8 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
         return false;
     if ((v = json_object_get(root, "output")) && !decode_output(v, req, err))
         return false;
+    if ((v = json_object_get(root, "curves")) && !ism_request_decode_curves(v, req, err))
+        return false;
     return true;
 }
 
@@ -682,5 +685,32 @@ void ism_request_free(ism_request *req)
     free(req->let_paths);
     free(req->preset);
     free(req->expr);
+    ism_request_free_curves(req);
     memset(req, 0, sizeof *req);
+}
+
+/* ---------------------------------------------------------------------------------------
+ * The readers for the other sections' decoders (request_internal.h) */
+
+bool ism_rq_check_fields(const json_t *obj, const char *path, const char *const *known,
+                         ism_req_error *err)
+{
+    return check_fields(obj, path, known, err);
+}
+
+bool ism_rq_read_number(const json_t *v, const char *path, double *out, ism_req_error *err)
+{
+    return read_number(v, path, out, err);
+}
+
+const char *ism_rq_type_name(const json_t *v) { return type_name(v); }
+
+void ism_rq_path_key(char out[160], const char *parent, const char *key)
+{
+    path_key(out, parent, key);
+}
+
+void ism_rq_path_index(char out[160], const char *parent, size_t i)
+{
+    path_index(out, parent, i);
 }

@@ -31,6 +31,8 @@
 #define ISM_REQ_MAX_ROOT_ITERS  60           /* tolerances.double_root_iters */
 #define ISM_REQ_MIN_ERROR_REL   1e-9         /* max_error >= this * the box diagonal: finer
                                                 is below what doubles resolve there */
+#define ISM_REQ_MAX_CURVES      256          /* curves: entries, and offsets + values in all
+                                                (each one cut of the mesh) */
 
 enum ism_format { ISM_FORMAT_DRC, ISM_FORMAT_GLB, ISM_FORMAT_PLY, ISM_FORMAT_OBJ,
                   ISM_FORMAT_STL, ISM_FORMAT_COUNT };
@@ -49,6 +51,19 @@ enum ism_attr {
 #define ISM_REQ_DEFAULT_POSITION_BITS 14
 #define ISM_REQ_DEFAULT_NORMAL_BITS 10
 #define ISM_REQ_DEFAULT_CURVATURE_BITS 14 /* 0 = float32 as computed (~2 B/triangle each) */
+
+/* One entry of "curves": a stack of planes n·p = d, levels g = c, the intersection with
+ * g = 0, or the silhouette seen along a direction. */
+enum ism_req_curve_kind { ISM_REQ_CURVE_PLANE, ISM_REQ_CURVE_LEVELS, ISM_REQ_CURVE_SURFACE,
+                          ISM_REQ_CURVE_SILHOUETTE, ISM_REQ_CURVE_KIND_COUNT };
+
+typedef struct ism_req_curve {
+    int kind;                  /* enum ism_req_curve_kind */
+    double v[3];               /* plane normal or silhouette direction */
+    double *values;            /* plane offsets or level values (owned) */
+    size_t nvalues;
+    char *expr;                /* g for levels and surface (owned), else NULL */
+} ism_req_curve;
 
 typedef struct ism_request {
     char *preset;              /* preset name, or NULL when the request wrote an expression */
@@ -73,6 +88,8 @@ typedef struct ism_request {
     int normal_bits;           /* Draco normal quantisation (4..16) */
     int curvature_bits;        /* 0 (float32) or 8..24 */
     unsigned attributes;       /* enum ism_attr bits */
+    ism_req_curve *curves;     /* the "curves" list (empty when not given) */
+    size_t ncurves;
 } ism_request;
 
 /* What the operator allows. */
@@ -109,6 +126,11 @@ const char *ism_format_mime_of(const char *name);
 /* Compiles the request's expression (with its params and lets). On failure fills err (400
  * with the expression's path and the parser's line and column; 422 for a size limit). */
 ism_tape *ism_request_compile(const ism_request *req, ism_req_error *err);
+
+/* Compiles src (written at JSON path `path`) with the request's params and lets; errors as
+ * ism_request_compile's, naming path. */
+ism_tape *ism_request_compile_source(const ism_request *req, const char *src, const char *path,
+                                     ism_req_error *err);
 
 /* The polygoniser's options for this request (budget fields left at their defaults). */
 void ism_request_poly_options(const ism_request *req, ism_poly_options *o);

@@ -22,8 +22,9 @@ static long param_named_in(const ism_request *req, const char *message)
     return -1;
 }
 
-/* Where in the request the failing source was written. */
-static void error_path(const ism_request *req, const ism_error *e, char *path, size_t n)
+/* Where in the request the failing source was written (fallback: the source's own path). */
+static void error_path(const ism_request *req, const ism_error *e, const char *fallback,
+                       char *path, size_t n)
 {
     if (e->where[0]) {
         for (size_t i = 0; i < req->nlets; i++)
@@ -37,7 +38,7 @@ static void error_path(const ism_request *req, const ism_error *e, char *path, s
         snprintf(path, n, "$.params.%s", req->params[p].name);
         return;
     }
-    snprintf(path, n, "%s", req->preset ? "$.preset" : "$.expr");
+    snprintf(path, n, "%s", fallback);
 }
 
 /* The parser says "(limit ...)" for every bound on size, nesting, exponent and counts: those
@@ -49,18 +50,24 @@ static bool is_limit(const ism_error *e)
 
 ism_tape *ism_request_compile(const ism_request *req, ism_req_error *err)
 {
+    return ism_request_compile_source(req, req->expr, req->preset ? "$.preset" : "$.expr", err);
+}
+
+ism_tape *ism_request_compile_source(const ism_request *req, const char *src, const char *at,
+                                     ism_req_error *err)
+{
     ism_expr_limits lim;
     ism_expr_limits_default(&lim);
     if (lim.max_source > ISM_REQ_MAX_SOURCE)
         lim.max_source = ISM_REQ_MAX_SOURCE;
     ism_error e;
     memset(&e, 0, sizeof e);
-    ism_tape *t = ism_tape_compile(req->expr, req->params, req->nparams, req->lets, req->nlets,
+    ism_tape *t = ism_tape_compile(src, req->params, req->nparams, req->lets, req->nlets,
                                    &lim, &e);
     if (t)
         return t;
     char path[160];
-    error_path(req, &e, path, sizeof path);
+    error_path(req, &e, at, path, sizeof path);
     if (strstr(e.message, "out of memory")) {
         ism_req_error_set(err, 500, "no_memory", path, "%s", e.message);
     } else if (e.line == 0 && e.column == 0) {

@@ -6,6 +6,7 @@
  * compiled tape's canonical text, so spacing does not matter and a preset equals its
  * written-out expression. */
 #include "proto/request.h"
+#include "proto/request_internal.h"
 #include "proto/draco_encode.h"
 #include "proto/json_writer.h"
 #include "core/version.h"
@@ -127,6 +128,7 @@ char *ism_request_canonical(const ism_request *req, size_t *len)
     write_tolerances(&w, req);
     ism_jw_key(&w, "output");
     write_output(&w, req, false);
+    ism_request_write_curves(&w, req, false);
     ism_jw_object_end(&w);
     return ism_jw_take(&w, len);
 }
@@ -162,6 +164,7 @@ static char *key_material(const ism_request *req, const ism_tape *tape, bool wit
     write_max_error(&w, req);
     ism_jw_key(&w, "tolerances");
     write_tolerances(&w, req);
+    ism_request_write_curves(&w, req, true);
     if (with_encoding) {
         ism_jw_key(&w, "encoding");
         write_output(&w, req, true);

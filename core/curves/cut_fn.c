@@ -42,9 +42,25 @@ void ism_cut_eval_free(ism_cut_eval *ev)
     memset(ev, 0, sizeof *ev);
 }
 
+/* The silhouette function ∇f·d, with gradient H d. */
+static double silhouette_g(ism_cut_eval *ev, const double d[3], const double p[3],
+                           double grad[3])
+{
+    double g[3], h[6];
+    ism_eval_hessian(ev->f, ev->fws, p[0], p[1], p[2], g, h);
+    if (grad) {
+        grad[0] = h[0] * d[0] + h[1] * d[1] + h[2] * d[2];
+        grad[1] = h[1] * d[0] + h[3] * d[1] + h[4] * d[2];
+        grad[2] = h[2] * d[0] + h[4] * d[1] + h[5] * d[2];
+    }
+    return g[0] * d[0] + g[1] * d[1] + g[2] * d[2];
+}
+
 double ism_cut_g(ism_cut_eval *ev, size_t k, const double p[3], double grad[3])
 {
     const ism_cut_fn *fn = &ev->fns[k];
+    if (fn->kind == ISM_CUT_SILHOUETTE)
+        return silhouette_g(ev, fn->n, p, grad);
     double v = fn->n[0] * p[0] + fn->n[1] * p[1] + fn->n[2] * p[2] - fn->c, g[3] = {0, 0, 0};
     if (fn->tape)
         v += grad ? ism_eval_gradient(fn->tape, ev->gws[k], p[0], p[1], p[2], g)

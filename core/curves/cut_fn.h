@@ -8,15 +8,16 @@
 #include <stddef.h>
 #include "core/eval/eval.h"
 
-enum ism_curve_kind { ISM_CURVE_SECTION, ISM_CURVE_LEVEL, ISM_CURVE_INTERSECTION,
-                      ISM_CURVE_SILHOUETTE, ISM_CURVE_KIND_COUNT };
+enum ism_cut_kind { ISM_CUT_SECTION, ISM_CUT_LEVEL, ISM_CUT_INTERSECTION,
+                    ISM_CUT_SILHOUETTE, ISM_CUT_KIND_COUNT };
 
-/* g(p) = tape(p) + n·p − c (tape NULL: the linear part alone). */
+/* g(p) = tape(p) + n·p − c (tape NULL: the linear part alone); for a silhouette
+ * g(p) = ∇f(p)·n (tape and c unused). */
 typedef struct ism_cut_fn {
     const ism_tape *tape;
     double n[3];
     double c;
-    int kind;            /* enum ism_curve_kind */
+    int kind;            /* enum ism_cut_kind */
     int source, index;   /* the request's curve entry and its offset / value number */
 } ism_cut_fn;
 

@@ -7,11 +7,13 @@
 #include "core/util/clock.h"
 
 #include "core/analysis/analysis.h"
+#include "core/curves/curves.h"
 #include "core/mesh/write_mesh.h"
 #include "core/octree/polygonise.h"
 #include "core/singular/check.h"
 #include "core/singular/surface.h"
 #include "proto/computed.h"
+#include "proto/curve_fns.h"
 #include "proto/draco_encode.h"
 #include "proto/features.h"
 #include "proto/glb.h"
@@ -133,10 +135,14 @@ static bool prepare(const char *json, size_t len, const char *format_override,
     snprintf(r->format, sizeof r->format, "%s", ism_format_name(req->format));
     double t1 = ism_now_ms();
     *tape = ism_request_compile(req, &e);
-    if (!*tape) {
+    ism_curve_fns cf; /* the curves' expressions compile (400 naming $.curves[i].expr) */
+    if (!*tape || !ism_curve_fns_build(req, &cf, &e)) {
+        ism_tape_free(*tape);
+        *tape = NULL;
         ism_request_free(req);
         return fail(r, &e);
     }
+    ism_curve_fns_free(&cf);
     size_t n;
     char *canonical = ism_request_canonical(req, &n);
     if (!canonical || !ism_request_key(req, *tape, r->key) ||
@@ -360,7 +366,26 @@ typedef struct scratch {
     ism_locus_check check;
     ism_poly_stats ps;
     ism_conform_stats cs;
+    ism_curve_fns cf;       /* requested curves, cut into the mesh */
+    ism_cut cut;
+    ism_arrangement arr;
+    bool have_curves;
 } scratch;
+
+/* Cuts the mesh along the requested curves and builds their arrangement into s. */
+static bool cut_curves(const ism_request *req, const ism_tape *tape, ism_pipeline_result *r,
+                       ism_computed *c, scratch *s)
+{
+    ism_req_error e;
+    if (!ism_curve_fns_build(req, &s->cf, &e))
+        return fail(r, &e);
+    ism_error err;
+    memset(&err, 0, sizeof err);
+    if (!ism_curves_cut(tape, s->cf.fns, s->cf.n, req->box, &c->mesh, &s->cut, &s->arr, &err))
+        return fail_with(r, 500, "no_memory", "%s", err.message);
+    s->have_curves = true;
+    return true;
+}
 
 /* Polygonises and analyses req's surface into c->mesh (locus into c->locus). */
 static bool polygonise_and_analyse(const ism_request *req, const ism_tape *tape,
@@ -389,6 +414,8 @@ static bool polygonise_and_analyse(const ism_request *req, const ism_tape *tape,
     if (cancelled(hooks))
         return fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
     r->polygonised = true;
+    if (req->ncurves && !cut_curves(req, tape, r, c, s))
+        return false;
 
     double t = ism_now_ms();
     ism_analysis_options ao;
@@ -429,8 +456,12 @@ static bool gather(const ism_request *req, ism_pipeline_result *r, ism_computed 
         return fail_with(r, 500, "no_memory", "%s", "out of memory collecting the features");
     c->features.locus = &c->locus;
     c->features.check = c->empty ? NULL : &s->check;
+    c->features.arrangement = s->have_curves ? &s->arr : NULL;
+    c->features.cut_fns = s->cf.fns;
     c->features_json = ism_features_json(fm, &c->features, &c->features_len);
     c->features.check = NULL; /* the check does not outlive the computation */
+    c->features.arrangement = NULL;
+    c->features.cut_fns = NULL;
     if (!c->features_json)
         return fail_with(r, 500, "no_memory", "%s", "out of memory writing the features");
     c->timings_ms[ISM_TIME_FEATURES] = ism_now_ms() - t;
@@ -456,6 +487,9 @@ static bool compute(const ism_request *req, const ism_tape *tape, const ism_pipe
     memset(&s, 0, sizeof s);
     bool ok = polygonise_and_analyse(req, tape, lim, hooks, r, c, &s) && gather(req, r, c, &s);
     ism_locus_check_free(&s.check);
+    ism_arrangement_free(&s.arr);
+    ism_cut_free(&s.cut);
+    ism_curve_fns_free(&s.cf);
     if (s.have_analysis)
         ism_analysis_free(&s.an);
     return ok;

@@ -86,7 +86,7 @@ static void run_free(cut_run *r)
 
 static ism_cut_fn plane(double a, double b, double c, double d)
 {
-    return (ism_cut_fn){.n = {a, b, c}, .c = d, .kind = ISM_CURVE_SECTION};
+    return (ism_cut_fn){.n = {a, b, c}, .c = d, .kind = ISM_CUT_SECTION};
 }
 
 /* Midpoints of curve edges: on the plane of their function (the cut edge lies in it up to

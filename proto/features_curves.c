@@ -1,0 +1,162 @@
+/* features_curves.c — the requested curves and their arrangement in the features JSON:
+ * curves of kinds section / level / intersection / silhouette (each its arcs as polylines in
+ * full double precision, with its ends), and the "arrangement" object (vertices, edges,
+ * faces with their triangle ranges, areas and Euler characteristics, and the Euler check). */
+#include "proto/features.h"
+#include "proto/json_writer.h"
+
+static const char *const kind_names[ISM_CUT_KIND_COUNT] = {"section", "level",
+                                                             "intersection", "silhouette"};
+static const char *const vertex_types[ISM_ARR_VERTEX_TYPE_COUNT] = {"crossing", "branch",
+                                                                    "end", "loop"};
+
+static void write_pos(ism_jw *w, const ism_mesh *m, uint32_t v)
+{
+    for (int k = 0; k < 3; k++)
+        ism_jw_number(w, m->pos[3 * (size_t)v + k]);
+}
+
+static void write_vertex_xyz(ism_jw *w, const ism_mesh *m, uint32_t v)
+{
+    ism_jw_key(w, "xyz");
+    ism_jw_array(w);
+    write_pos(w, m, v);
+    ism_jw_array_end(w);
+}
+
+static void write_arc(ism_jw *w, const ism_mesh *m, const ism_arrangement *a,
+                      const ism_arr_edge *e)
+{
+    ism_jw_array(w);
+    for (size_t i = e->first; i < e->first + e->count; i++)
+        write_pos(w, m, a->chain[i]);
+    ism_jw_array_end(w);
+}
+
+/* The curve's end vertices (END type) as {"type": "box", "xyz", "vertex"}. */
+static void write_ends(ism_jw *w, const ism_mesh *m, const ism_arrangement *a, size_t c)
+{
+    ism_jw_key(w, "ends");
+    ism_jw_array(w);
+    for (size_t i = 0; i < a->nedges; i++) {
+        const ism_arr_edge *e = &a->edges[i];
+        for (int k = 0; e->curve == c && k < 2; k++) {
+            uint32_t v = k ? e->to : e->from;
+            if (a->vertices[v].type != ISM_ARR_END)
+                continue;
+            ism_jw_object(w);
+            ism_jw_key(w, "type");
+            ism_jw_string(w, "box");
+            write_vertex_xyz(w, m, a->vertices[v].v);
+            ism_jw_key(w, "vertex");
+            ism_jw_uint(w, v);
+            ism_jw_object_end(w);
+        }
+    }
+    ism_jw_array_end(w);
+}
+
+void ism_features_cut_curves_json(ism_jw *w, const ism_mesh *m, const ism_arrangement *a,
+                                  const ism_cut_fn *fns)
+{
+    for (size_t c = 0; a && c < a->ncurves; c++) {
+        const ism_arr_curve *cv = &a->curves[c];
+        const ism_cut_fn *fn = &fns[cv->fn];
+        ism_jw_object(w);
+        ism_jw_key(w, "kind");
+        ism_jw_string(w, kind_names[fn->kind]);
+        ism_jw_key(w, "source");
+        ism_jw_int(w, fn->source);
+        ism_jw_key(w, "index");
+        ism_jw_int(w, fn->index);
+        ism_jw_key(w, "closed");
+        ism_jw_bool(w, cv->closed);
+        ism_jw_key(w, "length");
+        ism_jw_number(w, cv->length);
+        ism_jw_key(w, "edges");
+        ism_jw_array(w);
+        for (size_t i = 0; i < a->nedges; i++)
+            if (a->edges[i].curve == c)
+                ism_jw_uint(w, i);
+        ism_jw_array_end(w);
+        ism_jw_key(w, "arcs");
+        ism_jw_array(w);
+        for (size_t i = 0; i < a->nedges; i++)
+            if (a->edges[i].curve == c)
+                write_arc(w, m, a, &a->edges[i]);
+        ism_jw_array_end(w);
+        write_ends(w, m, a, c);
+        ism_jw_object_end(w);
+    }
+}
+
+static void write_faces(ism_jw *w, const ism_arrangement *a)
+{
+    ism_jw_key(w, "faces");
+    ism_jw_array(w);
+    for (size_t f = 0; f < a->nfaces; f++) {
+        const ism_arr_face *fc = &a->faces[f];
+        ism_jw_object(w);
+        ism_jw_key(w, "id");
+        ism_jw_uint(w, f);
+        ism_jw_key(w, "first_triangle");
+        ism_jw_uint(w, fc->first);
+        ism_jw_key(w, "triangles");
+        ism_jw_uint(w, fc->ntris);
+        ism_jw_key(w, "area");
+        ism_jw_number(w, fc->area);
+        ism_jw_key(w, "euler");
+        ism_jw_int(w, fc->euler);
+        ism_jw_key(w, "boundary");
+        ism_jw_uint(w, fc->boundary);
+        ism_jw_key(w, "component");
+        ism_jw_uint(w, fc->component);
+        ism_jw_object_end(w);
+    }
+    ism_jw_array_end(w);
+}
+
+void ism_features_arrangement_json(ism_jw *w, const ism_mesh *m, const ism_arrangement *a)
+{
+    ism_jw_object(w);
+    ism_jw_key(w, "vertices");
+    ism_jw_array(w);
+    for (size_t i = 0; i < a->nvertices; i++) {
+        ism_jw_object(w);
+        write_vertex_xyz(w, m, a->vertices[i].v);
+        ism_jw_key(w, "degree");
+        ism_jw_int(w, a->vertices[i].degree);
+        ism_jw_key(w, "type");
+        ism_jw_string(w, vertex_types[a->vertices[i].type]);
+        ism_jw_object_end(w);
+    }
+    ism_jw_array_end(w);
+    ism_jw_key(w, "edges");
+    ism_jw_array(w);
+    for (size_t i = 0; i < a->nedges; i++) {
+        ism_jw_object(w);
+        ism_jw_key(w, "from");
+        ism_jw_uint(w, a->edges[i].from);
+        ism_jw_key(w, "to");
+        ism_jw_uint(w, a->edges[i].to);
+        ism_jw_key(w, "curve");
+        ism_jw_uint(w, a->edges[i].curve);
+        ism_jw_key(w, "length");
+        ism_jw_number(w, a->edges[i].length);
+        ism_jw_object_end(w);
+    }
+    ism_jw_array_end(w);
+    write_faces(w, a);
+    ism_jw_key(w, "components");
+    ism_jw_uint(w, a->ncomponents);
+    ism_jw_key(w, "euler");
+    ism_jw_object(w);
+    ism_jw_key(w, "mesh");
+    ism_jw_int(w, a->euler_mesh);
+    ism_jw_key(w, "arrangement");
+    ism_jw_int(w, a->euler_arr);
+    ism_jw_key(w, "ok");
+    ism_jw_bool(w, a->euler_ok);
+    ism_jw_object_end(w);
+    ism_jw_object_end(w);
+}
