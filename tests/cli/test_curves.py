@@ -1,0 +1,91 @@
+"""test_curves.py — requested curves through the service pipeline (`isomesh REQUEST.json -o FILE
+--features F`): the unit sphere cut by the planes x = 0, y = 0 and the level z = 0 gives the
+arrangement 6 / 12 / 8 with faces of area pi/2 (0.5%) and every arc point within 1e-10 of
+the box diagonal of the sphere and of its plane (checked here from the closed forms), in a
+box shifted off the lattice by 0.37 of a finest cell; a curve that misses the surface gives
+no curve and one face, not an error; a bad curve is refused with its JSON path."""
+import json
+import math
+import os
+import shutil
+import subprocess
+import tempfile
+import unittest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
+ISOMESH = os.path.join(BUILD, "isomesh")
+
+DEPTH = 7
+SIDE = 2.6
+SHIFT = 0.37 * SIDE / 2 ** DEPTH
+
+
+class CurvesTest(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.mkdtemp(prefix="isomesh-curves-")
+
+    def tearDown(self):
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+    def run_request(self, request):
+        req = os.path.join(self.dir, "request.json")
+        with open(req, "w") as f:
+            json.dump(request, f)
+        out, feat = os.path.join(self.dir, "out.ply"), os.path.join(self.dir, "f.json")
+        proc = subprocess.run([ISOMESH, req, "-o", out, "--features", feat],
+                              capture_output=True, text=True, timeout=120)
+        if proc.returncode != 0:
+            return None, proc
+        with open(feat) as f:
+            return json.load(f), proc
+
+    def sphere(self, shift, curves):
+        lo, hi = -SIDE / 2 + shift, SIDE / 2 + shift
+        return {"expr": "x^2 + y^2 + z^2 - 1", "box": [lo, lo, lo, hi, hi, hi],
+                "depth": {"max": DEPTH + 1}, "max_error": 1e-3, "curves": curves}
+
+    def test_sphere_octants_on_and_off_the_lattice(self):
+        planes = [{"kind": "plane", "normal": [1, 0, 0], "offsets": [0]},
+                  {"kind": "plane", "normal": [0, 1, 0], "offsets": [0]},
+                  {"kind": "levels", "expr": "z", "values": [0]}]
+        for shift in (0.0, SHIFT):
+            f, proc = self.run_request(self.sphere(shift, planes))
+            self.assertIsNotNone(f, proc.stderr)
+            a = f["arrangement"]
+            self.assertEqual((len(a["vertices"]), len(a["edges"]), len(a["faces"])), (6, 12, 8))
+            self.assertTrue(a["euler"]["ok"])
+            self.assertEqual(a["euler"]["mesh"], 2)
+            for face in a["faces"]:
+                self.assertAlmostEqual(face["area"], math.pi / 2, delta=0.005 * math.pi / 2)
+                self.assertEqual(face["euler"], 1)
+            cut = [c for c in f["curves"] if c["kind"] in ("section", "level")]
+            self.assertEqual(len(cut), 3)
+            tol = 1e-10 * math.sqrt(3) * SIDE
+            for c in cut:
+                self.assertTrue(c["closed"])
+                axis = c["source"]  # x, y, z in the order of the request
+                for arc in c["arcs"]:
+                    for i in range(0, len(arc), 3):
+                        p = arc[i:i + 3]
+                        r = math.sqrt(sum(v * v for v in p))
+                        self.assertLess(abs(r - 1), tol)
+                        self.assertLess(abs(p[axis]), tol)
+
+    def test_a_curve_missing_the_surface_is_no_curve(self):
+        f, proc = self.run_request(self.sphere(0.0, [{"kind": "plane", "normal": [0, 0, 1],
+                                                      "offsets": [1.2]}]))
+        self.assertIsNotNone(f, proc.stderr)
+        self.assertEqual([c for c in f["curves"] if c["kind"] == "section"], [])
+        self.assertEqual(len(f["arrangement"]["faces"]), 1)
+        self.assertEqual(f["arrangement"]["faces"][0]["euler"], 2)
+
+    def test_bad_curve_names_its_path(self):
+        f, proc = self.run_request(self.sphere(0.0, [{"kind": "levels", "expr": "x +",
+                                                      "values": [0]}]))
+        self.assertIsNone(f)
+        self.assertIn("$.curves[0].expr", proc.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main()
