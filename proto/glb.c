@@ -55,7 +55,7 @@ typedef struct gltf {
     bin bin;
 } gltf;
 
-static int add_view(gltf *g, size_t offset, size_t length, int target)
+static int add_view(gltf *g, size_t offset, size_t length, int target, int stride)
 {
     ism_jw *w = &g->views;
     ism_jw_object(w);
@@ -65,6 +65,10 @@ static int add_view(gltf *g, size_t offset, size_t length, int target)
     ism_jw_uint(w, offset);
     ism_jw_key(w, "byteLength");
     ism_jw_uint(w, length);
+    if (stride) {
+        ism_jw_key(w, "byteStride");
+        ism_jw_int(w, stride);
+    }
     if (target) {
         ism_jw_key(w, "target");
         ism_jw_int(w, target);
@@ -126,7 +130,7 @@ static void add_node(gltf *g, const char *name, int mesh, const ism_jw *extras_s
 static void add_surface(gltf *g, const ism_wire_mesh *wm, const ism_draco_output *d)
 {
     size_t off = bin_append(&g->bin, d->data, d->len);
-    int view = add_view(g, off, d->len, 0);
+    int view = add_view(g, off, d->len, 0, 0);
     struct {
         const char *name;
         bool present;
@@ -191,6 +195,96 @@ static void add_surface(gltf *g, const ism_wire_mesh *wm, const ism_draco_output
     add_node(g, "surface", g->nmeshes++, NULL);
 }
 
+/* A vertex attribute of the plain surface as its own bufferView and accessor. */
+static int plain_attribute(gltf *g, const void *data, size_t bytes, size_t count, int ctype,
+                           const char *type, const double *bounds)
+{
+    size_t off = bin_append(&g->bin, data, bytes);
+    return add_accessor(g, add_view(g, off, bytes, TARGET_ARRAY, 0), ctype, count, type, bounds);
+}
+
+/* One byte per vertex: glTF wants vertex attributes 4-byte aligned, so each byte gets its own
+ * 4-byte slot (byteStride 4). -1 when out of memory. */
+static int plain_bytes(gltf *g, const uint8_t *data, size_t count)
+{
+    uint8_t *wide = calloc(count ? count : 1, 4);
+    if (!wide)
+        return -1;
+    for (size_t i = 0; i < count; i++)
+        wide[4 * i] = data[i];
+    size_t off = bin_append(&g->bin, wide, 4 * count);
+    free(wide);
+    return add_accessor(g, add_view(g, off, 4 * count, TARGET_ARRAY, 4), CT_UBYTE, count,
+                        "SCALAR", NULL);
+}
+
+/* The surface without Draco: plain accessors for every attribute sent and uint32 indices of
+ * the triangles with three distinct vertices (as Draco keeps them). */
+static bool add_plain_surface(gltf *g, const ism_wire_mesh *wm)
+{
+    uint32_t *idx = malloc((wm->live_triangles ? wm->live_triangles : 1) * 3 * sizeof *idx);
+    if (!idx)
+        return false;
+    size_t ni = 0;
+    for (size_t t = 0; t < wm->ntris; t++) {
+        const uint32_t *v = wm->tri + 3 * t;
+        if (v[0] != v[1] && v[1] != v[2] && v[0] != v[2])
+            for (int k = 0; k < 3; k++)
+                idx[ni++] = v[k];
+    }
+    size_t n = wm->nverts;
+    struct {
+        const char *name;
+        const void *data;
+        size_t bytes_per_vertex;
+        int ctype;
+        const char *type;
+    } atts[] = {
+        {"POSITION", wm->pos, 3 * sizeof(float), CT_FLOAT, "VEC3"},
+        {"NORMAL", wm->normal, 3 * sizeof(float), CT_FLOAT, "VEC3"},
+        {"_MEAN_CURVATURE", wm->mean_curvature, sizeof(float), CT_FLOAT, "SCALAR"},
+        {"_GAUSS_CURVATURE", wm->gauss_curvature, sizeof(float), CT_FLOAT, "SCALAR"},
+        {"_CLASS", NULL, 1, CT_UBYTE, "SCALAR"}, /* below */
+    };
+    int acc[5];
+    acc[4] = wm->vertex_class ? plain_bytes(g, wm->vertex_class, n) : -1;
+    for (int i = 0; i < 4; i++)
+        acc[i] = atts[i].data ? plain_attribute(g, atts[i].data, n * atts[i].bytes_per_vertex, n,
+                                                atts[i].ctype, atts[i].type,
+                                                i == 0 ? wm->bounds : NULL)
+                              : -1;
+    size_t ioff = bin_append(&g->bin, idx, ni * sizeof *idx);
+    int indices = add_accessor(g, add_view(g, ioff, ni * sizeof *idx, TARGET_ELEMENTS, 0), CT_UINT,
+                               ni, "SCALAR", NULL);
+    free(idx);
+    ism_jw *w = &g->meshes;
+    ism_jw_object(w);
+    ism_jw_key(w, "name");
+    ism_jw_string(w, "surface");
+    ism_jw_key(w, "primitives");
+    ism_jw_array(w);
+    ism_jw_object(w);
+    ism_jw_key(w, "mode");
+    ism_jw_int(w, GL_TRIANGLES);
+    ism_jw_key(w, "material");
+    ism_jw_int(w, 0);
+    ism_jw_key(w, "indices");
+    ism_jw_int(w, indices);
+    ism_jw_key(w, "attributes");
+    ism_jw_object(w);
+    for (int i = 0; i < 5; i++)
+        if (acc[i] >= 0) {
+            ism_jw_key(w, atts[i].name);
+            ism_jw_int(w, acc[i]);
+        }
+    ism_jw_object_end(w);
+    ism_jw_object_end(w);
+    ism_jw_array_end(w);
+    ism_jw_object_end(w);
+    add_node(g, "surface", g->nmeshes++, NULL);
+    return !g->bin.failed;
+}
+
 /* One uncompressed primitive: nv float positions (3 each) and, for LINES, nidx indices (two
  * per segment). Takes neither array. */
 static bool emit_primitive(gltf *g, const char *name, int mode, int material, const float *pos,
@@ -205,12 +299,12 @@ static bool emit_primitive(gltf *g, const char *name, int mode, int material, co
             bounds[k + 3] = fmax(bounds[k + 3], pos[3 * i + k]);
         }
     size_t poff = bin_append(&g->bin, pos, nv * 3 * sizeof *pos);
-    int pacc = add_accessor(g, add_view(g, poff, nv * 3 * sizeof *pos, TARGET_ARRAY), CT_FLOAT,
+    int pacc = add_accessor(g, add_view(g, poff, nv * 3 * sizeof *pos, TARGET_ARRAY, 0), CT_FLOAT,
                             nv, "VEC3", bounds);
     int iacc = -1;
     if (nidx) {
         size_t ioff = bin_append(&g->bin, idx, nidx * sizeof *idx);
-        iacc = add_accessor(g, add_view(g, ioff, nidx * sizeof *idx, TARGET_ELEMENTS), CT_UINT,
+        iacc = add_accessor(g, add_view(g, ioff, nidx * sizeof *idx, TARGET_ELEMENTS, 0), CT_UINT,
                             nidx, "SCALAR", NULL);
     }
     ism_jw *w = &g->meshes;
@@ -519,10 +613,14 @@ bool ism_glb_build(const ism_glb_input *in, unsigned char **out, size_t *len)
     ism_jw extras;
     ism_jw_init(&extras);
     bool ok = true;
-    if (in->draco && in->draco->len) {
-        add_surface(&g, in->wire, in->draco);
+    bool plain = !in->draco && in->wire && in->wire->live_triangles;
+    if ((in->draco && in->draco->len) || plain) {
+        if (plain)
+            ok = add_plain_surface(&g, in->wire);
+        else
+            add_surface(&g, in->wire, in->draco);
         const ism_features *f = in->features;
-        if (f) {
+        if (f && ok) {
             extras_for_points(f, &extras);
             ok = add_feature_primitive(&g, in->mesh, "nonmanifold_curves", GL_LINES, 1,
                                        &f->curves, NULL, 0, NULL) &&

@@ -11,6 +11,8 @@
  * when there is something to draw. The
  * surface's attributes: POSITION, NORMAL, _MEAN_CURVATURE, _GAUSS_CURVATURE, _CLASS (the
  * ones sent); the points node carries "extras": {"class": [...], "kind": [...]} per point.
+ * Without Draco (request output.draco false, ?draco=0) the surface is a plain primitive: the
+ * same attributes as float/ubyte accessors and uint32 indices, no extension required.
  * An empty surface gives a valid glTF with one empty scene and no buffer. */
 #ifndef ISM_GLB_H
 #define ISM_GLB_H
@@ -24,7 +26,8 @@
 typedef struct ism_glb_input {
     const ism_mesh *mesh;             /* positions of feature vertices */
     const ism_wire_mesh *wire;        /* which attributes were sent, bounds */
-    const ism_draco_output *draco;    /* NULL for an empty surface */
+    const ism_draco_output *draco;    /* NULL for an empty surface, or a plain glb (the
+                                         surface then as uncompressed accessors) */
     const ism_features *features;     /* may be NULL */
     const char *key;                  /* cache key for asset.extras; may be NULL */
 } ism_glb_input;

@@ -488,7 +488,7 @@ static bool decode_attributes(const json_t *v, unsigned *out, ism_req_error *err
 static bool decode_output(const json_t *v, ism_request *req, ism_req_error *err)
 {
     static const char *const known[] = {"format", "position_bits", "normal_bits",
-                                        "curvature_bits", "attributes", NULL};
+                                        "curvature_bits", "attributes", "draco", NULL};
     if (!check_fields(v, "$.output", known, err))
         return false;
     const json_t *f = json_object_get(v, "format");
@@ -521,6 +521,11 @@ static bool decode_output(const json_t *v, ism_request *req, ism_req_error *err)
     const json_t *at = json_object_get(v, "attributes");
     if (at && !decode_attributes(at, &req->attributes, err))
         return false;
+    const json_t *dr = json_object_get(v, "draco");
+    if (dr && !json_is_boolean(dr))
+        return bad(err, "$.output.draco", "expected true or false");
+    if (dr)
+        req->plain_glb = !json_is_true(dr);
     return true;
 }
 

@@ -90,6 +90,7 @@ typedef struct ism_request {
     unsigned attributes;       /* enum ism_attr bits */
     ism_req_curve *curves;     /* the "curves" list (empty when not given) */
     size_t ncurves;
+    bool plain_glb;            /* output.draco false: a glb without Draco (plain accessors) */
 } ism_request;
 
 /* What the operator allows. */

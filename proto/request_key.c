@@ -75,6 +75,10 @@ static void write_output(ism_jw *w, const ism_request *req, bool only_effective)
         if (req->attributes & (1u << k))
             ism_jw_string(w, attr_names[k]);
     ism_jw_array_end(w);
+    if (req->plain_glb) { /* only when asked: every other key stays as it was */
+        ism_jw_key(w, "draco");
+        ism_jw_bool(w, false);
+    }
     ism_jw_object_end(w);
 }
 

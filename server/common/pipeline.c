@@ -272,9 +272,10 @@ static bool encode_body(encode_job *j, ism_buf *body, char *why, size_t n)
         }
         break;
     case ISM_FORMAT_GLB: {
-        if (!empty && !(ok = encode_draco(j, &d, why, n)))
+        bool draco = !empty && !j->req->plain_glb;
+        if (draco && !(ok = encode_draco(j, &d, why, n)))
             break;
-        ism_glb_input gi = {&j->c->mesh, &j->wire, empty ? NULL : &d, &j->c->features, j->key};
+        ism_glb_input gi = {&j->c->mesh, &j->wire, draco ? &d : NULL, &j->c->features, j->key};
         unsigned char *glb;
         size_t len;
         if ((ok = ism_glb_build(&gi, &glb, &len)))

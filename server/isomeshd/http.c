@@ -5,6 +5,7 @@
 #include "server/isomeshd/http.h"
 
 #include <arpa/inet.h>
+#include <jansson.h>
 #include <ctype.h>
 #include <errno.h>
 #include <netinet/in.h>
@@ -216,6 +217,25 @@ enum MHD_Result ismd_wait_for(ismd_req *r, const char *key, const char *fmt,
     return ismd_respond_refused(r, st);
 }
 
+/* ?draco=0: the body with "output": {"draco": false} (a plain glb). NULL (and *bad set when
+ * the value is neither 0 nor 1, or the body is not a JSON object) when nothing changes. */
+static char *without_draco(ismd_req *r, bool *bad)
+{
+    const char *q = ismd_query(r, "draco");
+    *bad = q && strcmp(q, "0") != 0 && strcmp(q, "1") != 0;
+    if (!q || strcmp(q, "0") != 0)
+        return NULL;
+    json_t *root = json_loadb(r->body ? r->body : "", r->body_len, JSON_REJECT_DUPLICATES, NULL);
+    json_t *out = json_object_get(root, "output");
+    if (json_is_object(root) && !out)
+        json_object_set_new(root, "output", out = json_object());
+    char *text = NULL;
+    if (json_is_object(out) && json_object_set_new(out, "draco", json_false()) == 0)
+        text = json_dumps(root, JSON_COMPACT);
+    json_decref(root);
+    return text; /* NULL: the body as it is, whose decoding then names what is wrong */
+}
+
 ism_blob *ismd_keyed_request(ismd_req *r, enum MHD_Result *ret)
 {
     long long t0 = ism_now_ns();
@@ -224,7 +244,16 @@ ism_blob *ismd_keyed_request(ismd_req *r, enum MHD_Result *ret)
     const char *fmt = ismd_query(r, "format");
     if (fmt && !strcmp(fmt, "json"))
         fmt = NULL; /* links to every format (routes_mesh.c); the mesh is the request's own */
-    bool ok = ism_pipeline_key(r->body ? r->body : "", r->body_len, fmt, &r->srv->limits, &pr);
+    bool bad_draco;
+    char *plain = without_draco(r, &bad_draco);
+    if (bad_draco) {
+        *ret = ismd_respond_error(r, 400, "bad_request", "draco: expected 0 or 1");
+        return NULL;
+    }
+    bool ok = plain ? ism_pipeline_key(plain, strlen(plain), fmt, &r->srv->limits, &pr)
+                    : ism_pipeline_key(r->body ? r->body : "", r->body_len, fmt,
+                                       &r->srv->limits, &pr);
+    free(plain);
     r->parse_ms = (ism_now_ns() - t0) / 1e6;
     if (!ok) {
         unsigned status = pr.status >= 400 && pr.status <= 599 ? (unsigned)pr.status : 400;

@@ -5,13 +5,18 @@ by exactly one, isomesh_stored_encodings_total by three. The encodings made from
 surface are the very bytes a fresh daemon computes for the same requests, their vertex counts
 agree with the stats, and every answer carries proto/format.c's Content-Type. A second
 accuracy (depth) is a second polygonisation."""
+import json
+import math
 import os
 import struct
+import subprocess
 import sys
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from harness import Daemon, draco_counts  # noqa: E402
+from harness import ROOT, Daemon, draco_counts  # noqa: E402
+
+VALIDATOR = os.path.join(ROOT, "tests", "unit", "proto", "validate_gltf.mjs")
 
 # proto/format.c's table, written out independently.
 MIME = {"drc": "application/vnd.google.draco", "glb": "model/gltf-binary",
@@ -95,6 +100,48 @@ class OneComputationTest(unittest.TestCase):
                 self.assertEqual(g.header("Content-Type"), MIME[fmt])
             self.assertEqual(self.counters(d)[0], p0)
             self.assertEqual(d.get("/v1/meshes/%s.drc" % key).header("Content-Type"), MIME["drc"])
+
+    def test_plain_glb_without_draco(self):
+        """?format=glb&draco=0: a glb whose surface is plain accessors (no extension
+        required), from the same stored surface; the glTF validator finds no error; its
+        positions lie on the sphere and its vertex count is the stats'."""
+        sphere = {"expr": "x^2 + y^2 + z^2 - 0.64", "box": [-1.0037, -0.9963, -1, 1, 1.0029, 1],
+                  "depth": {"min": 3, "max": 5}}
+        with Daemon("--workers", "1") as d:
+            drc = d.post("/v1/mesh", sphere)
+            p0, _ = self.counters(d)
+            r = d.post("/v1/mesh?format=glb&draco=0", sphere)
+            self.assertEqual(r.status, 200, r.body[:300])
+            self.assertEqual(r.header("Content-Type"), MIME["glb"])
+            self.assertEqual(self.counters(d)[0], p0, "encoded from the stored surface")
+            self.assertNotEqual(r.header("ETag"), drc.header("ETag"))
+            body = r.body
+            jlen = struct.unpack("<I", body[12:16])[0]
+            gltf = json.loads(body[20:20 + jlen])
+            self.assertNotIn("extensionsRequired", gltf)
+            prim = gltf["meshes"][0]["primitives"][0]
+            self.assertNotIn("extensions", prim)
+            acc = gltf["accessors"]
+            stats = d.get("/v1/meshes/%s/stats" % r.header("ETag").strip('"')).json()
+            pos = acc[prim["attributes"]["POSITION"]]
+            self.assertEqual(pos["count"], stats["mesh"]["vertices"])
+            self.assertEqual(acc[prim["indices"]]["count"] % 3, 0)
+            self.assertEqual(sorted(prim["attributes"]),
+                             ["NORMAL", "POSITION", "_CLASS", "_GAUSS_CURVATURE", "_MEAN_CURVATURE"])
+            view = gltf["bufferViews"][pos["bufferView"]]
+            bin_at = 20 + jlen + 8
+            xyz = struct.unpack_from("<%df" % (3 * pos["count"]), body, bin_at + view["byteOffset"])
+            radii = [math.sqrt(sum(c * c for c in xyz[3 * i:3 * i + 3])) for i in range(pos["count"])]
+            self.assertAlmostEqual(min(radii), 0.8, delta=1e-5)
+            self.assertAlmostEqual(max(radii), 0.8, delta=1e-5)
+            path = os.path.join(d.tmp, "plain.glb")
+            with open(path, "wb") as f:
+                f.write(body)
+            proc = subprocess.run(["node", VALIDATOR, path], capture_output=True, text=True,
+                                  timeout=120, cwd=ROOT)
+            self.assertEqual(json.loads(proc.stdout)["errors"], 0, proc.stdout[-2000:])
+            bad = d.post("/v1/mesh?format=glb&draco=no", sphere)
+            self.assertEqual(bad.status, 400)
 
 
 if __name__ == "__main__":

@@ -46,7 +46,7 @@ static const bad_case bad_cases[] = {
     {"{\"expr\": \"x\", \"output\": {\"fromat\": \"glb\"}}", 400, "bad_request",
      "$.output.fromat",
      "$.output.fromat: unknown field (expected one of: format, position_bits, normal_bits, "
-     "curvature_bits, attributes)"},
+     "curvature_bits, attributes, draco)"},
     {"{\"expr\": \"x\", \"a b\": 1}", 400, "bad_request", "$[\"a b\"]",
      "$[\"a b\"]: unknown field (expected one of: expr, preset, params, let, box, depth, "
      "max_error, tolerances, output, curves)"},
