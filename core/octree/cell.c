@@ -2,6 +2,7 @@
  * (finer neighbours' tiles where they exist — crack repair), stitched into polygons, each
  * polygon triangulated; one-edge polygons are kept as segments. */
 #include "core/octree/cell.h"
+#include "core/octree/face_lines.h"
 #include "core/octree/singular.h"
 #include "core/octree/stitch.h"
 #include "core/octree/triangulate.h"

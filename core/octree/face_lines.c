@@ -11,7 +11,7 @@
  *     crossings around it (paper Fig. 3c);
  *   - lattice segments where f vanishes are lines of their own (double lines on edges).
  * Everything here depends only on the tile, so both nodes that share it agree. */
-#include "core/octree/cell.h"
+#include "core/octree/face_lines.h"
 #include "core/octree/singular.h"
 
 #include <math.h>

@@ -7,7 +7,8 @@
 #define ISM_SINGULAR_H
 
 #include <stdbool.h>
-#include "core/octree/cell.h"
+#include "core/octree/cell_types.h"
+#include "core/octree/sampler.h"
 
 /* Newton on ∇f = 0 from the centre of the box lo..hi. True, with the point in *s, when it
  * converges strictly inside the box to a point of f = 0 whose Hessian is non-degenerate

@@ -11,6 +11,7 @@
  *   - shared lines left over are one-edge (degenerate) polygons.
  * Up to two polygons per node are the paper's cases; more are kept and counted. */
 #include "core/octree/stitch.h"
+#include "core/octree/sampler.h"
 
 #include <math.h>
 #include <stdlib.h>

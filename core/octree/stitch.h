@@ -4,7 +4,8 @@
 #ifndef ISM_STITCH_H
 #define ISM_STITCH_H
 
-#include "core/octree/cell.h"
+#include <stdbool.h>
+#include "core/octree/cell_types.h"
 
 /* Replaces out's contents with the polygons made from the lines l. */
 bool ism_stitch(const ism_flines *l, ism_loops *out);

@@ -3,7 +3,10 @@
 #ifndef ISM_TRIANGULATE_H
 #define ISM_TRIANGULATE_H
 
-#include "core/octree/cell.h"
+#include <stddef.h>
+#include <stdbool.h>
+#include "core/octree/cell_types.h"
+#include "core/octree/sampler.h"
 
 /* Triangulates the closed polygon pts[0..n) (n >= 3) into out. reach bounds how far the
  * polygon's centre may move when projected onto the surface; node (lo xyz, hi xyz; NULL for

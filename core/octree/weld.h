@@ -6,7 +6,10 @@
 #define ISM_WELD_H
 
 #include "core/mesh/mesh.h"
-#include "core/octree/cell.h"
+#include <stddef.h>
+#include <stdint.h>
+#include <stdbool.h>
+#include "core/octree/cell_types.h"
 
 typedef struct ism_weld_stats {
     uint64_t zero_vertices, touch_vertices, pair_vertices, many_vertices;

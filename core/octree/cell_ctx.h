@@ -1,0 +1,38 @@
+/* cell_ctx.h — the per-thread context of the polygonisation of plotting nodes: the sampler,
+ * the octree and its break points, the root parameters, and scratch arrays reused from node
+ * to node. Filled by polygonise.c, used by cell.c and face_lines.c, released by
+ * ism_cell_ctx_free (cell.h). */
+#ifndef ISM_CELL_CTX_H
+#define ISM_CELL_CTX_H
+
+#include <stddef.h>
+#include <stdbool.h>
+#include "core/octree/breaks.h"
+#include "core/octree/cell_cache.h"
+#include "core/octree/cell_types.h"
+#include "core/octree/edge_roots.h"
+#include "core/octree/octree.h"
+#include "core/octree/sampler.h"
+
+typedef struct ism_cell_ctx {
+    ism_sampler s;
+    const ism_octree *tree;
+    const ism_breaks *breaks;
+    ism_root_params roots;
+    double stitch_tol;        /* two roots closer than this × segment length are one */
+    /* scratch, reused from node to node */
+    ism_coords coords;
+    ism_bpoint *bp;
+    size_t nbp, cap_bp;
+    ism_fevent *ev;
+    size_t nev, cap_ev;
+    ism_flines lines;
+    ism_loops loops;
+    ism_cell_cache cache;     /* must be initialised (ism_cell_cache_init) */
+    bool zero_tile;           /* set by ism_tile_lines: f vanishes on the whole tile */
+    ism_tile *zero;           /* the current node's tiles lying in f = 0 */
+    size_t nzero, cap_zero;
+    ism_cell_stats stats;
+} ism_cell_ctx;
+
+#endif

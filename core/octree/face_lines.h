@@ -1,0 +1,18 @@
+/* face_lines.h — the lines of f = 0 on one tile of a node's face (face_lines.c). */
+#ifndef ISM_FACE_LINES_H
+#define ISM_FACE_LINES_H
+
+#include <stdbool.h>
+#include "core/octree/cell_ctx.h"
+#include "core/octree/cell_types.h"
+#include "core/octree/octree.h"
+
+/* Appends the line a-b of the given kind (enum ism_line_kind); false when out of memory. */
+bool ism_flines_push(ism_flines *l, const ism_fpoint *a, const ism_fpoint *b, int kind);
+
+/* Appends to cx->lines the lines of f = 0 on one tile (a face or part of a face). When f
+ * vanishes on the whole tile (a plane of the surface lying in the lattice), sets
+ * cx->zero_tile, leaves cx->bp holding its boundary and adds no lines. */
+bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *tile);
+
+#endif
