@@ -8,7 +8,8 @@
 #define ISM_CELL_ERROR_H
 
 #include <stdbool.h>
-#include "core/octree/plot_test.h"
+#include "core/octree/corners.h"
+#include "core/octree/sampler.h"
 
 /* The largest distance measured on the polygons through the node's edge roots; corners
  * k of the node lo..hi. Returns false (and leaves *err alone) when the roots do not form

@@ -9,17 +9,6 @@
 #include <math.h>
 #include <string.h>
 
-void ism_cube_edge(int e, int *c0, int *c1, int faces[2])
-{
-    int axis = e / 4, rest = e % 4;
-    int o1 = (axis + 1) % 3, o2 = (axis + 2) % 3;
-    int base = ((rest & 1) << o1) | (((rest >> 1) & 1) << o2);
-    *c0 = base;
-    *c1 = base | (1 << axis);
-    faces[0] = o1 * 2 + (rest & 1);
-    faces[1] = o2 * 2 + ((rest >> 1) & 1);
-}
-
 /* Under an error bound, a node at most this many times the bound across is judged by its
  * measured error: its corner gradients may disagree (a crease, as where a max() joins two
  * surfaces, is never flat and would otherwise be refined to depth.max whatever the bound),

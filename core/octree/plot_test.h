@@ -7,6 +7,7 @@
 #define ISM_PLOT_TEST_H
 
 #include <stdbool.h>
+#include "core/octree/corners.h"
 #include "core/octree/sampler.h"
 
 typedef struct ism_flatness {
@@ -22,15 +23,6 @@ typedef struct ism_flatness {
                               measured at their centroids and edge midpoints (cell_error.h);
                               0: the paper's tests above */
 } ism_flatness;
-
-/* f and ∇f at a node's 8 corners (corner c: bit 0 = x, bit 1 = y, bit 2 = z). */
-typedef struct ism_corners {
-    double p[8][3], f[8], g[8][3];
-} ism_corners;
-
-/* Edge e (0..11) of a node: its corners c0 -> c1 (c1 one step along axis e / 4) and the two
- * faces it lies on (face = axis * 2 + side). */
-void ism_cube_edge(int e, int *c0, int *c1, int faces[2]);
 
 /* lo, hi: the node's world box; k: its corner values. True when the node may be plotted
  * at this size. */
