@@ -8,7 +8,9 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdbool.h>
-#include "core/octree/cell.h"
+#include "core/octree/cell_types.h"
+#include "core/octree/octree.h"
+#include "core/octree/sampler.h"
 
 /* The largest |f| / |∇f| at the centroids and edge midpoints of out's triangles from
  * first_tri on; points where ∇f vanishes or f is not finite are left out. */
