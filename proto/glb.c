@@ -126,6 +126,46 @@ static void add_node(gltf *g, const char *name, int mesh, const ism_jw *extras_s
     g->nnodes++;
 }
 
+/* The surface's mesh up to its primitive's attributes (acc[i] < 0: not sent); the caller may
+ * add members to the open primitive, then calls close_surface. */
+static const char *const SURFACE_ATTRIBUTES[5] = {"POSITION", "NORMAL", "_MEAN_CURVATURE",
+                                                  "_GAUSS_CURVATURE", "_CLASS"};
+
+static ism_jw *open_surface(gltf *g, int indices, const int acc[5])
+{
+    ism_jw *w = &g->meshes;
+    ism_jw_object(w);
+    ism_jw_key(w, "name");
+    ism_jw_string(w, "surface");
+    ism_jw_key(w, "primitives");
+    ism_jw_array(w);
+    ism_jw_object(w);
+    ism_jw_key(w, "mode");
+    ism_jw_int(w, GL_TRIANGLES);
+    ism_jw_key(w, "material");
+    ism_jw_int(w, 0);
+    ism_jw_key(w, "indices");
+    ism_jw_int(w, indices);
+    ism_jw_key(w, "attributes");
+    ism_jw_object(w);
+    for (int i = 0; i < 5; i++)
+        if (acc[i] >= 0) {
+            ism_jw_key(w, SURFACE_ATTRIBUTES[i]);
+            ism_jw_int(w, acc[i]);
+        }
+    ism_jw_object_end(w);
+    return w;
+}
+
+static void close_surface(gltf *g)
+{
+    ism_jw *w = &g->meshes;
+    ism_jw_object_end(w);
+    ism_jw_array_end(w);
+    ism_jw_object_end(w);
+    add_node(g, "surface", g->nmeshes++, NULL);
+}
+
 /* The Draco primitive of the surface. */
 static void add_surface(gltf *g, const ism_wire_mesh *wm, const ism_draco_output *d)
 {
@@ -152,27 +192,7 @@ static void add_surface(gltf *g, const ism_wire_mesh *wm, const ism_draco_output
                                  : -1;
     int indices = add_accessor(g, -1, d->points > 65535 ? CT_UINT : CT_USHORT, 3 * d->faces,
                                "SCALAR", NULL);
-    ism_jw *w = &g->meshes;
-    ism_jw_object(w);
-    ism_jw_key(w, "name");
-    ism_jw_string(w, "surface");
-    ism_jw_key(w, "primitives");
-    ism_jw_array(w);
-    ism_jw_object(w);
-    ism_jw_key(w, "mode");
-    ism_jw_int(w, GL_TRIANGLES);
-    ism_jw_key(w, "material");
-    ism_jw_int(w, 0);
-    ism_jw_key(w, "indices");
-    ism_jw_int(w, indices);
-    ism_jw_key(w, "attributes");
-    ism_jw_object(w);
-    for (int i = 0; i < 5; i++)
-        if (atts[i].present) {
-            ism_jw_key(w, atts[i].name);
-            ism_jw_int(w, acc[i]);
-        }
-    ism_jw_object_end(w);
+    ism_jw *w = open_surface(g, indices, acc);
     ism_jw_key(w, "extensions");
     ism_jw_object(w);
     ism_jw_key(w, "KHR_draco_mesh_compression");
@@ -189,10 +209,7 @@ static void add_surface(gltf *g, const ism_wire_mesh *wm, const ism_draco_output
     ism_jw_object_end(w);
     ism_jw_object_end(w);
     ism_jw_object_end(w);
-    ism_jw_object_end(w);
-    ism_jw_array_end(w);
-    ism_jw_object_end(w);
-    add_node(g, "surface", g->nmeshes++, NULL);
+    close_surface(g);
 }
 
 /* A vertex attribute of the plain surface as its own bufferView and accessor. */
@@ -234,17 +251,15 @@ static bool add_plain_surface(gltf *g, const ism_wire_mesh *wm)
     }
     size_t n = wm->nverts;
     struct {
-        const char *name;
         const void *data;
         size_t bytes_per_vertex;
         int ctype;
         const char *type;
-    } atts[] = {
-        {"POSITION", wm->pos, 3 * sizeof(float), CT_FLOAT, "VEC3"},
-        {"NORMAL", wm->normal, 3 * sizeof(float), CT_FLOAT, "VEC3"},
-        {"_MEAN_CURVATURE", wm->mean_curvature, sizeof(float), CT_FLOAT, "SCALAR"},
-        {"_GAUSS_CURVATURE", wm->gauss_curvature, sizeof(float), CT_FLOAT, "SCALAR"},
-        {"_CLASS", NULL, 1, CT_UBYTE, "SCALAR"}, /* below */
+    } atts[4] = { /* in SURFACE_ATTRIBUTES' order; the class is added below */
+        {wm->pos, 3 * sizeof(float), CT_FLOAT, "VEC3"},
+        {wm->normal, 3 * sizeof(float), CT_FLOAT, "VEC3"},
+        {wm->mean_curvature, sizeof(float), CT_FLOAT, "SCALAR"},
+        {wm->gauss_curvature, sizeof(float), CT_FLOAT, "SCALAR"},
     };
     int acc[5];
     acc[4] = wm->vertex_class ? plain_bytes(g, wm->vertex_class, n) : -1;
@@ -257,31 +272,8 @@ static bool add_plain_surface(gltf *g, const ism_wire_mesh *wm)
     int indices = add_accessor(g, add_view(g, ioff, ni * sizeof *idx, TARGET_ELEMENTS, 0), CT_UINT,
                                ni, "SCALAR", NULL);
     free(idx);
-    ism_jw *w = &g->meshes;
-    ism_jw_object(w);
-    ism_jw_key(w, "name");
-    ism_jw_string(w, "surface");
-    ism_jw_key(w, "primitives");
-    ism_jw_array(w);
-    ism_jw_object(w);
-    ism_jw_key(w, "mode");
-    ism_jw_int(w, GL_TRIANGLES);
-    ism_jw_key(w, "material");
-    ism_jw_int(w, 0);
-    ism_jw_key(w, "indices");
-    ism_jw_int(w, indices);
-    ism_jw_key(w, "attributes");
-    ism_jw_object(w);
-    for (int i = 0; i < 5; i++)
-        if (acc[i] >= 0) {
-            ism_jw_key(w, atts[i].name);
-            ism_jw_int(w, acc[i]);
-        }
-    ism_jw_object_end(w);
-    ism_jw_object_end(w);
-    ism_jw_array_end(w);
-    ism_jw_object_end(w);
-    add_node(g, "surface", g->nmeshes++, NULL);
+    open_surface(g, indices, acc);
+    close_surface(g);
     return !g->bin.failed;
 }
 

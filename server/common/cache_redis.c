@@ -3,6 +3,7 @@
  * the task list, and the calls tasks make (fetch, locks). Only the tier's thread touches the
  * hiredis context. */
 #include "server/common/cache_redis.h"
+#include "server/common/fd_io.h"
 #include "core/util/le_bytes.h"
 
 #include <errno.h>
@@ -296,40 +297,35 @@ const char *ism_cache_redis_prefix(const ism_cache_tier *t)
 
 bool ism_redis_load_password(const char *path, ism_redis_settings *s, char *err, size_t cap)
 {
-    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
-    if (fd < 0) {
-        snprintf(err, cap, "%s: %s", path, strerror(errno));
+    char *text;
+    size_t n;
+    unsigned mode = 0;
+    int rc = ism_read_file(path, PASSWORD_FILE_MAX, &text, &n, &mode, err, cap);
+    if (rc == 0)
+        snprintf(err, cap, "%s: %s", path, strerror(ENOENT));
+    if (rc <= 0)
+        return false;
+    if (mode & (S_IROTH | S_IWOTH)) {
+        explicit_bzero(text, n);
+        free(text);
+        snprintf(err, cap, "%s: readable or writable by others (chmod o-rw it)", path);
         return false;
     }
-    struct stat st;
-    char text[PASSWORD_FILE_MAX + 1];
-    ssize_t n = -1;
-    const char *why = NULL;
-    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode))
-        why = "not a regular file";
-    else if (st.st_mode & (S_IROTH | S_IWOTH))
-        why = "readable or writable by others (chmod o-rw it)";
-    else if ((n = read(fd, text, PASSWORD_FILE_MAX + 1)) < 0 || n > PASSWORD_FILE_MAX)
-        why = n < 0 ? strerror(errno) : "longer than 512 bytes";
-    close(fd);
-    if (why) {
-        snprintf(err, cap, "%s: %s", path, why);
-        return false;
-    }
-    text[n] = 0;
     text[strcspn(text, "\r\n")] = 0; /* the first line: "PASSWORD" or "USER PASSWORD" */
     char *space = strchr(text, ' ');
     const char *user = space ? text : "", *pass = space ? space + 1 : text;
     if (space)
         *space = 0;
-    if (!*pass || strlen(pass) >= sizeof s->password || strlen(user) >= sizeof s->username) {
+    bool ok = *pass && strlen(pass) < sizeof s->password && strlen(user) < sizeof s->username;
+    if (ok) {
+        memcpy(s->username, user, strlen(user) + 1); /* lengths checked above */
+        memcpy(s->password, pass, strlen(pass) + 1);
+    } else {
         snprintf(err, cap, "%s: expected one line, PASSWORD or USER PASSWORD", path);
-        return false;
     }
-    memcpy(s->username, user, strlen(user) + 1); /* lengths checked above */
-    memcpy(s->password, pass, strlen(pass) + 1);
-    explicit_bzero(text, sizeof text);
-    return true;
+    explicit_bzero(text, n);
+    free(text);
+    return ok;
 }
 
 struct redisReply *ism_cache_redis_call(ism_cache_tier *t, const char *what, int argc,

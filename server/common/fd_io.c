@@ -1,7 +1,12 @@
-/* fd_io.c — whole writes to a file descriptor (see fd_io.h). */
+/* fd_io.c — whole writes to a file descriptor and whole reads of small files (fd_io.h). */
 #include "server/common/fd_io.h"
 
 #include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 bool ism_write_all(int fd, const void *p, size_t n)
@@ -17,4 +22,63 @@ bool ism_write_all(int fd, const void *p, size_t n)
         n -= (size_t)w;
     }
     return true;
+}
+
+/* Reads exactly n bytes from fd into buf; the reason when it cannot, else NULL. */
+static const char *read_exactly(int fd, char *buf, size_t n)
+{
+    size_t got = 0;
+    while (got < n) {
+        ssize_t r = read(fd, buf + got, n - got);
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r < 0)
+            return strerror(errno);
+        if (r == 0)
+            return "the file shrank while being read";
+        got += (size_t)r;
+    }
+    return NULL;
+}
+
+int ism_read_file(const char *path, size_t max, char **data, size_t *len, unsigned *mode,
+                  char *err, size_t cap)
+{
+    *data = NULL;
+    *len = 0;
+    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
+    if (fd < 0) {
+        if (errno == ENOENT)
+            return 0;
+        snprintf(err, cap, "%s: %s", path, strerror(errno));
+        return -1;
+    }
+    struct stat st;
+    const char *why = NULL;
+    char toobig[64];
+    if (fstat(fd, &st) != 0)
+        why = strerror(errno);
+    else if (!S_ISREG(st.st_mode))
+        why = "not a regular file (a FIFO, device or directory is refused)";
+    else if ((unsigned long long)st.st_size > max) {
+        snprintf(toobig, sizeof toobig, "larger than %zu bytes", max);
+        why = toobig;
+    }
+    char *buf = why ? NULL : malloc((size_t)st.st_size + 1);
+    if (!why && !buf)
+        why = "out of memory";
+    if (!why)
+        why = read_exactly(fd, buf, (size_t)st.st_size);
+    close(fd);
+    if (why) {
+        free(buf);
+        snprintf(err, cap, "%s: %s", path, why);
+        return -1;
+    }
+    buf[st.st_size] = 0;
+    *data = buf;
+    *len = (size_t)st.st_size;
+    if (mode)
+        *mode = (unsigned)(st.st_mode & 07777);
+    return 1;
 }

@@ -118,11 +118,15 @@ static ism_request_limits request_limits(const ism_pipeline_limits *lim)
 }
 
 /* Decode, override the format, compile, key, canonical form: the part that needs no
- * geometry. On success the caller owns *req and *tape. */
+ * geometry. Clears r first; lim NULL means the defaults. On success the caller owns *req and
+ * *tape. */
 static bool prepare(const char *json, size_t len, const char *format_override,
                     const ism_pipeline_limits *lim, ism_pipeline_result *r, ism_request *req,
                     ism_tape **tape, double *decode_ms, double *compile_ms)
 {
+    memset(r, 0, sizeof *r);
+    ism_pipeline_limits dl;
+    lim = limits_or_default(lim, &dl);
     ism_req_error e;
     double t0 = ism_now_ms();
     ism_request_limits rl = request_limits(lim);
@@ -162,9 +166,6 @@ static bool prepare(const char *json, size_t len, const char *format_override,
 bool ism_pipeline_key(const char *json, size_t len, const char *format_override,
                       const ism_pipeline_limits *lim, ism_pipeline_result *r)
 {
-    ism_pipeline_limits dl;
-    lim = limits_or_default(lim, &dl);
-    memset(r, 0, sizeof *r);
     ism_request req;
     ism_tape *tape;
     double d, c;
@@ -513,10 +514,8 @@ bool ism_pipeline_run(const char *json, size_t len, const char *format_override,
                       ism_pipeline_result *r)
 {
     ism_pipeline_limits dl;
-    lim = limits_or_default(lim, &dl);
-    memset(r, 0, sizeof *r);
-    double t_start = ism_now_ms();
-    double decode_ms, compile_ms;
+    lim = limits_or_default(lim, &dl); /* the computation reads it too */
+    double t_start = ism_now_ms(), decode_ms, compile_ms;
     ism_request req;
     ism_tape *tape = NULL;
     if (!prepare(json, len, format_override, lim, r, &req, &tape, &decode_ms, &compile_ms))
@@ -545,11 +544,7 @@ bool ism_pipeline_encode_stored(const char *json, size_t len, const char *format
                                 const ism_pipeline_limits *lim, const void *stored,
                                 size_t stored_len, ism_pipeline_result *r)
 {
-    ism_pipeline_limits dl;
-    lim = limits_or_default(lim, &dl);
-    memset(r, 0, sizeof *r);
-    double t_start = ism_now_ms();
-    double decode_ms, compile_ms;
+    double t_start = ism_now_ms(), decode_ms, compile_ms;
     ism_request req;
     ism_tape *tape = NULL;
     if (!prepare(json, len, format_override, lim, r, &req, &tape, &decode_ms, &compile_ms))

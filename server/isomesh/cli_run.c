@@ -447,23 +447,13 @@ done:
 
 static char *read_file(const char *path, size_t *len)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        fprintf(stderr, "isomesh: cannot open %s: %s\n", path, strerror(errno));
-        return NULL;
-    }
-    char *buf = malloc(MAX_REQUEST_FILE + 1);
-    size_t n = buf ? fread(buf, 1, MAX_REQUEST_FILE + 1, f) : 0;
-    fclose(f);
-    if (!buf)
-        return NULL;
-    if (n > MAX_REQUEST_FILE) {
-        fprintf(stderr, "isomesh: %s: larger than %d bytes\n", path, MAX_REQUEST_FILE);
-        free(buf);
-        return NULL;
-    }
-    *len = n;
-    return buf;
+    char *text, err[512];
+    int rc = ism_read_file(path, MAX_REQUEST_FILE, &text, len, NULL, err, sizeof err);
+    if (rc == 0)
+        fprintf(stderr, "isomesh: cannot open %s: %s\n", path, strerror(ENOENT));
+    else if (rc < 0)
+        fprintf(stderr, "isomesh: %s\n", err);
+    return rc == 1 ? text : NULL;
 }
 
 int ism_cli_run_request_file(ism_cli_run *run, const char *path)

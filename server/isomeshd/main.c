@@ -20,6 +20,7 @@
 #include "server/common/cache_disk.h"
 #include "server/common/cache_mem.h"
 #include "server/common/cache_redis.h"
+#include "server/common/fd_io.h"
 #include "server/common/log.h"
 #include "server/isomeshd/config.h"
 #include "server/isomeshd/http.h"
@@ -38,30 +39,14 @@ static ism_blob *load_doc(const char *dir, const char *name)
 {
     if (!*dir)
         return NULL;
-    char path[8192];
+    char path[8192], err[256];
     snprintf(path, sizeof path, "%s/%s", dir, name);
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
-    if (fd < 0)
+    char *text;
+    size_t len;
+    if (ism_read_file(path, DOC_MAX, &text, &len, NULL, err, sizeof err) != 1)
         return NULL;
-    struct stat st;
-    ism_blob *b = NULL;
-    if (fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && (size_t)st.st_size <= DOC_MAX &&
-        (b = ism_blob_new((size_t)st.st_size))) {
-        size_t got = 0;
-        while (got < b->len) {
-            ssize_t n = read(fd, b->data + got, b->len - got);
-            if (n < 0 && errno == EINTR)
-                continue;
-            if (n <= 0)
-                break;
-            got += (size_t)n;
-        }
-        if (got != b->len) {
-            ism_blob_unref(b);
-            b = NULL;
-        }
-    }
-    close(fd);
+    ism_blob *b = ism_blob_copy(text, len);
+    free(text);
     return b;
 }
 

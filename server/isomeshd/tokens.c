@@ -8,6 +8,7 @@
  * HTTP thread (a denial-of-service lever). A preimage-resistant hash is what keeps a stolen
  * tokens file from giving away the tokens, and BLAKE2b is one. */
 #include "server/isomeshd/tokens.h"
+#include "server/common/fd_io.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -283,51 +284,16 @@ bool ismd_tokens_parse(const char *text, size_t len, const char *path, ismd_toke
 int ismd_tokens_read_file(const char *path, char **text, size_t *len, unsigned *mode,
                           char *err, size_t errcap)
 {
-    *text = NULL;
-    *len = 0;
-    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
-    if (fd < 0) {
-        if (errno == ENOENT)
-            return 0;
-        snprintf(err, errcap, "%s: %s", path, strerror(errno));
+    int rc = ism_read_file(path, ISMD_TOKENS_FILE_MAX, text, len, mode, err, errcap);
+    if (rc == 1 && (*mode & (S_IWGRP | S_IWOTH))) {
+        free(*text);
+        *text = NULL;
+        *len = 0;
+        snprintf(err, errcap, "%s: writable by group or others: anyone who can write it can "
+                 "give themselves a token (chmod go-w it)", path);
         return -1;
     }
-    struct stat st;
-    const char *why = NULL;
-    if (fstat(fd, &st) != 0)
-        why = strerror(errno);
-    else if (!S_ISREG(st.st_mode))
-        why = "not a regular file (a FIFO, device or directory is refused)";
-    else if (st.st_mode & (S_IWGRP | S_IWOTH))
-        why = "writable by group or others: anyone who can write it can give themselves a "
-              "token (chmod go-w it)";
-    else if (st.st_size > (off_t)ISMD_TOKENS_FILE_MAX)
-        why = "larger than 1 MiB";
-    char *buf = why ? NULL : malloc((size_t)st.st_size + 1);
-    if (!why && !buf)
-        why = "out of memory";
-    size_t got = 0;
-    while (!why && got < (size_t)st.st_size) {
-        ssize_t n = read(fd, buf + got, (size_t)st.st_size - got);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n < 0)
-            why = strerror(errno);
-        if (n <= 0)
-            break;
-        got += (size_t)n;
-    }
-    close(fd);
-    if (why) {
-        free(buf);
-        snprintf(err, errcap, "%s: %s", path, why);
-        return -1;
-    }
-    buf[got] = 0;
-    *text = buf;
-    *len = got;
-    *mode = (unsigned)(st.st_mode & 07777);
-    return 1;
+    return rc;
 }
 
 bool ismd_tokens_load(const char *path, bool missing_ok, ismd_tokens *out, char *err,
