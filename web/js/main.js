@@ -12,6 +12,7 @@ import { defaultState, requestBody, encodeState, decodeState, sensibleRange, COL
 import { renderParams } from './params_ui.js';
 import { showStats, clearStats, showLegend } from './stats_ui.js';
 import { niceStep, sig } from './format.js';
+import { Previewer, ticket, claim } from './live.js';
 
 const DEFAULT_PRESET = 'steiner-roman';
 const DEBOUNCE_MS = 250;
@@ -34,7 +35,9 @@ let retry = { timer: 0, count: 0, body: null };
 let pendingView = null;      // a view from the URL, applied to the first mesh
 let shownIdentity = null;    // what the mesh on screen is (refit when it changes)
 let afterToken = null;       // the request to resend once a token is given
-let loads = 0;
+let loads = 0;               // refined meshes shown
+let previews = 0;            // coarse previews shown (live.js)
+let previewer = null;
 let basePreset = null;       // the preset last chosen (the editor may drift from its text)
 
 const presetByName = (name) => presets.find((p) => p.name === name) || null;
@@ -68,12 +71,16 @@ function setBusy(on) {
     return;
   }
   $('progress').value = 0;
-  $('progress-label').textContent = 'Sending…';
+  // Over a live preview the refinement is announced quietly: the picture is already there.
+  const quiet = document.body.dataset.shown === 'preview';
+  $('busy').classList.toggle('quiet', quiet);
+  $('progress-label').textContent = quiet ? 'Refining…' : 'Sending…';
   busyTimer = setTimeout(() => { $('busy').hidden = false; }, BUSY_DELAY_MS);
 }
 
 function setProgress(fraction, jobState) {
   $('progress').value = fraction;
+  if ($('busy').classList.contains('quiet')) return;
   $('progress-label').textContent = jobState === 'queued' ? 'Queued: waiting for a worker…'
     : `Computing… ${Math.round(100 * fraction)}%`;
 }
@@ -145,9 +152,9 @@ function refreshExpression() {
 
 function renderSliders() {
   const list = paramNames.map((n) => ({ name: n, value: state.params[n], min: ranges[n][0], max: ranges[n][1] }));
-  renderParams($('params'), list, (name, value) => {
+  renderParams($('params'), list, (name, value, fromSlider) => {
     state.params[name] = value;
-    requestChanged();
+    requestChanged({ live: fromSlider });
   });
 }
 
@@ -340,8 +347,9 @@ function currentBody() {
 }
 
 // The request changed (slider, box, depth, preset, Compute). Cached results show at once;
-// others wait for the debounce unless now.
-function requestChanged({ now = false } = {}) {
+// others wait for the debounce unless now. live (a slider moving): a coarse preview is asked
+// for at once and the refined mesh once the slider has rested for the debounce.
+function requestChanged({ now = false, live = false } = {}) {
   updateUrl();
   if (!exprOk) {
     message('Fix the expression first: nothing was sent.', 'error');
@@ -352,8 +360,15 @@ function requestChanged({ now = false } = {}) {
   const hit = loader.cached(body);
   if (hit) {
     stopRunning();
-    show(hit, body);
+    show(hit, body, ticket());
     return;
+  }
+  if (live) {
+    stopRunning();
+    document.body.dataset.refinePending = '1';
+    previewer.want(body);
+  } else {
+    previewer.stop();
   }
   if (now) compute(body);
   else debounceTimer = setTimeout(() => compute(body), DEBOUNCE_MS);
@@ -379,12 +394,14 @@ async function compute(body) {
   const controller = new AbortController();
   const mine = { controller, body };
   running = mine;
+  const seq = ticket();
+  document.body.dataset.refinePending = '0';
   setBusy(true);
   try {
     const result = await loader.load(body, controller.signal, setProgress);
     if (running !== mine) return;
     retry.count = 0;
-    show(result, body);
+    show(result, body, seq);
   } catch (e) {
     if (running !== mine) return;
     if (e.name === 'AbortError') message('Canceled.');
@@ -397,7 +414,10 @@ async function compute(body) {
   }
 }
 
-function show(result, body) {
+// Draws result unless something newer (by sequence number seq, live.js) is on screen.
+// preview: a coarse live preview (stats and downloads stay with the refined mesh).
+function show(result, body, seq, preview = false) {
+  if (!claim(seq)) return;
   clearMessage();
   if (!result.mesh) message('The surface does not cross this box: the mesh is empty.');
   viewer.setMesh(result, JSON.parse(body).box);
@@ -413,6 +433,13 @@ function show(result, body) {
   applyDisplay();
   syncFeatureKey(viewer.features ? viewer.features.counts : { edges: 0, points: 0, boundary: 0, artefacts: 0 }, viewer.features);
   $('pick-info').hidden = true;
+  document.body.dataset.shown = preview ? 'preview' : 'final';
+  if (preview) {
+    previews++;
+    document.body.dataset.previews = String(previews);
+    document.body.dataset.previewKey = result.key;
+    return;
+  }
   showStats(result);
   setDownloads(result);
   if (exprOk) showExprError(null);
@@ -722,6 +749,7 @@ function wire() {
 
   $('cancel').addEventListener('click', () => {
     clearTimeout(debounceTimer);
+    previewer.stop();
     stopRunning();
     message('Canceled.');
   });
@@ -777,6 +805,12 @@ async function begin() {
 
 async function start() {
   viewer = new Viewer($('view'));
+  previewer = new Previewer({
+    load: (body, signal) => loader.load(body, signal, () => {}),
+    cached: (body) => loader.cached(body),
+    show: (result, body, seq) => show(result, body, seq, true),
+    failed: () => {},   // the refined request reports errors
+  });
   $('view').addEventListener('click', pickAt);
   viewer.onViewChange = updateUrl;
   wire();

@@ -19,14 +19,18 @@ export async function openViewer(context, url) {
   const page = await context.newPage();
   const requests = [];
   const errors = watchErrors(page);
-  page.on('request', (r) => requests.push({ method: r.method(), url: r.url(), headers: r.headers() }));
+  page.on('request', (r) => requests.push({ method: r.method(), url: r.url(), headers: r.headers(), body: r.postData() }));
   await page.goto(url);
   await waitForMesh(page, 0);
   return { page, requests, errors };
 }
 
-export function jobPosts(requests) {
-  return requests.filter((r) => r.method === 'POST' && new URL(r.url).pathname === '/v1/jobs').length;
+// POST /v1/jobs the page made; refinedOnly: leave out live previews (depth.max at most
+// PREVIEW_MAX, web/js/live.js).
+const PREVIEW_MAX = 4;
+export function jobPosts(requests, { refinedOnly = false } = {}) {
+  return requests.filter((r) => r.method === 'POST' && new URL(r.url).pathname === '/v1/jobs' &&
+    (!refinedOnly || !r.body || JSON.parse(r.body).depth.max > PREVIEW_MAX)).length;
 }
 
 // The panel's cells: {name: {text, value}}.
