@@ -1,5 +1,6 @@
 /* routes_misc.c — the small routes: GET /v1/presets, /v1/openapi.yaml, /v1/request.schema.json
- * (documents loaded from --data-dir at start-up), /healthz (the process answers), /readyz (a
+ * (documents loaded from --data-dir at start-up), POST /v1/box (the box a surface's zero set
+ * needs: a bounded interval pass, proto/box_fit.h, answered on the HTTP thread), /healthz (the process answers), /readyz (a
  * worker is ready and we are not shutting down), /metrics (Prometheus text, with the per-user
  * gauges of user_metrics.h). */
 #include <stdio.h>
@@ -8,6 +9,7 @@
 
 #include "server/isomeshd/http.h"
 #include "server/isomeshd/user_metrics.h"
+#include "proto/box_fit.h"
 
 enum MHD_Result ismd_route_doc(ismd_req *r)
 {
@@ -37,6 +39,27 @@ enum MHD_Result ismd_route_doc(ismd_req *r)
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "public, max-age=300");
     r->bytes = b->len;
     return ismd_send(r, 200, resp);
+}
+
+enum MHD_Result ismd_route_box(ismd_req *r)
+{
+    ism_request_limits lim = {.max_depth = r->srv->limits.max_depth};
+    ism_req_error err;
+    size_t len = 0;
+    char *json = ism_box_fit_answer(r->body ? r->body : "", r->body_len, &lim, &len, &err);
+    if (!json) {
+        size_t elen = 0;
+        char *e = ism_req_error_json(&err, &elen);
+        ism_blob *b = e ? ism_blob_copy(e, elen) : NULL;
+        free(e);
+        enum MHD_Result ret = b ? ismd_respond_error_blob(r, (unsigned)err.status, b)
+                                : ismd_respond_error(r, 500, "out_of_memory", "out of memory");
+        ism_blob_unref(b);
+        return ret;
+    }
+    enum MHD_Result ret = ismd_respond_json(r, 200, json);
+    free(json);
+    return ret;
 }
 
 enum MHD_Result ismd_route_health(ismd_req *r)

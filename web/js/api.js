@@ -123,6 +123,13 @@ export async function followJob(job, signal, onEvent) {
   }
 }
 
+// POST /v1/box: {box, cube, empty, complete, level} — the box around f = 0 within the
+// request's box (proto/box_fit.h).
+export async function fitBox(body, signal) {
+  const r = await call('/v1/box', { method: 'POST', body, signal, headers: { 'Content-Type': 'application/json' } });
+  return r.json();
+}
+
 export async function getBytes(url, signal) {
   const r = await call(url, { signal });
   const bytes = await r.arrayBuffer();

@@ -212,6 +212,9 @@ function syncControls() {
   $('show-edges').checked = state.show.edges;
   $('show-points').checked = state.show.points;
   $('show-boundary').checked = state.show.boundary;
+  $('show-box').checked = state.show.box !== false;
+  $('show-axes').checked = !!state.show.axes;
+  $('keep-box').checked = !!state.keepBox;
   $('wireframe').checked = state.wire;
   $('clip-on').checked = state.clip.on;
   $('clip-axis').value = state.clip.axis;
@@ -372,6 +375,32 @@ function requestChanged({ now = false, live = false } = {}) {
   }
   if (now) compute(body);
   else debounceTimer = setTimeout(() => compute(body), DEBOUNCE_MS);
+}
+
+// A typed expression gets its box fitted (POST /v1/box over FIT_CUBE) before it is computed,
+// unless the user keeps the box; a fit is asked once per expression and parameters.
+const FIT_CUBE = [-10, -10, -10, 10, 10, 10];
+let fittedFor = null;
+
+async function computeTyped() {
+  if (!exprOk || state.preset || state.keepBox) {
+    requestChanged({ now: true });
+    return;
+  }
+  const body = requestBody({ ...state, box: FIT_CUBE }, paramNames);
+  if (fittedFor !== body) {
+    try {
+      const fit = await api.fitBox(body);
+      fittedFor = body;
+      state.box = fit.empty ? FIT_CUBE.slice() : fit.box;
+      document.body.dataset.fittedBox = JSON.stringify(state.box);
+      syncControls();
+    } catch (e) {
+      failed(e, body);
+      return;
+    }
+  }
+  requestChanged({ now: true });
 }
 
 function stopRunning() {
@@ -645,10 +674,11 @@ function wire() {
   $('expr').addEventListener('keydown', (e) => {
     if (e.key === 'Enter' && (e.ctrlKey || e.metaKey)) {
       e.preventDefault();
-      requestChanged({ now: true });
+      computeTyped();
     }
   });
-  $('render').addEventListener('click', () => requestChanged({ now: true }));
+  $('render').addEventListener('click', () => computeTyped());
+  $('keep-box').addEventListener('change', () => { state.keepBox = $('keep-box').checked; });
 
   for (const id of BOX_IDS) {
     $(id).addEventListener('change', () => {
@@ -658,6 +688,8 @@ function wire() {
         return;
       }
       state.box = box;
+      state.keepBox = true;       // a box typed by hand is kept
+      $('keep-box').checked = true;
       syncClipSlider();
       requestChanged();
     });
@@ -696,7 +728,7 @@ function wire() {
     showLegend(state.color, viewer.setColorMode(state.color));
     updateUrl();
   });
-  for (const k of ['edges', 'points', 'boundary']) {
+  for (const k of ['edges', 'points', 'boundary', 'box', 'axes']) {
     $(`show-${k}`).addEventListener('change', () => {
       state.show[k] = $(`show-${k}`).checked;
       viewer.setVisibility(state.show);

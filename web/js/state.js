@@ -4,10 +4,11 @@
 //
 // Fragment keys (URLSearchParams): preset=NAME | expr=TEXT, p.NAME=VALUE per parameter,
 // box=xmin,ymin,zmin,xmax,ymax,zmax, depth=MIN,MAX, err=MAX_ERROR, cam=px,py,pz,tx,ty,tz,
-// color=shaded|mean|gauss, clip=AXIS,OFFSET[,flip], hide=edges,points,boundary, wire=1.
+// color=shaded|mean|gauss, clip=AXIS,OFFSET[,flip], hide=edges,points,boundary,box, wire=1,
+// axes=1.
 
 export const COLOR_MODES = ['shaded', 'mean', 'gauss'];
-const FEATURES = ['edges', 'points', 'boundary'];
+const FEATURES = ['edges', 'points', 'boundary', 'box'];
 const DEFAULT_BOX = [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5];
 
 export function defaultState() {
@@ -21,7 +22,8 @@ export function defaultState() {
     view: null,             // {pos: [3], target: [3]}
     color: 'shaded',
     clip: { on: false, axis: 'z', offset: 0, flip: false },
-    show: { edges: true, points: true, boundary: true },
+    show: { edges: true, points: true, boundary: true, box: true, axes: false },
+    keepBox: false,         // a typed expression keeps the box (else it is fitted, POST /v1/box)
     wire: false,
   };
 }
@@ -67,6 +69,7 @@ export function encodeState(state, paramNames) {
   const hidden = FEATURES.filter((k) => !state.show[k]);
   if (hidden.length) q.set('hide', hidden.join(','));
   if (state.wire) q.set('wire', '1');
+  if (state.show.axes) q.set('axes', '1');
   return q.toString().replace(/%2C/g, ',');  // commas read fine in a fragment
 }
 
@@ -126,6 +129,7 @@ export function decodeState(fragment) {
     const hidden = q.get('hide').split(',');
     s.show = Object.fromEntries(FEATURES.map((k) => [k, !hidden.includes(k)]));
   }
+  if (q.has('axes')) s.show = { ...(s.show || Object.fromEntries(FEATURES.map((k) => [k, true]))), axes: q.get('axes') === '1' };
   if (q.has('wire')) s.wire = q.get('wire') === '1';
   return s;
 }

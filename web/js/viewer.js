@@ -8,6 +8,7 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { buildFeatures, disposeFeatures, pickFeature, setLineResolution } from './features.js';
 import { curvatureColors, curvatureRange } from './colormap.js';
+import { buildBox, disposeBox } from './box_view.js';
 
 const SURFACE_RGB = 0xb9c6d8;
 const AXES = { x: new THREE.Vector3(1, 0, 0), y: new THREE.Vector3(0, 1, 0), z: new THREE.Vector3(0, 0, 1) };
@@ -114,6 +115,7 @@ export class Viewer {
     this.clearMesh();
     this.data = result;
     this.bounds = new THREE.Box3(new THREE.Vector3(box[0], box[1], box[2]), new THREE.Vector3(box[3], box[4], box[5]));
+    this.setBox(box);
     const m = result.mesh;
     if (m) {
       const g = new THREE.BufferGeometry();
@@ -139,6 +141,24 @@ export class Viewer {
     this.applyColor();
     this.applyVisibility();
     this.applyClip();
+    this.render();
+  }
+
+  // The search box drawn as an outline (show.box), with axes and ticks (show.axes).
+  setBox(box) {
+    if (box) this.box = box.slice();
+    const want = this.box && this.show.box !== false ? `${this.box.join(',')}|${!!this.show.axes}` : '';
+    if (want === this.boxDrawn) return;
+    if (this.boxGroup) {
+      this.scene.remove(this.boxGroup);
+      disposeBox(this.boxGroup);
+      this.boxGroup = null;
+    }
+    this.boxDrawn = want;
+    if (want) {
+      this.boxGroup = buildBox(this.box, !!this.show.axes);
+      this.scene.add(this.boxGroup);
+    }
     this.render();
   }
 
@@ -189,6 +209,7 @@ export class Viewer {
 
   setVisibility(show) {
     this.show = { ...show };
+    this.setBox();
     this.applyVisibility();
     this.render();
   }
