@@ -30,7 +30,7 @@ export async function openViewer(context, url) {
 const PREVIEW_MAX = 4;
 export function jobPosts(requests, { refinedOnly = false } = {}) {
   return requests.filter((r) => r.method === 'POST' && new URL(r.url).pathname === '/v1/jobs' &&
-    (!refinedOnly || !r.body || JSON.parse(r.body).depth.max > PREVIEW_MAX)).length;
+    (!refinedOnly || !r.body || JSON.parse(r.body).max_error !== undefined || JSON.parse(r.body).depth.max > PREVIEW_MAX)).length;
 }
 
 // The panel's cells: {name: {text, value}}.
