@@ -11,6 +11,7 @@ speed is measured beside nginx by tests/bench/bench_http.py, never here):
    there; before that bound the kernel took all 300 answers, ~1.3 MB each, at once), and a
    reader that starts reading gets its whole answer, byte for byte.
 
+Both end with a clean exit (status 0, no sanitizer report: run them against build/asan too).
 Timeouts are generous bounds against hanging, not speed goals."""
 import http.client
 import os
@@ -115,6 +116,7 @@ class HttpConcurrencyTest(unittest.TestCase):
             served = d.metric("isomesh_http_requests_total", route="/v1/meshes/{key}.{format}",
                               status="200")
             self.assertEqual(served, BURST * ROUNDS)
+            self.assert_clean_exit(d)
 
     def test_slow_readers_hold_up_no_one(self):
         with Daemon("--workers", "1") as d:
@@ -140,6 +142,14 @@ class HttpConcurrencyTest(unittest.TestCase):
             finally:
                 for s in readers:
                     s.close()
+            self.assert_clean_exit(d)
+
+    def assert_clean_exit(self, d):
+        """SIGTERM ends the daemon with status 0 and no sanitizer report (ASan builds)."""
+        self.assertEqual(d.stop(), 0)
+        log = d.log()
+        self.assertNotIn("ERROR: AddressSanitizer", log)
+        self.assertNotIn("runtime error:", log)
 
 
 if __name__ == "__main__":
