@@ -18,6 +18,47 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Crossings (and, apart, tangent roots) one tile can join. A tile of a node that passed the
+ * flatness test is cut by one curve, or two where sheets cross (2 to 4 crossings); only a
+ * leaf at the maximum depth that failed it sees more, and 64 means 32 curves through one
+ * tile — an f oscillating far below the cell size. Past it the extra events are dropped: the lines
+ * through them are missing, which shows as open chains (counted, open_chains) where the
+ * neighbouring face kept its end. */
+#define MAX_CROSS 64
+/* Points sampled on the straight path between two arcs of one sign (arcs_joined): a region
+ * of the other sign must cross the path to part them. 15 samples, 1/16 of the path apart,
+ * see any such band wider than that; a thinner one is finer than the tile resolves, and
+ * each sample is one evaluation of f on every tile with 4 crossings. */
+#define JOIN_SAMPLES 15
+/* A zero lattice point's `before` sign is known only after the walk (the gap after the
+ * previous event): this marks it until then; never a sign (+1, -1, 0). */
+#define SIGN_UNKNOWN 99
+/* Where an X's chords meet, two crossing sheets make f singular: |f| there at most this
+ * fraction of (mean |∇f| at the four crossings × tile size) — the point is on the surface
+ * to 5% of the tile, first order — ... */
+#define X_CENTRE_F_FRAC 0.05
+/* ... and |∇f| there at most this fraction of that mean: between two parallel sheets close
+ * together (which pass the other tests) ∇f is as large as anywhere, while at a crossing it
+ * vanishes; a quarter leaves room for the X's centre being a chord intersection, not the
+ * exact singular point. */
+#define X_CENTRE_GRAD_FRAC 0.25
+/* The double-root search across the middle of two tangent roots probes ±this fraction of
+ * their distance to either side: far enough to leave a double line's narrow neighbourhood
+ * of one sign, near enough to stay on the tile between them. */
+#define DOUBLE_LINE_PROBE 0.25
+/* A wedge's bisector shorter than this (unit arms nearly opposite, an opening of ~180°) is
+ * no wedge: the apex is a point on one smooth curve. */
+#define WEDGE_MIN_BISECTOR 1e-6
+/* The wedge is probed this fraction of the tile size along its bisector (inside the wedge,
+ * outside the rounding of the apex), and never beyond this fraction of its shorter arm (so
+ * the probe stays between the two curves). */
+#define WEDGE_PROBE_FRAC 0.02
+#define WEDGE_PROBE_ARM 0.25
+/* Two families of lines whose gradient scores (the sum over their lines of the dot product
+ * of the unit gradients at a line's two ends: 1 each when the ends see one sheet) differ by
+ * less than this per line are a tie, broken by the centre's sign. */
+#define FAMILY_SCORE_MARGIN 0.1
+
 bool ism_flines_push(ism_flines *l, const ism_fpoint *a, const ism_fpoint *b, int kind)
 {
     if (l->n == l->cap) {
@@ -225,7 +266,7 @@ static bool tile_events(ism_cell_ctx *cx)
             memcpy(z.p, a->p, sizeof z.p);
             memcpy(z.g, a->g, sizeof z.g);
             z.flags = ISM_FP_ZERO;
-            if (!push_event(cx, &z, 99, gap_after_point[i], i)) /* before: filled below */
+            if (!push_event(cx, &z, SIGN_UNKNOWN, gap_after_point[i], i)) /* filled below */
                 goto fail;
         }
         if (sr.n == 1 && sr.r[0].kind == ISM_ROOT_CROSS) {
@@ -245,7 +286,7 @@ static bool tile_events(ism_cell_ctx *cx)
     }
     /* second pass: a zero point's `before` is the gap after the previous event */
     for (size_t k = 0; k < cx->nev; k++)
-        if (cx->ev[k].before == 99) {
+        if (cx->ev[k].before == SIGN_UNKNOWN) {
             size_t prev = (k + cx->nev - 1) % cx->nev;
             cx->ev[k].before = cx->ev[prev].after;
             if (cx->nev == 1)
@@ -317,7 +358,8 @@ static bool is_crossing_x(ism_cell_ctx *cx, const ism_tile *t, ism_fevent *k[4],
         gbar += ism_norm3(k[i]->pt.g) / 4;
     double g[3];
     double f = ism_sample_grad(&cx->s, x, g);
-    return fabs(f) <= 0.05 * gbar * tile_size(cx, t) && ism_norm3(g) <= 0.25 * gbar;
+    return fabs(f) <= X_CENTRE_F_FRAC * gbar * tile_size(cx, t) &&
+           ism_norm3(g) <= X_CENTRE_GRAD_FRAC * gbar;
 }
 
 /* Where the X's lines meet (x): a singular point of the face (the same tile gives the same
@@ -352,7 +394,7 @@ static bool double_line_between(ism_cell_ctx *cx, const ism_tile *t, const ism_f
     w[1] = nrm[2] * d[0] - nrm[0] * d[2];
     w[2] = nrm[0] * d[1] - nrm[1] * d[0];
     ism_normalise3(w);
-    double half = 0.25 * len;
+    double half = DOUBLE_LINE_PROBE * len;
     for (int k = 0; k < 3; k++) {
         a[k] = m[k] - half * w[k];
         b[k] = m[k] + half * w[k];
@@ -381,10 +423,10 @@ static bool wedge_at(ism_cell_ctx *cx, const ism_tile *t, const ism_fevent *apex
         return false;
     for (int k = 0; k < 3; k++)
         dir[k] = d1[k] + d2[k];
-    if (!(ism_normalise3(dir) > 1e-6))
+    if (!(ism_normalise3(dir) > WEDGE_MIN_BISECTOR))
         return false;
-    double step = 0.02 * tile_size(cx, t);
-    double lim = 0.25 * (l1 < l2 ? l1 : l2);
+    double step = WEDGE_PROBE_FRAC * tile_size(cx, t);
+    double lim = WEDGE_PROBE_ARM * (l1 < l2 ? l1 : l2);
     if (step > lim)
         step = lim;
     double q[3];
@@ -413,9 +455,6 @@ static int family(const ism_cell_ctx *cx, const int *cross, int nc, int cut, pai
     }
     return n;
 }
-
-#define MAX_CROSS 64
-#define JOIN_SAMPLES 15
 
 /* A point of the boundary arc that starts at crossing event a and ends at event b: a lattice
  * point between them, or, when both lie on one segment, the middle of the two. */
@@ -453,7 +492,27 @@ static bool arcs_joined(ism_cell_ctx *cx, const int *cross, int first)
     return true;
 }
 
-/* Joins crossings into lines; writes them to lines[] and returns how many. When two sheets
+/* The subtle case, 4 crossings k0..k3 in walking order around the tile, x where the chords
+ * k0-k2 and k1-k3 meet (is_crossing_x):
+ *
+ *   two sheets cross at x (an X):            a cone's apex just off the face:
+ *   f = 0 and ∇f = 0 at x                    f(x) > 0, the face cuts a hyperbola
+ *   +------k0-------k1------+                +------k0-------k1------+
+ *   |       \   -   /       |                |       \   -   /       |
+ *   |   +    \     /    +   |                |   +    `-----'    +   |
+ *   |         \   /         |                |                       |
+ *   |           x           |                |           x           |
+ *   |         /   \         |                |                       |
+ *   |   +    /     \    +   |                |   +    .-----.    +   |
+ *   |       /   -   \       |                |       /   -   \       |
+ *   +------k3-------k2------+                +------k3-------k2------+
+ *   lines k0-k2 and k1-k3, through x when    lines k0-k1 and k3-k2: the branches cut
+ *   it is a singular point (ISM_PLANE_APEX)  off the arcs of the sign f does NOT have
+ *                                            at x; the + region joins through x
+ *
+ * Both look alike from the boundary (same signs, near-parallel gradients at k0, k2 and at
+ * k1, k3); ism_plane_crossing tells them apart by Newton on the face's in-plane gradient.
+ * Joins crossings into lines; writes them to lines[] and returns how many. When two sheets
  * cross at a singular point of the tile, the two lines are the X's and *has_apex is set with
  * the point in *apex: the lines go through it. */
 static int pair_crossings(ism_cell_ctx *cx, const ism_tile *t, const int *cross, int nc,
@@ -493,7 +552,7 @@ static int pair_crossings(ism_cell_ctx *cx, const ism_tile *t, const int *cross,
         /* the region of the joined arcs' sign crosses the tile: cut off the other sign's arcs */
         int joined_sign = cx->ev[cross[joined0 ? 0 : 1]].after;
         plus = joined_sign < 0;
-    } else if (fabs(sp - sm) > 0.1 * np) {
+    } else if (fabs(sp - sm) > FAMILY_SCORE_MARGIN * np) {
         plus = sp > sm;
     } else {
         double c[3];

@@ -26,6 +26,15 @@
  * cost 2 threads a quarter more evaluations on the gyroid. */
 #define CHUNKS_PER_THREAD 16
 #define MIN_CHUNK_LEAVES 64
+/* The flatness tolerance (edge roots off their plane, their centroid off the surface) is
+ * plane_frac × node size but never more than this fraction of the finest cell h. Without the
+ * cap a large node that is flat enough relative to its own size stays coarse whatever
+ * depth.max asks, so a deeper request would not refine it. A quarter: with the default
+ * plane_frac 0.05 the cap binds only on nodes at least 5 finest cells across (0.05 × 5h =
+ * h/4), so nodes at the finest levels keep the paper's test, while a coarse node must lie
+ * within h/4 of its plane and of the surface — less than the finest cells' own vertex
+ * spacing shows; a smaller fraction splits flat regions toward depth.max for no visible
+ * gain. Overridable at build time (-DISM_FLAT_ABS_FRACTION=...) to measure other values. */
 #ifndef ISM_FLAT_ABS_FRACTION
 #define ISM_FLAT_ABS_FRACTION 0.25
 #endif

@@ -17,6 +17,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* A node has a handful of lines (a plain polygon: 3 to 6, 2 ends each): up to this many
+ * ends, insertion sort beats qsort's indirect comparison calls; above it, qsort. */
+#define INSERTION_SORT_MAX 32
+
 typedef struct end_ref {
     double p[3];
     int end; /* 2 * line + (0 for a, 1 for b) */
@@ -63,30 +67,30 @@ static double far_agreement(const ism_flines *l, int e1, int e2)
     return fabs(ism_dot3(g1, g2)) / (n1 * n2);
 }
 
-/* Pairs the single-polygon ends meeting at a point without shared lines. */
+/* Pairs the single-polygon ends meeting at a point without shared lines: each end, in
+ * order, with the later unpaired end whose far gradient agrees most. Any number of ends (an
+ * end is unpaired while its partner is -1, as build_graph set it; it used to stop at 64 ends,
+ * which a node never reaches: at most 3 faces x 4 tiles meet at a point, each tile giving it
+ * at most 2 lines). An end left without a partner starts an open chain. */
 static void pair_point(graph *g, const end_ref *group, int n)
 {
-    int reg[64], nr = 0;
-    for (int i = 0; i < n && nr < 64; i++)
-        reg[nr++] = group[i].end;
-    bool used[64] = {false};
-    for (int i = 0; i < nr; i++) {
-        if (used[i])
+    for (int i = 0; i < n; i++) {
+        int ei = group[i].end;
+        if (g->partner[ei] >= 0)
             continue;
         int best = -1;
         double best_a = -1;
-        for (int j = i + 1; j < nr; j++) {
-            if (used[j])
+        for (int j = i + 1; j < n; j++) {
+            int ej = group[j].end;
+            if (g->partner[ej] >= 0)
                 continue;
-            double a = far_agreement(g->l, reg[i], reg[j]);
+            double a = far_agreement(g->l, ei, ej);
             if (a > best_a)
-                best_a = a, best = j;
+                best_a = a, best = ej;
         }
-        used[i] = true;
         if (best >= 0) {
-            used[best] = true;
-            g->partner[reg[i]] = reg[best];
-            g->partner[reg[best]] = reg[i];
+            g->partner[ei] = best;
+            g->partner[best] = ei;
         }
     }
 }
@@ -109,7 +113,7 @@ static bool build_graph(graph *g, const ism_flines *l)
         refs[e].end = (int)e;
         g->partner[e] = -1;
     }
-    if (ne <= 32) { /* a node has a handful of lines: insertion sort beats qsort's calls */
+    if (ne <= INSERTION_SORT_MAX) {
         for (size_t i = 1; i < ne; i++)
             for (size_t j = i; j > 0 && cmp_end(&refs[j - 1], &refs[j]) > 0; j--) {
                 end_ref t = refs[j];
@@ -236,9 +240,11 @@ static bool close_with_shared(graph *g, int from, int to, ism_loops *out, bool *
     }
     bool found = via[to] != -2;
     if (found) {
-        /* collect the path backwards from `to`, then append its inner points in order */
-        int path[256], np = 0;
-        for (int pt = to; pt != from && np < 256; pt = g->node[via[pt]])
+        /* collect the path backwards from `to`, then append its inner points in order; the
+         * path visits each point at most once, so the queue (npoints long, no longer needed)
+         * holds it whatever its length (it used to stop at 256 lines) */
+        int *path = queue, np = 0;
+        for (int pt = to; pt != from; pt = g->node[via[pt]])
             path[np++] = via[pt];
         for (int i = np - 1; i >= 0; i--) {
             g->used[path[i] >> 1] = true;
