@@ -96,14 +96,15 @@ def u64(v): return struct.pack("<Q", v)
 def blob(b): return u32(len(b)) + b
 
 
-def job_payload(json_text, fmt=b""):
-    return u32(8) + u32(1) + u64(100000) + u64(1 << 28) + blob(fmt) + blob(json_text)
+def job_payload(json_text, fmt=b"", computed=b""):
+    return (u32(8) + u32(1) + u64(100000) + u64(1 << 28) + blob(fmt) + blob(json_text) +
+            blob(computed))
 
 
-def result_payload(status, body):
-    return (u32(status) + u32(1234) + blob(b"ab" * 32) + blob(b"drc") +
-            blob(b"application/octet-stream") + blob(b'{"triangles": 2}') + blob(b"{}") +
-            blob(b'{"expr": "x"}') + blob(body))
+def result_payload(status, body, computed=b""):
+    return (u32(status) + u32(1234) + blob(b"ab" * 32) + blob(b"cd" * 32) + u32(1) +
+            blob(b"drc") + blob(b"application/vnd.google.draco") + blob(b'{"triangles": 2}') +
+            blob(b"{}") + blob(b'{"expr": "x"}') + blob(body) + blob(computed))
 
 
 FRAMES = [
@@ -115,6 +116,8 @@ FRAMES = [
     (0x08, frame(2, 1, job_payload(b"{}", b"glb"))[:20] + b"\0\0\0\0" +
      job_payload(b"{}", b"glb")),  # checksum left for the harness to fix (mode bit 3)
     (0x10, result_payload(200, b"body")),    # payload-only mode
+    (0x10, result_payload(200, b"body", b"ISMS" + bytes(12))),  # with a computed surface
+    (0x10, job_payload(b'{"preset": "sphere"}', b"ply", b"ISMS" + bytes(12))),
     (0x10, job_payload(b'{"preset": "torus"}', b"stl")),
     (0x44, frame(4, 3, result_payload(500, b""))[:40]),  # truncated
     (0x05, b"ISMF\x02" + bytes(19)),          # wrong version
