@@ -371,7 +371,8 @@ static void on_result(ismd_pool *p, worker *w, const ism_frame *fr)
             cache_result(p, f, r.body, stats, features, canonical ? canonical : f->request);
             r.stats = stats;
             r.features = features;
-            stats_timing(stats, r.timing, sizeof r.timing);
+            if (fres.polygonised) /* an encoding alone: the stats' phases are not this run's */
+                stats_timing(stats, r.timing, sizeof r.timing);
         }
     } else {
         r.body = ism_blob_copy(fres.body, fres.body_len);
