@@ -64,3 +64,18 @@ bool ism_curve_fns_build(const ism_request *req, ism_curve_fns *out, ism_req_err
     }
     return true;
 }
+
+bool ism_curve_fns_add_crease(ism_curve_fns *c, const ism_tape *f)
+{
+    ism_cut_fn crease;
+    if (!ism_cut_crease_fn(f, &crease))
+        return true;
+    ism_cut_fn *fns = realloc(c->fns, (c->n + 1) * sizeof *fns);
+    if (!fns)
+        return false;
+    memmove(fns + 1, fns, c->n * sizeof *fns);
+    fns[0] = crease;
+    c->fns = fns;
+    c->n++;
+    return true;
+}

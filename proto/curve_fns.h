@@ -19,4 +19,8 @@ typedef struct ism_curve_fns {
 bool ism_curve_fns_build(const ism_request *req, ism_curve_fns *out, ism_req_error *err);
 void ism_curve_fns_free(ism_curve_fns *c);
 
+/* Puts f's crease (f = min/max(a, b) at the top of its tape: where a = b) first; nothing
+ * when f has none. False when out of memory. */
+bool ism_curve_fns_add_crease(ism_curve_fns *c, const ism_tape *f);
+
 #endif

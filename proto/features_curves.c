@@ -5,8 +5,8 @@
 #include "proto/features.h"
 #include "proto/json_writer.h"
 
-static const char *const kind_names[ISM_CUT_KIND_COUNT] = {"section", "level",
-                                                             "intersection", "silhouette"};
+static const char *const kind_names[ISM_CUT_KIND_COUNT] = {
+    "section", "level", "intersection", "silhouette", "crease"};
 static const char *const vertex_types[ISM_ARR_VERTEX_TYPE_COUNT] = {"crossing", "branch",
                                                                     "end", "loop"};
 

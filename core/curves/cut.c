@@ -14,6 +14,8 @@
 /* Newton may move a split point at most this many lengths of its edge (further means it
  * ran to another part of the curve). */
 #define CUT_MAX_MOVE_EDGES 2.0
+/* Bisection steps for the fallback start on an edge (2^-40 of the edge). */
+#define CUT_BISECT_STEPS 40
 
 typedef struct cut_state {
     ism_cut_eval *ev;
@@ -28,6 +30,9 @@ typedef struct cut_state {
     size_t cap_vcurve;
     size_t cap_edges;
     double *gv;              /* g at the vertices of the current function */
+    double *reach;           /* per vertex: its longest edge (how far Newton may move a point
+                                of its edges: the polygoniser's vertices near a crease may lie
+                                that far off the surface) */
     signed char *sg;
 } cut_state;
 
@@ -109,8 +114,8 @@ static void normal_at(cut_state *s, const double p[3], const float ref[3], float
 }
 
 /* Puts point p (on or near edge u-w of length len) on curve k, and on curve j too when it is
- * not NONE. Counts a failure and keeps p. */
-static void refine_point(cut_state *s, uint32_t j, size_t k, double len, double p[3])
+ * not NONE. False (p kept) when Newton fails. */
+static bool try_refine(cut_state *s, uint32_t j, size_t k, double len, double p[3])
 {
     size_t ks[2] = {k, j};
     int nk = 1;
@@ -119,8 +124,33 @@ static void refine_point(cut_state *s, uint32_t j, size_t k, double len, double 
         ks[1] = k;
         nk = 2;
     }
-    if (!ism_cut_refine(s->ev, ks, nk, s->tol, CUT_MAX_MOVE_EDGES * len, p))
+    return ism_cut_refine(s->ev, ks, nk, s->tol, CUT_MAX_MOVE_EDGES * len, p);
+}
+
+static void refine_point(cut_state *s, uint32_t j, size_t k, double len, double p[3])
+{
+    if (!try_refine(s, j, k, len, p))
         s->c->unrefined++;
+}
+
+/* The root of g_k on the segment a-b (signs ga, gb apart) by bisection: a start for Newton
+ * where g bends too much for the linear estimate. */
+static void segment_root(cut_state *s, size_t k, const double a[3], const double b[3],
+                         double ga, double p[3])
+{
+    double lo = 0, hi = 1;
+    for (int it = 0; it < CUT_BISECT_STEPS; it++) {
+        double t = 0.5 * (lo + hi), q[3];
+        for (int c = 0; c < 3; c++)
+            q[c] = a[c] + t * (b[c] - a[c]);
+        double g = ism_cut_g(s->ev, k, q, NULL);
+        if ((g < 0) == (ga < 0))
+            lo = t;
+        else
+            hi = t;
+    }
+    for (int c = 0; c < 3; c++)
+        p[c] = a[c] + 0.5 * (lo + hi) * (b[c] - a[c]);
 }
 
 /* The vertex where g_k = 0 splits edge u-w (made once per edge). NONE when out of memory. */
@@ -141,7 +171,11 @@ static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
         len2 += (b[c] - a[c]) * (b[c] - a[c]);
     }
     uint32_t j = edge_curve(s, u, w);
-    refine_point(s, j, k, sqrt(len2), p);
+    double len = fmax(sqrt(len2), fmax(s->reach[u], s->reach[w]));
+    if (!try_refine(s, j, k, len, p)) {
+        segment_root(s, k, a, b, s->gv[u], p);
+        refine_point(s, j, k, len, p);
+    }
     float nrm[3];
     normal_at(s, p, s->m->normal + 3 * (size_t)u, nrm);
     uint32_t v = ism_mesh_add_vertex(s->m, p, nrm);
@@ -206,6 +240,20 @@ static bool split_triangle(cut_state *s, size_t k, const uint32_t t[3])
     return false;
 }
 
+/* Per vertex: its longest edge (0 for a vertex no triangle uses). NULL when out of memory. */
+static double *longest_edges(const ism_mesh *m)
+{
+    double *len = calloc(m->nverts + 1, sizeof *len);
+    for (size_t t = 0; len && t < m->ntris; t++)
+        for (int i = 0; i < 3; i++) {
+            uint32_t a = m->tri[3 * t + i], b = m->tri[3 * t + (i + 1) % 3];
+            double d = sqrt(dist2(m, a, b));
+            len[a] = d > len[a] ? d : len[a];
+            len[b] = d > len[b] ? d : len[b];
+        }
+    return len;
+}
+
 /* Signs of g_k at the vertices; those on the curve are put on it (and on an earlier curve
  * they lie on). */
 static bool classify(cut_state *s, size_t k)
@@ -221,13 +269,16 @@ static bool classify(cut_state *s, size_t k)
         double g = ism_cut_g(s->ev, k, m->pos + 3 * v, NULL);
         s->gv[v] = g;
         s->sg[v] = (signed char)((g > 0) - (g < 0));
-        if (g == 0) {
-            uint32_t j = vcurve_of(s, (uint32_t)v);
-            refine_point(s, j, k, s->tol * 1e6, m->pos + 3 * v);
+    }
+    free(s->reach);
+    if (!(s->reach = longest_edges(m)))
+        return false;
+    for (size_t v = 0; v < m->nverts; v++)
+        if (s->gv[v] == 0) {
+            refine_point(s, vcurve_of(s, (uint32_t)v), k, s->reach[v], m->pos + 3 * v);
             if (!set_vcurve(s, (uint32_t)v, (uint32_t)k))
                 return false;
         }
-    }
     return true;
 }
 
@@ -286,5 +337,6 @@ bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
     free(s.vcurve);
     free(s.gv);
     free(s.sg);
+    free(s.reach);
     return ok;
 }

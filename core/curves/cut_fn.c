@@ -8,6 +8,8 @@
 
 /* Newton steps before giving up (quadratic convergence needs a handful from a mesh point). */
 #define CUT_NEWTON_ITERS 30
+/* Step halvings tried when a full Newton step does not reduce the residual. */
+#define CUT_DAMPING_HALVINGS 12
 /* J Jᵀ with a determinant below this × the product of its diagonal is singular (the two
  * surfaces are tangent there): no reliable step. */
 #define CUT_SINGULAR_REL 1e-14
@@ -56,11 +58,38 @@ static double silhouette_g(ism_cut_eval *ev, const double d[3], const double p[3
     return g[0] * d[0] + g[1] * d[1] + g[2] * d[2];
 }
 
+/* The crease function a − b of f = min/max(a, b). */
+static double crease_g(ism_cut_eval *ev, const double p[3], double grad[3])
+{
+    double v[2], g[2][3];
+    if (!ism_eval_top_branches(ev->f, ev->fws, p[0], p[1], p[2], v, g))
+        return NAN;
+    for (int i = 0; grad && i < 3; i++)
+        grad[i] = g[0][i] - g[1][i];
+    return v[0] - v[1];
+}
+
+bool ism_cut_crease_fn(const ism_tape *f, ism_cut_fn *out)
+{
+    ism_eval_ws *ws = ism_eval_ws_new(f);
+    double v[2], g[2][3];
+    bool top = ws && ism_eval_top_branches(f, ws, 0, 0, 0, v, g);
+    ism_eval_ws_free(ws);
+    if (top) {
+        memset(out, 0, sizeof *out);
+        out->kind = ISM_CUT_CREASE;
+        out->source = -1;
+    }
+    return top;
+}
+
 double ism_cut_g(ism_cut_eval *ev, size_t k, const double p[3], double grad[3])
 {
     const ism_cut_fn *fn = &ev->fns[k];
     if (fn->kind == ISM_CUT_SILHOUETTE)
         return silhouette_g(ev, fn->n, p, grad);
+    if (fn->kind == ISM_CUT_CREASE)
+        return crease_g(ev, p, grad);
     double v = fn->n[0] * p[0] + fn->n[1] * p[1] + fn->n[2] * p[2] - fn->c, g[3] = {0, 0, 0};
     if (fn->tape)
         v += grad ? ism_eval_gradient(fn->tape, ev->gws[k], p[0], p[1], p[2], g)
@@ -127,8 +156,8 @@ bool ism_cut_refine(ism_cut_eval *ev, const size_t *ks, int nk, double tol, doub
 {
     double x[3] = {p[0], p[1], p[2]}, r[3], J[3][3];
     int m = nk + 1;
+    double worst = system_at(ev, ks, nk, x, r, J);
     for (int it = 0; it <= CUT_NEWTON_ITERS; it++) {
-        double worst = system_at(ev, ks, nk, x, r, J);
         if (!isfinite(worst))
             return false;
         if (worst <= tol) {
@@ -138,7 +167,7 @@ bool ism_cut_refine(ism_cut_eval *ev, const size_t *ks, int nk, double tol, doub
             memcpy(p, x, sizeof x);
             return true;
         }
-        double A[3][3], y[3];
+        double A[3][3], y[3], step[3] = {0, 0, 0};
         for (int i = 0; i < m; i++)
             for (int j = 0; j < m; j++)
                 A[i][j] = dot3(J[i], J[j]);
@@ -146,7 +175,20 @@ bool ism_cut_refine(ism_cut_eval *ev, const size_t *ks, int nk, double tol, doub
             return false;
         for (int c = 0; c < 3; c++)
             for (int i = 0; i < m; i++)
-                x[c] -= J[i][c] * y[i];
+                step[c] -= J[i][c] * y[i];
+        /* damped: halve the step until the residual drops (a kink of f, a far start) */
+        double lambda = 1, next = INFINITY, xn[3];
+        for (int h = 0; h < CUT_DAMPING_HALVINGS; h++, lambda *= 0.5) {
+            for (int c = 0; c < 3; c++)
+                xn[c] = x[c] + lambda * step[c];
+            next = system_at(ev, ks, nk, xn, r, J);
+            if (next < worst)
+                break;
+        }
+        if (!(next < worst))
+            return false;
+        memcpy(x, xn, sizeof x);
+        worst = next;
     }
     return false;
 }

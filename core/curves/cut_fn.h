@@ -9,10 +9,11 @@
 #include "core/eval/eval.h"
 
 enum ism_cut_kind { ISM_CUT_SECTION, ISM_CUT_LEVEL, ISM_CUT_INTERSECTION,
-                    ISM_CUT_SILHOUETTE, ISM_CUT_KIND_COUNT };
+                    ISM_CUT_SILHOUETTE, ISM_CUT_CREASE, ISM_CUT_KIND_COUNT };
 
 /* g(p) = tape(p) + n·p − c (tape NULL: the linear part alone); for a silhouette
- * g(p) = ∇f(p)·n (tape and c unused). */
+ * g(p) = ∇f(p)·n (tape and c unused); for a crease, where f = min/max(a, b) at the top of
+ * its tape, g = a − b (the branches from f's tape; everything else unused). */
 typedef struct ism_cut_fn {
     const ism_tape *tape;
     double n[3];
@@ -29,6 +30,10 @@ typedef struct ism_cut_eval {
     ism_eval_ws **gws;   /* per function, NULL for a plane */
     size_t nfns;
 } ism_cut_eval;
+
+/* The crease function of f when f's tape ends in min(a, b) or max(a, b); false otherwise.
+ * (Only the top min/max: CSG nested deeper gives no crease curve.) */
+bool ism_cut_crease_fn(const ism_tape *f, ism_cut_fn *out);
 
 bool ism_cut_eval_init(ism_cut_eval *ev, const ism_tape *f, const ism_cut_fn *fns, size_t n);
 void ism_cut_eval_free(ism_cut_eval *ev);

@@ -47,6 +47,12 @@ void ism_eval_interval_batch(const ism_tape *t, ism_eval_ws *ws, const ism_inter
 double ism_eval_gradient(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
                          double grad[3]);
 
+/* When t's last instruction is min(a, b) or max(a, b) of two registers (a CSG union or
+ * intersection at the top of f): true, with the two branches' values and gradients at the
+ * point; false otherwise (nothing evaluated). */
+bool ism_eval_top_branches(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
+                           double val[2], double grad[2][3]);
+
 /* f, gradient and Hessian (hess = xx, xy, xz, yy, yz, zz). Returns f. */
 double ism_eval_hessian(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
                         double grad[3], double hess[6]);

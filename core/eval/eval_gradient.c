@@ -4,6 +4,7 @@
 #include "core/eval/deriv_rules.h"
 #include "core/eval/trig_pair.h"
 #include "core/eval/workspace.h"
+#include <string.h>
 
 static ism_dual dual_binary(int op, ism_dual a, ism_dual b)
 {
@@ -78,4 +79,27 @@ double ism_eval_gradient(const ism_tape *t, ism_eval_ws *ws, double x, double y,
     for (int k = 0; k < 3; k++)
         grad[k] = f->d[k];
     return f->v;
+}
+
+bool ism_eval_top_branches(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
+                           double val[2], double grad[2][3])
+{
+    if (!t->len || !ism_ws_fits(ws, t))
+        return false;
+    const ism_instr *top = &t->code[t->len - 1];
+    if ((top->op != ISM_OP_MIN_RR && top->op != ISM_OP_MAX_RR) || top->out != t->result)
+        return false;
+    ism_dual *r = ws->dual;
+    r[ISM_REG_X] = (ism_dual){ x, { 1.0, 0.0, 0.0 } };
+    r[ISM_REG_Y] = (ism_dual){ y, { 0.0, 1.0, 0.0 } };
+    r[ISM_REG_Z] = (ism_dual){ z, { 0.0, 0.0, 1.0 } };
+    ism_trig_memo trig = {.n = 0};
+    for (size_t i = 0; i + 1 < t->len; i++)
+        r[t->code[i].out] = dual_op(&t->code[i], r, &trig);
+    const ism_dual *br[2] = {&r[top->a], &r[top->b]};
+    for (int s = 0; s < 2; s++) {
+        val[s] = br[s]->v;
+        memcpy(grad[s], br[s]->d, sizeof grad[s]);
+    }
+    return true;
 }

@@ -381,6 +381,10 @@ static bool cut_curves(const ism_request *req, const ism_tape *tape, ism_pipelin
     ism_req_error e;
     if (!ism_curve_fns_build(req, &s->cf, &e))
         return fail(r, &e);
+    if (!ism_curve_fns_add_crease(&s->cf, tape))
+        return fail_with(r, 500, "no_memory", "%s", "out of memory cutting the crease");
+    if (!s->cf.n)
+        return true;
     ism_error err;
     memset(&err, 0, sizeof err);
     if (!ism_curves_cut(tape, s->cf.fns, s->cf.n, req->box, &c->mesh, &s->cut, &s->arr, &err))
@@ -416,7 +420,7 @@ static bool polygonise_and_analyse(const ism_request *req, const ism_tape *tape,
     if (cancelled(hooks))
         return fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
     r->polygonised = true;
-    if (req->ncurves && !cut_curves(req, tape, r, c, s))
+    if (!cut_curves(req, tape, r, c, s))
         return false;
 
     double t = ism_now_ms();

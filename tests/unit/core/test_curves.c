@@ -188,3 +188,165 @@ Test(curves, torus_z0)
     for (int w = 0; w < 3; w++)
         torus_cut(w, plane(0, 0, 1, 0), 2 * M_PI * 0.6, 2 * M_PI * 1.4);
 }
+
+/* ---- the crease of a CSG surface: max(gyroid, ball) ---- */
+
+#include <stdlib.h>
+#include "core/eval/eval.h"
+
+static const ism_param gyroid_k[] = {{"k", 4}};
+static const pf_surface gyroid_ball = {
+    "max(sin(k*x)*cos(k*y) + sin(k*y)*cos(k*z) + sin(k*z)*cos(k*x), x^2 + y^2 + z^2 - 1.96)",
+    gyroid_k, 1, NULL, 0};
+static const pf_surface gyroid_alone = {
+    "sin(k*x)*cos(k*y) + sin(k*y)*cos(k*z) + sin(k*z)*cos(k*x)", gyroid_k, 1, NULL, 0};
+
+#define CREASE_TOL_REL 1e-9  /* the issue: crease points within 1e-9 × diagonal of both */
+#define DIHEDRAL_DEG 2.0     /* the issue: mesh dihedral vs the gradients' angle */
+
+typedef struct edge_tri {
+    uint64_t key;
+    uint32_t tri;
+} edge_tri;
+
+static int cmp_edge_tri(const void *a, const void *b)
+{
+    uint64_t x = ((const edge_tri *)a)->key, y = ((const edge_tri *)b)->key;
+    return (x > y) - (x < y);
+}
+
+static uint64_t ekey(uint32_t a, uint32_t b)
+{
+    return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
+}
+
+static void tri_normal(const ism_mesh *m, uint32_t t, double n[3])
+{
+    const uint32_t *v = m->tri + 3 * (size_t)t;
+    const double *a = m->pos + 3 * (size_t)v[0], *b = m->pos + 3 * (size_t)v[1],
+                 *c = m->pos + 3 * (size_t)v[2];
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    n[0] = u[1] * w[2] - u[2] * w[1];
+    n[1] = u[2] * w[0] - u[0] * w[2];
+    n[2] = u[0] * w[1] - u[1] * w[0];
+    double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int i = 0; i < 3; i++)
+        n[i] /= l;
+}
+
+static double angle_deg(const double a[3], const double b[3])
+{
+    double d = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) /
+               sqrt((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) *
+                    (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]));
+    return acos(fmax(-1, fmin(1, d))) * 180 / M_PI;
+}
+
+static void gyroid_crease(int which)
+{
+    const double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
+    double box[6];
+    shifted(base, which, 7, box);
+    ism_tape *f = pf_compile(&gyroid_ball), *gy = pf_compile(&gyroid_alone);
+    ism_cut_fn crease;
+    cr_assert(ism_cut_crease_fn(f, &crease));
+    ism_tape_free(f);
+    cut_run r;
+    ism_mesh_init(&r.m);
+    {
+        ism_tape *t = pf_compile(&gyroid_ball);
+        ism_poly_options o;
+        ism_poly_options_default(&o);
+        memcpy(o.box, box, sizeof o.box);
+        o.min_depth = 3;
+        o.max_depth = 7;
+        ism_poly_stats st;
+        ism_error err;
+        cr_assert_eq(ism_polygonise(t, &o, &r.m, &st, &err), ISM_POLY_OK);
+        cr_assert(ism_mesh_drop_loose(&r.m));
+        ism_cut_eval ev;
+        cr_assert(ism_cut_eval_init(&ev, t, &crease, 1));
+        memset(&r.cut, 0, sizeof r.cut);
+        r.diag = diagonal(box);
+        cr_assert(ism_cut_mesh(&ev, 1e-3 * CURVE_TOL_REL * r.diag, &r.m, &r.cut));
+        ism_cut_eval_free(&ev);
+        ism_tape_free(t);
+    }
+    cr_log_info("crease: %zu edges, %zu unrefined, worst f %g g %g", r.cut.nedges, r.cut.unrefined, r.cut.worst_f, r.cut.worst_g);
+    cr_assert_gt(r.cut.nedges, 100);
+    ism_eval_ws *ws = ism_eval_ws_new(gy);
+    /* every crease vertex on the gyroid and on the sphere (closed forms) */
+    for (size_t i = 0; i < r.cut.nedges; i++)
+        for (int e = 0; e < 2; e++) {
+            const double *p = r.m.pos + 3 * (size_t)(e ? r.cut.edges[i].b : r.cut.edges[i].a);
+            double g[3], v = ism_eval_gradient(gy, ws, p[0], p[1], p[2], g);
+            double dg = fabs(v) / sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+            double rr = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+            cr_assert_leq(dg, CREASE_TOL_REL * r.diag, "gyroid %g", dg);
+            cr_assert_leq(fabs(rr - 1.4), CREASE_TOL_REL * r.diag, "sphere %g", rr - 1.4);
+        }
+    /* no mesh edge straddles the crease: its ends are on one branch's side (or on it) */
+    double *side = malloc(r.m.nverts * sizeof *side);
+    for (size_t v = 0; v < r.m.nverts; v++) {
+        const double *p = r.m.pos + 3 * v;
+        side[v] = ism_eval_point(gy, ws, p[0], p[1], p[2]) -
+                  (p[0] * p[0] + p[1] * p[1] + p[2] * p[2] - 1.96);
+    }
+    uint8_t *on = calloc(r.m.nverts, 1);
+    for (size_t i = 0; i < r.cut.nedges; i++)
+        on[r.cut.edges[i].a] = on[r.cut.edges[i].b] = 1;
+    size_t straddle = 0;
+    for (size_t t = 0; t < r.m.ntris; t++)
+        for (int i = 0; i < 3; i++) {
+            uint32_t a = r.m.tri[3 * t + i], b = r.m.tri[3 * t + (i + 1) % 3];
+            straddle += !on[a] && !on[b] && side[a] * side[b] < 0;
+        }
+    cr_assert_eq(straddle, 0, "%zu mesh edges cross the crease", straddle);
+    /* the dihedral angle along the crease against the angle between the two gradients */
+    edge_tri *et = malloc(3 * r.m.ntris * sizeof *et);
+    for (size_t t = 0; t < r.m.ntris; t++)
+        for (int i = 0; i < 3; i++)
+            et[3 * t + i] = (edge_tri){ekey(r.m.tri[3 * t + i], r.m.tri[3 * t + (i + 1) % 3]),
+                                       (uint32_t)t};
+    qsort(et, 3 * r.m.ntris, sizeof *et, cmp_edge_tri);
+    double worst = 0, sum = 0;
+    size_t n = 0;
+    for (size_t i = 0; i < r.cut.nedges; i++) {
+        edge_tri key = {ekey(r.cut.edges[i].a, r.cut.edges[i].b), 0};
+        edge_tri *hit = bsearch(&key, et, 3 * r.m.ntris, sizeof *et, cmp_edge_tri);
+        if (!hit)
+            continue;
+        while (hit > et && hit[-1].key == key.key)
+            hit--;
+        if (hit + 2 > et + 3 * r.m.ntris || hit[1].key != key.key ||
+            (hit + 2 < et + 3 * r.m.ntris && hit[2].key == key.key))
+            continue; /* a border edge at the box */
+        double n0[3], n1[3], ga[3], p[3];
+        tri_normal(&r.m, hit[0].tri, n0);
+        tri_normal(&r.m, hit[1].tri, n1);
+        for (int k = 0; k < 3; k++)
+            p[k] = 0.5 * (r.m.pos[3 * (size_t)r.cut.edges[i].a + k] +
+                          r.m.pos[3 * (size_t)r.cut.edges[i].b + k]);
+        ism_eval_gradient(gy, ws, p[0], p[1], p[2], ga);
+        double gb[3] = {2 * p[0], 2 * p[1], 2 * p[2]};
+        double d = fabs(angle_deg(n0, n1) - angle_deg(ga, gb));
+        worst = fmax(worst, d);
+        sum += d;
+        n++;
+    }
+    cr_log_info("gyroid crease %d: %zu edges, dihedral vs gradients: mean %.3f max %.3f deg",
+                which, n, sum / (double)n, worst);
+    cr_assert_gt(n, 100);
+    cr_assert_leq(sum / (double)n, DIHEDRAL_DEG);
+    free(et);
+    free(on);
+    free(side);
+    ism_eval_ws_free(ws);
+    ism_tape_free(gy);
+    ism_cut_free(&r.cut);
+    ism_mesh_free(&r.m);
+}
+
+Test(curves, gyroid_ball_crease) { gyroid_crease(0); }
+Test(curves, gyroid_ball_crease_shift_037) { gyroid_crease(2); }
