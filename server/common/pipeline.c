@@ -387,8 +387,10 @@ static bool cut_curves(const ism_request *req, const ism_tape *tape, ism_pipelin
         return true;
     ism_error err;
     memset(&err, 0, sizeof err);
+    double t = ism_now_ms();
     if (!ism_curves_cut(tape, s->cf.fns, s->cf.n, req->box, &c->mesh, &s->cut, &s->arr, &err))
         return fail_with(r, 500, "no_memory", "%s", err.message);
+    c->timings_ms[ISM_TIME_SINGULAR] += ism_now_ms() - t; /* the curves are singular stages too */
     s->have_curves = true;
     return true;
 }
