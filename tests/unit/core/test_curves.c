@@ -350,3 +350,57 @@ static void gyroid_crease(int which)
 
 Test(curves, gyroid_ball_crease) { gyroid_crease(0); }
 Test(curves, gyroid_ball_crease_shift_037) { gyroid_crease(2); }
+
+/* ---- Viviani's curve: the unit sphere ∩ the cylinder (x − ½)² + y² = ¼ ---- */
+
+static const pf_surface cylinder = {"(x - 0.5)^2 + y^2 - 0.25", NULL, 0, NULL, 0};
+
+/* Its length from the parametrisation (cos²t, cos t sin t, sin t), |p'| = √(1 + cos²t),
+ * by Simpson's rule on 20,000 intervals. */
+static double viviani_length(void)
+{
+    const int n = 20000;
+    double h = 2 * M_PI / n, s = 0;
+    for (int i = 0; i <= n; i++) {
+        double c = cos(i * h), w = (i == 0 || i == n) ? 1 : (i % 2 ? 4 : 2);
+        s += w * sqrt(1 + c * c);
+    }
+    return s * h / 3;
+}
+
+static void viviani(int which)
+{
+    const double base[6] = {-1.3, -1.3, -1.3, 1.3, 1.3, 1.3};
+    double box[6];
+    shifted(base, which, 8, box);
+    ism_tape *g = pf_compile(&cylinder);
+    ism_cut_fn fn = {.tape = g, .kind = ISM_CUT_INTERSECTION};
+    cut_run r;
+    run(&sphere, box, &fn, 1, &r);
+    const ism_arrangement *a = &r.arr;
+    double len = 0;
+    for (size_t c = 0; c < a->ncurves; c++)
+        len += a->curves[c].length;
+    double want = viviani_length();
+    cr_log_info("viviani %d: %zu V (%s, degree %d), %zu curves, %zu faces, length %.5f of %.5f",
+                which, a->nvertices, a->nvertices ? (a->vertices[0].type == ISM_ARR_BRANCH ?
+                "branch" : "loop") : "-", a->nvertices ? a->vertices[0].degree : 0, a->ncurves,
+                a->nfaces, len, want);
+    cr_assert_float_eq(len, want, LENGTH_REL * want);
+    /* Known gap: the surfaces are tangent at (1, 0, 0), and only when a mesh vertex lies
+     * there (the symmetric box) does the cut make it the self-crossing vertex; off the
+     * lattice the two lobes join through the tangency (one loop, 2 faces instead of 3). */
+    if (which == 0) { /* one curve, a degree-4 vertex at (1, 0, 0), three faces */
+        cr_assert_eq(a->nfaces, 3);
+        cr_assert_eq(a->ncurves, 1);
+        cr_assert_eq(a->nvertices, 1);
+        cr_assert_eq(a->vertices[0].degree, 4);
+        cr_assert_float_eq(r.m.pos[3 * (size_t)a->vertices[0].v], 1.0, 1e-12);
+    }
+    run_free(&r);
+    ism_tape_free(g);
+}
+
+Test(curves, viviani) { viviani(0); }
+Test(curves, viviani_shift_1e3) { viviani(1); }
+Test(curves, viviani_shift_037) { viviani(2); }
