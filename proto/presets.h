@@ -26,7 +26,18 @@ typedef struct ism_preset {
     size_t nparams;
     double box[6];
     int min_depth, max_depth;
+    const char *source;        /* where the surface comes from (gallery entries) */
+    unsigned facts;            /* which of the stated facts below hold (enum ism_fact bits) */
+    int nodes;                 /* singular points of type node in the box */
+    int euler;                 /* Euler characteristic of the mesh */
+    int components;            /* connected components */
+    int singular;              /* singular points of any type (features JSON v2) */
 } ism_preset;
+
+/* The facts a gallery entry states; tests/cli/test_gallery.py checks each against the mesh
+ * (in the entry's box and in boxes shifted off the octree lattice). */
+enum ism_fact { ISM_FACT_NODES = 1, ISM_FACT_EULER = 2, ISM_FACT_COMPONENTS = 4,
+                ISM_FACT_SINGULAR = 8 };
 
 size_t ism_preset_count(void);
 const ism_preset *ism_preset_at(size_t i);
@@ -34,7 +45,8 @@ const ism_preset *ism_preset_at(size_t i);
 const ism_preset *ism_preset_find(const char *name);
 
 /* {"presets": [{"name", "title", "about", "expr", "let": [[name, source]...], "params":
- * [{"name", "default", "min", "max"}...], "box": [6], "depth": {"min", "max"}}...]}.
+ * [{"name", "default", "min", "max"}...], "box": [6], "depth": {"min", "max"}, "source",
+ * "facts": {"nodes"?, "euler"?, "components"?, "singular_points"?}}...]}.
  * malloc'd text, NULL when out of memory. */
 char *ism_presets_json(size_t *len);
 

@@ -1,12 +1,16 @@
 // explore.test.mjs — the box and inspection in the viewer: a typed expression gets a box
 // fitted around its zero set (POST /v1/box) that contains the whole surface (closed form:
 // an off-centre sphere) and the mesh is not cut (no boundary edges); the box outline and
-// the axes with ticks change the picture; a box typed by hand is kept.
+// the axes with ticks change the picture; a box typed by hand is kept; the gallery search;
+// picking a node of the Cayley cubic gives its type and its closed-form coordinates within
+// 1e-6; a PNG export has the size asked for.
 import { describe, it, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { startDaemon, stopDaemon, startBrowser, stopBrowser } from './lib/harness.mjs';
 import { openViewer, waitForMesh, loads, viewShot } from './lib/page.mjs';
-import { changedShare } from './lib/png.mjs';
+import fs from 'node:fs';
+import { changedShare, decodePng, pixelStats } from './lib/png.mjs';
+import { artifact } from './lib/harness.mjs';
 
 let daemon = null;
 let browser = null;
@@ -75,6 +79,55 @@ describe('box and inspection', { timeout: 300000 }, () => {
     await page.click('#render');
     await waitForMesh(page, before);
     assert.deepEqual(await boxFields(), kept);
+  });
+
+  it('the gallery is searchable and states facts the mesh has', async () => {
+    const total = (await (await fetch(`${daemon.base}/v1/presets`)).json()).presets.length;
+    assert.ok(total >= 40, `${total} gallery entries`);
+    await page.fill('#gallery-search', 'cayley');
+    const shown = Number(await page.evaluate(() => document.body.dataset.galleryShown));
+    assert.ok(shown >= 1 && shown < total, `${shown} of ${total} kept`);
+    const n = await loads(page);
+    await page.locator('#gallery-search').press('Enter');
+    await waitForMesh(page, n);
+    assert.equal(await page.inputValue('#preset'), 'cayley-cubic');
+    assert.match(await page.textContent('#preset-source'), /Cayley.*checked on the mesh: 4 nodes/);
+    await page.fill('#gallery-search', '');
+  });
+
+  it('picking a node of the Cayley cubic shows its type and coordinates (closed form)', async () => {
+    const nodes = [[-0.5, -0.5, -0.5], [-0.5, 0.5, 0.5], [0.5, -0.5, 0.5], [0.5, 0.5, -0.5]];
+    const spots = await page.evaluate(() => {
+      const v = window.isomeshViewer;
+      const r = v.canvas.getBoundingClientRect();
+      return v.features.pickables.filter((p) => p.what === 'point').map((p) => {
+        const q = new v.camera.position.constructor(...p.at[0]).project(v.camera);
+        return [r.left + (q.x + 1) / 2 * r.width, r.top + (1 - q.y) / 2 * r.height];
+      });
+    });
+    assert.equal(spots.length, 4, 'four singular points drawn');
+    for (const [x, y] of spots) {
+      await page.mouse.click(x, y);
+      await page.waitForSelector('#pick-info:not([hidden])');
+      const info = await page.$eval('#pick-info', (e) => ({ ...e.dataset, text: e.textContent }));
+      assert.equal(info.type, 'node');
+      assert.match(info.text, /^node point/);
+      const xyz = info.xyz.split(',').map(Number);
+      const err = Math.min(...nodes.map((p) => Math.hypot(p[0] - xyz[0], p[1] - xyz[1], p[2] - xyz[2])));
+      assert.ok(err < 1e-6, `picked (${xyz}) is ${err} from the nearest closed-form node`);
+    }
+  });
+
+  it('saves the view as a PNG of the requested size', async () => {
+    await page.fill('#png-width', '1000');
+    await page.fill('#png-height', '640');
+    const [download] = await Promise.all([page.waitForEvent('download'), page.click('#png-export')]);
+    const bytes = fs.readFileSync(await download.path());
+    fs.writeFileSync(artifact('export-cayley-cubic.png'), bytes);
+    const img = decodePng(bytes);
+    assert.deepEqual([img.width, img.height], [1000, 640]);
+    assert.ok(pixelStats(img).foreground > 0.03, 'the surface is in the picture');
+    assert.match(download.suggestedFilename(), /^cayley-cubic\.png$/);
   });
 
   it('left no page errors', () => {

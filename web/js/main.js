@@ -174,6 +174,7 @@ function fillPresetMenu() {
   custom.value = '';
   custom.textContent = 'Custom expression';
   sel.append(custom);
+  filterGallery();
 }
 
 function usePreset(name) {
@@ -189,10 +190,35 @@ function usePreset(name) {
   return true;
 }
 
+const FACT_LABELS = { nodes: 'nodes', euler: 'χ', components: 'components', singular_points: 'singular points' };
+
+// "Source: ...; checked: 4 nodes, χ = 2" for a gallery entry.
+function presetFacts(p) {
+  const facts = Object.entries(p.facts || {}).map(([k, v]) => (k === 'euler' ? `χ = ${v}` : `${v} ${FACT_LABELS[k] || k}`));
+  return `Source: ${p.source || '–'}` + (facts.length ? `; checked on the mesh: ${facts.join(', ')}` : '');
+}
+
+// The gallery search: keeps the presets whose name, title, description or source hold every
+// word typed (case-insensitive); the current choice stays listed.
+function filterGallery() {
+  const words = $('gallery-search').value.toLowerCase().split(/\s+/).filter(Boolean);
+  let shown = 0;
+  for (const o of $('preset').options) {
+    const p = presetByName(o.value);
+    if (!p) continue;
+    const text = `${p.name} ${p.title} ${p.about} ${p.source || ''}`.toLowerCase();
+    o.hidden = !words.every((w) => text.includes(w)) && o.value !== $('preset').value;
+    if (!o.hidden) shown++;
+  }
+  $('gallery-count').textContent = words.length ? `${shown} of ${presets.length}` : `${presets.length} surfaces`;
+  document.body.dataset.galleryShown = String(shown);
+}
+
 function showPresetChoice() {
   const p = presetByName(state.preset);
   $('preset').value = p ? p.name : '';
   $('preset-about').textContent = p ? p.about : 'Your own expression: every name that is not x, y, z, a function, a constant or a let is a parameter.';
+  $('preset-source').textContent = p ? presetFacts(p) : '';
   $('reset-box').disabled = !p;
 }
 
@@ -289,7 +315,7 @@ function pickAt(e) {
     info.hidden = true;
     return;
   }
-  const xyz = hit.xyz.map((v) => sig(v)).join(', ');
+  const xyz = hit.xyz.map((v) => sig(v, 7)).join(', ');
   if (hit.what === 'point') {
     const p = hit.p;
     const eig = (p.hessian_eigenvalues || []).map((v) => sig(v)).join(', ');
@@ -301,6 +327,8 @@ function pickAt(e) {
     info.textContent = `${c.kind} curve, ${c.xyz.length / 3} points, ${ends}\nnear (${xyz})`;
   }
   info.dataset.what = hit.what;
+  info.dataset.xyz = hit.xyz.join(',');
+  info.dataset.type = hit.what === 'point' ? hit.p.type : hit.p.kind;
   info.hidden = false;
 }
 
@@ -568,6 +596,19 @@ async function downloadWithToken(event) {
   }
 }
 
+// The view as a PNG of the size asked for (viewer.exportPng), downloaded.
+async function savePng() {
+  const blob = await viewer.exportPng(Number($('png-width').value) || 1920, Number($('png-height').value) || 1080);
+  const url = URL.createObjectURL(blob);
+  const a = document.createElement('a');
+  a.href = url;
+  a.download = `${state.preset || 'surface'}.png`;
+  document.body.append(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 10000);
+}
+
 // ---- token ----------------------------------------------------------------------------
 
 function askToken(why) {
@@ -663,6 +704,15 @@ function wire() {
     requestChanged({ now: true });
   });
 
+  $('gallery-search').addEventListener('input', filterGallery);
+  $('gallery-search').addEventListener('keydown', (e) => {
+    // Enter picks the first surface the search keeps.
+    if (e.key !== 'Enter') return;
+    const first = [...$('preset').options].find((o) => o.value && !o.hidden);
+    if (!first || first.value === state.preset) return;
+    $('preset').value = first.value;
+    $('preset').dispatchEvent(new Event('change'));
+  });
   $('expr').addEventListener('input', () => {
     state.expr = $('expr').value;
     const p = presetByName(basePreset);
@@ -804,6 +854,7 @@ function wire() {
     }
   });
   $('share-url').addEventListener('focus', () => $('share-url').select());
+  $('png-export').addEventListener('click', savePng);
   $('token-button').addEventListener('click', () => askToken());
   $('token-dialog').addEventListener('close', tokenClosed);
   $('downloads').addEventListener('click', downloadWithToken);
@@ -837,6 +888,7 @@ async function begin() {
 
 async function start() {
   viewer = new Viewer($('view'));
+  window.isomeshViewer = viewer;   // for the console and the browser tests
   previewer = new Previewer({
     load: (body, signal) => loader.load(body, signal, () => {}),
     cached: (body) => loader.cached(body),

@@ -13,6 +13,9 @@ import { buildBox, disposeBox } from './box_view.js';
 const SURFACE_RGB = 0xb9c6d8;
 const AXES = { x: new THREE.Vector3(1, 0, 0), y: new THREE.Vector3(0, 1, 0), z: new THREE.Vector3(0, 0, 1) };
 const DEFAULT_DIRECTION = new THREE.Vector3(1.5, -2.1, 1.25).normalize();
+// Largest exported image side (every WebGL2 implementation renders at least 4096; 8192 is
+// common but not promised, so a larger request is clamped).
+const MAX_EXPORT_PX = 4096;
 
 export class Viewer {
   constructor(canvas) {
@@ -283,6 +286,24 @@ export class Viewer {
     this.controls.target.copy(sphere.center);
     this.camera.position.copy(sphere.center).addScaledVector(dir, dist);
     this.controls.update();
+  }
+
+  // The current view rendered at width x height pixels (the camera's framing kept, its aspect
+  // taken from the new size) as a PNG Blob; the canvas is restored afterwards.
+  async exportPng(width, height) {
+    const w = Math.max(16, Math.min(MAX_EXPORT_PX, Math.round(width)));
+    const h = Math.max(16, Math.min(MAX_EXPORT_PX, Math.round(height)));
+    const ratio = this.renderer.getPixelRatio();
+    this.renderer.setPixelRatio(1);
+    this.renderer.setSize(w, h, false);
+    this.camera.aspect = w / h;
+    this.camera.updateProjectionMatrix();
+    if (this.features) setLineResolution(this.features, w, h);
+    this.draw();
+    const blob = await new Promise((resolve) => this.canvas.toBlob(resolve, 'image/png'));
+    this.renderer.setPixelRatio(ratio);
+    this.resize();
+    return blob;
   }
 
   resetDirection() {
