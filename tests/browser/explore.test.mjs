@@ -17,6 +17,10 @@ let browser = null;
 let page = null;
 let errors = [];
 
+function assertChanged(a, b) {
+  assert.ok(changedShare(a, b) > 0.01, `the picture changed (${changedShare(a, b)})`);
+}
+
 async function boxFields() {
   return page.evaluate(() => ['xmin', 'ymin', 'zmin', 'xmax', 'ymax', 'zmax'].map((k) => Number(document.getElementById(`box-${k}`).value)));
 }
@@ -128,6 +132,31 @@ describe('box and inspection', { timeout: 300000 }, () => {
     assert.deepEqual([img.width, img.height], [1000, 640]);
     assert.ok(pixelStats(img).foreground > 0.03, 'the surface is in the picture');
     assert.match(download.suggestedFilename(), /^cayley-cubic\.png$/);
+  });
+
+  it('the clipping plane draws the section curve on the surface; inside and outside differ', async () => {
+    await page.evaluate(() => document.activeElement && document.activeElement.blur());
+    const plain = await viewShot(page);
+    await page.uncheck('#two-sided');
+    const oneColour = await viewShot(page);
+    assert.ok(changedShare(plain, oneColour) > 0.005, `the inside has its own colour (${changedShare(plain, oneColour)})`);
+    await page.check('#two-sided');
+    await page.check('#clip-on');
+    await page.selectOption('#clip-axis', 'z');
+    const cut = await viewShot(page, 'cayley-cubic-section.png');
+    const seg = await page.evaluate(() => ({ s: window.isomeshViewer.sectionSegments, offset: window.isomeshViewer.clip.offset }));
+    assert.ok(seg.s.length >= 6 * 20, `${seg.s.length / 6} section segments`);
+    const f = (x, y, z) => 4 * (x * x + y * y + z * z) + 16 * x * y * z - 1;
+    const grad = (x, y, z) => Math.hypot(8 * x + 16 * y * z, 8 * y + 16 * x * z, 8 * z + 16 * x * y);
+    let worst = 0;
+    for (let i = 0; i < seg.s.length; i += 3) {
+      const [x, y, z] = seg.s.slice(i, i + 3);
+      assert.equal(z, seg.offset, 'on the plane');
+      worst = Math.max(worst, Math.abs(f(x, y, z)) / Math.max(grad(x, y, z), 1e-9));
+    }
+    assert.ok(worst < 0.01, `section points within ${worst} of the surface`);
+    assertChanged(plain, cut);
+    await page.uncheck('#clip-on');
   });
 
   it('left no page errors', () => {

@@ -786,6 +786,7 @@ function wire() {
       updateUrl();
     });
   }
+  $('two-sided').addEventListener('change', () => viewer.setTwoSided($('two-sided').checked));
   $('wireframe').addEventListener('change', () => {
     state.wire = $('wireframe').checked;
     viewer.setWireframe(state.wire);

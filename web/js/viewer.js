@@ -9,8 +9,12 @@ import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { buildFeatures, disposeFeatures, pickFeature, setLineResolution } from './features.js';
 import { curvatureColors, curvatureRange } from './colormap.js';
 import { buildBox, disposeBox } from './box_view.js';
+import { sectionSegments, sectionLines } from './section.js';
 
 const SURFACE_RGB = 0xb9c6d8;
+// Two-sided colouring: triangles face along grad f (the outside, f > 0), so back faces show
+// the inside; they are tinted warm (multiplies the surface colour in the shaded mode).
+const INSIDE_TINT = [1.12, 0.82, 0.55];
 const AXES = { x: new THREE.Vector3(1, 0, 0), y: new THREE.Vector3(0, 1, 0), z: new THREE.Vector3(0, 0, 1) };
 const DEFAULT_DIRECTION = new THREE.Vector3(1.5, -2.1, 1.25).normalize();
 // Largest exported image side (every WebGL2 implementation renders at least 4096; 8192 is
@@ -59,6 +63,15 @@ export class Viewer {
       color: SURFACE_RGB, side: THREE.DoubleSide, roughness: 0.55, metalness: 0.05,
       polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
     });
+    this.backTint = { value: new THREE.Color(1, 1, 1) };
+    this.twoSided = true;
+    this.material.onBeforeCompile = (shader) => {
+      shader.uniforms.backTint = this.backTint;
+      shader.fragmentShader = shader.fragmentShader
+        .replace('void main() {', 'uniform vec3 backTint;\nvoid main() {')
+        .replace('#include <color_fragment>', '#include <color_fragment>\n\tif (!gl_FrontFacing) diffuseColor.rgb *= backTint;');
+    };
+    this.section = null;
     this.wireMaterial = new THREE.MeshBasicMaterial({
       color: 0x0c1016, wireframe: true, transparent: true, opacity: 0.45, depthWrite: false,
     });
@@ -84,6 +97,7 @@ export class Viewer {
     this.camera.aspect = w / h;
     this.camera.updateProjectionMatrix();
     if (this.features) setLineResolution(this.features, w, h);
+    if (this.section) this.section.material.resolution.set(w, h);
     this.render();
   }
 
@@ -191,6 +205,8 @@ export class Viewer {
     const g = this.surface.geometry;
     const attr = { mean: 'mean_curvature', gauss: 'gauss_curvature' }[this.colorMode];
     const values = attr && this.data.mesh.attributes[attr];
+    const tint = this.twoSided && !values ? INSIDE_TINT : [1, 1, 1];
+    this.backTint.value.setRGB(tint[0], tint[1], tint[2]);
     if (!values) {
       g.deleteAttribute('color');
       this.material.vertexColors = false;
@@ -208,6 +224,13 @@ export class Viewer {
     this.material.color.setHex(0xffffff);
     this.material.needsUpdate = true;
     return cache[attr].range;
+  }
+
+  // Inside and outside in two colours (shaded mode).
+  setTwoSided(on) {
+    this.twoSided = on;
+    this.applyColor();
+    this.render();
   }
 
   setVisibility(show) {
@@ -264,6 +287,24 @@ export class Viewer {
     }
     this.material.needsUpdate = true;
     this.wireMaterial.needsUpdate = true;
+    this.updateSection();
+  }
+
+  // The section curve of the clipping plane (section.js), rebuilt when the cut moves.
+  updateSection() {
+    if (this.section) {
+      this.scene.remove(this.section);
+      this.section.geometry.dispose();
+      this.section.material.dispose();
+      this.section = null;
+    }
+    const c = this.clip || { on: false };
+    if (!c.on || !this.data || !this.data.mesh) return;
+    const m = this.data.mesh;
+    const axis = { x: 0, y: 1, z: 2 }[c.axis] ?? 2;
+    this.sectionSegments = sectionSegments(m.attributes.position, m.index, axis, c.offset);
+    this.section = sectionLines(this.sectionSegments, Math.max(1, this.canvas.clientWidth), Math.max(1, this.canvas.clientHeight));
+    if (this.section) this.scene.add(this.section);
   }
 
   updateClipRange() {
