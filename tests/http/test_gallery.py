@@ -2,7 +2,7 @@
 each with a source, parameters, a box and depths; every entry meshes without error at its own
 settings; and every fact an entry states (nodes: singular points of type node in the features
 JSON v2; Euler characteristic; components) holds on the mesh — in the entry's box and in the
-box shifted off the octree lattice by 1e-3 and by 0.37 of a finest cell."""
+box shifted off the octree lattice by 1e-3 and by 0.37 of a finest cell. Also POST /v1/box."""
 import json
 import os
 import sys
@@ -44,6 +44,28 @@ class GalleryTest(unittest.TestCase):
         stats = self.d.get(f"/v1/meshes/{key}/stats").json()
         features = self.d.get(f"/v1/meshes/{key}/features").json()
         return stats, features
+
+    def test_box_endpoint_fits_the_zero_set(self):
+        # A sphere of radius 1.2 about (3, -2, 0.5) in the cube ±10, centre shifted off the
+        # 128-cell lattice by 0.37 of a cell.
+        cell = 20 / 128
+        c = [3 + 0.37 * cell, -2 + 0.37 * cell, 0.5 + 0.37 * cell]
+        body = {"expr": f"(x - {c[0]!r})^2 + (y - {c[1]!r})^2 + (z - {c[2]!r})^2 - 1.44",
+                "box": [-10, -10, -10, 10, 10, 10]}
+        r = self.d.post("/v1/box", json.dumps(body).encode())
+        self.assertEqual(r.status, 200, r.body)
+        a = r.json()
+        self.assertFalse(a["empty"])
+        self.assertTrue(a["complete"])
+        for k in range(3):
+            self.assertLessEqual(a["box"][k], c[k] - 1.2)
+            self.assertGreaterEqual(a["box"][k + 3], c[k] + 1.2)
+            self.assertLess(a["box"][k + 3] - a["box"][k], 2.4 + 5 * cell)
+        r = self.d.post("/v1/box", json.dumps({"expr": "x^2 + y^2 + z^2 + 1", "box": body["box"]}).encode())
+        self.assertTrue(r.json()["empty"])
+        r = self.d.post("/v1/box", b'{"expr": "x^2 + sinn(y)"}')
+        self.assertEqual(r.status, 400)
+        self.assertEqual(r.json()["error"]["column"], 7)
 
     def test_entries_are_described(self):
         self.assertGreaterEqual(len(self.presets), MIN_ENTRIES)
