@@ -265,11 +265,9 @@ static bool classify(cut_state *s, size_t k)
     s->sg = malloc(m->nverts ? m->nverts : 1);
     if (!s->gv || !s->sg)
         return false;
-    for (size_t v = 0; v < m->nverts; v++) {
-        double g = ism_cut_g(s->ev, k, m->pos + 3 * v, NULL);
-        s->gv[v] = g;
-        s->sg[v] = (signed char)((g > 0) - (g < 0));
-    }
+    ism_cut_g_batch(s->ev, k, m->pos, m->nverts, s->gv);
+    for (size_t v = 0; v < m->nverts; v++)
+        s->sg[v] = (signed char)((s->gv[v] > 0) - (s->gv[v] < 0));
     free(s->reach);
     if (!(s->reach = longest_edges(m)))
         return false;

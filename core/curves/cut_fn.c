@@ -100,6 +100,29 @@ double ism_cut_g(ism_cut_eval *ev, size_t k, const double p[3], double grad[3])
     return v;
 }
 
+bool ism_cut_g_batch(ism_cut_eval *ev, size_t k, const double *pos, size_t n, double *out)
+{
+    const ism_cut_fn *fn = &ev->fns[k];
+    if (fn->kind == ISM_CUT_SILHOUETTE || fn->kind == ISM_CUT_CREASE) {
+        for (size_t i = 0; i < n; i++)
+            out[i] = ism_cut_g(ev, k, pos + 3 * i, NULL);
+        return true;
+    }
+    double xyz[3][ISM_EVAL_BATCH];
+    for (size_t i0 = 0; i0 < n; i0 += ISM_EVAL_BATCH) {
+        size_t m = n - i0 < ISM_EVAL_BATCH ? n - i0 : ISM_EVAL_BATCH;
+        for (size_t i = 0; i < m; i++)
+            for (int c = 0; c < 3; c++)
+                xyz[c][i] = pos[3 * (i0 + i) + c];
+        if (fn->tape)
+            ism_eval_batch(fn->tape, ev->gws[k], xyz[0], xyz[1], xyz[2], out + i0, m);
+        for (size_t i = 0; i < m; i++)
+            out[i0 + i] = (fn->tape ? out[i0 + i] : 0) + fn->n[0] * xyz[0][i] +
+                          fn->n[1] * xyz[1][i] + fn->n[2] * xyz[2][i] - fn->c;
+    }
+    return true;
+}
+
 static double dot3(const double a[3], const double b[3])
 {
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];

@@ -41,6 +41,10 @@ void ism_cut_eval_free(ism_cut_eval *ev);
 /* g_k at p, with its gradient when grad is not NULL. */
 double ism_cut_g(ism_cut_eval *ev, size_t k, const double p[3], double grad[3]);
 
+/* g_k at n points (pos: 3 per point) into out, in batches where g is a tape or a plane:
+ * the same values as ism_cut_g up to the order of the sum's rounding. */
+bool ism_cut_g_batch(ism_cut_eval *ev, size_t k, const double *pos, size_t n, double *out);
+
 /* Moves p onto f = 0 and g_k = 0 for each of the nk functions in ks (nk is 1 or 2) by
  * minimum-norm Newton steps. True when it ends with every |value| / |gradient| ≤ tol and
  * moved at most max_move; p is left unchanged otherwise. */
