@@ -1,45 +1,18 @@
-/* covered.c — candidate boxes that hold mesh vertices (see covered.h). Vertices are filed
- * by the finest cells that contain them (up to eight when a vertex lies on cell faces) in an
- * open-addressing set of cell keys; each box looks up its own cell. */
+/* covered.c — candidate boxes that hold mesh vertices (see covered.h). The finest boxes'
+ * cells go into a hash map (a few thousand at most: the candidates of the singular search);
+ * each vertex of a triangle looks up the cells that contain it (up to eight when it lies on
+ * cell faces) and marks those it finds. */
 #include "core/singular/covered.h"
 
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include "core/singular/key_map.h"
 
 /* A vertex within this fraction of a cell from a cell face also belongs to the cell across:
  * lattice points are computed from integer coordinates, so a vertex on a face lies on it up
  * to rounding (1e-9 of a cell is a million ulps at depth 16). */
 #define FACE_SLACK 1e-9
-
-typedef struct key_set {
-    uint64_t *slot; /* 0: empty; keys are stored + 1 */
-    size_t mask;
-} key_set;
-
-static uint64_t mix(uint64_t k)
-{
-    k ^= k >> 33;
-    k *= 0xff51afd7ed558ccdULL;
-    k ^= k >> 33;
-    return k;
-}
-
-static void set_add(key_set *s, uint64_t key)
-{
-    size_t i = mix(key) & s->mask;
-    while (s->slot[i] && s->slot[i] != key + 1)
-        i = (i + 1) & s->mask;
-    s->slot[i] = key + 1;
-}
-
-static bool set_has(const key_set *s, uint64_t key)
-{
-    for (size_t i = mix(key) & s->mask; s->slot[i]; i = (i + 1) & s->mask)
-        if (s->slot[i] == key + 1)
-            return true;
-    return false;
-}
 
 static uint64_t cell_key(const int64_t c[3])
 {
@@ -60,16 +33,39 @@ static void cells_of(double x, double lo, double cell, int64_t n, int64_t *c0, i
     *c1 = *c1 < 0 ? 0 : *c1 >= n ? n - 1 : *c1;
 }
 
-static void file_vertex(key_set *s, const double p[3], const double lo[3], const double cell[3],
-                        int64_t n)
+/* Marks hit[] for every finest box's cell (cells: key → number) that holds vertex p. */
+static void hit_cells(const ism_key_map *cells, uint8_t *hit, const double p[3],
+                      const double lo[3], const double cell[3], int64_t n)
 {
     int64_t a[3], b[3], c[3];
     for (int k = 0; k < 3; k++)
         cells_of(p[k], lo[k], cell[k], n, &a[k], &b[k]);
     for (c[0] = a[0]; c[0] <= b[0]; c[0]++)
         for (c[1] = a[1]; c[1] <= b[1]; c[1]++)
-            for (c[2] = a[2]; c[2] <= b[2]; c[2]++)
-                set_add(s, cell_key(c));
+            for (c[2] = a[2]; c[2] <= b[2]; c[2]++) {
+                uint32_t i = ism_key_map_find(cells, cell_key(c));
+                if (i != ISM_KEY_NONE)
+                    hit[i] = 1;
+            }
+}
+
+/* The cell of each finest box (UINT32_MAX for the larger ones) as a number in cells. */
+static bool box_cells(const ism_locus *l, const double lo[3], const double cell[3],
+                      ism_key_map *cells, uint32_t *which)
+{
+    for (size_t i = 0; i < l->nboxes; i++) {
+        const ism_lbox *b = &l->boxes[i];
+        int64_t c[3];
+        bool finest = true, added;
+        for (int k = 0; k < 3; k++) {
+            finest = finest && b->hi[k] - b->lo[k] <= 1.5 * cell[k];
+            c[k] = (int64_t)floor((0.5 * (b->lo[k] + b->hi[k]) - lo[k]) / cell[k]);
+        }
+        which[i] = finest ? ism_key_map_add(cells, cell_key(c), &added) : UINT32_MAX;
+        if (finest && which[i] == ISM_KEY_NONE)
+            return false;
+    }
+    return true;
 }
 
 bool ism_locus_mark_covered(ism_locus *l, const ism_locus_options *o, const ism_mesh *m)
@@ -82,25 +78,25 @@ bool ism_locus_mark_covered(ism_locus *l, const ism_locus_options *o, const ism_
         lo[k] = o->box[k];
         cell[k] = (o->box[k + 3] - o->box[k]) / (double)n;
     }
-    size_t want = 16 * 3 * m->ntris, cap = 1024; /* up to 8 cells a corner, half full */
-    while (cap < want)
-        cap *= 2;
-    key_set s = {calloc(cap, sizeof(uint64_t)), cap - 1};
-    if (!s.slot)
-        return false;
-    for (size_t t = 0; t < 3 * m->ntris; t++) /* triangle corners: segments cover nothing */
-        file_vertex(&s, m->pos + 3 * (size_t)m->tri[t], lo, cell, n);
-    for (size_t i = 0; i < l->nboxes; i++) {
-        ism_lbox *b = &l->boxes[i];
-        int64_t c[3];
-        bool finest = true;
-        for (int k = 0; k < 3; k++) {
-            finest = finest && b->hi[k] - b->lo[k] <= 1.5 * cell[k];
-            c[k] = (int64_t)floor((0.5 * (b->lo[k] + b->hi[k]) - lo[k]) / cell[k]);
-        }
-        if (finest && set_has(&s, cell_key(c)))
-            b->flags |= ISM_LBOX_USED;
+    ism_key_map cells;
+    ism_key_map_init(&cells);
+    uint32_t *which = malloc(l->nboxes * sizeof *which);
+    uint8_t *used = calloc(m->nverts + 1, 1), *hit = NULL;
+    bool ok = which && used && box_cells(l, lo, cell, &cells, which) &&
+              (hit = calloc(cells.n + 1, 1));
+    if (ok && cells.n > 0) {
+        for (size_t t = 0; t < 3 * m->ntris; t++) /* triangle corners: segments cover nothing */
+            used[m->tri[t]] = 1;
+        for (size_t v = 0; v < m->nverts; v++)
+            if (used[v])
+                hit_cells(&cells, hit, m->pos + 3 * v, lo, cell, n);
+        for (size_t i = 0; i < l->nboxes; i++)
+            if (which[i] != UINT32_MAX && hit[which[i]])
+                l->boxes[i].flags |= ISM_LBOX_USED;
     }
-    free(s.slot);
-    return true;
+    ism_key_map_free(&cells);
+    free(which);
+    free(used);
+    free(hit);
+    return ok;
 }

@@ -11,7 +11,7 @@
 
 /* Flags ISM_LBOX_USED on every finest box of l->boxes (side box / 2^max_depth) that holds a
  * corner of a triangle of m (on its boundary included; segments and lone vertices cover
- * nothing). O(T + boxes). False when out of memory. */
+ * nothing). O(T + V + boxes) time, O(V + boxes) memory. False when out of memory. */
 bool ism_locus_mark_covered(ism_locus *l, const ism_locus_options *o, const ism_mesh *m);
 
 #endif
