@@ -127,7 +127,8 @@ bool ism_conform_mesh(const ism_tape *f, const ism_locus_options *o, ism_locus *
     cf_run r = {.l = locus, .o = o};
     /* the longest side's cell: the octree's cells are boxes, the surgery must span them */
     double side = fmax(o->box[3] - o->box[0], fmax(o->box[4] - o->box[1], o->box[5] - o->box[2]));
-    r.c = (cf_ctx){.f = f, .m = mesh, .st = st, .cell = ldexp(side, -o->max_depth)};
+    r.c = (cf_ctx){.f = f, .m = mesh, .st = st, .cell = ldexp(side, -o->max_depth),
+                   .origin = {o->box[0], o->box[1], o->box[2]}, .extent = side};
     r.c.ws = ism_eval_ws_new(f);
     r.point_vertex = malloc((locus->npoints + 1) * sizeof *r.point_vertex);
     bool ok = r.c.ws && r.point_vertex;
@@ -148,11 +149,4 @@ bool ism_conform_mesh(const ism_tape *f, const ism_locus_options *o, ism_locus *
     free(r.point_vertex);
     st->time_ms = ism_now_ms() - t0;
     return ok && compacted;
-}
-
-bool ism_conform_count_artefacts(const ism_mesh *mesh, const ism_locus *locus,
-                                 const double box[6], ism_conform_stats *st, ism_error *err)
-{
-    return cf_count_artefacts(mesh, locus, box, &st->artefact_edges, &st->artefact_vertices,
-                              err);
 }

@@ -35,14 +35,6 @@ typedef struct ism_conform_stats {
                                   their rim (the polygoniser's confusion reached further) */
     size_t triangles_removed, triangles_added;
     size_t vertices_added, vertices_removed;
-    /* Non-manifold elements of the final mesh off every point and curve of the locus
-     * (ism_locus_check_mesh's rule, check.h): invented structure. Filled by
-     * ism_conform_count_artefacts, not by the pass (it costs an analysis of the mesh, about
-     * as much as the pass itself; a caller that analyses the mesh anyway can run
-     * ism_locus_check_mesh on its own analysis instead). */
-    size_t artefact_edges;     /* edges with more than two triangles, an end off the locus */
-    size_t artefact_vertices;  /* non-manifold points (several cones, chain ends, junctions)
-                                  off the locus */
     double time_ms;
 } ism_conform_stats;
 
@@ -55,11 +47,5 @@ typedef struct ism_conform_stats {
  * be NULL. */
 bool ism_conform_mesh(const ism_tape *f, const ism_locus_options *o, ism_locus *locus,
                       ism_mesh *mesh, ism_conform_stats *st, ism_error *err);
-
-/* Counts the artefacts of mesh against locus (box: the search box) into st->artefact_edges
- * and st->artefact_vertices with one analysis of the mesh. False on bad input or allocation
- * failure (err says which). */
-bool ism_conform_count_artefacts(const ism_mesh *mesh, const ism_locus *locus,
-                                 const double box[6], ism_conform_stats *st, ism_error *err);
 
 #endif

@@ -91,6 +91,8 @@ bool cf_polyline_init(cf_polyline *pl, const double *p, size_t n, bool closed, d
         }
     }
     pl->length = closed ? pl->s[n] : pl->s[n - 1];
+    for (int k = 0; k < 3; k++)
+        pl->hi[k] = hi[k];
     double ext = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
     pl->step = fmax(step, ext / (GRID_MAX_DIM - 1));
     size_t cells = 1;
@@ -171,9 +173,24 @@ static double nearest_within(const cf_polyline *pl, const double q[3], double wi
     return best <= within ? best : INFINITY;
 }
 
+double cf_polyline_box_distance(const cf_polyline *pl, const double q[3])
+{
+    double d2 = 0;
+    for (int k = 0; k < 3; k++) {
+        double e = fmax(0, fmax(pl->lo[k] - q[k], q[k] - pl->hi[k]));
+        d2 += e * e;
+    }
+    return sqrt(d2);
+}
+
 double cf_polyline_nearest(const cf_polyline *pl, const double q[3], double within, double *s,
                            double foot[3])
 {
+    /* every segment lies in the points' box: one farther than within (by more than the
+     * rounding of the distances below) has nothing within reach */
+    double mag = fmax(fabs(q[0]), fmax(fabs(q[1]), fabs(q[2])));
+    if (cf_polyline_box_distance(pl, q) > within + CF_QUERY_SLACK * (within + mag))
+        return INFINITY;
     /* widening searches: a point found within w is the nearest of all (every segment within
      * w was seen), so a far `within` costs little where something is near; a near `within`
      * is searched at once (a miss would pay for every widening) */

@@ -81,10 +81,11 @@ double cf_point_triangle_d2(const double q[3], const double a[3], const double b
 static int live_on_edge(const cf_ctx *c, uint32_t a, uint32_t b, uint32_t *which)
 {
     int n = 0;
-    for (uint32_t i = c->inc_start[a]; i < c->inc_start[a + 1]; i++) {
-        uint32_t t = c->inc_tri[i];
+    cf_inc it;
+    uint32_t t;
+    for (cf_inc_begin(c, a, &it); cf_inc_next(c, &it, &t);) {
         const uint32_t *v = c->m->tri + 3 * (size_t)t;
-        if (c->dead[t] || (v[0] != b && v[1] != b && v[2] != b))
+        if (v[0] != b && v[1] != b && v[2] != b)
             continue;
         n++;
         *which = t;
@@ -286,28 +287,42 @@ static bool chain_rim(const rim_edge *e, size_t ne, cf_loops *ls)
     return ok;
 }
 
-bool cf_cut_hole(cf_ctx *c, cf_tri_pred near, void *arg, cf_loops *out,
-                 uint32_t **removed, size_t *nremoved)
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* The live triangles the cutter selects, in increasing order: its candidates, sorted, then
+ * tested one by one. */
+static bool select_triangles(cf_ctx *c, const cf_cutter *cut, uint32_t **out, size_t *nout)
+{
+    cf_tris cand = {0};
+    cf_tgrid_begin(&c->grid);
+    if (!cut->gather(c, cut->arg, &cand)) {
+        free(cand.t);
+        return false;
+    }
+    qsort(cand.t, cand.n, sizeof *cand.t, cmp_u32);
+    size_t n = 0;
+    for (size_t i = 0; i < cand.n; i++)
+        if (!c->dead[cand.t[i]] && cut->near(c, cand.t[i], cut->arg))
+            cand.t[n++] = cand.t[i];
+    *out = cand.t;
+    *nout = n;
+    return true;
+}
+
+bool cf_cut_hole(cf_ctx *c, const cf_cutter *cut, cf_loops *out, uint32_t **removed,
+                 size_t *nremoved)
 {
     memset(out, 0, sizeof *out);
     *removed = NULL;
     *nremoved = 0;
-    size_t n = 0, cap = 0;
+    size_t n = 0;
     uint32_t *rm = NULL;
-    for (size_t t = 0; t < c->m->ntris; t++) {
-        if (c->dead[t] || !near(c, (uint32_t)t, arg))
-            continue;
-        if (n == cap) {
-            cap = cap ? 2 * cap : 256;
-            uint32_t *p = realloc(rm, cap * sizeof *p);
-            if (!p) {
-                free(rm);
-                return false;
-            }
-            rm = p;
-        }
-        rm[n++] = (uint32_t)t;
-    }
+    if (!select_triangles(c, cut, &rm, &n))
+        return false;
     for (size_t i = 0; i < n; i++)
         c->dead[rm[i]] = 1;
     rim_edge *e = NULL;
@@ -330,8 +345,7 @@ void cf_undo(cf_ctx *c, const uint32_t *removed, size_t nremoved, size_t ntris, 
 {
     for (size_t i = 0; i < nremoved; i++)
         c->dead[removed[i]] = 0;
-    c->m->ntris = ntris;
-    c->m->nverts = nverts;
+    cf_truncate(c, ntris, nverts);
 }
 
 /* Samples of f per side along a rim vertex's normal when looking for another sheet. */
@@ -376,13 +390,13 @@ bool cf_rim_clear(cf_ctx *c, const cf_loops *ls, double clearance)
 #define GROW 1.4
 #define MAX_GROW 6
 
-bool cf_cut_clean(cf_ctx *c, cf_tri_pred pred, void *arg, double *radius,
-                  double max_radius, cf_loops *ls, uint32_t **removed, size_t *nremoved)
+bool cf_cut_clean(cf_ctx *c, const cf_cutter *cut, double *radius, double max_radius,
+                  cf_loops *ls, uint32_t **removed, size_t *nremoved)
 {
     if (*radius > max_radius)
         *radius = max_radius;
     for (int k = 0;; k++) {
-        if (!cf_cut_hole(c, pred, arg, ls, removed, nremoved))
+        if (!cf_cut_hole(c, cut, ls, removed, nremoved))
             return false;
         if (k == MAX_GROW || ls->n == 0 || *radius * GROW > max_radius ||
             cf_rim_clear(c, ls, CLEAR_CELLS * c->cell))

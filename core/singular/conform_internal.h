@@ -9,8 +9,33 @@
 #include <stdbool.h>
 #include "core/eval/eval.h"
 #include "core/singular/conform.h"
+#include "core/singular/key_map.h"
 
 #define CF_NONE UINT32_MAX
+
+/* Levels of the triangle grid (conform_grid.c): doubling cells from two finest cells, and
+ * one last cell for triangles larger than all of them. */
+#define CF_TGRID_LEVELS 26
+
+/* The triangles of the mesh in a loose multi-level grid (conform_grid.c). */
+typedef struct cf_tgrid {
+    double lo[3], side;     /* origin, level-0 cell side */
+    ism_key_map cells;      /* packed (level, cell coordinates) → cell number */
+    uint32_t *head;         /* per cell: the last triangle filed there (CF_NONE: none) */
+    uint32_t *next;         /* per triangle: the one filed before it in its cell */
+    uint32_t *cell_of;      /* per triangle: its cell */
+    uint32_t *stamp;        /* per triangle: the gather that last took it */
+    uint32_t epoch;
+    size_t cap_head, cap_next, cap_cell_of, cap_stamp;
+    size_t ntris;           /* triangles filed: 0 .. ntris-1 */
+    size_t per_level[CF_TGRID_LEVELS];
+} cf_tgrid;
+
+/* A growable list of triangle numbers. */
+typedef struct cf_tris {
+    uint32_t *t;
+    size_t n, cap;
+} cf_tris;
 
 typedef struct cf_ctx {
     const ism_tape *f;
@@ -18,13 +43,27 @@ typedef struct cf_ctx {
     ism_mesh *m;
     uint8_t *dead;          /* per triangle: removed by surgery (compacted at the end) */
     size_t cap_dead;
-    uint32_t *inc_start;    /* live triangles around each vertex: inc_tri[inc_start[v] ..
-                               inc_start[v+1]) (rebuilt before each surgery) */
+    /* Triangles around each vertex, built once (cf_ctx_prepare) and kept current: the
+     * triangles then present in CSR form, inc_tri[inc_start[v] .. inc_start[v+1]) for
+     * v < inc_nverts, those appended since in a stack per vertex (x_head[v], x_next[node],
+     * node 3 (t − inc_ntris) + corner). Dead triangles stay listed (cf_inc_next skips them). */
+    uint32_t *inc_start;
     uint32_t *inc_tri;
-    size_t inc_nverts, cap_inc_start, cap_inc_tri;
+    size_t inc_nverts, inc_ntris;
+    uint32_t *x_head, *x_next;
+    size_t cap_x_head, cap_x_next;
+    bool indexed;           /* incidence and grid built */
+    cf_tgrid grid;          /* the triangles by position */
     uint8_t *singular;      /* per vertex: made by the pass where ∇f vanishes (normal from
                                the adjacent triangles at the end) */
     size_t cap_singular;
+    /* Per-vertex memo of one query (a surgery's distances to its curves): memo_d[v],
+     * memo_i[v] hold an answer where memo_gen[v] == gen (cf_memo_reset starts a new one). */
+    double *memo_d;
+    uint32_t *memo_i, *memo_gen;
+    uint32_t gen;
+    size_t cap_memo_d, cap_memo_i, cap_memo_gen;
+    double origin[3], extent; /* the box's low corner and longest side */
     double cell;            /* finest octree cell: the scale of the surgery */
     ism_conform_stats *st;
 } cf_ctx;
@@ -70,36 +109,87 @@ typedef struct cf_polyline {
     bool closed;
     double *s;              /* n + 1 entries */
     double length;
-    double lo[3], step;     /* grid origin and cell side */
+    double lo[3], hi[3];    /* the points' bounding box (lo: also the grid's origin) */
+    double step;            /* grid cell side */
     int dim[3];
     uint32_t *g_start, *g_seg; /* segments per grid cell (CSR) */
 } cf_polyline;
 
 /* ---- conform_mesh.c: incidence, dead marks, growth ---- */
-bool cf_ctx_prepare(cf_ctx *c);          /* room for the dead marks and incidence (current mesh) */
+/* Makes room for need elements of size sz in *v (capacity *cap, doubling), the new room
+ * zeroed. False when out of memory (*v unchanged). */
+bool cf_grow(void **v, size_t *cap, size_t need, size_t sz);
+/* Builds the incidence and the grid on first use (later calls only check room): O(T) once
+ * per pass, both then kept current by cf_add_triangle and cf_undo. */
+bool cf_ctx_prepare(cf_ctx *c);
 void cf_ctx_free(cf_ctx *c);
 bool cf_add_triangle(cf_ctx *c, uint32_t a, uint32_t b, uint32_t d);
 uint32_t cf_add_vertex(cf_ctx *c, const double p[3], bool singular);
-/* Longest edge of the live triangles at vertex v / with a vertex within r of p. */
+/* Drops the triangles from ntris and the vertices from nverts on (appended by a surgery
+ * that failed) from the mesh, its incidence and its grid. */
+void cf_truncate(cf_ctx *c, size_t ntris, size_t nverts);
+/* The live triangles at vertex v, one by one: cf_inc_begin, then cf_inc_next until false. */
+typedef struct cf_inc {
+    uint32_t i, end, node;
+} cf_inc;
+void cf_inc_begin(const cf_ctx *c, uint32_t v, cf_inc *it);
+bool cf_inc_next(const cf_ctx *c, cf_inc *it, uint32_t *t);
+/* Forgets the memo (O(1)) and makes room for every vertex. False when out of memory. */
+bool cf_memo_reset(cf_ctx *c);
+/* Squared length of the longest edge of triangle t. */
+double cf_triangle_longest_edge2(const ism_mesh *m, uint32_t t);
+/* Longest edge of the live triangles at vertex v / with a vertex within r of p (false when
+ * out of memory). */
 double cf_vertex_longest_edge(const cf_ctx *c, uint32_t v);
-double cf_longest_edge_near(const cf_ctx *c, const double p[3], double r);
+bool cf_longest_edge_near(cf_ctx *c, const double p[3], double r, double *out);
 /* Removes dead triangles and the vertices only they used; recomputes the singular vertices'
  * normals. */
 bool cf_compact(cf_ctx *c);
 
+/* ---- conform_grid.c: the triangles by position ---- */
+/* An empty grid for a box with low corner origin and longest side extent, finest cells of
+ * finest_cell. False on a degenerate scale. */
+bool cf_tgrid_init(cf_tgrid *g, const double origin[3], double extent, double finest_cell);
+void cf_tgrid_free(cf_tgrid *g);
+/* Files triangle t of m (t = the number filed so far). False when out of memory. */
+bool cf_tgrid_add(cf_tgrid *g, const ism_mesh *m, uint32_t t);
+/* Forgets the triangles from ntris on (filed last, forgotten first). */
+void cf_tgrid_truncate(cf_tgrid *g, size_t ntris);
+/* Starts a gather: the triangles taken by the cf_tgrid_gather calls that follow are
+ * appended to their list once each. */
+void cf_tgrid_begin(cf_tgrid *g);
+/* Appends to out every triangle of m not dead whose bounding box meets the box [lo, hi]
+ * and was not taken since cf_tgrid_begin. False when out of memory. */
+bool cf_tgrid_gather(cf_tgrid *g, const ism_mesh *m, const double lo[3], const double hi[3],
+                     const uint8_t *dead, cf_tris *out);
+bool cf_tris_push(cf_tris *out, uint32_t t);
+/* Query boxes are grown by this fraction of their scale (radius plus the coordinates'
+ * magnitude): the tests they prefilter compare distances computed in floating point, a few
+ * ulps off, and must never lose a triangle at exactly the radius. */
+#define CF_QUERY_SLACK 1e-9
+/* The box around the segment ab (a point when a = b) grown by r and the slack. */
+void cf_query_box(const double a[3], const double b[3], double r, double lo[3], double hi[3]);
+
 /* ---- conform_hole.c: removal and hole loops ---- */
-/* Marks dead the live triangles for which near(ctx, triangle) is true, then chains the
- * hole's boundary edges (edges left with one live triangle that lost at least one) into
- * loops. Returns false on allocation failure (nothing marked then). *removed counts the
- * triangles marked. */
+/* What a cut removes: the live triangles near() accepts. gather() appends to its list
+ * (cf_tgrid_gather after cf_tgrid_begin) a superset of them: never one near() would accept
+ * left out, each once. False from gather when out of memory. */
 typedef bool (*cf_tri_pred)(const cf_ctx *c, uint32_t t, void *arg);
-bool cf_cut_hole(cf_ctx *c, cf_tri_pred near, void *arg, cf_loops *out,
-                 uint32_t **removed, size_t *nremoved);
-/* cf_cut_hole, grown (*radius, which pred reads through arg, times a factor) until the rim
- * is clear of other sheets (cf_rim_clear), a bounded number of times and never beyond
- * max_radius. */
-bool cf_cut_clean(cf_ctx *c, cf_tri_pred pred, void *arg, double *radius,
-                  double max_radius, cf_loops *ls, uint32_t **removed, size_t *nremoved);
+typedef struct cf_cutter {
+    cf_tri_pred near;
+    bool (*gather)(cf_ctx *c, void *arg, cf_tris *out);
+    void *arg;
+} cf_cutter;
+/* Marks dead the triangles the cutter selects (*removed, in increasing order), then chains
+ * the hole's boundary edges (edges left with one live triangle that lost at least one) into
+ * loops. Returns false on allocation failure (nothing marked then). */
+bool cf_cut_hole(cf_ctx *c, const cf_cutter *cut, cf_loops *out, uint32_t **removed,
+                 size_t *nremoved);
+/* cf_cut_hole, grown (*radius, which the cutter reads through its arg, times a factor) until
+ * the rim is clear of other sheets (cf_rim_clear), a bounded number of times and never
+ * beyond max_radius. */
+bool cf_cut_clean(cf_ctx *c, const cf_cutter *cut, double *radius, double max_radius,
+                  cf_loops *ls, uint32_t **removed, size_t *nremoved);
 /* Undoes a cut whose refilling failed: revives the triangles, drops everything appended
  * since (ntris, nverts). */
 void cf_undo(cf_ctx *c, const uint32_t *removed, size_t nremoved, size_t ntris, size_t nverts);
@@ -134,6 +224,9 @@ void cf_polyline_free(cf_polyline *pl);
 double cf_polyline_nearest(const cf_polyline *pl, const double q[3], double within, double *s,
                            double foot[3]);
 
+/* Distance from q to the polyline's bounding box: a lower bound of cf_polyline_nearest's. */
+double cf_polyline_box_distance(const cf_polyline *pl, const double q[3]);
+
 /* ---- conform_zip.c: zipping loops to a curve ---- */
 /* Refills the hole loops cut around a group of npl double curves (meeting at shared end
  * points): each loop (through rings) is stitched to the vertices cv[k] (one per polyline
@@ -148,10 +241,5 @@ bool cf_conform_point(cf_run *r, size_t i);
 /* The double curves idx[0..n) (a group meeting at shared end points) made chains of mesh
  * edges. False only when out of memory (the mesh is then as before). */
 bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n);
-
-/* ---- conform_artefacts.c ---- */
-/* Non-manifold edges and points of m off the locus l (check.h's rule). */
-bool cf_count_artefacts(const ism_mesh *m, const ism_locus *l, const double box[6],
-                        size_t *edges, size_t *verts, ism_error *err);
 
 #endif

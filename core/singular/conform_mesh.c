@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static bool grow(void **v, size_t *cap, size_t need, size_t sz)
+bool cf_grow(void **v, size_t *cap, size_t need, size_t sz)
 {
     if (need <= *cap)
         return true;
@@ -24,16 +24,15 @@ static bool grow(void **v, size_t *cap, size_t need, size_t sz)
     return true;
 }
 
-bool cf_ctx_prepare(cf_ctx *c)
+/* The CSR incidence of the triangles present now (dead ones left out). */
+static bool build_incidence(cf_ctx *c)
 {
     const ism_mesh *m = c->m;
-    if (!grow((void **)&c->dead, &c->cap_dead, m->ntris, 1) ||
-        !grow((void **)&c->singular, &c->cap_singular, m->nverts, 1) ||
-        !grow((void **)&c->inc_start, &c->cap_inc_start, m->nverts + 1, sizeof(uint32_t)) ||
-        !grow((void **)&c->inc_tri, &c->cap_inc_tri, 3 * m->ntris + 1, sizeof(uint32_t)))
+    c->inc_start = calloc(m->nverts + 1, sizeof *c->inc_start);
+    c->inc_tri = malloc((3 * m->ntris + 1) * sizeof *c->inc_tri);
+    if (!c->inc_start || !c->inc_tri)
         return false;
     uint32_t *st = c->inc_start;
-    memset(st, 0, (m->nverts + 1) * sizeof *st);
     for (size_t t = 0; t < m->ntris; t++)
         if (!c->dead[t])
             for (int k = 0; k < 3; k++)
@@ -48,6 +47,24 @@ bool cf_ctx_prepare(cf_ctx *c)
         st[v] = st[v - 1];
     st[0] = 0;
     c->inc_nverts = m->nverts;
+    c->inc_ntris = m->ntris;
+    return true;
+}
+
+bool cf_ctx_prepare(cf_ctx *c)
+{
+    const ism_mesh *m = c->m;
+    if (!cf_grow((void **)&c->dead, &c->cap_dead, m->ntris, 1) ||
+        !cf_grow((void **)&c->singular, &c->cap_singular, m->nverts, 1))
+        return false;
+    if (c->indexed)
+        return true;
+    if (!build_incidence(c) || !cf_tgrid_init(&c->grid, c->origin, c->extent, c->cell))
+        return false;
+    for (size_t t = 0; t < m->ntris; t++)
+        if (!cf_tgrid_add(&c->grid, m, (uint32_t)t))
+            return false;
+    c->indexed = true;
     return true;
 }
 
@@ -57,22 +74,106 @@ void cf_ctx_free(cf_ctx *c)
     free(c->singular);
     free(c->inc_start);
     free(c->inc_tri);
+    free(c->x_head);
+    free(c->x_next);
+    free(c->memo_d);
+    free(c->memo_i);
+    free(c->memo_gen);
+    cf_tgrid_free(&c->grid);
+}
+
+bool cf_memo_reset(cf_ctx *c)
+{
+    size_t n = c->m->nverts + 1;
+    if (!cf_grow((void **)&c->memo_d, &c->cap_memo_d, n, sizeof *c->memo_d) ||
+        !cf_grow((void **)&c->memo_i, &c->cap_memo_i, n, sizeof *c->memo_i) ||
+        !cf_grow((void **)&c->memo_gen, &c->cap_memo_gen, n, sizeof *c->memo_gen))
+        return false; /* grow zeroes new room: generation 0, never current */
+    if (++c->gen == 0) {
+        memset(c->memo_gen, 0, c->cap_memo_gen * sizeof *c->memo_gen);
+        c->gen = 1;
+    }
+    return true;
+}
+
+/* Files the mesh's last triangle in the incidence and the grid. */
+static bool index_last(cf_ctx *c)
+{
+    ism_mesh *m = c->m;
+    size_t t = m->ntris - 1, node = 3 * (t - c->inc_ntris);
+    size_t had = c->cap_x_head;
+    if (!cf_grow((void **)&c->x_head, &c->cap_x_head, m->nverts, sizeof *c->x_head) ||
+        !cf_grow((void **)&c->x_next, &c->cap_x_next, node + 3, sizeof *c->x_next))
+        return false;
+    if (c->cap_x_head > had) /* new vertices have no appended triangle yet */
+        memset(c->x_head + had, 0xff, (c->cap_x_head - had) * sizeof *c->x_head);
+    if (!cf_tgrid_add(&c->grid, m, (uint32_t)t))
+        return false;
+    for (int k = 0; k < 3; k++) {
+        uint32_t v = m->tri[3 * t + (size_t)k];
+        c->x_next[node + (size_t)k] = c->x_head[v];
+        c->x_head[v] = (uint32_t)(node + (size_t)k);
+    }
+    return true;
 }
 
 bool cf_add_triangle(cf_ctx *c, uint32_t a, uint32_t b, uint32_t d)
 {
     if (a == b || b == d || a == d)
         return true; /* a ring that collapsed onto its neighbour: nothing to fill */
-    if (!grow((void **)&c->dead, &c->cap_dead, c->m->ntris + 1, 1) ||
+    if (!cf_grow((void **)&c->dead, &c->cap_dead, c->m->ntris + 1, 1) ||
         !ism_mesh_add_triangle(c->m, a, b, d))
         return false;
     c->dead[c->m->ntris - 1] = 0;
+    if (c->indexed && !index_last(c)) {
+        c->m->ntris--;
+        cf_tgrid_truncate(&c->grid, c->m->ntris);
+        return false;
+    }
     return true;
+}
+
+void cf_truncate(cf_ctx *c, size_t ntris, size_t nverts)
+{
+    ism_mesh *m = c->m;
+    if (c->indexed) {
+        for (size_t t = m->ntris; t > ntris && t > c->inc_ntris; t--) /* last pushed first */
+            for (int k = 2; k >= 0; k--)
+                c->x_head[m->tri[3 * (t - 1) + (size_t)k]] =
+                    c->x_next[3 * (t - 1 - c->inc_ntris) + (size_t)k];
+        cf_tgrid_truncate(&c->grid, ntris);
+    }
+    m->ntris = ntris;
+    m->nverts = nverts;
+}
+
+void cf_inc_begin(const cf_ctx *c, uint32_t v, cf_inc *it)
+{
+    bool base = v < c->inc_nverts;
+    it->i = base ? c->inc_start[v] : 0;
+    it->end = base ? c->inc_start[v + 1] : 0;
+    it->node = v < c->cap_x_head ? c->x_head[v] : CF_NONE;
+}
+
+bool cf_inc_next(const cf_ctx *c, cf_inc *it, uint32_t *t)
+{
+    while (it->i < it->end) {
+        *t = c->inc_tri[it->i++];
+        if (!c->dead[*t])
+            return true;
+    }
+    while (it->node != CF_NONE) {
+        *t = (uint32_t)(c->inc_ntris + it->node / 3);
+        it->node = c->x_next[it->node];
+        if (!c->dead[*t])
+            return true;
+    }
+    return false;
 }
 
 uint32_t cf_add_vertex(cf_ctx *c, const double p[3], bool singular)
 {
-    if (!grow((void **)&c->singular, &c->cap_singular, c->m->nverts + 1, 1))
+    if (!cf_grow((void **)&c->singular, &c->cap_singular, c->m->nverts + 1, 1))
         return CF_NONE;
     float n[3] = {0, 0, 0};
     if (!singular) {
@@ -97,28 +198,51 @@ static double dist2(const double *a, const double *b)
     return d0 * d0 + d1 * d1 + d2 * d2;
 }
 
+double cf_triangle_longest_edge2(const ism_mesh *m, uint32_t tri)
+{
+    const uint32_t *t = m->tri + 3 * (size_t)tri;
+    double best = 0;
+    for (int k = 0; k < 3; k++) {
+        double e = dist2(m->pos + 3 * (size_t)t[k], m->pos + 3 * (size_t)t[(k + 1) % 3]);
+        if (e > best)
+            best = e;
+    }
+    return best;
+}
+
 double cf_vertex_longest_edge(const cf_ctx *c, uint32_t v)
 {
-    const ism_mesh *m = c->m;
     double best = 0;
-    for (uint32_t i = c->inc_start[v]; i < c->inc_start[v + 1]; i++) {
-        const uint32_t *t = m->tri + 3 * (size_t)c->inc_tri[i];
-        for (int k = 0; k < 3; k++) {
-            double e = dist2(m->pos + 3 * (size_t)t[k], m->pos + 3 * (size_t)t[(k + 1) % 3]);
-            if (e > best)
-                best = e;
-        }
-    }
+    cf_inc it;
+    uint32_t t;
+    for (cf_inc_begin(c, v, &it); cf_inc_next(c, &it, &t);)
+        best = fmax(best, cf_triangle_longest_edge2(c->m, t));
     return sqrt(best);
 }
 
-double cf_longest_edge_near(const cf_ctx *c, const double p[3], double r)
+bool cf_longest_edge_near(cf_ctx *c, const double p[3], double r, double *out)
 {
+    /* the live triangles with a corner within r of p: their boxes meet p's cube */
+    double lo[3], hi[3];
+    cf_query_box(p, p, r, lo, hi);
+    cf_tris cand = {0};
+    cf_tgrid_begin(&c->grid);
+    if (!cf_tgrid_gather(&c->grid, c->m, lo, hi, c->dead, &cand)) {
+        free(cand.t);
+        return false;
+    }
     double best = 0;
-    for (size_t v = 0; v < c->inc_nverts; v++)
-        if (dist2(c->m->pos + 3 * v, p) <= r * r)
-            best = fmax(best, cf_vertex_longest_edge(c, (uint32_t)v));
-    return best;
+    for (size_t i = 0; i < cand.n; i++) {
+        const uint32_t *v = c->m->tri + 3 * (size_t)cand.t[i];
+        for (int k = 0; k < 3; k++)
+            if (dist2(c->m->pos + 3 * (size_t)v[k], p) <= r * r) {
+                best = fmax(best, cf_triangle_longest_edge2(c->m, cand.t[i]));
+                break;
+            }
+    }
+    free(cand.t);
+    *out = sqrt(best);
+    return true;
 }
 
 /* Normal of a vertex where ∇f vanishes: the area-weighted mean of its triangles' normals. */

@@ -46,6 +46,15 @@ static bool tri_in_ball(const cf_ctx *c, uint32_t t, void *arg)
                                 P + 3 * (size_t)v[2]) < b->r * b->r;
 }
 
+/* The triangles whose boxes meet the ball's cube: every one within r of its centre. */
+static bool gather_ball(cf_ctx *c, void *arg, cf_tris *out)
+{
+    const ball *b = arg;
+    double lo[3], hi[3];
+    cf_query_box(b->p, b->p, b->r, lo, hi);
+    return cf_tgrid_gather(&c->grid, c->m, lo, hi, c->dead, out);
+}
+
 static double loop_mean_dist(const cf_ctx *c, const cf_loop *l, const double p[3])
 {
     double s = 0;
@@ -84,16 +93,18 @@ bool cf_conform_point(cf_run *r, size_t i)
     }
     if (!cf_ctx_prepare(c))
         return false;
-    double r0 = CF_RHO_CELLS * c->cell;
-    ball b = {{pt->p[0], pt->p[1], pt->p[2]},
-              fmax(r0, CF_RHO_EDGES * cf_longest_edge_near(c, pt->p, r0))};
+    double r0 = CF_RHO_CELLS * c->cell, longest;
+    if (!cf_longest_edge_near(c, pt->p, r0, &longest))
+        return false;
+    ball b = {{pt->p[0], pt->p[1], pt->p[2]}, fmax(r0, CF_RHO_EDGES * longest)};
+    cf_cutter cut = {tri_in_ball, gather_ball, &b};
     size_t nt0 = c->m->ntris, nv0 = c->m->nverts, nrm;
     uint32_t *rm;
     cf_loops ls;
     double max_r = RHO_SEPARATION * locus_clearance(r, i);
     double seek_r = fmin(max_r, SEEK_CELLS * c->cell);
     for (;;) {
-        if (!cf_cut_clean(c, tri_in_ball, &b, &b.r, max_r, &ls, &rm, &nrm))
+        if (!cf_cut_clean(c, &cut, &b.r, max_r, &ls, &rm, &nrm))
             return false;
         if (ls.n > 0 || b.r * SEEK_GROW > seek_r)
             break;

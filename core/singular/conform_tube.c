@@ -12,6 +12,8 @@
 /* Curve points closer than this many finest cells to the previous kept one are skipped (a
  * tracer's fine steps would only make slivers). */
 #define CURVE_MIN_SPACING 0.5
+/* Curve segments are gathered in runs at most this many tube radii across. */
+#define CHUNK_RHO 2.0
 
 typedef struct tube {
     const cf_polyline *pl;
@@ -19,33 +21,39 @@ typedef struct tube {
     double r;
     double lo[3], hi[3]; /* the curves' bounding box */
     double reach;        /* edges up to this long are judged from vd alone */
-    double *vd;          /* per vertex: distance to the nearest curve, INFINITY beyond
-                            vd_r + reach */
-    uint32_t *vc;        /* per vertex: that curve (when vd is finite) */
-    double vd_r;         /* the radius vd was computed for (0: not yet) */
+    double vd_r;         /* the radius the memo holds distances for (0: none yet) */
 } tube;
 
-/* Each vertex's distance to the group's curves, as far as r + reach (one query a vertex,
- * instead of several a triangle). */
-static void vertex_distances(const cf_ctx *c, tube *tb)
+/* Vertex v's distance to the nearest of the group's curves (INFINITY beyond r + reach) and
+ * that curve, memoised in the context for the current radius. */
+static double vertex_distance(const cf_ctx *c, const tube *tb, uint32_t v, uint32_t *curve)
 {
-    for (size_t v = 0; v < c->m->nverts; v++) {
-        const double *p = c->m->pos + 3 * v;
-        double d = INFINITY;
-        bool in = true;
-        for (int k = 0; k < 3; k++)
-            in = in && p[k] >= tb->lo[k] - tb->r - tb->reach && p[k] <= tb->hi[k] + tb->r + tb->reach;
-        tb->vc[v] = 0;
-        for (size_t i = 0; in && i < tb->n; i++) {
-            double di = cf_polyline_nearest(&tb->pl[i], p, tb->r + tb->reach, NULL, NULL);
-            if (di < d) {
-                d = di;
-                tb->vc[v] = (uint32_t)i;
-            }
-        }
-        tb->vd[v] = d;
+    if (c->memo_gen[v] == c->gen) {
+        *curve = c->memo_i[v];
+        return c->memo_d[v];
     }
-    tb->vd_r = tb->r;
+    const double *p = c->m->pos + 3 * (size_t)v;
+    double d = INFINITY;
+    bool in = true;
+    for (int k = 0; k < 3; k++)
+        in = in && p[k] >= tb->lo[k] - tb->r - tb->reach && p[k] <= tb->hi[k] + tb->r + tb->reach;
+    *curve = 0;
+    double mag = fmax(fabs(p[0]), fmax(fabs(p[1]), fabs(p[2])));
+    for (size_t i = 0; in && i < tb->n; i++) {
+        /* a curve whose box is farther than the nearest so far can be neither nearer nor
+         * as near (the first of equals is kept) */
+        if (isfinite(d) && cf_polyline_box_distance(&tb->pl[i], p) > d + CF_QUERY_SLACK * (d + mag))
+            continue;
+        double di = cf_polyline_nearest(&tb->pl[i], p, tb->r + tb->reach, NULL, NULL);
+        if (di < d) {
+            d = di;
+            *curve = (uint32_t)i;
+        }
+    }
+    c->memo_gen[v] = c->gen;
+    c->memo_i[v] = *curve;
+    c->memo_d[v] = d;
+    return d;
 }
 
 static double d2(const double *a, const double *b)
@@ -57,13 +65,15 @@ static double d2(const double *a, const double *b)
 static bool tri_in_tube(const cf_ctx *c, uint32_t t, void *arg)
 {
     tube *tb = arg;
-    if (tb->vd_r != tb->r)
-        vertex_distances(c, tb);
     const uint32_t *v = c->m->tri + 3 * (size_t)t;
     const double *a = c->m->pos + 3 * (size_t)v[0], *b = c->m->pos + 3 * (size_t)v[1],
                  *d = c->m->pos + 3 * (size_t)v[2];
+    uint32_t vc[3];
+    double vd[3];
+    for (int k = 0; k < 3; k++)
+        vd[k] = vertex_distance(c, tb, v[k], &vc[k]);
     /* a corner within r, or every corner farther than r + the longest edge: decided */
-    double dmin = fmin(tb->vd[v[0]], fmin(tb->vd[v[1]], tb->vd[v[2]]));
+    double dmin = fmin(vd[0], fmin(vd[1], vd[2]));
     double edge = sqrt(fmax(d2(a, b), fmax(d2(b, d), d2(d, a))));
     if (dmin <= tb->r)
         return true;
@@ -82,16 +92,62 @@ static bool tri_in_tube(const cf_ctx *c, uint32_t t, void *arg)
         q[6][k] = (a[k] + b[k] + d[k]) / 3;
     }
     /* near the rim of the cut only: the curves nearest its corners (all of them when a
-     * corner is beyond vd's reach, a triangle longer than reach) */
-    bool all = !(isfinite(tb->vd[v[0]]) && isfinite(tb->vd[v[1]]) && isfinite(tb->vd[v[2]]));
+     * corner is beyond the memo's reach, a triangle longer than reach) */
+    bool all = !(isfinite(vd[0]) && isfinite(vd[1]) && isfinite(vd[2]));
     for (size_t i = 0; i < tb->n; i++) {
-        if (!all && tb->vc[v[0]] != i && tb->vc[v[1]] != i && tb->vc[v[2]] != i)
+        if (!all && vc[0] != i && vc[1] != i && vc[2] != i)
             continue;
         for (int j = 0; j < 7; j++)
             if (isfinite(cf_polyline_nearest(&tb->pl[i], q[j], tb->r, NULL, NULL)))
                 return true;
     }
     return false;
+}
+
+/* The triangles whose boxes meet a segment's box grown by r, for every segment of the
+ * curves: all those with a point within r of a curve. The segments are queried in runs
+ * whose box spans at most CHUNK_RHO radii (a run's box and a segment's differ little along
+ * the curve; each query reads the grid cells of its box grown by r on every side, so runs
+ * about 2r long read the fewest cells per length of curve). */
+static bool gather_near_curves(cf_ctx *c, const cf_polyline *pl, size_t n, double r,
+                               cf_tris *out)
+{
+    for (size_t k = 0; k < n; k++) {
+        size_t segs = pl[k].closed ? pl[k].n : pl[k].n - 1;
+        for (size_t i = 0; i < segs;) {
+            double lo[3], hi[3];
+            for (int j = 0; j < 3; j++)
+                lo[j] = hi[j] = pl[k].p[3 * i + j];
+            for (; i < segs; i++) { /* add segment i while the run stays short */
+                const double *b = pl[k].p + 3 * ((i + 1) % pl[k].n);
+                double ext = 0;
+                for (int j = 0; j < 3; j++)
+                    ext = fmax(ext, fmax(hi[j], b[j]) - fmin(lo[j], b[j]));
+                if (ext > CHUNK_RHO * r && (hi[0] > lo[0] || hi[1] > lo[1] || hi[2] > lo[2]))
+                    break;
+                for (int j = 0; j < 3; j++) {
+                    lo[j] = fmin(lo[j], b[j]);
+                    hi[j] = fmax(hi[j], b[j]);
+                }
+            }
+            double qlo[3], qhi[3];
+            cf_query_box(lo, hi, r, qlo, qhi);
+            if (!cf_tgrid_gather(&c->grid, c->m, qlo, qhi, c->dead, out))
+                return false;
+        }
+    }
+    return true;
+}
+
+static bool gather_tube(cf_ctx *c, void *arg, cf_tris *out)
+{
+    tube *tb = arg;
+    if (tb->vd_r != tb->r) { /* a new radius: the memoised distances are stale */
+        if (!cf_memo_reset(c))
+            return false;
+        tb->vd_r = tb->r;
+    }
+    return gather_near_curves(c, tb->pl, tb->n, tb->r, out);
 }
 
 /* The curve's points spaced at least min_step apart (the ends of an open curve kept). */
@@ -118,14 +174,35 @@ static double *thin_curve(const ism_sing_curve *cu, double min_step, size_t *n)
     return p;
 }
 
-/* Longest edge of the live triangles at vertices within r of the polyline. */
-static double longest_edge_near_curve(const cf_ctx *c, const cf_polyline *pl, double r)
+/* Longest edge of the live triangles with a vertex within r of one of the curves (*out;
+ * false when out of memory). */
+static bool longest_edge_near_curves(cf_ctx *c, const cf_polyline *pl, size_t n, double r,
+                                     double *out)
 {
+    cf_tris cand = {0};
+    cf_tgrid_begin(&c->grid);
+    bool ok = cf_memo_reset(c) && gather_near_curves(c, pl, n, r, &cand);
     double best = 0;
-    for (size_t v = 0; v < c->inc_nverts; v++)
-        if (isfinite(cf_polyline_nearest(pl, c->m->pos + 3 * v, r, NULL, NULL)))
-            best = fmax(best, cf_vertex_longest_edge(c, (uint32_t)v));
-    return best;
+    for (size_t i = 0; ok && i < cand.n; i++) {
+        const uint32_t *v = c->m->tri + 3 * (size_t)cand.t[i];
+        bool near = false;
+        for (int k = 0; k < 3 && !near; k++) {
+            if (c->memo_gen[v[k]] != c->gen) {
+                bool nk = false;
+                for (size_t j = 0; j < n && !nk; j++)
+                    nk = isfinite(cf_polyline_nearest(&pl[j], c->m->pos + 3 * (size_t)v[k], r,
+                                                      NULL, NULL));
+                c->memo_gen[v[k]] = c->gen;
+                c->memo_i[v[k]] = nk;
+            }
+            near = c->memo_i[v[k]];
+        }
+        if (near)
+            best = fmax(best, cf_triangle_longest_edge2(c->m, cand.t[i]));
+    }
+    free(cand.t);
+    *out = sqrt(best);
+    return ok;
 }
 
 /* The mesh vertex of the curve's point i: a locus point's shared vertex at an end. */
@@ -216,18 +293,13 @@ bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
         return ok;
     }
     double r0 = CF_RHO_CELLS * c->cell, longest = 0;
-    for (size_t k = 0; k < g.n; k++)
-        longest = fmax(longest, longest_edge_near_curve(c, &g.pl[k], r0));
-    tube tb = {g.pl, g.n, fmax(r0, CF_RHO_EDGES * longest), {INFINITY, INFINITY, INFINITY},
-               {-INFINITY, -INFINITY, -INFINITY}, fmax(longest, r0), NULL, NULL, 0};
-    tb.vd = malloc((c->m->nverts + 1) * sizeof *tb.vd);
-    tb.vc = malloc((c->m->nverts + 1) * sizeof *tb.vc);
-    if (!tb.vd || !tb.vc) {
-        free(tb.vd);
-        free(tb.vc);
+    if (!longest_edge_near_curves(c, g.pl, g.n, r0, &longest)) {
         group_free(&g);
         return false;
     }
+    tube tb = {g.pl, g.n, fmax(r0, CF_RHO_EDGES * longest), {INFINITY, INFINITY, INFINITY},
+               {-INFINITY, -INFINITY, -INFINITY}, fmax(longest, r0), 0};
+    cf_cutter cut = {tri_in_tube, gather_tube, &tb};
     for (size_t k = 0; k < g.n; k++)
         for (size_t i = 0; i < g.npts[k]; i++)
             for (int j = 0; j < 3; j++) {
@@ -237,7 +309,7 @@ bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
     size_t nt0 = c->m->ntris, nv0 = c->m->nverts, nrm = 0;
     uint32_t *rm = NULL;
     cf_loops ls = {0};
-    ok = cf_cut_clean(c, tri_in_tube, &tb, &tb.r, INFINITY, &ls, &rm, &nrm);
+    ok = cf_cut_clean(c, &cut, &tb.r, INFINITY, &ls, &rm, &nrm);
     if (ok && ls.n == 0) {
         cf_undo(c, rm, nrm, nt0, nv0);
         c->st->curves_failed += g.n;
@@ -258,8 +330,6 @@ bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
         }
     }
     free(rm);
-    free(tb.vd);
-    free(tb.vc);
     cf_loops_free(&ls);
     group_free(&g);
     return ok;

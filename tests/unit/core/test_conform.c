@@ -13,6 +13,7 @@
 #include "poly_fixture.h"
 #include "core/analysis/analysis.h"
 #include "core/eval/eval.h"
+#include "core/singular/check.h"
 #include "core/singular/conform.h"
 
 /* The refilled strip is at most this many finest cells from the locus (the cut's radius is
@@ -47,6 +48,7 @@ typedef double (*locus_dist_fn)(const double p[3], const void *arg);
 typedef struct run_result {
     ism_analysis a;
     ism_conform_stats st;
+    size_t artefact_edges, artefact_vertices; /* non-manifold elements off the locus */
     double max_near, max_far; /* |f| / |∇f| at triangle centroids */
 } run_result;
 
@@ -90,13 +92,16 @@ static void run(const ism_tape *t, const double box[6], int dmax, ism_locus *l,
     o.max_depth = dmax;
     ism_error err;
     cr_assert(ism_conform_mesh(t, &o, l, m, &r->st, &err), "conform: %s", err.message);
-    cr_assert(ism_conform_count_artefacts(m, l, box, &r->st, &err), "artefacts: %s",
-              err.message);
     ism_analysis_options ao;
     ism_analysis_options_default(&ao);
     ao.curvature = ao.accuracy = false;
     ao.threads = 1;
     cr_assert(ism_analyse(m, t, &ao, &r->a, &err), "analyse: %s", err.message);
+    ism_locus_check chk;
+    cr_assert(ism_locus_check_mesh(l, box, m, &r->a, &chk, &err), "check: %s", err.message);
+    r->artefact_edges = chk.nonmanifold_edges_off;
+    r->artefact_vertices = chk.nonmanifold_points_off;
+    ism_locus_check_free(&chk);
     centroid_distances(m, t, pf_cell(box, dmax), dist, arg, r);
     if (getenv("CONFORM_DEBUG"))
         fprintf(stderr, "poly %.0f ms conform %.0f ms: removed %zu added %zu tris, %zu verts; "
@@ -139,8 +144,8 @@ static void expect_points(const ism_mesh *m, const ism_locus *l, const run_resul
                  r->a.nonmanifold_edges);
     cr_expect_eq(r->a.vertex_components, 1, "%s: %zu vertex-components", what,
                  r->a.vertex_components);
-    cr_expect_eq(r->st.artefact_edges + r->st.artefact_vertices, 0, "%s: artefacts %zu + %zu",
-                 what, r->st.artefact_edges, r->st.artefact_vertices);
+    cr_expect_eq(r->artefact_edges + r->artefact_vertices, 0, "%s: artefacts %zu + %zu",
+                 what, r->artefact_edges, r->artefact_vertices);
     cr_expect_eq(r->st.points_short_cones, 0, "%s: %zu nodes short of cones", what,
                  r->st.points_short_cones);
 }
@@ -447,8 +452,8 @@ Test(conform, crossing_spheres_zipped_along_the_circle)
         cr_expect_eq(r.a.boundary_edges, 0, "%s: %zu boundary edges", what, r.a.boundary_edges);
         cr_expect_eq(r.a.class_count[ISM_VERTEX_NONMANIFOLD_POINT], 0, "%s: %zu cone points",
                      what, r.a.class_count[ISM_VERTEX_NONMANIFOLD_POINT]);
-        cr_expect_eq(r.st.artefact_edges + r.st.artefact_vertices, 0, "%s: artefacts %zu + %zu",
-                     what, r.st.artefact_edges, r.st.artefact_vertices);
+        cr_expect_eq(r.artefact_edges + r.artefact_vertices, 0, "%s: artefacts %zu + %zu",
+                     what, r.artefact_edges, r.artefact_vertices);
         expect_accuracy(&r, what);
         ism_analysis_free(&r.a);
         ism_mesh_free(&m);
@@ -517,8 +522,8 @@ Test(conform, cylinder_and_plane_lines_to_the_box)
         cr_expect_eq(r.a.euler, -1, "%s: χ = %ld, expected -1", what, r.a.euler);
         cr_expect_eq(r.a.class_count[ISM_VERTEX_NONMANIFOLD_POINT], 0, "%s: %zu cone points",
                      what, r.a.class_count[ISM_VERTEX_NONMANIFOLD_POINT]);
-        cr_expect_eq(r.st.artefact_edges + r.st.artefact_vertices, 0, "%s: artefacts %zu + %zu",
-                     what, r.st.artefact_edges, r.st.artefact_vertices);
+        cr_expect_eq(r.artefact_edges + r.artefact_vertices, 0, "%s: artefacts %zu + %zu",
+                     what, r.artefact_edges, r.artefact_vertices);
         expect_accuracy(&r, what);
         ism_analysis_free(&r.a);
         ism_mesh_free(&m);
@@ -583,8 +588,8 @@ Test(conform, three_planes_triple_point)
         cr_expect_eq(r.a.components, 1, "%s: %zu components", what, r.a.components);
         /* three squares crossing pairwise in segments, all three at a point: 3 − 3 + 1 */
         cr_expect_eq(r.a.euler, 1, "%s: χ = %ld, expected 1", what, r.a.euler);
-        cr_expect_eq(r.st.artefact_edges + r.st.artefact_vertices, 0, "%s: artefacts %zu + %zu",
-                     what, r.st.artefact_edges, r.st.artefact_vertices);
+        cr_expect_eq(r.artefact_edges + r.artefact_vertices, 0, "%s: artefacts %zu + %zu",
+                     what, r.artefact_edges, r.artefact_vertices);
         ism_analysis_free(&r.a);
         ism_mesh_free(&m);
         ism_locus_free(&l);
@@ -663,8 +668,8 @@ Test(conform, steiner_roman_pinch_and_triple_points)
          * set = 1 − (6 open half-segments × 1 × (−1) + triple point × 2 × 1) = 5 */
         cr_expect_eq(r.a.euler, 5, "%s: χ = %ld, expected 5", what, r.a.euler);
         cr_expect_eq(r.a.boundary_edges, 0, "%s: %zu boundary edges", what, r.a.boundary_edges);
-        cr_expect_eq(r.st.artefact_edges + r.st.artefact_vertices, 0, "%s: artefacts %zu + %zu",
-                     what, r.st.artefact_edges, r.st.artefact_vertices);
+        cr_expect_eq(r.artefact_edges + r.artefact_vertices, 0, "%s: artefacts %zu + %zu",
+                     what, r.artefact_edges, r.artefact_vertices);
         expect_accuracy(&r, what);
         ism_analysis_free(&r.a);
         ism_mesh_free(&m);
@@ -778,8 +783,8 @@ Test(conform, cross_cap_double_segment_between_pinch_points)
         /* RP² immersed with one double segment: χ = 1 − (2 − 1) χ(open segment) = 2 */
         cr_expect_eq(r.a.euler, 2, "%s: χ = %ld, expected 2", what, r.a.euler);
         cr_expect_eq(r.a.boundary_edges, 0, "%s: %zu boundary edges", what, r.a.boundary_edges);
-        cr_expect_eq(r.st.artefact_edges + r.st.artefact_vertices, 0, "%s: artefacts %zu + %zu",
-                     what, r.st.artefact_edges, r.st.artefact_vertices);
+        cr_expect_eq(r.artefact_edges + r.artefact_vertices, 0, "%s: artefacts %zu + %zu",
+                     what, r.artefact_edges, r.artefact_vertices);
         expect_accuracy(&r, what);
         ism_analysis_free(&r.a);
         ism_mesh_free(&m);
@@ -837,8 +842,8 @@ Test(conform, klein_bottle_double_circle)
         /* χ(image) = χ(Klein bottle) − (2 − 1) χ(circle) = 0 */
         cr_expect_eq(r.a.euler, 0, "%s: χ = %ld, expected 0", what, r.a.euler);
         cr_expect_eq(r.a.boundary_edges, 0, "%s: %zu boundary edges", what, r.a.boundary_edges);
-        cr_expect_eq(r.st.artefact_edges + r.st.artefact_vertices, 0, "%s: artefacts %zu + %zu",
-                     what, r.st.artefact_edges, r.st.artefact_vertices);
+        cr_expect_eq(r.artefact_edges + r.artefact_vertices, 0, "%s: artefacts %zu + %zu",
+                     what, r.artefact_edges, r.artefact_vertices);
         expect_accuracy(&r, what);
         ism_analysis_free(&r.a);
         ism_mesh_free(&m);

@@ -1,0 +1,226 @@
+/* conform_grid.c — the conformance pass's spatial index over the mesh's triangles: a loose
+ * multi-level grid. A triangle is filed once, in the level whose cells are at least as large
+ * as its bounding box, in the cell holding its box's centre; it then lies within half a cell
+ * of that cell, so a query box grown by a cell per level finds every triangle whose box meets
+ * it. Built once per pass, kept current as the surgery appends triangles and undoes them
+ * (a cell's list is a stack: the last triangle filed first, popped in the reverse order).
+ *
+ *      level 1  ┌───────────────┬───────────────┐   a long triangle (the coarse cells
+ *               │      ╱╲       │               │   far from the locus) goes up a level;
+ *      level 0  ├───┬──╱─┬╲──┬───┼───┬───┬───┬───┤   a query at each level reads the cells
+ *               │ ▲ │ ╱  │ ╲ │   │   │   │   │   │   its box meets, one more on each side
+ *               └───┴────┴───┴───┴───┴───┴───┴───┘
+ * Cost: O(T) to build; a query reads the cells its box meets at each level in use and the
+ * triangles filed there. */
+#include "core/singular/conform_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Level-0 cell side in finest octree cells: the polygoniser's triangles at the finest depth
+ * span about one cell, so most are filed at level 0 and a ball of CF_RHO_CELLS reads a few
+ * dozen cells. */
+#define GRID_CELLS 2.0
+/* Cell coordinates per axis are packed in this many bits (clamped: a monotone clamp keeps
+ * every query's answer a superset); the level-0 side grows with a box too large for it. */
+#define COORD_BITS 19
+#define COORD_MAX ((1 << COORD_BITS) - 1)
+/* Levels of doubling cells; a triangle larger than the top one (positions far outside the
+ * box) is filed in one cell read by every query. */
+#define TOP_LEVEL (CF_TGRID_LEVELS - 2)
+
+static uint64_t pack(int level, const int64_t c[3])
+{
+    return (uint64_t)level << (3 * COORD_BITS) | (uint64_t)c[0] << (2 * COORD_BITS) |
+           (uint64_t)c[1] << COORD_BITS | (uint64_t)c[2];
+}
+
+static int64_t coord(const cf_tgrid *g, double x, int k, double s)
+{
+    double i = floor((x - g->lo[k]) / s);
+    return !(i > 0) ? 0 : i >= COORD_MAX ? COORD_MAX : (int64_t)i;
+}
+
+static void tri_box(const ism_mesh *m, uint32_t t, double lo[3], double hi[3])
+{
+    const uint32_t *v = m->tri + 3 * (size_t)t;
+    for (int k = 0; k < 3; k++) {
+        double a = m->pos[3 * (size_t)v[0] + k], b = m->pos[3 * (size_t)v[1] + k],
+               d = m->pos[3 * (size_t)v[2] + k];
+        lo[k] = fmin(a, fmin(b, d));
+        hi[k] = fmax(a, fmax(b, d));
+    }
+}
+
+bool cf_tgrid_init(cf_tgrid *g, const double origin[3], double extent, double finest_cell)
+{
+    memset(g, 0, sizeof *g);
+    ism_key_map_init(&g->cells);
+    for (int k = 0; k < 3; k++)
+        g->lo[k] = origin[k];
+    g->side = fmax(GRID_CELLS * finest_cell, extent / (COORD_MAX / 2));
+    return g->side > 0 && isfinite(g->side);
+}
+
+void cf_tgrid_free(cf_tgrid *g)
+{
+    ism_key_map_free(&g->cells);
+    free(g->head);
+    free(g->next);
+    free(g->cell_of);
+    free(g->stamp);
+    memset(g, 0, sizeof *g);
+}
+
+bool cf_tgrid_add(cf_tgrid *g, const ism_mesh *m, uint32_t t)
+{
+    if (!cf_grow((void **)&g->next, &g->cap_next, (size_t)t + 1, sizeof *g->next) ||
+        !cf_grow((void **)&g->cell_of, &g->cap_cell_of, (size_t)t + 1, sizeof *g->cell_of) ||
+        !cf_grow((void **)&g->stamp, &g->cap_stamp, (size_t)t + 1, sizeof *g->stamp))
+        return false;
+    double lo[3], hi[3], s = g->side;
+    tri_box(m, t, lo, hi);
+    double e = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
+    int level = 0;
+    while (level < TOP_LEVEL && !(e <= s)) {
+        s *= 2;
+        level++;
+    }
+    int64_t c[3] = {0, 0, 0};
+    if (e <= s)
+        for (int k = 0; k < 3; k++)
+            c[k] = coord(g, 0.5 * (lo[k] + hi[k]), k, s);
+    else
+        level = TOP_LEVEL + 1; /* too large for any level (or not finite): read always */
+    bool added;
+    uint32_t cell = ism_key_map_add(&g->cells, pack(level, c), &added);
+    if (cell == ISM_KEY_NONE ||
+        !cf_grow((void **)&g->head, &g->cap_head, (size_t)cell + 1, sizeof *g->head))
+        return false;
+    if (added)
+        g->head[cell] = CF_NONE;
+    g->next[t] = g->head[cell];
+    g->head[cell] = t;
+    g->cell_of[t] = cell;
+    g->stamp[t] = 0;
+    g->per_level[level]++;
+    g->ntris = (size_t)t + 1;
+    return true;
+}
+
+void cf_tgrid_truncate(cf_tgrid *g, size_t ntris)
+{
+    while (g->ntris > ntris) {
+        uint32_t t = (uint32_t)--g->ntris, cell = g->cell_of[t];
+        g->head[cell] = g->next[t];
+        g->per_level[g->cells.keys[cell] >> (3 * COORD_BITS)]--;
+    }
+}
+
+void cf_tgrid_begin(cf_tgrid *g)
+{
+    if (++g->epoch == 0) { /* wrapped: forget every stamp */
+        memset(g->stamp, 0, g->ntris * sizeof *g->stamp);
+        g->epoch = 1;
+    }
+}
+
+bool cf_tris_push(cf_tris *out, uint32_t t)
+{
+    if (!cf_grow((void **)&out->t, &out->cap, out->n + 1, sizeof *out->t))
+        return false;
+    out->t[out->n++] = t;
+    return true;
+}
+
+/* A query: its box, the mesh and the dead marks. */
+typedef struct query {
+    const ism_mesh *m;
+    const uint8_t *dead;
+    double lo[3], hi[3];
+} query;
+
+/* The triangles of one cell whose boxes meet the query's, not yet gathered since
+ * cf_tgrid_begin and not dead. */
+static bool take_cell(cf_tgrid *g, uint32_t cell, const query *q, cf_tris *out)
+{
+    for (uint32_t t = g->head[cell]; t != CF_NONE; t = g->next[t]) {
+        if (g->stamp[t] == g->epoch || q->dead[t])
+            continue;
+        double lo[3], hi[3];
+        tri_box(q->m, t, lo, hi);
+        bool meets = true;
+        for (int k = 0; k < 3 && meets; k++)
+            meets = lo[k] <= q->hi[k] && hi[k] >= q->lo[k];
+        if (!meets)
+            continue;
+        g->stamp[t] = g->epoch;
+        if (!cf_tris_push(out, t))
+            return false;
+    }
+    return true;
+}
+
+static bool gather_level(cf_tgrid *g, int level, const query *q, cf_tris *out)
+{
+    double s = ldexp(g->side, level);
+    int64_t a[3], b[3], c[3];
+    size_t span = 1;
+    for (int k = 0; k < 3; k++) {
+        /* a triangle's box lies within half a cell of its cell: one more cell each side */
+        a[k] = coord(g, q->lo[k], k, s) - 1;
+        b[k] = coord(g, q->hi[k], k, s) + 1;
+        a[k] = a[k] < 0 ? 0 : a[k];
+        b[k] = b[k] > COORD_MAX ? COORD_MAX : b[k];
+        span *= (size_t)(b[k] - a[k] + 1);
+    }
+    if (span > g->cells.n) { /* a box larger than the occupied cells: read those instead */
+        for (uint32_t cell = 0; cell < g->cells.n; cell++) {
+            uint64_t key = g->cells.keys[cell];
+            bool in = (int)(key >> (3 * COORD_BITS)) == level;
+            for (int k = 0; k < 3 && in; k++) {
+                int64_t x = (int64_t)(key >> ((2 - k) * COORD_BITS)) & COORD_MAX;
+                in = x >= a[k] && x <= b[k];
+            }
+            if (in && !take_cell(g, cell, q, out))
+                return false;
+        }
+        return true;
+    }
+    for (c[0] = a[0]; c[0] <= b[0]; c[0]++)
+        for (c[1] = a[1]; c[1] <= b[1]; c[1]++)
+            for (c[2] = a[2]; c[2] <= b[2]; c[2]++) {
+                uint32_t cell = ism_key_map_find(&g->cells, pack(level, c));
+                if (cell != ISM_KEY_NONE && !take_cell(g, cell, q, out))
+                    return false;
+            }
+    return true;
+}
+
+bool cf_tgrid_gather(cf_tgrid *g, const ism_mesh *m, const double lo[3], const double hi[3],
+                     const uint8_t *dead, cf_tris *out)
+{
+    query q = {m, dead, {lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
+    for (int level = 0; level <= TOP_LEVEL; level++)
+        if (g->per_level[level] && !gather_level(g, level, &q, out))
+            return false;
+    if (g->per_level[TOP_LEVEL + 1]) {
+        uint32_t cell = ism_key_map_find(&g->cells, pack(TOP_LEVEL + 1, (const int64_t[3]){0}));
+        if (cell != ISM_KEY_NONE && !take_cell(g, cell, &q, out))
+            return false;
+    }
+    return true;
+}
+
+void cf_query_box(const double a[3], const double b[3], double r, double lo[3], double hi[3])
+{
+    double mag = 0;
+    for (int k = 0; k < 3; k++)
+        mag = fmax(mag, fmax(fabs(a[k]), fabs(b[k])));
+    double grow_by = r + CF_QUERY_SLACK * (r + mag);
+    for (int k = 0; k < 3; k++) {
+        lo[k] = fmin(a[k], b[k]) - grow_by;
+        hi[k] = fmax(a[k], b[k]) + grow_by;
+    }
+}
