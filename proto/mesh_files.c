@@ -44,11 +44,7 @@ bool ism_write_ply_wire(const ism_mesh *m, const ism_wire_mesh *w, ism_write_fn 
         if (w->vertex_class)
             ism_sink_u8(s, w->vertex_class[i]);
     }
-    for (size_t t = 0; t < m->ntris; t++) {
-        ism_sink_u8(s, 3);
-        for (int k = 0; k < 3; k++)
-            ism_sink_u32le(s, m->tri[3 * t + k]);
-    }
+    ism_ply_put_faces(s, m);
     bool ok = ism_sink_finish(s);
     free(s);
     return ok;

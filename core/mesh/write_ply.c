@@ -28,6 +28,15 @@ size_t ism_ply_size(const ism_mesh *m)
     return (size_t)h + m->nverts * 24 + m->ntris * 13;
 }
 
+void ism_ply_put_faces(ism_sink *s, const ism_mesh *m)
+{
+    for (size_t t = 0; t < m->ntris; t++) {
+        ism_sink_u8(s, 3);
+        for (int k = 0; k < 3; k++)
+            ism_sink_u32le(s, m->tri[3 * t + k]);
+    }
+}
+
 bool ism_write_ply(const ism_mesh *m, ism_write_fn write, void *ctx)
 {
     if (m->nverts > INT32_MAX)
@@ -46,11 +55,7 @@ bool ism_write_ply(const ism_mesh *m, ism_write_fn write, void *ctx)
         for (int k = 0; k < 3; k++)
             ism_sink_f32le(s, m->normal ? m->normal[3 * i + k] : 0.0f);
     }
-    for (size_t t = 0; t < m->ntris; t++) {
-        ism_sink_u8(s, 3);
-        for (int k = 0; k < 3; k++)
-            ism_sink_u32le(s, m->tri[3 * t + k]);
-    }
+    ism_ply_put_faces(s, m);
     bool ok = ism_sink_finish(s);
     free(s);
     return ok;

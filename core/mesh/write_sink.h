@@ -31,6 +31,10 @@ void ism_sink_u16le(ism_sink *s, uint16_t v);
 void ism_sink_u32le(ism_sink *s, uint32_t v);
 void ism_sink_f32le(ism_sink *s, float v);
 
+/* PLY's face element of m: per triangle a uchar 3 and three int32 (write_ply.c; shared with
+ * the service's PLY writer). */
+void ism_ply_put_faces(ism_sink *s, const ism_mesh *m);
+
 /* Flushes what is buffered; true when every byte was accepted by the callback. */
 bool ism_sink_finish(ism_sink *s);
 
