@@ -137,6 +137,7 @@ bool ismd_auth_route_needs_token(const ismd_auth *a, ismd_route route, const cha
     case ISMD_R_JOBS:
     case ISMD_R_SWEEP:
     case ISMD_R_BOX:
+    case ISMD_R_POINT:
         return true; /* POST computes; GET lists the caller's jobs */
     case ISMD_R_JOB:
         return !strcmp(method, "DELETE") || a->private_mode;

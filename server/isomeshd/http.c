@@ -324,6 +324,9 @@ static void route_v1(ismd_req *r, const char *p)
     } else if (!strcmp(p, "sweep")) {
         set_route(r, ISMD_R_SWEEP, "POST, OPTIONS", ismd_route_sweep);
         r->wants_body = true;
+    } else if (!strcmp(p, "point")) {
+        set_route(r, ISMD_R_POINT, "POST, OPTIONS", ismd_route_point);
+        r->wants_body = true;
     } else if (!strcmp(p, "box")) {
         set_route(r, ISMD_R_BOX, "POST, OPTIONS", ismd_route_box);
         r->wants_body = true;

@@ -165,6 +165,7 @@ enum MHD_Result ismd_route_job_delete(ismd_req *r);      /* DELETE /v1/jobs/{id}
 enum MHD_Result ismd_route_job_events(ismd_req *r);      /* GET /v1/jobs/{id}/events */
 enum MHD_Result ismd_route_doc(ismd_req *r);             /* presets, openapi, schema */
 enum MHD_Result ismd_route_box(ismd_req *r);             /* POST /v1/box */
+enum MHD_Result ismd_route_point(ismd_req *r);           /* POST /v1/point?at=X,Y,Z */
 enum MHD_Result ismd_route_health(ismd_req *r);          /* /healthz, /readyz */
 enum MHD_Result ismd_route_metrics(ismd_req *r);         /* /metrics */
 enum MHD_Result ismd_route_static(ismd_req *r);          /* the viewer and /vendor/three */

@@ -1,6 +1,7 @@
 /* routes_misc.c — the small routes: GET /v1/presets, /v1/openapi.yaml, /v1/request.schema.json
  * (documents loaded from --data-dir at start-up), POST /v1/box (the box a surface's zero set
- * needs: a bounded interval pass, proto/box_fit.h, answered on the HTTP thread), /healthz (the process answers), /readyz (a
+ * needs: a bounded interval pass, proto/box_fit.h, answered on the HTTP thread), POST
+ * /v1/point (f and curvature at one point, proto/point_probe.h), /healthz (the process answers), /readyz (a
  * worker is ready and we are not shutting down), /metrics (Prometheus text, with the per-user
  * gauges of user_metrics.h). */
 #include <stdio.h>
@@ -10,6 +11,7 @@
 #include "server/isomeshd/http.h"
 #include "server/isomeshd/user_metrics.h"
 #include "proto/box_fit.h"
+#include "proto/point_probe.h"
 
 enum MHD_Result ismd_route_doc(ismd_req *r)
 {
@@ -41,18 +43,15 @@ enum MHD_Result ismd_route_doc(ismd_req *r)
     return ismd_send(r, 200, resp);
 }
 
-enum MHD_Result ismd_route_box(ismd_req *r)
+/* The JSON answer, or the request error err describes. */
+static enum MHD_Result answer_or_error(ismd_req *r, char *json, const ism_req_error *err)
 {
-    ism_request_limits lim = {.max_depth = r->srv->limits.max_depth};
-    ism_req_error err;
-    size_t len = 0;
-    char *json = ism_box_fit_answer(r->body ? r->body : "", r->body_len, &lim, &len, &err);
     if (!json) {
         size_t elen = 0;
-        char *e = ism_req_error_json(&err, &elen);
+        char *e = ism_req_error_json(err, &elen);
         ism_blob *b = e ? ism_blob_copy(e, elen) : NULL;
         free(e);
-        enum MHD_Result ret = b ? ismd_respond_error_blob(r, (unsigned)err.status, b)
+        enum MHD_Result ret = b ? ismd_respond_error_blob(r, (unsigned)err->status, b)
                                 : ismd_respond_error(r, 500, "out_of_memory", "out of memory");
         ism_blob_unref(b);
         return ret;
@@ -60,6 +59,28 @@ enum MHD_Result ismd_route_box(ismd_req *r)
     enum MHD_Result ret = ismd_respond_json(r, 200, json);
     free(json);
     return ret;
+}
+
+enum MHD_Result ismd_route_box(ismd_req *r)
+{
+    ism_request_limits lim = {.max_depth = r->srv->limits.max_depth};
+    ism_req_error err;
+    size_t len = 0;
+    char *json = ism_box_fit_answer(r->body ? r->body : "", r->body_len, &lim, &len, &err);
+    return answer_or_error(r, json, &err);
+}
+
+enum MHD_Result ismd_route_point(ismd_req *r)
+{
+    double at[3];
+    const char *q = ismd_query(r, "at");
+    if (!q || !ism_point_parse(q, at))
+        return ismd_respond_error(r, 400, "bad_request", "?at=X,Y,Z: three finite numbers");
+    ism_request_limits lim = {.max_depth = r->srv->limits.max_depth};
+    ism_req_error err;
+    size_t len = 0;
+    char *json = ism_point_probe_answer(r->body ? r->body : "", r->body_len, &lim, at, &len, &err);
+    return answer_or_error(r, json, &err);
 }
 
 enum MHD_Result ismd_route_health(ismd_req *r)

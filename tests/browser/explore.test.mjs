@@ -159,6 +159,26 @@ describe('box and inspection', { timeout: 300000 }, () => {
     await page.uncheck('#clip-on');
   });
 
+  it('clicking the surface gives the point, f, |grad f| and curvature there', async () => {
+    const n = await loads(page);
+    await page.selectOption('#preset', 'sphere');
+    await waitForMesh(page, n);
+    const box = await page.locator('#view').boundingBox();
+    await page.mouse.click(box.x + box.width / 2, box.y + box.height / 2);
+    await page.waitForSelector('#pick-info[data-what=surface]:not([hidden])');
+    const info = await page.$eval('#pick-info', (e) => ({ ...e.dataset, text: e.textContent }));
+    const p = JSON.parse(info.probe);
+    const xyz = info.xyz.split(',').map(Number);
+    const rho = Math.hypot(...xyz);
+    assert.ok(Math.abs(rho - 1) < 0.01, `the point is on the unit sphere's mesh (|p| = ${rho})`);
+    // f = |p|^2 - 1: closed forms at the picked point (the level set through it is a sphere).
+    assert.ok(Math.abs(p.f - (rho * rho - 1)) < 1e-12);
+    assert.ok(Math.abs(p.grad_norm - 2 * rho) < 1e-12);
+    assert.ok(Math.abs(p.gauss_curvature * rho * rho - 1) < 1e-9, `K = ${p.gauss_curvature}`);
+    assert.ok(Math.abs(Math.abs(p.mean_curvature) * rho - 1) < 1e-9, `H = ${p.mean_curvature}`);
+    assert.match(info.text, /^surface point .*triangle \d+\nf = .*\|∇f\| = .*\nH = .*K = /);
+  });
+
   it('left no page errors', () => {
     assert.deepEqual(errors, []);
   });

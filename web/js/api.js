@@ -130,6 +130,13 @@ export async function fitBox(body, signal) {
   return r.json();
 }
 
+// POST /v1/point?at=X,Y,Z: f, gradient and level-set curvature there (proto/point_probe.h).
+export async function probePoint(body, xyz, signal) {
+  const at = xyz.map((v) => String(v)).join(',');
+  const r = await call(`/v1/point?at=${at}`, { method: 'POST', body, signal, headers: { 'Content-Type': 'application/json' } });
+  return r.json();
+}
+
 export async function getBytes(url, signal) {
   const r = await call(url, { signal });
   const bytes = await r.arrayBuffer();

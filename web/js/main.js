@@ -312,7 +312,7 @@ function pickAt(e) {
   const r = $('view').getBoundingClientRect();
   const hit = viewer.pick(e.clientX - r.left, e.clientY - r.top);
   if (!hit) {
-    info.hidden = true;
+    pickSurfaceAt(e.clientX - r.left, e.clientY - r.top);
     return;
   }
   const xyz = hit.xyz.map((v) => sig(v, 7)).join(', ');
@@ -330,6 +330,32 @@ function pickAt(e) {
   info.dataset.xyz = hit.xyz.join(',');
   info.dataset.type = hit.what === 'point' ? hit.p.type : hit.p.kind;
   info.hidden = false;
+}
+
+// Clicking the surface: the point, its triangle, and f, |grad f| and curvature there (asked
+// of the server, which evaluates the same f: POST /v1/point).
+async function pickSurfaceAt(x, y) {
+  const info = $('pick-info');
+  const hit = viewer.pickSurface(x, y);
+  const body = currentBody();
+  if (!hit || !body) {
+    info.hidden = true;
+    return;
+  }
+  try {
+    const p = await api.probePoint(body, hit.xyz);
+    const v = (n) => (n === null ? 'undefined' : sig(n, 4));
+    info.textContent = `surface point (${hit.xyz.map((c) => sig(c, 7)).join(', ')}), triangle ${hit.face}\n` +
+      `f = ${v(p.f)}, |∇f| = ${v(p.grad_norm)}, distance ≈ ${v(p.distance)}\n` +
+      `H = ${v(p.mean_curvature)}, K = ${v(p.gauss_curvature)}`;
+    info.dataset.what = 'surface';
+    info.dataset.type = 'surface';
+    info.dataset.xyz = hit.xyz.join(',');
+    info.dataset.probe = JSON.stringify(p);
+    info.hidden = false;
+  } catch (e) {
+    info.hidden = true;
+  }
 }
 
 function applyDisplay() {

@@ -251,6 +251,18 @@ export class Viewer {
     return pickFeature(this.features, this.camera, this.canvas.clientWidth, this.canvas.clientHeight, x, y);
   }
 
+  // The surface point under canvas pixel (x, y): {xyz, face (triangle index)} or null. Points
+  // removed by the clipping plane are skipped.
+  pickSurface(x, y) {
+    if (!this.surface) return null;
+    const ndc = new THREE.Vector2(2 * x / this.canvas.clientWidth - 1, 1 - 2 * y / this.canvas.clientHeight);
+    const ray = new THREE.Raycaster();
+    ray.setFromCamera(ndc, this.camera);
+    const hits = ray.intersectObject(this.surface, false);
+    const kept = hits.find((h) => this.clipping.every((p) => p.distanceToPoint(h.point) >= 0));
+    return kept ? { xyz: kept.point.toArray(), face: kept.faceIndex } : null;
+  }
+
   setWireframe(on) {
     this.wireframe = on;
     if (this.wire) this.wire.visible = on;
