@@ -179,6 +179,22 @@ describe('box and inspection', { timeout: 300000 }, () => {
     assert.match(info.text, /^surface point .*triangle \d+\nf = .*\|∇f\| = .*\nH = .*K = /);
   });
 
+  it('the curvature colours span the chosen percentiles', async () => {
+    await page.selectOption('#color-mode', 'gauss');
+    await page.waitForSelector('#legend[data-mode=gauss]:not([hidden])');
+    const spans = {};
+    for (const cut of ['p2', 'p10', 'full']) {
+      await page.selectOption('#color-range', cut);
+      spans[cut] = await page.$eval('#legend', (e) => [Number(e.dataset.lo), Number(e.dataset.hi), Number(e.dataset.min), Number(e.dataset.max)]);
+    }
+    const [lo10, hi10] = spans.p10, [lo2, hi2] = spans.p2, [loF, hiF, min, max] = spans.full;
+    assert.ok(lo2 <= lo10 && hi10 <= hi2, `10-90 % (${lo10}, ${hi10}) lies within 2-98 % (${lo2}, ${hi2})`);
+    assert.ok(loF <= lo2 && hi2 <= hiF, 'the full range holds the others');
+    assert.ok(loF <= min || hiF >= max, 'the full range reaches the data');
+    await page.selectOption('#color-range', 'p2');
+    await page.selectOption('#color-mode', 'shaded');
+  });
+
   it('left no page errors', () => {
     assert.deepEqual(errors, []);
   });

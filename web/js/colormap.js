@@ -28,10 +28,14 @@ function quantile(sorted, p) {
   return sorted[Math.min(sorted.length - 1, Math.max(0, Math.round(p * (sorted.length - 1))))];
 }
 
-// Chooses the scale for values. Returns {min, max (true finite range), lo, hi (the coloured
-// range), kind 'diverging'|'sequential', scale 'linear'|'log'|'symlog', s (symlog knee),
-// clamped, nonfinite}.
-export function curvatureRange(values) {
+// The percentile pairs the viewer offers for the coloured range (share cut at each end).
+export const RANGE_CUTS = { p2: 0.02, p5: 0.05, p10: 0.10, full: 0 };
+
+// Chooses the scale for values, the coloured range running from the cut-th to the
+// (1 - cut)-th percentile (default 2 %). Returns {min, max (true finite range), lo, hi (the
+// coloured range), kind 'diverging'|'sequential', scale 'linear'|'log'|'symlog', s (symlog
+// knee), clamped, nonfinite}.
+export function curvatureRange(values, cut = RANGE_CUTS.p2) {
   const finite = [];
   let nonfinite = 0;
   for (let i = 0; i < values.length; i++) {
@@ -43,7 +47,7 @@ export function curvatureRange(values) {
   }
   const sorted = Float64Array.from(finite).sort();
   const min = sorted[0], max = sorted[sorted.length - 1];
-  let p2 = quantile(sorted, 0.02), p98 = quantile(sorted, 0.98);
+  let p2 = quantile(sorted, cut), p98 = quantile(sorted, 1 - cut);
   const r = { min, max, nonfinite, s: 1, clamped: 0 };
   if (p2 < 0 && p98 > 0) {
     const L = Math.max(-p2, p98);

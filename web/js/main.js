@@ -813,6 +813,7 @@ function wire() {
     });
   }
   $('two-sided').addEventListener('change', () => viewer.setTwoSided($('two-sided').checked));
+  $('color-range').addEventListener('change', () => showLegend(state.color, viewer.setRangeCut($('color-range').value)));
   $('wireframe').addEventListener('change', () => {
     state.wire = $('wireframe').checked;
     viewer.setWireframe(state.wire);

@@ -7,7 +7,7 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { buildFeatures, disposeFeatures, pickFeature, setLineResolution } from './features.js';
-import { curvatureColors, curvatureRange } from './colormap.js';
+import { curvatureColors, curvatureRange, RANGE_CUTS } from './colormap.js';
 import { buildBox, disposeBox } from './box_view.js';
 import { sectionSegments, sectionLines } from './section.js';
 
@@ -80,6 +80,7 @@ export class Viewer {
     this.features = null;
     this.data = null;
     this.colorMode = 'shaded';
+    this.rangeCut = 'p2';      // colormap.RANGE_CUTS key: the percentiles the colours span
     this.show = { edges: true, points: true, boundary: true };
     this.wireframe = false;
     this.bounds = new THREE.Box3(new THREE.Vector3(-1, -1, -1), new THREE.Vector3(1, 1, 1));
@@ -215,15 +216,25 @@ export class Viewer {
       return null;
     }
     const cache = this.data.mesh.colors || (this.data.mesh.colors = {});
-    if (!cache[attr]) {
-      const range = curvatureRange(values);
-      cache[attr] = { range, rgb: curvatureColors(values, range) };
+    const slot = `${attr}|${this.rangeCut}`;
+    if (!cache[slot]) {
+      const range = curvatureRange(values, RANGE_CUTS[this.rangeCut] ?? RANGE_CUTS.p2);
+      cache[slot] = { range, rgb: curvatureColors(values, range) };
     }
+    cache[attr] = cache[slot];
     g.setAttribute('color', new THREE.BufferAttribute(cache[attr].rgb, 3));
     this.material.vertexColors = true;
     this.material.color.setHex(0xffffff);
     this.material.needsUpdate = true;
     return cache[attr].range;
+  }
+
+  // The percentiles the curvature colours span (colormap.RANGE_CUTS key); returns the legend.
+  setRangeCut(cut) {
+    this.rangeCut = cut;
+    const legend = this.applyColor();
+    this.render();
+    return legend;
   }
 
   // Inside and outside in two colours (shaded mode).
