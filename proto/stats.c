@@ -37,6 +37,10 @@ static void write_poly(ism_jw *w, const ism_poly_stats *s)
     kv_u(w, "nodes_excluded", s->nodes_excluded);
     kv_u(w, "plotting_nodes", s->plotting_nodes);
     kv_u(w, "unresolved_nodes", s->unresolved_nodes);
+    kv_u(w, "thin_searched", s->thin_searched);
+    kv_u(w, "thin_found", s->thin_found);
+    kv_u(w, "thin_undecided", s->thin_undecided);
+    kv_u(w, "deep_leaves", s->deep_leaves);
     kv_u(w, "error_missed_nodes", s->error_missed_nodes);
     kv_d(w, "error_worst", s->error_worst);
     kv_u(w, "error_rounds", s->error_rounds);
@@ -53,6 +57,8 @@ static void write_poly(ism_jw *w, const ism_poly_stats *s)
     kv_u(w, "cracks_repaired", s->cracks_repaired);
     kv_u(w, "singular_points", s->singular_points);
     kv_u(w, "crossed_faces", s->crossed_faces);
+    kv_u(w, "lifted_polygons", s->lifted_polygons);
+    kv_u(w, "lifted_chords", s->lifted_chords);
     kv_u(w, "evals_point", s->evals_point);
     kv_u(w, "evals_interval", s->evals_interval);
     kv_u(w, "evals_gradient", s->evals_gradient);

@@ -3,6 +3,7 @@
  * polygon triangulated; one-edge polygons are kept as segments. */
 #include "core/octree/cell.h"
 #include "core/octree/face_lines.h"
+#include "core/octree/face_flat.h"
 #include "core/octree/singular.h"
 #include "core/octree/stitch.h"
 #include "core/octree/triangulate.h"
@@ -119,6 +120,28 @@ static void drop_edges_of_zero_tiles(ism_cell_ctx *cx)
     cx->lines.n = kept;
 }
 
+/* Does this node emit what lies in its face (2 × axis + side) and nowhere else: its upper
+ * faces, and its lower faces on the search box's lower boundary (emit_zero_tile's rule)? */
+static bool owns_face(const ism_node *nd, int face)
+{
+    return face % 2 == 1 || nd->org[face / 2] == 0;
+}
+
+/* A polygon lying in one of the node's faces (face_flat.h): fanned from the surface point
+ * above it on this node's side; with none there, emitted flat by the face's owner only. */
+static bool face_polygon(ism_cell_ctx *cx, const ism_node *nd, const ism_fpoint *p, size_t n,
+                         int face, double reach, const double box[6], ism_cell_out *out)
+{
+    ism_fpoint top;
+    if (ism_lift_point(&cx->s, p, n, box, face, &top)) {
+        cx->stats.lifted_polygons++;
+        return ism_triangulate_tent(p, n, &top, out);
+    }
+    if (!owns_face(nd, face))
+        return true;
+    return ism_triangulate_loop(&cx->s, p, n, reach, box, out);
+}
+
 bool ism_cell_polygonise(ism_cell_ctx *cx, int32_t node, ism_cell_out *out)
 {
     cx->lines.n = 0;
@@ -175,7 +198,10 @@ bool ism_cell_polygonise(ism_cell_ctx *cx, int32_t node, ism_cell_out *out)
         if (lp->n < 2)
             continue;
         polygons++;
-        if (!ism_triangulate_loop(&cx->s, p, lp->n, reach, box, out))
+        int face = ism_face_plane(box, p, lp->n);
+        if (face >= 0 && !face_polygon(cx, nd, p, lp->n, face, reach, box, out))
+            return false;
+        if (face < 0 && !ism_triangulate_loop(&cx->s, p, lp->n, reach, box, out))
             return false;
     }
     cx->stats.polygons += polygons;

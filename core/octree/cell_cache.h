@@ -32,9 +32,10 @@ typedef struct ism_cell_cache {
 bool ism_cell_cache_init(ism_cell_cache *c);
 void ism_cell_cache_free(ism_cell_cache *c);
 
+/* 21 bits per coordinate: the lattice's 2^ISM_GRID_MAX_DEPTH + 1 points per axis fit. */
 static inline uint64_t ism_lattice_key(const int32_t p[3])
 {
-    return (((uint64_t)p[0] << 34) | ((uint64_t)p[1] << 17) | (uint64_t)p[2]) + 1;
+    return (((uint64_t)p[0] << 42) | ((uint64_t)p[1] << 21) | (uint64_t)p[2]) + 1;
 }
 
 static inline uint64_t ism_cache_mix(uint64_t k)

@@ -82,6 +82,7 @@ typedef struct ism_cell_out {
 typedef struct ism_cell_stats {
     uint64_t polygons, two_polygon_nodes, many_polygon_nodes, degenerate_polygons;
     uint64_t double_lines, open_chains, crossed_faces, crack_tiles, singular_points;
+    uint64_t lifted_polygons, lifted_chords;
 } ism_cell_stats;
 
 #endif

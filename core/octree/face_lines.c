@@ -12,6 +12,7 @@
  *   - lattice segments where f vanishes are lines of their own (double lines on edges).
  * Everything here depends only on the tile, so both nodes that share it agree. */
 #include "core/octree/face_lines.h"
+#include "core/octree/face_flat.h"
 #include "core/octree/singular.h"
 
 #include <math.h>
@@ -568,6 +569,30 @@ static bool emit(ism_cell_ctx *cx, int a, int b, int kind)
     return ism_flines_push(&cx->lines, &cx->ev[a].pt, &cx->ev[b].pt, kind);
 }
 
+/* A line of one polygon; a chord along one side of the tile goes through the point of its
+ * arc across the tile instead (face_flat.h: else the tile across that side may hold the
+ * same chord for its own arc, and four polygons would share one edge). */
+static bool emit_regular(ism_cell_ctx *cx, const ism_tile *t, int a, int b)
+{
+    const ism_grid *g = &cx->tree->grid;
+    const ism_fpoint *pa = &cx->ev[a].pt, *pb = &cx->ev[b].pt;
+    for (int k = 1; k <= 2; k++) {
+        int axis = (t->axis + k) % 3;
+        int32_t lo = k == 1 ? t->u0 : t->v0, hi = k == 1 ? t->u1 : t->v1;
+        double side0 = ism_grid_coord(g, axis, lo), side1 = ism_grid_coord(g, axis, hi);
+        double at = pa->p[axis];
+        ism_fpoint mid;
+        if (pb->p[axis] != at || (at != side0 && at != side1))
+            continue;
+        if (!ism_lift_chord(&cx->s, pa, pb, axis, at == side0 ? side1 : side0, &mid))
+            break;
+        cx->stats.lifted_chords++;
+        return ism_flines_push(&cx->lines, pa, &mid, ISM_LINE_REGULAR) &&
+               ism_flines_push(&cx->lines, &mid, pb, ISM_LINE_REGULAR);
+    }
+    return emit(cx, a, b, ISM_LINE_REGULAR);
+}
+
 /* f = 0 on the whole tile: at every boundary point and at the centre. */
 static bool is_zero_tile(ism_cell_ctx *cx, const ism_tile *t)
 {
@@ -668,7 +693,7 @@ bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
         }
     }
     for (int l = 0; l < nl; l++)
-        if (!line_used[l] && !emit(cx, lines[l].a, lines[l].b, ISM_LINE_REGULAR))
+        if (!line_used[l] && !emit_regular(cx, t, lines[l].a, lines[l].b))
             return false;
     return true;
 }

@@ -1,5 +1,5 @@
 /* grid.h — the integer lattice under the octree. A point of the lattice has integer
- * coordinates 0..2^depth on each axis (depth = the polygoniser's maximum depth); a cell at
+ * coordinates 0..2^depth on each axis (the depth the polygoniser may reach, below its maximum depth where a piece is thinner than a cell); a cell at
  * level L spans 2^(depth-L) lattice steps. Every world coordinate of a lattice point comes
  * from grid_coord(), so the same lattice point always has bit-identical world coordinates
  * in every cell that mentions it — the basis of exact welding. */
@@ -8,8 +8,11 @@
 
 #include <stdint.h>
 
-/* Deepest octree level the lattice supports (coordinates stay within 17 bits). */
-#define ISM_GRID_MAX_DEPTH 16
+/* Deepest octree level the lattice supports: coordinates up to 2^19 take 20 bits, and the
+ * break-point keys (breaks.c: 2 + 3 × 20 bits) and node keys (refine.c: 5 + 3 × 19 bits)
+ * still fit in 64. The polygoniser's depth.max stays at most ISM_MAX_DEPTH_LIMIT; the levels
+ * below it are for pieces thinner than a cell (ISM_THIN_EXTRA_DEPTH). */
+#define ISM_GRID_MAX_DEPTH 19
 
 typedef struct ism_grid {
     int depth;          /* maximum octree depth: lattice has 2^depth steps per axis */

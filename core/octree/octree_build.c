@@ -4,6 +4,7 @@
 #include "core/octree/octree_build.h"
 #include "core/octree/sampler.h"
 #include "core/octree/cell_cache.h"
+#include "core/octree/thin_search.h"
 #include "core/util/parallel.h"
 
 #include <pthread.h>
@@ -18,11 +19,26 @@ typedef struct node_vec {
     size_t n, cap;
 } node_vec;
 
+/* Nodes at the top levels left for the worker threads: each with the depth its subtree may
+ * reach (see grow). */
+typedef struct deferral {
+    size_t node;
+    int limit;
+} deferral;
+
+typedef struct defer_list {
+    int level;
+    deferral *v;
+    size_t n;
+} defer_list;
+
 typedef struct thread_state {
     ism_sampler s;
     ism_point_entry *corners; /* memo of f and ∇f at lattice points (pure: never stale) */
     ism_tape *tapes[ISM_GRID_MAX_DEPTH + 1];
+    ism_thin_ws thin;         /* the hidden-piece search's scratch */
     uint64_t visited, excluded, unresolved;
+    uint64_t thin_searched, thin_found, thin_undecided, deep_leaves;
 } thread_state;
 
 typedef struct build {
@@ -32,7 +48,7 @@ typedef struct build {
     int shortening;
     atomic_size_t nodes_total;
     atomic_int failed;           /* an enum ism_build_status other than OK */
-    size_t *task_nodes;          /* node index (in the top array) of each task */
+    deferral *tasks;             /* node index (in the top array) and limit of each task */
     node_vec *task_out;          /* each task's subtree; [0] is the task's node itself */
     atomic_size_t tasks_done;
     size_t ntasks;
@@ -110,22 +126,50 @@ static bool fail(build *b, enum ism_build_status st)
     return false;
 }
 
-/* Decides node v->v[i] and grows its subtree. When defer_level >= 0, nodes at that level
- * are left for tasks (their index is appended to *deferred). */
+/* A would-be leaf whose corners all have one sign may still hold a piece of the surface
+ * that no edge crosses (thin_search.h). True when one was found there: the node is split,
+ * below depth.max too, down to b->p->thin_depth at most. */
+static bool hides_piece(build *b, thread_state *th, const ism_node *nd, const ism_tape *sub,
+                        const ism_corners *k)
+{
+    if (nd->level >= b->p->thin_depth)
+        return false;
+    int sign = ism_sign(k->f[0]);
+    for (int c = 1; c < 8; c++)
+        if (ism_sign(k->f[c]) != sign)
+            return false;
+    if (sign == 0)
+        return false;
+    double lo[3], hi[3];
+    node_box(b->grid, nd, lo, hi);
+    const ism_tape *saved = th->s.tape;
+    th->s.tape = sub;
+    enum ism_thin_verdict v = ism_thin_search(&th->s, &th->thin, lo, hi, sign, NULL);
+    th->s.tape = saved;
+    th->thin_searched++;
+    th->thin_found += v == ISM_THIN_FOUND;
+    th->thin_undecided += v == ISM_THIN_UNDECIDED;
+    return v == ISM_THIN_FOUND;
+}
+
+/* Decides node v->v[i] and grows its subtree. Nodes that fail the flatness test are split
+ * down to level `limit` (depth.max, or ISM_THIN_RESOLVE_LEVELS deeper below a hidden
+ * piece); a would-be leaf that hides a piece is split in any case, down to thin_depth. When
+ * defer is not NULL, nodes at its level are left for tasks (appended to it). */
 static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_tape *tape,
-                 int defer_level, size_t **deferred, size_t *ndeferred)
+                 int limit, defer_list *defer)
 {
     if (atomic_load(&b->failed) != ISM_BUILD_OK)
         return false;
     if (b->p->cancel && *b->p->cancel)
         return fail(b, ISM_BUILD_CANCELLED);
     ism_node nd = v->v[i];
-    if (nd.level == defer_level) {
-        size_t *d = realloc(*deferred, (*ndeferred + 1) * sizeof *d);
+    if (defer && nd.level == defer->level) {
+        deferral *d = realloc(defer->v, (defer->n + 1) * sizeof *d);
         if (!d)
             return fail(b, ISM_BUILD_NO_MEMORY);
-        d[(*ndeferred)++] = i;
-        *deferred = d;
+        d[defer->n++] = (deferral){i, limit};
+        defer->v = d;
         return true;
     }
     th->visited++;
@@ -148,15 +192,18 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         th->s.tape = sub;
         bool flat = ism_plot_test(&th->s, &b->p->flatness, lo, hi, &k);
         th->s.tape = saved;
-        if (nd.level >= b->p->max_depth) {
-            leaf = true;
-            if (!flat) {
-                v->v[i].flags |= ISM_NODE_UNRESOLVED;
-                th->unresolved++;
-            }
-        } else {
-            leaf = flat;
+        leaf = flat || nd.level >= limit;
+        if (leaf && !flat && hides_piece(b, th, &nd, sub, &k)) {
+            leaf = false;
+            int resolve = b->p->max_depth + ISM_THIN_RESOLVE_LEVELS;
+            resolve = resolve < b->p->thin_depth ? resolve : b->p->thin_depth;
+            limit = limit > resolve ? limit : resolve;
         }
+        if (leaf && !flat) {
+            v->v[i].flags |= ISM_NODE_UNRESOLVED;
+            th->unresolved++;
+        }
+        th->deep_leaves += leaf && nd.level > b->p->max_depth;
     }
     if (leaf) {
         v->v[i].state = ISM_NODE_LEAF;
@@ -174,7 +221,7 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     v->v[i].state = ISM_NODE_SPLIT;
     v->v[i].child = (int32_t)first;
     for (int k = 0; k < 8; k++)
-        if (!grow(b, th, v, first + k, sub, defer_level, deferred, ndeferred))
+        if (!grow(b, th, v, first + k, sub, limit, defer))
             return false;
     return true;
 }
@@ -194,10 +241,8 @@ static void run_task(void *ctx, size_t task, int thread)
     build *b = ctx;
     thread_state *th = &b->threads[thread];
     node_vec *out = &b->task_out[task];
-    size_t *none = NULL, nnone = 0;
     /* The task's tape: shorten from the full tape over the task's own box on the way. */
-    grow(b, th, out, 0, b->p->tape, -1, &none, &nnone);
-    free(none);
+    grow(b, th, out, 0, b->p->tape, b->tasks[task].limit, NULL);
     report_progress(b);
 }
 
@@ -211,10 +256,10 @@ static bool init_threads(build *b, int nthreads)
         th->s.tape = b->p->tape;
         th->s.ws = ism_eval_ws_new(b->p->tape);
         th->corners = calloc((size_t)1 << CORNER_CACHE_BITS, sizeof *th->corners);
-        if (!th->s.ws || !th->corners)
+        if (!th->s.ws || !th->corners || !ism_thin_ws_init(&th->thin, b->p->tape))
             return false;
         if (b->shortening)
-            for (int l = 0; l <= b->p->max_depth; l++)
+            for (int l = 0; l <= b->p->thin_depth; l++)
                 if (!(th->tapes[l] = ism_tape_new_like(b->p->tape)))
                     return false;
     }
@@ -230,6 +275,12 @@ static void free_threads(build *b, int nthreads, ism_octree_build_stats *st)
         st->visited += th->visited;
         st->excluded += th->excluded;
         st->unresolved += th->unresolved;
+        st->thin_searched += th->thin_searched;
+        st->thin_found += th->thin_found;
+        st->thin_undecided += th->thin_undecided;
+        st->thin_boxes += th->thin.n_boxes;
+        st->deep_leaves += th->deep_leaves;
+        ism_thin_ws_free(&th->thin);
         st->n_point += th->s.n_point;
         st->n_gradient += th->s.n_gradient;
         st->n_interval += th->s.n_interval;
@@ -252,7 +303,7 @@ static bool join_tasks(build *b, node_vec *top)
         ism_node root = sub->v[0];
         if (root.child >= 0)
             root.child += (int32_t)offset;
-        top->v[b->task_nodes[k]] = root;
+        top->v[b->tasks[k].node] = root;
         for (size_t j = 1; j < sub->n; j++) {
             ism_node nd = sub->v[j];
             if (nd.child >= 0)
@@ -279,7 +330,7 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
     pthread_mutex_init(&b.progress_lock, NULL);
     int nthreads = p->threads < 1 ? 1 : p->threads;
     node_vec top = {0};
-    size_t *deferred = NULL, ndeferred = 0;
+    defer_list deferred = {0, NULL, 0};
     enum ism_build_status status = ISM_BUILD_OK;
 
     if (!init_threads(&b, nthreads)) {
@@ -291,24 +342,24 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
         status = ISM_BUILD_NO_MEMORY;
         goto done;
     }
-    int defer = p->max_depth < TOP_LEVEL ? p->max_depth : TOP_LEVEL;
-    grow(&b, &b.threads[0], &top, 0, p->tape, defer, &deferred, &ndeferred);
+    deferred.level = p->max_depth < TOP_LEVEL ? p->max_depth : TOP_LEVEL;
+    grow(&b, &b.threads[0], &top, 0, p->tape, p->max_depth, &deferred);
     if ((status = atomic_load(&b.failed)) != ISM_BUILD_OK)
         goto done;
 
-    b.ntasks = ndeferred;
-    b.task_nodes = deferred;
-    b.task_out = calloc(ndeferred ? ndeferred : 1, sizeof *b.task_out);
+    b.ntasks = deferred.n;
+    b.tasks = deferred.v;
+    b.task_out = calloc(b.ntasks ? b.ntasks : 1, sizeof *b.task_out);
     if (!b.task_out) {
         status = ISM_BUILD_NO_MEMORY;
         goto done;
     }
-    for (size_t k = 0; k < ndeferred; k++)
-        if (!vec_push(&b.task_out[k], &top.v[deferred[k]])) {
+    for (size_t k = 0; k < b.ntasks; k++)
+        if (!vec_push(&b.task_out[k], &top.v[b.tasks[k].node])) {
             status = ISM_BUILD_NO_MEMORY;
             goto done;
         }
-    ism_parallel_for(nthreads, ndeferred, run_task, &b);
+    ism_parallel_for(nthreads, b.ntasks, run_task, &b);
     if ((status = atomic_load(&b.failed)) != ISM_BUILD_OK)
         goto done;
     if (!join_tasks(&b, &top))
@@ -320,7 +371,7 @@ done:
         for (size_t k = 0; k < b.ntasks; k++)
             free(b.task_out[k].v);
     free(b.task_out);
-    free(deferred);
+    free(deferred.v);
     pthread_mutex_destroy(&b.progress_lock);
     if (status != ISM_BUILD_OK) {
         free(top.v);

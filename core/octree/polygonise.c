@@ -181,6 +181,8 @@ static void add_cell_stats(ism_poly_stats *st, const ism_cell_ctx *cx)
     st->cracks_repaired += cx->stats.crack_tiles;
     st->singular_points += cx->stats.singular_points;
     st->crossed_faces += cx->stats.crossed_faces;
+    st->lifted_polygons += cx->stats.lifted_polygons;
+    st->lifted_chords += cx->stats.lifted_chords;
     st->evals_point += cx->s.n_point;
     st->evals_gradient += cx->s.n_gradient;
     st->evals_interval += cx->s.n_interval;
@@ -337,11 +339,15 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     prog->span = span * 0.4 / 0.95; /* the octree's share of this round's progress */
     ism_octree tree;
     memset(&tree, 0, sizeof tree);
-    ism_grid_init(&tree.grid, o->box, o->max_depth);
+    int thin_depth = o->max_depth + (o->thin_search ? ISM_THIN_EXTRA_DEPTH : 0);
+    if (thin_depth > ISM_GRID_MAX_DEPTH)
+        thin_depth = ISM_GRID_MAX_DEPTH;
+    ism_grid_init(&tree.grid, o->box, thin_depth);
     ism_octree_build_params bp = {
         .tape = f,
         .min_depth = o->min_depth,
         .max_depth = o->max_depth,
+        .thin_depth = thin_depth,
         .flatness = {.gradient_test = o->gradient_test,
                      .normal_cos = o->flat_normal,
                      .plane_frac = o->flat_plane,
@@ -362,9 +368,10 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     st->nodes_visited = bs.visited;
     st->nodes_excluded = bs.excluded;
     st->unresolved_nodes = bs.unresolved;
-    st->evals_point = bs.n_point;
-    st->evals_gradient = bs.n_gradient;
-    st->evals_interval = bs.n_interval;
+    st->thin_searched = bs.thin_searched;
+    st->thin_found = bs.thin_found;
+    st->thin_undecided = bs.thin_undecided;
+    st->deep_leaves = bs.deep_leaves;
     double t_tree = ism_now_ms();
     st->time_ms[ISM_PHASE_OCTREE] = t_tree - t_start;
     if (status != ISM_POLY_OK)

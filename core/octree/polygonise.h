@@ -11,8 +11,16 @@
 #include "core/mesh/mesh.h"
 #include "core/octree/grid.h"
 
-/* Hard limits of the octree (cells are addressed by integer coordinates at max depth). */
-#define ISM_MAX_DEPTH_LIMIT ISM_GRID_MAX_DEPTH
+/* Hard limit of depth.max (cells are addressed by integer coordinates on a lattice that also
+ * holds the levels below it, ISM_THIN_EXTRA_DEPTH). */
+#define ISM_MAX_DEPTH_LIMIT 16
+/* How far below depth.max a piece of the surface thinner than a cell is followed when
+ * thin_search is on (the octree splits a node whose corners cannot see a piece it holds,
+ * thin_search.h): 3 levels mesh a tube of radius 1/4 cell within 1% of its area and keep
+ * the horn cyclide's horns tubes down to the conformance ball at depths 6-9; 10 levels (the
+ * stitching tolerance's 2^-10 of a cell) cost the horn cyclide 2-4 times its time at depth 8
+ * for the same result. Capped by the lattice (ISM_GRID_MAX_DEPTH). */
+#define ISM_THIN_EXTRA_DEPTH 3
 
 typedef struct ism_poly_options {
     double box[6];          /* xmin ymin zmin xmax ymax zmax: the octree root */
@@ -32,6 +40,10 @@ typedef struct ism_poly_options {
     size_t max_triangles;   /* budget: stop with an error beyond this (default 4,000,000) */
     size_t max_memory;      /* bytes the polygoniser may hold (default 2 GiB) */
     int threads;            /* worker threads for one request (0 = number of cores, max 64) */
+    bool thin_search;       /* search nodes that fail flatness with one corner sign for a piece
+                               they hide, and split them below max_depth (thin_search.h;
+                               default off: on Steiner's surface in shifted boxes the finer
+                               cells along the double lines still leave conformance artefacts) */
     /* Optional progress report, fraction in [0, 1], from the calling thread or a worker
      * thread (serialised by the polygoniser). */
     void (*progress)(void *ctx, double fraction);
@@ -57,6 +69,11 @@ typedef struct ism_poly_stats {
     uint64_t nodes_excluded;     /* nodes whose interval proved them empty */
     uint64_t plotting_nodes;     /* leaves that produced polygons */
     uint64_t unresolved_nodes;   /* leaves at max depth that failed flatness or polygonisation */
+    uint64_t thin_searched;      /* would-be leaves whose corners all had one sign, searched
+                                    for a piece of the surface they hide (thin_search.h) */
+    uint64_t thin_found;         /* ... that hid one, and were split (below max depth too) */
+    uint64_t thin_undecided;     /* ... where the search could neither find nor exclude one */
+    uint64_t deep_leaves;        /* leaves below max depth (meshing the hidden pieces) */
     uint64_t error_missed_nodes; /* under max_error: leaves whose emitted triangles were
                                     measured farther than max_error from the surface (at
                                     centroids and edge midpoints) and could not be split:
@@ -79,6 +96,10 @@ typedef struct ism_poly_stats {
                                     Kummer nodes): the node's polygons meet there */
     uint64_t crossed_faces;      /* faces where two sheets cross inside (an X of face lines):
                                     the node's polygons intersect (paper Fig. 1a) */
+    uint64_t lifted_polygons;    /* polygons lying in a node's face, fanned from the surface
+                                    point above them on the node's side (face_flat.h) */
+    uint64_t lifted_chords;      /* face lines along one side of their tile, taken through
+                                    their arc's point across the tile (face_flat.h) */
     uint64_t evals_point;        /* f evaluations */
     uint64_t evals_interval;     /* interval evaluations */
     uint64_t evals_gradient;     /* gradient evaluations */

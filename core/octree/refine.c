@@ -32,7 +32,7 @@ double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_t
     return worst;
 }
 
-/* Lattice coordinates fit in 17 bits (ISM_GRID_MAX_DEPTH 16), the level in 5. */
+/* A node's origin is below 2^ISM_GRID_MAX_DEPTH (19 bits a coordinate), the level fits in 5. */
 uint64_t ism_node_key(const ism_node *nd)
 {
     return (uint64_t)nd->level << 57 | (uint64_t)(uint32_t)nd->org[0] << 38 |

@@ -4,6 +4,7 @@
  * Newton steps along ∇f. Each polygon is wound so that its normal agrees with the mean
  * gradient at its points: consistent orientation wherever ∇f does. */
 #include "core/octree/triangulate.h"
+#include "core/octree/face_flat.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -135,12 +136,26 @@ static double min_angle_cos(const double *a, const double *b, const double *c)
     return worst; /* cos of the smallest angle: larger is worse */
 }
 
-/* Fans the polygon from the corner whose fan has the largest smallest angle. */
-static bool fan_from_best_corner(ism_cell_out *out, size_t base, size_t n)
+/* Does the fan of out->verts[base .. base + n) around vertex `apex` hold a triangle lying in
+ * one of the node's faces (which the node across it may emit as well)? Never without node. */
+static bool fan_in_face(const ism_cell_out *out, size_t base, size_t n, const double *apex,
+                        const double node[6])
+{
+    const ism_fpoint *q = out->verts + base;
+    for (size_t i = 0; node && i < n; i++)
+        if (q[i].p != apex && q[(i + 1) % n].p != apex && /* a corner's own two edges */
+            ism_in_one_face(node, apex, q[i].p, q[(i + 1) % n].p))
+            return true;
+    return false;
+}
+
+/* Fans the polygon from the corner whose fan has the largest smallest angle, among the
+ * corners whose fan has no triangle lying in a face of the node (any corner if none). */
+static bool fan_from_best_corner(ism_cell_out *out, size_t base, size_t n, const double node[6])
 {
     const ism_fpoint *q = out->verts + base;
     size_t best = 0;
-    double best_cos = 2;
+    double best_cos = 3;
     for (size_t c = 0; c < n; c++) {
         double worst = -1;
         for (size_t i = 1; i + 1 < n; i++) {
@@ -148,6 +163,8 @@ static bool fan_from_best_corner(ism_cell_out *out, size_t base, size_t n)
             if (w > worst)
                 worst = w;
         }
+        if (fan_in_face(out, base, n, q[c].p, node))
+            worst += 1; /* only when every corner's fan has one */
         if (worst < best_cos)
             best_cos = worst, best = c;
     }
@@ -175,14 +192,23 @@ bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, doubl
     if (n == 3)
         return push_tri(out, b, b + 1, b + 2);
     if (n == 4) {
+        /* along the shorter diagonal, unless that leaves a triangle lying in a face */
         const ism_fpoint *q = out->verts + base;
-        if (ism_dist3(q[0].p, q[2].p) <= ism_dist3(q[1].p, q[3].p))
+        bool first = ism_dist3(q[0].p, q[2].p) <= ism_dist3(q[1].p, q[3].p);
+        if (node && (ism_in_one_face(node, q[0].p, q[1].p, q[2].p) ||
+                     ism_in_one_face(node, q[0].p, q[2].p, q[3].p)))
+            first = false;
+        else if (node && (ism_in_one_face(node, q[1].p, q[2].p, q[3].p) ||
+                          ism_in_one_face(node, q[1].p, q[3].p, q[0].p)))
+            first = true;
+        if (first)
             return push_tri(out, b, b + 1, b + 2) && push_tri(out, b, b + 2, b + 3);
         return push_tri(out, b + 1, b + 2, b + 3) && push_tri(out, b + 1, b + 3, b);
     }
     ism_fpoint c;
-    if (!centre_point(s, out->verts + base, n, reach, node, &c))
-        return fan_from_best_corner(out, base, n);
+    if (!centre_point(s, out->verts + base, n, reach, node, &c) ||
+        fan_in_face(out, base, n, c.p, node))
+        return fan_from_best_corner(out, base, n, node);
     uint32_t ci;
     if (!push_vert(out, &c, &ci))
         return false;
@@ -192,12 +218,35 @@ bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, doubl
     return true;
 }
 
-bool ism_triangulate_fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex,
-                         ism_cell_out *out)
+/* Would the fan of pts around apex, in the polygon's order, face against ∇f? Each fan
+ * triangle's normal against the mean unit gradient at its corners. */
+static bool fan_reversed(const ism_fpoint *pts, size_t n, const ism_fpoint *apex)
 {
-    if (n < 2)
-        return true;
-    bool flip = n >= 3 && reversed(pts, n);
+    double sum = 0;
+    for (size_t i = 0; i < n; i++) {
+        const ism_fpoint *v[3] = {apex, &pts[i], &pts[(i + 1) % n]};
+        double e1[3], e2[3], nrm[3], g[3] = {0, 0, 0};
+        for (int k = 0; k < 3; k++) {
+            e1[k] = v[1]->p[k] - v[0]->p[k];
+            e2[k] = v[2]->p[k] - v[0]->p[k];
+        }
+        nrm[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        nrm[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        nrm[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        for (int j = 0; j < 3; j++) {
+            double u[3] = {v[j]->g[0], v[j]->g[1], v[j]->g[2]};
+            if (ism_normalise3(u) > 0)
+                for (int k = 0; k < 3; k++)
+                    g[k] += u[k];
+        }
+        sum += ism_dot3(nrm, g);
+    }
+    return sum < 0;
+}
+
+static bool fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex, bool flip,
+                ism_cell_out *out)
+{
     size_t base = out->nverts;
     for (size_t i = 0; i < n; i++) {
         uint32_t idx;
@@ -213,4 +262,20 @@ bool ism_triangulate_fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex
         if (!push_tri(out, a, b + (uint32_t)i, b + (uint32_t)((i + 1) % n)))
             return false;
     return true;
+}
+
+bool ism_triangulate_fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex,
+                         ism_cell_out *out)
+{
+    if (n < 2)
+        return true;
+    return fan(pts, n, apex, n >= 3 && reversed(pts, n), out);
+}
+
+bool ism_triangulate_tent(const ism_fpoint *pts, size_t n, const ism_fpoint *apex,
+                          ism_cell_out *out)
+{
+    if (n < 3)
+        return true;
+    return fan(pts, n, apex, fan_reversed(pts, n, apex), out);
 }

@@ -10,7 +10,9 @@
 
 /* Triangulates the closed polygon pts[0..n) (n >= 3) into out. reach bounds how far the
  * polygon's centre may move when projected onto the surface; node (lo xyz, hi xyz; NULL for
- * no bound) is the box the projected centre must stay in. */
+ * no bound) is the box the projected centre must stay in, and no triangle lies in one of
+ * its faces unless the polygon leaves no other choice (face_flat.h: the node across that
+ * face could emit the same triangle). */
 bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
                           const double node[6], ism_cell_out *out);
 
@@ -18,6 +20,12 @@ bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, doubl
  * the node where the polygon's sheet meets other sheets. */
 bool ism_triangulate_fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex,
                          ism_cell_out *out);
+
+/* Triangulates the closed polygon pts[0..n) (n >= 3), lying in a face of its node, as a
+ * fan around apex, a point of f = 0 off that face (face_flat.h: a tent over the polygon),
+ * wound so that the fan's triangles agree with ∇f. */
+bool ism_triangulate_tent(const ism_fpoint *pts, size_t n, const ism_fpoint *apex,
+                          ism_cell_out *out);
 
 /* Appends a one-edge (degenerate) polygon. */
 bool ism_cell_out_segment(ism_cell_out *out, const ism_fpoint *a, const ism_fpoint *b);

@@ -1,6 +1,6 @@
 /* lattice_key.h — a lattice point (or the cell it is the lowest corner of) packed into one
  * 64-bit key, 21 bits per axis: sortable, hashable, and exact for any depth the lattice
- * supports (ISM_GRID_MAX_DEPTH 16 needs 17 bits). */
+ * supports (ISM_GRID_MAX_DEPTH 19 needs 20 bits). */
 #ifndef ISM_LATTICE_KEY_H
 #define ISM_LATTICE_KEY_H
 

@@ -1,0 +1,167 @@
+/* thin_search.c — a depth-first walk over sub-boxes of one node (see thin_search.h): each
+ * box is dropped when its natural enclosure of f, or the mean-value form f(c) + ∇F·(X − c),
+ * keeps the corners' sign; a box that survives is probed by Newton from its centre and,
+ * unless the probe crosses to the other sign, cut in eight. */
+#include "core/octree/thin_search.h"
+#include "core/eval/interval_ops.h"
+
+#include <math.h>
+
+/* Sub-boxes down to 1/2^THIN_SEARCH_LEVELS of the node: a piece that the Newton probes
+ * miss from the node's centre is found from the centre of a box this much smaller (a tube
+ * or a ball a few times thinner than such a box is aimed at from any side). The octree
+ * then splits the node and searches its children again, so deeper pieces are still reached
+ * one level at a time. */
+#define THIN_SEARCH_LEVELS 3
+/* Surviving boxes per search: at most one node's worth of the deepest level's neighbours
+ * of a tangency (where f touches 0 without a sign change nothing is ever excluded: the
+ * search must end undecided, not cover the node box by box). */
+#define THIN_SEARCH_BOXES 48
+/* Newton steps per probe: from a box's centre to a piece within it converges in a few. */
+#define PROBE_STEPS 6
+/* Each step goes this much past Newton's f = 0: lands on the other side of a simple zero
+ * (the error flips to -PROBE_OVERSHOOT of itself), and from outside a tube or ball of
+ * radius r at distance ρ ≫ r it gets within r in about log(ρ/r) steps. */
+#define PROBE_OVERSHOOT 0.5
+/* A probe stops when a step moves less than this fraction of the box (stuck on its wall). */
+#define PROBE_MIN_MOVE 1e-9
+
+typedef struct sbox {
+    ism_interval x[3];
+    int level;
+} sbox;
+
+static bool other_sign(double f, int sign) { return sign > 0 ? f < 0 : f > 0; }
+
+static bool keeps_sign(ism_interval v, int sign) { return sign > 0 ? v.lo > 0 : v.hi < 0; }
+
+/* Newton from the box's centre toward f = 0 and a little past it, clamped to the box. */
+static bool probe(ism_sampler *s, const ism_interval x[3], int sign, double found[3])
+{
+    double p[3], size = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        p[k] = 0.5 * x[k].lo + 0.5 * x[k].hi;
+        size = fmin(size, x[k].hi - x[k].lo);
+    }
+    for (int it = 0; it <= PROBE_STEPS; it++) {
+        double g[3];
+        double f = ism_sample_grad(s, p, g);
+        if (other_sign(f, sign)) {
+            for (int k = 0; k < 3; k++)
+                found[k] = p[k];
+            return true;
+        }
+        double gg = ism_dot3(g, g);
+        if (it == PROBE_STEPS || !(gg > 0) || !isfinite(gg) || !isfinite(f))
+            return false;
+        double t = (1 + PROBE_OVERSHOOT) * f / gg, moved = 0;
+        for (int k = 0; k < 3; k++) {
+            double q = fmin(fmax(p[k] - t * g[k], x[k].lo), x[k].hi);
+            moved += fabs(q - p[k]);
+            p[k] = q;
+        }
+        if (!(moved > PROBE_MIN_MOVE * size))
+            return false;
+    }
+    return false;
+}
+
+/* Does the mean-value form prove that f keeps `sign` on the box? *kinked is set when f
+ * has a kink in it (the form is then no better than the natural enclosure). */
+static bool mean_value_keeps(ism_sampler *s, ism_thin_ws *w, const ism_interval x[3], int sign,
+                             bool *kinked)
+{
+    ism_ivgrad over;
+    s->n_interval++;
+    size_t kinks = ism_eval_interval_grad(s->tape, w->jet, x, NULL, NULL, &over);
+    *kinked = kinks != 0;
+    if (kinks == (size_t)-1)
+        return false;
+    if (keeps_sign(over.v, sign))
+        return true;
+    ism_interval c[3], d[3];
+    for (int k = 0; k < 3; k++) {
+        double m = 0.5 * x[k].lo + 0.5 * x[k].hi;
+        c[k] = iv(m, m);
+        d[k] = iv_sub(x[k], c[k]);
+    }
+    ism_ivgrad at;
+    s->n_interval++;
+    ism_eval_interval_grad(s->tape, w->jet, c, NULL, NULL, &at);
+    ism_interval mv = at.v;
+    for (int k = 0; k < 3; k++)
+        mv = iv_add(mv, iv_mul(over.d[k], d[k]));
+    return keeps_sign(mv, sign);
+}
+
+/* Pushes the children of b that the natural enclosure cannot drop. */
+static int push_children(ism_sampler *s, const sbox *b, int sign, sbox *stack, int top)
+{
+    ism_interval x[8], y[8], z[8], out[8];
+    sbox kids[8];
+    for (int c = 0; c < 8; c++) {
+        for (int k = 0; k < 3; k++) {
+            double m = 0.5 * b->x[k].lo + 0.5 * b->x[k].hi;
+            kids[c].x[k] = (c >> k) & 1 ? iv(m, b->x[k].hi) : iv(b->x[k].lo, m);
+        }
+        kids[c].level = b->level + 1;
+        x[c] = kids[c].x[0];
+        y[c] = kids[c].x[1];
+        z[c] = kids[c].x[2];
+    }
+    s->n_interval += 8;
+    ism_eval_interval_batch(s->tape, s->ws, x, y, z, out, 8);
+    for (int c = 7; c >= 0; c--) /* child 0 on top: examined first */
+        if (!keeps_sign(out[c], sign))
+            stack[top++] = kids[c];
+    return top;
+}
+
+enum ism_thin_verdict ism_thin_search(ism_sampler *s, ism_thin_ws *w, const double lo[3],
+                                      const double hi[3], int sign, double found[3])
+{
+    double scratch[3];
+    if (!found)
+        found = scratch;
+    /* depth first: at most 8 children pushed per level below the one expanded */
+    sbox stack[8 * THIN_SEARCH_LEVELS + 1];
+    int top = 0;
+    for (int k = 0; k < 3; k++)
+        stack[0].x[k] = iv(lo[k], hi[k]);
+    stack[0].level = 0;
+    top = 1;
+    bool undecided = false;
+    for (int budget = THIN_SEARCH_BOXES; top > 0;) {
+        sbox b = stack[--top];
+        w->n_boxes++;
+        bool kinked;
+        if (mean_value_keeps(s, w, b.x, sign, &kinked))
+            continue;
+        if (kinked && b.level == 0)
+            return ISM_THIN_KINKED;
+        if (probe(s, b.x, sign, found))
+            return ISM_THIN_FOUND;
+        if (b.level == THIN_SEARCH_LEVELS || --budget == 0) {
+            undecided = true;
+            if (budget == 0)
+                break;
+            continue;
+        }
+        top = push_children(s, &b, sign, stack, top);
+    }
+    return undecided ? ISM_THIN_UNDECIDED : ISM_THIN_EXCLUDED;
+}
+
+bool ism_thin_ws_init(ism_thin_ws *w, const ism_tape *t)
+{
+    w->n_boxes = 0;
+    w->jet = ism_ivjet_ws_new(t);
+    return w->jet != NULL;
+}
+
+void ism_thin_ws_free(ism_thin_ws *w)
+{
+    if (w->jet)
+        ism_ivjet_ws_free(w->jet);
+    w->jet = NULL;
+}

@@ -1,0 +1,42 @@
+/* thin_search.h — the search for a piece of f = 0 that a node's corners cannot see: a tube
+ * thinner than the node passing between its lattice lines, a small closed sheet inside it,
+ * a nappe piercing one of its faces in an island that crosses no edge, a ribbon of f of the
+ * other sign lying in a face. The node's eight corners have one sign s; the search looks for
+ * a point of the closed node where f has the other sign (a piece of the surface then
+ * separates it from the corners), by Newton probes aimed past f = 0 and by interval
+ * subdivision that proves s·f > 0 on the boxes it drops. */
+#ifndef ISM_THIN_SEARCH_H
+#define ISM_THIN_SEARCH_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include "core/eval/interval_jet.h"
+#include "core/octree/sampler.h"
+
+enum ism_thin_verdict {
+    ISM_THIN_EXCLUDED,  /* intervals prove s·f > 0 on the whole node: nothing is hidden */
+    ISM_THIN_FOUND,     /* a point of the node where s·f < 0: a hidden piece */
+    ISM_THIN_UNDECIDED, /* neither within the search's levels and budget (f touching 0
+                           without a sign change, as a double sheet f = g² does) */
+    ISM_THIN_KINKED,    /* not searched: f has a min/max/abs kink in the box (a CSG crease,
+                           whose slivers past the corners no depth resolves) */
+};
+
+/* One thread's scratch for the search (serves the tape it was made for and every tape
+ * shortened from it). */
+typedef struct ism_thin_ws {
+    ism_ivjet_ws *jet;
+    uint64_t n_boxes;   /* boxes examined, over every search with this workspace */
+} ism_thin_ws;
+
+bool ism_thin_ws_init(ism_thin_ws *w, const ism_tape *t);
+void ism_thin_ws_free(ism_thin_ws *w);
+
+/* Searches the closed box lo..hi, whose corners all have sign `sign` (±1), with s->tape
+ * (valid inside the box). On ISM_THIN_FOUND, found (when not NULL) holds the point. The
+ * cost is bounded (a fixed number of boxes and Newton steps), so UNDECIDED is possible. */
+enum ism_thin_verdict ism_thin_search(ism_sampler *s, ism_thin_ws *w, const double lo[3],
+                                      const double hi[3], int sign, double found[3]);
+
+#endif
