@@ -1,17 +1,22 @@
 /* check.c — the mesh against the locus (contract in check.h). The locus's curve segments go
  * into a uniform grid of buckets; a mesh vertex is on the locus when it is within the
- * tolerance of a singular point or of a segment in its bucket's neighbourhood. Cones of faces
- * at a singular point's vertex are counted locally: its triangles, joined when they share an
- * edge through the vertex. */
+ * tolerance of a singular point (filed by position in a hash of small cells) or of a segment
+ * in its bucket's neighbourhood. Each singular point's vertex is found in one pass over the
+ * vertices, and the cones of faces at those vertices in one pass over the triangles: a
+ * vertex's triangles, joined when they share an edge through the vertex. */
 #include "core/singular/check.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include "core/singular/key_map.h"
 
 /* Buckets per axis: 64³ bucket starts are 1 MiB; a bucket then spans 2 to 16 finest cells
  * at depths 7 to 10, so it holds a few dozen segments of a curve traced at cell steps. */
 #define GRID_MAX_SIDE 64
+/* A point's cells are those of its tol-box grown by this fraction: a vertex at exactly tol
+ * is never lost to the rounding of p ± tol. */
+#define TOL_SLACK 1e-6
 
 typedef struct seg_grid {
     double lo[3], cell;
@@ -131,16 +136,117 @@ static bool grid_build(seg_grid *g, const ism_locus *l, const double box[6], dou
     return true;
 }
 
-static bool near_locus(const ism_locus *l, const seg_grid *g, const double p[3], double tol)
+/* The singular points by position: each is filed in the cells (side 2 tol, so at most
+ * eight) that its tol-box meets, so a position looks at the points of its own cell only. */
+typedef struct point_grid {
+    double lo[3], cell;
+    ism_key_map cells;   /* packed cell coordinates → cell number */
+    uint32_t *head;      /* per cell: first filing (UINT32_MAX: none) */
+    uint32_t *next;      /* per filing: the next one in its cell */
+    uint32_t *point;     /* per filing: the point filed */
+    size_t n;
+} point_grid;
+
+/* A position's cell coordinates (false when not finite: never within tol of anything). */
+static bool point_cell(const point_grid *g, const double p[3], int64_t c[3])
+{
+    for (int k = 0; k < 3; k++) {
+        double x = floor((p[k] - g->lo[k]) / g->cell);
+        if (!(fabs(x) < 4e18))
+            return false;
+        c[k] = (int64_t)x;
+    }
+    return true;
+}
+
+/* Cell coordinates packed 21 bits an axis; far cells wrap onto others, which only adds
+ * points to measure. */
+static uint64_t point_cell_key(const int64_t c[3])
+{
+    return ((uint64_t)c[0] & 0x1fffff) << 42 | ((uint64_t)c[1] & 0x1fffff) << 21 |
+           ((uint64_t)c[2] & 0x1fffff);
+}
+
+static void point_grid_free(point_grid *g)
+{
+    ism_key_map_free(&g->cells);
+    free(g->head);
+    free(g->next);
+    free(g->point);
+}
+
+/* Files point i in cell c. */
+static bool file_point(point_grid *g, const int64_t c[3], uint32_t i)
+{
+    bool added;
+    uint32_t cell = ism_key_map_add(&g->cells, point_cell_key(c), &added);
+    if (cell == ISM_KEY_NONE)
+        return false;
+    g->point[g->n] = i;
+    g->next[g->n] = added ? UINT32_MAX : g->head[cell];
+    g->head[cell] = (uint32_t)g->n++;
+    return true;
+}
+
+static bool point_grid_build(point_grid *g, const ism_locus *l, const double box[6], double tol)
+{
+    memset(g, 0, sizeof *g);
+    ism_key_map_init(&g->cells);
+    for (int k = 0; k < 3; k++)
+        g->lo[k] = box[k];
+    g->cell = 2 * tol;
+    /* a tol-box spans two cells an axis, three when rounding puts it on a cell face */
+    size_t cap = 27 * l->npoints + 1;
+    g->head = malloc(cap * sizeof *g->head);
+    g->next = malloc(cap * sizeof *g->next);
+    g->point = malloc(cap * sizeof *g->point);
+    if (!g->head || !g->next || !g->point)
+        return false;
+    for (size_t i = 0; i < l->npoints; i++) {
+        double lo[3], hi[3];
+        for (int k = 0; k < 3; k++) { /* grown a little: the rounding of p ± tol */
+            lo[k] = l->points[i].p[k] - tol * (1 + TOL_SLACK);
+            hi[k] = l->points[i].p[k] + tol * (1 + TOL_SLACK);
+        }
+        int64_t a[3], b[3], c[3];
+        if (!point_cell(g, lo, a) || !point_cell(g, hi, b))
+            continue; /* not finite: no vertex is within tol of it */
+        for (int k = 0; k < 3; k++)
+            b[k] = b[k] > a[k] + 2 ? a[k] + 2 : b[k];
+        for (c[0] = a[0]; c[0] <= b[0]; c[0]++)
+            for (c[1] = a[1]; c[1] <= b[1]; c[1]++)
+                for (c[2] = a[2]; c[2] <= b[2]; c[2]++)
+                    if (!file_point(g, c, (uint32_t)i))
+                        return false;
+    }
+    return true;
+}
+
+/* The first filing of the points whose tol-box meets p's cell (UINT32_MAX: none). */
+static uint32_t points_near(const point_grid *g, const double p[3])
+{
+    int64_t c[3];
+    if (!g->n || !point_cell(g, p, c))
+        return UINT32_MAX;
+    uint32_t cell = ism_key_map_find(&g->cells, point_cell_key(c));
+    return cell == ISM_KEY_NONE ? UINT32_MAX : g->head[cell];
+}
+
+static double dist2(const double a[3], const double b[3])
+{
+    double d2 = 0;
+    for (int k = 0; k < 3; k++)
+        d2 += (a[k] - b[k]) * (a[k] - b[k]);
+    return d2;
+}
+
+static bool near_locus(const ism_locus *l, const point_grid *pg, const seg_grid *g,
+                       const double p[3], double tol)
 {
     double t2 = tol * tol;
-    for (size_t i = 0; i < l->npoints; i++) {
-        double d2 = 0;
-        for (int k = 0; k < 3; k++)
-            d2 += (p[k] - l->points[i].p[k]) * (p[k] - l->points[i].p[k]);
-        if (d2 <= t2)
+    for (uint32_t f = points_near(pg, p); f != UINT32_MAX; f = pg->next[f])
+        if (dist2(p, l->points[pg->point[f]].p) <= t2)
             return true;
-    }
     if (!g->nsegs)
         return false;
     size_t c = bucket_index(g, bucket_of(g, p[0], 0), bucket_of(g, p[1], 1),
@@ -151,36 +257,30 @@ static bool near_locus(const ism_locus *l, const seg_grid *g, const double p[3],
     return false;
 }
 
-/* Cones of faces at vertex v: v's triangles, joined when they share an edge at v. */
-static int cones_at(const ism_mesh *m, uint32_t v)
+/* For each point of the locus, the mesh vertex nearest to it within tol (the last of equals)
+ * or UINT32_MAX: one pass over the vertices. */
+static void vertices_at_points(const ism_locus *l, const point_grid *pg, const ism_mesh *m,
+                               double tol, uint32_t *vertex, double *best2)
 {
-    size_t n = 0, cap = 0;
-    uint32_t(*other)[2] = NULL; /* the two other corners of each triangle at v */
-    for (size_t t = 0; t < m->ntris; t++) {
-        const uint32_t *c = m->tri + 3 * t;
-        if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2])
-            continue;
-        int at = c[0] == v ? 0 : c[1] == v ? 1 : c[2] == v ? 2 : -1;
-        if (at < 0)
-            continue;
-        if (n == cap) {
-            cap = cap ? 2 * cap : 16;
-            void *p = realloc(other, cap * sizeof *other);
-            if (!p) {
-                free(other);
-                return -1;
+    for (size_t i = 0; i < l->npoints; i++) {
+        vertex[i] = UINT32_MAX;
+        best2[i] = tol * tol;
+    }
+    for (size_t v = 0; v < m->nverts; v++)
+        for (uint32_t f = points_near(pg, m->pos + 3 * v); f != UINT32_MAX; f = pg->next[f]) {
+            uint32_t i = pg->point[f];
+            double d2 = dist2(m->pos + 3 * v, l->points[i].p);
+            if (d2 <= best2[i]) {
+                best2[i] = d2;
+                vertex[i] = (uint32_t)v;
             }
-            other = p;
         }
-        other[n][0] = c[(at + 1) % 3];
-        other[n][1] = c[(at + 2) % 3];
-        n++;
-    }
-    int *parent = malloc((n ? n : 1) * sizeof *parent);
-    if (!parent) {
-        free(other);
-        return -1;
-    }
+}
+
+/* Cones of faces at a vertex from the two other corners of each of its triangles: the
+ * triangles joined when they share an edge at the vertex. */
+static int cones_of(uint32_t (*other)[2], size_t n, int *parent)
+{
     for (size_t i = 0; i < n; i++)
         parent[i] = (int)i;
     int cones = (int)n;
@@ -200,26 +300,62 @@ static int cones_at(const ism_mesh *m, uint32_t v)
                 cones--;
             }
         }
-    free(parent);
-    free(other);
     return cones;
 }
 
-/* The mesh vertex nearest to p within tol, or UINT32_MAX. */
-static uint32_t vertex_at(const ism_mesh *m, const double p[3], double tol)
+/* cones[i] for each point's vertex (0 without one): the triangles at those vertices taken
+ * in one pass over the mesh (collapsed ones left out), grouped by vertex. False when out of
+ * memory. */
+static bool cones_at_points(const ism_mesh *m, const uint32_t *vertex, size_t np, int *cones)
 {
-    uint32_t best = UINT32_MAX;
-    double best2 = tol * tol;
-    for (size_t v = 0; v < m->nverts; v++) {
-        double d2 = 0;
-        for (int k = 0; k < 3; k++)
-            d2 += (m->pos[3 * v + k] - p[k]) * (m->pos[3 * v + k] - p[k]);
-        if (d2 <= best2) {
-            best2 = d2;
-            best = (uint32_t)v;
+    /* slot[v]: the first point at vertex v, + 1 (0: no point there) */
+    uint32_t *slot = calloc(m->nverts + 1, sizeof *slot), *count = calloc(np + 1, sizeof *count);
+    uint32_t *start = calloc(np + 2, sizeof *start), (*other)[2] = NULL;
+    int *parent = NULL;
+    bool ok = slot && count && start;
+    for (size_t i = 0; ok && i < np; i++)
+        if (vertex[i] != UINT32_MAX && !slot[vertex[i]])
+            slot[vertex[i]] = (uint32_t)i + 1;
+    for (int pass = 0; ok && pass < 2; pass++) { /* count, then fill in triangle order */
+        for (size_t t = 0; t < m->ntris; t++) {
+            const uint32_t *c = m->tri + 3 * t;
+            if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2])
+                continue;
+            for (int at = 0; at < 3; at++) {
+                uint32_t s = slot[c[at]];
+                if (!s--)
+                    continue;
+                if (pass == 0) {
+                    count[s]++;
+                    continue;
+                }
+                other[start[s] + count[s]][0] = c[(at + 1) % 3];
+                other[start[s] + count[s]][1] = c[(at + 2) % 3];
+                count[s]++;
+            }
+        }
+        if (pass == 0) {
+            size_t most = 0;
+            for (size_t i = 0; i < np; i++) {
+                start[i + 1] = start[i] + count[i];
+                most = count[i] > most ? count[i] : most;
+                count[i] = 0;
+            }
+            other = malloc((start[np] + 1) * sizeof *other);
+            parent = malloc((most + 1) * sizeof *parent);
+            ok = other && parent;
         }
     }
-    return best;
+    for (size_t i = 0; ok && i < np; i++) {
+        uint32_t s = vertex[i] == UINT32_MAX ? 0 : slot[vertex[i]];
+        cones[i] = s ? cones_of(other + start[s - 1], count[s - 1], parent) : 0;
+    }
+    free(slot);
+    free(count);
+    free(start);
+    free(other);
+    free(parent);
+    return ok;
 }
 
 void ism_locus_check_free(ism_locus_check *c)
@@ -231,14 +367,15 @@ void ism_locus_check_free(ism_locus_check *c)
     memset(c, 0, sizeof *c);
 }
 
-static void check_curves(const ism_locus *l, const seg_grid *g, const ism_mesh *m,
-                         const ism_analysis *a, double tol, ism_locus_check *out)
+static void check_curves(const ism_locus *l, const point_grid *pg, const seg_grid *g,
+                         const ism_mesh *m, const ism_analysis *a, double tol,
+                         ism_locus_check *out)
 {
     for (size_t c = 0; c < a->ncurves; c++) {
         bool all = true;
         bool prev_on = false;
         for (uint32_t j = a->curve_start[c]; j < a->curve_start[c + 1]; j++) {
-            bool on = near_locus(l, g, m->pos + 3 * (size_t)a->curve_verts[j], tol);
+            bool on = near_locus(l, pg, g, m->pos + 3 * (size_t)a->curve_verts[j], tol);
             if (j > a->curve_start[c]) {
                 out->nonmanifold_edges++;
                 out->nonmanifold_edges_off += !(on && prev_on);
@@ -259,28 +396,28 @@ bool ism_locus_check_mesh(const ism_locus *l, const double box[6], const ism_mes
         diag += (box[k + 3] - box[k]) * (box[k + 3] - box[k]);
     double tol = ISM_LOCUS_ON_REL * sqrt(diag);
     seg_grid g;
-    bool ok = grid_build(&g, l, box, tol);
+    point_grid pg;
+    double *best2 = malloc((l->npoints ? l->npoints : 1) * sizeof *best2);
+    bool ok = grid_build(&g, l, box, tol) && point_grid_build(&pg, l, box, tol) && best2;
     out->curve_on = calloc(a->ncurves ? a->ncurves : 1, 1);
     out->point_on = calloc(a->npoints ? a->npoints : 1, 1);
     out->point_vertex = malloc((l->npoints ? l->npoints : 1) * sizeof *out->point_vertex);
     out->point_cones = calloc(l->npoints ? l->npoints : 1, sizeof *out->point_cones);
     ok = ok && out->curve_on && out->point_on && out->point_vertex && out->point_cones;
     if (ok) {
-        check_curves(l, &g, m, a, tol, out);
+        check_curves(l, &pg, &g, m, a, tol, out);
         out->nonmanifold_points = a->npoints;
         for (size_t i = 0; i < a->npoints; i++) {
-            out->point_on[i] = near_locus(l, &g, m->pos + 3 * (size_t)a->points[i], tol);
+            out->point_on[i] = near_locus(l, &pg, &g, m->pos + 3 * (size_t)a->points[i], tol);
             out->nonmanifold_points_off += !out->point_on[i];
         }
         out->artefacts = out->nonmanifold_edges_off + out->nonmanifold_points_off;
-        for (size_t i = 0; i < l->npoints && ok; i++) {
-            out->point_vertex[i] = vertex_at(m, l->points[i].p, tol);
-            int c = out->point_vertex[i] == UINT32_MAX ? 0 : cones_at(m, out->point_vertex[i]);
-            ok = c >= 0;
-            out->point_cones[i] = c;
-        }
+        vertices_at_points(l, &pg, m, tol, out->point_vertex, best2);
+        ok = cones_at_points(m, out->point_vertex, l->npoints, out->point_cones);
     }
     grid_free(&g);
+    point_grid_free(&pg);
+    free(best2);
     if (!ok) {
         ism_locus_check_free(out);
         return ism_error_set(err, "out of memory checking the mesh against the singular locus");

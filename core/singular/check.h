@@ -34,8 +34,10 @@ typedef struct ism_locus_check {
 } ism_locus_check;
 
 /* Checks the analysed mesh (a is ism_analyse's result for m) against the locus l found in
- * box (xmin ymin zmin xmax ymax zmax). Cost: O((V_nm + P + C) · log) with a grid over the
- * curves' segments. False when out of memory (err says so); out is then empty. */
+ * box (xmin ymin zmin xmax ymax zmax). Cost: O(V + T + P + S) for V vertices, T triangles,
+ * P singular points and S curve segments (grids over the points and the segments; one pass
+ * over the vertices and one over the triangles). False when out of memory (err says so);
+ * out is then empty. */
 bool ism_locus_check_mesh(const ism_locus *l, const double box[6], const ism_mesh *m,
                           const ism_analysis *a, ism_locus_check *out, ism_error *err);
 

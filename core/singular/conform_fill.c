@@ -44,9 +44,11 @@ void cf_project(cf_ctx *c, double p[3], double max_move)
     double q[3] = {p[0], p[1], p[2]}, g[3], fv;
     double d0 = distance_estimate(c, q, g, &fv), d = d0;
     for (int it = 0; it < PROJECT_STEPS && d > 0 && isfinite(d); it++) {
-        double gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+        double gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2], before[3] = {q[0], q[1], q[2]};
         for (int k = 0; k < 3; k++)
             q[k] -= fv * g[k] / gg;
+        if (q[0] == before[0] && q[1] == before[1] && q[2] == before[2])
+            break; /* a fixed point: the steps left would repeat this one exactly */
         d = distance_estimate(c, q, g, &fv);
     }
     if (isfinite(d) && d < d0 && dist(p, q) <= max_move)

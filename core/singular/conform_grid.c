@@ -70,6 +70,7 @@ void cf_tgrid_free(cf_tgrid *g)
     free(g->next);
     free(g->cell_of);
     free(g->stamp);
+    free(g->cell_box);
     memset(g, 0, sizeof *g);
 }
 
@@ -98,8 +99,21 @@ bool cf_tgrid_add(cf_tgrid *g, const ism_mesh *m, uint32_t t)
     if (cell == ISM_KEY_NONE ||
         !cf_grow((void **)&g->head, &g->cap_head, (size_t)cell + 1, sizeof *g->head))
         return false;
-    if (added)
+    if (!cf_grow((void **)&g->cell_box, &g->cap_cell_box, 6 * ((size_t)cell + 1),
+                 sizeof *g->cell_box))
+        return false;
+    double *cb = g->cell_box + 6 * (size_t)cell;
+    if (added) {
         g->head[cell] = CF_NONE;
+        for (int k = 0; k < 3; k++) {
+            cb[k] = lo[k];
+            cb[k + 3] = hi[k];
+        }
+    }
+    for (int k = 0; k < 3; k++) { /* the union of the boxes ever filed there */
+        cb[k] = fmin(cb[k], lo[k]);
+        cb[k + 3] = fmax(cb[k + 3], hi[k]);
+    }
     g->next[t] = g->head[cell];
     g->head[cell] = t;
     g->cell_of[t] = cell;
@@ -145,6 +159,10 @@ typedef struct query {
  * cf_tgrid_begin and not dead. */
 static bool take_cell(cf_tgrid *g, uint32_t cell, const query *q, cf_tris *out)
 {
+    const double *cb = g->cell_box + 6 * (size_t)cell;
+    for (int k = 0; k < 3; k++)
+        if (!(cb[k] <= q->hi[k] && cb[k + 3] >= q->lo[k]))
+            return true; /* no triangle of the cell reaches the query's box */
     for (uint32_t t = g->head[cell]; t != CF_NONE; t = g->next[t]) {
         if (g->stamp[t] == g->epoch || q->dead[t])
             continue;

@@ -22,11 +22,12 @@ typedef struct cf_tgrid {
     double lo[3], side;     /* origin, level-0 cell side */
     ism_key_map cells;      /* packed (level, cell coordinates) → cell number */
     uint32_t *head;         /* per cell: the last triangle filed there (CF_NONE: none) */
+    double *cell_box;       /* per cell: 6, a box holding every triangle filed there */
     uint32_t *next;         /* per triangle: the one filed before it in its cell */
     uint32_t *cell_of;      /* per triangle: its cell */
     uint32_t *stamp;        /* per triangle: the gather that last took it */
     uint32_t epoch;
-    size_t cap_head, cap_next, cap_cell_of, cap_stamp;
+    size_t cap_head, cap_next, cap_cell_of, cap_stamp, cap_cell_box;
     size_t ntris;           /* triangles filed: 0 .. ntris-1 */
     size_t per_level[CF_TGRID_LEVELS];
 } cf_tgrid;

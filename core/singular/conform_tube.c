@@ -22,13 +22,17 @@ typedef struct tube {
     double lo[3], hi[3]; /* the curves' bounding box */
     double reach;        /* edges up to this long are judged from vd alone */
     double vd_r;         /* the radius the memo holds distances for (0: none yet) */
+    uint32_t gen_base;   /* the memo's generation at the group's first radius */
 } tube;
 
 /* Vertex v's distance to the nearest of the group's curves (INFINITY beyond r + reach) and
  * that curve, memoised in the context for the current radius. */
 static double vertex_distance(const cf_ctx *c, const tube *tb, uint32_t v, uint32_t *curve)
 {
-    if (c->memo_gen[v] == c->gen) {
+    /* a distance found at a smaller radius of the same group stands: it is the distance to
+     * the nearest segment, which a wider search finds again (only "nothing within reach"
+     * must be asked again) */
+    if (c->memo_gen[v] == c->gen || (c->memo_gen[v] >= tb->gen_base && isfinite(c->memo_d[v]))) {
         *curve = c->memo_i[v];
         return c->memo_d[v];
     }
@@ -145,6 +149,8 @@ static bool gather_tube(cf_ctx *c, void *arg, cf_tris *out)
     if (tb->vd_r != tb->r) { /* a new radius: the memoised distances are stale */
         if (!cf_memo_reset(c))
             return false;
+        if (tb->vd_r == 0)
+            tb->gen_base = c->gen;
         tb->vd_r = tb->r;
     }
     return gather_near_curves(c, tb->pl, tb->n, tb->r, out);
@@ -298,7 +304,7 @@ bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
         return false;
     }
     tube tb = {g.pl, g.n, fmax(r0, CF_RHO_EDGES * longest), {INFINITY, INFINITY, INFINITY},
-               {-INFINITY, -INFINITY, -INFINITY}, fmax(longest, r0), 0};
+               {-INFINITY, -INFINITY, -INFINITY}, fmax(longest, r0), 0, 0};
     cf_cutter cut = {tri_in_tube, gather_tube, &tb};
     for (size_t k = 0; k < g.n; k++)
         for (size_t i = 0; i < g.npts[k]; i++)
