@@ -10,24 +10,6 @@ uint64_t arr_edge_key(uint32_t a, uint32_t b)
     return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
 }
 
-uint32_t arr_uf_find(uint32_t *parent, uint32_t i)
-{
-    while (parent[i] != i) {
-        parent[i] = parent[parent[i]];
-        i = parent[i];
-    }
-    return i;
-}
-
-void arr_uf_union(uint32_t *parent, uint32_t i, uint32_t j)
-{
-    uint32_t a = arr_uf_find(parent, i), b = arr_uf_find(parent, j);
-    if (a < b)
-        parent[b] = a;
-    else if (b < a)
-        parent[a] = b;
-}
-
 void arr_mesh_edges_free(arr_mesh_edges *e)
 {
     ism_key_map_free(&e->map);

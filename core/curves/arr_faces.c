@@ -28,9 +28,9 @@ static size_t number_sets(uint32_t *parent, size_t n, uint32_t *id)
 {
     size_t k = 0;
     for (size_t i = 0; i < n; i++)
-        id[i] = arr_uf_find(parent, (uint32_t)i) == i ? (uint32_t)k++ : NONE;
+        id[i] = ism_an_uf_find(parent, (uint32_t)i) == i ? (uint32_t)k++ : NONE;
     for (size_t i = 0; i < n; i++)
-        id[i] = id[arr_uf_find(parent, (uint32_t)i)];
+        id[i] = id[ism_an_uf_find(parent, (uint32_t)i)];
     return k;
 }
 
@@ -51,9 +51,9 @@ static bool join_triangles(const ism_mesh *m, const arr_mesh_edges *e, uint32_t 
                 first[k] = (uint32_t)t;
                 continue;
             }
-            arr_uf_union(comp, first[k], (uint32_t)t);
+            (void)ism_an_uf_union(comp, first[k], (uint32_t)t);
             if (!e->on_curve[k])
-                arr_uf_union(cell, first[k], (uint32_t)t);
+                (void)ism_an_uf_union(cell, first[k], (uint32_t)t);
         }
     free(first);
     return true;
@@ -125,7 +125,7 @@ static void measure_face(const ism_mesh *m, const arr_mesh_edges *e, face_scratc
                 uint32_t b = tv[(i + 1) % 3];
                 s->touched[ntouched++] = v;
                 s->touched[ntouched++] = b;
-                arr_uf_union(s->vpar, v, b);
+                (void)ism_an_uf_union(s->vpar, v, b);
             }
         }
     }
@@ -133,7 +133,7 @@ static void measure_face(const ism_mesh *m, const arr_mesh_edges *e, face_scratc
     face->euler_open = Vin - Ein + (long)face->ntris;
     face->boundary = 0;
     for (size_t i = 0; i < ntouched; i++) { /* one count per root */
-        uint32_t r = arr_uf_find(s->vpar, s->touched[i]);
+        uint32_t r = ism_an_uf_find(s->vpar, s->touched[i]);
         if (s->rstamp[r] != f + 1) {
             s->rstamp[r] = f + 1;
             face->boundary++;

@@ -194,16 +194,16 @@ static bool curves(ism_arrangement *a)
         qsort(r, 2 * ne, sizeof *r, cmp_end);
         for (size_t i = 1; i < 2 * ne; i++)
             if (r[i].vertex == r[i - 1].vertex && r[i].fn == r[i - 1].fn)
-                arr_uf_union(par, r[i].edge, r[i - 1].edge);
+                (void)ism_an_uf_union(par, r[i].edge, r[i - 1].edge);
         a->ncurves = 0;
         for (size_t i = 0; i < ne; i++)
-            id[i] = arr_uf_find(par, (uint32_t)i) == i ? (uint32_t)a->ncurves++ : NONE;
+            id[i] = ism_an_uf_find(par, (uint32_t)i) == i ? (uint32_t)a->ncurves++ : NONE;
         a->curves = calloc(a->ncurves + 1, sizeof *a->curves);
         ok = a->curves != NULL;
     }
     for (size_t i = 0; ok && i < ne; i++) {
         ism_arr_edge *e = &a->edges[i];
-        e->curve = id[arr_uf_find(par, (uint32_t)i)];
+        e->curve = id[ism_an_uf_find(par, (uint32_t)i)];
         ism_arr_curve *c = &a->curves[e->curve];
         if (!c->nedges)
             c->closed = true;

@@ -3,6 +3,7 @@
 #ifndef ISM_ARR_INTERNAL_H
 #define ISM_ARR_INTERNAL_H
 
+#include "core/analysis/unionfind.h"
 #include "core/curves/arrangement.h"
 #include "core/singular/key_map.h"
 
@@ -20,8 +21,6 @@ uint64_t arr_edge_key(uint32_t a, uint32_t b);
 bool arr_mesh_edges_build(const ism_mesh *m, const ism_cut *c, arr_mesh_edges *e);
 void arr_mesh_edges_free(arr_mesh_edges *e);
 
-uint32_t arr_uf_find(uint32_t *parent, uint32_t i);
-void arr_uf_union(uint32_t *parent, uint32_t i, uint32_t j);
 
 /* Faces: triangles reordered, tri_face and faces filled; comp gets each triangle's mesh
  * component (in the new order) and a->ncomponents is set. */
