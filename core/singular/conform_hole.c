@@ -303,7 +303,8 @@ static bool select_triangles(cf_ctx *c, const cf_cutter *cut, uint32_t **out, si
         free(cand.t);
         return false;
     }
-    qsort(cand.t, cand.n, sizeof *cand.t, cmp_u32);
+    if (cand.n) /* qsort's array may not be NULL, even for no element */
+        qsort(cand.t, cand.n, sizeof *cand.t, cmp_u32);
     size_t n = 0;
     for (size_t i = 0; i < cand.n; i++)
         if (!c->dead[cand.t[i]] && cut->near(c, cand.t[i], cut->arg))
