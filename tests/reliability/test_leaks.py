@@ -89,7 +89,10 @@ def run_mix(t, d):
     for pid in d.workers():
         os.kill(pid, signal.SIGKILL)
     th.join(120)
-    t.assertIn(box["r"][0], (200, 500))
+    # 500 (the worker died under it) or 200 (it had finished); 504 has been seen once under
+    # the sanitizer build on a loaded machine (the job ran past --job-timeout): what matters
+    # here is that it is answered and leaks nothing.
+    t.assertIn(box["r"][0], (200, 500, 504))
     d.wait_ready()
     # every client error
     t.assertEqual(request(port, "POST", "/v1/mesh", b"{bad json")[0], 400)
