@@ -102,10 +102,19 @@ static long nearest_point(const cf_polyline *pl, size_t top, double x)
     return (long)lo;
 }
 
+/* Turns a rim may make round a curve, at most: a rim winds a closed curve a few times (the
+ * Klein bottle's twice); anything past this is a broken parameter, not a winding. */
+#define CF_MAX_PERIODS 1e6
+
 /* The unfolded curve index whose parameter is nearest the unfolded parameter x. */
 static long curve_index_near(const cf_polyline *pl, double x)
 {
-    double per = period_length(pl), w = floor(x / per), y = x - w * per;
+    double per = period_length(pl), w = per > 0 ? floor(x / per) : 0.0;
+    /* A curve of zero length or a parameter that is not finite has no period to count:
+     * the first one (converting such a w to long would be undefined). */
+    if (!(fabs(w) <= CF_MAX_PERIODS))
+        w = 0.0;
+    double y = x - w * per;
     long base = (long)w * period_steps(pl);
     if (pl->closed)
         return base + nearest_point(pl, pl->n, y);
