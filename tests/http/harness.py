@@ -185,6 +185,16 @@ class Daemon:
     def log(self):
         return "\n".join(self._log_lines(last=200))
 
+    def log_count(self, text, want, timeout=10):
+        """How often text occurs in the whole log, waiting (bounded) until it reaches want:
+        a line is written after the counter it goes with, and log() sees only the tail."""
+        deadline = time.time() + timeout
+        while True:
+            n = sum(text in line for line in self._log_lines())
+            if n >= want or time.time() > deadline:
+                return n
+            time.sleep(0.05)
+
     def stop(self, timeout=20):
         """SIGTERM, wait (bounded), SIGKILL if need be. Returns the exit status."""
         if self.proc is None:

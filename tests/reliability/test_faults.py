@@ -240,7 +240,7 @@ class CrashDuringCacheWritesTest(unittest.TestCase):
                 self.assertEqual(got.body, r.body)  # recomputed when damaged: the same bytes
                 self.assertEqual(got.header("X-Cache"), "miss" if i < 4 else "hit")
             self.assertEqual(d.metric("isomesh_cache_corrupt_total", tier="disk"), 4)
-            self.assertEqual(d.log().count("cache_corrupt_entry_dropped"), 4)
+            self.assertEqual(d.log_count("cache_corrupt_entry_dropped", 4), 4)
 
 
 def userns_tmpfs_prefix(mountpoint, size):
