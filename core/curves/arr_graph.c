@@ -4,9 +4,13 @@
  * nothing; edges are the chains of cut edges between them; a curve is the arcs of one
  * function joined through its own vertices. */
 #include "core/curves/arr_internal.h"
+#include "core/util/grow.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* First capacity of the growable arrays: arrangements have tens of vertices and edges. */
+#define GRAPH_FIRST 64
 
 #define NONE UINT32_MAX
 
@@ -21,21 +25,6 @@ typedef struct graph {
     uint8_t *seen;          /* per cut edge */
     size_t cap_v, cap_e, cap_chain;
 } graph;
-
-static bool grow(void **p, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap)
-        return true;
-    size_t n = *cap ? *cap : 64;
-    while (n < need)
-        n *= 2;
-    void *q = realloc(*p, n * elem);
-    if (!q)
-        return false;
-    *p = q;
-    *cap = n;
-    return true;
-}
 
 static bool build_adjacency(graph *g)
 {
@@ -74,7 +63,7 @@ static bool build_adjacency(graph *g)
 static bool add_vertex(graph *g, uint32_t v, int type)
 {
     ism_arrangement *a = g->a;
-    if (!grow((void **)&a->vertices, &g->cap_v, a->nvertices + 1, sizeof *a->vertices))
+    if (!ism_grow((void **)&a->vertices, &g->cap_v, a->nvertices + 1, sizeof *a->vertices, GRAPH_FIRST))
         return false;
     g->avid[v] = (uint32_t)a->nvertices;
     a->vertices[a->nvertices++] =
@@ -85,7 +74,7 @@ static bool add_vertex(graph *g, uint32_t v, int type)
 static bool push_chain(graph *g, uint32_t v)
 {
     ism_arrangement *a = g->a;
-    if (!grow((void **)&a->chain, &g->cap_chain, a->nchain + 1, sizeof *a->chain))
+    if (!ism_grow((void **)&a->chain, &g->cap_chain, a->nchain + 1, sizeof *a->chain, GRAPH_FIRST))
         return false;
     a->chain[a->nchain++] = v;
     return true;
@@ -128,7 +117,7 @@ static bool walk(graph *g, uint32_t v, uint32_t ce)
     e.to = g->avid[v] != NONE ? g->avid[v] : e.from;
     e.count = g->a->nchain - e.first;
     ism_arrangement *a = g->a;
-    if (!grow((void **)&a->edges, &g->cap_e, a->nedges + 1, sizeof *a->edges))
+    if (!ism_grow((void **)&a->edges, &g->cap_e, a->nedges + 1, sizeof *a->edges, GRAPH_FIRST))
         return false;
     a->edges[a->nedges++] = e;
     return true;

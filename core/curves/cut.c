@@ -9,6 +9,10 @@
 #include <stdlib.h>
 #include <string.h>
 #include "core/singular/key_map.h"
+#include "core/util/grow.h"
+
+/* First capacity of the growable arrays: a cut has hundreds of edges even for one plane section at depth 6. */
+#define CUT_FIRST 256
 
 #define NONE UINT32_MAX
 /* Newton may move a split point at most this many lengths of its edge (further means it
@@ -47,25 +51,10 @@ void ism_cut_free(ism_cut *c)
     memset(c, 0, sizeof *c);
 }
 
-static bool grow(void **p, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap)
-        return true;
-    size_t n = *cap ? *cap : 256;
-    while (n < need)
-        n *= 2;
-    void *q = realloc(*p, n * elem);
-    if (!q)
-        return false;
-    *p = q;
-    *cap = n;
-    return true;
-}
-
 static bool set_vcurve(cut_state *s, uint32_t v, uint32_t fn)
 {
     size_t old = s->cap_vcurve;
-    if (!grow((void **)&s->vcurve, &s->cap_vcurve, (size_t)v + 1, sizeof *s->vcurve))
+    if (!ism_grow((void **)&s->vcurve, &s->cap_vcurve, (size_t)v + 1, sizeof *s->vcurve, CUT_FIRST))
         return false;
     for (size_t i = old; i < s->cap_vcurve; i++)
         s->vcurve[i] = NONE;
@@ -88,7 +77,7 @@ static bool add_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t fn)
         return false;
     if (!added)
         return true;
-    if (!grow((void **)&s->c->edges, &s->cap_edges, (size_t)i + 1, sizeof *s->c->edges))
+    if (!ism_grow((void **)&s->c->edges, &s->cap_edges, (size_t)i + 1, sizeof *s->c->edges, CUT_FIRST))
         return false;
     s->c->edges[i] = (ism_cut_edge){a, b, fn};
     s->c->nedges = (size_t)i + 1;
@@ -162,7 +151,7 @@ static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
         return NONE;
     if (!added)
         return s->split_v[i];
-    if (!grow((void **)&s->split_v, &s->cap_split, (size_t)i + 1, sizeof *s->split_v))
+    if (!ism_grow((void **)&s->split_v, &s->cap_split, (size_t)i + 1, sizeof *s->split_v, CUT_FIRST))
         return NONE;
     const double *a = s->m->pos + 3 * (size_t)u, *b = s->m->pos + 3 * (size_t)w;
     double t = s->gv[u] / (s->gv[u] - s->gv[w]), p[3], len2 = 0;

@@ -1,9 +1,13 @@
 /* locus.c — the singular locus's containers (growable arrays of points, curves, candidate
  * boxes and double sheets) and the names its enums take in JSON and stats. */
 #include "core/singular/locus.h"
+#include "core/util/grow.h"
 
 #include <stdlib.h>
 #include <string.h>
+
+/* First capacity of the growable arrays: a locus has a handful of points and curves; 16 covers most without a second realloc. */
+#define LOCUS_FIRST 16
 
 /* Default search budget: candidate boxes kept (each ~80 bytes; a double sheet at depth 9
  * keeps a few hundred thousand). */
@@ -36,23 +40,9 @@ void ism_locus_free(ism_locus *l)
     memset(l, 0, sizeof *l);
 }
 
-/* Makes room for one more element of size sz in *v (n used, *cap allocated). */
-static bool grow(void **v, size_t n, size_t *cap, size_t sz)
-{
-    if (n < *cap)
-        return true;
-    size_t c = *cap ? 2 * *cap : 16;
-    void *p = realloc(*v, c * sz);
-    if (!p)
-        return false;
-    *v = p;
-    *cap = c;
-    return true;
-}
-
 bool ism_locus_add_point(ism_locus *l, const ism_sing_point *p)
 {
-    if (!grow((void **)&l->points, l->npoints, &l->cap_points, sizeof *p))
+    if (!ism_grow((void **)&l->points, &l->cap_points, l->npoints + 1, sizeof *p, LOCUS_FIRST))
         return false;
     l->points[l->npoints++] = *p;
     return true;
@@ -60,7 +50,7 @@ bool ism_locus_add_point(ism_locus *l, const ism_sing_point *p)
 
 bool ism_locus_add_curve(ism_locus *l, const ism_sing_curve *c)
 {
-    if (!grow((void **)&l->curves, l->ncurves, &l->cap_curves, sizeof *c))
+    if (!ism_grow((void **)&l->curves, &l->cap_curves, l->ncurves + 1, sizeof *c, LOCUS_FIRST))
         return false;
     l->curves[l->ncurves++] = *c;
     return true;
@@ -68,7 +58,7 @@ bool ism_locus_add_curve(ism_locus *l, const ism_sing_curve *c)
 
 bool ism_locus_add_box(ism_locus *l, const ism_lbox *b)
 {
-    if (!grow((void **)&l->boxes, l->nboxes, &l->cap_boxes, sizeof *b))
+    if (!ism_grow((void **)&l->boxes, &l->cap_boxes, l->nboxes + 1, sizeof *b, LOCUS_FIRST))
         return false;
     l->boxes[l->nboxes++] = *b;
     return true;
@@ -76,7 +66,7 @@ bool ism_locus_add_box(ism_locus *l, const ism_lbox *b)
 
 bool ism_locus_add_sheet(ism_locus *l, const ism_double_sheet *s)
 {
-    if (!grow((void **)&l->sheets, l->nsheets, &l->cap_sheets, sizeof *s))
+    if (!ism_grow((void **)&l->sheets, &l->cap_sheets, l->nsheets + 1, sizeof *s, LOCUS_FIRST))
         return false;
     l->sheets[l->nsheets++] = *s;
     return true;

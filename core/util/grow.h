@@ -1,0 +1,35 @@
+/* grow.h — the one growable-array step of core/: make room for `need` elements.
+ *
+ * Arrays in core/ are (pointer, count, capacity) triples grown by doubling; this is the only
+ * place that doubles, checks the byte count for overflow and reallocs. On failure the array is
+ * left as it was (still owned by the caller) and false is returned. */
+#ifndef ISM_UTIL_GROW_H
+#define ISM_UTIL_GROW_H
+
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdlib.h>
+
+/* Ensures *cap >= need for an array *p of elements of elem bytes; the first allocation holds
+ * `first` elements (or more, when need is larger). */
+static inline bool ism_grow(void **p, size_t *cap, size_t need, size_t elem, size_t first)
+{
+    if (need <= *cap)
+        return true;
+    size_t n = *cap ? *cap : (first ? first : 1);
+    while (n < need) {
+        if (n > SIZE_MAX / 2)
+            return false;
+        n *= 2;
+    }
+    if (elem && n > SIZE_MAX / elem)
+        return false;
+    void *q = realloc(*p, n * elem);
+    if (!q)
+        return false;
+    *p = q;
+    *cap = n;
+    return true;
+}
+
+#endif
