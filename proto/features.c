@@ -90,14 +90,6 @@ static void write_xyz(ism_jw *w, const ism_mesh *m, uint32_t v)
         ism_jw_float(w, (float)m->pos[3 * (size_t)v + k]);
 }
 
-static void write_point3(ism_jw *w, const double p[3])
-{
-    ism_jw_array(w);
-    for (int k = 0; k < 3; k++)
-        ism_jw_number(w, p[k]);
-    ism_jw_array_end(w);
-}
-
 /* Polylines of mesh vertices; on (may be NULL) gives each line's "on_locus". Returns edges. */
 static size_t write_lines(ism_jw *w, const ism_mesh *m, const ism_polylines *p,
                           const uint8_t *on)
@@ -129,7 +121,7 @@ static void write_singular_point(ism_jw *w, const ism_sing_point *p, int cones)
 {
     ism_jw_object(w);
     ism_jw_key(w, "xyz");
-    write_point3(w, p->p);
+    ism_jw_numbers(w, p->p, 3);
     ism_jw_key(w, "radius");
     ism_jw_number(w, p->radius);
     ism_jw_key(w, "type");
@@ -137,7 +129,7 @@ static void write_singular_point(ism_jw *w, const ism_sing_point *p, int cones)
     ism_jw_key(w, "certified");
     ism_jw_bool(w, p->certified);
     ism_jw_key(w, "hessian_eigenvalues");
-    write_point3(w, p->eig);
+    ism_jw_numbers(w, p->eig, 3);
     ism_jw_key(w, "residual_f");
     ism_jw_number(w, p->residual_f);
     ism_jw_key(w, "residual_grad");
@@ -154,7 +146,7 @@ static void write_curve_end(ism_jw *w, const ism_sing_curve *c, int e, const ism
     ism_jw_key(w, "type");
     ism_jw_string(w, ism_end_type_name(c->end_type[e]));
     ism_jw_key(w, "xyz");
-    write_point3(w, c->xyz + 3 * at);
+    ism_jw_numbers(w, c->xyz + 3 * at, 3);
     ism_jw_key(w, "point");
     if (c->end_point[e] >= 0 && (size_t)c->end_point[e] < l->npoints)
         ism_jw_int(w, c->end_point[e]);
@@ -171,10 +163,7 @@ static void write_singular_curve(ism_jw *w, const ism_sing_curve *c, const ism_l
     ism_jw_key(w, "closed");
     ism_jw_bool(w, c->closed);
     ism_jw_key(w, "xyz");
-    ism_jw_array(w);
-    for (size_t i = 0; i < 3 * c->n; i++)
-        ism_jw_number(w, c->xyz[i]);
-    ism_jw_array_end(w);
+    ism_jw_numbers(w, c->xyz, 3 * c->n);
     ism_jw_key(w, "ends");
     ism_jw_array(w);
     for (int e = 0; e < 2 && !c->closed && c->n; e++)

@@ -19,9 +19,7 @@ static void write_pos(ism_jw *w, const ism_mesh *m, uint32_t v)
 static void write_vertex_xyz(ism_jw *w, const ism_mesh *m, uint32_t v)
 {
     ism_jw_key(w, "xyz");
-    ism_jw_array(w);
-    write_pos(w, m, v);
-    ism_jw_array_end(w);
+    ism_jw_numbers(w, m->pos + 3 * (size_t)v, 3);
 }
 
 static void write_arc(ism_jw *w, const ism_mesh *m, const ism_arrangement *a,

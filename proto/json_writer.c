@@ -164,6 +164,14 @@ void ism_jw_number(ism_jw *w, double v)
     put(w, buf, strlen(buf));
 }
 
+void ism_jw_numbers(ism_jw *w, const double *v, size_t n)
+{
+    ism_jw_array(w);
+    for (size_t i = 0; i < n; i++)
+        ism_jw_number(w, v[i]);
+    ism_jw_array_end(w);
+}
+
 void ism_jw_float(ism_jw *w, float v)
 {
     char buf[32];

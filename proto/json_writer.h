@@ -32,6 +32,7 @@ void ism_jw_key(ism_jw *w, const char *key);
 void ism_jw_string(ism_jw *w, const char *s);
 void ism_jw_string_n(ism_jw *w, const char *s, size_t n);
 void ism_jw_number(ism_jw *w, double v);  /* shortest round trip; null when not finite */
+void ism_jw_numbers(ism_jw *w, const double *v, size_t n); /* [v0, ..., vn-1] */
 void ism_jw_float(ism_jw *w, float v);    /* shortest text that reads back to the same float */
 void ism_jw_int(ism_jw *w, long long v);
 void ism_jw_uint(ism_jw *w, uint64_t v);
