@@ -21,28 +21,39 @@ const char *ism_point_kind_name(int kind)
     }
 }
 
-static bool copy_curves(const ism_analysis *a, ism_polylines *c)
+void ism_polylines_free(ism_polylines *p)
 {
-    size_t n = a->ncurves, nv = a->ncurves ? a->curve_start[a->ncurves] : 0;
+    free(p->start);
+    free(p->verts);
+    memset(p, 0, sizeof *p);
+}
+
+/* A copy of n polylines given as start (n + 1 entries, NULL when n is 0) and verts. */
+static bool copy_polylines(size_t n, const uint32_t *start, const uint32_t *verts,
+                           ism_polylines *c)
+{
+    size_t nv = n ? start[n] : 0;
     c->start = malloc((n + 1) * sizeof *c->start);
     c->verts = malloc((nv ? nv : 1) * sizeof *c->verts);
     if (!c->start || !c->verts)
         return false;
     c->n = n;
     if (n)
-        memcpy(c->start, a->curve_start, (n + 1) * sizeof *c->start);
+        memcpy(c->start, start, (n + 1) * sizeof *c->start);
     else
         c->start[0] = 0;
     if (nv)
-        memcpy(c->verts, a->curve_verts, nv * sizeof *c->verts);
+        memcpy(c->verts, verts, nv * sizeof *c->verts);
     return true;
 }
 
-bool ism_features_build(const ism_mesh *m, const ism_analysis *a, ism_features *f)
+bool ism_features_build(const ism_analysis *a, ism_features *f)
 {
     memset(f, 0, sizeof *f);
     if (a) {
-        if (!copy_curves(a, &f->curves))
+        if (!copy_polylines(a->ncurves, a->curve_start, a->curve_verts, &f->curves) ||
+            !copy_polylines(a->nboundaries, a->boundary_start, a->boundary_verts,
+                            &f->boundaries))
             goto fail;
         size_t np = a->npoints;
         f->points = malloc((np ? np : 1) * sizeof *f->points);
@@ -56,16 +67,8 @@ bool ism_features_build(const ism_mesh *m, const ism_analysis *a, ism_features *
             f->point_kind[i] = a->point_kind ? a->point_kind[i] : ISM_POINT_CONES;
             f->point_class[i] = a->vertex_class ? a->vertex_class[a->points[i]] : 0;
         }
-    } else {
-        f->curves.start = calloc(1, sizeof *f->curves.start);
-        if (!f->curves.start)
-            goto fail;
-    }
-    if (a && a->boundary_edges == 0) {
-        f->boundaries.start = calloc(1, sizeof *f->boundaries.start);
-        if (!f->boundaries.start)
-            goto fail;
-    } else if (!ism_boundary_chains(m, &f->boundaries)) {
+    } else if (!copy_polylines(0, NULL, NULL, &f->curves) ||
+               !copy_polylines(0, NULL, NULL, &f->boundaries)) {
         goto fail;
     }
     return true;

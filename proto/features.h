@@ -50,15 +50,9 @@ typedef struct ism_polylines {
 
 void ism_polylines_free(ism_polylines *p);
 
-/* Chains the boundary edges of m (edges of exactly one triangle; triangles with a repeated
- * index are ignored) into polylines following the triangles' winding: closed loops, and open
- * chains where a boundary meets a non-manifold vertex. O(triangles). False when out of
- * memory. */
-bool ism_boundary_chains(const ism_mesh *m, ism_polylines *out);
-
 typedef struct ism_features {
     ism_polylines curves;      /* non-manifold curves (a copy of the analysis's) */
-    ism_polylines boundaries;
+    ism_polylines boundaries;  /* boundary chains (a copy of the analysis's) */
     size_t npoints;
     uint32_t *points;          /* non-manifold points (vertex indices) */
     uint8_t *point_kind;       /* enum ism_point_kind per point */
@@ -70,10 +64,9 @@ typedef struct ism_features {
     const ism_cut_fn *cut_fns;  /* the functions arrangement's curves come from */
 } ism_features;
 
-/* Collects the features of m from its analysis a (a may be NULL: curves and points then
- * stay empty, boundaries are still chained). Boundaries are skipped when a says there are no
- * boundary edges. False when out of memory. */
-bool ism_features_build(const ism_mesh *m, const ism_analysis *a, ism_features *f);
+/* Collects the features of a mesh from its analysis a (NULL for an empty mesh: every list
+ * stays empty): non-manifold curves and points, boundary chains. False when out of memory. */
+bool ism_features_build(const ism_analysis *a, ism_features *f);
 void ism_features_free(ism_features *f);
 
 /* The features JSON above (f->locus and f->check are read when set). malloc'd, NULL when out

@@ -62,7 +62,8 @@ bool ism_analyse(const ism_mesh *m, const ism_tape *f, const ism_analysis_option
 void ism_analysis_free(ism_analysis *a)
 {
     void *arrays[] = {a->vertex_class, a->curve_start, a->curve_verts, a->points,
-                      a->point_kind, a->point_pos, a->component, a->mean_curvature,
+                      a->point_kind, a->point_pos, a->component, a->boundary_start,
+                      a->boundary_verts, a->mean_curvature,
                       a->gauss_curvature, a->k1, a->k2, a->singular, a->vertex_area,
                       a->triangle_min_angle, a->distance};
     for (size_t i = 0; i < sizeof arrays / sizeof *arrays; i++)

@@ -113,6 +113,12 @@ typedef struct ism_analysis {
                                          to the next boundary edge; boundary_loops counts the
                                          chains that close. */
     ism_component *component;         /* components entries */
+    /* The boundary chains as polylines, in the shape of the curves above: chain i runs over
+     * boundary_verts[boundary_start[i] .. boundary_start[i+1]) (closed when first == last),
+     * the way its first edge's triangle runs it; loops first-found by edge order. */
+    size_t nboundaries;               /* boundary_loops + boundary_chains */
+    uint32_t *boundary_start;         /* nboundaries + 1 entries */
+    uint32_t *boundary_verts;
 
     /* curvature from f (NULL when not asked for); finite everywhere: 0 where singular.
      * Sign: mean = (|g|² tr H - g H gᵀ) / (2|g|³) = div(∇f/|∇f|) / 2, so a surface bending

@@ -7,6 +7,7 @@
 #include "core/analysis/boundary.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 typedef struct chain_walk {
     const ism_mesh *m;
@@ -51,8 +52,21 @@ static uint32_t far_end(const chain_walk *cw, uint32_t e, uint32_t w)
     return lo == w ? hi : lo;
 }
 
-/* Follows the chain from e0 out of its end w; true when it comes back to e0. */
-static bool follow(chain_walk *cw, uint32_t e0, uint32_t w)
+/* Where the walk writes the vertices it passes (NULL: count only). */
+typedef struct trail {
+    uint32_t *v;
+    size_t n;
+} trail;
+
+static void put(trail *t, uint32_t v)
+{
+    if (t)
+        t->v[t->n++] = v;
+}
+
+/* Follows the chain from e0 out of its end w, putting every vertex reached after w on t;
+ * true when it comes back to e0 (then the last vertex put is e0's other end). */
+static bool follow(chain_walk *cw, uint32_t e0, uint32_t w, trail *t)
 {
     uint32_t e = e0;
     for (;;) {
@@ -63,32 +77,86 @@ static bool follow(chain_walk *cw, uint32_t e0, uint32_t w)
             return false;
         cw->visited[n] = 1;
         w = far_end(cw, n, w);
+        put(t, w);
         e = n;
     }
+}
+
+/* The boundary chains as polylines (see analysis_types.h): each runs the way its first
+ * edge's triangle runs it, so a loop follows the winding of its patch. */
+typedef struct chains_out {
+    uint32_t *start, *verts; /* as in ism_analysis */
+    size_t n, nverts;
+    trail back;              /* scratch: the walk out of an open chain's tail */
+} chains_out;
+
+static bool record(chain_walk *cw, chains_out *o, uint32_t e, uint32_t from, uint32_t to)
+{
+    size_t s = o->nverts;
+    trail fwd = {o->verts + s + 1, 0};
+    o->verts[s] = from;
+    o->verts[s + 1] = to;
+    fwd.n = 1;
+    bool closed = follow(cw, e, to, &fwd);
+    if (!closed) { /* open: prepend the walk out of the tail, reversed */
+        o->back.n = 0;
+        follow(cw, e, from, &o->back);
+        memmove(o->verts + s + o->back.n, o->verts + s, (fwd.n + 1) * sizeof *o->verts);
+        for (size_t i = 0; i < o->back.n; i++)
+            o->verts[s + i] = o->back.v[o->back.n - 1 - i];
+        fwd.n += o->back.n;
+    }
+    o->nverts = s + fwd.n + 1;
+    o->start[++o->n] = (uint32_t)o->nverts;
+    return closed;
+}
+
+/* The directed boundary edge e as its triangle runs it. */
+static void direction(const ism_mesh *m, const ism_an_edge_table *et, uint32_t e,
+                      uint32_t *from, uint32_t *to)
+{
+    uint32_t h = et->edge_he[et->edge_start[e]];
+    *from = m->tri[h];
+    *to = m->tri[ism_an_he_next(h)];
 }
 
 bool ism_an_boundary_chains(const ism_mesh *m, const ism_an_edge_table *et,
                             const ism_an_vertex_facts *vf, const uint32_t *comp, ism_analysis *a)
 {
+    size_t nb = 0;
+    for (uint32_t e = 0; e < et->nedges; e++)
+        nb += ism_an_edge_count(et, e) == 1;
     chain_walk cw = {m, et, vf, calloc(et->nedges ? et->nedges : 1, 1)};
-    if (!cw.visited)
-        return false;
-    for (uint32_t e = 0; e < et->nedges; e++) {
+    /* each chain holds its edges + 1 vertices: at most 2 per boundary edge in all */
+    chains_out o = {malloc((nb + 1) * sizeof *o.start), malloc((2 * nb + 1) * sizeof *o.verts),
+                    0, 0, {malloc((nb + 1) * sizeof *o.back.v), 0}};
+    bool ok = cw.visited && o.start && o.verts && o.back.v;
+    if (ok)
+        o.start[0] = 0;
+    for (uint32_t e = 0; ok && e < et->nedges; e++) {
         if (ism_an_edge_count(et, e) != 1 || cw.visited[e])
             continue;
         cw.visited[e] = 1;
-        uint32_t lo, hi;
-        ism_an_edge_ends(m, et, e, &lo, &hi);
+        uint32_t from, to;
+        direction(m, et, e, &from, &to);
         ism_component *c = &a->component[comp[et->edge_he[et->edge_start[e]] / 3]];
-        if (follow(&cw, e, hi)) {
+        if (record(&cw, &o, e, from, to)) {
             a->boundary_loops++;
             c->boundary_loops++;
         } else {
-            follow(&cw, e, lo);
             a->boundary_chains++;
             c->boundary_chains++;
         }
     }
     free(cw.visited);
+    free(o.back.v);
+    if (!ok) {
+        free(o.start);
+        free(o.verts);
+        return false;
+    }
+    a->nboundaries = o.n;
+    a->boundary_start = o.start;
+    a->boundary_verts = o.verts;
     return true;
 }

@@ -460,7 +460,7 @@ static bool gather(const ism_request *req, ism_pipeline_result *r, ism_computed 
     ism_mesh none;
     ism_mesh_init(&none);
     const ism_mesh *fm = c->empty ? &none : &c->mesh;
-    if (!ism_features_build(fm, c->empty ? NULL : &s->an, &c->features))
+    if (!ism_features_build(c->empty ? NULL : &s->an, &c->features))
         return fail_with(r, 500, "no_memory", "%s", "out of memory collecting the features");
     c->features.locus = &c->locus;
     c->features.check = c->empty ? NULL : &s->check;

@@ -323,7 +323,7 @@ static bool write_features(const char *path, const run_products *p)
     bool empty = p->mesh->ntris == 0 || !p->analysis;
     const ism_mesh *m = empty ? &none : p->mesh;
     ism_features f;
-    if (!ism_features_build(m, empty ? NULL : p->analysis, &f))
+    if (!ism_features_build(empty ? NULL : p->analysis, &f))
         return false;
     f.locus = p->locus;
     f.check = empty ? NULL : p->check;

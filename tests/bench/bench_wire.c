@@ -133,7 +133,7 @@ static bool run_case(const bench_case *c, const char *out_dir)
     ism_wire_mesh w;
     ism_features f;
     if (!ism_wire_mesh_build(&m, &a, ISM_ATTR_ALL, ldexp(1, req.max_depth) / side, &w) ||
-        !ism_features_build(&m, &a, &f)) {
+        !ism_features_build(&a, &f)) {
         fprintf(stderr, "bench_wire: out of memory\n");
         return false;
     }

@@ -383,7 +383,7 @@ static void check_arrival(ism_mesh *m, size_t want_nm_edges, size_t want_points,
     cr_assert_not_null(dm.cls, "the class attribute arrives");
 
     ism_features f;
-    cr_assert(ism_features_build(m, &a, &f));
+    cr_assert(ism_features_build(&a, &f));
     size_t flen;
     char *ftext = ism_features_json(m, &f, &flen);
     json_error_t je;

@@ -1,8 +1,9 @@
 /* test_features.c — boundary chains and the features JSON: a grid's boundary is one closed
- * loop that follows the triangles' winding; crossing planes' boundaries are closed chains of
- * real boundary edges; a closed torus has none; the JSON agrees with the analysis. */
+ * loop that follows the triangles' winding; crossing planes' boundaries are four chains that
+ * end on the crossing line; a closed torus has none; the JSON agrees with the analysis. */
 #include <criterion/criterion.h>
 #include <jansson.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -31,8 +32,12 @@ Test(features, grid_boundary_is_one_loop_along_the_winding)
 {
     ism_mesh m;
     test_mesh_grid(&m, 6);
-    ism_polylines p;
-    cr_assert(ism_boundary_chains(&m, &p));
+    ism_analysis a;
+    ism_error err;
+    cr_assert(ism_analyse(&m, NULL, NULL, &a, &err));
+    ism_features f;
+    cr_assert(ism_features_build(&a, &f));
+    const ism_polylines p = f.boundaries;
     cr_assert_eq(p.n, 1);
     cr_expect_eq(p.start[1] - p.start[0], 24 + 1, "24 edges, first vertex repeated");
     cr_expect_eq(p.verts[0], p.verts[24], "closed");
@@ -43,31 +48,46 @@ Test(features, grid_boundary_is_one_loop_along_the_winding)
         const double *q = m.pos + 3 * p.verts[i];
         cr_expect(q[0] == 0 || q[0] == 1 || q[1] == 0 || q[1] == 1, "on the square's rim");
     }
-    ism_polylines_free(&p);
+    ism_features_free(&f);
+    ism_analysis_free(&a);
     ism_mesh_free(&m);
 }
 
-Test(features, crossing_planes_boundaries_are_closed_chains_of_boundary_edges)
+Test(features, crossing_planes_boundaries_are_chains_ending_on_the_crossing_line)
 {
+    /* the planes z = 0 and y = 0 share the line y = z = 0; each square's rim runs into that
+     * line at x = ±1, where the cone of faces ends on a non-manifold edge: 4 half-rims */
     ism_mesh m;
     test_mesh_crossing_planes(&m, 4);
     ism_analysis a;
     ism_error err;
     cr_assert(ism_analyse(&m, NULL, NULL, &a, &err));
-    ism_polylines p;
-    cr_assert(ism_boundary_chains(&m, &p));
+    ism_features f;
+    cr_assert(ism_features_build(&a, &f));
+    const ism_polylines p = f.boundaries;
+    cr_expect_eq(p.n, 4);
+    cr_expect_eq(a.boundary_chains, 4);
+    cr_expect_eq(a.boundary_loops, 0);
     size_t edges = 0;
     for (size_t c = 0; c < p.n; c++) {
         uint32_t s = p.start[c], e = p.start[c + 1];
-        cr_expect_eq(p.verts[s], p.verts[e - 1], "chain %zu is closed", c);
+        cr_expect_neq(p.verts[s], p.verts[e - 1], "chain %zu is open", c);
+        const uint32_t ends[2] = {p.verts[s], p.verts[e - 1]};
+        for (int k = 0; k < 2; k++) {
+            const double *q = m.pos + 3 * ends[k];
+            cr_expect(q[1] == 0 && q[2] == 0 && fabs(q[0]) == 1,
+                      "chain %zu ends at (%g, %g, %g), not on the crossing line's ends", c,
+                      q[0], q[1], q[2]);
+        }
         for (uint32_t i = s; i + 1 < e; i++, edges++) {
             bool fwd;
             cr_expect_eq(edge_use(&m, p.verts[i], p.verts[i + 1], &fwd), 1);
+            cr_expect(fwd, "chain %zu follows its triangles' winding", c);
         }
     }
     cr_expect_eq(edges, a.boundary_edges);
     cr_expect_eq(edges, 2 * 16);
-    ism_polylines_free(&p);
+    ism_features_free(&f);
     ism_analysis_free(&a);
     ism_mesh_free(&m);
 }
@@ -84,7 +104,7 @@ Test(features, json_agrees_with_the_analysis)
         ism_error err;
         cr_assert(ism_analyse(m, NULL, NULL, &a, &err));
         ism_features f;
-        cr_assert(ism_features_build(m, &a, &f));
+        cr_assert(ism_features_build(&a, &f));
         size_t n;
         char *text = ism_features_json(m, &f, &n);
         json_error_t je;
@@ -120,7 +140,7 @@ Test(features, empty_mesh_has_empty_features)
     ism_mesh m;
     ism_mesh_init(&m);
     ism_features f;
-    cr_assert(ism_features_build(&m, NULL, &f));
+    cr_assert(ism_features_build(NULL, &f));
     size_t n;
     char *text = ism_features_json(&m, &f, &n);
     cr_expect_str_eq(text, "{\"version\":2,\"classes\":[\"manifold\",\"boundary\","
@@ -172,7 +192,7 @@ Test(features, locus_and_check_in_the_json)
         cr_expect_eq(chk.nonmanifold_edges, a.nonmanifold_edges);
         cr_expect_eq(chk.nonmanifold_edges_off, wrong ? a.nonmanifold_edges : 0);
         ism_features f;
-        cr_assert(ism_features_build(&m, &a, &f));
+        cr_assert(ism_features_build(&a, &f));
         f.locus = &l;
         f.check = &chk;
         size_t n;

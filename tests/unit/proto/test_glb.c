@@ -30,7 +30,7 @@ static unsigned char *build(const ism_mesh *m, size_t *len, ism_draco_output *d)
     ism_wire_mesh w;
     cr_assert(ism_wire_mesh_build(m, &a, ISM_ATTR_NORMAL | ISM_ATTR_CLASS, 0, &w));
     ism_features f;
-    cr_assert(ism_features_build(m, &a, &f));
+    cr_assert(ism_features_build(&a, &f));
     memset(d, 0, sizeof *d);
     bool empty = w.live_triangles == 0;
     if (!empty) {
