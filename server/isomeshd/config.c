@@ -89,9 +89,20 @@ static const flag FLAGS[] = {
     {"client-conns", K_INT, 0, 100000, "N",
      "connections one address may hold open at once; behind a proxy keep it above the "
      "proxy's connections; 0 = no limit [512]"},
+    {"max-connections", K_INT, 16, 20000, "N",
+     "connections the daemon holds at once; at the limit an address holding fewer than the "
+     "largest holder still gets in (that holder's longest-idle connection is closed, else "
+     "its newest), others are refused at once [4000]"},
+    {"header-timeout", K_DURATION, 0, 0, "TIME",
+     "a request's headers must arrive within this time of the connection being ready for "
+     "them (accepted, or its previous answer done), however they trickle; also bounds an "
+     "idle kept-alive connection; at least 1s [30s]"},
+    {"body-timeout", K_DURATION, 0, 0, "TIME",
+     "a request's body must arrive within this time of its headers, however it trickles; "
+     "at least 1s [60s]"},
     {"http-threads", K_INT, 1, 256, "N",
      "threads serving HTTP connections, each with its share (at most 124); more are started "
-     "when the connection limit needs them [33]"},
+     "when --max-connections needs them [35]"},
     {"max-depth", K_INT, 1, 16, "N", "deepest octree a request may ask for [10]"},
     {"max-triangles", K_INT, 1, 1000000000LL, "N",
      "most triangles a request may produce [4000000]"},
@@ -279,6 +290,7 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
         else if (!strcmp(name, "max-triangles")) cfg->max_triangles = (size_t)n;
         else if (!strcmp(name, "client-conns")) cfg->client_conns = (int)n;
         else if (!strcmp(name, "http-threads")) cfg->http_threads = (int)n;
+        else if (!strcmp(name, "max-connections")) cfg->max_conns = (unsigned)n;
         return true;
     case K_SIZE:
         if (!parse_size(v, &n) || n < f->min || n > f->max)
@@ -299,6 +311,10 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
             if (d < 1)
                 return false;
             cfg->conn_timeout_s = (unsigned)(d + 0.5);
+        } else if (!strcmp(name, "header-timeout") || !strcmp(name, "body-timeout")) {
+            if (d < 1)
+                return false;
+            *(name[0] == 'h' ? &cfg->header_timeout_s : &cfg->body_timeout_s) = d;
         } else if (!strcmp(name, "queue-timeout")) {
             cfg->queue_timeout_s = d;
         } else {
@@ -424,6 +440,9 @@ static void set_defaults(ismd_config *cfg)
     cfg->cache_disk_max = 4ULL << 30;
     cfg->conn_timeout_s = 30;
     cfg->client_conns = 512;
+    cfg->max_conns = 4000;
+    cfg->header_timeout_s = 30;
+    cfg->body_timeout_s = 60;
     cfg->http_threads = 1; /* at least; http.c starts as many as its connection limit needs */
     cfg->job_timeout_s = 60;
     cfg->queue_timeout_s = 60;

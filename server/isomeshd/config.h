@@ -27,6 +27,9 @@ typedef struct ismd_config {
     size_t max_body;          /* request body bytes */
     unsigned conn_timeout_s;  /* an idle connection (not waiting for a computation) is closed */
     int client_conns;         /* connections from one address at once (0 = no limit) */
+    unsigned max_conns;       /* connections held at once, fair across addresses (conns.h) */
+    double header_timeout_s;  /* a request's headers arrive within this (conns.h) */
+    double body_timeout_s;    /* a request's body arrives within this of its headers */
     int http_threads;         /* at least this many HTTP threads (http.c may start more) */
     int max_depth;
     size_t max_triangles;

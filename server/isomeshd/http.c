@@ -511,6 +511,9 @@ static enum MHD_Result first_call(ismd_server *s, struct MHD_Connection *conn, c
     for (char *p = r->path; *p; p++)
         if ((unsigned char)*p < 0x20 || (unsigned char)*p == 0x7f)
             *p = '?';
+    const union MHD_ConnectionInfo *ci = MHD_get_connection_info(conn, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+    r->cn = ci ? ci->socket_context : NULL;
+    ismd_conns_request(s->conns, r->cn, r, true); /* a body may follow until the next call */
     client_of(s, r, r->client, sizeof r->client);
     ismd_auth_identify(s->auth, ismd_header(r, MHD_HTTP_HEADER_AUTHORIZATION), r->client, &r->who);
     *con_cls = r;
@@ -632,6 +635,9 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         return first_call(s, conn, url, method, con_cls);
     if (*upload_size)
         return take_body(r, upload_data, upload_size);
+    if (r->client_left)
+        return MHD_NO; /* nobody to answer: close */
+    ismd_conns_body_done(s->conns, r->cn);
     if (r->status)
         return MHD_YES; /* already answered (a 413 on the first call) */
     if (r->ready) {
@@ -667,8 +673,13 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
         ismd_sched_detach(&s->sched, &r->waiter);
         ismd_sched_unlock(&s->sched);
     }
+    ismd_conns_request_done(s->conns, r->cn);
+    const char *cut = ismd_conns_cut_reason(s->conns, r->cn);
     double secs = (ism_now_ns() - r->t0_ns) / 1e9;
-    unsigned status = r->status ? r->status : 499; /* the client left before an answer */
+    /* no answer: the body came too slowly, or the client left */
+    unsigned status = r->status                          ? r->status
+                      : cut && !strcmp(cut, "body_deadline") ? 408
+                                                             : 499;
     ismd_metrics_request(&s->metrics, r->route, status, secs, r->bytes);
     ism_log_field f[] = {
         ISM_LS("method", r->method),
@@ -681,6 +692,7 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
         ISM_LS("client", r->client),
         ISM_LS("user", r->who.state == ISMD_AUTH_OK ? r->who.user : NULL),
         ISM_LS("end", toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? "ok" : "aborted"),
+        ISM_LS("closed", cut ? cut : r->client_left ? "client_left" : NULL),
     };
     ism_log_fields(ISM_LOG_INFO, "request", f, sizeof f / sizeof f[0]);
     ism_blob_unref(r->r_body);
@@ -742,8 +754,12 @@ static void mhd_log(void *cls, const char *fmt, va_list ap)
  * congestion window) are not limited by this, so fast clients on long links keep their
  * speed. */
 #define NOTSENT_LOWAT (256u << 10)
-/* Connections the daemon holds at once (split evenly among the polling threads). */
-#define CONNECTION_LIMIT 4000u
+/* Connections libmicrohttpd may hold beyond --max-connections: those the connection table
+ * closed and libmicrohttpd has not freed yet (an evicted connection waiting for a computation
+ * lingers until its flight ends). Without room for them, libmicrohttpd's own limit (which
+ * stops accepting: new clients wait unanswered in the backlog) could bite before the fair
+ * one. */
+#define CUT_ROOM(max) ((max) / 16u + 16u)
 /* Kernel queue of connections not yet accepted (a burst of new clients waits here). */
 #define LISTEN_BACKLOG 1024u
 /* Events one epoll_wait() of libmicrohttpd 0.9.75 takes (its MAX_EVENTS). */
@@ -752,9 +768,46 @@ static void mhd_log(void *cls, const char *fmt, va_list ap)
  * (and two spare) its epoll set stays below MHD_EPOLL_BATCH (see ismd_http_start). */
 #define CONNS_PER_THREAD (MHD_EPOLL_BATCH - 4u)
 
+/* libmicrohttpd reports a connection's start and end: its entry in the connection table,
+ * which decides its admission (conns.h). */
+static void on_connection(void *cls, struct MHD_Connection *conn, void **socket_context,
+                          enum MHD_ConnectionNotificationCode code)
+{
+    ismd_server *s = cls;
+    if (code == MHD_CONNECTION_NOTIFY_CLOSED) {
+        ismd_conns_closed(s->conns, *socket_context);
+        *socket_context = NULL;
+        return;
+    }
+    const union MHD_ConnectionInfo *ci = MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CONNECTION_FD);
+    char addr[64];
+    peer_of(conn, addr, sizeof addr);
+    *socket_context = ci ? ismd_conns_opened(s->conns, ci->connect_fd, addr) : NULL;
+}
+
+/* The connection table found that the client of r closed its connection (table lock held).
+ * A request waiting for a flight leaves it — the computation stops when nobody else waits
+ * for it (single flight: another request or a job keeps it) — and is resumed, to be closed
+ * without an answer. */
+static void client_left(void *ctx, void *req)
+{
+    ismd_server *s = ctx;
+    ismd_req *r = req;
+    ismd_sched_lock(&s->sched);
+    if (r->suspended && r->waiter.flight) {
+        ismd_sched_detach(&s->sched, &r->waiter);
+        r->client_left = true;
+        r->suspended = false;
+        atomic_fetch_sub(&s->metrics.suspended_connections, 1);
+        atomic_fetch_add(&s->metrics.clients_left, 1);
+        MHD_resume_connection(r->conn);
+    }
+    ismd_sched_unlock(&s->sched);
+}
+
 /* The thread model: libmicrohttpd's thread pool, each thread with its own epoll set and at
- * most CONNS_PER_THREAD connections (so CONNECTION_LIMIT needs 33 threads; --http-threads
- * may ask for more).
+ * most CONNS_PER_THREAD connections (so the default 4000 + CUT_ROOM connections need 35
+ * threads; --http-threads may ask for more).
  *
  * Why the cap: MHD_epoll() in 0.9.75 (and upstream since) drains events with
  * `while (epoll_wait(.., 128, timeout) == 128)`, the same timeout on every call. When a call
@@ -774,7 +827,18 @@ bool ismd_http_start(ismd_server *s, int listen_fd)
     unsigned lowat = NOTSENT_LOWAT; /* inherited by every accepted socket */
     if (setsockopt(listen_fd, IPPROTO_TCP, TCP_NOTSENT_LOWAT, &lowat, sizeof lowat) != 0)
         ism_logf(ISM_LOG_WARN, "socket_option", "TCP_NOTSENT_LOWAT: %s", strerror(errno));
-    unsigned threads = (CONNECTION_LIMIT + CONNS_PER_THREAD - 1) / CONNS_PER_THREAD;
+    ismd_conns_config cc = {
+        .max = s->cfg->max_conns,
+        .header_s = s->cfg->header_timeout_s,
+        .body_s = s->cfg->body_timeout_s,
+        .client_left = client_left,
+        .ctx = s,
+    };
+    s->conns = ismd_conns_start(&cc, &s->metrics);
+    if (!s->conns)
+        return false;
+    unsigned limit = s->cfg->max_conns + CUT_ROOM(s->cfg->max_conns);
+    unsigned threads = (limit + CONNS_PER_THREAD - 1) / CONNS_PER_THREAD;
     if ((unsigned)s->cfg->http_threads > threads)
         threads = (unsigned)s->cfg->http_threads;
     s->mhd = MHD_start_daemon(
@@ -786,7 +850,8 @@ bool ismd_http_start(ismd_server *s, int listen_fd)
         MHD_OPTION_NOTIFY_COMPLETED, on_completed, s,
         MHD_OPTION_UNESCAPE_CALLBACK, unescape, s,
         MHD_OPTION_CONNECTION_TIMEOUT, s->cfg->conn_timeout_s,
-        MHD_OPTION_CONNECTION_LIMIT, CONNECTION_LIMIT,
+        MHD_OPTION_NOTIFY_CONNECTION, on_connection, s,
+        MHD_OPTION_CONNECTION_LIMIT, limit,
         MHD_OPTION_PER_IP_CONNECTION_LIMIT, (unsigned)s->cfg->client_conns,
         MHD_OPTION_LISTEN_BACKLOG_SIZE, LISTEN_BACKLOG,
         MHD_OPTION_SIGPIPE_HANDLED_BY_APP, 1,
@@ -794,6 +859,8 @@ bool ismd_http_start(ismd_server *s, int listen_fd)
         MHD_OPTION_END);
     if (!s->mhd) {
         ism_logf(ISM_LOG_ERROR, "http_start_failed", "libmicrohttpd did not start");
+        ismd_conns_stop(s->conns);
+        s->conns = NULL;
         return false;
     }
     return true;
@@ -817,6 +884,8 @@ void ismd_http_stop(ismd_server *s, double max_s)
         usleep(10000);
     MHD_stop_daemon(s->mhd);
     s->mhd = NULL;
+    ismd_conns_stop(s->conns);
+    s->conns = NULL;
     if (s->listen_fd >= 0)
         close(s->listen_fd);
     s->listen_fd = -1;

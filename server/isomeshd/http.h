@@ -19,6 +19,7 @@
 #include "server/common/pipeline.h"
 #include "server/isomeshd/auth.h"
 #include "server/isomeshd/config.h"
+#include "server/isomeshd/conns.h"
 #include "server/isomeshd/metrics.h"
 #include "server/isomeshd/sched.h"
 #include "server/isomeshd/static_files.h"
@@ -38,6 +39,7 @@ typedef struct ismd_server {
     ismd_pool *pool;
     ismd_jobs *jobs;
     ismd_auth *auth;             /* bearer tokens (auth.h); disabled without --tokens */
+    ismd_conns *conns;           /* open connections: fair limit, deadlines (conns.h) */
     ism_pipeline_limits limits;
     ismd_static web, vendor;
     ism_blob *openapi, *schema, *presets;
@@ -56,6 +58,8 @@ typedef enum MHD_Result (*ismd_handler)(ismd_req *r);
 struct ismd_req {
     ismd_server *srv;
     struct MHD_Connection *conn;
+    ismd_conn *cn;             /* its entry in the connection table (NULL: out of memory) */
+    bool client_left;          /* closed while waiting for a flight: end without answering */
     ismd_route route;
     char method[8];
     char path[512];            /* URL path, truncated for the log */

@@ -28,6 +28,8 @@ static const double POLY_BOUNDS[ISMD_POLY_BUCKETS - 1] = {
 
 static const char *const RESTART_LABELS[ISMD_RESTART_COUNT] = {"crash", "deadline", "cancel",
                                                                 "protocol", "preempt"};
+static const char *const CUT_LABELS[ISMD_CUT_COUNT] = {
+    "refused", "evicted_idle", "evicted_busy", "header_deadline", "body_deadline"};
 static const char *const OUTCOME_LABELS[ISMD_OUT_COUNT] = {"ok", "rejected", "error",
                                                            "deadline", "crash", "canceled"};
 
@@ -308,6 +310,16 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
     for (int i = 0; i < ISMD_RESTART_COUNT; i++)
         emit(&o, "isomesh_worker_restarts_total{reason=\"%s\"} %llu\n", RESTART_LABELS[i],
              ld(&m->worker_restarts[i]));
+    header(&o, "isomesh_connections_closed_total", "counter",
+           "Connections the daemon closed itself: refused or evicted at --max-connections "
+           "(fair across addresses), or past --header-timeout / --body-timeout.");
+    for (int i = 0; i < ISMD_CUT_COUNT; i++)
+        emit(&o, "isomesh_connections_closed_total{reason=\"%s\"} %llu\n", CUT_LABELS[i],
+             ld(&m->connections_closed[i]));
+    header(&o, "isomesh_clients_left_total", "counter",
+           "Requests waiting for a computation whose client closed its connection (the "
+           "computation stops when no other request or job waits for it).");
+    emit(&o, "isomesh_clients_left_total %llu\n", ld(&m->clients_left));
     header(&o, "isomesh_worker_spawn_failures_total", "counter", "Failed worker starts.");
     emit(&o, "isomesh_worker_spawn_failures_total %llu\n", ld(&m->worker_spawn_failures));
 
@@ -325,6 +337,8 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
     gauge(&o, "isomesh_workers_busy", "Workers computing a mesh.", m->workers_busy);
     gauge(&o, "isomesh_jobs_active", "Jobs (POST /v1/jobs) queued or running.", m->jobs_active);
     gauge(&o, "isomesh_event_streams", "Open job event streams.", m->event_streams);
+    gauge(&o, "isomesh_connections", "Open HTTP connections (at most --max-connections).",
+          m->connections);
     gauge(&o, "isomesh_suspended_connections", "Connections waiting for a computation.",
           m->suspended_connections);
     if (o.failed) {

@@ -33,6 +33,13 @@ typedef enum ismd_outcome {
     ISMD_OUT_CANCELED, ISMD_OUT_COUNT
 } ismd_outcome;
 
+/* Why the connection table (conns.h) closed a connection. */
+typedef enum ismd_cut_reason {
+    ISMD_CUT_REFUSED, ISMD_CUT_EVICTED_IDLE, ISMD_CUT_EVICTED_BUSY, ISMD_CUT_HEADER_DEADLINE,
+    ISMD_CUT_BODY_DEADLINE,
+    ISMD_CUT_COUNT
+} ismd_cut_reason;
+
 typedef struct ismd_histogram {
     atomic_ullong bucket[ISMD_LAT_BUCKETS]; /* non-cumulative counts */
     atomic_ullong count;
@@ -58,11 +65,15 @@ typedef struct ismd_metrics {
     atomic_ullong polygonisations;           /* computations that polygonised a surface */
     atomic_ullong stored_encodings;          /* computations encoded from a stored surface */
     atomic_ullong rejected_queue_full, rejected_client_limit, rejected_unauthorized;
+    atomic_ullong connections_closed[ISMD_CUT_COUNT]; /* by the connection table (conns.h) */
+    atomic_ullong clients_left;              /* requests waiting for a computation whose
+                                                client closed its connection */
     /* gauges */
     atomic_llong queue_depth, queue_capacity;
     atomic_llong cluster_queue_depth;        /* --cluster: entries waiting in the whole service */
     atomic_llong workers_total, workers_ready, workers_busy;
     atomic_llong jobs_active, event_streams, suspended_connections;
+    atomic_llong connections;                /* open, as the connection table counts them */
     struct ism_redis_counters *redis;        /* the shared tier's figures (NULL: no --redis) */
 } ismd_metrics;
 

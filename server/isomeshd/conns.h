@@ -1,0 +1,67 @@
+/* conns.h — the table of open HTTP connections (libmicrohttpd's socket contexts): which address
+ * holds how many, and what each one is doing. It owns three rules libmicrohttpd lacks:
+ *
+ *  - one connection limit, fair across addresses: below it everyone gets in; at it, a
+ *    connection from an address holding fewer than the largest holder (by two or more) gets
+ *    in and one of that holder's connections is closed — one waiting for a request (the one
+ *    waiting longest) before a busy one (its newest). A connection from an address that is
+ *    itself among the largest holders takes the place of its own address's longest-waiting
+ *    idle connection, or is refused: closed at once, never left unanswered in the backlog.
+ *  - deadlines for receiving a request, whatever the trickle rate (libmicrohttpd's timeout
+ *    only ends silence): its headers within header_s of the connection becoming ready for
+ *    one (accepted, or its previous answer completed), its body within body_s of its
+ *    headers. This also bounds how long a kept-alive connection waits idle.
+ *  - clients that left a request still in progress: libmicrohttpd watches no suspended
+ *    connection, so a thread peeks at the sockets of requests in progress and hands those
+ *    whose peer closed to a callback (once per request).
+ *
+ * A connection is closed by shutdown(2) of its socket under the table's lock; libmicrohttpd
+ * then sees the end of the stream and frees it. The descriptor cannot have been reused by
+ * then: libmicrohttpd reports a close (ismd_conns_closed, which takes the lock) before it
+ * closes the descriptor. Thread-safe; the callback runs with the table's lock held. */
+#ifndef ISMD_CONNS_H
+#define ISMD_CONNS_H
+
+#include <stdbool.h>
+
+#include "server/isomeshd/metrics.h"
+
+typedef struct ismd_conn ismd_conn;
+typedef struct ismd_conns ismd_conns;
+
+typedef struct ismd_conns_config {
+    unsigned max;              /* connections held at once (--max-connections) */
+    double header_s;           /* --header-timeout */
+    double body_s;             /* --body-timeout */
+    /* A request in progress (req as given to ismd_conns_request) whose client closed its
+     * connection. Called from the table's thread with its lock held; must not call back
+     * into the table. */
+    void (*client_left)(void *ctx, void *req);
+    void *ctx;
+} ismd_conns_config;
+
+/* Starts the table and its thread. NULL on failure (logged). */
+ismd_conns *ismd_conns_start(const ismd_conns_config *cfg, ismd_metrics *metrics);
+/* Stops the thread and frees the table (after libmicrohttpd has stopped). */
+void ismd_conns_stop(ismd_conns *t);
+
+/* A new connection on socket fd from address addr: admitted, admitted in place of another
+ * (closed), or refused (closed). Always returns its entry (NULL only when out of memory),
+ * to be handed back to ismd_conns_closed. */
+ismd_conn *ismd_conns_opened(ismd_conns *t, int fd, const char *addr);
+/* libmicrohttpd is done with c (before it closes the socket). */
+void ismd_conns_closed(ismd_conns *t, ismd_conn *c);
+
+/* c's request headers are complete; req is the caller's context for it; body: its body is
+ * still to be received. */
+void ismd_conns_request(ismd_conns *t, ismd_conn *c, void *req, bool body);
+/* c's request body is complete (no effect when it was not awaited). */
+void ismd_conns_body_done(ismd_conns *t, ismd_conn *c);
+/* c's request completed: c waits for the next one. */
+void ismd_conns_request_done(ismd_conns *t, ismd_conn *c);
+
+/* Why the table closed c ("refused", "evicted", "header_deadline", "body_deadline"), or
+ * NULL when it did not. */
+const char *ismd_conns_cut_reason(ismd_conns *t, const ismd_conn *c);
+
+#endif

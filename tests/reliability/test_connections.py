@@ -1,0 +1,191 @@
+"""test_connections.py — isomeshd's connection table (server/isomeshd/conns.h), issue 17:
+
+- the global connection limit is fair across addresses: ten addresses, each under the
+  per-address cap, fill --max-connections; a client from an eleventh address is still answered
+  (not left in the listen backlog), the ten end up with near-equal shares, and a connection
+  with a request in progress outlives the idle ones of its own address;
+- request deadlines whatever the trickle rate: headers trickled under the idle timeout, and a
+  body trickled a byte at a time, are cut off by --header-timeout / --body-timeout (the
+  trickle keeps --conn-timeout from ever firing, so a close can only come from them);
+- a synchronous request whose client leaves frees its worker unless another request waits
+  for the same computation (single flight), seen in the metrics.
+
+Every server binds 127.0.0.1 and is stopped; waits are bounded and no assertion depends on
+how fast this machine is."""
+import json
+import os
+import socket
+import sys
+import time
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from reltools import Daemon, http_request, sphere, wait_until  # noqa: E402
+
+ADDRESSES = ["127.0.0.%d" % i for i in range(2, 12)]
+LIMIT = 40          # --max-connections: small, so the test opens few sockets
+PER_ADDRESS = 10    # each address opens this many (under --client-conns 12): 100 > LIMIT
+
+
+def server_closed(s):
+    """True when the server closed (or reset) s."""
+    try:
+        return s.recv(4096) == b""
+    except BlockingIOError:
+        return False
+    except OSError:
+        return True
+
+
+def connect(port, source):
+    s = socket.create_connection(("127.0.0.1", port), timeout=10, source_address=(source, 0))
+    s.setblocking(False)
+    return s
+
+
+def hopeless(k):
+    """Never resolves before its deadline (test_lockout.py's): pins a worker."""
+    return {"expr": "sin(1e300*x) + %g*y" % k, "depth": {"max": 10}}
+
+
+def post_raw(port, body, source="127.0.0.1"):
+    """A socket that has sent a whole POST /v1/mesh and not read anything."""
+    data = json.dumps(body).encode()
+    s = socket.create_connection(("127.0.0.1", port), timeout=10, source_address=(source, 0))
+    s.sendall(b"POST /v1/mesh HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+              b"Content-Length: %d\r\n\r\n" % len(data) + data)
+    return s
+
+
+class FairLimitTest(unittest.TestCase):
+    def test_a_new_address_gets_in_when_ten_others_fill_the_limit(self):
+        with Daemon("--workers", "1", "--max-connections", str(LIMIT), "--client-conns", "12",
+                    "--conn-timeout", "120s", "--header-timeout", "120s",
+                    "--job-timeout", "120s") as d:
+            # one connection of the first address has a request in progress (it waits for a
+            # computation); everything else only connects
+            busy = post_raw(d.port, hopeless(1), source=ADDRESSES[0])
+            busy.setblocking(False)
+            wait_until("the computation running", lambda: d.metric("isomesh_workers_busy") == 1)
+            socks = {a: [] for a in ADDRESSES}
+            try:
+                for a in ADDRESSES:
+                    for _ in range(PER_ADDRESS):
+                        socks[a].append(connect(d.port, a))
+
+                def held():
+                    return {a: [s for s in ss if not server_closed(s)] for a, ss in socks.items()}
+                # the daemon accepts in its own time: wait until it has settled at the limit
+                # (the busy connection is one of the LIMIT)
+                wait_until("the limit filled", lambda: sum(map(len, held().values())) == LIMIT - 1)
+                shares = {a: len(ss) for a, ss in held().items()}
+                # every address keeps a near-equal share (LIMIT / 10 = 4, the busy one aside)
+                self.assertTrue(all(2 <= n <= 6 for n in shares.values()), shares)
+                self.assertLessEqual(max(shares.values()) - min(shares.values()), 2, shares)
+                self.assertFalse(server_closed(busy))  # idle ones of its address went first
+                # an eleventh address is answered at once, in place of an idle connection
+                r = http_request(d.port, "GET", "/healthz", timeout=10, source="127.0.0.99")
+                self.assertEqual(r.status, 200)
+                self.assertFalse(server_closed(busy))
+                closed = d.metric("isomesh_connections_closed_total", reason="evicted_idle")
+                self.assertGreaterEqual(closed, len(ADDRESSES) * PER_ADDRESS - LIMIT + 1)
+                self.assertEqual(d.metric("isomesh_connections_closed_total",
+                                          reason="evicted_busy"), 0)
+                self.assertLessEqual(d.metric("isomesh_connections"), LIMIT)
+            finally:
+                for ss in socks.values():
+                    for s in ss:
+                        s.close()
+                busy.close()
+
+
+class DeadlineTest(unittest.TestCase):
+    def test_trickled_headers_and_bodies_are_cut_off(self):
+        with Daemon("--workers", "1", "--header-timeout", "2s", "--body-timeout", "2s",
+                    "--conn-timeout", "60s") as d:
+            heads = socket.create_connection(("127.0.0.1", d.port), timeout=10)
+            heads.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\n")
+            body = socket.create_connection(("127.0.0.1", d.port), timeout=10)
+            body.sendall(b"POST /v1/mesh HTTP/1.1\r\nHost: x\r\nContent-Type: application/json"
+                         b"\r\nContent-Length: 100000\r\n\r\n")
+            heads.setblocking(False)
+            body.setblocking(False)
+            try:
+                # a header line, and a body byte, every half second: never idle for MHD's
+                # 60 s timeout; the test gives up (fails) long before that
+                deadline = time.time() + 40
+                i = 0
+                while time.time() < deadline and not (server_closed(heads) and
+                                                      server_closed(body)):
+                    for s, data in ((heads, b"X-Slow-%d: 1\r\n" % i), (body, b" ")):
+                        try:
+                            s.send(data)
+                        except OSError:
+                            pass
+                    i += 1
+                    time.sleep(0.5)
+                self.assertTrue(server_closed(heads), "headers trickled forever")
+                self.assertTrue(server_closed(body), "body trickled forever")
+                self.assertEqual(d.metric("isomesh_connections_closed_total",
+                                          reason="header_deadline"), 1)
+                self.assertEqual(d.metric("isomesh_connections_closed_total",
+                                          reason="body_deadline"), 1)
+                d.log_count("status=408", 1)
+                self.assertIn("closed=body_deadline", d.log())
+            finally:
+                heads.close()
+                body.close()
+            # a request sent in pieces, but within the deadline, is served
+            s = socket.create_connection(("127.0.0.1", d.port), timeout=30)
+            try:
+                for part in (b"GET /healthz HTTP/1.1\r\n", b"Host: x\r\n", b"\r\n"):
+                    s.sendall(part)
+                    time.sleep(0.2)
+                self.assertTrue(s.recv(64).startswith(b"HTTP/1.1 200"))
+            finally:
+                s.close()
+
+
+class ClientLeftTest(unittest.TestCase):
+    def test_a_request_whose_client_left_frees_its_worker_unless_another_waits(self):
+        # one worker, and a job deadline far beyond this test's bounds: only cancelling frees it
+        with Daemon("--workers", "1", "--job-timeout", "600s") as d:
+            # alone: the client leaves, its computation stops, the worker is free again
+            a = post_raw(d.port, hopeless(1))
+            wait_until("the computation running", lambda: d.metric("isomesh_workers_busy") == 1)
+            a.close()
+            wait_until("the client seen gone", lambda: d.metric("isomesh_clients_left_total") == 1)
+            wait_until("its worker stopped",
+                       lambda: d.metric("isomesh_worker_restarts_total", reason="cancel") == 1)
+            wait_until("a worker ready", lambda: d.metric("isomesh_workers_ready") == 1
+                       and d.metric("isomesh_workers_busy") == 0)
+            # shared: two requests wait for the same computation; one leaves, it carries on
+            b1 = post_raw(d.port, hopeless(2))
+            wait_until("the computation running", lambda: d.metric("isomesh_workers_busy") == 1)
+            joins = d.metric("isomesh_singleflight_joins_total")
+            b2 = post_raw(d.port, hopeless(2), source="127.0.0.2")
+            wait_until("the second request joined",
+                       lambda: d.metric("isomesh_singleflight_joins_total") == joins + 1)
+            b1.close()
+            wait_until("the first client seen gone",
+                       lambda: d.metric("isomesh_clients_left_total") == 2)
+            self.assertEqual(d.metric("isomesh_worker_restarts_total", reason="cancel"), 1)
+            self.assertEqual(d.metric("isomesh_workers_busy"), 1)
+            b2.settimeout(0.5)
+            with self.assertRaises(socket.timeout):  # still waiting, not closed
+                b2.recv(1)
+            b2.close()
+            wait_until("the second client seen gone",
+                       lambda: d.metric("isomesh_clients_left_total") == 3)
+            wait_until("the worker stopped",
+                       lambda: d.metric("isomesh_worker_restarts_total", reason="cancel") == 2)
+            # the worker serves another user's small mesh
+            r = http_request(d.port, "POST", "/v1/mesh", sphere(0.61), timeout=120,
+                             source="127.0.0.3")
+            self.assertEqual(r.status, 200)
+            self.assertEqual(d.metric("isomesh_computations_total", outcome="canceled"), 2)
+            d.log_count("closed=client_left", 3)
+
+
+if __name__ == "__main__":
+    unittest.main()
