@@ -1,5 +1,5 @@
-/* job_queue.c — the per-user queue of job_queue.h: a line per user (flights threaded through
- * their own queue links, no allocation per push), a name table of lines, and the two orders.
+/* job_queue.c — the per-user queue of job_queue.h: a line per user (entries threaded through
+ * their own links, no allocation per push), a name table of lines, and the two orders.
  * A line exists while its user has anything queued or running, so the lines are bounded by
  * the queue's capacity plus the workers, and pop scans them (a few dozen on a lab server). */
 #include "server/isomeshd/job_queue.h"
@@ -10,8 +10,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "server/isomeshd/sched.h"
-
 #define NBUCKETS 256
 
 struct ismd_qline {
@@ -19,7 +17,7 @@ struct ismd_qline {
     int queued, running;
     int max_jobs, max_running;     /* as given by the user's latest push */
     unsigned long long last_turn;  /* when this user last got a worker (0 = not yet) */
-    ismd_flight *head, *tail;      /* waiting flights, oldest first */
+    ismd_qentry *head, *tail;      /* waiting entries, oldest first */
     ismd_qline *hnext;             /* name table chain */
     ismd_qline *prev, *next;       /* every line */
 };
@@ -76,10 +74,10 @@ static void line_release(uqueue *x, ismd_qline *l)
     free(l);
 }
 
-static ismd_push q_push(ismd_queue *q, ismd_flight *f, const ismd_user_limits *lim)
+static ismd_push q_push(ismd_queue *q, ismd_qentry *e, const ismd_user_limits *lim)
 {
     uqueue *x = (uqueue *)q;
-    ismd_qline *l = line_get(x, f->user);
+    ismd_qline *l = line_get(x, e->user);
     if (!l)
         return ISMD_PUSH_NO_MEMORY;
     l->max_jobs = lim && lim->max_jobs > 0 ? lim->max_jobs : x->user_jobs;
@@ -92,48 +90,49 @@ static ismd_push q_push(ismd_queue *q, ismd_flight *f, const ismd_user_limits *l
         line_release(x, l);
         return ISMD_PUSH_FULL;
     }
-    f->qline = l;
-    f->qnext = NULL;
-    f->qprev = l->tail;
+    e->line = l;
+    e->next = NULL;
+    e->prev = l->tail;
     if (l->tail)
-        l->tail->qnext = f;
+        l->tail->next = e;
     else
-        l->head = f;
-    l->tail = f;
+        l->head = e;
+    l->tail = e;
     l->queued++;
     x->len++;
-    f->queued = true;
+    e->queued = true;
     return ISMD_PUSH_OK;
 }
 
-static void unlink_queued(uqueue *x, ismd_flight *f)
+static void unlink_queued(uqueue *x, ismd_qentry *e)
 {
-    ismd_qline *l = f->qline;
-    if (f->qprev)
-        f->qprev->qnext = f->qnext;
+    ismd_qline *l = e->line;
+    if (e->prev)
+        e->prev->next = e->next;
     else
-        l->head = f->qnext;
-    if (f->qnext)
-        f->qnext->qprev = f->qprev;
+        l->head = e->next;
+    if (e->next)
+        e->next->prev = e->prev;
     else
-        l->tail = f->qprev;
-    f->qprev = f->qnext = NULL;
-    f->queued = false;
+        l->tail = e->prev;
+    e->prev = e->next = NULL;
+    e->queued = false;
     l->queued--;
     x->len--;
 }
 
-static void q_drop(ismd_queue *q, ismd_flight *f)
+static void q_drop(ismd_queue *q, ismd_qentry *e)
 {
     uqueue *x = (uqueue *)q;
-    ismd_qline *l = f->qline;
+    ismd_qline *l = e->line;
     if (!l)
         return;
-    if (f->queued)
-        unlink_queued(x, f);
-    else if (f->running)
+    if (e->queued)
+        unlink_queued(x, e);
+    else if (e->running)
         l->running--;
-    f->qline = NULL;
+    e->running = false;
+    e->line = NULL;
     line_release(x, l);
 }
 
@@ -150,13 +149,13 @@ static bool fair_before(const ismd_qline *a, const ismd_qline *b)
     return a->last_turn < b->last_turn;
 }
 
-/* fifo: the oldest waiting flight (ids grow with arrival). */
+/* fifo: the oldest waiting entry. */
 static bool fifo_before(const ismd_qline *a, const ismd_qline *b)
 {
-    return a->head->id < b->head->id;
+    return a->head->seq < b->head->seq;
 }
 
-static ismd_flight *pop_with(ismd_queue *q, bool (*before)(const ismd_qline *, const ismd_qline *))
+static ismd_qentry *pop_with(ismd_queue *q, bool (*before)(const ismd_qline *, const ismd_qline *))
 {
     uqueue *x = (uqueue *)q;
     ismd_qline *best = NULL;
@@ -165,19 +164,20 @@ static ismd_flight *pop_with(ismd_queue *q, bool (*before)(const ismd_qline *, c
             best = l;
     if (!best)
         return NULL;
-    ismd_flight *f = best->head;
-    unlink_queued(x, f);
+    ismd_qentry *e = best->head;
+    unlink_queued(x, e);
+    e->running = true;
     best->running++;
     best->last_turn = ++x->turns;
-    return f;
+    return e;
 }
 
-static ismd_flight *fair_pop(ismd_queue *q)
+static ismd_qentry *fair_pop(ismd_queue *q)
 {
     return pop_with(q, fair_before);
 }
 
-static ismd_flight *fifo_pop(ismd_queue *q)
+static ismd_qentry *fifo_pop(ismd_queue *q)
 {
     return pop_with(q, fifo_before);
 }
@@ -196,29 +196,30 @@ static bool fifo_starving(const ismd_queue *q)
     return false; /* the reference order: served as it came, nobody preempted */
 }
 
-static int q_user_running(const ismd_queue *q, const ismd_flight *f)
+static int q_user_running(const ismd_queue *q, const ismd_qentry *e)
 {
     (void)q;
-    return f->qline ? f->qline->running : 0;
+    return e->line ? e->line->running : 0;
 }
 
-static void q_requeue(ismd_queue *q, ismd_flight *f)
+static void q_requeue(ismd_queue *q, ismd_qentry *e)
 {
     uqueue *x = (uqueue *)q;
-    ismd_qline *l = f->qline;
-    if (!l || !f->running)
+    ismd_qline *l = e->line;
+    if (!l || !e->running)
         return;
+    e->running = false;
     l->running--;
-    f->qprev = NULL;
-    f->qnext = l->head;
+    e->prev = NULL;
+    e->next = l->head;
     if (l->head)
-        l->head->qprev = f;
+        l->head->prev = e;
     else
-        l->tail = f;
-    l->head = f;
+        l->tail = e;
+    l->head = e;
     l->queued++;
     x->len++;
-    f->queued = true;
+    e->queued = true;
 }
 
 static size_t q_length(const ismd_queue *q)

@@ -19,9 +19,21 @@
 
 #define ISMD_QUEUE_USER_MAX 64   /* user name, NUL included */
 
-typedef struct ismd_flight ismd_flight;
 typedef struct ismd_queue ismd_queue;
 typedef struct ismd_qline ismd_qline; /* one user's line (private to the queue) */
+
+/* What the queue keeps of one computation: its links in its user's line and its state there.
+ * The scheduler embeds one in each flight (sched.h) and fills user and seq before a push; the
+ * queue reads and writes nothing else of the flight. */
+typedef struct ismd_qentry ismd_qentry;
+struct ismd_qentry {
+    const char *user;          /* its user (kept alive by the owner while on the books) */
+    unsigned long long seq;    /* arrival order: the fifo order */
+    bool queued;               /* waiting in its line */
+    bool running;              /* popped and counted against its user, not yet dropped */
+    ismd_qline *line;          /* NULL: not on the queue's books */
+    ismd_qentry *prev, *next;  /* in its line, oldest first */
+};
 
 typedef enum ismd_queue_order { ISMD_ORDER_FAIR, ISMD_ORDER_FIFO } ismd_queue_order;
 
@@ -45,21 +57,21 @@ typedef struct ismd_user_load {
 
 typedef struct ismd_queue_ops {
     const char *name;
-    /* Queues f in the line of f->user. */
-    ismd_push (*push)(ismd_queue *q, ismd_flight *f, const ismd_user_limits *lim);
-    /* The next flight to run (now counted as running for its user), or NULL. */
-    ismd_flight *(*pop)(ismd_queue *q);
-    /* f leaves the queue's books for good (finished, canceled, past its deadline): a queued
-     * flight leaves its line, a running one stops counting against its user. */
-    void (*drop)(ismd_queue *q, ismd_flight *f);
+    /* Queues e in the line of e->user. */
+    ismd_push (*push)(ismd_queue *q, ismd_qentry *e, const ismd_user_limits *lim);
+    /* The next entry to run (now counted as running for its user), or NULL. */
+    ismd_qentry *(*pop)(ismd_queue *q);
+    /* e leaves the queue's books for good (finished, canceled, past its deadline): a queued
+     * entry leaves its line, a running one stops counting against its user. */
+    void (*drop)(ismd_queue *q, ismd_qentry *e);
     size_t (*length)(const ismd_queue *q);
     /* True when a user with nothing running has a flight waiting that may run (fair order
      * only: the pool then frees a worker from a user holding several, see sched.h). */
     bool (*starving)(const ismd_queue *q);
-    /* Computations of f's user running now. */
-    int (*user_running)(const ismd_queue *q, const ismd_flight *f);
-    /* A running f goes back to the head of its user's line (it was preempted). */
-    void (*requeue)(ismd_queue *q, ismd_flight *f);
+    /* Computations of e's user running now. */
+    int (*user_running)(const ismd_queue *q, const ismd_qentry *e);
+    /* A running e goes back to the head of its user's line (it was preempted). */
+    void (*requeue)(ismd_queue *q, ismd_qentry *e);
     /* Fills up to max users with work; returns how many there are in all. */
     size_t (*users)(const ismd_queue *q, ismd_user_load *out, size_t max);
     void (*destroy)(ismd_queue *q);

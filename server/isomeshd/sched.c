@@ -12,6 +12,9 @@
 
 #include "server/isomeshd/errors.h"
 
+/* The flight a queue entry is embedded in. */
+#define FLIGHT_OF(e) ((ismd_flight *)((char *)(e) - offsetof(ismd_flight, qe)))
+
 bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s,
                      double queue_timeout_s, ismd_metrics *metrics)
 {
@@ -130,9 +133,11 @@ static ismd_submit submit(ismd_sched *s, const char *key, const char *fmt, ism_b
     snprintf(f->fmt, sizeof f->fmt, "%s", fmt);
     snprintf(f->user, sizeof f->user, "%s", user);
     f->waiters.prev = f->waiters.next = &f->waiters;
-    f->id = s->next_id; /* before the push: the fifo order reads it */
+    f->id = s->next_id;
+    f->qe.user = f->user;
+    f->qe.seq = f->id;
     s->queue->slack = idle_workers(s);
-    switch (s->queue->ops->push(s->queue, f, lim)) {
+    switch (s->queue->ops->push(s->queue, &f->qe, lim)) {
     case ISMD_PUSH_OK:
         break;
     case ISMD_PUSH_USER_LIMIT:
@@ -148,7 +153,7 @@ static ismd_submit submit(ismd_sched *s, const char *key, const char *fmt, ism_b
         return ISMD_SUBMIT_NO_MEMORY;
     }
     if (ask_shared && s->shared_begin) { /* admitted; the shared cache is asked first */
-        s->queue->ops->drop(s->queue, f);
+        s->queue->ops->drop(s->queue, &f->qe);
         f->lim = lim ? *lim : (ismd_user_limits){0};
         if (!s->shared_begin(s->shared_ctx, f)) {
             free(f);
@@ -206,7 +211,7 @@ static void flight_free(ismd_sched *s, ismd_flight *f)
     else
         s->all_tail = f->aprev;
     s->nflights--;
-    s->queue->ops->drop(s->queue, f);
+    s->queue->ops->drop(s->queue, &f->qe);
     ism_blob_unref(f->request);
     free(f);
 }
@@ -219,7 +224,7 @@ void ismd_sched_detach(ismd_sched *s, ismd_waiter *w)
     waiter_unlink(w);
     if (f->nwaiters > 0)
         return;
-    if (f->queued || f->shared) {
+    if (f->qe.queued || f->shared) {
         atomic_fetch_add(&s->metrics->computations[ISMD_OUT_CANCELED], 1);
         flight_free(s, f);
         publish_queue(s);
@@ -230,7 +235,7 @@ void ismd_sched_detach(ismd_sched *s, ismd_waiter *w)
 
 void ismd_sched_finish(ismd_sched *s, ismd_flight *f, const ismd_result *r, ismd_outcome o)
 {
-    bool was_queued = f->queued;
+    bool was_queued = f->qe.queued;
     atomic_fetch_add(&s->metrics->computations[o], 1);
     while (f->waiters.next != &f->waiters) {
         ismd_waiter *w = f->waiters.next;
@@ -279,9 +284,10 @@ void ismd_sched_progress(ismd_sched *s, ismd_flight *f, double fraction)
 
 ismd_flight *ismd_sched_next(ismd_sched *s)
 {
-    ismd_flight *f = s->queue->ops->pop(s->queue);
-    if (!f)
+    ismd_qentry *e = s->queue->ops->pop(s->queue);
+    if (!e)
         return NULL;
+    ismd_flight *f = FLIGHT_OF(e);
     publish_queue(s);
     f->running = true;
     f->started_ns = ism_now_ns();
@@ -340,7 +346,7 @@ ismd_flight *ismd_sched_preempt_victim(ismd_sched *s)
     for (ismd_flight *f = s->all_head; f; f = f->anext) {
         if (!f->running)
             continue;
-        int n = q->user_running(s->queue, f);
+        int n = q->user_running(s->queue, &f->qe);
         if (n > best_n || (best && n == best_n && f->started_ns >= best->started_ns)) {
             best = f;
             best_n = n;
@@ -351,7 +357,7 @@ ismd_flight *ismd_sched_preempt_victim(ismd_sched *s)
 
 void ismd_sched_requeue(ismd_sched *s, ismd_flight *f)
 {
-    s->queue->ops->requeue(s->queue, f);
+    s->queue->ops->requeue(s->queue, &f->qe);
     f->running = false;
     f->deadline_ns = ism_now_ns() + seconds_ns(s->queue_timeout_s);
     atomic_fetch_add(&s->metrics->preemptions, 1);
@@ -365,7 +371,7 @@ void ismd_sched_drain(ismd_sched *s)
     ismd_flight *f = s->all_head;
     while (f) {
         ismd_flight *next = f->anext;
-        if (f->queued || f->shared)
+        if (f->qe.queued || f->shared)
             ismd_sched_fail(s, f, 503, "shutting_down",
                             "the server is shutting down; retry on another instance",
                             ISMD_OUT_CANCELED);
@@ -386,7 +392,7 @@ bool ismd_sched_enqueue(ismd_sched *s, ismd_flight *f)
     f->elsewhere = false;
     f->deadline_ns = ism_now_ns() + seconds_ns(s->queue_timeout_s);
     s->queue->slack = idle_workers(s);
-    ismd_push p = s->queue->ops->push(s->queue, f, &f->lim);
+    ismd_push p = s->queue->ops->push(s->queue, &f->qe, &f->lim);
     if (p == ISMD_PUSH_OK) {
         publish_queue(s);
         wake_pool(s);

@@ -34,6 +34,7 @@ typedef struct ismd_result {
     const char *cache;         /* "shared": computed by another daemon (shared_cache.h) */
 } ismd_result;
 
+typedef struct ismd_flight ismd_flight;
 typedef struct ismd_waiter ismd_waiter;
 struct ismd_waiter {
     ismd_waiter *prev, *next;
@@ -50,7 +51,7 @@ struct ismd_flight {
     char fmt[8];
     ism_blob *request;         /* canonical request JSON sent to the worker */
     uint64_t id;               /* job id in worker frames */
-    bool queued, running;
+    bool running;
     bool shared;               /* asking the shared cache first: neither queued nor running */
     bool elsewhere;            /* shared, and running on another daemon (cluster.h) */
     bool canceled;             /* running: to be stopped by the pool, waiters answered 499 */
@@ -64,8 +65,7 @@ struct ismd_flight {
     size_t nwaiters;
     char user[ISMD_QUEUE_USER_MAX]; /* who started it (its queue line and limits) */
     ismd_flight *hnext;        /* name table chain */
-    ismd_qline *qline;         /* queue links (owned by the queue implementation) */
-    ismd_flight *qprev, *qnext;
+    ismd_qentry qe;            /* its place in the queue (job_queue.h); qe.queued: waiting */
     ismd_flight *aprev, *anext;/* list of all flights, oldest first */
 };
 
