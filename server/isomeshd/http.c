@@ -1,11 +1,10 @@
-/* http.c — the request life cycle of http.h: libmicrohttpd set-up, routing on the first call
- * (404, 405, 413 from Content-Length, 415), reading the body within --max-body, answering on a
- * later call, suspending for flights and resuming when they end, one log line and the metrics
- * per request when MHD reports it complete, and the common response headers. */
+/* http.c — the request life cycle of http.h: libmicrohttpd set-up, the first call (route,
+ * then 404, 405, 401, 400, 413 from Content-Length, 415), reading the body within --max-body,
+ * answering on a later call (or closing when the client left a suspended request), one log
+ * line and the metrics per request when MHD reports it complete, and the connection table's
+ * view of every connection (conns.h). */
 #include "server/isomeshd/http.h"
 
-#include <arpa/inet.h>
-#include <jansson.h>
 #include <ctype.h>
 #include <errno.h>
 #include <netinet/in.h>
@@ -17,14 +16,15 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-#include "proto/request.h"
 #include "server/common/log.h"
+#include "server/isomeshd/client_addr.h"
 #include "server/isomeshd/errors.h"
-#include "server/isomeshd/jobs.h"
+#include "server/isomeshd/respond.h"
+#include "server/isomeshd/routes.h"
 
 #define DISCARD_FACTOR 4 /* body bytes we swallow before giving up on a rejected request */
 
-/* ---- headers and responses ----------------------------------------------------------- */
+/* ---- request accessors --------------------------------------------------------------- */
 
 const char *ismd_header(ismd_req *r, const char *name)
 {
@@ -34,366 +34,6 @@ const char *ismd_header(ismd_req *r, const char *name)
 const char *ismd_query(ismd_req *r, const char *name)
 {
     return MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, name);
-}
-
-static void free_blob_cb(void *cls)
-{
-    ism_blob_unref(cls);
-}
-
-struct MHD_Response *ismd_response_blob(ism_blob *b, const char *content_type)
-{
-    struct MHD_Response *resp = MHD_create_response_from_buffer_with_free_callback_cls(
-        b->len, b->data, free_blob_cb, ism_blob_ref(b));
-    if (!resp) {
-        ism_blob_unref(b);
-        return NULL;
-    }
-    if (content_type)
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, content_type);
-    return resp;
-}
-
-struct MHD_Response *ismd_response_text(const char *text, const char *content_type)
-{
-    ism_blob *b = ism_blob_from_str(text);
-    if (!b)
-        return NULL;
-    struct MHD_Response *resp = ismd_response_blob(b, content_type);
-    ism_blob_unref(b);
-    return resp;
-}
-
-enum MHD_Result ismd_send(ismd_req *r, unsigned status, struct MHD_Response *resp)
-{
-    if (!resp)
-        return MHD_NO;
-    const ismd_config *cfg = r->srv->cfg;
-    if (cfg->cors_origin[0]) {
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_ACCESS_CONTROL_ALLOW_ORIGIN, cfg->cors_origin);
-        MHD_add_response_header(resp, "Access-Control-Expose-Headers",
-                                "ETag, Location, X-Cache, Server-Timing, Retry-After, "
-                                "WWW-Authenticate");
-        if (strcmp(cfg->cors_origin, "*") != 0)
-            MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY, "Origin");
-    }
-    MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
-    r->status = status;
-    enum MHD_Result ok = MHD_queue_response(r->conn, status, resp);
-    MHD_destroy_response(resp);
-    return ok;
-}
-
-static enum MHD_Result respond_blob_sized(ismd_req *r, unsigned status, ism_blob *b,
-                                          const char *ctype)
-{
-    struct MHD_Response *resp = ismd_response_blob(b, ctype);
-    r->bytes = b->len;
-    if (resp && (status == 503 || status == 429))
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, "5");
-    if (resp && status == 405 && r->allow)
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, r->allow);
-    if (resp && status == 401)
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_WWW_AUTHENTICATE,
-                                ismd_auth_challenge(&r->who));
-    if (resp && status >= 400)
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
-    return ismd_send(r, status, resp);
-}
-
-enum MHD_Result ismd_respond_error_blob(ismd_req *r, unsigned status, ism_blob *json)
-{
-    return respond_blob_sized(r, status, json, "application/json");
-}
-
-enum MHD_Result ismd_respond_error(ismd_req *r, unsigned status, const char *code,
-                                   const char *message)
-{
-    ism_blob *b = ismd_error_json(code, message, NULL);
-    if (!b)
-        return MHD_NO;
-    enum MHD_Result ok = ismd_respond_error_blob(r, status, b);
-    ism_blob_unref(b);
-    return ok;
-}
-
-enum MHD_Result ismd_respond_json(ismd_req *r, unsigned status, const char *json)
-{
-    ism_blob *b = ism_blob_from_str(json);
-    if (!b)
-        return MHD_NO;
-    enum MHD_Result ok = respond_blob_sized(r, status, b, "application/json");
-    ism_blob_unref(b);
-    return ok;
-}
-
-/* The code and message of a 401 for this caller; counts the rejection. */
-static const char *unauthorized(ismd_req *r, const char **message)
-{
-    atomic_fetch_add(&r->srv->metrics.rejected_unauthorized, 1);
-    if (r->who.state == ISMD_AUTH_INVALID) {
-        *message = "this bearer token is not valid here (mistyped, or revoked)";
-        return "invalid_token";
-    }
-    *message = "this server needs a bearer token: send `Authorization: Bearer TOKEN` "
-               "(its administrator makes one with `isomeshd token add NAME`)";
-    return "unauthorized";
-}
-
-enum MHD_Result ismd_respond_unauthorized(ismd_req *r)
-{
-    const char *message;
-    const char *code = unauthorized(r, &message);
-    return ismd_respond_error(r, 401, code, message);
-}
-
-/* ---- waiting for a flight ------------------------------------------------------------ */
-
-void ismd_req_done(ismd_waiter *w, const ismd_result *res)
-{
-    ismd_req *r = (ismd_req *)((char *)w - offsetof(ismd_req, waiter));
-    r->r_status = res->status;
-    ism_blob_set(&r->r_body, res->body);
-    ism_blob_set(&r->r_stats, res->stats);
-    ism_blob_set(&r->r_features, res->features);
-    r->r_ctype = res->content_type;
-    r->queue_ms = res->queue_ms;
-    r->worker_ms = res->worker_ms;
-    snprintf(r->timing, sizeof r->timing, "%s", res->timing);
-    if (res->cache)
-        r->cache = res->cache; /* "shared": another daemon computed it */
-    r->ready = true;
-    if (r->suspended) {
-        r->suspended = false;
-        atomic_fetch_sub(&r->srv->metrics.suspended_connections, 1);
-        MHD_resume_connection(r->conn);
-    }
-}
-
-enum MHD_Result ismd_wait_for(ismd_req *r, const char *key, const char *fmt,
-                              ism_blob *request, ismd_handler on_ready)
-{
-    ismd_server *s = r->srv;
-    char wanted[ISM_CACHE_NAME_MAX];
-    const char *ext = r->want == ISMD_WANT_STATS      ? "stats.json"
-                      : r->want == ISMD_WANT_FEATURES ? "features.json"
-                                                      : fmt;
-    if (!ism_cache_name(wanted, key, ext))
-        return ismd_respond_error(r, 500, "internal", "bad cache name");
-    bool may_compute = !ismd_auth_lacking(s->auth, &r->who);
-    r->on_ready = on_ready;
-    r->waiter.done = ismd_req_done;
-    r->waiter.progress = NULL;
-    ismd_sched_lock(&s->sched);
-    /* The flight may have ended between the caller's cache lookup and this lock. */
-    ism_blob *hit = ism_cache_get_fast(&s->cache, wanted);
-    if (hit) {
-        ismd_sched_unlock(&s->sched);
-        r->r_status = 200;
-        ism_blob **slot = r->want == ISMD_WANT_STATS      ? &r->r_stats
-                          : r->want == ISMD_WANT_FEATURES ? &r->r_features
-                                                          : &r->r_body;
-        ism_blob_set(slot, hit);
-        ism_blob_unref(hit);
-        r->r_ctype = r->want == ISMD_WANT_MESH ? NULL : "application/json";
-        r->cache = "hit";
-        return on_ready(r);
-    }
-    if (!may_compute) { /* not cached: computing it needs a token */
-        ismd_sched_unlock(&s->sched);
-        return ismd_respond_unauthorized(r);
-    }
-    ismd_user_limits lim = {r->who.max_jobs, r->who.max_running};
-    ismd_submit st = ismd_sched_submit(&s->sched, key, fmt, request, r->who.user, &lim, &r->waiter);
-    if (st == ISMD_SUBMIT_NEW || st == ISMD_SUBMIT_JOINED) {
-        r->suspended = true;
-        r->cache = "miss";
-        atomic_fetch_add(&s->metrics.suspended_connections, 1);
-        MHD_suspend_connection(r->conn);
-        ismd_sched_unlock(&s->sched);
-        return MHD_YES;
-    }
-    ismd_sched_unlock(&s->sched);
-    return ismd_respond_refused(r, st);
-}
-
-/* ?draco=0: the body with "output": {"draco": false} (a plain glb). NULL (and *bad set when
- * the value is neither 0 nor 1, or the body is not a JSON object) when nothing changes. */
-static char *without_draco(ismd_req *r, bool *bad)
-{
-    const char *q = ismd_query(r, "draco");
-    *bad = q && strcmp(q, "0") != 0 && strcmp(q, "1") != 0;
-    if (!q || strcmp(q, "0") != 0)
-        return NULL;
-    json_t *root = json_loadb(r->body ? r->body : "", r->body_len, JSON_REJECT_DUPLICATES, NULL);
-    json_t *out = json_object_get(root, "output");
-    if (json_is_object(root) && !out)
-        json_object_set_new(root, "output", out = json_object());
-    char *text = NULL;
-    if (json_is_object(out) && json_object_set_new(out, "draco", json_false()) == 0)
-        text = json_dumps(root, JSON_COMPACT);
-    json_decref(root);
-    return text; /* NULL: the body as it is, whose decoding then names what is wrong */
-}
-
-ism_blob *ismd_keyed_request(ismd_req *r, enum MHD_Result *ret)
-{
-    long long t0 = ism_now_ns();
-    ism_pipeline_result pr;
-    memset(&pr, 0, sizeof pr);
-    const char *fmt = ismd_query(r, "format");
-    if (fmt && !strcmp(fmt, "json"))
-        fmt = NULL; /* links to every format (routes_mesh.c); the mesh is the request's own */
-    bool bad_draco;
-    char *plain = without_draco(r, &bad_draco);
-    if (bad_draco) {
-        *ret = ismd_respond_error(r, 400, "bad_request", "draco: expected 0 or 1");
-        return NULL;
-    }
-    bool ok = plain ? ism_pipeline_key(plain, strlen(plain), fmt, &r->srv->limits, &pr)
-                    : ism_pipeline_key(r->body ? r->body : "", r->body_len, fmt,
-                                       &r->srv->limits, &pr);
-    free(plain);
-    r->parse_ms = (ism_now_ns() - t0) / 1e6;
-    if (!ok) {
-        unsigned status = pr.status >= 400 && pr.status <= 599 ? (unsigned)pr.status : 400;
-        ism_blob *b = pr.body.len ? ism_blob_copy(pr.body.data, pr.body.len) : NULL;
-        *ret = b ? ismd_respond_error_blob(r, status, b)
-                 : ismd_respond_error(r, status, "bad_request", "the request was not accepted");
-        ism_blob_unref(b);
-        ism_pipeline_result_free(&pr);
-        return NULL;
-    }
-    snprintf(r->key, sizeof r->key, "%s", pr.key);
-    snprintf(r->fmt, sizeof r->fmt, "%s", pr.format);
-    ism_blob *canonical = ism_blob_copy(pr.canonical.data, pr.canonical.len);
-    ism_pipeline_result_free(&pr);
-    *ret = MHD_NO;
-    return canonical;
-}
-
-/* The answer to a computation the scheduler would not take (anything but NEW or JOINED). */
-enum MHD_Result ismd_respond_refused(ismd_req *r, ismd_submit st)
-{
-    switch (st) {
-    case ISMD_SUBMIT_QUEUE_FULL:
-        return ismd_respond_error(r, 503, "queue_full",
-                                  "every worker is busy and the queue is full; retry later");
-    case ISMD_SUBMIT_CLIENT_LIMIT:
-        return ismd_respond_error(r, 429, "too_many_requests",
-                                  "too many computations of yours are queued or running "
-                                  "(--user-jobs); wait for one to finish");
-    case ISMD_SUBMIT_DRAINING:
-        return ismd_respond_error(r, 503, "shutting_down", "the server is shutting down");
-    default:
-        return ismd_respond_error(r, 500, "out_of_memory", "the server ran out of memory");
-    }
-}
-
-/* ---- routing ------------------------------------------------------------------------- */
-
-static bool is_hex(const char *s, size_t n)
-{
-    for (size_t i = 0; i < n; i++)
-        if (!((s[i] >= '0' && s[i] <= '9') || (s[i] >= 'a' && s[i] <= 'f')))
-            return false;
-    return true;
-}
-
-static void set_route(ismd_req *r, ismd_route route, const char *allow, ismd_handler h)
-{
-    r->route = route;
-    r->allow = allow;
-    r->handler = h;
-}
-
-static void not_found(ismd_req *r, ismd_route route)
-{
-    set_route(r, route, NULL, NULL);
-    r->early_status = 404;
-    r->early_code = "not_found";
-    snprintf(r->early_msg, sizeof r->early_msg, "nothing here");
-}
-
-/* /v1/... */
-static void route_v1(ismd_req *r, const char *p)
-{
-    if (!strcmp(p, "mesh")) {
-        set_route(r, ISMD_R_MESH, "POST, OPTIONS", ismd_route_mesh_post);
-        r->wants_body = true;
-    } else if (!strcmp(p, "sweep")) {
-        set_route(r, ISMD_R_SWEEP, "POST, OPTIONS", ismd_route_sweep);
-        r->wants_body = true;
-    } else if (!strcmp(p, "point")) {
-        set_route(r, ISMD_R_POINT, "POST, OPTIONS", ismd_route_point);
-        r->wants_body = true;
-    } else if (!strcmp(p, "box")) {
-        set_route(r, ISMD_R_BOX, "POST, OPTIONS", ismd_route_box);
-        r->wants_body = true;
-    } else if (!strcmp(p, "jobs")) {
-        set_route(r, ISMD_R_JOBS, "GET, HEAD, POST, OPTIONS", ismd_route_jobs_post);
-        r->wants_body = true;
-    } else if (!strncmp(p, "jobs/", 5)) {
-        const char *id = p + 5;
-        size_t n = strcspn(id, "/");
-        if (n != 32 || !is_hex(id, n))
-            return not_found(r, ISMD_R_JOB);
-        memcpy(r->id, id, n);
-        r->id[n] = 0;
-        if (!id[n])
-            set_route(r, ISMD_R_JOB, "GET, HEAD, DELETE, OPTIONS", NULL);
-        else if (!strcmp(id + n, "/events"))
-            set_route(r, ISMD_R_JOB_EVENTS, "GET, OPTIONS", ismd_route_job_events);
-        else
-            not_found(r, ISMD_R_JOB);
-    } else if (!strncmp(p, "meshes/", 7)) {
-        const char *k = p + 7;
-        if (strlen(k) < ISM_KEY_HEX_LEN)
-            return not_found(r, ISMD_R_MESH_FILE);
-        memcpy(r->key, k, ISM_KEY_HEX_LEN);
-        r->key[ISM_KEY_HEX_LEN] = 0;
-        if (!ism_key_valid(r->key))
-            return not_found(r, ISMD_R_MESH_FILE);
-        const char *rest = k + ISM_KEY_HEX_LEN;
-        if (rest[0] == '.' && strlen(rest + 1) < sizeof r->fmt && ism_format_lookup(rest + 1) >= 0) {
-            strcpy(r->fmt, rest + 1);
-            set_route(r, ISMD_R_MESH_FILE, "GET, HEAD, OPTIONS", ismd_route_mesh_get);
-        } else if (!strcmp(rest, "/stats")) {
-            r->want = ISMD_WANT_STATS;
-            set_route(r, ISMD_R_MESH_STATS, "GET, HEAD, OPTIONS", ismd_route_mesh_json);
-        } else if (!strcmp(rest, "/features")) {
-            r->want = ISMD_WANT_FEATURES;
-            set_route(r, ISMD_R_MESH_FEATURES, "GET, HEAD, OPTIONS", ismd_route_mesh_json);
-        } else {
-            not_found(r, ISMD_R_MESH_FILE);
-        }
-    } else if (!strcmp(p, "presets")) {
-        set_route(r, ISMD_R_PRESETS, "GET, HEAD, OPTIONS", ismd_route_doc);
-    } else if (!strcmp(p, "openapi.yaml")) {
-        set_route(r, ISMD_R_OPENAPI, "GET, HEAD, OPTIONS", ismd_route_doc);
-    } else if (!strcmp(p, "request.schema.json")) {
-        set_route(r, ISMD_R_SCHEMA, "GET, HEAD, OPTIONS", ismd_route_doc);
-    } else {
-        not_found(r, ISMD_R_OTHER);
-    }
-}
-
-static void route(ismd_req *r, const char *url)
-{
-    if (!strncmp(url, "/v1/", 4))
-        route_v1(r, url + 4);
-    else if (!strcmp(url, "/healthz"))
-        set_route(r, ISMD_R_HEALTHZ, "GET, HEAD, OPTIONS", ismd_route_health);
-    else if (!strcmp(url, "/readyz"))
-        set_route(r, ISMD_R_READYZ, "GET, HEAD, OPTIONS", ismd_route_health);
-    else if (!strcmp(url, "/metrics"))
-        set_route(r, ISMD_R_METRICS, "GET, HEAD, OPTIONS", ismd_route_metrics);
-    else if (!strncmp(url, "/vendor/three/", 14))
-        set_route(r, ISMD_R_VENDOR, "GET, HEAD, OPTIONS", ismd_route_static);
-    else if (url[0] == '/')
-        set_route(r, ISMD_R_STATIC, "GET, HEAD, OPTIONS", ismd_route_static);
-    else
-        not_found(r, ISMD_R_OTHER);
 }
 
 static bool method_allowed(const char *allow, const char *method)
@@ -429,46 +69,6 @@ static bool json_content_type(const char *ct)
     size_t n = strcspn(ct, "; ");
     return (n == 16 && strncasecmp(ct, "application/json", 16) == 0) ||
            (n == 33 && strncasecmp(ct, "application/x-www-form-urlencoded", 33) == 0);
-}
-
-static void peer_of(struct MHD_Connection *c, char *out, size_t cap)
-{
-    const union MHD_ConnectionInfo *ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
-    snprintf(out, cap, "-");
-    if (!ci || !ci->client_addr)
-        return;
-    const struct sockaddr *sa = ci->client_addr;
-    if (sa->sa_family == AF_INET)
-        inet_ntop(AF_INET, &((const struct sockaddr_in *)sa)->sin_addr, out, (socklen_t)cap);
-    else if (sa->sa_family == AF_INET6)
-        inet_ntop(AF_INET6, &((const struct sockaddr_in6 *)sa)->sin6_addr, out, (socklen_t)cap);
-}
-
-/* Is addr one of the comma-separated addresses in list? */
-static bool in_address_list(const char *list, const char *addr)
-{
-    size_t n = strlen(addr);
-    for (const char *p = list; *p;) {
-        size_t len = strcspn(p, ",");
-        if (len == n && !strncmp(p, addr, n))
-            return true;
-        p += len + (p[len] == ',');
-    }
-    return false;
-}
-
-/* The client: the peer address, or behind a trusted reverse proxy the address it names in
- * X-Real-IP (only a well-formed IP literal is taken; anything else keeps the proxy's). */
-static void client_of(const ismd_server *s, ismd_req *r, char *out, size_t cap)
-{
-    peer_of(r->conn, out, cap);
-    if (!s->cfg->trusted_proxy[0] || !in_address_list(s->cfg->trusted_proxy, out))
-        return;
-    const char *real = ismd_header(r, "X-Real-IP");
-    unsigned char bin[16];
-    if (real && strlen(real) < cap &&
-        (inet_pton(AF_INET, real, bin) == 1 || inet_pton(AF_INET6, real, bin) == 1))
-        snprintf(out, cap, "%s", real);
 }
 
 typedef struct framing {
@@ -514,12 +114,12 @@ static enum MHD_Result first_call(ismd_server *s, struct MHD_Connection *conn, c
     const union MHD_ConnectionInfo *ci = MHD_get_connection_info(conn, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
     r->cn = ci ? ci->socket_context : NULL;
     ismd_conns_request(s->conns, r->cn, r, true); /* a body may follow until the next call */
-    client_of(s, r, r->client, sizeof r->client);
+    ismd_client_address(conn, s->cfg->trusted_proxy, r->client, sizeof r->client);
     ismd_auth_identify(s->auth, ismd_header(r, MHD_HTTP_HEADER_AUTHORIZATION), r->client, &r->who);
     *con_cls = r;
     atomic_fetch_add(&s->open_requests, 1);
 
-    route(r, url);
+    ismd_route_find(r, url);
     if (r->early_status)
         return MHD_YES;
     if (!strcmp(method, "OPTIONS"))
@@ -530,16 +130,11 @@ static enum MHD_Result first_call(ismd_server *s, struct MHD_Connection *conn, c
         r->wants_body = false;
         return MHD_YES;
     }
-    if (r->route == ISMD_R_JOB)
-        r->handler = !strcmp(method, "DELETE") ? ismd_route_job_delete : ismd_route_job_get;
-    if (r->route == ISMD_R_JOBS && strcmp(method, "POST") != 0) {
-        r->handler = ismd_route_jobs_list;
-        r->wants_body = false;
-    }
+    r->handler = ismd_route_handler(r, method, &r->wants_body);
     if (ismd_auth_route_needs_token(s->auth, r->route, method) &&
         ismd_auth_lacking(s->auth, &r->who)) {
         const char *message;
-        const char *code = unauthorized(r, &message);
+        const char *code = ismd_unauthorized(r, &message);
         early(r, 401, code, message); /* the body is never read */
         r->wants_body = false;
         return MHD_YES;
@@ -556,15 +151,8 @@ static enum MHD_Result first_call(ismd_server *s, struct MHD_Connection *conn, c
     if (cl) {
         char *end;
         unsigned long long n = strtoull(cl, &end, 10);
-        if (n > s->cfg->max_body) {
-            char msg[128];
-            snprintf(msg, sizeof msg, "the request body is over the limit of %zu bytes (--max-body)",
-                     s->cfg->max_body);
-            ism_blob *b = ismd_error_json("body_too_large", msg, NULL);
-            enum MHD_Result ok = b ? ismd_respond_error_blob(r, 413, b) : MHD_NO;
-            ism_blob_unref(b);
-            return ok;
-        }
+        if (n > s->cfg->max_body)
+            return ismd_respond_body_too_large(r);
     }
     if (!json_content_type(ismd_header(r, MHD_HTTP_HEADER_CONTENT_TYPE))) {
         early(r, 415, "unsupported_media_type",
@@ -609,21 +197,6 @@ static enum MHD_Result take_body(ismd_req *r, const char *data, size_t *size)
     return MHD_YES;
 }
 
-static enum MHD_Result preflight(ismd_req *r)
-{
-    struct MHD_Response *resp = MHD_create_response_from_buffer(0, "", MHD_RESPMEM_PERSISTENT);
-    if (!resp)
-        return MHD_NO;
-    MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, r->allow);
-    if (r->srv->cfg->cors_origin[0]) {
-        MHD_add_response_header(resp, "Access-Control-Allow-Methods", r->allow);
-        MHD_add_response_header(resp, "Access-Control-Allow-Headers",
-                                "Content-Type, If-None-Match, Authorization, Accept");
-        MHD_add_response_header(resp, "Access-Control-Max-Age", "600");
-    }
-    return ismd_send(r, 204, resp);
-}
-
 static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const char *url,
                                   const char *method, const char *version,
                                   const char *upload_data, size_t *upload_size, void **con_cls)
@@ -647,13 +220,9 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
     if (r->early_status)
         return ismd_respond_error(r, r->early_status, r->early_code, r->early_msg);
     if (!strcmp(r->method, "OPTIONS"))
-        return preflight(r);
-    if (r->body_too_big) {
-        char msg[128];
-        snprintf(msg, sizeof msg, "the request body is over the limit of %zu bytes (--max-body)",
-                 s->cfg->max_body);
-        return ismd_respond_error(r, 413, "body_too_large", msg);
-    }
+        return ismd_respond_preflight(r);
+    if (r->body_too_big)
+        return ismd_respond_body_too_large(r);
     return r->handler(r);
 }
 
@@ -781,7 +350,7 @@ static void on_connection(void *cls, struct MHD_Connection *conn, void **socket_
     }
     const union MHD_ConnectionInfo *ci = MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CONNECTION_FD);
     char addr[64];
-    peer_of(conn, addr, sizeof addr);
+    ismd_peer_address(conn, addr, sizeof addr);
     *socket_context = ci ? ismd_conns_opened(s->conns, ci->connect_fd, addr) : NULL;
 }
 

@@ -9,7 +9,10 @@
 #include <time.h>
 
 #include "server/isomeshd/cluster.h"
+#include "server/isomeshd/flight_wait.h"
 #include "server/isomeshd/http.h"
+#include "server/isomeshd/respond.h"
+#include "server/isomeshd/routes.h"
 #include "server/isomeshd/jobs.h"
 #include "server/isomeshd/shared_cache.h"
 

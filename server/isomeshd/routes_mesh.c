@@ -12,7 +12,10 @@
 #include "proto/request.h"
 #include "server/common/log.h"
 #include "server/isomeshd/errors.h"
+#include "server/isomeshd/flight_wait.h"
 #include "server/isomeshd/http.h"
+#include "server/isomeshd/respond.h"
+#include "server/isomeshd/routes.h"
 #include "server/isomeshd/worker_pool.h"
 
 #define IMMUTABLE "public, max-age=31536000, immutable"

@@ -9,6 +9,8 @@
 #include <string.h>
 
 #include "server/isomeshd/http.h"
+#include "server/isomeshd/respond.h"
+#include "server/isomeshd/routes.h"
 #include "server/isomeshd/user_metrics.h"
 #include "proto/box_fit.h"
 #include "proto/point_probe.h"

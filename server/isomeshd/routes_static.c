@@ -8,6 +8,8 @@
 #include <unistd.h>
 
 #include "server/isomeshd/http.h"
+#include "server/isomeshd/respond.h"
+#include "server/isomeshd/routes.h"
 
 static enum MHD_Result plain_404(ismd_req *r)
 {

@@ -11,6 +11,8 @@
 #include <string.h>
 
 #include "server/isomeshd/http.h"
+#include "server/isomeshd/respond.h"
+#include "server/isomeshd/routes.h"
 #include "server/isomeshd/jobs.h"
 
 /* Points per sweep: each one is a job record and (unless cached) a computation, and a user's

@@ -1,10 +1,10 @@
-/* worker_pool.c — the worker processes and the pool thread of worker_pool.h: spawning with
- * limits, non-blocking frame I/O over pipes driven by epoll, dispatch from the queue, results
- * into the cache, deadlines, cancellation, crash detection, respawn with back-off, shutdown. */
+/* worker_pool.c — the pool thread of worker_pool.h: its epoll loop over the workers' pipes
+ * (non-blocking frame I/O), dispatch from the queue, results into the cache, deadlines,
+ * cancellation, preemption, crash detection, respawn with back-off, shutdown. Starting a
+ * process is worker_spawn.h's; Server-Timing entries from the stats server_timing.h's. */
 #include "server/isomeshd/worker_pool.h"
 
 #include <errno.h>
-#include <fcntl.h>
 #include <limits.h>
 #include <pthread.h>
 #include <signal.h>
@@ -14,9 +14,6 @@
 #include <string.h>
 #include <sys/epoll.h>
 #include <sys/eventfd.h>
-#include <sys/prctl.h>
-#include <sys/resource.h>
-#include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -26,21 +23,14 @@
 #include "server/common/pipeline.h"
 #include "server/common/log.h"
 #include "server/isomeshd/errors.h"
+#include "server/isomeshd/server_timing.h"
+#include "server/isomeshd/worker_spawn.h"
 
-#define RESULT_PIPE_SIZE (1 << 20)
 #define QUICK_DEATH_NS 1000000000LL       /* a worker dying sooner than this backs off */
 #define MAX_BACKOFF_NS 5000000000LL
 #define STOP_WAIT_NS 2000000000LL          /* workers get this long to exit on EOF */
 #define MAX_EXPIRED 64
 #define START_TIMEOUT_NS 15000000000LL     /* a worker silent this long after exec is killed */
-
-/* AddressSanitizer reserves terabytes of address space for its shadow memory, so a build
- * with it cannot run under RLIMIT_AS: such builds skip the limit (and say so at start-up). */
-#if defined(__SANITIZE_ADDRESS__)
-#define SANITIZER_BUILD 1
-#else
-#define SANITIZER_BUILD 0
-#endif
 
 typedef enum wstate { W_EMPTY, W_STARTING, W_IDLE, W_BUSY, W_DYING } wstate;
 
@@ -96,65 +86,16 @@ static void wake(void *ctx)
     (void)r; /* EAGAIN means a wake-up is already pending */
 }
 
-static void set_nonblock(int fd)
-{
-    int fl = fcntl(fd, F_GETFL);
-    if (fl >= 0)
-        fcntl(fd, F_SETFL, fl | O_NONBLOCK);
-}
-
 /* ---- spawning ------------------------------------------------------------------------ */
-
-/* In the child between fork and exec: async-signal-safe calls only. */
-static void child_exec(const ismd_pool_config *cfg, pid_t parent, int in_fd, int out_fd)
-{
-    sigset_t none;
-    sigemptyset(&none);
-    sigprocmask(SIG_SETMASK, &none, NULL);
-    struct sigaction dfl = {.sa_handler = SIG_DFL};
-    sigaction(SIGPIPE, &dfl, NULL);
-    if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != parent)
-        _exit(126);
-    if (cfg->job_memory && !SANITIZER_BUILD) {
-        struct rlimit rl = {cfg->job_memory, cfg->job_memory};
-        if (setrlimit(RLIMIT_AS, &rl) != 0)
-            _exit(126);
-    }
-    if (dup2(in_fd, STDIN_FILENO) < 0 || dup2(out_fd, STDOUT_FILENO) < 0)
-        _exit(126);
-    syscall(SYS_close_range, 3u, ~0u, 0); /* everything else is O_CLOEXEC anyway */
-    char *const argv[] = {"isomesh", "--worker", NULL};
-    execv(cfg->worker_path, argv);
-    _exit(127);
-}
 
 static bool spawn(ismd_pool *p, worker *w)
 {
-    int req[2], res[2];
-    if (pipe2(req, O_CLOEXEC) != 0)
+    ismd_worker_proc proc;
+    if (!ismd_worker_spawn(&p->cfg, &proc))
         return false;
-    if (pipe2(res, O_CLOEXEC) != 0) {
-        close(req[0]);
-        close(req[1]);
-        return false;
-    }
-    pid_t parent = getpid();
-    pid_t pid = fork();
-    if (pid == 0)
-        child_exec(&p->cfg, parent, req[0], res[1]);
-    close(req[0]);
-    close(res[1]);
-    if (pid < 0) {
-        close(req[1]);
-        close(res[0]);
-        return false;
-    }
-    fcntl(res[0], F_SETPIPE_SZ, RESULT_PIPE_SIZE); /* fewer wake-ups for big results */
-    set_nonblock(req[1]);
-    set_nonblock(res[0]);
-    w->pid = pid;
-    w->to_fd = req[1];
-    w->from_fd = res[0];
+    w->pid = proc.pid;
+    w->to_fd = proc.to_fd;
+    w->from_fd = proc.from_fd;
     w->want_out = false;
     w->state = W_STARTING;
     w->flight = NULL;
@@ -213,16 +154,6 @@ static void kill_worker(ismd_pool *p, worker *w, ismd_restart_reason why)
     publish_workers(p);
 }
 
-static void describe_exit(int status, char *buf, size_t cap)
-{
-    if (WIFSIGNALED(status))
-        snprintf(buf, cap, "killed by signal %d (%s)", WTERMSIG(status), strsignal(WTERMSIG(status)));
-    else if (WIFEXITED(status))
-        snprintf(buf, cap, "exited with status %d", WEXITSTATUS(status));
-    else
-        snprintf(buf, cap, "ended");
-}
-
 /* Fails the flight w computes (its waiters get the error) and forgets it. */
 static void fail_flight(ismd_pool *p, worker *w, unsigned status, const char *code,
                         const char *message, ismd_outcome outcome)
@@ -245,7 +176,7 @@ static void worker_gone(ismd_pool *p, worker *w)
     while (waitpid(w->pid, &status, 0) < 0 && errno == EINTR)
         ;
     char how[128];
-    describe_exit(status, how, sizeof how);
+    ismd_worker_describe_exit(status, how, sizeof how);
     long long now = ism_now_ns();
     bool intended = w->state == W_DYING;
     if (!intended) {
@@ -285,10 +216,6 @@ static void protocol_error(ismd_pool *p, worker *w, const char *what)
                     "the worker sent a malformed answer; it has been replaced", ISMD_OUT_CRASH);
     kill_worker(p, w, ISMD_RESTART_PROTOCOL);
 }
-
-/* Pulls "phase;dur=ms" pairs for Server-Timing out of the stats JSON's "timings_ms" object
- * when the pipeline provides one (a flat object of numbers); leaves out empty otherwise. */
-static void stats_timing(const ism_blob *stats, char *out, size_t cap);
 
 /* A newly computed surface goes into every tier under its surface key, so any format of it,
  * on any daemon sharing the tiers, is encoded from it. */
@@ -372,7 +299,7 @@ static void on_result(ismd_pool *p, worker *w, const ism_frame *fr)
             r.stats = stats;
             r.features = features;
             if (fres.polygonised) /* an encoding alone: the stats' phases are not this run's */
-                stats_timing(stats, r.timing, sizeof r.timing);
+                ismd_server_timing(stats, r.timing, sizeof r.timing);
         }
     } else {
         r.body = ism_blob_copy(fres.body, fres.body_len);
@@ -759,7 +686,7 @@ ismd_pool *ismd_pool_start(const ismd_pool_config *cfg, ismd_sched *sched, ism_c
                  cfg->worker_path, strerror(errno));
         return NULL;
     }
-    if (SANITIZER_BUILD && cfg->job_memory)
+    if (ISMD_SANITIZER_BUILD && cfg->job_memory)
         ism_logf(ISM_LOG_WARN, "job_memory_ignored",
                  "AddressSanitizer build: workers run without RLIMIT_AS");
     ismd_pool *p = calloc(1, sizeof *p);
@@ -816,41 +743,4 @@ void ismd_pool_stop(ismd_pool *p, double grace_s)
     close(p->evfd);
     free(p->w);
     free(p);
-}
-
-/* ---- Server-Timing from stats -------------------------------------------------------- */
-
-#include <jansson.h>
-
-static void stats_timing(const ism_blob *stats, char *out, size_t cap)
-{
-    out[0] = 0;
-    if (!stats)
-        return;
-    json_t *root = json_loadb((const char *)stats->data, stats->len, 0, NULL);
-    json_t *t = root ? json_object_get(root, "timings_ms") : NULL;
-    size_t used = 0;
-    const char *k;
-    json_t *v;
-    if (json_is_object(t)) {
-        json_object_foreach(t, k, v) {
-            if (!json_is_number(v) || !strcmp(k, "total"))
-                continue; /* the daemon adds its own total */
-            bool token = *k != 0;
-            for (const char *c = k; *c; c++)
-                if (!((*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') ||
-                      (*c >= '0' && *c <= '9') || *c == '_' || *c == '-'))
-                    token = false;
-            if (!token)
-                continue;
-            int n = snprintf(out + used, cap - used, "%s%s;dur=%.3f", used ? ", " : "", k,
-                             json_number_value(v));
-            if (n < 0 || (size_t)n >= cap - used) {
-                out[used] = 0;
-                break;
-            }
-            used += (size_t)n;
-        }
-    }
-    json_decref(root);
 }

@@ -1,0 +1,161 @@
+/* respond.c — the response helpers of respond.h: responses sharing a blob's bytes, the
+ * common headers (CORS, nosniff, Retry-After, Allow, WWW-Authenticate, no-store on errors),
+ * the JSON error bodies, and the status recorded for the log and the metrics. */
+#include "server/isomeshd/respond.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#include "server/isomeshd/errors.h"
+
+static void free_blob_cb(void *cls)
+{
+    ism_blob_unref(cls);
+}
+
+struct MHD_Response *ismd_response_blob(ism_blob *b, const char *content_type)
+{
+    struct MHD_Response *resp = MHD_create_response_from_buffer_with_free_callback_cls(
+        b->len, b->data, free_blob_cb, ism_blob_ref(b));
+    if (!resp) {
+        ism_blob_unref(b);
+        return NULL;
+    }
+    if (content_type)
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, content_type);
+    return resp;
+}
+
+struct MHD_Response *ismd_response_text(const char *text, const char *content_type)
+{
+    ism_blob *b = ism_blob_from_str(text);
+    if (!b)
+        return NULL;
+    struct MHD_Response *resp = ismd_response_blob(b, content_type);
+    ism_blob_unref(b);
+    return resp;
+}
+
+enum MHD_Result ismd_send(ismd_req *r, unsigned status, struct MHD_Response *resp)
+{
+    if (!resp)
+        return MHD_NO;
+    const ismd_config *cfg = r->srv->cfg;
+    if (cfg->cors_origin[0]) {
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_ACCESS_CONTROL_ALLOW_ORIGIN, cfg->cors_origin);
+        MHD_add_response_header(resp, "Access-Control-Expose-Headers",
+                                "ETag, Location, X-Cache, Server-Timing, Retry-After, "
+                                "WWW-Authenticate");
+        if (strcmp(cfg->cors_origin, "*") != 0)
+            MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY, "Origin");
+    }
+    MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
+    r->status = status;
+    enum MHD_Result ok = MHD_queue_response(r->conn, status, resp);
+    MHD_destroy_response(resp);
+    return ok;
+}
+
+static enum MHD_Result respond_blob_sized(ismd_req *r, unsigned status, ism_blob *b,
+                                          const char *ctype)
+{
+    struct MHD_Response *resp = ismd_response_blob(b, ctype);
+    r->bytes = b->len;
+    if (resp && (status == 503 || status == 429))
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, "5");
+    if (resp && status == 405 && r->allow)
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, r->allow);
+    if (resp && status == 401)
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_WWW_AUTHENTICATE,
+                                ismd_auth_challenge(&r->who));
+    if (resp && status >= 400)
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
+    return ismd_send(r, status, resp);
+}
+
+enum MHD_Result ismd_respond_error_blob(ismd_req *r, unsigned status, ism_blob *json)
+{
+    return respond_blob_sized(r, status, json, "application/json");
+}
+
+enum MHD_Result ismd_respond_error(ismd_req *r, unsigned status, const char *code,
+                                   const char *message)
+{
+    ism_blob *b = ismd_error_json(code, message, NULL);
+    if (!b)
+        return MHD_NO;
+    enum MHD_Result ok = ismd_respond_error_blob(r, status, b);
+    ism_blob_unref(b);
+    return ok;
+}
+
+enum MHD_Result ismd_respond_json(ismd_req *r, unsigned status, const char *json)
+{
+    ism_blob *b = ism_blob_from_str(json);
+    if (!b)
+        return MHD_NO;
+    enum MHD_Result ok = respond_blob_sized(r, status, b, "application/json");
+    ism_blob_unref(b);
+    return ok;
+}
+
+const char *ismd_unauthorized(ismd_req *r, const char **message)
+{
+    atomic_fetch_add(&r->srv->metrics.rejected_unauthorized, 1);
+    if (r->who.state == ISMD_AUTH_INVALID) {
+        *message = "this bearer token is not valid here (mistyped, or revoked)";
+        return "invalid_token";
+    }
+    *message = "this server needs a bearer token: send `Authorization: Bearer TOKEN` "
+               "(its administrator makes one with `isomeshd token add NAME`)";
+    return "unauthorized";
+}
+
+enum MHD_Result ismd_respond_unauthorized(ismd_req *r)
+{
+    const char *message;
+    const char *code = ismd_unauthorized(r, &message);
+    return ismd_respond_error(r, 401, code, message);
+}
+
+enum MHD_Result ismd_respond_refused(ismd_req *r, ismd_submit st)
+{
+    switch (st) {
+    case ISMD_SUBMIT_QUEUE_FULL:
+        return ismd_respond_error(r, 503, "queue_full",
+                                  "every worker is busy and the queue is full; retry later");
+    case ISMD_SUBMIT_CLIENT_LIMIT:
+        return ismd_respond_error(r, 429, "too_many_requests",
+                                  "too many computations of yours are queued or running "
+                                  "(--user-jobs); wait for one to finish");
+    case ISMD_SUBMIT_DRAINING:
+        return ismd_respond_error(r, 503, "shutting_down", "the server is shutting down");
+    default:
+        return ismd_respond_error(r, 500, "out_of_memory", "the server ran out of memory");
+    }
+}
+
+
+enum MHD_Result ismd_respond_preflight(ismd_req *r)
+{
+    struct MHD_Response *resp = MHD_create_response_from_buffer(0, "", MHD_RESPMEM_PERSISTENT);
+    if (!resp)
+        return MHD_NO;
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, r->allow);
+    if (r->srv->cfg->cors_origin[0]) {
+        MHD_add_response_header(resp, "Access-Control-Allow-Methods", r->allow);
+        MHD_add_response_header(resp, "Access-Control-Allow-Headers",
+                                "Content-Type, If-None-Match, Authorization, Accept");
+        MHD_add_response_header(resp, "Access-Control-Max-Age", "600");
+    }
+    return ismd_send(r, 204, resp);
+}
+
+
+enum MHD_Result ismd_respond_body_too_large(ismd_req *r)
+{
+    char msg[128];
+    snprintf(msg, sizeof msg, "the request body is over the limit of %zu bytes (--max-body)",
+             r->srv->cfg->max_body);
+    return ismd_respond_error(r, 413, "body_too_large", msg);
+}

@@ -1,0 +1,32 @@
+/* respond.h — answering a request: responses that share a blob's bytes, and helpers that
+ * add the common headers, record the status and size for the log and the metrics, and queue
+ * the response. Each returns what the handler returns. */
+#ifndef ISMD_RESPOND_H
+#define ISMD_RESPOND_H
+
+#include "server/isomeshd/http.h"
+
+/* Adds CORS and nosniff headers, records status and size, queues and releases resp. */
+enum MHD_Result ismd_send(ismd_req *r, unsigned status, struct MHD_Response *resp);
+/* A response sharing b's bytes (b gets one more reference, dropped when MHD is done). */
+struct MHD_Response *ismd_response_blob(ism_blob *b, const char *content_type);
+struct MHD_Response *ismd_response_text(const char *text, const char *content_type);
+enum MHD_Result ismd_respond_error(ismd_req *r, unsigned status, const char *code,
+                                   const char *message);
+/* An error whose JSON body is already made (e.g. the pipeline's). */
+enum MHD_Result ismd_respond_error_blob(ismd_req *r, unsigned status, ism_blob *json);
+enum MHD_Result ismd_respond_json(ismd_req *r, unsigned status, const char *json);
+/* 401 with WWW-Authenticate: the caller needs a (valid) bearer token. */
+enum MHD_Result ismd_respond_unauthorized(ismd_req *r);
+/* 503, 429 or 500 for a computation the scheduler refused (ismd_sched_submit's answer). */
+enum MHD_Result ismd_respond_refused(ismd_req *r, ismd_submit st);
+
+/* The code and message of a 401 for r's caller (a missing or an invalid token); counts the
+ * rejection. */
+const char *ismd_unauthorized(ismd_req *r, const char **message);
+/* 204 to an OPTIONS request: Allow, and the CORS preflight headers when CORS is on. */
+enum MHD_Result ismd_respond_preflight(ismd_req *r);
+/* 413: the body is over --max-body. */
+enum MHD_Result ismd_respond_body_too_large(ismd_req *r);
+
+#endif
