@@ -30,6 +30,17 @@ def sanitizer_build(path):
     return b"__asan_init" in out
 
 
+def server_closed(s):
+    """True when the server closed (or reset) the non-blocking socket s; False while it is
+    open with nothing to read."""
+    try:
+        return s.recv(4096) == b""
+    except BlockingIOError:
+        return False
+    except OSError:
+        return True
+
+
 def raw_status(port, data, timeout=10):
     """Sends raw bytes on a new connection; the status code of the answer, or None when the
     server closed without one."""

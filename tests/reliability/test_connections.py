@@ -20,21 +20,11 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from reltools import Daemon, http_request, sphere, wait_until  # noqa: E402
+from reltools import Daemon, http_request, server_closed, sphere, wait_until  # noqa: E402
 
 ADDRESSES = ["127.0.0.%d" % i for i in range(2, 12)]
 LIMIT = 40          # --max-connections: small, so the test opens few sockets
 PER_ADDRESS = 10    # each address opens this many (under --client-conns 12): 100 > LIMIT
-
-
-def server_closed(s):
-    """True when the server closed (or reset) s."""
-    try:
-        return s.recv(4096) == b""
-    except BlockingIOError:
-        return False
-    except OSError:
-        return True
 
 
 def connect(port, source):

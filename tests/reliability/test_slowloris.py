@@ -12,7 +12,7 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from reltools import QUICK, Daemon, OtherUser, request, sphere  # noqa: E402
+from reltools import QUICK, Daemon, OtherUser, request, server_closed, sphere  # noqa: E402
 
 ATTACKERS = ["127.0.0.2", "127.0.0.3", "127.0.0.4", "127.0.0.5"]
 PER_ADDRESS = 60 if QUICK else 100
@@ -25,16 +25,6 @@ def open_slow(port, source):
     s.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\n")
     s.setblocking(False)
     return s
-
-
-def server_closed(s):
-    """True when the server closed (or reset) the connection."""
-    try:
-        return s.recv(4096) == b""
-    except BlockingIOError:
-        return False
-    except OSError:
-        return True
 
 
 class SlowlorisTest(unittest.TestCase):
