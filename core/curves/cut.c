@@ -4,43 +4,20 @@
  * the crossing is first interpolated linearly, then moved onto f = g = 0 by Newton. An edge
  * already lying on an earlier curve is split at the crossing of the two curves (Newton on
  * f, g₁, g₂), and its cut edge replaced by the two halves. */
-#include "core/curves/cut.h"
+#include "core/curves/cut_internal.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include "core/singular/key_map.h"
 #include "core/util/grow.h"
 
-/* First capacity of the growable arrays: a cut has hundreds of edges even for one plane section at depth 6. */
-#define CUT_FIRST 256
-
-#define NONE UINT32_MAX
+#define NONE CUT_NONE
 /* Newton may move a split point at most this many lengths of its edge (further means it
  * ran to another part of the curve). */
 #define CUT_MAX_MOVE_EDGES 2.0
 /* Bisection steps for the fallback start on an edge (2^-40 of the edge). */
 #define CUT_BISECT_STEPS 40
 
-typedef struct cut_state {
-    ism_cut_eval *ev;
-    ism_mesh *m;
-    ism_cut *c;
-    double tol;
-    ism_key_map split;       /* edge key -> index into split_v */
-    uint32_t *split_v;
-    size_t cap_split;
-    ism_key_map onmap;       /* cut edge key -> index into c->edges (fn NONE: replaced) */
-    uint32_t *vcurve;        /* per vertex: the first function it lies on, NONE when none */
-    size_t cap_vcurve;
-    size_t cap_edges;
-    double *gv;              /* g at the vertices of the current function */
-    double *reach;           /* per vertex: its longest edge (how far Newton may move a point
-                                of its edges: the polygoniser's vertices near a crease may lie
-                                that far off the surface) */
-    signed char *sg;
-} cut_state;
-
-static uint64_t edge_key(uint32_t a, uint32_t b)
+uint64_t cut_edge_key(uint32_t a, uint32_t b)
 {
     return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
 }
@@ -51,7 +28,7 @@ void ism_cut_free(ism_cut *c)
     memset(c, 0, sizeof *c);
 }
 
-static bool set_vcurve(cut_state *s, uint32_t v, uint32_t fn)
+bool cut_set_vcurve(cut_state *s, uint32_t v, uint32_t fn)
 {
     size_t old = s->cap_vcurve;
     if (!ism_grow((void **)&s->vcurve, &s->cap_vcurve, (size_t)v + 1, sizeof *s->vcurve, CUT_FIRST))
@@ -63,16 +40,15 @@ static bool set_vcurve(cut_state *s, uint32_t v, uint32_t fn)
     return true;
 }
 
-static uint32_t vcurve_of(const cut_state *s, uint32_t v)
+uint32_t cut_vcurve_of(const cut_state *s, uint32_t v)
 {
     return v < s->cap_vcurve ? s->vcurve[v] : NONE;
 }
 
-/* Records edge a-b as lying on curve fn (once). */
-static bool add_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t fn)
+bool cut_add_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t fn)
 {
     bool added;
-    uint32_t i = ism_key_map_add(&s->onmap, edge_key(a, b), &added);
+    uint32_t i = ism_key_map_add(&s->onmap, cut_edge_key(a, b), &added);
     if (i == ISM_KEY_NONE)
         return false;
     if (!added)
@@ -84,14 +60,22 @@ static bool add_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t fn)
     return true;
 }
 
+bool cut_split_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t v, uint32_t fn)
+{
+    uint32_t e = ism_key_map_find(&s->onmap, cut_edge_key(a, b));
+    if (e != ISM_KEY_NONE)
+        s->c->edges[e].fn = NONE;
+    return cut_add_cut_edge(s, a, v, fn) && cut_add_cut_edge(s, v, b, fn);
+}
+
 /* The earlier curve edge a-b lies on, or NONE. */
 static uint32_t edge_curve(const cut_state *s, uint32_t a, uint32_t b)
 {
-    uint32_t i = ism_key_map_find(&s->onmap, edge_key(a, b));
+    uint32_t i = ism_key_map_find(&s->onmap, cut_edge_key(a, b));
     return i == ISM_KEY_NONE ? NONE : s->c->edges[i].fn;
 }
 
-static void normal_at(cut_state *s, const double p[3], const float ref[3], float out[3])
+void cut_normal_at(cut_state *s, const double p[3], const float ref[3], float out[3])
 {
     double g[3];
     ism_eval_gradient(s->ev->f, s->ev->fws, p[0], p[1], p[2], g);
@@ -146,7 +130,7 @@ static void segment_root(cut_state *s, size_t k, const double a[3], const double
 static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
 {
     bool added;
-    uint32_t i = ism_key_map_add(&s->split, edge_key(u, w), &added);
+    uint32_t i = ism_key_map_add(&s->split, cut_edge_key(u, w), &added);
     if (i == ISM_KEY_NONE)
         return NONE;
     if (!added)
@@ -166,16 +150,12 @@ static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
         refine_point(s, j, k, len, p);
     }
     float nrm[3];
-    normal_at(s, p, s->m->normal + 3 * (size_t)u, nrm);
+    cut_normal_at(s, p, s->m->normal + 3 * (size_t)u, nrm);
     uint32_t v = ism_mesh_add_vertex(s->m, p, nrm);
-    if (v == NONE || !set_vcurve(s, v, (uint32_t)k))
+    if (v == NONE || !cut_set_vcurve(s, v, (uint32_t)k))
         return NONE;
-    if (j != NONE) { /* the earlier curve's edge is now two */
-        uint32_t e = ism_key_map_find(&s->onmap, edge_key(u, w));
-        s->c->edges[e].fn = NONE;
-        if (!add_cut_edge(s, u, v, j) || !add_cut_edge(s, v, w, j))
-            return NONE;
-    }
+    if (j != NONE && !cut_split_cut_edge(s, u, w, v, j)) /* the earlier curve's edge */
+        return NONE;
     s->split_v[i] = v;
     return v;
 }
@@ -205,7 +185,7 @@ static bool split_triangle(cut_state *s, size_t k, const uint32_t t[3])
     if (!pos || !neg) {
         for (int i = 0; i < 3; i++)
             if (sg[i] == 0 && sg[(i + 1) % 3] == 0 && sg[(i + 2) % 3] != 0 &&
-                !add_cut_edge(s, t[i], t[(i + 1) % 3], fn))
+                !cut_add_cut_edge(s, t[i], t[(i + 1) % 3], fn))
                 return false;
         return emit(s->m, t[0], t[1], t[2]);
     }
@@ -213,14 +193,14 @@ static bool split_triangle(cut_state *s, size_t k, const uint32_t t[3])
         if (sg[i] == 0) {
             uint32_t z = t[i], u = t[(i + 1) % 3], w = t[(i + 2) % 3];
             uint32_t p = split_vertex(s, k, u, w);
-            return p != NONE && add_cut_edge(s, z, p, fn) && emit(s->m, z, u, p) &&
+            return p != NONE && cut_add_cut_edge(s, z, p, fn) && emit(s->m, z, u, p) &&
                    emit(s->m, z, p, w);
         }
     for (int i = 0; i < 3; i++) /* the lone corner on its side */
         if (sg[i] != sg[(i + 1) % 3] && sg[i] != sg[(i + 2) % 3]) {
             uint32_t l = t[i], u = t[(i + 1) % 3], w = t[(i + 2) % 3];
             uint32_t p = split_vertex(s, k, l, u), q = split_vertex(s, k, l, w);
-            if (p == NONE || q == NONE || !add_cut_edge(s, p, q, fn) || !emit(s->m, l, p, q))
+            if (p == NONE || q == NONE || !cut_add_cut_edge(s, p, q, fn) || !emit(s->m, l, p, q))
                 return false;
             if (dist2(s->m, p, w) <= dist2(s->m, u, q)) /* the shorter diagonal */
                 return emit(s->m, p, u, w) && emit(s->m, p, w, q);
@@ -229,18 +209,36 @@ static bool split_triangle(cut_state *s, size_t k, const uint32_t t[3])
     return false;
 }
 
-/* Per vertex: its longest edge (0 for a vertex no triangle uses). NULL when out of memory. */
-static double *longest_edges(const ism_mesh *m)
+/* Per vertex: its longest edge into len (0 for a vertex no triangle uses). */
+static void longest_edges(const ism_mesh *m, double *len)
 {
-    double *len = calloc(m->nverts + 1, sizeof *len);
-    for (size_t t = 0; len && t < m->ntris; t++)
+    memset(len, 0, m->nverts * sizeof *len);
+    for (size_t t = 0; t < m->ntris; t++)
         for (int i = 0; i < 3; i++) {
             uint32_t a = m->tri[3 * t + i], b = m->tri[3 * t + (i + 1) % 3];
             double d = sqrt(dist2(m, a, b));
             len[a] = d > len[a] ? d : len[a];
             len[b] = d > len[b] ? d : len[b];
         }
-    return len;
+}
+
+bool cut_grow_vertex_arrays(cut_state *s)
+{
+    size_t need = s->m->nverts + 1, n = 2 * need;
+    if (need <= s->cap_gv)
+        return true;
+    double *gv = realloc(s->gv, n * sizeof *gv);
+    if (gv)
+        s->gv = gv;
+    double *reach = gv ? realloc(s->reach, n * sizeof *reach) : NULL;
+    if (reach)
+        s->reach = reach;
+    signed char *sg = reach ? realloc(s->sg, n) : NULL;
+    if (!sg)
+        return false;
+    s->sg = sg;
+    s->cap_gv = n;
+    return true;
 }
 
 /* Signs of g_k at the vertices; those on the curve are put on it (and on an earlier curve
@@ -248,22 +246,16 @@ static double *longest_edges(const ism_mesh *m)
 static bool classify(cut_state *s, size_t k)
 {
     ism_mesh *m = s->m;
-    free(s->gv);
-    free(s->sg);
-    s->gv = malloc((m->nverts ? m->nverts : 1) * sizeof *s->gv);
-    s->sg = malloc(m->nverts ? m->nverts : 1);
-    if (!s->gv || !s->sg)
+    if (!cut_grow_vertex_arrays(s))
         return false;
     ism_cut_g_batch(s->ev, k, m->pos, m->nverts, s->gv);
     for (size_t v = 0; v < m->nverts; v++)
         s->sg[v] = (signed char)((s->gv[v] > 0) - (s->gv[v] < 0));
-    free(s->reach);
-    if (!(s->reach = longest_edges(m)))
-        return false;
+    longest_edges(m, s->reach);
     for (size_t v = 0; v < m->nverts; v++)
         if (s->gv[v] == 0) {
-            refine_point(s, vcurve_of(s, (uint32_t)v), k, s->reach[v], m->pos + 3 * v);
-            if (!set_vcurve(s, (uint32_t)v, (uint32_t)k))
+            refine_point(s, cut_vcurve_of(s, (uint32_t)v), k, s->reach[v], m->pos + 3 * v);
+            if (!cut_set_vcurve(s, (uint32_t)v, (uint32_t)k))
                 return false;
         }
     return true;
@@ -271,7 +263,7 @@ static bool classify(cut_state *s, size_t k)
 
 static bool cut_one(cut_state *s, size_t k)
 {
-    if (!classify(s, k))
+    if (!classify(s, k) || !cut_tangencies(s, k))
         return false;
     ism_mesh *m = s->m;
     size_t nt = m->ntris;

@@ -100,6 +100,35 @@ double ism_cut_g(ism_cut_eval *ev, size_t k, const double p[3], double grad[3])
     return v;
 }
 
+double ism_cut_g_hessian(ism_cut_eval *ev, size_t k, const double p[3], double h, double grad[3],
+                         double hess[6])
+{
+    const ism_cut_fn *fn = &ev->fns[k];
+    double v = ism_cut_g(ev, k, p, grad);
+    memset(hess, 0, 6 * sizeof *hess);
+    if (fn->kind == ISM_CUT_SILHOUETTE || fn->kind == ISM_CUT_CREASE) {
+        double d[3][3]; /* d[c]: (∇g(p + h e_c) − ∇g(p − h e_c)) / 2h, column c */
+        for (int c = 0; c < 3; c++) {
+            double q[3] = {p[0], p[1], p[2]}, gp[3], gm[3];
+            q[c] = p[c] + h;
+            ism_cut_g(ev, k, q, gp);
+            q[c] = p[c] - h;
+            ism_cut_g(ev, k, q, gm);
+            for (int r = 0; r < 3; r++)
+                d[c][r] = (gp[r] - gm[r]) / (2 * h);
+        }
+        static const int at[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
+        for (int i = 0; i < 6; i++) /* symmetrised */
+            hess[i] = 0.5 * (d[at[i][0]][at[i][1]] + d[at[i][1]][at[i][0]]);
+        return v;
+    }
+    if (fn->tape) {
+        double g[3];
+        ism_eval_hessian(fn->tape, ev->gws[k], p[0], p[1], p[2], g, hess);
+    }
+    return v;
+}
+
 bool ism_cut_g_batch(ism_cut_eval *ev, size_t k, const double *pos, size_t n, double *out)
 {
     const ism_cut_fn *fn = &ev->fns[k];

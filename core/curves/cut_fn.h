@@ -41,6 +41,11 @@ void ism_cut_eval_free(ism_cut_eval *ev);
 /* g_k at p, with its gradient when grad is not NULL. */
 double ism_cut_g(ism_cut_eval *ev, size_t k, const double p[3], double grad[3]);
 
+/* g_k, its gradient and Hessian (xx xy xz yy yz zz) at p: exact for a tape (a plane's is
+ * zero); a silhouette's or a crease's by central differences of its gradient, step h. */
+double ism_cut_g_hessian(ism_cut_eval *ev, size_t k, const double p[3], double h, double grad[3],
+                         double hess[6]);
+
 /* g_k at n points (pos: 3 per point) into out, in batches where g is a tape or a plane:
  * the same values as ism_cut_g up to the order of the sum's rounding. */
 bool ism_cut_g_batch(ism_cut_eval *ev, size_t k, const double *pos, size_t n, double *out);

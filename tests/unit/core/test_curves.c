@@ -6,7 +6,10 @@
  * circles of radius r and two half-tori (annuli: χ = 0, two boundary cycles) of area
  * 2π²Rr, cut by z = 0 the two equators of lengths 2π(R ∓ r). Every curve vertex lies
  * within 1e-10 × the diagonal of both surfaces, and mesh edges run along the curves:
- * the midpoints of the curve edges lie on the plane to rounding. */
+ * the midpoints of the curve edges lie on the plane to rounding. Tangencies in every box:
+ * Viviani's curve has its degree-4 node at (1, 0, 0) within 1e-9 × the diagonal, one curve,
+ * 2 edges, 3 faces; two circles on the sphere that touch at (0.8, 0, 0.6) meet in one
+ * crossing of degree 4 with 3 faces of the caps' closed-form areas. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <string.h>
@@ -387,16 +390,17 @@ static void viviani(int which)
                 "branch" : "loop") : "-", a->nvertices ? a->vertices[0].degree : 0, a->ncurves,
                 a->nfaces, len, want);
     cr_assert_float_eq(len, want, LENGTH_REL * want);
-    /* Known gap: the surfaces are tangent at (1, 0, 0), and only when a mesh vertex lies
-     * there (the symmetric box) does the cut make it the self-crossing vertex; off the
-     * lattice the two lobes join through the tangency (one loop, 2 faces instead of 3). */
-    if (which == 0) { /* one curve, a degree-4 vertex at (1, 0, 0), three faces */
-        cr_assert_eq(a->nfaces, 3);
-        cr_assert_eq(a->ncurves, 1);
-        cr_assert_eq(a->nvertices, 1);
-        cr_assert_eq(a->vertices[0].degree, 4);
-        cr_assert_float_eq(r.m.pos[3 * (size_t)a->vertices[0].v], 1.0, 1e-12);
-    }
+    /* The surfaces are tangent at (1, 0, 0), a node of the curve found from the equations
+     * in every box: one curve, a degree-4 vertex there, three faces (two lobes, the rest). */
+    cr_assert_eq(a->nfaces, 3);
+    cr_assert_eq(a->ncurves, 1);
+    cr_assert_eq(a->nvertices, 1);
+    cr_assert_eq(a->nedges, 2);
+    cr_assert_eq(a->vertices[0].degree, 4);
+    cr_assert_eq(a->vertices[0].type, ISM_ARR_BRANCH);
+    const double *p = r.m.pos + 3 * (size_t)a->vertices[0].v, node[3] = {1, 0, 0};
+    double err = sqrt((p[0] - node[0]) * (p[0] - node[0]) + p[1] * p[1] + p[2] * p[2]);
+    cr_assert_leq(err, 1e-9 * r.diag, "node off by %g", err);
     run_free(&r);
     ism_tape_free(g);
 }
@@ -404,3 +408,57 @@ static void viviani(int which)
 Test(curves, viviani) { viviani(0); }
 Test(curves, viviani_shift_1e3) { viviani(1); }
 Test(curves, viviani_shift_037) { viviani(2); }
+
+/* ---- two curves that touch: the unit sphere cut by the sphere x² + y² + (z − 1)² = 0.8
+ * (the circle z = 0.6 of radius 0.8) and by the plane x = 0.8 (the circle of radius 0.6
+ * round the x axis), tangent at (0.8, 0, 0.6). The caps z ≥ 0.6 and x ≥ 0.8 meet only
+ * there: one crossing of degree 4, two loops, three faces (areas 2π·0.4, 2π·0.2 and the
+ * rest), whichever curve is cut first. ---- */
+
+static const pf_surface second_sphere = {"x^2 + y^2 + (z - 1)^2 - 0.8", NULL, 0, NULL, 0};
+
+static void touching_circles(int which, bool plane_first)
+{
+    const double base[6] = {-1.3, -1.3, -1.3, 1.3, 1.3, 1.3};
+    double box[6];
+    shifted(base, which, 8, box);
+    ism_tape *g = pf_compile(&second_sphere);
+    ism_cut_fn sph = {.tape = g, .kind = ISM_CUT_INTERSECTION}, pl = plane(1, 0, 0, 0.8);
+    ism_cut_fn fns[2] = {plane_first ? pl : sph, plane_first ? sph : pl};
+    cut_run r;
+    run(&sphere, box, fns, 2, &r);
+    const ism_arrangement *a = &r.arr;
+    cr_log_info("touching %d %d: %zu V, %zu E, %zu F, %zu curves", which, plane_first,
+                a->nvertices, a->nedges, a->nfaces, a->ncurves);
+    cr_assert_eq(a->nvertices, 1);
+    cr_assert_eq(a->nedges, 2);
+    cr_assert_eq(a->nfaces, 3);
+    cr_assert_eq(a->ncurves, 2);
+    cr_assert_eq(a->vertices[0].type, ISM_ARR_CROSSING);
+    cr_assert_eq(a->vertices[0].degree, 4);
+    const double *p = r.m.pos + 3 * (size_t)a->vertices[0].v;
+    double err = sqrt((p[0] - 0.8) * (p[0] - 0.8) + p[1] * p[1] + (p[2] - 0.6) * (p[2] - 0.6));
+    cr_assert_leq(err, 1e-9 * r.diag, "touching point off by %g", err);
+    double want[3] = {2 * M_PI * 0.2, 2 * M_PI * 0.4, 4 * M_PI - 2 * M_PI * 0.6}, got[3];
+    for (size_t f = 0; f < 3; f++)
+        got[f] = a->faces[f].area;
+    for (int i = 0; i < 3; i++) /* sorted ascending */
+        for (int j = i + 1; j < 3; j++)
+            if (got[j] < got[i]) {
+                double t = got[i];
+                got[i] = got[j];
+                got[j] = t;
+            }
+    for (int i = 0; i < 3; i++)
+        cr_assert_float_eq(got[i], want[i], AREA_REL * want[i], "face %d: %g", i, got[i]);
+    run_free(&r);
+    ism_tape_free(g);
+}
+
+Test(curves, touching_circles)
+{
+    for (int w = 0; w < 3; w++) {
+        touching_circles(w, false);
+        touching_circles(w, true);
+    }
+}

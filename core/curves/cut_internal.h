@@ -1,0 +1,59 @@
+/* cut_internal.h — what the cut's files share (not public): the state of cutting the mesh
+ * along one function after another, and the small operations on it that the tangency
+ * points (tangency.c) use too. */
+#ifndef ISM_CUT_INTERNAL_H
+#define ISM_CUT_INTERNAL_H
+
+#include "core/curves/cut.h"
+#include "core/singular/key_map.h"
+
+#define CUT_NONE UINT32_MAX
+/* First capacity of the growable arrays: a cut has hundreds of edges even for one plane
+ * section at depth 6. */
+#define CUT_FIRST 256
+
+typedef struct cut_state {
+    ism_cut_eval *ev;
+    ism_mesh *m;
+    ism_cut *c;
+    double tol;
+    ism_key_map split;       /* edge key -> index into split_v */
+    uint32_t *split_v;
+    size_t cap_split;
+    ism_key_map onmap;       /* cut edge key -> index into c->edges (fn CUT_NONE: replaced) */
+    uint32_t *vcurve;        /* per vertex: the first function it lies on, CUT_NONE when none */
+    size_t cap_vcurve;
+    size_t cap_edges;
+    double *gv;              /* g at the vertices of the current function */
+    double *reach;           /* per vertex: its longest edge (how far Newton may move a point
+                                of its edges: the polygoniser's vertices near a crease may lie
+                                that far off the surface) */
+    signed char *sg;
+    size_t cap_gv;           /* room in gv, reach and sg */
+} cut_state;
+
+uint64_t cut_edge_key(uint32_t a, uint32_t b);
+
+/* Notes that vertex v lies on curve fn (the first such curve is kept). */
+bool cut_set_vcurve(cut_state *s, uint32_t v, uint32_t fn);
+uint32_t cut_vcurve_of(const cut_state *s, uint32_t v);
+
+/* Records edge a-b as lying on curve fn (once). */
+bool cut_add_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t fn);
+
+/* Replaces the cut edge a-b (on curve fn) by a-v and v-b. */
+bool cut_split_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t v, uint32_t fn);
+
+/* The unit normal ∇f/|∇f| at p, oriented like ref. */
+void cut_normal_at(cut_state *s, const double p[3], const float ref[3], float out[3]);
+
+/* Room in gv, reach and sg for the mesh's vertices. */
+bool cut_grow_vertex_arrays(cut_state *s);
+
+/* Finds where g_k = 0 touches the surface or an earlier curve (critical.h) and makes each
+ * point a mesh vertex on which g_k is taken as exactly 0, so the cut meets there: a node of
+ * degree 4 on the surface, a touching crossing on an earlier curve. Runs after g_k's signs
+ * are known, before the triangles are split. False when out of memory. */
+bool cut_tangencies(cut_state *s, size_t k);
+
+#endif

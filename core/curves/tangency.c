@@ -1,0 +1,362 @@
+/* tangency.c — tangency points made mesh vertices before g_k cuts the mesh, so the cut meets
+ * there whatever the mesh: seeds from the mesh, points from the equations.
+ *
+ * Seeds: a vertex where g_k has a discrete saddle (the values of its link go up and down
+ * round it at least twice) near g_k = 0, and a vertex of an earlier curve's chain where g_k
+ * has a discrete extremum along the chain near 0. From each seed Newton on the Lagrange
+ * system (critical.c) finds the critical point of g_k on the surface, or on the earlier
+ * curve; where g_k is 0 there (within the curve precision) it is a tangency and becomes a
+ * vertex on which g_k is taken as exactly 0:
+ *   - on the surface (a node of the curve), the vertex of the seed's star nearest the point
+ *     is moved onto it, the nearest whose triangles keep their orientation and whose link's
+ *     signs of g_k change at least four times (both branches of the node leave it);
+ *   - on an earlier curve, the chain edge it lies on is split at it (or the chain vertex
+ *     moved onto it when it is that close), a crossing of the two curves. */
+#include "core/curves/critical.h"
+#include "core/curves/cut_internal.h"
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "core/util/grow.h"
+
+#define NONE CUT_NONE
+/* A seed's |g_k| may be at most this many times the largest difference of g_k to its
+ * neighbours: a critical value of 0 lies within about a ring of a vertex whose value is
+ * that small (at a quadratic critical point the nearest vertex holds at most a quarter of
+ * the neighbours' differences). */
+#define TANG_SEED_SPAN 4.0
+/* Newton may move a seed at most this many of its longest edges. */
+#define TANG_MAX_MOVE_EDGES 2.0
+/* Difference step of the Hessians of silhouettes and creases, × the seed's longest edge. */
+#define TANG_FD_STEP_REL 1e-4
+/* s->tol is a thousandth of the curve precision (curves.c); a critical point whose g_k
+ * lies within the precision is a tangency. */
+#define TANG_ACCEPT_TOLS 1e3
+/* At most this many tangencies per function: each costs passes over the triangles; beyond
+ * it g_k touches the surface along whole curves (degenerate), and the cut goes on without. */
+#define TANG_MAX_PER_FN 64
+/* A moved vertex's triangles must keep their normals within 60° of where they were. */
+#define TANG_MIN_COS 0.5
+/* A tangency this close (in edge fractions) to a chain vertex moves that vertex onto it
+ * rather than splitting the edge into a sliver. */
+#define TANG_CHAIN_SNAP 0.1
+/* Seeds tried per function (Newton from each): bounds the cost on a mesh full of noise. */
+#define TANG_MAX_SEEDS 4096
+
+typedef struct tangent {
+    double p[3];
+    uint32_t seed; /* mesh vertex */
+    uint32_t j;    /* the earlier curve, NONE on the surface */
+} tangent;
+
+typedef struct tang_state {
+    cut_state *s;
+    size_t k;
+    tangent t[TANG_MAX_PER_FN];
+    size_t n;
+    size_t seeds;
+    uint32_t *nbr;   /* per vertex: its two chain neighbours (chain seeds) */
+} tang_state;
+
+/* Whether w's value is above v's (ties broken by index: a symbolic perturbation). */
+static bool above(const double *g, uint32_t v, uint32_t w)
+{
+    return g[w] > g[v] || (g[w] == g[v] && w > v);
+}
+
+static double dist2(const double *a, const double *b)
+{
+    double d = 0;
+    for (int c = 0; c < 3; c++)
+        d += (a[c] - b[c]) * (a[c] - b[c]);
+    return d;
+}
+
+/* Newton from the seed vertex v (on curve j or on the surface); the point kept when it is a
+ * new tangency. */
+static void try_seed(tang_state *ts, uint32_t v, uint32_t j)
+{
+    cut_state *s = ts->s;
+    if (ts->n == TANG_MAX_PER_FN || ts->seeds++ == TANG_MAX_SEEDS)
+        return;
+    double p[3], dist, r = s->reach[v];
+    memcpy(p, s->m->pos + 3 * (size_t)v, sizeof p);
+    size_t jj = j == NONE ? ISM_CUT_NO_CURVE : j;
+    if (!ism_cut_critical(s->ev, ts->k, jj, s->tol, TANG_MAX_MOVE_EDGES * r,
+                          TANG_FD_STEP_REL * r, p, &dist) ||
+        !(dist <= TANG_ACCEPT_TOLS * s->tol))
+        return;
+    double same = TANG_ACCEPT_TOLS * s->tol;
+    for (size_t i = 0; i < ts->n; i++)
+        if (dist2(ts->t[i].p, p) <= same * same)
+            return;
+    ts->t[ts->n++] = (tangent){{p[0], p[1], p[2]}, v, j};
+}
+
+/* Discrete saddles of g_k near 0 (vertices on no earlier curve). */
+static bool surface_seeds(tang_state *ts)
+{
+    cut_state *s = ts->s;
+    const ism_mesh *m = s->m;
+    const double *g = s->gv;
+    uint8_t *changes = calloc(m->nverts + 1, 1);
+    double *spread = calloc(m->nverts + 1, sizeof *spread);
+    bool ok = changes && spread;
+    for (size_t t = 0; ok && t < m->ntris; t++)
+        for (int i = 0; i < 3; i++) {
+            uint32_t v = m->tri[3 * t + i], u = m->tri[3 * t + (i + 1) % 3],
+                     w = m->tri[3 * t + (i + 2) % 3];
+            if (above(g, v, u) != above(g, v, w) && changes[v] < UINT8_MAX)
+                changes[v]++;
+            spread[v] = fmax(spread[v], fmax(fabs(g[u] - g[v]), fabs(g[w] - g[v])));
+        }
+    for (size_t v = 0; ok && v < m->nverts; v++)
+        if (changes[v] >= 4 && fabs(g[v]) <= TANG_SEED_SPAN * spread[v] &&
+            cut_vcurve_of(s, (uint32_t)v) == NONE)
+            try_seed(ts, (uint32_t)v, NONE);
+    free(changes);
+    free(spread);
+    return ok;
+}
+
+/* Discrete extrema of g_k near 0 along the chains of earlier curves: vertices with two cut
+ * edges, both of one function, both neighbours above (or both below). */
+static bool chain_seeds(tang_state *ts)
+{
+    cut_state *s = ts->s;
+    const ism_cut *c = s->c;
+    const double *g = s->gv;
+    size_t nv = s->m->nverts;
+    uint32_t *fn = malloc((nv + 1) * sizeof *fn);
+    uint8_t *deg = calloc(nv + 1, 1), *up = calloc(nv + 1, 1);
+    double *spread = calloc(nv + 1, sizeof *spread);
+    ts->nbr = malloc(2 * (nv + 1) * sizeof *ts->nbr);
+    bool ok = fn && deg && up && spread && ts->nbr;
+    if (ok)
+        memset(fn, 0xff, (nv + 1) * sizeof *fn);
+    for (size_t i = 0; ok && i < c->nedges; i++) {
+        const ism_cut_edge *e = &c->edges[i];
+        if (e->fn == NONE)
+            continue;
+        for (int end = 0; end < 2; end++) {
+            uint32_t v = end ? e->b : e->a, w = end ? e->a : e->b;
+            if (fn[v] != NONE && fn[v] != e->fn)
+                deg[v] = UINT8_MAX; /* two curves meet here: not a seed */
+            fn[v] = e->fn;
+            if (deg[v] < 2)
+                ts->nbr[2 * (size_t)v + deg[v]] = w;
+            if (deg[v] < UINT8_MAX)
+                deg[v]++;
+            up[v] += above(g, v, w);
+            spread[v] = fmax(spread[v], fabs(g[w] - g[v]));
+        }
+    }
+    for (size_t v = 0; ok && v < nv; v++)
+        if (deg[v] == 2 && up[v] != 1 && fabs(g[v]) <= TANG_SEED_SPAN * spread[v])
+            try_seed(ts, (uint32_t)v, fn[v]);
+    free(fn);
+    free(deg);
+    free(up);
+    free(spread);
+    return ok;
+}
+
+/* The triangles with a corner in the star of v (its 2-ring of triangles) into *out. */
+static bool ring_triangles(const ism_mesh *m, uint32_t v, uint32_t **out, size_t *n)
+{
+    uint8_t *mark = calloc(m->nverts + 1, 1);
+    if (!mark)
+        return false;
+    mark[v] = 1;
+    for (size_t t = 0; t < m->ntris; t++) {
+        const uint32_t *tv = m->tri + 3 * t;
+        if (tv[0] == v || tv[1] == v || tv[2] == v)
+            mark[tv[0]] = mark[tv[1]] = mark[tv[2]] = 2;
+    }
+    size_t cap = 0;
+    *n = 0;
+    bool ok = true;
+    for (size_t t = 0; ok && t < m->ntris; t++) {
+        const uint32_t *tv = m->tri + 3 * t;
+        if (!mark[tv[0]] && !mark[tv[1]] && !mark[tv[2]])
+            continue;
+        ok = ism_grow((void **)out, &cap, *n + 1, sizeof **out, CUT_FIRST);
+        if (ok)
+            (*out)[(*n)++] = (uint32_t)t;
+    }
+    free(mark);
+    return ok;
+}
+
+static void tri_normal(const ism_mesh *m, const uint32_t *tv, uint32_t moved, const double *p,
+                       double n[3])
+{
+    const double *q[3];
+    for (int i = 0; i < 3; i++)
+        q[i] = tv[i] == moved ? p : m->pos + 3 * (size_t)tv[i];
+    double u[3], w[3];
+    for (int c = 0; c < 3; c++) {
+        u[c] = q[1][c] - q[0][c];
+        w[c] = q[2][c] - q[0][c];
+    }
+    n[0] = u[1] * w[2] - u[2] * w[1];
+    n[1] = u[2] * w[0] - u[0] * w[2];
+    n[2] = u[0] * w[1] - u[1] * w[0];
+}
+
+/* Whether u may move to p: its triangles keep their orientation, and (need_node) g_k's
+ * signs round it change at least four times once u is on the curve. */
+static bool can_move(const cut_state *s, const uint32_t *tris, size_t nt, uint32_t u,
+                     const double p[3], bool need_node)
+{
+    const ism_mesh *m = s->m;
+    int changes = 0;
+    for (size_t i = 0; i < nt; i++) {
+        const uint32_t *tv = m->tri + 3 * (size_t)tris[i];
+        int at = tv[0] == u ? 0 : tv[1] == u ? 1 : tv[2] == u ? 2 : -1;
+        if (at < 0)
+            continue;
+        double a[3], b[3];
+        tri_normal(m, tv, NONE, NULL, a);
+        tri_normal(m, tv, u, p, b);
+        double ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        if (!(ab > TANG_MIN_COS * sqrt(dist2(a, (double[3]){0, 0, 0}) *
+                                       dist2(b, (double[3]){0, 0, 0}))))
+            return false;
+        changes += s->sg[tv[(at + 1) % 3]] * s->sg[tv[(at + 2) % 3]] < 0;
+    }
+    return !need_node || changes >= 4;
+}
+
+/* Puts vertex u at p, on curve k (g_k taken as 0 there). */
+static bool move_vertex(cut_state *s, size_t k, uint32_t u, const double p[3])
+{
+    float nrm[3];
+    cut_normal_at(s, p, s->m->normal + 3 * (size_t)u, nrm);
+    memcpy(s->m->pos + 3 * (size_t)u, p, 3 * sizeof *p);
+    memcpy(s->m->normal + 3 * (size_t)u, nrm, sizeof nrm);
+    s->gv[u] = 0;
+    s->sg[u] = 0;
+    return cut_set_vcurve(s, u, (uint32_t)k);
+}
+
+typedef struct candidate {
+    double d2;
+    uint32_t v;
+} candidate;
+
+static int cmp_candidate(const void *x, const void *y)
+{
+    const candidate *a = x, *b = y;
+    if (a->d2 != b->d2)
+        return a->d2 < b->d2 ? -1 : 1;
+    return (a->v > b->v) - (a->v < b->v);
+}
+
+/* A node on the surface: the nearest movable vertex of the seed's star moved onto it. */
+static bool place_on_surface(cut_state *s, size_t k, const tangent *t)
+{
+    uint32_t *tris = NULL;
+    size_t nt = 0, nc = 0;
+    if (!ring_triangles(s->m, t->seed, &tris, &nt))
+        return false;
+    candidate *cand = malloc((3 * nt + 1) * sizeof *cand);
+    bool ok = cand != NULL;
+    for (size_t i = 0; ok && i < nt; i++) {
+        const uint32_t *tv = s->m->tri + 3 * (size_t)tris[i];
+        if (tv[0] != t->seed && tv[1] != t->seed && tv[2] != t->seed)
+            continue;
+        for (int c = 0; c < 3; c++)
+            cand[nc++] = (candidate){dist2(s->m->pos + 3 * (size_t)tv[c], t->p), tv[c]};
+    }
+    if (ok)
+        qsort(cand, nc, sizeof *cand, cmp_candidate);
+    for (size_t i = 0; ok && i < nc; i++) {
+        if ((i && cand[i].v == cand[i - 1].v) || cut_vcurve_of(s, cand[i].v) != NONE)
+            continue;
+        if (can_move(s, tris, nt, cand[i].v, t->p, true)) {
+            ok = move_vertex(s, k, cand[i].v, t->p);
+            break;
+        }
+    }
+    free(cand);
+    free(tris);
+    return ok; /* when no vertex can take it the cut goes on as the mesh allows */
+}
+
+/* Splits every triangle with edge a-b at the new vertex x (winding kept). */
+static bool split_triangles_at(ism_mesh *m, uint32_t a, uint32_t b, uint32_t x)
+{
+    size_t nt = m->ntris;
+    for (size_t t = 0; t < nt; t++) {
+        uint32_t *tv = m->tri + 3 * t;
+        for (int i = 0; i < 3; i++) {
+            uint32_t u = tv[i], w = tv[(i + 1) % 3], o = tv[(i + 2) % 3];
+            if (!((u == a && w == b) || (u == b && w == a)))
+                continue;
+            tv[(i + 1) % 3] = x; /* (u, x, o) in place, (x, w, o) appended */
+            if (!ism_mesh_add_triangle(m, x, w, o))
+                return false;
+            tv = m->tri + 3 * t; /* the array may have moved */
+            break;
+        }
+    }
+    return true;
+}
+
+/* A touching crossing with the earlier curve j: its chain edge from the seed split at the
+ * point, or a chain vertex moved onto it when it lies that close. */
+static bool place_on_curve(tang_state *ts, const tangent *t)
+{
+    cut_state *s = ts->s;
+    ism_mesh *m = s->m;
+    uint32_t v = t->seed, w = NONE;
+    double best = -INFINITY, tw = 0;
+    for (int i = 0; i < 2; i++) { /* the neighbour on whose side the point lies */
+        uint32_t u = ts->nbr[2 * (size_t)v + i];
+        const double *a = m->pos + 3 * (size_t)v, *b = m->pos + 3 * (size_t)u;
+        double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, q = 0, l2 = 0;
+        for (int c = 0; c < 3; c++) {
+            q += (t->p[c] - a[c]) * d[c];
+            l2 += d[c] * d[c];
+        }
+        double par = l2 > 0 ? q / l2 : 0;
+        if (par > best) {
+            best = par;
+            w = u;
+            tw = par;
+        }
+    }
+    uint32_t snap = tw <= TANG_CHAIN_SNAP ? v : tw >= 1 - TANG_CHAIN_SNAP ? w : NONE;
+    if (snap != NONE) {
+        if (cut_vcurve_of(s, snap) != t->j)
+            return true;
+        uint32_t *tris = NULL;
+        size_t nt = 0;
+        if (!ring_triangles(m, snap, &tris, &nt))
+            return false;
+        bool can = can_move(s, tris, nt, snap, t->p, false);
+        free(tris);
+        return !can || move_vertex(s, ts->k, snap, t->p);
+    }
+    float nrm[3];
+    cut_normal_at(s, t->p, m->normal + 3 * (size_t)v, nrm);
+    uint32_t x = ism_mesh_add_vertex(m, t->p, nrm);
+    if (x == NONE || !cut_grow_vertex_arrays(s))
+        return false;
+    s->gv[x] = 0;
+    s->sg[x] = 0;
+    s->reach[x] = s->reach[v];
+    return cut_set_vcurve(s, x, t->j) && cut_split_cut_edge(s, v, w, x, t->j) &&
+           split_triangles_at(m, v, w, x);
+}
+
+bool cut_tangencies(cut_state *s, size_t k)
+{
+    tang_state ts = {.s = s, .k = k};
+    bool ok = surface_seeds(&ts) && chain_seeds(&ts);
+    for (size_t i = 0; ok && i < ts.n; i++)
+        ok = ts.t[i].j == NONE ? place_on_surface(s, k, &ts.t[i]) : place_on_curve(&ts, &ts.t[i]);
+    free(ts.nbr);
+    return ok;
+}
