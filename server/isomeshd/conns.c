@@ -154,13 +154,18 @@ static void detach(ismd_conns *t, ismd_conn *c)
 }
 
 /* Closes c for the given reason: it stops counting now, libmicrohttpd frees it when it sees
- * the end of its stream. */
+ * the end of its stream. A request of c's still in progress is told its client is gone: one
+ * suspended for a computation would otherwise hold both until the computation ends. */
 static void cut(ismd_conns *t, ismd_conn *c, const char *why, ismd_cut_reason metric)
 {
     detach(t, c);
     c->cut = why;
     shutdown(c->fd, SHUT_RDWR);
     atomic_fetch_add(&t->m->connections_closed[metric], 1);
+    if (c->phase == P_WORKING && c->req && !c->left_told && t->cfg.client_left) {
+        c->left_told = true;
+        t->cfg.client_left(t->cfg.ctx, c->req);
+    }
 }
 
 /* ---- admission ----------------------------------------------------------------------- */

@@ -33,9 +33,10 @@ typedef struct ismd_conns_config {
     unsigned max;              /* connections held at once (--max-connections) */
     double header_s;           /* --header-timeout */
     double body_s;             /* --body-timeout */
-    /* A request in progress (req as given to ismd_conns_request) whose client closed its
-     * connection. Called from the table's thread with its lock held; must not call back
-     * into the table. */
+    /* A request in progress (req as given to ismd_conns_request) whose connection is gone:
+     * its client closed it, or the table did (evicted at the limit). Called once per request
+     * with the table's lock held, from its thread or from ismd_conns_opened; must not call
+     * back into the table. */
     void (*client_left)(void *ctx, void *req);
     void *ctx;
 } ismd_conns_config;

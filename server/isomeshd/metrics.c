@@ -317,8 +317,9 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
         emit(&o, "isomesh_connections_closed_total{reason=\"%s\"} %llu\n", CUT_LABELS[i],
              ld(&m->connections_closed[i]));
     header(&o, "isomesh_clients_left_total", "counter",
-           "Requests waiting for a computation whose client closed its connection (the "
-           "computation stops when no other request or job waits for it).");
+           "Requests waiting for a computation whose connection closed: by the client, or "
+           "evicted at --max-connections (the computation stops when no other request or job "
+           "waits for it).");
     emit(&o, "isomesh_clients_left_total %llu\n", ld(&m->clients_left));
     header(&o, "isomesh_worker_spawn_failures_total", "counter", "Failed worker starts.");
     emit(&o, "isomesh_worker_spawn_failures_total %llu\n", ld(&m->worker_spawn_failures));
