@@ -88,6 +88,39 @@ class FairLimitTest(unittest.TestCase):
                         s.close()
                 busy.close()
 
+    def test_at_the_limit_a_busy_connection_of_the_largest_holder_gives_way(self):
+        # one address holds every connection, each waiting for the same computation (one
+        # flight); a newcomer takes the place of the newest, which leaves the flight
+        with Daemon("--workers", "1", "--max-connections", "16", "--client-conns", "20",
+                    "--job-timeout", "120s") as d:
+            waiting = []
+            try:
+                # 15 (a scrape of /metrics is the 16th: no eviction while waiting)
+                for _ in range(15):
+                    waiting.append(post_raw(d.port, hopeless(3), source=ADDRESSES[0]))
+                    waiting[-1].setblocking(False)
+                wait_until("every request waiting",
+                           lambda: d.metric("isomesh_suspended_connections") == 15)
+                # the newcomer's second connection meets the limit whether or not the last
+                # scrape's connection is gone yet
+                first = connect(d.port, "127.0.0.99")
+                waiting.append(first)
+                r = http_request(d.port, "GET", "/healthz", timeout=10, source="127.0.0.99")
+                self.assertEqual(r.status, 200)
+                self.assertFalse(server_closed(first))
+                self.assertTrue(any(server_closed(s) for s in waiting[:15]))
+                # (each scrape of /metrics, from another address, evicts one more)
+                m = d.metrics()
+                evicted = m['isomesh_connections_closed_total{reason="evicted_busy"}']
+                self.assertGreaterEqual(evicted, 1)
+                self.assertEqual(m["isomesh_clients_left_total"], evicted)
+                # the computation goes on for the others
+                self.assertEqual(m["isomesh_workers_busy"], 1)
+                self.assertEqual(m['isomesh_worker_restarts_total{reason="cancel"}'], 0)
+            finally:
+                for s in waiting:
+                    s.close()
+
 
 class DeadlineTest(unittest.TestCase):
     def test_trickled_headers_and_bodies_are_cut_off(self):
