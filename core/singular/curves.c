@@ -9,6 +9,7 @@
 #include <string.h>
 #include "core/eval/eval.h"
 #include "core/singular/curve_trace.h"
+#include "core/singular/search.h"
 
 /* Newton's tolerance (× box diagonal): a step this small leaves the point far inside the
  * 1e-9 × diagonal the locus promises (the iteration is quadratic). */
@@ -248,7 +249,9 @@ static bool seed_point(ism_ctracer *tr, const ism_lbox *bx, ism_cpoint *s)
     memcpy(t, s->t, sizeof t);
     ism_cjet_frame(&tr->jet, p0, t, s);
     double fscale = s->hnorm * tr->diag * tr->diag;
-    return s->sigma > 0 && fabs(s->D) >= CURVES_SEED_RANK_REL * s->sigma * s->sigma &&
+    double zero = ISM_SING_HZERO_REL * tr->io->hessian_scale; /* both eigenvalues across */
+    return s->sigma > zero && fabs(s->D) > zero * s->sigma &&
+           fabs(s->D) >= CURVES_SEED_RANK_REL * s->sigma * s->sigma &&
            fabs(s->f) <= CURVES_F_REL * fscale &&
            s->grad <= ISM_CURVE_GRAD_REL * s->hnorm * tr->diag;
 }

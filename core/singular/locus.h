@@ -123,6 +123,9 @@ typedef struct ism_locus {
     char incomplete_why[96];
     uint64_t boxes_visited, evals_interval, evals_jet;
     double time_ms;
+    double hessian_scale;       /* the largest Hessian norm sampled over the box (set by the
+                                   search; 0 = unknown): the absolute scale below which a
+                                   Hessian's eigenvalues count as 0 (search.h, ism_sing_rank) */
 } ism_locus;
 
 void ism_locus_init(ism_locus *l);

@@ -129,7 +129,7 @@ static double across_value(ctx *x, const double q0[3], double e[2][3])
  * touching horns, 384u² + 40uy² + y⁴, dips below 0 across) is degenerate. */
 static int point_type(ctx *x, const double p[3], const double eig[3], double vec[3][3])
 {
-    int rank = ism_sym3_rank(eig, ISM_SING_RANK_REL);
+    int rank = ism_sing_rank(eig, x->out->hessian_scale);
     if (rank == 3)
         return (eig[0] > 0.0) == (eig[2] > 0.0) ? ISM_SING_ISOLATED : ISM_SING_NODE;
     if (rank < 2)

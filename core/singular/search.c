@@ -99,6 +99,7 @@ typedef struct search {
     const scell *frontier;
     size_t nfrontier;
     task_out *outs;
+    double hscale;          /* the Hessian scale of the box (hessian_scale) */
     atomic_int stop;        /* 1 deadline, 2 cancel, 3 budget */
     atomic_size_t kept;     /* cells and boxes kept so far in this level */
 } search;
@@ -223,8 +224,38 @@ static ism_lbox candidate(const search *s, worker *w, const ism_interval x[3])
     ism_eval_hessian(s->t, w->ws, b.q[0], b.q[1], b.q[2], g, h);
     w->evals_jet++;
     ism_sym3_eigen(h, eig, NULL);
-    b.rank = (uint8_t)ism_sym3_rank(eig, ISM_SING_RANK_REL);
+    b.rank = (uint8_t)ism_sing_rank(eig, s->hscale);
     return b;
+}
+
+int ism_sing_rank(const double eig[3], double hscale)
+{
+    double m = fmax(fabs(eig[0]), fmax(fabs(eig[1]), fabs(eig[2])));
+    double zero = fmax(ISM_SING_RANK_REL * m, ISM_SING_HZERO_REL * hscale);
+    int r = 0;
+    for (int i = 0; i < 3; i++)
+        r += m > 0 && fabs(eig[i]) > zero;
+    return r;
+}
+
+/* The largest Frobenius norm of the Hessian at the box's 3 × 3 × 3 lattice points (corners,
+ * edge and face middles, centre), non-finite values skipped: the scale of f's curvature
+ * across the box, against which a vanishing Hessian is told from a small one. */
+static double hessian_scale(search *s)
+{
+    double best = 0.0;
+    for (int m = 0; m < 27; m++) {
+        double p[3], g[3], h[6];
+        for (int k = 0; k < 3; k++)
+            p[k] = s->lo[k] + 0.5 * s->ext[k] * (double)(m / (k == 0 ? 1 : k == 1 ? 3 : 9) % 3);
+        ism_eval_hessian(s->t, s->workers[0].ws, p[0], p[1], p[2], g, h);
+        s->workers[0].evals_jet++;
+        double n2 = h[0] * h[0] + h[3] * h[3] + h[5] * h[5]
+                    + 2.0 * (h[1] * h[1] + h[2] * h[2] + h[4] * h[4]);
+        if (isfinite(n2))
+            best = fmax(best, sqrt(n2));
+    }
+    return best;
 }
 
 static uint64_t cell_key(const scell *c)
@@ -458,7 +489,12 @@ bool ism_sing_search(const ism_tape *f, const ism_locus_options *o, ism_locus *o
     atomic_init(&s.stop, 0);
     atomic_init(&s.kept, 0);
     vec boxes = { 0 };
-    bool ok = make_workers(&s) && subdivide(&s, &boxes);
+    bool ok = make_workers(&s);
+    if (ok) {
+        s.hscale = hessian_scale(&s);
+        out->hessian_scale = s.hscale;
+    }
+    ok = ok && subdivide(&s, &boxes);
     if (ok) {
         if (boxes.n)
             qsort(boxes.p, boxes.n, sizeof(keyed_box), by_key);

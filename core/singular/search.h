@@ -20,6 +20,17 @@
  * ~1e-10 of its largest or less, real curvatures are far above 1e-6. */
 #define ISM_SING_RANK_REL 1e-6
 
+/* ... and eigenvalues at most this × the locus' Hessian scale (locus.h) are 0 whatever the
+ * largest: where f vanishes to third order (f = g³·k on g = 0, the heart's ring z = 0) the
+ * computed Hessian is rounding, ~1e-13 of its terms, whose eigenvalues have no meaningful
+ * ratios; the curvature of any singular point a person writes lies far above 1e-9 of the
+ * Hessian the same f shows across its box. */
+#define ISM_SING_HZERO_REL 1e-9
+
+/* The Hessian's rank from its eigenvalues: those above ISM_SING_RANK_REL × the largest and
+ * above ISM_SING_HZERO_REL × hscale (the locus' Hessian scale; 0 = relative test only). */
+int ism_sing_rank(const double eig[3], double hscale);
+
 /* Appends to out->boxes the candidate boxes (ISM_LBOX_UNIQUE ones may be coarser than the
  * finest size), sorted by position (z, then y, then x of their lower corner), and adds the
  * work counters and time to out. Identical output for any thread count (when complete).

@@ -118,6 +118,28 @@ Test(singular_points, cusp)
     check_surface("x^2 + z^2 - y^3", UNIT, 6, ORIGIN, 1, 1e-6, ISM_SING_CUSP, false);
 }
 
+/* Taubin's heart f = A³ − z³B, A = x² + 9/4 y² + z² − 1, B = x² + 9/80 y². ∇f = 3A²∇A −
+ * 3z²B e_z − z³∇B vanishes on f = 0 where A = 0 and z = 0 (the ring x² + 9/4 y² = 1: f
+ * vanishes to third order there, H = 0, and the zero set A = z·B^(1/3) is a smooth sheet —
+ * no point, no curve to report) and where A = 0 and B = 0, i.e. x = y = 0, z = ±1. There
+ * f ≈ ∓B + (2(z ∓ 1))³: H = ∓diag(2, 9/40, 0) of rank 2 and f changes sign along z — two
+ * cusps. The ring's Hessian is rounding, ~1e-13 (its eigenvalue ratios once made hundreds
+ * of "rank-2" seeds, degenerate points and two-point curves). */
+Test(singular_points, heart_two_cusps_no_ring)
+{
+    static const double want[2][3] = { { 0, 0, -1 }, { 0, 0, 1 } };
+    const double box[6] = { -1.5, -1.5, -1.5, 1.5, 1.5, 1.5 };
+    ism_tape *t = compile("(x^2 + 9/4*y^2 + z^2 - 1)^3 - x^2*z^3 - 9/80*y^2*z^3");
+    for (int placement = 0; placement < 3; placement++) {
+        ism_locus l;
+        find(t, box, 6, placement, 0, &l);
+        expect_points("heart", placement, &l, box, want, 2, 1e-6, ISM_SING_CUSP, false);
+        cr_expect_eq(l.ncurves, 0, "heart (placement %d): %zu curves", placement, l.ncurves);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
+
 /* The unit sphere is smooth; its centre is a critical point with f = −1. */
 Test(singular_points, sphere_has_none)
 {
