@@ -131,6 +131,16 @@ static void write_singular_point(ism_jw *w, const ism_sing_point *p, int cones)
     ism_jw_string(w, ism_sing_type_name(p->type));
     ism_jw_key(w, "certified");
     ism_jw_bool(w, p->certified);
+    ism_jw_key(w, "certificate");
+    ism_jw_string(w, ism_cert_kind_name(p->certificate));
+    if (p->certificate == ISM_CERT_DEFLATION) {
+        ism_jw_key(w, "perturbation");
+        ism_jw_number(w, p->perturbation);
+    }
+    if (ism_uncert_why_name(p->uncertified_why)) {
+        ism_jw_key(w, "uncertified_reason");
+        ism_jw_string(w, ism_uncert_why_name(p->uncertified_why));
+    }
     ism_jw_key(w, "hessian_eigenvalues");
     ism_jw_numbers(w, p->eig, 3);
     ism_jw_key(w, "residual_f");

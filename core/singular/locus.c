@@ -84,6 +84,22 @@ const char *ism_sing_type_name(int type)
     return name_of(names, ISM_SING_TYPES, type);
 }
 
+const char *ism_cert_kind_name(int kind)
+{
+    static const char *const names[ISM_CERT_KINDS] = {"none", "krawczyk", "deflation"};
+    return name_of(names, ISM_CERT_KINDS, kind);
+}
+
+const char *ism_uncert_why_name(int why)
+{
+    static const char *const names[ISM_UNCERT_WHYS] = {
+        NULL, "Hessian rank <= 1: the first-order deflation does not square (corank 2)",
+        "rank 2 with a vanishing cubic term along the null direction (A3 or worse): the "
+        "deflated Jacobian is singular",
+        "Krawczyk did not contract on any box up to 1e-9 x diagonal"};
+    return why > 0 && why < ISM_UNCERT_WHYS ? names[why] : NULL;
+}
+
 const char *ism_curve_kind_name(int kind)
 {
     static const char *const names[ISM_CURVE_KINDS] = {"double", "whisker"};

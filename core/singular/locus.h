@@ -35,13 +35,39 @@ enum ism_sing_type {
     ISM_SING_TYPES
 };
 
+/* How a point's enclosure was proved (points.h). */
+enum ism_cert_kind {
+    ISM_CERT_NONE = 0,
+    ISM_CERT_KRAWCZYK = 1,  /* one zero of ∇f in the box (non-singular Hessian) */
+    ISM_CERT_DEFLATION = 2, /* rank-2 point: one zero of the deflated system in the box — a
+                               point where H is singular and ∇f = ε n, |ε| ≤ perturbation
+                               (core/singular/deflate.h) */
+    ISM_CERT_KINDS
+};
+
+/* Why a point is not certified. */
+enum ism_uncert_why {
+    ISM_UNCERT_NONE = 0,      /* certified, or not tried (pinch and triple points of curves) */
+    ISM_UNCERT_CORANK2 = 1,   /* Hessian rank <= 1: the first-order deflation does not square
+                                 (two null directions; touching spheres) */
+    ISM_UNCERT_CUBIC = 2,     /* rank 2 but f's cubic term along the null direction is 0 (an
+                                 A3 point or worse: the horn cyclide's): the deflated
+                                 Jacobian is singular too */
+    ISM_UNCERT_CONTRACT = 3,  /* Krawczyk did not contract on any box up to the bound */
+    ISM_UNCERT_WHYS
+};
+
 typedef struct ism_sing_point {
     double p[3];
     double radius;        /* half-width of the enclosure: the Krawczyk box when certified,
                              else of the candidate cluster */
     int type;             /* enum ism_sing_type */
-    bool certified;       /* Krawczyk proved one zero of ∇f in p ± radius, and the interval
-                             of f over that box contains 0 */
+    bool certified;       /* Krawczyk proved one zero of ∇f in p ± radius (or, for rank 2,
+                             of the deflated system: certificate), and the interval of f over
+                             that box contains 0 */
+    int certificate;      /* enum ism_cert_kind */
+    int uncertified_why;  /* enum ism_uncert_why */
+    double perturbation;  /* ISM_CERT_DEFLATION: the bound on |ε| (0 otherwise) */
     double eig[3];        /* Hessian eigenvalues at p, ascending */
     double residual_f;    /* |f(p)| */
     double residual_grad; /* |∇f(p)| */
@@ -140,6 +166,10 @@ bool ism_locus_add_sheet(ism_locus *l, const ism_double_sheet *s);
 /* Names used in JSON and stats: "node", "isolated", "cusp", "degenerate", "pinch",
  * "triple"; "double", "whisker"; "box", "pinch", "triple", "point", "lost". */
 const char *ism_sing_type_name(int type);
+/* "none", "krawczyk", "deflation"; and the reasons "corank 2", "cubic term 0",
+ * "no contraction" (NULL for ISM_UNCERT_NONE). */
+const char *ism_cert_kind_name(int kind);
+const char *ism_uncert_why_name(int why);
 const char *ism_curve_kind_name(int kind);
 const char *ism_end_type_name(int type);
 

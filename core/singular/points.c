@@ -1,6 +1,7 @@
 /* points.c — candidates of the search to certified, typed singular points (points.h). */
 #include "core/singular/points.h"
 #include "core/singular/clusters.h"
+#include "core/singular/deflate.h"
 #include "core/singular/krawczyk.h"
 #include "core/singular/newton.h"
 #include "core/singular/search.h"
@@ -52,6 +53,8 @@ typedef struct ctx {
     const double *box;  /* the search box: points outside it are not reported */
     ism_eval_ws *ws;
     ism_ivjet_ws *jw;
+    ism_deflate_ws *dw; /* made at the first rank-2 point (NULL until then) */
+    bool oom;
     double cell, diag;
     ism_locus *out;
     cand *c;
@@ -157,7 +160,36 @@ static int point_type(ctx *x, const double p[3], const double eig[3], double vec
     return definite && same ? ISM_SING_ISOLATED : ISM_SING_DEGENERATE;
 }
 
-/* Newton from start within [lo, hi], certificate, off-surface check, type. */
+/* The deflation certificate of a rank-2 point (deflate.h) along the eigenvector of its
+ * smallest |eigenvalue|; sets the point's certificate or the reason it has none. */
+static bool certify_rank2(ctx *x, ism_sing_point *pt, const double eig[3], double vec[3][3],
+                          ism_interval *fbox)
+{
+    if (!x->dw && !(x->dw = ism_deflate_ws_new(x->t))) {
+        x->oom = true;
+        return false;
+    }
+    int null = 0;
+    for (int i = 1; i < 3; i++)
+        if (fabs(eig[i]) < fabs(eig[null]))
+            null = i;
+    double rmax = ISM_SING_CERT_REL * x->diag;
+    ism_deflate_result r;
+    int a = ism_deflate_certify(x->dw, pt->p, vec[null], CERT_FIRST * rmax, rmax, CERT_GROWTH,
+                                &r, &x->out->evals_jet);
+    if (a != ISM_DEFLATE_CERTIFIED) {
+        pt->uncertified_why = a == ISM_DEFLATE_SINGULAR ? ISM_UNCERT_CUBIC : ISM_UNCERT_CONTRACT;
+        return false;
+    }
+    pt->radius = r.radius;
+    pt->certificate = ISM_CERT_DEFLATION;
+    pt->perturbation = r.eps;
+    *fbox = r.f;
+    return true;
+}
+
+/* Newton from start within [lo, hi], certificate (Krawczyk on ∇f, or deflation at rank 2),
+ * off-surface check, type. */
 static int resolve(ctx *x, const double start[3], const double lo[3], const double hi[3],
                    double trust, double half_width, ism_sing_point *pt)
 {
@@ -169,8 +201,20 @@ static int resolve(ctx *x, const double start[3], const double lo[3], const doub
     for (int k = 0; k < 3; k++)
         if (!(pt->p[k] >= x->box[k] && pt->p[k] <= x->box[k + 3]))
             return NOT_FOUND; /* a neighbour's point seen through a boundary cell */
+    double g[3], h[6], vec[3][3];
+    pt->residual_f = fabs(ism_eval_hessian(x->t, x->ws, pt->p[0], pt->p[1], pt->p[2], g, h));
+    x->out->evals_jet++;
+    pt->residual_grad = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    ism_sym3_eigen(h, pt->eig, vec);
+    int rank = ism_sing_rank(pt->eig, x->out->hessian_scale);
     ism_interval f;
     pt->certified = certify(x, pt->p, &pt->radius, &f);
+    if (pt->certified)
+        pt->certificate = ISM_CERT_KRAWCZYK;
+    else if (rank == 2)
+        pt->certified = certify_rank2(x, pt, pt->eig, vec, &f);
+    else
+        pt->uncertified_why = rank < 2 ? ISM_UNCERT_CORANK2 : ISM_UNCERT_CONTRACT;
     if (pt->certified && !(f.lo <= 0.0 && f.hi >= 0.0))
         return OFF_SURFACE;
     if (!pt->certified) {
@@ -183,11 +227,6 @@ static int resolve(ctx *x, const double start[3], const double lo[3], const doub
             return OFF_SURFACE;
         pt->radius = half_width;
     }
-    double g[3], h[6], vec[3][3];
-    pt->residual_f = fabs(ism_eval_hessian(x->t, x->ws, pt->p[0], pt->p[1], pt->p[2], g, h));
-    x->out->evals_jet++;
-    pt->residual_grad = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-    ism_sym3_eigen(h, pt->eig, vec);
     pt->type = point_type(x, pt->p, pt->eig, vec);
     pt->cones = -1;
     return FOUND;
@@ -473,9 +512,10 @@ bool ism_sing_points(const ism_tape *f, const ism_locus_options *o, ism_locus *o
     x.diag = sqrt(d2);
     x.ws = ism_eval_ws_new(f);
     x.jw = ism_ivjet_ws_new(f);
-    bool ok = x.ws && x.jw && run(&x, o);
+    bool ok = x.ws && x.jw && run(&x, o) && !x.oom;
     ism_eval_ws_free(x.ws);
     ism_ivjet_ws_free(x.jw);
+    ism_deflate_ws_free(x.dw);
     free(x.c);
     out->time_ms += ism_now_ms() - t0;
     if (!ok)

@@ -111,11 +111,59 @@ Test(singular_points, isolated_point)
     check_surface("x^2 + y^2 + z^2", UNIT, 6, ORIGIN, 1, 1e-9, ISM_SING_ISOLATED, true);
 }
 
+/* The one point of l is certified by deflation and its box holds want. */
+static void expect_deflated(const char *name, int placement, const ism_locus *l,
+                            const double want[3])
+{
+    bool hit = false;
+    for (size_t j = 0; j < l->npoints; j++) {
+        const ism_sing_point *p = &l->points[j];
+        if (fabs(p->p[0] - want[0]) > p->radius || fabs(p->p[1] - want[1]) > p->radius
+            || fabs(p->p[2] - want[2]) > p->radius)
+            continue;
+        hit = true;
+        cr_expect(p->certified && p->certificate == ISM_CERT_DEFLATION,
+                  "%s (placement %d): not certified by deflation", name, placement);
+        cr_expect(p->perturbation < 1e-9, "%s (placement %d): perturbation %g", name,
+                  placement, p->perturbation);
+    }
+    cr_expect(hit, "%s (placement %d): no enclosure holds (%g, %g, %g)", name, placement,
+              want[0], want[1], want[2]);
+}
+
 /* ∇f = (2x, −3y², 2z) = 0 only at 0, where f = 0 and H = diag(2, 0, 2): the A2 cusp
- * (f changes sign along y). Newton converges linearly here; the certificate cannot hold. */
+ * (f changes sign along y). Krawczyk on ∇f cannot hold (H is singular); the deflated system
+ * (∇f − εn, Hv, nᵀv − 1) has the non-singular Jacobian of an A2 point (f_yyy = −6 ≠ 0). */
 Test(singular_points, cusp)
 {
-    check_surface("x^2 + z^2 - y^3", UNIT, 6, ORIGIN, 1, 1e-6, ISM_SING_CUSP, false);
+    check_surface("x^2 + z^2 - y^3", UNIT, 6, ORIGIN, 1, 1e-9, ISM_SING_CUSP, true);
+    ism_tape *t = compile("x^2 + z^2 - y^3");
+    for (int placement = 0; placement < 3; placement++) {
+        ism_locus l;
+        find(t, UNIT, 6, placement, 0, &l);
+        expect_deflated("x^2 + z^2 - y^3", placement, &l, ORIGIN[0]);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
+
+/* The same cusp moved to c = (0.125, 0.3125, −0.1875) (exact in binary) and turned by 45°
+ * about z, so its null direction (1, 1, 0)/√2 is no axis: f = u² + w² − t³ with
+ * u = (X − Y)/√2, t = (X + Y)/√2, w = Z, (X, Y, Z) = p − c. */
+Test(singular_points, cusp_moved_and_turned)
+{
+    static const double want[1][3] = { { 0.125, 0.3125, -0.1875 } };
+    const char *src = "((x - 0.125 - (y - 0.3125))/sqrt(2))^2 + (z + 0.1875)^2"
+                      " - ((x - 0.125 + (y - 0.3125))/sqrt(2))^3";
+    check_surface(src, UNIT, 6, want, 1, 1e-9, ISM_SING_CUSP, true);
+    ism_tape *t = compile(src);
+    for (int placement = 0; placement < 3; placement++) {
+        ism_locus l;
+        find(t, UNIT, 6, placement, 0, &l);
+        expect_deflated("turned cusp", placement, &l, want[0]);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
 }
 
 /* Taubin's heart f = A³ − z³B, A = x² + 9/4 y² + z² − 1, B = x² + 9/80 y². ∇f = 3A²∇A −
@@ -123,7 +171,7 @@ Test(singular_points, cusp)
  * vanishes to third order there, H = 0, and the zero set A = z·B^(1/3) is a smooth sheet —
  * no point, no curve to report) and where A = 0 and B = 0, i.e. x = y = 0, z = ±1. There
  * f ≈ ∓B + (2(z ∓ 1))³: H = ∓diag(2, 9/40, 0) of rank 2 and f changes sign along z — two
- * cusps. The ring's Hessian is rounding, ~1e-13 (its eigenvalue ratios once made hundreds
+ * cusps (f_zzz = ±48 ≠ 0: deflation certifies them). The ring's Hessian is rounding, ~1e-13 (its eigenvalue ratios once made hundreds
  * of "rank-2" seeds, degenerate points and two-point curves). */
 Test(singular_points, heart_two_cusps_no_ring)
 {
@@ -133,7 +181,9 @@ Test(singular_points, heart_two_cusps_no_ring)
     for (int placement = 0; placement < 3; placement++) {
         ism_locus l;
         find(t, box, 6, placement, 0, &l);
-        expect_points("heart", placement, &l, box, want, 2, 1e-6, ISM_SING_CUSP, false);
+        expect_points("heart", placement, &l, box, want, 2, 1e-9, ISM_SING_CUSP, true);
+        expect_deflated("heart", placement, &l, want[0]);
+        expect_deflated("heart", placement, &l, want[1]);
         cr_expect_eq(l.ncurves, 0, "heart (placement %d): %zu curves", placement, l.ncurves);
         ism_locus_free(&l);
     }
@@ -155,6 +205,14 @@ Test(singular_points, touching_spheres_degenerate)
     check_surface("((x-1)^2 + y^2 + z^2 - 1)*((x+1)^2 + y^2 + z^2 - 1)",
                   (const double[6]){ -2, -2, -2, 2, 2, 2 }, 6, ORIGIN, 1, 1e-6,
                   ISM_SING_DEGENERATE, false);
+    ism_tape *t = compile("((x-1)^2 + y^2 + z^2 - 1)*((x+1)^2 + y^2 + z^2 - 1)");
+    ism_locus l;
+    find(t, (const double[6]){ -2, -2, -2, 2, 2, 2 }, 6, 2, 0, &l);
+    cr_assert_eq(l.npoints, 1);
+    cr_expect_eq(l.points[0].uncertified_why, ISM_UNCERT_CORANK2, "rank 1: %d",
+                 l.points[0].uncertified_why);
+    ism_locus_free(&l);
+    ism_tape_free(t);
 }
 
 /* Horn cyclide (a = 10, r = f = 2): with S = x² + y² + z² + 92,
@@ -174,6 +232,9 @@ Test(singular_points, horn_cyclide_one_point)
         ism_locus l;
         find(t, s->box, 7, placement, 0, &l);
         expect_points(s->name, placement, &l, s->box, want, 1, 1e-4, ISM_SING_DEGENERATE, false);
+        cr_expect_eq(l.points[0].uncertified_why, ISM_UNCERT_CUBIC,
+                     "horn (placement %d): f_yyy = 0, yet reason %d", placement,
+                     l.points[0].uncertified_why);
         ism_locus_free(&l);
     }
     ism_tape_free(t);
