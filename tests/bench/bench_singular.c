@@ -2,9 +2,10 @@
  * polygoniser: for every preset at its default box and depth, the polygoniser's time and the
  * stage's time with the same thread count (each the shortest of a few runs: the least
  * disturbed on a shared machine), their ratio (the issue's goal: <= 25%), and what the stage
- * found. Prints one JSON object per line.
+ * found. Prints one JSON object per line, and last {"worst": NAME, "ratio": R} (the preset
+ * with the largest ratio).
  *
- *   bench_singular [--threads N] [--repeats N] */
+ *   bench_singular [--threads N] [--repeats N] [--preset NAME] */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -53,14 +54,20 @@ static bool surface_ms(const ism_tape *t, const ism_preset *p, int threads, ism_
 int main(int argc, char **argv)
 {
     int threads = 0, repeats = 3;
+    const char *only = NULL, *worst = NULL;
+    double worst_ratio = -1.0;
     for (int i = 1; i + 1 < argc; i += 2) {
         if (strcmp(argv[i], "--threads") == 0)
             threads = atoi(argv[i + 1]);
         else if (strcmp(argv[i], "--repeats") == 0)
             repeats = atoi(argv[i + 1]);
+        else if (strcmp(argv[i], "--preset") == 0)
+            only = argv[i + 1];
     }
     for (size_t i = 0; i < ism_preset_count(); i++) {
         const ism_preset *p = ism_preset_at(i);
+        if (only && strcmp(only, p->name) != 0)
+            continue;
         ism_tape *t = compile_preset(p);
         if (!t)
             return 1;
@@ -90,8 +97,14 @@ int main(int argc, char **argv)
                certified, l.nboxes, (unsigned long long)l.boxes_visited,
                l.incomplete ? "true" : "false");
         fflush(stdout);
+        if (poly > 0 && stage / poly > worst_ratio) {
+            worst_ratio = stage / poly;
+            worst = p->name;
+        }
         ism_locus_free(&l);
         ism_tape_free(t);
     }
+    if (worst)
+        printf("{\"worst\": \"%s\", \"ratio\": %.4f}\n", worst, worst_ratio);
     return 0;
 }
