@@ -28,6 +28,8 @@ void ism_computed_free(ism_computed *c)
     free(c->wire.mean_curvature);
     free(c->wire.gauss_curvature);
     free(c->vertex_class);
+    free(c->tri_cell);
+    free(c->tri_sheet);
     ism_features_free(&c->features);
     ism_locus_free(&c->locus);
     free(c->features_json);
@@ -46,6 +48,8 @@ void ism_computed_wire(const ism_computed *c, unsigned attrs, ism_wire_mesh *vie
         view->gauss_curvature = NULL;
     if (!(attrs & ISM_ATTR_CLASS))
         view->vertex_class = NULL;
+    view->tri_cell = c->tri_cell; /* labels of triangles: sent whenever the surface has them */
+    view->tri_sheet = c->tri_sheet;
 }
 
 /* ---- writing ------------------------------------------------------------------------- */
@@ -97,6 +101,8 @@ bool ism_computed_write(const ism_computed *c, ism_frame_builder *b)
     put_array(b, w->mean_curvature, nv, sizeof(float));
     put_array(b, w->gauss_curvature, nv, sizeof(float));
     put_array(b, c->vertex_class, nv, 1);
+    put_array(b, c->tri_cell, m->ntris, sizeof *c->tri_cell);
+    put_array(b, c->tri_sheet, m->ntris, 1);
     ism_frame_put_u64(b, w->live_triangles);
     put_array(b, w->bounds, 6, sizeof(double));
     put_polylines(b, &c->features.curves);
@@ -104,6 +110,9 @@ bool ism_computed_write(const ism_computed *c, ism_frame_builder *b)
     put_array(b, c->features.points, c->features.npoints, sizeof(uint32_t));
     put_array(b, c->features.point_kind, c->features.npoints, 1);
     put_array(b, c->features.point_class, c->features.npoints, 1);
+    put_polylines(b, &c->features.arcs);
+    put_array(b, c->features.arc_kind, c->features.arcs.n, 1);
+    put_array(b, c->features.arc_curve, c->features.arcs.n, sizeof(uint32_t));
     put_locus(b, &c->locus);
     put_array(b, c->timings_ms, ISM_TIME_COUNT, sizeof(double));
     ism_frame_put_bytes(b, c->features_json, c->features_len);
@@ -312,6 +321,15 @@ static bool get_wire(reader *r, ism_computed *c)
         return false;
     c->vertex_class = p[4];
     w->vertex_class = c->vertex_class;
+    void *cell, *sheet;
+    if (!get_array(r, c->mesh.ntris, sizeof(uint32_t), true, &cell, "cells"))
+        return false;
+    c->tri_cell = cell;
+    w->tri_cell = c->tri_cell;
+    if (!get_array(r, c->mesh.ntris, 1, true, &sheet, "double sheets"))
+        return false;
+    c->tri_sheet = sheet;
+    w->tri_sheet = c->tri_sheet;
     w->nverts = nv;
     w->ntris = c->mesh.ntris;
     w->tri = c->mesh.tri;
@@ -347,6 +365,18 @@ static bool get_features(reader *r, ism_computed *c)
     f->point_class = cls;
     if (!indices_below(f->points, f->npoints, nv))
         return bad(r, "feature point out of range");
+    if (!get_polylines(r, nv, &f->arcs))
+        return false;
+    void *akind, *acurve;
+    if (!get_array(r, f->arcs.n, 1, false, &akind, "arc kinds"))
+        return false;
+    f->arc_kind = akind;
+    if (!get_array(r, f->arcs.n, sizeof(uint32_t), false, &acurve, "arc curves"))
+        return false;
+    f->arc_curve = acurve;
+    for (size_t i = 0; i < f->arcs.n; i++)
+        if (f->arc_kind[i] >= ISM_CUT_KIND_COUNT)
+            return bad(r, "arc kind out of range");
     f->locus = &c->locus;
     return true;
 }

@@ -16,6 +16,7 @@
  *   bytes bounds (f64 x 6),
  *   polylines curves, polylines boundaries (each: bytes start u32 x (n + 1), bytes verts u32),
  *   bytes points (u32), bytes point_kind (u8), bytes point_class (u8),
+ *   polylines arcs (of the requested curves), bytes arc_kind (u8), bytes arc_curve (u32),
  *   u64 singular points, each: bytes xyz (f64 x 3), u32 type, u32 certified,
  *   u64 singular curves, each: u32 kind, u32 closed, bytes xyz (f64 x 3 x n),
  *   bytes timings (f64 x ISM_TIME_COUNT), bytes features JSON, bytes stats JSON.
@@ -36,7 +37,7 @@
 #include "proto/stats.h"
 #include "proto/wire_mesh.h"
 
-#define ISM_COMPUTED_VERSION 1
+#define ISM_COMPUTED_VERSION 2
 /* The cache entry's extension ("<surface key>.mesh"). */
 #define ISM_COMPUTED_EXT "mesh"
 
@@ -46,6 +47,8 @@ typedef struct ism_computed {
     ism_mesh mesh;             /* positions, normals, triangles (owned) */
     ism_wire_mesh wire;        /* every attribute (owned; tri is mesh.tri, class is below) */
     uint8_t *vertex_class;     /* owned; NULL when the analysis had none */
+    uint32_t *tri_cell;        /* owned, per triangle; NULL when no curves were requested */
+    uint8_t *tri_sheet;        /* owned, per triangle; NULL when f has no double sheet */
     ism_features features;     /* owned; features.locus is &locus, check NULL */
     ism_locus locus;           /* singular points and curves (what the glb draws) */
     char *features_json;       /* the features JSON (proto/features.h) */

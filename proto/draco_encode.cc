@@ -35,20 +35,28 @@ void set_error(ism_draco_output *out, const char *what)
     std::snprintf(out->error, sizeof out->error, "draco: %s", what);
 }
 
-// Adds an attribute with the given values (identity mapping), its fixed unique id and a
-// metadata entry "name". Returns the attribute id inside the mesh, -1 on failure.
+// Adds an attribute with the given values, its fixed unique id and a metadata entry "name".
+// point_vertex NULL: one value per point (identity mapping); else point p takes value
+// point_vertex[p] (nvalues values). Returns the attribute id inside the mesh, -1 on failure.
 int add_attribute(draco::Mesh &mesh, draco::GeometryAttribute::Type type, int components,
-                  draco::DataType dtype, const void *values, size_t nverts, uint32_t unique_id,
-                  const char *name)
+                  draco::DataType dtype, const void *values, size_t nvalues,
+                  const uint32_t *point_vertex, uint32_t unique_id, const char *name)
 {
     draco::GeometryAttribute ga;
-    const int bytes = dtype == draco::DT_FLOAT32 ? 4 : 1;
+    const int bytes = dtype == draco::DT_FLOAT32 || dtype == draco::DT_UINT32 ? 4 : 1;
     ga.Init(type, nullptr, (int8_t)components, dtype, false, (int64_t)(components * bytes), 0);
-    const int id = mesh.AddAttribute(ga, true, (uint32_t)nverts);
+    const int id = mesh.AddAttribute(ga, point_vertex == nullptr, (uint32_t)nvalues);
     if (id < 0)
         return -1;
     draco::PointAttribute *att = mesh.attribute(id);
-    att->buffer()->Write(0, values, nverts * (size_t)components * (size_t)bytes);
+    att->buffer()->Write(0, values, nvalues * (size_t)components * (size_t)bytes);
+    if (point_vertex) {
+        const size_t npoints = mesh.num_points();
+        att->SetExplicitMapping(npoints);
+        for (size_t p = 0; p < npoints; p++)
+            att->SetPointMapEntry(draco::PointIndex((uint32_t)p),
+                                  draco::AttributeValueIndex(point_vertex[p]));
+    }
     att->set_unique_id(unique_id);
     std::unique_ptr<draco::AttributeMetadata> md(new draco::AttributeMetadata());
     md->AddEntryString("name", name);
@@ -56,20 +64,35 @@ int add_attribute(draco::Mesh &mesh, draco::GeometryAttribute::Type type, int co
     return id;
 }
 
+// The split points' vertices are all real vertices.
+bool points_valid(const ism_draco_input *in)
+{
+    for (size_t p = 0; in->point_vertex && p < in->npoints; p++)
+        if (in->point_vertex[p] >= in->nverts)
+            return false;
+    return true;
+}
+
 bool encode(const ism_draco_input *in, ism_draco_output *out)
 {
-    if (in->nverts == 0 || in->ntris == 0 || in->nverts > 0x7fffffffu) {
+    const uint32_t *pv = in->point_vertex;
+    const size_t npoints = pv ? in->npoints : in->nverts;
+    if (in->nverts == 0 || in->ntris == 0 || npoints > 0x7fffffffu) {
         set_error(out, "the mesh is empty or too large");
         return false;
     }
+    if (!points_valid(in) || (!pv && (in->point_cell || in->point_sheet))) {
+        set_error(out, "a point refers to a vertex that does not exist");
+        return false;
+    }
     draco::Mesh mesh;
-    mesh.set_num_points((uint32_t)in->nverts);
+    mesh.set_num_points((uint32_t)npoints);
     mesh.SetNumFaces(in->ntris);
     for (size_t t = 0; t < in->ntris; t++) {
         draco::Mesh::Face f;
         for (int k = 0; k < 3; k++) {
             const uint32_t v = in->tri[3 * t + k];
-            if (v >= in->nverts) {
+            if (v >= npoints) {
                 set_error(out, "a triangle refers to a vertex that does not exist");
                 return false;
             }
@@ -78,25 +101,34 @@ bool encode(const ism_draco_input *in, ism_draco_output *out)
         mesh.SetFace(draco::FaceIndex((uint32_t)t), f);
     }
 
+    const size_t nv = in->nverts;
     const int pos = add_attribute(mesh, draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32,
-                                  in->pos, in->nverts, ISM_DRACO_ID_POSITION, "position");
-    int nrm = -1, mean = -1, gauss = -1, cls = -1;
+                                  in->pos, nv, pv, ISM_DRACO_ID_POSITION, "position");
+    int nrm = -1, mean = -1, gauss = -1, cls = -1, cell = -1, sheet = -1;
     if (in->normal)
         nrm = add_attribute(mesh, draco::GeometryAttribute::NORMAL, 3, draco::DT_FLOAT32,
-                            in->normal, in->nverts, ISM_DRACO_ID_NORMAL, "normal");
+                            in->normal, nv, pv, ISM_DRACO_ID_NORMAL, "normal");
     if (in->mean_curvature)
         mean = add_attribute(mesh, draco::GeometryAttribute::GENERIC, 1, draco::DT_FLOAT32,
-                             in->mean_curvature, in->nverts, ISM_DRACO_ID_MEAN_CURVATURE,
+                             in->mean_curvature, nv, pv, ISM_DRACO_ID_MEAN_CURVATURE,
                              "mean_curvature");
     if (in->gauss_curvature)
         gauss = add_attribute(mesh, draco::GeometryAttribute::GENERIC, 1, draco::DT_FLOAT32,
-                              in->gauss_curvature, in->nverts, ISM_DRACO_ID_GAUSS_CURVATURE,
+                              in->gauss_curvature, nv, pv, ISM_DRACO_ID_GAUSS_CURVATURE,
                               "gauss_curvature");
     if (in->vertex_class)
         cls = add_attribute(mesh, draco::GeometryAttribute::GENERIC, 1, draco::DT_UINT8,
-                            in->vertex_class, in->nverts, ISM_DRACO_ID_CLASS, "class");
+                            in->vertex_class, nv, pv, ISM_DRACO_ID_CLASS, "class");
+    if (in->point_cell)
+        cell = add_attribute(mesh, draco::GeometryAttribute::GENERIC, 1, draco::DT_UINT32,
+                             in->point_cell, npoints, nullptr, ISM_DRACO_ID_CELL, "cell");
+    if (in->point_sheet)
+        sheet = add_attribute(mesh, draco::GeometryAttribute::GENERIC, 1, draco::DT_UINT8,
+                              in->point_sheet, npoints, nullptr, ISM_DRACO_ID_DOUBLE_SHEET,
+                              "double_sheet");
     if (pos < 0 || (in->normal && nrm < 0) || (in->mean_curvature && mean < 0) ||
-        (in->gauss_curvature && gauss < 0) || (in->vertex_class && cls < 0)) {
+        (in->gauss_curvature && gauss < 0) || (in->vertex_class && cls < 0) ||
+        (in->point_cell && cell < 0) || (in->point_sheet && sheet < 0)) {
         set_error(out, "could not add an attribute");
         return false;
     }

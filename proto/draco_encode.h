@@ -14,6 +14,13 @@
  *   2          "mean_curvature"   GENERIC     float32  1           H (analysis.h's sign)
  *   3          "gauss_curvature"  GENERIC     float32  1           K
  *   4          "class"            GENERIC     uint8    1           enum ism_vertex_class
+ *   5          "cell"             GENERIC     uint32   1           arrangement face (cell) id
+ *   6          "double_sheet"     GENERIC     uint8    1           1 on a double sheet, else 0
+ *
+ * "cell" and "double_sheet" label triangles: the caller splits vertices where they change
+ * (proto/corner_split.h), so all three points of a decoded triangle carry its label. They are
+ * sent whenever the surface has them (cells: curves were requested; sheets: f has double
+ * sheets).
  *
  * three.js: DRACOLoader finds position and normal by type; for the others use the decoder's
  * GetAttributeByUniqueId(mesh, id) (glTF: the KHR_draco_mesh_compression "attributes" map
@@ -35,6 +42,8 @@ enum ism_draco_id {
     ISM_DRACO_ID_MEAN_CURVATURE = 2,
     ISM_DRACO_ID_GAUSS_CURVATURE = 3,
     ISM_DRACO_ID_CLASS = 4,
+    ISM_DRACO_ID_CELL = 5,
+    ISM_DRACO_ID_DOUBLE_SHEET = 6,
 };
 
 /* Encoding speed used by the service (the measurement that chose it: draco_encode.cc). It
@@ -53,6 +62,12 @@ typedef struct ism_draco_input {
     int normal_bits;                /* octahedral quantisation of normals */
     int curvature_bits;             /* 0 = float32 as given, else quantised */
     int speed;                      /* 0 (smallest) .. 10 (fastest); < 0 = default */
+    /* Points split from the vertices (corner_split.h): when point_vertex is set, tri indexes
+     * npoints points and point p shows vertex point_vertex[p]; else points are vertices. */
+    size_t npoints;
+    const uint32_t *point_vertex;
+    const uint32_t *point_cell;     /* 1 per point; NULL = not sent */
+    const uint8_t *point_sheet;     /* 1 per point; NULL = not sent */
 } ism_draco_input;
 
 typedef struct ism_draco_output {

@@ -81,6 +81,9 @@ void ism_features_free(ism_features *f)
 {
     ism_polylines_free(&f->curves);
     ism_polylines_free(&f->boundaries);
+    ism_polylines_free(&f->arcs);
+    free(f->arc_kind);
+    free(f->arc_curve);
     free(f->points);
     free(f->point_kind);
     free(f->point_class);

@@ -62,6 +62,10 @@ typedef struct ism_features {
     const ism_arrangement *arrangement; /* requested curves cut into the mesh (not owned;
                                            NULL when none were asked) */
     const ism_cut_fn *cut_fns;  /* the functions arrangement's curves come from */
+    ism_polylines arcs;        /* the requested curves' arcs (arrangement edges), mesh vertices */
+    uint8_t *arc_kind;         /* per arc: enum ism_cut_kind */
+    uint32_t *arc_curve;       /* per arc: its curve (the order of the requested curves in the
+                                  features JSON) */
 } ism_features;
 
 /* Collects the features of a mesh from its analysis a (NULL for an empty mesh: every list
@@ -86,6 +90,13 @@ void ism_features_cut_curves_json(struct ism_jw *w, const ism_mesh *m,
 void ism_features_arrangement_json(struct ism_jw *w, const ism_mesh *m,
                                    const ism_arrangement *a);
 void ism_locus_counts_json(struct ism_jw *w, const ism_locus *l);
+
+/* Copies a's edges into f->arcs, arc_kind (from fns) and arc_curve, for the formats that draw
+ * them (glb LINES, OBJ `l`). False when out of memory. */
+bool ism_features_add_arcs(ism_features *f, const ism_arrangement *a, const ism_cut_fn *fns);
+
+/* Name of a requested curve's kind (enum ism_cut_kind): "section", "level", ... */
+const char *ism_cut_kind_name(int kind);
 
 /* Name of a point kind ("cones", "curve_end", "junction"). */
 const char *ism_point_kind_name(int kind);

@@ -5,10 +5,44 @@
 #include "proto/features.h"
 #include "proto/json_writer.h"
 
+#include <stdlib.h>
+#include <string.h>
+
 static const char *const kind_names[ISM_CUT_KIND_COUNT] = {
     "section", "level", "intersection", "silhouette", "crease"};
 static const char *const vertex_types[ISM_ARR_VERTEX_TYPE_COUNT] = {"crossing", "branch",
                                                                     "end", "loop"};
+
+const char *ism_cut_kind_name(int kind)
+{
+    return kind >= 0 && kind < ISM_CUT_KIND_COUNT ? kind_names[kind] : "unknown";
+}
+
+bool ism_features_add_arcs(ism_features *f, const ism_arrangement *a, const ism_cut_fn *fns)
+{
+    size_t n = a->nedges, total = 0;
+    for (size_t i = 0; i < n; i++)
+        total += a->edges[i].count;
+    if (total >= UINT32_MAX)
+        return false;
+    ism_polylines *p = &f->arcs;
+    p->start = malloc((n + 1) * sizeof *p->start);
+    p->verts = malloc((total ? total : 1) * sizeof *p->verts);
+    f->arc_kind = malloc(n ? n : 1);
+    f->arc_curve = malloc((n ? n : 1) * sizeof *f->arc_curve);
+    if (!p->start || !p->verts || !f->arc_kind || !f->arc_curve)
+        return false; /* the caller frees f */
+    p->n = n;
+    p->start[0] = 0;
+    for (size_t i = 0; i < n; i++) {
+        const ism_arr_edge *e = &a->edges[i];
+        memcpy(p->verts + p->start[i], a->chain + e->first, e->count * sizeof *p->verts);
+        p->start[i + 1] = p->start[i] + (uint32_t)e->count;
+        f->arc_kind[i] = (uint8_t)fns[e->fn].kind;
+        f->arc_curve[i] = e->curve;
+    }
+    return true;
+}
 
 static void write_pos(ism_jw *w, const ism_mesh *m, uint32_t v)
 {

@@ -1,6 +1,7 @@
 /* wire_mesh.h — a mesh as it goes on the wire: float32 positions, unit normals everywhere
  * (where ∇f vanished, the area-weighted normal of the vertex's triangles), curvature clamped
- * to what the mesh can resolve, the per-vertex class, and whether anything is left to draw.
+ * to what the mesh can resolve, the per-vertex class, the per-triangle labels (cell, double
+ * sheet) and whether anything is left to draw.
  * Shared by the Draco and glTF encoders. */
 #ifndef ISM_WIRE_MESH_H
 #define ISM_WIRE_MESH_H
@@ -19,6 +20,8 @@ typedef struct ism_wire_mesh {
     float *mean_curvature;     /* NULL when not asked for (or not computed) */
     float *gauss_curvature;
     const uint8_t *vertex_class; /* the analysis's (not owned); NULL when not asked for */
+    const uint32_t *tri_cell;  /* per triangle: its arrangement cell (not owned); NULL none */
+    const uint8_t *tri_sheet;  /* per triangle: 1 on a double sheet (not owned); NULL none */
     size_t live_triangles;     /* triangles whose three vertex indices differ */
     double bounds[6];          /* of the float positions: xmin ymin zmin xmax ymax zmax */
 } ism_wire_mesh;

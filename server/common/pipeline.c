@@ -13,6 +13,7 @@
 #include "core/singular/check.h"
 #include "core/singular/surface.h"
 #include "proto/computed.h"
+#include "proto/corner_split.h"
 #include "proto/curve_fns.h"
 #include "proto/draco_encode.h"
 #include "proto/features.h"
@@ -246,7 +247,22 @@ static bool encode_draco(encode_job *j, ism_draco_output *d, char *why, size_t n
         .curvature_bits = j->req->curvature_bits,
         .speed = -1,
     };
-    if (!ism_draco_encode(&in, d)) {
+    ism_corner_split split = {0};
+    if (w->tri_cell || w->tri_sheet) { /* triangle labels: vertices split where they change */
+        if (!ism_corner_split_build(w->tri, w->ntris, w->nverts, w->tri_cell, w->tri_sheet,
+                                    &split)) {
+            snprintf(why, n, "out of memory splitting the vertices along the cells");
+            return false;
+        }
+        in.tri = split.tri;
+        in.npoints = split.npoints;
+        in.point_vertex = split.point_vertex;
+        in.point_cell = split.point_cell;
+        in.point_sheet = split.point_sheet;
+    }
+    bool ok = ism_draco_encode(&in, d);
+    ism_corner_split_free(&split);
+    if (!ok) {
         snprintf(why, n, "%s", d->error);
         return false;
     }
@@ -443,6 +459,33 @@ static bool polygonise_and_analyse(const ism_request *req, const ism_tape *tape,
     return true;
 }
 
+/* Per-triangle labels into c: the arrangement's cells, and the double sheets' ranges (those
+ * are the polygoniser's triangle order, which a cut along curves does not keep: the flags
+ * are left out then). */
+static bool label_triangles(ism_computed *c, const scratch *s)
+{
+    size_t nt = c->mesh.ntris;
+    if (s->have_curves && nt) {
+        c->tri_cell = malloc(nt * sizeof *c->tri_cell);
+        if (!c->tri_cell)
+            return false;
+        memcpy(c->tri_cell, s->arr.tri_face, nt * sizeof *c->tri_cell);
+    }
+    const ism_locus *l = &c->locus;
+    if (!s->have_curves && l->nsheets && nt) {
+        c->tri_sheet = calloc(nt, 1);
+        if (!c->tri_sheet)
+            return false;
+        for (size_t i = 0; i < l->nsheets; i++)
+            for (size_t t = l->sheets[i].first_triangle;
+                 t < l->sheets[i].first_triangle + l->sheets[i].triangles && t < nt; t++)
+                c->tri_sheet[t] = 1;
+    }
+    c->wire.tri_cell = c->tri_cell;
+    c->wire.tri_sheet = c->tri_sheet;
+    return true;
+}
+
 /* Wire attributes, features and the surface's stats into c. */
 static bool gather(const ism_request *req, ism_pipeline_result *r, ism_computed *c, scratch *s)
 {
@@ -456,12 +499,16 @@ static bool gather(const ism_request *req, ism_pipeline_result *r, ism_computed 
         memcpy(c->vertex_class, s->an.vertex_class, c->mesh.nverts);
     }
     c->wire.vertex_class = c->vertex_class;
+    if (!label_triangles(c, s))
+        return fail_with(r, 500, "no_memory", "%s", "out of memory labelling the triangles");
     c->empty = c->wire.live_triangles == 0;
     ism_mesh none;
     ism_mesh_init(&none);
     const ism_mesh *fm = c->empty ? &none : &c->mesh;
     if (!ism_features_build(c->empty ? NULL : &s->an, &c->features))
         return fail_with(r, 500, "no_memory", "%s", "out of memory collecting the features");
+    if (s->have_curves && !c->empty && !ism_features_add_arcs(&c->features, &s->arr, s->cf.fns))
+        return fail_with(r, 500, "no_memory", "%s", "out of memory collecting the curves");
     c->features.locus = &c->locus;
     c->features.check = c->empty ? NULL : &s->check;
     c->features.arrangement = s->have_curves ? &s->arr : NULL;

@@ -13,7 +13,14 @@ async function module() {
   return decoderModule;
 }
 
-export const ATTRIBUTE_IDS = { position: 0, normal: 1, mean_curvature: 2, gauss_curvature: 3, class: 4 };
+export const ATTRIBUTE_IDS = { position: 0, normal: 1, mean_curvature: 2, gauss_curvature: 3, class: 4, cell: 5, double_sheet: 6 };
+
+// The integer attributes and how draco3d reads them; the rest are float32.
+const INTEGER_READERS = {
+  class: ['DracoUInt8Array', 'GetAttributeUInt8ForAllPoints', Uint8Array],
+  double_sheet: ['DracoUInt8Array', 'GetAttributeUInt8ForAllPoints', Uint8Array],
+  cell: ['DracoUInt32Array', 'GetAttributeUInt32ForAllPoints', Uint32Array],
+};
 
 // Returns {points, faces, index: Uint32Array, attributes: {name: {uniqueId, components, values}}}.
 export async function decodeDraco(bytes) {
@@ -30,10 +37,10 @@ export async function decodeDraco(bytes) {
       if (index < 0) continue;
       const attr = decoder.GetAttribute(mesh, index);
       const n = out.points * attr.num_components();
-      const arr = name === 'class' ? new draco.DracoUInt8Array() : new draco.DracoFloat32Array();
-      if (name === 'class') decoder.GetAttributeUInt8ForAllPoints(mesh, attr, arr);
-      else decoder.GetAttributeFloatForAllPoints(mesh, attr, arr);
-      const values = name === 'class' ? new Uint8Array(n) : new Float32Array(n);
+      const [arrayType, read, Typed] = INTEGER_READERS[name] || ['DracoFloat32Array', 'GetAttributeFloatForAllPoints', Float32Array];
+      const arr = new draco[arrayType]();
+      decoder[read](mesh, attr, arr);
+      const values = new Typed(n);
       for (let i = 0; i < n; i++) values[i] = arr.GetValue(i);
       draco.destroy(arr);
       out.attributes[name] = { uniqueId: attr.unique_id(), components: attr.num_components(),

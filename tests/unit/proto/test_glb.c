@@ -35,7 +35,7 @@ static unsigned char *build(const ism_mesh *m, size_t *len, ism_draco_output *d)
     bool empty = w.live_triangles == 0;
     if (!empty) {
         ism_draco_input in = {w.nverts, w.ntris, w.pos, w.tri, w.normal, NULL, NULL,
-                              w.vertex_class, 14, 10, 0, -1};
+                              w.vertex_class, 14, 10, 0, -1, 0, NULL, NULL, NULL};
         cr_assert(ism_draco_encode(&in, d), "%s", d->error);
     }
     ism_glb_input gi = {m, &w, empty ? NULL : d, &f, "0123abcd"};
