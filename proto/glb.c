@@ -3,11 +3,13 @@
  * bufferView 4-byte aligned, chunks padded as the spec asks (JSON with spaces, BIN with
  * zeros). */
 #include "proto/glb.h"
+#include "proto/corner_split.h"
 #include "core/util/le_bytes.h"
 #include "proto/json_writer.h"
 #include "core/version.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -128,10 +130,12 @@ static void add_node(gltf *g, const char *name, int mesh, const ism_jw *extras_s
 
 /* The surface's mesh up to its primitive's attributes (acc[i] < 0: not sent); the caller may
  * add members to the open primitive, then calls close_surface. */
-static const char *const SURFACE_ATTRIBUTES[5] = {"POSITION", "NORMAL", "_MEAN_CURVATURE",
-                                                  "_GAUSS_CURVATURE", "_CLASS"};
+enum { NSURF = 7 };
+static const char *const SURFACE_ATTRIBUTES[NSURF] = {
+    "POSITION", "NORMAL", "_MEAN_CURVATURE", "_GAUSS_CURVATURE", "_CLASS", "_CELL",
+    "_DOUBLE_SHEET"};
 
-static ism_jw *open_surface(gltf *g, int indices, const int acc[5])
+static ism_jw *open_surface(gltf *g, int indices, const int acc[NSURF])
 {
     ism_jw *w = &g->meshes;
     ism_jw_object(w);
@@ -148,7 +152,7 @@ static ism_jw *open_surface(gltf *g, int indices, const int acc[5])
     ism_jw_int(w, indices);
     ism_jw_key(w, "attributes");
     ism_jw_object(w);
-    for (int i = 0; i < 5; i++)
+    for (int i = 0; i < NSURF; i++)
         if (acc[i] >= 0) {
             ism_jw_key(w, SURFACE_ATTRIBUTES[i]);
             ism_jw_int(w, acc[i]);
@@ -184,9 +188,13 @@ static void add_surface(gltf *g, const ism_wire_mesh *wm, const ism_draco_output
         {"_GAUSS_CURVATURE", wm->gauss_curvature != NULL, ISM_DRACO_ID_GAUSS_CURVATURE,
          CT_FLOAT, "SCALAR"},
         {"_CLASS", wm->vertex_class != NULL, ISM_DRACO_ID_CLASS, CT_UBYTE, "SCALAR"},
+        /* uint32 in the Draco stream; read as float (exact below 2^24 cells), since glTF
+         * allows unsigned int only for indices */
+        {"_CELL", wm->tri_cell != NULL, ISM_DRACO_ID_CELL, CT_FLOAT, "SCALAR"},
+        {"_DOUBLE_SHEET", wm->tri_sheet != NULL, ISM_DRACO_ID_DOUBLE_SHEET, CT_UBYTE, "SCALAR"},
     };
-    int acc[5];
-    for (int i = 0; i < 5; i++)
+    int acc[NSURF];
+    for (int i = 0; i < NSURF; i++)
         acc[i] = atts[i].present ? add_accessor(g, -1, atts[i].ctype, d->points, atts[i].type,
                                                 i == 0 ? wm->bounds : NULL)
                                  : -1;
@@ -201,7 +209,7 @@ static void add_surface(gltf *g, const ism_wire_mesh *wm, const ism_draco_output
     ism_jw_int(w, view);
     ism_jw_key(w, "attributes");
     ism_jw_object(w);
-    for (int i = 0; i < 5; i++)
+    for (int i = 0; i < NSURF; i++)
         if (atts[i].present) {
             ism_jw_key(w, atts[i].name);
             ism_jw_int(w, atts[i].id);
@@ -235,43 +243,108 @@ static int plain_bytes(gltf *g, const uint8_t *data, size_t count)
                         "SCALAR", NULL);
 }
 
+/* The plain surface's vertices: the wire's, or points split along the triangle labels
+ * (corner_split.h) with every per-vertex array copied out per point. */
+typedef struct plain_points {
+    size_t n;
+    const uint32_t *tri;
+    const float *f32[4];        /* pos, normal, mean, gauss (3, 3, 1, 1 per point) */
+    const uint8_t *cls, *sheet;
+    float *cell;                /* the cell id as float (glTF: no unsigned int attributes) */
+    ism_corner_split split;
+    void *owned[6];
+} plain_points;
+
+static const int F32_COMPONENTS[4] = {3, 3, 1, 1};
+
+static void plain_points_free(plain_points *pp)
+{
+    for (int i = 0; i < 6; i++)
+        free(pp->owned[i]);
+    free(pp->cell);
+    ism_corner_split_free(&pp->split);
+}
+
+static bool plain_points_build(const ism_wire_mesh *wm, plain_points *pp)
+{
+    memset(pp, 0, sizeof *pp);
+    const float *src[4] = {wm->pos, wm->normal, wm->mean_curvature, wm->gauss_curvature};
+    if (!wm->tri_cell && !wm->tri_sheet) {
+        pp->n = wm->nverts;
+        pp->tri = wm->tri;
+        memcpy(pp->f32, src, sizeof src);
+        pp->cls = wm->vertex_class;
+        return true;
+    }
+    ism_corner_split *sp = &pp->split;
+    if (!ism_corner_split_build(wm->tri, wm->ntris, wm->nverts, wm->tri_cell, wm->tri_sheet, sp))
+        return false;
+    pp->n = sp->npoints;
+    pp->tri = sp->tri;
+    pp->sheet = sp->point_sheet;
+    for (int i = 0; i < 4; i++) {
+        if (!src[i])
+            continue;
+        int c = F32_COMPONENTS[i];
+        float *d = pp->owned[i] = malloc((pp->n ? pp->n : 1) * (size_t)c * sizeof *d);
+        if (!d)
+            return false;
+        for (size_t p = 0; p < pp->n; p++)
+            memcpy(d + (size_t)c * p, src[i] + (size_t)c * sp->point_vertex[p], c * sizeof *d);
+        pp->f32[i] = d;
+    }
+    if (wm->vertex_class) {
+        uint8_t *d = pp->owned[4] = malloc(pp->n ? pp->n : 1);
+        if (!d)
+            return false;
+        for (size_t p = 0; p < pp->n; p++)
+            d[p] = wm->vertex_class[sp->point_vertex[p]];
+        pp->cls = d;
+    }
+    if (sp->point_cell) {
+        pp->cell = malloc((pp->n ? pp->n : 1) * sizeof *pp->cell);
+        if (!pp->cell)
+            return false;
+        for (size_t p = 0; p < pp->n; p++)
+            pp->cell[p] = (float)sp->point_cell[p];
+    }
+    return true;
+}
+
 /* The surface without Draco: plain accessors for every attribute sent and uint32 indices of
  * the triangles with three distinct vertices (as Draco keeps them). */
 static bool add_plain_surface(gltf *g, const ism_wire_mesh *wm)
 {
+    plain_points pp;
     uint32_t *idx = malloc((wm->live_triangles ? wm->live_triangles : 1) * 3 * sizeof *idx);
-    if (!idx)
+    if (!plain_points_build(wm, &pp) || !idx) {
+        plain_points_free(&pp);
+        free(idx);
         return false;
+    }
     size_t ni = 0;
     for (size_t t = 0; t < wm->ntris; t++) {
-        const uint32_t *v = wm->tri + 3 * t;
+        const uint32_t *v = wm->tri + 3 * t; /* liveness is the vertices' */
         if (v[0] != v[1] && v[1] != v[2] && v[0] != v[2])
             for (int k = 0; k < 3; k++)
-                idx[ni++] = v[k];
+                idx[ni++] = pp.tri[3 * t + k];
     }
-    size_t n = wm->nverts;
-    struct {
-        const void *data;
-        size_t bytes_per_vertex;
-        int ctype;
-        const char *type;
-    } atts[4] = { /* in SURFACE_ATTRIBUTES' order; the class is added below */
-        {wm->pos, 3 * sizeof(float), CT_FLOAT, "VEC3"},
-        {wm->normal, 3 * sizeof(float), CT_FLOAT, "VEC3"},
-        {wm->mean_curvature, sizeof(float), CT_FLOAT, "SCALAR"},
-        {wm->gauss_curvature, sizeof(float), CT_FLOAT, "SCALAR"},
-    };
-    int acc[5];
-    acc[4] = wm->vertex_class ? plain_bytes(g, wm->vertex_class, n) : -1;
+    size_t n = pp.n;
+    int acc[NSURF];
+    acc[4] = pp.cls ? plain_bytes(g, pp.cls, n) : -1;
+    acc[6] = pp.sheet ? plain_bytes(g, pp.sheet, n) : -1;
     for (int i = 0; i < 4; i++)
-        acc[i] = atts[i].data ? plain_attribute(g, atts[i].data, n * atts[i].bytes_per_vertex, n,
-                                                atts[i].ctype, atts[i].type,
-                                                i == 0 ? wm->bounds : NULL)
-                              : -1;
+        acc[i] = pp.f32[i] ? plain_attribute(g, pp.f32[i], n * F32_COMPONENTS[i] * sizeof(float),
+                                             n, CT_FLOAT, F32_COMPONENTS[i] == 3 ? "VEC3" : "SCALAR",
+                                             i == 0 ? wm->bounds : NULL)
+                           : -1;
+    acc[5] = pp.cell ? plain_attribute(g, pp.cell, n * sizeof(float), n, CT_FLOAT, "SCALAR", NULL)
+                     : -1;
     size_t ioff = bin_append(&g->bin, idx, ni * sizeof *idx);
     int indices = add_accessor(g, add_view(g, ioff, ni * sizeof *idx, TARGET_ELEMENTS, 0), CT_UINT,
                                ni, "SCALAR", NULL);
     free(idx);
+    plain_points_free(&pp);
     open_surface(g, indices, acc);
     close_surface(g);
     return !g->bin.failed;
@@ -437,6 +510,58 @@ static bool add_singular_curves(gltf *g, const ism_features *f, int kind, const 
     return ok;
 }
 
+/* The requested curves of one kind (enum ism_cut_kind) as LINES, one polyline per arc;
+ * extras {"kind", "curves": how many, "curve": each arc's curve (the features JSON's order of
+ * the requested curves)}. */
+static bool add_cut_curves(gltf *g, const ism_mesh *m, const ism_features *f, int kind,
+                           int material)
+{
+    const ism_polylines *a = &f->arcs;
+    ism_polylines some = {0, NULL, NULL};
+    some.start = malloc((a->n + 1) * sizeof *some.start);
+    some.verts = malloc(((a->n ? a->start[a->n] : 0) + 1) * sizeof *some.verts);
+    ism_jw ex;
+    ism_jw_init(&ex);
+    bool ok = some.start && some.verts;
+    if (ok) {
+        some.start[0] = 0;
+        ism_jw_object(&ex);
+        ism_jw_key(&ex, "kind");
+        ism_jw_string(&ex, ism_cut_kind_name(kind));
+        ism_jw_key(&ex, "curve");
+        ism_jw_array(&ex);
+        size_t ncurves = 0;
+        uint32_t last = UINT32_MAX;
+        for (size_t i = 0; i < a->n; i++) {
+            if (f->arc_kind[i] != kind)
+                continue;
+            uint32_t len = a->start[i + 1] - a->start[i];
+            memcpy(some.verts + some.start[some.n], a->verts + a->start[i], len * sizeof(uint32_t));
+            some.start[some.n + 1] = some.start[some.n] + len;
+            some.n++;
+            ism_jw_uint(&ex, f->arc_curve[i]);
+            ncurves += f->arc_curve[i] != last; /* arcs of one curve are consecutive */
+            last = f->arc_curve[i];
+        }
+        ism_jw_array_end(&ex);
+        ism_jw_key(&ex, "curves");
+        ism_jw_uint(&ex, ncurves);
+        ism_jw_object_end(&ex);
+        char name[48];
+        snprintf(name, sizeof name, "%s_curves", ism_cut_kind_name(kind));
+        ok = add_feature_primitive(g, m, name, GL_LINES, material, &some, NULL, 0, &ex);
+    }
+    ism_jw_free(&ex);
+    ism_polylines_free(&some);
+    return ok;
+}
+
+/* Colours of the requested curves by kind (the viewer's, web/js/curves.js). */
+static const float CUT_COLORS[ISM_CUT_KIND_COUNT][3] = {
+    {1.00f, 0.31f, 0.64f}, {0.23f, 0.53f, 1.00f}, {1.00f, 0.75f, 0.04f}, {0.90f, 0.90f, 0.90f},
+    {0.98f, 0.34f, 0.03f}};
+#define CUT_MATERIAL0 7 /* the first requested-curve material */
+
 static void write_material(ism_jw *w, const char *name, float r, float gr, float b,
                            bool double_sided)
 {
@@ -535,6 +660,11 @@ static char *join_json(gltf *g, const ism_glb_input *in, size_t *len)
         write_material(&w, "singular_points", 1.00f, 0.82f, 0.12f, false);
         write_material(&w, "double_curves", 0.22f, 0.89f, 0.42f, false);
         write_material(&w, "whiskers", 0.13f, 0.83f, 0.93f, false);
+        for (int k = 0; k < ISM_CUT_KIND_COUNT; k++) {
+            char name[48];
+            snprintf(name, sizeof name, "%s_curves", ism_cut_kind_name(k));
+            write_material(&w, name, CUT_COLORS[k][0], CUT_COLORS[k][1], CUT_COLORS[k][2], false);
+        }
         ism_jw_array_end(&w);
         ism_jw_key(&w, "buffers");
         ism_jw_array(&w);
@@ -623,6 +753,8 @@ bool ism_glb_build(const ism_glb_input *in, unsigned char **out, size_t *len)
                  add_singular_points(&g, f, 4) &&
                  add_singular_curves(&g, f, ISM_CURVE_DOUBLE, "double_curves", 5) &&
                  add_singular_curves(&g, f, ISM_CURVE_WHISKER, "whiskers", 6);
+            for (int k = 0; ok && k < ISM_CUT_KIND_COUNT; k++)
+                ok = add_cut_curves(&g, in->mesh, f, k, CUT_MATERIAL0 + k);
         }
     }
     for (int i = 0; i < 4; i++)

@@ -8,9 +8,14 @@
  * "nonmanifold_points", "boundaries", and from the singular locus found from f
  * "singular_points" (POINTS; extras {"type": [...], "certified": [...], "xyz": [full
  * precision]}), "double_curves" and "whiskers" (LINES; extras {"kind", "curves"}) — each only
- * when there is something to draw. The
- * surface's attributes: POSITION, NORMAL, _MEAN_CURVATURE, _GAUSS_CURVATURE, _CLASS (the
- * ones sent); the points node carries "extras": {"class": [...], "kind": [...]} per point.
+ * when there is something to draw; the requested curves as LINES nodes "section_curves",
+ * "level_curves", "intersection_curves", "silhouette_curves", "crease_curves" (one polyline
+ * per arrangement edge; extras {"kind", "curves", "curve": [each arc's curve, the features
+ * JSON's order]}). The surface's attributes: POSITION, NORMAL, _MEAN_CURVATURE,
+ * _GAUSS_CURVATURE, _CLASS (the ones sent), _CELL (the arrangement cell of the point's
+ * triangles, float; when curves were requested) and _DOUBLE_SHEET (ubyte 0/1; when f has
+ * double sheets) — vertices are split where cells or sheets change, so every triangle's
+ * points agree; the points node carries "extras": {"class": [...], "kind": [...]} per point.
  * Without Draco (request output.draco false, ?draco=0) the surface is a plain primitive: the
  * same attributes as float/ubyte accessors and uint32 indices, no extension required.
  * An empty surface gives a valid glTF with one empty scene and no buffer. */

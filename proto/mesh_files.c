@@ -18,8 +18,30 @@ static void ply_header(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w)
         ism_sink_printf(s, "property float gauss_curvature\n");
     if (w->vertex_class)
         ism_sink_printf(s, "property uchar class\n");
-    ism_sink_printf(s, "element face %zu\nproperty list uchar int vertex_indices\nend_header\n",
-                    m->ntris);
+    ism_sink_printf(s, "element face %zu\nproperty list uchar int vertex_indices\n", m->ntris);
+    if (w->tri_cell)
+        ism_sink_printf(s, "property uint cell\n");
+    if (w->tri_sheet)
+        ism_sink_printf(s, "property uchar double_sheet\n");
+    ism_sink_printf(s, "end_header\n");
+}
+
+/* Faces with their labels (cell, double sheet) as face properties. */
+static void ply_faces(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w)
+{
+    if (!w->tri_cell && !w->tri_sheet) {
+        ism_ply_put_faces(s, m);
+        return;
+    }
+    for (size_t t = 0; t < m->ntris; t++) {
+        ism_sink_u8(s, 3);
+        for (int k = 0; k < 3; k++)
+            ism_sink_u32le(s, m->tri[3 * t + k]);
+        if (w->tri_cell)
+            ism_sink_u32le(s, w->tri_cell[t]);
+        if (w->tri_sheet)
+            ism_sink_u8(s, w->tri_sheet[t]);
+    }
 }
 
 bool ism_write_ply_wire(const ism_mesh *m, const ism_wire_mesh *w, ism_write_fn write,
@@ -44,7 +66,7 @@ bool ism_write_ply_wire(const ism_mesh *m, const ism_wire_mesh *w, ism_write_fn 
         if (w->vertex_class)
             ism_sink_u8(s, w->vertex_class[i]);
     }
-    ism_ply_put_faces(s, m);
+    ply_faces(s, m, w);
     bool ok = ism_sink_finish(s);
     free(s);
     return ok;
@@ -65,6 +87,26 @@ static void obj_lines(ism_sink *s, const char *group, const ism_polylines *p)
     }
 }
 
+/* The requested curves, one group per kind ("section_curves", ...), one `l` per arc. */
+static void obj_cut_curves(ism_sink *s, const ism_features *f)
+{
+    const ism_polylines *a = &f->arcs;
+    for (int k = 0; k < ISM_CUT_KIND_COUNT; k++) {
+        bool named = false;
+        for (size_t i = 0; i < a->n; i++) {
+            if (f->arc_kind[i] != k || a->start[i + 1] - a->start[i] < 2)
+                continue;
+            if (!named)
+                ism_sink_printf(s, "g %s_curves\n", ism_cut_kind_name(k));
+            named = true;
+            ism_sink_printf(s, "l");
+            for (uint32_t j = a->start[i]; j < a->start[i + 1]; j++)
+                ism_sink_printf(s, " %u", a->verts[j] + 1);
+            ism_sink_printf(s, "\n");
+        }
+    }
+}
+
 bool ism_write_obj_features(const ism_mesh *m, const ism_features *f, ism_write_fn write,
                             void *ctx)
 {
@@ -78,6 +120,7 @@ bool ism_write_obj_features(const ism_mesh *m, const ism_features *f, ism_write_
     ism_sink_init(s, write, ctx);
     obj_lines(s, "nonmanifold_curves", &f->curves);
     obj_lines(s, "boundaries", &f->boundaries);
+    obj_cut_curves(s, f);
     bool ok = ism_sink_finish(s);
     free(s);
     return ok;

@@ -2,9 +2,12 @@
  * write_mesh.h), plus what the wire carries. PLY: binary little endian, per vertex float x y z,
  * then the attributes the request asked for — float nx ny nz (unit everywhere), float
  * mean_curvature, float gauss_curvature (clamped as in Draco's), uchar class (features.h's
- * classes) — and faces as uchar 3 + int indices. OBJ: core's v / vn / f lines, then the
- * features as `l` polylines over the same 1-based vertices: a group `g nonmanifold_curves`
- * and a group `g boundaries` (closed ones repeat their first vertex). */
+ * classes) — and faces as uchar 3 + int indices, then face properties uint cell (when
+ * curves were requested: the arrangement face) and uchar double_sheet (when f has double
+ * sheets). OBJ: core's v / vn / f lines, then the features as `l` polylines over the same
+ * 1-based vertices: a group `g nonmanifold_curves`, a group `g boundaries` (closed ones
+ * repeat their first vertex), and per kind of requested curve a group `g section_curves`,
+ * `level_curves`, ... with one `l` per arrangement edge. */
 #ifndef ISM_MESH_FILES_H
 #define ISM_MESH_FILES_H
 
