@@ -520,9 +520,13 @@ static bool add_cut_curves(gltf *g, const ism_mesh *m, const ism_features *f, in
     ism_polylines some = {0, NULL, NULL};
     some.start = malloc((a->n + 1) * sizeof *some.start);
     some.verts = malloc(((a->n ? a->start[a->n] : 0) + 1) * sizeof *some.verts);
+    uint32_t top = 0; /* curve ids < top */
+    for (size_t i = 0; i < a->n; i++)
+        top = f->arc_curve[i] >= top ? f->arc_curve[i] + 1 : top;
+    uint8_t *seen = calloc(top ? top : 1, 1);
     ism_jw ex;
     ism_jw_init(&ex);
-    bool ok = some.start && some.verts;
+    bool ok = some.start && some.verts && seen;
     if (ok) {
         some.start[0] = 0;
         ism_jw_object(&ex);
@@ -531,7 +535,6 @@ static bool add_cut_curves(gltf *g, const ism_mesh *m, const ism_features *f, in
         ism_jw_key(&ex, "curve");
         ism_jw_array(&ex);
         size_t ncurves = 0;
-        uint32_t last = UINT32_MAX;
         for (size_t i = 0; i < a->n; i++) {
             if (f->arc_kind[i] != kind)
                 continue;
@@ -540,8 +543,8 @@ static bool add_cut_curves(gltf *g, const ism_mesh *m, const ism_features *f, in
             some.start[some.n + 1] = some.start[some.n] + len;
             some.n++;
             ism_jw_uint(&ex, f->arc_curve[i]);
-            ncurves += f->arc_curve[i] != last; /* arcs of one curve are consecutive */
-            last = f->arc_curve[i];
+            ncurves += !seen[f->arc_curve[i]];
+            seen[f->arc_curve[i]] = 1;
         }
         ism_jw_array_end(&ex);
         ism_jw_key(&ex, "curves");
@@ -553,6 +556,7 @@ static bool add_cut_curves(gltf *g, const ism_mesh *m, const ism_features *f, in
     }
     ism_jw_free(&ex);
     ism_polylines_free(&some);
+    free(seen);
     return ok;
 }
 

@@ -38,6 +38,20 @@ static void make(ism_computed *c)
     c->vertex_class = malloc(4);
     memcpy(c->vertex_class, (uint8_t[]){0, 1, 1, 2}, 4);
     c->wire.vertex_class = c->vertex_class;
+    c->tri_cell = malloc(2 * sizeof *c->tri_cell);
+    memcpy(c->tri_cell, (uint32_t[]){0, 1}, 2 * sizeof *c->tri_cell);
+    c->wire.tri_cell = c->tri_cell;
+    ism_polylines *arcs = &c->features.arcs;
+    arcs->n = 1;
+    arcs->start = malloc(2 * sizeof *arcs->start);
+    arcs->start[0] = 0;
+    arcs->start[1] = 2;
+    arcs->verts = malloc(2 * sizeof *arcs->verts);
+    memcpy(arcs->verts, (uint32_t[]){0, 2}, 2 * sizeof *arcs->verts);
+    c->features.arc_kind = malloc(1);
+    c->features.arc_kind[0] = ISM_CUT_LEVEL;
+    c->features.arc_curve = malloc(sizeof(uint32_t));
+    c->features.arc_curve[0] = 0;
     c->wire.live_triangles = 2;
     for (int k = 0; k < 6; k++)
         c->wire.bounds[k] = k - 2.5;
@@ -104,6 +118,12 @@ Test(computed, round_trip)
     cr_assert_eq(c.features.boundaries.verts[4], 0);
     cr_assert_eq(c.features.curves.n, 0);
     cr_assert_eq(c.features.points[0], 3);
+    cr_assert_eq(c.tri_cell[1], 1);
+    cr_assert_eq(c.wire.tri_cell, c.tri_cell);
+    cr_assert_null(c.tri_sheet);
+    cr_assert_eq(c.features.arcs.n, 1);
+    cr_assert_eq(c.features.arcs.verts[1], 2);
+    cr_assert_eq(c.features.arc_kind[0], ISM_CUT_LEVEL);
     cr_assert_eq(c.features.point_class[0], 3);
     cr_assert_eq(c.features.locus, &c.locus);
     cr_assert_eq(c.locus.npoints, 1);
@@ -121,6 +141,7 @@ Test(computed, round_trip)
     cr_assert_null(v.normal);
     cr_assert_null(v.mean_curvature);
     cr_assert_eq(v.vertex_class, c.vertex_class);
+    cr_assert_eq(v.tri_cell, c.tri_cell); /* triangle labels go whatever the attributes */
     ism_computed_free(&c);
     ism_computed_free(&want);
     ism_frame_builder_free(&b);

@@ -1,0 +1,225 @@
+"""test_curve_outputs.py — the arrangement and the requested curves in every output format,
+decoded by readers independent of the encoders: the unit sphere cut by the planes x = 0,
+y = 0, z = 0 (in a box on the octree lattice and one shifted 0.37 of a finest cell off it).
+
+- .drc (npm draco3d): every decoded triangle's three points carry one cell id, and the ids
+  partition the triangles into exactly the features' faces — each face's triangle count, and
+  its area summed from the decoded positions within 0.1% of the reported area and 0.5% of
+  pi/2 (the closed form: an octant of the unit sphere).
+- .glb (shifted box): the same through its KHR_draco_mesh_compression primitive (_CELL), and the curves as
+  LINES nodes "section_curves" whose points lie on the sphere and on a coordinate plane.
+- .obj (shifted box): a group `section_curves` of one `l` line per arrangement edge, on the sphere and a
+  plane; .ply: the face property `cell` with the faces' counts and areas.
+- Double sheets: f = s1 * s2^2 (two spheres of radius 0.4, the second a double sheet): the
+  decoded double_sheet flag marks exactly the sheet's triangles (count as reported, all at
+  x < 0, area 4 pi 0.16 within 1%), never a mixed triangle."""
+import json
+import math
+import os
+import shutil
+import struct
+import subprocess
+import tempfile
+import unittest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
+ISOMESH = os.path.join(BUILD, "isomesh")
+DECODE = os.path.join(ROOT, "tests", "cli", "decode_drc.mjs")
+
+DEPTH = 6
+SIDE = 2.6
+CELL = SIDE / 2 ** DEPTH
+PLANES = [{"kind": "plane", "normal": n, "offsets": [0]}
+          for n in ([1, 0, 0], [0, 1, 0], [0, 0, 1])]
+FLOAT_TOL = 1e-6   # float32 positions of points within 1e-10 of both surfaces
+
+
+def box(side, shift):
+    lo, hi = -side / 2 + shift, side / 2 + shift
+    return [lo, lo, lo, hi, hi, hi]
+
+
+def tri_area(p, q, r):
+    u = [q[k] - p[k] for k in range(3)]
+    w = [r[k] - p[k] for k in range(3)]
+    c = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]]
+    return 0.5 * math.sqrt(sum(v * v for v in c))
+
+
+def decode_drc(data, tmp):
+    path = os.path.join(tmp, "decode.drc")
+    with open(path, "wb") as f:
+        f.write(data)
+    r = subprocess.run(["node", DECODE, path], capture_output=True, text=True, timeout=120)
+    if r.returncode != 0:
+        raise AssertionError("decode_drc.mjs failed: " + r.stderr)
+    return json.loads(r.stdout)
+
+
+def glb_chunks(data):
+    jlen = struct.unpack_from("<I", data, 12)[0]
+    js = json.loads(data[20:20 + jlen])
+    blen = struct.unpack_from("<I", data, 20 + jlen)[0]
+    return js, data[28 + jlen:28 + jlen + blen]
+
+
+def labels_by_triangle(d, name):
+    """Each decoded triangle's label; fails on a triangle whose points disagree."""
+    vals, idx = d[name]["values"], d["index"]
+    out = []
+    for t in range(d["faces"]):
+        a, b, c = (vals[idx[3 * t + k]] for k in range(3))
+        if not a == b == c:
+            raise AssertionError(f"triangle {t} has points of {name} {a}, {b}, {c}")
+        out.append(a)
+    return out
+
+
+def decoded_triangles(d):
+    p, idx = d["position"], d["index"]
+    return [[p[3 * idx[3 * t + k]:3 * idx[3 * t + k] + 3] for k in range(3)]
+            for t in range(d["faces"])]
+
+
+class CurveOutputsTest(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.mkdtemp(prefix="isomesh-curve-outputs-")
+
+    def tearDown(self):
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+    def run_request(self, request, fmt):
+        req = os.path.join(self.dir, "request.json")
+        with open(req, "w") as f:
+            json.dump(request, f)
+        out, feat = os.path.join(self.dir, "out." + fmt), os.path.join(self.dir, "f.json")
+        proc = subprocess.run([ISOMESH, req, "-o", out, "--features", feat],
+                              capture_output=True, text=True, timeout=120)
+        self.assertEqual(proc.returncode, 0, proc.stderr)
+        with open(feat) as f, open(out, "rb") as g:
+            return json.load(f), g.read()
+
+    def sphere(self, shift):
+        return {"expr": "x^2 + y^2 + z^2 - 1", "box": box(SIDE, shift),
+                "depth": {"max": DEPTH}, "curves": PLANES}
+
+    def assert_cells_partition(self, cells, triangles, faces):
+        """cells: per triangle; triangles: their corners; faces: the features' faces."""
+        self.assertEqual(len(faces), 8)
+        count, area = {}, {}
+        for c, tri in zip(cells, triangles):
+            count[c] = count.get(c, 0) + 1
+            area[c] = area.get(c, 0.0) + tri_area(*tri)
+        self.assertEqual(sorted(count), [f["id"] for f in faces])
+        for f in faces:
+            self.assertEqual(count[f["id"]], f["triangles"], f)
+            self.assertLess(abs(area[f["id"]] - f["area"]) / f["area"], 1e-3, f)
+            self.assertLess(abs(area[f["id"]] - math.pi / 2) / (math.pi / 2), 0.005, f)
+
+    def assert_on_sphere_and_a_plane(self, pts):
+        self.assertTrue(pts)
+        for p in pts:
+            self.assertLess(abs(math.sqrt(sum(v * v for v in p)) - 1), FLOAT_TOL, p)
+            self.assertLess(min(abs(v) for v in p), FLOAT_TOL, p)
+
+    def test_drc_and_glb_cells_partition_the_triangles(self):
+        for shift in (0.0, 0.37 * CELL):
+            with self.subTest(shift=shift):
+                f, drc = self.run_request(self.sphere(shift), "drc")
+                faces = f["arrangement"]["faces"]
+                d = decode_drc(drc, self.dir)
+                self.assertEqual(d["cell"]["unique_id"], 5)
+                self.assert_cells_partition(labels_by_triangle(d, "cell"), decoded_triangles(d),
+                                            faces)
+        f, glb = self.run_request(self.sphere(0.37 * CELL), "glb")
+        js, bin_ = glb_chunks(glb)
+        prim = js["meshes"][0]["primitives"][0]
+        ext = prim["extensions"]["KHR_draco_mesh_compression"]
+        self.assertEqual(ext["attributes"]["_CELL"], 5)
+        self.assertIn("_CELL", prim["attributes"])
+        view = js["bufferViews"][ext["bufferView"]]
+        off = view.get("byteOffset", 0)
+        d = decode_drc(bin_[off:off + view["byteLength"]], self.dir)
+        self.assert_cells_partition(labels_by_triangle(d, "cell"), decoded_triangles(d),
+                                    f["arrangement"]["faces"])
+        self.check_glb_lines(js, bin_, f)
+
+    def check_glb_lines(self, js, bin_, f):
+        node = [n for n in js["nodes"] if n["name"] == "section_curves"]
+        self.assertEqual(len(node), 1)
+        ex = node[0]["extras"]
+        self.assertEqual((ex["kind"], ex["curves"]), ("section", 3))
+        self.assertEqual(len(ex["curve"]), len(f["arrangement"]["edges"]))
+        prim = js["meshes"][node[0]["mesh"]]["primitives"][0]
+        self.assertEqual(prim["mode"], 1)  # LINES
+        acc = js["accessors"][prim["attributes"]["POSITION"]]
+        view = js["bufferViews"][acc["bufferView"]]
+        raw = bin_[view.get("byteOffset", 0):view.get("byteOffset", 0) + 12 * acc["count"]]
+        pts = [struct.unpack_from("<3f", raw, 12 * i) for i in range(acc["count"])]
+        self.assert_on_sphere_and_a_plane(pts)
+        points_in_arcs = sum(len(a) // 3 for c in f["curves"] if c["kind"] == "section"
+                             for a in c["arcs"])
+        self.assertEqual(acc["count"], points_in_arcs)
+
+    def test_obj_lines_and_ply_cells(self):
+        shift = 0.37 * CELL
+        f, obj = self.run_request(self.sphere(shift), "obj")
+        verts, lines, group = [], [], None
+        for line in obj.decode().splitlines():
+            parts = line.split()
+            if parts and parts[0] == "v":
+                verts.append([float(v) for v in parts[1:4]])
+            elif parts and parts[0] == "g":
+                group = parts[1]
+            elif parts and parts[0] == "l" and group == "section_curves":
+                lines.append([int(i) - 1 for i in parts[1:]])
+        self.assertEqual(len(lines), len(f["arrangement"]["edges"]))
+        self.assert_on_sphere_and_a_plane([verts[i] for ln in lines for i in ln])
+
+        f, ply = self.run_request(self.sphere(shift), "ply")
+        head_end = ply.index(b"end_header\n") + len(b"end_header\n")
+        head = ply[:head_end].decode()
+        self.assertIn("element face", head)
+        self.assertIn("property uint cell", head)
+        nv = int(head.split("element vertex ")[1].split()[0])
+        nt = int(head.split("element face ")[1].split()[0])
+        vprops = head.split("element vertex")[1].split("element face")[0].count("property float")
+        vbytes = 4 * vprops + head.split("element face")[0].count("property uchar")
+        pos = [struct.unpack_from("<3f", ply, head_end + vbytes * i) for i in range(nv)]
+        at = head_end + vbytes * nv
+        cells, tris = [], []
+        for _ in range(nt):
+            self.assertEqual(ply[at], 3)
+            i, j, k, c = struct.unpack_from("<3iI", ply, at + 1)
+            tris.append([pos[i], pos[j], pos[k]])
+            cells.append(c)
+            at += 17
+        self.assertEqual(at, len(ply))
+        self.assert_cells_partition(cells, tris, f["arrangement"]["faces"])
+
+    def test_double_sheet_flag_marks_the_sheet(self):
+        expr = "((x-0.5)^2+y^2+z^2-0.16) * ((x+0.5)^2+y^2+z^2-0.16)^2"
+        cell = 2.2 / 2 ** 5
+        for shift in (0.0, 0.37 * cell):
+            with self.subTest(shift=shift):
+                b = [-1.1 + shift, -0.6 + shift, -0.6 + shift, 1.1 + shift, 0.6 + shift,
+                     0.6 + shift]
+                f, drc = self.run_request({"expr": expr, "box": b, "depth": {"max": 5}}, "drc")
+                sheets = f["double_sheets"]
+                self.assertEqual(len(sheets), 1)
+                d = decode_drc(drc, self.dir)
+                self.assertEqual(d["double_sheet"]["unique_id"], 6)
+                flags = labels_by_triangle(d, "double_sheet")
+                tris = decoded_triangles(d)
+                flagged = [t for t, s in zip(tris, flags) if s]
+                self.assertEqual(len(flagged), sheets[0]["triangles"])
+                for t, s in zip(tris, flags):
+                    cx = sum(p[0] for p in t) / 3
+                    self.assertTrue(cx < 0 if s else cx > 0, (s, t))
+                area = sum(tri_area(*t) for t in flagged)
+                self.assertLess(abs(area - 4 * math.pi * 0.16) / (4 * math.pi * 0.16), 0.01)
+
+
+if __name__ == "__main__":
+    unittest.main()
