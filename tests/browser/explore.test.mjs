@@ -3,7 +3,8 @@
 // an off-centre sphere) and the mesh is not cut (no boundary edges); the box outline and
 // the axes with ticks change the picture; a box typed by hand is kept; the gallery search;
 // picking a node of the Cayley cubic gives its type and its closed-form coordinates within
-// 1e-6; a PNG export has the size asked for.
+// 1e-6; a PNG export has the size asked for; the Curves panel cuts the sphere into cells
+// (curves drawn, areas 2 pi h, a picked cell's facts).
 import { describe, it, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { startDaemon, stopDaemon, startBrowser, stopBrowser } from './lib/harness.mjs';
@@ -192,6 +193,56 @@ describe('box and inspection', { timeout: 300000 }, () => {
     assert.ok(loF <= lo2 && hi2 <= hiF, 'the full range holds the others');
     assert.ok(loF <= min || hiF >= max, 'the full range reaches the data');
     await page.selectOption('#color-range', 'p2');
+    await page.selectOption('#color-mode', 'shaded');
+  });
+
+  it('the Curves panel cuts the sphere into cells: curves drawn, cells coloured and picked', async () => {
+    // The unit sphere (preset box ±1.5): 3 planes z = -0.75, 0, 0.75 cut 4 zones of area
+    // 2 pi h (Archimedes): pi/2, 3 pi/2, 3 pi/2, pi/2.
+    await page.evaluate(() => { document.getElementById('curves-section').open = true; });
+    await page.selectOption('#curve-kind', 'plane');
+    await page.selectOption('#curve-axis', 'z');
+    await page.fill('#curve-count', '3');
+    let n = await loads(page);
+    await page.click('#curve-add');
+    await waitForMesh(page, n);
+    const facts = async () => page.evaluate(() => ({
+      drawn: Number(document.body.dataset.curvesDrawn), cells: Number(document.body.dataset.cells),
+      sections: window.isomeshViewer.data.features.curves.filter((c) => c.kind === 'section').length,
+      faces: window.isomeshViewer.data.features.arrangement.faces.map((f) => f.area),
+      hash: location.hash }));
+    let f = await facts();
+    assert.deepEqual([f.drawn, f.sections, f.cells], [3, 3, 4]);
+    const zones = [Math.PI / 2, 1.5 * Math.PI];
+    for (const a of f.faces) assert.ok(zones.some((z) => Math.abs(a - z) / z < 0.01), `cell area ${a} is a zone's 2 pi h`);
+    assert.match(decodeURIComponent(f.hash), /curves=\[\{"kind":"plane","axis":"z","count":3\}\]/);
+
+    await page.selectOption('#curve-axis', 'x');
+    await page.fill('#curve-count', '1');
+    n = await loads(page);
+    await page.click('#curve-add');
+    await waitForMesh(page, n);
+    f = await facts();
+    assert.deepEqual([f.drawn, f.cells], [4, 8], 'x = 0 halves every zone');
+    await page.evaluate(() => document.activeElement && document.activeElement.blur());
+    const shaded = await viewShot(page, 'sphere-curves.png');
+    await page.selectOption('#color-mode', 'cells');
+    const cells = await viewShot(page, 'sphere-curves-cells.png');
+    assertChanged(shaded, cells);
+
+    const box = await page.locator('#view').boundingBox();
+    await page.mouse.click(box.x + box.width / 2, box.y + box.height / 2);
+    await page.waitForSelector('#pick-info[data-cell]:not([hidden])');
+    const info = await page.$eval('#pick-info', (e) => ({ ...e.dataset, text: e.textContent }));
+    const area = Number(info.cellArea);
+    assert.ok(zones.some((z) => Math.abs(area - z / 2) / (z / 2) < 0.01), `picked cell's area ${area} is half a zone`);
+    assert.equal(info.cellEuler, '1', 'a cell of the cut sphere is a disk');
+    assert.match(info.text, /^cell \d+: area .*χ = 1, 1 boundary cycle/);
+
+    n = await loads(page);
+    await page.click('#curve-list li:nth-child(2) button');
+    await waitForMesh(page, n);
+    assert.equal((await facts()).drawn, 3, 'removing the x plane leaves the z stack');
     await page.selectOption('#color-mode', 'shaded');
   });
 

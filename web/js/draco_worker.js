@@ -21,6 +21,9 @@ const ATTRIBUTES = [
   { id: 2, name: 'mean_curvature', type: 'GENERIC', components: 1, array: 'Float32Array' },
   { id: 3, name: 'gauss_curvature', type: 'GENERIC', components: 1, array: 'Float32Array' },
   { id: 4, name: 'class', type: 'GENERIC', components: 1, array: 'Uint8Array' },
+  // Triangle labels (vertices split where they change, so a triangle's three points agree):
+  { id: 5, name: 'cell', type: 'GENERIC', components: 1, array: 'Uint32Array' },
+  { id: 6, name: 'double_sheet', type: 'GENERIC', components: 1, array: 'Uint8Array' },
 ];
 
 let modulePromise = null;
@@ -41,7 +44,7 @@ function loadDecoder() {
 }
 
 function dracoDataType(draco, arrayName) {
-  return arrayName === 'Uint8Array' ? draco.DT_UINT8 : draco.DT_FLOAT32;
+  return { Uint8Array: draco.DT_UINT8, Uint32Array: draco.DT_UINT32 }[arrayName] ?? draco.DT_FLOAT32;
 }
 
 function readAttribute(draco, decoder, mesh, attr, spec) {

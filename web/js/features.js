@@ -37,7 +37,7 @@ function segments(polylines) {
 // depth-tested at full strength and once through the surface at HIDDEN_OPACITY.
 const HIDDEN_OPACITY = 0.3;
 
-function fatLines(positions, color, width, clippingPlanes) {
+export function fatLines(positions, color, width, clippingPlanes) {
   const geometry = new LineSegmentsGeometry();
   geometry.setPositions(positions);
   const group = new THREE.Group();

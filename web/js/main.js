@@ -5,6 +5,7 @@
 // with its retry time, the token prompt on 401).
 import { Viewer } from './viewer.js';
 import { POINT_TYPE_COLORS, CURVE_KIND_COLORS } from './features.js';
+import { CUT_KIND_COLORS, MAX_CURVE_REQUESTS, curveRequest, describeCurve, cellFace } from './curves.js';
 import * as api from './api.js';
 import * as loader from './loader.js';
 import { checkExpression, presetSource } from './expr.js';
@@ -238,6 +239,7 @@ function syncControls() {
   $('show-edges').checked = state.show.edges;
   $('show-points').checked = state.show.points;
   $('show-boundary').checked = state.show.boundary;
+  $('show-curves').checked = state.show.curves !== false;
   $('show-box').checked = state.show.box !== false;
   $('show-axes').checked = !!state.show.axes;
   $('keep-box').checked = !!state.keepBox;
@@ -247,6 +249,7 @@ function syncControls() {
   $('clip-flip').checked = state.clip.flip;
   syncClipSlider();
   syncFeatureKey();
+  renderCurveList();
 }
 
 function syncClipSlider() {
@@ -267,6 +270,8 @@ const FEATURE_LABELS = { edges: 'singular curve segments', points: 'singular poi
 const TYPE_LABELS = {
   node: 'nodes', isolated: 'isolated points', cusp: 'cusps', degenerate: 'degenerate points',
   pinch: 'pinch points', triple: 'triple points', double: 'double curves', whisker: 'whiskers',
+  section: 'sections', level: 'level curves', intersection: 'intersections', silhouette: 'silhouettes',
+  crease: 'creases',
 };
 const hex = (c) => `#${c.toString(16).padStart(6, '0')}`;
 
@@ -291,9 +296,11 @@ function syncFeatureKey(counts, made) {
   if (made) {
     const types = $('key-types');
     types.replaceChildren();
+    const cuts = viewer.curves ? viewer.curves.kinds : {};
     const entries = [
       ...Object.entries(made.types).map(([t, n]) => [t, n, POINT_TYPE_COLORS[t]]),
       ...Object.entries(made.kinds).map(([t, n]) => [t, n, CURVE_KIND_COLORS[t]]),
+      ...Object.entries(cuts).map(([t, n]) => [t, n, CUT_KIND_COLORS[t]]),
     ];
     for (const [t, n, color] of entries) {
       const span = document.createElement('span');
@@ -303,6 +310,10 @@ function syncFeatureKey(counts, made) {
       span.textContent = `${n} ${TYPE_LABELS[t] || t}`;
       types.append(span);
     }
+    const sheets = viewer.data && viewer.data.mesh && viewer.data.mesh.attributes.double_sheet;
+    const flagged = sheets ? sheets.reduce((n, v) => n + (v ? 1 : 0), 0) : 0;
+    key.querySelector('.key-sheets').hidden = !flagged;
+    key.querySelector('.key-sheets').dataset.count = String(flagged);
   }
 }
 
@@ -321,6 +332,12 @@ function pickAt(e) {
     const eig = (p.hessian_eigenvalues || []).map((v) => sig(v)).join(', ');
     info.textContent = `${p.type} point${p.certified ? ' (certified)' : ' (not certified)'}\n(${xyz})\n` +
       `Hessian eigenvalues ${eig}; ${p.cones} cone${p.cones === 1 ? '' : 's'} of faces`;
+  } else if (hit.what === 'cut') {
+    const c = hit.p;
+    const ends = c.closed ? 'closed' : `${(c.ends || []).length} ends on the box`;
+    info.textContent = `${c.kind} curve (entry ${c.source + 1}, value ${c.index + 1}): length ${sig(c.length, 6)}, ` +
+      `${c.arcs.length} arc${c.arcs.length === 1 ? '' : 's'}, ${ends}\nnear (${xyz})`;
+    info.dataset.length = String(c.length);
   } else {
     const c = hit.p;
     const ends = c.closed ? 'closed' : (c.ends || []).map((e) => e.type).join(' – ');
@@ -329,7 +346,21 @@ function pickAt(e) {
   info.dataset.what = hit.what;
   info.dataset.xyz = hit.xyz.join(',');
   info.dataset.type = hit.what === 'point' ? hit.p.type : hit.p.kind;
+  delete info.dataset.cell;
   info.hidden = false;
+}
+
+// The arrangement cell of a picked triangle as text ('' when there are no cells).
+function cellText(face, info) {
+  const id = viewer.cellOf(face);
+  const f = id === null ? null : cellFace(viewer.data.features, id);
+  delete info.dataset.cell;
+  if (!f) return '';
+  info.dataset.cell = String(id);
+  info.dataset.cellArea = String(f.area);
+  info.dataset.cellEuler = String(f.euler);
+  return `cell ${id}: area ${sig(f.area, 6)}, χ = ${f.euler}, ${f.boundary} boundary cycle${f.boundary === 1 ? '' : 's'}, ` +
+    `${f.triangles.toLocaleString('en-US')} triangles\n`;
 }
 
 // Clicking the surface: the point, its triangle, and f, |grad f| and curvature there (asked
@@ -342,10 +373,17 @@ async function pickSurfaceAt(x, y) {
     info.hidden = true;
     return;
   }
+  const cell = cellText(hit.face, info);
+  if (cell) {                      // the cell's facts at once; f and curvature follow
+    info.textContent = cell.trim();
+    info.dataset.what = 'cell';
+    info.dataset.type = 'cell';
+    info.hidden = false;
+  }
   try {
     const p = await api.probePoint(body, hit.xyz);
     const v = (n) => (n === null ? 'undefined' : sig(n, 4));
-    info.textContent = `surface point (${hit.xyz.map((c) => sig(c, 7)).join(', ')}), triangle ${hit.face}\n` +
+    info.textContent = cell + `surface point (${hit.xyz.map((c) => sig(c, 7)).join(', ')}), triangle ${hit.face}\n` +
       `f = ${v(p.f)}, |∇f| = ${v(p.grad_norm)}, distance ≈ ${v(p.distance)}\n` +
       `H = ${v(p.mean_curvature)}, K = ${v(p.gauss_curvature)}`;
     info.dataset.what = 'surface';
@@ -354,7 +392,7 @@ async function pickSurfaceAt(x, y) {
     info.dataset.probe = JSON.stringify(p);
     info.hidden = false;
   } catch (e) {
-    info.hidden = true;
+    info.hidden = !cell;
   }
 }
 
@@ -516,6 +554,7 @@ function show(result, body, seq, preview = false) {
   applyDisplay();
   syncFeatureKey(viewer.features ? viewer.features.counts : { edges: 0, points: 0, boundary: 0, artefacts: 0 }, viewer.features);
   $('pick-info').hidden = true;
+  showCurveFacts(result);
   document.body.dataset.shown = preview ? 'preview' : 'final';
   if (preview) {
     previews++;
@@ -547,6 +586,11 @@ function failed(e, body) {
     const msg = e.message.replace(/^\$\.[^:]*: (line \d+, )?column \d+: /, '');
     showExprError({ line: e.line || 1, column: e.column, message: msg }, true);
     message('The server did not accept the expression (see the editor).', 'error');
+    return;
+  }
+  if (e.status === 400 && /^\$\.curves/.test(e.path || '')) {
+    showCurveError(e.message);
+    message('The server did not accept a curve (see the Curves panel).', 'error');
     return;
   }
   if (e.status === 422) {
@@ -583,6 +627,108 @@ function countdown(text, seconds, body) {
     retry.timer = setTimeout(tick, 1000);
   };
   tick();
+}
+
+// ---- the Curves panel -----------------------------------------------------------------
+
+function showCurveError(text) {
+  $('curve-error').textContent = text || '';
+  $('curve-error').hidden = !text;
+}
+
+function renderCurveList() {
+  const list = $('curve-list');
+  list.replaceChildren();
+  const kindOf = { plane: 'section', levels: 'level', surface: 'intersection', silhouette: 'silhouette' };
+  state.curves.forEach((e, i) => {
+    const li = document.createElement('li');
+    li.style.setProperty('--swatch', hex(CUT_KIND_COLORS[kindOf[e.kind]] ?? 0xffffff));
+    const label = document.createElement('span');
+    label.textContent = describeCurve(e);
+    const remove = document.createElement('button');
+    remove.type = 'button';
+    remove.textContent = '×';
+    remove.title = 'Remove these curves';
+    remove.setAttribute('aria-label', `Remove ${describeCurve(e)}`);
+    remove.addEventListener('click', () => {
+      state.curves.splice(i, 1);
+      curvesChanged();
+    });
+    li.append(label, remove);
+    list.append(li);
+  });
+  $('curve-add').disabled = state.curves.length >= MAX_CURVE_REQUESTS;
+}
+
+function curvesChanged() {
+  showCurveError('');
+  renderCurveList();
+  requestChanged({ now: true });
+}
+
+// A g typed in the panel: its syntax checked here (the server checks it again, with the
+// request's parameters). Returns the error text or ''.
+function gProblem(text) {
+  if (!text.trim()) return 'type an expression g(x, y, z)';
+  const check = checkExpression(text, state.params);
+  return check.ok ? '' : `g: column ${check.column}: ${check.message}`;
+}
+
+// The entry the panel's fields describe, or {error}.
+function entryFromPanel() {
+  const kind = $('curve-kind').value;
+  if (kind === 'plane') {
+    const axis = $('curve-axis').value === 'custom' ? $('curve-normal').value.trim() : $('curve-axis').value;
+    const e = { kind, axis, count: Number($('curve-count').value) };
+    return curveRequest(e, state.box) ? e : { error: 'the normal needs three numbers, not all 0, and 1 to 64 planes' };
+  }
+  if (kind === 'levels') {
+    const e = { kind, expr: $('curve-level-expr').value.trim(), values: $('curve-level-values').value.trim() };
+    const bad = gProblem(e.expr);
+    if (bad) return { error: bad };
+    return curveRequest(e, state.box) ? e : { error: 'values: 1 to 64 numbers, separated by commas' };
+  }
+  if (kind === 'surface') {
+    const e = { kind, expr: $('curve-surface-expr').value.trim() };
+    const bad = gProblem(e.expr);
+    return bad ? { error: bad } : e;
+  }
+  const v = viewer.getView();    // the silhouette seen from here: along the view direction
+  const d = v.pos.map((p, k) => p - v.target[k]);
+  const len = Math.hypot(...d) || 1;
+  return { kind: 'silhouette', direction: d.map((x) => Number((x / len).toPrecision(6))) };
+}
+
+function wireCurves() {
+  const forms = { plane: 'curve-plane', levels: 'curve-levels', surface: 'curve-surface' };
+  $('curve-kind').addEventListener('change', () => {
+    for (const [k, id] of Object.entries(forms)) $(id).hidden = $('curve-kind').value !== k;
+    showCurveError('');
+  });
+  $('curve-axis').addEventListener('change', () => { $('curve-normal').hidden = $('curve-axis').value !== 'custom'; });
+  $('curve-add').addEventListener('click', () => {
+    const e = entryFromPanel();
+    if (e.error) {
+      showCurveError(e.error);
+      return;
+    }
+    if (state.curves.length >= MAX_CURVE_REQUESTS) return;
+    state.curves.push(e);
+    curvesChanged();
+  });
+}
+
+// What the panel says under the list: curves drawn, cells, the Euler check.
+function showCurveFacts(result) {
+  const f = result.features || {};
+  const drawn = viewer.curves ? viewer.curves.count : 0;
+  const a = f.arrangement;
+  document.body.dataset.curvesDrawn = String(drawn);
+  document.body.dataset.cells = String(a ? a.faces.length : 0);
+  $('curve-facts').textContent = a
+    ? `${drawn} curve${drawn === 1 ? '' : 's'} drawn; ${a.faces.length} cells, ${a.vertices.length} vertices, ${a.edges.length} edges; ` +
+      `V − E + F ${a.euler.ok ? '= χ' : '≠ χ (check failed)'}. Colour the cells with Display ▸ Colour; click a cell or a curve for its facts.`
+    : '';
 }
 
 // ---- downloads ------------------------------------------------------------------------
@@ -686,7 +832,7 @@ function applyFragment(fragment) {
       if (ranges[k]) ranges[k] = [Math.min(ranges[k][0], v), Math.max(ranges[k][1], v)];
     }
   }
-  for (const k of ['box', 'depth', 'maxError', 'color', 'clip', 'show', 'wire']) if (s[k] !== undefined) state[k] = s[k];
+  for (const k of ['box', 'depth', 'maxError', 'color', 'clip', 'show', 'wire', 'curves']) if (s[k] !== undefined) state[k] = s[k];
   pendingView = s.view || null;
   state.view = s.view || null;
   shownIdentity = null;
@@ -804,7 +950,7 @@ function wire() {
     showLegend(state.color, viewer.setColorMode(state.color));
     updateUrl();
   });
-  for (const k of ['edges', 'points', 'boundary', 'box', 'axes']) {
+  for (const k of ['edges', 'points', 'boundary', 'box', 'axes', 'curves']) {
     $(`show-${k}`).addEventListener('change', () => {
       state.show[k] = $(`show-${k}`).checked;
       viewer.setVisibility(state.show);
@@ -812,6 +958,7 @@ function wire() {
       updateUrl();
     });
   }
+  wireCurves();
   $('two-sided').addEventListener('change', () => viewer.setTwoSided($('two-sided').checked));
   $('color-range').addEventListener('change', () => showLegend(state.color, viewer.setRangeCut($('color-range').value)));
   $('wireframe').addEventListener('change', () => {

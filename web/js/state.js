@@ -4,11 +4,12 @@
 //
 // Fragment keys (URLSearchParams): preset=NAME | expr=TEXT, p.NAME=VALUE per parameter,
 // box=xmin,ymin,zmin,xmax,ymax,zmax, depth=MIN,MAX, err=MAX_ERROR, cam=px,py,pz,tx,ty,tz,
-// color=shaded|mean|gauss, clip=AXIS,OFFSET[,flip], hide=edges,points,boundary,box, wire=1,
-// axes=1.
+// color=shaded|mean|gauss|cells, clip=AXIS,OFFSET[,flip], hide=edges,points,boundary,box,curves,
+// wire=1, axes=1, curves=JSON list of the Curves panel's entries (curves.js).
+import { curveRequest, validEntries } from './curves.js';
 
-export const COLOR_MODES = ['shaded', 'mean', 'gauss'];
-const FEATURES = ['edges', 'points', 'boundary', 'box'];
+export const COLOR_MODES = ['shaded', 'mean', 'gauss', 'cells'];
+const FEATURES = ['edges', 'points', 'boundary', 'box', 'curves'];
 const DEFAULT_BOX = [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5];
 
 export function defaultState() {
@@ -22,7 +23,8 @@ export function defaultState() {
     view: null,             // {pos: [3], target: [3]}
     color: 'shaded',
     clip: { on: false, axis: 'z', offset: 0, flip: false },
-    show: { edges: true, points: true, boundary: true, box: true, axes: false },
+    show: { edges: true, points: true, boundary: true, box: true, axes: false, curves: true },
+    curves: [],             // the Curves panel's entries (curves.js)
     keepBox: false,         // a typed expression keeps the box (else it is fitted, POST /v1/box)
     wire: false,
   };
@@ -43,6 +45,8 @@ export function requestBody(state, paramNames) {
   } else {
     body.depth = { min: state.depth.min, max: state.depth.max };
   }
+  const curves = (state.curves || []).map((e) => curveRequest(e, state.box)).filter(Boolean);
+  if (curves.length) body.curves = curves;
   return JSON.stringify(body);
 }
 
@@ -70,6 +74,7 @@ export function encodeState(state, paramNames) {
   if (hidden.length) q.set('hide', hidden.join(','));
   if (state.wire) q.set('wire', '1');
   if (state.show.axes) q.set('axes', '1');
+  if (state.curves && state.curves.length) q.set('curves', JSON.stringify(state.curves));
   return q.toString().replace(/%2C/g, ',');  // commas read fine in a fragment
 }
 
@@ -131,6 +136,14 @@ export function decodeState(fragment) {
   }
   if (q.has('axes')) s.show = { ...(s.show || Object.fromEntries(FEATURES.map((k) => [k, true]))), axes: q.get('axes') === '1' };
   if (q.has('wire')) s.wire = q.get('wire') === '1';
+  if (q.has('curves')) {
+    let list = null;
+    try { list = JSON.parse(q.get('curves')); } catch { list = null; }
+    const box = s.box || DEFAULT_BOX;
+    const kept = validEntries(list, box);
+    if (Array.isArray(list) && kept.length === list.length) s.curves = kept;
+    else { s.curves = kept; s.problems.push('curves'); }
+  }
   return s;
 }
 

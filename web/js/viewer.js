@@ -2,11 +2,13 @@
 // keyboard), two-sided lighting (a headlight riding with the camera plus a hemisphere light,
 // on a DoubleSide material whose back faces get flipped normals, so a self-intersecting or
 // one-sided surface is lit the same from either side), the surface with its colour modes, the
-// wireframe overlay, the non-manifold features, one clipping plane, fit-to-view. Draws on
+// wireframe overlay, the non-manifold features, the requested curves and their cells
+// (curves.js), double sheets tinted, one clipping plane, fit-to-view. Draws on
 // demand (at most once per animation frame), not in a loop.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { buildFeatures, disposeFeatures, pickFeature, setLineResolution } from './features.js';
+import { buildCurves, cellColors } from './curves.js';
 import { curvatureColors, curvatureRange, RANGE_CUTS } from './colormap.js';
 import { buildBox, disposeBox } from './box_view.js';
 import { sectionSegments, sectionLines } from './section.js';
@@ -15,6 +17,8 @@ const SURFACE_RGB = 0xb9c6d8;
 // Two-sided colouring: triangles face along grad f (the outside, f > 0), so back faces show
 // the inside; they are tinted warm (multiplies the surface colour in the shaded mode).
 const INSIDE_TINT = [1.12, 0.82, 0.55];
+// Double sheets (f = g², no sign change) in the shaded mode: a violet surface colour.
+const SHEET_RGB = 0xb58cff;
 const AXES = { x: new THREE.Vector3(1, 0, 0), y: new THREE.Vector3(0, 1, 0), z: new THREE.Vector3(0, 0, 1) };
 const DEFAULT_DIRECTION = new THREE.Vector3(1.5, -2.1, 1.25).normalize();
 // Largest exported image side (every WebGL2 implementation renders at least 4096; 8192 is
@@ -78,10 +82,11 @@ export class Viewer {
     this.surface = null;
     this.wire = null;
     this.features = null;
+    this.curves = null;
     this.data = null;
     this.colorMode = 'shaded';
     this.rangeCut = 'p2';      // colormap.RANGE_CUTS key: the percentiles the colours span
-    this.show = { edges: true, points: true, boundary: true };
+    this.show = { edges: true, points: true, boundary: true, curves: true };
     this.wireframe = false;
     this.bounds = new THREE.Box3(new THREE.Vector3(-1, -1, -1), new THREE.Vector3(1, 1, 1));
     this.frames = 0;
@@ -97,9 +102,14 @@ export class Viewer {
     this.renderer.setSize(w, h, false);
     this.camera.aspect = w / h;
     this.camera.updateProjectionMatrix();
-    if (this.features) setLineResolution(this.features, w, h);
+    this.setLineResolution(w, h);
     if (this.section) this.section.material.resolution.set(w, h);
     this.render();
+  }
+
+  setLineResolution(w, h) {
+    if (this.features) setLineResolution(this.features, w, h);
+    if (this.curves) setLineResolution(this.curves, w, h);
   }
 
   // Asks for a frame; any number of changes within one animation frame draw once.
@@ -154,8 +164,9 @@ export class Viewer {
     const size = this.bounds.getSize(new THREE.Vector3()).length();
     this.features = buildFeatures(result.features, 0.009 * size, this.clipping);
     this.features.group.traverse((o) => { o.frustumCulled = false; });
-    setLineResolution(this.features, Math.max(1, this.canvas.clientWidth), Math.max(1, this.canvas.clientHeight));
-    this.scene.add(this.features.group);
+    this.curves = buildCurves(result.features, this.clipping);
+    this.setLineResolution(Math.max(1, this.canvas.clientWidth), Math.max(1, this.canvas.clientHeight));
+    this.scene.add(this.features.group, this.curves.group);
     this.applyColor();
     this.applyVisibility();
     this.applyClip();
@@ -185,11 +196,12 @@ export class Viewer {
       this.scene.remove(this.surface, this.wire);
       this.surface.geometry.dispose();
     }
-    if (this.features) {
-      this.scene.remove(this.features.group);
-      disposeFeatures(this.features);
+    for (const made of [this.features, this.curves]) {
+      if (!made) continue;
+      this.scene.remove(made.group);
+      disposeFeatures(made);
     }
-    this.surface = this.wire = this.features = this.data = null;
+    this.surface = this.wire = this.features = this.curves = this.data = null;
   }
 
   // Colour mode 'shaded' | 'mean' | 'gauss'. Returns the legend's range (null when shaded or
@@ -201,13 +213,41 @@ export class Viewer {
     return legend;
   }
 
+  // Per-point colours that are not a curvature scale: cells (colour mode 'cells'), or the
+  // shaded surface with its double sheets tinted; null when the mesh has no such attribute.
+  labelColors() {
+    const m = this.data.mesh;
+    const cache = m.colors || (m.colors = {});
+    if (this.colorMode === 'cells') {
+      if (!m.attributes.cell) return null;
+      return cache.cells || (cache.cells = cellColors(m.attributes.cell));
+    }
+    const sheet = m.attributes.double_sheet;
+    if (this.colorMode !== 'shaded' || !sheet || !sheet.some((v) => v)) return null;
+    if (!cache.sheets) {
+      const base = new THREE.Color(SURFACE_RGB), tint = new THREE.Color(SHEET_RGB);
+      const rgb = new Float32Array(sheet.length * 3);
+      for (let i = 0; i < sheet.length; i++) (sheet[i] ? tint : base).toArray(rgb, 3 * i);
+      cache.sheets = rgb;
+    }
+    return cache.sheets;
+  }
+
   applyColor() {
     if (!this.surface) return null;
     const g = this.surface.geometry;
     const attr = { mean: 'mean_curvature', gauss: 'gauss_curvature' }[this.colorMode];
     const values = attr && this.data.mesh.attributes[attr];
-    const tint = this.twoSided && !values ? INSIDE_TINT : [1, 1, 1];
+    const labels = values ? null : this.labelColors();
+    const tint = this.twoSided && !values && this.colorMode !== 'cells' ? INSIDE_TINT : [1, 1, 1];
     this.backTint.value.setRGB(tint[0], tint[1], tint[2]);
+    if (labels) {
+      g.setAttribute('color', new THREE.BufferAttribute(labels, 3));
+      this.material.vertexColors = true;
+      this.material.color.setHex(0xffffff);
+      this.material.needsUpdate = true;
+      return null;
+    }
     if (!values) {
       g.deleteAttribute('color');
       this.material.vertexColors = false;
@@ -254,12 +294,23 @@ export class Viewer {
   applyVisibility() {
     if (!this.features) return;
     for (const k of ['edges', 'points', 'boundary']) if (this.features[k]) this.features[k].visible = !!this.show[k];
+    if (this.curves) this.curves.group.visible = this.show.curves !== false;
   }
 
-  // The singular point or curve under canvas pixel (x, y), or null (features.js pickFeature).
+  // The singular point, singular curve or requested curve ('cut') under canvas pixel (x, y),
+  // or null (features.js pickFeature). Hidden layers are not picked.
   pick(x, y) {
     if (!this.features) return null;
-    return pickFeature(this.features, this.camera, this.canvas.clientWidth, this.canvas.clientHeight, x, y);
+    const pickables = [...this.features.pickables.filter((p) => (p.what === 'point' ? this.show.points : this.show.edges) !== false),
+      ...(this.curves && this.show.curves !== false ? this.curves.pickables : [])];
+    return pickFeature({ pickables }, this.camera, this.canvas.clientWidth, this.canvas.clientHeight, x, y);
+  }
+
+  // The arrangement cell of triangle face (its points all carry it), or null.
+  cellOf(face) {
+    const m = this.data && this.data.mesh;
+    if (!m || !m.attributes.cell || face === undefined) return null;
+    return m.attributes.cell[m.index[3 * face]];
   }
 
   // The surface point under canvas pixel (x, y): {xyz, face (triangle index)} or null. Points
@@ -300,8 +351,9 @@ export class Viewer {
     this.material.clippingPlanes = this.clipping.length ? this.clipping : null;
     this.wireMaterial.clippingPlanes = this.material.clippingPlanes;
     if (this.wire) this.wire.visible = this.wireframe;
-    if (this.features) {
-      this.features.group.traverse((o) => {
+    for (const made of [this.features, this.curves]) {
+      if (!made) continue;
+      made.group.traverse((o) => {
         if (o.material) {
           o.material.clippingPlanes = this.material.clippingPlanes;
           o.material.needsUpdate = true;
@@ -362,7 +414,7 @@ export class Viewer {
     this.renderer.setSize(w, h, false);
     this.camera.aspect = w / h;
     this.camera.updateProjectionMatrix();
-    if (this.features) setLineResolution(this.features, w, h);
+    this.setLineResolution(w, h);
     this.draw();
     const blob = await new Promise((resolve) => this.canvas.toBlob(resolve, 'image/png'));
     this.renderer.setPixelRatio(ratio);
