@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "core/analysis/analysis.h"
+#include "proto/corner_split.h"
 #include "proto/glb.h"
 #include "proto/request.h"
 #include "tests/unit/proto/meshes_for_tests.h"
@@ -202,6 +203,69 @@ Test(glb, crossing_planes_carry_lines_and_points_beside_the_surface, .timeout = 
     json_decref(report);
     json_decref(doc);
     free(g);
+    ism_mesh_free(&m);
+}
+
+/* The glb of m with per-triangle cells (Draco through a corner split, or plain). */
+static unsigned char *build_cells(const ism_mesh *m, const uint32_t *cell, bool draco,
+                                  size_t *len)
+{
+    ism_wire_mesh w;
+    cr_assert(ism_wire_mesh_build(m, NULL, ISM_ATTR_NORMAL, 0, &w));
+    w.tri_cell = cell;
+    ism_corner_split sp;
+    cr_assert(ism_corner_split_build(w.tri, w.ntris, w.nverts, cell, NULL, &sp));
+    ism_draco_output d;
+    memset(&d, 0, sizeof d);
+    ism_draco_input in = {w.nverts, w.ntris, w.pos, sp.tri, w.normal, NULL, NULL, NULL, 14, 10,
+                          0, -1, sp.npoints, sp.point_vertex, sp.point_cell, NULL};
+    if (draco)
+        cr_assert(ism_draco_encode(&in, &d), "%s", d.error);
+    ism_glb_input gi = {m, &w, draco ? &d : NULL, NULL, NULL};
+    unsigned char *glb;
+    cr_assert(ism_glb_build(&gi, &glb, len));
+    free(d.data);
+    ism_corner_split_free(&sp);
+    ism_wire_mesh_free(&w);
+    return glb;
+}
+
+Test(glb, cells_travel_as_CELL_in_draco_and_plain_glb, .timeout = 120)
+{
+    ism_mesh m;
+    test_mesh_torus(&m, 48, 24, 1, 0.3);
+    uint32_t *cell = malloc(m.ntris * sizeof *cell);
+    for (size_t t = 0; t < m.ntris; t++) /* two cells: the halves x < 0 and x > 0 */
+        cell[t] = m.pos[3 * (size_t)m.tri[3 * t]] + m.pos[3 * (size_t)m.tri[3 * t + 1]] +
+                      m.pos[3 * (size_t)m.tri[3 * t + 2]] > 0;
+    for (int draco = 0; draco < 2; draco++) {
+        size_t len;
+        unsigned char *g = build_cells(&m, cell, draco, &len);
+        json_t *doc = check_container(g, len);
+        json_t *prim = json_array_get(
+            json_object_get(json_array_get(json_object_get(doc, "meshes"), 0), "primitives"), 0);
+        json_t *acc = json_array_get(json_object_get(doc, "accessors"),
+                                     json_integer_value(json_object_get(
+                                         json_object_get(prim, "attributes"), "_CELL")));
+        cr_assert_not_null(acc, "the surface has _CELL");
+        cr_expect_eq(json_integer_value(json_object_get(acc, "componentType")), 5126);
+        cr_expect_gt(json_integer_value(json_object_get(acc, "count")), (json_int_t)m.nverts,
+                     "vertices on the two cuts are split");
+        json_t *report = validate(g, len);
+        expect_no_errors(report);
+        if (draco) {
+            json_t *dr = json_array_get(json_object_get(report, "draco"), 0);
+            cr_expect(json_is_true(json_object_get(dr, "accessors_match")));
+            json_t *c = json_object_get(json_object_get(dr, "attributes"), "_CELL");
+            cr_expect_eq(json_integer_value(json_object_get(c, "unique_id")), 5);
+            cr_expect_eq(json_number_value(json_object_get(c, "min")), 0);
+            cr_expect_eq(json_number_value(json_object_get(c, "max")), 1);
+        }
+        json_decref(report);
+        json_decref(doc);
+        free(g);
+    }
+    free(cell);
     ism_mesh_free(&m);
 }
 
