@@ -13,7 +13,9 @@ async function module() {
   return decoderModule;
 }
 
-export const ATTRIBUTE_IDS = { position: 0, normal: 1, mean_curvature: 2, gauss_curvature: 3, class: 4, cell: 5, double_sheet: 6 };
+export const ATTRIBUTE_IDS = { position: 0, normal: 1, mean_curvature: 2, gauss_curvature: 3, class: 4 };
+// Triangle labels, present only when the surface has them (curves asked for, double sheets).
+export const LABEL_IDS = { cell: 5, double_sheet: 6 };
 
 // The integer attributes and how draco3d reads them; the rest are float32.
 const INTEGER_READERS = {
@@ -32,7 +34,7 @@ export async function decodeDraco(bytes) {
     const status = decoder.DecodeArrayToMesh(array, array.byteLength, mesh);
     if (!status.ok()) throw new Error('draco3d: ' + status.error_msg());
     const out = { points: mesh.num_points(), faces: mesh.num_faces(), attributes: {} };
-    for (const [name, id] of Object.entries(ATTRIBUTE_IDS)) {
+    for (const [name, id] of Object.entries({ ...ATTRIBUTE_IDS, ...LABEL_IDS })) {
       const index = decoder.GetAttributeIdByMetadataEntry(mesh, 'name', name);
       if (index < 0) continue;
       const attr = decoder.GetAttribute(mesh, index);
