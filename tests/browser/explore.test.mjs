@@ -4,7 +4,7 @@
 // the axes with ticks change the picture; a box typed by hand is kept; the gallery search;
 // picking a node of the Cayley cubic gives its type and its closed-form coordinates within
 // 1e-6; a PNG export has the size asked for; the Curves panel cuts the sphere into cells
-// (curves drawn, areas 2 pi h, a picked cell's facts).
+// (curves drawn, areas 2 pi h, a picked cell's facts); double sheets are tinted.
 import { describe, it, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { startDaemon, stopDaemon, startBrowser, stopBrowser } from './lib/harness.mjs';
@@ -199,6 +199,11 @@ describe('box and inspection', { timeout: 300000 }, () => {
   it('the Curves panel cuts the sphere into cells: curves drawn, cells coloured and picked', async () => {
     // The unit sphere (preset box ±1.5): 3 planes z = -0.75, 0, 0.75 cut 4 zones of area
     // 2 pi h (Archimedes): pi/2, 3 pi/2, 3 pi/2, pi/2.
+    if (await page.inputValue('#preset') !== 'sphere') {   // when run alone
+      const k = await loads(page);
+      await page.selectOption('#preset', 'sphere');
+      await waitForMesh(page, k);
+    }
     await page.evaluate(() => { document.getElementById('curves-section').open = true; });
     await page.selectOption('#curve-kind', 'plane');
     await page.selectOption('#curve-axis', 'z');
@@ -244,6 +249,25 @@ describe('box and inspection', { timeout: 300000 }, () => {
     await waitForMesh(page, n);
     assert.equal((await facts()).drawn, 3, 'removing the x plane leaves the z stack');
     await page.selectOption('#color-mode', 'shaded');
+  });
+
+  it('double sheets are tinted (the double_sheet attribute of the Draco mesh)', async () => {
+    // s1 * s2^2: the sphere about (0.5, 0, 0) crosses zero, the one about (-0.5, 0, 0) is a
+    // double sheet. The pixel at each centre's projection shows its colour.
+    const n = await loads(page);
+    const expr = '((x-0.5)^2+y^2+z^2-0.16) * ((x+0.5)^2+y^2+z^2-0.16)^2';
+    await page.evaluate((e) => { location.hash = `expr=${encodeURIComponent(e)}&box=-1.1,-0.6,-0.6,1.1,0.6,0.6&depth=3,5&cam=0,-4,0,0,0,0`; }, expr);
+    await waitForMesh(page, n);
+    assert.equal(await page.$eval('.key-sheets', (e) => e.hidden), false, 'the key names the double sheets');
+    const img = await viewShot(page, 'double-sheet-tint.png');
+    const px = await page.evaluate(() => [[-0.5, -0.4, 0], [0.5, -0.4, 0]].map((p) => {
+      const v = window.isomeshViewer;
+      const q = new v.camera.position.constructor(...p).project(v.camera);
+      return [Math.round((q.x + 1) / 2 * v.canvas.clientWidth), Math.round((1 - q.y) / 2 * v.canvas.clientHeight)];
+    }));
+    const [sheet, plain] = px.map(([x, y]) => Array.from(img.rgba.subarray(4 * (y * img.width + x), 4 * (y * img.width + x) + 3)));
+    assert.ok(sheet[0] > sheet[1] + 25 && sheet[2] > sheet[1] + 25, `the double sheet is violet (${sheet})`);
+    assert.ok(plain[2] >= plain[0] && plain[0] - plain[1] < 25, `the other sphere keeps the surface colour (${plain})`);
   });
 
   it('left no page errors', () => {
