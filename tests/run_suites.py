@@ -18,13 +18,24 @@ import os
 import re
 import subprocess
 import sys
+import threading
 import time
+import traceback
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PY_DIRS = ["cli", "http", "deploy", "reliability"]
 # Also run against the --asan build (isomeshd and isomesh with ASan+UBSan, LeakSanitizer at exit;
 # the command line's runs are where the pipeline's own leaks show: workers end with _exit).
 SAN_PY_DIRS = ["cli", "http", "reliability"]
+TOP_COSTS = 20  # suites listed in the closing table of costs
+SUITE_TIMEOUT = 900  # s: a suite that runs longer has hung
+BUILD_TIMEOUT = 1800  # s: the sanitizer build, from scratch on a loaded machine
+# Started first, the longest first (measured CPU and wall seconds): with several lanes, a long
+# suite started last would leave the other lanes idle at the end. Suites not named follow in the
+# order they are found.
+HEAVY_FIRST = [
+    "build [asan+ubsan]",
+]
 
 
 def count_criterion(out):
@@ -73,19 +84,41 @@ def sanitizer_reports(report_dir):
     return "\n".join(out)
 
 
-def run(name, cmd, counter, env, timeout, report_dir=None):
-    print(f"\n=== {name}: {' '.join(cmd)}", flush=True)
-    t0 = time.time()
+def run_measured(cmd, env, timeout):
+    """Runs cmd (stdout and stderr together) -> (output, exit status, CPU seconds). The CPU time
+    is the user+system time of cmd and of every process below it that was waited for (its
+    daemons, their workers): a figure that, unlike wall time, barely moves with the load that
+    other programs put on the machine."""
     try:
-        proc = subprocess.run(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE,
-                              stderr=subprocess.STDOUT, text=True, errors="replace",
-                              timeout=timeout)
-        out, rc = proc.stdout, proc.returncode
-    except subprocess.TimeoutExpired as e:
-        out = (e.stdout or b"").decode("utf-8", "replace") if isinstance(e.stdout, bytes) else (e.stdout or "")
-        out += f"\n{name}: timed out after {timeout} s\n"
-        rc = -1
-    sys.stdout.write(out)
+        proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
+    except OSError as e:  # no such program (a build that did not make it)
+        return f"{cmd[0]}: {e}\n", 127, 0.0
+    chunks = []
+    reader = threading.Thread(target=lambda: chunks.extend(iter(lambda: proc.stdout.read(65536), b"")),
+                              daemon=True)
+    reader.start()
+    reader.join(timeout)
+    timed_out = reader.is_alive()
+    if timed_out:
+        proc.kill()
+        reader.join(30)  # its own children may still hold the pipe: bounded
+    _, status, ru = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    out = b"".join(chunks).decode("utf-8", "replace")
+    if timed_out:
+        out += f"\ntimed out after {timeout} s\n"
+        return out, -1, ru.ru_utime + ru.ru_stime
+    return out, proc.returncode, ru.ru_utime + ru.ru_stime
+
+
+def run(name, cmd, counter, env, timeout, report_dir=None):
+    """Runs one suite -> (passed, failed, wall seconds, CPU seconds, its output with a last
+    line of counts)."""
+    head = f"\n=== {name}: {' '.join(cmd)}\n"
+    t0 = time.time()
+    out, rc, cpu = run_measured(cmd, env, timeout)
+    wall = time.time() - t0
     counts = counter(out)
     if counts is None:
         counts = (1, 0) if rc == 0 else (0, 1)
@@ -94,16 +127,150 @@ def run(name, cmd, counter, env, timeout, report_dir=None):
         failed = 1  # the suite failed outside any single test (crash, build, leak report)
     reports = sanitizer_reports(report_dir)
     if reports:  # a daemon or worker of the suite reported a leak or an error
-        print(f"{name}: sanitizer reports:\n{reports}")
+        out += f"{name}: sanitizer reports:\n{reports}\n"
         failed += 1
-    print(f"=== {name}: {passed} passed, {failed} failed ({time.time() - t0:.1f} s)", flush=True)
-    return passed, failed
+    out += f"=== {name}: {passed} passed, {failed} failed ({wall:.1f} s, {cpu:.1f} s CPU)\n"
+    return passed, failed, wall, cpu, head + out
+
+
+class Suite:
+    """One suite to run: name, command, output counter, environment, time bound, where its
+    sanitized programs write their reports, and whether it needs the sanitizer build."""
+
+    def __init__(self, name, cmd, counter, env, timeout=SUITE_TIMEOUT, report_dir=None,
+                 needs_asan=False):
+        self.name, self.cmd, self.counter, self.env = name, cmd, counter, env
+        self.timeout, self.report_dir, self.needs_asan = timeout, report_dir, needs_asan
+
+
+def count_build(out):
+    return None  # the exit status decides
+
+
+def slug(name):
+    return re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_")
+
+
+def find_suites(args, env):
+    """Every suite, in the order they are started: see HEAVY_FIRST."""
+    suites = []
+    unit_dirs = sorted(d for d in os.listdir(os.path.join(ROOT, "tests", "unit"))
+                       if os.path.isdir(os.path.join(ROOT, "tests", "unit", d)))
+    for build, tag in ((args.release, ""), (args.asan, " [asan+ubsan]")):
+        if not build:
+            continue
+        for u in unit_dirs:
+            b = "unit_" + u
+            senv = dict(env)
+            if tag:
+                senv["ASAN_OPTIONS"] = "detect_leaks=1:abort_on_error=0:strict_string_checks=1"
+                senv["UBSAN_OPTIONS"] = "print_stacktrace=1:halt_on_error=1"
+                senv["ISOMESH_TEST_QUICK"] = "1"
+            suites.append(Suite(b + tag, [os.path.join(ROOT, build, "tests", b), "--jobs=2"],
+                                count_criterion, senv, needs_asan=bool(tag)))
+    for sub in PY_DIRS:
+        for f in python_suites(sub):
+            suites.append(Suite(f"{sub}/{f}", [sys.executable, "-m", "unittest", "-v",
+                                               os.path.join("tests", sub, f)], count_unittest, env))
+    if args.asan:
+        reports = os.path.join(ROOT, args.asan, "sanitizer-reports")
+        for sub in SAN_PY_DIRS:
+            for f in python_suites(sub):
+                name = f"{sub}/{f} [asan+ubsan]"
+                report_dir = os.path.join(reports, slug(name))  # its own: suites run at once
+                os.makedirs(report_dir, exist_ok=True)
+                sanitizer_reports(report_dir)  # left over from an interrupted run
+                senv = dict(env)
+                senv["ISOMESH_BUILD"] = os.path.join(ROOT, args.asan)
+                senv["ISOMESH_TEST_QUICK"] = "1"
+                senv["ASAN_OPTIONS"] = ("detect_leaks=1:abort_on_error=0:strict_string_checks=1:"
+                                        "log_path=" + os.path.join(report_dir, "asan"))
+                senv["UBSAN_OPTIONS"] = ("print_stacktrace=1:halt_on_error=1:"
+                                         "log_path=" + os.path.join(report_dir, "ubsan"))
+                suites.append(Suite(name, [sys.executable, "-m", "unittest", "-v",
+                                           os.path.join("tests", sub, f)],
+                                    count_unittest, senv, report_dir=report_dir, needs_asan=True))
+    d = os.path.join(ROOT, "tests", "browser")
+    for f in sorted(os.listdir(d)) if os.path.isdir(d) else []:
+        if f.endswith(".test.mjs"):
+            suites.append(Suite(f"browser/{f}", ["node", "--test", os.path.join("tests", "browser", f)],
+                                count_node, env))
+    if args.only:
+        suites = [s for s in suites if args.only in s.name]
+    if args.asan_build and any(s.needs_asan for s in suites):
+        suites.insert(0, Suite("build [asan+ubsan]", ["/bin/sh", "-c", args.asan_build],
+                               count_build, env, timeout=BUILD_TIMEOUT))
+    rank = {name: i for i, name in enumerate(HEAVY_FIRST)}
+    return sorted(suites, key=lambda s: rank.get(s.name, len(rank)))  # stable: found order
+
+
+def python_suites(sub):
+    d = os.path.join(ROOT, "tests", sub)
+    return [f for f in sorted(os.listdir(d)) if f.startswith("test_") and f.endswith(".py")] \
+        if os.path.isdir(d) else []
+
+
+class Lanes:
+    """Runs suites on `jobs` lanes at once, each lane taking the next suite that can start:
+    one that needs the sanitizer build waits until it is built (and fails unrun if the build
+    failed). Each suite's output is printed whole when it ends."""
+
+    def __init__(self, suites, jobs):
+        self.pending = list(suites)
+        self.jobs = max(1, jobs)
+        self.cv = threading.Condition()
+        self.asan_state = "building" if any(s.name.startswith("build ") for s in suites) else "built"
+        self.results = []   # (suite, passed, failed, wall, cpu)
+
+    def next_suite(self):
+        with self.cv:
+            while self.pending:
+                for i, s in enumerate(self.pending):
+                    if not s.needs_asan or self.asan_state != "building":
+                        return self.pending.pop(i)
+                self.cv.wait()
+            return None
+
+    def lane(self):
+        while True:
+            s = self.next_suite()
+            if s is None:
+                return
+            if s.needs_asan and self.asan_state == "failed":
+                out = f"\n=== {s.name}: not run, the sanitizer build failed\n"
+                p, f, wall, cpu = 0, 1, 0.0, 0.0
+            else:
+                try:
+                    p, f, wall, cpu, out = run(s.name, s.cmd, s.counter, s.env, s.timeout,
+                                               s.report_dir)
+                except Exception:  # a fault of this runner: the suite counts as failed
+                    p, f, wall, cpu = 0, 1, 0.0, 0.0
+                    out = f"\n=== {s.name}: the runner failed:\n{traceback.format_exc()}"
+            with self.cv:
+                if s.name.startswith("build "):
+                    self.asan_state = "failed" if f else "built"
+                self.results.append((s, p, f, wall, cpu))
+                sys.stdout.write(out)
+                sys.stdout.flush()
+                self.cv.notify_all()
+
+    def run(self):
+        threads = [threading.Thread(target=self.lane) for _ in range(self.jobs)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        return self.results
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--release", default="build/release")
     ap.add_argument("--asan", default="")
+    ap.add_argument("--asan-build", default="",
+                    help="a shell command that builds --asan, run on a lane of its own while "
+                         "release suites run; suites against --asan wait for it")
+    ap.add_argument("--jobs", type=int, default=1, help="suites run at once")
     ap.add_argument("--only", default="", help="run only suites whose name contains this")
     args = ap.parse_args()
 
@@ -111,61 +278,16 @@ def main():
     env["ISOMESH_BUILD"] = os.path.join(ROOT, args.release)
     env.setdefault("PYTHONDONTWRITEBYTECODE", "1")
 
-    suites = []
-    for build, tag in ((args.release, ""), (args.asan, " [asan+ubsan]")):
-        if not build:
-            continue
-        d = os.path.join(ROOT, build, "tests")
-        for b in sorted(os.listdir(d)) if os.path.isdir(d) else []:
-            if b.startswith("unit_"):
-                senv = dict(env)
-                if tag:
-                    senv["ASAN_OPTIONS"] = "detect_leaks=1:abort_on_error=0:strict_string_checks=1"
-                    senv["UBSAN_OPTIONS"] = "print_stacktrace=1:halt_on_error=1"
-                    senv["ISOMESH_TEST_QUICK"] = "1"
-                suites.append((b + tag, [os.path.join(d, b), "--jobs=2"], count_criterion, senv, 900))
-    for sub in PY_DIRS:
-        d = os.path.join(ROOT, "tests", sub)
-        for f in sorted(os.listdir(d)) if os.path.isdir(d) else []:
-            if f.startswith("test_") and f.endswith(".py"):
-                suites.append((f"{sub}/{f}", [sys.executable, "-m", "unittest", "-v",
-                                              os.path.join("tests", sub, f)],
-                               count_unittest, env, 900))
-    if args.asan:
-        report_dir = os.path.join(ROOT, args.asan, "sanitizer-reports")
-        os.makedirs(report_dir, exist_ok=True)
-        sanitizer_reports(report_dir)  # left over from an interrupted run
-        senv = dict(env)
-        senv["ISOMESH_BUILD"] = os.path.join(ROOT, args.asan)
-        senv["ISOMESH_TEST_QUICK"] = "1"
-        senv["ASAN_OPTIONS"] = ("detect_leaks=1:abort_on_error=0:strict_string_checks=1:"
-                                "log_path=" + os.path.join(report_dir, "asan"))
-        senv["UBSAN_OPTIONS"] = ("print_stacktrace=1:halt_on_error=1:"
-                                 "log_path=" + os.path.join(report_dir, "ubsan"))
-        for sub in SAN_PY_DIRS:
-            d = os.path.join(ROOT, "tests", sub)
-            for f in sorted(os.listdir(d)) if os.path.isdir(d) else []:
-                if f.startswith("test_") and f.endswith(".py"):
-                    suites.append((f"{sub}/{f} [asan+ubsan]",
-                                   [sys.executable, "-m", "unittest", "-v",
-                                    os.path.join("tests", sub, f)],
-                                   count_unittest, senv, 900, report_dir))
-    d = os.path.join(ROOT, "tests", "browser")
-    for f in sorted(os.listdir(d)) if os.path.isdir(d) else []:
-        if f.endswith(".test.mjs"):
-            suites.append((f"browser/{f}", ["node", "--test", os.path.join("tests", "browser", f)],
-                           count_node, env, 900))
-
-    if args.only:
-        suites = [s for s in suites if args.only in s[0]]
-    total_p = total_f = 0
-    failed_suites = []
-    for name, cmd, counter, senv, timeout, *report_dir in suites:
-        p, f = run(name, cmd, counter, senv, timeout, *report_dir)
-        total_p += p
-        total_f += f
-        if f:
-            failed_suites.append(name)
+    suites = find_suites(args, env)
+    t0 = time.time()
+    results = Lanes(suites, args.jobs).run()
+    total_p = sum(r[1] for r in results)
+    total_f = sum(r[2] for r in results)
+    failed_suites = [r[0].name for r in results if r[2]]
+    print(f"\nsuites by CPU time ({args.jobs} at once; s CPU, s wall):")
+    for s, _, _, wall, cpu in sorted(results, key=lambda r: -r[4])[:TOP_COSTS]:
+        print(f"  {cpu:7.1f} {wall:7.1f}  {s.name}")
+    print(f"  {sum(r[4] for r in results):7.1f} {time.time() - t0:7.1f}  all {len(results)} suites")
     print()
     if failed_suites:
         print("failed suites: " + ", ".join(failed_suites))
