@@ -202,6 +202,18 @@ static void write_singular(ism_jw *w, const ism_locus *l, const ism_locus_check 
     ism_jw_object_end(w);
 }
 
+static void write_remesh(ism_jw *w, const ism_remesh_stats *s)
+{
+    ism_jw_object(w);
+    kv_u(w, "flips", s->flips);
+    kv_u(w, "moves", s->moves);
+    kv_u(w, "locked_vertices", s->locked_vertices);
+    kv_d(w, "min_angle_before", s->min_angle_before);
+    kv_d(w, "min_angle_after", s->min_angle_after);
+    kv_ms(w, "time_ms", s->time_ms);
+    ism_jw_object_end(w);
+}
+
 /* What the singular stage could not do, or where the mesh disagrees with it. */
 static void singular_warnings(ism_jw *w, const ism_locus *l, const ism_locus_check *c)
 {
@@ -293,6 +305,10 @@ char *ism_stats_surface_json(const ism_stats_input *in, size_t *len)
     if (in->locus) {
         ism_jw_key(&w, "singular");
         write_singular(&w, in->locus, in->check, in->conform);
+    }
+    if (in->remesh) {
+        ism_jw_key(&w, "remesh");
+        write_remesh(&w, in->remesh);
     }
     ism_jw_key(&w, "warnings");
     write_warnings(&w, in);

@@ -13,6 +13,8 @@
  *                 "evals_jet", "time_ms", "conform": {points_conformed, points_failed,
  *                 points_short_cones, curves_conformed, curves_failed, loops_fallback,
  *                 triangles_removed, triangles_added, time_ms}},
+ *    "remesh": {"flips", "moves", "locked_vertices", "min_angle_before", "min_angle_after",
+ *               "time_ms"} (only after the quality pass),
  *    "timings_ms": {"decode", "compile", "singular", "polygonise", "analyse", "features",
  *    "encode", "total"}, "warnings": ["..."]}
  * (timings_ms comes right after "mesh"; the members from "polygoniser" on are the surface's,
@@ -25,6 +27,7 @@
 #include <stdbool.h>
 #include "core/analysis/analysis.h"
 #include "core/octree/polygonise.h"
+#include "core/remesh/remesh.h"
 #include "core/singular/check.h"
 #include "core/singular/conform.h"
 #include "core/singular/locus.h"
@@ -45,6 +48,7 @@ typedef struct ism_stats_input {
     const ism_locus_check *check;         /* the mesh checked against it (may be NULL) */
     const ism_conform_stats *conform;     /* what the conformance pass did (may be NULL) */
     double max_error;                     /* the requested error bound; 0 when none */
+    const ism_remesh_stats *remesh;       /* the quality pass ("quality": "good"), or NULL */
     double timings_ms[ISM_TIME_COUNT];
     const char *surface;                  /* ism_stats_surface_json's text, or NULL: then */
     size_t surface_len;                   /* it is written from poly ... conform */

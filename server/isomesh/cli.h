@@ -17,6 +17,7 @@ typedef struct ism_cli_run {
     const char *output;         /* -o */
     const char *features_output;/* --features */
     bool box_given, depth_given, print_stats;
+    int quality;                /* --quality: enum ism_quality (raw unless given) */
     ism_param *params;          /* names owned */
     size_t nparams;
     ism_let *lets;              /* names and sources owned */

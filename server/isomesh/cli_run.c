@@ -13,6 +13,7 @@
 #include "proto/stats.h"
 #include "core/singular/check.h"
 #include "core/singular/surface.h"
+#include "core/remesh/quality_pass.h"
 #include "server/common/fd_io.h"
 #include "server/common/pipeline.h"
 
@@ -288,6 +289,7 @@ typedef struct run_products {
     const ism_locus_check *check;  /* NULL when not analysed */
     const ism_conform_stats *conform;
     double max_error;              /* the requested bound, 0 when none */
+    const ism_remesh_stats *remesh;/* the quality pass's figures, NULL when it did not run */
 } run_products;
 
 static void print_stats(const run_products *p, const char *format, const double *timings)
@@ -305,6 +307,7 @@ static void print_stats(const run_products *p, const char *format, const double 
     in.check = p->check;
     in.conform = p->conform;
     in.max_error = p->max_error;
+    in.remesh = p->remesh;
     memcpy(in.timings_ms, timings, sizeof in.timings_ms);
     size_t len;
     char *json = ism_stats_json(&in, &len);
@@ -417,6 +420,13 @@ int ism_cli_run_surface(ism_cli_run *run)
     }
     if (mesh.ntris == 0)
         explain_empty(&locus);
+    ism_remesh_stats rs;
+    if (run->quality == ISM_QUALITY_GOOD &&
+        !ism_quality_pass(tape, &locus, NULL, run->options.max_error, NULL, &mesh, &rs, &err)) {
+        fprintf(stderr, "isomesh: %s\n", ism_error_format(&err, msg, sizeof msg));
+        status = 1;
+        goto done;
+    }
     ism_analysis an;
     memset(&an, 0, sizeof an);
     ism_locus_check chk;
@@ -426,7 +436,8 @@ int ism_cli_run_surface(ism_cli_run *run)
     if (run->output && !write_mesh(run->output, &mesh))
         status = 1;
     run_products prod = {&mesh, &ps, analysed ? &an : NULL, &locus, analysed ? &chk : NULL, &cs,
-                         run->options.max_error};
+                         run->options.max_error,
+                         run->quality == ISM_QUALITY_GOOD ? &rs : NULL};
     if (run->features_output && status == 0 && !write_features(run->features_output, &prod))
         status = 1;
     timings[ISM_TIME_TOTAL] = ism_now_ms() - t0;

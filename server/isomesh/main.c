@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "server/isomesh/cli.h"
+#include "core/remesh/quality_pass.h"
 #include "server/isomesh/sandbox.h"
 #include "server/isomesh/worker.h"
 
@@ -52,6 +53,10 @@ static const char usage_text[] =
     "                           depth MAX is then only a safety limit. Default: off, the\n"
     "                           flatness test (--flat-plane) decides\n"
     "      --max-triangles N    budget; stop with an error beyond it (default 4000000)\n"
+    "      --quality Q          raw (default): the polygoniser's triangles; good: then\n"
+    "                           flip edges toward Delaunay and relax vertices along the\n"
+    "                           surface (back on f = 0 by Newton), never across a boundary,\n"
+    "                           non-manifold edge, crease, curve or at a singular point\n"
     "output:\n"
     "  -o, --output FILE        .ply, .obj or .stl (written to a temporary name, renamed)\n"
     "      --stats              print the statistics as JSON on standard output\n"
@@ -64,7 +69,7 @@ static const char usage_text[] =
 enum long_only {
     OPT_LET = 256, OPT_SURFACE, OPT_SURFACES, OPT_LIST, OPT_THREADS, OPT_GRADIENT, OPT_EPS,
     OPT_ITERS, OPT_STITCH, OPT_FLAT_NORMAL, OPT_FLAT_PLANE, OPT_MAX_TRIS, OPT_MAX_ERROR,
-    OPT_STATS, OPT_WORKER, OPT_FEATURES,
+    OPT_STATS, OPT_WORKER, OPT_FEATURES, OPT_QUALITY,
 };
 
 static const struct option long_options[] = {
@@ -85,6 +90,7 @@ static const struct option long_options[] = {
     {"flat-plane", required_argument, 0, OPT_FLAT_PLANE},
     {"max-triangles", required_argument, 0, OPT_MAX_TRIS},
     {"max-error", required_argument, 0, OPT_MAX_ERROR},
+    {"quality", required_argument, 0, OPT_QUALITY},
     {"output", required_argument, 0, 'o'},
     {"stats", no_argument, 0, OPT_STATS},
     {"features", required_argument, 0, OPT_FEATURES},
@@ -122,6 +128,11 @@ static bool apply_option(ism_cli_run *run, int opt, const char *arg)
         o->max_triangles = (size_t)n;
         return true;
     }
+    case OPT_QUALITY:
+        if ((run->quality = ism_quality_lookup(arg)) >= 0)
+            return true;
+        fprintf(stderr, "isomesh: --quality %s: expected raw or good\n", arg);
+        return false;
     case 'o': run->output = arg; return true;
     case OPT_STATS: run->print_stats = true; return true;
     case OPT_FEATURES: run->features_output = arg; return true;

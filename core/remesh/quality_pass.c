@@ -1,0 +1,64 @@
+/* quality_pass.c — hands the locus's points, double-sheet ranges and the curve cut's edges to
+ * the quality pass as protection (quality_pass.h). */
+#include "core/remesh/quality_pass.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const names[ISM_QUALITY_COUNT] = {"raw", "good"};
+
+const char *ism_quality_name(enum ism_quality q)
+{
+    return q >= 0 && q < ISM_QUALITY_COUNT ? names[q] : "?";
+}
+
+int ism_quality_lookup(const char *name)
+{
+    for (int i = 0; i < ISM_QUALITY_COUNT; i++)
+        if (!strcmp(name, names[i]))
+            return i;
+    return -1;
+}
+
+/* 0 for the polygoniser's triangles, 1 + i for double sheet i's. */
+static uint32_t *sheet_labels(const ism_locus *locus, const ism_mesh *mesh)
+{
+    uint32_t *label = calloc(mesh->ntris ? mesh->ntris : 1, sizeof *label);
+    for (size_t i = 0; label && i < locus->nsheets; i++) {
+        const ism_double_sheet *s = locus->sheets + i;
+        for (size_t t = s->first_triangle; t < s->first_triangle + s->triangles && t < mesh->ntris; t++)
+            label[t] = (uint32_t)(i + 1);
+    }
+    return label;
+}
+
+bool ism_quality_pass(const ism_tape *f, const ism_locus *locus, const ism_cut *cut,
+                      double max_error, const volatile int *cancel, ism_mesh *mesh,
+                      ism_remesh_stats *st, ism_error *err)
+{
+    size_t ne = cut ? cut->nedges : 0, np = locus->npoints;
+    uint32_t *edges = malloc((ne ? ne : 1) * 2 * sizeof *edges);
+    double *points = malloc((np ? np : 1) * 3 * sizeof *points);
+    uint32_t *label = sheet_labels(locus, mesh);
+    bool ok = edges && points && label;
+    if (ok) {
+        for (size_t i = 0; i < ne; i++) {
+            edges[2 * i] = cut->edges[i].a;
+            edges[2 * i + 1] = cut->edges[i].b;
+        }
+        for (size_t i = 0; i < np; i++)
+            memcpy(points + 3 * i, locus->points[i].p, 3 * sizeof *points);
+        ism_remesh_options o = {.f = f, .max_error = max_error, .tri_label = label,
+                                .locked_edges = edges, .nlocked_edges = ne,
+                                .locked_points = points, .nlocked_points = np,
+                                .cancel = cancel};
+        ok = ism_remesh_quality(mesh, &o, st, err);
+    } else {
+        memset(st, 0, sizeof *st);
+        ism_error_set(err, "quality pass: out of memory");
+    }
+    free(edges);
+    free(points);
+    free(label);
+    return ok;
+}

@@ -1,0 +1,27 @@
+/* quality_pass.h — the quality pass applied to a surface's finished mesh (after the
+ * conformance to the singular locus and the curve cuts): what the locus and the cut say is
+ * protected is handed to ism_remesh_quality. The daemon's pipeline and the command line both
+ * call it. */
+#ifndef ISM_QUALITY_PASS_H
+#define ISM_QUALITY_PASS_H
+
+#include "core/curves/cut.h"
+#include "core/remesh/remesh.h"
+#include "core/singular/locus.h"
+
+/* The request's choice: the polygoniser's triangles as they come, or the pass run on them. */
+enum ism_quality { ISM_QUALITY_RAW = 0, ISM_QUALITY_GOOD = 1, ISM_QUALITY_COUNT };
+
+/* "raw" / "good", and back (-1 for an unknown name). */
+const char *ism_quality_name(enum ism_quality q);
+int ism_quality_lookup(const char *name);
+
+/* Runs the pass on mesh: the locus's singular points (with the ring around their vertex)
+ * stay, each double sheet's triangles are a patch of their own, and cut's edges (may be
+ * NULL) are never flipped. max_error as in ism_remesh_options. False with err set when out of
+ * memory (the mesh is then still valid). */
+bool ism_quality_pass(const ism_tape *f, const ism_locus *locus, const ism_cut *cut,
+                      double max_error, const volatile int *cancel, ism_mesh *mesh,
+                      ism_remesh_stats *st, ism_error *err);
+
+#endif

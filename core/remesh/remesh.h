@@ -1,0 +1,51 @@
+/* remesh.h — the quality pass (issue 15 item 4): better-shaped triangles on the same surface,
+ * the mesh saying the same things. Within each manifold patch it flips edges toward Delaunay
+ * (Lawson) and relaxes vertices in the tangent plane (towards the area-weighted centroid of
+ * their triangles), putting every moved vertex back on f = 0 by Newton along ∇f. Protected,
+ * never flipped or moved: boundary and non-manifold edges, edges between differently
+ * labelled triangles or given as locked (curves), crease edges (a sharp dihedral), vertices
+ * on any of them, vertices where several cones meet, where ∇f vanishes, and the vertex at
+ * each given point (singular points) with its neighbours. Triangle count, vertex count and
+ * each triangle's label are kept, so χ, components, non-manifold edges and points and
+ * boundary loops cannot change. */
+#ifndef ISM_REMESH_H
+#define ISM_REMESH_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include "core/expr/expr.h"
+#include "core/mesh/mesh.h"
+
+typedef struct ism_remesh_options {
+    const ism_tape *f;             /* the surface (required) */
+    double max_error;              /* > 0: a flip never puts its new edge's midpoint farther
+                                      than max(this, the old edge's) from f = 0 (0: the old
+                                      edge's distance is the bound) */
+    const uint32_t *tri_label;     /* per triangle, or NULL: flips only between equal labels */
+    const uint32_t *locked_edges;  /* 2 vertex indices per edge never flipped (curves) */
+    size_t nlocked_edges;
+    const double *locked_points;   /* 3 per point: its nearest vertex and that vertex's
+                                      neighbours stay where they are (singular points) */
+    size_t nlocked_points;
+    const volatile int *cancel;    /* polled between sweeps; non-zero stops early (the mesh is
+                                      valid after every sweep) */
+} ism_remesh_options;
+
+typedef struct ism_remesh_stats {
+    size_t flips, moves;           /* edge flips made, vertex moves accepted */
+    size_t locked_vertices;        /* vertices the pass left alone */
+    double min_angle_before, min_angle_after; /* degrees, over non-degenerate triangles */
+    double time_ms;
+} ism_remesh_stats;
+
+/* Runs the pass on m in place (same vertices and triangles by count; positions, normals and
+ * the triangles' corners change). False with err set when out of memory or f is missing;
+ * m is then still a valid mesh of the surface (possibly partly improved). */
+bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_stats *st,
+                        ism_error *err);
+
+/* The smallest angle (degrees) over m's non-degenerate triangles; 90 for none. */
+double ism_remesh_min_angle(const ism_mesh *m);
+
+#endif

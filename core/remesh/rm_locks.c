@@ -1,0 +1,120 @@
+/* rm_locks.c — what the quality pass must not touch. An edge is free when it is an oriented
+ * manifold edge (two triangles running opposite ways), its triangles carry one label, it is
+ * not in the caller's locked list and it is no crease; a vertex is free when every edge at it
+ * is free, its triangles form one closed fan, ∇f does not vanish there and it is not at (or
+ * next to) a given point. Everything else keeps its place and its edges. */
+#include "core/remesh/rm_pass.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Dihedral (between the normals of an edge's two triangles) above which the edge is a crease
+ * of the surface: the polygoniser's meshes bend by a few degrees per edge on smooth parts
+ * (about 4° on the sphere preset, rarely 25° on tight curvature), while a max/min crease
+ * meets at tens of degrees. Neither flipped across nor moved along. */
+#define ISM_RM_CREASE_DEG 40.0
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+static bool is_crease(const ism_mesh *m, uint32_t t1, uint32_t t2)
+{
+    double n1[3], n2[3];
+    const double *P = m->pos;
+    const uint32_t *a = m->tri + 3 * t1, *b = m->tri + 3 * t2;
+    double l1 = rm_cross(P + 3 * a[0], P + 3 * a[1], P + 3 * a[2], n1);
+    double l2 = rm_cross(P + 3 * b[0], P + 3 * b[1], P + 3 * b[2], n2);
+    double dot = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
+    return !(dot > cos(ISM_RM_CREASE_DEG * M_PI / 180) * l1 * l2);
+}
+
+/* True when edge {a, b} may be flipped. */
+static bool edge_free(const rm_mesh *r, uint32_t a, uint32_t b)
+{
+    uint32_t t[2];
+    int n;
+    if (!rm_edge_triangles(r, a, b, t, &n))
+        return false;
+    if (r->label && r->label[t[0]] != r->label[t[1]])
+        return false;
+    return !rm_edge_locked(r, a, b) && !is_crease(r->m, t[0], t[1]);
+}
+
+/* Every edge at v free, and the triangles one closed fan (walked across those edges). */
+static bool fan_free(const rm_mesh *r, uint32_t v)
+{
+    const uint32_t *tri = r->m->tri;
+    uint32_t n = r->count[v];
+    if (n < 3)
+        return false;
+    uint32_t t0 = r->vt[r->start[v]], t = t0, steps = 0;
+    do {
+        int k = rm_corner(r->m, t, v);
+        uint32_t ab[2], prev = tri[3 * t + (k + 2) % 3];
+        int c;
+        if (tri[3 * t + (k + 1) % 3] == v || prev == v || !edge_free(r, v, prev) ||
+            !rm_edge_triangles(r, v, prev, ab, &c))
+            return false;
+        t = ab[0];
+    } while (t != t0 && ++steps <= n);
+    return t == t0 && steps + 1 == n;
+}
+
+/* The nearest vertex to x used by some triangle (UINT32_MAX when none). */
+static uint32_t nearest_vertex(const rm_mesh *r, const double *x)
+{
+    uint32_t best = UINT32_MAX;
+    double bd = INFINITY;
+    for (size_t v = 0; v < r->m->nverts; v++) {
+        double d = rm_dist(r->m->pos + 3 * v, x);
+        if (r->count[v] && d < bd) {
+            bd = d;
+            best = (uint32_t)v;
+        }
+    }
+    return best;
+}
+
+static void lock_ring(rm_mesh *r, uint32_t v)
+{
+    r->locked[v] = 1;
+    for (uint32_t i = 0; i < r->count[v]; i++) {
+        const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
+        for (int k = 0; k < 3; k++)
+            r->locked[t[k]] = 1;
+    }
+}
+
+static bool copy_locked_edges(rm_mesh *r, const ism_remesh_options *o)
+{
+    r->locked_edges = malloc((o->nlocked_edges ? o->nlocked_edges : 1) * sizeof *r->locked_edges);
+    if (!r->locked_edges)
+        return false;
+    for (size_t i = 0; i < o->nlocked_edges; i++)
+        r->locked_edges[i] = rm_edge_key(o->locked_edges[2 * i], o->locked_edges[2 * i + 1]);
+    r->nlocked_edges = o->nlocked_edges;
+    qsort(r->locked_edges, r->nlocked_edges, sizeof *r->locked_edges, cmp_u64);
+    return true;
+}
+
+bool rm_lock_features(rm_pass *p, const ism_remesh_options *o)
+{
+    rm_mesh *r = &p->r;
+    if (!copy_locked_edges(r, o))
+        return false;
+    for (size_t v = 0; v < r->m->nverts; v++) {
+        const double *n = p->normal + 3 * v;
+        bool vanishes = n[0] == 0 && n[1] == 0 && n[2] == 0;
+        r->locked[v] = vanishes || !fan_free(r, (uint32_t)v);
+    }
+    for (size_t i = 0; i < o->nlocked_points; i++) {
+        uint32_t v = nearest_vertex(r, o->locked_points + 3 * i);
+        if (v != UINT32_MAX)
+            lock_ring(r, v);
+    }
+    return true;
+}

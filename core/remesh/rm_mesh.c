@@ -1,0 +1,149 @@
+/* rm_mesh.c — the quality pass's incidence (each vertex's triangles, updated by flips), edge
+ * look-ups by scanning a vertex's few triangles, and the shared angle geometry. */
+#include "core/remesh/rm_mesh.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+bool rm_mesh_build(rm_mesh *r, ism_mesh *m)
+{
+    size_t nv = m->nverts;
+    r->m = m;
+    r->start = calloc(nv + 1, sizeof *r->start);
+    r->count = calloc(nv ? nv : 1, sizeof *r->count);
+    r->locked = calloc(nv ? nv : 1, 1);
+    if (!r->start || !r->count || !r->locked)
+        return false;
+    for (size_t i = 0; i < 3 * m->ntris; i++)
+        r->count[m->tri[i]]++;
+    size_t total = 0;
+    for (size_t v = 0; v < nv; v++) {
+        r->start[v] = (uint32_t)total;
+        total += r->count[v] + ISM_RM_SLACK;
+        r->count[v] = 0;
+    }
+    r->start[nv] = (uint32_t)total;
+    if (total >= UINT32_MAX || !(r->vt = malloc((total ? total : 1) * sizeof *r->vt)))
+        return false;
+    for (size_t t = 0; t < m->ntris; t++)
+        for (int k = 0; k < 3; k++) {
+            uint32_t v = m->tri[3 * t + k];
+            /* a collapsed triangle lists its vertex once */
+            if (k > 0 && m->tri[3 * t] == v)
+                continue;
+            if (k > 1 && m->tri[3 * t + 1] == v)
+                continue;
+            r->vt[r->start[v] + r->count[v]++] = (uint32_t)t;
+        }
+    return true;
+}
+
+void rm_mesh_free(rm_mesh *r)
+{
+    free(r->start);
+    free(r->count);
+    free(r->vt);
+    free(r->locked);
+    free(r->locked_edges);
+    memset(r, 0, sizeof *r);
+}
+
+bool rm_edge_locked(const rm_mesh *r, uint32_t a, uint32_t b)
+{
+    uint64_t key = rm_edge_key(a, b);
+    size_t lo = 0, hi = r->nlocked_edges;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (r->locked_edges[mid] < key)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < r->nlocked_edges && r->locked_edges[lo] == key;
+}
+
+int rm_corner(const ism_mesh *m, uint32_t t, uint32_t v)
+{
+    for (int k = 0; k < 3; k++)
+        if (m->tri[3 * t + k] == v)
+            return k;
+    return -1;
+}
+
+bool rm_edge_triangles(const rm_mesh *r, uint32_t a, uint32_t b, uint32_t t[2], int *n)
+{
+    const uint32_t *tri = r->m->tri;
+    int forward = 0, backward = 0;
+    *n = 0;
+    for (uint32_t i = 0; i < r->count[a]; i++) {
+        uint32_t s = r->vt[r->start[a] + i];
+        int k = rm_corner(r->m, s, a);
+        uint32_t next = tri[3 * s + (k + 1) % 3], prev = tri[3 * s + (k + 2) % 3];
+        if (next == b) {
+            t[0] = s;
+            forward++;
+        } else if (prev == b) {
+            t[1] = s;
+            backward++;
+        } else {
+            continue;
+        }
+        (*n)++;
+    }
+    return *n == 2 && forward == 1 && backward == 1;
+}
+
+void rm_slot_remove(rm_mesh *r, uint32_t v, uint32_t t)
+{
+    uint32_t *s = r->vt + r->start[v];
+    for (uint32_t i = 0; i < r->count[v]; i++)
+        if (s[i] == t) {
+            s[i] = s[--r->count[v]];
+            return;
+        }
+}
+
+bool rm_slot_room(const rm_mesh *r, uint32_t v)
+{
+    return r->start[v] + r->count[v] < r->start[v + 1];
+}
+
+bool rm_slot_add(rm_mesh *r, uint32_t v, uint32_t t)
+{
+    if (!rm_slot_room(r, v))
+        return false;
+    r->vt[r->start[v] + r->count[v]++] = t;
+    return true;
+}
+
+double rm_dist(const double *p, const double *q)
+{
+    double d[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
+    return sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+}
+
+double rm_cross(const double *a, const double *b, const double *c, double n[3])
+{
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    n[0] = u[1] * v[2] - u[2] * v[1];
+    n[1] = u[2] * v[0] - u[0] * v[2];
+    n[2] = u[0] * v[1] - u[1] * v[0];
+    return sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+
+double rm_angle(const double *p, const double *q, const double *s)
+{
+    double n[3], len = rm_cross(p, q, s, n);
+    double dot = (q[0] - p[0]) * (s[0] - p[0]) + (q[1] - p[1]) * (s[1] - p[1]) +
+                 (q[2] - p[2]) * (s[2] - p[2]);
+    return len == 0 && dot == 0 ? 0 : atan2(len, dot);
+}
+
+double rm_min_angle(const double *a, const double *b, const double *c)
+{
+    double x = rm_angle(a, b, c), y = rm_angle(b, c, a);
+    double z = M_PI - x - y;
+    return fmin(x, fmin(y, z));
+}

@@ -1,0 +1,65 @@
+/* rm_mesh.h — the quality pass's working view of a triangle mesh (rm_mesh.c): each vertex's
+ * incident triangles in a fixed-capacity slot (so edge flips can update them in place), the
+ * vertices and edges that must not change, the per-triangle patch labels, and the small
+ * geometric helpers (angles, normals) the flip and relaxation steps share. */
+#ifndef ISM_RM_MESH_H
+#define ISM_RM_MESH_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include "core/mesh/mesh.h"
+
+/* Room kept in each vertex's slot beyond its starting degree: a flip adds one triangle to
+ * each of two vertices, so a vertex may gain at most this many before flips stop touching it
+ * (valence far above the start's is never a good triangle shape anyway). */
+#define ISM_RM_SLACK 6
+
+typedef struct rm_mesh {
+    ism_mesh *m;
+    uint32_t *start;          /* nverts + 1: slot of vertex v is vt[start[v] .. start[v+1]) */
+    uint32_t *count;          /* triangles in vertex v's slot */
+    uint32_t *vt;             /* incident triangle indices */
+    uint8_t *locked;          /* per vertex: never moved */
+    const uint32_t *label;    /* per triangle, or NULL: flips only between equal labels */
+    uint64_t *locked_edges;   /* sorted keys (rm_edge_key) of edges never flipped */
+    size_t nlocked_edges;
+} rm_mesh;
+
+/* Builds the incidence of m (r zeroed by the caller). False when out of memory. */
+bool rm_mesh_build(rm_mesh *r, ism_mesh *m);
+void rm_mesh_free(rm_mesh *r);
+
+/* The key of the undirected edge {a, b}. */
+static inline uint64_t rm_edge_key(uint32_t a, uint32_t b)
+{
+    return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
+}
+
+/* True when {a, b} is in the locked edge list. */
+bool rm_edge_locked(const rm_mesh *r, uint32_t a, uint32_t b);
+
+/* The triangles of edge {a, b}: *n gets how many there are (all of them counted), t[0..1]
+ * the first two: t[0] runs a -> b, t[1] runs b -> a when the edge is an oriented manifold
+ * edge (*n == 2 and the function returns true). */
+bool rm_edge_triangles(const rm_mesh *r, uint32_t a, uint32_t b, uint32_t t[2], int *n);
+
+/* Position k (0..2) of vertex v in triangle t, or -1. */
+int rm_corner(const ism_mesh *m, uint32_t t, uint32_t v);
+
+/* Removes triangle t from / adds it to vertex v's slot. Adding fails when the slot is full. */
+void rm_slot_remove(rm_mesh *r, uint32_t v, uint32_t t);
+bool rm_slot_add(rm_mesh *r, uint32_t v, uint32_t t);
+/* True when v's slot has room for one more triangle. */
+bool rm_slot_room(const rm_mesh *r, uint32_t v);
+
+/* Geometry. */
+double rm_dist(const double *p, const double *q);
+/* The angle at p between p->q and p->s (radians, 0 for a zero-length side). */
+double rm_angle(const double *p, const double *q, const double *s);
+/* The smallest of the triangle's three angles (radians). */
+double rm_min_angle(const double *a, const double *b, const double *c);
+/* (b - a) x (c - a), not normalised; returns its length. */
+double rm_cross(const double *a, const double *b, const double *c, double n[3]);
+
+#endif

@@ -1,0 +1,42 @@
+/* rm_pass.h — the state one quality pass shares between its steps (remesh.c sequences them):
+ * the incidence, f and a workspace to evaluate it, unit normals from ∇f at the vertices, and
+ * the steps themselves: protection (rm_locks.c), Lawson flips (rm_flip.c), tangential
+ * relaxation with projection onto f = 0 (rm_relax.c). */
+#ifndef ISM_RM_PASS_H
+#define ISM_RM_PASS_H
+
+#include "core/eval/eval.h"
+#include "core/remesh/remesh.h"
+#include "core/remesh/rm_mesh.h"
+
+/* |∇f| at most this × the median over the vertices counts as vanishing (a singular point or
+ * curve: no tangent plane to move in; the analysis's singular_rel). */
+#define ISM_RM_SINGULAR_REL 1e-6
+
+typedef struct rm_pass {
+    rm_mesh r;
+    const ism_tape *f;
+    ism_eval_ws *ws;
+    double *normal;        /* 3 per vertex: ∇f / |∇f| (0 where it vanishes) */
+    double gthresh;        /* |∇f| at or below this vanishes */
+    double max_error;
+    size_t flips, moves;
+} rm_pass;
+
+/* Unit normals and the vanishing threshold from ∇f at every vertex. False when out of memory. */
+bool rm_normals(rm_pass *p);
+
+/* Marks protected vertices (r.locked) and collects the locked edges (the given ones and the
+ * creases). False when out of memory. */
+bool rm_lock_features(rm_pass *p, const ism_remesh_options *o);
+
+/* One sweep of Lawson flips over every edge; returns the flips made. */
+size_t rm_flip_sweep(rm_pass *p);
+
+/* One sweep of tangential relaxation over the free vertices; returns the moves made. */
+size_t rm_relax_sweep(rm_pass *p);
+
+/* Distance estimate |f| / |∇f| at x (INFINITY where ∇f vanishes). */
+double rm_distance(rm_pass *p, const double x[3]);
+
+#endif

@@ -1,0 +1,183 @@
+/* rm_relax.c — tangential relaxation: each free vertex moves toward the area-weighted
+ * centroid of its triangles' centroids (a step of centroidal smoothing), within the tangent
+ * plane of f = 0 there, and is put back on f = 0 by Newton steps along ∇f. A move is kept
+ * only when no triangle of the fan turns over, Newton converged close to where it started,
+ * and the fan's smallest angle does not get worse (or stays above a comfortable angle);
+ * otherwise a half step is tried, then the vertex stays. Also ∇f's unit normals and the
+ * distance estimate the pass uses. */
+#include "core/remesh/rm_pass.h"
+#include "core/analysis/select.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Newton steps projecting a moved vertex onto f = 0 (quadratic convergence: from a tangent
+ * step of a fraction of an edge, 3-4 steps reach rounding). */
+#define ISM_RM_NEWTON_STEPS 8
+/* Newton has converged when its last step is below this × the fan's mean edge. */
+#define ISM_RM_NEWTON_REL 1e-9
+/* The projection may move a vertex at most this × the fan's mean edge off its tangent step
+ * (farther means it found another sheet). */
+#define ISM_RM_PROJECT_MAX_REL 0.5
+/* A move is refused when a triangle of the fan would face more than this away from the
+ * fan's normal (fold-over guard; smooth fans spread a few degrees around it). */
+#define ISM_RM_MAX_TURN_DEG 60.0
+/* A move may lower the fan's smallest angle while that stays at or above this (degrees):
+ * evening out the sizes lowers good angles a little to raise bad ones elsewhere. */
+#define ISM_RM_COMFORT_DEG 35.0
+
+static double dot3(const double *u, const double *v)
+{
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+}
+
+double rm_distance(rm_pass *p, const double x[3])
+{
+    double g[3], fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
+    double gn = sqrt(dot3(g, g));
+    return gn > p->gthresh && isfinite(fv) ? fabs(fv) / gn : INFINITY;
+}
+
+bool rm_normals(rm_pass *p)
+{
+    const ism_mesh *m = p->r.m;
+    size_t nv = m->nverts;
+    double *gn = malloc((nv ? nv : 1) * sizeof *gn);
+    if (!gn)
+        return false;
+    size_t n = 0;
+    for (size_t v = 0; v < nv; v++) {
+        const double *x = m->pos + 3 * v;
+        double *g = p->normal + 3 * v;
+        ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
+        double len = sqrt(dot3(g, g));
+        if (isfinite(len) && p->r.count[v])
+            gn[n++] = len;
+    }
+    p->gthresh = n ? ISM_RM_SINGULAR_REL * ism_an_select_double(gn, n, n / 2) : 0;
+    free(gn);
+    for (size_t v = 0; v < nv; v++) {
+        double *g = p->normal + 3 * v, len = sqrt(dot3(g, g));
+        double s = isfinite(len) && len > p->gthresh ? 1 / len : 0;
+        for (int k = 0; k < 3; k++)
+            g[k] *= s;
+    }
+    return true;
+}
+
+/* Newton from x onto f = 0; false when ∇f vanishes or it does not converge. */
+static bool project(rm_pass *p, double x[3], double scale, double g[3])
+{
+    for (int i = 0; i < ISM_RM_NEWTON_STEPS; i++) {
+        double fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
+        double g2 = dot3(g, g);
+        if (!isfinite(fv) || !(sqrt(g2) > p->gthresh))
+            return false;
+        double s = fv / g2;
+        for (int k = 0; k < 3; k++)
+            x[k] -= s * g[k];
+        if (fabs(s) * sqrt(g2) <= ISM_RM_NEWTON_REL * scale) {
+            ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
+            return sqrt(dot3(g, g)) > p->gthresh;
+        }
+    }
+    return false;
+}
+
+/* The fan of v: smallest angle, mean edge length, the area-weighted centroid and normal (the
+ * sum of the triangles' cross products: well defined for a closed fan even where a
+ * needle's own normal is rounding noise). */
+typedef struct fan {
+    double min_angle, mean_edge, centroid[3], normal[3];
+} fan;
+
+static void fan_measure(const rm_pass *p, uint32_t v, fan *f)
+{
+    const rm_mesh *r = &p->r;
+    const double *P = r->m->pos;
+    double area = 0, edges = 0;
+    f->min_angle = INFINITY;
+    f->mean_edge = 0;
+    memset(f->centroid, 0, sizeof f->centroid);
+    memset(f->normal, 0, sizeof f->normal);
+    for (uint32_t i = 0; i < r->count[v]; i++) {
+        const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
+        const double *a = P + 3 * t[0], *b = P + 3 * t[1], *c = P + 3 * t[2];
+        double n[3], w = 0.5 * rm_cross(a, b, c, n);
+        f->min_angle = fmin(f->min_angle, rm_min_angle(a, b, c));
+        for (int k = 0; k < 3; k++) {
+            f->centroid[k] += w * (a[k] + b[k] + c[k]) / 3;
+            f->normal[k] += n[k];
+            if (t[k] != v) {
+                f->mean_edge += rm_dist(P + 3 * v, P + 3 * t[k]);
+                edges++;
+            }
+        }
+        area += w;
+    }
+    for (int k = 0; k < 3; k++)
+        f->centroid[k] = area > 0 ? f->centroid[k] / area : P[3 * v + k];
+    f->mean_edge /= edges > 0 ? edges : 1;
+}
+
+/* True when moving v to x keeps every triangle of its fan facing within the limit of the
+ * fan's normal, and leaves the fan's smallest angle no worse (or comfortable). */
+static bool fan_accepts(const rm_pass *p, uint32_t v, const double x[3], const fan *f)
+{
+    const rm_mesh *r = &p->r;
+    const double *P = r->m->pos;
+    double worst = INFINITY, turn = cos(ISM_RM_MAX_TURN_DEG * M_PI / 180);
+    double ln = sqrt(dot3(f->normal, f->normal));
+    for (uint32_t i = 0; i < r->count[v]; i++) {
+        const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
+        const double *q[3];
+        for (int k = 0; k < 3; k++)
+            q[k] = t[k] == v ? x : P + 3 * t[k];
+        double n1[3], l1 = rm_cross(q[0], q[1], q[2], n1);
+        if (!(dot3(f->normal, n1) > turn * ln * l1))
+            return false;
+        worst = fmin(worst, rm_min_angle(q[0], q[1], q[2]));
+    }
+    return worst >= f->min_angle || worst >= ISM_RM_COMFORT_DEG * M_PI / 180;
+}
+
+/* Tries to move free vertex v; true when it moved. */
+static bool relax_vertex(rm_pass *p, uint32_t v)
+{
+    double *pos = p->r.m->pos + 3 * v, *n = p->normal + 3 * v;
+    fan f;
+    fan_measure(p, v, &f);
+    double d[3] = {f.centroid[0] - pos[0], f.centroid[1] - pos[1], f.centroid[2] - pos[2]};
+    double dn = dot3(d, n);
+    for (int k = 0; k < 3; k++)
+        d[k] -= dn * n[k];
+    for (double step = 1; step >= 0.5; step *= 0.5) {
+        double x[3] = {pos[0] + step * d[0], pos[1] + step * d[1], pos[2] + step * d[2]}, g[3];
+        double tangent[3] = {x[0], x[1], x[2]};
+        if (!project(p, x, f.mean_edge, g) ||
+            !(rm_dist(x, tangent) <= ISM_RM_PROJECT_MAX_REL * f.mean_edge) ||
+            !fan_accepts(p, v, x, &f))
+            continue;
+        float *mn = p->r.m->normal + 3 * v;
+        double len = sqrt(dot3(g, g));
+        double side = mn[0] * g[0] + mn[1] * g[1] + mn[2] * g[2] < 0 ? -1 : 1;
+        memcpy(pos, x, sizeof x);
+        for (int k = 0; k < 3; k++) {
+            n[k] = g[k] / len;
+            mn[k] = (float)(side * n[k]);
+        }
+        return true;
+    }
+    return false;
+}
+
+size_t rm_relax_sweep(rm_pass *p)
+{
+    size_t moves = 0;
+    for (size_t v = 0; v < p->r.m->nverts; v++)
+        if (!p->r.locked[v] && p->r.count[v] && relax_vertex(p, (uint32_t)v))
+            moves++;
+    p->moves += moves;
+    return moves;
+}
