@@ -455,6 +455,19 @@ static bool decode_max_error(const json_t *v, const json_t *depth, ism_request *
     return true;
 }
 
+/* "quality": "raw" or "good" (ism_quality_lookup). */
+static bool decode_quality(const json_t *v, ism_request *req, ism_req_error *err)
+{
+    const char *name;
+    if (!read_string(v, "$.quality", &name, err))
+        return false;
+    int q = ism_quality_lookup(name);
+    if (q < 0)
+        return bad(err, "$.quality", "unknown quality \"%.40s\" (raw or good)", name);
+    req->quality = q;
+    return true;
+}
+
 static const char *const attr_names[] = {"normal", "mean_curvature", "gauss_curvature",
                                          "class"};
 
@@ -576,7 +589,8 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
                         ism_req_error *err)
 {
     static const char *const known[] = {"expr", "preset", "params", "let", "box", "depth",
-                                        "max_error", "tolerances", "output", "curves", NULL};
+                                        "max_error", "quality", "tolerances", "output", "curves",
+                                        NULL};
     if (!json_is_object(root))
         return bad(err, "$", "a request is a JSON object, got %s", type_name(root));
     if (!check_fields(root, "$", known, err))
@@ -629,6 +643,8 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
         return false;
     if ((v = json_object_get(root, "max_error")) &&
         !decode_max_error(v, depth, req, depth_limit, err))
+        return false;
+    if ((v = json_object_get(root, "quality")) && !decode_quality(v, req, err))
         return false;
     if ((v = json_object_get(root, "tolerances")) && !decode_tolerances(v, req, err))
         return false;

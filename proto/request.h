@@ -17,6 +17,7 @@
 #include <stdbool.h>
 #include "core/expr/expr.h"
 #include "core/octree/polygonise.h"
+#include "core/remesh/quality_pass.h"
 
 /* Published limits (also in request.schema.json and openapi.yaml). */
 #define ISM_REQ_MAX_BYTES       (256 * 1024) /* request body */
@@ -77,6 +78,8 @@ typedef struct ism_request {
     int min_depth, max_depth;
     double max_error;          /* the error bound (model units); 0 when not given: then the
                                   flatness tolerances and depth.max decide */
+    int quality;               /* enum ism_quality: "raw" (default) or "good" (the quality
+                                  pass after meshing, core/remesh/) */
     double gradient;           /* the polygoniser's option names: gradient_test ... */
     double double_root_eps;
     int double_root_iters;

@@ -53,6 +53,15 @@ static void write_max_error(ism_jw *w, const ism_request *req)
     ism_jw_number(w, req->max_error);
 }
 
+/* The quality pass, only when asked for (keys of requests without it stay as they were). */
+static void write_quality(ism_jw *w, const ism_request *req)
+{
+    if (req->quality == ISM_QUALITY_RAW)
+        return;
+    ism_jw_key(w, "quality");
+    ism_jw_string(w, ism_quality_name(req->quality));
+}
+
 /* The encoding options; with only_effective, bits of attributes that are not sent are left
  * out (they cannot change the bytes). */
 static void write_output(ism_jw *w, const ism_request *req, bool only_effective)
@@ -128,6 +137,7 @@ char *ism_request_canonical(const ism_request *req, size_t *len)
     ism_jw_int(&w, req->max_depth);
     ism_jw_object_end(&w);
     write_max_error(&w, req);
+    write_quality(&w, req);
     ism_jw_key(&w, "tolerances");
     write_tolerances(&w, req);
     ism_jw_key(&w, "output");
@@ -166,6 +176,7 @@ static char *key_material(const ism_request *req, const ism_tape *tape, bool wit
     ism_jw_int(&w, req->max_depth);
     ism_jw_array_end(&w);
     write_max_error(&w, req);
+    write_quality(&w, req);
     ism_jw_key(&w, "tolerances");
     write_tolerances(&w, req);
     ism_request_write_curves(&w, req, true);

@@ -4,11 +4,10 @@
 #include <math.h>
 #include <string.h>
 
-bool ism_curves_cut(const ism_tape *f, const ism_cut_fn *fns, size_t n, const double box[6],
-                    ism_mesh *mesh, ism_cut *cut, ism_arrangement *arr, ism_error *err)
+bool ism_curves_cut_mesh(const ism_tape *f, const ism_cut_fn *fns, size_t n,
+                         const double box[6], ism_mesh *mesh, ism_cut *cut, ism_error *err)
 {
     memset(cut, 0, sizeof *cut);
-    memset(arr, 0, sizeof *arr);
     double d2 = 0;
     for (int k = 0; k < 3; k++)
         d2 += (box[k + 3] - box[k]) * (box[k + 3] - box[k]);
@@ -17,12 +16,24 @@ bool ism_curves_cut(const ism_tape *f, const ism_cut_fn *fns, size_t n, const do
         return ism_error_set(err, "out of memory cutting the mesh along the curves");
     /* Newton is asked for a thousandth of the tolerance: it converges quadratically, so the
      * last step lands far below it, and the reported residuals show the margin. */
-    bool ok = ism_cut_mesh(&ev, 1e-3 * ISM_CURVE_TOL_REL * sqrt(d2), mesh, cut) &&
-              ism_arrangement_build(mesh, cut, arr);
+    bool ok = ism_cut_mesh(&ev, 1e-3 * ISM_CURVE_TOL_REL * sqrt(d2), mesh, cut);
     ism_cut_eval_free(&ev);
     if (!ok) {
         ism_cut_free(cut);
         return ism_error_set(err, "out of memory cutting the mesh along the curves");
+    }
+    return true;
+}
+
+bool ism_curves_cut(const ism_tape *f, const ism_cut_fn *fns, size_t n, const double box[6],
+                    ism_mesh *mesh, ism_cut *cut, ism_arrangement *arr, ism_error *err)
+{
+    memset(arr, 0, sizeof *arr);
+    if (!ism_curves_cut_mesh(f, fns, n, box, mesh, cut, err))
+        return false;
+    if (!ism_arrangement_build(mesh, cut, arr)) {
+        ism_cut_free(cut);
+        return ism_error_set(err, "out of memory building the curves' arrangement");
     }
     return true;
 }

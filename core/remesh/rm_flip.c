@@ -7,14 +7,20 @@
 #include "core/remesh/rm_pass.h"
 
 #include <math.h>
+#include <stdlib.h>
 
 /* Largest bend between the two triangles of a flipped edge, before and after: a flip on a
  * quad bent more than this would move the surface the mesh describes (the polygoniser's
  * smooth parts bend a few degrees per edge; see ISM_RM_CREASE_DEG for creases). */
 #define ISM_RM_FLIP_MAX_BEND_DEG 20.0
-/* The Delaunay test asks for an angle sum this much above π (radians), so that the four
- * points of a circle (sum exactly π up to rounding) are never flipped back and forth. */
+/* The Delaunay test asks for sin(γ + δ) below minus this (γ + δ this far above π, in
+ * radians), so that the four points of a circle (sum exactly π up to rounding) are never
+ * flipped back and forth. */
 #define ISM_RM_FLIP_MARGIN 1e-9
+
+/* Flips one call may make, per triangle of the mesh: Lawson's procedure ends by itself in
+ * the plane; on a curved mesh this bounds the work whatever the geometry does. */
+#define ISM_RM_FLIPS_PER_TRIANGLE 4
 
 typedef struct quad {
     uint32_t a, b, c, d, t1, t2;
@@ -66,11 +72,25 @@ static bool bend_ok(const double *n1, double l1, const double *n2, double l2)
     return l1 > 0 && l2 > 0 && dot3(n1, n2) >= cos(ISM_RM_FLIP_MAX_BEND_DEG * M_PI / 180) * l1 * l2;
 }
 
+/* The angles at c and d of the quad sum above π: sin(γ + δ) < 0 written with the sides'
+ * cross and dot products (no arc tangents; both angles lie in [0, π]). */
+static bool not_delaunay(const double *A, const double *B, const double *C, const double *D)
+{
+    double n[3], sc = rm_cross(C, A, B, n), sd = rm_cross(D, B, A, n);
+    double cc = dot3((double[3]){A[0] - C[0], A[1] - C[1], A[2] - C[2]},
+                     (double[3]){B[0] - C[0], B[1] - C[1], B[2] - C[2]});
+    double cd = dot3((double[3]){A[0] - D[0], A[1] - D[1], A[2] - D[2]},
+                     (double[3]){B[0] - D[0], B[1] - D[1], B[2] - D[2]});
+    /* sin(γ + δ) |CA||CB||DA||DB| = sc cd + cc sd */
+    double scale = sqrt((cc * cc + sc * sc) * (cd * cd + sd * sd));
+    return sc * cd + cc * sd < -ISM_RM_FLIP_MARGIN * scale;
+}
+
 /* The geometric tests of a flip (the combinatorial ones passed). */
 static bool flip_improves(rm_pass *p, const quad *q)
 {
     const double *A = P(p, q->a), *B = P(p, q->b), *C = P(p, q->c), *D = P(p, q->d);
-    if (rm_angle(C, A, B) + rm_angle(D, B, A) <= M_PI + ISM_RM_FLIP_MARGIN)
+    if (!not_delaunay(A, B, C, D))
         return false;
     double n1[3], n2[3], m1[3], m2[3];
     double l1 = rm_cross(A, B, C, n1), l2 = rm_cross(B, A, D, n2);
@@ -79,8 +99,8 @@ static bool flip_improves(rm_pass *p, const quad *q)
     if (!bend_ok(n1, l1, n2, l2) || !bend_ok(m1, k1, m2, k2) || !(dot3(m1, s) > 0) ||
         !(dot3(m2, s) > 0))
         return false;
-    double before = fmin(rm_min_angle(A, B, C), rm_min_angle(B, A, D));
-    double after = fmin(rm_min_angle(A, D, C), rm_min_angle(B, C, D));
+    double before = fmin(rm_min_sine(A, B, C), rm_min_sine(B, A, D));
+    double after = fmin(rm_min_sine(A, D, C), rm_min_sine(B, C, D));
     if (!(after > before))
         return false;
     double mab[3], mcd[3];
@@ -103,22 +123,63 @@ static void do_flip(rm_pass *p, const quad *q)
     rm_slot_add(&p->r, q->d, q->t1);
 }
 
-size_t rm_flip_sweep(rm_pass *p)
+/* A stack of edges (vertex pairs) still to test. */
+typedef struct edge_stack {
+    uint32_t *e;
+    size_t n, cap;
+} edge_stack;
+
+static bool push(edge_stack *s, uint32_t a, uint32_t b)
+{
+    if (s->n + 2 > s->cap) {
+        size_t cap = s->cap ? 2 * s->cap : 1024;
+        uint32_t *e = realloc(s->e, cap * sizeof *e);
+        if (!e)
+            return false;
+        s->e = e;
+        s->cap = cap;
+    }
+    s->e[s->n++] = a;
+    s->e[s->n++] = b;
+    return true;
+}
+
+/* Tests edge {a, b} and flips it when every test passes. */
+static bool try_flip(rm_pass *p, uint32_t a, uint32_t b, quad *q)
 {
     const rm_mesh *r = &p->r;
-    size_t flips = 0;
-    for (size_t t = 0; t < r->m->ntris; t++)
-        for (int k = 0; k < 3; k++) {
-            uint32_t a = r->m->tri[3 * t + k], b = r->m->tri[3 * t + (k + 1) % 3];
-            quad q;
-            if (a > b || !find_quad(p, a, b, &q) || edge_exists(r, q.c, q.d) ||
-                !rm_slot_room(r, q.c) || !rm_slot_room(r, q.d) || !degree_allows(r, a) ||
-                !degree_allows(r, b) || !flip_improves(p, &q))
-                continue;
-            do_flip(p, &q);
-            flips++;
-            break; /* triangle t changed: its other edges are seen on the next sweep */
-        }
+    if (!find_quad(p, a, b, q) || edge_exists(r, q->c, q->d) || !rm_slot_room(r, q->c) ||
+        !rm_slot_room(r, q->d) || !degree_allows(r, a) || !degree_allows(r, b) ||
+        !flip_improves(p, q))
+        return false;
+    do_flip(p, q);
+    return true;
+}
+
+size_t rm_flip_active(rm_pass *p, bool *ok)
+{
+    const ism_mesh *m = p->r.m;
+    edge_stack s = {0};
+    size_t flips = 0, limit = ISM_RM_FLIPS_PER_TRIANGLE * m->ntris;
+    *ok = true;
+    for (size_t t = 0; t < m->ntris && *ok; t++) {
+        const uint32_t *v = m->tri + 3 * t;
+        if (p->active[v[0]] || p->active[v[1]] || p->active[v[2]])
+            for (int k = 0; k < 3 && *ok; k++)
+                if (v[k] < v[(k + 1) % 3])
+                    *ok = push(&s, v[k], v[(k + 1) % 3]);
+    }
+    while (*ok && s.n && flips < limit) {
+        uint32_t b = s.e[--s.n], a = s.e[--s.n];
+        quad q;
+        if (!try_flip(p, a, b, &q))
+            continue;
+        flips++;
+        /* the quad's sides may now fail the test */
+        *ok = push(&s, q.a, q.c) && push(&s, q.c, q.b) && push(&s, q.b, q.d) &&
+              push(&s, q.d, q.a);
+    }
+    free(s.e);
     p->flips += flips;
     return flips;
 }

@@ -141,9 +141,21 @@ double rm_angle(const double *p, const double *q, const double *s)
     return len == 0 && dot == 0 ? 0 : atan2(len, dot);
 }
 
+double rm_min_sine(const double *a, const double *b, const double *c)
+{
+    /* 2 area = |AB x AC| = product of the two sides at the smallest angle × its sine; those
+     * are the two longest sides */
+    double n[3], twice_area = rm_cross(a, b, c, n);
+    double ab = rm_dist(a, b), bc = rm_dist(b, c), ca = rm_dist(c, a);
+    double shortest = fmin(ab, fmin(bc, ca)), prod = ab * bc * ca;
+    return prod > 0 ? twice_area * shortest / prod : 0;
+}
+
 double rm_min_angle(const double *a, const double *b, const double *c)
 {
-    double x = rm_angle(a, b, c), y = rm_angle(b, c, a);
-    double z = M_PI - x - y;
-    return fmin(x, fmin(y, z));
+    /* the smallest angle lies opposite the shortest side */
+    double ab = rm_dist(a, b), bc = rm_dist(b, c), ca = rm_dist(c, a);
+    if (bc <= ab && bc <= ca)
+        return rm_angle(a, b, c);
+    return ca <= ab ? rm_angle(b, c, a) : rm_angle(c, a, b);
 }

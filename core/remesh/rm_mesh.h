@@ -59,6 +59,9 @@ double rm_dist(const double *p, const double *q);
 double rm_angle(const double *p, const double *q, const double *s);
 /* The smallest of the triangle's three angles (radians). */
 double rm_min_angle(const double *a, const double *b, const double *c);
+/* Its sine (0 for a degenerate triangle): the smallest angle is at most 60°, where the sine
+ * still grows with the angle, so comparisons need no arc tangent. */
+double rm_min_sine(const double *a, const double *b, const double *c);
 /* (b - a) x (c - a), not normalised; returns its length. */
 double rm_cross(const double *a, const double *b, const double *c, double n[3]);
 

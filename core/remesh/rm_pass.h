@@ -12,6 +12,11 @@
 /* |∇f| at most this × the median over the vertices counts as vanishing (a singular point or
  * curve: no tangent plane to move in; the analysis's singular_rel). */
 #define ISM_RM_SINGULAR_REL 1e-6
+/* A fan whose smallest angle is at least this (degrees) needs no work: a move may lower a
+ * fan's smallest angle while it stays at or above it (evening out sizes lowers good angles
+ * a little to raise bad ones nearby), and vertices far from any triangle under it are not
+ * relaxed at all. */
+#define ISM_RM_COMFORT_DEG 35.0
 
 typedef struct rm_pass {
     rm_mesh r;
@@ -20,6 +25,7 @@ typedef struct rm_pass {
     double *normal;        /* 3 per vertex: ∇f / |∇f| (0 where it vanishes) */
     double gthresh;        /* |∇f| at or below this vanishes */
     double max_error;
+    uint8_t *active;       /* per vertex: relaxed in this round (near a poor triangle) */
     size_t flips, moves;
 } rm_pass;
 
@@ -30,10 +36,15 @@ bool rm_normals(rm_pass *p);
  * creases). False when out of memory. */
 bool rm_lock_features(rm_pass *p, const ism_remesh_options *o);
 
-/* One sweep of Lawson flips over every edge; returns the flips made. */
-size_t rm_flip_sweep(rm_pass *p);
+/* Lawson flips starting from the edges of triangles with an active vertex, each flip
+ * queueing its quad's four sides; returns the flips made. *ok false when out of memory. */
+size_t rm_flip_active(rm_pass *p, bool *ok);
 
-/* One sweep of tangential relaxation over the free vertices; returns the moves made. */
+/* Marks the active vertices: those of triangles whose smallest angle is below
+ * ISM_RM_COMFORT_DEG, and their neighbours. Returns how many there are. */
+size_t rm_mark_active(rm_pass *p);
+
+/* One sweep of tangential relaxation over the free active vertices; returns the moves made. */
 size_t rm_relax_sweep(rm_pass *p);
 
 /* Distance estimate |f| / |∇f| at x (INFINITY where ∇f vanishes). */

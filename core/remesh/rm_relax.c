@@ -15,17 +15,17 @@
 /* Newton steps projecting a moved vertex onto f = 0 (quadratic convergence: from a tangent
  * step of a fraction of an edge, 3-4 steps reach rounding). */
 #define ISM_RM_NEWTON_STEPS 8
-/* Newton has converged when its last step is below this × the fan's mean edge. */
-#define ISM_RM_NEWTON_REL 1e-9
+/* Newton has converged when its last step is below this × the fan's mean edge: the distance
+ * left after a step of length s is about κ s² (κ the curvature), some 1e-12 of an edge on
+ * the presets' meshes, far below any error bound — and one evaluation fewer than asking the
+ * step itself to be that small. */
+#define ISM_RM_NEWTON_REL 1e-6
 /* The projection may move a vertex at most this × the fan's mean edge off its tangent step
  * (farther means it found another sheet). */
 #define ISM_RM_PROJECT_MAX_REL 0.5
 /* A move is refused when a triangle of the fan would face more than this away from the
  * fan's normal (fold-over guard; smooth fans spread a few degrees around it). */
 #define ISM_RM_MAX_TURN_DEG 60.0
-/* A move may lower the fan's smallest angle while that stays at or above this (degrees):
- * evening out the sizes lowers good angles a little to raise bad ones elsewhere. */
-#define ISM_RM_COMFORT_DEG 35.0
 
 static double dot3(const double *u, const double *v)
 {
@@ -77,19 +77,17 @@ static bool project(rm_pass *p, double x[3], double scale, double g[3])
         double s = fv / g2;
         for (int k = 0; k < 3; k++)
             x[k] -= s * g[k];
-        if (fabs(s) * sqrt(g2) <= ISM_RM_NEWTON_REL * scale) {
-            ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
-            return sqrt(dot3(g, g)) > p->gthresh;
-        }
+        if (fabs(s) * sqrt(g2) <= ISM_RM_NEWTON_REL * scale)
+            return true; /* g is from a point this close: the normal to keep */
     }
     return false;
 }
 
-/* The fan of v: smallest angle, mean edge length, the area-weighted centroid and normal (the
+/* The fan of v: the sine of its smallest angle, mean edge length, the area-weighted centroid and normal (the
  * sum of the triangles' cross products: well defined for a closed fan even where a
  * needle's own normal is rounding noise). */
 typedef struct fan {
-    double min_angle, mean_edge, centroid[3], normal[3];
+    double min_sine, mean_edge, centroid[3], normal[3];
 } fan;
 
 static void fan_measure(const rm_pass *p, uint32_t v, fan *f)
@@ -97,7 +95,7 @@ static void fan_measure(const rm_pass *p, uint32_t v, fan *f)
     const rm_mesh *r = &p->r;
     const double *P = r->m->pos;
     double area = 0, edges = 0;
-    f->min_angle = INFINITY;
+    f->min_sine = INFINITY;
     f->mean_edge = 0;
     memset(f->centroid, 0, sizeof f->centroid);
     memset(f->normal, 0, sizeof f->normal);
@@ -105,7 +103,7 @@ static void fan_measure(const rm_pass *p, uint32_t v, fan *f)
         const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
         const double *a = P + 3 * t[0], *b = P + 3 * t[1], *c = P + 3 * t[2];
         double n[3], w = 0.5 * rm_cross(a, b, c, n);
-        f->min_angle = fmin(f->min_angle, rm_min_angle(a, b, c));
+        f->min_sine = fmin(f->min_sine, rm_min_sine(a, b, c));
         for (int k = 0; k < 3; k++) {
             f->centroid[k] += w * (a[k] + b[k] + c[k]) / 3;
             f->normal[k] += n[k];
@@ -137,9 +135,9 @@ static bool fan_accepts(const rm_pass *p, uint32_t v, const double x[3], const f
         double n1[3], l1 = rm_cross(q[0], q[1], q[2], n1);
         if (!(dot3(f->normal, n1) > turn * ln * l1))
             return false;
-        worst = fmin(worst, rm_min_angle(q[0], q[1], q[2]));
+        worst = fmin(worst, rm_min_sine(q[0], q[1], q[2]));
     }
-    return worst >= f->min_angle || worst >= ISM_RM_COMFORT_DEG * M_PI / 180;
+    return worst >= f->min_sine || worst >= sin(ISM_RM_COMFORT_DEG * M_PI / 180);
 }
 
 /* Tries to move free vertex v; true when it moved. */
@@ -172,11 +170,35 @@ static bool relax_vertex(rm_pass *p, uint32_t v)
     return false;
 }
 
+size_t rm_mark_active(rm_pass *p)
+{
+    const ism_mesh *m = p->r.m;
+    const rm_mesh *r = &p->r;
+    double comfort = sin(ISM_RM_COMFORT_DEG * M_PI / 180);
+    memset(p->active, 0, m->nverts);
+    for (size_t t = 0; t < m->ntris; t++) {
+        const uint32_t *v = m->tri + 3 * t;
+        if (rm_min_sine(m->pos + 3 * v[0], m->pos + 3 * v[1], m->pos + 3 * v[2]) < comfort)
+            p->active[v[0]] = p->active[v[1]] = p->active[v[2]] = 1;
+    }
+    for (size_t v = 0; v < m->nverts; v++) /* 1 = near a poor triangle, 2 = its neighbour */
+        for (uint32_t i = 0; p->active[v] == 1 && i < r->count[v]; i++) {
+            const uint32_t *t = m->tri + 3 * r->vt[r->start[v] + i];
+            for (int k = 0; k < 3; k++)
+                if (!p->active[t[k]])
+                    p->active[t[k]] = 2;
+        }
+    size_t n = 0;
+    for (size_t v = 0; v < m->nverts; v++)
+        n += p->active[v] != 0;
+    return n;
+}
+
 size_t rm_relax_sweep(rm_pass *p)
 {
     size_t moves = 0;
     for (size_t v = 0; v < p->r.m->nverts; v++)
-        if (!p->r.locked[v] && p->r.count[v] && relax_vertex(p, (uint32_t)v))
+        if (p->active[v] && !p->r.locked[v] && p->r.count[v] && relax_vertex(p, (uint32_t)v))
             moves++;
     p->moves += moves;
     return moves;

@@ -388,10 +388,15 @@ typedef struct scratch {
     ism_cut cut;
     ism_arrangement arr;
     bool have_curves;
+    ism_remesh_stats rs;    /* the quality pass's figures */
+    bool have_remesh;
 } scratch;
 
-/* Cuts the mesh along the requested curves and builds their arrangement into s. */
-static bool cut_curves(const ism_request *req, const ism_tape *tape, ism_pipeline_result *r,
+/* Cuts the mesh along the requested curves, runs the quality pass when asked (after the
+ * cut, so curve edges are protected and the cut's slivers improved) and builds the curves'
+ * arrangement into s. */
+static bool cut_curves(const ism_request *req, const ism_tape *tape,
+                       const ism_pipeline_hooks *hooks, ism_pipeline_result *r,
                        ism_computed *c, scratch *s)
 {
     ism_req_error e;
@@ -399,14 +404,27 @@ static bool cut_curves(const ism_request *req, const ism_tape *tape, ism_pipelin
         return fail(r, &e);
     if (!ism_curve_fns_add_crease(&s->cf, tape))
         return fail_with(r, 500, "no_memory", "%s", "out of memory cutting the crease");
-    if (!s->cf.n)
-        return true;
     ism_error err;
     memset(&err, 0, sizeof err);
     double t = ism_now_ms();
-    if (!ism_curves_cut(tape, s->cf.fns, s->cf.n, req->box, &c->mesh, &s->cut, &s->arr, &err))
+    if (s->cf.n && !ism_curves_cut_mesh(tape, s->cf.fns, s->cf.n, req->box, &c->mesh, &s->cut,
+                                        &err))
         return fail_with(r, 500, "no_memory", "%s", err.message);
     c->timings_ms[ISM_TIME_SINGULAR] += ism_now_ms() - t; /* the curves are singular stages too */
+    if (req->quality == ISM_QUALITY_GOOD) {
+        if (!ism_quality_pass(tape, &c->locus, &s->cut, req->max_error,
+                              hooks ? hooks->cancel : NULL, &c->mesh, &s->rs, &err))
+            return fail_with(r, 500, "no_memory", "%s", err.message);
+        s->have_remesh = true;
+        if (cancelled(hooks))
+            return fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
+    }
+    if (!s->cf.n)
+        return true;
+    t = ism_now_ms();
+    if (!ism_arrangement_build(&c->mesh, &s->cut, &s->arr))
+        return fail_with(r, 500, "no_memory", "%s", "out of memory building the arrangement");
+    c->timings_ms[ISM_TIME_SINGULAR] += ism_now_ms() - t;
     s->have_curves = true;
     return true;
 }
@@ -438,7 +456,7 @@ static bool polygonise_and_analyse(const ism_request *req, const ism_tape *tape,
     if (cancelled(hooks))
         return fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
     r->polygonised = true;
-    if (!cut_curves(req, tape, r, c, s))
+    if (!cut_curves(req, tape, hooks, r, c, s))
         return false;
 
     double t = ism_now_ms();
@@ -528,6 +546,7 @@ static bool gather(const ism_request *req, ism_pipeline_result *r, ism_computed 
     si.check = &s->check;
     si.conform = &s->cs;
     si.max_error = req->max_error;
+    si.remesh = s->have_remesh ? &s->rs : NULL;
     c->stats_json = ism_stats_surface_json(&si, &c->stats_len);
     if (!c->stats_json)
         return fail_with(r, 500, "no_memory", "%s", "out of memory writing the stats");
