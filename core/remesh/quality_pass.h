@@ -16,8 +16,7 @@ enum ism_quality { ISM_QUALITY_RAW = 0, ISM_QUALITY_GOOD = 1, ISM_QUALITY_COUNT 
 const char *ism_quality_name(enum ism_quality q);
 int ism_quality_lookup(const char *name);
 
-/* Runs the pass on mesh: the locus's singular points (with the ring around their vertex)
- * stay, each double sheet's triangles are a patch of their own, and cut's edges (may be
+/* Runs the pass on mesh: the locus's singular points' vertices stay, each double sheet's triangles are a patch of their own, and cut's edges (may be
  * NULL) are never flipped. max_error as in ism_remesh_options. False with err set when out of
  * memory (the mesh is then still valid). */
 bool ism_quality_pass(const ism_tape *f, const ism_locus *locus, const ism_cut *cut,

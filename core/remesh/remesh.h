@@ -3,9 +3,9 @@
  * (Lawson) and relaxes vertices in the tangent plane (towards the area-weighted centroid of
  * their triangles), putting every moved vertex back on f = 0 by Newton along ∇f. Protected,
  * never flipped or moved: boundary and non-manifold edges, edges between differently
- * labelled triangles or given as locked (curves), crease edges (a sharp dihedral), vertices
- * on any of them, vertices where several cones meet, where ∇f vanishes, and the vertex at
- * each given point (singular points) with its neighbours. Triangle count, vertex count and
+ * labelled triangles or given as locked (curves), crease edges (a sharp dihedral that is no
+ * fold), vertices on any of them, vertices where several cones meet, where ∇f vanishes, and
+ * the vertex at each given point (singular points). Triangle count, vertex count and
  * each triangle's label are kept, so χ, components, non-manifold edges and points and
  * boundary loops cannot change. */
 #ifndef ISM_REMESH_H
@@ -25,8 +25,8 @@ typedef struct ism_remesh_options {
     const uint32_t *tri_label;     /* per triangle, or NULL: flips only between equal labels */
     const uint32_t *locked_edges;  /* 2 vertex indices per edge never flipped (curves) */
     size_t nlocked_edges;
-    const double *locked_points;   /* 3 per point: its nearest vertex and that vertex's
-                                      neighbours stay where they are (singular points) */
+    const double *locked_points;   /* 3 per point: its nearest vertex stays where it is
+                                      (singular points) */
     size_t nlocked_points;
     const volatile int *cancel;    /* polled between sweeps; non-zero stops early (the mesh is
                                       valid after every sweep) */

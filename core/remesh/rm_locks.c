@@ -21,32 +21,47 @@ static int cmp_u64(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-static bool is_crease(const ism_mesh *m, uint32_t t1, uint32_t t2)
+static double dot3(const double *u, const double *v)
 {
-    double n1[3], n2[3];
-    const double *P = m->pos;
-    const uint32_t *a = m->tri + 3 * t1, *b = m->tri + 3 * t2;
-    double l1 = rm_cross(P + 3 * a[0], P + 3 * a[1], P + 3 * a[2], n1);
-    double l2 = rm_cross(P + 3 * b[0], P + 3 * b[1], P + 3 * b[2], n2);
-    double dot = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
-    return !(dot > cos(ISM_RM_CREASE_DEG * M_PI / 180) * l1 * l2);
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
 }
 
-/* True when edge {a, b} may be flipped. */
-static bool edge_free(const rm_mesh *r, uint32_t a, uint32_t b)
+/* Edge {a, b} of triangles t1, t2 bends by more than the crease angle, and is no fold: a
+ * fold (one triangle turned over against its neighbours, a polygoniser artefact) has its two
+ * triangles facing opposite ways across ∇f at the edge's ends, a crease has both facing
+ * ∇f's side. */
+static bool is_crease(const rm_pass *p, uint32_t a, uint32_t b, uint32_t t1, uint32_t t2)
 {
+    const ism_mesh *m = p->r.m;
+    double n1[3], n2[3];
+    const double *P = m->pos;
+    const uint32_t *u = m->tri + 3 * t1, *w = m->tri + 3 * t2;
+    double l1 = rm_cross(P + 3 * u[0], P + 3 * u[1], P + 3 * u[2], n1);
+    double l2 = rm_cross(P + 3 * w[0], P + 3 * w[1], P + 3 * w[2], n2);
+    if (dot3(n1, n2) > cos(ISM_RM_CREASE_DEG * M_PI / 180) * l1 * l2)
+        return false;
+    const double *ga = p->normal + 3 * a, *gb = p->normal + 3 * b;
+    bool fold = (dot3(n1, ga) > 0) != (dot3(n2, ga) > 0) && (dot3(n1, gb) > 0) != (dot3(n2, gb) > 0);
+    return !fold;
+}
+
+/* True when edge {a, b} is free: neither flipped across a feature nor moved along one. */
+static bool edge_free(const rm_pass *p, uint32_t a, uint32_t b)
+{
+    const rm_mesh *r = &p->r;
     uint32_t t[2];
     int n;
     if (!rm_edge_triangles(r, a, b, t, &n))
         return false;
     if (r->label && r->label[t[0]] != r->label[t[1]])
         return false;
-    return !rm_edge_locked(r, a, b) && !is_crease(r->m, t[0], t[1]);
+    return !rm_edge_locked(r, a, b) && !is_crease(p, a, b, t[0], t[1]);
 }
 
 /* Every edge at v free, and the triangles one closed fan (walked across those edges). */
-static bool fan_free(const rm_mesh *r, uint32_t v)
+static bool fan_free(const rm_pass *p, uint32_t v)
 {
+    const rm_mesh *r = &p->r;
     const uint32_t *tri = r->m->tri;
     uint32_t n = r->count[v];
     if (n < 3)
@@ -56,7 +71,7 @@ static bool fan_free(const rm_mesh *r, uint32_t v)
         int k = rm_corner(r->m, t, v);
         uint32_t ab[2], prev = tri[3 * t + (k + 2) % 3];
         int c;
-        if (tri[3 * t + (k + 1) % 3] == v || prev == v || !edge_free(r, v, prev) ||
+        if (tri[3 * t + (k + 1) % 3] == v || prev == v || !edge_free(p, v, prev) ||
             !rm_edge_triangles(r, v, prev, ab, &c))
             return false;
         t = ab[0];
@@ -79,16 +94,6 @@ static uint32_t nearest_vertex(const rm_mesh *r, const double *x)
     return best;
 }
 
-static void lock_ring(rm_mesh *r, uint32_t v)
-{
-    r->locked[v] = 1;
-    for (uint32_t i = 0; i < r->count[v]; i++) {
-        const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
-        for (int k = 0; k < 3; k++)
-            r->locked[t[k]] = 1;
-    }
-}
-
 static bool copy_locked_edges(rm_mesh *r, const ism_remesh_options *o)
 {
     r->locked_edges = malloc((o->nlocked_edges ? o->nlocked_edges : 1) * sizeof *r->locked_edges);
@@ -109,12 +114,12 @@ bool rm_lock_features(rm_pass *p, const ism_remesh_options *o)
     for (size_t v = 0; v < r->m->nverts; v++) {
         const double *n = p->normal + 3 * v;
         bool vanishes = n[0] == 0 && n[1] == 0 && n[2] == 0;
-        r->locked[v] = vanishes || !fan_free(r, (uint32_t)v);
+        r->locked[v] = vanishes || !fan_free(p, (uint32_t)v);
     }
     for (size_t i = 0; i < o->nlocked_points; i++) {
         uint32_t v = nearest_vertex(r, o->locked_points + 3 * i);
         if (v != UINT32_MAX)
-            lock_ring(r, v);
+            r->locked[v] = 1;
     }
     return true;
 }

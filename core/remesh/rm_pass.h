@@ -32,8 +32,8 @@ typedef struct rm_pass {
 /* Unit normals and the vanishing threshold from ∇f at every vertex. False when out of memory. */
 bool rm_normals(rm_pass *p);
 
-/* Marks protected vertices (r.locked) and collects the locked edges (the given ones and the
- * creases). False when out of memory. */
+/* Marks protected vertices (r.locked) and collects the given locked edges. False when out of
+ * memory. */
 bool rm_lock_features(rm_pass *p, const ism_remesh_options *o);
 
 /* Lawson flips starting from the edges of triangles with an active vertex, each flip
