@@ -28,13 +28,14 @@ static void key_of(const char *json, char hex[65])
 #define TORUS "(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)"
 
 /* Each group: requests that must all share one key; different groups must differ. */
-static const char *const same[][6] = {
+static const char *const same[][7] = {
     {"{\"expr\": \"x^2 + y^2 + z^2 - r^2\", \"params\": {\"r\": 1}, \"box\": [-2,-2,-2,2,2,2]}",
      "{ \"box\" : [ -2, -2, -2, 2, 2, 2 ],\n \"params\": {\"r\": 1.0},\n \"expr\": \"x^2+y^2+z^2-r^2\" }",
      "{\"expr\": \"(x^2) + (y^2) + (z^2) - r^2\", \"params\": {\"r\": 1e0}, \"box\": [-2.0,-2,-2,2,2,2.0]}",
      "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"box\": [-2,-2,-2,2,2,2]}",
      "{\"expr\": \"q + z^2 - 1\", \"let\": {\"q\": \"x^2 + y^2\"}, \"box\": [-2,-2,-2,2,2,2], "
      "\"params\": {\"unused\": 5}}",
+     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"box\": [-2,-2,-2,2,2,2], \"quality\": \"raw\"}",
      NULL},
     /* defaults written out or left out, format does not matter */
     {"{\"expr\": \"x^2 + y^2 - 0.25\"}",
@@ -92,6 +93,7 @@ static const char *const different[] = {
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"output\": {\"attributes\": []}}",
     "{\"preset\": \"sphere\"}",
     "{\"preset\": \"sphere\", \"params\": {\"r\": 0.5}}",
+    "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"quality\": \"good\"}",
 };
 
 Test(key, requests_that_mean_the_same_mesh_share_a_key)
@@ -159,7 +161,7 @@ Test(key, canonical_request_decodes_to_the_same_key_and_itself)
     const char *jsons[] = {
         "{\"preset\": \"kummer-16-nodes\", \"params\": {\"w\": 1.25}, \"output\": {\"format\": \"ply\"}}",
         "{\"expr\": \"p*p - 0.1\", \"let\": {\"p\": \"x + y\"}, \"params\": {\"b\": 0.1, \"a\": 2}, "
-        "\"box\": [-1, -2, -3, 1, 2, 3], \"tolerances\": {\"stitch\": 0.01}}",
+        "\"box\": [-1, -2, -3, 1, 2, 3], \"quality\": \"good\", \"tolerances\": {\"stitch\": 0.01}}",
     };
     for (size_t i = 0; i < 2; i++) {
         char k1[65], k2[65];

@@ -36,7 +36,7 @@ static const bad_case bad_cases[] = {
      "from GET /v1/presets)"},
     {"{\"expr\": \"x\", \"colour\": 1}", 400, "bad_request", "$.colour",
      "$.colour: unknown field (expected one of: expr, preset, params, let, box, depth, "
-     "max_error, tolerances, output, curves)"},
+     "max_error, quality, tolerances, output, curves)"},
     {"{\"expr\": \"x\", \"tolerances\": {\"gradiant\": 0.9}}", 400, "bad_request",
      "$.tolerances.gradiant",
      "$.tolerances.gradiant: unknown field (expected one of: gradient, double_root_eps, "
@@ -49,7 +49,7 @@ static const bad_case bad_cases[] = {
      "curvature_bits, attributes, draco)"},
     {"{\"expr\": \"x\", \"a b\": 1}", 400, "bad_request", "$[\"a b\"]",
      "$[\"a b\"]: unknown field (expected one of: expr, preset, params, let, box, depth, "
-     "max_error, tolerances, output, curves)"},
+     "max_error, quality, tolerances, output, curves)"},
     /* surface */
     {"{\"expr\": 3}", 400, "bad_request", "$.expr", "$.expr: expected a string, got an integer"},
     {"{\"expr\": \"\"}", 400, "bad_request", "$.expr", "$.expr: the expression is empty"},
@@ -125,6 +125,17 @@ static const bad_case bad_cases[] = {
      "$.max_error: expected a number, got a string"},
     {"{\"expr\": \"x\", \"max_error\": null}", 400, "bad_request", "$.max_error",
      "$.max_error: expected a number, got null"},
+    /* quality: "raw" or "good" */
+    {"{\"expr\": \"x\", \"quality\": \"best\"}", 400, "bad_request", "$.quality",
+     "$.quality: unknown quality \"best\" (raw or good)"},
+    {"{\"expr\": \"x\", \"quality\": \"Good\"}", 400, "bad_request", "$.quality",
+     "$.quality: unknown quality \"Good\" (raw or good)"},
+    {"{\"expr\": \"x\", \"quality\": 1}", 400, "bad_request", "$.quality",
+     "$.quality: expected a string, got an integer"},
+    {"{\"expr\": \"x\", \"quality\": true}", 400, "bad_request", "$.quality",
+     "$.quality: expected a string, got*"},
+    {"{\"expr\": \"x\", \"quality\": null}", 400, "bad_request", "$.quality",
+     "$.quality: expected a string, got null"},
     /* tolerances */
     {"{\"expr\": \"x\", \"tolerances\": {\"gradient\": 2}}", 422, "over_limit",
      "$.tolerances.gradient", "$.tolerances.gradient: 2 is above the limit 1"},
