@@ -165,6 +165,17 @@ class ApiTest(unittest.TestCase):
         err = self.error_of(self.d.post("/v1/mesh", {"preset": "torus", "max_error": "x"}), 400)
         self.assertEqual(err.get("path"), "$.max_error")
 
+    def test_quality_good_through_the_daemon(self):
+        r = self.d.post("/v1/mesh", {"preset": "sphere", "quality": "good",
+                                     "depth": {"min": 3, "max": 5}})
+        self.assertEqual(r.status, 200)
+        s = self.d.get("/v1/meshes/%s/stats" % r.header("ETag").strip('"')).json()
+        self.assertGreaterEqual(s["analysis"]["quality"]["min_angle"], 20)
+        self.assertLess(s["remesh"]["min_angle_before"], s["remesh"]["min_angle_after"])
+        for bad in ("best", 1, None, ["good"]):
+            err = self.error_of(self.d.post("/v1/mesh", {"preset": "sphere", "quality": bad}), 400)
+            self.assertEqual(err.get("path"), "$.quality")
+
     def test_body_too_large_is_413(self):
         big = b'{"expr": "' + b"x+" * 40000 + b'x"}'
         self.error_of(self.d.post("/v1/mesh", big, headers={"Content-Type": "application/json"}), 413)
