@@ -55,7 +55,7 @@ bool cut_add_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t fn)
         return true;
     if (!ism_grow((void **)&s->c->edges, &s->cap_edges, (size_t)i + 1, sizeof *s->c->edges, CUT_FIRST))
         return false;
-    s->c->edges[i] = (ism_cut_edge){a, b, fn};
+    s->c->edges[i] = (ism_cut_edge){a, b, fn, {ISM_CUT_NO_BRANCH, ISM_CUT_NO_BRANCH}};
     s->c->nedges = (size_t)i + 1;
     return true;
 }
@@ -63,9 +63,29 @@ bool cut_add_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t fn)
 bool cut_split_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t v, uint32_t fn)
 {
     uint32_t e = ism_key_map_find(&s->onmap, cut_edge_key(a, b));
-    if (e != ISM_KEY_NONE)
+    uint32_t br[2] = {ISM_CUT_NO_BRANCH, ISM_CUT_NO_BRANCH};
+    if (e != ISM_KEY_NONE) {
         s->c->edges[e].fn = NONE;
-    return cut_add_cut_edge(s, a, v, fn) && cut_add_cut_edge(s, v, b, fn);
+        memcpy(br, s->c->edges[e].branch, sizeof br);
+    }
+    return cut_add_cut_edge(s, a, v, fn) && cut_add_cut_edge(s, v, b, fn) &&
+           cut_set_branches(s, a, v, br) && cut_set_branches(s, v, b, br);
+}
+
+bool cut_set_branches(cut_state *s, uint32_t a, uint32_t b, const uint32_t br[2])
+{
+    uint32_t e = ism_key_map_find(&s->onmap, cut_edge_key(a, b));
+    if (e == ISM_KEY_NONE)
+        return false;
+    memcpy(s->c->edges[e].branch, br, sizeof s->c->edges[e].branch);
+    return true;
+}
+
+void cut_use_pair(cut_state *s, uint32_t a, uint32_t b)
+{
+    uint32_t e = ism_key_map_find(&s->onmap, cut_edge_key(a, b));
+    for (int i = 0; i < 2; i++)
+        s->ev->pair[i] = e == ISM_KEY_NONE ? ISM_CUT_NO_BRANCH : s->c->edges[e].branch[i];
 }
 
 /* The earlier curve edge a-b lies on, or NONE. */
@@ -144,6 +164,7 @@ static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
         len2 += (b[c] - a[c]) * (b[c] - a[c]);
     }
     uint32_t j = edge_curve(s, u, w);
+    cut_use_pair(s, u, w); /* when u-w lies on a crease: its two branches */
     double len = fmax(sqrt(len2), fmax(s->reach[u], s->reach[w]));
     if (!try_refine(s, j, k, len, p)) {
         segment_root(s, k, a, b, s->gv[u], p);
@@ -200,17 +221,23 @@ static bool split_triangle(cut_state *s, size_t k, const uint32_t t[3])
         if (sg[i] != sg[(i + 1) % 3] && sg[i] != sg[(i + 2) % 3]) {
             uint32_t l = t[i], u = t[(i + 1) % 3], w = t[(i + 2) % 3];
             uint32_t p = split_vertex(s, k, l, u), q = split_vertex(s, k, l, w);
-            if (p == NONE || q == NONE || !cut_add_cut_edge(s, p, q, fn) || !emit(s->m, l, p, q))
-                return false;
-            if (dist2(s->m, p, w) <= dist2(s->m, u, q)) /* the shorter diagonal */
-                return emit(s->m, p, u, w) && emit(s->m, p, w, q);
-            return emit(s->m, p, u, q) && emit(s->m, u, w, q);
+            return p != NONE && q != NONE && cut_add_cut_edge(s, p, q, fn) &&
+                   cut_emit_lone(s->m, l, u, w, p, q);
         }
     return false;
 }
 
+bool cut_emit_lone(ism_mesh *m, uint32_t l, uint32_t u, uint32_t w, uint32_t p, uint32_t q)
+{
+    if (!emit(m, l, p, q))
+        return false;
+    if (dist2(m, p, w) <= dist2(m, u, q)) /* the shorter diagonal */
+        return emit(m, p, u, w) && emit(m, p, w, q);
+    return emit(m, p, u, q) && emit(m, u, w, q);
+}
+
 /* Per vertex: its longest edge into len (0 for a vertex no triangle uses). */
-static void longest_edges(const ism_mesh *m, double *len)
+void cut_longest_edges(const ism_mesh *m, double *len)
 {
     memset(len, 0, m->nverts * sizeof *len);
     for (size_t t = 0; t < m->ntris; t++)
@@ -251,7 +278,7 @@ static bool classify(cut_state *s, size_t k)
     ism_cut_g_batch(s->ev, k, m->pos, m->nverts, s->gv);
     for (size_t v = 0; v < m->nverts; v++)
         s->sg[v] = (signed char)((s->gv[v] > 0) - (s->gv[v] < 0));
-    longest_edges(m, s->reach);
+    cut_longest_edges(m, s->reach);
     for (size_t v = 0; v < m->nverts; v++)
         if (s->gv[v] == 0) {
             refine_point(s, cut_vcurve_of(s, (uint32_t)v), k, s->reach[v], m->pos + 3 * v);
@@ -294,10 +321,12 @@ static void finish(cut_state *s)
         for (int e = 0; e < 2; e++) {
             uint32_t v = e ? c->edges[i].b : c->edges[i].a;
             double df, dg;
+            memcpy(s->ev->pair, c->edges[i].branch, sizeof s->ev->pair);
             ism_cut_residuals(s->ev, c->edges[i].fn, s->m->pos + 3 * (size_t)v, &df, &dg);
             c->worst_f = df > c->worst_f ? df : c->worst_f;
             c->worst_g = dg > c->worst_g ? dg : c->worst_g;
         }
+    s->ev->pair[0] = s->ev->pair[1] = ISM_CUT_NO_BRANCH;
 }
 
 bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
@@ -307,7 +336,7 @@ bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
     ism_key_map_init(&s.onmap);
     bool ok = true;
     for (size_t k = 0; k < ev->nfns && ok; k++)
-        ok = cut_one(&s, k);
+        ok = ev->fns[k].kind == ISM_CUT_CREASE ? cut_crease(&s, k) : cut_one(&s, k);
     if (ok)
         finish(&s);
     ism_key_map_free(&s.split);

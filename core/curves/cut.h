@@ -14,7 +14,11 @@
 /* A mesh edge lying on the curve of function fn. */
 typedef struct ism_cut_edge {
     uint32_t a, b, fn;
+    uint32_t branch[2]; /* a crease edge: the branches of f on its two sides (branches.h),
+                           else ISM_CUT_NO_BRANCH */
 } ism_cut_edge;
+
+#define ISM_CUT_NO_BRANCH UINT32_MAX
 
 typedef struct ism_cut {
     ism_cut_edge *edges;

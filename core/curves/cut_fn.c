@@ -2,6 +2,7 @@
  * the curve: the minimum-norm step dx = −Jᵀ (J Jᵀ)⁻¹ r with J the rows ∇f, ∇g (and ∇g₂ at a
  * crossing of two curves, where the system is square). */
 #include "core/curves/cut_fn.h"
+#include "core/curves/branches.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,6 +18,7 @@
 bool ism_cut_eval_init(ism_cut_eval *ev, const ism_tape *f, const ism_cut_fn *fns, size_t n)
 {
     memset(ev, 0, sizeof *ev);
+    ev->pair[0] = ev->pair[1] = ISM_BRANCH_NONE;
     ev->f = f;
     ev->fns = fns;
     ev->nfns = n;
@@ -41,6 +43,10 @@ void ism_cut_eval_free(ism_cut_eval *ev)
         for (size_t k = 0; k < ev->nfns; k++)
             ism_eval_ws_free(ev->gws[k]);
     free(ev->gws);
+    if (ev->branches) {
+        ism_branches_free(ev->branches);
+        free(ev->branches);
+    }
     memset(ev, 0, sizeof *ev);
 }
 
@@ -58,12 +64,17 @@ static double silhouette_g(ism_cut_eval *ev, const double d[3], const double p[3
     return g[0] * d[0] + g[1] * d[1] + g[2] * d[2];
 }
 
-/* The crease function a − b of f = min/max(a, b). */
+/* The crease function f_A − f_B of the current pair of branches (or a − b of a min/max at
+ * the top of f's tape when no pair is set). */
 static double crease_g(ism_cut_eval *ev, const double p[3], double grad[3])
 {
     double v[2], g[2][3];
-    if (!ism_eval_top_branches(ev->f, ev->fws, p[0], p[1], p[2], v, g))
+    if (ev->branches && ev->pair[0] != ISM_BRANCH_NONE) {
+        for (int s = 0; s < 2; s++)
+            v[s] = ism_branches_gradient(ev->branches, ev->pair[s], p, g[s]);
+    } else if (!ism_eval_top_branches(ev->f, ev->fws, p[0], p[1], p[2], v, g)) {
         return NAN;
+    }
     for (int i = 0; grad && i < 3; i++)
         grad[i] = g[0][i] - g[1][i];
     return v[0] - v[1];
@@ -71,16 +82,12 @@ static double crease_g(ism_cut_eval *ev, const double p[3], double grad[3])
 
 bool ism_cut_crease_fn(const ism_tape *f, ism_cut_fn *out)
 {
-    ism_eval_ws *ws = ism_eval_ws_new(f);
-    double v[2], g[2][3];
-    bool top = ws && ism_eval_top_branches(f, ws, 0, 0, 0, v, g);
-    ism_eval_ws_free(ws);
-    if (top) {
-        memset(out, 0, sizeof *out);
-        out->kind = ISM_CUT_CREASE;
-        out->source = -1;
-    }
-    return top;
+    if (!ism_branches_any(f))
+        return false;
+    memset(out, 0, sizeof *out);
+    out->kind = ISM_CUT_CREASE;
+    out->source = -1;
+    return true;
 }
 
 double ism_cut_g(ism_cut_eval *ev, size_t k, const double p[3], double grad[3])

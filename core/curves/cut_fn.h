@@ -6,14 +6,15 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 #include "core/eval/eval.h"
 
 enum ism_cut_kind { ISM_CUT_SECTION, ISM_CUT_LEVEL, ISM_CUT_INTERSECTION,
                     ISM_CUT_SILHOUETTE, ISM_CUT_CREASE, ISM_CUT_KIND_COUNT };
 
 /* g(p) = tape(p) + n·p − c (tape NULL: the linear part alone); for a silhouette
- * g(p) = ∇f(p)·n (tape and c unused); for a crease, where f = min/max(a, b) at the top of
- * its tape, g = a − b (the branches from f's tape; everything else unused). */
+ * g(p) = ∇f(p)·n (tape and c unused); for a crease between f's branches A and B
+ * (branches.h), g = f_A − f_B (everything else unused). */
 typedef struct ism_cut_fn {
     const ism_tape *tape;
     double n[3];
@@ -22,6 +23,8 @@ typedef struct ism_cut_fn {
     int source, index;   /* the request's curve entry and its offset / value number */
 } ism_cut_fn;
 
+struct ism_branches;
+
 /* Evaluation state for f and the cut functions (one thread). */
 typedef struct ism_cut_eval {
     const ism_tape *f;
@@ -29,10 +32,13 @@ typedef struct ism_cut_eval {
     const ism_cut_fn *fns;
     ism_eval_ws **gws;   /* per function, NULL for a plane */
     size_t nfns;
+    struct ism_branches *branches; /* f's branches once a crease is cut (owned) */
+    uint32_t pair[2];    /* the crease function is f_pair[0] − f_pair[1] (set per crease
+                            edge); unset (UINT32_MAX): the top min/max's a − b */
 } ism_cut_eval;
 
-/* The crease function of f when f's tape ends in min(a, b) or max(a, b); false otherwise.
- * (Only the top min/max: CSG nested deeper gives no crease curve.) */
+/* The crease function of f when f's tape has a min or max (CSG); false otherwise. The crease
+ * is cut by branches (crease.c), not by the sign of one function. */
 bool ism_cut_crease_fn(const ism_tape *f, ism_cut_fn *out);
 
 bool ism_cut_eval_init(ism_cut_eval *ev, const ism_tape *f, const ism_cut_fn *fns, size_t n);

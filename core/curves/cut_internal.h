@@ -44,8 +44,22 @@ bool cut_add_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t fn);
 /* Replaces the cut edge a-b (on curve fn) by a-v and v-b. */
 bool cut_split_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t v, uint32_t fn);
 
+/* Sets the branches on the two sides of cut edge a-b (a crease edge). */
+bool cut_set_branches(cut_state *s, uint32_t a, uint32_t b, const uint32_t br[2]);
+
+/* Makes the crease function f_A − f_B of the branches of cut edge a-b the one evaluated
+ * (no pair when a-b is no crease edge). */
+void cut_use_pair(cut_state *s, uint32_t a, uint32_t b);
+
 /* The unit normal ∇f/|∇f| at p, oriented like ref. */
 void cut_normal_at(cut_state *s, const double p[3], const float ref[3], float out[3]);
+
+/* Emits triangle (l u w) split by a cut from p on l-u to q on l-w: (l p q) and the quad
+ * (p u w q) by its shorter diagonal (winding kept). */
+bool cut_emit_lone(ism_mesh *m, uint32_t l, uint32_t u, uint32_t w, uint32_t p, uint32_t q);
+
+/* Per vertex: its longest edge into len (0 for a vertex no triangle uses). */
+void cut_longest_edges(const ism_mesh *m, double *len);
 
 /* Room in gv, reach and sg for the mesh's vertices. */
 bool cut_grow_vertex_arrays(cut_state *s);
@@ -55,5 +69,11 @@ bool cut_grow_vertex_arrays(cut_state *s);
  * degree 4 on the surface, a touching crossing on an earlier curve. Runs after g_k's signs
  * are known, before the triangles are split. False when out of memory. */
 bool cut_tangencies(cut_state *s, size_t k);
+
+/* Cuts the mesh along the creases of f (function k, of kind crease): each vertex labelled
+ * with f's branch there, every mesh edge whose ends take branches A and B split at the
+ * point of f_A = f_B = 0 on it, a triangle of three branches at the triple point
+ * f_A = f_B = f_C = 0 (crease.c). False when out of memory. */
+bool cut_crease(cut_state *s, size_t k);
 
 #endif

@@ -136,8 +136,8 @@ static bool chain_seeds(tang_state *ts)
         memset(fn, 0xff, (nv + 1) * sizeof *fn);
     for (size_t i = 0; ok && i < c->nedges; i++) {
         const ism_cut_edge *e = &c->edges[i];
-        if (e->fn == NONE)
-            continue;
+        if (e->fn == NONE || s->ev->fns[e->fn].kind == ISM_CUT_CREASE)
+            continue; /* a crease's g depends on the edge: not seeded */
         for (int end = 0; end < 2; end++) {
             uint32_t v = end ? e->b : e->a, w = end ? e->a : e->b;
             if (fn[v] != NONE && fn[v] != e->fn)

@@ -1,0 +1,361 @@
+/* crease.c — cutting the mesh along the creases of a CSG function f. Each vertex is labelled
+ * with f's branch there (branches.h); a mesh edge whose ends take branches A and B holds a
+ * crease point, put on f_A = 0 and f_B = 0 by Newton from the crossing of f_A − f_B on the
+ * edge (shared by both triangles of the edge). A triangle with two branches is split like a
+ * sign change (cut.c); one with three holds a triple point f_A = f_B = f_C = 0 (a corner of
+ * the CSG solid, Newton on the 3 × 3 system from its centroid) and is fanned from it:
+ *
+ *            A                the three crease points on its edges joined to the triple
+ *           / \               point T: six triangles, three crease edges, each triangle
+ *        pab---pca            on one branch
+ *         / \ / \
+ *        /   T   \
+ *       B----pbc--C
+ *
+ * Every crease vertex lies on both branches' zero sets, so the mesh conforms: no edge
+ * crosses the crease, and each crease edge records its two branches (the normals of its
+ * sides, the later curves' Newton on it). */
+#include "core/curves/branches.h"
+#include "core/curves/cut_internal.h"
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "core/util/grow.h"
+
+#define NONE CUT_NONE
+/* Newton may move a crease point at most this many lengths of its edge (the polygoniser's
+ * vertices near a crease may lie that far off the surface). */
+#define CREASE_MAX_MOVE_EDGES 2.0
+/* Bisection steps on an edge when the linear start fails (2^-40 of the edge). */
+#define CREASE_BISECT_STEPS 40
+/* Passes of putting crease points back in order along their chain (each pass fixes the
+ * points whose neighbours lie on one side of them; one or two suffice). */
+#define CREASE_ORDER_PASSES 3
+/* Triple points of the same branches closer than this × the Newton tolerance are one. */
+#define CREASE_SAME_TRIPLE 1e3
+
+typedef struct triple {
+    double p[3];
+    uint32_t set[3]; /* its branches, sorted */
+    uint32_t v;
+} triple;
+
+typedef struct crease_state {
+    cut_state *s;
+    ism_branches *b;
+    uint32_t k;
+    uint32_t *label;  /* per vertex of the mesh before the cut */
+    triple *tp;
+    size_t ntp, cap_tp;
+} crease_state;
+
+static double dist2(const double *a, const double *b)
+{
+    double d = 0;
+    for (int c = 0; c < 3; c++)
+        d += (a[c] - b[c]) * (a[c] - b[c]);
+    return d;
+}
+
+/* f_A − f_B at p. */
+static double branch_gap(crease_state *cs, uint32_t A, uint32_t B, const double p[3])
+{
+    double g[3];
+    return ism_branches_gradient(cs->b, A, p, g) - ism_branches_gradient(cs->b, B, p, g);
+}
+
+/* The root of f_A − f_B on segment a-b (values ga, gb of opposite signs), by bisection. */
+static void gap_root(crease_state *cs, uint32_t A, uint32_t B, const double *a, const double *b,
+                     double ga, double p[3])
+{
+    double lo = 0, hi = 1;
+    for (int it = 0; it < CREASE_BISECT_STEPS; it++) {
+        double t = 0.5 * (lo + hi), q[3];
+        for (int c = 0; c < 3; c++)
+            q[c] = a[c] + t * (b[c] - a[c]);
+        if ((branch_gap(cs, A, B, q) < 0) == (ga < 0))
+            lo = t;
+        else
+            hi = t;
+    }
+    for (int c = 0; c < 3; c++)
+        p[c] = a[c] + 0.5 * (lo + hi) * (b[c] - a[c]);
+}
+
+/* A new crease vertex at p (normal oriented like vertex ref's). NONE when out of memory. */
+static uint32_t new_vertex(crease_state *cs, const double p[3], uint32_t ref)
+{
+    cut_state *s = cs->s;
+    float nrm[3];
+    cut_normal_at(s, p, s->m->normal + 3 * (size_t)ref, nrm);
+    uint32_t v = ism_mesh_add_vertex(s->m, p, nrm);
+    return v != NONE && cut_set_vcurve(s, v, cs->k) ? v : NONE;
+}
+
+/* The plane through p containing edge u-w and the mean normal of its ends: a crease point
+ * kept in it stays across the crease from the edge, so the points of consecutive edges
+ * follow each other along the crease (a point free to slide would go to the foot of the
+ * perpendicular, out of order where the mesh's edges meet the crease obliquely). False
+ * when the edge and normal are parallel. */
+static bool edge_plane(const ism_mesh *m, uint32_t u, uint32_t w, const double p[3],
+                       double plane[4])
+{
+    double d[3], n[3], c[3], l = 0;
+    for (int k = 0; k < 3; k++) {
+        d[k] = m->pos[3 * (size_t)w + k] - m->pos[3 * (size_t)u + k];
+        n[k] = (double)m->normal[3 * (size_t)u + k] + m->normal[3 * (size_t)w + k];
+    }
+    c[0] = d[1] * n[2] - d[2] * n[1];
+    c[1] = d[2] * n[0] - d[0] * n[2];
+    c[2] = d[0] * n[1] - d[1] * n[0];
+    for (int k = 0; k < 3; k++)
+        l += c[k] * c[k];
+    l = sqrt(l);
+    if (!(l > 0))
+        return false;
+    plane[3] = 0;
+    for (int k = 0; k < 3; k++) {
+        plane[k] = c[k] / l;
+        plane[3] += plane[k] * p[k];
+    }
+    return true;
+}
+
+/* The crease point on edge u-w (branches label[u] ≠ label[w]), made once per edge. */
+static uint32_t crease_vertex(crease_state *cs, uint32_t u, uint32_t w)
+{
+    cut_state *s = cs->s;
+    bool added;
+    uint32_t i = ism_key_map_add(&s->split, cut_edge_key(u, w), &added);
+    if (i == ISM_KEY_NONE)
+        return NONE;
+    if (!added)
+        return s->split_v[i];
+    if (!ism_grow((void **)&s->split_v, &s->cap_split, (size_t)i + 1, sizeof *s->split_v,
+                  CUT_FIRST))
+        return NONE;
+    uint32_t A = cs->label[u], B = cs->label[w];
+    const double *a = s->m->pos + 3 * (size_t)u, *b = s->m->pos + 3 * (size_t)w;
+    double ga = branch_gap(cs, A, B, a), gb = branch_gap(cs, A, B, b);
+    double t = (ga < 0) != (gb < 0) ? ga / (ga - gb) : 0.5, p[3];
+    for (int c = 0; c < 3; c++)
+        p[c] = a[c] + t * (b[c] - a[c]);
+    double len = fmax(sqrt(dist2(a, b)), fmax(s->reach[u], s->reach[w]));
+    size_t ks[1] = {B};
+    double max_move = CREASE_MAX_MOVE_EDGES * len, plane[4];
+    bool across = edge_plane(s->m, u, w, p, plane);
+    if (!ism_branches_refine(cs->b, A, ks, 1, across ? plane : NULL, s->tol, max_move, p)) {
+        bool again = (ga < 0) != (gb < 0);
+        if (again)
+            gap_root(cs, A, B, a, b, ga, p);
+        if (!again ||
+            !ism_branches_refine(cs->b, A, ks, 1, across ? plane : NULL, s->tol, max_move, p))
+            s->c->unrefined++;
+    }
+    uint32_t v = new_vertex(cs, p, u);
+    if (v != NONE)
+        s->split_v[i] = v;
+    return v;
+}
+
+static void sort3(uint32_t x[3])
+{
+    for (int i = 0; i < 3; i++)
+        for (int j = i + 1; j < 3; j++)
+            if (x[j] < x[i]) {
+                uint32_t t = x[i];
+                x[i] = x[j];
+                x[j] = t;
+            }
+}
+
+/* The triple point of the branches of triangle t (one vertex per point). */
+static uint32_t triple_vertex(crease_state *cs, const uint32_t t[3])
+{
+    cut_state *s = cs->s;
+    double p[3] = {0, 0, 0}, reach = 0;
+    for (int i = 0; i < 3; i++) {
+        for (int c = 0; c < 3; c++)
+            p[c] += s->m->pos[3 * (size_t)t[i] + c] / 3;
+        reach = fmax(reach, s->reach[t[i]]);
+    }
+    uint32_t set[3] = {cs->label[t[0]], cs->label[t[1]], cs->label[t[2]]};
+    size_t ks[2] = {set[1], set[2]};
+    if (!ism_branches_refine(cs->b, set[0], ks, 2, NULL, s->tol, CREASE_MAX_MOVE_EDGES * reach,
+                             p))
+        s->c->unrefined++;
+    sort3(set);
+    double same = CREASE_SAME_TRIPLE * s->tol;
+    for (size_t i = 0; i < cs->ntp; i++)
+        if (!memcmp(cs->tp[i].set, set, sizeof set) && dist2(cs->tp[i].p, p) <= same * same)
+            return cs->tp[i].v;
+    if (!ism_grow((void **)&cs->tp, &cs->cap_tp, cs->ntp + 1, sizeof *cs->tp, CUT_FIRST))
+        return NONE;
+    uint32_t v = new_vertex(cs, p, t[0]);
+    cs->tp[cs->ntp++] = (triple){{p[0], p[1], p[2]}, {set[0], set[1], set[2]}, v};
+    return v;
+}
+
+/* Records crease edge a-b between branches A and B. */
+static bool crease_edge(crease_state *cs, uint32_t a, uint32_t b, uint32_t A, uint32_t B)
+{
+    uint32_t br[2] = {A, B};
+    return cut_add_cut_edge(cs->s, a, b, cs->k) && cut_set_branches(cs->s, a, b, br);
+}
+
+/* A triangle of three branches fanned from its triple point. */
+static bool split_three(crease_state *cs, const uint32_t t[3])
+{
+    ism_mesh *m = cs->s->m;
+    uint32_t T = triple_vertex(cs, t), e[3];
+    if (T == NONE)
+        return false;
+    for (int i = 0; i < 3; i++) {
+        uint32_t a = t[i], b = t[(i + 1) % 3];
+        if ((e[i] = crease_vertex(cs, a, b)) == NONE ||
+            !crease_edge(cs, T, e[i], cs->label[a], cs->label[b]))
+            return false;
+    }
+    for (int i = 0; i < 3; i++)
+        if (!ism_mesh_add_triangle(m, t[i], e[i], T) ||
+            !ism_mesh_add_triangle(m, e[i], t[(i + 1) % 3], T))
+            return false;
+    return true;
+}
+
+static bool split_crease_triangle(crease_state *cs, const uint32_t t[3])
+{
+    uint32_t l[3] = {cs->label[t[0]], cs->label[t[1]], cs->label[t[2]]};
+    bool none = l[0] == ISM_BRANCH_NONE || l[1] == ISM_BRANCH_NONE || l[2] == ISM_BRANCH_NONE;
+    if (none || (l[0] == l[1] && l[1] == l[2]))
+        return ism_mesh_add_triangle(cs->s->m, t[0], t[1], t[2]);
+    if (l[0] != l[1] && l[1] != l[2] && l[2] != l[0])
+        return split_three(cs, t);
+    for (int i = 0; i < 3; i++) /* the lone corner on its branch */
+        if (l[i] != l[(i + 1) % 3] && l[i] != l[(i + 2) % 3]) {
+            uint32_t c = t[i], u = t[(i + 1) % 3], w = t[(i + 2) % 3];
+            uint32_t p = crease_vertex(cs, c, u), q = crease_vertex(cs, c, w);
+            return p != NONE && q != NONE && crease_edge(cs, p, q, l[i], cs->label[u]) &&
+                   cut_emit_lone(cs->s->m, c, u, w, p, q);
+        }
+    return false;
+}
+
+/* Whether v lies strictly between a and b along a-b. */
+static bool between(const double *a, const double *v, const double *b)
+{
+    double x = 0, y = 0;
+    for (int c = 0; c < 3; c++) {
+        x += (v[c] - a[c]) * (b[c] - a[c]);
+        y += (b[c] - v[c]) * (b[c] - a[c]);
+    }
+    return x > 0 && y > 0;
+}
+
+/* One pass over the crease chains: a crease point not between its two chain neighbours
+ * (the label boundary zigzags across the crease, and a point of one edge lands past the next
+ * one's) is moved onto the crease between them (Newton on f_A = f_B = 0 in the plane through
+ * their midpoint across the chain). Returns the points moved; -1 when out of memory. */
+static long order_pass(crease_state *cs)
+{
+    cut_state *s = cs->s;
+    const ism_cut *c = s->c;
+    size_t nv = s->m->nverts;
+    uint32_t *nb = malloc(2 * (nv + 1) * sizeof *nb), *edge = malloc((nv + 1) * sizeof *edge);
+    uint8_t *deg = calloc(nv + 1, 1);
+    long moved = -1;
+    if (nb && edge && deg) {
+        moved = 0;
+        for (size_t i = 0; i < c->nedges; i++) {
+            const ism_cut_edge *e = &c->edges[i];
+            if (e->fn != cs->k)
+                continue;
+            for (int end = 0; end < 2; end++) {
+                uint32_t v = end ? e->b : e->a;
+                if (deg[v] < 2)
+                    nb[2 * (size_t)v + deg[v]] = end ? e->a : e->b;
+                edge[v] = (uint32_t)i;
+                deg[v] = deg[v] < UINT8_MAX ? deg[v] + 1 : deg[v];
+            }
+        }
+        for (size_t v = 0; v < nv; v++) {
+            if (deg[v] != 2)
+                continue;
+            double *p = s->m->pos + 3 * v, *a = s->m->pos + 3 * (size_t)nb[2 * v],
+                   *b = s->m->pos + 3 * (size_t)nb[2 * v + 1];
+            if (between(a, p, b))
+                continue;
+            double q[3], plane[4] = {0, 0, 0, 0}, l = 0;
+            for (int k = 0; k < 3; k++) {
+                q[k] = 0.5 * (a[k] + b[k]);
+                plane[k] = b[k] - a[k];
+                l += plane[k] * plane[k];
+            }
+            l = sqrt(l);
+            for (int k = 0; k < 3; k++) {
+                plane[k] /= l;
+                plane[3] += plane[k] * q[k];
+            }
+            const uint32_t *br = c->edges[edge[v]].branch;
+            size_t ks[1] = {br[1]};
+            if (ism_branches_refine(cs->b, br[0], ks, 1, plane, s->tol, l, q)) {
+                memcpy(p, q, sizeof q);
+                moved++;
+            }
+        }
+    }
+    free(nb);
+    free(edge);
+    free(deg);
+    return moved;
+}
+
+/* The branch of f at every vertex. */
+static bool label_vertices(crease_state *cs)
+{
+    const ism_mesh *m = cs->s->m;
+    cs->label = malloc((m->nverts + 1) * sizeof *cs->label);
+    if (!cs->label)
+        return false;
+    for (size_t v = 0; v < m->nverts; v++)
+        if (!ism_branches_at(cs->b, m->pos + 3 * v, &cs->label[v]))
+            return false;
+    return true;
+}
+
+bool cut_crease(cut_state *s, size_t k)
+{
+    ism_cut_eval *ev = s->ev;
+    if (!ev->branches) {
+        ev->branches = malloc(sizeof *ev->branches);
+        if (!ev->branches || !ism_branches_init(ev->branches, ev->f)) {
+            free(ev->branches);
+            ev->branches = NULL;
+            return false;
+        }
+    }
+    crease_state cs = {.s = s, .b = ev->branches, .k = (uint32_t)k};
+    ism_mesh *m = s->m;
+    size_t nt = m->ntris;
+    uint32_t *old = malloc((nt ? nt : 1) * 3 * sizeof *old);
+    bool ok = old && cut_grow_vertex_arrays(s) && label_vertices(&cs);
+    if (ok) {
+        cut_longest_edges(m, s->reach);
+        memcpy(old, m->tri, nt * 3 * sizeof *old);
+        m->ntris = 0;
+        ism_key_map_free(&s->split);
+        ism_key_map_init(&s->split);
+    }
+    for (size_t t = 0; ok && t < nt; t++)
+        ok = split_crease_triangle(&cs, old + 3 * t);
+    for (int pass = 0; ok && pass < CREASE_ORDER_PASSES; pass++) {
+        long moved = order_pass(&cs);
+        ok = moved >= 0;
+        if (moved <= 0)
+            break;
+    }
+    free(old);
+    free(cs.label);
+    free(cs.tp);
+    return ok;
+}
