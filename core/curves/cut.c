@@ -196,6 +196,38 @@ static bool emit(ism_mesh *m, uint32_t a, uint32_t b, uint32_t c)
     return ism_mesh_add_triangle(m, a, b, c);
 }
 
+/* An edge whose ends both lie on the curve, seen from a triangle whose third corner has
+ * sign sign: it is a curve edge when g takes both signs across it (or at the border of the
+ * mesh), not when both sides have one sign (it crosses a sector of a node, or the curve only
+ * touches it). */
+static bool note_zero_edge(cut_state *s, uint32_t a, uint32_t b, int sign)
+{
+    bool added;
+    uint32_t i = ism_key_map_add(&s->zero, cut_edge_key(a, b), &added);
+    if (i == ISM_KEY_NONE ||
+        !ism_grow((void **)&s->zero_edge, &s->cap_zero, (size_t)i + 1, sizeof *s->zero_edge,
+                  CUT_FIRST))
+        return false;
+    if (added)
+        s->zero_edge[i] = (cut_zero_edge){a, b, 0, 0};
+    s->zero_edge[i].mask |= sign > 0 ? 1 : 2;
+    s->zero_edge[i].seen += s->zero_edge[i].seen < UINT8_MAX;
+    return true;
+}
+
+/* The curve edges among the edges with both ends on the curve. */
+static bool add_zero_edges(cut_state *s, size_t k)
+{
+    for (size_t i = 0; i < s->zero.n; i++) {
+        const cut_zero_edge *z = &s->zero_edge[i];
+        if ((z->mask == 3 || z->seen == 1) && !cut_add_cut_edge(s, z->a, z->b, (uint32_t)k))
+            return false;
+    }
+    ism_key_map_free(&s->zero);
+    ism_key_map_init(&s->zero);
+    return true;
+}
+
 /* Splits triangle t = (v0 v1 v2) by g_k, appending the pieces to the mesh. */
 static bool split_triangle(cut_state *s, size_t k, const uint32_t t[3])
 {
@@ -206,7 +238,7 @@ static bool split_triangle(cut_state *s, size_t k, const uint32_t t[3])
     if (!pos || !neg) {
         for (int i = 0; i < 3; i++)
             if (sg[i] == 0 && sg[(i + 1) % 3] == 0 && sg[(i + 2) % 3] != 0 &&
-                !cut_add_cut_edge(s, t[i], t[(i + 1) % 3], fn))
+                !note_zero_edge(s, t[i], t[(i + 1) % 3], sg[(i + 2) % 3]))
                 return false;
         return emit(s->m, t[0], t[1], t[2]);
     }
@@ -305,7 +337,7 @@ static bool cut_one(cut_state *s, size_t k)
     for (size_t t = 0; t < nt && ok; t++)
         ok = split_triangle(s, k, old + 3 * t);
     free(old);
-    return ok;
+    return ok && add_zero_edges(s, k);
 }
 
 /* Drops the replaced cut edges and measures how close the curve vertices are. */
@@ -334,6 +366,7 @@ bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
     cut_state s = {.ev = ev, .m = m, .c = c, .tol = tol};
     ism_key_map_init(&s.split);
     ism_key_map_init(&s.onmap);
+    ism_key_map_init(&s.zero);
     bool ok = true;
     for (size_t k = 0; k < ev->nfns && ok; k++)
         ok = ev->fns[k].kind == ISM_CUT_CREASE ? cut_crease(&s, k) : cut_one(&s, k);
@@ -341,6 +374,8 @@ bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
         finish(&s);
     ism_key_map_free(&s.split);
     ism_key_map_free(&s.onmap);
+    ism_key_map_free(&s.zero);
+    free(s.zero_edge);
     free(s.split_v);
     free(s.vcurve);
     free(s.gv);

@@ -12,6 +12,13 @@
  * section at depth 6. */
 #define CUT_FIRST 256
 
+/* An edge with both ends on the curve: the signs of g seen across it (bit 1 +, bit 2 −) and
+ * how many triangles have it. */
+typedef struct cut_zero_edge {
+    uint32_t a, b;
+    uint8_t mask, seen;
+} cut_zero_edge;
+
 typedef struct cut_state {
     ism_cut_eval *ev;
     ism_mesh *m;
@@ -30,6 +37,9 @@ typedef struct cut_state {
                                 that far off the surface) */
     signed char *sg;
     size_t cap_gv;           /* room in gv, reach and sg */
+    ism_key_map zero;        /* edge key -> index into zero_edge (the current function) */
+    cut_zero_edge *zero_edge;
+    size_t cap_zero;
 } cut_state;
 
 uint64_t cut_edge_key(uint32_t a, uint32_t b);

@@ -3,7 +3,10 @@
 arrangement 6 / 12 / 8 with faces of area pi/2 (0.5%) and every arc point within 1e-10 of
 the box diagonal of the sphere and of its plane (checked here from the closed forms), in a
 box shifted off the lattice by 0.37 of a finest cell; a curve that misses the surface gives
-no curve and one face, not an error; a bad curve is refused with its JSON path."""
+no curve and one face, not an error; a bad curve is refused with its JSON path. The Klein
+bottle preset cut by x = 0, in boxes shifted off the lattice: the section is three circles
+(closed form below), crossing on the double curve at (0, 1 +- sqrt 2, 0) and at the four
+points where the plane touches the surface, each a vertex of degree 4; 12 edges."""
 import json
 import math
 import os
@@ -71,6 +74,45 @@ class CurvesTest(unittest.TestCase):
                         r = math.sqrt(sum(v * v for v in p))
                         self.assertLess(abs(r - 1), tol)
                         self.assertLess(abs(p[axis]), tol)
+
+    def test_klein_bottle_section(self):
+        # f(0, y, z) = (y^2 + z^2 + 2y - 1) ((y^2 + z^2 - 2y - 1)^2 - 8 z^2): the circles
+        # C0 (y + 1)^2 + z^2 = 2 and C+- (y - 1)^2 + (z -+ sqrt 2)^2 = 4. C+ and C- cross on the
+        # double curve x^2 + (y - 1)^2 = 2 (z = 0) at y = 1 +- sqrt 2; C0 meets C+- where the
+        # plane is tangent to the surface: (1/3, -+ sqrt2/3) and (-1, +- sqrt 2) (solved by hand).
+        r2 = math.sqrt(2)
+        circles = [(-1, 0, r2), (1, r2, 2), (1, -r2, 2)]
+        want = [(1 + r2, 0), (1 - r2, 0), (1 / 3, -r2 / 3), (1 / 3, r2 / 3), (-1, r2), (-1, -r2)]
+        length = 2 * math.pi * r2 + 2 * 2 * math.pi * 2
+        cell = 8 / 2 ** 7
+        for shift in (1e-3, 0.37 * cell):
+            d = [0.61 * shift, shift, -0.83 * shift]
+            f, proc = self.run_request({
+                "preset": "klein-bottle", "depth": {"max": 7},
+                "box": [-4 + d[0], -4 + d[1], -4 + d[2], 4 + d[0], 4 + d[1], 4 + d[2]],
+                "curves": [{"kind": "plane", "normal": [1, 0, 0], "offsets": [0]}]})
+            self.assertIsNotNone(f, proc.stderr)
+            a = f["arrangement"]
+            self.assertTrue(a["euler"]["ok"])
+            self.assertEqual((len(a["vertices"]), len(a["edges"])), (6, 12))
+            tol = 1e-9 * math.sqrt(3) * 8
+            for w in want:
+                near = [v for v in a["vertices"]
+                        if math.hypot(v["xyz"][1] - w[0], v["xyz"][2] - w[1]) < 1e-6]
+                self.assertEqual(len(near), 1, (shift, w))
+                v = near[0]
+                self.assertEqual(v["degree"], 4)
+                self.assertLess(max(abs(v["xyz"][0]), math.hypot(v["xyz"][1] - w[0],
+                                                                 v["xyz"][2] - w[1])), tol)
+            cut = [c for c in f["curves"] if c["kind"] == "section"]
+            total = sum(c["length"] for c in cut)
+            self.assertAlmostEqual(total, length, delta=0.005 * length)
+            for c in cut:
+                for arc in c["arcs"]:
+                    for i in range(0, len(arc), 3):
+                        x, y, z = arc[i:i + 3]
+                        off = min(abs(math.hypot(y - cy, z - cz) - r) for cy, cz, r in circles)
+                        self.assertLess(max(abs(x), off), tol)
 
     def test_a_curve_missing_the_surface_is_no_curve(self):
         f, proc = self.run_request(self.sphere(0.0, [{"kind": "plane", "normal": [0, 0, 1],
