@@ -152,6 +152,9 @@ static void write_analysis(ism_jw *w, const ism_analysis *a, double max_error)
     kv_d(w, "median_angle", a->median_angle);
     kv_d(w, "share_under_10", a->share_under_10);
     kv_u(w, "degenerate_triangles", a->degenerate_triangles);
+    kv_d(w, "aspect_max", a->aspect_max);
+    kv_d(w, "aspect_mean", a->aspect_mean);
+    kv_d(w, "aspect_p99", a->aspect_p99);
     ism_jw_key(w, "angle_hist");
     ism_jw_array(w);
     for (int i = 0; i < ISM_ANGLE_BINS; i++)

@@ -150,6 +150,11 @@ typedef struct ism_analysis {
     double min_angle, median_angle, share_under_10;
     uint64_t angle_hist[ISM_ANGLE_BINS];
     size_t degenerate_triangles;      /* zero area */
+    /* aspect ratio of each non-degenerate triangle: longest side / (2 √3 × inradius), 1 for
+     * an equilateral triangle, growing without bound as it flattens (= longest side ×
+     * perimeter / (4 √3 area)); the largest, the mean and the 99th percentile (rank
+     * floor(0.99 (n - 1)) ascending) */
+    double aspect_max, aspect_mean, aspect_p99;
     float *triangle_min_angle;        /* ntris entries (0 for degenerate triangles) */
 
     /* accuracy: distance estimates |f| / |∇f| at vertices, edge midpoints and triangle

@@ -1,6 +1,6 @@
 /* quality.c — the shape of the triangles (Farin: "the larger the smallest angle, the better
  * the triangle"): each triangle's smallest angle, their minimum, median, histogram and the
- * share under 10 degrees; degenerate triangles; and the area around each vertex (one third
+ * share under 10 degrees; their aspect ratios; degenerate triangles; and the area around each vertex (one third
  * of its triangles' areas), the weights of ∫K dA. */
 #include "core/analysis/quality.h"
 #include "core/analysis/edges.h"
@@ -34,8 +34,8 @@ static double cross_norm(const double *a, const double *b)
 }
 
 /* Twice the area of triangle t; *angle its smallest angle in degrees (the one opposite the
- * shortest side), or -1 when the triangle is degenerate. */
-static double measure_triangle(const ism_mesh *m, size_t t, double *angle)
+ * shortest side), or -1 when the triangle is degenerate; *aspect its aspect ratio. */
+static double measure_triangle(const ism_mesh *m, size_t t, double *angle, double *aspect)
 {
     const uint32_t *c = m->tri + 3 * t;
     *angle = -1;
@@ -62,7 +62,22 @@ static double measure_triangle(const ism_mesh *m, size_t t, double *angle)
     sub3(p[(shortest + 1) % 3], p[shortest], u);
     sub3(p[(shortest + 2) % 3], p[shortest], w);
     *angle = atan2(twice_area, dot3(u, w)) * RAD_TO_DEG;
+    double perimeter = sqrt(len2[0]) + sqrt(len2[1]) + sqrt(len2[2]);
+    *aspect = sqrt(len2[longest]) * perimeter / (2 * sqrt(3.0) * twice_area);
     return twice_area;
+}
+
+static void aspect_statistics(ism_analysis *a, float *aspect, size_t n)
+{
+    if (n == 0)
+        return;
+    double sum = 0;
+    for (size_t i = 0; i < n; i++) {
+        sum += aspect[i];
+        a->aspect_max = fmax(a->aspect_max, aspect[i]);
+    }
+    a->aspect_mean = sum / (double)n;
+    a->aspect_p99 = ism_an_select_float(aspect, n, (size_t)(0.99 * (double)(n - 1)));
 }
 
 static void angle_statistics(ism_analysis *a, float *good, size_t ngood)
@@ -96,14 +111,16 @@ bool ism_an_triangle_quality(const ism_mesh *m, ism_analysis *a)
     a->triangle_min_angle = malloc((nt ? nt : 1) * sizeof *a->triangle_min_angle);
     a->vertex_area = calloc(nv ? nv : 1, sizeof *a->vertex_area);
     float *good = malloc((nt ? nt : 1) * sizeof *good);
-    if (!a->triangle_min_angle || !a->vertex_area || !good) {
+    float *aspect = malloc((nt ? nt : 1) * sizeof *aspect);
+    if (!a->triangle_min_angle || !a->vertex_area || !good || !aspect) {
         free(good);
+        free(aspect);
         return false;
     }
     size_t ngood = 0;
     a->min_angle = 0;
     for (size_t t = 0; t < nt; t++) {
-        double angle, area = 0.5 * measure_triangle(m, t, &angle);
+        double angle, ratio = 1, area = 0.5 * measure_triangle(m, t, &angle, &ratio);
         a->area += area;
         if (!ism_an_tri_collapsed(m->tri, t))
             for (int k = 0; k < 3; k++)
@@ -115,10 +132,13 @@ bool ism_an_triangle_quality(const ism_mesh *m, ism_analysis *a)
             a->triangle_min_angle[t] = (float)angle;
             if (ngood == 0 || angle < a->min_angle)
                 a->min_angle = angle;
+            aspect[ngood] = (float)ratio;
             good[ngood++] = (float)angle;
         }
     }
     angle_statistics(a, good, ngood);
+    aspect_statistics(a, aspect, ngood);
     free(good);
+    free(aspect);
     return true;
 }

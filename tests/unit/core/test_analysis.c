@@ -532,6 +532,13 @@ Test(analysis_quality, smallest_angles_histogram_and_median)
         total += a.angle_hist[i];
     cr_expect_eq(total, 3);
     cr_expect_eq(a.degenerate_triangles, 0);
+    /* aspect = longest side × perimeter / (2 √3 × twice the area): 1 for the equilateral,
+     * (√2 + 1) / √3 for the right isosceles, the sliver's from its sides 1, 0.1, √1.01 */
+    double eq = 1, right = (sqrt(2) + 1) / sqrt(3);
+    double thin = sqrt(1.01) * (1.1 + sqrt(1.01)) / (2 * sqrt(3) * 0.1);
+    cr_expect_float_eq(a.aspect_max, thin, 1e-5);
+    cr_expect_float_eq(a.aspect_mean, (eq + right + thin) / 3, 1e-5);
+    cr_expect_float_eq(a.aspect_p99, right, 1e-5); /* rank floor(0.99 × 2) = 1 of 3 */
     ism_analysis_free(&a);
     ism_mesh_free(&m);
 }
