@@ -64,7 +64,7 @@ Test(schema, fields_are_the_decoders)
 {
     json_t *s = schema();
     json_t *props = json_object_get(s, "properties");
-    cr_expect_eq(json_object_size(props), 10);
+    cr_expect_eq(json_object_size(props), 11);
     known_fields(props, NULL);
     const char *sections[] = {"depth", "tolerances", "output"};
     for (int i = 0; i < 3; i++)
@@ -99,6 +99,12 @@ Test(schema, defaults_are_the_decoders)
     cr_expect_eq(def(props, "output", "position_bits"), req.position_bits);
     cr_expect_eq(def(props, "output", "normal_bits"), req.normal_bits);
     cr_expect_eq(def(props, "output", "curvature_bits"), req.curvature_bits);
+    json_t *q = json_object_get(json_object_get(props, "quality"), "default");
+    cr_expect_str_eq(json_string_value(q), ism_quality_name(req.quality));
+    json_t *names = json_object_get(json_object_get(props, "quality"), "enum");
+    cr_expect_eq(json_array_size(names), ISM_QUALITY_COUNT);
+    for (int i = 0; i < ISM_QUALITY_COUNT; i++)
+        cr_expect_eq(ism_quality_lookup(json_string_value(json_array_get(names, i))), i);
     json_t *box = json_object_get(json_object_get(props, "box"), "default");
     for (int k = 0; k < 6; k++)
         cr_expect_eq(json_number_value(json_array_get(box, (size_t)k)), req.box[k]);
