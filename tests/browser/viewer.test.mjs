@@ -289,6 +289,29 @@ describe('isomesh viewer', { timeout: 600000 }, () => {
     assert.equal((await statsPanel(page)).max_error.text, 'off');
   });
 
+  it('asks for the quality pass and shows the triangles\' shape', async () => {
+    await choosePreset('sphere');
+    await page.evaluate(() => { document.getElementById('box-section').open = true; });
+    const before = await loads(page);
+    await page.check('#quality-good');
+    await waitForMesh(page, before);
+    const s = await getJSON(`/v1/meshes/${await meshKey()}/stats`);
+    const q = s.analysis.quality;
+    assert.ok(q.min_angle >= 20, `smallest angle ${q.min_angle}`);
+    assert.ok(s.remesh.min_angle_before < s.remesh.min_angle_after);
+    const panel = await statsPanel(page);
+    assert.deepEqual(JSON.parse(panel.angle_hist.value), q.angle_hist);
+    assert.equal(q.angle_hist.reduce((a, b) => a + b, 0), s.mesh.triangles - q.degenerate_triangles);
+    assert.equal(Number(panel.remesh.value), s.remesh.min_angle_after);
+    assert.equal(Number(panel.aspect.value), q.aspect_max);
+    assert.equal(Number(panel.share_under_10.value), q.share_under_10);
+    assert.match(await settledHref(page), /quality=good/);
+    const back = await loads(page);
+    await page.uncheck('#quality-good');
+    await waitForMesh(page, back);
+    assert.equal((await statsPanel(page)).remesh.text, 'off');
+  });
+
   it('says so when the surface does not cross the box', async () => {
     const before = await loads(page);
     await page.fill('#expr', 'x^2 + y^2 + z^2 + 1');

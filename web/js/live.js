@@ -40,9 +40,10 @@ export function claim(seq) {
 export function previewBody(body) {
   const b = JSON.parse(body);
   const d = b.depth || { min: 3, max: 7 };
-  if (d.max <= previewDepth && b.max_error === undefined) return null;
+  if (d.max <= previewDepth && b.max_error === undefined && b.quality === undefined) return null;
   b.depth = { min: Math.min(d.min, PREVIEW_MIN_DEPTH), max: previewDepth };
   delete b.max_error;   // a preview is coarse by depth, whatever the error bound asks
+  delete b.quality;     // ... and shows the raw triangles: the pass is for the final mesh
   return JSON.stringify(b);
 }
 

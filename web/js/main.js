@@ -235,6 +235,7 @@ function syncControls() {
   $('depth-max').value = String(state.depth.max);
   $('max-error').value = state.maxError > 0 ? String(state.maxError) : '';
   $('depth-max').disabled = state.maxError > 0;
+  $('quality-good').checked = state.quality === 'good';
   $('color-mode').value = state.color;
   $('show-edges').checked = state.show.edges;
   $('show-points').checked = state.show.points;
@@ -832,7 +833,7 @@ function applyFragment(fragment) {
       if (ranges[k]) ranges[k] = [Math.min(ranges[k][0], v), Math.max(ranges[k][1], v)];
     }
   }
-  for (const k of ['box', 'depth', 'maxError', 'color', 'clip', 'show', 'wire', 'curves']) if (s[k] !== undefined) state[k] = s[k];
+  for (const k of ['box', 'depth', 'maxError', 'quality', 'color', 'clip', 'show', 'wire', 'curves']) if (s[k] !== undefined) state[k] = s[k];
   pendingView = s.view || null;
   state.view = s.view || null;
   shownIdentity = null;
@@ -934,6 +935,10 @@ function wire() {
     $('max-error').removeAttribute('aria-invalid');
     state.maxError = text === '' ? null : e;
     $('depth-max').disabled = state.maxError > 0;
+    requestChanged();
+  });
+  $('quality-good').addEventListener('change', () => {
+    state.quality = $('quality-good').checked ? 'good' : 'raw';
     requestChanged();
   });
   $('reset-box').addEventListener('click', () => {

@@ -3,7 +3,7 @@
 // parameters, box, depth, view, colour mode, clipping and toggles.
 //
 // Fragment keys (URLSearchParams): preset=NAME | expr=TEXT, p.NAME=VALUE per parameter,
-// box=xmin,ymin,zmin,xmax,ymax,zmax, depth=MIN,MAX, err=MAX_ERROR, cam=px,py,pz,tx,ty,tz,
+// box=xmin,ymin,zmin,xmax,ymax,zmax, depth=MIN,MAX, err=MAX_ERROR, quality=good, cam=px,py,pz,tx,ty,tz,
 // color=shaded|mean|gauss|cells, clip=AXIS,OFFSET[,flip], hide=edges,points,boundary,box,curves,
 // wire=1, axes=1, curves=JSON list of the Curves panel's entries (curves.js).
 import { curveRequest, validEntries } from './curves.js';
@@ -20,6 +20,7 @@ export function defaultState() {
     box: DEFAULT_BOX.slice(),
     depth: { min: 3, max: 7 },
     maxError: null,         // the error bound (model units), null: the depth decides
+    quality: 'raw',         // 'good': the server's quality pass after meshing
     view: null,             // {pos: [3], target: [3]}
     color: 'shaded',
     clip: { on: false, axis: 'z', offset: 0, flip: false },
@@ -45,6 +46,7 @@ export function requestBody(state, paramNames) {
   } else {
     body.depth = { min: state.depth.min, max: state.depth.max };
   }
+  if (state.quality === 'good') body.quality = 'good';
   const curves = (state.curves || []).map((e) => curveRequest(e, state.box)).filter(Boolean);
   if (curves.length) body.curves = curves;
   return JSON.stringify(body);
@@ -67,6 +69,7 @@ export function encodeState(state, paramNames) {
   q.set('box', state.box.map(num).join(','));
   q.set('depth', `${state.depth.min},${state.depth.max}`);
   if (state.maxError > 0) q.set('err', num(state.maxError));
+  if (state.quality === 'good') q.set('quality', 'good');
   if (state.view) q.set('cam', [...state.view.pos, ...state.view.target].map(short).join(','));
   if (state.color !== 'shaded') q.set('color', state.color);
   if (state.clip.on) q.set('clip', [state.clip.axis, short(state.clip.offset)].concat(state.clip.flip ? ['flip'] : []).join(','));
@@ -112,6 +115,9 @@ export function decodeState(fragment) {
   if (q.has('err')) {
     const e = Number(q.get('err'));
     if (e > 0 && Number.isFinite(e)) s.maxError = e; else s.problems.push('err');
+  }
+  if (q.has('quality')) {
+    if (['raw', 'good'].includes(q.get('quality'))) s.quality = q.get('quality'); else s.problems.push('quality');
   }
   if (q.has('cam')) {
     const c = numbers(q.get('cam'), 6);

@@ -16,6 +16,28 @@ function put(name, text, raw) {
   else c.dataset.value = String(raw);
 }
 
+// The smallest-angle histogram as a row of bars (heights relative to the fullest bin); the
+// counts travel in data-value as a JSON list.
+function showHistogram(hist) {
+  const c = cell('angle_hist');
+  if (!c) return;
+  c.textContent = '';
+  if (!Array.isArray(hist) || !hist.length) {
+    c.textContent = '–';
+    delete c.dataset.value;
+    return;
+  }
+  c.dataset.value = JSON.stringify(hist);
+  const top = Math.max(1, ...hist);
+  hist.forEach((n, i) => {
+    const bar = document.createElement('span');
+    bar.className = 'bar';
+    bar.style.height = `${Math.round(100 * n / top)}%`;
+    bar.title = `${5 * i}–${5 * i + 5}°: ${n.toLocaleString('en-US')} triangles`;
+    c.append(bar);
+  });
+}
+
 export function clearStats() {
   for (const c of document.querySelectorAll('#stats dd')) {
     c.textContent = '–';
@@ -41,6 +63,15 @@ export function showStats(result) {
   put('nonmanifold_curves', fmt.count(an.nonmanifold_curves), an.nonmanifold_curves);
   put('boundary_edges', fmt.count(an.boundary_edges), an.boundary_edges);
   put('min_angle', Number.isFinite(q.min_angle) ? `${fmt.sig(q.min_angle)}°` : '–', q.min_angle);
+  put('share_under_10', Number.isFinite(q.share_under_10) ? `${fmt.sig(100 * q.share_under_10)} %` : '–',
+      q.share_under_10);
+  showHistogram(q.angle_hist);
+  put('aspect', Number.isFinite(q.aspect_max) ? `${fmt.sig(q.aspect_max)}, ${fmt.sig(q.aspect_p99)}` : '–',
+      Number.isFinite(q.aspect_max) ? q.aspect_max : null);
+  const rm = s.remesh;
+  put('remesh', rm ? `${fmt.sig(rm.min_angle_before)}° → ${fmt.sig(rm.min_angle_after)}° ` +
+      `(${fmt.count(rm.flips)} flips, ${fmt.count(rm.moves)} moves)` : 'off',
+      rm ? rm.min_angle_after : null);
   put('max_dist', fmt.sig(acc.max_dist_vertex), acc.max_dist_vertex);
   const between = Math.max(acc.max_dist_midpoint, acc.max_dist_centroid);
   const p99 = Math.max(acc.p99_dist_midpoint, acc.p99_dist_centroid);
