@@ -204,7 +204,8 @@ def preset(name, box, depth):
 
 PRESET_BOXES = {"kummer-4-nodes": [-3, -3, -3, 3, 3, 3], "kummer-16-nodes": [-3, -3, -3, 3, 3, 3],
                 "steiner-roman": [-1, -1, -1, 1, 1, 1], "klein-bottle": [-4, -4, -4, 4, 4, 4],
-                "sphere": [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5], "torus": [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5]}
+                "sphere": [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5], "torus": [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5],
+                "heart": [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5]}
 
 
 class PresetsOffTheLatticeTest(unittest.TestCase):
@@ -225,6 +226,22 @@ class PresetsOffTheLatticeTest(unittest.TestCase):
                 self.assertEqual(feats["singular_points"], [])
                 self.assertEqual(feats["curves"], [])
                 self.assertEqual(stats["analysis"]["euler"], chi)
+
+    def test_heart_is_a_sphere_with_two_cusps(self):
+        # (x² + 9/4 y² + z² − 1)³ − x²z³ − 9/80 y²z³: ∇f = 0 on f = 0 at the cusps (0, 0, ±1)
+        # (H of rank 2, f_zzz ≠ 0) and on the ring z = 0, x² + 9/4 y² = 1, where f vanishes to
+        # third order but its zero set is a smooth sheet; the surface is a topological sphere.
+        for stats, feats in self.run_preset("heart", 6):
+            pts = feats["singular_points"]
+            self.assertEqual(sorted(round(p["xyz"][2]) for p in pts), [-1, 1])
+            for p in pts:
+                self.assertEqual(p["type"], "cusp")
+                self.assertEqual(p["certificate"], "deflation")
+                self.assertLess(max(abs(p["xyz"][0]), abs(p["xyz"][1]), abs(abs(p["xyz"][2]) - 1)), 1e-9)
+            self.assertEqual(feats["curves"], [])
+            self.assertEqual(stats["analysis"]["euler"], 2)
+            self.assertEqual(stats["analysis"]["components"], 1)
+            self.assertEqual(stats["analysis"]["nonmanifold_vertices"], 0)
 
     def test_kummer_nodes(self):
         for name, nodes, depth in (("kummer-4-nodes", 4, 7), ("kummer-16-nodes", 16, 6)):
