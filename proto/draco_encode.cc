@@ -81,8 +81,12 @@ bool encode(const ism_draco_input *in, ism_draco_output *out)
         set_error(out, "the mesh is empty or too large");
         return false;
     }
-    if (!points_valid(in) || (!pv && (in->point_cell || in->point_sheet))) {
+    if (!points_valid(in)) {
         set_error(out, "a point refers to a vertex that does not exist");
+        return false;
+    }
+    if (!pv && (in->point_cell || in->point_sheet)) {
+        set_error(out, "triangle labels need the vertices split into points");
         return false;
     }
     draco::Mesh mesh;
