@@ -293,11 +293,71 @@ bool cut_grow_vertex_arrays(cut_state *s)
     if (reach)
         s->reach = reach;
     signed char *sg = reach ? realloc(s->sg, n) : NULL;
-    if (!sg)
+    if (sg)
+        s->sg = sg;
+    cut_vscratch *vs = sg ? realloc(s->vs, n * sizeof *vs) : NULL;
+    if (vs)
+        s->vs = vs;
+    uint8_t *near = vs ? realloc(s->near, n) : NULL;
+    if (!near)
         return false;
-    s->sg = sg;
+    memset(vs + s->cap_gv, 0, (n - s->cap_gv) * sizeof *vs);
+    memset(near + s->cap_gv, 0, n - s->cap_gv);
+    s->near = near;
     s->cap_gv = n;
     return true;
+}
+
+static bool push_near(cut_state *s, uint32_t v, uint8_t level)
+{
+    if (s->near[v])
+        return true;
+    if (!ism_grow((void **)&s->near_list, &s->cap_near, s->n_near + 1, sizeof *s->near_list,
+                  CUT_FIRST))
+        return false;
+    s->near[v] = level;
+    s->reach[v] = 0;
+    s->near_list[s->n_near++] = v;
+    return true;
+}
+
+bool cut_mark_near(cut_state *s)
+{
+    const ism_mesh *m = s->m;
+    for (size_t t = 0; t < m->ntris; t++) {
+        const uint32_t *tv = m->tri + 3 * t;
+        signed char a = s->sg[tv[0]];
+        if (a != 0 && a == s->sg[tv[1]] && a == s->sg[tv[2]])
+            continue;
+        for (int i = 0; i < 3; i++)
+            if (!push_near(s, tv[i], 1))
+                return false;
+    }
+    for (size_t t = 0; t < m->ntris; t++) { /* a ring further, and squared edge lengths */
+        const uint32_t *tv = m->tri + 3 * t;
+        if (s->near[tv[0]] != 1 && s->near[tv[1]] != 1 && s->near[tv[2]] != 1)
+            continue;
+        for (int i = 0; i < 3; i++) {
+            uint32_t a = tv[i], b = tv[(i + 1) % 3];
+            if (!push_near(s, a, 2))
+                return false;
+            double d = dist2(m, a, b);
+            s->reach[a] = d > s->reach[a] ? d : s->reach[a];
+            s->reach[b] = d > s->reach[b] ? d : s->reach[b];
+        }
+    }
+    for (size_t i = 0; i < s->n_near; i++)
+        s->reach[s->near_list[i]] = sqrt(s->reach[s->near_list[i]]);
+    return true;
+}
+
+void cut_clear_near(cut_state *s)
+{
+    for (size_t i = 0; i < s->n_near; i++) {
+        s->vs[s->near_list[i]] = (cut_vscratch){0};
+        s->near[s->near_list[i]] = 0;
+    }
+    s->n_near = 0;
 }
 
 /* Signs of g_k at the vertices; those on the curve are put on it (and on an earlier curve
@@ -310,7 +370,8 @@ static bool classify(cut_state *s, size_t k)
     ism_cut_g_batch(s->ev, k, m->pos, m->nverts, s->gv);
     for (size_t v = 0; v < m->nverts; v++)
         s->sg[v] = (signed char)((s->gv[v] > 0) - (s->gv[v] < 0));
-    cut_longest_edges(m, s->reach);
+    if (!cut_mark_near(s))
+        return false;
     for (size_t v = 0; v < m->nverts; v++)
         if (s->gv[v] == 0) {
             refine_point(s, cut_vcurve_of(s, (uint32_t)v), k, s->reach[v], m->pos + 3 * v);
@@ -337,6 +398,7 @@ static bool cut_one(cut_state *s, size_t k)
     for (size_t t = 0; t < nt && ok; t++)
         ok = split_triangle(s, k, old + 3 * t);
     free(old);
+    cut_clear_near(s);
     return ok && add_zero_edges(s, k);
 }
 
@@ -381,5 +443,8 @@ bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
     free(s.gv);
     free(s.sg);
     free(s.reach);
+    free(s.vs);
+    free(s.near);
+    free(s.near_list);
     return ok;
 }

@@ -19,6 +19,16 @@ typedef struct cut_zero_edge {
     uint8_t mask, seen;
 } cut_zero_edge;
 
+/* Per vertex, for the current function: how near the curve it is, and the tangency seeds'
+ * counts (tangency.c). Zero between functions (reset through near_list). */
+typedef struct cut_vscratch {
+    double spread;       /* largest |g(w) − g(v)| to a neighbour */
+    uint32_t fn;         /* the earlier curve it lies on + 1 (0: none seen) */
+    uint32_t nbr[2];     /* its chain neighbours on that curve */
+    uint8_t changes;     /* sign changes of g(w) − g(v) round it */
+    uint8_t deg, up;     /* chain edges, and how many lead up */
+} cut_vscratch;
+
 typedef struct cut_state {
     ism_cut_eval *ev;
     ism_mesh *m;
@@ -36,7 +46,12 @@ typedef struct cut_state {
                                 of its edges: the polygoniser's vertices near a crease may lie
                                 that far off the surface) */
     signed char *sg;
-    size_t cap_gv;           /* room in gv, reach and sg */
+    size_t cap_gv;           /* room in gv, reach, sg and vs */
+    cut_vscratch *vs;
+    uint8_t *near;           /* per vertex: 1 a corner of a triangle the curve crosses or
+                                touches, 2 a ring further, 0 farther */
+    uint32_t *near_list;     /* the vertices with vs[v].near set */
+    size_t n_near, cap_near;
     ism_key_map zero;        /* edge key -> index into zero_edge (the current function) */
     cut_zero_edge *zero_edge;
     size_t cap_zero;
@@ -70,6 +85,14 @@ bool cut_emit_lone(ism_mesh *m, uint32_t l, uint32_t u, uint32_t w, uint32_t p, 
 
 /* Per vertex: its longest edge into len (0 for a vertex no triangle uses). */
 void cut_longest_edges(const ism_mesh *m, double *len);
+
+/* Marks the vertices near the current curve (near, near_list) and their longest edges
+ * (reach: of a vertex a ring further, among the triangles at the curve's corners); the
+ * others' reach is left stale. False when out of memory. */
+bool cut_mark_near(cut_state *s);
+
+/* Clears the per-vertex scratch of the near vertices. */
+void cut_clear_near(cut_state *s);
 
 /* Room in gv, reach and sg for the mesh's vertices. */
 bool cut_grow_vertex_arrays(cut_state *s);

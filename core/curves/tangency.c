@@ -55,7 +55,6 @@ typedef struct tang_state {
     tangent t[TANG_MAX_PER_FN];
     size_t n;
     size_t seeds;
-    uint32_t *nbr;   /* per vertex: its two chain neighbours (chain seeds) */
 } tang_state;
 
 /* Whether w's value is above v's (ties broken by index: a symbolic perturbation). */
@@ -100,72 +99,68 @@ static bool on_no_other(const cut_state *s, uint32_t v, size_t k)
     return c == NONE || c == (uint32_t)k;
 }
 
-/* Discrete saddles of g_k near 0 (vertices on no earlier curve). */
-static bool surface_seeds(tang_state *ts)
+/* Discrete saddles of g_k near 0 (among the vertices near the curve, on no other curve). */
+static void surface_seeds(tang_state *ts)
 {
     cut_state *s = ts->s;
     const ism_mesh *m = s->m;
     const double *g = s->gv;
-    uint8_t *changes = calloc(m->nverts + 1, 1);
-    double *spread = calloc(m->nverts + 1, sizeof *spread);
-    bool ok = changes && spread;
-    for (size_t t = 0; ok && t < m->ntris; t++)
+    cut_vscratch *vs = s->vs;
+    for (size_t t = 0; t < m->ntris; t++) {
+        const uint32_t *tv = m->tri + 3 * t;
+        if (!s->near[tv[0]] && !s->near[tv[1]] && !s->near[tv[2]])
+            continue;
         for (int i = 0; i < 3; i++) {
-            uint32_t v = m->tri[3 * t + i], u = m->tri[3 * t + (i + 1) % 3],
-                     w = m->tri[3 * t + (i + 2) % 3];
-            if (above(g, v, u) != above(g, v, w) && changes[v] < UINT8_MAX)
-                changes[v]++;
-            spread[v] = fmax(spread[v], fmax(fabs(g[u] - g[v]), fabs(g[w] - g[v])));
+            uint32_t v = tv[i], u = tv[(i + 1) % 3], w = tv[(i + 2) % 3];
+            if (!s->near[v])
+                continue;
+            if (above(g, v, u) != above(g, v, w) && vs[v].changes < UINT8_MAX)
+                vs[v].changes++;
+            vs[v].spread = fmax(vs[v].spread, fmax(fabs(g[u] - g[v]), fabs(g[w] - g[v])));
         }
-    for (size_t v = 0; ok && v < m->nverts; v++)
-        if (changes[v] >= 4 && fabs(g[v]) <= TANG_SEED_SPAN * spread[v] &&
-            on_no_other(s, (uint32_t)v, ts->k))
-            try_seed(ts, (uint32_t)v, NONE);
-    free(changes);
-    free(spread);
-    return ok;
+    }
+    for (size_t i = 0; i < s->n_near; i++) {
+        uint32_t v = s->near_list[i];
+        if (vs[v].changes >= 4 && fabs(g[v]) <= TANG_SEED_SPAN * vs[v].spread &&
+            on_no_other(s, v, ts->k))
+            try_seed(ts, v, NONE);
+    }
 }
 
-/* Discrete extrema of g_k near 0 along the chains of earlier curves: vertices with two cut
- * edges, both of one function, both neighbours above (or both below). */
-static bool chain_seeds(tang_state *ts)
+/* Discrete extrema of g_k near 0 along the chains of earlier curves: vertices near the
+ * curve with two cut edges, both of one function, both neighbours above (or both below). */
+static void chain_seeds(tang_state *ts)
 {
     cut_state *s = ts->s;
     const ism_cut *c = s->c;
     const double *g = s->gv;
-    size_t nv = s->m->nverts;
-    uint32_t *fn = malloc((nv + 1) * sizeof *fn);
-    uint8_t *deg = calloc(nv + 1, 1), *up = calloc(nv + 1, 1);
-    double *spread = calloc(nv + 1, sizeof *spread);
-    ts->nbr = malloc(2 * (nv + 1) * sizeof *ts->nbr);
-    bool ok = fn && deg && up && spread && ts->nbr;
-    if (ok)
-        memset(fn, 0xff, (nv + 1) * sizeof *fn);
-    for (size_t i = 0; ok && i < c->nedges; i++) {
+    cut_vscratch *vs = s->vs;
+    for (size_t i = 0; i < s->n_near; i++) /* the seeds' spread counts along chains only */
+        vs[s->near_list[i]].spread = 0;
+    for (size_t i = 0; i < c->nedges; i++) {
         const ism_cut_edge *e = &c->edges[i];
         if (e->fn == NONE || s->ev->fns[e->fn].kind == ISM_CUT_CREASE)
             continue; /* a crease's g depends on the edge: not seeded */
         for (int end = 0; end < 2; end++) {
             uint32_t v = end ? e->b : e->a, w = end ? e->a : e->b;
-            if (fn[v] != NONE && fn[v] != e->fn)
-                deg[v] = UINT8_MAX; /* two curves meet here: not a seed */
-            fn[v] = e->fn;
-            if (deg[v] < 2)
-                ts->nbr[2 * (size_t)v + deg[v]] = w;
-            if (deg[v] < UINT8_MAX)
-                deg[v]++;
-            up[v] += above(g, v, w);
-            spread[v] = fmax(spread[v], fabs(g[w] - g[v]));
+            if (!s->near[v])
+                continue;
+            if (vs[v].fn && vs[v].fn != e->fn + 1)
+                vs[v].deg = UINT8_MAX; /* two curves meet here: not a seed */
+            vs[v].fn = e->fn + 1;
+            if (vs[v].deg < 2)
+                vs[v].nbr[vs[v].deg] = w;
+            if (vs[v].deg < UINT8_MAX)
+                vs[v].deg++;
+            vs[v].up += above(g, v, w);
+            vs[v].spread = fmax(vs[v].spread, fabs(g[w] - g[v]));
         }
     }
-    for (size_t v = 0; ok && v < nv; v++)
-        if (deg[v] == 2 && up[v] != 1 && fabs(g[v]) <= TANG_SEED_SPAN * spread[v])
-            try_seed(ts, (uint32_t)v, fn[v]);
-    free(fn);
-    free(deg);
-    free(up);
-    free(spread);
-    return ok;
+    for (size_t i = 0; i < s->n_near; i++) {
+        uint32_t v = s->near_list[i];
+        if (vs[v].deg == 2 && vs[v].up != 1 && fabs(g[v]) <= TANG_SEED_SPAN * vs[v].spread)
+            try_seed(ts, v, vs[v].fn - 1);
+    }
 }
 
 /* The triangles with a corner in the star of v (its 2-ring of triangles) into *out. */
@@ -371,10 +366,10 @@ static bool ray_exit(const cut_state *s, const uint32_t *tris, size_t nt, uint32
 
 /* Makes the node at u meet its four branch rays: each ray's link edge split at the curve
  * (Newton on f = g = 0 from where the ray crosses it), the new vertex on the curve, so the
- * cut leaves u four times whatever the star. */
-static bool split_rays(cut_state *s, size_t k, uint32_t u)
+ * cut leaves u four times whatever the star. reach: the seed's longest edge. */
+static bool split_rays(cut_state *s, size_t k, uint32_t u, double reach)
 {
-    double e1[3], e2[3], dir[2][2], h = TANG_FD_STEP_REL * s->reach[u];
+    double e1[3], e2[3], dir[2][2], h = TANG_FD_STEP_REL * reach;
     if (!node_directions(s, k, s->m->pos + 3 * (size_t)u, h, e1, e2, dir))
         return true;
     for (int ray = 0; ray < 4; ray++) {
@@ -405,7 +400,7 @@ static bool split_rays(cut_state *s, size_t k, uint32_t u)
             return false;
         s->gv[x] = 0;
         s->sg[x] = 0;
-        s->reach[x] = s->reach[u];
+        s->reach[x] = reach;
         if (!split_triangles_at(s->m, a, b, x))
             return false;
     }
@@ -445,7 +440,7 @@ static bool place_on_surface(cut_state *s, size_t k, const tangent *t)
     free(tris);
     if (!ok || chosen == NONE)
         return ok; /* no vertex can take it: the cut goes on as the mesh allows */
-    return move_vertex(s, k, chosen, t->p) && (node || split_rays(s, k, chosen));
+    return move_vertex(s, k, chosen, t->p) && (node || split_rays(s, k, chosen, s->reach[t->seed]));
 }
 
 /* Splits every triangle with edge a-b at the new vertex x (winding kept). */
@@ -477,7 +472,7 @@ static bool place_on_curve(tang_state *ts, const tangent *t)
     uint32_t v = t->seed, w = NONE;
     double best = -INFINITY, tw = 0;
     for (int i = 0; i < 2; i++) { /* the neighbour on whose side the point lies */
-        uint32_t u = ts->nbr[2 * (size_t)v + i];
+        uint32_t u = s->vs[v].nbr[i];
         const double *a = m->pos + 3 * (size_t)v, *b = m->pos + 3 * (size_t)u;
         double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, q = 0, l2 = 0;
         for (int c = 0; c < 3; c++) {
@@ -518,9 +513,10 @@ static bool place_on_curve(tang_state *ts, const tangent *t)
 bool cut_tangencies(cut_state *s, size_t k)
 {
     tang_state ts = {.s = s, .k = k};
-    bool ok = surface_seeds(&ts) && chain_seeds(&ts);
+    surface_seeds(&ts);
+    chain_seeds(&ts);
+    bool ok = true;
     for (size_t i = 0; ok && i < ts.n; i++)
         ok = ts.t[i].j == NONE ? place_on_surface(s, k, &ts.t[i]) : place_on_curve(&ts, &ts.t[i]);
-    free(ts.nbr);
     return ok;
 }
