@@ -236,7 +236,7 @@ static bool split_crease_triangle(crease_state *cs, const uint32_t t[3])
             uint32_t c = t[i], u = t[(i + 1) % 3], w = t[(i + 2) % 3];
             uint32_t p = crease_vertex(cs, c, u), q = crease_vertex(cs, c, w);
             return p != NONE && q != NONE && crease_edge(cs, p, q, l[i], cs->label[u]) &&
-                   cut_emit_lone(cs->s->m, c, u, w, p, q);
+                   cut_emit_lone(cs->s, c, u, w, p, q);
         }
     return false;
 }

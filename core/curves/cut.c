@@ -81,20 +81,6 @@ bool cut_set_branches(cut_state *s, uint32_t a, uint32_t b, const uint32_t br[2]
     return true;
 }
 
-void cut_use_pair(cut_state *s, uint32_t a, uint32_t b)
-{
-    uint32_t e = ism_key_map_find(&s->onmap, cut_edge_key(a, b));
-    for (int i = 0; i < 2; i++)
-        s->ev->pair[i] = e == ISM_KEY_NONE ? ISM_CUT_NO_BRANCH : s->c->edges[e].branch[i];
-}
-
-/* The earlier curve edge a-b lies on, or NONE. */
-static uint32_t edge_curve(const cut_state *s, uint32_t a, uint32_t b)
-{
-    uint32_t i = ism_key_map_find(&s->onmap, cut_edge_key(a, b));
-    return i == ISM_KEY_NONE ? NONE : s->c->edges[i].fn;
-}
-
 void cut_normal_at(cut_state *s, const double p[3], const float ref[3], float out[3])
 {
     double g[3];
@@ -163,8 +149,12 @@ static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
         p[c] = a[c] + t * (b[c] - a[c]);
         len2 += (b[c] - a[c]) * (b[c] - a[c]);
     }
-    uint32_t j = edge_curve(s, u, w);
-    cut_use_pair(s, u, w); /* when u-w lies on a crease: its two branches */
+    uint32_t e = cut_vcurve_of(s, u) == NONE || cut_vcurve_of(s, w) == NONE
+                     ? ISM_KEY_NONE
+                     : ism_key_map_find(&s->onmap, cut_edge_key(u, w));
+    uint32_t j = e == ISM_KEY_NONE ? NONE : s->c->edges[e].fn;
+    for (int c = 0; c < 2; c++) /* when u-w lies on a crease: its two branches */
+        s->ev->pair[c] = e == ISM_KEY_NONE ? ISM_CUT_NO_BRANCH : s->c->edges[e].branch[c];
     double len = fmax(sqrt(len2), fmax(s->reach[u], s->reach[w]));
     if (!try_refine(s, j, k, len, p)) {
         segment_root(s, k, a, b, s->gv[u], p);
@@ -191,9 +181,17 @@ static double dist2(const ism_mesh *m, uint32_t a, uint32_t b)
     return d;
 }
 
-static bool emit(ism_mesh *m, uint32_t a, uint32_t b, uint32_t c)
+/* Emits a piece of the triangle being split: into its own slot first, then appended. */
+static bool emit(cut_state *s, uint32_t a, uint32_t b, uint32_t c)
 {
-    return ism_mesh_add_triangle(m, a, b, c);
+    if (s->slot == SIZE_MAX)
+        return ism_mesh_add_triangle(s->m, a, b, c);
+    uint32_t *t = s->m->tri + 3 * s->slot;
+    t[0] = a;
+    t[1] = b;
+    t[2] = c;
+    s->slot = SIZE_MAX;
+    return true;
 }
 
 /* An edge whose ends both lie on the curve, seen from a triangle whose third corner has
@@ -240,32 +238,32 @@ static bool split_triangle(cut_state *s, size_t k, const uint32_t t[3])
             if (sg[i] == 0 && sg[(i + 1) % 3] == 0 && sg[(i + 2) % 3] != 0 &&
                 !note_zero_edge(s, t[i], t[(i + 1) % 3], sg[(i + 2) % 3]))
                 return false;
-        return emit(s->m, t[0], t[1], t[2]);
+        return emit(s, t[0], t[1], t[2]);
     }
     for (int i = 0; i < 3; i++) /* one corner on the curve, the other two apart */
         if (sg[i] == 0) {
             uint32_t z = t[i], u = t[(i + 1) % 3], w = t[(i + 2) % 3];
             uint32_t p = split_vertex(s, k, u, w);
-            return p != NONE && cut_add_cut_edge(s, z, p, fn) && emit(s->m, z, u, p) &&
-                   emit(s->m, z, p, w);
+            return p != NONE && cut_add_cut_edge(s, z, p, fn) && emit(s, z, u, p) &&
+                   emit(s, z, p, w);
         }
     for (int i = 0; i < 3; i++) /* the lone corner on its side */
         if (sg[i] != sg[(i + 1) % 3] && sg[i] != sg[(i + 2) % 3]) {
             uint32_t l = t[i], u = t[(i + 1) % 3], w = t[(i + 2) % 3];
             uint32_t p = split_vertex(s, k, l, u), q = split_vertex(s, k, l, w);
             return p != NONE && q != NONE && cut_add_cut_edge(s, p, q, fn) &&
-                   cut_emit_lone(s->m, l, u, w, p, q);
+                   cut_emit_lone(s, l, u, w, p, q);
         }
     return false;
 }
 
-bool cut_emit_lone(ism_mesh *m, uint32_t l, uint32_t u, uint32_t w, uint32_t p, uint32_t q)
+bool cut_emit_lone(cut_state *s, uint32_t l, uint32_t u, uint32_t w, uint32_t p, uint32_t q)
 {
-    if (!emit(m, l, p, q))
+    if (!emit(s, l, p, q))
         return false;
-    if (dist2(m, p, w) <= dist2(m, u, q)) /* the shorter diagonal */
-        return emit(m, p, u, w) && emit(m, p, w, q);
-    return emit(m, p, u, q) && emit(m, u, w, q);
+    if (dist2(s->m, p, w) <= dist2(s->m, u, q)) /* the shorter diagonal */
+        return emit(s, p, u, w) && emit(s, p, w, q);
+    return emit(s, p, u, q) && emit(s, u, w, q);
 }
 
 /* Per vertex: its longest edge into len (0 for a vertex no triangle uses). */
@@ -387,17 +385,18 @@ static bool cut_one(cut_state *s, size_t k)
         return false;
     ism_mesh *m = s->m;
     size_t nt = m->ntris;
-    uint32_t *old = malloc((nt ? nt : 1) * 3 * sizeof *old);
-    if (!old)
-        return false;
-    memcpy(old, m->tri, nt * 3 * sizeof *old);
-    m->ntris = 0;
     ism_key_map_free(&s->split);
     ism_key_map_init(&s->split);
     bool ok = true;
-    for (size_t t = 0; t < nt && ok; t++)
-        ok = split_triangle(s, k, old + 3 * t);
-    free(old);
+    for (size_t t = 0; t < nt && ok; t++) { /* pieces: the first in t's slot, others appended */
+        uint32_t tri[3] = {m->tri[3 * t], m->tri[3 * t + 1], m->tri[3 * t + 2]};
+        signed char a = s->sg[tri[0]];
+        if (a != 0 && a == s->sg[tri[1]] && a == s->sg[tri[2]])
+            continue; /* on one side: kept as it is */
+        s->slot = t;
+        ok = split_triangle(s, k, tri);
+    }
+    s->slot = SIZE_MAX;
     cut_clear_near(s);
     return ok && add_zero_edges(s, k);
 }
@@ -425,7 +424,7 @@ static void finish(cut_state *s)
 
 bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
 {
-    cut_state s = {.ev = ev, .m = m, .c = c, .tol = tol};
+    cut_state s = {.ev = ev, .m = m, .c = c, .tol = tol, .slot = SIZE_MAX};
     ism_key_map_init(&s.split);
     ism_key_map_init(&s.onmap);
     ism_key_map_init(&s.zero);

@@ -52,6 +52,8 @@ typedef struct cut_state {
                                 touches, 2 a ring further, 0 farther */
     uint32_t *near_list;     /* the vertices with vs[v].near set */
     size_t n_near, cap_near;
+    size_t slot;             /* the triangle being split (its first piece goes there), or
+                                SIZE_MAX: pieces appended */
     ism_key_map zero;        /* edge key -> index into zero_edge (the current function) */
     cut_zero_edge *zero_edge;
     size_t cap_zero;
@@ -72,16 +74,12 @@ bool cut_split_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t v, uint32
 /* Sets the branches on the two sides of cut edge a-b (a crease edge). */
 bool cut_set_branches(cut_state *s, uint32_t a, uint32_t b, const uint32_t br[2]);
 
-/* Makes the crease function f_A − f_B of the branches of cut edge a-b the one evaluated
- * (no pair when a-b is no crease edge). */
-void cut_use_pair(cut_state *s, uint32_t a, uint32_t b);
-
 /* The unit normal ∇f/|∇f| at p, oriented like ref. */
 void cut_normal_at(cut_state *s, const double p[3], const float ref[3], float out[3]);
 
 /* Emits triangle (l u w) split by a cut from p on l-u to q on l-w: (l p q) and the quad
  * (p u w q) by its shorter diagonal (winding kept). */
-bool cut_emit_lone(ism_mesh *m, uint32_t l, uint32_t u, uint32_t w, uint32_t p, uint32_t q);
+bool cut_emit_lone(cut_state *s, uint32_t l, uint32_t u, uint32_t w, uint32_t p, uint32_t q);
 
 /* Per vertex: its longest edge into len (0 for a vertex no triangle uses). */
 void cut_longest_edges(const ism_mesh *m, double *len);
