@@ -47,6 +47,9 @@ function assertRendered(img, what) {
   return s;
 }
 
+// CAP_RGB of web/js/cap.js as the canvas shows it (sRGB)
+const CAP_RGB = [0xc9, 0x8a, 0x5a];
+
 async function choosePreset(name) {
   const before = await loads(page);
   await page.selectOption('#preset', name);
@@ -310,6 +313,34 @@ describe('isomesh viewer', { timeout: 600000 }, () => {
     await page.uncheck('#quality-good');
     await waitForMesh(page, back);
     assert.equal((await statsPanel(page)).remesh.text, 'off');
+  });
+
+  it('the clip cap fills the cut where f < 0, computed from f', async () => {
+    // the sphere x² + y² + z² = 1 (the preset at r = 1) cut by y = c: a disc of radius
+    // √(1 − c²) where f < 0, nothing for |c| > 1
+    const capPixels = (img) => {
+      let n = 0;
+      for (let i = 0; i < img.width * img.height; i++) {
+        const [r, g, b] = [img.rgba[4 * i], img.rgba[4 * i + 1], img.rgba[4 * i + 2]];
+        n += Math.abs(r - CAP_RGB[0]) <= 6 && Math.abs(g - CAP_RGB[1]) <= 6 && Math.abs(b - CAP_RGB[2]) <= 6;
+      }
+      return n / (img.width * img.height);
+    };
+    const cutAt = async (c) => {
+      await page.$eval('#clip-offset', (e, v) => { e.value = String(v); e.dispatchEvent(new Event('input', { bubbles: true })); }, c);
+      return capPixels(await viewShot(page));
+    };
+    await page.check('#clip-on');
+    await page.selectOption('#clip-axis', 'y');
+    const whole = await cutAt(0), small = await cutAt(0.8), none = await cutAt(1.2);
+    assert.ok(whole > 0.01, `the cap of the unit disc covers ${whole} of the view`);
+    assert.ok(small > 0.002 && small < whole, `the disc of radius 0.6 (${small}) is smaller than the unit disc (${whole})`);
+    assert.ok(whole / small > 1.5 && whole / small < 6, `area ratio ${whole / small}, 1/0.36 = 2.8 up to perspective`);
+    assert.ok(none < 1e-4, `no cap beyond the sphere (${none})`);
+    await page.uncheck('#clip-cap');
+    assert.ok(await cutAt(0) < 1e-4, 'no cap when it is switched off');
+    await page.check('#clip-cap');
+    await page.uncheck('#clip-on');
   });
 
   it('says so when the surface does not cross the box', async () => {

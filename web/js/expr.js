@@ -106,14 +106,32 @@ function describe(t) {
   return `'${t.text}'`;
 }
 
-// ---- parser: each rule returns the constant value of what it read, or null -------------
+// ---- parser: each rule returns {v, g}: v the constant value of what it read (or null), g
+// the same as GLSL (ES 3.0) source over vec3 p, for the clip cap's shader (glsl.js) --------
+
+const K = (v) => ({ v, g: glslNumber(v) });
+const N = (g) => ({ v: null, g });
+
+// Largest magnitude written as a GLSL float literal (float's range ends at 3.4e38; a larger
+// literal does not compile) and the smallest kept (below, a float is zero anyway).
+const GLSL_FLOAT_MAX = 1e38;
+const GLSL_FLOAT_MIN = 1e-37;
+
+// A double as a GLSL float literal (always with a point or an exponent), clamped to float.
+function glslNumber(v) {
+  if (Number.isNaN(v) || Math.abs(v) < GLSL_FLOAT_MIN) return '0.0';
+  if (Math.abs(v) > GLSL_FLOAT_MAX) return v > 0 ? '1e38' : '-1e38';
+  const t = String(v);
+  return /[.e]/.test(t) ? t : t + '.0';
+}
 
 class Parser {
   constructor(src, paramValues) {
     this.toks = tokenize(src);
     this.i = 0;
     this.paramValues = paramValues || {};
-    this.lets = new Map();       // name -> constant value or null
+    this.lets = new Map();       // name -> {v, g} (g: the let's GLSL local)
+    this.letCode = [];           // GLSL declarations of the lets, in order
     this.letOrder = [];
     this.free = [];              // free names in order of first use (the parameters)
     this.declared = new Set();   // every let name written anywhere (for "defined later")
@@ -137,8 +155,9 @@ class Parser {
         throw new ExprError(this.tok, 'expected the final expression after the lets');
       }
     }
-    this.expr();
+    const f = this.expr();
     if (this.tok.kind !== 'END') this.trailing();
+    return f;
   }
 
   letStatement() {
@@ -154,7 +173,9 @@ class Parser {
     this.inLet = true;
     const value = this.expr();
     this.inLet = false;
-    this.lets.set(name.text, value);
+    const local = `l_${name.text}`;
+    this.letCode.push(`float ${local} = ${value.g};`);
+    this.lets.set(name.text, { v: value.v, g: value.v === null ? local : value.g });
     this.letOrder.push(name.text);
     if (this.tok.kind === 'SEMI') { this.next(); return; }
     if (this.tok.kind === 'END' || this.tok.line > this.prevEndLine) return;
@@ -191,7 +212,7 @@ class Parser {
       const op = this.tok;
       this.next();
       const r = this.term();
-      l = fold(op, l, r, (a, b) => (op.kind === 'PLUS' ? a + b : a - b), op.kind === 'PLUS' ? 'sum' : 'difference');
+      l = fold(op, l, r, (a, b) => (op.kind === 'PLUS' ? a + b : a - b), op.text);
     }
     return l;
   }
@@ -203,8 +224,8 @@ class Parser {
       this.next();
       if (op.kind === 'STAR' && this.tok.kind === 'STAR') throw new ExprError(op, 'use ^ for powers, not **');
       const r = this.unary();
-      if (op.kind === 'SLASH' && r === 0) throw new ExprError(op, 'division by zero');
-      l = fold(op, l, r, (a, b) => (op.kind === 'STAR' ? a * b : a / b), op.kind === 'STAR' ? 'product' : 'quotient');
+      if (op.kind === 'SLASH' && r.v === 0) throw new ExprError(op, 'division by zero');
+      l = fold(op, l, r, (a, b) => (op.kind === 'STAR' ? a * b : a / b), op.text);
     }
     return l;
   }
@@ -214,7 +235,8 @@ class Parser {
     if (at.kind !== 'MINUS' && at.kind !== 'PLUS') return this.power();
     this.next();
     const u = this.unary();
-    return at.kind === 'MINUS' && u !== null ? -u : u;
+    if (at.kind !== 'MINUS') return u;
+    return u.v !== null ? K(-u.v) : N(`(-${u.g})`);
   }
 
   exponent() {
@@ -222,7 +244,8 @@ class Parser {
     if (at.kind === 'MINUS' || at.kind === 'PLUS') {
       this.next();
       const e = this.exponent();
-      return at.kind === 'MINUS' && e !== null ? -e : e;
+      if (at.kind !== 'MINUS') return e;
+      return e.v !== null ? K(-e.v) : N(`(-${e.g})`);
     }
     return this.power();
   }
@@ -236,7 +259,9 @@ class Parser {
     return this.buildPower(base, e, at);
   }
 
-  buildPower(base, e, at) {
+  // base ^ e for a constant integer e ({v, g} both).
+  buildPower(base, exp, at) {
+    const e = exp.v;
     if (e === null) {
       throw new ExprError(at, 'bad exponent: ^ needs a constant integer (for other powers use pow(a, b))');
     }
@@ -244,7 +269,12 @@ class Parser {
       throw new ExprError(at, `bad exponent ${fmt(e)}: ^ needs an integer (for other powers use pow(a, b) or sqrt)`);
     }
     if (Math.abs(e) > MAX_EXPONENT) throw new ExprError(at, `exponent ${e} is too large (limit ${MAX_EXPONENT})`);
-    return base === null ? null : checkFinite(at, Math.pow(base, e), 'this power');
+    if (base.v !== null) {
+      const v = checkFinite(at, Math.pow(base.v, e));
+      if (v !== null) return K(v);
+    }
+    const g = e === 0 ? '1.0' : `ipow(${base.g}, ${Math.abs(e)})`;
+    return N(e < 0 ? `(1.0 / ${g})` : g);
   }
 
   primary() {
@@ -252,7 +282,7 @@ class Parser {
     switch (at.kind) {
       case 'NUM':
         this.next();
-        return at.number;
+        return K(at.number);
       case 'NAME':
         return this.name();
       case 'LPAREN': {
@@ -280,8 +310,8 @@ class Parser {
     // next line begins the next statement (as in core/expr/parser.c).
     const nextStatement = this.inLet && this.openParens === 0 && this.tok.line > t.endLine;
     if (this.tok.kind === 'LPAREN' && !nextStatement) return this.call(t);
-    if (VARIABLES.has(n)) return null;
-    if (n in CONSTANTS) return CONSTANTS[n];
+    if (VARIABLES.has(n)) return N(`p.${n}`);
+    if (n in CONSTANTS) return K(CONSTANTS[n]);
     if (this.lets.has(n)) return this.lets.get(n);
     if (FUNCTIONS[n]) throw new ExprError(t, `'${n}' is a function: write ${n}(...)`);
     if (n === 'let') throw new ExprError(t, "'let' can only start a line before the final expression: let NAME = EXPR");
@@ -291,7 +321,7 @@ class Parser {
     // Anything else is a parameter: the viewer gives it a slider and sends its value.
     if (!this.free.includes(n)) this.free.push(n);
     const v = this.paramValues[n];
-    return typeof v === 'number' ? v : null;
+    return typeof v === 'number' ? K(v) : N('0.0');
   }
 
   call(nameTok) {
@@ -330,13 +360,19 @@ class Parser {
     }
     if (n === 'pow') {
       const [a, b] = args;
-      if (b !== null && b === Math.floor(b)) return this.buildPower(a, b, secondAt);
-      return a === null || b === null ? null : checkFinite(nameTok, Math.pow(Math.max(a, 0), b), 'pow()');
+      if (b.v !== null && b.v === Math.floor(b.v)) return this.buildPower(a, b, secondAt);
+      const v = a.v === null || b.v === null ? null : checkFinite(nameTok, Math.pow(Math.max(a.v, 0), b.v));
+      return v !== null ? K(v) : N(`pow(max(${a.g}, 0.0), ${b.g})`);
     }
-    if (args.some((a) => a === null)) return null;
     const f = { sqrt: Math.sqrt, sin: Math.sin, cos: Math.cos, tan: Math.tan, exp: Math.exp,
       log: Math.log, abs: Math.abs, min: Math.min, max: Math.max }[n];
-    return checkFinite(nameTok, f(...args), `${n}()`);
+    if (args.every((a) => a.v !== null)) {
+      const v = checkFinite(nameTok, f(...args.map((a) => a.v)));
+      if (v !== null) return K(v);
+    }
+    // min and max of more than two: nested (GLSL's take two)
+    if (args.length === 1) return N(`${n}(${args[0].g})`);
+    return N(args.map((a) => a.g).reduce((acc, g) => `${n}(${acc}, ${g})`));
   }
 }
 
@@ -347,19 +383,22 @@ function checkFinite(at, v) {
   return Number.isFinite(v) ? v : null;
 }
 
-function fold(op, a, b, f, what) {
-  return a === null || b === null ? null : checkFinite(op, f(a, b), what);
+// a op b: folded when both are constants (and the result finite), else GLSL (op: + - * /).
+function fold(op, a, b, f, glslOp) {
+  const v = a.v === null || b.v === null ? null : checkFinite(op, f(a.v, b.v));
+  return v !== null ? K(v) : N(`(${a.g} ${glslOp} ${b.g})`);
 }
 
 // Checks src. paramValues (name -> number) are folded like the server folds parameters, so an
 // exponent written with a parameter is checked with its current value.
-// Returns {ok: true, params: [free names], lets: [let names]} or
+// Returns {ok: true, params: [free names], lets: [let names], glsl: {lets: [declarations],
+// f: GLSL of f over vec3 p (parameters as their current values)}} or
 // {ok: false, line, column, message}.
 export function checkExpression(src, paramValues) {
   try {
     const p = new Parser(src, paramValues);
-    p.source();
-    return { ok: true, params: p.free, lets: p.letOrder };
+    const f = p.source();
+    return { ok: true, params: p.free, lets: p.letOrder, glsl: { lets: p.letCode, f: f.g } };
   } catch (e) {
     if (e instanceof ExprError) return { ok: false, line: e.line, column: e.column, message: e.message };
     throw e;

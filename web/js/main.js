@@ -248,6 +248,7 @@ function syncControls() {
   $('clip-on').checked = state.clip.on;
   $('clip-axis').value = state.clip.axis;
   $('clip-flip').checked = state.clip.flip;
+  $('clip-cap').checked = state.clip.cap !== false;
   syncClipSlider();
   syncFeatureKey();
   renderCurveList();
@@ -264,6 +265,7 @@ function syncClipSlider() {
   s.disabled = !state.clip.on;
   $('clip-axis').disabled = !state.clip.on;
   $('clip-flip').disabled = !state.clip.on;
+  $('clip-cap').disabled = !state.clip.on;
   $('clip-offset-value').textContent = state.clip.on ? `${state.clip.axis} = ${sig(state.clip.offset)}` : 'off';
 }
 
@@ -536,13 +538,24 @@ async function compute(body) {
   }
 }
 
+// f of a request body as GLSL for the clip cap (cap.js), or null when it cannot be written.
+function surfaceGlsl(sent) {
+  const preset = sent.preset ? presetByName(sent.preset) : null;
+  const source = sent.expr ?? (preset ? presetSource(preset) : null);
+  if (source === null) return null;
+  const defaults = preset ? Object.fromEntries(preset.params.map((q) => [q.name, q.default])) : {};
+  const check = checkExpression(source, { ...defaults, ...(sent.params || {}) });
+  return check.ok ? check.glsl : null;
+}
+
 // Draws result unless something newer (by sequence number seq, live.js) is on screen.
 // preview: a coarse live preview (stats and downloads stay with the refined mesh).
 function show(result, body, seq, preview = false) {
   if (!claim(seq)) return;
   clearMessage();
   if (!result.mesh) message('The surface does not cross this box: the mesh is empty.');
-  viewer.setMesh(result, JSON.parse(body).box);
+  const sent = JSON.parse(body);
+  viewer.setMesh(result, sent.box, surfaceGlsl(sent));
   const id = identity();
   const refit = id !== shownIdentity;
   shownIdentity = id;
@@ -997,6 +1010,10 @@ function wire() {
     state.clip.offset = (state.box[k] + state.box[k + 3]) / 2;
     cutAway();
     $('clip-flip').checked = state.clip.flip;
+    clipChanged();
+  });
+  $('clip-cap').addEventListener('change', () => {
+    state.clip.cap = $('clip-cap').checked;
     clipChanged();
   });
   $('clip-flip').addEventListener('change', () => {

@@ -23,7 +23,7 @@ export function defaultState() {
     quality: 'raw',         // 'good': the server's quality pass after meshing
     view: null,             // {pos: [3], target: [3]}
     color: 'shaded',
-    clip: { on: false, axis: 'z', offset: 0, flip: false },
+    clip: { on: false, axis: 'z', offset: 0, flip: false, cap: true },
     show: { edges: true, points: true, boundary: true, box: true, axes: false, curves: true },
     curves: [],             // the Curves panel's entries (curves.js)
     keepBox: false,         // a typed expression keeps the box (else it is fitted, POST /v1/box)

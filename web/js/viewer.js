@@ -12,6 +12,7 @@ import { buildCurves, cellColors } from './curves.js';
 import { curvatureColors, curvatureRange, RANGE_CUTS } from './colormap.js';
 import { buildBox, disposeBox } from './box_view.js';
 import { sectionSegments, sectionLines } from './section.js';
+import { buildCap } from './cap.js';
 
 const SURFACE_RGB = 0xb9c6d8;
 // Two-sided colouring: triangles face along grad f (the outside, f > 0), so back faces show
@@ -138,10 +139,12 @@ export class Viewer {
     this.controls.update();
   }
 
-  // Shows a decoded mesh (loader.js) with its features; box: the request's search box.
-  setMesh(result, box) {
+  // Shows a decoded mesh (loader.js) with its features; box: the request's search box;
+  // glsl: f as GLSL ({lets, f} from expr.js) for the clip cap, or null.
+  setMesh(result, box, glsl = null) {
     this.clearMesh();
     this.data = result;
+    this.glsl = glsl;
     this.bounds = new THREE.Box3(new THREE.Vector3(box[0], box[1], box[2]), new THREE.Vector3(box[3], box[4], box[5]));
     this.setBox(box);
     const m = result.mesh;
@@ -331,7 +334,7 @@ export class Viewer {
     this.render();
   }
 
-  // clip: {on, axis 'x'|'y'|'z', offset (world units), flip}. Keeps the side where the
+  // clip: {on, axis 'x'|'y'|'z', offset (world units), flip, cap}. Keeps the side where the
   // coordinate is below the offset (above with flip).
   setClip(clip) {
     this.clip = { ...clip };
@@ -363,6 +366,20 @@ export class Viewer {
     this.material.needsUpdate = true;
     this.wireMaterial.needsUpdate = true;
     this.updateSection();
+    this.updateCap();
+  }
+
+  // The cap of the clipping plane (cap.js), drawn from f; rebuilt when the cut moves.
+  updateCap() {
+    if (this.cap) {
+      this.scene.remove(this.cap);
+      this.cap.geometry.dispose();
+      this.cap.material.dispose();
+      this.cap = null;
+    }
+    if (!this.data) return; // an empty mesh still has a cap when the box lies inside f < 0
+    this.cap = buildCap(this.clip, this.box, this.glsl);
+    if (this.cap) this.scene.add(this.cap);
   }
 
   // The section curve of the clipping plane (section.js), rebuilt when the cut moves.
