@@ -76,7 +76,7 @@ static const ism_preset presets[] = {
      "A Dupin cyclide whose tube shrinks to a singular point at (a, 0, 0) where two horns "
      "touch (paper Fig. 6).",
      "(x^2 + y^2 + z^2 + a^2 - f^2 - r^2)^2 - 4*(a*x - f*r)^2 - 4*(a^2 - f^2)*y^2", NULL, 0,
-     cyclide_params, COUNT(cyclide_params), {-14, -16, -16, 18, 16, 16}, 3, 8, .source = NULL},
+     cyclide_params, COUNT(cyclide_params), {-15, -16, -16, 17, 16, 16}, 3, 8, .source = NULL},
     {"klein-bottle", "Klein bottle",
      "Figure-8 Klein bottle: one-sided, self-intersecting along a curve in the plane z = 0 "
      "(paper Fig. 7).",

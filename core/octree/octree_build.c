@@ -7,6 +7,7 @@
 #include "core/octree/thin_search.h"
 #include "core/util/parallel.h"
 
+#include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -126,22 +127,25 @@ static bool fail(build *b, enum ism_build_status st)
     return false;
 }
 
-/* A would-be leaf whose corners all have one sign may still hold a piece of the surface
- * that no edge crosses (thin_search.h). True when one was found there: the node is split,
- * below depth.max too, down to b->p->thin_depth at most. */
-static bool hides_piece(build *b, thread_state *th, const ism_node *nd, const ism_tape *sub,
-                        const ism_corners *k)
+/* The one sign of the corners of node face (2 × axis + side), 0 when they differ or one
+ * is 0. */
+static int face_sign(const ism_corners *k, int face)
 {
-    if (nd->level >= b->p->thin_depth)
-        return false;
-    int sign = ism_sign(k->f[0]);
-    for (int c = 1; c < 8; c++)
-        if (ism_sign(k->f[c]) != sign)
-            return false;
-    if (sign == 0)
-        return false;
-    double lo[3], hi[3];
-    node_box(b->grid, nd, lo, hi);
+    int axis = face / 2, side = face % 2, sign = 2;
+    for (int c = 0; c < 8; c++) {
+        if (((c >> axis) & 1) != side)
+            continue;
+        int s = ism_sign(k->f[c]);
+        if (sign != 2 && s != sign)
+            return 0;
+        sign = s;
+    }
+    return sign;
+}
+
+static enum ism_thin_verdict search(thread_state *th, const ism_tape *sub, const double lo[3],
+                                    const double hi[3], int sign)
+{
     const ism_tape *saved = th->s.tape;
     th->s.tape = sub;
     enum ism_thin_verdict v = ism_thin_search(&th->s, &th->thin, lo, hi, sign, NULL);
@@ -149,7 +153,64 @@ static bool hides_piece(build *b, thread_state *th, const ism_node *nd, const is
     th->thin_searched++;
     th->thin_found += v == ISM_THIN_FOUND;
     th->thin_undecided += v == ISM_THIN_UNDECIDED;
-    return v == ISM_THIN_FOUND;
+    return v;
+}
+
+/* Does the box lie inside one of the balls whose mesh a later stage rebuilds? */
+static bool quiet(const ism_octree_build_params *p, const double lo[3], const double hi[3])
+{
+    for (size_t i = 0; i < p->nquiet; i++) {
+        const double *b = p->quiet[i];
+        double far = 0;
+        for (int a = 0; a < 3; a++) {
+            double d = fmax(fabs(lo[a] - b[a]), fabs(hi[a] - b[a]));
+            far += d * d;
+        }
+        if (far < b[3] * b[3])
+            return true;
+    }
+    return false;
+}
+
+/* A would-be leaf may hold a piece of the surface that no edge crosses (thin_search.h):
+ * with all corners of one sign, anywhere in it; with both signs, behind a face whose four
+ * corners share a sign — a nappe or a thin tube piercing the face in a closed curve that
+ * crosses none of its edges (an island), which neither this node nor its neighbour across
+ * the face would see. True when one was found there: the node is split, below depth.max
+ * too, down to b->p->thin_depth at most. */
+static bool hides_piece(build *b, thread_state *th, const ism_node *nd, const ism_tape *sub,
+                        const ism_corners *k)
+{
+    if (nd->level >= b->p->thin_depth)
+        return false;
+    double lo[3], hi[3];
+    node_box(b->grid, nd, lo, hi);
+    if (quiet(b->p, lo, hi))
+        return false;
+    int sign = face_sign(k, 0);
+    if (sign != 0 && sign == face_sign(k, 1))
+        return search(th, sub, lo, hi, sign) == ISM_THIN_FOUND;
+    for (int face = 0; face < 6; face++) {
+        int s = face_sign(k, face);
+        if (s == 0)
+            continue;
+        double flo[3], fhi[3];
+        memcpy(flo, lo, sizeof flo);
+        memcpy(fhi, hi, sizeof fhi);
+        if (face % 2)
+            flo[face / 2] = hi[face / 2];
+        else
+            fhi[face / 2] = lo[face / 2];
+        th->s.n_interval++;
+        ism_interval v = ism_eval_interval(sub, th->s.ws, (ism_interval){flo[0], fhi[0]},
+                                           (ism_interval){flo[1], fhi[1]},
+                                           (ism_interval){flo[2], fhi[2]});
+        if (!(v.lo <= 0 && v.hi >= 0))
+            continue; /* f keeps a sign on the whole face */
+        if (search(th, sub, flo, fhi, s) == ISM_THIN_FOUND)
+            return true;
+    }
+    return false;
 }
 
 /* Decides node v->v[i] and grows its subtree. Nodes that fail the flatness test are split

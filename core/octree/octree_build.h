@@ -28,6 +28,9 @@ typedef struct ism_octree_build_params {
                                          from its corners (thin_search.h) is split down to
                                          here; the grid must be at least this deep */
     ism_flatness flatness;
+    const double (*quiet)[4];         /* balls hidden pieces are not chased into (see
+                                         ism_poly_options): NULL for none */
+    size_t nquiet;
     int threads;
     size_t max_nodes;                 /* stop with ISM_BUILD_TOO_BIG beyond this */
     const ism_split_set *force_split; /* nodes split whatever the flatness test says (their

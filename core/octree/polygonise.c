@@ -356,6 +356,8 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
                      .double_root_eps = o->double_root_eps,
                      .double_root_iters = o->double_root_iters,
                      .max_error = o->max_error},
+        .quiet = o->quiet,
+        .nquiet = o->nquiet,
         .threads = threads,
         .max_nodes = o->max_memory / 4 / sizeof(ism_node),
         .force_split = split,

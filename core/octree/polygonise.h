@@ -16,11 +16,13 @@
 #define ISM_MAX_DEPTH_LIMIT 16
 /* How far below depth.max a piece of the surface thinner than a cell is followed when
  * thin_search is on (the octree splits a node whose corners cannot see a piece it holds,
- * thin_search.h): 3 levels mesh a tube of radius 1/4 cell within 1% of its area and keep
- * the horn cyclide's horns tubes down to the conformance ball at depths 6-9; 10 levels (the
- * stitching tolerance's 2^-10 of a cell) cost the horn cyclide 2-4 times its time at depth 8
- * for the same result. Capped by the lattice (ISM_GRID_MAX_DEPTH). */
-#define ISM_THIN_EXTRA_DEPTH 3
+ * thin_search.h). A tube of radius r stops being chased where it crosses the cells' edges,
+ * about where cells are 2r across; a horn shrinking to a singular point is followed to the
+ * conformance ball around the point (the `quiet` balls below). The horn cyclide's horns,
+ * radius y²/96 at distance y from the point, are 1/16 of a cell 3 levels below depth 8 where
+ * they reach the ball (0.31 at depth 8): 8 levels keep them tubes at depths 6-9 in boxes off
+ * the lattice (3 left holes and detached horns). Capped by the lattice (ISM_GRID_MAX_DEPTH). */
+#define ISM_THIN_EXTRA_DEPTH 8
 
 typedef struct ism_poly_options {
     double box[6];          /* xmin ymin zmin xmax ymax zmax: the octree root */
@@ -40,10 +42,18 @@ typedef struct ism_poly_options {
     size_t max_triangles;   /* budget: stop with an error beyond this (default 4,000,000) */
     size_t max_memory;      /* bytes the polygoniser may hold (default 2 GiB) */
     int threads;            /* worker threads for one request (0 = number of cores, max 64) */
-    bool thin_search;       /* search nodes that fail flatness with one corner sign for a piece
-                               they hide, and split them below max_depth (thin_search.h;
-                               default off: on Steiner's surface in shifted boxes the finer
-                               cells along the double lines still leave conformance artefacts) */
+    bool thin_search;       /* search nodes that fail flatness for a piece no edge sees (one
+                               corner sign, or an island in a face of one sign) and split them
+                               below max_depth (thin_search.h). Default off: along double
+                               curves and whiskers the chase finds pieces at every level (the
+                               sheets' wedges are self-similar) and costs 10-20 times the
+                               polygoniser's time on the Whitney umbrella and the cross-cap */
+    /* Balls (x, y, z, radius) whose mesh a later stage rebuilds — around the singular points
+     * found from f, which the conformance pass refills (core/singular/conform.h): hidden
+     * pieces are not chased into them (a horn shrinking to its point would otherwise be
+     * followed to the lattice's last level). NULL when there are none. */
+    const double (*quiet)[4];
+    size_t nquiet;
     /* Optional progress report, fraction in [0, 1], from the calling thread or a worker
      * thread (serialised by the polygoniser). */
     void (*progress)(void *ctx, double fraction);

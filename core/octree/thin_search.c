@@ -35,13 +35,18 @@ static bool other_sign(double f, int sign) { return sign > 0 ? f < 0 : f > 0; }
 
 static bool keeps_sign(ism_interval v, int sign) { return sign > 0 ? v.lo > 0 : v.hi < 0; }
 
-/* Newton from the box's centre toward f = 0 and a little past it, clamped to the box. */
+/* Is the box flat along axis k (a node's face: the search stays in its plane)? */
+static bool flat_along(const ism_interval x[3], int k) { return x[k].lo == x[k].hi; }
+
+/* Newton from the box's centre toward f = 0 and a little past it, clamped to the box (in a
+ * face, along the gradient's part in the face's plane). */
 static bool probe(ism_sampler *s, const ism_interval x[3], int sign, double found[3])
 {
     double p[3], size = INFINITY;
     for (int k = 0; k < 3; k++) {
         p[k] = 0.5 * x[k].lo + 0.5 * x[k].hi;
-        size = fmin(size, x[k].hi - x[k].lo);
+        if (!flat_along(x, k))
+            size = fmin(size, x[k].hi - x[k].lo);
     }
     for (int it = 0; it <= PROBE_STEPS; it++) {
         double g[3];
@@ -51,6 +56,9 @@ static bool probe(ism_sampler *s, const ism_interval x[3], int sign, double foun
                 found[k] = p[k];
             return true;
         }
+        for (int k = 0; k < 3; k++)
+            if (flat_along(x, k))
+                g[k] = 0;
         double gg = ism_dot3(g, g);
         if (it == PROBE_STEPS || !(gg > 0) || !isfinite(gg) || !isfinite(f))
             return false;
@@ -94,24 +102,30 @@ static bool mean_value_keeps(ism_sampler *s, ism_thin_ws *w, const ism_interval 
     return keeps_sign(mv, sign);
 }
 
-/* Pushes the children of b that the natural enclosure cannot drop. */
+/* Pushes the children of b that the natural enclosure cannot drop (four in a face). */
 static int push_children(ism_sampler *s, const sbox *b, int sign, sbox *stack, int top)
 {
     ism_interval x[8], y[8], z[8], out[8];
     sbox kids[8];
+    int n = 0;
     for (int c = 0; c < 8; c++) {
+        bool twin = false; /* the same box as an earlier child: b is flat along that axis */
         for (int k = 0; k < 3; k++) {
             double m = 0.5 * b->x[k].lo + 0.5 * b->x[k].hi;
-            kids[c].x[k] = (c >> k) & 1 ? iv(m, b->x[k].hi) : iv(b->x[k].lo, m);
+            twin |= ((c >> k) & 1) && flat_along(b->x, k);
+            kids[n].x[k] = (c >> k) & 1 ? iv(m, b->x[k].hi) : iv(b->x[k].lo, m);
         }
-        kids[c].level = b->level + 1;
-        x[c] = kids[c].x[0];
-        y[c] = kids[c].x[1];
-        z[c] = kids[c].x[2];
+        if (twin)
+            continue;
+        kids[n].level = b->level + 1;
+        x[n] = kids[n].x[0];
+        y[n] = kids[n].x[1];
+        z[n] = kids[n].x[2];
+        n++;
     }
-    s->n_interval += 8;
-    ism_eval_interval_batch(s->tape, s->ws, x, y, z, out, 8);
-    for (int c = 7; c >= 0; c--) /* child 0 on top: examined first */
+    s->n_interval += (uint64_t)n;
+    ism_eval_interval_batch(s->tape, s->ws, x, y, z, out, (size_t)n);
+    for (int c = n - 1; c >= 0; c--) /* child 0 on top: examined first */
         if (!keeps_sign(out[c], sign))
             stack[top++] = kids[c];
     return top;

@@ -34,7 +34,8 @@ bool ism_thin_ws_init(ism_thin_ws *w, const ism_tape *t);
 void ism_thin_ws_free(ism_thin_ws *w);
 
 /* Searches the closed box lo..hi, whose corners all have sign `sign` (±1), with s->tape
- * (valid inside the box). On ISM_THIN_FOUND, found (when not NULL) holds the point. The
+ * (valid inside the box). A box flat along an axis (lo == hi there: a node's face) is
+ * searched in its plane. On ISM_THIN_FOUND, found (when not NULL) holds the point. The
  * cost is bounded (a fixed number of boxes and Newton steps), so UNDECIDED is possible. */
 enum ism_thin_verdict ism_thin_search(ism_sampler *s, ism_thin_ws *w, const double lo[3],
                                       const double hi[3], int sign, double found[3]);

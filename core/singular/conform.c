@@ -114,6 +114,18 @@ static bool run_items(cf_run *r)
     return true;
 }
 
+/* The surgery's scale is the longest side's cell: the octree's cells are boxes, the surgery
+ * must span them. */
+static double longest_side(const ism_locus_options *o)
+{
+    return fmax(o->box[3] - o->box[0], fmax(o->box[4] - o->box[1], o->box[5] - o->box[2]));
+}
+
+double ism_conform_min_radius(const ism_locus_options *o)
+{
+    return CF_RHO_CELLS * ldexp(longest_side(o), -o->max_depth);
+}
+
 bool ism_conform_mesh(const ism_tape *f, const ism_locus_options *o, ism_locus *locus,
                       ism_mesh *mesh, ism_conform_stats *st, ism_error *err)
 {
@@ -125,8 +137,7 @@ bool ism_conform_mesh(const ism_tape *f, const ism_locus_options *o, ism_locus *
     if (!check_input(f, o, locus, mesh, err))
         return false;
     cf_run r = {.l = locus, .o = o};
-    /* the longest side's cell: the octree's cells are boxes, the surgery must span them */
-    double side = fmax(o->box[3] - o->box[0], fmax(o->box[4] - o->box[1], o->box[5] - o->box[2]));
+    double side = longest_side(o);
     r.c = (cf_ctx){.f = f, .m = mesh, .st = st, .cell = ldexp(side, -o->max_depth),
                    .origin = {o->box[0], o->box[1], o->box[2]}, .extent = side};
     r.c.ws = ism_eval_ws_new(f);

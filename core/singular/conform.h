@@ -48,4 +48,8 @@ typedef struct ism_conform_stats {
 bool ism_conform_mesh(const ism_tape *f, const ism_locus_options *o, ism_locus *locus,
                       ism_mesh *mesh, ism_conform_stats *st, ism_error *err);
 
+/* The radius of the smallest ball the pass cuts around a point (world units): every mesh
+ * element within it is rebuilt whatever the polygoniser made there. */
+double ism_conform_min_radius(const ism_locus_options *o);
+
 #endif

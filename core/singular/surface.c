@@ -7,6 +7,7 @@
 #include "core/singular/sheets.h"
 #include "core/util/clock.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 void ism_locus_options_from_poly(const ism_poly_options *po, ism_locus_options *lo)
@@ -16,6 +17,30 @@ void ism_locus_options_from_poly(const ism_poly_options *po, ism_locus_options *
     lo->max_depth = po->max_depth;
     lo->threads = po->threads;
     lo->cancel = po->cancel;
+}
+
+/* Share of the conformance pass's smallest ball in which the polygoniser does not chase
+ * hidden pieces: the ball's rim, where the refill meets the polygoniser's mesh, must lie in
+ * cells that were chased (the pass widens its cut from there, never narrows it). */
+#define QUIET_SHARE 0.8
+
+/* The balls around the locus's points where hidden pieces are not chased (see
+ * ism_poly_options): malloc'd, NULL when there are none or memory ran out. */
+static double (*quiet_balls(const ism_locus *l, const ism_locus_options *lo, size_t *n))[4]
+{
+    *n = 0;
+    if (l->npoints == 0)
+        return NULL;
+    double (*b)[4] = malloc(l->npoints * sizeof *b);
+    if (!b)
+        return NULL;
+    double r = QUIET_SHARE * ism_conform_min_radius(lo);
+    for (size_t i = 0; i < l->npoints; i++) {
+        memcpy(b[i], l->points[i].p, sizeof l->points[i].p);
+        b[i][3] = r;
+    }
+    *n = l->npoints;
+    return b;
 }
 
 enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options *po,
@@ -33,7 +58,13 @@ enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options 
     if (!ism_locus_find(f, &lo, locus, err))
         return ISM_POLY_NO_MEMORY;
     double t1 = ism_now_ms();
-    enum ism_poly_status st = ism_polygonise(f, po, mesh, ps, err);
+    ism_poly_options pq = *po;
+    double (*balls)[4] = quiet_balls(locus, &lo, &pq.nquiet);
+    if (locus->npoints && !balls)
+        return ISM_POLY_NO_MEMORY;
+    pq.quiet = (const double (*)[4])balls;
+    enum ism_poly_status st = ism_polygonise(f, &pq, mesh, ps, err);
+    free(balls);
     double t2 = ism_now_ms();
     times->polygonise_ms = t2 - t1;
     if (st != ISM_POLY_OK)

@@ -152,8 +152,8 @@ Test(thin, small_sphere_straddling_a_face)
 /* The horn cyclide a = 10, r = f = 2 (test_singular_points.c derives its one singular point,
  * (10, 0, 0), where the horns' tube (u + 5y²/96)² + z² = (y²/96)² shrinks to nothing). The
  * surface is a torus with one meridian pinched to a point: χ = 1, in one piece, and nothing
- * non-manifold but the point. The box's face x = −14 touches it at (−14, 0, 0): the shifts
- * move the box by −s, keeping that cap inside. */
+ * non-manifold but the point. Its box [−15, 17] × [−16, 16]² keeps the cap at x = −14 inside
+ * (the paper's −14 touched it: a shift toward +x cut the cap off). */
 static void check_horn(int dmax, int w)
 {
     const test_surface *hs = &TEST_SURFACES[6];
@@ -161,7 +161,7 @@ static void check_horn(int dmax, int w)
     ism_tape *t = test_surface_compile(hs);
     ism_poly_options po;
     ism_poly_options_default(&po);
-    shifted(hs->box, -shift_of(w, hs->box, dmax), po.box);
+    shifted(hs->box, shift_of(w, hs->box, dmax), po.box);
     po.min_depth = 3;
     po.max_depth = dmax;
     po.threads = 2;
@@ -204,12 +204,15 @@ Test(thin, horn_cyclide_depth_6, .timeout = 120)
 
 Test(thin, horn_cyclide_depth_7, .timeout = 120)
 {
-    for (int w = 0; w < 2; w++) /* the 0.37-cell shift: see the issue report (a lost piece) */
+    for (int w = 0; w < 3; w++)
         check_horn(7, w);
 }
 
+/* 0.37 of a cell off the lattice at depth 8 the horns' tube (radius y²/96) passes between
+ * lattice lines down to the conformance ball, 0.31 from the point, where it is 0.001 across:
+ * 1/16 of a cell 3 levels down (the chase followed it only that far: a hole). */
 Test(thin, horn_cyclide_depth_8, .timeout = 120)
 {
     if (!pf_quick())
-        check_horn(8, 0); /* the shifted boxes take 8-11 s each (measured, not asserted) */
+        check_horn(8, 2);
 }

@@ -1,0 +1,169 @@
+#!/usr/bin/env python3
+"""sweep_singular.py — issue 13's lattice-independence sweep: every preset of the gallery in its
+own box and shifted off the octree lattice (by 1e-3, and by 0.37 / -0.23 / 0.41 of a finest
+cell), at depths 6-9, through `isomesh --stats`. Prints one row per (preset, depth)
+with the singular counts, χ, components, non-manifold vertices/edges and artefacts of each box,
+and lists every preset whose counts differ between boxes or that has artefacts. Not part of
+`make test` (hundreds of runs, minutes each at depth 9).
+
+  sweep_singular.py [--build build/release] [--depths 6,7,8,9] [--presets a,b] [--jobs 2]
+                    [--cache FILE.jsonl] [--extra ARG ...]
+
+--cache keeps finished runs (keyed by preset, box, depth, extra arguments and the binary's
+mtime), so an interrupted sweep resumes where it stopped."""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from concurrent.futures import ThreadPoolExecutor
+
+SHIFTS = (("own", (0, 0, 0), False), ("1e-3", (1e-3, -1e-3, 0.7e-3), False),
+          ("0.37c", (0.37, -0.23, 0.41), True))
+
+
+def presets(build):
+    """The gallery: GET /v1/presets of a daemon started for the purpose (build's isomeshd, or
+    the repository's when build holds only isomesh)."""
+    if os.path.exists(os.path.join(build, "isomeshd")):
+        os.environ.setdefault("ISOMESH_BUILD", os.path.abspath(build))
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                                    "http"))
+    from harness import Daemon
+    d = Daemon()
+    d.start()
+    try:
+        return d.get("/v1/presets").json()["presets"]
+    finally:
+        d.stop()
+        d.cleanup()
+
+
+def boxes(box, depth):
+    out = []
+    for label, s, in_cells in SHIFTS:
+        cell = [(box[a + 3] - box[a]) / 2 ** depth for a in range(3)]
+        d = [s[a] * cell[a] if in_cells else s[a] for a in range(3)]
+        out.append((label, [box[a] + d[a % 3] for a in range(6)]))
+    return out
+
+
+def summary(stats):
+    """What a run keeps (cached): the singular stats and the mesh's analysis, without times
+    and the accuracy/quality blocks."""
+    an = {k: v for k, v in stats["analysis"].items() if k not in ("quality", "accuracy")}
+    return {"singular": stats["singular"], "analysis": an,
+            "thin_found": stats["polygoniser"]["thin_found"],
+            "ms": round(stats["timings_ms"]["total"])}
+
+
+def counts(r):
+    """The facts that must not depend on the box (KEYS) and a few more to show: singular
+    points by type, curves by kind, double sheets, χ, components, non-manifold points and
+    curves of the mesh, boundary loops; artefacts, non-manifold edges, incomplete, thin."""
+    sg, an = r["singular"], r["analysis"]
+    pts = "".join(f"{k[0]}{v}" for k, v in sg["by_type"].items() if v) or "-"
+    return {"pts": pts, "cert": sg["certified"], "dc": sg["double_curves"],
+            "wc": sg["whisker_curves"], "ds": sg["double_sheets"], "chi": an["euler"],
+            "comp": an["components"], "nmp": an["nonmanifold_points"],
+            "nmc": an["nonmanifold_curves"], "bl": an["boundary_loops"],
+            "art": sg["artefacts"], "nme": an["nonmanifold_edges"], "inc": sg["incomplete"],
+            "thin": r["thin_found"], "ms": r["ms"]}
+
+
+def run(exe, name, box, depth, extra, timeout):
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [exe, "--surface", name, "-b", ",".join(repr(v) for v in box), "-d", f"3:{depth}",
+               "--stats", *extra]
+        try:
+            r = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, cwd=tmp)
+        except subprocess.TimeoutExpired:
+            return {"error": "timeout"}
+        if r.returncode != 0:
+            return {"error": r.stderr.strip()[:200]}
+        return summary(json.loads(r.stdout))
+
+
+KEYS = ("pts", "cert", "dc", "wc", "ds", "chi", "comp", "nmp", "nmc", "bl")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--build", default="build/release")
+    ap.add_argument("--depths", default="6,7,8,9")
+    ap.add_argument("--presets", default="")
+    ap.add_argument("--skip", default="")
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--cache", default="")
+    ap.add_argument("--timeout", type=float, default=900)
+    ap.add_argument("--extra", nargs="*", default=[])
+    args = ap.parse_args()
+    exe = os.path.join(args.build, "isomesh")
+    stamp = os.path.getmtime(exe)
+    ps = presets(args.build)
+    if args.presets:
+        want = args.presets.split(",")
+        ps = [p for p in ps if p["name"] in want]
+    if args.skip:
+        ps = [p for p in ps if p["name"] not in args.skip.split(",")]
+    depths = [int(d) for d in args.depths.split(",")]
+    cache = {}
+    if args.cache and os.path.exists(args.cache):
+        with open(args.cache) as f:
+            for line in f:
+                e = json.loads(line)
+                cache[e["k"]] = e["v"]
+    jobs = []
+    for p in ps:
+        for d in depths:
+            for label, box in boxes(p["box"], d):
+                k = json.dumps([p["name"], box, d, args.extra, stamp])
+                jobs.append((p["name"], d, label, box, k))
+
+    def one(j):
+        name, d, label, box, k = j
+        if k in cache:
+            return j, cache[k]
+        v = run(exe, name, box, d, args.extra, args.timeout)
+        if args.cache:
+            with open(args.cache, "a") as f:
+                f.write(json.dumps({"k": k, "v": v}) + "\n")
+        return j, v
+
+    res = {}
+    with ThreadPoolExecutor(args.jobs) as ex:
+        for (name, d, label, box, k), v in ex.map(one, jobs):
+            res[(name, d, label)] = v
+    bad = []
+    print(f"{'preset':<18}{'d':>2}  " + "  |  ".join(f"{l:<50}" for l, _, _ in SHIFTS))
+    for p in ps:
+        for d in depths:
+            row = [v if "error" in v else counts(v)
+                   for v in (res[(p["name"], d, l)] for l, _, _ in SHIFTS)]
+            cells = []
+            for v in row:
+                if "error" in v:
+                    cells.append(f"ERR {v['error'][:40]}")
+                    continue
+                cells.append(f"{v['pts']:<9}c{v['cert']:<3}dc{v['dc']:<2}wc{v['wc']:<2}ds{v['ds']} "
+                             f"χ{v['chi']:<4}k{v['comp']:<2}np{v['nmp']:<2}nc{v['nmc']:<2}b{v['bl']:<2}"
+                             f"A{v['art']}" + (" INC" if v["inc"] else "") +
+                             (f" T{v['thin']}" if v["thin"] else ""))
+            ok = [v for v in row if "error" not in v]
+            diff = [k for k in KEYS if len({str(v[k]) for v in ok}) > 1]
+            art = any(v["art"] for v in ok)
+            flag = ""
+            if diff or art or len(ok) < len(row):
+                flag = " <-- " + ",".join(diff) + (" ART" if art else "") + \
+                       (" ERR" if len(ok) < len(row) else "")
+                bad.append((p["name"], d, diff, art))
+            print(f"{p['name']:<18}{d:>2}  " + "  |  ".join(f"{c:<50}" for c in cells) + flag)
+    print(f"\n{len(bad)} (preset, depth) rows disagree or have artefacts:")
+    for name, d, diff, art in bad:
+        print(f"  {name} d{d}: {','.join(diff)}{' artefacts' if art else ''}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
