@@ -277,7 +277,7 @@ static void check_curves(const naive *n, const ism_analysis *a)
 Test(analysis_random, soups_agree_with_the_naive_reference)
 {
     unsigned seed = 12345;
-    int rounds = getenv("ISM_TEST_QUICK") ? 500 : 3000;
+    int rounds = getenv("ISOMESH_TEST_QUICK") ? 500 : 3000;
     int with_nm = 0, with_cones = 0, with_duplicates = 0, non_orientable = 0, closed_curves = 0;
     for (int round = 0; round < rounds; round++) {
         soup s;

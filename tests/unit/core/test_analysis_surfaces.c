@@ -2,7 +2,7 @@
  * curvature and Gauss-Bonnet on a sphere and a torus, Steiner's double lines along the three
  * axes meeting at the triple point, the four nodes of a Kummer surface, the Klein bottle's
  * self-intersection in the plane z = 0. Expected values come from the mathematics of each
- * surface. Shallower octrees under ISM_TEST_QUICK=1 (the sanitizer run). */
+ * surface. Shallower octrees under ISOMESH_TEST_QUICK=1 (the sanitizer run). */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -20,7 +20,7 @@ typedef struct surface {
 
 static bool quick(void)
 {
-    const char *q = getenv("ISM_TEST_QUICK");
+    const char *q = getenv("ISOMESH_TEST_QUICK");
     return q && *q == '1';
 }
 

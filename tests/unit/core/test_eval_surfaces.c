@@ -59,6 +59,6 @@ double test_uniform(test_rng *r, double lo, double hi)
 
 size_t test_scaled(size_t full)
 {
-    const char *q = getenv("ISM_TEST_QUICK");
+    const char *q = getenv("ISOMESH_TEST_QUICK");
     return q && q[0] == '1' ? (full + 4) / 5 : full;
 }

@@ -31,7 +31,7 @@ typedef struct test_rng {
 
 double test_uniform(test_rng *r, double lo, double hi);
 
-/* Work counts shrink under ISM_TEST_QUICK=1 (the sanitizer run). */
+/* Work counts shrink under ISOMESH_TEST_QUICK=1 (the sanitizer run). */
 size_t test_scaled(size_t full);
 
 #endif

@@ -239,7 +239,7 @@ Test(expr_errors, hundred_thousand_parentheses)
 
 Test(expr_errors, million_nodes)
 {
-    size_t reps = getenv("ISM_TEST_QUICK") ? 200000 : 1000000;
+    size_t reps = getenv("ISOMESH_TEST_QUICK") ? 200000 : 1000000;
     char *src = repeat("", "x*y+", reps, "z");
     ism_expr_limits lim = wide_source(8u << 20);
     ism_error err;
