@@ -92,10 +92,12 @@ run: deps web-deps
 	$(MAKE) -j$(JOBS) programs
 	$(ISOMESHD) --listen $(LISTEN) --web-root web --cache-dir $(CACHE_DIR)
 
+# The suites run $(JOBS) at once; the sanitizer build is made while the first release suites run
+# (the suites against it wait for it).
 test: deps-test
 	$(MAKE) -j$(JOBS) build web-deps test-deps
-	$(MAKE) -j$(JOBS) OUT=build/asan SAN=1 OPT=-O1 unit-bins
-	$(PYTHON) tests/run_suites.py --release build/release --asan build/asan
+	$(PYTHON) tests/run_suites.py --jobs $(JOBS) --release build/release --asan build/asan \
+	    --asan-build '$(MAKE) -j$(JOBS) OUT=build/asan SAN=1 OPT=-O1 unit-bins'
 
 bench: deps-bench build $(BENCH_BINS)
 	$(PYTHON) tests/bench/run_bench.py --build $(OUT)

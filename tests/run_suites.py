@@ -35,6 +35,23 @@ BUILD_TIMEOUT = 1800  # s: the sanitizer build, from scratch on a loaded machine
 # order they are found.
 HEAVY_FIRST = [
     "build [asan+ubsan]",
+    "unit_core [asan+ubsan]",
+    "browser/viewer.test.mjs",
+    "reliability/test_sandbox.py",
+    "http/test_gallery.py",
+    "unit_core",
+    "http/test_fairness.py [asan+ubsan]",
+    "cli/test_singular.py [asan+ubsan]",
+    "http/test_gallery.py [asan+ubsan]",
+    "http/test_fairness.py",
+    "browser/live.test.mjs",
+    "deploy/test_cluster.py",
+    "reliability/test_faults.py",
+    "browser/explore.test.mjs",
+    "reliability/test_faults.py [asan+ubsan]",
+    "reliability/test_sandbox.py [asan+ubsan]",
+    "browser/jobs.test.mjs",
+    "browser/auth.test.mjs",
 ]
 
 
