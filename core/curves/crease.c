@@ -26,8 +26,6 @@
 /* Newton may move a crease point at most this many lengths of its edge (the polygoniser's
  * vertices near a crease may lie that far off the surface). */
 #define CREASE_MAX_MOVE_EDGES 2.0
-/* Bisection steps on an edge when the linear start fails (2^-40 of the edge). */
-#define CREASE_BISECT_STEPS 40
 /* Passes of putting crease points back in order along their chain (each pass fixes the
  * points whose neighbours lie on one side of them; one or two suffice). */
 #define CREASE_ORDER_PASSES 3
@@ -64,22 +62,15 @@ static double branch_gap(crease_state *cs, uint32_t A, uint32_t B, const double 
     return ism_branches_gradient(cs->b, A, p, g) - ism_branches_gradient(cs->b, B, p, g);
 }
 
-/* The root of f_A − f_B on segment a-b (values ga, gb of opposite signs), by bisection. */
-static void gap_root(crease_state *cs, uint32_t A, uint32_t B, const double *a, const double *b,
-                     double ga, double p[3])
+typedef struct gap_of {
+    crease_state *cs;
+    uint32_t A, B;
+} gap_of;
+
+static double gap_at(void *ctx, const double p[3])
 {
-    double lo = 0, hi = 1;
-    for (int it = 0; it < CREASE_BISECT_STEPS; it++) {
-        double t = 0.5 * (lo + hi), q[3];
-        for (int c = 0; c < 3; c++)
-            q[c] = a[c] + t * (b[c] - a[c]);
-        if ((branch_gap(cs, A, B, q) < 0) == (ga < 0))
-            lo = t;
-        else
-            hi = t;
-    }
-    for (int c = 0; c < 3; c++)
-        p[c] = a[c] + 0.5 * (lo + hi) * (b[c] - a[c]);
+    gap_of *g = ctx;
+    return branch_gap(g->cs, g->A, g->B, p);
 }
 
 /* A new crease vertex at p (normal oriented like vertex ref's). NONE when out of memory. */
@@ -125,15 +116,11 @@ static bool edge_plane(const ism_mesh *m, uint32_t u, uint32_t w, const double p
 static uint32_t crease_vertex(crease_state *cs, uint32_t u, uint32_t w)
 {
     cut_state *s = cs->s;
-    bool added;
-    uint32_t i = ism_key_map_add(&s->split, cut_edge_key(u, w), &added);
-    if (i == ISM_KEY_NONE)
+    uint32_t i, had;
+    if (!cut_split_slot(s, u, w, &i, &had))
         return NONE;
-    if (!added)
-        return s->split_v[i];
-    if (!ism_grow((void **)&s->split_v, &s->cap_split, (size_t)i + 1, sizeof *s->split_v,
-                  CUT_FIRST))
-        return NONE;
+    if (had != NONE)
+        return had;
     uint32_t A = cs->label[u], B = cs->label[w];
     const double *a = s->m->pos + 3 * (size_t)u, *b = s->m->pos + 3 * (size_t)w;
     double ga = branch_gap(cs, A, B, a), gb = branch_gap(cs, A, B, b);
@@ -147,7 +134,7 @@ static uint32_t crease_vertex(crease_state *cs, uint32_t u, uint32_t w)
     if (!ism_branches_refine(cs->b, A, ks, 1, across ? plane : NULL, s->tol, max_move, p)) {
         bool again = (ga < 0) != (gb < 0);
         if (again)
-            gap_root(cs, A, B, a, b, ga, p);
+            cut_bisect(gap_at, &(gap_of){cs, A, B}, a, b, ga, p);
         if (!again ||
             !ism_branches_refine(cs->b, A, ks, 1, across ? plane : NULL, s->tol, max_move, p))
             s->c->unrefined++;

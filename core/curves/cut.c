@@ -112,18 +112,15 @@ static void refine_point(cut_state *s, uint32_t j, size_t k, double len, double 
         s->c->unrefined++;
 }
 
-/* The root of g_k on the segment a-b (signs ga, gb apart) by bisection: a start for Newton
- * where g bends too much for the linear estimate. */
-static void segment_root(cut_state *s, size_t k, const double a[3], const double b[3],
-                         double ga, double p[3])
+void cut_bisect(cut_sign_fn fn, void *ctx, const double a[3], const double b[3], double ga,
+                double p[3])
 {
     double lo = 0, hi = 1;
     for (int it = 0; it < CUT_BISECT_STEPS; it++) {
         double t = 0.5 * (lo + hi), q[3];
         for (int c = 0; c < 3; c++)
             q[c] = a[c] + t * (b[c] - a[c]);
-        double g = ism_cut_g(s->ev, k, q, NULL);
-        if ((g < 0) == (ga < 0))
+        if ((fn(ctx, q) < 0) == (ga < 0))
             lo = t;
         else
             hi = t;
@@ -132,17 +129,37 @@ static void segment_root(cut_state *s, size_t k, const double a[3], const double
         p[c] = a[c] + 0.5 * (lo + hi) * (b[c] - a[c]);
 }
 
-/* The vertex where g_k = 0 splits edge u-w (made once per edge). NONE when out of memory. */
-static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
+typedef struct g_of {
+    cut_state *s;
+    size_t k;
+} g_of;
+
+static double g_at(void *ctx, const double p[3])
+{
+    g_of *g = ctx;
+    return ism_cut_g(g->s->ev, g->k, p, NULL);
+}
+
+bool cut_split_slot(cut_state *s, uint32_t u, uint32_t w, uint32_t *slot, uint32_t *v)
 {
     bool added;
     uint32_t i = ism_key_map_add(&s->split, cut_edge_key(u, w), &added);
-    if (i == ISM_KEY_NONE)
+    if (i == ISM_KEY_NONE || !ism_grow((void **)&s->split_v, &s->cap_split, (size_t)i + 1,
+                                       sizeof *s->split_v, CUT_FIRST))
+        return false;
+    *slot = i;
+    *v = added ? NONE : s->split_v[i];
+    return true;
+}
+
+/* The vertex where g_k = 0 splits edge u-w (made once per edge). NONE when out of memory. */
+static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
+{
+    uint32_t i, had;
+    if (!cut_split_slot(s, u, w, &i, &had))
         return NONE;
-    if (!added)
-        return s->split_v[i];
-    if (!ism_grow((void **)&s->split_v, &s->cap_split, (size_t)i + 1, sizeof *s->split_v, CUT_FIRST))
-        return NONE;
+    if (had != NONE)
+        return had;
     const double *a = s->m->pos + 3 * (size_t)u, *b = s->m->pos + 3 * (size_t)w;
     double t = s->gv[u] / (s->gv[u] - s->gv[w]), p[3], len2 = 0;
     for (int c = 0; c < 3; c++) {
@@ -157,7 +174,7 @@ static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
         s->ev->pair[c] = e == ISM_KEY_NONE ? ISM_CUT_NO_BRANCH : s->c->edges[e].branch[c];
     double len = fmax(sqrt(len2), fmax(s->reach[u], s->reach[w]));
     if (!try_refine(s, j, k, len, p)) {
-        segment_root(s, k, a, b, s->gv[u], p);
+        cut_bisect(g_at, &(g_of){s, k}, a, b, s->gv[u], p); /* g bends: a start by bisection */
         refine_point(s, j, k, len, p);
     }
     float nrm[3];

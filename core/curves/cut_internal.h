@@ -74,6 +74,19 @@ bool cut_split_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t v, uint32
 /* Sets the branches on the two sides of cut edge a-b (a crease edge). */
 bool cut_set_branches(cut_state *s, uint32_t a, uint32_t b, const uint32_t br[2]);
 
+/* Edge u-w's slot in the split map (*slot): *v its vertex when the edge is split already,
+ * else NONE (the caller makes it and stores it in split_v[*slot]). False when out of
+ * memory. */
+bool cut_split_slot(cut_state *s, uint32_t u, uint32_t w, uint32_t *slot, uint32_t *v);
+
+typedef double (*cut_sign_fn)(void *ctx, const double p[3]);
+
+/* The sign change of fn on segment a-b (fn(a) = ga, fn(b) of the other sign) by bisection to
+ * 2^-40 of the segment: a start for Newton where the function bends too much for the linear
+ * estimate. */
+void cut_bisect(cut_sign_fn fn, void *ctx, const double a[3], const double b[3], double ga,
+                double p[3]);
+
 /* The unit normal ∇f/|∇f| at p, oriented like ref. */
 void cut_normal_at(cut_state *s, const double p[3], const float ref[3], float out[3]);
 

@@ -227,3 +227,18 @@ bool pf_nm_edges_one_closed_curve(const ism_mesh *m, size_t *nedges)
     free(parent);
     return ok;
 }
+
+void pf_tri_normal(const ism_mesh *m, size_t t, double n[3])
+{
+    const uint32_t *v = m->tri + 3 * t;
+    const double *a = m->pos + 3 * (size_t)v[0], *b = m->pos + 3 * (size_t)v[1],
+                 *c = m->pos + 3 * (size_t)v[2];
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    n[0] = u[1] * w[2] - u[2] * w[1];
+    n[1] = u[2] * w[0] - u[0] * w[2];
+    n[2] = u[0] * w[1] - u[1] * w[0];
+    double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int i = 0; i < 3; i++)
+        n[i] /= l;
+}

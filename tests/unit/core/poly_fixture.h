@@ -39,6 +39,9 @@ void pf_run(const ism_tape *t, const double box[6], int dmin, int dmax, int thre
 
 void pf_measure(const ism_mesh *m, const ism_tape *t, pf_props *p);
 
+/* The unit normal of triangle t from its winding. */
+void pf_tri_normal(const ism_mesh *m, size_t t, double n[3]);
+
 /* Non-manifold edges (more than two triangles) whose two end points satisfy pred. */
 size_t pf_count_nm_edges(const ism_mesh *m, bool (*pred)(const double a[3], const double b[3]));
 

@@ -223,21 +223,6 @@ static uint64_t ekey(uint32_t a, uint32_t b)
     return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
 }
 
-static void tri_normal(const ism_mesh *m, uint32_t t, double n[3])
-{
-    const uint32_t *v = m->tri + 3 * (size_t)t;
-    const double *a = m->pos + 3 * (size_t)v[0], *b = m->pos + 3 * (size_t)v[1],
-                 *c = m->pos + 3 * (size_t)v[2];
-    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    n[0] = u[1] * w[2] - u[2] * w[1];
-    n[1] = u[2] * w[0] - u[0] * w[2];
-    n[2] = u[0] * w[1] - u[1] * w[0];
-    double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    for (int i = 0; i < 3; i++)
-        n[i] /= l;
-}
-
 static double angle_deg(const double a[3], const double b[3])
 {
     double d = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) /
@@ -326,8 +311,8 @@ static void gyroid_crease(int which)
             (hit + 2 < et + 3 * r.m.ntris && hit[2].key == key.key))
             continue; /* a border edge at the box */
         double n0[3], n1[3], ga[3], p[3];
-        tri_normal(&r.m, hit[0].tri, n0);
-        tri_normal(&r.m, hit[1].tri, n1);
+        pf_tri_normal(&r.m, hit[0].tri, n0);
+        pf_tri_normal(&r.m, hit[1].tri, n1);
         for (int k = 0; k < 3; k++)
             p[k] = 0.5 * (r.m.pos[3 * (size_t)r.cut.edges[i].a + k] +
                           r.m.pos[3 * (size_t)r.cut.edges[i].b + k]);

@@ -108,18 +108,6 @@ static void plane_normal(int q, double out[3])
         out[k] = (q % 2 ? -1 : 1) * n_[q / 2][k];
 }
 
-static void tri_normal(const ism_mesh *m, size_t t, double n[3])
-{
-    const uint32_t *v = m->tri + 3 * t;
-    const double *a = m->pos + 3 * (size_t)v[0], *b = m->pos + 3 * (size_t)v[1],
-                 *c = m->pos + 3 * (size_t)v[2];
-    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    n[0] = u[1] * w[2] - u[2] * w[1];
-    n[1] = u[2] * w[0] - u[0] * w[2];
-    n[2] = u[0] * w[1] - u[1] * w[0];
-}
-
 /* The plane a triangle lies on: the one nearest its centroid. */
 static int tri_plane(const ism_mesh *m, size_t t)
 {
@@ -154,8 +142,8 @@ static void check_sides(const ism_mesh *m, const ism_cut *cut, const float *cn, 
         int q0 = tri_plane(m, tris[0]), q1 = tri_plane(m, tris[1]);
         cr_assert_neq(q0, q1, "both sides of a crease edge on one plane");
         double t0[3], t1[3], p0[3], p1[3];
-        tri_normal(m, tris[0], t0);
-        tri_normal(m, tris[1], t1);
+        pf_tri_normal(m, tris[0], t0);
+        pf_tri_normal(m, tris[1], t1);
         plane_normal(q0, p0);
         plane_normal(q1, p1);
         double d = fabs(angle_deg(t0, t1) - angle_deg(p0, p1));
