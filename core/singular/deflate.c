@@ -173,6 +173,25 @@ static bool krawczyk7(ism_interval J[N][N], const ism_interval g[N], const doubl
 
 static double mag(ism_interval a) { return fmax(fabs(a.lo), fabs(a.hi)); }
 
+/* The scales at p (jets jp, third derivatives tp): the Hessian's and the third derivatives'
+ * largest entries, and whether the cubic term along n stands above DEFLATE_CUBIC_REL. */
+static bool cubic_at(const ism_ivjet *jp, ism_interval tp[3][6], const double n[3], double *h2,
+                     double *t3)
+{
+    double cubic = 0.0;
+    *h2 = *t3 = 0.0;
+    for (int e = 0; e < 6; e++) {
+        *h2 = fmax(*h2, mag(jp->h[e]));
+        for (int k = 0; k < 3; k++)
+            *t3 = fmax(*t3, mag(tp[k][e]));
+    }
+    for (int k = 0; k < 3; k++)
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++)
+                cubic += n[k] * n[i] * n[j] * mid(tp[k][SYM[i][j]]);
+    return *t3 > 0.0 && fabs(cubic) > DEFLATE_CUBIC_REL * *t3 && isfinite(cubic);
+}
+
 int ism_deflate_certify(ism_deflate_ws *w, const double p[3], const double n[3],
                         double r_first, double r_max, double growth, ism_deflate_result *out,
                         uint64_t *evals)
@@ -182,18 +201,8 @@ int ism_deflate_certify(ism_deflate_ws *w, const double p[3], const double n[3],
     for (int k = 0; k < 3; k++)
         xp[k] = iv(p[k], p[k]);
     jets(w, xp, &jp, tp, evals);
-    /* scales: the Hessian's and the third derivatives' sizes at p, and the cubic term */
-    double h2 = 0.0, t3 = 0.0, cubic = 0.0;
-    for (int e = 0; e < 6; e++) {
-        h2 = fmax(h2, mag(jp.h[e]));
-        for (int k = 0; k < 3; k++)
-            t3 = fmax(t3, mag(tp[k][e]));
-    }
-    for (int k = 0; k < 3; k++)
-        for (int i = 0; i < 3; i++)
-            for (int j = 0; j < 3; j++)
-                cubic += n[k] * n[i] * n[j] * mid(tp[k][SYM[i][j]]);
-    if (!(t3 > 0.0) || !(fabs(cubic) > DEFLATE_CUBIC_REL * t3) || !isfinite(cubic))
+    double h2, t3;
+    if (!cubic_at(&jp, tp, n, &h2, &t3))
         return ISM_DEFLATE_SINGULAR;
     ism_interval g[N];
     residual(&jp, n, g);

@@ -35,6 +35,16 @@
 /* Rank-3 projections tried as starts inside one extended cluster (a node on or near a
  * curve); beyond this the cluster is left to the curve stage as it is. */
 #define EXTENDED_STARTS_MAX 64
+/* Rank-2 projections of one extended cluster probed for a cusp (cusp_probe), at
+ * least MERGE_CELLS apart: a curve of zeros gives one probe a cell of its length; beyond
+ * this many cells of curve in one cluster no further cusp is looked for there. */
+#define CUSP_PROBES_MAX 512
+/* The probe's difference step (× finest cell): far above rounding of the Hessian, small
+ * enough that a curve's bending (second order in the step) keeps its cubic term near 0. */
+#define CUSP_PROBE_CELLS 0.01
+/* nᵀ D³f[n] n at least this fraction of |D³f[n]|: a cusp's is of the size of the rest
+ * (x² + z² − y³: all of it), a curve's is 0 up to the difference's error. */
+#define CUSP_CUBIC_REL 1e-2
 /* Box-to-point distance checks explaining boxes by published points (points × boxes): a
  * bound on the work, far above any real case (16 nodes × a few thousand boxes). */
 #define EXPLAIN_WORK_MAX 1e8
@@ -160,23 +170,34 @@ static int point_type(ctx *x, const double p[3], const double eig[3], double vec
     return definite && same ? ISM_SING_ISOLATED : ISM_SING_DEGENERATE;
 }
 
-/* The deflation certificate of a rank-2 point (deflate.h) along the eigenvector of its
- * smallest |eigenvalue|; sets the point's certificate or the reason it has none. */
-static bool certify_rank2(ctx *x, ism_sing_point *pt, const double eig[3], double vec[3][3],
-                          ism_interval *fbox)
+static bool deflate_ws(ctx *x)
 {
-    if (!x->dw && !(x->dw = ism_deflate_ws_new(x->t))) {
+    if (!x->dw && !(x->dw = ism_deflate_ws_new(x->t)))
         x->oom = true;
-        return false;
-    }
+    return x->dw != NULL;
+}
+
+/* The eigenvector of the smallest |eigenvalue|. */
+static const double *null_vector(const double eig[3], double vec[3][3])
+{
     int null = 0;
     for (int i = 1; i < 3; i++)
         if (fabs(eig[i]) < fabs(eig[null]))
             null = i;
+    return vec[null];
+}
+
+/* The deflation certificate of a rank-2 point (deflate.h) along its null vector; sets the
+ * point's certificate or the reason it has none. */
+static bool certify_rank2(ctx *x, ism_sing_point *pt, const double eig[3], double vec[3][3],
+                          ism_interval *fbox)
+{
+    if (!deflate_ws(x))
+        return false;
     double rmax = ISM_SING_CERT_REL * x->diag;
     ism_deflate_result r;
-    int a = ism_deflate_certify(x->dw, pt->p, vec[null], CERT_FIRST * rmax, rmax, CERT_GROWTH,
-                                &r, &x->out->evals_jet);
+    int a = ism_deflate_certify(x->dw, pt->p, null_vector(eig, vec), CERT_FIRST * rmax, rmax,
+                                CERT_GROWTH, &r, &x->out->evals_jet);
     if (a != ISM_DEFLATE_CERTIFIED) {
         pt->uncertified_why = a == ISM_DEFLATE_SINGULAR ? ISM_UNCERT_CUBIC : ISM_UNCERT_CONTRACT;
         return false;
@@ -186,6 +207,32 @@ static bool certify_rank2(ctx *x, ism_sing_point *pt, const double eig[3], doubl
     pt->perturbation = r.eps;
     *fbox = r.f;
     return true;
+}
+
+/* Whether the rank-2 projection q may be a cusp rather than a point of a curve of zeros of
+ * ∇f: f's cubic term along the Hessian's null direction n, nᵀ D³f[n] n, is not 0 there (on a
+ * curve with tangent n it is exactly 0, f vanishing along the curve). D³f[n] by a central
+ * difference of the Hessian over ±CUSP_PROBE_CELLS along n — a filter only: deflation
+ * decides. */
+static bool cusp_probe(ctx *x, const double q[3])
+{
+    double g[3], h[6], hp[6], hm[6], eig[3], vec[3][3];
+    ism_eval_hessian(x->t, x->ws, q[0], q[1], q[2], g, h);
+    ism_sym3_eigen(h, eig, vec);
+    const double *n = null_vector(eig, vec);
+    double d = CUSP_PROBE_CELLS * x->cell;
+    ism_eval_hessian(x->t, x->ws, q[0] + d * n[0], q[1] + d * n[1], q[2] + d * n[2], g, hp);
+    ism_eval_hessian(x->t, x->ws, q[0] - d * n[0], q[1] - d * n[1], q[2] - d * n[2], g, hm);
+    x->out->evals_jet += 3;
+    static const int S[3][3] = { { 0, 1, 2 }, { 1, 3, 4 }, { 2, 4, 5 } };
+    double nn = 0.0, norm = 0.0; /* nᵀ D³f[n] n and the Frobenius norm of D³f[n], × 2d */
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            double t = hp[S[i][j]] - hm[S[i][j]];
+            nn += n[i] * t * n[j];
+            norm += t * t;
+        }
+    return isfinite(nn) && fabs(nn) > CUSP_CUBIC_REL * sqrt(norm);
 }
 
 /* Newton from start within [lo, hi], certificate (Krawczyk on ∇f, or deflation at rank 2),
@@ -310,7 +357,8 @@ static bool from_unique_box(ctx *x, size_t i, uint8_t *box_fate)
 }
 
 /* An isolated cluster: Newton from its first projection, within the cluster grown by a
- * cell. Rank-3 projections of an extended cluster: only certified points are kept. */
+ * cell. Rank-3 projections of an extended cluster, and rank-2 ones whose cubic term along
+ * the null direction is not 0 (cusps): only certified points are kept. */
 static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint32_t *label,
                          uint8_t *fate)
 {
@@ -327,13 +375,22 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
         *fate = r == FOUND ? 1 : r == OFF_SURFACE ? 2 : 0;
         return r != FOUND || add_cand(x, &pt, id, SIZE_MAX);
     }
-    size_t tried = 0;
-    double starts[EXTENDED_STARTS_MAX][3];
+    size_t tried = 0, probed = 0;
+    double starts[EXTENDED_STARTS_MAX][3], probes[CUSP_PROBES_MAX][3];
     for (size_t i = c->first_projected; i < l->nboxes && tried < EXTENDED_STARTS_MAX; i++) {
         const ism_lbox *b = &l->boxes[i];
-        if (label[i] != id || !(b->flags & ISM_LBOX_PROJECTED) || b->rank != 3)
+        if (label[i] != id || !(b->flags & ISM_LBOX_PROJECTED) || b->rank < 2)
             continue;
         bool seen = false;
+        if (b->rank == 2) { /* a cusp among the points of a curve: its cubic term says */
+            for (size_t s = 0; s < probed && !seen; s++)
+                seen = dist3(probes[s], b->q) <= MERGE_CELLS * x->cell;
+            if (seen || probed == CUSP_PROBES_MAX)
+                continue;
+            memcpy(probes[probed++], b->q, sizeof probes[0]);
+            if (!cusp_probe(x, b->q))
+                continue;
+        }
         for (size_t s = 0; s < tried && !seen; s++)
             seen = dist3(starts[s], b->q) <= MERGE_CELLS * x->cell;
         if (seen)
@@ -343,7 +400,7 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
             && !add_cand(x, &pt, UINT32_MAX, SIZE_MAX))
             return false;
     }
-    return true;
+    return !x->oom;
 }
 
 static bool same_point(const ctx *x, const ism_sing_point *a, const ism_sing_point *b)

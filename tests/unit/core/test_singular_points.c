@@ -183,6 +183,10 @@ Test(singular_points, heart_two_cusps_no_ring)
     const char *src = "(x^2 + 9/4*y^2 + z^2 - 1)^3 - x^2*z^3 - 9/80*y^2*z^3";
     check_surface(src, box, 6, want, 2, 1e-9, ISM_SING_CUSP, true);
     check_deflated(src, box, 6, want, 2);
+    /* depth 5: the cusp at z = 1 shares its cluster with a lobe's critical points off the
+       surface (not one point): found among the cluster's rank-2 projections by its cubic
+       term (a curve's is 0), not taken for a whisker */
+    check_deflated(src, box, 5, want, 2);
 }
 
 /* The unit sphere is smooth; its centre is a critical point with f = −1. */
