@@ -4,10 +4,10 @@
 #include "core/octree/octree_build.h"
 #include "core/octree/sampler.h"
 #include "core/octree/cell_cache.h"
+#include "core/octree/quiet.h"
 #include "core/octree/thin_search.h"
 #include "core/util/parallel.h"
 
-#include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -45,6 +45,7 @@ typedef struct thread_state {
 typedef struct build {
     const ism_octree_build_params *p;
     const ism_grid *grid;
+    ism_quiet quiet;             /* index of p->quiet */
     thread_state *threads;
     int shortening;
     atomic_size_t nodes_total;
@@ -156,22 +157,6 @@ static enum ism_thin_verdict search(thread_state *th, const ism_tape *sub, const
     return v;
 }
 
-/* Does the box lie inside one of the balls whose mesh a later stage rebuilds? */
-static bool quiet(const ism_octree_build_params *p, const double lo[3], const double hi[3])
-{
-    for (size_t i = 0; i < p->nquiet; i++) {
-        const double *b = p->quiet[i];
-        double far = 0;
-        for (int a = 0; a < 3; a++) {
-            double d = fmax(fabs(lo[a] - b[a]), fabs(hi[a] - b[a]));
-            far += d * d;
-        }
-        if (far < b[3] * b[3])
-            return true;
-    }
-    return false;
-}
-
 /* A would-be leaf may hold a piece of the surface that no edge crosses (thin_search.h):
  * with all corners of one sign, anywhere in it; with both signs, behind a face whose four
  * corners share a sign — a nappe or a thin tube piercing the face in a closed curve that
@@ -185,7 +170,7 @@ static bool hides_piece(build *b, thread_state *th, const ism_node *nd, const is
         return false;
     double lo[3], hi[3];
     node_box(b->grid, nd, lo, hi);
-    if (quiet(b->p, lo, hi))
+    if (ism_quiet_holds(&b->quiet, lo, hi))
         return false;
     int sign = face_sign(k, 0);
     if (sign != 0 && sign == face_sign(k, 1))
@@ -394,7 +379,7 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
     defer_list deferred = {0, NULL, 0};
     enum ism_build_status status = ISM_BUILD_OK;
 
-    if (!init_threads(&b, nthreads)) {
+    if (!ism_quiet_init(&b.quiet, p->quiet, p->nquiet) || !init_threads(&b, nthreads)) {
         status = ISM_BUILD_NO_MEMORY;
         goto done;
     }
@@ -428,6 +413,7 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
 
 done:
     free_threads(&b, nthreads, stats);
+    ism_quiet_free(&b.quiet);
     if (b.task_out)
         for (size_t k = 0; k < b.ntasks; k++)
             free(b.task_out[k].v);

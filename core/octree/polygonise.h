@@ -44,14 +44,12 @@ typedef struct ism_poly_options {
     int threads;            /* worker threads for one request (0 = number of cores, max 64) */
     bool thin_search;       /* search nodes that fail flatness for a piece no edge sees (one
                                corner sign, or an island in a face of one sign) and split them
-                               below max_depth (thin_search.h). Default off: along double
-                               curves and whiskers the chase finds pieces at every level (the
-                               sheets' wedges are self-similar) and costs 10-20 times the
-                               polygoniser's time on the Whitney umbrella and the cross-cap */
+                               below max_depth (thin_search.h; default off) */
     /* Balls (x, y, z, radius) whose mesh a later stage rebuilds — around the singular points
-     * found from f, which the conformance pass refills (core/singular/conform.h): hidden
-     * pieces are not chased into them (a horn shrinking to its point would otherwise be
-     * followed to the lattice's last level). NULL when there are none. */
+     * and along the curves found from f, which the conformance pass refills
+     * (core/singular/conform.h): hidden pieces are not chased into them (a horn shrinking to
+     * its point would be followed to the lattice's last level, the wedges between two sheets
+     * along a double curve at every level). NULL when there are none. */
     const double (*quiet)[4];
     size_t nquiet;
     /* Optional progress report, fraction in [0, 1], from the calling thread or a worker

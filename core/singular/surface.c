@@ -7,6 +7,7 @@
 #include "core/singular/sheets.h"
 #include "core/util/clock.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -19,28 +20,72 @@ void ism_locus_options_from_poly(const ism_poly_options *po, ism_locus_options *
     lo->cancel = po->cancel;
 }
 
-/* Share of the conformance pass's smallest ball in which the polygoniser does not chase
+/* Share of the conformance pass's smallest ball (and tube) in which the polygoniser does not chase
  * hidden pieces: the ball's rim, where the refill meets the polygoniser's mesh, must lie in
  * cells that were chased (the pass widens its cut from there, never narrows it). */
 #define QUIET_SHARE 0.8
 
-/* The balls around the locus's points where hidden pieces are not chased (see
- * ism_poly_options): malloc'd, NULL when there are none or memory ran out. */
-static double (*quiet_balls(const ism_locus *l, const ism_locus_options *lo, size_t *n))[4]
+/* Along a double curve the pass cuts a tube of the same radius: its balls are this far
+ * apart at most, in radii (their union then covers a tube of 0.97 of the radius). */
+#define QUIET_SPACING 0.5
+
+typedef struct ball_list {
+    double (*b)[4];
+    size_t n, cap;
+} ball_list;
+
+static bool add_ball(ball_list *l, const double p[3], double r)
 {
-    *n = 0;
-    if (l->npoints == 0)
-        return NULL;
-    double (*b)[4] = malloc(l->npoints * sizeof *b);
-    if (!b)
-        return NULL;
-    double r = QUIET_SHARE * ism_conform_min_radius(lo);
-    for (size_t i = 0; i < l->npoints; i++) {
-        memcpy(b[i], l->points[i].p, sizeof l->points[i].p);
-        b[i][3] = r;
+    if (l->n == l->cap) {
+        size_t c = l->cap ? 2 * l->cap : 64;
+        double (*b)[4] = realloc(l->b, c * sizeof *b);
+        if (!b)
+            return false;
+        l->b = b;
+        l->cap = c;
     }
-    *n = l->npoints;
-    return b;
+    memcpy(l->b[l->n], p, 3 * sizeof *p);
+    l->b[l->n++][3] = r;
+    return true;
+}
+
+/* Balls along segment a-b (a included, b not), QUIET_SPACING radii apart at most. */
+static bool add_segment(ball_list *l, const double a[3], const double b[3], double r)
+{
+    double d = sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) +
+                    (b[2] - a[2]) * (b[2] - a[2]));
+    double steps = ceil(d / (QUIET_SPACING * r));
+    if (!(steps >= 1 && steps < 1e6))
+        steps = 1;
+    for (double k = 0; k < steps; k++) {
+        double t = k / steps, p[3];
+        for (int a3 = 0; a3 < 3; a3++)
+            p[a3] = a[a3] + t * (b[a3] - a[a3]);
+        if (!add_ball(l, p, r))
+            return false;
+    }
+    return true;
+}
+
+/* The balls around the locus where hidden pieces are not chased (see ism_poly_options): one
+ * at each point, a row along each curve. malloc'd in *out (NULL when there are none); false
+ * when memory ran out. */
+static bool quiet_balls(const ism_locus *l, const ism_locus_options *lo, ball_list *out)
+{
+    memset(out, 0, sizeof *out);
+    double r = QUIET_SHARE * ism_conform_min_radius(lo);
+    for (size_t i = 0; i < l->npoints; i++)
+        if (!add_ball(out, l->points[i].p, r))
+            return false;
+    for (size_t c = 0; c < l->ncurves; c++) {
+        const ism_sing_curve *cu = &l->curves[c];
+        for (size_t i = 0; i < cu->n; i++) {
+            size_t j = i + 1 < cu->n ? i + 1 : cu->closed ? 0 : i;
+            if (!add_segment(out, cu->xyz + 3 * i, cu->xyz + 3 * j, r))
+                return false;
+        }
+    }
+    return true;
 }
 
 enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options *po,
@@ -59,12 +104,15 @@ enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options 
         return ISM_POLY_NO_MEMORY;
     double t1 = ism_now_ms();
     ism_poly_options pq = *po;
-    double (*balls)[4] = quiet_balls(locus, &lo, &pq.nquiet);
-    if (locus->npoints && !balls)
+    ball_list balls;
+    if (!quiet_balls(locus, &lo, &balls)) {
+        free(balls.b);
         return ISM_POLY_NO_MEMORY;
-    pq.quiet = (const double (*)[4])balls;
+    }
+    pq.quiet = (const double (*)[4])balls.b;
+    pq.nquiet = balls.n;
     enum ism_poly_status st = ism_polygonise(f, &pq, mesh, ps, err);
-    free(balls);
+    free(balls.b);
     double t2 = ism_now_ms();
     times->polygonise_ms = t2 - t1;
     if (st != ISM_POLY_OK)
