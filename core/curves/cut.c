@@ -212,9 +212,9 @@ static bool emit(cut_state *s, uint32_t a, uint32_t b, uint32_t c)
 }
 
 /* An edge whose ends both lie on the curve, seen from a triangle whose third corner has
- * sign sign: it is a curve edge when g takes both signs across it (or at the border of the
- * mesh), not when both sides have one sign (it crosses a sector of a node, or the curve only
- * touches it). */
+ * sign sign (a triangle of zeros: g's sign inside it): it is a curve edge when g takes both
+ * signs across it (or at the border of the mesh), not when both sides have one sign (it
+ * crosses a sector of a node, or the curve only touches it). */
 static bool note_zero_edge(cut_state *s, uint32_t a, uint32_t b, int sign)
 {
     bool added;
@@ -225,7 +225,7 @@ static bool note_zero_edge(cut_state *s, uint32_t a, uint32_t b, int sign)
         return false;
     if (added)
         s->zero_edge[i] = (cut_zero_edge){a, b, 0, 0};
-    s->zero_edge[i].mask |= sign > 0 ? 1 : 2;
+    s->zero_edge[i].mask |= sign > 0 ? 1 : sign < 0 ? 2 : 0;
     s->zero_edge[i].seen += s->zero_edge[i].seen < UINT8_MAX;
     return true;
 }
@@ -235,12 +235,24 @@ static bool add_zero_edges(cut_state *s, size_t k)
 {
     for (size_t i = 0; i < s->zero.n; i++) {
         const cut_zero_edge *z = &s->zero_edge[i];
-        if ((z->mask == 3 || z->seen == 1) && !cut_add_cut_edge(s, z->a, z->b, (uint32_t)k))
+        if ((z->mask == 3 || (z->seen == 1 && z->mask)) &&
+            !cut_add_cut_edge(s, z->a, z->b, (uint32_t)k))
             return false;
     }
     ism_key_map_free(&s->zero);
     ism_key_map_init(&s->zero);
     return true;
+}
+
+/* The sign of g_k at the centroid of triangle t. */
+static int centroid_sign(cut_state *s, size_t k, const uint32_t t[3])
+{
+    double c[3] = {0, 0, 0};
+    for (int i = 0; i < 3; i++)
+        for (int d = 0; d < 3; d++)
+            c[d] += s->m->pos[3 * (size_t)t[i] + d] / 3;
+    double g = ism_cut_g(s->ev, k, c, NULL);
+    return (g > 0) - (g < 0);
 }
 
 /* Splits triangle t = (v0 v1 v2) by g_k, appending the pieces to the mesh. */
@@ -251,9 +263,10 @@ static bool split_triangle(cut_state *s, size_t k, const uint32_t t[3])
     int neg = (sg[0] < 0) + (sg[1] < 0) + (sg[2] < 0);
     uint32_t fn = (uint32_t)k;
     if (!pos || !neg) {
+        int side = pos ? 1 : neg ? -1 : centroid_sign(s, k, t); /* all zero: g inside */
         for (int i = 0; i < 3; i++)
-            if (sg[i] == 0 && sg[(i + 1) % 3] == 0 && sg[(i + 2) % 3] != 0 &&
-                !note_zero_edge(s, t[i], t[(i + 1) % 3], sg[(i + 2) % 3]))
+            if (sg[i] == 0 && sg[(i + 1) % 3] == 0 &&
+                !note_zero_edge(s, t[i], t[(i + 1) % 3], side))
                 return false;
         return emit(s, t[0], t[1], t[2]);
     }
