@@ -4,10 +4,11 @@
 
 #include <string.h>
 
-static const char *const format_names[ISM_FORMAT_COUNT] = {"drc", "glb", "ply", "obj", "stl"};
+static const char *const format_names[ISM_FORMAT_COUNT] = {"drc", "glb", "ply", "obj", "stl",
+                                                            "png"};
 static const char *const format_mimes[ISM_FORMAT_COUNT] = {
     "application/vnd.google.draco", "model/gltf-binary", "application/ply", "model/obj",
-    "model/stl"};
+    "model/stl", "image/png"};
 
 const char *ism_format_name(enum ism_format f)
 {
@@ -37,7 +38,7 @@ bool ism_request_set_format(ism_request *req, const char *name, ism_req_error *e
     int k = ism_format_lookup(name);
     if (k < 0)
         return ism_req_error_set(err, 400, "bad_request", "format",
-                                 "unknown format (expected one of: drc, glb, ply, obj, stl)");
+                                 "unknown format (expected one of: drc, glb, ply, obj, stl, png)");
     req->format = (enum ism_format)k;
     return true;
 }

@@ -512,7 +512,7 @@ static bool decode_output(const json_t *v, ism_request *req, ism_req_error *err)
         int k = ism_format_lookup(name);
         if (k < 0)
             return bad(err, "$.output.format",
-                       "unknown format (expected one of: drc, glb, ply, obj, stl)");
+                       "unknown format (expected one of: drc, glb, ply, obj, stl, png)");
         req->format = (enum ism_format)k;
     }
     const json_t *pb = json_object_get(v, "position_bits");

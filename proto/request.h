@@ -35,8 +35,9 @@
 #define ISM_REQ_MAX_CURVES      256          /* curves: entries, and offsets + values in all
                                                 (each one cut of the mesh) */
 
+/* PNG: a thumbnail picture of the mesh (proto/thumbnail.h), encoded like any format. */
 enum ism_format { ISM_FORMAT_DRC, ISM_FORMAT_GLB, ISM_FORMAT_PLY, ISM_FORMAT_OBJ,
-                  ISM_FORMAT_STL, ISM_FORMAT_COUNT };
+                  ISM_FORMAT_STL, ISM_FORMAT_PNG, ISM_FORMAT_COUNT };
 
 /* Per-vertex attributes a client may ask for (bit set). Draco unique ids: draco_encode.h. */
 enum ism_attr {
@@ -116,7 +117,7 @@ bool ism_request_decode(const char *json, size_t len, const ism_request_limits *
 
 void ism_request_free(ism_request *req);
 
-/* Replaces the format by name ("drc", "glb", "ply", "obj", "stl"); 400 on an unknown name. */
+/* Replaces the format by name ("drc", "glb", "ply", "obj", "stl", "png"); 400 on an unknown name. */
 bool ism_request_set_format(ism_request *req, const char *name, ism_req_error *err);
 
 const char *ism_format_name(enum ism_format f);

@@ -21,6 +21,7 @@
 #include "proto/mesh_files.h"
 #include "proto/request.h"
 #include "proto/stats.h"
+#include "proto/thumbnail.h"
 #include "proto/wire_mesh.h"
 
 #include <math.h>
@@ -311,6 +312,13 @@ static bool encode_body(encode_job *j, ism_buf *body, char *why, size_t n)
     case ISM_FORMAT_STL:
         ok = ism_write_stl(m, ism_buf_write, body);
         break;
+    case ISM_FORMAT_PNG: {
+        unsigned char *png;
+        size_t len;
+        if ((ok = ism_thumbnail_png(m, j->req->box, &png, &len)))
+            take(body, png, len);
+        break;
+    }
     default:
         ok = false;
     }

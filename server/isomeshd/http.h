@@ -82,6 +82,7 @@ struct ismd_req {
     char key[65];
     char fmt[8];
     char id[40];
+    const char *preset;        /* a known preset's name (static storage) */
     ismd_want want;
     bool links;                /* answer with the key and URLs (JSON), not the mesh */
     ismd_handler handler;      /* the route's answer, run once the body is in */

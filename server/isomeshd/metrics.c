@@ -15,6 +15,7 @@ static const char *const ROUTE_LABELS[ISMD_R_COUNT] = {
     "/v1/meshes/{key}.{format}", "/v1/meshes/{key}/stats", "/v1/meshes/{key}/features",
     "/v1/presets", "/v1/openapi.yaml", "/v1/request.schema.json", "/healthz", "/readyz",
     "/metrics", "static", "/vendor/three", "other", "/v1/sweep", "/v1/box", "/v1/point",
+    "/v1/presets/{name}/thumbnail.png",
 };
 
 static const unsigned STATUSES[ISMD_NSTATUS - 1] = {200, 202, 204, 206, 304, 400, 401, 403, 404,

@@ -1,15 +1,17 @@
 /* routes.c — the route table of routes.h. One line per route, first match wins: its path
- * ({id} a job id, {key} a mesh key, {fmt} a mesh format, a final * anything), its metrics
- * label, its Allow header (NULL: nothing here, 404), and its handler for GET/HEAD, POST and
- * DELETE. A POST handler reads the request body. */
+ * ({id} a job id, {key} a mesh key, {fmt} a mesh format, {name} a preset's name, a final *
+ * anything), its metrics label, its Allow header (NULL: nothing here, 404), and its handler
+ * for GET/HEAD, POST and DELETE. A POST handler reads the request body. */
 #include "server/isomeshd/routes.h"
 
 #include <stdio.h>
 #include <string.h>
 
+#include "proto/presets.h"
 #include "proto/request.h"
 
 #define JOB_ID_LEN 32 /* hex digits of a job id (jobs.h) */
+#define PRESET_NAME_MAX 64 /* longer than any preset's name (presets.c) */
 
 struct ismd_route_def {
     const char *path;
@@ -40,6 +42,7 @@ static const ismd_route_def ROUTES[] = {
     {"/v1/meshes/{key}/features",   ISMD_R_MESH_FEATURES, READ,     ismd_route_mesh_json, NULL, NULL, ISMD_WANT_FEATURES},
     {"/v1/meshes/*",                ISMD_R_MESH_FILE,     NULL,     NULL, NULL, NULL, 0},
     {"/v1/presets",                 ISMD_R_PRESETS,       READ,     ismd_route_doc, NULL, NULL, 0},
+    {"/v1/presets/{name}/thumbnail.png", ISMD_R_THUMBNAIL, READ,   ismd_route_thumbnail, NULL, NULL, 0},
     {"/v1/openapi.yaml",            ISMD_R_OPENAPI,       READ,     ismd_route_doc, NULL, NULL, 0},
     {"/v1/request.schema.json",     ISMD_R_SCHEMA,        READ,     ismd_route_doc, NULL, NULL, 0},
     {"/v1/*",                       ISMD_R_OTHER,         NULL,     NULL, NULL, NULL, 0},
@@ -81,6 +84,20 @@ static bool take_param(const char *name, size_t n, const char **url, ismd_req *r
         r->key[ISM_KEY_HEX_LEN] = 0;
         *url = u + ISM_KEY_HEX_LEN;
         return ism_key_valid(r->key);
+    }
+    if (n == 4 && !strncmp(name, "name", 4)) { /* a preset's name, up to the next '/' */
+        char buf[PRESET_NAME_MAX];
+        size_t len = strcspn(u, "/");
+        if (len >= sizeof buf)
+            return false;
+        memcpy(buf, u, len);
+        buf[len] = 0;
+        const ism_preset *p = ism_preset_find(buf);
+        if (!p)
+            return false;
+        r->preset = p->name;
+        *url = u + len;
+        return true;
     }
     if (n == 3 && !strncmp(name, "fmt", 3)) { /* the rest of the path */
         size_t len = strlen(u);

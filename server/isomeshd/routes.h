@@ -40,6 +40,7 @@ enum MHD_Result ismd_route_job_get(ismd_req *r);         /* GET /v1/jobs/{id} */
 enum MHD_Result ismd_route_job_delete(ismd_req *r);      /* DELETE /v1/jobs/{id} */
 enum MHD_Result ismd_route_job_events(ismd_req *r);      /* GET /v1/jobs/{id}/events */
 enum MHD_Result ismd_route_doc(ismd_req *r);             /* presets, openapi, schema */
+enum MHD_Result ismd_route_thumbnail(ismd_req *r);       /* GET /v1/presets/{name}/thumbnail.png */
 enum MHD_Result ismd_route_box(ismd_req *r);             /* POST /v1/box */
 enum MHD_Result ismd_route_point(ismd_req *r);           /* POST /v1/point?at=X,Y,Z */
 enum MHD_Result ismd_route_health(ismd_req *r);          /* /healthz, /readyz */

@@ -1,7 +1,8 @@
 // explore.test.mjs — the box and inspection in the viewer: a typed expression gets a box
 // fitted around its zero set (POST /v1/box) that contains the whole surface (closed form:
 // an off-centre sphere) and the mesh is not cut (no boundary edges); the box outline and
-// the axes with ticks change the picture; a box typed by hand is kept; the gallery search;
+// the axes with ticks change the picture; a box typed by hand is kept; the gallery search and
+// its thumbnails (loaded only when in view);
 // picking a node of the Cayley cubic gives its type and its closed-form coordinates within
 // 1e-6; a PNG export has the size asked for; the Curves panel cuts the sphere into cells
 // (curves drawn, areas 2 pi h, a picked cell's facts); double sheets are tinted.
@@ -98,6 +99,26 @@ describe('box and inspection', { timeout: 300000 }, () => {
     assert.equal(await page.inputValue('#preset'), 'cayley-cubic');
     assert.match(await page.textContent('#preset-source'), /Cayley.*checked on the mesh: 4 nodes/);
     await page.fill('#gallery-search', '');
+  });
+
+  it('the gallery shows the daemon\'s own thumbnails, only those in view', async () => {
+    // Searching first keeps one picture in the strip: opening it loads that one alone.
+    await page.fill('#gallery-search', 'cayley');
+    await page.click('#gallery-pictures summary');
+    await page.waitForFunction(() => document.querySelector('.thumb[data-preset="cayley-cubic"]')?.dataset.loaded === 'yes', null, { timeout: 120000 });
+    const got = await page.evaluate(() => {
+      const b = document.querySelector('.thumb[data-preset="cayley-cubic"]');
+      const img = b.querySelector('img');
+      return { w: img.naturalWidth, h: img.naturalHeight, current: b.classList.contains('current'),
+               asked: document.querySelectorAll('.thumb[data-loaded]').length,
+               shown: [...document.querySelectorAll('.thumb')].filter((t) => !t.hidden).length };
+    });
+    assert.deepEqual([got.w, got.h], [160, 120]);
+    assert.ok(got.current, 'the current preset is marked');
+    assert.ok(got.asked <= got.shown && got.shown < 10, `${got.asked} pictures asked for, ${got.shown} shown`);
+    await page.click('#gallery-pictures summary');
+    await page.fill('#gallery-search', '');
+    assert.deepEqual(errors, []);
   });
 
   it('picking a node of the Cayley cubic shows its type and coordinates (closed form)', async () => {

@@ -2,11 +2,14 @@
 each with a source, parameters, a box and depths; every entry meshes without error at its own
 settings; and every fact an entry states (nodes: singular points of type node in the features
 JSON v2; Euler characteristic; components) holds on the mesh — in the entry's box and in the
-box shifted off the octree lattice by 1e-3 and by 0.37 of a finest cell. Also POST /v1/box."""
+box shifted off the octree lattice by 1e-3 and by 0.37 of a finest cell. Also POST /v1/box, and
+the thumbnails the daemon renders itself (GET /v1/presets/{name}/thumbnail.png)."""
 import json
 import os
+import struct
 import sys
 import unittest
+import zlib
 from concurrent.futures import ThreadPoolExecutor
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -23,6 +26,34 @@ SANITIZED = os.path.basename(os.path.normpath(BUILD)) == "asan"
 def shifted(box, max_depth, s):
     cell = [(box[a + 3] - box[a]) / 2 ** max_depth for a in range(3)]
     return [box[a % 3 + (3 if a >= 3 else 0)] + s * cell[a % 3] for a in range(6)]
+
+
+def decode_png(data):
+    """(width, height, rows of RGBA bytes) of an 8-bit RGBA PNG, every chunk CRC checked, the
+    rows unfiltered (all five filter types) — with Python's zlib, independent of the daemon."""
+    assert data[:8] == b"\x89PNG\r\n\x1a\n", "PNG signature"
+    pos, idat, w = 8, b"", None
+    while pos < len(data):
+        n, kind = struct.unpack(">I4s", data[pos:pos + 8])
+        body = data[pos + 8:pos + 8 + n]
+        assert struct.unpack(">I", data[pos + 8 + n:pos + 12 + n])[0] == zlib.crc32(kind + body)
+        if kind == b"IHDR":
+            w, h, depth, colour = struct.unpack(">IIBB", body[:10])
+            assert (depth, colour) == (8, 6), "8-bit RGBA"
+        elif kind == b"IDAT":
+            idat += body
+        pos += 12 + n
+    raw, stride, rows, prev = zlib.decompress(idat), 4 * w, [], bytearray(4 * w)
+    for y in range(h):
+        f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for i in range(stride):
+            a, b, c = line[i - 4] if i >= 4 else 0, prev[i], prev[i - 4] if i >= 4 else 0
+            pa, pb, pc = abs(b - c), abs(a - c), abs(a + b - 2 * c)
+            pred = [0, a, b, (a + b) // 2, a if pa <= pb and pa <= pc else b if pb <= pc else c][f]
+            line[i] = (line[i] + pred) & 255
+        rows.append(line)
+        prev = line
+    return w, h, rows
 
 
 class GalleryTest(unittest.TestCase):
@@ -48,6 +79,31 @@ class GalleryTest(unittest.TestCase):
         stats = self.d.get(f"/v1/meshes/{key}/stats").json()
         features = self.d.get(f"/v1/meshes/{key}/features").json()
         return stats, features
+
+    def test_thumbnails_rendered_cached_and_checked(self):
+        # The torus (R 1, r 0.3) seen along (1.5, -2.1, 1.25): the line of sight through its
+        # centre passes sin(25.8 deg) = 0.44 > r from the core circle, so the centre pixel
+        # shows the hole; the Kummer surface fills more of its frame. Foreground: alpha > 0.
+        for name, share in (("torus", (0.08, 0.5)), ("kummer-16-nodes", (0.15, 0.7))):
+            before = self.d.metric("isomesh_polygonisations_total") or 0
+            r = self.d.get(f"/v1/presets/{name}/thumbnail.png", timeout=300)
+            self.assertEqual(r.status, 200, r.body[:200])
+            self.assertEqual(r.header("Content-Type"), "image/png")
+            w, h, rows = decode_png(r.body)
+            self.assertEqual((w, h), (160, 120))
+            fg = sum(1 for row in rows for x in range(w) if row[4 * x + 3]) / (w * h)
+            self.assertTrue(share[0] <= fg <= share[1], f"{name}: foreground share {fg:.3f}")
+            colours = {bytes(row[4 * x:4 * x + 3]) for row in rows for x in range(w) if row[4 * x + 3] == 255}
+            self.assertGreater(len(colours), 50, f"{name}: shaded, not flat")
+            if name == "torus":
+                self.assertEqual(rows[h // 2][4 * (w // 2) + 3], 0, "the torus' hole at the centre")
+            self.assertEqual(self.d.metric("isomesh_polygonisations_total"), before + 1)
+            again = self.d.get(f"/v1/presets/{name}/thumbnail.png")
+            self.assertEqual((again.status, again.header("X-Cache")), (200, "hit"))
+            self.assertEqual(again.body, r.body)
+            self.assertEqual(self.d.metric("isomesh_polygonisations_total"), before + 1)
+        self.assertEqual(self.d.get("/v1/presets/no-such-surface/thumbnail.png").status, 404)
+        self.assertEqual(self.d.get("/v1/presets/../thumbnail.png").status, 404)
 
     def test_box_endpoint_fits_the_zero_set(self):
         # A sphere of radius 1.2 about (3, -2, 0.5) in the cube ±10, centre shifted off the

@@ -74,6 +74,12 @@ export async function getPresets() {
   return (await r.json()).presets;
 }
 
+// GET /v1/presets/{name}/thumbnail.png: the daemon's own picture of a preset (a Blob).
+export async function getThumbnail(name, signal) {
+  const r = await call(`/v1/presets/${encodeURIComponent(name)}/thumbnail.png`, { signal });
+  return r.blob();
+}
+
 // POST /v1/jobs: the job as JSON (202; state "done" at once when the server had it cached).
 export async function submitJob(body, signal) {
   const r = await call('/v1/jobs', {

@@ -13,6 +13,7 @@ import { defaultState, requestBody, encodeState, decodeState, sensibleRange, COL
 import { renderParams } from './params_ui.js';
 import { showStats, clearStats, showLegend } from './stats_ui.js';
 import { niceStep, sig } from './format.js';
+import { Gallery } from './gallery.js';
 import { Previewer, ticket, claim } from './live.js';
 
 const DEFAULT_PRESET = 'steiner-roman';
@@ -175,8 +176,20 @@ function fillPresetMenu() {
   custom.value = '';
   custom.textContent = 'Custom expression';
   sel.append(custom);
+  gallery.fill(presets);
+  gallery.watch($('gallery-pictures').open);
   filterGallery();
 }
+
+// The pictures' strip (gallery.js): a click picks the preset like the menu does.
+const gallery = new Gallery($('thumbs'), {
+  load: (name) => api.getThumbnail(name),
+  pick: (name) => {
+    if (name === state.preset) return;
+    $('preset').value = name;
+    $('preset').dispatchEvent(new Event('change'));
+  },
+});
 
 function usePreset(name) {
   const p = presetByName(name);
@@ -204,13 +217,14 @@ function presetFacts(p) {
 function filterGallery() {
   const words = $('gallery-search').value.toLowerCase().split(/\s+/).filter(Boolean);
   let shown = 0;
+  const keep = (p) => words.every((w) => `${p.name} ${p.title} ${p.about} ${p.source || ''}`.toLowerCase().includes(w));
   for (const o of $('preset').options) {
     const p = presetByName(o.value);
     if (!p) continue;
-    const text = `${p.name} ${p.title} ${p.about} ${p.source || ''}`.toLowerCase();
-    o.hidden = !words.every((w) => text.includes(w)) && o.value !== $('preset').value;
+    o.hidden = !keep(p) && o.value !== $('preset').value;
     if (!o.hidden) shown++;
   }
+  gallery.filter((name) => keep(presetByName(name)), $('preset').value);
   $('gallery-count').textContent = words.length ? `${shown} of ${presets.length}` : `${presets.length} surfaces`;
   document.body.dataset.galleryShown = String(shown);
 }
@@ -221,6 +235,7 @@ function showPresetChoice() {
   $('preset-about').textContent = p ? p.about : 'Your own expression: every name that is not x, y, z, a function, a constant or a let is a parameter.';
   $('preset-source').textContent = p ? presetFacts(p) : '';
   $('reset-box').disabled = !p;
+  filterGallery();
 }
 
 // ---- controls <-> state ---------------------------------------------------------------
@@ -891,6 +906,7 @@ function wire() {
   });
 
   $('gallery-search').addEventListener('input', filterGallery);
+  $('gallery-pictures').addEventListener('toggle', () => gallery.watch($('gallery-pictures').open));
   $('gallery-search').addEventListener('keydown', (e) => {
     // Enter picks the first surface the search keeps.
     if (e.key !== 'Enter') return;

@@ -99,7 +99,7 @@ class Job:
             raise IsomeshError(self.info.get("status", 500), err.get("code", self.info["state"]),
                                err.get("message", "the job did not finish"))
         key, fmt = self.info["key"], self.info["format"]
-        urls = {f: "/v1/meshes/%s.%s" % (key, f) for f in ("drc", "glb", "ply", "obj", "stl")}
+        urls = {f: "/v1/meshes/%s.%s" % (key, f) for f in ("drc", "glb", "ply", "obj", "stl", "png")}
         urls.update(stats=self.info.get("stats_url", "/v1/meshes/%s/stats" % key),
                     features=self.info.get("features_url", "/v1/meshes/%s/features" % key))
         return MeshRef(self.client, {"key": key, "format": fmt, "urls": urls,
@@ -140,7 +140,7 @@ class Client:
 
     def mesh(self, request, format=None):
         """Computes (or finds) the mesh of request (a dict: proto/request.schema.json) and
-        returns its MeshRef; format ("drc", "glb", "ply", "obj", "stl") overrides the
+        returns its MeshRef; format ("drc", "glb", "ply", "obj", "stl", "png") overrides the
         request's."""
         query = {"format": format} if format else None
         return MeshRef(self, self._json("POST", "/v1/mesh", request, query))

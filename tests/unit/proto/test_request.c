@@ -152,7 +152,7 @@ static const bad_case bad_cases[] = {
     /* output */
     {"{\"expr\": \"x\", \"output\": {\"format\": \"gltf\"}}", 400, "bad_request",
      "$.output.format",
-     "$.output.format: unknown format (expected one of: drc, glb, ply, obj, stl)"},
+     "$.output.format: unknown format (expected one of: drc, glb, ply, obj, stl, png)"},
     {"{\"expr\": \"x\", \"output\": {\"position_bits\": 30}}", 422, "over_limit",
      "$.output.position_bits", "$.output.position_bits: 30 is above the limit 24"},
     {"{\"expr\": \"x\", \"output\": {\"normal_bits\": 2}}", 422, "over_limit",
