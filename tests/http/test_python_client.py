@@ -93,7 +93,7 @@ class PythonClientTest(unittest.TestCase):
             self.c.sweep(SPHERE, {"r": []})
         self.assertEqual(e.exception.status, 400)
         with self.assertRaises(isomesh_client.IsomeshError) as e:
-            self.c.sweep(SPHERE, {"r": [0.5, 0.6]}, format="png")
+            self.c.sweep(SPHERE, {"r": [0.5, 0.6]}, format="gif")
         self.assertEqual(e.exception.status, 400)
         self.assertIn("grid point 0", e.exception.message)
         with self.assertRaises(isomesh_client.IsomeshError) as e:
