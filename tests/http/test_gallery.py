@@ -168,6 +168,10 @@ class GalleryTest(unittest.TestCase):
                 if got[fact] != want:
                     failures.append(f"{where}: {fact} {got[fact]}, the gallery says {want}")
         self.assertEqual(failures, [], "\n".join(failures))
+        # every entry at its own depth ran in the seccomp-filtered workers without one dying
+        # (tests/reliability/test_sandbox.py relies on this for full depths)
+        self.assertEqual(self.d.metric("isomesh_worker_restarts_total", reason="crash"), 0)
+        self.assertEqual(self.d.log_count("sandbox refused", 1, timeout=0), 0)
 
 
 if __name__ == "__main__":
