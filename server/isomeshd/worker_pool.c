@@ -1,6 +1,9 @@
 /* worker_pool.c — the pool thread of worker_pool.h: its epoll loop over the workers' pipes
  * (non-blocking frame I/O), dispatch from the queue, results into the cache, deadlines,
- * cancellation, preemption, crash detection, respawn with back-off, shutdown. Starting a
+ * cancellation, preemption, crash detection, respawn with back-off, shutdown. One surface is
+ * polygonised once even when several formats of it are asked for at once: a flight whose
+ * surface another worker is polygonising is held (still "running" for the scheduler, on no
+ * worker) until that computation ends, then encoded from the stored surface. Starting a
  * process is worker_spawn.h's; Server-Timing entries from the stats server_timing.h's. */
 #include "server/isomeshd/worker_pool.h"
 
@@ -34,6 +37,12 @@
 
 typedef enum wstate { W_EMPTY, W_STARTING, W_IDLE, W_BUSY, W_DYING } wstate;
 
+/* A flight held until its surface, being polygonised by another worker, is stored. */
+typedef struct held {
+    ismd_flight *f;
+    char surface[65];
+} held;
+
 typedef struct worker {
     int slot;
     wstate state;
@@ -42,6 +51,8 @@ typedef struct worker {
     bool want_out;             /* EPOLLOUT registered on to_fd */
     ism_frame_reader rd;
     ismd_flight *flight;
+    char surface[65];          /* the surface key of flight */
+    bool polygonising;         /* flight computes its surface (none was stored) */
     unsigned char *out;        /* request frame being written */
     size_t out_len, out_off;
     long long spawned_ns, respawn_at_ns;
@@ -57,6 +68,8 @@ struct ismd_pool {
     int n;
     int epfd, evfd;
     pthread_t thread;
+    held *held;                /* flights waiting for another's polygonisation of their surface */
+    size_t nheld, held_cap;
     atomic_bool stopping;
     long long stop_deadline_ns;
 };
@@ -428,9 +441,11 @@ static void flush_out(ismd_pool *p, worker *w)
     }
 }
 
-/* The stored computed surface of a flight's request (its surface key's entry), or NULL. */
-static ism_blob *stored_surface(ismd_pool *p, const ismd_flight *f)
+/* The stored computed surface of a flight's request (its surface key's entry), or NULL;
+ * surface gets the surface key ("" when the request does not key). */
+static ism_blob *stored_surface(ismd_pool *p, const ismd_flight *f, char surface[65])
 {
+    surface[0] = 0;
     if (!f->request)
         return NULL;
     ism_pipeline_limits lim;
@@ -441,13 +456,14 @@ static ism_blob *stored_surface(ismd_pool *p, const ismd_flight *f)
     bool keyed = ism_pipeline_key((const char *)f->request->data, f->request->len, f->fmt, &lim,
                                   &pr) &&
                  ism_cache_name(name, pr.surface_key, ISM_COMPUTED_EXT);
+    if (keyed)
+        memcpy(surface, pr.surface_key, 65);
     ism_pipeline_result_free(&pr);
     return keyed ? ism_cache_get(p->cache, name, NULL) : NULL;
 }
 
-static bool encode_request(ismd_pool *p, worker *w, const ismd_flight *f)
+static bool encode_request(ismd_pool *p, worker *w, const ismd_flight *f, ism_blob *stored)
 {
-    ism_blob *stored = stored_surface(p, f);
     ism_frame_job job = {
         .max_depth = (uint32_t)p->cfg.max_depth,
         .threads = (uint32_t)p->cfg.threads,
@@ -467,8 +483,74 @@ static bool encode_request(ismd_pool *p, worker *w, const ismd_flight *f)
         w->out_off = 0;
     }
     ism_frame_builder_free(&b);
-    ism_blob_unref(stored);
     return ok;
+}
+
+/* ---- flights held behind their surface's polygonisation ------------------------------- */
+
+static bool polygonising(const ismd_pool *p, const char *surface)
+{
+    for (int i = 0; i < p->n; i++)
+        if (p->w[i].state == W_BUSY && p->w[i].flight && p->w[i].polygonising &&
+            !strcmp(p->w[i].surface, surface))
+            return true;
+    return false;
+}
+
+static bool hold(ismd_pool *p, ismd_flight *f, const char *surface)
+{
+    if (p->nheld == p->held_cap) {
+        size_t cap = p->held_cap ? 2 * p->held_cap : 16;
+        held *h = realloc(p->held, cap * sizeof *h);
+        if (!h)
+            return false;
+        p->held = h;
+        p->held_cap = cap;
+    }
+    p->held[p->nheld].f = f;
+    memcpy(p->held[p->nheld].surface, surface, 65);
+    p->nheld++;
+    return true;
+}
+
+static void unhold_at(ismd_pool *p, size_t i)
+{
+    p->held[i] = p->held[--p->nheld];
+}
+
+/* Forgets f if it is held (it is being finished). */
+static void unhold(ismd_pool *p, const ismd_flight *f)
+{
+    for (size_t i = 0; i < p->nheld; i++)
+        if (p->held[i].f == f) {
+            unhold_at(p, i);
+            return;
+        }
+}
+
+/* The next flight for an idle worker, with its stored surface (or NULL) and surface key: a
+ * held flight whose surface is no longer being polygonised first, then the queue's next; a
+ * queued flight whose surface a busy worker is polygonising is held instead. */
+static ismd_flight *next_flight(ismd_pool *p, ism_blob **stored, char surface[65])
+{
+    for (size_t i = 0; i < p->nheld; i++)
+        if (!polygonising(p, p->held[i].surface)) {
+            ismd_flight *f = p->held[i].f;
+            unhold_at(p, i);
+            *stored = stored_surface(p, f, surface);
+            return f;
+        }
+    for (;;) {
+        ismd_sched_lock(p->sched);
+        ismd_flight *f = ismd_sched_next(p->sched);
+        ismd_sched_unlock(p->sched);
+        if (!f)
+            return NULL;
+        /* running now: only this thread finishes it, so it stays valid without the lock */
+        *stored = stored_surface(p, f, surface);
+        if (*stored || !surface[0] || !polygonising(p, surface) || !hold(p, f, surface))
+            return f;
+    }
 }
 
 static void dispatch(ismd_pool *p)
@@ -477,18 +559,24 @@ static void dispatch(ismd_pool *p)
         worker *w = &p->w[i];
         if (w->state != W_IDLE)
             continue;
-        ismd_sched_lock(p->sched);
-        ismd_flight *f = ismd_sched_next(p->sched);
-        bool ok = f && encode_request(p, w, f);
-        if (f && !ok)
-            ismd_sched_fail(p->sched, f, 500, "out_of_memory", "the server ran out of memory",
-                            ISMD_OUT_ERROR);
-        ismd_sched_unlock(p->sched);
+        ism_blob *stored = NULL;
+        char surface[65];
+        ismd_flight *f = next_flight(p, &stored, surface);
         if (!f)
             break;
-        if (!ok)
+        bool ok = encode_request(p, w, f, stored);
+        ism_blob_unref(stored);
+        if (!ok) {
+            ismd_sched_lock(p->sched);
+            ismd_sched_fail(p->sched, f, 500, "out_of_memory", "the server ran out of memory",
+                            ISMD_OUT_ERROR);
+            ismd_sched_unlock(p->sched);
+            i--; /* the worker is still idle */
             continue;
+        }
         w->flight = f;
+        w->polygonising = stored == NULL;
+        memcpy(w->surface, surface, sizeof w->surface);
         w->state = W_BUSY;
         flush_out(p, w);
     }
@@ -534,6 +622,7 @@ static void enforce(ismd_pool *p, long long now)
     size_t ne = ismd_sched_expire(p->sched, now, expired, MAX_EXPIRED);
     for (size_t i = 0; i < ne; i++) {
         worker *w = worker_of(p, expired[i]);
+        unhold(p, expired[i]);
         char msg[160];
         snprintf(msg, sizeof msg, "the computation ran past its deadline of %g s "
                  "(--job-timeout); its worker was stopped", p->sched->job_timeout_s);
@@ -557,6 +646,18 @@ static void enforce(ismd_pool *p, long long now)
             doomed[nd] = w;
             why[nd++] = ISMD_RESTART_CANCEL;
         }
+    }
+    for (size_t i = 0; i < p->nheld;) {
+        ismd_flight *f = p->held[i].f;
+        if (f->nwaiters > 0 && !f->canceled) {
+            i++;
+            continue;
+        }
+        unhold_at(p, i);
+        if (f->nwaiters == 0)
+            ismd_sched_finish(p->sched, f, &(ismd_result){.status = 499}, ISMD_OUT_CANCELED);
+        else
+            ismd_sched_fail(p->sched, f, 499, "canceled", "the job was canceled", ISMD_OUT_CANCELED);
     }
     worker *taken = preempt(p);
     if (taken && nd < sizeof doomed / sizeof doomed[0]) {
@@ -613,6 +714,14 @@ static int alive_count(ismd_pool *p)
  * then SIGKILL the stragglers. */
 static void stop_all(ismd_pool *p)
 {
+    ismd_sched_lock(p->sched);
+    while (p->nheld) {
+        ismd_flight *f = p->held[0].f;
+        unhold_at(p, 0);
+        ismd_sched_fail(p->sched, f, 503, "shutting_down",
+                        "the server is shutting down; retry on another instance", ISMD_OUT_CANCELED);
+    }
+    ismd_sched_unlock(p->sched);
     for (int i = 0; i < p->n; i++) {
         worker *w = &p->w[i];
         if (w->state == W_BUSY && w->flight) {
@@ -741,6 +850,7 @@ void ismd_pool_stop(ismd_pool *p, double grace_s)
     ismd_sched_unlock(p->sched);
     close(p->epfd);
     close(p->evfd);
+    free(p->held);
     free(p->w);
     free(p);
 }

@@ -4,7 +4,8 @@ from the stored computed surface ("<surface key>.mesh"): isomesh_polygonisations
 by exactly one, isomesh_stored_encodings_total by three. The encodings made from the stored
 surface are the very bytes a fresh daemon computes for the same requests, their vertex counts
 agree with the stats, and every answer carries proto/format.c's Content-Type. A second
-accuracy (depth) is a second polygonisation."""
+accuracy (depth) is a second polygonisation. Formats asked for at the same time, before the
+surface is computed, are one polygonisation too (the pool holds the others behind it)."""
 import json
 import math
 import os
@@ -12,6 +13,7 @@ import struct
 import subprocess
 import sys
 import unittest
+from concurrent.futures import ThreadPoolExecutor
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from harness import ROOT, Daemon, draco_counts  # noqa: E402
@@ -44,6 +46,23 @@ class OneComputationTest(unittest.TestCase):
     def counters(self, d):
         return (d.metric("isomesh_polygonisations_total") or 0,
                 d.metric("isomesh_stored_encodings_total") or 0)
+
+    def test_concurrent_formats_one_polygonisation(self):
+        # A surface that takes the worker a while (depth 7, ~1 s): drc, ply and glb asked for
+        # at once with two workers free. Without holding, two workers would each polygonise.
+        req = with_(params={"a": 1.3}, depth={"min": 3, "max": 7})
+        with Daemon("--workers", "2") as d:
+            p0, s0 = self.counters(d)
+            with ThreadPoolExecutor(3) as ex:
+                answers = list(ex.map(lambda fmt: d.post("/v1/mesh?format=" + fmt, req, timeout=300),
+                                      ("drc", "ply", "glb")))
+            for r in answers:
+                self.assertEqual(r.status, 200, r.body[:300])
+                self.assertEqual(r.header("X-Cache"), "miss")
+            self.assertEqual(len({r.header("ETag") for r in answers}), 1)
+            stats = d.get("/v1/meshes/%s/stats" % answers[0].header("ETag").strip('"')).json()
+            self.assertEqual(ply_vertex_count(answers[1].body), stats["mesh"]["vertices"])
+            self.assertEqual(self.counters(d), (p0 + 1, s0 + 2))
 
     def test_four_encodings_one_polygonisation(self):
         twelve = with_(output={"position_bits": 12, "attributes": ["normal", "class"]})
