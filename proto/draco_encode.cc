@@ -3,17 +3,22 @@
 // triangles for the same bytes) and encodes it with edgebreaker. The only C++ in isomesh;
 // nothing escapes it but a C struct and a message.
 //
-// Encoding speed (ISM_DRACO_DEFAULT_SPEED = 4, for encoding and decoding), chosen by
-// measurement with tests/bench/bench_wire on polygoniser meshes (torus, sphere, gyroid, Klein
-// bottle; 14 position bits, 10 normal bits):
-//   speeds 5-7   identical tools and sizes: positions 1.42-1.86 B/triangle;
-//   speed 4      Draco's costlier tools for positions and connectivity: 6-11% smaller
-//                (1.26-1.75 B/tri) at about the same encode rate (3-5 Mtri/s positions
-//                only, 2.5-3 Mtri/s with normals);
-//   speeds 0-3   normals another 6-8% smaller, but encoding with normals falls to
-//                1.4-2.4 Mtri/s, under the service's goal of 2 Mtri/s;
-//   speeds 8-10  weaker prediction, then the sequential coder (4-7x larger).
-// So 4 is the smallest output that keeps encoding comfortably above 2 Mtri/s.
+// The service's tools (ism_draco_default_tools: speed 8 with valence-coded edgebreaker
+// connectivity), chosen by measurement with `bench_wire --tools` (issue 16: within 5% of speed
+// 4's size at <= 1/2 its encode time) on the default payload (14-bit positions, 10-bit normals,
+// 14-bit curvatures, class), CPU time of the fastest of 2-5 encodes, ratios to speed 4:
+//   mesh (triangles)       speed 5      speed 8      speed 8 + valence
+//   torus d7 (19k)         1.03 0.71    0.99 0.33    0.95 0.43
+//   torus d9 (59k)         1.04 0.93    1.04 0.35    1.00 0.51
+//   gyroid-ball d7 (94k)   1.03 1.03    1.03 0.31    0.99 0.41
+//   gyroid-ball d9 (428k)  1.04 1.05    1.06 0.40    1.02 0.41
+//   klein d8 (88k)         1.06 1.03    1.07 0.36    1.02 0.33
+//   kummer-16 d9 (169k)    1.04 0.86    1.07 0.29    1.03 0.28
+// Speeds 0-4 choose Draco's costly tools (valence connectivity, and below 4 geometric normal
+// prediction); speeds 5-7 the same tools as each other (speed 5 column); speed 8 delta-codes
+// every attribute instead of parallelogram prediction, which costs little on these dense
+// meshes and saves ~60% of the time; valence connectivity wins back the size. Speed 10 is the
+// sequential coder (4-7x larger). Positions-only and with-normals tables: bench_wire.py.
 #include "proto/draco_encode.h"
 
 #include <cstdio>
@@ -138,8 +143,29 @@ bool encode(const ism_draco_input *in, ism_draco_output *out)
     }
 
     draco::ExpertEncoder enc(mesh);
-    const int speed = in->speed < 0 ? ISM_DRACO_DEFAULT_SPEED : in->speed;
-    enc.SetSpeedOptions(speed, speed);
+    const ism_draco_tools *tools = in->tools ? in->tools : &ism_draco_default_tools;
+    enc.SetSpeedOptions(tools->speed, tools->speed);
+    if (tools->connectivity != ISM_DRACO_CONN_BY_SPEED) {
+        // SetEncodingSubmethod writes "encoding_submethod", which 1.5.5's edgebreaker never
+        // reads (measured: same bytes); it reads "edgebreaker_method".
+        enc.SetEncodingMethod(draco::MESH_EDGEBREAKER_ENCODING);
+        enc.options().SetGlobalInt("edgebreaker_method",
+                                   tools->connectivity == ISM_DRACO_CONN_VALENCE
+                                       ? draco::MESH_EDGEBREAKER_VALENCE_ENCODING
+                                       : draco::MESH_EDGEBREAKER_STANDARD_ENCODING);
+    }
+    if (tools->position_prediction != ISM_DRACO_PRED_BY_SPEED) {
+        static const draco::PredictionSchemeMethod method[] = {
+            draco::PREDICTION_UNDEFINED, draco::PREDICTION_DIFFERENCE,
+            draco::MESH_PREDICTION_PARALLELOGRAM,
+            draco::MESH_PREDICTION_CONSTRAINED_MULTI_PARALLELOGRAM};
+        const draco::Status ps =
+            enc.SetAttributePredictionScheme(pos, method[tools->position_prediction]);
+        if (!ps.ok()) {
+            set_error(out, ps.error_msg());
+            return false;
+        }
+    }
     enc.SetTrackEncodedProperties(true);
     enc.SetAttributeQuantization(pos, in->position_bits);
     if (nrm >= 0)
@@ -169,6 +195,9 @@ bool encode(const ism_draco_input *in, ism_draco_output *out)
 }
 
 } // namespace
+
+extern "C" const ism_draco_tools ism_draco_default_tools = {8, ISM_DRACO_CONN_VALENCE,
+                                                            ISM_DRACO_PRED_BY_SPEED};
 
 extern "C" bool ism_draco_encode(const ism_draco_input *in, ism_draco_output *out)
 {

@@ -46,9 +46,28 @@ enum ism_draco_id {
     ISM_DRACO_ID_DOUBLE_SHEET = 6,
 };
 
-/* Encoding speed used by the service (the measurement that chose it: draco_encode.cc). It
- * enters the cache key: changing it changes the bytes. */
-#define ISM_DRACO_DEFAULT_SPEED 4
+/* Draco's tools. speed 0 (smallest) .. 10 (fastest) picks them all; the other fields override
+ * one choice (0 = what the speed picks). */
+enum ism_draco_connectivity {
+    ISM_DRACO_CONN_BY_SPEED = 0,
+    ISM_DRACO_CONN_STANDARD,        /* edgebreaker, standard symbols */
+    ISM_DRACO_CONN_VALENCE,         /* edgebreaker, valence-coded symbols (speeds 0-4) */
+};
+enum ism_draco_prediction {
+    ISM_DRACO_PRED_BY_SPEED = 0,
+    ISM_DRACO_PRED_DIFFERENCE,
+    ISM_DRACO_PRED_PARALLELOGRAM,          /* speeds 2-7 */
+    ISM_DRACO_PRED_CONSTRAINED_MULTI,      /* speeds 0-1 */
+};
+typedef struct ism_draco_tools {
+    int speed;
+    enum ism_draco_connectivity connectivity;
+    enum ism_draco_prediction position_prediction;
+} ism_draco_tools;
+
+/* The service's tools (the measurement that chose them: draco_encode.cc). They enter the
+ * cache key: changing them changes the bytes. */
+extern const ism_draco_tools ism_draco_default_tools;
 
 typedef struct ism_draco_input {
     size_t nverts, ntris;
@@ -61,7 +80,7 @@ typedef struct ism_draco_input {
     int position_bits;              /* quantisation over the mesh's bounding cube (1..30) */
     int normal_bits;                /* octahedral quantisation of normals */
     int curvature_bits;             /* 0 = float32 as given, else quantised */
-    int speed;                      /* 0 (smallest) .. 10 (fastest); < 0 = default */
+    const ism_draco_tools *tools;   /* NULL = ism_draco_default_tools */
     /* Points split from the vertices (corner_split.h): when point_vertex is set, tri indexes
      * npoints points and point p shows vertex point_vertex[p]; else points are vertices. */
     size_t npoints;

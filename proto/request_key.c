@@ -148,6 +148,22 @@ char *ism_request_canonical(const ism_request *req, size_t *len)
 }
 
 /* The key material; with_encoding adds what changes the bytes but not the surface. */
+/* The encoder's tools change the bytes too (an override only when set, so keys made with the
+ * speed alone stay as they were). */
+static void write_draco_tools(ism_jw *w, const ism_draco_tools *t)
+{
+    ism_jw_key(w, "draco_speed");
+    ism_jw_int(w, t->speed);
+    if (t->connectivity != ISM_DRACO_CONN_BY_SPEED) {
+        ism_jw_key(w, "draco_connectivity");
+        ism_jw_int(w, (int)t->connectivity);
+    }
+    if (t->position_prediction != ISM_DRACO_PRED_BY_SPEED) {
+        ism_jw_key(w, "draco_position_prediction");
+        ism_jw_int(w, (int)t->position_prediction);
+    }
+}
+
 static char *key_material(const ism_request *req, const ism_tape *tape, bool with_encoding,
                           size_t *len)
 {
@@ -183,8 +199,7 @@ static char *key_material(const ism_request *req, const ism_tape *tape, bool wit
     if (with_encoding) {
         ism_jw_key(&w, "encoding");
         write_output(&w, req, true);
-        ism_jw_key(&w, "draco_speed"); /* the encoder's setting changes the bytes too */
-        ism_jw_int(&w, ISM_DRACO_DEFAULT_SPEED);
+        write_draco_tools(&w, &ism_draco_default_tools);
     }
     ism_jw_object_end(&w);
     return ism_jw_take(&w, len);

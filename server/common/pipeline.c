@@ -246,7 +246,7 @@ static bool encode_draco(encode_job *j, ism_draco_output *d, char *why, size_t n
         .position_bits = j->req->position_bits,
         .normal_bits = j->req->normal_bits,
         .curvature_bits = j->req->curvature_bits,
-        .speed = -1,
+        .tools = NULL,
     };
     ism_corner_split split = {0};
     if (w->tri_cell || w->tri_sheet) { /* triangle labels: vertices split where they change */

@@ -5,7 +5,8 @@
  * is also written as binary PLY into the directory given with --out (the reference tools of
  * bench_wire.py read it). Prints one JSON object per line.
  *
- *   bench_wire [--out DIR] [--quick]     (--quick: only the small and middle meshes) */
+ *   bench_wire [--out DIR] [--quick] [--tools]   (--quick: only the small and middle meshes;
+ *                                                 --tools: only the tool table, on tool_cases) */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -40,25 +41,44 @@ static const bench_case cases[] = {
     {"kummer-16", "{\"preset\": \"kummer-16-nodes\", \"depth\": {\"max\": 8}}", 5},
 };
 
+/* The presets of issue 16's encoding goal at their default depth and at depth 9: only the
+ * tool table (--tools). */
+static const bench_case tool_cases[] = {
+    {"torus-d7", "{\"preset\": \"torus\"}", 5},
+    {"torus-d9", "{\"preset\": \"torus\", \"depth\": {\"max\": 9}}", 3},
+    {"gyroid-d7", "{\"preset\": \"gyroid-ball\"}", 3},
+    {"gyroid-d9", "{\"preset\": \"gyroid-ball\", \"depth\": {\"max\": 9}}", 2},
+    {"klein-d8", "{\"preset\": \"klein-bottle\"}", 3},
+    {"kummer16-d9", "{\"preset\": \"kummer-16-nodes\"}", 2},
+};
+
 static int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
     return (x > y) - (x < y);
 }
 
-/* Shortest encode time over repeats (the least disturbed by other work on a shared machine);
- * bytes of the (deterministic) output. */
+/* This thread's CPU milliseconds (a loaded machine stretches wall time, not this). */
+static double thread_cpu_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
+}
+
+/* Shortest encode time over repeats, in CPU time of the encoding thread (the least disturbed
+ * by other work on a shared machine); bytes of the (deterministic) output. */
 static bool measure(const ism_draco_input *in, int repeats, size_t *bytes, double *ms)
 {
     double t[16];
     for (int r = 0; r < repeats && r < 16; r++) {
         ism_draco_output d;
-        double t0 = ism_now_ms();
+        double t0 = thread_cpu_ms();
         if (!ism_draco_encode(in, &d)) {
             fprintf(stderr, "bench_wire: %s\n", d.error);
             return false;
         }
-        t[r] = ism_now_ms() - t0;
+        t[r] = thread_cpu_ms() - t0;
         *bytes = d.len;
         free(d.data);
     }
@@ -70,7 +90,7 @@ static bool measure(const ism_draco_input *in, int repeats, size_t *bytes, doubl
 static size_t file_write(void *ctx, const void *p, size_t n) { return fwrite(p, 1, n, ctx); }
 
 static ism_draco_input input_of(const ism_wire_mesh *w, unsigned attrs, int bits, int cbits,
-                                int speed)
+                                const ism_draco_tools *tools)
 {
     ism_draco_input in = {
         .nverts = w->nverts,
@@ -84,7 +104,7 @@ static ism_draco_input input_of(const ism_wire_mesh *w, unsigned attrs, int bits
         .position_bits = bits,
         .normal_bits = ISM_REQ_DEFAULT_NORMAL_BITS,
         .curvature_bits = cbits,
-        .speed = speed,
+        .tools = tools,
     };
     return in;
 }
@@ -101,7 +121,42 @@ static size_t glb_side_bytes(const ism_features *f)
     return b + f->npoints * 12;
 }
 
-static bool run_case(const bench_case *c, const char *out_dir)
+/* Draco's tool choices on the service's default payload (all attributes, 14 bits), each beside
+ * the service's: the table that chose ism_draco_default_tools. */
+static bool run_tools(const bench_case *c, const ism_wire_mesh *w)
+{
+    static const struct {
+        const char *name;
+        ism_draco_tools t;
+    } tools[] = {
+        {"speed4", {4, ISM_DRACO_CONN_BY_SPEED, ISM_DRACO_PRED_BY_SPEED}},
+        {"speed5", {5, ISM_DRACO_CONN_BY_SPEED, ISM_DRACO_PRED_BY_SPEED}},
+        {"speed4+standard", {4, ISM_DRACO_CONN_STANDARD, ISM_DRACO_PRED_BY_SPEED}},
+        {"speed5+valence", {5, ISM_DRACO_CONN_VALENCE, ISM_DRACO_PRED_BY_SPEED}},
+        {"speed8", {8, ISM_DRACO_CONN_BY_SPEED, ISM_DRACO_PRED_BY_SPEED}},
+        {"speed8+parallelogram", {8, ISM_DRACO_CONN_BY_SPEED, ISM_DRACO_PRED_PARALLELOGRAM}},
+        {"speed8+valence", {8, ISM_DRACO_CONN_VALENCE, ISM_DRACO_PRED_BY_SPEED}},
+        {"speed9", {9, ISM_DRACO_CONN_BY_SPEED, ISM_DRACO_PRED_BY_SPEED}},
+    };
+    for (size_t i = 0; i < sizeof tools / sizeof tools[0]; i++) {
+        ism_draco_input in = input_of(w, ISM_ATTR_ALL, 14, ISM_REQ_DEFAULT_CURVATURE_BITS,
+                                      &tools[i].t);
+        size_t bytes;
+        double ms;
+        if (!measure(&in, c->repeats, &bytes, &ms))
+            return false;
+        const ism_draco_tools *t = &tools[i].t, *d = &ism_draco_default_tools;
+        bool is_default = t->speed == d->speed && t->connectivity == d->connectivity &&
+                          t->position_prediction == d->position_prediction;
+        printf("{\"case\":\"%s\",\"kind\":\"tools\",\"tools\":\"%s\",\"bytes\":%zu,"
+               "\"ms\":%.3f,\"default\":%s}\n",
+               c->name, tools[i].name, bytes, ms, is_default ? "true" : "false");
+        fflush(stdout);
+    }
+    return true;
+}
+
+static bool run_case(const bench_case *c, const char *out_dir, bool tools_only)
 {
     ism_request req;
     ism_req_error rerr;
@@ -139,6 +194,8 @@ static bool run_case(const bench_case *c, const char *out_dir)
     }
     size_t flen = 0;
     free(ism_features_json(&m, &f, &flen));
+    if (tools_only)
+        out_dir = NULL;
 
     if (out_dir) {
         char path[512];
@@ -158,6 +215,16 @@ static bool run_case(const bench_case *c, const char *out_dir)
            c->name, m.ntris, m.nverts, m.nverts * 12 + m.ntris * 12, ism_ply_size(&m), poly_ms,
            a.nonmanifold_edges, a.npoints, a.boundary_edges, flen, glb_side_bytes(&f));
 
+    if (tools_only) {
+        bool ok = run_tools(c, &w);
+        ism_features_free(&f);
+        ism_wire_mesh_free(&w);
+        ism_analysis_free(&a);
+        ism_mesh_free(&m);
+        ism_tape_free(tape);
+        ism_request_free(&req);
+        return ok;
+    }
     static const struct {
         const char *name;
         unsigned attrs;
@@ -168,7 +235,7 @@ static bool run_case(const bench_case *c, const char *out_dir)
     for (size_t b = 0; b < 3; b++)
         for (size_t v = 0; v < 3; v++) {
             ism_draco_input in = input_of(&w, variants[v].attrs, bits[b],
-                                          ISM_REQ_DEFAULT_CURVATURE_BITS, -1);
+                                          ISM_REQ_DEFAULT_CURVATURE_BITS, NULL);
             size_t bytes;
             double ms;
             if (!measure(&in, c->repeats, &bytes, &ms))
@@ -180,7 +247,8 @@ static bool run_case(const bench_case *c, const char *out_dir)
     static const int speeds[] = {0, 2, 4, 5, 6, 7, 8, 10};
     for (size_t s = 0; s < sizeof speeds / sizeof speeds[0]; s++)
         for (size_t v = 0; v < 2; v++) {
-            ism_draco_input in = input_of(&w, variants[v].attrs, 14, 0, speeds[s]);
+            ism_draco_tools t = {speeds[s], ISM_DRACO_CONN_BY_SPEED, ISM_DRACO_PRED_BY_SPEED};
+            ism_draco_input in = input_of(&w, variants[v].attrs, 14, 0, &t);
             size_t bytes;
             double ms;
             if (!measure(&in, c->repeats, &bytes, &ms))
@@ -189,9 +257,11 @@ static bool run_case(const bench_case *c, const char *out_dir)
                    "\"bytes\":%zu,\"ms\":%.3f}\n",
                    c->name, speeds[s], variants[v].name, bytes, ms);
         }
+    if (!run_tools(c, &w))
+        return false;
     static const int cbits[] = {0, 10, 12, 14, 16};
     for (size_t k = 0; k < sizeof cbits / sizeof cbits[0]; k++) {
-        ism_draco_input in = input_of(&w, ISM_ATTR_ALL, 14, cbits[k], -1);
+        ism_draco_input in = input_of(&w, ISM_ATTR_ALL, 14, cbits[k], NULL);
         size_t bytes;
         double ms;
         if (!measure(&in, 1, &bytes, &ms))
@@ -212,21 +282,30 @@ static bool run_case(const bench_case *c, const char *out_dir)
 int main(int argc, char **argv)
 {
     const char *out_dir = NULL;
-    bool quick = false;
+    bool quick = false, tools_only = false;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--out") == 0 && i + 1 < argc)
             out_dir = argv[++i];
         else if (strcmp(argv[i], "--quick") == 0)
             quick = true;
+        else if (strcmp(argv[i], "--tools") == 0)
+            tools_only = true;
         else {
-            fprintf(stderr, "usage: bench_wire [--out DIR] [--quick]\n");
+            fprintf(stderr, "usage: bench_wire [--out DIR] [--quick] [--tools]\n");
             return 2;
         }
+    }
+    if (tools_only) {
+        for (size_t i = 0; i < sizeof tool_cases / sizeof tool_cases[0]; i++)
+            if ((!quick || !strstr(tool_cases[i].name, "d9")) &&
+                !run_case(&tool_cases[i], out_dir, true))
+                return 1;
+        return 0;
     }
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         if (quick && strstr(cases[i].name, "1M"))
             continue;
-        if (!run_case(&cases[i], out_dir))
+        if (!run_case(&cases[i], out_dir, false))
             return 1;
     }
     return 0;

@@ -49,6 +49,25 @@ def draco_cli(ply, bits, normals):
     return size, dt
 
 
+def print_tools(rows, meshes):
+    """Draco's tool choices on the default payload as ratios to speed 4 (the default until issue
+    16; its goal: within 5% of that size at <= 1/2 its encode time)."""
+    tools = [r for r in rows if r["kind"] == "tools"]
+    names = list(dict.fromkeys(r["tools"] for r in tools))
+    print("\nDraco tools on the default payload (14 bits, all attributes): size and encode time "
+          "as ratios to speed 4 (before issue 16); * = the service's default now")
+    print(f"{'mesh':<12}{'tris':>9}{'speed4 B':>10}{'ms':>8}" +
+          "".join(f"{n + ('*' if any(r['default'] for r in tools if r['tools'] == n) else ''):>22}"
+                  for n in names[1:]))
+    for name, m in meshes.items():
+        row = {r["tools"]: r for r in tools if r["case"] == name}
+        base = row[names[0]]
+        cells = "".join(f"{row[n]['bytes'] / base['bytes']:>11.3f}{row[n]['ms'] / base['ms']:>11.2f}"
+                        for n in names[1:])
+        print(f"{name:<12}{m['triangles']:>9}{base['bytes']:>10}{base['ms']:>8.1f}{cells}")
+    print("  each cell: size ratio, time ratio (fastest of several encodes; goal <= 1.05, <= 0.5)")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--build", default="build/release")
@@ -65,7 +84,7 @@ def main():
                 by[(r["case"], r["bits"], r["attributes"])] = r
 
         print("Draco encoding of polygoniser meshes (isomesh speed "
-              "= default; B/tri = bytes per triangle; Mtri/s = triangles per second of the "
+              "= default; B/tri = bytes per triangle; Mtri/s = triangles per CPU second of the "
               "fastest of several runs)")
         head = (f"{'mesh':<12}{'tris':>9}{'bits':>5} | {'pos':>6}{'+nrm':>6}{'+all':>6}"
                 f"{'Mtri/s':>8} | {'raw':>6}{'PLY':>6}{'PLY+z':>7} | {'cli pos':>8}{'cli +nrm':>9}"
@@ -107,6 +126,8 @@ def main():
                 cells.append(f"{p['bytes'] / t:.2f}/{t / p['ms'] / 1000:.1f}|"
                              f"{n['bytes'] / t:.2f}/{t / n['ms'] / 1000:.1f}")
             print(f"{name:<12}" + "".join(f"{c:>21}" for c in cells))
+
+        print_tools(rows, meshes)
 
         print("\nCurvature quantisation (14 position bits, all attributes): B/tri")
         cb = sorted({r["curvature_bits"] for r in rows if r["kind"] == "curvature"})

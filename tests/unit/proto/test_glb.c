@@ -36,7 +36,7 @@ static unsigned char *build(const ism_mesh *m, size_t *len, ism_draco_output *d)
     bool empty = w.live_triangles == 0;
     if (!empty) {
         ism_draco_input in = {w.nverts, w.ntris, w.pos, w.tri, w.normal, NULL, NULL,
-                              w.vertex_class, 14, 10, 0, -1, 0, NULL, NULL, NULL};
+                              w.vertex_class, 14, 10, 0, NULL, 0, NULL, NULL, NULL};
         cr_assert(ism_draco_encode(&in, d), "%s", d->error);
     }
     ism_glb_input gi = {m, &w, empty ? NULL : d, &f, "0123abcd"};
@@ -218,7 +218,7 @@ static unsigned char *build_cells(const ism_mesh *m, const uint32_t *cell, bool 
     ism_draco_output d;
     memset(&d, 0, sizeof d);
     ism_draco_input in = {w.nverts, w.ntris, w.pos, sp.tri, w.normal, NULL, NULL, NULL, 14, 10,
-                          0, -1, sp.npoints, sp.point_vertex, sp.point_cell, NULL};
+                          0, NULL, sp.npoints, sp.point_vertex, sp.point_cell, NULL};
     if (draco)
         cr_assert(ism_draco_encode(&in, &d), "%s", d.error);
     ism_glb_input gi = {m, &w, draco ? &d : NULL, NULL, NULL};
