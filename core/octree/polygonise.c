@@ -63,6 +63,7 @@ void ism_poly_options_default(ism_poly_options *o)
     o->max_triangles = 4000000;
     o->max_memory = (size_t)2 << 30;
     o->threads = 0;
+    o->thin_search = true;
 }
 
 static bool in_range(double v, double lo, double hi) { return isfinite(v) && v >= lo && v <= hi; }
@@ -339,7 +340,9 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     prog->span = span * 0.4 / 0.95; /* the octree's share of this round's progress */
     ism_octree tree;
     memset(&tree, 0, sizeof tree);
-    int thin_depth = o->max_depth + (o->thin_search ? ISM_THIN_EXTRA_DEPTH : 0);
+    int thin_depth = o->max_depth + (!o->thin_search ? 0
+                                     : o->quiet ? ISM_THIN_EXTRA_DEPTH
+                                                : ISM_THIN_BLIND_DEPTH);
     if (thin_depth > ISM_GRID_MAX_DEPTH)
         thin_depth = ISM_GRID_MAX_DEPTH;
     ism_grid_init(&tree.grid, o->box, thin_depth);

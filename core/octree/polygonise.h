@@ -23,6 +23,10 @@
  * they reach the ball (0.31 at depth 8): 8 levels keep them tubes at depths 6-9 in boxes off
  * the lattice (3 left holes and detached horns). Capped by the lattice (ISM_GRID_MAX_DEPTH). */
 #define ISM_THIN_EXTRA_DEPTH 8
+/* ... and this far when the caller gives no `quiet` balls (the polygoniser alone, without the
+ * singular locus): near a singular point the chase would go to the last level, and the cells
+ * it leaves there are not rebuilt by anyone. */
+#define ISM_THIN_BLIND_DEPTH 3
 
 typedef struct ism_poly_options {
     double box[6];          /* xmin ymin zmin xmax ymax zmax: the octree root */
@@ -44,12 +48,13 @@ typedef struct ism_poly_options {
     int threads;            /* worker threads for one request (0 = number of cores, max 64) */
     bool thin_search;       /* search nodes that fail flatness for a piece no edge sees (one
                                corner sign, or an island in a face of one sign) and split them
-                               below max_depth (thin_search.h; default off) */
+                               below max_depth (thin_search.h; default on) */
     /* Balls (x, y, z, radius) whose mesh a later stage rebuilds — around the singular points
      * and along the curves found from f, which the conformance pass refills
      * (core/singular/conform.h): hidden pieces are not chased into them (a horn shrinking to
      * its point would be followed to the lattice's last level, the wedges between two sheets
-     * along a double curve at every level). NULL when there are none. */
+     * along a double curve at every level). NULL when the caller knows no locus: the chase
+     * then goes ISM_THIN_BLIND_DEPTH levels deep only. */
     const double (*quiet)[4];
     size_t nquiet;
     /* Optional progress report, fraction in [0, 1], from the calling thread or a worker

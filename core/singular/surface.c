@@ -109,7 +109,8 @@ enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options 
         free(balls.b);
         return ISM_POLY_NO_MEMORY;
     }
-    pq.quiet = (const double (*)[4])balls.b;
+    double none[1][4] = {{0, 0, 0, 0}}; /* the locus is known, and empty */
+    pq.quiet = balls.n ? (const double (*)[4])balls.b : (const double (*)[4])none;
     pq.nquiet = balls.n;
     enum ism_poly_status st = ism_polygonise(f, &pq, mesh, ps, err);
     free(balls.b);
