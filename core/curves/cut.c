@@ -5,6 +5,7 @@
  * already lying on an earlier curve is split at the crossing of the two curves (Newton on
  * f, g₁, g₂), and its cut edge replaced by the two halves. */
 #include "core/curves/cut_internal.h"
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -452,6 +453,54 @@ static void finish(cut_state *s)
     s->ev->pair[0] = s->ev->pair[1] = ISM_CUT_NO_BRANCH;
 }
 
+/* V − E + T of the triangles (edges counted once); LONG_MIN when out of memory. */
+static long mesh_euler(const ism_mesh *m)
+{
+    ism_key_map e;
+    ism_key_map_init(&e);
+    for (size_t t = 0; t < m->ntris; t++)
+        for (int i = 0; i < 3; i++) {
+            bool added;
+            if (ism_key_map_add(&e, cut_edge_key(m->tri[3 * t + i], m->tri[3 * t + (i + 1) % 3]),
+                                &added) == ISM_KEY_NONE) {
+                ism_key_map_free(&e);
+                return LONG_MIN;
+            }
+        }
+    long chi = (long)m->nverts - (long)e.n + (long)m->ntris;
+    ism_key_map_free(&e);
+    return chi;
+}
+
+/* The crease cut by branches; where it leaves a crack (the mesh's Euler characteristic
+ * changes: a vertex whose branch ties, a triple junction it cannot resolve) the mesh is
+ * restored and cut by the sign of a − b of the top min/max instead. */
+static bool crease_or_top(cut_state *s, size_t k)
+{
+    ism_mesh *m = s->m;
+    size_t nv = m->nverts, nt = m->ntris, ne = s->c->nedges;
+    long before = mesh_euler(m);
+    uint32_t *tri = malloc((nt ? nt : 1) * 3 * sizeof *tri);
+    if (!tri || before == LONG_MIN) {
+        free(tri);
+        return false;
+    }
+    memcpy(tri, m->tri, nt * 3 * sizeof *tri);
+    bool ok = cut_crease(s, k);
+    if (ok && mesh_euler(m) != before) {
+        memcpy(m->tri, tri, nt * 3 * sizeof *tri); /* its vertices stay, unused (the cut
+                                                      edge map still names them) */
+        m->ntris = nt;
+        for (size_t v = nv; v < m->nverts && v < s->cap_vcurve; v++)
+            s->vcurve[v] = NONE;
+        for (size_t i = ne; i < s->c->nedges; i++)
+            s->c->edges[i].fn = NONE;
+        ok = cut_one(s, k);
+    }
+    free(tri);
+    return ok;
+}
+
 bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
 {
     cut_state s = {.ev = ev, .m = m, .c = c, .tol = tol, .slot = SIZE_MAX};
@@ -460,7 +509,7 @@ bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
     ism_key_map_init(&s.zero);
     bool ok = true;
     for (size_t k = 0; k < ev->nfns && ok; k++)
-        ok = ev->fns[k].kind == ISM_CUT_CREASE ? cut_crease(&s, k) : cut_one(&s, k);
+        ok = ev->fns[k].kind == ISM_CUT_CREASE ? crease_or_top(&s, k) : cut_one(&s, k);
     if (ok)
         finish(&s);
     ism_key_map_free(&s.split);
