@@ -60,6 +60,15 @@ def steiner_roman(x, y, z, p):
     return x**2 * y**2 + y**2 * z**2 + z**2 * x**2 + x * y * z
 
 
+def barth_sextic(x, y, z, p):
+    """Barth's sextic (65 nodes) cut by the ball of radius 1.5 (bench_error.c's formula)."""
+    phi = p["phi"]
+    r2 = x**2 + y**2 + z**2
+    b = 4 * (phi**2 * x**2 - y**2) * (phi**2 * y**2 - z**2) * (phi**2 * z**2 - x**2) \
+        - (1 + 2 * phi) * (r2 - 1)**2
+    return np.maximum(b, r2 - 2.25)
+
+
 SURFACES = {
     "sphere": sphere,
     "torus": torus,
@@ -68,6 +77,7 @@ SURFACES = {
     "kummer-16-nodes": kummer,
     "klein-bottle": klein_bottle,
     "steiner-roman": steiner_roman,
+    "barth-sextic": barth_sextic,
 }
 
 
@@ -124,6 +134,7 @@ def main():
     ap.add_argument("--cells", type=int)
     ap.add_argument("--out")
     ap.add_argument("--eval", metavar="X,Y,Z[;X,Y,Z...]")
+    ap.add_argument("--tool", choices=["skimage", "vtk"], default="skimage")
     args = ap.parse_args()
     f = SURFACES[args.surface]
     params = parse_params(args.param)
@@ -137,20 +148,64 @@ def main():
     if not 1 <= args.cells <= MAX_CELLS:
         raise SystemExit(f"skimage_mc: --cells must be in 1..{MAX_CELLS}")
     box = parse_triple(args.box, "box", 6)
-    from skimage.measure import marching_cubes
-
+    contour = load_flying_edges() if args.tool == "vtk" else load_marching_cubes()
+    c0 = time.process_time()
     t0 = time.perf_counter()
     vol = sample(f, params, box, args.cells)
     t1 = time.perf_counter()
     spacing = tuple((box[k + 3] - box[k]) / args.cells for k in range(3))
-    verts, faces, _normals, _values = marching_cubes(vol, level=0.0, spacing=spacing)
+    verts, faces = contour(vol, spacing)
     t2 = time.perf_counter()
+    cpu = time.process_time() - c0
     verts = verts.astype(np.float64) + np.array(box[:3])
     write_ply(args.out, verts, faces)
     t3 = time.perf_counter()
-    print(json.dumps({"sample_s": t1 - t0, "mc_s": t2 - t1, "write_s": t3 - t2,
+    print(json.dumps({"sample_s": t1 - t0, "mc_s": t2 - t1, "write_s": t3 - t2, "cpu_s": cpu,
                       "vertices": int(len(verts)), "triangles": int(len(faces))}))
     return 0
+
+
+def load_marching_cubes():
+    """scikit-image's marching cubes (imported before the clock starts)."""
+    from skimage.measure import marching_cubes
+
+    def contour(vol, spacing):
+        verts, faces, _normals, _values = marching_cubes(vol, level=0.0, spacing=spacing)
+        return verts, faces
+    return contour
+
+
+def load_flying_edges():
+    """VTK's flying edges (vtkFlyingEdges3D, Debian's python3-vtk9) on the same samples, one
+    thread (the sequential SMP back end), no normals or gradients computed."""
+    from vtkmodules.vtkCommonCore import vtkSMPTools
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+    from vtkmodules.vtkFiltersCore import vtkFlyingEdges3D
+    from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+    vtkSMPTools.SetBackend("Sequential")
+    return lambda vol, spacing: flying_edges(vol, spacing, vtkImageData, vtkFlyingEdges3D,
+                                             numpy_to_vtk, vtk_to_numpy)
+
+
+def flying_edges(vol, spacing, vtkImageData, vtkFlyingEdges3D, numpy_to_vtk, vtk_to_numpy):
+    img = vtkImageData()
+    img.SetDimensions(*vol.shape)
+    img.SetSpacing(*spacing)
+    # VTK's point order runs x fastest: the (x, y, z)-indexed volume in Fortran order
+    scalars = numpy_to_vtk(np.ravel(vol, order="F"), deep=False)
+    img.GetPointData().SetScalars(scalars)
+    fe = vtkFlyingEdges3D()
+    fe.SetInputData(img)
+    fe.SetValue(0, 0.0)
+    fe.ComputeNormalsOff()
+    fe.ComputeGradientsOff()
+    fe.ComputeScalarsOff()
+    fe.Update()
+    out = fe.GetOutput()
+    verts = vtk_to_numpy(out.GetPoints().GetData()) if out.GetNumberOfPoints() else np.zeros((0, 3))
+    cells = vtk_to_numpy(out.GetPolys().GetConnectivityArray()) if out.GetNumberOfCells() \
+        else np.zeros(0, dtype=np.int64)
+    return verts, cells.reshape(-1, 3)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,355 @@
+#!/usr/bin/env python3
+"""bench_equal_error.py — CPU time at equal measured error (issue 16, item 3): isomesh beside
+libfive (dual contouring, built from a source snapshot when one is found), VTK's flying edges
+and scikit-image's marching cubes, on the sphere, the torus, the gyroid in a ball, the Klein
+bottle and Barth's nodal sextic in a ball.
+
+One measure for every tool: the largest distance from a triangle's centroid to f = 0
+(bench_error.c: closed form for the sphere and the torus, else the Newton projection on
+isomesh's compiled f). One thread everywhere; CPU seconds of the meshing call alone, taken
+inside each process (isomesh: the whole surface pipeline — singular locus, polygoniser,
+conformance; libfive: Mesh::render with one worker; VTK / scikit-image: numpy sampling of
+the grid plus the contouring).
+
+For each surface, target error E and tool, the tool's one resolution knob (isomesh: the
+requested max_error, depth 10 as the safety limit; libfive: min_feature, max_err left at its
+default; grids: N cells across the box) is searched: doubled or halved until one setting
+meets E and one does not, then 3 geometric bisections; the cheapest setting that met E is
+kept (its CPU the smaller of two runs). A run past RUN_CPU_LIMIT_S CPU seconds or a grid
+past MAX_CELLS counts as not reaching E. Goals (issue 16): isomesh's CPU <= 0.5 x libfive's
+and <= 0.2 x VTK's at every target; <= 1.5 µs CPU per triangle on the gyroid.
+Asserts nothing; exits 0 unless it cannot run.
+
+  bench_equal_error.py --build build/release [--quick] [--only NAME] [--libfive DIR]
+"""
+import argparse
+import json
+import math
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+DEBIAN_PYTHON = "/usr/bin/python3"   # python3-numpy, python3-skimage, python3-vtk9
+LIBFIVE_DIR = os.environ.get("LIBFIVE_DIR", "/work/scratch/libfive")
+RUN_CPU_LIMIT_S = 40      # RLIMIT_CPU of one measured run: slower settings count as not reached
+RUN_WALL_LIMIT_S = 900    # the machine may be loaded 10x: wall time is only a safety net
+MAX_CELLS = 512           # grids: 513^3 float32 samples (0.5 GB) at most
+ISO_DEPTH = 10            # isomesh's depth.max under max_error (a safety limit)
+BISECTIONS = 3
+CPU_RESOLUTION_S = 1e-4   # shorter CPU times are read as this (the clocks' tick on a busy machine)
+MAX_RUNS_PER_TARGET = 12
+
+
+def run(argv, cpu_limit=RUN_CPU_LIMIT_S):
+    """One child process under an RLIMIT_CPU; its last stdout line as JSON, or None."""
+    def limits():
+        resource.setrlimit(resource.RLIMIT_CPU, (cpu_limit, cpu_limit + 5))
+    try:
+        r = subprocess.run(argv, capture_output=True, text=True, cwd=ROOT, preexec_fn=limits,
+                           timeout=RUN_WALL_LIMIT_S)
+    except subprocess.TimeoutExpired:
+        return None
+    if r.returncode != 0:
+        return None
+    try:
+        return json.loads(r.stdout.strip().splitlines()[-1])
+    except (ValueError, IndexError):
+        return None
+
+
+# ---- the tools: each maps a resolution x (larger = finer) to {cpu_s, triangles, max_c} --------
+
+class Tool:
+    name = "?"
+
+    def __init__(self, bench, tmp):
+        self.bench, self.tmp = bench, tmp
+
+    def measure(self, s, ply, inner):
+        if inner is None:
+            return None
+        m = run([self.bench, "measure", s["name"], ply])
+        if os.path.exists(ply):
+            os.unlink(ply)
+        if m is None:
+            return None
+        return dict(cpu_s=max(inner["cpu_s"], CPU_RESOLUTION_S), triangles=m["triangles"], max_c=m["max_c"])
+
+
+class Isomesh(Tool):
+    name = "isomesh"
+
+    def start(self, s, e):
+        return 1 / e
+
+    def setting(self, x):
+        return f"E={1 / x:.3g}"
+
+    def run(self, s, x):
+        r = run([self.bench, "mesh", s["name"], repr(1 / x), str(ISO_DEPTH)])
+        return r and dict(cpu_s=max(r["cpu_s"], CPU_RESOLUTION_S), triangles=r["triangles"], max_c=r["max_c"])
+
+
+class Grid(Tool):
+    """scikit-image or VTK through skimage_mc.py (the same numpy sampling)."""
+
+    def __init__(self, bench, tmp, tool):
+        super().__init__(bench, tmp)
+        self.tool = tool
+        self.name = "VTK FE" if tool == "vtk" else "skimage"
+
+    def start(self, s, e):
+        return max(8, round(4 * (s["box"][3] - s["box"][0]) / math.sqrt(e) / 10))
+
+    def setting(self, x):
+        return f"N={x}"
+
+    def run(self, s, x):
+        if x > MAX_CELLS:
+            return None
+        ply = os.path.join(self.tmp, f"{self.tool}-{s['name']}-{x}.ply")
+        argv = [DEBIAN_PYTHON, os.path.join(HERE, "skimage_mc.py"), "--tool", self.tool,
+                "--surface", s["name"], "--box=" + ",".join(repr(float(v)) for v in s["box"]),
+                "--cells", str(x), "--out", ply]
+        argv += [f"--param={k}={v!r}" for k, v in s["params"].items()]
+        return self.measure(s, ply, run(argv))
+
+
+class Libfive(Tool):
+    name = "libfive"
+
+    def __init__(self, bench, tmp, exe):
+        super().__init__(bench, tmp)
+        self.exe = exe
+
+    def start(self, s, e):
+        return 1 / (2 * math.sqrt(e))
+
+    def setting(self, x):
+        return f"mf={1 / x:.3g}"
+
+    def run(self, s, x):
+        ply = os.path.join(self.tmp, f"libfive-{s['name']}.ply")
+        return self.measure(s, ply, run([self.exe, "mesh", s["name"], repr(1 / x), "1e-8", ply]))
+
+
+def step(tool, x, up):
+    """The next resolution: twice or half as fine (grids: whole cells)."""
+    y = x * 2 if up else x / 2
+    return max(2, round(y)) if isinstance(tool, Grid) else y
+
+
+def mid(tool, lo, hi):
+    m = math.sqrt(lo * hi)
+    return round(m) if isinstance(tool, Grid) else m
+
+
+def search(tool, s, e, cache):
+    """The cheapest setting found whose measured max centroid distance is <= e, or None."""
+    def at(x):
+        if x not in cache:
+            cache[x] = tool.run(s, x)
+        return cache[x]
+
+    def ok(r):
+        return r is not None and r["max_c"] <= e
+
+    x, runs = tool.start(s, e), 0
+    r = at(x)
+    lo = hi = None
+    if ok(r):
+        hi = x
+        while runs < MAX_RUNS_PER_TARGET // 2 and lo is None:
+            x, runs = step(tool, x, False), runs + 1
+            if ok(at(x)):
+                hi = x
+            else:
+                lo = x
+    else:
+        lo = x
+        while r is not None and hi is None and runs < MAX_RUNS_PER_TARGET // 2:
+            x, runs = step(tool, x, True), runs + 1
+            r = at(x)
+            if ok(r):
+                hi = x
+            else:
+                lo = x
+    if hi is None:
+        return None
+    for _ in range(BISECTIONS if lo is not None else 0):
+        m = mid(tool, lo, hi)
+        if m in (lo, hi):
+            break
+        if ok(at(m)):
+            hi = m
+        else:
+            lo = m
+    best_x = min((x for x, r in cache.items() if ok(r)), key=lambda x: cache[x]["cpu_s"])
+    again = tool.run(s, best_x)  # a second run: the less disturbed time counts
+    best = dict(cache[best_x])
+    if again and again["cpu_s"] < best["cpu_s"]:
+        best["cpu_s"] = again["cpu_s"]
+    best["setting"] = tool.setting(best_x)
+    return best
+
+
+# ---- libfive -----------------------------------------------------------------------------------
+
+def build_libfive_mesher(build, libfive_dir):
+    """g++ libfive_mesher.cc against a libfive built from source in libfive_dir; (exe, None)
+    or (None, why not)."""
+    lib = os.path.join(libfive_dir, "build", "libfive", "src", "libfive.so")
+    inc = os.path.join(libfive_dir, "libfive", "include")
+    if not os.path.exists(lib):
+        return None, (f"no libfive at {libfive_dir} (build/libfive/src/libfive.so: fetch its "
+                      f"source there, cmake -DBUILD_STUDIO_APP=OFF -DBUILD_GUILE_BINDINGS=OFF "
+                      f"-DBUILD_PYTHON_BINDINGS=OFF -DBUILD_TESTS=OFF, make libfive)")
+    src = os.path.join(HERE, "libfive_mesher.cc")
+    exe = os.path.join(build, "bench", "libfive_mesher")
+    if os.path.exists(exe) and os.path.getmtime(exe) >= max(os.path.getmtime(src),
+                                                            os.path.getmtime(lib)):
+        return exe, None
+    os.makedirs(os.path.dirname(exe), exist_ok=True)
+    argv = ["g++", "-std=c++17", "-O2", "-I", inc, "-I", "/usr/include/eigen3", "-o", exe, src,
+            lib, f"-Wl,-rpath,{os.path.dirname(lib)}", "-pthread"]
+    r = subprocess.run(argv, capture_output=True, text=True)
+    if r.returncode != 0:
+        return None, "libfive_mesher did not build: " + r.stderr.strip()[-300:]
+    return exe, None
+
+
+def check_formulas(bench, s, libfive):
+    """Each tool's formula against isomesh's tape at a few points of the box."""
+    pts = []
+    seed = 16
+    for _ in range(8):
+        p = []
+        for k in range(3):
+            seed = (seed * 6364136223846793005 + 1442695040888963407) % (1 << 64)
+            p.append(s["box"][k] + (seed >> 11) / float(1 << 53) * (s["box"][k + 3] - s["box"][k]))
+        pts.append(",".join(f"{v:.9g}" for v in p))
+    text = ";".join(pts)
+    ref = run([bench, "eval", s["name"], text])
+    argv = [DEBIAN_PYTHON, os.path.join(HERE, "skimage_mc.py"), "--surface", s["name"],
+            f"--eval={text}"] + [f"--param={k}={v!r}" for k, v in s["params"].items()]
+    others = [("numpy", run(argv), 1e-12)]
+    if libfive:
+        others.append(("libfive", run([libfive, "eval", s["name"], text]), 1e-5))
+    scale = max(abs(v) for v in ref) or 1
+    bad = []
+    for name, vals, tol in others:
+        if not vals or max(abs(a - b) for a, b in zip(ref, vals)) > tol * scale:
+            bad.append(name)
+    return bad
+
+
+# ---- the report --------------------------------------------------------------------------------
+
+def bench_surface(s, tools):
+    print(f"\n=== {s['name']}  box {s['box']}  targets {s['targets']}")
+    head = (f"{'E':>8} {'tool':<9}{'setting':>12}{'CPU s':>9}{'triangles':>11}{'µs/tri':>8}"
+            f"{'max c':>10}{'iso/tool':>9}")
+    print(head)
+    print("-" * len(head))
+    caches = {t.name: {} for t in tools}
+    rows = []
+    for e in s["targets"]:
+        found = {t.name: search(t, s, e, caches[t.name]) for t in tools}
+        iso = found.get("isomesh")
+        for t in tools:
+            b = found[t.name]
+            if b is None:
+                print(f"{e:>8.2g} {t.name:<9}{'not reached within the limits':>40}")
+                continue
+            us = 1e6 * b["cpu_s"] / max(b["triangles"], 1)
+            ratio = "" if t.name == "isomesh" or not iso else f"{iso['cpu_s'] / b['cpu_s']:9.2f}"
+            print(f"{e:>8.2g} {t.name:<9}{b['setting']:>12}{b['cpu_s']:9.3f}{b['triangles']:>11}"
+                  f"{us:8.2f}{b['max_c']:10.3g}{ratio}")
+        sys.stdout.flush()
+        rows.append((e, found))
+    return rows
+
+
+def goal_lines(name, rows):
+    lines = []
+    for other, goal in (("libfive", 0.5), ("VTK FE", 0.2)):
+        pairs = [(e, f["isomesh"], f.get(other)) for e, f in rows if other in f]
+        if not pairs:
+            continue
+        txt = ", ".join(
+            f"{e:.2g}: " + ("-" if not (i and o) else f"{i['cpu_s'] / o['cpu_s']:.2f}")
+            for e, i, o in pairs)
+        met = all(i and (not o or i["cpu_s"] / o["cpu_s"] <= goal) for _, i, o in pairs)
+        lines.append(f"[{'PASS' if met else 'MISS'}] {name}: isomesh / {other} CPU at equal "
+                     f"error {txt} (goal <= {goal:g})")
+    if name == "gyroid-ball":
+        us = [(e, 1e6 * f["isomesh"]["cpu_s"] / f["isomesh"]["triangles"])
+              for e, f in rows if f.get("isomesh")]
+        lines.append(f"[{'PASS' if us and all(u <= 1.5 for _, u in us) else 'MISS'}] "
+                     f"gyroid-ball: isomesh µs CPU per triangle "
+                     + ", ".join(f"{e:.2g}: {u:.2f}" for e, u in us) + " (goal <= 1.5)")
+    return lines
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--build", default=os.path.join(ROOT, "build/release"))
+    ap.add_argument("--quick", action="store_true", help="the coarsest target only")
+    ap.add_argument("--only", default="", help="surfaces whose name contains this")
+    ap.add_argument("--libfive", default=LIBFIVE_DIR)
+    ap.add_argument("--tools", default="isomesh,libfive,vtk,skimage")
+    args = ap.parse_args()
+    build = os.path.abspath(args.build)
+    bench = os.path.join(build, "bench", "bench_error")
+    if not os.path.exists(bench):
+        sys.exit(f"bench_equal_error: {bench} is missing (make build/release/bench/bench_error)")
+    shm = "/dev/shm" if os.path.isdir("/dev/shm") else None
+    tmp = tempfile.mkdtemp(prefix="isomesh-bench-eq-", dir=shm)
+    started = time.perf_counter()
+    load0 = os.getloadavg()[0]
+    try:
+        wanted = args.tools.split(",")
+        tools = [Isomesh(bench, tmp)] if "isomesh" in wanted else []
+        five = None
+        if "libfive" in wanted:
+            five, why = build_libfive_mesher(build, args.libfive)
+            if five:
+                tools.append(Libfive(bench, tmp, five))
+            else:
+                print(f"bench_equal_error: libfive skipped: {why}")
+        tools += [Grid(bench, tmp, t) for t in ("vtk", "skimage") if t in wanted]
+        print(f"bench_equal_error: tools {[t.name for t in tools]}; one thread; CPU s inside "
+              f"each process; max c = max centroid distance to f = 0 (bench_error.c); load "
+              f"average {load0:.1f} on {os.cpu_count()} cores")
+        goals = []
+        for s in json.loads(subprocess.check_output([bench, "list"], text=True)):
+            if args.only not in s["name"]:
+                continue
+            if args.quick:
+                s["targets"] = s["targets"][:1]
+            bad = check_formulas(bench, s, five)
+            if bad:
+                print(f"\n=== {s['name']}: skipped, formulas differ from isomesh's: {bad}")
+                continue
+            goals += goal_lines(s["name"], bench_surface(s, tools))
+        print("\n=== goals (PASS/MISS are reports, not assertions)")
+        for g in goals:
+            print(g)
+        load1 = os.getloadavg()[0]
+        note = " (above the core count: CPU times are inflated by cache sharing)" \
+            if max(load0, load1) > (os.cpu_count() or 1) else ""
+        print(f"\nbench_equal_error: {time.perf_counter() - started:.0f} s, load average "
+              f"{load0:.1f} -> {load1:.1f}{note}")
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
