@@ -97,8 +97,7 @@ static double gradient_agreement(const double ga[3], const double gb[3])
     return ism_dot3(ga, gb) / (na * nb);
 }
 
-/* Can f vanish on the segment a→b? Intervals over its bounding box say no rigorously. */
-static bool may_vanish(ism_sampler *s, const double a[3], const double b[3])
+bool ism_segment_may_reach(ism_sampler *s, const double a[3], const double b[3], double eps)
 {
     ism_interval box[3];
     for (int k = 0; k < 3; k++) {
@@ -107,7 +106,7 @@ static bool may_vanish(ism_sampler *s, const double a[3], const double b[3])
     }
     s->n_interval++;
     ism_interval r = ism_eval_interval(s->tape, s->ws, box[0], box[1], box[2]);
-    return r.lo <= 0 && r.hi >= 0;
+    return r.lo <= eps && r.hi >= -eps;
 }
 
 /* A root whose gradient turns against an end point's hints at further roots between them. */
@@ -135,7 +134,7 @@ void ism_segment_roots(ism_sampler *s, const ism_root_params *prm, const double 
     }
     if (gradient_agreement(ga, gb) > prm->gradient_test)
         return; /* same sign, same sheet: no root (paper eq. 2) */
-    if (!may_vanish(s, a, b))
+    if (!ism_segment_may_reach(s, a, b, 0))
         return; /* the interval over the segment proves it: no root to search for */
     out->flags |= ISM_SEG_SEARCHED;
     double tc;

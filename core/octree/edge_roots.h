@@ -48,6 +48,10 @@ void ism_segment_roots(ism_sampler *s, const ism_root_params *prm, const double 
 double ism_regula_falsi(ism_sampler *s, const double a[3], const double b[3], double fa,
                         double fb);
 
+/* Can |f| come within eps of 0 on the segment a→b? False when the interval over its
+ * bounding box proves |f| > eps everywhere on it (then no root and no tangent point). */
+bool ism_segment_may_reach(ism_sampler *s, const double a[3], const double b[3], double eps);
+
 /* The paper's double-root bisection on a→b (fa, fb of the same sign): returns 2 and a
  * split point t (one root each side), 1 and the tangent point t (|f| < eps), or 0. */
 int ism_double_root_search(ism_sampler *s, const ism_root_params *prm, const double a[3],

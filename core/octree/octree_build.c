@@ -25,6 +25,7 @@ typedef struct node_vec {
 typedef struct deferral {
     size_t node;
     int limit;
+    int32_t previous; /* the node in the last round's tree, or -1 */
 } deferral;
 
 typedef struct defer_list {
@@ -46,6 +47,7 @@ typedef struct build {
     const ism_octree_build_params *p;
     const ism_grid *grid;
     ism_quiet quiet;             /* index of p->quiet */
+    const ism_octree *previous;  /* p->previous when it may be used, else NULL */
     thread_state *threads;
     int shortening;
     atomic_size_t nodes_total;
@@ -198,12 +200,33 @@ static bool hides_piece(build *b, thread_state *th, const ism_node *nd, const is
     return false;
 }
 
+/* The last round's node pv took over for node i when its decision still holds: an empty
+ * node stays empty, a leaf not forced to split now stays a leaf (with its flags). The
+ * counters move as the evaluation would have moved them. */
+static bool take_over(build *b, thread_state *th, node_vec *v, size_t i, const ism_node *pv,
+                      bool forced)
+{
+    if (pv->state == ISM_NODE_EMPTY) {
+        v->v[i].state = ISM_NODE_EMPTY;
+        th->excluded++;
+        return true;
+    }
+    if (pv->state != ISM_NODE_LEAF || forced)
+        return false;
+    v->v[i].state = ISM_NODE_LEAF;
+    v->v[i].flags = pv->flags;
+    th->unresolved += (pv->flags & ISM_NODE_UNRESOLVED) != 0;
+    th->deep_leaves += pv->level > b->p->max_depth;
+    return true;
+}
+
 /* Decides node v->v[i] and grows its subtree. Nodes that fail the flatness test are split
  * down to level `limit` (depth.max, or ISM_THIN_RESOLVE_LEVELS deeper below a hidden
  * piece); a would-be leaf that hides a piece is split in any case, down to thin_depth. When
- * defer is not NULL, nodes at its level are left for tasks (appended to it). */
+ * defer is not NULL, nodes at its level are left for tasks (appended to it). pi: the same
+ * node in the last round's tree (b->previous), or -1. */
 static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_tape *tape,
-                 int limit, defer_list *defer)
+                 int limit, defer_list *defer, int32_t pi)
 {
     if (atomic_load(&b->failed) != ISM_BUILD_OK)
         return false;
@@ -214,22 +237,26 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         deferral *d = realloc(defer->v, (defer->n + 1) * sizeof *d);
         if (!d)
             return fail(b, ISM_BUILD_NO_MEMORY);
-        d[defer->n++] = (deferral){i, limit};
+        d[defer->n++] = (deferral){i, limit, pi};
         defer->v = d;
         return true;
     }
     th->visited++;
+    bool forced = nd.level < b->p->max_depth &&
+                  ism_split_set_has(b->p->force_split, ism_node_key(&nd));
+    const ism_node *pv = pi >= 0 ? &b->previous->nodes[pi] : NULL;
+    if (pv && take_over(b, th, v, i, pv, forced))
+        return true;
     ism_interval range;
     const ism_tape *sub = node_range(b, th, &nd, tape, &range);
-    if (!(range.lo <= 0 && range.hi >= 0)) {
+    if (!pv && !(range.lo <= 0 && range.hi >= 0)) {
         v->v[i].state = ISM_NODE_EMPTY;
         th->excluded++;
         return true;
     }
     bool leaf = false;
-    bool forced = nd.level < b->p->max_depth &&
-                  ism_split_set_has(b->p->force_split, ism_node_key(&nd));
-    if (nd.level >= b->p->min_depth && !forced) {
+    /* a node split last round is split again (its range was computed for its tape) */
+    if (!pv && nd.level >= b->p->min_depth && !forced) {
         double lo[3], hi[3];
         node_box(b->grid, &nd, lo, hi);
         ism_corners k;
@@ -266,8 +293,9 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     }
     v->v[i].state = ISM_NODE_SPLIT;
     v->v[i].child = (int32_t)first;
+    bool was_split = pv && pv->state == ISM_NODE_SPLIT;
     for (int k = 0; k < 8; k++)
-        if (!grow(b, th, v, first + k, sub, limit, defer))
+        if (!grow(b, th, v, first + k, sub, limit, defer, was_split ? pv->child + k : -1))
             return false;
     return true;
 }
@@ -288,7 +316,7 @@ static void run_task(void *ctx, size_t task, int thread)
     thread_state *th = &b->threads[thread];
     node_vec *out = &b->task_out[task];
     /* The task's tape: shorten from the full tape over the task's own box on the way. */
-    grow(b, th, out, 0, b->p->tape, b->tasks[task].limit, NULL);
+    grow(b, th, out, 0, b->p->tape, b->tasks[task].limit, NULL, b->tasks[task].previous);
     report_progress(b);
 }
 
@@ -389,7 +417,9 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
         goto done;
     }
     deferred.level = p->max_depth < TOP_LEVEL ? p->max_depth : TOP_LEVEL;
-    grow(&b, &b.threads[0], &top, 0, p->tape, p->max_depth, &deferred);
+    b.previous = p->thin_depth == p->max_depth && p->previous && p->previous->n ? p->previous
+                                                                                : NULL;
+    grow(&b, &b.threads[0], &top, 0, p->tape, p->max_depth, &deferred, b.previous ? 0 : -1);
     if ((status = atomic_load(&b.failed)) != ISM_BUILD_OK)
         goto done;
 

@@ -35,6 +35,14 @@ typedef struct ism_octree_build_params {
     size_t max_nodes;                 /* stop with ISM_BUILD_TOO_BIG beyond this */
     const ism_split_set *force_split; /* nodes split whatever the flatness test says (their
                                          emitted triangles missed max_error): NULL for none */
+    const ism_octree *previous;       /* the last round's tree, built with these parameters
+                                         and a force_split set this one's contains, or NULL:
+                                         its leaves that are not forced now and its empty
+                                         nodes are taken over without evaluating f (a node's
+                                         decision depends on nothing else), so the tree is
+                                         the one a fresh build makes. Ignored when
+                                         thin_depth > max_depth (the hidden-piece search's
+                                         counters are not kept) */
     const volatile int *cancel;
     void (*progress)(void *ctx, double fraction); /* fraction of subtrees done */
     void *progress_ctx;

@@ -25,10 +25,15 @@ static bool normals_agree(const double (*n)[3], double normal_cos)
     return true;
 }
 
-/* The paper's double-root search along edge c0-c1 found nothing. */
+/* The paper's double-root search along edge c0-c1 finds nothing. One interval over the
+ * edge first: where it proves |f| > eps the search (up to double_root_iters gradients, a
+ * third of the gyroid's time under max_error) could find neither a sign change nor a
+ * tangent point, so the answer is the same without it. */
 static bool no_roots(ism_sampler *s, const ism_flatness *fl, const ism_corners *k, int c0,
                      int c1)
 {
+    if (!ism_segment_may_reach(s, k->p[c0], k->p[c1], fl->double_root_eps))
+        return true;
     ism_root_params prm = {fl->gradient_test, fl->double_root_eps, fl->double_root_iters};
     double t;
     return ism_double_root_search(s, &prm, k->p[c0], k->p[c1], k->f[c0], k->f[c1], &t) == 0;

@@ -331,10 +331,13 @@ static enum ism_poly_status fail_with(enum ism_poly_status s, const ism_poly_opt
 }
 
 /* One octree and its polygons; with next (under max_error, when another round may
- * follow), the leaves to split are collected instead of welding a mesh. */
+ * follow), the leaves to split are collected instead of welding a mesh. *prev: the last
+ * round's tree (empty in the first), whose decisions the octree takes over; replaced by
+ * this round's tree when another round may follow. */
 static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options *o, int threads,
                                       progress *prog, const ism_split_set *split,
-                                      ism_split_set *next, ism_mesh *mesh, ism_poly_stats *st)
+                                      ism_split_set *next, ism_mesh *mesh, ism_poly_stats *st,
+                                      ism_octree *prev)
 {
     double t_start = ism_now_ms(), from = prog->from, span = prog->span;
     prog->span = span * 0.4 / 0.95; /* the octree's share of this round's progress */
@@ -364,6 +367,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
         .threads = threads,
         .max_nodes = o->max_memory / 4 / sizeof(ism_node),
         .force_split = split,
+        .previous = prev,
         .cancel = o->cancel,
         .progress = report,
         .progress_ctx = prog,
@@ -387,7 +391,11 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     prog->span = span * 0.55 / 0.95;
     double t_weld = 0;
     status = polygonise_leaves(f, o, &tree, threads, prog, mesh, st, &t_weld, next);
-    ism_octree_free(&tree);
+    ism_octree_free(prev);
+    if (next && next->n)
+        *prev = tree;
+    else
+        ism_octree_free(&tree);
     double t_end = ism_now_ms();
     st->time_ms[ISM_PHASE_POLYGONS] = t_end - t_tree - t_weld - st->time_ms[ISM_PHASE_CRACKS];
     st->time_ms[ISM_PHASE_MESH] = t_weld;
@@ -415,6 +423,8 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
     double t_start = ism_now_ms();
     int threads = thread_count(o);
     ism_split_set split = {0}, next = {0};
+    ism_octree prev;
+    memset(&prev, 0, sizeof prev);
     ism_poly_stats costs, round;
     memset(&costs, 0, sizeof costs);
     enum ism_poly_status status = ISM_POLY_OK;
@@ -424,7 +434,8 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
         progress prog = {o, PTHREAD_MUTEX_INITIALIZER, r ? 0.95 : 0, r ? 0 : 0.95};
         memset(&round, 0, sizeof round);
         next.n = 0;
-        status = one_round(f, o, threads, &prog, &split, last ? NULL : &next, mesh, &round);
+        status = one_round(f, o, threads, &prog, &split, last ? NULL : &next, mesh, &round,
+                           &prev);
         add_round_costs(&costs, &round);
         if (status != ISM_POLY_OK || !next.n)
             break;
@@ -440,6 +451,7 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
     }
     ism_split_set_free(&split);
     ism_split_set_free(&next);
+    ism_octree_free(&prev);
     uint64_t rounds = stats->error_rounds;
     *stats = round;
     stats->error_rounds = rounds;

@@ -15,7 +15,7 @@ For each surface, target error E and tool, the tool's one resolution knob (isome
 requested max_error, depth 10 as the safety limit; libfive: min_feature, max_err left at its
 default; grids: N cells across the box) is searched: doubled or halved until one setting
 meets E and one does not, then 3 geometric bisections; the cheapest setting that met E is
-kept (its CPU the smaller of two runs). A run past RUN_CPU_LIMIT_S CPU seconds or a grid
+kept (its CPU the least of 2-4 runs). A run past RUN_CPU_LIMIT_S CPU seconds or a grid
 past MAX_CELLS counts as not reaching E. Goals (issue 16): isomesh's CPU <= 0.5 x libfive's
 and <= 0.2 x VTK's at every target; <= 1.5 µs CPU per triangle on the gyroid.
 Asserts nothing; exits 0 unless it cannot run.
@@ -26,7 +26,6 @@ import argparse
 import json
 import math
 import os
-import resource
 import shutil
 import subprocess
 import sys
@@ -37,30 +36,33 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 DEBIAN_PYTHON = "/usr/bin/python3"   # python3-numpy, python3-skimage, python3-vtk9
 LIBFIVE_DIR = os.environ.get("LIBFIVE_DIR", "/work/scratch/libfive")
-RUN_CPU_LIMIT_S = 40      # RLIMIT_CPU of one measured run: slower settings count as not reached
+RUN_CPU_LIMIT_S = 40      # a run past this many CPU seconds counts as not reaching the target
 RUN_WALL_LIMIT_S = 900    # the machine may be loaded 10x: wall time is only a safety net
 MAX_CELLS = 512           # grids: 513^3 float32 samples (0.5 GB) at most
 ISO_DEPTH = 10            # isomesh's depth.max under max_error (a safety limit)
 BISECTIONS = 3
-CPU_RESOLUTION_S = 1e-4   # shorter CPU times are read as this (the clocks' tick on a busy machine)
+QUICK_RUN_S = 0.05        # the chosen setting is run again (3 more times when quicker than this)
+CPU_RESOLUTION_S = 1e-4   # shorter CPU times are read as this (no ratio by a zero)
 MAX_RUNS_PER_TARGET = 12
 
 
-def run(argv, cpu_limit=RUN_CPU_LIMIT_S):
-    """One child process under an RLIMIT_CPU; its last stdout line as JSON, or None."""
-    def limits():
-        resource.setrlimit(resource.RLIMIT_CPU, (cpu_limit, cpu_limit + 5))
+def run(argv):
+    """One child process; its last stdout line as JSON, or None. (No RLIMIT_CPU: with one
+    set, Linux reads the child's CPU clock in scheduler ticks, 4 ms.)"""
     try:
-        r = subprocess.run(argv, capture_output=True, text=True, cwd=ROOT, preexec_fn=limits,
+        r = subprocess.run(argv, capture_output=True, text=True, cwd=ROOT,
                            timeout=RUN_WALL_LIMIT_S)
     except subprocess.TimeoutExpired:
         return None
     if r.returncode != 0:
         return None
     try:
-        return json.loads(r.stdout.strip().splitlines()[-1])
+        out = json.loads(r.stdout.strip().splitlines()[-1])
     except (ValueError, IndexError):
         return None
+    if isinstance(out, dict) and out.get("cpu_s", 0) > RUN_CPU_LIMIT_S:
+        return None  # over the budget: counts as not reaching the target
+    return out
 
 
 # ---- the tools: each maps a resolution x (larger = finer) to {cpu_s, triangles, max_c} --------
@@ -79,7 +81,8 @@ class Tool:
             os.unlink(ply)
         if m is None:
             return None
-        return dict(cpu_s=max(inner["cpu_s"], CPU_RESOLUTION_S), triangles=m["triangles"], max_c=m["max_c"])
+        return dict(cpu_s=max(inner["cpu_s"], CPU_RESOLUTION_S), triangles=m["triangles"],
+                    max_c=m["max_c"])
 
 
 class Isomesh(Tool):
@@ -93,7 +96,8 @@ class Isomesh(Tool):
 
     def run(self, s, x):
         r = run([self.bench, "mesh", s["name"], repr(1 / x), str(ISO_DEPTH)])
-        return r and dict(cpu_s=max(r["cpu_s"], CPU_RESOLUTION_S), triangles=r["triangles"], max_c=r["max_c"])
+        return r and dict(cpu_s=max(r["cpu_s"], CPU_RESOLUTION_S), triangles=r["triangles"],
+                          max_c=r["max_c"])
 
 
 class Grid(Tool):
@@ -191,10 +195,11 @@ def search(tool, s, e, cache):
         else:
             lo = m
     best_x = min((x for x, r in cache.items() if ok(r)), key=lambda x: cache[x]["cpu_s"])
-    again = tool.run(s, best_x)  # a second run: the less disturbed time counts
     best = dict(cache[best_x])
-    if again and again["cpu_s"] < best["cpu_s"]:
-        best["cpu_s"] = again["cpu_s"]
+    for _ in range(3 if best["cpu_s"] < QUICK_RUN_S else 1):
+        again = tool.run(s, best_x)  # the least disturbed run counts
+        if again and again["cpu_s"] < best["cpu_s"]:
+            best["cpu_s"] = again["cpu_s"]
     best["setting"] = tool.setting(best_x)
     return best
 

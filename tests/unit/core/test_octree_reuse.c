@@ -1,0 +1,123 @@
+/* test_octree_reuse.c — the max_error rounds take the last round's octree over
+ * (octree_build.h, previous): built from the last tree with a larger set of forced splits,
+ * the tree is node for node the one a fresh build makes with that set (same order, children,
+ * flags and counts), while evaluating f far less. On the torus and the gyroid in a ball (its
+ * max() shortens tapes on the way down), in boxes on the lattice and shifted off it by 1e-3
+ * and 0.37 of a finest cell, on one and two threads. */
+#include <criterion/criterion.h>
+#include <string.h>
+#include "core/octree/octree_build.h"
+#include "poly_fixture.h"
+
+#define MAX_DEPTH 7
+#define MAX_ERROR 1e-2
+
+static const ism_param torus_rr[] = {{"R", 1}, {"r", 0.3}};
+static const pf_surface torus = {"(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)",
+                                 torus_rr, 2, NULL, 0};
+static const ism_param gyroid_k[] = {{"k", 4}};
+static const pf_surface gyroid = {
+    "max(sin(k*x)*cos(k*y) + sin(k*y)*cos(k*z) + sin(k*z)*cos(k*x), x^2 + y^2 + z^2 - 1.96)",
+    gyroid_k, 1, NULL, 0};
+
+static void build(const ism_tape *t, double shift, int threads, const ism_split_set *split,
+                  const ism_octree *previous, ism_octree *tree, ism_octree_build_stats *st)
+{
+    double box[6];
+    for (int k = 0; k < 3; k++) {
+        box[k] = -1.5 + shift;
+        box[3 + k] = 1.5 + shift;
+    }
+    memset(tree, 0, sizeof *tree);
+    ism_grid_init(&tree->grid, box, MAX_DEPTH);
+    ism_octree_build_params p = {
+        .tape = t,
+        .min_depth = 3,
+        .max_depth = MAX_DEPTH,
+        .thin_depth = MAX_DEPTH,
+        .flatness = {.gradient_test = 0.9, .normal_cos = 0.9, .plane_frac = 0.05,
+                     .abs_tol = 0.25 * ism_grid_cell_size(&tree->grid, MAX_DEPTH),
+                     .double_root_eps = 1e-9, .double_root_iters = 25, .max_error = MAX_ERROR},
+        .threads = threads,
+        .max_nodes = (size_t)1 << 26,
+        .force_split = split,
+        .previous = previous,
+    };
+    cr_assert_eq(ism_octree_build(tree, &p, st), ISM_BUILD_OK);
+}
+
+/* Every stride-th leaf above the maximum depth, from the offset-th on, into s. */
+static void add_leaves(const ism_octree *tree, size_t offset, size_t stride, ism_split_set *s)
+{
+    size_t seen = 0;
+    for (size_t i = 0; i < tree->n; i++) {
+        const ism_node *nd = &tree->nodes[i];
+        if (nd->state != ISM_NODE_LEAF || nd->level >= MAX_DEPTH)
+            continue;
+        if (seen++ % stride == offset)
+            cr_assert(ism_split_set_add(s, ism_node_key(nd)));
+    }
+    ism_split_set_sort(s);
+}
+
+static void same_tree(const ism_octree *a, const ism_octree *b, const char *what)
+{
+    cr_assert_eq(a->n, b->n, "%s: %zu nodes against %zu", what, a->n, b->n);
+    for (size_t i = 0; i < a->n; i++) {
+        const ism_node *x = &a->nodes[i], *y = &b->nodes[i];
+        cr_assert(memcmp(x->org, y->org, sizeof x->org) == 0 && x->child == y->child &&
+                      x->level == y->level && x->state == y->state && x->flags == y->flags,
+                  "%s: node %zu differs", what, i);
+    }
+}
+
+/* A box shift (in finest cells) and a thread count. */
+typedef struct run_case {
+    double cells;
+    int threads;
+} run_case;
+
+static void check(const pf_surface *s, const run_case *cases, size_t ncases)
+{
+    ism_tape *t = pf_compile(s);
+    for (size_t i = 0; i < ncases; i++) {
+        double shift = cases[i].cells * 3.0 / (1 << MAX_DEPTH);
+        int threads = cases[i].threads;
+        ism_octree first, fresh, reused;
+        ism_octree_build_stats s1, sf, sr;
+        ism_split_set split = {0};
+        build(t, shift, threads, NULL, NULL, &first, &s1);
+        add_leaves(&first, 0, 7, &split);
+        ism_octree second;
+        ism_octree_build_stats s2;
+        build(t, shift, threads, &split, &first, &second, &s2);
+        add_leaves(&second, 3, 5, &split); /* a third round's larger set */
+        build(t, shift, threads, &split, NULL, &fresh, &sf);
+        build(t, shift, threads, &split, &second, &reused, &sr);
+        same_tree(&fresh, &reused, s->expr);
+        cr_expect_eq(sf.visited, sr.visited);
+        cr_expect_eq(sf.excluded, sr.excluded);
+        cr_expect_eq(sf.unresolved, sr.unresolved);
+        cr_expect_lt(sr.n_gradient * 2, sf.n_gradient, "shift %g: %llu gradients of %llu",
+                     shift, (unsigned long long)sr.n_gradient,
+                     (unsigned long long)sf.n_gradient);
+        ism_octree_free(&first);
+        ism_octree_free(&second);
+        ism_octree_free(&fresh);
+        ism_octree_free(&reused);
+        ism_split_set_free(&split);
+    }
+    ism_tape_free(t);
+}
+
+Test(octree_reuse, torus_tree_as_a_fresh_build)
+{
+    static const run_case cases[] = {{0, 1}, {1e-3, 2}, {0.37, 2}};
+    check(&torus, cases, sizeof cases / sizeof cases[0]);
+}
+
+Test(octree_reuse, gyroid_ball_tree_as_a_fresh_build)
+{
+    static const run_case cases[] = {{0.37, 2}}; /* the costly one: one box */
+    check(&gyroid, cases, sizeof cases / sizeof cases[0]);
+}
