@@ -27,7 +27,7 @@ libsodium-dev libseccomp-dev libhiredis-dev nodejs npm ca-certificates"
 test_pkgs="libcriterion-dev draco clang libclang-rt-14-dev chromium python3 redis-server
 nginx-light wrk valgrind systemd fonts-dejavu-core openssl"
 # Reference tools the benchmarks measure beside isomesh.
-bench_pkgs="python3-skimage python3-numpy libcgal-dev libgmp-dev libmpfr-dev hyperfine"
+bench_pkgs="python3-skimage python3-numpy python3-vtk9 libcgal-dev libgmp-dev libmpfr-dev hyperfine"
 
 case "$purpose" in
     run) want=$run_pkgs ;;

@@ -328,7 +328,15 @@ def main():
                 tools.append(Libfive(bench, tmp, five))
             else:
                 print(f"bench_equal_error: libfive skipped: {why}")
-        tools += [Grid(bench, tmp, t) for t in ("vtk", "skimage") if t in wanted]
+        for t, module in (("vtk", "vtkmodules.vtkFiltersCore"), ("skimage", "skimage.measure")):
+            if t not in wanted:
+                continue
+            if subprocess.run([DEBIAN_PYTHON, "-c", f"import {module}"],
+                              capture_output=True).returncode != 0:
+                print(f"bench_equal_error: {t} skipped: {DEBIAN_PYTHON} cannot import {module} "
+                      f"(deploy/install-deps.sh bench)")
+                continue
+            tools.append(Grid(bench, tmp, t))
         print(f"bench_equal_error: tools {[t.name for t in tools]}; one thread; CPU s inside "
               f"each process; max c = max centroid distance to f = 0 (bench_error.c); load "
               f"average {load0:.1f} on {os.cpu_count()} cores")
