@@ -227,6 +227,13 @@ def python_suites(sub):
         if os.path.isdir(d) else []
 
 
+def group(suite):
+    """Suites of one group never run at the same time: the deploy suites each start Redis from
+    deploy/redis/isomesh.conf, on its one fixed port, so two at once would share (and stop) one
+    Redis. None: no group."""
+    return "deploy" if suite.name.startswith("deploy/") else None
+
+
 class Lanes:
     """Runs suites on `jobs` lanes at once, each lane taking the next suite that can start:
     one that needs the sanitizer build waits until it is built (and fails unrun if the build
@@ -238,12 +245,16 @@ class Lanes:
         self.cv = threading.Condition()
         self.asan_state = "building" if any(s.name.startswith("build ") for s in suites) else "built"
         self.results = []   # (suite, passed, failed, wall, cpu)
+        self.busy = set()   # groups of the suites running now (see group())
 
     def next_suite(self):
         with self.cv:
             while self.pending:
                 for i, s in enumerate(self.pending):
-                    if not s.needs_asan or self.asan_state != "building":
+                    if (not s.needs_asan or self.asan_state != "building") and \
+                            group(s) not in self.busy:
+                        if group(s):
+                            self.busy.add(group(s))
                         return self.pending.pop(i)
                 self.cv.wait()
             return None
@@ -264,6 +275,7 @@ class Lanes:
                     p, f, wall, cpu = 0, 1, 0.0, 0.0
                     out = f"\n=== {s.name}: the runner failed:\n{traceback.format_exc()}"
             with self.cv:
+                self.busy.discard(group(s))
                 if s.name.startswith("build "):
                     self.asan_state = "failed" if f else "built"
                 self.results.append((s, p, f, wall, cpu))
