@@ -10,6 +10,7 @@
 #include "core/curves/curves.h"
 #include "core/mesh/write_mesh.h"
 #include "core/octree/polygonise.h"
+#include "core/octree/resolvable.h"
 #include "core/singular/check.h"
 #include "core/singular/surface.h"
 #include "proto/computed.h"
@@ -454,6 +455,12 @@ static bool polygonise_and_analyse(const ism_request *req, const ism_tape *tape,
     o.progress = polygoniser_progress;
     o.progress_ctx = &pm;
     o.cancel = hooks ? hooks->cancel : NULL;
+    char why[400];
+    ism_resolvable rv = ism_resolvable_check(tape, req->box, why, sizeof why);
+    if (rv == ISM_RESOLVABLE_NO_MEMORY)
+        return fail_with(r, 500, "no_memory", "%s", "out of memory checking the expression");
+    if (rv != ISM_RESOLVABLE_OK)
+        return fail_with(r, 422, "unresolvable", "%s", why);
     ism_surface_times times;
     enum ism_poly_status st =
         ism_mesh_surface(tape, &o, &c->mesh, &c->locus, &s->ps, &s->cs, &times, &err);

@@ -83,6 +83,9 @@ static const flag FLAGS[] = {
     {"job-memory", K_SIZE, 0, (long long)1 << 42, "BYTES",
      "address-space limit of each worker process; 0 = none [4G]"},
     {"max-body", K_SIZE, 1024, (long long)64 << 20, "BYTES", "largest request body [256K]"},
+    {"upload-memory", K_SIZE, 1024, (long long)1 << 40, "BYTES",
+     "memory all request bodies being received may hold at once; beyond it a request gets "
+     "503 [64M]"},
     {"conn-timeout", K_DURATION, 0, 0, "TIME",
      "close a connection idle this long (one waiting for its computation never is); at "
      "least 1s [30s]"},
@@ -298,6 +301,7 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
         if (!strcmp(name, "cache-mem")) cfg->cache_mem = (size_t)n;
         else if (!strcmp(name, "job-memory")) cfg->job_memory = (size_t)n;
         else if (!strcmp(name, "max-body")) cfg->max_body = (size_t)n;
+        else if (!strcmp(name, "upload-memory")) cfg->upload_memory = (size_t)n;
         else if (!strcmp(name, "cache-disk-max")) cfg->cache_disk_max = (unsigned long long)n;
         return true;
     case K_DURATION:
@@ -448,6 +452,7 @@ static void set_defaults(ismd_config *cfg)
     cfg->queue_timeout_s = 60;
     cfg->job_memory = (size_t)4 << 30;
     cfg->max_body = (size_t)256 << 10;
+    cfg->upload_memory = (size_t)64 << 20; /* 256 bodies of the largest size */
     cfg->max_depth = 10;
     cfg->max_triangles = 4000000;
     cfg->log_format = ISM_LOG_TEXT;

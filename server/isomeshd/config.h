@@ -25,6 +25,7 @@ typedef struct ismd_config {
     double queue_timeout_s;   /* longest wait for a worker (503 queue_timeout beyond) */
     size_t job_memory;        /* RLIMIT_AS of a worker process (0 = unlimited) */
     size_t max_body;          /* request body bytes */
+    size_t upload_memory;     /* bytes all request bodies being received may hold at once */
     unsigned conn_timeout_s;  /* an idle connection (not waiting for a computation) is closed */
     int client_conns;         /* connections from one address at once (0 = no limit) */
     unsigned max_conns;       /* connections held at once, fair across addresses (conns.h) */

@@ -1,5 +1,6 @@
-/* http.c — the request life cycle of http.h: libmicrohttpd set-up, the first call (route,
- * then 404, 405, 401, 400, 413 from Content-Length, 415), reading the body within --max-body,
+/* http.c — the request life cycle of http.h: libmicrohttpd set-up, the first call (501 for
+ * an unknown Transfer-Encoding, route, then 404, 405, 401, 400, 413 from Content-Length,
+ * 415), reading the body within --max-body,
  * answering on a later call (or closing when the client left a suspended request), one log
  * line and the metrics per request when MHD reports it complete, and the connection table's
  * view of every connection (conns.h). */
@@ -95,6 +96,19 @@ static bool framing_conflict(struct MHD_Connection *c)
     return f.content_length > 1 || (f.content_length && f.transfer_encoding);
 }
 
+/* A Transfer-Encoding other than "chunked" (gzip, "gzip, chunked", anything unknown):
+ * libmicrohttpd would read such a body until the client closes, so the request is answered
+ * 501 before its body (RFC 9112 6.1: a server that does not understand a coding says so). */
+static bool unknown_transfer_coding(ismd_req *r)
+{
+    const char *te = ismd_header(r, MHD_HTTP_HEADER_TRANSFER_ENCODING);
+    if (!te)
+        return false;
+    te += strspn(te, " \t");
+    size_t n = strcspn(te, " \t");
+    return !(n == 7 && strncasecmp(te, "chunked", 7) == 0 && te[n + strspn(te + n, " \t")] == 0);
+}
+
 /* The first call: build the context, route, and reject what can be rejected before the body
  * arrives. Only a 413 from Content-Length is answered now (the body is never read). */
 static enum MHD_Result first_call(ismd_server *s, struct MHD_Connection *conn, const char *url,
@@ -118,6 +132,10 @@ static enum MHD_Result first_call(ismd_server *s, struct MHD_Connection *conn, c
     ismd_auth_identify(s->auth, ismd_header(r, MHD_HTTP_HEADER_AUTHORIZATION), r->client, &r->who);
     *con_cls = r;
     atomic_fetch_add(&s->open_requests, 1);
+    if (unknown_transfer_coding(r))
+        return ismd_respond_error(r, 501, "not_implemented",
+                                  "this Transfer-Encoding is not supported: send the body with "
+                                  "Content-Length, or chunked");
 
     ismd_route_find(r, url);
     if (r->early_status)
@@ -162,21 +180,53 @@ static enum MHD_Result first_call(ismd_server *s, struct MHD_Connection *conn, c
     return MHD_YES;
 }
 
+/* Bytes of every request body that --upload-memory does not count: a request's own small
+ * body is always received (ordinary requests are a few hundred bytes; a flood of large
+ * uploads must not refuse them), so the bound on all bodies is --upload-memory plus this
+ * much per connection (64 MB at the default 4000 connections). */
+#define UPLOAD_FREE ((size_t)16 << 10)
+
+/* The bytes of a buffer of cap bytes that --upload-memory counts. */
+static long long upload_counted(size_t cap)
+{
+    return cap > UPLOAD_FREE ? (long long)(cap - UPLOAD_FREE) : 0;
+}
+
+/* Gives r's body buffer back (and its bytes to --upload-memory). */
+static void drop_body(ismd_req *r)
+{
+    atomic_fetch_sub(&r->srv->metrics.upload_bytes, upload_counted(r->body_cap));
+    free(r->body);
+    r->body = NULL;
+    r->body_len = r->body_cap = 0;
+}
+
+/* Takes what growing r's body buffer to cap bytes needs of --upload-memory; false (nothing
+ * taken) when every body being received together would then hold more than it. */
+static bool reserve_upload(ismd_req *r, size_t cap)
+{
+    ismd_server *s = r->srv;
+    long long grow = upload_counted(cap) - upload_counted(r->body_cap);
+    long long now = atomic_fetch_add(&s->metrics.upload_bytes, grow) + grow;
+    if (now <= (long long)s->cfg->upload_memory)
+        return true;
+    atomic_fetch_sub(&s->metrics.upload_bytes, grow);
+    return false;
+}
+
 static enum MHD_Result take_body(ismd_req *r, const char *data, size_t *size)
 {
     size_t n = *size;
     *size = 0;
     size_t max = r->srv->cfg->max_body;
-    if (!r->wants_body || r->body_too_big || r->status) {
+    if (!r->wants_body || r->body_too_big || r->uploads_full || r->status) {
         r->discarded += n;
         return r->discarded > DISCARD_FACTOR * max ? MHD_NO : MHD_YES;
     }
     if (r->body_len + n > max) {
         r->body_too_big = true;
         r->discarded += r->body_len + n;
-        free(r->body);
-        r->body = NULL;
-        r->body_len = r->body_cap = 0;
+        drop_body(r);
         return MHD_YES;
     }
     if (r->body_len + n + 1 > r->body_cap) {
@@ -185,9 +235,18 @@ static enum MHD_Result take_body(ismd_req *r, const char *data, size_t *size)
             cap *= 2;
         if (cap > max + 1)
             cap = max + 1;
+        if (!reserve_upload(r, cap)) {
+            r->uploads_full = true;
+            r->discarded += r->body_len + n;
+            drop_body(r);
+            return MHD_YES;
+        }
         char *b = realloc(r->body, cap);
-        if (!b)
+        if (!b) {
+            atomic_fetch_sub(&r->srv->metrics.upload_bytes,
+                             upload_counted(cap) - upload_counted(r->body_cap));
             return MHD_NO;
+        }
         r->body = b;
         r->body_cap = cap;
     }
@@ -223,6 +282,10 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         return ismd_respond_preflight(r);
     if (r->body_too_big)
         return ismd_respond_body_too_large(r);
+    if (r->uploads_full)
+        return ismd_respond_error(r, 503, "uploads_full",
+                                  "the server is receiving too many request bodies at once "
+                                  "(--upload-memory); retry shortly");
     return r->handler(r);
 }
 
@@ -267,7 +330,7 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
     ism_blob_unref(r->r_body);
     ism_blob_unref(r->r_stats);
     ism_blob_unref(r->r_features);
-    free(r->body);
+    drop_body(r);
     free(r);
     atomic_fetch_sub(&s->open_requests, 1);
 }

@@ -73,6 +73,7 @@ struct ismd_req {
     char *body;
     size_t body_len, body_cap, discarded;
     bool wants_body, body_too_big;
+    bool uploads_full;         /* refused: the bodies of all requests hit --upload-memory */
     /* an error decided on the first call, answered once the body is read */
     unsigned early_status;
     const char *early_code;

@@ -20,7 +20,7 @@ static const char *const ROUTE_LABELS[ISMD_R_COUNT] = {
 
 static const unsigned STATUSES[ISMD_NSTATUS - 1] = {200, 202, 204, 206, 304, 400, 401, 403, 404,
                                                     405, 408, 413, 415, 422, 429, 431, 499,
-                                                    500, 503, 504};
+                                                    500, 501, 503, 504};
 
 static const double LAT_BOUNDS[ISMD_LAT_BUCKETS - 1] = {
     0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 30, 60};
@@ -341,6 +341,8 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
     gauge(&o, "isomesh_event_streams", "Open job event streams.", m->event_streams);
     gauge(&o, "isomesh_connections", "Open HTTP connections (at most --max-connections).",
           m->connections);
+    gauge(&o, "isomesh_upload_bytes",
+          "Bytes held by request bodies (at most --upload-memory).", m->upload_bytes);
     gauge(&o, "isomesh_suspended_connections", "Connections waiting for a computation.",
           m->suspended_connections);
     if (o.failed) {

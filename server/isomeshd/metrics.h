@@ -18,7 +18,7 @@ typedef enum ismd_route {
 
 const char *ismd_route_label(ismd_route r);
 
-#define ISMD_NSTATUS 21       /* tracked status codes + "other" */
+#define ISMD_NSTATUS 22       /* tracked status codes + "other" */
 #define ISMD_LAT_BUCKETS 17   /* request latency buckets incl. +Inf */
 #define ISMD_POLY_BUCKETS 14  /* computation time buckets incl. +Inf */
 
@@ -74,6 +74,7 @@ typedef struct ismd_metrics {
     atomic_llong workers_total, workers_ready, workers_busy;
     atomic_llong jobs_active, event_streams, suspended_connections;
     atomic_llong connections;                /* open, as the connection table counts them */
+    atomic_llong upload_bytes;               /* request body buffers (--upload-memory) */
     struct ism_redis_counters *redis;        /* the shared tier's figures (NULL: no --redis) */
 } ismd_metrics;
 

@@ -17,6 +17,20 @@ from harness import (BUILD, QUICK, ROOT, SLOW, Daemon, draco_counts, http_reques
 
 ISOMESH = os.path.join(BUILD, "isomesh")
 
+# Slow but resolvable work: the gyroid ball plus a tiny sum of 400 sines, so that every
+# evaluation walks a tape of ~1,200 operations. At depth 10 it runs minutes of CPU on any
+# machine, so it holds a worker until its deadline or its cancel. (A hopeless expression
+# such as sin(1e300*x) + y is refused at once with 422 unresolvable since the daemon probes
+# for it: it no longer pins a worker.)
+_SINES = "+".join("sin(%d*x+y)" % i for i in range(1, 401))
+
+
+def busy_work(k):
+    """A request holding a worker for minutes; distinct k, distinct computations."""
+    return {"expr": "max(sin(4*x)*cos(4*y) + sin(4*y)*cos(4*z) + sin(4*z)*cos(4*x), "
+                    "x^2 + y^2 + z^2 - 1.96) + 1e-9*(%s) + %g*1e-12" % (_SINES, k),
+            "box": [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5], "depth": {"max": 10}}
+
 
 def sanitizer_build(path):
     """True when the program at path was built with AddressSanitizer."""
@@ -39,6 +53,38 @@ def server_closed(s):
         return False
     except OSError:
         return True
+
+
+def read_answer(s):
+    """(status, headers with lower-case names, body) of one answer read from socket s (framed
+    by its Content-Length, else read until the server closes); status None when the server
+    closed without one."""
+    got = b""
+    while b"\r\n\r\n" not in got:
+        chunk = s.recv(65536)
+        if not chunk:
+            return None, {}, b""
+        got += chunk
+    head, body = got.split(b"\r\n\r\n", 1)
+    lines = head.decode("latin-1").split("\r\n")
+    headers = {}
+    for line in lines[1:]:
+        name, _, value = line.partition(":")
+        headers[name.strip().lower()] = value.strip()
+    size = int(headers.get("content-length", -1))
+    while size < 0 or len(body) < size:
+        chunk = s.recv(65536)
+        if not chunk:
+            break
+        body += chunk
+    return int(lines[0][9:12]), headers, body
+
+
+def raw_answer(port, data, timeout=30):
+    """Sends raw bytes on a new connection and reads one answer (read_answer)."""
+    with socket.create_connection(("127.0.0.1", port), timeout=timeout) as s:
+        s.sendall(data)
+        return read_answer(s)
 
 
 def raw_status(port, data, timeout=10):

@@ -21,8 +21,8 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from reltools import (Daemon, http_request, metric_key, parse_metrics, server_closed,  # noqa: E402
-                      sphere, wait_until)
+from reltools import (Daemon, busy_work, http_request, metric_key, parse_metrics,  # noqa: E402
+                      server_closed, sphere, wait_until)
 
 ADDRESSES = ["127.0.0.%d" % i for i in range(2, 12)]
 LIMIT = 40          # --max-connections: small, so the test opens few sockets
@@ -33,11 +33,6 @@ def connect(port, source):
     s = socket.create_connection(("127.0.0.1", port), timeout=10, source_address=(source, 0))
     s.setblocking(False)
     return s
-
-
-def hopeless(k):
-    """Never resolves before its deadline (test_lockout.py's): pins a worker."""
-    return {"expr": "sin(1e300*x) + %g*y" % k, "depth": {"max": 10}}
 
 
 def post_raw(port, body, source="127.0.0.1"):
@@ -77,7 +72,7 @@ class FairLimitTest(unittest.TestCase):
             # one connection of the first address has a request in progress (it waits for a
             # computation); everything else only connects
             scraper = Scraper(d.port)
-            busy = post_raw(d.port, hopeless(1), source=ADDRESSES[0])
+            busy = post_raw(d.port, busy_work(1), source=ADDRESSES[0])
             busy.setblocking(False)
             wait_until("the computation running",
                        lambda: scraper.metric("isomesh_workers_busy") == 1)
@@ -122,7 +117,7 @@ class FairLimitTest(unittest.TestCase):
             waiting = []
             try:
                 for _ in range(15):
-                    waiting.append(post_raw(d.port, hopeless(3), source=ADDRESSES[0]))
+                    waiting.append(post_raw(d.port, busy_work(3), source=ADDRESSES[0]))
                     waiting[-1].setblocking(False)
                 wait_until("every request waiting, the computation running",
                            lambda: scraper.metric("isomesh_suspended_connections") == 15
@@ -195,7 +190,7 @@ class ClientLeftTest(unittest.TestCase):
         # one worker, and a job deadline far beyond this test's bounds: only cancelling frees it
         with Daemon("--workers", "1", "--job-timeout", "600s") as d:
             # alone: the client leaves, its computation stops, the worker is free again
-            a = post_raw(d.port, hopeless(1))
+            a = post_raw(d.port, busy_work(1))
             wait_until("the computation running", lambda: d.metric("isomesh_workers_busy") == 1)
             a.close()
             wait_until("the client seen gone", lambda: d.metric("isomesh_clients_left_total") == 1)
@@ -204,10 +199,10 @@ class ClientLeftTest(unittest.TestCase):
             wait_until("a worker ready", lambda: d.metric("isomesh_workers_ready") == 1
                        and d.metric("isomesh_workers_busy") == 0)
             # shared: two requests wait for the same computation; one leaves, it carries on
-            b1 = post_raw(d.port, hopeless(2))
+            b1 = post_raw(d.port, busy_work(2))
             wait_until("the computation running", lambda: d.metric("isomesh_workers_busy") == 1)
             joins = d.metric("isomesh_singleflight_joins_total")
-            b2 = post_raw(d.port, hopeless(2), source="127.0.0.2")
+            b2 = post_raw(d.port, busy_work(2), source="127.0.0.2")
             wait_until("the second request joined",
                        lambda: d.metric("isomesh_singleflight_joins_total") == joins + 1)
             b1.close()

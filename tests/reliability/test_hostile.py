@@ -6,7 +6,11 @@ none of them starts a computation or kills a worker, and the other user sees onl
     non-finite and overflowing numbers, a box of zero, astronomical or vanishing size, depth
     beyond the limit;
   * bodies: a 1 GB Content-Length is refused (413) before a byte of it is sent, an endless
-    chunked body is cut off after a bounded number of bytes, conflicting framing headers;
+    chunked body is cut off after a bounded number of bytes, conflicting framing headers, an
+    unknown Transfer-Encoding (501, not a wait for the client to close); six slow uploads of
+    the largest size held open at once never hold more than --upload-memory (the ones beyond
+    it get 503 with Retry-After when their body is complete), and the other user's small
+    bodies are never refused meanwhile;
   * content types other than JSON (415); invalid and overlong UTF-8, NUL, duplicate keys,
     trailing garbage, 100k-deep JSON (400);
   * oversized URLs and headers;
@@ -24,10 +28,13 @@ import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from reltools import QUICK, Daemon, OtherUser, raw_status, request  # noqa: E402
+from reltools import (QUICK, Daemon, OtherUser, raw_answer, raw_status, read_answer,  # noqa: E402
+                      request, wait_until)
 
 SECRET = b"TOPSECRET-isomesh-hostile-test"
 MAX_BODY = 1 << 20
+UPLOAD_MEMORY = 4 * MAX_BODY  # bodies being received at once: four of the largest size fit
+# (the first 16 KB of each body are not counted: http.c's UPLOAD_FREE)
 
 
 def expr(e, **extra):
@@ -95,7 +102,8 @@ class HostileTest(unittest.TestCase):
         os.symlink(os.path.join(cls.tmp, "secret.txt"), os.path.join(web, "leak.txt"))
         os.symlink(cls.tmp, os.path.join(web, "up"))
         os.symlink("/", os.path.join(web, "rootdir"))
-        cls.d = Daemon("--workers", "2", "--max-body", str(MAX_BODY), web_root=web)
+        cls.d = Daemon("--workers", "2", "--max-body", str(MAX_BODY),
+                       "--upload-memory", str(UPLOAD_MEMORY), web_root=web)
         try:
             cls.d.start()
         except Exception:
@@ -198,6 +206,53 @@ class HostileTest(unittest.TestCase):
             data = (b"POST /v1/mesh HTTP/1.1\r\nHost: x\r\nConnection: close\r\n"
                     b"Content-Type: application/json\r\n" + extra + b"\r\n" + body)
             self.assertEqual(raw_status(self.d.port, data), 400, extra)
+
+    def test_an_unknown_transfer_encoding_is_not_implemented(self):
+        body = b'{"preset": "sphere"}'
+        for te in (b"gzip", b"gzip, chunked", b"chunked, gzip", b"identity", b"x"):
+            data = (b"POST /v1/mesh HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                    b"Transfer-Encoding: " + te + b"\r\n\r\n" + body)
+            got, h, answer = raw_answer(self.d.port, data)
+            self.assertEqual(got, 501, te)
+            self.assertEqual(json.loads(answer)["error"]["code"], "not_implemented")
+        chunked = (b"POST /v1/mesh HTTP/1.1\r\nHost: x\r\nConnection: close\r\n"
+                   b"Content-Type: application/json\r\nTransfer-Encoding: Chunked\r\n\r\n"
+                   b"%x\r\n%s\r\n0\r\n\r\n" % (len(body), body))
+        self.assertEqual(raw_status(self.d.port, chunked), 200)  # the one coding understood
+
+    def test_slow_uploads_hold_at_most_the_upload_memory(self):
+        other = self.under_attack()
+        started, restarts = self.baseline()
+        socks = []
+        try:
+            for _ in range(6):  # each sends all but the last byte of a largest-size body
+                s = socket.create_connection(("127.0.0.1", self.d.port), timeout=30)
+                s.sendall(b"POST /v1/mesh HTTP/1.1\r\nHost: x\r\nConnection: close\r\n"
+                          b"Content-Type: application/json\r\nContent-Length: %d\r\n\r\n"
+                          % MAX_BODY + b" " * (MAX_BODY - 1))
+                socks.append(s)
+            # the daemon has read them: four bodies' buffers (MAX_BODY + 1 bytes each, 16 KB
+            # of them free) fit, six never do
+            wait_until("the pending bodies read", lambda: self.d.metric(
+                "isomesh_upload_bytes") >= 3 * MAX_BODY)
+            self.assertLessEqual(self.d.metric("isomesh_upload_bytes"), UPLOAD_MEMORY)
+            answers = []
+            for s in socks:
+                s.sendall(b" ")
+                answers.append(read_answer(s))
+            statuses = sorted(a[0] for a in answers)
+            self.assertGreaterEqual(statuses.count(503), 2, statuses)
+            # the others were read whole and refused as requests (a body of blanks)
+            self.assertTrue(all(st in (400, 422, 503) for st in statuses), statuses)
+            for got, h, answer in answers:
+                if got == 503:
+                    self.assertEqual(json.loads(answer)["error"]["code"], "uploads_full")
+                    self.assertIsNotNone(h.get("retry-after"))
+        finally:
+            for s in socks:
+                s.close()
+        wait_until("the bodies freed", lambda: self.d.metric("isomesh_upload_bytes") == 0)
+        self.assert_unharmed(other, started, restarts)
 
     def test_oversized_urls_and_headers(self):
         other = self.under_attack()

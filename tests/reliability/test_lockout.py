@@ -1,10 +1,11 @@
 """test_lockout.py — a daemon that a few users cannot lock (issue 17), each red-team case on a
 real isomeshd: one user's flood of job posts evicts only that user's own finished job records
-(another user's record stays readable); hopeless requests from several users do not keep a
+(another user's record stays readable); long computations of several users do not keep a
 small request of another user from a worker; a request's deadline counts its time on a worker,
-and its wait for one has its own bound (--queue-timeout) answered with a clear 503.
+and its wait for one has its own bound (--queue-timeout) answered with a clear 503; a
+hopeless expression (sin(1e300*x) + 3*y) is refused with 422 and never holds a worker.
 
-Bounded everywhere: the hopeless requests are stopped by the daemon's shutdown, every wait has
+Bounded everywhere: the long computations are stopped by the daemon's shutdown, every wait has
 a deadline, and no assertion depends on how fast this machine computes except the generous
 bound on the small request (a sphere at depth 5 takes milliseconds; the bound is seconds)."""
 import http.client
@@ -15,21 +16,21 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from reltools import Daemon, http_request, sanitizer_build, sphere, wait_until  # noqa: E402
+from reltools import Daemon, busy_work, http_request, sanitizer_build, sphere, wait_until  # noqa: E402
 from harness import ISOMESHD  # noqa: E402
 
 USER_JOBS_KEPT = 1000  # jobs.c: records one user keeps
-# The small request beside hopeless ones: the issue's bound (about 1 s measured here: a
+# The small request beside long ones: the issue's bound (about 1 s measured here: a
 # worker respawn and milliseconds of work), or under AddressSanitizer, whose workers start
-# and compute several times slower, a looser one; without the fix it waits out the hopeless
+# and compute several times slower, a looser one; without the fix it waits out the long
 # requests' 60 s deadline either way.
 SMALL_BOUND_S = 30.0 if sanitizer_build(ISOMESHD) else 5.0
 
 
 def hopeless(k):
-    """Cheap to send, never resolves: the zero set oscillates below any cell size, so the
-    octree refines everywhere up to the deadline. Distinct k, distinct computations."""
-    return {"expr": "sin(1e300*x) + %g*y" % k, "depth": {"max": 10}}
+    """Cheap to send, never resolvable: the zero set oscillates far below any cell size (the
+    octree would refine everywhere up to the deadline). Refused at once (422 unresolvable)."""
+    return {"expr": "sin(1e300*x) + %g*y" % k}
 
 
 def post_from(port, source, path, body, timeout=60):
@@ -76,15 +77,15 @@ def server_timing(r, name):
 
 
 class HopelessUsersTest(unittest.TestCase):
-    def test_hopeless_requests_of_three_users_leave_a_worker_for_a_fourth(self):
-        # 4 workers; 3 users (3 addresses) send 2 hopeless jobs each: one user ends up with 2
+    def test_long_requests_of_three_users_leave_a_worker_for_a_fourth(self):
+        # 4 workers; 3 users (3 addresses) send 2 long jobs each: one user ends up with 2
         # workers, the others with 1 each (a user with nothing running who finds every worker
         # busy takes one back from a user holding two) -- every worker busy until its deadline
         with Daemon("--workers", "4", "--job-timeout", "60s") as d:
             jobs = []
             for user in ("127.0.0.2", "127.0.0.3", "127.0.0.4"):
                 for i in range(2):
-                    r = post_from(d.port, user, "/v1/jobs", hopeless(len(jobs) + 1))
+                    r = post_from(d.port, user, "/v1/jobs", busy_work(len(jobs) + 1))
                     self.assertEqual(r.status, 202, r.body[:200])
                     jobs.append((user, r.json()))
             wait_until("every worker busy, 2 jobs queued",
@@ -110,7 +111,7 @@ class HopelessUsersTest(unittest.TestCase):
                           for u, j in jobs]
                 self.assertEqual(states.count("running") + states.count("queued"), 6, states)
                 # and gets its worker back once the small request is done
-                wait_until("the hopeless jobs all running again",
+                wait_until("the long jobs all running again",
                            lambda: d.metric("isomesh_workers_busy") == 4
                            and d.metric("isomesh_queue_depth") == 2)
             finally:
@@ -120,10 +121,10 @@ class HopelessUsersTest(unittest.TestCase):
 
 class QueueDeadlineTest(unittest.TestCase):
     def test_the_deadline_counts_time_on_a_worker_not_the_wait_for_one(self):
-        # one worker held by a hopeless job until its 3 s deadline; a small request queued
+        # one worker held by a long job until its 3 s deadline; a small request queued
         # behind it waits about that long, then computes in milliseconds: answered, not 504
         with Daemon("--workers", "1", "--job-timeout", "3s", "--queue-timeout", "30s") as d:
-            blocker = d.post("/v1/jobs", hopeless(1)).json()
+            blocker = d.post("/v1/jobs", busy_work(1)).json()
             wait_until("the blocker running", lambda: d.get(blocker["url"]).json()["state"] == "running")
             small = post_from(d.port, "127.0.0.2", "/v1/mesh",
                               {"expr": "x^2 + y^2 + z^2 - 0.25", "depth": {"max": 5}})
@@ -133,7 +134,24 @@ class QueueDeadlineTest(unittest.TestCase):
 
     def test_a_wait_past_the_queue_timeout_is_a_clear_503(self):
         with Daemon("--workers", "1", "--job-timeout", "60s", "--queue-timeout", "1s") as d:
-            blocker = d.post("/v1/jobs", hopeless(1)).json()
+            # a hopeless request is refused with its reason, and leaves the one worker free:
+            # were it computing (until the 60 s deadline), the blocker below would fail its
+            # 1 s queue deadline instead of running
+            for path in ("/v1/mesh", "/v1/jobs"):
+                r = post_from(d.port, "127.0.0.3", path, hopeless(3))
+                if path == "/v1/jobs":
+                    job = r.json()
+                    r = wait_until("the hopeless job ending", lambda: (lambda j: j if j["state"]
+                                   in ("failed", "done") else None)(http_request(
+                                       d.port, "GET", job["url"], source="127.0.0.3").json()))
+                    self.assertEqual(r["status"], 422, r)
+                    err = r["error"]
+                else:
+                    self.assertEqual(r.status, 422, r.body[:300])
+                    err = r.json()["error"]
+                self.assertEqual(err["code"], "unresolvable", err)
+                self.assertIn("faster than any cell can resolve", err["message"])
+            blocker = d.post("/v1/jobs", busy_work(1)).json()
             try:
                 wait_until("the blocker running",
                            lambda: d.get(blocker["url"]).json()["state"] == "running")
