@@ -1,5 +1,5 @@
 /* client_addr.c — who is on the other end of a connection (client_addr.h): the peer address
- * as text, and the client a trusted reverse proxy names in X-Real-IP. */
+ * as text, and the client a trusted reverse proxy names in X-Real-IP or X-Forwarded-For. */
 #include "server/isomeshd/client_addr.h"
 
 #include <arpa/inet.h>
@@ -22,8 +22,7 @@ void ismd_peer_address(struct MHD_Connection *c, char *out, size_t cap)
         inet_ntop(AF_INET6, &((const struct sockaddr_in6 *)sa)->sin6_addr, out, (socklen_t)cap);
 }
 
-/* Is addr one of the comma-separated addresses in list? */
-static bool in_address_list(const char *list, const char *addr)
+bool ismd_address_listed(const char *list, const char *addr)
 {
     size_t n = strlen(addr);
     for (const char *p = list; *p;) {
@@ -35,16 +34,58 @@ static bool in_address_list(const char *list, const char *addr)
     return false;
 }
 
+/* Is the n bytes at s an IPv4 or IPv6 literal? Copied (terminated) into out when it is. */
+static bool ip_literal(const char *s, size_t n, char *out, size_t cap)
+{
+    char text[64];
+    unsigned char bin[16];
+    if (n == 0 || n >= sizeof text || n >= cap)
+        return false;
+    memcpy(text, s, n);
+    text[n] = 0;
+    if (inet_pton(AF_INET, text, bin) != 1 && inet_pton(AF_INET6, text, bin) != 1)
+        return false;
+    memcpy(out, text, n + 1);
+    return true;
+}
+
+/* X-Forwarded-For "client, proxy1, proxy2": each proxy appends the address it was reached
+ * from, so only the entries right of the last untrusted one were written by trusted proxies.
+ * Walks from the right over trusted proxies; the first other entry is the client (out
+ * unchanged when an entry is not an IP literal: it may be forged, and so may all left of it). */
+static void forwarded_for(const char *xff, const char *trusted, char *out, size_t cap)
+{
+    const char *end = xff + strlen(xff);
+    while (end > xff) {
+        const char *start = end;
+        while (start > xff && start[-1] != ',')
+            start--;
+        const char *a = start, *b = end;
+        while (a < b && (*a == ' ' || *a == '\t'))
+            a++;
+        while (b > a && (b[-1] == ' ' || b[-1] == '\t'))
+            b--;
+        char addr[64];
+        if (!ip_literal(a, (size_t)(b - a), addr, sizeof addr))
+            return;
+        snprintf(out, cap, "%s", addr);
+        if (!ismd_address_listed(trusted, addr))
+            return;
+        end = start > xff ? start - 1 : xff;
+    }
+}
+
 void ismd_client_address(struct MHD_Connection *c, const char *trusted_proxy, char *out,
                          size_t cap)
 {
     ismd_peer_address(c, out, cap);
-    if (!trusted_proxy[0] || !in_address_list(trusted_proxy, out))
+    if (!trusted_proxy[0] || !ismd_address_listed(trusted_proxy, out))
         return;
     const char *real = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "X-Real-IP");
-    unsigned char bin[16];
-    if (real && strlen(real) < cap &&
-        (inet_pton(AF_INET, real, bin) == 1 || inet_pton(AF_INET6, real, bin) == 1))
-        snprintf(out, cap, "%s", real);
+    if (real && ip_literal(real, strlen(real), out, cap))
+        return;
+    const char *xff = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "X-Forwarded-For");
+    if (xff)
+        forwarded_for(xff, trusted_proxy, out, cap);
 }
 

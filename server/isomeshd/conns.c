@@ -15,16 +15,26 @@
 #include "core/util/clock.h"
 #include "server/common/log.h"
 #include "server/common/text_hash.h"
+#include "server/isomeshd/client_addr.h"
 
 #define NBUCKETS 1024          /* holder name table; addresses are few beside connections */
 #define ADDR_MAX 64            /* an IPv6 literal with room to spare */
 /* The thread's period: a deadline is enforced at most this late. */
 #define TICK_NS 250000000LL
+/* Refused connections left open for their first request (answered 503, then closed): at most
+ * this many at once (beyond, a refusal closes at once), each for at most REFUSED_WAIT_NS
+ * (a client sends its request as soon as it connects; one that does not is not waited for).
+ * Bounded like the evicted connections that linger (http.c's CUT_ROOM). */
+#define REFUSED_ROOM(max) ((max) / 16u + 16u)
+#define REFUSED_WAIT_NS 2000000000LL
 /* Sockets of requests in progress are peeked every this many ticks (a peek is a system call
  * per connection; a client that left is noticed within a second). */
 #define PEEK_EVERY 4
 
 typedef enum phase { P_READY, P_BODY, P_WORKING } phase;
+/* A refused connection: closed at once, or open until its 503 is sent (counted in
+ * t->lingering until libmicrohttpd closes it). */
+typedef enum refusal { L_NONE, L_OPEN, L_COUNTED } refusal;
 
 /* A link of a circular list with a sentinel. */
 typedef struct node {
@@ -47,6 +57,7 @@ struct ismd_conn {
     void *req;                 /* the request in progress, if any */
     const char *cut;           /* why the table closed it */
     bool left_told;            /* client_left was called for this request */
+    refusal linger;
     node link;                 /* in h->idle or h->busy */
     node all;                  /* in the table's list of connections */
 };
@@ -59,6 +70,7 @@ struct ismd_conns {
     holder *buckets[NBUCKETS];
     node holders, conns;
     unsigned count;            /* admitted connections (the limit counts these) */
+    unsigned lingering;        /* refused ones left open for a 503 */
     bool stopping;
     pthread_t thread;
 };
@@ -202,6 +214,31 @@ static ismd_conn *victim(ismd_conns *t, holder *h)
     return oldest(&h->idle);
 }
 
+/* Refuses c: left open for a 503 while there is room, else closed now. Lock held. */
+static void refuse(ismd_conns *t, ismd_conn *c)
+{
+    c->cut = "refused";
+    atomic_fetch_add(&t->m->connections_closed[ISMD_CUT_REFUSED], 1);
+    if (t->lingering < REFUSED_ROOM(t->cfg.max)) {
+        c->linger = L_OPEN;
+        t->lingering++;
+    } else {
+        shutdown(c->fd, SHUT_RDWR);
+    }
+}
+
+/* Is h at its address's cap (a trusted proxy has none)? */
+static bool at_address_cap(const ismd_conns *t, const holder *h)
+{
+    return t->cfg.per_address && h->count >= t->cfg.per_address &&
+           !(t->cfg.trusted && ismd_address_listed(t->cfg.trusted, h->addr));
+}
+
+unsigned ismd_conns_refused_room(unsigned max)
+{
+    return REFUSED_ROOM(max);
+}
+
 ismd_conn *ismd_conns_opened(ismd_conns *t, int fd, const char *addr)
 {
     ismd_conn *c = calloc(1, sizeof *c);
@@ -217,6 +254,8 @@ ismd_conn *ismd_conns_opened(ismd_conns *t, int fd, const char *addr)
     if (!h) {
         c->cut = "refused";
         shutdown(fd, SHUT_RDWR);
+    } else if (at_address_cap(t, h)) {
+        refuse(t, c);
     } else if (t->count < t->cfg.max) {
         attach(t, h, c);
     } else {
@@ -227,9 +266,7 @@ ismd_conn *ismd_conns_opened(ismd_conns *t, int fd, const char *addr)
                                                        : ISMD_CUT_EVICTED_BUSY);
         } else {
             holder_release(t, h);
-            c->cut = "refused";
-            shutdown(fd, SHUT_RDWR);
-            atomic_fetch_add(&t->m->connections_closed[ISMD_CUT_REFUSED], 1);
+            refuse(t, c);
         }
     }
     pthread_mutex_unlock(&t->lock);
@@ -243,8 +280,20 @@ void ismd_conns_closed(ismd_conns *t, ismd_conn *c)
     pthread_mutex_lock(&t->lock);
     detach(t, c);
     node_unlink(&c->all);
+    if (c->linger != L_NONE)
+        t->lingering--;
     pthread_mutex_unlock(&t->lock);
     free(c);
+}
+
+bool ismd_conns_refused(ismd_conns *t, const ismd_conn *c)
+{
+    if (!c)
+        return false;
+    pthread_mutex_lock(&t->lock);
+    bool open = c->linger == L_OPEN;
+    pthread_mutex_unlock(&t->lock);
+    return open;
 }
 
 /* ---- phases -------------------------------------------------------------------------- */
@@ -319,9 +368,13 @@ static void sweep(ismd_conns *t, long long now, bool peek)
     long long body_ns = (long long)(t->cfg.body_s * 1e9);
     for (node *n = t->conns.next; n != &t->conns; n = n->next) {
         ismd_conn *c = CONTAINER(n, ismd_conn, all);
+        long long age = now - c->since_ns;
+        if (c->linger == L_OPEN && c->phase == P_READY && age > REFUSED_WAIT_NS) {
+            c->linger = L_COUNTED; /* no request came: closed without its 503 */
+            shutdown(c->fd, SHUT_RDWR);
+        }
         if (c->cut)
             continue;
-        long long age = now - c->since_ns;
         if (c->phase == P_READY && age > header_ns)
             cut(t, c, "header_deadline", ISMD_CUT_HEADER_DEADLINE);
         else if (c->phase == P_BODY && age > body_ns)

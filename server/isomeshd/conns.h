@@ -6,7 +6,12 @@
  *    in and one of that holder's connections is closed — one waiting for a request (the one
  *    waiting longest) before a busy one (its newest). A connection from an address that is
  *    itself among the largest holders takes the place of its own address's longest-waiting
- *    idle connection, or is refused: closed at once, never left unanswered in the backlog.
+ *    idle connection, or is refused: answered 503 with Retry-After (its first request;
+ *    never left unanswered in the backlog). The same for a connection beyond the
+ *    per-address cap (--client-conns), which a trusted proxy's connections are exempt from
+ *    (nginx holds the connections of many clients and limits them per client itself).
+ *    Refused connections waiting for their request are few (REFUSED_ROOM) and brief
+ *    (REFUSED_WAIT_NS); beyond that they are closed at once.
  *  - deadlines for receiving a request, whatever the trickle rate (libmicrohttpd's timeout
  *    only ends silence): its headers within header_s of the connection becoming ready for
  *    one (accepted, or its previous answer completed), its body within body_s of its
@@ -31,6 +36,8 @@ typedef struct ismd_conns ismd_conns;
 
 typedef struct ismd_conns_config {
     unsigned max;              /* connections held at once (--max-connections) */
+    unsigned per_address;      /* connections of one address (--client-conns; 0 = any) */
+    const char *trusted;       /* addresses exempt from per_address (--trusted-proxy) */
     double header_s;           /* --header-timeout */
     double body_s;             /* --body-timeout */
     /* A request in progress (req as given to ismd_conns_request) whose connection is gone:
@@ -47,8 +54,8 @@ ismd_conns *ismd_conns_start(const ismd_conns_config *cfg, ismd_metrics *metrics
 void ismd_conns_stop(ismd_conns *t);
 
 /* A new connection on socket fd from address addr: admitted, admitted in place of another
- * (closed), or refused (closed). Always returns its entry (NULL only when out of memory),
- * to be handed back to ismd_conns_closed. */
+ * (closed), or refused (left open for a 503, or closed). Always returns its entry (NULL only
+ * when out of memory), to be handed back to ismd_conns_closed. */
 ismd_conn *ismd_conns_opened(ismd_conns *t, int fd, const char *addr);
 /* libmicrohttpd is done with c (before it closes the socket). */
 void ismd_conns_closed(ismd_conns *t, ismd_conn *c);
@@ -60,6 +67,12 @@ void ismd_conns_request(ismd_conns *t, ismd_conn *c, void *req, bool body);
 void ismd_conns_body_done(ismd_conns *t, ismd_conn *c);
 /* c's request completed: c waits for the next one. */
 void ismd_conns_request_done(ismd_conns *t, ismd_conn *c);
+
+/* Was c refused and left open so that its first request is answered 503 (and closed)? */
+bool ismd_conns_refused(ismd_conns *t, const ismd_conn *c);
+
+/* Connections libmicrohttpd must have room for beyond max: refused ones awaiting their 503. */
+unsigned ismd_conns_refused_room(unsigned max);
 
 /* Why the table closed c ("refused", "evicted", "header_deadline", "body_deadline"), or
  * NULL when it did not. */

@@ -132,6 +132,12 @@ static enum MHD_Result first_call(ismd_server *s, struct MHD_Connection *conn, c
     ismd_auth_identify(s->auth, ismd_header(r, MHD_HTTP_HEADER_AUTHORIZATION), r->client, &r->who);
     *con_cls = r;
     atomic_fetch_add(&s->open_requests, 1);
+    if (ismd_conns_refused(s->conns, r->cn)) {
+        r->close_after = true;
+        return ismd_respond_error(r, 503, "too_many_connections",
+                                  "the server holds as many connections as it may (or as "
+                                  "many of your address's as it may); retry shortly");
+    }
     if (unknown_transfer_coding(r))
         return ismd_respond_error(r, 501, "not_implemented",
                                   "this Transfer-Encoding is not supported: send the body with "
@@ -461,6 +467,8 @@ bool ismd_http_start(ismd_server *s, int listen_fd)
         ism_logf(ISM_LOG_WARN, "socket_option", "TCP_NOTSENT_LOWAT: %s", strerror(errno));
     ismd_conns_config cc = {
         .max = s->cfg->max_conns,
+        .per_address = (unsigned)s->cfg->client_conns,
+        .trusted = s->cfg->trusted_proxy,
         .header_s = s->cfg->header_timeout_s,
         .body_s = s->cfg->body_timeout_s,
         .client_left = client_left,
@@ -469,7 +477,8 @@ bool ismd_http_start(ismd_server *s, int listen_fd)
     s->conns = ismd_conns_start(&cc, &s->metrics);
     if (!s->conns)
         return false;
-    unsigned limit = s->cfg->max_conns + CUT_ROOM(s->cfg->max_conns);
+    unsigned limit = s->cfg->max_conns + CUT_ROOM(s->cfg->max_conns) +
+                     ismd_conns_refused_room(s->cfg->max_conns);
     unsigned threads = (limit + CONNS_PER_THREAD - 1) / CONNS_PER_THREAD;
     if ((unsigned)s->cfg->http_threads > threads)
         threads = (unsigned)s->cfg->http_threads;
@@ -484,7 +493,6 @@ bool ismd_http_start(ismd_server *s, int listen_fd)
         MHD_OPTION_CONNECTION_TIMEOUT, s->cfg->conn_timeout_s,
         MHD_OPTION_NOTIFY_CONNECTION, on_connection, s,
         MHD_OPTION_CONNECTION_LIMIT, limit,
-        MHD_OPTION_PER_IP_CONNECTION_LIMIT, (unsigned)s->cfg->client_conns,
         MHD_OPTION_LISTEN_BACKLOG_SIZE, LISTEN_BACKLOG,
         MHD_OPTION_SIGPIPE_HANDLED_BY_APP, 1,
         MHD_OPTION_THREAD_POOL_SIZE, threads,

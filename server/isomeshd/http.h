@@ -62,6 +62,7 @@ struct ismd_req {
     struct MHD_Connection *conn;
     ismd_conn *cn;             /* its entry in the connection table (NULL: out of memory) */
     bool client_left;          /* closed while waiting for a flight: end without answering */
+    bool close_after;          /* the answer closes the connection (Connection: close) */
     const ismd_route_def *def;  /* its route */
     ismd_route route;
     char method[8];

@@ -70,6 +70,8 @@ static enum MHD_Result respond_blob_sized(ismd_req *r, unsigned status, ism_blob
                                 ismd_auth_challenge(&r->who));
     if (resp && status >= 400)
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
+    if (resp && r->close_after)
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CONNECTION, "close");
     return ismd_send(r, status, resp);
 }
 

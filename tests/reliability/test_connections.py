@@ -3,7 +3,8 @@
 - the global connection limit is fair across addresses: ten addresses, each under the
   per-address cap, fill --max-connections; a client from an eleventh address is still answered
   (not left in the listen backlog), the ten end up with near-equal shares, and a connection
-  with a request in progress outlives the idle ones of its own address;
+  with a request in progress outlives the idle ones of its own address; a connection that
+  nobody can give way to is answered 503 with Retry-After, not closed;
 - request deadlines whatever the trickle rate: headers trickled under the idle timeout, and a
   body trickled a byte at a time, are cut off by --header-timeout / --body-timeout (the
   trickle keeps --conn-timeout from ever firing, so a close can only come from them);
@@ -132,6 +133,19 @@ class FairLimitTest(unittest.TestCase):
                 # the computation goes on for the others
                 self.assertEqual(m["isomesh_workers_busy"], 1)
                 self.assertEqual(m['isomesh_worker_restarts_total{reason="cancel"}'], 0)
+                # the limit again, every connection busy, the largest holder asks for more:
+                # nobody gives way, and the newcomer is told so (503, Retry-After), not closed
+                waiting.append(post_raw(d.port, busy_work(3), source=ADDRESSES[0]))
+                waiting[-1].setblocking(False)
+                wait_until("the limit filled with busy connections",
+                           lambda: scraper.metric("isomesh_suspended_connections") == 15)
+                r = http_request(d.port, "GET", "/healthz", timeout=10, source=ADDRESSES[0])
+                self.assertEqual(r.status, 503, r.body[:200])
+                self.assertEqual(r.json()["error"]["code"], "too_many_connections")
+                self.assertIsNotNone(r.header("Retry-After"))
+                self.assertEqual(scraper.metric("isomesh_connections_closed_total",
+                                                reason="refused"), 1)
+                self.assertEqual(sum(server_closed(s) for s in waiting), 1)  # the one evicted
             finally:
                 scraper.close()
                 for s in waiting:
