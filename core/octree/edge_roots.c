@@ -109,6 +109,30 @@ bool ism_segment_may_reach(ism_sampler *s, const double a[3], const double b[3],
     return r.lo <= eps && r.hi >= -eps;
 }
 
+/* Do the tangent lines of f along the segment at its two ends (same sign) meet beyond 0?
+ * The paper's eq. 2 reads agreeing gradients as one sheet on both ends; across a C0 crease
+ * (min/max of two sheets, the seam of a CSG union) the gradients of two sheets can agree to
+ * within the test while f rises from both ends to the crease and crosses 0 there — a pocket
+ * of the other sign that both ends miss:
+ *
+ *        f    tangent at a ╲   ╱ tangent at b      |f| falls from both ends toward the
+ *        0 ─ ─ ─ ─ ─ ─ ─ ─ ─╳─ ─ ─ ─ ─ ─ ─ ─ ─     crease and the tangents meet past 0:
+ *                          ╱ ╲  (f: the crease)     search the segment for two roots
+ *        a ───────────────╱───╲─────────────── b
+ *
+ * Costs no evaluation (the gradients at the ends are known); the search it lets through is
+ * still guarded by the segment's interval. */
+static bool tangents_reach_zero(const double a[3], const double b[3], double fa, double fb,
+                                const double ga[3], const double gb[3])
+{
+    double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double side = fa < 0 ? -1 : 1, sa = ism_dot3(ga, d), sb = ism_dot3(gb, d);
+    if (!(side * sa < 0) || !(side * sb > 0))
+        return false; /* |f| does not fall from both ends toward the middle */
+    double t = (fb - fa - sb) / (sa - sb); /* fa + sa t = fb + sb (t - 1) */
+    return t > 0 && t < 1 && side * (fa + sa * t) < 0;
+}
+
 /* A root whose gradient turns against an end point's hints at further roots between them. */
 static int suspect_more(const double g_end[3], const double g_root[3])
 {
@@ -132,7 +156,7 @@ void ism_segment_roots(ism_sampler *s, const ism_root_params *prm, const double 
             out->flags |= ISM_SEG_MANY_ROOTS;
         return;
     }
-    if (gradient_agreement(ga, gb) > prm->gradient_test)
+    if (gradient_agreement(ga, gb) > prm->gradient_test && !tangents_reach_zero(a, b, fa, fb, ga, gb))
         return; /* same sign, same sheet: no root (paper eq. 2) */
     if (!ism_segment_may_reach(s, a, b, 0))
         return; /* the interval over the segment proves it: no root to search for */

@@ -470,19 +470,46 @@ static const double *arc_point(const ism_cell_ctx *cx, const ism_fevent *a, cons
     return cx->bp[((size_t)a->seg + 1) % cx->nbp].p;
 }
 
+/* Do p and q lie on one side of the tile? Two points of different arcs of one sign on one
+ * side have an arc of the other sign between them on that side: the straight path from one
+ * to the other runs along the boundary through it, however narrow it is (a wedge between two
+ * sheets pokes through a side in an arc much shorter than the path's sample spacing):
+ *
+ *   +----------------------+        p and q: the two − arcs' points (corners of one side)
+ *   |  +      /            |        the + arc between them is the wedge's mouth, 1/40 of
+ *   |        /      −      |        the side: samples along the side would miss it and
+ *   |_      /              |        call the − arcs joined
+ *   | \ −  / +             |
+ *   p-------k0-k1-----------q
+ */
+static bool on_one_side(const ism_cell_ctx *cx, const ism_tile *t, const double p[3],
+                        const double q[3])
+{
+    const ism_grid *g = &cx->tree->grid;
+    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    double su[2] = {ism_grid_coord(g, u, t->u0), ism_grid_coord(g, u, t->u1)};
+    double sv[2] = {ism_grid_coord(g, v, t->v0), ism_grid_coord(g, v, t->v1)};
+    for (int k = 0; k < 2; k++)
+        if ((p[u] == su[k] && q[u] == su[k]) || (p[v] == sv[k] && q[v] == sv[k]))
+            return true;
+    return false;
+}
+
 /* Four crossings leave two boundary arcs of each sign, and the two lines either cut off the
  * two + arcs (the − region crosses the tile and joins its arcs) or the two − arcs; the signs
  * alone cannot tell (a saddle, or a small ellipse near a corner, as where a cone's nappe pokes
  * through a node's edges). Returns true when f keeps the sign of the arcs starting at
  * cross[first] and cross[first + 2] all along the straight path between points of the two:
  * that sign's region is connected inside the tile, so the lines cut off the other sign's arcs. */
-static bool arcs_joined(ism_cell_ctx *cx, const int *cross, int first)
+static bool arcs_joined(ism_cell_ctx *cx, const ism_tile *t, const int *cross, int first)
 {
     const ism_fevent *e = cx->ev;
     int sign = e[cross[first]].after;
     double m1[3], m2[3];
     const double *p1 = arc_point(cx, &e[cross[first]], &e[cross[first + 1]], m1);
     const double *p2 = arc_point(cx, &e[cross[first + 2]], &e[cross[(first + 3) % 4]], m2);
+    if (on_one_side(cx, t, p1, p2))
+        return false; /* the path is the boundary, where the other sign's arc lies between */
     for (int k = 1; k <= JOIN_SAMPLES; k++) {
         double t = (double)k / (JOIN_SAMPLES + 1), q[3];
         for (int a = 0; a < 3; a++)
@@ -547,8 +574,8 @@ static int pair_crossings(ism_cell_ctx *cx, const ism_tile *t, const int *cross,
         }
     }
     bool plus;
-    bool joined0 = nc == 4 && arcs_joined(cx, cross, 0);
-    bool joined1 = nc == 4 && arcs_joined(cx, cross, 1);
+    bool joined0 = nc == 4 && arcs_joined(cx, t, cross, 0);
+    bool joined1 = nc == 4 && arcs_joined(cx, t, cross, 1);
     if (joined0 != joined1) {
         /* the region of the joined arcs' sign crosses the tile: cut off the other sign's arcs */
         int joined_sign = cx->ev[cross[joined0 ? 0 : 1]].after;

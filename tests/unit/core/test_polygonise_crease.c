@@ -1,0 +1,77 @@
+/* test_polygonise_crease.c — CSG unions and differences (min/max of smooth pieces) off the
+ * octree lattice: their seams are C0 creases where two sheets meet at a shallow angle, and a
+ * pocket of one sign there can be thinner than a cell. The mesh must stay closed: no boundary
+ * edge, no non-manifold edge, one piece, the Euler characteristic of the solid's genus.
+ * The boxes are the sweep's (tests/bench/sweep_singular.py) shifted by 1e-3 and by
+ * (0.37, −0.23, 0.41) of a finest cell, where each of these once left a hole of one to three
+ * triangles at the seam: a tile's arcs judged joined along a side that the pocket's mouth
+ * crosses (three balls, cube minus ball), and two roots on a segment across the seam missed
+ * because the two sheets' gradients agreed to 0.902 (double torus). */
+#include <criterion/criterion.h>
+#include <math.h>
+#include "poly_fixture.h"
+
+/* The sweep's two off-lattice shifts: an absolute one, and one in finest cells per axis. */
+static void shifted(const double base[6], int depth, int which, double box[6])
+{
+    static const double abs_shift[3] = {1e-3, -1e-3, 0.7e-3};
+    static const double cell_shift[3] = {0.37, -0.23, 0.41};
+    for (int k = 0; k < 3; k++) {
+        double cell = ldexp(base[k + 3] - base[k], -depth);
+        double d = which == 0 ? abs_shift[k] : cell_shift[k] * cell;
+        box[k] = base[k] + d;
+        box[k + 3] = base[k + 3] + d;
+    }
+}
+
+/* Polygonises s at depth 7 in both shifted boxes of base; the mesh must be closed with
+ * Euler characteristic euler (2 − 2 genus) in one piece. */
+static void check_seams(const char *expr, const double base[6], long euler)
+{
+    const pf_surface s = {expr, NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    int depth = 7;
+    for (int w = 0; w < 2; w++) {
+        double box[6];
+        shifted(base, depth, w, box);
+        ism_mesh m;
+        ism_poly_stats st;
+        pf_run(t, box, 3, depth, 0, &m, &st);
+        pf_props p;
+        pf_measure(&m, t, &p);
+        const char *what = w == 0 ? "shift 1e-3" : "shift 0.37 cell";
+        cr_expect_eq(p.boundary_edges, 0, "%s, %s: %zu boundary edges", expr, what,
+                     p.boundary_edges);
+        cr_expect_eq(p.nonmanifold_edges, 0, "%s, %s: %zu non-manifold edges", expr, what,
+                     p.nonmanifold_edges);
+        cr_expect_eq(p.euler, euler, "%s, %s: χ = %ld, expected %ld", expr, what, p.euler,
+                     euler);
+        cr_expect_eq(p.components, 1, "%s, %s: %zu components", expr, what, p.components);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
+
+/* Three overlapping balls: a sphere's topology, χ = 2. */
+Test(crease, three_balls_closed_off_lattice)
+{
+    const double box[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
+    check_seams("min((x - 0.6)^2 + y^2 + z^2 - 0.5, (x + 0.3)^2 + (y - 0.52)^2 + z^2 - 0.5, "
+                "(x + 0.3)^2 + (y + 0.52)^2 + z^2 - 0.5)", box, 2);
+}
+
+/* The cube [−1, 1]³ minus the ball of radius 1.3 (> 1, < √2): a frame of 12 bars, genus 5,
+ * χ = −8. */
+Test(crease, cube_minus_ball_closed_off_lattice)
+{
+    const double box[6] = {-1.3, -1.3, -1.3, 1.3, 1.3, 1.3};
+    check_seams("max(max(abs(x), abs(y), abs(z)) - 1, 1.69 - (x^2 + y^2 + z^2))", box, -8);
+}
+
+/* Two tori (R = 1, r = 0.5) 2.2 apart, overlapping: genus 2, χ = −2. */
+Test(crease, double_torus_closed_off_lattice)
+{
+    const double box[6] = {-1.8, -1.8, -0.8, 4, 1.8, 0.8};
+    check_seams("min((x^2 + y^2 + z^2 + 0.75)^2 - 4*(x^2 + y^2), "
+                "((x - 2.2)^2 + y^2 + z^2 + 0.75)^2 - 4*((x - 2.2)^2 + y^2))", box, -2);
+}
