@@ -26,7 +26,12 @@
 #include <math.h>
 #include <stdlib.h>
 
-/* The rim lies about rho from the curve; its feet are searched this many rho away. */
+/* The rim lies about rho from the curve; its feet are searched this many rho away first.
+ * A rim vertex can lie farther: the tube takes every triangle that comes within rho, and
+ * where the octree is coarse beside the curve (a sphere's flat top next to the circle where
+ * it crosses another, 3 finest cells off) such a triangle reaches 5 rho away. Its foot is
+ * then searched without bound (the polyline's widening search costs little): fanning the
+ * whole rim to its centroid instead (the last resort) would span the sphere. */
 #define FOOT_SEARCH_RHO 4.0
 /* A run's end parameter this many rho from an end of an open curve is taken to that end,
  * and a loop whose extreme parameter is that close turns round that end: the tube's rounded
@@ -480,8 +485,10 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
         int *cid = malloc(l->n * sizeof *cid);
         bool found = u && foot && cid, ok = found, multi = false;
         for (size_t i = 0; found && i < l->n; i++) {
-            cid[i] = nearest_curve(pl, npl, c->m->pos + 3 * (size_t)l->v[i],
-                                   FOOT_SEARCH_RHO * rho, &u[i], foot + 3 * i);
+            const double *p = c->m->pos + 3 * (size_t)l->v[i];
+            cid[i] = nearest_curve(pl, npl, p, FOOT_SEARCH_RHO * rho, &u[i], foot + 3 * i);
+            if (cid[i] < 0) /* the corner of a long triangle the tube took (below) */
+                cid[i] = nearest_curve(pl, npl, p, INFINITY, &u[i], foot + 3 * i);
             found = cid[i] >= 0;
             multi |= cid[i] != cid[0];
         }

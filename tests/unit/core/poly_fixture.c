@@ -37,6 +37,17 @@ void pf_run(const ism_tape *t, const double box[6], int dmin, int dmax, int thre
     cr_assert_eq(s, ISM_POLY_OK, "polygonise failed: %s", err.message);
 }
 
+void pf_sweep_box(const double base[6], int d, int which, double box[6])
+{
+    static const double abs_shift[3] = {1e-3, -1e-3, 0.7e-3};
+    static const double cell_shift[3] = {0.37, -0.23, 0.41};
+    for (int k = 0; k < 3; k++) {
+        double s = which == 0 ? abs_shift[k] : cell_shift[k] * ldexp(base[k + 3] - base[k], -d);
+        box[k] = base[k] + s;
+        box[k + 3] = base[k + 3] + s;
+    }
+}
+
 double pf_cell(const double box[6], int d)
 {
     double s = box[3] - box[0];

@@ -11,19 +11,6 @@
 #include <math.h>
 #include "poly_fixture.h"
 
-/* The sweep's two off-lattice shifts: an absolute one, and one in finest cells per axis. */
-static void shifted(const double base[6], int depth, int which, double box[6])
-{
-    static const double abs_shift[3] = {1e-3, -1e-3, 0.7e-3};
-    static const double cell_shift[3] = {0.37, -0.23, 0.41};
-    for (int k = 0; k < 3; k++) {
-        double cell = ldexp(base[k + 3] - base[k], -depth);
-        double d = which == 0 ? abs_shift[k] : cell_shift[k] * cell;
-        box[k] = base[k] + d;
-        box[k + 3] = base[k + 3] + d;
-    }
-}
-
 /* Polygonises s at depth 7 in both shifted boxes of base; the mesh must be closed with
  * Euler characteristic euler (2 − 2 genus) in one piece. */
 static void check_seams(const char *expr, const double base[6], long euler)
@@ -33,7 +20,7 @@ static void check_seams(const char *expr, const double base[6], long euler)
     int depth = 7;
     for (int w = 0; w < 2; w++) {
         double box[6];
-        shifted(base, depth, w, box);
+        pf_sweep_box(base, depth, w, box);
         ism_mesh m;
         ism_poly_stats st;
         pf_run(t, box, 3, depth, 0, &m, &st);
