@@ -136,7 +136,7 @@ static void write_singular_point(ism_jw *w, const ism_sing_point *p, int cones)
     ism_jw_bool(w, p->certified);
     ism_jw_key(w, "certificate");
     ism_jw_string(w, ism_cert_kind_name(p->certificate));
-    if (p->certificate == ISM_CERT_DEFLATION) {
+    if (p->certificate >= ISM_CERT_DEFLATION) {
         ism_jw_key(w, "perturbation");
         ism_jw_number(w, p->perturbation);
     }

@@ -2,6 +2,7 @@
  * ones left in out->boxes. */
 #include "core/singular/find.h"
 #include "core/singular/curves.h"
+#include "core/singular/point_cert.h"
 #include "core/singular/points.h"
 #include "core/singular/search.h"
 
@@ -15,5 +16,5 @@ bool ism_locus_find(const ism_tape *f, const ism_locus_options *o, ism_locus *ou
     /* Each later stage works on the boxes not flagged ISM_LBOX_USED; one cut short by the
      * deadline or cancel sets out->incomplete itself. Double sheets (rank-1 boxes) need the
      * mesh: core/singular/surface.c meshes them after the polygoniser. */
-    return ism_sing_trace_curves(f, o, out, err);
+    return ism_sing_trace_curves(f, o, out, err) && ism_sing_certify_curve_points(f, o, out, err);
 }

@@ -86,17 +86,24 @@ const char *ism_sing_type_name(int type)
 
 const char *ism_cert_kind_name(int kind)
 {
-    static const char *const names[ISM_CERT_KINDS] = {"none", "krawczyk", "deflation"};
+    static const char *const names[ISM_CERT_KINDS] = {"none",          "krawczyk",
+                                                          "deflation",     "rank-0 system",
+                                                          "rank-1 system", "A3 system"};
     return name_of(names, ISM_CERT_KINDS, kind);
 }
 
 const char *ism_uncert_why_name(int why)
 {
     static const char *const names[ISM_UNCERT_WHYS] = {
-        NULL, "Hessian rank <= 1: the first-order deflation does not square (corank 2)",
-        "rank 2 with a vanishing cubic term along the null direction (A3 or worse): the "
-        "deflated Jacobian is singular",
-        "Krawczyk did not contract on any box up to 1e-9 x diagonal"};
+        NULL,
+        "contact of two sheets (Hessian rank 1, the rank-1 system singular): no regular "
+        "system defines such a point and double precision places it only to ~1e-5 of f's "
+        "scale - not certifiable in principle",
+        "rank 2 with vanishing cubic and quartic terms along the null direction (A4 or "
+        "worse): the deflated and A3 systems are singular",
+        "Krawczyk did not contract on any box up to 1e-9 x diagonal",
+        "Hessian 0 and the rank-0 system singular (the Hessian of f's cubic term vanishes "
+        "along some direction)"};
     return why > 0 && why < ISM_UNCERT_WHYS ? names[why] : NULL;
 }
 

@@ -35,25 +35,34 @@ enum ism_sing_type {
     ISM_SING_TYPES
 };
 
-/* How a point's enclosure was proved (points.h). */
+/* How a point's enclosure was proved (points.h, point_cert.h). */
 enum ism_cert_kind {
     ISM_CERT_NONE = 0,
     ISM_CERT_KRAWCZYK = 1,  /* one zero of ∇f in the box (non-singular Hessian) */
     ISM_CERT_DEFLATION = 2, /* rank-2 point: one zero of the deflated system in the box — a
                                point where H is singular and ∇f = ε n, |ε| ≤ perturbation
                                (core/singular/deflate.h) */
+    /* The type's defining system (core/singular/typecert.h) has one regular solution x*
+     * in the box: no other point of the box is of that type, and x* is of that type for f
+     * changed by at most `perturbation` (the system's relative residual at x*). */
+    ISM_CERT_RANK0 = 3,     /* ∇f = 0, H = 0 (triple points) */
+    ISM_CERT_RANK1 = 4,     /* ∇f = 0, rank H = 1 (pinch points) */
+    ISM_CERT_A3 = 5,        /* ∇f = 0, Hv = 0, D³f[v, v, v] = 0 (an A3 point) */
     ISM_CERT_KINDS
 };
 
 /* Why a point is not certified. */
 enum ism_uncert_why {
-    ISM_UNCERT_NONE = 0,      /* certified, or not tried (pinch and triple points of curves) */
-    ISM_UNCERT_CORANK2 = 1,   /* Hessian rank <= 1: the first-order deflation does not square
-                                 (two null directions; touching spheres) */
-    ISM_UNCERT_CUBIC = 2,     /* rank 2 but f's cubic term along the null direction is 0 (an
-                                 A3 point or worse: the horn cyclide's): the deflated
-                                 Jacobian is singular too */
+    ISM_UNCERT_NONE = 0,      /* certified */
+    ISM_UNCERT_CONTACT = 1,   /* Hessian rank 1 and the rank-1 system singular: two sheets
+                                 touching (touching spheres). No regular defining system
+                                 exists, and double precision places such a point only to
+                                 ~(1e-16)^(1/3) of f's scale: not certifiable in principle */
+    ISM_UNCERT_CUBIC = 2,     /* rank 2, cubic and quartic terms along the null direction 0
+                                 (A4 or worse): the deflated and A3 systems are singular */
     ISM_UNCERT_CONTRACT = 3,  /* Krawczyk did not contract on any box up to the bound */
+    ISM_UNCERT_RANK0 = 4,     /* Hessian 0 and the rank-0 system singular (f's cubic term has
+                                 a direction along which its Hessian vanishes) */
     ISM_UNCERT_WHYS
 };
 
@@ -67,7 +76,8 @@ typedef struct ism_sing_point {
                              that box contains 0 */
     int certificate;      /* enum ism_cert_kind */
     int uncertified_why;  /* enum ism_uncert_why */
-    double perturbation;  /* ISM_CERT_DEFLATION: the bound on |ε| (0 otherwise) */
+    double perturbation;  /* ISM_CERT_DEFLATION: the bound on |ε|; the defining systems:
+                             their relative residual at the point (0 otherwise) */
     double eig[3];        /* Hessian eigenvalues at p, ascending */
     double residual_f;    /* |f(p)| */
     double residual_grad; /* |∇f(p)| */
@@ -166,8 +176,8 @@ bool ism_locus_add_sheet(ism_locus *l, const ism_double_sheet *s);
 /* Names used in JSON and stats: "node", "isolated", "cusp", "degenerate", "pinch",
  * "triple"; "double", "whisker"; "box", "pinch", "triple", "point", "lost". */
 const char *ism_sing_type_name(int type);
-/* "none", "krawczyk", "deflation"; and the reasons "corank 2", "cubic term 0",
- * "no contraction" (NULL for ISM_UNCERT_NONE). */
+/* "none", "krawczyk", "deflation", "rank-0 system", "rank-1 system", "A3 system"; and
+ * the reasons (a sentence each; NULL for ISM_UNCERT_NONE). */
 const char *ism_cert_kind_name(int kind);
 const char *ism_uncert_why_name(int why);
 const char *ism_curve_kind_name(int kind);

@@ -5,6 +5,13 @@
 
 #include <math.h>
 
+/* Rows are scaled to unit length, but none by more than 1 / (this × the longest row): a row
+ * that carries no first-order information at the point (∇f's rows where H = 0, at a triple
+ * point) is rounding noise whose relative width is large, and scaling it up would let that
+ * noise into every row of P. Any P with P A = I is valid (A of full column rank): the floor
+ * changes only how well K contracts, never what it proves. */
+#define OD_ROW_FLOOR 1e-6
+
 /* y = m⁻¹ (n × n) by Gauss–Jordan with partial pivoting; m is destroyed. False when singular
  * or not finite. */
 static bool invert(int n, double m[][ISM_OD_MAXK], double y[][ISM_OD_MAXK])
@@ -41,7 +48,28 @@ static bool invert(int n, double m[][ISM_OD_MAXK], double y[][ISM_OD_MAXK])
     return true;
 }
 
-bool ism_od_left_inverse(int m, int k, const double a[][ISM_OD_MAXK], double p[][ISM_OD_MAXM])
+/* ‖P W⁻¹‖ ‖W A‖ (max-row norms): the condition of the row-scaled matrix. */
+static double condition(int m, int k, const double a[][ISM_OD_MAXK], const double p[][ISM_OD_MAXM],
+                        const double w[])
+{
+    double np = 0.0, na = 0.0;
+    for (int i = 0; i < k; i++) {
+        double row = 0.0;
+        for (int r = 0; r < m; r++)
+            row += fabs(p[i][r]) / w[r];
+        np = fmax(np, row);
+    }
+    for (int r = 0; r < m; r++) {
+        double row = 0.0;
+        for (int j = 0; j < k; j++)
+            row += fabs(a[r][j]) * w[r];
+        na = fmax(na, row);
+    }
+    return np * na;
+}
+
+bool ism_od_left_inverse(int m, int k, const double a[][ISM_OD_MAXK], double p[][ISM_OD_MAXM],
+                         double *cond)
 {
     double n[ISM_OD_MAXK][ISM_OD_MAXK], y[ISM_OD_MAXK][ISM_OD_MAXK], w[ISM_OD_MAXM];
     if (m == k) {
@@ -51,16 +79,26 @@ bool ism_od_left_inverse(int m, int k, const double a[][ISM_OD_MAXK], double p[]
         if (!invert(k, n, y))
             return false;
         for (int i = 0; i < k; i++)
-            for (int j = 0; j < k; j++)
+            for (int j = 0; j < k; j++) {
                 p[i][j] = y[i][j];
+                w[i] = 1.0;
+            }
+        if (cond)
+            *cond = condition(m, k, a, p, w);
         return true;
     }
+    double longest = 0.0;
     for (int r = 0; r < m; r++) { /* row scales: every equation weighs the same */
         double s = 0.0;
         for (int j = 0; j < k; j++)
             s += a[r][j] * a[r][j];
-        w[r] = s > 0.0 ? 1.0 / sqrt(s) : 0.0;
+        w[r] = sqrt(s);
+        longest = fmax(longest, w[r]);
     }
+    if (!(longest > 0.0) || !isfinite(longest))
+        return false;
+    for (int r = 0; r < m; r++)
+        w[r] = 1.0 / fmax(w[r], OD_ROW_FLOOR * longest);
     for (int i = 0; i < k; i++)
         for (int j = 0; j < k; j++) {
             double s = 0.0;
@@ -79,6 +117,8 @@ bool ism_od_left_inverse(int m, int k, const double a[][ISM_OD_MAXK], double p[]
             if (!isfinite(p[i][r]))
                 return false;
         }
+    if (cond)
+        *cond = condition(m, k, a, p, w);
     return true;
 }
 
@@ -89,7 +129,7 @@ bool ism_od_krawczyk(int m, int k, const ism_interval jz[][ISM_OD_MAXK], const i
     for (int r = 0; r < m; r++)
         for (int j = 0; j < k; j++)
             a[r][j] = 0.5 * jz[r][j].lo + 0.5 * jz[r][j].hi;
-    if (!ism_od_left_inverse(m, k, a, p))
+    if (!ism_od_left_inverse(m, k, a, p, NULL))
         return false;
     bool inner = true;
     for (int i = 0; i < k; i++) {

@@ -19,10 +19,11 @@
 #define ISM_OD_MAXM 10 /* equations: ∇f (3) and six Hessian conditions (rank 0) */
 
 /* P = a left inverse of a (m × k, m ≥ k): a⁻¹ when square, else the least-squares inverse of
- * a with its rows scaled to unit length, (AᵀA)⁻¹Aᵀ D. False when a is (numerically) rank
- * deficient or not finite. */
-bool ism_od_left_inverse(int m, int k, const double a[][ISM_OD_MAXK],
-                         double p[][ISM_OD_MAXM]);
+ * D a, its rows scaled to unit length (but by at most a fixed factor, overdet.c), times D.
+ * *cond (may be NULL): ‖P D⁻¹‖ ‖D a‖ in max-row norms, the condition of the scaled matrix.
+ * False when a is (numerically) rank deficient or not finite. */
+bool ism_od_left_inverse(int m, int k, const double a[][ISM_OD_MAXK], double p[][ISM_OD_MAXM],
+                         double *cond);
 
 /* The test above on Z = z[0..k) with centre zc; g encloses G(z_c), jz encloses J over Z.
  * Writes K (may be NULL). True when K ⊂ int Z. */

@@ -1,9 +1,9 @@
 /* points.c — candidates of the search to certified, typed singular points (points.h). */
 #include "core/singular/points.h"
 #include "core/singular/clusters.h"
-#include "core/singular/deflate.h"
-#include "core/singular/krawczyk.h"
+#include "core/singular/curve_jet.h"
 #include "core/singular/newton.h"
+#include "core/singular/point_cert.h"
 #include "core/singular/search.h"
 #include "core/eval/interval_jet.h"
 #include "core/eval/interval_ops.h"
@@ -21,10 +21,6 @@
  * 4/5 a step), and the step (× box diagonal) that ends it — a few ulps of the position. */
 #define POINT_NEWTON_ITERS 200
 #define POINT_NEWTON_TOL 1e-15
-/* Certificate boxes are tried from CERT_FIRST × the largest allowed half-width, growing by
- * CERT_GROWTH: the smallest box that works is the best enclosure. */
-#define CERT_FIRST 1e-6
-#define CERT_GROWTH 10.0
 /* f is sampled this far (× finest cell) each way along the Hessian's null direction to tell
  * a cusp (sign change) from an isolated or degenerate point. */
 #define TYPE_PROBE_CELLS 0.25
@@ -45,6 +41,13 @@
 /* nᵀ D³f[n] n at least this fraction of |D³f[n]|: a cusp's is of the size of the rest
  * (x² + z² − y³: all of it), a curve's is 0 up to the difference's error. */
 #define CUSP_CUBIC_REL 1e-2
+/* The step along the null direction that tells a point of a curve of zeros of ∇f (on_curve),
+ * × finest cell: well inside the smallest whisker loop a cluster can hide (a loop of radius
+ * ~ a cell), far above the Newton tolerance. */
+#define CURVE_PROBE_CELLS 0.05
+/* Newton iterations across the curve at a probe (quadratic: a few; slack for a start
+ * off the curve by the probe's second-order term). */
+#define CURVE_PROBE_NEWTON 30
 /* Box-to-point distance checks explaining boxes by published points (points × boxes): a
  * bound on the work, far above any real case (16 nodes × a few thousand boxes). */
 #define EXPLAIN_WORK_MAX 1e8
@@ -62,9 +65,7 @@ typedef struct ctx {
     const ism_tape *t;
     const double *box;  /* the search box: points outside it are not reported */
     ism_eval_ws *ws;
-    ism_ivjet_ws *jw;
-    ism_deflate_ws *dw; /* made at the first rank-2 point (NULL until then) */
-    bool oom;
+    ism_pcert pc;       /* certificates (point_cert.h) */
     double cell, diag;
     ism_locus *out;
     cand *c;
@@ -75,33 +76,6 @@ static double dist3(const double a[3], const double b[3])
 {
     double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
     return sqrt(dx * dx + dy * dy + dz * dz);
-}
-
-/* Krawczyk on p ± r for growing r up to the allowed half-width. On success writes the
- * radius and the interval of f over that box. */
-static bool certify(ctx *x, const double p[3], double *radius, ism_interval *fbox)
-{
-    double rmax = ISM_SING_CERT_REL * x->diag;
-    ism_interval c[3];
-    for (int k = 0; k < 3; k++)
-        c[k] = iv(p[k], p[k]);
-    ism_ivgrad gc;
-    ism_eval_interval_grad(x->t, x->jw, c, NULL, NULL, &gc);
-    x->out->evals_interval++;
-    for (double r = CERT_FIRST * rmax; r <= rmax * (1.0 + 1e-12); r *= CERT_GROWTH) {
-        ism_interval b[3];
-        for (int k = 0; k < 3; k++)
-            b[k] = iv(down1(p[k] - r), up1(p[k] + r));
-        ism_ivjet j;
-        ism_eval_interval_jet(x->t, x->jw, b, NULL, NULL, &j);
-        x->out->evals_jet++;
-        if (ism_krawczyk(b, p, gc.d, j.h, NULL) == ISM_KRAWCZYK_UNIQUE) {
-            *radius = r;
-            *fbox = j.v;
-            return true;
-        }
-    }
-    return false;
 }
 
 /* The lowest (or, for an indefinite pair, the critical) value of f across the plane of
@@ -170,13 +144,6 @@ static int point_type(ctx *x, const double p[3], const double eig[3], double vec
     return definite && same ? ISM_SING_ISOLATED : ISM_SING_DEGENERATE;
 }
 
-static bool deflate_ws(ctx *x)
-{
-    if (!x->dw && !(x->dw = ism_deflate_ws_new(x->t)))
-        x->oom = true;
-    return x->dw != NULL;
-}
-
 /* The eigenvector of the smallest |eigenvalue|. */
 static const double *null_vector(const double eig[3], double vec[3][3])
 {
@@ -185,28 +152,6 @@ static const double *null_vector(const double eig[3], double vec[3][3])
         if (fabs(eig[i]) < fabs(eig[null]))
             null = i;
     return vec[null];
-}
-
-/* The deflation certificate of a rank-2 point (deflate.h) along its null vector; sets the
- * point's certificate or the reason it has none. */
-static bool certify_rank2(ctx *x, ism_sing_point *pt, const double eig[3], double vec[3][3],
-                          ism_interval *fbox)
-{
-    if (!deflate_ws(x))
-        return false;
-    double rmax = ISM_SING_CERT_REL * x->diag;
-    ism_deflate_result r;
-    int a = ism_deflate_certify(x->dw, pt->p, null_vector(eig, vec), CERT_FIRST * rmax, rmax,
-                                CERT_GROWTH, &r, &x->out->evals_jet);
-    if (a != ISM_DEFLATE_CERTIFIED) {
-        pt->uncertified_why = a == ISM_DEFLATE_SINGULAR ? ISM_UNCERT_CUBIC : ISM_UNCERT_CONTRACT;
-        return false;
-    }
-    pt->radius = r.radius;
-    pt->certificate = ISM_CERT_DEFLATION;
-    pt->perturbation = r.eps;
-    *fbox = r.f;
-    return true;
 }
 
 /* Whether the rank-2 projection q may be a cusp rather than a point of a curve of zeros of
@@ -235,7 +180,17 @@ static bool cusp_probe(ctx *x, const double q[3])
     return isfinite(nn) && fabs(nn) > CUSP_CUBIC_REL * sqrt(norm);
 }
 
-/* Newton from start within [lo, hi], certificate (Krawczyk on ∇f, or deflation at rank 2),
+/* f's residuals and the Hessian's eigen-decomposition at pt->p. */
+static void measure(ctx *x, ism_sing_point *pt, double vec[3][3])
+{
+    double g[3], h[6];
+    pt->residual_f = fabs(ism_eval_hessian(x->t, x->ws, pt->p[0], pt->p[1], pt->p[2], g, h));
+    x->out->evals_jet++;
+    pt->residual_grad = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    ism_sym3_eigen(h, pt->eig, vec);
+}
+
+/* Newton from start within [lo, hi], certificate by the Hessian's rank (point_cert.h),
  * off-surface check, type. */
 static int resolve(ctx *x, const double start[3], const double lo[3], const double hi[3],
                    double trust, double half_width, ism_sing_point *pt)
@@ -248,20 +203,14 @@ static int resolve(ctx *x, const double start[3], const double lo[3], const doub
     for (int k = 0; k < 3; k++)
         if (!(pt->p[k] >= x->box[k] && pt->p[k] <= x->box[k + 3]))
             return NOT_FOUND; /* a neighbour's point seen through a boundary cell */
-    double g[3], h[6], vec[3][3];
-    pt->residual_f = fabs(ism_eval_hessian(x->t, x->ws, pt->p[0], pt->p[1], pt->p[2], g, h));
-    x->out->evals_jet++;
-    pt->residual_grad = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-    ism_sym3_eigen(h, pt->eig, vec);
+    double vec[3][3];
+    measure(x, pt, vec);
     int rank = ism_sing_rank(pt->eig, x->out->hessian_scale);
     ism_interval f;
-    pt->certified = certify(x, pt->p, &pt->radius, &f);
-    if (pt->certified)
-        pt->certificate = ISM_CERT_KRAWCZYK;
-    else if (rank == 2)
-        pt->certified = certify_rank2(x, pt, pt->eig, vec, &f);
-    else
-        pt->uncertified_why = rank < 2 ? ISM_UNCERT_CORANK2 : ISM_UNCERT_CONTRACT;
+    double before[3] = { pt->p[0], pt->p[1], pt->p[2] };
+    if (ism_pcert_point(&x->pc, pt, rank, null_vector(pt->eig, vec), x->cell, &f)
+        && memcmp(before, pt->p, sizeof before) != 0)
+        measure(x, pt, vec); /* a defining system refined the position */
     if (pt->certified && !(f.lo <= 0.0 && f.hi >= 0.0))
         return OFF_SURFACE;
     if (!pt->certified) {
@@ -291,6 +240,39 @@ static bool add_cand(ctx *x, const ism_sing_point *pt, uint32_t cluster, size_t 
     }
     x->c[x->nc] = (cand){ *pt, cluster, box, x->nc };
     x->nc++;
+    return true;
+}
+
+/* Whether the uncertified rank-2 point pt lies on a curve of zeros of ∇f (a whisker circle
+ * smaller than a cell, whose boxes cluster like a point's): a step of CURVE_PROBE_CELLS
+ * along the Hessian's null direction each way, Newton across it in the plane of the range
+ * directions, lands on ∇f = 0 again (the curve tracer's test, ISM_CURVE_GRAD_REL) and on
+ * f = 0 within the same relative size. At an isolated degenerate point the null component
+ * of ∇f grows off the point (by ~t² at a cusp, t³ at an A3 point: those are certified
+ * before this is asked). */
+static bool on_curve(ctx *x, const ism_sing_point *pt)
+{
+    double g[3], h[6], eig[3], vec[3][3];
+    ism_eval_hessian(x->t, x->ws, pt->p[0], pt->p[1], pt->p[2], g, h);
+    ism_sym3_eigen(h, eig, vec);
+    const double *n = null_vector(eig, vec);
+    double E[2][3], hs = fmax(x->out->hessian_scale, fmax(fabs(eig[0]), fabs(eig[2])));
+    ism_cjet_normal_basis(n, E);
+    ism_cjet j = { x->t, x->ws, POINT_NEWTON_TOL * x->diag, 0 };
+    double d = CURVE_PROBE_CELLS * x->cell;
+    for (int side = 0; side < 2; side++) {
+        double start[3], q[3];
+        for (int k = 0; k < 3; k++)
+            start[k] = pt->p[k] + (side ? -d : d) * n[k];
+        if (!ism_cjet_correct(&j, start, E, E, d, CURVE_PROBE_NEWTON, q, NULL))
+            return false;
+        double fq = ism_eval_hessian(x->t, x->ws, q[0], q[1], q[2], g, h);
+        double lim = ISM_CURVE_GRAD_REL * hs * x->diag;
+        if (!(sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]) <= lim
+              && fabs(fq) <= lim * x->diag))
+            return false;
+    }
+    x->out->evals_jet += j.evals + 3;
     return true;
 }
 
@@ -372,6 +354,9 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
     ism_sing_point pt;
     if (is_point_cluster(x, c)) {
         int r = resolve(x, l->boxes[c->first_projected].q, lo, hi, x->cell, half, &pt);
+        if (r == FOUND && !pt.certified && ism_sing_rank(pt.eig, l->hessian_scale) == 2
+            && on_curve(x, &pt))
+            r = NOT_FOUND; /* a small closed curve: left to the curve stage */
         *fate = r == FOUND ? 1 : r == OFF_SURFACE ? 2 : 0;
         return r != FOUND || add_cand(x, &pt, id, SIZE_MAX);
     }
@@ -400,7 +385,7 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
             && !add_cand(x, &pt, UINT32_MAX, SIZE_MAX))
             return false;
     }
-    return !x->oom;
+    return !x->pc.oom;
 }
 
 static bool same_point(const ctx *x, const ism_sing_point *a, const ism_sing_point *b)
@@ -568,11 +553,10 @@ bool ism_sing_points(const ism_tape *f, const ism_locus_options *o, ism_locus *o
     }
     x.diag = sqrt(d2);
     x.ws = ism_eval_ws_new(f);
-    x.jw = ism_ivjet_ws_new(f);
-    bool ok = x.ws && x.jw && run(&x, o) && !x.oom;
+    bool ok = ism_pcert_init(&x.pc, f, x.diag, out->hessian_scale, &out->evals_jet) && x.ws && run(&x, o)
+              && !x.pc.oom;
     ism_eval_ws_free(x.ws);
-    ism_ivjet_ws_free(x.jw);
-    ism_deflate_ws_free(x.dw);
+    ism_pcert_free(&x.pc);
     free(x.c);
     out->time_ms += ism_now_ms() - t0;
     if (!ok)
