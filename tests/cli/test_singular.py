@@ -266,6 +266,12 @@ class PresetsOffTheLatticeTest(unittest.TestCase):
                 self.assertTrue(any(math.dist(w, p) < 1e-6 for p in pinch), w)
             self.assertEqual(len(triple), 1)
             self.assertLess(math.dist(triple[0], (0, 0, 0)), 1e-6)
+            # certified by their defining systems: rank 1 (pinch), rank 0 (triple)
+            for p in pts:
+                want = "rank-1 system" if p["type"] == "pinch" else "rank-0 system"
+                self.assertEqual((p["certified"], p["certificate"]), (True, want), p)
+                self.assertLess(p["perturbation"], 1e-9)
+                self.assertNotIn("uncertified_reason", p)
             kinds = sorted(c["kind"] for c in feats["curves"])
             self.assertEqual(kinds, ["double"] * 6 + ["whisker"] * 6)
             self.assertEqual(stats["analysis"]["euler"], 5)
