@@ -22,14 +22,14 @@ char *ism_box_fit_answer(const char *json, size_t len, const ism_request_limits 
     char *out = NULL;
     ism_tape *t = ism_request_compile(&req, err);
     ism_fit_box_result f;
-    if (t && !ism_fit_box(t, req.box, &f)) {
+    if (t && !ism_fit_box(t, req.poly.box, &f)) {
         ism_req_error_set(err, 500, "out_of_memory", "", "out of memory while fitting the box");
     } else if (t) {
         ism_jw w;
         ism_jw_init(&w);
         ism_jw_object(&w);
         write_box(&w, "box", f.box);
-        write_box(&w, "cube", req.box);
+        write_box(&w, "cube", req.poly.box);
         ism_jw_key(&w, "empty");
         ism_jw_bool(&w, f.empty);
         ism_jw_key(&w, "complete");

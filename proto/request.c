@@ -6,6 +6,7 @@
 #include "proto/request_internal.h"
 #include "proto/presets.h"
 #include "proto/json_writer.h"
+#include "core/octree/tolerances.h"
 
 #include <jansson.h>
 #include <math.h>
@@ -375,55 +376,52 @@ static bool decode_depth(const json_t *v, ism_request *req, int limit, ism_req_e
         return false;
     const json_t *mn = json_object_get(v, "min"), *mx = json_object_get(v, "max");
     if (mx) {
-        if (!read_int(mx, "$.depth.max", &req->max_depth, err) ||
-            !in_range(req->max_depth, 1, limit, "$.depth.max", err))
+        if (!read_int(mx, "$.depth.max", &req->poly.max_depth, err) ||
+            !in_range(req->poly.max_depth, 1, limit, "$.depth.max", err))
             return false;
-        if (!mn && req->min_depth > req->max_depth)
-            req->min_depth = req->max_depth;
+        if (!mn && req->poly.min_depth > req->poly.max_depth)
+            req->poly.min_depth = req->poly.max_depth;
     }
     if (mn) {
-        if (!read_int(mn, "$.depth.min", &req->min_depth, err) ||
-            !in_range(req->min_depth, 0, ISM_REQ_MAX_MIN_DEPTH, "$.depth.min", err))
+        if (!read_int(mn, "$.depth.min", &req->poly.min_depth, err) ||
+            !in_range(req->poly.min_depth, 0, ISM_REQ_MAX_MIN_DEPTH, "$.depth.min", err))
             return false;
-        if (!mx && req->max_depth < req->min_depth)
-            req->max_depth = req->min_depth;
+        if (!mx && req->poly.max_depth < req->poly.min_depth)
+            req->poly.max_depth = req->poly.min_depth;
     }
-    if (req->min_depth > req->max_depth)
-        return bad(err, "$.depth", "min (%d) is above max (%d)", req->min_depth,
-                   req->max_depth);
+    if (req->poly.min_depth > req->poly.max_depth)
+        return bad(err, "$.depth", "min (%d) is above max (%d)", req->poly.min_depth,
+                   req->poly.max_depth);
     return true;
 }
 
+/* "tolerances": every field is one of the table's (core/octree/tolerances.h), within its
+ * range. */
 static bool decode_tolerances(const json_t *v, ism_request *req, ism_req_error *err)
 {
-    static const char *const known[] = {"gradient", "double_root_eps", "double_root_iters",
-                                        "stitch", "flat_normal", "flat_plane", NULL};
+    const char *known[ISM_TOLERANCE_COUNT + 1];
+    for (int i = 0; i < ISM_TOLERANCE_COUNT; i++)
+        known[i] = ism_tolerances[i].key;
+    known[ISM_TOLERANCE_COUNT] = NULL;
     if (!check_fields(v, "$.tolerances", known, err))
         return false;
-    struct {
-        const char *name;
-        double *out;
-        double lo, hi;
-    } reals[] = {
-        {"gradient", &req->gradient, -1, 1},
-        {"double_root_eps", &req->double_root_eps, 0, 1},
-        {"stitch", &req->stitch, 1e-9, 0.25},
-        {"flat_normal", &req->flat_normal, -1, 1},
-        {"flat_plane", &req->flat_plane, 1e-6, 1},
-    };
-    for (size_t i = 0; i < sizeof reals / sizeof reals[0]; i++) {
-        const json_t *f = json_object_get(v, reals[i].name);
+    for (int i = 0; i < ISM_TOLERANCE_COUNT; i++) {
+        const ism_tolerance *t = &ism_tolerances[i];
+        const json_t *f = json_object_get(v, t->key);
+        if (!f)
+            continue;
         path_t p;
-        path_key(p, "$.tolerances", reals[i].name);
-        if (f && (!read_number(f, p, reals[i].out, err) ||
-                  !in_range(*reals[i].out, reals[i].lo, reals[i].hi, p, err)))
+        path_key(p, "$.tolerances", t->key);
+        int n;
+        double x;
+        if (t->is_int ? !read_int(f, p, &n, err) : !read_number(f, p, &x, err))
             return false;
+        if (t->is_int)
+            x = n;
+        if (!in_range(x, t->lo, t->hi, p, err))
+            return false;
+        ism_tolerance_set(&req->poly, t, x);
     }
-    const json_t *it = json_object_get(v, "double_root_iters");
-    if (it && (!read_int(it, "$.tolerances.double_root_iters", &req->double_root_iters, err) ||
-               !in_range(req->double_root_iters, 1, ISM_REQ_MAX_ROOT_ITERS,
-                         "$.tolerances.double_root_iters", err)))
-        return false;
     return true;
 }
 
@@ -437,7 +435,7 @@ static bool decode_max_error(const json_t *v, const json_t *depth, ism_request *
     if (!read_number(v, "$.max_error", &e, err))
         return false;
     for (int k = 0; k < 3; k++)
-        d2 += (req->box[k + 3] - req->box[k]) * (req->box[k + 3] - req->box[k]);
+        d2 += (req->poly.box[k + 3] - req->poly.box[k]) * (req->poly.box[k + 3] - req->poly.box[k]);
     char b[32], c[32];
     if (!(e > 0))
         return over(err, "$.max_error", "%s must be above 0 (a distance in model units)",
@@ -449,9 +447,9 @@ static bool decode_max_error(const json_t *v, const json_t *depth, ism_request *
                  num(sqrt(d2), c));
         return false;
     }
-    req->max_error = e;
+    req->poly.max_error = e;
     if (!(depth && json_object_get(depth, "max")))
-        req->max_depth = depth_limit;
+        req->poly.max_depth = depth_limit;
     return true;
 }
 
@@ -547,17 +545,10 @@ static bool decode_output(const json_t *v, ism_request *req, ism_req_error *err)
 
 static void set_defaults(ism_request *req, int depth_limit)
 {
-    ism_poly_options o;
-    ism_poly_options_default(&o);
-    memcpy(req->box, o.box, sizeof req->box);
-    req->max_depth = o.max_depth < depth_limit ? o.max_depth : depth_limit;
-    req->min_depth = o.min_depth < req->max_depth ? o.min_depth : req->max_depth;
-    req->gradient = o.gradient_test;
-    req->double_root_eps = o.double_root_eps;
-    req->double_root_iters = o.double_root_iters;
-    req->stitch = o.stitch_tol;
-    req->flat_normal = o.flat_normal;
-    req->flat_plane = o.flat_plane;
+    ism_poly_options_default(&req->poly);
+    ism_poly_options *o = &req->poly;
+    o->max_depth = o->max_depth < depth_limit ? o->max_depth : depth_limit;
+    o->min_depth = o->min_depth < o->max_depth ? o->min_depth : o->max_depth;
     req->format = ISM_FORMAT_DRC;
     req->position_bits = ISM_REQ_DEFAULT_POSITION_BITS;
     req->normal_bits = ISM_REQ_DEFAULT_NORMAL_BITS;
@@ -579,9 +570,9 @@ static bool apply_preset(ism_request *req, const ism_preset *p, int depth_limit,
     for (size_t i = 0; i < p->nparams; i++)
         if (!set_param(req, p->params[i].name, p->params[i].value, err))
             return false;
-    memcpy(req->box, p->box, sizeof req->box);
-    req->max_depth = p->max_depth < depth_limit ? p->max_depth : depth_limit;
-    req->min_depth = p->min_depth < req->max_depth ? p->min_depth : req->max_depth;
+    memcpy(req->poly.box, p->box, sizeof req->poly.box);
+    req->poly.max_depth = p->max_depth < depth_limit ? p->max_depth : depth_limit;
+    req->poly.min_depth = p->min_depth < req->poly.max_depth ? p->min_depth : req->poly.max_depth;
     return true;
 }
 
@@ -634,9 +625,9 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
         return false;
 
     const json_t *v;
-    if ((v = json_object_get(root, "box")) && !decode_box(v, req->box, err))
+    if ((v = json_object_get(root, "box")) && !decode_box(v, req->poly.box, err))
         return false;
-    if (!check_box(req->box, err))
+    if (!check_box(req->poly.box, err))
         return false;
     const json_t *depth = json_object_get(root, "depth");
     if (depth && !decode_depth(depth, req, depth_limit, err))

@@ -29,7 +29,6 @@
 #define ISM_REQ_MAX_PARAMS      64
 #define ISM_REQ_MAX_LETS        64
 #define ISM_REQ_MAX_SOURCE      16384        /* bytes of one expression or let source */
-#define ISM_REQ_MAX_ROOT_ITERS  60           /* tolerances.double_root_iters */
 #define ISM_REQ_MIN_ERROR_REL   1e-9         /* max_error >= this * the box diagonal: finer
                                                 is below what doubles resolve there */
 #define ISM_REQ_MAX_CURVES      256          /* curves: entries, and offsets + values in all
@@ -75,18 +74,12 @@ typedef struct ism_request {
     ism_let *lets;             /* in order; names and sources owned */
     size_t nlets;
     char **let_paths;          /* JSON path of each let's source, for errors */
-    double box[6];             /* xmin ymin zmin xmax ymax zmax */
-    int min_depth, max_depth;
-    double max_error;          /* the error bound (model units); 0 when not given: then the
-                                  flatness tolerances and depth.max decide */
+    /* The polygoniser's options the request sets: box, min_depth, max_depth, max_error (0
+     * when not given: then the flatness tolerances and depth.max decide) and the tolerances
+     * (core/octree/tolerances.h); the others keep ism_poly_options_default's values. */
+    ism_poly_options poly;
     int quality;               /* enum ism_quality: "raw" (default) or "good" (the quality
                                   pass after meshing, core/remesh/) */
-    double gradient;           /* the polygoniser's option names: gradient_test ... */
-    double double_root_eps;
-    int double_root_iters;
-    double stitch;
-    double flat_normal;
-    double flat_plane;
     enum ism_format format;
     int position_bits;         /* Draco position quantisation (6..24) */
     int normal_bits;           /* Draco normal quantisation (4..16) */

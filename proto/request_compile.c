@@ -91,15 +91,5 @@ ism_tape *ism_request_compile_source(const ism_request *req, const char *src, co
 
 void ism_request_poly_options(const ism_request *req, ism_poly_options *o)
 {
-    ism_poly_options_default(o);
-    memcpy(o->box, req->box, sizeof o->box);
-    o->min_depth = req->min_depth;
-    o->max_depth = req->max_depth;
-    o->gradient_test = req->gradient;
-    o->double_root_eps = req->double_root_eps;
-    o->double_root_iters = req->double_root_iters;
-    o->stitch_tol = req->stitch;
-    o->flat_normal = req->flat_normal;
-    o->flat_plane = req->flat_plane;
-    o->max_error = req->max_error;
+    *o = req->poly;
 }

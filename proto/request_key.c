@@ -10,6 +10,7 @@
 #include "proto/draco_encode.h"
 #include "proto/json_writer.h"
 #include "core/version.h"
+#include "core/octree/tolerances.h"
 
 #include <sodium.h>
 #include <stdlib.h>
@@ -29,28 +30,25 @@ static void write_box(ism_jw *w, const double box[6])
 static void write_tolerances(ism_jw *w, const ism_request *req)
 {
     ism_jw_object(w);
-    ism_jw_key(w, "gradient");
-    ism_jw_number(w, req->gradient);
-    ism_jw_key(w, "double_root_eps");
-    ism_jw_number(w, req->double_root_eps);
-    ism_jw_key(w, "double_root_iters");
-    ism_jw_int(w, req->double_root_iters);
-    ism_jw_key(w, "stitch");
-    ism_jw_number(w, req->stitch);
-    ism_jw_key(w, "flat_normal");
-    ism_jw_number(w, req->flat_normal);
-    ism_jw_key(w, "flat_plane");
-    ism_jw_number(w, req->flat_plane);
+    for (int i = 0; i < ISM_TOLERANCE_COUNT; i++) {
+        const ism_tolerance *t = &ism_tolerances[i];
+        double v = ism_tolerance_get(&req->poly, t);
+        ism_jw_key(w, t->key);
+        if (t->is_int)
+            ism_jw_int(w, (int)v);
+        else
+            ism_jw_number(w, v);
+    }
     ism_jw_object_end(w);
 }
 
 /* The error bound, only when one was given (keys of requests without it stay as they were). */
 static void write_max_error(ism_jw *w, const ism_request *req)
 {
-    if (!(req->max_error > 0))
+    if (!(req->poly.max_error > 0))
         return;
     ism_jw_key(w, "max_error");
-    ism_jw_number(w, req->max_error);
+    ism_jw_number(w, req->poly.max_error);
 }
 
 /* The quality pass, only when asked for (keys of requests without it stay as they were). */
@@ -128,13 +126,13 @@ char *ism_request_canonical(const ism_request *req, size_t *len)
     ism_jw_object_end(&w);
     free(sorted);
     ism_jw_key(&w, "box");
-    write_box(&w, req->box);
+    write_box(&w, req->poly.box);
     ism_jw_key(&w, "depth");
     ism_jw_object(&w);
     ism_jw_key(&w, "min");
-    ism_jw_int(&w, req->min_depth);
+    ism_jw_int(&w, req->poly.min_depth);
     ism_jw_key(&w, "max");
-    ism_jw_int(&w, req->max_depth);
+    ism_jw_int(&w, req->poly.max_depth);
     ism_jw_object_end(&w);
     write_max_error(&w, req);
     write_quality(&w, req);
@@ -185,11 +183,11 @@ static char *key_material(const ism_request *req, const ism_tape *tape, bool wit
     ism_jw_string_n(&w, text, n);
     free(text);
     ism_jw_key(&w, "box");
-    write_box(&w, req->box);
+    write_box(&w, req->poly.box);
     ism_jw_key(&w, "depth");
     ism_jw_array(&w);
-    ism_jw_int(&w, req->min_depth);
-    ism_jw_int(&w, req->max_depth);
+    ism_jw_int(&w, req->poly.min_depth);
+    ism_jw_int(&w, req->poly.max_depth);
     ism_jw_array_end(&w);
     write_max_error(&w, req);
     write_quality(&w, req);

@@ -3,6 +3,7 @@
  * parallel chunks (phase 2: face lines, stitching, crack repair, triangles), welds the
  * chunks in order (phase 3), and fills the statistics. */
 #include "core/octree/polygonise.h"
+#include "core/octree/tolerances.h"
 #include "core/util/clock.h"
 #include "core/octree/breaks.h"
 #include "core/octree/cell.h"
@@ -54,12 +55,8 @@ void ism_poly_options_default(ism_poly_options *o)
     memcpy(o->box, box, sizeof box);
     o->min_depth = 3;
     o->max_depth = 7;
-    o->gradient_test = 0.9;
-    o->double_root_eps = 1e-9;
-    o->double_root_iters = 25;
-    o->stitch_tol = 1e-3;
-    o->flat_normal = 0.9;
-    o->flat_plane = 0.05;
+    for (int i = 0; i < ISM_TOLERANCE_COUNT; i++)
+        ism_tolerance_set(o, &ism_tolerances[i], ism_tolerances[i].def);
     o->max_triangles = 4000000;
     o->max_memory = (size_t)2 << 30;
     o->threads = 0;
@@ -82,18 +79,11 @@ bool ism_poly_options_check(const ism_poly_options *o, ism_error *err)
     if (o->max_depth < o->min_depth || o->max_depth > ISM_MAX_DEPTH_LIMIT)
         return ism_error_set(err, "depth.max: %d is outside %d..%d", o->max_depth, o->min_depth,
                              ISM_MAX_DEPTH_LIMIT);
-    if (!in_range(o->gradient_test, -1, 1))
-        return ism_error_set(err, "gradient_test: must be in [-1, 1]");
-    if (!in_range(o->double_root_eps, 0, 1e300))
-        return ism_error_set(err, "double_root_eps: must be a finite number >= 0");
-    if (o->double_root_iters < 1 || o->double_root_iters > 200)
-        return ism_error_set(err, "double_root_iters: must be in 1..200");
-    if (!in_range(o->stitch_tol, 0, 0.25))
-        return ism_error_set(err, "stitch_tol: must be in [0, 0.25]");
-    if (!in_range(o->flat_normal, -1, 1))
-        return ism_error_set(err, "flat_normal: must be in [-1, 1]");
-    if (!in_range(o->flat_plane, 1e-6, 10))
-        return ism_error_set(err, "flat_plane: must be in [1e-6, 10]");
+    for (int i = 0; i < ISM_TOLERANCE_COUNT; i++) {
+        const ism_tolerance *t = &ism_tolerances[i];
+        if (!ism_tolerance_accepts(t, ism_tolerance_get(o, t)))
+            return ism_error_set(err, "%s: must be in [%g, %g]", t->field, t->lo, t->hi);
+    }
     if (!in_range(o->max_error, 0, 1e300))
         return ism_error_set(err, "max_error: must be a finite number >= 0 (0: off)");
     if (o->threads < 0 || o->threads > MAX_THREADS)

@@ -10,6 +10,7 @@
 #include "core/expr/expr.h"
 #include "core/mesh/mesh.h"
 #include "core/octree/grid.h"
+#include "core/octree/poly_options.h"
 
 /* Hard limit of depth.max (cells are addressed by integer coordinates on a lattice that also
  * holds the levels below it, ISM_THIN_EXTRA_DEPTH). */
@@ -28,43 +29,6 @@
  * it leaves there are not rebuilt by anyone. */
 #define ISM_THIN_BLIND_DEPTH 3
 
-typedef struct ism_poly_options {
-    double box[6];          /* xmin ymin zmin xmax ymax zmax: the octree root */
-    int min_depth;          /* subdivide unconditionally to here (default 3) */
-    int max_depth;          /* never deeper than here (default 7) */
-    double gradient_test;   /* paper eq. (1): ĝa·ĝb > this means "same sheet" (0.9) */
-    double double_root_eps; /* |f(c)| below this is a double root (1e-9) */
-    int double_root_iters;  /* bisection steps looking for two roots (25) */
-    double stitch_tol;      /* end points match within this fraction of the node size (1e-3) */
-    double flat_normal;     /* flatness: min cos between gradients in a plotting node (0.8) */
-    double flat_plane;      /* flatness: max distance of polygon points from their plane,
-                               as a fraction of the node size (0.1) */
-    double max_error;       /* > 0: subdivide until the triangles of each node lie within this
-                               distance of the surface (world units, measured at triangle
-                               centroids and edge midpoints); max_depth is then only a safety
-                               limit, and flat_plane is not used. 0 (default): flat_plane */
-    size_t max_triangles;   /* budget: stop with an error beyond this (default 4,000,000) */
-    size_t max_memory;      /* bytes the polygoniser may hold (default 2 GiB) */
-    int threads;            /* worker threads for one request (0 = number of cores, max 64) */
-    bool thin_search;       /* search nodes that fail flatness for a piece no edge sees (one
-                               corner sign, or an island in a face of one sign) and split them
-                               below max_depth (thin_search.h; default on) */
-    /* Balls (x, y, z, radius) whose mesh a later stage rebuilds — around the singular points
-     * and along the curves found from f, which the conformance pass refills
-     * (core/singular/conform.h): hidden pieces are not chased into them (a horn shrinking to
-     * its point would be followed to the lattice's last level, the wedges between two sheets
-     * along a double curve at every level). NULL when the caller knows no locus: the chase
-     * then goes ISM_THIN_BLIND_DEPTH levels deep only. */
-    const double (*quiet)[4];
-    size_t nquiet;
-    /* Optional progress report, fraction in [0, 1], from the calling thread or a worker
-     * thread (serialised by the polygoniser). */
-    void (*progress)(void *ctx, double fraction);
-    void *progress_ctx;
-    /* Optional cancellation: polled often; when it becomes non-zero the call stops with
-     * ISM_POLY_CANCELLED. */
-    const volatile int *cancel;
-} ism_poly_options;
 
 void ism_poly_options_default(ism_poly_options *o);
 

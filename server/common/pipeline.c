@@ -316,7 +316,7 @@ static bool encode_body(encode_job *j, ism_buf *body, char *why, size_t n)
     case ISM_FORMAT_PNG: {
         unsigned char *png;
         size_t len;
-        if ((ok = ism_thumbnail_png(m, j->req->box, &png, &len)))
+        if ((ok = ism_thumbnail_png(m, j->req->poly.box, &png, &len)))
             take(body, png, len);
         break;
     }
@@ -334,8 +334,8 @@ static double curvature_limit(const ism_request *req)
 {
     double side = 0;
     for (int k = 0; k < 3; k++)
-        side = fmax(side, req->box[k + 3] - req->box[k]);
-    return ldexp(1.0, req->max_depth) / side;
+        side = fmax(side, req->poly.box[k + 3] - req->poly.box[k]);
+    return ldexp(1.0, req->poly.max_depth) / side;
 }
 
 /* The encoding of c that req asks for: body, stats, features; status 200. */
@@ -416,12 +416,12 @@ static bool cut_curves(const ism_request *req, const ism_tape *tape,
     ism_error err;
     memset(&err, 0, sizeof err);
     double t = ism_now_ms();
-    if (s->cf.n && !ism_curves_cut_mesh(tape, s->cf.fns, s->cf.n, req->box, &c->mesh, &s->cut,
+    if (s->cf.n && !ism_curves_cut_mesh(tape, s->cf.fns, s->cf.n, req->poly.box, &c->mesh, &s->cut,
                                         &err))
         return fail_with(r, 500, "no_memory", "%s", err.message);
     c->timings_ms[ISM_TIME_SINGULAR] += ism_now_ms() - t; /* the curves are singular stages too */
     if (req->quality == ISM_QUALITY_GOOD) {
-        if (!ism_quality_pass(tape, &c->locus, &s->cut, req->max_error,
+        if (!ism_quality_pass(tape, &c->locus, &s->cut, req->poly.max_error,
                               hooks ? hooks->cancel : NULL, &c->mesh, &s->rs, &err))
             return fail_with(r, 500, "no_memory", "%s", err.message);
         s->have_remesh = true;
@@ -483,7 +483,7 @@ static bool polygonise_and_analyse(const ism_request *req, const ism_tape *tape,
     if (!ism_analyse(&c->mesh, tape, &ao, &s->an, &err))
         return fail_with(r, 500, "internal", "mesh analysis failed: %s", err.message);
     s->have_analysis = true;
-    if (!ism_locus_check_mesh(&c->locus, req->box, &c->mesh, &s->an, &s->check, &err))
+    if (!ism_locus_check_mesh(&c->locus, req->poly.box, &c->mesh, &s->an, &s->check, &err))
         return fail_with(r, 500, "no_memory", "%s", err.message);
     c->timings_ms[ISM_TIME_ANALYSE] = ism_now_ms() - t;
     report(hooks, 0.92);
@@ -560,7 +560,7 @@ static bool gather(const ism_request *req, ism_pipeline_result *r, ism_computed 
     si.locus = &c->locus;
     si.check = &s->check;
     si.conform = &s->cs;
-    si.max_error = req->max_error;
+    si.max_error = req->poly.max_error;
     si.remesh = s->have_remesh ? &s->rs : NULL;
     c->stats_json = ism_stats_surface_json(&si, &c->stats_len);
     if (!c->stats_json)

@@ -10,10 +10,12 @@
 #include <unistd.h>
 
 #include "server/isomesh/cli.h"
+#include "core/octree/tolerances.h"
 #include "core/remesh/quality_pass.h"
 #include "server/isomesh/sandbox.h"
 #include "server/isomesh/worker.h"
 
+/* The usage text; the tolerances' lines are printed from their table where %s stands. */
 static const char usage_text[] =
     "usage:\n"
     "  isomesh -e EXPR [-p NAME=VALUE]... [--let NAME=EXPR]... [options] -o FILE\n"
@@ -42,12 +44,7 @@ static const char usage_text[] =
     "                           or the surface's own box)\n"
     "  -d, --depth MIN:MAX      subdivision depths (default 3:7; MAX at most 16)\n"
     "      --threads N          threads for this run (default: all cores; output identical)\n"
-    "      --gradient-test G    paper eq. (1): same sheet when ĝa·ĝb > G (default 0.9)\n"
-    "      --double-root-eps E  |f(c)| < E is a double root (default 1e-9)\n"
-    "      --double-root-iters N  bisection steps for two roots (default 25)\n"
-    "      --stitch-tol T       roots closer than T × segment are one (default 0.001)\n"
-    "      --flat-normal C      flatness: corner gradients within acos(C) (default 0.9)\n"
-    "      --flat-plane F       flatness: polygon within F × node size of its plane (0.05)\n"
+    "%s"   /* the tolerances, from core/octree/tolerances.h */
     "      --max-error E        subdivide until the triangles lie within E of the surface\n"
     "                           (model units, measured at centroids and edge midpoints);\n"
     "                           depth MAX is then only a safety limit. Default: off, the\n"
@@ -67,12 +64,12 @@ static const char usage_text[] =
     "exit status: 0 done, 1 the run failed (budget, memory), 2 bad input.\n";
 
 enum long_only {
-    OPT_LET = 256, OPT_SURFACE, OPT_SURFACES, OPT_LIST, OPT_THREADS, OPT_GRADIENT, OPT_EPS,
-    OPT_ITERS, OPT_STITCH, OPT_FLAT_NORMAL, OPT_FLAT_PLANE, OPT_MAX_TRIS, OPT_MAX_ERROR,
-    OPT_STATS, OPT_WORKER, OPT_FEATURES, OPT_QUALITY,
+    OPT_LET = 256, OPT_SURFACE, OPT_SURFACES, OPT_LIST, OPT_THREADS, OPT_MAX_TRIS,
+    OPT_MAX_ERROR, OPT_STATS, OPT_WORKER, OPT_FEATURES, OPT_QUALITY,
+    OPT_TOLERANCE, /* OPT_TOLERANCE + i: the table's tolerance i */
 };
 
-static const struct option long_options[] = {
+static const struct option base_options[] = {
     {"expr", required_argument, 0, 'e'},
     {"param", required_argument, 0, 'p'},
     {"let", required_argument, 0, OPT_LET},
@@ -82,12 +79,6 @@ static const struct option long_options[] = {
     {"box", required_argument, 0, 'b'},
     {"depth", required_argument, 0, 'd'},
     {"threads", required_argument, 0, OPT_THREADS},
-    {"gradient-test", required_argument, 0, OPT_GRADIENT},
-    {"double-root-eps", required_argument, 0, OPT_EPS},
-    {"double-root-iters", required_argument, 0, OPT_ITERS},
-    {"stitch-tol", required_argument, 0, OPT_STITCH},
-    {"flat-normal", required_argument, 0, OPT_FLAT_NORMAL},
-    {"flat-plane", required_argument, 0, OPT_FLAT_PLANE},
     {"max-triangles", required_argument, 0, OPT_MAX_TRIS},
     {"max-error", required_argument, 0, OPT_MAX_ERROR},
     {"quality", required_argument, 0, OPT_QUALITY},
@@ -96,8 +87,48 @@ static const struct option long_options[] = {
     {"features", required_argument, 0, OPT_FEATURES},
     {"worker", no_argument, 0, OPT_WORKER},
     {"help", no_argument, 0, 'h'},
-    {0, 0, 0, 0},
 };
+#define NBASE_OPTIONS (sizeof base_options / sizeof base_options[0])
+
+/* base_options, then one option per tolerance, then the terminator. */
+static void all_options(struct option *out)
+{
+    memcpy(out, base_options, sizeof base_options);
+    for (int i = 0; i < ISM_TOLERANCE_COUNT; i++)
+        out[NBASE_OPTIONS + i] =
+            (struct option){ism_tolerances[i].flag, required_argument, 0, OPT_TOLERANCE + i};
+    out[NBASE_OPTIONS + ISM_TOLERANCE_COUNT] = (struct option){0, 0, 0, 0};
+}
+
+static void print_usage(void)
+{
+    char lines[ISM_TOLERANCE_COUNT * 128] = "", *at = lines;
+    for (int i = 0; i < ISM_TOLERANCE_COUNT; i++) {
+        const ism_tolerance *t = &ism_tolerances[i];
+        char flag[40];
+        snprintf(flag, sizeof flag, "%s %s", t->flag, t->is_int ? "N" : "V");
+        at += snprintf(at, (size_t)(lines + sizeof lines - at), "      --%-18s %s (default %g)\n",
+                       flag, t->help, t->def);
+    }
+    printf(usage_text, lines);
+}
+
+/* Parses a tolerance's value: a number inside its range (a whole one for an int field). */
+static bool parse_tolerance(ism_poly_options *o, const ism_tolerance *t, const char *arg)
+{
+    char flag[40];
+    double v;
+    snprintf(flag, sizeof flag, "--%s", t->flag);
+    if (!ism_cli_parse_double(flag, arg, &v))
+        return false;
+    if (!ism_tolerance_accepts(t, v)) {
+        fprintf(stderr, "isomesh: %s: %s is not %s in [%g, %g]\n", flag, arg,
+                t->is_int ? "a whole number" : "a number", t->lo, t->hi);
+        return false;
+    }
+    ism_tolerance_set(o, t, v);
+    return true;
+}
 
 /* Applies one option to the run; false (after printing the error) on a bad value. */
 static bool apply_option(ism_cli_run *run, int opt, const char *arg)
@@ -113,13 +144,6 @@ static bool apply_option(ism_cli_run *run, int opt, const char *arg)
     case 'd': return ism_cli_parse_depth(arg, &o->min_depth, &o->max_depth) &&
                      (run->depth_given = true);
     case OPT_THREADS: return ism_cli_parse_int("--threads", arg, 0, 64, &o->threads);
-    case OPT_GRADIENT: return ism_cli_parse_double("--gradient-test", arg, &o->gradient_test);
-    case OPT_EPS: return ism_cli_parse_double("--double-root-eps", arg, &o->double_root_eps);
-    case OPT_ITERS: return ism_cli_parse_int("--double-root-iters", arg, 1, 200,
-                                             &o->double_root_iters);
-    case OPT_STITCH: return ism_cli_parse_double("--stitch-tol", arg, &o->stitch_tol);
-    case OPT_FLAT_NORMAL: return ism_cli_parse_double("--flat-normal", arg, &o->flat_normal);
-    case OPT_FLAT_PLANE: return ism_cli_parse_double("--flat-plane", arg, &o->flat_plane);
     case OPT_MAX_ERROR: return ism_cli_parse_double("--max-error", arg, &o->max_error);
     case OPT_MAX_TRIS: {
         int n;
@@ -136,7 +160,10 @@ static bool apply_option(ism_cli_run *run, int opt, const char *arg)
     case 'o': run->output = arg; return true;
     case OPT_STATS: run->print_stats = true; return true;
     case OPT_FEATURES: run->features_output = arg; return true;
-    default: return false;
+    default:
+        if (opt >= OPT_TOLERANCE && opt < OPT_TOLERANCE + ISM_TOLERANCE_COUNT)
+            return parse_tolerance(o, &ism_tolerances[opt - OPT_TOLERANCE], arg);
+        return false;
     }
 }
 
@@ -152,10 +179,12 @@ int main(int argc, char **argv)
     ism_cli_run_init(&run);
     bool list = false;
     int opt;
+    struct option long_options[NBASE_OPTIONS + ISM_TOLERANCE_COUNT + 1];
+    all_options(long_options);
     opterr = 0;
     while ((opt = getopt_long(argc, argv, ":e:p:b:d:o:h", long_options, NULL)) != -1) {
         if (opt == 'h') {
-            fputs(usage_text, stdout);
+            print_usage();
             ism_cli_run_free(&run);
             return 0;
         }

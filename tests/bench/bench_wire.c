@@ -184,10 +184,10 @@ static bool run_case(const bench_case *c, const char *out_dir, bool tools_only)
     }
     double side = 0;
     for (int k = 0; k < 3; k++)
-        side = fmax(side, req.box[k + 3] - req.box[k]);
+        side = fmax(side, req.poly.box[k + 3] - req.poly.box[k]);
     ism_wire_mesh w;
     ism_features f;
-    if (!ism_wire_mesh_build(&m, &a, ISM_ATTR_ALL, ldexp(1, req.max_depth) / side, &w) ||
+    if (!ism_wire_mesh_build(&m, &a, ISM_ATTR_ALL, ldexp(1, req.poly.max_depth) / side, &w) ||
         !ism_features_build(&a, &f)) {
         fprintf(stderr, "bench_wire: out of memory\n");
         return false;

@@ -261,8 +261,30 @@ class TestIsomesh(unittest.TestCase):
         p = run("--help")
         self.assertEqual(p.returncode, 0)
         for flag in ("--expr", "--param", "--let", "--box", "--depth", "--surface", "--surfaces",
-                     "--stats", "--output", "--worker", "--threads", "--max-error"):
+                     "--stats", "--output", "--worker", "--threads", "--max-error",
+                     "--gradient-test", "--double-root-eps", "--double-root-iters",
+                     "--stitch-tol", "--flat-normal", "--flat-plane"):
             self.assertIn(flag, p.stdout)
+
+    def test_tolerances_have_the_published_ranges(self):
+        """The CLI accepts each tolerance at the limits proto/request.schema.json publishes for
+        requests and refuses a value past them, naming the flag (one range for both)."""
+        with open(os.path.join(ROOT, "proto", "request.schema.json")) as f:
+            tol = json.load(f)["properties"]["tolerances"]["properties"]
+        flags = {"gradient": "--gradient-test", "stitch": "--stitch-tol"}
+        sphere = ("-e", "x^2 + y^2 + z^2 - 0.8", "-d", "1:2")
+        with tempfile.TemporaryDirectory() as d:
+            out = os.path.join(d, "s.ply")
+            for key, spec in tol.items():
+                flag = flags.get(key, "--" + key.replace("_", "-"))
+                step = 1 if spec["type"] == "integer" else max(abs(spec["maximum"]), 1e-9) / 10
+                ok = run(*sphere, flag, str(spec["maximum"]), "-o", out)
+                self.assertEqual(ok.returncode, 0, f"{flag} {spec['maximum']}: {ok.stderr}")
+                bad = run(*sphere, flag, repr(spec["maximum"] + step), "-o", out)
+                self.assertEqual(bad.returncode, 2, f"{flag} above {spec['maximum']}")
+                self.assertIn(flag, bad.stderr)
+                bad = run(*sphere, flag, repr(spec["minimum"] - step), "-o", out)
+                self.assertEqual(bad.returncode, 2, f"{flag} below {spec['minimum']}")
 
 
 if __name__ == "__main__":

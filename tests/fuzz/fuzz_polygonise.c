@@ -50,6 +50,7 @@ static void poly_progress(void *ctx, double fraction)
         w->cancel = 1;
 }
 
+/* The tolerances stay inside the ranges of core/octree/tolerances.h (its edges included). */
 static void poly_options_from(const uint8_t *b, ism_poly_options *o)
 {
     static const double size[8] = {1e-3, 0.1, 0.5, 1, 1.5, 2, 3, 10};
@@ -57,10 +58,10 @@ static void poly_options_from(const uint8_t *b, ism_poly_options *o)
     static const double centre[8] = {0, 0.1, -0.3, 0.5, 1, 1e-7, -2, 0.123456};
     static const double gradient[8] = {0.9, -1, 1, 0, 0.5, 0.99, -0.5, 0.95};
     static const double fnormal[8] = {0.9, 0.8, -1, 1, 0, 0.5, 0.99, 0.999};
-    static const double fplane[8] = {0.05, 0.1, 1e-6, 1, 10, 0.01, 0.5, 0.2};
-    static const double stitch[8] = {1e-3, 0, 0.25, 1e-6, 0.01, 0.1, 1e-9, 0.05};
-    static const int iters[8] = {25, 1, 200, 5, 60, 10, 2, 100};
-    static const double eps[8] = {1e-9, 0, 1, 1e-3, 1e-15, 1e-6, 0.5, 1e300};
+    static const double fplane[8] = {0.05, 0.1, 1e-6, 1, 0.7, 0.01, 0.5, 0.2};
+    static const double stitch[8] = {1e-3, 2e-9, 0.25, 1e-6, 0.01, 0.1, 1e-9, 0.05};
+    static const int iters[8] = {25, 1, 59, 5, 60, 10, 2, 40};
+    static const double eps[8] = {1e-9, 0, 1, 1e-3, 1e-15, 1e-6, 0.5, 0.9};
     static const size_t budget[8] = {20000, 1, 10, 100, 1000, 5000, 20000, 20000};
 
     ism_poly_options_default(o);

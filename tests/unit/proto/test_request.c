@@ -294,7 +294,7 @@ Test(request, operator_depth_limit_applies)
     const char *plain = "{\"expr\": \"x\"}";
     lim.max_depth = 5;
     cr_assert(ism_request_decode(plain, strlen(plain), &lim, &req, &err));
-    cr_expect_eq(req.max_depth, 5);
+    cr_expect_eq(req.poly.max_depth, 5);
     ism_request_free(&req);
 }
 
@@ -308,8 +308,8 @@ Test(request, max_error_decodes_and_sets_the_safety_depth)
     ism_poly_options o;
     const char *bound = "{\"preset\": \"torus\", \"max_error\": 0.002}";
     cr_assert(ism_request_decode(bound, strlen(bound), &lim, &req, &err), "%s", err.message);
-    cr_expect_eq(req.max_error, 0.002);
-    cr_expect_eq(req.max_depth, 9);
+    cr_expect_eq(req.poly.max_error, 0.002);
+    cr_expect_eq(req.poly.max_depth, 9);
     ism_request_poly_options(&req, &o);
     cr_expect_eq(o.max_error, 0.002);
     cr_expect_eq(o.max_depth, 9);
@@ -317,12 +317,12 @@ Test(request, max_error_decodes_and_sets_the_safety_depth)
 
     const char *both = "{\"preset\": \"torus\", \"max_error\": 0.002, \"depth\": {\"max\": 6}}";
     cr_assert(ism_request_decode(both, strlen(both), &lim, &req, &err), "%s", err.message);
-    cr_expect_eq(req.max_depth, 6);
+    cr_expect_eq(req.poly.max_depth, 6);
     ism_request_free(&req);
 
     const char *plain = "{\"preset\": \"torus\"}";
     cr_assert(ism_request_decode(plain, strlen(plain), &lim, &req, &err), "%s", err.message);
-    cr_expect_eq(req.max_error, 0);
+    cr_expect_eq(req.poly.max_error, 0);
     ism_request_poly_options(&req, &o);
     cr_expect_eq(o.max_error, 0);
     ism_request_free(&req);
@@ -337,15 +337,15 @@ Test(request, defaults_come_from_the_polygoniser)
     ism_poly_options o;
     ism_poly_options_default(&o);
     for (int k = 0; k < 6; k++)
-        cr_expect_eq(req.box[k], o.box[k]);
-    cr_expect_eq(req.min_depth, o.min_depth);
-    cr_expect_eq(req.max_depth, o.max_depth);
-    cr_expect_eq(req.gradient, o.gradient_test);
-    cr_expect_eq(req.double_root_eps, o.double_root_eps);
-    cr_expect_eq(req.double_root_iters, o.double_root_iters);
-    cr_expect_eq(req.stitch, o.stitch_tol);
-    cr_expect_eq(req.flat_normal, o.flat_normal);
-    cr_expect_eq(req.flat_plane, o.flat_plane);
+        cr_expect_eq(req.poly.box[k], o.box[k]);
+    cr_expect_eq(req.poly.min_depth, o.min_depth);
+    cr_expect_eq(req.poly.max_depth, o.max_depth);
+    cr_expect_eq(req.poly.gradient_test, o.gradient_test);
+    cr_expect_eq(req.poly.double_root_eps, o.double_root_eps);
+    cr_expect_eq(req.poly.double_root_iters, o.double_root_iters);
+    cr_expect_eq(req.poly.stitch_tol, o.stitch_tol);
+    cr_expect_eq(req.poly.flat_normal, o.flat_normal);
+    cr_expect_eq(req.poly.flat_plane, o.flat_plane);
     cr_expect_eq(req.format, ISM_FORMAT_DRC);
     cr_expect_eq(req.position_bits, 14);
     cr_expect_eq(req.normal_bits, 10);
@@ -372,7 +372,7 @@ Test(request, every_preset_decodes_compiles_and_passes_the_polygonisers_check)
         cr_expect_str_eq(req.preset, p->name);
         cr_expect_eq(req.nparams, p->nparams);
         cr_expect_eq(req.nlets, p->nlets);
-        cr_expect_eq(req.max_depth, p->max_depth);
+        cr_expect_eq(req.poly.max_depth, p->max_depth);
         for (size_t k = 0; k < p->nparams; k++) {
             cr_expect_leq(p->params[k].min, p->params[k].value, "%s", p->name);
             cr_expect_geq(p->params[k].max, p->params[k].value, "%s", p->name);
@@ -400,9 +400,9 @@ Test(request, preset_params_override_defaults)
         if (strcmp(req.params[i].name, "R") == 0)
             cr_expect_eq(req.params[i].value, 1.0);
     }
-    cr_expect_eq(req.max_depth, 5);
-    cr_expect_eq(req.min_depth, 3);
-    cr_expect_eq(req.box[0], -1.5);
+    cr_expect_eq(req.poly.max_depth, 5);
+    cr_expect_eq(req.poly.min_depth, 3);
+    cr_expect_eq(req.poly.box[0], -1.5);
     ism_request_free(&req);
 }
 
@@ -435,9 +435,9 @@ Test(request, integral_reals_are_integers_and_negative_zero_is_zero)
     ism_request req;
     ism_req_error err;
     cr_assert(ism_request_decode(json, strlen(json), NULL, &req, &err), "%s", err.message);
-    cr_expect_eq(req.min_depth, 2);
-    cr_expect_eq(req.max_depth, 6);
-    cr_expect(!signbit(req.box[0]));
+    cr_expect_eq(req.poly.min_depth, 2);
+    cr_expect_eq(req.poly.max_depth, 6);
+    cr_expect(!signbit(req.poly.box[0]));
     ism_request_free(&req);
 }
 

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "core/octree/polygonise.h"
+#include "core/octree/tolerances.h"
 #include "proto/draco_encode.h"
 #include "proto/presets.h"
 #include "proto/request.h"
@@ -88,14 +89,12 @@ Test(schema, defaults_are_the_decoders)
     ism_request req;
     ism_req_error err;
     cr_assert(ism_request_decode("{\"expr\": \"x\"}", 13, NULL, &req, &err));
-    cr_expect_eq(def(props, "depth", "min"), req.min_depth);
-    cr_expect_eq(def(props, "depth", "max"), req.max_depth);
-    cr_expect_eq(def(props, "tolerances", "gradient"), req.gradient);
-    cr_expect_eq(def(props, "tolerances", "double_root_eps"), req.double_root_eps);
-    cr_expect_eq(def(props, "tolerances", "double_root_iters"), req.double_root_iters);
-    cr_expect_eq(def(props, "tolerances", "stitch"), req.stitch);
-    cr_expect_eq(def(props, "tolerances", "flat_normal"), req.flat_normal);
-    cr_expect_eq(def(props, "tolerances", "flat_plane"), req.flat_plane);
+    cr_expect_eq(def(props, "depth", "min"), req.poly.min_depth);
+    cr_expect_eq(def(props, "depth", "max"), req.poly.max_depth);
+    for (int i = 0; i < ISM_TOLERANCE_COUNT; i++)
+        cr_expect_eq(def(props, "tolerances", ism_tolerances[i].key),
+                     ism_tolerance_get(&req.poly, &ism_tolerances[i]), "%s",
+                     ism_tolerances[i].key);
     cr_expect_eq(def(props, "output", "position_bits"), req.position_bits);
     cr_expect_eq(def(props, "output", "normal_bits"), req.normal_bits);
     cr_expect_eq(def(props, "output", "curvature_bits"), req.curvature_bits);
@@ -107,7 +106,7 @@ Test(schema, defaults_are_the_decoders)
         cr_expect_eq(ism_quality_lookup(json_string_value(json_array_get(names, i))), i);
     json_t *box = json_object_get(json_object_get(props, "box"), "default");
     for (int k = 0; k < 6; k++)
-        cr_expect_eq(json_number_value(json_array_get(box, (size_t)k)), req.box[k]);
+        cr_expect_eq(json_number_value(json_array_get(box, (size_t)k)), req.poly.box[k]);
     cr_expect_str_eq(json_string_value(json_object_get(
                          json_object_get(json_object_get(json_object_get(props, "output"),
                                                          "properties"), "format"), "default")),
@@ -135,6 +134,26 @@ static void limit(json_t *props, const char *section, const char *name, double s
         snprintf(json, sizeof json, "{\"expr\": \"x\", \"%s\": {\"%s\": %.17g}}", section, name, past);
         cr_expect_eq(decode_status(json, &err), 422, "%s", json);
     }
+}
+
+/* The schema's "tolerances" are the table's: the same names, and each one's range is the
+ * table's (which the decoder and the polygoniser's check both use). */
+Test(schema, tolerances_are_the_tables)
+{
+    json_t *s = schema();
+    json_t *tol = json_object_get(json_object_get(json_object_get(s, "properties"),
+                                                  "tolerances"), "properties");
+    cr_expect_eq(json_object_size(tol), ISM_TOLERANCE_COUNT);
+    for (int i = 0; i < ISM_TOLERANCE_COUNT; i++) {
+        const ism_tolerance *t = &ism_tolerances[i];
+        json_t *p = json_object_get(tol, t->key);
+        cr_assert_not_null(p, "%s is not in the schema", t->key);
+        cr_expect_eq(json_number_value(json_object_get(p, "minimum")), t->lo, "%s", t->key);
+        cr_expect_eq(json_number_value(json_object_get(p, "maximum")), t->hi, "%s", t->key);
+        cr_expect_str_eq(json_string_value(json_object_get(p, "type")),
+                         t->is_int ? "integer" : "number", "%s", t->key);
+    }
+    json_decref(s);
 }
 
 Test(schema, limits_are_where_the_decoder_draws_the_line)

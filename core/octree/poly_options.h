@@ -1,0 +1,50 @@
+/* poly_options.h — the polygoniser's options, data only: what a caller sets before
+ * ism_polygonise (polygonise.h has the defaults and the check; the tolerances' table,
+ * tolerances.h, describes six of the fields). */
+#ifndef ISM_POLY_OPTIONS_H
+#define ISM_POLY_OPTIONS_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+typedef struct ism_poly_options {
+    double box[6];          /* xmin ymin zmin xmax ymax zmax: the octree root */
+    int min_depth;          /* subdivide unconditionally to here (default 3) */
+    int max_depth;          /* never deeper than here (default 7) */
+    /* The six tolerances; their defaults, ranges and reasons are the table in
+     * tolerances.h. */
+    double gradient_test;   /* paper eq. (1): ĝa·ĝb > this means "same sheet" */
+    double double_root_eps; /* |f(c)| below this is a double root */
+    int double_root_iters;  /* bisection steps looking for two roots */
+    double stitch_tol;      /* two roots closer than this fraction of a segment are one */
+    double flat_normal;     /* flatness: min cos between gradients in a plotting node */
+    double flat_plane;      /* flatness: max distance of polygon points from their plane,
+                               as a fraction of the node size */
+    double max_error;       /* > 0: subdivide until the triangles of each node lie within this
+                               distance of the surface (world units, measured at triangle
+                               centroids and edge midpoints); max_depth is then only a safety
+                               limit, and flat_plane is not used. 0 (default): flat_plane */
+    size_t max_triangles;   /* budget: stop with an error beyond this (default 4,000,000) */
+    size_t max_memory;      /* bytes the polygoniser may hold (default 2 GiB) */
+    int threads;            /* worker threads for one request (0 = number of cores, max 64) */
+    bool thin_search;       /* search nodes that fail flatness for a piece no edge sees (one
+                               corner sign, or an island in a face of one sign) and split them
+                               below max_depth (thin_search.h; default on) */
+    /* Balls (x, y, z, radius) whose mesh a later stage rebuilds — around the singular points
+     * and along the curves found from f, which the conformance pass refills
+     * (core/singular/conform.h): hidden pieces are not chased into them (a horn shrinking to
+     * its point would be followed to the lattice's last level, the wedges between two sheets
+     * along a double curve at every level). NULL when the caller knows no locus: the chase
+     * then goes ISM_THIN_BLIND_DEPTH levels deep only. */
+    const double (*quiet)[4];
+    size_t nquiet;
+    /* Optional progress report, fraction in [0, 1], from the calling thread or a worker
+     * thread (serialised by the polygoniser). */
+    void (*progress)(void *ctx, double fraction);
+    void *progress_ctx;
+    /* Optional cancellation: polled often; when it becomes non-zero the call stops with
+     * ISM_POLY_CANCELLED. */
+    const volatile int *cancel;
+} ism_poly_options;
+
+#endif
