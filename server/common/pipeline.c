@@ -456,7 +456,7 @@ static bool polygonise_and_analyse(const ism_request *req, const ism_tape *tape,
     o.progress_ctx = &pm;
     o.cancel = hooks ? hooks->cancel : NULL;
     char why[400];
-    ism_resolvable rv = ism_resolvable_check(tape, req->box, why, sizeof why);
+    ism_resolvable rv = ism_resolvable_check(tape, req->poly.box, why, sizeof why);
     if (rv == ISM_RESOLVABLE_NO_MEMORY)
         return fail_with(r, 500, "no_memory", "%s", "out of memory checking the expression");
     if (rv != ISM_RESOLVABLE_OK)
