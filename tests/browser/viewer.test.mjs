@@ -354,16 +354,38 @@ describe('isomesh viewer', { timeout: 600000 }, () => {
     assert.equal(await page.getAttribute('#downloads a[data-format=glb]', 'href'), null);
   });
 
-  it('curvature colours change the canvas and their legend is the decoded attribute', async () => {
+  it('asks only for the attributes its colouring draws; curvature colours come from the stored surface and their legend is the decoded attribute', async () => {
     await choosePreset('kummer-16-nodes');
     const key = await meshKey();
+    // Shaded: the request the page sent and the mesh it got carry no curvature.
+    const sent = requests.filter((r) => r.method === 'POST' && new URL(r.url).pathname === '/v1/jobs').map((r) => JSON.parse(r.body));
+    assert.deepEqual(sent.at(-1).output, { attributes: ['normal'] }, 'the shaded view asks for normals only');
+    const drcOf = async (k) => Buffer.from(await (await api(`/v1/meshes/${k}.drc`)).arrayBuffer());
+    const plainDrc = await drcOf(key);
+    const plain = await decodeDraco(plainDrc);
+    assert.deepEqual(Object.keys(plain.attributes).sort(), ['normal', 'position']);
     const shaded = await viewShot(page);
     const sShaded = pixelStats(shaded);
-    const drc = await api(`/v1/meshes/${key}.drc`);
-    const decoded = await decodeDraco(Buffer.from(await drc.arrayBuffer()));
+    const polygonisations = async () => Number((await (await api('/metrics')).text()).match(/^isomesh_polygonisations_total (\d+)/m)[1]);
+    const computed = await polygonisations();
+    const bytes = { shaded: plainDrc.length };
     for (const [mode, attr, file] of [['mean', 'mean_curvature', 'kummer-16-nodes-mean.png'], ['gauss', 'gauss_curvature', 'kummer-16-nodes-gauss.png']]) {
+      const n = await loads(page);
+      const posts = jobPosts(requests);
       await page.selectOption('#color-mode', mode);
+      const colouredKey = await waitForMesh(page, n);
       await page.waitForSelector(`#legend[data-mode=${mode}]:not([hidden])`);
+      // A new request for the same surface with this curvature, encoded from the stored
+      // surface: no new polygonisation.
+      assert.equal(jobPosts(requests), posts + 1);
+      const body = JSON.parse(requests.filter((r) => r.method === 'POST' && new URL(r.url).pathname === '/v1/jobs').at(-1).body);
+      assert.deepEqual(body.output, { attributes: ['normal', attr] });
+      assert.notEqual(colouredKey, key);
+      assert.equal(await polygonisations(), computed, `${mode}: no polygonisation for another attribute set`);
+      const drc = await drcOf(colouredKey);
+      const decoded = await decodeDraco(drc);
+      bytes[mode] = drc.length;
+      assert.equal(decoded.faces, plain.faces);
       const img = await viewShot(page, file);
       const s = assertRendered(img, `${mode} curvature`);
       assert.ok(changedShare(shaded, img) > 0.03, `${mode}: the canvas changed`);
@@ -375,12 +397,16 @@ describe('isomesh viewer', { timeout: 600000 }, () => {
       assert.ok(Math.abs(Number(legend.max) - hi) <= 1e-6 * Math.max(1, Math.abs(hi)), `${mode} max ${legend.max} vs ${hi}`);
       assert.ok(Number(legend.lo) < Number(legend.hi));
       assert.ok(Number(legend.lo) >= lo && Number(legend.hi) <= hi, 'the bar lies within the data');
+      const other = mode === 'mean' ? 'gauss_curvature' : 'mean_curvature';
+      assert.equal(decoded.attributes[other], undefined, `${mode}: ${other} is not sent`);
     }
-    const [mlo, mhi] = finiteRange(decoded.attributes.mean_curvature.values);
-    const [glo, ghi] = finiteRange(decoded.attributes.gauss_curvature.values);
-    assert.ok(mlo !== glo || mhi !== ghi, 'H and K differ, so swapped ids would show');
+    console.log(`# kummer-16-nodes drc bytes: shaded ${bytes.shaded}, mean ${bytes.mean}, gauss ${bytes.gauss}`);
+    // Back to shaded: the mesh held with more attributes serves it, nothing is sent.
+    const posts = jobPosts(requests);
     await page.selectOption('#color-mode', 'shaded');
     await page.waitForSelector('#legend', { state: 'hidden' });
+    await page.waitForTimeout(300);
+    assert.equal(jobPosts(requests), posts, 'no request for shading');
   });
 
   it('the clipping plane cuts the surface open', async () => {
@@ -401,14 +427,24 @@ describe('isomesh viewer', { timeout: 600000 }, () => {
     await page.uncheck('#clip-on');
   });
 
-  it('every download link gives a valid file of this mesh', async () => {
-    const key = await meshKey();
-    const stats = await getJSON(`/v1/meshes/${key}/stats`);
-    const formats = await page.$$eval('#downloads a[data-format]', (as) => as.map((a) => [a.dataset.format, a.getAttribute('href')]));
+  it('every download link gives a valid file of this mesh, with every attribute', async () => {
+    // The view holds normals only (shaded); the first click asks for the same surface with
+    // every attribute and points the links there.
+    const shownKey = await meshKey();
+    const hrefs = () => page.$$eval('#downloads a[data-format]', (as) => as.map((a) => [a.dataset.format, a.getAttribute('href')]));
+    const formats = await hrefs();
     assert.deepEqual(formats.map((f) => f[0]), ['drc', 'glb', 'ply', 'obj', 'stl']);
-    for (const [fmt, href] of formats) {
-      assert.equal(href, `/v1/meshes/${key}.${fmt}`);
+    for (const [fmt, href] of formats) assert.equal(href, `/v1/meshes/${shownKey}.${fmt}`);
+    let key = null, stats = null;
+    for (const [fmt] of formats) {
       const [download] = await Promise.all([page.waitForEvent('download'), page.click(`#downloads a[data-format=${fmt}]`)]);
+      if (!key) {
+        key = new URL(download.url()).pathname.match(/^\/v1\/meshes\/([0-9a-f]{64})\.drc$/)[1];
+        assert.notEqual(key, shownKey);
+        for (const [f, href] of await hrefs()) assert.equal(href, `/v1/meshes/${key}.${f}`);
+        stats = await getJSON(`/v1/meshes/${key}/stats`);
+        assert.equal(stats.mesh.triangles, (await getJSON(`/v1/meshes/${shownKey}/stats`)).mesh.triangles, 'the same surface');
+      }
       assert.match(download.suggestedFilename(), new RegExp(`^kummer-16-nodes-[0-9a-f]{8}\\.${fmt}$`));
       const bytes = fs.readFileSync(await download.path());
       if (fmt === 'drc') {
@@ -430,6 +466,7 @@ describe('isomesh viewer', { timeout: 600000 }, () => {
         assert.match(head, /^ply\n/);
         assert.match(head, new RegExp(`element vertex ${stats.mesh.vertices}\n`));
         assert.match(head, new RegExp(`element face ${stats.mesh.triangles}\n`));
+        assert.match(head, /property float mean_curvature\nproperty float gauss_curvature\n/, 'the PLY carries the curvature');
       } else if (fmt === 'obj') {
         const text = bytes.toString('utf8');
         assert.equal((text.match(/^v /gm) || []).length, stats.mesh.vertices);
@@ -446,7 +483,9 @@ describe('isomesh viewer', { timeout: 600000 }, () => {
     await page.fill('#param-w-value', '1.2');
     await page.locator('#param-w-value').press('Enter');
     await waitForMesh(page, before);
+    before = await loads(page);
     await page.selectOption('#color-mode', 'gauss');
+    await waitForMesh(page, before);   // the same surface with its Gaussian curvature
     await page.check('#clip-on');
     await page.selectOption('#clip-axis', 'x');
     await page.$eval('#clip-offset', (e) => { e.value = '0.5'; e.dispatchEvent(new Event('input', { bubbles: true })); });

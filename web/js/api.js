@@ -89,6 +89,14 @@ export async function submitJob(body, signal) {
   return { job: JSON.parse(text), bytes: text.length };
 }
 
+// POST /v1/mesh?format=json: {key, urls, stats} of body's mesh (computed or encoded if needed).
+export async function meshLinks(body, signal) {
+  const r = await call('/v1/mesh?format=json', {
+    method: 'POST', body, signal, headers: { 'Content-Type': 'application/json' },
+  });
+  return r.json();
+}
+
 export function cancelJob(id) {
   return call(`/v1/jobs/${encodeURIComponent(id)}`, { method: 'DELETE' }).catch(() => {});
 }

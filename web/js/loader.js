@@ -4,7 +4,10 @@
 // canceled with DELETE, which frees the worker (a dropped POST /v1/mesh would not). The mesh
 // itself is then fetched from its immutable URL /v1/meshes/{key}.drc (browser-cacheable),
 // decoded in a worker, and kept in a small in-page LRU so that dragging a slider back over
-// values already seen redraws with no network at all.
+// values already seen redraws with no network at all. A request differs from another of the
+// same surface only by its attributes (the colour mode's, state.js) is answered by a held mesh
+// that has them all, and a new attribute set of a held surface reuses its features (the server
+// encodes it from its stored surface: no polygonisation).
 import * as api from './api.js';
 
 const MESH_LRU = 12;
@@ -41,17 +44,57 @@ export function decodeDraco(bytes) {
 
 const keyOfRequest = new Map();   // request body text -> mesh key
 const meshes = new Map();         // mesh key -> loaded result (insertion order = LRU order)
+const ofSurface = new Map();      // surface text (splitBody) -> [{key, attributes}] held
 
-function remember(result) {
+// What the server sends when a request leaves output.attributes out.
+export const ALL_ATTRIBUTES = ['normal', 'mean_curvature', 'gauss_curvature', 'class'];
+
+// body (request JSON text) as {surface: the request without output.attributes, attributes}.
+export function splitBody(body) {
+  const b = JSON.parse(body);
+  const attributes = (b.output && b.output.attributes) || ALL_ATTRIBUTES;
+  if (b.output) {
+    delete b.output.attributes;
+    if (!Object.keys(b.output).length) delete b.output;
+  }
+  return { surface: JSON.stringify(b), attributes };
+}
+
+function remember(result, body) {
   meshes.delete(result.key);
   meshes.set(result.key, result);
   while (meshes.size > MESH_LRU) meshes.delete(meshes.keys().next().value);
+  if (!body) return;
+  const { surface, attributes } = splitBody(body);
+  const held = (ofSurface.get(surface) || []).filter((h) => h.key !== result.key && meshes.has(h.key));
+  held.push({ key: result.key, attributes });
+  ofSurface.delete(surface);
+  ofSurface.set(surface, held);
+  for (const [s, list] of ofSurface) {     // forget surfaces whose meshes all left the LRU
+    if (ofSurface.size <= MESH_LRU) break;
+    if (!list.some((h) => meshes.has(h.key))) ofSurface.delete(s);
+  }
 }
 
-// The result for body if this page already holds it (no network), else null.
+// A held mesh of body's surface with at least its attributes, or null.
+function heldFor(body) {
+  const { surface, attributes } = splitBody(body);
+  const held = (ofSurface.get(surface) || []).find((h) => meshes.has(h.key) && attributes.every((a) => h.attributes.includes(a)));
+  return held ? meshes.get(held.key) : null;
+}
+
+// The features of body's surface if a held mesh has them (they do not depend on attributes).
+function heldFeatures(body) {
+  const { surface } = splitBody(body);
+  const held = (ofSurface.get(surface) || []).find((h) => meshes.has(h.key));
+  return held ? meshes.get(held.key).features : null;
+}
+
+// The result for body if this page already holds it, or the same surface with more
+// attributes (no network), else null.
 export function cached(body) {
   const key = keyOfRequest.get(body);
-  const hit = key && meshes.get(key);
+  const hit = (key && meshes.get(key)) || heldFor(body);
   if (!hit) return null;
   remember(hit);
   return { ...hit, viewerCache: true, transferred: 0, wallMs: 0 };
@@ -91,9 +134,11 @@ export async function load(body, signal, onProgress) {
 
   const key = job.key;
   const meshUrl = job.mesh_url || `/v1/meshes/${key}.drc`;
+  const known = heldFeatures(body);
   const [mesh, features, stats] = await Promise.all([
     api.getBytes(meshUrl, signal),
-    api.getJSON(job.features_url || `/v1/meshes/${key}/features`, signal),
+    known ? Promise.resolve({ json: known, transferred: 0 })
+      : api.getJSON(job.features_url || `/v1/meshes/${key}/features`, signal),
     job.stats ? Promise.resolve({ json: job.stats, transferred: 0 })
       : api.getJSON(job.stats_url || `/v1/meshes/${key}/stats`, signal),
   ]);
@@ -109,6 +154,6 @@ export async function load(body, signal, onProgress) {
     serverCache, viewerCache: false, transferred, wallMs: performance.now() - t0,
   };
   keyOfRequest.set(body, key);
-  remember(result);
+  remember(result, body);
   return result;
 }

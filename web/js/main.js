@@ -9,7 +9,7 @@ import { CUT_KIND_COLORS, MAX_CURVE_REQUESTS, curveRequest, describeCurve, cellF
 import * as api from './api.js';
 import * as loader from './loader.js';
 import { checkExpression, presetSource } from './expr.js';
-import { defaultState, requestBody, encodeState, decodeState, sensibleRange, COLOR_MODES } from './state.js';
+import { defaultState, requestBody, encodeState, decodeState, sensibleRange, COLOR_MODES, COLOR_ATTRIBUTES } from './state.js';
 import { renderParams } from './params_ui.js';
 import { showStats, clearStats, showLegend } from './stats_ui.js';
 import { niceStep, sig } from './format.js';
@@ -41,6 +41,7 @@ let loads = 0;               // refined meshes shown
 let previews = 0;            // coarse previews shown (live.js)
 let previewer = null;
 let basePreset = null;       // the preset last chosen (the editor may drift from its text)
+let shownBody = null;        // the request of the mesh on screen
 
 const presetByName = (name) => presets.find((p) => p.name === name) || null;
 
@@ -536,11 +537,13 @@ async function compute(body) {
   const seq = ticket();
   document.body.dataset.refinePending = '0';
   setBusy(true);
+  let shown = false;
   try {
     const result = await loader.load(body, controller.signal, setProgress);
     if (running !== mine) return;
     retry.count = 0;
     show(result, body, seq);
+    shown = true;
   } catch (e) {
     if (running !== mine) return;
     if (e.name === 'AbortError') message('Canceled.');
@@ -549,8 +552,20 @@ async function compute(body) {
     if (running === mine) {
       running = null;
       setBusy(false);
+      if (shown) fetchColourData();
     }
   }
+}
+
+// The mesh on screen was asked for without an attribute the colour mode now draws (the page
+// asks only for what it colours by: state.js COLOR_ATTRIBUTES): ask for the same surface
+// with them — held in the page, or encoded by the server from its stored surface. Waits while
+// a computation runs (its end calls again), so that a running polygonisation is not canceled.
+function fetchColourData() {
+  const m = viewer.data && viewer.data.mesh;
+  if (running || !m || !shownBody || shownBody === currentBody()) return;
+  if (COLOR_ATTRIBUTES[state.color].every((a) => m.attributes[a])) return;
+  requestChanged({ now: true });
 }
 
 // f of a request body as GLSL for the clip cap (cap.js), or null when it cannot be written.
@@ -567,6 +582,7 @@ function surfaceGlsl(sent) {
 // preview: a coarse live preview (stats and downloads stay with the refined mesh).
 function show(result, body, seq, preview = false) {
   if (!claim(seq)) return;
+  shownBody = body;
   clearMessage();
   if (!result.mesh) message('The surface does not cross this box: the mesh is empty.');
   const sent = JSON.parse(body);
@@ -592,7 +608,7 @@ function show(result, body, seq, preview = false) {
     return;
   }
   showStats(result);
-  setDownloads(result);
+  setDownloads(result, body);
   if (exprOk) showExprError(null);
   loads++;
   updateUrl();
@@ -762,25 +778,57 @@ function showCurveFacts(result) {
 
 // ---- downloads ------------------------------------------------------------------------
 
-function setDownloads(result) {
+// Downloads carry every attribute, though the view asks only for those it colours by: the
+// links point at the mesh on screen when it has them all; else the first click asks the
+// server for the same surface with every attribute (POST /v1/mesh?format=json: its key,
+// encoded from the stored surface) and points the links there. downloads.pending: that
+// request, while not yet asked.
+let downloads = { key: null, pending: null };
+
+function setDownloads(result, body) {
+  const { surface, attributes } = loader.splitBody(body);
+  const complete = loader.ALL_ATTRIBUTES.every((a) => attributes.includes(a));
+  downloads = { key: result.mesh ? result.key : null, pending: result.mesh && !complete ? surface : null };
+  linkDownloads(downloads.key);
+}
+
+function linkDownloads(key) {
   const base = state.preset || 'surface';
   for (const a of document.querySelectorAll('#downloads a')) {
     const fmt = a.dataset.format;
-    if (!result.mesh) {
+    if (!key) {
       a.removeAttribute('href');
       a.setAttribute('aria-disabled', 'true');
       continue;
     }
-    a.href = `/v1/meshes/${result.key}.${fmt}`;
-    a.download = `${base}-${result.key.slice(0, 8)}.${fmt}`;
+    a.href = `/v1/meshes/${key}.${fmt}`;
+    a.download = `${base}-${key.slice(0, 8)}.${fmt}`;
     a.setAttribute('aria-disabled', 'false');
   }
 }
 
-// With a token set, a plain link would go without it: fetch with the header instead.
-async function downloadWithToken(event) {
+async function download(event) {
   const a = event.target.closest('a[data-format]');
-  if (!a || !a.href || !api.token.get()) return;
+  if (!a || !a.href) return;
+  if (downloads.pending) {
+    event.preventDefault();
+    const mine = downloads;
+    try {
+      const links = await api.meshLinks(mine.pending);
+      if (downloads !== mine) return;       // another mesh came meanwhile
+      downloads = { key: links.key, pending: null };
+      linkDownloads(links.key);
+      a.click();
+    } catch (e) {
+      failed(e, null);
+    }
+    return;
+  }
+  if (api.token.get()) downloadWithToken(event, a);
+}
+
+// With a token set, a plain link would go without it: fetch with the header instead.
+async function downloadWithToken(event, a) {
   event.preventDefault();
   try {
     const { bytes } = await api.getBytes(a.getAttribute('href'));
@@ -983,6 +1031,7 @@ function wire() {
     state.color = COLOR_MODES.includes($('color-mode').value) ? $('color-mode').value : 'shaded';
     showLegend(state.color, viewer.setColorMode(state.color));
     updateUrl();
+    fetchColourData();
   });
   for (const k of ['edges', 'points', 'boundary', 'box', 'axes', 'curves']) {
     $(`show-${k}`).addEventListener('change', () => {
@@ -1070,7 +1119,7 @@ function wire() {
   $('png-export').addEventListener('click', savePng);
   $('token-button').addEventListener('click', () => askToken());
   $('token-dialog').addEventListener('close', tokenClosed);
-  $('downloads').addEventListener('click', downloadWithToken);
+  $('downloads').addEventListener('click', download);
 
   window.addEventListener('hashchange', () => applyFragment(location.hash));
   performance.setResourceTimingBufferSize(1000);

@@ -9,6 +9,14 @@
 import { curveRequest, validEntries } from './curves.js';
 
 export const COLOR_MODES = ['shaded', 'mean', 'gauss', 'cells'];
+// The per-vertex attributes (request output.attributes) each colour mode draws: normals for
+// the shading, a curvature only while its map is shown (the two curvatures are about a third
+// of the bytes of a curved surface). Cells and double sheets travel whenever the surface has
+// them. A mesh holding more than this serves the mode too (loader.js).
+export const COLOR_ATTRIBUTES = {
+  shaded: ['normal'], cells: ['normal'],
+  mean: ['normal', 'mean_curvature'], gauss: ['normal', 'gauss_curvature'],
+};
 const FEATURES = ['edges', 'points', 'boundary', 'box', 'curves'];
 const DEFAULT_BOX = [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5];
 
@@ -31,7 +39,8 @@ export function defaultState() {
   };
 }
 
-// The request JSON text for state (params: only the names the expression uses).
+// The request JSON text for state (params: only the names the expression uses; the
+// attributes its colour mode draws).
 export function requestBody(state, paramNames) {
   const body = {};
   if (state.preset) body.preset = state.preset;
@@ -49,6 +58,7 @@ export function requestBody(state, paramNames) {
   if (state.quality === 'good') body.quality = 'good';
   const curves = (state.curves || []).map((e) => curveRequest(e, state.box)).filter(Boolean);
   if (curves.length) body.curves = curves;
+  body.output = { attributes: COLOR_ATTRIBUTES[state.color] || COLOR_ATTRIBUTES.shaded };
   return JSON.stringify(body);
 }
 
