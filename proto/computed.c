@@ -30,6 +30,8 @@ void ism_computed_free(ism_computed *c)
     free(c->vertex_class);
     free(c->tri_cell);
     free(c->tri_sheet);
+    free(c->corner_at);
+    free(c->corner_normal);
     ism_features_free(&c->features);
     ism_locus_free(&c->locus);
     free(c->features_json);
@@ -40,8 +42,10 @@ void ism_computed_free(ism_computed *c)
 void ism_computed_wire(const ism_computed *c, unsigned attrs, ism_wire_mesh *view)
 {
     *view = c->wire;
-    if (!(attrs & ISM_ATTR_NORMAL))
+    if (!(attrs & ISM_ATTR_NORMAL)) {
         view->normal = NULL;
+        view->ncorner_normals = 0;
+    }
     if (!(attrs & ISM_ATTR_MEAN_CURVATURE))
         view->mean_curvature = NULL;
     if (!(attrs & ISM_ATTR_GAUSS_CURVATURE))
@@ -114,6 +118,8 @@ bool ism_computed_write(const ism_computed *c, ism_frame_builder *b)
     put_array(b, c->features.arc_kind, c->features.arcs.n, 1);
     put_array(b, c->features.arc_curve, c->features.arcs.n, sizeof(uint32_t));
     put_locus(b, &c->locus);
+    put_array(b, c->corner_at, w->ncorner_normals, sizeof *c->corner_at);
+    put_array(b, c->corner_normal, 3 * w->ncorner_normals, sizeof *c->corner_normal);
     put_array(b, c->timings_ms, ISM_TIME_COUNT, sizeof(double));
     ism_frame_put_bytes(b, c->features_json, c->features_len);
     ism_frame_put_bytes(b, c->stats_json, c->stats_len);
@@ -381,6 +387,32 @@ static bool get_features(reader *r, ism_computed *c)
     return true;
 }
 
+/* The crease corners' normals (after the mesh and the wire). */
+static bool get_corner_normals(reader *r, ism_computed *c)
+{
+    size_t len;
+    ism_frame_cursor peek = r->cur;
+    ism_frame_get_bytes(&peek, &len);
+    if (peek.failed || len % sizeof(uint32_t))
+        return bad(r, "corner normals");
+    size_t n = len / sizeof(uint32_t);
+    void *at, *nrm;
+    if (!get_array(r, n, sizeof(uint32_t), true, &at, "corner indices"))
+        return false;
+    c->corner_at = at;
+    if (!get_array(r, 3 * n, sizeof(float), true, &nrm, "corner normals"))
+        return false;
+    c->corner_normal = nrm;
+    for (size_t i = 0; i < n; i++)
+        if (c->corner_at[i] >= 3 * c->mesh.ntris || (i && c->corner_at[i] <= c->corner_at[i - 1]))
+            return bad(r, "corner index out of order or range");
+    ism_wire_mesh *w = &c->wire;
+    w->ncorner_normals = n;
+    w->corner_at = c->corner_at;
+    w->corner_normal = c->corner_normal;
+    return true;
+}
+
 static bool read_all(reader *r, ism_computed *c)
 {
     size_t len;
@@ -395,7 +427,7 @@ static bool read_all(reader *r, ism_computed *c)
         return bad(r, "truncated");
     void *timings;
     if (!get_mesh(r, c) || !get_wire(r, c) || !get_features(r, c) || !get_locus(r, &c->locus) ||
-        !get_array(r, ISM_TIME_COUNT, sizeof(double), false, &timings, "timings"))
+        !get_corner_normals(r, c) || !get_array(r, ISM_TIME_COUNT, sizeof(double), false, &timings, "timings"))
         return false;
     memcpy(c->timings_ms, timings, sizeof c->timings_ms);
     free(timings);

@@ -19,6 +19,8 @@
  *   polylines arcs (of the requested curves), bytes arc_kind (u8), bytes arc_curve (u32),
  *   u64 singular points, each: bytes xyz (f64 x 3), u32 type, u32 certified,
  *   u64 singular curves, each: u32 kind, u32 closed, bytes xyz (f64 x 3 x n),
+ *   bytes corner_at (u32 x n, ascending corner indices 3 t + k < 3 ntris),
+ *   bytes corner_normal (f32 x 3 x n) (both empty when no crease corner),
  *   bytes timings (f64 x ISM_TIME_COUNT), bytes features JSON, bytes stats JSON.
  *
  * A reader refuses any other version, magic, length or an index out of range (the entry is
@@ -37,7 +39,7 @@
 #include "proto/stats.h"
 #include "proto/wire_mesh.h"
 
-#define ISM_COMPUTED_VERSION 2
+#define ISM_COMPUTED_VERSION 3
 /* The cache entry's extension ("<surface key>.mesh"). */
 #define ISM_COMPUTED_EXT "mesh"
 
@@ -49,6 +51,8 @@ typedef struct ism_computed {
     uint8_t *vertex_class;     /* owned; NULL when the analysis had none */
     uint32_t *tri_cell;        /* owned, per triangle; NULL when no curves were requested */
     uint8_t *tri_sheet;        /* owned, per triangle; NULL when f has no double sheet */
+    uint32_t *corner_at;       /* owned: the wire's corner normals (wire_mesh.h), NULL none */
+    float *corner_normal;
     ism_features features;     /* owned; features.locus is &locus, check NULL */
     ism_locus locus;           /* singular points and curves (what the glb draws) */
     char *features_json;       /* the features JSON (proto/features.h) */

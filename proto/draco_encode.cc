@@ -90,7 +90,7 @@ bool encode(const ism_draco_input *in, ism_draco_output *out)
         set_error(out, "a point refers to a vertex that does not exist");
         return false;
     }
-    if (!pv && (in->point_cell || in->point_sheet)) {
+    if (!pv && (in->point_cell || in->point_sheet || in->point_normal)) {
         set_error(out, "triangle labels need the vertices split into points");
         return false;
     }
@@ -114,7 +114,10 @@ bool encode(const ism_draco_input *in, ism_draco_output *out)
     const int pos = add_attribute(mesh, draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32,
                                   in->pos, nv, pv, ISM_DRACO_ID_POSITION, "position");
     int nrm = -1, mean = -1, gauss = -1, cls = -1, cell = -1, sheet = -1;
-    if (in->normal)
+    if (in->point_normal)
+        nrm = add_attribute(mesh, draco::GeometryAttribute::NORMAL, 3, draco::DT_FLOAT32,
+                            in->point_normal, npoints, nullptr, ISM_DRACO_ID_NORMAL, "normal");
+    else if (in->normal)
         nrm = add_attribute(mesh, draco::GeometryAttribute::NORMAL, 3, draco::DT_FLOAT32,
                             in->normal, nv, pv, ISM_DRACO_ID_NORMAL, "normal");
     if (in->mean_curvature)
@@ -135,7 +138,8 @@ bool encode(const ism_draco_input *in, ism_draco_output *out)
         sheet = add_attribute(mesh, draco::GeometryAttribute::GENERIC, 1, draco::DT_UINT8,
                               in->point_sheet, npoints, nullptr, ISM_DRACO_ID_DOUBLE_SHEET,
                               "double_sheet");
-    if (pos < 0 || (in->normal && nrm < 0) || (in->mean_curvature && mean < 0) ||
+    const bool normals = in->normal || in->point_normal;
+    if (pos < 0 || (normals && nrm < 0) || (in->mean_curvature && mean < 0) ||
         (in->gauss_curvature && gauss < 0) || (in->vertex_class && cls < 0) ||
         (in->point_cell && cell < 0) || (in->point_sheet && sheet < 0)) {
         set_error(out, "could not add an attribute");

@@ -10,7 +10,8 @@
  *
  *   unique id  metadata name      Draco type  data     components  meaning
  *   0          "position"         POSITION    float32  3           x y z
- *   1          "normal"           NORMAL      float32  3           unit ∇f / |∇f|
+ *   1          "normal"           NORMAL      float32  3           unit ∇f / |∇f| (on a
+ *                                                                  crease: each side's branch)
  *   2          "mean_curvature"   GENERIC     float32  1           H (analysis.h's sign)
  *   3          "gauss_curvature"  GENERIC     float32  1           K
  *   4          "class"            GENERIC     uint8    1           enum ism_vertex_class
@@ -87,6 +88,8 @@ typedef struct ism_draco_input {
     const uint32_t *point_vertex;
     const uint32_t *point_cell;     /* 1 per point; NULL = not sent */
     const uint8_t *point_sheet;     /* 1 per point; NULL = not sent */
+    const float *point_normal;      /* 3 per point (a crease's sides: corner_split.h); when
+                                       set, sent as the normal instead of normal */
 } ism_draco_input;
 
 typedef struct ism_draco_output {

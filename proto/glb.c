@@ -269,7 +269,7 @@ static bool plain_points_build(const ism_wire_mesh *wm, plain_points *pp)
 {
     memset(pp, 0, sizeof *pp);
     const float *src[4] = {wm->pos, wm->normal, wm->mean_curvature, wm->gauss_curvature};
-    if (!wm->tri_cell && !wm->tri_sheet) {
+    if (!ism_corner_split_needed(wm)) {
         pp->n = wm->nverts;
         pp->tri = wm->tri;
         memcpy(pp->f32, src, sizeof src);
@@ -277,11 +277,13 @@ static bool plain_points_build(const ism_wire_mesh *wm, plain_points *pp)
         return true;
     }
     ism_corner_split *sp = &pp->split;
-    if (!ism_corner_split_build(wm->tri, wm->ntris, wm->nverts, wm->tri_cell, wm->tri_sheet, sp))
+    if (!ism_corner_split_build(wm, sp))
         return false;
     pp->n = sp->npoints;
     pp->tri = sp->tri;
     pp->sheet = sp->point_sheet;
+    if (sp->point_normal)
+        src[1] = NULL; /* a crease's sides: the split's per-point normals, below */
     for (int i = 0; i < 4; i++) {
         if (!src[i])
             continue;
@@ -293,6 +295,8 @@ static bool plain_points_build(const ism_wire_mesh *wm, plain_points *pp)
             memcpy(d + (size_t)c * p, src[i] + (size_t)c * sp->point_vertex[p], c * sizeof *d);
         pp->f32[i] = d;
     }
+    if (sp->point_normal)
+        pp->f32[1] = sp->point_normal;
     if (wm->vertex_class) {
         uint8_t *d = pp->owned[4] = malloc(pp->n ? pp->n : 1);
         if (!d)

@@ -107,10 +107,13 @@ static void obj_cut_curves(ism_sink *s, const ism_features *f)
     }
 }
 
-bool ism_write_obj_features(const ism_mesh *m, const ism_features *f, ism_write_fn write,
-                            void *ctx)
+bool ism_write_obj_features(const ism_mesh *m, const ism_wire_mesh *w, const ism_features *f,
+                            ism_write_fn write, void *ctx)
 {
-    if (!ism_write_obj(m, write, ctx))
+    ism_obj_corner_normals cn = {0, NULL, NULL};
+    if (w && w->ncorner_normals)
+        cn = (ism_obj_corner_normals){w->ncorner_normals, w->corner_at, w->corner_normal};
+    if (!ism_write_obj_corners(m, &cn, write, ctx))
         return false;
     if (!f)
         return true;

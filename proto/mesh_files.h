@@ -4,7 +4,8 @@
  * mean_curvature, float gauss_curvature (clamped as in Draco's), uchar class (features.h's
  * classes) — and faces as uchar 3 + int indices, then face properties uint cell (when
  * curves were requested: the arrangement face) and uchar double_sheet (when f has double
- * sheets). OBJ: core's v / vn / f lines, then the features as `l` polylines over the same
+ * sheets); one normal per vertex (at a crease vertex, one side's). OBJ: core's v / vn / f
+ * lines (a crease's other-side corners with `vn` lines of their own), then the features as `l` polylines over the same
  * 1-based vertices: a group `g nonmanifold_curves`, a group `g boundaries` (closed ones
  * repeat their first vertex), and per kind of requested curve a group `g section_curves`,
  * `level_curves`, ... with one `l` per arrangement edge. */
@@ -21,8 +22,9 @@
 bool ism_write_ply_wire(const ism_mesh *m, const ism_wire_mesh *w, ism_write_fn write,
                         void *ctx);
 
-/* OBJ of m with f's curves and boundaries as `l` lines (f may be NULL). */
-bool ism_write_obj_features(const ism_mesh *m, const ism_features *f, ism_write_fn write,
-                            void *ctx);
+/* OBJ of m with w's corner normals (a crease's sides: extra `vn` lines those corners use;
+ * w may be NULL) and f's curves and boundaries as `l` lines (f may be NULL). */
+bool ism_write_obj_features(const ism_mesh *m, const ism_wire_mesh *w, const ism_features *f,
+                            ism_write_fn write, void *ctx);
 
 #endif

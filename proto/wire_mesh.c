@@ -5,6 +5,9 @@
  * around the vertex (and +z when even that vanishes). */
 #include "proto/wire_mesh.h"
 #include "proto/request.h"
+#include "core/curves/branches.h"
+#include "core/curves/crease_normals.h"
+#include "core/util/grow.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -128,4 +131,50 @@ void ism_wire_mesh_free(ism_wire_mesh *w)
     free(w->mean_curvature);
     free(w->gauss_curvature);
     memset(w, 0, sizeof *w);
+}
+
+/* Whether corner normal c (unit, or zero when no branch gave one) is the vertex's v to
+ * ISM_CORNER_NORMAL_MIN_ANGLE. */
+static bool same_normal(const float *c, const float *v)
+{
+    double d = (double)c[0] * v[0] + (double)c[1] * v[1] + (double)c[2] * v[2];
+    return is_zero3(c) || d >= cos(ISM_CORNER_NORMAL_MIN_ANGLE);
+}
+
+bool ism_wire_corner_normals(const ism_tape *f, const ism_mesh *m, const ism_wire_mesh *w,
+                             size_t *n, uint32_t **at, float **normal)
+{
+    *n = 0;
+    *at = NULL;
+    *normal = NULL;
+    if (!w->normal || !m->ntris || !ism_branches_any(f))
+        return true;
+    if (m->ntris > UINT32_MAX / 3)
+        return false; /* corner indices are uint32 */
+    float *cn = malloc(m->ntris * 9 * sizeof *cn);
+    if (!cn || !ism_crease_corner_normals(f, m, cn)) {
+        free(cn);
+        return false;
+    }
+    size_t k = 0, cap = 0;
+    for (size_t c = 0; c < 3 * m->ntris; c++) {
+        if (same_normal(cn + 3 * c, w->normal + 3 * (size_t)m->tri[c]))
+            continue;
+        if (!ism_grow((void **)at, &cap, k + 1, sizeof **at, 64)) {
+            free(cn);
+            free(*at);
+            *at = NULL;
+            return false;
+        }
+        memmove(cn + 3 * k, cn + 3 * c, 3 * sizeof *cn); /* compacted in place: k <= c */
+        (*at)[k++] = (uint32_t)c;
+    }
+    if (!k) {
+        free(cn);
+        return true;
+    }
+    float *shrunk = realloc(cn, k * 3 * sizeof *cn);
+    *normal = shrunk ? shrunk : cn;
+    *n = k;
+    return true;
 }

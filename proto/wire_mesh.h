@@ -11,6 +11,7 @@
 #include <stdbool.h>
 #include "core/mesh/mesh.h"
 #include "core/analysis/analysis.h"
+#include "core/eval/eval.h"
 
 typedef struct ism_wire_mesh {
     size_t nverts, ntris;
@@ -22,6 +23,12 @@ typedef struct ism_wire_mesh {
     const uint8_t *vertex_class; /* the analysis's (not owned); NULL when not asked for */
     const uint32_t *tri_cell;  /* per triangle: its arrangement cell (not owned); NULL none */
     const uint8_t *tri_sheet;  /* per triangle: 1 on a double sheet (not owned); NULL none */
+    /* Sharp creases: the corners whose normal is not their vertex's (the side of a crease
+     * whose branch is not the one ∇f took there), by corner index 3 t + k ascending, with a
+     * unit normal each (not owned; ncorner_normals 0 when none or normals not sent). */
+    size_t ncorner_normals;
+    const uint32_t *corner_at;
+    const float *corner_normal;
     size_t live_triangles;     /* triangles whose three vertex indices differ */
     double bounds[6];          /* of the float positions: xmin ymin zmin xmax ymax zmax */
 } ism_wire_mesh;
@@ -34,5 +41,17 @@ bool ism_wire_mesh_build(const ism_mesh *m, const ism_analysis *a, unsigned attr
                          double curvature_limit, ism_wire_mesh *w);
 
 void ism_wire_mesh_free(ism_wire_mesh *w);
+
+/* A corner's normal is sent apart from its vertex's when they differ by more than this
+ * angle (radians): 1e-3 is below what 10-bit octahedral normals resolve (~2e-3), so smooth
+ * parts, where the branch gradient is ∇f to rounding, send none. */
+#define ISM_CORNER_NORMAL_MIN_ANGLE 1e-3
+
+/* The corners of w (built from m) whose branch normal (core/curves/crease_normals.h) differs
+ * from the vertex's wire normal by more than ISM_CORNER_NORMAL_MIN_ANGLE, into malloc'd
+ * *at / *normal (NULL, *n 0 when none: f without min/max, or no normals in w). False when
+ * out of memory. */
+bool ism_wire_corner_normals(const ism_tape *f, const ism_mesh *m, const ism_wire_mesh *w,
+                             size_t *n, uint32_t **at, float **normal);
 
 #endif

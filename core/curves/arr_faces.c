@@ -59,15 +59,16 @@ static bool join_triangles(const ism_mesh *m, const arr_mesh_edges *e, uint32_t 
     return true;
 }
 
-/* Moves triangle data into face order (stable counting sort by face id). */
+/* Moves triangle data (and parent, when not NULL) into face order (stable counting sort by
+ * face id). */
 static bool reorder(ism_mesh *m, arr_mesh_edges *e, const uint32_t *fid, size_t nf,
-                    uint32_t *comp, ism_arrangement *a)
+                    uint32_t *comp, uint32_t *parent, ism_arrangement *a)
 {
     size_t nt = m->ntris;
     size_t *start = calloc(nf + 1, sizeof *start);
     uint32_t *tri = malloc((3 * nt + 1) * sizeof *tri), *te = malloc((3 * nt + 1) * sizeof *te);
-    uint32_t *cp = malloc((nt + 1) * sizeof *cp);
-    bool ok = start && tri && te && cp;
+    uint32_t *cp = malloc((nt + 1) * sizeof *cp), *pp = malloc((nt + 1) * sizeof *pp);
+    bool ok = start && tri && te && cp && pp;
     if (ok) {
         for (size_t t = 0; t < nt; t++)
             start[fid[t] + 1]++;
@@ -82,16 +83,20 @@ static bool reorder(ism_mesh *m, arr_mesh_edges *e, const uint32_t *fid, size_t 
             memcpy(tri + 3 * d, m->tri + 3 * t, 3 * sizeof *tri);
             memcpy(te + 3 * d, e->tri_edge + 3 * t, 3 * sizeof *te);
             cp[d] = comp[t];
+            pp[d] = parent ? parent[t] : 0;
             a->tri_face[d] = fid[t];
         }
         memcpy(m->tri, tri, 3 * nt * sizeof *tri);
         memcpy(e->tri_edge, te, 3 * nt * sizeof *te);
         memcpy(comp, cp, nt * sizeof *cp);
+        if (parent)
+            memcpy(parent, pp, nt * sizeof *pp);
     }
     free(start);
     free(tri);
     free(te);
     free(cp);
+    free(pp);
     return ok;
 }
 
@@ -167,7 +172,8 @@ static bool measure_faces(const ism_mesh *m, const arr_mesh_edges *e, ism_arrang
     return ok;
 }
 
-bool arr_build_faces(ism_mesh *m, arr_mesh_edges *e, ism_arrangement *a, uint32_t *comp)
+bool arr_build_faces(ism_mesh *m, arr_mesh_edges *e, ism_arrangement *a, uint32_t *comp,
+                     uint32_t *tri_parent)
 {
     size_t nt = m->ntris;
     uint32_t *cell = malloc((nt + 1) * sizeof *cell), *fid = malloc((nt + 1) * sizeof *fid);
@@ -179,7 +185,7 @@ bool arr_build_faces(ism_mesh *m, arr_mesh_edges *e, ism_arrangement *a, uint32_
         a->ncomponents = number_sets(comp, nt, cid);
         memcpy(comp, cid, nt * sizeof *comp);
         a->faces = calloc(a->nfaces + 1, sizeof *a->faces);
-        ok = a->faces && reorder(m, e, fid, a->nfaces, comp, a) && measure_faces(m, e, a);
+        ok = a->faces && reorder(m, e, fid, a->nfaces, comp, tri_parent, a) && measure_faces(m, e, a);
     }
     if (ok)
         for (size_t f = 0; f < a->nfaces; f++)

@@ -24,7 +24,8 @@ void arr_mesh_edges_free(arr_mesh_edges *e);
 
 /* Faces: triangles reordered, tri_face and faces filled; comp gets each triangle's mesh
  * component (in the new order) and a->ncomponents is set. */
-bool arr_build_faces(ism_mesh *m, arr_mesh_edges *e, ism_arrangement *a, uint32_t *comp);
+bool arr_build_faces(ism_mesh *m, arr_mesh_edges *e, ism_arrangement *a, uint32_t *comp,
+                     uint32_t *tri_parent);
 
 /* Vertices, edges and curves from the cut edges. */
 bool arr_build_graph(const ism_mesh *m, const ism_cut *c, ism_arrangement *a);

@@ -51,7 +51,7 @@ static void euler_check(const ism_mesh *m, const arr_mesh_edges *e, const uint32
     }
 }
 
-bool ism_arrangement_build(ism_mesh *m, const ism_cut *c, ism_arrangement *a)
+bool ism_arrangement_build(ism_mesh *m, ism_cut *c, ism_arrangement *a)
 {
     memset(a, 0, sizeof *a);
     arr_mesh_edges e;
@@ -60,7 +60,8 @@ bool ism_arrangement_build(ism_mesh *m, const ism_cut *c, ism_arrangement *a)
     uint32_t *comp = malloc((m->ntris + 1) * sizeof *comp);
     uint32_t *vcomp = malloc((m->nverts + 1) * sizeof *vcomp);
     long *em = NULL, *ea = NULL;
-    bool ok = comp && vcomp && arr_build_faces(m, &e, a, comp) && arr_build_graph(m, c, a);
+    bool ok = comp && vcomp && arr_build_faces(m, &e, a, comp, c->tri_parent) &&
+              arr_build_graph(m, c, a);
     if (ok) {
         em = calloc(a->ncomponents + 1, sizeof *em);
         ea = calloc(a->ncomponents + 1, sizeof *ea);

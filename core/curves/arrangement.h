@@ -66,8 +66,9 @@ typedef struct ism_arrangement {
 
 /* Builds the arrangement of the cut edges c on m, reordering m's triangles so each face's
  * triangles are contiguous (in order of each face's first triangle; order inside a face
- * kept). a is overwritten. False when out of memory. */
-bool ism_arrangement_build(ism_mesh *m, const ism_cut *c, ism_arrangement *a);
+ * kept; c's tri_parent, when set, reordered with them). a is overwritten. False when out
+ * of memory. */
+bool ism_arrangement_build(ism_mesh *m, ism_cut *c, ism_arrangement *a);
 
 void ism_arrangement_free(ism_arrangement *a);
 

@@ -73,12 +73,12 @@ static double gap_at(void *ctx, const double p[3])
     return branch_gap(g->cs, g->A, g->B, p);
 }
 
-/* A new crease vertex at p (normal oriented like vertex ref's). NONE when out of memory. */
-static uint32_t new_vertex(crease_state *cs, const double p[3], uint32_t ref)
+/* A new crease vertex at p (normal ∇f as it points there). NONE when out of memory. */
+static uint32_t new_vertex(crease_state *cs, const double p[3])
 {
     cut_state *s = cs->s;
     float nrm[3];
-    cut_normal_at(s, p, s->m->normal + 3 * (size_t)ref, nrm);
+    cut_normal_at(s, p, NULL, nrm);
     uint32_t v = ism_mesh_add_vertex(s->m, p, nrm);
     return v != NONE && cut_set_vcurve(s, v, cs->k) ? v : NONE;
 }
@@ -139,7 +139,7 @@ static uint32_t crease_vertex(crease_state *cs, uint32_t u, uint32_t w)
             !ism_branches_refine(cs->b, A, ks, 1, across ? plane : NULL, s->tol, max_move, p))
             s->c->unrefined++;
     }
-    uint32_t v = new_vertex(cs, p, u);
+    uint32_t v = new_vertex(cs, p);
     if (v != NONE)
         s->split_v[i] = v;
     return v;
@@ -178,7 +178,7 @@ static uint32_t triple_vertex(crease_state *cs, const uint32_t t[3])
             return cs->tp[i].v;
     if (!ism_grow((void **)&cs->tp, &cs->cap_tp, cs->ntp + 1, sizeof *cs->tp, CUT_FIRST))
         return NONE;
-    uint32_t v = new_vertex(cs, p, t[0]);
+    uint32_t v = new_vertex(cs, p);
     cs->tp[cs->ntp++] = (triple){{p[0], p[1], p[2]}, {set[0], set[1], set[2]}, v};
     return v;
 }
@@ -193,7 +193,6 @@ static bool crease_edge(crease_state *cs, uint32_t a, uint32_t b, uint32_t A, ui
 /* A triangle of three branches fanned from its triple point. */
 static bool split_three(crease_state *cs, const uint32_t t[3])
 {
-    ism_mesh *m = cs->s->m;
     uint32_t T = triple_vertex(cs, t), e[3];
     if (T == NONE)
         return false;
@@ -204,8 +203,8 @@ static bool split_three(crease_state *cs, const uint32_t t[3])
             return false;
     }
     for (int i = 0; i < 3; i++)
-        if (!ism_mesh_add_triangle(m, t[i], e[i], T) ||
-            !ism_mesh_add_triangle(m, e[i], t[(i + 1) % 3], T))
+        if (!cut_add_triangle(cs->s, t[i], e[i], T) ||
+            !cut_add_triangle(cs->s, e[i], t[(i + 1) % 3], T))
             return false;
     return true;
 }
@@ -215,7 +214,7 @@ static bool split_crease_triangle(crease_state *cs, const uint32_t t[3])
     uint32_t l[3] = {cs->label[t[0]], cs->label[t[1]], cs->label[t[2]]};
     bool none = l[0] == ISM_BRANCH_NONE || l[1] == ISM_BRANCH_NONE || l[2] == ISM_BRANCH_NONE;
     if (none || (l[0] == l[1] && l[1] == l[2]))
-        return ism_mesh_add_triangle(cs->s->m, t[0], t[1], t[2]);
+        return cut_add_triangle(cs->s, t[0], t[1], t[2]);
     if (l[0] != l[1] && l[1] != l[2] && l[2] != l[0])
         return split_three(cs, t);
     for (int i = 0; i < 3; i++) /* the lone corner on its branch */
@@ -324,8 +323,8 @@ bool cut_crease(cut_state *s, size_t k)
     crease_state cs = {.s = s, .b = ev->branches, .k = (uint32_t)k};
     ism_mesh *m = s->m;
     size_t nt = m->ntris;
-    uint32_t *old = malloc((nt ? nt : 1) * 3 * sizeof *old);
-    bool ok = old && cut_grow_vertex_arrays(s) && label_vertices(&cs);
+    uint32_t *old = malloc((nt ? nt : 1) * 3 * sizeof *old), *parent = cut_parents_copy(s, nt);
+    bool ok = old && parent && cut_grow_vertex_arrays(s) && label_vertices(&cs);
     if (ok) {
         cut_longest_edges(m, s->reach);
         memcpy(old, m->tri, nt * 3 * sizeof *old);
@@ -333,8 +332,10 @@ bool cut_crease(cut_state *s, size_t k)
         ism_key_map_free(&s->split);
         ism_key_map_init(&s->split);
     }
-    for (size_t t = 0; ok && t < nt; t++)
+    for (size_t t = 0; ok && t < nt; t++) {
+        s->from = parent[t];
         ok = split_crease_triangle(&cs, old + 3 * t);
+    }
     for (int pass = 0; ok && pass < CREASE_ORDER_PASSES; pass++) {
         long moved = order_pass(&cs);
         ok = moved >= 0;
@@ -342,6 +343,7 @@ bool cut_crease(cut_state *s, size_t k)
             break;
     }
     free(old);
+    free(parent);
     free(cs.label);
     free(cs.tp);
     return ok;

@@ -8,9 +8,9 @@
 #include "core/mesh/mesh.h"
 
 /* out (9 floats per triangle): at each corner the unit gradient of the branch of f taken at
- * the triangle's centroid (branches.h), oriented like the vertex's normal; the vertex's own
- * normal where f has no min/max or ties at the centroid. Meant for a mesh cut along its
- * creases (no triangle straddles one). False when out of memory. */
+ * the triangle's centroid (branches.h), pointing as ∇f_i does;
+ * the vertex's own normal where f has no min/max or ties at the centroid. Meant for a mesh
+ * cut along its creases (no triangle straddles one). False when out of memory. */
 bool ism_crease_corner_normals(const ism_tape *f, const ism_mesh *m, float *out);
 
 #endif

@@ -26,7 +26,38 @@ uint64_t cut_edge_key(uint32_t a, uint32_t b)
 void ism_cut_free(ism_cut *c)
 {
     free(c->edges);
+    free(c->tri_parent);
     memset(c, 0, sizeof *c);
+}
+
+bool cut_add_triangle(cut_state *s, uint32_t a, uint32_t b, uint32_t c)
+{
+    size_t t = s->m->ntris;
+    if (!ism_grow((void **)&s->parent, &s->cap_parent, t + 1, sizeof *s->parent, CUT_FIRST) ||
+        !ism_mesh_add_triangle(s->m, a, b, c))
+        return false;
+    s->parent[t] = s->from;
+    return true;
+}
+
+uint32_t *cut_parents_copy(const cut_state *s, size_t nt)
+{
+    uint32_t *p = malloc((nt ? nt : 1) * sizeof *p);
+    if (p && nt)
+        memcpy(p, s->parent, nt * sizeof *p);
+    return p;
+}
+
+/* Every triangle its own parent (before the first cut). */
+static bool parents_init(cut_state *s)
+{
+    size_t nt = s->m->ntris;
+    if (nt > UINT32_MAX ||
+        !ism_grow((void **)&s->parent, &s->cap_parent, nt ? nt : 1, sizeof *s->parent, CUT_FIRST))
+        return false;
+    for (size_t t = 0; t < nt; t++)
+        s->parent[t] = (uint32_t)t;
+    return true;
 }
 
 bool cut_set_vcurve(cut_state *s, uint32_t v, uint32_t fn)
@@ -87,7 +118,7 @@ void cut_normal_at(cut_state *s, const double p[3], const float ref[3], float ou
     double g[3];
     ism_eval_gradient(s->ev->f, s->ev->fws, p[0], p[1], p[2], g);
     double n = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-    double d = g[0] * ref[0] + g[1] * ref[1] + g[2] * ref[2];
+    double d = ref ? g[0] * ref[0] + g[1] * ref[1] + g[2] * ref[2] : 1;
     double k = n > 0 ? (d < 0 ? -1 / n : 1 / n) : 0;
     for (int i = 0; i < 3; i++)
         out[i] = (float)(g[i] * k);
@@ -179,7 +210,9 @@ static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
         refine_point(s, j, k, len, p);
     }
     float nrm[3];
-    cut_normal_at(s, p, s->m->normal + 3 * (size_t)u, nrm);
+    bool crease = s->ev->fns[k].kind == ISM_CUT_CREASE ||
+                  (j != NONE && s->ev->fns[j].kind == ISM_CUT_CREASE);
+    cut_normal_at(s, p, crease ? NULL : s->m->normal + 3 * (size_t)u, nrm);
     uint32_t v = ism_mesh_add_vertex(s->m, p, nrm);
     if (v == NONE || !cut_set_vcurve(s, v, (uint32_t)k))
         return NONE;
@@ -203,7 +236,7 @@ static double dist2(const ism_mesh *m, uint32_t a, uint32_t b)
 static bool emit(cut_state *s, uint32_t a, uint32_t b, uint32_t c)
 {
     if (s->slot == SIZE_MAX)
-        return ism_mesh_add_triangle(s->m, a, b, c);
+        return cut_add_triangle(s, a, b, c);
     uint32_t *t = s->m->tri + 3 * s->slot;
     t[0] = a;
     t[1] = b;
@@ -425,6 +458,7 @@ static bool cut_one(cut_state *s, size_t k)
         if (a != 0 && a == s->sg[tri[1]] && a == s->sg[tri[2]])
             continue; /* on one side: kept as it is */
         s->slot = t;
+        s->from = s->parent[t];
         ok = split_triangle(s, k, tri);
     }
     s->slot = SIZE_MAX;
@@ -480,9 +514,10 @@ static bool crease_or_top(cut_state *s, size_t k)
     ism_mesh *m = s->m;
     size_t nv = m->nverts, nt = m->ntris, ne = s->c->nedges;
     long before = mesh_euler(m);
-    uint32_t *tri = malloc((nt ? nt : 1) * 3 * sizeof *tri);
-    if (!tri || before == LONG_MIN) {
+    uint32_t *tri = malloc((nt ? nt : 1) * 3 * sizeof *tri), *parent = cut_parents_copy(s, nt);
+    if (!tri || !parent || before == LONG_MIN) {
         free(tri);
+        free(parent);
         return false;
     }
     memcpy(tri, m->tri, nt * 3 * sizeof *tri);
@@ -491,6 +526,7 @@ static bool crease_or_top(cut_state *s, size_t k)
         memcpy(m->tri, tri, nt * 3 * sizeof *tri); /* its vertices stay, unused (the cut
                                                       edge map still names them) */
         m->ntris = nt;
+        memcpy(s->parent, parent, nt * sizeof *parent);
         for (size_t v = nv; v < m->nverts && v < s->cap_vcurve; v++)
             s->vcurve[v] = NONE;
         for (size_t i = ne; i < s->c->nedges; i++)
@@ -498,6 +534,7 @@ static bool crease_or_top(cut_state *s, size_t k)
         ok = cut_one(s, k);
     }
     free(tri);
+    free(parent);
     return ok;
 }
 
@@ -507,11 +544,15 @@ bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
     ism_key_map_init(&s.split);
     ism_key_map_init(&s.onmap);
     ism_key_map_init(&s.zero);
-    bool ok = true;
+    bool ok = parents_init(&s);
     for (size_t k = 0; k < ev->nfns && ok; k++)
         ok = ev->fns[k].kind == ISM_CUT_CREASE ? crease_or_top(&s, k) : cut_one(&s, k);
     if (ok)
         finish(&s);
+    free(c->tri_parent);
+    c->tri_parent = ok ? s.parent : NULL;
+    if (!ok)
+        free(s.parent);
     ism_key_map_free(&s.split);
     ism_key_map_free(&s.onmap);
     ism_key_map_free(&s.zero);

@@ -26,6 +26,9 @@ typedef struct ism_cut {
     size_t unrefined;      /* curve vertices Newton could not put on both surfaces (kept at
                               the linear estimate) */
     double worst_f, worst_g; /* largest |f|/|∇f|, |g|/|∇g| over the curve's vertices */
+    uint32_t *tri_parent;  /* per triangle of the cut mesh: the triangle of the mesh before
+                              the cut it lies in (labels of the polygoniser's triangles, such
+                              as double-sheet ranges, follow through it); NULL before a cut */
 } ism_cut;
 
 void ism_cut_free(ism_cut *c);

@@ -54,12 +54,21 @@ typedef struct cut_state {
     size_t n_near, cap_near;
     size_t slot;             /* the triangle being split (its first piece goes there), or
                                 SIZE_MAX: pieces appended */
+    uint32_t *parent;        /* per triangle: the input mesh's triangle it lies in */
+    size_t cap_parent;
+    uint32_t from;           /* the parent of the triangle being split (of appended pieces) */
     ism_key_map zero;        /* edge key -> index into zero_edge (the current function) */
     cut_zero_edge *zero_edge;
     size_t cap_zero;
 } cut_state;
 
 uint64_t cut_edge_key(uint32_t a, uint32_t b);
+
+/* Appends triangle (a, b, c) as a piece of s->from (its parent). False when out of memory. */
+bool cut_add_triangle(cut_state *s, uint32_t a, uint32_t b, uint32_t c);
+
+/* A copy of the parents of the first nt triangles (NULL when out of memory). */
+uint32_t *cut_parents_copy(const cut_state *s, size_t nt);
 
 /* Notes that vertex v lies on curve fn (the first such curve is kept). */
 bool cut_set_vcurve(cut_state *s, uint32_t v, uint32_t fn);
@@ -87,7 +96,9 @@ typedef double (*cut_sign_fn)(void *ctx, const double p[3]);
 void cut_bisect(cut_sign_fn fn, void *ctx, const double a[3], const double b[3], double ga,
                 double p[3]);
 
-/* The unit normal ∇f/|∇f| at p, oriented like ref. */
+/* The unit normal ∇f/|∇f| at p, oriented like ref (ref NULL: as ∇f points — at a crease
+ * point, where the two sides' normals may be more than 90° apart, the neighbour's normal is
+ * no guide to the sign). */
 void cut_normal_at(cut_state *s, const double p[3], const float ref[3], float out[3]);
 
 /* Emits triangle (l u w) split by a cut from p on l-u to q on l-w: (l p q) and the quad

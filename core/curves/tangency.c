@@ -255,7 +255,7 @@ static int cmp_candidate(const void *x, const void *y)
     return (a->v > b->v) - (a->v < b->v);
 }
 
-static bool split_triangles_at(ism_mesh *m, uint32_t a, uint32_t b, uint32_t x);
+static bool split_triangles_at(cut_state *s, uint32_t a, uint32_t b, uint32_t x);
 
 /* Orthonormal e1, e2 spanning the plane normal to n. */
 static void tangent_basis(const double n[3], double e1[3], double e2[3])
@@ -401,7 +401,7 @@ static bool split_rays(cut_state *s, size_t k, uint32_t u, double reach)
         s->gv[x] = 0;
         s->sg[x] = 0;
         s->reach[x] = reach;
-        if (!split_triangles_at(s->m, a, b, x))
+        if (!split_triangles_at(s, a, b, x))
             return false;
     }
     return true;
@@ -444,8 +444,9 @@ static bool place_on_surface(cut_state *s, size_t k, const tangent *t)
 }
 
 /* Splits every triangle with edge a-b at the new vertex x (winding kept). */
-static bool split_triangles_at(ism_mesh *m, uint32_t a, uint32_t b, uint32_t x)
+static bool split_triangles_at(cut_state *s, uint32_t a, uint32_t b, uint32_t x)
 {
+    ism_mesh *m = s->m;
     size_t nt = m->ntris;
     for (size_t t = 0; t < nt; t++) {
         uint32_t *tv = m->tri + 3 * t;
@@ -454,7 +455,8 @@ static bool split_triangles_at(ism_mesh *m, uint32_t a, uint32_t b, uint32_t x)
             if (!((u == a && w == b) || (u == b && w == a)))
                 continue;
             tv[(i + 1) % 3] = x; /* (u, x, o) in place, (x, w, o) appended */
-            if (!ism_mesh_add_triangle(m, x, w, o))
+            s->from = s->parent[t];
+            if (!cut_add_triangle(s, x, w, o))
                 return false;
             tv = m->tri + 3 * t; /* the array may have moved */
             break;
@@ -507,7 +509,7 @@ static bool place_on_curve(tang_state *ts, const tangent *t)
     s->sg[x] = 0;
     s->reach[x] = s->reach[v];
     return cut_set_vcurve(s, x, t->j) && cut_split_cut_edge(s, v, w, x, t->j) &&
-           split_triangles_at(m, v, w, x);
+           split_triangles_at(s, v, w, x);
 }
 
 bool cut_tangencies(cut_state *s, size_t k)

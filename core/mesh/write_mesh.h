@@ -6,6 +6,7 @@
 
 #include <stddef.h>
 #include <stdbool.h>
+#include <stdint.h>
 #include "core/mesh/mesh.h"
 
 /* Writes n bytes from p; returns how many were written (fewer than n means failure). */
@@ -18,6 +19,19 @@ bool ism_write_ply(const ism_mesh *m, ism_write_fn write, void *ctx);
 /* Wavefront OBJ: `v`, `vn` (one per vertex) and `f a//a b//b c//c` lines, 1-based indices,
  * coordinates with 9 significant digits (float precision). */
 bool ism_write_obj(const ism_mesh *m, ism_write_fn write, void *ctx);
+
+/* Corners with a normal of their own (a crease's sides): at[j] is the corner 3 t + k
+ * (ascending), normal[3 j ..] its unit normal. */
+typedef struct ism_obj_corner_normals {
+    size_t n;
+    const uint32_t *at;
+    const float *normal;
+} ism_obj_corner_normals;
+
+/* As ism_write_obj, with cn's n normals written after the vertices' `vn` lines and used by
+ * those corners (`f a//nA ...`); cn NULL or empty writes ism_write_obj's file. */
+bool ism_write_obj_corners(const ism_mesh *m, const ism_obj_corner_normals *cn,
+                           ism_write_fn write, void *ctx);
 
 /* Binary STL: 80-byte header, triangle count, then per triangle its unit facet normal
  * (from the vertices' winding; 0 for a zero-area triangle), three corners and a zero

@@ -20,15 +20,14 @@ int ism_quality_lookup(const char *name)
     return -1;
 }
 
-/* 0 for the polygoniser's triangles, 1 + i for double sheet i's. */
-static uint32_t *sheet_labels(const ism_locus *locus, const ism_mesh *mesh)
+/* 0 for the polygoniser's triangles, 1 + i for double sheet i's (a triangle of a cut mesh
+ * takes its parent's: cut.h). */
+static uint32_t *sheet_labels(const ism_locus *locus, const ism_cut *cut, const ism_mesh *mesh)
 {
+    const uint32_t *parent = cut ? cut->tri_parent : NULL;
     uint32_t *label = calloc(mesh->ntris ? mesh->ntris : 1, sizeof *label);
-    for (size_t i = 0; label && i < locus->nsheets; i++) {
-        const ism_double_sheet *s = locus->sheets + i;
-        for (size_t t = s->first_triangle; t < s->first_triangle + s->triangles && t < mesh->ntris; t++)
-            label[t] = (uint32_t)(i + 1);
-    }
+    for (size_t t = 0; label && t < mesh->ntris; t++)
+        label[t] = ism_locus_sheet_of(locus, parent ? parent[t] : t);
     return label;
 }
 
@@ -39,7 +38,7 @@ bool ism_quality_pass(const ism_tape *f, const ism_locus *locus, const ism_cut *
     size_t ne = cut ? cut->nedges : 0, np = locus->npoints;
     uint32_t *edges = malloc((ne ? ne : 1) * 2 * sizeof *edges);
     double *points = malloc((np ? np : 1) * 3 * sizeof *points);
-    uint32_t *label = sheet_labels(locus, mesh);
+    uint32_t *label = sheet_labels(locus, cut, mesh);
     bool ok = edges && points && label;
     if (ok) {
         for (size_t i = 0; i < ne; i++) {

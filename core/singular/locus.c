@@ -72,6 +72,15 @@ bool ism_locus_add_sheet(ism_locus *l, const ism_double_sheet *s)
     return true;
 }
 
+uint32_t ism_locus_sheet_of(const ism_locus *l, size_t t)
+{
+    for (size_t i = 0; i < l->nsheets; i++)
+        if (t >= l->sheets[i].first_triangle &&
+            t - l->sheets[i].first_triangle < l->sheets[i].triangles)
+            return (uint32_t)(i + 1);
+    return 0;
+}
+
 static const char *name_of(const char *const *names, int n, int i)
 {
     return i >= 0 && i < n ? names[i] : "unknown";

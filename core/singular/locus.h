@@ -173,6 +173,10 @@ bool ism_locus_add_curve(ism_locus *l, const ism_sing_curve *c);
 bool ism_locus_add_box(ism_locus *l, const ism_lbox *b);
 bool ism_locus_add_sheet(ism_locus *l, const ism_double_sheet *s);
 
+/* 1 + i when triangle t of the polygoniser's mesh is in double sheet i's range, else 0
+ * (O(sheets)). */
+uint32_t ism_locus_sheet_of(const ism_locus *l, size_t t);
+
 /* Names used in JSON and stats: "node", "isolated", "cusp", "degenerate", "pinch",
  * "triple"; "double", "whisker"; "box", "pinch", "triple", "point", "lost". */
 const char *ism_sing_type_name(int type);

@@ -250,9 +250,8 @@ static bool encode_draco(encode_job *j, ism_draco_output *d, char *why, size_t n
         .tools = NULL,
     };
     ism_corner_split split = {0};
-    if (w->tri_cell || w->tri_sheet) { /* triangle labels: vertices split where they change */
-        if (!ism_corner_split_build(w->tri, w->ntris, w->nverts, w->tri_cell, w->tri_sheet,
-                                    &split)) {
+    if (ism_corner_split_needed(w)) { /* labels, crease sides: vertices split where they change */
+        if (!ism_corner_split_build(w, &split)) {
             snprintf(why, n, "out of memory splitting the vertices along the cells");
             return false;
         }
@@ -261,6 +260,7 @@ static bool encode_draco(encode_job *j, ism_draco_output *d, char *why, size_t n
         in.point_vertex = split.point_vertex;
         in.point_cell = split.point_cell;
         in.point_sheet = split.point_sheet;
+        in.point_normal = split.point_normal;
     }
     bool ok = ism_draco_encode(&in, d);
     ism_corner_split_free(&split);
@@ -308,7 +308,8 @@ static bool encode_body(encode_job *j, ism_buf *body, char *why, size_t n)
                    : ism_write_ply_wire(m, &j->wire, ism_buf_write, body);
         break;
     case ISM_FORMAT_OBJ:
-        ok = ism_write_obj_features(m, empty ? NULL : &j->c->features, ism_buf_write, body);
+        ok = ism_write_obj_features(m, empty ? NULL : &j->wire, empty ? NULL : &j->c->features,
+                                    ism_buf_write, body);
         break;
     case ISM_FORMAT_STL:
         ok = ism_write_stl(m, ism_buf_write, body);
@@ -493,8 +494,7 @@ static bool polygonise_and_analyse(const ism_request *req, const ism_tape *tape,
 }
 
 /* Per-triangle labels into c: the arrangement's cells, and the double sheets' ranges (those
- * are the polygoniser's triangle order, which a cut along curves does not keep: the flags
- * are left out then). */
+ * are the polygoniser's triangle order: a triangle of a cut mesh takes its parent's). */
 static bool label_triangles(ism_computed *c, const scratch *s)
 {
     size_t nt = c->mesh.ntris;
@@ -505,26 +505,30 @@ static bool label_triangles(ism_computed *c, const scratch *s)
         memcpy(c->tri_cell, s->arr.tri_face, nt * sizeof *c->tri_cell);
     }
     const ism_locus *l = &c->locus;
-    if (!s->have_curves && l->nsheets && nt) {
-        c->tri_sheet = calloc(nt, 1);
+    const uint32_t *parent = s->cut.tri_parent;
+    if (l->nsheets && nt) {
+        c->tri_sheet = malloc(nt);
         if (!c->tri_sheet)
             return false;
-        for (size_t i = 0; i < l->nsheets; i++)
-            for (size_t t = l->sheets[i].first_triangle;
-                 t < l->sheets[i].first_triangle + l->sheets[i].triangles && t < nt; t++)
-                c->tri_sheet[t] = 1;
+        for (size_t t = 0; t < nt; t++)
+            c->tri_sheet[t] = ism_locus_sheet_of(l, parent ? parent[t] : t) != 0;
     }
     c->wire.tri_cell = c->tri_cell;
     c->wire.tri_sheet = c->tri_sheet;
     return true;
 }
 
-/* Wire attributes, features and the surface's stats into c. */
-static bool gather(const ism_request *req, ism_pipeline_result *r, ism_computed *c, scratch *s)
+/* Wire attributes (with the crease sides' normals), features and the surface's stats into c. */
+static bool gather(const ism_request *req, const ism_tape *tape, ism_pipeline_result *r,
+                   ism_computed *c, scratch *s)
 {
     double t = ism_now_ms();
-    if (!ism_wire_mesh_build(&c->mesh, &s->an, ISM_ATTR_ALL, curvature_limit(req), &c->wire))
+    if (!ism_wire_mesh_build(&c->mesh, &s->an, ISM_ATTR_ALL, curvature_limit(req), &c->wire) ||
+        !ism_wire_corner_normals(tape, &c->mesh, &c->wire, &c->wire.ncorner_normals,
+                                 &c->corner_at, &c->corner_normal))
         return fail_with(r, 500, "no_memory", "%s", "out of memory preparing the mesh for the wire");
+    c->wire.corner_at = c->corner_at;
+    c->wire.corner_normal = c->corner_normal;
     if (s->an.vertex_class && c->mesh.nverts) {
         c->vertex_class = malloc(c->mesh.nverts);
         if (!c->vertex_class)
@@ -574,7 +578,8 @@ static bool compute(const ism_request *req, const ism_tape *tape, const ism_pipe
 {
     scratch s;
     memset(&s, 0, sizeof s);
-    bool ok = polygonise_and_analyse(req, tape, lim, hooks, r, c, &s) && gather(req, r, c, &s);
+    bool ok = polygonise_and_analyse(req, tape, lim, hooks, r, c, &s) &&
+              gather(req, tape, r, c, &s);
     ism_locus_check_free(&s.check);
     ism_arrangement_free(&s.arr);
     ism_cut_free(&s.cut);

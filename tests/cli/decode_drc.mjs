@@ -1,6 +1,7 @@
 // decode_drc.mjs — test helper: decodes a .drc with npm draco3d (a decoder independent of
-// the libdraco that encoded it) and prints {"faces", "points", "index", "position", and the
-// integer attributes "cell" and "double_sheet" when present} as JSON, for Python tests.
+// the libdraco that encoded it) and prints {"faces", "points", "index", "position", "normal"
+// (when sent), and the integer attributes "cell" and "double_sheet" when present} as JSON,
+// for Python tests.
 // Usage: node tests/cli/decode_drc.mjs FILE.drc
 import fs from 'node:fs';
 import { decodeDraco } from '../browser/lib/draco.mjs';
@@ -8,6 +9,7 @@ import { decodeDraco } from '../browser/lib/draco.mjs';
 const m = await decodeDraco(fs.readFileSync(process.argv[2]));
 const out = { faces: m.faces, points: m.points, index: Array.from(m.index),
   position: Array.from(m.attributes.position.values) };
+if (m.attributes.normal) out.normal = Array.from(m.attributes.normal.values);
 for (const name of ['cell', 'double_sheet']) {
   const a = m.attributes[name];
   if (a) out[name] = { unique_id: a.uniqueId, values: Array.from(a.values) };

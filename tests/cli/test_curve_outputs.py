@@ -12,7 +12,14 @@ y = 0, z = 0 (in a box on the octree lattice and one shifted 0.37 of a finest ce
   plane; .ply: the face property `cell` with the faces' counts and areas.
 - Double sheets: f = s1 * s2^2 (two spheres of radius 0.4, the second a double sheet): the
   decoded double_sheet flag marks exactly the sheet's triangles (count as reported, all at
-  x < 0, area 4 pi 0.16 within 1%), never a mixed triangle."""
+  x < 0, area 4 pi 0.16 within 1%), never a mixed triangle; with a section asked for too
+  (the cut renumbers triangles: each takes its parent's flag).
+- Crease normals: gyroid-ball (max of a gyroid G and a ball B) in a box on the lattice and
+  ones shifted off it. In the decoded .drc and in the .obj every corner's normal is its
+  triangle's branch gradient (closed form, G or B by the sign of B - G at the centroid) within
+  1 degree, and at crease points the two sides' normals differ by the angle between grad G
+  and grad B there (within 1 degree). Triangles whose side the 14-bit positions cannot decide
+  (centroid closer to the crease than 4 quantisation steps) are left out."""
 import json
 import math
 import os
@@ -80,6 +87,55 @@ def decoded_triangles(d):
     p, idx = d["position"], d["index"]
     return [[p[3 * idx[3 * t + k]:3 * idx[3 * t + k] + 3] for k in range(3)]
             for t in range(d["faces"])]
+
+
+GYROID_K = 4.0
+GYROID_BALL = ("max(sin(4*x)*cos(4*y) + sin(4*y)*cos(4*z) + sin(4*z)*cos(4*x), "
+               "x^2 + y^2 + z^2 - 1.96)")
+
+
+def gyroid(p):
+    x, y, z = (GYROID_K * v for v in p)
+    return math.sin(x) * math.cos(y) + math.sin(y) * math.cos(z) + math.sin(z) * math.cos(x)
+
+
+def gyroid_grad(p):
+    x, y, z = (GYROID_K * v for v in p)
+    k = GYROID_K
+    return [k * (math.cos(x) * math.cos(y) - math.sin(z) * math.sin(x)),
+            k * (math.cos(y) * math.cos(z) - math.sin(x) * math.sin(y)),
+            k * (math.cos(z) * math.cos(x) - math.sin(y) * math.sin(z))]
+
+
+def ball(p):
+    return sum(v * v for v in p) - 1.96
+
+
+def ball_grad(p):
+    return [2 * v for v in p]
+
+
+def angle_deg(u, v):
+    nu, nv = math.sqrt(sum(a * a for a in u)), math.sqrt(sum(a * a for a in v))
+    d = sum(a * b for a, b in zip(u, v)) / (nu * nv)
+    return math.degrees(math.acos(max(-1.0, min(1.0, d))))
+
+
+def parse_obj_corners(text):
+    """[(corner positions, corner normals)] per face of an OBJ with `f v//n` faces."""
+    v, vn, faces = [], [], []
+    for line in text.splitlines():
+        parts = line.split()
+        if not parts:
+            continue
+        if parts[0] == "v":
+            v.append([float(a) for a in parts[1:4]])
+        elif parts[0] == "vn":
+            vn.append([float(a) for a in parts[1:4]])
+        elif parts[0] == "f":
+            ids = [[int(i) - 1 for i in c.split("//")] for c in parts[1:4]]
+            faces.append(([v[a] for a, _ in ids], [vn[b] for _, b in ids]))
+    return faces
 
 
 class CurveOutputsTest(unittest.TestCase):
@@ -199,13 +255,19 @@ class CurveOutputsTest(unittest.TestCase):
         self.assert_cells_partition(cells, tris, f["arrangement"]["faces"])
 
     def test_double_sheet_flag_marks_the_sheet(self):
+        """Also with curves asked for (the cut renumbers the triangles: each takes its
+        parent's flag), where the sheet's triangle count grows past the polygoniser's."""
         expr = "((x-0.5)^2+y^2+z^2-0.16) * ((x+0.5)^2+y^2+z^2-0.16)^2"
         cell = 2.2 / 2 ** 5
-        for shift in (0.0, 0.37 * cell):
-            with self.subTest(shift=shift):
+        section = [{"kind": "plane", "normal": [0, 0, 1], "offsets": [0.05]}]
+        for shift, curves in ((0.0, None), (0.37 * cell, None), (0.37 * cell, section)):
+            with self.subTest(shift=shift, curves=bool(curves)):
                 b = [-1.1 + shift, -0.6 + shift, -0.6 + shift, 1.1 + shift, 0.6 + shift,
                      0.6 + shift]
-                f, drc = self.run_request({"expr": expr, "box": b, "depth": {"max": 5}}, "drc")
+                req = {"expr": expr, "box": b, "depth": {"max": 5}}
+                if curves:
+                    req["curves"] = curves
+                f, drc = self.run_request(req, "drc")
                 sheets = f["double_sheets"]
                 self.assertEqual(len(sheets), 1)
                 d = decode_drc(drc, self.dir)
@@ -213,12 +275,63 @@ class CurveOutputsTest(unittest.TestCase):
                 flags = labels_by_triangle(d, "double_sheet")
                 tris = decoded_triangles(d)
                 flagged = [t for t, s in zip(tris, flags) if s]
-                self.assertEqual(len(flagged), sheets[0]["triangles"])
+                if curves:  # the section cuts both spheres: more triangles than meshed
+                    self.assertGreater(len(flagged), sheets[0]["triangles"])
+                    self.assertTrue(any(c["kind"] == "section" and c["arcs"]
+                                        for c in f["curves"]))
+                else:
+                    self.assertEqual(len(flagged), sheets[0]["triangles"])
                 for t, s in zip(tris, flags):
                     cx = sum(p[0] for p in t) / 3
                     self.assertTrue(cx < 0 if s else cx > 0, (s, t))
                 area = sum(tri_area(*t) for t in flagged)
                 self.assertLess(abs(area - 4 * math.pi * 0.16) / (4 * math.pi * 0.16), 0.01)
+
+
+    def assert_branch_normals(self, faces, quantum):
+        """faces: [(3 positions, 3 normals)]. Returns (corners checked, crease points)."""
+        worst, sides, checked = 0.0, {}, 0
+        for pts, nrms in faces:
+            c = [sum(p[j] for p in pts) / 3 for j in range(3)]
+            d = [a - b for a, b in zip(ball_grad(c), gyroid_grad(c))]
+            margin = (ball(c) - gyroid(c)) / math.sqrt(sum(x * x for x in d))
+            if abs(margin) < 4 * quantum:
+                continue  # the side is below what the positions resolve
+            on_ball = margin > 0
+            for p, n in zip(pts, nrms):
+                worst = max(worst, angle_deg(n, ball_grad(p) if on_ball else gyroid_grad(p)))
+                sides.setdefault(tuple(p), {}).setdefault(on_ball, set()).add(tuple(n))
+                checked += 1
+        self.assertLess(worst, 1.0, "a corner normal is not its branch's gradient")
+        crease = [p for p, s in sides.items() if len(s) == 2]
+        for p in crease:
+            want = angle_deg(gyroid_grad(p), ball_grad(p))
+            for n0 in sides[p][False]:
+                for n1 in sides[p][True]:
+                    self.assertLess(abs(angle_deg(n0, n1) - want), 1.0, (p, n0, n1, want))
+        return checked, len(crease)
+
+    def test_crease_sides_carry_their_branch_normals(self):
+        depth, side = 5, 3.0
+        cell = side / 2 ** depth
+        for shift, fmt in ((0.0, "drc"), (0.37 * cell, "drc"), (1e-3 * cell, "obj")):
+            with self.subTest(shift=shift, format=fmt):
+                req = {"expr": GYROID_BALL, "box": box(side, shift), "depth": {"max": depth}}
+                f, out = self.run_request(req, fmt)
+                self.assertTrue(any(c["kind"] == "crease" for c in f["curves"]))
+                if fmt == "drc":
+                    d = decode_drc(out, self.dir)
+                    self.assertEqual(len(d["normal"]), 3 * d["points"])
+                    nrm = [d["normal"][3 * i:3 * i + 3] for i in range(d["points"])]
+                    faces = [(t, [nrm[d["index"][3 * f_ + k]] for k in range(3)])
+                             for f_, t in enumerate(decoded_triangles(d))]
+                    quantum = side / 2 ** 14  # 14-bit positions over the box
+                else:
+                    faces = parse_obj_corners(out.decode())
+                    quantum = 1e-7  # 9 significant digits
+                checked, crease = self.assert_branch_normals(faces, quantum)
+                self.assertGreater(checked, 0.9 * 3 * len(faces))
+                self.assertGreater(crease, 500, "crease points with both sides decided")
 
 
 if __name__ == "__main__":

@@ -86,7 +86,7 @@ static double position_tolerance(const ism_wire_mesh *w, int bits)
 static bool encode(const ism_wire_mesh *w, int bits, int nbits, int cbits, ism_draco_output *d)
 {
     ism_draco_input in = {w->nverts, w->ntris, w->pos, w->tri, w->normal, w->mean_curvature,
-                          w->gauss_curvature, w->vertex_class, bits, nbits, cbits, NULL, 0, NULL, NULL, NULL};
+                          w->gauss_curvature, w->vertex_class, bits, nbits, cbits, NULL, 0, NULL, NULL, NULL, NULL};
     bool ok = ism_draco_encode(&in, d);
     cr_assert(ok, "%s", d->error);
     return ok;
@@ -250,7 +250,7 @@ Test(draco, degenerate_faces_are_dropped_and_all_degenerate_is_refused)
     ism_mesh_add_triangle(&m, 0, 0, 1);
     cr_assert(ism_wire_mesh_build(&m, NULL, 0, 0, &w));
     cr_expect_eq(w.live_triangles, 0);
-    ism_draco_input in = {w.nverts, w.ntris, w.pos, w.tri, NULL, NULL, NULL, NULL, 14, 10, 0, NULL, 0, NULL, NULL, NULL};
+    ism_draco_input in = {w.nverts, w.ntris, w.pos, w.tri, NULL, NULL, NULL, NULL, 14, 10, 0, NULL, 0, NULL, NULL, NULL, NULL};
     cr_expect(!ism_draco_encode(&in, &d));
     cr_expect_null(d.data);
     cr_expect_neq(d.error[0], '\0');

@@ -36,7 +36,7 @@ static unsigned char *build(const ism_mesh *m, size_t *len, ism_draco_output *d)
     bool empty = w.live_triangles == 0;
     if (!empty) {
         ism_draco_input in = {w.nverts, w.ntris, w.pos, w.tri, w.normal, NULL, NULL,
-                              w.vertex_class, 14, 10, 0, NULL, 0, NULL, NULL, NULL};
+                              w.vertex_class, 14, 10, 0, NULL, 0, NULL, NULL, NULL, NULL};
         cr_assert(ism_draco_encode(&in, d), "%s", d->error);
     }
     ism_glb_input gi = {m, &w, empty ? NULL : d, &f, "0123abcd"};
@@ -214,11 +214,11 @@ static unsigned char *build_cells(const ism_mesh *m, const uint32_t *cell, bool 
     cr_assert(ism_wire_mesh_build(m, NULL, ISM_ATTR_NORMAL, 0, &w));
     w.tri_cell = cell;
     ism_corner_split sp;
-    cr_assert(ism_corner_split_build(w.tri, w.ntris, w.nverts, cell, NULL, &sp));
+    cr_assert(ism_corner_split_build(&w, &sp));
     ism_draco_output d;
     memset(&d, 0, sizeof d);
     ism_draco_input in = {w.nverts, w.ntris, w.pos, sp.tri, w.normal, NULL, NULL, NULL, 14, 10,
-                          0, NULL, sp.npoints, sp.point_vertex, sp.point_cell, NULL};
+                          0, NULL, sp.npoints, sp.point_vertex, sp.point_cell, NULL, NULL};
     if (draco)
         cr_assert(ism_draco_encode(&in, &d), "%s", d.error);
     ism_glb_input gi = {m, &w, draco ? &d : NULL, NULL, NULL};
