@@ -5,7 +5,9 @@
 // its thumbnails (loaded only when in view);
 // picking a node of the Cayley cubic gives its type and its closed-form coordinates within
 // 1e-6; a PNG export has the size asked for; the Curves panel cuts the sphere into cells
-// (curves drawn, areas 2 pi h, a picked cell's facts); double sheets are tinted.
+// (curves drawn, areas 2 pi h, a picked cell's facts) and adds a level curve, an
+// intersection (Viviani's node of degree 4) and the view's silhouette (closed forms); double
+// sheets are tinted.
 import { describe, it, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { startDaemon, stopDaemon, startBrowser, stopBrowser } from './lib/harness.mjs';
@@ -270,6 +272,58 @@ describe('box and inspection', { timeout: 300000 }, () => {
     await waitForMesh(page, n);
     assert.equal((await facts()).drawn, 3, 'removing the x plane leaves the z stack');
     await page.selectOption('#color-mode', 'shaded');
+  });
+
+  it('the panel adds level curves, an intersection and the silhouette of the view', async () => {
+    // On the unit sphere (the z stack of the test above stays, when it ran): the level x = 0.5
+    // is a circle; the cylinder (x - 1/2)^2 + y^2 = 1/4 meets it in Viviani's curve, which
+    // crosses itself at (1, 0, 0); the silhouette along d is the great circle p . d = 0.
+    if (await page.inputValue('#preset') !== 'sphere') {   // when run alone
+      const k = await loads(page);
+      await page.selectOption('#preset', 'sphere');
+      await waitForMesh(page, k);
+    }
+    await page.evaluate(() => { document.getElementById('curves-section').open = true; });
+    const add = async (kind, fill) => {
+      await page.selectOption('#curve-kind', kind);
+      for (const [sel, v] of Object.entries(fill)) await page.fill(sel, v);
+      const n = await loads(page);
+      await page.click('#curve-add');
+      await waitForMesh(page, n);
+    };
+    const curves = (kind) => page.evaluate((k) => window.isomeshViewer.data.features.curves
+      .filter((c) => c.kind === k).map((c) => c.arcs.flatMap((a) => { const p = []; for (let i = 0; i < a.length; i += 3) p.push(a.slice(i, i + 3)); return p; })), kind);
+    const onSphere = (p) => Math.abs(Math.hypot(...p) - 1) < 1e-6;
+    const before = await viewShot(page);
+
+    await add('levels', { '#curve-level-expr': 'x', '#curve-level-values': '0.5' });
+    const level = await curves('level');
+    assert.equal(level.length, 1, 'one level curve x = 0.5');
+    assert.ok(level[0].length > 10 && level[0].every((p) => onSphere(p) && Math.abs(p[0] - 0.5) < 1e-6), 'on the sphere and at x = 0.5');
+
+    await add('surface', { '#curve-surface-expr': '(x - 0.5)^2 + y^2 - 0.25' });
+    const viviani = (await curves('intersection')).flat();
+    assert.ok(viviani.length > 10 && viviani.every((p) => onSphere(p) && Math.abs((p[0] - 0.5) ** 2 + p[1] ** 2 - 0.25) < 1e-6), 'on the sphere and the cylinder');
+    const near = (p) => Math.hypot(p[0] - 1, p[1], p[2]) < 1e-6;
+    const node = await page.evaluate(() => window.isomeshViewer.data.features.arrangement.vertices
+      .filter((v) => Math.hypot(v.xyz[0] - 1, v.xyz[1], v.xyz[2]) < 1e-6).map((v) => v.degree));
+    const through = (await curves('section')).filter((c) => c.some(near)).length;  // z = 0 of the stack
+    assert.deepEqual(node, [4 + 2 * through], `Viviani's curve crosses itself at (1, 0, 0): degree 4, + 2 per plane there (${through})`);
+
+    const view = await page.evaluate(() => { const v = window.isomeshViewer.getView(); return v.pos.map((p, k) => p - v.target[k]); });
+    await add('silhouette', {});
+    const entry = JSON.parse(decodeURIComponent(await page.evaluate(() => location.hash)).match(/curves=(\[.*?\])(&|$)/)[1])
+      .find((e) => e.kind === 'silhouette');
+    const d = entry.direction, len = Math.hypot(...view);
+    d.forEach((x, k) => assert.ok(Math.abs(x - view[k] / len) < 1e-5, `the direction is the view's (${d})`));
+    const sil = (await curves('silhouette')).flat();
+    assert.ok(sil.length > 10 && sil.every((p) => onSphere(p) && Math.abs(p[0] * d[0] + p[1] * d[1] + p[2] * d[2]) < 1e-5), 'the great circle across the view');
+    const f = await page.evaluate(() => ({ list: document.querySelectorAll('#curve-list li').length,
+      ok: window.isomeshViewer.data.features.arrangement.euler.ok, drawn: Number(document.body.dataset.curvesDrawn) }));
+    assert.ok(f.ok, 'V - E + F = chi');
+    assert.ok(f.list >= 3 && f.drawn >= 3, `three more entries listed and drawn (${f.list}, ${f.drawn})`);
+    await page.evaluate(() => document.activeElement && document.activeElement.blur());
+    assertChanged(before, await viewShot(page, 'sphere-level-intersection-silhouette.png'));
   });
 
   it('double sheets are tinted (the double_sheet attribute of the Draco mesh)', async () => {
