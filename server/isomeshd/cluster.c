@@ -143,6 +143,15 @@ static const char CANCEL_NAME_LUA[] =
     "  redis.call('xdel', s, id) end "
     "return 1";
 
+/* KEYS stream, job hash; ARGV id. The executor's flight was canceled here (nobody waits for
+ * it any more): the entry goes, its job hash says canceled. */
+static const char DROPPED_LUA[] =
+    "redis.call('xack', KEYS[1], 'workers', ARGV[1]) "
+    "redis.call('xdel', KEYS[1], ARGV[1]) "
+    "if redis.call('hget', KEYS[2], 'id') == ARGV[1] then "
+    "  redis.call('hset', KEYS[2], 'cancel', '1') end "
+    "return 1";
+
 /* KEYS stream, job hash; ARGV id. A waiting entry goes; a running one is flagged. */
 static const char CANCEL_LUA[] =
     "if redis.call('hget', KEYS[2], 'id') == ARGV[1] then "
@@ -319,12 +328,17 @@ static long long cj_end(cjob *j)
 
 /* The flight ended: its results are in Redis before the job hash says so. A refusal by this
  * daemon (shutting down, queue full) is not the computation's answer: the entry is left
- * pending, and another daemon re-claims it one lock lifetime later. A cancel (499) leaves
- * the hash as the cancel left it. */
+ * pending, and another daemon re-claims it one lock lifetime later. A cancel (499: nobody
+ * waits any more) drops the entry and marks the hash canceled. */
 static void cj_report(cjob *j, ism_cache_tier *t)
 {
-    if (j->status == 503 || j->status == 429 || j->status == 499)
+    if (j->status == 503 || j->status == 429)
         return;
+    if (j->status == 499) {
+        const char *args[] = {j->stream, j->job, j->id};
+        run_script(j->c, "cluster_dropped", DROPPED_LUA, 2, args, 3, NULL);
+        return;
+    }
     ism_cache_redis_flush(t);
     char status[16];
     snprintf(status, sizeof status, "%u", j->status);
@@ -384,14 +398,17 @@ static long long cj_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
         return now + CJ_TICK_NS;
     if (!ismd_shared_enter(sh))
         return now + CJ_TICK_NS;
-    if (beat == 2 && !j->finished && j->waiter.flight) {
-        /* canceled: for every waiter here too; the flight answers us when it stops */
+    if (beat == 2 && !j->finished && j->waiter.flight && j->waiter.passive) {
+        /* canceled, and the flight is its own origin's: a DELETE through another daemon;
+         * for every waiter here (the origin's); the flight answers us when it stops */
         ismd_sched_cancel(j->c->sched, j->waiter.flight);
         ismd_shared_leave(sh);
         j->beat_at_ns = LLONG_MAX;
         return now + CJ_TICK_NS;
     }
-    /* another daemon took it over: stop computing it here (unless others wait for it) */
+    /* canceled by another daemon's origin (nobody there wants it), or taken over by another
+     * daemon: stop computing it here unless requests here wait for it too (they keep it, as
+     * a local cancel would) */
     if (!j->finished)
         ismd_sched_detach(j->c->sched, &j->waiter);
     ismd_shared_leave(sh);
@@ -448,6 +465,8 @@ static bool start_entry(ismd_cluster *c, const redisReply *r)
         ismd_submit st = ismd_sched_submit_here(c->sched, key, fmt, request, user, NULL,
                                                 &j->waiter);
         ok = st == ISMD_SUBMIT_NEW || st == ISMD_SUBMIT_JOINED;
+        /* its own origin's flight: the entry stands for the waiters already here */
+        j->waiter.passive = ok && !strcmp(j->waiter.flight->cluster_entry, id);
         if (ok)
             atomic_fetch_add(r->element[4]->integer ? &c->sched->metrics->cluster_reclaimed
                                                     : &c->sched->metrics->cluster_taken, 1);

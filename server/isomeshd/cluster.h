@@ -35,7 +35,7 @@
 #include "server/common/cache.h"
 #include "server/isomeshd/sched.h"
 
-#define ISMD_CLUSTER_ID_MAX 48   /* a stream entry id, NUL included */
+#define ISMD_CLUSTER_ID_MAX ISMD_ENTRY_ID_MAX   /* a stream entry id, NUL included */
 
 typedef struct ismd_cluster ismd_cluster;
 typedef struct ismd_shared ismd_shared;

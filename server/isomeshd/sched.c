@@ -216,12 +216,25 @@ static void flight_free(ismd_sched *s, ismd_flight *f)
     free(f);
 }
 
+/* Does nobody but the cluster executor of f's own queue entry wait for f? */
+static bool only_passive(const ismd_flight *f)
+{
+    for (const ismd_waiter *w = f->waiters.next; w != &f->waiters; w = w->next)
+        if (!w->passive)
+            return false;
+    return true;
+}
+
 void ismd_sched_detach(ismd_sched *s, ismd_waiter *w)
 {
     ismd_flight *f = w->flight;
     if (!f)
         return;
     waiter_unlink(w);
+    if (f->nwaiters > 0 && only_passive(f)) {
+        ismd_sched_cancel(s, f); /* wanted only by itself: the executor is answered 499 */
+        return;
+    }
     if (f->nwaiters > 0)
         return;
     if (f->qe.queued || f->shared) {

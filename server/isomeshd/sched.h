@@ -34,11 +34,16 @@ typedef struct ismd_result {
     const char *cache;         /* "shared": computed by another daemon (shared_cache.h) */
 } ismd_result;
 
+#define ISMD_ENTRY_ID_MAX 48       /* a cluster queue (stream) entry id, NUL included */
+
 typedef struct ismd_flight ismd_flight;
 typedef struct ismd_waiter ismd_waiter;
 struct ismd_waiter {
     ismd_waiter *prev, *next;
     ismd_flight *flight;       /* NULL once finished or detached */
+    /* The cluster executor's waiter for the entry its own flight put on the queue
+     * (cluster.h): it keeps the flight only while someone else waits for it too. */
+    bool passive;
     /* Called once, lock held, when the flight finishes. */
     void (*done)(ismd_waiter *w, const ismd_result *r);
     /* Optional, lock held: the flight started running or reported progress. */
@@ -56,6 +61,7 @@ struct ismd_flight {
     bool elsewhere;            /* shared, and running on another daemon (cluster.h) */
     bool canceled;             /* running: to be stopped by the pool, waiters answered 499 */
     ismd_user_limits lim;      /* the user's limits, for queueing after the shared cache */
+    char cluster_entry[ISMD_ENTRY_ID_MAX]; /* the cluster queue entry it added, or "" */
     double progress;
     long long submitted_ns, started_ns;
     long long deadline_ns;     /* queued: the end of its wait (--queue-timeout); running: of
@@ -120,8 +126,9 @@ ismd_submit ismd_sched_submit_here(ismd_sched *s, const char *key, const char *f
                                    ism_blob *request, const char *user,
                                    const ismd_user_limits *lim, ismd_waiter *w);
 
-/* Takes w off its flight (a canceled job). A queued flight left without waiters is dropped;
- * a running one is stopped by the pool (its worker is replaced). */
+/* Takes w off its flight (a canceled job, a client that left). A queued flight left without
+ * waiters is dropped; a running one is stopped by the pool (its worker is replaced). A flight
+ * left with passive waiters only is canceled (they are answered 499). */
 void ismd_sched_detach(ismd_sched *s, ismd_waiter *w);
 
 /* Cancels f for every waiter (a cancel through another daemon: cluster.h): answered 499

@@ -448,6 +448,12 @@ static long long to_cluster(task *k, ism_cache_tier *t, long long now)
         return task_end(k, t);
     }
     atomic_fetch_add(&sh->sched->metrics->cluster_submitted, 1);
+    if (ismd_shared_enter(sh)) { /* an executor here that takes the entry joins the flight */
+        ismd_flight *g = my_flight(k, true);
+        if (g)
+            snprintf(g->cluster_entry, sizeof g->cluster_entry, "%s", k->entry);
+        ismd_shared_leave(sh);
+    }
     k->state = T_REMOTE;
     return now + REMOTE_POLL_NS;
 }

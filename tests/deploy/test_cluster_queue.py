@@ -12,11 +12,17 @@ with Redis, daemons of one worker each and (for the failure case) nginx:
 * a job is seen through any daemon (GET /v1/jobs/{id}, its events as one event per
   connection with a retry delay), also after the daemon it was posted to is killed: its
   computation goes on elsewhere and the job reads done, its mesh served by the survivor;
-  a DELETE through another daemon cancels it everywhere (the worker computing it stops).
+  a DELETE through another daemon cancels it everywhere (the worker computing it stops);
+* cancels reach the cluster's own waits: when the daemon that put a computation on the queue
+  also runs it, a synchronous client that leaves, or a DELETE of the only job waiting for
+  it, stops the worker and drops the queue entry (before, the executor's own interest kept
+  it running for nobody).
 
 Every wait is bounded; no assertion depends on the machine's speed beyond the bounds."""
+import json
 import os
 import signal
+import socket
 import sys
 import threading
 import time
@@ -166,6 +172,37 @@ class ClusterQueueTest(unittest.TestCase):
                             for d in s.daemons) == 1, 10))
             self.assertEqual(sum(d.metric("isomesh_computations_total", outcome="ok")
                                  for d in s.daemons), 0)
+        finally:
+            self.assertEqual(s.cleanup(), [], "sanitizer reports")
+
+    def test_cancels_reach_a_computation_its_own_daemon_runs_for_the_cluster(self):
+        s = stack.Stack(n=1, daemon_args=("--cluster", "--workers", "1"), with_nginx=False).start()
+        try:
+            d, = s.daemons
+
+            def canceled():
+                return d.metric("isomesh_worker_restarts_total", reason="cancel")
+            # a synchronous client leaves mid-computation
+            data = json.dumps(slow_work(801)).encode()
+            sock = socket.create_connection(("127.0.0.1", d.port), timeout=30)
+            sock.sendall(b"POST /v1/mesh HTTP/1.1\r\nHost: x\r\nContent-Type: application/json"
+                         b"\r\nContent-Length: %d\r\n\r\n" % len(data) + data)
+            self.assertTrue(stack.wait_until(lambda: d.metric("isomesh_workers_busy") == 1, 30))
+            sock.close()
+            self.assertTrue(stack.wait_until(lambda: canceled() == 1, 15))
+            self.assertTrue(stack.wait_until(lambda: d.metric("isomesh_workers_busy") == 0, 15))
+            # the only job waiting for a computation is deleted
+            job = d.post("/v1/jobs", slow_work(802)).json()
+            self.assertTrue(stack.wait_until(
+                lambda: d.get(job["url"]).json()["state"] == "running", 30))
+            self.assertEqual(d.request("DELETE", job["url"]).json()["state"], "canceled")
+            self.assertTrue(stack.wait_until(lambda: canceled() == 2, 15))
+            self.assertEqual(d.metric("isomesh_computations_total", outcome="ok"), 0)
+            # and neither entry is left on the queue (waiting, or pending for another daemon
+            # to re-claim)
+            self.assertTrue(stack.wait_until(
+                lambda: s.redis.command("XLEN", "isomesh:v1:q:127.0.0.1") == 0, 10))
+            self.assertEqual(d.metric("isomesh_computations_started_total"), 2)
         finally:
             self.assertEqual(s.cleanup(), [], "sanitizer reports")
 
