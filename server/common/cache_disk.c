@@ -206,6 +206,32 @@ static ism_blob *disk_get(ism_cache_tier *t, const char *name)
     return b;
 }
 
+int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, size_t len,
+                                long long *offset)
+{
+    disk_tier *d = (disk_tier *)t;
+    char rel[ISM_CACHE_NAME_MAX + 4];
+    if (d->root_fd < 0 || !rel_path(rel, name))
+        return -1;
+    int fd = openat(d->root_fd, rel, O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+    if (fd < 0)
+        return -1;
+    struct stat st;
+    unsigned char hdr[HEADER_SIZE];
+    bool sound = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) &&
+                 (uint64_t)st.st_size == (uint64_t)len + HEADER_SIZE &&
+                 pread_all(fd, hdr, HEADER_SIZE, 0) && memcmp(hdr, "ISMC", 4) == 0 &&
+                 ism_get_le32(hdr + 4) == FILE_VERSION && ism_get_le32(hdr + 20) == 0 &&
+                 ((uint64_t)ism_get_le32(hdr + 8) | (uint64_t)ism_get_le32(hdr + 12) << 32) ==
+                     (uint64_t)len;
+    if (!sound) {
+        close(fd);
+        return -1;
+    }
+    *offset = HEADER_SIZE;
+    return fd;
+}
+
 static bool disk_has(ism_cache_tier *t, const char *name)
 {
     disk_tier *d = (disk_tier *)t;

@@ -37,6 +37,15 @@ bool ism_cache_disk_usable(const ism_cache_tier *t);
 /* Bounds the directory's size in bytes (0: no bound); prunes in the background when over. */
 void ism_cache_disk_set_max(ism_cache_tier *t, unsigned long long max_bytes);
 
+/* A descriptor (O_RDONLY, close-on-exec; the caller closes it) of the file holding name when
+ * it is on disk (not only queued for writing) with a sound header saying exactly len bytes
+ * of payload, which start at *offset: for sending the payload without reading it (sendfile).
+ * -1 otherwise. The payload's checksum is not read here (that would cost the copy this
+ * saves): callers hold the same bytes already, and a file damaged on disk since it was
+ * written is caught at its next full read. */
+int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, size_t len,
+                                long long *offset);
+
 /* Waits until every queued write is on disk (or failed). */
 void ism_cache_disk_flush(ism_cache_tier *t);
 

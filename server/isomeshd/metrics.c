@@ -341,6 +341,10 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
     gauge(&o, "isomesh_event_streams", "Open job event streams.", m->event_streams);
     gauge(&o, "isomesh_connections", "Open HTTP connections (at most --max-connections).",
           m->connections);
+    header(&o, "isomesh_sendfile_responses_total", "counter",
+           "Cached bodies sent from their disk cache file (sendfile) instead of memory.");
+    emit(&o, "isomesh_sendfile_responses_total %llu\n",
+         (unsigned long long)atomic_load(&m->sendfile_responses));
     gauge(&o, "isomesh_upload_bytes",
           "Bytes held by request bodies (at most --upload-memory).", m->upload_bytes);
     gauge(&o, "isomesh_suspended_connections", "Connections waiting for a computation.",

@@ -5,6 +5,9 @@
 
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
+
+#include "server/common/cache_disk.h"
 
 #include "server/isomeshd/errors.h"
 
@@ -21,6 +24,32 @@ struct MHD_Response *ismd_response_blob(ism_blob *b, const char *content_type)
         ism_blob_unref(b);
         return NULL;
     }
+    if (content_type)
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, content_type);
+    return resp;
+}
+
+/* Bodies at least this large are sent from their disk cache file when it is there: below it
+ * the copy costs less than opening the file (measured: 27% of the daemon's CPU on a cached
+ * 453 KB mesh was the kernel copying it from user space into socket buffers). */
+#define SENDFILE_MIN ((size_t)64 << 10)
+
+struct MHD_Response *ismd_response_cached(ismd_server *s, const char *name, ism_blob *b,
+                                          const char *content_type)
+{
+    long long offset = 0;
+    int fd = b->len >= SENDFILE_MIN && s->disk
+                 ? ism_cache_disk_open_payload(s->disk, name, b->len, &offset)
+                 : -1;
+    if (fd < 0)
+        return ismd_response_blob(b, content_type);
+    struct MHD_Response *resp =
+        MHD_create_response_from_fd_at_offset64(b->len, fd, (uint64_t)offset);
+    if (!resp) {
+        close(fd);
+        return NULL;
+    }
+    atomic_fetch_add(&s->metrics.sendfile_responses, 1);
     if (content_type)
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, content_type);
     return resp;

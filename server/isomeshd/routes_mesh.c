@@ -100,7 +100,11 @@ static enum MHD_Result answer_mesh(ismd_req *r)
         return answer_failure(r);
     if (r->links)
         return answer_links(r);
-    struct MHD_Response *resp = ismd_response_blob(r->r_body, ism_format_mime_of(r->fmt));
+    char name[ISM_CACHE_NAME_MAX];
+    struct MHD_Response *resp =
+        ism_cache_name(name, r->key, r->fmt)
+            ? ismd_response_cached(r->srv, name, r->r_body, ism_format_mime_of(r->fmt))
+            : ismd_response_blob(r->r_body, ism_format_mime_of(r->fmt));
     if (!resp)
         return MHD_NO;
     char etag[80], loc[128];

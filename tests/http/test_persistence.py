@@ -2,7 +2,8 @@
 restart is served from disk after it without computing (also another format of it, computed
 from the stored request); a flipped byte in a cache file is detected, the entry dropped and
 counted, and the mesh recomputed and correct; an unwritable cache directory still serves
-every request and counts the failed stores."""
+every request and counts the failed stores; a large cached body is sent from its disk file
+(sendfile), byte for byte the body computed, and from memory when the file does not match."""
 import glob
 import os
 import shutil
@@ -11,7 +12,9 @@ import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from harness import Daemon, draco_counts, sphere  # noqa: E402
+from harness import Daemon, draco_counts, http_request, sphere, wait_until  # noqa: E402
+
+SENDFILE_MIN = 64 << 10  # server/isomeshd/respond.c: smaller bodies are copied
 
 
 class PersistenceTest(unittest.TestCase):
@@ -81,6 +84,36 @@ class PersistenceTest(unittest.TestCase):
         with Daemon("--workers", "1", cache_dir=self.cache) as d:
             self.assertEqual(d.get("/v1/meshes/%s.drc" % key).header("X-Cache"), "hit")
             self.assertEqual(d.metric("isomesh_cache_corrupt_total", tier="disk"), 0)
+
+    def test_a_large_cached_body_is_sent_from_its_disk_file(self):
+        with Daemon("--workers", "1", cache_dir=self.cache) as d:
+            first = d.post("/v1/mesh", {"preset": "gyroid-ball", "depth": {"max": 6}})
+            self.assertEqual(first.status, 200)
+            self.assertGreater(len(first.body), SENDFILE_MIN)
+            key = first.header("ETag").strip('"')
+            url = "/v1/meshes/%s.drc" % key
+            wait_until("the file on disk", lambda: glob.glob(
+                os.path.join(self.cache, "**", "%s.drc" % key), recursive=True))
+            path = self.cache_file(key, "drc")
+            wait_until("the file complete",
+                       lambda: os.path.getsize(path) == len(first.body) + 24)
+            sent = d.metric("isomesh_sendfile_responses_total")
+            got = d.get(url)
+            self.assertEqual(got.status, 200)
+            self.assertEqual(got.body, first.body)
+            self.assertEqual(got.header("Content-Type"), first.header("Content-Type"))
+            self.assertEqual(d.metric("isomesh_sendfile_responses_total"), sent + 1)
+            head = http_request(d.port, "HEAD", url)
+            self.assertEqual(int(head.header("Content-Length")), len(first.body))
+            self.assertEqual(d.post("/v1/mesh", {"preset": "gyroid-ball", "depth": {"max": 6}})
+                             .body, first.body)  # a synchronous hit too
+            sent = d.metric("isomesh_sendfile_responses_total")
+            # a file that does not hold exactly these bytes' length is not used
+            with open(path, "ab") as f:
+                f.write(b"x")
+            again = d.get(url)
+            self.assertEqual(again.body, first.body)
+            self.assertEqual(d.metric("isomesh_sendfile_responses_total"), sent)
 
     def test_unwritable_cache_dir_still_serves(self):
         blocker = os.path.join(self.tmp, "file")
