@@ -1,0 +1,83 @@
+#!/usr/bin/env python3
+"""bench_front.py — the shipped nginx front (deploy/nginx/isomesh.conf, as tests/deploy/stack.py
+generates it: every upstream pointed at one daemon, one nginx worker per core) beside the
+daemon it fronts, in the same run: wrk fetching one cached mesh by key
+(/v1/meshes/{key}.drc, kummer-16-nodes at depth 8, ~310 KB) at 16, 64 and 256 connections,
+directly and through nginx (its proxy_cache answers every request after the first).
+
+Goal (issue 17): through nginx >= 80% of the daemon's direct req/s. Also prints how many of
+the daemon's answers went out by sendfile from the disk cache (issue 16). Prints the load
+average (above the core count, compare the ratios only); asserts nothing."""
+import argparse
+import os
+import shutil
+import sys
+import tempfile
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+sys.path.insert(0, os.path.join(os.path.dirname(HERE), "deploy"))
+import bench_http  # noqa: E402
+import stack  # noqa: E402
+
+QUICK = os.environ.get("ISOMESH_TEST_QUICK") == "1"
+CONNS = (16, 64, 256)
+GOAL = 0.8
+
+
+def nginx_front(daemon_port):
+    """stack.Nginx on the shipped site, with a worker per core as Debian's nginx.conf has."""
+    n = stack.Nginx([daemon_port])
+    with open(n.conf) as f:
+        text = f.read()
+    with open(n.conf, "w") as f:
+        f.write(text.replace("worker_processes 1;", "worker_processes auto;")
+                    .replace("worker_connections 512;", "worker_connections 2048;"))
+    return n.start()
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--build", default="build/release")
+    args = ap.parse_args()
+    build = os.path.abspath(args.build)
+    if not shutil.which("wrk") or not stack.NGINX:
+        print("skipped: wrk or nginx missing")
+        return 0
+    tmp = tempfile.mkdtemp(prefix="isomesh_bench_front_")
+    d = bench_http.start_daemon(build, tmp, "--workers", "2")
+    n = None
+    try:
+        url, body = bench_http.cached_url(d, bench_http.MESH_REQ)
+        n = nginx_front(d.port)
+        nurl = url.replace(":%d/" % d.port, ":%d/" % n.port)
+        secs = 2 if QUICK else 8
+        print("load average %s on %d cores" % (" ".join("%.1f" % x for x in os.getloadavg()),
+                                                os.cpu_count()))
+        print("%-34s %6s %10s %9s %9s %7s" % ("server", "conns", "req/s", "p50 ms", "p99 ms",
+                                              ">2 s"))
+        ratios = []
+        for conns in CONNS:
+            direct = bench_http.wrk(url, conns, secs, pid=d.proc.pid)
+            front = bench_http.wrk(nurl, conns, secs, pid=bench_http.nginx_workers(n.proc.pid))
+            for name, r in (("isomeshd direct", direct), ("nginx front (shipped config)", front)):
+                print("%-34s %6d %10.0f %9.3f %9.3f %7d%s" % (
+                    name, conns, r["rps"], r["p50"], r["p99"], r["over2s"],
+                    "  (%d non-2xx, %d socket errors)" % (r["bad"], r["errors"])
+                    if r["bad"] or r["errors"] else ""))
+            ratios.append(front["rps"] / direct["rps"])
+        print("nginx front / daemon req/s: %s; goal >= %.0f%%: %s" % (
+            ", ".join("%d conns %.2f" % (c, q) for c, q in zip(CONNS, ratios)), GOAL * 100,
+            "met" if min(ratios) >= GOAL else "NOT met"))
+        print("daemon answers sent from the disk cache file (sendfile): %d"
+              % d.metric("isomesh_sendfile_responses_total"))
+    finally:
+        if n:
+            n.cleanup()
+        d.cleanup()
+        shutil.rmtree(tmp, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
