@@ -17,6 +17,7 @@
 typedef struct rim_edge {
     uint32_t from, to;   /* the direction new triangles traverse */
     uint32_t lo, hi;     /* sorted ends (for removing duplicates) */
+    uint32_t live;       /* the live triangle on it */
 } rim_edge;
 
 void cf_loops_free(cf_loops *ls)
@@ -122,6 +123,7 @@ static bool rim_edges(const cf_ctx *c, const uint32_t *rm, size_t nrm, rim_edge 
             e[n].to = ab ? a : b;
             e[n].lo = a < b ? a : b;
             e[n].hi = a < b ? b : a;
+            e[n].live = t;
             n++;
         }
     }
@@ -314,6 +316,82 @@ static bool select_triangles(cf_ctx *c, const cf_cutter *cut, uint32_t **out, si
     return true;
 }
 
+/* Kept pieces of at most this many triangles that the cut encloses (every edge of the
+ * piece's boundary shared with a removed triangle) are removed too, else each is a rim loop
+ * of its own. The cut's boundary wiggles by about a cell, which leaves single triangles and
+ * pairs behind; a larger piece is a part of a sheet that the cut passes by, and its rim
+ * joins the cut's. */
+#define ISLAND_MAX_TRIS 8
+
+typedef struct island {
+    uint32_t t[ISLAND_MAX_TRIS];
+    size_t n;
+} island;
+
+/* Adds live triangle u to the island; false when it outgrows ISLAND_MAX_TRIS. */
+static bool island_add(island *is, uint32_t u)
+{
+    for (size_t i = 0; i < is->n; i++)
+        if (is->t[i] == u)
+            return true;
+    if (is->n == ISLAND_MAX_TRIS)
+        return false;
+    is->t[is->n++] = u;
+    return true;
+}
+
+/* Floods from live triangle t through live triangles sharing an edge (dead ones are the
+ * cut): true with the piece in is when it closes within ISLAND_MAX_TRIS triangles. */
+static bool enclosed_island(const cf_ctx *c, uint32_t t, island *is)
+{
+    is->n = 0;
+    island_add(is, t);
+    for (size_t i = 0; i < is->n; i++) {
+        const uint32_t *v = c->m->tri + 3 * (size_t)is->t[i];
+        for (int k = 0; k < 3; k++) {
+            uint32_t a = v[k], b = v[(k + 1) % 3], u;
+            cf_inc it;
+            for (cf_inc_begin(c, a, &it); cf_inc_next(c, &it, &u);) {
+                const uint32_t *w = c->m->tri + 3 * (size_t)u;
+                if ((w[0] == b || w[1] == b || w[2] == b) && !island_add(is, u))
+                    return false;
+            }
+        }
+    }
+    return true;
+}
+
+/* Removes the kept pieces the cut encloses (ISLAND_MAX_TRIS), found from the live triangles
+ * on its rim e[0..ne), appending them to *rm (*n); *grew when there were any.
+ *
+ *     ╲ cut ╱╲ cut ╱      the triangle in the middle kept no corner and no sample within
+ *      ╲   ╱kept╲ ╱       the radius, but each of its neighbours did: kept, it is a rim
+ *       ╲ ╱______╲        loop of three of its own, zipped to the curve across the hole
+ *                         (a pinch point's tube at depth 5, 0.37 cell off the lattice)
+ */
+static bool absorb_islands(cf_ctx *c, const rim_edge *e, size_t ne, uint32_t **rm, size_t *n,
+                           bool *grew)
+{
+    *grew = false;
+    for (size_t k = 0; k < ne; k++) {
+        island is;
+        if (c->dead[e[k].live] || !enclosed_island(c, e[k].live, &is))
+            continue;
+        uint32_t *r = realloc(*rm, (*n + is.n) * sizeof *r);
+        if (!r)
+            return false;
+        *rm = r;
+        for (size_t i = 0; i < is.n; i++) {
+            c->dead[is.t[i]] = 1;
+            r[(*n)++] = is.t[i];
+        }
+        *grew = true;
+    }
+    if (*grew)
+        qsort(*rm, *n, sizeof **rm, cmp_u32);
+    return true;
+}
+
 bool cf_cut_hole(cf_ctx *c, const cf_cutter *cut, cf_loops *out, uint32_t **removed,
                  size_t *nremoved)
 {
@@ -328,7 +406,14 @@ bool cf_cut_hole(cf_ctx *c, const cf_cutter *cut, cf_loops *out, uint32_t **remo
         c->dead[rm[i]] = 1;
     rim_edge *e = NULL;
     size_t ne = 0;
-    if (!rim_edges(c, rm, n, &e, &ne) || !chain_rim(e, ne, out)) {
+    bool grew = false;
+    bool ok = rim_edges(c, rm, n, &e, &ne) && absorb_islands(c, e, ne, &rm, &n, &grew);
+    if (ok && grew) {
+        free(e);
+        e = NULL;
+        ok = rim_edges(c, rm, n, &e, &ne);
+    }
+    if (!ok || !chain_rim(e, ne, out)) {
         free(e);
         cf_loops_free(out);
         for (size_t i = 0; i < n; i++)

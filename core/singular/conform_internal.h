@@ -181,9 +181,10 @@ typedef struct cf_cutter {
     bool (*gather)(cf_ctx *c, void *arg, cf_tris *out);
     void *arg;
 } cf_cutter;
-/* Marks dead the triangles the cutter selects (*removed, in increasing order), then chains
- * the hole's boundary edges (edges left with one live triangle that lost at least one) into
- * loops. Returns false on allocation failure (nothing marked then). */
+/* Marks dead the triangles the cutter selects and the kept pieces of a few triangles they
+ * enclose (*removed, in increasing order), then chains the hole's boundary edges (edges
+ * left with one live triangle that lost at least one) into loops. Returns false on
+ * allocation failure (nothing marked then). */
 bool cf_cut_hole(cf_ctx *c, const cf_cutter *cut, cf_loops *out, uint32_t **removed,
                  size_t *nremoved);
 /* cf_cut_hole, grown (*radius, which the cutter reads through its arg, times a factor) until

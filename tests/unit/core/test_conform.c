@@ -633,12 +633,12 @@ Test(conform, steiner_roman_pinch_and_triple_points)
     const pf_surface s = {"x^2*y^2 + y^2*z^2 + z^2*x^2 + x*y*z", NULL, 0, NULL, 0};
     ism_tape *t = pf_compile(&s);
     const double base[6] = {-1, -1, -1, 1, 1, 1};
-    /* depth 6 in quick runs too: at depth 5 in the box 0.37 cell off the lattice one pinch
-     * point's tube leaves a non-manifold edge 0.03 off the axes and a boundary edge (3
-     * artefacts) — an open defect of the conformance pass (issue 13), not hidden elsewhere:
-     * the release run of tests/bench/sweep_singular.py shows it */
-    int dmax = 6;
-    for (int w = 0; w < 3; w++) {
+    /* depth 5 in every box: 0.37 cell off the lattice the tube once enclosed a kept
+     * triangle by a pinch point, whose rim (a loop of three) was zipped to the curve: a
+     * non-manifold edge 0.03 off the axes and a boundary edge. Depth 6 in the shifted boxes
+     * (release runs only) */
+    for (int pass = 0; pass < (pf_quick() ? 3 : 5); pass++) {
+        int dmax = pass < 3 ? 5 : 6, w = pass < 3 ? pass : pass - 2;
         double box[6];
         shifted_box(base, shift_amount(w, base, dmax), box);
         ism_locus l;
@@ -658,7 +658,7 @@ Test(conform, steiner_roman_pinch_and_triple_points)
         run_result r;
         run(t, box, dmax, &l, dist_to_segments, NULL, &m, &r);
         char what[64];
-        snprintf(what, sizeof what, "steiner, shift %d", w);
+        snprintf(what, sizeof what, "steiner, depth %d shift %d", dmax, w);
         size_t n, four;
         double far;
         nm_edges(&m, dist_to_segments, &n, &four, &far);
