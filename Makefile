@@ -20,6 +20,10 @@ CXX := g++
 OUT ?= build/release
 SAN ?=
 OPT ?= -O2
+# Debug information. The sanitizer build of `make test` asks for -g1: line tables and function
+# names (all a sanitizer's stack trace prints) for ~40% less compile CPU than full -g
+# (draco_encode.cc: 6.7 s against 10.9 s at -O1 with ASan+UBSan).
+DEBUG ?= -g
 PYTHON ?= python3
 LISTEN ?= 127.0.0.1:8080
 # The daemon `make run` starts keeps its cache here (one per checkout, not one per user).
@@ -29,8 +33,8 @@ JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
 WARN     := -Wall -Wextra -Werror
 CPPFLAGS := -I. -D_GNU_SOURCE -MMD -MP
-CFLAGS   := -std=c11 $(OPT) -g $(WARN) -pthread
-CXXFLAGS := -std=c++17 $(OPT) -g $(WARN) -pthread
+CFLAGS   := -std=c11 $(OPT) $(DEBUG) $(WARN) -pthread
+CXXFLAGS := -std=c++17 $(OPT) $(DEBUG) $(WARN) -pthread
 LDFLAGS  := -pthread
 ifeq ($(SAN),1)
   SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
@@ -97,7 +101,7 @@ run: deps web-deps
 test: deps-test
 	$(MAKE) -j$(JOBS) build web-deps test-deps
 	$(PYTHON) tests/run_suites.py --jobs $(JOBS) --release build/release --asan build/asan \
-	    --asan-build '$(MAKE) -j$(JOBS) OUT=build/asan SAN=1 OPT=-O1 unit-bins'
+	    --asan-build '$(MAKE) -j$(JOBS) OUT=build/asan SAN=1 OPT=-O1 DEBUG=-g1 unit-bins'
 
 bench: deps-bench build $(BENCH_BINS)
 	$(PYTHON) tests/bench/run_bench.py --build $(OUT)

@@ -9,8 +9,12 @@ import math
 import os
 import struct
 import subprocess
+import sys
 import tempfile
 import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from boxes import placements  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
@@ -21,14 +25,9 @@ GOAL_DEG = 20.0  # issue 15: no triangle under 20 degrees on smooth closed surfa
 
 
 def shifted_boxes(centre, half):
-    """The symmetric box and two copies shifted by 1e-3 and by 0.37 (per axis 0.37, -0.23,
-    0.41) of a finest cell."""
-    cell = 2 * half / 2 ** MAX_DEPTH
-    out = []
-    for s in [(0, 0, 0), (1e-3, -1e-3, 0.7e-3), (0.37 * cell, -0.23 * cell, 0.41 * cell)]:
-        lo = [centre[k] - half + s[k] for k in range(3)]
-        out.append(lo + [lo[k] + 2 * half for k in range(3)])
-    return out
+    """The box of side 2 half around centre and its copies shifted off the lattice (boxes.py)."""
+    box = [c - half for c in centre] + [c + half for c in centre]
+    return placements(box, 2 * half / 2 ** MAX_DEPTH)
 
 
 def read_ply(path):

@@ -8,8 +8,12 @@ import json
 import math
 import os
 import subprocess
+import sys
 import tempfile
 import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from boxes import placements  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
@@ -19,14 +23,8 @@ MAX_DEPTH = 6
 
 
 def shifted_boxes(half):
-    """The symmetric box [-half, half]^3 and two shifted copies: by 1e-3 (x up, y down, z up
-    by 0.7e-3) and by 0.37 of a finest cell (different fractions per axis, so no lattice plane
-    of any depth passes through the origin)."""
-    cell = 2 * half / 2 ** MAX_DEPTH
-    out = []
-    for sx, sy, sz in [(0, 0, 0), (1e-3, -1e-3, 0.7e-3), (0.37 * cell, -0.23 * cell, 0.41 * cell)]:
-        out.append([-half + sx, -half + sy, -half + sz, half + sx, half + sy, half + sz])
-    return out
+    """The symmetric box [-half, half]^3 and its copies shifted off the lattice (boxes.py)."""
+    return placements([-half] * 3 + [half] * 3, 2 * half / 2 ** MAX_DEPTH)
 
 
 def diagonal(box):
@@ -181,13 +179,9 @@ class DoubleSheetTest(unittest.TestCase):
 
 
 def preset_boxes(box, depth):
-    """The preset's own box and two copies shifted off its lattice (see shifted_boxes)."""
+    """The preset's own box and its copies shifted off its lattice (boxes.py)."""
     side = max(box[3] - box[0], box[4] - box[1], box[5] - box[2])
-    cell = side / 2 ** depth
-    out = []
-    for sx, sy, sz in [(0, 0, 0), (1e-3, -1e-3, 0.7e-3), (0.37 * cell, -0.23 * cell, 0.41 * cell)]:
-        out.append([box[0] + sx, box[1] + sy, box[2] + sz, box[3] + sx, box[4] + sy, box[5] + sz])
-    return out
+    return placements(box, side / 2 ** depth)
 
 
 def preset(name, box, depth):

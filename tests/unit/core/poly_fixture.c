@@ -8,6 +8,11 @@
 #include <string.h>
 #include "core/eval/eval.h"
 
+int pf_first_box(void)
+{
+    return pf_quick() ? 2 : 0;
+}
+
 int pf_quick(void)
 {
     const char *q = getenv("ISOMESH_TEST_QUICK");

@@ -31,6 +31,12 @@ typedef struct pf_props {
 /* 1 when ISOMESH_TEST_QUICK is set (sanitizer runs): tests lower their depths by this. */
 int pf_quick(void);
 
+/* The first of the three box placements (0 as given, 1 shifted by 1e-3, 2 by 0.37 of a finest
+ * cell) a test loops from: 0 normally; 2 under ISOMESH_TEST_QUICK, so the sanitizer run, which
+ * looks for memory errors rather than geometry, meshes only the least lattice-aligned box while
+ * the release run checks all three. */
+int pf_first_box(void);
+
 ism_tape *pf_compile(const pf_surface *s);
 
 /* Polygonises with the given box and depths (other options default); asserts success. */

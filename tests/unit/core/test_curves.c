@@ -182,13 +182,13 @@ static void torus_cut(int which, ism_cut_fn fn, double len_lo, double len_hi)
 
 Test(curves, torus_x0)
 {
-    for (int w = 0; w < 3; w++)
+    for (int w = pf_first_box(); w < 3; w++)
         torus_cut(w, plane(1, 0, 0, 0), 2 * M_PI * 0.4, 2 * M_PI * 0.4);
 }
 
 Test(curves, torus_z0)
 {
-    for (int w = 0; w < 3; w++)
+    for (int w = pf_first_box(); w < 3; w++)
         torus_cut(w, plane(0, 0, 1, 0), 2 * M_PI * 0.6, 2 * M_PI * 1.4);
 }
 
@@ -442,7 +442,7 @@ static void touching_circles(int which, bool plane_first)
 
 Test(curves, touching_circles)
 {
-    for (int w = 0; w < 3; w++) {
+    for (int w = pf_first_box(); w < 3; w++) {
         touching_circles(w, false);
         touching_circles(w, true);
     }

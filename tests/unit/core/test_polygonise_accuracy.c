@@ -75,7 +75,7 @@ static void check_bound(const pf_surface *s, double (*dist)(const double *), dou
 {
     static const double shifts[] = {0, 1e-3 * FINEST, 0.37 * FINEST};
     ism_tape *t = pf_compile(s);
-    for (size_t i = 0; i < sizeof shifts / sizeof shifts[0]; i++) {
+    for (size_t i = (size_t)pf_first_box(); i < sizeof shifts / sizeof shifts[0]; i++) {
         ism_mesh m;
         ism_poly_stats st;
         run_bounded(t, shifts[i], e, SAFETY_DEPTH, &m, &st);

@@ -204,7 +204,7 @@ Test(thin, horn_cyclide_depth_6, .timeout = 120)
 
 Test(thin, horn_cyclide_depth_7, .timeout = 120)
 {
-    for (int w = 0; w < 3; w++)
+    for (int w = pf_first_box(); w < 3; w++)
         check_horn(7, w);
 }
 
