@@ -14,7 +14,8 @@ import unittest
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from harness import Daemon, draco_counts, http_request, sphere, wait_until  # noqa: E402
 
-SENDFILE_MIN = 64 << 10  # server/isomeshd/respond.c: smaller bodies are copied
+SENDFILE_MIN = 1 << 20  # server/isomeshd/respond.c: smaller bodies are copied
+LARGE = {"preset": "gyroid-ball", "depth": {"max": 6}, "output": {"format": "stl"}}
 
 
 class PersistenceTest(unittest.TestCase):
@@ -87,14 +88,14 @@ class PersistenceTest(unittest.TestCase):
 
     def test_a_large_cached_body_is_sent_from_its_disk_file(self):
         with Daemon("--workers", "1", cache_dir=self.cache) as d:
-            first = d.post("/v1/mesh", {"preset": "gyroid-ball", "depth": {"max": 6}})
+            first = d.post("/v1/mesh", LARGE)
             self.assertEqual(first.status, 200)
             self.assertGreater(len(first.body), SENDFILE_MIN)
             key = first.header("ETag").strip('"')
-            url = "/v1/meshes/%s.drc" % key
+            url = "/v1/meshes/%s.stl" % key
             wait_until("the file on disk", lambda: glob.glob(
-                os.path.join(self.cache, "**", "%s.drc" % key), recursive=True))
-            path = self.cache_file(key, "drc")
+                os.path.join(self.cache, "**", "%s.stl" % key), recursive=True))
+            path = self.cache_file(key, "stl")
             wait_until("the file complete",
                        lambda: os.path.getsize(path) == len(first.body) + 24)
             sent = d.metric("isomesh_sendfile_responses_total")
@@ -105,7 +106,7 @@ class PersistenceTest(unittest.TestCase):
             self.assertEqual(d.metric("isomesh_sendfile_responses_total"), sent + 1)
             head = http_request(d.port, "HEAD", url)
             self.assertEqual(int(head.header("Content-Length")), len(first.body))
-            self.assertEqual(d.post("/v1/mesh", {"preset": "gyroid-ball", "depth": {"max": 6}})
+            self.assertEqual(d.post("/v1/mesh", LARGE)
                              .body, first.body)  # a synchronous hit too
             sent = d.metric("isomesh_sendfile_responses_total")
             # a file that does not hold exactly these bytes' length is not used
