@@ -453,6 +453,7 @@ bool ism_frame_job_encode(const ism_frame_job *j, ism_frame_builder *b)
     ism_frame_put_u32(b, j->threads);
     ism_frame_put_u64(b, j->max_triangles);
     ism_frame_put_u64(b, j->max_memory);
+    ism_frame_put_u32(b, j->timeout_ms);
     ism_frame_put_str(b, j->format);
     ism_frame_put_bytes(b, j->json, j->json_len);
     ism_frame_put_bytes(b, j->computed, j->computed_len);
@@ -470,6 +471,7 @@ bool ism_frame_job_decode(const ism_frame *f, ism_frame_job *j)
     j->threads = ism_frame_get_u32(&c);
     j->max_triangles = ism_frame_get_u64(&c);
     j->max_memory = ism_frame_get_u64(&c);
+    j->timeout_ms = ism_frame_get_u32(&c);
     ism_frame_get_str(&c, j->format, sizeof j->format);
     j->json = ism_frame_get_bytes(&c, &j->json_len);
     j->computed = ism_frame_get_bytes(&c, &j->computed_len);

@@ -151,6 +151,9 @@ typedef struct ism_frame_job {
     uint32_t threads;
     uint64_t max_triangles;
     uint64_t max_memory;
+    uint32_t timeout_ms;       /* the daemon stops the job this long after sending it (0 =
+                                  never): the worker's stages that can stop early do so
+                                  before then */
     char format[8];            /* "" = the request's own format */
     const unsigned char *json; /* the request JSON (points into the payload when decoded) */
     size_t json_len;

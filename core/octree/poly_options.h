@@ -45,6 +45,11 @@ typedef struct ism_poly_options {
     /* Optional cancellation: polled often; when it becomes non-zero the call stops with
      * ISM_POLY_CANCELLED. */
     const volatile int *cancel;
+    /* Optional deadline, an ism_now_ms() time (0 = none), for the stages that can stop with a
+     * partial answer: the singular locus, its double sheets and the conformance pass
+     * (core/singular/surface.h) stop past it and mark the locus incomplete. The polygoniser
+     * itself does not read it (a partial mesh is no answer; cancel stops it). */
+    double deadline_ms;
 } ism_poly_options;
 
 #endif

@@ -90,6 +90,8 @@ bool ism_poly_options_check(const ism_poly_options *o, ism_error *err)
         return ism_error_set(err, "threads: must be in 0..%d", MAX_THREADS);
     if (o->max_triangles < 1)
         return ism_error_set(err, "max_triangles: must be at least 1");
+    if (!in_range(o->deadline_ms, 0, 1e300))
+        return ism_error_set(err, "deadline_ms: must be a finite number >= 0 (0: none)");
     return true;
 }
 

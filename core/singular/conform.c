@@ -114,6 +114,26 @@ static bool run_items(cf_run *r)
     return true;
 }
 
+/* Marks the locus incomplete (unless an earlier stage did), naming what was left as the
+ * polygoniser made it: the double curves and sheet-carrying points not conformed. */
+static void say_cut_short(const cf_run *r)
+{
+    ism_locus *l = r->l;
+    if (l->incomplete)
+        return;
+    size_t curves = 0, points = 0;
+    for (size_t i = 0; i < l->ncurves; i++)
+        curves += l->curves[i].kind == ISM_CURVE_DOUBLE;
+    curves -= r->c.st->curves_conformed + r->c.st->curves_failed;
+    for (size_t i = 0; i < l->npoints; i++)
+        points += carries_sheets(l->points[i].type) && l->points[i].cones < 0 &&
+                  r->point_vertex[i] == CF_NONE;
+    l->incomplete = true;
+    snprintf(l->incomplete_why, sizeof l->incomplete_why,
+             "conformance %s: %zu double curves, %zu points not conformed",
+             r->o->cancel && *r->o->cancel ? "cancelled" : "past the deadline", curves, points);
+}
+
 /* The surgery's scale is the longest side's cell: the octree's cells are boxes, the surgery
  * must span them. */
 static double longest_side(const ism_locus_options *o)
@@ -146,11 +166,8 @@ bool ism_conform_mesh(const ism_tape *f, const ism_locus_options *o, ism_locus *
     for (size_t i = 0; ok && i < locus->npoints; i++)
         r.point_vertex[i] = CF_NONE;
     ok = ok && run_items(&r);
-    if (ok && stop_now(o) && !locus->incomplete) {
-        locus->incomplete = true;
-        snprintf(locus->incomplete_why, sizeof locus->incomplete_why,
-                 "conformance cut short (deadline or cancel)");
-    }
+    if (ok && stop_now(o))
+        say_cut_short(&r);
     /* compaction also after a failure: what was refilled stays, nothing is left dead */
     bool compacted = r.c.dead == NULL || cf_compact(&r.c);
     if (!ok || !compacted)

@@ -18,6 +18,7 @@ void ism_locus_options_from_poly(const ism_poly_options *po, ism_locus_options *
     lo->max_depth = po->max_depth;
     lo->threads = po->threads;
     lo->cancel = po->cancel;
+    lo->deadline_ms = po->deadline_ms;
 }
 
 /* Share of the conformance pass's smallest ball (and tube) in which the polygoniser does not chase
@@ -112,6 +113,10 @@ enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options 
     double none[1][4] = {{0, 0, 0, 0}}; /* the locus is known, and empty */
     pq.quiet = balls.n ? (const double (*)[4])balls.b : (const double (*)[4])none;
     pq.nquiet = balls.n;
+    if (locus->incomplete) { /* points may be missing: chase as without a locus (bounded) */
+        pq.quiet = NULL;
+        pq.nquiet = 0;
+    }
     enum ism_poly_status st = ism_polygonise(f, &pq, mesh, ps, err);
     free(balls.b);
     double t2 = ism_now_ms();

@@ -18,15 +18,16 @@ typedef struct ism_surface_times {
     double polygonise_ms;
 } ism_surface_times;
 
-/* The locus options that go with polygoniser options: the same box, depth, threads and
- * cancellation. */
+/* The locus options that go with polygoniser options: the same box, depth, threads,
+ * cancellation and deadline. */
 void ism_locus_options_from_poly(const ism_poly_options *po, ism_locus_options *lo);
 
 /* Meshes f = 0 in po->box: mesh (initialised by the caller) gets the conforming mesh, locus
  * (initialised by the caller) what was found from f, cs what the conformance pass did.
  * Returns the polygoniser's status (BAD_OPTIONS, NO_MEMORY also for the locus stages); a
- * locus stage cut short by cancellation or its budget marks locus->incomplete and the mesh
- * is still returned. */
+ * locus stage cut short by its budget or po->deadline_ms marks locus->incomplete (the reason
+ * in incomplete_why) and the mesh is still returned, conformed as far as the pass got
+ * (a locus cut short before the polygoniser: hidden pieces chased as without a locus). */
 enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options *po,
                                       ism_mesh *mesh, ism_locus *locus, ism_poly_stats *ps,
                                       ism_conform_stats *cs, ism_surface_times *times,

@@ -456,6 +456,7 @@ static bool polygonise_and_analyse(const ism_request *req, const ism_tape *tape,
     o.progress = polygoniser_progress;
     o.progress_ctx = &pm;
     o.cancel = hooks ? hooks->cancel : NULL;
+    o.deadline_ms = hooks ? hooks->deadline_ms : 0;
     char why[400];
     ism_resolvable rv = ism_resolvable_check(tape, req->poly.box, why, sizeof why);
     if (rv == ISM_RESOLVABLE_NO_MEMORY)

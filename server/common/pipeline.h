@@ -60,11 +60,14 @@ typedef struct ism_pipeline_result {
 
 void ism_pipeline_result_free(ism_pipeline_result *r);
 
-/* Progress in [0, 1]; cancel polled often (non-zero stops the run with status 499). */
+/* Progress in [0, 1]; cancel polled often (non-zero stops the run with status 499);
+ * deadline_ms (an ism_now_ms() time, 0 = none): the singular stages stop past it and the
+ * stats and features say the locus is incomplete (the mesh is still answered). */
 typedef struct ism_pipeline_hooks {
     void (*progress)(void *ctx, double fraction);
     void *ctx;
     const volatile int *cancel;
+    double deadline_ms;
     bool keep_computed;       /* fill result.computed (proto/computed.h's entry) */
 } ism_pipeline_hooks;
 

@@ -28,6 +28,11 @@
 #define WORKER_MAX_REQUEST ISM_FRAME_MAX_PAYLOAD
 /* Progress frames at most this often (plus the first one). */
 #define PROGRESS_INTERVAL_NS 50000000LL
+/* Share of the daemon's job timeout after which the singular stages stop (the locus then
+ * reported incomplete): the rest is left to what follows them — the curves, the analysis,
+ * encoding and sending — so the job answers with a partial locus instead of the daemon's
+ * 504 (the polygoniser runs between the stages and is not cut). */
+#define SINGULAR_DEADLINE_SHARE 0.7
 
 /* Polygoniser threads for a job that names none: counted before the sandbox, because counting
  * cores reads /sys. */
@@ -158,6 +163,8 @@ static bool run_job(int out_fd, const ism_frame *f)
     ism_pipeline_result pr;
     memset(&pr, 0, sizeof pr);
     long long start = ism_now_ns();
+    if (job.timeout_ms)
+        hooks.deadline_ms = (double)start / 1e6 + SINGULAR_DEADLINE_SHARE * job.timeout_ms;
     const char *json = (const char *)job.json, *format = job.format[0] ? job.format : NULL;
     /* From the stored surface when there is one that fits; computed otherwise. */
     if (!job.computed_len ||

@@ -9,6 +9,7 @@
 
 #include <errno.h>
 #include <limits.h>
+#include <math.h>
 #include <pthread.h>
 #include <signal.h>
 #include <stdatomic.h>
@@ -462,6 +463,13 @@ static ism_blob *stored_surface(ismd_pool *p, const ismd_flight *f, char surface
     return keyed ? ism_cache_get(p->cache, name, NULL) : NULL;
 }
 
+/* The job timeout in whole milliseconds for the worker (0: none; clamped to the field). */
+static uint32_t job_timeout_ms(double seconds)
+{
+    double ms = floor(seconds * 1e3);
+    return !(ms > 0) ? 0 : ms >= (double)UINT32_MAX ? UINT32_MAX : (uint32_t)ms;
+}
+
 static bool encode_request(ismd_pool *p, worker *w, const ismd_flight *f, ism_blob *stored)
 {
     ism_frame_job job = {
@@ -469,6 +477,7 @@ static bool encode_request(ismd_pool *p, worker *w, const ismd_flight *f, ism_bl
         .threads = (uint32_t)p->cfg.threads,
         .max_triangles = p->cfg.max_triangles,
         .max_memory = p->cfg.job_memory ? p->cfg.job_memory / 4 * 3 : 0,
+        .timeout_ms = job_timeout_ms(p->sched->job_timeout_s),
         .json = f->request->data,
         .json_len = f->request->len,
         .computed = stored ? stored->data : NULL,

@@ -282,7 +282,7 @@ Test(payload, job_round_trip_and_truncation)
 {
     const char *json = "{\"preset\": \"sphere\"}";
     ism_frame_job j = {.max_depth = 9, .threads = 3, .max_triangles = 123456789012ULL,
-                       .max_memory = 1ULL << 33, .format = "glb",
+                       .max_memory = 1ULL << 33, .timeout_ms = 61000, .format = "glb",
                        .json = (const unsigned char *)json, .json_len = strlen(json)};
     ism_frame_builder b = {0};
     cr_assert(ism_frame_job_encode(&j, &b));
@@ -293,6 +293,7 @@ Test(payload, job_round_trip_and_truncation)
     cr_assert_eq(d.threads, 3);
     cr_assert_eq(d.max_triangles, 123456789012ULL);
     cr_assert_eq(d.max_memory, 1ULL << 33);
+    cr_assert_eq(d.timeout_ms, 61000);
     cr_assert_str_eq(d.format, "glb");
     cr_assert_eq(d.json_len, strlen(json));
     cr_assert_eq(memcmp(d.json, json, d.json_len), 0);
