@@ -392,39 +392,54 @@ static bool absorb_islands(cf_ctx *c, const rim_edge *e, size_t ne, uint32_t **r
     return true;
 }
 
-bool cf_cut_hole(cf_ctx *c, const cf_cutter *cut, cf_loops *out, uint32_t **removed,
-                 size_t *nremoved)
+/* Marks dead the live triangles the cutter selects now and merges them into the sorted list
+ * *rm of n removed before (a wider cut removes all a narrower one did: only the triangles
+ * still live are tested again). False when out of memory (nothing more marked then). */
+static bool cut_more(cf_ctx *c, const cf_cutter *cut, uint32_t **rm, size_t *n)
+{
+    uint32_t *add = NULL;
+    size_t na = 0;
+    if (!select_triangles(c, cut, &add, &na))
+        return false;
+    uint32_t *m = na ? malloc((*n + na) * sizeof *m) : NULL;
+    if (na && !m) {
+        free(add);
+        return false;
+    }
+    size_t i = 0, j = 0, k = 0;
+    while (na && (i < *n || j < na))
+        m[k++] = j == na || (i < *n && (*rm)[i] < add[j]) ? (*rm)[i++] : add[j++];
+    for (j = 0; j < na; j++)
+        c->dead[add[j]] = 1;
+    free(add);
+    if (na) {
+        free(*rm);
+        *rm = m;
+        *n += na;
+    }
+    return true;
+}
+
+/* The hole's rim around the removed triangles *rm (n), the kept pieces of a few triangles
+ * the cut encloses removed too (added to *rm), chained into loops (out emptied first).
+ * False when out of memory (out then empty). */
+static bool rim_loops(cf_ctx *c, uint32_t **rm, size_t *n, cf_loops *out)
 {
     memset(out, 0, sizeof *out);
-    *removed = NULL;
-    *nremoved = 0;
-    size_t n = 0;
-    uint32_t *rm = NULL;
-    if (!select_triangles(c, cut, &rm, &n))
-        return false;
-    for (size_t i = 0; i < n; i++)
-        c->dead[rm[i]] = 1;
     rim_edge *e = NULL;
     size_t ne = 0;
     bool grew = false;
-    bool ok = rim_edges(c, rm, n, &e, &ne) && absorb_islands(c, e, ne, &rm, &n, &grew);
+    bool ok = rim_edges(c, *rm, *n, &e, &ne) && absorb_islands(c, e, ne, rm, n, &grew);
     if (ok && grew) {
         free(e);
         e = NULL;
-        ok = rim_edges(c, rm, n, &e, &ne);
+        ok = rim_edges(c, *rm, *n, &e, &ne);
     }
-    if (!ok || !chain_rim(e, ne, out)) {
-        free(e);
-        cf_loops_free(out);
-        for (size_t i = 0; i < n; i++)
-            c->dead[rm[i]] = 0;
-        free(rm);
-        return false;
-    }
+    ok = ok && chain_rim(e, ne, out);
     free(e);
-    *removed = rm;
-    *nremoved = n;
-    return true;
+    if (!ok)
+        cf_loops_free(out);
+    return ok;
 }
 
 void cf_undo(cf_ctx *c, const uint32_t *removed, size_t nremoved, size_t ntris, size_t nverts)
@@ -481,15 +496,21 @@ bool cf_cut_clean(cf_ctx *c, const cf_cutter *cut, double *radius, double max_ra
 {
     if (*radius > max_radius)
         *radius = max_radius;
+    memset(ls, 0, sizeof *ls);
+    *removed = NULL;
+    *nremoved = 0;
     for (int k = 0;; k++) {
-        if (!cf_cut_hole(c, cut, ls, removed, nremoved))
+        if (!cut_more(c, cut, removed, nremoved) || !rim_loops(c, removed, nremoved, ls)) {
+            cf_undo(c, *removed, *nremoved, c->m->ntris, c->m->nverts);
+            free(*removed);
+            *removed = NULL;
+            *nremoved = 0;
             return false;
+        }
         if (k == MAX_GROW || ls->n == 0 || *radius * GROW > max_radius ||
             cf_rim_clear(c, ls, CLEAR_CELLS * c->cell))
             return true;
-        cf_undo(c, *removed, *nremoved, c->m->ntris, c->m->nverts);
-        free(*removed);
-        cf_loops_free(ls);
+        cf_loops_free(ls); /* wider: the removed triangles stay removed */
         *radius *= GROW;
         c->st->cuts_widened++;
     }

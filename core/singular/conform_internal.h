@@ -182,14 +182,12 @@ typedef struct cf_cutter {
     void *arg;
 } cf_cutter;
 /* Marks dead the triangles the cutter selects and the kept pieces of a few triangles they
- * enclose (*removed, in increasing order), then chains the hole's boundary edges (edges
- * left with one live triangle that lost at least one) into loops. Returns false on
+ * enclose (*removed, in increasing order), chains the hole's boundary edges (edges left with
+ * one live triangle that lost at least one) into loops, and grows the cut (*radius, which
+ * the cutter reads through its arg, times a factor; a cutter must select at a larger radius
+ * every triangle it selected at a smaller one) until the rim is clear of other sheets
+ * (cf_rim_clear), a bounded number of times and never beyond max_radius. Returns false on
  * allocation failure (nothing marked then). */
-bool cf_cut_hole(cf_ctx *c, const cf_cutter *cut, cf_loops *out, uint32_t **removed,
-                 size_t *nremoved);
-/* cf_cut_hole, grown (*radius, which the cutter reads through its arg, times a factor) until
- * the rim is clear of other sheets (cf_rim_clear), a bounded number of times and never
- * beyond max_radius. */
 bool cf_cut_clean(cf_ctx *c, const cf_cutter *cut, double *radius, double max_radius,
                   cf_loops *ls, uint32_t **removed, size_t *nremoved);
 /* Undoes a cut whose refilling failed: revives the triangles, drops everything appended
