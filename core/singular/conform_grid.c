@@ -57,6 +57,7 @@ bool cf_tgrid_init(cf_tgrid *g, const double origin[3], double extent, double fi
 {
     memset(g, 0, sizeof *g);
     ism_key_map_init(&g->cells);
+    g->last_cell = CF_NONE;
     for (int k = 0; k < 3; k++)
         g->lo[k] = origin[k];
     g->side = fmax(GRID_CELLS * finest_cell, extent / (COORD_MAX / 2));
@@ -94,8 +95,13 @@ bool cf_tgrid_add(cf_tgrid *g, const ism_mesh *m, uint32_t t)
             c[k] = coord(g, 0.5 * (lo[k] + hi[k]), k, s);
     else
         level = TOP_LEVEL + 1; /* too large for any level (or not finite): read always */
-    bool added;
-    uint32_t cell = ism_key_map_add(&g->cells, pack(level, c), &added);
+    bool added = false;
+    uint64_t key = pack(level, c);
+    uint32_t cell = key == g->last_key && g->last_cell != CF_NONE
+                        ? g->last_cell
+                        : ism_key_map_add(&g->cells, key, &added);
+    g->last_key = key;
+    g->last_cell = cell;
     if (cell == ISM_KEY_NONE ||
         !cf_grow((void **)&g->head, &g->cap_head, (size_t)cell + 1, sizeof *g->head))
         return false;

@@ -27,6 +27,9 @@ typedef struct cf_tgrid {
     uint32_t *cell_of;      /* per triangle: its cell */
     uint32_t *stamp;        /* per triangle: the gather that last took it */
     uint32_t epoch;
+    uint64_t last_key;      /* the cell the last triangle was filed in (consecutive ones of
+                               the polygoniser's mesh mostly share it): no hash probe then */
+    uint32_t last_cell;     /* ... its number, CF_NONE before the first */
     size_t cap_head, cap_next, cap_cell_of, cap_stamp, cap_cell_box;
     size_t ntris;           /* triangles filed: 0 .. ntris-1 */
     size_t per_level[CF_TGRID_LEVELS];

@@ -21,7 +21,8 @@ typedef struct tube {
     double r;
     double lo[3], hi[3]; /* the curves' bounding box */
     double reach;        /* edges up to this long are judged from vd alone */
-    double vd_r;         /* the radius the memo holds distances for (0: none yet) */
+    double vd_r;         /* the radius the memo holds distances for (0: none yet, -1:
+                            the reach changed) */
     uint32_t gen_base;   /* the memo's generation at the group's first radius */
 } tube;
 
@@ -180,28 +181,21 @@ static double *thin_curve(const ism_sing_curve *cu, double min_step, size_t *n)
     return p;
 }
 
-/* Longest edge of the live triangles with a vertex within r of one of the curves (*out;
- * false when out of memory). */
-static bool longest_edge_near_curves(cf_ctx *c, const cf_polyline *pl, size_t n, double r,
-                                     double *out)
+/* Longest edge of the live triangles with a vertex within tb->r of one of the curves (*out;
+ * false when out of memory). The vertices' distances stay memoised for the cut that follows
+ * (the first gather_tube of the group starts the memo). */
+static bool longest_edge_near_curves(cf_ctx *c, tube *tb, double *out)
 {
     cf_tris cand = {0};
     cf_tgrid_begin(&c->grid);
-    bool ok = cf_memo_reset(c) && gather_near_curves(c, pl, n, r, &cand);
+    bool ok = gather_tube(c, tb, &cand);
     double best = 0;
     for (size_t i = 0; ok && i < cand.n; i++) {
         const uint32_t *v = c->m->tri + 3 * (size_t)cand.t[i];
         bool near = false;
         for (int k = 0; k < 3 && !near; k++) {
-            if (c->memo_gen[v[k]] != c->gen) {
-                bool nk = false;
-                for (size_t j = 0; j < n && !nk; j++)
-                    nk = isfinite(cf_polyline_nearest(&pl[j], c->m->pos + 3 * (size_t)v[k], r,
-                                                      NULL, NULL));
-                c->memo_gen[v[k]] = c->gen;
-                c->memo_i[v[k]] = nk;
-            }
-            near = c->memo_i[v[k]];
+            uint32_t curve;
+            near = vertex_distance(c, tb, v[k], &curve) <= tb->r;
         }
         if (near)
             best = fmax(best, cf_triangle_longest_edge2(c->m, cand.t[i]));
@@ -298,20 +292,27 @@ bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
         group_free(&g);
         return ok;
     }
+    /* the tube's radius and reach from the longest edge near the curves, measured with a
+     * reach of r0 (the finest cells' edges are shorter) */
     double r0 = CF_RHO_CELLS * c->cell, longest = 0;
-    if (!longest_edge_near_curves(c, g.pl, g.n, r0, &longest)) {
-        group_free(&g);
-        return false;
-    }
-    tube tb = {g.pl, g.n, fmax(r0, CF_RHO_EDGES * longest), {INFINITY, INFINITY, INFINITY},
-               {-INFINITY, -INFINITY, -INFINITY}, fmax(longest, r0), 0, 0};
-    cf_cutter cut = {tri_in_tube, gather_tube, &tb};
+    tube tb = {g.pl, g.n, r0, {INFINITY, INFINITY, INFINITY},
+               {-INFINITY, -INFINITY, -INFINITY}, r0, 0, 0};
     for (size_t k = 0; k < g.n; k++)
         for (size_t i = 0; i < g.npts[k]; i++)
             for (int j = 0; j < 3; j++) {
                 tb.lo[j] = fmin(tb.lo[j], g.pts[k][3 * i + j]);
                 tb.hi[j] = fmax(tb.hi[j], g.pts[k][3 * i + j]);
             }
+    if (!longest_edge_near_curves(c, &tb, &longest)) {
+        group_free(&g);
+        return false;
+    }
+    tb.r = fmax(r0, CF_RHO_EDGES * longest);
+    if (fmax(longest, r0) != tb.reach) { /* "nothing within reach" answers are stale */
+        tb.reach = fmax(longest, r0);
+        tb.vd_r = -1;
+    }
+    cf_cutter cut = {tri_in_tube, gather_tube, &tb};
     size_t nt0 = c->m->ntris, nv0 = c->m->nverts, nrm = 0;
     uint32_t *rm = NULL;
     cf_loops ls = {0};
