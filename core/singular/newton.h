@@ -44,6 +44,9 @@ typedef struct ism_newton_opts {
     double tol;          /* a step shorter than this ends the iteration */
     int max_iter;
     const double *lo, *hi; /* the iterates must stay in [lo, hi] (NULL: unbounded) */
+    bool extrapolate;    /* where the steps shrink by a steady ratio (linear convergence at
+                            a multiple zero of ∇f), jump by the rest of their geometric
+                            series (see newton.c) */
 } ism_newton_opts;
 
 /* Iterates p <- p - H⁺∇f from p (steps truncated as above), at most o->max_iter times,

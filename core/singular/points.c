@@ -198,7 +198,7 @@ static int resolve(ctx *x, const double start[3], const double lo[3], const doub
     memset(pt, 0, sizeof *pt);
     memcpy(pt->p, start, sizeof pt->p);
     ism_newton_opts no = { ISM_SING_PINV_REL_POINT, trust, POINT_NEWTON_TOL * x->diag,
-                           POINT_NEWTON_ITERS, lo, hi };
+                           POINT_NEWTON_ITERS, lo, hi, false };
     ism_sing_newton(x->t, x->ws, pt->p, &no, &x->out->evals_jet);
     for (int k = 0; k < 3; k++)
         if (!(pt->p[k] >= x->box[k] && pt->p[k] <= x->box[k + 3]))

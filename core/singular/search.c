@@ -213,7 +213,7 @@ static ism_lbox candidate(const search *s, worker *w, const ism_interval x[3])
         hi[k] = x[k].hi + half;
     }
     ism_newton_opts no = { ISM_SING_PINV_REL, width, SEARCH_GN_TOL * width, SEARCH_GN_ITERS,
-                           lo, hi };
+                           lo, hi, true };
     ism_newton_result r = ism_sing_newton(s->t, w->ws, b.q, &no, &w->evals_jet);
     if (r.converged)
         b.flags |= ISM_LBOX_PROJECTED;
