@@ -16,6 +16,10 @@
 /* Newton steps projecting a ring vertex (quadratic convergence from a fraction of a cell:
  * a handful suffices; more would only wander near a singular point). */
 #define PROJECT_STEPS 6
+/* ... and none once the point is this close, × the finest cell (|f| / |∇f|): the next step
+ * would move it by less, a rounding-level amount (Newton has reached 1e-8 cell after the
+ * third step, 1e-14 after the fourth; without this the last steps only jitter). */
+#define PROJECT_DONE 1e-12
 /* Rings at most (each one more row of triangles; the strip is a few cells wide). */
 #define MAX_RINGS 6
 /* A ring's spacing relative to the loop's mean edge: rows about as far apart as the rim's
@@ -43,7 +47,7 @@ void cf_project(cf_ctx *c, double p[3], double max_move)
 {
     double q[3] = {p[0], p[1], p[2]}, g[3], fv;
     double d0 = distance_estimate(c, q, g, &fv), d = d0;
-    for (int it = 0; it < PROJECT_STEPS && d > 0 && isfinite(d); it++) {
+    for (int it = 0; it < PROJECT_STEPS && d > PROJECT_DONE * c->cell && isfinite(d); it++) {
         double gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2], before[3] = {q[0], q[1], q[2]};
         for (int k = 0; k < 3; k++)
             q[k] -= fv * g[k] / gg;

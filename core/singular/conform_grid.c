@@ -77,9 +77,11 @@ void cf_tgrid_free(cf_tgrid *g)
 
 bool cf_tgrid_add(cf_tgrid *g, const ism_mesh *m, uint32_t t)
 {
-    if (!cf_grow((void **)&g->next, &g->cap_next, (size_t)t + 1, sizeof *g->next) ||
-        !cf_grow((void **)&g->cell_of, &g->cap_cell_of, (size_t)t + 1, sizeof *g->cell_of) ||
-        !cf_grow((void **)&g->stamp, &g->cap_stamp, (size_t)t + 1, sizeof *g->stamp))
+    size_t need = (size_t)t + 1;
+    if ((need > g->cap_next || need > g->cap_cell_of || need > g->cap_stamp) &&
+        (!cf_grow((void **)&g->next, &g->cap_next, need, sizeof *g->next) ||
+         !cf_grow((void **)&g->cell_of, &g->cap_cell_of, need, sizeof *g->cell_of) ||
+         !cf_grow((void **)&g->stamp, &g->cap_stamp, need, sizeof *g->stamp)))
         return false;
     double lo[3], hi[3], s = g->side;
     tri_box(m, t, lo, hi);
@@ -102,11 +104,12 @@ bool cf_tgrid_add(cf_tgrid *g, const ism_mesh *m, uint32_t t)
                         : ism_key_map_add(&g->cells, key, &added);
     g->last_key = key;
     g->last_cell = cell;
-    if (cell == ISM_KEY_NONE ||
-        !cf_grow((void **)&g->head, &g->cap_head, (size_t)cell + 1, sizeof *g->head))
+    if (cell == ISM_KEY_NONE)
         return false;
-    if (!cf_grow((void **)&g->cell_box, &g->cap_cell_box, 6 * ((size_t)cell + 1),
-                 sizeof *g->cell_box))
+    size_t cells = (size_t)cell + 1;
+    if ((cells > g->cap_head || 6 * cells > g->cap_cell_box) &&
+        (!cf_grow((void **)&g->head, &g->cap_head, cells, sizeof *g->head) ||
+         !cf_grow((void **)&g->cell_box, &g->cap_cell_box, 6 * cells, sizeof *g->cell_box)))
         return false;
     double *cb = g->cell_box + 6 * (size_t)cell;
     if (added) {
