@@ -7,19 +7,15 @@
 #include "core/version.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 static void kv_u(ism_jw *w, const char *k, uint64_t v)
 {
     ism_jw_key(w, k);
     ism_jw_uint(w, v);
-}
-
-static void kv_d(ism_jw *w, const char *k, double v)
-{
-    ism_jw_key(w, k);
-    ism_jw_number(w, v);
 }
 
 /* Milliseconds to the microsecond (more digits would be noise). */
@@ -29,41 +25,117 @@ static void kv_ms(ism_jw *w, const char *k, double v)
     ism_jw_number(w, round(v * 1e3) / 1e3);
 }
 
+/* One number of a stats object: its JSON key, where it lives in the C structure and how it is
+ * written (an unsigned count of any width, a double, or milliseconds). The tables below list
+ * each object's plain numbers in output order; what is not a plain number (nested objects,
+ * nulls, arrays) is written around them. */
+enum field_kind { FIELD_COUNT, FIELD_DOUBLE, FIELD_MS };
+
+typedef struct stat_field {
+    const char *key;
+    size_t offset, size;
+    enum field_kind kind;
+} stat_field;
+
+#define KIND_OF(type, member) \
+    _Generic(((type *)0)->member, double: FIELD_DOUBLE, default: FIELD_COUNT)
+/* The member's own name as the key; NAMED when the JSON says it otherwise. */
+#define NAMED(key, type, member) \
+    {key, offsetof(type, member), sizeof(((type *)0)->member), KIND_OF(type, member)}
+#define FIELD(type, member) NAMED(#member, type, member)
+#define MS(key, type, member) {key, offsetof(type, member), sizeof(double), FIELD_MS}
+#define NFIELDS(t) (sizeof(t) / sizeof(t[0]))
+
+static void write_fields(ism_jw *w, const void *base, const stat_field *f, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        const unsigned char *at = (const unsigned char *)base + f[i].offset;
+        if (f[i].kind == FIELD_COUNT) {
+            uint64_t v64 = 0;
+            uint32_t v32 = 0;
+            if (f[i].size == sizeof v64)
+                memcpy(&v64, at, sizeof v64);
+            else
+                memcpy(&v32, at, sizeof v32), v64 = v32;
+            kv_u(w, f[i].key, v64);
+            continue;
+        }
+        double v;
+        memcpy(&v, at, sizeof v);
+        if (f[i].kind == FIELD_MS) {
+            kv_ms(w, f[i].key, v);
+        } else {
+            ism_jw_key(w, f[i].key);
+            ism_jw_number(w, v);
+        }
+    }
+}
+
+#define P(m) FIELD(ism_poly_stats, m)
+static const stat_field poly_fields[] = {
+    P(nodes_visited), P(nodes_excluded), P(plotting_nodes), P(unresolved_nodes),
+    P(thin_searched), P(thin_found), P(thin_undecided), P(deep_leaves),
+    P(error_missed_nodes), P(error_worst), P(error_rounds),
+    P(edges_single_root), P(edges_double_root), P(edges_touching), P(edges_many_roots),
+    P(zero_vertices), P(polygons), P(two_polygon_nodes), P(degenerate_polygons),
+    P(nonmanifold_lines), P(open_chains), P(cracks_repaired), P(singular_points),
+    P(crossed_faces), P(lifted_polygons), P(lifted_chords),
+    P(evals_point), P(evals_interval), P(evals_gradient), P(triangles), P(vertices),
+};
+#undef P
+
+#define A(m) FIELD(ism_analysis, m)
+static const stat_field accuracy_fields[] = {
+    A(max_dist_vertex), A(mean_dist_vertex), A(p99_dist_vertex),
+    A(max_dist_midpoint), A(mean_dist_midpoint), A(p99_dist_midpoint),
+    A(max_dist_centroid), A(mean_dist_centroid), A(p99_dist_centroid),
+    A(max_newton_dist), A(mean_newton_dist), NAMED("skipped", ism_analysis, accuracy_skipped),
+};
+
+static const stat_field edge_fields[] = {
+    A(edges), A(boundary_edges), A(manifold_edges), A(nonmanifold_edges), A(nonmanifold_vertices),
+};
+
+static const stat_field component_fields[] = {
+    NAMED("nonmanifold_curves", ism_analysis, ncurves),
+    NAMED("nonmanifold_points", ism_analysis, npoints),
+};
+
+static const stat_field topology_fields[] = {
+    A(components), A(vertex_components), A(boundary_loops), A(boundary_chains),
+};
+
+static const stat_field measure_fields[] = {
+    A(vertices_used), A(triangles_used), A(collapsed_triangles), A(area), A(total_gauss),
+    A(total_abs_gauss), A(singular_vertices), A(gradient_scale),
+};
+
+static const stat_field quality_fields[] = {
+    A(min_angle), A(median_angle), A(share_under_10), A(degenerate_triangles), A(aspect_max),
+    A(aspect_mean), A(aspect_p99),
+};
+#undef A
+
+#define C(m) FIELD(ism_conform_stats, m)
+static const stat_field conform_fields[] = {
+    C(points_conformed), C(points_failed), C(points_short_cones), C(curves_conformed),
+    C(curves_failed), C(loops_fallback), C(triangles_removed), C(triangles_added),
+    MS("time_ms", ism_conform_stats, time_ms),
+};
+#undef C
+
+#define R(m) FIELD(ism_remesh_stats, m)
+static const stat_field remesh_fields[] = {
+    R(flips), R(moves), R(locked_vertices), R(min_angle_before), R(min_angle_after),
+    MS("time_ms", ism_remesh_stats, time_ms),
+};
+#undef R
+
 static void write_poly(ism_jw *w, const ism_poly_stats *s)
 {
     static const char *const phase[ISM_PHASE_COUNT] = {"octree", "polygons", "cracks", "mesh"};
     ism_jw_object(w);
-    kv_u(w, "nodes_visited", s->nodes_visited);
-    kv_u(w, "nodes_excluded", s->nodes_excluded);
-    kv_u(w, "plotting_nodes", s->plotting_nodes);
-    kv_u(w, "unresolved_nodes", s->unresolved_nodes);
-    kv_u(w, "thin_searched", s->thin_searched);
-    kv_u(w, "thin_found", s->thin_found);
-    kv_u(w, "thin_undecided", s->thin_undecided);
-    kv_u(w, "deep_leaves", s->deep_leaves);
-    kv_u(w, "error_missed_nodes", s->error_missed_nodes);
-    kv_d(w, "error_worst", s->error_worst);
-    kv_u(w, "error_rounds", s->error_rounds);
-    kv_u(w, "edges_single_root", s->edges_single_root);
-    kv_u(w, "edges_double_root", s->edges_double_root);
-    kv_u(w, "edges_touching", s->edges_touching);
-    kv_u(w, "edges_many_roots", s->edges_many_roots);
-    kv_u(w, "zero_vertices", s->zero_vertices);
-    kv_u(w, "polygons", s->polygons);
-    kv_u(w, "two_polygon_nodes", s->two_polygon_nodes);
-    kv_u(w, "degenerate_polygons", s->degenerate_polygons);
-    kv_u(w, "nonmanifold_lines", s->nonmanifold_lines);
-    kv_u(w, "open_chains", s->open_chains);
-    kv_u(w, "cracks_repaired", s->cracks_repaired);
-    kv_u(w, "singular_points", s->singular_points);
-    kv_u(w, "crossed_faces", s->crossed_faces);
-    kv_u(w, "lifted_polygons", s->lifted_polygons);
-    kv_u(w, "lifted_chords", s->lifted_chords);
-    kv_u(w, "evals_point", s->evals_point);
-    kv_u(w, "evals_interval", s->evals_interval);
-    kv_u(w, "evals_gradient", s->evals_gradient);
-    kv_u(w, "triangles", s->triangles);
-    kv_u(w, "vertices", s->vertices);
+    write_fields(w, s, poly_fields, NFIELDS(poly_fields));
     ism_jw_key(w, "threads");
     ism_jw_int(w, s->threads);
     ism_jw_key(w, "time_ms");
@@ -85,18 +157,7 @@ static void write_accuracy(ism_jw *w, const ism_analysis *a, double max_error)
 {
     ism_jw_key(w, "accuracy");
     ism_jw_object(w);
-    kv_d(w, "max_dist_vertex", a->max_dist_vertex);
-    kv_d(w, "mean_dist_vertex", a->mean_dist_vertex);
-    kv_d(w, "p99_dist_vertex", a->p99_dist_vertex);
-    kv_d(w, "max_dist_midpoint", a->max_dist_midpoint);
-    kv_d(w, "mean_dist_midpoint", a->mean_dist_midpoint);
-    kv_d(w, "p99_dist_midpoint", a->p99_dist_midpoint);
-    kv_d(w, "max_dist_centroid", a->max_dist_centroid);
-    kv_d(w, "mean_dist_centroid", a->mean_dist_centroid);
-    kv_d(w, "p99_dist_centroid", a->p99_dist_centroid);
-    kv_d(w, "max_newton_dist", a->max_newton_dist);
-    kv_d(w, "mean_newton_dist", a->mean_newton_dist);
-    kv_u(w, "skipped", a->accuracy_skipped);
+    write_fields(w, a, accuracy_fields, NFIELDS(accuracy_fields));
     ism_jw_key(w, "max_error");
     if (max_error > 0)
         ism_jw_number(w, max_error);
@@ -110,73 +171,42 @@ static void write_accuracy(ism_jw *w, const ism_analysis *a, double max_error)
     ism_jw_object_end(w);
 }
 
-static void write_analysis(ism_jw *w, const ism_analysis *a, double max_error)
+static void write_quality(ism_jw *w, const ism_analysis *a)
 {
-    static const char *const cls[ISM_VERTEX_CLASSES] = {"manifold", "boundary",
-                                                        "nonmanifold_edge",
-                                                        "nonmanifold_point", "isolated"};
-    ism_jw_object(w);
-    kv_u(w, "edges", a->edges);
-    kv_u(w, "boundary_edges", a->boundary_edges);
-    kv_u(w, "manifold_edges", a->manifold_edges);
-    kv_u(w, "nonmanifold_edges", a->nonmanifold_edges);
-    kv_u(w, "nonmanifold_vertices", a->nonmanifold_vertices);
-    ism_jw_key(w, "vertex_classes");
-    ism_jw_object(w);
-    for (int i = 0; i < ISM_VERTEX_CLASSES; i++)
-        kv_u(w, cls[i], a->class_count[i]);
-    ism_jw_object_end(w);
-    kv_u(w, "nonmanifold_curves", a->ncurves);
-    kv_u(w, "nonmanifold_points", a->npoints);
-    ism_jw_key(w, "euler");
-    ism_jw_int(w, a->euler);
-    kv_u(w, "components", a->components);
-    kv_u(w, "vertex_components", a->vertex_components);
-    kv_u(w, "boundary_loops", a->boundary_loops);
-    kv_u(w, "boundary_chains", a->boundary_chains);
-    ism_jw_key(w, "orientable");
-    ism_jw_bool(w, a->orientable);
-    ism_jw_key(w, "genus");
-    ism_jw_int(w, a->genus);
-    kv_u(w, "vertices_used", a->vertices_used);
-    kv_u(w, "triangles_used", a->triangles_used);
-    kv_u(w, "collapsed_triangles", a->collapsed_triangles);
-    kv_d(w, "area", a->area);
-    kv_d(w, "total_gauss", a->total_gauss);
-    kv_d(w, "total_abs_gauss", a->total_abs_gauss);
-    kv_u(w, "singular_vertices", a->singular_vertices);
-    kv_d(w, "gradient_scale", a->gradient_scale);
     ism_jw_key(w, "quality");
     ism_jw_object(w);
-    kv_d(w, "min_angle", a->min_angle);
-    kv_d(w, "median_angle", a->median_angle);
-    kv_d(w, "share_under_10", a->share_under_10);
-    kv_u(w, "degenerate_triangles", a->degenerate_triangles);
-    kv_d(w, "aspect_max", a->aspect_max);
-    kv_d(w, "aspect_mean", a->aspect_mean);
-    kv_d(w, "aspect_p99", a->aspect_p99);
+    write_fields(w, a, quality_fields, NFIELDS(quality_fields));
     ism_jw_key(w, "angle_hist");
     ism_jw_array(w);
     for (int i = 0; i < ISM_ANGLE_BINS; i++)
         ism_jw_uint(w, a->angle_hist[i]);
     ism_jw_array_end(w);
     ism_jw_object_end(w);
-    write_accuracy(w, a, max_error);
-    ism_jw_object_end(w);
 }
 
-static void write_conform(ism_jw *w, const ism_conform_stats *s)
+static void write_analysis(ism_jw *w, const ism_analysis *a, double max_error)
 {
+    static const char *const cls[ISM_VERTEX_CLASSES] = {"manifold", "boundary",
+                                                        "nonmanifold_edge",
+                                                        "nonmanifold_point", "isolated"};
     ism_jw_object(w);
-    kv_u(w, "points_conformed", s->points_conformed);
-    kv_u(w, "points_failed", s->points_failed);
-    kv_u(w, "points_short_cones", s->points_short_cones);
-    kv_u(w, "curves_conformed", s->curves_conformed);
-    kv_u(w, "curves_failed", s->curves_failed);
-    kv_u(w, "loops_fallback", s->loops_fallback);
-    kv_u(w, "triangles_removed", s->triangles_removed);
-    kv_u(w, "triangles_added", s->triangles_added);
-    kv_ms(w, "time_ms", s->time_ms);
+    write_fields(w, a, edge_fields, NFIELDS(edge_fields));
+    ism_jw_key(w, "vertex_classes");
+    ism_jw_object(w);
+    for (int i = 0; i < ISM_VERTEX_CLASSES; i++)
+        kv_u(w, cls[i], a->class_count[i]);
+    ism_jw_object_end(w);
+    write_fields(w, a, component_fields, NFIELDS(component_fields));
+    ism_jw_key(w, "euler");
+    ism_jw_int(w, a->euler);
+    write_fields(w, a, topology_fields, NFIELDS(topology_fields));
+    ism_jw_key(w, "orientable");
+    ism_jw_bool(w, a->orientable);
+    ism_jw_key(w, "genus");
+    ism_jw_int(w, a->genus);
+    write_fields(w, a, measure_fields, NFIELDS(measure_fields));
+    write_quality(w, a);
+    write_accuracy(w, a, max_error);
     ism_jw_object_end(w);
 }
 
@@ -200,7 +230,9 @@ static void write_singular(ism_jw *w, const ism_locus *l, const ism_locus_check 
     kv_ms(w, "time_ms", l->time_ms);
     if (cs) {
         ism_jw_key(w, "conform");
-        write_conform(w, cs);
+        ism_jw_object(w);
+        write_fields(w, cs, conform_fields, NFIELDS(conform_fields));
+        ism_jw_object_end(w);
     }
     ism_jw_object_end(w);
 }
@@ -208,12 +240,7 @@ static void write_singular(ism_jw *w, const ism_locus *l, const ism_locus_check 
 static void write_remesh(ism_jw *w, const ism_remesh_stats *s)
 {
     ism_jw_object(w);
-    kv_u(w, "flips", s->flips);
-    kv_u(w, "moves", s->moves);
-    kv_u(w, "locked_vertices", s->locked_vertices);
-    kv_d(w, "min_angle_before", s->min_angle_before);
-    kv_d(w, "min_angle_after", s->min_angle_after);
-    kv_ms(w, "time_ms", s->time_ms);
+    write_fields(w, s, remesh_fields, NFIELDS(remesh_fields));
     ism_jw_object_end(w);
 }
 
