@@ -14,7 +14,14 @@
  *
  * Every crease vertex lies on both branches' zero sets, so the mesh conforms: no edge
  * crosses the crease, and each crease edge records its two branches (the normals of its
- * sides, the later curves' Newton on it). */
+ * sides, the later curves' Newton on it).
+ *
+ * A vertex where f ties (no branch: the polygoniser put it on the crease, as its sharp-
+ * feature vertices are) is a crease point already: its edges are never split; a triangle
+ * (T, A, B) is split from T to the crease point of A-B, and an edge between two such vertices
+ * is a crease edge when the triangles on its two sides take different branches. (Kept whole,
+ * such triangles left T-junctions against their split neighbours: the crack that sent
+ * three balls to the fallback cut, 420 triangles at the default depth.) */
 #include "core/curves/branches.h"
 #include "core/curves/cut_internal.h"
 #include <math.h>
@@ -45,6 +52,9 @@ typedef struct crease_state {
     uint32_t *label;  /* per vertex of the mesh before the cut */
     triple *tp;
     size_t ntp, cap_tp;
+    ism_key_map tie_edge; /* an edge between two tie vertices -> index into tie_side */
+    uint32_t *tie_side;   /* the branch of the first triangle seen on that edge */
+    size_t cap_tie;
 } crease_state;
 
 static double dist2(const double *a, const double *b)
@@ -183,11 +193,13 @@ static uint32_t triple_vertex(crease_state *cs, const uint32_t t[3])
     return v;
 }
 
-/* Records crease edge a-b between branches A and B. */
+/* Records crease edge a-b between branches A and B (its ends noted on the crease: a tie
+ * vertex was not yet). */
 static bool crease_edge(crease_state *cs, uint32_t a, uint32_t b, uint32_t A, uint32_t B)
 {
     uint32_t br[2] = {A, B};
-    return cut_add_cut_edge(cs->s, a, b, cs->k) && cut_set_branches(cs->s, a, b, br);
+    return cut_set_vcurve(cs->s, a, cs->k) && cut_set_vcurve(cs->s, b, cs->k) &&
+           cut_add_cut_edge(cs->s, a, b, cs->k) && cut_set_branches(cs->s, a, b, br);
 }
 
 /* A triangle of three branches fanned from its triple point. */
@@ -209,11 +221,52 @@ static bool split_three(crease_state *cs, const uint32_t t[3])
     return true;
 }
 
+/* Edge a-b between two tie vertices, seen from a triangle on branch A: a crease edge once
+ * the other side is seen on another branch. */
+static bool tie_edge_side(crease_state *cs, uint32_t a, uint32_t b, uint32_t A)
+{
+    bool added;
+    uint32_t i = ism_key_map_add(&cs->tie_edge, cut_edge_key(a, b), &added);
+    if (i == ISM_KEY_NONE ||
+        !ism_grow((void **)&cs->tie_side, &cs->cap_tie, (size_t)i + 1, sizeof *cs->tie_side,
+                  CUT_FIRST))
+        return false;
+    if (added) {
+        cs->tie_side[i] = A;
+        return true;
+    }
+    return cs->tie_side[i] == A || crease_edge(cs, a, b, cs->tie_side[i], A);
+}
+
+/* A triangle with one or more tie vertices (l[i] ISM_BRANCH_NONE). */
+static bool split_tie_triangle(crease_state *cs, const uint32_t t[3], const uint32_t l[3])
+{
+    int ties = 0, at = 0;
+    for (int i = 0; i < 3; i++)
+        if (l[i] == ISM_BRANCH_NONE) {
+            ties++;
+            at = i;
+        }
+    if (ties == 2) { /* the edge opposite the one labelled corner */
+        int x = l[0] != ISM_BRANCH_NONE ? 0 : l[1] != ISM_BRANCH_NONE ? 1 : 2;
+        if (!tie_edge_side(cs, t[(x + 1) % 3], t[(x + 2) % 3], l[x]))
+            return false;
+    }
+    uint32_t T = t[at], u = t[(at + 1) % 3], w = t[(at + 2) % 3];
+    uint32_t A = cs->label[u], B = cs->label[w];
+    if (ties != 1 || A == B)
+        return cut_add_triangle(cs->s, t[0], t[1], t[2]);
+    uint32_t p = crease_vertex(cs, u, w);
+    return p != NONE && crease_edge(cs, T, p, A, B) && cut_add_triangle(cs->s, T, u, p) &&
+           cut_add_triangle(cs->s, T, p, w);
+}
+
 static bool split_crease_triangle(crease_state *cs, const uint32_t t[3])
 {
     uint32_t l[3] = {cs->label[t[0]], cs->label[t[1]], cs->label[t[2]]};
-    bool none = l[0] == ISM_BRANCH_NONE || l[1] == ISM_BRANCH_NONE || l[2] == ISM_BRANCH_NONE;
-    if (none || (l[0] == l[1] && l[1] == l[2]))
+    if (l[0] == ISM_BRANCH_NONE || l[1] == ISM_BRANCH_NONE || l[2] == ISM_BRANCH_NONE)
+        return split_tie_triangle(cs, t, l);
+    if (l[0] == l[1] && l[1] == l[2])
         return cut_add_triangle(cs->s, t[0], t[1], t[2]);
     if (l[0] != l[1] && l[1] != l[2] && l[2] != l[0])
         return split_three(cs, t);
@@ -296,6 +349,60 @@ static long order_pass(crease_state *cs)
     return moved;
 }
 
+/* Adds branch x to a tie vertex's set (n of at most TIE_BRANCHES kept; n past it: more). */
+#define TIE_BRANCHES 3
+static void tie_add(uint32_t *set, uint8_t *n, uint32_t x)
+{
+    for (int i = 0; i < *n && i < TIE_BRANCHES; i++)
+        if (set[i] == x)
+            return;
+    if (*n < TIE_BRANCHES)
+        set[*n] = x;
+    if (*n <= TIE_BRANCHES)
+        (*n)++;
+}
+
+/* The tie vertices (the first nv, no branch) on the crease put on it by Newton: onto
+ * f_A = f_B = 0 for the two branches of their crease edges, onto the triple point
+ * f_A = f_B = f_C = 0 for three (the polygoniser put them where f ties to rounding, which is
+ * on the crease only to its own precision). False when out of memory. */
+static bool refine_ties(crease_state *cs, size_t nv)
+{
+    cut_state *s = cs->s;
+    uint32_t *set = malloc((nv ? nv : 1) * TIE_BRANCHES * sizeof *set);
+    uint8_t *n = calloc(nv ? nv : 1, 1);
+    if (!set || !n) {
+        free(set);
+        free(n);
+        return false;
+    }
+    for (size_t i = 0; i < s->c->nedges; i++) {
+        const ism_cut_edge *e = &s->c->edges[i];
+        for (int end = 0; e->fn == cs->k && end < 2; end++) {
+            uint32_t v = end ? e->b : e->a;
+            if (v < nv && cs->label[v] == ISM_BRANCH_NONE)
+                for (int j = 0; j < 2; j++)
+                    tie_add(set + TIE_BRANCHES * (size_t)v, &n[v], e->branch[j]);
+        }
+    }
+    for (size_t v = 0; v < nv; v++) {
+        if (n[v] < 2 || n[v] > TIE_BRANCHES)
+            continue;
+        const uint32_t *b = set + TIE_BRANCHES * v;
+        size_t ks[2] = {b[1], n[v] == 3 ? b[2] : 0};
+        double p[3];
+        memcpy(p, s->m->pos + 3 * v, sizeof p);
+        if (ism_branches_refine(cs->b, b[0], ks, n[v] - 1, NULL, s->tol,
+                                CREASE_MAX_MOVE_EDGES * s->reach[v], p))
+            memcpy(s->m->pos + 3 * v, p, sizeof p);
+        else
+            s->c->unrefined++;
+    }
+    free(set);
+    free(n);
+    return true;
+}
+
 /* The branch of f at every vertex. */
 static bool label_vertices(crease_state *cs)
 {
@@ -321,8 +428,9 @@ bool cut_crease(cut_state *s, size_t k)
         }
     }
     crease_state cs = {.s = s, .b = ev->branches, .k = (uint32_t)k};
+    ism_key_map_init(&cs.tie_edge);
     ism_mesh *m = s->m;
-    size_t nt = m->ntris;
+    size_t nt = m->ntris, nv = m->nverts;
     uint32_t *old = malloc((nt ? nt : 1) * 3 * sizeof *old), *parent = cut_parents_copy(s, nt);
     bool ok = old && parent && cut_grow_vertex_arrays(s) && label_vertices(&cs);
     if (ok) {
@@ -336,6 +444,7 @@ bool cut_crease(cut_state *s, size_t k)
         s->from = parent[t];
         ok = split_crease_triangle(&cs, old + 3 * t);
     }
+    ok = ok && refine_ties(&cs, nv);
     for (int pass = 0; ok && pass < CREASE_ORDER_PASSES; pass++) {
         long moved = order_pass(&cs);
         ok = moved >= 0;
@@ -346,5 +455,7 @@ bool cut_crease(cut_state *s, size_t k)
     free(parent);
     free(cs.label);
     free(cs.tp);
+    ism_key_map_free(&cs.tie_edge);
+    free(cs.tie_side);
     return ok;
 }

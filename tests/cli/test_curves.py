@@ -6,7 +6,11 @@ box shifted off the lattice by 0.37 of a finest cell; a curve that misses the su
 no curve and one face, not an error; a bad curve is refused with its JSON path. The Klein
 bottle preset cut by x = 0, in boxes shifted off the lattice: the section is three circles
 (closed form below), crossing on the double curve at (0, 1 +- sqrt 2, 0) and at the four
-points where the plane touches the surface, each a vertex of degree 4; 12 edges."""
+points where the plane touches the surface, each a vertex of degree 4; 12 edges. Three
+overlapping balls (min of three spheres, in the lattice box and two shifted off it): the
+crease is three arcs between the two triple points where all three spheres meet (closed
+form: the circumcentre of the centres, +-z), each a vertex of degree 3 within 1e-9 x diagonal,
+every arc point within that of two of the spheres; the mesh stays a sphere (chi 2)."""
 import json
 import math
 import os
@@ -113,6 +117,44 @@ class CurvesTest(unittest.TestCase):
                         x, y, z = arc[i:i + 3]
                         off = min(abs(math.hypot(y - cy, z - cz) - r) for cy, cz, r in circles)
                         self.assertLess(max(abs(x), off), tol)
+
+    def test_three_balls_crease_arcs_and_triple_points(self):
+        centres = [(0.6, 0, 0), (-0.3, 0.52, 0), (-0.3, -0.52, 0)]
+        expr = "min(" + ", ".join(f"(x - {cx})^2 + (y - {cy})^2 + z^2 - 0.5"
+                                  for cx, cy, _ in centres) + ")"
+        # Equidistant from the centres: x0 on the x axis with (0.6 - x0)^2 = (x0 + 0.3)^2 +
+        # 0.52^2, then z^2 = 0.5 - (0.6 - x0)^2.
+        x0 = (0.36 - 0.09 - 0.52 ** 2) / 1.8
+        z0 = math.sqrt(0.5 - (0.6 - x0) ** 2)
+        depth, side = 6, 3.0
+        cell = side / 2 ** depth
+        tol = 1e-9 * math.sqrt(3) * side
+
+        def sphere_dist(p, c):
+            return abs(math.dist(p, c) - math.sqrt(0.5))
+
+        for shift in (0.0, 1e-3 * cell, 0.37 * cell):
+            with self.subTest(shift=shift):
+                d = [shift, 0.61 * shift, -0.83 * shift]
+                box = [-side / 2 + d[0], -side / 2 + d[1], -side / 2 + d[2],
+                       side / 2 + d[0], side / 2 + d[1], side / 2 + d[2]]
+                f, proc = self.run_request({"expr": expr, "box": box,
+                                            "depth": {"max": depth}})
+                self.assertIsNotNone(f, proc.stderr)
+                a = f["arrangement"]
+                self.assertTrue(a["euler"]["ok"])
+                self.assertEqual(a["euler"]["mesh"], 2)
+                self.assertEqual((len(a["vertices"]), len(a["edges"]), len(a["faces"])),
+                                 (2, 3, 3))
+                for v, sz in zip(sorted(a["vertices"], key=lambda v: v["xyz"][2]), (-1, 1)):
+                    self.assertEqual(v["degree"], 3)
+                    self.assertLess(math.dist(v["xyz"], (x0, 0, sz * z0)), tol, v)
+                arcs = [arc for c in f["curves"] if c["kind"] == "crease" for arc in c["arcs"]]
+                self.assertEqual(len(arcs), 3)
+                for arc in arcs:
+                    for i in range(0, len(arc), 3):
+                        near = sorted(sphere_dist(arc[i:i + 3], c) for c in centres)
+                        self.assertLess(near[1], tol, arc[i:i + 3])
 
     def test_a_curve_missing_the_surface_is_no_curve(self):
         f, proc = self.run_request(self.sphere(0.0, [{"kind": "plane", "normal": [0, 0, 1],
