@@ -631,6 +631,57 @@ static bool is_zero_tile(ism_cell_ctx *cx, const ism_tile *t)
     return fabs(ism_sample_f(&cx->s, c)) <= cx->roots.eps;
 }
 
+/* Bisection steps for a crossing hidden in a zero run: halves the segment down to 2^-52 of
+ * its length, the resolution of its coordinates. */
+#define ZERO_RUN_BISECTIONS 52
+
+/* A line of f = 0 that leaves a zero run of the tile's boundary into the tile (a smooth
+ * surface containing a lattice line and crossing the lattice plane there: the helicoid's
+ * axis on the plane x = 0, where its ruling at z = π/4 lies in the plane too):
+ *
+ *     A ══════════ P ══════════ B     zero run A..B on the tile's side; f just inside the
+ *        +         │      −           tile has one sign near A and the other near B, so a
+ *                  │                  line of f = 0 leaves the run at P, where the in-plane
+ *     ─────────────E──────────────    derivative across the side changes sign, and meets
+ *                                     the crossing E (otherwise without a partner)
+ *
+ * Finds the first zero run ev[i] → ev[i + 1] whose ends' derivatives across it (the
+ * gradient's in-plane component perpendicular to the run) have opposite signs, and P on it
+ * by bisection over the run's canonical direction (increasing coordinate), so both tiles
+ * sharing the run find the same P bit for bit. Returns i, or -1. */
+static int zero_run_crossing(ism_cell_ctx *cx, const ism_tile *t, ism_fpoint *P)
+{
+    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3, ne = (int)cx->nev;
+    for (int i = 0; i < ne; i++) {
+        const ism_fevent *a = &cx->ev[i], *b = &cx->ev[(i + 1) % ne];
+        if (a->after != 0 || b->before != 0 || a == b)
+            continue;
+        int along = a->pt.p[u] != b->pt.p[u] ? u : v, perp = along == u ? v : u;
+        if (a->pt.p[perp] != b->pt.p[perp] || !(a->pt.g[perp] * b->pt.g[perp] < 0))
+            continue;
+        bool up = a->pt.p[along] < b->pt.p[along];
+        const ism_fevent *lo = up ? a : b, *hi = up ? b : a;
+        double x0 = lo->pt.p[along], x1 = hi->pt.p[along], s0 = lo->pt.g[perp];
+        double q[3] = {lo->pt.p[0], lo->pt.p[1], lo->pt.p[2]}, g[3];
+        for (int k = 0; k < ZERO_RUN_BISECTIONS && x1 - x0 > 0; k++) {
+            q[along] = 0.5 * (x0 + x1);
+            ism_sample_grad(&cx->s, q, g);
+            if ((g[perp] < 0) == (s0 < 0))
+                x0 = q[along];
+            else
+                x1 = q[along];
+        }
+        q[along] = 0.5 * (x0 + x1);
+        if (!(q[along] > lo->pt.p[along] && q[along] < hi->pt.p[along]))
+            continue;
+        memcpy(P->p, q, sizeof P->p);
+        ism_sample_grad(&cx->s, q, P->g);
+        P->flags = ISM_FP_ZERO;
+        return i;
+    }
+    return -1;
+}
+
 bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
 {
     cx->zero_tile = false;
@@ -646,16 +697,37 @@ bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
     int cross[MAX_CROSS], touch[MAX_CROSS], nc = 0, nt = 0;
     for (int i = 0; i < ne; i++) {
         ism_fevent *e = &cx->ev[i];
+        if ((e->before == 0 || e->after == 0) || e->before == e->after)
+            continue;
+        nc++;
+    }
+    ism_fpoint hidden;
+    int hidden_run = nc % 2 == 1 ? zero_run_crossing(cx, t, &hidden) : -1;
+    nc = 0;
+    for (int i = 0; i < ne; i++) {
+        ism_fevent *e = &cx->ev[i];
         if (e->before == 0 || e->after == 0) {
-            /* a zero run: the segment after this event lies in f = 0 */
-            if (e->after == 0 && !emit(cx, i, (i + 1) % ne, ISM_LINE_EDGE))
+            /* a zero run: the segment after this event lies in f = 0 (split where a line
+             * leaves it) */
+            if (e->after == 0 && i == hidden_run) {
+                const ism_fpoint *b = &cx->ev[(i + 1) % ne].pt;
+                if (!ism_flines_push(&cx->lines, &e->pt, &hidden, ISM_LINE_EDGE) ||
+                    !ism_flines_push(&cx->lines, &hidden, b, ISM_LINE_EDGE))
+                    return false;
+            } else if (e->after == 0 && !emit(cx, i, (i + 1) % ne, ISM_LINE_EDGE)) {
                 return false;
+            }
         } else if (e->before != e->after) {
             if (nc < MAX_CROSS)
                 cross[nc++] = i;
         } else if (nt < MAX_CROSS) {
             touch[nt++] = i;
         }
+    }
+    if (nc == 1 && hidden_run >= 0) { /* the crossing's partner left the zero run */
+        if (!ism_flines_push(&cx->lines, &hidden, &cx->ev[cross[0]].pt, ISM_LINE_REGULAR))
+            return false;
+        nc = 0;
     }
     if (nc % 2 == 1) {
         cx->stats.open_chains++; /* inconsistent signs: drop the last crossing */

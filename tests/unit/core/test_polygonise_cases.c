@@ -2,6 +2,9 @@
  * parts stay apart, an empty box gives an empty mesh, adaptivity pays, output is
  * deterministic and independent of the thread count, budgets and bad options fail clearly. */
 #include <criterion/criterion.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 #include "poly_fixture.h"
 
@@ -155,5 +158,69 @@ Test(cases, bad_options_name_the_field)
     cr_expect_eq(ism_polygonise(t, &o, &m, &st, &err), ISM_POLY_BAD_OPTIONS);
     cr_expect(strstr(err.message, "gradient_test") != NULL, "%s", err.message);
     ism_mesh_free(&m);
+    ism_tape_free(t);
+}
+
+static int cmp_key(const void *x, const void *y)
+{
+    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
+    return a < b ? -1 : a > b;
+}
+
+/* Boundary edges of m (in one triangle) with both ends strictly inside box (farther than
+ * tol from its faces): holes, not the cut by the box. */
+static size_t inner_boundary_edges(const ism_mesh *m, const double box[6], double tol)
+{
+    size_t ne = 3 * m->ntris, n = 0;
+    uint64_t *e = malloc((ne + 1) * sizeof *e);
+    cr_assert(e);
+    for (size_t t = 0; t < m->ntris; t++)
+        for (int k = 0; k < 3; k++) {
+            uint64_t a = m->tri[3 * t + k], b = m->tri[3 * t + (k + 1) % 3];
+            e[3 * t + k] = a < b ? a << 32 | b : b << 32 | a;
+        }
+    qsort(e, ne, sizeof *e, cmp_key);
+    for (size_t i = 0, j; i < ne; i = j) {
+        for (j = i; j < ne && e[j] == e[i]; j++)
+            ;
+        const double *p = m->pos + 3 * (size_t)(e[i] >> 32), *q = m->pos + 3 * (size_t)(uint32_t)e[i];
+        bool inside = true;
+        for (int k = 0; k < 3; k++)
+            inside = inside && fmin(p[k], q[k]) > box[k] + tol && fmax(p[k], q[k]) < box[k + 3] - tol;
+        n += j - i == 1 && inside;
+    }
+    free(e);
+    return n;
+}
+
+/* The helicoid x sin 2z = y cos 2z contains its axis (a lattice line in a box centred on
+ * it) and, at z = ±π/4, rulings lying in the lattice plane x = 0 that leave the axis. Cut by
+ * the box it is a disk: χ = 1, one piece. The rulings once had no partner on the zero run
+ * of the axis (a hole of four triangles at each, χ = −1). */
+Test(cases, helicoid_axis_on_the_lattice)
+{
+    static const ism_param k2[] = {{"k", 2}};
+    const pf_surface helicoid = {"x*sin(k*z) - y*cos(k*z)", k2, 1, NULL, 0};
+    ism_tape *t = pf_compile(&helicoid);
+    const double base[6] = {-1.2, -1.2, -1.2, 1.2, 1.2, 1.2};
+    int d = 6;
+    for (int w = -1; w < 2; w++) {
+        double box[6];
+        if (w < 0)
+            memcpy(box, base, sizeof box);
+        else
+            pf_sweep_box(base, d, w, box);
+        ism_mesh m;
+        ism_poly_stats st;
+        pf_run(t, box, 3, d, 0, &m, &st);
+        pf_props p;
+        pf_measure(&m, t, &p);
+        cr_expect_eq(p.euler, 1, "box %d: χ = %ld, a disk has 1", w, p.euler);
+        cr_expect_eq(p.components, 1, "box %d: %zu components", w, p.components);
+        cr_expect_eq(p.nonmanifold_edges, 0, "box %d: %zu non-manifold edges", w,
+                     p.nonmanifold_edges);
+        cr_expect_eq(inner_boundary_edges(&m, box, 1e-9), 0, "box %d: holes", w);
+        ism_mesh_free(&m);
+    }
     ism_tape_free(t);
 }
