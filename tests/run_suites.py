@@ -227,6 +227,14 @@ def python_suites(sub):
         if os.path.isdir(d) else []
 
 
+def waits_mostly(suite):
+    """Suites that mostly wait: a headless browser on a page waiting for its daemon, its
+    decoder and its renders (the viewer suite: 148 s wall for 43 s CPU in the clean run at
+    59122b6). They run on one lane of their own beside the --jobs lanes, so that their waits
+    do not leave a core idle."""
+    return suite.name.startswith("browser/")
+
+
 def group(suite):
     """Suites of one group never run at the same time: the deploy suites each start Redis from
     deploy/redis/isomesh.conf, on its one fixed port, so two at once would share (and stop) one
@@ -237,7 +245,9 @@ def group(suite):
 class Lanes:
     """Runs suites on `jobs` lanes at once, each lane taking the next suite that can start:
     one that needs the sanitizer build waits until it is built (and fails unrun if the build
-    failed). Each suite's output is printed whole when it ends."""
+    failed). With more than one lane, one more lane runs only the suites that mostly wait
+    (waits_mostly); the other lanes take those too once nothing else is left. Each suite's
+    output is printed whole when it ends."""
 
     def __init__(self, suites, jobs):
         self.pending = list(suites)
@@ -247,21 +257,26 @@ class Lanes:
         self.results = []   # (suite, passed, failed, wall, cpu)
         self.busy = set()   # groups of the suites running now (see group())
 
-    def next_suite(self):
+    def next_suite(self, waiting_lane):
         with self.cv:
             while self.pending:
+                others_left = any(not waits_mostly(s) for s in self.pending)
                 for i, s in enumerate(self.pending):
+                    if waiting_lane != waits_mostly(s) and (waiting_lane or others_left):
+                        continue
                     if (not s.needs_asan or self.asan_state != "building") and \
                             group(s) not in self.busy:
                         if group(s):
                             self.busy.add(group(s))
                         return self.pending.pop(i)
+                if waiting_lane and not any(waits_mostly(s) for s in self.pending):
+                    return None
                 self.cv.wait()
             return None
 
-    def lane(self):
+    def lane(self, waiting_lane=False):
         while True:
-            s = self.next_suite()
+            s = self.next_suite(waiting_lane)
             if s is None:
                 return
             if s.needs_asan and self.asan_state == "failed":
@@ -285,6 +300,8 @@ class Lanes:
 
     def run(self):
         threads = [threading.Thread(target=self.lane) for _ in range(self.jobs)]
+        if self.jobs > 1 and any(waits_mostly(s) for s in self.pending):
+            threads.append(threading.Thread(target=self.lane, args=(True,)))
         for t in threads:
             t.start()
         for t in threads:
@@ -313,7 +330,9 @@ def main():
     total_p = sum(r[1] for r in results)
     total_f = sum(r[2] for r in results)
     failed_suites = [r[0].name for r in results if r[2]]
-    print(f"\nsuites by CPU time ({args.jobs} at once; s CPU, s wall):")
+    extra = " and one lane for the suites that mostly wait" \
+        if args.jobs > 1 and any(waits_mostly(r[0]) for r in results) else ""
+    print(f"\nsuites by CPU time ({args.jobs} at once{extra}; s CPU, s wall):")
     for s, _, _, wall, cpu in sorted(results, key=lambda r: -r[4])[:TOP_COSTS]:
         print(f"  {cpu:7.1f} {wall:7.1f}  {s.name}")
     print(f"  {sum(r[4] for r in results):7.1f} {time.time() - t0:7.1f}  all {len(results)} suites")
