@@ -7,11 +7,12 @@
 // 1e-6; a PNG export has the size asked for; the Curves panel cuts the sphere into cells
 // (curves drawn, areas 2 pi h, a picked cell's facts) and adds a level curve, an
 // intersection (Viviani's node of degree 4) and the view's silhouette (closed forms); double
-// sheets are tinted.
+// sheets are tinted; the render mode's ambient occlusion of two spheres matches its closed
+// form (5/9 of the light where they face each other, all of it opposite, none inside).
 import { describe, it, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { startDaemon, stopDaemon, startBrowser, stopBrowser } from './lib/harness.mjs';
-import { openViewer, waitForMesh, loads, viewShot } from './lib/page.mjs';
+import { openViewer, waitForMesh, loads, viewShot, settledHref } from './lib/page.mjs';
 import fs from 'node:fs';
 import { changedShare, decodePng, pixelStats } from './lib/png.mjs';
 import { artifact } from './lib/harness.mjs';
@@ -343,6 +344,61 @@ describe('box and inspection', { timeout: 300000 }, () => {
     const [sheet, plain] = px.map(([x, y]) => Array.from(img.rgba.subarray(4 * (y * img.width + x), 4 * (y * img.width + x) + 3)));
     assert.ok(sheet[0] > sheet[1] + 25 && sheet[2] > sheet[1] + 25, `the double sheet is violet (${sheet})`);
     assert.ok(plain[2] >= plain[0] && plain[0] - plain[1] < 25, `the other sphere keeps the surface colour (${plain})`);
+
+  });
+
+  it('the render mode: ambient occlusion per vertex, as the closed form of two spheres says', async () => {
+    // Two spheres of radius 0.4 about (-0.5, 0, 0) and (0.5, 0, 0). The point of the left one
+    // nearest the right one, (-0.1, 0, 0), sees the right sphere as a cap of half-angle
+    // asin(0.4 / 0.6) about its normal: the cosine-weighted light it keeps is
+    // 1 - sin^2 = 1 - (0.4 / 0.6)^2 = 5/9. The point farthest from it, (-0.9, 0, 0), has
+    // nothing over its hemisphere (light 1); inside a closed sphere every direction is shut
+    // (light 0).
+    const n = await loads(page);
+    await page.evaluate(() => { location.hash = 'expr=((x-0.5)%5E2%2By%5E2%2Bz%5E2-0.16)*((x%2B0.5)%5E2%2By%5E2%2Bz%5E2-0.16)&box=-1.1,-0.6,-0.6,1.1,0.6,0.6&depth=3,5&cam=0.6,-3,2,0,0,0'; });
+    await waitForMesh(page, n);
+    await page.evaluate(() => document.activeElement && document.activeElement.blur());
+    const plain = await viewShot(page);
+    await page.check('#occlusion');
+    await page.waitForFunction(() => document.getElementById('view').dataset.look === 'occlusion', null, { timeout: 120000 });
+    const ao = await viewShot(page, 'spheres-occlusion.png');
+    const got = await page.evaluate(() => {
+      const g = window.isomeshViewer.surface.geometry;
+      const p = g.attributes.position.array, light = g.attributes.occlusion.array;
+      const nearest = (q) => {
+        let best = 0, bd = Infinity;
+        for (let i = 0; i < p.length / 3; i++) {
+          const d = Math.hypot(p[3 * i] - q[0], p[3 * i + 1] - q[1], p[3 * i + 2] - q[2]);
+          if (d < bd) { bd = d; best = i; }
+        }
+        return best;
+      };
+      let inside = 0;
+      for (let i = 1; i < light.length; i += 2) inside = Math.max(inside, light[i]);
+      return { gap: light[2 * nearest([-0.1, 0, 0])], open: light[2 * nearest([-0.9, 0, 0])], inside, ms: window.isomeshViewer.occlusionMs };
+    });
+    console.log(`# occlusion: light at the gap ${got.gap.toFixed(3)} (closed form ${(5 / 9).toFixed(3)}), opposite ${got.open.toFixed(3)}, inside at most ${got.inside.toFixed(3)}; computed in ${got.ms.toFixed(0)} ms`);
+    assert.ok(Math.abs(got.gap - 5 / 9) < 0.12, `light at the gap ${got.gap}`);
+    assert.ok(got.open > 0.95, `light opposite ${got.open}`);
+    assert.ok(got.inside < 0.1, `inside ${got.inside}`);
+    // The picture darkens where the spheres face each other, and keeps its outline: pixels
+    // near the page's background colour (its corner) in one picture and not in the other are few.
+    assert.ok(changedShare(plain, ao) > 0.002, `the picture changed (${changedShare(plain, ao)})`);
+    const corner = 4 * (10 * plain.width + 10);
+    const bg = Array.from(plain.rgba.subarray(corner, corner + 3));
+    const isBg = (im, i) => Math.abs(im.rgba[i] - bg[0]) + Math.abs(im.rgba[i + 1] - bg[1]) + Math.abs(im.rgba[i + 2] - bg[2]) < 40;
+    let flipped = 0, background = 0, darker = 0;
+    for (let i = 0; i < plain.rgba.length; i += 4) {
+      if (isBg(plain, i)) background++;
+      if (isBg(plain, i) !== isBg(ao, i)) flipped++;
+      darker += plain.rgba[i] + plain.rgba[i + 1] + plain.rgba[i + 2] - ao.rgba[i] - ao.rgba[i + 1] - ao.rgba[i + 2];
+    }
+    const pixels = plain.width * plain.height;
+    assert.ok(background > 0.2 * pixels && background < 0.95 * pixels, `background ${background} of ${pixels} pixels`);
+    assert.ok(flipped < 0.005 * pixels, `the same outline (${flipped} pixels changed sides)`);
+    assert.ok(darker > 0, 'occlusion only darkens');
+    assert.match(await settledHref(page), /[#&]ao=1(&|$)/);
+    await page.uncheck('#occlusion');
   });
 
   it('left no page errors', () => {

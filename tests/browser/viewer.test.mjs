@@ -539,7 +539,7 @@ describe('isomesh viewer', { timeout: 600000 }, () => {
     await page.focus('body');
     // Tab on until every control below has had the focus (bounded: the page has fewer than
     // 200 focusable controls with every section open)
-    const wanted = ['view', 'preset', 'expr', 'render', 'param-mu2', 'color-mode', 'show-edges', 'wireframe', 'clip-on', 'fit', 'drc'];
+    const wanted = ['view', 'preset', 'expr', 'render', 'param-mu2', 'color-mode', 'show-edges', 'wireframe', 'occlusion', 'clip-on', 'fit', 'drc'];
     const seen = new Set();
     for (let i = 0; i < 200 && !wanted.every((id) => seen.has(id)); i++) {
       await page.keyboard.press('Tab');

@@ -261,6 +261,7 @@ function syncControls() {
   $('show-axes').checked = !!state.show.axes;
   $('keep-box').checked = !!state.keepBox;
   $('wireframe').checked = state.wire;
+  $('occlusion').checked = !!state.occlusion;
   $('clip-on').checked = state.clip.on;
   $('clip-axis').value = state.clip.axis;
   $('clip-flip').checked = state.clip.flip;
@@ -421,6 +422,7 @@ function applyDisplay() {
   viewer.setVisibility(state.show);
   viewer.setWireframe(state.wire);
   viewer.setClip(state.clip);
+  viewer.setOcclusion(!!state.occlusion);
 }
 
 // The URL follows the state, at most once every URL_INTERVAL_MS (browsers refuse a flood of
@@ -909,7 +911,7 @@ function applyFragment(fragment) {
       if (ranges[k]) ranges[k] = [Math.min(ranges[k][0], v), Math.max(ranges[k][1], v)];
     }
   }
-  for (const k of ['box', 'depth', 'maxError', 'quality', 'color', 'clip', 'show', 'wire', 'curves']) if (s[k] !== undefined) state[k] = s[k];
+  for (const k of ['box', 'depth', 'maxError', 'quality', 'color', 'clip', 'show', 'wire', 'occlusion', 'curves']) if (s[k] !== undefined) state[k] = s[k];
   pendingView = s.view || null;
   state.view = s.view || null;
   shownIdentity = null;
@@ -1043,6 +1045,11 @@ function wire() {
   }
   wireCurves();
   $('two-sided').addEventListener('change', () => viewer.setTwoSided($('two-sided').checked));
+  $('occlusion').addEventListener('change', () => {
+    state.occlusion = $('occlusion').checked;
+    viewer.setOcclusion(state.occlusion);
+    updateUrl();
+  });
   $('color-range').addEventListener('change', () => showLegend(state.color, viewer.setRangeCut($('color-range').value)));
   $('wireframe').addEventListener('change', () => {
     state.wire = $('wireframe').checked;

@@ -5,7 +5,8 @@
 // Fragment keys (URLSearchParams): preset=NAME | expr=TEXT, p.NAME=VALUE per parameter,
 // box=xmin,ymin,zmin,xmax,ymax,zmax, depth=MIN,MAX, err=MAX_ERROR, quality=good, cam=px,py,pz,tx,ty,tz,
 // color=shaded|mean|gauss|cells, clip=AXIS,OFFSET[,flip], hide=edges,points,boundary,box,curves,
-// wire=1, axes=1, curves=JSON list of the Curves panel's entries (curves.js).
+// wire=1, axes=1, ao=1 (the render mode with ambient occlusion), curves=JSON list of the
+// Curves panel's entries (curves.js).
 import { curveRequest, validEntries } from './curves.js';
 
 export const COLOR_MODES = ['shaded', 'mean', 'gauss', 'cells'];
@@ -36,6 +37,7 @@ export function defaultState() {
     curves: [],             // the Curves panel's entries (curves.js)
     keepBox: false,         // a typed expression keeps the box (else it is fitted, POST /v1/box)
     wire: false,
+    occlusion: false,       // the render mode: ambient occlusion over the shading (render_mode.js)
   };
 }
 
@@ -86,6 +88,7 @@ export function encodeState(state, paramNames) {
   const hidden = FEATURES.filter((k) => !state.show[k]);
   if (hidden.length) q.set('hide', hidden.join(','));
   if (state.wire) q.set('wire', '1');
+  if (state.occlusion) q.set('ao', '1');
   if (state.show.axes) q.set('axes', '1');
   if (state.curves && state.curves.length) q.set('curves', JSON.stringify(state.curves));
   return q.toString().replace(/%2C/g, ',');  // commas read fine in a fragment
@@ -152,6 +155,7 @@ export function decodeState(fragment) {
   }
   if (q.has('axes')) s.show = { ...(s.show || Object.fromEntries(FEATURES.map((k) => [k, true]))), axes: q.get('axes') === '1' };
   if (q.has('wire')) s.wire = q.get('wire') === '1';
+  if (q.has('ao')) s.occlusion = q.get('ao') === '1';
   if (q.has('curves')) {
     let list = null;
     try { list = JSON.parse(q.get('curves')); } catch { list = null; }

@@ -3,8 +3,10 @@
 // on a DoubleSide material whose back faces get flipped normals, so a self-intersecting or
 // one-sided surface is lit the same from either side), the surface with its colour modes, the
 // wireframe overlay, the non-manifold features, the requested curves and their cells
-// (curves.js), double sheets tinted, one clipping plane, fit-to-view. Draws on
-// demand (at most once per animation frame), not in a loop.
+// (curves.js), double sheets tinted, one clipping plane, fit-to-view, and the render mode
+// with ambient occlusion (occlusion.js: computed per mesh when first shown in that mode, kept
+// per vertex, each side its own). Draws on demand (at most once per animation frame), not in
+// a loop.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { buildFeatures, disposeFeatures, pickFeature, setLineResolution } from './features.js';
@@ -13,6 +15,7 @@ import { curvatureColors, curvatureRange, RANGE_CUTS } from './colormap.js';
 import { buildBox, disposeBox } from './box_view.js';
 import { sectionSegments, sectionLines } from './section.js';
 import { buildCap } from './cap.js';
+import { bakeOcclusion } from './occlusion.js';
 
 const SURFACE_RGB = 0xb9c6d8;
 // Two-sided colouring: triangles face along grad f (the outside, f > 0), so back faces show
@@ -70,11 +73,18 @@ export class Viewer {
     });
     this.backTint = { value: new THREE.Color(1, 1, 1) };
     this.twoSided = true;
+    // The render mode: the light each side of a vertex keeps (attribute occlusion: outside,
+    // inside; occlusion.js) multiplies the shading when occlusionStrength is 1.
+    this.occlusionStrength = { value: 0 };
     this.material.onBeforeCompile = (shader) => {
       shader.uniforms.backTint = this.backTint;
+      shader.uniforms.occlusionStrength = this.occlusionStrength;
+      shader.vertexShader = shader.vertexShader
+        .replace('void main() {', 'attribute vec2 occlusion;\nvarying vec2 vOcclusion;\nvoid main() {\n\tvOcclusion = occlusion;');
       shader.fragmentShader = shader.fragmentShader
-        .replace('void main() {', 'uniform vec3 backTint;\nvoid main() {')
-        .replace('#include <color_fragment>', '#include <color_fragment>\n\tif (!gl_FrontFacing) diffuseColor.rgb *= backTint;');
+        .replace('void main() {', 'uniform vec3 backTint;\nuniform float occlusionStrength;\nvarying vec2 vOcclusion;\nvoid main() {')
+        .replace('#include <color_fragment>', '#include <color_fragment>\n\tif (!gl_FrontFacing) diffuseColor.rgb *= backTint;')
+        .replace('#include <opaque_fragment>', 'outgoingLight *= mix(1.0, gl_FrontFacing ? vOcclusion.x : vOcclusion.y, occlusionStrength);\n\t#include <opaque_fragment>');
     };
     this.section = null;
     this.wireMaterial = new THREE.MeshBasicMaterial({
@@ -92,6 +102,7 @@ export class Viewer {
     this.bounds = new THREE.Box3(new THREE.Vector3(-1, -1, -1), new THREE.Vector3(1, 1, 1));
     this.frames = 0;
     this.framePending = false;
+    this.occlusion = false;    // the render mode (ambient occlusion)
 
     new ResizeObserver(() => this.resize()).observe(canvas);
     this.resize();
@@ -125,8 +136,29 @@ export class Viewer {
 
   draw() {
     this.updateClipRange();
+    this.applyOcclusion();
     this.renderer.render(this.scene, this.camera);
     this.frames++;
+  }
+
+  // The render mode: ambient occlusion over the shading (true) or the plain shading.
+  setOcclusion(on) {
+    this.occlusion = on;
+    this.render();
+  }
+
+  // Computes the shown mesh's occlusion the first time it is drawn in the render mode
+  // (canvas[data-look] says which look the last frame has).
+  applyOcclusion() {
+    const g = this.surface && this.surface.geometry;
+    if (this.occlusion && g && g.attributes.normal && !g.attributes.occlusion) {
+      const t0 = performance.now();
+      g.setAttribute('occlusion', new THREE.BufferAttribute(bakeOcclusion(this.renderer, g), 2));
+      this.occlusionMs = performance.now() - t0;
+    }
+    const on = this.occlusion && !!(g && g.attributes.occlusion);
+    this.occlusionStrength.value = on ? 1 : 0;
+    this.canvas.dataset.look = on ? 'occlusion' : 'plain';
   }
 
   onKey(e) {

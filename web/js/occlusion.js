@@ -1,0 +1,178 @@
+// occlusion.js — ambient occlusion of a mesh, computed once per mesh in the browser (on the GPU)
+// and kept per vertex, for the viewer's render mode: folds, necks, corners and the insides of
+// tunnels darken and the shape reads as in a rendered figure. Being a property of the mesh,
+// not of the view, it costs nothing while the camera moves, and it sees occluders a
+// screen-space method cannot (those behind the point as seen from the camera).
+//
+// Method ("obscurance by depth maps"): for DIRECTIONS directions d spread evenly over the
+// sphere (a Fibonacci lattice), the mesh is drawn from far along d into a depth map
+// (orthographic, both sides of every triangle); then every vertex, drawn as one point into a
+// pixel of its own in an accumulation target, looks itself up in that map: it sees d when
+// nothing lies in front of it along d. Each side of the surface collects its own sums:
+//     outside (along the normal n = grad f / |grad f|):  sum vis * max(d.n, 0), sum max(d.n, 0)
+//     inside:                                             sum vis * max(-d.n, 0), sum max(-d.n, 0)
+// (cosine-weighted visibility of the hemisphere). Their ratios are the light each side keeps
+// (1: open, 0: shut in); the viewer's material multiplies its light by the side it shows. A
+// finite set of directions gives each one's shadow edge as a step: SMOOTHING passes averaging
+// each vertex with its mesh neighbours blur those steps out.
+// What the clipping plane cuts away still occludes (the occlusion is the whole mesh's).
+import * as THREE from 'three';
+
+// Directions over the whole sphere (each side's hemisphere gets half): enough that a corner
+// or a neck is sampled by several, few enough to stay one short pause in software GL.
+const DIRECTIONS = 64;
+// Depth map side (texels): a texel is 1/DEPTH_RES of the mesh's bounding diameter.
+const DEPTH_RES = 384;
+// A vertex counts as seen when it lies at most this many texel widths behind the map's
+// nearest surface (its own triangles are in the map too), plus a slope term for directions
+// that graze its surface.
+const BIAS_TEXELS = 1.5;
+// Vertices per row of the accumulation target.
+const ACC_WIDTH = 1024;
+// Neighbour-averaging passes over the result (each reaches one ring of triangles further).
+const SMOOTHING = 2;
+
+const depthVertex = `
+void main() { gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0); }`;
+const depthFragment = `
+void main() { gl_FragColor = vec4(1.0); }`;
+
+const gatherVertex = `
+attribute float vid;
+uniform mat4 dirViewProjection;
+uniform vec3 dir;
+uniform sampler2D depthMap;
+uniform vec2 accSize;
+uniform float bias;
+varying vec4 sums;
+void main() {
+  vec4 clip = dirViewProjection * vec4(position, 1.0);   // orthographic: w = 1
+  vec3 ndc = clip.xyz / clip.w;
+  float mapDepth = texture2D(depthMap, ndc.xy * 0.5 + 0.5).r;
+  float c = dot(normalize(normal), dir);
+  float slope = bias * min(4.0, sqrt(max(0.0, 1.0 - c * c)) / max(abs(c), 1e-3));
+  float seen = (ndc.z * 0.5 + 0.5) <= mapDepth + bias + slope ? 1.0 : 0.0;
+  float up = max(c, 0.0), down = max(-c, 0.0);
+  sums = vec4(seen * up, up, seen * down, down);
+  float x = mod(vid, accSize.x), y = floor(vid / accSize.x);
+  gl_Position = vec4((x + 0.5) / accSize.x * 2.0 - 1.0, (y + 0.5) / accSize.y * 2.0 - 1.0, 0.0, 1.0);
+  gl_PointSize = 1.0;
+}`;
+const gatherFragment = `
+varying vec4 sums;
+void main() { gl_FragColor = sums; }`;
+
+// Unit vectors spread evenly over the sphere (golden-angle spiral).
+function fibonacciDirections(n) {
+  const out = [];
+  const golden = Math.PI * (3 - Math.sqrt(5));
+  for (let i = 0; i < n; i++) {
+    const z = 1 - (2 * i + 1) / n;
+    const r = Math.sqrt(1 - z * z);
+    out.push(new THREE.Vector3(r * Math.cos(golden * i), r * Math.sin(golden * i), z));
+  }
+  return out;
+}
+
+// The light each vertex of geometry keeps on its outside and inside, interleaved
+// (Float32Array, 2 per vertex, each in [0, 1]). geometry needs position and normal.
+export function bakeOcclusion(renderer, geometry) {
+  const n = geometry.attributes.position.count;
+  const sphere = (geometry.boundingSphere || (geometry.computeBoundingSphere(), geometry.boundingSphere)).clone();
+  const R = Math.max(sphere.radius, 1e-9);
+  const rows = Math.max(1, Math.ceil(n / ACC_WIDTH));
+
+  const depthTarget = new THREE.WebGLRenderTarget(DEPTH_RES, DEPTH_RES, { depthBuffer: true });
+  depthTarget.depthTexture = new THREE.DepthTexture(DEPTH_RES, DEPTH_RES, THREE.FloatType);
+  const acc = new THREE.WebGLRenderTarget(ACC_WIDTH, rows, {
+    type: THREE.HalfFloatType, depthBuffer: false, minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
+  });
+
+  const depthScene = new THREE.Scene();
+  const depthMaterial = new THREE.ShaderMaterial({ vertexShader: depthVertex, fragmentShader: depthFragment, side: THREE.DoubleSide });
+  depthScene.add(new THREE.Mesh(geometry, depthMaterial));
+
+  const points = new THREE.BufferGeometry();
+  points.setAttribute('position', geometry.attributes.position);
+  points.setAttribute('normal', geometry.attributes.normal);
+  points.setAttribute('vid', new THREE.BufferAttribute(Float32Array.from({ length: n }, (_, i) => i), 1));
+  const gather = new THREE.ShaderMaterial({
+    vertexShader: gatherVertex, fragmentShader: gatherFragment,
+    uniforms: {
+      dirViewProjection: { value: new THREE.Matrix4() }, dir: { value: new THREE.Vector3() },
+      depthMap: { value: depthTarget.depthTexture }, accSize: { value: new THREE.Vector2(ACC_WIDTH, rows) },
+      bias: { value: 0 },
+    },
+    blending: THREE.CustomBlending, blendEquation: THREE.AddEquation,
+    blendSrc: THREE.OneFactor, blendDst: THREE.OneFactor, blendSrcAlpha: THREE.OneFactor, blendDstAlpha: THREE.OneFactor,
+    depthTest: false, depthWrite: false,
+  });
+  const cloud = new THREE.Points(points, gather);
+  cloud.frustumCulled = false;
+  const gatherScene = new THREE.Scene();
+  gatherScene.add(cloud);
+  const gatherCamera = new THREE.OrthographicCamera();   // unused by the shader
+
+  const camera = new THREE.OrthographicCamera(-R, R, R, -R, R, 3 * R);
+  const saved = { target: renderer.getRenderTarget(), color: renderer.getClearColor(new THREE.Color()), alpha: renderer.getClearAlpha(), clipping: renderer.localClippingEnabled };
+  renderer.localClippingEnabled = false;
+  renderer.setClearColor(0x000000, 0);
+  renderer.setRenderTarget(acc);
+  renderer.clear(true, false, false);
+  gather.uniforms.bias.value = BIAS_TEXELS / DEPTH_RES;   // depth spans 2R, as does the map
+  for (const d of fibonacciDirections(DIRECTIONS)) {
+    camera.position.copy(sphere.center).addScaledVector(d, 2 * R);
+    camera.up.set(Math.abs(d.z) < 0.9 ? 0 : 1, 0, Math.abs(d.z) < 0.9 ? 1 : 0);
+    camera.lookAt(sphere.center);
+    camera.updateMatrixWorld();
+    camera.updateProjectionMatrix();
+    renderer.setRenderTarget(depthTarget);
+    renderer.clear(true, true, false);
+    renderer.render(depthScene, camera);
+    gather.uniforms.dirViewProjection.value.multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse);
+    gather.uniforms.dir.value.copy(d);
+    renderer.setRenderTarget(acc);
+    renderer.autoClear = false;
+    renderer.render(gatherScene, gatherCamera);
+    renderer.autoClear = true;
+  }
+  const raw = new Uint16Array(4 * ACC_WIDTH * rows);
+  renderer.readRenderTargetPixels(acc, 0, 0, ACC_WIDTH, rows, raw);
+  renderer.setRenderTarget(saved.target);
+  renderer.setClearColor(saved.color, saved.alpha);
+  renderer.localClippingEnabled = saved.clipping;
+
+  const light = new Float32Array(2 * n);
+  const h = THREE.DataUtils.fromHalfFloat;
+  for (let i = 0; i < n; i++) {
+    const w0 = h(raw[4 * i + 1]), w1 = h(raw[4 * i + 3]);
+    light[2 * i] = w0 > 0 ? Math.min(1, h(raw[4 * i]) / w0) : 1;
+    light[2 * i + 1] = w1 > 0 ? Math.min(1, h(raw[4 * i + 2]) / w1) : 1;
+  }
+  for (const o of [depthTarget, acc, depthMaterial, gather, points]) o.dispose();
+  depthTarget.depthTexture.dispose();
+  return geometry.index ? smooth(light, geometry.index.array, SMOOTHING) : light;
+}
+
+// passes rounds of: each vertex's pair of values becomes the mean over itself and the vertices
+// it shares a triangle with (each shared edge counted once per triangle).
+function smooth(values, index, passes) {
+  const n = values.length / 2;
+  let cur = values;
+  for (let p = 0; p < passes; p++) {
+    const sum = Float32Array.from(cur), count = new Float32Array(n).fill(1);
+    for (let t = 0; t < index.length; t += 3) {
+      for (let k = 0; k < 3; k++) {
+        const a = index[t + k], b = index[t + (k + 1) % 3];
+        sum[2 * a] += cur[2 * b]; sum[2 * a + 1] += cur[2 * b + 1]; count[a]++;
+        sum[2 * b] += cur[2 * a]; sum[2 * b + 1] += cur[2 * a + 1]; count[b]++;
+      }
+    }
+    for (let i = 0; i < n; i++) {
+      sum[2 * i] /= count[i];
+      sum[2 * i + 1] /= count[i];
+    }
+    cur = sum;
+  }
+  return cur;
+}
