@@ -140,7 +140,8 @@ describe('box and inspection', { timeout: 300000 }, () => {
       await page.waitForSelector('#pick-info:not([hidden])');
       const info = await page.$eval('#pick-info', (e) => ({ ...e.dataset, text: e.textContent }));
       assert.equal(info.type, 'node');
-      assert.match(info.text, /^node point/);
+      assert.match(info.text, /^node point \(certified by \w+ within [0-9.e-]+\)/);
+      assert.equal(info.certified, 'true');
       const xyz = info.xyz.split(',').map(Number);
       const err = Math.min(...nodes.map((p) => Math.hypot(p[0] - xyz[0], p[1] - xyz[1], p[2] - xyz[2])));
       assert.ok(err < 1e-6, `picked (${xyz}) is ${err} from the nearest closed-form node`);

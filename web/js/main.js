@@ -337,6 +337,15 @@ function syncFeatureKey(counts, made) {
   }
 }
 
+// How a singular point was certified (the method, the enclosure's radius, and for a cusp the
+// perturbation it was proved under), or why it could not be.
+function certificateText(p) {
+  if (!p.certified)
+    return ` (not certified${p.uncertified_reason ? ': ' + p.uncertified_reason : ''})`;
+  const eps = p.perturbation ? `, |ε| ≤ ${sig(p.perturbation, 2)}` : '';
+  return ` (certified${p.certificate ? ' by ' + p.certificate : ''} within ${sig(p.radius, 2)}${eps})`;
+}
+
 // Clicking near a singular point or curve says what it is.
 function pickAt(e) {
   const info = $('pick-info');
@@ -350,7 +359,7 @@ function pickAt(e) {
   if (hit.what === 'point') {
     const p = hit.p;
     const eig = (p.hessian_eigenvalues || []).map((v) => sig(v)).join(', ');
-    info.textContent = `${p.type} point${p.certified ? ' (certified)' : ' (not certified)'}\n(${xyz})\n` +
+    info.textContent = `${p.type} point${certificateText(p)}\n(${xyz})\n` +
       `Hessian eigenvalues ${eig}; ${p.cones} cone${p.cones === 1 ? '' : 's'} of faces`;
   } else if (hit.what === 'cut') {
     const c = hit.p;
@@ -366,6 +375,8 @@ function pickAt(e) {
   info.dataset.what = hit.what;
   info.dataset.xyz = hit.xyz.join(',');
   info.dataset.type = hit.what === 'point' ? hit.p.type : hit.p.kind;
+  if (hit.what === 'point') info.dataset.certified = String(!!hit.p.certified);
+  else delete info.dataset.certified;
   delete info.dataset.cell;
   info.hidden = false;
 }
