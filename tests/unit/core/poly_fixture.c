@@ -170,6 +170,23 @@ size_t pf_count_nm_edges(const ism_mesh *m, bool (*pred)(const double a[3], cons
     return count;
 }
 
+size_t pf_count_edges(const ism_mesh *m, size_t lo, size_t hi,
+                      bool (*pred)(const double a[3], const double b[3], const void *arg),
+                      const void *arg)
+{
+    edge *e = sorted_edges(m);
+    size_t n = m->ntris * 3, count = 0;
+    for (size_t i = 0, j; i < n; i = j) {
+        for (j = i; j < n && e[j].a == e[i].a && e[j].b == e[i].b; j++)
+            ;
+        if (j - i >= lo && j - i <= hi &&
+            (!pred || pred(m->pos + 3 * e[i].a, m->pos + 3 * e[i].b, arg)))
+            count++;
+    }
+    free(e);
+    return count;
+}
+
 size_t pf_vertex_cones(const ism_mesh *m, uint32_t v)
 {
     size_t n = 0, cap = 64;

@@ -51,6 +51,11 @@ void pf_tri_normal(const ism_mesh *m, size_t t, double n[3]);
 /* Non-manifold edges (more than two triangles) whose two end points satisfy pred. */
 size_t pf_count_nm_edges(const ism_mesh *m, bool (*pred)(const double a[3], const double b[3]));
 
+/* Edges in lo..hi triangles (each edge once) whose two end points satisfy pred (NULL: all). */
+size_t pf_count_edges(const ism_mesh *m, size_t lo, size_t hi,
+                      bool (*pred)(const double a[3], const double b[3], const void *arg),
+                      const void *arg);
+
 /* Number of fans of triangles around vertex v (triangles containing v, joined when they
  * share an edge through v): 1 for a manifold vertex, 2 where two cones meet. */
 size_t pf_vertex_cones(const ism_mesh *m, uint32_t v);

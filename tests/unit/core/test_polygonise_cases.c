@@ -3,8 +3,6 @@
  * deterministic and independent of the thread count, budgets and bad options fail clearly. */
 #include <criterion/criterion.h>
 #include <math.h>
-#include <stdint.h>
-#include <stdlib.h>
 #include <string.h>
 #include "poly_fixture.h"
 
@@ -161,36 +159,15 @@ Test(cases, bad_options_name_the_field)
     ism_tape_free(t);
 }
 
-static int cmp_key(const void *x, const void *y)
+/* Both ends strictly inside the box arg (farther than 1e-9 from its faces): an edge of a
+ * hole, not of the cut by the box. */
+static bool inside_box(const double a[3], const double b[3], const void *arg)
 {
-    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
-    return a < b ? -1 : a > b;
-}
-
-/* Boundary edges of m (in one triangle) with both ends strictly inside box (farther than
- * tol from its faces): holes, not the cut by the box. */
-static size_t inner_boundary_edges(const ism_mesh *m, const double box[6], double tol)
-{
-    size_t ne = 3 * m->ntris, n = 0;
-    uint64_t *e = malloc((ne + 1) * sizeof *e);
-    cr_assert(e);
-    for (size_t t = 0; t < m->ntris; t++)
-        for (int k = 0; k < 3; k++) {
-            uint64_t a = m->tri[3 * t + k], b = m->tri[3 * t + (k + 1) % 3];
-            e[3 * t + k] = a < b ? a << 32 | b : b << 32 | a;
-        }
-    qsort(e, ne, sizeof *e, cmp_key);
-    for (size_t i = 0, j; i < ne; i = j) {
-        for (j = i; j < ne && e[j] == e[i]; j++)
-            ;
-        const double *p = m->pos + 3 * (size_t)(e[i] >> 32), *q = m->pos + 3 * (size_t)(uint32_t)e[i];
-        bool inside = true;
-        for (int k = 0; k < 3; k++)
-            inside = inside && fmin(p[k], q[k]) > box[k] + tol && fmax(p[k], q[k]) < box[k + 3] - tol;
-        n += j - i == 1 && inside;
-    }
-    free(e);
-    return n;
+    const double *box = arg, tol = 1e-9;
+    bool in = true;
+    for (int k = 0; k < 3; k++)
+        in = in && fmin(a[k], b[k]) > box[k] + tol && fmax(a[k], b[k]) < box[k + 3] - tol;
+    return in;
 }
 
 /* The helicoid x sin 2z = y cos 2z contains its axis (a lattice line in a box centred on
@@ -219,7 +196,7 @@ Test(cases, helicoid_axis_on_the_lattice)
         cr_expect_eq(p.components, 1, "box %d: %zu components", w, p.components);
         cr_expect_eq(p.nonmanifold_edges, 0, "box %d: %zu non-manifold edges", w,
                      p.nonmanifold_edges);
-        cr_expect_eq(inner_boundary_edges(&m, box, 1e-9), 0, "box %d: holes", w);
+        cr_expect_eq(pf_count_edges(&m, 1, 1, inside_box, box), 0, "box %d: holes", w);
         ism_mesh_free(&m);
     }
     ism_tape_free(t);

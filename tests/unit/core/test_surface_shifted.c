@@ -5,8 +5,8 @@
  * edges with four triangles each, no non-manifold element off the locus). */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 #include "core/analysis/analysis.h"
 #include "core/singular/check.h"
@@ -60,34 +60,6 @@ static void surface_run_free(surface_run *r)
     ism_mesh_free(&r->m);
 }
 
-static int cmp_u64(const void *x, const void *y)
-{
-    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
-    return a < b ? -1 : a > b;
-}
-
-/* Edges of the mesh in more than two triangles, and how many of them in exactly four. */
-static void count_nm_edges(const ism_mesh *m, size_t *n, size_t *four)
-{
-    size_t ne = 3 * m->ntris;
-    uint64_t *e = malloc((ne + 1) * sizeof *e);
-    cr_assert(e);
-    for (size_t t = 0; t < m->ntris; t++)
-        for (int k = 0; k < 3; k++) {
-            uint64_t a = m->tri[3 * t + k], b = m->tri[3 * t + (k + 1) % 3];
-            e[3 * t + k] = a < b ? a << 32 | b : b << 32 | a;
-        }
-    qsort(e, ne, sizeof *e, cmp_u64);
-    *n = *four = 0;
-    for (size_t i = 0, j; i < ne; i = j) {
-        for (j = i; j < ne && e[j] == e[i]; j++)
-            ;
-        *n += j - i > 2;
-        *four += j - i == 4;
-    }
-    free(e);
-}
-
 /* The crossing-spheres preset (unit spheres at x = ±1/4): their circle lies 0.03 below the
  * spheres' flat tops, where the octree stays coarse. At depth 8, 0.37 cell off the lattice,
  * the tube took a top triangle reaching 5 radii from the circle, its rim found no foot within
@@ -99,8 +71,8 @@ Test(surface_shifted, crossing_spheres_depth_8)
     surface_run r;
     run_surface("((x - 0.25)^2 + y^2 + z^2 - 1)*((x + 0.25)^2 + y^2 + z^2 - 1)", base, 8, 1,
                 &r);
-    size_t n, four;
-    count_nm_edges(&r.m, &n, &four);
+    size_t n = pf_count_edges(&r.m, 3, SIZE_MAX, NULL, NULL);
+    size_t four = pf_count_edges(&r.m, 4, 4, NULL, NULL);
     cr_expect_eq(r.l.ncurves, 1, "%zu curves found, the spheres cross in one circle",
                  r.l.ncurves);
     cr_expect_eq(r.cs.loops_fallback, 0, "%zu rims fanned to their centroid",
