@@ -49,14 +49,16 @@ static void hit_cells(const ism_key_map *cells, uint8_t *hit, const double p[3],
             }
 }
 
-/* The cell of each finest box (UINT32_MAX for the larger ones) as a number in cells. */
+/* The cell of each finest box not yet used (UINT32_MAX for the larger ones, and for those a
+ * point or curve already explains: marking them again changes nothing) as a number in
+ * cells. */
 static bool box_cells(const ism_locus *l, const double lo[3], const double cell[3],
                       ism_key_map *cells, uint32_t *which)
 {
     for (size_t i = 0; i < l->nboxes; i++) {
         const ism_lbox *b = &l->boxes[i];
         int64_t c[3];
-        bool finest = true, added;
+        bool finest = !(b->flags & ISM_LBOX_USED), added;
         for (int k = 0; k < 3; k++) {
             finest = finest && b->hi[k] - b->lo[k] <= 1.5 * cell[k];
             c[k] = (int64_t)floor((0.5 * (b->lo[k] + b->hi[k]) - lo[k]) / cell[k]);
