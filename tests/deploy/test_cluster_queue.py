@@ -16,7 +16,9 @@ with Redis, daemons of one worker each and (for the failure case) nginx:
 * cancels reach the cluster's own waits: when the daemon that put a computation on the queue
   also runs it, a synchronous client that leaves, or a DELETE of the only job waiting for
   it, stops the worker and drops the queue entry (before, the executor's own interest kept
-  it running for nobody).
+  it running for nobody), while a synchronous request that shares the computation on the
+  daemon running it keeps it: the job is canceled, the request gets its mesh (before, the
+  cancel reached it as a 499).
 
 Every wait is bounded; no assertion depends on the machine's speed beyond the bounds."""
 import json
@@ -203,6 +205,46 @@ class ClusterQueueTest(unittest.TestCase):
             self.assertTrue(stack.wait_until(
                 lambda: s.redis.command("XLEN", "isomesh:v1:q:127.0.0.1") == 0, 10))
             self.assertEqual(d.metric("isomesh_computations_started_total"), 2)
+        finally:
+            self.assertEqual(s.cleanup(), [], "sanitizer reports")
+
+    def test_a_canceled_job_leaves_a_request_sharing_its_computation_its_mesh(self):
+        s = stack.Stack(n=2, daemon_args=("--cluster", "--workers", "1"), with_nginx=False).start()
+        try:
+            a, b = s.daemons
+            for k in range(4):  # until the other daemon's executor runs it (a few tries)
+                req = {"preset": "gyroid-ball", "params": {"k": 4.9 + k / 100},
+                       "depth": {"max": 8}}
+                job = a.post("/v1/jobs", req).json()
+                self.assertTrue(stack.wait_until(
+                    lambda: a.get(job["url"]).json()["state"] == "running", 60))
+                # the daemon whose executor runs it: a request there shares the flight
+                runner = s.redis.command("HGET", "isomesh:v1:job:%s.%s" % (
+                    job["key"], job["format"]), "daemon")
+                e = a if int(runner.split(b"/")[1]) == a.proc.pid else b
+                if e is b or k == 3:
+                    break
+                a.request("DELETE", job["url"])
+                self.assertTrue(stack.wait_until(
+                    lambda: a.metric("isomesh_workers_busy") == 0, 30))
+            restarts = sum(d.metric("isomesh_worker_restarts_total", reason="cancel")
+                           for d in s.daemons)
+            started = sum(d.metric("isomesh_computations_started_total") for d in s.daemons)
+            sync = harness.in_background(lambda: e.post("/v1/mesh", req, timeout=300))
+            self.assertTrue(stack.wait_until(
+                lambda: e.metric("isomesh_suspended_connections") == 1, 30))
+            gone = a.request("DELETE", job["url"])
+            self.assertEqual(gone.json()["state"], "canceled")  # it was still running
+            sync[0].join(300)
+            self.assertNotIn("error", sync[1])
+            r = sync[1]["result"]
+            self.assertEqual(r.status, 200, r.body[:300])
+            self.assertEqual(r.header("ETag").strip('"'), job["key"])
+            self.assertEqual(a.get(job["url"]).json()["state"], "canceled")
+            self.assertEqual(sum(d.metric("isomesh_worker_restarts_total", reason="cancel")
+                                 for d in s.daemons), restarts)
+            self.assertEqual(sum(d.metric("isomesh_computations_started_total")
+                                 for d in s.daemons), started)
         finally:
             self.assertEqual(s.cleanup(), [], "sanitizer reports")
 
