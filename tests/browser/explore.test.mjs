@@ -3,8 +3,8 @@
 // an off-centre sphere) and the mesh is not cut (no boundary edges); the box outline and
 // the axes with ticks change the picture; a box typed by hand is kept; the gallery search and
 // its thumbnails (loaded only when in view);
-// picking a node of the Cayley cubic gives its type and its closed-form coordinates within
-// 1e-6; a PNG export has the size asked for; the Curves panel cuts the sphere into cells
+// picking a node of the Cayley cubic gives its type, its closed-form coordinates within
+// 1e-6 and f = 0, grad f = 0 there; a PNG export has the size asked for; the Curves panel cuts the sphere into cells
 // (curves drawn, areas 2 pi h, a picked cell's facts) and adds a level curve, an
 // intersection (Viviani's node of degree 4) and the view's silhouette (closed forms); double
 // sheets are tinted; the render mode's ambient occlusion of two spheres matches its closed
@@ -124,7 +124,7 @@ describe('box and inspection', { timeout: 300000 }, () => {
     assert.deepEqual(errors, []);
   });
 
-  it('picking a node of the Cayley cubic shows its type and coordinates (closed form)', async () => {
+  it('picking a node of the Cayley cubic shows its type, coordinates (closed form) and f = 0, grad f = 0 there', async () => {
     const nodes = [[-0.5, -0.5, -0.5], [-0.5, 0.5, 0.5], [0.5, -0.5, 0.5], [0.5, 0.5, -0.5]];
     const spots = await page.evaluate(() => {
       const v = window.isomeshViewer;
@@ -137,14 +137,20 @@ describe('box and inspection', { timeout: 300000 }, () => {
     assert.equal(spots.length, 4, 'four singular points drawn');
     for (const [x, y] of spots) {
       await page.mouse.click(x, y);
-      await page.waitForSelector('#pick-info:not([hidden])');
+      await page.waitForSelector('#pick-info[data-probe]:not([hidden])');
       const info = await page.$eval('#pick-info', (e) => ({ ...e.dataset, text: e.textContent }));
       assert.equal(info.type, 'node');
       assert.match(info.text, /^node point \(certified by \w+ within [0-9.e-]+\)/);
       assert.equal(info.certified, 'true');
+      assert.match(info.text, /^node point.*\n.*\n.*\nf = .*\|∇f\| = .*\nH = /s);
       const xyz = info.xyz.split(',').map(Number);
       const err = Math.min(...nodes.map((p) => Math.hypot(p[0] - xyz[0], p[1] - xyz[1], p[2] - xyz[2])));
       assert.ok(err < 1e-6, `picked (${xyz}) is ${err} from the nearest closed-form node`);
+      // f and its gradient there, from the server: a node is a zero of both (|f| is quadratic
+      // and |grad f| linear in the distance to it; |grad f|'s second derivatives are below 40).
+      const probe = JSON.parse(info.probe);
+      assert.ok(Math.abs(probe.f) < 1e-9, `f = ${probe.f} at the node`);
+      assert.ok(probe.grad_norm < 40 * Math.max(err, 1e-12) + 1e-9, `|grad f| = ${probe.grad_norm} at the node`);
     }
   });
 
@@ -217,6 +223,15 @@ describe('box and inspection', { timeout: 300000 }, () => {
     assert.ok(lo2 <= lo10 && hi10 <= hi2, `10-90 % (${lo10}, ${hi10}) lies within 2-98 % (${lo2}, ${hi2})`);
     assert.ok(loF <= lo2 && hi2 <= hiF, 'the full range holds the others');
     assert.ok(loF <= min || hiF >= max, 'the full range reaches the data');
+    // Each map keeps its own range: K at 10-90 %, H still at its 2-98 %, K's back.
+    await page.selectOption('#color-range', 'p10');
+    await page.selectOption('#color-mode', 'mean');
+    await page.waitForSelector('#legend[data-mode=mean]:not([hidden])');
+    assert.equal(await page.inputValue('#color-range'), 'p2');
+    await page.selectOption('#color-mode', 'gauss');
+    await page.waitForSelector('#legend[data-mode=gauss]:not([hidden])');
+    assert.equal(await page.inputValue('#color-range'), 'p10');
+    assert.deepEqual(await page.$eval('#legend', (e) => [Number(e.dataset.lo), Number(e.dataset.hi)]), spans.p10.slice(0, 2));
     await page.selectOption('#color-range', 'p2');
     await page.selectOption('#color-mode', 'shaded');
   });

@@ -378,7 +378,31 @@ function pickAt(e) {
   if (hit.what === 'point') info.dataset.certified = String(!!hit.p.certified);
   else delete info.dataset.certified;
   delete info.dataset.cell;
+  delete info.dataset.probe;
   info.hidden = false;
+  probeInto(info, hit.xyz, info.textContent + '\n');
+}
+
+let picks = 0;   // the newest pick: a probe answering an older one is dropped
+
+// f, |grad f| and curvature at xyz (POST /v1/point: the server evaluates the same f) appended
+// to the pick's text; data-probe holds the answer. Resolves true when it was shown, false when
+// the probe failed (the pick's own facts stay), null when a newer pick came meanwhile.
+async function probeInto(info, xyz, head) {
+  const mine = ++picks;
+  const body = currentBody();
+  if (!body) return false;
+  try {
+    const p = await api.probePoint(body, xyz);
+    if (mine !== picks) return null;
+    const v = (n) => (n === null ? 'undefined' : sig(n, 4));
+    info.textContent = head + `f = ${v(p.f)}, |∇f| = ${v(p.grad_norm)}, distance ≈ ${v(p.distance)}\n` +
+      `H = ${v(p.mean_curvature)}, K = ${v(p.gauss_curvature)}`;
+    info.dataset.probe = JSON.stringify(p);
+    return true;
+  } catch {
+    return mine === picks ? false : null;
+  }
 }
 
 // The arrangement cell of a picked triangle as text ('' when there are no cells).
@@ -401,28 +425,26 @@ async function pickSurfaceAt(x, y) {
   const hit = viewer.pickSurface(x, y);
   const body = currentBody();
   if (!hit || !body) {
+    picks++;                       // a probe still on its way is for a pick no longer shown
     info.hidden = true;
     return;
   }
   const cell = cellText(hit.face, info);
+  delete info.dataset.probe;
   if (cell) {                      // the cell's facts at once; f and curvature follow
     info.textContent = cell.trim();
     info.dataset.what = 'cell';
     info.dataset.type = 'cell';
     info.hidden = false;
   }
-  try {
-    const p = await api.probePoint(body, hit.xyz);
-    const v = (n) => (n === null ? 'undefined' : sig(n, 4));
-    info.textContent = cell + `surface point (${hit.xyz.map((c) => sig(c, 7)).join(', ')}), triangle ${hit.face}\n` +
-      `f = ${v(p.f)}, |∇f| = ${v(p.grad_norm)}, distance ≈ ${v(p.distance)}\n` +
-      `H = ${v(p.mean_curvature)}, K = ${v(p.gauss_curvature)}`;
+  const head = cell + `surface point (${hit.xyz.map((c) => sig(c, 7)).join(', ')}), triangle ${hit.face}\n`;
+  const shown = await probeInto(info, hit.xyz, head);
+  if (shown) {
     info.dataset.what = 'surface';
     info.dataset.type = 'surface';
     info.dataset.xyz = hit.xyz.join(',');
-    info.dataset.probe = JSON.stringify(p);
     info.hidden = false;
-  } catch (e) {
+  } else if (shown === false) {
     info.hidden = !cell;
   }
 }
@@ -1042,6 +1064,7 @@ function wire() {
 
   $('color-mode').addEventListener('change', () => {
     state.color = COLOR_MODES.includes($('color-mode').value) ? $('color-mode').value : 'shaded';
+    $('color-range').value = viewer.rangeCutOf(state.color);   // each map keeps its own range
     showLegend(state.color, viewer.setColorMode(state.color));
     updateUrl();
     fetchColourData();

@@ -96,7 +96,9 @@ export class Viewer {
     this.curves = null;
     this.data = null;
     this.colorMode = 'shaded';
-    this.rangeCut = 'p2';      // colormap.RANGE_CUTS key: the percentiles the colours span
+    // Per colour map, the colormap.RANGE_CUTS key of the percentiles its colours span: each
+    // map keeps its own (H and K differ in how heavy their tails are).
+    this.rangeCuts = { mean: 'p2', gauss: 'p2' };
     this.show = { edges: true, points: true, boundary: true, curves: true };
     this.wireframe = false;
     this.bounds = new THREE.Box3(new THREE.Vector3(-1, -1, -1), new THREE.Vector3(1, 1, 1));
@@ -291,9 +293,10 @@ export class Viewer {
       return null;
     }
     const cache = this.data.mesh.colors || (this.data.mesh.colors = {});
-    const slot = `${attr}|${this.rangeCut}`;
+    const cut = this.rangeCutOf(this.colorMode);
+    const slot = `${attr}|${cut}`;
     if (!cache[slot]) {
-      const range = curvatureRange(values, RANGE_CUTS[this.rangeCut] ?? RANGE_CUTS.p2);
+      const range = curvatureRange(values, RANGE_CUTS[cut] ?? RANGE_CUTS.p2);
       cache[slot] = { range, rgb: curvatureColors(values, range) };
     }
     cache[attr] = cache[slot];
@@ -304,9 +307,15 @@ export class Viewer {
     return cache[attr].range;
   }
 
-  // The percentiles the curvature colours span (colormap.RANGE_CUTS key); returns the legend.
+  // The range cut (colormap.RANGE_CUTS key) colour mode mode uses.
+  rangeCutOf(mode) {
+    return this.rangeCuts[mode] || 'p2';
+  }
+
+  // The percentiles the current curvature map's colours span (colormap.RANGE_CUTS key; the
+  // map keeps it); returns the legend.
   setRangeCut(cut) {
-    this.rangeCut = cut;
+    if (this.colorMode in this.rangeCuts) this.rangeCuts[this.colorMode] = cut;
     const legend = this.applyColor();
     this.render();
     return legend;
