@@ -46,14 +46,19 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
     p.ws = ism_eval_ws_new(o->f);
     p.normal = malloc((m->nverts ? m->nverts : 1) * 3 * sizeof *p.normal);
     p.active = malloc(m->nverts ? m->nverts : 1);
-    bool ok = p.ws && p.normal && p.active && rm_mesh_build(&p.r, m) && rm_normals(&p) &&
-              rm_lock_features(&p, o);
+    p.slide = malloc(m->nverts ? m->nverts : 1);
+    bool ok = p.ws && p.normal && p.active && p.slide && rm_mesh_build(&p.r, m) &&
+              rm_normals(&p) && rm_lock_features(&p, o);
     if (ok) {
         for (int round = 0; round < ISM_RM_ROUNDS && !stopped(o); round++) {
             if (!rm_mark_active(&p))
                 break;
-            rm_flip_active(&p, &ok);
-            if (!ok || stopped(o) || !rm_relax_sweep(&p))
+            if (rm_flip_active(&p, &ok) && round == 0)
+                rm_lock_vertices(&p, o); /* caps flipped away: their false creases go */
+            if (!ok || stopped(o))
+                break;
+            size_t moved = rm_relax_sweep(&p);
+            if (!(moved + rm_slide_sweep(&p)))
                 break;
         }
         if (ok && rm_mark_active(&p))
@@ -67,6 +72,7 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
     rm_mesh_free(&p.r);
     free(p.normal);
     free(p.active);
+    free(p.slide);
     ism_eval_ws_free(p.ws);
     st->time_ms = ism_now_ms() - t0;
     return ok ? true : ism_error_set(err, "quality pass: out of memory");

@@ -3,7 +3,9 @@
  * test), and only when the flip keeps the mesh saying the same: both triangles carry one
  * label, ab is not locked, the quad is nearly flat (no crease folded), the new triangles face
  * the old way, cd is not already an edge, the smallest angle of the pair grows, and cd's
- * midpoint lies no farther from f = 0 than the bound (max_error, or ab's own distance). */
+ * midpoint lies no farther from f = 0 than the bound (max_error, or ab's own distance). A
+ * cap (an angle near 180°) has no normal to speak of: its bend is not asked, and the bound
+ * is the largest of the quad's five edges. */
 #include "core/remesh/rm_pass.h"
 
 #include <math.h>
@@ -17,6 +19,12 @@
  * radians), so that the four points of a circle (sum exactly π up to rounding) are never
  * flipped back and forth. */
 #define ISM_RM_FLIP_MARGIN 1e-9
+
+/* A triangle with an angle at least this large (degrees) is a cap: its apex lies almost on
+ * the opposite side, so its normal is rounding noise and says nothing about a bend. The
+ * bend test of a flip then looks only at the new pair (klein-bottle: 0.1°-1° caps along the
+ * double curve's tubes, their flips refused as "bent" before this). */
+#define ISM_RM_CAP_DEG 160.0
 
 /* Flips one call may make, per triangle of the mesh: Lawson's procedure ends by itself in
  * the plane; on a curved mesh this bounds the work whatever the geometry does. */
@@ -86,6 +94,21 @@ static bool not_delaunay(const double *A, const double *B, const double *C, cons
     return sc * cd + cc * sd < -ISM_RM_FLIP_MARGIN * scale;
 }
 
+/* The triangle's largest angle is at least ISM_RM_CAP_DEG: cos of it below cos(cap). */
+static bool is_cap(const double *a, const double *b, const double *c)
+{
+    double cap = cos(ISM_RM_CAP_DEG * M_PI / 180);
+    return cos(rm_angle(a, b, c)) < cap || cos(rm_angle(b, c, a)) < cap ||
+           cos(rm_angle(c, a, b)) < cap;
+}
+
+/* Distance from f = 0 at the midpoint of pq. */
+static double midpoint_distance(rm_pass *p, const double *P, const double *Q)
+{
+    double m[3] = {0.5 * (P[0] + Q[0]), 0.5 * (P[1] + Q[1]), 0.5 * (P[2] + Q[2])};
+    return rm_distance(p, m);
+}
+
 /* The geometric tests of a flip (the combinatorial ones passed). */
 static bool flip_improves(rm_pass *p, const quad *q)
 {
@@ -96,19 +119,19 @@ static bool flip_improves(rm_pass *p, const quad *q)
     double l1 = rm_cross(A, B, C, n1), l2 = rm_cross(B, A, D, n2);
     double k1 = rm_cross(A, D, C, m1), k2 = rm_cross(B, C, D, m2);
     double s[3] = {n1[0] + n2[0], n1[1] + n2[1], n1[2] + n2[2]};
-    if (!bend_ok(n1, l1, n2, l2) || !bend_ok(m1, k1, m2, k2) || !(dot3(m1, s) > 0) ||
+    bool cap = is_cap(A, B, C) || is_cap(B, A, D);
+    if ((!cap && !bend_ok(n1, l1, n2, l2)) || !bend_ok(m1, k1, m2, k2) || !(dot3(m1, s) > 0) ||
         !(dot3(m2, s) > 0))
         return false;
     double before = fmin(rm_min_sine(A, B, C), rm_min_sine(B, A, D));
     double after = fmin(rm_min_sine(A, D, C), rm_min_sine(B, C, D));
     if (!(after > before))
         return false;
-    double mab[3], mcd[3];
-    for (int k = 0; k < 3; k++) {
-        mab[k] = 0.5 * (A[k] + B[k]);
-        mcd[k] = 0.5 * (C[k] + D[k]);
-    }
-    return rm_distance(p, mcd) <= fmax(p->max_error, rm_distance(p, mab));
+    double bound = fmax(p->max_error, midpoint_distance(p, A, B));
+    if (cap) /* ab is as good as c's detour: the quad's sides bound the new edge too */
+        bound = fmax(fmax(bound, fmax(midpoint_distance(p, A, C), midpoint_distance(p, C, B))),
+                     fmax(midpoint_distance(p, B, D), midpoint_distance(p, D, A)));
+    return midpoint_distance(p, C, D) <= bound;
 }
 
 /* (a, b, c), (b, a, d) -> (a, d, c), (b, c, d): winding kept, incidence updated. */

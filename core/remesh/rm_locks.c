@@ -14,6 +14,9 @@
  * (about 4° on the sphere preset, rarely 25° on tight curvature), while a max/min crease
  * meets at tens of degrees. Neither flipped across nor moved along. */
 #define ISM_RM_CREASE_DEG 40.0
+/* Boundary vertices with more triangles than this are not slid (the fan walk keeps its
+ * neighbours on the stack; the polygoniser's vertices have about 6). */
+#define ISM_RM_SLIDE_MAX_DEGREE 32
 
 static int cmp_u64(const void *a, const void *b)
 {
@@ -45,8 +48,7 @@ static bool is_crease(const rm_pass *p, uint32_t a, uint32_t b, uint32_t t1, uin
     return !fold;
 }
 
-/* True when edge {a, b} is free: neither flipped across a feature nor moved along one. */
-static bool edge_free(const rm_pass *p, uint32_t a, uint32_t b)
+bool rm_edge_free(const rm_pass *p, uint32_t a, uint32_t b)
 {
     const rm_mesh *r = &p->r;
     uint32_t t[2];
@@ -71,7 +73,7 @@ static bool fan_free(const rm_pass *p, uint32_t v)
         int k = rm_corner(r->m, t, v);
         uint32_t ab[2], prev = tri[3 * t + (k + 2) % 3];
         int c;
-        if (tri[3 * t + (k + 1) % 3] == v || prev == v || !edge_free(p, v, prev) ||
+        if (tri[3 * t + (k + 1) % 3] == v || prev == v || !rm_edge_free(p, v, prev) ||
             !rm_edge_triangles(r, v, prev, ab, &c))
             return false;
         t = ab[0];
@@ -106,20 +108,67 @@ static bool copy_locked_edges(rm_mesh *r, const ism_remesh_options *o)
     return true;
 }
 
-bool rm_lock_features(rm_pass *p, const ism_remesh_options *o)
+/* Vertex v lies on the mesh's boundary in one open fan whose inner edges are all free, its
+ * two boundary edges are not locked, and its boundary neighbours share one coordinate with it
+ * exactly (a box face cut the surface there): the boundary curve is f = 0 in that plane, and
+ * v may slide along it (rm_slide.c). */
+static bool box_slidable(const rm_pass *p, uint32_t v)
+{
+    const rm_mesh *r = &p->r;
+    const uint32_t *tri = r->m->tri;
+    uint32_t nb[2 * ISM_RM_SLIDE_MAX_DEGREE], nnb = 0, ends[2], nend = 0;
+    if (r->count[v] > ISM_RM_SLIDE_MAX_DEGREE)
+        return false;
+    for (uint32_t i = 0; i < r->count[v]; i++) { /* v's distinct neighbours */
+        const uint32_t *t = tri + 3 * r->vt[r->start[v] + i];
+        for (int k = 0; k < 3; k++) {
+            uint32_t j = 0;
+            while (j < nnb && nb[j] != t[k])
+                j++;
+            if (t[k] != v && j == nnb)
+                nb[nnb++] = t[k];
+        }
+    }
+    if (nnb != r->count[v] + 1) /* one open fan: one neighbour more than triangles */
+        return false;
+    for (uint32_t j = 0; j < nnb; j++) {
+        uint32_t two[2];
+        int n;
+        bool manifold = rm_edge_triangles(r, v, nb[j], two, &n);
+        if (n == 1 && nend < 2 && !rm_edge_locked(r, v, nb[j]))
+            ends[nend++] = nb[j];
+        else if (!manifold || !rm_edge_free(p, v, nb[j]))
+            return false;
+    }
+    if (nend != 2)
+        return false;
+    const double *P = r->m->pos;
+    for (int k = 0; k < 3; k++)
+        if (P[3 * v + k] == P[3 * ends[0] + k] && P[3 * v + k] == P[3 * ends[1] + k])
+            return true;
+    return false;
+}
+
+void rm_lock_vertices(rm_pass *p, const ism_remesh_options *o)
 {
     rm_mesh *r = &p->r;
-    if (!copy_locked_edges(r, o))
-        return false;
     for (size_t v = 0; v < r->m->nverts; v++) {
         const double *n = p->normal + 3 * v;
         bool vanishes = n[0] == 0 && n[1] == 0 && n[2] == 0;
         r->locked[v] = vanishes || !fan_free(p, (uint32_t)v);
+        p->slide[v] = !vanishes && r->locked[v] && r->count[v] && box_slidable(p, (uint32_t)v);
     }
     for (size_t i = 0; i < o->nlocked_points; i++) {
         uint32_t v = nearest_vertex(r, o->locked_points + 3 * i);
         if (v != UINT32_MAX)
-            r->locked[v] = 1;
+            r->locked[v] = 1, p->slide[v] = 0;
     }
+}
+
+bool rm_lock_features(rm_pass *p, const ism_remesh_options *o)
+{
+    if (!copy_locked_edges(&p->r, o))
+        return false;
+    rm_lock_vertices(p, o);
     return true;
 }

@@ -26,6 +26,7 @@ typedef struct rm_pass {
     double gthresh;        /* |∇f| at or below this vanishes */
     double max_error;
     uint8_t *active;       /* per vertex: relaxed in this round (near a poor triangle) */
+    uint8_t *slide;        /* per vertex: on a box face's boundary curve, may slide along it */
     size_t flips, moves;
 } rm_pass;
 
@@ -35,6 +36,14 @@ bool rm_normals(rm_pass *p);
 /* Marks protected vertices (r.locked) and collects the given locked edges. False when out of
  * memory. */
 bool rm_lock_features(rm_pass *p, const ism_remesh_options *o);
+
+/* Recomputes the vertex protection (r.locked, slide) from the mesh as it is now: after flips
+ * have replaced caps, whose noisy normals looked like creases. Features that flips never
+ * change (boundary, non-manifold, labels, locked edges and points) stay protected. */
+void rm_lock_vertices(rm_pass *p, const ism_remesh_options *o);
+
+/* True when edge {a, b} is free: an oriented manifold edge, one label, not locked, no crease. */
+bool rm_edge_free(const rm_pass *p, uint32_t a, uint32_t b);
 
 /* Lawson flips starting from the edges of triangles with an active vertex, each flip
  * queueing its quad's four sides; returns the flips made. *ok false when out of memory. */
@@ -46,6 +55,30 @@ size_t rm_mark_active(rm_pass *p);
 
 /* One sweep of tangential relaxation over the free active vertices; returns the moves made. */
 size_t rm_relax_sweep(rm_pass *p);
+
+/* One sweep sliding the active box-boundary vertices (slide) along their boundary curve
+ * toward the middle of their two boundary neighbours (rm_slide.c); returns the moves made. */
+size_t rm_slide_sweep(rm_pass *p);
+
+/* The fan of v: the sine of its smallest angle, mean edge length, the area-weighted centroid
+ * and normal (the sum of the triangles' cross products: well defined even where a needle's
+ * own normal is rounding noise). */
+typedef struct rm_fan {
+    double min_sine, mean_edge, centroid[3], normal[3];
+} rm_fan;
+
+void rm_fan_measure(const rm_pass *p, uint32_t v, rm_fan *f);
+
+/* True when moving v to x keeps every triangle of its fan facing within a limit of the fan's
+ * normal, and leaves the fan's smallest angle no worse (or comfortable). */
+bool rm_fan_accepts(const rm_pass *p, uint32_t v, const double x[3], const rm_fan *f);
+
+/* Newton from x onto f = 0 (with axis >= 0: within the plane x[axis] = const, ∇f's component
+ * along it dropped); g gets ∇f there. False when ∇f vanishes or it does not converge. */
+bool rm_project(rm_pass *p, double x[3], double scale, int axis, double g[3]);
+
+/* Puts v at x (on f = 0, ∇f there g): position, unit normal, the mesh's normal on its side. */
+void rm_commit_move(rm_pass *p, uint32_t v, const double x[3], const double g[3]);
 
 /* Distance estimate |f| / |∇f| at x (INFINITY where ∇f vanishes). */
 double rm_distance(rm_pass *p, const double x[3]);

@@ -66,11 +66,12 @@ bool rm_normals(rm_pass *p)
     return true;
 }
 
-/* Newton from x onto f = 0; false when ∇f vanishes or it does not converge. */
-static bool project(rm_pass *p, double x[3], double scale, double g[3])
+bool rm_project(rm_pass *p, double x[3], double scale, int axis, double g[3])
 {
     for (int i = 0; i < ISM_RM_NEWTON_STEPS; i++) {
         double fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
+        if (axis >= 0)
+            g[axis] = 0;
         double g2 = dot3(g, g);
         if (!isfinite(fv) || !(sqrt(g2) > p->gthresh))
             return false;
@@ -83,14 +84,7 @@ static bool project(rm_pass *p, double x[3], double scale, double g[3])
     return false;
 }
 
-/* The fan of v: the sine of its smallest angle, mean edge length, the area-weighted centroid and normal (the
- * sum of the triangles' cross products: well defined for a closed fan even where a
- * needle's own normal is rounding noise). */
-typedef struct fan {
-    double min_sine, mean_edge, centroid[3], normal[3];
-} fan;
-
-static void fan_measure(const rm_pass *p, uint32_t v, fan *f)
+void rm_fan_measure(const rm_pass *p, uint32_t v, rm_fan *f)
 {
     const rm_mesh *r = &p->r;
     const double *P = r->m->pos;
@@ -119,9 +113,7 @@ static void fan_measure(const rm_pass *p, uint32_t v, fan *f)
     f->mean_edge /= edges > 0 ? edges : 1;
 }
 
-/* True when moving v to x keeps every triangle of its fan facing within the limit of the
- * fan's normal, and leaves the fan's smallest angle no worse (or comfortable). */
-static bool fan_accepts(const rm_pass *p, uint32_t v, const double x[3], const fan *f)
+bool rm_fan_accepts(const rm_pass *p, uint32_t v, const double x[3], const rm_fan *f)
 {
     const rm_mesh *r = &p->r;
     const double *P = r->m->pos;
@@ -140,12 +132,25 @@ static bool fan_accepts(const rm_pass *p, uint32_t v, const double x[3], const f
     return worst >= f->min_sine || worst >= sin(ISM_RM_COMFORT_DEG * M_PI / 180);
 }
 
+void rm_commit_move(rm_pass *p, uint32_t v, const double x[3], const double g[3])
+{
+    double *pos = p->r.m->pos + 3 * v, *n = p->normal + 3 * v;
+    float *mn = p->r.m->normal + 3 * v;
+    double len = sqrt(dot3(g, g));
+    double side = mn[0] * g[0] + mn[1] * g[1] + mn[2] * g[2] < 0 ? -1 : 1;
+    memcpy(pos, x, 3 * sizeof *x);
+    for (int k = 0; k < 3; k++) {
+        n[k] = g[k] / len;
+        mn[k] = (float)(side * n[k]);
+    }
+}
+
 /* Tries to move free vertex v; true when it moved. */
 static bool relax_vertex(rm_pass *p, uint32_t v)
 {
     double *pos = p->r.m->pos + 3 * v, *n = p->normal + 3 * v;
-    fan f;
-    fan_measure(p, v, &f);
+    rm_fan f;
+    rm_fan_measure(p, v, &f);
     double d[3] = {f.centroid[0] - pos[0], f.centroid[1] - pos[1], f.centroid[2] - pos[2]};
     double dn = dot3(d, n);
     for (int k = 0; k < 3; k++)
@@ -153,18 +158,11 @@ static bool relax_vertex(rm_pass *p, uint32_t v)
     for (double step = 1; step >= 0.5; step *= 0.5) {
         double x[3] = {pos[0] + step * d[0], pos[1] + step * d[1], pos[2] + step * d[2]}, g[3];
         double tangent[3] = {x[0], x[1], x[2]};
-        if (!project(p, x, f.mean_edge, g) ||
+        if (!rm_project(p, x, f.mean_edge, -1, g) ||
             !(rm_dist(x, tangent) <= ISM_RM_PROJECT_MAX_REL * f.mean_edge) ||
-            !fan_accepts(p, v, x, &f))
+            !rm_fan_accepts(p, v, x, &f))
             continue;
-        float *mn = p->r.m->normal + 3 * v;
-        double len = sqrt(dot3(g, g));
-        double side = mn[0] * g[0] + mn[1] * g[1] + mn[2] * g[2] < 0 ? -1 : 1;
-        memcpy(pos, x, sizeof x);
-        for (int k = 0; k < 3; k++) {
-            n[k] = g[k] / len;
-            mn[k] = (float)(side * n[k]);
-        }
+        rm_commit_move(p, v, x, g);
         return true;
     }
     return false;
