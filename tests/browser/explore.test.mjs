@@ -26,6 +26,16 @@ function assertChanged(a, b) {
   assert.ok(changedShare(a, b) > 0.01, `the picture changed (${changedShare(a, b)})`);
 }
 
+// The sphere preset shown (when a test runs alone) and the Curves panel open.
+async function sphereWithCurvesPanel() {
+  if (await page.inputValue('#preset') !== 'sphere') {
+    const k = await loads(page);
+    await page.selectOption('#preset', 'sphere');
+    await waitForMesh(page, k);
+  }
+  await page.evaluate(() => { document.getElementById('curves-section').open = true; });
+}
+
 async function boxFields() {
   return page.evaluate(() => ['xmin', 'ymin', 'zmin', 'xmax', 'ymax', 'zmax'].map((k) => Number(document.getElementById(`box-${k}`).value)));
 }
@@ -239,12 +249,7 @@ describe('box and inspection', { timeout: 300000 }, () => {
   it('the Curves panel cuts the sphere into cells: curves drawn, cells coloured and picked', async () => {
     // The unit sphere (preset box ±1.5): 3 planes z = -0.75, 0, 0.75 cut 4 zones of area
     // 2 pi h (Archimedes): pi/2, 3 pi/2, 3 pi/2, pi/2.
-    if (await page.inputValue('#preset') !== 'sphere') {   // when run alone
-      const k = await loads(page);
-      await page.selectOption('#preset', 'sphere');
-      await waitForMesh(page, k);
-    }
-    await page.evaluate(() => { document.getElementById('curves-section').open = true; });
+    await sphereWithCurvesPanel();
     await page.selectOption('#curve-kind', 'plane');
     await page.selectOption('#curve-axis', 'z');
     await page.fill('#curve-count', '3');
@@ -295,12 +300,7 @@ describe('box and inspection', { timeout: 300000 }, () => {
     // On the unit sphere (the z stack of the test above stays, when it ran): the level x = 0.5
     // is a circle; the cylinder (x - 1/2)^2 + y^2 = 1/4 meets it in Viviani's curve, which
     // crosses itself at (1, 0, 0); the silhouette along d is the great circle p . d = 0.
-    if (await page.inputValue('#preset') !== 'sphere') {   // when run alone
-      const k = await loads(page);
-      await page.selectOption('#preset', 'sphere');
-      await waitForMesh(page, k);
-    }
-    await page.evaluate(() => { document.getElementById('curves-section').open = true; });
+    await sphereWithCurvesPanel();
     const add = async (kind, fill) => {
       await page.selectOption('#curve-kind', kind);
       for (const [sel, v] of Object.entries(fill)) await page.fill(sel, v);
