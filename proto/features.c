@@ -144,6 +144,10 @@ static void write_singular_point(ism_jw *w, const ism_sing_point *p, int cones)
         ism_jw_key(w, "uncertified_reason");
         ism_jw_string(w, ism_uncert_why_name(p->uncertified_why));
     }
+    if (p->exists_radius > 0.0) {
+        ism_jw_key(w, "exists_within");
+        ism_jw_number(w, p->exists_radius);
+    }
     ism_jw_key(w, "hessian_eigenvalues");
     ism_jw_numbers(w, p->eig, 3);
     ism_jw_key(w, "residual_f");

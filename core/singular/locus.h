@@ -78,6 +78,9 @@ typedef struct ism_sing_point {
     int uncertified_why;  /* enum ism_uncert_why */
     double perturbation;  /* ISM_CERT_DEFLATION: the bound on |ε|; the defining systems:
                              their relative residual at the point (0 otherwise) */
+    double exists_radius; /* > 0 on an uncertified contact: a zero of ∇f is proved to lie
+                             within this distance of p (Poincaré–Miranda, miranda.h) — no
+                             uniqueness, no 1e-9 bound */
     double eig[3];        /* Hessian eigenvalues at p, ascending */
     double residual_f;    /* |f(p)| */
     double residual_grad; /* |∇f(p)| */

@@ -2,6 +2,7 @@
 #include "core/singular/point_cert.h"
 #include "core/singular/deflate.h"
 #include "core/singular/krawczyk.h"
+#include "core/singular/miranda.h"
 #include "core/singular/points.h"
 #include "core/singular/search.h"
 #include "core/singular/typecert.h"
@@ -16,6 +17,10 @@
  * CERT_GROWTH: the smallest box that works is the best enclosure. */
 #define CERT_FIRST 1e-6
 #define CERT_GROWTH 10.0
+/* The largest cube (× diagonal) the existence proof of a contact tries: a contact is located
+ * to ~1e-5 of f's scale in double precision; beyond 1e-3 the proof says little more than
+ * the candidate cluster. */
+#define MIRANDA_RMAX_REL 1e-3
 
 bool ism_pcert_init(ism_pcert *c, const ism_tape *t, double diag, double hscale,
                     uint64_t *evals)
@@ -30,6 +35,7 @@ void ism_pcert_free(ism_pcert *c)
     ism_ivjet_ws_free(c->jw);
     ism_deflate_ws_free(c->dw);
     ism_typecert_ws_free(c->tw);
+    ism_jet4_ws_free(c->j3);
 }
 
 /* Krawczyk on p ± r for growing r up to the allowed half-width. */
@@ -123,6 +129,14 @@ bool ism_pcert_point(ism_pcert *c, ism_sing_point *pt, int rank, const double nu
         pt->uncertified_why = ISM_UNCERT_CONTRACT;
     }
     pt->certified = ok;
+    pt->exists_radius = 0.0;
+    if (pt->uncertified_why != ISM_UNCERT_CONTACT)
+        return ok;
+    if (!c->j3 && !(c->j3 = ism_jet4_ws_new(c->t, 3)))
+        c->oom = true;
+    else if (!ism_miranda_zero(c->j3, pt->p, ISM_SING_CERT_REL * c->diag,
+                               MIRANDA_RMAX_REL * c->diag, &pt->exists_radius, c->evals))
+        pt->exists_radius = 0.0;
     return ok;
 }
 

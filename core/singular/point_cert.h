@@ -13,6 +13,7 @@
 
 typedef struct ism_deflate_ws ism_deflate_ws;
 typedef struct ism_typecert_ws ism_typecert_ws;
+typedef struct ism_jet4_ws ism_jet4_ws;
 
 /* The workspaces (the deflation and defining-system tapes are built at first use). */
 typedef struct ism_pcert {
@@ -20,6 +21,7 @@ typedef struct ism_pcert {
     ism_ivjet_ws *jw;
     ism_deflate_ws *dw;
     ism_typecert_ws *tw;
+    ism_jet4_ws *j3;    /* third derivatives for the existence proof of a contact */
     double diag;        /* the search box's diagonal */
     double hscale;      /* its Hessian scale (locus.h; 0 = unknown) */
     uint64_t *evals;    /* jet evaluations are added here */
@@ -33,7 +35,8 @@ void ism_pcert_free(ism_pcert *c);
 
 /* Certifies pt (pt->p near the point; rank and null_vec, the eigenvector of H's smallest
  * |eigenvalue|, from H at pt->p) in a box of half-width ≤ ISM_SING_CERT_REL × diag: sets
- * certified, certificate, radius, perturbation, or uncertified_why. A defining system may
+ * certified, certificate, radius, perturbation, or uncertified_why (and, for a contact,
+ * exists_radius when Poincaré–Miranda proves a zero of ∇f nearby). A defining system may
  * move pt->p by up to reach (its Gauss–Newton). *fbox: f over the certified box. Returns
  * pt->certified. */
 bool ism_pcert_point(ism_pcert *c, ism_sing_point *pt, int rank, const double null_vec[3],

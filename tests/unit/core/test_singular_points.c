@@ -201,7 +201,9 @@ Test(singular_points, sphere_has_none)
  * ∇f = s2∇s1 + s1∇s2 = 0 and H = ∇s1∇s2ᵀ + ∇s2∇s1ᵀ = diag(−8, 0, 0) (rank 1); along y,
  * f = y⁴, so the zero of ∇f is isolated but degenerate. f = (x² + y² + z²)² − 4x² has no
  * cubic term: no regular defining system exists (typecert.c), and ∇f's rounding hides the
- * point within ~1e-5 — in every box it is reported, uncertified, as a contact. */
+ * point within ~1e-5 — in every box it is reported, uncertified, as a contact. Poincaré–
+ * Miranda still proves a zero of ∇f within exists_radius ≤ 1e-6 × diagonal of the reported
+ * point; the only zero of ∇f near 0 is 0 itself, so that ball must hold the origin. */
 Test(singular_points, touching_spheres_degenerate)
 {
     const char *src = "((x-1)^2 + y^2 + z^2 - 1)*((x+1)^2 + y^2 + z^2 - 1)";
@@ -215,6 +217,11 @@ Test(singular_points, touching_spheres_degenerate)
         cr_expect(!l.points[0].certified);
         cr_expect_eq(l.points[0].uncertified_why, ISM_UNCERT_CONTACT, "placement %d: reason %d",
                      placement, l.points[0].uncertified_why);
+        double r = l.points[0].exists_radius;
+        cr_expect(r > 0 && r <= 1e-6 * dist(box, box + 3), "placement %d: exists within %g",
+                  placement, r);
+        cr_expect_leq(dist(l.points[0].p, ORIGIN[0]), r, "placement %d: 0 is %g away, > %g",
+                      placement, dist(l.points[0].p, ORIGIN[0]), r);
         cr_expect_str_eq(ism_uncert_why_name(ISM_UNCERT_CONTACT),
                          "contact of two sheets (Hessian rank 1, the rank-1 system singular): "
                          "no regular system defines such a point and double precision places "
