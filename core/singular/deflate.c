@@ -11,7 +11,6 @@
 #include "core/singular/overdet.h"
 #include "core/eval/interval_ops.h"
 
-#include <stdlib.h>
 #include <string.h>
 
 #define N 7
@@ -21,28 +20,6 @@
  * cyclide's to ~1e-6 of its box), where the cubic term is that small but not 0; a cusp's
  * cubic term is of the size of f's other third derivatives (x² + z² − y³: all of it). */
 #define DEFLATE_CUBIC_REL 1e-3
-
-struct ism_deflate_ws {
-    ism_jet4_ws *jet;
-};
-
-ism_deflate_ws *ism_deflate_ws_new(const ism_tape *f)
-{
-    ism_deflate_ws *w = calloc(1, sizeof *w);
-    if (w && !(w->jet = ism_jet4_ws_new(f, 3))) {
-        free(w);
-        return NULL;
-    }
-    return w;
-}
-
-void ism_deflate_ws_free(ism_deflate_ws *w)
-{
-    if (!w)
-        return;
-    ism_jet4_ws_free(w->jet);
-    free(w);
-}
 
 /* J(Z) for the x box (jet j) and the v box v. */
 static void jacobian(const ism_jet4 *j, const ism_interval v[3], const double n[3],
@@ -100,7 +77,7 @@ static bool cubic_at(const ism_jet4 *jp, const double n[3], double *h2, double *
     return *t3 > 0.0 && fabs(cubic) > DEFLATE_CUBIC_REL * *t3 && isfinite(cubic);
 }
 
-int ism_deflate_certify(ism_deflate_ws *w, const double p[3], const double n[3],
+int ism_deflate_certify(ism_jet4_ws *w, const double p[3], const double n[3],
                         double r_first, double r_max, double growth, ism_deflate_result *out,
                         uint64_t *evals)
 {
@@ -108,7 +85,7 @@ int ism_deflate_certify(ism_deflate_ws *w, const double p[3], const double n[3],
     ism_jet4 jp;
     for (int k = 0; k < 3; k++)
         xp[k] = iv(p[k], p[k]);
-    ism_jet4_eval(w->jet, xp, &jp, evals);
+    ism_jet4_eval(w, xp, &jp, evals);
     double h2, t3;
     if (!cubic_at(&jp, n, &h2, &t3))
         return ISM_DEFLATE_SINGULAR;
@@ -126,7 +103,7 @@ int ism_deflate_certify(ism_deflate_ws *w, const double p[3], const double n[3],
         memcpy(x, z, sizeof x);
         memcpy(v, z + 3, sizeof v);
         ism_jet4 jf;
-        ism_jet4_eval(w->jet, x, &jf, evals);
+        ism_jet4_eval(w, x, &jf, evals);
         jacobian(&jf, v, n, J);
         if (ism_od_krawczyk(N, N, J, g, zc, z, k)) {
             out->radius = r;

@@ -19,13 +19,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 #include "core/eval/eval.h"
+#include "core/singular/jet4.h"
 
-/* The partial-derivative tapes of f and the workspaces of their interval jets. */
-typedef struct ism_deflate_ws ism_deflate_ws;
-
-/* NULL when out of memory. */
-ism_deflate_ws *ism_deflate_ws_new(const ism_tape *f);
-void ism_deflate_ws_free(ism_deflate_ws *w);
 
 enum ism_deflate_answer {
     ISM_DEFLATE_CERTIFIED = 0,
@@ -43,7 +38,7 @@ typedef struct ism_deflate_result {
 /* Tries the x boxes p ± r for r = r_first, r_first × growth, ... up to r_max, around the
  * approximate cusp p with unit null vector n of its Hessian. *evals (may be NULL) counts
  * interval jet evaluations. */
-int ism_deflate_certify(ism_deflate_ws *w, const double p[3], const double n[3],
+int ism_deflate_certify(ism_jet4_ws *w, const double p[3], const double n[3],
                         double r_first, double r_max, double growth, ism_deflate_result *out,
                         uint64_t *evals);
 

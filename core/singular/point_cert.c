@@ -33,9 +33,16 @@ bool ism_pcert_init(ism_pcert *c, const ism_tape *t, double diag, double hscale,
 void ism_pcert_free(ism_pcert *c)
 {
     ism_ivjet_ws_free(c->jw);
-    ism_deflate_ws_free(c->dw);
-    ism_typecert_ws_free(c->tw);
     ism_jet4_ws_free(c->j3);
+    ism_jet4_ws_free(c->j4);
+}
+
+/* *w made at first use (order 3 or 4); false (oom set) when out of memory. */
+static bool jets(ism_pcert *c, ism_jet4_ws **w, int order)
+{
+    if (!*w && !(*w = ism_jet4_ws_new(c->t, order)))
+        c->oom = true;
+    return *w != NULL;
 }
 
 /* Krawczyk on p ± r for growing r up to the allowed half-width. */
@@ -67,13 +74,11 @@ static bool krawczyk(ism_pcert *c, ism_sing_point *pt, ism_interval *fbox)
  * set (ISM_UNCERT_CUBIC when the cubic term vanishes: the A3 system is tried next). */
 static bool deflation(ism_pcert *c, ism_sing_point *pt, const double n[3], ism_interval *fbox)
 {
-    if (!c->dw && !(c->dw = ism_deflate_ws_new(c->t))) {
-        c->oom = true;
+    if (!jets(c, &c->j3, 3))
         return false;
-    }
     double rmax = ISM_SING_CERT_REL * c->diag;
     ism_deflate_result r;
-    int a = ism_deflate_certify(c->dw, pt->p, n, CERT_FIRST * rmax, rmax, CERT_GROWTH, &r,
+    int a = ism_deflate_certify(c->j3, pt->p, n, CERT_FIRST * rmax, rmax, CERT_GROWTH, &r,
                                 c->evals);
     if (a != ISM_DEFLATE_CERTIFIED) {
         pt->uncertified_why = a == ISM_DEFLATE_SINGULAR ? ISM_UNCERT_CUBIC : ISM_UNCERT_CONTRACT;
@@ -92,12 +97,10 @@ static bool defining_system(ism_pcert *c, ism_sing_point *pt, int system, double
 {
     static const int why_singular[ISM_TC_SYSTEMS] = { ISM_UNCERT_RANK0, ISM_UNCERT_CONTACT,
                                                       ISM_UNCERT_CUBIC };
-    if (!c->tw && !(c->tw = ism_typecert_ws_new(c->t))) {
-        c->oom = true;
+    if (!jets(c, &c->j4, 4))
         return false;
-    }
     ism_typecert_result r;
-    int a = ism_typecert(c->tw, system, pt->p, reach, ISM_SING_CERT_REL * c->diag, c->diag,
+    int a = ism_typecert(c->j4, system, pt->p, reach, ISM_SING_CERT_REL * c->diag, c->diag,
                          c->hscale, &r, c->evals);
     if (a != ISM_TC_CERTIFIED) {
         pt->uncertified_why = a == ISM_TC_SINGULAR ? why_singular[system] : ISM_UNCERT_CONTRACT;
@@ -132,9 +135,7 @@ bool ism_pcert_point(ism_pcert *c, ism_sing_point *pt, int rank, const double nu
     pt->exists_radius = 0.0;
     if (pt->uncertified_why != ISM_UNCERT_CONTACT)
         return ok;
-    if (!c->j3 && !(c->j3 = ism_jet4_ws_new(c->t, 3)))
-        c->oom = true;
-    else if (!ism_miranda_zero(c->j3, pt->p, ISM_SING_CERT_REL * c->diag,
+    if (jets(c, &c->j3, 3) && !ism_miranda_zero(c->j3, pt->p, ISM_SING_CERT_REL * c->diag,
                                MIRANDA_RMAX_REL * c->diag, &pt->exists_radius, c->evals))
         pt->exists_radius = 0.0;
     return ok;

@@ -11,17 +11,14 @@
 #include "core/expr/expr.h"
 #include "core/singular/locus.h"
 
-typedef struct ism_deflate_ws ism_deflate_ws;
-typedef struct ism_typecert_ws ism_typecert_ws;
 typedef struct ism_jet4_ws ism_jet4_ws;
 
-/* The workspaces (the deflation and defining-system tapes are built at first use). */
+/* The workspaces (the partial-derivative tapes are built at first use). */
 typedef struct ism_pcert {
     const ism_tape *t;
     ism_ivjet_ws *jw;
-    ism_deflate_ws *dw;
-    ism_typecert_ws *tw;
-    ism_jet4_ws *j3;    /* third derivatives for the existence proof of a contact */
+    ism_jet4_ws *j3;    /* f's jets to order 3 (deflation, a contact's existence proof) */
+    ism_jet4_ws *j4;    /* ... and to order 4 (the defining systems) */
     double diag;        /* the search box's diagonal */
     double hscale;      /* its Hessian scale (locus.h; 0 = unknown) */
     uint64_t *evals;    /* jet evaluations are added here */

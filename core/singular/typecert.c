@@ -33,13 +33,11 @@
  * point jets until the step stops shrinking; then Krawczyk on X = x ± r (V = v ± r_v) for
  * growing r; the residual is |G| over the contracted K. */
 #include "core/singular/typecert.h"
-#include "core/singular/jet4.h"
 #include "core/singular/overdet.h"
 #include "core/eval/interval_ops.h"
 #include "core/util/sym3.h"
 
 #include <math.h>
-#include <stdlib.h>
 #include <string.h>
 
 /* Gauss–Newton steps at most (quadratic convergence at a regular solution: a dozen reach
@@ -64,28 +62,6 @@
  * seen stay under ~1e3 (the horn cyclide's A3 system 530), singular ones start at ~2e4. Only
  * the reason reported depends on it, never a certificate. */
 #define TC_COND_MAX 1e4
-
-struct ism_typecert_ws {
-    ism_jet4_ws *jet;
-};
-
-ism_typecert_ws *ism_typecert_ws_new(const ism_tape *f)
-{
-    ism_typecert_ws *w = calloc(1, sizeof *w);
-    if (w && !(w->jet = ism_jet4_ws_new(f, 4))) {
-        free(w);
-        return NULL;
-    }
-    return w;
-}
-
-void ism_typecert_ws_free(ism_typecert_ws *w)
-{
-    if (!w)
-        return;
-    ism_jet4_ws_free(w->jet);
-    free(w);
-}
 
 /* A system: its sizes and the frame fixed at the start. */
 typedef struct sys {
@@ -210,20 +186,20 @@ static void build(const sys *s, const ism_jet4 *j, const ism_interval z[], ism_i
         a3(s, j, z + 3, g, J);
 }
 
-static void eval_at(ism_typecert_ws *w, const sys *s, const ism_interval z[], ism_jet4 *j,
+static void eval_at(ism_jet4_ws *w, const sys *s, const ism_interval z[], ism_jet4 *j,
                     ism_interval g[], ism_interval J[][ISM_OD_MAXK], uint64_t *evals)
 {
-    ism_jet4_eval(w->jet, z, j, evals);
+    ism_jet4_eval(w, z, j, evals);
     build(s, j, z, g, J);
 }
 
 /* The system's sizes and frame from the Hessian at p. */
-static void setup(ism_typecert_ws *w, int kind, const double p[3], sys *s, double zc[],
+static void setup(ism_jet4_ws *w, int kind, const double p[3], sys *s, double zc[],
                   uint64_t *evals)
 {
     ism_interval x[3] = { pt(p[0]), pt(p[1]), pt(p[2]) };
     ism_jet4 j;
-    ism_jet4_eval(w->jet, x, &j, evals);
+    ism_jet4_eval(w, x, &j, evals);
     double h[6] = { mid(j.h[0][0]), mid(j.h[0][1]), mid(j.h[0][2]),
                     mid(j.h[1][1]), mid(j.h[1][2]), mid(j.h[2][2]) };
     double eig[3], vec[3][3];
@@ -245,7 +221,7 @@ static void setup(ism_typecert_ws *w, int kind, const double p[3], sys *s, doubl
 
 /* Gauss–Newton on G from zc; false when it leaves reach or does not settle. *cond: the
  * scaled Jacobian's condition at the last point. */
-static bool refine(ism_typecert_ws *w, const sys *s, double zc[], double reach, double diag,
+static bool refine(ism_jet4_ws *w, const sys *s, double zc[], double reach, double diag,
                    double *cond, uint64_t *evals)
 {
     double start[3] = { zc[0], zc[1], zc[2] }, last = INFINITY;
@@ -297,7 +273,7 @@ static double row_scale(const sys *s, int r, double diag, double hs)
 }
 
 /* max |G_r| / row_scale over the box k (Krawczyk's enclosure of the solution). */
-static double residual(ism_typecert_ws *w, const sys *s, const ism_interval k[], double diag,
+static double residual(ism_jet4_ws *w, const sys *s, const ism_interval k[], double diag,
                        double hs, uint64_t *evals)
 {
     ism_interval g[ISM_OD_MAXM], J[ISM_OD_MAXM][ISM_OD_MAXK];
@@ -309,7 +285,7 @@ static double residual(ism_typecert_ws *w, const sys *s, const ism_interval k[],
     return worst;
 }
 
-int ism_typecert(ism_typecert_ws *w, int system, const double p[3], double reach, double rmax,
+int ism_typecert(ism_jet4_ws *w, int system, const double p[3], double reach, double rmax,
                  double diag, double hscale, ism_typecert_result *out, uint64_t *evals)
 {
     sys s;

@@ -18,6 +18,7 @@
 
 #include <stdint.h>
 #include "core/eval/eval.h"
+#include "core/singular/jet4.h"
 
 enum ism_tc_system {
     ISM_TC_RANK0 = 0, /* ∇f = 0, H = 0: a triple point (xyz = 0, Steiner's origin), the
@@ -36,12 +37,6 @@ enum ism_tc_answer {
     ISM_TC_FAILED = 2,   /* converged, but Krawczyk did not contract on any box up to rmax */
 };
 
-typedef struct ism_typecert_ws ism_typecert_ws;
-
-/* NULL when out of memory (the A3 system needs f's fourth derivatives: ten tapes). */
-ism_typecert_ws *ism_typecert_ws_new(const ism_tape *f);
-void ism_typecert_ws_free(ism_typecert_ws *w);
-
 typedef struct ism_typecert_result {
     double p[3];      /* the certified point: the centre of X */
     double radius;    /* half-width of X */
@@ -55,8 +50,9 @@ typedef struct ism_typecert_result {
 /* Refines p (within reach of it) by Gauss–Newton on the system's G, then tries boxes of
  * half-width rmax × 1e-6, 1e-5, ... up to rmax around the refined point. diag: the search
  * box's diagonal (the scale of positions); hscale: its Hessian scale (locus.h; 0 = the
- * Hessian at p). *evals (may be NULL) counts jet evaluations. */
-int ism_typecert(ism_typecert_ws *w, int system, const double p[3], double reach, double rmax,
+ * Hessian at p). w: f's jets to order 4 (the A3 system's Jacobian holds D⁴f; jet4.h).
+ * *evals (may be NULL) counts jet evaluations. */
+int ism_typecert(ism_jet4_ws *w, int system, const double p[3], double reach, double rmax,
                  double diag, double hscale, ism_typecert_result *out, uint64_t *evals);
 
 #endif
