@@ -53,22 +53,31 @@ static bool says(const ism_locus *l, const char *word)
     return strstr(l->incomplete_why, word) != NULL;
 }
 
-/* The control: no deadline, the whole locus (3 double curves, conformed) and complete. */
-Test(singular_deadline, none_gives_the_complete_locus)
+/* The whole surface (core/singular/surface.h) with the given deadline (0: none); asserts
+ * the mesh comes back. */
+static void run_surface(double deadline_ms, ism_mesh *m, ism_locus *l, ism_conform_stats *cs)
 {
     ism_tape *t = compile();
     ism_poly_options po;
     poly_options(&po);
-    ism_mesh m;
-    ism_mesh_init(&m);
-    ism_locus l;
-    ism_locus_init(&l);
+    po.deadline_ms = deadline_ms;
+    ism_mesh_init(m);
+    ism_locus_init(l);
     ism_poly_stats ps;
-    ism_conform_stats cs;
     ism_surface_times tm;
     ism_error err;
-    cr_assert_eq(ism_mesh_surface(t, &po, &m, &l, &ps, &cs, &tm, &err), ISM_POLY_OK, "%s",
+    cr_assert_eq(ism_mesh_surface(t, &po, m, l, &ps, cs, &tm, &err), ISM_POLY_OK, "%s",
                  err.message);
+    ism_tape_free(t);
+}
+
+/* The control: no deadline, the whole locus (3 double curves, conformed) and complete. */
+Test(singular_deadline, none_gives_the_complete_locus)
+{
+    ism_mesh m;
+    ism_locus l;
+    ism_conform_stats cs;
+    run_surface(0, &m, &l, &cs);
     cr_expect_not(l.incomplete, "incomplete without a deadline: %s", l.incomplete_why);
     size_t dbl = 0;
     for (size_t i = 0; i < l.ncurves; i++)
@@ -77,34 +86,22 @@ Test(singular_deadline, none_gives_the_complete_locus)
     cr_expect_eq(cs.curves_conformed, dbl);
     ism_locus_free(&l);
     ism_mesh_free(&m);
-    ism_tape_free(t);
 }
 
 /* The whole surface with a deadline already passed: the mesh comes back (the polygoniser is
  * not cut), the locus says incomplete and why, and nothing was conformed. */
 Test(singular_deadline, passed_deadline_cuts_the_whole_stage)
 {
-    ism_tape *t = compile();
-    ism_poly_options po;
-    poly_options(&po);
-    po.deadline_ms = passed();
     ism_mesh m;
-    ism_mesh_init(&m);
     ism_locus l;
-    ism_locus_init(&l);
-    ism_poly_stats ps;
     ism_conform_stats cs;
-    ism_surface_times tm;
-    ism_error err;
-    cr_assert_eq(ism_mesh_surface(t, &po, &m, &l, &ps, &cs, &tm, &err), ISM_POLY_OK, "%s",
-                 err.message);
+    run_surface(passed(), &m, &l, &cs);
     cr_expect(l.incomplete);
     cr_expect(says(&l, "deadline"), "why: %s", l.incomplete_why);
     cr_expect_eq(cs.curves_conformed + cs.points_conformed, 0);
     cr_expect_gt(m.ntris, 0, "the mesh is still made");
     ism_locus_free(&l);
     ism_mesh_free(&m);
-    ism_tape_free(t);
 }
 
 /* The locus stages one by one, each given a passed deadline after the ones before it ran to
