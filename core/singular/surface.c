@@ -100,10 +100,10 @@ enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options 
         return ISM_POLY_BAD_OPTIONS;
     ism_locus_options lo;
     ism_locus_options_from_poly(po, &lo);
-    double t0 = ism_now_ms();
+    double t0 = ism_now_ms(), c0 = ism_cpu_ms();
     if (!ism_locus_find(f, &lo, locus, err))
         return ISM_POLY_NO_MEMORY;
-    double t1 = ism_now_ms();
+    double t1 = ism_now_ms(), c1 = ism_cpu_ms();
     ism_poly_options pq = *po;
     ball_list balls;
     if (!quiet_balls(locus, &lo, &balls)) {
@@ -119,8 +119,9 @@ enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options 
     }
     enum ism_poly_status st = ism_polygonise(f, &pq, mesh, ps, err);
     free(balls.b);
-    double t2 = ism_now_ms();
+    double t2 = ism_now_ms(), c2 = ism_cpu_ms();
     times->polygonise_ms = t2 - t1;
+    times->polygonise_cpu_ms = c2 - c1;
     if (st != ISM_POLY_OK)
         return st;
     if (po->cancel && *po->cancel)
@@ -134,6 +135,7 @@ enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options 
         !ism_mesh_drop_loose(mesh))
         return ISM_POLY_NO_MEMORY;
     times->singular_ms = (t1 - t0) + (ism_now_ms() - t2);
+    times->singular_cpu_ms = (c1 - c0) + (ism_cpu_ms() - c2);
     locus->time_ms = times->singular_ms;
     return ISM_POLY_OK;
 }

@@ -16,6 +16,8 @@
 typedef struct ism_surface_times {
     double singular_ms;  /* finding the locus, meshing double sheets, conforming */
     double polygonise_ms;
+    double singular_cpu_ms, polygonise_cpu_ms; /* the same phases in process CPU time (all
+                                                  threads; ism_cpu_ms) */
 } ism_surface_times;
 
 /* The locus options that go with polygoniser options: the same box, depth, threads,

@@ -16,4 +16,13 @@ static inline double ism_now_ms(void) { return (double)ism_now_ns() / 1e6; }
 
 static inline double ism_now_s(void) { return (double)ism_now_ns() / 1e9; }
 
+/* CPU time of the whole process, all threads, in milliseconds: what a computation cost,
+ * unlike the clocks above not stretched by other processes sharing the cores. */
+static inline double ism_cpu_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
+}
+
 #endif
