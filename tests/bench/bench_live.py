@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """bench_live.py — the viewer's live exploration (issue 18): from a slider move to a changed
 picture on every preset with a parameter, measured in headless Chromium by
-tests/bench/live_preview.mjs (goal 300 ms). Printed, never asserted.
+tests/bench/live_preview.mjs (goal 300 ms), with the server's time for the last preview and the
+load average (the figures mean little on a loaded machine). Printed, never asserted.
 
   bench_live.py --build build/release"""
 import argparse
