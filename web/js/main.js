@@ -621,7 +621,7 @@ function show(result, body, seq, preview = false) {
   clearMessage();
   if (!result.mesh) message('The surface does not cross this box: the mesh is empty.');
   const sent = JSON.parse(body);
-  viewer.setMesh(result, sent.box, surfaceGlsl(sent));
+  viewer.setMesh(result, sent.box, surfaceGlsl(sent), preview);
   const id = identity();
   const refit = id !== shownIdentity;
   shownIdentity = id;

@@ -149,14 +149,18 @@ export class Viewer {
     this.render();
   }
 
-  // Computes the shown mesh's occlusion the first time it is drawn in the render mode
-  // (canvas[data-look] says which look the last frame has).
+  // Computes the shown mesh's occlusion the first time it is drawn in the render mode (a live
+  // preview is drawn plain); canvas[data-look] says which look the last frame has.
   applyOcclusion() {
     const g = this.surface && this.surface.geometry;
-    if (this.occlusion && g && g.attributes.normal && !g.attributes.occlusion) {
-      const t0 = performance.now();
-      g.setAttribute('occlusion', new THREE.BufferAttribute(bakeOcclusion(this.renderer, g), 2));
-      this.occlusionMs = performance.now() - t0;
+    if (this.occlusion && !this.preview && g && g.attributes.normal && !g.attributes.occlusion) {
+      const m = this.data.mesh;          // kept with the decoded mesh: a redraw from the page's
+      if (!m.occlusion) {                // cache does not compute it again
+        const t0 = performance.now();
+        m.occlusion = bakeOcclusion(this.renderer, g);
+        this.occlusionMs = performance.now() - t0;
+      }
+      g.setAttribute('occlusion', new THREE.BufferAttribute(m.occlusion, 2));
     }
     const on = this.occlusion && !!(g && g.attributes.occlusion);
     this.occlusionStrength.value = on ? 1 : 0;
@@ -174,10 +178,12 @@ export class Viewer {
   }
 
   // Shows a decoded mesh (loader.js) with its features; box: the request's search box;
-  // glsl: f as GLSL ({lets, f} from expr.js) for the clip cap, or null.
-  setMesh(result, box, glsl = null) {
+  // glsl: f as GLSL ({lets, f} from expr.js) for the clip cap, or null; preview: a coarse live
+  // preview (drawn plain in the render mode: its occlusion would slow the drag down).
+  setMesh(result, box, glsl = null, preview = false) {
     this.clearMesh();
     this.data = result;
+    this.preview = preview;
     this.glsl = glsl;
     this.bounds = new THREE.Box3(new THREE.Vector3(box[0], box[1], box[2]), new THREE.Vector3(box[3], box[4], box[5]));
     this.setBox(box);
