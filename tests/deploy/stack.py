@@ -303,6 +303,7 @@ class Stack:
         self.n = n
         self.daemon_args = list(daemon_args)
         self.with_nginx = with_nginx
+        self.paused = []  # worker pids stopped by pause_workers
 
     def start(self):
         try:
@@ -322,9 +323,34 @@ class Stack:
             raise
         return self
 
+    def pause_workers(self, daemons=None, timeout=30):
+        """SIGSTOPs the ready workers of daemons (default: all) not paused yet. A computation
+        sent to a paused worker is dispatched (the worker is busy, the lock in Redis taken)
+        and then waits, using no CPU, until resume_workers: a test observes that state for
+        as long as it needs, whatever the machine's speed, with a small mesh."""
+        for d in self.daemons if daemons is None else daemons:
+            ready = wait_until(lambda: d.metric("isomesh_workers_ready")
+                               == d.metric("isomesh_workers") > 0, timeout)
+            if not ready:  # a starting worker paused would be killed as silent
+                raise RuntimeError("the daemon's workers never became ready:\n" + d.log())
+            for pid in d.workers():
+                if pid not in self.paused:
+                    os.kill(pid, signal.SIGSTOP)
+                    self.paused.append(pid)
+
+    def resume_workers(self):
+        """SIGCONTs every worker pause_workers stopped (those gone since are skipped)."""
+        for pid in self.paused:
+            try:
+                os.kill(pid, signal.SIGCONT)
+            except ProcessLookupError:
+                pass
+        self.paused = []
+
     def cleanup(self):
         """Stops everything; returns the sanitizer or crash reports found in the daemons'
         logs (a sanitizer build reports leaks and memory errors when the daemon exits)."""
+        self.resume_workers()  # a paused worker would hold its daemon's exit
         if self.nginx:
             self.nginx.cleanup()
         reports = []

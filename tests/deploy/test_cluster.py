@@ -27,11 +27,13 @@ def sphere(r):
     return harness.sphere(r)
 
 
-def slow(tag):
-    """A request taking a second or two (gyroid ball, depth 9), distinct per tag."""
-    shift = 0.001 * tag
-    return {"preset": "gyroid-ball", "depth": {"max": 9},
-            "box": [-1.5 - shift, -1.5, -1.5, 1.5, 1.5, 1.5]}
+HELD_DEADLINE = "600s"
+
+
+def held(tag):
+    """A small mesh distinct per tag, for the tests that pause the workers (Stack.pause_workers)
+    to hold a computation running while they observe it: its duration does not matter."""
+    return sphere(0.69 + tag / 1000)
 
 
 def joined(t, box, timeout=120):
@@ -51,7 +53,8 @@ def started(d):
 class ClusterTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
-        cls.s = stack.Stack(n=2).start()
+        # a job deadline no paused computation (see held) reaches on a loaded machine
+        cls.s = stack.Stack(n=2, daemon_args=("--job-timeout", HELD_DEADLINE)).start()
         cls.a, cls.b = cls.s.daemons
         cls.ng = cls.s.nginx
 
@@ -118,11 +121,22 @@ class ClusterTest(unittest.TestCase):
         self.assertEqual(unknown.json()["error"]["code"], "unknown_mesh")
 
     def test_identical_concurrent_requests_on_both_daemons_compute_once(self):
-        req = slow(1)
+        req = held(1)
         before = sum(started(d) for d in self.s.daemons)
         waits = sum(d.metric("isomesh_redis_lock_waits_total") for d in self.s.daemons)
-        jobs = [harness.in_background(lambda d=d: d.post("/v1/mesh", req))
-                for d in (self.a, self.b, self.a, self.b)]
+        suspended = [d.metric("isomesh_suspended_connections") for d in self.s.daemons]
+        self.s.pause_workers()  # the first computation runs until all four requests wait
+        try:
+            jobs = [harness.in_background(lambda: self.a.post("/v1/mesh", req))]
+            self.assertTrue(stack.wait_until(
+                lambda: sum(d.metric("isomesh_workers_busy") for d in self.s.daemons) == 1, 30))
+            jobs += [harness.in_background(lambda d=d: d.post("/v1/mesh", req))
+                     for d in (self.b, self.a, self.b)]
+            self.assertTrue(stack.wait_until(lambda: [
+                d.metric("isomesh_suspended_connections") - n
+                for d, n in zip(self.s.daemons, suspended)] == [2, 2], 30))
+        finally:
+            self.s.resume_workers()
         answers = [joined(*j) for j in jobs]
         for r in answers:
             self.assertEqual(r.status, 200, r.body[:300])
@@ -247,15 +261,16 @@ class ClusterTest(unittest.TestCase):
         self.assertEqual(self.ng.post("/v1/mesh", req, source="127.0.0.8").status, 200)
 
     def test_job_events_pass_through_nginx_unbuffered_and_jobs_stay_on_their_daemon(self):
-        r = self.ng.post("/v1/jobs", slow(2), source="127.0.0.9")
-        self.assertEqual(r.status, 202, r.body[:300])
-        job = r.json()
-        for _ in range(10):  # every route of the job reaches the daemon holding it
-            st = self.ng.get(job["url"], source="127.0.0.9")
-            self.assertEqual(st.status, 200, st.body[:200])
+        self.s.pause_workers()  # the job runs until its first event came through
         conn = http.client.HTTPConnection("127.0.0.1", self.ng.port, timeout=120,
                                           source_address=("127.0.0.9", 0))
         try:
+            r = self.ng.post("/v1/jobs", held(2), source="127.0.0.9")
+            self.assertEqual(r.status, 202, r.body[:300])
+            job = r.json()
+            for _ in range(10):  # every route of the job reaches the daemon holding it
+                st = self.ng.get(job["url"], source="127.0.0.9")
+                self.assertEqual(st.status, 200, st.body[:200])
             conn.request("GET", job["events_url"], headers={"Accept-Encoding": "gzip"})
             resp = conn.getresponse()
             self.assertEqual(resp.status, 200)
@@ -269,8 +284,10 @@ class ClusterTest(unittest.TestCase):
             # The first event came through while the job still ran: nothing held it back.
             state = self.ng.get(job["url"], source="127.0.0.9").json()["state"]
             self.assertIn(state, ("queued", "running"))
+            self.s.resume_workers()
             rest = resp.read()
         finally:
+            self.s.resume_workers()
             conn.close()
         text = (first + rest).decode()
         events = [dict(line.split(": ", 1) for line in block.splitlines())
@@ -282,7 +299,14 @@ class ClusterTest(unittest.TestCase):
 
     def test_open_requests_are_limited_per_client_address(self):
         src = "127.0.0.10"
-        job = self.ng.post("/v1/jobs", slow(4), source=src).json()
+        self.s.pause_workers()  # the job runs (its streams stay open) until every answer is in
+        try:
+            self._open_requests_are_limited(src)
+        finally:
+            self.s.resume_workers()
+
+    def _open_requests_are_limited(self, src):
+        job = self.ng.post("/v1/jobs", held(4), source=src).json()
         statuses, lock = [], threading.Lock()
         opened = threading.Barrier(41, timeout=60)
 
@@ -302,6 +326,7 @@ class ClusterTest(unittest.TestCase):
         for t in threads:
             t.start()
         opened.wait()
+        self.s.resume_workers()  # the job ends: so do its streams
         for t in threads:
             t.join(120)
         self.assertEqual(len(statuses), 40)

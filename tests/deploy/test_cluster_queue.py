@@ -43,9 +43,11 @@ def work(i):
             "box": [-1, -1, -1, 1, 1, 1], "depth": {"max": 7}}
 
 
-def slow_work(i):
-    """Seconds of work: long enough to kill its daemon in the middle."""
-    return {"preset": "gyroid-ball", "params": {"k": 4 + i / 1000}, "depth": {"max": 7}}
+# The tests that need a computation still running while they observe it (kill its daemon,
+# cancel it, count what waits behind it) pause the workers (Stack.pause_workers) rather than
+# ask for a long one: the computation is small, its duration never matters, and the job
+# deadline is one no paused computation reaches on a loaded machine.
+HELD = ("--cluster", "--workers", "1", "--job-timeout", "600s")
 
 
 def wait_job(d, job, source="127.0.0.1", timeout=120):
@@ -65,10 +67,14 @@ def started(d):
 @unittest.skipIf(SKIP, SKIP)
 class ClusterQueueTest(unittest.TestCase):
     def test_one_users_jobs_posted_to_one_daemon_run_on_every_daemon(self):
-        s = stack.Stack(n=3, daemon_args=("--cluster", "--workers", "1"), with_nginx=False).start()
+        s = stack.Stack(n=3, daemon_args=HELD, with_nginx=False).start()
         try:
             a = s.daemons[0]
+            s.pause_workers()  # each daemon takes one job before any finishes
             jobs = [a.post("/v1/jobs", work(i)).json() for i in range(6)]
+            self.assertTrue(stack.wait_until(
+                lambda: [d.metric("isomesh_workers_busy") for d in s.daemons] == [1, 1, 1], 30))
+            s.resume_workers()
             for j in jobs:
                 self.assertEqual(wait_job(a, j)["state"], "done")
             counts = [started(d) for d in s.daemons]
@@ -84,14 +90,17 @@ class ClusterQueueTest(unittest.TestCase):
             self.assertEqual(s.cleanup(), [], "sanitizer reports")
 
     def test_a_second_user_is_served_before_the_first_users_backlog(self):
-        s = stack.Stack(n=2, daemon_args=("--cluster", "--workers", "1"), with_nginx=False).start()
+        s = stack.Stack(n=2, daemon_args=HELD, with_nginx=False).start()
         try:
             a, b = s.daemons
+            s.pause_workers()  # the backlog waits behind two running jobs until the other comes
             backlog = [harness.http_request(a.port, "POST", "/v1/jobs", work(100 + i),
                                             source="127.0.0.2").json() for i in range(8)]
-            stack.wait_until(lambda: sum(d.metric("isomesh_workers_busy") for d in s.daemons) == 2, 30)
+            self.assertTrue(stack.wait_until(
+                lambda: sum(d.metric("isomesh_workers_busy") for d in s.daemons) == 2, 30))
             other = harness.http_request(b.port, "POST", "/v1/jobs", work(200),
                                          source="127.0.0.3").json()
+            s.resume_workers()
             mine = wait_job(b, other, source="127.0.0.3")
             self.assertEqual(mine["state"], "done")
             done = [wait_job(a, j, source="127.0.0.2") for j in backlog]
@@ -103,9 +112,10 @@ class ClusterQueueTest(unittest.TestCase):
             self.assertEqual(s.cleanup(), [], "sanitizer reports")
 
     def test_a_killed_daemon_s_computation_finishes_elsewhere_for_the_client(self):
-        req = slow_work(300)
-        s = stack.Stack(n=2, daemon_args=("--cluster", "--workers", "1", "--redis-lock-ttl", "1s")).start()
+        req = work(300)
+        s = stack.Stack(n=2, daemon_args=HELD + ("--redis-lock-ttl", "1s")).start()
         try:
+            s.pause_workers()  # the victim's computation runs until it is killed
             box = {}
 
             def ask():
@@ -122,6 +132,7 @@ class ClusterQueueTest(unittest.TestCase):
             survivor = [d for d in s.daemons if d is not victim][0]
             victim.proc.send_signal(signal.SIGKILL)
             victim.proc.wait(timeout=10)
+            s.resume_workers()  # the survivor's
             t.join(120)
             self.assertFalse(t.is_alive())
             r = box["r"]
@@ -135,10 +146,11 @@ class ClusterQueueTest(unittest.TestCase):
             self.assertEqual(again.body, r.body)
 
     def test_the_service_wide_queue_depth_is_published_by_every_daemon(self):
-        s = stack.Stack(n=2, daemon_args=("--cluster", "--workers", "1"), with_nginx=False).start()
+        s = stack.Stack(n=2, daemon_args=HELD, with_nginx=False).start()
         try:
             a, b = s.daemons
-            blockers = [a.post("/v1/jobs", slow_work(500 + i)).json() for i in range(2)]
+            s.pause_workers()  # both workers held while the queue depth is read
+            blockers = [a.post("/v1/jobs", work(500 + i)).json() for i in range(2)]
             self.assertTrue(stack.wait_until(
                 lambda: sum(d.metric("isomesh_workers_busy") for d in s.daemons) == 2, 30))
             waiting = [a.post("/v1/jobs", work(510 + i)).json() for i in range(3)]
@@ -147,6 +159,7 @@ class ClusterQueueTest(unittest.TestCase):
                     lambda: d.metric("isomesh_cluster_queue_depth") == 3, 5), d.metric(
                         "isomesh_cluster_queue_depth"))
                 self.assertEqual(d.metric("isomesh_queue_depth"), 0)  # nothing waits locally
+            s.resume_workers()
             for j in blockers + waiting:
                 self.assertEqual(wait_job(a, j)["state"], "done")
             for d in s.daemons:
@@ -156,10 +169,11 @@ class ClusterQueueTest(unittest.TestCase):
             self.assertEqual(s.cleanup(), [], "sanitizer reports")
 
     def test_a_job_canceled_through_another_daemon_stops_everywhere(self):
-        s = stack.Stack(n=2, daemon_args=("--cluster", "--workers", "1"), with_nginx=False).start()
+        s = stack.Stack(n=2, daemon_args=HELD, with_nginx=False).start()
         try:
             a, b = s.daemons
-            job = a.post("/v1/jobs", slow_work(600)).json()
+            s.pause_workers()  # the job runs until it is canceled
+            job = a.post("/v1/jobs", work(600)).json()
             self.assertTrue(stack.wait_until(
                 lambda: b.get(job["url"]).json().get("state") == "running", 30))
             gone = b.request("DELETE", job["url"])
@@ -178,14 +192,15 @@ class ClusterQueueTest(unittest.TestCase):
             self.assertEqual(s.cleanup(), [], "sanitizer reports")
 
     def test_cancels_reach_a_computation_its_own_daemon_runs_for_the_cluster(self):
-        s = stack.Stack(n=1, daemon_args=("--cluster", "--workers", "1"), with_nginx=False).start()
+        s = stack.Stack(n=1, daemon_args=HELD, with_nginx=False).start()
         try:
             d, = s.daemons
+            s.pause_workers()  # each computation runs until it is canceled
 
             def canceled():
                 return d.metric("isomesh_worker_restarts_total", reason="cancel")
             # a synchronous client leaves mid-computation
-            data = json.dumps(slow_work(801)).encode()
+            data = json.dumps(work(801)).encode()
             sock = socket.create_connection(("127.0.0.1", d.port), timeout=30)
             sock.sendall(b"POST /v1/mesh HTTP/1.1\r\nHost: x\r\nContent-Type: application/json"
                          b"\r\nContent-Length: %d\r\n\r\n" % len(data) + data)
@@ -194,7 +209,8 @@ class ClusterQueueTest(unittest.TestCase):
             self.assertTrue(stack.wait_until(lambda: canceled() == 1, 15))
             self.assertTrue(stack.wait_until(lambda: d.metric("isomesh_workers_busy") == 0, 15))
             # the only job waiting for a computation is deleted
-            job = d.post("/v1/jobs", slow_work(802)).json()
+            s.pause_workers()  # the worker started after the cancel
+            job = d.post("/v1/jobs", work(802)).json()
             self.assertTrue(stack.wait_until(
                 lambda: d.get(job["url"]).json()["state"] == "running", 30))
             self.assertEqual(d.request("DELETE", job["url"]).json()["state"], "canceled")
@@ -209,12 +225,12 @@ class ClusterQueueTest(unittest.TestCase):
             self.assertEqual(s.cleanup(), [], "sanitizer reports")
 
     def test_a_canceled_job_leaves_a_request_sharing_its_computation_its_mesh(self):
-        s = stack.Stack(n=2, daemon_args=("--cluster", "--workers", "1"), with_nginx=False).start()
+        s = stack.Stack(n=2, daemon_args=HELD, with_nginx=False).start()
         try:
             a, b = s.daemons
             for k in range(4):  # until the other daemon's executor runs it (a few tries)
-                req = {"preset": "gyroid-ball", "params": {"k": 4.9 + k / 100},
-                       "depth": {"max": 8}}
+                s.pause_workers()  # (again after a cancel: its worker is a new one)
+                req = work(900 + k)
                 job = a.post("/v1/jobs", req).json()
                 self.assertTrue(stack.wait_until(
                     lambda: a.get(job["url"]).json()["state"] == "running", 60))
@@ -235,6 +251,7 @@ class ClusterQueueTest(unittest.TestCase):
                 lambda: e.metric("isomesh_suspended_connections") == 1, 30))
             gone = a.request("DELETE", job["url"])
             self.assertEqual(gone.json()["state"], "canceled")  # it was still running
+            s.resume_workers()
             sync[0].join(300)
             self.assertNotIn("error", sync[1])
             r = sync[1]["result"]
@@ -249,7 +266,7 @@ class ClusterQueueTest(unittest.TestCase):
             self.assertEqual(s.cleanup(), [], "sanitizer reports")
 
     def test_a_job_is_seen_through_any_daemon_even_after_its_daemon_died(self):
-        s = stack.Stack(n=2, daemon_args=("--cluster", "--workers", "1", "--redis-lock-ttl", "1s"),
+        s = stack.Stack(n=2, daemon_args=HELD + ("--redis-lock-ttl", "1s"),
                         with_nginx=False).start()
         try:
             a, b = s.daemons
@@ -269,12 +286,14 @@ class ClusterQueueTest(unittest.TestCase):
             self.assertTrue(text.startswith("retry: "), text[:80])
             self.assertIn("event: done\n", text)
             self.assertEqual(b.get("/v1/jobs/" + "0" * 32).status, 404)
-            # a slow job; its daemon killed while it computes (there, or on b)
-            slow = a.post("/v1/jobs", slow_work(401)).json()
+            # a held job; its daemon killed while it computes (there, or on b)
+            s.pause_workers()
+            slow = a.post("/v1/jobs", work(401)).json()
             self.assertTrue(stack.wait_until(
                 lambda: b.get(slow["url"]).json()["state"] == "running", 30))
             a.proc.send_signal(signal.SIGKILL)
             a.proc.wait(timeout=10)
+            s.resume_workers()  # b's
             done = stack.wait_until(lambda: (lambda j: j if j["state"] == "done" else None)(
                 b.get(slow["url"]).json()), 60)
             self.assertTrue(done, b.get(slow["url"]).body[:300])
