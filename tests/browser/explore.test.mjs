@@ -377,6 +377,7 @@ describe('box and inspection', { timeout: 300000 }, () => {
     const plain = await viewShot(page);
     await page.check('#occlusion');
     await page.waitForFunction(() => document.getElementById('view').dataset.look === 'occlusion', null, { timeout: 120000 });
+    await page.waitForSelector('#message', { state: 'hidden' });   // 'Computing the ambient occlusion…' is gone
     const ao = await viewShot(page, 'spheres-occlusion.png');
     const got = await page.evaluate(() => {
       const g = window.isomeshViewer.surface.geometry;

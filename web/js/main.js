@@ -1079,10 +1079,21 @@ function wire() {
   }
   wireCurves();
   $('two-sided').addEventListener('change', () => viewer.setTwoSided($('two-sided').checked));
-  $('occlusion').addEventListener('change', () => {
+  $('occlusion').addEventListener('change', async () => {
     state.occlusion = $('occlusion').checked;
-    viewer.setOcclusion(state.occlusion);
     updateUrl();
+    // Computing a large mesh's occlusion holds the page for a moment (seconds in software GL):
+    // say so first, and let the message paint before.
+    const slow = state.occlusion && viewer.needsOcclusion();
+    if (slow) {
+      message('Computing the ambient occlusion…');
+      await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
+    }
+    viewer.setOcclusion(state.occlusion);
+    if (slow) {
+      await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
+      clearMessage();
+    }
   });
   $('color-range').addEventListener('change', () => showLegend(state.color, viewer.setRangeCut($('color-range').value)));
   $('wireframe').addEventListener('change', () => {

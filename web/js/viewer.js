@@ -149,6 +149,13 @@ export class Viewer {
     this.render();
   }
 
+  // True when the shown mesh's occlusion is still to be computed (the next frame in the render
+  // mode does it).
+  needsOcclusion() {
+    const m = this.data && this.data.mesh;
+    return !!(m && !m.occlusion && !this.preview);
+  }
+
   // Computes the shown mesh's occlusion the first time it is drawn in the render mode (a live
   // preview is drawn plain); canvas[data-look] says which look the last frame has.
   applyOcclusion() {
