@@ -682,6 +682,31 @@ static int zero_run_crossing(ism_cell_ctx *cx, const ism_tile *t, ism_fpoint *P)
     return -1;
 }
 
+/* A surface tangent to the tile's plane at a lattice point that ends a zero run has f's
+ * in-plane gradient below this fraction of |∇f| there (rounding of an exact 0). */
+#define TANGENT_PLANE_REL 1e-9
+
+/* The end of a zero run (or a corner between two) where a line of f = 0 leaves it: the
+ * run's lattice line and a second line of the surface cross there, and the surface is
+ * tangent to the tile's plane (Clebsch's cubic in its own box: the lines z = −1 and
+ * x + z = 0 of the plane y = 0 meet at (1, 0, −1), the second one running through the
+ * tiles' corners; at (0, 0, −1) three lines of the plane z = −1 meet, two of them lattice
+ * lines). Returns its event index, or -1. */
+static int zero_run_tangent_end(const ism_cell_ctx *cx, const ism_tile *t)
+{
+    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    for (int i = 0; i < (int)cx->nev; i++) {
+        const ism_fevent *e = &cx->ev[i];
+        if (!(e->pt.flags & ISM_FP_ZERO) || (e->before != 0 && e->after != 0))
+            continue;
+        double g = ism_norm3(e->pt.g);
+        if (g > 0 && fabs(e->pt.g[u]) <= TANGENT_PLANE_REL * g &&
+            fabs(e->pt.g[v]) <= TANGENT_PLANE_REL * g)
+            return i;
+    }
+    return -1;
+}
+
 bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
 {
     cx->zero_tile = false;
@@ -726,6 +751,12 @@ bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
     }
     if (nc == 1 && hidden_run >= 0) { /* the crossing's partner left the zero run */
         if (!ism_flines_push(&cx->lines, &hidden, &cx->ev[cross[0]].pt, ISM_LINE_REGULAR))
+            return false;
+        nc = 0;
+    }
+    int end = nc == 1 ? zero_run_tangent_end(cx, t) : -1;
+    if (end >= 0) { /* ... or left it at its end */
+        if (!emit(cx, end, cross[0], ISM_LINE_REGULAR))
             return false;
         nc = 0;
     }

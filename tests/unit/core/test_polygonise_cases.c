@@ -201,3 +201,39 @@ Test(cases, helicoid_axis_on_the_lattice)
     }
     ism_tape_free(t);
 }
+
+/* Clebsch's diagonal cubic is smooth and holds 27 real lines; in the box ±2 several are
+ * lattice lines (x = 0, z = −1 …) and others run through the lattice points of a lattice
+ * plane (x + z = 0 in y = 0), crossing the first at points where the surface is tangent to
+ * that plane. Its mesh has no non-manifold edge and no boundary but the box's, and the same
+ * χ in its own box as off the lattice. These crossings once had no line (open chains): 9
+ * cone points, χ −20 in the own box, −2 off it. */
+Test(cases, clebsch_lines_on_the_lattice)
+{
+    const pf_surface clebsch = {"x^3 + y^3 + z^3 + 1 - (x + y + z + 1)^3", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&clebsch);
+    const double base[6] = {-2, -2, -2, 2, 2, 2};
+    int d = 6;
+    long chi[3];
+    for (int w = -1; w < 2; w++) {
+        double box[6];
+        if (w < 0)
+            memcpy(box, base, sizeof box);
+        else
+            pf_sweep_box(base, d, w, box);
+        ism_mesh m;
+        ism_poly_stats st;
+        pf_run(t, box, 3, d, 0, &m, &st);
+        pf_props p;
+        pf_measure(&m, t, &p);
+        chi[w + 1] = p.euler;
+        cr_expect_eq(p.nonmanifold_edges, 0, "box %d: %zu non-manifold edges", w,
+                     p.nonmanifold_edges);
+        cr_expect_eq(pf_count_edges(&m, 1, 1, inside_box, box), 0, "box %d: holes", w);
+        cr_expect_eq(st.open_chains, 0, "box %d: %zu open chains", w, st.open_chains);
+        ism_mesh_free(&m);
+    }
+    cr_expect(chi[0] == chi[1] && chi[1] == chi[2], "χ %ld (own box), %ld, %ld (shifted)",
+              chi[0], chi[1], chi[2]);
+    ism_tape_free(t);
+}
