@@ -97,10 +97,11 @@ static bool defining_system(ism_pcert *c, ism_sing_point *pt, int system, double
 {
     static const int why_singular[ISM_TC_SYSTEMS] = { ISM_UNCERT_RANK0, ISM_UNCERT_CONTACT,
                                                       ISM_UNCERT_CUBIC };
-    if (!jets(c, &c->j4, 4))
+    ism_jet4_ws **w = system == ISM_TC_A3 ? &c->j4 : &c->j3; /* D⁴f only for A3 */
+    if (!jets(c, w, system == ISM_TC_A3 ? 4 : 3))
         return false;
     ism_typecert_result r;
-    int a = ism_typecert(c->j4, system, pt->p, reach, ISM_SING_CERT_REL * c->diag, c->diag,
+    int a = ism_typecert(*w, system, pt->p, reach, ISM_SING_CERT_REL * c->diag, c->diag,
                          c->hscale, &r, c->evals);
     if (a != ISM_TC_CERTIFIED) {
         pt->uncertified_why = a == ISM_TC_SINGULAR ? why_singular[system] : ISM_UNCERT_CONTRACT;

@@ -50,7 +50,7 @@ typedef struct ism_typecert_result {
 /* Refines p (within reach of it) by Gauss–Newton on the system's G, then tries boxes of
  * half-width rmax × 1e-6, 1e-5, ... up to rmax around the refined point. diag: the search
  * box's diagonal (the scale of positions); hscale: its Hessian scale (locus.h; 0 = the
- * Hessian at p). w: f's jets to order 4 (the A3 system's Jacobian holds D⁴f; jet4.h).
+ * Hessian at p). w: f's jets to order 3, or 4 for ISM_TC_A3 (its Jacobian holds D⁴f).
  * *evals (may be NULL) counts jet evaluations. */
 int ism_typecert(ism_jet4_ws *w, int system, const double p[3], double reach, double rmax,
                  double diag, double hscale, ism_typecert_result *out, uint64_t *evals);
