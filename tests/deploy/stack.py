@@ -162,6 +162,14 @@ class Redis:
         shutil.rmtree(self.tmp, ignore_errors=True)
 
 
+def wait_stored(redis, key, fmt="drc", timeout=30):
+    """Waits until a computed mesh's four entries (the mesh, its stats, features and request)
+    are in redis: a daemon writes them after its answer. True when they all are."""
+    names = ["isomesh:v1:%s.%s" % (key, ext)
+             for ext in (fmt, "stats.json", "features.json", "request.json")]
+    return wait_until(lambda: all(redis.command("EXISTS", n) == 1 for n in names), timeout)
+
+
 # ---- nginx ------------------------------------------------------------------------------
 
 def nginx_site(daemon_ports, listen_port, tls=None, cache_dir=None):

@@ -64,6 +64,9 @@ class ClusterTest(unittest.TestCase):
         if reports:
             raise AssertionError("sanitizer reports:\n" + "\n".join(reports))
 
+    def wait_stored(self, key):
+        self.assertTrue(stack.wait_stored(self.s.redis, key), "never stored in Redis")
+
     def computed_by(self, before):
         """The daemons whose started-computations count grew since before (a list)."""
         return [d for d, n in zip(self.s.daemons, before) if started(d) > n]
@@ -77,6 +80,7 @@ class ClusterTest(unittest.TestCase):
         who = self.computed_by(before)
         self.assertEqual(len(who), 1, "exactly one daemon computed it")
         other = self.b if who[0] is self.a else self.a
+        self.wait_stored(first.header("ETag").strip('"'))
         n_other = started(other)
         hits = other.metric("isomesh_cache_tier_hits_total", tier="redis")
         second = other.post("/v1/mesh", req)
@@ -102,6 +106,7 @@ class ClusterTest(unittest.TestCase):
         first = self.a.post("/v1/mesh", req)
         self.assertEqual(first.status, 200)
         key = first.header("ETag").strip('"')
+        self.wait_stored(key)
         # b never saw this request: it finds the canonical request in Redis
         n_b = started(self.b)
         glb = self.b.get("/v1/meshes/%s.glb" % key)

@@ -109,6 +109,7 @@ class FailureTest(unittest.TestCase):
             self.assertTrue(stack.wait_until(lambda: log_count(d, "redis_recovered") == 1, 5))
         first = self.a.post("/v1/mesh", sphere(0.58))
         self.assertEqual(first.header("X-Cache"), "miss")
+        self.assertTrue(stack.wait_stored(self.s.redis, first.header("ETag").strip('"')))
         second = self.b.post("/v1/mesh", sphere(0.58))
         self.assertEqual(second.header("X-Cache"), "shared")
         self.assertEqual(second.body, first.body)
@@ -168,6 +169,7 @@ class FailureTest(unittest.TestCase):
         self.assertEqual(r.status, 200)
         key = r.header("ETag").strip('"')
         redis = self.s.redis
+        self.assertTrue(stack.wait_stored(redis, key))  # b finds the request there
         # the formats nobody computed yet: locked by hand, forever and for a day
         redis.command("SET", "isomesh:v1:lock:%s.ply" % key, "operator")
         redis.command("SET", "isomesh:v1:lock:%s.obj" % key, "operator", "EX", "86400")
