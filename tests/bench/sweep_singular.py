@@ -99,7 +99,7 @@ def main():
     ap.add_argument("--timeout", type=float, default=900)
     ap.add_argument("--extra", nargs="*", default=[])
     args = ap.parse_args()
-    exe = os.path.join(args.build, "isomesh")
+    exe = os.path.abspath(os.path.join(args.build, "isomesh"))  # the runs start in a temp dir
     stamp = os.path.getmtime(exe)
     ps = presets(args.build)
     if args.presets:
