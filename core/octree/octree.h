@@ -21,12 +21,24 @@ enum ism_node_flags {
     ISM_NODE_UNRESOLVED = 1, /* leaf at max depth that failed the flatness test */
 };
 
+/* What the hidden-piece search (thin_search.h) decided at a node, kept so that the next
+ * max_error round can take the node over without searching again: the number of searches
+ * (the whole node, or each face whose corners share a sign), how many of them could not
+ * decide, and whether a piece was found (the node was split and its subtree may go
+ * ISM_THIN_RESOLVE_LEVELS past depth.max). A node makes at most 6 searches. */
+#define ISM_NODE_THIN_SEARCHES(t) ((t) & 7)
+#define ISM_NODE_THIN_UNDECIDED(t) (((t) >> 3) & 7)
+#define ISM_NODE_THIN_FOUND 0x40
+#define ISM_NODE_THIN_PACK(searches, undecided, found) \
+    ((uint8_t)((searches) | (undecided) << 3 | ((found) ? ISM_NODE_THIN_FOUND : 0)))
+
 typedef struct ism_node {
     int32_t org[3];  /* lattice origin */
     int32_t child;   /* index of the first of 8 consecutive children, -1 for leaves */
     uint8_t level;
     uint8_t state;
     uint8_t flags;
+    uint8_t thin;    /* the hidden-piece search's verdict here (ISM_NODE_THIN_*), 0 if none ran */
 } ism_node;
 
 typedef struct ism_octree {

@@ -146,38 +146,55 @@ static int face_sign(const ism_corners *k, int face)
     return sign;
 }
 
+/* A search's verdict, with the counts ism_node.thin keeps (searches, undecided). */
+typedef struct thin_tally {
+    int searches, undecided;
+} thin_tally;
+
 static enum ism_thin_verdict search(thread_state *th, const ism_tape *sub, const double lo[3],
-                                    const double hi[3], int sign)
+                                    const double hi[3], int sign, thin_tally *tally)
 {
     const ism_tape *saved = th->s.tape;
     th->s.tape = sub;
     enum ism_thin_verdict v = ism_thin_search(&th->s, &th->thin, lo, hi, sign, NULL);
     th->s.tape = saved;
-    th->thin_searched++;
-    th->thin_found += v == ISM_THIN_FOUND;
-    th->thin_undecided += v == ISM_THIN_UNDECIDED;
+    tally->searches++;
+    tally->undecided += v == ISM_THIN_UNDECIDED;
     return v;
+}
+
+/* The counters move by a node's hidden-piece verdict, searched now or taken over. */
+static void count_thin(thread_state *th, uint8_t thin)
+{
+    th->thin_searched += ISM_NODE_THIN_SEARCHES(thin);
+    th->thin_undecided += ISM_NODE_THIN_UNDECIDED(thin);
+    th->thin_found += (thin & ISM_NODE_THIN_FOUND) != 0;
 }
 
 /* A would-be leaf may hold a piece of the surface that no edge crosses (thin_search.h):
  * with all corners of one sign, anywhere in it; with both signs, behind a face whose four
  * corners share a sign — a nappe or a thin tube piercing the face in a closed curve that
  * crosses none of its edges (an island), which neither this node nor its neighbour across
- * the face would see. True when one was found there: the node is split, below depth.max
- * too, down to b->p->thin_depth at most. */
-static bool hides_piece(build *b, thread_state *th, const ism_node *nd, const ism_tape *sub,
-                        const ism_corners *k)
+ * the face would see. Returns the verdict as ism_node.thin keeps it: when it holds
+ * ISM_NODE_THIN_FOUND the node is split, below depth.max too, down to b->p->thin_depth at
+ * most. */
+static uint8_t hides_piece(build *b, thread_state *th, const ism_node *nd, const ism_tape *sub,
+                           const ism_corners *k)
 {
     if (nd->level >= b->p->thin_depth)
-        return false;
+        return 0;
     double lo[3], hi[3];
     node_box(b->grid, nd, lo, hi);
     if (ism_quiet_holds(&b->quiet, lo, hi))
-        return false;
+        return 0;
+    thin_tally tally = {0, 0};
+    bool found = false;
     int sign = face_sign(k, 0);
-    if (sign != 0 && sign == face_sign(k, 1))
-        return search(th, sub, lo, hi, sign) == ISM_THIN_FOUND;
-    for (int face = 0; face < 6; face++) {
+    if (sign != 0 && sign == face_sign(k, 1)) {
+        found = search(th, sub, lo, hi, sign, &tally) == ISM_THIN_FOUND;
+        return ISM_NODE_THIN_PACK(tally.searches, tally.undecided, found);
+    }
+    for (int face = 0; face < 6 && !found; face++) {
         int s = face_sign(k, face);
         if (s == 0)
             continue;
@@ -194,10 +211,18 @@ static bool hides_piece(build *b, thread_state *th, const ism_node *nd, const is
                                            (ism_interval){flo[2], fhi[2]});
         if (!(v.lo <= 0 && v.hi >= 0))
             continue; /* f keeps a sign on the whole face */
-        if (search(th, sub, flo, fhi, s) == ISM_THIN_FOUND)
-            return true;
+        found = search(th, sub, flo, fhi, s, &tally) == ISM_THIN_FOUND;
     }
-    return false;
+    return ISM_NODE_THIN_PACK(tally.searches, tally.undecided, found);
+}
+
+/* The level down to which nodes failing the flatness test split below a node where a
+ * hidden piece was found. */
+static int resolve_limit(const build *b, int limit)
+{
+    int resolve = b->p->max_depth + ISM_THIN_RESOLVE_LEVELS;
+    resolve = resolve < b->p->thin_depth ? resolve : b->p->thin_depth;
+    return limit > resolve ? limit : resolve;
 }
 
 /* The last round's node pv took over for node i when its decision still holds: an empty
@@ -215,6 +240,8 @@ static bool take_over(build *b, thread_state *th, node_vec *v, size_t i, const i
         return false;
     v->v[i].state = ISM_NODE_LEAF;
     v->v[i].flags = pv->flags;
+    v->v[i].thin = pv->thin;
+    count_thin(th, pv->thin);
     th->unresolved += (pv->flags & ISM_NODE_UNRESOLVED) != 0;
     th->deep_leaves += pv->level > b->p->max_depth;
     return true;
@@ -255,7 +282,14 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         return true;
     }
     bool leaf = false;
-    /* a node split last round is split again (its range was computed for its tape) */
+    /* a node split last round is split again (its range was computed for its tape), with
+     * the hidden-piece verdict that split it */
+    if (pv && pv->state == ISM_NODE_SPLIT) {
+        v->v[i].thin = pv->thin;
+        count_thin(th, pv->thin);
+        if (pv->thin & ISM_NODE_THIN_FOUND)
+            limit = resolve_limit(b, limit);
+    }
     if (!pv && nd.level >= b->p->min_depth && !forced) {
         double lo[3], hi[3];
         node_box(b->grid, &nd, lo, hi);
@@ -266,11 +300,13 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         bool flat = ism_plot_test(&th->s, &b->p->flatness, lo, hi, &k);
         th->s.tape = saved;
         leaf = flat || nd.level >= limit;
-        if (leaf && !flat && hides_piece(b, th, &nd, sub, &k)) {
+        if (leaf && !flat) {
+            v->v[i].thin = hides_piece(b, th, &nd, sub, &k);
+            count_thin(th, v->v[i].thin);
+        }
+        if (v->v[i].thin & ISM_NODE_THIN_FOUND) {
             leaf = false;
-            int resolve = b->p->max_depth + ISM_THIN_RESOLVE_LEVELS;
-            resolve = resolve < b->p->thin_depth ? resolve : b->p->thin_depth;
-            limit = limit > resolve ? limit : resolve;
+            limit = resolve_limit(b, limit);
         }
         if (leaf && !flat) {
             v->v[i].flags |= ISM_NODE_UNRESOLVED;
@@ -286,7 +322,7 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         return fail(b, ISM_BUILD_TOO_BIG);
     size_t first = v->n;
     for (int k = 0; k < 8; k++) {
-        ism_node c = {{0, 0, 0}, -1, (uint8_t)(nd.level + 1), ISM_NODE_LEAF, 0};
+        ism_node c = {{0, 0, 0}, -1, (uint8_t)(nd.level + 1), ISM_NODE_LEAF, 0, 0};
         ism_child_origin(b->grid, &nd, k, c.org);
         if (!vec_push(v, &c))
             return fail(b, ISM_BUILD_NO_MEMORY);
@@ -411,14 +447,13 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
         status = ISM_BUILD_NO_MEMORY;
         goto done;
     }
-    ism_node root = {{0, 0, 0}, -1, 0, ISM_NODE_LEAF, 0};
+    ism_node root = {{0, 0, 0}, -1, 0, ISM_NODE_LEAF, 0, 0};
     if (!vec_push(&top, &root)) {
         status = ISM_BUILD_NO_MEMORY;
         goto done;
     }
     deferred.level = p->max_depth < TOP_LEVEL ? p->max_depth : TOP_LEVEL;
-    b.previous = p->thin_depth == p->max_depth && p->previous && p->previous->n ? p->previous
-                                                                                : NULL;
+    b.previous = p->previous && p->previous->n ? p->previous : NULL;
     grow(&b, &b.threads[0], &top, 0, p->tape, p->max_depth, &deferred, b.previous ? 0 : -1);
     if ((status = atomic_load(&b.failed)) != ISM_BUILD_OK)
         goto done;

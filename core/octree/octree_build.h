@@ -38,11 +38,11 @@ typedef struct ism_octree_build_params {
     const ism_octree *previous;       /* the last round's tree, built with these parameters
                                          and a force_split set this one's contains, or NULL:
                                          its leaves that are not forced now and its empty
-                                         nodes are taken over without evaluating f (a node's
-                                         decision depends on nothing else), so the tree is
-                                         the one a fresh build makes. Ignored when
-                                         thin_depth > max_depth (the hidden-piece search's
-                                         counters are not kept) */
+                                         nodes are taken over without evaluating f, its split
+                                         nodes split again with the hidden-piece verdict they
+                                         keep (a node's decision depends on nothing else), so
+                                         the tree is the one a fresh build makes, counters
+                                         included but thin_boxes (boxes searched now) */
     const volatile int *cancel;
     void (*progress)(void *ctx, double fraction); /* fraction of subtrees done */
     void *progress_ctx;
@@ -53,7 +53,7 @@ typedef struct ism_octree_build_stats {
     uint64_t thin_searched;  /* would-be leaves with one corner sign searched for a piece */
     uint64_t thin_found;     /* ... where one was found (split, below max_depth too) */
     uint64_t thin_undecided; /* ... where the search could neither find nor exclude one */
-    uint64_t thin_boxes;     /* boxes those searches examined */
+    uint64_t thin_boxes;     /* boxes those searches examined (in this build only) */
     uint64_t deep_leaves;    /* leaves below max_depth (under hidden pieces) */
     uint64_t n_point, n_gradient, n_interval;
 } ism_octree_build_stats;

@@ -1,9 +1,11 @@
 /* test_octree_reuse.c — the max_error rounds take the last round's octree over
  * (octree_build.h, previous): built from the last tree with a larger set of forced splits,
  * the tree is node for node the one a fresh build makes with that set (same order, children,
- * flags and counts), while evaluating f far less. On the torus and the gyroid in a ball (its
- * max() shortens tapes on the way down), in boxes on the lattice and shifted off it by 1e-3
- * and 0.37 of a finest cell, on one and two threads. */
+ * flags, hidden-piece verdicts and counts), while evaluating f far less. On the torus, the
+ * gyroid in a ball (its max() shortens tapes on the way down) and a torus whose tube is
+ * thinner than the finest cells (the hidden-piece search splits below depth.max), in boxes
+ * on the lattice and shifted off it by 1e-3 and 0.37 of a finest cell, on one and two
+ * threads. */
 #include <criterion/criterion.h>
 #include <string.h>
 #include "core/octree/octree_build.h"
@@ -19,9 +21,15 @@ static const ism_param gyroid_k[] = {{"k", 4}};
 static const pf_surface gyroid = {
     "max(sin(k*x)*cos(k*y) + sin(k*y)*cos(k*z) + sin(k*z)*cos(k*x), x^2 + y^2 + z^2 - 1.96)",
     gyroid_k, 1, NULL, 0};
+/* tube radius 0.26 of a depth-7 cell: only the hidden-piece search sees most of it */
+static const ism_param thin_rr[] = {{"R", 1}, {"r", 0.006}};
+static const pf_surface thin_torus = {"(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)",
+                                      thin_rr, 2, NULL, 0};
+#define THIN_LEVELS 3 /* the polygoniser's ISM_THIN_BLIND_DEPTH: no quiet balls */
 
-static void build(const ism_tape *t, double shift, int threads, const ism_split_set *split,
-                  const ism_octree *previous, ism_octree *tree, ism_octree_build_stats *st)
+static void build(const ism_tape *t, double shift, int thin_depth, int threads,
+                  const ism_split_set *split, const ism_octree *previous, ism_octree *tree,
+                  ism_octree_build_stats *st)
 {
     double box[6];
     for (int k = 0; k < 3; k++) {
@@ -29,12 +37,12 @@ static void build(const ism_tape *t, double shift, int threads, const ism_split_
         box[3 + k] = 1.5 + shift;
     }
     memset(tree, 0, sizeof *tree);
-    ism_grid_init(&tree->grid, box, MAX_DEPTH);
+    ism_grid_init(&tree->grid, box, thin_depth);
     ism_octree_build_params p = {
         .tape = t,
         .min_depth = 3,
         .max_depth = MAX_DEPTH,
-        .thin_depth = MAX_DEPTH,
+        .thin_depth = thin_depth,
         .flatness = {.gradient_test = 0.9, .normal_cos = 0.9, .plane_frac = 0.05,
                      .abs_tol = 0.25 * ism_grid_cell_size(&tree->grid, MAX_DEPTH),
                      .double_root_eps = 1e-9, .double_root_iters = 25, .max_error = MAX_ERROR},
@@ -66,38 +74,48 @@ static void same_tree(const ism_octree *a, const ism_octree *b, const char *what
     for (size_t i = 0; i < a->n; i++) {
         const ism_node *x = &a->nodes[i], *y = &b->nodes[i];
         cr_assert(memcmp(x->org, y->org, sizeof x->org) == 0 && x->child == y->child &&
-                      x->level == y->level && x->state == y->state && x->flags == y->flags,
+                      x->level == y->level && x->state == y->state && x->flags == y->flags &&
+                      x->thin == y->thin,
                   "%s: node %zu differs", what, i);
     }
 }
 
-/* A box shift (in finest cells) and a thread count. */
+/* A box shift (in finest cells), a thread count and the levels the hidden-piece search may
+ * go past depth.max. */
 typedef struct run_case {
     double cells;
     int threads;
+    int thin_levels;
 } run_case;
 
-static void check(const pf_surface *s, const run_case *cases, size_t ncases)
+/* pieces: the surface has pieces only the hidden-piece search finds. */
+static void check(const pf_surface *s, const run_case *cases, size_t ncases, bool pieces)
 {
     ism_tape *t = pf_compile(s);
     for (size_t i = 0; i < ncases; i++) {
         double shift = cases[i].cells * 3.0 / (1 << MAX_DEPTH);
-        int threads = cases[i].threads;
+        int threads = cases[i].threads, thin = MAX_DEPTH + cases[i].thin_levels;
         ism_octree first, fresh, reused;
         ism_octree_build_stats s1, sf, sr;
         ism_split_set split = {0};
-        build(t, shift, threads, NULL, NULL, &first, &s1);
+        build(t, shift, thin, threads, NULL, NULL, &first, &s1);
         add_leaves(&first, 0, 7, &split);
         ism_octree second;
         ism_octree_build_stats s2;
-        build(t, shift, threads, &split, &first, &second, &s2);
+        build(t, shift, thin, threads, &split, &first, &second, &s2);
         add_leaves(&second, 3, 5, &split); /* a third round's larger set */
-        build(t, shift, threads, &split, NULL, &fresh, &sf);
-        build(t, shift, threads, &split, &second, &reused, &sr);
+        build(t, shift, thin, threads, &split, NULL, &fresh, &sf);
+        build(t, shift, thin, threads, &split, &second, &reused, &sr);
         same_tree(&fresh, &reused, s->expr);
         cr_expect_eq(sf.visited, sr.visited);
         cr_expect_eq(sf.excluded, sr.excluded);
         cr_expect_eq(sf.unresolved, sr.unresolved);
+        cr_expect_eq(sf.deep_leaves, sr.deep_leaves);
+        cr_expect_eq(sf.thin_searched, sr.thin_searched);
+        cr_expect_eq(sf.thin_found, sr.thin_found);
+        cr_expect_eq(sf.thin_undecided, sr.thin_undecided);
+        if (pieces)
+            cr_expect_gt(sf.thin_found, 0, "shift %g: no hidden piece found", shift);
         cr_expect_lt(sr.n_gradient * 2, sf.n_gradient, "shift %g: %llu gradients of %llu",
                      shift, (unsigned long long)sr.n_gradient,
                      (unsigned long long)sf.n_gradient);
@@ -112,12 +130,21 @@ static void check(const pf_surface *s, const run_case *cases, size_t ncases)
 
 Test(octree_reuse, torus_tree_as_a_fresh_build)
 {
-    static const run_case cases[] = {{0, 1}, {1e-3, 2}, {0.37, 2}};
-    check(&torus, cases, sizeof cases / sizeof cases[0]);
+    static const run_case cases[] = {{0, 1, 0}, {1e-3, 2, 0}, {0.37, 2, THIN_LEVELS}};
+    check(&torus, cases, sizeof cases / sizeof cases[0], false);
 }
 
 Test(octree_reuse, gyroid_ball_tree_as_a_fresh_build)
 {
-    static const run_case cases[] = {{0.37, 2}}; /* the costly one: one box */
-    check(&gyroid, cases, sizeof cases / sizeof cases[0]);
+    static const run_case cases[] = {{0.37, 2, THIN_LEVELS}}; /* the costly one: one box */
+    check(&gyroid, cases, sizeof cases / sizeof cases[0], false);
+}
+
+/* Split below depth.max where hidden pieces were found: the next round must split the same
+ * nodes as deep (the verdict kept per node), not stop at depth.max. */
+Test(octree_reuse, thin_torus_tree_as_a_fresh_build)
+{
+    static const run_case cases[] = {{0, 1, THIN_LEVELS}, {1e-3, 2, THIN_LEVELS},
+                                     {0.37, 1, THIN_LEVELS}};
+    check(&thin_torus, cases, sizeof cases / sizeof cases[0], true);
 }
