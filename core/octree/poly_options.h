@@ -30,6 +30,10 @@ typedef struct ism_poly_options {
     bool thin_search;       /* search nodes that fail flatness for a piece no edge sees (one
                                corner sign, or an island in a face of one sign) and split them
                                below max_depth (thin_search.h; default on) */
+    bool fresh_rounds;      /* under max_error, build every round's octree and polygons
+                               afresh (default off: a round takes the last round's tree over
+                               and copies the leaves its splits cannot have changed,
+                               leaf_memo.h — the same mesh, for less; on is for tests) */
     /* Balls (x, y, z, radius) whose mesh a later stage rebuilds — around the singular points
      * and along the curves found from f, which the conformance pass refills
      * (core/singular/conform.h): hidden pieces are not chased into them (a horn shrinking to

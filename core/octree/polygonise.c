@@ -7,6 +7,7 @@
 #include "core/util/clock.h"
 #include "core/octree/breaks.h"
 #include "core/octree/cell.h"
+#include "core/octree/leaf_memo.h"
 #include "core/octree/octree_build.h"
 #include "core/octree/refine.h"
 #include "core/octree/weld.h"
@@ -126,7 +127,36 @@ typedef struct phase2 {
     atomic_int status;           /* enum ism_poly_status */
     progress *prog;
     float *leaf_error;           /* under max_error: what each leaf's triangles measured */
+    const ism_leaf_memo *memo;   /* the last round's leaves, or NULL */
+    const int32_t *reuse;        /* per leaf: its leaf in memo to copy, or -1; or NULL */
+    ism_leaf_rec *rec;           /* per leaf: where its output went, when another round may
+                                    follow; else NULL */
 } phase2;
+
+/* Leaf i of chunk into out: copied from the last round when it emits the same there, else
+ * polygonised (and measured under max_error). */
+static bool one_leaf(phase2 *p, ism_cell_ctx *cx, size_t chunk, size_t i, ism_cell_out *out)
+{
+    ism_cell_stats before = cx->stats;
+    size_t v0 = out->nverts, t0 = out->ntris, s0 = out->nsegs;
+    float err = 0;
+    if (p->reuse && p->reuse[i] >= 0) {
+        if (!ism_leaf_memo_copy(p->memo, (size_t)p->reuse[i], out, &cx->stats, &err))
+            return false;
+    } else {
+        if (!ism_cell_polygonise(cx, p->leaves[i], out))
+            return false;
+        if (p->leaf_error)
+            err = (float)ism_emitted_error(&cx->s, out, t0);
+    }
+    if (p->leaf_error)
+        p->leaf_error[i] = err;
+    if (p->rec)
+        p->rec[i] = (ism_leaf_rec){chunk, v0, t0, s0, out->nverts - v0, out->ntris - t0,
+                                   out->nsegs - s0, err,
+                                   ism_cell_stats_minus(&cx->stats, &before)};
+    return true;
+}
 
 static void run_chunk(void *arg, size_t chunk, int thread)
 {
@@ -141,15 +171,11 @@ static void run_chunk(void *arg, size_t chunk, int thread)
     ism_cell_out *out = &p->out[chunk];
     size_t first = chunk * p->chunk_leaves;
     size_t last = first + p->chunk_leaves < p->nleaves ? first + p->chunk_leaves : p->nleaves;
-    for (size_t i = first; i < last; i++) {
-        size_t before = out->ntris;
-        if (!ism_cell_polygonise(cx, p->leaves[i], out)) {
+    for (size_t i = first; i < last; i++)
+        if (!one_leaf(p, cx, chunk, i, out)) {
             atomic_store(&p->status, ISM_POLY_NO_MEMORY);
             return;
         }
-        if (p->leaf_error)
-            p->leaf_error[i] = (float)ism_emitted_error(&cx->s, out, before);
-    }
     if (atomic_fetch_add(&p->triangles, out->ntris) + out->ntris > p->max_triangles) {
         atomic_store(&p->status, ISM_POLY_TOO_BIG);
         return;
@@ -204,14 +230,47 @@ static bool collect_misses(const phase2 *p, const ism_poly_options *o, ism_split
     return true;
 }
 
+/* What a max_error round leaves the next: its tree (octree_build.h, previous) and what its
+ * leaves emitted (leaf_memo.h). Empty before the first round. */
+typedef struct carry {
+    ism_octree tree;
+    ism_leaf_memo memo;
+} carry;
+
+/* The leaves of p->tree that emit what they emitted in the last round (c), when there was
+ * one. */
+static bool match_last_round(phase2 *p, const carry *c, int32_t **reuse)
+{
+    *reuse = NULL;
+    if (!c->memo.rec || !c->tree.n || p->o->fresh_rounds)
+        return true;
+    if (!(*reuse = malloc((p->nleaves ? p->nleaves : 1) * sizeof **reuse)))
+        return false;
+    p->memo = &c->memo;
+    p->reuse = *reuse;
+    return ism_leaf_memo_match(&c->tree, p->tree, *reuse);
+}
+
+/* This round's leaf outputs become the memo the next round copies from. */
+static void keep_for_next_round(phase2 *p, carry *c)
+{
+    ism_leaf_memo_free(&c->memo);
+    c->memo = (ism_leaf_memo){p->out, p->nchunks, p->rec, p->nleaves};
+    p->out = NULL;
+    p->rec = NULL;
+}
+
 /* Phase 2: every candidate leaf polygonised, chunk by chunk, on all threads. With next
- * (under max_error), the leaves to split in another round are added to it. */
+ * (under max_error), the leaves to split in another round are added to it, and what they
+ * emitted is kept in c for it; leaves that emit what they emitted in c's round are copied
+ * from there. */
 static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_options *o,
                                               const ism_octree *tree, int threads,
                                               progress *prog, ism_mesh *mesh,
                                               ism_poly_stats *st, double *t_weld,
-                                              ism_split_set *next)
+                                              ism_split_set *next, carry *c)
 {
+    int32_t *reuse = NULL;
     ism_breaks breaks = {0};
     phase2 p;
     memset(&p, 0, sizeof p);
@@ -242,7 +301,10 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     p.ctx = calloc((size_t)threads, sizeof *p.ctx);
     if (o->max_error > 0 && !(p.leaf_error = calloc(p.nleaves ? p.nleaves : 1, sizeof(float))))
         goto done;
-    if (!p.out || !p.ctx)
+    if (next && !o->fresh_rounds &&
+        !(p.rec = malloc((p.nleaves ? p.nleaves : 1) * sizeof *p.rec)))
+        goto done;
+    if (!p.out || !p.ctx || !match_last_round(&p, c, &reuse))
         goto done;
     ism_root_params roots = {o->gradient_test, o->double_root_eps, o->double_root_iters};
     for (int t = 0; t < threads; t++) {
@@ -265,8 +327,11 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         status = ISM_POLY_NO_MEMORY;
         goto done;
     }
-    if (next && next->n)
+    if (next && next->n) {
+        if (p.rec)
+            keep_for_next_round(&p, c);
         goto done; /* another round will mesh it again: no weld */
+    }
 
     t0 = ism_now_ms();
     ism_weld_stats ws;
@@ -289,6 +354,8 @@ done:
     free(p.ctx);
     free(p.leaves);
     free(p.leaf_error);
+    free(p.rec);
+    free(reuse);
     ism_breaks_free(&breaks);
     return status;
 }
@@ -324,12 +391,13 @@ static enum ism_poly_status fail_with(enum ism_poly_status s, const ism_poly_opt
 
 /* One octree and its polygons; with next (under max_error, when another round may
  * follow), the leaves to split are collected instead of welding a mesh. *prev: the last
- * round's tree (empty in the first), whose decisions the octree takes over; replaced by
- * this round's tree when another round may follow. */
+ * round's tree and leaf outputs (empty in the first), whose decisions the octree takes
+ * over and whose leaves are copied where they still hold; replaced by this round's when
+ * another round may follow. */
 static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options *o, int threads,
                                       progress *prog, const ism_split_set *split,
                                       ism_split_set *next, ism_mesh *mesh, ism_poly_stats *st,
-                                      ism_octree *prev)
+                                      carry *prev)
 {
     double t_start = ism_now_ms(), from = prog->from, span = prog->span;
     prog->span = span * 0.4 / 0.95; /* the octree's share of this round's progress */
@@ -359,7 +427,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
         .threads = threads,
         .max_nodes = o->max_memory / 4 / sizeof(ism_node),
         .force_split = split,
-        .previous = prev,
+        .previous = o->fresh_rounds ? NULL : &prev->tree,
         .cancel = o->cancel,
         .progress = report,
         .progress_ctx = prog,
@@ -382,10 +450,10 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     prog->from = from + span * 0.4 / 0.95;
     prog->span = span * 0.55 / 0.95;
     double t_weld = 0;
-    status = polygonise_leaves(f, o, &tree, threads, prog, mesh, st, &t_weld, next);
-    ism_octree_free(prev);
+    status = polygonise_leaves(f, o, &tree, threads, prog, mesh, st, &t_weld, next, prev);
+    ism_octree_free(&prev->tree);
     if (next && next->n)
-        *prev = tree;
+        prev->tree = tree;
     else
         ism_octree_free(&tree);
     double t_end = ism_now_ms();
@@ -415,7 +483,7 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
     double t_start = ism_now_ms();
     int threads = thread_count(o);
     ism_split_set split = {0}, next = {0};
-    ism_octree prev;
+    carry prev;
     memset(&prev, 0, sizeof prev);
     ism_poly_stats costs, round;
     memset(&costs, 0, sizeof costs);
@@ -443,7 +511,8 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
     }
     ism_split_set_free(&split);
     ism_split_set_free(&next);
-    ism_octree_free(&prev);
+    ism_octree_free(&prev.tree);
+    ism_leaf_memo_free(&prev.memo);
     uint64_t rounds = stats->error_rounds;
     *stats = round;
     stats->error_rounds = rounds;

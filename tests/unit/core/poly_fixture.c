@@ -275,3 +275,19 @@ void pf_tri_normal(const ism_mesh *m, size_t t, double n[3])
     for (int i = 0; i < 3; i++)
         n[i] /= l;
 }
+
+void pf_same_mesh(const ism_mesh *a, const ism_mesh *b, const char *what)
+{
+    cr_assert_eq(a->nverts, b->nverts, "%s: %zu vertices against %zu", what, a->nverts,
+                 b->nverts);
+    cr_assert_eq(a->ntris, b->ntris, "%s: %zu triangles against %zu", what, a->ntris, b->ntris);
+    cr_assert_eq(a->nsegs, b->nsegs, "%s: %zu segments against %zu", what, a->nsegs, b->nsegs);
+    cr_assert(memcmp(a->pos, b->pos, 3 * a->nverts * sizeof *a->pos) == 0, "%s: positions",
+              what);
+    cr_assert(memcmp(a->normal, b->normal, 3 * a->nverts * sizeof *a->normal) == 0,
+              "%s: normals", what);
+    cr_assert(memcmp(a->tri, b->tri, 3 * a->ntris * sizeof *a->tri) == 0, "%s: triangles",
+              what);
+    cr_assert(a->nsegs == 0 || memcmp(a->seg, b->seg, 2 * a->nsegs * sizeof *a->seg) == 0,
+              "%s: segments", what);
+}

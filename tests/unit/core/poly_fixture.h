@@ -72,4 +72,8 @@ void pf_sweep_box(const double base[6], int d, int which, double box[6]);
 /* Finest cell size of the box at depth d (the smallest side / 2^d). */
 double pf_cell(const double box[6], int d);
 
+/* Asserts that two meshes are the same bit for bit: positions, normals, triangles and
+ * segments, in the same order. */
+void pf_same_mesh(const ism_mesh *a, const ism_mesh *b, const char *what);
+
 #endif

@@ -33,8 +33,8 @@ static double torus_dist(const double p[3])
 /* Finest cell of the safety depth over a side of 3 (the box shifts are fractions of it). */
 #define FINEST (3.0 / (1 << SAFETY_DEPTH))
 
-static void run_bounded(const ism_tape *t, double shift, double e, int max_depth, ism_mesh *m,
-                        ism_poly_stats *st)
+static void run_rounds(const ism_tape *t, double shift, double e, int max_depth, bool fresh,
+                       ism_mesh *m, ism_poly_stats *st)
 {
     ism_poly_options o;
     ism_poly_options_default(&o);
@@ -45,9 +45,16 @@ static void run_bounded(const ism_tape *t, double shift, double e, int max_depth
     o.min_depth = 3;
     o.max_depth = max_depth;
     o.max_error = e;
+    o.fresh_rounds = fresh;
     ism_error err;
     ism_mesh_init(m);
     cr_assert_eq(ism_polygonise(t, &o, m, st, &err), ISM_POLY_OK, "%s", err.message);
+}
+
+static void run_bounded(const ism_tape *t, double shift, double e, int max_depth, ism_mesh *m,
+                        ism_poly_stats *st)
+{
+    run_rounds(t, shift, e, max_depth, false, m, st);
 }
 
 /* The largest distance at triangle centroids and at edge midpoints. */
@@ -100,7 +107,8 @@ Test(accuracy, sphere_tight_bound) { check_bound(&sphere, sphere_dist, 4e-4); }
 
 /* A bound the octree's own estimate misses on the lattice-aligned torus (a fan from a centre
  * that finer neighbours' tiles moved measured 6.3e-4 after one round): the refinement
- * rounds split those leaves until the mesh meets it. */
+ * rounds split those leaves until the mesh meets it. The rounds reuse the last round's
+ * tree and leaves (test_round_reuse.c): the mesh is the one rounds computed afresh make. */
 Test(accuracy, refinement_rounds_meet_what_the_estimate_missed)
 {
     static const double shifts[] = {0}; /* where it was seen; the shifted boxes: above */
@@ -114,6 +122,13 @@ Test(accuracy, refinement_rounds_meet_what_the_estimate_missed)
         cr_expect_leq(fmax(cen, mid), 5.97e-4, "shift %g: %g (%llu rounds)", shifts[i],
                       fmax(cen, mid), (unsigned long long)st.error_rounds);
         cr_expect_eq(st.error_missed_nodes, 0);
+        cr_expect_gt(st.error_rounds, 1, "shift %g: the rounds to compare", shifts[i]);
+        ism_mesh fresh;
+        ism_poly_stats sf;
+        run_rounds(t, shifts[i], 5.97e-4, SAFETY_DEPTH, true, &fresh, &sf);
+        pf_same_mesh(&fresh, &m, "torus, rounds afresh and reusing");
+        cr_expect_lt(st.evals_gradient, sf.evals_gradient);
+        ism_mesh_free(&fresh);
         ism_mesh_free(&m);
     }
     ism_tape_free(t);

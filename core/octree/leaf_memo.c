@@ -1,0 +1,166 @@
+/* leaf_memo.c — the leaves of the last max_error round whose output the next round copies:
+ * the two trees walked side by side, then every leaf touching a split one struck out. */
+#include "core/octree/leaf_memo.h"
+#include "core/util/grow.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* A node's closed box in lattice steps: lo[a] .. hi[a]. */
+typedef struct lbox {
+    int32_t lo[3], hi[3];
+} lbox;
+
+static lbox node_lbox(const ism_octree *t, const ism_node *nd)
+{
+    int32_t s = ism_grid_cell_steps(&t->grid, nd->level);
+    lbox b;
+    for (int a = 0; a < 3; a++) {
+        b.lo[a] = nd->org[a];
+        b.hi[a] = nd->org[a] + s;
+    }
+    return b;
+}
+
+static bool touch(const lbox *x, const lbox *y)
+{
+    for (int a = 0; a < 3; a++)
+        if (x->hi[a] < y->lo[a] || y->hi[a] < x->lo[a])
+            return false;
+    return true;
+}
+
+typedef struct walk {
+    const ism_octree *before, *now;
+    const int32_t *before_leaf; /* node of before -> its leaf index, or -1 */
+    int32_t *match;             /* node of now -> leaf of before, or -1 */
+    lbox *split;                /* boxes of before's leaves that now splits */
+    size_t nsplit, cap_split;
+    bool ok;
+} walk;
+
+/* Nodes a (of before) and b (of now) are the same node. */
+static void pair(walk *w, int32_t a, int32_t b)
+{
+    const ism_node *x = &w->before->nodes[a], *y = &w->now->nodes[b];
+    if (y->state == ISM_NODE_SPLIT && x->state == ISM_NODE_SPLIT) {
+        for (int k = 0; k < 8 && w->ok; k++)
+            pair(w, x->child + k, y->child + k);
+        return;
+    }
+    if (y->state == ISM_NODE_LEAF && x->state == ISM_NODE_LEAF && y->flags == x->flags) {
+        w->match[b] = w->before_leaf[a];
+        return;
+    }
+    if (x->state == y->state)
+        return; /* both empty */
+    /* a leaf split now (or any other change): whatever touches it may emit otherwise */
+    if (!ism_grow((void **)&w->split, &w->cap_split, w->nsplit + 1, sizeof *w->split, 64)) {
+        w->ok = false;
+        return;
+    }
+    w->split[w->nsplit++] = node_lbox(w->before, x);
+}
+
+/* Strikes out the leaves of now under node i that touch box c. */
+static void strike(walk *w, int32_t i, const lbox *c)
+{
+    const ism_node *nd = &w->now->nodes[i];
+    lbox b = node_lbox(w->now, nd);
+    if (!touch(&b, c))
+        return;
+    if (nd->state == ISM_NODE_SPLIT)
+        for (int k = 0; k < 8; k++)
+            strike(w, nd->child + k, c);
+    else
+        w->match[i] = -1;
+}
+
+bool ism_leaf_memo_match(const ism_octree *before, const ism_octree *now, int32_t *reuse)
+{
+    walk w = {before, now, NULL, NULL, NULL, 0, 0, true};
+    int32_t *before_leaf = malloc((before->n ? before->n : 1) * sizeof *before_leaf);
+    w.match = malloc((now->n ? now->n : 1) * sizeof *w.match);
+    if (!before_leaf || !w.match) {
+        free(before_leaf);
+        free(w.match);
+        return false;
+    }
+    int32_t nleaves = 0;
+    for (size_t i = 0; i < before->n; i++)
+        before_leaf[i] = before->nodes[i].state == ISM_NODE_LEAF ? nleaves++ : -1;
+    for (size_t i = 0; i < now->n; i++)
+        w.match[i] = -1;
+    w.before_leaf = before_leaf;
+    if (before->n && now->n)
+        pair(&w, 0, 0);
+    for (size_t k = 0; k < w.nsplit && w.ok; k++)
+        strike(&w, 0, &w.split[k]);
+    size_t leaf = 0;
+    for (size_t i = 0; i < now->n; i++)
+        if (now->nodes[i].state == ISM_NODE_LEAF)
+            reuse[leaf++] = w.match[i];
+    free(before_leaf);
+    free(w.match);
+    free(w.split);
+    return w.ok;
+}
+
+bool ism_leaf_memo_copy(const ism_leaf_memo *m, size_t leaf, ism_cell_out *out,
+                        ism_cell_stats *st, float *error)
+{
+    const ism_leaf_rec *r = &m->rec[leaf];
+    const ism_cell_out *src = &m->out[r->chunk];
+    if (!ism_grow((void **)&out->verts, &out->cap_verts, out->nverts + r->nv,
+                  sizeof *out->verts, 256) ||
+        !ism_grow((void **)&out->tris, &out->cap_tris, out->ntris + r->nt,
+                  3 * sizeof *out->tris, 256) ||
+        !ism_grow((void **)&out->segs, &out->cap_segs, out->nsegs + r->ns,
+                  2 * sizeof *out->segs, 16))
+        return false;
+    /* indices were local to src (from r->v0 on); they become local to out */
+    uint32_t shift = (uint32_t)out->nverts - (uint32_t)r->v0;
+    memcpy(out->verts + out->nverts, src->verts + r->v0, r->nv * sizeof *out->verts);
+    out->nverts += r->nv;
+    for (size_t i = 0; i < 3 * r->nt; i++)
+        out->tris[3 * out->ntris + i] = src->tris[3 * r->t0 + i] + shift;
+    out->ntris += r->nt;
+    for (size_t i = 0; i < 2 * r->ns; i++)
+        out->segs[2 * out->nsegs + i] = src->segs[2 * r->s0 + i] + shift;
+    out->nsegs += r->ns;
+    uint64_t add[sizeof *st / sizeof(uint64_t)], sum[sizeof *st / sizeof(uint64_t)];
+    memcpy(add, &r->stats, sizeof add);
+    memcpy(sum, st, sizeof sum);
+    for (size_t k = 0; k < sizeof sum / sizeof sum[0]; k++)
+        sum[k] += add[k];
+    memcpy(st, sum, sizeof sum);
+    *error = r->error;
+    return true;
+}
+
+_Static_assert(sizeof(ism_cell_stats) % sizeof(uint64_t) == 0,
+               "ism_cell_stats holds uint64_t counters only");
+
+ism_cell_stats ism_cell_stats_minus(const ism_cell_stats *after, const ism_cell_stats *before)
+{
+    uint64_t a[sizeof *after / sizeof(uint64_t)], b[sizeof *after / sizeof(uint64_t)];
+    memcpy(a, after, sizeof a);
+    memcpy(b, before, sizeof b);
+    for (size_t k = 0; k < sizeof a / sizeof a[0]; k++)
+        a[k] -= b[k];
+    ism_cell_stats d;
+    memcpy(&d, a, sizeof d);
+    return d;
+}
+
+void ism_leaf_memo_free(ism_leaf_memo *m)
+{
+    for (size_t c = 0; m->out && c < m->nchunks; c++) {
+        free(m->out[c].verts);
+        free(m->out[c].tris);
+        free(m->out[c].segs);
+    }
+    free(m->out);
+    free(m->rec);
+    memset(m, 0, sizeof *m);
+}

@@ -1,0 +1,47 @@
+/* leaf_memo.h — what each leaf of a max_error round emitted, kept for the next round. A
+ * leaf's polygons depend only on what lies in its closed box: its corners and edges, the
+ * tiles the leaves across its faces make of them, and the break points other leaves put on
+ * its edges and tiles (breaks.h). The next round's tree is this one with some leaves split
+ * (octree_build.h, previous), so a leaf of both trees whose closed box touches no leaf
+ * split since emits the same triangles, bit for bit: they are copied instead of computed. */
+#ifndef ISM_LEAF_MEMO_H
+#define ISM_LEAF_MEMO_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdbool.h>
+#include "core/octree/cell_types.h"
+#include "core/octree/octree.h"
+
+/* Where one leaf's output lies in its chunk's output, what it measured and counted. */
+typedef struct ism_leaf_rec {
+    size_t chunk, v0, t0, s0;  /* its first vertex, triangle, segment in out[chunk] */
+    size_t nv, nt, ns;
+    float error;               /* ism_emitted_error of its triangles */
+    ism_cell_stats stats;      /* what polygonising it added to the counters */
+} ism_leaf_rec;
+
+typedef struct ism_leaf_memo {
+    ism_cell_out *out;         /* the round's chunk outputs (owned) */
+    size_t nchunks;
+    ism_leaf_rec *rec;         /* one per leaf, leaves in node order (owned) */
+    size_t nleaves;
+} ism_leaf_memo;
+
+/* For each leaf of `now` (leaves in node order), the index of the same leaf among
+ * `before`'s leaves when its output may be copied, else -1 (a leaf new in `now`, or one
+ * whose closed box touches a leaf of `before` that `now` splits). `now` must be `before`
+ * with leaves split; reuse holds one entry per leaf of `now`. False when out of memory. */
+bool ism_leaf_memo_match(const ism_octree *before, const ism_octree *now, int32_t *reuse);
+
+/* Appends leaf `leaf`'s recorded output to out (vertex indices moved to out's), adds its
+ * counters to st and returns its measured error. False when out of memory. */
+bool ism_leaf_memo_copy(const ism_leaf_memo *m, size_t leaf, ism_cell_out *out,
+                        ism_cell_stats *st, float *error);
+
+/* Counter differences after - before (what one leaf added). */
+ism_cell_stats ism_cell_stats_minus(const ism_cell_stats *after, const ism_cell_stats *before);
+
+void ism_leaf_memo_free(ism_leaf_memo *m);
+
+#endif
