@@ -54,12 +54,11 @@ double ism_eval_point(const ism_tape *t, ism_eval_ws *ws, double x, double y, do
     r[ISM_REG_X] = x;
     r[ISM_REG_Y] = y;
     r[ISM_REG_Z] = z;
-    ism_trig_memo trig = {.n = 0};
     for (size_t i = 0; i < t->len; i++) {
         const ism_instr *in = &t->code[i];
         if (in->op == ISM_OP_SIN || in->op == ISM_OP_COS) {
             double s, c;
-            ism_trig_pair(&trig, r[in->a], &s, &c);
+            ism_trig_pair(ws->trig, r[in->a], &s, &c);
             r[in->out] = in->op == ISM_OP_SIN ? s : c;
         } else {
             r[in->out] = point_op(in, r);

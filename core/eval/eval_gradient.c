@@ -37,7 +37,7 @@ static ism_dual dual_binary(int op, ism_dual a, ism_dual b)
     }
 }
 
-static ism_dual dual_op(const ism_instr *in, const ism_dual *r, ism_trig_memo *trig)
+static ism_dual dual_op(const ism_instr *in, const ism_dual *r, ism_trig_cache *trig)
 {
     if (ism_op_has_reg_b(in->op))
         return dual_binary(in->op, r[in->a], r[in->b]);
@@ -61,6 +61,70 @@ static ism_dual dual_op(const ism_instr *in, const ism_dual *r, ism_trig_memo *t
     return out;
 }
 
+/* out = g(a) with g' = g1: the chain rule, 0 where g1 is 0 (even when ∇a is not finite). */
+static inline void dual_chain(ism_dual *out, double g, double g1, const ism_dual *a)
+{
+    double d0 = g1 == 0.0 ? 0.0 : g1 * a->d[0], d1 = g1 == 0.0 ? 0.0 : g1 * a->d[1],
+           d2 = g1 == 0.0 ? 0.0 : g1 * a->d[2];
+    out->v = g;
+    out->d[0] = d0;
+    out->d[1] = d1;
+    out->d[2] = d2;
+}
+
+/* One instruction in place: the frequent operations written out (the same arithmetic as
+ * dual_op, without building and copying a value per step), the others through dual_op. */
+static inline void dual_step(const ism_instr *in, ism_dual *r, ism_trig_cache *trig)
+{
+    ism_dual *o = &r[in->out];
+    const ism_dual *a = &r[in->a];
+    switch (in->op) {
+    case ISM_OP_ADD_RR: {
+        const ism_dual *b = &r[in->b];
+        double v = a->v + b->v, d0 = a->d[0] + b->d[0], d1 = a->d[1] + b->d[1],
+               d2 = a->d[2] + b->d[2];
+        *o = (ism_dual){v, {d0, d1, d2}};
+        return;
+    }
+    case ISM_OP_SUB_RR: {
+        const ism_dual *b = &r[in->b];
+        double v = a->v - b->v, d0 = a->d[0] - b->d[0], d1 = a->d[1] - b->d[1],
+               d2 = a->d[2] - b->d[2];
+        *o = (ism_dual){v, {d0, d1, d2}};
+        return;
+    }
+    case ISM_OP_MUL_RR: {
+        const ism_dual *b = &r[in->b];
+        double av = a->v, bv = b->v;
+        double d0 = a->d[0] * bv + av * b->d[0], d1 = a->d[1] * bv + av * b->d[1],
+               d2 = a->d[2] * bv + av * b->d[2];
+        *o = (ism_dual){av * bv, {d0, d1, d2}};
+        return;
+    }
+    case ISM_OP_ADD_RC:
+        dual_chain(o, a->v + in->imm, 1.0, a);
+        return;
+    case ISM_OP_MUL_RC:
+        dual_chain(o, a->v * in->imm, in->imm, a);
+        return;
+    case ISM_OP_SQUARE:
+        dual_chain(o, a->v * a->v, 2.0 * a->v, a);
+        return;
+    case ISM_OP_SIN:
+    case ISM_OP_COS: {
+        double sv, cv;
+        ism_trig_pair(trig, a->v, &sv, &cv);
+        if (in->op == ISM_OP_SIN)
+            dual_chain(o, sv, cv, a);
+        else
+            dual_chain(o, cv, -sv, a);
+        return;
+    }
+    default:
+        *o = dual_op(in, r, trig);
+    }
+}
+
 double ism_eval_gradient(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
                          double grad[3])
 {
@@ -72,9 +136,8 @@ double ism_eval_gradient(const ism_tape *t, ism_eval_ws *ws, double x, double y,
     r[ISM_REG_X] = (ism_dual){ x, { 1.0, 0.0, 0.0 } };
     r[ISM_REG_Y] = (ism_dual){ y, { 0.0, 1.0, 0.0 } };
     r[ISM_REG_Z] = (ism_dual){ z, { 0.0, 0.0, 1.0 } };
-    ism_trig_memo trig = {.n = 0};
     for (size_t i = 0; i < t->len; i++)
-        r[t->code[i].out] = dual_op(&t->code[i], r, &trig);
+        dual_step(&t->code[i], r, ws->trig);
     const ism_dual *f = &r[t->result];
     for (int k = 0; k < 3; k++)
         grad[k] = f->d[k];
@@ -93,9 +156,8 @@ bool ism_eval_top_branches(const ism_tape *t, ism_eval_ws *ws, double x, double 
     r[ISM_REG_X] = (ism_dual){ x, { 1.0, 0.0, 0.0 } };
     r[ISM_REG_Y] = (ism_dual){ y, { 0.0, 1.0, 0.0 } };
     r[ISM_REG_Z] = (ism_dual){ z, { 0.0, 0.0, 1.0 } };
-    ism_trig_memo trig = {.n = 0};
     for (size_t i = 0; i + 1 < t->len; i++)
-        r[t->code[i].out] = dual_op(&t->code[i], r, &trig);
+        r[t->code[i].out] = dual_op(&t->code[i], r, ws->trig);
     const ism_dual *br[2] = {&r[top->a], &r[top->b]};
     for (int s = 0; s < 2; s++) {
         val[s] = br[s]->v;

@@ -24,12 +24,14 @@ ism_eval_ws *ism_eval_ws_new(const ism_tape *t)
     ws->jet = malloc(n * sizeof *ws->jet);
     ws->choice = malloc(cap ? cap : 1);
     ws->needed = malloc(n);
-    if (!ws->batch || !ws->scalar || !ws->iv || !ws->iv_lo || !ws->iv_hi || !ws->dual || !ws->jet || !ws->choice
+    ws->trig = malloc(sizeof *ws->trig);
+    if (!ws->trig || !ws->batch || !ws->scalar || !ws->iv || !ws->iv_lo || !ws->iv_hi || !ws->dual || !ws->jet || !ws->choice
         || !ws->needed) {
         ism_eval_ws_free(ws);
         return NULL;
     }
     memset(ws->batch, 0, n * ISM_EVAL_BATCH * sizeof(double));
+    ism_trig_cache_init(ws->trig);
     return ws;
 }
 
@@ -46,5 +48,6 @@ void ism_eval_ws_free(ism_eval_ws *ws)
     free(ws->jet);
     free(ws->choice);
     free(ws->needed);
+    free(ws->trig);
     free(ws);
 }

@@ -6,6 +6,7 @@
 
 #include <stdint.h>
 #include "core/eval/eval.h"
+#include "core/eval/trig_pair.h"
 #include "core/expr/tape.h"
 
 /* Boxes per inner chunk of the batched interval evaluator. */
@@ -30,6 +31,7 @@ struct ism_eval_ws {
     ism_jet *jet;             /* nregs */
     uint8_t *choice;          /* code_cap: min/max branch proved by the last interval pass */
     uint8_t *needed;          /* nregs: scratch for shortening */
+    ism_trig_cache *trig;     /* sines and cosines of recent arguments (pure: never stale) */
 };
 
 /* True when ws has room for evaluating t. */
