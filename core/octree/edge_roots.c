@@ -139,13 +139,23 @@ static int suspect_more(const double g_end[3], const double g_root[3])
     return gradient_agreement(g_end, g_root) < -0.5;
 }
 
+bool ism_segment_rootless(const ism_root_params *prm, const double a[3], const double b[3],
+                          double fa, double fb, const double ga[3], const double gb[3])
+{
+    if (fa == 0 || fb == 0 || !isfinite(fa) || !isfinite(fb))
+        return true;
+    /* same sign, same sheet: no root (paper eq. 2) */
+    return (fa < 0) == (fb < 0) && gradient_agreement(ga, gb) > prm->gradient_test &&
+           !tangents_reach_zero(a, b, fa, fb, ga, gb);
+}
+
 void ism_segment_roots(ism_sampler *s, const ism_root_params *prm, const double a[3],
                        const double b[3], double fa, double fb, const double ga[3],
                        const double gb[3], ism_seg_roots *out)
 {
     out->n = 0;
     out->flags = 0;
-    if (fa == 0 || fb == 0 || !isfinite(fa) || !isfinite(fb))
+    if (ism_segment_rootless(prm, a, b, fa, fb, ga, gb))
         return;
     if ((fa < 0) != (fb < 0)) {
         make_root(s, a, b, ism_regula_falsi(s, a, b, fa, fb), ISM_ROOT_CROSS, &out->r[0]);
@@ -156,8 +166,6 @@ void ism_segment_roots(ism_sampler *s, const ism_root_params *prm, const double 
             out->flags |= ISM_SEG_MANY_ROOTS;
         return;
     }
-    if (gradient_agreement(ga, gb) > prm->gradient_test && !tangents_reach_zero(a, b, fa, fb, ga, gb))
-        return; /* same sign, same sheet: no root (paper eq. 2) */
     if (!ism_segment_may_reach(s, a, b, 0))
         return; /* the interval over the segment proves it: no root to search for */
     out->flags |= ISM_SEG_SEARCHED;

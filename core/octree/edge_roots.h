@@ -37,6 +37,13 @@ typedef struct ism_root_params {
     int iters;             /* bisection steps of the double-root search */
 } ism_root_params;
 
+/* True when the end values alone prove that ism_segment_roots(a→b) finds no root (an end
+ * at 0 or undefined, or one sign at both ends with gradients agreeing beyond gradient_test
+ * and tangents that do not meet past 0): it would then evaluate nothing, so there is
+ * nothing to memoise either. Give a and b in the order ism_segment_roots gets them. */
+bool ism_segment_rootless(const ism_root_params *prm, const double a[3], const double b[3],
+                          double fa, double fb, const double ga[3], const double gb[3]);
+
 /* Roots of f on the segment a→b with f(a) = fa, f(b) = fb and gradients ga, gb. When fa
  * or fb is exactly 0 the segment reports no interior root: that end point is a root of
  * its own, handled by whoever owns the lattice point. */

@@ -177,17 +177,35 @@ static ism_segment_entry *segment_entry(ism_cell_ctx *cx, uint64_t ka, uint64_t 
                                (((uint64_t)1 << ISM_SEGMENT_CACHE_BITS) - 1)];
 }
 
-static void prefetch_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint *b)
+/* A segment whose end values prove it rootless (in its canonical direction lo→hi, as
+ * compute_segment asks): no memo lookup (a cache miss) for it. */
+static bool rootless(const ism_cell_ctx *cx, const ism_bpoint *lo, const ism_bpoint *hi)
+{
+    return ism_segment_rootless(&cx->roots, lo->p, hi->p, lo->f, hi->f, lo->g, hi->g);
+}
+
+/* Asks for the memo entry of a→b (the walk reads it soon after); false when the segment
+ * is rootless and needs none. */
+static bool prefetch_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint *b)
 {
     bool forward = is_forward(a, b);
     const ism_bpoint *lo = forward ? a : b, *hi = forward ? b : a;
+    if (rootless(cx, lo, hi))
+        return false;
     __builtin_prefetch(segment_entry(cx, ism_lattice_key(lo->ip), ism_lattice_key(hi->ip)), 1);
+    return true;
 }
 
-/* Roots of the segment a→b in walking order, computed in the canonical direction. */
+/* Roots of the segment a→b in walking order, computed in the canonical direction; none
+ * without a look when `may_have_roots` is false (prefetch_segment said it is rootless). */
 static void walk_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint *b,
-                         ism_seg_roots *out)
+                         bool may_have_roots, ism_seg_roots *out)
 {
+    if (!may_have_roots) {
+        out->n = 0;
+        out->flags = 0;
+        return;
+    }
     bool forward = is_forward(a, b);
     const ism_bpoint *lo = forward ? a : b, *hi = forward ? b : a;
     uint64_t ka = ism_lattice_key(lo->ip), kb = ism_lattice_key(hi->ip);
@@ -245,16 +263,17 @@ static bool tile_events(ism_cell_ctx *cx)
 {
     cx->nev = 0;
     size_t n = cx->nbp;
-    int *gap_after_point = malloc(n * sizeof *gap_after_point);
+    /* per point: the sign after it, then whether its segment may hold roots */
+    int *gap_after_point = malloc(2 * n * sizeof *gap_after_point);
     if (!gap_after_point)
         return false;
     for (size_t i = 0; i < n; i++)
-        prefetch_segment(cx, &cx->bp[i], &cx->bp[(i + 1) % n]);
+        gap_after_point[n + i] = prefetch_segment(cx, &cx->bp[i], &cx->bp[(i + 1) % n]);
     /* first pass: the sign just after each lattice point and the roots on its segment */
     for (size_t i = 0; i < n; i++) {
         const ism_bpoint *a = &cx->bp[i], *b = &cx->bp[(i + 1) % n];
         ism_seg_roots sr;
-        walk_segment(cx, a, b, &sr);
+        walk_segment(cx, a, b, gap_after_point[n + i], &sr);
         int sa = ism_sign(a->f), sb = ism_sign(b->f);
         uint8_t many = sr.flags & ISM_SEG_MANY_ROOTS ? ISM_FP_MANY : 0;
         if (sr.n == 0) {
