@@ -290,7 +290,7 @@ class ClusterQueueTest(unittest.TestCase):
             s.pause_workers()
             slow = a.post("/v1/jobs", work(401)).json()
             self.assertTrue(stack.wait_until(
-                lambda: b.get(slow["url"]).json()["state"] == "running", 30))
+                lambda: b.get(slow["url"]).json().get("state") == "running", 30))  # known there yet?
             a.proc.send_signal(signal.SIGKILL)
             a.proc.wait(timeout=10)
             s.resume_workers()  # b's
