@@ -120,7 +120,8 @@ bool ism_leaf_memo_copy(const ism_leaf_memo *m, size_t leaf, ism_cell_out *out,
         return false;
     /* indices were local to src (from r->v0 on); they become local to out */
     uint32_t shift = (uint32_t)out->nverts - (uint32_t)r->v0;
-    memcpy(out->verts + out->nverts, src->verts + r->v0, r->nv * sizeof *out->verts);
+    if (r->nv) /* a leaf that emitted nothing may meet arrays never allocated */
+        memcpy(out->verts + out->nverts, src->verts + r->v0, r->nv * sizeof *out->verts);
     out->nverts += r->nv;
     for (size_t i = 0; i < 3 * r->nt; i++)
         out->tris[3 * out->ntris + i] = src->tris[3 * r->t0 + i] + shift;
