@@ -47,7 +47,8 @@ void pf_sweep_box(const double base[6], int d, int which, double box[6])
     static const double abs_shift[3] = {1e-3, -1e-3, 0.7e-3};
     static const double cell_shift[3] = {0.37, -0.23, 0.41};
     for (int k = 0; k < 3; k++) {
-        double s = which == 0 ? abs_shift[k] : cell_shift[k] * ldexp(base[k + 3] - base[k], -d);
+        double s = which < 0 ? 0 : which == 0 ? abs_shift[k]
+                                              : cell_shift[k] * ldexp(base[k + 3] - base[k], -d);
         box[k] = base[k] + s;
         box[k + 3] = base[k + 3] + s;
     }

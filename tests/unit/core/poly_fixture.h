@@ -66,7 +66,7 @@ bool pf_nm_edges_one_closed_curve(const ism_mesh *m, size_t *nedges);
 
 /* base shifted off the octree lattice as tests/bench/sweep_singular.py shifts the presets:
  * which 0 by (1e-3, −1e-3, 0.7e-3), which 1 by (0.37, −0.23, 0.41) of a finest cell of its
- * own axis at depth d. */
+ * own axis at depth d; which −1: base as given (so one loop from −1 runs all three). */
 void pf_sweep_box(const double base[6], int d, int which, double box[6]);
 
 /* Finest cell size of the box at depth d (the smallest side / 2^d). */

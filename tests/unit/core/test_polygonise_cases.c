@@ -183,10 +183,7 @@ Test(cases, helicoid_axis_on_the_lattice)
     int d = 6;
     for (int w = -1; w < 2; w++) {
         double box[6];
-        if (w < 0)
-            memcpy(box, base, sizeof box);
-        else
-            pf_sweep_box(base, d, w, box);
+        pf_sweep_box(base, d, w, box);
         ism_mesh m;
         ism_poly_stats st;
         pf_run(t, box, 3, d, 0, &m, &st);
@@ -217,10 +214,7 @@ Test(cases, clebsch_lines_on_the_lattice)
     long chi[3];
     for (int w = -1; w < 2; w++) {
         double box[6];
-        if (w < 0)
-            memcpy(box, base, sizeof box);
-        else
-            pf_sweep_box(base, d, w, box);
+        pf_sweep_box(base, d, w, box);
         ism_mesh m;
         ism_poly_stats st;
         pf_run(t, box, 3, d, 0, &m, &st);

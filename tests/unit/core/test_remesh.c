@@ -125,10 +125,7 @@ Test(remesh, box_cut_boundary_slides_along_the_cut)
     ism_tape *t = pf_compile(&s);
     for (int which = -1; which < 2; which++) {
         double box[6];
-        if (which < 0)
-            memcpy(box, base, sizeof box);
-        else
-            pf_sweep_box(base, d, which, box);
+        pf_sweep_box(base, d, which, box);
         ism_mesh m;
         ism_mesh_init(&m);
         ism_poly_stats ps;
