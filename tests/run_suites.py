@@ -236,9 +236,11 @@ def waits_mostly(suite):
 
 
 def group(suite):
-    """Suites of one group never run at the same time: the deploy suites each start Redis from
-    deploy/redis/isomesh.conf, on its one fixed port, so two at once would share (and stop) one
-    Redis. None: no group."""
+    """Suites of one group never run at the same time. The deploy suites: each starts Redis,
+    two or three daemons and nginx (on free ports: tests/deploy/stack.py), many processes for
+    little CPU; one at a time keeps the machine's load bounded. (Two failures once blamed on
+    running them together were races in the tests, fixed in 98ad6b7 and 3207255.) None: no
+    group."""
     return "deploy" if suite.name.startswith("deploy/") else None
 
 
