@@ -26,24 +26,27 @@ static void kv_ms(ism_jw *w, const char *k, double v)
 }
 
 /* One number of a stats object: its JSON key, where it lives in the C structure and how it is
- * written (an unsigned count of any width, a double, or milliseconds). The tables below list
- * each object's plain numbers in output order; what is not a plain number (nested objects,
- * nulls, arrays) is written around them. */
+ * written (a 64-bit unsigned count, a double, or milliseconds). The tables below list each
+ * object's plain numbers in output order; what is not a plain number (nested objects, nulls,
+ * arrays) is written around them. KIND_OF has no default: a member of any other type (an int,
+ * a bool, a narrower count) does not compile, so every count is read as 64 bits. */
 enum field_kind { FIELD_COUNT, FIELD_DOUBLE, FIELD_MS };
 
 typedef struct stat_field {
     const char *key;
-    size_t offset, size;
+    size_t offset;
     enum field_kind kind;
 } stat_field;
 
+_Static_assert(sizeof(unsigned long) == sizeof(uint64_t) &&
+               sizeof(unsigned long long) == sizeof(uint64_t), "counts are read as 64 bits");
 #define KIND_OF(type, member) \
-    _Generic(((type *)0)->member, double: FIELD_DOUBLE, default: FIELD_COUNT)
+    _Generic(((type *)0)->member, double: FIELD_DOUBLE, unsigned long: FIELD_COUNT, \
+             unsigned long long: FIELD_COUNT)
 /* The member's own name as the key; NAMED when the JSON says it otherwise. */
-#define NAMED(key, type, member) \
-    {key, offsetof(type, member), sizeof(((type *)0)->member), KIND_OF(type, member)}
+#define NAMED(key, type, member) {key, offsetof(type, member), KIND_OF(type, member)}
 #define FIELD(type, member) NAMED(#member, type, member)
-#define MS(key, type, member) {key, offsetof(type, member), sizeof(double), FIELD_MS}
+#define MS(key, type, member) {key, offsetof(type, member), FIELD_MS}
 #define NFIELDS(t) (sizeof(t) / sizeof(t[0]))
 
 static void write_fields(ism_jw *w, const void *base, const stat_field *f, size_t n)
@@ -51,13 +54,9 @@ static void write_fields(ism_jw *w, const void *base, const stat_field *f, size_
     for (size_t i = 0; i < n; i++) {
         const unsigned char *at = (const unsigned char *)base + f[i].offset;
         if (f[i].kind == FIELD_COUNT) {
-            uint64_t v64 = 0;
-            uint32_t v32 = 0;
-            if (f[i].size == sizeof v64)
-                memcpy(&v64, at, sizeof v64);
-            else
-                memcpy(&v32, at, sizeof v32), v64 = v32;
-            kv_u(w, f[i].key, v64);
+            uint64_t v;
+            memcpy(&v, at, sizeof v);
+            kv_u(w, f[i].key, v);
             continue;
         }
         double v;
