@@ -2,7 +2,12 @@
 Redis (issue 18, item 5): daemon A computes a drc; daemon B, asked for the ply, the obj and a
 12-bit drc of the same surface, encodes them from the computed surface A stored in Redis
 ("<surface key>.mesh"): the polygonisations counted by both daemons add up to one. The same
-with --cluster, where the cluster queue picks the daemon that encodes."""
+with --cluster, where the cluster queue picks the daemon that encodes.
+
+A daemon answers before its Redis writes go out (they follow on its Redis thread, in the order
+they were made: the computed surface first, then the mesh, its stats, features and request),
+so B is asked only once the mesh's entries are in Redis (stack.wait_stored): asked sooner, B
+would find no stored surface and polygonise again, and the count would be two."""
 import os
 import sys
 import unittest
@@ -36,6 +41,8 @@ class OneComputationClusterTest(unittest.TestCase):
             r = a.post("/v1/mesh", base)
             self.assertEqual(r.status, 200, r.body[:300])
             self.assertEqual(polygonisations(s.daemons), 1)
+            self.assertTrue(stack.wait_stored(s.redis, r.header("ETag").strip('"')))
+            self.assertEqual(len(s.redis.command("KEYS", "isomesh:v1:*.mesh")), 1)
             for req, fmt in ((base, "ply"), (base, "obj"), (twelve, "drc")):
                 r = b.post("/v1/mesh?format=" + fmt, req)
                 self.assertEqual(r.status, 200, r.body[:300])
