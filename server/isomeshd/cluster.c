@@ -6,7 +6,6 @@
 #include "server/isomeshd/cluster.h"
 
 #include <hiredis/hiredis.h>
-#include <limits.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -25,6 +24,10 @@
 #define HEARTBEAT_MAX_NS 500000000LL /* and heart-beats (progress too) at least this often */
 #define STATE_TTL_MS "3600000"       /* a job hash outlives its last change by an hour */
 #define DEPTH_TICK_NS 1000000000LL   /* the service-wide queue depth is counted this often */
+#define DELETES_TICK_NS 100000000LL  /* DELETEs of its jobs through other daemons are looked
+                                        for this often: a tenth of a second is quick enough
+                                        for a client, and one SPOP each time costs Redis little */
+#define DELETES_PER_TICK "64"        /* of them, taken at once at most */
 
 /* ---- scripts ------------------------------------------------------------------------- */
 
@@ -131,16 +134,18 @@ static const char FINISH_LUA[] =
     "  redis.call('pexpire', KEYS[2], ARGV[5]) end "
     "return 1";
 
-/* KEYS job hash. The computation of that name, unless it has ended, is canceled: flagged
- * (its origin answers its waiters, its executor stops), and deleted while still waiting. */
-static const char CANCEL_NAME_LUA[] =
-    "local id = redis.call('hget', KEYS[1], 'id') "
-    "local state = redis.call('hget', KEYS[1], 'state') "
-    "if not id or state == 'done' or state == 'failed' then return 0 end "
+/* KEYS jobrec; ARGV deletes prefix, job id, ttl. DELETE of a job through a daemon that does
+ * not hold it: the job's record says canceled (the job's own flag: its computation may be
+ * shared), and its id goes to the set of the daemon holding it, which lets go of that job as
+ * a DELETE there would (and takes the flag back when the job had finished first). 0 when no
+ * daemon recorded the job. */
+static const char JOB_DELETE_LUA[] =
+    "local d = redis.call('hget', KEYS[1], 'daemon') "
+    "if not d then return 0 end "
     "redis.call('hset', KEYS[1], 'cancel', '1') "
-    "local s = redis.call('hget', KEYS[1], 'stream') "
-    "if s and not redis.call('xpending', s, 'workers', id, id, 1)[1] then "
-    "  redis.call('xdel', s, id) end "
+    "local s = ARGV[1] .. d "
+    "redis.call('sadd', s, ARGV[2]) "
+    "redis.call('pexpire', s, ARGV[3]) "
     "return 1";
 
 /* KEYS stream, job hash; ARGV id. The executor's flight was canceled here (nobody waits for
@@ -169,6 +174,8 @@ struct ismd_cluster {
     int user_jobs, user_running;
     unsigned long turn;        /* rotates the order among users with equal load */
     long long depth_at_ns;     /* when to count the service-wide queue next */
+    ismd_jobs *jobs;           /* this daemon's jobs (DELETEs through other daemons) */
+    long long deletes_at_ns;   /* when to look for those next */
     ism_redis_task take;
 };
 
@@ -284,7 +291,7 @@ int ismd_cluster_view(ismd_cluster *c, const char *name, const char *id, ismd_cj
         if (v->state == ISMD_CJ_FAILED && err)
             v->error = ism_blob_from_str(err);
         if (v->state < ISMD_CJ_DONE && reply_str(r->element[5]))
-            v->state = ISMD_CJ_CANCELED; /* DELETE through another daemon */
+            v->state = ISMD_CJ_CANCELED; /* its origin gave it up (cluster.h) */
     }
     freeReplyObject(r);
     return 0;
@@ -398,17 +405,9 @@ static long long cj_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
         return now + CJ_TICK_NS;
     if (!ismd_shared_enter(sh))
         return now + CJ_TICK_NS;
-    if (beat == 2 && !j->finished && j->waiter.flight && j->waiter.passive) {
-        /* canceled, and the flight is its own origin's: a DELETE through another daemon;
-         * for every waiter here (the origin's); the flight answers us when it stops */
-        ismd_sched_cancel(j->c->sched, j->waiter.flight);
-        ismd_shared_leave(sh);
-        j->beat_at_ns = LLONG_MAX;
-        return now + CJ_TICK_NS;
-    }
-    /* canceled by another daemon's origin (nobody there wants it), or taken over by another
+    /* canceled by its origin (nobody there wants it any more), or taken over by another
      * daemon: stop computing it here unless requests here wait for it too (they keep it, as
-     * a local cancel would) */
+     * a local cancel would; so does the origin's own flight when it runs here) */
     if (!j->finished)
         ismd_sched_detach(j->c->sched, &j->waiter);
     ismd_shared_leave(sh);
@@ -527,6 +526,47 @@ static void count_waiting(ismd_cluster *c)
     freeReplyObject(r);
 }
 
+/* A job deleted through another daemon had finished first (or is forgotten): its record
+ * says what this daemon says, its end rather than canceled. */
+static void undelete(ismd_cluster *c, const char *id)
+{
+    char rec[KEY_MAX];
+    ckey(c, rec, "jobrec:", id);
+    const char *argv[] = {"HDEL", rec, "cancel"};
+    size_t lens[] = {4, strlen(rec), 6};
+    redisReply *r = ism_cache_redis_call(c->redis, "jobrec_undelete", 3, argv, lens);
+    if (r)
+        freeReplyObject(r);
+}
+
+/* Lets go of the jobs here that were deleted through other daemons (JOB_DELETE_LUA), each
+ * as a DELETE here would: the job is canceled, its computation stops only when nothing else
+ * here waits for it. */
+static void take_deletes(ismd_cluster *c)
+{
+    char set[KEY_MAX];
+    ckey(c, set, "deleted:", c->consumer);
+    const char *argv[] = {"SPOP", set, DELETES_PER_TICK};
+    size_t lens[] = {4, strlen(set), strlen(DELETES_PER_TICK)};
+    redisReply *r = ism_cache_redis_call(c->redis, "cluster_deletes", 3, argv, lens);
+    if (!r)
+        return;
+    for (size_t i = 0; r->type == REDIS_REPLY_ARRAY && i < r->elements; i++) {
+        const char *id = reply_str(r->element[i]);
+        if (!id || !ismd_shared_enter(c->sh))
+            continue;
+        ismd_job *job = ismd_jobs_find(c->jobs, id);
+        bool live = job && ismd_jobs_cancel(c->jobs, c->sched, job);
+        ismd_shared_leave(c->sh);
+        if (!live)
+            undelete(c, id);
+        ism_log_field f[] = {ISM_LS("job", id),
+                             ISM_LS("was", live ? "live" : job ? "finished" : "unknown")};
+        ism_log_fields(ISM_LOG_INFO, "cluster_job_deleted", f, 2);
+    }
+    freeReplyObject(r);
+}
+
 static long long take_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
 {
     ismd_cluster *c = (ismd_cluster *)((char *)base - offsetof(ismd_cluster, take));
@@ -546,18 +586,23 @@ static long long take_run(ism_redis_task *base, ism_cache_tier *t, bool stopping
         c->depth_at_ns = now + DEPTH_TICK_NS;
         count_waiting(c);
     }
+    if (now >= c->deletes_at_ns && ism_cache_redis_up(t)) {
+        c->deletes_at_ns = now + DELETES_TICK_NS;
+        take_deletes(c);
+    }
     return now + TAKE_TICK_NS;
 }
 
-ismd_cluster *ismd_cluster_start(ismd_shared *sh, ismd_sched *sched, ism_cache_tier *redis,
-                                 const char *instance, long ttl_ms, int user_jobs,
-                                 int user_running)
+ismd_cluster *ismd_cluster_start(ismd_shared *sh, ismd_sched *sched, ismd_jobs *jobs,
+                                 ism_cache_tier *redis, const char *instance, long ttl_ms,
+                                 int user_jobs, int user_running)
 {
     ismd_cluster *c = calloc(1, sizeof *c);
     if (!c)
         return NULL;
     c->sh = sh;
     c->sched = sched;
+    c->jobs = jobs;
     c->redis = redis;
     snprintf(c->consumer, sizeof c->consumer, "%s", instance);
     c->ttl_ms = ttl_ms;
@@ -580,7 +625,7 @@ typedef struct jobtask {
     ism_redis_task base;       /* first: the tier hands this back */
     ismd_cluster *c;
     ismd_waiter *w;            /* lookup: who gets the answer; NULL: a record to write */
-    bool cancel;               /* without w: cancel key.fmt's computation instead */
+    bool delete;               /* without w: delete the job instead (JOB_DELETE_LUA) */
     char id[40], user[ISMD_QUEUE_USER_MAX], key[65], fmt[8];
     long long created_unix;
 } jobtask;
@@ -599,11 +644,11 @@ static void write_record(jobtask *j)
     ckey(j->c, rec, "jobrec:", j->id);
     snprintf(created, sizeof created, "%lld", j->created_unix);
     const char *argv[] = {"HSET", rec, "user", j->user, "key", j->key, "fmt", j->fmt,
-                          "created", created};
-    size_t lens[10];
-    for (int i = 0; i < 10; i++)
+                          "created", created, "daemon", j->c->consumer};
+    size_t lens[12];
+    for (int i = 0; i < 12; i++)
         lens[i] = strlen(argv[i]);
-    redisReply *r = ism_cache_redis_call(j->c->redis, "jobrec_write", 10, argv, lens);
+    redisReply *r = ism_cache_redis_call(j->c->redis, "jobrec_write", 12, argv, lens);
     if (r)
         freeReplyObject(r);
     const char *exp[] = {"PEXPIRE", rec, JOBREC_TTL_MS};
@@ -612,14 +657,13 @@ static void write_record(jobtask *j)
         freeReplyObject(r);
 }
 
-static void cancel_by_name(jobtask *j)
+static void delete_job(jobtask *j)
 {
-    char name[ISM_CACHE_NAME_MAX], job[KEY_MAX];
-    if (!ism_cache_name(name, j->key, j->fmt))
-        return;
-    ckey(j->c, job, "job:", name);
-    const char *args[] = {job};
-    run_script(j->c, "cluster_cancel_name", CANCEL_NAME_LUA, 1, args, 1, NULL);
+    char rec[KEY_MAX], set[KEY_MAX];
+    ckey(j->c, rec, "jobrec:", j->id);
+    ckey(j->c, set, "deleted:", "");
+    const char *args[] = {rec, set, j->id, JOBREC_TTL_MS};
+    run_script(j->c, "cluster_job_delete", JOB_DELETE_LUA, 1, args, 4, NULL);
 }
 
 /* HMGET key fields... into out[] (copies, "" when missing). 1 found (first field set), 0 not,
@@ -651,10 +695,10 @@ static int hash_fields(ismd_cluster *c, const char *key, const char *const *fiel
 static unsigned lookup(jobtask *j, ism_blob **json)
 {
     char rec[KEY_MAX], job[KEY_MAX], name[ISM_CACHE_NAME_MAX];
-    char r[4][256], h[6][256];
+    char r[5][256], h[6][256];
     ckey(j->c, rec, "jobrec:", j->id);
-    static const char *const RF[] = {"user", "key", "fmt", "created"};
-    int got = hash_fields(j->c, rec, RF, 4, r);
+    static const char *const RF[] = {"user", "key", "fmt", "created", "cancel"};
+    int got = hash_fields(j->c, rec, RF, 5, r);
     if (got <= 0)
         return got < 0 ? 503 : 404;
     if (!ism_cache_name(name, r[1], r[2]))
@@ -674,8 +718,8 @@ static unsigned lookup(jobtask *j, ism_blob **json)
     ism_cache_name(parts[2], r[1], "features.json");
     if (!ismd_job_state_parse(h[0], &v.state) && ism_cache_redis_count(j->c->redis, names, 3) == 3)
         v.state = ISMD_JOB_DONE; /* no computation on record: the mesh was there already */
-    if (v.state < ISMD_JOB_DONE && h[5][0])
-        v.state = ISMD_JOB_CANCELED;
+    if (r[4][0] || (v.state < ISMD_JOB_DONE && h[5][0]))
+        v.state = ISMD_JOB_CANCELED; /* the job deleted, or its computation canceled */
     v.progress = v.state == ISMD_JOB_DONE ? 1 : strtod(h[1], NULL);
     v.status = (unsigned)strtoul(h[2], NULL, 10);
     v.started_unix_ms = strtoll(h[4], NULL, 10);
@@ -702,8 +746,8 @@ static long long jobtask_run(ism_redis_task *base, ism_cache_tier *t, bool stopp
     if (stopping)
         return jobtask_end(j); /* the tier is closing: the scheduler may be gone */
     if (!j->w) {
-        if (j->cancel)
-            cancel_by_name(j);
+        if (j->delete)
+            delete_job(j);
         else
             write_record(j);
         return jobtask_end(j);
@@ -757,13 +801,11 @@ bool ismd_cluster_job_lookup(ismd_cluster *c, const char *id, ismd_waiter *w)
     return true;
 }
 
-void ismd_cluster_job_cancel(ismd_cluster *c, const char *id, const char *key, const char *fmt)
+void ismd_cluster_job_delete(ismd_cluster *c, const char *id)
 {
     jobtask *j = jobtask_new(c, id);
     if (!j)
         return;
-    j->cancel = true;
-    snprintf(j->key, sizeof j->key, "%s", key);
-    snprintf(j->fmt, sizeof j->fmt, "%s", fmt);
+    j->delete = true;
     ism_cache_redis_schedule(c->redis, &j->base, 0);
 }

@@ -9,8 +9,21 @@
  *   P ulim        hash user -> the user's running limit (0: none), from its latest entry
  *   P job:<name>  hash: state (queued, running, done, failed), progress, status and error
  *                 (failed), the daemon running it, its entry's id and stream; expires
- *   P jobrec:<id> hash: a job (POST /v1/jobs) of any daemon: user, key, fmt, created, so
- *                 that every daemon answers GET /v1/jobs/{id}; expires
+ *   P jobrec:<id> hash: a job (POST /v1/jobs) of any daemon: user, key, fmt, created, the
+ *                 daemon holding it, and cancel once deleted, so that every daemon answers
+ *                 GET and DELETE /v1/jobs/{id}; expires
+ *   P deleted:<daemon>  set: ids of that daemon's jobs deleted through other daemons
+ *
+ * Canceling: a job is a waiter, and so is a synchronous request; a computation is canceled
+ * only when nothing waits for it any more. A DELETE through the daemon holding the job, or a
+ * client leaving, takes that one waiter off (sched.h). A DELETE through another daemon flags
+ * the job's record (the job reads canceled everywhere at once) and puts its id in its
+ * daemon's deleted set; that daemon takes the set every DELETES_TICK_NS and lets go of each
+ * job as a DELETE there would, so requests sharing the computation keep it. A daemon that
+ * died takes nothing: its deleted jobs read canceled, their computations (re-claimed
+ * elsewhere) run to their end. The job hash's cancel flag is the computation's: set by its
+ * origin when nothing there waits for it any more (or by an executor whose flight was
+ * canceled), it tells the executor to stop unless requests on its own daemon share it.
  *
  * The origin (shared_cache.c, on the Redis thread) adds a computation it holds the lock of to
  * its user's stream (refused when the user already has its --user-jobs there: cluster-wide),
@@ -33,6 +46,7 @@
 
 #include "server/common/blob.h"
 #include "server/common/cache.h"
+#include "server/isomeshd/jobs.h"
 #include "server/isomeshd/sched.h"
 
 #define ISMD_CLUSTER_ID_MAX ISMD_ENTRY_ID_MAX   /* a stream entry id, NUL included */
@@ -53,11 +67,12 @@ typedef struct ismd_cj_view {
     ism_blob *error;          /* FAILED: the error JSON (the caller unrefs it) */
 } ismd_cj_view;
 
-/* Starts the executor of sh's daemon (its tasks live and stop with sh). user_jobs and
- * user_running are the default per-user limits. NULL when out of memory. */
-ismd_cluster *ismd_cluster_start(ismd_shared *sh, ismd_sched *sched, ism_cache_tier *redis,
-                                 const char *instance, long ttl_ms, int user_jobs,
-                                 int user_running);
+/* Starts the executor of sh's daemon (its tasks live and stop with sh). jobs is the daemon's
+ * job table (deletes through other daemons reach it). user_jobs and user_running are the
+ * default per-user limits. NULL when out of memory. */
+ismd_cluster *ismd_cluster_start(ismd_shared *sh, ismd_sched *sched, ismd_jobs *jobs,
+                                 ism_cache_tier *redis, const char *instance, long ttl_ms,
+                                 int user_jobs, int user_running);
 
 /* ---- the origin's calls, Redis thread only ------------------------------------------- */
 
@@ -84,9 +99,10 @@ void ismd_cluster_job_created(ismd_cluster *c, const char *id, const char *user,
  * done when the mesh is in the shared cache), 404 when no daemon recorded it, or 503 when
  * Redis is unavailable. False (w never called) when out of memory or stopping. */
 bool ismd_cluster_job_lookup(ismd_cluster *c, const char *id, ismd_waiter *w);
-/* DELETE of job id (for key.fmt) through a daemon that does not hold it: its computation is
- * canceled service-wide (for every job sharing it; the daemon holding the job answers its
- * waiters "canceled"). Fire and forget; the caller checked who may. */
-void ismd_cluster_job_cancel(ismd_cluster *c, const char *id, const char *key, const char *fmt);
+/* DELETE of job id through a daemon that does not hold it: the job reads canceled on every
+ * daemon, and the daemon holding it lets go of it as a DELETE there would (its computation
+ * stops unless another request or job shares it). Fire and forget; the caller checked who
+ * may. */
+void ismd_cluster_job_delete(ismd_cluster *c, const char *id);
 
 #endif

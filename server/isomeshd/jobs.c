@@ -360,14 +360,15 @@ const char *ismd_job_user(const ismd_job *job)
     return job->user;
 }
 
-void ismd_jobs_cancel(ismd_jobs *j, ismd_sched *s, ismd_job *job)
+bool ismd_jobs_cancel(ismd_jobs *j, ismd_sched *s, ismd_job *job)
 {
     (void)j;
     if (finished(job))
-        return;
+        return false;
     ismd_sched_detach(s, &job->waiter);
     job->state = ISMD_JOB_CANCELED;
     mark_finished(job);
+    return true;
 }
 
 static json_t *json_from_blob(const ism_blob *b)

@@ -76,8 +76,8 @@ bool ismd_job_state_parse(const char *s, ismd_job_state *out);
 /* {"jobs": [...]}: the jobs of user (NULL: everyone's), newest first, at most max, without
  * their stats; "truncated": true when more were left out. */
 json_t *ismd_jobs_list_json(const ismd_jobs *j, const char *user, size_t max);
-/* Cancels a live job (no effect on a finished one). */
-void ismd_jobs_cancel(ismd_jobs *j, ismd_sched *s, ismd_job *job);
+/* Cancels a live job (no effect on a finished one). True when it was live. */
+bool ismd_jobs_cancel(ismd_jobs *j, ismd_sched *s, ismd_job *job);
 
 /* An event-stream response following job (NULL when out of memory). conn is the connection
  * the response will be queued on; sched is the lock's owner. */

@@ -218,7 +218,7 @@ int main(int argc, char **argv)
         ism_log_async(false);
         return 1;
     }
-    ismd_cluster_settings cluster = {cfg.user_jobs, cfg.user_running};
+    ismd_cluster_settings cluster = {cfg.user_jobs, cfg.user_running, s.jobs};
     if (s.redis && !(s.shared = ismd_shared_start(&s.sched, &s.cache, s.redis, &s.limits,
                                                   cfg.redis_lock_ttl_s,
                                                   cfg.cluster ? &cluster : NULL))) {

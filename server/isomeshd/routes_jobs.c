@@ -200,15 +200,13 @@ static enum MHD_Result answer_remote_events(ismd_req *r, json_t *o)
     return ismd_send(r, 200, resp);
 }
 
-/* DELETE of another daemon's job: a live one is canceled service-wide, and answered as
- * canceled (a finished one as it is, like a local one). */
+/* DELETE of another daemon's job: a live one is deleted (its daemon lets go of it, cluster.h)
+ * and answered as canceled (a finished one as it is, like a local one). */
 static enum MHD_Result cancel_remote(ismd_req *r, json_t *o)
 {
     const char *state = json_string_value(json_object_get(o, "state"));
-    const char *key = json_string_value(json_object_get(o, "key"));
-    const char *fmt = json_string_value(json_object_get(o, "format"));
-    if (state && key && fmt && (!strcmp(state, "queued") || !strcmp(state, "running"))) {
-        ismd_cluster_job_cancel(ismd_shared_cluster(r->srv->shared), r->id, key, fmt);
+    if (state && (!strcmp(state, "queued") || !strcmp(state, "running"))) {
+        ismd_cluster_job_delete(ismd_shared_cluster(r->srv->shared), r->id);
         json_object_set_new(o, "state", json_string("canceled"));
     }
     return send_json(r, o);

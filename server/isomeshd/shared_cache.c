@@ -491,7 +491,7 @@ static long long remote_done(task *k, ism_cache_tier *t, long long now)
 
 static long long remote_failed(task *k, ism_cache_tier *t, ismd_cj_view *v)
 {
-    ismd_result r = {.status = v->status >= 400 ? v->status : 500, /* 499: canceled */
+    ismd_result r = {.status = v->status >= 400 ? v->status : 500,
                      .content_type = "application/json", .body = v->error};
     if (!r.body)
         r.body = ismd_error_json("cluster_error", "the computation failed on another daemon",
@@ -532,12 +532,8 @@ static long long remote(task *k, ism_cache_tier *t, long long now)
         return remote_done(k, t, now);
     case ISMD_CJ_FAILED:
         return remote_failed(k, t, &v);
-    case ISMD_CJ_CANCELED:
-        v.status = 499;
-        v.error = ismd_error_json("canceled", "the job was canceled (DELETE /v1/jobs/{id} "
-                                  "through another daemon)", NULL);
-        return remote_failed(k, t, &v);
-    default: /* its record is gone: start over */
+    default: /* its record is gone, or the computation was canceled (cluster.h: never for
+              * requests here, which still wait for it): start over */
         if (!k->lock_lost)
             ism_cache_redis_unlock(t, k->name, k->token);
         k->state = T_LOOK;
@@ -608,7 +604,8 @@ ismd_shared *ismd_shared_start(ismd_sched *sched, ism_cache *cache, ism_cache_ti
     snprintf(sh->instance, sizeof sh->instance, "%s/%ld/%016llx", host, (long)getpid(), nonce);
     pthread_mutex_init(&sh->lock, NULL);
     pthread_cond_init(&sh->changed, NULL);
-    if (cluster && !(sh->cluster = ismd_cluster_start(sh, sched, redis, sh->instance, sh->ttl_ms,
+    if (cluster && !(sh->cluster = ismd_cluster_start(sh, sched, cluster->jobs, redis,
+                                                      sh->instance, sh->ttl_ms,
                                                       cluster->user_jobs,
                                                       cluster->user_running))) {
         free_shared(sh);

@@ -25,14 +25,17 @@
 
 #include "server/common/cache.h"
 #include "server/common/pipeline.h"
+#include "server/isomeshd/jobs.h"
 #include "server/isomeshd/sched.h"
 
 typedef struct ismd_shared ismd_shared;
 typedef struct ismd_cluster ismd_cluster;
 
-/* --cluster: the default per-user limits, held over the whole service. */
+/* --cluster: the default per-user limits, held over the whole service, and the daemon's job
+ * table (its jobs may be deleted through other daemons). */
 typedef struct ismd_cluster_settings {
     int user_jobs, user_running;
+    ismd_jobs *jobs;
 } ismd_cluster_settings;
 
 /* Hooks the shared stage into sched (new flights go through it). With cluster (not NULL), a

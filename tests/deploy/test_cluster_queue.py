@@ -12,7 +12,9 @@ with Redis, daemons of one worker each and (for the failure case) nginx:
 * a job is seen through any daemon (GET /v1/jobs/{id}, its events as one event per
   connection with a retry delay), also after the daemon it was posted to is killed: its
   computation goes on elsewhere and the job reads done, its mesh served by the survivor;
-  a DELETE through another daemon cancels it everywhere (the worker computing it stops);
+  a DELETE through another daemon lets go of that job only, as through its own daemon: a
+  synchronous request sharing its computation still gets its mesh (before, the cancel
+  reached it as a 499), and a computation nothing else waits for stops (its worker too);
 * cancels reach the cluster's own waits: when the daemon that put a computation on the queue
   also runs it, a synchronous client that leaves, or a DELETE of the only job waiting for
   it, stops the worker and drops the queue entry (before, the executor's own interest kept
@@ -168,26 +170,58 @@ class ClusterQueueTest(unittest.TestCase):
         finally:
             self.assertEqual(s.cleanup(), [], "sanitizer reports")
 
-    def test_a_job_canceled_through_another_daemon_stops_everywhere(self):
+    def test_a_job_deleted_through_another_daemon_lets_go_of_that_job_only(self):
         s = stack.Stack(n=2, daemon_args=HELD, with_nginx=False).start()
         try:
             a, b = s.daemons
-            s.pause_workers()  # the job runs until it is canceled
-            job = a.post("/v1/jobs", work(600)).json()
+
+            def canceled():
+                return sum(d.metric("isomesh_worker_restarts_total", reason="cancel")
+                           for d in s.daemons)
+
+            def ok():
+                return sum(d.metric("isomesh_computations_total", outcome="ok")
+                           for d in s.daemons)
+            # a job and a synchronous request on a share one computation; the job is deleted
+            # through b: the job lets go, the request keeps its computation and gets its mesh
+            s.pause_workers()  # the computation runs until the DELETE is through
+            req = work(600)
+            job = a.post("/v1/jobs", req).json()
             self.assertTrue(stack.wait_until(
                 lambda: b.get(job["url"]).json().get("state") == "running", 30))
+            sync = harness.in_background(lambda: a.post("/v1/mesh", req, timeout=300))
+            self.assertTrue(stack.wait_until(
+                lambda: a.metric("isomesh_suspended_connections") == 1, 30))
             gone = b.request("DELETE", job["url"])
             self.assertEqual(gone.status, 200, gone.body[:300])
             self.assertEqual(gone.json()["state"], "canceled")
-            # the daemon holding the job says so too, and the worker computing it stops
             self.assertTrue(stack.wait_until(
-                lambda: a.get(job["url"]).json()["state"] == "canceled", 10), a.get(job["url"]).body)
+                lambda: a.get(job["url"]).json()["state"] == "canceled", 10),
+                a.get(job["url"]).body)
             self.assertEqual(b.get(job["url"]).json()["state"], "canceled")
+            s.resume_workers()
+            sync[0].join(300)
+            self.assertNotIn("error", sync[1])
+            r = sync[1]["result"]
+            self.assertEqual(r.status, 200, r.body[:300])
+            self.assertEqual(r.header("ETag").strip('"'), job["key"])
+            self.assertEqual(canceled(), 0)
+            self.assertEqual(ok(), 1)
+            for d in (a, b):  # the job stays canceled, its mesh notwithstanding
+                self.assertEqual(d.get(job["url"]).json()["state"], "canceled")
+            # a job that alone waits for its computation, deleted through b: the worker
+            # computing it stops, and nothing is left on the queue
+            s.pause_workers()
+            alone = a.post("/v1/jobs", work(601)).json()
             self.assertTrue(stack.wait_until(
-                lambda: sum(d.metric("isomesh_worker_restarts_total", reason="cancel")
-                            for d in s.daemons) == 1, 10))
-            self.assertEqual(sum(d.metric("isomesh_computations_total", outcome="ok")
-                                 for d in s.daemons), 0)
+                lambda: b.get(alone["url"]).json().get("state") == "running", 30))
+            self.assertEqual(b.request("DELETE", alone["url"]).json()["state"], "canceled")
+            self.assertTrue(stack.wait_until(
+                lambda: a.get(alone["url"]).json()["state"] == "canceled", 10))
+            self.assertTrue(stack.wait_until(lambda: canceled() == 1, 10))
+            self.assertTrue(stack.wait_until(
+                lambda: s.redis.command("XLEN", "isomesh:v1:q:127.0.0.1") == 0, 10))
+            self.assertEqual(ok(), 1)
         finally:
             self.assertEqual(s.cleanup(), [], "sanitizer reports")
 
