@@ -4,6 +4,7 @@
 #include "server/common/cache_disk.h"
 #include "core/util/le_bytes.h"
 #include "server/common/fd_io.h"
+#include "server/common/file_memo.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -27,6 +28,7 @@
 #define FAILURE_LOG_INTERVAL_S 10
 #define PRUNE_LOW_WATER(max) ((max) / 10 * 9) /* a prune frees down to 90% of the bound */
 #define PRUNE_RETRY_S 1                       /* still over after a pass: wait this long */
+#define COMPARE_CHUNK ((size_t)64 << 10)      /* a payload is compared in reads this large */
 
 typedef struct pending {
     struct pending *next;
@@ -59,6 +61,7 @@ typedef struct disk_tier {
      * (writer: rename + count; reader: drop + uncount; pruner: scan + unlink + correction), so
      * the pruner's correction never counts a file twice or drops one it never saw. */
     pthread_mutex_t dir_lock;
+    ism_file_memo *sent_ok; /* files whose payload was found equal to the bytes to send */
 } disk_tier;
 
 /* ---- helpers ------------------------------------------------------------------------- */
@@ -206,8 +209,27 @@ static ism_blob *disk_get(ism_cache_tier *t, const char *name)
     return b;
 }
 
-int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, size_t len,
-                                long long *offset)
+/* Whether the payload of fd (from HEADER_SIZE) is exactly payload[0..len). -1 on a read
+ * error or out of memory (nothing is known then). */
+static int payload_equals(int fd, const unsigned char *payload, size_t len)
+{
+    unsigned char *buf = malloc(len < COMPARE_CHUNK ? len + 1 : COMPARE_CHUNK);
+    if (!buf)
+        return -1;
+    int same = 1;
+    for (size_t at = 0; at < len && same == 1; at += COMPARE_CHUNK) {
+        size_t n = len - at < COMPARE_CHUNK ? len - at : COMPARE_CHUNK;
+        if (!pread_all(fd, buf, n, (off_t)(HEADER_SIZE + at)))
+            same = -1;
+        else if (memcmp(buf, payload + at, n) != 0)
+            same = 0;
+    }
+    free(buf);
+    return same;
+}
+
+int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, const void *payload,
+                                size_t len, long long *offset)
 {
     disk_tier *d = (disk_tier *)t;
     char rel[ISM_CACHE_NAME_MAX + 4];
@@ -224,6 +246,15 @@ int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, size_t len,
                  ism_get_le32(hdr + 4) == FILE_VERSION && ism_get_le32(hdr + 20) == 0 &&
                  ((uint64_t)ism_get_le32(hdr + 8) | (uint64_t)ism_get_le32(hdr + 12) << 32) ==
                      (uint64_t)len;
+    if (sound && !ism_file_memo_holds(d->sent_ok, name, &st)) {
+        int same = payload_equals(fd, payload, len);
+        if (same == 0)
+            drop_corrupt(d, rel, name, "payload differs from the bytes it was stored with",
+                         (long long)st.st_size);
+        else if (same == 1)
+            ism_file_memo_put(d->sent_ok, name, &st);
+        sound = same == 1;
+    }
     if (!sound) {
         close(fd);
         return -1;
@@ -655,6 +686,7 @@ static void disk_close(ism_cache_tier *t)
     pthread_cond_destroy(&d->wake);
     pthread_cond_destroy(&d->idle);
     pthread_cond_destroy(&d->prune_wake);
+    ism_file_memo_free(d->sent_ok);
     free(d);
 }
 
@@ -687,6 +719,7 @@ ism_cache_tier *ism_cache_disk_new(const char *dir, size_t max_pending)
         return NULL;
     d->root_fd = -1;
     d->max_pending = max_pending;
+    d->sent_ok = ism_file_memo_new(); /* NULL: every send compares */
     pthread_mutex_init(&d->lock, NULL);
     pthread_mutex_init(&d->dir_lock, NULL);
     pthread_cond_init(&d->wake, NULL);

@@ -38,13 +38,16 @@ bool ism_cache_disk_usable(const ism_cache_tier *t);
 void ism_cache_disk_set_max(ism_cache_tier *t, unsigned long long max_bytes);
 
 /* A descriptor (O_RDONLY, close-on-exec; the caller closes it) of the file holding name when
- * it is on disk (not only queued for writing) with a sound header saying exactly len bytes
- * of payload, which start at *offset: for sending the payload without reading it (sendfile).
- * -1 otherwise. The payload's checksum is not read here (that would cost the copy this
- * saves): callers hold the same bytes already, and a file damaged on disk since it was
- * written is caught at its next full read. */
-int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, size_t len,
-                                long long *offset);
+ * it is on disk (not only queued for writing) with a sound header and exactly the len bytes
+ * of payload the caller holds, which start at *offset: for sending the payload without
+ * copying it (sendfile). -1 otherwise; a file whose payload differs is dropped as damaged
+ * (logged and counted like a bad read). The payload is compared with the caller's bytes the
+ * first time the file is opened here and again whenever the file has changed since
+ * (file_memo.h: its inode, size or change time differ, or it changed moments before the
+ * last comparison), so a file written to after it was stored is never sent; one left
+ * untouched is sent without being read. */
+int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, const void *payload,
+                                size_t len, long long *offset);
 
 /* Waits until every queued write is on disk (or failed). */
 void ism_cache_disk_flush(ism_cache_tier *t);

@@ -42,7 +42,7 @@ struct MHD_Response *ismd_response_cached(ismd_server *s, const char *name, ism_
 {
     long long offset = 0;
     int fd = b->len >= SENDFILE_MIN && s->disk
-                 ? ism_cache_disk_open_payload(s->disk, name, b->len, &offset)
+                 ? ism_cache_disk_open_payload(s->disk, name, b->data, b->len, &offset)
                  : -1;
     if (fd < 0)
         return ismd_response_blob(b, content_type);

@@ -8,12 +8,13 @@
 
 /* Adds CORS and nosniff headers, records status and size, queues and releases resp. */
 enum MHD_Result ismd_send(ismd_req *r, unsigned status, struct MHD_Response *resp);
-/* A response sharing b's bytes (b gets one more reference, dropped when MHD is done). */
 /* The response for cached entry name whose bytes are b: from its file in the disk cache
  * (libmicrohttpd sends it with sendfile, no copy through user space) when b is large and the
- * file is there, else from b's bytes. NULL when out of memory. */
+ * file holds exactly b's bytes (cache_disk.h compares them whenever the file changed), else
+ * from b's bytes. NULL when out of memory. */
 struct MHD_Response *ismd_response_cached(ismd_server *s, const char *name, ism_blob *b,
                                           const char *content_type);
+/* A response sharing b's bytes (b gets one more reference, dropped when MHD is done). */
 struct MHD_Response *ismd_response_blob(ism_blob *b, const char *content_type);
 struct MHD_Response *ismd_response_text(const char *text, const char *content_type);
 enum MHD_Result ismd_respond_error(ismd_req *r, unsigned status, const char *code,

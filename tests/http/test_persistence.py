@@ -3,7 +3,9 @@ restart is served from disk after it without computing (also another format of i
 from the stored request); a flipped byte in a cache file is detected, the entry dropped and
 counted, and the mesh recomputed and correct; an unwritable cache directory still serves
 every request and counts the failed stores; a large cached body is sent from its disk file
-(sendfile), byte for byte the body computed, and from memory when the file does not match."""
+(sendfile), byte for byte the body computed, and from memory when the file does not match:
+a wrong length, or a byte flipped on disk after it was sent from (the file is then dropped as
+damaged)."""
 import glob
 import os
 import shutil
@@ -115,6 +117,24 @@ class PersistenceTest(unittest.TestCase):
             again = d.get(url)
             self.assertEqual(again.body, first.body)
             self.assertEqual(d.metric("isomesh_sendfile_responses_total"), sent)
+            # cut back to them, it is (compared again, since it changed)
+            os.truncate(path, len(first.body) + 24)
+            self.assertEqual(d.get(url).body, first.body)
+            self.assertEqual(d.metric("isomesh_sendfile_responses_total"), sent + 1)
+            # a byte flipped in it: never sent, dropped as damaged, and the body comes from
+            # memory, byte for byte the one computed
+            with open(path, "r+b") as f:
+                f.seek(os.path.getsize(path) // 2)
+                b = f.read(1)
+                f.seek(-1, os.SEEK_CUR)
+                f.write(bytes([b[0] ^ 0x01]))
+            again = d.get(url)
+            self.assertEqual(again.status, 200)
+            self.assertEqual(again.body, first.body)
+            self.assertEqual(d.metric("isomesh_sendfile_responses_total"), sent + 1)
+            self.assertEqual(d.metric("isomesh_cache_corrupt_total", tier="disk"), 1)
+            self.assertIn("cache_corrupt_entry_dropped", d.log())
+            self.assertFalse(os.path.exists(path))
 
     def test_unwritable_cache_dir_still_serves(self):
         blocker = os.path.join(self.tmp, "file")

@@ -1,7 +1,8 @@
 /* test_cache.c — the cache tiers (server/common/cache*.h): entry-name rules, the memory LRU's
  * byte bound and recency order, promotion from disk to memory, the disk tier's persistence
- * across instances, its detection of damaged files (any flipped byte, truncation) and its
- * refusal to fail when the directory cannot be written. */
+ * across instances, its detection of damaged files (any flipped byte, truncation; also a file
+ * about to be sent as it is, whose bytes must be the caller's) and its refusal to fail when
+ * the directory cannot be written. */
 #include <criterion/criterion.h>
 #include <fcntl.h>
 #include <stdio.h>
@@ -213,6 +214,62 @@ Test(cache_disk, any_damage_is_dropped_and_counted)
     d->close(d);
     free(path);
     ism_blob_unref(b);
+    remove_tree(dir);
+    free(dir);
+}
+
+/* Flips the byte at offset of path in place (the file keeps its size). */
+static void flip_byte(const char *path, long offset)
+{
+    int fd = open(path, O_RDWR);
+    cr_assert_geq(fd, 0);
+    unsigned char c;
+    cr_assert_eq(pread(fd, &c, 1, offset), 1);
+    c ^= 0x40;
+    cr_assert_eq(pwrite(fd, &c, 1, offset), 1);
+    close(fd);
+}
+
+Test(cache_disk, a_file_is_sent_only_while_it_holds_the_callers_bytes)
+{
+    char *dir = temp_dir();
+    size_t n = 200 * 1000; /* several comparison reads, the last one partial */
+    ism_blob *b = filled(n, 7), *other = filled(n, 8);
+    char *path = file_of(dir, KEY_A ".stl");
+    ism_cache_tier *d = ism_cache_disk_new(dir, 1 << 20);
+    d->put(d, KEY_A ".stl", b);
+    ism_cache_disk_flush(d);
+    long long off = -1;
+    int fd = ism_cache_disk_open_payload(d, KEY_A ".stl", b->data, n, &off);
+    cr_assert_geq(fd, 0);
+    cr_assert_eq(off, 24);
+    unsigned char *sent = malloc(n);
+    cr_assert_eq(pread(fd, sent, n, off), (ssize_t)n);
+    cr_assert_eq(memcmp(sent, b->data, n), 0);
+    close(fd);
+    /* other bytes of the same length: not sent, the file dropped as damaged */
+    cr_assert_eq(ism_cache_disk_open_payload(d, KEY_A ".stl", other->data, n, &off), -1);
+    cr_assert_eq(atomic_load(&d->counters.corrupt), 1);
+    cr_assert_neq(access(path, F_OK), 0);
+    /* a byte flipped on disk after a send (first payload byte, the middle, the last) */
+    long flips[] = {24, 24 + (long)n / 2, 24 + (long)n - 1};
+    for (int i = 0; i < 3; i++) {
+        d->put(d, KEY_A ".stl", b);
+        ism_cache_disk_flush(d);
+        fd = ism_cache_disk_open_payload(d, KEY_A ".stl", b->data, n, &off);
+        cr_assert_geq(fd, 0);
+        close(fd);
+        flip_byte(path, flips[i]);
+        cr_assert_eq(ism_cache_disk_open_payload(d, KEY_A ".stl", b->data, n, &off), -1,
+                     "flip at %ld was sent", flips[i]);
+        cr_assert_eq(atomic_load(&d->counters.corrupt), 2 + (unsigned long long)i);
+        cr_assert_neq(access(path, F_OK), 0, "the damaged file was kept");
+    }
+    d->close(d);
+    free(sent);
+    free(path);
+    ism_blob_unref(b);
+    ism_blob_unref(other);
     remove_tree(dir);
     free(dir);
 }
