@@ -5,6 +5,10 @@ with Redis, daemons of one worker each and (for the failure case) nginx:
   together exactly as many as were posted), and the origin reports each one done;
 * a second user's job posted after a first user's backlog starts before most of it (users are
   served in turn cluster-wide: the fewest running first);
+* per-user limits count a user's computations on every daemon (--user-jobs: a third one,
+  posted to a daemon that holds only one of them, is refused with 429; --user-running: a
+  user's second computation waits while a worker is idle, which takes another user's), and
+  tokens hold through any daemon (another user's DELETE is 403, an admin's goes through);
 * the daemon computing a synchronous request is killed with SIGKILL mid-computation: the
   request, sent through nginx, still gets a 200 whose mesh is byte for byte the one a fresh
   daemon computes (the entry is re-claimed by a surviving daemon after --redis-lock-ttl, or
@@ -25,9 +29,11 @@ with Redis, daemons of one worker each and (for the failure case) nginx:
 Every wait is bounded; no assertion depends on the machine's speed beyond the bounds."""
 import json
 import os
+import shutil
 import signal
 import socket
 import sys
+import tempfile
 import threading
 import time
 import unittest
@@ -35,6 +41,8 @@ import unittest
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import stack  # noqa: E402
 from stack import harness  # noqa: E402
+sys.path.insert(0, os.path.join(stack.ROOT, "tests", "http"))
+from test_auth import add_token, bearer  # noqa: E402
 
 SKIP = stack.missing_programs()
 
@@ -224,6 +232,52 @@ class ClusterQueueTest(unittest.TestCase):
             self.assertEqual(ok(), 1)
         finally:
             self.assertEqual(s.cleanup(), [], "sanitizer reports")
+
+    def test_per_user_limits_and_admin_rights_hold_over_the_whole_service(self):
+        tmp = tempfile.mkdtemp(prefix="isomesh_tokens_")
+        path = os.path.join(tmp, "tokens")
+        alice, bob, root = (add_token(path, "alice"), add_token(path, "bob"),
+                            add_token(path, "root", "--admin"))
+        s = stack.Stack(n=2, daemon_args=HELD + ("--tokens", path, "--user-jobs", "2",
+                                                 "--user-running", "1"),
+                        with_nginx=False).start()
+        try:
+            a, b = s.daemons
+            s.pause_workers()  # what runs stays running while the limits are read
+            first = a.post("/v1/jobs", work(700), headers=bearer(alice)).json()
+            second = b.post("/v1/jobs", work(701), headers=bearer(alice)).json()
+            self.assertTrue(stack.wait_until(
+                lambda: s.redis.command("XLEN", "isomesh:v1:q:alice") == 2, 30))
+            # --user-jobs 2 counts alice's computations on both daemons: a third is refused,
+            # though b alone holds one of hers
+            third = b.post("/v1/mesh", work(702), headers=bearer(alice), timeout=60)
+            self.assertEqual(third.status, 429, third.body[:300])
+            self.assertEqual(third.json()["error"]["code"], "too_many_requests")
+            self.assertIn("every daemon", third.json()["error"]["message"])  # not b's own
+            # --user-running 1 too: one of hers runs, the other waits while a worker is idle,
+            # and that worker takes bob's job, posted after hers
+            self.assertTrue(stack.wait_until(
+                lambda: sum(d.metric("isomesh_workers_busy") for d in s.daemons) == 1, 30))
+            theirs = a.post("/v1/jobs", work(703), headers=bearer(bob)).json()
+            self.assertTrue(stack.wait_until(
+                lambda: sum(d.metric("isomesh_workers_busy") for d in s.daemons) == 2, 30))
+            self.assertEqual(b.get(theirs["url"], headers=bearer(bob)).json()["state"], "running")
+            states = sorted(d.get(j["url"], headers=bearer(alice)).json()["state"]
+                            for d, j in ((a, first), (b, second)))
+            self.assertEqual(states, ["queued", "running"])
+            # a job is another user's through any daemon; an admin may delete it anywhere
+            nope = b.request("DELETE", first["url"], headers=bearer(bob))
+            self.assertEqual(nope.status, 403, nope.body[:300])
+            self.assertEqual(nope.json()["error"]["code"], "not_your_job")
+            self.assertIn(a.get(first["url"], headers=bearer(alice)).json()["state"],
+                          ("queued", "running"))
+            gone = b.request("DELETE", first["url"], headers=bearer(root))
+            self.assertEqual(gone.json()["state"], "canceled")
+            self.assertTrue(stack.wait_until(lambda: a.get(
+                first["url"], headers=bearer(alice)).json()["state"] == "canceled", 10))
+        finally:
+            self.assertEqual(s.cleanup(), [], "sanitizer reports")
+            shutil.rmtree(tmp, ignore_errors=True)
 
     def test_cancels_reach_a_computation_its_own_daemon_runs_for_the_cluster(self):
         s = stack.Stack(n=1, daemon_args=HELD, with_nginx=False).start()
