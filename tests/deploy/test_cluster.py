@@ -7,8 +7,8 @@ A mesh computed through nginx is a shared hit on the other daemon, bytes identic
 format of a key known only to the other daemon is computed from the canonical request in
 Redis; identical concurrent requests to both daemons compute once; nginx keeps the daemons'
 immutable caching headers, answers 304, gzips JSON/YAML/JS but not Draco or glb, refuses
-bodies over the limit, limits request rates per client, streams job events unbuffered and
-keeps a job's routes on its daemon; a damaged entry in Redis is dropped and recomputed."""
+bodies over the limit, limits request rates per client address and per token (across
+addresses), streams job events unbuffered and keeps a job's routes on its daemon; a damaged entry in Redis is dropped and recomputed."""
 import http.client
 import json
 import os
@@ -264,6 +264,22 @@ class ClusterTest(unittest.TestCase):
         self.assertTrue(set(statuses) <= {200, 429}, statuses)
         # another client is not affected
         self.assertEqual(self.ng.post("/v1/mesh", req, source="127.0.0.8").status, 200)
+
+    def test_rate_limit_per_token_across_addresses(self):
+        req = sphere(0.66)
+        self.assertEqual(self.ng.post("/v1/mesh", req).status, 200)  # cached from now on
+        sources = ["127.0.0.%d" % i for i in range(11, 15)]  # 10 each: under the address burst
+        token = {"Authorization": "Bearer ism_rate_limit_test_token"}
+        statuses = [self.ng.post("/v1/mesh", req, headers=token, source=sources[i % 4]).status
+                    for i in range(40)]
+        self.assertEqual(statuses[0], 200)
+        self.assertIn(429, statuses)  # the token's 21-request burst spent over four addresses
+        self.assertTrue(set(statuses) <= {200, 429}, statuses)
+        # four other addresses without a token, ten requests each: their own limits only
+        others = ["127.0.0.%d" % i for i in range(21, 25)]
+        statuses = [self.ng.post("/v1/mesh", req, source=others[i % 4]).status
+                    for i in range(40)]
+        self.assertEqual(set(statuses), {200}, statuses)
 
     def test_job_events_pass_through_nginx_unbuffered_and_jobs_stay_on_their_daemon(self):
         self.s.pause_workers()  # the job runs until its first event came through
