@@ -25,7 +25,7 @@ libsodium-dev libseccomp-dev libhiredis-dev nodejs npm ca-certificates"
 # Tests: unit-test framework, Draco's own decoder, sanitizer/fuzzer runtime, a browser,
 # Python for HTTP tests, the servers the deploy tests start, load and leak tools.
 test_pkgs="libcriterion-dev draco clang libclang-rt-14-dev chromium python3 redis-server
-nginx-light wrk valgrind systemd fonts-dejavu-core openssl"
+nginx-light wrk valgrind systemd fonts-dejavu-core openssl stunnel4"
 # Reference tools the benchmarks measure beside isomesh.
 bench_pkgs="python3-skimage python3-numpy python3-vtk9 libcgal-dev libgmp-dev libmpfr-dev hyperfine"
 

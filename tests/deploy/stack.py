@@ -41,6 +41,7 @@ REDIS_SERVER = which("redis-server")
 NGINX = which("nginx")
 SYSTEMD_ANALYZE = which("systemd-analyze")
 OPENSSL = which("openssl")
+STUNNEL = which("stunnel4") or which("stunnel")
 
 
 def free_port():
@@ -112,17 +113,19 @@ def redis_command(port, *args, timeout=5):
 
 
 class Redis:
-    """redis-server with deploy/redis/isomesh.conf, on its own port and directory."""
+    """redis-server with deploy/redis/isomesh.conf, on its own port and directory (extra:
+    more command-line settings, e.g. a TLS port)."""
 
-    def __init__(self, port=None):
+    def __init__(self, port=None, extra=()):
         self.tmp = tempfile.mkdtemp(prefix="isomesh_redis_")
         self.port = port or free_port()
+        self.extra = list(extra)
         self.proc = None
 
     def start(self, timeout=10):
         cmd = [REDIS_SERVER, REDIS_CONF, "--port", str(self.port), "--bind", "127.0.0.1",
                "--dir", self.tmp, "--save", "", "--appendonly", "no",
-               "--logfile", os.path.join(self.tmp, "redis.log"), "--daemonize", "no"]
+               "--logfile", os.path.join(self.tmp, "redis.log"), "--daemonize", "no"] + self.extra
         self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                                      stderr=subprocess.DEVNULL)
 

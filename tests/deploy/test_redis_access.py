@@ -5,8 +5,14 @@
   keeps serving on its own, logging the outage with what=auth); a password file others may
   read is refused at start;
 * --redis-namespace: a daemon of another namespace sees none of the first one's meshes (it
-  computes the same mesh itself) and writes its own keys under its own name."""
+  computes the same mesh itself) and writes its own keys under its own name;
+* TLS: Redis with only a TLS port for the daemon, reached through stunnel run with
+  deploy/redis/stunnel-isomesh.conf (its addresses, CA file and host name pointed at this
+  machine, nothing else changed): the daemon connects and shares its mesh, and the same
+  configuration expecting another host name lets nothing through (the certificate is
+  checked)."""
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -79,6 +85,87 @@ class RedisAccessTest(unittest.TestCase):
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, timeout=30)
             self.assertNotEqual(p.returncode, 0)
             self.assertIn(expect, p.stderr)
+
+
+STUNNEL_CONF = os.path.join(stack.DEPLOY, "redis", "stunnel-isomesh.conf")
+TLS_HOST = "redis.isomesh.test"
+
+
+def stunnel_conf(tmp, accept, connect, cafile, host, name):
+    """The shipped stunnel configuration with only what names this machine replaced."""
+    with open(STUNNEL_CONF) as f:
+        text = f.read()
+    for pattern, value in ((r"^foreground = .*$", "foreground = yes"),
+                           (r"^pid = .*$", "pid = " + os.path.join(tmp, name + ".pid")),
+                           (r"^accept = .*$", "accept = 127.0.0.1:%d" % accept),
+                           (r"^connect = .*$", "connect = 127.0.0.1:%d" % connect),
+                           (r"^CAfile = .*$", "CAfile = " + cafile),
+                           (r"^checkHost = .*$", "checkHost = " + host)):
+        text, n = re.subn(pattern, value, text, flags=re.M)
+        if n != 1:
+            raise AssertionError("%s: no single line %s" % (STUNNEL_CONF, pattern))
+    path = os.path.join(tmp, name + ".conf")
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+@unittest.skipIf(SKIP or not stack.STUNNEL or not stack.OPENSSL,
+                 SKIP or "stunnel4 or openssl is missing (deploy/install-deps.sh test)")
+class RedisTlsTest(unittest.TestCase):
+    def setUp(self):
+        self.tmp = tempfile.TemporaryDirectory()
+        self.procs = []
+        t = self.tmp.name
+        self.cert, key = os.path.join(t, "redis.crt"), os.path.join(t, "redis.key")
+        r = subprocess.run([stack.OPENSSL, "req", "-x509", "-newkey", "rsa:2048", "-nodes",
+                            "-keyout", key, "-out", self.cert, "-days", "2",
+                            "-subj", "/CN=" + TLS_HOST, "-addext",
+                            "subjectAltName=DNS:" + TLS_HOST],
+                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=60)
+        self.assertEqual(r.returncode, 0, r.stdout)
+        os.chmod(key, 0o644)  # redis-server may run as another user than the test's files
+        self.tls_port = stack.free_port()
+        # the plain port is the test's own view into Redis; the daemon only gets the tunnel
+        self.redis = stack.Redis(extra=["--tls-port", str(self.tls_port), "--tls-cert-file",
+                                        self.cert, "--tls-key-file", key, "--tls-ca-cert-file",
+                                        self.cert, "--tls-auth-clients", "no"]).start()
+
+    def tearDown(self):
+        for p in self.procs:
+            stack.stop_process(p)
+        self.redis.cleanup()
+        self.tmp.cleanup()
+
+    def tunnel(self, host, name):
+        """stunnel on a free port to Redis's TLS port, expecting host; returns the port."""
+        port = stack.free_port()
+        conf = stunnel_conf(self.tmp.name, port, self.tls_port, self.cert, host, name)
+        self.procs.append(subprocess.Popen([stack.STUNNEL, conf], stdin=subprocess.DEVNULL,
+                                           stdout=subprocess.DEVNULL,
+                                           stderr=subprocess.DEVNULL))
+
+        def listening():
+            try:
+                stack.socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                return True
+            except OSError:
+                return False
+        self.assertTrue(stack.wait_until(listening, 10), "stunnel never listened")
+        return port
+
+    def test_the_daemon_reaches_redis_through_the_shipped_stunnel_configuration(self):
+        wrong = self.tunnel("another.isomesh.test", "wrong")
+        with self.assertRaises((OSError, stack.RedisError)):
+            stack.redis_command(wrong, "PING", timeout=10)  # the host name is checked
+        right = self.tunnel(TLS_HOST, "right")
+        self.assertEqual(stack.redis_command(right, "PING", timeout=10), "PONG")
+        with harness.Daemon("--workers", "1", "--redis", "127.0.0.1:%d" % right) as d:
+            self.assertTrue(stack.wait_until(lambda: d.metric("isomesh_redis_up") == 1, 10),
+                            d.log())
+            r = d.post("/v1/mesh", harness.sphere(0.79))
+            self.assertEqual(r.status, 200)
+            self.assertTrue(stack.wait_stored(self.redis, r.header("ETag").strip('"')))
 
 
 if __name__ == "__main__":
