@@ -8,7 +8,7 @@
 // (bench_live.py runs it for `make bench`).
 import { startDaemon, stopDaemon, startBrowser, stopBrowser } from '../browser/lib/harness.mjs';
 import { openViewer, waitForMesh, loads } from '../browser/lib/page.mjs';
-import { dragAndTime } from '../browser/lib/live.mjs';
+import { dragAndTime, breakdown } from '../browser/lib/live.mjs';
 import os from 'node:os';
 
 const GOAL_MS = 300;
@@ -43,7 +43,7 @@ try {
       const server = preview ? `${preview.timings_ms.total.toFixed(0)} ms` : '–';
       console.log(`${p.name.padEnd(18)} ${q.name.padEnd(4)} -> ${String(target).padEnd(8)} changed picture ${shown.padStart(8)}` +
         `${r.ms !== null && r.ms <= GOAL_MS ? '' : '  (over the goal)'}   last preview computed in ${server.padStart(7)}` +
-        `   refined mesh on screen after ${(rows.at(-1).refinedMs / 1000).toFixed(1)} s`);
+        `   refined mesh on screen after ${(rows.at(-1).refinedMs / 1000).toFixed(1)} s\n    ${breakdown(r)}`);
     }
   }
 } finally {

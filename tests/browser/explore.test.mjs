@@ -418,6 +418,93 @@ describe('box and inspection', { timeout: 300000 }, () => {
     await page.uncheck('#occlusion');
   });
 
+  it('the occlusion is computed in the background, plain first, and a clipped half occludes nothing', async () => {
+    // The two spheres of the test before (its mesh is on screen). Cut at x = 0 keeping x < 0:
+    // the left sphere stays whole and alone, and a lone sphere is convex — nothing over any
+    // outside point's hemisphere — so its occluded picture must equal its plain one. Uncut, the
+    // right sphere darkens the left one where they face each other (light 5/9 at the gap).
+    const win = await page.evaluate(() => {
+      // A point of the left sphere (centre (-0.5, 0, 0), radius 0.4) facing the right one and
+      // the camera, projected to view pixels.
+      const v = window.isomeshViewer;
+      const n = new v.camera.position.constructor(1, -0.3, 0.15).normalize();
+      const q = n.clone().multiplyScalar(0.4).add(new v.camera.position.constructor(-0.5, 0, 0)).project(v.camera);
+      return [Math.round((q.x + 1) / 2 * v.canvas.clientWidth), Math.round((1 - q.y) / 2 * v.canvas.clientHeight)];
+    });
+    const mean = (img) => {           // mean RGB sum over a 7x7 window at win
+      let s = 0;
+      for (let dy = -3; dy <= 3; dy++) for (let dx = -3; dx <= 3; dx++) {
+        const i = 4 * ((win[1] + dy) * img.width + win[0] + dx);
+        s += img.rgba[i] + img.rgba[i + 1] + img.rgba[i + 2];
+      }
+      return s / 49;
+    };
+    const darkened = (plain, ao) => {  // share of pixels more than 10% darker with occlusion
+      let k = 0;
+      for (let i = 0; i < plain.rgba.length; i += 4) {
+        const a = plain.rgba[i] + plain.rgba[i + 1] + plain.rgba[i + 2], b = ao.rgba[i] + ao.rgba[i + 1] + ao.rgba[i + 2];
+        if (b < 0.9 * a - 6) k++;
+      }
+      return k / (plain.width * plain.height);
+    };
+    await page.evaluate(() => document.activeElement && document.activeElement.blur());
+    const plainWhole = await viewShot(page);
+    await page.check('#occlusion');      // the uncut mesh's occlusion is held: no computation
+    await page.waitForFunction(() => document.getElementById('view').dataset.look === 'occlusion', null, { timeout: 120000 });
+    const aoWhole = await viewShot(page);
+    await page.uncheck('#occlusion');
+    await page.check('#clip-on');
+    await page.selectOption('#clip-axis', 'x');
+    assert.equal(await page.inputValue('#clip-offset'), '0');
+    assert.equal(await page.isChecked('#clip-flip'), false, 'the half towards the camera (x > 0) is cut away');
+    await page.evaluate(() => document.activeElement && document.activeElement.blur());
+    const plainCut = await viewShot(page, 'spheres-cut-plain.png');
+
+    // Turn the render mode on with the cut: a new occlusion is computed. Record every animation
+    // frame (its time and look) and answer a click while it runs.
+    await page.evaluate(() => {
+      const rec = { frames: [], click: null, done: false };
+      window.aoRecord = rec;
+      const view = document.getElementById('view');
+      const tick = () => {
+        rec.frames.push({ t: performance.now(), look: view.dataset.look, state: view.dataset.occlusion });
+        if (view.dataset.look === 'occlusion') { rec.done = true; return; }
+        requestAnimationFrame(tick);
+      };
+      requestAnimationFrame(tick);
+    });
+    await page.check('#occlusion');
+    await page.waitForFunction(() => document.getElementById('view').dataset.occlusion === 'computing', null, { timeout: 30000, polling: 20 });
+    await page.evaluate(() => document.addEventListener('click', () => {
+      window.aoRecord.click = { t: performance.now(), state: document.getElementById('view').dataset.occlusion };
+    }, { once: true }));
+    await page.click('#preset-about');
+    await page.waitForFunction(() => window.aoRecord.done, null, { timeout: 120000 });
+    await page.waitForSelector('#message', { state: 'hidden' });
+    const rec = await page.evaluate(() => window.aoRecord);
+    const busy = rec.frames.filter((f) => f.state === 'computing');
+    const gaps = rec.frames.slice(1).map((f, i) => f.t - rec.frames[i].t);
+    const span = busy.length ? busy.at(-1).t - busy[0].t : 0;
+    const bakeMs = await page.evaluate(() => window.isomeshViewer.occlusionMs);
+    console.log(`# occlusion in the background: computed in ${bakeMs.toFixed(0)} ms; ${busy.length} frames meanwhile, longest gap ${Math.max(...gaps).toFixed(0)} ms; click answered while computing: ${rec.click && rec.click.state === 'computing'}`);
+    assert.equal(rec.frames[0].look, 'plain', 'the plain surface is drawn first');
+    assert.ok(rec.click && rec.click.state === 'computing', `a click is answered while the occlusion is computed (${JSON.stringify(rec.click)})`);
+    assert.ok(busy.length >= 3, `${busy.length} frames while computing`);
+    assert.ok(Math.max(...gaps) < 0.5 * bakeMs, `longest frame gap ${Math.max(...gaps)} ms of a ${bakeMs} ms computation`);
+    assert.ok(span > 0.3 * bakeMs, `frames ran through the computation (${span} of ${bakeMs} ms)`);
+    const aoCut = await viewShot(page, 'spheres-cut-occlusion.png');
+
+    const whole = mean(aoWhole) / mean(plainWhole), cut = mean(aoCut) / mean(plainCut);
+    const dWhole = darkened(plainWhole, aoWhole), dCut = darkened(plainCut, aoCut);
+    console.log(`# occluded / plain brightness where the spheres face each other: ${whole.toFixed(3)} uncut, ${cut.toFixed(3)} with the right sphere cut away; pixels >10% darker: ${(100 * dWhole).toFixed(2)}% uncut, ${(100 * dCut).toFixed(2)}% cut`);
+    assert.ok(whole < 0.92, `uncut, the right sphere darkens the left (${whole})`);
+    assert.ok(cut > 0.97, `cut away, it darkens nothing (${cut})`);
+    assert.ok(dWhole > 0.002, `uncut: ${dWhole} of the pixels darker`);
+    assert.ok(dCut < 0.001, `cut: ${dCut} of the pixels darker`);
+    await page.uncheck('#occlusion');
+    await page.uncheck('#clip-on');
+  });
+
   it('left no page errors', () => {
     assert.deepEqual(errors, []);
   });

@@ -9,6 +9,7 @@
 // that has them all, and a new attribute set of a held surface reuses its features (the server
 // encodes it from its stored surface: no polygonisation).
 import * as api from './api.js';
+import * as timeline from './timeline.js';
 
 const MESH_LRU = 12;
 
@@ -97,7 +98,7 @@ export function cached(body) {
   const hit = (key && meshes.get(key)) || heldFor(body);
   if (!hit) return null;
   remember(hit);
-  return { ...hit, viewerCache: true, transferred: 0, wallMs: 0 };
+  return { ...hit, viewerCache: true, transferred: 0, wallMs: 0, timing: timeline.start() };
 }
 
 // Loads body (the request JSON text). onProgress(fraction, state) while the server works.
@@ -107,7 +108,9 @@ export async function load(body, signal, onProgress) {
   const hit = cached(body);
   if (hit) return hit;
   const t0 = performance.now();
+  const timing = timeline.start();
   const { job: submitted, bytes: jobBytes } = await api.submitJob(body, signal);
+  timeline.mark(timing, 'posted');
   let job = submitted;
   let transferred = jobBytes;
   const serverCache = job.state === 'done' ? 'hit' : 'miss';
@@ -131,6 +134,7 @@ export async function load(body, signal, onProgress) {
   }
   if (job.state !== 'done') throw new api.ApiError(500, { message: 'the job stream ended early' }, null);
   onProgress(1, 'done');
+  timeline.mark(timing, 'done');
 
   const key = job.key;
   const meshUrl = job.mesh_url || `/v1/meshes/${key}.drc`;
@@ -142,6 +146,7 @@ export async function load(body, signal, onProgress) {
     job.stats ? Promise.resolve({ json: job.stats, transferred: 0 })
       : api.getJSON(job.stats_url || `/v1/meshes/${key}/stats`, signal),
   ]);
+  timeline.mark(timing, 'fetched');
   transferred += mesh.transferred + features.transferred + stats.transferred;
   const drcBytes = mesh.bytes.byteLength;
   const decoded = drcBytes > 0 ? await decodeDraco(mesh.bytes) : null;
@@ -153,7 +158,9 @@ export async function load(body, signal, onProgress) {
     key, mesh: decoded, features: features.json, stats: stats.json, drcBytes,
     serverCache, viewerCache: false, transferred, wallMs: performance.now() - t0,
   };
+  timeline.mark(timing, 'decoded');
+  const fresh = { ...result, timing };
   keyOfRequest.set(body, key);
   remember(result, body);
-  return result;
+  return fresh;
 }

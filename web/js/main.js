@@ -15,6 +15,7 @@ import { showStats, clearStats, showLegend } from './stats_ui.js';
 import { niceStep, sig } from './format.js';
 import { Gallery } from './gallery.js';
 import { Previewer, ticket, claim } from './live.js';
+import * as timeline from './timeline.js';
 
 const DEFAULT_PRESET = 'steiner-roman';
 const DEBOUNCE_MS = 250;
@@ -622,6 +623,11 @@ function show(result, body, seq, preview = false) {
   if (!result.mesh) message('The surface does not cross this box: the mesh is empty.');
   const sent = JSON.parse(body);
   viewer.setMesh(result, sent.box, surfaceGlsl(sent), preview);
+  if (result.timing) {
+    result.timing.key = result.key;
+    result.timing.preview = preview;
+    timeline.shown(result.timing);
+  }
   const id = identity();
   const refit = id !== shownIdentity;
   shownIdentity = id;
@@ -1079,21 +1085,10 @@ function wire() {
   }
   wireCurves();
   $('two-sided').addEventListener('change', () => viewer.setTwoSided($('two-sided').checked));
-  $('occlusion').addEventListener('change', async () => {
+  $('occlusion').addEventListener('change', () => {
     state.occlusion = $('occlusion').checked;
     updateUrl();
-    // Computing a large mesh's occlusion holds the page for a moment (seconds in software GL):
-    // say so first, and let the message paint before.
-    const slow = state.occlusion && viewer.needsOcclusion();
-    if (slow) {
-      message('Computing the ambient occlusion…');
-      await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
-    }
     viewer.setOcclusion(state.occlusion);
-    if (slow) {
-      await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
-      clearMessage();
-    }
   });
   $('color-range').addEventListener('change', () => showLegend(state.color, viewer.setRangeCut($('color-range').value)));
   $('wireframe').addEventListener('change', () => {
@@ -1178,6 +1173,14 @@ function wire() {
   performance.addEventListener('resourcetimingbufferfull', () => performance.clearResourceTimings());
 }
 
+// The render mode's occlusion is computed in the background (seconds in software GL for a
+// large mesh; the page stays usable and shows the plain surface meanwhile): say so.
+const OCCLUSION_NOTE = 'Computing the ambient occlusion…';
+function occlusionStatus(computing) {
+  if (computing && $('message').hidden) message(OCCLUSION_NOTE);
+  else if (!computing && $('message').textContent === OCCLUSION_NOTE) clearMessage();
+}
+
 // A private server (isomeshd --private) refuses even the presets without a token: ask for it
 // first, and begin once it is given.
 let beginAfterToken = false;
@@ -1211,6 +1214,7 @@ async function start() {
   });
   $('view').addEventListener('click', pickAt);
   viewer.onViewChange = updateUrl;
+  viewer.onOcclusion = occlusionStatus;
   wire();
   clearStats();
   await begin();

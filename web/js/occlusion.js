@@ -15,7 +15,12 @@
 // (1: open, 0: shut in); the viewer's material multiplies its light by the side it shows. A
 // finite set of directions gives each one's shadow edge as a step: SMOOTHING passes averaging
 // each vertex with its mesh neighbours blur those steps out.
-// What the clipping plane cuts away still occludes (the occlusion is the whole mesh's).
+// What the clipping plane cuts away is left out of the depth maps: it occludes nothing.
+//
+// The page stays responsive meanwhile (software GL takes seconds for a large mesh): the
+// directions go to the GPU a few at a time, each batch followed by a fence that is polled
+// between tasks, so input events and animation frames run while the GPU works; batches grow
+// or shrink to take about CHUNK_MS each.
 import * as THREE from 'three';
 
 // Directions over the whole sphere (each side's hemisphere gets half): enough that a corner
@@ -31,11 +36,29 @@ const BIAS_TEXELS = 1.5;
 const ACC_WIDTH = 1024;
 // Neighbour-averaging passes over the result (each reaches one ring of triangles further).
 const SMOOTHING = 2;
+// GPU time one batch of directions should take: short enough that a frame or an input event
+// waits at most about this long, long enough that the fence round trips stay a small overhead.
+const CHUNK_MS = 40;
+// Directions per batch at most (a fast GPU does all 64 in a few batches).
+const MAX_CHUNK = 16;
+// How often a fence is polled while the GPU works (ms; a timer, so other tasks run between).
+const POLL_MS = 4;
 
+// The depth pass leaves out what the clipping plane removes: keep.xyz . p + keep.w < 0 (the
+// mesh is drawn untransformed, so its positions are world positions).
 const depthVertex = `
-void main() { gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0); }`;
+uniform vec4 keep;
+varying float kept;
+void main() {
+  kept = dot(keep.xyz, position) + keep.w;
+  gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
+}`;
 const depthFragment = `
-void main() { gl_FragColor = vec4(1.0); }`;
+varying float kept;
+void main() {
+  if (kept < 0.0) discard;
+  gl_FragColor = vec4(1.0);
+}`;
 
 const gatherVertex = `
 attribute float vid;
@@ -75,52 +98,54 @@ function fibonacciDirections(n) {
 }
 
 // The light each vertex of geometry keeps on its outside and inside, interleaved
-// (Float32Array, 2 per vertex, each in [0, 1]). geometry needs position and normal.
-export function bakeOcclusion(renderer, geometry) {
+// (Float32Array, 2 per vertex, each in [0, 1]); geometry needs position and normal. keep: the
+// THREE.Plane whose negative side the clipping removes (it then occludes nothing), or null.
+// Resolves null, having stopped early, as soon as alive() turns false (checked between batches).
+export async function bakeOcclusion(renderer, geometry, { keep = null, alive = () => true } = {}) {
   const n = geometry.attributes.position.count;
   const sphere = (geometry.boundingSphere || (geometry.computeBoundingSphere(), geometry.boundingSphere)).clone();
   const R = Math.max(sphere.radius, 1e-9);
   const rows = Math.max(1, Math.ceil(n / ACC_WIDTH));
+  const made = [];   // GPU objects to dispose at the end
+  const own = (o) => { made.push(o); return o; };
 
-  const depthTarget = new THREE.WebGLRenderTarget(DEPTH_RES, DEPTH_RES, { depthBuffer: true });
-  depthTarget.depthTexture = new THREE.DepthTexture(DEPTH_RES, DEPTH_RES, THREE.FloatType);
-  const acc = new THREE.WebGLRenderTarget(ACC_WIDTH, rows, {
+  const depthTarget = own(new THREE.WebGLRenderTarget(DEPTH_RES, DEPTH_RES, { depthBuffer: true }));
+  depthTarget.depthTexture = own(new THREE.DepthTexture(DEPTH_RES, DEPTH_RES, THREE.FloatType));
+  const acc = own(new THREE.WebGLRenderTarget(ACC_WIDTH, rows, {
     type: THREE.HalfFloatType, depthBuffer: false, minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter,
-  });
+  }));
 
   const depthScene = new THREE.Scene();
-  const depthMaterial = new THREE.ShaderMaterial({ vertexShader: depthVertex, fragmentShader: depthFragment, side: THREE.DoubleSide });
+  const keepVector = keep ? new THREE.Vector4(keep.normal.x, keep.normal.y, keep.normal.z, keep.constant) : new THREE.Vector4(0, 0, 0, 1);
+  const depthMaterial = own(new THREE.ShaderMaterial({
+    vertexShader: depthVertex, fragmentShader: depthFragment, side: THREE.DoubleSide,
+    uniforms: { keep: { value: keepVector } },
+  }));
   depthScene.add(new THREE.Mesh(geometry, depthMaterial));
 
-  const points = new THREE.BufferGeometry();
+  const points = own(new THREE.BufferGeometry());
   points.setAttribute('position', geometry.attributes.position);
   points.setAttribute('normal', geometry.attributes.normal);
   points.setAttribute('vid', new THREE.BufferAttribute(Float32Array.from({ length: n }, (_, i) => i), 1));
-  const gather = new THREE.ShaderMaterial({
+  const gather = own(new THREE.ShaderMaterial({
     vertexShader: gatherVertex, fragmentShader: gatherFragment,
     uniforms: {
       dirViewProjection: { value: new THREE.Matrix4() }, dir: { value: new THREE.Vector3() },
       depthMap: { value: depthTarget.depthTexture }, accSize: { value: new THREE.Vector2(ACC_WIDTH, rows) },
-      bias: { value: 0 },
+      bias: { value: BIAS_TEXELS / DEPTH_RES },   // depth spans 2R, as does the map
     },
     blending: THREE.CustomBlending, blendEquation: THREE.AddEquation,
     blendSrc: THREE.OneFactor, blendDst: THREE.OneFactor, blendSrcAlpha: THREE.OneFactor, blendDstAlpha: THREE.OneFactor,
     depthTest: false, depthWrite: false,
-  });
+  }));
   const cloud = new THREE.Points(points, gather);
   cloud.frustumCulled = false;
   const gatherScene = new THREE.Scene();
   gatherScene.add(cloud);
   const gatherCamera = new THREE.OrthographicCamera();   // unused by the shader
-
   const camera = new THREE.OrthographicCamera(-R, R, R, -R, R, 3 * R);
-  const saved = { target: renderer.getRenderTarget(), color: renderer.getClearColor(new THREE.Color()), alpha: renderer.getClearAlpha(), clipping: renderer.localClippingEnabled };
-  renderer.localClippingEnabled = false;
-  renderer.setClearColor(0x000000, 0);
-  renderer.setRenderTarget(acc);
-  renderer.clear(true, false, false);
-  gather.uniforms.bias.value = BIAS_TEXELS / DEPTH_RES;   // depth spans 2R, as does the map
-  for (const d of fibonacciDirections(DIRECTIONS)) {
+
+  const pass = (d) => {
     camera.position.copy(sphere.center).addScaledVector(d, 2 * R);
     camera.up.set(Math.abs(d.z) < 0.9 ? 0 : 1, 0, Math.abs(d.z) < 0.9 ? 1 : 0);
     camera.lookAt(sphere.center);
@@ -132,26 +157,82 @@ export function bakeOcclusion(renderer, geometry) {
     gather.uniforms.dirViewProjection.value.multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse);
     gather.uniforms.dir.value.copy(d);
     renderer.setRenderTarget(acc);
-    renderer.autoClear = false;
     renderer.render(gatherScene, gatherCamera);
-    renderer.autoClear = true;
-  }
-  const raw = new Uint16Array(4 * ACC_WIDTH * rows);
-  renderer.readRenderTargetPixels(acc, 0, 0, ACC_WIDTH, rows, raw);
-  renderer.setRenderTarget(saved.target);
-  renderer.setClearColor(saved.color, saved.alpha);
-  renderer.localClippingEnabled = saved.clipping;
+  };
 
-  const light = new Float32Array(2 * n);
-  const h = THREE.DataUtils.fromHalfFloat;
-  for (let i = 0; i < n; i++) {
-    const w0 = h(raw[4 * i + 1]), w1 = h(raw[4 * i + 3]);
-    light[2 * i] = w0 > 0 ? Math.min(1, h(raw[4 * i]) / w0) : 1;
-    light[2 * i + 1] = w1 > 0 ? Math.min(1, h(raw[4 * i + 2]) / w1) : 1;
+  try {
+    const gl = renderer.getContext();
+    await renderer.compileAsync(depthScene, camera);
+    await renderer.compileAsync(gatherScene, gatherCamera);
+    if (!alive()) return null;
+    withTargets(renderer, () => {
+      renderer.setRenderTarget(acc);
+      renderer.clear(true, false, false);
+    });
+    const directions = fibonacciDirections(DIRECTIONS);
+    let next = 0, chunk = 1;
+    while (next < directions.length) {
+      const t0 = performance.now();
+      const batch = directions.slice(next, next + chunk);
+      next += batch.length;
+      withTargets(renderer, () => batch.forEach(pass));
+      await gpuDone(gl);
+      if (!alive()) return null;
+      const ms = performance.now() - t0;
+      chunk = Math.max(1, Math.min(MAX_CHUNK, Math.round(batch.length * CHUNK_MS / Math.max(ms, 1))));
+    }
+    const raw = new Uint16Array(4 * ACC_WIDTH * rows);
+    renderer.readRenderTargetPixels(acc, 0, 0, ACC_WIDTH, rows, raw);
+    const light = new Float32Array(2 * n);
+    const h = THREE.DataUtils.fromHalfFloat;
+    for (let i = 0; i < n; i++) {
+      const w0 = h(raw[4 * i + 1]), w1 = h(raw[4 * i + 3]);
+      light[2 * i] = w0 > 0 ? Math.min(1, h(raw[4 * i]) / w0) : 1;
+      light[2 * i + 1] = w1 > 0 ? Math.min(1, h(raw[4 * i + 2]) / w1) : 1;
+    }
+    return geometry.index ? smooth(light, geometry.index.array, SMOOTHING) : light;
+  } finally {
+    for (const o of made) o.dispose();
   }
-  for (const o of [depthTarget, acc, depthMaterial, gather, points]) o.dispose();
-  depthTarget.depthTexture.dispose();
-  return geometry.index ? smooth(light, geometry.index.array, SMOOTHING) : light;
+}
+
+// Runs draw with the renderer's target, clear colour, clipping and autoClear set for the bake,
+// and puts the viewer's back afterwards (the viewer draws frames between batches).
+function withTargets(renderer, draw) {
+  const saved = {
+    target: renderer.getRenderTarget(), color: renderer.getClearColor(new THREE.Color()), alpha: renderer.getClearAlpha(),
+    clipping: renderer.localClippingEnabled, autoClear: renderer.autoClear,
+  };
+  renderer.localClippingEnabled = false;
+  renderer.autoClear = false;
+  renderer.setClearColor(0x000000, 0);
+  try {
+    draw();
+  } finally {
+    renderer.setRenderTarget(saved.target);
+    renderer.setClearColor(saved.color, saved.alpha);
+    renderer.localClippingEnabled = saved.clipping;
+    renderer.autoClear = saved.autoClear;
+  }
+}
+
+// Resolves once the GPU has done every command issued so far: a fence, polled from timer
+// tasks (a WebGL fence's status changes only between tasks), so the page runs meanwhile.
+function gpuDone(gl) {
+  const sync = gl.fenceSync(gl.SYNC_GPU_COMMANDS_COMPLETE, 0);
+  gl.flush();
+  if (!sync) return Promise.resolve();   // context lost: nothing to wait for
+  return new Promise((resolve) => {
+    const poll = () => {
+      if (gl.clientWaitSync(sync, 0, 0) === gl.TIMEOUT_EXPIRED) {
+        setTimeout(poll, POLL_MS);
+        return;
+      }
+      gl.deleteSync(sync);
+      resolve();
+    };
+    setTimeout(poll, 0);
+  });
 }
 
 // passes rounds of: each vertex's pair of values becomes the mean over itself and the vertices

@@ -4,9 +4,9 @@
 // one-sided surface is lit the same from either side), the surface with its colour modes, the
 // wireframe overlay, the non-manifold features, the requested curves and their cells
 // (curves.js), double sheets tinted, one clipping plane, fit-to-view, and the render mode
-// with ambient occlusion (occlusion.js: computed per mesh when first shown in that mode, kept
-// per vertex, each side its own). Draws on demand (at most once per animation frame), not in
-// a loop.
+// with ambient occlusion (occlusion.js: computed in the background per mesh and cut when first
+// shown in that mode, kept per vertex, each side its own; plain shading until then). Draws on
+// demand (at most once per animation frame), not in a loop.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { buildFeatures, disposeFeatures, pickFeature, setLineResolution } from './features.js';
@@ -16,6 +16,7 @@ import { buildBox, disposeBox } from './box_view.js';
 import { sectionSegments, sectionLines } from './section.js';
 import { buildCap } from './cap.js';
 import { bakeOcclusion } from './occlusion.js';
+import * as timeline from './timeline.js';
 
 const SURFACE_RGB = 0xb9c6d8;
 // Two-sided colouring: triangles face along grad f (the outside, f > 0), so back faces show
@@ -28,6 +29,11 @@ const DEFAULT_DIRECTION = new THREE.Vector3(1.5, -2.1, 1.25).normalize();
 // Largest exported image side (every WebGL2 implementation renders at least 4096; 8192 is
 // common but not promised, so a larger request is clamped).
 const MAX_EXPORT_PX = 4096;
+// The render mode waits this long after the mesh or the cut last changed before it computes
+// the occlusion (a dragged clip slider would otherwise restart it at every step).
+const BAKE_SETTLE_MS = 200;
+// Occlusions kept per mesh, one per cut (the whole mesh and the last few cuts).
+const OCCLUSION_CUTS_KEPT = 3;
 
 export class Viewer {
   constructor(canvas) {
@@ -141,6 +147,7 @@ export class Viewer {
     this.applyOcclusion();
     this.renderer.render(this.scene, this.camera);
     this.frames++;
+    timeline.drawn();
   }
 
   // The render mode: ambient occlusion over the shading (true) or the plain shading.
@@ -149,29 +156,67 @@ export class Viewer {
     this.render();
   }
 
-  // True when the shown mesh's occlusion is still to be computed (the next frame in the render
-  // mode does it).
-  needsOcclusion() {
-    const m = this.data && this.data.mesh;
-    return !!(m && !m.occlusion && !this.preview);
-  }
-
-  // Computes the shown mesh's occlusion the first time it is drawn in the render mode (a live
-  // preview is drawn plain); canvas[data-look] says which look the last frame has.
+  // The render mode's occlusion of the shown mesh, computed in the background (occlusion.js:
+  // batches on the GPU between which the page runs) the first time the mesh is drawn in that
+  // mode with the current cut, and kept with the decoded mesh per cut; until it is there the
+  // surface is drawn plain. A live preview is always drawn plain. canvas[data-look] says which
+  // look the last frame has, canvas[data-occlusion] 'computing' while a bake runs.
   applyOcclusion() {
     const g = this.surface && this.surface.geometry;
-    if (this.occlusion && !this.preview && g && g.attributes.normal && !g.attributes.occlusion) {
-      const m = this.data.mesh;          // kept with the decoded mesh: a redraw from the page's
-      if (!m.occlusion) {                // cache does not compute it again
-        const t0 = performance.now();
-        m.occlusion = bakeOcclusion(this.renderer, g);
-        this.occlusionMs = performance.now() - t0;
+    const m = this.data && this.data.mesh;
+    const want = this.occlusion && !this.preview && g && g.attributes.normal;
+    const cut = this.cutKey();
+    if (want) {
+      const light = m.occlusion && m.occlusion.get(cut);
+      if (light && g.userData.occlusionCut !== cut) {
+        g.setAttribute('occlusion', new THREE.BufferAttribute(light, 2));
+        g.userData.occlusionCut = cut;
+      } else if (!light && !(this.bake && this.bake.mesh === m && this.bake.cut === cut)) {
+        this.startBake(m, g, cut);
       }
-      g.setAttribute('occlusion', new THREE.BufferAttribute(m.occlusion, 2));
+    } else if (this.bake) {
+      this.bake = null;           // the running bake stops at its next batch
     }
-    const on = this.occlusion && !!(g && g.attributes.occlusion);
+    const on = !!(want && g.attributes.occlusion && g.userData.occlusionCut === cut);
     this.occlusionStrength.value = on ? 1 : 0;
     this.canvas.dataset.look = on ? 'occlusion' : 'plain';
+    this.canvas.dataset.occlusion = this.bake ? 'computing' : (on ? 'done' : 'off');
+  }
+
+  // What the clipping removes, as a key of the occlusion computed without it ('' for nothing).
+  cutKey() {
+    const p = this.clipping[0];
+    return p ? `${p.normal.toArray().join(',')}|${p.constant}` : '';
+  }
+
+  // Computes m's occlusion for cut once the cut has held still for BAKE_SETTLE_MS (a clip
+  // slider being dragged starts nothing); a newer bake, another mesh or leaving the render
+  // mode abandons it. onOcclusion(computing) tells the page.
+  startBake(m, g, cut) {
+    const mine = { mesh: m, cut };
+    this.bake = mine;
+    const plane = this.clipping[0] ? this.clipping[0].clone() : null;
+    const alive = () => this.bake === mine;
+    setTimeout(async () => {
+      if (!alive()) return;
+      if (this.onOcclusion) this.onOcclusion(true);
+      const t0 = performance.now();
+      let light = null;
+      try {
+        light = await bakeOcclusion(this.renderer, g, { keep: plane, alive });
+      } finally {
+        if (alive()) this.bake = null;
+        if (this.onOcclusion) this.onOcclusion(false);
+      }
+      if (!light) return;
+      this.occlusionMs = performance.now() - t0;
+      if (!m.occlusion) m.occlusion = new Map();
+      m.occlusion.delete(cut);
+      m.occlusion.set(cut, light);
+      while (m.occlusion.size > OCCLUSION_CUTS_KEPT) m.occlusion.delete(m.occlusion.keys().next().value);
+      this.render();
+    }, BAKE_SETTLE_MS);
+    this.render();
   }
 
   onKey(e) {

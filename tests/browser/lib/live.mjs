@@ -61,17 +61,35 @@ export async function dragAndTime(page, name, target, timeoutMs = 20000) {
         coverage.min = Math.min(coverage.min, c);
         coverage.max = Math.max(coverage.max, c);
         const done = Number(document.body.dataset.loads || 0) > before && document.body.dataset.shown === 'final';
-        if (done) { resolve({ ms, coverage }); return; }
+        if (done) { resolve({ ms, coverage, t0 }); return; }
       }
-      if (now - t0 > timeoutMs) { resolve({ ms, coverage }); return; }
+      if (now - t0 > timeoutMs) { resolve({ ms, coverage, t0 }); return; }
       requestAnimationFrame(tick);
     };
     requestAnimationFrame(tick);
   }), { name, target, steps: DRAG_STEPS, stepMs: DRAG_STEP_MS, share: CHANGED_SHARE, delta: CHANGE_DELTA, timeoutMs, before });
   const finalKey = await waitForMesh(page, before);
-  const info = await page.evaluate(() => ({
+  const info = await page.evaluate((t0) => ({
     previews: Number(document.body.dataset.previews || 0), previewKey: document.body.dataset.previewKey || '',
     shown: document.body.dataset.shown,
-  }));
+    timeline: (window.isomeshTimeline || []).filter((e) => e.marks.asked >= t0),
+  }), timed.t0);
   return { ...timed, finalKey, ...info };
+}
+
+// Where the time to the first picture after a drag went (web/js/timeline.js marks of the mesh
+// whose frame was the last drawn before the picture was seen to change), as text: "wait 0 + post 12 + job 80 + fetch 9 + decode 15 +
+// hand 30 + draw 20 + seen 10", each in ms ('seen': the frame drawn to the pixel change).
+export function breakdown(r) {
+  const seenAt = r.ms === null ? Infinity : r.t0 + r.ms;
+  const drawnBefore = r.timeline.filter((x) => x.marks.drawn !== undefined && x.marks.drawn <= seenAt);
+  const e = drawnBefore.at(-1) || r.timeline.find((x) => x.marks.shown !== undefined);
+  if (!e) return 'no mesh shown';
+  const m = e.marks;
+  const steps = [['wait', r.t0, m.asked], ['post', m.asked, m.posted], ['job', m.posted, m.done],
+    ['fetch', m.done, m.fetched], ['decode', m.fetched, m.decoded], ['hand', m.decoded ?? m.asked, m.shown],
+    ['draw', m.shown, m.drawn], ['seen', m.drawn, r.ms === null ? undefined : r.t0 + r.ms]];
+  const nth = r.timeline.filter((x) => x.marks.shown !== undefined).indexOf(e) + 1;
+  return `${e.preview ? 'preview' : 'refined'} #${nth}: ` + steps.filter(([, a, b]) => a !== undefined && b !== undefined)
+    .map(([name, a, b]) => `${name} ${Math.round(b - a)}`).join(' + ');
 }
