@@ -92,7 +92,8 @@ typedef struct run_case {
 static void check(const pf_surface *s, const run_case *cases, size_t ncases, bool pieces)
 {
     ism_tape *t = pf_compile(s);
-    for (size_t i = 0; i < ncases; i++) {
+    /* under sanitizers (pf_quick) only the last case, each test's box off the lattice */
+    for (size_t i = pf_quick() ? ncases - 1 : 0; i < ncases; i++) {
         double shift = cases[i].cells * 3.0 / (1 << MAX_DEPTH);
         int threads = cases[i].threads, thin = MAX_DEPTH + cases[i].thin_levels;
         ism_octree first, fresh, reused;
