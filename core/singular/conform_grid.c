@@ -10,8 +10,12 @@
  *      level 0  ├───┬──╱─┬╲──┬───┼───┬───┬───┬───┤   a query at each level reads the cells
  *               │ ▲ │ ╱  │ ╲ │   │   │   │   │   │   its box meets, one more on each side
  *               └───┴────┴───┴───┴───┴───┴───┴───┘
- * Cost: O(T) to build; a query reads the cells its box meets at each level in use and the
- * triangles filed there. */
+ * The polygoniser's triangles are filed lazily: only those whose box meets the region the
+ * surgeries have asked for (the locus grown by their radius), found by one pass over them
+ * per widening of that region; most of a mesh lies far from its singular locus.
+ * Cost: O(T) box tests per widening of the covered region, and the filing of the triangles
+ * in it; a query reads the cells its box meets at each level in use and the triangles filed
+ * there. */
 #include "core/singular/conform_internal.h"
 
 #include <math.h>
@@ -42,26 +46,51 @@ static int64_t coord(const cf_tgrid *g, double x, int k, double s)
     return !(i > 0) ? 0 : i >= COORD_MAX ? COORD_MAX : (int64_t)i;
 }
 
+/* min and max by comparison: libm's fmin/fmax are calls, and the box of every triangle of
+ * the mesh is taken once per pass (positions are finite; -0 and +0 compare equal, so either
+ * gives the same cells and the same answers) */
+static double min2(double a, double b)
+{
+    return b < a ? b : a;
+}
+
+static double max2(double a, double b)
+{
+    return b > a ? b : a;
+}
+
 static void tri_box(const ism_mesh *m, uint32_t t, double lo[3], double hi[3])
 {
     const uint32_t *v = m->tri + 3 * (size_t)t;
     for (int k = 0; k < 3; k++) {
         double a = m->pos[3 * (size_t)v[0] + k], b = m->pos[3 * (size_t)v[1] + k],
                d = m->pos[3 * (size_t)v[2] + k];
-        lo[k] = fmin(a, fmin(b, d));
-        hi[k] = fmax(a, fmax(b, d));
+        lo[k] = min2(a, min2(b, d));
+        hi[k] = max2(a, max2(b, d));
     }
 }
 
-bool cf_tgrid_init(cf_tgrid *g, const double origin[3], double extent, double finest_cell)
+bool cf_tgrid_init(cf_tgrid *g, const double origin[3], double extent, double finest_cell,
+                   size_t ntris)
 {
     memset(g, 0, sizeof *g);
     ism_key_map_init(&g->cells);
     g->last_cell = CF_NONE;
-    for (int k = 0; k < 3; k++)
+    for (int k = 0; k < 3; k++) {
         g->lo[k] = origin[k];
+        g->cover[k] = INFINITY; /* empty: nothing covered yet */
+        g->cover[k + 3] = -INFINITY;
+    }
     g->side = fmax(GRID_CELLS * finest_cell, extent / (COORD_MAX / 2));
-    return g->side > 0 && isfinite(g->side);
+    if (!(g->side > 0 && isfinite(g->side)))
+        return false;
+    if (!cf_grow((void **)&g->next, &g->cap_next, ntris + 1, sizeof *g->next) ||
+        !cf_grow((void **)&g->cell_of, &g->cap_cell_of, ntris + 1, sizeof *g->cell_of) ||
+        !cf_grow((void **)&g->stamp, &g->cap_stamp, ntris + 1, sizeof *g->stamp))
+        return false;
+    memset(g->cell_of, 0xff, ntris * sizeof *g->cell_of); /* CF_NONE: not filed */
+    g->ntris = g->base = ntris;
+    return true;
 }
 
 void cf_tgrid_free(cf_tgrid *g)
@@ -75,7 +104,9 @@ void cf_tgrid_free(cf_tgrid *g)
     memset(g, 0, sizeof *g);
 }
 
-bool cf_tgrid_add(cf_tgrid *g, const ism_mesh *m, uint32_t t)
+/* Files triangle t: pushed on its cell's stack, or, for one of the first `base` filed late,
+ * below the appended triangles there (cf_tgrid_truncate pops those from the top). */
+static bool file_triangle(cf_tgrid *g, const ism_mesh *m, uint32_t t)
 {
     size_t need = (size_t)t + 1;
     if ((need > g->cap_next || need > g->cap_cell_of || need > g->cap_stamp) &&
@@ -85,7 +116,7 @@ bool cf_tgrid_add(cf_tgrid *g, const ism_mesh *m, uint32_t t)
         return false;
     double lo[3], hi[3], s = g->side;
     tri_box(m, t, lo, hi);
-    double e = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
+    double e = max2(hi[0] - lo[0], max2(hi[1] - lo[1], hi[2] - lo[2]));
     int level = 0;
     while (level < TOP_LEVEL && !(e <= s)) {
         s *= 2;
@@ -120,15 +151,60 @@ bool cf_tgrid_add(cf_tgrid *g, const ism_mesh *m, uint32_t t)
         }
     }
     for (int k = 0; k < 3; k++) { /* the union of the boxes ever filed there */
-        cb[k] = fmin(cb[k], lo[k]);
-        cb[k + 3] = fmax(cb[k + 3], hi[k]);
+        cb[k] = min2(cb[k], lo[k]);
+        cb[k + 3] = max2(cb[k + 3], hi[k]);
     }
-    g->next[t] = g->head[cell];
-    g->head[cell] = t;
+    uint32_t *link = &g->head[cell];
+    if (t < g->base)
+        while (*link != CF_NONE && *link >= g->base)
+            link = &g->next[*link];
+    g->next[t] = *link;
+    *link = t;
     g->cell_of[t] = cell;
     g->stamp[t] = 0;
     g->per_level[level]++;
+    return true;
+}
+
+bool cf_tgrid_add(cf_tgrid *g, const ism_mesh *m, uint32_t t)
+{
+    if (!file_triangle(g, m, t))
+        return false;
     g->ntris = (size_t)t + 1;
+    return true;
+}
+
+static bool box_inside(const double lo[3], const double hi[3], const double box[6])
+{
+    for (int k = 0; k < 3; k++)
+        if (!(lo[k] >= box[k] && hi[k] <= box[k + 3]))
+            return false;
+    return true;
+}
+
+bool cf_tgrid_cover(cf_tgrid *g, const ism_mesh *m, const double lo[3], const double hi[3],
+                    double ahead)
+{
+    if (box_inside(lo, hi, g->cover))
+        return true;
+    double want[6];
+    for (int k = 0; k < 3; k++) {
+        want[k] = fmin(g->cover[k], lo[k] - ahead);
+        want[k + 3] = fmax(g->cover[k + 3], hi[k] + ahead);
+    }
+    g->cover_passes++;
+    for (size_t t = 0; t < g->base; t++) {
+        if (g->cell_of[t] != CF_NONE)
+            continue;
+        double a[3], b[3];
+        tri_box(m, (uint32_t)t, a, b);
+        bool meets = true;
+        for (int k = 0; k < 3 && meets; k++)
+            meets = a[k] <= want[k + 3] && b[k] >= want[k];
+        if (meets && !file_triangle(g, m, (uint32_t)t))
+            return false;
+    }
+    memcpy(g->cover, want, sizeof want);
     return true;
 }
 
@@ -136,6 +212,8 @@ void cf_tgrid_truncate(cf_tgrid *g, size_t ntris)
 {
     while (g->ntris > ntris) {
         uint32_t t = (uint32_t)--g->ntris, cell = g->cell_of[t];
+        if (cell == CF_NONE)
+            continue; /* one of the first base, never filed */
         g->head[cell] = g->next[t];
         g->per_level[g->cells.keys[cell] >> (3 * COORD_BITS)]--;
     }
@@ -228,6 +306,8 @@ static bool gather_level(cf_tgrid *g, int level, const query *q, cf_tris *out)
 bool cf_tgrid_gather(cf_tgrid *g, const ism_mesh *m, const double lo[3], const double hi[3],
                      const uint8_t *dead, cf_tris *out)
 {
+    if (!cf_tgrid_cover(g, m, lo, hi, 0))
+        return false;
     query q = {m, dead, {lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
     for (int level = 0; level <= TOP_LEVEL; level++)
         if (g->per_level[level] && !gather_level(g, level, &q, out))

@@ -17,21 +17,27 @@
  * one last cell for triangles larger than all of them. */
 #define CF_TGRID_LEVELS 26
 
-/* The triangles of the mesh in a loose multi-level grid (conform_grid.c). */
+/* The triangles of the mesh in a loose multi-level grid (conform_grid.c). The mesh's
+ * triangles when the grid was made (the polygoniser's) are filed lazily, only those whose
+ * box meets the region the queries have needed so far (`cover`); every triangle appended
+ * after is filed at once. */
 typedef struct cf_tgrid {
     double lo[3], side;     /* origin, level-0 cell side */
     ism_key_map cells;      /* packed (level, cell coordinates) → cell number */
     uint32_t *head;         /* per cell: the last triangle filed there (CF_NONE: none) */
     double *cell_box;       /* per cell: 6, a box holding every triangle filed there */
     uint32_t *next;         /* per triangle: the one filed before it in its cell */
-    uint32_t *cell_of;      /* per triangle: its cell */
+    uint32_t *cell_of;      /* per triangle: its cell (CF_NONE: not filed yet) */
     uint32_t *stamp;        /* per triangle: the gather that last took it */
     uint32_t epoch;
     uint64_t last_key;      /* the cell the last triangle was filed in (consecutive ones of
                                the polygoniser's mesh mostly share it): no hash probe then */
     uint32_t last_cell;     /* ... its number, CF_NONE before the first */
     size_t cap_head, cap_next, cap_cell_of, cap_stamp, cap_cell_box;
-    size_t ntris;           /* triangles filed: 0 .. ntris-1 */
+    size_t ntris;           /* triangles known: 0 .. ntris-1 */
+    size_t base;            /* triangles 0 .. base-1 are the mesh's at cf_tgrid_init */
+    double cover[6];        /* every one of those whose box meets this box is filed */
+    size_t cover_passes;    /* passes over them that filed more */
     size_t per_level[CF_TGRID_LEVELS];
 } cf_tgrid;
 
@@ -152,11 +158,21 @@ bool cf_compact(cf_ctx *c);
 
 /* ---- conform_grid.c: the triangles by position ---- */
 /* An empty grid for a box with low corner origin and longest side extent, finest cells of
- * finest_cell. False on a degenerate scale. */
-bool cf_tgrid_init(cf_tgrid *g, const double origin[3], double extent, double finest_cell);
+ * finest_cell, over the ntris triangles of the mesh (filed on demand, cf_tgrid_cover).
+ * False on a degenerate scale or when out of memory. */
+bool cf_tgrid_init(cf_tgrid *g, const double origin[3], double extent, double finest_cell,
+                   size_t ntris);
 void cf_tgrid_free(cf_tgrid *g);
-/* Files triangle t of m (t = the number filed so far). False when out of memory. */
+/* Files triangle t of m, appended to the mesh since the grid was made (t = the number known
+ * so far). False when out of memory. */
 bool cf_tgrid_add(cf_tgrid *g, const ism_mesh *m, uint32_t t);
+/* Makes sure every triangle whose box meets the box [lo, hi] is filed: when that box is not
+ * covered yet, one pass over the mesh's first `base` triangles files those meeting it grown
+ * by `ahead` on every side (room for the next widenings of a cut). cf_tgrid_gather covers its
+ * query box itself (ahead 0); a caller that knows the region its next queries need asks for
+ * it first (a query not covered costs a pass of its own). False when out of memory. */
+bool cf_tgrid_cover(cf_tgrid *g, const ism_mesh *m, const double lo[3], const double hi[3],
+                    double ahead);
 /* Forgets the triangles from ntris on (filed last, forgotten first). */
 void cf_tgrid_truncate(cf_tgrid *g, size_t ntris);
 /* Starts a gather: the triangles taken by the cf_tgrid_gather calls that follow are

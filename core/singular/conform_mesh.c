@@ -59,11 +59,9 @@ bool cf_ctx_prepare(cf_ctx *c)
         return false;
     if (c->indexed)
         return true;
-    if (!build_incidence(c) || !cf_tgrid_init(&c->grid, c->origin, c->extent, c->cell))
+    if (!build_incidence(c) ||
+        !cf_tgrid_init(&c->grid, c->origin, c->extent, c->cell, m->ntris))
         return false;
-    for (size_t t = 0; t < m->ntris; t++)
-        if (!cf_tgrid_add(&c->grid, m, (uint32_t)t))
-            return false;
     c->indexed = true;
     return true;
 }
@@ -225,6 +223,8 @@ bool cf_longest_edge_near(cf_ctx *c, const double p[3], double r, double *out)
     /* the live triangles with a corner within r of p: their boxes meet p's cube */
     double lo[3], hi[3];
     cf_query_box(p, p, r, lo, hi);
+    if (!cf_tgrid_cover(&c->grid, c->m, lo, hi, r)) /* and the first widenings' */
+        return false;
     cf_tris cand = {0};
     cf_tgrid_begin(&c->grid);
     if (!cf_tgrid_gather(&c->grid, c->m, lo, hi, c->dead, &cand)) {

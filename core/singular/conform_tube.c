@@ -154,7 +154,12 @@ static bool gather_tube(cf_ctx *c, void *arg, cf_tris *out)
             tb->gen_base = c->gen;
         tb->vd_r = tb->r;
     }
-    return gather_near_curves(c, tb->pl, tb->n, tb->r, out);
+    /* the curves' box grown by r holds every run's query box: one pass over the mesh files
+     * what the runs need, and (ahead by r) what the next widenings need */
+    double lo[3], hi[3];
+    cf_query_box(tb->lo, tb->hi, tb->r, lo, hi);
+    return cf_tgrid_cover(&c->grid, c->m, lo, hi, tb->r) &&
+           gather_near_curves(c, tb->pl, tb->n, tb->r, out);
 }
 
 /* The curve's points spaced at least min_step apart (the ends of an open curve kept). */
