@@ -193,19 +193,28 @@ bool cf_tgrid_cover(cf_tgrid *g, const ism_mesh *m, const double lo[3], const do
         want[k + 3] = fmax(g->cover[k + 3], hi[k] + ahead);
     }
     g->cover_passes++;
-    for (size_t t = 0; t < g->base; t++) {
-        if (g->cell_of[t] != CF_NONE)
-            continue;
-        double a[3], b[3];
-        tri_box(m, (uint32_t)t, a, b);
-        bool meets = true;
-        for (int k = 0; k < 3 && meets; k++)
-            meets = a[k] <= want[k + 3] && b[k] >= want[k];
-        if (meets && !file_triangle(g, m, (uint32_t)t))
-            return false;
+    /* a triangle's box misses the box exactly when its three corners lie beyond one of the
+     * box's six planes: one outcode per vertex (read in order), their AND per triangle */
+    uint8_t *out = malloc(m->nverts + 1);
+    if (!out)
+        return false;
+    for (size_t v = 0; v < m->nverts; v++) {
+        const double *p = m->pos + 3 * v;
+        uint8_t o = 0;
+        for (int k = 0; k < 3; k++)
+            o |= (uint8_t)((p[k] < want[k]) << (2 * k) | (p[k] > want[k + 3]) << (2 * k + 1));
+        out[v] = o;
     }
-    memcpy(g->cover, want, sizeof want);
-    return true;
+    bool ok = true;
+    for (size_t t = 0; ok && t < g->base; t++) {
+        const uint32_t *v = m->tri + 3 * t;
+        if (g->cell_of[t] == CF_NONE && !(out[v[0]] & out[v[1]] & out[v[2]]))
+            ok = file_triangle(g, m, (uint32_t)t);
+    }
+    free(out);
+    if (ok)
+        memcpy(g->cover, want, sizeof want);
+    return ok;
 }
 
 void cf_tgrid_truncate(cf_tgrid *g, size_t ntris)
