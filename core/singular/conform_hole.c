@@ -484,12 +484,6 @@ bool cf_rim_clear(cf_ctx *c, const cf_loops *ls, double clearance)
     return true;
 }
 
-/* The rim must lie where no other sheet comes within this many cells along its normals
- * (two spheres touching stay closer than a cell out to about √(cell × radius)); until then
- * the cut grows by GROW, at most MAX_GROW times. */
-#define CLEAR_CELLS 1.5
-#define GROW 1.4
-#define MAX_GROW 6
 
 bool cf_cut_clean(cf_ctx *c, const cf_cutter *cut, double *radius, double max_radius,
                   cf_loops *ls, uint32_t **removed, size_t *nremoved)
@@ -507,11 +501,11 @@ bool cf_cut_clean(cf_ctx *c, const cf_cutter *cut, double *radius, double max_ra
             *nremoved = 0;
             return false;
         }
-        if (k == MAX_GROW || ls->n == 0 || *radius * GROW > max_radius ||
-            cf_rim_clear(c, ls, CLEAR_CELLS * c->cell))
+        if (k == CF_MAX_GROW || ls->n == 0 || *radius * CF_GROW > max_radius ||
+            cf_rim_clear(c, ls, CF_CLEAR_CELLS * c->cell))
             return true;
         cf_loops_free(ls); /* wider: the removed triangles stay removed */
-        *radius *= GROW;
+        *radius *= CF_GROW;
         c->st->cuts_widened++;
     }
 }

@@ -87,6 +87,13 @@ typedef struct cf_ctx {
  * octree did not reach its finest depth. */
 #define CF_RHO_EDGES 1.25
 
+/* The rim of a cut must lie where no other sheet comes within this many cells along its
+ * normals (two spheres touching stay closer than a cell out to about √(cell × radius));
+ * until then the cut grows by CF_GROW, at most CF_MAX_GROW times (cf_cut_clean). */
+#define CF_CLEAR_CELLS 1.5
+#define CF_GROW 1.4
+#define CF_MAX_GROW 6
+
 /* One run of the pass: the context, the locus and the mesh vertex given to each point. */
 typedef struct cf_run {
     cf_ctx c;
@@ -245,6 +252,12 @@ double cf_polyline_nearest(const cf_polyline *pl, const double q[3], double with
 
 /* Distance from q to the polyline's bounding box: a lower bound of cf_polyline_nearest's. */
 double cf_polyline_box_distance(const cf_polyline *pl, const double q[3]);
+
+/* ---- conform_angle.c: how far the sheets crossing along a curve stay close ---- */
+/* The radius a tube around the npl polylines needs for its rim to be clear of the other
+ * sheet (CF_CLEAR_CELLS along the normals), from the angle the two sheets cross at along
+ * them (the median over sampled points; 0 where none is a transversal crossing). */
+double cf_crossing_radius(cf_ctx *c, const cf_polyline *pl, size_t npl);
 
 /* ---- conform_zip.c: zipping loops to a curve ---- */
 /* Refills the hole loops cut around a group of npl double curves (meeting at shared end

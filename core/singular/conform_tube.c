@@ -313,6 +313,8 @@ bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
         return false;
     }
     tb.r = fmax(r0, CF_RHO_EDGES * longest);
+    /* as wide as the sheets' crossing angle asks (no wider than the cut could grow) */
+    tb.r = fmax(tb.r, fmin(cf_crossing_radius(c, g.pl, g.n), tb.r * pow(CF_GROW, CF_MAX_GROW)));
     if (fmax(longest, r0) != tb.reach) { /* "nothing within reach" answers are stale */
         tb.reach = fmax(longest, r0);
         tb.vd_r = -1;
