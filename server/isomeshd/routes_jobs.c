@@ -2,7 +2,8 @@
  * caller's jobs; every job for an admin token), GET /v1/jobs/{id}, DELETE /v1/jobs/{id}
  * (cancel: its owner or an admin when tokens are on), GET /v1/jobs/{id}/events (server-sent
  * events). With --cluster, a job this daemon does not hold is looked up in Redis (cluster.h):
- * GET /v1/jobs/{id} and its events work through any daemon of the service. */
+ * GET /v1/jobs/{id}, its events and DELETE work through any daemon of the service (a DELETE
+ * there lets go of that job only, as on the daemon holding it). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
