@@ -28,12 +28,23 @@
                                         for this often: a tenth of a second is quick enough
                                         for a client, and one SPOP each time costs Redis little */
 #define DELETES_PER_TICK "64"        /* of them, taken at once at most */
+#define ORPHAN_CHECK_NS 100000000LL  /* a computation wanted by no request here (its origin's
+                                        own, run here) asks this often whether another daemon
+                                        waits for it, and stops when none does */
 
 /* ---- scripts ------------------------------------------------------------------------- */
 
 /* KEYS stream, users, job hash, ulim; ARGV user, max entries, name, key, fmt, req, max
- * running, ttl. The entry's id, or false when the user already has max entries. */
+ * running, ttl. {entry id, its stream}, or false when the user already has max entries. An
+ * entry of the same computation still waiting or running, not canceled (its origin gave it up
+ * while other daemons waited for it: CANCEL_LUA), is joined instead of a new one. */
 static const char ENQUEUE_LUA[] =
+    "local cur = redis.call('hget', KEYS[3], 'id') "
+    "local st = redis.call('hget', KEYS[3], 'state') "
+    "local cs = redis.call('hget', KEYS[3], 'stream') "
+    "if cur and cs and (st == 'queued' or st == 'running') "
+    "   and not redis.call('hget', KEYS[3], 'cancel') "
+    "   and #redis.call('xrange', cs, cur, cur) > 0 then return {cur, cs} end "
     "if redis.call('exists', KEYS[1]) == 0 then "
     "  redis.call('xgroup', 'create', KEYS[1], 'workers', '0', 'MKSTREAM') end "
     "if redis.call('xlen', KEYS[1]) >= tonumber(ARGV[2]) then return false end "
@@ -45,7 +56,7 @@ static const char ENQUEUE_LUA[] =
     "redis.call('hset', KEYS[3], 'state', 'queued', 'progress', '0', 'id', id, "
     "  'stream', KEYS[1]) "
     "redis.call('pexpire', KEYS[3], ARGV[8]) "
-    "return id";
+    "return {id, KEYS[1]}";
 
 /* KEYS users, ulim; ARGV stream prefix, consumer, min idle ms, turn, job prefix, now ms,
  * ttl. {user, stream, id, fields, claimed} or false. Re-claims a dead daemon's entry first
@@ -157,10 +168,31 @@ static const char DROPPED_LUA[] =
     "  redis.call('hset', KEYS[2], 'cancel', '1') end "
     "return 1";
 
-/* KEYS stream, job hash; ARGV id. A waiting entry goes; a running one is flagged. */
+/* The daemons other than ARGV[self] that want KEYS[want] now (ARGV[now] in ms): expired
+ * wishes are dropped first. A Lua fragment defining n. */
+#define WANTED_LUA(want, now, self) \
+    "redis.call('zremrangebyscore', KEYS[" want "], '-inf', ARGV[" now "]) " \
+    "local n = redis.call('zcard', KEYS[" want "]) " \
+    "if redis.call('zscore', KEYS[" want "], ARGV[" self "]) then n = n - 1 end "
+
+/* KEYS want; ARGV now ms, consumer. How many other daemons wait for the computation. */
+static const char WANTED_ELSEWHERE_LUA[] = WANTED_LUA("1", "1", "2") "return n";
+
+/* KEYS want; ARGV consumer, until ms, key ttl ms. This daemon waits for the computation. */
+static const char WANT_LUA[] =
+    "redis.call('zadd', KEYS[1], ARGV[2], ARGV[1]) "
+    "redis.call('pexpire', KEYS[1], ARGV[3]) "
+    "return 1";
+
+/* KEYS stream, job hash, want; ARGV id, now ms, consumer. The origin has nobody waiting any
+ * more: unless another daemon waits for the computation (then it goes on, and the first of
+ * them to take its lock joins the entry: ENQUEUE_LUA), a waiting entry goes, a running one
+ * is flagged. */
 static const char CANCEL_LUA[] =
-    "if redis.call('hget', KEYS[2], 'id') == ARGV[1] then "
-    "  redis.call('hset', KEYS[2], 'cancel', '1') end "
+    WANTED_LUA("3", "2", "3")
+    "local mine = redis.call('hget', KEYS[2], 'id') == ARGV[1] "
+    "if mine and n > 0 then return 0 end "
+    "if mine then redis.call('hset', KEYS[2], 'cancel', '1') end "
     "if not redis.call('xpending', KEYS[1], 'workers', ARGV[1], ARGV[1], 1)[1] then "
     "  redis.call('xdel', KEYS[1], ARGV[1]) end "
     "return 1";
@@ -184,9 +216,10 @@ typedef struct cjob {
     ism_redis_task base;       /* first: the tier hands this back */
     ismd_waiter waiter;
     ismd_cluster *c;
-    char stream[KEY_MAX], job[KEY_MAX];
+    char stream[KEY_MAX], job[KEY_MAX], name[ISM_CACHE_NAME_MAX];
     char id[ISMD_CLUSTER_ID_MAX];
-    long long beat_at_ns;
+    long long beat_at_ns, orphan_check_ns;
+    bool kept_logged;          /* cluster_computation_kept said for it */
     /* set under the scheduler's lock by the flight */
     bool finished;
     unsigned status;
@@ -223,11 +256,32 @@ static void ckey(const ismd_cluster *c, char out[KEY_MAX], const char *kind, con
     snprintf(out, KEY_MAX, "%s%s%s", ism_cache_redis_prefix(c->redis), kind, name);
 }
 
+static const char *reply_str(const redisReply *e)
+{
+    return e && e->type == REDIS_REPLY_STRING ? e->str : NULL;
+}
+
+/* The wall clock in milliseconds, as text, plus ahead_ms. */
+static void wall_ms(char out[24], long long ahead_ms)
+{
+    struct timespec wall;
+    clock_gettime(CLOCK_REALTIME, &wall);
+    snprintf(out, 24, "%lld", (long long)wall.tv_sec * 1000 + wall.tv_nsec / 1000000 + ahead_ms);
+}
+
+/* A computation nobody here waits for goes on for another daemon's requests (who: the
+ * origin deciding on its own, or its executor here). */
+static void log_kept(const char *name, const char *who)
+{
+    ism_log_field f[] = {ISM_LS("name", name), ISM_LS("by", who)};
+    ism_log_fields(ISM_LOG_INFO, "cluster_computation_kept", f, 2);
+}
+
 /* ---- the origin ---------------------------------------------------------------------- */
 
 int ismd_cluster_enqueue(ismd_cluster *c, const char *name, const char *key, const char *fmt,
                          const char *user, const ismd_user_limits *lim, const ism_blob *request,
-                         char id[ISMD_CLUSTER_ID_MAX])
+                         char id[ISMD_CLUSTER_ID_MAX], char stream_out[ISMD_CLUSTER_KEY_MAX])
 {
     char stream[KEY_MAX], job[KEY_MAX], jobs[16], running[16];
     char *req = malloc(request->len + 1);
@@ -250,16 +304,15 @@ int ismd_cluster_enqueue(ismd_cluster *c, const char *name, const char *key, con
     free(req);
     if (rc < 0)
         return -1;
-    int got = r->type == REDIS_REPLY_STRING ? 1 : r->type == REDIS_REPLY_NIL ? 0 : -1;
-    if (got == 1)
-        snprintf(id, ISMD_CLUSTER_ID_MAX, "%s", r->str);
+    int got = r->type == REDIS_REPLY_NIL ? 0 : -1;
+    if (r->type == REDIS_REPLY_ARRAY && r->elements == 2 && reply_str(r->element[0]) &&
+        reply_str(r->element[1])) {
+        snprintf(id, ISMD_CLUSTER_ID_MAX, "%s", r->element[0]->str);
+        snprintf(stream_out, ISMD_CLUSTER_KEY_MAX, "%s", r->element[1]->str);
+        got = 1;
+    }
     freeReplyObject(r);
     return got;
-}
-
-static const char *reply_str(const redisReply *e)
-{
-    return e && e->type == REDIS_REPLY_STRING ? e->str : NULL;
 }
 
 int ismd_cluster_view(ismd_cluster *c, const char *name, const char *id, ismd_cj_view *v)
@@ -297,13 +350,52 @@ int ismd_cluster_view(ismd_cluster *c, const char *name, const char *id, ismd_cj
     return 0;
 }
 
-void ismd_cluster_cancel(ismd_cluster *c, const char *name, const char *user, const char *id)
+void ismd_cluster_cancel(ismd_cluster *c, const char *name, const char *stream, const char *id)
 {
-    char stream[KEY_MAX], job[KEY_MAX];
-    ckey(c, stream, "q:", user);
+    char job[KEY_MAX], want[KEY_MAX], now[24];
     ckey(c, job, "job:", name);
-    const char *args[] = {stream, job, id};
-    run_script(c, "cluster_cancel", CANCEL_LUA, 2, args, 3, NULL);
+    ckey(c, want, "want:", name);
+    wall_ms(now, 0);
+    const char *args[] = {stream, job, want, id, now, c->consumer};
+    redisReply *r = NULL;
+    if (run_script(c, "cluster_cancel", CANCEL_LUA, 3, args, 6, &r) < 0)
+        return;
+    if (r->type == REDIS_REPLY_INTEGER && r->integer == 0)
+        log_kept(name, "origin");
+    freeReplyObject(r);
+}
+
+void ismd_cluster_want(ismd_cluster *c, const char *name, bool want)
+{
+    char key[KEY_MAX], until[24], ttl[24];
+    ckey(c, key, "want:", name);
+    if (!want) {
+        const char *argv[] = {"ZREM", key, c->consumer};
+        size_t lens[] = {4, strlen(key), strlen(c->consumer)};
+        redisReply *r = ism_cache_redis_call(c->redis, "cluster_unwant", 3, argv, lens);
+        if (r)
+            freeReplyObject(r);
+        return;
+    }
+    wall_ms(until, c->ttl_ms);
+    snprintf(ttl, sizeof ttl, "%ld", 2 * c->ttl_ms);
+    const char *args[] = {key, c->consumer, until, ttl};
+    run_script(c, "cluster_want", WANT_LUA, 1, args, 4, NULL);
+}
+
+/* Whether another daemon waits for name now (false when Redis does not say). */
+static bool wanted_elsewhere(ismd_cluster *c, const char *name)
+{
+    char key[KEY_MAX], now[24];
+    ckey(c, key, "want:", name);
+    wall_ms(now, 0);
+    const char *args[] = {key, now, c->consumer};
+    redisReply *r = NULL;
+    if (run_script(c, "cluster_wanted", WANTED_ELSEWHERE_LUA, 1, args, 3, &r) < 0)
+        return false;
+    bool wanted = r->type == REDIS_REPLY_INTEGER && r->integer > 0;
+    freeReplyObject(r);
+    return wanted;
 }
 
 /* ---- a taken entry ------------------------------------------------------------------- */
@@ -377,6 +469,18 @@ static int cj_beat(cjob *j, double progress)
     return v;
 }
 
+/* Nobody here waits for the origin's own flight any more, nor does another daemon: it stops
+ * (its waiter, this task's, is answered 499 and drops the entry). */
+static void cancel_orphan(cjob *j)
+{
+    if (!ismd_shared_enter(j->c->sh))
+        return;
+    ismd_flight *f = j->waiter.flight;
+    if (f && ismd_sched_only_passive(f))
+        ismd_sched_cancel(j->c->sched, f);
+    ismd_shared_leave(j->c->sh);
+}
+
 static long long cj_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
 {
     cjob *j = (cjob *)base;
@@ -390,12 +494,23 @@ static long long cj_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
     }
     bool finished = j->finished;
     double progress = j->progress;
+    bool orphan = !finished && j->waiter.passive && j->waiter.flight &&
+                  ismd_sched_only_passive(j->waiter.flight);
     ismd_shared_leave(sh);
     if (finished) {
         cj_report(j, t);
         return cj_end(j);
     }
     long long now = ism_now_ns();
+    if (orphan && now >= j->orphan_check_ns) {
+        j->orphan_check_ns = now + ORPHAN_CHECK_NS;
+        if (!wanted_elsewhere(j->c, j->name))
+            cancel_orphan(j);
+        else if (!j->kept_logged) {
+            j->kept_logged = true;
+            log_kept(j->name, "executor");
+        }
+    }
     if (now < j->beat_at_ns)
         return now + CJ_TICK_NS;
     long long every = j->c->ttl_ms * 1000000LL / 3;
@@ -411,7 +526,7 @@ static long long cj_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
     if (!j->finished)
         ismd_sched_detach(j->c->sched, &j->waiter);
     ismd_shared_leave(sh);
-    ism_log_field f[] = {ISM_LS("job", strstr(j->job, ":v1:job:") + 8), ISM_LS("entry", j->id)};
+    ism_log_field f[] = {ISM_LS("job", j->name), ISM_LS("entry", j->id)};
     ism_log_fields(ISM_LOG_INFO, "cluster_job_dropped", f, 2);
     return cj_end(j);
 }
@@ -457,6 +572,7 @@ static bool start_entry(ismd_cluster *c, const redisReply *r)
     j->waiter.progress = cj_progress;
     snprintf(j->stream, sizeof j->stream, "%s", stream);
     ckey(c, j->job, "job:", name);
+    snprintf(j->name, sizeof j->name, "%s", name);
     snprintf(j->id, sizeof j->id, "%s", id);
     ismd_shared_prefetch_surface(c->sh, c->redis, request); /* encode, not polygonise */
     bool ok = false;
@@ -490,9 +606,7 @@ static int take_one(ismd_cluster *c)
     char idle_ms[24], turn[24], now_ms[24];
     snprintf(idle_ms, sizeof idle_ms, "%ld", c->ttl_ms);
     snprintf(turn, sizeof turn, "%lu", c->turn++);
-    struct timespec wall;
-    clock_gettime(CLOCK_REALTIME, &wall);
-    snprintf(now_ms, sizeof now_ms, "%lld", (long long)wall.tv_sec * 1000 + wall.tv_nsec / 1000000);
+    wall_ms(now_ms, 0);
     char users[KEY_MAX], ulim[KEY_MAX], streams[KEY_MAX], jobs[KEY_MAX];
     ckey(c, users, "users", "");
     ckey(c, ulim, "ulim", "");

@@ -13,6 +13,8 @@
  *                 daemon holding it, and cancel once deleted, so that every daemon answers
  *                 GET and DELETE /v1/jobs/{id}; expires
  *   P deleted:<daemon>  set: ids of that daemon's jobs deleted through other daemons
+ *   P want:<name> sorted set: daemons whose requests wait for that computation (its lock is
+ *                 another's), each until a lock lifetime after it last said so
  *
  * Canceling: a job is a waiter, and so is a synchronous request; a computation is canceled
  * only when nothing waits for it any more. A DELETE through the daemon holding the job, or a
@@ -22,8 +24,13 @@
  * job as a DELETE there would, so requests sharing the computation keep it. A daemon that
  * died takes nothing: its deleted jobs read canceled, their computations (re-claimed
  * elsewhere) run to their end. The job hash's cancel flag is the computation's: set by its
- * origin when nothing there waits for it any more (or by an executor whose flight was
- * canceled), it tells the executor to stop unless requests on its own daemon share it.
+ * origin when nothing there waits for it any more and no other daemon does (P want:<name>:
+ * requests of other daemons waiting for its lock; with one, the computation goes on and the
+ * first of them to take the lock joins its entry), or by an executor whose flight was
+ * canceled, it tells the executor to stop unless requests on its own daemon share it. An
+ * origin whose flight runs here (the executor's waiter is then passive) leaves that
+ * decision to the executor, which stops it once neither requests here nor other daemons
+ * want it.
  *
  * The origin (shared_cache.c, on the Redis thread) adds a computation it holds the lock of to
  * its user's stream (refused when the user already has its --user-jobs there: cluster-wide),
@@ -50,6 +57,7 @@
 #include "server/isomeshd/sched.h"
 
 #define ISMD_CLUSTER_ID_MAX ISMD_ENTRY_ID_MAX   /* a stream entry id, NUL included */
+#define ISMD_CLUSTER_KEY_MAX 512                /* a key in Redis (a user's stream) */
 
 typedef struct ismd_cluster ismd_cluster;
 typedef struct ismd_shared ismd_shared;
@@ -77,16 +85,23 @@ ismd_cluster *ismd_cluster_start(ismd_shared *sh, ismd_sched *sched, ismd_jobs *
 /* ---- the origin's calls, Redis thread only ------------------------------------------- */
 
 /* Adds flight f's computation (copied: name, key, format, user, limits, request) to its
- * user's stream; id gets the entry's id. 1 added, 0 the user has its limit of entries
- * there, -1 Redis unavailable. */
+ * user's stream, or joins the live entry of the same computation an origin left to the
+ * daemons still waiting for it; id and stream get the entry's. 1 added or joined, 0 the user
+ * has its limit of entries there, -1 Redis unavailable. */
 int ismd_cluster_enqueue(ismd_cluster *c, const char *name, const char *key, const char *fmt,
                          const char *user, const ismd_user_limits *lim, const ism_blob *request,
-                         char id[ISMD_CLUSTER_ID_MAX]);
+                         char id[ISMD_CLUSTER_ID_MAX], char stream[ISMD_CLUSTER_KEY_MAX]);
 /* Reads the job hash of name for entry id. 0, or -1 when Redis is unavailable. */
 int ismd_cluster_view(ismd_cluster *c, const char *name, const char *id, ismd_cj_view *v);
-/* Nobody waits for entry id any more: a waiting entry is deleted, a running one is told to
- * stop (its executor sees the cancel at its next heartbeat). */
-void ismd_cluster_cancel(ismd_cluster *c, const char *name, const char *user, const char *id);
+/* Nobody here waits for entry id (of stream) any more: unless another daemon waits for the
+ * computation (ismd_cluster_want), a waiting entry is deleted and a running one told to stop
+ * (its executor sees the cancel at its next heartbeat). */
+void ismd_cluster_cancel(ismd_cluster *c, const char *name, const char *stream, const char *id);
+/* want: a request here waits for name, whose lock another daemon holds (shared_cache.h step
+ * 1); recorded for one lock lifetime, so call it again every third of that. !want: no more.
+ * A computation somebody wants is not canceled when its origin's requests all leave: the
+ * first waiter to take its lock joins it. */
+void ismd_cluster_want(ismd_cluster *c, const char *name, bool want);
 
 /* ---- jobs seen through any daemon (called from HTTP threads; never block) ---------- */
 

@@ -217,7 +217,7 @@ static void flight_free(ismd_sched *s, ismd_flight *f)
 }
 
 /* Does nobody but the cluster executor of f's own queue entry wait for f? */
-static bool only_passive(const ismd_flight *f)
+bool ismd_sched_only_passive(const ismd_flight *f)
 {
     for (const ismd_waiter *w = f->waiters.next; w != &f->waiters; w = w->next)
         if (!w->passive)
@@ -231,11 +231,7 @@ void ismd_sched_detach(ismd_sched *s, ismd_waiter *w)
     if (!f)
         return;
     waiter_unlink(w);
-    if (f->nwaiters > 0 && only_passive(f)) {
-        ismd_sched_cancel(s, f); /* wanted only by itself: the executor is answered 499 */
-        return;
-    }
-    if (f->nwaiters > 0)
+    if (f->nwaiters > 0) /* passive ones alone: their executor decides (cluster.h) */
         return;
     if (f->qe.queued || f->shared) {
         atomic_fetch_add(&s->metrics->computations[ISMD_OUT_CANCELED], 1);

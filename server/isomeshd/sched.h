@@ -128,11 +128,15 @@ ismd_submit ismd_sched_submit_here(ismd_sched *s, const char *key, const char *f
 
 /* Takes w off its flight (a canceled job, a client that left). A queued flight left without
  * waiters is dropped; a running one is stopped by the pool (its worker is replaced). A flight
- * left with passive waiters only is canceled (they are answered 499). */
+ * left with passive waiters only goes on until their owner cancels it (cluster.h: unless
+ * another daemon waits for it). */
 void ismd_sched_detach(ismd_sched *s, ismd_waiter *w);
+/* Whether every waiter of f is passive (the cluster executor's). */
+bool ismd_sched_only_passive(const ismd_flight *f);
 
-/* Cancels f for every waiter (a cancel through another daemon: cluster.h): answered 499
- * now when it waits, by the pool (which stops its worker) when it runs. */
+/* Cancels f for every waiter (its passive waiters alone left, and no other daemon wants it:
+ * cluster.h): answered 499 now when it waits, by the pool (which stops its worker) when it
+ * runs. */
 void ismd_sched_cancel(ismd_sched *s, ismd_flight *f);
 
 /* Hands r to every waiter and frees the flight (must not be queued). */

@@ -56,6 +56,9 @@ typedef struct task {
     char token[192];
     char user[ISMD_QUEUE_USER_MAX];     /* T_REMOTE: the flight's user and its entry */
     char entry[ISMD_CLUSTER_ID_MAX];
+    char stream[ISMD_CLUSTER_KEY_MAX];  /* the entry's stream (another user's when joined) */
+    bool wanting;                       /* said so in Redis (ismd_cluster_want) */
+    long long want_at_ns;               /* when to say it again */
 } task;
 
 /* ---- the scheduler, entered only while not stopping ---------------------------------- */
@@ -105,8 +108,10 @@ static void free_shared(ismd_shared *sh)
 static long long task_end(task *k, ism_cache_tier *t)
 {
     ismd_shared *sh = k->sh;
+    if (k->wanting)
+        ismd_cluster_want(sh->cluster, k->name, false);
     if (k->state == T_REMOTE)
-        ismd_cluster_cancel(sh->cluster, k->name, k->user, k->entry);
+        ismd_cluster_cancel(sh->cluster, k->name, k->stream, k->entry);
     if ((k->state == T_HOLD || k->state == T_REMOTE) && !k->lock_lost) {
         ism_cache_redis_flush(t);
         ism_cache_redis_unlock(t, k->name, k->token);
@@ -190,8 +195,16 @@ static long long go_local(task *k, ism_cache_tier *t)
 
 /* ---- steps --------------------------------------------------------------------------- */
 
+/* The lock is another daemon's: wait (with --cluster, saying so in Redis, so that its origin
+ * does not cancel the computation when its own requests leave). */
 static long long wait_more(task *k, long long now)
 {
+    ismd_shared *sh = k->sh;
+    if (sh->cluster && now >= k->want_at_ns) {
+        ismd_cluster_want(sh->cluster, k->name, true);
+        k->wanting = true;
+        k->want_at_ns = now + sh->ttl_ms * 1000000LL / 3;
+    }
     if (k->state != T_WAIT) {
         k->state = T_WAIT;
         k->poll_ns = POLL_MIN_NS;
@@ -375,6 +388,11 @@ static long long look(task *k, ism_cache_tier *t, long long now)
     atomic_fetch_add(&sh->counters->locks_acquired, 1);
     if (k->state == T_WAIT)
         atomic_fetch_add(&sh->counters->lock_takeovers, 1);
+    if (k->wanting) { /* the lock is ours now: our own cancel decides */
+        ismd_cluster_want(sh->cluster, k->name, false);
+        k->wanting = false;
+        k->want_at_ns = 0;
+    }
     k->state = T_HOLD;
     atomic_fetch_sub(&sh->counters->asking, 1);
     k->renew_at_ns = now + sh->ttl_ms * 1000000LL / 3;
@@ -435,7 +453,7 @@ static long long to_cluster(task *k, ism_cache_tier *t, long long now)
     if (!req)
         return task_end(k, t);
     int rc = ismd_cluster_enqueue(sh->cluster, k->name, k->key, k->fmt, k->user, &lim, req,
-                                  k->entry);
+                                  k->entry, k->stream);
     ism_blob_unref(req);
     if (rc < 0) { /* Redis failed just now: compute here */
         atomic_fetch_add(&sh->counters->fallbacks, 1);

@@ -19,6 +19,10 @@ with Redis, daemons of one worker each and (for the failure case) nginx:
   a DELETE through another daemon lets go of that job only, as through its own daemon: a
   synchronous request sharing its computation still gets its mesh (before, the cancel
   reached it as a 499), and a computation nothing else waits for stops (its worker too);
+* a synchronous request on a daemon waiting for another daemon's computation (its lock) keeps
+  that computation when the origin's only client leaves: it is not canceled (the origin, or
+  its executor when the origin runs it itself, sees the waiter in Redis), the waiter gets its
+  mesh, computed once, no worker stopped (before, it was canceled and computed again);
 * cancels reach the cluster's own waits: when the daemon that put a computation on the queue
   also runs it, a synchronous client that leaves, or a DELETE of the only job waiting for
   it, stops the worker and drops the queue entry (before, the executor's own interest kept
@@ -350,6 +354,54 @@ class ClusterQueueTest(unittest.TestCase):
                                  for d in s.daemons), restarts)
             self.assertEqual(sum(d.metric("isomesh_computations_started_total")
                                  for d in s.daemons), started)
+        finally:
+            self.assertEqual(s.cleanup(), [], "sanitizer reports")
+
+    def test_a_computation_another_daemon_waits_for_outlives_its_origins_client(self):
+        s = stack.Stack(n=3, daemon_args=HELD, with_nginx=False).start()
+        try:
+            origin = s.daemons[0]
+            s.pause_workers()  # the computation runs until everything below is in place
+            req = work(950)
+            data = json.dumps(req).encode()
+            sock = socket.create_connection(("127.0.0.1", origin.port), timeout=30)
+            sock.sendall(b"POST /v1/mesh HTTP/1.1\r\nHost: x\r\nContent-Type: application/json"
+                         b"\r\nContent-Length: %d\r\n\r\n" % len(data) + data)
+
+            def runner():
+                jobs = s.redis.command("KEYS", "isomesh:v1:job:*")
+                if len(jobs) != 1 or s.redis.command("HGET", jobs[0], "state") != b"running":
+                    return None
+                pid = int(s.redis.command("HGET", jobs[0], "daemon").split(b"/")[1])
+                return jobs[0].decode(), [d for d in s.daemons if d.proc.pid == pid][0]
+            got = stack.wait_until(runner, 30)
+            self.assertTrue(got, "the computation never ran")
+            job, e = got
+            name = job[len("isomesh:v1:job:"):]
+            # a request on a daemon that neither holds the computation's lock nor runs it: it
+            # waits for the lock, and says so in Redis. When the origin runs the computation
+            # itself, its executor decides; else the origin does, and the waiter then takes
+            # the lock and joins the running entry
+            waiter = [d for d in s.daemons if d is not origin and d is not e][0]
+            sync = harness.in_background(lambda: waiter.post("/v1/mesh", req, timeout=300))
+            self.assertTrue(stack.wait_until(
+                lambda: waiter.metric("isomesh_suspended_connections") == 1
+                and s.redis.command("ZCARD", "isomesh:v1:want:" + name) == 1, 30))
+            sock.close()  # the origin's only client leaves
+            self.assertTrue(stack.wait_until(
+                lambda: "cluster_computation_kept" in origin.log(), 15), origin.log()[-2000:])
+            self.assertIsNone(s.redis.command("HGET", job, "cancel"))
+            s.resume_workers()
+            sync[0].join(300)
+            self.assertNotIn("error", sync[1])
+            r = sync[1]["result"]
+            self.assertEqual(r.status, 200, r.body[:300])
+            self.assertEqual(origin.metric("isomesh_clients_left_total"), 1)
+            # computed once, never stopped
+            self.assertEqual(sum(d.metric("isomesh_computations_started_total")
+                                 for d in s.daemons), 1)
+            self.assertEqual(sum(d.metric("isomesh_worker_restarts_total", reason="cancel")
+                                 for d in s.daemons), 0)
         finally:
             self.assertEqual(s.cleanup(), [], "sanitizer reports")
 
