@@ -8,7 +8,7 @@ import { describe, it, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { startDaemon, stopDaemon, startBrowser, stopBrowser } from './lib/harness.mjs';
 import { openViewer, waitForMesh, loads } from './lib/page.mjs';
-import { dragAndTime } from './lib/live.mjs';
+import { dragAndTime, breakdown } from './lib/live.mjs';
 
 // Loose: a loaded 2-core machine may be far slower than the goal; a preview that never comes
 // (the picture changing only with the refined mesh, seconds later) still fails.
@@ -52,7 +52,7 @@ describe('live exploration', { timeout: 300000 }, () => {
       const r = await dragAndTime(page, param, target);
       const fine = await stats(r.finalKey);
       const coarse = await stats(r.previewKey);
-      console.log(`# ${preset}: slider move -> changed picture ${r.ms === null ? 'never' : r.ms.toFixed(0) + ' ms'} (goal ${GOAL_MS} ms); ${r.previews - previewsBefore} previews, the last computed in ${coarse.timings_ms.total.toFixed(0)} ms (${coarse.mesh.triangles} triangles)`);
+      console.log(`# ${preset}: slider move -> changed picture ${r.ms === null ? 'never' : r.ms.toFixed(0) + ' ms'} (goal ${GOAL_MS} ms); ${r.previews - previewsBefore} previews, the last computed in ${coarse.timings_ms.total.toFixed(0)} ms (${coarse.mesh.triangles} triangles)\n#   ${breakdown(r)}`);
       assert.notEqual(r.ms, null, 'the picture changed');
       assert.ok(r.ms < LOOSE_MS, `${r.ms} ms to a changed picture`);
       assert.ok(r.previews > previewsBefore, 'a preview was shown before the refined mesh');

@@ -43,6 +43,7 @@ let previews = 0;            // coarse previews shown (live.js)
 let previewer = null;
 let basePreset = null;       // the preset last chosen (the editor may drift from its text)
 let shownBody = null;        // the request of the mesh on screen
+let refineTurn = 0;          // the newest request change: a refinement waiting for an older one is dropped
 
 const presetByName = (name) => presets.find((p) => p.name === name) || null;
 
@@ -507,6 +508,7 @@ function requestChanged({ now = false, live = false } = {}) {
   }
   const body = currentBody();
   clearTimeout(debounceTimer);
+  const turn = ++refineTurn;
   const hit = loader.cached(body);
   if (hit) {
     stopRunning();
@@ -517,9 +519,16 @@ function requestChanged({ now = false, live = false } = {}) {
     stopRunning();
     document.body.dataset.refinePending = '1';
     previewer.want(body);
-  } else {
-    previewer.stop();
+    // The refined mesh once the slider has rested and the last preview is on screen: its
+    // computation would otherwise take the CPU the preview's frame needs.
+    debounceTimer = setTimeout(async () => {
+      await previewer.idle();
+      await viewer.settled();
+      if (turn === refineTurn) compute(body);
+    }, DEBOUNCE_MS);
+    return;
   }
+  previewer.stop();
   if (now) compute(body);
   else debounceTimer = setTimeout(() => compute(body), DEBOUNCE_MS);
 }
@@ -643,6 +652,7 @@ function show(result, body, seq, preview = false) {
   showCurveFacts(result);
   document.body.dataset.shown = preview ? 'preview' : 'final';
   if (preview) {
+    viewer.drawNow();
     previews++;
     document.body.dataset.previews = String(previews);
     document.body.dataset.previewKey = result.key;
@@ -1140,6 +1150,7 @@ function wire() {
 
   $('cancel').addEventListener('click', () => {
     clearTimeout(debounceTimer);
+    refineTurn++;
     previewer.stop();
     stopRunning();
     message('Canceled.');
@@ -1211,6 +1222,7 @@ async function start() {
     cached: (body) => loader.cached(body),
     show: (result, body, seq) => show(result, body, seq, true),
     failed: () => {},   // the refined request reports errors
+    settled: () => viewer.settled(),
   });
   $('view').addEventListener('click', pickAt);
   viewer.onViewChange = updateUrl;

@@ -22,6 +22,7 @@
 // between tasks, so input events and animation frames run while the GPU works; batches grow
 // or shrink to take about CHUNK_MS each.
 import * as THREE from 'three';
+import { gpuDone } from './gpu.js';
 
 // Directions over the whole sphere (each side's hemisphere gets half): enough that a corner
 // or a neck is sampled by several, few enough to stay one short pause in software GL.
@@ -41,8 +42,6 @@ const SMOOTHING = 2;
 const CHUNK_MS = 40;
 // Directions per batch at most (a fast GPU does all 64 in a few batches).
 const MAX_CHUNK = 16;
-// How often a fence is polled while the GPU works (ms; a timer, so other tasks run between).
-const POLL_MS = 4;
 
 // The depth pass leaves out what the clipping plane removes: keep.xyz . p + keep.w < 0 (the
 // mesh is drawn untransformed, so its positions are world positions).
@@ -214,25 +213,6 @@ function withTargets(renderer, draw) {
     renderer.localClippingEnabled = saved.clipping;
     renderer.autoClear = saved.autoClear;
   }
-}
-
-// Resolves once the GPU has done every command issued so far: a fence, polled from timer
-// tasks (a WebGL fence's status changes only between tasks), so the page runs meanwhile.
-function gpuDone(gl) {
-  const sync = gl.fenceSync(gl.SYNC_GPU_COMMANDS_COMPLETE, 0);
-  gl.flush();
-  if (!sync) return Promise.resolve();   // context lost: nothing to wait for
-  return new Promise((resolve) => {
-    const poll = () => {
-      if (gl.clientWaitSync(sync, 0, 0) === gl.TIMEOUT_EXPIRED) {
-        setTimeout(poll, POLL_MS);
-        return;
-      }
-      gl.deleteSync(sync);
-      resolve();
-    };
-    setTimeout(poll, 0);
-  });
 }
 
 // passes rounds of: each vertex's pair of values becomes the mean over itself and the vertices

@@ -1,6 +1,7 @@
 // timeline.js — where the time between a request and its picture goes, per mesh shown: marks
 // (performance.now() in ms) taken by loader.js (asked, job posted, job done, bytes fetched,
-// decoded), main.js (handed to the viewer) and viewer.js (first frame drawn with it). The last
+// decoded), main.js (handed to the viewer) and viewer.js (first frame drawn with it, and
+// done by the GPU). The last
 // KEPT entries are readable as window.isomeshTimeline (the browser tests and make bench print
 // them: queueing, server, transfer, decode, draw).
 
@@ -27,10 +28,18 @@ export function shown(entry) {
   if (entries.length > KEPT) entries.shift();
 }
 
-// The first frame after the newest shown entry was drawn.
+// The first frame after the newest shown entry was drawn (issued to the GPU); returns that
+// entry (or null) for gpuDone.
 export function drawn() {
   const e = entries[entries.length - 1];
-  if (e) mark(e, 'drawn');
+  if (!e || e.marks.drawn !== undefined) return null;
+  mark(e, 'drawn');
+  return e;
+}
+
+// The GPU has done the frame that first drew entry (from drawn()).
+export function gpuDone(entry) {
+  mark(entry, 'gpu');
 }
 
 export function list() {

@@ -17,6 +17,7 @@ import { sectionSegments, sectionLines } from './section.js';
 import { buildCap } from './cap.js';
 import { bakeOcclusion } from './occlusion.js';
 import * as timeline from './timeline.js';
+import { gpuDone } from './gpu.js';
 
 const SURFACE_RGB = 0xb9c6d8;
 // Two-sided colouring: triangles face along grad f (the outside, f > 0), so back faces show
@@ -34,12 +35,23 @@ const MAX_EXPORT_PX = 4096;
 const BAKE_SETTLE_MS = 200;
 // Occlusions kept per mesh, one per cut (the whole mesh and the last few cuts).
 const OCCLUSION_CUTS_KEPT = 3;
+// A live preview is drawn at PREVIEW_SCALE of the pixel ratio when the last full-resolution
+// frame kept the GPU busy longer than SLOW_FRAME_MS (software GL: ~100-250 ms a frame at
+// 900x750 px, 2-3x less at half the side), so that the picture follows the slider; the
+// refined mesh is drawn at full resolution again. A GPU draws a frame in a few ms: its
+// previews stay sharp.
+const SLOW_FRAME_MS = 50;
+const PREVIEW_SCALE = 0.5;
 
 export class Viewer {
   constructor(canvas) {
     this.canvas = canvas;
     this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
-    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+    this.baseRatio = Math.min(window.devicePixelRatio || 1, 2);
+    this.renderer.setPixelRatio(this.baseRatio);
+    this.frameMs = 0;          // GPU time of the last full-resolution frame (measureFrame)
+    this.measuring = false;
+    this.settledWaiters = [];
     this.renderer.localClippingEnabled = true;
     this.renderer.setClearColor(0x000000, 0);
 
@@ -134,20 +146,78 @@ export class Viewer {
 
   // Asks for a frame; any number of changes within one animation frame draw once.
   render() {
+    this.dirty = true;
     if (this.framePending) return;
     this.framePending = true;
     requestAnimationFrame(() => {
       this.framePending = false;
-      this.draw();
+      if (this.dirty) this.draw();
+      else this.releaseSettled();
     });
   }
 
+  // Draws now rather than at the next animation frame (a live preview: when the GPU is slow the
+  // next frame may be long in coming); a frame already asked for then draws only if something
+  // changes meanwhile.
+  drawNow() {
+    this.draw();
+  }
+
   draw() {
+    this.dirty = false;
+    this.fitResolution();
     this.updateClipRange();
     this.applyOcclusion();
     this.renderer.render(this.scene, this.camera);
     this.frames++;
-    timeline.drawn();
+    this.measureFrame(timeline.drawn());
+  }
+
+  // The drawing buffer's pixel ratio for this frame: reduced for a live preview when frames
+  // are slow (SLOW_FRAME_MS). Changed here, right before drawing, so no script or compositor
+  // ever sees the cleared buffer a resize leaves.
+  fitResolution() {
+    const ratio = this.preview && this.frameMs > SLOW_FRAME_MS ? this.baseRatio * PREVIEW_SCALE : this.baseRatio;
+    if (ratio === this.renderer.getPixelRatio()) return;
+    this.renderer.setPixelRatio(ratio);
+    this.renderer.setSize(Math.max(1, this.canvas.clientWidth), Math.max(1, this.canvas.clientHeight), false);
+  }
+
+  // Times the frame just issued until the GPU has done it (a fence: the page runs meanwhile);
+  // one fence at a time: a frame issued meanwhile gets the next one. Full-resolution frames
+  // set frameMs. entry: the timeline entry this frame first drew, or null.
+  measureFrame(entry) {
+    if (entry) gpuDone(this.renderer.getContext()).then(() => timeline.gpuDone(entry));
+    if (this.measuring) {
+      this.unmeasured = true;
+      return;
+    }
+    this.measuring = true;
+    const full = this.renderer.getPixelRatio() === this.baseRatio;
+    const t0 = performance.now();
+    gpuDone(this.renderer.getContext()).then(() => {
+      this.measuring = false;
+      if (full) this.frameMs = performance.now() - t0;
+      if (this.unmeasured) {
+        this.unmeasured = false;
+        this.measureFrame(null);
+        return;
+      }
+      this.releaseSettled();
+    });
+  }
+
+  // Resolves once the frames asked for so far are drawn and done by the GPU.
+  settled() {
+    if (!this.measuring && !this.dirty) return Promise.resolve();
+    return new Promise((resolve) => this.settledWaiters.push(resolve));
+  }
+
+  releaseSettled() {
+    if (this.measuring || this.dirty) return;   // a frame is still to come or on the GPU
+    const waiters = this.settledWaiters;
+    this.settledWaiters = [];
+    for (const w of waiters) w();
   }
 
   // The render mode: ambient occlusion over the shading (true) or the plain shading.
@@ -525,7 +595,6 @@ export class Viewer {
   async exportPng(width, height) {
     const w = Math.max(16, Math.min(MAX_EXPORT_PX, Math.round(width)));
     const h = Math.max(16, Math.min(MAX_EXPORT_PX, Math.round(height)));
-    const ratio = this.renderer.getPixelRatio();
     this.renderer.setPixelRatio(1);
     this.renderer.setSize(w, h, false);
     this.camera.aspect = w / h;
@@ -533,7 +602,7 @@ export class Viewer {
     this.setLineResolution(w, h);
     this.draw();
     const blob = await new Promise((resolve) => this.canvas.toBlob(resolve, 'image/png'));
-    this.renderer.setPixelRatio(ratio);
+    this.renderer.setPixelRatio(this.baseRatio);
     this.resize();
     return blob;
   }

@@ -79,7 +79,8 @@ export async function dragAndTime(page, name, target, timeoutMs = 20000) {
 
 // Where the time to the first picture after a drag went (web/js/timeline.js marks of the mesh
 // whose frame was the last drawn before the picture was seen to change), as text: "wait 0 + post 12 + job 80 + fetch 9 + decode 15 +
-// hand 30 + draw 20 + seen 10", each in ms ('seen': the frame drawn to the pixel change).
+// hand 30 + draw 20 + screen 90", each in ms ('screen': from the frame issued to the GPU to the
+// pixel change seen by the page: the GPU's work and the compositor's).
 export function breakdown(r) {
   const seenAt = r.ms === null ? Infinity : r.t0 + r.ms;
   const drawnBefore = r.timeline.filter((x) => x.marks.drawn !== undefined && x.marks.drawn <= seenAt);
@@ -88,7 +89,7 @@ export function breakdown(r) {
   const m = e.marks;
   const steps = [['wait', r.t0, m.asked], ['post', m.asked, m.posted], ['job', m.posted, m.done],
     ['fetch', m.done, m.fetched], ['decode', m.fetched, m.decoded], ['hand', m.decoded ?? m.asked, m.shown],
-    ['draw', m.shown, m.drawn], ['seen', m.drawn, r.ms === null ? undefined : r.t0 + r.ms]];
+    ['draw', m.shown, m.drawn], ['screen', m.drawn, r.ms === null ? undefined : r.t0 + r.ms]];
   const nth = r.timeline.filter((x) => x.marks.shown !== undefined).indexOf(e) + 1;
   return `${e.preview ? 'preview' : 'refined'} #${nth}: ` + steps.filter(([, a, b]) => a !== undefined && b !== undefined)
     .map(([name, a, b]) => `${name} ${Math.round(b - a)}`).join(' + ');
