@@ -177,6 +177,7 @@ export class Viewer {
   // are slow (SLOW_FRAME_MS). Changed here, right before drawing, so no script or compositor
   // ever sees the cleared buffer a resize leaves.
   fitResolution() {
+    if (this.exporting) return;           // exportPng has set its own size
     const ratio = this.preview && this.frameMs > SLOW_FRAME_MS ? this.baseRatio * PREVIEW_SCALE : this.baseRatio;
     if (ratio === this.renderer.getPixelRatio()) return;
     this.renderer.setPixelRatio(ratio);
@@ -600,7 +601,12 @@ export class Viewer {
     this.camera.aspect = w / h;
     this.camera.updateProjectionMatrix();
     this.setLineResolution(w, h);
-    this.draw();
+    this.exporting = true;
+    try {
+      this.draw();
+    } finally {
+      this.exporting = false;
+    }
     const blob = await new Promise((resolve) => this.canvas.toBlob(resolve, 'image/png'));
     this.renderer.setPixelRatio(this.baseRatio);
     this.resize();
