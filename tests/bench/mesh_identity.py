@@ -1,0 +1,113 @@
+#!/usr/bin/env python3
+"""mesh_identity.py — the check that a speed change changes no mesh: the PLY md5 of every preset
+of the gallery (its own box and depths, one thread), of a set of presets in boxes shifted off the
+octree lattice (by 1e-3, and by 0.37 / -0.23 / 0.41 of a finest cell) on two threads, and of
+max_error runs (several rounds, lattice and shifted boxes, 1 and 2 threads), through the CLI.
+`--save FILE` records them; `--check FILE` runs again and names every run whose mesh differs.
+Not part of `make test` (a few minutes on two cores); run it before and after a change:
+
+  mesh_identity.py --build build/release --save /tmp/before.json
+  (change, rebuild)
+  mesh_identity.py --build build/release --check /tmp/before.json
+
+The PLY holds positions, normals and faces as the polygoniser's pipeline made them (locus,
+conformance included), so equal md5s mean byte-identical meshes."""
+import argparse
+import hashlib
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from concurrent.futures import ThreadPoolExecutor
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from sweep_singular import boxes, presets  # noqa: E402  (the gallery and the shifted boxes)
+
+# Presets also run in the shifted boxes, on two threads: smooth, crease, singular, lattice-plane.
+SHIFTED = ("sphere", "torus", "gyroid-ball", "klein-bottle", "steiner-roman", "kummer-16-nodes",
+           "cube-minus-ball", "helicoid", "double-torus", "whitney-umbrella")
+# max_error runs (preset, E, depth.max): one to five refinement rounds each.
+ERROR_RUNS = (("sphere", 1e-3, 10), ("torus", 3e-3, 10), ("torus", 6e-4, 10),
+              ("gyroid-ball", 1e-2, 10), ("klein-bottle", 1e-2, 9), ("double-torus", 3e-3, 9))
+
+
+def md5_of_run(exe, name, box, depth, extra, timeout):
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "m.ply")
+        cmd = [exe, "--surface", name, "-b", ",".join(repr(v) for v in box), "-d", depth,
+               "-o", out, *extra]
+        try:
+            r = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, cwd=tmp)
+        except subprocess.TimeoutExpired:
+            return "timeout"
+        if r.returncode != 0:
+            return "error: " + r.stderr.strip()[:200]
+        with open(out, "rb") as f:
+            return hashlib.md5(f.read()).hexdigest()
+
+
+def runs(ps):
+    """(key, name, box, depth, extra) of every run."""
+    out = []
+    by_name = {p["name"]: p for p in ps}
+    for p in ps:
+        d = f"{p['depth']['min']}:{p['depth']['max']}"
+        out.append((f"{p['name']} own d{d} t1", p["name"], p["box"], d, ["--threads", "1"]))
+    for name in SHIFTED:
+        p = by_name[name]
+        d = f"{p['depth']['min']}:{p['depth']['max']}"
+        for label, box in boxes(p["box"], p["depth"]["max"])[1:]:
+            out.append((f"{name} {label} d{d} t2", name, box, d, ["--threads", "2"]))
+    for name, e, dmax in ERROR_RUNS:
+        p = by_name[name]
+        d = f"{p['depth']['min']}:{dmax}"
+        for label, box in boxes(p["box"], dmax):
+            for t in ("1", "2") if label != "1e-3" else ("2",):
+                out.append((f"{name} {label} E{e:g} d{d} t{t}", name, box, d,
+                            ["--max-error", repr(e), "--threads", t]))
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--build", default="build/release")
+    ap.add_argument("--save", default="")
+    ap.add_argument("--check", default="")
+    ap.add_argument("--only", default="", help="run only keys containing this text")
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--timeout", type=float, default=900)
+    args = ap.parse_args()
+    if bool(args.save) == bool(args.check):
+        ap.error("give one of --save FILE, --check FILE")
+    exe = os.path.abspath(os.path.join(args.build, "isomesh"))
+    todo = [r for r in runs(presets(args.build)) if args.only in r[0]]
+    with ThreadPoolExecutor(args.jobs) as pool:
+        sums = list(pool.map(lambda r: md5_of_run(exe, r[1], r[2], r[3], r[4], args.timeout),
+                             todo))
+    got = {r[0]: s for r, s in zip(todo, sums)}
+    if args.save:
+        with open(args.save, "w") as f:
+            json.dump(got, f, indent=1, sort_keys=True)
+        bad = [k for k, s in got.items() if len(s) != 32]
+        for k in bad:
+            print(f"FAILED {k}: {got[k]}")
+        print(f"{len(got)} runs saved to {args.save}")
+        return 1 if bad else 0
+    with open(args.check) as f:
+        want = json.load(f)
+    same = differ = 0
+    for k, s in got.items():
+        if k not in want:
+            print(f"NEW     {k}")
+        elif want[k] == s and len(s) == 32:
+            same += 1
+        else:
+            differ += 1
+            print(f"DIFFERS {k}: {want[k]} -> {s}")
+    print(f"{same} identical, {differ} differ")
+    return 1 if differ else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
