@@ -1,165 +1,220 @@
-/* breaks.c — the break-point registry: every non-empty leaf's corners keyed by lattice line,
- * radix-sorted and deduplicated into one array; queries are binary searches. */
+/* breaks.c — the break-point registry: every non-empty leaf's corners in one hash table
+ * keyed by lattice point, each holding its successor on the three lattice lines through it
+ * (found by radix-sorting the points line by line), so a query walks a line from its lower
+ * end one probe per break point. */
 #include "core/octree/breaks.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-/* A key is axis | u | v | position, each coordinate in b->cbits bits (depth + 1: lattice
- * coordinates run from 0 to 2^depth), so that shallow trees sort in fewer radix passes. */
-static uint64_t line_key(const ism_breaks *b, int axis, const int32_t p[3])
-{
-    int u = (axis + 1) % 3, v = (axis + 2) % 3, cb = b->cbits;
-    return ((((uint64_t)axis << (2 * cb)) | ((uint64_t)p[u] << cb) | (uint64_t)p[v]) << cb);
-}
+/* Radix digits of 11 bits: one pass's 2^11 counts stay in the first-level cache. */
+#define RADIX_BITS 11
+#define RADIX (1u << RADIX_BITS)
+/* Table slots per registered point, at least: probes stay short at a load of 1/2. */
+#define SLOTS_PER_POINT 2
+/* Slots of the point this many places ahead are asked for while the current one is filled:
+ * the table is larger than the caches, and independent misses overlap. */
+#define LOOKAHEAD 16
 
-static uint64_t line_mask(const ism_breaks *b) { return ~(((uint64_t)1 << b->cbits) - 1); }
-
-/* LSD radix sort of keys of `bits` bits, 16 bits per pass. */
-static bool radix_sort(uint64_t *a, size_t n, int bits)
+/* LSD radix sort of n keys of `bits` bits, carrying vals along when not NULL (tk, tv: room
+ * for n more of each); the counts of every pass come from one read, and a pass whose digit
+ * is the same in every key is skipped. */
+static bool radix_sort(uint64_t *a, uint32_t *vals, uint64_t *tk, uint32_t *tv, size_t n,
+                       int bits)
 {
-    uint64_t *tmp = malloc((n ? n : 1) * sizeof *tmp);
-    size_t *count = malloc(65536 * sizeof *count);
-    if (!tmp || !count) {
-        free(tmp);
-        free(count);
+    int passes = (bits + RADIX_BITS - 1) / RADIX_BITS;
+    size_t *count = calloc((size_t)passes * RADIX, sizeof *count);
+    if (!count)
         return false;
-    }
-    uint64_t *src = a, *dst = tmp;
-    for (int shift = 0; shift < bits; shift += 16) {
-        memset(count, 0, 65536 * sizeof *count);
-        for (size_t i = 0; i < n; i++)
-            count[(src[i] >> shift) & 0xffff]++;
+    for (size_t i = 0; i < n; i++)
+        for (int p = 0; p < passes; p++)
+            count[p * RADIX + ((a[i] >> (p * RADIX_BITS)) & (RADIX - 1))]++;
+    uint64_t *src = a, *dst = tk;
+    uint32_t *vsrc = vals, *vdst = tv;
+    for (int p = 0; p < passes && n; p++) {
+        size_t *c = count + (size_t)p * RADIX;
+        int shift = p * RADIX_BITS;
+        if (c[(src[0] >> shift) & (RADIX - 1)] == n)
+            continue;
         size_t sum = 0;
-        for (size_t d = 0; d < 65536; d++) {
-            size_t c = count[d];
-            count[d] = sum;
-            sum += c;
+        for (size_t d = 0; d < RADIX; d++) {
+            size_t k = c[d];
+            c[d] = sum;
+            sum += k;
         }
-        for (size_t i = 0; i < n; i++)
-            dst[count[(src[i] >> shift) & 0xffff]++] = src[i];
+        for (size_t i = 0; i < n; i++) {
+            size_t at = c[(src[i] >> shift) & (RADIX - 1)]++;
+            dst[at] = src[i];
+            if (vals)
+                vdst[at] = vsrc[i];
+        }
         uint64_t *s = src;
         src = dst;
         dst = s;
+        uint32_t *vs = vsrc;
+        vsrc = vdst;
+        vdst = vs;
     }
-    if (src != a) /* an odd number of passes */
+    if (src != a) {
         memcpy(a, src, n * sizeof *a);
-    free(tmp);
+        if (vals)
+            memcpy(vals, vsrc, n * sizeof *vals);
+    }
     free(count);
     return true;
 }
 
-static size_t line_slot(const ism_breaks *b, uint64_t line)
+/* Sort keys of lattice points, line by line along `axis`: the two other coordinates, then
+ * the coordinate along the axis, each shifted right by `shift` (every corner is a multiple
+ * of the finest leaf's size) into cb bits. */
+typedef struct packing {
+    int shift, cb;
+} packing;
+
+static uint64_t pack(const packing *k, int axis, const int32_t p[3])
 {
-    uint64_t h = (line >> b->cbits) * 0x9e3779b97f4a7c15ull;
-    return (size_t)(h ^ (h >> 29)) & b->line_mask;
+    int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    return ((uint64_t)(p[u] >> k->shift) << 2 * k->cb) |
+           ((uint64_t)(p[v] >> k->shift) << k->cb) | (uint64_t)(p[axis] >> k->shift);
 }
 
-/* Indexes the first key of every line, so a query costs one probe instead of a binary
- * search over every break point of the tree. */
-static bool index_lines(ism_breaks *b)
+static void unpack(const packing *k, int axis, uint64_t key, int32_t p[3])
 {
-    uint64_t mask = line_mask(b);
-    size_t lines = 0;
-    for (size_t i = 0; i < b->n; i++)
-        lines += i == 0 || (b->keys[i] & mask) != (b->keys[i - 1] & mask);
-    size_t cap = 16;
-    while (cap < 2 * lines)
-        cap *= 2;
-    b->line_first = calloc(cap, sizeof *b->line_first);
-    if (!b->line_first || b->n >= UINT32_MAX)
+    int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    uint64_t m = ((uint64_t)1 << k->cb) - 1;
+    p[u] = (int32_t)(key >> 2 * k->cb) << k->shift;
+    p[v] = (int32_t)((key >> k->cb) & m) << k->shift;
+    p[axis] = (int32_t)(key & m) << k->shift;
+}
+
+static uint64_t line_of(const packing *k, uint64_t key) { return key >> k->cb; }
+
+/* A new point's slot (the point is not in the table yet). */
+static ism_break_point *insert(ism_breaks *b, const int32_t p[3])
+{
+    uint64_t key = ism_lattice_key(p);
+    size_t s = ism_cache_mix(key) & b->mask;
+    while (b->slots[s].key)
+        s = (s + 1) & b->mask;
+    b->slots[s].key = key;
+    return &b->slots[s];
+}
+
+/* Scratch of the build: the distinct points keyed along z (sorted), their successors along
+ * x and y by index, and room for a radix sort with payload. */
+typedef struct scratch {
+    uint64_t *k, *tk, *ak;
+    uint32_t *idx, *tv;
+    int32_t *next[2];
+} scratch;
+
+/* The successors along `axis` (0 or 1) of the n points of w->k: re-keyed line by line along
+ * it with their index, sorted, and read off consecutive pairs on one line. */
+static bool link_axis(const packing *pk, scratch *w, size_t n, int axis)
+{
+    for (size_t i = 0; i < n; i++) {
+        int32_t p[3];
+        unpack(pk, 2, w->k[i], p);
+        w->ak[i] = pack(pk, axis, p);
+        w->idx[i] = (uint32_t)i;
+        w->next[axis][i] = ISM_BREAK_NONE;
+    }
+    if (!radix_sort(w->ak, w->idx, w->tk, w->tv, n, 3 * pk->cb))
         return false;
-    b->line_mask = cap - 1;
-    for (size_t i = 0; i < b->n; i++) {
-        if (i > 0 && (b->keys[i] & mask) == (b->keys[i - 1] & mask))
-            continue;
-        size_t slot = line_slot(b, b->keys[i] & mask);
-        while (b->line_first[slot])
-            slot = (slot + 1) & b->line_mask;
-        b->line_first[slot] = (uint32_t)(i + 1);
+    for (size_t i = 0; i + 1 < n; i++)
+        if (line_of(pk, w->ak[i]) == line_of(pk, w->ak[i + 1]))
+            w->next[axis][w->idx[i]] = (int32_t)(w->ak[i + 1] & (((uint64_t)1 << pk->cb) - 1))
+                                       << pk->shift;
+    return true;
+}
+
+/* The table of the n distinct points of w->k (sorted along z, so each one's successor along
+ * z is the next one on its line), with their successors along x and y from link_axis. */
+static bool fill_table(ism_breaks *b, const packing *pk, const scratch *w, size_t n)
+{
+    size_t cap = 16;
+    while (cap < SLOTS_PER_POINT * n)
+        cap *= 2;
+    if (!(b->slots = calloc(cap, sizeof *b->slots)))
+        return false;
+    b->mask = cap - 1;
+    b->n = n;
+    for (size_t i = 0; i < n; i++) {
+        int32_t p[3];
+        if (i + LOOKAHEAD < n) {
+            unpack(pk, 2, w->k[i + LOOKAHEAD], p);
+            ism_breaks_prefetch(b, p);
+        }
+        unpack(pk, 2, w->k[i], p);
+        ism_break_point *e = insert(b, p);
+        e->next[0] = w->next[0][i];
+        e->next[1] = w->next[1][i];
+        e->next[2] = ISM_BREAK_NONE;
+        if (i + 1 < n && line_of(pk, w->k[i]) == line_of(pk, w->k[i + 1]))
+            e->next[2] = (int32_t)(w->k[i + 1] & (((uint64_t)1 << pk->cb) - 1)) << pk->shift;
     }
     return true;
 }
 
-/* Index of the first key on `line`, or b->n when the line has no break points. */
-static size_t first_on_line(const ism_breaks *b, uint64_t line)
+static void scratch_free(scratch *w)
 {
-    for (size_t slot = line_slot(b, line);; slot = (slot + 1) & b->line_mask) {
-        uint32_t f = b->line_first[slot];
-        if (!f)
-            return b->n;
-        if ((b->keys[f - 1] & line_mask(b)) == line)
-            return f - 1;
-    }
-}
-
-/* Index of the first key above `key` at or after `from` (keys are sorted): a galloping
- * search, so a query near the start of a long line costs a few probes, not a scan of it. */
-static size_t first_above(const ism_breaks *b, size_t from, uint64_t key)
-{
-    size_t lo = from, step = 1;
-    while (lo < b->n && b->keys[lo] <= key) {
-        size_t next = lo + step;
-        if (next >= b->n || b->keys[next] > key) {
-            size_t hi = next < b->n ? next : b->n; /* the answer is in (lo, hi] */
-            while (hi - lo > 1) {
-                size_t mid = lo + (hi - lo) / 2;
-                if (b->keys[mid] <= key)
-                    lo = mid;
-                else
-                    hi = mid;
-            }
-            return hi;
-        }
-        lo = next;
-        step *= 2;
-    }
-    return lo;
+    free(w->k);
+    free(w->tk);
+    free(w->ak);
+    free(w->idx);
+    free(w->tv);
+    free(w->next[0]);
+    free(w->next[1]);
 }
 
 bool ism_breaks_build(ism_breaks *b, const ism_octree *t)
 {
-    b->cbits = t->grid.depth + 1;
+    memset(b, 0, sizeof *b);
+    const ism_grid *g = &t->grid;
     size_t leaves = 0;
+    int finest = 0;
     for (size_t i = 0; i < t->n; i++)
-        leaves += t->nodes[i].state == ISM_NODE_LEAF;
-    uint64_t *k = malloc((leaves ? leaves : 1) * 24 * sizeof *k);
-    if (!k)
-        return false;
-    size_t n = 0;
-    for (size_t i = 0; i < t->n; i++) {
+        if (t->nodes[i].state == ISM_NODE_LEAF) {
+            leaves++;
+            if (t->nodes[i].level > finest)
+                finest = t->nodes[i].level;
+        }
+    packing pk = {g->depth - finest, finest + 1}; /* coordinates 0 .. 2^finest after shift */
+    size_t n = 8 * leaves, room = n ? n : 1;
+    scratch w = {malloc(room * sizeof *w.k), malloc(room * sizeof *w.tk), NULL, NULL, NULL,
+                 {NULL, NULL}};
+    bool ok = w.k && w.tk;
+    for (size_t i = 0, m = 0; ok && i < t->n; i++) {
         const ism_node *nd = &t->nodes[i];
         if (nd->state != ISM_NODE_LEAF)
             continue;
-        int32_t s = ism_grid_cell_steps(&t->grid, nd->level);
+        int32_t s = ism_grid_cell_steps(g, nd->level);
         for (int c = 0; c < 8; c++) {
             int32_t p[3];
             for (int a = 0; a < 3; a++)
                 p[a] = nd->org[a] + ((c >> a) & 1) * s;
-            for (int axis = 0; axis < 3; axis++)
-                k[n++] = line_key(b, axis, p) | (uint64_t)p[axis];
+            w.k[m++] = pack(&pk, 2, p);
         }
     }
-    if (!radix_sort(k, n, 2 + 3 * b->cbits)) {
-        free(k);
-        return false;
-    }
+    ok = ok && radix_sort(w.k, NULL, w.tk, NULL, n, 3 * pk.cb);
     size_t m = 0;
-    for (size_t i = 0; i < n; i++)
-        if (m == 0 || k[m - 1] != k[i])
-            k[m++] = k[i];
-    b->keys = k;
-    b->n = m;
-    return index_lines(b);
+    for (size_t i = 0; ok && i < n; i++)
+        if (m == 0 || w.k[m - 1] != w.k[i])
+            w.k[m++] = w.k[i];
+    room = m ? m : 1;
+    ok = ok && m < UINT32_MAX && (w.ak = malloc(room * sizeof *w.ak)) &&
+         (w.idx = malloc(room * sizeof *w.idx)) && (w.tv = malloc(room * sizeof *w.tv)) &&
+         (w.next[0] = malloc(room * sizeof *w.next[0])) &&
+         (w.next[1] = malloc(room * sizeof *w.next[1]));
+    ok = ok && link_axis(&pk, &w, m, 0) && link_axis(&pk, &w, m, 1) && fill_table(b, &pk, &w, m);
+    scratch_free(&w);
+    return ok;
 }
 
 void ism_breaks_free(ism_breaks *b)
 {
-    free(b->keys);
-    free(b->line_first);
-    b->keys = NULL;
-    b->line_first = NULL;
-    b->n = 0;
+    free(b->slots);
+    memset(b, 0, sizeof *b);
 }
 
 static bool push(ism_coords *c, int32_t v)
@@ -180,20 +235,19 @@ bool ism_breaks_on(const ism_breaks *b, int axis, const int32_t p[3], int32_t lo
                    ism_coords *out)
 {
     out->n = 0;
-    uint64_t line = line_key(b, axis, p), mask = line_mask(b);
+    int32_t q[3] = {p[0], p[1], p[2]};
     if (!push(out, lo))
         return false;
-    for (size_t i = first_above(b, first_on_line(b, line), line | (uint64_t)lo); i < b->n; i++) {
-        uint64_t k = b->keys[i];
-        if ((k & mask) != line)
-            break;
-        int32_t c = (int32_t)(k & ~mask);
-        if (c >= hi)
-            break;
-        if (!push(out, c))
+    for (q[axis] = lo;;) {
+        const ism_break_point *e = ism_breaks_find(b, q);
+        if (!e)
+            return false;
+        if (e->next[axis] >= hi)
+            return push(out, hi);
+        q[axis] = e->next[axis];
+        if (!push(out, q[axis]))
             return false;
     }
-    return push(out, hi);
 }
 
 void ism_coords_free(ism_coords *c)

@@ -10,17 +10,44 @@
 #include <stdbool.h>
 #include "core/octree/octree.h"
 
+/* A registered lattice point: a corner of some non-empty leaf. */
+typedef struct ism_break_point {
+    uint64_t key;     /* ism_lattice_key of the point; 0: an empty slot */
+    int32_t next[3];  /* along each axis, the coordinate of the next registered point on the
+                         lattice line through this one (ISM_BREAK_NONE: none) */
+} ism_break_point;
+
+#define ISM_BREAK_NONE INT32_MAX
+
 typedef struct ism_breaks {
-    uint64_t *keys;  /* sorted, unique: line (axis and the two other coordinates) + position */
-    size_t n;
-    uint32_t *line_first; /* open-addressing table: line -> index of its first key (+1) */
-    size_t line_mask;
-    int cbits;            /* bits per lattice coordinate in a key */
+    ism_break_point *slots; /* open addressing by ism_cache_mix(key), linear probing */
+    size_t mask;            /* slot count - 1 (a power of two) */
+    size_t n;               /* registered points */
 } ism_breaks;
 
-/* Collects the corners of every non-empty leaf on the three lattice lines through them. */
+/* Registers the corners of every non-empty leaf, each with its successor on the three
+ * lattice lines through it. */
 bool ism_breaks_build(ism_breaks *b, const ism_octree *t);
 void ism_breaks_free(ism_breaks *b);
+
+/* The registered point p, or NULL. */
+static inline const ism_break_point *ism_breaks_find(const ism_breaks *b, const int32_t p[3])
+{
+    uint64_t key = ism_lattice_key(p);
+    for (size_t s = ism_cache_mix(key) & b->mask;; s = (s + 1) & b->mask) {
+        const ism_break_point *e = &b->slots[s];
+        if (e->key == key)
+            return e;
+        if (!e->key)
+            return NULL;
+    }
+}
+
+/* Asks the memory for p's slot (a query follows soon). */
+static inline void ism_breaks_prefetch(const ism_breaks *b, const int32_t p[3])
+{
+    __builtin_prefetch(&b->slots[ism_cache_mix(ism_lattice_key(p)) & b->mask]);
+}
 
 /* A growable list of lattice coordinates. */
 typedef struct ism_coords {
@@ -29,7 +56,9 @@ typedef struct ism_coords {
 } ism_coords;
 
 /* Replaces out with the break points on the lattice line along `axis` through point p
- * (p[axis] is ignored) that lie in [lo, hi], ascending; lo and hi are always included. */
+ * (p[axis] is ignored) that lie in [lo, hi], ascending; lo and hi are always included.
+ * The point at lo must be registered (every side of a tile is an edge of a non-empty leaf);
+ * false when it is not, or when memory runs out. */
 bool ism_breaks_on(const ism_breaks *b, int axis, const int32_t p[3], int32_t lo, int32_t hi,
                    ism_coords *out);
 

@@ -9,6 +9,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 #include "core/octree/edge_roots.h"
+#include "core/octree/grid.h"
 #include "core/octree/sampler.h"
 
 #define ISM_POINT_CACHE_BITS 15
@@ -31,19 +32,6 @@ typedef struct ism_cell_cache {
 
 bool ism_cell_cache_init(ism_cell_cache *c);
 void ism_cell_cache_free(ism_cell_cache *c);
-
-/* 21 bits per coordinate: the lattice's 2^ISM_GRID_MAX_DEPTH + 1 points per axis fit. */
-static inline uint64_t ism_lattice_key(const int32_t p[3])
-{
-    return (((uint64_t)p[0] << 42) | ((uint64_t)p[1] << 21) | (uint64_t)p[2]) + 1;
-}
-
-static inline uint64_t ism_cache_mix(uint64_t k)
-{
-    k ^= k >> 31;
-    k *= 0x9e3779b97f4a7c15ull;
-    return k ^ (k >> 29);
-}
 
 /* The entry of lattice point ip in a direct-mapped table of 2^bits point entries. */
 static inline ism_point_entry *ism_point_slot(ism_point_entry *table, int bits,

@@ -44,6 +44,21 @@ static inline int32_t ism_grid_cell_steps(const ism_grid *g, int level)
     return (int32_t)1 << (g->depth - level);
 }
 
+/* A lattice point as one nonzero 64-bit key: 21 bits per coordinate (the lattice's
+ * 2^ISM_GRID_MAX_DEPTH + 1 points per axis fit), plus one so that 0 marks an empty slot. */
+static inline uint64_t ism_lattice_key(const int32_t p[3])
+{
+    return (((uint64_t)p[0] << 42) | ((uint64_t)p[1] << 21) | (uint64_t)p[2]) + 1;
+}
+
+/* Spreads a key's bits over the whole word, for tables indexed by its low bits. */
+static inline uint64_t ism_cache_mix(uint64_t k)
+{
+    k ^= k >> 31;
+    k *= 0x9e3779b97f4a7c15ull;
+    return k ^ (k >> 29);
+}
+
 /* The smallest world size of a cell at this level (over the three axes). */
 double ism_grid_cell_size(const ism_grid *g, int level);
 
