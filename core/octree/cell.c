@@ -76,13 +76,43 @@ static bool emit_zero_tile(face_walk *w, const ism_tile *tile)
     return ok;
 }
 
-static bool on_tile(void *ctx, const ism_tile *tile)
+static bool on_tile(face_walk *w, const ism_tile *tile)
 {
-    face_walk *w = ctx;
     w->tiles++;
     if (!ism_tile_lines(w->cx, tile) || (w->cx->zero_tile && !emit_zero_tile(w, tile)))
         w->ok = false;
     return w->ok;
+}
+
+static bool keep_tile(void *ctx, const ism_tile *tile)
+{
+    ism_cell_ctx *cx = ctx;
+    if (cx->ntiles == cx->cap_tiles) {
+        size_t c = cx->cap_tiles ? cx->cap_tiles * 2 : 32;
+        ism_tile *v = realloc(cx->tiles, c * sizeof *v);
+        if (!v)
+            return false;
+        cx->tiles = v;
+        cx->cap_tiles = c;
+    }
+    cx->tiles[cx->ntiles++] = *tile;
+    return true;
+}
+
+/* The tiles of the node's six faces into cx->tiles, face f's from first[f] to first[f + 1],
+ * each asked for from memory (ism_tile_prefetch) before any is walked. */
+static bool gather_tiles(ism_cell_ctx *cx, int32_t node, size_t first[7])
+{
+    cx->ntiles = 0;
+    for (int face = 0; face < 6; face++) {
+        first[face] = cx->ntiles;
+        if (!ism_octree_face_tiles(cx->tree, node, face / 2, face % 2, keep_tile, cx))
+            return false;
+    }
+    first[6] = cx->ntiles;
+    for (size_t i = 0; i < cx->ntiles; i++)
+        ism_tile_prefetch(cx, &cx->tiles[i]);
+    return true;
 }
 
 /* Is the segment ab on the boundary of tile t (world coordinates)? */
@@ -147,16 +177,20 @@ bool ism_cell_polygonise(ism_cell_ctx *cx, int32_t node, ism_cell_out *out)
     cx->lines.n = 0;
     cx->nzero = 0;
     const ism_node *nd = &cx->tree->nodes[node];
-    for (int axis = 0; axis < 3; axis++)
-        for (int side = 0; side < 2; side++) {
-            face_walk w = {cx, out, side == 1 || nd->org[axis] == 0, 0, true};
-            size_t before = cx->lines.n;
-            ism_octree_face_tiles(cx->tree, node, axis, side, on_tile, &w);
-            if (!w.ok)
-                return false;
-            if (w.tiles > 1 && cx->lines.n > before)
-                cx->stats.crack_tiles++;
-        }
+    size_t first[7];
+    if (!gather_tiles(cx, node, first))
+        return false;
+    for (int face = 0; face < 6; face++) {
+        int axis = face / 2, side = face % 2;
+        face_walk w = {cx, out, side == 1 || nd->org[axis] == 0, 0, true};
+        size_t before = cx->lines.n;
+        for (size_t i = first[face]; i < first[face + 1] && w.ok; i++)
+            on_tile(&w, &cx->tiles[i]);
+        if (!w.ok)
+            return false;
+        if (w.tiles > 1 && cx->lines.n > before)
+            cx->stats.crack_tiles++;
+    }
     if (cx->nzero)
         drop_edges_of_zero_tiles(cx);
     if (cx->lines.n == 0)
@@ -220,7 +254,11 @@ void ism_cell_ctx_free(ism_cell_ctx *cx)
     free(cx->lines.v);
     ism_loops_free(&cx->loops);
     free(cx->zero);
+    free(cx->tiles);
+    free(cx->gap);
+    cx->gap = NULL;
     cx->zero = NULL;
+    cx->tiles = NULL;
     cx->bp = NULL;
     cx->ev = NULL;
     cx->lines.v = NULL;

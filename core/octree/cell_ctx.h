@@ -26,10 +26,14 @@ typedef struct ism_cell_ctx {
     size_t nbp, cap_bp;
     ism_fevent *ev;
     size_t nev, cap_ev;
+    int *gap;                 /* per boundary point: the sign after it, its segment's test */
+    size_t cap_gap;
     ism_flines lines;
     ism_loops loops;
     ism_cell_cache cache;     /* must be initialised (ism_cell_cache_init) */
     bool zero_tile;           /* set by ism_tile_lines: f vanishes on the whole tile */
+    ism_tile *tiles;          /* the current node's tiles, face by face */
+    size_t ntiles, cap_tiles;
     ism_tile *zero;           /* the current node's tiles lying in f = 0 */
     size_t nzero, cap_zero;
     ism_cell_stats stats;

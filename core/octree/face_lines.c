@@ -264,9 +264,14 @@ static bool tile_events(ism_cell_ctx *cx)
     cx->nev = 0;
     size_t n = cx->nbp;
     /* per point: the sign after it, then whether its segment may hold roots */
-    int *gap_after_point = malloc(2 * n * sizeof *gap_after_point);
-    if (!gap_after_point)
-        return false;
+    if (cx->cap_gap < 2 * n) {
+        int *v = realloc(cx->gap, 2 * n * sizeof *v);
+        if (!v)
+            return false;
+        cx->gap = v;
+        cx->cap_gap = 2 * n;
+    }
+    int *gap_after_point = cx->gap;
     for (size_t i = 0; i < n; i++)
         gap_after_point[n + i] = prefetch_segment(cx, &cx->bp[i], &cx->bp[(i + 1) % n]);
     /* first pass: the sign just after each lattice point and the roots on its segment */
@@ -287,21 +292,21 @@ static bool tile_events(ism_cell_ctx *cx)
             memcpy(z.g, a->g, sizeof z.g);
             z.flags = ISM_FP_ZERO;
             if (!push_event(cx, &z, SIGN_UNKNOWN, gap_after_point[i], i)) /* filled below */
-                goto fail;
+                return false;
         }
         if (sr.n == 1 && sr.r[0].kind == ISM_ROOT_CROSS) {
             ism_fpoint q = root_point(&sr.r[0], many);
             if (!push_event(cx, &q, sa, sb, i))
-                goto fail;
+                return false;
         } else if (sr.n == 1) {
             ism_fpoint q = root_point(&sr.r[0], ISM_FP_TOUCH | many);
             if (!push_event(cx, &q, sa, sa, i))
-                goto fail;
+                return false;
         } else if (sr.n == 2) {
             ism_fpoint q0 = root_point(&sr.r[0], ISM_FP_PAIR | many);
             ism_fpoint q1 = root_point(&sr.r[1], ISM_FP_PAIR | many);
             if (!push_event(cx, &q0, sa, -sa, i) || !push_event(cx, &q1, -sa, sa, i))
-                goto fail;
+                return false;
         }
     }
     /* second pass: a zero point's `before` is the gap after the previous event */
@@ -312,11 +317,7 @@ static bool tile_events(ism_cell_ctx *cx)
             if (cx->nev == 1)
                 cx->ev[k].before = cx->ev[k].after;
         }
-    free(gap_after_point);
     return true;
-fail:
-    free(gap_after_point);
-    return false;
 }
 
 static double unit_dot(const double a[3], const double b[3])
@@ -724,6 +725,21 @@ static int zero_run_tangent_end(const ism_cell_ctx *cx, const ism_tile *t)
             return i;
     }
     return -1;
+}
+
+void ism_tile_prefetch(const ism_cell_ctx *cx, const ism_tile *t)
+{
+    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    int32_t cu[4] = {t->u0, t->u1, t->u1, t->u0}, cv[4] = {t->v0, t->v0, t->v1, t->v1};
+    for (int c = 0; c < 4; c++) {
+        int32_t q[3];
+        q[t->axis] = t->plane;
+        q[u] = cu[c];
+        q[v] = cv[c];
+        if (c != 2) /* the sides' lower ends: corners 0, 1 and 3 */
+            ism_breaks_prefetch(cx->breaks, q);
+        __builtin_prefetch(ism_point_slot(cx->cache.points, ISM_POINT_CACHE_BITS, q), 1);
+    }
 }
 
 bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
