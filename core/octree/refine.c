@@ -2,6 +2,7 @@
 #include "core/octree/refine.h"
 
 #include <math.h>
+#include <stdbool.h>
 #include <stdlib.h>
 
 static double dist_at(ism_sampler *s, const double p[3])
@@ -12,18 +13,35 @@ static double dist_at(ism_sampler *s, const double p[3])
     return gl > 0 && isfinite(d) ? d : 0;
 }
 
+/* Is a-b (vertex indices, either way round) a side of triangle t? */
+static bool has_side(const uint32_t *t, uint32_t a, uint32_t b)
+{
+    for (int k = 0; k < 3; k++) {
+        uint32_t p = t[k], q = t[(k + 1) % 3];
+        if ((p == a && q == b) || (p == b && q == a))
+            return true;
+    }
+    return false;
+}
+
 double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_tri)
 {
     double worst = 0;
     for (size_t t = first_tri; t < out->ntris; t++) {
+        const uint32_t *tri = &out->tris[3 * t];
         const double *v[3];
         for (int k = 0; k < 3; k++)
-            v[k] = out->verts[out->tris[3 * t + k]].p;
+            v[k] = out->verts[tri[k]].p;
         double c[3];
         for (int a = 0; a < 3; a++)
             c[a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
         worst = fmax(worst, dist_at(s, c));
         for (int k = 0; k < 3; k++) {
+            /* a fan's or a quad's triangles come in order, each sharing a side with the
+             * one before: that side's midpoint (the same bits either way round) was
+             * measured already */
+            if (t > first_tri && has_side(tri - 3, tri[k], tri[(k + 1) % 3]))
+                continue;
             const double *p = v[k], *q = v[(k + 1) % 3];
             double m[3] = {(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2};
             worst = fmax(worst, dist_at(s, m));
