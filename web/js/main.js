@@ -509,23 +509,36 @@ function requestChanged({ now = false, live = false } = {}) {
   const body = currentBody();
   clearTimeout(debounceTimer);
   const turn = ++refineTurn;
+  // The refined mesh once the slider has rested and the last preview is on screen: its
+  // computation (or its full-resolution frame) would otherwise take the CPU the preview's
+  // frame needs.
+  const whenRested = (then) => {
+    debounceTimer = setTimeout(async () => {
+      await previewer.idle();
+      await viewer.settled();
+      if (turn === refineTurn) then();
+    }, DEBOUNCE_MS);
+  };
   const hit = loader.cached(body);
   if (hit) {
     stopRunning();
-    show(hit, body, ticket());
+    // A mesh this page holds, met while the slider moves, is drawn like a preview (at once,
+    // reduced when frames are slow); as the final mesh once the slider rests.
+    show(hit, body, ticket(), live, false);
+    if (live) {
+      document.body.dataset.refinePending = '1';
+      whenRested(() => {
+        document.body.dataset.refinePending = '0';
+        show(loader.cached(body) || hit, body, ticket());
+      });
+    }
     return;
   }
   if (live) {
     stopRunning();
     document.body.dataset.refinePending = '1';
     previewer.want(body);
-    // The refined mesh once the slider has rested and the last preview is on screen: its
-    // computation would otherwise take the CPU the preview's frame needs.
-    debounceTimer = setTimeout(async () => {
-      await previewer.idle();
-      await viewer.settled();
-      if (turn === refineTurn) compute(body);
-    }, DEBOUNCE_MS);
+    whenRested(() => compute(body));
     return;
   }
   previewer.stop();
@@ -624,8 +637,9 @@ function surfaceGlsl(sent) {
 }
 
 // Draws result unless something newer (by sequence number seq, live.js) is on screen.
-// preview: a coarse live preview (stats and downloads stay with the refined mesh).
-function show(result, body, seq, preview = false) {
+// preview: drawn while a slider moves (stats and downloads stay with the refined mesh);
+// coarse: a live preview's coarse mesh (false for a held refined mesh met during a drag).
+function show(result, body, seq, preview = false, coarse = preview) {
   if (!claim(seq)) return;
   shownBody = body;
   clearMessage();
@@ -655,7 +669,7 @@ function show(result, body, seq, preview = false) {
     viewer.drawNow();
     previews++;
     document.body.dataset.previews = String(previews);
-    document.body.dataset.previewKey = result.key;
+    if (coarse) document.body.dataset.previewKey = result.key;
     return;
   }
   showStats(result);
