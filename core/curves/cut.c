@@ -15,6 +15,9 @@
 /* Newton may move a split point at most this many lengths of its edge (further means it
  * ran to another part of the curve). */
 #define CUT_MAX_MOVE_EDGES 2.0
+/* Newton steps moving a triangle's centroid onto f = 0 (it lies within the triangle's
+ * sagitta of the surface: quadratic convergence ends there in two or three). */
+#define CUT_CENTROID_STEPS 4
 /* Bisection steps for the fallback start on an edge (2^-40 of the edge). */
 #define CUT_BISECT_STEPS 40
 
@@ -278,13 +281,24 @@ static bool add_zero_edges(cut_state *s, size_t k)
     return true;
 }
 
-/* The sign of g_k at the centroid of triangle t. */
+/* The sign of g_k on the surface inside triangle t: at its centroid moved onto f = 0 by
+ * Newton along ∇f. At the centroid itself g may vanish where the triangle lies in g's zero
+ * set (a plane tangent to the surface: the Klein bottle's x = 0 at its nodes, through
+ * vertices of the lattice) while the surface beyond it takes g's sign. */
 static int centroid_sign(cut_state *s, size_t k, const uint32_t t[3])
 {
     double c[3] = {0, 0, 0};
     for (int i = 0; i < 3; i++)
         for (int d = 0; d < 3; d++)
             c[d] += s->m->pos[3 * (size_t)t[i] + d] / 3;
+    for (int it = 0; it < CUT_CENTROID_STEPS; it++) {
+        double gf[3], f = ism_eval_gradient(s->ev->f, s->ev->fws, c[0], c[1], c[2], gf);
+        double n2 = gf[0] * gf[0] + gf[1] * gf[1] + gf[2] * gf[2];
+        if (!(n2 > 0) || f == 0)
+            break;
+        for (int d = 0; d < 3; d++)
+            c[d] -= f * gf[d] / n2;
+    }
     double g = ism_cut_g(s->ev, k, c, NULL);
     return (g > 0) - (g < 0);
 }

@@ -194,15 +194,20 @@ static bool solve_sym(int m, double a[3][3], const double r[3], double y[3])
     return true;
 }
 
-/* Values and gradient rows of f and the functions ks at p; the worst |value| / |gradient|. */
-static double system_at(ism_cut_eval *ev, const size_t *ks, int nk, const double p[3],
-                        double r[3], double J[3][3])
+/* Values and gradient rows of f, the functions ks and the plane (n, c; NULL for none) at p;
+ * the worst |value| / |gradient|. */
+static double system_at(ism_cut_eval *ev, const size_t *ks, int nk, const double plane[4],
+                        const double p[3], double r[3], double J[3][3])
 {
     r[0] = ism_eval_gradient(ev->f, ev->fws, p[0], p[1], p[2], J[0]);
     for (int i = 0; i < nk; i++)
         r[i + 1] = ism_cut_g(ev, ks[i], p, J[i + 1]);
+    if (plane) {
+        memcpy(J[nk + 1], plane, 3 * sizeof *plane);
+        r[nk + 1] = dot3(plane, p) - plane[3];
+    }
     double worst = 0;
-    for (int i = 0; i <= nk; i++) {
+    for (int i = 0; i <= nk + (plane != NULL); i++) {
         double n = sqrt(dot3(J[i], J[i]));
         double d = n > 0 ? fabs(r[i]) / n : (r[i] == 0 ? 0 : INFINITY);
         worst = d > worst ? d : worst;
@@ -210,12 +215,13 @@ static double system_at(ism_cut_eval *ev, const size_t *ks, int nk, const double
     return worst;
 }
 
-bool ism_cut_refine(ism_cut_eval *ev, const size_t *ks, int nk, double tol, double max_move,
-                    double p[3])
+/* Newton on f, the nk functions ks and the plane (NULL for none): at most 3 equations. */
+static bool refine(ism_cut_eval *ev, const size_t *ks, int nk, const double plane[4],
+                   double tol, double max_move, double p[3])
 {
     double x[3] = {p[0], p[1], p[2]}, r[3], J[3][3];
-    int m = nk + 1;
-    double worst = system_at(ev, ks, nk, x, r, J);
+    int m = nk + 1 + (plane != NULL);
+    double worst = system_at(ev, ks, nk, plane, x, r, J);
     for (int it = 0; it <= CUT_NEWTON_ITERS; it++) {
         if (!isfinite(worst))
             return false;
@@ -240,7 +246,7 @@ bool ism_cut_refine(ism_cut_eval *ev, const size_t *ks, int nk, double tol, doub
         for (int h = 0; h < CUT_DAMPING_HALVINGS; h++, lambda *= 0.5) {
             for (int c = 0; c < 3; c++)
                 xn[c] = x[c] + lambda * step[c];
-            next = system_at(ev, ks, nk, xn, r, J);
+            next = system_at(ev, ks, nk, plane, xn, r, J);
             if (next < worst)
                 break;
         }
@@ -250,6 +256,18 @@ bool ism_cut_refine(ism_cut_eval *ev, const size_t *ks, int nk, double tol, doub
         worst = next;
     }
     return false;
+}
+
+bool ism_cut_refine(ism_cut_eval *ev, const size_t *ks, int nk, double tol, double max_move,
+                    double p[3])
+{
+    return refine(ev, ks, nk, NULL, tol, max_move, p);
+}
+
+bool ism_cut_refine_on_plane(ism_cut_eval *ev, size_t k, const double plane[4], double tol,
+                             double max_move, double p[3])
+{
+    return refine(ev, &k, 1, plane, tol, max_move, p);
 }
 
 void ism_cut_residuals(ism_cut_eval *ev, size_t k, const double p[3], double *df, double *dg)

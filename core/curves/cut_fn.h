@@ -62,6 +62,12 @@ bool ism_cut_g_batch(ism_cut_eval *ev, size_t k, const double *pos, size_t n, do
 bool ism_cut_refine(ism_cut_eval *ev, const size_t *ks, int nk, double tol, double max_move,
                     double p[3]);
 
+/* As ism_cut_refine for g_k alone, the point also kept on the plane n·p = c (plane: n, c):
+ * the curve's crossing with a plane across it (a node's branch, picked by the plane across
+ * its tangent, where the minimum-norm step could run to the other branch). */
+bool ism_cut_refine_on_plane(ism_cut_eval *ev, size_t k, const double plane[4], double tol,
+                             double max_move, double p[3]);
+
 /* The largest |value| / |gradient| of f and of g_k at p (the distance to each set). */
 void ism_cut_residuals(ism_cut_eval *ev, size_t k, const double p[3], double *df, double *dg);
 

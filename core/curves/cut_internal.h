@@ -119,6 +119,36 @@ void cut_clear_near(cut_state *s);
 /* Room in gv, reach and sg for the mesh's vertices. */
 bool cut_grow_vertex_arrays(cut_state *s);
 
+/* Difference step of the Hessians of silhouettes and creases, × the longest edge at the
+ * point (tangency seeds, node branch directions). */
+#define CUT_FD_STEP_REL 1e-4
+
+/* Whether v lies on no curve but (maybe) k's own: moving it along k keeps the others. */
+bool cut_on_no_other(const cut_state *s, uint32_t v, size_t k);
+
+/* The triangles with a corner in the star of v (its 2-ring of triangles) into *out (grown;
+ * free it). False when out of memory. */
+bool cut_ring_triangles(const ism_mesh *m, uint32_t v, uint32_t **out, size_t *n);
+
+/* Whether u may move to p: its triangles among tris (but those with vertex skip; NONE for
+ * none) keep their orientation, and (need_node) g_k's signs round it change at least four
+ * times once u is on the curve. */
+bool cut_can_move(const cut_state *s, const uint32_t *tris, size_t nt, uint32_t u,
+                  const double p[3], bool need_node, uint32_t skip);
+
+/* Puts vertex u at p, on curve k (g_k taken as 0 there). False when out of memory. */
+bool cut_move_vertex(cut_state *s, size_t k, uint32_t u, const double p[3]);
+
+/* Splits every triangle with edge a-b at the new vertex x (winding kept). */
+bool cut_split_triangles_at(cut_state *s, uint32_t a, uint32_t b, uint32_t x);
+
+/* Node u (a vertex on a node of curve k, where g_k = 0 touches the surface) made to meet
+ * its four branches: each followed out of u's star, the link edges it crosses split at it
+ * and link vertices it passes put on it (or merged into the vertex on the curve beside
+ * them), so the cut leaves u four times whatever the star (node.c). reach: the longest
+ * edge near u. False when out of memory. */
+bool cut_node_branches(cut_state *s, size_t k, uint32_t u, double reach);
+
 /* Finds where g_k = 0 touches the surface or an earlier curve (critical.h) and makes each
  * point a mesh vertex on which g_k is taken as exactly 0, so the cut meets there: a node of
  * degree 4 on the surface, a touching crossing on an earlier curve. Runs after g_k's signs

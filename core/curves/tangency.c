@@ -9,7 +9,8 @@
  * vertex on which g_k is taken as exactly 0:
  *   - on the surface (a node of the curve), the vertex of the seed's star nearest the point
  *     is moved onto it, the nearest whose triangles keep their orientation and whose link's
- *     signs of g_k change at least four times (both branches of the node leave it);
+ *     signs of g_k change at least four times (both branches of the node leave it), else
+ *     the nearest that can move, its branches then followed out of its star (node.c);
  *   - on an earlier curve, the chain edge it lies on is split at it (or the chain vertex
  *     moved onto it when it is that close), a crossing of the two curves. */
 #include "core/curves/critical.h"
@@ -27,8 +28,6 @@
 #define TANG_SEED_SPAN 4.0
 /* Newton may move a seed at most this many of its longest edges. */
 #define TANG_MAX_MOVE_EDGES 2.0
-/* Difference step of the Hessians of silhouettes and creases, × the seed's longest edge. */
-#define TANG_FD_STEP_REL 1e-4
 /* s->tol is a thousandth of the curve precision (curves.c); a critical point whose g_k
  * lies within the precision is a tangency. */
 #define TANG_ACCEPT_TOLS 1e3
@@ -82,7 +81,7 @@ static void try_seed(tang_state *ts, uint32_t v, uint32_t j)
     memcpy(p, s->m->pos + 3 * (size_t)v, sizeof p);
     size_t jj = j == NONE ? ISM_CUT_NO_CURVE : j;
     if (!ism_cut_critical(s->ev, ts->k, jj, s->tol, TANG_MAX_MOVE_EDGES * r,
-                          TANG_FD_STEP_REL * r, p, &dist) ||
+                          CUT_FD_STEP_REL * r, p, &dist) ||
         !(dist <= TANG_ACCEPT_TOLS * s->tol))
         return;
     double same = TANG_ACCEPT_TOLS * s->tol;
@@ -92,8 +91,7 @@ static void try_seed(tang_state *ts, uint32_t v, uint32_t j)
     ts->t[ts->n++] = (tangent){{p[0], p[1], p[2]}, v, j};
 }
 
-/* Whether v lies on no curve but (maybe) k's own: moving it along k keeps the others. */
-static bool on_no_other(const cut_state *s, uint32_t v, size_t k)
+bool cut_on_no_other(const cut_state *s, uint32_t v, size_t k)
 {
     uint32_t c = cut_vcurve_of(s, v);
     return c == NONE || c == (uint32_t)k;
@@ -122,7 +120,7 @@ static void surface_seeds(tang_state *ts)
     for (size_t i = 0; i < s->n_near; i++) {
         uint32_t v = s->near_list[i];
         if (vs[v].changes >= 4 && fabs(g[v]) <= TANG_SEED_SPAN * vs[v].spread &&
-            on_no_other(s, v, ts->k))
+            cut_on_no_other(s, v, ts->k))
             try_seed(ts, v, NONE);
     }
 }
@@ -163,8 +161,7 @@ static void chain_seeds(tang_state *ts)
     }
 }
 
-/* The triangles with a corner in the star of v (its 2-ring of triangles) into *out. */
-static bool ring_triangles(const ism_mesh *m, uint32_t v, uint32_t **out, size_t *n)
+bool cut_ring_triangles(const ism_mesh *m, uint32_t v, uint32_t **out, size_t *n)
 {
     uint8_t *mark = calloc(m->nverts + 1, 1);
     if (!mark)
@@ -206,17 +203,15 @@ static void tri_normal(const ism_mesh *m, const uint32_t *tv, uint32_t moved, co
     n[2] = u[0] * w[1] - u[1] * w[0];
 }
 
-/* Whether u may move to p: its triangles keep their orientation, and (need_node) g_k's
- * signs round it change at least four times once u is on the curve. */
-static bool can_move(const cut_state *s, const uint32_t *tris, size_t nt, uint32_t u,
-                     const double p[3], bool need_node)
+bool cut_can_move(const cut_state *s, const uint32_t *tris, size_t nt, uint32_t u,
+                  const double p[3], bool need_node, uint32_t skip)
 {
     const ism_mesh *m = s->m;
     int changes = 0;
     for (size_t i = 0; i < nt; i++) {
         const uint32_t *tv = m->tri + 3 * (size_t)tris[i];
         int at = tv[0] == u ? 0 : tv[1] == u ? 1 : tv[2] == u ? 2 : -1;
-        if (at < 0)
+        if (at < 0 || tv[0] == skip || tv[1] == skip || tv[2] == skip)
             continue;
         double a[3], b[3];
         tri_normal(m, tv, NONE, NULL, a);
@@ -230,8 +225,7 @@ static bool can_move(const cut_state *s, const uint32_t *tris, size_t nt, uint32
     return !need_node || changes >= 4;
 }
 
-/* Puts vertex u at p, on curve k (g_k taken as 0 there). */
-static bool move_vertex(cut_state *s, size_t k, uint32_t u, const double p[3])
+bool cut_move_vertex(cut_state *s, size_t k, uint32_t u, const double p[3])
 {
     float nrm[3];
     cut_normal_at(s, p, s->m->normal + 3 * (size_t)u, nrm);
@@ -255,158 +249,6 @@ static int cmp_candidate(const void *x, const void *y)
     return (a->v > b->v) - (a->v < b->v);
 }
 
-static bool split_triangles_at(cut_state *s, uint32_t a, uint32_t b, uint32_t x);
-
-/* Orthonormal e1, e2 spanning the plane normal to n. */
-static void tangent_basis(const double n[3], double e1[3], double e2[3])
-{
-    double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    double u[3] = {n[0] / l, n[1] / l, n[2] / l};
-    double a[3] = {fabs(u[0]) < 0.6 ? 1 : 0, fabs(u[0]) < 0.6 ? 0 : 1, 0};
-    double d = a[0] * u[0] + a[1] * u[1] + a[2] * u[2];
-    for (int c = 0; c < 3; c++)
-        e1[c] = a[c] - d * u[c];
-    l = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
-    for (int c = 0; c < 3; c++)
-        e1[c] /= l;
-    e2[0] = u[1] * e1[2] - u[2] * e1[1];
-    e2[1] = u[2] * e1[0] - u[0] * e1[2];
-    e2[2] = u[0] * e1[1] - u[1] * e1[0];
-}
-
-/* The node's two branch directions in the tangent plane (e1, e2 coordinates): the null
- * directions of the Lagrangian's Hessian H_g − λ H_f restricted to the plane. False when
- * the form is not indefinite (no node). */
-static bool node_directions(cut_state *s, size_t k, const double p[3], double h,
-                            double e1[3], double e2[3], double dir[2][2])
-{
-    double gf[3], hf[6], gg[3], hg[6];
-    ism_eval_hessian(s->ev->f, s->ev->fws, p[0], p[1], p[2], gf, hf);
-    ism_cut_g_hessian(s->ev, k, p, h, gg, hg);
-    double ff = gf[0] * gf[0] + gf[1] * gf[1] + gf[2] * gf[2];
-    if (!(ff > 0))
-        return false;
-    double lam = (gg[0] * gf[0] + gg[1] * gf[1] + gg[2] * gf[2]) / ff, Q[6];
-    for (int i = 0; i < 6; i++)
-        Q[i] = hg[i] - lam * hf[i];
-    tangent_basis(gf, e1, e2);
-    const double *e[2] = {e1, e2};
-    double q[2][2];
-    for (int i = 0; i < 2; i++)
-        for (int j = 0; j < 2; j++) {
-            const double *x = e[i], *y = e[j];
-            q[i][j] = Q[0] * x[0] * y[0] + Q[3] * x[1] * y[1] + Q[5] * x[2] * y[2] +
-                      Q[1] * (x[0] * y[1] + x[1] * y[0]) + Q[2] * (x[0] * y[2] + x[2] * y[0]) +
-                      Q[4] * (x[1] * y[2] + x[2] * y[1]);
-        }
-    double det = q[0][0] * q[1][1] - q[0][1] * q[0][1];
-    if (!(det < 0))
-        return false;
-    /* q11 c² + 2 q12 c s + q22 s² = 0: c = −q12 ± √−det, s = q11 (or the swap when q11 ≈ 0) */
-    double r = sqrt(-det);
-    for (int i = 0; i < 2; i++) {
-        double sg = i ? -1 : 1;
-        if (fabs(q[0][0]) >= fabs(q[1][1])) {
-            dir[i][0] = -q[0][1] + sg * r;
-            dir[i][1] = q[0][0];
-        } else {
-            dir[i][0] = q[1][1];
-            dir[i][1] = -q[0][1] + sg * r;
-        }
-        double l = hypot(dir[i][0], dir[i][1]);
-        dir[i][0] /= l;
-        dir[i][1] /= l;
-    }
-    return true;
-}
-
-static double cross2(const double a[2], const double b[2])
-{
-    return a[0] * b[1] - a[1] * b[0];
-}
-
-/* The ray from node u along r (tangent-plane coordinates) out through its star: the link
- * edge a-b it crosses and where (parameter *at along a-b). False when none. */
-static bool ray_exit(const cut_state *s, const uint32_t *tris, size_t nt, uint32_t u,
-                     const double e1[3], const double e2[3], const double r[2], uint32_t *a,
-                     uint32_t *b, double *at)
-{
-    const ism_mesh *m = s->m;
-    const double *p = m->pos + 3 * (size_t)u;
-    for (size_t i = 0; i < nt; i++) {
-        const uint32_t *tv = m->tri + 3 * (size_t)tris[i];
-        int c = tv[0] == u ? 0 : tv[1] == u ? 1 : tv[2] == u ? 2 : -1;
-        if (c < 0)
-            continue;
-        uint32_t va = tv[(c + 1) % 3], vb = tv[(c + 2) % 3];
-        double A[2] = {0, 0}, B[2] = {0, 0};
-        for (int k = 0; k < 3; k++) {
-            double da = m->pos[3 * (size_t)va + k] - p[k], db = m->pos[3 * (size_t)vb + k] - p[k];
-            A[0] += da * e1[k];
-            A[1] += da * e2[k];
-            B[0] += db * e1[k];
-            B[1] += db * e2[k];
-        }
-        double ab = cross2(A, B), ar = cross2(A, r), rb = cross2(r, B);
-        if (ab == 0 || (ar > 0) != (ab > 0) || (rb > 0) != (ab > 0))
-            continue; /* r not inside the angle a-u-b */
-        double BA[2] = {B[0] - A[0], B[1] - A[1]}, den = cross2(BA, r);
-        if (den == 0)
-            continue;
-        *a = va;
-        *b = vb;
-        *at = -ar / den;
-        return true;
-    }
-    return false;
-}
-
-/* A crossing of a link edge this close to an end (edge fractions) is left to the cut. */
-#define TANG_RAY_END 0.02
-
-/* Makes the node at u meet its four branch rays: each ray's link edge split at the curve
- * (Newton on f = g = 0 from where the ray crosses it), the new vertex on the curve, so the
- * cut leaves u four times whatever the star. reach: the seed's longest edge. */
-static bool split_rays(cut_state *s, size_t k, uint32_t u, double reach)
-{
-    double e1[3], e2[3], dir[2][2], h = TANG_FD_STEP_REL * reach;
-    if (!node_directions(s, k, s->m->pos + 3 * (size_t)u, h, e1, e2, dir))
-        return true;
-    for (int ray = 0; ray < 4; ray++) {
-        double r[2] = {(ray & 2 ? -1 : 1) * dir[ray & 1][0], (ray & 2 ? -1 : 1) * dir[ray & 1][1]};
-        uint32_t *tris = NULL, a, b;
-        size_t nt = 0;
-        double at;
-        if (!ring_triangles(s->m, u, &tris, &nt))
-            return false;
-        bool hit = ray_exit(s, tris, nt, u, e1, e2, r, &a, &b, &at);
-        free(tris);
-        if (!hit || at < TANG_RAY_END || at > 1 - TANG_RAY_END || s->sg[a] == 0 ||
-            s->sg[b] == 0)
-            continue;
-        double q[3], len2 = 0;
-        for (int c = 0; c < 3; c++) {
-            double d = s->m->pos[3 * (size_t)b + c] - s->m->pos[3 * (size_t)a + c];
-            q[c] = s->m->pos[3 * (size_t)a + c] + at * d;
-            len2 += d * d;
-        }
-        size_t ks[1] = {k};
-        if (!ism_cut_refine(s->ev, ks, 1, s->tol, sqrt(len2), q))
-            continue;
-        float nrm[3];
-        cut_normal_at(s, q, s->m->normal + 3 * (size_t)a, nrm);
-        uint32_t x = ism_mesh_add_vertex(s->m, q, nrm);
-        if (x == NONE || !cut_grow_vertex_arrays(s) || !cut_set_vcurve(s, x, (uint32_t)k))
-            return false;
-        s->gv[x] = 0;
-        s->sg[x] = 0;
-        s->reach[x] = reach;
-        if (!split_triangles_at(s, a, b, x))
-            return false;
-    }
-    return true;
-}
-
 /* A node on the surface: the nearest vertex of the seed's star whose link already shows
  * both branches (its signs change four times) is moved onto it; failing that the nearest
  * that can move, and its star split where the branches leave it. */
@@ -414,7 +256,7 @@ static bool place_on_surface(cut_state *s, size_t k, const tangent *t)
 {
     uint32_t *tris = NULL;
     size_t nt = 0, nc = 0;
-    if (!ring_triangles(s->m, t->seed, &tris, &nt))
+    if (!cut_ring_triangles(s->m, t->seed, &tris, &nt))
         return false;
     candidate *cand = malloc((3 * nt + 1) * sizeof *cand);
     bool ok = cand != NULL;
@@ -430,21 +272,21 @@ static bool place_on_surface(cut_state *s, size_t k, const tangent *t)
     uint32_t chosen = NONE;
     for (int node = 1; ok && node >= 0 && chosen == NONE; node--)
         for (size_t i = 0; i < nc && chosen == NONE; i++) {
-            if ((i && cand[i].v == cand[i - 1].v) || !on_no_other(s, cand[i].v, k))
+            if ((i && cand[i].v == cand[i - 1].v) || !cut_on_no_other(s, cand[i].v, k))
                 continue;
-            if (can_move(s, tris, nt, cand[i].v, t->p, node))
+            if (cut_can_move(s, tris, nt, cand[i].v, t->p, node, NONE))
                 chosen = cand[i].v;
         }
-    bool node = chosen != NONE && can_move(s, tris, nt, chosen, t->p, true);
+    bool node = chosen != NONE && cut_can_move(s, tris, nt, chosen, t->p, true, NONE);
     free(cand);
     free(tris);
     if (!ok || chosen == NONE)
         return ok; /* no vertex can take it: the cut goes on as the mesh allows */
-    return move_vertex(s, k, chosen, t->p) && (node || split_rays(s, k, chosen, s->reach[t->seed]));
+    return cut_move_vertex(s, k, chosen, t->p) &&
+           (node || cut_node_branches(s, k, chosen, s->reach[t->seed]));
 }
 
-/* Splits every triangle with edge a-b at the new vertex x (winding kept). */
-static bool split_triangles_at(cut_state *s, uint32_t a, uint32_t b, uint32_t x)
+bool cut_split_triangles_at(cut_state *s, uint32_t a, uint32_t b, uint32_t x)
 {
     ism_mesh *m = s->m;
     size_t nt = m->ntris;
@@ -494,11 +336,11 @@ static bool place_on_curve(tang_state *ts, const tangent *t)
             return true;
         uint32_t *tris = NULL;
         size_t nt = 0;
-        if (!ring_triangles(m, snap, &tris, &nt))
+        if (!cut_ring_triangles(m, snap, &tris, &nt))
             return false;
-        bool can = can_move(s, tris, nt, snap, t->p, false);
+        bool can = cut_can_move(s, tris, nt, snap, t->p, false, NONE);
         free(tris);
-        return !can || move_vertex(s, ts->k, snap, t->p);
+        return !can || cut_move_vertex(s, ts->k, snap, t->p);
     }
     float nrm[3];
     cut_normal_at(s, t->p, m->normal + 3 * (size_t)v, nrm);
@@ -509,7 +351,7 @@ static bool place_on_curve(tang_state *ts, const tangent *t)
     s->sg[x] = 0;
     s->reach[x] = s->reach[v];
     return cut_set_vcurve(s, x, t->j) && cut_split_cut_edge(s, v, w, x, t->j) &&
-           split_triangles_at(s, v, w, x);
+           cut_split_triangles_at(s, v, w, x);
 }
 
 bool cut_tangencies(cut_state *s, size_t k)

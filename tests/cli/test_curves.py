@@ -4,7 +4,8 @@ arrangement 6 / 12 / 8 with faces of area pi/2 (0.5%) and every arc point within
 the box diagonal of the sphere and of its plane (checked here from the closed forms), in a
 box shifted off the lattice by 0.37 of a finest cell; a curve that misses the surface gives
 no curve and one face, not an error; a bad curve is refused with its JSON path. The Klein
-bottle preset cut by x = 0, in boxes shifted off the lattice: the section is three circles
+bottle preset cut by x = 0, in its lattice box (the plane through lattice vertices) and boxes
+shifted off it by 1e-3 and 0.37 cell: the section is three circles
 (closed form below), crossing on the double curve at (0, 1 +- sqrt 2, 0) and at the four
 points where the plane touches the surface, each a vertex of degree 4; 12 edges. Three
 overlapping balls (min of three spheres, in the lattice box and two shifted off it): the
@@ -89,7 +90,7 @@ class CurvesTest(unittest.TestCase):
         want = [(1 + r2, 0), (1 - r2, 0), (1 / 3, -r2 / 3), (1 / 3, r2 / 3), (-1, r2), (-1, -r2)]
         length = 2 * math.pi * r2 + 2 * 2 * math.pi * 2
         cell = 8 / 2 ** 7
-        for shift in (1e-3, 0.37 * cell):
+        for shift in (0.0, 1e-3, 0.37 * cell):
             d = [0.61 * shift, shift, -0.83 * shift]
             f, proc = self.run_request({
                 "preset": "klein-bottle", "depth": {"max": 7},
