@@ -1,15 +1,79 @@
-/* mesh_files.c — the service's PLY (attributes as extra vertex properties) and OBJ (features
- * as `l` lines) of mesh_files.h, streamed through core's sink. */
+/* mesh_files.c — the service's PLY (attributes as extra vertex properties, a crease's sides
+ * on vertices of their own) and OBJ (features as `l` lines) of mesh_files.h, streamed through
+ * core's sink. */
 #include "proto/mesh_files.h"
 #include "core/mesh/write_sink.h"
 
 #include <stdlib.h>
+#include <string.h>
 
-static void ply_header(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w)
+/* A crease's other sides in PLY: the corners with a normal of their own (w->corner_at) get
+ * vertices of their own, appended after the mesh's (whose indices stay), one per vertex and
+ * distinct normal, so each side's triangles stay joined and shade with their branch's
+ * normal. */
+typedef struct ply_sides {
+    size_t n;             /* extra vertices */
+    uint32_t *vertex;     /* per extra vertex: the mesh vertex it copies */
+    const float **normal; /* per extra vertex: its normal (into w->corner_normal) */
+    uint32_t *corner;     /* per corner with its own normal (as w->corner_at): its vertex */
+} ply_sides;
+
+typedef struct side_key {
+    uint32_t vertex, j; /* the mesh vertex, the corner's index in w->corner_at */
+    const float *normal;
+} side_key;
+
+/* By vertex, then normal (bit for bit: one branch's normal at one vertex is one value). */
+static int cmp_side(const void *x, const void *y)
+{
+    const side_key *a = x, *b = y;
+    if (a->vertex != b->vertex)
+        return a->vertex < b->vertex ? -1 : 1;
+    return memcmp(a->normal, b->normal, 3 * sizeof *a->normal);
+}
+
+static void ply_sides_free(ply_sides *p)
+{
+    free(p->vertex);
+    free((void *)p->normal);
+    free(p->corner);
+}
+
+static bool ply_sides_build(const ism_mesh *m, const ism_wire_mesh *w, ply_sides *p)
+{
+    size_t nc = w->normal ? w->ncorner_normals : 0;
+    memset(p, 0, sizeof *p);
+    if (!nc)
+        return true;
+    side_key *key = malloc(nc * sizeof *key);
+    p->vertex = malloc(nc * sizeof *p->vertex);
+    p->normal = malloc(nc * sizeof *p->normal);
+    p->corner = malloc(nc * sizeof *p->corner);
+    if (!key || !p->vertex || !p->normal || !p->corner) {
+        free(key);
+        ply_sides_free(p);
+        return false;
+    }
+    for (size_t j = 0; j < nc; j++)
+        key[j] = (side_key){m->tri[w->corner_at[j]], (uint32_t)j, w->corner_normal + 3 * j};
+    qsort(key, nc, sizeof *key, cmp_side);
+    for (size_t i = 0; i < nc; i++) {
+        if (!i || cmp_side(&key[i], &key[i - 1])) {
+            p->vertex[p->n] = key[i].vertex;
+            p->normal[p->n++] = key[i].normal;
+        }
+        p->corner[key[i].j] = (uint32_t)(m->nverts + p->n - 1);
+    }
+    free(key);
+    return true;
+}
+
+static void ply_header(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w, size_t extra)
 {
     ism_sink_printf(s, "ply\nformat binary_little_endian 1.0\ncomment isomesh\n"
                        "element vertex %zu\n"
-                       "property float x\nproperty float y\nproperty float z\n", m->nverts);
+                       "property float x\nproperty float y\nproperty float z\n",
+                    m->nverts + extra);
     if (w->normal)
         ism_sink_printf(s, "property float nx\nproperty float ny\nproperty float nz\n");
     if (w->mean_curvature)
@@ -26,17 +90,22 @@ static void ply_header(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w)
     ism_sink_printf(s, "end_header\n");
 }
 
-/* Faces with their labels (cell, double sheet) as face properties. */
-static void ply_faces(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w)
+/* Faces (a crease's other-side corners on their own vertices) with their labels (cell,
+ * double sheet) as face properties. */
+static void ply_faces(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w,
+                      const ply_sides *sides)
 {
-    if (!w->tri_cell && !w->tri_sheet) {
+    if (!w->tri_cell && !w->tri_sheet && !sides->n) {
         ism_ply_put_faces(s, m);
         return;
     }
+    size_t j = 0; /* the next corner with a normal of its own */
     for (size_t t = 0; t < m->ntris; t++) {
         ism_sink_u8(s, 3);
-        for (int k = 0; k < 3; k++)
-            ism_sink_u32le(s, m->tri[3 * t + k]);
+        for (size_t c = 3 * t; c < 3 * t + 3; c++) {
+            bool own = sides->n && j < w->ncorner_normals && w->corner_at[j] == c;
+            ism_sink_u32le(s, own ? sides->corner[j++] : m->tri[c]);
+        }
         if (w->tri_cell)
             ism_sink_u32le(s, w->tri_cell[t]);
         if (w->tri_sheet)
@@ -44,31 +113,43 @@ static void ply_faces(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w)
     }
 }
 
+/* One vertex row: mesh vertex i's position and attributes, with normal n (NULL: none). */
+static void ply_vertex(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w, size_t i,
+                       const float *n)
+{
+    for (int k = 0; k < 3; k++)
+        ism_sink_f32le(s, (float)m->pos[3 * i + k]);
+    for (int k = 0; n && k < 3; k++)
+        ism_sink_f32le(s, n[k]);
+    if (w->mean_curvature)
+        ism_sink_f32le(s, w->mean_curvature[i]);
+    if (w->gauss_curvature)
+        ism_sink_f32le(s, w->gauss_curvature[i]);
+    if (w->vertex_class)
+        ism_sink_u8(s, w->vertex_class[i]);
+}
+
 bool ism_write_ply_wire(const ism_mesh *m, const ism_wire_mesh *w, ism_write_fn write,
                         void *ctx)
 {
-    if (m->nverts > INT32_MAX || w->nverts != m->nverts)
-        return false; /* PLY's int indices could not address every vertex */
-    ism_sink *s = malloc(sizeof *s);
-    if (!s)
+    ply_sides sides;
+    if (w->nverts != m->nverts || !ply_sides_build(m, w, &sides))
         return false;
-    ism_sink_init(s, write, ctx);
-    ply_header(s, m, w);
-    for (size_t i = 0; i < m->nverts; i++) {
-        for (int k = 0; k < 3; k++)
-            ism_sink_f32le(s, (float)m->pos[3 * i + k]);
-        for (int k = 0; w->normal && k < 3; k++)
-            ism_sink_f32le(s, w->normal[3 * i + k]);
-        if (w->mean_curvature)
-            ism_sink_f32le(s, w->mean_curvature[i]);
-        if (w->gauss_curvature)
-            ism_sink_f32le(s, w->gauss_curvature[i]);
-        if (w->vertex_class)
-            ism_sink_u8(s, w->vertex_class[i]);
+    ism_sink *s = m->nverts + sides.n <= INT32_MAX ? malloc(sizeof *s) : NULL;
+    if (!s) { /* PLY's int indices could not address every vertex, or out of memory */
+        ply_sides_free(&sides);
+        return false;
     }
-    ply_faces(s, m, w);
+    ism_sink_init(s, write, ctx);
+    ply_header(s, m, w, sides.n);
+    for (size_t i = 0; i < m->nverts; i++)
+        ply_vertex(s, m, w, i, w->normal ? w->normal + 3 * i : NULL);
+    for (size_t i = 0; i < sides.n; i++)
+        ply_vertex(s, m, w, sides.vertex[i], sides.normal[i]);
+    ply_faces(s, m, w, &sides);
     bool ok = ism_sink_finish(s);
     free(s);
+    ply_sides_free(&sides);
     return ok;
 }
 

@@ -4,8 +4,11 @@
  * mean_curvature, float gauss_curvature (clamped as in Draco's), uchar class (features.h's
  * classes) — and faces as uchar 3 + int indices, then face properties uint cell (when
  * curves were requested: the arrangement face) and uchar double_sheet (when f has double
- * sheets); one normal per vertex (at a crease vertex, one side's). OBJ: core's v / vn / f
- * lines (a crease's other-side corners with `vn` lines of their own), then the features as `l` polylines over the same
+ * sheets). A crease vertex's other side (the corners whose branch normal is not the
+ * vertex's) gets a vertex of its own per distinct normal, appended after the mesh's vertices
+ * (their indices unchanged), so each side shades with its branch's normal. OBJ: core's
+ * v / vn / f lines (a crease's other-side corners with `vn` lines of their own), then the
+ * features as `l` polylines over the same
  * 1-based vertices: a group `g nonmanifold_curves`, a group `g boundaries` (closed ones
  * repeat their first vertex), and per kind of requested curve a group `g section_curves`,
  * `level_curves`, ... with one `l` per arrangement edge. */

@@ -18,7 +18,8 @@ y = 0, z = 0 (in a box on the octree lattice and one shifted 0.37 of a finest ce
   ones shifted off it. In the decoded .drc and in the .obj every corner's normal is its
   triangle's branch gradient (closed form, G or B by the sign of B - G at the centroid) within
   1 degree, and at crease points the two sides' normals differ by the angle between grad G
-  and grad B there (within 1 degree). Triangles whose side the 14-bit positions cannot decide
+  and grad B there (within 1 degree); likewise in the .ply (the sides on vertices of their
+  own). Triangles whose side the 14-bit positions cannot decide
   (centroid closer to the crease than 4 quantisation steps) are left out."""
 import json
 import math
@@ -119,6 +120,28 @@ def angle_deg(u, v):
     nu, nv = math.sqrt(sum(a * a for a in u)), math.sqrt(sum(a * a for a in v))
     d = sum(a * b for a, b in zip(u, v)) / (nu * nv)
     return math.degrees(math.acos(max(-1.0, min(1.0, d))))
+
+
+def parse_ply_corners(data):
+    """[(corner positions, corner normals)] per face of a binary PLY with float x y z nx ny nz
+    first among its vertex properties."""
+    head_end = data.index(b"end_header\n") + len(b"end_header\n")
+    head = data[:head_end].decode()
+    nv = int(head.split("element vertex ")[1].split()[0])
+    nt = int(head.split("element face ")[1].split()[0])
+    vhead, fhead = head.split("element vertex")[1].split("element face")
+    assert vhead.split("property")[4].split()[1] == "nx"
+    vbytes = 4 * vhead.count("property float") + vhead.count("property uchar")
+    fextra = 4 * fhead.count("property uint") + fhead.count("property uchar")
+    rows = [struct.unpack_from("<6f", data, head_end + vbytes * i) for i in range(nv)]
+    at, faces = head_end + vbytes * nv, []
+    for _ in range(nt):
+        assert data[at] == 3
+        ids = struct.unpack_from("<3i", data, at + 1)
+        faces.append(([list(rows[i][:3]) for i in ids], [list(rows[i][3:]) for i in ids]))
+        at += 13 + fextra
+    assert at == len(data)
+    return faces
 
 
 def parse_obj_corners(text):
@@ -314,7 +337,8 @@ class CurveOutputsTest(unittest.TestCase):
     def test_crease_sides_carry_their_branch_normals(self):
         depth, side = 5, 3.0
         cell = side / 2 ** depth
-        for shift, fmt in ((0.0, "drc"), (0.37 * cell, "drc"), (1e-3 * cell, "obj")):
+        for shift, fmt in ((0.0, "drc"), (0.37 * cell, "drc"), (1e-3 * cell, "obj"),
+                           (1e-3 * cell, "ply")):
             with self.subTest(shift=shift, format=fmt):
                 req = {"expr": GYROID_BALL, "box": box(side, shift), "depth": {"max": depth}}
                 f, out = self.run_request(req, fmt)
@@ -326,6 +350,9 @@ class CurveOutputsTest(unittest.TestCase):
                     faces = [(t, [nrm[d["index"][3 * f_ + k]] for k in range(3)])
                              for f_, t in enumerate(decoded_triangles(d))]
                     quantum = side / 2 ** 14  # 14-bit positions over the box
+                elif fmt == "ply":  # crease sides on vertices of their own
+                    faces = parse_ply_corners(out)
+                    quantum = 2e-7  # float32 positions
                 else:
                     faces = parse_obj_corners(out.decode())
                     quantum = 1e-7  # 9 significant digits
