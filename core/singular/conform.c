@@ -16,9 +16,13 @@ static bool carries_sheets(int type)
     return type == ISM_SING_NODE || type == ISM_SING_CUSP || type == ISM_SING_DEGENERATE;
 }
 
-static bool stop_now(const ism_locus_options *o)
+/* Between items: the reasons cf_poll stops on inside them (the budget is its own). */
+static bool stop_now(cf_run *r)
 {
-    return (o->cancel && *o->cancel) || (o->deadline_ms > 0 && ism_now_ms() > o->deadline_ms);
+    const ism_locus_options *o = r->o;
+    if ((o->cancel && *o->cancel) || (o->deadline_ms > 0 && ism_now_ms() > o->deadline_ms))
+        r->c.stopped = true;
+    return r->c.stopped;
 }
 
 static bool check_input(const ism_tape *f, const ism_locus_options *o, const ism_locus *l,
@@ -76,7 +80,7 @@ static bool run_curves(cf_run *r)
     bool ok = parent && idx && owner;
     if (ok)
         group_curves(r->l, parent, owner);
-    for (size_t g = 0; ok && g < nc && !stop_now(r->o); g++) {
+    for (size_t g = 0; ok && g < nc && !stop_now(r); g++) {
         if (r->l->curves[g].kind != ISM_CURVE_DOUBLE) {
             r->c.st->curves_skipped++;
             continue;
@@ -102,7 +106,7 @@ static bool run_items(cf_run *r)
     if (!run_curves(r))
         return false;
     for (size_t i = 0; i < r->l->npoints; i++) {
-        if (stop_now(r->o))
+        if (stop_now(r))
             return true;
         if (!carries_sheets(r->l->points[i].type) || r->point_vertex[i] != CF_NONE) {
             r->c.st->points_skipped++; /* no sheet, or already a curve's end vertex */
@@ -129,9 +133,13 @@ static void say_cut_short(const cf_run *r)
         points += carries_sheets(l->points[i].type) && l->points[i].cones < 0 &&
                   r->point_vertex[i] == CF_NONE;
     l->incomplete = true;
+    const ism_locus_options *o = r->o;
+    const char *why = o->cancel && *o->cancel ? "cancelled"
+                      : o->conform_work_max && r->c.st->work > o->conform_work_max
+                          ? "past its work budget"
+                          : "past the deadline";
     snprintf(l->incomplete_why, sizeof l->incomplete_why,
-             "conformance %s: %zu double curves, %zu points not conformed",
-             r->o->cancel && *r->o->cancel ? "cancelled" : "past the deadline", curves, points);
+             "conformance %s: %zu double curves, %zu points not conformed", why, curves, points);
 }
 
 /* The surgery's scale is the longest side's cell: the octree's cells are boxes, the surgery
@@ -159,14 +167,16 @@ bool ism_conform_mesh(const ism_tape *f, const ism_locus_options *o, ism_locus *
     cf_run r = {.l = locus, .o = o};
     double side = longest_side(o);
     r.c = (cf_ctx){.f = f, .m = mesh, .st = st, .cell = ldexp(side, -o->max_depth),
-                   .origin = {o->box[0], o->box[1], o->box[2]}, .extent = side};
+                   .origin = {o->box[0], o->box[1], o->box[2]}, .extent = side,
+                   .cancel = o->cancel, .deadline_ms = o->deadline_ms,
+                   .work_max = o->conform_work_max};
     r.c.ws = ism_eval_ws_new(f);
     r.point_vertex = malloc((locus->npoints + 1) * sizeof *r.point_vertex);
     bool ok = r.c.ws && r.point_vertex;
     for (size_t i = 0; ok && i < locus->npoints; i++)
         r.point_vertex[i] = CF_NONE;
     ok = ok && run_items(&r);
-    if (ok && stop_now(o))
+    if (ok && stop_now(&r))
         say_cut_short(&r);
     /* compaction also after a failure: what was refilled stays, nothing is left dead */
     bool compacted = r.c.dead == NULL || cf_compact(&r.c);

@@ -35,11 +35,26 @@ typedef struct ism_conform_stats {
                                   their rim (the polygoniser's confusion reached further) */
     size_t triangles_removed, triangles_added;
     size_t vertices_added, vertices_removed;
+    size_t work;               /* units of work done: candidate triangles tested, rim edges
+                                  and rim vertices checked, vertices projected, triangles
+                                  added (what the pass polls its deadline by) */
+    size_t polls;              /* deadline and cancel checks made (one per
+                                  ISM_CONFORM_POLL_WORK units at most) */
+    size_t items_stopped;      /* surgeries stopped in the middle (deadline, cancel, work
+                                  budget) and undone: their place left as the polygoniser
+                                  made it */
     double time_ms;
 } ism_conform_stats;
 
+/* The pass checks its deadline and cancel flag after at most this many units of work (a few
+ * microseconds each: about a millisecond between checks, and a check costs a clock read),
+ * inside every surgery, however large: one double curve can hold most of a mesh. */
+#define ISM_CONFORM_POLL_WORK 1024
+
 /* Makes mesh conform to locus (o->box and o->max_depth give the finest cell, the scale of
- * the surgery; o->cancel and o->deadline_ms are polled between items). Sets each point's
+ * the surgery; o->cancel, o->deadline_ms and o->conform_work_max are polled between items and
+ * inside each, every ISM_CONFORM_POLL_WORK units of work at most: a surgery stopped in the
+ * middle is undone, and the locus is marked incomplete). Sets each point's
  * `cones` (cones of faces at its vertex; 0 when it got none). The mesh stays welded and
  * consistently oriented per sheet; vertices that lost all their triangles are removed.
  * False only on bad input or allocation failure (err says which): the mesh is then still

@@ -45,6 +45,7 @@ static double distance_estimate(cf_ctx *c, const double p[3], double g[3], doubl
 
 void cf_project(cf_ctx *c, double p[3], double max_move)
 {
+    cf_poll(c, 1);
     double q[3] = {p[0], p[1], p[2]}, g[3], fv;
     double d0 = distance_estimate(c, q, g, &fv), d = d0;
     for (int it = 0; it < PROJECT_STEPS && d > PROJECT_DONE * c->cell && isfinite(d); it++) {
@@ -169,7 +170,7 @@ bool cf_fan(cf_ctx *c, const cf_loop *l, uint32_t apex, const double apex_pos[3]
     for (size_t i = 0; i < l->n; i++)
         outer[i] = l->v[i];
     bool ok = true;
-    for (int r = rings; ok && r >= 1; r--) {
+    for (int r = rings; ok && r >= 1 && !c->stopped; r--) {
         ok = make_ring(c, dirs, m, apex_pos, (double)r / (rings + 1), inner) &&
              (n == m ? cf_ladder(c, outer, inner, m, l->closed) : ladder_split(c, l, inner, m));
         n = m;

@@ -103,14 +103,14 @@ static int cmp_rim(const void *pa, const void *pb)
 }
 
 /* The rim edges of the dead triangles, each once, directed for the refill. */
-static bool rim_edges(const cf_ctx *c, const uint32_t *rm, size_t nrm, rim_edge **out,
+static bool rim_edges(cf_ctx *c, const uint32_t *rm, size_t nrm, rim_edge **out,
                       size_t *nout)
 {
     rim_edge *e = malloc((3 * nrm + 1) * sizeof *e);
     if (!e)
         return false;
     size_t n = 0;
-    for (size_t i = 0; i < nrm; i++) {
+    for (size_t i = 0; i < nrm && !cf_poll(c, 1); i++) {
         const uint32_t *v = c->m->tri + 3 * (size_t)rm[i];
         for (int k = 0; k < 3; k++) {
             uint32_t a = v[k], b = v[(k + 1) % 3], t = 0;
@@ -308,7 +308,7 @@ static bool select_triangles(cf_ctx *c, const cf_cutter *cut, uint32_t **out, si
     if (cand.n) /* qsort's array may not be NULL, even for no element */
         qsort(cand.t, cand.n, sizeof *cand.t, cmp_u32);
     size_t n = 0;
-    for (size_t i = 0; i < cand.n; i++)
+    for (size_t i = 0; i < cand.n && !cf_poll(c, 1); i++)
         if (!c->dead[cand.t[i]] && cut->near(c, cand.t[i], cut->arg))
             cand.t[n++] = cand.t[i];
     *out = cand.t;
@@ -471,6 +471,8 @@ bool cf_rim_clear(cf_ctx *c, const cf_loops *ls, double clearance)
 {
     for (size_t i = 0; i < ls->n; i++)
         for (size_t j = 0; j < ls->l[i].n; j++) {
+            if (cf_poll(c, 1))
+                return false; /* the caller sees c->stopped */
             const double *p = c->m->pos + 3 * (size_t)ls->l[i].v[j];
             double g[3];
             ism_eval_gradient(c->f, c->ws, p[0], p[1], p[2], g);
@@ -494,15 +496,18 @@ bool cf_cut_clean(cf_ctx *c, const cf_cutter *cut, double *radius, double max_ra
     *removed = NULL;
     *nremoved = 0;
     for (int k = 0;; k++) {
-        if (!cut_more(c, cut, removed, nremoved) || !rim_loops(c, removed, nremoved, ls)) {
+        bool ok = cut_more(c, cut, removed, nremoved) && rim_loops(c, removed, nremoved, ls);
+        bool clear = ok && (k == CF_MAX_GROW || ls->n == 0 || *radius * CF_GROW > max_radius ||
+                            cf_rim_clear(c, ls, CF_CLEAR_CELLS * c->cell));
+        if (!ok || c->stopped) { /* out of memory, or stopped: nothing cut */
             cf_undo(c, *removed, *nremoved, c->m->ntris, c->m->nverts);
+            cf_loops_free(ls);
             free(*removed);
             *removed = NULL;
             *nremoved = 0;
-            return false;
+            return ok;
         }
-        if (k == CF_MAX_GROW || ls->n == 0 || *radius * CF_GROW > max_radius ||
-            cf_rim_clear(c, ls, CF_CLEAR_CELLS * c->cell))
+        if (clear)
             return true;
         cf_loops_free(ls); /* wider: the removed triangles stay removed */
         *radius *= CF_GROW;

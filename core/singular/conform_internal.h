@@ -73,6 +73,12 @@ typedef struct cf_ctx {
     uint32_t *memo_i, *memo_gen;
     uint32_t gen;
     size_t cap_memo_d, cap_memo_i, cap_memo_gen;
+    /* Stopping (cf_poll): the caller's cancel flag, deadline and work budget */
+    const volatile int *cancel;
+    double deadline_ms;
+    size_t work_max;
+    size_t since_poll;      /* work since the last clock read */
+    bool stopped;           /* set once a poll found a reason to stop: every loop ends */
     double origin[3], extent; /* the box's low corner and longest side */
     double cell;            /* finest octree cell: the scale of the surgery */
     ism_conform_stats *st;
@@ -151,6 +157,11 @@ typedef struct cf_inc {
 } cf_inc;
 void cf_inc_begin(const cf_ctx *c, uint32_t v, cf_inc *it);
 bool cf_inc_next(const cf_ctx *c, cf_inc *it, uint32_t *t);
+/* Counts `work` units done and returns c->stopped: set when the cancel flag is up, the
+ * deadline has passed (read every ISM_CONFORM_POLL_WORK units) or the budget is spent. Loops
+ * whose length grows with the mesh call it per element and end when it returns true; a
+ * surgery that sees c->stopped is undone. */
+bool cf_poll(cf_ctx *c, size_t work);
 /* Forgets the memo (O(1)) and makes room for every vertex. False when out of memory. */
 bool cf_memo_reset(cf_ctx *c);
 /* Squared length of the longest edge of triangle t. */
@@ -213,7 +224,8 @@ typedef struct cf_cutter {
  * the cutter reads through its arg, times a factor; a cutter must select at a larger radius
  * every triangle it selected at a smaller one) until the rim is clear of other sheets
  * (cf_rim_clear), a bounded number of times and never beyond max_radius. Returns false on
- * allocation failure (nothing marked then). */
+ * allocation failure (nothing marked then); stopped (c->stopped), it marks nothing and
+ * returns no loop. */
 bool cf_cut_clean(cf_ctx *c, const cf_cutter *cut, double *radius, double max_radius,
                   cf_loops *ls, uint32_t **removed, size_t *nremoved);
 /* Undoes a cut whose refilling failed: revives the triangles, drops everything appended

@@ -3,6 +3,7 @@
  * triangles, and the final compaction (dead triangles and orphaned vertices dropped, normals
  * of the vertices where ∇f vanishes taken from their triangles as the welder does). */
 #include "core/singular/conform_internal.h"
+#include "core/util/clock.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -80,6 +81,23 @@ void cf_ctx_free(cf_ctx *c)
     cf_tgrid_free(&c->grid);
 }
 
+bool cf_poll(cf_ctx *c, size_t work)
+{
+    if (c->stopped)
+        return true;
+    c->st->work += work;
+    c->since_poll += work;
+    if (c->work_max && c->st->work > c->work_max)
+        c->stopped = true;
+    if (c->since_poll >= ISM_CONFORM_POLL_WORK) {
+        c->since_poll = 0;
+        c->st->polls++;
+        if ((c->cancel && *c->cancel) || (c->deadline_ms > 0 && ism_now_ms() > c->deadline_ms))
+            c->stopped = true;
+    }
+    return c->stopped;
+}
+
 bool cf_memo_reset(cf_ctx *c)
 {
     size_t n = c->m->nverts + 1;
@@ -119,6 +137,7 @@ bool cf_add_triangle(cf_ctx *c, uint32_t a, uint32_t b, uint32_t d)
 {
     if (a == b || b == d || a == d)
         return true; /* a ring that collapsed onto its neighbour: nothing to fill */
+    cf_poll(c, 1); /* the refill ends at its next ring once this says stop */
     if (!cf_grow((void **)&c->dead, &c->cap_dead, c->m->ntris + 1, 1) ||
         !ism_mesh_add_triangle(c->m, a, b, d))
         return false;
@@ -232,7 +251,7 @@ bool cf_longest_edge_near(cf_ctx *c, const double p[3], double r, double *out)
         return false;
     }
     double best = 0;
-    for (size_t i = 0; i < cand.n; i++) {
+    for (size_t i = 0; i < cand.n && !cf_poll(c, 1); i++) {
         const uint32_t *v = c->m->tri + 3 * (size_t)cand.t[i];
         for (int k = 0; k < 3; k++)
             if (dist2(c->m->pos + 3 * (size_t)v[k], p) <= r * r) {

@@ -96,6 +96,8 @@ bool cf_conform_point(cf_run *r, size_t i)
     double r0 = CF_RHO_CELLS * c->cell, longest;
     if (!cf_longest_edge_near(c, pt->p, r0, &longest))
         return false;
+    if (c->stopped)
+        return true;
     ball b = {{pt->p[0], pt->p[1], pt->p[2]}, fmax(r0, CF_RHO_EDGES * longest)};
     cf_cutter cut = {tri_in_ball, gather_ball, &b};
     size_t nt0 = c->m->ntris, nv0 = c->m->nverts, nrm;
@@ -106,6 +108,10 @@ bool cf_conform_point(cf_run *r, size_t i)
     for (;;) {
         if (!cf_cut_clean(c, &cut, &b.r, max_r, &ls, &rm, &nrm))
             return false;
+        if (c->stopped) {
+            c->st->items_stopped++;
+            return true;
+        }
         if (ls.n > 0 || b.r * SEEK_GROW > seek_r)
             break;
         /* nothing round the point yet (thin horns the polygoniser lost): look further */
@@ -124,10 +130,12 @@ bool cf_conform_point(cf_run *r, size_t i)
     }
     uint32_t apex = cf_add_vertex(c, pt->p, true);
     bool ok = apex != CF_NONE;
-    for (size_t k = 0; ok && k < ls.n; k++)
+    for (size_t k = 0; ok && k < ls.n && !c->stopped; k++)
         ok = cf_fan(c, &ls.l[k], apex, pt->p,
                     cf_ring_count(loop_mean_dist(c, &ls.l[k], pt->p), cf_loop_mean_edge(c, &ls.l[k])));
-    if (!ok) {
+    if (ok && c->stopped)
+        c->st->items_stopped++;
+    if (!ok || c->stopped) {
         cf_undo(c, rm, nrm, nt0, nv0);
     } else {
         r->point_vertex[i] = apex;

@@ -195,7 +195,7 @@ static bool longest_edge_near_curves(cf_ctx *c, tube *tb, double *out)
     cf_tgrid_begin(&c->grid);
     bool ok = gather_tube(c, tb, &cand);
     double best = 0;
-    for (size_t i = 0; ok && i < cand.n; i++) {
+    for (size_t i = 0; ok && i < cand.n && !cf_poll(c, 1); i++) {
         const uint32_t *v = c->m->tri + 3 * (size_t)cand.t[i];
         bool near = false;
         for (int k = 0; k < 3 && !near; k++) {
@@ -308,9 +308,9 @@ bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
                 tb.lo[j] = fmin(tb.lo[j], g.pts[k][3 * i + j]);
                 tb.hi[j] = fmax(tb.hi[j], g.pts[k][3 * i + j]);
             }
-    if (!longest_edge_near_curves(c, &tb, &longest)) {
+    if (!longest_edge_near_curves(c, &tb, &longest) || c->stopped) {
         group_free(&g);
-        return false;
+        return c->stopped; /* stopped: nothing cut yet */
     }
     tb.r = fmax(r0, CF_RHO_EDGES * longest);
     /* as wide as the sheets' crossing angle asks (no wider than the cut could grow) */
@@ -324,7 +324,9 @@ bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
     uint32_t *rm = NULL;
     cf_loops ls = {0};
     ok = cf_cut_clean(c, &cut, &tb.r, INFINITY, &ls, &rm, &nrm);
-    if (ok && ls.n == 0) {
+    if (ok && c->stopped) {
+        c->st->items_stopped++;
+    } else if (ok && ls.n == 0) {
         cf_undo(c, rm, nrm, nt0, nv0);
         c->st->curves_failed += g.n;
     } else if (ok) {
@@ -332,7 +334,9 @@ bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
             for (size_t i = 0; ok && i < g.npts[k]; i++)
                 ok = (g.cv[k][i] = curve_point_vertex(r, g.cu[k], g.pts[k], i, g.npts[k])) != CF_NONE;
         ok = ok && cf_zip_loops(c, g.pl, (const uint32_t *const *)g.cv, g.n, &ls, tb.r);
-        if (!ok) {
+        if (ok && c->stopped)
+            c->st->items_stopped++;
+        if (!ok || c->stopped) {
             cf_undo(c, rm, nrm, nt0, nv0);
             for (size_t i = 0; i < r->l->npoints; i++)
                 if (r->point_vertex[i] != CF_NONE && r->point_vertex[i] >= nv0)

@@ -191,7 +191,7 @@ static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot)
     uint32_t *outer = rows, *inner = rows + l->n;
     for (size_t i = 0; i < l->n; i++)
         outer[i] = l->v[i];
-    for (int r = rings; r >= 1; r--) {
+    for (int r = rings; r >= 1 && !c->stopped; r--) {
         double t = (double)r / (rings + 1);
         for (size_t i = 0; i < l->n; i++) {
             const double *v = c->m->pos + 3 * (size_t)l->v[i], *q = foot + 3 * i;
@@ -479,7 +479,7 @@ static void smooth_ids(int *cid, size_t n, bool closed)
 bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, size_t npl,
                   const cf_loops *ls, double rho)
 {
-    for (size_t k = 0; k < ls->n; k++) {
+    for (size_t k = 0; k < ls->n && !c->stopped; k++) {
         const cf_loop *l = &ls->l[k];
         double *u = malloc(l->n * sizeof *u), *foot = malloc(3 * l->n * sizeof *foot);
         int *cid = malloc(l->n * sizeof *cid);

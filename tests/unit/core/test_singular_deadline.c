@@ -4,7 +4,8 @@
  * still made. Steiner's Roman surface x²y² + y²z² + z²x² + xyz has work for every stage: 3
  * double lines on the axes (from its closed form: f = ∇f = 0 on each axis for |t| ≤ 1/2, the
  * rest of each axis a whisker), a triple point and 6 pinch points. Asserts flags and counts,
- * never wall time. */
+ * never wall time: inside one surgery the pass is stopped by its work budget, which the same
+ * poll as the deadline checks. */
 #include <criterion/criterion.h>
 #include <string.h>
 
@@ -168,6 +169,71 @@ Test(singular_deadline, conformance_stops_and_leaves_the_mesh)
     cr_expect_eq(cs.curves_conformed + cs.points_conformed, 0);
     cr_expect_eq(m.ntris, nt);
     cr_expect_eq(m.nverts, nv);
+    ism_mesh_free(&m);
+    ism_locus_free(&l);
+    ism_tape_free(t);
+}
+
+/* The locus and the polygoniser's mesh of the test surface, for the conformance pass. */
+static void locus_and_mesh(const ism_tape *t, ism_locus_options *lo, ism_locus *l, ism_mesh *m)
+{
+    ism_poly_options po;
+    poly_options(&po);
+    locus_options(&po, lo);
+    ism_locus_init(l);
+    ism_error err;
+    cr_assert(ism_locus_find(t, lo, l, &err), "%s", err.message);
+    cr_assert_not(l->incomplete, "%s", l->incomplete_why);
+    ism_mesh_init(m);
+    ism_poly_stats ps;
+    cr_assert_eq(ism_polygonise(t, &po, m, &ps, &err), ISM_POLY_OK, "%s", err.message);
+}
+
+/* Inside one surgery: Steiner's 6 double half-axes all meet at the triple point, so the pass
+ * has ONE item (a group of curves cut and refilled at once). Without a limit it polls more
+ * than once, once per ISM_CONFORM_POLL_WORK units at least; with a work budget of half what
+ * that item needs (the deadline's stand-in that depends on no clock: the same poll stops
+ * both) it stops in the middle of the item, undoes it — the mesh is the polygoniser's, byte
+ * for byte — says why, and overruns the budget by less than one poll's worth. */
+Test(singular_deadline, conformance_stops_inside_one_surgery)
+{
+    ism_tape *t = compile();
+    ism_locus_options lo;
+    ism_locus l;
+    ism_mesh m;
+    ism_error err;
+    ism_conform_stats full;
+    locus_and_mesh(t, &lo, &l, &m);
+    cr_assert(ism_conform_mesh(t, &lo, &l, &m, &full, &err), "%s", err.message);
+    cr_assert_eq(full.curves_conformed, 6, "%zu curves conformed", full.curves_conformed);
+    cr_expect_eq(full.items_stopped, 0);
+    cr_expect_geq(full.polls, full.work / ISM_CONFORM_POLL_WORK);
+    cr_expect_geq(full.polls, 2, "one surgery of %zu units polled %zu times", full.work,
+                  full.polls);
+    ism_mesh_free(&m);
+    ism_locus_free(&l);
+
+    ism_mesh before;
+    ism_locus unused;
+    locus_and_mesh(t, &lo, &l, &m);
+    locus_and_mesh(t, &lo, &unused, &before);
+    ism_locus_free(&unused);
+    lo.conform_work_max = full.work / 2;
+    ism_conform_stats cut;
+    cr_assert(ism_conform_mesh(t, &lo, &l, &m, &cut, &err), "%s", err.message);
+    cr_expect(l.incomplete);
+    cr_expect(says(&l, "conformance") && says(&l, "budget"), "why: %s", l.incomplete_why);
+    cr_expect_eq(cut.items_stopped, 1);
+    cr_expect_eq(cut.curves_conformed + cut.points_conformed, 0);
+    cr_expect_gt(cut.work, ISM_CONFORM_POLL_WORK, "stopped before the surgery began");
+    cr_expect_leq(cut.work, lo.conform_work_max + ISM_CONFORM_POLL_WORK);
+    cr_log_info("one surgery: %zu units, %zu polls; budget %zu: stopped at %zu", full.work,
+                full.polls, lo.conform_work_max, cut.work);
+    cr_assert_eq(m.ntris, before.ntris);
+    cr_assert_eq(m.nverts, before.nverts);
+    cr_expect(memcmp(m.tri, before.tri, 3 * m.ntris * sizeof *m.tri) == 0, "triangles differ");
+    cr_expect(memcmp(m.pos, before.pos, 3 * m.nverts * sizeof *m.pos) == 0, "positions differ");
+    ism_mesh_free(&before);
     ism_mesh_free(&m);
     ism_locus_free(&l);
     ism_tape_free(t);
