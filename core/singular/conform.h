@@ -15,41 +15,8 @@
 #include <stdbool.h>
 #include "core/expr/expr.h"
 #include "core/mesh/mesh.h"
+#include "core/singular/conform_stats.h"
 #include "core/singular/locus.h"
-
-typedef struct ism_conform_stats {
-    size_t points_conformed;   /* points made one vertex with at least one cone of faces */
-    size_t points_failed;      /* sheet-carrying points with no hole loop around them (no
-                                  mesh there), or out of the box: cones = 0 */
-    size_t points_short_cones; /* nodes with fewer than the 2 cones their Hessian promises
-                                  (a nappe the polygoniser lost beyond the ball) */
-    size_t points_skipped;     /* isolated points (no sheet), pinch and triple points (made
-                                  vertices as ends of their curves) */
-    size_t curves_conformed;   /* double curves zipped into the mesh */
-    size_t curves_failed;      /* double curves with no hole loop along them */
-    size_t curves_skipped;     /* whiskers (no sheet; they stay in the locus) */
-    size_t loops_fallback;     /* hole loops that could not be zipped to their curve and were
-                                  closed by a fan to their projected centroid instead (no
-                                  crack, but not conforming there) */
-    size_t cuts_widened;       /* cuts made again wider because another sheet came near
-                                  their rim (the polygoniser's confusion reached further) */
-    size_t triangles_removed, triangles_added;
-    size_t vertices_added, vertices_removed;
-    size_t work;               /* units of work done: candidate triangles tested, rim edges
-                                  and rim vertices checked, vertices projected, triangles
-                                  added (what the pass polls its deadline by) */
-    size_t polls;              /* deadline and cancel checks made (one per
-                                  ISM_CONFORM_POLL_WORK units at most) */
-    size_t items_stopped;      /* surgeries stopped in the middle (deadline, cancel, work
-                                  budget) and undone: their place left as the polygoniser
-                                  made it */
-    double time_ms;
-} ism_conform_stats;
-
-/* The pass checks its deadline and cancel flag after at most this many units of work (a few
- * microseconds each: about a millisecond between checks, and a check costs a clock read),
- * inside every surgery, however large: one double curve can hold most of a mesh. */
-#define ISM_CONFORM_POLL_WORK 1024
 
 /* Makes mesh conform to locus (o->box and o->max_depth give the finest cell, the scale of
  * the surgery; o->cancel, o->deadline_ms and o->conform_work_max are polled between items and

@@ -8,8 +8,10 @@
 #include <stdint.h>
 #include <stdbool.h>
 #include "core/eval/eval.h"
-#include "core/singular/conform.h"
+#include "core/mesh/mesh.h"
+#include "core/singular/conform_stats.h"
 #include "core/singular/key_map.h"
+#include "core/singular/locus.h"
 
 #define CF_NONE UINT32_MAX
 

@@ -5,7 +5,7 @@
 #define ISM_CURVE_EVENTS_H
 
 #include <stdbool.h>
-#include "core/singular/curve_trace.h"
+#include "core/singular/curve_tracer.h"
 
 /* nxt (a corrected point outside the box, one step from cur inside it) becomes the curve's
  * point on the box's face the segment cur→nxt leaves through: exactly on the face plane,

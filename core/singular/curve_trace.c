@@ -62,20 +62,6 @@
 /* Deadline and cancel are polled every this many step attempts (each a few Hessians). */
 #define CTRACE_POLL 16
 
-int ism_ctracer_side(const ism_ctracer *tr, int k, double v)
-{
-    double slack = tr->jet.tol; /* a curve in a face wanders by rounding around it */
-    return v < tr->box[k] - slack ? -1 : v > tr->box[k + 3] + slack ? 1 : 0;
-}
-
-bool ism_ctracer_inside(const ism_ctracer *tr, const double p[3])
-{
-    for (int k = 0; k < 3; k++)
-        if (ism_ctracer_side(tr, k, p[k]) != 0 || isnan(p[k]))
-            return false;
-    return true;
-}
-
 static void stop(ism_ctracer *tr, const char *why)
 {
     if (!tr->stop)

@@ -9,9 +9,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
-#include "core/singular/curve_index.h"
-#include "core/singular/curve_jet.h"
-#include "core/singular/locus.h"
+#include "core/singular/curve_tracer.h"
 
 /* A vertex of a traced path: point index ≥ 0 when it is a pinch point (the curve changes
  * kind there). */
@@ -30,24 +28,6 @@ typedef struct ism_cpath {
     bool closed;    /* came back to its first vertex (not repeated) */
 } ism_cpath;
 
-/* Everything one call of the curve stage shares. */
-typedef struct ism_ctracer {
-    ism_cjet jet;
-    ism_cindex idx;
-    ism_locus *io;
-    const ism_locus_options *o;
-    double box[6];
-    double diag;        /* box diagonal */
-    double cell;        /* finest search cell: smallest box side / 2^max_depth */
-    double hmax, hmin;  /* step bounds */
-    double delta;       /* a box is explained by a segment passing this close to its q */
-    double snap;        /* a path ends at an existing point it passes this close to */
-    size_t vertices_left, attempts_left;
-    unsigned polls;
-    bool stop;          /* budget, deadline or cancel: no more tracing */
-    bool oom;
-    const char *why;    /* reason for stop */
-} ism_ctracer;
 
 /* Traces from start (a converged curve point whose frame points the way to go) until an
  * end, appending vertices to path (start first). closable: watch for a return to start.
@@ -60,13 +40,5 @@ void ism_ctrace(ism_ctracer *tr, const ism_cpoint *start, int ignore_point, bool
 /* Spends one unit of work (a step attempt, a seed): false, and tr->stop set with a reason,
  * when the budget is spent, the deadline passed or the caller cancelled. */
 bool ism_ctracer_go(ism_ctracer *tr);
-
-/* Whether p is in the box, up to Newton's tolerance (a curve lying in a face of the box, as
- * the axes of xyz = 0 in [0, 1]³, stays inside). */
-bool ism_ctracer_inside(const ism_ctracer *tr, const double p[3]);
-
-/* -1 / +1 when coordinate k of a point, v, is beyond the box's low / high face (with the
- * same tolerance), else 0. */
-int ism_ctracer_side(const ism_ctracer *tr, int k, double v);
 
 #endif

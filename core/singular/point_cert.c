@@ -3,7 +3,6 @@
 #include "core/singular/deflate.h"
 #include "core/singular/krawczyk.h"
 #include "core/singular/miranda.h"
-#include "core/singular/points.h"
 #include "core/singular/search.h"
 #include "core/singular/typecert.h"
 #include "core/eval/interval_ops.h"

@@ -11,6 +11,10 @@
 #include "core/expr/expr.h"
 #include "core/singular/locus.h"
 
+/* Largest half-width of a certificate box, × the search box diagonal (the issue's bound:
+ * an enclosure of width <= 1e-9 × diagonal). */
+#define ISM_SING_CERT_REL 0.5e-9
+
 typedef struct ism_jet4_ws ism_jet4_ws;
 
 /* The workspaces (the partial-derivative tapes are built at first use). */

@@ -23,11 +23,8 @@
 
 #include <stdbool.h>
 #include "core/singular/locus.h"
+#include "core/singular/point_cert.h" /* ISM_SING_CERT_REL */
 #include "core/expr/expr.h"
-
-/* Largest half-width of a certificate box, × the search box diagonal (the issue's bound:
- * an enclosure of width <= 1e-9 × diagonal). */
-#define ISM_SING_CERT_REL 0.5e-9
 
 /* Adds the points found from out->boxes (the search's output for the same f and o) to
  * out->points, sorted by position (z, y, x), and updates the boxes as described above.
