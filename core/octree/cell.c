@@ -70,7 +70,7 @@ static bool emit_zero_tile(face_walk *w, const ism_tile *tile)
         pts[i].flags = ISM_FP_ZERO;
     }
     double reach = 0;
-    bool ok = ism_triangulate_loop(&cx->s, pts, cx->nbp, reach, NULL, w->out);
+    bool ok = ism_triangulate_loop(&cx->s, pts, cx->nbp, reach, NULL, 0, w->out);
     free(pts);
     cx->stats.polygons++;
     return ok;
@@ -169,7 +169,7 @@ static bool face_polygon(ism_cell_ctx *cx, const ism_node *nd, const ism_fpoint 
     }
     if (!owns_face(nd, face))
         return true;
-    return ism_triangulate_loop(&cx->s, p, n, reach, box, out);
+    return ism_triangulate_loop(&cx->s, p, n, reach, box, cx->max_error, out);
 }
 
 bool ism_cell_polygonise(ism_cell_ctx *cx, int32_t node, ism_cell_out *out)
@@ -235,7 +235,7 @@ bool ism_cell_polygonise(ism_cell_ctx *cx, int32_t node, ism_cell_out *out)
         int face = ism_face_plane(box, p, lp->n);
         if (face >= 0 && !face_polygon(cx, nd, p, lp->n, face, reach, box, out))
             return false;
-        if (face < 0 && !ism_triangulate_loop(&cx->s, p, lp->n, reach, box, out))
+        if (face < 0 && !ism_triangulate_loop(&cx->s, p, lp->n, reach, box, cx->max_error, out))
             return false;
     }
     cx->stats.polygons += polygons;

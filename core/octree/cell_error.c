@@ -17,21 +17,10 @@ typedef struct root_pt {
     int face[2];
 } root_pt;
 
-/* |f| / |∇f| at p: the first-order distance to the surface; +inf where it is undefined. */
-static double dist_at(ism_sampler *s, const double p[3])
-{
-    double g[3];
-    double f = ism_sample_grad(s, p, g);
-    double gl = ism_norm3(g);
-    if (!isfinite(f) || !isfinite(gl) || !(gl > 0))
-        return INFINITY;
-    return fabs(f) / gl;
-}
-
 static double midpoint_dist(ism_sampler *s, const double *a, const double *b)
 {
     double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
-    return dist_at(s, m);
+    return ism_sample_dist(s, m);
 }
 
 static double centroid_dist(ism_sampler *s, const double *a, const double *b, const double *c)
@@ -39,7 +28,7 @@ static double centroid_dist(ism_sampler *s, const double *a, const double *b, co
     double m[3];
     for (int k = 0; k < 3; k++)
         m[k] = (a[k] + b[k] + c[k]) / 3;
-    return dist_at(s, m);
+    return ism_sample_dist(s, m);
 }
 
 /* The polygon's centre moved toward f = 0 along ∇f, as triangulate.c fans from it. */
@@ -76,7 +65,7 @@ static double loop_error(ism_sampler *s, const double (*p)[3], int n)
     }
     double c[3];
     centre_on_surface(s, p, n, c);
-    worst = fmax(worst, dist_at(s, c));
+    worst = fmax(worst, ism_sample_dist(s, c));
     for (int i = 0; i < n; i++) {
         worst = fmax(worst, midpoint_dist(s, c, p[i]));
         worst = fmax(worst, centroid_dist(s, c, p[i], p[(i + 1) % n]));

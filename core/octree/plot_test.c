@@ -10,10 +10,15 @@
 #include <string.h>
 
 /* Under an error bound, a node at most this many times the bound across is judged by its
- * measured error: its corner gradients may disagree (a crease, as where a max() joins two
- * surfaces, is never flat and would otherwise be refined to depth.max whatever the bound),
- * and an edge whose gradients disagree is searched for two roots instead of assumed to
- * hold them. Whatever a node this small could hide is about as small as the bound. */
+ * measured error alone: its corner gradients may disagree, an edge may hold two roots and
+ * a face may be crossed by two curves. Near a crease (where a max() joins two surfaces)
+ * all three hold at every level — the solid's wedge pokes through edges and faces — and
+ * the node would otherwise be refined to depth.max whatever the bound. The polygoniser
+ * finds both roots of such an edge and pairs a face's four crossings (face_lines.c); what
+ * the leaf really emits is measured after polygonising, and a leaf that missed the bound
+ * is split in the next round (refine.h). Whatever a node this small could hide is about as
+ * small as the bound. Gyroid ball at E = 0.0334 (box ±1.5, depth 10): 101,900 -> 19,526
+ * triangles, max centroid distance 0.0303 both, χ −18 both. */
 #define CREASE_CELL_ERRORS 4.0
 
 static bool normals_agree(const double (*n)[3], double normal_cos)
@@ -60,7 +65,7 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
         return false;
 
     double roots[12][3], centroid[3] = {0, 0, 0};
-    int nroots = 0, face_cross[6] = {0};
+    int nroots = 0, face_cross[6] = {0}, ndisagree = 0, disagree[12];
     for (int e = 0; e < 12; e++) {
         int c0, c1, faces[2];
         ism_cube_edge(e, &c0, &c1, faces);
@@ -69,10 +74,12 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
         bool crosses = (f[c0] < 0) != (f[c1] < 0) || f[c0] == 0 || f[c1] == 0;
         if (!crosses) {
             /* signs agree, gradients do not: maybe two roots (a small node under an error
-             * bound looks for them, as the edge roots will) */
-            if (ism_dot3(n[c0], n[c1]) <= fl->gradient_test &&
-                !(measured_only && no_roots(s, fl, k, c0, c1)))
-                return false;
+             * bound leaves them to the edge roots and the measurement, below) */
+            if (ism_dot3(n[c0], n[c1]) <= fl->gradient_test) {
+                if (!measured_only)
+                    return false;
+                disagree[ndisagree++] = e;
+            }
             continue;
         }
         /* One secant step is enough to judge flatness: the exact roots come later. */
@@ -85,11 +92,20 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
         face_cross[faces[0]]++;
         face_cross[faces[1]]++;
     }
-    for (int k = 0; k < 6; k++)
+    for (int k = 0; k < 6 && !measured_only; k++)
         if (face_cross[k] > 2)
             return false; /* a saddle on a face: two curves, look closer */
-    if (nroots == 0)
+    if (nroots == 0) {
+        /* no edge crossed: two roots on an edge are the only sign of the surface here
+         * (a tube or a wedge tip between the corners), so it is looked for */
+        for (int i = 0; i < ndisagree; i++) {
+            int c0, c1, faces[2];
+            ism_cube_edge(disagree[i], &c0, &c1, faces);
+            if (!no_roots(s, fl, k, c0, c1))
+                return false;
+        }
         return true;
+    }
     double err;
     if (fl->max_error > 0 && ism_cell_error(s, k, &err))
         return err <= fl->max_error;

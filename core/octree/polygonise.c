@@ -314,6 +314,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         cx->breaks = &breaks;
         cx->roots = roots;
         cx->stitch_tol = o->stitch_tol;
+        cx->max_error = o->max_error;
         if (!(cx->s.ws = ism_eval_ws_new(f)) || !ism_cell_cache_init(&cx->cache))
             goto done;
     }

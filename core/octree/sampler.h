@@ -49,6 +49,17 @@ static inline double ism_dist3(const double a[3], const double b[3])
     return ism_norm3(d);
 }
 
+/* |f| / |∇f| at p: the first-order distance to f = 0; +inf where it is undefined. */
+static inline double ism_sample_dist(ism_sampler *s, const double p[3])
+{
+    double g[3];
+    double f = ism_sample_grad(s, p, g);
+    double gl = ism_norm3(g);
+    if (!isfinite(f) || !isfinite(gl) || !(gl > 0))
+        return INFINITY;
+    return fabs(f) / gl;
+}
+
 /* -1, 0 or +1. */
 static inline int ism_sign(double v) { return (v > 0) - (v < 0); }
 

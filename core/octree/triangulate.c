@@ -1,7 +1,8 @@
 /* triangulate.c — triangles from stitched polygons. A triangle or quadrilateral is split
  * directly (a quad along its shorter diagonal); a larger polygon (crack repair puts extra
  * points on coarse nodes' faces) is fanned around its centre, projected onto f = 0 by a few
- * Newton steps along ∇f. Each polygon is wound so that its normal agrees with the mean
+ * Newton steps along ∇f — or, under an error bound, from one of its corners when that fan
+ * measures within the bound. Each polygon is wound so that its normal agrees with the mean
  * gradient at its points: consistent orientation wherever ∇f does. */
 #include "core/octree/triangulate.h"
 #include "core/octree/face_flat.h"
@@ -149,9 +150,11 @@ static bool fan_in_face(const ism_cell_out *out, size_t base, size_t n, const do
     return false;
 }
 
-/* Fans the polygon from the corner whose fan has the largest smallest angle, among the
- * corners whose fan has no triangle lying in a face of the node (any corner if none). */
-static bool fan_from_best_corner(ism_cell_out *out, size_t base, size_t n, const double node[6])
+/* The corner whose fan has the largest smallest angle, among the corners whose fan has no
+ * triangle lying in a face of the node (any corner if none); *in_face: the chosen fan has
+ * one. */
+static size_t best_corner(const ism_cell_out *out, size_t base, size_t n, const double node[6],
+                          bool *in_face)
 {
     const ism_fpoint *q = out->verts + base;
     size_t best = 0;
@@ -168,16 +171,68 @@ static bool fan_from_best_corner(ism_cell_out *out, size_t base, size_t n, const
         if (worst < best_cos)
             best_cos = worst, best = c;
     }
+    *in_face = best_cos > 1;
+    return best;
+}
+
+static bool fan_from_corner(ism_cell_out *out, size_t base, size_t n, size_t c)
+{
     uint32_t b = (uint32_t)base;
     for (size_t i = 1; i + 1 < n; i++)
-        if (!push_tri(out, b + (uint32_t)best, b + (uint32_t)((best + i) % n),
-                      b + (uint32_t)((best + i + 1) % n)))
+        if (!push_tri(out, b + (uint32_t)c, b + (uint32_t)((c + i) % n),
+                      b + (uint32_t)((c + i + 1) % n)))
             return false;
     return true;
 }
 
+static bool fan_from_best_corner(ism_cell_out *out, size_t base, size_t n, const double node[6])
+{
+    bool in_face;
+    return fan_from_corner(out, base, n, best_corner(out, base, n, node, &in_face));
+}
+
+/* The largest distance to f = 0 at the centroids of the fan of q[0..n) from corner c and at
+ * the middles of its diagonals (its sides are the polygon's, whatever the triangulation),
+ * stopping once it passes bound. */
+static double corner_fan_error(ism_sampler *s, const ism_fpoint *q, size_t n, size_t c,
+                               double bound)
+{
+    double worst = 0;
+    const double *a = q[c].p;
+    for (size_t i = 1; i + 1 < n && worst <= bound; i++) {
+        const double *b = q[(c + i) % n].p, *d = q[(c + i + 1) % n].p;
+        double m[3];
+        for (int k = 0; k < 3; k++)
+            m[k] = (a[k] + b[k] + d[k]) / 3;
+        worst = fmax(worst, ism_sample_dist(s, m));
+        if (i + 2 < n) { /* a-d is a diagonal */
+            for (int k = 0; k < 3; k++)
+                m[k] = 0.5 * (a[k] + d[k]);
+            worst = fmax(worst, ism_sample_dist(s, m));
+        }
+    }
+    return worst;
+}
+
+/* Under max_error, a polygon of five or more corners fanned from its best corner (n − 2
+ * triangles) rather than from its centre (n triangles and one more vertex) when that fan
+ * measures within the bound; false (and nothing emitted) when it does not. The sphere at
+ * E = 7.9e-4 (box ±1.5): 21,224 -> 17,192 triangles, max centroid distance 6.5e-4 -> 6.7e-4;
+ * the gyroid ball at 0.0334: 22,612 -> 17,236. */
+static bool corner_fan_within(ism_sampler *s, ism_cell_out *out, size_t base, size_t n,
+                              const double node[6], double max_error, bool *emitted)
+{
+    *emitted = false;
+    bool in_face;
+    size_t c = best_corner(out, base, n, node, &in_face);
+    if (in_face || corner_fan_error(s, out->verts + base, n, c, max_error) > max_error)
+        return true;
+    *emitted = true;
+    return fan_from_corner(out, base, n, c);
+}
+
 bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
-                          const double node[6], ism_cell_out *out)
+                          const double node[6], double max_error, ism_cell_out *out)
 {
     if (n < 3)
         return true;
@@ -205,6 +260,11 @@ bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, doubl
             return push_tri(out, b, b + 1, b + 2) && push_tri(out, b, b + 2, b + 3);
         return push_tri(out, b + 1, b + 2, b + 3) && push_tri(out, b + 1, b + 3, b);
     }
+    bool emitted = false;
+    if (max_error > 0 && !corner_fan_within(s, out, base, n, node, max_error, &emitted))
+        return false;
+    if (emitted)
+        return true;
     ism_fpoint c;
     if (!centre_point(s, out->verts + base, n, reach, node, &c) ||
         fan_in_face(out, base, n, c.p, node))

@@ -12,9 +12,11 @@
  * polygon's centre may move when projected onto the surface; node (lo xyz, hi xyz; NULL for
  * no bound) is the box the projected centre must stay in, and no triangle lies in one of
  * its faces unless the polygon leaves no other choice (face_flat.h: the node across that
- * face could emit the same triangle). */
+ * face could emit the same triangle). max_error > 0: a polygon of five or more corners is
+ * fanned from a corner, without a centre, when that fan's centroids and diagonals' middles
+ * lie within max_error of f = 0 (0: always from the centre). */
 bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
-                          const double node[6], ism_cell_out *out);
+                          const double node[6], double max_error, ism_cell_out *out);
 
 /* Triangulates the closed polygon pts[0..n) (n >= 2) as a fan around apex, a point inside
  * the node where the polygon's sheet meets other sheets. */

@@ -4,10 +4,13 @@
  * shifted off it by 1e-3 and 0.37 of a finest cell; refinement rounds meet a bound the
  * octree's estimate alone missed; the cost grows like area / E (halving E
  * about doubles the triangles, never 4x); depth.max stops the refinement and the octree then
- * counts the cells that missed E; without max_error the mesh is what it was. */
+ * counts the cells that missed E; without max_error the mesh is what it was. Fewer triangles
+ * for the same error: the sphere within 3x the fewest any mesh with its vertices on it can
+ * have, and the gyroid ball's crease no longer sending cells to depth.max. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <string.h>
+#include "core/eval/eval.h"
 #include "poly_fixture.h"
 
 static const ism_param sphere_r[] = {{"r", 1}};
@@ -105,6 +108,38 @@ Test(accuracy, torus_within_the_bound) { check_bound(&torus, torus_dist, 1e-3); 
 
 Test(accuracy, sphere_tight_bound) { check_bound(&sphere, sphere_dist, 4e-4); }
 
+/* Fewest triangles any mesh with its vertices on the unit sphere can have with every
+ * centroid within e of it: an inscribed equilateral triangle of side L has its centroid
+ * L² / 6 inside, so L² <= 6 e and each covers at most (√3 / 4) 6 e of the area 4π. */
+static double sphere_floor(double e) { return 4 * M_PI / (sqrt(3) / 4 * 6 * e); }
+
+/* Under max_error, pentagons and hexagons are fanned from a corner (n − 2 triangles) when
+ * that measures within E, not from a centre point (n triangles): at E = 7.9e-4 (marching
+ * cubes' centroid distance at 64³ in this box, 17,192 triangles) the sphere takes 17,192
+ * (2.81 × the floor) in all three boxes, and within E; centre fans took 21,224 (3.47 ×). */
+Test(accuracy, sphere_corner_fans_near_the_floor)
+{
+    static const double shifts[] = {0, 1e-3 * FINEST, 0.37 * FINEST};
+    const double e = 7.9e-4;
+    ism_tape *t = pf_compile(&sphere);
+    for (size_t i = (size_t)pf_first_box(); i < sizeof shifts / sizeof shifts[0]; i++) {
+        ism_mesh m;
+        ism_poly_stats st;
+        run_bounded(t, shifts[i], e, SAFETY_DEPTH, &m, &st);
+        cr_expect_leq((double)m.ntris, 3 * sphere_floor(e), "shift %g: %zu triangles, floor %.0f",
+                      shifts[i], m.ntris, sphere_floor(e));
+        double cen, mid;
+        between_vertices(&m, sphere_dist, &cen, &mid);
+        cr_expect_leq(fmax(cen, mid), e, "shift %g: %g", shifts[i], fmax(cen, mid));
+        pf_props pr;
+        pf_measure(&m, t, &pr);
+        cr_expect_eq(pr.euler, 2);
+        cr_expect_eq(pr.boundary_edges + pr.nonmanifold_edges, 0);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
+
 /* A bound the octree's own estimate misses on the lattice-aligned torus (a fan from a centre
  * that finer neighbours' tiles moved measured 6.3e-4 after one round): the refinement
  * rounds split those leaves until the mesh meets it. The rounds reuse the last round's
@@ -183,5 +218,126 @@ Test(accuracy, no_bound_keeps_the_depth_driven_mesh)
     cr_expect_eq(m.ntris, 5192);
     cr_expect_eq(st.error_missed_nodes, 0);
     ism_mesh_free(&m);
+    ism_tape_free(t);
+}
+
+/* The gyroid ball's crease, where max() switches from the gyroid to the ball: the solid's
+ * wedge pokes through cell edges (two roots) and faces (four crossings) at every level, so
+ * a cell there was split down to depth.max whatever E asked (depth 8: 47,096 triangles,
+ * depth 10: 101,900 at E = 0.0334). Now a cell at most 4 E across is judged by what it
+ * emits: E, not depth.max, sets the mesh (depth 10 within 1.25x of depth 8; 1.07x
+ * measured), every centroid and edge midpoint lies within E of f = 0 — proved without
+ * |f| / |∇f|: a point of the other sign within E along one of the two branches' gradients
+ * or the 26 lattice directions — and the topology stays the gyroid ball's (χ −18, one
+ * closed component). */
+static const ism_param gyroid_k[] = {{"k", 4}};
+static const pf_surface gyroid_ball = {
+    "max(sin(k*x)*cos(k*y) + sin(k*y)*cos(k*z) + sin(k*z)*cos(k*x), x^2 + y^2 + z^2 - 1.96)",
+    gyroid_k, 1, NULL, 0};
+static const pf_surface gyroid_part = {
+    "sin(k*x)*cos(k*y) + sin(k*y)*cos(k*z) + sin(k*z)*cos(k*x)", gyroid_k, 1, NULL, 0};
+static const pf_surface ball_part = {"x^2 + y^2 + z^2 - 1.96", NULL, 0, NULL, 0};
+#define CREASE_E 0.0334 /* bench_accuracy's 64³ marching cubes distance on this surface */
+
+typedef struct within_e {
+    const ism_tape *f, *branch[2];
+    ism_eval_ws *ws, *bws[2];
+} within_e;
+
+/* A point of f's other sign (or a zero) within e of p: f = 0 lies within e of p. */
+static bool zero_within(within_e *w, const double p[3], double e)
+{
+    double fp = ism_eval_point(w->f, w->ws, p[0], p[1], p[2]);
+    if (fp == 0)
+        return true;
+    double dirs[2 + 26][3];
+    int n = 0;
+    for (int b = 0; b < 2; b++) {
+        double g[3];
+        ism_eval_gradient(w->branch[b], w->bws[b], p[0], p[1], p[2], g);
+        double gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        if (gl > 0)
+            for (int a = 0; a < 3; a++)
+                dirs[n][a] = g[a] / gl;
+        n += gl > 0;
+    }
+    for (int i = 0; i < 27; i++) {
+        int d[3] = {i % 3 - 1, i / 3 % 3 - 1, i / 9 - 1};
+        double l = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (l > 0)
+            for (int a = 0; a < 3; a++)
+                dirs[n][a] = d[a] / l;
+        n += l > 0;
+    }
+    for (int i = 0; i < n; i++)
+        for (int s = -1; s <= 1; s += 2) {
+            double q[3];
+            for (int a = 0; a < 3; a++)
+                q[a] = p[a] + s * e * dirs[i][a];
+            double fq = ism_eval_point(w->f, w->ws, q[0], q[1], q[2]);
+            if ((fq <= 0) != (fp < 0) || fq == 0)
+                return true;
+        }
+    return false;
+}
+
+/* Triangles whose centroid or an edge midpoint has no zero proved within e. */
+static size_t far_triangles(within_e *w, const ism_mesh *m, double e)
+{
+    size_t far = 0;
+    for (size_t t = 0; t < m->ntris; t++) {
+        const double *v[3];
+        for (int k = 0; k < 3; k++)
+            v[k] = m->pos + 3 * (size_t)m->tri[3 * t + k];
+        double c[3];
+        for (int a = 0; a < 3; a++)
+            c[a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
+        bool ok = zero_within(w, c, e);
+        for (int k = 0; k < 3 && ok; k++) {
+            const double *p = v[k], *q = v[(k + 1) % 3];
+            double h[3] = {(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2};
+            ok = zero_within(w, h, e);
+        }
+        far += !ok;
+    }
+    return far;
+}
+
+Test(accuracy, crease_does_not_set_the_depth)
+{
+    static const double shifts[] = {0, 1e-3 * FINEST, 0.37 * FINEST};
+    ism_tape *t = pf_compile(&gyroid_ball);
+    within_e w = {t, {pf_compile(&gyroid_part), pf_compile(&ball_part)}, NULL, {NULL, NULL}};
+    w.ws = ism_eval_ws_new(t);
+    for (int b = 0; b < 2; b++)
+        w.bws[b] = ism_eval_ws_new(w.branch[b]);
+    for (size_t i = (size_t)pf_first_box(); i < sizeof shifts / sizeof shifts[0]; i++) {
+        ism_mesh m;
+        ism_poly_stats st;
+        run_bounded(t, shifts[i], CREASE_E, SAFETY_DEPTH, &m, &st);
+        cr_expect_eq(st.error_missed_nodes, 0, "shift %g", shifts[i]);
+        size_t far = far_triangles(&w, &m, CREASE_E);
+        cr_expect_eq(far, 0, "shift %g: %zu of %zu triangles farther than E", shifts[i], far,
+                     m.ntris);
+        pf_props pr;
+        pf_measure(&m, t, &pr);
+        cr_expect_eq(pr.euler, -18, "shift %g: χ %ld", shifts[i], pr.euler);
+        cr_expect_eq(pr.components, 1, "shift %g", shifts[i]);
+        cr_expect_eq(pr.boundary_edges + pr.nonmanifold_edges, 0, "shift %g", shifts[i]);
+        if (i == 2) { /* the depth comparison, off the lattice */
+            ism_mesh coarse;
+            ism_poly_stats sc;
+            run_bounded(t, shifts[i], CREASE_E, SAFETY_DEPTH - 2, &coarse, &sc);
+            cr_expect_leq(m.ntris * 4, coarse.ntris * 5, "depth %d: %zu triangles, depth %d: %zu",
+                          SAFETY_DEPTH, m.ntris, SAFETY_DEPTH - 2, coarse.ntris);
+            ism_mesh_free(&coarse);
+        }
+        ism_mesh_free(&m);
+    }
+    for (int b = 0; b < 2; b++) {
+        ism_eval_ws_free(w.bws[b]);
+        ism_tape_free((ism_tape *)w.branch[b]);
+    }
+    ism_eval_ws_free(w.ws);
     ism_tape_free(t);
 }
