@@ -60,24 +60,30 @@ static void run_bounded(const ism_tape *t, double shift, double e, int max_depth
     run_rounds(t, shift, e, max_depth, false, m, st);
 }
 
+/* Triangle t's points between its vertices: [0] its centroid, [1..3] its edges' midpoints. */
+static void between_points(const ism_mesh *m, size_t t, double pts[4][3])
+{
+    const double *v[3];
+    for (int k = 0; k < 3; k++)
+        v[k] = m->pos + 3 * (size_t)m->tri[3 * t + k];
+    for (int a = 0; a < 3; a++) {
+        pts[0][a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
+        for (int k = 0; k < 3; k++)
+            pts[1 + k][a] = (v[k][a] + v[(k + 1) % 3][a]) / 2;
+    }
+}
+
 /* The largest distance at triangle centroids and at edge midpoints. */
 static void between_vertices(const ism_mesh *m, double (*dist)(const double *), double *cen,
                              double *mid)
 {
     *cen = *mid = 0;
     for (size_t t = 0; t < m->ntris; t++) {
-        const double *v[3];
-        for (int k = 0; k < 3; k++)
-            v[k] = m->pos + 3 * (size_t)m->tri[3 * t + k];
-        double c[3];
-        for (int a = 0; a < 3; a++)
-            c[a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
-        *cen = fmax(*cen, dist(c));
-        for (int k = 0; k < 3; k++) {
-            const double *p = v[k], *q = v[(k + 1) % 3];
-            double h[3] = {(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2};
-            *mid = fmax(*mid, dist(h));
-        }
+        double pts[4][3];
+        between_points(m, t, pts);
+        *cen = fmax(*cen, dist(pts[0]));
+        for (int k = 1; k < 4; k++)
+            *mid = fmax(*mid, dist(pts[k]));
     }
 }
 
@@ -286,18 +292,11 @@ static size_t far_triangles(within_e *w, const ism_mesh *m, double e)
 {
     size_t far = 0;
     for (size_t t = 0; t < m->ntris; t++) {
-        const double *v[3];
-        for (int k = 0; k < 3; k++)
-            v[k] = m->pos + 3 * (size_t)m->tri[3 * t + k];
-        double c[3];
-        for (int a = 0; a < 3; a++)
-            c[a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
-        bool ok = zero_within(w, c, e);
-        for (int k = 0; k < 3 && ok; k++) {
-            const double *p = v[k], *q = v[(k + 1) % 3];
-            double h[3] = {(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2};
-            ok = zero_within(w, h, e);
-        }
+        double pts[4][3];
+        between_points(m, t, pts);
+        bool ok = true;
+        for (int k = 0; k < 4 && ok; k++)
+            ok = zero_within(w, pts[k], e);
         far += !ok;
     }
     return far;
