@@ -1,5 +1,6 @@
 /* quality_pass.c — hands the locus's points, double-sheet ranges and the curve cut's edges to
- * the quality pass as protection (quality_pass.h). */
+ * the quality pass as protection, and renumbers them as its collapses renumbered the mesh
+ * (quality_pass.h). */
 #include "core/remesh/quality_pass.h"
 
 #include <stdlib.h>
@@ -31,7 +32,35 @@ static uint32_t *sheet_labels(const ism_locus *locus, const ism_cut *cut, const 
     return label;
 }
 
-bool ism_quality_pass(const ism_tape *f, const ism_locus *locus, const ism_cut *cut,
+/* The cut's edges and triangle parents in the renumbered mesh (a cut edge's vertices are
+ * locked: never gone). */
+static void renumber_cut(ism_cut *cut, const ism_remesh_renumber *ren)
+{
+    for (size_t i = 0; i < cut->nedges; i++) {
+        cut->edges[i].a = ren->vert[cut->edges[i].a];
+        cut->edges[i].b = ren->vert[cut->edges[i].b];
+    }
+    for (size_t t = 0; cut->tri_parent && t < ren->ntris; t++)
+        if (ren->tri[t] != ISM_REMESH_GONE)
+            cut->tri_parent[ren->tri[t]] = cut->tri_parent[t];
+}
+
+/* Each double sheet's range of triangles in the renumbered mesh: the kept triangles before
+ * its first and in it (kept triangles keep their order, so a range stays a range). */
+static void renumber_sheets(ism_locus *locus, const ism_remesh_renumber *ren)
+{
+    for (size_t i = 0; i < locus->nsheets; i++) {
+        ism_double_sheet *s = &locus->sheets[i];
+        size_t before = 0, in = 0;
+        for (size_t t = 0; t < s->first_triangle + s->triangles && t < ren->ntris; t++)
+            if (ren->tri[t] != ISM_REMESH_GONE)
+                *(t < s->first_triangle ? &before : &in) += 1;
+        s->first_triangle = before;
+        s->triangles = in;
+    }
+}
+
+bool ism_quality_pass(const ism_tape *f, ism_locus *locus, ism_cut *cut,
                       double max_error, const volatile int *cancel, ism_mesh *mesh,
                       ism_remesh_stats *st, ism_error *err)
 {
@@ -51,7 +80,13 @@ bool ism_quality_pass(const ism_tape *f, const ism_locus *locus, const ism_cut *
                                 .locked_edges = edges, .nlocked_edges = ne,
                                 .locked_points = points, .nlocked_points = np,
                                 .cancel = cancel};
-        ok = ism_remesh_quality(mesh, &o, st, err);
+        ism_remesh_renumber ren;
+        ok = ism_remesh_quality(mesh, &o, st, &ren, err);
+        if (ren.vert && cut)
+            renumber_cut(cut, &ren);
+        if (ren.vert && !(cut && cut->tri_parent))
+            renumber_sheets(locus, &ren);
+        ism_remesh_renumber_free(&ren);
     } else {
         memset(st, 0, sizeof *st);
         ism_error_set(err, "quality pass: out of memory");

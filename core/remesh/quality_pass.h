@@ -16,10 +16,13 @@ enum ism_quality { ISM_QUALITY_RAW = 0, ISM_QUALITY_GOOD = 1, ISM_QUALITY_COUNT 
 const char *ism_quality_name(enum ism_quality q);
 int ism_quality_lookup(const char *name);
 
-/* Runs the pass on mesh: the locus's singular points' vertices stay, each double sheet's triangles are a patch of their own, and cut's edges (may be
- * NULL) are never flipped. max_error as in ism_remesh_options. False with err set when out of
- * memory (the mesh is then still valid). */
-bool ism_quality_pass(const ism_tape *f, const ism_locus *locus, const ism_cut *cut,
+/* Runs the pass on mesh: the locus's singular points' vertices stay, each double sheet's
+ * triangles are a patch of their own, and cut's edges (may be NULL) are never flipped or
+ * collapsed. What collapses renumber is renumbered with the mesh: cut's edges and triangle
+ * parents, and the double sheets' triangle ranges when they index this mesh (no cut parents).
+ * max_error as in ism_remesh_options. False with err set when out of memory (the mesh is then
+ * still valid, and still agrees with the locus and the cut). */
+bool ism_quality_pass(const ism_tape *f, ism_locus *locus, ism_cut *cut,
                       double max_error, const volatile int *cancel, ism_mesh *mesh,
                       ism_remesh_stats *st, ism_error *err);
 

@@ -5,9 +5,11 @@
  * never flipped or moved: boundary and non-manifold edges, edges between differently
  * labelled triangles or given as locked (curves), crease edges (a sharp dihedral that is no
  * fold), vertices on any of them, vertices where several cones meet, where ∇f vanishes, and
- * the vertex at each given point (singular points). Triangle count, vertex count and
- * each triangle's label are kept, so χ, components, non-manifold edges and points and
- * boundary loops cannot change. */
+ * the vertex at each given point (singular points). Needles and caps that flips and moves
+ * cannot mend lose an edge by collapse (a free vertex merged into a neighbour, where the
+ * link condition holds: the topology is kept), and the mesh is renumbered after; each
+ * triangle keeps its label, features keep their vertices, so χ, components, non-manifold
+ * edges and points and boundary loops cannot change. */
 #ifndef ISM_REMESH_H
 #define ISM_REMESH_H
 
@@ -34,16 +36,32 @@ typedef struct ism_remesh_options {
 
 typedef struct ism_remesh_stats {
     size_t flips, moves;           /* edge flips made, vertex moves accepted */
+    size_t collapses;              /* edges collapsed (each removes a vertex, two triangles) */
     size_t locked_vertices;        /* vertices the pass left alone */
     double min_angle_before, min_angle_after; /* degrees, over non-degenerate triangles */
     double time_ms;
 } ism_remesh_stats;
 
-/* Runs the pass on m in place (same vertices and triangles by count; positions, normals and
- * the triangles' corners change). False with err set when out of memory or f is missing;
- * m is then still a valid mesh of the surface (possibly partly improved). */
+/* An index of the mesh before the pass that the pass removed. */
+#define ISM_REMESH_GONE UINT32_MAX
+
+/* How the pass renumbered the mesh: per vertex and per triangle before it, the index after
+ * (ISM_REMESH_GONE when collapsed away); the rest keep their order. For whatever the caller
+ * keeps beside the mesh by index (curve edges, triangle ranges and labels). */
+typedef struct ism_remesh_renumber {
+    uint32_t *vert, *tri;
+    size_t nverts, ntris;          /* the counts before the pass */
+} ism_remesh_renumber;
+
+void ism_remesh_renumber_free(ism_remesh_renumber *ren);
+
+/* Runs the pass on m in place: positions, normals and the triangles' corners change, and
+ * collapses remove vertices and triangles (the segments are renumbered with them); ren (may
+ * be NULL) gets the renumbering. False with err set when out of memory or f is missing; m is
+ * then still a valid mesh of the surface (possibly partly improved), and ren says how it was
+ * renumbered. */
 bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_stats *st,
-                        ism_error *err);
+                        ism_remesh_renumber *ren, ism_error *err);
 
 /* The smallest angle (degrees) over m's non-degenerate triangles; 90 for none. */
 double ism_remesh_min_angle(const ism_mesh *m);

@@ -187,7 +187,7 @@ size_t rm_flip_active(rm_pass *p, bool *ok)
     *ok = true;
     for (size_t t = 0; t < m->ntris && *ok; t++) {
         const uint32_t *v = m->tri + 3 * t;
-        if (p->active[v[0]] || p->active[v[1]] || p->active[v[2]])
+        if (!p->r.dead[t] && (p->active[v[0]] || p->active[v[1]] || p->active[v[2]]))
             for (int k = 0; k < 3 && *ok; k++)
                 if (v[k] < v[(k + 1) % 3])
                     *ok = push(&s, v[k], v[(k + 1) % 3]);

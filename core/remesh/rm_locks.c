@@ -1,8 +1,9 @@
 /* rm_locks.c — what the quality pass must not touch. An edge is free when it is an oriented
  * manifold edge (two triangles running opposite ways), its triangles carry one label, it is
  * not in the caller's locked list and it is no crease; a vertex is free when every edge at it
- * is free, its triangles form one closed fan, ∇f does not vanish there and it is not at (or
- * next to) a given point. Everything else keeps its place and its edges. */
+ * is free, its triangles form one closed fan, ∇f does not vanish there, it ends no segment of
+ * the mesh (a one-dimensional part) and it is not at a given point. Everything else keeps its
+ * place and its edges. */
 #include "core/remesh/rm_pass.h"
 
 #include <math.h>
@@ -158,6 +159,8 @@ void rm_lock_vertices(rm_pass *p, const ism_remesh_options *o)
         r->locked[v] = vanishes || !fan_free(p, (uint32_t)v);
         p->slide[v] = !vanishes && r->locked[v] && r->count[v] && box_slidable(p, (uint32_t)v);
     }
+    for (size_t s = 0; s < 2 * r->m->nsegs; s++)
+        r->locked[r->m->seg[s]] = 1, p->slide[r->m->seg[s]] = 0;
     for (size_t i = 0; i < o->nlocked_points; i++) {
         uint32_t v = nearest_vertex(r, o->locked_points + 3 * i);
         if (v != UINT32_MAX)

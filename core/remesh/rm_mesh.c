@@ -1,5 +1,6 @@
-/* rm_mesh.c — the quality pass's incidence (each vertex's triangles, updated by flips), edge
- * look-ups by scanning a vertex's few triangles, and the shared angle geometry. */
+/* rm_mesh.c — the quality pass's incidence (each vertex's triangles, updated by flips and
+ * collapses), edge look-ups by scanning a vertex's few triangles, and the shared angle
+ * geometry. */
 #include "core/remesh/rm_mesh.h"
 
 #include <math.h>
@@ -10,20 +11,24 @@ bool rm_mesh_build(rm_mesh *r, ism_mesh *m)
 {
     size_t nv = m->nverts;
     r->m = m;
-    r->start = calloc(nv + 1, sizeof *r->start);
+    r->start = calloc(nv ? nv : 1, sizeof *r->start);
+    r->room = calloc(nv ? nv : 1, sizeof *r->room);
     r->count = calloc(nv ? nv : 1, sizeof *r->count);
     r->locked = calloc(nv ? nv : 1, 1);
-    if (!r->start || !r->count || !r->locked)
+    r->gone = calloc(nv ? nv : 1, 1);
+    r->dead = calloc(m->ntris ? m->ntris : 1, 1);
+    if (!r->start || !r->room || !r->count || !r->locked || !r->gone || !r->dead)
         return false;
     for (size_t i = 0; i < 3 * m->ntris; i++)
         r->count[m->tri[i]]++;
     size_t total = 0;
     for (size_t v = 0; v < nv; v++) {
         r->start[v] = (uint32_t)total;
-        total += r->count[v] + ISM_RM_SLACK;
+        r->room[v] = r->count[v] + ISM_RM_SLACK;
+        total += r->room[v];
         r->count[v] = 0;
     }
-    r->start[nv] = (uint32_t)total;
+    r->nvt = r->cap_vt = total;
     if (total >= UINT32_MAX || !(r->vt = malloc((total ? total : 1) * sizeof *r->vt)))
         return false;
     for (size_t t = 0; t < m->ntris; t++)
@@ -42,7 +47,10 @@ bool rm_mesh_build(rm_mesh *r, ism_mesh *m)
 void rm_mesh_free(rm_mesh *r)
 {
     free(r->start);
+    free(r->room);
     free(r->count);
+    free(r->gone);
+    free(r->dead);
     free(r->vt);
     free(r->locked);
     free(r->locked_edges);
@@ -106,7 +114,29 @@ void rm_slot_remove(rm_mesh *r, uint32_t v, uint32_t t)
 
 bool rm_slot_room(const rm_mesh *r, uint32_t v)
 {
-    return r->start[v] + r->count[v] < r->start[v + 1];
+    return r->count[v] < r->room[v];
+}
+
+bool rm_slot_reserve(rm_mesh *r, uint32_t v, uint32_t n)
+{
+    if (r->count[v] + (size_t)n <= r->room[v])
+        return true;
+    size_t room = 2 * ((size_t)r->count[v] + n);
+    if (r->nvt + room >= UINT32_MAX)
+        return false;
+    if (r->nvt + room > r->cap_vt) {
+        size_t cap = 2 * (r->nvt + room);
+        uint32_t *vt = realloc(r->vt, cap * sizeof *vt);
+        if (!vt)
+            return false;
+        r->vt = vt;
+        r->cap_vt = cap;
+    }
+    memcpy(r->vt + r->nvt, r->vt + r->start[v], r->count[v] * sizeof *r->vt);
+    r->start[v] = (uint32_t)r->nvt;
+    r->room[v] = (uint32_t)room;
+    r->nvt += room;
+    return true;
 }
 
 bool rm_slot_add(rm_mesh *r, uint32_t v, uint32_t t)

@@ -1,7 +1,8 @@
 /* rm_mesh.h — the quality pass's working view of a triangle mesh (rm_mesh.c): each vertex's
- * incident triangles in a fixed-capacity slot (so edge flips can update them in place), the
- * vertices and edges that must not change, the per-triangle patch labels, and the small
- * geometric helpers (angles, normals) the flip and relaxation steps share. */
+ * incident triangles in a slot with room to spare (so edge flips can update them in place;
+ * a collapse moves a slot that overflows to the end of the array), the vertices and edges
+ * that must not change, the triangles and vertices collapses removed, the per-triangle patch
+ * labels, and the small geometric helpers (angles, normals) the steps share. */
 #ifndef ISM_RM_MESH_H
 #define ISM_RM_MESH_H
 
@@ -17,10 +18,14 @@
 
 typedef struct rm_mesh {
     ism_mesh *m;
-    uint32_t *start;          /* nverts + 1: slot of vertex v is vt[start[v] .. start[v+1]) */
+    uint32_t *start;          /* slot of vertex v: vt[start[v] .. start[v] + room[v]) */
+    uint32_t *room;           /* capacity of vertex v's slot */
     uint32_t *count;          /* triangles in vertex v's slot */
     uint32_t *vt;             /* incident triangle indices */
+    size_t nvt, cap_vt;       /* entries of vt handed out to slots, allocated */
     uint8_t *locked;          /* per vertex: never moved */
+    uint8_t *gone;            /* per vertex: removed by a collapse (in no triangle) */
+    uint8_t *dead;            /* per triangle: removed by a collapse (in no slot) */
     const uint32_t *label;    /* per triangle, or NULL: flips only between equal labels */
     uint64_t *locked_edges;   /* sorted keys (rm_edge_key) of edges never flipped */
     size_t nlocked_edges;
@@ -52,6 +57,9 @@ void rm_slot_remove(rm_mesh *r, uint32_t v, uint32_t t);
 bool rm_slot_add(rm_mesh *r, uint32_t v, uint32_t t);
 /* True when v's slot has room for one more triangle. */
 bool rm_slot_room(const rm_mesh *r, uint32_t v);
+/* Makes room for n more triangles in v's slot (moving it to the end of vt when it is too
+ * small). False when out of memory or vt would pass 2^32 entries. */
+bool rm_slot_reserve(rm_mesh *r, uint32_t v, uint32_t n);
 
 /* Geometry. */
 double rm_dist(const double *p, const double *q);

@@ -1,7 +1,9 @@
 /* rm_pass.h — the state one quality pass shares between its steps (remesh.c sequences them):
  * the incidence, f and a workspace to evaluate it, unit normals from ∇f at the vertices, and
- * the steps themselves: protection (rm_locks.c), Lawson flips (rm_flip.c), tangential
- * relaxation with projection onto f = 0 (rm_relax.c). */
+ * the steps themselves: protection (rm_locks.c), Lawson flips (rm_flip.c), edge collapses
+ * (rm_collapse.c), tangential relaxation with projection onto f = 0 (rm_relax.c), box
+ * boundary slides (rm_slide.c), and the renumbering that drops what collapses removed
+ * (rm_compact.c). */
 #ifndef ISM_RM_PASS_H
 #define ISM_RM_PASS_H
 
@@ -27,7 +29,10 @@ typedef struct rm_pass {
     double max_error;
     uint8_t *active;       /* per vertex: relaxed in this round (near a poor triangle) */
     uint8_t *slide;        /* per vertex: on a box face's boundary curve, may slide along it */
-    size_t flips, moves;
+    double centroid_bound;  /* collapses may put a centroid this far from f = 0 (the mesh's
+                               farthest before the pass, at most max_error) */
+    double midpoint_bound;  /* the same for edge midpoints */
+    size_t flips, moves, collapses;
 } rm_pass;
 
 /* Unit normals and the vanishing threshold from ∇f at every vertex. False when out of memory. */
@@ -48,6 +53,19 @@ bool rm_edge_free(const rm_pass *p, uint32_t a, uint32_t b);
 /* Lawson flips starting from the edges of triangles with an active vertex, each flip
  * queueing its quad's four sides; returns the flips made. *ok false when out of memory. */
 size_t rm_flip_active(rm_pass *p, bool *ok);
+
+/* Collapses edges of triangles with a small angle (rm_collapse.c) where the topology, the
+ * features and the distance to f = 0 allow it; returns the collapses made. Removed
+ * triangles are marked dead and removed vertices gone (rm_compact drops them). *ok false
+ * when out of memory. */
+size_t rm_collapse_active(rm_pass *p, bool *ok);
+/* Sets the bounds collapses keep to (centroid_bound, midpoint_bound) from the mesh as it is. */
+void rm_collapse_bounds(rm_pass *p);
+
+/* Drops the dead triangles and gone vertices from the mesh, keeping the others in order
+ * (triangles, segments renumbered). With ren, ren gets the old-to-new maps. False when out of
+ * memory (the mesh is then unchanged). */
+bool rm_compact(rm_mesh *r, ism_remesh_renumber *ren);
 
 /* Marks the active vertices: those of triangles whose smallest angle is below
  * ISM_RM_COMFORT_DEG, and their neighbours. Returns how many there are. */

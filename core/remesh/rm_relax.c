@@ -176,7 +176,8 @@ size_t rm_mark_active(rm_pass *p)
     memset(p->active, 0, m->nverts);
     for (size_t t = 0; t < m->ntris; t++) {
         const uint32_t *v = m->tri + 3 * t;
-        if (rm_min_sine(m->pos + 3 * v[0], m->pos + 3 * v[1], m->pos + 3 * v[2]) < comfort)
+        if (!r->dead[t] &&
+            rm_min_sine(m->pos + 3 * v[0], m->pos + 3 * v[1], m->pos + 3 * v[2]) < comfort)
             p->active[v[0]] = p->active[v[1]] = p->active[v[2]] = 1;
     }
     for (size_t v = 0; v < m->nverts; v++) /* 1 = near a poor triangle, 2 = its neighbour */

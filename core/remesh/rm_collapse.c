@@ -1,0 +1,326 @@
+/* rm_collapse.c — edge collapses that remove needles and caps no flip or move can mend
+ * (a short edge beside long ones: the conformance balls around Kummer's nodes, Steiner's
+ * pinch points, the box cut). A free vertex v is merged into a neighbour w (w keeps its
+ * place, so it may be locked: a feature vertex stays on its feature): v's two triangles on
+ * vw go, its others take w instead of v. Taken only when the mesh keeps saying the same
+ * thing — the link condition (no vertex but the two opposite ones is a neighbour of both v
+ * and w, counted over every sheet at w), so the topology is kept exactly; every new triangle
+ * faces the fan's way and bends no more than a crease against its outer neighbour; the
+ * smallest angle of the fan grows; and no new centroid or edge midpoint lies farther from
+ * f = 0 than the farthest of the fan's before. */
+#include "core/remesh/rm_pass.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Triangles whose smallest angle is under this (degrees) have their edges tried: the
+ * issue's goal on smooth surfaces; better triangles are left to flips and relaxation. */
+#define ISM_RM_COLLAPSE_DEG 20.0
+/* A removed vertex, and the kept one after the merge, have at most this many triangles:
+ * higher valences make poor angles anyway, and it bounds the fans held on the stack. */
+#define ISM_RM_COLLAPSE_MAX_DEGREE 16
+/* A new triangle facing more than this from the old fan's normal is a fold (the relaxation's
+ * limit, ISM_RM_MAX_TURN_DEG in rm_relax.c). */
+#define ISM_RM_COLLAPSE_MAX_TURN_DEG 60.0
+/* A new triangle may bend against its outer neighbour by at most this (degrees), or by no more
+ * than the old triangle did: the crease angle of rm_locks.c, so a collapse makes no crease. */
+#define ISM_RM_COLLAPSE_MAX_BEND_DEG 40.0
+/* Sweeps over the triangles per call: a collapse leaves its neighbours' needles for the next. */
+#define ISM_RM_COLLAPSE_SWEEPS 3
+
+/* A candidate: v merged into w, t1 = (v, w, c) and t2 = (w, v, d) removed. */
+typedef struct merge {
+    uint32_t v, w, t1, t2, c, d;
+    double after; /* smallest sine of the new triangles */
+} merge;
+
+static double dot3(const double *u, const double *v)
+{
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+}
+
+static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * v; }
+
+static uint32_t slot(const rm_mesh *r, uint32_t v, uint32_t i) { return r->vt[r->start[v] + i]; }
+
+/* The corners of triangle t with v at x (x may be v's own position). */
+static void corners(const rm_pass *p, uint32_t t, uint32_t v, const double *x, const double *q[3])
+{
+    const uint32_t *c = p->r.m->tri + 3 * t;
+    for (int k = 0; k < 3; k++)
+        q[k] = c[k] == v ? x : P(p, c[k]);
+}
+
+/* The triangles on vw and their third vertices; v free, vw an oriented manifold edge. */
+static bool find_merge(const rm_pass *p, uint32_t v, uint32_t w, merge *g)
+{
+    const rm_mesh *r = &p->r;
+    uint32_t t[2];
+    int n;
+    if (r->locked[v] || r->gone[v] || r->gone[w] || r->count[v] < 3 ||
+        r->count[v] > ISM_RM_COLLAPSE_MAX_DEGREE || !rm_edge_triangles(r, v, w, t, &n))
+        return false;
+    const uint32_t *tri = r->m->tri;
+    g->v = v, g->w = w, g->t1 = t[0], g->t2 = t[1];
+    g->c = tri[3 * t[0] + (rm_corner(r->m, t[0], v) + 2) % 3];
+    g->d = tri[3 * t[1] + (rm_corner(r->m, t[1], w) + 2) % 3];
+    return g->c != g->d && r->count[w] + r->count[v] - 4 <= ISM_RM_COLLAPSE_MAX_DEGREE;
+}
+
+/* v's neighbours into nb (at most 2 × ISM_RM_COLLAPSE_MAX_DEGREE); returns how many. */
+static int neighbours(const rm_mesh *r, uint32_t v, uint32_t *nb)
+{
+    int n = 0;
+    for (uint32_t i = 0; i < r->count[v]; i++) {
+        const uint32_t *t = r->m->tri + 3 * slot(r, v, i);
+        for (int k = 0; k < 3; k++) {
+            int j = 0;
+            while (j < n && nb[j] != t[k])
+                j++;
+            if (t[k] != v && j == n)
+                nb[n++] = t[k];
+        }
+    }
+    return n;
+}
+
+/* The link condition: no neighbour of w other than v, c, d is a neighbour of v; and where v
+ * has three triangles, w has none on c and d already (the merge would repeat it). */
+static bool link_ok(const rm_mesh *r, const merge *g)
+{
+    uint32_t nb[2 * ISM_RM_COLLAPSE_MAX_DEGREE];
+    int n = neighbours(r, g->v, nb);
+    for (uint32_t i = 0; i < r->count[g->w]; i++) {
+        const uint32_t *t = r->m->tri + 3 * slot(r, g->w, i);
+        int cd = 0;
+        for (int k = 0; k < 3; k++) {
+            uint32_t x = t[k];
+            cd += x == g->c || x == g->d;
+            if (x == g->w || x == g->v || x == g->c || x == g->d)
+                continue;
+            for (int j = 0; j < n; j++)
+                if (nb[j] == x)
+                    return false;
+        }
+        if (cd == 2 && r->count[g->v] == 3)
+            return false;
+    }
+    return true;
+}
+
+/* The triangle across edge {a, b} from triangle t, or UINT32_MAX when ab is no manifold edge. */
+static uint32_t across(const rm_mesh *r, uint32_t a, uint32_t b, uint32_t t)
+{
+    uint32_t two[2];
+    int n;
+    if (!rm_edge_triangles(r, a, b, two, &n))
+        return UINT32_MAX;
+    return two[0] == t ? two[1] : two[0];
+}
+
+/* cos of the bend between normals n (length ln) and m (lm). */
+static double cos_bend(const double *n, double ln, const double *m, double lm)
+{
+    return ln > 0 && lm > 0 ? dot3(n, m) / (ln * lm) : -1;
+}
+
+/* New triangle t (v at w's place) faces the fan's way and bends against the triangle across
+ * its outer edge no more than the crease angle or than it did before; *sine gets its
+ * smallest angle's sine. */
+static bool new_triangle_ok(const rm_pass *p, const merge *g, uint32_t t, const double *fan_n,
+                            double *sine)
+{
+    const double *q[3], *o[3];
+    corners(p, t, g->v, P(p, g->w), q);
+    corners(p, t, g->v, P(p, g->v), o);
+    double n[3], m[3], u[3];
+    double ln = rm_cross(q[0], q[1], q[2], n), lo = rm_cross(o[0], o[1], o[2], m);
+    if (!(cos_bend(fan_n, sqrt(dot3(fan_n, fan_n)), n, ln) >
+          cos(ISM_RM_COLLAPSE_MAX_TURN_DEG * M_PI / 180)))
+        return false;
+    *sine = rm_min_sine(q[0], q[1], q[2]);
+    const uint32_t *c = p->r.m->tri + 3 * t;
+    int k = rm_corner(p->r.m, t, g->v);
+    uint32_t a = c[(k + 1) % 3], b = c[(k + 2) % 3], s = across(&p->r, a, b, t);
+    if (s == UINT32_MAX)
+        return true;
+    const uint32_t *z = p->r.m->tri + 3 * s;
+    double lu = rm_cross(P(p, z[0]), P(p, z[1]), P(p, z[2]), u);
+    double now = cos_bend(n, ln, u, lu), before = cos_bend(m, lo, u, lu);
+    return now >= fmin(before, cos(ISM_RM_COLLAPSE_MAX_BEND_DEG * M_PI / 180));
+}
+
+/* Distance from f = 0 at the midpoint of ab and at the centroid of abc. */
+static double mid_distance(rm_pass *p, const double *a, const double *b)
+{
+    double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
+    return rm_distance(p, m);
+}
+
+static double centroid_distance(rm_pass *p, const double *q[3])
+{
+    double c[3];
+    for (int k = 0; k < 3; k++)
+        c[k] = (q[0][k] + q[1][k] + q[2][k]) / 3;
+    return rm_distance(p, c);
+}
+
+/* No new centroid or new edge's midpoint farther from f = 0 than the farthest of the old
+ * fan's centroids, resp. midpoints of v's edges, or than the mesh's farthest before the pass
+ * (within the error bound). */
+static bool distance_ok(rm_pass *p, const merge *g)
+{
+    const rm_mesh *r = &p->r;
+    double old_c = 0, old_m = 0, new_c = 0, new_m = 0;
+    for (uint32_t i = 0; i < r->count[g->v]; i++) {
+        uint32_t t = slot(r, g->v, i);
+        const double *q[3];
+        corners(p, t, g->v, P(p, g->v), q);
+        old_c = fmax(old_c, centroid_distance(p, q));
+        const uint32_t *c = r->m->tri + 3 * t;
+        uint32_t next = c[(rm_corner(r->m, t, g->v) + 1) % 3];
+        old_m = fmax(old_m, mid_distance(p, P(p, g->v), P(p, next)));
+        if (t == g->t1 || t == g->t2)
+            continue;
+        corners(p, t, g->v, P(p, g->w), q);
+        new_c = fmax(new_c, centroid_distance(p, q));
+        if (next != g->c && next != g->d)
+            new_m = fmax(new_m, mid_distance(p, P(p, g->w), P(p, next)));
+    }
+    return new_c <= fmax(old_c, p->centroid_bound) && new_m <= fmax(old_m, p->midpoint_bound);
+}
+
+/* Every test of merging g->v into g->w; g->after gets the new fan's smallest sine. The
+ * smallest angle must grow, and no more triangles be poor (under ISM_RM_COLLAPSE_DEG) than
+ * before: a needle traded for two thin triangles is no gain. */
+static bool merge_ok(rm_pass *p, merge *g)
+{
+    const rm_mesh *r = &p->r;
+    if (!link_ok(r, g))
+        return false;
+    rm_fan f;
+    rm_fan_measure(p, g->v, &f);
+    double poor = sin(ISM_RM_COLLAPSE_DEG * M_PI / 180);
+    int poor_before = 0, poor_after = 0;
+    g->after = INFINITY;
+    for (uint32_t i = 0; i < r->count[g->v]; i++) {
+        uint32_t t = slot(r, g->v, i);
+        const double *q[3];
+        corners(p, t, g->v, P(p, g->v), q);
+        poor_before += rm_min_sine(q[0], q[1], q[2]) < poor;
+        double s;
+        if (t == g->t1 || t == g->t2)
+            continue;
+        if (!new_triangle_ok(p, g, t, f.normal, &s))
+            return false;
+        poor_after += s < poor;
+        g->after = fmin(g->after, s);
+    }
+    return g->after > f.min_sine && poor_after <= poor_before && distance_ok(p, g);
+}
+
+/* Merges g->v into g->w. False when out of memory (nothing changed). */
+static bool do_merge(rm_pass *p, const merge *g)
+{
+    rm_mesh *r = &p->r;
+    uint32_t fan[ISM_RM_COLLAPSE_MAX_DEGREE], n = r->count[g->v];
+    if (!rm_slot_reserve(r, g->w, n))
+        return false;
+    memcpy(fan, r->vt + r->start[g->v], n * sizeof *fan);
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t t = fan[i], *c = r->m->tri + 3 * t;
+        if (t == g->t1 || t == g->t2) {
+            r->dead[t] = 1;
+            rm_slot_remove(r, g->w, t);
+            rm_slot_remove(r, t == g->t1 ? g->c : g->d, t);
+            continue;
+        }
+        c[rm_corner(r->m, t, g->v)] = g->w;
+        rm_slot_add(r, g->w, t);
+        for (int k = 0; k < 3; k++)
+            p->active[c[k]] = 1;
+    }
+    r->count[g->v] = 0;
+    r->gone[g->v] = r->locked[g->v] = 1;
+    p->active[g->v] = p->slide[g->v] = 0;
+    return true;
+}
+
+/* The better of merging a into b and b into a, when either passes every test. */
+static bool best_merge(rm_pass *p, uint32_t a, uint32_t b, merge *best)
+{
+    merge g;
+    bool found = false;
+    if (find_merge(p, a, b, &g) && merge_ok(p, &g))
+        *best = g, found = true;
+    if (find_merge(p, b, a, &g) && merge_ok(p, &g) && (!found || g.after > best->after))
+        *best = g, found = true;
+    return found;
+}
+
+/* Tries t's edges, shortest first; true when one was collapsed. *ok false when out of memory. */
+static bool collapse_triangle(rm_pass *p, uint32_t t, bool *ok)
+{
+    const uint32_t *c = p->r.m->tri + 3 * t;
+    uint32_t v[3] = {c[0], c[1], c[2]};
+    double len[3];
+    int order[3] = {0, 1, 2};
+    for (int k = 0; k < 3; k++)
+        len[k] = rm_dist(P(p, v[k]), P(p, v[(k + 1) % 3]));
+    for (int i = 1; i < 3; i++) /* edges by length: three elements */
+        for (int j = i; j > 0 && len[order[j]] < len[order[j - 1]]; j--) {
+            int s = order[j];
+            order[j] = order[j - 1], order[j - 1] = s;
+        }
+    for (int i = 0; i < 3; i++) {
+        int k = order[i];
+        merge g;
+        if (best_merge(p, v[k], v[(k + 1) % 3], &g)) {
+            *ok = do_merge(p, &g);
+            return *ok;
+        }
+    }
+    return false;
+}
+
+void rm_collapse_bounds(rm_pass *p)
+{
+    const ism_mesh *m = p->r.m;
+    double c = 0, e = 0;
+    for (size_t t = 0; t < m->ntris; t++) {
+        const uint32_t *v = m->tri + 3 * t;
+        const double *q[3] = {P(p, v[0]), P(p, v[1]), P(p, v[2])};
+        if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2])
+            continue;
+        c = fmax(c, centroid_distance(p, q));
+        for (int k = 0; k < 3; k++)
+            if (v[k] < v[(k + 1) % 3]) /* each edge once from each side: twice at most */
+                e = fmax(e, mid_distance(p, q[k], q[(k + 1) % 3]));
+    }
+    double cap = p->max_error > 0 ? p->max_error : INFINITY;
+    p->centroid_bound = fmin(c, cap);
+    p->midpoint_bound = fmin(e, cap);
+}
+
+size_t rm_collapse_active(rm_pass *p, bool *ok)
+{
+    const ism_mesh *m = p->r.m;
+    double poor = sin(ISM_RM_COLLAPSE_DEG * M_PI / 180);
+    size_t total = 0;
+    *ok = true;
+    for (int sweep = 0; sweep < ISM_RM_COLLAPSE_SWEEPS && *ok; sweep++) {
+        size_t made = 0;
+        for (size_t t = 0; t < m->ntris && *ok; t++) {
+            const uint32_t *v = m->tri + 3 * t;
+            if (!p->r.dead[t] &&
+                rm_min_sine(P(p, v[0]), P(p, v[1]), P(p, v[2])) < poor &&
+                collapse_triangle(p, (uint32_t)t, ok))
+                made++;
+        }
+        total += made;
+        if (!made)
+            break;
+    }
+    p->collapses += total;
+    return total;
+}

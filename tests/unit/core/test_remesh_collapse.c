@@ -1,0 +1,258 @@
+/* test_remesh_collapse.c — the quality pass's edge collapses (core/remesh/rm_collapse.c) and
+ * the renumbering they cause, on two unit spheres touching at the origin (centres (±1, 0, 0)),
+ * conformed so that the point is one vertex of two cones, in boxes shifted off the octree
+ * lattice by 1e-3 and 0.37 of a finest cell. Checked from the closed form, never from the
+ * pass's own figures: χ = 2 + 2 − 1 = 3, no boundary and no non-manifold edge, the point still
+ * one vertex of two cones, fewer needles than before and none under a bound away from the
+ * point, vertices and centroids no farther from the spheres than before. What the caller
+ * keeps by index beside the mesh follows the renumbering: a sheet range made of one sphere's
+ * triangles (by centroid side), a segment and curve-cut edges (by their end points' places),
+ * and the cut's triangle parents. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/remesh/quality_pass.h"
+#include "core/singular/conform.h"
+#include "tests/unit/core/poly_fixture.h"
+
+#define SPHERES "((x-1)^2 + y^2 + z^2 - 1)*((x+1)^2 + y^2 + z^2 - 1)"
+/* Triangles under this (degrees) count as needles. */
+#define NEEDLE_DEG 10.0
+
+/* Distance from the nearer sphere (closed form). */
+static double sphere_distance(const double *p)
+{
+    double a = sqrt((p[0] - 1) * (p[0] - 1) + p[1] * p[1] + p[2] * p[2]) - 1;
+    double b = sqrt((p[0] + 1) * (p[0] + 1) + p[1] * p[1] + p[2] * p[2]) - 1;
+    return fmin(fabs(a), fabs(b));
+}
+
+static void centroid(const ism_mesh *m, size_t t, double c[3])
+{
+    for (int j = 0; j < 3; j++) {
+        c[j] = 0;
+        for (int k = 0; k < 3; k++)
+            c[j] += m->pos[3 * (size_t)m->tri[3 * t + k] + j] / 3;
+    }
+}
+
+static double angle_deg(const double *p, const double *q, const double *r)
+{
+    double u[3], v[3], dot = 0, uu = 0, vv = 0;
+    for (int k = 0; k < 3; k++) {
+        u[k] = q[k] - p[k], v[k] = r[k] - p[k];
+        dot += u[k] * v[k], uu += u[k] * u[k], vv += v[k] * v[k];
+    }
+    return acos(fmax(-1, fmin(1, dot / sqrt(uu * vv)))) * 180 / M_PI;
+}
+
+/* Smallest angle of triangle t (degrees). */
+static double tri_min_angle(const ism_mesh *m, size_t t)
+{
+    const double *a = m->pos + 3 * (size_t)m->tri[3 * t], *b = m->pos + 3 * (size_t)m->tri[3 * t + 1],
+                 *c = m->pos + 3 * (size_t)m->tri[3 * t + 2];
+    return fmin(angle_deg(a, b, c), fmin(angle_deg(b, c, a), angle_deg(c, a, b)));
+}
+
+typedef struct shape {
+    size_t needles;           /* triangles under NEEDLE_DEG not touching the point */
+    double min_angle_away;    /* smallest angle of those not touching the point */
+    double centroid_error;    /* largest centroid distance from the spheres */
+    double vertex_error;      /* largest vertex distance from the spheres */
+} shape;
+
+static void measure(const ism_mesh *m, uint32_t point, shape *s)
+{
+    memset(s, 0, sizeof *s);
+    s->min_angle_away = 90;
+    for (size_t v = 0; v < m->nverts; v++)
+        s->vertex_error = fmax(s->vertex_error, sphere_distance(m->pos + 3 * v));
+    for (size_t t = 0; t < m->ntris; t++) {
+        double c[3];
+        centroid(m, t, c);
+        s->centroid_error = fmax(s->centroid_error, sphere_distance(c));
+        const uint32_t *v = m->tri + 3 * t;
+        if (v[0] == point || v[1] == point || v[2] == point)
+            continue;
+        double a = tri_min_angle(m, t);
+        s->needles += a < NEEDLE_DEG;
+        s->min_angle_away = fmin(s->min_angle_away, a);
+    }
+}
+
+static uint32_t vertex_at_origin(const ism_mesh *m)
+{
+    for (size_t v = 0; v < m->nverts; v++)
+        if (m->pos[3 * v] == 0 && m->pos[3 * v + 1] == 0 && m->pos[3 * v + 2] == 0)
+            return (uint32_t)v;
+    return UINT32_MAX;
+}
+
+/* Reorders the triangles so those of the sphere at x = +1 (centroid x > 0) come first;
+ * returns how many they are. */
+static size_t right_sphere_first(ism_mesh *m)
+{
+    uint32_t *tri = malloc(3 * m->ntris * sizeof *tri);
+    cr_assert(tri);
+    size_t n = 0;
+    for (int pass = 0; pass < 2; pass++)
+        for (size_t t = 0; t < m->ntris; t++) {
+            double c[3];
+            centroid(m, t, c);
+            if ((c[0] > 0) == (pass == 0))
+                memcpy(tri + 3 * n++, m->tri + 3 * t, 3 * sizeof *tri);
+        }
+    size_t right = 0;
+    for (size_t t = 0; t < m->ntris; t++) {
+        double c[3];
+        centroid(m, t, c);
+        right += c[0] > 0;
+    }
+    memcpy(m->tri, tri, 3 * m->ntris * sizeof *tri);
+    free(tri);
+    return right;
+}
+
+/* The places of a curve cut's and a segment's end points, to find them again. */
+typedef struct kept {
+    double cut_pos[6][3], seg_pos[2][3];
+    size_t nsegs; /* the mesh's segments with the fake one, the last */
+} kept;
+
+/* A fake curve cut along the three edges of triangle t (with identity parents when asked) and
+ * a segment along the first edge of triangle s: what a caller keeps by index. */
+static void keep_by_index(ism_mesh *m, size_t t, size_t s, bool parents, ism_cut *cut, kept *k)
+{
+    memset(cut, 0, sizeof *cut);
+    cut->nedges = 3;
+    cut->edges = calloc(3, sizeof *cut->edges);
+    cr_assert(cut->edges);
+    for (int e = 0; e < 3; e++) {
+        cut->edges[e].a = m->tri[3 * t + e];
+        cut->edges[e].b = m->tri[3 * t + (e + 1) % 3];
+        memcpy(k->cut_pos[2 * e], m->pos + 3 * (size_t)cut->edges[e].a, sizeof k->cut_pos[0]);
+        memcpy(k->cut_pos[2 * e + 1], m->pos + 3 * (size_t)cut->edges[e].b, sizeof k->cut_pos[0]);
+    }
+    if (parents) {
+        cut->tri_parent = malloc(m->ntris * sizeof *cut->tri_parent);
+        cr_assert(cut->tri_parent);
+        for (size_t i = 0; i < m->ntris; i++)
+            cut->tri_parent[i] = (uint32_t)i;
+    }
+    uint32_t a = m->tri[3 * s], b = m->tri[3 * s + 1];
+    cr_assert(ism_mesh_add_segment(m, a, b));
+    k->nsegs = m->nsegs;
+    memcpy(k->seg_pos[0], m->pos + 3 * (size_t)a, sizeof k->seg_pos[0]);
+    memcpy(k->seg_pos[1], m->pos + 3 * (size_t)b, sizeof k->seg_pos[0]);
+}
+
+static bool is_edge(const ism_mesh *m, uint32_t a, uint32_t b)
+{
+    for (size_t t = 0; t < m->ntris; t++)
+        for (int k = 0; k < 3; k++)
+            if (m->tri[3 * t + k] == a && m->tri[3 * t + (k + 1) % 3] == b)
+                return true;
+    return false;
+}
+
+static void expect_kept(const ism_mesh *m, const ism_cut *cut, const kept *k, const char *what)
+{
+    for (int e = 0; e < 3; e++) {
+        uint32_t a = cut->edges[e].a, b = cut->edges[e].b;
+        cr_assert_lt(a, m->nverts, "%s", what);
+        cr_assert_lt(b, m->nverts, "%s", what);
+        cr_expect_eq(memcmp(m->pos + 3 * (size_t)a, k->cut_pos[2 * e], sizeof k->cut_pos[0]), 0,
+                     "%s: cut edge %d lost its first end", what, e);
+        cr_expect_eq(memcmp(m->pos + 3 * (size_t)b, k->cut_pos[2 * e + 1], sizeof k->cut_pos[0]),
+                     0, "%s: cut edge %d lost its second end", what, e);
+        cr_expect(is_edge(m, a, b), "%s: cut edge %d is no edge of the mesh", what, e);
+    }
+    cr_assert_eq(m->nsegs, k->nsegs, "%s", what);
+    const uint32_t *seg = m->seg + 2 * (m->nsegs - 1);
+    for (int j = 0; j < 2; j++)
+        cr_expect_eq(memcmp(m->pos + 3 * (size_t)seg[j], k->seg_pos[j], sizeof k->seg_pos[0]), 0,
+                     "%s: the segment lost end %d", what, j);
+}
+
+/* The sheet made of the right sphere's triangles still is exactly them: through its range
+ * (no parents) or through the parents (the range indexes the mesh before the cut). */
+static void expect_sheet(const ism_mesh *m, const ism_locus *l, const ism_cut *cut,
+                         size_t right_before, const char *what)
+{
+    size_t wrong = 0;
+    for (size_t t = 0; t < m->ntris; t++) {
+        double c[3];
+        centroid(m, t, c);
+        uint32_t label = ism_locus_sheet_of(l, cut->tri_parent ? cut->tri_parent[t] : t);
+        wrong += (label == 1) != (c[0] > 0);
+    }
+    cr_expect_eq(wrong, 0, "%s: %zu triangles labelled on the wrong sphere", what, wrong);
+    if (cut->tri_parent)
+        cr_expect_eq(l->sheets[0].triangles, right_before, "%s: parents' range changed", what);
+}
+
+Test(remesh_collapse, touching_spheres_keep_topology_and_lose_needles)
+{
+    const pf_surface s = {SPHERES, NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double base[6] = {-2.2, -1.2, -1.2, 2.2, 1.2, 1.2};
+    int d = 6 - pf_quick();
+    for (int which = 0; which < 2; which++) {
+        double box[6];
+        pf_sweep_box(base, d, which, box);
+        ism_mesh m;
+        ism_mesh_init(&m);
+        ism_poly_stats ps;
+        pf_run(t, box, 3, d, 1, &m, &ps);
+        ism_locus l;
+        ism_locus_init(&l);
+        ism_sing_point pt = {.p = {0, 0, 0}, .radius = 1e-12, .type = ISM_SING_DEGENERATE,
+                             .certified = true, .cones = -1};
+        cr_assert(ism_locus_add_point(&l, &pt));
+        ism_locus_options lo;
+        ism_locus_options_default(&lo);
+        memcpy(lo.box, box, sizeof lo.box);
+        lo.max_depth = d;
+        ism_error err;
+        cr_assert(ism_conform_mesh(t, &lo, &l, &m, NULL, &err), "%s", err.message);
+        size_t right = right_sphere_first(&m);
+        ism_double_sheet sheet = {.first_triangle = 0, .triangles = right};
+        cr_assert(ism_locus_add_sheet(&l, &sheet));
+        ism_cut cut;
+        kept k;
+        keep_by_index(&m, right / 2, right + 7, which == 1, &cut, &k);
+        shape before, after;
+        measure(&m, vertex_at_origin(&m), &before);
+        ism_remesh_stats st;
+        cr_assert(ism_quality_pass(t, &l, &cut, 0, NULL, &m, &st, &err), "%s", err.message);
+        uint32_t point = vertex_at_origin(&m);
+        measure(&m, point, &after);
+        pf_props a;
+        pf_measure(&m, t, &a);
+        char what[64];
+        snprintf(what, sizeof what, "box %d", which);
+        cr_log_info("%s: %zu collapses; needles %zu -> %zu, min angle away from the point "
+                    "%.2f -> %.2f, centroid error %.3g -> %.3g", what, st.collapses,
+                    before.needles, after.needles, before.min_angle_away, after.min_angle_away,
+                    before.centroid_error, after.centroid_error);
+        cr_expect_gt(st.collapses, 0, "%s", what);
+        cr_expect_eq(a.euler, 3, "%s: χ = %ld", what, a.euler);
+        cr_expect_eq(a.boundary_edges, 0, "%s", what);
+        cr_expect_eq(a.nonmanifold_edges, 0, "%s", what);
+        cr_assert_neq(point, UINT32_MAX, "%s: the point lost its vertex", what);
+        cr_expect_eq(pf_vertex_cones(&m, point), 2, "%s", what);
+        cr_expect_lt(after.needles, before.needles, "%s", what);
+        cr_expect_geq(after.min_angle_away, 20.0, "%s: %.2f", what, after.min_angle_away);
+        cr_expect_leq(after.centroid_error, before.centroid_error, "%s", what);
+        cr_expect_leq(after.vertex_error, fmax(1e-9, before.vertex_error), "%s", what);
+        expect_kept(&m, &cut, &k, what);
+        expect_sheet(&m, &l, &cut, right, what);
+        ism_cut_free(&cut);
+        ism_locus_free(&l);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
