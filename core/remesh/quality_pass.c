@@ -33,30 +33,44 @@ static uint32_t *sheet_labels(const ism_locus *locus, const ism_cut *cut, const 
 }
 
 /* The cut's edges and triangle parents in the renumbered mesh (a cut edge's vertices are
- * locked: never gone). */
-static void renumber_cut(ism_cut *cut, const ism_remesh_renumber *ren)
+ * locked: never gone); false when out of memory. */
+static bool renumber_cut(ism_cut *cut, const ism_remesh_renumber *ren)
 {
     for (size_t i = 0; i < cut->nedges; i++) {
         cut->edges[i].a = ren->vert[cut->edges[i].a];
         cut->edges[i].b = ren->vert[cut->edges[i].b];
     }
-    for (size_t t = 0; cut->tri_parent && t < ren->ntris; t++)
-        if (ren->tri[t] != ISM_REMESH_GONE)
-            cut->tri_parent[ren->tri[t]] = cut->tri_parent[t];
+    if (!cut->tri_parent)
+        return true;
+    uint32_t *parent = malloc((ren->ntris_after ? ren->ntris_after : 1) * sizeof *parent);
+    if (!parent)
+        return false;
+    for (size_t t = 0; t < ren->ntris_after; t++)
+        parent[t] = cut->tri_parent[ren->origin[t]];
+    free(cut->tri_parent);
+    cut->tri_parent = parent;
+    return true;
 }
 
-/* Each double sheet's range of triangles in the renumbered mesh: the kept triangles before
- * its first and in it (kept triangles keep their order, so a range stays a range). */
+/* How many triangles after the pass have their origin before triangle t (the origins are
+ * non-decreasing: the first index whose origin is t or later). */
+static size_t first_from(const ism_remesh_renumber *ren, size_t t)
+{
+    size_t n = 0;
+    while (n < ren->ntris_after && ren->origin[n] < t)
+        n++;
+    return n;
+}
+
+/* Each double sheet's range of triangles in the renumbered mesh: those whose origin lies in
+ * its range before. */
 static void renumber_sheets(ism_locus *locus, const ism_remesh_renumber *ren)
 {
     for (size_t i = 0; i < locus->nsheets; i++) {
         ism_double_sheet *s = &locus->sheets[i];
-        size_t before = 0, in = 0;
-        for (size_t t = 0; t < s->first_triangle + s->triangles && t < ren->ntris; t++)
-            if (ren->tri[t] != ISM_REMESH_GONE)
-                *(t < s->first_triangle ? &before : &in) += 1;
-        s->first_triangle = before;
-        s->triangles = in;
+        size_t a = first_from(ren, s->first_triangle);
+        s->triangles = first_from(ren, s->first_triangle + s->triangles) - a;
+        s->first_triangle = a;
     }
 }
 
@@ -82,10 +96,10 @@ bool ism_quality_pass(const ism_tape *f, ism_locus *locus, ism_cut *cut,
                                 .cancel = cancel};
         ism_remesh_renumber ren;
         ok = ism_remesh_quality(mesh, &o, st, &ren, err);
-        if (ren.vert && cut)
-            renumber_cut(cut, &ren);
         if (ren.vert && !(cut && cut->tri_parent))
             renumber_sheets(locus, &ren);
+        if (ren.vert && cut && !renumber_cut(cut, &ren))
+            ok = ism_error_set(err, "quality pass: out of memory");
         ism_remesh_renumber_free(&ren);
     } else {
         memset(st, 0, sizeof *st);

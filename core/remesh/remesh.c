@@ -38,6 +38,15 @@ double ism_remesh_min_angle(const ism_mesh *m)
 
 static bool stopped(const ism_remesh_options *o) { return o->cancel && *o->cancel; }
 
+/* Collapses, then insertions beside the needles collapses cannot reach, then flips of the
+ * split needles' thin halves. */
+static void mend_needles(rm_pass *p, bool *ok)
+{
+    rm_collapse_active(p, ok);
+    if (*ok && rm_insert_active(p, ok) && *ok && rm_mark_active(p))
+        rm_flip_active(p, ok);
+}
+
 bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_stats *st,
                         ism_remesh_renumber *ren, ism_error *err)
 {
@@ -54,11 +63,15 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
     p.max_error = o->max_error > 0 ? o->max_error : 0;
     p.r.label = o->tri_label;
     p.ws = ism_eval_ws_new(o->f);
-    p.normal = malloc((m->nverts ? m->nverts : 1) * 3 * sizeof *p.normal);
-    p.active = malloc(m->nverts ? m->nverts : 1);
-    p.slide = malloc(m->nverts ? m->nverts : 1);
-    bool ok = p.ws && p.normal && p.active && p.slide && rm_mesh_build(&p.r, m) &&
-              rm_normals(&p) && rm_lock_features(&p, o);
+    size_t nv = m->nverts, nt = m->ntris;
+    bool ok = p.ws && rm_mesh_build(&p.r, m, nt / ISM_RM_INSERT_SHARE + ISM_RM_INSERT_MIN);
+    if (ok) {
+        size_t cv = p.r.cap_verts ? p.r.cap_verts : 1;
+        p.normal = malloc(cv * 3 * sizeof *p.normal);
+        p.active = calloc(cv, 1);
+        p.slide = calloc(cv, 1);
+    }
+    ok = ok && p.normal && p.active && p.slide && rm_normals(&p) && rm_lock_features(&p, o);
     if (ok) {
         rm_collapse_bounds(&p);
         for (int round = 0; round < ISM_RM_ROUNDS && !stopped(o); round++) {
@@ -69,7 +82,7 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
             if (!ok || stopped(o))
                 break;
             if (round >= ISM_RM_COLLAPSE_ROUND)
-                rm_collapse_active(&p, &ok);
+                mend_needles(&p, &ok);
             if (!ok || stopped(o))
                 break;
             size_t moved = rm_relax_sweep(&p);
@@ -81,11 +94,12 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
         for (size_t v = 0; v < m->nverts; v++)
             st->locked_vertices += p.r.locked[v] && p.r.count[v];
     }
-    if (p.r.dead && p.r.gone && !rm_compact(&p.r, ren))
+    if (p.r.dead && p.r.gone && p.r.origin && !rm_compact(&p.r, nv, nt, ren))
         ok = false;
     st->flips = p.flips;
     st->moves = p.moves;
     st->collapses = p.collapses;
+    st->inserts = p.inserts;
     st->min_angle_after = ism_remesh_min_angle(m);
     rm_mesh_free(&p.r);
     free(p.normal);

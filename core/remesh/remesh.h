@@ -37,6 +37,8 @@ typedef struct ism_remesh_options {
 typedef struct ism_remesh_stats {
     size_t flips, moves;           /* edge flips made, vertex moves accepted */
     size_t collapses;              /* edges collapsed (each removes a vertex, two triangles) */
+    size_t inserts;                /* vertices inserted beside a needle's short feature edge
+                                      (each adds two triangles) */
     size_t locked_vertices;        /* vertices the pass left alone */
     double min_angle_before, min_angle_after; /* degrees, over non-degenerate triangles */
     double time_ms;
@@ -45,12 +47,16 @@ typedef struct ism_remesh_stats {
 /* An index of the mesh before the pass that the pass removed. */
 #define ISM_REMESH_GONE UINT32_MAX
 
-/* How the pass renumbered the mesh: per vertex and per triangle before it, the index after
- * (ISM_REMESH_GONE when collapsed away); the rest keep their order. For whatever the caller
- * keeps beside the mesh by index (curve edges, triangle ranges and labels). */
+/* How the pass renumbered the mesh, for whatever the caller keeps beside it by index (curve
+ * edges, triangle ranges and labels). Vertices before the pass keep their order (those
+ * collapsed away are gone), inserted ones follow them; each triangle after the pass lies in
+ * one triangle before it (itself when kept, the one split otherwise), its origin, and the
+ * triangles are ordered by origin, so a range of triangles before is a range after. */
 typedef struct ism_remesh_renumber {
-    uint32_t *vert, *tri;
+    uint32_t *vert;                /* per vertex before: its index after, or ISM_REMESH_GONE */
+    uint32_t *origin;              /* per triangle after: its origin (non-decreasing) */
     size_t nverts, ntris;          /* the counts before the pass */
+    size_t ntris_after;
 } ism_remesh_renumber;
 
 void ism_remesh_renumber_free(ism_remesh_renumber *ren);

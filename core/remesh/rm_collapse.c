@@ -150,21 +150,6 @@ static bool new_triangle_ok(const rm_pass *p, const merge *g, uint32_t t, const 
     return now >= fmin(before, cos(ISM_RM_COLLAPSE_MAX_BEND_DEG * M_PI / 180));
 }
 
-/* Distance from f = 0 at the midpoint of ab and at the centroid of abc. */
-static double mid_distance(rm_pass *p, const double *a, const double *b)
-{
-    double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
-    return rm_distance(p, m);
-}
-
-static double centroid_distance(rm_pass *p, const double *q[3])
-{
-    double c[3];
-    for (int k = 0; k < 3; k++)
-        c[k] = (q[0][k] + q[1][k] + q[2][k]) / 3;
-    return rm_distance(p, c);
-}
-
 /* No new centroid or new edge's midpoint farther from f = 0 than the farthest of the old
  * fan's centroids, resp. midpoints of v's edges, or than the mesh's farthest before the pass
  * (within the error bound). */
@@ -176,16 +161,16 @@ static bool distance_ok(rm_pass *p, const merge *g)
         uint32_t t = slot(r, g->v, i);
         const double *q[3];
         corners(p, t, g->v, P(p, g->v), q);
-        old_c = fmax(old_c, centroid_distance(p, q));
+        old_c = fmax(old_c, rm_centroid_distance(p, q[0], q[1], q[2]));
         const uint32_t *c = r->m->tri + 3 * t;
         uint32_t next = c[(rm_corner(r->m, t, g->v) + 1) % 3];
-        old_m = fmax(old_m, mid_distance(p, P(p, g->v), P(p, next)));
+        old_m = fmax(old_m, rm_midpoint_distance(p, P(p, g->v), P(p, next)));
         if (t == g->t1 || t == g->t2)
             continue;
         corners(p, t, g->v, P(p, g->w), q);
-        new_c = fmax(new_c, centroid_distance(p, q));
+        new_c = fmax(new_c, rm_centroid_distance(p, q[0], q[1], q[2]));
         if (next != g->c && next != g->d)
-            new_m = fmax(new_m, mid_distance(p, P(p, g->w), P(p, next)));
+            new_m = fmax(new_m, rm_midpoint_distance(p, P(p, g->w), P(p, next)));
     }
     return new_c <= fmax(old_c, p->centroid_bound) && new_m <= fmax(old_m, p->midpoint_bound);
 }
@@ -292,10 +277,10 @@ void rm_collapse_bounds(rm_pass *p)
         const double *q[3] = {P(p, v[0]), P(p, v[1]), P(p, v[2])};
         if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2])
             continue;
-        c = fmax(c, centroid_distance(p, q));
+        c = fmax(c, rm_centroid_distance(p, q[0], q[1], q[2]));
         for (int k = 0; k < 3; k++)
             if (v[k] < v[(k + 1) % 3]) /* each edge once from each side: twice at most */
-                e = fmax(e, mid_distance(p, q[k], q[(k + 1) % 3]));
+                e = fmax(e, rm_midpoint_distance(p, q[k], q[(k + 1) % 3]));
     }
     double cap = p->max_error > 0 ? p->max_error : INFINITY;
     p->centroid_bound = fmin(c, cap);

@@ -2,8 +2,9 @@
  * (a, b, c) and (b, a, d) becomes cd when the angles at c and d sum above π (the Delaunay
  * test), and only when the flip keeps the mesh saying the same: both triangles carry one
  * label, ab is not locked, the quad is nearly flat (no crease folded), the new triangles face
- * the old way, cd is not already an edge, the smallest angle of the pair grows, and cd's
- * midpoint lies no farther from f = 0 than the bound (max_error, or ab's own distance). A
+ * the old way, cd is not already an edge, the smallest angle of the pair grows, cd's
+ * midpoint lies no farther from f = 0 than the bound (max_error, or ab's own distance), and
+ * the new centroids no farther than the old ones or the mesh's farthest before the pass. A
  * cap (an angle near 180°) has no normal to speak of: its bend is not asked, and the bound
  * is the largest of the quad's five edges. */
 #include "core/remesh/rm_pass.h"
@@ -49,7 +50,7 @@ static bool find_quad(const rm_pass *p, uint32_t a, uint32_t b, quad *q)
     int n;
     if (!rm_edge_triangles(r, a, b, t, &n))
         return false;
-    if ((r->label && r->label[t[0]] != r->label[t[1]]) || rm_edge_locked(r, a, b))
+    if (rm_label(r, t[0]) != rm_label(r, t[1]) || rm_edge_locked(r, a, b))
         return false;
     const uint32_t *tri = r->m->tri;
     q->a = a;
@@ -102,13 +103,6 @@ static bool is_cap(const double *a, const double *b, const double *c)
            cos(rm_angle(c, a, b)) < cap;
 }
 
-/* Distance from f = 0 at the midpoint of pq. */
-static double midpoint_distance(rm_pass *p, const double *P, const double *Q)
-{
-    double m[3] = {0.5 * (P[0] + Q[0]), 0.5 * (P[1] + Q[1]), 0.5 * (P[2] + Q[2])};
-    return rm_distance(p, m);
-}
-
 /* The geometric tests of a flip (the combinatorial ones passed). */
 static bool flip_improves(rm_pass *p, const quad *q)
 {
@@ -127,11 +121,17 @@ static bool flip_improves(rm_pass *p, const quad *q)
     double after = fmin(rm_min_sine(A, D, C), rm_min_sine(B, C, D));
     if (!(after > before))
         return false;
-    double bound = fmax(p->max_error, midpoint_distance(p, A, B));
+    double bound = fmax(p->max_error, rm_midpoint_distance(p, A, B));
     if (cap) /* ab is as good as c's detour: the quad's sides bound the new edge too */
-        bound = fmax(fmax(bound, fmax(midpoint_distance(p, A, C), midpoint_distance(p, C, B))),
-                     fmax(midpoint_distance(p, B, D), midpoint_distance(p, D, A)));
-    return midpoint_distance(p, C, D) <= bound;
+        bound = fmax(fmax(bound, fmax(rm_midpoint_distance(p, A, C),
+                                      rm_midpoint_distance(p, C, B))),
+                     fmax(rm_midpoint_distance(p, B, D), rm_midpoint_distance(p, D, A)));
+    if (!(rm_midpoint_distance(p, C, D) <= bound))
+        return false;
+    /* the new triangles' centroids no farther than the old ones' or the mesh's before */
+    double cb = fmax(p->centroid_bound, fmax(rm_centroid_distance(p, A, B, C),
+                                             rm_centroid_distance(p, B, A, D)));
+    return rm_centroid_distance(p, A, D, C) <= cb && rm_centroid_distance(p, B, C, D) <= cb;
 }
 
 /* (a, b, c), (b, a, d) -> (a, d, c), (b, c, d): winding kept, incidence updated. */

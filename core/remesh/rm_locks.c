@@ -56,7 +56,7 @@ bool rm_edge_free(const rm_pass *p, uint32_t a, uint32_t b)
     int n;
     if (!rm_edge_triangles(r, a, b, t, &n))
         return false;
-    if (r->label && r->label[t[0]] != r->label[t[1]])
+    if (rm_label(r, t[0]) != rm_label(r, t[1]))
         return false;
     return !rm_edge_locked(r, a, b) && !is_crease(p, a, b, t[0], t[1]);
 }

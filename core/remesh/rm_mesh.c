@@ -7,18 +7,24 @@
 #include <stdlib.h>
 #include <string.h>
 
-bool rm_mesh_build(rm_mesh *r, ism_mesh *m)
+bool rm_mesh_build(rm_mesh *r, ism_mesh *m, size_t extra)
 {
-    size_t nv = m->nverts;
+    size_t nv = m->nverts, cv = nv + extra, ct = m->ntris + 2 * extra;
     r->m = m;
-    r->start = calloc(nv ? nv : 1, sizeof *r->start);
-    r->room = calloc(nv ? nv : 1, sizeof *r->room);
-    r->count = calloc(nv ? nv : 1, sizeof *r->count);
-    r->locked = calloc(nv ? nv : 1, 1);
-    r->gone = calloc(nv ? nv : 1, 1);
-    r->dead = calloc(m->ntris ? m->ntris : 1, 1);
-    if (!r->start || !r->room || !r->count || !r->locked || !r->gone || !r->dead)
+    r->cap_verts = cv;
+    r->cap_tris = ct;
+    r->start = calloc(cv ? cv : 1, sizeof *r->start);
+    r->room = calloc(cv ? cv : 1, sizeof *r->room);
+    r->count = calloc(cv ? cv : 1, sizeof *r->count);
+    r->locked = calloc(cv ? cv : 1, 1);
+    r->gone = calloc(cv ? cv : 1, 1);
+    r->dead = calloc(ct ? ct : 1, 1);
+    r->origin = malloc((ct ? ct : 1) * sizeof *r->origin);
+    if (!r->start || !r->room || !r->count || !r->locked || !r->gone || !r->dead ||
+        !r->origin || ct >= UINT32_MAX || !ism_mesh_reserve(m, cv, ct))
         return false;
+    for (size_t t = 0; t < m->ntris; t++)
+        r->origin[t] = (uint32_t)t;
     for (size_t i = 0; i < 3 * m->ntris; i++)
         r->count[m->tri[i]]++;
     size_t total = 0;
@@ -51,6 +57,7 @@ void rm_mesh_free(rm_mesh *r)
     free(r->count);
     free(r->gone);
     free(r->dead);
+    free(r->origin);
     free(r->vt);
     free(r->locked);
     free(r->locked_edges);

@@ -26,13 +26,25 @@ typedef struct rm_mesh {
     uint8_t *locked;          /* per vertex: never moved */
     uint8_t *gone;            /* per vertex: removed by a collapse (in no triangle) */
     uint8_t *dead;            /* per triangle: removed by a collapse (in no slot) */
-    const uint32_t *label;    /* per triangle, or NULL: flips only between equal labels */
+    uint32_t *origin;         /* per triangle: the triangle before the pass it was cut from
+                                 (itself, for those the pass started with) */
+    size_t cap_verts, cap_tris; /* room in every per-vertex / per-triangle array (and the
+                                 mesh's) for vertices and triangles that insertions add */
+    const uint32_t *label;    /* per triangle before the pass (index by origin), or NULL:
+                                 flips only between equal labels */
     uint64_t *locked_edges;   /* sorted keys (rm_edge_key) of edges never flipped */
     size_t nlocked_edges;
 } rm_mesh;
 
-/* Builds the incidence of m (r zeroed by the caller). False when out of memory. */
-bool rm_mesh_build(rm_mesh *r, ism_mesh *m);
+/* Builds the incidence of m (r zeroed by the caller), with room for extra vertices and
+ * 2 × extra triangles more (in m too). False when out of memory. */
+bool rm_mesh_build(rm_mesh *r, ism_mesh *m, size_t extra);
+
+/* The label of triangle t (0 without labels). */
+static inline uint32_t rm_label(const struct rm_mesh *r, uint32_t t)
+{
+    return r->label ? r->label[r->origin[t]] : 0;
+}
 void rm_mesh_free(rm_mesh *r);
 
 /* The key of the undirected edge {a, b}. */

@@ -32,8 +32,14 @@ typedef struct rm_pass {
     double centroid_bound;  /* collapses may put a centroid this far from f = 0 (the mesh's
                                farthest before the pass, at most max_error) */
     double midpoint_bound;  /* the same for edge midpoints */
-    size_t flips, moves, collapses;
+    size_t flips, moves, collapses, inserts;
 } rm_pass;
+
+/* Room for insertions (rm_insert.c): at most ntris / ISM_RM_INSERT_SHARE + ISM_RM_INSERT_MIN
+ * vertices per pass (steiner-roman's box needs about 300 for its 64,000 triangles; the bound
+ * keeps the pass's memory within a few per cent of the mesh's). */
+#define ISM_RM_INSERT_SHARE 32
+#define ISM_RM_INSERT_MIN 64
 
 /* Unit normals and the vanishing threshold from ∇f at every vertex. False when out of memory. */
 bool rm_normals(rm_pass *p);
@@ -59,13 +65,18 @@ size_t rm_flip_active(rm_pass *p, bool *ok);
  * triangles are marked dead and removed vertices gone (rm_compact drops them). *ok false
  * when out of memory. */
 size_t rm_collapse_active(rm_pass *p, bool *ok);
+/* Splits needles under 10° whose short edge joins two locked vertices at a new vertex beside
+ * that edge (rm_insert.c), within the room reserved; returns the insertions made. *ok false
+ * when out of memory. */
+size_t rm_insert_active(rm_pass *p, bool *ok);
 /* Sets the bounds collapses keep to (centroid_bound, midpoint_bound) from the mesh as it is. */
 void rm_collapse_bounds(rm_pass *p);
 
-/* Drops the dead triangles and gone vertices from the mesh, keeping the others in order
- * (triangles, segments renumbered). With ren, ren gets the old-to-new maps. False when out of
- * memory (the mesh is then unchanged). */
-bool rm_compact(rm_mesh *r, ism_remesh_renumber *ren);
+/* Drops the dead triangles and gone vertices from the mesh (which had nverts_before and
+ * ntris_before when the pass began), keeps the vertices in order and orders the triangles by
+ * origin (segments renumbered). With ren, ren gets the maps. False when out of memory (the
+ * dead triangles are then collapsed ones, the gone vertices in no triangle). */
+bool rm_compact(rm_mesh *r, size_t nverts_before, size_t ntris_before, ism_remesh_renumber *ren);
 
 /* Marks the active vertices: those of triangles whose smallest angle is below
  * ISM_RM_COMFORT_DEG, and their neighbours. Returns how many there are. */
@@ -100,5 +111,8 @@ void rm_commit_move(rm_pass *p, uint32_t v, const double x[3], const double g[3]
 
 /* Distance estimate |f| / |∇f| at x (INFINITY where ∇f vanishes). */
 double rm_distance(rm_pass *p, const double x[3]);
+/* The same at the midpoint of ab, and at the centroid of abc. */
+double rm_midpoint_distance(rm_pass *p, const double *a, const double *b);
+double rm_centroid_distance(rm_pass *p, const double *a, const double *b, const double *c);
 
 #endif

@@ -2,7 +2,8 @@
  * centroid of its triangles' centroids (a step of centroidal smoothing), within the tangent
  * plane of f = 0 there, and is put back on f = 0 by Newton steps along ∇f. A move is kept
  * only when no triangle of the fan turns over, Newton converged close to where it started,
- * and the fan's smallest angle does not get worse (or stays above a comfortable angle);
+ * the fan's smallest angle does not get worse (or stays above a comfortable angle) and no
+ * centroid of the fan ends farther from f = 0 than the mesh's farthest before the pass;
  * otherwise a half step is tried, then the vertex stays. Also ∇f's unit normals and the
  * distance estimate the pass uses. */
 #include "core/remesh/rm_pass.h"
@@ -37,6 +38,20 @@ double rm_distance(rm_pass *p, const double x[3])
     double g[3], fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
     double gn = sqrt(dot3(g, g));
     return gn > p->gthresh && isfinite(fv) ? fabs(fv) / gn : INFINITY;
+}
+
+double rm_midpoint_distance(rm_pass *p, const double *a, const double *b)
+{
+    double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
+    return rm_distance(p, m);
+}
+
+double rm_centroid_distance(rm_pass *p, const double *a, const double *b, const double *c)
+{
+    double m[3];
+    for (int k = 0; k < 3; k++)
+        m[k] = (a[k] + b[k] + c[k]) / 3;
+    return rm_distance(p, m);
 }
 
 bool rm_normals(rm_pass *p)
@@ -145,6 +160,29 @@ void rm_commit_move(rm_pass *p, uint32_t v, const double x[3], const double g[3]
     }
 }
 
+/* The farthest of the fan's centroids from f = 0 with v at x. */
+static double fan_centroid_error(rm_pass *p, uint32_t v, const double *x)
+{
+    const rm_mesh *r = &p->r;
+    double worst = 0;
+    for (uint32_t i = 0; i < r->count[v]; i++) {
+        const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
+        const double *q[3];
+        for (int k = 0; k < 3; k++)
+            q[k] = t[k] == v ? x : r->m->pos + 3 * (size_t)t[k];
+        worst = fmax(worst, rm_centroid_distance(p, q[0], q[1], q[2]));
+    }
+    return worst;
+}
+
+/* Moving v to x puts no centroid of its fan farther from f = 0 than the mesh's farthest
+ * before the pass (centroid_bound) or than the fan's farthest now. */
+static bool centroids_stay(rm_pass *p, uint32_t v, const double *x)
+{
+    double now = fan_centroid_error(p, v, x);
+    return now <= p->centroid_bound || now <= fan_centroid_error(p, v, p->r.m->pos + 3 * v);
+}
+
 /* Tries to move free vertex v; true when it moved. */
 static bool relax_vertex(rm_pass *p, uint32_t v)
 {
@@ -160,7 +198,7 @@ static bool relax_vertex(rm_pass *p, uint32_t v)
         double tangent[3] = {x[0], x[1], x[2]};
         if (!rm_project(p, x, f.mean_edge, -1, g) ||
             !(rm_dist(x, tangent) <= ISM_RM_PROJECT_MAX_REL * f.mean_edge) ||
-            !rm_fan_accepts(p, v, x, &f))
+            !rm_fan_accepts(p, v, x, &f) || !centroids_stay(p, v, x))
             continue;
         rm_commit_move(p, v, x, g);
         return true;

@@ -70,8 +70,9 @@ static bool run(const char *name, double shift)
     }
     if (ok) {
         row("good", &m, t);
-        printf("      flips %zu, moves %zu, collapses %zu, locked vertices %zu, %.0f ms\n",
-               rs.flips, rs.moves, rs.collapses, rs.locked_vertices, rs.time_ms);
+        printf("      flips %zu, moves %zu, collapses %zu, inserts %zu, locked vertices %zu, "
+               "%.0f ms\n", rs.flips, rs.moves, rs.collapses, rs.inserts, rs.locked_vertices,
+               rs.time_ms);
     }
     ism_locus_free(&l);
     ism_mesh_free(&m);

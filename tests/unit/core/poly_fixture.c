@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "core/eval/eval.h"
+#include "core/singular/surface.h"
 
 int pf_first_box(void)
 {
@@ -40,6 +41,23 @@ void pf_run(const ism_tape *t, const double box[6], int dmin, int dmax, int thre
     ism_mesh_init(m);
     enum ism_poly_status s = ism_polygonise(t, &o, m, st, &err);
     cr_assert_eq(s, ISM_POLY_OK, "polygonise failed: %s", err.message);
+}
+
+void pf_run_surface(const ism_tape *t, const double box[6], int dmin, int dmax, ism_mesh *m,
+                    ism_locus *l)
+{
+    ism_poly_options o;
+    ism_poly_options_default(&o);
+    memcpy(o.box, box, sizeof o.box);
+    o.min_depth = dmin, o.max_depth = dmax, o.threads = 1;
+    ism_poly_stats ps;
+    ism_conform_stats cs;
+    ism_surface_times tm;
+    ism_error err;
+    ism_mesh_init(m);
+    ism_locus_init(l);
+    enum ism_poly_status s = ism_mesh_surface(t, &o, m, l, &ps, &cs, &tm, &err);
+    cr_assert_eq(s, ISM_POLY_OK, "meshing the surface failed: %s", err.message);
 }
 
 void pf_sweep_box(const double base[6], int d, int which, double box[6])

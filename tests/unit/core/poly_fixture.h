@@ -9,6 +9,7 @@
 #include "core/expr/expr.h"
 #include "core/mesh/mesh.h"
 #include "core/octree/polygonise.h"
+#include "core/singular/locus.h"
 
 typedef struct pf_surface {
     const char *expr;
@@ -42,6 +43,11 @@ ism_tape *pf_compile(const pf_surface *s);
 /* Polygonises with the given box and depths (other options default); asserts success. */
 void pf_run(const ism_tape *t, const double box[6], int dmin, int dmax, int threads,
             ism_mesh *m, ism_poly_stats *st);
+
+/* The service's meshing (core/singular/surface.h: the locus found from f, the polygoniser's
+ * mesh conformed to it) on one thread; m and l are initialised here; asserts success. */
+void pf_run_surface(const ism_tape *t, const double box[6], int dmin, int dmax, ism_mesh *m,
+                    ism_locus *l);
 
 void pf_measure(const ism_mesh *m, const ism_tape *t, pf_props *p);
 

@@ -1,0 +1,222 @@
+/* rm_insert.c — a vertex inserted beside the short edge of a needle that no collapse can
+ * mend: both ends of the short edge are locked (a double line's consecutive vertices,
+ * steiner-roman: 0.0005 beside 0.005), so the needle's apex is the nearest vertex there is.
+ * The new vertex goes where an equilateral triangle on the short edge would have its apex
+ * (closer to the edge where the needle's angle at one end is under 120°, so it stays inside),
+ * put on f = 0 by Newton along the needle's normal; the needle becomes three triangles, the
+ * first well shaped, the two thin ones next to the apex left to the Lawson flips that follow
+ * (their long sides are free edges, so the flips can replace them). The new triangles keep
+ * the needle's origin (its label, its place in a range of triangles); χ is kept (one vertex,
+ * three edges, two triangles more). */
+#include "core/remesh/rm_pass.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Needles under this smallest angle (degrees) are mended by insertion: the count the issue
+ * measures; between it and 20° the flips and moves do well enough. */
+#define ISM_RM_INSERT_DEG 10.0
+/* The apex lies at least this many equilateral heights from the short edge (else the
+ * triangle is no needle of a short edge: a cap, left to the flips). */
+#define ISM_RM_INSERT_TALL 2.0
+/* Newton may move the new vertex at most this × the short edge off its place in the needle
+ * (farther, it found another sheet or a fold). */
+#define ISM_RM_INSERT_PROJECT_MAX 0.25
+/* Newton steps, and the step (× the short edge) that ends them: quadratic convergence from a
+ * fraction of an edge (rm_relax.c's ISM_RM_NEWTON_STEPS and _REL). */
+#define ISM_RM_INSERT_NEWTON_STEPS 8
+#define ISM_RM_INSERT_NEWTON_REL 1e-6
+/* The thin halves' Lawson test must pass by this much (radians): rm_flip.c's margin keeps
+ * four points of a circle from flipping, and the flip must happen for the split to pay. */
+#define ISM_RM_INSERT_FLIP_MARGIN 1e-6
+
+static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * v; }
+
+static double dot3(const double *u, const double *v)
+{
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+}
+
+/* The needle t as (a, b, c) in its winding, ab its shortest side; false when t is no needle
+ * with a short edge between locked vertices and free long sides. */
+static bool needle(const rm_pass *p, uint32_t t, uint32_t abc[3])
+{
+    const rm_mesh *r = &p->r;
+    const uint32_t *v = r->m->tri + 3 * t;
+    int k = 0;
+    double best = INFINITY;
+    for (int i = 0; i < 3; i++) {
+        double l = rm_dist(P(p, v[i]), P(p, v[(i + 1) % 3]));
+        if (l < best)
+            best = l, k = i;
+    }
+    for (int i = 0; i < 3; i++)
+        abc[i] = v[(k + i) % 3];
+    double n[3], twice_area = rm_cross(P(p, abc[0]), P(p, abc[1]), P(p, abc[2]), n);
+    double height = best > 0 ? twice_area / best : 0;
+    return r->locked[abc[0]] && r->locked[abc[1]] &&
+           height >= ISM_RM_INSERT_TALL * sqrt(0.75) * best && rm_edge_free(p, abc[1], abc[2]) &&
+           rm_edge_free(p, abc[2], abc[0]);
+}
+
+/* Newton along the line through x in direction n (unit) onto f = 0: beside a double line ∇f
+ * leans toward the other sheet, while the needle's normal leads back to the needle's own.
+ * g gets ∇f there; false when it does not converge within ISM_RM_INSERT_PROJECT_MAX × len. */
+static bool project_along(rm_pass *p, double x[3], const double n[3], double len, double g[3])
+{
+    double s = 0, x0[3] = {x[0], x[1], x[2]};
+    for (int i = 0; i < ISM_RM_INSERT_NEWTON_STEPS; i++) {
+        double fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g), slope = dot3(g, n);
+        if (!isfinite(fv) || !(fabs(slope) > p->gthresh))
+            return false;
+        double step = fv / slope;
+        s -= step;
+        for (int k = 0; k < 3; k++)
+            x[k] = x0[k] + s * n[k];
+        if (!(fabs(s) <= ISM_RM_INSERT_PROJECT_MAX * len))
+            return false;
+        if (fabs(step) <= ISM_RM_INSERT_NEWTON_REL * len) {
+            ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
+            return sqrt(dot3(g, g)) > p->gthresh;
+        }
+    }
+    return false;
+}
+
+/* The place of the new vertex, before projection: seen from a and b at half the needle's
+ * angles there, at most 60° (the apex of the equilateral triangle on ab where both angles
+ * allow), in the needle's plane; n gets the needle's unit normal. */
+static bool place_in_needle(const rm_pass *p, const uint32_t abc[3], double x[3], double n[3])
+{
+    const double *a = P(p, abc[0]), *b = P(p, abc[1]), *c = P(p, abc[2]);
+    double ln = rm_cross(a, b, c, n), len = rm_dist(a, b);
+    double alpha = fmin(M_PI / 3, 0.5 * rm_angle(a, b, c));
+    double beta = fmin(M_PI / 3, 0.5 * rm_angle(b, c, a));
+    if (!(ln > 0) || !(len > 0) || !(alpha > 0) || !(beta > 0))
+        return false;
+    double e1[3], e2[3];
+    for (int k = 0; k < 3; k++) {
+        n[k] /= ln;
+        e1[k] = (b[k] - a[k]) / len;
+    }
+    /* e2 = n × e1: in the plane, perpendicular to ab, on c's side (the winding a, b, c) */
+    e2[0] = n[1] * e1[2] - n[2] * e1[1];
+    e2[1] = n[2] * e1[0] - n[0] * e1[2];
+    e2[2] = n[0] * e1[1] - n[1] * e1[0];
+    double s = len * sin(beta) / sin(alpha + beta);
+    for (int k = 0; k < 3; k++)
+        x[k] = a[k] + s * (cos(alpha) * e1[k] + sin(alpha) * e2[k]);
+    return true;
+}
+
+/* The new vertex's place on f = 0 (along the needle's normal); g gets ∇f there. */
+static bool new_place(rm_pass *p, const uint32_t abc[3], double x[3], double g[3])
+{
+    double n[3];
+    return place_in_needle(p, abc, x, n) &&
+           project_along(p, x, n, rm_dist(P(p, abc[0]), P(p, abc[1])), g);
+}
+
+/* The three triangles (a, b, x), (b, c, x), (c, a, x) face the needle's way. */
+static bool faces_kept(const rm_pass *p, const uint32_t abc[3], const double *x)
+{
+    double n[3], m[3];
+    rm_cross(P(p, abc[0]), P(p, abc[1]), P(p, abc[2]), n);
+    for (int k = 0; k < 3; k++) {
+        rm_cross(P(p, abc[k]), P(p, abc[(k + 1) % 3]), x, m);
+        if (!(dot3(n, m) > 0))
+            return false;
+    }
+    return true;
+}
+
+/* No centroid of the three triangles farther from f = 0 than the needle's, or than the
+ * mesh's farthest before the pass (centroid_bound, as collapses keep). */
+static bool centroids_ok(rm_pass *p, const uint32_t abc[3], const double *x)
+{
+    const double *a = P(p, abc[0]), *b = P(p, abc[1]), *c = P(p, abc[2]);
+    double bound = fmax(rm_centroid_distance(p, a, b, c), p->centroid_bound);
+    return rm_centroid_distance(p, a, b, x) <= bound &&
+           rm_centroid_distance(p, b, c, x) <= bound && rm_centroid_distance(p, c, a, x) <= bound;
+}
+
+/* The thin triangle (p, q, x) of a split (pq a long side of the needle) will be flipped
+ * away: the angles at x and at the vertex across pq sum above π (the Lawson test), so the
+ * split is not left with two needles where it had one. */
+static bool flippable(const rm_pass *p, uint32_t a, uint32_t b, const double *x)
+{
+    uint32_t two[2];
+    int n;
+    if (!rm_edge_triangles(&p->r, a, b, two, &n))
+        return false;
+    const uint32_t *o = p->r.m->tri + 3 * two[1]; /* runs b -> a */
+    uint32_t y = o[(rm_corner(p->r.m, two[1], a) + 1) % 3];
+    return rm_angle(x, P(p, a), P(p, b)) + rm_angle(P(p, y), P(p, a), P(p, b)) >
+           M_PI + ISM_RM_INSERT_FLIP_MARGIN;
+}
+
+/* Appends triangle (a, b, c) cut from triangle t (its origin); its index. */
+static uint32_t add_triangle(rm_pass *p, uint32_t t, uint32_t a, uint32_t b, uint32_t c)
+{
+    rm_mesh *r = &p->r;
+    uint32_t s = (uint32_t)r->m->ntris;
+    ism_mesh_add_triangle(r->m, a, b, c); /* within the room reserved at the start */
+    r->origin[s] = r->origin[t];
+    r->dead[s] = 0;
+    return s;
+}
+
+/* Splits needle t = (a, b, c) at the new vertex x. False when out of memory. */
+static bool split(rm_pass *p, uint32_t t, const uint32_t abc[3], const double *x, const double *g)
+{
+    rm_mesh *r = &p->r;
+    uint32_t a = abc[0], b = abc[1], c = abc[2];
+    if (!rm_slot_reserve(r, a, 1) || !rm_slot_reserve(r, b, 1) || !rm_slot_reserve(r, c, 1))
+        return false;
+    uint32_t v = ism_mesh_add_vertex(r->m, x, NULL);
+    r->start[v] = r->room[v] = r->count[v] = 0;
+    r->locked[v] = r->gone[v] = 0;
+    p->slide[v] = 0;
+    if (!rm_slot_reserve(r, v, 3))
+        return false;
+    /* the apex's normal says which side of ∇f the mesh's normals take here */
+    memcpy(r->m->normal + 3 * v, r->m->normal + 3 * c, 3 * sizeof *r->m->normal);
+    rm_commit_move(p, v, x, g);
+    uint32_t *tri = r->m->tri + 3 * t;
+    tri[0] = a, tri[1] = b, tri[2] = v;
+    uint32_t t1 = add_triangle(p, t, b, c, v), t2 = add_triangle(p, t, c, a, v);
+    rm_slot_remove(r, c, t);
+    rm_slot_add(r, b, t1);
+    rm_slot_add(r, c, t1);
+    rm_slot_add(r, c, t2);
+    rm_slot_add(r, a, t2);
+    rm_slot_add(r, v, t);
+    rm_slot_add(r, v, t1);
+    rm_slot_add(r, v, t2);
+    p->active[a] = p->active[b] = p->active[c] = p->active[v] = 1;
+    return true;
+}
+
+size_t rm_insert_active(rm_pass *p, bool *ok)
+{
+    rm_mesh *r = &p->r;
+    double poor = sin(ISM_RM_INSERT_DEG * M_PI / 180);
+    size_t made = 0, nt = r->m->ntris;
+    *ok = true;
+    for (size_t t = 0; t < nt && *ok; t++) {
+        const uint32_t *v = r->m->tri + 3 * t;
+        uint32_t abc[3];
+        double x[3], g[3];
+        if (r->dead[t] || r->m->nverts >= r->cap_verts || r->m->ntris + 2 > r->cap_tris ||
+            !(rm_min_sine(P(p, v[0]), P(p, v[1]), P(p, v[2])) < poor) ||
+            !needle(p, (uint32_t)t, abc) || !new_place(p, abc, x, g) ||
+            !faces_kept(p, abc, x) || !centroids_ok(p, abc, x) ||
+            !flippable(p, abc[1], abc[2], x) ||
+            !flippable(p, abc[2], abc[0], x))
+            continue;
+        *ok = split(p, (uint32_t)t, abc, x, g);
+        made += *ok;
+    }
+    p->inserts += made;
+    return made;
+}
