@@ -125,7 +125,8 @@ static const stat_field conform_fields[] = {
 
 #define R(m) FIELD(ism_remesh_stats, m)
 static const stat_field remesh_fields[] = {
-    R(flips), R(moves), R(collapses), R(locked_vertices), R(min_angle_before), R(min_angle_after),
+    R(flips), R(moves), R(collapses), R(inserts), R(locked_vertices), R(min_angle_before),
+    R(min_angle_after),
     MS("time_ms", ism_remesh_stats, time_ms),
 };
 #undef R

@@ -13,8 +13,9 @@
  *                 "evals_jet", "time_ms", "conform": {points_conformed, points_failed,
  *                 points_short_cones, curves_conformed, curves_failed, loops_fallback,
  *                 triangles_removed, triangles_added, time_ms}},
- *    "remesh": {"flips", "moves", "collapses", "locked_vertices", "min_angle_before",
- *               "min_angle_after", "time_ms"} (only after the quality pass),
+ *    "remesh": {"flips", "moves", "collapses", "inserts", "locked_vertices",
+ *               "min_angle_before", "min_angle_after", "time_ms"} (only after the quality
+ *               pass),
  *    "timings_ms": {"decode", "compile", "singular", "polygonise", "analyse", "features",
  *    "encode", "total"}, "warnings": ["..."]}
  * (timings_ms comes right after "mesh"; the members from "polygoniser" on are the surface's,
