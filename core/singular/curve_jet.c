@@ -5,6 +5,7 @@
 
 #include <string.h>
 #include "core/util/sym3.h"
+#include "core/singular/search.h"
 
 /* A 2×2 Jacobian whose determinant is below this fraction of its squared norm is singular
  * to working precision (the step would be rounding noise). Near a pinch point the normal
@@ -167,4 +168,26 @@ void ism_cjet_frame(ism_cjet *j, const double p[3], const double *prev_t, ism_cp
         out->hn[e] = h[e] - out->t[i] * u[k] - u[i] * out->t[k] + tht * out->t[i] * out->t[k];
     }
     out->sigma = 0.5 * fabs(a + d) + sqrt(0.25 * (a - d) * (a - d) + b * b);
+}
+
+/* A seed's curve is on the zero set when |f| ≤ this × Hessian scale × diagonal²: f is
+ * constant along a curve of critical points, and a critical curve at that level lies within
+ * ~√(2·1e-14) ≈ 1.4e-7 × diagonal of the surface — below any mesh's resolution, while
+ * rounding of f is ~1e-16 of its terms. */
+#define CJET_SEED_F_REL 1e-14
+
+/* A seed must show the Hessian's rank 2: its smaller eigenvalue across the curve at least
+ * this fraction of the larger. Rank 1 is a double sheet (f = g²: a plane of null
+ * directions, no curve to follow) or a pinch point (seeds a little off it serve). */
+#define CJET_SEED_RANK_REL 1e-6
+
+bool ism_cjet_seed_ok(const ism_cpoint *s, double hessian_scale, double diag,
+                      double rank_margin)
+{
+    double fscale = s->hnorm * diag * diag;
+    double zero = ISM_SING_HZERO_REL * hessian_scale; /* both eigenvalues across */
+    return s->sigma > zero && fabs(s->D) > zero * s->sigma &&
+           fabs(s->D) >= rank_margin * CJET_SEED_RANK_REL * s->sigma * s->sigma &&
+           fabs(s->f) <= CJET_SEED_F_REL * fscale &&
+           s->grad <= ISM_CURVE_GRAD_REL * s->hnorm * diag;
 }

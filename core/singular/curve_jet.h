@@ -51,6 +51,13 @@ bool ism_cjet_correct(ism_cjet *j, const double start[3], const double P[2][3],
  * both small, it is prev_t projected onto their eigenvectors, so it never jumps. */
 void ism_cjet_frame(ism_cjet *j, const double p[3], const double *prev_t, ism_cpoint *out);
 
+/* Whether the frame s (at a point Newton put on ∇f = 0) can start a trace: f ~ 0 there,
+ * ∇f ~ 0, and the Hessian across the curve of rank 2 — both eigenvalues above the rank
+ * thresholds of search.h relative to hessian_scale, the smaller above rank_margin × the
+ * seed's own relative threshold (1: the curve stage's test; diag: the box diagonal). */
+bool ism_cjet_seed_ok(const ism_cpoint *s, double hessian_scale, double diag,
+                      double rank_margin);
+
 /* The Frobenius inner product of a's and b's normal-plane Hessians (independent of the
  * bases chosen). Negative when the Hessian across the curve flipped between them: the curve
  * passed through a point where it vanishes. */

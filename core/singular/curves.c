@@ -44,17 +44,6 @@
 /* Newton iterations projecting a seed onto its curve (it starts up to a cell away). */
 #define CURVES_SEED_IT 30
 
-/* A seed's curve is on the zero set when |f| ≤ this × Hessian scale × diagonal²: f is
- * constant along a curve of critical points, and a critical curve at that level lies within
- * ~√(2·1e-14) ≈ 1.4e-7 × diagonal of the surface — below any mesh's resolution, while
- * rounding of f is ~1e-16 of its terms. */
-#define CURVES_F_REL 1e-14
-
-/* A seed must show the Hessian's rank 2: its smaller eigenvalue across the curve at least
- * this fraction of the larger. Rank 1 is a double sheet (f = g²: a plane of null
- * directions, no curve to follow) or a pinch point (seeds a little off it serve). */
-#define CURVES_SEED_RANK_REL 1e-6
-
 /* Work budget: vertices over all curves (24 bytes each), and units of work — a step attempt
  * or a seed tried, each a few Hessian evaluations — per vertex allowed. */
 #define CURVES_MAX_VERTICES ((size_t)1 << 20)
@@ -65,6 +54,10 @@
 
 /* Branches meeting at a collapse point that make it a triple point. */
 #define CURVES_TRIPLE_BRANCHES 3
+
+/* Branches ending at a rank-1 point whose rank-1 system is singular that make it a crossing
+ * of curves rather than a contact of two sheets (which no curve reaches). */
+#define CURVES_CROSSING_BRANCHES 2
 
 static bool options_ok(const ism_locus_options *o, ism_error *err)
 {
@@ -248,12 +241,7 @@ static bool seed_point(ism_ctracer *tr, const ism_lbox *bx, ism_cpoint *s)
     double t[3];
     memcpy(t, s->t, sizeof t);
     ism_cjet_frame(&tr->jet, p0, t, s);
-    double fscale = s->hnorm * tr->diag * tr->diag;
-    double zero = ISM_SING_HZERO_REL * tr->io->hessian_scale; /* both eigenvalues across */
-    return s->sigma > zero && fabs(s->D) > zero * s->sigma &&
-           fabs(s->D) >= CURVES_SEED_RANK_REL * s->sigma * s->sigma &&
-           fabs(s->f) <= CURVES_F_REL * fscale &&
-           s->grad <= ISM_CURVE_GRAD_REL * s->hnorm * tr->diag;
+    return ism_cjet_seed_ok(s, tr->io->hessian_scale, tr->diag, 1.0);
 }
 
 static void trace_seed(ism_ctracer *tr, ism_lbox *bx)
@@ -358,5 +346,26 @@ bool ism_sing_trace_curves(const ism_tape *f, const ism_locus_options *o, ism_lo
     ism_eval_ws_free(tr.jet.ws);
     if (tr.oom)
         return ism_error_set(err, "singular curves: out of memory");
+    return true;
+}
+
+bool ism_sing_name_crossings(ism_locus *io)
+{
+    int *count = calloc(io->npoints + 1, sizeof *count);
+    if (!count)
+        return false;
+    for (size_t c = 0; c < io->ncurves; c++)
+        for (int e = 0; e < 2; e++)
+            if (!io->curves[c].closed && io->curves[c].end_point[e] >= 0)
+                count[io->curves[c].end_point[e]]++;
+    for (size_t j = 0; j < io->npoints; j++) {
+        ism_sing_point *p = &io->points[j];
+        if (count[j] >= CURVES_CROSSING_BRANCHES && p->uncertified_why == ISM_UNCERT_CONTACT) {
+            p->uncertified_why = ISM_UNCERT_CROSSING;
+            p->exists_radius = 0.0; /* Miranda's existence is a contact's (∇f = 0 along the
+                                       curves here: nothing to prove) */
+        }
+    }
+    free(count);
     return true;
 }

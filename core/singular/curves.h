@@ -33,4 +33,11 @@
 bool ism_sing_trace_curves(const ism_tape *f, const ism_locus_options *o, ism_locus *io,
                            ism_error *err);
 
+/* Names the reason of every uncertified point where ≥ 2 branches of io's curves end and whose
+ * rank-1 system is singular (ISM_UNCERT_CONTACT, the certificates' default for that case):
+ * curves cross there (ISM_UNCERT_CROSSING: z² + x²y², whose x and y axes are whiskers
+ * crossing at the origin, H = diag(0, 0, 2)); a contact of two sheets is reached by no curve.
+ * Run after every point is certified. False only when out of memory. */
+bool ism_sing_name_crossings(ism_locus *io);
+
 #endif

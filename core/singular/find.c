@@ -16,5 +16,9 @@ bool ism_locus_find(const ism_tape *f, const ism_locus_options *o, ism_locus *ou
     /* Each later stage works on the boxes not flagged ISM_LBOX_USED; one cut short by the
      * deadline or cancel sets out->incomplete itself. Double sheets (rank-1 boxes) need the
      * mesh: core/singular/surface.c meshes them after the polygoniser. */
-    return ism_sing_trace_curves(f, o, out, err) && ism_sing_certify_curve_points(f, o, out, err);
+    if (!ism_sing_trace_curves(f, o, out, err) || !ism_sing_certify_curve_points(f, o, out, err))
+        return false;
+    if (!ism_sing_name_crossings(out))
+        return ism_error_set(err, "singular curves: out of memory");
+    return true;
 }

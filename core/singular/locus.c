@@ -112,7 +112,13 @@ const char *ism_uncert_why_name(int why)
         "worse): the deflated and A3 systems are singular",
         "Krawczyk did not contract on any box up to 1e-9 x diagonal",
         "Hessian 0 and the rank-0 system singular (the Hessian of f's cubic term vanishes "
-        "along some direction)"};
+        "along some direction)",
+        "singular curves cross here (Hessian rank 1 where two or more traced branches end): "
+        "the rank-1 system is singular where curves cross, so no regular system defines "
+        "the point",
+        "a closed singular curve too small to trace at this resolution (the Hessian across "
+        "it is below the rank threshold): reported as one of its points, radius bounding "
+        "the loop"};
     return why > 0 && why < ISM_UNCERT_WHYS ? names[why] : NULL;
 }
 

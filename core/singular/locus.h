@@ -63,6 +63,13 @@ enum ism_uncert_why {
     ISM_UNCERT_CONTRACT = 3,  /* Krawczyk did not contract on any box up to the bound */
     ISM_UNCERT_RANK0 = 4,     /* Hessian 0 and the rank-0 system singular (f's cubic term has
                                  a direction along which its Hessian vanishes) */
+    ISM_UNCERT_CROSSING = 5,  /* Hessian rank 1 where two or more traced singular curves end
+                                 (two whiskers crossing in z² + x²y²): not a contact of two
+                                 sheets; the rank-1 system is singular where curves cross */
+    ISM_UNCERT_LOOP = 6,      /* a closed curve of zeros of ∇f on f = 0 (a whisker loop) too
+                                 small for the curve tracer (the Hessian across it is below
+                                 the rank threshold), reported as one of its points; radius
+                                 bounds the loop */
     ISM_UNCERT_WHYS
 };
 

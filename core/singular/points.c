@@ -45,9 +45,28 @@
  * × finest cell: well inside the smallest whisker loop a cluster can hide (a loop of radius
  * ~ a cell), far above the Newton tolerance. */
 #define CURVE_PROBE_CELLS 0.05
+/* The rank-1 probe's landing tolerance, relative to |H| × step (|H| × step² for f): a curve
+ * of zeros gives rounding there; two spheres of radius R touching give (d/R)²/2 — over it
+ * for every d above 1.4e-5 R, so with the smallest step at CURVE_STRICT_MIN_CELLS no contact
+ * of sheets a cell or more across passes. Loops below ~4 × that step read as a contact. */
+#define CURVE_STRICT_REL 1e-10
+#define CURVE_STRICT_MIN_CELLS 1e-3
 /* Newton iterations across the curve at a probe (quadratic: a few; slack for a start
  * off the curve by the probe's second-order term). */
 #define CURVE_PROBE_NEWTON 30
+/* A critical point proved off the surface inside a point cluster is searched for a closed
+ * curve of zeros around it (descend) only when the quadratic model of f reaches 0 within
+ * this many finest cells of it: a loop the cluster could hide. */
+#define DESCEND_REACH_CELLS 1.0
+/* ... and a point Newton finds from there counts only when |f| there is below this fraction
+ * of |f| at the critical point (it is not the same off-surface point seen again). */
+#define DESCEND_F_DROP 1e-3
+
+/* A small loop is left to the curve stage only when its Hessian across clears the seed's
+ * rank test by this factor: at the test's edge the tracer's first step loses it (r = 5e-4
+ * in ±1: a two-point curve with lost ends), while a point standing for the loop is honest. */
+#define LOOP_SEED_MARGIN 2.0
+
 /* Box-to-point distance checks explaining boxes by published points (points × boxes): a
  * bound on the work, far above any real case (16 nodes × a few thousand boxes). */
 #define EXPLAIN_WORK_MAX 1e8
@@ -243,37 +262,57 @@ static bool add_cand(ctx *x, const ism_sing_point *pt, uint32_t cluster, size_t 
     return true;
 }
 
-/* Whether the uncertified rank-2 point pt lies on a curve of zeros of ∇f (a whisker circle
- * smaller than a cell, whose boxes cluster like a point's): a step of CURVE_PROBE_CELLS
- * along the Hessian's null direction each way, Newton across it in the plane of the range
- * directions, lands on ∇f = 0 again (the curve tracer's test, ISM_CURVE_GRAD_REL) and on
- * f = 0 within the same relative size. At an isolated degenerate point the null component
- * of ∇f grows off the point (by ~t² at a cusp, t³ at an A3 point: those are certified
- * before this is asked). */
-static bool on_curve(ctx *x, const ism_sing_point *pt)
+/* Whether both probes at distance d along the unit null direction n of pt land on ∇f = 0:
+ * a start d along n each way, Newton across in the plane normal to n (E), and there |∇f| ≤
+ * glim and |f| ≤ flim. */
+static bool probes_land(ctx *x, const ism_sing_point *pt, const double n[3], double E[2][3],
+                        double d, double glim, double flim)
+{
+    ism_cjet j = { x->t, x->ws, POINT_NEWTON_TOL * x->diag, 0 };
+    bool ok = true;
+    for (int side = 0; side < 2 && ok; side++) {
+        double start[3], q[3], g[3], h[6];
+        for (int k = 0; k < 3; k++)
+            start[k] = pt->p[k] + (side ? -d : d) * n[k];
+        ok = ism_cjet_correct(&j, start, E, E, d, CURVE_PROBE_NEWTON, q, NULL);
+        if (ok) {
+            double fq = ism_eval_hessian(x->t, x->ws, q[0], q[1], q[2], g, h);
+            j.evals++;
+            ok = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]) <= glim && fabs(fq) <= flim;
+        }
+    }
+    x->out->evals_jet += j.evals;
+    return ok;
+}
+
+/* Whether the uncertified point pt of Hessian rank 1 or 2 lies on a curve of zeros of ∇f (a
+ * whisker circle smaller than a cell, whose boxes cluster like a point's). Rank 2: a step of
+ * CURVE_PROBE_CELLS along the Hessian's null direction each way lands on ∇f = 0 again (the
+ * curve tracer's test, ISM_CURVE_GRAD_REL) and on f = 0 within the same relative size; at an
+ * isolated rank-2 point the null component of ∇f grows off the point (by ~t² at a cusp, t³
+ * at an A3 point: those are certified before this is asked). Rank 1 (a loop whose Hessian
+ * across is below the rank threshold, or two sheets touching, where ∇f is only cubic along
+ * the null plane and passes that test): the landing must hold |∇f| ≤ CURVE_STRICT_REL ×
+ * |H| × d and |f| ≤ that × d at some step d from CURVE_PROBE_CELLS down by 4 to
+ * CURVE_STRICT_MIN_CELLS — a loop passes once d is well inside it, a contact never. */
+static bool on_curve(ctx *x, const ism_sing_point *pt, int rank)
 {
     double g[3], h[6], eig[3], vec[3][3];
     ism_eval_hessian(x->t, x->ws, pt->p[0], pt->p[1], pt->p[2], g, h);
+    x->out->evals_jet++;
     ism_sym3_eigen(h, eig, vec);
     const double *n = null_vector(eig, vec);
-    double E[2][3], hs = fmax(x->out->hessian_scale, fmax(fabs(eig[0]), fabs(eig[2])));
+    double E[2][3], big = fmax(fabs(eig[0]), fabs(eig[2]));
     ism_cjet_normal_basis(n, E);
-    ism_cjet j = { x->t, x->ws, POINT_NEWTON_TOL * x->diag, 0 };
     double d = CURVE_PROBE_CELLS * x->cell;
-    for (int side = 0; side < 2; side++) {
-        double start[3], q[3];
-        for (int k = 0; k < 3; k++)
-            start[k] = pt->p[k] + (side ? -d : d) * n[k];
-        if (!ism_cjet_correct(&j, start, E, E, d, CURVE_PROBE_NEWTON, q, NULL))
-            return false;
-        double fq = ism_eval_hessian(x->t, x->ws, q[0], q[1], q[2], g, h);
-        double lim = ISM_CURVE_GRAD_REL * hs * x->diag;
-        if (!(sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]) <= lim
-              && fabs(fq) <= lim * x->diag))
-            return false;
+    if (rank == 2) {
+        double lim = ISM_CURVE_GRAD_REL * fmax(x->out->hessian_scale, big) * x->diag;
+        return probes_land(x, pt, n, E, d, lim, lim * x->diag);
     }
-    x->out->evals_jet += j.evals + 3;
-    return true;
+    for (; d >= CURVE_STRICT_MIN_CELLS * x->cell; d *= 0.25)
+        if (probes_land(x, pt, n, E, d, CURVE_STRICT_REL * big * d, CURVE_STRICT_REL * big * d * d))
+            return true;
+    return false;
 }
 
 /* Bounds of a cluster's boxes and of its boxes' projections. */
@@ -321,6 +360,85 @@ static bool is_point_cluster(const ctx *x, const cluster_info *c)
     return true;
 }
 
+/* A critical point c proved off the surface in a point cluster may be the centre of a closed
+ * curve of zeros of ∇f on f = 0 that the cluster's cells cannot show ((x² + y² − r²)² + z²
+ * with r below a cell: f = r⁴ at the centre, every box's projection lands there, and the
+ * loop was dropped with it). f falls to 0 from c along an eigenvector of the Hessian whose
+ * eigenvalue λ has the sign opposite to f(c), at about t = √(2|f(c)|/|λ|) (the quadratic
+ * model); Newton from there, both ways along each such direction, lands on the curve when
+ * there is one. A landing point on a curve of zeros (on_curve) is returned as it is, with
+ * *loop set (no point certificate applies to a point of a curve: a defining system would
+ * move it to a least-squares point off the loop); else resolve's verdict from there when it
+ * is FOUND; else OFF_SURFACE (*pt untouched). */
+static int descend(ctx *x, const double c[3], const double lo[3], const double hi[3],
+                   double half, ism_sing_point *pt, bool *loop)
+{
+    double g[3], h[6], eig[3], vec[3][3];
+    double fc = ism_eval_hessian(x->t, x->ws, c[0], c[1], c[2], g, h);
+    x->out->evals_jet++;
+    ism_sym3_eigen(h, eig, vec);
+    for (int i = 0; i < 3; i++) {
+        if (!(fc * eig[i] < 0.0))
+            continue;
+        double t = sqrt(2.0 * fabs(fc) / fabs(eig[i]));
+        if (!(t <= DESCEND_REACH_CELLS * x->cell))
+            continue;
+        for (int side = 0; side < 2; side++) {
+            ism_sing_point q = { .cones = -1, .radius = half };
+            for (int k = 0; k < 3; k++)
+                q.p[k] = c[k] + (side ? -t : t) * vec[i][k];
+            ism_newton_opts no = { ISM_SING_PINV_REL_POINT, x->cell, POINT_NEWTON_TOL * x->diag,
+                                   POINT_NEWTON_ITERS, lo, hi, false };
+            ism_sing_newton(x->t, x->ws, q.p, &no, &x->out->evals_jet);
+            double qv[3][3];
+            measure(x, &q, qv);
+            if (!(q.residual_f <= DESCEND_F_DROP * fabs(fc)))
+                continue; /* back at c, or elsewhere off the surface */
+            int rank = ism_sing_rank(q.eig, x->out->hessian_scale);
+            if ((rank == 1 || rank == 2) && on_curve(x, &q, rank)) {
+                *pt = q;
+                *loop = true;
+                return FOUND;
+            }
+            if (resolve(x, q.p, lo, hi, x->cell, half, &q) == FOUND) {
+                *pt = q;
+                return FOUND;
+            }
+        }
+    }
+    return OFF_SURFACE;
+}
+
+/* The uncertified point pt of a point cluster lies on a closed curve of zeros (on_curve):
+ * when the curve stage can start there (ism_cjet_seed_ok), the cluster's first projected box
+ * becomes its seed (q on the curve, rank 2) and NOT_FOUND is returned; else the loop is too
+ * small to trace (the Hessian across it below LOOP_SEED_MARGIN × the rank threshold: r < 7e-4
+ * for (x² + y² − r²)² + z², whose Hessian across is diag(8r², 2)) and pt stands for it, its radius the farthest corner of the
+ * cluster's boxes (the search keeps every cell the loop meets). */
+static int small_loop(ctx *x, const cluster_info *c, ism_sing_point *pt)
+{
+    ism_cjet j = { x->t, x->ws, POINT_NEWTON_TOL * x->diag, 0 };
+    ism_cpoint s;
+    ism_cjet_frame(&j, pt->p, NULL, &s);
+    x->out->evals_jet += j.evals;
+    if (ism_cjet_seed_ok(&s, x->out->hessian_scale, x->diag, LOOP_SEED_MARGIN)) {
+        ism_lbox *b = &x->out->boxes[c->first_projected];
+        memcpy(b->q, pt->p, sizeof b->q);
+        b->rank = 2;
+        return NOT_FOUND; /* left to the curve stage */
+    }
+    double r2 = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double d = fmax(pt->p[k] - c->lo[k], c->hi[k] - pt->p[k]);
+        r2 += d * d;
+    }
+    pt->radius = sqrt(r2);
+    pt->type = ISM_SING_DEGENERATE;
+    pt->uncertified_why = ISM_UNCERT_LOOP;
+    pt->exists_radius = 0.0;
+    return FOUND;
+}
+
 /* A Krawczyk box of the search: Newton inside it (grown by half), certify. */
 static bool from_unique_box(ctx *x, size_t i, uint8_t *box_fate)
 {
@@ -354,9 +472,15 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
     ism_sing_point pt;
     if (is_point_cluster(x, c)) {
         int r = resolve(x, l->boxes[c->first_projected].q, lo, hi, x->cell, half, &pt);
-        if (r == FOUND && !pt.certified && ism_sing_rank(pt.eig, l->hessian_scale) == 2
-            && on_curve(x, &pt))
-            r = NOT_FOUND; /* a small closed curve: left to the curve stage */
+        bool loop = false;
+        if (r == OFF_SURFACE) {
+            r = descend(x, pt.p, lo, hi, half, &pt, &loop);
+        } else if (r == FOUND && !pt.certified) {
+            int rank = ism_sing_rank(pt.eig, l->hessian_scale);
+            loop = (rank == 1 || rank == 2) && on_curve(x, &pt, rank);
+        }
+        if (r == FOUND && loop)
+            r = small_loop(x, c, &pt); /* a small closed curve */
         *fate = r == FOUND ? 1 : r == OFF_SURFACE ? 2 : 0;
         return r != FOUND || add_cand(x, &pt, id, SIZE_MAX);
     }

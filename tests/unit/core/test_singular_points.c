@@ -378,6 +378,115 @@ Test(singular_points, small_whisker_loops_traced)
     }
 }
 
+/* The same loops smaller still, box ±1, depth 7 (cell 1/64): at the centre f = r⁴ > 0 and
+ * ∇f = 0, every box's projection landed there, and that off-surface point took the loop
+ * with it (r = 0.001 and 0.0002: nothing in the own and 1e-3 boxes), or the loop was
+ * read as a contact of two sheets (r = 0.0005, 0.37 cell off). The Hessian across the
+ * circle is diag(8r², 2): r = 0.001 clears the tracer's rank test (8r²/2 ≥ 2 × 1e-6) and is
+ * one closed whisker of length 2πr; below (r = 0.0005: the test's edge, 0.0002 below it)
+ * the loop is one uncertified point of the circle, reason "small loop", its radius
+ * bounding the loop (≥ 2r: the farthest point of the circle from one of its points). */
+Test(singular_points, whisker_loops_below_a_sixteenth_of_a_cell)
+{
+    static const double radii[3] = { 0.001, 0.0005, 0.0002 };
+    double diag = dist(UNIT, UNIT + 3);
+    for (int i = 0; i < 3; i++) {
+        char src[96];
+        snprintf(src, sizeof src, "(x^2 + y^2 - %.17g^2)^2 + z^2", radii[i]);
+        ism_tape *t = compile(src);
+        for (int placement = 0; placement < 3; placement++) {
+            ism_locus l;
+            find(t, UNIT, 7, placement, 0, &l);
+            if (i == 0) {
+                cr_expect_eq(l.npoints, 0, "%s (placement %d): %zu points", src, placement,
+                             l.npoints);
+                cr_assert_eq(l.ncurves, 1, "%s (placement %d): %zu curves", src, placement,
+                             l.ncurves);
+                const ism_sing_curve *c = &l.curves[0];
+                cr_expect(c->closed && c->kind == ISM_CURVE_WHISKER);
+                double len = 0.0;
+                for (size_t k = 0; k < c->n; k++)
+                    len += dist(c->xyz + 3 * k, c->xyz + 3 * ((k + 1) % c->n));
+                cr_expect(fabs(len / (2 * M_PI * radii[i]) - 1) < 1e-2, "%s (placement %d): "
+                          "length %.6g, 2πr %.6g", src, placement, len, 2 * M_PI * radii[i]);
+            } else {
+                cr_expect_eq(l.ncurves, 0, "%s (placement %d): %zu curves", src, placement,
+                             l.ncurves);
+                cr_assert_eq(l.npoints, 1, "%s (placement %d): %zu points", src, placement,
+                             l.npoints);
+                const ism_sing_point *p = &l.points[0];
+                cr_expect(!p->certified && p->uncertified_why == ISM_UNCERT_LOOP,
+                          "%s (placement %d): certified %d, reason %s", src, placement,
+                          p->certified, ism_uncert_why_name(p->uncertified_why));
+                cr_expect_eq(p->type, ISM_SING_DEGENERATE);
+                double off = fabs(hypot(p->p[0], p->p[1]) - radii[i]) + fabs(p->p[2]);
+                cr_expect(off <= 1e-9 * diag, "%s (placement %d): %g off the circle", src,
+                          placement, off);
+                cr_expect(p->radius >= 2 * radii[i] && p->radius <= 4.0 / 64 * sqrt(3.0),
+                          "%s (placement %d): radius %g", src, placement, p->radius);
+            }
+            ism_locus_free(&l);
+        }
+        ism_tape_free(t);
+    }
+}
+
+/* z² + x²y² ≥ 0 vanishes on z = 0, xy = 0: the x and y axes, where ∇f = (2xy², 2x²y, 2z)
+ * = 0 too; across the x axis at (a, 0, 0) H = diag(0, 2a², 2), definite: whiskers. x²y² −
+ * z² = (xy − z)(xy + z): the sheets z = ±xy cross along the same axes, H across diag(2a²,
+ * −2): double curves. At the origin H = diag(0, 0, ±2), rank 1, and four branches meet: a
+ * triple point in the list's sense, whose rank-1 system is singular — reported once as
+ * "contact of two sheets", which no sheet makes there. Four curves on the axes, each from
+ * the origin to the box (total length: the box's x and y extents), and the point named a
+ * crossing of curves. */
+Test(singular_points, curves_crossing_at_a_rank_one_point)
+{
+    static const char *const src[2] = { "z^2 + x^2*y^2", "x^2*y^2 - z^2" };
+    static const int kind[2] = { ISM_CURVE_WHISKER, ISM_CURVE_DOUBLE };
+    double diag = dist(UNIT, UNIT + 3);
+    for (int s = 0; s < 2; s++) {
+        ism_tape *t = compile(src[s]);
+        for (int placement = 0; placement < 3; placement++) {
+            ism_locus l;
+            double box[6];
+            placed_box(UNIT, 6, placement, box);
+            find(t, UNIT, 6, placement, 0, &l);
+            cr_assert_eq(l.npoints, 1, "%s (placement %d): %zu points", src[s], placement,
+                         l.npoints);
+            const ism_sing_point *p = &l.points[0];
+            cr_expect(dist(p->p, ORIGIN[0]) <= 1e-9 * diag, "%s (placement %d): point at "
+                      "(%g, %g, %g)", src[s], placement, p->p[0], p->p[1], p->p[2]);
+            cr_expect_eq(p->type, ISM_SING_TRIPLE);
+            cr_expect(!p->certified && p->uncertified_why == ISM_UNCERT_CROSSING,
+                      "%s (placement %d): reason %s", src[s], placement,
+                      ism_uncert_why_name(p->uncertified_why));
+            cr_assert_eq(l.ncurves, 4, "%s (placement %d): %zu curves", src[s], placement,
+                         l.ncurves);
+            double total = 0.0;
+            for (size_t c = 0; c < l.ncurves; c++) {
+                const ism_sing_curve *cv = &l.curves[c];
+                cr_expect(cv->kind == kind[s] && !cv->closed);
+                bool to_point = cv->end_type[0] == ISM_END_TRIPLE || cv->end_type[1] == ISM_END_TRIPLE;
+                bool to_box = cv->end_type[0] == ISM_END_BOX || cv->end_type[1] == ISM_END_BOX;
+                cr_expect(to_point && to_box, "%s (placement %d): curve %zu ends %d %d", src[s],
+                          placement, c, cv->end_type[0], cv->end_type[1]);
+                for (size_t k = 0; k < cv->n; k++) {
+                    const double *a = cv->xyz + 3 * k;
+                    cr_expect(fmin(fabs(a[0]), fabs(a[1])) + fabs(a[2]) <= 1e-9 * diag,
+                              "%s: (%g, %g, %g) off the axes", src[s], a[0], a[1], a[2]);
+                    if (k + 1 < cv->n)
+                        total += dist(a, cv->xyz + 3 * (k + 1));
+                }
+            }
+            double want = (box[3] - box[0]) + (box[4] - box[1]);
+            cr_expect(fabs(total - want) <= 1e-6, "%s (placement %d): length %.9g, want %.9g",
+                      src[s], placement, total, want);
+            ism_locus_free(&l);
+        }
+        ism_tape_free(t);
+    }
+}
+
 /* Kummer's quartic (x²+y²+z²−μ²)² − λ p q r s written out with its derivatives by hand, in
  * long double: an evaluation independent of the tape and its evaluators. */
 typedef struct kummer {
