@@ -5,20 +5,12 @@
 #include "core/curves/branches.h"
 #include <stdlib.h>
 #include <string.h>
+#include "core/eval/eval.h"
 #include "core/expr/tape.h"
-
-static bool is_min_max(int op)
-{
-    return op == ISM_OP_MIN_RR || op == ISM_OP_MIN_RC || op == ISM_OP_MAX_RR ||
-           op == ISM_OP_MAX_RC;
-}
 
 bool ism_branches_any(const ism_tape *f)
 {
-    for (size_t i = 0; i < f->len; i++)
-        if (is_min_max(f->code[i].op))
-            return true;
-    return false;
+    return ism_tape_has_min_max(f);
 }
 
 bool ism_branches_init(ism_branches *b, const ism_tape *f)

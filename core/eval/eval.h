@@ -57,6 +57,9 @@ bool ism_eval_top_branches(const ism_tape *t, ism_eval_ws *ws, double x, double 
 double ism_eval_hessian(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
                         double grad[3], double hess[6]);
 
+/* Whether t holds a min or max (f may have a C0 crease where its operands are equal). */
+bool ism_tape_has_min_max(const ism_tape *t);
+
 /* A tape with room for any shortened version of t (free with ism_tape_free). */
 ism_tape *ism_tape_new_like(const ism_tape *t);
 

@@ -31,6 +31,14 @@ static int is_min_max(int op)
         || op == ISM_OP_MAX_RC;
 }
 
+bool ism_tape_has_min_max(const ism_tape *t)
+{
+    for (size_t i = 0; i < t->len; i++)
+        if (is_min_max(t->code[i].op))
+            return true;
+    return false;
+}
+
 /* The instruction a decided min/max becomes. */
 static ism_instr decided(const ism_instr *in, uint8_t choice)
 {

@@ -35,11 +35,14 @@ typedef struct ism_root_params {
     double gradient_test;  /* ĝa·ĝb above this: same sheet, no root when signs agree */
     double eps;            /* double-root threshold on |f| */
     int iters;             /* bisection steps of the double-root search */
+    bool crease;           /* f has min/max (a C0 crease may cross a segment): same-sign ends
+                              where |f| falls toward the middle are searched (edge_roots.c) */
 } ism_root_params;
 
 /* True when the end values alone prove that ism_segment_roots(a→b) finds no root (an end
  * at 0 or undefined, or one sign at both ends with gradients agreeing beyond gradient_test
- * and tangents that do not meet past 0): it would then evaluate nothing, so there is
+ * and tangents that do not meet past 0 — with prm->crease: |f| not falling from both ends
+ * toward the middle): it would then evaluate nothing, so there is
  * nothing to memoise either. Give a and b in the order ism_segment_roots gets them. */
 bool ism_segment_rootless(const ism_root_params *prm, const double a[3], const double b[3],
                           double fa, double fb, const double ga[3], const double gb[3]);

@@ -39,7 +39,8 @@ static bool no_roots(ism_sampler *s, const ism_flatness *fl, const ism_corners *
 {
     if (!ism_segment_may_reach(s, k->p[c0], k->p[c1], fl->double_root_eps))
         return true;
-    ism_root_params prm = {fl->gradient_test, fl->double_root_eps, fl->double_root_iters};
+    ism_root_params prm = {fl->gradient_test, fl->double_root_eps, fl->double_root_iters,
+                           false}; /* the search alone: crease only gates it elsewhere */
     double t;
     return ism_double_root_search(s, &prm, k->p[c0], k->p[c1], k->f[c0], k->f[c1], &t) == 0;
 }

@@ -306,7 +306,8 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         goto done;
     if (!p.out || !p.ctx || !match_last_round(&p, c, &reuse))
         goto done;
-    ism_root_params roots = {o->gradient_test, o->double_root_eps, o->double_root_iters};
+    ism_root_params roots = {o->gradient_test, o->double_root_eps, o->double_root_iters,
+                             ism_tape_has_min_max(f)};
     for (int t = 0; t < threads; t++) {
         ism_cell_ctx *cx = &p.ctx[t];
         cx->s.tape = f;
