@@ -345,33 +345,46 @@ Test(singular_points, xyz_triple_and_whitney_pinch_certified)
     check_enclosed("x^2 - z*y^2", UNIT, 5, ORIGIN, rank1, pinch, 1);
 }
 
+/* The whisker loop (x² + y² − r²)² + z² (its source in src). */
+static ism_tape *loop_tape(double r, char src[96])
+{
+    snprintf(src, 96, "(x^2 + y^2 - %.17g^2)^2 + z^2", r);
+    return compile(src);
+}
+
+/* l holds the loop of radius r as one closed whisker and nothing else: every point within
+ * 1e-9 × diagonal of the circle, its length 2πr within 1% (a polygon of n sides inscribed:
+ * −π²/(6n²)). */
+static void expect_traced_loop(const ism_locus *l, const char *src, int placement, double r)
+{
+    cr_expect_eq(l->npoints, 0, "%s (placement %d): %zu points", src, placement, l->npoints);
+    cr_assert_eq(l->ncurves, 1, "%s (placement %d): %zu curves", src, placement, l->ncurves);
+    const ism_sing_curve *c = &l->curves[0];
+    cr_expect(c->closed && c->kind == ISM_CURVE_WHISKER);
+    double len = 0.0, worst = 0.0;
+    for (size_t k = 0; k < c->n; k++) {
+        const double *a = c->xyz + 3 * k, *b = c->xyz + 3 * ((k + 1) % c->n);
+        len += dist(a, b);
+        worst = fmax(worst, fabs(hypot(a[0], a[1]) - r) + fabs(a[2]));
+    }
+    cr_expect(worst <= 1e-9 * dist(UNIT, UNIT + 3), "%s: %g off the circle", src, worst);
+    cr_expect(fabs(len / (2 * M_PI * r) - 1) < 1e-2, "%s (placement %d): length %.6g, 2πr %.6g",
+              src, placement, len, 2 * M_PI * r);
+}
+
 /* (x² + y² − r²)² + z²: ∇f = 0 on the circle ρ = r, z = 0 (f ≥ 0: a whisker), H across it
  * diag(8r², 2). Radii below a finest cell (1/32 at depth 6 in ±1) once made one cluster
- * taken for an uncertified point; now one closed whisker, every point within 1e-9 × diagonal
- * of the circle, its length 2πr within 1% (a polygon of n sides inscribed: −π²/(6n²)). */
+ * taken for an uncertified point; now one closed whisker. */
 Test(singular_points, small_whisker_loops_traced)
 {
     static const double radii[3] = { 0.02, 0.006, 0.003 };
     for (int i = 0; i < 3; i++) {
         char src[96];
-        snprintf(src, sizeof src, "(x^2 + y^2 - %.17g^2)^2 + z^2", radii[i]);
-        ism_tape *t = compile(src);
+        ism_tape *t = loop_tape(radii[i], src);
         for (int placement = 0; placement < 3; placement++) {
             ism_locus l;
             find(t, UNIT, 6, placement, 0, &l);
-            cr_expect_eq(l.npoints, 0, "%s (placement %d): %zu points", src, placement, l.npoints);
-            cr_assert_eq(l.ncurves, 1, "%s (placement %d): %zu curves", src, placement, l.ncurves);
-            const ism_sing_curve *c = &l.curves[0];
-            cr_expect(c->closed && c->kind == ISM_CURVE_WHISKER);
-            double len = 0.0, worst = 0.0;
-            for (size_t k = 0; k < c->n; k++) {
-                const double *a = c->xyz + 3 * k, *b = c->xyz + 3 * ((k + 1) % c->n);
-                len += dist(a, b);
-                worst = fmax(worst, fabs(hypot(a[0], a[1]) - radii[i]) + fabs(a[2]));
-            }
-            cr_expect(worst <= 1e-9 * dist(UNIT, UNIT + 3), "%s: %g off the circle", src, worst);
-            cr_expect(fabs(len / (2 * M_PI * radii[i]) - 1) < 1e-2, "%s (placement %d): length "
-                      "%.6g, 2πr %.6g", src, placement, len, 2 * M_PI * radii[i]);
+            expect_traced_loop(&l, src, placement, radii[i]);
             ism_locus_free(&l);
         }
         ism_tape_free(t);
@@ -382,33 +395,23 @@ Test(singular_points, small_whisker_loops_traced)
  * ∇f = 0, every box's projection landed there, and that off-surface point took the loop
  * with it (r = 0.001 and 0.0002: nothing in the own and 1e-3 boxes), or the loop was
  * read as a contact of two sheets (r = 0.0005, 0.37 cell off). The Hessian across the
- * circle is diag(8r², 2): r = 0.001 clears the tracer's rank test (8r²/2 ≥ 2 × 1e-6) and is
- * one closed whisker of length 2πr; below (r = 0.0005: the test's edge, 0.0002 below it)
- * the loop is one uncertified point of the circle, reason "small loop", its radius
- * bounding the loop (≥ 2r: the farthest point of the circle from one of its points). */
+ * circle is diag(8r², 2): r = 0.001 clears the tracer's rank test twice over (8r²/2 ≥ 2 ×
+ * 1e-6) and is one closed whisker of length 2πr; below (r < 7.1e-4: 0.0005, the tracer's
+ * own edge, and 0.0002) the loop is one uncertified point of the circle, reason "small
+ * loop", its radius bounding the loop (≥ 2r: the farthest point of the circle from one of
+ * its points; at most the cluster's 4 cells across). */
 Test(singular_points, whisker_loops_below_a_sixteenth_of_a_cell)
 {
     static const double radii[3] = { 0.001, 0.0005, 0.0002 };
     double diag = dist(UNIT, UNIT + 3);
     for (int i = 0; i < 3; i++) {
         char src[96];
-        snprintf(src, sizeof src, "(x^2 + y^2 - %.17g^2)^2 + z^2", radii[i]);
-        ism_tape *t = compile(src);
+        ism_tape *t = loop_tape(radii[i], src);
         for (int placement = 0; placement < 3; placement++) {
             ism_locus l;
             find(t, UNIT, 7, placement, 0, &l);
             if (i == 0) {
-                cr_expect_eq(l.npoints, 0, "%s (placement %d): %zu points", src, placement,
-                             l.npoints);
-                cr_assert_eq(l.ncurves, 1, "%s (placement %d): %zu curves", src, placement,
-                             l.ncurves);
-                const ism_sing_curve *c = &l.curves[0];
-                cr_expect(c->closed && c->kind == ISM_CURVE_WHISKER);
-                double len = 0.0;
-                for (size_t k = 0; k < c->n; k++)
-                    len += dist(c->xyz + 3 * k, c->xyz + 3 * ((k + 1) % c->n));
-                cr_expect(fabs(len / (2 * M_PI * radii[i]) - 1) < 1e-2, "%s (placement %d): "
-                          "length %.6g, 2πr %.6g", src, placement, len, 2 * M_PI * radii[i]);
+                expect_traced_loop(&l, src, placement, radii[i]);
             } else {
                 cr_expect_eq(l.ncurves, 0, "%s (placement %d): %zu curves", src, placement,
                              l.ncurves);
