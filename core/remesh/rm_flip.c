@@ -21,12 +21,6 @@
  * flipped back and forth. */
 #define ISM_RM_FLIP_MARGIN 1e-9
 
-/* A triangle with an angle at least this large (degrees) is a cap: its apex lies almost on
- * the opposite side, so its normal is rounding noise and says nothing about a bend. The
- * bend test of a flip then looks only at the new pair (klein-bottle: 0.1°-1° caps along the
- * double curve's tubes, their flips refused as "bent" before this). */
-#define ISM_RM_CAP_DEG 160.0
-
 /* Flips one call may make, per triangle of the mesh: Lawson's procedure ends by itself in
  * the plane; on a curved mesh this bounds the work whatever the geometry does. */
 #define ISM_RM_FLIPS_PER_TRIANGLE 4
@@ -95,14 +89,6 @@ static bool not_delaunay(const double *A, const double *B, const double *C, cons
     return sc * cd + cc * sd < -ISM_RM_FLIP_MARGIN * scale;
 }
 
-/* The triangle's largest angle is at least ISM_RM_CAP_DEG: cos of it below cos(cap). */
-static bool is_cap(const double *a, const double *b, const double *c)
-{
-    double cap = cos(ISM_RM_CAP_DEG * M_PI / 180);
-    return cos(rm_angle(a, b, c)) < cap || cos(rm_angle(b, c, a)) < cap ||
-           cos(rm_angle(c, a, b)) < cap;
-}
-
 /* The geometric tests of a flip (the combinatorial ones passed). */
 static bool flip_improves(rm_pass *p, const quad *q)
 {
@@ -113,7 +99,7 @@ static bool flip_improves(rm_pass *p, const quad *q)
     double l1 = rm_cross(A, B, C, n1), l2 = rm_cross(B, A, D, n2);
     double k1 = rm_cross(A, D, C, m1), k2 = rm_cross(B, C, D, m2);
     double s[3] = {n1[0] + n2[0], n1[1] + n2[1], n1[2] + n2[2]};
-    bool cap = is_cap(A, B, C) || is_cap(B, A, D);
+    bool cap = rm_is_cap(A, B, C) || rm_is_cap(B, A, D);
     if ((!cap && !bend_ok(n1, l1, n2, l2)) || !bend_ok(m1, k1, m2, k2) || !(dot3(m1, s) > 0) ||
         !(dot3(m2, s) > 0))
         return false;

@@ -42,8 +42,10 @@ static bool is_crease(const rm_pass *p, uint32_t a, uint32_t b, uint32_t t1, uin
     const uint32_t *u = m->tri + 3 * t1, *w = m->tri + 3 * t2;
     double l1 = rm_cross(P + 3 * u[0], P + 3 * u[1], P + 3 * u[2], n1);
     double l2 = rm_cross(P + 3 * w[0], P + 3 * w[1], P + 3 * w[2], n2);
-    if (dot3(n1, n2) > cos(ISM_RM_CREASE_DEG * M_PI / 180) * l1 * l2)
-        return false;
+    if (dot3(n1, n2) > cos(ISM_RM_CREASE_DEG * M_PI / 180) * l1 * l2 ||
+        rm_is_cap(P + 3 * u[0], P + 3 * u[1], P + 3 * u[2]) ||
+        rm_is_cap(P + 3 * w[0], P + 3 * w[1], P + 3 * w[2]))
+        return false; /* a cap's normal says nothing of a bend */
     const double *ga = p->normal + 3 * a, *gb = p->normal + 3 * b;
     bool fold = (dot3(n1, ga) > 0) != (dot3(n2, ga) > 0) && (dot3(n1, gb) > 0) != (dot3(n2, gb) > 0);
     return !fold;

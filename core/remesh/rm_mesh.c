@@ -196,3 +196,10 @@ double rm_min_angle(const double *a, const double *b, const double *c)
         return rm_angle(a, b, c);
     return ca <= ab ? rm_angle(b, c, a) : rm_angle(c, a, b);
 }
+
+bool rm_is_cap(const double *a, const double *b, const double *c)
+{
+    double cap = cos(ISM_RM_CAP_DEG * M_PI / 180);
+    return cos(rm_angle(a, b, c)) < cap || cos(rm_angle(b, c, a)) < cap ||
+           cos(rm_angle(c, a, b)) < cap;
+}

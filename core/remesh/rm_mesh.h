@@ -73,6 +73,12 @@ bool rm_slot_room(const rm_mesh *r, uint32_t v);
  * small). False when out of memory or vt would pass 2^32 entries. */
 bool rm_slot_reserve(rm_mesh *r, uint32_t v, uint32_t n);
 
+/* A triangle with an angle at least this large (degrees) is a cap: its apex lies almost on
+ * the opposite side, so its normal is rounding noise and says nothing about a bend
+ * (klein-bottle: 0.1°-1° caps along the double curve's tubes, their flips refused as "bent",
+ * steiner-roman: caps beside the double lines taken for creases, their vertices locked). */
+#define ISM_RM_CAP_DEG 160.0
+
 /* Geometry. */
 double rm_dist(const double *p, const double *q);
 /* The angle at p between p->q and p->s (radians, 0 for a zero-length side). */
@@ -82,6 +88,8 @@ double rm_min_angle(const double *a, const double *b, const double *c);
 /* Its sine (0 for a degenerate triangle): the smallest angle is at most 60°, where the sine
  * still grows with the angle, so comparisons need no arc tangent. */
 double rm_min_sine(const double *a, const double *b, const double *c);
+/* True when the triangle's largest angle is at least ISM_RM_CAP_DEG. */
+bool rm_is_cap(const double *a, const double *b, const double *c);
 /* (b - a) x (c - a), not normalised; returns its length. */
 double rm_cross(const double *a, const double *b, const double *c, double n[3]);
 
