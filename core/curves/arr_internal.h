@@ -4,7 +4,9 @@
 #define ISM_ARR_INTERNAL_H
 
 #include "core/analysis/unionfind.h"
-#include "core/curves/arrangement.h"
+#include "core/curves/arr_types.h"
+#include "core/curves/cut_types.h"
+#include "core/mesh/mesh.h"
 #include "core/singular/key_map.h"
 
 typedef struct arr_mesh_edges {

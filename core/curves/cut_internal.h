@@ -4,7 +4,9 @@
 #ifndef ISM_CUT_INTERNAL_H
 #define ISM_CUT_INTERNAL_H
 
-#include "core/curves/cut.h"
+#include "core/curves/cut_fn.h"
+#include "core/curves/cut_types.h"
+#include "core/mesh/mesh.h"
 #include "core/singular/key_map.h"
 
 #define CUT_NONE UINT32_MAX
