@@ -190,10 +190,11 @@ def nginx_site(daemon_ports, listen_port, tls=None, cache_dir=None):
                        for p in daemon_ports)
     if daemon_ports is not None:
         text = re.sub(r"^(\s*)server 127\.0\.0\.1:8080 (.*);\n", upstream, text, flags=re.M)
-    text = re.sub(r"^(\s*)listen 80;$", r"\1listen 127.0.0.1:%d;" % listen_port, text, flags=re.M)
+    text = re.sub(r"^(\s*)listen 80( reuseport)?;$", r"\1listen 127.0.0.1:%d\2;" % listen_port, text,
+                  flags=re.M)
     if cache_dir:
         text = text.replace("/var/cache/nginx/isomesh", cache_dir)
-    text = re.sub(r"^\s*listen \[::\]:80;\n", "", text, flags=re.M)
+    text = re.sub(r"^\s*listen \[::\]:80( reuseport)?;\n", "", text, flags=re.M)
     if tls:
         port, cert, key = tls
         text = re.sub(r"^(\s*)# listen 443 ssl http2;$", r"\1listen 127.0.0.1:%d ssl http2;" % port,
