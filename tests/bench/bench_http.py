@@ -27,6 +27,7 @@ import http.client
 import json
 import os
 import re
+import resource
 import shutil
 import signal
 import statistics
@@ -90,18 +91,25 @@ def nginx_workers(master):
 def wrk(url, conns, seconds, script=None, pid=None):
     """wrk's figures for url; with pid (one, or a list of the server's processes), also the
     server's CPU microseconds per request (less sensitive to a loaded machine than req/s:
-    the server's own cost)."""
+    the server's own cost), wrk's own (client_cpu_us) and the cores the two got together
+    over the run (cores: on a loaded machine the scheduler's share, which sets req/s)."""
     pid = [pid] if isinstance(pid, int) else pid
     threads = 1 if conns == 1 else 2
     cmd = ["wrk", "-t%d" % threads, "-c%d" % conns, "-d%ds" % seconds, "--latency"]
     if script:
         cmd += ["-s", script]
     cpu0 = cpu_seconds(pid) if pid else 0.0
+    kids0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
     out = subprocess.run(cmd + [url], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                          text=True, timeout=seconds + 60).stdout
+    wall = time.perf_counter() - t0
+    kids1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = cpu_seconds(pid) - cpu0 if pid else 0.0
+    client = (kids1.ru_utime - kids0.ru_utime) + (kids1.ru_stime - kids0.ru_stime)
     done = re.search(r"(\d+) requests in", out)
-    cpu_us = cpu / int(done.group(1)) * 1e6 if pid and done and int(done.group(1)) else float("nan")
+    n = int(done.group(1)) if done else 0
+    cpu_us = cpu / n * 1e6 if pid and n else float("nan")
     rps = float(re.search(r"Requests/sec:\s+([\d.]+)", out).group(1))
 
     def pct(p):
@@ -114,7 +122,9 @@ def wrk(url, conns, seconds, script=None, pid=None):
     counts = [int(x) for x in sock.groups()] if sock else [0, 0, 0, 0]
     return {"rps": rps, "p50": pct(50), "p90": pct(90), "p99": pct(99),
             "bad": int(errors.group(1)) if errors else 0, "errors": sum(counts[:3]),
-            "over2s": counts[3], "cpu_us": cpu_us}
+            "over2s": counts[3], "cpu_us": cpu_us,
+            "client_cpu_us": client / n * 1e6 if n else float("nan"),
+            "cores": (cpu + client) / wall if pid else float("nan")}
 
 
 def get_ok(port, path, timeout):
