@@ -84,8 +84,7 @@ def main():
             ratios.append(front["rps"] / direct["rps"])
             cpu_ratios.append(front["cpu_us"] / direct["cpu_us"])
             share_ratios.append(front["cores"] / direct["cores"])
-            equal_share.append((direct["cpu_us"] + direct["client_cpu_us"]) /
-                               (front["cpu_us"] + front["client_cpu_us"]))
+            equal_share.append(bench_http.equal_share(front, direct))
         print("nginx front / daemon req/s: %s; goal >= %.0f%%: %s" % (
             ", ".join("%d conns %.2f" % (c, q) for c, q in zip(CONNS, ratios)), GOAL * 100,
             "met" if min(ratios) >= GOAL else "NOT met"))

@@ -211,22 +211,33 @@ def row(name, conns, r):
                 for k, what in (("bad", "non-2xx"), ("errors", "socket errors")) if r[k])))
 
 
+def equal_share(a, b):
+    """a's req/s over b's had both runs got the same CPU: the inverse ratio of their server +
+    wrk CPU per request (req/s = cores / CPU per request). On a loaded machine the runs get
+    unequal shares (a server with dozens of runnable threads gets more than one with two)."""
+    return (b["cpu_us"] + b["client_cpu_us"]) / (a["cpu_us"] + a["client_cpu_us"])
+
+
 def versus_nginx(results, nginx, which):
     """isomeshd's figures as ratios of nginx's, per connection count, and the issue-16 goals."""
     print("\nisomeshd / nginx (%s), same run (req/s: higher is better; p99: lower is better)"
           % which)
-    print("%6s %12s %12s %16s %14s" % ("conns", "req/s ratio", "p99 ratio", "over 2 s (nginx)",
-                                       "CPU/req ratio"))
+    print("%6s %12s %12s %16s %14s %12s %14s" % ("conns", "req/s ratio", "p99 ratio",
+                                                 "over 2 s (nginx)", "CPU/req ratio",
+                                                 "cores ratio", "equal share"))
     met = True
     for conns in sorted(nginx):
         i, n = results[conns], nginx[conns]
         rr, pr = i["rps"] / n["rps"], i["p99"] / n["p99"] if n["p99"] else float("inf")
-        print("%6d %11.2fx %11.2fx %9d (%d) %13.2fx" % (conns, rr, pr, i["over2s"], n["over2s"],
-                                                       i["cpu_us"] / n["cpu_us"]))
+        print("%6d %11.2fx %11.2fx %9d (%d) %13.2fx %11.2fx %13.2fx" % (
+            conns, rr, pr, i["over2s"], n["over2s"], i["cpu_us"] / n["cpu_us"],
+            i["cores"] / n["cores"], equal_share(i, n)))
         if conns >= 16:
             met = met and rr >= 1.0 and pr <= 1.5 and i["over2s"] == 0 and not i["errors"]
     print("goal (issue 16) beside nginx (%s): req/s >= nginx's, p99 <= 1.5x nginx's, no request "
           "over 2 s at 16, 64 and 256 connections: %s" % (which, "met" if met else "NOT met"))
+    print("(cores ratio: the CPU server + wrk got per second, isomeshd's run over nginx's; "
+          "equal share: the req/s ratio had both got the same CPU)")
 
 
 SLOW_READERS = 450
