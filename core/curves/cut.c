@@ -40,7 +40,7 @@ bool cut_add_triangle(cut_state *s, uint32_t a, uint32_t b, uint32_t c)
         !ism_mesh_add_triangle(s->m, a, b, c))
         return false;
     s->parent[t] = s->from;
-    return true;
+    return cut_cells_place(s, t);
 }
 
 uint32_t *cut_parents_copy(const cut_state *s, size_t nt)
@@ -80,6 +80,23 @@ uint32_t cut_vcurve_of(const cut_state *s, uint32_t v)
     return v < s->cap_vcurve ? s->vcurve[v] : NONE;
 }
 
+/* Lists cut edge i at its ends a and b (ehead / enext). */
+static bool link_edge_ends(cut_state *s, uint32_t i, uint32_t a, uint32_t b)
+{
+    size_t old = s->cap_ehead, top = (a > b ? a : b) + (size_t)1;
+    if (!ism_grow((void **)&s->ehead, &s->cap_ehead, top, sizeof *s->ehead, CUT_FIRST) ||
+        !ism_grow((void **)&s->enext, &s->cap_enext, 2 * (size_t)i + 2, sizeof *s->enext,
+                  CUT_FIRST))
+        return false;
+    for (size_t v = old; v < s->cap_ehead; v++)
+        s->ehead[v] = NONE;
+    s->enext[2 * (size_t)i] = s->ehead[a];
+    s->ehead[a] = 2 * i;
+    s->enext[2 * (size_t)i + 1] = s->ehead[b];
+    s->ehead[b] = 2 * i + 1;
+    return true;
+}
+
 bool cut_add_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t fn)
 {
     bool added;
@@ -92,7 +109,7 @@ bool cut_add_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t fn)
         return false;
     s->c->edges[i] = (ism_cut_edge){a, b, fn, {ISM_CUT_NO_BRANCH, ISM_CUT_NO_BRANCH}};
     s->c->nedges = (size_t)i + 1;
-    return true;
+    return link_edge_ends(s, i, a, b);
 }
 
 bool cut_split_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t v, uint32_t fn)
@@ -244,6 +261,7 @@ static bool emit(cut_state *s, uint32_t a, uint32_t b, uint32_t c)
     t[0] = a;
     t[1] = b;
     t[2] = c;
+    cut_cells_grow(s, s->slot);
     s->slot = SIZE_MAX;
     return true;
 }
@@ -400,21 +418,23 @@ static bool push_near(cut_state *s, uint32_t v, uint8_t level)
 bool cut_mark_near(cut_state *s)
 {
     const ism_mesh *m = s->m;
-    for (size_t t = 0; t < m->ntris; t++) {
-        const uint32_t *tv = m->tri + 3 * t;
+    const uint32_t *list = s->cells.tris;
+    size_t n = s->cells.ntris;
+    for (size_t i = 0; i < n; i++) {
+        const uint32_t *tv = m->tri + 3 * (size_t)list[i];
         signed char a = s->sg[tv[0]];
         if (a != 0 && a == s->sg[tv[1]] && a == s->sg[tv[2]])
             continue;
-        for (int i = 0; i < 3; i++)
-            if (!push_near(s, tv[i], 1))
+        for (int c = 0; c < 3; c++)
+            if (!push_near(s, tv[c], 1))
                 return false;
     }
-    for (size_t t = 0; t < m->ntris; t++) { /* a ring further, and squared edge lengths */
-        const uint32_t *tv = m->tri + 3 * t;
+    for (size_t i = 0; i < n; i++) { /* a ring further, and squared edge lengths */
+        const uint32_t *tv = m->tri + 3 * (size_t)list[i];
         if (s->near[tv[0]] != 1 && s->near[tv[1]] != 1 && s->near[tv[2]] != 1)
             continue;
-        for (int i = 0; i < 3; i++) {
-            uint32_t a = tv[i], b = tv[(i + 1) % 3];
+        for (int c = 0; c < 3; c++) {
+            uint32_t a = tv[c], b = tv[(c + 1) % 3];
             if (!push_near(s, a, 2))
                 return false;
             double d = dist2(m, a, b);
@@ -436,37 +456,42 @@ void cut_clear_near(cut_state *s)
     s->n_near = 0;
 }
 
-/* Signs of g_k at the vertices; those on the curve are put on it (and on an earlier curve
- * they lie on). */
+/* Signs of g_k at the vertices near its curve (cut_cells_select); those on the curve are
+ * put on it (and on an earlier curve they lie on). */
 static bool classify(cut_state *s, size_t k)
 {
     ism_mesh *m = s->m;
-    if (!cut_grow_vertex_arrays(s))
+    s->fn = k;
+    if (!cut_grow_vertex_arrays(s) || !cut_cells_ready(s) ||
+        !cut_cells_select(s, k) || !cut_mark_near(s))
         return false;
-    ism_cut_g_batch(s->ev, k, m->pos, m->nverts, s->gv);
-    for (size_t v = 0; v < m->nverts; v++)
-        s->sg[v] = (signed char)((s->gv[v] > 0) - (s->gv[v] < 0));
-    if (!cut_mark_near(s))
-        return false;
-    for (size_t v = 0; v < m->nverts; v++)
-        if (s->gv[v] == 0) {
-            refine_point(s, cut_vcurve_of(s, (uint32_t)v), k, s->reach[v], m->pos + 3 * v);
-            if (!cut_set_vcurve(s, (uint32_t)v, (uint32_t)k))
-                return false;
-        }
+    for (size_t i = 0; i < s->cells.nverts; i++) {
+        uint32_t v = s->cells.verts[i];
+        if (s->gv[v] != 0)
+            continue;
+        refine_point(s, cut_vcurve_of(s, v), k, s->reach[v], m->pos + 3 * (size_t)v);
+        cut_cells_moved(s, m->pos + 3 * (size_t)v, s->reach[v]);
+        if (!cut_set_vcurve(s, v, (uint32_t)k))
+            return false;
+    }
     return true;
 }
 
 static bool cut_one(cut_state *s, size_t k)
 {
+    size_t edits = s->edits;
     if (!classify(s, k) || !cut_tangencies(s, k))
         return false;
+    if (s->edits != edits && /* the tangencies changed the mesh: list its triangles again */
+        ((!s->cells.valid && !cut_cells_build(s)) || !cut_cells_select(s, k)))
+        return false;
     ism_mesh *m = s->m;
-    size_t nt = m->ntris;
     ism_key_map_free(&s->split);
     ism_key_map_init(&s->split);
     bool ok = true;
-    for (size_t t = 0; t < nt && ok; t++) { /* pieces: the first in t's slot, others appended */
+    for (size_t i = 0; i < s->cells.ntris && ok; i++) { /* pieces: the first in t's slot,
+                                                            others appended */
+        size_t t = s->cells.tris[i];
         uint32_t tri[3] = {m->tri[3 * t], m->tri[3 * t + 1], m->tri[3 * t + 2]};
         signed char a = s->sg[tri[0]];
         if (a != 0 && a == s->sg[tri[1]] && a == s->sg[tri[2]])
@@ -489,15 +514,24 @@ static void finish(cut_state *s)
         if (c->edges[i].fn != NONE)
             c->edges[n++] = c->edges[i];
     c->nedges = n;
+    uint32_t *seen = malloc((s->m->nverts + 1) * sizeof *seen); /* NULL: each end measured */
+    for (size_t v = 0; seen && v < s->m->nverts; v++)
+        seen[v] = NONE;
     for (size_t i = 0; i < n; i++)
         for (int e = 0; e < 2; e++) {
-            uint32_t v = e ? c->edges[i].b : c->edges[i].a;
+            uint32_t v = e ? c->edges[i].b : c->edges[i].a, fn = c->edges[i].fn;
+            if (seen && c->edges[i].branch[0] == ISM_CUT_NO_BRANCH) {
+                if (seen[v] == fn)
+                    continue; /* measured for this curve already (a crease's g is its edge's) */
+                seen[v] = fn;
+            }
             double df, dg;
             memcpy(s->ev->pair, c->edges[i].branch, sizeof s->ev->pair);
             ism_cut_residuals(s->ev, c->edges[i].fn, s->m->pos + 3 * (size_t)v, &df, &dg);
             c->worst_f = df > c->worst_f ? df : c->worst_f;
             c->worst_g = dg > c->worst_g ? dg : c->worst_g;
         }
+    free(seen);
     s->ev->pair[0] = s->ev->pair[1] = ISM_CUT_NO_BRANCH;
 }
 
@@ -535,6 +569,7 @@ static bool crease_or_top(cut_state *s, size_t k)
         return false;
     }
     memcpy(tri, m->tri, nt * 3 * sizeof *tri);
+    s->cells.valid = false; /* the crease cut writes the triangles afresh */
     bool ok = cut_crease(s, k);
     if (ok && mesh_euler(m) != before) {
         memcpy(m->tri, tri, nt * 3 * sizeof *tri); /* its vertices stay, unused (the cut
@@ -579,5 +614,8 @@ bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
     free(s.vs);
     free(s.near);
     free(s.near_list);
+    cut_cells_free(&s.cells);
+    free(s.ehead);
+    free(s.enext);
     return ok;
 }

@@ -4,6 +4,7 @@
 #ifndef ISM_CUT_INTERNAL_H
 #define ISM_CUT_INTERNAL_H
 
+#include "core/curves/cut_cells.h"
 #include "core/curves/cut_fn.h"
 #include "core/curves/cut_types.h"
 #include "core/mesh/mesh.h"
@@ -62,6 +63,13 @@ typedef struct cut_state {
     ism_key_map zero;        /* edge key -> index into zero_edge (the current function) */
     cut_zero_edge *zero_edge;
     size_t cap_zero;
+    cut_cells cells;         /* where the current function's work is (cut_cells.h) */
+    uint32_t *ehead;         /* per vertex: its first cut edge end (2 e + end), CUT_NONE */
+    size_t cap_ehead;
+    uint32_t *enext;         /* per cut edge end: the vertex's next one */
+    size_t cap_enext;
+    size_t fn;               /* the current function */
+    size_t edits;            /* tangency edits of the mesh (moves, splits, merges) so far */
 } cut_state;
 
 uint64_t cut_edge_key(uint32_t a, uint32_t b);
@@ -76,7 +84,7 @@ uint32_t *cut_parents_copy(const cut_state *s, size_t nt);
 bool cut_set_vcurve(cut_state *s, uint32_t v, uint32_t fn);
 uint32_t cut_vcurve_of(const cut_state *s, uint32_t v);
 
-/* Records edge a-b as lying on curve fn (once). */
+/* Records edge a-b as lying on curve fn (once; listed at both ends: ehead / enext). */
 bool cut_add_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t fn);
 
 /* Replaces the cut edge a-b (on curve fn) by a-v and v-b. */
@@ -135,11 +143,13 @@ bool cut_ring_triangles(const ism_mesh *m, uint32_t v, uint32_t **out, size_t *n
 /* Whether u may move to p: its triangles among tris (but those with vertex skip; NONE for
  * none) keep their orientation, and (need_node) g_k's signs round it change at least four
  * times once u is on the curve. */
-bool cut_can_move(const cut_state *s, const uint32_t *tris, size_t nt, uint32_t u,
+bool cut_can_move(cut_state *s, const uint32_t *tris, size_t nt, uint32_t u,
                   const double p[3], bool need_node, uint32_t skip);
 
-/* Puts vertex u at p, on curve k (g_k taken as 0 there). False when out of memory. */
-bool cut_move_vertex(cut_state *s, size_t k, uint32_t u, const double p[3]);
+/* Puts vertex u at p, on curve k (g_k taken as 0 there); tris (nt of them) hold u's
+ * triangles. False when out of memory. */
+bool cut_move_vertex(cut_state *s, size_t k, uint32_t u, const double p[3],
+                     const uint32_t *tris, size_t nt);
 
 /* Splits every triangle with edge a-b at the new vertex x (winding kept). */
 bool cut_split_triangles_at(cut_state *s, uint32_t a, uint32_t b, uint32_t x);
@@ -150,6 +160,28 @@ bool cut_split_triangles_at(cut_state *s, uint32_t a, uint32_t b, uint32_t x);
  * them), so the cut leaves u four times whatever the star (node.c). reach: the longest
  * edge near u. False when out of memory. */
 bool cut_node_branches(cut_state *s, size_t k, uint32_t u, double reach);
+
+/* The grid of triangle cells (cut_cells.c). Build: from the whole mesh (cells.valid false
+ * when there is nothing to index). Place: a triangle appended to the mesh. Grow: triangle
+ * t's corners changed in place. Moved: a vertex moved to p, its triangles within r of it.
+ * Ready: built when not valid or outgrown by the mesh.
+ * Select: the triangles near g_k = 0 into cells.tris (ascending; every triangle when the
+ * grid is not valid), their vertices not yet seen for k into cells.verts, with g_k at them
+ * in gv and sg. Each is a no-op while the grid is not valid; false when out of memory. */
+bool cut_cells_build(cut_state *s);
+/* The grid built when it is not valid or the mesh has outgrown it. */
+bool cut_cells_ready(cut_state *s);
+void cut_cells_free(cut_cells *c);
+bool cut_cells_place(cut_state *s, size_t t);
+void cut_cells_grow(cut_state *s, size_t t);
+void cut_cells_moved(cut_state *s, const double p[3], double r);
+bool cut_cells_select(cut_state *s, size_t k);
+
+/* The sign of the current function at vertex v (evaluated when v was not listed for it). */
+signed char cut_sign_of(cut_state *s, uint32_t v);
+
+/* Vertex v lies on the current curve: g taken as exactly 0 there. */
+void cut_on_curve_now(cut_state *s, uint32_t v);
 
 /* Finds where g_k = 0 touches the surface or an earlier curve (critical.h) and makes each
  * point a mesh vertex on which g_k is taken as exactly 0, so the cut meets there: a node of

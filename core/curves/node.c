@@ -152,7 +152,7 @@ static bool onto_branch(cut_state *s, size_t k, const double from[3], const doub
 }
 
 /* Whether a neighbour of cur (through the triangles tris) on the curve lies within r of q. */
-static bool curve_vertex_near(const cut_state *s, const uint32_t *tris, size_t nt,
+static bool curve_vertex_near(cut_state *s, const uint32_t *tris, size_t nt,
                               uint32_t cur, const double q[3], double r)
 {
     for (size_t i = 0; i < nt; i++) {
@@ -160,7 +160,7 @@ static bool curve_vertex_near(const cut_state *s, const uint32_t *tris, size_t n
         if (tv[0] != cur && tv[1] != cur && tv[2] != cur)
             continue;
         for (int c = 0; c < 3; c++)
-            if (tv[c] != cur && s->sg[tv[c]] == 0 &&
+            if (tv[c] != cur && cut_sign_of(s, tv[c]) == 0 &&
                 dist2(s->m->pos + 3 * (size_t)tv[c], q) <= r * r)
                 return true;
     }
@@ -170,7 +170,7 @@ static bool curve_vertex_near(const cut_state *s, const uint32_t *tris, size_t n
 /* Whether w may be merged into z: w's triangles without z keep their orientation at z's
  * place, and w and z share no neighbour but the apexes of their edge's triangles (so the
  * mesh stays a surface). tris: the triangles round w. */
-static bool can_merge(const cut_state *s, const uint32_t *tris, size_t nt, uint32_t w,
+static bool can_merge(cut_state *s, const uint32_t *tris, size_t nt, uint32_t w,
                       uint32_t z)
 {
     const ism_mesh *m = s->m;
@@ -211,6 +211,8 @@ static void merge_vertex(cut_state *s, uint32_t w, uint32_t z)
         s->parent[n++] = s->parent[t];
     }
     m->ntris = n;
+    s->cells.valid = false; /* the triangles are renumbered */
+    s->edits++;
 }
 
 /* Puts link vertex w on the branch (R from `from`) at its own distance along R; where a
@@ -234,7 +236,7 @@ static bool branch_through_vertex(cut_state *s, size_t k, const double from[3],
         for (size_t i = 0; !*moved && i < nt; i++) /* a vertex on the curve there */
             for (int c = 0; c < 3; c++) {
                 uint32_t z = s->m->tri[3 * (size_t)tris[i] + c];
-                if (z != w && s->sg[z] == 0 &&
+                if (z != w && cut_sign_of(s, z) == 0 &&
                     dist2(s->m->pos + 3 * (size_t)z, q) <= near * near &&
                     can_merge(s, tris, nt, w, z)) {
                     merge_vertex(s, w, z);
@@ -242,8 +244,9 @@ static bool branch_through_vertex(cut_state *s, size_t k, const double from[3],
                 }
             }
     }
+    bool ok = !*moved || cut_move_vertex(s, k, w, q, tris, nt);
     free(tris);
-    return !*moved || cut_move_vertex(s, k, w, q);
+    return ok;
 }
 
 /* Splits link edge a-b at the branch point q: *x the new vertex on the curve. */
@@ -255,8 +258,7 @@ static bool branch_through_edge(cut_state *s, size_t k, uint32_t a, uint32_t b,
     *x = ism_mesh_add_vertex(s->m, q, nrm);
     if (*x == NONE || !cut_grow_vertex_arrays(s) || !cut_set_vcurve(s, *x, (uint32_t)k))
         return false;
-    s->gv[*x] = 0;
-    s->sg[*x] = 0;
+    cut_on_curve_now(s, *x);
     s->reach[*x] = reach;
     return cut_split_triangles_at(s, a, b, *x);
 }
@@ -320,7 +322,7 @@ static bool branch_step(cut_state *s, size_t k, uint32_t cur, const double R[3],
         bool moved;
         ok = branch_through_vertex(s, k, from, R, w, edge, &moved);
         *next = ok && moved ? w : NONE;
-    } else if (!vertices_only && (step == 0 || s->sg[a] * s->sg[b] >= 0)) {
+    } else if (!vertices_only && (step == 0 || cut_sign_of(s, a) * cut_sign_of(s, b) >= 0)) {
         ok = branch_through_edge(s, k, a, b, q, reach, next);
     }
     return ok;

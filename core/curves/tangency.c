@@ -97,20 +97,21 @@ bool cut_on_no_other(const cut_state *s, uint32_t v, size_t k)
     return c == NONE || c == (uint32_t)k;
 }
 
-/* Discrete saddles of g_k near 0 (among the vertices near the curve, on no other curve). */
+/* Discrete saddles of g_k near 0 among the corners of the triangles the curve crosses or
+ * touches (near 1: a node's nearest vertex is one), on no other curve. */
 static void surface_seeds(tang_state *ts)
 {
     cut_state *s = ts->s;
     const ism_mesh *m = s->m;
     const double *g = s->gv;
     cut_vscratch *vs = s->vs;
-    for (size_t t = 0; t < m->ntris; t++) {
-        const uint32_t *tv = m->tri + 3 * t;
-        if (!s->near[tv[0]] && !s->near[tv[1]] && !s->near[tv[2]])
+    for (size_t i0 = 0; i0 < s->cells.ntris; i0++) { /* the stars of the curve's corners */
+        const uint32_t *tv = m->tri + 3 * (size_t)s->cells.tris[i0];
+        if (s->near[tv[0]] != 1 && s->near[tv[1]] != 1 && s->near[tv[2]] != 1)
             continue;
         for (int i = 0; i < 3; i++) {
             uint32_t v = tv[i], u = tv[(i + 1) % 3], w = tv[(i + 2) % 3];
-            if (!s->near[v])
+            if (s->near[v] != 1)
                 continue;
             if (above(g, v, u) != above(g, v, w) && vs[v].changes < UINT8_MAX)
                 vs[v].changes++;
@@ -119,14 +120,15 @@ static void surface_seeds(tang_state *ts)
     }
     for (size_t i = 0; i < s->n_near; i++) {
         uint32_t v = s->near_list[i];
-        if (vs[v].changes >= 4 && fabs(g[v]) <= TANG_SEED_SPAN * vs[v].spread &&
+        if (s->near[v] == 1 && vs[v].changes >= 4 && fabs(g[v]) <= TANG_SEED_SPAN * vs[v].spread &&
             cut_on_no_other(s, v, ts->k))
             try_seed(ts, v, NONE);
     }
 }
 
-/* Discrete extrema of g_k near 0 along the chains of earlier curves: vertices near the
- * curve with two cut edges, both of one function, both neighbours above (or both below). */
+/* Discrete extrema of g_k near 0 along the chains of earlier curves: corners of the
+ * triangles the curve crosses or touches with two cut edges, both of one function, both
+ * neighbours above (or both below). */
 static void chain_seeds(tang_state *ts)
 {
     cut_state *s = ts->s;
@@ -135,14 +137,16 @@ static void chain_seeds(tang_state *ts)
     cut_vscratch *vs = s->vs;
     for (size_t i = 0; i < s->n_near; i++) /* the seeds' spread counts along chains only */
         vs[s->near_list[i]].spread = 0;
-    for (size_t i = 0; i < c->nedges; i++) {
-        const ism_cut_edge *e = &c->edges[i];
-        if (e->fn == NONE || s->ev->fns[e->fn].kind == ISM_CUT_CREASE)
-            continue; /* a crease's g depends on the edge: not seeded */
-        for (int end = 0; end < 2; end++) {
-            uint32_t v = end ? e->b : e->a, w = end ? e->a : e->b;
-            if (!s->near[v])
-                continue;
+    for (size_t i = 0; i < s->n_near; i++) { /* the cut edges at the curve's corners */
+        uint32_t v = s->near_list[i];
+        if (s->near[v] != 1 || v >= s->cap_ehead)
+            continue;
+        for (uint32_t end = s->ehead[v]; end != NONE; end = s->enext[end]) {
+            const ism_cut_edge *e = &c->edges[end / 2];
+            if (e->fn == NONE || s->ev->fns[e->fn].kind == ISM_CUT_CREASE)
+                continue; /* a crease's g depends on the edge: not seeded */
+            uint32_t w = end & 1 ? e->a : e->b;
+            cut_sign_of(s, w); /* its g (w may lie outside the listed triangles) */
             if (vs[v].fn && vs[v].fn != e->fn + 1)
                 vs[v].deg = UINT8_MAX; /* two curves meet here: not a seed */
             vs[v].fn = e->fn + 1;
@@ -203,7 +207,7 @@ static void tri_normal(const ism_mesh *m, const uint32_t *tv, uint32_t moved, co
     n[2] = u[0] * w[1] - u[1] * w[0];
 }
 
-bool cut_can_move(const cut_state *s, const uint32_t *tris, size_t nt, uint32_t u,
+bool cut_can_move(cut_state *s, const uint32_t *tris, size_t nt, uint32_t u,
                   const double p[3], bool need_node, uint32_t skip)
 {
     const ism_mesh *m = s->m;
@@ -220,19 +224,25 @@ bool cut_can_move(const cut_state *s, const uint32_t *tris, size_t nt, uint32_t 
         if (!(ab > TANG_MIN_COS * sqrt(dist2(a, (double[3]){0, 0, 0}) *
                                        dist2(b, (double[3]){0, 0, 0}))))
             return false;
-        changes += s->sg[tv[(at + 1) % 3]] * s->sg[tv[(at + 2) % 3]] < 0;
+        changes += cut_sign_of(s, tv[(at + 1) % 3]) * cut_sign_of(s, tv[(at + 2) % 3]) < 0;
     }
     return !need_node || changes >= 4;
 }
 
-bool cut_move_vertex(cut_state *s, size_t k, uint32_t u, const double p[3])
+bool cut_move_vertex(cut_state *s, size_t k, uint32_t u, const double p[3],
+                     const uint32_t *tris, size_t nt)
 {
     float nrm[3];
     cut_normal_at(s, p, s->m->normal + 3 * (size_t)u, nrm);
     memcpy(s->m->pos + 3 * (size_t)u, p, 3 * sizeof *p);
     memcpy(s->m->normal + 3 * (size_t)u, nrm, sizeof nrm);
-    s->gv[u] = 0;
-    s->sg[u] = 0;
+    cut_on_curve_now(s, u);
+    for (size_t i = 0; i < nt; i++) {
+        const uint32_t *tv = s->m->tri + 3 * (size_t)tris[i];
+        if (tv[0] == u || tv[1] == u || tv[2] == u)
+            cut_cells_grow(s, tris[i]);
+    }
+    s->edits++;
     return cut_set_vcurve(s, u, (uint32_t)k);
 }
 
@@ -279,11 +289,11 @@ static bool place_on_surface(cut_state *s, size_t k, const tangent *t)
         }
     bool node = chosen != NONE && cut_can_move(s, tris, nt, chosen, t->p, true, NONE);
     free(cand);
+    ok = ok && (chosen == NONE || cut_move_vertex(s, k, chosen, t->p, tris, nt));
     free(tris);
     if (!ok || chosen == NONE)
         return ok; /* no vertex can take it: the cut goes on as the mesh allows */
-    return cut_move_vertex(s, k, chosen, t->p) &&
-           (node || cut_node_branches(s, k, chosen, s->reach[t->seed]));
+    return node || cut_node_branches(s, k, chosen, s->reach[t->seed]);
 }
 
 bool cut_split_triangles_at(cut_state *s, uint32_t a, uint32_t b, uint32_t x)
@@ -297,6 +307,7 @@ bool cut_split_triangles_at(cut_state *s, uint32_t a, uint32_t b, uint32_t x)
             if (!((u == a && w == b) || (u == b && w == a)))
                 continue;
             tv[(i + 1) % 3] = x; /* (u, x, o) in place, (x, w, o) appended */
+            cut_cells_grow(s, t);
             s->from = s->parent[t];
             if (!cut_add_triangle(s, x, w, o))
                 return false;
@@ -304,6 +315,7 @@ bool cut_split_triangles_at(cut_state *s, uint32_t a, uint32_t b, uint32_t x)
             break;
         }
     }
+    s->edits++;
     return true;
 }
 
@@ -338,17 +350,17 @@ static bool place_on_curve(tang_state *ts, const tangent *t)
         size_t nt = 0;
         if (!cut_ring_triangles(m, snap, &tris, &nt))
             return false;
-        bool can = cut_can_move(s, tris, nt, snap, t->p, false, NONE);
+        bool ok = !cut_can_move(s, tris, nt, snap, t->p, false, NONE) ||
+                  cut_move_vertex(s, ts->k, snap, t->p, tris, nt);
         free(tris);
-        return !can || cut_move_vertex(s, ts->k, snap, t->p);
+        return ok;
     }
     float nrm[3];
     cut_normal_at(s, t->p, m->normal + 3 * (size_t)v, nrm);
     uint32_t x = ism_mesh_add_vertex(m, t->p, nrm);
     if (x == NONE || !cut_grow_vertex_arrays(s))
         return false;
-    s->gv[x] = 0;
-    s->sg[x] = 0;
+    cut_on_curve_now(s, x);
     s->reach[x] = s->reach[v];
     return cut_set_vcurve(s, x, t->j) && cut_split_cut_edge(s, v, w, x, t->j) &&
            cut_split_triangles_at(s, v, w, x);
