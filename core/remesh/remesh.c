@@ -39,12 +39,12 @@ double ism_remesh_min_angle(const ism_mesh *m)
 static bool stopped(const ism_remesh_options *o) { return o->cancel && *o->cancel; }
 
 /* Collapses, then insertions beside the needles collapses cannot reach, then flips of the
- * split needles' thin halves. */
+ * split needles' thin halves (from the split needles' corners only). */
 static void mend_needles(rm_pass *p, bool *ok)
 {
     rm_collapse_active(p, ok);
-    if (*ok && rm_insert_active(p, ok) && *ok && rm_mark_active(p))
-        rm_flip_active(p, ok);
+    if (*ok && rm_insert_active(p, ok) && *ok)
+        rm_flip_from(p, p->touched, ok);
 }
 
 bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_stats *st,
@@ -70,8 +70,10 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
         p.normal = malloc(cv * 3 * sizeof *p.normal);
         p.active = calloc(cv, 1);
         p.slide = calloc(cv, 1);
+        p.touched = calloc(cv, 1);
     }
-    ok = ok && p.normal && p.active && p.slide && rm_normals(&p) && rm_lock_features(&p, o);
+    ok = ok && p.normal && p.active && p.slide && p.touched && rm_normals(&p) &&
+         rm_lock_features(&p, o);
     if (ok) {
         rm_collapse_bounds(&p);
         for (int round = 0; round < ISM_RM_ROUNDS && !stopped(o); round++) {
@@ -105,6 +107,7 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
     free(p.normal);
     free(p.active);
     free(p.slide);
+    free(p.touched);
     ism_eval_ws_free(p.ws);
     st->time_ms = ism_now_ms() - t0;
     return ok ? true : ism_error_set(err, "quality pass: out of memory");

@@ -153,25 +153,34 @@ static bool new_triangle_ok(const rm_pass *p, const merge *g, uint32_t t, const 
 /* No new centroid or new edge's midpoint farther from f = 0 than the farthest of the old
  * fan's centroids, resp. midpoints of v's edges, or than the mesh's farthest before the pass
  * (within the error bound). */
-static bool distance_ok(rm_pass *p, const merge *g)
+/* The farthest of the fan's centroids and of the midpoints of v's edges from f = 0, with v
+ * at x (before: x is v's place) or merged into w (after: the removed triangles and the edges
+ * to c and d, which are w's already, left out). */
+static void fan_distances(rm_pass *p, const merge *g, bool after, double *cen, double *mid)
 {
     const rm_mesh *r = &p->r;
-    double old_c = 0, old_m = 0, new_c = 0, new_m = 0;
+    const double *x = P(p, after ? g->w : g->v);
+    *cen = *mid = 0;
     for (uint32_t i = 0; i < r->count[g->v]; i++) {
         uint32_t t = slot(r, g->v, i);
-        const double *q[3];
-        corners(p, t, g->v, P(p, g->v), q);
-        old_c = fmax(old_c, rm_centroid_distance(p, q[0], q[1], q[2]));
-        const uint32_t *c = r->m->tri + 3 * t;
-        uint32_t next = c[(rm_corner(r->m, t, g->v) + 1) % 3];
-        old_m = fmax(old_m, rm_midpoint_distance(p, P(p, g->v), P(p, next)));
-        if (t == g->t1 || t == g->t2)
+        if (after && (t == g->t1 || t == g->t2))
             continue;
-        corners(p, t, g->v, P(p, g->w), q);
-        new_c = fmax(new_c, rm_centroid_distance(p, q[0], q[1], q[2]));
-        if (next != g->c && next != g->d)
-            new_m = fmax(new_m, rm_midpoint_distance(p, P(p, g->w), P(p, next)));
+        const double *q[3];
+        corners(p, t, g->v, x, q);
+        *cen = fmax(*cen, rm_centroid_distance(p, q[0], q[1], q[2]));
+        uint32_t next = r->m->tri[3 * t + (rm_corner(r->m, t, g->v) + 1) % 3];
+        if (!after || (next != g->c && next != g->d))
+            *mid = fmax(*mid, rm_midpoint_distance(p, x, P(p, next)));
     }
+}
+
+static bool distance_ok(rm_pass *p, const merge *g)
+{
+    double new_c, new_m, old_c, old_m;
+    fan_distances(p, g, true, &new_c, &new_m);
+    if (new_c <= p->centroid_bound && new_m <= p->midpoint_bound)
+        return true; /* within the mesh's before: the fan's own need not be asked */
+    fan_distances(p, g, false, &old_c, &old_m);
     return new_c <= fmax(old_c, p->centroid_bound) && new_m <= fmax(old_m, p->midpoint_bound);
 }
 
@@ -223,7 +232,7 @@ static bool do_merge(rm_pass *p, const merge *g)
         c[rm_corner(r->m, t, g->v)] = g->w;
         rm_slot_add(r, g->w, t);
         for (int k = 0; k < 3; k++)
-            p->active[c[k]] = 1;
+            p->active[c[k]] = 1, p->touched[c[k]] = 2;
     }
     r->count[g->v] = 0;
     r->gone[g->v] = r->locked[g->v] = 1;
@@ -293,15 +302,19 @@ size_t rm_collapse_active(rm_pass *p, bool *ok)
     double poor = sin(ISM_RM_COLLAPSE_DEG * M_PI / 180);
     size_t total = 0;
     *ok = true;
+    memset(p->touched, 1, m->nverts);
     for (int sweep = 0; sweep < ISM_RM_COLLAPSE_SWEEPS && *ok; sweep++) {
         size_t made = 0;
         for (size_t t = 0; t < m->ntris && *ok; t++) {
             const uint32_t *v = m->tri + 3 * t;
-            if (!p->r.dead[t] &&
+            /* a triangle no collapse came near since the last sweep fails as it did */
+            if (!p->r.dead[t] && (p->touched[v[0]] | p->touched[v[1]] | p->touched[v[2]]) &&
                 rm_min_sine(P(p, v[0]), P(p, v[1]), P(p, v[2])) < poor &&
                 collapse_triangle(p, (uint32_t)t, ok))
                 made++;
         }
+        for (size_t v = 0; v < m->nverts; v++) /* 2: touched in this sweep */
+            p->touched[v] = p->touched[v] == 2;
         total += made;
         if (!made)
             break;

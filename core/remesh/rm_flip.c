@@ -114,10 +114,10 @@ static bool flip_improves(rm_pass *p, const quad *q)
                      fmax(rm_midpoint_distance(p, B, D), rm_midpoint_distance(p, D, A)));
     if (!(rm_midpoint_distance(p, C, D) <= bound))
         return false;
-    /* the new triangles' centroids no farther than the old ones' or the mesh's before */
-    double cb = fmax(p->centroid_bound, fmax(rm_centroid_distance(p, A, B, C),
-                                             rm_centroid_distance(p, B, A, D)));
-    return rm_centroid_distance(p, A, D, C) <= cb && rm_centroid_distance(p, B, C, D) <= cb;
+    /* the new triangles' centroids no farther than the mesh's before or the old ones' */
+    double now = fmax(rm_centroid_distance(p, A, D, C), rm_centroid_distance(p, B, C, D));
+    return now <= p->centroid_bound ||
+           now <= fmax(rm_centroid_distance(p, A, B, C), rm_centroid_distance(p, B, A, D));
 }
 
 /* (a, b, c), (b, a, d) -> (a, d, c), (b, c, d): winding kept, incidence updated. */
@@ -167,13 +167,18 @@ static bool try_flip(rm_pass *p, uint32_t a, uint32_t b, quad *q)
 
 size_t rm_flip_active(rm_pass *p, bool *ok)
 {
+    return rm_flip_from(p, p->active, ok);
+}
+
+size_t rm_flip_from(rm_pass *p, const uint8_t *seed, bool *ok)
+{
     const ism_mesh *m = p->r.m;
     edge_stack s = {0};
     size_t flips = 0, limit = ISM_RM_FLIPS_PER_TRIANGLE * m->ntris;
     *ok = true;
     for (size_t t = 0; t < m->ntris && *ok; t++) {
         const uint32_t *v = m->tri + 3 * t;
-        if (!p->r.dead[t] && (p->active[v[0]] || p->active[v[1]] || p->active[v[2]]))
+        if (!p->r.dead[t] && (seed[v[0]] || seed[v[1]] || seed[v[2]]))
             for (int k = 0; k < 3 && *ok; k++)
                 if (v[k] < v[(k + 1) % 3])
                     *ok = push(&s, v[k], v[(k + 1) % 3]);

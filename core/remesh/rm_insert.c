@@ -194,6 +194,7 @@ static bool split(rm_pass *p, uint32_t t, const uint32_t abc[3], const double *x
     rm_slot_add(r, v, t1);
     rm_slot_add(r, v, t2);
     p->active[a] = p->active[b] = p->active[c] = p->active[v] = 1;
+    p->touched[a] = p->touched[b] = p->touched[c] = p->touched[v] = 1;
     return true;
 }
 
@@ -203,6 +204,7 @@ size_t rm_insert_active(rm_pass *p, bool *ok)
     double poor = sin(ISM_RM_INSERT_DEG * M_PI / 180);
     size_t made = 0, nt = r->m->ntris;
     *ok = true;
+    memset(p->touched, 0, r->cap_verts);
     for (size_t t = 0; t < nt && *ok; t++) {
         const uint32_t *v = r->m->tri + 3 * t;
         uint32_t abc[3];

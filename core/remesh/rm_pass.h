@@ -29,6 +29,8 @@ typedef struct rm_pass {
     double max_error;
     uint8_t *active;       /* per vertex: relaxed in this round (near a poor triangle) */
     uint8_t *slide;        /* per vertex: on a box face's boundary curve, may slide along it */
+    uint8_t *touched;      /* per vertex: near a collapse of this sweep (rm_collapse.c), or
+                              a corner of a split needle (rm_insert.c) */
     double centroid_bound;  /* collapses may put a centroid this far from f = 0 (the mesh's
                                farthest before the pass, at most max_error) */
     double midpoint_bound;  /* the same for edge midpoints */
@@ -59,6 +61,8 @@ bool rm_edge_free(const rm_pass *p, uint32_t a, uint32_t b);
 /* Lawson flips starting from the edges of triangles with an active vertex, each flip
  * queueing its quad's four sides; returns the flips made. *ok false when out of memory. */
 size_t rm_flip_active(rm_pass *p, bool *ok);
+/* The same, starting from the edges of triangles with a vertex marked in seed. */
+size_t rm_flip_from(rm_pass *p, const uint8_t *seed, bool *ok);
 
 /* Collapses edges of triangles with a small angle (rm_collapse.c) where the topology, the
  * features and the distance to f = 0 allow it; returns the collapses made. Removed
