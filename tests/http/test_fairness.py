@@ -207,6 +207,9 @@ class FairnessTest(unittest.TestCase):
         with Daemon("--workers", "1", "--tokens", self.tokens) as d:
             a, b = Client(d, alice), Client(d, bob)
             blocker = a.submit(SLOW)
+            # running before it is canceled (a worker not yet ready would leave it queued, and
+            # a canceled queued job starts no computation)
+            wait_until("the blocker running", lambda: a.job(blocker)["state"] == "running")
             mine = a.submit(flood_request(7))
             # bob asks for the same mesh, written differently (key order, a default spelled out)
             same = {"depth": {"max": 5, "min": 3}, "params": {"k": 4.007}, "preset": "gyroid-ball"}
