@@ -34,8 +34,8 @@ typedef struct ism_conform_stats {
     double time_ms;
 } ism_conform_stats;
 
-/* The pass checks its deadline and cancel flag after at most this many units of work (a few
- * microseconds each: about a millisecond between checks, and a check costs a clock read),
+/* The pass checks its deadline and cancel flag after at most this many units of work (0.1 to
+ * a few microseconds each: at most a few milliseconds between checks; a check is a clock read),
  * inside every surgery, however large: one double curve can hold most of a mesh. */
 #define ISM_CONFORM_POLL_WORK 1024
 
