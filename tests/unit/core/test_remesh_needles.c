@@ -199,72 +199,84 @@ static void expect_sheet(const ism_mesh *m, const ism_locus *l, const ism_cut *c
         cr_expect_eq(l->sheets[0].triangles, right_before, "%s: parents' range changed", what);
 }
 
-Test(remesh_needles, touching_spheres_keep_topology_and_lose_needles)
+/* Runs check on expr's tape in base shifted off the lattice by 1e-3 and by 0.37 of a finest
+ * cell at depth 6 (depth 5 and only the second under sanitizers). */
+static void in_shifted_boxes(const char *expr, const double base[6],
+                             void (*check)(const ism_tape *t, const double box[6], int d,
+                                           int which))
 {
-    const pf_surface s = {SPHERES, NULL, 0, NULL, 0};
+    const pf_surface s = {expr, NULL, 0, NULL, 0};
     ism_tape *t = pf_compile(&s);
-    const double base[6] = {-2.2, -1.2, -1.2, 2.2, 1.2, 1.2};
     int d = 6 - pf_quick();
-    for (int which = pf_first_box() - 1; which < 2; which++) {
-        if (which < 0)
-            continue; /* the shifted boxes only */
+    for (int which = pf_first_box() ? 1 : 0; which < 2; which++) {
         double box[6];
         pf_sweep_box(base, d, which, box);
-        ism_mesh m;
-        ism_mesh_init(&m);
-        ism_poly_stats ps;
-        pf_run(t, box, 3, d, 1, &m, &ps);
-        ism_locus l;
-        ism_locus_init(&l);
-        ism_sing_point pt = {.p = {0, 0, 0}, .radius = 1e-12, .type = ISM_SING_DEGENERATE,
-                             .certified = true, .cones = -1};
-        cr_assert(ism_locus_add_point(&l, &pt));
-        ism_locus_options lo;
-        ism_locus_options_default(&lo);
-        memcpy(lo.box, box, sizeof lo.box);
-        lo.max_depth = d;
-        ism_error err;
-        cr_assert(ism_conform_mesh(t, &lo, &l, &m, NULL, &err), "%s", err.message);
-        size_t right = right_sphere_first(&m);
-        ism_double_sheet sheet = {.first_triangle = 0, .triangles = right};
-        cr_assert(ism_locus_add_sheet(&l, &sheet));
-        ism_cut cut;
-        kept k;
-        keep_by_index(&m, right / 2, right + 7, which == 1, &cut, &k);
-        shape before, after;
-        measure(&m, vertex_at_origin(&m), &before);
-        ism_remesh_stats st;
-        cr_assert(ism_quality_pass(t, &l, &cut, 0, NULL, &m, &st, &err), "%s", err.message);
-        uint32_t point = vertex_at_origin(&m);
-        measure(&m, point, &after);
-        pf_props a;
-        pf_measure(&m, t, &a);
-        char what[64];
-        snprintf(what, sizeof what, "box %d", which);
-        cr_log_info("%s: %zu collapses, %zu inserts; needles %zu -> %zu, min angle away from "
-                    "the point %.2f -> %.2f, centroid error %.3g -> %.3g", what, st.collapses,
-                    st.inserts, before.needles, after.needles, before.min_angle_away, after.min_angle_away,
-                    before.centroid_error, after.centroid_error);
-        cr_expect_gt(st.collapses, 0, "%s", what);
-        cr_expect_eq(a.euler, 3, "%s: χ = %ld", what, a.euler);
-        cr_expect_eq(a.boundary_edges, 0, "%s", what);
-        cr_expect_eq(a.nonmanifold_edges, 0, "%s", what);
-        cr_assert_neq(point, UINT32_MAX, "%s: the point lost its vertex", what);
-        cr_expect_eq(pf_vertex_cones(&m, point), 2, "%s", what);
-        cr_expect_gt(before.needles, 0, "%s: nothing to mend", what);
-        cr_expect_eq(after.needles, 0, "%s: %zu needles", what, after.needles);
-        /* measured 25.2° and 23.2° at depth 6; 13.2° at depth 5 (sanitizer runs) */
-        if (!pf_quick())
-            cr_expect_geq(after.min_angle_away, 20.0, "%s: %.2f", what, after.min_angle_away);
-        cr_expect_leq(after.centroid_error, before.centroid_error, "%s", what);
-        cr_expect_leq(after.vertex_error, fmax(1e-9, before.vertex_error), "%s", what);
-        expect_kept(&m, &cut, &k, what);
-        expect_sheet(&m, &l, &cut, right, what);
-        ism_cut_free(&cut);
-        ism_locus_free(&l);
-        ism_mesh_free(&m);
+        check(t, box, d, which);
     }
     ism_tape_free(t);
+}
+
+static void touching_spheres(const ism_tape *t, const double box[6], int d, int which)
+{
+    ism_mesh m;
+    ism_mesh_init(&m);
+    ism_poly_stats ps;
+    pf_run(t, box, 3, d, 1, &m, &ps);
+    ism_locus l;
+    ism_locus_init(&l);
+    ism_sing_point pt = {.p = {0, 0, 0}, .radius = 1e-12, .type = ISM_SING_DEGENERATE,
+                         .certified = true, .cones = -1};
+    cr_assert(ism_locus_add_point(&l, &pt));
+    ism_locus_options lo;
+    ism_locus_options_default(&lo);
+    memcpy(lo.box, box, sizeof lo.box);
+    lo.max_depth = d;
+    ism_error err;
+    cr_assert(ism_conform_mesh(t, &lo, &l, &m, NULL, &err), "%s", err.message);
+    size_t right = right_sphere_first(&m);
+    ism_double_sheet sheet = {.first_triangle = 0, .triangles = right};
+    cr_assert(ism_locus_add_sheet(&l, &sheet));
+    ism_cut cut;
+    kept k;
+    keep_by_index(&m, right / 2, right + 7, which == 1, &cut, &k);
+    shape before, after;
+    measure(&m, vertex_at_origin(&m), &before);
+    ism_remesh_stats st;
+    cr_assert(ism_quality_pass(t, &l, &cut, 0, NULL, &m, &st, &err), "%s", err.message);
+    uint32_t point = vertex_at_origin(&m);
+    measure(&m, point, &after);
+    pf_props a;
+    pf_measure(&m, t, &a);
+    char what[64];
+    snprintf(what, sizeof what, "box %d", which);
+    cr_log_info("%s: %zu collapses, %zu inserts; needles %zu -> %zu, min angle away from "
+                "the point %.2f -> %.2f, centroid error %.3g -> %.3g", what, st.collapses,
+                st.inserts, before.needles, after.needles, before.min_angle_away, after.min_angle_away,
+                before.centroid_error, after.centroid_error);
+    cr_expect_gt(st.collapses, 0, "%s", what);
+    cr_expect_eq(a.euler, 3, "%s: χ = %ld", what, a.euler);
+    cr_expect_eq(a.boundary_edges, 0, "%s", what);
+    cr_expect_eq(a.nonmanifold_edges, 0, "%s", what);
+    cr_assert_neq(point, UINT32_MAX, "%s: the point lost its vertex", what);
+    cr_expect_eq(pf_vertex_cones(&m, point), 2, "%s", what);
+    cr_expect_gt(before.needles, 0, "%s: nothing to mend", what);
+    cr_expect_eq(after.needles, 0, "%s: %zu needles", what, after.needles);
+    /* measured 25.2° and 23.2° at depth 6; 13.2° at depth 5 (sanitizer runs) */
+    if (!pf_quick())
+        cr_expect_geq(after.min_angle_away, 20.0, "%s: %.2f", what, after.min_angle_away);
+    cr_expect_leq(after.centroid_error, before.centroid_error, "%s", what);
+    cr_expect_leq(after.vertex_error, fmax(1e-9, before.vertex_error), "%s", what);
+    expect_kept(&m, &cut, &k, what);
+    expect_sheet(&m, &l, &cut, right, what);
+    ism_cut_free(&cut);
+    ism_locus_free(&l);
+    ism_mesh_free(&m);
+}
+
+Test(remesh_needles, touching_spheres_keep_topology_and_lose_needles)
+{
+    const double base[6] = {-2.2, -1.2, -1.2, 2.2, 1.2, 1.2};
+    in_shifted_boxes(SPHERES, base, touching_spheres);
 }
 
 /* ---- Steiner's Roman surface ---- */
@@ -370,69 +382,64 @@ static uint8_t *upper_labels(const ism_mesh *m, const ism_locus *l, const ism_cu
     return label;
 }
 
+static void steiner(const ism_tape *t, const double box[6], int d, int which)
+{
+    ism_mesh m;
+    ism_locus l;
+    pf_run_surface(t, box, 3, d, &m, &l);
+    size_t upper = upper_first(&m);
+    ism_double_sheet sheet = {.first_triangle = 0, .triangles = upper};
+    cr_assert(ism_locus_add_sheet(&l, &sheet));
+    ism_cut cut;
+    memset(&cut, 0, sizeof cut);
+    if (which == 1) {
+        cr_assert(cut.tri_parent = malloc(m.ntris * sizeof *cut.tri_parent));
+        for (size_t i = 0; i < m.ntris; i++)
+            cut.tri_parent[i] = (uint32_t)i;
+    }
+    uint8_t *lab = upper_labels(&m, &l, &cut);
+    placed_edge *eb, *ea;
+    size_t neb = label_edges(&m, lab, &eb);
+    free(lab);
+    pf_props b, a;
+    pf_measure(&m, t, &b);
+    shape before, after;
+    steiner_shape(&m, t, &before);
+    ism_remesh_stats st;
+    ism_error err;
+    cr_assert(ism_quality_pass(t, &l, &cut, 0, NULL, &m, &st, &err), "%s", err.message);
+    pf_measure(&m, t, &a);
+    steiner_shape(&m, t, &after);
+    lab = upper_labels(&m, &l, &cut);
+    size_t nea = label_edges(&m, lab, &ea);
+    free(lab);
+    char what[64];
+    snprintf(what, sizeof what, "box %d", which);
+    cr_log_info("%s: %zu collapses, %zu inserts; under %g°: %zu -> %zu; centroid error "
+                "%.3g -> %.3g", what, st.collapses, st.inserts, NEEDLE_DEG, before.needles,
+                after.needles, before.centroid_error, after.centroid_error);
+    cr_expect_gt(st.inserts, 0, "%s", what);
+    /* RP² immersed with a triple point and six half-segments of double line: χ = 5 */
+    cr_expect_eq(a.euler, 5, "%s: χ = %ld", what, a.euler);
+    cr_expect_eq(b.euler, 5, "%s: χ = %ld before", what, b.euler);
+    cr_expect_eq(a.nonmanifold_edges, b.nonmanifold_edges, "%s", what);
+    cr_expect_eq(a.boundary_edges, 0, "%s", what);
+    cr_expect_eq(a.components, 1, "%s", what);
+    cr_expect_leq(4 * after.needles, before.needles, "%s", what);
+    cr_expect_leq(after.centroid_error, before.centroid_error, "%s", what);
+    cr_expect_leq(a.max_dist, fmax(1e-9, b.max_dist), "%s", what);
+    cr_expect_eq(nea, neb, "%s: %zu label edges, %zu before", what, nea, neb);
+    cr_expect(neb > 0 && nea == neb && !memcmp(ea, eb, neb * sizeof *eb),
+              "%s: the label boundary moved", what);
+    free(ea);
+    free(eb);
+    ism_cut_free(&cut);
+    ism_locus_free(&l);
+    ism_mesh_free(&m);
+}
+
 Test(remesh_needles, steiner_double_lines_split_and_topology_kept)
 {
-    const pf_surface s = {STEINER, NULL, 0, NULL, 0};
-    ism_tape *t = pf_compile(&s);
     const double base[6] = {-1, -1, -1, 1, 1, 1};
-    int d = 6 - pf_quick();
-    for (int which = pf_first_box() - 1; which < 2; which++) {
-        if (which < 0)
-            continue; /* the shifted boxes only */
-        double box[6];
-        pf_sweep_box(base, d, which, box);
-        ism_mesh m;
-        ism_locus l;
-        pf_run_surface(t, box, 3, d, &m, &l);
-        size_t upper = upper_first(&m);
-        ism_double_sheet sheet = {.first_triangle = 0, .triangles = upper};
-        cr_assert(ism_locus_add_sheet(&l, &sheet));
-        ism_cut cut;
-        memset(&cut, 0, sizeof cut);
-        if (which == 1) {
-            cr_assert(cut.tri_parent = malloc(m.ntris * sizeof *cut.tri_parent));
-            for (size_t i = 0; i < m.ntris; i++)
-                cut.tri_parent[i] = (uint32_t)i;
-        }
-        uint8_t *lab = upper_labels(&m, &l, &cut);
-        placed_edge *eb, *ea;
-        size_t neb = label_edges(&m, lab, &eb);
-        free(lab);
-        pf_props b, a;
-        pf_measure(&m, t, &b);
-        shape before, after;
-        steiner_shape(&m, t, &before);
-        ism_remesh_stats st;
-        ism_error err;
-        cr_assert(ism_quality_pass(t, &l, &cut, 0, NULL, &m, &st, &err), "%s", err.message);
-        pf_measure(&m, t, &a);
-        steiner_shape(&m, t, &after);
-        lab = upper_labels(&m, &l, &cut);
-        size_t nea = label_edges(&m, lab, &ea);
-        free(lab);
-        char what[64];
-        snprintf(what, sizeof what, "box %d", which);
-        cr_log_info("%s: %zu collapses, %zu inserts; under %g°: %zu -> %zu; centroid error "
-                    "%.3g -> %.3g", what, st.collapses, st.inserts, NEEDLE_DEG, before.needles,
-                    after.needles, before.centroid_error, after.centroid_error);
-        cr_expect_gt(st.inserts, 0, "%s", what);
-        /* RP² immersed with a triple point and six half-segments of double line: χ = 5 */
-        cr_expect_eq(a.euler, 5, "%s: χ = %ld", what, a.euler);
-        cr_expect_eq(b.euler, 5, "%s: χ = %ld before", what, b.euler);
-        cr_expect_eq(a.nonmanifold_edges, b.nonmanifold_edges, "%s", what);
-        cr_expect_eq(a.boundary_edges, 0, "%s", what);
-        cr_expect_eq(a.components, 1, "%s", what);
-        cr_expect_leq(4 * after.needles, before.needles, "%s", what);
-        cr_expect_leq(after.centroid_error, before.centroid_error, "%s", what);
-        cr_expect_leq(a.max_dist, fmax(1e-9, b.max_dist), "%s", what);
-        cr_expect_eq(nea, neb, "%s: %zu label edges, %zu before", what, nea, neb);
-        cr_expect(neb > 0 && nea == neb && !memcmp(ea, eb, neb * sizeof *eb),
-                  "%s: the label boundary moved", what);
-        free(ea);
-        free(eb);
-        ism_cut_free(&cut);
-        ism_locus_free(&l);
-        ism_mesh_free(&m);
-    }
-    ism_tape_free(t);
+    in_shifted_boxes(STEINER, base, steiner);
 }
