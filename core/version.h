@@ -5,6 +5,6 @@
 #define ISM_VERSION_H
 
 #define ISM_VERSION "0.1.0"
-#define ISM_MESHER_VERSION "mesher-15"
+#define ISM_MESHER_VERSION "mesher-16"
 
 #endif

@@ -21,7 +21,8 @@ typedef struct ism_cell_ctx {
     ism_root_params roots;
     double stitch_tol;        /* two roots closer than this × segment length are one */
     double max_error;         /* > 0: polygons may be fanned from a corner within this
-                                 distance of f = 0 (triangulate.h); 0: from their centre */
+                                 distance of f = 0 (triangulate.h); 0: from their centre
+                                 (no bound, or a singular locus is known: options.quiet) */
     /* scratch, reused from node to node */
     ism_coords coords;
     ism_bpoint *bp;

@@ -1,9 +1,13 @@
 /* cell_error.c — the distance to f = 0 of the triangles a node would emit, measured at their
  * centroids and edge midpoints (see cell_error.h). */
 #include "core/octree/cell_error.h"
+#include "core/octree/crease_split.h"
 #include "core/octree/edge_roots.h"
+#include "core/octree/refine.h"
+#include "core/octree/triangulate.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #define MAX_ROOTS 12
@@ -73,6 +77,35 @@ static double loop_error(ism_sampler *s, const double (*p)[3], int n)
     return worst;
 }
 
+/* Polygon p[0..n) triangulated as loop_error measures it, into out; false when out of
+ * memory. */
+static bool loop_tris(ism_sampler *s, const double (*p)[3], int n, ism_cell_out *out)
+{
+    uint32_t base = (uint32_t)out->nverts, idx;
+    for (int i = 0; i <= n; i++) {
+        ism_fpoint v = {{0, 0, 0}, {0, 0, 0}, 0};
+        if (i < n)
+            memcpy(v.p, p[i], sizeof v.p);
+        else if (n >= 5)
+            centre_on_surface(s, p, n, v.p);
+        else
+            break;
+        if (!ism_cell_out_vert(out, &v, &idx))
+            return false;
+    }
+    if (n == 3)
+        return ism_cell_out_tri(out, base, base + 1, base + 2);
+    if (n == 4) {
+        uint32_t a = ism_dist3(p[0], p[2]) <= ism_dist3(p[1], p[3]) ? 0 : 1;
+        return ism_cell_out_tri(out, base + a, base + a + 1, base + a + 2) &&
+               ism_cell_out_tri(out, base + a, base + a + 2, base + (a + 3) % 4);
+    }
+    for (int i = 0; i < n; i++)
+        if (!ism_cell_out_tri(out, idx, base + (uint32_t)i, base + (uint32_t)((i + 1) % n)))
+            return false;
+    return true;
+}
+
 /* The node's edge roots, each with the two faces its edge lies on; false when a corner is
  * exactly on the surface (its roots are shared by several edges). */
 static bool edge_roots(ism_sampler *s, const ism_corners *k, root_pt *r, int *n)
@@ -94,7 +127,9 @@ static bool edge_roots(ism_sampler *s, const ism_corners *k, root_pt *r, int *n)
     return true;
 }
 
-bool ism_cell_error(ism_sampler *s, const ism_corners *k, double *err)
+/* The polygons through the node's edge roots, measured one by one (cut NULL) or
+ * triangulated into cut, split along f's crease and measured there. */
+static bool cell_loops(ism_sampler *s, const ism_corners *k, ism_cell_out *cut, double *err)
 {
     root_pt r[MAX_ROOTS];
     int n;
@@ -124,8 +159,31 @@ bool ism_cell_error(ism_sampler *s, const ism_corners *k, double *err)
             via = r[cur].face[0] == via ? r[cur].face[1] : r[cur].face[0];
             cur = on_face[via][0] == cur ? on_face[via][1] : on_face[via][0];
         }
-        worst = fmax(worst, loop_error(s, (const double (*)[3])loop, m));
+        if (!cut)
+            worst = fmax(worst, loop_error(s, (const double (*)[3])loop, m));
+        else if (!loop_tris(s, (const double (*)[3])loop, m, cut))
+            return false;
+    }
+    if (cut) {
+        if (!ism_crease_split(s, cut, 0))
+            return false;
+        worst = ism_emitted_error(s, cut, 0);
     }
     *err = worst;
     return true;
+}
+
+bool ism_cell_error(ism_sampler *s, const ism_corners *k, double *err)
+{
+    return cell_loops(s, k, NULL, err);
+}
+
+bool ism_cell_error_cut(ism_sampler *s, const ism_corners *k, double *err)
+{
+    ism_cell_out cut;
+    memset(&cut, 0, sizeof cut);
+    bool ok = cell_loops(s, k, &cut, err);
+    free(cut.verts);
+    free(cut.tris);
+    return ok;
 }

@@ -18,4 +18,9 @@
  * finite at a measuring point. */
 bool ism_cell_error(ism_sampler *s, const ism_corners *k, double *err);
 
+/* The same with the triangles first split along the crease of f's top min/max, as the
+ * polygoniser splits them under an error bound (crease_split.h). Also false when out of
+ * memory. */
+bool ism_cell_error_cut(ism_sampler *s, const ism_corners *k, double *err);
+
 #endif

@@ -4,6 +4,7 @@
  * the distance of the node's would-be triangles to the surface (cell_error.h). */
 #include "core/octree/plot_test.h"
 #include "core/octree/cell_error.h"
+#include "core/octree/crease_split.h"
 #include "core/octree/edge_roots.h"
 
 #include <math.h>
@@ -45,6 +46,35 @@ static bool no_roots(ism_sampler *s, const ism_flatness *fl, const ism_corners *
     return ism_double_root_search(s, &prm, k->p[c0], k->p[c1], k->f[c0], k->f[c1], &t) == 0;
 }
 
+/* Under an error bound, a node whose corners lie on both branches of f's top min/max (a
+ * CSG crease may pass through it): f's own corner gradients mix the two branches' and never
+ * agree, so the node is judged by each branch's gradients at its own corners instead, and
+ * its triangles, cut along the crease (crease_split.h), by what they measure after
+ * polygonising (a leaf that misses E is split in the next round). -1: not such a node. The
+ * gyroid ball at E = 3e-3 (box ±1.5, depth 10): 197,764 -> 34,750 triangles; at 1e-3, E is
+ * met (max centroid distance 9.7e-4, 91,536 triangles) where depth 10 missed it (2.3e-3). */
+static int crease_cell(ism_sampler *s, const ism_flatness *fl, const ism_corners *k)
+{
+    double n[8][3];
+    int branch[8], seen = 0;
+    for (int c = 0; c < 8; c++) {
+        if ((branch[c] = ism_crease_branch(s, k->p[c], n[c])) < 0)
+            return -1;
+        ism_normalise3(n[c]);
+        seen |= 1 << branch[c];
+    }
+    if (seen != 3)
+        return -1;
+    for (int i = 0; i < 8; i++)
+        for (int j = i + 1; j < 8; j++)
+            if (branch[i] == branch[j] && ism_dot3(n[i], n[j]) < fl->normal_cos)
+                return 0;
+    double err;
+    if (ism_cell_error_cut(s, k, &err))
+        return err <= fl->max_error;
+    return 1; /* polygons the estimate cannot follow: the measurement after decides */
+}
+
 bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
                    const double hi[3], const ism_corners *k)
 {
@@ -61,6 +91,9 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
     for (int a = 1; a < 3; a++)
         if (hi[a] - lo[a] < size)
             size = hi[a] - lo[a];
+    int crease = fl->max_error > 0 ? crease_cell(s, fl, k) : -1;
+    if (crease >= 0)
+        return crease;
     bool measured_only = fl->max_error > 0 && size <= CREASE_CELL_ERRORS * fl->max_error;
     if (!measured_only && !normals_agree(n, fl->normal_cos))
         return false;

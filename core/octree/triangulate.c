@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static bool push_vert(ism_cell_out *o, const ism_fpoint *p, uint32_t *idx)
+bool ism_cell_out_vert(ism_cell_out *o, const ism_fpoint *p, uint32_t *idx)
 {
     if (o->nverts == o->cap_verts) {
         size_t c = o->cap_verts ? o->cap_verts * 2 : 256;
@@ -26,7 +26,7 @@ static bool push_vert(ism_cell_out *o, const ism_fpoint *p, uint32_t *idx)
     return true;
 }
 
-static bool push_tri(ism_cell_out *o, uint32_t a, uint32_t b, uint32_t c)
+bool ism_cell_out_tri(ism_cell_out *o, uint32_t a, uint32_t b, uint32_t c)
 {
     if (o->ntris == o->cap_tris) {
         size_t cap = o->cap_tris ? o->cap_tris * 2 : 256;
@@ -44,7 +44,7 @@ static bool push_tri(ism_cell_out *o, uint32_t a, uint32_t b, uint32_t c)
 bool ism_cell_out_segment(ism_cell_out *out, const ism_fpoint *a, const ism_fpoint *b)
 {
     uint32_t ia, ib;
-    if (!push_vert(out, a, &ia) || !push_vert(out, b, &ib))
+    if (!ism_cell_out_vert(out, a, &ia) || !ism_cell_out_vert(out, b, &ib))
         return false;
     if (out->nsegs == out->cap_segs) {
         size_t c = out->cap_segs ? out->cap_segs * 2 : 16;
@@ -179,7 +179,7 @@ static bool fan_from_corner(ism_cell_out *out, size_t base, size_t n, size_t c)
 {
     uint32_t b = (uint32_t)base;
     for (size_t i = 1; i + 1 < n; i++)
-        if (!push_tri(out, b + (uint32_t)c, b + (uint32_t)((c + i) % n),
+        if (!ism_cell_out_tri(out, b + (uint32_t)c, b + (uint32_t)((c + i) % n),
                       b + (uint32_t)((c + i + 1) % n)))
             return false;
     return true;
@@ -240,12 +240,12 @@ bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, doubl
     size_t base = out->nverts;
     for (size_t i = 0; i < n; i++) {
         uint32_t idx;
-        if (!push_vert(out, &pts[flip ? n - 1 - i : i], &idx))
+        if (!ism_cell_out_vert(out, &pts[flip ? n - 1 - i : i], &idx))
             return false;
     }
     uint32_t b = (uint32_t)base;
     if (n == 3)
-        return push_tri(out, b, b + 1, b + 2);
+        return ism_cell_out_tri(out, b, b + 1, b + 2);
     if (n == 4) {
         /* along the shorter diagonal, unless that leaves a triangle lying in a face */
         const ism_fpoint *q = out->verts + base;
@@ -257,8 +257,8 @@ bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, doubl
                           ism_in_one_face(node, q[1].p, q[3].p, q[0].p)))
             first = true;
         if (first)
-            return push_tri(out, b, b + 1, b + 2) && push_tri(out, b, b + 2, b + 3);
-        return push_tri(out, b + 1, b + 2, b + 3) && push_tri(out, b + 1, b + 3, b);
+            return ism_cell_out_tri(out, b, b + 1, b + 2) && ism_cell_out_tri(out, b, b + 2, b + 3);
+        return ism_cell_out_tri(out, b + 1, b + 2, b + 3) && ism_cell_out_tri(out, b + 1, b + 3, b);
     }
     bool emitted = false;
     if (max_error > 0 && !corner_fan_within(s, out, base, n, node, max_error, &emitted))
@@ -270,10 +270,10 @@ bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, doubl
         fan_in_face(out, base, n, c.p, node))
         return fan_from_best_corner(out, base, n, node);
     uint32_t ci;
-    if (!push_vert(out, &c, &ci))
+    if (!ism_cell_out_vert(out, &c, &ci))
         return false;
     for (size_t i = 0; i < n; i++)
-        if (!push_tri(out, ci, b + (uint32_t)i, b + (uint32_t)((i + 1) % n)))
+        if (!ism_cell_out_tri(out, ci, b + (uint32_t)i, b + (uint32_t)((i + 1) % n)))
             return false;
     return true;
 }
@@ -310,16 +310,16 @@ static bool fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex, bool fl
     size_t base = out->nverts;
     for (size_t i = 0; i < n; i++) {
         uint32_t idx;
-        if (!push_vert(out, &pts[flip ? n - 1 - i : i], &idx))
+        if (!ism_cell_out_vert(out, &pts[flip ? n - 1 - i : i], &idx))
             return false;
     }
     uint32_t a;
-    if (!push_vert(out, apex, &a))
+    if (!ism_cell_out_vert(out, apex, &a))
         return false;
     uint32_t b = (uint32_t)base;
     size_t edges = n == 2 ? 1 : n; /* a one-edge polygon gives one triangle */
     for (size_t i = 0; i < edges; i++)
-        if (!push_tri(out, a, b + (uint32_t)i, b + (uint32_t)((i + 1) % n)))
+        if (!ism_cell_out_tri(out, a, b + (uint32_t)i, b + (uint32_t)((i + 1) % n)))
             return false;
     return true;
 }

@@ -29,6 +29,11 @@ bool ism_triangulate_fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex
 bool ism_triangulate_tent(const ism_fpoint *pts, size_t n, const ism_fpoint *apex,
                           ism_cell_out *out);
 
+/* Appends a point (its index in *idx) or a triangle of point indices; false when out of
+ * memory. */
+bool ism_cell_out_vert(ism_cell_out *o, const ism_fpoint *p, uint32_t *idx);
+bool ism_cell_out_tri(ism_cell_out *o, uint32_t a, uint32_t b, uint32_t c);
+
 /* Appends a one-edge (degenerate) polygon. */
 bool ism_cell_out_segment(ism_cell_out *out, const ism_fpoint *a, const ism_fpoint *b);
 

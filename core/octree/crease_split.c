@@ -1,0 +1,120 @@
+/* crease_split.c — a leaf's triangles cut where f's top min/max changes branch (see
+ * crease_split.h). */
+#include "core/octree/crease_split.h"
+#include "core/octree/triangulate.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Newton steps toward a = b = 0 from the edge's linear estimate: quadratic convergence
+ * reaches rounding in 4-5 on a transversal crease; more do not help where the branches
+ * are tangent (the linear estimate is kept then). */
+#define CREASE_NEWTON_STEPS 8
+/* A Newton result farther than this many edge lengths from the edge is not the edge's
+ * crease point (a distant part of the crease curve): the linear estimate is kept. */
+#define CREASE_REACH_EDGES 1.0
+
+int ism_crease_branch(ism_sampler *s, const double p[3], double g[3])
+{
+    double v[2], bg[2][3];
+    s->n_gradient++;
+    if (!ism_eval_top_branches(s->tape, s->ws, p[0], p[1], p[2], v, bg))
+        return -1;
+    int b = v[1] > v[0];
+    if (g)
+        memcpy(g, bg[b], sizeof bg[b]);
+    return b;
+}
+
+static bool before(const double *a, const double *b)
+{
+    for (int k = 0; k < 3; k++)
+        if (a[k] != b[k])
+            return a[k] < b[k];
+    return false;
+}
+
+/* One minimum-norm Newton step on (a, b) = 0 from x; false when the branches' gradients
+ * are parallel there or a value is not finite. */
+static bool newton_step(ism_sampler *s, double x[3])
+{
+    double v[2], g[2][3];
+    s->n_gradient++;
+    ism_eval_top_branches(s->tape, s->ws, x[0], x[1], x[2], v, g);
+    double aa = ism_dot3(g[0], g[0]), ab = ism_dot3(g[0], g[1]), bb = ism_dot3(g[1], g[1]);
+    double det = aa * bb - ab * ab;
+    if (!(det > 1e-12 * aa * bb) || !isfinite(v[0]) || !isfinite(v[1]))
+        return false;
+    double y0 = (bb * v[0] - ab * v[1]) / det, y1 = (aa * v[1] - ab * v[0]) / det;
+    for (int k = 0; k < 3; k++)
+        x[k] -= y0 * g[0][k] + y1 * g[1][k];
+    return true;
+}
+
+/* The crease point of edge p-q (branches differ at its ends): Newton on a = b = 0 from
+ * where a - b changes sign along the edge, or that linear estimate itself. */
+static void crease_point(ism_sampler *s, const double *p0, const double *q0, ism_fpoint *out)
+{
+    const double *p = before(q0, p0) ? q0 : p0, *q = p == p0 ? q0 : p0;
+    double v[2], g[2][3], d[2];
+    const double *ends[2] = {p, q};
+    for (int e = 0; e < 2; e++) {
+        s->n_gradient++;
+        ism_eval_top_branches(s->tape, s->ws, ends[e][0], ends[e][1], ends[e][2], v, g);
+        d[e] = v[0] - v[1];
+    }
+    double t = d[0] / (d[0] - d[1]);
+    if (!(t >= 0 && t <= 1))
+        t = 0.5;
+    double lin[3], x[3];
+    for (int k = 0; k < 3; k++)
+        lin[k] = x[k] = p[k] + t * (q[k] - p[k]);
+    bool ok = true;
+    for (int it = 0; it < CREASE_NEWTON_STEPS && ok; it++)
+        ok = newton_step(s, x);
+    if (!ok || !(ism_dist3(x, lin) <= CREASE_REACH_EDGES * ism_dist3(p, q))) {
+        memcpy(x, lin, sizeof x); /* onto f = 0 along ∇f at least */
+        for (int it = 0; it < CREASE_NEWTON_STEPS; it++) {
+            double gf[3];
+            double f = ism_sample_grad(s, x, gf), gg = ism_dot3(gf, gf);
+            if (!(gg > 0) || !isfinite(f))
+                break;
+            for (int k = 0; k < 3; k++)
+                x[k] -= f * gf[k] / gg;
+        }
+        if (!(ism_dist3(x, lin) <= CREASE_REACH_EDGES * ism_dist3(p, q)))
+            memcpy(x, ism_dist3(lin, p) <= ism_dist3(lin, q) ? p : q, sizeof x);
+    }
+    memcpy(out->p, x, sizeof out->p);
+    ism_sample_grad(s, x, out->g);
+    out->flags = ISM_FP_INTERIOR;
+}
+
+bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
+{
+    size_t ntris = out->ntris;
+    for (size_t t = first_tri; t < ntris; t++) {
+        int br[3];
+        for (int k = 0; k < 3; k++)
+            br[k] = ism_crease_branch(s, out->verts[out->tris[3 * t + k]].p, NULL);
+        if (br[0] < 0)
+            return true; /* no min/max at the top of the tape */
+        if (br[0] == br[1] && br[1] == br[2])
+            continue;
+        /* r: the corner alone on its branch; the others follow it in winding order */
+        int r = br[0] == br[1] ? 2 : br[0] == br[2] ? 1 : 0;
+        uint32_t a = out->tris[3 * t + r], b = out->tris[3 * t + (r + 1) % 3],
+                 c = out->tris[3 * t + (r + 2) % 3];
+        ism_fpoint ab, ac;
+        crease_point(s, out->verts[a].p, out->verts[b].p, &ab);
+        crease_point(s, out->verts[a].p, out->verts[c].p, &ac);
+        uint32_t iab, iac;
+        if (!ism_cell_out_vert(out, &ab, &iab) || !ism_cell_out_vert(out, &ac, &iac))
+            return false;
+        uint32_t *tri = out->tris + 3 * t;
+        tri[0] = a, tri[1] = iab, tri[2] = iac;
+        if (!ism_cell_out_tri(out, iab, b, c) || !ism_cell_out_tri(out, iab, c, iac))
+            return false;
+    }
+    return true;
+}
