@@ -287,6 +287,27 @@ static bool zero_within(within_e *w, const double p[3], double e)
     return false;
 }
 
+/* The gyroid ball and its two branches, compiled, with their workspaces. */
+static within_e within_e_open(void)
+{
+    within_e w = {pf_compile(&gyroid_ball), {pf_compile(&gyroid_part), pf_compile(&ball_part)},
+                  NULL, {NULL, NULL}};
+    w.ws = ism_eval_ws_new(w.f);
+    for (int b = 0; b < 2; b++)
+        w.bws[b] = ism_eval_ws_new(w.branch[b]);
+    return w;
+}
+
+static void within_e_close(within_e *w)
+{
+    for (int b = 0; b < 2; b++) {
+        ism_eval_ws_free(w->bws[b]);
+        ism_tape_free((ism_tape *)w->branch[b]);
+    }
+    ism_eval_ws_free(w->ws);
+    ism_tape_free((ism_tape *)w->f);
+}
+
 /* Triangles whose centroid or an edge midpoint has no zero proved within e. */
 static size_t far_triangles(within_e *w, const ism_mesh *m, double e)
 {
@@ -302,27 +323,32 @@ static size_t far_triangles(within_e *w, const ism_mesh *m, double e)
     return far;
 }
 
+/* The gyroid ball's mesh m (stats st) within e: no cell missed it, every centroid and edge
+ * midpoint proved within e, χ −18 in one closed piece. */
+static void expect_gyroid_ball_within(within_e *w, const ism_mesh *m, const ism_poly_stats *st,
+                                      double e, double shift)
+{
+    cr_expect_eq(st->error_missed_nodes, 0, "shift %g: %llu cells missed E", shift,
+                 (unsigned long long)st->error_missed_nodes);
+    size_t far = far_triangles(w, m, e);
+    cr_expect_eq(far, 0, "shift %g: %zu of %zu triangles farther than E", shift, far, m->ntris);
+    pf_props pr;
+    pf_measure(m, w->f, &pr);
+    cr_expect_eq(pr.euler, -18, "shift %g: χ %ld", shift, pr.euler);
+    cr_expect_eq(pr.components, 1, "shift %g", shift);
+    cr_expect_eq(pr.boundary_edges + pr.nonmanifold_edges, 0, "shift %g", shift);
+}
+
 Test(accuracy, crease_does_not_set_the_depth)
 {
     static const double shifts[] = {0, 1e-3 * FINEST, 0.37 * FINEST};
-    ism_tape *t = pf_compile(&gyroid_ball);
-    within_e w = {t, {pf_compile(&gyroid_part), pf_compile(&ball_part)}, NULL, {NULL, NULL}};
-    w.ws = ism_eval_ws_new(t);
-    for (int b = 0; b < 2; b++)
-        w.bws[b] = ism_eval_ws_new(w.branch[b]);
+    within_e w = within_e_open();
+    const ism_tape *t = w.f;
     for (size_t i = (size_t)pf_first_box(); i < sizeof shifts / sizeof shifts[0]; i++) {
         ism_mesh m;
         ism_poly_stats st;
         run_bounded(t, shifts[i], CREASE_E, SAFETY_DEPTH, &m, &st);
-        cr_expect_eq(st.error_missed_nodes, 0, "shift %g", shifts[i]);
-        size_t far = far_triangles(&w, &m, CREASE_E);
-        cr_expect_eq(far, 0, "shift %g: %zu of %zu triangles farther than E", shifts[i], far,
-                     m.ntris);
-        pf_props pr;
-        pf_measure(&m, t, &pr);
-        cr_expect_eq(pr.euler, -18, "shift %g: χ %ld", shifts[i], pr.euler);
-        cr_expect_eq(pr.components, 1, "shift %g", shifts[i]);
-        cr_expect_eq(pr.boundary_edges + pr.nonmanifold_edges, 0, "shift %g", shifts[i]);
+        expect_gyroid_ball_within(&w, &m, &st, CREASE_E, shifts[i]);
         if (i == 2) { /* the depth comparison, off the lattice */
             ism_mesh coarse;
             ism_poly_stats sc;
@@ -333,12 +359,7 @@ Test(accuracy, crease_does_not_set_the_depth)
         }
         ism_mesh_free(&m);
     }
-    for (int b = 0; b < 2; b++) {
-        ism_eval_ws_free(w.bws[b]);
-        ism_tape_free((ism_tape *)w.branch[b]);
-    }
-    ism_eval_ws_free(w.ws);
-    ism_tape_free(t);
+    within_e_close(&w);
 }
 
 /* Cut along the crease (crease_split.h), a cell straddling it is as good as its branches:
@@ -349,31 +370,14 @@ Test(accuracy, crease_does_not_set_the_depth)
 Test(accuracy, crease_cut_meets_the_bound_above_the_crease_depth)
 {
     static const double shifts[] = {0, 0.37 * FINEST};
-    ism_tape *t = pf_compile(&gyroid_ball);
-    within_e w = {t, {pf_compile(&gyroid_part), pf_compile(&ball_part)}, NULL, {NULL, NULL}};
-    w.ws = ism_eval_ws_new(t);
-    for (int b = 0; b < 2; b++)
-        w.bws[b] = ism_eval_ws_new(w.branch[b]);
+    within_e w = within_e_open();
+    const ism_tape *t = w.f;
     for (size_t i = pf_quick() ? 1 : 0; i < sizeof shifts / sizeof shifts[0]; i++) {
         ism_mesh m;
         ism_poly_stats st;
         run_bounded(t, shifts[i], 3e-3, 9, &m, &st);
-        cr_expect_eq(st.error_missed_nodes, 0, "shift %g: %llu cells missed E", shifts[i],
-                     (unsigned long long)st.error_missed_nodes);
-        size_t far = far_triangles(&w, &m, 3e-3);
-        cr_expect_eq(far, 0, "shift %g: %zu of %zu triangles farther than E", shifts[i], far,
-                     m.ntris);
-        pf_props pr;
-        pf_measure(&m, t, &pr);
-        cr_expect_eq(pr.euler, -18, "shift %g: χ %ld", shifts[i], pr.euler);
-        cr_expect_eq(pr.components, 1, "shift %g", shifts[i]);
-        cr_expect_eq(pr.boundary_edges + pr.nonmanifold_edges, 0, "shift %g", shifts[i]);
+        expect_gyroid_ball_within(&w, &m, &st, 3e-3, shifts[i]);
         ism_mesh_free(&m);
     }
-    for (int b = 0; b < 2; b++) {
-        ism_eval_ws_free(w.bws[b]);
-        ism_tape_free((ism_tape *)w.branch[b]);
-    }
-    ism_eval_ws_free(w.ws);
-    ism_tape_free(t);
+    within_e_close(&w);
 }
