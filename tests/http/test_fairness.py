@@ -162,6 +162,7 @@ class FairnessTest(unittest.TestCase):
                     "--tokens", self.tokens) as d:
             a, b = Client(d, alice), Client(d, bob)
             blocker = a.submit(SLOW)
+            wait_until("the blocker running", lambda: a.job(blocker)["state"] == "running")
             second = a.submit(flood_request(1))
             for r in (a.call("POST", "/v1/jobs", flood_request(2)),
                       a.call("POST", "/v1/mesh", flood_request(3))):
