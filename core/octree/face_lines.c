@@ -31,6 +31,11 @@
  * see any such band wider than that; a thinner one is finer than the tile resolves, and
  * each sample is one evaluation of f on every tile with 4 crossings. */
 #define JOIN_SAMPLES 15
+/* A bent path between two arcs whose points lie on one side (arcs_joined_around) turns at
+ * k/8 of the tile's extent across that side, k = 1..7: a band of the arcs' sign between the
+ * other sign's bump and its region beyond is found when it is 1/8 of the tile wide; 14 paths
+ * of 2 × JOIN_SAMPLES points at most, on the rare tile where no straight path decides. */
+#define BENT_STEPS 8
 /* A zero lattice point's `before` sign is known only after the walk (the gap after the
  * previous event): this marks it until then; never a sign (+1, -1, 0). */
 #define SIGN_UNKNOWN 99
@@ -503,16 +508,34 @@ static const double *arc_point(const ism_cell_ctx *cx, const ism_fevent *a, cons
  *   p-------k0-k1-----------q
  */
 static bool on_one_side(const ism_cell_ctx *cx, const ism_tile *t, const double p[3],
-                        const double q[3])
+                        const double q[3], int *axis, double *from, double *to)
 {
     const ism_grid *g = &cx->tree->grid;
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
-    double su[2] = {ism_grid_coord(g, u, t->u0), ism_grid_coord(g, u, t->u1)};
-    double sv[2] = {ism_grid_coord(g, v, t->v0), ism_grid_coord(g, v, t->v1)};
-    for (int k = 0; k < 2; k++)
-        if ((p[u] == su[k] && q[u] == su[k]) || (p[v] == sv[k] && q[v] == sv[k]))
-            return true;
+    int uv[2] = {(t->axis + 1) % 3, (t->axis + 2) % 3};
+    double s[2][2] = {{ism_grid_coord(g, uv[0], t->u0), ism_grid_coord(g, uv[0], t->u1)},
+                      {ism_grid_coord(g, uv[1], t->v0), ism_grid_coord(g, uv[1], t->v1)}};
+    for (int a = 0; a < 2; a++)
+        for (int k = 0; k < 2; k++)
+            if (p[uv[a]] == s[a][k] && q[uv[a]] == s[a][k]) {
+                *axis = uv[a];
+                *from = s[a][k];
+                *to = s[a][1 - k];
+                return true;
+            }
     return false;
+}
+
+/* Does f keep the given sign at JOIN_SAMPLES points strictly between a and b? */
+static bool path_keeps_sign(ism_cell_ctx *cx, const double a[3], const double b[3], int sign)
+{
+    for (int k = 1; k <= JOIN_SAMPLES; k++) {
+        double t = (double)k / (JOIN_SAMPLES + 1), q[3];
+        for (int i = 0; i < 3; i++)
+            q[i] = a[i] + t * (b[i] - a[i]);
+        if (ism_sign(ism_sample_f(&cx->s, q)) != sign)
+            return false;
+    }
+    return true;
 }
 
 /* Four crossings leave two boundary arcs of each sign, and the two lines either cut off the
@@ -535,19 +558,48 @@ static void arc_path(const ism_cell_ctx *cx, const int *cross, int first, double
 
 static bool arcs_joined(ism_cell_ctx *cx, const ism_tile *t, const int *cross, int first)
 {
-    int sign = cx->ev[cross[first]].after;
-    double p1[3], p2[3];
+    double p1[3], p2[3], from, to;
+    int axis;
     arc_path(cx, cross, first, p1, p2);
-    if (on_one_side(cx, t, p1, p2))
+    if (on_one_side(cx, t, p1, p2, &axis, &from, &to))
         return false; /* the path is the boundary, where the other sign's arc lies between */
-    for (int k = 1; k <= JOIN_SAMPLES; k++) {
-        double t = (double)k / (JOIN_SAMPLES + 1), q[3];
-        for (int a = 0; a < 3; a++)
-            q[a] = p1[a] + t * (p2[a] - p1[a]);
-        if (ism_sign(ism_sample_f(&cx->s, q)) != sign)
-            return false;
+    return path_keeps_sign(cx, p1, p2, cx->ev[cross[first]].after);
+}
+
+/* Arcs whose points lie on one side of the tile (no straight path between them: on_one_side)
+ * may still join around the other sign's arc between them — a narrow bump of the other sign
+ * poking through that side:
+ *
+ *   +-----------------------+
+ *   |           +           |   + above (the tile's centre is +)
+ *   k3 ------------------- k2
+ *   |    −         m        |   − joins its arcs under the + region, around the bump;
+ *   |   ·····    ·   ·····  |   the path p → m → q shows it
+ *   |        · /‾‾‾\ ·      |
+ *   p---------k0-+-k1-------q   the bump k0–k1: + (a plate's top 0.2 cells high)
+ *
+ * With neither sign's straight path joined, the gradient scores tie (the bump's sides face
+ * each other, the plane's crossings agree) and the centre's sign joined the + arcs: the bump
+ * glued to the plane above it. The path is bent through m, the middle of p and q moved into
+ * the tile by k/BENT_STEPS of its extent across that side, k = 1 .. BENT_STEPS − 1; true
+ * when f keeps the arcs' sign along both legs at some k. */
+static bool arcs_joined_around(ism_cell_ctx *cx, const ism_tile *t, const int *cross, int first)
+{
+    double p1[3], p2[3], from, to;
+    int axis;
+    arc_path(cx, cross, first, p1, p2);
+    if (!on_one_side(cx, t, p1, p2, &axis, &from, &to))
+        return false;
+    int sign = cx->ev[cross[first]].after;
+    for (int k = 1; k < BENT_STEPS; k++) {
+        double m[3];
+        for (int i = 0; i < 3; i++)
+            m[i] = 0.5 * (p1[i] + p2[i]);
+        m[axis] = from + (to - from) * k / BENT_STEPS;
+        if (path_keeps_sign(cx, p1, m, sign) && path_keeps_sign(cx, m, p2, sign))
+            return true;
     }
-    return true;
+    return false;
 }
 
 /* Both signs' straight paths kept their sign, which two lines that do not cross allow only
@@ -639,6 +691,9 @@ static int pair_crossings(ism_cell_ctx *cx, const ism_tile *t, const int *cross,
     if (at_cross >= 0) {
         joined0 = at_cross == 1;
         joined1 = !joined0;
+    } else if (nc == 4 && !joined0 && !joined1) {
+        joined0 = arcs_joined_around(cx, t, cross, 0);
+        joined1 = arcs_joined_around(cx, t, cross, 1);
     }
     if (joined0 != joined1) {
         /* the region of the joined arcs' sign crosses the tile: cut off the other sign's arcs */

@@ -111,3 +111,35 @@ Test(crease, double_torus_pocket_along_a_lattice_line)
     ism_mesh_free(&m);
     ism_tape_free(t);
 }
+
+/* A plate's top poking 0.2 cells through a tile's lower side under a plane 0.4 cells up,
+ * whose region holds the tile's centre: max(y − 0.4c, min(0.12c − |x − x_c|, 0.2c − y,
+ * 0.47 − |z|)), box ±1 at depth 5 (c = 1/16), x_c the middle of the cell [0, c]. On the z
+ * tiles of the cells [0, c]², the − arcs' points are the two corners of the lower side
+ * (no straight path: the + bump lies between), the + arcs' path crosses the − band, the
+ * gradient scores tie (the bump's sides face each other, the plane's crossings agree) and
+ * the centre's + sign joined the bump to the plane: one piece, χ 0. The plane (a disk in the
+ * box) and the plate (a box open at y = −1: a disk) are two pieces, χ 2. Also in the
+ * sweep's shifted boxes, the surface staying put (the 1e-3 box showed the same fault). */
+Test(crease, narrow_bump_under_a_plane)
+{
+    const pf_surface s = {"max(y - 0.025, min(0.0075 - abs(x - 0.03125), 0.0125 - y, "
+                          "0.47 - abs(z)))", NULL, 0, NULL, 0};
+    const double base[6] = {-1, -1, -1, 1, 1, 1};
+    ism_tape *t = pf_compile(&s);
+    for (int w = -1; w < 2; w++) {
+        double box[6];
+        pf_sweep_box(base, 5, w, box);
+        ism_mesh m;
+        ism_poly_stats st;
+        pf_run(t, box, 3, 5, 0, &m, &st);
+        pf_props p;
+        pf_measure(&m, t, &p);
+        cr_expect_eq(p.components, 2, "box %d: %zu pieces", w, p.components);
+        cr_expect_eq(p.euler, 2, "box %d: χ = %ld", w, p.euler);
+        cr_expect_eq(p.nonmanifold_edges, 0, "box %d: %zu non-manifold edges", w,
+                     p.nonmanifold_edges);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
