@@ -540,6 +540,24 @@ static bool decode_output(const json_t *v, ism_request *req, ism_req_error *err)
     return true;
 }
 
+/* "preview": true or false (after "quality", "output" and "curves", which it checks): a
+ * preview computes none of what curves, the quality pass and the curvatures and classes
+ * need, so it sends positions and normals only and refuses curves and quality "good". */
+static bool decode_preview(const json_t *v, ism_request *req, ism_req_error *err)
+{
+    if (!json_is_boolean(v))
+        return bad(err, "$.preview", "expected true or false, got %s", type_name(v));
+    req->preview = json_is_true(v);
+    if (!req->preview)
+        return true;
+    if (req->ncurves)
+        return bad(err, "$.preview", "a preview has no curves: leave out \"curves\"");
+    if (req->quality != ISM_QUALITY_RAW)
+        return bad(err, "$.preview", "a preview has no quality pass: leave out \"quality\"");
+    req->attributes &= ISM_ATTR_NORMAL;
+    return true;
+}
+
 /* ---------------------------------------------------------------------------------------
  * The whole request */
 
@@ -581,7 +599,7 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
 {
     static const char *const known[] = {"expr", "preset", "params", "let", "box", "depth",
                                         "max_error", "quality", "tolerances", "output", "curves",
-                                        NULL};
+                                        "preview", NULL};
     if (!json_is_object(root))
         return bad(err, "$", "a request is a JSON object, got %s", type_name(root));
     if (!check_fields(root, "$", known, err))
@@ -642,6 +660,8 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
     if ((v = json_object_get(root, "output")) && !decode_output(v, req, err))
         return false;
     if ((v = json_object_get(root, "curves")) && !ism_request_decode_curves(v, req, err))
+        return false;
+    if ((v = json_object_get(root, "preview")) && !decode_preview(v, req, err))
         return false;
     return true;
 }

@@ -88,6 +88,10 @@ typedef struct ism_request {
     ism_req_curve *curves;     /* the "curves" list (empty when not given) */
     size_t ncurves;
     bool plain_glb;            /* output.draco false: a glb without Draco (plain accessors) */
+    bool preview;              /* "preview": true: a quick picture for live exploration — the
+                                  polygoniser's mesh only (no singular locus, conformance,
+                                  analysis or features); positions and normals are sent.
+                                  Not with "curves" or "quality": "good" (400). */
 } ism_request;
 
 /* What the operator allows. */

@@ -60,6 +60,15 @@ static void write_quality(ism_jw *w, const ism_request *req)
     ism_jw_string(w, ism_quality_name(req->quality));
 }
 
+/* The preview mode, only when asked for (keys of full requests stay as they were). */
+static void write_preview(ism_jw *w, const ism_request *req)
+{
+    if (!req->preview)
+        return;
+    ism_jw_key(w, "preview");
+    ism_jw_bool(w, true);
+}
+
 /* The encoding options; with only_effective, bits of attributes that are not sent are left
  * out (they cannot change the bytes). */
 static void write_output(ism_jw *w, const ism_request *req, bool only_effective)
@@ -136,6 +145,7 @@ char *ism_request_canonical(const ism_request *req, size_t *len)
     ism_jw_object_end(&w);
     write_max_error(&w, req);
     write_quality(&w, req);
+    write_preview(&w, req);
     ism_jw_key(&w, "tolerances");
     write_tolerances(&w, req);
     ism_jw_key(&w, "output");
@@ -191,6 +201,7 @@ static char *key_material(const ism_request *req, const ism_tape *tape, bool wit
     ism_jw_array_end(&w);
     write_max_error(&w, req);
     write_quality(&w, req);
+    write_preview(&w, req);
     ism_jw_key(&w, "tolerances");
     write_tolerances(&w, req);
     ism_request_write_curves(&w, req, true);

@@ -244,6 +244,22 @@ static void write_remesh(ism_jw *w, const ism_remesh_stats *s)
     ism_jw_object_end(w);
 }
 
+/* The stages a preview ("preview": true) does not run, by their names in timings_ms (and
+ * the request's curves and quality, which a preview refuses). */
+static void write_preview(ism_jw *w)
+{
+    static const char *const skipped[] = {"singular", "curves", "quality", "analysis",
+                                          "features"};
+    ism_jw_key(w, "preview");
+    ism_jw_object(w);
+    ism_jw_key(w, "skipped");
+    ism_jw_array(w);
+    for (size_t i = 0; i < sizeof skipped / sizeof *skipped; i++)
+        ism_jw_string(w, skipped[i]);
+    ism_jw_array_end(w);
+    ism_jw_object_end(w);
+}
+
 /* What the singular stage could not do, or where the mesh disagrees with it. */
 static void singular_warnings(ism_jw *w, const ism_locus *l, const ism_locus_check *c)
 {
@@ -340,6 +356,8 @@ char *ism_stats_surface_json(const ism_stats_input *in, size_t *len)
         ism_jw_key(&w, "remesh");
         write_remesh(&w, in->remesh);
     }
+    if (in->preview)
+        write_preview(&w);
     ism_jw_key(&w, "warnings");
     write_warnings(&w, in);
     ism_jw_object_end(&w);

@@ -16,6 +16,8 @@
  *    "remesh": {"flips", "moves", "collapses", "inserts", "locked_vertices",
  *               "min_angle_before", "min_angle_after", "time_ms"} (only after the quality
  *               pass),
+ *    "preview": {"skipped": ["singular", "curves", "quality", "analysis", "features"]} (only
+ *               in a preview: the stages it did not run),
  *    "timings_ms": {"decode", "compile", "singular", "polygonise", "analyse", "features",
  *    "encode", "total"}, "warnings": ["..."]}
  * (timings_ms comes right after "mesh"; the members from "polygoniser" on are the surface's,
@@ -50,6 +52,7 @@ typedef struct ism_stats_input {
     const ism_conform_stats *conform;     /* what the conformance pass did (may be NULL) */
     double max_error;                     /* the requested error bound; 0 when none */
     const ism_remesh_stats *remesh;       /* the quality pass ("quality": "good"), or NULL */
+    bool preview;                         /* a preview: the stages it skips are listed */
     double timings_ms[ISM_TIME_COUNT];
     const char *surface;                  /* ism_stats_surface_json's text, or NULL: then */
     size_t surface_len;                   /* it is written from poly ... conform */

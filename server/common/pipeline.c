@@ -439,6 +439,29 @@ static bool cut_curves(const ism_request *req, const ism_tape *tape,
     return true;
 }
 
+/* A preview ("preview": true): the polygoniser's mesh alone into c->mesh — no singular
+ * locus (quiet NULL: hidden pieces are chased only ISM_THIN_BLIND_DEPTH levels deep, as
+ * without one), no conformance, double sheets, curves or analysis; c->locus stays empty. */
+static bool polygonise_preview(const ism_tape *tape, const ism_poly_options *o,
+                               const ism_pipeline_hooks *hooks, ism_pipeline_result *r,
+                               ism_computed *c, scratch *s)
+{
+    ism_error err;
+    memset(&err, 0, sizeof err);
+    double t = ism_now_ms();
+    enum ism_poly_status st = ism_polygonise(tape, o, &c->mesh, &s->ps, &err);
+    c->timings_ms[ISM_TIME_POLYGONISE] = ism_now_ms() - t;
+    if (!polygonise_status(r, st, &err))
+        return false;
+    if (cancelled(hooks))
+        return fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
+    r->polygonised = true;
+    if (!ism_mesh_drop_loose(&c->mesh)) /* segments travel nowhere without a locus */
+        return fail_with(r, 500, "no_memory", "%s", "out of memory tidying the mesh");
+    report(hooks, 0.92);
+    return true;
+}
+
 /* Polygonises and analyses req's surface into c->mesh (locus into c->locus). */
 static bool polygonise_and_analyse(const ism_request *req, const ism_tape *tape,
                                    const ism_pipeline_limits *lim,
@@ -463,6 +486,8 @@ static bool polygonise_and_analyse(const ism_request *req, const ism_tape *tape,
         return fail_with(r, 500, "no_memory", "%s", "out of memory checking the expression");
     if (rv != ISM_RESOLVABLE_OK)
         return fail_with(r, 422, "unresolvable", "%s", why);
+    if (req->preview)
+        return polygonise_preview(tape, &o, hooks, r, c, s);
     ism_surface_times times;
     enum ism_poly_status st =
         ism_mesh_surface(tape, &o, &c->mesh, &c->locus, &s->ps, &s->cs, &times, &err);
@@ -524,7 +549,8 @@ static bool gather(const ism_request *req, const ism_tape *tape, ism_pipeline_re
                    ism_computed *c, scratch *s)
 {
     double t = ism_now_ms();
-    if (!ism_wire_mesh_build(&c->mesh, &s->an, ISM_ATTR_ALL, curvature_limit(req), &c->wire) ||
+    const ism_analysis *an = s->have_analysis ? &s->an : NULL; /* none in a preview */
+    if (!ism_wire_mesh_build(&c->mesh, an, ISM_ATTR_ALL, curvature_limit(req), &c->wire) ||
         !ism_wire_corner_normals(tape, &c->mesh, &c->wire, &c->wire.ncorner_normals,
                                  &c->corner_at, &c->corner_normal))
         return fail_with(r, 500, "no_memory", "%s", "out of memory preparing the mesh for the wire");
@@ -543,12 +569,12 @@ static bool gather(const ism_request *req, const ism_tape *tape, ism_pipeline_re
     ism_mesh none;
     ism_mesh_init(&none);
     const ism_mesh *fm = c->empty ? &none : &c->mesh;
-    if (!ism_features_build(c->empty ? NULL : &s->an, &c->features))
+    if (!ism_features_build(c->empty ? NULL : an, &c->features))
         return fail_with(r, 500, "no_memory", "%s", "out of memory collecting the features");
     if (s->have_curves && !c->empty && !ism_features_add_arcs(&c->features, &s->arr, s->cf.fns))
         return fail_with(r, 500, "no_memory", "%s", "out of memory collecting the curves");
     c->features.locus = &c->locus;
-    c->features.check = c->empty ? NULL : &s->check;
+    c->features.check = c->empty || !an ? NULL : &s->check;
     c->features.arrangement = s->have_curves ? &s->arr : NULL;
     c->features.cut_fns = s->cf.fns;
     c->features_json = ism_features_json(fm, &c->features, &c->features_len);
@@ -561,10 +587,11 @@ static bool gather(const ism_request *req, const ism_tape *tape, ism_pipeline_re
     ism_stats_input si;
     memset(&si, 0, sizeof si);
     si.poly = &s->ps;
-    si.analysis = &s->an;
-    si.locus = &c->locus;
-    si.check = &s->check;
-    si.conform = &s->cs;
+    si.analysis = an;
+    si.locus = req->preview ? NULL : &c->locus;
+    si.check = an ? &s->check : NULL;
+    si.conform = req->preview ? NULL : &s->cs;
+    si.preview = req->preview;
     si.max_error = req->poly.max_error;
     si.remesh = s->have_remesh ? &s->rs : NULL;
     c->stats_json = ism_stats_surface_json(&si, &c->stats_len);

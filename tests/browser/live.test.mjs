@@ -58,6 +58,7 @@ describe('live exploration', { timeout: 300000 }, () => {
       assert.ok(r.previews > previewsBefore, 'a preview was shown before the refined mesh');
       assert.equal(r.shown, 'final');
       assert.ok(r.coverage.min > 0.5 * r.coverage.max, `no blank frame while the preview is replaced (${JSON.stringify(r.coverage)})`);
+      assert.ok(coarse.preview && coarse.preview.skipped.includes('singular'), 'the preview was asked for in the server\'s preview mode');
       assert.ok(coarse.mesh.triangles < fine.mesh.triangles, `preview ${coarse.mesh.triangles} < refined ${fine.mesh.triangles} triangles`);
       assert.equal(Number(await page.inputValue(`#param-${param}-value`)), target);
     });

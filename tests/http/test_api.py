@@ -109,6 +109,61 @@ class ApiTest(unittest.TestCase):
         self.assertEqual(r.header("X-Cache"), "hit")
         self.assertEqual(r.body, stl.body)
 
+    def test_preview_is_a_cached_mesh_under_its_own_key(self):
+        """"preview": true (live exploration) gives the polygoniser's mesh alone: a decodable
+        mesh on the sphere, stats saying which stages were skipped, a key of its own, cached."""
+        r = 0.83
+        full_req = dict(sphere(r), depth={"min": 3, "max": 4})
+        prev_req = dict(full_req, preview=True)
+        first = self.d.post("/v1/mesh", prev_req)
+        self.assertEqual(first.status, 200, first.body[:300])
+        self.assertEqual(first.header("X-Cache"), "miss")
+        verts, faces = draco_counts(first.body)
+        self.assertGreater(verts, 0)
+        self.assertGreater(faces, 0)
+        key = first.header("ETag").strip('"')
+        full = self.d.post("/v1/mesh", full_req)
+        self.assertEqual(full.status, 200, full.body[:300])
+        self.assertNotEqual(full.header("ETag").strip('"'), key)
+        again = self.d.post("/v1/mesh", dict(prev_req, output={"attributes": ["normal"]}))
+        self.assertEqual(again.header("X-Cache"), "hit")   # a preview sends normals only
+        self.assertEqual(again.header("ETag").strip('"'), key)
+
+        s = self.d.get("/v1/meshes/%s/stats" % key).json()
+        self.assertEqual(s["preview"]["skipped"],
+                         ["singular", "curves", "quality", "analysis", "features"])
+        self.assertNotIn("analysis", s)
+        self.assertNotIn("singular", s)
+        self.assertEqual(s["timings_ms"]["singular"], 0)
+        self.assertEqual(s["timings_ms"]["analyse"], 0)
+        self.assertEqual(s["mesh"]["vertices"], verts)
+        fs = self.d.get("/v1/meshes/%s/stats" % full.header("ETag").strip('"')).json()
+        self.assertNotIn("preview", fs)
+        self.assertEqual(fs["analysis"]["euler"], 2)
+        self.assertEqual(fs["mesh"]["triangles"], s["mesh"]["triangles"])  # a sphere has no locus
+
+        # the mesh lies on the sphere: vertices (roots on cell edges) to the root tolerance,
+        # triangle centroids inside it by at most the sagitta of a finest cell's chord
+        obj = self.d.get("/v1/meshes/%s.obj" % key).body.decode().splitlines()
+        pts = [tuple(map(float, l.split()[1:4])) for l in obj if l.startswith("v ")]
+        tris = [[int(w.split("/")[0]) - 1 for w in l.split()[1:4]] for l in obj if l.startswith("f ")]
+        self.assertEqual(len(pts), verts)
+        for p in pts:
+            self.assertAlmostEqual(sum(c * c for c in p) ** 0.5, r, delta=1e-4)
+        cell = 3.0 / 2 ** 4
+        for t in tris:
+            c = [sum(pts[i][k] for i in t) / 3 for k in range(3)]
+            rc = sum(x * x for x in c) ** 0.5
+            self.assertTrue(r - 2 * cell * cell / r < rc <= r + 1e-4, (t, rc))
+
+        # a preview has no curves and no quality pass: refused, naming the field
+        for extra in ({"quality": "good"},
+                      {"curves": [{"kind": "plane", "normal": [0, 0, 1], "offsets": [0]}]}):
+            err = self.error_of(self.d.post("/v1/mesh", dict(prev_req, **extra)), 400)
+            self.assertEqual(err["path"], "$.preview")
+        err = self.error_of(self.d.post("/v1/mesh", dict(full_req, preview=1)), 400)
+        self.assertEqual(err["path"], "$.preview")
+
     def test_stats_and_features(self):
         key = self.d.post("/v1/mesh", sphere(0.66)).header("ETag").strip('"')
         stats = self.d.get("/v1/meshes/%s/stats" % key)

@@ -1,5 +1,7 @@
 // live.js — live exploration while a slider moves: coarse previews of the surface (the same
-// request at a low depth, computed by the same workers and cached like any mesh), at most one
+// request at a low depth in the server's preview mode, `"preview": true`: the polygoniser's
+// mesh alone, without the singular stage, analysis and features; computed by the same
+// workers and cached like any mesh, under its own key), at most one
 // in flight and always for the newest value, so the picture follows the slider; the refined
 // mesh (main.js, once the slider rests and the last preview is drawn: idle()) replaces the
 // preview. Every request carries a sequence
@@ -62,8 +64,9 @@ export function claim(seq) {
   return true;
 }
 
-// The preview request for a request body (JSON text): the same with depth capped; null when
-// the request is already that coarse.
+// The preview request for a request body (JSON text): the same with depth capped, in the
+// server's preview mode (normals only; no curves, no quality pass: the server refuses them
+// in a preview); null when the request is already that coarse.
 export function previewBody(body) {
   const b = JSON.parse(body);
   const d = b.depth || { min: 3, max: 7 };
@@ -72,6 +75,9 @@ export function previewBody(body) {
   b.depth = { min: Math.min(d.min, PREVIEW_MIN_DEPTH), max: previewDepth };
   delete b.max_error;   // a preview is coarse by depth, whatever the error bound asks
   delete b.quality;     // ... and shows the raw triangles: the pass is for the final mesh
+  delete b.curves;      // the curves are drawn on the refined mesh
+  b.output = { ...(b.output || {}), attributes: ['normal'] };   // a preview is shaded
+  b.preview = true;
   return JSON.stringify(b);
 }
 

@@ -55,6 +55,13 @@ static const char *const same[][7] = {
     /* -0 is 0 */
     {"{\"expr\": \"x + y + z - 0.5\", \"box\": [-0.0, 0, 0, 1, 1, 1]}",
      "{\"expr\": \"x + y + z - 0.5\", \"box\": [0, -0, 0, 1, 1, 1]}",
+     "{\"expr\": \"x + y + z - 0.5\", \"box\": [0, 0, 0, 1, 1, 1], \"preview\": false}",
+     NULL},
+    /* a preview sends normals only, whatever else is listed */
+    {"{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"preview\": true}",
+     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"preview\": true, \"output\": {\"attributes\": [\"normal\"]}}",
+     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"preview\": true, \"output\": {\"attributes\": "
+     "[\"class\", \"normal\", \"mean_curvature\"]}}",
      NULL},
     /* bits of attributes that are not sent do not matter */
     {"{\"expr\": \"x - y\", \"output\": {\"attributes\": [\"class\"], \"normal_bits\": 12, \"curvature_bits\": 16}}",
@@ -94,6 +101,8 @@ static const char *const different[] = {
     "{\"preset\": \"sphere\"}",
     "{\"preset\": \"sphere\", \"params\": {\"r\": 0.5}}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"quality\": \"good\"}",
+    "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"preview\": true, \"output\": {\"attributes\": [\"normal\"]}}",
+    "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"preview\": true, \"output\": {\"attributes\": []}}",
 };
 
 Test(key, requests_that_mean_the_same_mesh_share_a_key)
@@ -162,8 +171,9 @@ Test(key, canonical_request_decodes_to_the_same_key_and_itself)
         "{\"preset\": \"kummer-16-nodes\", \"params\": {\"w\": 1.25}, \"output\": {\"format\": \"ply\"}}",
         "{\"expr\": \"p*p - 0.1\", \"let\": {\"p\": \"x + y\"}, \"params\": {\"b\": 0.1, \"a\": 2}, "
         "\"box\": [-1, -2, -3, 1, 2, 3], \"quality\": \"good\", \"tolerances\": {\"stitch\": 0.01}}",
+        "{\"preset\": \"gyroid-ball\", \"depth\": {\"max\": 4}, \"preview\": true}",
     };
-    for (size_t i = 0; i < 2; i++) {
+    for (size_t i = 0; i < sizeof jsons / sizeof *jsons; i++) {
         char k1[65], k2[65];
         key_of(jsons[i], k1);
         ism_request req;
@@ -198,4 +208,43 @@ Test(key, canonical_numbers_are_shortest_round_trip)
     cr_expect_null(strstr(c, "0000000"), "%s", c);
     free(c);
     ism_request_free(&req);
+}
+
+/* A preview is another computed surface (its own surface key), and the canonical request
+ * says so; it refuses what it does not compute, naming $.preview. */
+Test(key, preview_has_its_own_surface_key_and_refuses_curves_and_quality)
+{
+    const char *jsons[2] = {"{\"preset\": \"torus\", \"output\": {\"attributes\": [\"normal\"]}}",
+                            "{\"preset\": \"torus\", \"preview\": true}"};
+    char surface[2][65];
+    for (int i = 0; i < 2; i++) {
+        ism_request req;
+        ism_req_error err;
+        cr_assert(ism_request_decode(jsons[i], strlen(jsons[i]), NULL, &req, &err));
+        cr_expect_eq(req.preview, i == 1);
+        cr_expect_eq(req.attributes, (unsigned)ISM_ATTR_NORMAL);
+        ism_tape *t = ism_request_compile(&req, &err);
+        cr_assert_not_null(t);
+        cr_assert(ism_request_surface_key(&req, t, surface[i]));
+        size_t n;
+        char *c = ism_request_canonical(&req, &n);
+        cr_expect_eq(strstr(c, "\"preview\":true") != NULL, i == 1, "%s", c);
+        free(c);
+        ism_tape_free(t);
+        ism_request_free(&req);
+    }
+    cr_expect_str_neq(surface[0], surface[1]);
+    const char *bad[] = {
+        "{\"preset\": \"torus\", \"preview\": true, \"quality\": \"good\"}",
+        "{\"preset\": \"torus\", \"preview\": true, \"curves\": [{\"kind\": \"plane\", "
+        "\"normal\": [0, 0, 1], \"offsets\": [0]}]}",
+        "{\"preset\": \"torus\", \"preview\": \"yes\"}",
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        ism_request req;
+        ism_req_error err;
+        cr_expect_not(ism_request_decode(bad[i], strlen(bad[i]), NULL, &req, &err), "%s", bad[i]);
+        cr_expect_eq(err.status, 400, "%s", bad[i]);
+        cr_expect_str_eq(err.path, "$.preview", "%s: %s", bad[i], err.message);
+    }
 }
