@@ -89,8 +89,9 @@ typedef struct ism_request {
     size_t ncurves;
     bool plain_glb;            /* output.draco false: a glb without Draco (plain accessors) */
     bool preview;              /* "preview": true: a quick picture for live exploration — the
-                                  polygoniser's mesh only (no singular locus, conformance,
-                                  analysis or features); positions and normals are sent.
+                                  polygoniser's mesh only (no search for hidden thin
+                                  pieces, no singular locus, conformance, analysis or
+                                  features); positions and normals are sent.
                                   Not with "curves" or "quality": "good" (400). */
 } ism_request;
 

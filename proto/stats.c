@@ -244,12 +244,13 @@ static void write_remesh(ism_jw *w, const ism_remesh_stats *s)
     ism_jw_object_end(w);
 }
 
-/* The stages a preview ("preview": true) does not run, by their names in timings_ms (and
- * the request's curves and quality, which a preview refuses). */
+/* The stages a preview ("preview": true) does not run: the polygoniser's hidden-piece
+ * search (ism_poly_options.thin_search), the stages by their names in timings_ms, and the
+ * request's curves and quality, which a preview refuses. */
 static void write_preview(ism_jw *w)
 {
-    static const char *const skipped[] = {"singular", "curves", "quality", "analysis",
-                                          "features"};
+    static const char *const skipped[] = {"thin_search", "singular", "curves", "quality",
+                                          "analysis", "features"};
     ism_jw_key(w, "preview");
     ism_jw_object(w);
     ism_jw_key(w, "skipped");

@@ -16,7 +16,8 @@
  *    "remesh": {"flips", "moves", "collapses", "inserts", "locked_vertices",
  *               "min_angle_before", "min_angle_after", "time_ms"} (only after the quality
  *               pass),
- *    "preview": {"skipped": ["singular", "curves", "quality", "analysis", "features"]} (only
+ *    "preview": {"skipped": ["thin_search", "singular", "curves", "quality", "analysis",
+ *               "features"]} (only
  *               in a preview: the stages it did not run),
  *    "timings_ms": {"decode", "compile", "singular", "polygonise", "analyse", "features",
  *    "encode", "total"}, "warnings": ["..."]}

@@ -440,16 +440,21 @@ static bool cut_curves(const ism_request *req, const ism_tape *tape,
 }
 
 /* A preview ("preview": true): the polygoniser's mesh alone into c->mesh — no singular
- * locus (quiet NULL: hidden pieces are chased only ISM_THIN_BLIND_DEPTH levels deep, as
- * without one), no conformance, double sheets, curves or analysis; c->locus stays empty. */
-static bool polygonise_preview(const ism_tape *tape, const ism_poly_options *o,
+ * locus, conformance, double sheets, curves or analysis (c->locus stays empty), and no
+ * search for pieces hidden from the cells' corners: without a locus that search chases
+ * every singular point ISM_THIN_BLIND_DEPTH levels down (kummer at depth 4: 12584
+ * triangles and 749 ms instead of 1880 and 97 ms at load 24), and a preview is a picture
+ * of the shape while a slider moves; the refined mesh has them. */
+static bool polygonise_preview(const ism_tape *tape, const ism_poly_options *po,
                                const ism_pipeline_hooks *hooks, ism_pipeline_result *r,
                                ism_computed *c, scratch *s)
 {
     ism_error err;
     memset(&err, 0, sizeof err);
+    ism_poly_options o = *po;
+    o.thin_search = false;
     double t = ism_now_ms();
-    enum ism_poly_status st = ism_polygonise(tape, o, &c->mesh, &s->ps, &err);
+    enum ism_poly_status st = ism_polygonise(tape, &o, &c->mesh, &s->ps, &err);
     c->timings_ms[ISM_TIME_POLYGONISE] = ism_now_ms() - t;
     if (!polygonise_status(r, st, &err))
         return false;

@@ -131,7 +131,13 @@ class ApiTest(unittest.TestCase):
 
         s = self.d.get("/v1/meshes/%s/stats" % key).json()
         self.assertEqual(s["preview"]["skipped"],
-                         ["singular", "curves", "quality", "analysis", "features"])
+                         ["thin_search", "singular", "curves", "quality", "analysis",
+                          "features"])
+        # the hidden-piece search too: a torus searches cells at depth 4, its preview none
+        for preview, searched in ((False, True), (True, False)):
+            t = self.d.post("/v1/mesh", {"preset": "torus", "depth": {"max": 4}, "preview": preview})
+            ts = self.d.get("/v1/meshes/%s/stats" % t.header("ETag").strip('"')).json()
+            self.assertEqual(ts["polygoniser"]["thin_searched"] > 0, searched, preview)
         self.assertNotIn("analysis", s)
         self.assertNotIn("singular", s)
         self.assertEqual(s["timings_ms"]["singular"], 0)
