@@ -72,6 +72,24 @@ void pf_sweep_box(const double base[6], int d, int which, double box[6])
     }
 }
 
+void pf_run_placed(const ism_tape *t, const double base[6], int d, int which, double box[6],
+                   ism_mesh *m, pf_props *p)
+{
+    ism_poly_stats st;
+    pf_sweep_box(base, d, which, box);
+    pf_run(t, box, 3, d, 0, m, &st);
+    pf_measure(m, t, p);
+}
+
+bool pf_inside_box(const double a[3], const double b[3], const void *arg)
+{
+    const double *box = arg, tol = 1e-9;
+    bool in = true;
+    for (int k = 0; k < 3; k++)
+        in = in && fmin(a[k], b[k]) > box[k] + tol && fmax(a[k], b[k]) < box[k + 3] - tol;
+    return in;
+}
+
 double pf_cell(const double box[6], int d)
 {
     double s = box[3] - box[0];

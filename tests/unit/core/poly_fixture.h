@@ -75,6 +75,15 @@ bool pf_nm_edges_one_closed_curve(const ism_mesh *m, size_t *nedges);
  * own axis at depth d; which −1: base as given (so one loop from −1 runs all three). */
 void pf_sweep_box(const double base[6], int d, int which, double box[6]);
 
+/* pf_sweep_box(base, d, which, box), then pf_run at depths 3..d (all threads) and
+ * pf_measure into *p: one placement of a sweep over the three boxes. */
+void pf_run_placed(const ism_tape *t, const double base[6], int d, int which, double box[6],
+                   ism_mesh *m, pf_props *p);
+
+/* Both ends strictly inside the box arg (farther than 1e-9 from its faces): for
+ * pf_count_edges, an edge of a hole, not of the cut by the box. */
+bool pf_inside_box(const double a[3], const double b[3], const void *arg);
+
 /* Finest cell size of the box at depth d (the smallest side / 2^d). */
 double pf_cell(const double box[6], int d);
 

@@ -159,17 +159,6 @@ Test(cases, bad_options_name_the_field)
     ism_tape_free(t);
 }
 
-/* Both ends strictly inside the box arg (farther than 1e-9 from its faces): an edge of a
- * hole, not of the cut by the box. */
-static bool inside_box(const double a[3], const double b[3], const void *arg)
-{
-    const double *box = arg, tol = 1e-9;
-    bool in = true;
-    for (int k = 0; k < 3; k++)
-        in = in && fmin(a[k], b[k]) > box[k] + tol && fmax(a[k], b[k]) < box[k + 3] - tol;
-    return in;
-}
-
 /* The helicoid x sin 2z = y cos 2z contains its axis (a lattice line in a box centred on
  * it) and, at z = ±π/4, rulings lying in the lattice plane x = 0 that leave the axis. Cut by
  * the box it is a disk: χ = 1, one piece. The rulings once had no partner on the zero run
@@ -183,17 +172,14 @@ Test(cases, helicoid_axis_on_the_lattice)
     int d = 6;
     for (int w = -1; w < 2; w++) {
         double box[6];
-        pf_sweep_box(base, d, w, box);
         ism_mesh m;
-        ism_poly_stats st;
-        pf_run(t, box, 3, d, 0, &m, &st);
         pf_props p;
-        pf_measure(&m, t, &p);
+        pf_run_placed(t, base, d, w, box, &m, &p);
         cr_expect_eq(p.euler, 1, "box %d: χ = %ld, a disk has 1", w, p.euler);
         cr_expect_eq(p.components, 1, "box %d: %zu components", w, p.components);
         cr_expect_eq(p.nonmanifold_edges, 0, "box %d: %zu non-manifold edges", w,
                      p.nonmanifold_edges);
-        cr_expect_eq(pf_count_edges(&m, 1, 1, inside_box, box), 0, "box %d: holes", w);
+        cr_expect_eq(pf_count_edges(&m, 1, 1, pf_inside_box, box), 0, "box %d: holes", w);
         ism_mesh_free(&m);
     }
     ism_tape_free(t);
@@ -223,7 +209,7 @@ Test(cases, clebsch_lines_on_the_lattice)
         chi[w + 1] = p.euler;
         cr_expect_eq(p.nonmanifold_edges, 0, "box %d: %zu non-manifold edges", w,
                      p.nonmanifold_edges);
-        cr_expect_eq(pf_count_edges(&m, 1, 1, inside_box, box), 0, "box %d: holes", w);
+        cr_expect_eq(pf_count_edges(&m, 1, 1, pf_inside_box, box), 0, "box %d: holes", w);
         cr_expect_eq(st.open_chains, 0, "box %d: %zu open chains", w, st.open_chains);
         ism_mesh_free(&m);
     }

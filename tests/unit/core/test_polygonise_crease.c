@@ -66,16 +66,6 @@ Test(crease, double_torus_closed_off_lattice)
                 "((x - 2.2)^2 + y^2 + z^2 + 0.75)^2 - 4*((x - 2.2)^2 + y^2))", box, -2, 1);
 }
 
-/* Is the edge a–b outside the box's faces (a hole, not the box's cut)? */
-static bool inside_box(const double a[3], const double b[3], const void *arg)
-{
-    const double *box = arg;
-    for (int k = 0; k < 3; k++)
-        if ((a[k] == box[k] && b[k] == box[k]) || (a[k] == box[k + 3] && b[k] == box[k + 3]))
-            return false;
-    return true;
-}
-
 /* The double torus's seam at depth 9 in the sweep's 1e-3 box, where the seam's pocket (the
  * notch between the tori, x = 1.1) runs along the lattice line z = −0.489925, its crease
  * 3e-5 to 7.5e-5 above it: a + strip 4e-4 to 7e-4 wide crossing tiles 0.011 wide. Two
@@ -104,7 +94,7 @@ Test(crease, double_torus_pocket_along_a_lattice_line)
     ism_mesh m;
     ism_poly_stats st;
     pf_run(t, box, 3, depth, 0, &m, &st);
-    size_t holes = pf_count_edges(&m, 1, 1, inside_box, box);
+    size_t holes = pf_count_edges(&m, 1, 1, pf_inside_box, box);
     size_t nm = pf_count_edges(&m, 3, SIZE_MAX, NULL, NULL);
     cr_expect_eq(holes, 0, "%zu boundary edges inside the box", holes);
     cr_expect_eq(nm, 0, "%zu non-manifold edges", nm);
@@ -129,12 +119,9 @@ Test(crease, narrow_bump_under_a_plane)
     ism_tape *t = pf_compile(&s);
     for (int w = -1; w < 2; w++) {
         double box[6];
-        pf_sweep_box(base, 5, w, box);
         ism_mesh m;
-        ism_poly_stats st;
-        pf_run(t, box, 3, 5, 0, &m, &st);
         pf_props p;
-        pf_measure(&m, t, &p);
+        pf_run_placed(t, base, 5, w, box, &m, &p);
         cr_expect_eq(p.components, 2, "box %d: %zu pieces", w, p.components);
         cr_expect_eq(p.euler, 2, "box %d: χ = %ld", w, p.euler);
         cr_expect_eq(p.nonmanifold_edges, 0, "box %d: %zu non-manifold edges", w,
