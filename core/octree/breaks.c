@@ -1,7 +1,7 @@
 /* breaks.c — the break-point registry: every non-empty leaf's corners in one hash table
  * keyed by lattice point, each holding its successor on the three lattice lines through it
- * (found by radix-sorting the points line by line), so a query walks a line from its lower
- * end one probe per break point. */
+ * (found by radix-sorting the points line by line), so the break points of a segment are
+ * found from its lower end one probe per point. */
 #include "core/octree/breaks.h"
 
 #include <stdlib.h>
@@ -217,7 +217,7 @@ void ism_breaks_free(ism_breaks *b)
     memset(b, 0, sizeof *b);
 }
 
-static bool push(ism_coords *c, int32_t v)
+bool ism_coords_push(ism_coords *c, int32_t v)
 {
     if (c->n == c->cap) {
         size_t cap = c->cap ? c->cap * 2 : 16;
@@ -229,25 +229,6 @@ static bool push(ism_coords *c, int32_t v)
     }
     c->v[c->n++] = v;
     return true;
-}
-
-bool ism_breaks_on(const ism_breaks *b, int axis, const int32_t p[3], int32_t lo, int32_t hi,
-                   ism_coords *out)
-{
-    out->n = 0;
-    int32_t q[3] = {p[0], p[1], p[2]};
-    if (!push(out, lo))
-        return false;
-    for (q[axis] = lo;;) {
-        const ism_break_point *e = ism_breaks_find(b, q);
-        if (!e)
-            return false;
-        if (e->next[axis] >= hi)
-            return push(out, hi);
-        q[axis] = e->next[axis];
-        if (!push(out, q[axis]))
-            return false;
-    }
 }
 
 void ism_coords_free(ism_coords *c)

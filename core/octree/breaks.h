@@ -55,12 +55,8 @@ typedef struct ism_coords {
     size_t n, cap;
 } ism_coords;
 
-/* Replaces out with the break points on the lattice line along `axis` through point p
- * (p[axis] is ignored) that lie in [lo, hi], ascending; lo and hi are always included.
- * The point at lo must be registered (every side of a tile is an edge of a non-empty leaf);
- * false when it is not, or when memory runs out. */
-bool ism_breaks_on(const ism_breaks *b, int axis, const int32_t p[3], int32_t lo, int32_t hi,
-                   ism_coords *out);
+/* Appends v; false when out of memory. */
+bool ism_coords_push(ism_coords *c, int32_t v);
 
 void ism_coords_free(ism_coords *c);
 

@@ -2,18 +2,25 @@
 #include "core/octree/cell_cache.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 bool ism_cell_cache_init(ism_cell_cache *c)
 {
-    c->points = calloc((size_t)1 << ISM_POINT_CACHE_BITS, sizeof *c->points);
+    size_t bytes = ((size_t)1 << ISM_POINT_CACHE_BITS) * sizeof *c->points;
+    c->points = aligned_alloc(_Alignof(ism_lattice_entry), bytes);
+    if (c->points)
+        memset(c->points, 0, bytes);
     c->segments = calloc((size_t)1 << ISM_SEGMENT_CACHE_BITS, sizeof *c->segments);
-    return c->points && c->segments;
+    c->quiet = calloc((size_t)1 << ISM_QUIET_CACHE_BITS, sizeof *c->quiet);
+    return c->points && c->segments && c->quiet;
 }
 
 void ism_cell_cache_free(ism_cell_cache *c)
 {
     free(c->points);
     free(c->segments);
+    free(c->quiet);
     c->points = NULL;
     c->segments = NULL;
+    c->quiet = NULL;
 }

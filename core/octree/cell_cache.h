@@ -1,8 +1,10 @@
 /* cell_cache.h — per-thread memo of what neighbouring nodes compute again and again: f and
- * ∇f at lattice points, and the roots of lattice segments. Both are pure functions of their
- * lattice coordinates, so a hit returns exactly what a recomputation would: the cache only
- * saves time, never changes the mesh. Direct-mapped: a collision simply overwrites. The
- * octree build memoises node corners through the same lookup (ism_point_memo). */
+ * ∇f at lattice points (with the points' successors on their lattice lines, copied from the
+ * break-point registry, so that walking a tile's side and sampling it cost one lookup a
+ * point), and the roots of lattice segments. All are pure functions of their lattice
+ * coordinates, so a hit returns exactly what a recomputation would: the cache only saves
+ * time, never changes the mesh. Direct-mapped: a collision simply overwrites. The octree
+ * build memoises node corners through a lookup of the same kind (ism_point_memo). */
 #ifndef ISM_CELL_CACHE_H
 #define ISM_CELL_CACHE_H
 
@@ -14,20 +16,39 @@
 
 #define ISM_POINT_CACHE_BITS 15
 #define ISM_SEGMENT_CACHE_BITS 14
+#define ISM_QUIET_CACHE_BITS 14 /* 256 KB: half the second-level cache */
 
 typedef struct ism_point_entry {
     uint64_t key; /* 0: empty (lattice keys are stored + 1) */
     double f, g[3];
 } ism_point_entry;
 
+/* A lattice point as the cell phase memoises it: one cache line. */
+typedef struct ism_lattice_entry {
+    _Alignas(64) uint64_t key; /* 0: empty (lattice keys are stored + 1) */
+    double f, g[3], gn; /* f, ∇f and |∇f| */
+    int32_t next[3]; /* the registry's successors (ism_break_point.next), or next[0] =
+                        ISM_LATTICE_UNREGISTERED when the point is no break point */
+} ism_lattice_entry;
+
+#define ISM_LATTICE_UNREGISTERED INT32_MIN
+
 typedef struct ism_segment_entry {
     uint64_t a, b; /* lattice keys of the end points (+1), 0: empty */
     ism_seg_roots roots;
 } ism_segment_entry;
 
+/* A tile on which no line of f = 0 starts (nothing crosses its boundary): both nodes that
+ * share a face walk its tiles, and the second walk of a quiet one is skipped. */
+typedef struct ism_quiet_tile {
+    uint64_t where; /* axis, plane, u0 (0: empty) */
+    uint64_t span;  /* v0, u1, v1 */
+} ism_quiet_tile;
+
 typedef struct ism_cell_cache {
-    ism_point_entry *points;
+    ism_lattice_entry *points;
     ism_segment_entry *segments;
+    ism_quiet_tile *quiet;
 } ism_cell_cache;
 
 bool ism_cell_cache_init(ism_cell_cache *c);

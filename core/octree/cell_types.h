@@ -58,7 +58,7 @@ typedef struct ism_loops {
 /* One lattice point of a tile's boundary. */
 typedef struct ism_bpoint {
     int32_t ip[3];
-    double p[3], f, g[3];
+    double p[3], f, g[3], gn; /* gn = |g| */
 } ism_bpoint;
 
 /* A surface point on a tile's boundary, with the sign of f just before and after it

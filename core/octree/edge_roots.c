@@ -89,12 +89,16 @@ static void make_root(ism_sampler *s, const double a[3], const double b[3], doub
 }
 
 /* Unit-gradient agreement of two points; -2 when either gradient vanishes. */
-static double gradient_agreement(const double ga[3], const double gb[3])
+static double agreement_of(const double ga[3], const double gb[3], double na, double nb)
 {
-    double na = ism_norm3(ga), nb = ism_norm3(gb);
     if (!(na > 0) || !(nb > 0) || !isfinite(na) || !isfinite(nb))
         return -2;
     return ism_dot3(ga, gb) / (na * nb);
+}
+
+static double gradient_agreement(const double ga[3], const double gb[3])
+{
+    return agreement_of(ga, gb, ism_norm3(ga), ism_norm3(gb));
 }
 
 bool ism_segment_may_reach(ism_sampler *s, const double a[3], const double b[3], double eps)
@@ -148,14 +152,21 @@ static int suspect_more(const double g_end[3], const double g_root[3])
     return gradient_agreement(g_end, g_root) < -0.5;
 }
 
-bool ism_segment_rootless(const ism_root_params *prm, const double a[3], const double b[3],
-                          double fa, double fb, const double ga[3], const double gb[3])
+bool ism_segment_rootless_normed(const ism_root_params *prm, const double a[3],
+                                 const double b[3], double fa, double fb, const double ga[3],
+                                 const double gb[3], double na, double nb)
 {
     if (fa == 0 || fb == 0 || !isfinite(fa) || !isfinite(fb))
         return true;
     /* same sign, same sheet: no root (paper eq. 2) */
-    return (fa < 0) == (fb < 0) && gradient_agreement(ga, gb) > prm->gradient_test &&
+    return (fa < 0) == (fb < 0) && agreement_of(ga, gb, na, nb) > prm->gradient_test &&
            !pocket_possible(a, b, fa, fb, ga, gb, prm->crease);
+}
+
+bool ism_segment_rootless(const ism_root_params *prm, const double a[3], const double b[3],
+                          double fa, double fb, const double ga[3], const double gb[3])
+{
+    return ism_segment_rootless_normed(prm, a, b, fa, fb, ga, gb, ism_norm3(ga), ism_norm3(gb));
 }
 
 void ism_segment_roots(ism_sampler *s, const ism_root_params *prm, const double a[3],

@@ -47,6 +47,11 @@ typedef struct ism_root_params {
 bool ism_segment_rootless(const ism_root_params *prm, const double a[3], const double b[3],
                           double fa, double fb, const double ga[3], const double gb[3]);
 
+/* The same, given |ga| and |gb| (memoised with the end points' gradients). */
+bool ism_segment_rootless_normed(const ism_root_params *prm, const double a[3],
+                                 const double b[3], double fa, double fb, const double ga[3],
+                                 const double gb[3], double na, double nb);
+
 /* Roots of f on the segment a→b with f(a) = fa, f(b) = fb and gradients ga, gb. When fa
  * or fb is exactly 0 the segment reports no interior root: that end point is a root of
  * its own, handled by whoever owns the lattice point. */

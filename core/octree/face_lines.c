@@ -82,9 +82,56 @@ bool ism_flines_push(ism_flines *l, const ism_fpoint *a, const ism_fpoint *b, in
     return true;
 }
 
-/* Appends a lattice point of the boundary; its f and ∇f come later (sample_bpoints), once
- * every memo entry the walk needs has been asked for: the lookups are cache misses, and
- * issuing them together overlaps their latency. */
+static ism_lattice_entry *lattice_slot(ism_cell_ctx *cx, const int32_t ip[3])
+{
+    return &cx->cache.points[ism_cache_mix(ism_lattice_key(ip)) &
+                             (((uint64_t)1 << ISM_POINT_CACHE_BITS) - 1)];
+}
+
+/* Lattice point ip through the thread's memo: f and ∇f there, and its successors on its
+ * lattice lines from the break-point registry (one probe there per memo miss). */
+static const ism_lattice_entry *lattice_entry(ism_cell_ctx *cx, const int32_t ip[3])
+{
+    uint64_t key = ism_lattice_key(ip);
+    ism_lattice_entry *e = lattice_slot(cx, ip);
+    if (e->key != key) {
+        double p[3];
+        ism_grid_point(&cx->tree->grid, (ism_ipt){{ip[0], ip[1], ip[2]}}, p);
+        e->key = key;
+        e->f = ism_sample_grad(&cx->s, p, e->g);
+        e->gn = ism_norm3(e->g);
+        const ism_break_point *b = ism_breaks_find(cx->breaks, ip);
+        for (int a = 0; a < 3; a++)
+            e->next[a] = b ? b->next[a] : ISM_LATTICE_UNREGISTERED;
+    }
+    return e;
+}
+
+/* The break points of the lattice line along `axis` through p that lie in [lo, hi],
+ * ascending, into cx->coords; lo and hi always. The point at lo is a corner of a non-empty
+ * leaf (every side of a tile is an edge of one), so it is registered: false when it is not,
+ * or when memory runs out. */
+static bool side_breaks(ism_cell_ctx *cx, int axis, const int32_t p[3], int32_t lo, int32_t hi)
+{
+    ism_coords *out = &cx->coords;
+    out->n = 0;
+    int32_t q[3] = {p[0], p[1], p[2]};
+    if (!ism_coords_push(out, lo))
+        return false;
+    for (q[axis] = lo;;) {
+        const ism_lattice_entry *e = lattice_entry(cx, q);
+        if (e->next[0] == ISM_LATTICE_UNREGISTERED)
+            return false;
+        if (e->next[axis] >= hi)
+            return ism_coords_push(out, hi);
+        q[axis] = e->next[axis];
+        if (!ism_coords_push(out, q[axis]))
+            return false;
+    }
+}
+
+/* Appends a lattice point of the boundary with its f and ∇f (the walk has just asked the
+ * memo for it, or for its side's end: the lookup hits). */
 static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3])
 {
     if (cx->nbp == cx->cap_bp) {
@@ -98,20 +145,11 @@ static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3])
     ism_bpoint *b = &cx->bp[cx->nbp++];
     memcpy(b->ip, ip, sizeof b->ip);
     ism_grid_point(&cx->tree->grid, (ism_ipt){{ip[0], ip[1], ip[2]}}, b->p);
-    __builtin_prefetch(ism_point_slot(cx->cache.points, ISM_POINT_CACHE_BITS, ip), 1);
+    const ism_lattice_entry *e = lattice_entry(cx, ip);
+    b->f = e->f;
+    memcpy(b->g, e->g, sizeof b->g);
+    b->gn = e->gn;
     return true;
-}
-
-/* f and ∇f at every boundary point, through the thread's memo. */
-static void sample_bpoints(ism_cell_ctx *cx)
-{
-    for (size_t i = 0; i < cx->nbp; i++) {
-        ism_bpoint *b = &cx->bp[i];
-        const ism_point_entry *e =
-            ism_point_memo(cx->cache.points, ISM_POINT_CACHE_BITS, b->ip, b->p, &cx->s);
-        b->f = e->f;
-        memcpy(b->g, e->g, sizeof b->g);
-    }
 }
 
 static bool push_event(ism_cell_ctx *cx, const ism_fpoint *pt, int before, int after, size_t seg)
@@ -142,7 +180,7 @@ static bool tile_boundary(ism_cell_ctx *cx, const ism_tile *t)
         p[v] = cv[side];
         int32_t from = p[along], to = along == u ? cu[(side + 1) % 4] : cv[(side + 1) % 4];
         int32_t lo = from < to ? from : to, hi = from < to ? to : from;
-        if (!ism_breaks_on(cx->breaks, along, p, lo, hi, &cx->coords))
+        if (!side_breaks(cx, along, p, lo, hi))
             return false;
         size_t n = cx->coords.n;
         for (size_t k = 0; k + 1 < n; k++) { /* the last point starts the next side */
@@ -151,7 +189,6 @@ static bool tile_boundary(ism_cell_ctx *cx, const ism_tile *t)
                 return false;
         }
     }
-    sample_bpoints(cx);
     return true;
 }
 
@@ -186,7 +223,8 @@ static ism_segment_entry *segment_entry(ism_cell_ctx *cx, uint64_t ka, uint64_t 
  * compute_segment asks): no memo lookup (a cache miss) for it. */
 static bool rootless(const ism_cell_ctx *cx, const ism_bpoint *lo, const ism_bpoint *hi)
 {
-    return ism_segment_rootless(&cx->roots, lo->p, hi->p, lo->f, hi->f, lo->g, hi->g);
+    return ism_segment_rootless_normed(&cx->roots, lo->p, hi->p, lo->f, hi->f, lo->g, hi->g,
+                                       lo->gn, hi->gn);
 }
 
 /* Asks for the memo entry of a→b (the walk reads it soon after); false when the segment
@@ -826,7 +864,7 @@ static int zero_run_tangent_end(const ism_cell_ctx *cx, const ism_tile *t)
     return -1;
 }
 
-void ism_tile_prefetch(const ism_cell_ctx *cx, const ism_tile *t)
+void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *t)
 {
     int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
     int32_t cu[4] = {t->u0, t->u1, t->u1, t->u0}, cv[4] = {t->v0, t->v0, t->v1, t->v1};
@@ -835,15 +873,30 @@ void ism_tile_prefetch(const ism_cell_ctx *cx, const ism_tile *t)
         q[t->axis] = t->plane;
         q[u] = cu[c];
         q[v] = cv[c];
-        if (c != 2) /* the sides' lower ends: corners 0, 1 and 3 */
-            ism_breaks_prefetch(cx->breaks, q);
-        __builtin_prefetch(ism_point_slot(cx->cache.points, ISM_POINT_CACHE_BITS, q), 1);
+        __builtin_prefetch(lattice_slot(cx, q), 1);
     }
+}
+
+/* The tile as a quiet-tile memo entry (lattice coordinates take 20 bits, the axis 2). */
+static ism_quiet_tile quiet_key(const ism_tile *t)
+{
+    return (ism_quiet_tile){
+        ((uint64_t)t->axis << 40 | (uint64_t)t->plane << 20 | (uint64_t)t->u0) + 1,
+        (uint64_t)t->v0 << 40 | (uint64_t)t->u1 << 20 | (uint64_t)t->v1};
+}
+
+static ism_quiet_tile *quiet_slot(ism_cell_ctx *cx, const ism_quiet_tile *k)
+{
+    return &cx->cache.quiet[ism_cache_mix(k->where * 31 + k->span) &
+                            (((uint64_t)1 << ISM_QUIET_CACHE_BITS) - 1)];
 }
 
 bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
 {
     cx->zero_tile = false;
+    ism_quiet_tile key = quiet_key(t), *q = quiet_slot(cx, &key);
+    if (q->where == key.where && q->span == key.span)
+        return true; /* walked before: nothing crosses its boundary */
     if (!tile_boundary(cx, t))
         return false;
     if (is_zero_tile(cx, t)) {
@@ -852,6 +905,10 @@ bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
     }
     if (!tile_events(cx))
         return false;
+    if (cx->nev == 0) { /* nothing crosses the tile's boundary (most tiles): no lines */
+        *q = key;
+        return true;
+    }
     int ne = (int)cx->nev;
     int cross[MAX_CROSS], touch[MAX_CROSS], nc = 0, nt = 0;
     for (int i = 0; i < ne; i++) {

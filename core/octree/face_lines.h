@@ -11,9 +11,9 @@
 bool ism_flines_push(ism_flines *l, const ism_fpoint *a, const ism_fpoint *b, int kind);
 
 /* Asks the memory for what ism_tile_lines will read first about this tile (its corners'
- * break points and memo entries): the node's tiles are prefetched together, so that these
- * misses overlap. Changes nothing. */
-void ism_tile_prefetch(const ism_cell_ctx *cx, const ism_tile *tile);
+ * memo entries): the node's tiles are prefetched together, so that these misses overlap.
+ * Changes nothing. */
+void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *tile);
 
 /* Appends to cx->lines the lines of f = 0 on one tile (a face or part of a face). When f
  * vanishes on the whole tile (a plane of the surface lying in the lattice), sets
