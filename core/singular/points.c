@@ -31,6 +31,16 @@
 /* Rank-3 projections tried as starts inside one extended cluster (a node on or near a
  * curve); beyond this the cluster is left to the curve stage as it is. */
 #define EXTENDED_STARTS_MAX 64
+/* Unprojected rank-3 boxes of one extended cluster searched again below the search cell
+ * (unprojected_starts): a bound on the work, far above the few such boxes nodes leave at
+ * a coarse depth (kummer-4-nodes, depth 3, box shifted 0.37 cell: 94). */
+#define UNPROJECTED_BOXES_MAX 256
+/* Levels below the search cell of that local search: cells 1/8 of the search cell, finer
+ * than the nodes of one cell lie apart in any case seen (Kummer's 4 nodes, all in one cell
+ * 0.75 wide at depth 3, are 0.47 apart). */
+#define UNPROJECTED_DEPTH 3
+/* Candidate boxes one local search may keep (all 8³ of them fit). */
+#define UNPROJECTED_SUB_BOXES_MAX 512
 /* Rank-2 projections of one extended cluster probed for a cusp (cusp_probe), at
  * least MERGE_CELLS apart: a curve of zeros gives one probe a cell of its length; beyond
  * this many cells of curve in one cluster no further cusp is looked for there. */
@@ -82,6 +92,7 @@ typedef struct cand {
 
 typedef struct ctx {
     const ism_tape *t;
+    const ism_locus_options *o;
     const double *box;  /* the search box: points outside it are not reported */
     ism_eval_ws *ws;
     ism_pcert pc;       /* certificates (point_cert.h) */
@@ -456,6 +467,66 @@ static bool from_unique_box(ctx *x, size_t i, uint8_t *box_fate)
     return r != FOUND || add_cand(x, &pt, UINT32_MAX, i);
 }
 
+/* Newton from start within [lo, hi]; a certified point on the surface is a candidate.
+ * False only when out of memory. */
+static bool certified_from(ctx *x, const double start[3], const double lo[3],
+                           const double hi[3], double half)
+{
+    ism_sing_point pt;
+    return !(resolve(x, start, lo, hi, x->cell, half, &pt) == FOUND && pt.certified)
+           || add_cand(x, &pt, UINT32_MAX, SIZE_MAX);
+}
+
+/* The rank-3 boxes of an extended cluster whose projection failed (Newton from the centre
+ * left the cell: kummer-4-nodes at depth 3 in ±3, cell 0.75, projects only onto its 8
+ * critical points off the surface, and its 4 nodes' cells stay unprojected): each is searched
+ * again as a box of its own, UNPROJECTED_DEPTH levels below the search cell (search.h), and
+ * Newton runs from every sub-cell projected or proved to hold one zero of ∇f, within the
+ * cluster grown by a cell; only certified points are kept. Only in clusters whose every
+ * projection has rank 3 (points, not a curve's or sheet's cells: there it would triple the
+ * stage's work on steiner-roman, cross-cap and heart at depth 7 for nothing found). At most
+ * UNPROJECTED_BOXES_MAX boxes a cluster; a sub-search cut short (budget, deadline) marks the
+ * locus incomplete. */
+static bool unprojected_starts(ctx *x, uint32_t id, const uint32_t *label, const double lo[3],
+                               const double hi[3], double half)
+{
+    const ism_locus *l = x->out;
+    for (size_t i = 0; i < l->nboxes; i++)
+        if (label[i] == id && (l->boxes[i].flags & ISM_LBOX_PROJECTED) && l->boxes[i].rank < 3)
+            return true; /* a curve's or sheet's cluster: left to those stages as it is */
+    size_t boxes = 0;
+    for (size_t i = 0; i < l->nboxes && boxes < UNPROJECTED_BOXES_MAX; i++) {
+        const ism_lbox *b = &l->boxes[i];
+        if (label[i] != id || (b->flags & ISM_LBOX_PROJECTED) || b->rank < 3)
+            continue;
+        boxes++;
+        ism_locus_options so = *x->o;
+        memcpy(so.box, b->lo, sizeof so.box[0] * 3);
+        memcpy(so.box + 3, b->hi, sizeof so.box[0] * 3);
+        so.max_depth = UNPROJECTED_DEPTH;
+        so.max_boxes = UNPROJECTED_SUB_BOXES_MAX;
+        so.threads = 1;
+        ism_locus sub;
+        ism_locus_init(&sub);
+        ism_error err;
+        bool ok = ism_sing_search(x->t, &so, &sub, &err);
+        x->out->evals_interval += sub.evals_interval;
+        x->out->evals_jet += sub.evals_jet;
+        for (size_t j = 0; ok && j < sub.nboxes; j++)
+            if (sub.boxes[j].flags & (ISM_LBOX_PROJECTED | ISM_LBOX_UNIQUE))
+                ok = certified_from(x, sub.boxes[j].q, lo, hi, half);
+        if (ok && sub.incomplete && !x->out->incomplete) {
+            x->out->incomplete = true;
+            snprintf(x->out->incomplete_why, sizeof x->out->incomplete_why,
+                     "singular points, a search below the cell: %.40s", sub.incomplete_why);
+        }
+        ism_locus_free(&sub);
+        if (!ok)
+            return false;
+    }
+    return true;
+}
+
 /* An isolated cluster: Newton from its first projection, within the cluster grown by a
  * cell. Rank-3 projections of an extended cluster, and rank-2 ones whose cubic term along
  * the null direction is not 0 (cusps): only certified points are kept. */
@@ -469,8 +540,8 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
         hi[k] = c->hi[k] + x->cell;
         half = fmax(half, 0.5 * (c->hi[k] - c->lo[k]));
     }
-    ism_sing_point pt;
     if (is_point_cluster(x, c)) {
+        ism_sing_point pt;
         int r = resolve(x, l->boxes[c->first_projected].q, lo, hi, x->cell, half, &pt);
         bool loop = false;
         if (r == OFF_SURFACE) {
@@ -505,11 +576,10 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
         if (seen)
             continue;
         memcpy(starts[tried++], b->q, sizeof starts[0]);
-        if (resolve(x, b->q, lo, hi, x->cell, half, &pt) == FOUND && pt.certified
-            && !add_cand(x, &pt, UINT32_MAX, SIZE_MAX))
+        if (!certified_from(x, b->q, lo, hi, half))
             return false;
     }
-    return !x->pc.oom;
+    return unprojected_starts(x, id, label, lo, hi, half) && !x->pc.oom;
 }
 
 static bool same_point(const ctx *x, const ism_sing_point *a, const ism_sing_point *b)
@@ -668,7 +738,7 @@ bool ism_sing_points(const ism_tape *f, const ism_locus_options *o, ism_locus *o
                      ism_error *err)
 {
     double t0 = ism_now_ms();
-    ctx x = { .t = f, .box = o->box, .out = out };
+    ctx x = { .t = f, .o = o, .box = o->box, .out = out };
     double cells = ldexp(1.0, o->max_depth), d2 = 0.0;
     for (int k = 0; k < 3; k++) {
         double ext = o->box[k + 3] - o->box[k];
