@@ -85,7 +85,8 @@ class DiskBoundTest(unittest.TestCase):
             self.assertTrue(wait_until(
                 lambda: d.metric("isomesh_cache_bytes", tier="disk") == total(self.cache)))
             self.assertLessEqual(d.metric("isomesh_cache_bytes", tier="disk"), LIMIT)
-            self.assertTrue(wait_until(lambda: "cache_pruned" in d.log()), d.log()[-2000:])  # a pipe's thread reads it
+            # the log comes through a pipe read by a thread: awaited
+            self.assertTrue(wait_until(lambda: "cache_pruned" in d.log()), d.log()[-2000:])
             held = entries(self.cache)
             # whole keys only: every key on disk has all its files, the hot one among them
             for key, kinds in held.items():
@@ -136,7 +137,8 @@ class DiskBoundTest(unittest.TestCase):
             self.assertFalse(os.path.exists(dead_probe))
             self.assertTrue(os.path.exists(live))      # its writer (this test) is alive
             self.assertTrue(os.path.exists(foreign))   # not a name the cache writes
-            self.assertTrue(wait_until(lambda: "cache_tmp_cleaned" in d.log()), d.log()[-2000:])  # a pipe's thread reads it
+            # the log comes through a pipe read by a thread: awaited
+            self.assertTrue(wait_until(lambda: "cache_tmp_cleaned" in d.log()), d.log()[-2000:])
 
 
 if __name__ == "__main__":
