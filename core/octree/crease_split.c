@@ -13,6 +13,10 @@
 /* A Newton result farther than this many edge lengths from the edge is not the edge's
  * crease point (a distant part of the crease curve): the linear estimate is kept. */
 #define CREASE_REACH_EDGES 1.0
+/* The branches' gradients count as parallel (no crease line through x, the 2 × 2 normal
+ * system singular) when |ga|²|gb|² − (ga·gb)² is below this share of |ga|²|gb|²: a sine
+ * of the crossing angle under 1e-6 rad, where a step would run along the crease. */
+#define CREASE_PARALLEL_SIN2 1e-12
 
 int ism_crease_branch(ism_sampler *s, const double p[3], double g[3])
 {
@@ -43,7 +47,7 @@ static bool newton_step(ism_sampler *s, double x[3])
     ism_eval_top_branches(s->tape, s->ws, x[0], x[1], x[2], v, g);
     double aa = ism_dot3(g[0], g[0]), ab = ism_dot3(g[0], g[1]), bb = ism_dot3(g[1], g[1]);
     double det = aa * bb - ab * ab;
-    if (!(det > 1e-12 * aa * bb) || !isfinite(v[0]) || !isfinite(v[1]))
+    if (!(det > CREASE_PARALLEL_SIN2 * aa * bb) || !isfinite(v[0]) || !isfinite(v[1]))
         return false;
     double y0 = (bb * v[0] - ab * v[1]) / det, y1 = (aa * v[1] - ab * v[0]) / det;
     for (int k = 0; k < 3; k++)
