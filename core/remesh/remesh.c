@@ -20,6 +20,13 @@
  * under 10°; steiner-roman in its box: 281 against 369 under 10°). */
 #define ISM_RM_COLLAPSE_ROUND 2
 
+void ism_remesh_renumber_free(ism_remesh_renumber *ren)
+{
+    free(ren->vert);
+    free(ren->origin);
+    memset(ren, 0, sizeof *ren);
+}
+
 double ism_remesh_min_angle(const ism_mesh *m)
 {
     double worst = 90;

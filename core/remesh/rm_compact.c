@@ -7,13 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-void ism_remesh_renumber_free(ism_remesh_renumber *ren)
-{
-    free(ren->vert);
-    free(ren->origin);
-    memset(ren, 0, sizeof *ren);
-}
-
 /* Dead triangles with one repeated corner (a collapsed triangle, which every reader skips):
  * the mesh stays valid even if the renumbering cannot be made. */
 static void collapse_dead(rm_mesh *r)

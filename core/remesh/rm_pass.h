@@ -8,7 +8,7 @@
 #define ISM_RM_PASS_H
 
 #include "core/eval/eval.h"
-#include "core/remesh/remesh.h"
+#include "core/remesh/remesh_types.h"
 #include "core/remesh/rm_mesh.h"
 
 /* |∇f| at most this × the median over the vertices counts as vanishing (a singular point or
