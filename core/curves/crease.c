@@ -419,15 +419,17 @@ static bool label_vertices(crease_state *cs)
 bool cut_crease(cut_state *s, size_t k)
 {
     ism_cut_eval *ev = s->ev;
-    if (!ev->branches) {
-        ev->branches = malloc(sizeof *ev->branches);
-        if (!ev->branches || !ism_branches_init(ev->branches, ev->f)) {
-            free(ev->branches);
-            ev->branches = NULL;
+    if (!s->branches) {
+        s->branches = malloc(sizeof *s->branches);
+        if (!s->branches || !ism_branches_init(s->branches, ev->f)) {
+            free(s->branches);
+            s->branches = NULL;
             return false;
         }
     }
-    crease_state cs = {.s = s, .b = ev->branches, .k = (uint32_t)k};
+    ev->branch_tape = s->branches->tape;
+    ev->branch_ws = s->branches->ws;
+    crease_state cs = {.s = s, .b = s->branches, .k = (uint32_t)k};
     ism_key_map_init(&cs.tie_edge);
     ism_mesh *m = s->m;
     size_t nt = m->ntris, nv = m->nverts;

@@ -617,5 +617,11 @@ bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
     cut_cells_free(&s.cells);
     free(s.ehead);
     free(s.enext);
+    if (s.branches) {
+        ism_branches_free(s.branches);
+        free(s.branches);
+        ev->branch_tape = NULL;
+        ev->branch_ws = NULL;
+    }
     return ok;
 }

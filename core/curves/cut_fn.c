@@ -2,7 +2,6 @@
  * the curve: the minimum-norm step dx = −Jᵀ (J Jᵀ)⁻¹ r with J the rows ∇f, ∇g (and ∇g₂ at a
  * crossing of two curves, where the system is square). */
 #include "core/curves/cut_fn.h"
-#include "core/curves/branches.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,7 +17,7 @@
 bool ism_cut_eval_init(ism_cut_eval *ev, const ism_tape *f, const ism_cut_fn *fns, size_t n)
 {
     memset(ev, 0, sizeof *ev);
-    ev->pair[0] = ev->pair[1] = ISM_BRANCH_NONE;
+    ev->pair[0] = ev->pair[1] = ISM_CUT_NO_BRANCH;
     ev->f = f;
     ev->fns = fns;
     ev->nfns = n;
@@ -43,10 +42,6 @@ void ism_cut_eval_free(ism_cut_eval *ev)
         for (size_t k = 0; k < ev->nfns; k++)
             ism_eval_ws_free(ev->gws[k]);
     free(ev->gws);
-    if (ev->branches) {
-        ism_branches_free(ev->branches);
-        free(ev->branches);
-    }
     memset(ev, 0, sizeof *ev);
 }
 
@@ -69,9 +64,10 @@ static double silhouette_g(ism_cut_eval *ev, const double d[3], const double p[3
 static double crease_g(ism_cut_eval *ev, const double p[3], double grad[3])
 {
     double v[2], g[2][3];
-    if (ev->branches && ev->pair[0] != ISM_BRANCH_NONE) {
+    if (ev->branch_tape && ev->pair[0] != ISM_CUT_NO_BRANCH) {
         for (int s = 0; s < 2; s++)
-            v[s] = ism_branches_gradient(ev->branches, ev->pair[s], p, g[s]);
+            v[s] = ism_eval_gradient(ev->branch_tape[ev->pair[s]], ev->branch_ws[ev->pair[s]],
+                                     p[0], p[1], p[2], g[s]);
     } else if (!ism_eval_top_branches(ev->f, ev->fws, p[0], p[1], p[2], v, g)) {
         return NAN;
     }
@@ -82,7 +78,7 @@ static double crease_g(ism_cut_eval *ev, const double p[3], double grad[3])
 
 bool ism_cut_crease_fn(const ism_tape *f, ism_cut_fn *out)
 {
-    if (!ism_branches_any(f))
+    if (!ism_tape_has_min_max(f))
         return false;
     memset(out, 0, sizeof *out);
     out->kind = ISM_CUT_CREASE;

@@ -7,6 +7,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include "core/curves/cut_types.h"
 #include "core/eval/eval.h"
 
 enum ism_cut_kind { ISM_CUT_SECTION, ISM_CUT_LEVEL, ISM_CUT_INTERSECTION,
@@ -23,8 +24,6 @@ typedef struct ism_cut_fn {
     int source, index;   /* the request's curve entry and its offset / value number */
 } ism_cut_fn;
 
-struct ism_branches;
-
 /* Evaluation state for f and the cut functions (one thread). */
 typedef struct ism_cut_eval {
     const ism_tape *f;
@@ -32,9 +31,11 @@ typedef struct ism_cut_eval {
     const ism_cut_fn *fns;
     ism_eval_ws **gws;   /* per function, NULL for a plane */
     size_t nfns;
-    struct ism_branches *branches; /* f's branches once a crease is cut (owned) */
+    ism_tape *const *branch_tape; /* while a crease is cut: f's branches (branches.h, owned
+                                     by the cut) and a workspace for each; else NULL */
+    ism_eval_ws *const *branch_ws;
     uint32_t pair[2];    /* the crease function is f_pair[0] − f_pair[1] (set per crease
-                            edge); unset (UINT32_MAX): the top min/max's a − b */
+                            edge); unset (ISM_CUT_NO_BRANCH): the top min/max's a − b */
 } ism_cut_eval;
 
 /* The crease function of f when f's tape has a min or max (CSG); false otherwise. The crease

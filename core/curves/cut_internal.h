@@ -4,6 +4,7 @@
 #ifndef ISM_CUT_INTERNAL_H
 #define ISM_CUT_INTERNAL_H
 
+#include "core/curves/branches.h"
 #include "core/curves/cut_cells.h"
 #include "core/curves/cut_fn.h"
 #include "core/curves/cut_types.h"
@@ -70,6 +71,7 @@ typedef struct cut_state {
     size_t cap_enext;
     size_t fn;               /* the current function */
     size_t edits;            /* tangency edits of the mesh (moves, splits, merges) so far */
+    ism_branches *branches;  /* f's branches, made when a crease is cut (crease.c), or NULL */
 } cut_state;
 
 uint64_t cut_edge_key(uint32_t a, uint32_t b);
