@@ -83,7 +83,7 @@ PROGRAMS := $(if $(ISOMESH_SRC),$(ISOMESH)) $(if $(DAEMON_SRC),$(ISOMESHD))
 # ---------------------------------------------------------------------------------------
 # User-facing targets
 
-.PHONY: all programs run test deps deps-test deps-bench build unit-bins web-deps test-deps bench soak fuzz clean
+.PHONY: all programs run test check-includes deps deps-test deps-bench build unit-bins web-deps test-deps bench soak fuzz clean
 
 all: deps build web-deps
 
@@ -98,10 +98,14 @@ run: deps web-deps
 
 # The suites run $(JOBS) at once; the sanitizer build is made while the first release suites run
 # (the suites against it wait for it).
-test: deps-test
+test: deps-test check-includes
 	$(MAKE) -j$(JOBS) build web-deps test-deps
 	$(PYTHON) tests/run_suites.py --jobs $(JOBS) --release build/release --asan build/asan \
 	    --asan-build '$(MAKE) -j$(JOBS) OUT=build/asan SAN=1 OPT=-O1 DEBUG=-g1 unit-bins'
+
+# The include rule (server -> proto -> core, no cycles in a folder or between folders): a second.
+check-includes:
+	$(PYTHON) tests/check_includes.py
 
 bench: deps-bench build $(BENCH_BINS)
 	$(PYTHON) tests/bench/run_bench.py --build $(OUT)

@@ -17,6 +17,14 @@ import re
 import sys
 
 LAYERS = ["core", "proto", "server"]  # each may include only its own and the earlier ones
+# Cycles there before the check, to be taken apart (server/isomeshd: http.h holds the types
+# that respond and the routes need and declares http.c's functions that call them; the
+# shared stage and the cluster queue call each other's start, stop and task counts). Listed
+# by their modules; any other cycle, or one of these growing, fails.
+KNOWN = {
+    ("server/isomeshd/cluster", "server/isomeshd/shared_cache"),
+    ("server/isomeshd/http", "server/isomeshd/respond", "server/isomeshd/routes"),
+}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 COMMENT = re.compile(r"/\*.*?\*/|//[^\n]*", re.S)
 # A function definition at file scope: a line starting in column 0 with a return type, then
@@ -122,6 +130,9 @@ def main():
                 problems.append(f"layer: {a} uses {b} ({LAYERS[lb]} is above {LAYERS[la]})")
     inside = {a: {b for b in bs if os.path.dirname(b) == os.path.dirname(a)} for a, bs in edges.items()}
     for c in cycles(inside):
+        if tuple(c) in KNOWN:
+            print("known cycle (to be taken apart): " + " ".join(c))
+            continue
         problems.append("cycle in " + os.path.dirname(c[0]) + ": " + " ".join(os.path.basename(x) for x in c))
     folders = collections.defaultdict(set)
     for a, bs in edges.items():

@@ -105,7 +105,7 @@ static void wake(void *ctx)
 static bool spawn(ismd_pool *p, worker *w)
 {
     ismd_worker_proc proc;
-    if (!ismd_worker_spawn(&p->cfg, &proc))
+    if (!ismd_worker_spawn(p->cfg.worker_path, p->cfg.job_memory, &proc))
         return false;
     w->pid = proc.pid;
     w->to_fd = proc.to_fd;

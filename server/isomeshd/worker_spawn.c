@@ -16,7 +16,8 @@
 #define RESULT_PIPE_SIZE (1 << 20) /* a worker's answer pipe: fewer wake-ups for big results */
 
 /* In the child between fork and exec: async-signal-safe calls only. */
-static void child_exec(const ismd_pool_config *cfg, pid_t parent, int in_fd, int out_fd)
+static void child_exec(const char *path, size_t job_memory, pid_t parent, int in_fd,
+                       int out_fd)
 {
     sigset_t none;
     sigemptyset(&none);
@@ -25,8 +26,8 @@ static void child_exec(const ismd_pool_config *cfg, pid_t parent, int in_fd, int
     sigaction(SIGPIPE, &dfl, NULL);
     if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != parent)
         _exit(126);
-    if (cfg->job_memory && !ISMD_SANITIZER_BUILD) {
-        struct rlimit rl = {cfg->job_memory, cfg->job_memory};
+    if (job_memory && !ISMD_SANITIZER_BUILD) {
+        struct rlimit rl = {job_memory, job_memory};
         if (setrlimit(RLIMIT_AS, &rl) != 0)
             _exit(126);
     }
@@ -34,7 +35,7 @@ static void child_exec(const ismd_pool_config *cfg, pid_t parent, int in_fd, int
         _exit(126);
     syscall(SYS_close_range, 3u, ~0u, 0); /* everything else is O_CLOEXEC anyway */
     char *const argv[] = {"isomesh", "--worker", NULL};
-    execv(cfg->worker_path, argv);
+    execv(path, argv);
     _exit(127);
 }
 
@@ -56,7 +57,7 @@ void ismd_worker_describe_exit(int status, char *buf, size_t cap)
 }
 
 
-bool ismd_worker_spawn(const ismd_pool_config *cfg, ismd_worker_proc *out)
+bool ismd_worker_spawn(const char *path, size_t job_memory, ismd_worker_proc *out)
 {
     int req[2], res[2];
     if (pipe2(req, O_CLOEXEC) != 0)
@@ -69,7 +70,7 @@ bool ismd_worker_spawn(const ismd_pool_config *cfg, ismd_worker_proc *out)
     pid_t parent = getpid();
     pid_t pid = fork();
     if (pid == 0)
-        child_exec(cfg, parent, req[0], res[1]);
+        child_exec(path, job_memory, parent, req[0], res[1]);
     close(req[0]);
     close(res[1]);
     if (pid < 0) {

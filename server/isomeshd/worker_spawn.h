@@ -8,8 +8,6 @@
 #include <stddef.h>
 #include <sys/types.h>
 
-#include "server/isomeshd/worker_pool.h"
-
 /* AddressSanitizer reserves terabytes of address space for its shadow memory, so a build
  * with it cannot run under RLIMIT_AS: such builds skip the limit (and say so at start-up). */
 #if defined(__SANITIZE_ADDRESS__)
@@ -26,9 +24,10 @@ typedef struct ismd_worker_proc {
     int from_fd;               /* its answers */
 } ismd_worker_proc;
 
-/* Starts a worker with cfg's binary and limits. False (errno set, nothing left open) when it
- * could not be started; an exec failure shows as the worker's exit with status 127. */
-bool ismd_worker_spawn(const ismd_pool_config *cfg, ismd_worker_proc *out);
+/* Starts the worker binary at path with an address-space limit of job_memory bytes (0: none).
+ * False (errno set, nothing left open) when it could not be started; an exec failure shows
+ * as the worker's exit with status 127. */
+bool ismd_worker_spawn(const char *path, size_t job_memory, ismd_worker_proc *out);
 
 /* "killed by signal 9 (Killed)", "exited with status 1": a waitpid status in words. */
 void ismd_worker_describe_exit(int status, char *buf, size_t cap);
