@@ -34,17 +34,51 @@
 
 /* ---- scripts ------------------------------------------------------------------------- */
 
+/* Redis's own clock in milliseconds, as text: every daemon's times of a computation (queued,
+ * started, ended in its job hash) are read on one clock, in the order Redis ran the scripts. */
+#define NOW_MS_LUA \
+    "local function now_ms() local t = redis.call('time') " \
+    "  return string.format('%.0f', t[1] * 1000 + math.floor(t[2] / 1000)) end "
+
+/* abandoned(p, name, now): a computation whose origin (the daemon that put it on the queue,
+ * the job hash's origin) died, and that nothing else wants: no other daemon holds its lock
+ * or waits for it (P want:<name>), and every job recorded for it (P cjobs:<name>) was
+ * deleted. Nobody is left to let go of it (cluster.h), so a DELETE of its last job, the
+ * heartbeat of the daemon running it and a daemon re-claiming it stop it here. p: the key
+ * prefix; now: the wall clock in ms (for want). */
+#define ABANDONED_LUA \
+    "local function abandoned(p, name, now) " \
+    "  local jk = p .. 'job:' .. name " \
+    "  local o = redis.call('hget', jk, 'origin') " \
+    "  if not o or redis.call('exists', p .. 'alive:' .. o) == 1 then return false end " \
+    "  local lock = redis.call('get', p .. 'lock:' .. name) " \
+    "  if lock and string.sub(lock, 1, #o + 1) ~= o .. '/' then return false end " \
+    "  local w = p .. 'want:' .. name " \
+    "  redis.call('zremrangebyscore', w, '-inf', now) " \
+    "  if redis.call('zcard', w) > 0 then return false end " \
+    "  local js = redis.call('smembers', p .. 'cjobs:' .. name) " \
+    "  if #js == 0 then return false end " \
+    "  for _, id in ipairs(js) do " \
+    "    local r = p .. 'jobrec:' .. id " \
+    "    if redis.call('exists', r) == 1 and not redis.call('hget', r, 'cancel') then " \
+    "      return false end " \
+    "  end " \
+    "  return true end "
+
 /* KEYS stream, users, job hash, ulim; ARGV user, max entries, name, key, fmt, req, max
- * running, ttl. {entry id, its stream}, or false when the user already has max entries. An
- * entry of the same computation still waiting or running, not canceled (its origin gave it up
- * while other daemons waited for it: CANCEL_LUA), is joined instead of a new one. */
+ * running, ttl, consumer. {entry id, its stream}, or false when the user already has max
+ * entries. An entry of the same computation still waiting or running, not canceled (its
+ * origin gave it up while other daemons waited for it: CANCEL_LUA), is joined instead of a
+ * new one; the daemon joining it (it holds the lock now) becomes its origin. */
 static const char ENQUEUE_LUA[] =
+    NOW_MS_LUA
     "local cur = redis.call('hget', KEYS[3], 'id') "
     "local st = redis.call('hget', KEYS[3], 'state') "
     "local cs = redis.call('hget', KEYS[3], 'stream') "
     "if cur and cs and (st == 'queued' or st == 'running') "
     "   and not redis.call('hget', KEYS[3], 'cancel') "
-    "   and #redis.call('xrange', cs, cur, cur) > 0 then return {cur, cs} end "
+    "   and #redis.call('xrange', cs, cur, cur) > 0 then "
+    "  redis.call('hset', KEYS[3], 'origin', ARGV[9]) return {cur, cs} end "
     "if redis.call('exists', KEYS[1]) == 0 then "
     "  redis.call('xgroup', 'create', KEYS[1], 'workers', '0', 'MKSTREAM') end "
     "if redis.call('xlen', KEYS[1]) >= tonumber(ARGV[2]) then return false end "
@@ -54,26 +88,39 @@ static const char ENQUEUE_LUA[] =
     "redis.call('hset', KEYS[4], ARGV[1], ARGV[7]) "
     "redis.call('del', KEYS[3]) "
     "redis.call('hset', KEYS[3], 'state', 'queued', 'progress', '0', 'id', id, "
-    "  'stream', KEYS[1]) "
+    "  'stream', KEYS[1], 'origin', ARGV[9], 'queued_ms', now_ms()) "
     "redis.call('pexpire', KEYS[3], ARGV[8]) "
     "return {id, KEYS[1]}";
 
-/* KEYS users, ulim; ARGV stream prefix, consumer, min idle ms, turn, job prefix, now ms,
+/* KEYS users, ulim; ARGV stream prefix, consumer, min idle ms, turn, key prefix, now ms,
  * ttl. {user, stream, id, fields, claimed} or false. Re-claims a dead daemon's entry first
  * (the oldest pending entry idle for a lock lifetime: XPENDING IDLE scans the whole list,
- * where XAUTOCLAIM would look at its first few only; a deleted one is acknowledged), else
- * reads a new one from the user with the fewest running, below its limit. Streams with
- * nothing left are removed with their users. */
+ * where XAUTOCLAIM would look at its first few only; a deleted one is acknowledged, a
+ * canceled or abandoned one dropped), else reads a new one from the user with the fewest
+ * running, below its limit. Streams with nothing left are removed with their users. */
 static const char TAKE_LUA[] =
+    NOW_MS_LUA ABANDONED_LUA
+    "local function name_of(e) "
+    "  for i = 1, #e[2], 2 do if e[2][i] == 'name' then return e[2][i + 1] end end "
+    "  return nil end "
     "local function start(u, s, e, claimed) "
-    "  local name = nil "
-    "  for i = 1, #e[2], 2 do if e[2][i] == 'name' then name = e[2][i + 1] end end "
+    "  local name = name_of(e) "
     "  if name then "
-    "    local jk = ARGV[5] .. name "
+    "    local jk = ARGV[5] .. 'job:' .. name "
     "    if redis.call('hget', jk, 'id') == e[1] then "
-    "      redis.call('hset', jk, 'state', 'running', 'daemon', ARGV[2], 'started_ms', ARGV[6]) "
+    "      redis.call('hset', jk, 'state', 'running', 'daemon', ARGV[2], 'started_ms', now_ms()) "
     "      redis.call('pexpire', jk, ARGV[7]) end end "
     "  return {u, s, e[1], e[2], claimed} end "
+    "local function dropped(s, e) "
+    "  local name = name_of(e) "
+    "  if not name then return false end "
+    "  local jk = ARGV[5] .. 'job:' .. name "
+    "  if redis.call('hget', jk, 'id') ~= e[1] then return false end "
+    "  if not redis.call('hget', jk, 'cancel') and not abandoned(ARGV[5], name, ARGV[6]) then "
+    "    return false end "
+    "  redis.call('hset', jk, 'cancel', '1') "
+    "  redis.call('xack', s, 'workers', e[1]) redis.call('xdel', s, e[1]) "
+    "  return true end "
     "local users = redis.call('smembers', KEYS[1]) "
     "local n = #users "
     "local cands = {} "
@@ -87,8 +134,9 @@ static const char TAKE_LUA[] =
     "      local p = redis.call('xpending', s, 'workers', 'IDLE', ARGV[3], '-', '+', 1)[1] "
     "      if p then "
     "        local c = redis.call('xclaim', s, 'workers', ARGV[2], ARGV[3], p[1]) "
-    "        if c[1] and c[1][2] then return start(u, s, c[1], 1) end "
-    "        redis.call('xack', s, 'workers', p[1]) "
+    "        if c[1] and c[1][2] then "
+    "          if not dropped(s, c[1]) then return start(u, s, c[1], 1) end "
+    "        else redis.call('xack', s, 'workers', p[1]) end "
     "      end "
     "    end "
     "    if pend == 0 and redis.call('xlen', s) == 0 then "
@@ -120,13 +168,18 @@ static const char DEPTH_LUA[] =
     "end "
     "return n";
 
-/* KEYS stream, job hash; ARGV consumer, id, progress, ttl. 1: still ours (idle time reset,
- * progress published); 0: taken over by another daemon, or its record is gone; 2: canceled
- * (both acknowledged and deleted). */
+/* KEYS stream, job hash; ARGV consumer, id, progress, ttl, key prefix, name, now ms. 1:
+ * still ours (idle time reset, progress published); 0: taken over by another daemon, or its
+ * record is gone; 2: canceled, or abandoned (ABANDONED_LUA: flagged canceled), both
+ * acknowledged and deleted. */
 static const char HEARTBEAT_LUA[] =
+    ABANDONED_LUA
     "local p = redis.call('xpending', KEYS[1], 'workers', ARGV[2], ARGV[2], 1)[1] "
     "if not p or p[2] ~= ARGV[1] then return 0 end "
     "local mine = redis.call('hget', KEYS[2], 'id') == ARGV[2] "
+    "if mine and not redis.call('hget', KEYS[2], 'cancel') "
+    "   and abandoned(ARGV[5], ARGV[6], ARGV[7]) then "
+    "  redis.call('hset', KEYS[2], 'cancel', '1') end "
     "if not mine or redis.call('hget', KEYS[2], 'cancel') then "
     "  redis.call('xack', KEYS[1], 'workers', ARGV[2]) redis.call('xdel', KEYS[1], ARGV[2]) "
     "  if mine then return 2 end return 0 end "
@@ -137,27 +190,47 @@ static const char HEARTBEAT_LUA[] =
 
 /* KEYS stream, job hash; ARGV id, state, status, error, ttl. */
 static const char FINISH_LUA[] =
+    NOW_MS_LUA
     "redis.call('xack', KEYS[1], 'workers', ARGV[1]) "
     "redis.call('xdel', KEYS[1], ARGV[1]) "
     "if redis.call('hget', KEYS[2], 'id') == ARGV[1] then "
     "  redis.call('hset', KEYS[2], 'state', ARGV[2], 'status', ARGV[3], 'error', ARGV[4], "
-    "    'progress', '1') "
+    "    'progress', '1', 'ended_ms', now_ms()) "
     "  redis.call('pexpire', KEYS[2], ARGV[5]) end "
     "return 1";
 
-/* KEYS jobrec; ARGV deletes prefix, job id, ttl. DELETE of a job through a daemon that does
- * not hold it: the job's record says canceled (the job's own flag: its computation may be
- * shared), and its id goes to the set of the daemon holding it, which lets go of that job as
- * a DELETE there would (and takes the flag back when the job had finished first). 0 when no
- * daemon recorded the job. */
+/* KEYS jobrec; ARGV key prefix, job id, ttl, now ms. DELETE of a job through a daemon that
+ * does not hold it: the job's record says canceled (the job's own flag: its computation may
+ * be shared), and its id goes to the set of the daemon holding it, which lets go of that job
+ * as a DELETE there would (and takes the flag back when the job had finished first). A dead
+ * daemon lets go of nothing: when the job was the last thing anyone wanted of its
+ * computation (ABANDONED_LUA), the computation is flagged canceled here, a waiting entry
+ * deleted, a running one stopped by its executor's next heartbeat, a pending one dropped by
+ * the daemon re-claiming it. 0 when no daemon recorded the job, 2 when its computation was
+ * stopped that way, else 1. */
 static const char JOB_DELETE_LUA[] =
+    ABANDONED_LUA
     "local d = redis.call('hget', KEYS[1], 'daemon') "
     "if not d then return 0 end "
     "redis.call('hset', KEYS[1], 'cancel', '1') "
-    "local s = ARGV[1] .. d "
+    "local s = ARGV[1] .. 'deleted:' .. d "
     "redis.call('sadd', s, ARGV[2]) "
     "redis.call('pexpire', s, ARGV[3]) "
-    "return 1";
+    "local key = redis.call('hget', KEYS[1], 'key') "
+    "local fmt = redis.call('hget', KEYS[1], 'fmt') "
+    "if not key or not fmt then return 1 end "
+    "local name = key .. '.' .. fmt "
+    "local jk = ARGV[1] .. 'job:' .. name "
+    "local id = redis.call('hget', jk, 'id') "
+    "local st = redis.call('hget', jk, 'state') "
+    "local cs = redis.call('hget', jk, 'stream') "
+    "if not id or not cs or (st ~= 'queued' and st ~= 'running') "
+    "   or redis.call('hget', jk, 'cancel') or not abandoned(ARGV[1], name, ARGV[4]) then "
+    "  return 1 end "
+    "redis.call('hset', jk, 'cancel', '1') "
+    "if not redis.call('xpending', cs, 'workers', id, id, 1)[1] then "
+    "  redis.call('xdel', cs, id) end "
+    "return 2";
 
 /* KEYS stream, job hash; ARGV id. The executor's flight was canceled here (nobody waits for
  * it any more): the entry goes, its job hash says canceled. */
@@ -166,6 +239,12 @@ static const char DROPPED_LUA[] =
     "redis.call('xdel', KEYS[1], ARGV[1]) "
     "if redis.call('hget', KEYS[2], 'id') == ARGV[1] then "
     "  redis.call('hset', KEYS[2], 'cancel', '1') end "
+    "return 1";
+
+/* KEYS cjobs; ARGV job id, ttl. */
+static const char CJOBS_ADD_LUA[] =
+    "redis.call('sadd', KEYS[1], ARGV[1]) "
+    "redis.call('pexpire', KEYS[1], ARGV[2]) "
     "return 1";
 
 /* The daemons other than ARGV[self] that want KEYS[want] now (ARGV[now] in ms): expired
@@ -206,6 +285,7 @@ struct ismd_cluster {
     int user_jobs, user_running;
     unsigned long turn;        /* rotates the order among users with equal load */
     long long depth_at_ns;     /* when to count the service-wide queue next */
+    long long alive_at_ns;     /* when to say next that this daemon lives (P alive:<it>) */
     ismd_jobs *jobs;           /* this daemon's jobs (DELETEs through other daemons) */
     long long deletes_at_ns;   /* when to look for those next */
     ism_redis_task take;
@@ -248,6 +328,14 @@ static int run_script(ismd_cluster *c, const char *what, const char *lua, int nk
     else
         freeReplyObject(r);
     return 0;
+}
+
+/* How often a daemon says in Redis that it lives, or runs an entry: three times a lock
+ * lifetime, and at least every HEARTBEAT_MAX_NS. */
+static long long beat_every_ns(const ismd_cluster *c)
+{
+    long long every = c->ttl_ms * 1000000LL / 3;
+    return every < HEARTBEAT_MAX_NS ? every : HEARTBEAT_MAX_NS;
 }
 
 /* "<namespace>:v1:<kind><name>" (kind "job:", "q:", "users", ...). */
@@ -298,9 +386,9 @@ int ismd_cluster_enqueue(ismd_cluster *c, const char *name, const char *key, con
     ckey(c, users, "users", "");
     ckey(c, ulim, "ulim", "");
     const char *args[] = {stream, users, job, ulim, user, jobs, name, key, fmt, req,
-                          running, STATE_TTL_MS};
+                          running, STATE_TTL_MS, c->consumer};
     redisReply *r = NULL;
-    int rc = run_script(c, "cluster_enqueue", ENQUEUE_LUA, 4, args, 12, &r);
+    int rc = run_script(c, "cluster_enqueue", ENQUEUE_LUA, 4, args, 13, &r);
     free(req);
     if (rc < 0)
         return -1;
@@ -460,9 +548,12 @@ static int cj_beat(cjob *j, double progress)
 {
     char p[32];
     snprintf(p, sizeof p, "%.4f", progress);
-    const char *args[] = {j->stream, j->job, j->c->consumer, j->id, p, STATE_TTL_MS};
+    char now[24];
+    wall_ms(now, 0);
+    const char *args[] = {j->stream, j->job, j->c->consumer, j->id, p, STATE_TTL_MS,
+                          ism_cache_redis_prefix(j->c->redis), j->name, now};
     redisReply *r = NULL;
-    if (run_script(j->c, "cluster_heartbeat", HEARTBEAT_LUA, 2, args, 6, &r) < 0)
+    if (run_script(j->c, "cluster_heartbeat", HEARTBEAT_LUA, 2, args, 9, &r) < 0)
         return -1;
     int v = r->type == REDIS_REPLY_INTEGER ? (int)r->integer : -1;
     freeReplyObject(r);
@@ -513,8 +604,7 @@ static long long cj_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
     }
     if (now < j->beat_at_ns)
         return now + CJ_TICK_NS;
-    long long every = j->c->ttl_ms * 1000000LL / 3;
-    j->beat_at_ns = now + (every < HEARTBEAT_MAX_NS ? every : HEARTBEAT_MAX_NS);
+    j->beat_at_ns = now + beat_every_ns(j->c);
     int beat = cj_beat(j, progress);
     if (beat == 1 || beat < 0)
         return now + CJ_TICK_NS;
@@ -607,13 +697,12 @@ static int take_one(ismd_cluster *c)
     snprintf(idle_ms, sizeof idle_ms, "%ld", c->ttl_ms);
     snprintf(turn, sizeof turn, "%lu", c->turn++);
     wall_ms(now_ms, 0);
-    char users[KEY_MAX], ulim[KEY_MAX], streams[KEY_MAX], jobs[KEY_MAX];
+    char users[KEY_MAX], ulim[KEY_MAX], streams[KEY_MAX];
     ckey(c, users, "users", "");
     ckey(c, ulim, "ulim", "");
     ckey(c, streams, "q:", "");
-    ckey(c, jobs, "job:", "");
-    const char *args[] = {users, ulim, streams, c->consumer, idle_ms, turn, jobs,
-                          now_ms, STATE_TTL_MS};
+    const char *args[] = {users, ulim, streams, c->consumer, idle_ms, turn,
+                          ism_cache_redis_prefix(c->redis), now_ms, STATE_TTL_MS};
     redisReply *r = NULL;
     if (run_script(c, "cluster_take", TAKE_LUA, 2, args, 9, &r) < 0)
         return -1;
@@ -681,6 +770,20 @@ static void take_deletes(ismd_cluster *c)
     freeReplyObject(r);
 }
 
+/* P alive:<this daemon> for one lock lifetime: a daemon without it has died (or stopped), and
+ * nobody lets go of its jobs any more (ABANDONED_LUA). */
+static void say_alive(ismd_cluster *c)
+{
+    char key[KEY_MAX], ttl[24];
+    ckey(c, key, "alive:", c->consumer);
+    snprintf(ttl, sizeof ttl, "%ld", c->ttl_ms);
+    const char *argv[] = {"SET", key, "1", "PX", ttl};
+    size_t lens[] = {3, strlen(key), 1, 2, strlen(ttl)};
+    redisReply *r = ism_cache_redis_call(c->redis, "cluster_alive", 5, argv, lens);
+    if (r)
+        freeReplyObject(r);
+}
+
 static long long take_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
 {
     ismd_cluster *c = (ismd_cluster *)((char *)base - offsetof(ismd_cluster, take));
@@ -696,6 +799,10 @@ static long long take_run(ism_redis_task *base, ism_cache_tier *t, bool stopping
         if (take_one(c) <= 0)
             break;
     long long now = ism_now_ns();
+    if (now >= c->alive_at_ns && ism_cache_redis_up(t)) {
+        c->alive_at_ns = now + beat_every_ns(c);
+        say_alive(c);
+    }
     if (now >= c->depth_at_ns && ism_cache_redis_up(t)) {
         c->depth_at_ns = now + DEPTH_TICK_NS;
         count_waiting(c);
@@ -769,15 +876,28 @@ static void write_record(jobtask *j)
     size_t elens[] = {7, strlen(rec), strlen(JOBREC_TTL_MS)};
     if ((r = ism_cache_redis_call(j->c->redis, "jobrec_expire", 3, exp, elens)))
         freeReplyObject(r);
+    char name[ISM_CACHE_NAME_MAX], set[KEY_MAX];
+    if (!ism_cache_name(name, j->key, j->fmt))
+        return;
+    ckey(j->c, set, "cjobs:", name); /* the jobs of one computation (ABANDONED_LUA) */
+    const char *args[] = {set, j->id, JOBREC_TTL_MS};
+    run_script(j->c, "cjobs_add", CJOBS_ADD_LUA, 1, args, 3, NULL);
 }
 
 static void delete_job(jobtask *j)
 {
-    char rec[KEY_MAX], set[KEY_MAX];
+    char rec[KEY_MAX], now[24];
     ckey(j->c, rec, "jobrec:", j->id);
-    ckey(j->c, set, "deleted:", "");
-    const char *args[] = {rec, set, j->id, JOBREC_TTL_MS};
-    run_script(j->c, "cluster_job_delete", JOB_DELETE_LUA, 1, args, 4, NULL);
+    wall_ms(now, 0);
+    const char *args[] = {rec, ism_cache_redis_prefix(j->c->redis), j->id, JOBREC_TTL_MS, now};
+    redisReply *r = NULL;
+    if (run_script(j->c, "cluster_job_delete", JOB_DELETE_LUA, 1, args, 5, &r) < 0)
+        return;
+    if (r->type == REDIS_REPLY_INTEGER && r->integer == 2) {
+        ism_log_field f = ISM_LS("job", j->id);
+        ism_log_fields(ISM_LOG_INFO, "cluster_abandoned_computation_canceled", &f, 1);
+    }
+    freeReplyObject(r);
 }
 
 /* HMGET key fields... into out[] (copies, "" when missing). 1 found (first field set), 0 not,

@@ -8,11 +8,16 @@
  *   P users       the set of users with a stream
  *   P ulim        hash user -> the user's running limit (0: none), from its latest entry
  *   P job:<name>  hash: state (queued, running, done, failed), progress, status and error
- *                 (failed), the daemon running it, its entry's id and stream; expires
+ *                 (failed), the daemon running it, its origin (the daemon that queued it),
+ *                 its entry's id and stream, and queued_ms, started_ms, ended_ms on Redis's
+ *                 clock (one clock for every daemon); expires
  *   P jobrec:<id> hash: a job (POST /v1/jobs) of any daemon: user, key, fmt, created, the
  *                 daemon holding it, and cancel once deleted, so that every daemon answers
  *                 GET and DELETE /v1/jobs/{id}; expires
  *   P deleted:<daemon>  set: ids of that daemon's jobs deleted through other daemons
+ *   P cjobs:<name> set: ids of the jobs (any daemon's) recorded for that computation
+ *   P alive:<daemon> present while that daemon lives (renewed like a heartbeat, expires
+ *                 one lock lifetime after its last renewal)
  *   P want:<name> sorted set: daemons whose requests wait for that computation (its lock is
  *                 another's), each until a lock lifetime after it last said so
  *
@@ -22,8 +27,10 @@
  * the job's record (the job reads canceled everywhere at once) and puts its id in its
  * daemon's deleted set; that daemon takes the set every DELETES_TICK_NS and lets go of each
  * job as a DELETE there would, so requests sharing the computation keep it. A daemon that
- * died takes nothing: its deleted jobs read canceled, their computations (re-claimed
- * elsewhere) run to their end. The job hash's cancel flag is the computation's: set by its
+ * died takes nothing: its deleted jobs read canceled at once, and a computation whose
+ * origin died is stopped wherever it runs (or waits, or waits to be re-claimed) once every
+ * job recorded for it was deleted and no other daemon holds its lock or waits for it: by the
+ * DELETE itself, else by the heartbeat of its executor. The job hash's cancel flag is the computation's: set by its
  * origin when nothing there waits for it any more and no other daemon does (P want:<name>:
  * requests of other daemons waiting for its lock; with one, the computation goes on and the
  * first of them to take the lock joins its entry), or by an executor whose flight was
