@@ -15,8 +15,9 @@
  *    "curves": [{"kind": "double"|"whisker", "closed", "xyz": [x0, y0, z0, ...],
  *                "ends": [{"type", "xyz", "point"}]}],        (ends: [] when closed)
  *              then the requested curves: {"kind": "section"|"level"|"intersection"|
- *                "silhouette", "source", "index", "closed", "length", "edges", "arcs",
- *                "ends": [{"type": "box", "xyz", "vertex"}]}
+ *                "silhouette"|"crease", "source", "index", "closed", "length", "edges",
+ *                "arcs", "ends": [{"type": "box"|"double_curve"|"singular_point", "xyz",
+ *                "vertex", "point" (singular_point: index into singular_points)}]}
  *    "arrangement": {...} (only when curves were requested; features_curves.c),
  *    "double_sheets": [{"first_triangle", "triangles", "area"}],
  *    "nonmanifold_edges": [{"closed", "on_locus", "xyz"}],   chains of mesh edges of > 2 triangles

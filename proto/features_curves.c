@@ -10,8 +10,8 @@
 
 static const char *const kind_names[ISM_CUT_KIND_COUNT] = {
     "section", "level", "intersection", "silhouette", "crease"};
-static const char *const vertex_types[ISM_ARR_VERTEX_TYPE_COUNT] = {"crossing", "branch",
-                                                                    "end", "loop"};
+static const char *const vertex_types[ISM_ARR_VERTEX_TYPE_COUNT] = {
+    "crossing", "branch", "end", "loop", "double_curve", "singular_point"};
 
 const char *ism_cut_kind_name(int kind)
 {
@@ -65,7 +65,27 @@ static void write_arc(ism_jw *w, const ism_mesh *m, const ism_arrangement *a,
     ism_jw_array_end(w);
 }
 
-/* The curve's end vertices (END type) as {"type": "box", "xyz", "vertex"}. */
+/* What a curve ending at a vertex of type t ends on: "box", "double_curve",
+ * "singular_point", or NULL where it does not end (its arcs join there). */
+static const char *end_type(int t)
+{
+    return t == ISM_ARR_END            ? "box"
+           : t == ISM_ARR_DOUBLE_CURVE   ? "double_curve"
+           : t == ISM_ARR_SINGULAR_POINT ? "singular_point"
+                                         : NULL;
+}
+
+/* The singular point's index into "singular_points" when v is at one. */
+static void write_point(ism_jw *w, const ism_arr_vertex *v)
+{
+    if (v->type != ISM_ARR_SINGULAR_POINT)
+        return;
+    ism_jw_key(w, "point");
+    ism_jw_int(w, v->point);
+}
+
+/* Each arc end of curve c where the curve ends, as {"type": "box" | "double_curve" |
+ * "singular_point", "xyz", "vertex", "point" (singular points)}. */
 static void write_ends(ism_jw *w, const ism_mesh *m, const ism_arrangement *a, size_t c)
 {
     ism_jw_key(w, "ends");
@@ -74,14 +94,16 @@ static void write_ends(ism_jw *w, const ism_mesh *m, const ism_arrangement *a, s
         const ism_arr_edge *e = &a->edges[i];
         for (int k = 0; e->curve == c && k < 2; k++) {
             uint32_t v = k ? e->to : e->from;
-            if (a->vertices[v].type != ISM_ARR_END)
+            const char *type = end_type(a->vertices[v].type);
+            if (!type)
                 continue;
             ism_jw_object(w);
             ism_jw_key(w, "type");
-            ism_jw_string(w, "box");
+            ism_jw_string(w, type);
             write_vertex_xyz(w, m, a->vertices[v].v);
             ism_jw_key(w, "vertex");
             ism_jw_uint(w, v);
+            write_point(w, &a->vertices[v]);
             ism_jw_object_end(w);
         }
     }
@@ -160,6 +182,7 @@ void ism_features_arrangement_json(ism_jw *w, const ism_mesh *m, const ism_arran
         ism_jw_int(w, a->vertices[i].degree);
         ism_jw_key(w, "type");
         ism_jw_string(w, vertex_types[a->vertices[i].type]);
+        write_point(w, &a->vertices[i]);
         ism_jw_object_end(w);
     }
     ism_jw_array_end(w);

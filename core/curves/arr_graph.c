@@ -1,8 +1,9 @@
 /* arr_graph.c — the arrangement's vertices, edges and curves from the cut edges: a mesh
- * vertex is an arrangement vertex where curves of two functions meet, where one curve has
- * other than two cut edges (a branch or an end), and once on each closed curve that meets
- * nothing; edges are the chains of cut edges between them; a curve is the arcs of one
- * function joined through its own vertices. */
+ * vertex is an arrangement vertex where a curve meets the singular locus (a singular point,
+ * a double curve), where curves of two functions meet, where one curve has other than two
+ * cut edges (a branch or an end), and once on each closed curve that meets nothing; edges
+ * are the chains of cut edges between them; a curve is the arcs of one function joined
+ * through its own vertices, except at the singular locus, where its arcs end. */
 #include "core/curves/arr_internal.h"
 #include "core/util/grow.h"
 #include <math.h>
@@ -17,6 +18,7 @@
 typedef struct graph {
     const ism_mesh *m;
     const ism_cut *c;
+    const uint32_t *sing;   /* per vertex: arr_singular_marks */
     ism_arrangement *a;
     uint32_t *start, *adj;  /* per vertex: its cut edges adj[start[v] .. start[v+1]) */
     uint32_t *fn1;          /* per vertex: the function of its first cut edge */
@@ -60,14 +62,15 @@ static bool build_adjacency(graph *g)
     return true;
 }
 
-static bool add_vertex(graph *g, uint32_t v, int type)
+static bool add_vertex(graph *g, uint32_t v, int type, int point)
 {
     ism_arrangement *a = g->a;
     if (!ism_grow((void **)&a->vertices, &g->cap_v, a->nvertices + 1, sizeof *a->vertices, GRAPH_FIRST))
         return false;
     g->avid[v] = (uint32_t)a->nvertices;
     a->vertices[a->nvertices++] =
-        (ism_arr_vertex){.v = v, .degree = (int)(g->start[v + 1] - g->start[v]), .type = type};
+        (ism_arr_vertex){.v = v, .degree = (int)(g->start[v + 1] - g->start[v]), .type = type,
+                         .point = point};
     return true;
 }
 
@@ -131,14 +134,26 @@ static bool walk_from(graph *g, uint32_t v)
     return true;
 }
 
+/* The type of curve vertex v of deg cut edges, or -1 when it is inside an arc. */
+static int vertex_type(const graph *g, size_t v, uint32_t deg)
+{
+    if (deg == 0)
+        return -1;
+    if (g->sing[v] == ARR_SING_DOUBLE)
+        return ISM_ARR_DOUBLE_CURVE;
+    if (g->sing[v] != ARR_SING_NONE)
+        return ISM_ARR_SINGULAR_POINT;
+    if (deg == 2 && !g->multi[v])
+        return -1;
+    return g->multi[v] ? ISM_ARR_CROSSING : deg == 1 ? ISM_ARR_END : ISM_ARR_BRANCH;
+}
+
 static bool vertices_and_edges(graph *g)
 {
     for (size_t v = 0; v < g->m->nverts; v++) {
-        uint32_t deg = g->start[v + 1] - g->start[v];
-        if (deg == 0 || (deg == 2 && !g->multi[v]))
-            continue;
-        int type = g->multi[v] ? ISM_ARR_CROSSING : deg == 1 ? ISM_ARR_END : ISM_ARR_BRANCH;
-        if (!add_vertex(g, (uint32_t)v, type))
+        int type = vertex_type(g, v, g->start[v + 1] - g->start[v]);
+        int point = type == ISM_ARR_SINGULAR_POINT ? (int)g->sing[v] : -1;
+        if (type >= 0 && !add_vertex(g, (uint32_t)v, type, point))
             return false;
     }
     for (size_t i = 0; i < g->a->nvertices; i++)
@@ -147,7 +162,7 @@ static bool vertices_and_edges(graph *g)
     for (size_t i = 0; i < g->c->nedges; i++) /* closed curves meeting nothing */
         if (!g->seen[i]) {
             uint32_t v = g->c->edges[i].a;
-            if (!add_vertex(g, v, ISM_ARR_LOOP) || !walk_from(g, v))
+            if (!add_vertex(g, v, ISM_ARR_LOOP, -1) || !walk_from(g, v))
                 return false;
         }
     return true;
@@ -167,7 +182,14 @@ static int cmp_end(const void *x, const void *y)
     return (a->edge > b->edge) - (a->edge < b->edge);
 }
 
-/* Curves: arcs of one function sharing an arrangement vertex are one curve. */
+/* Whether a curve ends at vertex type t (its arcs are not joined there). */
+static bool ends_at(int t)
+{
+    return t == ISM_ARR_END || t == ISM_ARR_DOUBLE_CURVE || t == ISM_ARR_SINGULAR_POINT;
+}
+
+/* Curves: arcs of one function sharing an arrangement vertex are one curve, except where
+ * they meet the singular locus: there each arc ends. */
 static bool curves(ism_arrangement *a)
 {
     size_t ne = a->nedges;
@@ -182,7 +204,8 @@ static bool curves(ism_arrangement *a)
         }
         qsort(r, 2 * ne, sizeof *r, cmp_end);
         for (size_t i = 1; i < 2 * ne; i++)
-            if (r[i].vertex == r[i - 1].vertex && r[i].fn == r[i - 1].fn)
+            if (r[i].vertex == r[i - 1].vertex && r[i].fn == r[i - 1].fn &&
+                !ends_at(a->vertices[r[i].vertex].type))
                 (void)ism_an_uf_union(par, r[i].edge, r[i - 1].edge);
         a->ncurves = 0;
         for (size_t i = 0; i < ne; i++)
@@ -199,7 +222,7 @@ static bool curves(ism_arrangement *a)
         c->fn = e->fn;
         c->length += e->length;
         c->nedges++;
-        if (a->vertices[e->from].type == ISM_ARR_END || a->vertices[e->to].type == ISM_ARR_END)
+        if (ends_at(a->vertices[e->from].type) || ends_at(a->vertices[e->to].type))
             c->closed = false;
     }
     free(r);
@@ -208,9 +231,10 @@ static bool curves(ism_arrangement *a)
     return ok;
 }
 
-bool arr_build_graph(const ism_mesh *m, const ism_cut *c, ism_arrangement *a)
+bool arr_build_graph(const ism_mesh *m, const ism_cut *c, const uint32_t *sing,
+                     ism_arrangement *a)
 {
-    graph g = {.m = m, .c = c, .a = a};
+    graph g = {.m = m, .c = c, .sing = sing, .a = a};
     bool ok = build_adjacency(&g) && vertices_and_edges(&g) && curves(a);
     free(g.start);
     free(g.adj);

@@ -8,6 +8,7 @@
 #include "core/curves/cut_types.h"
 #include "core/mesh/mesh.h"
 #include "core/singular/key_map.h"
+#include "core/singular/locus.h"
 
 typedef struct arr_mesh_edges {
     ism_key_map map;      /* edge key -> edge index */
@@ -29,7 +30,16 @@ void arr_mesh_edges_free(arr_mesh_edges *e);
 bool arr_build_faces(ism_mesh *m, arr_mesh_edges *e, ism_arrangement *a, uint32_t *comp,
                      uint32_t *tri_parent);
 
-/* Vertices, edges and curves from the cut edges. */
-bool arr_build_graph(const ism_mesh *m, const ism_cut *c, ism_arrangement *a);
+/* Singular marks of the vertices on curves (arr_singular.c): ARR_SING_NONE, ARR_SING_DOUBLE
+ * (on a double curve the curve crosses or leaves) or the index of the locus point within
+ * tol (l may be NULL: no points). mark has m->nverts entries. False when out of memory. */
+#define ARR_SING_NONE UINT32_MAX
+#define ARR_SING_DOUBLE (UINT32_MAX - 1)
+bool arr_singular_marks(const ism_mesh *m, const ism_cut *c, const arr_mesh_edges *e,
+                        const ism_locus *l, double tol, uint32_t *mark);
+
+/* Vertices, edges and curves from the cut edges; sing: the marks above. */
+bool arr_build_graph(const ism_mesh *m, const ism_cut *c, const uint32_t *sing,
+                     ism_arrangement *a);
 
 #endif

@@ -12,6 +12,10 @@ enum ism_arr_vertex_type {
     ISM_ARR_BRANCH,    /* one function's curve meets itself (degree ≥ 3) */
     ISM_ARR_END,       /* a curve ends (the mesh's border: the box) */
     ISM_ARR_LOOP,      /* the chosen point of a closed curve that meets nothing */
+    ISM_ARR_DOUBLE_CURVE,   /* curves meet a double curve of the surface (the vertex ends a
+                               mesh edge of three or more triangles) and end there */
+    ISM_ARR_SINGULAR_POINT, /* curves meet a singular point of the locus (node, cusp, pinch,
+                               triple point, ...) and end there */
     ISM_ARR_VERTEX_TYPE_COUNT
 };
 
@@ -19,6 +23,7 @@ typedef struct ism_arr_vertex {
     uint32_t v;        /* mesh vertex */
     int degree;        /* arcs leaving it */
     int type;          /* enum ism_arr_vertex_type */
+    int point;         /* ISM_ARR_SINGULAR_POINT: index into the locus's points; else -1 */
 } ism_arr_vertex;
 
 typedef struct ism_arr_edge {
@@ -40,7 +45,7 @@ typedef struct ism_arr_face {
 
 typedef struct ism_arr_curve {
     uint32_t fn;
-    bool closed;         /* no END vertex on it */
+    bool closed;         /* it ends nowhere: no END, DOUBLE_CURVE or SINGULAR_POINT vertex */
     double length;
     size_t nedges;
 } ism_arr_curve;

@@ -16,11 +16,28 @@ void ism_arrangement_free(ism_arrangement *a)
     memset(a, 0, sizeof *a);
 }
 
-/* Per component: mesh χ into em, arrangement χ into ea; vcomp maps mesh vertices. */
-static void euler_check(const ism_mesh *m, const arr_mesh_edges *e, const uint32_t *comp,
+/* The mesh component of arrangement edge i: its first mesh edge's (its end vertices may
+ * be shared by components that touch at a point, as the nappes of a cone at its apex). */
+static uint32_t edge_component(const ism_arrangement *a, const arr_mesh_edges *e,
+                               const uint32_t *ecomp, const uint32_t *vcomp, size_t i)
+{
+    const ism_arr_edge *ae = &a->edges[i];
+    uint32_t k = ae->count > 1 ? ism_key_map_find(&e->map, arr_edge_key(a->chain[ae->first],
+                                                                        a->chain[ae->first + 1]))
+                               : ISM_KEY_NONE;
+    return k != ISM_KEY_NONE ? ecomp[k] : vcomp[a->vertices[ae->from].v];
+}
+
+/* Per component: mesh χ into em, arrangement χ into ea; vcomp maps mesh vertices (a vertex
+ * to the first component seen using it: the same one on both sides). False when out of
+ * memory. */
+static bool euler_check(const ism_mesh *m, const arr_mesh_edges *e, const uint32_t *comp,
                         ism_arrangement *a, long *em, long *ea, uint32_t *vcomp)
 {
-    uint8_t *eseen = calloc(e->n + 1, 1);
+    uint32_t *ecomp = malloc((e->n + 1) * sizeof *ecomp); /* per mesh edge */
+    if (!ecomp)
+        return false;
+    memset(ecomp, 0xff, (e->n + 1) * sizeof *ecomp);
     for (size_t t = 0; t < m->ntris; t++) {
         em[comp[t]]++;
         for (int i = 0; i < 3; i++) {
@@ -29,17 +46,17 @@ static void euler_check(const ism_mesh *m, const arr_mesh_edges *e, const uint32
                 vcomp[v] = comp[t];
                 em[comp[t]]++;
             }
-            if (eseen && !eseen[k]) {
-                eseen[k] = 1;
+            if (ecomp[k] == UINT32_MAX) {
+                ecomp[k] = comp[t];
                 em[comp[t]]--;
             }
         }
     }
-    free(eseen);
     for (size_t i = 0; i < a->nvertices; i++)
         ea[vcomp[a->vertices[i].v]]++;
     for (size_t i = 0; i < a->nedges; i++)
-        ea[vcomp[a->vertices[a->edges[i].from].v]]--;
+        ea[edge_component(a, e, ecomp, vcomp, i)]--;
+    free(ecomp);
     for (size_t f = 0; f < a->nfaces; f++)
         ea[a->faces[f].component] += a->faces[f].euler_open;
     a->euler_mesh = a->euler_arr = 0;
@@ -49,9 +66,11 @@ static void euler_check(const ism_mesh *m, const arr_mesh_edges *e, const uint32
         a->euler_arr += ea[k];
         a->euler_ok &= em[k] == ea[k];
     }
+    return true;
 }
 
-bool ism_arrangement_build(ism_mesh *m, ism_cut *c, ism_arrangement *a)
+bool ism_arrangement_build(ism_mesh *m, ism_cut *c, const ism_locus *locus, double on_tol,
+                           ism_arrangement *a)
 {
     memset(a, 0, sizeof *a);
     arr_mesh_edges e;
@@ -59,9 +78,10 @@ bool ism_arrangement_build(ism_mesh *m, ism_cut *c, ism_arrangement *a)
         return false;
     uint32_t *comp = malloc((m->ntris + 1) * sizeof *comp);
     uint32_t *vcomp = malloc((m->nverts + 1) * sizeof *vcomp);
+    uint32_t *sing = malloc((m->nverts + 1) * sizeof *sing);
     long *em = NULL, *ea = NULL;
-    bool ok = comp && vcomp && arr_build_faces(m, &e, a, comp, c->tri_parent) &&
-              arr_build_graph(m, c, a);
+    bool ok = comp && vcomp && sing && arr_singular_marks(m, c, &e, locus, on_tol, sing) &&
+              arr_build_faces(m, &e, a, comp, c->tri_parent) && arr_build_graph(m, c, sing, a);
     if (ok) {
         em = calloc(a->ncomponents + 1, sizeof *em);
         ea = calloc(a->ncomponents + 1, sizeof *ea);
@@ -69,10 +89,11 @@ bool ism_arrangement_build(ism_mesh *m, ism_cut *c, ism_arrangement *a)
     }
     if (ok) {
         memset(vcomp, 0xff, (m->nverts + 1) * sizeof *vcomp);
-        euler_check(m, &e, comp, a, em, ea, vcomp);
+        ok = euler_check(m, &e, comp, a, em, ea, vcomp);
     }
     free(comp);
     free(vcomp);
+    free(sing);
     free(em);
     free(ea);
     arr_mesh_edges_free(&e);

@@ -14,6 +14,7 @@ bool ism_curves_cut_mesh(const ism_tape *f, const ism_cut_fn *fns, size_t n,
     ism_cut_eval ev;
     if (!ism_cut_eval_init(&ev, f, fns, n))
         return ism_error_set(err, "out of memory cutting the mesh along the curves");
+    ev.box = box;
     /* Newton is asked for a thousandth of the tolerance: it converges quadratically, so the
      * last step lands far below it, and the reported residuals show the margin. */
     bool ok = ism_cut_mesh(&ev, 1e-3 * ISM_CURVE_TOL_REL * sqrt(d2), mesh, cut);
@@ -31,7 +32,7 @@ bool ism_curves_cut(const ism_tape *f, const ism_cut_fn *fns, size_t n, const do
     memset(arr, 0, sizeof *arr);
     if (!ism_curves_cut_mesh(f, fns, n, box, mesh, cut, err))
         return false;
-    if (!ism_arrangement_build(mesh, cut, arr)) {
+    if (!ism_arrangement_build(mesh, cut, NULL, 0, arr)) {
         ism_cut_free(cut);
         return ism_error_set(err, "out of memory building the curves' arrangement");
     }

@@ -16,8 +16,8 @@
 bool ism_curves_cut_mesh(const ism_tape *f, const ism_cut_fn *fns, size_t n,
                          const double box[6], ism_mesh *mesh, ism_cut *cut, ism_error *err);
 
-/* Cuts mesh along fns[0..n) and builds the arrangement (cut and arr are overwritten; free
- * them with ism_cut_free / ism_arrangement_free). False with err set when out of memory. */
+/* Cuts mesh along fns[0..n) and builds the arrangement without a singular locus (cut and
+ * arr are overwritten; free them with ism_cut_free / ism_arrangement_free). False with err set when out of memory. */
 bool ism_curves_cut(const ism_tape *f, const ism_cut_fn *fns, size_t n, const double box[6],
                     ism_mesh *mesh, ism_cut *cut, ism_arrangement *arr, ism_error *err);
 

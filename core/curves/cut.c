@@ -204,6 +204,45 @@ bool cut_split_slot(cut_state *s, uint32_t u, uint32_t w, uint32_t *slot, uint32
     return true;
 }
 
+/* A lattice plane's coordinate is computed from the box's corner and side (lo + i × side /
+ * 2^depth), so the mesh's border on the far face can differ from the box's bound by a few
+ * ulps of the side: within this × the side it is that face. */
+#define BOX_FACE_REL 1e-12
+
+/* The box face edge a-b lies in (plane: n, c), when the box is known: both ends on one
+ * coordinate plane (bit for bit) at one of its faces — the mesh's border there. */
+static bool box_face_of(const cut_state *s, const double *a, const double *b, double plane[4])
+{
+    const double *box = s->ev->box;
+    for (int i = 0; box && i < 6; i++) {
+        int c = i % 3;
+        if (a[c] == b[c] && fabs(a[c] - box[i]) <= BOX_FACE_REL * (box[c + 3] - box[c])) {
+            plane[0] = plane[1] = plane[2] = 0;
+            plane[c] = 1;
+            plane[3] = a[c];
+            return true;
+        }
+    }
+    return false;
+}
+
+/* Puts the point p where curve k leaves the mesh through a box face (an edge a-b in that
+ * face) on the face as well, so the curve's end is the curve's exit from the box; p kept
+ * (and false) when Newton fails there (the curve tangent to the face). */
+static bool refine_on_face(cut_state *s, size_t k, const double *a, const double *b, double len,
+                           double p[3])
+{
+    double plane[4];
+    if (s->ev->fns[k].kind == ISM_CUT_CREASE || !box_face_of(s, a, b, plane))
+        return false;
+    double q[3] = {p[0], p[1], p[2]};
+    if (!ism_cut_refine_on_plane(s->ev, k, plane, s->tol, CUT_MAX_MOVE_EDGES * len, q))
+        return false;
+    for (int c = 0; c < 3; c++) /* on the face exactly (Newton leaves it to rounding) */
+        p[c] = plane[c] == 1 ? plane[3] : q[c];
+    return true;
+}
+
 /* The vertex where g_k = 0 splits edge u-w (made once per edge). NONE when out of memory. */
 static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
 {
@@ -225,7 +264,7 @@ static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
     for (int c = 0; c < 2; c++) /* when u-w lies on a crease: its two branches */
         s->ev->pair[c] = e == ISM_KEY_NONE ? ISM_CUT_NO_BRANCH : s->c->edges[e].branch[c];
     double len = fmax(sqrt(len2), fmax(s->reach[u], s->reach[w]));
-    if (!try_refine(s, j, k, len, p)) {
+    if ((j != NONE || !refine_on_face(s, k, a, b, len, p)) && !try_refine(s, j, k, len, p)) {
         cut_bisect(g_at, &(g_of){s, k}, a, b, s->gv[u], p); /* g bends: a start by bisection */
         refine_point(s, j, k, len, p);
     }

@@ -36,6 +36,8 @@ typedef struct ism_cut_eval {
     ism_eval_ws *const *branch_ws;
     uint32_t pair[2];    /* the crease function is f_pair[0] − f_pair[1] (set per crease
                             edge); unset (ISM_CUT_NO_BRANCH): the top min/max's a − b */
+    const double *box;   /* the meshed box (xmin ymin zmin xmax ymax zmax) or NULL: a curve
+                            leaving the mesh through a box face ends on that face */
 } ism_cut_eval;
 
 /* The crease function of f when f's tape has a min or max (CSG); false otherwise. The crease

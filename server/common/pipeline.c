@@ -432,7 +432,10 @@ static bool cut_curves(const ism_request *req, const ism_tape *tape,
     if (!s->cf.n)
         return true;
     t = ism_now_ms();
-    if (!ism_arrangement_build(&c->mesh, &s->cut, &s->arr))
+    const double *b = req->poly.box; /* curve ends on the locus: as the locus check's */
+    double diag = sqrt((b[3] - b[0]) * (b[3] - b[0]) + (b[4] - b[1]) * (b[4] - b[1]) +
+                       (b[5] - b[2]) * (b[5] - b[2]));
+    if (!ism_arrangement_build(&c->mesh, &s->cut, &c->locus, ISM_LOCUS_ON_REL * diag, &s->arr))
         return fail_with(r, 500, "no_memory", "%s", "out of memory building the arrangement");
     c->timings_ms[ISM_TIME_SINGULAR] += ism_now_ms() - t;
     s->have_curves = true;

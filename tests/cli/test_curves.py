@@ -6,8 +6,13 @@ box shifted off the lattice by 0.37 of a finest cell; a curve that misses the su
 no curve and one face, not an error; a bad curve is refused with its JSON path. The Klein
 bottle preset cut by x = 0, in its lattice box (the plane through lattice vertices) and boxes
 shifted off it by 1e-3 and 0.37 cell: the section is three circles
-(closed form below), crossing on the double curve at (0, 1 +- sqrt 2, 0) and at the four
-points where the plane touches the surface, each a vertex of degree 4; 12 edges. Three
+(closed form below), crossing on the double curve at (0, 1 +- sqrt 2, 0) (vertices typed
+double_curve, where the section's arcs end: 4 ends each) and at the four points where the
+plane touches the surface (typed branch), each a vertex of degree 4; 12 edges. The cone
+x^2 + y^2 = z^2 cut by a plane through its apex (in three boxes): two lines through the node,
+one vertex typed singular_point (its index naming the certified node at the origin) of
+degree 4, four arcs each one curve from the node to the box (ends singular_point and box), of
+the closed-form lengths; V - E + F per component matches on the two nappes. Three
 overlapping balls (min of three spheres, in the lattice box and two shifted off it): the
 crease is three arcs between the two triple points where all three spheres meet (closed
 form: the circumcentre of the centres, +-z), each a vertex of degree 3 within 1e-9 x diagonal,
@@ -101,23 +106,90 @@ class CurvesTest(unittest.TestCase):
             self.assertTrue(a["euler"]["ok"])
             self.assertEqual((len(a["vertices"]), len(a["edges"])), (6, 12))
             tol = 1e-9 * math.sqrt(3) * 8
-            for w in want:
+            for i, w in enumerate(want):
                 near = [v for v in a["vertices"]
                         if math.hypot(v["xyz"][1] - w[0], v["xyz"][2] - w[1]) < 1e-6]
                 self.assertEqual(len(near), 1, (shift, w))
                 v = near[0]
                 self.assertEqual(v["degree"], 4)
+                self.assertEqual(v["type"], "double_curve" if i < 2 else "branch", (shift, w))
                 self.assertLess(max(abs(v["xyz"][0]), math.hypot(v["xyz"][1] - w[0],
                                                                  v["xyz"][2] - w[1])), tol)
             cut = [c for c in f["curves"] if c["kind"] == "section"]
             total = sum(c["length"] for c in cut)
             self.assertAlmostEqual(total, length, delta=0.005 * length)
+            ends = [e for c in cut for e in c["ends"]]  # every arc end at the double curve
+            self.assertEqual(sorted(e["type"] for e in ends), ["double_curve"] * 8)
+            for e in ends:
+                y = e["xyz"][1]
+                self.assertLess(min(abs(y - 1 - r2), abs(y - 1 + r2)), tol)
+            self.assertFalse(any(c["closed"] for c in cut))
             for c in cut:
                 for arc in c["arcs"]:
                     for i in range(0, len(arc), 3):
                         x, y, z = arc[i:i + 3]
                         off = min(abs(math.hypot(y - cy, z - cz) - r) for cy, cz, r in circles)
                         self.assertLess(max(abs(x), off), tol)
+
+    def test_cone_section_through_the_node(self):
+        n = (1.0, 0.3, 0.2)
+        # Directions (a, b, 1) on the cone (a^2 + b^2 = 1) and the plane (n.d = 0): the line
+        # n0 a + n1 b = -n2 meets the unit circle at foot +- s * (-n1, n0) / |(n0, n1)|.
+        m = math.hypot(n[0], n[1])
+        foot = [-n[2] * n[0] / m ** 2, -n[2] * n[1] / m ** 2]
+        s = math.sqrt(1 - (n[2] / m) ** 2)
+        dirs = []
+        for sg in (1, -1):
+            a, b = foot[0] - sg * s * n[1] / m, foot[1] + sg * s * n[0] / m
+            dirs += [(a, b, 1.0), (-a, -b, -1.0)]
+        depth, side = 6, 2.0
+        cell = side / 2 ** depth
+        for shift in (0.0, 1e-3, 0.37 * cell):
+            with self.subTest(shift=shift):
+                d = [shift, 0.61 * shift, -0.83 * shift]
+                box = [-1 + d[0], -1 + d[1], -1 + d[2], 1 + d[0], 1 + d[1], 1 + d[2]]
+                diag = math.sqrt(3) * side
+                tol = 1e-9 * diag
+                f, proc = self.run_request({
+                    "expr": "x^2 + y^2 - z^2", "box": box, "depth": {"max": depth},
+                    "curves": [{"kind": "plane", "normal": list(n), "offsets": [0]}]})
+                self.assertIsNotNone(f, proc.stderr)
+                a = f["arrangement"]
+                self.assertTrue(a["euler"]["ok"], a["euler"])
+                self.assertEqual(a["euler"]["mesh"], 1)  # two disks sharing the apex
+                self.assertEqual(a["components"], 2)
+                self.assertEqual((len(a["vertices"]), len(a["edges"]), len(a["faces"])),
+                                 (5, 4, 4))
+                apex = [v for v in a["vertices"] if v["type"] == "singular_point"]
+                self.assertEqual(len(apex), 1)
+                self.assertEqual(apex[0]["degree"], 4)
+                self.assertLess(max(map(abs, apex[0]["xyz"])), tol)
+                node = f["singular_points"][apex[0]["point"]]
+                self.assertEqual(node["type"], "node")
+                self.assertLess(max(map(abs, node["xyz"])), tol)
+                self.assertEqual(sorted(v["type"] for v in a["vertices"]),
+                                 ["end"] * 4 + ["singular_point"])
+                cut = [c for c in f["curves"] if c["kind"] == "section"]
+                self.assertEqual(len(cut), 4)
+                want = []
+                for dv in dirs:  # to where the ray leaves the box
+                    t = min((box[k + 3] if dv[k] > 0 else box[k]) / dv[k] for k in range(3))
+                    want.append(t * math.sqrt(sum(x * x for x in dv)))
+                got = sorted(c["length"] for c in cut)
+                for g, w in zip(got, sorted(want)):
+                    self.assertAlmostEqual(g, w, delta=1e-6 * w)
+                for c in cut:
+                    self.assertFalse(c["closed"])
+                    self.assertEqual(sorted(e["type"] for e in c["ends"]),
+                                     ["box", "singular_point"])
+                    for arc in c["arcs"]:
+                        for i in range(0, len(arc), 3):
+                            x, y, z = arc[i:i + 3]
+                            r = math.sqrt(x * x + y * y + z * z)
+                            on_cone = abs(x * x + y * y - z * z) / max(2 * r, 1e-300)
+                            self.assertLess(max(abs(n[0] * x + n[1] * y + n[2] * z) /
+                                                math.sqrt(sum(v * v for v in n)), on_cone),
+                                            tol)
 
     def test_three_balls_crease_arcs_and_triple_points(self):
         centres = [(0.6, 0, 0), (-0.3, 0.52, 0), (-0.3, -0.52, 0)]

@@ -68,7 +68,7 @@ static void run(const pf_surface *s, const double box[6], const ism_cut_fn *fns,
     memset(&r->cut, 0, sizeof r->cut);
     cr_assert(ism_cut_mesh(&ev, 1e-3 * CURVE_TOL_REL * r->diag, &r->m, &r->cut));
     ism_cut_eval_free(&ev);
-    cr_assert(ism_arrangement_build(&r->m, &r->cut, &r->arr));
+    cr_assert(ism_arrangement_build(&r->m, &r->cut, NULL, 0, &r->arr));
     ism_tape_free(t);
     cr_assert_eq(r->cut.unrefined, 0);
     cr_assert_leq(r->cut.worst_f, CURVE_TOL_REL * r->diag, "f residual %g", r->cut.worst_f);

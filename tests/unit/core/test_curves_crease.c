@@ -186,7 +186,7 @@ static void parallelepiped(int which)
     cr_assert(ism_cut_mesh(&ev, 1e-13 * diag, &m, &cut));
     ism_cut_eval_free(&ev);
     ism_arrangement arr;
-    cr_assert(ism_arrangement_build(&m, &cut, &arr));
+    cr_assert(ism_arrangement_build(&m, &cut, NULL, 0, &arr));
     cr_log_info("slabs %d: %zu tris, %zu crease edges, V %zu E %zu F %zu, unrefined %zu", which,
                 m.ntris, cut.nedges, arr.nvertices, arr.nedges, arr.nfaces, cut.unrefined);
     cr_assert_eq(cut.unrefined, 0);
