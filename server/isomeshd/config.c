@@ -40,7 +40,9 @@ static const flag FLAGS[] = {
      "before 429 [32]"},
     {"client-jobs", K_INT, 1, 100000, "N", "old name of --user-jobs"},
     {"user-running", K_INT, 0, 256, "N",
-     "computations of one user on workers at once, the rest wait; 0 = no limit [0]"},
+     "computations of one user on workers at once, the rest wait; 0 = every worker while no "
+     "other user waits, half of them (rounded up) while others do: a user above that gives "
+     "one back (preempted, requeued) to a user below it [0]"},
     {"queue-order", K_ORDER, 0, 0, "fair|fifo",
      "fair: waiting computations are served round robin across users; fifo: oldest first "
      "[fair]"},

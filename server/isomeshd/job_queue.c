@@ -182,17 +182,18 @@ static ismd_qentry *fifo_pop(ismd_queue *q)
     return pop_with(q, fifo_before);
 }
 
-static bool fair_starving(const ismd_queue *q)
+static bool fair_waiting_below(const ismd_queue *q, int n)
 {
     for (const ismd_qline *l = ((const uqueue *)q)->lines; l; l = l->next)
-        if (l->running == 0 && may_run(l))
+        if (l->running < n && may_run(l))
             return true;
     return false;
 }
 
-static bool fifo_starving(const ismd_queue *q)
+static bool fifo_waiting_below(const ismd_queue *q, int n)
 {
     (void)q;
+    (void)n;
     return false; /* the reference order: served as it came, nobody preempted */
 }
 
@@ -253,18 +254,18 @@ static void q_destroy(ismd_queue *q)
 
 static const ismd_queue_ops FAIR_OPS = {
     .name = "fair", .push = q_push, .pop = fair_pop, .drop = q_drop,
-    .length = q_length, .starving = fair_starving, .user_running = q_user_running,
+    .length = q_length, .waiting_below = fair_waiting_below, .user_running = q_user_running,
     .requeue = q_requeue, .users = q_users, .destroy = q_destroy,
 };
 
 static const ismd_queue_ops FIFO_OPS = {
     .name = "fifo", .push = q_push, .pop = fifo_pop, .drop = q_drop,
-    .length = q_length, .starving = fifo_starving, .user_running = q_user_running,
+    .length = q_length, .waiting_below = fifo_waiting_below, .user_running = q_user_running,
     .requeue = q_requeue, .users = q_users, .destroy = q_destroy,
 };
 
 ismd_queue *ismd_queue_new(size_t capacity, ismd_queue_order order, int user_jobs,
-                           int user_running)
+                           int user_running, int workers)
 {
     uqueue *x = calloc(1, sizeof *x);
     if (!x)
@@ -274,5 +275,7 @@ ismd_queue *ismd_queue_new(size_t capacity, ismd_queue_order order, int user_job
     x->order = order;
     x->user_jobs = user_jobs > 0 ? user_jobs : 1;
     x->user_running = user_running;
+    if (order == ISMD_ORDER_FAIR && user_running <= 0)
+        x->base.fair_share = (workers + 1) / 2;
     return &x->base;
 }

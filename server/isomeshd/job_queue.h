@@ -65,9 +65,10 @@ typedef struct ismd_queue_ops {
      * entry leaves its line, a running one stops counting against its user. */
     void (*drop)(ismd_queue *q, ismd_qentry *e);
     size_t (*length)(const ismd_queue *q);
-    /* True when a user with nothing running has a flight waiting that may run (fair order
-     * only: the pool then frees a worker from a user holding several, see sched.h). */
-    bool (*starving)(const ismd_queue *q);
+    /* True when a user with fewer than n computations running has a flight waiting that may
+     * run (fair order only: the pool then frees a worker from a user holding more, see
+     * sched.h). */
+    bool (*waiting_below)(const ismd_queue *q, int n);
     /* Computations of e's user running now. */
     int (*user_running)(const ismd_queue *q, const ismd_qentry *e);
     /* A running e goes back to the head of its user's line (it was preempted). */
@@ -83,11 +84,15 @@ struct ismd_queue {
     size_t slack;       /* idle workers when a flight is pushed: that many will not wait, so
                            they do not count against capacity (a --queue 0 daemon still runs
                            one computation per idle worker) */
+    int fair_share;     /* fair order without a default running limit: half the workers,
+                           rounded up, the most a user keeps while other users wait (sched.h
+                           preempts above it); 0 = none */
 };
 
 /* At most capacity flights waiting; user_jobs and user_running are the default per-user
- * limits (user_running 0 = no limit but the workers). */
+ * limits. user_running 0: a user may run on every one of the workers while nobody else
+ * waits, and on half of them (rounded up) while other users do (fair order). */
 ismd_queue *ismd_queue_new(size_t capacity, ismd_queue_order order, int user_jobs,
-                           int user_running);
+                           int user_running, int workers);
 
 #endif

@@ -211,7 +211,7 @@ int main(int argc, char **argv)
     if (!setup_cache(&s, &cfg) ||
         !ismd_sched_init(&s.sched,
                          ismd_queue_new((size_t)cfg.queue, cfg.queue_fifo ? ISMD_ORDER_FIFO : ISMD_ORDER_FAIR,
-                                        cfg.user_jobs, cfg.user_running),
+                                        cfg.user_jobs, cfg.user_running, cfg.workers),
                          cfg.job_timeout_s, cfg.queue_timeout_s, &s.metrics) ||
         !(s.jobs = ismd_jobs_new(&s.metrics))) {
         ism_logf(ISM_LOG_ERROR, "startup_failed", "out of memory");

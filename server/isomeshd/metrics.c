@@ -286,8 +286,8 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
            "Cluster queue entries taken over from a daemon that stopped heart-beating.");
     emit(&o, "isomesh_cluster_reclaimed_total %llu\n", ld(&m->cluster_reclaimed));
     header(&o, "isomesh_preemptions_total", "counter",
-           "Computations sent back to their user's line so that a user with nothing running "
-           "got a worker.");
+           "Computations sent back to their user's line so that a user with nothing running, "
+           "or below half the workers, got a worker.");
     emit(&o, "isomesh_preemptions_total %llu\n", ld(&m->preemptions));
     header(&o, "isomesh_polygonise_seconds", "histogram",
            "Worker wall time per finished computation (polygonise, analyse, encode).");

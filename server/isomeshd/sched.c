@@ -348,10 +348,8 @@ long long ismd_sched_next_deadline(const ismd_sched *s)
 ismd_flight *ismd_sched_preempt_victim(ismd_sched *s)
 {
     const ismd_queue_ops *q = s->queue->ops;
-    if (!q->starving(s->queue))
-        return NULL;
     ismd_flight *best = NULL;
-    int best_n = 1; /* a user must hold at least two workers to lose one */
+    int best_n = 0;
     for (ismd_flight *f = s->all_head; f; f = f->anext) {
         if (!f->running)
             continue;
@@ -361,7 +359,13 @@ ismd_flight *ismd_sched_preempt_victim(ismd_sched *s)
             best_n = n;
         }
     }
-    return best;
+    /* a user must hold at least two workers to lose one to a user with none; above the
+     * fair share (a half), one to a user below it. Either way the loser keeps at least as
+     * many as the winner then has, so no worker is taken back and forth. */
+    int share = s->queue->fair_share;
+    bool starving = best_n >= 2 && q->waiting_below(s->queue, 1);
+    bool over = share > 0 && best_n > share && q->waiting_below(s->queue, share);
+    return starving || over ? best : NULL;
 }
 
 void ismd_sched_requeue(ismd_sched *s, ismd_flight *f)

@@ -161,9 +161,11 @@ size_t ismd_sched_expire(ismd_sched *s, long long now_ns, ismd_flight **expired,
 long long ismd_sched_next_deadline(const ismd_sched *s);
 
 /* Preemption, so that users who each hold a worker with endless work cannot keep another
- * user's request from one: when a user with nothing running waits (fair order) and every
- * worker is busy, the flight to take back is the latest started of the user holding the
- * most workers, if that user holds at least two. NULL when none should be. */
+ * user's request from one (fair order, every worker busy): the flight to take back is the
+ * latest started of the user holding the most workers, when a user with nothing running
+ * waits and that user holds at least two, or (no default --user-running: the queue's
+ * fair_share, half the workers rounded up) when that user holds more than the share and a
+ * user below it waits. NULL when none should be. */
 ismd_flight *ismd_sched_preempt_victim(ismd_sched *s);
 /* A running flight goes back to the head of its user's line, its waiters told it is queued
  * again (the pool stops its worker). */

@@ -1,7 +1,8 @@
 """test_lockout.py — a daemon that a few users cannot lock (issue 17), each red-team case on a
 real isomeshd: one user's flood of job posts evicts only that user's own finished job records
 (another user's record stays readable); long computations of several users do not keep a
-small request of another user from a worker; a request's deadline counts its time on a worker,
+small request of another user from a worker; a user alone uses every worker, and keeps half
+of them while another user waits (the default --user-running); a request's deadline counts its time on a worker,
 and its wait for one has its own bound (--queue-timeout) answered with a clear 503; a
 hopeless expression (sin(1e300*x) + 3*y) is refused with 422 and never holds a worker.
 
@@ -117,6 +118,39 @@ class HopelessUsersTest(unittest.TestCase):
             finally:
                 for u, j in jobs:
                     http_request(d.port, "DELETE", j["url"], source=u)
+
+    def test_a_user_on_every_worker_keeps_half_of_them_while_another_user_waits(self):
+        # the default --user-running (issue 17: "at most half the workers when others wait"):
+        # alone, a user computes on all 4 workers; once another user waits, the first gives
+        # workers back until it holds half of them (rounded up), the other user as many --
+        # not fewer (a third job of the second user does not take one more), and not more
+        # (two each, stable); when nobody else waits, every worker again
+        with Daemon("--workers", "4", "--job-timeout", "60s") as d:
+            def jobs_of(user, state):
+                return d.metric("isomesh_user_jobs", user=user, state=state)
+            alice = [post_from(d.port, "127.0.0.2", "/v1/jobs", busy_work(i + 1)).json()
+                     for i in range(4)]
+            bob = []
+            try:
+                wait_until("alice on every worker", lambda: jobs_of("127.0.0.2", "running") == 4)
+                before = d.metric("isomesh_preemptions_total")
+                bob = [post_from(d.port, "127.0.0.3", "/v1/jobs", busy_work(10 + i)).json()
+                       for i in range(3)]
+                wait_until("two workers each", lambda: jobs_of("127.0.0.2", "running") == 2
+                           and jobs_of("127.0.0.3", "running") == 2)
+                self.assertEqual(jobs_of("127.0.0.2", "queued"), 2)
+                self.assertEqual(jobs_of("127.0.0.3", "queued"), 1)
+                # one for a user with nothing running, one for a user below the half
+                self.assertEqual(d.metric("isomesh_preemptions_total"), before + 2)
+                for j in bob:
+                    http_request(d.port, "DELETE", j["url"], source="127.0.0.3")
+                wait_until("alice on every worker again",
+                           lambda: jobs_of("127.0.0.2", "running") == 4)
+                self.assertEqual(d.metric("isomesh_preemptions_total"), before + 2)
+            finally:
+                for u, js in (("127.0.0.2", alice), ("127.0.0.3", bob)):
+                    for j in js:
+                        http_request(d.port, "DELETE", j["url"], source=u)
 
 
 class QueueDeadlineTest(unittest.TestCase):
