@@ -5,14 +5,6 @@
 #include <stdbool.h>
 #include <stdlib.h>
 
-static double dist_at(ism_sampler *s, const double p[3])
-{
-    double g[3];
-    double f = ism_sample_grad(s, p, g);
-    double gl = ism_norm3(g), d = fabs(f) / gl;
-    return gl > 0 && isfinite(d) ? d : 0;
-}
-
 /* Is a-b (vertex indices, either way round) a side of triangle t? */
 static bool has_side(const uint32_t *t, uint32_t a, uint32_t b)
 {
@@ -35,7 +27,7 @@ double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_t
         double c[3];
         for (int a = 0; a < 3; a++)
             c[a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
-        worst = fmax(worst, dist_at(s, c));
+        worst = fmax(worst, ism_sample_dist(s, c));
         for (int k = 0; k < 3; k++) {
             /* a fan's or a quad's triangles come in order, each sharing a side with the
              * one before: that side's midpoint (the same bits either way round) was
@@ -44,7 +36,7 @@ double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_t
                 continue;
             const double *p = v[k], *q = v[(k + 1) % 3];
             double m[3] = {(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2};
-            worst = fmax(worst, dist_at(s, m));
+            worst = fmax(worst, ism_sample_dist(s, m));
         }
     }
     return worst;

@@ -12,8 +12,9 @@
 #include "core/octree/octree.h"
 #include "core/octree/sampler.h"
 
-/* The largest |f| / |∇f| at the centroids and edge midpoints of out's triangles from
- * first_tri on; points where ∇f vanishes or f is not finite are left out. */
+/* The largest |f| / |∇f| (ism_sample_dist) at the centroids and edge midpoints of out's
+ * triangles from first_tri on: +inf when one of them has no estimate (∇f vanishing where f
+ * is not 0, or f not finite), so that leaf is split again. */
 double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_tri);
 
 /* A node's identity across rounds (its level and lattice origin). */

@@ -49,11 +49,16 @@ static inline double ism_dist3(const double a[3], const double b[3])
     return ism_norm3(d);
 }
 
-/* |f| / |∇f| at p: the first-order distance to f = 0; +inf where it is undefined. */
+/* |f| / |∇f| at p: the first-order distance to f = 0. 0 where f is exactly 0 (on the surface,
+ * even where ∇f vanishes: a cone's apex); +inf where there is no estimate: f or ∇f not
+ * finite, or ∇f vanishing where f is not 0 (a critical point of f off the surface is not on
+ * it, however small f). */
 static inline double ism_sample_dist(ism_sampler *s, const double p[3])
 {
     double g[3];
     double f = ism_sample_grad(s, p, g);
+    if (f == 0)
+        return 0;
     double gl = ism_norm3(g);
     if (!isfinite(f) || !isfinite(gl) || !(gl > 0))
         return INFINITY;
