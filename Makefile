@@ -107,8 +107,9 @@ test: deps-test check-includes
 check-includes:
 	$(PYTHON) tests/check_includes.py
 
+# BENCH_ONLY=NAME runs only the benchmark scripts whose name contains NAME (e.g. bench_front).
 bench: deps-bench build $(BENCH_BINS)
-	$(PYTHON) tests/bench/run_bench.py --build $(OUT)
+	$(PYTHON) tests/bench/run_bench.py --build $(OUT) --only "$(BENCH_ONLY)"
 
 # The load/soak benchmark alone (wrk mix for 60 s, RSS series, slowloris): tests/bench/bench_load.py
 soak: deps-test build
