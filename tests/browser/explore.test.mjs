@@ -6,7 +6,9 @@
 // picking a node of the Cayley cubic gives its type, its closed-form coordinates within
 // 1e-6 and f = 0, grad f = 0 there; a PNG export has the size asked for; the Curves panel cuts the sphere into cells
 // (curves drawn, areas 2 pi h, a picked cell's facts) and adds a level curve, an
-// intersection (Viviani's node of degree 4) and the view's silhouette (closed forms); double
+// intersection (Viviani's node of degree 4) and the view's silhouette (closed forms); a cone
+// cut through its node: the vertex there typed singular_point, drawn and counted in the key;
+// double
 // sheets are tinted; the render mode's ambient occlusion of two spheres matches its closed
 // form (5/9 of the light where they face each other, all of it opposite, none inside).
 import { describe, it, before, after } from 'node:test';
@@ -294,6 +296,33 @@ describe('box and inspection', { timeout: 300000 }, () => {
     await waitForMesh(page, n);
     assert.equal((await facts()).drawn, 3, 'removing the x plane leaves the z stack');
     await page.selectOption('#color-mode', 'shaded');
+  });
+
+  it('curves through a cone\'s node end there: the vertex typed, drawn and counted in the key', async () => {
+    // x^2 + y^2 = z^2 cut by the plane x = 0 (the stack of one plane along x in a box
+    // symmetric about the apex): the lines y = +-z through the node at the origin, one
+    // singular_point vertex of degree 4 and four ends at the box.
+    const url = `${daemon.base}/#expr=${encodeURIComponent('x^2 + y^2 - z^2')}&box=-1,-1,-1,1,1,1&depth=3,6` +
+      `&curves=${encodeURIComponent(JSON.stringify([{ kind: 'plane', axis: 'x', count: 1 }]))}`;
+    const cone = await openViewer(browser.context, url);
+    try {
+      const got = await cone.page.evaluate(() => {
+        const a = window.isomeshViewer.data.features.arrangement;
+        const key = (t) => { const e = document.querySelector(`#key-types .key-type-${t}`); return e ? [e.dataset.count, e.textContent] : null; };
+        const drawn = window.isomeshViewer.curves.group.getObjectByName('curve-vertices-singular_point');
+        return { types: a.vertices.map((v) => v.type).sort(), apex: a.vertices.find((v) => v.type === 'singular_point'),
+          node: key('singular_point'), ends: key('end'), drawn: drawn ? drawn.children[1].count : 0 };
+      });
+      assert.deepEqual(got.types, ['end', 'end', 'end', 'end', 'singular_point']);
+      assert.equal(got.apex.degree, 4);
+      assert.ok(Math.hypot(...got.apex.xyz) < 1e-9, `the apex at the origin (${got.apex.xyz})`);
+      assert.deepEqual(got.node, ['1', '1 curves meeting a singular point']);
+      assert.deepEqual(got.ends, ['4', '4 curve ends at the box']);
+      assert.equal(got.drawn, 1, 'one marker at the node');
+      assert.deepEqual(cone.errors, []);
+    } finally {
+      await cone.page.close();
+    }
   });
 
   it('the panel adds level curves, an intersection and the silhouette of the view', async () => {

@@ -1,27 +1,58 @@
 // curves.js — the requested curves on the surface and the cells they cut (issue 14), from the
 // features JSON ("curves" entries with "arcs", and "arrangement") and the Draco "cell"
-// attribute: the curves as fat lines coloured by kind, the arrangement's cells as distinct
-// colours, picking a curve or a cell, and the panel's list of curve requests (what each
-// entry sends as the request's "curves").
+// attribute: the curves as fat lines coloured by kind, the arrangement's vertices as small
+// markers coloured by type (where curves cross, branch, end at the box, meet a double curve
+// or a singular point), the arrangement's cells as distinct colours, picking a curve or a
+// cell, and the panel's list of curve requests (what each entry sends as the request's
+// "curves").
 import * as THREE from 'three';
-import { fatLines } from './features.js';
+import { fatLines, markers, CURVE_KIND_COLORS, FEATURE_COLORS } from './features.js';
 
 // One colour per kind of requested curve (proto/glb.c uses the same).
 export const CUT_KIND_COLORS = {
   section: 0xff4fa3, level: 0x3b87ff, intersection: 0xffbf0a, silhouette: 0xe6e6e6, crease: 0xfa5708,
 };
+// One colour per arrangement vertex type (features JSON arrangement.vertices[].type); the
+// two on the singular locus take the colours of the double curves and singular points.
+export const ARR_VERTEX_COLORS = {
+  crossing: 0xffffff, branch: 0x9fb4ff, end: 0x8a94a6, loop: 0x5d6b82,
+  double_curve: CURVE_KIND_COLORS.double, singular_point: FEATURE_COLORS.points,
+};
+// Vertex markers drawn at most (a stack of 64 planes on a busy surface makes thousands of
+// crossings; the legend still counts them all). Radius relative to the singular points'.
+const MAX_VERTEX_MARKERS = 20000;
+const VERTEX_MARKER_SCALE = 0.55;
 const CURVE_WIDTH = 3;
 export const MAX_CURVE_REQUESTS = 32;   // entries the panel keeps (the server allows 256)
 export const MAX_STACK = 64;            // planes or levels in one entry
 
 const isCut = (c) => Array.isArray(c.arcs);
 
+// The arrangement's vertices as markers of radius r, one colour per type; their counts by
+// type into made.vertexTypes.
+function vertexMarkers(f, r, clippingPlanes, made) {
+  const vertices = ((f && f.arrangement && f.arrangement.vertices) || []).filter((v) => Array.isArray(v.xyz));
+  let budget = MAX_VERTEX_MARKERS;
+  for (const [type, color] of Object.entries(ARR_VERTEX_COLORS)) {
+    const some = vertices.filter((v) => v.type === type);
+    if (some.length) made.vertexTypes[type] = some.length;
+    const drawn = some.slice(0, Math.max(0, budget));
+    budget -= drawn.length;
+    if (drawn.length) {
+      const g = markers(drawn, r, color, clippingPlanes);
+      g.name = `curve-vertices-${type}`;
+      made.group.add(g);
+    }
+  }
+}
+
 // The requested curves of features f: {group, count (curves drawn), kinds {kind: n},
-// pickables [{what: 'cut', p, at}]}.
-export function buildCurves(f, clippingPlanes) {
+// vertexTypes {type: n}, pickables [{what: 'cut', p, at}]}. radius: the singular points'
+// marker size (the curves' vertices are drawn smaller).
+export function buildCurves(f, clippingPlanes, radius = 0.01) {
   const group = new THREE.Group();
   group.name = 'requested-curves';
-  const made = { group, count: 0, kinds: {}, pickables: [] };
+  const made = { group, count: 0, kinds: {}, vertexTypes: {}, pickables: [] };
   const curves = ((f && f.curves) || []).filter(isCut);
   for (const [kind, color] of Object.entries(CUT_KIND_COLORS)) {
     const pos = [];
@@ -37,6 +68,7 @@ export function buildCurves(f, clippingPlanes) {
     made.pickables.push({ what: 'cut', p: c, at });
   }
   made.count = curves.length;
+  vertexMarkers(f, VERTEX_MARKER_SCALE * radius, clippingPlanes, made);
   group.traverse((o) => { o.frustumCulled = false; });
   return made;
 }

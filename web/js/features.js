@@ -53,7 +53,7 @@ export function fatLines(positions, color, width, clippingPlanes) {
 }
 
 // Spheres at points [{xyz}], one colour; opacity < 1 for uncertified points.
-function markers(points, radius, color, clippingPlanes, opacity = 1) {
+export function markers(points, radius, color, clippingPlanes, opacity = 1) {
   const sphere = new THREE.SphereGeometry(radius, 16, 12);
   const front = new THREE.MeshStandardMaterial({
     color, emissive: color, emissiveIntensity: 0.35, roughness: 0.4, clippingPlanes,

@@ -5,7 +5,7 @@
 // with its retry time, the token prompt on 401).
 import { Viewer } from './viewer.js';
 import { POINT_TYPE_COLORS, CURVE_KIND_COLORS } from './features.js';
-import { CUT_KIND_COLORS, MAX_CURVE_REQUESTS, curveRequest, describeCurve, cellFace } from './curves.js';
+import { ARR_VERTEX_COLORS, CUT_KIND_COLORS, MAX_CURVE_REQUESTS, curveRequest, describeCurve, cellFace } from './curves.js';
 import * as api from './api.js';
 import * as loader from './loader.js';
 import { checkExpression, presetSource } from './expr.js';
@@ -293,7 +293,9 @@ const TYPE_LABELS = {
   node: 'nodes', isolated: 'isolated points', cusp: 'cusps', degenerate: 'degenerate points',
   pinch: 'pinch points', triple: 'triple points', double: 'double curves', whisker: 'whiskers',
   section: 'sections', level: 'level curves', intersection: 'intersections', silhouette: 'silhouettes',
-  crease: 'creases',
+  crease: 'creases', crossing: 'curve crossings', branch: 'curve branch points', end: 'curve ends at the box',
+  loop: 'closed curves meeting nothing', double_curve: 'curves meeting a double curve',
+  singular_point: 'curves meeting a singular point',
 };
 const hex = (c) => `#${c.toString(16).padStart(6, '0')}`;
 
@@ -319,10 +321,12 @@ function syncFeatureKey(counts, made) {
     const types = $('key-types');
     types.replaceChildren();
     const cuts = viewer.curves ? viewer.curves.kinds : {};
+    const ends = viewer.curves ? viewer.curves.vertexTypes : {};
     const entries = [
       ...Object.entries(made.types).map(([t, n]) => [t, n, POINT_TYPE_COLORS[t]]),
       ...Object.entries(made.kinds).map(([t, n]) => [t, n, CURVE_KIND_COLORS[t]]),
       ...Object.entries(cuts).map(([t, n]) => [t, n, CUT_KIND_COLORS[t]]),
+      ...Object.entries(ends).map(([t, n]) => [t, n, ARR_VERTEX_COLORS[t]]),
     ];
     for (const [t, n, color] of entries) {
       const span = document.createElement('span');

@@ -330,7 +330,7 @@ export class Viewer {
     const size = this.bounds.getSize(new THREE.Vector3()).length();
     this.features = buildFeatures(result.features, 0.009 * size, this.clipping);
     this.features.group.traverse((o) => { o.frustumCulled = false; });
-    this.curves = buildCurves(result.features, this.clipping);
+    this.curves = buildCurves(result.features, this.clipping, 0.009 * size);
     this.setLineResolution(Math.max(1, this.canvas.clientWidth), Math.max(1, this.canvas.clientHeight));
     this.scene.add(this.features.group, this.curves.group);
     this.applyColor();
