@@ -141,8 +141,8 @@ static bool same_normal(const float *c, const float *v)
     return is_zero3(c) || d >= cos(ISM_CORNER_NORMAL_MIN_ANGLE);
 }
 
-bool ism_wire_corner_normals(const ism_tape *f, const ism_mesh *m, const ism_wire_mesh *w,
-                             size_t *n, uint32_t **at, float **normal)
+bool ism_wire_corner_normals(const ism_tape *f, const ism_mesh *m, const ism_cut *cut,
+                             const ism_wire_mesh *w, size_t *n, uint32_t **at, float **normal)
 {
     *n = 0;
     *at = NULL;
@@ -152,7 +152,7 @@ bool ism_wire_corner_normals(const ism_tape *f, const ism_mesh *m, const ism_wir
     if (m->ntris > UINT32_MAX / 3)
         return false; /* corner indices are uint32 */
     float *cn = malloc(m->ntris * 9 * sizeof *cn);
-    if (!cn || !ism_crease_corner_normals(f, m, cn)) {
+    if (!cn || !ism_crease_corner_normals(f, m, cut, cn)) {
         free(cn);
         return false;
     }

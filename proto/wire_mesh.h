@@ -11,6 +11,7 @@
 #include <stdbool.h>
 #include "core/mesh/mesh.h"
 #include "core/analysis/analysis.h"
+#include "core/curves/cut_types.h"
 #include "core/eval/eval.h"
 
 typedef struct ism_wire_mesh {
@@ -47,11 +48,11 @@ void ism_wire_mesh_free(ism_wire_mesh *w);
  * parts, where the branch gradient is ∇f to rounding, send none. */
 #define ISM_CORNER_NORMAL_MIN_ANGLE 1e-3
 
-/* The corners of w (built from m) whose branch normal (core/curves/crease_normals.h) differs
- * from the vertex's wire normal by more than ISM_CORNER_NORMAL_MIN_ANGLE, into malloc'd
- * *at / *normal (NULL, *n 0 when none: f without min/max, or no normals in w). False when
- * out of memory. */
-bool ism_wire_corner_normals(const ism_tape *f, const ism_mesh *m, const ism_wire_mesh *w,
-                             size_t *n, uint32_t **at, float **normal);
+/* The corners of w (built from m) whose branch normal (core/curves/crease_normals.h; cut:
+ * the mesh's crease edges, NULL when none were cut) differs from the vertex's wire normal by
+ * more than ISM_CORNER_NORMAL_MIN_ANGLE, into malloc'd *at / *normal (NULL, *n 0 when none:
+ * f without min/max, or no normals in w). False when out of memory. */
+bool ism_wire_corner_normals(const ism_tape *f, const ism_mesh *m, const ism_cut *cut,
+                             const ism_wire_mesh *w, size_t *n, uint32_t **at, float **normal);
 
 #endif

@@ -559,8 +559,8 @@ static bool gather(const ism_request *req, const ism_tape *tape, ism_pipeline_re
     double t = ism_now_ms();
     const ism_analysis *an = s->have_analysis ? &s->an : NULL; /* none in a preview */
     if (!ism_wire_mesh_build(&c->mesh, an, ISM_ATTR_ALL, curvature_limit(req), &c->wire) ||
-        !ism_wire_corner_normals(tape, &c->mesh, &c->wire, &c->wire.ncorner_normals,
-                                 &c->corner_at, &c->corner_normal))
+        !ism_wire_corner_normals(tape, &c->mesh, s->cut.edges ? &s->cut : NULL, &c->wire,
+                                 &c->wire.ncorner_normals, &c->corner_at, &c->corner_normal))
         return fail_with(r, 500, "no_memory", "%s", "out of memory preparing the mesh for the wire");
     c->wire.corner_at = c->corner_at;
     c->wire.corner_normal = c->corner_normal;

@@ -16,11 +16,12 @@ y = 0, z = 0 (in a box on the octree lattice and one shifted 0.37 of a finest ce
   (the cut renumbers triangles: each takes its parent's flag).
 - Crease normals: gyroid-ball (max of a gyroid G and a ball B) in a box on the lattice and
   ones shifted off it. In the decoded .drc and in the .obj every corner's normal is its
-  triangle's branch gradient (closed form, G or B by the sign of B - G at the centroid) within
+  triangle's branch gradient (closed form, G or B by the sign of B - G at the corner farthest
+  from the crease: at the centroid, a sliver along the crease reads the wrong side) within
   1 degree, and at crease points the two sides' normals differ by the angle between grad G
   and grad B there (within 1 degree); likewise in the .ply (the sides on vertices of their
   own). Triangles whose side the 14-bit positions cannot decide
-  (centroid closer to the crease than 4 quantisation steps) are left out."""
+  (every corner closer to the crease than 4 quantisation steps) are left out."""
 import json
 import math
 import os
@@ -314,10 +315,14 @@ class CurveOutputsTest(unittest.TestCase):
     def assert_branch_normals(self, faces, quantum):
         """faces: [(3 positions, 3 normals)]. Returns (corners checked, crease points)."""
         worst, sides, checked = 0.0, {}, 0
-        for pts, nrms in faces:
-            c = [sum(p[j] for p in pts) / 3 for j in range(3)]
+        def crease_dist(c):  # signed distance to the surface B = G (ball side positive)
             d = [a - b for a, b in zip(ball_grad(c), gyroid_grad(c))]
-            margin = (ball(c) - gyroid(c)) / math.sqrt(sum(x * x for x in d))
+            return (ball(c) - gyroid(c)) / math.sqrt(sum(x * x for x in d))
+
+        for pts, nrms in faces:
+            # The side: at the corner farthest from the crease (a point of the surface; a
+            # flat triangle's centroid lies off it, on the wrong side for a sliver).
+            margin = max((crease_dist(p) for p in pts), key=abs)
             if abs(margin) < 4 * quantum:
                 continue  # the side is below what the positions resolve
             on_ball = margin > 0

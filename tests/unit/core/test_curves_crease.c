@@ -255,7 +255,7 @@ static void parallelepiped(int which)
         }
     cr_assert_leq(worst_plane, ON_PLANE_REL * diag, "crease vertex %g off a plane", worst_plane);
     float *cn = malloc(9 * m.ntris * sizeof *cn);
-    cr_assert(ism_crease_corner_normals(f, &m, cn));
+    cr_assert(ism_crease_corner_normals(f, &m, &cut, cn));
     double worst_angle = 0;
     check_sides(&m, &cut, cn, &worst_angle);
     cr_log_info("slabs %d: crease vertices off their planes by %.2e, dihedral off by %.3f deg",
