@@ -13,6 +13,7 @@ import { startDaemon, stopDaemon, startBrowser, stopBrowser, watchErrors } from 
 import { waitForMesh, loads, openViewer, jobPosts, statsPanel, viewShot, settledHref } from './lib/page.mjs';
 import { pixelStats, changedShare } from './lib/png.mjs';
 import { decodeDraco, ATTRIBUTE_IDS } from './lib/draco.mjs';
+import { pickSingularPoints, nearest } from './lib/pick.mjs';
 import { checkExpression } from '../../web/js/expr.js';
 
 const require = createRequire(import.meta.url);
@@ -137,6 +138,56 @@ describe('isomesh viewer', { timeout: 600000 }, () => {
     const off = features.nonmanifold_points.filter((p) => !p.on_locus).length +
       segs(features.nonmanifold_edges.filter((c) => !c.on_locus));
     assert.equal(counts['key-artefacts'], off);
+  });
+
+  it('picking a Kummer node shows its type and coordinates within 1e-6 of the closed form', async () => {
+    // f = (|X|^2 - mu2)^2 - lambda p q r s with the planes p, q = w - z -+ sqrt2 x and r, s =
+    // w + z +- sqrt2 y (mu2 = 2, w = 1: the preset's defaults). Where two of the planes and the
+    // sphere |X|^2 = mu2 meet, both terms vanish to second order: a node on each of the
+    // tetrahedron's 6 edges, twice (12). The other 4, (+-1/sqrt2, 0, -1/2) and
+    // (0, +-1/sqrt2, 1/2), are zeros of f and grad f too (exact substitution; checked below).
+    const mu2 = 2, w = 1, r2 = Math.SQRT2;
+    const planes = [[[r2, 0, 1], w], [[-r2, 0, 1], w], [[0, r2, 1], -w], [[0, -r2, 1], -w]];   // n . X = c
+    const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    const nodes = [[r2 / 2, 0, -0.5], [-r2 / 2, 0, -0.5], [0, r2 / 2, 0.5], [0, -r2 / 2, 0.5]];
+    for (let i = 0; i < 4; i++) {
+      for (let j = i + 1; j < 4; j++) {
+        const [[a, ca], [b, cb]] = [planes[i], planes[j]];
+        const d = cross(a, b), dd = dot(d, d), ab = dot(a, b);
+        const x0 = [0, 1, 2].map((k) => ((ca * dot(b, b) - cb * ab) * a[k] + (cb * dot(a, a) - ca * ab) * b[k]) / dd);
+        // |x0 + t d|^2 = mu2, x0 . d = 0
+        const t = Math.sqrt((mu2 - dot(x0, x0)) / dd);
+        for (const s of [t, -t]) nodes.push(x0.map((v, k) => v + s * d[k]));
+      }
+    }
+    const f = ([x, y, z]) => {
+      const lambda = (3 * mu2 - 1) / (3 - mu2);
+      const p = w - z - r2 * x, q = w - z + r2 * x, r = w + z + r2 * y, s = w + z - r2 * y;
+      return (x * x + y * y + z * z - mu2) ** 2 - lambda * p * q * r * s;
+    };
+    const h = 1e-5, grad = (X) => [0, 1, 2].map((k) => {
+      const a = [...X], b = [...X];
+      a[k] += h; b[k] -= h;
+      return (f(a) - f(b)) / (2 * h);
+    });
+    for (const X of nodes) assert.ok(Math.abs(f(X)) < 1e-12 && Math.hypot(...grad(X)) < 1e-8, `(${X}) is a node`);
+
+    const picks = await pickSingularPoints(page);
+    assert.equal(picks.length, 16, 'sixteen singular points drawn');
+    const seen = new Set();
+    for (const p of picks) {
+      assert.equal(p.type, 'node');
+      const shown = p.text.split('\n')[1].match(/^\((.*)\)$/)[1].split(', ').map(Number);   // as the panel prints it
+      assert.ok(nearest(nodes, shown) < 1e-6, `shown as (${shown})`);
+      const err = nearest(nodes, p.xyz);
+      assert.ok(err < 1e-6, `picked (${p.xyz}) is ${err} from the nearest closed-form node`);
+      assert.ok(Math.abs(p.probe.f) < 1e-9, `the server's f = ${p.probe.f} there`);
+      seen.add(nodes.findIndex((X) => Math.hypot(X[0] - p.xyz[0], X[1] - p.xyz[1], X[2] - p.xyz[2]) === err));
+    }
+    console.log(`# Kummer: ${picks.length} picks, ${seen.size} different nodes, worst distance to the closed form ${Math.max(...picks.map((p) => nearest(nodes, p.xyz))).toExponential(2)}`);
+    // A click picks the point drawn nearest to it: two nodes may share a pixel from this view.
+    assert.ok(seen.size >= 12, `${seen.size} different nodes picked`);
   });
 
   it('moving a slider computes a new mesh; moving it back is instant, from the page', async () => {
