@@ -20,7 +20,8 @@
 // The page stays responsive meanwhile (software GL takes seconds for a large mesh): the
 // directions go to the GPU a few at a time, each batch followed by a fence that is polled
 // between tasks, so input events and animation frames run while the GPU works; batches grow
-// or shrink to take about CHUNK_MS each.
+// or shrink to take about CHUNK_MS each. The read-back values are turned into light and
+// smoothed SLICE at a time, in tasks of their own.
 import * as THREE from 'three';
 import { gpuDone } from './gpu.js';
 
@@ -42,6 +43,9 @@ const SMOOTHING = 2;
 const CHUNK_MS = 40;
 // Directions per batch at most (a fast GPU does all 64 in a few batches).
 const MAX_CHUNK = 16;
+// Vertices or triangles read back and smoothed in one task: a few ms of script (the whole of it
+// took 100-180 ms for the gyroid ball's 59k vertices at load 15, in one task, before).
+const SLICE = 8192;
 
 // The depth pass leaves out what the clipping plane removes: keep.xyz . p + keep.w < 0 (the
 // mesh is drawn untransformed, so its positions are world positions).
@@ -184,12 +188,13 @@ export async function bakeOcclusion(renderer, geometry, { keep = null, alive = (
     renderer.readRenderTargetPixels(acc, 0, 0, ACC_WIDTH, rows, raw);
     const light = new Float32Array(2 * n);
     const h = THREE.DataUtils.fromHalfFloat;
-    for (let i = 0; i < n; i++) {
+    await inSlices(n, (i) => {
       const w0 = h(raw[4 * i + 1]), w1 = h(raw[4 * i + 3]);
       light[2 * i] = w0 > 0 ? Math.min(1, h(raw[4 * i]) / w0) : 1;
       light[2 * i + 1] = w1 > 0 ? Math.min(1, h(raw[4 * i + 2]) / w1) : 1;
-    }
-    return geometry.index ? smooth(light, geometry.index.array, SMOOTHING) : light;
+    });
+    if (!alive()) return null;
+    return geometry.index ? await smooth(light, geometry.index.array, SMOOTHING) : light;
   } finally {
     for (const o of made) o.dispose();
   }
@@ -215,24 +220,34 @@ function withTargets(renderer, draw) {
   }
 }
 
+// Runs step(i) for i = 0 .. count - 1, SLICE at a time, each slice a task of its own: the page
+// draws frames and answers input between them.
+async function inSlices(count, step) {
+  for (let start = 0; start < count; start += SLICE) {
+    if (start > 0) await new Promise((r) => setTimeout(r, 0));
+    const end = Math.min(count, start + SLICE);
+    for (let i = start; i < end; i++) step(i);
+  }
+}
+
 // passes rounds of: each vertex's pair of values becomes the mean over itself and the vertices
 // it shares a triangle with (each shared edge counted once per triangle).
-function smooth(values, index, passes) {
+async function smooth(values, index, passes) {
   const n = values.length / 2;
   let cur = values;
   for (let p = 0; p < passes; p++) {
     const sum = Float32Array.from(cur), count = new Float32Array(n).fill(1);
-    for (let t = 0; t < index.length; t += 3) {
+    await inSlices(index.length / 3, (t) => {
       for (let k = 0; k < 3; k++) {
-        const a = index[t + k], b = index[t + (k + 1) % 3];
+        const a = index[3 * t + k], b = index[3 * t + (k + 1) % 3];
         sum[2 * a] += cur[2 * b]; sum[2 * a + 1] += cur[2 * b + 1]; count[a]++;
         sum[2 * b] += cur[2 * a]; sum[2 * b + 1] += cur[2 * a + 1]; count[b]++;
       }
-    }
-    for (let i = 0; i < n; i++) {
+    });
+    await inSlices(n, (i) => {
       sum[2 * i] /= count[i];
       sum[2 * i + 1] /= count[i];
-    }
+    });
     cur = sum;
   }
   return cur;

@@ -222,26 +222,32 @@ export class Viewer {
   }
 
   // The render mode: ambient occlusion over the shading (true) or the plain shading.
+  // A frame is drawn only when the look changes: until the occlusion is computed the surface
+  // stays plain, and in software GL every frame of a large mesh holds the page (the compositor
+  // reads it back) for as long as the GPU takes to draw it.
   setOcclusion(on) {
     this.occlusion = on;
-    this.render();
+    if (this.applyOcclusion()) this.render();
   }
 
   // The render mode's occlusion of the shown mesh, computed in the background (occlusion.js:
   // batches on the GPU between which the page runs) the first time the mesh is drawn in that
   // mode with the current cut, and kept with the decoded mesh per cut; until it is there the
   // surface is drawn plain. A live preview is always drawn plain. canvas[data-look] says which
-  // look the last frame has, canvas[data-occlusion] 'computing' while a bake runs.
+  // look the last frame has, canvas[data-occlusion] 'computing' while a bake runs. Returns
+  // whether the look changed (then a frame must show it).
   applyOcclusion() {
     const g = this.surface && this.surface.geometry;
     const m = this.data && this.data.mesh;
     const want = this.occlusion && !this.preview && g && g.attributes.normal;
     const cut = this.cutKey();
+    let swapped = false;
     if (want) {
       const light = m.occlusion && m.occlusion.get(cut);
       if (light && g.userData.occlusionCut !== cut) {
         g.setAttribute('occlusion', new THREE.BufferAttribute(light, 2));
         g.userData.occlusionCut = cut;
+        swapped = true;
       } else if (!light && !(this.bake && this.bake.mesh === m && this.bake.cut === cut)) {
         this.startBake(m, g, cut);
       }
@@ -249,9 +255,11 @@ export class Viewer {
       this.bake = null;           // the running bake stops at its next batch
     }
     const on = !!(want && g.attributes.occlusion && g.userData.occlusionCut === cut);
+    const changed = this.occlusionStrength.value !== (on ? 1 : 0) || swapped;
     this.occlusionStrength.value = on ? 1 : 0;
     this.canvas.dataset.look = on ? 'occlusion' : 'plain';
     this.canvas.dataset.occlusion = this.bake ? 'computing' : (on ? 'done' : 'off');
+    return changed;
   }
 
   // What the clipping removes, as a key of the occlusion computed without it ('' for nothing).
@@ -287,7 +295,7 @@ export class Viewer {
       while (m.occlusion.size > OCCLUSION_CUTS_KEPT) m.occlusion.delete(m.occlusion.keys().next().value);
       this.render();
     }, BAKE_SETTLE_MS);
-    this.render();
+    this.canvas.dataset.occlusion = 'computing';
   }
 
   onKey(e) {
