@@ -2,6 +2,8 @@
  * the curve: the minimum-norm step dx = −Jᵀ (J Jᵀ)⁻¹ r with J the rows ∇f, ∇g (and ∇g₂ at a
  * crossing of two curves, where the system is square). */
 #include "core/curves/cut_fn.h"
+#include "core/util/min_norm.h"
+#include "core/util/vec3.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -155,41 +157,6 @@ bool ism_cut_g_batch(ism_cut_eval *ev, size_t k, const double *pos, size_t n, do
     return true;
 }
 
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-/* Solves the m × m system (m = 2 or 3) A y = r, A symmetric given as rows. False when singular. */
-static bool solve_sym(int m, double a[3][3], const double r[3], double y[3])
-{
-    if (m == 2) {
-        double det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
-        if (!(fabs(det) > CUT_SINGULAR_REL * a[0][0] * a[1][1]))
-            return false;
-        y[0] = (r[0] * a[1][1] - a[0][1] * r[1]) / det;
-        y[1] = (a[0][0] * r[1] - a[1][0] * r[0]) / det;
-        return true;
-    }
-    double c0 = a[1][1] * a[2][2] - a[1][2] * a[2][1];
-    double c1 = a[1][2] * a[2][0] - a[1][0] * a[2][2];
-    double c2 = a[1][0] * a[2][1] - a[1][1] * a[2][0];
-    double det = a[0][0] * c0 + a[0][1] * c1 + a[0][2] * c2;
-    if (!(fabs(det) > CUT_SINGULAR_REL * a[0][0] * a[1][1] * a[2][2]))
-        return false;
-    double b[3][3];
-    for (int col = 0; col < 3; col++) {
-        memcpy(b, a, sizeof b);
-        for (int row = 0; row < 3; row++)
-            b[row][col] = r[row];
-        double d = b[0][0] * (b[1][1] * b[2][2] - b[1][2] * b[2][1]) -
-                   b[0][1] * (b[1][0] * b[2][2] - b[1][2] * b[2][0]) +
-                   b[0][2] * (b[1][0] * b[2][1] - b[1][1] * b[2][0]);
-        y[col] = d / det;
-    }
-    return true;
-}
-
 /* Values and gradient rows of f, the functions ks and the plane (n, c; NULL for none) at p;
  * the worst |value| / |gradient|. */
 static double system_at(ism_cut_eval *ev, const size_t *ks, int nk, const double plane[4],
@@ -200,11 +167,11 @@ static double system_at(ism_cut_eval *ev, const size_t *ks, int nk, const double
         r[i + 1] = ism_cut_g(ev, ks[i], p, J[i + 1]);
     if (plane) {
         memcpy(J[nk + 1], plane, 3 * sizeof *plane);
-        r[nk + 1] = dot3(plane, p) - plane[3];
+        r[nk + 1] = ism_dot3(plane, p) - plane[3];
     }
     double worst = 0;
     for (int i = 0; i <= nk + (plane != NULL); i++) {
-        double n = sqrt(dot3(J[i], J[i]));
+        double n = sqrt(ism_dot3(J[i], J[i]));
         double d = n > 0 ? fabs(r[i]) / n : (r[i] == 0 ? 0 : INFINITY);
         worst = d > worst ? d : worst;
     }
@@ -223,20 +190,14 @@ static bool refine(ism_cut_eval *ev, const size_t *ks, int nk, const double plan
             return false;
         if (worst <= tol) {
             double d[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
-            if (dot3(d, d) > max_move * max_move)
+            if (ism_dot3(d, d) > max_move * max_move)
                 return false;
             memcpy(p, x, sizeof x);
             return true;
         }
-        double A[3][3], y[3], step[3] = {0, 0, 0};
-        for (int i = 0; i < m; i++)
-            for (int j = 0; j < m; j++)
-                A[i][j] = dot3(J[i], J[j]);
-        if (!solve_sym(m, A, r, y))
+        double step[3];
+        if (!ism_min_norm_step(m, (const double (*)[3])J, r, CUT_SINGULAR_REL, step))
             return false;
-        for (int c = 0; c < 3; c++)
-            for (int i = 0; i < m; i++)
-                step[c] -= J[i][c] * y[i];
         /* damped: halve the step until the residual drops (a kink of f, a far start) */
         double lambda = 1, next = INFINITY, xn[3];
         for (int h = 0; h < CUT_DAMPING_HALVINGS; h++, lambda *= 0.5) {
@@ -270,8 +231,8 @@ void ism_cut_residuals(ism_cut_eval *ev, size_t k, const double p[3], double *df
 {
     double g[3];
     double f = ism_eval_gradient(ev->f, ev->fws, p[0], p[1], p[2], g);
-    double nf = sqrt(dot3(g, g));
+    double nf = sqrt(ism_dot3(g, g));
     *df = nf > 0 ? fabs(f) / nf : fabs(f);
-    double v = ism_cut_g(ev, k, p, g), ng = sqrt(dot3(g, g));
+    double v = ism_cut_g(ev, k, p, g), ng = sqrt(ism_dot3(g, g));
     *dg = ng > 0 ? fabs(v) / ng : fabs(v);
 }

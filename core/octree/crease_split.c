@@ -2,6 +2,7 @@
  * crease_split.h). */
 #include "core/octree/crease_split.h"
 #include "core/octree/triangulate.h"
+#include "core/util/min_norm.h"
 
 #include <math.h>
 #include <string.h>
@@ -45,13 +46,12 @@ static bool newton_step(ism_sampler *s, double x[3])
     double v[2], g[2][3];
     s->n_gradient++;
     ism_eval_top_branches(s->tape, s->ws, x[0], x[1], x[2], v, g);
-    double aa = ism_dot3(g[0], g[0]), ab = ism_dot3(g[0], g[1]), bb = ism_dot3(g[1], g[1]);
-    double det = aa * bb - ab * ab;
-    if (!(det > CREASE_PARALLEL_SIN2 * aa * bb) || !isfinite(v[0]) || !isfinite(v[1]))
+    double step[3];
+    if (!isfinite(v[0]) || !isfinite(v[1]) ||
+        !ism_min_norm_step(2, (const double (*)[3])g, v, CREASE_PARALLEL_SIN2, step))
         return false;
-    double y0 = (bb * v[0] - ab * v[1]) / det, y1 = (aa * v[1] - ab * v[0]) / det;
     for (int k = 0; k < 3; k++)
-        x[k] -= y0 * g[0][k] + y1 * g[1][k];
+        x[k] += step[k];
     return true;
 }
 

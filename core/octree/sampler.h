@@ -1,12 +1,13 @@
 /* sampler.h — one thread's access to f during polygonisation: the compiled tape, that
  * thread's evaluation workspace, and counters of every kind of evaluation (the statistics
- * report them). Also the small vector helpers the octree code shares. */
+ * report them), and the first-order distance to f = 0 measured through it. */
 #ifndef ISM_SAMPLER_H
 #define ISM_SAMPLER_H
 
 #include <stdint.h>
 #include <math.h>
 #include "core/eval/eval.h"
+#include "core/util/vec3.h"
 
 typedef struct ism_sampler {
     const ism_tape *tape;
@@ -24,29 +25,6 @@ static inline double ism_sample_grad(ism_sampler *s, const double p[3], double g
 {
     s->n_gradient++;
     return ism_eval_gradient(s->tape, s->ws, p[0], p[1], p[2], g);
-}
-
-static inline double ism_dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static inline double ism_norm3(const double a[3]) { return sqrt(ism_dot3(a, a)); }
-
-/* Normalises a in place; returns its former length (a is left unchanged when it is 0). */
-static inline double ism_normalise3(double a[3])
-{
-    double n = ism_norm3(a);
-    if (n > 0 && isfinite(n))
-        for (int k = 0; k < 3; k++)
-            a[k] /= n;
-    return n;
-}
-
-static inline double ism_dist3(const double a[3], const double b[3])
-{
-    double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-    return ism_norm3(d);
 }
 
 /* |f| / |∇f| at p: the first-order distance to f = 0. 0 where f is exactly 0 (on the surface,

@@ -9,6 +9,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 #include "core/eval/eval.h"
+#include "core/util/vec3.h"
 
 /* A converged point counts as on the curve when |∇f| ≤ this × Hessian scale × box diagonal,
  * i.e. it is within ~1e-9 × diagonal of a zero of ∇f. (Newton fixes only the two normal
@@ -68,17 +69,6 @@ void ism_cjet_normal_basis(const double t[3], double n[2][3]);
 
 /* The frame with its tangent reversed (the other direction of travel). */
 void ism_cjet_reverse(ism_cpoint *c);
-
-static inline double ism_dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static inline double ism_dist3(const double a[3], const double b[3])
-{
-    double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-    return sqrt(ism_dot3(d, d));
-}
 
 /* Distance from p to the segment a–b, and in *u the parameter (0..1) of its nearest point. */
 double ism_dist_segment(const double p[3], const double a[3], const double b[3], double *u);

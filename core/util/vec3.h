@@ -1,0 +1,31 @@
+/* vec3.h — the small vector helpers on double[3] that the polygoniser, the singular locus
+ * and the curves share (dot product, length, normalising, distance), inline. */
+#ifndef ISM_VEC3_H
+#define ISM_VEC3_H
+
+#include <math.h>
+
+static inline double ism_dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static inline double ism_norm3(const double a[3]) { return sqrt(ism_dot3(a, a)); }
+
+/* Normalises a in place; returns its former length (a is left unchanged when it is 0). */
+static inline double ism_normalise3(double a[3])
+{
+    double n = ism_norm3(a);
+    if (n > 0 && isfinite(n))
+        for (int k = 0; k < 3; k++)
+            a[k] /= n;
+    return n;
+}
+
+static inline double ism_dist3(const double a[3], const double b[3])
+{
+    double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+    return ism_norm3(d);
+}
+
+#endif
