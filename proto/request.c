@@ -453,6 +453,20 @@ static bool decode_max_error(const json_t *v, const json_t *depth, ism_request *
     return true;
 }
 
+/* "simplify": true or false (after "max_error"). Under an error bound the mesh is simplified
+ * unless it says false: asking for E is asking for the fewest triangles within E. Without a
+ * bound there is nothing to keep the simplification honest, so true is refused. */
+static bool decode_simplify(const json_t *v, ism_request *req, ism_req_error *err)
+{
+    if (!json_is_boolean(v))
+        return bad(err, "$.simplify", "expected true or false, got %s", type_name(v));
+    if (json_is_true(v) && !(req->poly.max_error > 0))
+        return bad(err, "$.simplify", "the simplification keeps the mesh within \"max_error\": "
+                                      "give max_error too");
+    req->simplify = json_is_true(v);
+    return true;
+}
+
 /* "quality": "raw" or "good" (ism_quality_lookup). */
 static bool decode_quality(const json_t *v, ism_request *req, ism_req_error *err)
 {
@@ -599,7 +613,7 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
 {
     static const char *const known[] = {"expr", "preset", "params", "let", "box", "depth",
                                         "max_error", "quality", "tolerances", "output", "curves",
-                                        "preview", NULL};
+                                        "preview", "simplify", NULL};
     if (!json_is_object(root))
         return bad(err, "$", "a request is a JSON object, got %s", type_name(root));
     if (!check_fields(root, "$", known, err))
@@ -652,6 +666,9 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
         return false;
     if ((v = json_object_get(root, "max_error")) &&
         !decode_max_error(v, depth, req, depth_limit, err))
+        return false;
+    req->simplify = req->poly.max_error > 0;
+    if ((v = json_object_get(root, "simplify")) && !decode_simplify(v, req, err))
         return false;
     if ((v = json_object_get(root, "quality")) && !decode_quality(v, req, err))
         return false;

@@ -80,6 +80,10 @@ typedef struct ism_request {
     ism_poly_options poly;
     int quality;               /* enum ism_quality: "raw" (default) or "good" (the quality
                                   pass after meshing, core/remesh/) */
+    bool simplify;             /* under max_error: the simplification after meshing
+                                  (core/remesh/simplify.h); "simplify": false turns it off.
+                                  Set from max_error when not given; true without
+                                  max_error is refused (400) */
     enum ism_format format;
     int position_bits;         /* Draco position quantisation (6..24) */
     int normal_bits;           /* Draco normal quantisation (4..16) */

@@ -49,6 +49,8 @@ static void write_max_error(ism_jw *w, const ism_request *req)
         return;
     ism_jw_key(w, "max_error");
     ism_jw_number(w, req->poly.max_error);
+    ism_jw_key(w, "simplify"); /* its meshes differ from the polygoniser's under the bound */
+    ism_jw_bool(w, req->simplify);
 }
 
 /* The quality pass, only when asked for (keys of requests without it stay as they were). */

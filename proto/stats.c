@@ -131,6 +131,14 @@ static const stat_field remesh_fields[] = {
 };
 #undef R
 
+#define S(m) FIELD(ism_simplify_stats, m)
+static const stat_field simplify_fields[] = {
+    S(triangles_before), S(triangles_after), S(collapses), S(flips), S(moves), S(rounds),
+    S(locked_vertices), S(min_angle_before), S(min_angle_after),
+    MS("time_ms", ism_simplify_stats, time_ms),
+};
+#undef S
+
 static void write_poly(ism_jw *w, const ism_poly_stats *s)
 {
     static const char *const phase[ISM_PHASE_COUNT] = {"octree", "polygons", "cracks", "mesh"};
@@ -244,6 +252,15 @@ static void write_remesh(ism_jw *w, const ism_remesh_stats *s)
     ism_jw_object_end(w);
 }
 
+static void write_simplify(ism_jw *w, const ism_simplify_stats *s)
+{
+    ism_jw_object(w);
+    write_fields(w, s, simplify_fields, NFIELDS(simplify_fields));
+    ism_jw_key(w, "stopped");
+    ism_jw_bool(w, s->stopped);
+    ism_jw_object_end(w);
+}
+
 /* The stages a preview ("preview": true) does not run: the polygoniser's hidden-piece
  * search (ism_poly_options.thin_search), the stages by their names in timings_ms, and the
  * request's curves and quality, which a preview refuses. */
@@ -352,6 +369,10 @@ char *ism_stats_surface_json(const ism_stats_input *in, size_t *len)
     if (in->locus) {
         ism_jw_key(&w, "singular");
         write_singular(&w, in->locus, in->check, in->conform);
+    }
+    if (in->simplify) {
+        ism_jw_key(&w, "simplify");
+        write_simplify(&w, in->simplify);
     }
     if (in->remesh) {
         ism_jw_key(&w, "remesh");

@@ -13,6 +13,9 @@
  *                 "evals_jet", "time_ms", "conform": {points_conformed, points_failed,
  *                 points_short_cones, curves_conformed, curves_failed, loops_fallback,
  *                 triangles_removed, triangles_added, time_ms}},
+ *    "simplify": {"triangles_before", "triangles_after", "collapses", "flips", "moves",
+ *                 "rounds", "locked_vertices", "min_angle_before", "min_angle_after",
+ *                 "time_ms", "stopped"} (only after the simplification),
  *    "remesh": {"flips", "moves", "collapses", "inserts", "locked_vertices",
  *               "min_angle_before", "min_angle_after", "time_ms"} (only after the quality
  *               pass),
@@ -32,6 +35,7 @@
 #include "core/analysis/analysis.h"
 #include "core/octree/polygonise.h"
 #include "core/remesh/remesh.h"
+#include "core/remesh/simplify.h"
 #include "core/singular/check.h"
 #include "core/singular/conform.h"
 #include "core/singular/locus.h"
@@ -53,6 +57,7 @@ typedef struct ism_stats_input {
     const ism_conform_stats *conform;     /* what the conformance pass did (may be NULL) */
     double max_error;                     /* the requested error bound; 0 when none */
     const ism_remesh_stats *remesh;       /* the quality pass ("quality": "good"), or NULL */
+    const ism_simplify_stats *simplify;   /* the simplification (under max_error), or NULL */
     bool preview;                         /* a preview: the stages it skips are listed */
     double timings_ms[ISM_TIME_COUNT];
     const char *surface;                  /* ism_stats_surface_json's text, or NULL: then */

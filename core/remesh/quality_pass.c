@@ -1,6 +1,6 @@
 /* quality_pass.c — hands the locus's points, double-sheet ranges and the curve cut's edges to
- * the quality pass as protection, and renumbers them as its collapses renumbered the mesh
- * (quality_pass.h). */
+ * the quality pass or the simplification as protection, and renumbers them as its collapses
+ * renumbered the mesh (quality_pass.h). */
 #include "core/remesh/quality_pass.h"
 
 #include <stdlib.h>
@@ -74,9 +74,27 @@ static void renumber_sheets(ism_locus *locus, const ism_remesh_renumber *ren)
     }
 }
 
-bool ism_quality_pass(const ism_tape *f, ism_locus *locus, ism_cut *cut,
-                      double max_error, const volatile int *cancel, ism_mesh *mesh,
-                      ism_remesh_stats *st, ism_error *err)
+/* A pass over the mesh with the options it is given, its statistics at st. */
+typedef bool (*pass_fn)(ism_mesh *m, const ism_remesh_options *o, void *st,
+                        ism_remesh_renumber *ren, ism_error *err);
+
+static bool quality_fn(ism_mesh *m, const ism_remesh_options *o, void *st,
+                       ism_remesh_renumber *ren, ism_error *err)
+{
+    return ism_remesh_quality(m, o, st, ren, err);
+}
+
+static bool simplify_fn(ism_mesh *m, const ism_remesh_options *o, void *st,
+                        ism_remesh_renumber *ren, ism_error *err)
+{
+    return ism_remesh_simplify(m, o, st, ren, err);
+}
+
+/* Runs pass on mesh with the locus's points, the sheets' labels and the cut's edges
+ * protected, and renumbers them after it. */
+static bool run_protected(pass_fn pass, const ism_tape *f, ism_locus *locus, ism_cut *cut,
+                          double max_error, const volatile int *cancel, ism_mesh *mesh,
+                          void *st, ism_error *err)
 {
     size_t ne = cut ? cut->nedges : 0, np = locus->npoints;
     uint32_t *edges = malloc((ne ? ne : 1) * 2 * sizeof *edges);
@@ -95,18 +113,33 @@ bool ism_quality_pass(const ism_tape *f, ism_locus *locus, ism_cut *cut,
                                 .locked_points = points, .nlocked_points = np,
                                 .cancel = cancel};
         ism_remesh_renumber ren;
-        ok = ism_remesh_quality(mesh, &o, st, &ren, err);
+        ok = pass(mesh, &o, st, &ren, err);
         if (ren.vert && !(cut && cut->tri_parent))
             renumber_sheets(locus, &ren);
         if (ren.vert && cut && !renumber_cut(cut, &ren))
-            ok = ism_error_set(err, "quality pass: out of memory");
+            ok = ism_error_set(err, "out of memory renumbering the curves after a mesh pass");
         ism_remesh_renumber_free(&ren);
     } else {
-        memset(st, 0, sizeof *st);
-        ism_error_set(err, "quality pass: out of memory");
+        ism_error_set(err, "out of memory before a mesh pass");
     }
     free(edges);
     free(points);
     free(label);
     return ok;
+}
+
+bool ism_quality_pass(const ism_tape *f, ism_locus *locus, ism_cut *cut,
+                      double max_error, const volatile int *cancel, ism_mesh *mesh,
+                      ism_remesh_stats *st, ism_error *err)
+{
+    memset(st, 0, sizeof *st);
+    return run_protected(quality_fn, f, locus, cut, max_error, cancel, mesh, st, err);
+}
+
+bool ism_simplify_pass(const ism_tape *f, ism_locus *locus, ism_cut *cut,
+                       double max_error, const volatile int *cancel, ism_mesh *mesh,
+                       ism_simplify_stats *st, ism_error *err)
+{
+    memset(st, 0, sizeof *st);
+    return run_protected(simplify_fn, f, locus, cut, max_error, cancel, mesh, st, err);
 }

@@ -1,12 +1,13 @@
-/* quality_pass.h — the quality pass applied to a surface's finished mesh (after the
- * conformance to the singular locus and the curve cuts): what the locus and the cut say is
- * protected is handed to ism_remesh_quality. The daemon's pipeline and the command line both
- * call it. */
+/* quality_pass.h — the quality pass and the simplification applied to a surface's finished
+ * mesh (after the conformance to the singular locus and the curve cuts): what the locus and
+ * the cut say is protected is handed to ism_remesh_quality or ism_remesh_simplify. The
+ * daemon's pipeline and the command line both call them. */
 #ifndef ISM_QUALITY_PASS_H
 #define ISM_QUALITY_PASS_H
 
 #include "core/curves/cut.h"
 #include "core/remesh/remesh.h"
+#include "core/remesh/simplify.h"
 #include "core/singular/locus.h"
 
 /* The request's choice: the polygoniser's triangles as they come, or the pass run on them. */
@@ -25,5 +26,12 @@ int ism_quality_lookup(const char *name);
 bool ism_quality_pass(const ism_tape *f, ism_locus *locus, ism_cut *cut,
                       double max_error, const volatile int *cancel, ism_mesh *mesh,
                       ism_remesh_stats *st, ism_error *err);
+
+/* Runs the simplification (simplify.h) within max_error (> 0) on mesh with the same
+ * protection and renumbering as ism_quality_pass. False with err set when out of memory
+ * (the mesh is then still valid and within the bound). */
+bool ism_simplify_pass(const ism_tape *f, ism_locus *locus, ism_cut *cut,
+                       double max_error, const volatile int *cancel, ism_mesh *mesh,
+                       ism_simplify_stats *st, ism_error *err);
 
 #endif

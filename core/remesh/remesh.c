@@ -65,22 +65,8 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
     if (!o->f)
         return ism_error_set(err, "quality pass: no function to project onto");
     rm_pass p;
-    memset(&p, 0, sizeof p);
-    p.f = o->f;
-    p.max_error = o->max_error > 0 ? o->max_error : 0;
-    p.r.label = o->tri_label;
-    p.ws = ism_eval_ws_new(o->f);
     size_t nv = m->nverts, nt = m->ntris;
-    bool ok = p.ws && rm_mesh_build(&p.r, m, nt / ISM_RM_INSERT_SHARE + ISM_RM_INSERT_MIN);
-    if (ok) {
-        size_t cv = p.r.cap_verts ? p.r.cap_verts : 1;
-        p.normal = malloc(cv * 3 * sizeof *p.normal);
-        p.active = calloc(cv, 1);
-        p.slide = calloc(cv, 1);
-        p.touched = calloc(cv, 1);
-    }
-    ok = ok && p.normal && p.active && p.slide && p.touched && rm_normals(&p) &&
-         rm_lock_features(&p, o);
+    bool ok = rm_pass_open(&p, m, o, nt / ISM_RM_INSERT_SHARE + ISM_RM_INSERT_MIN);
     if (ok) {
         rm_collapse_bounds(&p);
         for (int round = 0; round < ISM_RM_ROUNDS && !stopped(o); round++) {
@@ -103,19 +89,13 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
         for (size_t v = 0; v < m->nverts; v++)
             st->locked_vertices += p.r.locked[v] && p.r.count[v];
     }
-    if (p.r.dead && p.r.gone && p.r.origin && !rm_compact(&p.r, nv, nt, ren))
-        ok = false;
     st->flips = p.flips;
     st->moves = p.moves;
     st->collapses = p.collapses;
     st->inserts = p.inserts;
+    if (!rm_pass_close(&p, nv, nt, ren))
+        ok = false;
     st->min_angle_after = ism_remesh_min_angle(m);
-    rm_mesh_free(&p.r);
-    free(p.normal);
-    free(p.active);
-    free(p.slide);
-    free(p.touched);
-    ism_eval_ws_free(p.ws);
     st->time_ms = ism_now_ms() - t0;
     return ok ? true : ism_error_set(err, "quality pass: out of memory");
 }

@@ -8,6 +8,7 @@
  * faces the fan's way and bends no more than a crease against its outer neighbour; the
  * smallest angle of the fan grows; and no new centroid or edge midpoint lies farther from
  * f = 0 than the farthest of the fan's before. */
+#include "core/remesh/rm_merge.h"
 #include "core/remesh/rm_pass.h"
 
 #include <math.h>
@@ -17,7 +18,7 @@
  * issue's goal on smooth surfaces; better triangles are left to flips and relaxation. */
 #define ISM_RM_COLLAPSE_DEG 20.0
 /* A removed vertex, and the kept one after the merge, have at most this many triangles:
- * higher valences make poor angles anyway, and it bounds the fans held on the stack. */
+ * higher valences make poor angles anyway. */
 #define ISM_RM_COLLAPSE_MAX_DEGREE 16
 /* A new triangle facing more than this from the old fan's normal is a fold (the relaxation's
  * limit, ISM_RM_MAX_TURN_DEG in rm_relax.c). */
@@ -28,12 +29,6 @@
 /* Sweeps over the triangles per call: a collapse leaves its neighbours' needles for the next. */
 #define ISM_RM_COLLAPSE_SWEEPS 3
 
-/* A candidate: v merged into w, t1 = (v, w, c) and t2 = (w, v, d) removed. */
-typedef struct merge {
-    uint32_t v, w, t1, t2, c, d;
-    double after; /* smallest sine of the new triangles */
-} merge;
-
 static double dot3(const double *u, const double *v)
 {
     return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
@@ -43,79 +38,9 @@ static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * 
 
 static uint32_t slot(const rm_mesh *r, uint32_t v, uint32_t i) { return r->vt[r->start[v] + i]; }
 
-/* The corners of triangle t with v at x (x may be v's own position). */
 static void corners(const rm_pass *p, uint32_t t, uint32_t v, const double *x, const double *q[3])
 {
-    const uint32_t *c = p->r.m->tri + 3 * t;
-    for (int k = 0; k < 3; k++)
-        q[k] = c[k] == v ? x : P(p, c[k]);
-}
-
-/* The triangles on vw and their third vertices; v free, vw an oriented manifold edge. */
-static bool find_merge(const rm_pass *p, uint32_t v, uint32_t w, merge *g)
-{
-    const rm_mesh *r = &p->r;
-    uint32_t t[2];
-    int n;
-    if (r->locked[v] || r->gone[v] || r->gone[w] || r->count[v] < 3 ||
-        r->count[v] > ISM_RM_COLLAPSE_MAX_DEGREE || !rm_edge_triangles(r, v, w, t, &n))
-        return false;
-    const uint32_t *tri = r->m->tri;
-    g->v = v, g->w = w, g->t1 = t[0], g->t2 = t[1];
-    g->c = tri[3 * t[0] + (rm_corner(r->m, t[0], v) + 2) % 3];
-    g->d = tri[3 * t[1] + (rm_corner(r->m, t[1], w) + 2) % 3];
-    return g->c != g->d && r->count[w] + r->count[v] - 4 <= ISM_RM_COLLAPSE_MAX_DEGREE;
-}
-
-/* v's neighbours into nb (at most 2 × ISM_RM_COLLAPSE_MAX_DEGREE); returns how many. */
-static int neighbours(const rm_mesh *r, uint32_t v, uint32_t *nb)
-{
-    int n = 0;
-    for (uint32_t i = 0; i < r->count[v]; i++) {
-        const uint32_t *t = r->m->tri + 3 * slot(r, v, i);
-        for (int k = 0; k < 3; k++) {
-            int j = 0;
-            while (j < n && nb[j] != t[k])
-                j++;
-            if (t[k] != v && j == n)
-                nb[n++] = t[k];
-        }
-    }
-    return n;
-}
-
-/* The link condition: no neighbour of w other than v, c, d is a neighbour of v; and where v
- * has three triangles, w has none on c and d already (the merge would repeat it). */
-static bool link_ok(const rm_mesh *r, const merge *g)
-{
-    uint32_t nb[2 * ISM_RM_COLLAPSE_MAX_DEGREE];
-    int n = neighbours(r, g->v, nb);
-    for (uint32_t i = 0; i < r->count[g->w]; i++) {
-        const uint32_t *t = r->m->tri + 3 * slot(r, g->w, i);
-        int cd = 0;
-        for (int k = 0; k < 3; k++) {
-            uint32_t x = t[k];
-            cd += x == g->c || x == g->d;
-            if (x == g->w || x == g->v || x == g->c || x == g->d)
-                continue;
-            for (int j = 0; j < n; j++)
-                if (nb[j] == x)
-                    return false;
-        }
-        if (cd == 2 && r->count[g->v] == 3)
-            return false;
-    }
-    return true;
-}
-
-/* The triangle across edge {a, b} from triangle t, or UINT32_MAX when ab is no manifold edge. */
-static uint32_t across(const rm_mesh *r, uint32_t a, uint32_t b, uint32_t t)
-{
-    uint32_t two[2];
-    int n;
-    if (!rm_edge_triangles(r, a, b, two, &n))
-        return UINT32_MAX;
-    return two[0] == t ? two[1] : two[0];
+    rm_merge_corners(&p->r, t, v, x, q);
 }
 
 /* cos of the bend between normals n (length ln) and m (lm). */
@@ -127,7 +52,7 @@ static double cos_bend(const double *n, double ln, const double *m, double lm)
 /* New triangle t (v at w's place) faces the fan's way and bends against the triangle across
  * its outer edge no more than the crease angle or than it did before; *sine gets its
  * smallest angle's sine. */
-static bool new_triangle_ok(const rm_pass *p, const merge *g, uint32_t t, const double *fan_n,
+static bool new_triangle_ok(const rm_pass *p, const rm_merge *g, uint32_t t, const double *fan_n,
                             double *sine)
 {
     const double *q[3], *o[3];
@@ -141,7 +66,7 @@ static bool new_triangle_ok(const rm_pass *p, const merge *g, uint32_t t, const 
     *sine = rm_min_sine(q[0], q[1], q[2]);
     const uint32_t *c = p->r.m->tri + 3 * t;
     int k = rm_corner(p->r.m, t, g->v);
-    uint32_t a = c[(k + 1) % 3], b = c[(k + 2) % 3], s = across(&p->r, a, b, t);
+    uint32_t a = c[(k + 1) % 3], b = c[(k + 2) % 3], s = rm_merge_across(&p->r, a, b, t);
     if (s == UINT32_MAX)
         return true;
     const uint32_t *z = p->r.m->tri + 3 * s;
@@ -156,7 +81,7 @@ static bool new_triangle_ok(const rm_pass *p, const merge *g, uint32_t t, const 
 /* The farthest of the fan's centroids and of the midpoints of v's edges from f = 0, with v
  * at x (before: x is v's place) or merged into w (after: the removed triangles and the edges
  * to c and d, which are w's already, left out). */
-static void fan_distances(rm_pass *p, const merge *g, bool after, double *cen, double *mid)
+static void fan_distances(rm_pass *p, const rm_merge *g, bool after, double *cen, double *mid)
 {
     const rm_mesh *r = &p->r;
     const double *x = P(p, after ? g->w : g->v);
@@ -174,7 +99,7 @@ static void fan_distances(rm_pass *p, const merge *g, bool after, double *cen, d
     }
 }
 
-static bool distance_ok(rm_pass *p, const merge *g)
+static bool distance_ok(rm_pass *p, const rm_merge *g)
 {
     double new_c, new_m, old_c, old_m;
     fan_distances(p, g, true, &new_c, &new_m);
@@ -187,10 +112,10 @@ static bool distance_ok(rm_pass *p, const merge *g)
 /* Every test of merging g->v into g->w; g->after gets the new fan's smallest sine. The
  * smallest angle must grow, and no more triangles be poor (under ISM_RM_COLLAPSE_DEG) than
  * before: a needle traded for two thin triangles is no gain. */
-static bool merge_ok(rm_pass *p, merge *g)
+static bool merge_ok(rm_pass *p, rm_merge *g)
 {
     const rm_mesh *r = &p->r;
-    if (!link_ok(r, g))
+    if (!rm_merge_link_ok(r, g))
         return false;
     rm_fan f;
     rm_fan_measure(p, g->v, &f);
@@ -213,41 +138,31 @@ static bool merge_ok(rm_pass *p, merge *g)
     return g->after > f.min_sine && poor_after <= poor_before && distance_ok(p, g);
 }
 
-/* Merges g->v into g->w. False when out of memory (nothing changed). */
-static bool do_merge(rm_pass *p, const merge *g)
+/* Merges g->v into g->w, marking the corners of its new triangles active and touched. False
+ * when out of memory (nothing changed). */
+static bool do_merge(rm_pass *p, const rm_merge *g)
 {
-    rm_mesh *r = &p->r;
-    uint32_t fan[ISM_RM_COLLAPSE_MAX_DEGREE], n = r->count[g->v];
-    if (!rm_slot_reserve(r, g->w, n))
+    uint32_t fan[ISM_RM_MERGE_MAX_DEGREE], n;
+    if (!rm_merge_apply(&p->r, g, fan, &n))
         return false;
-    memcpy(fan, r->vt + r->start[g->v], n * sizeof *fan);
     for (uint32_t i = 0; i < n; i++) {
-        uint32_t t = fan[i], *c = r->m->tri + 3 * t;
-        if (t == g->t1 || t == g->t2) {
-            r->dead[t] = 1;
-            rm_slot_remove(r, g->w, t);
-            rm_slot_remove(r, t == g->t1 ? g->c : g->d, t);
-            continue;
-        }
-        c[rm_corner(r->m, t, g->v)] = g->w;
-        rm_slot_add(r, g->w, t);
+        const uint32_t *c = p->r.m->tri + 3 * fan[i];
         for (int k = 0; k < 3; k++)
             p->active[c[k]] = 1, p->touched[c[k]] = 2;
     }
-    r->count[g->v] = 0;
-    r->gone[g->v] = r->locked[g->v] = 1;
     p->active[g->v] = p->slide[g->v] = 0;
     return true;
 }
 
 /* The better of merging a into b and b into a, when either passes every test. */
-static bool best_merge(rm_pass *p, uint32_t a, uint32_t b, merge *best)
+static bool best_merge(rm_pass *p, uint32_t a, uint32_t b, rm_merge *best)
 {
-    merge g;
+    rm_merge g;
     bool found = false;
-    if (find_merge(p, a, b, &g) && merge_ok(p, &g))
+    uint32_t deg = ISM_RM_COLLAPSE_MAX_DEGREE;
+    if (rm_merge_find(&p->r, a, b, deg, &g) && merge_ok(p, &g))
         *best = g, found = true;
-    if (find_merge(p, b, a, &g) && merge_ok(p, &g) && (!found || g.after > best->after))
+    if (rm_merge_find(&p->r, b, a, deg, &g) && merge_ok(p, &g) && (!found || g.after > best->after))
         *best = g, found = true;
     return found;
 }
@@ -268,7 +183,7 @@ static bool collapse_triangle(rm_pass *p, uint32_t t, bool *ok)
         }
     for (int i = 0; i < 3; i++) {
         int k = order[i];
-        merge g;
+        rm_merge g;
         if (best_merge(p, v[k], v[(k + 1) % 3], &g)) {
             *ok = do_merge(p, &g);
             return *ok;

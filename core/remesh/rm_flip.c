@@ -7,6 +7,7 @@
  * the new centroids no farther than the old ones or the mesh's farthest before the pass. A
  * cap (an angle near 180°) has no normal to speak of: its bend is not asked, and the bound
  * is the largest of the quad's five edges. */
+#include "core/remesh/rm_bound.h"
 #include "core/remesh/rm_pass.h"
 
 #include <math.h>
@@ -107,6 +108,9 @@ static bool flip_improves(rm_pass *p, const quad *q)
     double after = fmin(rm_min_sine(A, D, C), rm_min_sine(B, C, D));
     if (!(after > before))
         return false;
+    if (p->bounded) /* the simplification's rule: within max_error, measured */
+        return rm_bound_edge(p, C, D) && rm_bound_triangle(p, A, D, C) &&
+               rm_bound_triangle(p, B, C, D);
     double bound = fmax(p->max_error, rm_midpoint_distance(p, A, B));
     if (cap) /* ab is as good as c's detour: the quad's sides bound the new edge too */
         bound = fmax(fmax(bound, fmax(rm_midpoint_distance(p, A, C),

@@ -34,8 +34,21 @@ typedef struct rm_pass {
     double centroid_bound;  /* collapses may put a centroid this far from f = 0 (the mesh's
                                farthest before the pass, at most max_error) */
     double midpoint_bound;  /* the same for edge midpoints */
+    bool bounded;           /* the simplification's rule (rm_bound.h): flips and moves keep
+                               every centroid and edge midpoint within max_error, measured
+                               with a Newton step, whatever they were before */
     size_t flips, moves, collapses, inserts;
 } rm_pass;
+
+/* Opens a pass over m (the caller keeps m): f's workspace, the incidence with room for extra
+ * vertices (and 2 × extra triangles), the marks, ∇f's unit normals and the protection. False
+ * when out of memory or f is missing; rm_pass_close must be called either way. */
+bool rm_pass_open(rm_pass *p, ism_mesh *m, const ism_remesh_options *o, size_t extra);
+/* Drops what collapses removed from m (which had nverts_before and ntris_before vertices and
+ * triangles when the pass opened; ren, may be NULL, gets the maps) and frees the state.
+ * False when out of memory (m is still valid). */
+bool rm_pass_close(rm_pass *p, size_t nverts_before, size_t ntris_before,
+                   ism_remesh_renumber *ren);
 
 /* Room for insertions (rm_insert.c): at most ntris / ISM_RM_INSERT_SHARE + ISM_RM_INSERT_MIN
  * vertices per pass (steiner-roman's box needs about 300 for its 64,000 triangles; the bound

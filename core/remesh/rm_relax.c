@@ -6,6 +6,7 @@
  * centroid of the fan ends farther from f = 0 than the mesh's farthest before the pass;
  * otherwise a half step is tried, then the vertex stays. Also ∇f's unit normals and the
  * distance estimate the pass uses. */
+#include "core/remesh/rm_bound.h"
 #include "core/remesh/rm_pass.h"
 #include "core/analysis/select.h"
 
@@ -176,9 +177,12 @@ static double fan_centroid_error(rm_pass *p, uint32_t v, const double *x)
 }
 
 /* Moving v to x puts no centroid of its fan farther from f = 0 than the mesh's farthest
- * before the pass (centroid_bound) or than the fan's farthest now. */
+ * before the pass (centroid_bound) or than the fan's farthest now (bounded: every centroid
+ * and edge midpoint of the fan within max_error). */
 static bool centroids_stay(rm_pass *p, uint32_t v, const double *x)
 {
+    if (p->bounded) /* the simplification's rule: within max_error, measured */
+        return rm_bound_fan(p, v, x);
     double now = fan_centroid_error(p, v, x);
     return now <= p->centroid_bound || now <= fan_centroid_error(p, v, p->r.m->pos + 3 * v);
 }

@@ -400,11 +400,13 @@ typedef struct scratch {
     bool have_curves;
     ism_remesh_stats rs;    /* the quality pass's figures */
     bool have_remesh;
+    ism_simplify_stats ss;  /* the simplification's */
+    bool have_simplify;
 } scratch;
 
-/* Cuts the mesh along the requested curves, runs the quality pass when asked (after the
- * cut, so curve edges are protected and the cut's slivers improved) and builds the curves'
- * arrangement into s. */
+/* Cuts the mesh along the requested curves, runs the simplification (under max_error) and
+ * the quality pass when asked (after the cut, so curve edges are protected and the cut's
+ * slivers improved) and builds the curves' arrangement into s. */
 static bool cut_curves(const ism_request *req, const ism_tape *tape,
                        const ism_pipeline_hooks *hooks, ism_pipeline_result *r,
                        ism_computed *c, scratch *s)
@@ -421,6 +423,14 @@ static bool cut_curves(const ism_request *req, const ism_tape *tape,
                                         &err))
         return fail_with(r, 500, "no_memory", "%s", err.message);
     c->timings_ms[ISM_TIME_SINGULAR] += ism_now_ms() - t; /* the curves are singular stages too */
+    if (req->simplify && req->poly.max_error > 0) {
+        if (!ism_simplify_pass(tape, &c->locus, &s->cut, req->poly.max_error,
+                               hooks ? hooks->cancel : NULL, &c->mesh, &s->ss, &err))
+            return fail_with(r, 500, "no_memory", "%s", err.message);
+        s->have_simplify = true;
+        if (cancelled(hooks))
+            return fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
+    }
     if (req->quality == ISM_QUALITY_GOOD) {
         if (!ism_quality_pass(tape, &c->locus, &s->cut, req->poly.max_error,
                               hooks ? hooks->cancel : NULL, &c->mesh, &s->rs, &err))
@@ -602,6 +612,7 @@ static bool gather(const ism_request *req, const ism_tape *tape, ism_pipeline_re
     si.preview = req->preview;
     si.max_error = req->poly.max_error;
     si.remesh = s->have_remesh ? &s->rs : NULL;
+    si.simplify = s->have_simplify ? &s->ss : NULL;
     c->stats_json = ism_stats_surface_json(&si, &c->stats_len);
     if (!c->stats_json)
         return fail_with(r, 500, "no_memory", "%s", "out of memory writing the stats");

@@ -18,6 +18,8 @@ typedef struct ism_cli_run {
     const char *features_output;/* --features */
     bool box_given, depth_given, print_stats;
     int quality;                /* --quality: enum ism_quality (raw unless given) */
+    bool no_simplify;           /* --no-simplify: under --max-error, the polygoniser's
+                                   triangles without the simplification */
     ism_param *params;          /* names owned */
     size_t nparams;
     ism_let *lets;              /* names and sources owned */

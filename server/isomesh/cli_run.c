@@ -290,6 +290,7 @@ typedef struct run_products {
     const ism_conform_stats *conform;
     double max_error;              /* the requested bound, 0 when none */
     const ism_remesh_stats *remesh;/* the quality pass's figures, NULL when it did not run */
+    const ism_simplify_stats *simplify; /* the simplification's, NULL when it did not run */
 } run_products;
 
 static void print_stats(const run_products *p, const char *format, const double *timings)
@@ -308,6 +309,7 @@ static void print_stats(const run_products *p, const char *format, const double 
     in.conform = p->conform;
     in.max_error = p->max_error;
     in.remesh = p->remesh;
+    in.simplify = p->simplify;
     memcpy(in.timings_ms, timings, sizeof in.timings_ms);
     size_t len;
     char *json = ism_stats_json(&in, &len);
@@ -420,6 +422,14 @@ int ism_cli_run_surface(ism_cli_run *run)
     }
     if (mesh.ntris == 0)
         explain_empty(&locus);
+    ism_simplify_stats ss;
+    bool simplify = run->options.max_error > 0 && !run->no_simplify;
+    if (simplify &&
+        !ism_simplify_pass(tape, &locus, NULL, run->options.max_error, NULL, &mesh, &ss, &err)) {
+        fprintf(stderr, "isomesh: %s\n", ism_error_format(&err, msg, sizeof msg));
+        status = 1;
+        goto done;
+    }
     ism_remesh_stats rs;
     if (run->quality == ISM_QUALITY_GOOD &&
         !ism_quality_pass(tape, &locus, NULL, run->options.max_error, NULL, &mesh, &rs, &err)) {
@@ -437,7 +447,8 @@ int ism_cli_run_surface(ism_cli_run *run)
         status = 1;
     run_products prod = {&mesh, &ps, analysed ? &an : NULL, &locus, analysed ? &chk : NULL, &cs,
                          run->options.max_error,
-                         run->quality == ISM_QUALITY_GOOD ? &rs : NULL};
+                         run->quality == ISM_QUALITY_GOOD ? &rs : NULL,
+                         simplify ? &ss : NULL};
     if (run->features_output && status == 0 && !write_features(run->features_output, &prod))
         status = 1;
     timings[ISM_TIME_TOTAL] = ism_now_ms() - t0;

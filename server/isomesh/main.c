@@ -48,7 +48,11 @@ static const char usage_text[] =
     "      --max-error E        subdivide until the triangles lie within E of the surface\n"
     "                           (model units, measured at centroids and edge midpoints);\n"
     "                           depth MAX is then only a safety limit. Default: off, the\n"
-    "                           flatness test (--flat-plane) decides\n"
+    "                           flatness test (--flat-plane) decides. With it, edges are\n"
+    "                           then collapsed wherever the mesh stays within E (measured\n"
+    "                           at every new centroid and edge midpoint; features, topology\n"
+    "                           and orientation kept): the fewest triangles for the error\n"
+    "      --no-simplify        under --max-error, keep the polygoniser's triangles\n"
     "      --max-triangles N    budget; stop with an error beyond it (default 4000000)\n"
     "      --quality Q          raw (default): the polygoniser's triangles; good: then\n"
     "                           flip edges toward Delaunay and relax vertices along the\n"
@@ -65,7 +69,7 @@ static const char usage_text[] =
 
 enum long_only {
     OPT_LET = 256, OPT_SURFACE, OPT_SURFACES, OPT_LIST, OPT_THREADS, OPT_MAX_TRIS,
-    OPT_MAX_ERROR, OPT_STATS, OPT_WORKER, OPT_FEATURES, OPT_QUALITY,
+    OPT_MAX_ERROR, OPT_NO_SIMPLIFY, OPT_STATS, OPT_WORKER, OPT_FEATURES, OPT_QUALITY,
     OPT_TOLERANCE, /* OPT_TOLERANCE + i: the table's tolerance i */
 };
 
@@ -82,6 +86,7 @@ static const struct option base_options[] = {
     {"max-triangles", required_argument, 0, OPT_MAX_TRIS},
     {"max-error", required_argument, 0, OPT_MAX_ERROR},
     {"quality", required_argument, 0, OPT_QUALITY},
+    {"no-simplify", no_argument, 0, OPT_NO_SIMPLIFY},
     {"output", required_argument, 0, 'o'},
     {"stats", no_argument, 0, OPT_STATS},
     {"features", required_argument, 0, OPT_FEATURES},
@@ -152,6 +157,7 @@ static bool apply_option(ism_cli_run *run, int opt, const char *arg)
         o->max_triangles = (size_t)n;
         return true;
     }
+    case OPT_NO_SIMPLIFY: run->no_simplify = true; return true;
     case OPT_QUALITY:
         if ((run->quality = ism_quality_lookup(arg)) >= 0)
             return true;

@@ -1,0 +1,57 @@
+/* rm_bound.c — distances to f = 0 measured with a Newton step, and the bound checks built on
+ * them (rm_bound.h). */
+#include "core/remesh/rm_bound.h"
+
+#include <math.h>
+
+static double dot3(const double *u, const double *v)
+{
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+}
+
+double rm_bound_distance(rm_pass *p, const double x[3], double limit)
+{
+    double g[3], fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
+    double g2 = dot3(g, g), gn = sqrt(g2);
+    if (!isfinite(fv) || !(gn > p->gthresh))
+        return INFINITY;
+    double step = fabs(fv) / gn;
+    if (step > limit)
+        return step;
+    double s = fv / g2, y[3] = {x[0] - s * g[0], x[1] - s * g[1], x[2] - s * g[2]};
+    double h[3], fy = ism_eval_gradient(p->f, p->ws, y[0], y[1], y[2], h), hn = sqrt(dot3(h, h));
+    if (!isfinite(fy) || !(hn > p->gthresh))
+        return INFINITY;
+    return step + fabs(fy) / hn;
+}
+
+bool rm_bound_edge(rm_pass *p, const double *a, const double *b)
+{
+    double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
+    return rm_bound_distance(p, m, p->max_error) <= p->max_error;
+}
+
+bool rm_bound_triangle(rm_pass *p, const double *a, const double *b, const double *c)
+{
+    double m[3];
+    for (int k = 0; k < 3; k++)
+        m[k] = (a[k] + b[k] + c[k]) / 3;
+    return rm_bound_distance(p, m, p->max_error) <= p->max_error;
+}
+
+bool rm_bound_fan(rm_pass *p, uint32_t v, const double *x)
+{
+    const rm_mesh *r = &p->r;
+    const double *P = r->m->pos;
+    for (uint32_t i = 0; i < r->count[v]; i++) {
+        const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
+        const double *q[3];
+        for (int k = 0; k < 3; k++)
+            q[k] = t[k] == v ? x : P + 3 * (size_t)t[k];
+        int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+        /* each edge at v is the next edge of exactly one triangle of a closed fan */
+        if (!rm_bound_triangle(p, q[0], q[1], q[2]) || !rm_bound_edge(p, x, q[(k + 1) % 3]))
+            return false;
+    }
+    return true;
+}

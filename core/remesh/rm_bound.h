@@ -1,0 +1,26 @@
+/* rm_bound.h — the error bound the simplification keeps (rm_bound.c): the distance from a
+ * point to f = 0 measured with a Newton step, and the checks that a changed piece of mesh —
+ * a vertex's fan with the vertex moved, a flipped pair — has every triangle centroid and
+ * every edge midpoint within max_error. Measured, not assumed: nothing is taken from the
+ * mesh's size or curvature. */
+#ifndef ISM_RM_BOUND_H
+#define ISM_RM_BOUND_H
+
+#include "core/remesh/rm_pass.h"
+
+/* The distance from x to f = 0: |f|/|∇f| at x (the Newton step's length) plus |f|/|∇f| where
+ * that step lands — by the triangle inequality no less than the distance to the zero set
+ * when the landing point's estimate is (second order there). INFINITY where ∇f vanishes or
+ * f is not finite; above limit, the first term alone (the step is not taken). */
+double rm_bound_distance(rm_pass *p, const double x[3], double limit);
+
+/* True when the midpoint of ab lies within max_error of f = 0. */
+bool rm_bound_edge(rm_pass *p, const double *a, const double *b);
+/* True when the centroid of abc lies within max_error of f = 0. */
+bool rm_bound_triangle(rm_pass *p, const double *a, const double *b, const double *c);
+
+/* True when every triangle of v's fan, with v at x, has its centroid within max_error, and
+ * every edge at v its midpoint. */
+bool rm_bound_fan(rm_pass *p, uint32_t v, const double *x);
+
+#endif

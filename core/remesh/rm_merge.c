@@ -1,0 +1,103 @@
+/* rm_merge.c — a vertex merged into a neighbour (rm_merge.h): the two triangles on their
+ * edge, the link condition, and the incidence update. */
+#include "core/remesh/rm_merge.h"
+
+#include <string.h>
+
+static uint32_t slot(const rm_mesh *r, uint32_t v, uint32_t i) { return r->vt[r->start[v] + i]; }
+
+bool rm_merge_find(const rm_mesh *r, uint32_t v, uint32_t w, uint32_t max_degree, rm_merge *g)
+{
+    uint32_t t[2];
+    int n;
+    if (max_degree > ISM_RM_MERGE_MAX_DEGREE)
+        max_degree = ISM_RM_MERGE_MAX_DEGREE;
+    if (r->locked[v] || r->gone[v] || r->gone[w] || r->count[v] < 3 ||
+        r->count[v] > max_degree || !rm_edge_triangles(r, v, w, t, &n))
+        return false;
+    const uint32_t *tri = r->m->tri;
+    g->v = v, g->w = w, g->t1 = t[0], g->t2 = t[1];
+    g->c = tri[3 * t[0] + (rm_corner(r->m, t[0], v) + 2) % 3];
+    g->d = tri[3 * t[1] + (rm_corner(r->m, t[1], w) + 2) % 3];
+    return g->c != g->d && r->count[w] + r->count[v] - 4 <= max_degree;
+}
+
+/* v's neighbours into nb (at most 2 × ISM_RM_MERGE_MAX_DEGREE); returns how many. */
+static int neighbours(const rm_mesh *r, uint32_t v, uint32_t *nb)
+{
+    int n = 0;
+    for (uint32_t i = 0; i < r->count[v]; i++) {
+        const uint32_t *t = r->m->tri + 3 * slot(r, v, i);
+        for (int k = 0; k < 3; k++) {
+            int j = 0;
+            while (j < n && nb[j] != t[k])
+                j++;
+            if (t[k] != v && j == n)
+                nb[n++] = t[k];
+        }
+    }
+    return n;
+}
+
+bool rm_merge_link_ok(const rm_mesh *r, const rm_merge *g)
+{
+    uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE];
+    int n = neighbours(r, g->v, nb);
+    for (uint32_t i = 0; i < r->count[g->w]; i++) {
+        const uint32_t *t = r->m->tri + 3 * slot(r, g->w, i);
+        int cd = 0;
+        for (int k = 0; k < 3; k++) {
+            uint32_t x = t[k];
+            cd += x == g->c || x == g->d;
+            if (x == g->w || x == g->v || x == g->c || x == g->d)
+                continue;
+            for (int j = 0; j < n; j++)
+                if (nb[j] == x)
+                    return false;
+        }
+        if (cd == 2 && r->count[g->v] == 3)
+            return false;
+    }
+    return true;
+}
+
+void rm_merge_corners(const rm_mesh *r, uint32_t t, uint32_t v, const double *x,
+                      const double *q[3])
+{
+    const uint32_t *c = r->m->tri + 3 * t;
+    for (int k = 0; k < 3; k++)
+        q[k] = c[k] == v ? x : r->m->pos + 3 * (size_t)c[k];
+}
+
+uint32_t rm_merge_across(const rm_mesh *r, uint32_t a, uint32_t b, uint32_t t)
+{
+    uint32_t two[2];
+    int n;
+    if (!rm_edge_triangles(r, a, b, two, &n))
+        return UINT32_MAX;
+    return two[0] == t ? two[1] : two[0];
+}
+
+bool rm_merge_apply(rm_mesh *r, const rm_merge *g, uint32_t *fan, uint32_t *nfan)
+{
+    uint32_t n = r->count[g->v];
+    if (!rm_slot_reserve(r, g->w, n))
+        return false;
+    memcpy(fan, r->vt + r->start[g->v], n * sizeof *fan);
+    *nfan = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t t = fan[i], *c = r->m->tri + 3 * t;
+        if (t == g->t1 || t == g->t2) {
+            r->dead[t] = 1;
+            rm_slot_remove(r, g->w, t);
+            rm_slot_remove(r, t == g->t1 ? g->c : g->d, t);
+            continue;
+        }
+        c[rm_corner(r->m, t, g->v)] = g->w;
+        rm_slot_add(r, g->w, t);
+        fan[(*nfan)++] = t;
+    }
+    r->count[g->v] = 0;
+    r->gone[g->v] = r->locked[g->v] = 1;
+    return true;
+}

@@ -1,0 +1,42 @@
+/* rm_pass.c — opening and closing the state a pass over the mesh shares (rm_pass.h): the
+ * incidence with room for insertions, ∇f's unit normals, the per-vertex marks and the
+ * protection; at the end the renumbering without what collapses removed, and the frees. The
+ * quality pass (remesh.c) and the simplification (simplify.c) both run on it. */
+#include "core/remesh/rm_pass.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+bool rm_pass_open(rm_pass *p, ism_mesh *m, const ism_remesh_options *o, size_t extra)
+{
+    memset(p, 0, sizeof *p);
+    p->f = o->f;
+    p->max_error = o->max_error > 0 ? o->max_error : 0;
+    p->r.label = o->tri_label;
+    p->ws = ism_eval_ws_new(o->f);
+    bool ok = p->ws && rm_mesh_build(&p->r, m, extra);
+    if (ok) {
+        size_t cv = p->r.cap_verts ? p->r.cap_verts : 1;
+        p->normal = malloc(cv * 3 * sizeof *p->normal);
+        p->active = calloc(cv, 1);
+        p->slide = calloc(cv, 1);
+        p->touched = calloc(cv, 1);
+    }
+    return ok && p->normal && p->active && p->slide && p->touched && rm_normals(p) &&
+           rm_lock_features(p, o);
+}
+
+bool rm_pass_close(rm_pass *p, size_t nverts_before, size_t ntris_before,
+                   ism_remesh_renumber *ren)
+{
+    bool ok = !(p->r.dead && p->r.gone && p->r.origin) ||
+              rm_compact(&p->r, nverts_before, ntris_before, ren);
+    rm_mesh_free(&p->r);
+    free(p->normal);
+    free(p->active);
+    free(p->slide);
+    free(p->touched);
+    ism_eval_ws_free(p->ws);
+    memset(p, 0, sizeof *p);
+    return ok;
+}

@@ -1,0 +1,243 @@
+/* sp_collapse.c — the simplification's edge collapses (sp_collapse.h). An edge with a free
+ * end is tried in order of length: two free ends merge at the edge's midpoint put on f = 0
+ * by Newton (or, failing that, one into the other's place); a free end merges into a locked
+ * one, which keeps its place, so feature vertices never move. A merge is taken only when
+ * every test passes, cheapest first: the link condition, orientation, shape, then the
+ * distances to f = 0 measured at every new centroid and edge midpoint. */
+#include "core/remesh/sp_collapse.h"
+#include "core/remesh/rm_bound.h"
+#include "core/remesh/rm_merge.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The merged fan has at most this many triangles: valence far above the ideal 6 only comes
+ * with poor angles, which the shape test refuses anyway. */
+#define ISM_SP_MAX_DEGREE 16
+/* A merge may not leave a triangle whose smallest angle is under both this (degrees) and the
+ * smallest of the two fans before: the pass never makes the mesh's shape worse than the
+ * polygoniser's, and big triangles with poor angles would block the next rounds' merges. */
+#define ISM_SP_MIN_DEG 25.0
+/* A new triangle turned more than this (degrees) from its old self is a fold in the making. */
+#define ISM_SP_MAX_TURN_DEG 45.0
+/* A new triangle's normal may differ from ∇f's at a free corner by at most this (degrees):
+ * triangles within a small error of a smooth surface tilt a few degrees, a flipped or folded
+ * one by far more. Locked corners are not asked (a crease's vertex carries one side's ∇f). */
+#define ISM_SP_MAX_TILT_DEG 30.0
+/* The merged vertex may land at most this × the edge's length from the edge's midpoint when
+ * projected onto f = 0 (farther: Newton found another sheet). */
+#define ISM_SP_PROJECT_MAX_REL 0.5
+/* Edges between polls of the cancel flag. */
+#define ISM_SP_POLL_EDGES 512
+
+typedef struct edge {
+    double len;
+    uint32_t a, b;
+} edge;
+
+static int cmp_edge(const void *x, const void *y)
+{
+    const edge *e = x, *f = y;
+    return e->len < f->len ? -1 : e->len > f->len ? 1 : (e->a > f->a) - (e->a < f->a);
+}
+
+static double dot3(const double *u, const double *v)
+{
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+}
+
+static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * (size_t)v; }
+
+/* The edges with a free end (each once), shortest first; *n gets how many. NULL when out of
+ * memory. */
+static edge *candidate_edges(const rm_pass *p, size_t *n)
+{
+    const ism_mesh *m = p->r.m;
+    edge *e = malloc((3 * m->ntris + 1) * sizeof *e);
+    *n = 0;
+    for (size_t t = 0; e && t < m->ntris; t++) {
+        const uint32_t *c = m->tri + 3 * t;
+        for (int k = 0; e && !p->r.dead[t] && k < 3; k++) {
+            uint32_t a = c[k], b = c[(k + 1) % 3];
+            if (a < b && !(p->r.locked[a] && p->r.locked[b]))
+                e[(*n)++] = (edge){rm_dist(P(p, a), P(p, b)), a, b};
+        }
+    }
+    if (e)
+        qsort(e, *n, sizeof *e, cmp_edge);
+    return e;
+}
+
+/* Triangle t of the merged fan (g->v and g->w both read at x) passes orientation and shape;
+ * *sine gets its smallest angle's sine. */
+static bool shape_ok(const rm_pass *p, const rm_merge *g, uint32_t t, const double *x,
+                     double floor_sine)
+{
+    const uint32_t *c = p->r.m->tri + 3 * t;
+    const double *q[3], *o[3];
+    for (int k = 0; k < 3; k++) {
+        o[k] = P(p, c[k]);
+        q[k] = c[k] == g->v || c[k] == g->w ? x : o[k];
+    }
+    double n[3], m[3], ln = rm_cross(q[0], q[1], q[2], n), lo = rm_cross(o[0], o[1], o[2], m);
+    if (!(ln > 0) || !(dot3(n, m) > cos(ISM_SP_MAX_TURN_DEG * M_PI / 180) * ln * lo))
+        return false;
+    for (int k = 0; k < 3; k++) {
+        uint32_t u = c[k] == g->v ? g->w : c[k];
+        const float *s = p->r.m->normal + 3 * (size_t)u;
+        double side[3] = {s[0], s[1], s[2]}, ls = sqrt(dot3(side, side));
+        double sign = dot3(m, side) < 0 ? -1 : 1; /* the side the old triangle faced */
+        if (!p->r.locked[u] && ls > 0 &&
+            !(sign * dot3(n, side) > cos(ISM_SP_MAX_TILT_DEG * M_PI / 180) * ln * ls))
+            return false;
+    }
+    return rm_min_sine(q[0], q[1], q[2]) >= floor_sine;
+}
+
+/* The triangles the merge changes: v's (and w's when w moves), without t1 and t2. */
+static uint32_t merged_fan(const rm_pass *p, const rm_merge *g, bool w_moves, uint32_t *fan)
+{
+    const rm_mesh *r = &p->r;
+    uint32_t n = 0;
+    for (int side = 0; side < 1 + w_moves; side++) {
+        uint32_t u = side ? g->w : g->v;
+        for (uint32_t i = 0; i < r->count[u]; i++) {
+            uint32_t t = r->vt[r->start[u] + i];
+            if (t != g->t1 && t != g->t2)
+                fan[n++] = t;
+        }
+    }
+    return n;
+}
+
+/* The smallest sine over the triangles of v and w before the merge. */
+static double fans_min_sine(const rm_pass *p, const rm_merge *g)
+{
+    const rm_mesh *r = &p->r;
+    double s = INFINITY;
+    for (int side = 0; side < 2; side++) {
+        uint32_t u = side ? g->w : g->v;
+        for (uint32_t i = 0; i < r->count[u]; i++) {
+            const uint32_t *c = r->m->tri + 3 * r->vt[r->start[u] + i];
+            s = fmin(s, rm_min_sine(P(p, c[0]), P(p, c[1]), P(p, c[2])));
+        }
+    }
+    return s;
+}
+
+/* Every new centroid and every edge at x within max_error. */
+static bool distances_ok(rm_pass *p, const rm_merge *g, const uint32_t *fan, uint32_t n,
+                         const double *x)
+{
+    uint32_t seen[2 * ISM_RM_MERGE_MAX_DEGREE + 2];
+    uint32_t nseen = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        const uint32_t *c = p->r.m->tri + 3 * fan[i];
+        const double *q[3];
+        for (int k = 0; k < 3; k++)
+            q[k] = c[k] == g->v || c[k] == g->w ? x : P(p, c[k]);
+        if (!rm_bound_triangle(p, q[0], q[1], q[2]))
+            return false;
+        for (int k = 0; k < 3; k++) {
+            uint32_t u = c[k], j = 0;
+            if (u == g->v || u == g->w)
+                continue;
+            while (j < nseen && seen[j] != u)
+                j++;
+            if (j < nseen)
+                continue;
+            seen[nseen++] = u;
+            if (!rm_bound_edge(p, x, P(p, u)))
+                return false;
+        }
+    }
+    return true;
+}
+
+/* All tests of merging g->v into g->w placed at x. */
+static bool merge_ok(rm_pass *p, const rm_merge *g, const double *x)
+{
+    if (!rm_merge_link_ok(&p->r, g))
+        return false;
+    bool w_moves = memcmp(x, P(p, g->w), 3 * sizeof *x) != 0;
+    uint32_t fan[2 * ISM_RM_MERGE_MAX_DEGREE], n = merged_fan(p, g, w_moves, fan);
+    double floor_sine = fmin(fans_min_sine(p, g), sin(ISM_SP_MIN_DEG * M_PI / 180));
+    for (uint32_t i = 0; i < n; i++)
+        if (!shape_ok(p, g, fan[i], x, floor_sine))
+            return false;
+    return distances_ok(p, g, fan, n, x);
+}
+
+/* Merges g->v into g->w, w put at x (∇f there gx, NULL when w stays); marks the new fan's
+ * corners active and busy. False when out of memory. */
+static bool apply(rm_pass *p, const rm_merge *g, const double *x, const double *gx)
+{
+    uint32_t fan[ISM_RM_MERGE_MAX_DEGREE], n;
+    if (!rm_merge_apply(&p->r, g, fan, &n))
+        return false;
+    if (gx)
+        rm_commit_move(p, g->w, x, gx);
+    for (uint32_t i = 0; i < p->r.count[g->w]; i++) {
+        const uint32_t *c = p->r.m->tri + 3 * p->r.vt[p->r.start[g->w] + i];
+        for (int k = 0; k < 3; k++)
+            p->active[c[k]] = 1, p->touched[c[k]] = 1;
+    }
+    p->active[g->v] = p->slide[g->v] = 0;
+    p->collapses++;
+    return true;
+}
+
+/* v into w at w's place, when every test passes. */
+static bool into(rm_pass *p, uint32_t v, uint32_t w, bool *ok)
+{
+    rm_merge g;
+    if (!rm_merge_find(&p->r, v, w, ISM_SP_MAX_DEGREE, &g) || !merge_ok(p, &g, P(p, w)))
+        return false;
+    *ok = apply(p, &g, P(p, w), NULL);
+    return *ok;
+}
+
+/* Both ends free: merged at the midpoint projected onto f = 0. */
+static bool at_middle(rm_pass *p, uint32_t a, uint32_t b, bool *ok)
+{
+    rm_merge g;
+    const double *A = P(p, a), *B = P(p, b);
+    double len = rm_dist(A, B), x[3], mid[3], gx[3];
+    for (int k = 0; k < 3; k++)
+        x[k] = mid[k] = 0.5 * (A[k] + B[k]);
+    if (!rm_merge_find(&p->r, a, b, ISM_SP_MAX_DEGREE, &g) || p->r.locked[b] ||
+        !rm_project(p, x, len, -1, gx) || !(rm_dist(x, mid) <= ISM_SP_PROJECT_MAX_REL * len) ||
+        !merge_ok(p, &g, x))
+        return false;
+    *ok = apply(p, &g, x, gx);
+    return *ok;
+}
+
+static bool collapse_edge(rm_pass *p, uint32_t a, uint32_t b, bool *ok)
+{
+    const uint8_t *locked = p->r.locked;
+    if (!locked[a] && !locked[b] && at_middle(p, a, b, ok))
+        return true;
+    if (*ok && !locked[a] && into(p, a, b, ok))
+        return true;
+    return *ok && !locked[b] && into(p, b, a, ok);
+}
+
+size_t sp_collapse_round(rm_pass *p, const volatile int *cancel, bool *ok)
+{
+    size_t n, made = 0;
+    edge *e = candidate_edges(p, &n);
+    *ok = e != NULL;
+    memset(p->touched, 0, p->r.cap_verts);
+    for (size_t i = 0; *ok && i < n; i++) {
+        if (i % ISM_SP_POLL_EDGES == 0 && cancel && *cancel)
+            break;
+        uint32_t a = e[i].a, b = e[i].b;
+        if (p->r.gone[a] || p->r.gone[b] || p->touched[a] || p->touched[b])
+            continue;
+        made += collapse_edge(p, a, b, ok);
+    }
+    free(e);
+    return made;
+}
