@@ -9,20 +9,36 @@ static double dot3(const double *u, const double *v)
     return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
 }
 
-double rm_bound_distance(rm_pass *p, const double x[3], double limit)
+/* f/|∇f| at x into *s1 and, unless |*s1| > limit, where the Newton step from x lands into *s2
+ * (0 otherwise). False where ∇f vanishes or f is not finite. */
+static bool two_steps(rm_pass *p, const double x[3], double limit, double *s1, double *s2)
 {
     double g[3], fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
     double g2 = dot3(g, g), gn = sqrt(g2);
+    *s2 = 0;
     if (!isfinite(fv) || !(gn > p->gthresh))
-        return INFINITY;
-    double step = fabs(fv) / gn;
-    if (step > limit)
-        return step;
+        return false;
+    *s1 = fv / gn;
+    if (fabs(*s1) > limit)
+        return true;
     double s = fv / g2, y[3] = {x[0] - s * g[0], x[1] - s * g[1], x[2] - s * g[2]};
     double h[3], fy = ism_eval_gradient(p->f, p->ws, y[0], y[1], y[2], h), hn = sqrt(dot3(h, h));
     if (!isfinite(fy) || !(hn > p->gthresh))
-        return INFINITY;
-    return step + fabs(fy) / hn;
+        return false;
+    *s2 = fy / hn;
+    return true;
+}
+
+double rm_bound_distance(rm_pass *p, const double x[3], double limit)
+{
+    double s1, s2;
+    return two_steps(p, x, limit, &s1, &s2) ? fabs(s1) + fabs(s2) : INFINITY;
+}
+
+double rm_bound_signed(rm_pass *p, const double x[3])
+{
+    double s1, s2;
+    return two_steps(p, x, INFINITY, &s1, &s2) ? s1 + s2 : INFINITY;
 }
 
 bool rm_bound_edge(rm_pass *p, const double *a, const double *b)

@@ -14,6 +14,11 @@
  * f is not finite; above limit, the first term alone (the step is not taken). */
 double rm_bound_distance(rm_pass *p, const double x[3], double limit);
 
+/* The signed distance from x to f = 0, positive where f is: f/|∇f| at x plus f/|∇f| where the
+ * Newton step from x lands (INFINITY where ∇f vanishes or f is not finite). Moving x by δ
+ * along ∇f's unit vector changes it by about δ. */
+double rm_bound_signed(rm_pass *p, const double x[3]);
+
 /* True when the midpoint of ab lies within max_error of f = 0. */
 bool rm_bound_edge(rm_pass *p, const double *a, const double *b);
 /* True when the centroid of abc lies within max_error of f = 0. */

@@ -187,6 +187,19 @@ static bool centroids_stay(rm_pass *p, uint32_t v, const double *x)
     return now <= p->centroid_bound || now <= fan_centroid_error(p, v, p->r.m->pos + 3 * v);
 }
 
+/* The simplification's vertices sit off f = 0 by a balancing offset (sp_place.h): x, just
+ * put on f = 0 (∇f there g), takes the signed distance the vertex had at pos, and g is
+ * measured again there. False where f cannot be measured. */
+static bool keep_offset(rm_pass *p, const double *pos, double x[3], double g[3])
+{
+    double d = rm_bound_signed(p, pos), gn = sqrt(dot3(g, g));
+    if (!isfinite(d) || !(gn > 0))
+        return false;
+    for (int k = 0; k < 3; k++)
+        x[k] += d * g[k] / gn;
+    return isfinite(ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g));
+}
+
 /* Tries to move free vertex v; true when it moved. */
 static bool relax_vertex(rm_pass *p, uint32_t v)
 {
@@ -202,7 +215,8 @@ static bool relax_vertex(rm_pass *p, uint32_t v)
         double tangent[3] = {x[0], x[1], x[2]};
         if (!rm_project(p, x, f.mean_edge, -1, g) ||
             !(rm_dist(x, tangent) <= ISM_RM_PROJECT_MAX_REL * f.mean_edge) ||
-            !rm_fan_accepts(p, v, x, &f) || !centroids_stay(p, v, x))
+            (p->bounded && !keep_offset(p, pos, x, g)) || !rm_fan_accepts(p, v, x, &f) ||
+            !centroids_stay(p, v, x))
             continue;
         rm_commit_move(p, v, x, g);
         return true;

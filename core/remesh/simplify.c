@@ -5,28 +5,46 @@
 #include "core/remesh/simplify.h"
 #include "core/remesh/rm_pass.h"
 #include "core/remesh/sp_collapse.h"
+#include "core/remesh/sp_place.h"
 #include "core/util/clock.h"
 
 #include <math.h>
 #include <string.h>
 
-/* Rounds of (collapses, flips, relaxation) at most: each vertex takes part in at most one
- * collapse a round, so a round removes at most half the vertices, and the polygoniser's
- * meshes under a bound are rarely more than 2^4 times too fine. */
-#define ISM_SP_ROUNDS 10
+/* Rounds of (collapses, flips, relaxation, offsets) at most: a merged vertex takes part in no
+ * other collapse that round, so a round removes at most half the vertices; the presets'
+ * meshes under a bound settle in 4 to 6 rounds (sphere at E = 7.9e-4: 8598 vertices, then
+ * 5144, 2992, 2447, 2394). */
+#define ISM_SP_ROUNDS 16
 /* A round that removes fewer than this share of the vertices ends the loop: the mesh is at
- * its bound nearly everywhere. */
-#define ISM_SP_MIN_GAIN 0.01
+ * its bound nearly everywhere (the rounds after cost as much for a few merges). */
+#define ISM_SP_MIN_GAIN 0.005
 
 static bool stopped(const ism_remesh_options *o) { return o->cancel && *o->cancel; }
 
-/* Flips and one relaxation sweep over every vertex, under the bound. */
+/* Adds the neighbours of the active vertices to them. */
+static void grow_active(rm_pass *p)
+{
+    const rm_mesh *r = &p->r;
+    for (size_t v = 0; v < r->m->nverts; v++)
+        for (uint32_t i = 0; p->active[v] == 1 && i < r->count[v]; i++) {
+            const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
+            for (int k = 0; k < 3; k++)
+                if (!p->active[t[k]])
+                    p->active[t[k]] = 2;
+        }
+}
+
+/* Around the active vertices (grown by a ring): flips, one relaxation sweep and one of
+ * balancing offsets, under the bound. The next round's collapses start from them. */
 static void even_out(rm_pass *p, bool *ok)
 {
-    memset(p->active, 1, p->r.m->nverts);
+    grow_active(p);
     rm_flip_active(p, ok);
-    if (*ok)
+    if (*ok) {
         rm_relax_sweep(p);
+        sp_offset_sweep(p);
+    }
 }
 
 static size_t live_vertices(const rm_pass *p)
@@ -54,6 +72,8 @@ bool ism_remesh_simplify(ism_mesh *m, const ism_remesh_options *o, ism_simplify_
     size_t nv = m->nverts, nt = m->ntris;
     bool ok = rm_pass_open(&p, m, o, 0);
     p.bounded = true;
+    if (ok)
+        memset(p.active, 1, m->nverts);
     for (int round = 0; ok && round < ISM_SP_ROUNDS && !stopped(o); round++) {
         size_t live = live_vertices(&p);
         size_t made = sp_collapse_round(&p, o->cancel, &ok);

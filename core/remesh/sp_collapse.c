@@ -7,6 +7,7 @@
 #include "core/remesh/sp_collapse.h"
 #include "core/remesh/rm_bound.h"
 #include "core/remesh/rm_merge.h"
+#include "core/remesh/sp_place.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -49,8 +50,8 @@ static double dot3(const double *u, const double *v)
 
 static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * (size_t)v; }
 
-/* The edges with a free end (each once), shortest first; *n gets how many. NULL when out of
- * memory. */
+/* The edges with a free end and an active one (each once), shortest first; *n gets how
+ * many. NULL when out of memory. */
 static edge *candidate_edges(const rm_pass *p, size_t *n)
 {
     const ism_mesh *m = p->r.m;
@@ -60,7 +61,7 @@ static edge *candidate_edges(const rm_pass *p, size_t *n)
         const uint32_t *c = m->tri + 3 * t;
         for (int k = 0; e && !p->r.dead[t] && k < 3; k++) {
             uint32_t a = c[k], b = c[(k + 1) % 3];
-            if (a < b && !(p->r.locked[a] && p->r.locked[b]))
+            if (a < b && !(p->r.locked[a] && p->r.locked[b]) && (p->active[a] || p->active[b]))
                 e[(*n)++] = (edge){rm_dist(P(p, a), P(p, b)), a, b};
         }
     }
@@ -155,22 +156,34 @@ static bool distances_ok(rm_pass *p, const rm_merge *g, const uint32_t *fan, uin
     return true;
 }
 
-/* All tests of merging g->v into g->w placed at x. */
-static bool merge_ok(rm_pass *p, const rm_merge *g, const double *x)
+/* All tests of merging g->v into g->w placed at x; with gx, the merged vertex may move off x
+ * to its balancing offset (sp_place.h), and gx gets ∇f where it lands. */
+
+static bool merge_ok(rm_pass *p, const rm_merge *g, double *x, double *gx)
 {
     if (!rm_merge_link_ok(&p->r, g))
         return false;
-    bool w_moves = memcmp(x, P(p, g->w), 3 * sizeof *x) != 0;
+    bool w_moves = gx || memcmp(x, P(p, g->w), 3 * sizeof *x) != 0;
     uint32_t fan[2 * ISM_RM_MERGE_MAX_DEGREE], n = merged_fan(p, g, w_moves, fan);
     double floor_sine = fmin(fans_min_sine(p, g), sin(ISM_SP_MIN_DEG * M_PI / 180));
     for (uint32_t i = 0; i < n; i++)
         if (!shape_ok(p, g, fan[i], x, floor_sine))
             return false;
-    return distances_ok(p, g, fan, n, x);
+    if (!gx)
+        return distances_ok(p, g, fan, n, x);
+    sp_stencil s[SP_MAX_STENCILS];
+    int ns = sp_stencils(p, fan, n, g->v, g->w, s);
+    double before, after;
+    if (!ns || !sp_place(p, s, ns, x, gx, &before, &after) || !(after <= p->max_error))
+        return false;
+    for (uint32_t i = 0; i < n; i++) /* the offset moved x a little: shape again */
+        if (!shape_ok(p, g, fan[i], x, floor_sine))
+            return false;
+    return true;
 }
 
 /* Merges g->v into g->w, w put at x (∇f there gx, NULL when w stays); marks the new fan's
- * corners active and busy. False when out of memory. */
+ * corners active and w busy for the rest of the round. False when out of memory. */
 static bool apply(rm_pass *p, const rm_merge *g, const double *x, const double *gx)
 {
     uint32_t fan[ISM_RM_MERGE_MAX_DEGREE], n;
@@ -181,24 +194,27 @@ static bool apply(rm_pass *p, const rm_merge *g, const double *x, const double *
     for (uint32_t i = 0; i < p->r.count[g->w]; i++) {
         const uint32_t *c = p->r.m->tri + 3 * p->r.vt[p->r.start[g->w] + i];
         for (int k = 0; k < 3; k++)
-            p->active[c[k]] = 1, p->touched[c[k]] = 1;
+            p->active[c[k]] = 1;
     }
+    p->touched[g->w] = 1;
     p->active[g->v] = p->slide[g->v] = 0;
     p->collapses++;
     return true;
 }
 
-/* v into w at w's place, when every test passes. */
+/* v into w, when every test passes: at w's place when w is locked, else placed from there. */
 static bool into(rm_pass *p, uint32_t v, uint32_t w, bool *ok)
 {
     rm_merge g;
-    if (!rm_merge_find(&p->r, v, w, ISM_SP_MAX_DEGREE, &g) || !merge_ok(p, &g, P(p, w)))
+    double x[3] = {P(p, w)[0], P(p, w)[1], P(p, w)[2]}, gx[3];
+    double *moves = p->r.locked[w] ? NULL : gx;
+    if (!rm_merge_find(&p->r, v, w, ISM_SP_MAX_DEGREE, &g) || !merge_ok(p, &g, x, moves))
         return false;
-    *ok = apply(p, &g, P(p, w), NULL);
+    *ok = apply(p, &g, x, moves);
     return *ok;
 }
 
-/* Both ends free: merged at the midpoint projected onto f = 0. */
+/* Both ends free: merged at the midpoint put on f = 0, then placed from there. */
 static bool at_middle(rm_pass *p, uint32_t a, uint32_t b, bool *ok)
 {
     rm_merge g;
@@ -208,7 +224,7 @@ static bool at_middle(rm_pass *p, uint32_t a, uint32_t b, bool *ok)
         x[k] = mid[k] = 0.5 * (A[k] + B[k]);
     if (!rm_merge_find(&p->r, a, b, ISM_SP_MAX_DEGREE, &g) || p->r.locked[b] ||
         !rm_project(p, x, len, -1, gx) || !(rm_dist(x, mid) <= ISM_SP_PROJECT_MAX_REL * len) ||
-        !merge_ok(p, &g, x))
+        !merge_ok(p, &g, x, gx))
         return false;
     *ok = apply(p, &g, x, gx);
     return *ok;
@@ -230,6 +246,7 @@ size_t sp_collapse_round(rm_pass *p, const volatile int *cancel, bool *ok)
     edge *e = candidate_edges(p, &n);
     *ok = e != NULL;
     memset(p->touched, 0, p->r.cap_verts);
+    memset(p->active, 0, p->r.cap_verts);
     for (size_t i = 0; *ok && i < n; i++) {
         if (i % ISM_SP_POLL_EDGES == 0 && cancel && *cancel)
             break;

@@ -43,13 +43,13 @@ void pf_run(const ism_tape *t, const double box[6], int dmin, int dmax, int thre
     cr_assert_eq(s, ISM_POLY_OK, "polygonise failed: %s", err.message);
 }
 
-void pf_run_surface(const ism_tape *t, const double box[6], int dmin, int dmax, ism_mesh *m,
-                    ism_locus *l)
+void pf_run_surface_bounded(const ism_tape *t, const double box[6], int dmin, int dmax,
+                            double max_error, ism_mesh *m, ism_locus *l)
 {
     ism_poly_options o;
     ism_poly_options_default(&o);
     memcpy(o.box, box, sizeof o.box);
-    o.min_depth = dmin, o.max_depth = dmax, o.threads = 1;
+    o.min_depth = dmin, o.max_depth = dmax, o.threads = 1, o.max_error = max_error;
     ism_poly_stats ps;
     ism_conform_stats cs;
     ism_surface_times tm;
@@ -58,6 +58,12 @@ void pf_run_surface(const ism_tape *t, const double box[6], int dmin, int dmax, 
     ism_locus_init(l);
     enum ism_poly_status s = ism_mesh_surface(t, &o, m, l, &ps, &cs, &tm, &err);
     cr_assert_eq(s, ISM_POLY_OK, "meshing the surface failed: %s", err.message);
+}
+
+void pf_run_surface(const ism_tape *t, const double box[6], int dmin, int dmax, ism_mesh *m,
+                    ism_locus *l)
+{
+    pf_run_surface_bounded(t, box, dmin, dmax, 0, m, l);
 }
 
 void pf_sweep_box(const double base[6], int d, int which, double box[6])
@@ -296,6 +302,24 @@ bool pf_nm_edges_one_closed_curve(const ism_mesh *m, size_t *nedges)
     free(deg);
     free(parent);
     return ok;
+}
+
+static double angle_deg(const double *p, const double *q, const double *r)
+{
+    double u[3], v[3], dot = 0, uu = 0, vv = 0;
+    for (int k = 0; k < 3; k++) {
+        u[k] = q[k] - p[k], v[k] = r[k] - p[k];
+        dot += u[k] * v[k], uu += u[k] * u[k], vv += v[k] * v[k];
+    }
+    return acos(fmax(-1, fmin(1, dot / sqrt(uu * vv)))) * 180 / M_PI;
+}
+
+double pf_tri_min_angle(const ism_mesh *m, size_t t)
+{
+    const uint32_t *v = m->tri + 3 * t;
+    const double *a = m->pos + 3 * (size_t)v[0], *b = m->pos + 3 * (size_t)v[1],
+                 *c = m->pos + 3 * (size_t)v[2];
+    return fmin(angle_deg(a, b, c), fmin(angle_deg(b, c, a), angle_deg(c, a, b)));
 }
 
 void pf_tri_normal(const ism_mesh *m, size_t t, double n[3])

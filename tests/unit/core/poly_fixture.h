@@ -49,7 +49,14 @@ void pf_run(const ism_tape *t, const double box[6], int dmin, int dmax, int thre
 void pf_run_surface(const ism_tape *t, const double box[6], int dmin, int dmax, ism_mesh *m,
                     ism_locus *l);
 
+/* The same under an error bound max_error (> 0; 0: none). */
+void pf_run_surface_bounded(const ism_tape *t, const double box[6], int dmin, int dmax,
+                            double max_error, ism_mesh *m, ism_locus *l);
+
 void pf_measure(const ism_mesh *m, const ism_tape *t, pf_props *p);
+
+/* The smallest angle of triangle t (degrees). */
+double pf_tri_min_angle(const ism_mesh *m, size_t t);
 
 /* The unit normal of triangle t from its winding. */
 void pf_tri_normal(const ism_mesh *m, size_t t, double n[3]);

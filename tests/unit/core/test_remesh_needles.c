@@ -43,25 +43,6 @@ static void centroid(const ism_mesh *m, size_t t, double c[3])
     }
 }
 
-static double angle_deg(const double *p, const double *q, const double *r)
-{
-    double u[3], v[3], dot = 0, uu = 0, vv = 0;
-    for (int k = 0; k < 3; k++) {
-        u[k] = q[k] - p[k], v[k] = r[k] - p[k];
-        dot += u[k] * v[k], uu += u[k] * u[k], vv += v[k] * v[k];
-    }
-    return acos(fmax(-1, fmin(1, dot / sqrt(uu * vv)))) * 180 / M_PI;
-}
-
-/* Smallest angle of triangle t (degrees). */
-static double tri_min_angle(const ism_mesh *m, size_t t)
-{
-    const uint32_t *v = m->tri + 3 * t;
-    const double *a = m->pos + 3 * (size_t)v[0], *b = m->pos + 3 * (size_t)v[1],
-                 *c = m->pos + 3 * (size_t)v[2];
-    return fmin(angle_deg(a, b, c), fmin(angle_deg(b, c, a), angle_deg(c, a, b)));
-}
-
 typedef struct shape {
     size_t needles;           /* triangles under NEEDLE_DEG not touching the point */
     double min_angle_away;    /* smallest angle of those not touching the point */
@@ -82,7 +63,7 @@ static void measure(const ism_mesh *m, uint32_t point, shape *s)
         const uint32_t *v = m->tri + 3 * t;
         if (v[0] == point || v[1] == point || v[2] == point)
             continue;
-        double a = tri_min_angle(m, t);
+        double a = pf_tri_min_angle(m, t);
         s->needles += a < NEEDLE_DEG;
         s->min_angle_away = fmin(s->min_angle_away, a);
     }
@@ -296,7 +277,7 @@ static void steiner_shape(const ism_mesh *m, const ism_tape *t, shape *s)
         double gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
         if (gl > 0)
             s->centroid_error = fmax(s->centroid_error, fabs(fv) / gl);
-        s->needles += tri_min_angle(m, i) < NEEDLE_DEG;
+        s->needles += pf_tri_min_angle(m, i) < NEEDLE_DEG;
     }
     ism_eval_ws_free(ws);
 }

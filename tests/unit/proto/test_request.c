@@ -36,7 +36,7 @@ static const bad_case bad_cases[] = {
      "from GET /v1/presets)"},
     {"{\"expr\": \"x\", \"colour\": 1}", 400, "bad_request", "$.colour",
      "$.colour: unknown field (expected one of: expr, preset, params, let, box, depth, "
-     "max_error, quality, tolerances, output, curves, preview)"},
+     "max_error, quality, tolerances, output, curves, preview, simplify)"},
     {"{\"expr\": \"x\", \"tolerances\": {\"gradiant\": 0.9}}", 400, "bad_request",
      "$.tolerances.gradiant",
      "$.tolerances.gradiant: unknown field (expected one of: gradient, double_root_eps, "
@@ -49,7 +49,7 @@ static const bad_case bad_cases[] = {
      "curvature_bits, attributes, draco)"},
     {"{\"expr\": \"x\", \"a b\": 1}", 400, "bad_request", "$[\"a b\"]",
      "$[\"a b\"]: unknown field (expected one of: expr, preset, params, let, box, depth, "
-     "max_error, quality, tolerances, output, curves, preview)"},
+     "max_error, quality, tolerances, output, curves, preview, simplify)"},
     /* surface */
     {"{\"expr\": 3}", 400, "bad_request", "$.expr", "$.expr: expected a string, got an integer"},
     {"{\"expr\": \"\"}", 400, "bad_request", "$.expr", "$.expr: the expression is empty"},

@@ -1,0 +1,165 @@
+/* sp_place.c — balancing offsets of the simplified mesh's vertices (sp_place.h): a convex
+ * piecewise-linear minimax in one unknown, solved exactly on the linear model, then checked by
+ * measuring every stencil at the result. */
+#include "core/remesh/sp_place.h"
+#include "core/remesh/rm_bound.h"
+
+#include <math.h>
+
+/* The offset is searched within this × max_error each way: no vertex may lie farther off. */
+#define SP_PLACE_RANGE 1.0
+/* A placement whose linear model stays above this × max_error is not measured: the model is
+ * good to second order in the offset (a few per cent at these sizes). */
+#define SP_PLACE_SLACK 1.05
+
+static double dot3(const double *u, const double *v)
+{
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+}
+
+/* Adds a stencil when there is room. */
+static bool add(sp_stencil *s, int *n, const double *a, const double *b)
+{
+    if (*n >= SP_MAX_STENCILS)
+        return false;
+    s[*n].a = a, s[*n].b = b;
+    (*n)++;
+    return true;
+}
+
+int sp_stencils(const rm_pass *p, const uint32_t *fan, uint32_t n, uint32_t v, uint32_t w,
+                sp_stencil *s)
+{
+    int ns = 0;
+    uint32_t seen[SP_MAX_STENCILS];
+    int nseen = 0;
+    if (!add(s, &ns, NULL, NULL))
+        return 0;
+    for (uint32_t i = 0; i < n; i++) {
+        const uint32_t *c = p->r.m->tri + 3 * fan[i];
+        const double *other[2];
+        int no = 0;
+        for (int k = 0; k < 3; k++) {
+            if (c[k] == v || c[k] == w)
+                continue;
+            if (no < 2)
+                other[no] = p->r.m->pos + 3 * (size_t)c[k];
+            no++;
+            int j = 0;
+            while (j < nseen && seen[j] != c[k])
+                j++;
+            if (j == nseen && nseen < SP_MAX_STENCILS) {
+                seen[nseen++] = c[k];
+                if (!add(s, &ns, p->r.m->pos + 3 * (size_t)c[k], NULL))
+                    return 0;
+            }
+        }
+        if (no == 2 && !add(s, &ns, other[0], other[1]))
+            return 0;
+    }
+    return ns;
+}
+
+/* The stencil's point with the moving vertex at x, and its weight in the vertex's offset. */
+static double point(const sp_stencil *s, const double *x, double y[3])
+{
+    for (int k = 0; k < 3; k++)
+        y[k] = !s->a ? x[k] : !s->b ? 0.5 * (x[k] + s->a[k]) : (x[k] + s->a[k] + s->b[k]) / 3;
+    return !s->a ? 1.0 : !s->b ? 0.5 : 1.0 / 3;
+}
+
+/* The largest and smallest signed distance among the stencils of each weight (the vertex,
+ * the midpoints, the centroids): the largest |e_k + w_k δ| is the largest of six lines. */
+typedef struct lines {
+    double w[3], hi[3], lo[3];
+} lines;
+
+static int weight_class(double w) { return w == 1.0 ? 0 : w == 0.5 ? 1 : 2; }
+
+static double model(const lines *l, double delta)
+{
+    double worst = 0;
+    for (int c = 0; c < 3; c++)
+        if (l->hi[c] >= l->lo[c])
+            worst = fmax(worst, fmax(l->hi[c] + l->w[c] * delta, -(l->lo[c] + l->w[c] * delta)));
+    return worst;
+}
+
+/* The offset within ±range where the largest of the six lines is least: where a rising line
+ * (a largest distance, plus w δ) meets a falling one (a smallest, minus w δ), or an end. */
+static double best_offset(const lines *l, double range)
+{
+    double best = 0, worst = model(l, 0);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            if (!(l->hi[i] >= l->lo[i]) || !(l->hi[j] >= l->lo[j]))
+                continue;
+            double d = fmax(-range, fmin(range, -(l->lo[j] + l->hi[i]) / (l->w[i] + l->w[j])));
+            double m = model(l, d);
+            if (m < worst)
+                best = d, worst = m;
+        }
+    return best;
+}
+
+bool sp_place(rm_pass *p, const sp_stencil *s, int n, double x[3], double g[3],
+              double *before, double *after)
+{
+    lines l = {{1.0, 0.5, 1.0 / 3}, {-INFINITY, -INFINITY, -INFINITY},
+               {INFINITY, INFINITY, INFINITY}};
+    double y[3];
+    *before = *after = INFINITY;
+    for (int k = 0; k < n; k++) {
+        int c = weight_class(point(&s[k], x, y));
+        double e = rm_bound_signed(p, y);
+        if (!isfinite(e))
+            return false;
+        l.hi[c] = fmax(l.hi[c], e);
+        l.lo[c] = fmin(l.lo[c], e);
+    }
+    *before = model(&l, 0);
+    if (!(*before > 0))
+        return false;
+    double delta = best_offset(&l, SP_PLACE_RANGE * p->max_error);
+    if (!(model(&l, delta) <= SP_PLACE_SLACK * p->max_error))
+        return false; /* the model already says no: nothing to measure */
+    ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
+    double gn = sqrt(dot3(g, g));
+    if (!(gn > p->gthresh) || !isfinite(gn))
+        return false;
+    for (int k = 0; k < 3; k++)
+        x[k] += delta * g[k] / gn;
+    double fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
+    if (!isfinite(fv))
+        return false;
+    *after = 0;
+    for (int k = 0; k < n; k++) {
+        point(&s[k], x, y);
+        *after = fmax(*after, rm_bound_distance(p, y, INFINITY));
+    }
+    return isfinite(*after);
+}
+
+size_t sp_offset_sweep(rm_pass *p)
+{
+    const rm_mesh *r = &p->r;
+    size_t moves = 0;
+    sp_stencil s[SP_MAX_STENCILS];
+    for (size_t v = 0; v < r->m->nverts; v++) {
+        if (r->locked[v] || !r->count[v] || !p->active[v])
+            continue;
+        int n = sp_stencils(p, r->vt + r->start[v], r->count[v], (uint32_t)v, (uint32_t)v, s);
+        double x[3], g[3], before, after;
+        for (int k = 0; k < 3; k++)
+            x[k] = r->m->pos[3 * v + k];
+        rm_fan f;
+        rm_fan_measure(p, (uint32_t)v, &f);
+        if (n && sp_place(p, s, n, x, g, &before, &after) && after < before &&
+            rm_fan_accepts(p, (uint32_t)v, x, &f)) {
+            rm_commit_move(p, (uint32_t)v, x, g);
+            moves++;
+        }
+    }
+    p->moves += moves;
+    return moves;
+}
