@@ -55,19 +55,31 @@ bool rm_bound_triangle(rm_pass *p, const double *a, const double *b, const doubl
     return rm_bound_distance(p, m, p->max_error) <= p->max_error;
 }
 
-bool rm_bound_fan(rm_pass *p, uint32_t v, const double *x)
+double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x)
 {
     const rm_mesh *r = &p->r;
     const double *P = r->m->pos;
+    double worst = 0;
     for (uint32_t i = 0; i < r->count[v]; i++) {
         const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
         const double *q[3];
         for (int k = 0; k < 3; k++)
             q[k] = t[k] == v ? x : P + 3 * (size_t)t[k];
         int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+        double g[3], m[3];
+        for (int j = 0; j < 3; j++) {
+            g[j] = (q[0][j] + q[1][j] + q[2][j]) / 3;
+            m[j] = 0.5 * (x[j] + q[(k + 1) % 3][j]);
+        }
         /* each edge at v is the next edge of exactly one triangle of a closed fan */
-        if (!rm_bound_triangle(p, q[0], q[1], q[2]) || !rm_bound_edge(p, x, q[(k + 1) % 3]))
-            return false;
+        worst = fmax(worst, fmax(rm_bound_distance(p, g, INFINITY),
+                                 rm_bound_distance(p, m, INFINITY)));
     }
-    return true;
+    return fmax(worst, rm_bound_distance(p, x, INFINITY));
+}
+
+bool rm_bound_fan(rm_pass *p, uint32_t v, const double *x)
+{
+    double now = rm_bound_fan_worst(p, v, x);
+    return now <= p->max_error || now <= rm_bound_fan_worst(p, v, p->r.m->pos + 3 * (size_t)v);
 }

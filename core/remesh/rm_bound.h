@@ -24,8 +24,12 @@ bool rm_bound_edge(rm_pass *p, const double *a, const double *b);
 /* True when the centroid of abc lies within max_error of f = 0. */
 bool rm_bound_triangle(rm_pass *p, const double *a, const double *b, const double *c);
 
-/* True when every triangle of v's fan, with v at x, has its centroid within max_error, and
- * every edge at v its midpoint. */
+/* The largest distance over v's fan with v at x: its centroids, the midpoints of the edges at
+ * v, and x itself (v free: a closed fan). */
+double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x);
+
+/* True when v's fan with v at x lies within max_error (rm_bound_fan_worst), or no farther
+ * than with v where it is (a fan the polygoniser left beyond the bound may still improve). */
 bool rm_bound_fan(rm_pass *p, uint32_t v, const double *x);
 
 #endif

@@ -99,6 +99,9 @@ bool rm_compact(rm_mesh *r, size_t nverts_before, size_t ntris_before, ism_remes
  * ISM_RM_COMFORT_DEG, and their neighbours. Returns how many there are. */
 size_t rm_mark_active(rm_pass *p);
 
+/* Tries to move free vertex v toward its fan's centroid (rm_relax.c); true when it moved. */
+bool rm_relax_vertex(rm_pass *p, uint32_t v);
+
 /* One sweep of tangential relaxation over the free active vertices; returns the moves made. */
 size_t rm_relax_sweep(rm_pass *p);
 

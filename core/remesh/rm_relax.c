@@ -200,8 +200,7 @@ static bool keep_offset(rm_pass *p, const double *pos, double x[3], double g[3])
     return isfinite(ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g));
 }
 
-/* Tries to move free vertex v; true when it moved. */
-static bool relax_vertex(rm_pass *p, uint32_t v)
+bool rm_relax_vertex(rm_pass *p, uint32_t v)
 {
     double *pos = p->r.m->pos + 3 * v, *n = p->normal + 3 * v;
     rm_fan f;
@@ -253,7 +252,7 @@ size_t rm_relax_sweep(rm_pass *p)
 {
     size_t moves = 0;
     for (size_t v = 0; v < p->r.m->nverts; v++)
-        if (p->active[v] && !p->r.locked[v] && p->r.count[v] && relax_vertex(p, (uint32_t)v))
+        if (p->active[v] && !p->r.locked[v] && p->r.count[v] && rm_relax_vertex(p, (uint32_t)v))
             moves++;
     p->moves += moves;
     return moves;

@@ -8,8 +8,8 @@
 
 /* The offset is searched within this × max_error each way: no vertex may lie farther off. */
 #define SP_PLACE_RANGE 1.0
-/* A placement whose linear model stays above this × max_error is not measured: the model is
- * good to second order in the offset (a few per cent at these sizes). */
+/* A placement whose linear model stays above this × the caller's limit is not measured: the
+ * model is good to second order in the offset (a few per cent at these sizes). */
 #define SP_PLACE_SLACK 1.05
 
 static double dot3(const double *u, const double *v)
@@ -102,7 +102,7 @@ static double best_offset(const lines *l, double range)
     return best;
 }
 
-bool sp_place(rm_pass *p, const sp_stencil *s, int n, double x[3], double g[3],
+bool sp_place(rm_pass *p, const sp_stencil *s, int n, double limit, double x[3], double g[3],
               double *before, double *after)
 {
     lines l = {{1.0, 0.5, 1.0 / 3}, {-INFINITY, -INFINITY, -INFINITY},
@@ -121,7 +121,7 @@ bool sp_place(rm_pass *p, const sp_stencil *s, int n, double x[3], double g[3],
     if (!(*before > 0))
         return false;
     double delta = best_offset(&l, SP_PLACE_RANGE * p->max_error);
-    if (!(model(&l, delta) <= SP_PLACE_SLACK * p->max_error))
+    if (!(model(&l, delta) <= SP_PLACE_SLACK * limit))
         return false; /* the model already says no: nothing to measure */
     ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
     double gn = sqrt(dot3(g, g));
@@ -140,26 +140,30 @@ bool sp_place(rm_pass *p, const sp_stencil *s, int n, double x[3], double g[3],
     return isfinite(*after);
 }
 
+bool sp_offset_vertex(rm_pass *p, uint32_t v)
+{
+    const rm_mesh *r = &p->r;
+    sp_stencil s[SP_MAX_STENCILS];
+    int n = sp_stencils(p, r->vt + r->start[v], r->count[v], v, v, s);
+    double x[3], g[3], before, after;
+    for (int k = 0; k < 3; k++)
+        x[k] = r->m->pos[3 * (size_t)v + k];
+    rm_fan f;
+    rm_fan_measure(p, v, &f);
+    if (!n || !sp_place(p, s, n, p->max_error, x, g, &before, &after) || !(after < before) ||
+        !rm_fan_accepts(p, v, x, &f))
+        return false;
+    rm_commit_move(p, v, x, g);
+    p->moves++;
+    return true;
+}
+
 size_t sp_offset_sweep(rm_pass *p)
 {
     const rm_mesh *r = &p->r;
     size_t moves = 0;
-    sp_stencil s[SP_MAX_STENCILS];
-    for (size_t v = 0; v < r->m->nverts; v++) {
-        if (r->locked[v] || !r->count[v] || !p->active[v])
-            continue;
-        int n = sp_stencils(p, r->vt + r->start[v], r->count[v], (uint32_t)v, (uint32_t)v, s);
-        double x[3], g[3], before, after;
-        for (int k = 0; k < 3; k++)
-            x[k] = r->m->pos[3 * v + k];
-        rm_fan f;
-        rm_fan_measure(p, (uint32_t)v, &f);
-        if (n && sp_place(p, s, n, x, g, &before, &after) && after < before &&
-            rm_fan_accepts(p, (uint32_t)v, x, &f)) {
-            rm_commit_move(p, (uint32_t)v, x, g);
-            moves++;
-        }
-    }
-    p->moves += moves;
+    for (size_t v = 0; v < r->m->nverts; v++)
+        if (!r->locked[v] && r->count[v] && p->active[v])
+            moves += sp_offset_vertex(p, (uint32_t)v);
     return moves;
 }

@@ -31,9 +31,13 @@ int sp_stencils(const rm_pass *p, const uint32_t *fan, uint32_t n, uint32_t v, u
  * 1/2 or 1/3, of the offset), then measures every stencil there (rm_bound_distance). *before
  * gets the largest distance at x before the move, *after the largest after it, g ∇f at the
  * new x. False when f cannot be measured at some stencil, or when the model's best is
- * clearly above max_error (nothing measured then). */
-bool sp_place(rm_pass *p, const sp_stencil *s, int n, double x[3], double g[3],
+ * clearly above limit (nothing measured then). */
+bool sp_place(rm_pass *p, const sp_stencil *s, int n, double limit, double x[3], double g[3],
               double *before, double *after);
+
+/* Moves free vertex v to its balancing offset when that lowers the largest distance of its
+ * fan and keeps the fan's shape (rm_fan_accepts); true when it moved. */
+bool sp_offset_vertex(rm_pass *p, uint32_t v);
 
 /* One sweep over the free active vertices: each moves to its balancing offset when that
  * lowers the largest distance of its fan and keeps the fan's shape (rm_fan_accepts). Returns
