@@ -46,15 +46,15 @@ static double point_op(const ism_instr *in, const double *r)
     }
 }
 
-double ism_eval_point(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z)
+/* The first n instructions of t at (x, y, z) into ws->scalar. */
+static void run_point(const ism_tape *t, ism_eval_ws *ws, size_t n, double x, double y,
+                      double z)
 {
-    if (!ism_ws_fits(ws, t))
-        return NAN;
     double *r = ws->scalar;
     r[ISM_REG_X] = x;
     r[ISM_REG_Y] = y;
     r[ISM_REG_Z] = z;
-    for (size_t i = 0; i < t->len; i++) {
+    for (size_t i = 0; i < n; i++) {
         const ism_instr *in = &t->code[i];
         if (in->op == ISM_OP_SIN || in->op == ISM_OP_COS) {
             double s, c;
@@ -64,7 +64,28 @@ double ism_eval_point(const ism_tape *t, ism_eval_ws *ws, double x, double y, do
             r[in->out] = point_op(in, r);
         }
     }
-    return r[t->result];
+}
+
+double ism_eval_point(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z)
+{
+    if (!ism_ws_fits(ws, t))
+        return NAN;
+    run_point(t, ws, t->len, x, y, z);
+    return ws->scalar[t->result];
+}
+
+bool ism_eval_top_values(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
+                         double val[2])
+{
+    if (!t->len || !ism_ws_fits(ws, t))
+        return false;
+    const ism_instr *top = &t->code[t->len - 1];
+    if ((top->op != ISM_OP_MIN_RR && top->op != ISM_OP_MAX_RR) || top->out != t->result)
+        return false;
+    run_point(t, ws, t->len - 1, x, y, z);
+    val[0] = ws->scalar[top->a];
+    val[1] = ws->scalar[top->b];
+    return true;
 }
 
 /* Lane kernels: one group of LANES lanes each, restrict parameters so that gcc knows the

@@ -120,6 +120,16 @@ static inline void dual_step(const ism_instr *in, ism_dual *r, ism_trig_cache *t
             dual_chain(o, cv, -sv, a);
         return;
     }
+    case ISM_OP_MAX_RR: {
+        const ism_dual *b = &r[in->b];
+        *o = a->v > b->v ? *a : *b;
+        return;
+    }
+    case ISM_OP_MIN_RR: {
+        const ism_dual *b = &r[in->b];
+        *o = a->v < b->v ? *a : *b;
+        return;
+    }
     default:
         *o = dual_op(in, r, trig);
     }
@@ -157,7 +167,7 @@ bool ism_eval_top_branches(const ism_tape *t, ism_eval_ws *ws, double x, double 
     r[ISM_REG_Y] = (ism_dual){ y, { 0.0, 1.0, 0.0 } };
     r[ISM_REG_Z] = (ism_dual){ z, { 0.0, 0.0, 1.0 } };
     for (size_t i = 0; i + 1 < t->len; i++)
-        r[t->code[i].out] = dual_op(&t->code[i], r, ws->trig);
+        dual_step(&t->code[i], r, ws->trig);
     const ism_dual *br[2] = {&r[top->a], &r[top->b]};
     for (int s = 0; s < 2; s++) {
         val[s] = br[s]->v;

@@ -5,6 +5,7 @@
 #include "core/util/min_norm.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* Newton steps toward a = b = 0 from the edge's linear estimate: quadratic convergence
@@ -19,9 +20,21 @@
  * of the crossing angle under 1e-6 rad, where a step would run along the crease. */
 #define CREASE_PARALLEL_SIN2 1e-12
 
+/* Branch labels of a leaf's vertices kept on the stack up to this many vertices (a leaf
+ * emits a few dozen); more take the heap. */
+#define LABELS_ON_STACK 256
+/* A vertex whose branch is not looked up yet. */
+#define LABEL_UNKNOWN 2
+
 int ism_crease_branch(ism_sampler *s, const double p[3], double g[3])
 {
     double v[2], bg[2][3];
+    if (!g) { /* the label alone: values, no gradients */
+        s->n_point++;
+        if (!ism_eval_top_values(s->tape, s->ws, p[0], p[1], p[2], v))
+            return -1;
+        return v[1] > v[0];
+    }
     s->n_gradient++;
     if (!ism_eval_top_branches(s->tape, s->ws, p[0], p[1], p[2], v, bg))
         return -1;
@@ -94,15 +107,25 @@ static void crease_point(ism_sampler *s, const double *p0, const double *q0, ism
     out->flags = ISM_FP_INTERIOR;
 }
 
-bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
+/* The branch of vertex v (labels[v - first], looked up once). */
+static int vertex_branch(ism_sampler *s, const ism_cell_out *out, uint8_t *labels,
+                         uint32_t first, uint32_t v)
 {
-    size_t ntris = out->ntris;
+    uint8_t *l = &labels[v - first];
+    if (*l == LABEL_UNKNOWN)
+        *l = (uint8_t)ism_crease_branch(s, out->verts[v].p, NULL);
+    return *l;
+}
+
+/* Splits triangles first_tri..ntris - 1, whose vertices lie in first..first + n - 1 (labels:
+ * n entries of LABEL_UNKNOWN). */
+static bool split_labelled(ism_sampler *s, ism_cell_out *out, size_t first_tri, size_t ntris,
+                           uint8_t *labels, uint32_t first)
+{
     for (size_t t = first_tri; t < ntris; t++) {
         int br[3];
         for (int k = 0; k < 3; k++)
-            br[k] = ism_crease_branch(s, out->verts[out->tris[3 * t + k]].p, NULL);
-        if (br[0] < 0)
-            return true; /* no min/max at the top of the tape */
+            br[k] = vertex_branch(s, out, labels, first, out->tris[3 * t + k]);
         if (br[0] == br[1] && br[1] == br[2])
             continue;
         /* r: the corner alone on its branch; the others follow it in winding order */
@@ -121,4 +144,31 @@ bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
             return false;
     }
     return true;
+}
+
+bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
+{
+    size_t ntris = out->ntris;
+    if (first_tri == ntris)
+        return true;
+    double v[2];
+    const double *p0 = out->verts[out->tris[3 * first_tri]].p;
+    s->n_point++;
+    if (!ism_eval_top_values(s->tape, s->ws, p0[0], p0[1], p0[2], v))
+        return true; /* no min/max at the top of the tape */
+    uint32_t lo = UINT32_MAX, hi = 0;
+    for (size_t i = 3 * first_tri; i < 3 * ntris; i++) {
+        lo = out->tris[i] < lo ? out->tris[i] : lo;
+        hi = out->tris[i] > hi ? out->tris[i] : hi;
+    }
+    size_t n = (size_t)hi - lo + 1;
+    uint8_t stack[LABELS_ON_STACK], *labels = n <= LABELS_ON_STACK ? stack : malloc(n);
+    if (!labels)
+        return false;
+    memset(labels, LABEL_UNKNOWN, n);
+    labels[out->tris[3 * first_tri] - lo] = v[1] > v[0];
+    bool ok = split_labelled(s, out, first_tri, ntris, labels, lo);
+    if (labels != stack)
+        free(labels);
+    return ok;
 }

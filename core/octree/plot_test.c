@@ -57,14 +57,17 @@ static int crease_cell(ism_sampler *s, const ism_flatness *fl, const ism_corners
 {
     double n[8][3];
     int branch[8], seen = 0;
-    for (int c = 0; c < 8; c++) {
-        if ((branch[c] = ism_crease_branch(s, k->p[c], n[c])) < 0)
+    for (int c = 0; c < 8; c++) { /* labels first: most nodes lie on one branch */
+        if ((branch[c] = ism_crease_branch(s, k->p[c], NULL)) < 0)
             return -1;
-        ism_normalise3(n[c]);
         seen |= 1 << branch[c];
     }
     if (seen != 3)
         return -1;
+    for (int c = 0; c < 8; c++) {
+        ism_crease_branch(s, k->p[c], n[c]);
+        ism_normalise3(n[c]);
+    }
     for (int i = 0; i < 8; i++)
         for (int j = i + 1; j < 8; j++)
             if (branch[i] == branch[j] && ism_dot3(n[i], n[j]) < fl->normal_cos)
