@@ -106,7 +106,7 @@ static bool gather_tiles(ism_cell_ctx *cx, int32_t node, size_t first[7])
     cx->ntiles = 0;
     for (int face = 0; face < 6; face++) {
         first[face] = cx->ntiles;
-        if (!ism_octree_face_tiles(cx->tree, node, face / 2, face % 2, keep_tile, cx))
+        if (!ism_octree_face_tiles(cx->tree, cx->parent, node, face / 2, face % 2, keep_tile, cx))
             return false;
     }
     first[6] = cx->ntiles;

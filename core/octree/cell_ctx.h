@@ -17,6 +17,7 @@
 typedef struct ism_cell_ctx {
     ism_sampler s;
     const ism_octree *tree;
+    const int32_t *parent;    /* each node's parent in tree (ism_octree_parents) */
     const ism_breaks *breaks;
     ism_root_params roots;
     double stitch_tol;        /* two roots closer than this × segment length are one */

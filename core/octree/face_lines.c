@@ -864,19 +864,6 @@ static int zero_run_tangent_end(const ism_cell_ctx *cx, const ism_tile *t)
     return -1;
 }
 
-void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *t)
-{
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
-    int32_t cu[4] = {t->u0, t->u1, t->u1, t->u0}, cv[4] = {t->v0, t->v0, t->v1, t->v1};
-    for (int c = 0; c < 4; c++) {
-        int32_t q[3];
-        q[t->axis] = t->plane;
-        q[u] = cu[c];
-        q[v] = cv[c];
-        __builtin_prefetch(lattice_slot(cx, q), 1);
-    }
-}
-
 /* The tile as a quiet-tile memo entry (lattice coordinates take 20 bits, the axis 2). */
 static ism_quiet_tile quiet_key(const ism_tile *t)
 {
@@ -889,6 +876,21 @@ static ism_quiet_tile *quiet_slot(ism_cell_ctx *cx, const ism_quiet_tile *k)
 {
     return &cx->cache.quiet[ism_cache_mix(k->where * 31 + k->span) &
                             (((uint64_t)1 << ISM_QUIET_CACHE_BITS) - 1)];
+}
+
+void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *t)
+{
+    ism_quiet_tile key = quiet_key(t);
+    __builtin_prefetch(quiet_slot(cx, &key), 0);
+    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    int32_t cu[4] = {t->u0, t->u1, t->u1, t->u0}, cv[4] = {t->v0, t->v0, t->v1, t->v1};
+    for (int c = 0; c < 4; c++) {
+        int32_t q[3];
+        q[t->axis] = t->plane;
+        q[u] = cu[c];
+        q[v] = cv[c];
+        __builtin_prefetch(lattice_slot(cx, q), 1);
+    }
 }
 
 bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)

@@ -3,13 +3,11 @@
  * neighbours put on their shared face: the paper's FixHoles, done by construction). */
 #include "core/octree/octree.h"
 
-int32_t ism_octree_find(const ism_octree *t, const int32_t o[3], int level)
+#include <stdlib.h>
+
+/* Down from node i (which contains o) as ism_octree_find goes down from the root. */
+static int32_t descend(const ism_octree *t, int32_t i, const int32_t o[3], int level)
 {
-    int32_t full = (int32_t)1 << t->grid.depth;
-    for (int a = 0; a < 3; a++)
-        if (o[a] < 0 || o[a] >= full)
-            return -1;
-    int32_t i = 0;
     while (t->nodes[i].level < level && t->nodes[i].child >= 0) {
         const ism_node *nd = &t->nodes[i];
         int32_t half = ism_grid_cell_steps(&t->grid, nd->level + 1);
@@ -20,6 +18,59 @@ int32_t ism_octree_find(const ism_octree *t, const int32_t o[3], int level)
         i = nd->child + k;
     }
     return i;
+}
+
+static bool inside_root(const ism_octree *t, const int32_t o[3])
+{
+    int32_t full = (int32_t)1 << t->grid.depth;
+    for (int a = 0; a < 3; a++)
+        if (o[a] < 0 || o[a] >= full)
+            return false;
+    return true;
+}
+
+int32_t ism_octree_find(const ism_octree *t, const int32_t o[3], int level)
+{
+    return inside_root(t, o) ? descend(t, 0, o, level) : -1;
+}
+
+int32_t *ism_octree_parents(const ism_octree *t)
+{
+    int32_t *parent = malloc((t->n ? t->n : 1) * sizeof *parent);
+    if (!parent)
+        return NULL;
+    if (t->n)
+        parent[0] = -1;
+    for (size_t i = 0; i < t->n; i++)
+        if (t->nodes[i].child >= 0)
+            for (int k = 0; k < 8; k++)
+                parent[t->nodes[i].child + k] = (int32_t)i;
+    return parent;
+}
+
+/* Does node nd contain the lattice point o? */
+static bool contains(const ism_octree *t, const ism_node *nd, const int32_t o[3])
+{
+    int32_t s = ism_grid_cell_steps(&t->grid, nd->level);
+    for (int a = 0; a < 3; a++)
+        if (o[a] < nd->org[a] || o[a] - nd->org[a] >= s)
+            return false;
+    return true;
+}
+
+/* ism_octree_find, from the nearest ancestor of `from` that contains o (the same node:
+ * every path to o runs through it); parent NULL: from the root. */
+static int32_t find_near(const ism_octree *t, const int32_t *parent, int32_t from,
+                         const int32_t o[3], int level)
+{
+    if (!inside_root(t, o))
+        return -1;
+    if (!parent)
+        return descend(t, 0, o, level);
+    int32_t i = from;
+    while (i > 0 && !contains(t, &t->nodes[i], o))
+        i = parent[i];
+    return descend(t, i, o, level);
 }
 
 static ism_tile face_of(const ism_octree *t, const ism_node *nd, int axis, int side)
@@ -50,14 +101,14 @@ static bool collect_leaves(const ism_octree *t, int32_t i, int axis, int side,
     return true;
 }
 
-bool ism_octree_face_tiles(const ism_octree *t, int32_t node, int axis, int side,
-                           bool (*emit)(void *ctx, const ism_tile *tile), void *ctx)
+bool ism_octree_face_tiles(const ism_octree *t, const int32_t *parent, int32_t node, int axis,
+                           int side, bool (*emit)(void *ctx, const ism_tile *tile), void *ctx)
 {
     const ism_node *nd = &t->nodes[node];
     int32_t s = ism_grid_cell_steps(&t->grid, nd->level);
     int32_t o[3] = {nd->org[0], nd->org[1], nd->org[2]};
     o[axis] += side ? s : -s;
-    int32_t j = ism_octree_find(t, o, nd->level);
+    int32_t j = find_near(t, parent, node, o, nd->level);
     ism_tile own = face_of(t, nd, axis, side);
     if (j < 0)
         return emit(ctx, &own); /* the face is on the search box's boundary */

@@ -60,6 +60,10 @@ static inline void ism_child_origin(const ism_grid *g, const ism_node *nd, int k
  * at that level; -1 when o is outside the root. */
 int32_t ism_octree_find(const ism_octree *t, const int32_t o[3], int level);
 
+/* Every node's parent (-1 for the root), for ism_octree_face_tiles; malloc'ed (NULL when
+ * out of memory). */
+int32_t *ism_octree_parents(const ism_octree *t);
+
 /* A rectangle of a lattice plane: the face of one leaf, used as a piece of another node's
  * face. u = (axis+1)%3, v = (axis+2)%3. */
 typedef struct ism_tile {
@@ -70,8 +74,10 @@ typedef struct ism_tile {
 
 /* Tiles the face (axis, side) of leaf `node` by the non-empty leaves on the other side
  * (or the face itself when the other side is not finer). Calls emit for each tile; a face
- * that lies in an empty node's closed box yields nothing. Returns false if emit does. */
-bool ism_octree_face_tiles(const ism_octree *t, int32_t node, int axis, int side,
-                           bool (*emit)(void *ctx, const ism_tile *tile), void *ctx);
+ * that lies in an empty node's closed box yields nothing. Returns false if emit does.
+ * parent (ism_octree_parents, or NULL) lets the neighbour be found from the node's nearest
+ * common ancestor instead of the root. */
+bool ism_octree_face_tiles(const ism_octree *t, const int32_t *parent, int32_t node, int axis,
+                           int side, bool (*emit)(void *ctx, const ism_tile *tile), void *ctx);
 
 #endif

@@ -108,15 +108,18 @@ static void node_corners(const ism_grid *g, thread_state *th, const ism_tape *ta
     int32_t s = ism_grid_cell_steps(g, nd->level);
     const ism_tape *saved = th->s.tape;
     th->s.tape = tape;
+    int32_t ip[8][3];
+    for (int c = 0; c < 8; c++) { /* the 8 memo slots asked for at once: their misses overlap */
+        for (int a = 0; a < 3; a++)
+            ip[c][a] = nd->org[a] + ((c >> a) & 1) * s;
+        __builtin_prefetch(ism_point_slot(th->corners, CORNER_CACHE_BITS, ip[c]), 1);
+    }
     for (int c = 0; c < 8; c++) {
-        int32_t ip[3];
-        for (int a = 0; a < 3; a++) {
-            ip[a] = nd->org[a] + ((c >> a) & 1) * s;
-            k->p[c][a] = ism_grid_coord(g, a, ip[a]);
-        }
+        for (int a = 0; a < 3; a++)
+            k->p[c][a] = ism_grid_coord(g, a, ip[c][a]);
         /* the full tape and a shortened one agree inside the node: either will do */
         const ism_point_entry *e =
-            ism_point_memo(th->corners, CORNER_CACHE_BITS, ip, k->p[c], &th->s);
+            ism_point_memo(th->corners, CORNER_CACHE_BITS, ip[c], k->p[c], &th->s);
         k->f[c] = e->f;
         memcpy(k->g[c], e->g, sizeof k->g[c]);
     }

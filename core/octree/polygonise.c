@@ -273,7 +273,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
                                               ism_poly_stats *st, double *t_weld,
                                               ism_split_set *next, carry *c)
 {
-    int32_t *reuse = NULL;
+    int32_t *reuse = NULL, *parent = NULL;
     ism_breaks breaks = {0};
     phase2 p;
     memset(&p, 0, sizeof p);
@@ -291,7 +291,8 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         goto done;
     st->time_ms[ISM_PHASE_CRACKS] = ism_now_ms() - t0;
     p.leaves = malloc((tree->n ? tree->n : 1) * sizeof *p.leaves);
-    if (!p.leaves)
+    parent = ism_octree_parents(tree);
+    if (!p.leaves || !parent)
         goto done;
     for (size_t i = 0; i < tree->n; i++)
         if (tree->nodes[i].state == ISM_NODE_LEAF)
@@ -315,6 +316,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         ism_cell_ctx *cx = &p.ctx[t];
         cx->s.tape = f;
         cx->tree = tree;
+        cx->parent = parent;
         cx->breaks = &breaks;
         cx->roots = roots;
         cx->stitch_tol = o->stitch_tol;
@@ -360,6 +362,7 @@ done:
     }
     free(p.ctx);
     free(p.leaves);
+    free(parent);
     free(p.leaf_error);
     free(p.rec);
     free(reuse);
