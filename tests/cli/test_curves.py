@@ -16,14 +16,22 @@ the closed-form lengths; V - E + F per component matches on the two nappes. Thre
 overlapping balls (min of three spheres, in the lattice box and two shifted off it): the
 crease is three arcs between the two triple points where all three spheres meet (closed
 form: the circumcentre of the centres, +-z), each a vertex of degree 3 within 1e-9 x diagonal,
-every arc point within that of two of the spheres; the mesh stays a sphere (chi 2)."""
+every arc point within that of two of the spheres; the mesh stays a sphere (chi 2). The
+gyroid-ball preset (max of the gyroid G and the ball B, its box and the two shifted ones):
+every point of its crease arcs (the mesh's crease vertices in full precision) lies within
+1e-9 x diagonal of G = 0 and of B = 0, each evaluated here in closed form."""
 import json
 import math
 import os
 import shutil
 import subprocess
+import sys
 import tempfile
 import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from boxes import placements  # noqa: E402
+from test_curve_outputs import ball, ball_grad, gyroid, gyroid_grad  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
@@ -228,6 +236,25 @@ class CurvesTest(unittest.TestCase):
                     for i in range(0, len(arc), 3):
                         near = sorted(sphere_dist(arc[i:i + 3], c) for c in centres)
                         self.assertLess(near[1], tol, arc[i:i + 3])
+
+    def test_gyroid_ball_crease_vertices_on_both_branches(self):
+        side, depth = 3.0, 6
+        tol = 1e-9 * math.sqrt(3) * side
+        for box in placements([-side / 2] * 3 + [side / 2] * 3, side / 2 ** depth):
+            with self.subTest(box=box):
+                f, proc = self.run_request({"preset": "gyroid-ball", "box": box,
+                                            "depth": {"max": depth}})
+                self.assertIsNotNone(f, proc.stderr)
+                pts = [arc[i:i + 3] for c in f["curves"] if c["kind"] == "crease"
+                       for arc in c["arcs"] for i in range(0, len(arc), 3)]
+                self.assertGreater(len(pts), 1000)
+                worst = [0.0, 0.0]
+                for p in pts:
+                    for k, (v, g) in enumerate(((gyroid(p), gyroid_grad(p)),
+                                                (ball(p), ball_grad(p)))):
+                        worst[k] = max(worst[k], abs(v) / math.sqrt(sum(x * x for x in g)))
+                self.assertLess(max(worst), tol, f"{len(pts)} crease points: off G {worst[0]:.2e},"
+                                f" off B {worst[1]:.2e}")
 
     def test_a_curve_missing_the_surface_is_no_curve(self):
         f, proc = self.run_request(self.sphere(0.0, [{"kind": "plane", "normal": [0, 0, 1],
