@@ -1,8 +1,10 @@
-/* fd_io.c — whole writes to a file descriptor and whole reads of small files (fd_io.h). */
+/* fd_io.c — whole writes to a file descriptor, whole reads of small files and safe
+ * replacement of whole files (fd_io.h). */
 #include "server/common/fd_io.h"
 
 #include <errno.h>
 #include <fcntl.h>
+#include <libgen.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -81,4 +83,61 @@ int ism_read_file(const char *path, size_t max, char **data, size_t *len, unsign
     if (mode)
         *mode = (unsigned)(st.st_mode & 07777);
     return 1;
+}
+
+/* fsync of the directory holding path, so that a rename into it survives a crash (best
+ * effort: some file systems refuse to sync a directory, and the file is replaced anyway). */
+static void fsync_dir_of(const char *path)
+{
+    char *copy = strdup(path);
+    if (!copy)
+        return;
+    int dfd = open(dirname(copy), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    free(copy);
+    if (dfd >= 0) {
+        (void)fsync(dfd);
+        close(dfd);
+    }
+}
+
+bool ism_replace_file_via(int fd, const char *tmp, const char *path, const void *data, size_t len,
+                          unsigned mode, char *err, size_t cap)
+{
+    const char *what = NULL;
+    if (!ism_write_all(fd, data, len) || fsync(fd) != 0)
+        what = "writing";
+    else if (fchmod(fd, (mode_t)mode) != 0)
+        what = "setting the permissions of";
+    int e = errno;
+    if (close(fd) != 0 && !what)
+        what = "writing", e = errno;
+    if (!what && rename(tmp, path) != 0)
+        what = "renaming over", e = errno;
+    if (what) {
+        snprintf(err, cap, "%s: %s %s: %s", path, what, tmp, strerror(e));
+        unlink(tmp);
+        return false;
+    }
+    fsync_dir_of(path);
+    return true;
+}
+
+bool ism_replace_file(const char *path, const void *data, size_t len, unsigned mode, char *err,
+                      size_t cap)
+{
+    size_t n = strlen(path) + 8;
+    char *tmp = malloc(n);
+    if (!tmp) {
+        snprintf(err, cap, "%s: out of memory", path);
+        return false;
+    }
+    snprintf(tmp, n, "%s.XXXXXX", path);
+    int fd = mkstemp(tmp);
+    bool ok = false;
+    if (fd < 0)
+        snprintf(err, cap, "%s: cannot create %s: %s", path, tmp, strerror(errno));
+    else
+        ok = ism_replace_file_via(fd, tmp, path, data, len, mode, err, cap);
+    free(tmp);
+    return ok;
 }

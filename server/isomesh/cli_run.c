@@ -19,6 +19,7 @@
 
 #include <errno.h>
 #include <jansson.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -45,27 +46,11 @@ void ism_cli_run_free(ism_cli_run *run)
 
 bool ism_cli_write_file(const char *path, const void *data, size_t len)
 {
-    size_t n = strlen(path) + 16;
-    char *tmp = malloc(n);
-    if (!tmp)
-        return false;
-    snprintf(tmp, n, "%s.tmpXXXXXX", path);
-    int fd = mkstemp(tmp);
-    if (fd < 0) {
-        fprintf(stderr, "isomesh: cannot create %s: %s\n", path, strerror(errno));
-        free(tmp);
-        return false;
-    }
-    bool ok = ism_write_all(fd, data, len) && fsync(fd) == 0;
-    ok = close(fd) == 0 && ok;
-    if (ok)
-        ok = chmod(tmp, 0644) == 0 && rename(tmp, path) == 0;
-    if (!ok) {
-        fprintf(stderr, "isomesh: cannot write %s: %s\n", path, strerror(errno));
-        unlink(tmp);
-    }
-    free(tmp);
-    return ok;
+    char err[PATH_MAX + 200];
+    if (ism_replace_file(path, data, len, 0644, err, sizeof err))
+        return true;
+    fprintf(stderr, "isomesh: cannot write %s\n", err);
+    return false;
 }
 
 /* ---- the surface ------------------------------------------------------------------- */

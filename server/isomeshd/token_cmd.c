@@ -3,7 +3,8 @@
  * `add` prints a new token once on standard output and writes only its hash to the file.
  * Every change rewrites the file safely: the new content goes to FILE.new, created with
  * O_EXCL (so it is also the lock against a second command at the same time), is fsync'd,
- * takes the old file's permissions, and is renamed over FILE; then the directory is fsync'd.
+ * takes the old file's permissions, and is renamed over FILE; then the directory is fsync'd
+ * (ism_replace_file_via, fd_io.h).
  * A reader (the daemon on SIGHUP) sees the old file or the new one, never half of one.
  * Comments and the order of lines are kept. A file that does not parse is left alone. */
 #include "server/common/fd_io.h"
@@ -88,20 +89,8 @@ static bool read_text(const char *path, char **text, size_t *len, bool *exists, 
     return *text != NULL;
 }
 
-
-static void fsync_dir_of(const char *path)
-{
-    char copy[PATH_CAP];
-    snprintf(copy, sizeof copy, "%s", path);
-    int dfd = open(dirname(copy), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (dfd >= 0) {
-        fsync(dfd);
-        close(dfd);
-    }
-}
-
 /* One change of the file: lock (FILE.new, O_EXCL), read and check the current text, let edit
- * build the new text, write it to FILE.new, fsync, rename over FILE. */
+ * build the new text, write it to FILE.new, fsync, rename over FILE (ism_replace_file_via). */
 typedef bool (*editor)(const char *old, size_t oldlen, const ismd_tokens *parsed, void *ctx,
                        char **out, size_t *outlen);
 
@@ -136,21 +125,12 @@ static int change_file(const char *path, editor edit, void *ctx)
     }
     if (!edit(old, oldlen, &parsed, ctx, &text, &len))
         goto out;
-    if (!ism_write_all(fd, text, len) || fsync(fd) != 0 || (exists && fchmod(fd, mode) != 0)) {
-        fprintf(stderr, "isomeshd token: writing %s: %s\n", tmp, strerror(errno));
+    int locked = fd;
+    fd = -1;   /* closed by the replacement, which removes tmp when it fails */
+    if (!ism_replace_file_via(locked, tmp, path, text, len, mode, err, sizeof err)) {
+        fprintf(stderr, "isomeshd token: %s\n", err);
         goto out;
     }
-    if (close(fd) != 0) {
-        fd = -1;
-        fprintf(stderr, "isomeshd token: writing %s: %s\n", tmp, strerror(errno));
-        goto out;
-    }
-    fd = -1;
-    if (rename(tmp, path) != 0) {
-        fprintf(stderr, "isomeshd token: renaming %s to %s: %s\n", tmp, path, strerror(errno));
-        goto out;
-    }
-    fsync_dir_of(path);
     rc = 0;
 out:
     if (fd >= 0)
