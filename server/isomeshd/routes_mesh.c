@@ -168,7 +168,9 @@ static bool etag_matches(const char *inm, const char *key)
         size_t n = strcspn(p, ",");
         while (n && p[n - 1] == ' ')
             n--;
-        if ((n == 1 && *p == '*') || (n == 66 && p[0] == '"' && !strncmp(p + 1, key, 64) && p[65] == '"'))
+        bool quoted_key = n == ISM_KEY_HEX_LEN + 2 && p[0] == '"' &&
+                          !strncmp(p + 1, key, ISM_KEY_HEX_LEN) && p[ISM_KEY_HEX_LEN + 1] == '"';
+        if ((n == 1 && *p == '*') || quoted_key)
             return true;
         p += strcspn(p, ",");
     }
