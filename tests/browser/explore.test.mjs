@@ -4,7 +4,8 @@
 // the axes with ticks change the picture; a box typed by hand is kept; the gallery search and
 // its thumbnails (loaded only when in view);
 // picking a node of the Cayley cubic gives its type, its closed-form coordinates within
-// 1e-6 and f = 0, grad f = 0 there; a PNG export has the size asked for; the Curves panel cuts the sphere into cells
+// 1e-6 and f = 0, grad f = 0 there, and so does picking the double curve of two planes; a PNG
+// export has the size asked for; the Curves panel cuts the sphere into cells
 // (curves drawn, areas 2 pi h, a picked cell's facts) and adds a level curve, an
 // intersection (Viviani's node of degree 4) and the view's silhouette (closed forms); a cone
 // cut through its node: the vertex there typed singular_point, drawn and counted in the key;
@@ -190,6 +191,35 @@ describe('box and inspection', { timeout: 300000 }, () => {
     assert.ok(worst < 0.01, `section points within ${worst} of the surface`);
     assertChanged(plain, cut);
     await page.uncheck('#clip-on');
+  });
+
+  it('picking a double curve shows its kind, a point on it (closed form) and f = 0, grad f = 0 there', async () => {
+    // Two planes x = -0.3 z and y = 0.2 z (box off the lattice): they cross in the line
+    // t (-0.3, 0.2, 1), where f = (x + 0.3 z)(y - 0.2 z) and its gradient vanish.
+    const n = await loads(page);
+    await page.evaluate(() => { location.hash = `expr=${encodeURIComponent('(x + 0.3*z)*(y - 0.2*z)')}&box=-1.0037,-0.9963,-1,1,1.0029,1&depth=3,5`; });
+    await waitForMesh(page, n);
+    const spot = await page.evaluate(() => {
+      const v = window.isomeshViewer;
+      const curves = v.features.pickables.filter((p) => p.what === 'curve');
+      const at = curves[0].at[Math.floor(curves[0].at.length / 2)];
+      const r = v.canvas.getBoundingClientRect();
+      const q = new v.camera.position.constructor(...at).project(v.camera);
+      return { count: curves.length, kind: curves[0].p.kind, x: r.left + (q.x + 1) / 2 * r.width, y: r.top + (1 - q.y) / 2 * r.height };
+    });
+    assert.equal(spot.count, 1, 'one singular curve');
+    await page.mouse.click(spot.x, spot.y);
+    await page.waitForSelector('#pick-info[data-what=curve][data-probe]:not([hidden])');
+    const info = await page.$eval('#pick-info', (e) => ({ ...e.dataset, text: e.textContent }));
+    assert.equal(info.type, 'double');
+    assert.match(info.text, /^double curve, \d+ points, box – box\nnear \(.*\)\nf = .*\|∇f\| = .*\nH = /);
+    const p = info.xyz.split(',').map(Number);
+    const d = [-0.3, 0.2, 1], dd = Math.hypot(...d);
+    const t = (p[0] * d[0] + p[1] * d[1] + p[2] * d[2]) / dd;
+    const off = Math.hypot(...p.map((v, k) => v - t * d[k] / dd));
+    assert.ok(off < 1e-6, `picked (${p}) is ${off} from the line`);
+    const probe = JSON.parse(info.probe);
+    assert.ok(Math.abs(probe.f) < 1e-9 && probe.grad_norm < 1e-6, `f = ${probe.f}, |grad f| = ${probe.grad_norm} there`);
   });
 
   it('clicking the surface gives the point, f, |grad f| and curvature there', async () => {
