@@ -27,100 +27,135 @@ typedef struct flag {
     long long min, max;     /* K_INT, K_SIZE bounds */
     const char *arg;        /* placeholder in --help */
     const char *help;
+    const char *def;        /* the default, as a value of this flag: set_defaults applies it
+                               and --help shows it; NULL = computed in set_defaults (or none) */
+    const char *shown;      /* --help's words for the default when def is not them */
 } flag;
 
 static const flag FLAGS[] = {
     {"listen", K_LISTEN, 0, 0, "HOST:PORT",
-     "address to serve HTTP on; port 0 picks a free port (logged) [127.0.0.1:8080]"},
-    {"workers", K_INT, 1, 256, "N", "worker processes computing meshes [one per online core]"},
+     "address to serve HTTP on; port 0 picks a free port (logged)",
+     "127.0.0.1:8080", NULL},
+    {"workers", K_INT, 1, 256, "N", "worker processes computing meshes",
+     NULL, "one per online core"},
     {"queue", K_INT, 0, 100000, "N",
-     "computations waiting for a worker before new ones get 503 [64]"},
+     "computations waiting for a worker before new ones get 503",
+     "64", NULL},
     {"user-jobs", K_INT, 1, 100000, "N",
      "computations one user (token user, else client address) may have queued or running "
-     "before 429 [32]"},
-    {"client-jobs", K_INT, 1, 100000, "N", "old name of --user-jobs"},
+     "before 429",
+     "32", NULL},
+    {"client-jobs", K_INT, 1, 100000, "N", "old name of --user-jobs",
+     NULL, NULL},
     {"user-running", K_INT, 0, 256, "N",
      "computations of one user on workers at once, the rest wait; 0 = every worker while no "
      "other user waits, half of them (rounded up) while others do: a user above that gives "
-     "one back (preempted, requeued) to a user below it [0]"},
+     "one back (preempted, requeued) to a user below it",
+     "0", NULL},
     {"queue-order", K_ORDER, 0, 0, "fair|fifo",
-     "fair: waiting computations are served round robin across users; fifo: oldest first "
-     "[fair]"},
+     "fair: waiting computations are served round robin across users; fifo: oldest first",
+     "fair", NULL},
     {"tokens", K_PATH, 0, 0, "FILE",
      "bearer tokens file (`isomeshd token add NAME`): computing needs a token; re-read on "
-     "SIGHUP [none: open to all]"},
+     "SIGHUP",
+     NULL, "none: open to all"},
     {"private", K_BOOL, 0, 0, "",
      "with --tokens, reading (meshes, jobs, presets, documents, /metrics) needs a token too; "
-     "the viewer's files, /healthz and /readyz stay open"},
+     "the viewer's files, /healthz and /readyz stay open",
+     "off", NULL},
     {"cache-dir", K_PATH, 0, 0, "DIR",
-     "disk cache directory [$XDG_CACHE_HOME/isomesh, else $HOME/.cache/isomesh]"},
+     "disk cache directory",
+     NULL, "$XDG_CACHE_HOME/isomesh, else $HOME/.cache/isomesh"},
     {"cache-mem", K_SIZE, 0, (long long)1 << 40, "BYTES",
-     "in-memory cache size, e.g. 512M; 0 disables it [256M]"},
+     "in-memory cache size, e.g. 512M; 0 disables it",
+     "256M", NULL},
     {"cache-disk-max", K_SIZE, 0, (long long)1 << 50, "BYTES",
-     "disk cache size; past it the least recently used entries are removed; 0 = no bound "
-     "[4G]"},
+     "disk cache size; past it the least recently used entries are removed; 0 = no bound",
+     "4G", NULL},
     {"redis", K_REDIS, 0, 0, "HOST:PORT",
      "shared cache in this Redis server: daemons using the same one serve each other's "
-     "meshes and compute identical requests once (deploy/README.md) [none]"},
+     "meshes and compute identical requests once (deploy/README.md)",
+     NULL, "none"},
     {"redis-namespace", K_STRING, 0, 0, "NAME",
      "first part of every Redis key (NAME:v1:...): services with different names share one "
-     "Redis without seeing each other's meshes, locks or queue; 1-48 of A-Z a-z 0-9 . _ - "
-     "[isomesh]"},
+     "Redis without seeing each other's meshes, locks or queue; 1-48 of A-Z a-z 0-9 . _ -",
+     ISM_REDIS_DEFAULT_NAMESPACE, NULL},
     {"redis-password-file", K_PATH, 0, 0, "FILE",
      "AUTH to Redis with the first line of FILE, PASSWORD or USER PASSWORD (a Redis ACL "
-     "user); FILE must not be readable by others [none]"},
+     "user); FILE must not be readable by others",
+     NULL, "none"},
     {"cluster", K_BOOL, 0, 0, "",
      "with --redis, one queue for every daemon sharing that Redis: computations wait in "
      "per-user Redis streams and run on whichever daemon has an idle worker (users served in "
      "turn, --user-jobs and --user-running held cluster-wide); a daemon that dies has its "
-     "computations re-run elsewhere after --redis-lock-ttl (deploy/README.md)"},
+     "computations re-run elsewhere after --redis-lock-ttl (deploy/README.md)",
+     "off", NULL},
     {"redis-lock-ttl", K_DURATION, 0, 0, "TIME",
      "lifetime of a computation's lock in Redis, extended while it runs: the longest wait "
-     "for a daemon that died mid-computation; at least 500ms [10s]"},
+     "for a daemon that died mid-computation; at least 500ms",
+     "10s", NULL},
     {"job-timeout", K_DURATION, 0, 0, "TIME",
-     "deadline of one computation from its start on a worker, e.g. 90s, 500ms [60s]"},
+     "deadline of one computation from its start on a worker, e.g. 90s, 500ms",
+     "60s", NULL},
     {"queue-timeout", K_DURATION, 0, 0, "TIME",
      "longest wait of a computation for a free worker; past it the request gets 503 "
-     "queue_timeout (a synchronous request waits at most queue-timeout + job-timeout) [60s]"},
+     "queue_timeout (a synchronous request waits at most queue-timeout + job-timeout)",
+     "60s", NULL},
     {"job-memory", K_SIZE, 0, (long long)1 << 42, "BYTES",
-     "address-space limit of each worker process; 0 = none [4G]"},
-    {"max-body", K_SIZE, 1024, (long long)64 << 20, "BYTES", "largest request body [256K]"},
+     "address-space limit of each worker process; 0 = none",
+     "4G", NULL},
+    {"max-body", K_SIZE, 1024, (long long)64 << 20, "BYTES", "largest request body",
+     "256K", NULL},
     {"upload-memory", K_SIZE, 1024, (long long)1 << 40, "BYTES",
      "memory all request bodies being received may hold at once; beyond it a request gets "
-     "503 [64M]"},
+     "503",
+     "64M", NULL},
     {"conn-timeout", K_DURATION, 0, 0, "TIME",
      "close a connection idle this long (one waiting for its computation never is); at "
-     "least 1s [30s]"},
+     "least 1s",
+     "30s", NULL},
     {"client-conns", K_INT, 0, 100000, "N",
      "connections one address may hold open at once; behind a proxy keep it above the "
-     "proxy's connections; 0 = no limit [512]"},
+     "proxy's connections; 0 = no limit",
+     "512", NULL},
     {"max-connections", K_INT, 16, 20000, "N",
      "connections the daemon holds at once; at the limit an address holding fewer than the "
      "largest holder still gets in (that holder's longest-idle connection is closed, else "
-     "its newest), others are refused at once [4000]"},
+     "its newest), others are refused at once",
+     "4000", NULL},
     {"header-timeout", K_DURATION, 0, 0, "TIME",
      "a request's headers must arrive within this time of the connection being ready for "
      "them (accepted, or its previous answer done), however they trickle; also bounds an "
-     "idle kept-alive connection; at least 1s [30s]"},
+     "idle kept-alive connection; at least 1s",
+     "30s", NULL},
     {"body-timeout", K_DURATION, 0, 0, "TIME",
      "a request's body must arrive within this time of its headers, however it trickles; "
-     "at least 1s [60s]"},
+     "at least 1s",
+     "60s", NULL},
     {"http-threads", K_INT, 1, 256, "N",
      "threads serving HTTP connections, each with its share (at most 124); more are started "
-     "when --max-connections needs them [35]"},
-    {"max-depth", K_INT, 1, 16, "N", "deepest octree a request may ask for [10]"},
+     "when --max-connections needs them",
+     "1", NULL},
+    {"max-depth", K_INT, 1, 16, "N", "deepest octree a request may ask for",
+     "10", NULL},
     {"max-triangles", K_INT, 1, 1000000000LL, "N",
-     "most triangles a request may produce [4000000]"},
+     "most triangles a request may produce",
+     "4000000", NULL},
     {"web-root", K_PATH, 0, 0, "DIR",
-     "the viewer's directory, served at /; \"\" serves no files [web/ of the source tree]"},
+     "the viewer's directory, served at /; \"\" serves no files",
+     NULL, "web/ of the source tree"},
     {"data-dir", K_PATH, 0, 0, "DIR",
-     "directory with openapi.yaml and request.schema.json [proto/ of the source tree]"},
+     "directory with openapi.yaml and request.schema.json",
+     NULL, "proto/ of the source tree"},
     {"cors-origin", K_STRING, 0, 0, "ORIGIN",
-     "value of Access-Control-Allow-Origin, e.g. * or https://example.org [none]"},
+     "value of Access-Control-Allow-Origin, e.g. * or https://example.org",
+     NULL, "none"},
     {"trusted-proxy", K_STRING, 0, 0, "ADDR[,ADDR]",
      "reverse proxies (e.g. nginx at 127.0.0.1) whose X-Real-IP header names the client for "
-     "per-user limits and fair scheduling without tokens [none]"},
-    {"log-format", K_LOGFMT, 0, 0, "text|json", "log line format on stderr [text]"},
+     "per-user limits and fair scheduling without tokens",
+     NULL, "none"},
+    {"log-format", K_LOGFMT, 0, 0, "text|json", "log line format on stderr",
+     "text", NULL},
 };
 #define NFLAGS (sizeof FLAGS / sizeof FLAGS[0])
 
@@ -427,13 +462,11 @@ static void source_tree_dir(char *out, size_t cap, const char *exe, const char *
 static void set_defaults(ismd_config *cfg)
 {
     memset(cfg, 0, sizeof *cfg);
-    strcpy(cfg->listen_host, "127.0.0.1");
-    cfg->listen_port = 8080;
+    for (size_t i = 0; i < NFLAGS; i++)
+        if (FLAGS[i].def && !apply(cfg, &FLAGS[i], FLAGS[i].def))
+            abort(); /* a default that its own parser refuses: a bug in FLAGS */
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     cfg->workers = cores < 1 ? 1 : cores > 256 ? 256 : (int)cores;
-    cfg->queue = 64;
-    cfg->user_jobs = 32;
-    cfg->redis_lock_ttl_s = 10;
     const char *xdg = getenv("XDG_CACHE_HOME");
     const char *home = getenv("HOME");
     if (xdg && *xdg == '/')
@@ -442,22 +475,6 @@ static void set_defaults(ismd_config *cfg)
         snprintf(cfg->cache_dir, sizeof cfg->cache_dir, "%s/.cache/isomesh", home);
     else
         snprintf(cfg->cache_dir, sizeof cfg->cache_dir, "/tmp/isomesh-cache-%ld", (long)getuid());
-    cfg->cache_mem = (size_t)256 << 20;
-    cfg->cache_disk_max = 4ULL << 30;
-    cfg->conn_timeout_s = 30;
-    cfg->client_conns = 512;
-    cfg->max_conns = 4000;
-    cfg->header_timeout_s = 30;
-    cfg->body_timeout_s = 60;
-    cfg->http_threads = 1; /* at least; http.c starts as many as its connection limit needs */
-    cfg->job_timeout_s = 60;
-    cfg->queue_timeout_s = 60;
-    cfg->job_memory = (size_t)4 << 30;
-    cfg->max_body = (size_t)256 << 10;
-    cfg->upload_memory = (size_t)64 << 20; /* 256 bodies of the largest size */
-    cfg->max_depth = 10;
-    cfg->max_triangles = 4000000;
-    cfg->log_format = ISM_LOG_TEXT;
     char exe[4096];
     exe_dir(exe, sizeof exe);
     source_tree_dir(cfg->web_root, sizeof cfg->web_root, exe, "web");
@@ -481,7 +498,11 @@ static void print_help(void)
     for (size_t i = 0; i < NFLAGS; i++) {
         char left[64];
         snprintf(left, sizeof left, "--%s %s", FLAGS[i].name, FLAGS[i].arg);
-        printf("  %-28s %s\n", left, FLAGS[i].help);
+        const char *d = FLAGS[i].shown ? FLAGS[i].shown : FLAGS[i].def;
+        if (d)
+            printf("  %-28s %s [%s]\n", left, FLAGS[i].help, d);
+        else
+            printf("  %-28s %s\n", left, FLAGS[i].help);
     }
     printf("  %-28s %s\n", "--config FILE", "read settings from FILE first");
     printf("  %-28s %s\n", "--help, --version", "print this or the version and exit");

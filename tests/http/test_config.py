@@ -1,9 +1,12 @@
 """test_config.py — isomeshd's settings and logs: --help names every flag, a bad flag or value
 is a one-line error with exit status 2, --config FILE is read (and command-line flags win over
 it), its errors name the file and line, and --log-format json writes one JSON object per line
-with one request line per request (method, path, status, bytes, ms, cache, key)."""
+with one request line per request (method, path, status, bytes, ms, cache, key); the defaults
+that README.md's prose and deploy/README.md's limits table state are --help's, and the values
+that table gives for deploy/isomeshd.conf are the file's."""
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -15,6 +18,61 @@ from harness import ISOMESHD, Daemon, sphere  # noqa: E402
 FLAGS = ["--listen", "--workers", "--queue", "--client-jobs", "--cache-dir", "--cache-mem",
          "--job-timeout", "--job-memory", "--max-body", "--max-depth", "--max-triangles",
          "--web-root", "--data-dir", "--cors-origin", "--log-format", "--config"]
+
+
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+UNITS = {"": 1, "k": 1 << 10, "kib": 1 << 10, "kb": 1 << 10, "m": 1 << 20, "mib": 1 << 20,
+         "mb": 1 << 20, "g": 1 << 30, "gib": 1 << 30, "gb": 1 << 30, "t": 1 << 40,
+         "ms": 1e-3, "s": 1, "min": 60, "h": 3600}
+QUANTITY = re.compile(r"^(\d[\d ,\u2009\u202f]*(?:\.\d+)?)\s*([A-Za-z]*)$")
+
+
+def quantity(text):
+    """A number written as in the docs or in a flag value ("4 000 000", "4,000", "256 KiB",
+    "64M", "60 s", "10s") in bytes, seconds or units; None when it is words."""
+    m = QUANTITY.match(text.strip())
+    if not m or m.group(2).lower() not in UNITS:
+        return None
+    digits = re.sub(r"[ ,\u2009\u202f]", "", m.group(1))
+    return float(digits) * UNITS[m.group(2).lower()]
+
+
+def help_defaults():
+    """{flag name: the default --help prints in brackets at the end of its line}."""
+    text = run("--help").stdout
+    return {m.group(1): m.group(2)
+            for m in re.finditer(r"^  --([a-z-]+) .*\[([^\]\n]*)\]$", text, re.M)}
+
+
+def limits_table_pairs(text, flags):
+    """(flag, documented default, isomeshd.conf's value or None) for each quantity in
+    deploy/README.md's limits table: the i-th flag named in a row's `where` cell goes with
+    the i-th comma-separated item of its default cell (items after "`isomeshd.conf`:" are
+    the settings file's)."""
+    table = text[text.index("| limit | where | default |"):]
+    for row in table.splitlines()[2:]:
+        if not row.startswith("|"):
+            break
+        cells = [c.strip() for c in row.strip("|").split("|")]
+        named = [n for n in re.findall(r"`([a-z-]+)`", cells[1]) if n in flags]
+        named = list(dict.fromkeys(named))
+        own, _, conf = cells[2].partition("; `isomeshd.conf`:")
+        own, conf = own.split(","), conf.split(",") if conf else []
+        for i, name in enumerate(named):
+            if i < len(own) and quantity(own[i]) is not None:
+                yield name, own[i], conf[i] if i < len(conf) else None
+
+
+def conf_values(path):
+    """{name: value} of a `name = value` settings file."""
+    out = {}
+    with open(path) as f:
+        for line in f:
+            line = line.split("#")[0].strip()
+            if "=" in line:
+                k, v = line.split("=", 1)
+                out[k.strip()] = v.strip()
+    return out
 
 
 def run(*args, timeout=10):
@@ -32,6 +90,43 @@ class ConfigTest(unittest.TestCase):
         v = run("--version")
         self.assertEqual(v.returncode, 0)
         self.assertIn("isomeshd", v.stdout)
+
+    def test_documented_defaults_are_the_daemons(self):
+        defaults = help_defaults()
+        self.assertEqual(quantity(defaults["queue"]), 64.0)  # the parse sees --help's table
+        with open(os.path.join(ROOT, "deploy", "README.md")) as f:
+            pairs = list(limits_table_pairs(f.read(), defaults))
+        conf = conf_values(os.path.join(ROOT, "deploy", "isomeshd.conf"))
+        checked = set()
+        for name, own, in_conf in pairs:
+            self.assertEqual(quantity(own), quantity(defaults[name]),
+                             "deploy/README.md says --%s defaults to %s, --help [%s]"
+                             % (name, own, defaults[name]))
+            if in_conf is not None:
+                self.assertEqual(quantity(in_conf), quantity(conf[name]),
+                                 "deploy/README.md says isomeshd.conf sets %s = %s, the file %s"
+                                 % (name, in_conf, conf[name]))
+            checked.add(name)
+        for name in ("queue", "user-jobs", "cache-mem", "job-memory", "max-body",
+                     "upload-memory", "max-depth", "max-triangles", "job-timeout",
+                     "redis-lock-ttl"):
+            self.assertIn(name, checked, "deploy/README.md's limits table lost --" + name)
+        # a settings file value the table omits would go unnoticed: every conf value that
+        # differs from --help's default is named in the table
+        for name, value in conf.items():
+            if quantity(value) is not None and quantity(value) != quantity(defaults[name]):
+                self.assertTrue(any(n == name and c for n, _, c in pairs),
+                                "isomeshd.conf changes %s; the limits table does not say" % name)
+        # README.md's prose: "`--FLAG` ... (VALUE;" gives the default
+        with open(os.path.join(ROOT, "README.md")) as f:
+            readme = f.read()
+        said = re.findall(r"`--([a-z-]+)`[^`()]{0,40}\((\d[\d,.]*(?: ?[A-Za-z]+)?)(?=[;,)])",
+                          readme)
+        for name, value in said:
+            self.assertEqual(quantity(value), quantity(defaults[name]),
+                             "README.md says --%s defaults to %s, --help [%s]"
+                             % (name, value, defaults[name]))
+        self.assertGreaterEqual(len({n for n, _ in said}), 7, said)
 
     def test_bad_values_are_one_line_and_exit_2(self):
         cases = [
