@@ -12,6 +12,7 @@
 #include "core/analysis/accuracy.h"
 #include "core/analysis/blocks.h"
 #include "core/analysis/select.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -30,8 +31,6 @@ typedef struct implicit_pass {
     double threshold;
 } implicit_pass;
 
-static double norm3(const double *v) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
-
 float ism_an_finite_float(double x)
 {
     if (isnan(x))
@@ -45,7 +44,7 @@ static double newton_distance(const implicit_pass *ip, ism_eval_ws *ws, const do
                               double fv, const double g0[3])
 {
     double p[3] = {p0[0], p0[1], p0[2]}, g[3] = {g0[0], g0[1], g0[2]};
-    double g_start = norm3(g0);
+    double g_start = ism_norm3(g0);
     for (int i = 0; i < ip->o->newton_steps; i++) {
         if (i > 0)
             fv = ism_eval_gradient(ip->f, ws, p[0], p[1], p[2], g);
@@ -55,11 +54,11 @@ static double newton_distance(const implicit_pass *ip, ism_eval_ws *ws, const do
         double s = fv / gg, move = fabs(s) * sqrt(gg);
         for (int k = 0; k < 3; k++)
             p[k] -= s * g[k];
-        if (move <= 1e-15 * (1 + norm3(p)))
+        if (move <= 1e-15 * (1 + ism_norm3(p)))
             break;
     }
     double d[3] = {p[0] - p0[0], p[1] - p0[1], p[2] - p0[2]};
-    double dist = norm3(d);
+    double dist = ism_norm3(d);
     return isfinite(dist) ? dist : 0;
 }
 
@@ -91,7 +90,7 @@ static void vertex_block(void *ctx, ism_eval_ws *ws, size_t block)
         } else {
             fv = ism_eval_gradient(ip->f, ws, p[0], p[1], p[2], g);
         }
-        double gn = norm3(g);
+        double gn = ism_norm3(g);
         ok = ok && isfinite(fv) && isfinite(gn);
         ip->fval[v] = fv;
         ip->gnorm[v] = ok ? gn : NAN;

@@ -8,6 +8,7 @@
 #include "core/analysis/options.h"
 #include "core/analysis/blocks.h"
 #include "core/analysis/select.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -30,8 +31,6 @@ typedef struct project_pass {
     double *move;      /* per vertex */
 } project_pass;
 
-static double norm3(const double *v) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
-
 static void shortest_edges(const ism_mesh *m, double *shortest)
 {
     for (size_t v = 0; v < m->nverts; v++)
@@ -40,7 +39,7 @@ static void shortest_edges(const ism_mesh *m, double *shortest)
         for (int k = 0; k < 3; k++) {
             uint32_t i = m->tri[3 * t + k], j = m->tri[3 * t + (k + 1) % 3];
             const double *p = m->pos + 3 * i, *q = m->pos + 3 * j;
-            double d[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]}, len = norm3(d);
+            double d[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]}, len = ism_norm3(d);
             if (i != j && len < shortest[i])
                 shortest[i] = len;
             if (i != j && len < shortest[j])
@@ -56,7 +55,7 @@ static void gnorm_block(void *ctx, ism_eval_ws *ws, size_t block)
         const double *p = pp->m->pos + 3 * v;
         double g[3];
         ism_eval_gradient(pp->f, ws, p[0], p[1], p[2], g);
-        pp->gnorm[v] = norm3(g);
+        pp->gnorm[v] = ism_norm3(g);
     }
 }
 
@@ -81,7 +80,7 @@ static bool find_threshold(project_pass *pp, const ism_analysis_options *o)
 
 static void aim_normal(float *normal, const double g[3])
 {
-    double len = norm3(g), side = normal[0] * g[0] + normal[1] * g[1] + normal[2] * g[2];
+    double len = ism_norm3(g), side = normal[0] * g[0] + normal[1] * g[1] + normal[2] * g[2];
     double s = (side < 0 ? -1 : 1) / len;
     for (int k = 0; k < 3; k++)
         normal[k] = (float)(g[k] * s);
@@ -96,7 +95,7 @@ static enum outcome project_vertex(project_pass *pp, ism_eval_ws *ws, size_t v)
     double last = INFINITY;
     for (int i = 0; i < pp->steps; i++) {
         double fv = ism_eval_gradient(pp->f, ws, p[0], p[1], p[2], g);
-        double gn = norm3(g);
+        double gn = ism_norm3(g);
         if (!(gn > pp->threshold) || !isfinite(fv) || !isfinite(gn))
             return i == 0 ? KEPT_SINGULAR : KEPT_FAR;
         double s = fv / (gn * gn);
@@ -106,11 +105,11 @@ static enum outcome project_vertex(project_pass *pp, ism_eval_ws *ws, size_t v)
         if (last <= CONVERGED_REL * pp->shortest[v])
             break;
     }
-    double d[3] = {p[0] - pos[0], p[1] - pos[1], p[2] - pos[2]}, dist = norm3(d);
+    double d[3] = {p[0] - pos[0], p[1] - pos[1], p[2] - pos[2]}, dist = ism_norm3(d);
     if (!(last <= CONVERGED_REL * pp->shortest[v]) || !(dist <= 0.5 * pp->shortest[v]))
         return KEPT_FAR;
     ism_eval_gradient(pp->f, ws, p[0], p[1], p[2], g);
-    if (!(norm3(g) > pp->threshold) || !isfinite(norm3(g)))
+    if (!(ism_norm3(g) > pp->threshold) || !isfinite(ism_norm3(g)))
         return KEPT_FAR;
     memcpy(pos, p, sizeof p);
     aim_normal(pp->m->normal + 3 * v, g);

@@ -5,6 +5,7 @@
 #include "core/analysis/quality.h"
 #include "core/analysis/edges.h"
 #include "core/analysis/select.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -18,11 +19,6 @@ static void sub3(const double *a, const double *b, double *out)
     out[0] = a[0] - b[0];
     out[1] = a[1] - b[1];
     out[2] = a[2] - b[2];
-}
-
-static double dot3(const double *a, const double *b)
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
 static double cross_norm(const double *a, const double *b)
@@ -45,7 +41,7 @@ static double measure_triangle(const ism_mesh *m, size_t t, double *angle, doubl
     double side[3][3], len2[3];
     for (int k = 0; k < 3; k++) { /* side k is opposite corner k */
         sub3(p[(k + 2) % 3], p[(k + 1) % 3], side[k]);
-        len2[k] = dot3(side[k], side[k]);
+        len2[k] = ism_dot3(side[k], side[k]);
     }
     double twice_area = cross_norm(side[1], side[2]);
     int shortest = 0, longest = 0;
@@ -61,7 +57,7 @@ static double measure_triangle(const ism_mesh *m, size_t t, double *angle, doubl
     double u[3], w[3];
     sub3(p[(shortest + 1) % 3], p[shortest], u);
     sub3(p[(shortest + 2) % 3], p[shortest], w);
-    *angle = atan2(twice_area, dot3(u, w)) * RAD_TO_DEG;
+    *angle = atan2(twice_area, ism_dot3(u, w)) * RAD_TO_DEG;
     double perimeter = sqrt(len2[0]) + sqrt(len2[1]) + sqrt(len2[2]);
     *aspect = sqrt(len2[longest]) * perimeter / (2 * sqrt(3.0) * twice_area);
     return twice_area;

@@ -1,6 +1,7 @@
 /* names.c — the built-in names (variables, constants, functions with their arities) and the
  * table of parameters and lets bound by one compilation. */
 #include "core/expr/names.h"
+#include "core/util/grow.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -99,14 +100,8 @@ bool ism_names_check_new(const ism_names *s, const char *name, size_t len, const
 
 bool ism_names_add(ism_names *s, const char *name, size_t len, int kind, uint32_t node)
 {
-    if (s->count == s->cap) {
-        size_t cap = s->cap ? s->cap * 2 : 16;
-        ism_name *items = realloc(s->items, cap * sizeof *items);
-        if (!items)
-            return false;
-        s->items = items;
-        s->cap = cap;
-    }
+    if (!ism_grow((void **)&s->items, &s->cap, s->count + 1, sizeof *s->items, 16))
+        return false;
     ism_name *e = &s->items[s->count++];
     memcpy(e->name, name, len);
     e->name[len] = '\0';

@@ -1,6 +1,7 @@
 /* mesh.c — storage of the indexed triangle mesh: growth of the vertex, normal and triangle
  * arrays (doubling, so appends are amortised O(1)), and small queries over them. */
 #include "core/mesh/mesh.h"
+#include "core/util/grow.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -75,14 +76,8 @@ bool ism_mesh_add_triangle(ism_mesh *m, uint32_t a, uint32_t b, uint32_t c)
 
 bool ism_mesh_add_segment(ism_mesh *m, uint32_t a, uint32_t b)
 {
-    if (m->nsegs == m->cap_segs) {
-        size_t c = m->cap_segs ? m->cap_segs * 2 : 16;
-        uint32_t *s = realloc(m->seg, c * 2 * sizeof *s);
-        if (!s)
-            return false;
-        m->seg = s;
-        m->cap_segs = c;
-    }
+    if (!ism_grow((void **)&m->seg, &m->cap_segs, m->nsegs + 1, 2 * sizeof *m->seg, 16))
+        return false;
     m->seg[2 * m->nsegs] = a;
     m->seg[2 * m->nsegs + 1] = b;
     m->nsegs++;

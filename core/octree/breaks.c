@@ -3,6 +3,7 @@
  * (found by radix-sorting the points line by line), so the break points of a segment are
  * found from its lower end one probe per point. */
 #include "core/octree/breaks.h"
+#include "core/util/grow.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -219,14 +220,8 @@ void ism_breaks_free(ism_breaks *b)
 
 bool ism_coords_push(ism_coords *c, int32_t v)
 {
-    if (c->n == c->cap) {
-        size_t cap = c->cap ? c->cap * 2 : 16;
-        int32_t *nv = realloc(c->v, cap * sizeof *nv);
-        if (!nv)
-            return false;
-        c->v = nv;
-        c->cap = cap;
-    }
+    if (!ism_grow((void **)&c->v, &c->cap, c->n + 1, sizeof *c->v, 16))
+        return false;
     c->v[c->n++] = v;
     return true;
 }

@@ -7,6 +7,7 @@
 #include "core/octree/singular.h"
 #include "core/octree/stitch.h"
 #include "core/octree/triangulate.h"
+#include "core/util/grow.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -50,14 +51,8 @@ static bool sign_changes_across(ism_cell_ctx *cx, const ism_tile *t)
 static bool emit_zero_tile(face_walk *w, const ism_tile *tile)
 {
     ism_cell_ctx *cx = w->cx;
-    if (cx->nzero == cx->cap_zero) {
-        size_t c = cx->cap_zero ? cx->cap_zero * 2 : 8;
-        ism_tile *v = realloc(cx->zero, c * sizeof *v);
-        if (!v)
-            return false;
-        cx->zero = v;
-        cx->cap_zero = c;
-    }
+    if (!ism_grow((void **)&cx->zero, &cx->cap_zero, cx->nzero + 1, sizeof *cx->zero, 8))
+        return false;
     cx->zero[cx->nzero++] = *tile;
     if (!w->owner || !sign_changes_across(cx, tile))
         return true;
@@ -87,14 +82,8 @@ static bool on_tile(face_walk *w, const ism_tile *tile)
 static bool keep_tile(void *ctx, const ism_tile *tile)
 {
     ism_cell_ctx *cx = ctx;
-    if (cx->ntiles == cx->cap_tiles) {
-        size_t c = cx->cap_tiles ? cx->cap_tiles * 2 : 32;
-        ism_tile *v = realloc(cx->tiles, c * sizeof *v);
-        if (!v)
-            return false;
-        cx->tiles = v;
-        cx->cap_tiles = c;
-    }
+    if (!ism_grow((void **)&cx->tiles, &cx->cap_tiles, cx->ntiles + 1, sizeof *cx->tiles, 32))
+        return false;
     cx->tiles[cx->ntiles++] = *tile;
     return true;
 }

@@ -14,6 +14,7 @@
 #include "core/octree/face_lines.h"
 #include "core/octree/face_flat.h"
 #include "core/octree/singular.h"
+#include "core/util/grow.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -67,14 +68,8 @@
 
 bool ism_flines_push(ism_flines *l, const ism_fpoint *a, const ism_fpoint *b, int kind)
 {
-    if (l->n == l->cap) {
-        size_t c = l->cap ? l->cap * 2 : 32;
-        ism_fline *v = realloc(l->v, c * sizeof *v);
-        if (!v)
-            return false;
-        l->v = v;
-        l->cap = c;
-    }
+    if (!ism_grow((void **)&l->v, &l->cap, l->n + 1, sizeof *l->v, 32))
+        return false;
     ism_fline *ln = &l->v[l->n++];
     ln->a = *a;
     ln->b = *b;
@@ -134,14 +129,8 @@ static bool side_breaks(ism_cell_ctx *cx, int axis, const int32_t p[3], int32_t 
  * memo for it, or for its side's end: the lookup hits). */
 static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3])
 {
-    if (cx->nbp == cx->cap_bp) {
-        size_t c = cx->cap_bp ? cx->cap_bp * 2 : 64;
-        ism_bpoint *v = realloc(cx->bp, c * sizeof *v);
-        if (!v)
-            return false;
-        cx->bp = v;
-        cx->cap_bp = c;
-    }
+    if (!ism_grow((void **)&cx->bp, &cx->cap_bp, cx->nbp + 1, sizeof *cx->bp, 64))
+        return false;
     ism_bpoint *b = &cx->bp[cx->nbp++];
     memcpy(b->ip, ip, sizeof b->ip);
     ism_grid_point(&cx->tree->grid, (ism_ipt){{ip[0], ip[1], ip[2]}}, b->p);
@@ -154,14 +143,8 @@ static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3])
 
 static bool push_event(ism_cell_ctx *cx, const ism_fpoint *pt, int before, int after, size_t seg)
 {
-    if (cx->nev == cx->cap_ev) {
-        size_t c = cx->cap_ev ? cx->cap_ev * 2 : 64;
-        ism_fevent *v = realloc(cx->ev, c * sizeof *v);
-        if (!v)
-            return false;
-        cx->ev = v;
-        cx->cap_ev = c;
-    }
+    if (!ism_grow((void **)&cx->ev, &cx->cap_ev, cx->nev + 1, sizeof *cx->ev, 64))
+        return false;
     cx->ev[cx->nev++] = (ism_fevent){*pt, before, after, (int)seg};
     return true;
 }

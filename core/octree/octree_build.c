@@ -7,6 +7,7 @@
 #include "core/octree/quiet.h"
 #include "core/octree/thin_search.h"
 #include "core/util/parallel.h"
+#include "core/util/grow.h"
 
 #include <pthread.h>
 #include <stdatomic.h>
@@ -61,14 +62,8 @@ typedef struct build {
 
 static bool vec_push(node_vec *v, const ism_node *nd)
 {
-    if (v->n == v->cap) {
-        size_t c = v->cap ? v->cap * 2 : 256;
-        ism_node *nv = realloc(v->v, c * sizeof *nv);
-        if (!nv)
-            return false;
-        v->v = nv;
-        v->cap = c;
-    }
+    if (!ism_grow((void **)&v->v, &v->cap, v->n + 1, sizeof *v->v, 256))
+        return false;
     v->v[v->n++] = *nd;
     return true;
 }

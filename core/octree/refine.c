@@ -1,5 +1,6 @@
 /* refine.c — measuring a leaf's emitted triangles and the split set (see refine.h). */
 #include "core/octree/refine.h"
+#include "core/util/grow.h"
 
 #include <math.h>
 #include <stdbool.h>
@@ -51,14 +52,8 @@ uint64_t ism_node_key(const ism_node *nd)
 
 bool ism_split_set_add(ism_split_set *s, uint64_t key)
 {
-    if (s->n == s->cap) {
-        size_t c = s->cap ? s->cap * 2 : 64;
-        uint64_t *k = realloc(s->keys, c * sizeof *k);
-        if (!k)
-            return false;
-        s->keys = k;
-        s->cap = c;
-    }
+    if (!ism_grow((void **)&s->keys, &s->cap, s->n + 1, sizeof *s->keys, 64))
+        return false;
     s->keys[s->n++] = key;
     return true;
 }

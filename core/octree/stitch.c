@@ -12,6 +12,7 @@
  * Up to two polygons per node are the paper's cases; more are kept and counted. */
 #include "core/octree/stitch.h"
 #include "core/octree/sampler.h"
+#include "core/util/grow.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -155,28 +156,16 @@ static void free_graph(graph *g)
 
 static bool push_loop_point(ism_loops *out, const ism_fpoint *p)
 {
-    if (out->npts == out->cap_pts) {
-        size_t c = out->cap_pts ? out->cap_pts * 2 : 64;
-        ism_fpoint *v = realloc(out->pts, c * sizeof *v);
-        if (!v)
-            return false;
-        out->pts = v;
-        out->cap_pts = c;
-    }
+    if (!ism_grow((void **)&out->pts, &out->cap_pts, out->npts + 1, sizeof *out->pts, 64))
+        return false;
     out->pts[out->npts++] = *p;
     return true;
 }
 
 static bool close_loop(ism_loops *out, size_t start, bool closed)
 {
-    if (out->nloops == out->cap_loops) {
-        size_t c = out->cap_loops ? out->cap_loops * 2 : 8;
-        ism_loop *v = realloc(out->loops, c * sizeof *v);
-        if (!v)
-            return false;
-        out->loops = v;
-        out->cap_loops = c;
-    }
+    if (!ism_grow((void **)&out->loops, &out->cap_loops, out->nloops + 1, sizeof *out->loops, 8))
+        return false;
     out->loops[out->nloops++] = (ism_loop){start, out->npts - start, closed};
     return true;
 }

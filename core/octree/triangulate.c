@@ -6,6 +6,7 @@
  * gradient at its points: consistent orientation wherever ∇f does. */
 #include "core/octree/triangulate.h"
 #include "core/octree/face_flat.h"
+#include "core/util/grow.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -13,14 +14,8 @@
 
 bool ism_cell_out_vert(ism_cell_out *o, const ism_fpoint *p, uint32_t *idx)
 {
-    if (o->nverts == o->cap_verts) {
-        size_t c = o->cap_verts ? o->cap_verts * 2 : 256;
-        ism_fpoint *v = realloc(o->verts, c * sizeof *v);
-        if (!v)
-            return false;
-        o->verts = v;
-        o->cap_verts = c;
-    }
+    if (!ism_grow((void **)&o->verts, &o->cap_verts, o->nverts + 1, sizeof *o->verts, 256))
+        return false;
     *idx = (uint32_t)o->nverts;
     o->verts[o->nverts++] = *p;
     return true;
@@ -28,14 +23,8 @@ bool ism_cell_out_vert(ism_cell_out *o, const ism_fpoint *p, uint32_t *idx)
 
 bool ism_cell_out_tri(ism_cell_out *o, uint32_t a, uint32_t b, uint32_t c)
 {
-    if (o->ntris == o->cap_tris) {
-        size_t cap = o->cap_tris ? o->cap_tris * 2 : 256;
-        uint32_t *v = realloc(o->tris, cap * 3 * sizeof *v);
-        if (!v)
-            return false;
-        o->tris = v;
-        o->cap_tris = cap;
-    }
+    if (!ism_grow((void **)&o->tris, &o->cap_tris, o->ntris + 1, 3 * sizeof *o->tris, 256))
+        return false;
     uint32_t *t = o->tris + 3 * o->ntris++;
     t[0] = a, t[1] = b, t[2] = c;
     return true;
@@ -46,14 +35,8 @@ bool ism_cell_out_segment(ism_cell_out *out, const ism_fpoint *a, const ism_fpoi
     uint32_t ia, ib;
     if (!ism_cell_out_vert(out, a, &ia) || !ism_cell_out_vert(out, b, &ib))
         return false;
-    if (out->nsegs == out->cap_segs) {
-        size_t c = out->cap_segs ? out->cap_segs * 2 : 16;
-        uint32_t *v = realloc(out->segs, c * 2 * sizeof *v);
-        if (!v)
-            return false;
-        out->segs = v;
-        out->cap_segs = c;
-    }
+    if (!ism_grow((void **)&out->segs, &out->cap_segs, out->nsegs + 1, 2 * sizeof *out->segs, 16))
+        return false;
     out->segs[2 * out->nsegs] = ia;
     out->segs[2 * out->nsegs + 1] = ib;
     out->nsegs++;

@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "core/singular/key_map.h"
+#include "core/util/vec3.h"
 
 /* Buckets per axis: 64³ bucket starts are 1 MiB; a bucket then spans 2 to 16 finest cells
  * at depths 7 to 10, so it holds a few dozen segments of a curve traced at cell steps. */
@@ -232,20 +233,12 @@ static uint32_t points_near(const point_grid *g, const double p[3])
     return cell == ISM_KEY_NONE ? UINT32_MAX : g->head[cell];
 }
 
-static double dist2(const double a[3], const double b[3])
-{
-    double d2 = 0;
-    for (int k = 0; k < 3; k++)
-        d2 += (a[k] - b[k]) * (a[k] - b[k]);
-    return d2;
-}
-
 static bool near_locus(const ism_locus *l, const point_grid *pg, const seg_grid *g,
                        const double p[3], double tol)
 {
     double t2 = tol * tol;
     for (uint32_t f = points_near(pg, p); f != UINT32_MAX; f = pg->next[f])
-        if (dist2(p, l->points[pg->point[f]].p) <= t2)
+        if (ism_sqdist3(p, l->points[pg->point[f]].p) <= t2)
             return true;
     if (!g->nsegs)
         return false;
@@ -269,7 +262,7 @@ static void vertices_at_points(const ism_locus *l, const point_grid *pg, const i
     for (size_t v = 0; v < m->nverts; v++)
         for (uint32_t f = points_near(pg, m->pos + 3 * v); f != UINT32_MAX; f = pg->next[f]) {
             uint32_t i = pg->point[f];
-            double d2 = dist2(m->pos + 3 * v, l->points[i].p);
+            double d2 = ism_sqdist3(m->pos + 3 * v, l->points[i].p);
             if (d2 <= best2[i]) {
                 best2[i] = d2;
                 vertex[i] = (uint32_t)v;

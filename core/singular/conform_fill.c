@@ -9,6 +9,7 @@
  *                  apex
  */
 #include "core/singular/conform_internal.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -28,12 +29,6 @@
 /* A loop of fewer vertices than this (a thin sheet round a cusp) gets twice as many on its
  * rings: a ring of a few chords sags far off a thin, round sheet. */
 #define FINE_RING_MIN 8
-
-static double dist(const double *a, const double *b)
-{
-    double d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = a[2] - b[2];
-    return sqrt(d0 * d0 + d1 * d1 + d2 * d2);
-}
 
 /* |f| / |∇f| at p (INFINITY where ∇f vanishes). */
 static double distance_estimate(cf_ctx *c, const double p[3], double g[3], double *fv)
@@ -56,7 +51,7 @@ void cf_project(cf_ctx *c, double p[3], double max_move)
             break; /* a fixed point: the steps left would repeat this one exactly */
         d = distance_estimate(c, q, g, &fv);
     }
-    if (isfinite(d) && d < d0 && dist(p, q) <= max_move)
+    if (isfinite(d) && d < d0 && ism_dist3(p, q) <= max_move)
         for (int k = 0; k < 3; k++)
             p[k] = q[k];
 }
@@ -76,7 +71,8 @@ double cf_loop_mean_edge(const cf_ctx *c, const cf_loop *l)
         return 0;
     double sum = 0;
     for (size_t i = 0; i < ne; i++)
-        sum += dist(c->m->pos + 3 * (size_t)l->v[i], c->m->pos + 3 * (size_t)l->v[(i + 1) % l->n]);
+        sum += ism_dist3(c->m->pos + 3 * (size_t)l->v[i],
+                         c->m->pos + 3 * (size_t)l->v[(i + 1) % l->n]);
     return sum / (double)ne;
 }
 
@@ -110,7 +106,7 @@ static bool make_ring(cf_ctx *c, const double *dirs, size_t m, const double apex
         double p[3];
         for (int k = 0; k < 3; k++)
             p[k] = apex[k] + t * (v[k] - apex[k]);
-        cf_project(c, p, 0.5 * t * dist(v, apex));
+        cf_project(c, p, 0.5 * t * ism_dist3(v, apex));
         r[i] = cf_add_vertex(c, p, false);
         if (r[i] == CF_NONE)
             return false;

@@ -9,6 +9,7 @@
  *        dead  (hole)  dead
  */
 #include "core/singular/conform_internal.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -28,11 +29,6 @@ void cf_loops_free(cf_loops *ls)
     memset(ls, 0, sizeof *ls);
 }
 
-static double dot3(const double *a, const double *b)
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
 double cf_point_triangle_d2(const double q[3], const double a[3], const double b[3],
                             const double c[3])
 {
@@ -43,13 +39,14 @@ double cf_point_triangle_d2(const double q[3], const double a[3], const double b
         ac[k] = c[k] - a[k];
         ap[k] = q[k] - a[k];
     }
-    double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+    double d1 = ism_dot3(ab, ap), d2 = ism_dot3(ac, ap);
     double bp[3], cp[3];
     for (int k = 0; k < 3; k++) {
         bp[k] = q[k] - b[k];
         cp[k] = q[k] - c[k];
     }
-    double d3 = dot3(ab, bp), d4 = dot3(ac, bp), d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+    double d3 = ism_dot3(ab, bp), d4 = ism_dot3(ac, bp);
+    double d5 = ism_dot3(ab, cp), d6 = ism_dot3(ac, cp);
     double u = 0, v = 0; /* r = a + u ab + v ac */
     double va = d3 * d6 - d5 * d4, vb = d5 * d2 - d1 * d6, vc = d1 * d4 - d3 * d2;
     if (d1 <= 0 && d2 <= 0) {
@@ -69,13 +66,13 @@ double cf_point_triangle_d2(const double q[3], const double a[3], const double b
     } else {
         double den = va + vb + vc;
         if (!(fabs(den) > 0))
-            return fmin(dot3(ap, ap), fmin(dot3(bp, bp), dot3(cp, cp)));
+            return fmin(ism_dot3(ap, ap), fmin(ism_dot3(bp, bp), ism_dot3(cp, cp)));
         u = vb / den;
         v = vc / den;
     }
     for (int k = 0; k < 3; k++)
         r[k] = a[k] + u * ab[k] + v * ac[k] - q[k];
-    return dot3(r, r);
+    return ism_dot3(r, r);
 }
 
 /* Live triangles containing both a and b, and the last one found. */
@@ -476,7 +473,7 @@ bool cf_rim_clear(cf_ctx *c, const cf_loops *ls, double clearance)
             const double *p = c->m->pos + 3 * (size_t)ls->l[i].v[j];
             double g[3];
             ism_eval_gradient(c->f, c->ws, p[0], p[1], p[2], g);
-            double gl = sqrt(dot3(g, g));
+            double gl = sqrt(ism_dot3(g, g));
             if (!(gl > 0) || !isfinite(gl))
                 return false; /* the rim runs through a singular point */
             double n[3] = {g[0] / gl, g[1] / gl, g[2] / gl}, m[3] = {-n[0], -n[1], -n[2]};

@@ -4,6 +4,7 @@
  * of the vertices where ∇f vanishes taken from their triangles as the welder does). */
 #include "core/singular/conform_internal.h"
 #include "core/util/clock.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -209,18 +210,12 @@ uint32_t cf_add_vertex(cf_ctx *c, const double p[3], bool singular)
     return v;
 }
 
-static double dist2(const double *a, const double *b)
-{
-    double d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = a[2] - b[2];
-    return d0 * d0 + d1 * d1 + d2 * d2;
-}
-
 double cf_triangle_longest_edge2(const ism_mesh *m, uint32_t tri)
 {
     const uint32_t *t = m->tri + 3 * (size_t)tri;
     double best = 0;
     for (int k = 0; k < 3; k++) {
-        double e = dist2(m->pos + 3 * (size_t)t[k], m->pos + 3 * (size_t)t[(k + 1) % 3]);
+        double e = ism_sqdist3(m->pos + 3 * (size_t)t[k], m->pos + 3 * (size_t)t[(k + 1) % 3]);
         if (e > best)
             best = e;
     }
@@ -254,7 +249,7 @@ bool cf_longest_edge_near(cf_ctx *c, const double p[3], double r, double *out)
     for (size_t i = 0; i < cand.n && !cf_poll(c, 1); i++) {
         const uint32_t *v = c->m->tri + 3 * (size_t)cand.t[i];
         for (int k = 0; k < 3; k++)
-            if (dist2(c->m->pos + 3 * (size_t)v[k], p) <= r * r) {
+            if (ism_sqdist3(c->m->pos + 3 * (size_t)v[k], p) <= r * r) {
                 best = fmax(best, cf_triangle_longest_edge2(c->m, cand.t[i]));
                 break;
             }
@@ -289,7 +284,7 @@ static void singular_normals(cf_ctx *c)
     for (size_t v = 0; v < m->nverts; v++) {
         if (!c->singular[v])
             continue;
-        double len = sqrt(dist2(acc + 3 * v, (const double[3]){0, 0, 0}));
+        double len = sqrt(ism_sqdist3(acc + 3 * v, (const double[3]){0, 0, 0}));
         for (int j = 0; j < 3; j++)
             m->normal[3 * v + j] = len > 0 ? (float)(acc[3 * v + j] / len) : 0.0f;
     }

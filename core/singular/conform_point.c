@@ -4,6 +4,7 @@
  * the polygoniser had left a nappe as an island — is fanned through projected rings to ONE
  * vertex at the point's position. */
 #include "core/singular/conform_internal.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -18,12 +19,6 @@
  * polygoniser), the ball grows by SEEK_GROW up to SEEK_CELLS cells looking for their rims. */
 #define SEEK_GROW 1.5
 #define SEEK_CELLS 8.0
-
-static double d2(const double *a, const double *b)
-{
-    double x = a[0] - b[0], y = a[1] - b[1], z = a[2] - b[2];
-    return x * x + y * y + z * z;
-}
 
 static bool in_box(const double box[6], const double p[3], double slack)
 {
@@ -59,7 +54,7 @@ static double loop_mean_dist(const cf_ctx *c, const cf_loop *l, const double p[3
 {
     double s = 0;
     for (size_t i = 0; i < l->n; i++)
-        s += sqrt(d2(c->m->pos + 3 * (size_t)l->v[i], p)) / (double)l->n;
+        s += sqrt(ism_sqdist3(c->m->pos + 3 * (size_t)l->v[i], p)) / (double)l->n;
     return s;
 }
 
@@ -71,13 +66,13 @@ static double locus_clearance(const cf_run *r, size_t i)
     double best = INFINITY;
     for (size_t k = 0; k < r->l->npoints; k++)
         if (k != i)
-            best = fmin(best, d2(p, r->l->points[k].p));
+            best = fmin(best, ism_sqdist3(p, r->l->points[k].p));
     for (size_t k = 0; k < r->l->ncurves; k++) {
         const ism_sing_curve *cu = &r->l->curves[k];
         if (!cu->closed && (cu->end_point[0] == (int)i || cu->end_point[1] == (int)i))
             continue;
         for (size_t j = 0; j < cu->n; j++)
-            best = fmin(best, d2(p, cu->xyz + 3 * j));
+            best = fmin(best, ism_sqdist3(p, cu->xyz + 3 * j));
     }
     return sqrt(best);
 }

@@ -4,6 +4,7 @@
  * points become mesh vertices, and every rim loop — one per side of each sheet — is zipped
  * to them (conform_zip.c), so each curve edge ends up with the crossing sheets' triangles. */
 #include "core/singular/conform_internal.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -61,12 +62,6 @@ static double vertex_distance(const cf_ctx *c, const tube *tb, uint32_t v, uint3
     return d;
 }
 
-static double d2(const double *a, const double *b)
-{
-    double x = a[0] - b[0], y = a[1] - b[1], z = a[2] - b[2];
-    return x * x + y * y + z * z;
-}
-
 static bool tri_in_tube(const cf_ctx *c, uint32_t t, void *arg)
 {
     tube *tb = arg;
@@ -79,7 +74,7 @@ static bool tri_in_tube(const cf_ctx *c, uint32_t t, void *arg)
         vd[k] = vertex_distance(c, tb, v[k], &vc[k]);
     /* a corner within r, or every corner farther than r + the longest edge: decided */
     double dmin = fmin(vd[0], fmin(vd[1], vd[2]));
-    double edge = sqrt(fmax(d2(a, b), fmax(d2(b, d), d2(d, a))));
+    double edge = sqrt(fmax(ism_sqdist3(a, b), fmax(ism_sqdist3(b, d), ism_sqdist3(d, a))));
     if (dmin <= tb->r)
         return true;
     if (edge <= tb->reach && !(dmin <= tb->r + edge))
@@ -171,10 +166,10 @@ static double *thin_curve(const ism_sing_curve *cu, double min_step, size_t *n)
     size_t k = 0;
     for (size_t i = 0; i < cu->n; i++) {
         const double *q = cu->xyz + 3 * i;
-        bool last = i == cu->n - 1, near_prev = k > 0 && d2(q, p + 3 * (k - 1)) < m2;
+        bool last = i == cu->n - 1, near_prev = k > 0 && ism_sqdist3(q, p + 3 * (k - 1)) < m2;
         if (near_prev && !last)
             continue;
-        if (last && cu->closed && k > 1 && (near_prev || d2(q, p) < m2))
+        if (last && cu->closed && k > 1 && (near_prev || ism_sqdist3(q, p) < m2))
             continue;
         if (last && !cu->closed && near_prev && k > 1)
             k--; /* the true end replaces the kept point just before it */

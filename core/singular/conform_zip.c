@@ -22,6 +22,7 @@
  * runs, each zipped to the stretch of curve it spans, its ends taken to an end of the curve
  * within END_SNAP_RHO (box exits, junctions of curves). */
 #include "core/singular/conform_internal.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -41,12 +42,6 @@
 /* A chain whose extreme parameter near an end of its curve exceeds both its own ends by this
  * many rho turns round that end (a rim's parameters wiggle by less along a tube's side). */
 #define TURN_MIN_RHO 0.25
-
-static double dist(const double *a, const double *b)
-{
-    double d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = a[2] - b[2];
-    return sqrt(d0 * d0 + d1 * d1 + d2 * d2);
-}
 
 /* Index steps in one period of the unfolded curve. */
 static long period_steps(const cf_polyline *pl)
@@ -183,7 +178,7 @@ static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot)
 {
     double width = 0;
     for (size_t i = 0; i < l->n; i++)
-        width += dist(c->m->pos + 3 * (size_t)l->v[i], foot + 3 * i) / (double)l->n;
+        width += ism_dist3(c->m->pos + 3 * (size_t)l->v[i], foot + 3 * i) / (double)l->n;
     int rings = cf_ring_count(width, cf_loop_mean_edge(c, l));
     uint32_t *rows = malloc(2 * l->n * sizeof *rows);
     if (!rows)
@@ -198,7 +193,7 @@ static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot)
             double p[3];
             for (int k = 0; k < 3; k++)
                 p[k] = q[k] + t * (v[k] - q[k]);
-            cf_project(c, p, 0.5 * t * dist(v, q));
+            cf_project(c, p, 0.5 * t * ism_dist3(v, q));
             if ((inner[i] = cf_add_vertex(c, p, false)) == CF_NONE) {
                 free(rows);
                 return NULL;

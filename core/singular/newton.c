@@ -1,10 +1,9 @@
 /* newton.c — pseudo-inverse Newton on ∇f = 0 (newton.h). */
 #include "core/singular/newton.h"
 #include "core/util/sym3.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
-
-static double norm3(const double v[3]) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
 bool ism_sing_pinv_step(const double g[3], const double h[6], double rel, double trust,
                         double step[3])
@@ -37,7 +36,7 @@ bool ism_sing_pinv_step(const double g[3], const double h[6], double rel, double
     for (; kept > 0; kept--) {
         for (int k = 0; k < 3; k++)
             step[k] = part[0][k] + (kept > 1 ? part[1][k] : 0.0) + (kept > 2 ? part[2][k] : 0.0);
-        if (!(norm3(step) > trust))
+        if (!(ism_norm3(step) > trust))
             break;
     }
     if (kept == 0)
@@ -84,7 +83,7 @@ typedef struct steps {
 /* Stretches step (see above) when the last ratios are steady; records it either way. */
 static void extrapolate(steps *h, double step[3], const double p[3], const ism_newton_opts *o)
 {
-    double len = norm3(step), ratio = h->len > 0 ? len / h->len : 0.0;
+    double len = ism_norm3(step), ratio = h->len > 0 ? len / h->len : 0.0;
     double cosine = h->len > 0 && len > 0
                         ? (step[0] * h->prev[0] + step[1] * h->prev[1] + step[2] * h->prev[2]) /
                               (len * h->len)
@@ -113,7 +112,7 @@ ism_newton_result ism_sing_newton(const ism_tape *t, ism_eval_ws *ws, double p[3
     ism_newton_result r = { false, 0, INFINITY };
     double g[3], h[6], step[3];
     jet_at(t, ws, p, g, h, evals);
-    r.grad_norm = norm3(g);
+    r.grad_norm = ism_norm3(g);
     steps hist = { { 0 }, 0.0, 0.0 };
     while (r.iterations < o->max_iter) {
         if (r.grad_norm == 0.0) {
@@ -131,10 +130,10 @@ ism_newton_result ism_sing_newton(const ism_tape *t, ism_eval_ws *ws, double p[3
             p[k] = q[k];
         r.iterations++;
         double hnorm = jet_at(t, ws, p, g, h, evals);
-        r.grad_norm = norm3(g);
+        r.grad_norm = ism_norm3(g);
         if (!(r.grad_norm < INFINITY))
             return r;
-        if (norm3(step) < o->tol) {
+        if (ism_norm3(step) < o->tol) {
             /* a short step is convergence only with a small gradient: a step truncated to
                directions the gradient does not point along is also short */
             r.converged = r.grad_norm <= ISM_SING_NEWTON_RESID * o->tol * hnorm;

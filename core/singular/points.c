@@ -9,6 +9,7 @@
 #include "core/eval/interval_ops.h"
 #include "core/util/clock.h"
 #include "core/util/sym3.h"
+#include "core/util/vec3.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -101,12 +102,6 @@ typedef struct ctx {
     cand *c;
     size_t nc, capc;
 } ctx;
-
-static double dist3(const double a[3], const double b[3])
-{
-    double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
-    return sqrt(dx * dx + dy * dy + dz * dz);
-}
 
 /* The lowest (or, for an indefinite pair, the critical) value of f across the plane of
  * H's two range directions e[0], e[1] through q: a few Newton steps in that plane. */
@@ -564,7 +559,7 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
         bool seen = false;
         if (b->rank == 2) { /* a cusp among the points of a curve: its cubic term says */
             for (size_t s = 0; s < probed && !seen; s++)
-                seen = dist3(probes[s], b->q) <= MERGE_CELLS * x->cell;
+                seen = ism_dist3(probes[s], b->q) <= MERGE_CELLS * x->cell;
             if (seen || probed == CUSP_PROBES_MAX)
                 continue;
             memcpy(probes[probed++], b->q, sizeof probes[0]);
@@ -572,7 +567,7 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
                 continue;
         }
         for (size_t s = 0; s < tried && !seen; s++)
-            seen = dist3(starts[s], b->q) <= MERGE_CELLS * x->cell;
+            seen = ism_dist3(starts[s], b->q) <= MERGE_CELLS * x->cell;
         if (seen)
             continue;
         memcpy(starts[tried++], b->q, sizeof starts[0]);
@@ -590,7 +585,7 @@ static bool same_point(const ctx *x, const ism_sing_point *a, const ism_sing_poi
                 return false;
         return true;
     }
-    return dist3(a->p, b->p) <= MERGE_CELLS * x->cell;
+    return ism_dist3(a->p, b->p) <= MERGE_CELLS * x->cell;
 }
 
 /* Best first: certified, then the smaller gradient residual, then the earlier. */
@@ -662,7 +657,7 @@ static void explain_by_points(const ctx *x, const uint32_t *label, size_t nclust
             continue;
         bool near = false;
         for (size_t j = 0; j < l->npoints && !near; j++)
-            near = dist3(b->q, l->points[j].p) <= MERGE_CELLS * x->cell;
+            near = ism_dist3(b->q, l->points[j].p) <= MERGE_CELLS * x->cell;
         if (near)
             box_fate[i] = 1;
         else

@@ -14,6 +14,7 @@
 #include "core/singular/sheet_mesh.h"
 #include "core/singular/sheet_project.h"
 #include "core/util/parallel.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -51,11 +52,6 @@ void ism_sheet_tris_free(ism_sheet_tris *t)
     free(t->x);
     free(t->tri);
     ism_sheet_tris_init(t);
-}
-
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
 static uint64_t xedge_key(const ism_sheet_field *sf, xedge e)
@@ -100,7 +96,7 @@ static void add_ctri(const ism_sheet_field *sf, xedge e0, xedge e1, xedge e2, co
     nrm[0] = u[1] * v[2] - u[2] * v[1];
     nrm[1] = u[2] * v[0] - u[0] * v[2];
     nrm[2] = u[0] * v[1] - u[1] * v[0];
-    out[*n] = dot3(nrm, d) >= 0 ? (ctri){{e0, e1, e2}} : (ctri){{e0, e2, e1}};
+    out[*n] = ism_dot3(nrm, d) >= 0 ? (ctri){{e0, e1, e2}} : (ctri){{e0, e2, e1}};
     (*n)++;
 }
 
@@ -179,7 +175,7 @@ static bool cell_candidate(const ism_sheet_field *sf, const uint32_t c[8])
     bool neg = false, pos = false;
     for (int i = 0; i < 8; i++) {
         const ism_sheet_vertex *v = &sf->v[c[i]];
-        if (!(v->have & ISM_SF_ORIENTED) || dot3(v->n, sf->v[c[0]].n) < SHEET_AGREE)
+        if (!(v->have & ISM_SF_ORIENTED) || ism_dot3(v->n, sf->v[c[0]].n) < SHEET_AGREE)
             return false;
         neg |= v->psi < 0;
         pos |= v->psi >= 0;

@@ -4,6 +4,7 @@
  * from its lowest index, so the result is deterministic. */
 #include "core/singular/sheet_orient.h"
 #include "core/singular/lattice_key.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -62,17 +63,12 @@ static bool has_direction(const ism_sheet_vertex *v)
     return (v->have & ISM_SF_JET) && !(v->have & ISM_SF_NO_DIR);
 }
 
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
 static void settle(ism_sheet_vertex *v, const double ref[3])
 {
-    if (ref && dot3(v->n, ref) < 0)
+    if (ref && ism_dot3(v->n, ref) < 0)
         for (int k = 0; k < 3; k++)
             v->n[k] = -v->n[k];
-    v->psi = dot3(v->g, v->n) / v->lam;
+    v->psi = ism_dot3(v->g, v->n) / v->lam;
     v->have |= ISM_SF_ORIENTED;
 }
 
@@ -92,7 +88,7 @@ static bool push_neighbours(ism_sheet_field *sf, heap *h, uint32_t a)
             if (b == ISM_KEY_NONE || !has_direction(&sf->v[b])
                 || (sf->v[b].have & ISM_SF_ORIENTED))
                 continue;
-            heap_edge e = {fabs(dot3(sf->v[a].n, sf->v[b].n)), b, a};
+            heap_edge e = {fabs(ism_dot3(sf->v[a].n, sf->v[b].n)), b, a};
             if (!heap_push(h, e))
                 return false;
         }

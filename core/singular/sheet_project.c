@@ -2,6 +2,7 @@
  * sheet_project.h). Near f = g²·k (k ≠ 0), H ≈ 2k∇g∇gᵀ, so n is ∇g's direction and
  * −(∇f·n)/λ = −g/|∇g| to first order: quadratic convergence onto g = 0. */
 #include "core/singular/sheet_project.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <string.h>
@@ -25,12 +26,6 @@
 #define SHEET_F_REL 1e-6
 /* Power-iteration steps per Newton step that refresh n from the Hessian (see power_step). */
 #define SHEET_POWER_STEPS 2
-
-static double dist3(const double a[3], const double b[3])
-{
-    double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-    return sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-}
 
 /* n ← H·n / |H·n|, kept on nref's side; λ ← nᵀHn. Near a double sheet H is ~rank 1, so
  * each step shrinks the error in n by λ2/λ1 ≈ 0 (no eigen-decomposition needed; and
@@ -67,7 +62,7 @@ bool ism_sheet_project(const ism_tape *f, ism_eval_ws *ws, const double p0[3],
             return false;
         for (int k = 0; k < 3; k++)
             p[k] += step * n[k];
-        if (!(dist3(p, p0) <= SHEET_MAX_MOVE * cell))
+        if (!(ism_dist3(p, p0) <= SHEET_MAX_MOVE * cell))
             return false;
     }
     if (!(fabs(step) <= SHEET_STALL_TOL * cell))

@@ -1,5 +1,6 @@
 /* vec3.h — the small vector helpers on double[3] that the polygoniser, the singular locus
- * and the curves share (dot product, length, normalising, distance), inline. */
+ * and the curves share (dot product, length, normalising, distance), inline, each written
+ * once (the same arithmetic, in the same order, wherever it is used). */
 #ifndef ISM_VEC3_H
 #define ISM_VEC3_H
 
@@ -22,10 +23,16 @@ static inline double ism_normalise3(double a[3])
     return n;
 }
 
-static inline double ism_dist3(const double a[3], const double b[3])
+/* The squared distance |a − b|². */
+static inline double ism_sqdist3(const double a[3], const double b[3])
 {
     double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-    return ism_norm3(d);
+    return ism_dot3(d, d);
+}
+
+static inline double ism_dist3(const double a[3], const double b[3])
+{
+    return sqrt(ism_sqdist3(a, b));
 }
 
 #endif
