@@ -28,6 +28,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "core/util/grow.h"
+#include "core/util/vec3.h"
 
 #define NONE CUT_NONE
 /* Newton may move a crease point at most this many lengths of its edge (the polygoniser's
@@ -56,14 +57,6 @@ typedef struct crease_state {
     uint32_t *tie_side;   /* the branch of the first triangle seen on that edge */
     size_t cap_tie;
 } crease_state;
-
-static double dist2(const double *a, const double *b)
-{
-    double d = 0;
-    for (int c = 0; c < 3; c++)
-        d += (a[c] - b[c]) * (a[c] - b[c]);
-    return d;
-}
 
 /* f_A − f_B at p. */
 static double branch_gap(crease_state *cs, uint32_t A, uint32_t B, const double p[3])
@@ -137,7 +130,7 @@ static uint32_t crease_vertex(crease_state *cs, uint32_t u, uint32_t w)
     double t = (ga < 0) != (gb < 0) ? ga / (ga - gb) : 0.5, p[3];
     for (int c = 0; c < 3; c++)
         p[c] = a[c] + t * (b[c] - a[c]);
-    double len = fmax(sqrt(dist2(a, b)), fmax(s->reach[u], s->reach[w]));
+    double len = fmax(sqrt(ism_sqdist3(a, b)), fmax(s->reach[u], s->reach[w]));
     size_t ks[1] = {B};
     double max_move = CREASE_MAX_MOVE_EDGES * len, plane[4];
     bool across = edge_plane(s->m, u, w, p, plane);
@@ -184,7 +177,7 @@ static uint32_t triple_vertex(crease_state *cs, const uint32_t t[3])
     sort3(set);
     double same = CREASE_SAME_TRIPLE * s->tol;
     for (size_t i = 0; i < cs->ntp; i++)
-        if (!memcmp(cs->tp[i].set, set, sizeof set) && dist2(cs->tp[i].p, p) <= same * same)
+        if (!memcmp(cs->tp[i].set, set, sizeof set) && ism_sqdist3(cs->tp[i].p, p) <= same * same)
             return cs->tp[i].v;
     if (!ism_grow((void **)&cs->tp, &cs->cap_tp, cs->ntp + 1, sizeof *cs->tp, CUT_FIRST))
         return NONE;

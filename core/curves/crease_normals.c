@@ -12,11 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "core/curves/branches.h"
-
-static double dot3(const double *a, const double *b)
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
+#include "core/util/vec3.h"
 
 /* The branch's unit gradient at vertex v (as ∇f_i points); the vertex's own normal when no
  * branch, or where the branch's gradient vanishes (a double sheet's). */
@@ -27,7 +23,7 @@ static void corner(ism_branches *b, uint32_t br, const ism_mesh *m, uint32_t v, 
         return;
     double g[3];
     ism_branches_gradient(b, br, m->pos + 3 * (size_t)v, g);
-    double n = sqrt(dot3(g, g));
+    double n = sqrt(ism_dot3(g, g));
     if (!(n > 0) || !isfinite(n))
         return;
     for (int i = 0; i < 3; i++)

@@ -4,6 +4,7 @@
  * [∇cᵀ, 0]], regular at a non-degenerate critical point (a saddle of g on f = 0: a node of
  * the curve; a simple tangency of two curves), so Newton converges quadratically. */
 #include "core/curves/critical.h"
+#include "core/util/vec3.h"
 #include <math.h>
 #include <string.h>
 
@@ -20,11 +21,6 @@ typedef struct lagrange {
     double cdist;    /* worst |c_i| / |∇c_i| */
     double gdist;    /* |g_k| / |∇g_k| */
 } lagrange;
-
-static double norm3(const double a[3])
-{
-    return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-}
 
 static void hess_full(const double h[6], double H[3][3])
 {
@@ -45,7 +41,7 @@ static void system_at(ism_cut_eval *ev, size_t k, size_t j, double h, const doub
     hess_full(gh, H);
     L->cdist = 0;
     for (int i = 0; i < L->m; i++) {
-        double Hc[3][3], n = norm3(cg[i]), lam = x[3 + i];
+        double Hc[3][3], n = ism_norm3(cg[i]), lam = x[3 + i];
         hess_full(ch[i], Hc);
         for (int a = 0; a < 3; a++)
             for (int b = 0; b < 3; b++)
@@ -53,7 +49,7 @@ static void system_at(ism_cut_eval *ev, size_t k, size_t j, double h, const doub
         double d = n > 0 ? fabs(cv[i]) / n : INFINITY;
         L->cdist = d > L->cdist ? d : L->cdist;
     }
-    double ng = norm3(gg);
+    double ng = ism_norm3(gg);
     L->gdist = ng > 0 ? fabs(gv) / ng : INFINITY;
     memset(L->J, 0, sizeof L->J);
     for (int a = 0; a < 3; a++) {
@@ -151,9 +147,9 @@ bool ism_cut_critical(ism_cut_eval *ev, size_t k, size_t j, double tol, double m
         for (int i = 0; i < n; i++)
             x[i] += y[i];
         double d[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
-        if (!isfinite(x[0] + x[1] + x[2]) || norm3(d) > max_move)
+        if (!isfinite(x[0] + x[1] + x[2]) || ism_norm3(d) > max_move)
             return false;
-        if (norm3(y) <= tol && L.cdist <= tol) {
+        if (ism_norm3(y) <= tol && L.cdist <= tol) {
             system_at(ev, k, j, h, x, &L); /* the distances at the final point */
             if (!(L.cdist <= tol))
                 return false;

@@ -6,6 +6,7 @@
  * on it, so that the sign cut leaves the node four times and the sectors between the
  * branches take their own signs. */
 #include "core/curves/cut_internal.h"
+#include "core/util/vec3.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -125,17 +126,6 @@ static bool ray_exit(const cut_state *s, const uint32_t *tris, size_t nt, uint32
  * not show which side of it they lie on for a few cells. */
 #define NODE_WALK_STEPS 6
 
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static double dist2(const double a[3], const double b[3])
-{
-    double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-    return dot3(d, d);
-}
-
 static bool has_vertex(const uint32_t *tv, uint32_t v)
 {
     return tv[0] == v || tv[1] == v || tv[2] == v;
@@ -147,7 +137,7 @@ static bool has_vertex(const uint32_t *tv, uint32_t v)
 static bool onto_branch(cut_state *s, size_t k, const double from[3], const double R[3],
                         double d, double max_move, double q[3])
 {
-    double plane[4] = {R[0], R[1], R[2], dot3(R, from) + d};
+    double plane[4] = {R[0], R[1], R[2], ism_dot3(R, from) + d};
     return d > 0 && ism_cut_refine_on_plane(s->ev, k, plane, s->tol, max_move, q);
 }
 
@@ -161,7 +151,7 @@ static bool curve_vertex_near(cut_state *s, const uint32_t *tris, size_t nt,
             continue;
         for (int c = 0; c < 3; c++)
             if (tv[c] != cur && cut_sign_of(s, tv[c]) == 0 &&
-                dist2(s->m->pos + 3 * (size_t)tv[c], q) <= r * r)
+                ism_sqdist3(s->m->pos + 3 * (size_t)tv[c], q) <= r * r)
                 return true;
     }
     return false;
@@ -231,13 +221,13 @@ static bool branch_through_vertex(cut_state *s, size_t k, const double from[3],
         return false;
     const double *pw = s->m->pos + 3 * (size_t)w;
     double q[3] = {pw[0], pw[1], pw[2]}, near = NODE_RAY_END * edge;
-    if (onto_branch(s, k, from, R, dot3(R, pw) - dot3(R, from), edge, q)) {
+    if (onto_branch(s, k, from, R, ism_dot3(R, pw) - ism_dot3(R, from), edge, q)) {
         *moved = cut_can_move(s, tris, nt, w, q, false, NONE);
         for (size_t i = 0; !*moved && i < nt; i++) /* a vertex on the curve there */
             for (int c = 0; c < 3; c++) {
                 uint32_t z = s->m->tri[3 * (size_t)tris[i] + c];
                 if (z != w && cut_sign_of(s, z) == 0 &&
-                    dist2(s->m->pos + 3 * (size_t)z, q) <= near * near &&
+                    ism_sqdist3(s->m->pos + 3 * (size_t)z, q) <= near * near &&
                     can_merge(s, tris, nt, w, z)) {
                     merge_vertex(s, w, z);
                     break;
@@ -272,10 +262,10 @@ static void branch_tangent(cut_state *s, size_t k, const double p[3], double R[3
     t[0] = gf[1] * gg[2] - gf[2] * gg[1];
     t[1] = gf[2] * gg[0] - gf[0] * gg[2];
     t[2] = gf[0] * gg[1] - gf[1] * gg[0];
-    double l = sqrt(dot3(t, t));
+    double l = sqrt(ism_dot3(t, t));
     if (!(l > 0))
         return;
-    l = dot3(t, R) < 0 ? -l : l;
+    l = ism_dot3(t, R) < 0 ? -l : l;
     for (int c = 0; c < 3; c++)
         R[c] = t[c] / l;
 }
@@ -292,10 +282,10 @@ static bool branch_step(cut_state *s, size_t k, uint32_t cur, const double R[3],
     *next = NONE;
     memcpy(from, s->m->pos + 3 * (size_t)cur, sizeof from);
     ism_eval_gradient(s->ev->f, s->ev->fws, from[0], from[1], from[2], gf);
-    if (!(dot3(gf, gf) > 0))
+    if (!(ism_dot3(gf, gf) > 0))
         return true;
     tangent_basis(gf, e1, e2);
-    double r[2] = {dot3(R, e1), dot3(R, e2)}, l = hypot(r[0], r[1]), at = 0;
+    double r[2] = {ism_dot3(R, e1), ism_dot3(R, e2)}, l = hypot(r[0], r[1]), at = 0;
     if (!(l > 0))
         return true;
     r[0] /= l;
@@ -306,17 +296,17 @@ static bool branch_step(cut_state *s, size_t k, uint32_t cur, const double R[3],
         return false;
     bool hit = ray_exit(s, tris, nt, cur, e1, e2, r, &a, &b, &at), ok = true;
     const double *pa = s->m->pos + 3 * (size_t)a, *pb = s->m->pos + 3 * (size_t)b;
-    double edge = hit ? sqrt(dist2(pa, pb)) : 0, q[3], near = NODE_RAY_END * edge;
+    double edge = hit ? sqrt(ism_sqdist3(pa, pb)) : 0, q[3], near = NODE_RAY_END * edge;
     for (int c = 0; hit && c < 3; c++)
         q[c] = pa[c] + at * (pb[c] - pa[c]);
-    if (!hit || !onto_branch(s, k, from, R, dot3(R, q) - dot3(R, from), edge, q) ||
+    if (!hit || !onto_branch(s, k, from, R, ism_dot3(R, q) - ism_dot3(R, from), edge, q) ||
         curve_vertex_near(s, tris, nt, cur, q, near)) {
         free(tris);
         return true; /* no branch point, or it passes through a vertex on the curve */
     }
     free(tris);
-    uint32_t w = at < NODE_RAY_END || dist2(q, pa) <= near * near       ? a
-                 : at > 1 - NODE_RAY_END || dist2(q, pb) <= near * near ? b
+    uint32_t w = at < NODE_RAY_END || ism_sqdist3(q, pa) <= near * near       ? a
+                 : at > 1 - NODE_RAY_END || ism_sqdist3(q, pb) <= near * near ? b
                                                                       : NONE;
     if (w != NONE) {
         bool moved;

@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "core/util/grow.h"
+#include "core/util/vec3.h"
 
 #define NONE CUT_NONE
 /* A seed's |g_k| may be at most this many times the largest difference of g_k to its
@@ -62,14 +63,6 @@ static bool above(const double *g, uint32_t v, uint32_t w)
     return g[w] > g[v] || (g[w] == g[v] && w > v);
 }
 
-static double dist2(const double *a, const double *b)
-{
-    double d = 0;
-    for (int c = 0; c < 3; c++)
-        d += (a[c] - b[c]) * (a[c] - b[c]);
-    return d;
-}
-
 /* Newton from the seed vertex v (on curve j or on the surface); the point kept when it is a
  * new tangency. */
 static void try_seed(tang_state *ts, uint32_t v, uint32_t j)
@@ -86,7 +79,7 @@ static void try_seed(tang_state *ts, uint32_t v, uint32_t j)
         return;
     double same = TANG_ACCEPT_TOLS * s->tol;
     for (size_t i = 0; i < ts->n; i++)
-        if (dist2(ts->t[i].p, p) <= same * same)
+        if (ism_sqdist3(ts->t[i].p, p) <= same * same)
             return;
     ts->t[ts->n++] = (tangent){{p[0], p[1], p[2]}, v, j};
 }
@@ -221,8 +214,8 @@ bool cut_can_move(cut_state *s, const uint32_t *tris, size_t nt, uint32_t u,
         tri_normal(m, tv, NONE, NULL, a);
         tri_normal(m, tv, u, p, b);
         double ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-        if (!(ab > TANG_MIN_COS * sqrt(dist2(a, (double[3]){0, 0, 0}) *
-                                       dist2(b, (double[3]){0, 0, 0}))))
+        if (!(ab > TANG_MIN_COS * sqrt(ism_sqdist3(a, (double[3]){0, 0, 0}) *
+                                       ism_sqdist3(b, (double[3]){0, 0, 0}))))
             return false;
         changes += cut_sign_of(s, tv[(at + 1) % 3]) * cut_sign_of(s, tv[(at + 2) % 3]) < 0;
     }
@@ -275,7 +268,7 @@ static bool place_on_surface(cut_state *s, size_t k, const tangent *t)
         if (tv[0] != t->seed && tv[1] != t->seed && tv[2] != t->seed)
             continue;
         for (int c = 0; c < 3; c++)
-            cand[nc++] = (candidate){dist2(s->m->pos + 3 * (size_t)tv[c], t->p), tv[c]};
+            cand[nc++] = (candidate){ism_sqdist3(s->m->pos + 3 * (size_t)tv[c], t->p), tv[c]};
     }
     if (ok)
         qsort(cand, nc, sizeof *cand, cmp_candidate);

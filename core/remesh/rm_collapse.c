@@ -10,6 +10,7 @@
  * f = 0 than the farthest of the fan's before. */
 #include "core/remesh/rm_merge.h"
 #include "core/remesh/rm_pass.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <string.h>
@@ -29,11 +30,6 @@
 /* Sweeps over the triangles per call: a collapse leaves its neighbours' needles for the next. */
 #define ISM_RM_COLLAPSE_SWEEPS 3
 
-static double dot3(const double *u, const double *v)
-{
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-}
-
 static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * v; }
 
 static uint32_t slot(const rm_mesh *r, uint32_t v, uint32_t i) { return r->vt[r->start[v] + i]; }
@@ -46,7 +42,7 @@ static void corners(const rm_pass *p, uint32_t t, uint32_t v, const double *x, c
 /* cos of the bend between normals n (length ln) and m (lm). */
 static double cos_bend(const double *n, double ln, const double *m, double lm)
 {
-    return ln > 0 && lm > 0 ? dot3(n, m) / (ln * lm) : -1;
+    return ln > 0 && lm > 0 ? ism_dot3(n, m) / (ln * lm) : -1;
 }
 
 /* New triangle t (v at w's place) faces the fan's way and bends against the triangle across
@@ -60,7 +56,7 @@ static bool new_triangle_ok(const rm_pass *p, const rm_merge *g, uint32_t t, con
     corners(p, t, g->v, P(p, g->v), o);
     double n[3], m[3], u[3];
     double ln = rm_cross(q[0], q[1], q[2], n), lo = rm_cross(o[0], o[1], o[2], m);
-    if (!(cos_bend(fan_n, sqrt(dot3(fan_n, fan_n)), n, ln) >
+    if (!(cos_bend(fan_n, sqrt(ism_dot3(fan_n, fan_n)), n, ln) >
           cos(ISM_RM_COLLAPSE_MAX_TURN_DEG * M_PI / 180)))
         return false;
     *sine = rm_min_sine(q[0], q[1], q[2]);

@@ -9,6 +9,7 @@
  * is the largest of the quad's five edges. */
 #include "core/remesh/rm_bound.h"
 #include "core/remesh/rm_pass.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -31,11 +32,6 @@ typedef struct quad {
 } quad;
 
 static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * v; }
-
-static double dot3(const double *u, const double *v)
-{
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-}
 
 /* The quad around edge {a, b} when it is a free edge; false otherwise. */
 static bool find_quad(const rm_pass *p, uint32_t a, uint32_t b, quad *q)
@@ -73,7 +69,7 @@ static bool degree_allows(const rm_mesh *r, uint32_t v)
 
 static bool bend_ok(const double *n1, double l1, const double *n2, double l2)
 {
-    return l1 > 0 && l2 > 0 && dot3(n1, n2) >= cos(ISM_RM_FLIP_MAX_BEND_DEG * M_PI / 180) * l1 * l2;
+    return l1 > 0 && l2 > 0 && ism_dot3(n1, n2) >= cos(ISM_RM_FLIP_MAX_BEND_DEG * M_PI / 180) * l1 * l2;
 }
 
 /* The angles at c and d of the quad sum above π: sin(γ + δ) < 0 written with the sides'
@@ -81,9 +77,9 @@ static bool bend_ok(const double *n1, double l1, const double *n2, double l2)
 static bool not_delaunay(const double *A, const double *B, const double *C, const double *D)
 {
     double n[3], sc = rm_cross(C, A, B, n), sd = rm_cross(D, B, A, n);
-    double cc = dot3((double[3]){A[0] - C[0], A[1] - C[1], A[2] - C[2]},
+    double cc = ism_dot3((double[3]){A[0] - C[0], A[1] - C[1], A[2] - C[2]},
                      (double[3]){B[0] - C[0], B[1] - C[1], B[2] - C[2]});
-    double cd = dot3((double[3]){A[0] - D[0], A[1] - D[1], A[2] - D[2]},
+    double cd = ism_dot3((double[3]){A[0] - D[0], A[1] - D[1], A[2] - D[2]},
                      (double[3]){B[0] - D[0], B[1] - D[1], B[2] - D[2]});
     /* sin(γ + δ) |CA||CB||DA||DB| = sc cd + cc sd */
     double scale = sqrt((cc * cc + sc * sc) * (cd * cd + sd * sd));
@@ -101,8 +97,8 @@ static bool flip_improves(rm_pass *p, const quad *q)
     double k1 = rm_cross(A, D, C, m1), k2 = rm_cross(B, C, D, m2);
     double s[3] = {n1[0] + n2[0], n1[1] + n2[1], n1[2] + n2[2]};
     bool cap = rm_is_cap(A, B, C) || rm_is_cap(B, A, D);
-    if ((!cap && !bend_ok(n1, l1, n2, l2)) || !bend_ok(m1, k1, m2, k2) || !(dot3(m1, s) > 0) ||
-        !(dot3(m2, s) > 0))
+    if ((!cap && !bend_ok(n1, l1, n2, l2)) || !bend_ok(m1, k1, m2, k2) || !(ism_dot3(m1, s) > 0) ||
+        !(ism_dot3(m2, s) > 0))
         return false;
     double before = fmin(rm_min_sine(A, B, C), rm_min_sine(B, A, D));
     double after = fmin(rm_min_sine(A, D, C), rm_min_sine(B, C, D));

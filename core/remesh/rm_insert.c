@@ -9,6 +9,7 @@
  * the needle's origin (its label, its place in a range of triangles); χ is kept (one vertex,
  * three edges, two triangles more). */
 #include "core/remesh/rm_pass.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <string.h>
@@ -31,11 +32,6 @@
 #define ISM_RM_INSERT_FLIP_MARGIN 1e-6
 
 static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * v; }
-
-static double dot3(const double *u, const double *v)
-{
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-}
 
 /* The needle t as (a, b, c) in its winding, ab its shortest side; false when t is no needle
  * with a short edge between locked vertices and free long sides. */
@@ -66,7 +62,7 @@ static bool project_along(rm_pass *p, double x[3], const double n[3], double len
 {
     double s = 0, x0[3] = {x[0], x[1], x[2]};
     for (int i = 0; i < ISM_RM_INSERT_NEWTON_STEPS; i++) {
-        double fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g), slope = dot3(g, n);
+        double fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g), slope = ism_dot3(g, n);
         if (!isfinite(fv) || !(fabs(slope) > p->gthresh))
             return false;
         double step = fv / slope;
@@ -77,7 +73,7 @@ static bool project_along(rm_pass *p, double x[3], const double n[3], double len
             return false;
         if (fabs(step) <= ISM_RM_INSERT_NEWTON_REL * len) {
             ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
-            return sqrt(dot3(g, g)) > p->gthresh;
+            return sqrt(ism_dot3(g, g)) > p->gthresh;
         }
     }
     return false;
@@ -124,7 +120,7 @@ static bool faces_kept(const rm_pass *p, const uint32_t abc[3], const double *x)
     rm_cross(P(p, abc[0]), P(p, abc[1]), P(p, abc[2]), n);
     for (int k = 0; k < 3; k++) {
         rm_cross(P(p, abc[k]), P(p, abc[(k + 1) % 3]), x, m);
-        if (!(dot3(n, m) > 0))
+        if (!(ism_dot3(n, m) > 0))
             return false;
     }
     return true;

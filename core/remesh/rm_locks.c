@@ -5,6 +5,7 @@
  * the mesh (a one-dimensional part) and it is not at a given point. Everything else keeps its
  * place and its edges. */
 #include "core/remesh/rm_pass.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -25,11 +26,6 @@ static int cmp_u64(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-static double dot3(const double *u, const double *v)
-{
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-}
-
 /* Edge {a, b} of triangles t1, t2 bends by more than the crease angle, and is no fold: a
  * fold (one triangle turned over against its neighbours, a polygoniser artefact) has its two
  * triangles facing opposite ways across ∇f at the edge's ends, a crease has both facing
@@ -42,12 +38,12 @@ static bool is_crease(const rm_pass *p, uint32_t a, uint32_t b, uint32_t t1, uin
     const uint32_t *u = m->tri + 3 * t1, *w = m->tri + 3 * t2;
     double l1 = rm_cross(P + 3 * u[0], P + 3 * u[1], P + 3 * u[2], n1);
     double l2 = rm_cross(P + 3 * w[0], P + 3 * w[1], P + 3 * w[2], n2);
-    if (dot3(n1, n2) > cos(ISM_RM_CREASE_DEG * M_PI / 180) * l1 * l2 ||
+    if (ism_dot3(n1, n2) > cos(ISM_RM_CREASE_DEG * M_PI / 180) * l1 * l2 ||
         rm_is_cap(P + 3 * u[0], P + 3 * u[1], P + 3 * u[2]) ||
         rm_is_cap(P + 3 * w[0], P + 3 * w[1], P + 3 * w[2]))
         return false; /* a cap's normal says nothing of a bend */
     const double *ga = p->normal + 3 * a, *gb = p->normal + 3 * b;
-    bool fold = (dot3(n1, ga) > 0) != (dot3(n2, ga) > 0) && (dot3(n1, gb) > 0) != (dot3(n2, gb) > 0);
+    bool fold = (ism_dot3(n1, ga) > 0) != (ism_dot3(n2, ga) > 0) && (ism_dot3(n1, gb) > 0) != (ism_dot3(n2, gb) > 0);
     return !fold;
 }
 

@@ -9,6 +9,7 @@
 #include "core/remesh/rm_bound.h"
 #include "core/remesh/rm_pass.h"
 #include "core/analysis/select.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -29,15 +30,10 @@
  * fan's normal (fold-over guard; smooth fans spread a few degrees around it). */
 #define ISM_RM_MAX_TURN_DEG 60.0
 
-static double dot3(const double *u, const double *v)
-{
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-}
-
 double rm_distance(rm_pass *p, const double x[3])
 {
     double g[3], fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
-    double gn = sqrt(dot3(g, g));
+    double gn = sqrt(ism_dot3(g, g));
     return gn > p->gthresh && isfinite(fv) ? fabs(fv) / gn : INFINITY;
 }
 
@@ -67,14 +63,14 @@ bool rm_normals(rm_pass *p)
         const double *x = m->pos + 3 * v;
         double *g = p->normal + 3 * v;
         ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
-        double len = sqrt(dot3(g, g));
+        double len = sqrt(ism_dot3(g, g));
         if (isfinite(len) && p->r.count[v])
             gn[n++] = len;
     }
     p->gthresh = n ? ISM_RM_SINGULAR_REL * ism_an_select_double(gn, n, n / 2) : 0;
     free(gn);
     for (size_t v = 0; v < nv; v++) {
-        double *g = p->normal + 3 * v, len = sqrt(dot3(g, g));
+        double *g = p->normal + 3 * v, len = sqrt(ism_dot3(g, g));
         double s = isfinite(len) && len > p->gthresh ? 1 / len : 0;
         for (int k = 0; k < 3; k++)
             g[k] *= s;
@@ -88,7 +84,7 @@ bool rm_project(rm_pass *p, double x[3], double scale, int axis, double g[3])
         double fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
         if (axis >= 0)
             g[axis] = 0;
-        double g2 = dot3(g, g);
+        double g2 = ism_dot3(g, g);
         if (!isfinite(fv) || !(sqrt(g2) > p->gthresh))
             return false;
         double s = fv / g2;
@@ -134,14 +130,14 @@ bool rm_fan_accepts(const rm_pass *p, uint32_t v, const double x[3], const rm_fa
     const rm_mesh *r = &p->r;
     const double *P = r->m->pos;
     double worst = INFINITY, turn = cos(ISM_RM_MAX_TURN_DEG * M_PI / 180);
-    double ln = sqrt(dot3(f->normal, f->normal));
+    double ln = sqrt(ism_dot3(f->normal, f->normal));
     for (uint32_t i = 0; i < r->count[v]; i++) {
         const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
         const double *q[3];
         for (int k = 0; k < 3; k++)
             q[k] = t[k] == v ? x : P + 3 * t[k];
         double n1[3], l1 = rm_cross(q[0], q[1], q[2], n1);
-        if (!(dot3(f->normal, n1) > turn * ln * l1))
+        if (!(ism_dot3(f->normal, n1) > turn * ln * l1))
             return false;
         worst = fmin(worst, rm_min_sine(q[0], q[1], q[2]));
     }
@@ -152,7 +148,7 @@ void rm_commit_move(rm_pass *p, uint32_t v, const double x[3], const double g[3]
 {
     double *pos = p->r.m->pos + 3 * v, *n = p->normal + 3 * v;
     float *mn = p->r.m->normal + 3 * v;
-    double len = sqrt(dot3(g, g));
+    double len = sqrt(ism_dot3(g, g));
     double side = mn[0] * g[0] + mn[1] * g[1] + mn[2] * g[2] < 0 ? -1 : 1;
     memcpy(pos, x, 3 * sizeof *x);
     for (int k = 0; k < 3; k++) {
@@ -192,7 +188,7 @@ static bool centroids_stay(rm_pass *p, uint32_t v, const double *x)
  * measured again there. False where f cannot be measured. */
 static bool keep_offset(rm_pass *p, const double *pos, double x[3], double g[3])
 {
-    double d = rm_bound_signed(p, pos), gn = sqrt(dot3(g, g));
+    double d = rm_bound_signed(p, pos), gn = sqrt(ism_dot3(g, g));
     if (!isfinite(d) || !(gn > 0))
         return false;
     for (int k = 0; k < 3; k++)
@@ -206,7 +202,7 @@ bool rm_relax_vertex(rm_pass *p, uint32_t v)
     rm_fan f;
     rm_fan_measure(p, v, &f);
     double d[3] = {f.centroid[0] - pos[0], f.centroid[1] - pos[1], f.centroid[2] - pos[2]};
-    double dn = dot3(d, n);
+    double dn = ism_dot3(d, n);
     for (int k = 0; k < 3; k++)
         d[k] -= dn * n[k];
     for (double step = 1; step >= 0.5; step *= 0.5) {
