@@ -2,7 +2,8 @@
 
 - the global connection limit is fair across addresses: ten addresses, each under the
   per-address cap, fill --max-connections; a client from an eleventh address is still answered
-  (not left in the listen backlog), the ten end up with near-equal shares, and a connection
+  (not left in the listen backlog) within NEW_CLIENT_BOUND_S, the ten end up with near-equal
+  shares, and a connection
   with a request in progress outlives the idle ones of its own address; a connection that
   nobody can give way to is answered 503 with Retry-After, not closed;
 - request deadlines whatever the trickle rate: headers trickled under the idle timeout, and a
@@ -16,6 +17,7 @@ how fast this machine is."""
 import http.client
 import json
 import os
+import resource
 import socket
 import sys
 import time
@@ -23,11 +25,34 @@ import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from reltools import (Daemon, busy_work, http_request, metric_key, parse_metrics,  # noqa: E402
-                      server_closed, sphere, wait_until)
+                      sanitizer_build, server_closed, sphere, wait_until)
+from harness import ISOMESHD  # noqa: E402
 
+# Issue 17's red-team case at its own scale: 4,800 connections from 10 addresses, each under
+# the per-address cap (--client-conns 512), against the default --max-connections 4000.
+# Measured here (load 34 on 2 cores): 4,800 connects 1.8 s, the daemon settles at the limit
+# in 0.2 s, the new client is answered in 0.08 s; the whole test ~5 s.
 ADDRESSES = ["127.0.0.%d" % i for i in range(2, 12)]
-LIMIT = 40          # --max-connections: small, so the test opens few sockets
-PER_ADDRESS = 10    # each address opens this many (under --client-conns 12): 100 > LIMIT
+LIMIT = 4000        # --max-connections, its default
+PER_ADDRESS = 480   # each address opens this many (under --client-conns 512): 4,800 > LIMIT
+# The issue asks for an answer within 1 s. Without the fair limit the new client waits in the
+# listen backlog until some connection's timeout frees a slot: 120 s here (the test's idle
+# timeouts), 10 s in the issue's measurement. 2 s is 25x the answer time measured at load 34
+# yet far below any timeout path, so it fails on the old behaviour and not on a loaded
+# machine; under AddressSanitizer (several times slower at everything) 10 s, still 12x under.
+NEW_CLIENT_BOUND_S = 10.0 if sanitizer_build(ISOMESHD) else 2.0
+FDS_NEEDED = LIMIT + PER_ADDRESS * len(ADDRESSES) + 1000  # the daemon's and this process's
+
+
+def raise_nofile():
+    """Raises this process's open-file limit (the daemon inherits it) to FDS_NEEDED; False
+    when the hard limit is below it."""
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if hard != resource.RLIM_INFINITY and hard < FDS_NEEDED:
+        return False
+    if soft != resource.RLIM_INFINITY and soft < FDS_NEEDED:
+        resource.setrlimit(resource.RLIMIT_NOFILE, (FDS_NEEDED, hard))
+    return True
 
 
 def connect(port, source):
@@ -67,8 +92,9 @@ class Scraper:
 
 class FairLimitTest(unittest.TestCase):
     def test_a_new_address_gets_in_when_ten_others_fill_the_limit(self):
-        with Daemon("--workers", "1", "--max-connections", str(LIMIT), "--client-conns", "12",
-                    "--conn-timeout", "120s", "--header-timeout", "120s",
+        if not raise_nofile():
+            self.skipTest("RLIMIT_NOFILE's hard limit is under %d" % FDS_NEEDED)
+        with Daemon("--workers", "1", "--conn-timeout", "120s", "--header-timeout", "120s",
                     "--job-timeout", "120s") as d:
             # one connection of the first address has a request in progress (it waits for a
             # computation); everything else only connects
@@ -89,13 +115,16 @@ class FairLimitTest(unittest.TestCase):
                 # (the busy connection and the scraper's are two of the LIMIT)
                 wait_until("the limit filled", lambda: sum(map(len, held().values())) == LIMIT - 2)
                 shares = {a: len(ss) for a, ss in held().items()}
-                # every address keeps a near-equal share (LIMIT / 10 = 4, the busy one aside)
-                self.assertTrue(all(2 <= n <= 6 for n in shares.values()), shares)
+                # every address keeps a near-equal share (LIMIT / 10, the busy one aside)
+                self.assertTrue(all(abs(n - LIMIT // 10) <= 2 for n in shares.values()), shares)
                 self.assertLessEqual(max(shares.values()) - min(shares.values()), 2, shares)
                 self.assertFalse(server_closed(busy))  # idle ones of its address went first
                 # an eleventh address is answered at once, in place of an idle connection
-                r = http_request(d.port, "GET", "/healthz", timeout=10, source="127.0.0.99")
+                start = time.monotonic()
+                r = http_request(d.port, "GET", "/healthz", timeout=30, source="127.0.0.99")
+                took = time.monotonic() - start
                 self.assertEqual(r.status, 200)
+                self.assertLess(took, NEW_CLIENT_BOUND_S)
                 self.assertFalse(server_closed(busy))
                 m = scraper.metrics()
                 closed = m['isomesh_connections_closed_total{reason="evicted_idle"}']
