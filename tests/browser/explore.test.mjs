@@ -156,14 +156,16 @@ describe('box and inspection', { timeout: 300000 }, () => {
     }
   });
 
-  it('saves the view as a PNG of the requested size', async () => {
-    await page.fill('#png-width', '1000');
-    await page.fill('#png-height', '640');
+  it('saves the view as a PNG of the requested size, larger than the screen', async () => {
+    // 1600 x 1000: larger than the browser window (1280 x 800; the view is smaller still), so
+    // the export is drawn at its own resolution, not copied from the canvas on screen.
+    await page.fill('#png-width', '1600');
+    await page.fill('#png-height', '1000');
     const [download] = await Promise.all([page.waitForEvent('download'), page.click('#png-export')]);
     const bytes = fs.readFileSync(await download.path());
     fs.writeFileSync(artifact('export-cayley-cubic.png'), bytes);
     const img = decodePng(bytes);
-    assert.deepEqual([img.width, img.height], [1000, 640]);
+    assert.deepEqual([img.width, img.height], [1600, 1000]);
     assert.ok(pixelStats(img).foreground > 0.03, 'the surface is in the picture');
     assert.match(download.suggestedFilename(), /^cayley-cubic\.png$/);
   });
