@@ -133,8 +133,7 @@ static const flag FLAGS[] = {
      "at least 1s",
      "60s", NULL},
     {"http-threads", K_INT, 1, 256, "N",
-     "threads serving HTTP connections, each with its share (at most 124); more are started "
-     "when --max-connections needs them",
+     "threads serving HTTP connections (at least; two per core are started)",
      "1", NULL},
     {"max-depth", K_INT, 1, 16, "N", "deepest octree a request may ask for",
      "10", NULL},

@@ -8,18 +8,21 @@
 
 #include <ctype.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include "server/common/log.h"
 #include "server/isomeshd/client_addr.h"
 #include "server/isomeshd/errors.h"
+#include "server/common/http_loops.h"
 #include "server/isomeshd/respond.h"
 #include "server/isomeshd/routes.h"
 
@@ -400,11 +403,6 @@ static void mhd_log(void *cls, const char *fmt, va_list ap)
 #define CUT_ROOM(max) ((max) / 16u + 16u)
 /* Kernel queue of connections not yet accepted (a burst of new clients waits here). */
 #define LISTEN_BACKLOG 1024u
-/* Events one epoll_wait() of libmicrohttpd 0.9.75 takes (its MAX_EVENTS). */
-#define MHD_EPOLL_BATCH 128u
-/* Connections one polling thread may hold: with its listening socket and its wake-up pipe
- * (and two spare) its epoll set stays below MHD_EPOLL_BATCH (see ismd_http_start). */
-#define CONNS_PER_THREAD (MHD_EPOLL_BATCH - 4u)
 
 /* libmicrohttpd reports a connection's start and end: its entry in the connection table,
  * which decides its admission (conns.h). */
@@ -443,22 +441,54 @@ static void client_left(void *ctx, void *req)
     ismd_sched_unlock(&s->sched);
 }
 
-/* The thread model: libmicrohttpd's thread pool, each thread with its own epoll set and at
- * most CONNS_PER_THREAD connections (so the default 4000 + CUT_ROOM connections need 35
- * threads; --http-threads may ask for more).
- *
- * Why the cap: MHD_epoll() in 0.9.75 (and upstream since) drains events with
- * `while (epoll_wait(.., 128, timeout) == 128)`, the same timeout on every call. When a call
- * returns exactly 128 events and nothing new is pending, the next call sleeps (up to the
- * connection timeout) while those 128 connections wait, queued but not served. A burst of
- * >= 128 ready connections on one thread met it (strace: epoll_wait = 128, 128, then a
- * 2.9 s sleep until the clients gave up). A set of fewer than 128 descriptors can never
- * fill a batch, so the loop always ends after one call.
- *
- * Why epoll and several threads: poll() walks every connection of its thread on each pass
+/* Descriptors a connection may hold at once: its socket and the cache file its answer is
+ * sent from (respond.c, bodies of SENDFILE_MIN or more). */
+#define FDS_PER_CONNECTION 2u
+/* Descriptors beside the connections': workers' pipes, cache files being written, logs. */
+#define FDS_BESIDE 256u
+
+/* Grows the process's descriptor table now to hold n descriptors (at most RLIMIT_NOFILE).
+ * The kernel grows it on demand, doubling, and in a multi-threaded process each growth waits
+ * for an RCU grace period (expand_fdtable -> synchronize_rcu) while every thread that opens
+ * or accepts a descriptor waits for it: measured, 450 slow readers arriving together (a
+ * socket and a cache file each) held both polling threads in D state (expand_files,
+ * synchronize_rcu) and /healthz waited 0.2-1.5 s at load ~20. The table never shrinks, so
+ * growing it once at the start (a few hundred KB) takes that wait out of serving. */
+static void reserve_descriptors(int any_fd, unsigned n)
+{
+    struct rlimit rl;
+    if (getrlimit(RLIMIT_NOFILE, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY && n > rl.rlim_cur)
+        n = (unsigned)rl.rlim_cur;
+    if (n < 2)
+        return;
+    int fd = fcntl(any_fd, F_DUPFD_CLOEXEC, (int)n - 1); /* the table covers fd, so n slots */
+    if (fd >= 0)
+        close(fd);
+}
+
+/* Polling threads per core. One per core served a cached mesh with the fewest wake-ups (0.2
+ * context switches per request at 16-256 connections), but on a loaded machine (load ~20 on
+ * 2 cores) a new client arriving behind 450 slow readers waited 50-300 ms for one of the two
+ * threads (/healthz p99, test_http_concurrency); two per core: 50-125 ms, and 0.3-0.4
+ * switches per request; four per core: 10-55 ms, but 1.1 switches per request at 256
+ * connections. */
+#define THREADS_PER_CORE 2u
+
+/* The thread model (http_loops.c): THREADS_PER_CORE polling threads per core, each with its
+ * own libmicrohttpd daemon and epoll set on the shared listening socket (--http-threads may
+ * ask for more). Why epoll: poll() walks every connection of its thread on each pass
  * (measured, 256 connections: 124 us of CPU per 307 KB answer with 2 poll threads against
- * 112 us with epoll, nginx 82 us; req/s 0.86x nginx's against 1.56x), and a connection in a
- * long copy holds up only its own thread's share. */
+ * 112 us with epoll, nginx 82 us). Why so few threads: each extra thread wakes for fewer
+ * connections (the 35 threads the 4,000-connection limit needed before http_loops.c: 1.1-5.4
+ * context switches per request at 256 connections, nginx 0.02-0.4), and a connection in a
+ * long copy holds up its thread only until NOTSENT_LOWAT is queued. */
+static unsigned http_threads(const ismd_config *cfg)
+{
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    unsigned n = THREADS_PER_CORE * (cores > 0 ? (unsigned)cores : 1u);
+    return (unsigned)cfg->http_threads > n ? (unsigned)cfg->http_threads : n;
+}
+
 bool ismd_http_start(ismd_server *s, int listen_fd)
 {
     s->listen_fd = listen_fd;
@@ -479,25 +509,21 @@ bool ismd_http_start(ismd_server *s, int listen_fd)
         return false;
     unsigned limit = s->cfg->max_conns + CUT_ROOM(s->cfg->max_conns) +
                      ismd_conns_refused_room(s->cfg->max_conns);
-    unsigned threads = (limit + CONNS_PER_THREAD - 1) / CONNS_PER_THREAD;
-    if ((unsigned)s->cfg->http_threads > threads)
-        threads = (unsigned)s->cfg->http_threads;
-    s->mhd = MHD_start_daemon(
-        MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME |
-            MHD_USE_ERROR_LOG,
-        0, NULL, NULL, on_request, s,
-        MHD_OPTION_EXTERNAL_LOGGER, mhd_log, s,
-        MHD_OPTION_LISTEN_SOCKET, listen_fd,
-        MHD_OPTION_NOTIFY_COMPLETED, on_completed, s,
-        MHD_OPTION_UNESCAPE_CALLBACK, unescape, s,
-        MHD_OPTION_CONNECTION_TIMEOUT, s->cfg->conn_timeout_s,
-        MHD_OPTION_NOTIFY_CONNECTION, on_connection, s,
-        MHD_OPTION_CONNECTION_LIMIT, limit,
-        MHD_OPTION_LISTEN_BACKLOG_SIZE, LISTEN_BACKLOG,
-        MHD_OPTION_SIGPIPE_HANDLED_BY_APP, 1,
-        MHD_OPTION_THREAD_POOL_SIZE, threads,
-        MHD_OPTION_END);
-    if (!s->mhd) {
+    reserve_descriptors(listen_fd, FDS_PER_CONNECTION * limit + FDS_BESIDE);
+    struct MHD_OptionItem opts[] = {
+        {MHD_OPTION_EXTERNAL_LOGGER, (intptr_t)mhd_log, s},
+        {MHD_OPTION_NOTIFY_COMPLETED, (intptr_t)on_completed, s},
+        {MHD_OPTION_UNESCAPE_CALLBACK, (intptr_t)unescape, s},
+        {MHD_OPTION_CONNECTION_TIMEOUT, s->cfg->conn_timeout_s, NULL},
+        {MHD_OPTION_NOTIFY_CONNECTION, (intptr_t)on_connection, s},
+        {MHD_OPTION_LISTEN_BACKLOG_SIZE, LISTEN_BACKLOG, NULL},
+        {MHD_OPTION_SIGPIPE_HANDLED_BY_APP, 1, NULL},
+        {MHD_OPTION_END, 0, NULL},
+    };
+    s->loops = ism_http_loops_start(http_threads(s->cfg),
+                                     MHD_ALLOW_SUSPEND_RESUME | MHD_USE_ERROR_LOG, listen_fd,
+                                     limit, on_request, s, opts);
+    if (!s->loops) {
         ism_logf(ISM_LOG_ERROR, "http_start_failed", "libmicrohttpd did not start");
         ismd_conns_stop(s->conns);
         s->conns = NULL;
@@ -508,22 +534,22 @@ bool ismd_http_start(ismd_server *s, int listen_fd)
 
 void ismd_http_quiesce(ismd_server *s)
 {
-    if (!s->mhd)
+    if (!s->loops)
         return;
-    MHD_socket fd = MHD_quiesce_daemon(s->mhd);
-    if (fd != MHD_INVALID_SOCKET)
-        shutdown(fd, SHUT_RDWR); /* refuse new connections now; closed after the stop */
+    ism_http_loops_quiesce(s->loops);
+    if (s->listen_fd >= 0)
+        shutdown(s->listen_fd, SHUT_RDWR); /* refuse new connections now; closed after the stop */
 }
 
 void ismd_http_stop(ismd_server *s, double max_s)
 {
-    if (!s->mhd)
+    if (!s->loops)
         return;
     long long until = ism_now_ns() + (long long)(max_s * 1e9);
     while (atomic_load(&s->open_requests) > 0 && ism_now_ns() < until)
         usleep(10000);
-    MHD_stop_daemon(s->mhd);
-    s->mhd = NULL;
+    ism_http_loops_stop(s->loops);
+    s->loops = NULL;
     ismd_conns_stop(s->conns);
     s->conns = NULL;
     if (s->listen_fd >= 0)

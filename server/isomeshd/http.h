@@ -44,7 +44,7 @@ typedef struct ismd_server {
     ism_pipeline_limits limits;
     ismd_static web, vendor;
     ism_blob *openapi, *schema, *presets;
-    struct MHD_Daemon *mhd;
+    struct ism_http_loops *loops; /* the polling threads (server/common/http_loops.h) */
     atomic_bool draining;
     atomic_long open_requests;   /* contexts created and not yet completed */
     int listen_fd;

@@ -1,7 +1,8 @@
 /* http_ceiling.c — the reference bench_http.py measures isomeshd against: libmicrohttpd alone,
- * configured as isomeshd configures it (a pool of epoll threads holding at most 124
- * connections each, 256 KB of unsent bytes per socket, suspend/resume allowed, answer on the
- * handler's second call), answering every GET with one file's bytes from memory. Whatever
+ * configured as isomeshd configures it (its polling threads, server/common/http_loops.h: two
+ * per core, each a daemon in external epoll mode on the shared socket; 256 KB of unsent bytes
+ * per socket, suspend/resume allowed, answer on the handler's second call), answering every
+ * GET with one file's bytes from memory. Whatever
  * isomeshd adds (routing, cache lookup, headers, log line, metrics) shows up as the
  * difference.
  *
@@ -17,8 +18,10 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include "server/common/http_loops.h"
+
 #define CONNECTION_LIMIT 4000u   /* as isomeshd's http.c */
-#define CONNS_PER_THREAD 124u     /* as isomeshd's http.c (below libmicrohttpd's epoll batch) */
+#define THREADS_PER_CORE 2u       /* as isomeshd's http.c */
 #define NOTSENT_LOWAT (256 << 10) /* as isomeshd's http.c */
 
 /* A listening socket on 127.0.0.1:port with isomeshd's socket options; -1 on failure. */
@@ -82,20 +85,22 @@ int main(int argc, char **argv)
     sigaddset(&stop, SIGINT);
     pthread_sigmask(SIG_BLOCK, &stop, NULL);
     signal(SIGPIPE, SIG_IGN);
-    unsigned threads = (CONNECTION_LIMIT + CONNS_PER_THREAD - 1) / CONNS_PER_THREAD;
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    unsigned threads = THREADS_PER_CORE * (cores > 0 ? (unsigned)cores : 1u);
     int lfd = listen_on(atoi(argv[1]));
-    struct MHD_Daemon *d = lfd < 0 ? NULL : MHD_start_daemon(
-        MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME,
-        0, NULL, NULL, answer, NULL, MHD_OPTION_LISTEN_SOCKET, lfd,
-        MHD_OPTION_CONNECTION_LIMIT, CONNECTION_LIMIT, MHD_OPTION_THREAD_POOL_SIZE, threads,
-        MHD_OPTION_END);
+    struct MHD_OptionItem opts[] = {{MHD_OPTION_SIGPIPE_HANDLED_BY_APP, 1, NULL},
+                                    {MHD_OPTION_END, 0, NULL}};
+    ism_http_loops *d = lfd < 0 ? NULL : ism_http_loops_start(threads, MHD_ALLOW_SUSPEND_RESUME,
+                                                                lfd, CONNECTION_LIMIT, answer,
+                                                                NULL, opts);
     if (!d) {
         fprintf(stderr, "http_ceiling: cannot listen on port %s\n", argv[1]);
         return 1;
     }
     int sig;
     sigwait(&stop, &sig);
-    MHD_stop_daemon(d);
+    ism_http_loops_stop(d);
+    close(lfd);
     free(body);
     return 0;
 }
