@@ -6,9 +6,10 @@ daemon it fronts, in the same run: wrk fetching one cached mesh by key
 directly and through nginx (its proxy_cache answers every request after the first).
 
 Goal (issue 17): through nginx >= 80% of the daemon's direct req/s. Also the servers' CPU
-microseconds per request (nginx's workers; the daemon's threads), the figure a loaded machine
-does not distort: with a load average far above the core count the req/s ratio measures how
-the scheduler shares the cores (the daemon runs dozens of threads, nginx a worker per core),
+microseconds and voluntary context switches (wake-ups) per request (nginx's workers; the
+daemon's threads), the figures a loaded machine distorts least: with a load average far above
+the core count the req/s ratio measures how the scheduler shares the cores (the daemon runs
+two polling threads per core beside its other threads, nginx a worker per core),
 and the CPU ratio says what the same throughput would cost on an idle machine; the cores
 column (server + wrk CPU per second of the run) shows the share each run got, and
 req/s = cores / (server + wrk CPU per request) gives the ratio at an equal share (on the
@@ -78,30 +79,34 @@ def main():
         secs = 2 if QUICK else 8
         load_before, idle_before = load_text(), idle()
         print("load average %s on %d cores" % (load_before, os.cpu_count()))
-        print("%-34s %6s %10s %9s %9s %7s %8s %8s %6s" % (
-            "server", "conns", "req/s", "p50 ms", "p99 ms", ">2 s", "CPU/req", "wrk/req",
-            "cores"))
-        print("(CPU/req, wrk/req: CPU microseconds per request of the server, of wrk; cores: "
-              "the CPU the two got per second of the run)")
-        ratios, cpu_ratios, share_ratios, equal_share = [], [], [], []
+        print("%-34s %6s %10s %9s %9s %7s %8s %8s %8s %6s" % (
+            "server", "conns", "req/s", "p50 ms", "p99 ms", ">2 s", "CPU/req", "wake/req",
+            "wrk/req", "cores"))
+        print("(CPU/req, wrk/req: CPU microseconds per request of the server, of wrk; wake/req: "
+              "the server's voluntary context switches per request (/proc); cores: the CPU the "
+              "two got per second of the run)")
+        ratios, cpu_ratios, share_ratios, equal_share, wakes = [], [], [], [], []
         for conns in CONNS:
             direct = bench_http.wrk(url, conns, secs, pid=d.proc.pid)
             front = bench_http.wrk(nurl, conns, secs, pid=bench_http.nginx_workers(n.proc.pid))
             for name, r in (("isomeshd direct", direct), ("nginx front (shipped config)", front)):
-                print("%-34s %6d %10.0f %9.3f %9.3f %7d %8.0f %8.0f %6.2f%s" % (
+                print("%-34s %6d %10.0f %9.3f %9.3f %7d %8.0f %8.2f %8.0f %6.2f%s" % (
                     name, conns, r["rps"], r["p50"], r["p99"], r["over2s"], r["cpu_us"],
-                    r["client_cpu_us"], r["cores"],
+                    r["vcs"], r["client_cpu_us"], r["cores"],
                     "  (%d non-2xx, %d socket errors)" % (r["bad"], r["errors"])
                     if r["bad"] or r["errors"] else ""))
             ratios.append(front["rps"] / direct["rps"])
             cpu_ratios.append(front["cpu_us"] / direct["cpu_us"])
             share_ratios.append(front["cores"] / direct["cores"])
             equal_share.append(bench_http.equal_share(front, direct))
+            wakes.append((direct["vcs"], front["vcs"]))
         print("nginx front / daemon req/s: %s; goal >= %.0f%%: %s" % (
             ", ".join("%d conns %.2f" % (c, q) for c, q in zip(CONNS, ratios)), GOAL * 100,
             "met" if min(ratios) >= GOAL else "NOT met"))
         print("nginx front / daemon CPU per request (lower: the front costs less): %s" % ", ".join(
             "%d conns %.2f" % (c, q) for c, q in zip(CONNS, cpu_ratios)))
+        print("wake-ups (voluntary context switches) per request, daemon / nginx front: %s"
+              % ", ".join("%d conns %.2f / %.2f" % (c, w[0], w[1]) for c, w in zip(CONNS, wakes)))
         print("nginx front / daemon cores obtained (server + wrk; below 1: the front's run got "
               "less of the machine, which lowers its req/s whatever its cost): %s" % ", ".join(
                   "%d conns %.2f" % (c, q) for c, q in zip(CONNS, share_ratios)))

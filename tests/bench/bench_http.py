@@ -5,8 +5,9 @@ same run:
 1. Cached mesh throughput: wrk (Debian) fetching a cached ~100k-triangle Draco mesh
    (kummer-16-nodes at depth 8, ~310 KB) from /v1/meshes/{key}.drc at 1, 16, 64 and 256
    connections — requests per second, latency percentiles, requests over wrk's 2 s timeout,
-   errors — beside libmicrohttpd alone serving the same bytes from memory with isomeshd's
-   thread model (build/bench/http_ceiling) and nginx serving them as a static file (sendfile;
+   errors, and the server's CPU microseconds and context switches per request (from /proc:
+   what a loaded machine distorts least) — beside libmicrohttpd alone serving the same bytes
+   from memory with isomeshd's thread model (build/bench/http_ceiling) and nginx serving them as a static file (sendfile;
    one worker process, and one per core). Then isomeshd's figures as ratios of both. Also the
    same mesh with positions only (~100 KB), and POST /v1/mesh of the request (decode + key +
    cache hit) at 16 connections.
@@ -20,7 +21,8 @@ same run:
 Goals (issue 6): >= 12,000 req/s at 16 connections for the cached mesh, p99 < 10 ms at 64
 connections, cold-request overhead over the bare command <= 5 ms. Goals (issue 16), beside
 nginx in the same run: req/s >= nginx's at 16, 64 and 256 connections, p99 <= 1.5x nginx's,
-no request over 2 s. Prints figures and the machine's load average (on a loaded machine
+no request over 2 s; CPU and voluntary context switches per request <= nginx's. Prints
+figures and the machine's load average (on a loaded machine
 the ratios are what carries over); asserts nothing."""
 import argparse
 import http.client
@@ -74,6 +76,29 @@ def cpu_seconds(pids):
     return total
 
 
+def ctx_switches(pids):
+    """Voluntary and involuntary context switches of the processes pids, all their threads
+    summed (/proc/PID/task/TID/status): wake-ups (a thread that sleeps in epoll_wait and is
+    woken switches voluntarily) and preemptions."""
+    vol = invol = 0
+    for pid in pids:
+        try:
+            tids = os.listdir("/proc/%d/task" % pid)
+        except OSError:
+            continue
+        for tid in tids:
+            try:
+                with open("/proc/%d/task/%s/status" % (pid, tid)) as f:
+                    for line in f:
+                        if line.startswith("voluntary_ctxt_switches"):
+                            vol += int(line.split()[1])
+                        elif line.startswith("nonvoluntary_ctxt_switches"):
+                            invol += int(line.split()[1])
+            except (OSError, ValueError, IndexError):
+                pass
+    return vol, invol
+
+
 def nginx_workers(master):
     """The pids of nginx's worker processes (the children of master), else [master]."""
     found = []
@@ -99,6 +124,7 @@ def wrk(url, conns, seconds, script=None, pid=None):
     if script:
         cmd += ["-s", script]
     cpu0 = cpu_seconds(pid) if pid else 0.0
+    cs0 = ctx_switches(pid) if pid else (0, 0)
     kids0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     out = subprocess.run(cmd + [url], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
@@ -106,6 +132,7 @@ def wrk(url, conns, seconds, script=None, pid=None):
     wall = time.perf_counter() - t0
     kids1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = cpu_seconds(pid) - cpu0 if pid else 0.0
+    cs1 = ctx_switches(pid) if pid else (0, 0)
     client = (kids1.ru_utime - kids0.ru_utime) + (kids1.ru_stime - kids0.ru_stime)
     done = re.search(r"(\d+) requests in", out)
     n = int(done.group(1)) if done else 0
@@ -123,6 +150,8 @@ def wrk(url, conns, seconds, script=None, pid=None):
     return {"rps": rps, "p50": pct(50), "p90": pct(90), "p99": pct(99),
             "bad": int(errors.group(1)) if errors else 0, "errors": sum(counts[:3]),
             "over2s": counts[3], "cpu_us": cpu_us,
+            "vcs": (cs1[0] - cs0[0]) / n if pid and n else float("nan"),
+            "ics": (cs1[1] - cs0[1]) / n if pid and n else float("nan"),
             "client_cpu_us": client / n * 1e6 if n else float("nan"),
             "cores": (cpu + client) / wall if pid else float("nan")}
 
@@ -205,10 +234,20 @@ def cached_url(d, req):
 
 
 def row(name, conns, r):
-    print("%-40s %6d %10.0f %9.3f %9.3f %9.3f %7d %8.0f%s" % (
+    print("%-40s %6d %10.0f %9.3f %9.3f %9.3f %7d %8.0f %8.2f %8.2f%s" % (
         name, conns, r["rps"], r["p50"], r["p90"], r["p99"], r["over2s"], r["cpu_us"],
+        r["vcs"], r["ics"],
         "".join("  (%d %s)" % (r[k], what)
                 for k, what in (("bad", "non-2xx"), ("errors", "socket errors")) if r[k])))
+
+
+def load_line():
+    """The load average, and a warning when it is above the core count."""
+    load = os.getloadavg()
+    return "load average %s on %d cores%s" % (
+        " ".join("%.1f" % x for x in load), os.cpu_count(),
+        " (above the core count: req/s and latency follow the scheduler's share; compare the "
+        "CPU and switches per request)" if load[0] > os.cpu_count() else "")
 
 
 def equal_share(a, b):
@@ -220,24 +259,32 @@ def equal_share(a, b):
 
 def versus_nginx(results, nginx, which):
     """isomeshd's figures as ratios of nginx's, per connection count, and the issue-16 goals."""
-    print("\nisomeshd / nginx (%s), same run (req/s: higher is better; p99: lower is better)"
-          % which)
-    print("%6s %12s %12s %16s %14s %12s %14s" % ("conns", "req/s ratio", "p99 ratio",
-                                                 "over 2 s (nginx)", "CPU/req ratio",
-                                                 "cores ratio", "equal share"))
-    met = True
+    print("\nisomeshd / nginx (%s), same run (req/s: higher is better; the rest: lower is better); "
+          "%s" % (which, load_line()))
+    print("%6s %12s %12s %16s %14s %14s %12s %14s" % ("conns", "req/s ratio", "p99 ratio",
+                                                      "over 2 s (nginx)", "CPU/req ratio",
+                                                      "wake/req ratio", "cores ratio",
+                                                      "equal share"))
+    met = cost_met = True
     for conns in sorted(nginx):
         i, n = results[conns], nginx[conns]
         rr, pr = i["rps"] / n["rps"], i["p99"] / n["p99"] if n["p99"] else float("inf")
-        print("%6d %11.2fx %11.2fx %9d (%d) %13.2fx %11.2fx %13.2fx" % (
-            conns, rr, pr, i["over2s"], n["over2s"], i["cpu_us"] / n["cpu_us"],
+        cr = i["cpu_us"] / n["cpu_us"]
+        wr = i["vcs"] / n["vcs"] if n["vcs"] else float("inf")
+        print("%6d %11.2fx %11.2fx %9d (%d) %13.2fx %8.2f/%.2f %11.2fx %13.2fx" % (
+            conns, rr, pr, i["over2s"], n["over2s"], cr, i["vcs"], n["vcs"],
             i["cores"] / n["cores"], equal_share(i, n)))
         if conns >= 16:
             met = met and rr >= 1.0 and pr <= 1.5 and i["over2s"] == 0 and not i["errors"]
+            cost_met = cost_met and cr <= 1.0 and i["vcs"] <= n["vcs"]
     print("goal (issue 16) beside nginx (%s): req/s >= nginx's, p99 <= 1.5x nginx's, no request "
           "over 2 s at 16, 64 and 256 connections: %s" % (which, "met" if met else "NOT met"))
-    print("(cores ratio: the CPU server + wrk got per second, isomeshd's run over nginx's; "
-          "equal share: the req/s ratio had both got the same CPU)")
+    print("cost beside nginx (%s): CPU and wake-ups (voluntary context switches) per request "
+          "<= nginx's at 16, 64 and 256 connections: %s" % (which, "met" if cost_met else
+                                                            "NOT met"))
+    print("(wake/req: isomeshd's voluntary context switches per request / nginx's; cores ratio: "
+          "the CPU server + wrk got per second, isomeshd's run over nginx's; equal share: the "
+          "req/s ratio had both got the same CPU)")
 
 
 SLOW_READERS = 450
@@ -344,14 +391,13 @@ def throughput(build, tmp):
         ceiling, curl = start_ceiling(build, tmp, body)
         secs = 2 if QUICK else 10
         short = 2 if QUICK else 5
-        print("load average %s on %d cores%s" % (
-            " ".join("%.1f" % x for x in os.getloadavg()), os.cpu_count(),
-            " (above the core count: every figure is noisy, compare the ratios)"
-            if os.getloadavg()[0] > os.cpu_count() else ""))
-        print("\n%-40s %6s %10s %9s %9s %9s %7s %8s" % ("server / route", "conns", "req/s",
-                                                        "p50 ms", "p90 ms", "p99 ms", ">2 s",
-                                                        "CPU/req"))
-        print("(CPU/req: the server process's CPU microseconds per request, all its threads)")
+        print(load_line())
+        print("\n%-40s %6s %10s %9s %9s %9s %7s %8s %8s %8s" % (
+            "server / route", "conns", "req/s", "p50 ms", "p90 ms", "p99 ms", ">2 s", "CPU/req",
+            "wake/req", "prmt/req"))
+        print("(CPU/req: the server's CPU microseconds per request, all its threads and "
+              "processes; wake/req, prmt/req: their voluntary (a sleeping thread woken) and "
+              "involuntary (preempted) context switches per request, from /proc)")
         results, nginx_results, nginx_all_results = {}, {}, {}
         for conns in (1, 16, 64, 256):
             results[conns] = wrk(url, conns, secs, pid=d.proc.pid)
@@ -379,7 +425,8 @@ def throughput(build, tmp):
             versus_nginx(results, nginx_results, "1 worker")
         if nginx_all_results:
             versus_nginx(results, nginx_all_results, "a worker per core")
-        print("\n/healthz every 50 ms while %d slow readers fetch the %.1f MB OBJ (16 KB per "
+        print("\n" + load_line())
+        print("/healthz every 50 ms while %d slow readers fetch the %.1f MB OBJ (16 KB per "
               "0.2 s each)" % (SLOW_READERS, len(obj) / 1e6))
         print("%-40s %8s %8s %8s %8s" % ("server", "answers", "p50 ms", "p99 ms", "max ms"))
         slow = slow_readers(d.port, obj_url[len("http://127.0.0.1:%d" % d.port):], "/healthz")
