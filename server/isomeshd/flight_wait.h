@@ -4,7 +4,7 @@
 #ifndef ISMD_FLIGHT_WAIT_H
 #define ISMD_FLIGHT_WAIT_H
 
-#include "server/isomeshd/http.h"
+#include "server/isomeshd/http_types.h"
 
 /* The body of POST /v1/mesh or /v1/jobs parsed, checked and keyed (?format= too): fills
  * r->key and r->fmt and returns the canonical request; NULL when it was refused (answered,

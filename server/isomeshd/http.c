@@ -30,16 +30,6 @@
 
 /* ---- request accessors --------------------------------------------------------------- */
 
-const char *ismd_header(ismd_req *r, const char *name)
-{
-    return MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, name);
-}
-
-const char *ismd_query(ismd_req *r, const char *name)
-{
-    return MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, name);
-}
-
 static bool method_allowed(const char *allow, const char *method)
 {
     size_t n = strlen(method);

@@ -4,7 +4,7 @@
 #ifndef ISMD_RESPOND_H
 #define ISMD_RESPOND_H
 
-#include "server/isomeshd/http.h"
+#include "server/isomeshd/http_types.h"
 
 /* Adds CORS and nosniff headers, records status and size, queues and releases resp. */
 enum MHD_Result ismd_send(ismd_req *r, unsigned status, struct MHD_Response *resp);

@@ -4,7 +4,7 @@
 #ifndef ISMD_ROUTES_H
 #define ISMD_ROUTES_H
 
-#include "server/isomeshd/http.h"
+#include "server/isomeshd/http_types.h"
 
 /* Finds url's route: sets r->route, r->allow (NULL: 404, answered once the body is read),
  * r->want and the path parameters (r->key, r->fmt, r->id). */

@@ -11,7 +11,7 @@
 
 #include "server/isomeshd/cluster.h"
 #include "server/isomeshd/flight_wait.h"
-#include "server/isomeshd/http.h"
+#include "server/isomeshd/http_types.h"
 #include "server/isomeshd/respond.h"
 #include "server/isomeshd/routes.h"
 #include "server/isomeshd/jobs.h"

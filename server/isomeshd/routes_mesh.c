@@ -13,7 +13,7 @@
 #include "server/common/log.h"
 #include "server/isomeshd/errors.h"
 #include "server/isomeshd/flight_wait.h"
-#include "server/isomeshd/http.h"
+#include "server/isomeshd/http_types.h"
 #include "server/isomeshd/respond.h"
 #include "server/isomeshd/routes.h"
 #include "server/isomeshd/worker_pool.h"

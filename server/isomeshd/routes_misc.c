@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "server/isomeshd/http.h"
+#include "server/isomeshd/http_types.h"
 #include "server/isomeshd/respond.h"
 #include "server/isomeshd/routes.h"
 #include "server/isomeshd/user_metrics.h"

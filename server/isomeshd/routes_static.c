@@ -7,7 +7,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "server/isomeshd/http.h"
+#include "server/isomeshd/http_types.h"
 #include "server/isomeshd/respond.h"
 #include "server/isomeshd/routes.h"
 

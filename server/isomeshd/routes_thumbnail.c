@@ -9,7 +9,7 @@
 #include "proto/presets.h"
 #include "proto/request.h"
 #include "server/isomeshd/flight_wait.h"
-#include "server/isomeshd/http.h"
+#include "server/isomeshd/http_types.h"
 #include "server/isomeshd/respond.h"
 #include "server/isomeshd/routes.h"
 
