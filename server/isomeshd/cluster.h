@@ -39,6 +39,13 @@
  * decision to the executor, which stops it once neither requests here nor other daemons
  * want it.
  *
+ * A live daemon cut off from Redis past a lock lifetime looks dead (its alive key and lock
+ * expire): a DELETE elsewhere may flag its computation canceled as abandoned. That never
+ * fails its requests: an executor's cancel only detaches its own waiter (requests there keep
+ * the flight), and an origin reading its computation canceled starts over (shared_cache.c's
+ * remote), computing it itself while Redis is unreachable. The cost is a computation done
+ * twice at worst.
+ *
  * The origin (shared_cache.c, on the Redis thread) adds a computation it holds the lock of to
  * its user's stream (refused when the user already has its --user-jobs there: cluster-wide),
  * then follows its job hash until it is done (the mesh is then read from the shared cache) or

@@ -31,7 +31,11 @@ with Redis, daemons of one worker each and (for the failure case) nginx:
   it, stops the worker and drops the queue entry (before, the executor's own interest kept
   it running for nobody), while a synchronous request that shares the computation on the
   daemon running it keeps it: the job is canceled, the request gets its mesh (before, the
-  cancel reached it as a 499).
+  cancel reached it as a 499);
+* a live daemon cut off from Redis past --redis-lock-ttl (frozen by SIGSTOP) counts as dead,
+  and a DELETE of its job through another daemon stops the computation there as abandoned;
+  a synchronous request on the cut-off daemon sharing it still gets its mesh (its origin
+  starts the canceled computation over; failing it instead answers 500 cluster_error).
 
 Every wait is bounded; no assertion depends on the machine's speed beyond the bounds."""
 import json
@@ -494,6 +498,61 @@ class ClusterQueueTest(unittest.TestCase):
                 started(b), canceled()), file=sys.stderr)
         finally:
             s.cleanup()
+
+    def test_a_daemon_cut_off_past_the_lock_lifetime_keeps_its_requests_computation(self):
+        # A live daemon that cannot reach Redis for longer than --redis-lock-ttl (here: frozen
+        # by SIGSTOP, so nothing of it reaches Redis: its alive key and its lock expire)
+        # counts as dead: a DELETE of its job through another daemon finds the computation
+        # abandoned and flags it canceled. A synchronous request on the cut-off daemon that
+        # shares the computation must still get its mesh: the flag only stops executors
+        # that nothing local wants it for, and the origin starts a canceled computation
+        # over for the requests still waiting (cluster.h).
+        s = stack.Stack(n=2, daemon_args=HELD + ("--redis-lock-ttl", "1s"),
+                        with_nginx=False).start()
+        try:
+            a, b = s.daemons
+            for k in range(6):  # until b's executor runs it (a's own would keep it for the
+                s.pause_workers()  # request there whatever Redis says)
+                req = work(1100 + k)
+                job = a.post("/v1/jobs", req).json()
+                self.assertTrue(stack.wait_until(
+                    lambda: a.get(job["url"]).json()["state"] == "running", 60))
+                runner = computation(s, job)[b"daemon"]
+                if int(runner.split(b"/")[1]) == b.proc.pid:
+                    break
+                a.request("DELETE", job["url"])
+                self.assertTrue(stack.wait_until(
+                    lambda: a.metric("isomesh_workers_busy") == 0, 30))
+            else:
+                self.skipTest("b's executor never took the computation in 6 tries")
+            sync = harness.in_background(lambda: a.post("/v1/mesh", req, timeout=300))
+            self.assertTrue(stack.wait_until(
+                lambda: a.metric("isomesh_suspended_connections") == 1, 30))
+            origin = computation(s, job)[b"origin"].decode()
+            a.proc.send_signal(signal.SIGSTOP)
+            try:
+                self.assertTrue(stack.wait_until(lambda: s.redis.command(
+                    "EXISTS", "isomesh:v1:alive:" + origin) == 0, 30), "a still alive")
+                gone = b.request("DELETE", job["url"])
+                self.assertEqual(gone.status, 200, gone.body[:300])
+                self.assertEqual(gone.json()["state"], "canceled")
+                # the edge is reached: the computation was taken for abandoned
+                self.assertEqual(computation(s, job).get(b"cancel"), b"1",
+                                 (computation(s, job), s.redis.command(
+                                     "GET", "isomesh:v1:lock:%s.%s" % (job["key"], job["format"])),
+                                  s.redis.command("KEYS", "isomesh:v1:want:*"), origin))
+            finally:
+                a.proc.send_signal(signal.SIGCONT)
+            s.resume_workers()
+            sync[0].join(300)
+            self.assertNotIn("error", sync[1])
+            r = sync[1]["result"]
+            self.assertEqual(r.status, 200, r.body[:300])
+            self.assertEqual(r.header("ETag").strip('"'), job["key"])
+            self.assertEqual(b.get(job["url"]).json()["state"], "canceled")
+            print("b ran it at try %d" % (k + 1), file=sys.stderr)
+        finally:
+            self.assertEqual(s.cleanup(), [], "sanitizer reports")
 
 
 if __name__ == "__main__":
