@@ -1,6 +1,7 @@
 // viewer.test.mjs — the isomesh viewer end to end: a real isomeshd (its own port and cache
 // directory) and headless Chromium. Load the page, pick the Kummer surface, check the canvas
-// really shows a surface, the stats panel against the stats endpoint, a slider that computes a
+// really shows a surface, the stats panel against the stats endpoint, its 16 nodes picked
+// (type and closed-form coordinates within 1e-6), a slider that computes a
 // new mesh and comes back from the page's cache, expression errors at their column (the
 // viewer's own check and the server's), curvature colours against the decoded attributes,
 // the clipping plane, each download, a shared link, keyboard access, a narrow screen, and
