@@ -38,7 +38,7 @@ double rm_bound_distance(rm_pass *p, const double x[3], double limit)
 double rm_bound_signed(rm_pass *p, const double x[3])
 {
     double s1, s2;
-    return two_steps(p, x, INFINITY, &s1, &s2) ? s1 + s2 : INFINITY;
+    return two_steps(p, x, -1, &s1, &s2) ? s1 : INFINITY;
 }
 
 bool rm_bound_edge(rm_pass *p, const double *a, const double *b)

@@ -14,9 +14,9 @@
  * f is not finite; above limit, the first term alone (the step is not taken). */
 double rm_bound_distance(rm_pass *p, const double x[3], double limit);
 
-/* The signed distance from x to f = 0, positive where f is: f/|∇f| at x plus f/|∇f| where the
- * Newton step from x lands (INFINITY where ∇f vanishes or f is not finite). Moving x by δ
- * along ∇f's unit vector changes it by about δ. */
+/* The signed distance from x to f = 0 to first order, positive where f is: f/|∇f| at x
+ * (INFINITY where ∇f vanishes or f is not finite). Moving x by δ along ∇f's unit vector
+ * changes it by about δ. A model's input: bounds are checked with rm_bound_distance. */
 double rm_bound_signed(rm_pass *p, const double x[3]);
 
 /* True when the midpoint of ab lies within max_error of f = 0. */

@@ -1,7 +1,7 @@
 /* sp_collapse.c — the simplification's edge collapses (sp_collapse.h). An edge with a free
  * end is tried in order of length: two free ends merge at the edge's midpoint put on f = 0
- * by Newton (or, failing that, one into the other's place); a free end merges into a locked
- * one, which keeps its place, so feature vertices never move. A merge is taken only when
+ * by Newton, then moved to its balancing offset (sp_place.h); a free end merges into a
+ * locked one, which keeps its place, so feature vertices never move. A merge is taken only when
  * every test passes, cheapest first: the link condition, orientation, shape, then the
  * distances to f = 0 measured at every new centroid and edge midpoint. */
 #include "core/remesh/sp_collapse.h"
@@ -228,15 +228,14 @@ static bool merge(rm_pass *p, const rm_merge *g, enum verdict verdict, const dou
     return false;
 }
 
-/* v into w, when every test passes: at w's place when w is locked, else placed from there. */
+/* Free v into locked w, which keeps its place, when every test passes. */
 static bool into(rm_pass *p, uint32_t v, uint32_t w, bool *ok)
 {
     rm_merge g;
-    double x[3] = {P(p, w)[0], P(p, w)[1], P(p, w)[2]}, gx[3];
-    double *moves = p->r.locked[w] ? NULL : gx;
     if (!rm_merge_find(&p->r, v, w, ISM_SP_MAX_DEGREE, &g))
         return false;
-    return merge(p, &g, merge_verdict(p, &g, x, moves), x, moves, ok);
+    double x[3] = {P(p, w)[0], P(p, w)[1], P(p, w)[2]};
+    return merge(p, &g, merge_verdict(p, &g, x, NULL), x, NULL, ok);
 }
 
 /* Both ends free: merged at the midpoint put on f = 0, then placed from there. */
@@ -256,11 +255,9 @@ static bool at_middle(rm_pass *p, uint32_t a, uint32_t b, bool *ok)
 static bool collapse_edge(rm_pass *p, uint32_t a, uint32_t b, bool *ok)
 {
     const uint8_t *locked = p->r.locked;
-    if (!locked[a] && !locked[b] && at_middle(p, a, b, ok))
-        return true;
-    if (*ok && !locked[a] && into(p, a, b, ok))
-        return true;
-    return *ok && !locked[b] && into(p, b, a, ok);
+    if (!locked[a] && !locked[b]) /* into either end's place: 0.8% fewer merges, 15% more work */
+        return at_middle(p, a, b, ok);
+    return locked[a] ? into(p, b, a, ok) : into(p, a, b, ok);
 }
 
 size_t sp_collapse_round(rm_pass *p, const volatile int *cancel, bool *ok)

@@ -54,6 +54,7 @@ bool sp_snapshot_take(const rm_pass *p, const rm_merge *g, sp_snapshot *s)
         memcpy(s->pos[i], m->pos + 3 * (size_t)v, sizeof s->pos[i]);
         memcpy(s->normal[i], p->normal + 3 * (size_t)v, sizeof s->normal[i]);
         memcpy(s->mesh_normal[i], m->normal + 3 * (size_t)v, sizeof s->mesh_normal[i]);
+        s->active[i] = p->active[v];
     }
     const uint32_t slots[SP_TRIAL_SLOTS] = {g->v, g->w, g->c, g->d};
     for (int i = 0; i < SP_TRIAL_SLOTS; i++)
@@ -75,6 +76,7 @@ void sp_snapshot_restore(rm_pass *p, const sp_snapshot *s)
         memcpy(m->pos + 3 * (size_t)v, s->pos[i], sizeof s->pos[i]);
         memcpy(p->normal + 3 * (size_t)v, s->normal[i], sizeof s->normal[i]);
         memcpy(m->normal + 3 * (size_t)v, s->mesh_normal[i], sizeof s->mesh_normal[i]);
+        p->active[v] = s->active[i];
     }
     for (int j = 0; j < s->ntri; j++) {
         memcpy(m->tri + 3 * (size_t)s->tri[j], s->corners[j], sizeof s->corners[j]);

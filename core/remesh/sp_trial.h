@@ -26,6 +26,7 @@ typedef struct sp_snapshot {
     uint32_t ring[SP_TRIAL_MAX_RING];
     double pos[SP_TRIAL_MAX_RING][3], normal[SP_TRIAL_MAX_RING][3];
     float mesh_normal[SP_TRIAL_MAX_RING][3];
+    uint8_t active[SP_TRIAL_MAX_RING];
     int nring;
     uint32_t tri[SP_TRIAL_MAX_TRIS], corners[SP_TRIAL_MAX_TRIS][3];
     int ntri;
@@ -39,8 +40,9 @@ typedef struct sp_snapshot {
  * is too large to record (then it is not tried). */
 bool sp_snapshot_take(const rm_pass *p, const rm_merge *g, sp_snapshot *s);
 
-/* Puts back everything recorded: positions, normals, the triangles' corners and dead marks,
- * the four slots, v's marks and the counters. */
+/* Puts back everything recorded: positions, normals and active marks of the ring, the
+ * triangles' corners and dead marks, the four slots, v's marks and the counters (a refused
+ * trial leaves nothing for the next round to try again). */
 void sp_snapshot_restore(rm_pass *p, const sp_snapshot *s);
 
 /* After the merge: each free vertex of the ring (w's neighbours, then w) relaxes toward its

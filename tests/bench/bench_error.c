@@ -5,8 +5,10 @@
  * to f = 0, in closed form for the sphere and the torus, else the length of the Newton
  * projection q <- q - f ∇f / |∇f|² (on the tape compiled from the same expression).
  *
- *   bench_error mesh NAME E [DEPTH]      isomesh (core/singular/surface.h: the locus, the
- *                                        polygoniser, conformance), one thread
+ *   bench_error mesh NAME E [DEPTH [raw]]  isomesh (core/singular/surface.h: the locus, the
+ *                                        polygoniser, conformance, then the simplification
+ *                                        within E as the service does by default; raw: not
+ *                                        it), one thread
  *   bench_error measure NAME FILE.ply    a mesh from another tool (binary little-endian PLY:
  *                                        double x y z, faces as uchar count + int32 indices)
  *   bench_error eval NAME X,Y,Z[;...]    f at points (to check the other tools' formulas)
@@ -15,6 +17,7 @@
  * Each prints one JSON line. CPU seconds are the process's (CLOCK_PROCESS_CPUTIME_ID)
  * around the meshing call alone: no parsing, no writing, no measuring. */
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -22,6 +25,7 @@
 
 #include "core/eval/eval.h"
 #include "core/octree/polygonise.h"
+#include "core/remesh/quality_pass.h"
 #include "core/singular/surface.h"
 
 /* Newton projection: at most this many steps; it stops once a step is below STEP_TOL
@@ -214,7 +218,8 @@ static ism_tape *compile(const surface *s)
     return t;
 }
 
-static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, int depth)
+static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, int depth,
+                    bool simplify)
 {
     ism_poly_options o;
     ism_poly_options_default(&o);
@@ -230,17 +235,23 @@ static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, 
     ism_conform_stats cs;
     ism_surface_times times;
     ism_error err;
+    ism_simplify_stats ss;
+    memset(&ss, 0, sizeof ss);
     double c0 = cpu_seconds();
     enum ism_poly_status st = ism_mesh_surface(t, &o, &mesh, &locus, &ps, &cs, &times, &err);
+    if (st == ISM_POLY_OK && simplify && !ism_simplify_pass(t, &locus, NULL, e, NULL, &mesh, &ss, &err))
+        st = ISM_POLY_NO_MEMORY;
     double cpu = cpu_seconds() - c0;
     if (st != ISM_POLY_OK) {
         fprintf(stderr, "bench_error: %s: %s\n", s->name, err.message);
         return 1;
     }
     error_stats es = centroid_error(m, mesh.pos, mesh.tri, mesh.ntris);
-    printf("{\"cpu_s\": %.6f, \"poly_ms\": %.3f, \"singular_ms\": %.3f, \"triangles\": %zu, "
+    printf("{\"cpu_s\": %.6f, \"poly_ms\": %.3f, \"singular_ms\": %.3f, \"simplify_ms\": %.3f, "
+           "\"triangles_raw\": %zu, \"triangles\": %zu, "
            "\"max_c\": %.6g, \"mean_c\": %.6g, \"rounds\": %llu, \"missed\": %llu}\n",
-           cpu, times.polygonise_ms, times.singular_ms, es.triangles, es.max, es.mean,
+           cpu, times.polygonise_ms, times.singular_ms, ss.time_ms,
+           simplify ? ss.triangles_before : es.triangles, es.triangles, es.max, es.mean,
            (unsigned long long)ps.error_rounds, (unsigned long long)ps.error_missed_nodes);
     ism_locus_free(&locus);
     ism_mesh_free(&mesh);
@@ -301,7 +312,7 @@ int main(int argc, char **argv)
     if (argc == 2 && strcmp(argv[1], "list") == 0)
         return cmd_list();
     if (argc < 4) {
-        fprintf(stderr, "usage: bench_error mesh NAME E [DEPTH] | measure NAME FILE.ply | "
+        fprintf(stderr, "usage: bench_error mesh NAME E [DEPTH [raw]] | measure NAME FILE.ply | "
                         "eval NAME X,Y,Z[;...] | list\n");
         return 2;
     }
@@ -312,7 +323,8 @@ int main(int argc, char **argv)
     measurer m = {s, t, ism_eval_ws_new(t)};
     int rc = 2;
     if (strcmp(argv[1], "mesh") == 0)
-        rc = cmd_mesh(s, t, &m, atof(argv[3]), argc > 4 ? atoi(argv[4]) : 10);
+        rc = cmd_mesh(s, t, &m, atof(argv[3]), argc > 4 ? atoi(argv[4]) : 10,
+                      !(argc > 5 && strcmp(argv[5], "raw") == 0));
     else if (strcmp(argv[1], "measure") == 0)
         rc = cmd_measure(&m, argv[3]);
     else if (strcmp(argv[1], "eval") == 0)
