@@ -168,12 +168,48 @@ static const char DEPTH_LUA[] =
     "end "
     "return n";
 
-/* KEYS stream, job hash; ARGV consumer, id, progress, ttl, key prefix, name, now ms. 1:
- * still ours (idle time reset, progress published); 0: taken over by another daemon, or its
- * record is gone; 2: canceled, or abandoned (ABANDONED_LUA: flagged canceled), both
- * acknowledged and deleted. */
+/* over_share(p, stream, user): the service's fair share, as one daemon's scheduler keeps
+ * it (sched.c's preempt victim) but over every daemon: every worker of the service busy
+ * (the live daemons' counts, P nworkers), and this user holds two or more while another
+ * user with nothing running waits, or (the user's own running limit unset) more than half
+ * of the workers, rounded up, while another user holding fewer than half waits. Waiting:
+ * an entry not taken yet, below that user's running limit. */
+#define OVER_SHARE_LUA \
+    "local function over_share(p, stream, user) " \
+    "  local total = 0 " \
+    "  local nw = redis.call('hgetall', p .. 'nworkers') " \
+    "  for i = 1, #nw, 2 do " \
+    "    if redis.call('exists', p .. 'alive:' .. nw[i]) == 1 then " \
+    "      total = total + tonumber(nw[i + 1]) " \
+    "    else redis.call('hdel', p .. 'nworkers', nw[i]) end " \
+    "  end " \
+    "  local mine = redis.call('xpending', stream, 'workers')[1] " \
+    "  if total == 0 or mine < 2 then return false end " \
+    "  local own = tonumber(redis.call('hget', p .. 'ulim', user) or '0') or 0 " \
+    "  local share = own <= 0 and math.ceil(total / 2) or 0 " \
+    "  local busy, below = 0, nil " \
+    "  for _, u in ipairs(redis.call('smembers', p .. 'users')) do " \
+    "    local s = p .. 'q:' .. u " \
+    "    if redis.call('exists', s) == 1 then " \
+    "      local pend = redis.call('xpending', s, 'workers')[1] " \
+    "      busy = busy + pend " \
+    "      local lim = tonumber(redis.call('hget', p .. 'ulim', u) or '0') or 0 " \
+    "      if u ~= user and redis.call('xlen', s) > pend and (lim <= 0 or pend < lim) " \
+    "         and (below == nil or pend < below) then below = pend end " \
+    "    end " \
+    "  end " \
+    "  if busy < total or below == nil then return false end " \
+    "  return below == 0 or (share > 0 and mine > share and below < share) end "
+
+/* KEYS stream, job hash; ARGV consumer, id, progress, ttl, key prefix, name, now ms, may
+ * give back, user. 1: still ours (idle time reset, progress published); 0: taken over by
+ * another daemon, or its record is gone; 2: canceled, or abandoned (ABANDONED_LUA: flagged
+ * canceled), both acknowledged and deleted; 3: given back (nothing on this daemon but the
+ * entry wants the computation, and its user is over the service's share, OVER_SHARE_LUA):
+ * the entry goes to the end of its user's stream as a new one, the job hash says queued
+ * under its new id (the origin, following the old one, starts over and joins it). */
 static const char HEARTBEAT_LUA[] =
-    ABANDONED_LUA
+    ABANDONED_LUA OVER_SHARE_LUA
     "local p = redis.call('xpending', KEYS[1], 'workers', ARGV[2], ARGV[2], 1)[1] "
     "if not p or p[2] ~= ARGV[1] then return 0 end "
     "local mine = redis.call('hget', KEYS[2], 'id') == ARGV[2] "
@@ -183,9 +219,23 @@ static const char HEARTBEAT_LUA[] =
     "if not mine or redis.call('hget', KEYS[2], 'cancel') then "
     "  redis.call('xack', KEYS[1], 'workers', ARGV[2]) redis.call('xdel', KEYS[1], ARGV[2]) "
     "  if mine then return 2 end return 0 end "
+    "if ARGV[8] == '1' and over_share(ARGV[5], KEYS[1], ARGV[9]) then "
+    "  local e = redis.call('xrange', KEYS[1], ARGV[2], ARGV[2])[1] "
+    "  redis.call('xack', KEYS[1], 'workers', ARGV[2]) redis.call('xdel', KEYS[1], ARGV[2]) "
+    "  local id = redis.call('xadd', KEYS[1], '*', unpack(e[2])) "
+    "  redis.call('hset', KEYS[2], 'id', id, 'state', 'queued', 'progress', '0') "
+    "  redis.call('hdel', KEYS[2], 'daemon', 'started_ms') "
+    "  return 3 end "
     "redis.call('xclaim', KEYS[1], 'workers', ARGV[1], 0, ARGV[2], 'JUSTID') "
     "redis.call('hset', KEYS[2], 'progress', ARGV[3]) "
     "redis.call('pexpire', KEYS[2], ARGV[4]) "
+    "return 1";
+
+/* KEYS alive, nworkers; ARGV ttl, consumer, workers. This daemon lives for one more lock
+ * lifetime, with its worker count (the service's share counts live daemons' workers). */
+static const char ALIVE_LUA[] =
+    "redis.call('set', KEYS[1], '1', 'PX', ARGV[1]) "
+    "redis.call('hset', KEYS[2], ARGV[2], ARGV[3]) "
     "return 1";
 
 /* KEYS stream, job hash; ARGV id, state, status, error, ttl. */
@@ -298,6 +348,7 @@ typedef struct cjob {
     ismd_cluster *c;
     char stream[KEY_MAX], job[KEY_MAX], name[ISM_CACHE_NAME_MAX];
     char id[ISMD_CLUSTER_ID_MAX];
+    char user[ISMD_CLUSTER_KEY_MAX];
     long long beat_at_ns, orphan_check_ns;
     bool kept_logged;          /* cluster_computation_kept said for it */
     /* set under the scheduler's lock by the flight */
@@ -543,17 +594,19 @@ static void cj_report(cjob *j, ism_cache_tier *t)
     free(err);
 }
 
-/* Still ours and wanted: 1; taken over: 0; canceled: 2; Redis unavailable: -1. */
-static int cj_beat(cjob *j, double progress)
+/* Still ours and wanted: 1; taken over: 0; canceled: 2; given back: 3; Redis unavailable:
+ * -1. */
+static int cj_beat(cjob *j, double progress, bool may_give_back)
 {
     char p[32];
     snprintf(p, sizeof p, "%.4f", progress);
     char now[24];
     wall_ms(now, 0);
     const char *args[] = {j->stream, j->job, j->c->consumer, j->id, p, STATE_TTL_MS,
-                          ism_cache_redis_prefix(j->c->redis), j->name, now};
+                          ism_cache_redis_prefix(j->c->redis), j->name, now,
+                          may_give_back ? "1" : "0", j->user};
     redisReply *r = NULL;
-    if (run_script(j->c, "cluster_heartbeat", HEARTBEAT_LUA, 2, args, 9, &r) < 0)
+    if (run_script(j->c, "cluster_heartbeat", HEARTBEAT_LUA, 2, args, 11, &r) < 0)
         return -1;
     int v = r->type == REDIS_REPLY_INTEGER ? (int)r->integer : -1;
     freeReplyObject(r);
@@ -587,6 +640,9 @@ static long long cj_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
     double progress = j->progress;
     bool orphan = !finished && j->waiter.passive && j->waiter.flight &&
                   ismd_sched_only_passive(j->waiter.flight);
+    /* only an entry that nothing else here wants gives its worker back */
+    bool alone = !finished && !j->waiter.passive && j->waiter.flight &&
+                 j->waiter.flight->nwaiters == 1;
     ismd_shared_leave(sh);
     if (finished) {
         cj_report(j, t);
@@ -605,9 +661,14 @@ static long long cj_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
     if (now < j->beat_at_ns)
         return now + CJ_TICK_NS;
     j->beat_at_ns = now + beat_every_ns(j->c);
-    int beat = cj_beat(j, progress);
+    int beat = cj_beat(j, progress, alone);
     if (beat == 1 || beat < 0)
         return now + CJ_TICK_NS;
+    if (beat == 3) {
+        ism_log_field lf[] = {ISM_LS("job", j->name), ISM_LS("user", j->user)};
+        ism_log_fields(ISM_LOG_INFO, "cluster_computation_preempted", lf, 2);
+        atomic_fetch_add(&j->c->sched->metrics->preemptions, 1);
+    }
     if (!ismd_shared_enter(sh))
         return now + CJ_TICK_NS;
     /* canceled by its origin (nobody there wants it any more), or taken over by another
@@ -664,6 +725,7 @@ static bool start_entry(ismd_cluster *c, const redisReply *r)
     ckey(c, j->job, "job:", name);
     snprintf(j->name, sizeof j->name, "%s", name);
     snprintf(j->id, sizeof j->id, "%s", id);
+    snprintf(j->user, sizeof j->user, "%s", user);
     ismd_shared_prefetch_surface(c->sh, c->redis, request); /* encode, not polygonise */
     bool ok = false;
     if (ismd_shared_enter(c->sh)) {
@@ -774,14 +836,14 @@ static void take_deletes(ismd_cluster *c)
  * nobody lets go of its jobs any more (ABANDONED_LUA). */
 static void say_alive(ismd_cluster *c)
 {
-    char key[KEY_MAX], ttl[24];
+    char key[KEY_MAX], counts[KEY_MAX], ttl[24], workers[24];
     ckey(c, key, "alive:", c->consumer);
+    ckey(c, counts, "nworkers", "");
     snprintf(ttl, sizeof ttl, "%ld", c->ttl_ms);
-    const char *argv[] = {"SET", key, "1", "PX", ttl};
-    size_t lens[] = {3, strlen(key), 1, 2, strlen(ttl)};
-    redisReply *r = ism_cache_redis_call(c->redis, "cluster_alive", 5, argv, lens);
-    if (r)
-        freeReplyObject(r);
+    snprintf(workers, sizeof workers, "%lld",
+             (long long)atomic_load(&c->sched->metrics->workers_total));
+    const char *args[] = {key, counts, ttl, c->consumer, workers};
+    run_script(c, "cluster_alive", ALIVE_LUA, 2, args, 5, NULL);
 }
 
 static long long take_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)

@@ -18,6 +18,8 @@
  *   P cjobs:<name> set: ids of the jobs (any daemon's) recorded for that computation
  *   P alive:<daemon> present while that daemon lives (renewed like a heartbeat, expires
  *                 one lock lifetime after its last renewal)
+ *   P nworkers    hash daemon -> its worker count (fields of daemons no longer alive are
+ *                 dropped when read)
  *   P want:<name> sorted set: daemons whose requests wait for that computation (its lock is
  *                 another's), each until a lock lifetime after it last said so
  *
@@ -57,7 +59,10 @@
  * entries running cluster-wide, below that user's running limit, ties taken in turn. The entry
  * becomes a local flight (or joins one of the same name here); while it runs, its own task
  * re-claims the entry every heartbeat (resetting its idle time), publishes progress and
- * watches for a cancel; when it ends, the results are flushed to Redis before the job hash
+ * watches for a cancel, and gives the entry back (to the end of its user's stream) when its
+ * user is over the service's fair share while another user waits and nothing else on this
+ * daemon shares the computation (HEARTBEAT_LUA's over_share: sched.c's preemption rule
+ * over the workers of every live daemon, P nworkers); when it ends, the results are flushed to Redis before the job hash
  * says so, and the entry is acknowledged and deleted. Every step is one Lua script, so a
  * crash between two commands never leaves half a change. */
 #ifndef ISMD_CLUSTER_H

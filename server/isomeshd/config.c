@@ -87,7 +87,8 @@ static const flag FLAGS[] = {
     {"cluster", K_BOOL, 0, 0, "",
      "with --redis, one queue for every daemon sharing that Redis: computations wait in "
      "per-user Redis streams and run on whichever daemon has an idle worker (users served in "
-     "turn, --user-jobs and --user-running held cluster-wide); a daemon that dies has its "
+     "turn, --user-jobs and --user-running, and its default half share, held over every "
+     "daemon's workers); a daemon that dies has its "
      "computations re-run elsewhere after --redis-lock-ttl (deploy/README.md)",
      "off", NULL},
     {"redis-lock-ttl", K_DURATION, 0, 0, "TIME",

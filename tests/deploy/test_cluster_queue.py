@@ -5,6 +5,10 @@ with Redis, daemons of one worker each and (for the failure case) nginx:
   together exactly as many as were posted), and the origin reports each one done;
 * a second user's job posted after a first user's backlog starts before most of it (users are
   served in turn cluster-wide: the fewest running first);
+* a user holding every worker of the service (2 daemons, 1 worker each, paused) gives one
+  back across daemons to another user's job posted after, which finishes while the first
+  user's other computation still runs; the given-back one finishes later (before: the
+  second user's job stayed queued);
 * per-user limits count a user's computations on every daemon (--user-jobs: a third one,
   posted to a daemon that holds only one of them, is refused with 429; --user-running: a
   user's second computation waits while a worker is idle, which takes another user's), and
@@ -551,6 +555,36 @@ class ClusterQueueTest(unittest.TestCase):
             self.assertEqual(r.header("ETag").strip('"'), job["key"])
             self.assertEqual(b.get(job["url"]).json()["state"], "canceled")
             print("b ran it at try %d" % (k + 1), file=sys.stderr)
+        finally:
+            self.assertEqual(s.cleanup(), [], "sanitizer reports")
+
+    def test_a_user_over_half_the_services_workers_gives_one_back_to_a_waiting_user(self):
+        # 2 daemons of one worker each: the service's share is 1 worker while another user
+        # waits. u holds both (paused: they never end by themselves); v's job, posted after,
+        # can start only if one of u's is preempted across daemons (before: never here).
+        s = stack.Stack(n=2, daemon_args=HELD, with_nginx=False).start()
+        try:
+            a, b = s.daemons
+            s.pause_workers()
+            mine = [a.post("/v1/jobs", work(1300 + i)).json() for i in range(2)]
+            self.assertTrue(stack.wait_until(lambda: all(
+                a.get(j["url"]).json()["state"] == "running" for j in mine), 60))
+            preempted = sum(d.metric("isomesh_preemptions_total") for d in s.daemons)
+            theirs = harness.http_request(b.port, "POST", "/v1/jobs", work(1310),
+                                          source="127.0.0.2").json()
+            done = wait_job(b, theirs, source="127.0.0.2", timeout=120)
+            self.assertEqual(done["state"], "done")
+            # u keeps the other worker (still paused: its computation is still running)
+            states = sorted(a.get(j["url"]).json()["state"] for j in mine)
+            self.assertIn("running", states)
+            self.assertEqual(sum(d.metric("isomesh_preemptions_total") for d in s.daemons),
+                             preempted + 1)
+            v = computation(s, theirs)
+            self.assertEqual(v[b"state"], b"done")
+            # the given-back computation went back to u's stream and was not lost
+            s.resume_workers()
+            for j in mine:
+                self.assertEqual(wait_job(a, j)["state"], "done")
         finally:
             self.assertEqual(s.cleanup(), [], "sanitizer reports")
 
