@@ -65,6 +65,31 @@ static void addf(line *l, const char *fmt, ...)
         add_raw(l, tmp, (size_t)n < sizeof tmp ? (size_t)n : sizeof tmp - 1);
 }
 
+/* Decimal digits of v (the hot path: one per request's status and size; vsnprintf's format
+ * parsing cost more than the line's copying). */
+static void add_int(line *l, long long v)
+{
+    char tmp[24];
+    char *p = tmp + sizeof tmp;
+    unsigned long long u = v < 0 ? 0ULL - (unsigned long long)v : (unsigned long long)v;
+    do {
+        *--p = (char)('0' + u % 10);
+        u /= 10;
+    } while (u);
+    if (v < 0)
+        *--p = '-';
+    add_raw(l, p, (size_t)(tmp + sizeof tmp - p));
+}
+
+/* v as exactly `width` digits, zero-padded (0 <= v < 10^width). */
+static void add_padded(line *l, long v, int width)
+{
+    char tmp[8];
+    for (int i = width - 1; i >= 0; i--, v /= 10)
+        tmp[i] = (char)('0' + v % 10);
+    add_raw(l, tmp, (size_t)width);
+}
+
 /* JSON string body (without quotes): escapes quotes, backslashes and control bytes. */
 static void add_json_escaped(line *l, const char *s)
 {
@@ -114,8 +139,15 @@ static void add_time(line *l)
     clock_gettime(CLOCK_REALTIME, &ts);
     struct tm tm;
     gmtime_r(&ts.tv_sec, &tm);
-    addf(l, "%04d-%02d-%02dT%02d:%02d:%02d.%03ldZ", tm.tm_year + 1900, tm.tm_mon + 1,
-         tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, ts.tv_nsec / 1000000);
+    /* as "%04d-%02d-%02dT%02d:%02d:%02d.%03ldZ" */
+    const long parts[] = {tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min,
+                          tm.tm_sec, ts.tv_nsec / 1000000};
+    const char seps[] = "--T::.Z";
+    for (int i = 0; i < 7; i++) {
+        add_padded(l, parts[i] < 0 ? 0 : parts[i] % (i == 0 ? 10000 : i == 6 ? 1000 : 100),
+                   i == 0 ? 4 : i == 6 ? 3 : 2);
+        add_raw(l, seps + i, 1);
+    }
 }
 
 static void write_all(const char *p, size_t left)
@@ -253,7 +285,9 @@ void ism_log_fields(ism_log_level level, const char *event, const ism_log_field 
     if (log_format == ISM_LOG_JSON) {
         add(&l, "{\"ts\":\"");
         add_time(&l);
-        addf(&l, "\",\"level\":\"%s\",\"program\":\"", level_name(level));
+        add(&l, "\",\"level\":\"");
+        add(&l, level_name(level));
+        add(&l, "\",\"program\":\"");
         add_json_escaped(&l, log_program);
         add(&l, "\",\"event\":\"");
         add_json_escaped(&l, event);
@@ -272,7 +306,7 @@ void ism_log_fields(ism_log_level level, const char *event, const ism_log_field 
                     add(&l, "null");
                 }
                 break;
-            case ISM_LF_INT: addf(&l, "%lld", fields[i].i); break;
+            case ISM_LF_INT: add_int(&l, fields[i].i); break;
             case ISM_LF_NUM: addf(&l, "%.3f", fields[i].d); break;
             }
         }
@@ -281,14 +315,19 @@ void ism_log_fields(ism_log_level level, const char *event, const ism_log_field 
         add_raw(&l, "}", 1);
     } else {
         add_time(&l);
-        addf(&l, " %s %s: %s", level_name(level), log_program, event);
+        add(&l, " ");
+        add(&l, level_name(level));
+        add(&l, " ");
+        add(&l, log_program);
+        add(&l, ": ");
+        add(&l, event);
         for (size_t i = 0; i < n; i++) {
             add(&l, " ");
             add(&l, fields[i].name);
             add(&l, "=");
             switch (fields[i].kind) {
             case ISM_LF_STR: add_text_value(&l, fields[i].s ? fields[i].s : "-"); break;
-            case ISM_LF_INT: addf(&l, "%lld", fields[i].i); break;
+            case ISM_LF_INT: add_int(&l, fields[i].i); break;
             case ISM_LF_NUM: addf(&l, "%.3f", fields[i].d); break;
             }
         }

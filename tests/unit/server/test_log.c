@@ -3,12 +3,15 @@
  * and a log reader that stops reading never blocks the caller (lines are dropped and
  * counted instead). */
 #include <criterion/criterion.h>
+#include <ctype.h>
+#include <limits.h>
 #include <jansson.h>
 #include <pthread.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "server/common/log.h"
@@ -80,6 +83,38 @@ Test(log, json_lines_parse_and_escape)
     cr_assert_str_eq(json_string_value(json_object_get(o, "level")), "warn");
     cr_assert_str_eq(json_string_value(json_object_get(o, "event")), "request");
     json_decref(o);
+    free(c.text);
+}
+
+/* Integers and the timestamp are written without printf: compared with printf's own "%lld"
+ * and with the UTC time read around the call (strftime). */
+Test(log, integers_and_timestamp_match_printf)
+{
+    ism_log_setup("test", ISM_LOG_TEXT);
+    const long long vals[] = {0, 7, -1, 404, 1234567890123LL, LLONG_MAX, LLONG_MIN};
+    enum { NV = sizeof vals / sizeof vals[0] };
+    capture c;
+    capture_start(&c);
+    time_t before = time(NULL);
+    for (int i = 0; i < NV; i++) {
+        ism_log_field f = ISM_LI("v", vals[i]);
+        ism_log_fields(ISM_LOG_INFO, "n", &f, 1);
+    }
+    time_t after = time(NULL);
+    capture_stop(&c);
+    char *line = c.text;
+    for (int i = 0; i < NV; i++) {
+        char want[48], ts0[32], ts1[32];
+        snprintf(want, sizeof want, " info test: n v=%lld\n", vals[i]);
+        cr_assert(!strncmp(line + 24, want, strlen(want)), "%.80s vs %s", line, want);
+        strftime(ts0, sizeof ts0, "%Y-%m-%dT%H:%M:%S", gmtime(&before));
+        strftime(ts1, sizeof ts1, "%Y-%m-%dT%H:%M:%S", gmtime(&after));
+        cr_assert(strncmp(line, ts0, 19) >= 0 && strncmp(line, ts1, 19) <= 0, "%.24s", line);
+        cr_assert(line[19] == '.' && isdigit((unsigned char)line[20]) &&
+                  isdigit((unsigned char)line[21]) && isdigit((unsigned char)line[22]) &&
+                  line[23] == 'Z', "%.24s", line);
+        line = strchr(line, '\n') + 1;
+    }
     free(c.text);
 }
 
