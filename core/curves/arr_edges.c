@@ -1,18 +1,17 @@
-/* arr_edges.c — the mesh's edges for the arrangement: each triangle's three edges numbered
- * through a key map, how many triangles use each, which lie on a cut curve; and the
- * union-find the faces and components are made with. */
+/* arr_edges.c — the mesh's edges for the arrangement: each triangle's three edges numbered,
+ * how many triangles use each, which lie on a cut curve. An edge is filed under its lower
+ * vertex (a CSR of each vertex's edges to higher vertices, a few each), so numbering walks
+ * the triangles twice and finding an edge scans its lower end's short list: no hash table
+ * (hashing the mesh's 3 T triangle sides, with its rehashes, was about a seventh of the
+ * cut and arrangement's time on the benchmark). */
 #include "core/curves/arr_internal.h"
 #include <stdlib.h>
 #include <string.h>
 
-uint64_t arr_edge_key(uint32_t a, uint32_t b)
-{
-    return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
-}
-
 void arr_mesh_edges_free(arr_mesh_edges *e)
 {
-    ism_key_map_free(&e->map);
+    free(e->lo_start);
+    free(e->hi);
     free(e->tri_edge);
     free(e->ntri);
     free(e->on_curve);
@@ -21,33 +20,93 @@ void arr_mesh_edges_free(arr_mesh_edges *e)
     memset(e, 0, sizeof *e);
 }
 
+uint32_t arr_edge_find(const arr_mesh_edges *e, uint32_t a, uint32_t b)
+{
+    uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
+    for (uint32_t k = e->lo_start[lo]; k < e->lo_start[lo + 1]; k++)
+        if (e->hi[k] == hi)
+            return k;
+    return ARR_NO_EDGE;
+}
+
+/* Sorts list[0..n) (a vertex's higher neighbours: a handful) and drops repeats; returns the
+ * count left. */
+static uint32_t sort_unique(uint32_t *list, uint32_t n)
+{
+    for (uint32_t i = 1; i < n; i++)
+        for (uint32_t j = i; j > 0 && list[j - 1] > list[j]; j--) {
+            uint32_t t = list[j];
+            list[j] = list[j - 1];
+            list[j - 1] = t;
+        }
+    uint32_t k = 0;
+    for (uint32_t i = 0; i < n; i++)
+        if (!k || list[k - 1] != list[i])
+            list[k++] = list[i];
+    return k;
+}
+
+/* The other end of triangle side s (side s runs from corner s to the next corner). */
+static uint32_t side_end(const ism_mesh *m, size_t s)
+{
+    return m->tri[s - s % 3 + (s % 3 + 1) % 3];
+}
+
+/* lo_start and hi: every triangle side filed under its lower vertex, repeats dropped. */
+static bool file_edges(const ism_mesh *m, arr_mesh_edges *e)
+{
+    size_t nv = m->nverts, sides = 3 * m->ntris;
+    uint32_t *start = calloc(nv + 2, sizeof *start);
+    e->lo_start = malloc((nv + 1) * sizeof *e->lo_start);
+    e->hi = malloc((sides + 1) * sizeof *e->hi);
+    if (!start || !e->lo_start || !e->hi) {
+        free(start);
+        return false;
+    }
+    for (size_t s = 0; s < sides; s++) {
+        uint32_t a = m->tri[s], b = side_end(m, s);
+        start[(a < b ? a : b) + 2]++;
+    }
+    for (size_t v = 0; v < nv; v++)
+        start[v + 2] += start[v + 1];
+    for (size_t s = 0; s < sides; s++) { /* then v's sides are start[v] .. start[v + 1] */
+        uint32_t a = m->tri[s], b = side_end(m, s);
+        e->hi[start[(a < b ? a : b) + 1]++] = a < b ? b : a;
+    }
+    uint32_t n = 0;
+    for (size_t v = 0; v < nv; v++) {
+        uint32_t first = start[v], k = sort_unique(e->hi + first, start[v + 1] - first);
+        e->lo_start[v] = n;
+        memmove(e->hi + n, e->hi + first, k * sizeof *e->hi);
+        n += k;
+    }
+    e->lo_start[nv] = n;
+    e->n = n;
+    free(start);
+    return true;
+}
+
 bool arr_mesh_edges_build(const ism_mesh *m, const ism_cut *c, arr_mesh_edges *e)
 {
     memset(e, 0, sizeof *e);
-    ism_key_map_init(&e->map);
-    size_t cap = 3 * m->ntris + 1;
-    e->tri_edge = malloc(cap * sizeof *e->tri_edge);
-    e->ntri = calloc(cap, sizeof *e->ntri);
-    e->on_curve = calloc(cap, 1);
+    if (!file_edges(m, e))
+        goto fail;
+    e->tri_edge = malloc((3 * m->ntris + 1) * sizeof *e->tri_edge);
+    e->ntri = calloc(e->n + 1, sizeof *e->ntri);
+    e->on_curve = calloc(e->n + 1, 1);
     e->v_on_curve = calloc(m->nverts + 1, 1);
     e->v_used = calloc(m->nverts + 1, 1);
     if (!e->tri_edge || !e->ntri || !e->on_curve || !e->v_on_curve || !e->v_used)
         goto fail;
-    for (size_t t = 0; t < m->ntris; t++)
-        for (int i = 0; i < 3; i++) {
-            uint32_t a = m->tri[3 * t + i], b = m->tri[3 * t + (i + 1) % 3];
-            bool added;
-            uint32_t k = ism_key_map_add(&e->map, arr_edge_key(a, b), &added);
-            if (k == ISM_KEY_NONE)
-                goto fail;
-            e->tri_edge[3 * t + i] = k;
-            e->ntri[k]++;
-            e->v_used[a] = 1;
-        }
-    e->n = e->map.n;
+    for (size_t s = 0; s < 3 * m->ntris; s++) {
+        uint32_t k = arr_edge_find(e, m->tri[s], side_end(m, s));
+        e->tri_edge[s] = k;
+        e->ntri[k]++;
+        e->v_used[m->tri[s]] = 1;
+    }
     for (size_t i = 0; i < c->nedges; i++) {
-        uint32_t k = ism_key_map_find(&e->map, arr_edge_key(c->edges[i].a, c->edges[i].b));
-        if (k != ISM_KEY_NONE)
+        uint32_t k = arr_edge_find(e, c->edges[i].a, c->edges[i].b);
+        if (k != ARR_NO_EDGE)
             e->on_curve[k] = 1;
         e->v_on_curve[c->edges[i].a] = e->v_on_curve[c->edges[i].b] = 1;
     }

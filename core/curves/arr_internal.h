@@ -7,11 +7,12 @@
 #include "core/curves/arr_types.h"
 #include "core/curves/cut_types.h"
 #include "core/mesh/mesh.h"
-#include "core/singular/key_map.h"
 #include "core/singular/locus.h"
 
 typedef struct arr_mesh_edges {
-    ism_key_map map;      /* edge key -> edge index */
+    uint32_t *lo_start;   /* per vertex v: its edges to higher vertices are lo_start[v] ..
+                             lo_start[v + 1] (nverts + 1 entries) */
+    uint32_t *hi;         /* per edge: its higher vertex */
     uint32_t *tri_edge;   /* 3 per triangle: its edges (v0v1, v1v2, v2v0) */
     uint32_t *ntri;       /* per edge: triangles using it */
     uint8_t *on_curve;    /* per edge */
@@ -20,7 +21,10 @@ typedef struct arr_mesh_edges {
     size_t n;
 } arr_mesh_edges;
 
-uint64_t arr_edge_key(uint32_t a, uint32_t b);
+#define ARR_NO_EDGE UINT32_MAX
+
+/* The edge a-b of the mesh, or ARR_NO_EDGE (a scan of the lower end's few edges). */
+uint32_t arr_edge_find(const arr_mesh_edges *e, uint32_t a, uint32_t b);
 bool arr_mesh_edges_build(const ism_mesh *m, const ism_cut *c, arr_mesh_edges *e);
 void arr_mesh_edges_free(arr_mesh_edges *e);
 

@@ -47,8 +47,8 @@ static uint32_t point_at(const by_x *s, size_t n, const ism_sing_point *pts, con
 /* Whether a cut edge lies on a mesh edge of three or more triangles. */
 static bool cut_edge_double(const arr_mesh_edges *e, const ism_cut_edge *c)
 {
-    uint32_t k = ism_key_map_find(&e->map, arr_edge_key(c->a, c->b));
-    return k != ISM_KEY_NONE && e->ntri[k] > 2;
+    uint32_t k = arr_edge_find(e, c->a, c->b);
+    return k != ARR_NO_EDGE && e->ntri[k] > 2;
 }
 
 /* v_double[v]: 1 when v ends a mesh edge of three or more triangles; 2 when, moreover, some

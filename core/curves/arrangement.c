@@ -22,10 +22,9 @@ static uint32_t edge_component(const ism_arrangement *a, const arr_mesh_edges *e
                                const uint32_t *ecomp, const uint32_t *vcomp, size_t i)
 {
     const ism_arr_edge *ae = &a->edges[i];
-    uint32_t k = ae->count > 1 ? ism_key_map_find(&e->map, arr_edge_key(a->chain[ae->first],
-                                                                        a->chain[ae->first + 1]))
-                               : ISM_KEY_NONE;
-    return k != ISM_KEY_NONE ? ecomp[k] : vcomp[a->vertices[ae->from].v];
+    uint32_t k = ae->count > 1 ? arr_edge_find(e, a->chain[ae->first], a->chain[ae->first + 1])
+                               : ARR_NO_EDGE;
+    return k != ARR_NO_EDGE ? ecomp[k] : vcomp[a->vertices[ae->from].v];
 }
 
 /* Per component: mesh χ into em, arrangement χ into ea; vcomp maps mesh vertices (a vertex
