@@ -19,8 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "poly_fixture.h"
-#include "core/curves/arrangement.h"
-#include "core/curves/cut.h"
+#include "core/curves/curves.h"
 
 #define NPLANES 16
 #define ON_REL 1e-9      /* the precision for curve points (× diagonal) */
@@ -259,8 +258,7 @@ static void ellipsoid_planes(int which)
     expected(pl, cell, x);
 
     ism_tape *f = pf_compile(&ellipsoid);
-    ism_mesh m;
-    ism_mesh_init(&m);
+    ism_mesh m; /* pf_run initialises it */
     ism_poly_stats st;
     pf_run(f, box, 3, depth, 1, &m, &st);
     cr_assert(ism_mesh_drop_loose(&m));
@@ -278,14 +276,10 @@ static void ellipsoid_planes(int which)
                                   .kind = ISM_CUT_SECTION};
         }
     }
-    ism_cut_eval ev;
-    cr_assert(ism_cut_eval_init(&ev, f, fns, NPLANES));
     ism_cut cut;
-    memset(&cut, 0, sizeof cut);
-    cr_assert(ism_cut_mesh(&ev, 1e-3 * tol, &m, &cut));
-    ism_cut_eval_free(&ev);
     ism_arrangement arr;
-    cr_assert(ism_arrangement_build(&m, &cut, NULL, 0, &arr));
+    ism_error err;
+    cr_assert(ism_curves_cut(f, fns, NPLANES, box, &m, &cut, &arr, &err), "%s", err.message);
     cr_log_info("ellipsoid x %d planes, box %d: %zu triangles; V E F %zu %zu %zu, closed form "
                 "%zu %zu %zu", NPLANES, which, m.ntris, arr.nvertices, arr.nedges, arr.nfaces,
                 x->v, x->e, x->f);
