@@ -4,6 +4,7 @@
 #include "core/octree/octree_build.h"
 #include "core/octree/sampler.h"
 #include "core/octree/cell_cache.h"
+#include "core/octree/node_balls.h"
 #include "core/octree/quiet.h"
 #include "core/octree/thin_search.h"
 #include "core/util/parallel.h"
@@ -144,6 +145,17 @@ static int face_sign(const ism_corners *k, int face)
     return sign;
 }
 
+/* Is nd in a ball round a certified node that asks for smaller nodes (node_balls.h)?
+ * Never at the lattice's last level. */
+static bool near_node(const build *b, const ism_node *nd)
+{
+    if (b->p->nnode_balls == 0 || nd->level >= b->p->thin_depth)
+        return false;
+    double lo[3], hi[3];
+    node_box(b->grid, nd, lo, hi);
+    return ism_node_balls_split(b->p->node_balls, b->p->nnode_balls, lo, hi);
+}
+
 /* A search's verdict, with the counts ism_node.thin keeps (searches, undecided). */
 typedef struct thin_tally {
     int searches, undecided;
@@ -267,8 +279,9 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         return true;
     }
     th->visited++;
-    bool forced = nd.level < b->p->max_depth &&
-                  ism_split_set_has(b->p->force_split, ism_node_key(&nd));
+    bool forced = (nd.level < b->p->max_depth &&
+                   ism_split_set_has(b->p->force_split, ism_node_key(&nd))) ||
+                  near_node(b, &nd);
     const ism_node *pv = pi >= 0 ? &b->previous->nodes[pi] : NULL;
     if (pv && take_over(b, th, v, i, pv, forced))
         return true;

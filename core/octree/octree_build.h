@@ -31,6 +31,9 @@ typedef struct ism_octree_build_params {
     const double (*quiet)[4];         /* balls hidden pieces are not chased into (see
                                          ism_poly_options): NULL for none */
     size_t nquiet;
+    const double (*node_balls)[5];    /* balls round certified nodes split finer (see
+                                         ism_poly_options): NULL for none */
+    size_t nnode_balls;
     int threads;
     size_t max_nodes;                 /* stop with ISM_BUILD_TOO_BIG beyond this */
     const ism_split_set *force_split; /* nodes split whatever the flatness test says (their

@@ -42,6 +42,12 @@ typedef struct ism_poly_options {
      * then goes ISM_THIN_BLIND_DEPTH levels deep only. */
     const double (*quiet)[4];
     size_t nquiet;
+    /* Balls around the certified nodes found from f (node_balls.h: x, y, z, radius, cell;
+     * at most ISM_NODE_BALLS_MAX): a node meeting one is split until it is no larger than
+     * the ball's cell, below max_depth too (down to the lattice's last level), so both
+     * nappes of the cone cross cell edges there. NULL for none. */
+    const double (*node_balls)[5];
+    size_t nnode_balls;
     /* Optional progress report, fraction in [0, 1], from the calling thread or a worker
      * thread (serialised by the polygoniser). */
     void (*progress)(void *ctx, double fraction);

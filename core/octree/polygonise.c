@@ -434,6 +434,8 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
                      .max_error = o->max_error},
         .quiet = o->quiet,
         .nquiet = o->nquiet,
+        .node_balls = o->node_balls,
+        .nnode_balls = o->nnode_balls,
         .threads = threads,
         .max_nodes = o->max_memory / 4 / sizeof(ism_node),
         .force_split = split,

@@ -58,25 +58,6 @@ static double loop_mean_dist(const cf_ctx *c, const cf_loop *l, const double p[3
     return s;
 }
 
-/* Distance from point i to the rest of the locus: other points, and the points of curves
- * that do not end at it. */
-static double locus_clearance(const cf_run *r, size_t i)
-{
-    const double *p = r->l->points[i].p;
-    double best = INFINITY;
-    for (size_t k = 0; k < r->l->npoints; k++)
-        if (k != i)
-            best = fmin(best, ism_sqdist3(p, r->l->points[k].p));
-    for (size_t k = 0; k < r->l->ncurves; k++) {
-        const ism_sing_curve *cu = &r->l->curves[k];
-        if (!cu->closed && (cu->end_point[0] == (int)i || cu->end_point[1] == (int)i))
-            continue;
-        for (size_t j = 0; j < cu->n; j++)
-            best = fmin(best, ism_sqdist3(p, cu->xyz + 3 * j));
-    }
-    return sqrt(best);
-}
-
 bool cf_conform_point(cf_run *r, size_t i)
 {
     cf_ctx *c = &r->c;
@@ -98,7 +79,7 @@ bool cf_conform_point(cf_run *r, size_t i)
     size_t nt0 = c->m->ntris, nv0 = c->m->nverts, nrm;
     uint32_t *rm;
     cf_loops ls;
-    double max_r = RHO_SEPARATION * locus_clearance(r, i);
+    double max_r = RHO_SEPARATION * ism_locus_clearance(r->l, i);
     double seek_r = fmin(max_r, SEEK_CELLS * c->cell);
     for (;;) {
         if (!cf_cut_clean(c, &cut, &b.r, max_r, &ls, &rm, &nrm))

@@ -2,7 +2,9 @@
  * boxes and double sheets) and the names its enums take in JSON and stats. */
 #include "core/singular/locus.h"
 #include "core/util/grow.h"
+#include "core/util/vec3.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -132,4 +134,21 @@ const char *ism_end_type_name(int type)
 {
     static const char *const names[ISM_END_TYPES] = {"box", "pinch", "triple", "point", "lost"};
     return name_of(names, ISM_END_TYPES, type);
+}
+
+double ism_locus_clearance(const ism_locus *l, size_t i)
+{
+    const double *p = l->points[i].p;
+    double best = INFINITY;
+    for (size_t k = 0; k < l->npoints; k++)
+        if (k != i)
+            best = fmin(best, ism_sqdist3(p, l->points[k].p));
+    for (size_t k = 0; k < l->ncurves; k++) {
+        const ism_sing_curve *cu = &l->curves[k];
+        if (!cu->closed && (cu->end_point[0] == (int)i || cu->end_point[1] == (int)i))
+            continue;
+        for (size_t j = 0; j < cu->n; j++)
+            best = fmin(best, ism_sqdist3(p, cu->xyz + 3 * j));
+    }
+    return sqrt(best);
 }

@@ -190,6 +190,11 @@ bool ism_locus_add_sheet(ism_locus *l, const ism_double_sheet *s);
  * (O(sheets)). */
 uint32_t ism_locus_sheet_of(const ism_locus *l, size_t t);
 
+/* Distance from point i to the rest of the locus: the other points, and the points of the
+ * curves that do not end at it (INFINITY when there is nothing else). O(points + curve
+ * points). */
+double ism_locus_clearance(const ism_locus *l, size_t i);
+
 /* Names used in JSON and stats: "node", "isolated", "cusp", "degenerate", "pinch",
  * "triple"; "double", "whisker"; "box", "pinch", "triple", "point", "lost". */
 const char *ism_sing_type_name(int type);

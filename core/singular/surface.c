@@ -5,6 +5,7 @@
 #include "core/singular/covered.h"
 #include "core/singular/find.h"
 #include "core/singular/sheets.h"
+#include "core/octree/node_balls.h"
 #include "core/util/clock.h"
 
 #include <math.h>
@@ -89,6 +90,38 @@ static bool quiet_balls(const ism_locus *l, const ism_locus_options *lo, ball_li
     return true;
 }
 
+/* Around a certified node the octree's nodes are split until they are at most the node's
+ * clearance (the distance to the rest of the locus) / NODE_CELLS across, within
+ * NODE_REACH × the clearance of it. Where the surface between two nodes is a piece smaller
+ * than the depth's cells (kummer-4-nodes: an inner piece spanning its 4 nodes, 0.48
+ * apart), that piece is at most as wide as the nodes are apart; 8 cells across it cross
+ * it with edges at any lattice offset, and the conformance ball (0.45 clearance) then
+ * spans 3.6 cells, past the cells whose polygons the apex confuses. At depths whose cells
+ * are already that fine nothing changes. */
+#define NODE_CELLS 4.0
+/* The ball reaches the neighbouring nodes: a piece joining two nodes is fine all along. */
+#define NODE_REACH 1.0
+
+/* The balls for the certified nodes with a finite clearance (the first ISM_NODE_BALLS_MAX
+ * in the locus's order). */
+static size_t node_balls(const ism_locus *l, double (*out)[ISM_NODE_BALL_FIELDS])
+{
+    size_t n = 0;
+    for (size_t i = 0; i < l->npoints && n < ISM_NODE_BALLS_MAX; i++) {
+        const ism_sing_point *p = &l->points[i];
+        if (p->type != ISM_SING_NODE || !p->certified)
+            continue;
+        double c = ism_locus_clearance(l, i);
+        if (!isfinite(c) || !(c > 0))
+            continue;
+        memcpy(out[n], p->p, 3 * sizeof *p->p);
+        out[n][ISM_NODE_BALL_R] = NODE_REACH * c;
+        out[n][ISM_NODE_BALL_CELL] = c / NODE_CELLS;
+        n++;
+    }
+    return n;
+}
+
 enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options *po,
                                       ism_mesh *mesh, ism_locus *locus, ism_poly_stats *ps,
                                       ism_conform_stats *cs, ism_surface_times *times,
@@ -113,12 +146,20 @@ enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options 
     double none[1][4] = {{0, 0, 0, 0}}; /* the locus is known, and empty */
     pq.quiet = balls.n ? (const double (*)[4])balls.b : (const double (*)[4])none;
     pq.nquiet = balls.n;
+    double(*nodes)[ISM_NODE_BALL_FIELDS] = malloc(ISM_NODE_BALLS_MAX * sizeof *nodes);
+    if (!nodes) {
+        free(balls.b);
+        return ISM_POLY_NO_MEMORY;
+    }
+    pq.nnode_balls = node_balls(locus, nodes);
+    pq.node_balls = (const double (*)[ISM_NODE_BALL_FIELDS])nodes;
     if (locus->incomplete) { /* points may be missing: chase as without a locus (bounded) */
         pq.quiet = NULL;
         pq.nquiet = 0;
     }
     enum ism_poly_status st = ism_polygonise(f, &pq, mesh, ps, err);
     free(balls.b);
+    free(nodes);
     double t2 = ism_now_ms(), c2 = ism_cpu_ms();
     times->polygonise_ms = t2 - t1;
     times->polygonise_cpu_ms = c2 - c1;
