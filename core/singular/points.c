@@ -29,6 +29,13 @@
 #define TYPE_ACROSS_STEPS 4
 /* Uncertified candidates closer than this (× finest cell) to another point are the same. */
 #define MERGE_CELLS 1.0
+/* Two rank-3 projections (Newton converged onto a non-degenerate zero of ∇f) closer than
+ * this (× finest cell) are the same start; farther apart they are different zeros, however
+ * close: at a coarse depth several critical points share a cell (kummer-4-nodes at depth 3
+ * in ±2.2 shifted 0.37 cell, cell 0.55: its 4 nodes 0.47 apart and 0.51 from the critical
+ * points off the surface; MERGE_CELLS skipped 3 of the 4). Rank-2 starts (along a curve of
+ * zeros) stay MERGE_CELLS apart. */
+#define SAME_START_CELLS 1e-6
 /* Rank-3 projections tried as starts inside one extended cluster (a node on or near a
  * curve); beyond this the cluster is left to the curve stage as it is. */
 #define EXTENDED_STARTS_MAX 64
@@ -566,8 +573,9 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
             if (!cusp_probe(x, b->q))
                 continue;
         }
+        double same = (b->rank == 3 ? SAME_START_CELLS : MERGE_CELLS) * x->cell;
         for (size_t s = 0; s < tried && !seen; s++)
-            seen = ism_dist3(starts[s], b->q) <= MERGE_CELLS * x->cell;
+            seen = ism_dist3(starts[s], b->q) <= same;
         if (seen)
             continue;
         memcpy(starts[tried++], b->q, sizeof starts[0]);
