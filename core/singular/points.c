@@ -39,16 +39,16 @@
 /* Rank-3 projections tried as starts inside one extended cluster (a node on or near a
  * curve); beyond this the cluster is left to the curve stage as it is. */
 #define EXTENDED_STARTS_MAX 64
-/* Unprojected rank-3 boxes of one extended cluster searched again below the search cell
- * (unprojected_starts): a bound on the work, far above the few such boxes nodes leave at
- * a coarse depth (kummer-4-nodes, depth 3, box shifted 0.37 cell: 94). */
-#define UNPROJECTED_BOXES_MAX 256
+/* Rank-3 boxes of one extended cluster searched again below the search cell
+ * (below_cell_starts): a bound on the work, far above the few such boxes nodes leave at
+ * a coarse depth (kummer-4-nodes, depth 3, box shifted 0.37 cell: 114). */
+#define BELOW_CELL_BOXES_MAX 256
 /* Levels below the search cell of that local search: cells 1/8 of the search cell, finer
  * than the nodes of one cell lie apart in any case seen (Kummer's 4 nodes, all in one cell
  * 0.75 wide at depth 3, are 0.47 apart). */
-#define UNPROJECTED_DEPTH 3
+#define BELOW_CELL_DEPTH 3
 /* Candidate boxes one local search may keep (all 8³ of them fit). */
-#define UNPROJECTED_SUB_BOXES_MAX 512
+#define BELOW_CELL_SUB_BOXES_MAX 512
 /* Rank-2 projections of one extended cluster probed for a cusp (cusp_probe), at
  * least MERGE_CELLS apart: a curve of zeros gives one probe a cell of its length; beyond
  * this many cells of curve in one cluster no further cusp is looked for there. */
@@ -479,17 +479,19 @@ static bool certified_from(ctx *x, const double start[3], const double lo[3],
            || add_cand(x, &pt, UINT32_MAX, SIZE_MAX);
 }
 
-/* The rank-3 boxes of an extended cluster whose projection failed (Newton from the centre
- * left the cell: kummer-4-nodes at depth 3 in ±3, cell 0.75, projects only onto its 8
- * critical points off the surface, and its 4 nodes' cells stay unprojected): each is searched
- * again as a box of its own, UNPROJECTED_DEPTH levels below the search cell (search.h), and
- * Newton runs from every sub-cell projected or proved to hold one zero of ∇f, within the
- * cluster grown by a cell; only certified points are kept. Only in clusters whose every
- * projection has rank 3 (points, not a curve's or sheet's cells: there it would triple the
- * stage's work on steiner-roman, cross-cap and heart at depth 7 for nothing found). At most
- * UNPROJECTED_BOXES_MAX boxes a cluster; a sub-search cut short (budget, deadline) marks the
- * locus incomplete. */
-static bool unprojected_starts(ctx *x, uint32_t id, const uint32_t *label, const double lo[3],
+/* The rank-3 boxes of an extended cluster not proved to hold one zero of ∇f: each may hold
+ * points its projection did not reach — Newton from the centre left the cell (kummer-4-nodes
+ * at depth 3 in ±3, cell 0.75, projects only onto its 8 critical points off the surface, and
+ * its 4 nodes' cells stay unprojected), or landed on one of several points in the cell (the
+ * same box shifted (0.37, −0.23, 0.41) cell puts 3 nodes in one cell, projected onto one).
+ * Each is searched again as a box of its own, BELOW_CELL_DEPTH levels below the search cell
+ * (search.h), and Newton runs from every sub-cell projected or proved to hold one zero of
+ * ∇f, within the cluster grown by a cell; only certified points are kept. Only in clusters
+ * whose every projection has rank 3 (points, not a curve's or sheet's cells: there it would
+ * triple the stage's work on steiner-roman, cross-cap and heart at depth 7 for nothing
+ * found). At most BELOW_CELL_BOXES_MAX boxes a cluster; a sub-search cut short (budget,
+ * deadline) marks the locus incomplete. */
+static bool below_cell_starts(ctx *x, uint32_t id, const uint32_t *label, const double lo[3],
                                const double hi[3], double half)
 {
     const ism_locus *l = x->out;
@@ -497,16 +499,16 @@ static bool unprojected_starts(ctx *x, uint32_t id, const uint32_t *label, const
         if (label[i] == id && (l->boxes[i].flags & ISM_LBOX_PROJECTED) && l->boxes[i].rank < 3)
             return true; /* a curve's or sheet's cluster: left to those stages as it is */
     size_t boxes = 0;
-    for (size_t i = 0; i < l->nboxes && boxes < UNPROJECTED_BOXES_MAX; i++) {
+    for (size_t i = 0; i < l->nboxes && boxes < BELOW_CELL_BOXES_MAX; i++) {
         const ism_lbox *b = &l->boxes[i];
-        if (label[i] != id || (b->flags & ISM_LBOX_PROJECTED) || b->rank < 3)
+        if (label[i] != id || (b->flags & ISM_LBOX_UNIQUE) || b->rank < 3)
             continue;
         boxes++;
         ism_locus_options so = *x->o;
         memcpy(so.box, b->lo, sizeof so.box[0] * 3);
         memcpy(so.box + 3, b->hi, sizeof so.box[0] * 3);
-        so.max_depth = UNPROJECTED_DEPTH;
-        so.max_boxes = UNPROJECTED_SUB_BOXES_MAX;
+        so.max_depth = BELOW_CELL_DEPTH;
+        so.max_boxes = BELOW_CELL_SUB_BOXES_MAX;
         so.threads = 1;
         ism_locus sub;
         ism_locus_init(&sub);
@@ -582,7 +584,7 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
         if (!certified_from(x, b->q, lo, hi, half))
             return false;
     }
-    return unprojected_starts(x, id, label, lo, hi, half) && !x->pc.oom;
+    return below_cell_starts(x, id, label, lo, hi, half) && !x->pc.oom;
 }
 
 static bool same_point(const ctx *x, const ism_sing_point *a, const ism_sing_point *b)
