@@ -3,6 +3,7 @@
  * parallel chunks (phase 2: face lines, stitching, crack repair, triangles), welds the
  * chunks in order (phase 3), and fills the statistics. */
 #include "core/octree/polygonise.h"
+#include "core/octree/node_balls.h"
 #include "core/octree/tolerances.h"
 #include "core/util/clock.h"
 #include "core/octree/breaks.h"
@@ -94,6 +95,8 @@ bool ism_poly_options_check(const ism_poly_options *o, ism_error *err)
         return ism_error_set(err, "max_triangles: must be at least 1");
     if (!in_range(o->deadline_ms, 0, 1e300))
         return ism_error_set(err, "deadline_ms: must be a finite number >= 0 (0: none)");
+    if (o->nnode_balls > ISM_NODE_BALLS_MAX || (o->nnode_balls && !o->node_balls))
+        return ism_error_set(err, "node_balls: at most %d, and given", ISM_NODE_BALLS_MAX);
     return true;
 }
 
