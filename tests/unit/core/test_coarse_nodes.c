@@ -21,6 +21,7 @@
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include "core/util/vec3.h"
 #include "tests/unit/core/poly_fixture.h"
 #include "tests/unit/core/test_eval_surfaces.h"
 
@@ -115,12 +116,6 @@ static size_t edge_components(const ism_mesh *m)
     return n;
 }
 
-static double dist(const double *a, const double *b)
-{
-    return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
-                (a[2] - b[2]) * (a[2] - b[2]));
-}
-
 /* One run: 4 certified nodes within 1e-9 of the closed form, each one mesh vertex with 2
  * cones, χ 0, two components, closed, no non-manifold edge. */
 static void check_run(const ism_tape *t, const double base[6], int d, int which,
@@ -138,7 +133,7 @@ static void check_run(const ism_tape *t, const double base[6], int d, int which,
         size_t hits = 0;
         for (size_t j = 0; j < l.npoints; j++) {
             const ism_sing_point *p = &l.points[j];
-            if (dist(p->p, want[i]) > 1e-9)
+            if (ism_dist3(p->p, want[i]) > 1e-9)
                 continue;
             hits++;
             cr_expect(p->certified && p->type == ISM_SING_NODE, "±%g d%d %s: node %d is %s%s",
