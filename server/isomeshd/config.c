@@ -110,7 +110,7 @@ static const flag FLAGS[] = {
     {"upload-memory", K_SIZE, 1024, (long long)1 << 40, "BYTES",
      "memory all request bodies being received may hold at once; beyond it a request gets "
      "503",
-     "64M", NULL},
+     "64M", NULL}, /* 256 bodies of the largest --max-body */
     {"conn-timeout", K_DURATION, 0, 0, "TIME",
      "close a connection idle this long (one waiting for its computation never is); at "
      "least 1s",
@@ -135,7 +135,7 @@ static const flag FLAGS[] = {
      "60s", NULL},
     {"http-threads", K_INT, 1, 256, "N",
      "threads serving HTTP connections (at least; two per core are started)",
-     "1", NULL},
+     "1", NULL}, /* at least: http.c starts as many as the connection limit needs */
     {"max-depth", K_INT, 1, 16, "N", "deepest octree a request may ask for",
      "10", NULL},
     {"max-triangles", K_INT, 1, 1000000000LL, "N",
