@@ -125,6 +125,11 @@ static const bad_case bad_cases[] = {
      "$.max_error: expected a number, got a string"},
     {"{\"expr\": \"x\", \"max_error\": null}", 400, "bad_request", "$.max_error",
      "$.max_error: expected a number, got null"},
+    /* simplify: a boolean, true only under max_error */
+    {"{\"expr\": \"x\", \"simplify\": true}", 400, "bad_request", "$.simplify",
+     "$.simplify: the simplification keeps the mesh within \"max_error\": give max_error too"},
+    {"{\"expr\": \"x\", \"max_error\": 0.01, \"simplify\": 1}", 400, "bad_request",
+     "$.simplify", "$.simplify: expected true or false, got an integer"},
     /* quality: "raw" or "good" */
     {"{\"expr\": \"x\", \"quality\": \"best\"}", 400, "bad_request", "$.quality",
      "$.quality: unknown quality \"best\" (raw or good)"},
@@ -310,6 +315,7 @@ Test(request, max_error_decodes_and_sets_the_safety_depth)
     cr_assert(ism_request_decode(bound, strlen(bound), &lim, &req, &err), "%s", err.message);
     cr_expect_eq(req.poly.max_error, 0.002);
     cr_expect_eq(req.poly.max_depth, 9);
+    cr_expect(req.simplify, "a bound asks for the simplification unless it says false");
     ism_request_poly_options(&req, &o);
     cr_expect_eq(o.max_error, 0.002);
     cr_expect_eq(o.max_depth, 9);
@@ -320,9 +326,15 @@ Test(request, max_error_decodes_and_sets_the_safety_depth)
     cr_expect_eq(req.poly.max_depth, 6);
     ism_request_free(&req);
 
+    const char *raw = "{\"preset\": \"torus\", \"max_error\": 0.002, \"simplify\": false}";
+    cr_assert(ism_request_decode(raw, strlen(raw), &lim, &req, &err), "%s", err.message);
+    cr_expect(!req.simplify);
+    ism_request_free(&req);
+
     const char *plain = "{\"preset\": \"torus\"}";
     cr_assert(ism_request_decode(plain, strlen(plain), &lim, &req, &err), "%s", err.message);
     cr_expect_eq(req.poly.max_error, 0);
+    cr_expect(!req.simplify);
     ism_request_poly_options(&req, &o);
     cr_expect_eq(o.max_error, 0);
     ism_request_free(&req);
