@@ -62,7 +62,8 @@ static ism_dual dual_op(const ism_instr *in, const ism_dual *r, ism_trig_cache *
 }
 
 /* out = g(a) with g' = g1: the chain rule, 0 where g1 is 0 (even when ∇a is not finite). */
-static inline void dual_chain(ism_dual *out, double g, double g1, const ism_dual *a)
+static inline __attribute__((always_inline)) void dual_chain(ism_dual *out, double g, double g1,
+                                                             const ism_dual *a)
 {
     double d0 = g1 == 0.0 ? 0.0 : g1 * a->d[0], d1 = g1 == 0.0 ? 0.0 : g1 * a->d[1],
            d2 = g1 == 0.0 ? 0.0 : g1 * a->d[2];
@@ -73,8 +74,10 @@ static inline void dual_chain(ism_dual *out, double g, double g1, const ism_dual
 }
 
 /* One instruction in place: the frequent operations written out (the same arithmetic as
- * dual_op, without building and copying a value per step), the others through dual_op. */
-static inline void dual_step(const ism_instr *in, ism_dual *r, ism_trig_cache *trig)
+ * dual_op, without building and copying a value per step), the others through dual_op.
+ * Inlined into each tape loop (a call per instruction cost as much as the arithmetic). */
+static inline __attribute__((always_inline)) void dual_step(const ism_instr *in, ism_dual *r,
+                                                            ism_trig_cache *trig)
 {
     ism_dual *o = &r[in->out];
     const ism_dual *a = &r[in->a];

@@ -68,16 +68,35 @@ static bool newton_step(ism_sampler *s, double x[3])
     return true;
 }
 
+/* CREASE_NEWTON_STEPS steps from x (false when one fails), ending early where x comes back
+ * to where it was two steps before — a fixed point, or a 2-cycle of rounding: the steps left
+ * would only repeat those two, so the last one's result is known. */
+static bool newton_steps(ism_sampler *s, double x[3])
+{
+    double back[2][3]; /* back[it % 2]: x before step it */
+    for (int it = 0; it < CREASE_NEWTON_STEPS; it++) {
+        memcpy(back[it % 2], x, sizeof back[0]);
+        if (!newton_step(s, x))
+            return false;
+        if (it >= 1 && memcmp(x, back[(it + 1) % 2], sizeof back[0]) == 0) {
+            if ((CREASE_NEWTON_STEPS - it - 1) % 2)
+                memcpy(x, back[it % 2], sizeof back[0]);
+            return true;
+        }
+    }
+    return true;
+}
+
 /* The crease point of edge p-q (branches differ at its ends): Newton on a = b = 0 from
  * where a - b changes sign along the edge, or that linear estimate itself. */
 static void crease_point(ism_sampler *s, const double *p0, const double *q0, ism_fpoint *out)
 {
     const double *p = before(q0, p0) ? q0 : p0, *q = p == p0 ? q0 : p0;
-    double v[2], g[2][3], d[2];
+    double v[2], d[2];
     const double *ends[2] = {p, q};
     for (int e = 0; e < 2; e++) {
-        s->n_gradient++;
-        ism_eval_top_branches(s->tape, s->ws, ends[e][0], ends[e][1], ends[e][2], v, g);
+        s->n_point++;
+        ism_eval_top_values(s->tape, s->ws, ends[e][0], ends[e][1], ends[e][2], v);
         d[e] = v[0] - v[1];
     }
     double t = d[0] / (d[0] - d[1]);
@@ -86,9 +105,7 @@ static void crease_point(ism_sampler *s, const double *p0, const double *q0, ism
     double lin[3], x[3];
     for (int k = 0; k < 3; k++)
         lin[k] = x[k] = p[k] + t * (q[k] - p[k]);
-    bool ok = true;
-    for (int it = 0; it < CREASE_NEWTON_STEPS && ok; it++)
-        ok = newton_step(s, x);
+    bool ok = newton_steps(s, x);
     if (!ok || !(ism_dist3(x, lin) <= CREASE_REACH_EDGES * ism_dist3(p, q))) {
         memcpy(x, lin, sizeof x); /* onto f = 0 along ∇f at least */
         for (int it = 0; it < CREASE_NEWTON_STEPS; it++) {
