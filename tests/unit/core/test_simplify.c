@@ -73,7 +73,8 @@ static double min_angle(const ism_mesh *m)
 }
 
 /* Triangles whose normal points toward the axis or centre (outward is away from it: the
- * polygoniser winds by ∇f); axis_only drops z (the cylinder). */
+ * polygoniser winds by ∇f; a sliver's normal may be rounding noise, so the raw mesh may have
+ * a few, which merges remove, never add); axis_only drops z (the cylinder). */
 static size_t inward(const ism_mesh *m, bool axis_only)
 {
     size_t n = 0;
@@ -225,8 +226,9 @@ static void smooth_case(const char *expr, distance_fn dist, bool axis_only, long
     cr_expect_eq(r.before.euler, euler, "%s: χ = %ld before", what, r.before.euler);
     cr_expect_eq(r.after.components, r.before.components, "%s", what);
     cr_expect_eq(r.after.nonmanifold_edges, 0, "%s", what);
-    cr_expect_eq(inward(m, axis_only), inward(&r.raw, axis_only), "%s: triangles turned over",
-                 what);
+    size_t in_before = inward(&r.raw, axis_only), in_after = inward(m, axis_only);
+    cr_expect_leq(in_after, in_before, "%s: %zu triangles face inward, %zu before", what,
+                  in_after, in_before);
     cr_expect_geq(min_angle(m), fmin(angle_before, SHAPE_FLOOR_DEG) - 1e-9, "%s", what);
     expect_same_features(&r.raw, m, false, what);
     *nb = r.raw.ntris, *na = m->ntris;
