@@ -1,4 +1,5 @@
-/* cell_cache.c — allocation of the per-thread lattice point and segment memos. */
+/* cell_cache.c — allocation of the per-thread lattice point and segment memos, and their
+ * passing from one max_error round to the next. */
 #include "core/octree/cell_cache.h"
 
 #include <stdlib.h>
@@ -12,7 +13,14 @@ bool ism_cell_cache_init(ism_cell_cache *c)
         memset(c->points, 0, bytes);
     c->segments = calloc((size_t)1 << ISM_SEGMENT_CACHE_BITS, sizeof *c->segments);
     c->quiet = calloc((size_t)1 << ISM_QUIET_CACHE_BITS, sizeof *c->quiet);
+    c->round = 1;
     return c->points && c->segments && c->quiet;
+}
+
+void ism_cell_cache_next_round(ism_cell_cache *c)
+{
+    c->round++;
+    memset(c->quiet, 0, ((size_t)1 << ISM_QUIET_CACHE_BITS) * sizeof *c->quiet);
 }
 
 void ism_cell_cache_free(ism_cell_cache *c)

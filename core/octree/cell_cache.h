@@ -29,6 +29,7 @@ typedef struct ism_lattice_entry {
     double f, g[3], gn; /* f, ∇f and |∇f| */
     int32_t next[3]; /* the registry's successors (ism_break_point.next), or next[0] =
                         ISM_LATTICE_UNREGISTERED when the point is no break point */
+    uint32_t round;  /* the max_error round whose registry next[] was read from */
 } ism_lattice_entry;
 
 #define ISM_LATTICE_UNREGISTERED INT32_MIN
@@ -49,10 +50,17 @@ typedef struct ism_cell_cache {
     ism_lattice_entry *points;
     ism_segment_entry *segments;
     ism_quiet_tile *quiet;
+    uint32_t round;  /* the current max_error round (from 1) */
 } ism_cell_cache;
 
 bool ism_cell_cache_init(ism_cell_cache *c);
 void ism_cell_cache_free(ism_cell_cache *c);
+
+/* The memo kept for another max_error round of the same f and lattice: f, ∇f and segment
+ * roots stay (pure), the points' registry successors are read again on their first use
+ * (the leaves, so the break points, changed) and the quiet tiles are forgotten (a tile's
+ * sides may have gained break points). */
+void ism_cell_cache_next_round(ism_cell_cache *c);
 
 /* The entry of lattice point ip in a direct-mapped table of 2^bits point entries. */
 static inline ism_point_entry *ism_point_slot(ism_point_entry *table, int bits,

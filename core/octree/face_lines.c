@@ -91,13 +91,18 @@ static const ism_lattice_entry *lattice_entry(ism_cell_ctx *cx, const int32_t ip
     ism_lattice_entry *e = lattice_slot(cx, ip);
     if (e->key != key) {
         double p[3];
+        ism_breaks_prefetch(cx->breaks, ip);
         ism_grid_point(&cx->tree->grid, (ism_ipt){{ip[0], ip[1], ip[2]}}, p);
         e->key = key;
         e->f = ism_sample_grad(&cx->s, p, e->g);
         e->gn = ism_norm3(e->g);
+        e->round = 0;
+    }
+    if (e->round != cx->cache.round) { /* f and ∇f from an earlier round still hold */
         const ism_break_point *b = ism_breaks_find(cx->breaks, ip);
         for (int a = 0; a < 3; a++)
             e->next[a] = b ? b->next[a] : ISM_LATTICE_UNREGISTERED;
+        e->round = cx->cache.round;
     }
     return e;
 }

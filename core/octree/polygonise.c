@@ -241,7 +241,36 @@ static bool collect_misses(const phase2 *p, const ism_poly_options *o, ism_split
 typedef struct carry {
     ism_octree tree;
     ism_leaf_memo memo;
+    ism_cell_cache *caches; /* each thread's memo (cell_cache.h), or NULL */
+    int ncaches;
 } carry;
+
+/* Thread t's memo for this round: the last round's, or a new one. */
+static bool round_cache(carry *c, int threads, int t, ism_cell_cache *out)
+{
+    if (!c->caches) {
+        if (!(c->caches = calloc((size_t)threads, sizeof *c->caches)))
+            return false;
+        c->ncaches = threads;
+        for (int k = 0; k < threads; k++)
+            if (!ism_cell_cache_init(&c->caches[k]))
+                return false;
+    } else if (t == 0) {
+        for (int k = 0; k < c->ncaches; k++)
+            ism_cell_cache_next_round(&c->caches[k]);
+    }
+    *out = c->caches[t];
+    return true;
+}
+
+static void free_caches(carry *c)
+{
+    for (int k = 0; c->caches && k < c->ncaches; k++)
+        ism_cell_cache_free(&c->caches[k]);
+    free(c->caches);
+    c->caches = NULL;
+    c->ncaches = 0;
+}
 
 /* The leaves of p->tree that emit what they emitted in the last round (c), when there was
  * one. */
@@ -326,7 +355,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         /* corner fans only where no singular locus is known: beside a double curve they
          * changed what the conformance pass rebuilt (Steiner at E = 0.01: χ 5 -> −1) */
         cx->max_error = o->nquiet ? 0 : o->max_error;
-        if (!(cx->s.ws = ism_eval_ws_new(f)) || !ism_cell_cache_init(&cx->cache))
+        if (!(cx->s.ws = ism_eval_ws_new(f)) || !round_cache(c, threads, t, &cx->cache))
             goto done;
     }
     ism_parallel_for(threads, p.nchunks, run_chunk, &p);
@@ -360,9 +389,10 @@ done:
     for (int t = 0; p.ctx && t < threads; t++) {
         if (p.ctx[t].s.ws)
             ism_eval_ws_free(p.ctx[t].s.ws);
-        ism_cell_cache_free(&p.ctx[t].cache);
         ism_cell_ctx_free(&p.ctx[t]);
     }
+    if (!next || !next->n || o->fresh_rounds || status != ISM_POLY_OK)
+        free_caches(c); /* no round follows, or it starts afresh */
     free(p.ctx);
     free(p.leaves);
     free(parent);
@@ -528,6 +558,7 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
     ism_split_set_free(&next);
     ism_octree_free(&prev.tree);
     ism_leaf_memo_free(&prev.memo);
+    free_caches(&prev);
     uint64_t rounds = stats->error_rounds;
     *stats = round;
     stats->error_rounds = rounds;
