@@ -1,20 +1,16 @@
 /* rm_bound.c — distances to f = 0 measured with a Newton step, and the bound checks built on
  * them (rm_bound.h). */
 #include "core/remesh/rm_bound.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
-
-static double dot3(const double *u, const double *v)
-{
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-}
 
 /* f/|∇f| at x into *s1 and, unless |*s1| > limit, where the Newton step from x lands into *s2
  * (0 otherwise). False where ∇f vanishes or f is not finite. */
 static bool two_steps(rm_pass *p, const double x[3], double limit, double *s1, double *s2)
 {
     double g[3], fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
-    double g2 = dot3(g, g), gn = sqrt(g2);
+    double g2 = ism_dot3(g, g), gn = sqrt(g2);
     *s2 = 0;
     if (!isfinite(fv) || !(gn > p->gthresh))
         return false;
@@ -22,7 +18,7 @@ static bool two_steps(rm_pass *p, const double x[3], double limit, double *s1, d
     if (fabs(*s1) > limit)
         return true;
     double s = fv / g2, y[3] = {x[0] - s * g[0], x[1] - s * g[1], x[2] - s * g[2]};
-    double h[3], fy = ism_eval_gradient(p->f, p->ws, y[0], y[1], y[2], h), hn = sqrt(dot3(h, h));
+    double h[3], fy = ism_eval_gradient(p->f, p->ws, y[0], y[1], y[2], h), hn = sqrt(ism_dot3(h, h));
     if (!isfinite(fy) || !(hn > p->gthresh))
         return false;
     *s2 = fy / hn;

@@ -9,6 +9,7 @@
 #include "core/remesh/rm_merge.h"
 #include "core/remesh/sp_place.h"
 #include "core/remesh/sp_trial.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -48,11 +49,6 @@ static int cmp_edge(const void *x, const void *y)
     return e->len < f->len ? -1 : e->len > f->len ? 1 : (e->a > f->a) - (e->a < f->a);
 }
 
-static double dot3(const double *u, const double *v)
-{
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-}
-
 static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * (size_t)v; }
 
 /* The edges with a free end and an active one (each once), shortest first; *n gets how
@@ -87,15 +83,15 @@ static bool shape_ok(const rm_pass *p, const rm_merge *g, uint32_t t, const doub
         q[k] = c[k] == g->v || c[k] == g->w ? x : o[k];
     }
     double n[3], m[3], ln = rm_cross(q[0], q[1], q[2], n), lo = rm_cross(o[0], o[1], o[2], m);
-    if (!(ln > 0) || !(dot3(n, m) > cos(ISM_SP_MAX_TURN_DEG * M_PI / 180) * ln * lo))
+    if (!(ln > 0) || !(ism_dot3(n, m) > cos(ISM_SP_MAX_TURN_DEG * M_PI / 180) * ln * lo))
         return false;
     for (int k = 0; k < 3; k++) {
         uint32_t u = c[k] == g->v ? g->w : c[k];
         const float *s = p->r.m->normal + 3 * (size_t)u;
-        double side[3] = {s[0], s[1], s[2]}, ls = sqrt(dot3(side, side));
-        double sign = dot3(m, side) < 0 ? -1 : 1; /* the side the old triangle faced */
+        double side[3] = {s[0], s[1], s[2]}, ls = sqrt(ism_dot3(side, side));
+        double sign = ism_dot3(m, side) < 0 ? -1 : 1; /* the side the old triangle faced */
         if (!p->r.locked[u] && ls > 0 &&
-            !(sign * dot3(n, side) > cos(ISM_SP_MAX_TILT_DEG * M_PI / 180) * ln * ls))
+            !(sign * ism_dot3(n, side) > cos(ISM_SP_MAX_TILT_DEG * M_PI / 180) * ln * ls))
             return false;
     }
     return rm_min_sine(q[0], q[1], q[2]) >= floor_sine;

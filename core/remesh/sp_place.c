@@ -3,6 +3,7 @@
  * measuring every stencil at the result. */
 #include "core/remesh/sp_place.h"
 #include "core/remesh/rm_bound.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 
@@ -11,11 +12,6 @@
 /* A placement whose linear model stays above this × the caller's limit is not measured: the
  * model is good to second order in the offset (a few per cent at these sizes). */
 #define SP_PLACE_SLACK 1.05
-
-static double dot3(const double *u, const double *v)
-{
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-}
 
 /* Adds a stencil when there is room. */
 static bool add(sp_stencil *s, int *n, const double *a, const double *b)
@@ -124,7 +120,7 @@ bool sp_place(rm_pass *p, const sp_stencil *s, int n, double limit, double x[3],
     if (!(model(&l, delta) <= SP_PLACE_SLACK * limit))
         return false; /* the model already says no: nothing to measure */
     ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
-    double gn = sqrt(dot3(g, g));
+    double gn = sqrt(ism_dot3(g, g));
     if (!(gn > p->gthresh) || !isfinite(gn))
         return false;
     for (int k = 0; k < 3; k++)
