@@ -120,6 +120,42 @@ static double min_angle_cos(const double *a, const double *b, const double *c)
     return worst; /* cos of the smallest angle: larger is worse */
 }
 
+/* Triangle a, b, c's normal against the mean unit gradient at its corners: > 0 when it keeps
+ * the surface's orientation, < 0 when it is turned over, 0 when degenerate. */
+static double tri_agreement(const ism_fpoint *a, const ism_fpoint *b, const ism_fpoint *c)
+{
+    const ism_fpoint *v[3] = {a, b, c};
+    double e1[3], e2[3], nrm[3], g[3] = {0, 0, 0};
+    for (int k = 0; k < 3; k++) {
+        e1[k] = b->p[k] - a->p[k];
+        e2[k] = c->p[k] - a->p[k];
+    }
+    nrm[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    nrm[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    nrm[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    for (int j = 0; j < 3; j++) {
+        double u[3] = {v[j]->g[0], v[j]->g[1], v[j]->g[2]};
+        if (ism_normalise3(u) > 0)
+            for (int k = 0; k < 3; k++)
+                g[k] += u[k];
+    }
+    return ism_dot3(nrm, g);
+}
+
+/* Does the fan of q[0..n) (wound to agree with ∇f) around apex — one of its corners or a
+ * point off it — hold a turned-over triangle? A fan from a corner of a polygon that is not
+ * star-shaped from it (a reflex corner across, as where the polygon runs along a node's
+ * face) folds back: the sphere at E = 2e-3, depth 8, box 0.37 cell off the lattice had 4. */
+static bool fan_folds(const ism_fpoint *q, size_t n, const ism_fpoint *apex)
+{
+    for (size_t i = 0; i < n; i++) {
+        const ism_fpoint *a = &q[i], *b = &q[(i + 1) % n];
+        if (a != apex && b != apex && tri_agreement(apex, a, b) < 0)
+            return true;
+    }
+    return false;
+}
+
 /* Does the fan of out->verts[base .. base + n) around vertex `apex` hold a triangle lying in
  * one of the node's faces (which the node across it may emit as well)? Never without node. */
 static bool fan_in_face(const ism_cell_out *out, size_t base, size_t n, const double *apex,
@@ -134,8 +170,8 @@ static bool fan_in_face(const ism_cell_out *out, size_t base, size_t n, const do
 }
 
 /* The corner whose fan has the largest smallest angle, among the corners whose fan has no
- * triangle lying in a face of the node (any corner if none); *in_face: the chosen fan has
- * one. */
+ * turned-over triangle nor one lying in a face of the node (else the fewest such faults:
+ * a fold before a face triangle); *in_face: the chosen fan has one of them. */
 static size_t best_corner(const ism_cell_out *out, size_t base, size_t n, const double node[6],
                           bool *in_face)
 {
@@ -151,6 +187,8 @@ static size_t best_corner(const ism_cell_out *out, size_t base, size_t n, const 
         }
         if (fan_in_face(out, base, n, q[c].p, node))
             worst += 1; /* only when every corner's fan has one */
+        if (fan_folds(q, n, &q[c]))
+            worst += 2; /* only when every corner's fan folds */
         if (worst < best_cos)
             best_cos = worst, best = c;
     }
@@ -250,7 +288,7 @@ bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, doubl
         return true;
     ism_fpoint c;
     if (!centre_point(s, out->verts + base, n, reach, node, &c) ||
-        fan_in_face(out, base, n, c.p, node))
+        fan_in_face(out, base, n, c.p, node) || fan_folds(out->verts + base, n, &c))
         return fan_from_best_corner(out, base, n, node);
     uint32_t ci;
     if (!ism_cell_out_vert(out, &c, &ci))
@@ -259,32 +297,6 @@ bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, doubl
         if (!ism_cell_out_tri(out, ci, b + (uint32_t)i, b + (uint32_t)((i + 1) % n)))
             return false;
     return true;
-}
-
-/* Would the fan of pts around apex, in the polygon's order, face against ∇f? Each fan
- * triangle's normal against the mean unit gradient at its corners. */
-static bool fan_reversed(const ism_fpoint *pts, size_t n, const ism_fpoint *apex)
-{
-    double sum = 0;
-    for (size_t i = 0; i < n; i++) {
-        const ism_fpoint *v[3] = {apex, &pts[i], &pts[(i + 1) % n]};
-        double e1[3], e2[3], nrm[3], g[3] = {0, 0, 0};
-        for (int k = 0; k < 3; k++) {
-            e1[k] = v[1]->p[k] - v[0]->p[k];
-            e2[k] = v[2]->p[k] - v[0]->p[k];
-        }
-        nrm[0] = e1[1] * e2[2] - e1[2] * e2[1];
-        nrm[1] = e1[2] * e2[0] - e1[0] * e2[2];
-        nrm[2] = e1[0] * e2[1] - e1[1] * e2[0];
-        for (int j = 0; j < 3; j++) {
-            double u[3] = {v[j]->g[0], v[j]->g[1], v[j]->g[2]};
-            if (ism_normalise3(u) > 0)
-                for (int k = 0; k < 3; k++)
-                    g[k] += u[k];
-        }
-        sum += ism_dot3(nrm, g);
-    }
-    return sum < 0;
 }
 
 static bool fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex, bool flip,
@@ -320,5 +332,8 @@ bool ism_triangulate_tent(const ism_fpoint *pts, size_t n, const ism_fpoint *ape
 {
     if (n < 3)
         return true;
-    return fan(pts, n, apex, fan_reversed(pts, n, apex), out);
+    double sum = 0; /* the fan's triangles against ∇f, in the polygon's order */
+    for (size_t i = 0; i < n; i++)
+        sum += tri_agreement(apex, &pts[i], &pts[(i + 1) % n]);
+    return fan(pts, n, apex, sum < 0, out);
 }
