@@ -277,6 +277,8 @@ bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, doubl
         else if (node && (ism_in_one_face(node, q[1].p, q[2].p, q[3].p) ||
                           ism_in_one_face(node, q[1].p, q[3].p, q[0].p)))
             first = true;
+        else if (fan_folds(q, n, &q[first ? 0 : 1]) && !fan_folds(q, n, &q[first ? 1 : 0]))
+            first = !first; /* a quad not convex: the other diagonal keeps the orientation */
         if (first)
             return ism_cell_out_tri(out, b, b + 1, b + 2) && ism_cell_out_tri(out, b, b + 2, b + 3);
         return ism_cell_out_tri(out, b + 1, b + 2, b + 3) && ism_cell_out_tri(out, b + 1, b + 3, b);
