@@ -177,7 +177,7 @@ static size_t best_corner(const ism_cell_out *out, size_t base, size_t n, const 
 {
     const ism_fpoint *q = out->verts + base;
     size_t best = 0;
-    double best_cos = 3;
+    double best_cos = HUGE_VAL; /* cos + 1 (face) + 2 (fold) may pass 3 */
     for (size_t c = 0; c < n; c++) {
         double worst = -1;
         for (size_t i = 1; i + 1 < n; i++) {
