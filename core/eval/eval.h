@@ -57,6 +57,11 @@ bool ism_eval_top_branches(const ism_tape *t, ism_eval_ws *ws, double x, double 
 bool ism_eval_top_values(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
                          double val[2]);
 
+/* When t ends in min/max of two registers (as ism_eval_top_branches asks): 0 or 1, the
+ * branch whose value f takes given their values val (min: the smaller, max: the larger; 0 on
+ * a tie); -1 when t does not end so. */
+int ism_top_active_branch(const ism_tape *t, const double val[2]);
+
 /* f, gradient and Hessian (hess = xx, xy, xz, yy, yz, zz). Returns f. */
 double ism_eval_hessian(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
                         double grad[3], double hess[6]);

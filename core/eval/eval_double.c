@@ -88,6 +88,16 @@ bool ism_eval_top_values(const ism_tape *t, ism_eval_ws *ws, double x, double y,
     return true;
 }
 
+int ism_top_active_branch(const ism_tape *t, const double val[2])
+{
+    if (!t->len)
+        return -1;
+    const ism_instr *top = &t->code[t->len - 1];
+    if ((top->op != ISM_OP_MIN_RR && top->op != ISM_OP_MAX_RR) || top->out != t->result)
+        return -1;
+    return top->op == ISM_OP_MIN_RR ? val[1] < val[0] : val[1] > val[0];
+}
+
 /* Lane kernels: one group of LANES lanes each, restrict parameters so that gcc knows the
  * output aliases no input (gcc honours restrict reliably on parameters, also once inlined). */
 #define KERNEL_RR(NAME, EXPR)                                                          \

@@ -33,14 +33,13 @@ int ism_crease_branch(ism_sampler *s, const double p[3], double g[3])
         s->n_point++;
         if (!ism_eval_top_values(s->tape, s->ws, p[0], p[1], p[2], v))
             return -1;
-        return v[1] > v[0];
+        return ism_top_active_branch(s->tape, v);
     }
     s->n_gradient++;
     if (!ism_eval_top_branches(s->tape, s->ws, p[0], p[1], p[2], v, bg))
         return -1;
-    int b = v[1] > v[0];
-    if (g)
-        memcpy(g, bg[b], sizeof bg[b]);
+    int b = ism_top_active_branch(s->tape, v);
+    memcpy(g, bg[b], sizeof bg[b]);
     return b;
 }
 
@@ -183,7 +182,7 @@ bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
     if (!labels)
         return false;
     memset(labels, LABEL_UNKNOWN, n);
-    labels[out->tris[3 * first_tri] - lo] = v[1] > v[0];
+    labels[out->tris[3 * first_tri] - lo] = (uint8_t)ism_top_active_branch(s->tape, v);
     bool ok = split_labelled(s, out, first_tri, ntris, labels, lo);
     if (labels != stack)
         free(labels);

@@ -1,0 +1,192 @@
+/* test_crease_min_max.c — a CSG crease meshes the same whether f's top is min or max: the
+ * union of two unit balls 0.8 apart written as min(a, b) (inside f < 0) and as max(−a, −b)
+ * (the same zero set, the inside where f > 0) under an error bound, each in the lattice box
+ * and boxes shifted by 1e-3 and 0.37 of a finest cell. Closed forms: every crease vertex lies
+ * on both spheres (|p| = 1, |p − c| = 1) within 1e-9 × the diagonal, and at every crease edge
+ * the normals each side carries meet at the spheres' angle, acos(1 − 0.8²/2) = 47.16°, within
+ * 2°; both meshes are closed spheres (χ 2, one piece), no cell misses the bound, and their
+ * triangle counts agree within EQUIV_TRIS_REL. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "poly_fixture.h"
+#include "core/curves/crease_normals.h"
+#include "core/curves/cut.h"
+#include "core/curves/cut_fn.h"
+#include "core/eval/eval.h"
+#include "core/octree/crease_split.h"
+
+#define SEP 1.1               /* the second ball's centre (SEP, 0, 0) */
+#define RAD 0.25              /* the second ball's radius (the first's is 1) */
+#define MESH_E 2e-3           /* the error bound */
+#define DEPTH 8               /* finest cell 3.4 / 256 = 0.013 */
+#define CREASE_TOL_REL 1e-9   /* crease vertices on both spheres within this × the diagonal */
+#define DIHEDRAL_DEG 2.0      /* carried normals' angle vs the spheres' closed-form angle */
+#define EQUIV_TRIS_REL 0.02   /* min and max forms: triangle counts within 2% */
+
+static const pf_surface as_min = {
+    "min(x^2 + y^2 + z^2 - 1, (x - 1.1)^2 + y^2 + z^2 - 0.0625)", NULL, 0, NULL, 0};
+static const pf_surface as_max = {
+    "max(-(x^2 + y^2 + z^2 - 1), -((x - 1.1)^2 + y^2 + z^2 - 0.0625))", NULL, 0, NULL, 0};
+
+typedef struct crease_run {
+    size_t ntris, crease_edges, missed;
+    long euler;
+    size_t components;
+    double worst_sphere, worst_dihedral, diag;
+} crease_run;
+
+static double angle_deg(const double a[3], const double b[3])
+{
+    double d = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) /
+               sqrt((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) *
+                    (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]));
+    return acos(fmax(-1, fmin(1, d))) * 180 / M_PI;
+}
+
+/* The two triangles holding edge a-b (n: how many, up to 2 recorded). */
+static size_t edge_tris(const ism_mesh *m, uint32_t a, uint32_t b, size_t t2[2])
+{
+    size_t n = 0;
+    for (size_t t = 0; t < m->ntris; t++) {
+        const uint32_t *v = m->tri + 3 * t;
+        bool ha = v[0] == a || v[1] == a || v[2] == a, hb = v[0] == b || v[1] == b || v[2] == b;
+        if (ha && hb && n++ < 2)
+            t2[n - 1] = t;
+    }
+    return n;
+}
+
+static const float *corner_normal(const ism_mesh *m, const float *cn, size_t t, uint32_t v)
+{
+    int i = m->tri[3 * t] == v ? 0 : m->tri[3 * t + 1] == v ? 1 : 2;
+    return cn + 9 * t + 3 * i;
+}
+
+static void mesh_crease(const pf_surface *s, const double box[6], crease_run *r)
+{
+    ism_tape *t = pf_compile(s);
+    ism_poly_options o;
+    ism_poly_options_default(&o);
+    memcpy(o.box, box, sizeof o.box);
+    o.min_depth = 3, o.max_depth = DEPTH, o.max_error = MESH_E;
+    ism_poly_stats st;
+    ism_error err;
+    ism_mesh m;
+    ism_mesh_init(&m);
+    cr_assert_eq(ism_polygonise(t, &o, &m, &st, &err), ISM_POLY_OK, "%s", err.message);
+    cr_assert(ism_mesh_drop_loose(&m));
+    pf_props p;
+    pf_measure(&m, t, &p);
+    memset(r, 0, sizeof *r);
+    r->ntris = m.ntris, r->euler = p.euler, r->components = p.components;
+    r->missed = (size_t)st.error_missed_nodes;
+    r->diag = sqrt(3) * (box[3] - box[0]);
+    ism_cut_fn crease;
+    cr_assert(ism_cut_crease_fn(t, &crease));
+    ism_cut_eval ev;
+    cr_assert(ism_cut_eval_init(&ev, t, &crease, 1));
+    ism_cut cut;
+    memset(&cut, 0, sizeof cut);
+    cr_assert(ism_cut_mesh(&ev, 1e-3 * CREASE_TOL_REL * r->diag, &m, &cut));
+    ism_cut_eval_free(&ev);
+    float *cn = malloc(9 * m.ntris * sizeof *cn);
+    cr_assert(ism_crease_corner_normals(t, &m, &cut, cn));
+    const double cos_spheres = (1 - SEP * SEP + RAD * RAD) / (2 * RAD), want = acos(cos_spheres) * 180 / M_PI;
+    r->crease_edges = cut.nedges;
+    for (size_t i = 0; i < cut.nedges; i++) {
+        uint32_t ends[2] = {cut.edges[i].a, cut.edges[i].b};
+        for (int e = 0; e < 2; e++) {
+            const double *q = m.pos + 3 * (size_t)ends[e];
+            double r0 = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+            double r1 = sqrt((q[0] - SEP) * (q[0] - SEP) + q[1] * q[1] + q[2] * q[2]);
+            r->worst_sphere = fmax(r->worst_sphere, fmax(fabs(r0 - 1), fabs(r1 - RAD)));
+        }
+        size_t t2[2];
+        if (edge_tris(&m, ends[0], ends[1], t2) != 2)
+            continue;
+        for (int e = 0; e < 2; e++) {
+            const float *n0 = corner_normal(&m, cn, t2[0], ends[e]),
+                        *n1 = corner_normal(&m, cn, t2[1], ends[e]);
+            double d0[3] = {n0[0], n0[1], n0[2]}, d1[3] = {n1[0], n1[1], n1[2]};
+            r->worst_dihedral = fmax(r->worst_dihedral, fabs(angle_deg(d0, d1) - want));
+        }
+    }
+    free(cn);
+    ism_cut_free(&cut);
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+}
+
+static void expect_crease(const crease_run *r, const char *form, int w)
+{
+    cr_log_info("%s box %d: %zu triangles, χ %ld, %zu pieces, %zu missed, %zu crease edges, "
+                "sphere %.3g, dihedral %.3g deg", form, w, r->ntris, r->euler, r->components,
+                r->missed, r->crease_edges, r->worst_sphere, r->worst_dihedral);
+    cr_expect_eq(r->euler, 2, "%s box %d: χ %ld", form, w, r->euler);
+    cr_expect_eq(r->components, 1, "%s box %d", form, w);
+    cr_expect_eq(r->missed, 0, "%s box %d: %zu cells missed E", form, w, r->missed);
+    cr_expect_gt(r->crease_edges, 50, "%s box %d", form, w);
+    cr_expect_leq(r->worst_sphere, CREASE_TOL_REL * r->diag, "%s box %d: %g", form, w,
+                  r->worst_sphere);
+    cr_expect_leq(r->worst_dihedral, DIHEDRAL_DEG, "%s box %d: %g deg", form, w,
+                  r->worst_dihedral);
+}
+
+Test(crease_min_max, two_balls_min_and_max_forms_agree)
+{
+    const double base[6] = {-1.3, -1.3, -1.3, 1.7, 1.3, 1.3};
+    for (int w = pf_first_box() - 1; w < 2; w++) {
+        double box[6];
+        pf_sweep_box(base, DEPTH, w, box);
+        crease_run rmin, rmax;
+        mesh_crease(&as_min, box, &rmin);
+        mesh_crease(&as_max, box, &rmax);
+        expect_crease(&rmin, "min", w);
+        expect_crease(&rmax, "max", w);
+        double lo = fmin(rmin.ntris, rmax.ntris), hi = fmax(rmin.ntris, rmax.ntris);
+        cr_expect_leq(hi - lo, EQUIV_TRIS_REL * lo, "box %d: min %zu, max %zu triangles", w,
+                      rmin.ntris, rmax.ntris);
+    }
+}
+
+/* ism_crease_branch names the branch whose value f takes — min's smaller, max's larger — and
+ * hands back that branch's gradient, for both forms, at points on either side of the crease
+ * and across the box (closed forms: a = |p|² − 1, b = |p − c|² − RAD², ∇a = 2p, ∇b = 2(p − c)).
+ * It once named the larger for min too: the dominated branch, whose gradients crease_cell
+ * then compared at the corners the other branch owns. */
+Test(crease_min_max, branch_is_the_one_f_takes)
+{
+    const pf_surface forms[2] = {as_min, as_max};
+    for (int fm = 0; fm < 2; fm++) {
+        ism_tape *t = pf_compile(&forms[fm]);
+        ism_sampler s = {t, ism_eval_ws_new(t), 0, 0, 0};
+        for (int i = 0; i < 9 * 9 * 9; i++) {
+            double p[3] = {-1.3 + 0.37 * (i % 9), -1.3 + 0.31 * (i / 9 % 9),
+                           -1.3 + 0.29 * (i / 81)};
+            double c[2][3] = {{0, 0, 0}, {SEP, 0, 0}}, v[2], g[2][3];
+            for (int b = 0; b < 2; b++) {
+                double sgn = fm == 0 ? 1 : -1; /* the max form's branches are −a, −b */
+                v[b] = -(b ? RAD * RAD : 1);
+                for (int k = 0; k < 3; k++) {
+                    v[b] += (p[k] - c[b][k]) * (p[k] - c[b][k]);
+                    g[b][k] = sgn * 2 * (p[k] - c[b][k]);
+                }
+                v[b] *= sgn;
+            }
+            if (fabs(v[0] - v[1]) < 1e-9)
+                continue; /* a tie: either branch */
+            int want = fm == 0 ? v[1] < v[0] : v[1] > v[0]; /* the tape may swap a, b */
+            double got_g[3];
+            int label = ism_crease_branch(&s, p, got_g);
+            cr_assert_geq(label, 0);
+            cr_assert_eq(ism_crease_branch(&s, p, NULL), label);
+            for (int k = 0; k < 3; k++)
+                cr_assert_float_eq(got_g[k], g[want][k], 1e-12, "%s at (%g, %g, %g)",
+                                   forms[fm].expr, p[0], p[1], p[2]);
+        }
+        ism_eval_ws_free(s.ws);
+        ism_tape_free(t);
+    }
+}
