@@ -352,3 +352,11 @@ void pf_same_mesh(const ism_mesh *a, const ism_mesh *b, const char *what)
     cr_assert(a->nsegs == 0 || memcmp(a->seg, b->seg, 2 * a->nsegs * sizeof *a->seg) == 0,
               "%s: segments", what);
 }
+
+double pf_vec_angle_deg(const double a[3], const double b[3])
+{
+    double d = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) /
+               sqrt((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) *
+                    (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]));
+    return acos(fmax(-1, fmin(1, d))) * 180 / M_PI;
+}

@@ -58,6 +58,9 @@ void pf_measure(const ism_mesh *m, const ism_tape *t, pf_props *p);
 /* The smallest angle of triangle t (degrees). */
 double pf_tri_min_angle(const ism_mesh *m, size_t t);
 
+/* The angle between vectors a and b (degrees, 0..180). */
+double pf_vec_angle_deg(const double a[3], const double b[3]);
+
 /* The unit normal of triangle t from its winding. */
 void pf_tri_normal(const ism_mesh *m, size_t t, double n[3]);
 

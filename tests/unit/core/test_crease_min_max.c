@@ -43,14 +43,6 @@ typedef struct crease_run {
     double worst_sphere, worst_dihedral, diag;
 } crease_run;
 
-static double angle_deg(const double a[3], const double b[3])
-{
-    double d = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) /
-               sqrt((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) *
-                    (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]));
-    return acos(fmax(-1, fmin(1, d))) * 180 / M_PI;
-}
-
 /* The two triangles holding edge a-b (n: how many, up to 2 recorded). */
 static size_t edge_tris(const ism_mesh *m, uint32_t a, uint32_t b, size_t t2[2])
 {
@@ -116,7 +108,7 @@ static void mesh_crease(const pf_surface *s, const double box[6], crease_run *r)
             const float *n0 = corner_normal(&m, cn, t2[0], ends[e]),
                         *n1 = corner_normal(&m, cn, t2[1], ends[e]);
             double d0[3] = {n0[0], n0[1], n0[2]}, d1[3] = {n1[0], n1[1], n1[2]};
-            r->worst_dihedral = fmax(r->worst_dihedral, fabs(angle_deg(d0, d1) - want));
+            r->worst_dihedral = fmax(r->worst_dihedral, fabs(pf_vec_angle_deg(d0, d1) - want));
         }
     }
     free(cn);

@@ -233,14 +233,6 @@ static uint64_t ekey(uint32_t a, uint32_t b)
     return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
 }
 
-static double angle_deg(const double a[3], const double b[3])
-{
-    double d = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) /
-               sqrt((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) *
-                    (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]));
-    return acos(fmax(-1, fmin(1, d))) * 180 / M_PI;
-}
-
 /* The gyroid ball's branches at p: the gyroid G (k = 4) and the ball B = |p|² − 1.96, each
  * with its gradient. */
 static double gyroid_at(ism_tape *gy, ism_eval_ws *ws, const double *p, double g[3])
@@ -274,7 +266,7 @@ static double min_angle(const ism_mesh *m, size_t t)
         const double *r = m->pos + 3 * (size_t)m->tri[3 * t + (i + 2) % 3];
         double u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
         double v[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
-        best = fmin(best, angle_deg(u, v));
+        best = fmin(best, pf_vec_angle_deg(u, v));
     }
     return best;
 }
@@ -282,7 +274,7 @@ static double min_angle(const ism_mesh *m, size_t t)
 static double angle_f(const float *a, const double *b)
 {
     double d[3] = {a[0], a[1], a[2]};
-    return angle_deg(d, b);
+    return pf_vec_angle_deg(d, b);
 }
 
 /* The side (0 gyroid, 1 ball) triangle t lies on, by B − G at its corner off the crease
@@ -334,7 +326,7 @@ static void check_crease_edge(const ism_mesh *m, ism_tape *gy, ism_eval_ws *ws, 
             cs->worst_branch = fmax(cs->worst_branch, angle_f(n1, grad[s1]));
         double d1[3] = {n1[0], n1[1], n1[2]};
         cs->worst_carried = fmax(cs->worst_carried,
-                                 fabs(angle_f(n0, d1) - angle_deg(grad[0], grad[1])));
+                                 fabs(angle_f(n0, d1) - pf_vec_angle_deg(grad[0], grad[1])));
     }
     double f0[3], f1[3], ga[3], gb[3], mid[3];
     pf_tri_normal(m, t0, f0);
@@ -343,7 +335,7 @@ static void check_crease_edge(const ism_mesh *m, ism_tape *gy, ism_eval_ws *ws, 
         mid[k] = 0.5 * (m->pos[3 * (size_t)a + k] + m->pos[3 * (size_t)b + k]);
     gyroid_at(gy, ws, mid, ga);
     ball_at(mid, gb);
-    double d = fabs(angle_deg(f0, f1) - angle_deg(ga, gb));
+    double d = fabs(pf_vec_angle_deg(f0, f1) - pf_vec_angle_deg(ga, gb));
     cs->sum_flat += d;
     cs->worst_flat = fmax(cs->worst_flat, d);
     if (d > DIHEDRAL_DEG) { /* how thin the pair is where the flat normals miss */

@@ -94,14 +94,6 @@ static void nearest_planes(const double *p, int q[2], double d[2])
     }
 }
 
-static double angle_deg(const double a[3], const double b[3])
-{
-    double d = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) /
-               sqrt((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) *
-                    (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]));
-    return acos(fmax(-1, fmin(1, d))) * 180 / M_PI;
-}
-
 static void plane_normal(int q, double out[3])
 {
     for (int k = 0; k < 3; k++)
@@ -146,7 +138,7 @@ static void check_sides(const ism_mesh *m, const ism_cut *cut, const float *cn, 
         pf_tri_normal(m, tris[1], t1);
         plane_normal(q0, p0);
         plane_normal(q1, p1);
-        double d = fabs(angle_deg(t0, t1) - angle_deg(p0, p1));
+        double d = fabs(pf_vec_angle_deg(t0, t1) - pf_vec_angle_deg(p0, p1));
         *worst = fmax(*worst, d);
         for (int s = 0; s < 2; s++) /* per-side corner normals: the side's own plane */
             for (int e = 0; e < 2; e++) {
