@@ -24,10 +24,13 @@
 
 #include "server/common/log.h"
 
-/* Longest sleep without an event. Suspended connections being resumed, shutdowns and quiesce
- * wake a daemon through its own descriptor and connection timeouts through
- * MHD_get_timeout(); the bound only caps how late anything missed would be noticed. */
-#define MAX_WAIT_MS 1000
+/* Longest sleep without an event. Shutdowns wake a thread through the stop descriptor and
+ * connection timeouts through MHD_get_timeout(), but a connection resumed from another
+ * thread (every computed mesh, job event) does NOT wake this poll in external-epoll mode:
+ * at 1000 ms every computed request took 1.0 s. Until resumes write a wake descriptor of
+ * their own, the bound is what a resumed answer may wait: 10 ms (4 threads idle: 400
+ * wake-ups a second, a few µs each). */
+#define MAX_WAIT_MS 10
 
 typedef struct loop {
     struct MHD_Daemon *d;
