@@ -228,6 +228,10 @@ class AuthDaemonTest(unittest.TestCase):
             self.assertEqual(d.metric("isomesh_rejected_total", reason="unauthorized"), 7)
             self.assertEqual(d.metric("isomesh_http_requests_total", route="/v1/mesh",
                                       status="401"), 5)
+            # the log's writer thread gathers lines for 50 ms (server/common/log.c): await it
+            deadline = time.monotonic() + 30
+            while "user=alice" not in d.log() and time.monotonic() < deadline:
+                time.sleep(0.05)
             self.assertIn("user=alice", d.log())
 
     def test_revoked_token_after_sighup_is_401_and_connections_carry_on(self):
