@@ -17,13 +17,6 @@ import re
 import sys
 
 LAYERS = ["core", "proto", "server"]  # each may include only its own and the earlier ones
-# A cycle there before the check, to be taken apart (server/isomeshd: the shared stage and
-# the cluster queue call each other: its tasks live and stop with the stage, enter/leave its
-# lock, and the stage queues computations on it). Listed by its modules; any other cycle, or
-# this one growing, fails.
-KNOWN = {
-    ("server/isomeshd/cluster", "server/isomeshd/shared_cache"),
-}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 COMMENT = re.compile(r"/\*.*?\*/|//[^\n]*", re.S)
 # A function definition at file scope: a line starting in column 0 with a return type, then
@@ -129,9 +122,6 @@ def main():
                 problems.append(f"layer: {a} uses {b} ({LAYERS[lb]} is above {LAYERS[la]})")
     inside = {a: {b for b in bs if os.path.dirname(b) == os.path.dirname(a)} for a, bs in edges.items()}
     for c in cycles(inside):
-        if tuple(c) in KNOWN:
-            print("known cycle (to be taken apart): " + " ".join(c))
-            continue
         problems.append("cycle in " + os.path.dirname(c[0]) + ": " + " ".join(os.path.basename(x) for x in c))
     folders = collections.defaultdict(set)
     for a, bs in edges.items():

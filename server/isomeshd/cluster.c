@@ -2,7 +2,7 @@
  * finish, cancel), the origin's calls, and the executor: a take task that turns stream entries
  * into local flights while workers are idle, and a task per taken entry that heart-beats it
  * and reports its end. Tasks run on the Redis tier's thread and enter the scheduler only
- * through the shared stage (ismd_shared_enter), never holding its lock across a Redis call. */
+ * through their group (ismd_redis_tasks_enter), never holding its lock across a Redis call. */
 #include "server/isomeshd/cluster.h"
 
 #include <hiredis/hiredis.h>
@@ -15,7 +15,7 @@
 #include "server/common/cache_redis.h"
 #include "server/common/log.h"
 #include "server/isomeshd/jobs.h"
-#include "server/isomeshd/shared_cache.h"
+#include "server/isomeshd/surface_prefetch.h"
 
 #define KEY_MAX 512
 #define TAKE_TICK_NS 25000000LL      /* an idle daemon looks for work this often */
@@ -327,9 +327,11 @@ static const char CANCEL_LUA[] =
     "return 1";
 
 struct ismd_cluster {
-    ismd_shared *sh;
+    ismd_redis_tasks *tasks;   /* this queue's tasks, with the shared stage's */
     ismd_sched *sched;
+    ism_cache *cache;
     ism_cache_tier *redis;
+    const ism_pipeline_limits *limits;
     char consumer[128];        /* this daemon in the consumer group */
     long ttl_ms;               /* a silent daemon's entries are re-claimed after this */
     int user_jobs, user_running;
@@ -557,10 +559,10 @@ static void cj_progress(ismd_waiter *w, double fraction, bool running)
 
 static long long cj_end(cjob *j)
 {
-    ismd_shared *sh = j->c->sh;
+    ismd_redis_tasks *g = j->c->tasks;
     ism_blob_unref(j->error);
     free(j);
-    ismd_shared_task_ended(sh);
+    ismd_redis_tasks_ended(g);
     return 0;
 }
 
@@ -617,23 +619,23 @@ static int cj_beat(cjob *j, double progress, bool may_give_back)
  * (its waiter, this task's, is answered 499 and drops the entry). */
 static void cancel_orphan(cjob *j)
 {
-    if (!ismd_shared_enter(j->c->sh))
+    if (!ismd_redis_tasks_enter(j->c->tasks))
         return;
     ismd_flight *f = j->waiter.flight;
     if (f && ismd_sched_only_passive(f))
         ismd_sched_cancel(j->c->sched, f);
-    ismd_shared_leave(j->c->sh);
+    ismd_redis_tasks_leave(j->c->tasks);
 }
 
 static long long cj_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
 {
     cjob *j = (cjob *)base;
-    ismd_shared *sh = j->c->sh;
-    if (stopping || !ismd_shared_enter(sh)) {
+    ismd_redis_tasks *g = j->c->tasks;
+    if (stopping || !ismd_redis_tasks_enter(g)) {
         /* the pool has stopped: the flight is over. Left pending for another daemon. */
         if (j->finished)
             return cj_end(j);
-        ismd_shared_task_ended(sh); /* still a waiter of a flight: leaked, never freed twice */
+        ismd_redis_tasks_ended(g); /* still a waiter of a flight: leaked, never freed twice */
         return 0;
     }
     bool finished = j->finished;
@@ -643,7 +645,7 @@ static long long cj_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
     /* only an entry that nothing else here wants gives its worker back */
     bool alone = !finished && !j->waiter.passive && j->waiter.flight &&
                  j->waiter.flight->nwaiters == 1;
-    ismd_shared_leave(sh);
+    ismd_redis_tasks_leave(g);
     if (finished) {
         cj_report(j, t);
         return cj_end(j);
@@ -669,14 +671,14 @@ static long long cj_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
         ism_log_fields(ISM_LOG_INFO, "cluster_computation_preempted", lf, 2);
         atomic_fetch_add(&j->c->sched->metrics->preemptions, 1);
     }
-    if (!ismd_shared_enter(sh))
+    if (!ismd_redis_tasks_enter(g))
         return now + CJ_TICK_NS;
     /* canceled by its origin (nobody there wants it any more), or taken over by another
      * daemon: stop computing it here unless requests here wait for it too (they keep it, as
      * a local cancel would; so does the origin's own flight when it runs here) */
     if (!j->finished)
         ismd_sched_detach(j->c->sched, &j->waiter);
-    ismd_shared_leave(sh);
+    ismd_redis_tasks_leave(g);
     ism_log_field f[] = {ISM_LS("job", j->name), ISM_LS("entry", j->id)};
     ism_log_fields(ISM_LOG_INFO, "cluster_job_dropped", f, 2);
     return cj_end(j);
@@ -712,7 +714,7 @@ static bool start_entry(ismd_cluster *c, const redisReply *r)
         return false;
     cjob *j = calloc(1, sizeof *j);
     ism_blob *request = ism_blob_from_str(req);
-    if (!j || !request || !ismd_shared_task_added(c->sh)) {
+    if (!j || !request || !ismd_redis_tasks_added(c->tasks)) {
         free(j);
         ism_blob_unref(request);
         return false;
@@ -726,9 +728,9 @@ static bool start_entry(ismd_cluster *c, const redisReply *r)
     snprintf(j->name, sizeof j->name, "%s", name);
     snprintf(j->id, sizeof j->id, "%s", id);
     snprintf(j->user, sizeof j->user, "%s", user);
-    ismd_shared_prefetch_surface(c->sh, c->redis, request); /* encode, not polygonise */
+    ismd_prefetch_surface(c->cache, c->redis, c->limits, request); /* encode, not polygonise */
     bool ok = false;
-    if (ismd_shared_enter(c->sh)) {
+    if (ismd_redis_tasks_enter(c->tasks)) {
         ismd_submit st = ismd_sched_submit_here(c->sched, key, fmt, request, user, NULL,
                                                 &j->waiter);
         ok = st == ISMD_SUBMIT_NEW || st == ISMD_SUBMIT_JOINED;
@@ -737,7 +739,7 @@ static bool start_entry(ismd_cluster *c, const redisReply *r)
         if (ok)
             atomic_fetch_add(r->element[4]->integer ? &c->sched->metrics->cluster_reclaimed
                                                     : &c->sched->metrics->cluster_taken, 1);
-        ismd_shared_leave(c->sh);
+        ismd_redis_tasks_leave(c->tasks);
     }
     ism_blob_unref(request);
     if (!ok) {
@@ -818,11 +820,11 @@ static void take_deletes(ismd_cluster *c)
         return;
     for (size_t i = 0; r->type == REDIS_REPLY_ARRAY && i < r->elements; i++) {
         const char *id = reply_str(r->element[i]);
-        if (!id || !ismd_shared_enter(c->sh))
+        if (!id || !ismd_redis_tasks_enter(c->tasks))
             continue;
         ismd_job *job = ismd_jobs_find(c->jobs, id);
         bool live = job && ismd_jobs_cancel(c->jobs, c->sched, job);
-        ismd_shared_leave(c->sh);
+        ismd_redis_tasks_leave(c->tasks);
         if (!live)
             undelete(c, id);
         ism_log_field f[] = {ISM_LS("job", id),
@@ -849,13 +851,13 @@ static void say_alive(ismd_cluster *c)
 static long long take_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
 {
     ismd_cluster *c = (ismd_cluster *)((char *)base - offsetof(ismd_cluster, take));
-    if (stopping || !ismd_shared_enter(c->sh)) {
-        ismd_shared_task_ended(c->sh);
+    if (stopping || !ismd_redis_tasks_enter(c->tasks)) {
+        ismd_redis_tasks_ended(c->tasks);
         return 0; /* c is freed with the stage */
     }
     long long idle = idle_capacity(c->sched);
     bool draining = c->sched->draining;
-    ismd_shared_leave(c->sh);
+    ismd_redis_tasks_leave(c->tasks);
     for (long long i = 0; !draining && ism_cache_redis_up(t) && i < idle && i < TAKE_MAX_PER_TICK;
          i++)
         if (take_one(c) <= 0)
@@ -876,28 +878,33 @@ static long long take_run(ism_redis_task *base, ism_cache_tier *t, bool stopping
     return now + TAKE_TICK_NS;
 }
 
-ismd_cluster *ismd_cluster_start(ismd_shared *sh, ismd_sched *sched, ismd_jobs *jobs,
-                                 ism_cache_tier *redis, const char *instance, long ttl_ms,
-                                 int user_jobs, int user_running)
+ismd_cluster *ismd_cluster_start(const ismd_cluster_env *env, const ismd_cluster_settings *set)
 {
     ismd_cluster *c = calloc(1, sizeof *c);
     if (!c)
         return NULL;
-    c->sh = sh;
-    c->sched = sched;
-    c->jobs = jobs;
-    c->redis = redis;
-    snprintf(c->consumer, sizeof c->consumer, "%s", instance);
-    c->ttl_ms = ttl_ms;
-    c->user_jobs = user_jobs > 0 ? user_jobs : 1;
-    c->user_running = user_running;
+    c->tasks = env->tasks;
+    c->sched = env->sched;
+    c->cache = env->cache;
+    c->redis = env->redis;
+    c->limits = env->limits;
+    c->jobs = set->jobs;
+    snprintf(c->consumer, sizeof c->consumer, "%s", env->instance);
+    c->ttl_ms = env->ttl_ms;
+    c->user_jobs = set->user_jobs > 0 ? set->user_jobs : 1;
+    c->user_running = set->user_running;
     c->take.run = take_run;
-    if (!ismd_shared_task_added(sh)) {
+    if (!ismd_redis_tasks_added(c->tasks)) {
         free(c);
         return NULL;
     }
-    ism_cache_redis_schedule(redis, &c->take, 0);
+    ism_cache_redis_schedule(c->redis, &c->take, 0);
     return c;
+}
+
+void ismd_cluster_free(ismd_cluster *c)
+{
+    free(c);
 }
 
 /* ---- jobs seen through any daemon ---------------------------------------------------- */
@@ -915,9 +922,9 @@ typedef struct jobtask {
 
 static long long jobtask_end(jobtask *j)
 {
-    ismd_shared *sh = j->c->sh;
+    ismd_redis_tasks *g = j->c->tasks;
     free(j);
-    ismd_shared_task_ended(sh);
+    ismd_redis_tasks_ended(g);
     return 0;
 }
 
@@ -1051,9 +1058,9 @@ static long long jobtask_run(ism_redis_task *base, ism_cache_tier *t, bool stopp
     ism_blob *json = NULL;
     ismd_result r = {.status = lookup(j, &json), .content_type = "application/json"};
     r.body = json;
-    if (ismd_shared_enter(j->c->sh)) {
+    if (ismd_redis_tasks_enter(j->c->tasks)) {
         j->w->done(j->w, &r);
-        ismd_shared_leave(j->c->sh);
+        ismd_redis_tasks_leave(j->c->tasks);
     }
     ism_blob_unref(json);
     return jobtask_end(j);
@@ -1064,7 +1071,7 @@ static jobtask *jobtask_new(ismd_cluster *c, const char *id)
     jobtask *j = calloc(1, sizeof *j);
     if (!j)
         return NULL;
-    if (!ismd_shared_task_added(c->sh)) {
+    if (!ismd_redis_tasks_added(c->tasks)) {
         free(j);
         return NULL;
     }

@@ -72,14 +72,35 @@
 
 #include "server/common/blob.h"
 #include "server/common/cache.h"
+#include "server/common/pipeline.h"
 #include "server/isomeshd/jobs.h"
+#include "server/isomeshd/redis_tasks.h"
 #include "server/isomeshd/sched.h"
 
 #define ISMD_CLUSTER_ID_MAX ISMD_ENTRY_ID_MAX   /* a stream entry id, NUL included */
 #define ISMD_CLUSTER_KEY_MAX 512                /* a key in Redis (a user's stream) */
 
 typedef struct ismd_cluster ismd_cluster;
-typedef struct ismd_shared ismd_shared;
+
+/* --cluster: the default per-user limits, held over the whole service, and the daemon's job
+ * table (its jobs may be deleted through other daemons). */
+typedef struct ismd_cluster_settings {
+    int user_jobs, user_running;
+    ismd_jobs *jobs;
+} ismd_cluster_settings;
+
+/* What the executor runs in: its tasks' group (they live and stop with the shared stage,
+ * shared_cache.h, and enter the scheduler through it), the daemon's scheduler and cache, the
+ * Redis tier, the request limits, this daemon's name (its consumer) and the lock lifetime. */
+typedef struct ismd_cluster_env {
+    ismd_redis_tasks *tasks;
+    ismd_sched *sched;
+    ism_cache *cache;
+    ism_cache_tier *redis;
+    const ism_pipeline_limits *limits;
+    const char *instance;
+    long ttl_ms;
+} ismd_cluster_env;
 
 typedef enum ismd_cj_state {
     ISMD_CJ_MISSING, ISMD_CJ_QUEUED, ISMD_CJ_RUNNING, ISMD_CJ_DONE, ISMD_CJ_FAILED,
@@ -94,12 +115,11 @@ typedef struct ismd_cj_view {
     ism_blob *error;          /* FAILED: the error JSON (the caller unrefs it) */
 } ismd_cj_view;
 
-/* Starts the executor of sh's daemon (its tasks live and stop with sh). jobs is the daemon's
- * job table (deletes through other daemons reach it). user_jobs and user_running are the
- * default per-user limits. NULL when out of memory. */
-ismd_cluster *ismd_cluster_start(ismd_shared *sh, ismd_sched *sched, ismd_jobs *jobs,
-                                 ism_cache_tier *redis, const char *instance, long ttl_ms,
-                                 int user_jobs, int user_running);
+/* Starts the executor of env's daemon (its tasks live and stop with env->tasks). NULL when
+ * out of memory or stopping. */
+ismd_cluster *ismd_cluster_start(const ismd_cluster_env *env, const ismd_cluster_settings *set);
+/* Frees c (NULL: nothing) once its tasks have all ended (env->tasks' release). */
+void ismd_cluster_free(ismd_cluster *c);
 
 /* ---- the origin's calls, Redis thread only ------------------------------------------- */
 

@@ -5,19 +5,19 @@
  * never holds that lock across a Redis call. */
 #include "server/isomeshd/shared_cache.h"
 
-#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/random.h>
 #include <unistd.h>
 
-#include "proto/computed.h"
 #include "server/common/cache_redis.h"
 #include "proto/request.h"
 #include "server/common/log.h"
 #include "server/isomeshd/cluster.h"
 #include "server/isomeshd/errors.h"
+#include "server/isomeshd/redis_tasks.h"
+#include "server/isomeshd/surface_prefetch.h"
 #include "server/isomeshd/worker_pool.h"
 
 #define POLL_MIN_NS 10000000LL        /* first look after finding the lock taken */
@@ -38,10 +38,7 @@ struct ismd_shared {
     long ttl_ms;
     char instance[128];           /* host/pid/random: this daemon in lock tokens */
     ismd_cluster *cluster;        /* --cluster: computations go to the cluster queue */
-    pthread_mutex_t lock;         /* guards the fields below */
-    pthread_cond_t changed;
-    int ntasks, inside;           /* tasks alive; tasks using the scheduler now */
-    bool stopping, detached;      /* no more scheduler use; owner gone (last task frees) */
+    ismd_redis_tasks *tasks;      /* the stage's tasks and the cluster queue's */
 };
 
 typedef struct task {
@@ -61,29 +58,6 @@ typedef struct task {
     long long want_at_ns;               /* when to say it again */
 } task;
 
-/* ---- the scheduler, entered only while not stopping ---------------------------------- */
-
-bool ismd_shared_enter(ismd_shared *sh)
-{
-    pthread_mutex_lock(&sh->lock);
-    bool ok = !sh->stopping;
-    if (ok)
-        sh->inside++;
-    pthread_mutex_unlock(&sh->lock);
-    if (ok)
-        ismd_sched_lock(sh->sched);
-    return ok;
-}
-
-void ismd_shared_leave(ismd_shared *sh)
-{
-    ismd_sched_unlock(sh->sched);
-    pthread_mutex_lock(&sh->lock);
-    sh->inside--;
-    pthread_cond_broadcast(&sh->changed);
-    pthread_mutex_unlock(&sh->lock);
-}
-
 /* The task's flight if it still exists (lock held); shared_only: still in this stage. */
 static ismd_flight *my_flight(task *k, bool shared_only)
 {
@@ -95,11 +69,11 @@ static ismd_flight *my_flight(task *k, bool shared_only)
 
 /* ---- ending a task ------------------------------------------------------------------- */
 
-static void free_shared(ismd_shared *sh)
+/* The group's release (redis_tasks.h): the stage and its cluster queue go together. */
+static void free_shared(void *owner)
 {
-    free(sh->cluster);
-    pthread_mutex_destroy(&sh->lock);
-    pthread_cond_destroy(&sh->changed);
+    ismd_shared *sh = owner;
+    ismd_cluster_free(sh->cluster);
     free(sh);
 }
 
@@ -119,7 +93,7 @@ static long long task_end(task *k, ism_cache_tier *t)
     if (k->state != T_HOLD && k->state != T_REMOTE)
         atomic_fetch_sub(&sh->counters->asking, 1);
     free(k);
-    ismd_shared_task_ended(sh);
+    ismd_redis_tasks_ended(sh->tasks);
     return 0;
 }
 
@@ -128,32 +102,12 @@ ismd_cluster *ismd_shared_cluster(ismd_shared *sh)
     return sh ? sh->cluster : NULL;
 }
 
-bool ismd_shared_task_added(ismd_shared *sh)
-{
-    pthread_mutex_lock(&sh->lock);
-    bool ok = !sh->stopping;
-    if (ok)
-        sh->ntasks++;
-    pthread_mutex_unlock(&sh->lock);
-    return ok;
-}
-
-void ismd_shared_task_ended(ismd_shared *sh)
-{
-    pthread_mutex_lock(&sh->lock);
-    bool last = --sh->ntasks == 0 && sh->detached;
-    pthread_cond_broadcast(&sh->changed);
-    pthread_mutex_unlock(&sh->lock);
-    if (last)
-        free_shared(sh);
-}
-
 /* ---- answers ------------------------------------------------------------------------- */
 
 static void answer(task *k, const ismd_result *r)
 {
     ismd_shared *sh = k->sh;
-    if (!ismd_shared_enter(sh))
+    if (!ismd_redis_tasks_enter(sh->tasks))
         return;
     ismd_flight *f = my_flight(k, true);
     if (f) {
@@ -161,7 +115,7 @@ static void answer(task *k, const ismd_result *r)
         copy.queue_ms = (ism_now_ns() - f->submitted_ns) / 1e6;
         ismd_sched_answer(sh->sched, f, &copy);
     }
-    ismd_shared_leave(sh);
+    ismd_redis_tasks_leave(sh->tasks);
 }
 
 static void answer_error(task *k, unsigned status, const char *code, const char *message)
@@ -177,11 +131,11 @@ static void answer_error(task *k, unsigned status, const char *code, const char 
 static bool to_queue(task *k)
 {
     ismd_shared *sh = k->sh;
-    if (!ismd_shared_enter(sh))
+    if (!ismd_redis_tasks_enter(sh->tasks))
         return false;
     ismd_flight *f = my_flight(k, true);
     bool queued = f && ismd_sched_enqueue(sh->sched, f);
-    ismd_shared_leave(sh);
+    ismd_redis_tasks_leave(sh->tasks);
     return queued;
 }
 
@@ -218,12 +172,12 @@ static long long wait_more(task *k, long long now)
 /* Whether the flight still waits here; *need_request when it has no canonical request. */
 static bool still_wanted(task *k, bool *need_request)
 {
-    if (!ismd_shared_enter(k->sh))
+    if (!ismd_redis_tasks_enter(k->sh->tasks))
         return false;
     ismd_flight *f = my_flight(k, true);
     if (f)
         *need_request = f->request == NULL;
-    ismd_shared_leave(k->sh);
+    ismd_redis_tasks_leave(k->sh->tasks);
     return f != NULL;
 }
 
@@ -240,12 +194,12 @@ static bool request_gives_key(ismd_shared *sh, const ism_blob *req, const task *
 
 static void attach_request(task *k, ism_blob *req)
 {
-    if (!ismd_shared_enter(k->sh))
+    if (!ismd_redis_tasks_enter(k->sh->tasks))
         return;
     ismd_flight *f = my_flight(k, true);
     if (f && !f->request)
         f->request = ism_blob_ref(req);
-    ismd_shared_leave(k->sh);
+    ismd_redis_tasks_leave(k->sh->tasks);
 }
 
 static void unref_all(ism_blob **b, size_t n)
@@ -301,33 +255,14 @@ static bool answer_stored(task *k, ism_cache_tier *t, stored *st, size_t n)
 
 static long long to_cluster(task *k, ism_cache_tier *t, long long now);
 
-void ismd_shared_prefetch_surface(ismd_shared *sh, ism_cache_tier *t, const ism_blob *request)
-{
-    if (!request)
-        return;
-    ism_pipeline_result pr;
-    char name[ISM_CACHE_NAME_MAX];
-    bool keyed = ism_pipeline_key((const char *)request->data, request->len, NULL, sh->limits,
-                                  &pr) &&
-                 ism_cache_name(name, pr.surface_key, ISM_COMPUTED_EXT);
-    ism_pipeline_result_free(&pr);
-    if (!keyed || ism_cache_has(sh->cache, name))
-        return;
-    const char *argv[1] = {name};
-    ism_blob *got = NULL;
-    if (ism_cache_redis_fetch(t, argv, 1, &got) == 0 && got)
-        ism_cache_put_local(sh->cache, name, got);
-    ism_blob_unref(got);
-}
-
 /* The request of the task's flight (a new reference), or NULL. */
 static ism_blob *flight_request(task *k)
 {
-    if (!ismd_shared_enter(k->sh))
+    if (!ismd_redis_tasks_enter(k->sh->tasks))
         return NULL;
     ismd_flight *f = my_flight(k, true);
     ism_blob *req = f ? ism_blob_ref(f->request) : NULL;
-    ismd_shared_leave(k->sh);
+    ismd_redis_tasks_leave(k->sh->tasks);
     return req;
 }
 
@@ -399,7 +334,7 @@ static long long look(task *k, ism_cache_tier *t, long long now)
     if (sh->cluster)
         return to_cluster(k, t, now);
     ism_blob *req = flight_request(k); /* computed here: from the stored surface if any */
-    ismd_shared_prefetch_surface(sh, t, req);
+    ismd_prefetch_surface(sh->cache, t, sh->limits, req);
     ism_blob_unref(req);
     if (!to_queue(k))
         return task_end(k, t); /* gone meanwhile, or refused by the queue: release the lock */
@@ -426,10 +361,10 @@ static void renew_lock(task *k, ism_cache_tier *t, long long now)
 static long long hold(task *k, ism_cache_tier *t, long long now)
 {
     ismd_shared *sh = k->sh;
-    if (!ismd_shared_enter(sh))
+    if (!ismd_redis_tasks_enter(sh->tasks))
         return task_end(k, t);
     bool running = my_flight(k, false) != NULL;
-    ismd_shared_leave(sh);
+    ismd_redis_tasks_leave(sh->tasks);
     if (!running)
         return task_end(k, t);
     renew_lock(k, t, now);
@@ -442,14 +377,14 @@ static long long hold(task *k, ism_cache_tier *t, long long now)
 static long long to_cluster(task *k, ism_cache_tier *t, long long now)
 {
     ismd_shared *sh = k->sh;
-    if (!ismd_shared_enter(sh))
+    if (!ismd_redis_tasks_enter(sh->tasks))
         return task_end(k, t);
     ismd_flight *f = my_flight(k, true);
     ism_blob *req = f ? ism_blob_ref(f->request) : NULL;
     ismd_user_limits lim = f ? f->lim : (ismd_user_limits){0};
     if (f)
         snprintf(k->user, sizeof k->user, "%s", f->user);
-    ismd_shared_leave(sh);
+    ismd_redis_tasks_leave(sh->tasks);
     if (!req)
         return task_end(k, t);
     int rc = ismd_cluster_enqueue(sh->cluster, k->name, k->key, k->fmt, k->user, &lim, req,
@@ -466,11 +401,11 @@ static long long to_cluster(task *k, ism_cache_tier *t, long long now)
         return task_end(k, t);
     }
     atomic_fetch_add(&sh->sched->metrics->cluster_submitted, 1);
-    if (ismd_shared_enter(sh)) { /* an executor here that takes the entry joins the flight */
+    if (ismd_redis_tasks_enter(sh->tasks)) { /* an executor here that takes the entry joins the flight */
         ismd_flight *g = my_flight(k, true);
         if (g)
             snprintf(g->cluster_entry, sizeof g->cluster_entry, "%s", k->entry);
-        ismd_shared_leave(sh);
+        ismd_redis_tasks_leave(sh->tasks);
     }
     k->state = T_REMOTE;
     return now + REMOTE_POLL_NS;
@@ -479,7 +414,7 @@ static long long to_cluster(task *k, ism_cache_tier *t, long long now)
 /* Running on another daemon: tell the waiters (progress events, the job's state). */
 static void running_elsewhere(task *k, double progress)
 {
-    if (!ismd_shared_enter(k->sh))
+    if (!ismd_redis_tasks_enter(k->sh->tasks))
         return;
     ismd_flight *f = my_flight(k, true);
     if (f && (!f->elsewhere || f->progress != progress)) {
@@ -492,7 +427,7 @@ static void running_elsewhere(task *k, double progress)
         }
         ismd_sched_progress(k->sh->sched, f, progress);
     }
-    ismd_shared_leave(k->sh);
+    ismd_redis_tasks_leave(k->sh->tasks);
 }
 
 /* Computed elsewhere: answered from Redis, or (the results did not fit there) computed here. */
@@ -525,11 +460,11 @@ static long long remote_failed(task *k, ism_cache_tier *t, ismd_cj_view *v)
 static long long remote(task *k, ism_cache_tier *t, long long now)
 {
     ismd_shared *sh = k->sh;
-    if (!ismd_shared_enter(sh))
+    if (!ismd_redis_tasks_enter(sh->tasks))
         return task_end(k, t);
     ismd_flight *f = my_flight(k, false);
     bool here = f && !f->shared;
-    ismd_shared_leave(sh);
+    ismd_redis_tasks_leave(sh->tasks);
     if (!f)
         return task_end(k, t); /* nobody waits any more (or past its deadline): cancel */
     if (here) {                /* this daemon's executor took it */
@@ -563,10 +498,7 @@ static long long remote(task *k, ism_cache_tier *t, long long now)
 static long long task_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
 {
     task *k = (task *)base;
-    pthread_mutex_lock(&k->sh->lock);
-    bool stop = stopping || k->sh->stopping;
-    pthread_mutex_unlock(&k->sh->lock);
-    if (stop)
+    if (stopping || ismd_redis_tasks_stopping(k->sh->tasks))
         return task_end(k, t);
     long long now = ism_now_ns();
     return k->state == T_HOLD     ? hold(k, t, now)
@@ -591,7 +523,7 @@ static bool begin(void *ctx, ismd_flight *f)
     snprintf(k->key, sizeof k->key, "%s", f->key);
     snprintf(k->fmt, sizeof k->fmt, "%s", f->fmt);
     snprintf(k->token, sizeof k->token, "%s/%llu", sh->instance, (unsigned long long)f->id);
-    if (!ismd_shared_task_added(sh)) {
+    if (!ismd_redis_tasks_added(sh->tasks)) {
         free(k);
         return false;
     }
@@ -605,8 +537,10 @@ ismd_shared *ismd_shared_start(ismd_sched *sched, ism_cache *cache, ism_cache_ti
                                const ismd_cluster_settings *cluster)
 {
     ismd_shared *sh = calloc(1, sizeof *sh);
-    if (!sh)
+    if (!sh || !(sh->tasks = ismd_redis_tasks_new(sched, free_shared, sh))) {
+        free(sh);
         return NULL;
+    }
     sh->sched = sched;
     sh->cache = cache;
     sh->redis = redis;
@@ -620,14 +554,12 @@ ismd_shared *ismd_shared_start(ismd_sched *sched, ism_cache *cache, ism_cache_ti
     if (getrandom(&nonce, sizeof nonce, 0) != (ssize_t)sizeof nonce)
         nonce = (unsigned long long)ism_now_ns();
     snprintf(sh->instance, sizeof sh->instance, "%s/%ld/%016llx", host, (long)getpid(), nonce);
-    pthread_mutex_init(&sh->lock, NULL);
-    pthread_cond_init(&sh->changed, NULL);
-    if (cluster && !(sh->cluster = ismd_cluster_start(sh, sched, cluster->jobs, redis,
-                                                      sh->instance, sh->ttl_ms,
-                                                      cluster->user_jobs,
-                                                      cluster->user_running))) {
-        free_shared(sh);
-        return NULL;
+    if (cluster) {
+        ismd_cluster_env env = {sh->tasks, sched, cache, redis, limits, sh->instance, sh->ttl_ms};
+        if (!(sh->cluster = ismd_cluster_start(&env, cluster))) {
+            ismd_redis_tasks_stop(sh->tasks, 0); /* no task yet: frees sh */
+            return NULL;
+        }
     }
     ismd_sched_lock(sched);
     sched->shared_begin = begin;
@@ -642,24 +574,5 @@ void ismd_shared_stop(ismd_shared *sh)
     sh->sched->shared_begin = NULL;
     sh->sched->shared_ctx = NULL;
     ismd_sched_unlock(sh->sched);
-    pthread_mutex_lock(&sh->lock);
-    sh->stopping = true;
-    while (sh->inside > 0) /* short: nobody waits on the network inside */
-        pthread_cond_wait(&sh->changed, &sh->lock);
-    long long until = ism_now_ns() + STOP_WAIT_NS;
-    while (sh->ntasks > 0 && ism_now_ns() < until) {
-        struct timespec ts;
-        clock_gettime(CLOCK_REALTIME, &ts);
-        ts.tv_nsec += 20000000;
-        if (ts.tv_nsec >= 1000000000) {
-            ts.tv_sec++;
-            ts.tv_nsec -= 1000000000;
-        }
-        pthread_cond_timedwait(&sh->changed, &sh->lock, &ts);
-    }
-    bool free_now = sh->ntasks == 0;
-    sh->detached = true; /* otherwise the last task frees it (when the tier closes) */
-    pthread_mutex_unlock(&sh->lock);
-    if (free_now)
-        free_shared(sh);
+    ismd_redis_tasks_stop(sh->tasks, STOP_WAIT_NS); /* sh is freed with the last task */
 }

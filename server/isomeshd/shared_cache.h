@@ -25,18 +25,10 @@
 
 #include "server/common/cache.h"
 #include "server/common/pipeline.h"
-#include "server/isomeshd/jobs.h"
+#include "server/isomeshd/cluster.h"
 #include "server/isomeshd/sched.h"
 
 typedef struct ismd_shared ismd_shared;
-typedef struct ismd_cluster ismd_cluster;
-
-/* --cluster: the default per-user limits, held over the whole service, and the daemon's job
- * table (its jobs may be deleted through other daemons). */
-typedef struct ismd_cluster_settings {
-    int user_jobs, user_running;
-    ismd_jobs *jobs;
-} ismd_cluster_settings;
 
 /* Hooks the shared stage into sched (new flights go through it). With cluster (not NULL), a
  * computation step 3 would queue here goes to the cluster queue instead (cluster.h), and this
@@ -47,19 +39,6 @@ ismd_shared *ismd_shared_start(ismd_sched *sched, ism_cache *cache, ism_cache_ti
 
 /* The cluster queue (cluster.h) when started with one, else NULL. */
 ismd_cluster *ismd_shared_cluster(ismd_shared *sh);
-
-/* For tasks that live and stop with the stage (cluster.c). enter: the scheduler is locked,
- * false (not locked) once stopping; leave unlocks it. task_added: one task more (false once
- * stopping); task_ended: one less (the last one after stop frees the stage). */
-bool ismd_shared_enter(ismd_shared *sh);
-void ismd_shared_leave(ismd_shared *sh);
-bool ismd_shared_task_added(ismd_shared *sh);
-void ismd_shared_task_ended(ismd_shared *sh);
-
-/* Before a computation starts here (Redis thread): copies the stored computed surface of
- * request ("<surface key>.mesh", proto/computed.h) from Redis into the local tiers when only
- * Redis has it, so the worker encodes from it instead of polygonising. */
-void ismd_shared_prefetch_surface(ismd_shared *sh, ism_cache_tier *t, const ism_blob *request);
 
 /* Unhooks and waits (bounded) for the tasks to finish, releasing the locks they hold. Call
  * after the pool has stopped and before the scheduler is destroyed; frees sh. */

@@ -1,0 +1,26 @@
+/* surface_prefetch.c — the copy of surface_prefetch.h: key the request, look in the local
+ * tiers, fetch from Redis. */
+#include "server/isomeshd/surface_prefetch.h"
+
+#include "proto/computed.h"
+#include "server/common/cache_redis.h"
+
+void ismd_prefetch_surface(ism_cache *cache, ism_cache_tier *redis,
+                           const ism_pipeline_limits *limits, const ism_blob *request)
+{
+    if (!request)
+        return;
+    ism_pipeline_result pr;
+    char name[ISM_CACHE_NAME_MAX];
+    bool keyed = ism_pipeline_key((const char *)request->data, request->len, NULL, limits,
+                                  &pr) &&
+                 ism_cache_name(name, pr.surface_key, ISM_COMPUTED_EXT);
+    ism_pipeline_result_free(&pr);
+    if (!keyed || ism_cache_has(cache, name))
+        return;
+    const char *argv[1] = {name};
+    ism_blob *got = NULL;
+    if (ism_cache_redis_fetch(redis, argv, 1, &got) == 0 && got)
+        ism_cache_put_local(cache, name, got);
+    ism_blob_unref(got);
+}
