@@ -1,6 +1,7 @@
 /* http_loops.c — the HTTP polling threads of http_loops.h: one libmicrohttpd daemon per
  * thread in external epoll mode, all on one listening socket; each thread sleeps in poll() on
- * its daemon's epoll descriptor (and a shared stop descriptor) and then runs the daemon once.
+ * its daemon's epoll descriptor, its own wake descriptor and a shared stop descriptor, and
+ * then runs the daemon once.
  *
  * Why not libmicrohttpd's own thread pool: MHD_epoll() in 0.9.75 drains events with
  * `while (epoll_wait(.., 128, timeout) == 128)`, the same blocking timeout on every call, so a
@@ -10,13 +11,21 @@
  * connections, each waking for a few connections (1.1-2.5 context switches per request at
  * 256 connections, nginx 0.01-0.1). Here the wait happens outside: MHD_run() calls
  * epoll_wait with a zero timeout, which never sleeps, so any number of connections per
- * thread is safe and the threads can be as many as the cores. */
+ * thread is safe and the threads can be as many as the cores.
+ *
+ * Why a wake descriptor per loop: without an internal thread MHD_start_daemon drops
+ * MHD_USE_ITC (0.9.75 daemon.c: "useless if we are using 'external' select"), so
+ * MHD_resume_connection from another thread only sets a flag that the next MHD_run reads;
+ * nothing in the epoll set becomes readable. ism_http_resume writes the owning loop's
+ * eventfd after resuming, and the loop drains it before running the daemon, so a resume that
+ * lands after MHD_run read the flag leaves the descriptor readable for the next poll. */
 #include "server/common/http_loops.h"
 
 #include <errno.h>
 #include <poll.h>
 #include <pthread.h>
 #include <stdatomic.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/eventfd.h>
@@ -24,17 +33,17 @@
 
 #include "server/common/log.h"
 
-/* Longest sleep without an event. Shutdowns wake a thread through the stop descriptor and
- * connection timeouts through MHD_get_timeout(), but a connection resumed from another
- * thread (every computed mesh, job event) does NOT wake this poll in external-epoll mode:
- * at 1000 ms every computed request took 1.0 s. Until resumes write a wake descriptor of
- * their own, the bound is what a resumed answer may wait: 10 ms (4 threads idle: 400
- * wake-ups a second, a few µs each). */
-#define MAX_WAIT_MS 10
+/* Longest sleep without an event. Nothing needs it: shutdowns wake a thread through the stop
+ * descriptor, resumes through the loop's wake descriptor, new connections and data through
+ * the epoll descriptor, connection timeouts through MHD_get_timeout(). It only bounds the
+ * damage of a wake-up missed by some path not known here; 1 s keeps 4 idle threads at 4
+ * wake-ups a second. */
+#define MAX_WAIT_MS 1000
 
 typedef struct loop {
     struct MHD_Daemon *d;
     int epoll_fd;
+    int wake_fd; /* an eventfd: readable after a resume of one of d's connections */
     pthread_t thread;
     bool running;
     ism_http_loops *set;
@@ -55,46 +64,94 @@ static int wait_ms(struct MHD_Daemon *d)
     return (int)ms;
 }
 
+/* Makes the eventfd fd readable (its counter cannot overflow: one read empties it). */
+static void signal_fd(int fd, const char *what)
+{
+    uint64_t one = 1;
+    if (write(fd, &one, sizeof one) != sizeof one)
+        ism_logf(ISM_LOG_WARN, what, "eventfd: %s", strerror(errno));
+}
+
+static void drain_fd(int fd)
+{
+    uint64_t count;
+    if (read(fd, &count, sizeof count) < 0 && errno != EAGAIN)
+        ism_logf(ISM_LOG_WARN, "http_wake", "eventfd: %s", strerror(errno));
+}
+
 static void *loop_main(void *arg)
 {
     loop *l = arg;
-    struct pollfd p[2] = {{.fd = l->epoll_fd, .events = POLLIN},
+    struct pollfd p[3] = {{.fd = l->epoll_fd, .events = POLLIN},
+                          {.fd = l->wake_fd, .events = POLLIN},
                           {.fd = l->set->stop_fd, .events = POLLIN}};
     MHD_run(l->d); /* the first run puts the listening socket in the epoll set */
     while (!atomic_load(&l->set->stopping)) {
-        if (poll(p, 2, wait_ms(l->d)) < 0 && errno != EINTR)
+        if (poll(p, 3, wait_ms(l->d)) < 0 && errno != EINTR)
             ism_logf(ISM_LOG_WARN, "http_poll", "%s", strerror(errno));
         if (atomic_load(&l->set->stopping))
             break;
+        if (p[1].revents)
+            drain_fd(l->wake_fd); /* before the run, which takes every resume made so far */
         MHD_run(l->d);
     }
     return NULL;
 }
 
-/* Ends the threads and daemons started so far. */
-static void stop_all(ism_http_loops *s)
+ism_http_loops *ism_http_loops_new(unsigned n)
 {
+    ism_http_loops *s = calloc(1, sizeof *s);
+    if (!s)
+        return NULL;
+    s->stop_fd = -1;
+    s->loops = calloc(n ? n : 1, sizeof *s->loops);
+    if (!s->loops) {
+        free(s);
+        return NULL;
+    }
+    s->n = n;
+    for (unsigned i = 0; i < n; i++)
+        s->loops[i].wake_fd = -1;
+    bool ok = (s->stop_fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK)) >= 0;
+    for (unsigned i = 0; ok && i < n; i++)
+        ok = (s->loops[i].wake_fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK)) >= 0;
+    if (!ok) {
+        ism_logf(ISM_LOG_ERROR, "http_start_failed", "eventfd: %s", strerror(errno));
+        ism_http_loops_stop(s);
+        return NULL;
+    }
+    return s;
+}
+
+/* Ends the threads started so far, then the daemons, and frees s. */
+void ism_http_loops_stop(ism_http_loops *s)
+{
+    if (!s)
+        return;
     atomic_store(&s->stopping, true);
-    uint64_t one = 1;
-    if (write(s->stop_fd, &one, sizeof one) != sizeof one)
-        ism_logf(ISM_LOG_WARN, "http_stop", "eventfd: %s", strerror(errno));
+    if (s->stop_fd >= 0)
+        signal_fd(s->stop_fd, "http_stop");
     for (unsigned i = 0; i < s->n; i++)
         if (s->loops[i].running)
             pthread_join(s->loops[i].thread, NULL);
     for (unsigned i = 0; i < s->n; i++) {
-        if (!s->loops[i].d)
-            continue;
-        MHD_quiesce_daemon(s->loops[i].d); /* so that stopping does not close the socket */
-        MHD_stop_daemon(s->loops[i].d);
+        loop *l = &s->loops[i];
+        if (l->d) {
+            MHD_quiesce_daemon(l->d); /* so that stopping does not close the socket */
+            MHD_stop_daemon(l->d);
+        }
+        if (l->wake_fd >= 0)
+            close(l->wake_fd);
     }
-    close(s->stop_fd);
+    if (s->stop_fd >= 0)
+        close(s->stop_fd);
     free(s->loops);
     free(s);
 }
 
-static bool start_one(ism_http_loops *s, loop *l, unsigned flags, int listen_fd, unsigned limit,
-                      MHD_AccessHandlerCallback ah, void *ah_cls,
-                      const struct MHD_OptionItem *opts)
+static bool start_daemon(ism_http_loops *s, loop *l, unsigned flags, int listen_fd,
+                         unsigned limit, MHD_AccessHandlerCallback ah, void *ah_cls,
+                         const struct MHD_OptionItem *opts)
 {
     l->set = s;
     l->d = MHD_start_daemon(flags | MHD_USE_EPOLL, 0, NULL, NULL, ah, ah_cls,
@@ -108,46 +165,49 @@ static bool start_one(ism_http_loops *s, loop *l, unsigned flags, int listen_fd,
     if (!di)
         return false;
     l->epoll_fd = di->epoll_fd;
-    l->running = pthread_create(&l->thread, NULL, loop_main, l) == 0;
-    return l->running;
+    return true;
 }
 
-ism_http_loops *ism_http_loops_start(unsigned n, unsigned flags, int listen_fd,
-                                       unsigned conn_limit, MHD_AccessHandlerCallback ah,
-                                       void *ah_cls, const struct MHD_OptionItem *opts)
+bool ism_http_loops_start(ism_http_loops *s, unsigned flags, int listen_fd, unsigned conn_limit,
+                          MHD_AccessHandlerCallback ah, void *ah_cls,
+                          const struct MHD_OptionItem *opts)
 {
-    ism_http_loops *s = calloc(1, sizeof *s);
-    if (!s)
-        return NULL;
-    s->loops = calloc(n, sizeof *s->loops);
-    s->stop_fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
-    if (!s->loops || s->stop_fd < 0) {
-        if (s->stop_fd >= 0)
-            close(s->stop_fd);
-        free(s->loops);
-        free(s);
-        return NULL;
-    }
-    unsigned limit = (conn_limit + n - 1) / n;
-    for (s->n = 0; s->n < n; s->n++) {
-        if (!start_one(s, &s->loops[s->n], flags, listen_fd, limit, ah, ah_cls, opts)) {
+    unsigned limit = (conn_limit + s->n - 1) / s->n;
+    /* Every daemon exists before any thread runs: ism_http_resume reads the whole table. */
+    for (unsigned i = 0; i < s->n; i++)
+        if (!start_daemon(s, &s->loops[i], flags, listen_fd, limit, ah, ah_cls, opts)) {
             ism_logf(ISM_LOG_ERROR, "http_start_failed",
-                     "libmicrohttpd daemon %u of %u did not start", s->n + 1, n);
-            s->n++;
-            stop_all(s);
-            return NULL;
+                     "libmicrohttpd daemon %u of %u did not start", i + 1, s->n);
+            return false;
+        }
+    for (unsigned i = 0; i < s->n; i++) {
+        loop *l = &s->loops[i];
+        l->running = pthread_create(&l->thread, NULL, loop_main, l) == 0;
+        if (!l->running) {
+            ism_logf(ISM_LOG_ERROR, "http_start_failed", "polling thread %u of %u: no thread",
+                     i + 1, s->n);
+            return false;
         }
     }
-    return s;
+    return true;
+}
+
+void ism_http_resume(ism_http_loops *s, struct MHD_Connection *c)
+{
+    /* Read before resuming: once resumed, c may be answered and freed by its loop. */
+    const union MHD_ConnectionInfo *ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_DAEMON);
+    struct MHD_Daemon *d = ci ? ci->daemon : NULL;
+    MHD_resume_connection(c);
+    for (unsigned i = 0; i < s->n; i++)
+        if (s->loops[i].d == d) {
+            signal_fd(s->loops[i].wake_fd, "http_wake");
+            return;
+        }
+    ism_logf(ISM_LOG_WARN, "http_wake", "a resumed connection of no known daemon");
 }
 
 void ism_http_loops_quiesce(ism_http_loops *s)
 {
     for (unsigned i = 0; i < s->n; i++)
-        MHD_quiesce_daemon(s->loops[i].d);
-}
-
-void ism_http_loops_stop(ism_http_loops *s)
-{
-    stop_all(s);
+        MHD_quiesce_daemon(s->loops[i].d); /* takes the socket out of the epoll set itself */
 }

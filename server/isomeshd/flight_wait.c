@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "server/common/http_loops.h"
 #include "server/isomeshd/respond.h"
 
 void ismd_req_done(ismd_waiter *w, const ismd_result *res)
@@ -28,7 +29,7 @@ void ismd_req_done(ismd_waiter *w, const ismd_result *res)
     if (r->suspended) {
         r->suspended = false;
         atomic_fetch_sub(&r->srv->metrics.suspended_connections, 1);
-        MHD_resume_connection(r->conn);
+        ism_http_resume(r->srv->loops, r->conn);
     }
 }
 

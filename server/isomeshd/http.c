@@ -432,7 +432,7 @@ static void client_left(void *ctx, void *req)
         r->suspended = false;
         atomic_fetch_sub(&s->metrics.suspended_connections, 1);
         atomic_fetch_add(&s->metrics.clients_left, 1);
-        MHD_resume_connection(r->conn);
+        ism_http_resume(s->loops, r->conn);
     }
     ismd_sched_unlock(&s->sched);
 }
@@ -517,11 +517,13 @@ bool ismd_http_start(ismd_server *s, int listen_fd)
         {MHD_OPTION_SIGPIPE_HANDLED_BY_APP, 1, NULL},
         {MHD_OPTION_END, 0, NULL},
     };
-    s->loops = ism_http_loops_start(http_threads(s->cfg),
-                                     MHD_ALLOW_SUSPEND_RESUME | MHD_USE_ERROR_LOG, listen_fd,
-                                     limit, on_request, s, opts);
-    if (!s->loops) {
+    /* s->loops is set before any thread runs: resumes (other threads) read it. */
+    s->loops = ism_http_loops_new(http_threads(s->cfg));
+    if (!s->loops || !ism_http_loops_start(s->loops, MHD_ALLOW_SUSPEND_RESUME | MHD_USE_ERROR_LOG,
+                                           listen_fd, limit, on_request, s, opts)) {
         ism_logf(ISM_LOG_ERROR, "http_start_failed", "libmicrohttpd did not start");
+        ism_http_loops_stop(s->loops);
+        s->loops = NULL;
         ismd_conns_stop(s->conns);
         s->conns = NULL;
         return false;

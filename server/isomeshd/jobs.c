@@ -51,6 +51,7 @@ struct stream {
     ismd_jobs *jobs;
     ismd_sched *sched;
     struct MHD_Connection *conn;
+    ism_http_loops *loops; /* the polling threads serving conn */
     bool suspended, finished;
     unsigned sent_version;
     char *pending;
@@ -224,7 +225,7 @@ static void notify(ismd_job *job)
     for (stream *st = job->streams; st; st = st->next)
         if (st->suspended) {
             st->suspended = false;
-            MHD_resume_connection(st->conn);
+            ism_http_resume(st->loops, st->conn);
         }
 }
 
@@ -559,7 +560,7 @@ static void stream_free(void *cls)
 }
 
 struct MHD_Response *ismd_jobs_stream(ismd_jobs *j, ismd_sched *s, ismd_job *job,
-                                      struct MHD_Connection *conn)
+                                      struct MHD_Connection *conn, ism_http_loops *loops)
 {
     stream *st = calloc(1, sizeof *st);
     if (!st)
@@ -568,6 +569,7 @@ struct MHD_Response *ismd_jobs_stream(ismd_jobs *j, ismd_sched *s, ismd_job *job
     st->jobs = j;
     st->sched = s;
     st->conn = conn;
+    st->loops = loops;
     st->sent_version = job->version - 1; /* the first read sends the current state */
     struct MHD_Response *resp =
         MHD_create_response_from_callback(MHD_SIZE_UNKNOWN, 4096, stream_read, st, stream_free);
@@ -592,6 +594,6 @@ void ismd_jobs_close_streams(ismd_jobs *j)
         for (stream *st = job->streams; st; st = st->next)
             if (st->suspended) {
                 st->suspended = false;
-                MHD_resume_connection(st->conn);
+                ism_http_resume(st->loops, st->conn);
             }
 }

@@ -17,6 +17,7 @@
 #include <time.h>
 
 #include "server/common/blob.h"
+#include "server/common/http_loops.h"
 #include "server/isomeshd/metrics.h"
 #include "server/isomeshd/sched.h"
 
@@ -80,9 +81,10 @@ json_t *ismd_jobs_list_json(const ismd_jobs *j, const char *user, size_t max);
 bool ismd_jobs_cancel(ismd_jobs *j, ismd_sched *s, ismd_job *job);
 
 /* An event-stream response following job (NULL when out of memory). conn is the connection
- * the response will be queued on; sched is the lock's owner. */
+ * the response will be queued on, served by one of loops' threads (each event resumes it
+ * there); sched is the lock's owner. */
 struct MHD_Response *ismd_jobs_stream(ismd_jobs *j, ismd_sched *s, ismd_job *job,
-                                      struct MHD_Connection *conn);
+                                      struct MHD_Connection *conn, ism_http_loops *loops);
 /* Shutdown: every stream sends its last event and ends; new streams end at once. */
 void ismd_jobs_close_streams(ismd_jobs *j);
 

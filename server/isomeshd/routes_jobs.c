@@ -312,7 +312,7 @@ enum MHD_Result ismd_route_job_events(ismd_req *r)
     ismd_job *job = touch_job(r, false, true, &ret);
     if (!job)
         return ret;
-    struct MHD_Response *resp = ismd_jobs_stream(s->jobs, &s->sched, job, r->conn);
+    struct MHD_Response *resp = ismd_jobs_stream(s->jobs, &s->sched, job, r->conn, s->loops);
     ismd_sched_unlock(&s->sched);
     if (!resp)
         return MHD_NO;

@@ -90,10 +90,10 @@ int main(int argc, char **argv)
     int lfd = listen_on(atoi(argv[1]));
     struct MHD_OptionItem opts[] = {{MHD_OPTION_SIGPIPE_HANDLED_BY_APP, 1, NULL},
                                     {MHD_OPTION_END, 0, NULL}};
-    ism_http_loops *d = lfd < 0 ? NULL : ism_http_loops_start(threads, MHD_ALLOW_SUSPEND_RESUME,
-                                                                lfd, CONNECTION_LIMIT, answer,
-                                                                NULL, opts);
-    if (!d) {
+    ism_http_loops *d = lfd < 0 ? NULL : ism_http_loops_new(threads);
+    if (!d || !ism_http_loops_start(d, MHD_ALLOW_SUSPEND_RESUME, lfd, CONNECTION_LIMIT, answer,
+                                    NULL, opts)) {
+        ism_http_loops_stop(d);
         fprintf(stderr, "http_ceiling: cannot listen on port %s\n", argv[1]);
         return 1;
     }
