@@ -99,6 +99,8 @@ class FailureTest(unittest.TestCase):
             self.assertEqual(d.metric("isomesh_redis_outages_total"), 1)
             self.assertGreaterEqual(d.metric("isomesh_redis_fallbacks_total"), 3)
             self.assertGreater(d.metric("isomesh_cache_store_failures_total", tier="redis"), 0)
+            # the line follows the counter: await it (the writer batches for 50 ms)
+            self.assertTrue(stack.wait_until(lambda: log_count(d, "redis_unavailable") >= 1, 5))
             self.assertEqual(log_count(d, "redis_unavailable"), 1, "one line per outage")
 
         self.s.redis = stack.Redis(port=port).start()  # an empty Redis on the same port

@@ -172,7 +172,8 @@ class AuthConfigTest(unittest.TestCase):
                 f.write("tokens = %s\nprivate = yes\nuser-jobs = 2\nqueue-order = fifo\n" % tokens)
             with Daemon("--workers", "1", "--config", conf) as d:
                 self.assertEqual(d.get("/v1/presets").status, 401)
-                self.assertIn("private=yes", d.log())
+                # logged after "listening" (which start() waited for), maybe in a later batch
+                self.assertEqual(d.log_count("private=yes", 1), 1, d.log())
             for args in (["--private=maybe"], ["--queue-order", "lifo"], ["--user-jobs", "0"],
                          ["--user-running", "-1"]):
                 r = subprocess.run([ISOMESHD] + args, stderr=subprocess.PIPE, text=True, timeout=10)
