@@ -28,6 +28,9 @@
                                         for this often: a tenth of a second is quick enough
                                         for a client, and one SPOP each time costs Redis little */
 #define DELETES_PER_TICK "64"        /* of them, taken at once at most */
+#define TAKE_TRIES "8"               /* users a take may find with nothing to read (their
+                                        P wait entry stale) before it gives up until the next
+                                        tick: bounds the script, and each try mends one */
 #define ORPHAN_CHECK_NS 100000000LL  /* a computation wanted by no request here (its origin's
                                         own, run here) asks this often whether another daemon
                                         waits for it, and stops when none does */
@@ -65,117 +68,144 @@
     "  end " \
     "  return true end "
 
-/* KEYS stream, users, job hash, ulim; ARGV user, max entries, name, key, fmt, req, max
- * running, ttl, consumer. {entry id, its stream}, or false when the user already has max
- * entries. An entry of the same computation still waiting or running, not canceled (its
- * origin gave it up while other daemons waited for it: CANCEL_LUA), is joined instead of a
- * new one; the daemon joining it (it holds the lock now) becomes its origin. */
+/* A user's state for choosing and sharing, kept beside its streams (P q:<user>, new entries;
+ * P r:<user>, entries given back, taken first) so that no script reads every user's:
+ *   P run    hash user -> its entries taken (running, or pending on a dead daemon)
+ *   P nwait  hash user -> its entries not taken yet
+ *   P wait   sorted set: the users with an entry to take and below their running limit,
+ *            scored by their entries taken (the fewest first)
+ * refresh(p, u) recomputes u's three from its streams (a handful of commands whatever the
+ * number of users) and is called by every script that changes them; streams left with
+ * nothing are removed. stream_user(p, s): the user of stream s. */
+#define REFRESH_LUA \
+    "local function stream_user(p, s) return string.sub(s, #p + 3) end " \
+    "local function counts(s) " \
+    "  if redis.call('exists', s) == 0 then return 0, 0 end " \
+    "  return redis.call('xpending', s, 'workers')[1], redis.call('xlen', s) end " \
+    "local function refresh(p, u) " \
+    "  local q, r = p .. 'q:' .. u, p .. 'r:' .. u " \
+    "  local pq, lq = counts(q) " \
+    "  local pr, lr = counts(r) " \
+    "  local run, waiting = pq + pr, math.max(lq + lr - pq - pr, 0) " \
+    "  if run > 0 then redis.call('hset', p .. 'run', u, run) " \
+    "  else redis.call('hdel', p .. 'run', u) end " \
+    "  if waiting > 0 then redis.call('hset', p .. 'nwait', u, waiting) " \
+    "  else redis.call('hdel', p .. 'nwait', u) end " \
+    "  local lim = tonumber(redis.call('hget', p .. 'ulim', u) or '0') or 0 " \
+    "  if waiting > 0 and (lim <= 0 or run < lim) then redis.call('zadd', p .. 'wait', run, u) " \
+    "  else redis.call('zrem', p .. 'wait', u) end " \
+    "  if run == 0 and waiting == 0 then " \
+    "    redis.call('del', q, r) redis.call('hdel', p .. 'ulim', u) end end "
+
+/* KEYS stream, job hash, ulim; ARGV user, max entries, name, key, fmt, req, max running,
+ * ttl, consumer, key prefix. {entry id, its stream}, or false when the user already has max
+ * entries (over its two streams). An entry of the same computation still waiting or running,
+ * not canceled (its origin gave it up while other daemons waited for it: CANCEL_LUA), is
+ * joined instead of a new one; the daemon joining it (it holds the lock now) becomes its
+ * origin. */
 static const char ENQUEUE_LUA[] =
-    NOW_MS_LUA
-    "local cur = redis.call('hget', KEYS[3], 'id') "
-    "local st = redis.call('hget', KEYS[3], 'state') "
-    "local cs = redis.call('hget', KEYS[3], 'stream') "
+    NOW_MS_LUA REFRESH_LUA
+    "local cur = redis.call('hget', KEYS[2], 'id') "
+    "local st = redis.call('hget', KEYS[2], 'state') "
+    "local cs = redis.call('hget', KEYS[2], 'stream') "
     "if cur and cs and (st == 'queued' or st == 'running') "
-    "   and not redis.call('hget', KEYS[3], 'cancel') "
+    "   and not redis.call('hget', KEYS[2], 'cancel') "
     "   and #redis.call('xrange', cs, cur, cur) > 0 then "
-    "  redis.call('hset', KEYS[3], 'origin', ARGV[9]) return {cur, cs} end "
+    "  redis.call('hset', KEYS[2], 'origin', ARGV[9]) return {cur, cs} end "
     "if redis.call('exists', KEYS[1]) == 0 then "
     "  redis.call('xgroup', 'create', KEYS[1], 'workers', '0', 'MKSTREAM') end "
-    "if redis.call('xlen', KEYS[1]) >= tonumber(ARGV[2]) then return false end "
+    "local _, lq = counts(KEYS[1]) "
+    "local _, lr = counts(ARGV[10] .. 'r:' .. ARGV[1]) "
+    "if lq + lr >= tonumber(ARGV[2]) then return false end "
     "local id = redis.call('xadd', KEYS[1], '*', 'name', ARGV[3], 'key', ARGV[4], "
     "  'fmt', ARGV[5], 'user', ARGV[1], 'req', ARGV[6]) "
-    "redis.call('sadd', KEYS[2], ARGV[1]) "
-    "redis.call('hset', KEYS[4], ARGV[1], ARGV[7]) "
-    "redis.call('del', KEYS[3]) "
-    "redis.call('hset', KEYS[3], 'state', 'queued', 'progress', '0', 'id', id, "
+    "redis.call('hset', KEYS[3], ARGV[1], ARGV[7]) "
+    "redis.call('del', KEYS[2]) "
+    "redis.call('hset', KEYS[2], 'state', 'queued', 'progress', '0', 'id', id, "
     "  'stream', KEYS[1], 'origin', ARGV[9], 'queued_ms', now_ms()) "
-    "redis.call('pexpire', KEYS[3], ARGV[8]) "
+    "redis.call('pexpire', KEYS[2], ARGV[8]) "
+    "refresh(ARGV[10], ARGV[1]) "
     "return {id, KEYS[1]}";
 
-/* KEYS users, ulim; ARGV stream prefix, consumer, min idle ms, turn, key prefix, now ms,
- * ttl. {user, stream, id, fields, claimed} or false. Re-claims a dead daemon's entry first
- * (the oldest pending entry idle for a lock lifetime: XPENDING IDLE scans the whole list,
- * where XAUTOCLAIM would look at its first few only; a deleted one is acknowledged, a
- * canceled or abandoned one dropped), else reads a new one from the user with the fewest
- * running, below its limit. Streams with nothing left are removed with their users. */
+/* KEYS wait, run; ARGV key prefix, consumer, min idle ms, turn, now ms, ttl. {user, stream,
+ * id, fields, claimed} or false. Re-claims a dead daemon's entry first (the oldest pending
+ * entry idle for a lock lifetime, among the users with entries taken: XPENDING IDLE scans the
+ * whole list, where XAUTOCLAIM would look at its first few only; a deleted one is
+ * acknowledged, a canceled or abandoned one dropped), else reads a new one from the user with
+ * the fewest running, below its limit (P wait's first), ties taken in turn: its given-back
+ * entries first (P r:<user>), then its stream. A user P wait names that has nothing to read
+ * leaves it (at most TAKE_TRIES of them per call). */
 static const char TAKE_LUA[] =
-    NOW_MS_LUA ABANDONED_LUA
+    NOW_MS_LUA ABANDONED_LUA REFRESH_LUA
+    "local p = ARGV[1] "
     "local function name_of(e) "
     "  for i = 1, #e[2], 2 do if e[2][i] == 'name' then return e[2][i + 1] end end "
     "  return nil end "
     "local function start(u, s, e, claimed) "
     "  local name = name_of(e) "
     "  if name then "
-    "    local jk = ARGV[5] .. 'job:' .. name "
+    "    local jk = p .. 'job:' .. name "
     "    if redis.call('hget', jk, 'id') == e[1] then "
     "      redis.call('hset', jk, 'state', 'running', 'daemon', ARGV[2], 'started_ms', now_ms()) "
-    "      redis.call('pexpire', jk, ARGV[7]) end end "
+    "      redis.call('pexpire', jk, ARGV[6]) end end "
+    "  refresh(p, u) "
     "  return {u, s, e[1], e[2], claimed} end "
     "local function dropped(s, e) "
     "  local name = name_of(e) "
     "  if not name then return false end "
-    "  local jk = ARGV[5] .. 'job:' .. name "
+    "  local jk = p .. 'job:' .. name "
     "  if redis.call('hget', jk, 'id') ~= e[1] then return false end "
-    "  if not redis.call('hget', jk, 'cancel') and not abandoned(ARGV[5], name, ARGV[6]) then "
+    "  if not redis.call('hget', jk, 'cancel') and not abandoned(p, name, ARGV[5]) then "
     "    return false end "
     "  redis.call('hset', jk, 'cancel', '1') "
     "  redis.call('xack', s, 'workers', e[1]) redis.call('xdel', s, e[1]) "
     "  return true end "
-    "local users = redis.call('smembers', KEYS[1]) "
-    "local n = #users "
-    "local cands = {} "
-    "for i = 1, n do "
-    "  local u = users[i] "
-    "  local s = ARGV[1] .. u "
-    "  if redis.call('exists', s) == 0 then redis.call('srem', KEYS[1], u) "
-    "  else "
-    "    local pend = redis.call('xpending', s, 'workers')[1] "
-    "    if pend > 0 then "
-    "      local p = redis.call('xpending', s, 'workers', 'IDLE', ARGV[3], '-', '+', 1)[1] "
-    "      if p then "
-    "        local c = redis.call('xclaim', s, 'workers', ARGV[2], ARGV[3], p[1]) "
+    "for _, u in ipairs(redis.call('hkeys', KEYS[2])) do "
+    "  for _, s in ipairs({p .. 'r:' .. u, p .. 'q:' .. u}) do "
+    "    if redis.call('exists', s) == 1 then "
+    "      local pe = redis.call('xpending', s, 'workers', 'IDLE', ARGV[3], '-', '+', 1)[1] "
+    "      if pe then "
+    "        local c = redis.call('xclaim', s, 'workers', ARGV[2], ARGV[3], pe[1]) "
     "        if c[1] and c[1][2] then "
     "          if not dropped(s, c[1]) then return start(u, s, c[1], 1) end "
-    "        else redis.call('xack', s, 'workers', p[1]) end "
+    "        else redis.call('xack', s, 'workers', pe[1]) end "
+    "        refresh(p, u) "
     "      end "
-    "    end "
-    "    if pend == 0 and redis.call('xlen', s) == 0 then "
-    "      redis.call('del', s) redis.call('srem', KEYS[1], u) "
-    "    else "
-    "      local lim = tonumber(redis.call('hget', KEYS[2], u) or '0') or 0 "
-    "      if lim <= 0 or pend < lim then "
-    "        cands[#cands + 1] = {u, pend, (i + tonumber(ARGV[4])) % n} end "
     "    end "
     "  end "
     "end "
-    "table.sort(cands, function(a, b) "
-    "  if a[2] ~= b[2] then return a[2] < b[2] end return a[3] < b[3] end) "
-    "for _, c in ipairs(cands) do "
-    "  local s = ARGV[1] .. c[1] "
-    "  local r = redis.call('xreadgroup', 'group', 'workers', ARGV[2], 'count', 1, "
-    "    'streams', s, '>') "
-    "  if r then return start(c[1], s, r[1][2][1], 0) end "
+    "for try = 1, " TAKE_TRIES " do "
+    "  local first = redis.call('zrange', KEYS[1], 0, 0, 'WITHSCORES') "
+    "  if #first == 0 then return false end "
+    "  local ties = redis.call('zcount', KEYS[1], first[2], first[2]) "
+    "  local u = redis.call('zrangebyscore', KEYS[1], first[2], first[2], 'LIMIT', "
+    "    tonumber(ARGV[4]) % ties, 1)[1] "
+    "  for _, s in ipairs({p .. 'r:' .. u, p .. 'q:' .. u}) do "
+    "    if redis.call('exists', s) == 1 then "
+    "      local r = redis.call('xreadgroup', 'group', 'workers', ARGV[2], 'count', 1, "
+    "        'streams', s, '>') "
+    "      if r then return start(u, s, r[1][2][1], 0) end "
+    "    end "
+    "  end "
+    "  redis.call('zrem', KEYS[1], u) redis.call('hdel', p .. 'nwait', u) "
     "end "
     "return false";
 
-/* KEYS users; ARGV stream prefix. Entries waiting (not yet taken) over every user's stream. */
+/* KEYS nwait. Entries waiting (not yet taken) over every user's streams. */
 static const char DEPTH_LUA[] =
     "local n = 0 "
-    "for _, u in ipairs(redis.call('smembers', KEYS[1])) do "
-    "  local s = ARGV[1] .. u "
-    "  if redis.call('exists', s) == 1 then "
-    "    n = n + redis.call('xlen', s) - redis.call('xpending', s, 'workers')[1] end "
-    "end "
+    "for _, v in ipairs(redis.call('hvals', KEYS[1])) do n = n + tonumber(v) end "
     "return n";
 
-/* over_share(p, stream, user): the service's fair share, as one daemon's scheduler keeps
- * it (sched.c's preempt victim) but over every daemon: every worker of the service busy
- * (the live daemons' counts, P nworkers), and this user holds two or more while another
- * user with nothing running waits, or (the user's own running limit unset) more than half
- * of the workers, rounded up, while another user holding fewer than half waits. Waiting:
- * an entry not taken yet, below that user's running limit. */
+/* over_share(p, user): the service's fair share, as one daemon's scheduler keeps it
+ * (sched.c's preempt victim) but over every daemon: every worker of the service busy (the
+ * live daemons' counts, P nworkers), and this user holds two or more while another user
+ * with nothing running waits, or (the user's own running limit unset) more than half of the
+ * workers, rounded up, while another user holding fewer than half waits. Waiting: an entry
+ * not taken yet, below that user's running limit (P wait). Reads P run and the first two of
+ * P wait, not every user's streams. */
 #define OVER_SHARE_LUA \
-    "local function over_share(p, stream, user) " \
+    "local function over_share(p, user) " \
     "  local total = 0 " \
     "  local nw = redis.call('hgetall', p .. 'nworkers') " \
     "  for i = 1, #nw, 2 do " \
@@ -183,22 +213,18 @@ static const char DEPTH_LUA[] =
     "      total = total + tonumber(nw[i + 1]) " \
     "    else redis.call('hdel', p .. 'nworkers', nw[i]) end " \
     "  end " \
-    "  local mine = redis.call('xpending', stream, 'workers')[1] " \
+    "  local mine = tonumber(redis.call('hget', p .. 'run', user) or '0') or 0 " \
     "  if total == 0 or mine < 2 then return false end " \
     "  local own = tonumber(redis.call('hget', p .. 'ulim', user) or '0') or 0 " \
     "  local share = own <= 0 and math.ceil(total / 2) or 0 " \
     "  local busy, below = 0, nil " \
-    "  for _, u in ipairs(redis.call('smembers', p .. 'users')) do " \
-    "    local s = p .. 'q:' .. u " \
-    "    if redis.call('exists', s) == 1 then " \
-    "      local pend = redis.call('xpending', s, 'workers')[1] " \
-    "      busy = busy + pend " \
-    "      local lim = tonumber(redis.call('hget', p .. 'ulim', u) or '0') or 0 " \
-    "      if u ~= user and redis.call('xlen', s) > pend and (lim <= 0 or pend < lim) " \
-    "         and (below == nil or pend < below) then below = pend end " \
-    "    end " \
+    "  for _, v in ipairs(redis.call('hvals', p .. 'run')) do busy = busy + tonumber(v) end " \
+    "  if busy < total then return false end " \
+    "  local low = redis.call('zrange', p .. 'wait', 0, 1, 'WITHSCORES') " \
+    "  for i = 1, #low, 2 do " \
+    "    if low[i] ~= user then below = tonumber(low[i + 1]) break end " \
     "  end " \
-    "  if busy < total or below == nil then return false end " \
+    "  if below == nil then return false end " \
     "  return below == 0 or (share > 0 and mine > share and below < share) end "
 
 /* KEYS stream, job hash; ARGV consumer, id, progress, ttl, key prefix, name, now ms, may
@@ -206,25 +232,32 @@ static const char DEPTH_LUA[] =
  * another daemon, or its record is gone; 2: canceled, or abandoned (ABANDONED_LUA: flagged
  * canceled), both acknowledged and deleted; 3: given back (nothing on this daemon but the
  * entry wants the computation, and its user is over the service's share, OVER_SHARE_LUA):
- * the entry goes to the end of its user's stream as a new one, the job hash says queued
- * under its new id (the origin, following the old one, starts over and joins it). */
+ * the entry goes to its user's given-back stream (P r:<user>, read before the user's other
+ * entries: the user's next computation to start is this one) as a new one, the job hash says
+ * queued under its new id (the origin, following the old one, starts over and joins it). */
 static const char HEARTBEAT_LUA[] =
-    ABANDONED_LUA OVER_SHARE_LUA
-    "local p = redis.call('xpending', KEYS[1], 'workers', ARGV[2], ARGV[2], 1)[1] "
-    "if not p or p[2] ~= ARGV[1] then return 0 end "
+    ABANDONED_LUA REFRESH_LUA OVER_SHARE_LUA
+    "if redis.call('exists', KEYS[1]) == 0 then return 0 end "
+    "local pe = redis.call('xpending', KEYS[1], 'workers', ARGV[2], ARGV[2], 1)[1] "
+    "if not pe or pe[2] ~= ARGV[1] then return 0 end "
     "local mine = redis.call('hget', KEYS[2], 'id') == ARGV[2] "
     "if mine and not redis.call('hget', KEYS[2], 'cancel') "
     "   and abandoned(ARGV[5], ARGV[6], ARGV[7]) then "
     "  redis.call('hset', KEYS[2], 'cancel', '1') end "
-    "if not mine or redis.call('hget', KEYS[2], 'cancel') then "
+    "local e = redis.call('xrange', KEYS[1], ARGV[2], ARGV[2])[1] "
+    "if not e or not mine or redis.call('hget', KEYS[2], 'cancel') then "
     "  redis.call('xack', KEYS[1], 'workers', ARGV[2]) redis.call('xdel', KEYS[1], ARGV[2]) "
-    "  if mine then return 2 end return 0 end "
-    "if ARGV[8] == '1' and over_share(ARGV[5], KEYS[1], ARGV[9]) then "
-    "  local e = redis.call('xrange', KEYS[1], ARGV[2], ARGV[2])[1] "
+    "  refresh(ARGV[5], ARGV[9]) "
+    "  if mine and e then return 2 end return 0 end "
+    "if ARGV[8] == '1' and over_share(ARGV[5], ARGV[9]) then "
     "  redis.call('xack', KEYS[1], 'workers', ARGV[2]) redis.call('xdel', KEYS[1], ARGV[2]) "
-    "  local id = redis.call('xadd', KEYS[1], '*', unpack(e[2])) "
-    "  redis.call('hset', KEYS[2], 'id', id, 'state', 'queued', 'progress', '0') "
+    "  local r = ARGV[5] .. 'r:' .. ARGV[9] "
+    "  if redis.call('exists', r) == 0 then "
+    "    redis.call('xgroup', 'create', r, 'workers', '0', 'MKSTREAM') end "
+    "  local id = redis.call('xadd', r, '*', unpack(e[2])) "
+    "  redis.call('hset', KEYS[2], 'id', id, 'stream', r, 'state', 'queued', 'progress', '0') "
     "  redis.call('hdel', KEYS[2], 'daemon', 'started_ms') "
+    "  refresh(ARGV[5], ARGV[9]) "
     "  return 3 end "
     "redis.call('xclaim', KEYS[1], 'workers', ARGV[1], 0, ARGV[2], 'JUSTID') "
     "redis.call('hset', KEYS[2], 'progress', ARGV[3]) "
@@ -238,15 +271,16 @@ static const char ALIVE_LUA[] =
     "redis.call('hset', KEYS[2], ARGV[2], ARGV[3]) "
     "return 1";
 
-/* KEYS stream, job hash; ARGV id, state, status, error, ttl. */
+/* KEYS stream, job hash; ARGV id, state, status, error, ttl, key prefix. */
 static const char FINISH_LUA[] =
-    NOW_MS_LUA
+    NOW_MS_LUA REFRESH_LUA
     "redis.call('xack', KEYS[1], 'workers', ARGV[1]) "
     "redis.call('xdel', KEYS[1], ARGV[1]) "
     "if redis.call('hget', KEYS[2], 'id') == ARGV[1] then "
     "  redis.call('hset', KEYS[2], 'state', ARGV[2], 'status', ARGV[3], 'error', ARGV[4], "
     "    'progress', '1', 'ended_ms', now_ms()) "
     "  redis.call('pexpire', KEYS[2], ARGV[5]) end "
+    "refresh(ARGV[6], stream_user(ARGV[6], KEYS[1])) "
     "return 1";
 
 /* KEYS jobrec; ARGV key prefix, job id, ttl, now ms. DELETE of a job through a daemon that
@@ -259,7 +293,7 @@ static const char FINISH_LUA[] =
  * the daemon re-claiming it. 0 when no daemon recorded the job, 2 when its computation was
  * stopped that way, else 1. */
 static const char JOB_DELETE_LUA[] =
-    ABANDONED_LUA
+    ABANDONED_LUA REFRESH_LUA
     "local d = redis.call('hget', KEYS[1], 'daemon') "
     "if not d then return 0 end "
     "redis.call('hset', KEYS[1], 'cancel', '1') "
@@ -278,17 +312,20 @@ static const char JOB_DELETE_LUA[] =
     "   or redis.call('hget', jk, 'cancel') or not abandoned(ARGV[1], name, ARGV[4]) then "
     "  return 1 end "
     "redis.call('hset', jk, 'cancel', '1') "
-    "if not redis.call('xpending', cs, 'workers', id, id, 1)[1] then "
-    "  redis.call('xdel', cs, id) end "
+    "if redis.call('exists', cs) == 1 "
+    "   and not redis.call('xpending', cs, 'workers', id, id, 1)[1] then "
+    "  redis.call('xdel', cs, id) refresh(ARGV[1], stream_user(ARGV[1], cs)) end "
     "return 2";
 
-/* KEYS stream, job hash; ARGV id. The executor's flight was canceled here (nobody waits for
- * it any more): the entry goes, its job hash says canceled. */
+/* KEYS stream, job hash; ARGV id, key prefix. The executor's flight was canceled here
+ * (nobody waits for it any more): the entry goes, its job hash says canceled. */
 static const char DROPPED_LUA[] =
+    REFRESH_LUA
     "redis.call('xack', KEYS[1], 'workers', ARGV[1]) "
     "redis.call('xdel', KEYS[1], ARGV[1]) "
     "if redis.call('hget', KEYS[2], 'id') == ARGV[1] then "
     "  redis.call('hset', KEYS[2], 'cancel', '1') end "
+    "refresh(ARGV[2], stream_user(ARGV[2], KEYS[1])) "
     "return 1";
 
 /* KEYS cjobs; ARGV job id, ttl. */
@@ -313,17 +350,18 @@ static const char WANT_LUA[] =
     "redis.call('pexpire', KEYS[1], ARGV[3]) "
     "return 1";
 
-/* KEYS stream, job hash, want; ARGV id, now ms, consumer. The origin has nobody waiting any
- * more: unless another daemon waits for the computation (then it goes on, and the first of
- * them to take its lock joins the entry: ENQUEUE_LUA), a waiting entry goes, a running one
- * is flagged. */
+/* KEYS stream, job hash, want; ARGV id, now ms, consumer, key prefix. The origin has
+ * nobody waiting any more: unless another daemon waits for the computation (then it goes on,
+ * and the first of them to take its lock joins the entry: ENQUEUE_LUA), a waiting entry goes,
+ * a running one is flagged. */
 static const char CANCEL_LUA[] =
-    WANTED_LUA("3", "2", "3")
+    WANTED_LUA("3", "2", "3") REFRESH_LUA
     "local mine = redis.call('hget', KEYS[2], 'id') == ARGV[1] "
     "if mine and n > 0 then return 0 end "
     "if mine then redis.call('hset', KEYS[2], 'cancel', '1') end "
-    "if not redis.call('xpending', KEYS[1], 'workers', ARGV[1], ARGV[1], 1)[1] then "
-    "  redis.call('xdel', KEYS[1], ARGV[1]) end "
+    "if redis.call('exists', KEYS[1]) == 1 "
+    "   and not redis.call('xpending', KEYS[1], 'workers', ARGV[1], ARGV[1], 1)[1] then "
+    "  redis.call('xdel', KEYS[1], ARGV[1]) refresh(ARGV[4], stream_user(ARGV[4], KEYS[1])) end "
     "return 1";
 
 struct ismd_cluster {
@@ -435,13 +473,12 @@ int ismd_cluster_enqueue(ismd_cluster *c, const char *name, const char *key, con
     snprintf(jobs, sizeof jobs, "%d", lim && lim->max_jobs > 0 ? lim->max_jobs : c->user_jobs);
     snprintf(running, sizeof running, "%d",
              lim && lim->max_running > 0 ? lim->max_running : c->user_running);
-    char users[KEY_MAX], ulim[KEY_MAX];
-    ckey(c, users, "users", "");
+    char ulim[KEY_MAX];
     ckey(c, ulim, "ulim", "");
-    const char *args[] = {stream, users, job, ulim, user, jobs, name, key, fmt, req,
-                          running, STATE_TTL_MS, c->consumer};
+    const char *args[] = {stream, job, ulim, user, jobs, name, key, fmt, req,
+                          running, STATE_TTL_MS, c->consumer, ism_cache_redis_prefix(c->redis)};
     redisReply *r = NULL;
-    int rc = run_script(c, "cluster_enqueue", ENQUEUE_LUA, 4, args, 13, &r);
+    int rc = run_script(c, "cluster_enqueue", ENQUEUE_LUA, 3, args, 13, &r);
     free(req);
     if (rc < 0)
         return -1;
@@ -497,9 +534,10 @@ void ismd_cluster_cancel(ismd_cluster *c, const char *name, const char *stream, 
     ckey(c, job, "job:", name);
     ckey(c, want, "want:", name);
     wall_ms(now, 0);
-    const char *args[] = {stream, job, want, id, now, c->consumer};
+    const char *args[] = {stream, job, want, id, now, c->consumer,
+                          ism_cache_redis_prefix(c->redis)};
     redisReply *r = NULL;
-    if (run_script(c, "cluster_cancel", CANCEL_LUA, 3, args, 6, &r) < 0)
+    if (run_script(c, "cluster_cancel", CANCEL_LUA, 3, args, 7, &r) < 0)
         return;
     if (r->type == REDIS_REPLY_INTEGER && r->integer == 0)
         log_kept(name, "origin");
@@ -575,8 +613,8 @@ static void cj_report(cjob *j, ism_cache_tier *t)
     if (j->status == 503 || j->status == 429)
         return;
     if (j->status == 499) {
-        const char *args[] = {j->stream, j->job, j->id};
-        run_script(j->c, "cluster_dropped", DROPPED_LUA, 2, args, 3, NULL);
+        const char *args[] = {j->stream, j->job, j->id, ism_cache_redis_prefix(j->c->redis)};
+        run_script(j->c, "cluster_dropped", DROPPED_LUA, 2, args, 4, NULL);
         return;
     }
     ism_cache_redis_flush(t);
@@ -591,8 +629,9 @@ static void cj_report(cjob *j, ism_cache_tier *t)
         }
     }
     const char *args[] = {j->stream, j->job, j->id, j->status == 200 ? "done" : "failed",
-                          status, err ? err : "", STATE_TTL_MS};
-    run_script(j->c, "cluster_finish", FINISH_LUA, 2, args, 7, NULL);
+                          status, err ? err : "", STATE_TTL_MS,
+                          ism_cache_redis_prefix(j->c->redis)};
+    run_script(j->c, "cluster_finish", FINISH_LUA, 2, args, 8, NULL);
     free(err);
 }
 
@@ -761,14 +800,13 @@ static int take_one(ismd_cluster *c)
     snprintf(idle_ms, sizeof idle_ms, "%ld", c->ttl_ms);
     snprintf(turn, sizeof turn, "%lu", c->turn++);
     wall_ms(now_ms, 0);
-    char users[KEY_MAX], ulim[KEY_MAX], streams[KEY_MAX];
-    ckey(c, users, "users", "");
-    ckey(c, ulim, "ulim", "");
-    ckey(c, streams, "q:", "");
-    const char *args[] = {users, ulim, streams, c->consumer, idle_ms, turn,
-                          ism_cache_redis_prefix(c->redis), now_ms, STATE_TTL_MS};
+    char wait[KEY_MAX], run[KEY_MAX];
+    ckey(c, wait, "wait", "");
+    ckey(c, run, "run", "");
+    const char *args[] = {wait, run, ism_cache_redis_prefix(c->redis), c->consumer, idle_ms,
+                          turn, now_ms, STATE_TTL_MS};
     redisReply *r = NULL;
-    if (run_script(c, "cluster_take", TAKE_LUA, 2, args, 9, &r) < 0)
+    if (run_script(c, "cluster_take", TAKE_LUA, 2, args, 8, &r) < 0)
         return -1;
     int got = 0;
     if (r->type == REDIS_REPLY_ARRAY && r->elements == 5 &&
@@ -781,12 +819,11 @@ static int take_one(ismd_cluster *c)
 /* Publishes how many entries wait in the whole service (isomesh_cluster_queue_depth). */
 static void count_waiting(ismd_cluster *c)
 {
-    char users[KEY_MAX], streams[KEY_MAX];
-    ckey(c, users, "users", "");
-    ckey(c, streams, "q:", "");
-    const char *args[] = {users, streams};
+    char nwait[KEY_MAX];
+    ckey(c, nwait, "nwait", "");
+    const char *args[] = {nwait};
     redisReply *r = NULL;
-    if (run_script(c, "cluster_depth", DEPTH_LUA, 1, args, 2, &r) < 0)
+    if (run_script(c, "cluster_depth", DEPTH_LUA, 1, args, 1, &r) < 0)
         return;
     if (r->type == REDIS_REPLY_INTEGER)
         atomic_store(&c->sched->metrics->cluster_queue_depth, r->integer);

@@ -5,7 +5,13 @@
  *   P q:<user>    one stream per user: an entry per computation waiting or running (fields
  *                 name, key, fmt, user, req = its canonical request); consumer group
  *                 "workers", one consumer per daemon
- *   P users       the set of users with a stream
+ *   P r:<user>    the user's given-back entries (preempted: taken again before its others),
+ *                 same fields and group
+ *   P run, P nwait  hashes user -> its entries taken (running, or pending on a dead daemon),
+ *                 its entries not taken yet (over both streams)
+ *   P wait        sorted set: users with an entry to take, below their running limit, scored
+ *                 by their entries taken (run, nwait and wait are kept by every script that
+ *                 changes a user's streams: choosing and sharing never read every user's)
  *   P ulim        hash user -> the user's running limit (0: none), from its latest entry
  *   P job:<name>  hash: state (queued, running, done, failed), progress, status and error
  *                 (failed), the daemon running it, its origin (the daemon that queued it),
@@ -55,15 +61,18 @@
  *
  * The executor (a task per daemon, on the Redis thread) takes entries while this daemon has
  * idle workers: first one pending on a daemon that has not heart-beaten for a lock lifetime
- * (XPENDING IDLE + XCLAIM: its daemon died), else a new one (XREADGROUP) from the user with the fewest
- * entries running cluster-wide, below that user's running limit, ties taken in turn. The entry
- * becomes a local flight (or joins one of the same name here); while it runs, its own task
- * re-claims the entry every heartbeat (resetting its idle time), publishes progress and
- * watches for a cancel, and gives the entry back (to the end of its user's stream) when its
- * user is over the service's fair share while another user waits and nothing else on this
- * daemon shares the computation (HEARTBEAT_LUA's over_share: sched.c's preemption rule
- * over the workers of every live daemon, P nworkers); when it ends, the results are flushed to Redis before the job hash
- * says so, and the entry is acknowledged and deleted. Every step is one Lua script, so a
+ * (XPENDING IDLE + XCLAIM: its daemon died), else a new one (XREADGROUP) from the user with the
+ * fewest entries running cluster-wide, below that user's running limit, ties taken in turn:
+ * the user's given-back entries first, then its stream. The entry becomes a local flight (or
+ * joins one of the same name here); while it runs, its own task re-claims the entry every
+ * heartbeat (resetting its idle time), publishes progress and watches for a cancel, and gives
+ * the entry back when its user is over the service's fair share while another user waits and
+ * nothing else on this daemon shares the computation (HEARTBEAT_LUA's over_share: sched.c's
+ * preemption rule over the workers of every live daemon, P nworkers). A given-back entry goes
+ * to its user's P r:<user>, so it is that user's next computation to start; it starts from
+ * scratch (its partial work lived in the worker process stopped to free the worker). When
+ * an entry ends, the results are flushed to Redis before the job hash says so, and the entry
+ * is acknowledged and deleted. Every step is one Lua script, so a
  * crash between two commands never leaves half a change. */
 #ifndef ISMD_CLUSTER_H
 #define ISMD_CLUSTER_H

@@ -7,8 +7,9 @@ with Redis, daemons of one worker each and (for the failure case) nginx:
   served in turn cluster-wide: the fewest running first);
 * a user holding every worker of the service (2 daemons, 1 worker each, paused) gives one
   back across daemons to another user's job posted after, which finishes while the first
-  user's other computation still runs; the given-back one finishes later (before: the
-  second user's job stayed queued);
+  user's other computation still runs (before: the second user's job stayed queued); the
+  given-back one is the first user's next to start, before its computations queued behind
+  it (Redis's started_ms; before: it went to the end of the user's stream);
 * per-user limits count a user's computations on every daemon (--user-jobs: a third one,
   posted to a daemon that holds only one of them, is refused with 429; --user-running: a
   user's second computation waits while a worker is idle, which takes another user's), and
@@ -564,8 +565,10 @@ class ClusterQueueTest(unittest.TestCase):
 
     def test_a_user_over_half_the_services_workers_gives_one_back_to_a_waiting_user(self):
         # 2 daemons of one worker each: the service's share is 1 worker while another user
-        # waits. u holds both (paused: they never end by themselves); v's job, posted after,
-        # can start only if one of u's is preempted across daemons (before: never here).
+        # waits. u holds both (paused: they never end by themselves) and has 4 more queued
+        # behind them; v's job, posted after, can start only if one of u's is preempted
+        # across daemons (before: never here). The given-back one is u's next to start:
+        # again before any of u's queued ones, on Redis's clock (before: after all of them).
         s = stack.Stack(n=2, daemon_args=HELD, with_nginx=False).start()
         try:
             a, b = s.daemons
@@ -573,6 +576,7 @@ class ClusterQueueTest(unittest.TestCase):
             mine = [a.post("/v1/jobs", work(1300 + i)).json() for i in range(2)]
             self.assertTrue(stack.wait_until(lambda: all(
                 a.get(j["url"]).json()["state"] == "running" for j in mine), 60))
+            queued = [a.post("/v1/jobs", work(1302 + i)).json() for i in range(4)]
             preempted = sum(d.metric("isomesh_preemptions_total") for d in s.daemons)
             theirs = harness.http_request(b.port, "POST", "/v1/jobs", work(1310),
                                           source="127.0.0.2").json()
@@ -583,12 +587,28 @@ class ClusterQueueTest(unittest.TestCase):
             self.assertIn("running", states)
             self.assertEqual(sum(d.metric("isomesh_preemptions_total") for d in s.daemons),
                              preempted + 1)
+            # its job hash says so once its executor's task reports the end (a tick later)
+            self.assertTrue(stack.wait_until(
+                lambda: computation(s, theirs)[b"state"] == b"done", 30))
             v = computation(s, theirs)
-            self.assertEqual(v[b"state"], b"done")
-            # the given-back computation went back to u's stream and was not lost
+            # the given-back computation went to u's given-back stream, was not lost, and
+            # started again before every one of u's queued computations
             s.resume_workers()
-            for j in mine:
+            for j in mine + queued:
                 self.assertEqual(wait_job(a, j)["state"], "done")
+            # (the given-back one: its last start is after v's, the other's long before)
+            starts = [int(computation(s, j)[b"started_ms"]) for j in mine]
+            back = [t for t in starts if t >= int(v[b"started_ms"])]
+            self.assertEqual(len(back), 1, "exactly one of u's two computations given back")
+            restarted = back[0]
+            for j in queued:
+                self.assertLess(restarted, int(computation(s, j)[b"started_ms"]), j)
+            # with everything done, the users' kept counts (cluster.h: run, nwait, wait) are
+            # empty and their streams gone, as a count of the streams would say
+            r = s.redis.command
+            self.assertEqual((r("HLEN", "isomesh:v1:run"), r("HLEN", "isomesh:v1:nwait"),
+                              r("ZCARD", "isomesh:v1:wait")), (0, 0, 0))
+            self.assertEqual(r("KEYS", "isomesh:v1:[qr]:*"), [])
         finally:
             self.assertEqual(s.cleanup(), [], "sanitizer reports")
 
