@@ -166,6 +166,8 @@ bool ism_cell_polygonise(ism_cell_ctx *cx, int32_t node, ism_cell_out *out)
     cx->lines.n = 0;
     cx->nzero = 0;
     const ism_node *nd = &cx->tree->nodes[node];
+    if (nd->flags & ISM_NODE_ZERO_FREE)
+        return true; /* no tile of its faces yields an event (octree.h) */
     size_t first[7];
     if (!gather_tiles(cx, node, first))
         return false;

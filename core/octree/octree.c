@@ -88,7 +88,7 @@ static bool collect_leaves(const ism_octree *t, int32_t i, int axis, int side,
                            bool (*emit)(void *, const ism_tile *), void *ctx)
 {
     const ism_node *nd = &t->nodes[i];
-    if (nd->state == ISM_NODE_EMPTY)
+    if (ism_node_void(nd))
         return true;
     if (nd->child < 0) {
         ism_tile tile = face_of(t, nd, axis, side);
@@ -113,8 +113,8 @@ bool ism_octree_face_tiles(const ism_octree *t, const int32_t *parent, int32_t n
     if (j < 0)
         return emit(ctx, &own); /* the face is on the search box's boundary */
     const ism_node *nb = &t->nodes[j];
-    if (nb->state == ISM_NODE_EMPTY)
-        return true; /* the face lies in a closed box proven empty */
+    if (ism_node_void(nb))
+        return true; /* the face lies in a closed box proven free of f = 0 */
     if (nb->child < 0 || nb->level < nd->level)
         return emit(ctx, &own); /* the other side is as coarse or coarser */
     return collect_leaves(t, j, axis, 1 - side, emit, ctx);

@@ -19,6 +19,11 @@ enum ism_node_state {
 
 enum ism_node_flags {
     ISM_NODE_UNRESOLVED = 1, /* leaf at max depth that failed the flatness test */
+    ISM_NODE_ZERO_FREE = 2,  /* leaf whose closed box intervals prove |f| > the double-root
+                                eps on: no root and no tangent point on any of its segments,
+                                so it emits nothing and its faces yield no tile (as an empty
+                                node's); it stays a leaf, so its corners still break the
+                                lattice lines (breaks.c) and no neighbour's segments change */
 };
 
 /* What the hidden-piece search (thin_search.h) decided at a node, kept so that the next
@@ -47,6 +52,13 @@ typedef struct ism_octree {
     size_t n, cap;
 } ism_octree;
 
+/* Does the node's closed box hold no point of f = 0 (empty, or a zero-free leaf)? */
+static inline bool ism_node_void(const ism_node *nd)
+{
+    return nd->state == ISM_NODE_EMPTY ||
+           (nd->state == ISM_NODE_LEAF && (nd->flags & ISM_NODE_ZERO_FREE));
+}
+
 /* Child k of a node sits at org + half * (k & 1, k >> 1 & 1, k >> 2 & 1). */
 static inline void ism_child_origin(const ism_grid *g, const ism_node *nd, int k,
                                     int32_t out[3])
@@ -74,7 +86,7 @@ typedef struct ism_tile {
 
 /* Tiles the face (axis, side) of leaf `node` by the non-empty leaves on the other side
  * (or the face itself when the other side is not finer). Calls emit for each tile; a face
- * that lies in an empty node's closed box yields nothing. Returns false if emit does.
+ * that lies in the closed box of an empty node or a zero-free leaf yields nothing. Returns false if emit does.
  * parent (ism_octree_parents, or NULL) lets the neighbour be found from the node's nearest
  * common ancestor instead of the root. */
 bool ism_octree_face_tiles(const ism_octree *t, const int32_t *parent, int32_t node, int axis,

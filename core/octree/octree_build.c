@@ -7,6 +7,7 @@
 #include "core/octree/node_balls.h"
 #include "core/octree/quiet.h"
 #include "core/octree/thin_search.h"
+#include "core/octree/zero_free.h"
 #include "core/util/parallel.h"
 #include "core/util/grow.h"
 
@@ -257,13 +258,31 @@ static bool take_over(build *b, thread_state *th, node_vec *v, size_t i, const i
     return true;
 }
 
+/* The intervals of node nd's 8 children over tape, in one batched call (the same bounds
+ * node_range finds child by child when it does not shorten). */
+static void children_ranges(build *b, thread_state *th, const ism_node *nd,
+                            const ism_tape *tape, ism_interval range[8])
+{
+    ism_interval box[3][8];
+    for (int k = 0; k < 8; k++) {
+        ism_node c = {{0, 0, 0}, -1, (uint8_t)(nd->level + 1), ISM_NODE_LEAF, 0, 0};
+        ism_child_origin(b->grid, nd, k, c.org);
+        double lo[3], hi[3];
+        node_box(b->grid, &c, lo, hi);
+        for (int a = 0; a < 3; a++)
+            box[a][k] = (ism_interval){lo[a], hi[a]};
+    }
+    ism_eval_interval_batch(tape, th->s.ws, box[0], box[1], box[2], range, 8);
+    th->s.n_interval += 8;
+}
+
 /* Decides node v->v[i] and grows its subtree. Nodes that fail the flatness test are split
  * down to level `limit` (depth.max, or ISM_THIN_RESOLVE_LEVELS deeper below a hidden
  * piece); a would-be leaf that hides a piece is split in any case, down to thin_depth. When
  * defer is not NULL, nodes at its level are left for tasks (appended to it). pi: the same
  * node in the last round's tree (b->previous), or -1. */
 static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_tape *tape,
-                 int limit, defer_list *defer, int32_t pi)
+                 int limit, defer_list *defer, int32_t pi, const ism_interval *known)
 {
     if (atomic_load(&b->failed) != ISM_BUILD_OK)
         return false;
@@ -285,8 +304,8 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     const ism_node *pv = pi >= 0 ? &b->previous->nodes[pi] : NULL;
     if (pv && take_over(b, th, v, i, pv, forced))
         return true;
-    ism_interval range;
-    const ism_tape *sub = node_range(b, th, &nd, tape, &range);
+    ism_interval range = known ? *known : (ism_interval){0, 0};
+    const ism_tape *sub = known ? tape : node_range(b, th, &nd, tape, &range);
     if (!pv && !(range.lo <= 0 && range.hi >= 0)) {
         v->v[i].state = ISM_NODE_EMPTY;
         th->excluded++;
@@ -311,7 +330,11 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         bool flat = ism_plot_test(&th->s, &b->p->flatness, lo, hi, &k);
         th->s.tape = saved;
         leaf = flat || nd.level >= limit;
-        if (leaf && !flat) {
+        /* a leaf proven free of f = 0 emits nothing and hides no piece: skipped from here */
+        if (leaf && !b->p->scalar_eval && ism_box_zero_free(sub, th->s.ws, lo, hi, &k,
+                                      b->p->flatness.double_root_eps, &th->s.n_interval))
+            v->v[i].flags |= ISM_NODE_ZERO_FREE;
+        else if (leaf && !flat) {
             v->v[i].thin = hides_piece(b, th, &nd, sub, &k);
             count_thin(th, v->v[i].thin);
         }
@@ -341,8 +364,16 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     v->v[i].state = ISM_NODE_SPLIT;
     v->v[i].child = (int32_t)first;
     bool was_split = pv && pv->state == ISM_NODE_SPLIT;
+    /* the children's intervals at once, unless each child shortens its own tape, is taken
+     * over from the last round, or is left for a task */
+    bool batch = !b->p->scalar_eval && !b->shortening && !was_split &&
+                 !(defer && nd.level + 1 == defer->level);
+    ism_interval ranges[8];
+    if (batch)
+        children_ranges(b, th, &nd, sub, ranges);
     for (int k = 0; k < 8; k++)
-        if (!grow(b, th, v, first + k, sub, limit, defer, was_split ? pv->child + k : -1))
+        if (!grow(b, th, v, first + k, sub, limit, defer, was_split ? pv->child + k : -1,
+                  batch ? &ranges[k] : NULL))
             return false;
     return true;
 }
@@ -363,7 +394,8 @@ static void run_task(void *ctx, size_t task, int thread)
     thread_state *th = &b->threads[thread];
     node_vec *out = &b->task_out[task];
     /* The task's tape: shorten from the full tape over the task's own box on the way. */
-    grow(b, th, out, 0, b->p->tape, b->tasks[task].limit, NULL, b->tasks[task].previous);
+    grow(b, th, out, 0, b->p->tape, b->tasks[task].limit, NULL, b->tasks[task].previous,
+         NULL);
     report_progress(b);
 }
 
@@ -444,7 +476,7 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
     memset(&b, 0, sizeof b);
     b.p = p;
     b.grid = &t->grid;
-    b.shortening = 1;
+    b.shortening = ism_tape_has_min_max(p->tape); /* nothing to drop without min/max */
     atomic_init(&b.failed, ISM_BUILD_OK);
     atomic_init(&b.nodes_total, 1);
     atomic_init(&b.tasks_done, 0);
@@ -465,7 +497,8 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
     }
     deferred.level = p->max_depth < TOP_LEVEL ? p->max_depth : TOP_LEVEL;
     b.previous = p->previous && p->previous->n ? p->previous : NULL;
-    grow(&b, &b.threads[0], &top, 0, p->tape, p->max_depth, &deferred, b.previous ? 0 : -1);
+    grow(&b, &b.threads[0], &top, 0, p->tape, p->max_depth, &deferred, b.previous ? 0 : -1,
+         NULL);
     if ((status = atomic_load(&b.failed)) != ISM_BUILD_OK)
         goto done;
 

@@ -46,6 +46,8 @@ typedef struct ism_octree_build_params {
                                          keep (a node's decision depends on nothing else), so
                                          the tree is the one a fresh build makes, counters
                                          included but thin_boxes (boxes searched now) */
+    bool scalar_eval;                 /* no batched intervals, no zero-free leaves (the
+                                         reference path: ism_poly_options.scalar_eval) */
     const volatile int *cancel;
     void (*progress)(void *ctx, double fraction); /* fraction of subtrees done */
     void *progress_ctx;

@@ -34,6 +34,9 @@ typedef struct ism_poly_options {
                                afresh (default off: a round takes the last round's tree over
                                and copies the leaves its splits cannot have changed,
                                leaf_memo.h — the same mesh, for less; on is for tests) */
+    bool scalar_eval;       /* evaluate the octree node by node: no batched intervals over a
+                               node's children and no zero-free leaves (octree.h) — the same
+                               mesh bit for bit, for more; on is for tests (default off) */
     /* Balls (x, y, z, radius) whose mesh a later stage rebuilds — around the singular points
      * and along the curves found from f, which the conformance pass refills
      * (core/singular/conform.h): hidden pieces are not chased into them (a horn shrinking to

@@ -472,6 +472,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
         .threads = threads,
         .max_nodes = o->max_memory / 4 / sizeof(ism_node),
         .force_split = split,
+        .scalar_eval = o->scalar_eval,
         .previous = o->fresh_rounds ? NULL : &prev->tree,
         .cancel = o->cancel,
         .progress = report,
