@@ -23,6 +23,7 @@
  * such triangles left T-junctions against their split neighbours: the crack that sent
  * three balls to the fallback cut, 420 triangles at the default depth.) */
 #include "core/curves/branches.h"
+#include "core/curves/crease_weld.h"
 #include "core/curves/cut_internal.h"
 #include <math.h>
 #include <stdlib.h>
@@ -231,6 +232,16 @@ static bool tie_edge_side(crease_state *cs, uint32_t a, uint32_t b, uint32_t A)
     return cs->tie_side[i] == A || crease_edge(cs, a, b, cs->tie_side[i], A);
 }
 
+/* The branch at triangle t's centroid (ISM_BRANCH_NONE where f ties there too). */
+static bool centroid_branch(crease_state *cs, const uint32_t t[3], uint32_t *A)
+{
+    double c[3] = {0, 0, 0};
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++)
+            c[k] += cs->s->m->pos[3 * (size_t)t[i] + k] / 3;
+    return ism_branches_at(cs->b, c, A);
+}
+
 /* A triangle with one or more tie vertices (l[i] ISM_BRANCH_NONE). */
 static bool split_tie_triangle(crease_state *cs, const uint32_t t[3], const uint32_t l[3])
 {
@@ -244,6 +255,14 @@ static bool split_tie_triangle(crease_state *cs, const uint32_t t[3], const uint
         int x = l[0] != ISM_BRANCH_NONE ? 0 : l[1] != ISM_BRANCH_NONE ? 1 : 2;
         if (!tie_edge_side(cs, t[(x + 1) % 3], t[(x + 2) % 3], l[x]))
             return false;
+    }
+    if (ties == 3) { /* three corners on the crease: its side is its middle's */
+        uint32_t A;
+        if (!centroid_branch(cs, t, &A))
+            return false;
+        for (int i = 0; A != ISM_BRANCH_NONE && i < 3; i++)
+            if (!tie_edge_side(cs, t[i], t[(i + 1) % 3], A))
+                return false;
     }
     uint32_t T = t[at], u = t[(at + 1) % 3], w = t[(at + 2) % 3];
     uint32_t A = cs->label[u], B = cs->label[w];
@@ -431,13 +450,16 @@ bool cut_crease(cut_state *s, size_t k)
     if (ok) {
         cut_longest_edges(m, s->reach);
         memcpy(old, m->tri, nt * 3 * sizeof *old);
+        ok = ism_crease_weld_ties(m, cs.label, ISM_BRANCH_NONE, s->tol, old, nt) != SIZE_MAX;
         m->ntris = 0;
         ism_key_map_free(&s->split);
         ism_key_map_init(&s->split);
     }
     for (size_t t = 0; ok && t < nt; t++) {
+        const uint32_t *v = old + 3 * t;
         s->from = parent[t];
-        ok = split_crease_triangle(&cs, old + 3 * t);
+        if (v[0] != v[1] && v[1] != v[2] && v[2] != v[0]) /* else a welded sliver: gone */
+            ok = split_crease_triangle(&cs, v);
     }
     ok = ok && refine_ties(&cs, nv);
     for (int pass = 0; ok && pass < CREASE_ORDER_PASSES; pass++) {

@@ -574,7 +574,8 @@ static void finish(cut_state *s)
     s->ev->pair[0] = s->ev->pair[1] = ISM_CUT_NO_BRANCH;
 }
 
-/* V − E + T of the triangles (edges counted once); LONG_MIN when out of memory. */
+/* V − E + T of the triangles (vertices and edges counted once, only those triangles use: the
+ * crease cut leaves welded copies unused); LONG_MIN when out of memory. */
 static long mesh_euler(const ism_mesh *m)
 {
     ism_key_map e;
@@ -588,7 +589,18 @@ static long mesh_euler(const ism_mesh *m)
                 return LONG_MIN;
             }
         }
-    long chi = (long)m->nverts - (long)e.n + (long)m->ntris;
+    uint8_t *used = calloc(m->nverts + 1, 1);
+    long chi = LONG_MIN;
+    if (used) {
+        size_t nv = 0;
+        for (size_t i = 0; i < 3 * m->ntris; i++)
+            if (!used[m->tri[i]]) {
+                used[m->tri[i]] = 1;
+                nv++;
+            }
+        chi = (long)nv - (long)e.n + (long)m->ntris;
+    }
+    free(used);
     ism_key_map_free(&e);
     return chi;
 }

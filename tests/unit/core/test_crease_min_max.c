@@ -18,6 +18,7 @@
 #include "core/curves/cut_fn.h"
 #include "core/eval/eval.h"
 #include "core/octree/crease_split.h"
+#include "core/singular/surface.h"
 
 #define SEP 1.05              /* the second ball's centre (SEP, 0, 0) */
 #define RAD 0.1               /* the second ball's radius (the first's is 1) */
@@ -187,4 +188,85 @@ Test(crease_min_max, branch_is_the_one_f_takes)
         ism_eval_ws_free(s.ws);
         ism_tape_free(t);
     }
+}
+
+/* Two unit balls centred 0.8 apart, box −1.3..2.1: the crease circle lies in the plane
+ * x = 0.4, a lattice plane of the box (its middle), radius √0.84. Under an error bound the
+ * polygoniser puts a crease point in each leaf meeting the crease (crease_split.h); on the
+ * lattice plane f ties exactly at all of them, the copies of one point lie a rounding apart,
+ * joined by triangles of no area, and no triangle edge had a branch on both sides: 0 crease
+ * edges at depth 5, one 0.04 long at depth 6. Checked in the lattice box and the boxes
+ * shifted by 1e-3 and 0.37 of a finest cell: the crease edges form one closed chain, their
+ * vertices within 1e-9 × diagonal of both spheres, and the circle's length from the mesh —
+ * each chord's arc 2r asin(c / 2r) summed — equals 2πr within LATTICE_ARC_REL, and the
+ * chords' sum falls short of 2πr by between Σ c³ / 24r² and twice that (arc − chord of a
+ * chord c ≤ r: c³ / 24r² + 3c⁵ / 640r⁴ + ...). */
+#define LATTICE_SEP 0.8
+#define LATTICE_DEPTH 5
+#define LATTICE_E 1e-3
+/* Arc sum against 2πr: vertices on the circle to Newton's precision (1e-12 of the diagonal)
+ * make the arcs exact to rounding; one missing or doubled-back edge is a whole chord's arc,
+ * ~0.1 of a radian here. */
+#define LATTICE_ARC_REL 1e-8
+
+static void lattice_crease(int w)
+{
+    const double base[6] = {-1.3, -1.3, -1.3, 2.1, 2.1, 2.1};
+    double box[6];
+    pf_sweep_box(base, LATTICE_DEPTH, w, box);
+    const pf_surface s = {"min(x^2 + y^2 + z^2 - 1, (x - 0.8)^2 + y^2 + z^2 - 1)", NULL, 0,
+                          NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    ism_mesh m;
+    ism_locus l;
+    pf_run_surface_bounded(t, box, 3, LATTICE_DEPTH, LATTICE_E, &m, &l);
+    double diag = sqrt(3) * (box[3] - box[0]), r = sqrt(1 - 0.25 * LATTICE_SEP * LATTICE_SEP);
+    ism_cut_fn crease;
+    cr_assert(ism_cut_crease_fn(t, &crease));
+    ism_cut_eval ev;
+    cr_assert(ism_cut_eval_init(&ev, t, &crease, 1));
+    ism_cut cut;
+    memset(&cut, 0, sizeof cut);
+    cr_assert(ism_cut_mesh(&ev, 1e-3 * CREASE_TOL_REL * diag, &m, &cut));
+    ism_cut_eval_free(&ev);
+    uint8_t *deg = calloc(m.nverts, 1);
+    double arcs = 0, chords = 0, short_by = 0, worst = 0;
+    for (size_t i = 0; i < cut.nedges; i++) {
+        const double *p = m.pos + 3 * (size_t)cut.edges[i].a, *q = m.pos + 3 * (size_t)cut.edges[i].b;
+        for (int e = 0; e < 2; e++) {
+            const double *v = e ? q : p;
+            double r0 = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            double r1 = sqrt((v[0] - LATTICE_SEP) * (v[0] - LATTICE_SEP) + v[1] * v[1] + v[2] * v[2]);
+            worst = fmax(worst, fmax(fabs(r0 - 1), fabs(r1 - 1)));
+            deg[e ? cut.edges[i].b : cut.edges[i].a]++;
+        }
+        double c = sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                        (p[2] - q[2]) * (p[2] - q[2]));
+        chords += c;
+        arcs += 2 * r * asin(fmin(1, c / (2 * r)));
+        short_by += c * c * c / (24 * r * r);
+    }
+    size_t odd = 0;
+    for (size_t v = 0; v < m.nverts; v++)
+        odd += deg[v] != 0 && deg[v] != 2;
+    cr_log_info("lattice crease box %d: %zu crease edges, arcs %.12f chords %.9f (2πr %.12f), "
+                "off the spheres %.2e", w, cut.nedges, arcs, chords, 2 * M_PI * r, worst);
+    cr_expect_gt(cut.nedges, 20, "box %d", w);
+    cr_expect_eq(odd, 0, "box %d: %zu crease vertices not on exactly two crease edges", w, odd);
+    cr_expect_leq(worst, CREASE_TOL_REL * diag, "box %d: %g", w, worst);
+    cr_expect_float_eq(arcs, 2 * M_PI * r, LATTICE_ARC_REL * 2 * M_PI * r, "box %d: %.12f", w,
+                       arcs);
+    cr_expect_leq(chords, 2 * M_PI * r - short_by, "box %d: %.9f", w, chords);
+    cr_expect_geq(chords, 2 * M_PI * r - 2 * short_by, "box %d: %.9f", w, chords);
+    free(deg);
+    ism_cut_free(&cut);
+    ism_locus_free(&l);
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+}
+
+Test(crease_min_max, crease_on_a_lattice_plane)
+{
+    for (int w = pf_first_box() - 1; w < 2; w++)
+        lattice_crease(w);
 }
