@@ -264,6 +264,7 @@ function syncControls() {
   $('keep-box').checked = !!state.keepBox;
   $('wireframe').checked = state.wire;
   $('occlusion').checked = !!state.occlusion;
+  $('shadows').checked = !!state.shadows;
   $('clip-on').checked = state.clip.on;
   $('clip-axis').value = state.clip.axis;
   $('clip-flip').checked = state.clip.flip;
@@ -462,6 +463,7 @@ function applyDisplay() {
   viewer.setWireframe(state.wire);
   viewer.setClip(state.clip);
   viewer.setOcclusion(!!state.occlusion);
+  viewer.setShadows(!!state.shadows);
 }
 
 // The URL follows the state, at most once every URL_INTERVAL_MS (browsers refuse a flood of
@@ -978,7 +980,7 @@ function applyFragment(fragment) {
       if (ranges[k]) ranges[k] = [Math.min(ranges[k][0], v), Math.max(ranges[k][1], v)];
     }
   }
-  for (const k of ['box', 'depth', 'maxError', 'quality', 'color', 'clip', 'show', 'wire', 'occlusion', 'curves']) if (s[k] !== undefined) state[k] = s[k];
+  for (const k of ['box', 'depth', 'maxError', 'quality', 'color', 'clip', 'show', 'wire', 'occlusion', 'shadows', 'curves']) if (s[k] !== undefined) state[k] = s[k];
   pendingView = s.view || null;
   state.view = s.view || null;
   shownIdentity = null;
@@ -1117,6 +1119,11 @@ function wire() {
     state.occlusion = $('occlusion').checked;
     updateUrl();
     viewer.setOcclusion(state.occlusion);
+  });
+  $('shadows').addEventListener('change', () => {
+    state.shadows = $('shadows').checked;
+    updateUrl();
+    viewer.setShadows(state.shadows);
   });
   $('color-range').addEventListener('change', () => showLegend(state.color, viewer.setRangeCut($('color-range').value)));
   $('wireframe').addEventListener('change', () => {

@@ -5,7 +5,8 @@
 // Fragment keys (URLSearchParams): preset=NAME | expr=TEXT, p.NAME=VALUE per parameter,
 // box=xmin,ymin,zmin,xmax,ymax,zmax, depth=MIN,MAX, err=MAX_ERROR, quality=good, cam=px,py,pz,tx,ty,tz,
 // color=shaded|mean|gauss|cells, clip=AXIS,OFFSET[,flip], hide=edges,points,boundary,box,curves,
-// wire=1, axes=1, ao=1 (the render mode with ambient occlusion), curves=JSON list of the
+// wire=1, axes=1, ao=1 (the render mode with ambient occlusion), shadows=1 (the render mode's
+// soft shadows), curves=JSON list of the
 // Curves panel's entries (curves.js).
 import { curveRequest, validEntries } from './curves.js';
 
@@ -37,7 +38,8 @@ export function defaultState() {
     curves: [],             // the Curves panel's entries (curves.js)
     keepBox: false,         // a typed expression keeps the box (else it is fitted, POST /v1/box)
     wire: false,
-    occlusion: false,       // the render mode: ambient occlusion over the shading (render_mode.js)
+    occlusion: false,       // the render mode: ambient occlusion over the shading (occlusion.js)
+    shadows: false,         // the render mode: soft shadows from a key light (shadows.js)
   };
 }
 
@@ -89,6 +91,7 @@ export function encodeState(state, paramNames) {
   if (hidden.length) q.set('hide', hidden.join(','));
   if (state.wire) q.set('wire', '1');
   if (state.occlusion) q.set('ao', '1');
+  if (state.shadows) q.set('shadows', '1');
   if (state.show.axes) q.set('axes', '1');
   if (state.curves && state.curves.length) q.set('curves', JSON.stringify(state.curves));
   return q.toString().replace(/%2C/g, ',');  // commas read fine in a fragment
@@ -156,6 +159,7 @@ export function decodeState(fragment) {
   if (q.has('axes')) s.show = { ...(s.show || Object.fromEntries(FEATURES.map((k) => [k, true]))), axes: q.get('axes') === '1' };
   if (q.has('wire')) s.wire = q.get('wire') === '1';
   if (q.has('ao')) s.occlusion = q.get('ao') === '1';
+  if (q.has('shadows')) s.shadows = q.get('shadows') === '1';
   if (q.has('curves')) {
     let list = null;
     try { list = JSON.parse(q.get('curves')); } catch { list = null; }

@@ -5,8 +5,10 @@
 // wireframe overlay, the non-manifold features, the requested curves and their cells
 // (curves.js), double sheets tinted, one clipping plane, fit-to-view, and the render mode
 // with ambient occlusion (occlusion.js: computed in the background per mesh and cut when first
-// shown in that mode, kept per vertex, each side its own; plain shading until then). Draws on
-// demand (at most once per animation frame), not in a loop.
+// shown in that mode, kept per vertex, each side its own; plain shading until then) and soft
+// shadows from three.js's shadow mapping (shadows.js: a key light fixed in the world,
+// self-shadowing and a ground plane; a toggle of its own). Draws on demand (at most once per
+// animation frame), not in a loop.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { buildFeatures, disposeFeatures, pickFeature, setLineResolution } from './features.js';
@@ -14,7 +16,8 @@ import { buildCurves, cellColors } from './curves.js';
 import { curvatureColors, curvatureRange, RANGE_CUTS } from './colormap.js';
 import { buildBox, disposeBox } from './box_view.js';
 import { sectionSegments, sectionLines } from './section.js';
-import { buildCap } from './cap.js';
+import { buildCap, disposeCap } from './cap.js';
+import { Shadows, HEADLIGHT_SCALE } from './shadows.js';
 import { bakeOcclusion } from './occlusion.js';
 import * as timeline from './timeline.js';
 import { gpuDone } from './gpu.js';
@@ -72,6 +75,8 @@ export class Viewer {
     this.camera.add(fill);
     this.camera.add(fill.target);
     fill.target.position.set(0, 0, -1);
+    this.headLights = [head, fill];
+    this.shadows = new Shadows(this.scene, this.renderer);
 
     this.controls = new OrbitControls(this.camera, canvas);
     this.controls.enableDamping = false;
@@ -88,6 +93,7 @@ export class Viewer {
     this.material = new THREE.MeshStandardMaterial({
       color: SURFACE_RGB, side: THREE.DoubleSide, roughness: 0.55, metalness: 0.05,
       polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
+      clipShadows: true,   // what the clipping plane removes casts no shadow
     });
     this.backTint = { value: new THREE.Color(1, 1, 1) };
     this.twoSided = true;
@@ -262,6 +268,19 @@ export class Viewer {
     return changed;
   }
 
+  // The render mode's soft shadows (shadows.js) on or off: the key light and the ground, the
+  // headlights dimmed meanwhile, the cap lit (and shadowed) or flat to match.
+  setShadows(on) {
+    if (this.shadows.setOn(on)) {
+      for (const l of this.headLights) {
+        if (l.userData.base === undefined) l.userData.base = l.intensity;
+        l.intensity = l.userData.base * (on ? HEADLIGHT_SCALE : 1);
+      }
+      this.render();
+    }
+    if (this.cap) this.cap.material = on ? this.cap.userData.lit : this.cap.userData.flat;
+  }
+
   // What the clipping removes, as a key of the occlusion computed without it ('' for nothing).
   cutKey() {
     const p = this.clipping[0];
@@ -329,12 +348,14 @@ export class Viewer {
       g.computeBoundingSphere();
       this.surface = new THREE.Mesh(g, this.material);
       this.surface.name = 'surface';
+      this.surface.castShadow = this.surface.receiveShadow = true;
       this.wire = new THREE.Mesh(g, this.wireMaterial);
       this.wire.name = 'wireframe';
       this.wire.renderOrder = 1;
       this.scene.add(this.surface, this.wire);
       if (!g.boundingBox.isEmpty()) this.bounds = g.boundingBox.clone();
     }
+    this.shadows.fit(this.bounds);
     const size = this.bounds.getSize(new THREE.Vector3()).length();
     this.features = buildFeatures(result.features, 0.009 * size, this.clipping);
     this.features.group.traverse((o) => { o.frustumCulled = false; });
@@ -545,19 +566,22 @@ export class Viewer {
     this.wireMaterial.needsUpdate = true;
     this.updateSection();
     this.updateCap();
+    this.shadows.markDirty();
   }
 
   // The cap of the clipping plane (cap.js), drawn from f; rebuilt when the cut moves.
   updateCap() {
     if (this.cap) {
       this.scene.remove(this.cap);
-      this.cap.geometry.dispose();
-      this.cap.material.dispose();
+      disposeCap(this.cap);
       this.cap = null;
     }
     if (!this.data) return; // an empty mesh still has a cap when the box lies inside f < 0
     this.cap = buildCap(this.clip, this.box, this.glsl);
-    if (this.cap) this.scene.add(this.cap);
+    if (this.cap) {
+      if (this.shadows.on) this.cap.material = this.cap.userData.lit;
+      this.scene.add(this.cap);
+    }
   }
 
   // The section curve of the clipping plane (section.js), rebuilt when the cut moves.
