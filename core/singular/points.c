@@ -328,6 +328,21 @@ static bool on_curve(ctx *x, const ism_sing_point *pt, int rank)
     return false;
 }
 
+/* Whether the rank-2 projection q, whose cubic term along the null direction is 0
+ * (cusp_probe false), is no point of a curve of zeros of ∇f (on_curve false): an isolated
+ * zero where f is quartic or higher along the null direction (an A3 point) — the horn
+ * cyclide's (a, 0, 0), f ≈ 384u² + 40uy² + y⁴. At depth 3 in its box (cell 4) that
+ * point's cells join one cluster with the tube's cells and the critical points off the
+ * surface at (±0.74..., 0, 0) and (−10.74..., 0, 0); its projections, (10, ±0.0009, 0),
+ * were taken for a curve's, no start was tried, and the curve stage traced a two-point
+ * whisker with lost ends. Deflation or the A3 system then certifies the point. */
+static bool isolated_rank2(ctx *x, const double q[3])
+{
+    ism_sing_point pt = { .cones = -1 };
+    memcpy(pt.p, q, sizeof pt.p);
+    return !on_curve(x, &pt, 2);
+}
+
 /* Bounds of a cluster's boxes and of its boxes' projections. */
 typedef struct cluster_info {
     double lo[3], hi[3];   /* boxes */
@@ -479,53 +494,71 @@ static bool certified_from(ctx *x, const double start[3], const double lo[3],
            || add_cand(x, &pt, UINT32_MAX, SIZE_MAX);
 }
 
-/* The rank-3 boxes of an extended cluster not proved to hold one zero of ∇f: each may hold
- * points its projection did not reach — Newton from the centre left the cell (kummer-4-nodes
- * at depth 3 in ±3, cell 0.75, projects only onto its 8 critical points off the surface, and
- * its 4 nodes' cells stay unprojected), or landed on one of several points in the cell (the
- * same box shifted (0.37, −0.23, 0.41) cell puts 3 nodes in one cell, projected onto one).
- * Each is searched again as a box of its own, BELOW_CELL_DEPTH levels below the search cell
- * (search.h), and Newton runs from every sub-cell projected or proved to hold one zero of
- * ∇f, within the cluster grown by a cell; only certified points are kept. Only in clusters
- * whose every projection has rank 3 (points, not a curve's or sheet's cells: there it would
- * triple the stage's work on steiner-roman, cross-cap and heart at depth 7 for nothing
- * found). At most BELOW_CELL_BOXES_MAX boxes a cluster; a sub-search cut short (budget,
- * deadline) marks the locus incomplete. */
+/* One box of a cluster searched again as a box of its own, BELOW_CELL_DEPTH levels below
+ * the search cell (search.h): Newton from every sub-cell projected or proved to hold one
+ * zero of ∇f, within lo..hi; only certified points are kept. A sub-search cut short
+ * (budget, deadline) marks the locus incomplete. False only when out of memory. */
+static bool search_below(ctx *x, const ism_lbox *b, const double lo[3], const double hi[3],
+                         double half)
+{
+    ism_locus_options so = *x->o;
+    memcpy(so.box, b->lo, sizeof so.box[0] * 3);
+    memcpy(so.box + 3, b->hi, sizeof so.box[0] * 3);
+    so.max_depth = BELOW_CELL_DEPTH;
+    so.max_boxes = BELOW_CELL_SUB_BOXES_MAX;
+    so.threads = 1;
+    ism_locus sub;
+    ism_locus_init(&sub);
+    ism_error err;
+    bool ok = ism_sing_search(x->t, &so, &sub, &err);
+    x->out->evals_interval += sub.evals_interval;
+    x->out->evals_jet += sub.evals_jet;
+    for (size_t j = 0; ok && j < sub.nboxes; j++)
+        if (sub.boxes[j].flags & (ISM_LBOX_PROJECTED | ISM_LBOX_UNIQUE))
+            ok = certified_from(x, sub.boxes[j].q, lo, hi, half);
+    if (ok && sub.incomplete && !x->out->incomplete) {
+        x->out->incomplete = true;
+        snprintf(x->out->incomplete_why, sizeof x->out->incomplete_why,
+                 "singular points, a search below the cell: %.40s", sub.incomplete_why);
+    }
+    ism_locus_free(&sub);
+    return ok;
+}
+
+/* Which boxes of a cluster below_cell_starts searches again. */
+enum { BELOW_RANK3 = 0,      /* rank 3, not a Krawczyk box (an extended cluster) */
+       BELOW_UNPROJECTED = 1 /* Newton from the centre left the cell (a point cluster) */ };
+
+/* The boxes of cluster id that `which` selects, each searched below the cell (search_below),
+ * at most BELOW_CELL_BOXES_MAX of them. BELOW_RANK3, in an extended cluster: each may hold
+ * points its projection did not reach — Newton from the centre left the cell
+ * (kummer-4-nodes at depth 3 in ±3, cell 0.75, projects only onto its 8 critical points off
+ * the surface, and its 4 nodes' cells stay unprojected), or landed on one of several points
+ * in the cell (the same box shifted (0.37, −0.23, 0.41) cell puts 3 nodes in one cell,
+ * projected onto one). Only in clusters whose every projection has rank 3 (points, not a
+ * curve's or sheet's cells: there it would triple the stage's work on steiner-roman,
+ * cross-cap and heart at depth 7 for nothing found). BELOW_UNPROJECTED, in a point cluster
+ * whose projections all landed on one critical point off the surface: the cluster would be
+ * dropped whole with it, and its unprojected boxes with it — isolated-point at depth 3 in
+ * its box shifted 0.37 cell (cells 0.33 × 0.2 × 0.2): the origin's cell joins the cells
+ * between it and the sphere, whose projections reach only the saddle at (0.377, 0, 0) off
+ * the surface, and Newton from the origin's cell centre left it; the isolated point was
+ * lost. */
 static bool below_cell_starts(ctx *x, uint32_t id, const uint32_t *label, const double lo[3],
-                               const double hi[3], double half)
+                               const double hi[3], double half, int which)
 {
     const ism_locus *l = x->out;
-    for (size_t i = 0; i < l->nboxes; i++)
+    for (size_t i = 0; which == BELOW_RANK3 && i < l->nboxes; i++)
         if (label[i] == id && (l->boxes[i].flags & ISM_LBOX_PROJECTED) && l->boxes[i].rank < 3)
             return true; /* a curve's or sheet's cluster: left to those stages as it is */
     size_t boxes = 0;
     for (size_t i = 0; i < l->nboxes && boxes < BELOW_CELL_BOXES_MAX; i++) {
         const ism_lbox *b = &l->boxes[i];
-        if (label[i] != id || (b->flags & ISM_LBOX_UNIQUE) || b->rank < 3)
+        bool want = which == BELOW_RANK3 ? b->rank == 3 : !(b->flags & ISM_LBOX_PROJECTED);
+        if (label[i] != id || (b->flags & ISM_LBOX_UNIQUE) || !want)
             continue;
         boxes++;
-        ism_locus_options so = *x->o;
-        memcpy(so.box, b->lo, sizeof so.box[0] * 3);
-        memcpy(so.box + 3, b->hi, sizeof so.box[0] * 3);
-        so.max_depth = BELOW_CELL_DEPTH;
-        so.max_boxes = BELOW_CELL_SUB_BOXES_MAX;
-        so.threads = 1;
-        ism_locus sub;
-        ism_locus_init(&sub);
-        ism_error err;
-        bool ok = ism_sing_search(x->t, &so, &sub, &err);
-        x->out->evals_interval += sub.evals_interval;
-        x->out->evals_jet += sub.evals_jet;
-        for (size_t j = 0; ok && j < sub.nboxes; j++)
-            if (sub.boxes[j].flags & (ISM_LBOX_PROJECTED | ISM_LBOX_UNIQUE))
-                ok = certified_from(x, sub.boxes[j].q, lo, hi, half);
-        if (ok && sub.incomplete && !x->out->incomplete) {
-            x->out->incomplete = true;
-            snprintf(x->out->incomplete_why, sizeof x->out->incomplete_why,
-                     "singular points, a search below the cell: %.40s", sub.incomplete_why);
-        }
-        ism_locus_free(&sub);
-        if (!ok)
+        if (!search_below(x, b, lo, hi, half))
             return false;
     }
     return true;
@@ -550,6 +583,9 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
         bool loop = false;
         if (r == OFF_SURFACE) {
             r = descend(x, pt.p, lo, hi, half, &pt, &loop);
+            if (r == OFF_SURFACE
+                && !below_cell_starts(x, id, label, lo, hi, half, BELOW_UNPROJECTED))
+                return false;
         } else if (r == FOUND && !pt.certified) {
             int rank = ism_sing_rank(pt.eig, l->hessian_scale);
             loop = (rank == 1 || rank == 2) && on_curve(x, &pt, rank);
@@ -566,13 +602,13 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
         if (label[i] != id || !(b->flags & ISM_LBOX_PROJECTED) || b->rank < 2)
             continue;
         bool seen = false;
-        if (b->rank == 2) { /* a cusp among the points of a curve: its cubic term says */
+        if (b->rank == 2) { /* a cusp or A3 point among the points of a curve */
             for (size_t s = 0; s < probed && !seen; s++)
                 seen = ism_dist3(probes[s], b->q) <= MERGE_CELLS * x->cell;
             if (seen || probed == CUSP_PROBES_MAX)
                 continue;
             memcpy(probes[probed++], b->q, sizeof probes[0]);
-            if (!cusp_probe(x, b->q))
+            if (!cusp_probe(x, b->q) && !isolated_rank2(x, b->q))
                 continue;
         }
         double same = (b->rank == 3 ? SAME_START_CELLS : MERGE_CELLS) * x->cell;
@@ -584,7 +620,7 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
         if (!certified_from(x, b->q, lo, hi, half))
             return false;
     }
-    return below_cell_starts(x, id, label, lo, hi, half) && !x->pc.oom;
+    return below_cell_starts(x, id, label, lo, hi, half, BELOW_RANK3) && !x->pc.oom;
 }
 
 static bool same_point(const ctx *x, const ism_sing_point *a, const ism_sing_point *b)

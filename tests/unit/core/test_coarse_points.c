@@ -1,0 +1,98 @@
+/* test_coarse_points.c — singular points other than nodes at coarse depths (3 and 4) through
+ * the whole pipeline of core/singular/surface.h, in the preset's box as given and shifted off
+ * the octree lattice as tests/bench/sweep_singular.py shifts it (1e-3, 0.37 of a finest cell).
+ *
+ * What is asserted comes from the closed forms, not from the code:
+ *  - isolated-point, f = |p|² g with g = (x − 1.1)² + y² + z² − 0.25: ∇f = 2p g + |p|² ∇g.
+ *    Where f = 0 either p = 0 (g(0) = 0.96, so ∇f = 0 there and H = 2 g(0) I = 1.92 I,
+ *    definite: an isolated point) or g = 0 with p ≠ 0, where ∇f = |p|² ∇g ≠ 0 (∇g = 2(p − c)
+ *    does not vanish on the sphere). So exactly one singular point, the origin, isolated;
+ *    the rest is the sphere of radius 0.5 about (1.1, 0, 0), inside every box tried: χ 2, one
+ *    component, no boundary, no non-manifold edge. Before, at depth 3 in the box shifted 0.37
+ *    cell the point was lost (its cell joined a cluster whose projections all reached a
+ *    critical point off the surface, and the cluster was dropped whole).
+ *  - horn-cyclide, f = S² − 4(a x − f r)² − 4(a² − f²) y², S = x² + y² + z² + a² − f² − r²,
+ *    a = 10, f = r = 2 (S ≥ 92 > 0): ∂f/∂z = 4 S z gives z = 0; ∂f/∂y = 4 y (S − 2(a² − f²))
+ *    gives y = 0 or S = 192. With y = z = 0, f = 0 is x² + 92 = ±2(10x − 4): x = 10 (double
+ *    root), −6 or −14, and ∂f/∂x = 4 S x − 8a(a x − f r) vanishes only at x = 10 (7680 −
+ *    7680; at −6: 2048, at −14: −4608). With S = 192, ∂f/∂x = 0 gives x = 10 and then f = 0
+ *    gives y = 0: the same point. So exactly one singular point, (10, 0, 0), where the horns
+ *    touch; f is quartic along y there (an A3 point), no singular curve. Before, at depth 3
+ *    (cell 4) its cells joined one cluster with the tube's and with critical points off the
+ *    surface; its projections were taken for a curve's, and a two-point whisker with lost
+ *    ends was reported instead of the point (in all three boxes). */
+#include <criterion/criterion.h>
+#include <math.h>
+#include "core/util/vec3.h"
+#include "tests/unit/core/poly_fixture.h"
+#include "tests/unit/core/test_eval_surfaces.h"
+
+static const char *place_name(int which)
+{
+    return which < 0 ? "own" : which == 0 ? "1e-3" : "0.37 cell";
+}
+
+/* Exactly one singular point in l, certified, of the given type, within tol of want. */
+static void expect_one_point(const ism_locus *l, int type, const double want[3], double tol,
+                             const char *what, int d, int which)
+{
+    const char *place = place_name(which);
+    cr_expect_eq(l->npoints, 1, "%s d%d %s: %zu singular points", what, d, place, l->npoints);
+    cr_expect_eq(l->ncurves, 0, "%s d%d %s: %zu singular curves", what, d, place, l->ncurves);
+    cr_expect(!l->incomplete, "%s d%d %s: incomplete (%s)", what, d, place, l->incomplete_why);
+    if (l->npoints < 1)
+        return;
+    const ism_sing_point *p = &l->points[0];
+    cr_expect(p->certified && p->type == type, "%s d%d %s: the point is %s%s", what, d, place,
+              p->certified ? "" : "uncertified ", ism_sing_type_name(p->type));
+    cr_expect(ism_dist3(p->p, want) <= tol, "%s d%d %s: point (%g, %g, %g), want (%g, %g, %g)",
+              what, d, place, p->p[0], p->p[1], p->p[2], want[0], want[1], want[2]);
+}
+
+Test(coarse_points, isolated_point)
+{
+    ism_tape *t = pf_compile(&(pf_surface){
+        "(x^2 + y^2 + z^2)*((x - 1.1)^2 + y^2 + z^2 - 0.25)", NULL, 0, NULL, 0});
+    const double base[6] = {-0.8, -0.8, -0.8, 1.8, 0.8, 0.8}, origin[3] = {0, 0, 0};
+    for (int d = 3; d <= 4; d++)
+        for (int which = pf_first_box() - 1; which <= 1; which++) {
+            double box[6];
+            pf_sweep_box(base, d, which, box);
+            ism_mesh m;
+            ism_locus l;
+            pf_run_surface(t, box, 3, d, &m, &l);
+            expect_one_point(&l, ISM_SING_ISOLATED, origin, 1e-9, "isolated-point", d, which);
+            pf_props pr;
+            pf_measure(&m, t, &pr);
+            const char *place = place_name(which);
+            cr_expect(pr.euler == 2 && pr.components == 1 && pr.boundary_edges == 0 &&
+                          pr.nonmanifold_edges == 0,
+                      "isolated-point d%d %s: χ %ld, %zu components, %zu boundary and %zu "
+                      "non-manifold edges; want the sphere: 2, 1, 0, 0",
+                      d, place, pr.euler, pr.components, pr.boundary_edges,
+                      pr.nonmanifold_edges);
+            ism_locus_free(&l);
+            ism_mesh_free(&m);
+        }
+    ism_tape_free(t);
+}
+
+Test(coarse_points, horn_cyclide_depth_3)
+{
+    const test_surface *s = &TEST_SURFACES[6];
+    cr_assert_str_eq(s->name, "horn-cyclide");
+    ism_tape *t = test_surface_compile(s);
+    const double want[3] = {10, 0, 0};
+    double diag = sqrt(32.0 * 32.0 + 2 * 32.0 * 32.0);
+    for (int which = pf_first_box() - 1; which <= 1; which++) {
+        double box[6];
+        pf_sweep_box(s->box, 3, which, box);
+        ism_mesh m;
+        ism_locus l;
+        pf_run_surface(t, box, 3, 3, &m, &l);
+        expect_one_point(&l, ISM_SING_DEGENERATE, want, 1e-9 * diag, "horn-cyclide", 3, which);
+        ism_locus_free(&l);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
