@@ -328,19 +328,31 @@ static bool on_curve(ctx *x, const ism_sing_point *pt, int rank)
     return false;
 }
 
-/* Whether the rank-2 projection q, whose cubic term along the null direction is 0
- * (cusp_probe false), is no point of a curve of zeros of ∇f (on_curve false): an isolated
- * zero where f is quartic or higher along the null direction (an A3 point) — the horn
- * cyclide's (a, 0, 0), f ≈ 384u² + 40uy² + y⁴. At depth 3 in its box (cell 4) that
- * point's cells join one cluster with the tube's cells and the critical points off the
- * surface at (±0.74..., 0, 0) and (−10.74..., 0, 0); its projections, (10, ±0.0009, 0),
- * were taken for a curve's, no start was tried, and the curve stage traced a two-point
- * whisker with lost ends. Deflation or the A3 system then certifies the point. */
+/* Whether the rank-2 projection q, whose cubic term along the null direction n is 0
+ * (cusp_probe false), is no point of a curve of zeros of ∇f: an isolated zero where f is
+ * quartic or higher along n (an A3 point) — the horn cyclide's (a, 0, 0), f ≈ 384(u² + z²)
+ * + 40u y² + y⁴ (u = x − a). At depth 3 in its box (cell 4) that point's cells join one
+ * cluster with the tube's and with critical points off the surface; its projections,
+ * (10, ±0.0009, 0), were taken for a curve's, no start was tried, and the curve stage
+ * traced a two-point whisker with lost ends. A step of CURVE_PROBE_CELLS along n each way
+ * and Newton across land on ∇f = 0 to rounding (CURVE_STRICT_REL × |H| × step) on a curve of
+ * zeros; at an A3 point the null component left there is cubic in the step (0.17 d³ on the
+ * horn, 1.7e-4 at depth 4 — under on_curve's rank-2 bound, 1e-9 × the box's Hessian scale
+ * × diagonal = 6e-4, which took it for a curve). A curve taken for a point here costs one
+ * Newton and a certificate that fails: only certified points are kept. */
 static bool isolated_rank2(ctx *x, const double q[3])
 {
+    double g[3], h[6], eig[3], vec[3][3], E[2][3];
+    ism_eval_hessian(x->t, x->ws, q[0], q[1], q[2], g, h);
+    x->out->evals_jet++;
+    ism_sym3_eigen(h, eig, vec);
+    const double *n = null_vector(eig, vec);
+    ism_cjet_normal_basis(n, E);
     ism_sing_point pt = { .cones = -1 };
     memcpy(pt.p, q, sizeof pt.p);
-    return !on_curve(x, &pt, 2);
+    double d = CURVE_PROBE_CELLS * x->cell, big = fmax(fabs(eig[0]), fabs(eig[2]));
+    return !probes_land(x, &pt, n, E, d, CURVE_STRICT_REL * big * d,
+                        CURVE_STRICT_REL * big * d * d);
 }
 
 /* Bounds of a cluster's boxes and of its boxes' projections. */
