@@ -15,7 +15,15 @@
  * curve of the locus: two balls never overlap, and a small part of the surface between two
  * nodes is never swallowed whole. */
 #define RHO_SEPARATION 0.45
-/* With no mesh within the ball (sheets thinner than a cell near the point, lost by the
+/* A lone point (nothing else of the locus in the box: its clearance is infinite) has no
+ * distance to bound its ball by, and its ball does not grow: it keeps its start radius
+ * (CF_RHO_CELLS cells, or CF_RHO_EDGES × the longest edge there — what the polygoniser's
+ * confusion needs), except to seek a lost mesh (below). Growing while the rim sees another
+ * sheet close by swallowed both sheets at a coarse depth: the horn cyclide at depth 3 (cell
+ * 4, ball 10 → up to 75) joined its two horns into one rim loop (one cone, χ 2 instead of
+ * 1), and the wide cone x² + y² = 36 z² in ±1 at depth 3 its two nappes (χ 2 or 0 in the
+ * shifted boxes instead of 1); there the other sheet stays close to the rim at any radius.
+ * With no mesh within the ball (sheets thinner than a cell near the point, lost by the
  * polygoniser), the ball grows by SEEK_GROW up to SEEK_CELLS cells looking for their rims. */
 #define SEEK_GROW 1.5
 #define SEEK_CELLS 8.0
@@ -79,9 +87,11 @@ bool cf_conform_point(cf_run *r, size_t i)
     size_t nt0 = c->m->ntris, nv0 = c->m->nverts, nrm;
     uint32_t *rm;
     cf_loops ls;
-    double max_r = RHO_SEPARATION * ism_locus_clearance(r->l, i);
-    double seek_r = fmin(max_r, SEEK_CELLS * c->cell);
+    double clear_r = RHO_SEPARATION * ism_locus_clearance(r->l, i);
+    double seek_r = fmin(clear_r, SEEK_CELLS * c->cell);
     for (;;) {
+        /* a lone point keeps its ball's radius (see SEEK_GROW's comment) */
+        double max_r = isfinite(clear_r) ? clear_r : b.r;
         if (!cf_cut_clean(c, &cut, &b.r, max_r, &ls, &rm, &nrm))
             return false;
         if (c->stopped) {

@@ -22,7 +22,18 @@
  *    surface; its projections were taken for a curve's, and a two-point whisker with lost
  *    ends was reported instead of the point (in all three boxes); at depth 4 in the box
  *    shifted 0.37 cell the same projections passed the curve test (f's null component
- *    0.17 d³ at the probe, under its bound). */
+ *    0.17 d³ at the probe, under its bound).
+ *  - lone points (no other piece of the locus in the box; their conformance ball has no
+ *    clearance to bound its growth). The horn cyclide at depth 3 (cell 4): a torus whose
+ *    tube shrinks to the point, i.e. a sphere with two points identified, χ = 2 − 1 = 1,
+ *    the point one vertex where the two horns' cones meet. Its y = 0 section is the point
+ *    and the circle (x + 10)² + z² = 16 (from x² + z² + 92 = ±2(10x − 4)), so the surface
+ *    reaches x = −14: the box shifted 0.37 cell (x ≥ −13.52) cuts a disc off the tube: χ 0
+ *    and one boundary loop. The wide cone x² + y² = 36 z² in ±1: two nappes z = ±r/6, each a
+ *    disc over the box's square, sharing the apex: χ = 1 + 1 − 1 = 1, two boundary loops,
+ *    the apex one vertex with 2 cones. Before, the ball grew (×1.4 up to 6 times) while its
+ *    rim saw the other horn or nappe close by, until it swallowed both into one loop: horn
+ *    χ 2 (one cone), the cone χ 2 or 0 in the shifted boxes. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include "core/util/vec3.h"
@@ -99,4 +110,60 @@ Test(coarse_points, horn_cyclide)
             ism_mesh_free(&m);
         }
     ism_tape_free(t);
+}
+
+static uint32_t vertex_at(const ism_mesh *m, const double p[3])
+{
+    for (size_t v = 0; v < m->nverts; v++)
+        if (m->pos[3 * v] == p[0] && m->pos[3 * v + 1] == p[1] && m->pos[3 * v + 2] == p[2])
+            return (uint32_t)v;
+    return UINT32_MAX;
+}
+
+/* One run of a surface with one lone point: χ, boundary (edges or none) and the point's
+ * vertex with 2 cones. */
+static void check_lone(const ism_tape *t, const double box[6], int d, long euler, bool open,
+                       const char *what, int which)
+{
+    ism_mesh m;
+    ism_locus l;
+    pf_run_surface(t, box, 3, d, &m, &l);
+    const char *place = place_name(which);
+    cr_expect_eq(l.npoints, 1, "%s d%d %s: %zu points", what, d, place, l.npoints);
+    if (l.npoints == 1) {
+        uint32_t v = vertex_at(&m, l.points[0].p);
+        cr_expect(v != UINT32_MAX && pf_vertex_cones(&m, v) == 2,
+                  "%s d%d %s: the point is %s with %zu cones, want 2", what, d, place,
+                  v == UINT32_MAX ? "no vertex" : "a vertex",
+                  v == UINT32_MAX ? (size_t)0 : pf_vertex_cones(&m, v));
+    }
+    pf_props pr;
+    pf_measure(&m, t, &pr);
+    cr_expect(pr.euler == euler && (pr.boundary_edges > 0) == open && pr.nonmanifold_edges == 0,
+              "%s d%d %s: χ %ld, %zu boundary and %zu non-manifold edges; want χ %ld, %s, 0",
+              what, d, place, pr.euler, pr.boundary_edges, pr.nonmanifold_edges, euler,
+              open ? "a boundary" : "none");
+    ism_locus_free(&l);
+    ism_mesh_free(&m);
+}
+
+Test(coarse_points, lone_points_keep_their_ball)
+{
+    const test_surface *s = &TEST_SURFACES[6];
+    ism_tape *horn = test_surface_compile(s);
+    for (int which = pf_first_box() - 1; which <= 1; which++) {
+        double box[6];
+        pf_sweep_box(s->box, 3, which, box);
+        bool cut = box[0] > -14.0; /* the tube reaches x = −14 */
+        check_lone(horn, box, 3, cut ? 0 : 1, cut, "horn-cyclide", which);
+    }
+    ism_tape_free(horn);
+    ism_tape *cone = pf_compile(&(pf_surface){"x^2 + y^2 - 36*z^2", NULL, 0, NULL, 0});
+    const double base[6] = {-1, -1, -1, 1, 1, 1};
+    for (int which = pf_first_box() - 1; which <= 1; which++) {
+        double box[6];
+        pf_sweep_box(base, 3, which, box);
+        check_lone(cone, box, 3, 1, true, "wide cone", which);
+    }
+    ism_tape_free(cone);
 }
