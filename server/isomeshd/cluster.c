@@ -191,6 +191,16 @@ static const char TAKE_LUA[] =
     "end "
     "return false";
 
+/* KEYS users; ARGV key prefix. A queue left by daemons older than P run/nwait/wait (their
+ * set of users with a stream, P users) gets its users' counts once, from their streams; the
+ * set goes. Every daemon runs it as it starts (nothing to do after the first). */
+static const char UPGRADE_LUA[] =
+    REFRESH_LUA
+    "local users = redis.call('smembers', KEYS[1]) "
+    "for _, u in ipairs(users) do refresh(ARGV[1], u) end "
+    "redis.call('del', KEYS[1]) "
+    "return #users";
+
 /* KEYS nwait. Entries waiting (not yet taken) over every user's streams. */
 static const char DEPTH_LUA[] =
     "local n = 0 "
@@ -378,6 +388,7 @@ struct ismd_cluster {
     long long alive_at_ns;     /* when to say next that this daemon lives (P alive:<it>) */
     ismd_jobs *jobs;           /* this daemon's jobs (DELETEs through other daemons) */
     long long deletes_at_ns;   /* when to look for those next */
+    bool upgraded;             /* UPGRADE_LUA has run */
     ism_redis_task take;
 };
 
@@ -885,6 +896,26 @@ static void say_alive(ismd_cluster *c)
     run_script(c, "cluster_alive", ALIVE_LUA, 2, args, 5, NULL);
 }
 
+/* UPGRADE_LUA; true once it ran. */
+static bool upgrade(ismd_cluster *c)
+{
+    char users[KEY_MAX];
+    ckey(c, users, "users", "");
+    const char *args[] = {users, ism_cache_redis_prefix(c->redis)};
+    redisReply *r = NULL;
+    if (run_script(c, "cluster_upgrade", UPGRADE_LUA, 1, args, 2, &r) < 0)
+        return false;
+    bool ran = r->type == REDIS_REPLY_INTEGER;
+    if (ran && r->integer > 0) {
+        char n[24];
+        snprintf(n, sizeof n, "%lld", (long long)r->integer);
+        ism_log_field f = ISM_LS("users", n);
+        ism_log_fields(ISM_LOG_INFO, "cluster_queue_upgraded", &f, 1);
+    }
+    freeReplyObject(r);
+    return ran;
+}
+
 static long long take_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
 {
     ismd_cluster *c = (ismd_cluster *)((char *)base - offsetof(ismd_cluster, take));
@@ -895,6 +926,8 @@ static long long take_run(ism_redis_task *base, ism_cache_tier *t, bool stopping
     long long idle = idle_capacity(c->sched);
     bool draining = c->sched->draining;
     ismd_redis_tasks_leave(c->tasks);
+    if (!c->upgraded && ism_cache_redis_up(t))
+        c->upgraded = upgrade(c);
     for (long long i = 0; !draining && ism_cache_redis_up(t) && i < idle && i < TAKE_MAX_PER_TICK;
          i++)
         if (take_one(c) <= 0)

@@ -11,7 +11,10 @@
  *                 its entries not taken yet (over both streams)
  *   P wait        sorted set: users with an entry to take, below their running limit, scored
  *                 by their entries taken (run, nwait and wait are kept by every script that
- *                 changes a user's streams: choosing and sharing never read every user's)
+ *                 changes a user's streams: choosing and sharing never read every user's;
+ *                 a daemon starting on a queue left by older daemons, whose P users set
+ *                 listed the users instead, computes them once and drops the set. Daemons
+ *                 of the two layouts must not share one queue: upgrade them all at once)
  *   P ulim        hash user -> the user's running limit (0: none), from its latest entry
  *   P job:<name>  hash: state (queued, running, done, failed), progress, status and error
  *                 (failed), the daemon running it, its origin (the daemon that queued it),

@@ -40,7 +40,10 @@ with Redis, daemons of one worker each and (for the failure case) nginx:
 * a live daemon cut off from Redis past --redis-lock-ttl (frozen by SIGSTOP) counts as dead,
   and a DELETE of its job through another daemon stops the computation there as abandoned;
   a synchronous request on the cut-off daemon sharing it still gets its mesh (its origin
-  starts the canceled computation over; failing it instead answers 500 cluster_error).
+  starts the canceled computation over; failing it instead answers 500 cluster_error);
+* a queue left by daemons of the older layout (no kept per-user counts) is served once a
+  daemon of this one starts on it: it counts the users once, and a computation queued there
+  is taken (before the count, nothing would take it).
 
 Every wait is bounded; no assertion depends on the machine's speed beyond the bounds."""
 import json
@@ -609,6 +612,34 @@ class ClusterQueueTest(unittest.TestCase):
             self.assertEqual((r("HLEN", "isomesh:v1:run"), r("HLEN", "isomesh:v1:nwait"),
                               r("ZCARD", "isomesh:v1:wait")), (0, 0, 0))
             self.assertEqual(r("KEYS", "isomesh:v1:[qr]:*"), [])
+        finally:
+            self.assertEqual(s.cleanup(), [], "sanitizer reports")
+
+
+    def test_a_queue_left_by_older_daemons_is_served_after_an_upgrade(self):
+        # The older layout: the users' streams and their set P users, no kept counts
+        # (cluster.h). A daemon starting on it counts its users once: a computation queued
+        # there is taken by it (without the count, no take sees it: P wait is empty).
+        s = stack.Stack(n=1, daemon_args=HELD, with_nginx=False).start()
+        try:
+            a = s.daemons[0]
+            s.pause_workers()
+            held = a.post("/v1/jobs", work(1400)).json()
+            self.assertTrue(stack.wait_until(
+                lambda: a.get(held["url"]).json()["state"] == "running", 60))
+            waiting = a.post("/v1/jobs", work(1401)).json()
+            r = s.redis.command
+            # (queued in Redis a moment after the answer: the shared stage's task does it)
+            self.assertTrue(stack.wait_until(lambda: r("ZCARD", "isomesh:v1:wait") == 1, 30))
+            r("DEL", "isomesh:v1:run", "isomesh:v1:nwait", "isomesh:v1:wait")
+            r("SADD", "isomesh:v1:users", held["user"])
+            b = harness.Daemon("--redis", "127.0.0.1:%d" % s.redis.port, *HELD)
+            s.daemons.append(b)
+            b.start()
+            self.assertEqual(wait_job(a, waiting, timeout=60)["state"], "done")
+            self.assertEqual(a.get(held["url"]).json()["state"], "running")  # a still paused
+            self.assertEqual(r("EXISTS", "isomesh:v1:users"), 0)
+            self.assertEqual(r("HGET", "isomesh:v1:run", held["user"]), b"1")
         finally:
             self.assertEqual(s.cleanup(), [], "sanitizer reports")
 
