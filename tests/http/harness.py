@@ -79,6 +79,18 @@ def http_request(port, method, path, body=None, headers=None, timeout=60, source
         conn.close()
 
 
+def open_get(port, path, timeout=60):
+    """GET path on its own connection to 127.0.0.1:port, the body left unread (a stream read
+    as it arrives) -> (the connection, for the caller to close; the response)."""
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=timeout)
+    try:
+        conn.request("GET", path)
+        return conn, conn.getresponse()
+    except Exception:
+        conn.close()
+        raise
+
+
 class Daemon:
     def __init__(self, *args, cache_dir=None, web_root=None, log_format="text", binary=None,
                  prefix=(), env=None, log_file=None):
@@ -219,6 +231,16 @@ class Daemon:
     def cleanup(self):
         self.stop()
         shutil.rmtree(self.tmp, ignore_errors=True)
+
+    @classmethod
+    def started(cls, *args, **kwargs):
+        """A started daemon (cleaned up, and the error raised, when it does not start)."""
+        d = cls(*args, **kwargs)
+        try:
+            return d.start()
+        except Exception:
+            d.cleanup()
+            raise
 
     def __enter__(self):
         return self.start()

@@ -12,7 +12,8 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from harness import ROOT, SLOW, SPHERE, Daemon, draco_counts, parse_metrics, sphere  # noqa: E402
+from harness import (ROOT, SLOW, SPHERE, Daemon, draco_counts, open_get,  # noqa: E402
+                     parse_metrics, sphere)
 
 ORIGIN = "https://viewer.example"
 
@@ -326,11 +327,8 @@ class ApiTest(unittest.TestCase):
         r = self.d.post("/v1/jobs", {"preset": "torus", "depth": {"max": 8}})
         self.assertEqual(r.status, 202)
         job = r.json()
-        import http.client
-        conn = http.client.HTTPConnection("127.0.0.1", self.d.port, timeout=60)
+        conn, resp = open_get(self.d.port, job["events_url"])
         try:
-            conn.request("GET", job["events_url"])
-            resp = conn.getresponse()
             self.assertEqual(resp.status, 200)
             self.assertEqual(resp.getheader("Content-Type"), "text/event-stream")
             text = resp.read().decode()  # the stream ends after the final event

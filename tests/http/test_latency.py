@@ -13,7 +13,6 @@ time the client sees:
 The bound: a sample's excess stays under EXCESS_MAX_MS, half the sleep bound; the old code gave
 1,000 ms minus the computation (900+ ms for these). One sample of each group may exceed it (a
 machine at a load of 20 can stall a process that long); the others may not."""
-import http.client
 import json
 import os
 import sys
@@ -22,7 +21,7 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from harness import Daemon, sphere  # noqa: E402
+from harness import Daemon, open_get, sphere  # noqa: E402
 
 # Half the polling threads' sleep bound (1,000 ms): an answer that waited for the bound
 # instead of a wake-up exceeds it by the bound minus its computation time.
@@ -55,12 +54,7 @@ def timing(header):
 class LatencyTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
-        cls.d = Daemon("--workers", "2")
-        try:
-            cls.d.start()
-        except Exception:
-            cls.d.cleanup()
-            raise
+        cls.d = Daemon.started("--workers", "2")
         cls.n = 0
 
     @classmethod
@@ -130,10 +124,8 @@ class LatencyTest(unittest.TestCase):
         r = self.d.post("/v1/jobs", req)
         self.assertEqual(r.status, 202, r.body[:300])
         job = r.json()
-        conn = http.client.HTTPConnection("127.0.0.1", self.d.port, timeout=60)
+        conn, resp = open_get(self.d.port, job["events_url"])
         try:
-            conn.request("GET", job["events_url"])
-            resp = conn.getresponse()
             self.assertEqual(resp.status, 200)
             names, data = [], None
             while True:
