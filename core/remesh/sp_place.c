@@ -99,12 +99,12 @@ static double best_offset(const lines *l, double range)
 }
 
 bool sp_place(rm_pass *p, const sp_stencil *s, int n, double limit, double x[3], double g[3],
-              double *before, double *after)
+              double *before)
 {
     lines l = {{1.0, 0.5, 1.0 / 3}, {-INFINITY, -INFINITY, -INFINITY},
                {INFINITY, INFINITY, INFINITY}};
     double y[3];
-    *before = *after = INFINITY;
+    *before = INFINITY;
     for (int k = 0; k < n; k++) {
         int c = weight_class(point(&s[k], x, y));
         double e = rm_bound_signed(p, y);
@@ -125,15 +125,17 @@ bool sp_place(rm_pass *p, const sp_stencil *s, int n, double limit, double x[3],
         return false;
     for (int k = 0; k < 3; k++)
         x[k] += delta * g[k] / gn;
-    double fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
-    if (!isfinite(fv))
-        return false;
-    *after = 0;
-    for (int k = 0; k < n; k++) {
+    return isfinite(ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g));
+}
+
+double sp_measure(rm_pass *p, const sp_stencil *s, int n, const double x[3], double stop)
+{
+    double worst = 0, y[3];
+    for (int k = 0; k < n && worst <= stop; k++) {
         point(&s[k], x, y);
-        *after = fmax(*after, rm_bound_distance(p, y, INFINITY));
+        worst = fmax(worst, rm_bound_distance(p, y, stop)); /* above stop: one step */
     }
-    return isfinite(*after);
+    return isfinite(worst) ? worst : INFINITY;
 }
 
 bool sp_offset_vertex(rm_pass *p, uint32_t v)
@@ -141,12 +143,13 @@ bool sp_offset_vertex(rm_pass *p, uint32_t v)
     const rm_mesh *r = &p->r;
     sp_stencil s[SP_MAX_STENCILS];
     int n = sp_stencils(p, r->vt + r->start[v], r->count[v], v, v, s);
-    double x[3], g[3], before, after;
+    double x[3], g[3], before;
     for (int k = 0; k < 3; k++)
         x[k] = r->m->pos[3 * (size_t)v + k];
     rm_fan f;
     rm_fan_measure(p, v, &f);
-    if (!n || !sp_place(p, s, n, p->max_error, x, g, &before, &after) || !(after < before) ||
+    if (!n || !sp_place(p, s, n, p->max_error, x, g, &before) ||
+        !(sp_measure(p, s, n, x, before) < before) ||
         !rm_fan_accepts(p, v, x, &f))
         return false;
     rm_commit_move(p, v, x, g);

@@ -28,12 +28,17 @@ int sp_stencils(const rm_pass *p, const uint32_t *fan, uint32_t n, uint32_t v, u
 
 /* Moves x along ∇f's unit vector to the offset that minimises the largest |signed distance|
  * over the stencils (a linear model in the offset: a stencil's point moves by its weight, 1,
- * 1/2 or 1/3, of the offset), then measures every stencil there (rm_bound_distance). *before
- * gets the largest distance at x before the move, *after the largest after it, g ∇f at the
- * new x. False when f cannot be measured at some stencil, or when the model's best is
- * clearly above limit (nothing measured then). */
+ * 1/2 or 1/3, of the offset); *before gets the model's largest distance at x before the
+ * move, g ∇f at the new x. False when f cannot be measured at some stencil or at the new
+ * x, or when the model's best is clearly above limit (nothing measured then). The caller
+ * measures the new place with sp_measure. */
 bool sp_place(rm_pass *p, const sp_stencil *s, int n, double limit, double x[3], double g[3],
-              double *before, double *after);
+              double *before);
+
+/* The largest distance (rm_bound_distance) over the stencils with the moving point at x —
+ * or, as soon as one measures above stop, that one (the caller's test has failed then; the
+ * rest are not measured). INFINITY where f cannot be measured. */
+double sp_measure(rm_pass *p, const sp_stencil *s, int n, const double x[3], double stop);
 
 /* Moves free vertex v to its balancing offset when that lowers the largest distance of its
  * fan and keeps the fan's shape (rm_fan_accepts); true when it moved. */
