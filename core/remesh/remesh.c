@@ -67,6 +67,9 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
     rm_pass p;
     size_t nv = m->nverts, nt = m->ntris;
     bool ok = rm_pass_open(&p, m, o, nt / ISM_RM_INSERT_SHARE + ISM_RM_INSERT_MIN);
+    /* under an error bound every step keeps it, measured at centroids and edge midpoints
+       (rm_bound.h), whatever the mesh before: the simplified mesh's vertices sit off f = 0 */
+    p.bounded = o->max_error > 0;
     if (ok) {
         rm_collapse_bounds(&p);
         for (int round = 0; round < ISM_RM_ROUNDS && !stopped(o); round++) {

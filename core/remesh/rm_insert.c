@@ -127,13 +127,20 @@ static bool faces_kept(const rm_pass *p, const uint32_t abc[3], const double *x)
 }
 
 /* No centroid of the three triangles farther from f = 0 than the needle's, or than the
- * mesh's farthest before the pass (centroid_bound, as collapses keep). */
+ * mesh's farthest before the pass (centroid_bound, as collapses keep); under a bound
+ * (bounded), no midpoint of the three new edges farther than the needle's centroid or the
+ * mesh's farthest midpoint (midpoint_bound) either. */
 static bool centroids_ok(rm_pass *p, const uint32_t abc[3], const double *x)
 {
     const double *a = P(p, abc[0]), *b = P(p, abc[1]), *c = P(p, abc[2]);
-    double bound = fmax(rm_centroid_distance(p, a, b, c), p->centroid_bound);
-    return rm_centroid_distance(p, a, b, x) <= bound &&
-           rm_centroid_distance(p, b, c, x) <= bound && rm_centroid_distance(p, c, a, x) <= bound;
+    double own = rm_centroid_distance(p, a, b, c), bound = fmax(own, p->centroid_bound);
+    if (!(rm_centroid_distance(p, a, b, x) <= bound &&
+          rm_centroid_distance(p, b, c, x) <= bound && rm_centroid_distance(p, c, a, x) <= bound))
+        return false;
+    double mid = fmax(own, p->midpoint_bound);
+    return !p->bounded || (rm_midpoint_distance(p, a, x) <= mid &&
+                           rm_midpoint_distance(p, b, x) <= mid &&
+                           rm_midpoint_distance(p, c, x) <= mid);
 }
 
 /* The thin triangle (p, q, x) of a split (pq a long side of the needle) will be flipped

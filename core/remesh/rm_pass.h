@@ -34,9 +34,11 @@ typedef struct rm_pass {
     double centroid_bound;  /* collapses may put a centroid this far from f = 0 (the mesh's
                                farthest before the pass, at most max_error) */
     double midpoint_bound;  /* the same for edge midpoints */
-    bool bounded;           /* the simplification's rule (rm_bound.h): flips and moves keep
-                               every centroid and edge midpoint within max_error, measured
-                               with a Newton step, whatever they were before */
+    bool bounded;           /* the rule under max_error (rm_bound.h; the simplification, and
+                               the quality pass given a bound): flips and moves keep every
+                               centroid and edge midpoint within max_error, measured with a
+                               Newton step, whatever they were before; collapses, insertions
+                               and slides measure with the step too, midpoints included */
     size_t flips, moves, collapses, inserts;
 } rm_pass;
 
@@ -129,7 +131,8 @@ bool rm_project(rm_pass *p, double x[3], double scale, int axis, double g[3]);
 /* Puts v at x (on f = 0, ∇f there g): position, unit normal, the mesh's normal on its side. */
 void rm_commit_move(rm_pass *p, uint32_t v, const double x[3], const double g[3]);
 
-/* Distance estimate |f| / |∇f| at x (INFINITY where ∇f vanishes). */
+/* Distance estimate |f| / |∇f| at x (INFINITY where ∇f vanishes); bounded, plus the Newton
+ * step's (rm_bound_distance), as every bound under max_error is measured. */
 double rm_distance(rm_pass *p, const double x[3]);
 /* The same at the midpoint of ab, and at the centroid of abc. */
 double rm_midpoint_distance(rm_pass *p, const double *a, const double *b);

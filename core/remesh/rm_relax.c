@@ -32,6 +32,8 @@
 
 double rm_distance(rm_pass *p, const double x[3])
 {
+    if (p->bounded)
+        return rm_bound_distance(p, x, INFINITY);
     double g[3], fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
     double gn = sqrt(ism_dot3(g, g));
     return gn > p->gthresh && isfinite(fv) ? fabs(fv) / gn : INFINITY;

@@ -5,6 +5,7 @@
  * boundary neighbours in the same box plane, rm_locks.c) moves toward the middle of its
  * neighbours within the plane and back onto f = 0 by Newton in the plane, so it stays on the
  * box face and on the surface, and the boundary loop keeps its vertices, edges and order. */
+#include "core/remesh/rm_bound.h"
 #include "core/remesh/rm_pass.h"
 
 #include <math.h>
@@ -87,7 +88,7 @@ static bool slide_vertex(rm_pass *p, uint32_t v)
         ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
         if (!(rm_dist(x, start) <= 0.5 * f.mean_edge) || !in_order(x, a, b) ||
             !(boundary_error(p, x, a, b) <= bound) || !(rm_distance(p, x) <= bound) ||
-            !rm_fan_accepts(p, v, x, &f))
+            !rm_fan_accepts(p, v, x, &f) || (p->bounded && !rm_bound_fan(p, v, x)))
             continue;
         rm_commit_move(p, v, x, g);
         return true;

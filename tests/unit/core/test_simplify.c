@@ -290,3 +290,73 @@ Test(simplify, steiner_keeps_its_double_lines)
     }
     ism_tape_free(t);
 }
+
+/* The torus (x² + y² + z² + R² − r²)² − 4R²(x² + y²), R = 1, r = 0.4, and its gradient, in
+ * long double. */
+#define TORUS_R 1.0L
+#define TORUS_RR 0.4L
+/* Newton's projection stops when a step is below this, or after NEWTON_STEPS. */
+#define NEWTON_TOL 1e-15L
+#define NEWTON_STEPS 50
+
+static long double torus_f(const long double q[3], long double g[3])
+{
+    long double s = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + TORUS_R * TORUS_R -
+                    TORUS_RR * TORUS_RR;
+    for (int k = 0; k < 3; k++)
+        g[k] = 4 * s * q[k] - (k < 2 ? 8 * TORUS_R * TORUS_R * q[k] : 0);
+    return s * s - 4 * TORUS_R * TORUS_R * (q[0] * q[0] + q[1] * q[1]);
+}
+
+/* How far p is from the torus, bounded from above: Newton's projection q <- q − f ∇f / |∇f|²
+ * in long double lands on f = 0, so |q − p| is no less than the distance (a second method:
+ * the pass measures with |f|/|∇f| and one step in double, never the landing point). */
+static double torus_newton_distance(const double *p)
+{
+    long double q[3] = {p[0], p[1], p[2]}, g[3];
+    for (int i = 0; i < NEWTON_STEPS; i++) {
+        long double f = torus_f(q, g), g2 = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+        long double step = fabsl(f) / sqrtl(g2);
+        for (int k = 0; k < 3; k++)
+            q[k] -= f * g[k] / g2;
+        if (step < NEWTON_TOL)
+            break;
+    }
+    long double d2 = 0;
+    for (int k = 0; k < 3; k++)
+        d2 += (q[k] - p[k]) * (q[k] - p[k]);
+    return (double)sqrtl(d2);
+}
+
+/* The quality pass run after the simplification keeps its bound: every vertex, edge midpoint
+ * and centroid of the final mesh within E (issue 15: the error is measured between vertices).
+ * The quality pass moves vertices and flips edges on the simplified mesh, whose vertices sit
+ * off f = 0 and whose midpoints are at the bound. */
+Test(simplify, quality_pass_after_keeps_the_bound)
+{
+    const pf_surface s = {"(x^2 + y^2 + z^2 + 1 - 0.16)^2 - 4*(x^2 + y^2)", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double base[6] = {-1.5, -1.5, -0.5, 1.5, 1.5, 0.5}, e = 3e-3;
+    int d = 8 - pf_quick();
+    for (int which = pf_first_box() ? 1 : -1; which < 2; which++) {
+        double box[6];
+        pf_sweep_box(base, d, which, box);
+        run r;
+        run_case(t, box, e, d, &r);
+        double simplified = worst_distance(&r.m, torus_newton_distance);
+        ism_remesh_stats rs;
+        ism_error err;
+        cr_assert(ism_quality_pass(t, &r.l, NULL, e, NULL, &r.m, &rs, &err), "%s", err.message);
+        double worst = worst_distance(&r.m, torus_newton_distance);
+        cr_log_info("torus, box %d: %zu -> %zu -> %zu triangles, worst distance %.6g after "
+                    "the simplification, %.6g after the quality pass (E %g), %zu flips, %zu "
+                    "moves", which, r.raw.ntris, r.st.triangles_after, r.m.ntris, simplified,
+                    worst, e, rs.flips, rs.moves);
+        cr_expect_leq(simplified, e * (1 + BOUND_SLACK), "box %d: simplified %.6g", which,
+                      simplified);
+        cr_expect_leq(worst, e * (1 + BOUND_SLACK), "box %d: %.6g beyond E = %g after the "
+                      "quality pass", which, worst, e);
+        run_free(&r);
+    }
+    ism_tape_free(t);
+}
