@@ -23,6 +23,7 @@
  * such triangles left T-junctions against their split neighbours: the crack that sent
  * three balls to the fallback cut, 420 triangles at the default depth.) */
 #include "core/curves/branches.h"
+#include "core/curves/crease_snap.h"
 #include "core/curves/crease_weld.h"
 #include "core/curves/cut_internal.h"
 #include <math.h>
@@ -446,7 +447,9 @@ bool cut_crease(cut_state *s, size_t k)
     ism_mesh *m = s->m;
     size_t nt = m->ntris, nv = m->nverts;
     uint32_t *old = malloc((nt ? nt : 1) * 3 * sizeof *old), *parent = cut_parents_copy(s, nt);
-    bool ok = old && parent && cut_grow_vertex_arrays(s) && label_vertices(&cs);
+    size_t snapped;
+    bool ok = old && parent && cut_grow_vertex_arrays(s) && label_vertices(&cs) &&
+              cut_crease_snap(s, cs.b, cs.label, &snapped);
     if (ok) {
         cut_longest_edges(m, s->reach);
         memcpy(old, m->tri, nt * 3 * sizeof *old);
