@@ -100,11 +100,11 @@ static void *loop_main(void *arg)
 
 ism_http_loops *ism_http_loops_new(unsigned n)
 {
-    ism_http_loops *s = calloc(1, sizeof *s);
+    ism_http_loops *s = n ? calloc(1, sizeof *s) : NULL;
     if (!s)
         return NULL;
     s->stop_fd = -1;
-    s->loops = calloc(n ? n : 1, sizeof *s->loops);
+    s->loops = calloc(n, sizeof *s->loops);
     if (!s->loops) {
         free(s);
         return NULL;

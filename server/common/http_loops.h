@@ -9,8 +9,9 @@
 
 typedef struct ism_http_loops ism_http_loops;
 
-/* n loops, each with its own wake descriptor; nothing runs yet (so that the pointer can be
- * stored where resumers find it before any request is served). NULL on failure. */
+/* n (at least 1) loops, each with its own wake descriptor; nothing runs yet (so that the
+ * pointer can be stored where resumers find it before any request is served). NULL on
+ * failure. */
 ism_http_loops *ism_http_loops_new(unsigned n);
 /* Starts l's n daemons, each with `flags` (MHD_USE_EPOLL is added, no internal thread), the
  * access handler ah/ah_cls, the options opts (ended by MHD_OPTION_END; no listening socket,
