@@ -204,6 +204,10 @@ static char *key_material(const ism_request *req, const ism_tape *tape, bool wit
     write_max_error(&w, req);
     write_quality(&w, req);
     write_preview(&w, req);
+    if (req->preview) { /* how a preview searches for hidden pieces (core/version.h) */
+        ism_jw_key(&w, "preview_search");
+        ism_jw_string(&w, ISM_PREVIEW_SEARCH);
+    }
     ism_jw_key(&w, "tolerances");
     write_tolerances(&w, req);
     ism_request_write_curves(&w, req, true);

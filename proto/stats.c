@@ -261,13 +261,13 @@ static void write_simplify(ism_jw *w, const ism_simplify_stats *s)
     ism_jw_object_end(w);
 }
 
-/* The stages a preview ("preview": true) does not run: the polygoniser's hidden-piece
- * search (ism_poly_options.thin_search), the stages by their names in timings_ms, and the
- * request's curves and quality, which a preview refuses. */
+/* The stages a preview ("preview": true) does not run: the stages by their names in
+ * timings_ms, and the request's curves and quality, which a preview refuses; and how it
+ * searched for hidden pieces (ism_poly_options.thin_coarse: "coarse"). */
 static void write_preview(ism_jw *w)
 {
-    static const char *const skipped[] = {"thin_search", "singular", "curves", "quality",
-                                          "analysis", "features"};
+    static const char *const skipped[] = {"singular", "curves", "quality", "analysis",
+                                          "features"};
     ism_jw_key(w, "preview");
     ism_jw_object(w);
     ism_jw_key(w, "skipped");
@@ -275,6 +275,8 @@ static void write_preview(ism_jw *w)
     for (size_t i = 0; i < sizeof skipped / sizeof *skipped; i++)
         ism_jw_string(w, skipped[i]);
     ism_jw_array_end(w);
+    ism_jw_key(w, "thin_search");
+    ism_jw_string(w, "coarse");
     ism_jw_object_end(w);
 }
 

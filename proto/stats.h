@@ -19,9 +19,9 @@
  *    "remesh": {"flips", "moves", "collapses", "inserts", "locked_vertices",
  *               "min_angle_before", "min_angle_after", "time_ms"} (only after the quality
  *               pass),
- *    "preview": {"skipped": ["thin_search", "singular", "curves", "quality", "analysis",
- *               "features"]} (only
- *               in a preview: the stages it did not run),
+ *    "preview": {"skipped": ["singular", "curves", "quality", "analysis", "features"],
+ *               "thin_search": "coarse"} (only in a preview: the stages it did not run, and
+ *               its hidden-piece search: whole nodes only, ism_poly_options.thin_coarse),
  *    "timings_ms": {"decode", "compile", "singular", "polygonise", "analyse", "features",
  *    "encode", "total"}, "warnings": ["..."]}
  * (timings_ms comes right after "mesh"; the members from "polygoniser" on are the surface's,

@@ -162,12 +162,15 @@ typedef struct thin_tally {
     int searches, undecided;
 } thin_tally;
 
-static enum ism_thin_verdict search(thread_state *th, const ism_tape *sub, const double lo[3],
-                                    const double hi[3], int sign, thin_tally *tally)
+static enum ism_thin_verdict search(const build *b, thread_state *th, const ism_tape *sub,
+                                    const double lo[3], const double hi[3], int sign,
+                                    thin_tally *tally)
 {
     const ism_tape *saved = th->s.tape;
     th->s.tape = sub;
-    enum ism_thin_verdict v = ism_thin_search(&th->s, &th->thin, lo, hi, sign, NULL);
+    enum ism_thin_verdict v = b->p->thin_coarse
+                                  ? ism_thin_probe(&th->s, lo, hi, sign, NULL)
+                                  : ism_thin_search(&th->s, &th->thin, lo, hi, sign, NULL);
     th->s.tape = saved;
     tally->searches++;
     tally->undecided += v == ISM_THIN_UNDECIDED;
@@ -202,9 +205,11 @@ static uint8_t hides_piece(build *b, thread_state *th, const ism_node *nd, const
     bool found = false;
     int sign = face_sign(k, 0);
     if (sign != 0 && sign == face_sign(k, 1)) {
-        found = search(th, sub, lo, hi, sign, &tally) == ISM_THIN_FOUND;
+        found = search(b, th, sub, lo, hi, sign, &tally) == ISM_THIN_FOUND;
         return ISM_NODE_THIN_PACK(tally.searches, tally.undecided, found);
     }
+    if (b->p->thin_coarse)
+        return 0;
     for (int face = 0; face < 6 && !found; face++) {
         int s = face_sign(k, face);
         if (s == 0)
@@ -222,7 +227,7 @@ static uint8_t hides_piece(build *b, thread_state *th, const ism_node *nd, const
                                            (ism_interval){flo[2], fhi[2]});
         if (!(v.lo <= 0 && v.hi >= 0))
             continue; /* f keeps a sign on the whole face */
-        found = search(th, sub, flo, fhi, s, &tally) == ISM_THIN_FOUND;
+        found = search(b, th, sub, flo, fhi, s, &tally) == ISM_THIN_FOUND;
     }
     return ISM_NODE_THIN_PACK(tally.searches, tally.undecided, found);
 }
@@ -231,7 +236,7 @@ static uint8_t hides_piece(build *b, thread_state *th, const ism_node *nd, const
  * hidden piece was found. */
 static int resolve_limit(const build *b, int limit)
 {
-    int resolve = b->p->max_depth + ISM_THIN_RESOLVE_LEVELS;
+    int resolve = b->p->max_depth + (b->p->thin_coarse ? 0 : ISM_THIN_RESOLVE_LEVELS);
     resolve = resolve < b->p->thin_depth ? resolve : b->p->thin_depth;
     return limit > resolve ? limit : resolve;
 }

@@ -30,6 +30,13 @@ typedef struct ism_poly_options {
     bool thin_search;       /* search nodes that fail flatness for a piece no edge sees (one
                                corner sign, or an island in a face of one sign) and split them
                                below max_depth (thin_search.h; default on) */
+    bool thin_coarse;       /* with thin_search, the live preview's cheaper search: only
+                               nodes whose eight corners share a sign are searched (a small
+                               closed piece or a tube inside them; not the islands in the faces
+                               of nodes with both signs, mostly the nappes round singular
+                               points), by Newton probes without interval proofs
+                               (ism_thin_probe), and a piece found is split only while it
+                               stays hidden, not ISM_THIN_RESOLVE_LEVELS further (default off) */
     bool fresh_rounds;      /* under max_error, build every round's octree and polygons
                                afresh (default off: a round takes the last round's tree over
                                and copies the leaves its splits cannot have changed,

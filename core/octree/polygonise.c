@@ -457,6 +457,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
         .min_depth = o->min_depth,
         .max_depth = o->max_depth,
         .thin_depth = thin_depth,
+        .thin_coarse = o->thin_coarse,
         .flatness = {.gradient_test = o->gradient_test,
                      .normal_cos = o->flat_normal,
                      .plane_frac = o->flat_plane,

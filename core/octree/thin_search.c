@@ -166,6 +166,33 @@ enum ism_thin_verdict ism_thin_search(ism_sampler *s, ism_thin_ws *w, const doub
     return undecided ? ISM_THIN_UNDECIDED : ISM_THIN_EXCLUDED;
 }
 
+enum ism_thin_verdict ism_thin_probe(ism_sampler *s, const double lo[3], const double hi[3],
+                                     int sign, double found[3])
+{
+    double scratch[3];
+    if (!found)
+        found = scratch;
+    if (ism_tape_has_min_max(s->tape))
+        return ISM_THIN_KINKED;
+    ism_interval x[3];
+    for (int k = 0; k < 3; k++)
+        x[k] = iv(lo[k], hi[k]);
+    if (probe(s, x, sign, found))
+        return ISM_THIN_FOUND;
+    for (int c = 0; c < 8; c++) {
+        bool twin = false; /* the same octant as an earlier one: the box is flat there */
+        ism_interval o[3];
+        for (int k = 0; k < 3; k++) {
+            double m = 0.5 * lo[k] + 0.5 * hi[k];
+            twin |= ((c >> k) & 1) && flat_along(x, k);
+            o[k] = (c >> k) & 1 ? iv(m, hi[k]) : iv(lo[k], m);
+        }
+        if (!twin && probe(s, o, sign, found))
+            return ISM_THIN_FOUND;
+    }
+    return ISM_THIN_UNDECIDED;
+}
+
 bool ism_thin_ws_init(ism_thin_ws *w, const ism_tape *t)
 {
     w->n_boxes = 0;

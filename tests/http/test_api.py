@@ -131,14 +131,8 @@ class ApiTest(unittest.TestCase):
         self.assertEqual(again.header("ETag").strip('"'), key)
 
         s = self.d.get("/v1/meshes/%s/stats" % key).json()
-        self.assertEqual(s["preview"]["skipped"],
-                         ["thin_search", "singular", "curves", "quality", "analysis",
-                          "features"])
-        # the hidden-piece search too: a torus searches cells at depth 4, its preview none
-        for preview, searched in ((False, True), (True, False)):
-            t = self.d.post("/v1/mesh", {"preset": "torus", "depth": {"max": 4}, "preview": preview})
-            ts = self.d.get("/v1/meshes/%s/stats" % t.header("ETag").strip('"')).json()
-            self.assertEqual(ts["polygoniser"]["thin_searched"] > 0, searched, preview)
+        self.assertEqual(s["preview"], {"skipped": ["singular", "curves", "quality", "analysis",
+                                                    "features"], "thin_search": "coarse"})
         self.assertNotIn("analysis", s)
         self.assertNotIn("singular", s)
         self.assertEqual(s["timings_ms"]["singular"], 0)
@@ -170,6 +164,43 @@ class ApiTest(unittest.TestCase):
             self.assertEqual(err["path"], "$.preview")
         err = self.error_of(self.d.post("/v1/mesh", dict(full_req, preview=1)), 400)
         self.assertEqual(err["path"], "$.preview")
+
+    def test_preview_keeps_pieces_thinner_than_its_cells(self):
+        """A preview searches the cells whose corners all share a sign for a piece between
+        them: a ball of radius 0.04 (a fifth of a depth-4 cell, a tenth of a depth-3 one) and a
+        rod of radius 0.05 along z, both off the lattice, show in previews at depths 3 and 4,
+        in the box as given and shifted by 1e-3 and by 0.37 of a cell. Closed forms: the
+        points on the small ball lie at its radius from its centre (roots on cell edges), the
+        rod's points at its radius from its axis, along its whole length in the box."""
+        c, rb = (-0.93, 0.71, -0.64), 0.04
+        a, rr = (0.13, -0.07), 0.05
+        ball = "((x-0.31)^2+(y+0.23)^2+(z-0.17)^2-0.25)*((x+0.93)^2+(y-0.71)^2+(z+0.64)^2-%r)" % (rb * rb)
+        rod = "(x-0.13)^2+(y+0.07)^2-%r+0*z" % (rr * rr)
+        for depth in (3, 4):
+            cell = 3.0 / 2 ** depth
+            for shift in (0.0, 1e-3, 0.37 * cell):
+                box = [-1.5 + shift] * 3 + [1.5 + shift] * 3
+                for expr in (ball, rod):
+                    r = self.d.post("/v1/mesh?format=obj", {"expr": expr, "box": box, "preview": True,
+                                                            "depth": {"min": 3, "max": depth}})
+                    self.assertEqual(r.status, 200, r.body[:300])
+                    pts = [tuple(map(float, l.split()[1:4])) for l in r.body.decode().splitlines()
+                           if l.startswith("v ")]
+                    what = (depth, shift, expr[:20])
+                    if expr is ball:
+                        near = [sum((p[k] - c[k]) ** 2 for k in range(3)) ** 0.5 for p in pts]
+                        on = [d for d in near if d < 0.5]
+                        self.assertGreaterEqual(len(on), 6, what)
+                        for d in on:
+                            self.assertAlmostEqual(d, rb, delta=1e-4, msg=what)
+                    else:
+                        self.assertGreater(len(pts), 0, what)
+                        for p in pts:
+                            self.assertAlmostEqual(((p[0] - a[0]) ** 2 + (p[1] - a[1]) ** 2) ** 0.5, rr,
+                                                   delta=1e-4, msg=what)
+                        zs = sorted(p[2] for p in pts)
+                        gaps = [zs[0] - box[2]] + [q - p for p, q in zip(zs, zs[1:])] + [box[5] - zs[-1]]
+                        self.assertLessEqual(max(gaps), 1.01 * cell, what)   # no length of it missing
 
     def test_stats_and_features(self):
         key = self.d.post("/v1/mesh", sphere(0.66)).header("ETag").strip('"')

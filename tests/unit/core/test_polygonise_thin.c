@@ -26,9 +26,10 @@ static double shift_of(int which, const double base[6], int dmax)
     return which == 0 ? 0 : which == 1 ? 1e-3 : 0.37 * pf_cell(base, dmax);
 }
 
-/* pf_run with the hidden-piece search on. */
-static void pf_run_thin(const ism_tape *t, const double box[6], int dmax, ism_mesh *m,
-                        ism_poly_stats *st)
+/* pf_run with the hidden-piece search on; coarse: the live preview's search
+ * (ism_poly_options.thin_coarse). */
+static void pf_run_search(const ism_tape *t, const double box[6], int dmax, bool coarse,
+                          ism_mesh *m, ism_poly_stats *st)
 {
     ism_poly_options o;
     ism_poly_options_default(&o);
@@ -37,9 +38,16 @@ static void pf_run_thin(const ism_tape *t, const double box[6], int dmax, ism_me
     o.max_depth = dmax;
     o.threads = 2;
     o.thin_search = true;
+    o.thin_coarse = coarse;
     ism_mesh_init(m);
     ism_error err;
     cr_assert_eq(ism_polygonise(t, &o, m, st, &err), ISM_POLY_OK, "%s", err.message);
+}
+
+static void pf_run_thin(const ism_tape *t, const double box[6], int dmax, ism_mesh *m,
+                        ism_poly_stats *st)
+{
+    pf_run_search(t, box, dmax, false, m, st);
 }
 
 static void analyse(const ism_mesh *m, const ism_tape *t, ism_analysis *a)
@@ -103,8 +111,9 @@ Test(thin, tube_centred_on_a_lattice_plane)
     check_tube(0.5 * h, 0, "tube on a plane");
 }
 
-/* A sphere of radius 0.3 cell centred at c (in cells from the box's lower corner). */
-static void check_small_sphere(const double c_cells[3], const char *name)
+/* A sphere of radius 0.3 cell centred at c (in cells from the box's lower corner); coarse:
+ * with the preview's search (no resolve levels: the area is not checked). */
+static void check_small_sphere(const double c_cells[3], bool coarse, const char *name)
 {
     const double base[6] = {-1, -1, -1, 1, 1, 1};
     const int dmax = 7;
@@ -121,7 +130,7 @@ static void check_small_sphere(const double c_cells[3], const char *name)
         shifted(base, shift_of(w, base, dmax), box);
         ism_mesh m;
         ism_poly_stats st;
-        pf_run_thin(t, box, dmax, &m, &st);
+        pf_run_search(t, box, dmax, coarse, &m, &st);
         pf_props p;
         pf_measure(&m, t, &p);
         cr_expect_eq(p.euler, 2, "%s, shift %d: χ = %ld", name, w, p.euler);
@@ -129,7 +138,7 @@ static void check_small_sphere(const double c_cells[3], const char *name)
                      "%s, shift %d: %zu boundary, %zu non-manifold edges", name, w,
                      p.boundary_edges, p.nonmanifold_edges);
         cr_expect_eq(p.components, 1, "%s, shift %d: %zu components", name, w, p.components);
-        if (w < 2) /* at 0.37 cell a lattice corner is inside: a coarse section, as above */
+        if (w < 2 && !coarse) /* at 0.37 cell a lattice corner is inside: a coarse section */
             cr_expect_leq(fabs(p.area - 4 * M_PI * r * r), 0.25 * 4 * M_PI * r * r,
                           "%s, shift %d: area %g, sphere %g", name, w, p.area, 4 * M_PI * r * r);
         ism_mesh_free(&m);
@@ -139,14 +148,22 @@ static void check_small_sphere(const double c_cells[3], const char *name)
 
 Test(thin, small_sphere_inside_one_cell)
 {
-    check_small_sphere((const double[3]){64.5, 63.5, 70.5}, "sphere in a cell");
+    check_small_sphere((const double[3]){64.5, 63.5, 70.5}, false, "sphere in a cell");
 }
 
 /* Centred on a face's centre: the face cuts it in a circle of radius 0.3 cell, 0.5 cell
  * from the face's edges (an island in the face, seen by neither cell). */
 Test(thin, small_sphere_straddling_a_face)
 {
-    check_small_sphere((const double[3]){64, 63.5, 70.5}, "sphere on a face");
+    check_small_sphere((const double[3]){64, 63.5, 70.5}, false, "sphere on a face");
+}
+
+/* The live preview's coarse search (whole cells of one corner sign, no resolve levels) finds
+ * both spheres too, closed and in one piece. */
+Test(thin, small_spheres_coarse_search)
+{
+    check_small_sphere((const double[3]){64.5, 63.5, 70.5}, true, "sphere in a cell, coarse");
+    check_small_sphere((const double[3]){64, 63.5, 70.5}, true, "sphere on a face, coarse");
 }
 
 /* The horn cyclide a = 10, r = f = 2 (test_singular_points.c derives its one singular point,
