@@ -124,12 +124,22 @@ class ClusterQueueTest(unittest.TestCase):
             for j in first:
                 self.assertEqual(wait_job(a, j, source="127.0.0.2")["state"], "done")
             self.assertEqual(wait_job(b, second, source="127.0.0.3")["state"], "done")
+            # (a job done on its own daemon's executor is recorded ended a tick later)
+            self.assertTrue(stack.wait_until(
+                lambda: all(b"ended_ms" in computation(s, j) for j in first), 30))
             facts = [computation(s, j) for j in first]
             ran = [f[b"daemon"] for f in facts]
             self.assertEqual(len(set(ran)), 3, ran)  # every daemon ran some of them
+            # a heartbeat that comes while the second user waits (before a worker frees: a
+            # slow run) finds the first user on every worker and gives one back (the share
+            # rule, test_a_user_over_half...): that computation starts again, once
+            preempted = int(sum(d.metric("isomesh_preemptions_total") for d in s.daemons))
+            self.assertLessEqual(preempted, 1)
             self.assertEqual(sum(d.metric("isomesh_computations_started_total")
-                                 for d in s.daemons), 31)
-            self.assertEqual(a.metric("isomesh_cluster_submitted_total"), 30)
+                                 for d in s.daemons), 31 + preempted)
+            # (its origin, following the old entry, joins the given-back one: once more,
+            # unless the mesh is stored by then)
+            self.assertIn(a.metric("isomesh_cluster_submitted_total"), range(30, 31 + preempted))
             mine = computation(s, second)
             q, st = float(mine[b"queued_ms"]), float(mine[b"started_ms"])
             # no job of the first user got a worker while the second user's job waited
@@ -139,7 +149,7 @@ class ClusterQueueTest(unittest.TestCase):
             # a job running when it came), in the first user's median job time as recorded
             # (ended - started) for the jobs that ran unpaused, on the same loaded machine
             held = [f for f in facts if float(f[b"started_ms"]) < q]
-            self.assertEqual(len(held), 3)
+            self.assertEqual(len(held), 3 - preempted)  # the given-back one started again
             freed = min(float(f[b"ended_ms"]) for f in held)
             times = sorted(float(f[b"ended_ms"]) - float(f[b"started_ms"])
                            for f in facts if f not in held)
