@@ -52,28 +52,41 @@ static void centre_on_surface(ism_sampler *s, const double (*p)[3], int n, doubl
     }
 }
 
-/* The worst distance on one polygon p[0..n), triangulated as triangulate.c does. */
-static double loop_error(ism_sampler *s, const double (*p)[3], int n)
+/* worst = max(worst, d); true once it is beyond bound (the measuring may stop). */
+static bool beyond(double *worst, double d, double bound)
+{
+    *worst = fmax(*worst, d);
+    return *worst > bound;
+}
+
+/* The worst distance on one polygon p[0..n), triangulated as triangulate.c does; the
+ * measuring stops at the first point beyond bound. */
+static double loop_error(ism_sampler *s, const double (*p)[3], int n, double bound)
 {
     double worst = 0;
     for (int i = 0; i < n; i++)
-        worst = fmax(worst, midpoint_dist(s, p[i], p[(i + 1) % n]));
-    if (n == 3)
-        return fmax(worst, centroid_dist(s, p[0], p[1], p[2]));
+        if (beyond(&worst, midpoint_dist(s, p[i], p[(i + 1) % n]), bound))
+            return worst;
+    if (n == 3) {
+        beyond(&worst, centroid_dist(s, p[0], p[1], p[2]), bound);
+        return worst;
+    }
     if (n == 4) {
         int a = ism_dist3(p[0], p[2]) <= ism_dist3(p[1], p[3]) ? 0 : 1;
         const double *d0 = p[a], *d1 = p[a + 2];
-        worst = fmax(worst, midpoint_dist(s, d0, d1));
-        worst = fmax(worst, centroid_dist(s, d0, p[a + 1], d1));
-        return fmax(worst, centroid_dist(s, d0, d1, p[(a + 3) % 4]));
+        if (!beyond(&worst, midpoint_dist(s, d0, d1), bound) &&
+            !beyond(&worst, centroid_dist(s, d0, p[a + 1], d1), bound))
+            beyond(&worst, centroid_dist(s, d0, d1, p[(a + 3) % 4]), bound);
+        return worst;
     }
     double c[3];
     centre_on_surface(s, p, n, c);
-    worst = fmax(worst, ism_sample_dist(s, c));
-    for (int i = 0; i < n; i++) {
-        worst = fmax(worst, midpoint_dist(s, c, p[i]));
-        worst = fmax(worst, centroid_dist(s, c, p[i], p[(i + 1) % n]));
-    }
+    if (beyond(&worst, ism_sample_dist(s, c), bound))
+        return worst;
+    for (int i = 0; i < n; i++)
+        if (beyond(&worst, midpoint_dist(s, c, p[i]), bound) ||
+            beyond(&worst, centroid_dist(s, c, p[i], p[(i + 1) % n]), bound))
+            return worst;
     return worst;
 }
 
@@ -129,7 +142,8 @@ static bool edge_roots(ism_sampler *s, const ism_corners *k, root_pt *r, int *n)
 
 /* The polygons through the node's edge roots, measured one by one (cut NULL) or
  * triangulated into cut, split along f's crease and measured there. */
-static bool cell_loops(ism_sampler *s, const ism_corners *k, ism_cell_out *cut, double *err)
+static bool cell_loops(ism_sampler *s, const ism_corners *k, ism_cell_out *cut, double bound,
+                       double *err)
 {
     root_pt r[MAX_ROOTS];
     int n;
@@ -149,7 +163,7 @@ static bool cell_loops(ism_sampler *s, const ism_corners *k, ism_cell_out *cut, 
             return false;
     bool used[MAX_ROOTS] = {false};
     double worst = 0, loop[MAX_ROOTS][3];
-    for (int start = 0; start < n; start++) {
+    for (int start = 0; start < n && !(worst > bound); start++) {
         if (used[start])
             continue;
         int m = 0, cur = start, via = r[start].face[0];
@@ -160,29 +174,29 @@ static bool cell_loops(ism_sampler *s, const ism_corners *k, ism_cell_out *cut, 
             cur = on_face[via][0] == cur ? on_face[via][1] : on_face[via][0];
         }
         if (!cut)
-            worst = fmax(worst, loop_error(s, (const double (*)[3])loop, m));
+            worst = fmax(worst, loop_error(s, (const double (*)[3])loop, m, bound));
         else if (!loop_tris(s, (const double (*)[3])loop, m, cut))
             return false;
     }
     if (cut) {
         if (!ism_crease_split(s, cut, 0))
             return false;
-        worst = ism_emitted_error(s, cut, 0);
+        worst = ism_emitted_error(s, cut, 0, bound);
     }
     *err = worst;
     return true;
 }
 
-bool ism_cell_error(ism_sampler *s, const ism_corners *k, double *err)
+bool ism_cell_error(ism_sampler *s, const ism_corners *k, double bound, double *err)
 {
-    return cell_loops(s, k, NULL, err);
+    return cell_loops(s, k, NULL, bound, err);
 }
 
-bool ism_cell_error_cut(ism_sampler *s, const ism_corners *k, double *err)
+bool ism_cell_error_cut(ism_sampler *s, const ism_corners *k, double bound, double *err)
 {
     ism_cell_out cut;
     memset(&cut, 0, sizeof cut);
-    bool ok = cell_loops(s, k, &cut, err);
+    bool ok = cell_loops(s, k, &cut, bound, err);
     free(cut.verts);
     free(cut.tris);
     return ok;

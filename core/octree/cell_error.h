@@ -15,12 +15,14 @@
  * k of the node lo..hi. Returns false (and leaves *err alone) when the roots do not form
  * clean polygons — a corner exactly on the surface, a face crossed at one or more than two
  * points — so that the caller decides by another rule. *err is +inf when f or ∇f is not
- * finite at a measuring point. */
-bool ism_cell_error(ism_sampler *s, const ism_corners *k, double *err);
+ * finite at a measuring point. The measuring stops at the first point beyond bound (*err is
+ * then its distance): whether the node meets bound is the same as with every point
+ * measured (INFINITY measures them all). */
+bool ism_cell_error(ism_sampler *s, const ism_corners *k, double bound, double *err);
 
 /* The same with the triangles first split along the crease of f's top min/max, as the
  * polygoniser splits them under an error bound (crease_split.h). Also false when out of
  * memory. */
-bool ism_cell_error_cut(ism_sampler *s, const ism_corners *k, double *err);
+bool ism_cell_error_cut(ism_sampler *s, const ism_corners *k, double bound, double *err);
 
 #endif

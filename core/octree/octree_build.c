@@ -336,8 +336,9 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         th->s.tape = saved;
         leaf = flat || nd.level >= limit;
         /* a leaf proven free of f = 0 emits nothing and hides no piece: skipped from here */
-        if (leaf && !b->p->scalar_eval && ism_box_zero_free(sub, th->s.ws, lo, hi, &k,
-                                      b->p->flatness.double_root_eps, &th->s.n_interval))
+        if (leaf && !b->p->scalar_eval &&
+            ism_box_zero_free(sub, th->s.ws, th->thin.jet, lo, hi, &k,
+                              b->p->flatness.double_root_eps, &th->s.n_interval))
             v->v[i].flags |= ISM_NODE_ZERO_FREE;
         else if (leaf && !flat) {
             v->v[i].thin = hides_piece(b, th, &nd, sub, &k);
@@ -369,10 +370,10 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     v->v[i].state = ISM_NODE_SPLIT;
     v->v[i].child = (int32_t)first;
     bool was_split = pv && pv->state == ISM_NODE_SPLIT;
-    /* the children's intervals at once, unless each child shortens its own tape, is taken
-     * over from the last round, or is left for a task */
-    bool batch = !b->p->scalar_eval && !b->shortening && !was_split &&
-                 !(defer && nd.level + 1 == defer->level);
+    /* the children's intervals at once, unless each child may shorten its own tape (sub
+     * still holds a min/max), is taken over from the last round, or is left for a task */
+    bool batch = !b->p->scalar_eval && !was_split && !(defer && nd.level + 1 == defer->level) &&
+                 !(b->shortening && ism_tape_has_min_max(sub));
     ism_interval ranges[8];
     if (batch)
         children_ranges(b, th, &nd, sub, ranges);

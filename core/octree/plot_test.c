@@ -73,7 +73,7 @@ static int crease_cell(ism_sampler *s, const ism_flatness *fl, const ism_corners
             if (branch[i] == branch[j] && ism_dot3(n[i], n[j]) < fl->normal_cos)
                 return 0;
     double err;
-    if (ism_cell_error_cut(s, k, &err))
+    if (ism_cell_error_cut(s, k, fl->max_error, &err))
         return err <= fl->max_error;
     return 1; /* polygons the estimate cannot follow: the measurement after decides */
 }
@@ -144,7 +144,7 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
         return true;
     }
     double err;
-    if (fl->max_error > 0 && ism_cell_error(s, k, &err))
+    if (fl->max_error > 0 && ism_cell_error(s, k, fl->max_error, &err))
         return err <= fl->max_error;
     for (int a = 0; a < 3; a++)
         centroid[a] /= nroots;

@@ -153,7 +153,7 @@ static bool one_leaf(phase2 *p, ism_cell_ctx *cx, size_t chunk, size_t i, ism_ce
         if (p->leaf_error && !ism_crease_split(&cx->s, out, t0))
             return false; /* under max_error: cut along a CSG crease before measuring */
         if (p->leaf_error)
-            err = (float)ism_emitted_error(&cx->s, out, t0);
+            err = (float)ism_emitted_error(&cx->s, out, t0, INFINITY);
     }
     if (p->leaf_error)
         p->leaf_error[i] = err;

@@ -17,10 +17,11 @@ static bool has_side(const uint32_t *t, uint32_t a, uint32_t b)
     return false;
 }
 
-double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_tri)
+double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
+                         double bound)
 {
     double worst = 0;
-    for (size_t t = first_tri; t < out->ntris; t++) {
+    for (size_t t = first_tri; t < out->ntris && !(worst > bound); t++) {
         const uint32_t *tri = &out->tris[3 * t];
         const double *v[3];
         for (int k = 0; k < 3; k++)

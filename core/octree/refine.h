@@ -14,8 +14,11 @@
 
 /* The largest |f| / |∇f| (ism_sample_dist) at the centroids and edge midpoints of out's
  * triangles from first_tri on: +inf when one of them has no estimate (∇f vanishing where f
- * is not 0, or f not finite), so that leaf is split again. */
-double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_tri);
+ * is not 0, or f not finite), so that leaf is split again. The measuring stops at the first
+ * point beyond bound (its distance is returned): whether the triangles meet bound is the
+ * same; INFINITY measures them all. */
+double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
+                         double bound);
 
 /* A node's identity across rounds (its level and lattice origin). */
 uint64_t ism_node_key(const ism_node *nd);
