@@ -88,35 +88,6 @@ static uint32_t new_vertex(crease_state *cs, const double p[3])
     return v != NONE && cut_set_vcurve(s, v, cs->k) ? v : NONE;
 }
 
-/* The plane through p containing edge u-w and the mean normal of its ends: a crease point
- * kept in it stays across the crease from the edge, so the points of consecutive edges
- * follow each other along the crease (a point free to slide would go to the foot of the
- * perpendicular, out of order where the mesh's edges meet the crease obliquely). False
- * when the edge and normal are parallel. */
-static bool edge_plane(const ism_mesh *m, uint32_t u, uint32_t w, const double p[3],
-                       double plane[4])
-{
-    double d[3], n[3], c[3], l = 0;
-    for (int k = 0; k < 3; k++) {
-        d[k] = m->pos[3 * (size_t)w + k] - m->pos[3 * (size_t)u + k];
-        n[k] = (double)m->normal[3 * (size_t)u + k] + m->normal[3 * (size_t)w + k];
-    }
-    c[0] = d[1] * n[2] - d[2] * n[1];
-    c[1] = d[2] * n[0] - d[0] * n[2];
-    c[2] = d[0] * n[1] - d[1] * n[0];
-    for (int k = 0; k < 3; k++)
-        l += c[k] * c[k];
-    l = sqrt(l);
-    if (!(l > 0))
-        return false;
-    plane[3] = 0;
-    for (int k = 0; k < 3; k++) {
-        plane[k] = c[k] / l;
-        plane[3] += plane[k] * p[k];
-    }
-    return true;
-}
-
 /* The crease point on edge u-w (branches label[u] ≠ label[w]), made once per edge. */
 static uint32_t crease_vertex(crease_state *cs, uint32_t u, uint32_t w)
 {
@@ -135,7 +106,10 @@ static uint32_t crease_vertex(crease_state *cs, uint32_t u, uint32_t w)
     double len = fmax(sqrt(ism_sqdist3(a, b)), fmax(s->reach[u], s->reach[w]));
     size_t ks[1] = {B};
     double max_move = CREASE_MAX_MOVE_EDGES * len, plane[4];
-    bool across = edge_plane(s->m, u, w, p, plane);
+    double n[3];
+    for (int c = 0; c < 3; c++)
+        n[c] = (double)s->m->normal[3 * (size_t)u + c] + s->m->normal[3 * (size_t)w + c];
+    bool across = cut_plane_along(a, b, n, p, plane);
     if (!ism_branches_refine(cs->b, A, ks, 1, across ? plane : NULL, s->tol, max_move, p)) {
         bool again = (ga < 0) != (gb < 0);
         if (again)

@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "core/util/grow.h"
+#include "core/util/vec3.h"
 
 #define NONE CUT_NONE
 /* Newton may move a split point at most this many lengths of its edge (further means it
@@ -243,6 +244,36 @@ static bool refine_on_face(cut_state *s, size_t k, const double *a, const double
     return true;
 }
 
+bool cut_plane_along(const double a[3], const double b[3], const double n[3], const double p[3],
+                     double plane[4])
+{
+    double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double c[3] = {d[1] * n[2] - d[2] * n[1], d[2] * n[0] - d[0] * n[2],
+                   d[0] * n[1] - d[1] * n[0]};
+    double l = ism_norm3(c);
+    if (!(l > 0) || !isfinite(l))
+        return false;
+    for (int k = 0; k < 3; k++)
+        plane[k] = c[k] / l;
+    plane[3] = ism_dot3(plane, p);
+    return true;
+}
+
+/* Puts p (on edge a-b of length len) on curve k in the plane across the edge (∇f at p and
+ * the edge: cut_plane_along). False (p kept) when Newton fails there (the curve runs along
+ * the edge). */
+static bool refine_across(cut_state *s, size_t k, const double *a, const double *b, double len,
+                          double p[3])
+{
+    double g[3], plane[4], q[3] = {p[0], p[1], p[2]};
+    ism_eval_gradient(s->ev->f, s->ev->fws, p[0], p[1], p[2], g);
+    if (s->ev->fns[k].kind == ISM_CUT_CREASE || !cut_plane_along(a, b, g, p, plane) ||
+        !ism_cut_refine_on_plane(s->ev, k, plane, s->tol, CUT_MAX_MOVE_EDGES * len, q))
+        return false;
+    memcpy(p, q, sizeof q);
+    return true;
+}
+
 /* The vertex where g_k = 0 splits edge u-w (made once per edge). NONE when out of memory. */
 static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
 {
@@ -264,7 +295,9 @@ static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
     for (int c = 0; c < 2; c++) /* when u-w lies on a crease: its two branches */
         s->ev->pair[c] = e == ISM_KEY_NONE ? ISM_CUT_NO_BRANCH : s->c->edges[e].branch[c];
     double len = fmax(sqrt(len2), fmax(s->reach[u], s->reach[w]));
-    if ((j != NONE || !refine_on_face(s, k, a, b, len, p)) && !try_refine(s, j, k, len, p)) {
+    if ((j != NONE || (!refine_on_face(s, k, a, b, len, p) &&
+                       !refine_across(s, k, a, b, len, p))) &&
+        !try_refine(s, j, k, len, p)) {
         cut_bisect(g_at, &(g_of){s, k}, a, b, s->gv[u], p); /* g bends: a start by bisection */
         refine_point(s, j, k, len, p);
     }
