@@ -51,14 +51,12 @@ bool rm_bound_triangle(rm_pass *p, const double *a, const double *b, const doubl
     return rm_bound_distance(p, m, p->max_error) <= p->max_error;
 }
 
-/* rm_bound_fan_worst, or as soon as a point measures above stop, that point's distance
- * (then above stop; the rest are not measured). */
-static double fan_worst(rm_pass *p, uint32_t v, const double *x, double stop)
+double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x)
 {
     const rm_mesh *r = &p->r;
     const double *P = r->m->pos;
-    double worst = rm_bound_distance(p, x, stop);
-    for (uint32_t i = 0; i < r->count[v] && worst <= stop; i++) {
+    double worst = 0;
+    for (uint32_t i = 0; i < r->count[v]; i++) {
         const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
         const double *q[3];
         for (int k = 0; k < 3; k++)
@@ -70,24 +68,14 @@ static double fan_worst(rm_pass *p, uint32_t v, const double *x, double stop)
             m[j] = 0.5 * (x[j] + q[(k + 1) % 3][j]);
         }
         /* each edge at v is the next edge of exactly one triangle of a closed fan */
-        worst = fmax(worst, rm_bound_distance(p, g, stop));
-        if (worst <= stop)
-            worst = fmax(worst, rm_bound_distance(p, m, stop));
+        worst = fmax(worst, fmax(rm_bound_distance(p, g, INFINITY),
+                                 rm_bound_distance(p, m, INFINITY)));
     }
-    return worst;
-}
-
-double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x)
-{
-    return fan_worst(p, v, x, INFINITY);
+    return fmax(worst, rm_bound_distance(p, x, INFINITY));
 }
 
 bool rm_bound_fan(rm_pass *p, uint32_t v, const double *x)
 {
-    const double *at = p->r.m->pos + 3 * (size_t)v, e = p->max_error;
-    if (fan_worst(p, v, x, e) <= e)
-        return true;
-    if (fan_worst(p, v, at, e) <= e)
-        return false; /* beyond E at x, within it where v is */
-    return rm_bound_fan_worst(p, v, x) <= rm_bound_fan_worst(p, v, at);
+    double now = rm_bound_fan_worst(p, v, x);
+    return now <= p->max_error || now <= rm_bound_fan_worst(p, v, p->r.m->pos + 3 * (size_t)v);
 }
