@@ -31,6 +31,8 @@
 #define TAKE_TRIES "8"               /* users a take may find with nothing to read (their
                                         P wait entry stale) before it gives up until the next
                                         tick: bounds the script, and each try mends one */
+#define NEWEST_SCAN "64"             /* a user's entries taken that a give-back compares
+                                        (the first so many: more than any user runs) */
 #define ORPHAN_CHECK_NS 100000000LL  /* a computation wanted by no request here (its origin's
                                         own, run here) asks this often whether another daemon
                                         waits for it, and stops when none does */
@@ -237,16 +239,41 @@ static const char DEPTH_LUA[] =
     "  if below == nil then return false end " \
     "  return below == 0 or (share > 0 and mine > share and below < share) end "
 
+/* newest(p, user, id, started): no other entry of the user taken by a live daemon and able
+ * to give back (its job hash's alone, published by its heartbeats) started after this one
+ * (id, started_ms started). The entry given back is the newest, as sched.c's preemption takes
+ * the one started last: the least work is lost. */
+#define NEWEST_LUA \
+    "local function newest(p, user, id, started) " \
+    "  for _, s in ipairs({p .. 'r:' .. user, p .. 'q:' .. user}) do " \
+    "    local taken = {} " \
+    "    if redis.call('exists', s) == 1 then " \
+    "      taken = redis.call('xpending', s, 'workers', '-', '+', " NEWEST_SCAN ") end " \
+    "    for _, x in ipairs(taken) do " \
+    "      local e = x[1] ~= id and redis.call('xrange', s, x[1], x[1])[1] " \
+    "      for i = 1, e and #e[2] or 0, 2 do " \
+    "        if e[2][i] == 'name' then " \
+    "          local h = redis.call('hmget', p .. 'job:' .. e[2][i + 1], 'id', 'alone', " \
+    "            'started_ms', 'daemon') " \
+    "          if h[1] == x[1] and h[2] == '1' and h[4] " \
+    "             and tonumber(h[3] or '0') > started " \
+    "             and redis.call('exists', p .. 'alive:' .. h[4]) == 1 then return false end " \
+    "        end " \
+    "      end " \
+    "    end " \
+    "  end " \
+    "  return true end "
+
 /* KEYS stream, job hash; ARGV consumer, id, progress, ttl, key prefix, name, now ms, may
  * give back, user. 1: still ours (idle time reset, progress published); 0: taken over by
  * another daemon, or its record is gone; 2: canceled, or abandoned (ABANDONED_LUA: flagged
  * canceled), both acknowledged and deleted; 3: given back (nothing on this daemon but the
- * entry wants the computation, and its user is over the service's share, OVER_SHARE_LUA):
- * the entry goes to its user's given-back stream (P r:<user>, read before the user's other
+ * entry wants the computation, its user is over the service's share, OVER_SHARE_LUA, and it
+ * is the user's newest that may go, NEWEST_LUA): the entry goes to its user's given-back stream (P r:<user>, read before the user's other
  * entries: the user's next computation to start is this one) as a new one, the job hash says
  * queued under its new id (the origin, following the old one, starts over and joins it). */
 static const char HEARTBEAT_LUA[] =
-    ABANDONED_LUA REFRESH_LUA OVER_SHARE_LUA
+    ABANDONED_LUA REFRESH_LUA OVER_SHARE_LUA NEWEST_LUA
     "if redis.call('exists', KEYS[1]) == 0 then return 0 end "
     "local pe = redis.call('xpending', KEYS[1], 'workers', ARGV[2], ARGV[2], 1)[1] "
     "if not pe or pe[2] ~= ARGV[1] then return 0 end "
@@ -259,7 +286,8 @@ static const char HEARTBEAT_LUA[] =
     "  redis.call('xack', KEYS[1], 'workers', ARGV[2]) redis.call('xdel', KEYS[1], ARGV[2]) "
     "  refresh(ARGV[5], ARGV[9]) "
     "  if mine and e then return 2 end return 0 end "
-    "if ARGV[8] == '1' and over_share(ARGV[5], ARGV[9]) then "
+    "if ARGV[8] == '1' and over_share(ARGV[5], ARGV[9]) and newest(ARGV[5], ARGV[9], ARGV[2], "
+    "   tonumber(redis.call('hget', KEYS[2], 'started_ms') or '0')) then "
     "  redis.call('xack', KEYS[1], 'workers', ARGV[2]) redis.call('xdel', KEYS[1], ARGV[2]) "
     "  local r = ARGV[5] .. 'r:' .. ARGV[9] "
     "  if redis.call('exists', r) == 0 then "
@@ -270,7 +298,7 @@ static const char HEARTBEAT_LUA[] =
     "  refresh(ARGV[5], ARGV[9]) "
     "  return 3 end "
     "redis.call('xclaim', KEYS[1], 'workers', ARGV[1], 0, ARGV[2], 'JUSTID') "
-    "redis.call('hset', KEYS[2], 'progress', ARGV[3]) "
+    "redis.call('hset', KEYS[2], 'progress', ARGV[3], 'alone', ARGV[8]) "
     "redis.call('pexpire', KEYS[2], ARGV[4]) "
     "return 1";
 

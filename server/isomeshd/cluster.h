@@ -18,8 +18,9 @@
  *   P ulim        hash user -> the user's running limit (0: none), from its latest entry
  *   P job:<name>  hash: state (queued, running, done, failed), progress, status and error
  *                 (failed), the daemon running it, its origin (the daemon that queued it),
- *                 its entry's id and stream, and queued_ms, started_ms, ended_ms on Redis's
- *                 clock (one clock for every daemon); expires
+ *                 its entry's id and stream, queued_ms, started_ms, ended_ms on Redis's
+ *                 clock (one clock for every daemon), and alone (its last heartbeat: 1 when
+ *                 it may be given back); expires
  *   P jobrec:<id> hash: a job (POST /v1/jobs) of any daemon: user, key, fmt, created, the
  *                 daemon holding it, and cancel once deleted, so that every daemon answers
  *                 GET and DELETE /v1/jobs/{id}; expires
@@ -71,10 +72,11 @@
  * heartbeat (resetting its idle time), publishes progress and watches for a cancel, and gives
  * the entry back when its user is over the service's fair share while another user waits and
  * nothing else on this daemon shares the computation (HEARTBEAT_LUA's over_share: sched.c's
- * preemption rule over the workers of every live daemon, P nworkers). A given-back entry goes
- * to its user's P r:<user>, so it is that user's next computation to start; it starts from
- * scratch (its partial work lived in the worker process stopped to free the worker). When
- * an entry ends, the results are flushed to Redis before the job hash says so, and the entry
+ * preemption rule over the workers of every live daemon, P nworkers) and it is the user's
+ * entry started last among those that may go (NEWEST_LUA: the least work lost). A given-back
+ * entry goes to its user's P r:<user>, so it is that user's next computation to start; it
+ * starts from scratch (its partial work lived in the worker process stopped to free the
+ * worker). When an entry ends, the results are flushed to Redis before the job hash says so, and the entry
  * is acknowledged and deleted. Every step is one Lua script, so a
  * crash between two commands never leaves half a change. */
 #ifndef ISMD_CLUSTER_H

@@ -14,12 +14,10 @@ nothing.
     python3 tests/bench/bench_cluster_share.py [--users 10,100,1000] [--jobs 10] [--reps 50]
 """
 import argparse
-import codecs
 import os
 import re
 import socket
 import statistics
-import subprocess
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -31,18 +29,6 @@ P = "isomesh:v1:"          # the default namespace's prefix
 DAEMON = "bench/1/0"       # the daemon running the entries
 STATE_TTL_MS = "3600000"
 LIMIT_JOBS = "1000000"     # --user-jobs: never the limit here
-
-
-def scripts():
-    """name -> Lua text of every `static const char NAME[] = "...";` in cluster.c."""
-    src = os.path.join(ROOT, "server", "isomeshd", "cluster.c")
-    out = subprocess.run(["gcc", "-E", "-P", "-D_GNU_SOURCE", "-I" + ROOT, "-I/usr/include/hiredis",
-                          src], check=True, capture_output=True, text=True).stdout
-    found = {}
-    for m in re.finditer(r"static const char (\w+)\[\] =\s*((?:\"(?:[^\"\\]|\\.)*\"\s*)+);", out):
-        parts = re.findall(r"\"((?:[^\"\\]|\\.)*)\"", m.group(2))
-        found[m.group(1)] = codecs.decode("".join(parts), "unicode_escape")
-    return found
 
 
 class Conn:
@@ -132,7 +118,7 @@ def main():
     ap.add_argument("--reps", type=int, default=50)
     ap.add_argument("--build", help="run_bench.py's; unused (the scripts come from the source)")
     a = ap.parse_args()
-    lua = scripts()
+    lua = stack.cluster_scripts()
     red = stack.Redis()
     red.start()
     try:

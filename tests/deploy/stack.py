@@ -4,6 +4,7 @@ with deploy/redis/isomesh.conf (its own port and directory, nothing saved), isom
 configuration generated from deploy/nginx/isomesh.conf (the upstreams pointed at the daemons,
 its own prefix, pid, logs and temporary directories). Every process is started and stopped
 here, with bounded waits. Plus a minimal Redis client (RESP over a socket, stdlib only)."""
+import codecs
 import gzip
 import os
 import pwd
@@ -171,6 +172,21 @@ def wait_stored(redis, key, fmt="drc", timeout=30):
     names = ["isomesh:v1:%s.%s" % (key, ext)
              for ext in (fmt, "stats.json", "features.json", "request.json")]
     return wait_until(lambda: all(redis.command("EXISTS", n) == 1 for n in names), timeout)
+
+
+# ---- the cluster queue's scripts ---------------------------------------------------------
+
+def cluster_scripts():
+    """name -> Lua text of every `static const char NAME[] = "...";` in
+    server/isomeshd/cluster.c, through the C preprocessor: the daemon's own scripts."""
+    src = os.path.join(ROOT, "server", "isomeshd", "cluster.c")
+    out = subprocess.run(["gcc", "-E", "-P", "-D_GNU_SOURCE", "-I" + ROOT, "-I/usr/include/hiredis",
+                          src], check=True, capture_output=True, text=True).stdout
+    found = {}
+    for m in re.finditer(r"static const char (\w+)\[\] =\s*((?:\"(?:[^\"\\]|\\.)*\"\s*)+);", out):
+        parts = re.findall(r"\"((?:[^\"\\]|\\.)*)\"", m.group(2))
+        found[m.group(1)] = codecs.decode("".join(parts), "unicode_escape")
+    return found
 
 
 # ---- nginx ------------------------------------------------------------------------------
