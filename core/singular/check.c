@@ -28,24 +28,6 @@ typedef struct seg_grid {
     uint32_t *idx;         /* segment numbers, bucketed */
 } seg_grid;
 
-static double dist2_point_segment(const double p[3], const double a[3], const double b[3])
-{
-    double ab[3], ap[3], t = 0, l2 = 0;
-    for (int k = 0; k < 3; k++) {
-        ab[k] = b[k] - a[k];
-        ap[k] = p[k] - a[k];
-        l2 += ab[k] * ab[k];
-        t += ab[k] * ap[k];
-    }
-    t = l2 > 0 ? fmin(1.0, fmax(0.0, t / l2)) : 0.0;
-    double d2 = 0;
-    for (int k = 0; k < 3; k++) {
-        double d = ap[k] - t * ab[k];
-        d2 += d * d;
-    }
-    return d2;
-}
-
 static int bucket_of(const seg_grid *g, double x, int k)
 {
     int i = (int)floor((x - g->lo[k]) / g->cell);
@@ -245,7 +227,7 @@ static bool near_locus(const ism_locus *l, const point_grid *pg, const seg_grid 
     size_t c = bucket_index(g, bucket_of(g, p[0], 0), bucket_of(g, p[1], 1),
                             bucket_of(g, p[2], 2));
     for (uint32_t j = g->start[c]; j < g->start[c + 1]; j++)
-        if (dist2_point_segment(p, g->a[g->idx[j]], g->b[g->idx[j]]) <= t2)
+        if (ism_sqdist_segment3(p, g->a[g->idx[j]], g->b[g->idx[j]]) <= t2)
             return true;
     return false;
 }

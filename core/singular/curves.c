@@ -10,6 +10,8 @@
 #include "core/eval/eval.h"
 #include "core/singular/curve_trace.h"
 #include "core/singular/search.h"
+#include "core/util/sym3.h"
+#include "core/util/vec3.h"
 
 /* Newton's tolerance (× box diagonal): a step this small leaves the point far inside the
  * 1e-9 × diagonal the locus promises (the iteration is quadratic). */
@@ -54,6 +56,20 @@
 
 /* Branches meeting at a collapse point that make it a triple point. */
 #define CURVES_TRIPLE_BRANCHES 3
+
+/* Projections of Hessian rank ≤ 1 (pinch and triple points, where curves meet) probed for
+ * seeds (degenerate_seeds), distinct points at most: a few per curve end at a coarse depth;
+ * a double sheet's rank-1 boxes (10⁵ of them) project onto as many distinct points, and no
+ * probe there gives a seed (the Hessian across has rank 1). */
+#define CURVES_DEGENERATE_PROBES_MAX 64
+/* The probe's step along a null direction of the Hessian there (cells): well off the point,
+ * where the curve's Hessian across has its full rank 2, well inside the cell. */
+#define CURVES_DEGENERATE_STEP_CELLS 0.25
+/* Without rank-2 seeds, more rank ≤ 1 boxes than this are a double sheet's (each its own
+ * point, none a curve's end): the stage returns without building its index, as before. */
+#define CURVES_DEGENERATE_BOXES_MAX 1024
+/* Two rank ≤ 1 projections this close (cells) are one point, probed once. */
+#define CURVES_DEGENERATE_SAME_CELLS 1e-3
 
 /* Branches ending at a rank-1 point whose rank-1 system is singular that make it a crossing
  * of curves rather than a contact of two sheets (which no curve reaches). */
@@ -244,11 +260,11 @@ static bool seed_point(ism_ctracer *tr, const ism_lbox *bx, ism_cpoint *s)
     return ism_cjet_seed_ok(s, tr->io->hessian_scale, tr->diag, 1.0);
 }
 
-static void trace_seed(ism_ctracer *tr, ism_lbox *bx)
+/* Traces the curve through the seed s of box bx (unless a curve traced already passes
+ * there). */
+static void trace_from(ism_ctracer *tr, ism_lbox *bx, const ism_cpoint *seed)
 {
-    ism_cpoint s;
-    if (!seed_point(tr, bx, &s))
-        return;
+    ism_cpoint s = *seed;
     if (ism_cindex_near_segment(&tr->idx, s.p, tr->delta)) {
         bx->flags |= ISM_LBOX_USED; /* on a curve traced already */
         return;
@@ -266,6 +282,13 @@ static void trace_seed(ism_ctracer *tr, ism_lbox *bx)
         emit(tr, &fw, &bw);
     free(fw.v);
     free(bw.v);
+}
+
+static void trace_seed(ism_ctracer *tr, ism_lbox *bx)
+{
+    ism_cpoint s;
+    if (seed_point(tr, bx, &s))
+        trace_from(tr, bx, &s);
 }
 
 /* Types the ends at points, now that every branch is known: a point where ≥ 3 branches end
@@ -303,15 +326,111 @@ static bool is_seed(const ism_lbox *b)
     return (b->flags & ISM_LBOX_PROJECTED) && b->rank == 2 && !(b->flags & ISM_LBOX_USED);
 }
 
+/* A box projected onto a point of Hessian rank ≤ 1 — also when the points stage explained
+ * it by a point it published (USED): the curves leaving a pinch or triple point still need
+ * seeds (the cross-cap at depth 4: its boxes below z = −1 project onto (0, 0, −1), and the
+ * whisker z < −1 had none). */
+static bool is_degenerate(const ism_lbox *b)
+{
+    return (b->flags & ISM_LBOX_PROJECTED) && b->rank <= 1;
+}
+
+/* Whether q lies within the enclosure of a point standing for a whisker loop too small to
+ * trace (points.c's small_loop): that loop is reported as the point, not traced. */
+static bool in_small_loop(const ism_locus *io, const double q[3])
+{
+    for (size_t i = 0; i < io->npoints; i++)
+        if (io->points[i].uncertified_why == ISM_UNCERT_LOOP &&
+            ism_dist3(io->points[i].p, q) <= io->points[i].radius)
+            return true;
+    return false;
+}
+
+/* Whether p lies within tr->delta of a segment of the curves io holds before this stage
+ * (curves[0 .. first)): the curve index holds only the curves traced here. */
+static bool near_earlier_curve(const ism_ctracer *tr, const double p[3], size_t first)
+{
+    for (size_t c = 0; c < first; c++) {
+        const ism_sing_curve *cu = &tr->io->curves[c];
+        size_t segs = cu->closed ? cu->n : cu->n - 1;
+        for (size_t i = 0; i < segs; i++) {
+            const double *a = cu->xyz + 3 * i, *b = cu->xyz + 3 * ((i + 1) % cu->n);
+            double d2 = ism_sqdist_segment3(p, a, b);
+            if (d2 <= tr->delta * tr->delta)
+                return true;
+        }
+    }
+    return false;
+}
+
+/* Seeds next to a projection q of Hessian rank ≤ 1 (a pinch or triple point): a step of
+ * CURVES_DEGENERATE_STEP_CELLS each way along every null direction of the Hessian at q, each
+ * tried as a seed box of its own (seed_point decides). At a coarse depth the boxes along a
+ * curve may all project onto its end points, leaving no rank-2 seed: the cross-cap at depth
+ * 3 in ±1.2 (cell 0.3, the z axis on cell edges) projected onto (0, 0, −1), (0, 0, 0) and
+ * (0, 0, 1) only, and its double segment and whiskers were not traced at all (no point
+ * either: the points stage starts only from rank ≥ 2 in such a cluster). */
+static void degenerate_seeds(ism_ctracer *tr, const ism_lbox *bx, size_t first_curve)
+{
+    double g[3], h[6], eig[3], vec[3][3];
+    ism_eval_hessian(tr->jet.f, tr->jet.ws, bx->q[0], bx->q[1], bx->q[2], g, h);
+    tr->jet.evals++;
+    ism_sym3_eigen(h, eig, vec);
+    double m = fmax(fabs(eig[0]), fmax(fabs(eig[1]), fabs(eig[2])));
+    double zero = fmax(ISM_SING_RANK_REL * m, ISM_SING_HZERO_REL * tr->io->hessian_scale);
+    if (!(m > zero)) /* H vanishes: its eigenvectors are rounding; probe along the axes */
+        for (int i = 0; i < 3; i++)
+            for (int k = 0; k < 3; k++)
+                vec[i][k] = i == k;
+    double d = CURVES_DEGENERATE_STEP_CELLS * tr->cell;
+    for (int i = 0; i < 3 && !tr->stop && !tr->oom; i++) {
+        if (m > 0 && fabs(eig[i]) > zero)
+            continue; /* not a null direction */
+        for (int side = 0; side < 2 && ism_ctracer_go(tr); side++) {
+            ism_lbox probe = *bx;
+            for (int k = 0; k < 3; k++)
+                probe.q[k] = bx->q[k] + (side ? -d : d) * vec[i][k];
+            probe.rank = 2;
+            ism_cpoint sp;
+            if (seed_point(tr, &probe, &sp) && !near_earlier_curve(tr, sp.p, first_curve))
+                trace_from(tr, &probe, &sp);
+        }
+    }
+}
+
+/* Every distinct rank ≤ 1 projection (at most CURVES_DEGENERATE_PROBES_MAX) probed for seeds
+ * (degenerate_seeds). */
+static void trace_degenerate(ism_ctracer *tr, size_t first_curve)
+{
+    double seen[CURVES_DEGENERATE_PROBES_MAX][3];
+    size_t nseen = 0;
+    ism_locus *io = tr->io;
+    for (size_t b = 0; b < io->nboxes && nseen < CURVES_DEGENERATE_PROBES_MAX && !tr->stop &&
+                       !tr->oom; b++) {
+        const ism_lbox *bx = &io->boxes[b];
+        if (!is_degenerate(bx) || in_small_loop(io, bx->q))
+            continue;
+        bool same = false;
+        for (size_t s = 0; s < nseen && !same; s++)
+            same = ism_dist3(seen[s], bx->q) <= CURVES_DEGENERATE_SAME_CELLS * tr->cell;
+        if (same)
+            continue;
+        memcpy(seen[nseen++], bx->q, sizeof seen[0]);
+        degenerate_seeds(tr, bx, first_curve);
+    }
+}
+
 bool ism_sing_trace_curves(const ism_tape *f, const ism_locus_options *o, ism_locus *io,
                            ism_error *err)
 {
     if (!options_ok(o, err))
         return false;
-    size_t seeds = 0;
-    for (size_t b = 0; b < io->nboxes; b++)
+    size_t seeds = 0, degenerate = 0;
+    for (size_t b = 0; b < io->nboxes; b++) {
         seeds += is_seed(&io->boxes[b]);
-    if (seeds == 0)
+        degenerate += is_degenerate(&io->boxes[b]);
+    }
+    if (seeds == 0 && (degenerate == 0 || degenerate > CURVES_DEGENERATE_BOXES_MAX))
         return true; /* nothing to trace (a double sheet's 10⁵ rank-1 boxes: no index built) */
     ism_ctracer tr;
     tracer_init(&tr, o, io);
@@ -327,6 +446,7 @@ bool ism_sing_trace_curves(const ism_tape *f, const ism_locus_options *o, ism_lo
         if (is_seed(bx) && ism_ctracer_go(&tr))
             trace_seed(&tr, bx);
     }
+    trace_degenerate(&tr, first_curve);
     if (!tr.oom)
         type_ends(&tr, first_curve);
     size_t lost = 0;

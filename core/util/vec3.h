@@ -35,4 +35,23 @@ static inline double ism_dist3(const double a[3], const double b[3])
     return sqrt(ism_sqdist3(a, b));
 }
 
+/* The squared distance from p to the segment a–b (to a when a = b). */
+static inline double ism_sqdist_segment3(const double p[3], const double a[3], const double b[3])
+{
+    double ab[3], ap[3], t = 0, l2 = 0;
+    for (int k = 0; k < 3; k++) {
+        ab[k] = b[k] - a[k];
+        ap[k] = p[k] - a[k];
+        l2 += ab[k] * ab[k];
+        t += ab[k] * ap[k];
+    }
+    t = l2 > 0 ? fmin(1.0, fmax(0.0, t / l2)) : 0.0;
+    double d2 = 0;
+    for (int k = 0; k < 3; k++) {
+        double d = ap[k] - t * ab[k];
+        d2 += d * d;
+    }
+    return d2;
+}
+
 #endif
