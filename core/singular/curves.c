@@ -61,15 +61,21 @@
  * seeds (degenerate_seeds), distinct points at most: a few per curve end at a coarse depth;
  * a double sheet's rank-1 boxes (10⁵ of them) project onto as many distinct points, and no
  * probe there gives a seed (the Hessian across has rank 1). */
-#define CURVES_DEGENERATE_PROBES_MAX 64
+#define CURVES_DEGENERATE_PROBES_MAX 32
 /* The probe's step along a null direction of the Hessian there (cells): well off the point,
  * where the curve's Hessian across has its full rank 2, well inside the cell. */
 #define CURVES_DEGENERATE_STEP_CELLS 0.25
 /* Without rank-2 seeds, more rank ≤ 1 boxes than this are a double sheet's (each its own
  * point, none a curve's end): the stage returns without building its index, as before. */
 #define CURVES_DEGENERATE_BOXES_MAX 1024
-/* Two rank ≤ 1 projections this close (cells) are one point, probed once. */
-#define CURVES_DEGENERATE_SAME_CELLS 1e-3
+/* Two rank ≤ 1 projections this close (cells) are one point, probed once: a pinch or
+ * triple point is one point seen from several boxes; a curve of them (the heart's ring
+ * z = 0, where H vanishes on a smooth sheet) is probed once a cell. */
+#define CURVES_DEGENERATE_SAME_CELLS 1.0
+/* Newton iterations projecting a probe onto its curve: it starts 0.25 cell off, where Newton
+ * across is quadratic at once; a probe that does not land by then is no seed (on the heart's
+ * ring, CURVES_SEED_IT's 30 each doubled the stage's Hessian evaluations at depth 6). */
+#define CURVES_DEGENERATE_IT 8
 
 /* Branches ending at a rank-1 point whose rank-1 system is singular that make it a crossing
  * of curves rather than a contact of two sheets (which no curve reaches). */
@@ -247,11 +253,11 @@ static void emit(ism_ctracer *tr, const ism_cpath *fw, const ism_cpath *bw)
 
 /* Projects the seed box's q onto its curve; false when it does not lead onto a curve of the
  * zero set inside the box. */
-static bool seed_point(ism_ctracer *tr, const ism_lbox *bx, ism_cpoint *s)
+static bool seed_point(ism_ctracer *tr, const ism_lbox *bx, int iters, ism_cpoint *s)
 {
     double p0[3];
     ism_cjet_frame(&tr->jet, bx->q, NULL, s);
-    if (!ism_cjet_correct(&tr->jet, bx->q, s->n, s->n, tr->cell, CURVES_SEED_IT, p0, NULL) ||
+    if (!ism_cjet_correct(&tr->jet, bx->q, s->n, s->n, tr->cell, iters, p0, NULL) ||
         !ism_ctracer_inside(tr, p0))
         return false;
     double t[3];
@@ -287,7 +293,7 @@ static void trace_from(ism_ctracer *tr, ism_lbox *bx, const ism_cpoint *seed)
 static void trace_seed(ism_ctracer *tr, ism_lbox *bx)
 {
     ism_cpoint s;
-    if (seed_point(tr, bx, &s))
+    if (seed_point(tr, bx, CURVES_SEED_IT, &s))
         trace_from(tr, bx, &s);
 }
 
@@ -392,7 +398,8 @@ static void degenerate_seeds(ism_ctracer *tr, const ism_lbox *bx, size_t first_c
                 probe.q[k] = bx->q[k] + (side ? -d : d) * vec[i][k];
             probe.rank = 2;
             ism_cpoint sp;
-            if (seed_point(tr, &probe, &sp) && !near_earlier_curve(tr, sp.p, first_curve))
+            if (seed_point(tr, &probe, CURVES_DEGENERATE_IT, &sp) &&
+                !near_earlier_curve(tr, sp.p, first_curve))
                 trace_from(tr, &probe, &sp);
         }
     }
