@@ -12,6 +12,7 @@
 #include "core/util/grow.h"
 
 #include <pthread.h>
+#include <stdalign.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -38,7 +39,8 @@ typedef struct defer_list {
 } defer_list;
 
 typedef struct thread_state {
-    ism_sampler s;
+    alignas(ISM_CACHE_LINE) ism_sampler s; /* threads' states in lines of their own: each
+                                              writes its counters for every node */
     ism_point_entry *corners; /* memo of f and ∇f at lattice points (pure: never stale) */
     ism_tape *tapes[ISM_GRID_MAX_DEPTH + 1];
     ism_thin_ws thin;         /* the hidden-piece search's scratch */
@@ -407,9 +409,10 @@ static void run_task(void *ctx, size_t task, int thread)
 
 static bool init_threads(build *b, int nthreads)
 {
-    b->threads = calloc((size_t)nthreads, sizeof *b->threads);
+    b->threads = aligned_alloc(ISM_CACHE_LINE, (size_t)nthreads * sizeof *b->threads);
     if (!b->threads)
         return false;
+    memset(b->threads, 0, (size_t)nthreads * sizeof *b->threads);
     for (int t = 0; t < nthreads; t++) {
         thread_state *th = &b->threads[t];
         th->s.tape = b->p->tape;
@@ -520,7 +523,7 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
             status = ISM_BUILD_NO_MEMORY;
             goto done;
         }
-    ism_parallel_for(nthreads, b.ntasks, run_task, &b);
+    ism_parallel_for_costed(nthreads, b.ntasks, run_task, &b, p->cost);
     if ((status = atomic_load(&b.failed)) != ISM_BUILD_OK)
         goto done;
     if (!join_tasks(&b, &top))

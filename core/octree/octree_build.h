@@ -10,6 +10,7 @@
 #include <stdint.h>
 #include "core/expr/expr.h"
 #include "core/octree/octree.h"
+#include "core/util/parallel.h"
 #include "core/octree/plot_test.h"
 #include "core/octree/refine.h"
 
@@ -53,6 +54,8 @@ typedef struct ism_octree_build_params {
     const volatile int *cancel;
     void (*progress)(void *ctx, double fraction); /* fraction of subtrees done */
     void *progress_ctx;
+    ism_par_cost *cost;               /* what the parallel part cost is added here (parallel.h),
+                                         or NULL */
 } ism_octree_build_params;
 
 typedef struct ism_octree_build_stats {

@@ -17,6 +17,7 @@
 
 #include <math.h>
 #include <pthread.h>
+#include <stdalign.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -117,6 +118,12 @@ static void report(void *ctx, double fraction)
     pthread_mutex_unlock(&p->lock);
 }
 
+/* A thread's context in cache lines of its own: the counters and scratch lengths a thread
+ * writes for every node and evaluation do not share a line with another thread's. */
+typedef struct padded_ctx {
+    alignas(ISM_CACHE_LINE) ism_cell_ctx c;
+} padded_ctx;
+
 typedef struct phase2 {
     const ism_poly_options *o;
     const ism_octree *tree;
@@ -124,7 +131,7 @@ typedef struct phase2 {
     int32_t *leaves;
     size_t nleaves, nchunks, chunk_leaves;
     ism_cell_out *out;           /* one per chunk */
-    ism_cell_ctx *ctx;           /* one per thread */
+    padded_ctx *ctx;             /* one per thread */
     size_t max_triangles;
     atomic_size_t triangles;
     atomic_size_t chunks_done;
@@ -173,7 +180,7 @@ static void run_chunk(void *arg, size_t chunk, int thread)
         atomic_store(&p->status, ISM_POLY_CANCELLED);
         return;
     }
-    ism_cell_ctx *cx = &p->ctx[thread];
+    ism_cell_ctx *cx = &p->ctx[thread].c;
     ism_cell_out *out = &p->out[chunk];
     size_t first = chunk * p->chunk_leaves;
     size_t last = first + p->chunk_leaves < p->nleaves ? first + p->chunk_leaves : p->nleaves;
@@ -188,6 +195,36 @@ static void run_chunk(void *arg, size_t chunk, int thread)
     }
     size_t done = atomic_fetch_add(&p->chunks_done, 1) + 1;
     report(p->prog, (double)done / (double)p->nchunks);
+}
+
+/* The CPU a phase costs (ism_poly_stats.cpu_ms, serial_ms, critical_ms): the calling
+ * thread's CPU from start to stop, and what the parallel loops given `par` cost. */
+typedef struct phase_meter {
+    double caller0;
+    ism_par_cost par;
+} phase_meter;
+
+static void meter_start(phase_meter *m)
+{
+    m->caller0 = ism_thread_cpu_ms();
+    memset(&m->par, 0, sizeof m->par);
+}
+
+static void meter_stop(const phase_meter *m, ism_poly_stats *st, enum ism_poly_phase ph)
+{
+    double serial = ism_thread_cpu_ms() - m->caller0 - m->par.caller_ms;
+    st->serial_ms[ph] += serial;
+    st->cpu_ms[ph] += serial + m->par.cpu_ms;
+    st->critical_ms[ph] += serial + m->par.busiest_ms;
+}
+
+/* Stops a meter running inside another (outer): the outer one leaves out what the calling
+ * thread spent in this one. */
+static void meter_stop_inside(const phase_meter *m, ism_poly_stats *st, enum ism_poly_phase ph,
+                              phase_meter *outer)
+{
+    meter_stop(m, st, ph);
+    outer->caller0 += ism_thread_cpu_ms() - m->caller0;
 }
 
 static int thread_count(const ism_poly_options *o)
@@ -295,7 +332,8 @@ static void keep_for_next_round(phase2 *p, carry *c)
     p->rec = NULL;
 }
 
-/* Phase 2: every candidate leaf polygonised, chunk by chunk, on all threads. With next
+/* Phase 2: every candidate leaf polygonised, chunk by chunk, on all threads (its CPU seen by
+ * the meter `outer`; the breaks' and the weld's go to their own phases). With next
  * (under max_error), the leaves to split in another round are added to it, and what they
  * emitted is kept in c for it; leaves that emit what they emitted in c's round are copied
  * from there. */
@@ -303,7 +341,8 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
                                               const ism_octree *tree, int threads,
                                               progress *prog, ism_mesh *mesh,
                                               ism_poly_stats *st, double *t_weld,
-                                              ism_split_set *next, carry *c)
+                                              phase_meter *outer, ism_split_set *next,
+                                              carry *c)
 {
     int32_t *reuse = NULL, *parent = NULL;
     ism_breaks breaks = {0};
@@ -319,8 +358,11 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     enum ism_poly_status status = ISM_POLY_NO_MEMORY;
 
     double t0 = ism_now_ms();
+    phase_meter m;
+    meter_start(&m);
     if (!ism_breaks_build(&breaks, tree))
         goto done;
+    meter_stop_inside(&m, st, ISM_PHASE_CRACKS, outer);
     st->time_ms[ISM_PHASE_CRACKS] = ism_now_ms() - t0;
     p.leaves = malloc((tree->n ? tree->n : 1) * sizeof *p.leaves);
     parent = ism_octree_parents(tree);
@@ -334,7 +376,8 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         p.chunk_leaves = MIN_CHUNK_LEAVES;
     p.nchunks = (p.nleaves + p.chunk_leaves - 1) / p.chunk_leaves;
     p.out = calloc(p.nchunks ? p.nchunks : 1, sizeof *p.out);
-    p.ctx = calloc((size_t)threads, sizeof *p.ctx);
+    if ((p.ctx = aligned_alloc(ISM_CACHE_LINE, (size_t)threads * sizeof *p.ctx)))
+        memset(p.ctx, 0, (size_t)threads * sizeof *p.ctx);
     if (o->max_error > 0 && !(p.leaf_error = calloc(p.nleaves ? p.nleaves : 1, sizeof(float))))
         goto done;
     if (next && !o->fresh_rounds &&
@@ -345,7 +388,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     ism_root_params roots = {o->gradient_test, o->double_root_eps, o->double_root_iters,
                              ism_tape_has_min_max(f)};
     for (int t = 0; t < threads; t++) {
-        ism_cell_ctx *cx = &p.ctx[t];
+        ism_cell_ctx *cx = &p.ctx[t].c;
         cx->s.tape = f;
         cx->tree = tree;
         cx->parent = parent;
@@ -358,10 +401,10 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         if (!(cx->s.ws = ism_eval_ws_new(f)) || !round_cache(c, threads, t, &cx->cache))
             goto done;
     }
-    ism_parallel_for(threads, p.nchunks, run_chunk, &p);
+    ism_parallel_for_costed(threads, p.nchunks, run_chunk, &p, &outer->par);
     status = atomic_load(&p.status);
     for (int t = 0; t < threads; t++)
-        add_cell_stats(st, &p.ctx[t]);
+        add_cell_stats(st, &p.ctx[t].c);
     if (status != ISM_POLY_OK)
         goto done;
     if (p.leaf_error && !collect_misses(&p, o, next, st)) {
@@ -375,8 +418,11 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     }
 
     t0 = ism_now_ms();
+    meter_start(&m);
     ism_weld_stats ws;
-    status = ism_weld(p.out, p.nchunks, mesh, &ws) ? ISM_POLY_OK : ISM_POLY_NO_MEMORY;
+    status = ism_weld(p.out, p.nchunks, threads, mesh, &ws, &m.par) ? ISM_POLY_OK
+                                                                      : ISM_POLY_NO_MEMORY;
+    meter_stop_inside(&m, st, ISM_PHASE_MESH, outer);
     *t_weld = ism_now_ms() - t0;
     st->zero_vertices = ws.zero_vertices;
     st->edges_touching = ws.touch_vertices;
@@ -387,9 +433,9 @@ done:
         ism_cell_out_free(&p.out[c]);
     free(p.out);
     for (int t = 0; p.ctx && t < threads; t++) {
-        if (p.ctx[t].s.ws)
-            ism_eval_ws_free(p.ctx[t].s.ws);
-        ism_cell_ctx_free(&p.ctx[t]);
+        if (p.ctx[t].c.s.ws)
+            ism_eval_ws_free(p.ctx[t].c.s.ws);
+        ism_cell_ctx_free(&p.ctx[t].c);
     }
     if (!next || !next->n || o->fresh_rounds || status != ISM_POLY_OK)
         free_caches(c); /* no round follows, or it starts afresh */
@@ -443,6 +489,8 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
                                       carry *prev)
 {
     double t_start = ism_now_ms(), from = prog->from, span = prog->span;
+    phase_meter m;
+    meter_start(&m);
     prog->span = span * 0.4 / 0.95; /* the octree's share of this round's progress */
     ism_octree tree;
     memset(&tree, 0, sizeof tree);
@@ -478,6 +526,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
         .cancel = o->cancel,
         .progress = report,
         .progress_ctx = prog,
+        .cost = &m.par,
     };
     ism_octree_build_stats bs;
     enum ism_poly_status status = from_build(ism_octree_build(&tree, &bp, &bs));
@@ -490,6 +539,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     st->deep_leaves = bs.deep_leaves;
     double t_tree = ism_now_ms();
     st->time_ms[ISM_PHASE_OCTREE] = t_tree - t_start;
+    meter_stop(&m, st, ISM_PHASE_OCTREE);
     if (status != ISM_POLY_OK)
         return status;
     count_leaves(&tree, st);
@@ -497,12 +547,15 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     prog->from = from + span * 0.4 / 0.95;
     prog->span = span * 0.55 / 0.95;
     double t_weld = 0;
-    status = polygonise_leaves(f, o, &tree, threads, prog, mesh, st, &t_weld, next, prev);
+    meter_start(&m);
+    status = polygonise_leaves(f, o, &tree, threads, prog, mesh, st, &t_weld, &m, next,
+                               prev);
     ism_octree_free(&prev->tree);
     if (next && next->n)
         prev->tree = tree;
     else
         ism_octree_free(&tree);
+    meter_stop(&m, st, ISM_PHASE_POLYGONS);
     double t_end = ism_now_ms();
     st->time_ms[ISM_PHASE_POLYGONS] = t_end - t_tree - t_weld - st->time_ms[ISM_PHASE_CRACKS];
     st->time_ms[ISM_PHASE_MESH] = t_weld;
@@ -516,8 +569,12 @@ static void add_round_costs(ism_poly_stats *total, const ism_poly_stats *r)
     total->evals_point += r->evals_point;
     total->evals_gradient += r->evals_gradient;
     total->evals_interval += r->evals_interval;
-    for (int k = 0; k < ISM_PHASE_COUNT; k++)
+    for (int k = 0; k < ISM_PHASE_COUNT; k++) {
         total->time_ms[k] += r->time_ms[k];
+        total->cpu_ms[k] += r->cpu_ms[k];
+        total->serial_ms[k] += r->serial_ms[k];
+        total->critical_ms[k] += r->critical_ms[k];
+    }
 }
 
 enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o,
@@ -569,6 +626,9 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
     stats->evals_gradient = costs.evals_gradient;
     stats->evals_interval = costs.evals_interval;
     memcpy(stats->time_ms, costs.time_ms, sizeof stats->time_ms);
+    memcpy(stats->cpu_ms, costs.cpu_ms, sizeof stats->cpu_ms);
+    memcpy(stats->serial_ms, costs.serial_ms, sizeof stats->serial_ms);
+    memcpy(stats->critical_ms, costs.critical_ms, sizeof stats->critical_ms);
     stats->total_ms = ism_now_ms() - t_start;
     if (status != ISM_POLY_OK) {
         ism_mesh_free(mesh);

@@ -1,15 +1,26 @@
-/* weld.c — exact-position welding of node outputs with an open-addressing hash table, and
- * the vertex normals: ∇f normalised, or the mean of the adjacent triangles' normals where
- * the gradient vanishes (singular points). */
+/* weld.c — exact-position welding of node outputs, in parallel over the pieces, and the
+ * vertex normals: ∇f normalised, or the mean of the adjacent triangles' normals where the
+ * gradient vanishes (singular points).
+ *
+ * Every piece vertex has a number (its piece, then its place in the piece); a lock-free
+ * open-addressing table keeps, per distinct position, the smallest number that has it (a
+ * compare-and-swap minimum), whatever order the threads insert in. The vertices holding that
+ * smallest number become the mesh's vertices, numbered in piece order; the others take
+ * their index. Five loops over the pieces, each one piece per task, with prefix sums over
+ * the pieces between them: insert; resolve (count new vertices); place (write them); map
+ * (count kept triangles); write the triangles. */
 #include "core/octree/weld.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
-typedef struct slot {
-    uint32_t vertex; /* UINT32_MAX: empty */
-} slot;
+/* Table slots per piece vertex, at least: probes stay short at a load of 1/2 or less. */
+#define SLOTS_PER_VERTEX 2
+/* Vertex numbers, and the slot numbers of a table of up to 4 slots per vertex (2 rounded up
+ * to a power of two), fit in 32 bits below this. */
+#define MAX_PIECE_VERTICES ((size_t)1 << 30)
 
 /* g scaled to unit length, or 0 0 0 when g is zero or not finite. Dividing by the largest
  * component first keeps the squared length from underflowing (∇f ~ 1e-160 where f = g^64
@@ -44,31 +55,66 @@ static bool same_point(const double a[3], const double b[3])
     return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
 }
 
-typedef struct table {
-    slot *s;
+typedef struct welder {
+    const ism_cell_out *pieces;
+    _Atomic uint64_t *slots; /* hash tag << 32 | (number + 1) of a position's first
+                                occurrence; 0: empty */
     size_t mask;
-} table;
+    size_t *voff;            /* per piece: the number of its first vertex (npieces + 1) */
+    const double **at;       /* per vertex number: its position */
+    uint32_t *slot;          /* per vertex number: its position's slot */
+    uint32_t *rep;           /* per vertex number: the number of its position's first */
+    uint32_t *index;         /* per vertex number: its index in the mesh */
+    size_t *new_verts, *kept_tris; /* per piece; then, after the prefix sums, where its new
+                                      vertices / kept triangles start in the mesh */
+    ism_weld_stats *piece_st;
+    ism_mesh *mesh;
+} welder;
 
-static uint32_t find_or_add(table *t, ism_mesh *m, const ism_fpoint *p, bool *added)
+#define NUMBER_OF(slot) ((uint32_t)(slot) - 1)
+
+/* Records vertex number g at p, keeping the smallest number per position, and notes its
+ * slot. The tag (the hash's high half) spares reading the positions of most other keys. */
+static void insert(welder *w, uint32_t g, const double p[3])
 {
-    size_t i = hash_point(p->p) & t->mask;
-    for (;;) {
-        uint32_t v = t->s[i].vertex;
-        if (v == UINT32_MAX)
-            break;
-        if (same_point(m->pos + 3 * v, p->p)) {
-            *added = false;
-            return v;
-        }
-        i = (i + 1) & t->mask;
+    uint64_t h = hash_point(p), tag = h & 0xffffffff00000000ull, mine = tag | (g + 1ull);
+    for (size_t i = h & w->mask;; i = (i + 1) & w->mask) {
+        uint64_t cur = atomic_load_explicit(&w->slots[i], memory_order_relaxed);
+        while (!cur) /* an empty slot: take it, or see who did */
+            if (atomic_compare_exchange_weak(&w->slots[i], &cur, mine)) {
+                w->slot[g] = (uint32_t)i;
+                return;
+            }
+        if ((cur & 0xffffffff00000000ull) != tag || !same_point(w->at[NUMBER_OF(cur)], p))
+            continue;
+        while (mine < cur && !atomic_compare_exchange_weak(&w->slots[i], &cur, mine))
+            ;
+        w->slot[g] = (uint32_t)i;
+        return;
     }
-    float n[3];
-    unit_normal(p->g, n);
-    uint32_t v = ism_mesh_add_vertex(m, p->p, n);
-    if (v != UINT32_MAX)
-        t->s[i].vertex = v;
-    *added = true;
-    return v;
+}
+
+static void insert_piece(void *ctx, size_t k, int thread)
+{
+    (void)thread;
+    welder *w = ctx;
+    const ism_cell_out *o = &w->pieces[k];
+    for (size_t i = 0; i < o->nverts; i++)
+        w->at[w->voff[k] + i] = o->verts[i].p;
+    for (size_t i = 0; i < o->nverts; i++)
+        insert(w, (uint32_t)(w->voff[k] + i), o->verts[i].p);
+}
+
+static void resolve_piece(void *ctx, size_t k, int thread)
+{
+    (void)thread;
+    welder *w = ctx;
+    size_t fresh = 0;
+    for (size_t g = w->voff[k]; g < w->voff[k + 1]; g++) {
+        w->rep[g] = NUMBER_OF(atomic_load_explicit(&w->slots[w->slot[g]], memory_order_relaxed));
+        fresh += w->rep[g] == g;
+    }
+    w->new_verts[k] = fresh;
 }
 
 static void count_kind(ism_weld_stats *st, uint8_t flags)
@@ -79,9 +125,84 @@ static void count_kind(ism_weld_stats *st, uint8_t flags)
     st->many_vertices += (flags & ISM_FP_MANY) != 0;
 }
 
+static void place_piece(void *ctx, size_t k, int thread)
+{
+    (void)thread;
+    welder *w = ctx;
+    const ism_cell_out *o = &w->pieces[k];
+    size_t at = w->new_verts[k];
+    for (size_t i = 0; i < o->nverts; i++) {
+        size_t g = w->voff[k] + i;
+        if (w->rep[g] != g)
+            continue;
+        w->index[g] = (uint32_t)at;
+        memcpy(w->mesh->pos + 3 * at, o->verts[i].p, sizeof o->verts[i].p);
+        unit_normal(o->verts[i].g, w->mesh->normal + 3 * at);
+        count_kind(&w->piece_st[k], o->verts[i].flags);
+        at++;
+    }
+}
+
+static bool degenerate(const uint32_t *map, const uint32_t *tri)
+{
+    uint32_t a = map[tri[0]], b = map[tri[1]], c = map[tri[2]];
+    return a == b || b == c || a == c;
+}
+
+static void map_piece(void *ctx, size_t k, int thread)
+{
+    (void)thread;
+    welder *w = ctx;
+    const ism_cell_out *o = &w->pieces[k];
+    uint32_t *map = w->index + w->voff[k];
+    for (size_t i = 0; i < o->nverts; i++) { /* first occurrences were placed already */
+        size_t g = w->voff[k] + i;
+        if (w->rep[g] != g)
+            map[i] = w->index[w->rep[g]];
+    }
+    size_t kept = 0;
+    for (size_t i = 0; i < o->ntris; i++)
+        kept += !degenerate(map, o->tris + 3 * i);
+    w->kept_tris[k] = kept;
+    w->piece_st[k].dropped_triangles = o->ntris - kept;
+}
+
+static void write_piece(void *ctx, size_t k, int thread)
+{
+    (void)thread;
+    welder *w = ctx;
+    const ism_cell_out *o = &w->pieces[k];
+    const uint32_t *map = w->index + w->voff[k];
+    uint32_t *out = w->mesh->tri + 3 * w->kept_tris[k];
+    for (size_t i = 0; i < o->ntris; i++) {
+        const uint32_t *t = o->tris + 3 * i;
+        if (degenerate(map, t))
+            continue;
+        for (int j = 0; j < 3; j++)
+            *out++ = map[t[j]];
+    }
+}
+
+/* Turns per-piece counts into where each piece starts; returns the total. */
+static size_t prefix(size_t *v, size_t n)
+{
+    size_t sum = 0;
+    for (size_t k = 0; k < n; k++) {
+        size_t c = v[k];
+        v[k] = sum;
+        sum += c;
+    }
+    return sum;
+}
+
 /* Normals where ∇f vanished: the mean of the adjacent triangles' normals. */
 static void fill_missing_normals(ism_mesh *m)
 {
+    size_t missing = 0;
+    for (size_t i = 0; i < 3 * m->nverts; i += 3)
+        missing += m->normal[i] == 0 && m->normal[i + 1] == 0 && m->normal[i + 2] == 0;
+    if (!missing)
+        return;
     double *acc = calloc(m->nverts * 3, sizeof *acc);
     if (!acc)
         return;
@@ -105,57 +226,89 @@ static void fill_missing_normals(ism_mesh *m)
     free(acc);
 }
 
-bool ism_weld(const ism_cell_out *pieces, size_t npieces, ism_mesh *mesh, ism_weld_stats *st)
+/* The one-edge polygons, in piece order (few: no loop of their own). */
+static bool add_segments(const welder *w, size_t npieces)
+{
+    for (size_t k = 0; k < npieces; k++) {
+        const ism_cell_out *o = &w->pieces[k];
+        const uint32_t *map = w->index + w->voff[k];
+        for (size_t i = 0; i < o->nsegs; i++) {
+            uint32_t a = map[o->segs[2 * i]], b = map[o->segs[2 * i + 1]];
+            if (a != b && !ism_mesh_add_segment(w->mesh, a, b))
+                return false;
+        }
+    }
+    return true;
+}
+
+static bool weld_all(welder *w, size_t npieces, int threads, ism_par_cost *cost)
+{
+    ism_mesh *m = w->mesh;
+    ism_parallel_for_costed(threads, npieces, insert_piece, w, cost);
+    ism_parallel_for_costed(threads, npieces, resolve_piece, w, cost);
+    size_t nverts = prefix(w->new_verts, npieces);
+    if (!ism_mesh_reserve(m, nverts, 0))
+        return false;
+    m->nverts = nverts;
+    ism_parallel_for_costed(threads, npieces, place_piece, w, cost);
+    ism_parallel_for_costed(threads, npieces, map_piece, w, cost);
+    size_t ntris = prefix(w->kept_tris, npieces);
+    if (!ism_mesh_reserve(m, 0, ntris))
+        return false;
+    m->ntris = ntris;
+    ism_parallel_for_costed(threads, npieces, write_piece, w, cost);
+    return add_segments(w, npieces);
+}
+
+bool ism_weld(const ism_cell_out *pieces, size_t npieces, int threads, ism_mesh *mesh,
+              ism_weld_stats *st, ism_par_cost *cost)
 {
     memset(st, 0, sizeof *st);
-    size_t total = 0, tris = 0;
-    for (size_t k = 0; k < npieces; k++) {
+    welder w = {pieces, NULL, 0, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, mesh};
+    size_t n = npieces ? npieces : 1;
+    w.voff = malloc((n + 1) * sizeof *w.voff);
+    w.new_verts = malloc(n * sizeof *w.new_verts);
+    w.kept_tris = malloc(n * sizeof *w.kept_tris);
+    w.piece_st = calloc(n, sizeof *w.piece_st);
+    bool ok = w.voff && w.new_verts && w.kept_tris && w.piece_st;
+    size_t total = 0;
+    for (size_t k = 0; ok && k < npieces; k++) {
+        w.voff[k] = total;
         total += pieces[k].nverts;
-        tris += pieces[k].ntris;
     }
-    size_t cap = 16;
-    while (cap < 2 * total + 16)
-        cap *= 2;
-    table t = {malloc(cap * sizeof(slot)), cap - 1};
-    uint32_t *map = NULL;
-    size_t map_cap = 0;
-    bool ok = t.s != NULL && ism_mesh_reserve(mesh, total / 3 + 16, tris);
-    if (ok)
-        memset(t.s, 0xff, cap * sizeof(slot));
-    for (size_t k = 0; k < npieces && ok; k++) {
-        const ism_cell_out *o = &pieces[k];
-        if (o->nverts > map_cap) {
-            uint32_t *nm = realloc(map, o->nverts * sizeof *nm);
-            if (!nm) {
-                ok = false;
-                break;
-            }
-            map = nm;
-            map_cap = o->nverts;
-        }
-        for (size_t i = 0; i < o->nverts && ok; i++) {
-            bool added;
-            map[i] = find_or_add(&t, mesh, &o->verts[i], &added);
-            ok = map[i] != UINT32_MAX;
-            if (added)
-                count_kind(st, o->verts[i].flags);
-        }
-        for (size_t i = 0; i < o->ntris && ok; i++) {
-            uint32_t a = map[o->tris[3 * i]], b = map[o->tris[3 * i + 1]], c = map[o->tris[3 * i + 2]];
-            if (a == b || b == c || a == c) {
-                st->dropped_triangles++;
-                continue;
-            }
-            ok = ism_mesh_add_triangle(mesh, a, b, c);
-        }
-        for (size_t i = 0; i < o->nsegs && ok; i++) {
-            uint32_t a = map[o->segs[2 * i]], b = map[o->segs[2 * i + 1]];
-            if (a != b)
-                ok = ism_mesh_add_segment(mesh, a, b);
-        }
+    ok = ok && total < MAX_PIECE_VERTICES;
+    if (ok) {
+        w.voff[npieces] = total;
+        size_t cap = 16;
+        while (cap < SLOTS_PER_VERTEX * total)
+            cap *= 2;
+        w.mask = cap - 1;
+        w.slots = calloc(cap, sizeof *w.slots); /* all-zero bytes: every slot empty */
+        size_t room = total ? total : 1;
+        w.at = malloc(room * sizeof *w.at);
+        w.slot = malloc(room * sizeof *w.slot);
+        w.rep = malloc(room * sizeof *w.rep);
+        w.index = malloc(room * sizeof *w.index);
+        ok = w.slots && w.at && w.slot && w.rep && w.index &&
+             weld_all(&w, npieces, threads, cost);
     }
-    free(t.s);
-    free(map);
+    for (size_t k = 0; ok && k < npieces; k++) {
+        const ism_weld_stats *p = &w.piece_st[k];
+        st->zero_vertices += p->zero_vertices;
+        st->touch_vertices += p->touch_vertices;
+        st->pair_vertices += p->pair_vertices;
+        st->many_vertices += p->many_vertices;
+        st->dropped_triangles += p->dropped_triangles;
+    }
+    free(w.slots);
+    free(w.at);
+    free(w.slot);
+    free(w.rep);
+    free(w.index);
+    free(w.voff);
+    free(w.new_verts);
+    free(w.kept_tris);
+    free(w.piece_st);
     if (ok)
         fill_missing_normals(mesh);
     return ok;

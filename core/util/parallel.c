@@ -1,60 +1,181 @@
-/* parallel.c — a fork/join loop over numbered tasks on pthreads. */
+/* parallel.c — a fork/join loop over numbered tasks on pthreads, and what it cost. Each
+ * thread starts on its own contiguous block of task numbers (neighbouring tasks share
+ * memoised work, so a thread keeps its locality); one that runs dry steals the upper half of
+ * the largest block left. A block is one atomic word (next and end task), claimed from the
+ * front by its owner and split from the back by thieves with compare-and-swap: no lock, and
+ * the owner's word stays in its own cache line until someone steals. */
 #include "core/util/parallel.h"
+#include "core/util/clock.h"
 
 #include <pthread.h>
+#include <stdalign.h>
 #include <stdatomic.h>
+#include <stdbool.h>
+#include <stdint.h>
 #include <unistd.h>
 
 #define MAX_THREADS 64
 
+/* Task numbers [lo, hi) packed as lo << 32 | hi (task counts stay below 2^32). */
+typedef struct block {
+    alignas(ISM_CACHE_LINE) _Atomic uint64_t range; /* a line each: claims do not bounce */
+} block;
+
 typedef struct loop {
     void (*fn)(void *, size_t, int);
     void *ctx;
-    size_t ntasks;
-    atomic_size_t next;
+    int threads;
+    block blocks[MAX_THREADS];
 } loop;
 
 typedef struct worker {
     loop *l;
     int id;
+    double cpu_ms; /* the thread's CPU while it ran tasks */
 } worker;
 
-static void run_tasks(loop *l, int id)
+static uint64_t pack(uint32_t lo, uint32_t hi) { return (uint64_t)lo << 32 | hi; }
+static uint32_t lo_of(uint64_t r) { return (uint32_t)(r >> 32); }
+static uint32_t hi_of(uint64_t r) { return (uint32_t)r; }
+
+/* The next task of block b from its front, or false when it is empty. */
+static bool claim(block *b, uint32_t *task)
+{
+    uint64_t r = atomic_load_explicit(&b->range, memory_order_relaxed);
+    for (;;) {
+        if (lo_of(r) >= hi_of(r))
+            return false;
+        if (atomic_compare_exchange_weak(&b->range, &r, pack(lo_of(r) + 1, hi_of(r)))) {
+            *task = lo_of(r);
+            return true;
+        }
+    }
+}
+
+/* Moves the upper half of the largest other block into thread id's (empty) block; false
+ * when every block is empty. Only a block's owner grows it, and only while it is empty, so
+ * thieves that saw it empty never race with the store. */
+static bool steal(loop *l, int id)
 {
     for (;;) {
-        size_t t = atomic_fetch_add(&l->next, 1);
-        if (t >= l->ntasks)
-            return;
-        l->fn(l->ctx, t, id);
+        int victim = -1;
+        uint32_t most = 0;
+        uint64_t seen = 0;
+        for (int t = 0; t < l->threads; t++) {
+            uint64_t r = atomic_load_explicit(&l->blocks[t].range, memory_order_relaxed);
+            uint32_t left = lo_of(r) < hi_of(r) ? hi_of(r) - lo_of(r) : 0;
+            if (t != id && left > most) {
+                most = left;
+                victim = t;
+                seen = r;
+            }
+        }
+        if (victim < 0)
+            return false;
+        uint32_t lo = lo_of(seen), hi = hi_of(seen), mid = lo + (hi - lo) / 2;
+        if (atomic_compare_exchange_strong(&l->blocks[victim].range, &seen, pack(lo, mid))) {
+            atomic_store(&l->blocks[id].range, pack(mid, hi));
+            return true;
+        }
     }
+}
+
+static void run_tasks(worker *w)
+{
+    loop *l = w->l;
+    block *own = &l->blocks[w->id];
+    double t0 = ism_thread_cpu_ms();
+    for (;;) {
+        uint32_t task;
+        if (claim(own, &task))
+            l->fn(l->ctx, task, w->id);
+        else if (!steal(l, w->id))
+            break;
+    }
+    w->cpu_ms = ism_thread_cpu_ms() - t0;
 }
 
 static void *thread_main(void *arg)
 {
-    worker *w = arg;
-    run_tasks(w->l, w->id);
+    run_tasks(arg);
     return NULL;
 }
 
-void ism_parallel_for(int threads, size_t ntasks, void (*fn)(void *, size_t, int), void *ctx)
+/* Loops too long for a packed block, run in slices. */
+static void run_in_slices(int threads, size_t ntasks, void (*fn)(void *, size_t, int),
+                          void *ctx, ism_par_cost *cost);
+
+void ism_parallel_for_costed(int threads, size_t ntasks, void (*fn)(void *, size_t, int),
+                             void *ctx, ism_par_cost *cost)
 {
-    loop l = {fn, ctx, ntasks, 0};
+    if (ntasks > UINT32_MAX) {
+        run_in_slices(threads, ntasks, fn, ctx, cost);
+        return;
+    }
     if (threads > MAX_THREADS)
         threads = MAX_THREADS;
     if ((size_t)threads > ntasks)
         threads = (int)ntasks;
+    if (threads < 1)
+        return;
+    loop l;
+    l.fn = fn;
+    l.ctx = ctx;
     pthread_t tid[MAX_THREADS];
     worker w[MAX_THREADS];
     int started = 0;
+    for (int i = 0; i < threads; i++) /* blocks for every thread before any starts */
+        atomic_init(&l.blocks[i].range, pack((uint32_t)(ntasks * (size_t)i / (size_t)threads),
+                                             (uint32_t)(ntasks * (size_t)(i + 1) /
+                                                        (size_t)threads)));
+    l.threads = threads;
+    w[0] = (worker){&l, 0, 0};
     for (int i = 1; i < threads; i++) {
-        w[i] = (worker){&l, i};
+        w[i] = (worker){&l, i, 0};
         if (pthread_create(&tid[i], NULL, thread_main, &w[i]) != 0)
-            break; /* fewer threads: the calling thread still runs every remaining task */
+            break; /* fewer threads: the calling thread steals the blocks of the others */
         started = i;
     }
-    run_tasks(&l, 0);
+    run_tasks(&w[0]);
     for (int i = 1; i <= started; i++)
         pthread_join(tid[i], NULL);
+    if (!cost)
+        return;
+    double busiest = 0;
+    for (int i = 0; i <= started; i++) {
+        cost->cpu_ms += w[i].cpu_ms;
+        busiest = w[i].cpu_ms > busiest ? w[i].cpu_ms : busiest;
+    }
+    cost->caller_ms += w[0].cpu_ms;
+    cost->busiest_ms += busiest;
+}
+
+/* Task numbers offset into a slice: fn sees the loop's own numbering. */
+typedef struct slice {
+    void (*fn)(void *, size_t, int);
+    void *ctx;
+    size_t first;
+} slice;
+
+static void slice_task(void *arg, size_t task, int thread)
+{
+    slice *s = arg;
+    s->fn(s->ctx, s->first + task, thread);
+}
+
+static void run_in_slices(int threads, size_t ntasks, void (*fn)(void *, size_t, int),
+                          void *ctx, ism_par_cost *cost)
+{
+    for (size_t first = 0; first < ntasks; first += UINT32_MAX) {
+        slice s = {fn, ctx, first};
+        size_t n = ntasks - first < UINT32_MAX ? ntasks - first : UINT32_MAX;
+        ism_parallel_for_costed(threads, n, slice_task, &s, cost);
+    }
+}
+
+void ism_parallel_for(int threads, size_t ntasks, void (*fn)(void *, size_t, int), void *ctx)
+{
+    ism_parallel_for_costed(threads, ntasks, fn, ctx, NULL);
 }
 
 int ism_cpu_count(void)

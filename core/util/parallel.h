@@ -6,10 +6,27 @@
 
 #include <stddef.h>
 
+/* Bytes of a cache line: per-thread state written often is aligned to it, so two threads'
+ * writes never share a line (false sharing). */
+#define ISM_CACHE_LINE 64
+
+/* What parallel loops cost, in CPU milliseconds of each thread (CLOCK_THREAD_CPUTIME_ID),
+ * added up over the loops it was passed to: all threads together, the calling thread's
+ * share, and per loop the busiest thread's — on idle cores the loops' wall time, whatever
+ * the load was when they ran. */
+typedef struct ism_par_cost {
+    double cpu_ms, caller_ms, busiest_ms;
+} ism_par_cost;
+
 /* Calls fn(ctx, task, thread) once for every task in [0, ntasks), on `threads` threads
  * (thread is 0..threads-1, so per-thread state can be indexed by it). */
 void ism_parallel_for(int threads, size_t ntasks, void (*fn)(void *ctx, size_t task, int thread),
                       void *ctx);
+
+/* The same, adding what the loop cost to *cost (when not NULL). */
+void ism_parallel_for_costed(int threads, size_t ntasks,
+                             void (*fn)(void *ctx, size_t task, int thread), void *ctx,
+                             ism_par_cost *cost);
 
 /* Number of online processors (at least 1). */
 int ism_cpu_count(void);
