@@ -1,14 +1,21 @@
 /* breaks.c — the break-point registry: every non-empty leaf's corners in one hash table
  * keyed by lattice point, each holding its successor on the three lattice lines through it
  * (found by radix-sorting the points line by line), so the break points of a segment are
- * found from its lower end one probe per point. */
+ * found from its lower end one probe per point.
+ *
+ * Built on several threads: every step is a loop over equal blocks of an array (ism_parallel_
+ * for), with prefix sums over the blocks between loops — the corners gathered per block of
+ * nodes, an LSD radix sort whose passes count and scatter per block (stable, so the order
+ * is the one a single thread makes), duplicates dropped per block, and the table filled with
+ * compare-and-swap on empty slots. The table's contents do not depend on the thread count;
+ * where a point lands in its probe run may, which no query can see. */
 #include "core/octree/breaks.h"
 #include "core/util/grow.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-/* Radix digits of 11 bits: one pass's 2^11 counts stay in the first-level cache. */
+/* Radix digits of 11 bits: one pass's 2^11 counts per block stay in the first-level cache. */
 #define RADIX_BITS 11
 #define RADIX (1u << RADIX_BITS)
 /* Table slots per registered point, at least: probes stay short at a load of 1/2. */
@@ -16,54 +23,8 @@
 /* Slots of the point this many places ahead are asked for while the current one is filled:
  * the table is larger than the caches, and independent misses overlap. */
 #define LOOKAHEAD 16
-
-/* LSD radix sort of n keys of `bits` bits, carrying vals along when not NULL (tk, tv: room
- * for n more of each); the counts of every pass come from one read, and a pass whose digit
- * is the same in every key is skipped. */
-static bool radix_sort(uint64_t *a, uint32_t *vals, uint64_t *tk, uint32_t *tv, size_t n,
-                       int bits)
-{
-    int passes = (bits + RADIX_BITS - 1) / RADIX_BITS;
-    size_t *count = calloc((size_t)passes * RADIX, sizeof *count);
-    if (!count)
-        return false;
-    for (size_t i = 0; i < n; i++)
-        for (int p = 0; p < passes; p++)
-            count[p * RADIX + ((a[i] >> (p * RADIX_BITS)) & (RADIX - 1))]++;
-    uint64_t *src = a, *dst = tk;
-    uint32_t *vsrc = vals, *vdst = tv;
-    for (int p = 0; p < passes && n; p++) {
-        size_t *c = count + (size_t)p * RADIX;
-        int shift = p * RADIX_BITS;
-        if (c[(src[0] >> shift) & (RADIX - 1)] == n)
-            continue;
-        size_t sum = 0;
-        for (size_t d = 0; d < RADIX; d++) {
-            size_t k = c[d];
-            c[d] = sum;
-            sum += k;
-        }
-        for (size_t i = 0; i < n; i++) {
-            size_t at = c[(src[i] >> shift) & (RADIX - 1)]++;
-            dst[at] = src[i];
-            if (vals)
-                vdst[at] = vsrc[i];
-        }
-        uint64_t *s = src;
-        src = dst;
-        dst = s;
-        uint32_t *vs = vsrc;
-        vsrc = vdst;
-        vdst = vs;
-    }
-    if (src != a) {
-        memcpy(a, src, n * sizeof *a);
-        if (vals)
-            memcpy(vals, vsrc, n * sizeof *vals);
-    }
-    free(count);
-    return true;
-}
+/* Below this many corners one block does all (a loop's threads cost more than they save). */
+#define MIN_PARALLEL_CORNERS (1u << 15)
 
 /* Sort keys of lattice points, line by line along `axis`: the two other coordinates, then
  * the coordinate along the axis, each shifted right by `shift` (every corner is a multiple
@@ -90,75 +51,310 @@ static void unpack(const packing *k, int axis, uint64_t key, int32_t p[3])
 
 static uint64_t line_of(const packing *k, uint64_t key) { return key >> k->cb; }
 
-/* A new point's slot (the point is not in the table yet). */
-static ism_break_point *insert(ism_breaks *b, const int32_t p[3])
+/* The coordinate along the key's axis of the point after key i of a sorted array a of n,
+ * when it lies on the same line; else ISM_BREAK_NONE. */
+static int32_t successor(const packing *k, const uint64_t *a, size_t n, size_t i)
 {
-    uint64_t key = ism_lattice_key(p);
-    size_t s = ism_cache_mix(key) & b->mask;
-    while (b->slots[s].key)
-        s = (s + 1) & b->mask;
-    b->slots[s].key = key;
-    return &b->slots[s];
+    if (i + 1 >= n || line_of(k, a[i]) != line_of(k, a[i + 1]))
+        return ISM_BREAK_NONE;
+    return (int32_t)(a[i + 1] & (((uint64_t)1 << k->cb) - 1)) << k->shift;
 }
 
-/* Scratch of the build: the distinct points keyed along z (sorted), their successors along
- * x and y by index, and room for a radix sort with payload. */
-typedef struct scratch {
+/* The build: its arrays, and the split of the current one into blocks. */
+typedef struct builder {
+    const ism_octree *t;
+    ism_breaks *b;
+    packing pk;
+    int threads;
+    ism_par_cost *cost;
+    size_t nblocks;
+    size_t *per_block;        /* a count per block (prefix sums turn them into offsets) */
+    int *finest;              /* per block of nodes: the deepest leaf level */
+    size_t *count;            /* radix sort: RADIX counts per block */
+    /* the distinct points keyed along z (sorted); room for a sort with payload */
     uint64_t *k, *tk, *ak;
     uint32_t *idx, *tv;
-    int32_t *next[2];
-} scratch;
+    int32_t *next[2];         /* successors along x and y, by index in k */
+    size_t n;                 /* length of the array being worked on */
+    /* the current radix pass */
+    uint64_t *src, *dst;
+    uint32_t *vsrc, *vdst;
+    int shift, axis;
+} builder;
 
-/* The successors along `axis` (0 or 1) of the n points of w->k: re-keyed line by line along
- * it with their index, sorted, and read off consecutive pairs on one line. */
-static bool link_axis(const packing *pk, scratch *w, size_t n, int axis)
+static size_t block_lo(const builder *w, size_t blk, size_t n)
 {
-    for (size_t i = 0; i < n; i++) {
-        int32_t p[3];
-        unpack(pk, 2, w->k[i], p);
-        w->ak[i] = pack(pk, axis, p);
-        w->idx[i] = (uint32_t)i;
-        w->next[axis][i] = ISM_BREAK_NONE;
+    return n * blk / w->nblocks;
+}
+
+static void run_blocks(builder *w, size_t n, void (*fn)(void *, size_t, int))
+{
+    w->n = n;
+    ism_parallel_for_costed(w->threads, w->nblocks, fn, w, w->cost);
+}
+
+/* Turns the per-block counts into offsets; returns the total. */
+static size_t prefix(size_t *v, size_t n)
+{
+    size_t sum = 0;
+    for (size_t k = 0; k < n; k++) {
+        size_t c = v[k];
+        v[k] = sum;
+        sum += c;
     }
-    if (!radix_sort(w->ak, w->idx, w->tk, w->tv, n, 3 * pk->cb))
-        return false;
-    for (size_t i = 0; i + 1 < n; i++)
-        if (line_of(pk, w->ak[i]) == line_of(pk, w->ak[i + 1]))
-            w->next[axis][w->idx[i]] = (int32_t)(w->ak[i + 1] & (((uint64_t)1 << pk->cb) - 1))
-                                       << pk->shift;
+    return sum;
+}
+
+/* ---- the corners of the leaves ------------------------------------------------------ */
+
+static void count_leaves(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    builder *w = ctx;
+    size_t leaves = 0;
+    int finest = 0;
+    for (size_t i = block_lo(w, blk, w->n); i < block_lo(w, blk + 1, w->n); i++)
+        if (w->t->nodes[i].state == ISM_NODE_LEAF) {
+            leaves++;
+            if (w->t->nodes[i].level > finest)
+                finest = w->t->nodes[i].level;
+        }
+    w->per_block[blk] = leaves;
+    w->finest[blk] = finest;
+}
+
+static void gather_corners(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    builder *w = ctx;
+    const ism_grid *g = &w->t->grid;
+    size_t m = 8 * w->per_block[blk];
+    for (size_t i = block_lo(w, blk, w->n); i < block_lo(w, blk + 1, w->n); i++) {
+        const ism_node *nd = &w->t->nodes[i];
+        if (nd->state != ISM_NODE_LEAF)
+            continue;
+        int32_t s = ism_grid_cell_steps(g, nd->level);
+        for (int c = 0; c < 8; c++) {
+            int32_t p[3];
+            for (int a = 0; a < 3; a++)
+                p[a] = nd->org[a] + ((c >> a) & 1) * s;
+            w->k[m++] = pack(&w->pk, 2, p);
+        }
+    }
+}
+
+/* ---- LSD radix sort ------------------------------------------------------------------- */
+
+static void count_digits(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    builder *w = ctx;
+    size_t *c = w->count + blk * RADIX;
+    memset(c, 0, RADIX * sizeof *c);
+    for (size_t i = block_lo(w, blk, w->n); i < block_lo(w, blk + 1, w->n); i++)
+        c[(w->src[i] >> w->shift) & (RADIX - 1)]++;
+}
+
+static void scatter(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    builder *w = ctx;
+    size_t *c = w->count + blk * RADIX;
+    for (size_t i = block_lo(w, blk, w->n); i < block_lo(w, blk + 1, w->n); i++) {
+        size_t at = c[(w->src[i] >> w->shift) & (RADIX - 1)]++;
+        w->dst[at] = w->src[i];
+        if (w->vsrc)
+            w->vdst[at] = w->vsrc[i];
+    }
+}
+
+/* Where each block's keys of each digit go: digits in order, blocks in order within a
+ * digit (what keeps the sort stable). False when one digit holds every key (nothing moves). */
+static bool digit_offsets(builder *w, size_t n)
+{
+    size_t sum = 0;
+    for (size_t d = 0; d < RADIX; d++) {
+        size_t in_digit = 0;
+        for (size_t blk = 0; blk < w->nblocks; blk++) {
+            size_t *c = &w->count[blk * RADIX + d];
+            size_t k = *c;
+            *c = sum;
+            sum += k;
+            in_digit += k;
+        }
+        if (in_digit == n)
+            return false;
+    }
     return true;
 }
 
-/* The table of the n distinct points of w->k (sorted along z, so each one's successor along
- * z is the next one on its line), with their successors along x and y from link_axis. */
-static bool fill_table(ism_breaks *b, const packing *pk, const scratch *w, size_t n)
+/* Sorts the n keys of a, `bits` bits each, carrying vals along when not NULL (tk, tv: room
+ * for n more of each). */
+static void radix_sort(builder *w, uint64_t *a, uint32_t *vals, uint64_t *tk, uint32_t *tv,
+                       size_t n, int bits)
+{
+    w->src = a, w->dst = tk, w->vsrc = vals, w->vdst = tv;
+    for (w->shift = 0; w->shift < bits && n; w->shift += RADIX_BITS) {
+        run_blocks(w, n, count_digits);
+        if (!digit_offsets(w, n))
+            continue;
+        run_blocks(w, n, scatter);
+        uint64_t *s = w->src;
+        w->src = w->dst, w->dst = s;
+        uint32_t *vs = w->vsrc;
+        w->vsrc = w->vdst, w->vdst = vs;
+    }
+    if (w->src != a) {
+        memcpy(a, w->src, n * sizeof *a);
+        if (vals)
+            memcpy(vals, w->vsrc, n * sizeof *vals);
+    }
+}
+
+/* ---- duplicates ----------------------------------------------------------------------- */
+
+static bool first_of_run(const uint64_t *a, size_t i) { return i == 0 || a[i - 1] != a[i]; }
+
+static void count_distinct(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    builder *w = ctx;
+    size_t m = 0;
+    for (size_t i = block_lo(w, blk, w->n); i < block_lo(w, blk + 1, w->n); i++)
+        m += first_of_run(w->k, i);
+    w->per_block[blk] = m;
+}
+
+static void copy_distinct(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    builder *w = ctx;
+    size_t m = w->per_block[blk];
+    for (size_t i = block_lo(w, blk, w->n); i < block_lo(w, blk + 1, w->n); i++)
+        if (first_of_run(w->k, i))
+            w->tk[m++] = w->k[i];
+}
+
+/* ---- successors along x and y ----------------------------------------------------------- */
+
+static void rekey(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    builder *w = ctx;
+    for (size_t i = block_lo(w, blk, w->n); i < block_lo(w, blk + 1, w->n); i++) {
+        int32_t p[3];
+        unpack(&w->pk, 2, w->k[i], p);
+        w->ak[i] = pack(&w->pk, w->axis, p);
+        w->idx[i] = (uint32_t)i;
+    }
+}
+
+static void link_block(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    builder *w = ctx;
+    for (size_t i = block_lo(w, blk, w->n); i < block_lo(w, blk + 1, w->n); i++)
+        w->next[w->axis][w->idx[i]] = successor(&w->pk, w->ak, w->n, i);
+}
+
+/* The successors along `axis` (0 or 1) of the n points of w->k: re-keyed line by line along
+ * it with their index, sorted, and read off consecutive pairs on one line. */
+static void link_axis(builder *w, size_t n, int axis)
+{
+    w->axis = axis;
+    run_blocks(w, n, rekey);
+    radix_sort(w, w->ak, w->idx, w->tk, w->tv, n, 3 * w->pk.cb);
+    run_blocks(w, n, link_block);
+}
+
+/* ---- the table -------------------------------------------------------------------------- */
+
+/* A new point's slot (the point is not in the table yet): the first empty slot of its probe
+ * run that this thread wins (compare-and-swap: other threads fill the table too). */
+static ism_break_point *insert(ism_breaks *b, const int32_t p[3])
+{
+    uint64_t key = ism_lattice_key(p);
+    for (size_t s = ism_cache_mix(key) & b->mask;; s = (s + 1) & b->mask) {
+        uint64_t empty = 0;
+        if (__atomic_load_n(&b->slots[s].key, __ATOMIC_RELAXED) == 0 &&
+            __atomic_compare_exchange_n(&b->slots[s].key, &empty, key, false, __ATOMIC_RELAXED,
+                                        __ATOMIC_RELAXED))
+            return &b->slots[s];
+    }
+}
+
+/* The block's points of w->k (sorted along z, so each one's successor along z is the next
+ * one on its line), with their successors along x and y. */
+static void fill_block(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    builder *w = ctx;
+    size_t hi = block_lo(w, blk + 1, w->n);
+    for (size_t i = block_lo(w, blk, w->n); i < hi; i++) {
+        int32_t p[3];
+        if (i + LOOKAHEAD < hi) {
+            unpack(&w->pk, 2, w->k[i + LOOKAHEAD], p);
+            ism_breaks_prefetch(w->b, p);
+        }
+        unpack(&w->pk, 2, w->k[i], p);
+        ism_break_point *e = insert(w->b, p);
+        e->next[0] = w->next[0][i];
+        e->next[1] = w->next[1][i];
+        e->next[2] = successor(&w->pk, w->k, w->n, i);
+    }
+}
+
+static bool fill_table(builder *w, size_t n)
 {
     size_t cap = 16;
     while (cap < SLOTS_PER_POINT * n)
         cap *= 2;
-    if (!(b->slots = calloc(cap, sizeof *b->slots)))
+    if (!(w->b->slots = calloc(cap, sizeof *w->b->slots)))
         return false;
-    b->mask = cap - 1;
-    b->n = n;
-    for (size_t i = 0; i < n; i++) {
-        int32_t p[3];
-        if (i + LOOKAHEAD < n) {
-            unpack(pk, 2, w->k[i + LOOKAHEAD], p);
-            ism_breaks_prefetch(b, p);
-        }
-        unpack(pk, 2, w->k[i], p);
-        ism_break_point *e = insert(b, p);
-        e->next[0] = w->next[0][i];
-        e->next[1] = w->next[1][i];
-        e->next[2] = ISM_BREAK_NONE;
-        if (i + 1 < n && line_of(pk, w->k[i]) == line_of(pk, w->k[i + 1]))
-            e->next[2] = (int32_t)(w->k[i + 1] & (((uint64_t)1 << pk->cb) - 1)) << pk->shift;
-    }
+    w->b->mask = cap - 1;
+    w->b->n = n;
+    run_blocks(w, n, fill_block);
     return true;
 }
 
-static void scratch_free(scratch *w)
+/* ---- the build -------------------------------------------------------------------------- */
+
+static bool alloc_points(builder *w, size_t m)
 {
+    size_t room = m ? m : 1;
+    return (w->ak = malloc(room * sizeof *w->ak)) && (w->idx = malloc(room * sizeof *w->idx)) &&
+           (w->tv = malloc(room * sizeof *w->tv)) &&
+           (w->next[0] = malloc(room * sizeof *w->next[0])) &&
+           (w->next[1] = malloc(room * sizeof *w->next[1]));
+}
+
+/* The corners of every leaf, sorted along z and without duplicates, in w->k; their count. */
+static bool distinct_corners(builder *w, size_t *out)
+{
+    const ism_octree *t = w->t;
+    run_blocks(w, t->n, count_leaves);
+    int finest = 0;
+    for (size_t blk = 0; blk < w->nblocks; blk++)
+        finest = w->finest[blk] > finest ? w->finest[blk] : finest;
+    w->pk = (packing){t->grid.depth - finest, finest + 1}; /* coordinates 0 .. 2^finest */
+    size_t n = 8 * prefix(w->per_block, w->nblocks), room = n ? n : 1;
+    if (!(w->k = malloc(room * sizeof *w->k)) || !(w->tk = malloc(room * sizeof *w->tk)))
+        return false;
+    run_blocks(w, t->n, gather_corners);
+    radix_sort(w, w->k, NULL, w->tk, NULL, n, 3 * w->pk.cb);
+    run_blocks(w, n, count_distinct);
+    *out = prefix(w->per_block, w->nblocks);
+    run_blocks(w, n, copy_distinct);
+    uint64_t *s = w->k;
+    w->k = w->tk, w->tk = s;
+    return *out < UINT32_MAX;
+}
+
+static void builder_free(builder *w)
+{
+    free(w->per_block);
+    free(w->finest);
+    free(w->count);
     free(w->k);
     free(w->tk);
     free(w->ak);
@@ -168,47 +364,30 @@ static void scratch_free(scratch *w)
     free(w->next[1]);
 }
 
-bool ism_breaks_build(ism_breaks *b, const ism_octree *t)
+bool ism_breaks_build(ism_breaks *b, const ism_octree *t, int threads, ism_par_cost *cost)
 {
     memset(b, 0, sizeof *b);
-    const ism_grid *g = &t->grid;
-    size_t leaves = 0;
-    int finest = 0;
-    for (size_t i = 0; i < t->n; i++)
-        if (t->nodes[i].state == ISM_NODE_LEAF) {
-            leaves++;
-            if (t->nodes[i].level > finest)
-                finest = t->nodes[i].level;
-        }
-    packing pk = {g->depth - finest, finest + 1}; /* coordinates 0 .. 2^finest after shift */
-    size_t n = 8 * leaves, room = n ? n : 1;
-    scratch w = {malloc(room * sizeof *w.k), malloc(room * sizeof *w.tk), NULL, NULL, NULL,
-                 {NULL, NULL}};
-    bool ok = w.k && w.tk;
-    for (size_t i = 0, m = 0; ok && i < t->n; i++) {
-        const ism_node *nd = &t->nodes[i];
-        if (nd->state != ISM_NODE_LEAF)
-            continue;
-        int32_t s = ism_grid_cell_steps(g, nd->level);
-        for (int c = 0; c < 8; c++) {
-            int32_t p[3];
-            for (int a = 0; a < 3; a++)
-                p[a] = nd->org[a] + ((c >> a) & 1) * s;
-            w.k[m++] = pack(&pk, 2, p);
-        }
-    }
-    ok = ok && radix_sort(w.k, NULL, w.tk, NULL, n, 3 * pk.cb);
+    builder w;
+    memset(&w, 0, sizeof w);
+    w.t = t;
+    w.b = b;
+    w.cost = cost;
+    w.threads = threads < 1 ? 1 : threads;
+    /* one block per thread; a tree with few leaves has few nodes too: one block */
+    w.nblocks = 8 * t->n < MIN_PARALLEL_CORNERS ? 1 : (size_t)w.threads;
     size_t m = 0;
-    for (size_t i = 0; ok && i < n; i++)
-        if (m == 0 || w.k[m - 1] != w.k[i])
-            w.k[m++] = w.k[i];
-    room = m ? m : 1;
-    ok = ok && m < UINT32_MAX && (w.ak = malloc(room * sizeof *w.ak)) &&
-         (w.idx = malloc(room * sizeof *w.idx)) && (w.tv = malloc(room * sizeof *w.tv)) &&
-         (w.next[0] = malloc(room * sizeof *w.next[0])) &&
-         (w.next[1] = malloc(room * sizeof *w.next[1]));
-    ok = ok && link_axis(&pk, &w, m, 0) && link_axis(&pk, &w, m, 1) && fill_table(b, &pk, &w, m);
-    scratch_free(&w);
+    bool ok = (w.per_block = malloc(w.nblocks * sizeof *w.per_block)) &&
+              (w.finest = malloc(w.nblocks * sizeof *w.finest)) &&
+              (w.count = malloc(w.nblocks * RADIX * sizeof *w.count)) &&
+              distinct_corners(&w, &m) && alloc_points(&w, m);
+    if (ok) {
+        link_axis(&w, m, 0);
+        link_axis(&w, m, 1);
+        ok = fill_table(&w, m);
+    }
+    builder_free(&w);
+    if (!ok)
+        ism_breaks_free(b);
     return ok;
 }
 

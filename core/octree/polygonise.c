@@ -197,8 +197,8 @@ static void run_chunk(void *arg, size_t chunk, int thread)
     report(p->prog, (double)done / (double)p->nchunks);
 }
 
-/* The CPU a phase costs (ism_poly_stats.cpu_ms, serial_ms, critical_ms): the calling
- * thread's CPU from start to stop, and what the parallel loops given `par` cost. */
+/* The CPU a phase costs (ism_poly_stats.cpu_ms, serial_ms, critical_ms, even_ms): the
+ * calling thread's CPU from start to stop, and what the parallel loops given `par` cost. */
 typedef struct phase_meter {
     double caller0;
     ism_par_cost par;
@@ -216,6 +216,7 @@ static void meter_stop(const phase_meter *m, ism_poly_stats *st, enum ism_poly_p
     st->serial_ms[ph] += serial;
     st->cpu_ms[ph] += serial + m->par.cpu_ms;
     st->critical_ms[ph] += serial + m->par.busiest_ms;
+    st->even_ms[ph] += serial + m->par.even_ms;
 }
 
 /* Stops a meter running inside another (outer): the outer one leaves out what the calling
@@ -360,7 +361,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     double t0 = ism_now_ms();
     phase_meter m;
     meter_start(&m);
-    if (!ism_breaks_build(&breaks, tree))
+    if (!ism_breaks_build(&breaks, tree, threads, &m.par))
         goto done;
     meter_stop_inside(&m, st, ISM_PHASE_CRACKS, outer);
     st->time_ms[ISM_PHASE_CRACKS] = ism_now_ms() - t0;
@@ -574,6 +575,7 @@ static void add_round_costs(ism_poly_stats *total, const ism_poly_stats *r)
         total->cpu_ms[k] += r->cpu_ms[k];
         total->serial_ms[k] += r->serial_ms[k];
         total->critical_ms[k] += r->critical_ms[k];
+        total->even_ms[k] += r->even_ms[k];
     }
 }
 
@@ -629,6 +631,7 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
     memcpy(stats->cpu_ms, costs.cpu_ms, sizeof stats->cpu_ms);
     memcpy(stats->serial_ms, costs.serial_ms, sizeof stats->serial_ms);
     memcpy(stats->critical_ms, costs.critical_ms, sizeof stats->critical_ms);
+    memcpy(stats->even_ms, costs.even_ms, sizeof stats->even_ms);
     stats->total_ms = ism_now_ms() - t_start;
     if (status != ISM_POLY_OK) {
         ism_mesh_free(mesh);

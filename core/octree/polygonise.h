@@ -85,10 +85,12 @@ typedef struct ism_poly_stats {
     int threads;                 /* threads actually used */
     double time_ms[ISM_PHASE_COUNT];
     /* CPU per phase in milliseconds (every thread's, CLOCK_THREAD_CPUTIME_ID), the part of it
-     * the calling thread spent outside parallel loops, and the phase's critical path: that
-     * serial part plus, per parallel loop, its busiest thread's CPU — the phase's wall time on
-     * idle cores. Unlike time_ms, none of them is stretched by other processes' load. */
+     * the calling thread spent outside parallel loops, and two critical paths: that serial
+     * part plus, per parallel loop, its busiest thread's CPU (the phase's wall time on idle
+     * cores, as the threads were scheduled), or plus per loop the even share (parallel.h: a
+     * fair split of the same tasks). Unlike time_ms, none is stretched by other processes. */
     double cpu_ms[ISM_PHASE_COUNT], serial_ms[ISM_PHASE_COUNT], critical_ms[ISM_PHASE_COUNT];
+    double even_ms[ISM_PHASE_COUNT];
     double total_ms;
 } ism_poly_stats;
 

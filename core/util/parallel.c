@@ -25,13 +25,15 @@ typedef struct loop {
     void (*fn)(void *, size_t, int);
     void *ctx;
     int threads;
+    bool timed;        /* each task's CPU is read (for an ism_par_cost) */
     block blocks[MAX_THREADS];
 } loop;
 
 typedef struct worker {
     loop *l;
     int id;
-    double cpu_ms; /* the thread's CPU while it ran tasks */
+    double cpu_ms;     /* the thread's CPU while it ran tasks */
+    double longest_ms; /* its longest task's */
 } worker;
 
 static uint64_t pack(uint32_t lo, uint32_t hi) { return (uint64_t)lo << 32 | hi; }
@@ -84,15 +86,21 @@ static void run_tasks(worker *w)
 {
     loop *l = w->l;
     block *own = &l->blocks[w->id];
-    double t0 = ism_thread_cpu_ms();
+    double t0 = l->timed ? ism_thread_cpu_ms() : 0, t = t0;
     for (;;) {
         uint32_t task;
-        if (claim(own, &task))
+        if (claim(own, &task)) {
             l->fn(l->ctx, task, w->id);
-        else if (!steal(l, w->id))
+            if (!l->timed)
+                continue;
+            double now = ism_thread_cpu_ms();
+            w->longest_ms = now - t > w->longest_ms ? now - t : w->longest_ms;
+            t = now;
+        } else if (!steal(l, w->id)) {
             break;
+        }
     }
-    w->cpu_ms = ism_thread_cpu_ms() - t0;
+    w->cpu_ms = l->timed ? ism_thread_cpu_ms() - t0 : 0;
 }
 
 static void *thread_main(void *arg)
@@ -121,6 +129,7 @@ void ism_parallel_for_costed(int threads, size_t ntasks, void (*fn)(void *, size
     loop l;
     l.fn = fn;
     l.ctx = ctx;
+    l.timed = cost != NULL;
     pthread_t tid[MAX_THREADS];
     worker w[MAX_THREADS];
     int started = 0;
@@ -129,9 +138,9 @@ void ism_parallel_for_costed(int threads, size_t ntasks, void (*fn)(void *, size
                                              (uint32_t)(ntasks * (size_t)(i + 1) /
                                                         (size_t)threads)));
     l.threads = threads;
-    w[0] = (worker){&l, 0, 0};
+    w[0] = (worker){&l, 0, 0, 0};
     for (int i = 1; i < threads; i++) {
-        w[i] = (worker){&l, i, 0};
+        w[i] = (worker){&l, i, 0, 0};
         if (pthread_create(&tid[i], NULL, thread_main, &w[i]) != 0)
             break; /* fewer threads: the calling thread steals the blocks of the others */
         started = i;
@@ -141,13 +150,17 @@ void ism_parallel_for_costed(int threads, size_t ntasks, void (*fn)(void *, size
         pthread_join(tid[i], NULL);
     if (!cost)
         return;
-    double busiest = 0;
-    for (int i = 0; i <= started; i++) {
-        cost->cpu_ms += w[i].cpu_ms;
+    double busiest = 0, longest = 0, all = 0;
+    int ran = started + 1;
+    for (int i = 0; i < ran; i++) {
+        all += w[i].cpu_ms;
         busiest = w[i].cpu_ms > busiest ? w[i].cpu_ms : busiest;
+        longest = w[i].longest_ms > longest ? w[i].longest_ms : longest;
     }
+    cost->cpu_ms += all;
     cost->caller_ms += w[0].cpu_ms;
     cost->busiest_ms += busiest;
+    cost->even_ms += all / ran > longest ? all / ran : longest;
 }
 
 /* Task numbers offset into a slice: fn sees the loop's own numbering. */

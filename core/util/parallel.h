@@ -11,11 +11,13 @@
 #define ISM_CACHE_LINE 64
 
 /* What parallel loops cost, in CPU milliseconds of each thread (CLOCK_THREAD_CPUTIME_ID),
- * added up over the loops it was passed to: all threads together, the calling thread's
- * share, and per loop the busiest thread's — on idle cores the loops' wall time, whatever
- * the load was when they ran. */
+ * added up over the loops it was passed to: all threads together; the calling thread's
+ * share; per loop the busiest thread's (the loop's wall time on idle cores, but on loaded
+ * ones a thread that starts late leaves its tasks to the others); and per loop the even
+ * share max(CPU / threads, longest task) — what a fair split of the same tasks would take,
+ * whatever the scheduler did. */
 typedef struct ism_par_cost {
-    double cpu_ms, caller_ms, busiest_ms;
+    double cpu_ms, caller_ms, busiest_ms, even_ms;
 } ism_par_cost;
 
 /* Calls fn(ctx, task, thread) once for every task in [0, ntasks), on `threads` threads

@@ -2,7 +2,7 @@
  * (ism_polygonise alone: no singular locus, no conformance, no analysis) on a surface of the
  * thread-scaling goal, at a depth, on a number of threads. Prints one JSON line: wall and
  * process CPU around the call, and per phase the polygoniser's own figures (wall time_ms,
- * cpu_ms, serial_ms, critical_ms: polygonise.h), the evaluations (point, gradient,
+ * cpu_ms, serial_ms, critical_ms, even_ms: polygonise.h), the evaluations (point, gradient,
  * interval), the mesh's size and a hash of its bytes
  * (positions, normals, triangles) to check that every thread count makes the same mesh.
  *
@@ -87,6 +87,7 @@ static int run(const surface *s, int depth, int threads)
     print_phases("cpu_ms", st.cpu_ms);
     print_phases("serial_ms", st.serial_ms);
     print_phases("critical_ms", st.critical_ms);
+    print_phases("even_ms", st.even_ms);
     printf(", \"evals\": [%llu, %llu, %llu]", (unsigned long long)st.evals_point,
            (unsigned long long)st.evals_gradient, (unsigned long long)st.evals_interval);
     printf("}\n");

@@ -7,11 +7,15 @@ the minimum of each figure is kept (the machine is shared). Printed per surface:
   wall and CPU (process) of each thread count, and the wall speed-up — meaningful only on an
   idle machine, so the RESULT line says NOT idle when the load average was above the cores;
   per phase (octree, breaks, polygons, weld) the CPU, the part of it the calling thread ran
-  alone (serial) and the critical path (serial + each parallel loop's busiest thread);
+  alone (serial), the critical path as the threads ran (serial + each parallel loop's
+  busiest thread) and as a fair split of the same tasks would run (serial + per loop
+  max(CPU / 2, longest task): on a loaded machine a thread that starts late leaves its
+  tasks to the other, which the first path counts as imbalance);
   the serial fraction s of the one-thread CPU and Amdahl's bound 1 / (s + (1 - s) / 2);
   the load-independent estimate of the two-thread speed-up: one-thread CPU / two-thread
-  critical path (it counts the serial part, the imbalance of the threads and any work the
-  second thread adds), and the balance of the parallel loops (their CPU / (2 x busiest));
+  fair critical path (it counts the serial part, the longest tasks and any work the second
+  thread adds), the same with the busiest threads, and the balance of the parallel loops
+  as they ran (their CPU / (2 x busiest));
   whether both thread counts made the same mesh (hash of positions, normals, triangles).
 
 Asserts nothing; exits 0 unless a run fails.
@@ -60,7 +64,8 @@ def report(name, depth, one, two, load, hashes):
     s = sum(one["serial_ms"]) / sum(one["cpu_ms"])
     amdahl = 1 / (s + (1 - s) / 2)
     crit2 = sum(two["critical_ms"])
-    estimate = sum(one["cpu_ms"]) / crit2
+    estimate = sum(one["cpu_ms"]) / sum(two["even_ms"])
+    as_ran = sum(one["cpu_ms"]) / crit2
     par_cpu = sum(c - s_ for c, s_ in zip(two["cpu_ms"], two["serial_ms"]))
     par_busy = sum(c - s_ for c, s_ in zip(two["critical_ms"], two["serial_ms"]))
     balance = par_cpu / (2 * par_busy) if par_busy > 0 else 1.0
@@ -68,20 +73,21 @@ def report(name, depth, one, two, load, hashes):
     same = len(hashes) == 1
     print("\n%s depth %d: %d triangles, mesh %s on 1 and 2 threads" % (
         name, depth, one["triangles"], "identical" if same else "DIFFERENT"))
-    print("%-9s %11s %11s %11s %11s %11s %11s" % (
-        "phase", "cpu 1t ms", "serial 1t", "cpu 2t ms", "serial 2t", "critical 2t", "wall 2t"))
+    print("%-9s %10s %10s %10s %10s %10s %10s %10s %10s" % (
+        "phase", "cpu 1t ms", "serial 1t", "cpu 2t ms", "serial 2t", "as ran 2t", "fair 2t",
+        "wall 1t", "wall 2t"))
     for i, ph in enumerate(PHASES):
-        print("%-9s %11.1f %11.1f %11.1f %11.1f %11.1f %11.1f" % (
+        print("%-9s %10.1f %10.1f %10.1f %10.1f %10.1f %10.1f %10.1f %10.1f" % (
             ph, one["cpu_ms"][i], one["serial_ms"][i], two["cpu_ms"][i], two["serial_ms"][i],
-            two["critical_ms"][i], two["time_ms"][i]))
-    print("%-9s %11.1f %11.1f %11.1f %11.1f %11.1f" % (
+            two["critical_ms"][i], two["even_ms"][i], one["time_ms"][i], two["time_ms"][i]))
+    print("%-9s %10.1f %10.1f %10.1f %10.1f %10.1f %10.1f" % (
         "total", sum(one["cpu_ms"]), sum(one["serial_ms"]), sum(two["cpu_ms"]),
-        sum(two["serial_ms"]), crit2))
+        sum(two["serial_ms"]), crit2, sum(two["even_ms"])))
     print("wall 1t %.0f ms, 2t %.0f ms (x%.2f); process CPU 1t %.0f ms, 2t %.0f ms" % (
         one["wall_ms"], two["wall_ms"], wall, one["process_cpu_ms"], two["process_cpu_ms"]))
-    print("serial fraction %.3f -> Amdahl bound x%.2f; estimate from CPU x%.2f (parallel "
-          "loops' balance %.2f, 2t/1t CPU %.2f)" % (
-              s, amdahl, estimate, balance, sum(two["cpu_ms"]) / sum(one["cpu_ms"])))
+    print("serial fraction %.3f -> Amdahl bound x%.2f; estimate from CPU x%.2f fair split, "
+          "x%.2f as the threads ran (parallel loops' balance %.2f, 2t/1t CPU %.2f)" % (
+              s, amdahl, estimate, as_ran, balance, sum(two["cpu_ms"]) / sum(one["cpu_ms"])))
     idle = load <= os.cpu_count()
     print("RESULT threads %s d%d: 2 threads x%.2f wall (goal >= %.1f: %s), estimate x%.2f, "
           "Amdahl bound x%.2f; %s" % (

@@ -1,6 +1,7 @@
 /* test_polygonise_cases.c — behaviour around the edges of the polygoniser: near-touching
  * parts stay apart, an empty box gives an empty mesh, adaptivity pays, output is
- * deterministic and independent of the thread count, budgets and bad options fail clearly. */
+ * deterministic and independent of the thread count (gyroid; nodal sextic off the lattice),
+ * budgets and bad options fail clearly. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <string.h>
@@ -84,6 +85,39 @@ Test(cases, deterministic_and_thread_independent)
     cr_assert_gt(a.ntris, 1000);
     expect_same_mesh(&a, &b, "two threads vs four");
     expect_same_mesh(&a, &c, "one thread vs two");
+    ism_mesh_free(&a);
+    ism_mesh_free(&b);
+    ism_mesh_free(&c);
+    ism_tape_free(t);
+}
+
+/* Barth's sextic (65 nodes) in a ball, in a box off the octree lattice by 0.37 of a finest
+ * cell: the break-point registry, the work stealing and the weld on 1, 2 and 4 threads make
+ * the same bytes (the registry's parallel path starts at 2^15 corners: reached here). */
+Test(cases, nodal_sextic_thread_independent_off_lattice)
+{
+    static const ism_param phi[] = {{"phi", 1.6180339887498949}};
+    const pf_surface barth = {
+        "max(4*(phi^2*x^2 - y^2)*(phi^2*y^2 - z^2)*(phi^2*z^2 - x^2) - "
+        "(1 + 2*phi)*(x^2 + y^2 + z^2 - 1)^2, x^2 + y^2 + z^2 - 2.25)",
+        phi, 1, NULL, 0};
+    ism_tape *t = pf_compile(&barth);
+    int d = 6 - pf_quick();
+    double box[6], cell = 3.2 / (1 << d);
+    for (int k = 0; k < 3; k++) {
+        box[k] = -1.6 + 0.37 * cell;
+        box[3 + k] = 1.6 + 0.37 * cell;
+    }
+    ism_mesh a, b, c;
+    ism_poly_stats st;
+    pf_run(t, box, 3, d, 1, &a, &st);
+    pf_run(t, box, 3, d, 2, &b, &st);
+    pf_run(t, box, 3, d, 4, &c, &st);
+    cr_assert_gt(a.ntris, 5000, "%zu triangles", a.ntris);
+    cr_assert_gt(8 * st.nodes_visited, (uint64_t)1 << 15, "%llu nodes: the registry's serial path",
+                 (unsigned long long)st.nodes_visited);
+    expect_same_mesh(&a, &b, "one thread vs two");
+    expect_same_mesh(&a, &c, "one thread vs four");
     ism_mesh_free(&a);
     ism_mesh_free(&b);
     ism_mesh_free(&c);

@@ -1,0 +1,75 @@
+/* test_parallel.c — the fork/join loop with work stealing (core/util/parallel.h): every task
+ * runs exactly once on a thread number below the thread count, for task counts below, at and
+ * above it, with uneven task lengths that make threads run dry and steal; what the loop cost
+ * keeps its order (all threads >= busiest >= even share, caller <= all). */
+#include <criterion/criterion.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+
+#include "core/util/parallel.h"
+
+enum { MAX_TASKS = 3000 };
+
+typedef struct tally {
+    atomic_int runs[MAX_TASKS];
+    atomic_int bad_thread;
+    int threads;
+    size_t heavy_below; /* tasks below this number spin longer: the first block's owner
+                           falls behind and the others steal from it */
+} tally;
+
+static void task(void *ctx, size_t i, int thread)
+{
+    tally *t = ctx;
+    atomic_fetch_add(&t->runs[i], 1);
+    if (thread < 0 || thread >= t->threads)
+        atomic_store(&t->bad_thread, 1);
+    volatile double x = 1;
+    for (int k = 0; k < (i < t->heavy_below ? 20000 : 200); k++)
+        x = x * 1.0000001 + 1e-9;
+}
+
+static void check_once(int threads, size_t ntasks, size_t heavy_below)
+{
+    tally *t = calloc(1, sizeof *t);
+    cr_assert_not_null(t);
+    t->threads = threads;
+    t->heavy_below = heavy_below;
+    ism_par_cost cost = {0, 0, 0, 0};
+    ism_parallel_for_costed(threads, ntasks, task, t, &cost);
+    for (size_t i = 0; i < ntasks; i++)
+        cr_assert_eq(atomic_load(&t->runs[i]), 1, "%d threads, %zu tasks: task %zu ran %d times",
+                     threads, ntasks, i, atomic_load(&t->runs[i]));
+    for (size_t i = ntasks; i < MAX_TASKS; i++)
+        cr_assert_eq(atomic_load(&t->runs[i]), 0);
+    cr_expect_eq(atomic_load(&t->bad_thread), 0, "a thread number out of range");
+    cr_expect_geq(cost.cpu_ms, cost.busiest_ms);
+    cr_expect_geq(cost.cpu_ms, cost.caller_ms);
+    cr_expect_geq(cost.busiest_ms + 1e-6, cost.even_ms, "busiest %g < even share %g",
+                  cost.busiest_ms, cost.even_ms);
+    free(t);
+}
+
+Test(parallel, every_task_once)
+{
+    const int threads[] = {1, 2, 3, 4, 8};
+    const size_t counts[] = {0, 1, 2, 3, 7, 64, 1000, MAX_TASKS};
+    for (size_t a = 0; a < sizeof threads / sizeof *threads; a++)
+        for (size_t b = 0; b < sizeof counts / sizeof *counts; b++) {
+            check_once(threads[a], counts[b], 0);
+            check_once(threads[a], counts[b], counts[b] / 2);
+        }
+}
+
+static void add_offset(void *ctx, size_t i, int thread)
+{
+    (void)thread;
+    atomic_fetch_add((atomic_size_t *)ctx, i + 1);
+}
+
+Test(parallel, plain_loop_sums_every_task)
+{
+    atomic_size_t sum = 0;
+    ism_parallel_for(2, 500, add_offset, &sum);
+    cr_expect_eq(atomic_load(&sum), (size_t)500 * 501 / 2);
+}
