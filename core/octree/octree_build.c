@@ -18,6 +18,10 @@
 #include <string.h>
 
 #define TOP_LEVEL 2
+/* A thread adds its new nodes to the shared count (the max_nodes budget) in batches this
+ * large: one shared write per 512 splits instead of one per split, at the price of
+ * exceeding the budget by at most this many nodes per thread before the build stops. */
+#define NODE_BATCH 4096
 
 typedef struct node_vec {
     ism_node *v;
@@ -46,6 +50,7 @@ typedef struct thread_state {
     ism_thin_ws thin;         /* the hidden-piece search's scratch */
     uint64_t visited, excluded, unresolved;
     uint64_t thin_searched, thin_found, thin_undecided, deep_leaves;
+    size_t new_nodes;         /* made since the last batch went to build.nodes_total */
 } thread_state;
 
 typedef struct build {
@@ -55,11 +60,12 @@ typedef struct build {
     const ism_octree *previous;  /* p->previous when it may be used, else NULL */
     thread_state *threads;
     int shortening;
-    atomic_size_t nodes_total;
+    /* written rarely, read by every node; the counters below live on lines of their own */
     atomic_int failed;           /* an enum ism_build_status other than OK */
+    alignas(ISM_CACHE_LINE) atomic_size_t nodes_total; /* in batches (NODE_BATCH) */
     deferral *tasks;             /* node index (in the top array) and limit of each task */
     node_vec *task_out;          /* each task's subtree; [0] is the task's node itself */
-    atomic_size_t tasks_done;
+    alignas(ISM_CACHE_LINE) atomic_size_t tasks_done;
     size_t ntasks;
     pthread_mutex_t progress_lock;
 } build;
@@ -130,6 +136,18 @@ static bool fail(build *b, enum ism_build_status st)
     int expected = ISM_BUILD_OK;
     atomic_compare_exchange_strong(&b->failed, &expected, (int)st);
     return false;
+}
+
+/* Adds the thread's new nodes to the shared count; false (and the build failed) beyond
+ * max_nodes. Whether the whole tree fits does not depend on the batching: every node is
+ * counted by the end of its task. */
+static bool count_nodes(build *b, thread_state *th)
+{
+    size_t n = th->new_nodes;
+    th->new_nodes = 0;
+    if (atomic_fetch_add(&b->nodes_total, n) + n > b->p->max_nodes)
+        return fail(b, ISM_BUILD_TOO_BIG);
+    return true;
 }
 
 /* The one sign of the corners of node face (2 × axis + side), 0 when they differ or one
@@ -360,8 +378,8 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         v->v[i].state = ISM_NODE_LEAF;
         return true;
     }
-    if (atomic_fetch_add(&b->nodes_total, 8) + 8 > b->p->max_nodes)
-        return fail(b, ISM_BUILD_TOO_BIG);
+    if ((th->new_nodes += 8) >= NODE_BATCH && !count_nodes(b, th))
+        return false;
     size_t first = v->n;
     for (int k = 0; k < 8; k++) {
         ism_node c = {{0, 0, 0}, -1, (uint8_t)(nd.level + 1), ISM_NODE_LEAF, 0, 0};
@@ -402,8 +420,9 @@ static void run_task(void *ctx, size_t task, int thread)
     thread_state *th = &b->threads[thread];
     node_vec *out = &b->task_out[task];
     /* The task's tape: shorten from the full tape over the task's own box on the way. */
-    grow(b, th, out, 0, b->p->tape, b->tasks[task].limit, NULL, b->tasks[task].previous,
-         NULL);
+    if (grow(b, th, out, 0, b->p->tape, b->tasks[task].limit, NULL, b->tasks[task].previous,
+             NULL))
+        count_nodes(b, th);
     report_progress(b);
 }
 
@@ -506,8 +525,9 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
     }
     deferred.level = p->max_depth < TOP_LEVEL ? p->max_depth : TOP_LEVEL;
     b.previous = p->previous && p->previous->n ? p->previous : NULL;
-    grow(&b, &b.threads[0], &top, 0, p->tape, p->max_depth, &deferred, b.previous ? 0 : -1,
-         NULL);
+    if (grow(&b, &b.threads[0], &top, 0, p->tape, p->max_depth, &deferred, b.previous ? 0 : -1,
+             NULL))
+        count_nodes(&b, &b.threads[0]);
     if ((status = atomic_load(&b.failed)) != ISM_BUILD_OK)
         goto done;
 
