@@ -82,9 +82,15 @@ typedef struct builder {
     int shift, axis;
 } builder;
 
-static size_t block_lo(const builder *w, size_t blk, size_t n)
+/* The range [lo, hi) of block blk of the array being worked on (read once per loop: the
+ * loops write through pointers the compiler cannot tell apart from the builder's fields). */
+typedef struct range {
+    size_t lo, hi;
+} range;
+
+static range block(const builder *w, size_t blk)
 {
-    return n * blk / w->nblocks;
+    return (range){w->n * blk / w->nblocks, w->n * (blk + 1) / w->nblocks};
 }
 
 static void run_blocks(builder *w, size_t n, void (*fn)(void *, size_t, int))
@@ -113,7 +119,8 @@ static void count_leaves(void *ctx, size_t blk, int thread)
     builder *w = ctx;
     size_t leaves = 0;
     int finest = 0;
-    for (size_t i = block_lo(w, blk, w->n); i < block_lo(w, blk + 1, w->n); i++)
+    range r = block(w, blk);
+    for (size_t i = r.lo; i < r.hi; i++)
         if (w->t->nodes[i].state == ISM_NODE_LEAF) {
             leaves++;
             if (w->t->nodes[i].level > finest)
@@ -128,9 +135,12 @@ static void gather_corners(void *ctx, size_t blk, int thread)
     (void)thread;
     builder *w = ctx;
     const ism_grid *g = &w->t->grid;
-    size_t m = 8 * w->per_block[blk];
-    for (size_t i = block_lo(w, blk, w->n); i < block_lo(w, blk + 1, w->n); i++) {
-        const ism_node *nd = &w->t->nodes[i];
+    const ism_node *nodes = w->t->nodes;
+    const packing pk = w->pk;
+    uint64_t *k = w->k + 8 * w->per_block[blk];
+    range r = block(w, blk);
+    for (size_t i = r.lo; i < r.hi; i++) {
+        const ism_node *nd = &nodes[i];
         if (nd->state != ISM_NODE_LEAF)
             continue;
         int32_t s = ism_grid_cell_steps(g, nd->level);
@@ -138,7 +148,7 @@ static void gather_corners(void *ctx, size_t blk, int thread)
             int32_t p[3];
             for (int a = 0; a < 3; a++)
                 p[a] = nd->org[a] + ((c >> a) & 1) * s;
-            w->k[m++] = pack(&w->pk, 2, p);
+            *k++ = pack(&pk, 2, p);
         }
     }
 }
@@ -150,9 +160,12 @@ static void count_digits(void *ctx, size_t blk, int thread)
     (void)thread;
     builder *w = ctx;
     size_t *c = w->count + blk * RADIX;
+    const uint64_t *src = w->src;
+    int shift = w->shift;
+    range r = block(w, blk);
     memset(c, 0, RADIX * sizeof *c);
-    for (size_t i = block_lo(w, blk, w->n); i < block_lo(w, blk + 1, w->n); i++)
-        c[(w->src[i] >> w->shift) & (RADIX - 1)]++;
+    for (size_t i = r.lo; i < r.hi; i++)
+        c[(src[i] >> shift) & (RADIX - 1)]++;
 }
 
 static void scatter(void *ctx, size_t blk, int thread)
@@ -160,11 +173,17 @@ static void scatter(void *ctx, size_t blk, int thread)
     (void)thread;
     builder *w = ctx;
     size_t *c = w->count + blk * RADIX;
-    for (size_t i = block_lo(w, blk, w->n); i < block_lo(w, blk + 1, w->n); i++) {
-        size_t at = c[(w->src[i] >> w->shift) & (RADIX - 1)]++;
-        w->dst[at] = w->src[i];
-        if (w->vsrc)
-            w->vdst[at] = w->vsrc[i];
+    const uint64_t *src = w->src;
+    uint64_t *dst = w->dst;
+    const uint32_t *vsrc = w->vsrc;
+    uint32_t *vdst = w->vdst;
+    int shift = w->shift;
+    range r = block(w, blk);
+    for (size_t i = r.lo; i < r.hi; i++) {
+        size_t at = c[(src[i] >> shift) & (RADIX - 1)]++;
+        dst[at] = src[i];
+        if (vsrc)
+            vdst[at] = vsrc[i];
     }
 }
 
@@ -220,7 +239,8 @@ static void count_distinct(void *ctx, size_t blk, int thread)
     (void)thread;
     builder *w = ctx;
     size_t m = 0;
-    for (size_t i = block_lo(w, blk, w->n); i < block_lo(w, blk + 1, w->n); i++)
+    range r = block(w, blk);
+    for (size_t i = r.lo; i < r.hi; i++)
         m += first_of_run(w->k, i);
     w->per_block[blk] = m;
 }
@@ -229,10 +249,12 @@ static void copy_distinct(void *ctx, size_t blk, int thread)
 {
     (void)thread;
     builder *w = ctx;
-    size_t m = w->per_block[blk];
-    for (size_t i = block_lo(w, blk, w->n); i < block_lo(w, blk + 1, w->n); i++)
-        if (first_of_run(w->k, i))
-            w->tk[m++] = w->k[i];
+    const uint64_t *k = w->k;
+    uint64_t *out = w->tk + w->per_block[blk];
+    range r = block(w, blk);
+    for (size_t i = r.lo; i < r.hi; i++)
+        if (first_of_run(k, i))
+            *out++ = k[i];
 }
 
 /* ---- successors along x and y ----------------------------------------------------------- */
@@ -241,11 +263,17 @@ static void rekey(void *ctx, size_t blk, int thread)
 {
     (void)thread;
     builder *w = ctx;
-    for (size_t i = block_lo(w, blk, w->n); i < block_lo(w, blk + 1, w->n); i++) {
+    const packing pk = w->pk;
+    const uint64_t *k = w->k;
+    uint64_t *ak = w->ak;
+    uint32_t *idx = w->idx;
+    int axis = w->axis;
+    range r = block(w, blk);
+    for (size_t i = r.lo; i < r.hi; i++) {
         int32_t p[3];
-        unpack(&w->pk, 2, w->k[i], p);
-        w->ak[i] = pack(&w->pk, w->axis, p);
-        w->idx[i] = (uint32_t)i;
+        unpack(&pk, 2, k[i], p);
+        ak[i] = pack(&pk, axis, p);
+        idx[i] = (uint32_t)i;
     }
 }
 
@@ -253,8 +281,14 @@ static void link_block(void *ctx, size_t blk, int thread)
 {
     (void)thread;
     builder *w = ctx;
-    for (size_t i = block_lo(w, blk, w->n); i < block_lo(w, blk + 1, w->n); i++)
-        w->next[w->axis][w->idx[i]] = successor(&w->pk, w->ak, w->n, i);
+    const packing pk = w->pk;
+    const uint64_t *ak = w->ak;
+    const uint32_t *idx = w->idx;
+    int32_t *next = w->next[w->axis];
+    size_t n = w->n;
+    range r = block(w, blk);
+    for (size_t i = r.lo; i < r.hi; i++)
+        next[idx[i]] = successor(&pk, ak, n, i);
 }
 
 /* The successors along `axis` (0 or 1) of the n points of w->k: re-keyed line by line along
@@ -289,18 +323,23 @@ static void fill_block(void *ctx, size_t blk, int thread)
 {
     (void)thread;
     builder *w = ctx;
-    size_t hi = block_lo(w, blk + 1, w->n);
-    for (size_t i = block_lo(w, blk, w->n); i < hi; i++) {
+    const packing pk = w->pk;
+    const uint64_t *k = w->k;
+    const int32_t *nx = w->next[0], *ny = w->next[1];
+    ism_breaks *b = w->b;
+    size_t n = w->n;
+    range r = block(w, blk);
+    for (size_t i = r.lo; i < r.hi; i++) {
         int32_t p[3];
-        if (i + LOOKAHEAD < hi) {
-            unpack(&w->pk, 2, w->k[i + LOOKAHEAD], p);
-            ism_breaks_prefetch(w->b, p);
+        if (i + LOOKAHEAD < r.hi) {
+            unpack(&pk, 2, k[i + LOOKAHEAD], p);
+            ism_breaks_prefetch(b, p);
         }
-        unpack(&w->pk, 2, w->k[i], p);
-        ism_break_point *e = insert(w->b, p);
-        e->next[0] = w->next[0][i];
-        e->next[1] = w->next[1][i];
-        e->next[2] = successor(&w->pk, w->k, w->n, i);
+        unpack(&pk, 2, k[i], p);
+        ism_break_point *e = insert(b, p);
+        e->next[0] = nx[i];
+        e->next[1] = ny[i];
+        e->next[2] = successor(&pk, k, n, i);
     }
 }
 

@@ -6,9 +6,11 @@
  * open-addressing table keeps, per distinct position, the smallest number that has it (a
  * compare-and-swap minimum), whatever order the threads insert in. The vertices holding that
  * smallest number become the mesh's vertices, numbered in piece order; the others take
- * their index. Five loops over the pieces, each one piece per task, with prefix sums over
- * the pieces between them: insert; resolve (count new vertices); place (write them); map
- * (count kept triangles); write the triangles. */
+ * their index. Six loops over the pieces, each one piece per task, with prefix sums over
+ * the pieces between them: dedupe within the piece (most duplicates are neighbours in one
+ * chunk: a small table in the thread's cache); insert the piece's first occurrences in the
+ * shared table; resolve (count new vertices); place (write them); map (count kept
+ * triangles); write the triangles. */
 #include "core/octree/weld.h"
 
 #include <math.h>
@@ -21,6 +23,7 @@
 /* Vertex numbers, and the slot numbers of a table of up to 4 slots per vertex (2 rounded up
  * to a power of two), fit in 32 bits below this. */
 #define MAX_PIECE_VERTICES ((size_t)1 << 30)
+#define MAX_THREADS 64 /* as many as ism_parallel_for runs */
 
 /* g scaled to unit length, or 0 0 0 when g is zero or not finite. Dividing by the largest
  * component first keeps the squared length from underflowing (∇f ~ 1e-160 where f = g^64
@@ -61,9 +64,13 @@ typedef struct welder {
                                 occurrence; 0: empty */
     size_t mask;
     size_t *voff;            /* per piece: the number of its first vertex (npieces + 1) */
-    const double **at;       /* per vertex number: its position */
-    uint32_t *slot;          /* per vertex number: its position's slot */
-    uint32_t *rep;           /* per vertex number: the number of its position's first */
+    const double **at;       /* per vertex number: its position (first in its piece only) */
+    uint32_t *slot;          /* per vertex number: its position's slot (same) */
+    uint32_t *rep;           /* per vertex number: the number of its position's first in
+                                its piece, then its first in all */
+    uint32_t *local;         /* per thread: a table of local_cap slots for one piece */
+    size_t local_cap;
+    size_t *distinct;        /* per piece: positions first in it */
     uint32_t *index;         /* per vertex number: its index in the mesh */
     size_t *new_verts, *kept_tris; /* per piece; then, after the prefix sums, where its new
                                       vertices / kept triangles start in the mesh */
@@ -94,24 +101,59 @@ static void insert(welder *w, uint32_t g, const double p[3])
     }
 }
 
+/* The slot of p in a piece's own table (piece-local vertex index + 1; 0: empty). */
+static uint32_t *local_slot(uint32_t *table, size_t mask, const ism_fpoint *v, const double p[3])
+{
+    for (size_t i = hash_point(p) & mask;; i = (i + 1) & mask)
+        if (!table[i] || same_point(v[table[i] - 1].p, p))
+            return &table[i];
+}
+
+/* Pass 1: each vertex's first occurrence within its piece (a table in the thread's cache:
+ * most duplicates are neighbouring nodes of one chunk). */
+static void dedupe_piece(void *ctx, size_t k, int thread)
+{
+    welder *w = ctx;
+    const ism_cell_out *o = &w->pieces[k];
+    uint32_t *table = w->local + (size_t)thread * w->local_cap;
+    size_t cap = 16, first = w->voff[k], distinct = 0;
+    while (cap < SLOTS_PER_VERTEX * o->nverts)
+        cap *= 2;
+    memset(table, 0, cap * sizeof *table);
+    for (size_t i = 0; i < o->nverts; i++) {
+        uint32_t *e = local_slot(table, cap - 1, o->verts, o->verts[i].p);
+        if (!*e) {
+            *e = (uint32_t)i + 1;
+            w->at[first + i] = o->verts[i].p;
+            distinct++;
+        }
+        w->rep[first + i] = (uint32_t)(first + *e - 1);
+    }
+    w->distinct[k] = distinct;
+}
+
+/* Pass 2: the piece's first occurrences into the shared table. */
 static void insert_piece(void *ctx, size_t k, int thread)
 {
     (void)thread;
     welder *w = ctx;
-    const ism_cell_out *o = &w->pieces[k];
-    for (size_t i = 0; i < o->nverts; i++)
-        w->at[w->voff[k] + i] = o->verts[i].p;
-    for (size_t i = 0; i < o->nverts; i++)
-        insert(w, (uint32_t)(w->voff[k] + i), o->verts[i].p);
+    for (size_t g = w->voff[k]; g < w->voff[k + 1]; g++)
+        if (w->rep[g] == g)
+            insert(w, (uint32_t)g, w->at[g]);
 }
 
+/* Pass 3: every vertex's first occurrence in all pieces; counts the piece's new vertices. */
 static void resolve_piece(void *ctx, size_t k, int thread)
 {
     (void)thread;
     welder *w = ctx;
     size_t fresh = 0;
     for (size_t g = w->voff[k]; g < w->voff[k + 1]; g++) {
-        w->rep[g] = NUMBER_OF(atomic_load_explicit(&w->slots[w->slot[g]], memory_order_relaxed));
+        if (w->rep[g] == g) /* first in the piece: the shared table knows */
+            w->rep[g] = NUMBER_OF(atomic_load_explicit(&w->slots[w->slot[g]],
+                                                       memory_order_relaxed));
+        else /* a later one: its piece's first, resolved just before */
+            w->rep[g] = w->rep[w->rep[g]];
         fresh += w->rep[g] == g;
     }
     w->new_verts[k] = fresh;
@@ -241,9 +283,25 @@ static bool add_segments(const welder *w, size_t npieces)
     return true;
 }
 
+/* The shared table, sized by the positions first in their pieces. */
+static bool alloc_table(welder *w, size_t npieces)
+{
+    size_t distinct = 0, cap = 16;
+    for (size_t k = 0; k < npieces; k++)
+        distinct += w->distinct[k];
+    while (cap < SLOTS_PER_VERTEX * distinct)
+        cap *= 2;
+    w->mask = cap - 1;
+    w->slots = calloc(cap, sizeof *w->slots); /* all-zero bytes: every slot empty */
+    return w->slots != NULL;
+}
+
 static bool weld_all(welder *w, size_t npieces, int threads, ism_par_cost *cost)
 {
     ism_mesh *m = w->mesh;
+    ism_parallel_for_costed(threads, npieces, dedupe_piece, w, cost);
+    if (!alloc_table(w, npieces))
+        return false;
     ism_parallel_for_costed(threads, npieces, insert_piece, w, cost);
     ism_parallel_for_costed(threads, npieces, resolve_piece, w, cost);
     size_t nverts = prefix(w->new_verts, npieces);
@@ -264,32 +322,37 @@ bool ism_weld(const ism_cell_out *pieces, size_t npieces, int threads, ism_mesh 
               ism_weld_stats *st, ism_par_cost *cost)
 {
     memset(st, 0, sizeof *st);
-    welder w = {pieces, NULL, 0, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, mesh};
+    welder w;
+    memset(&w, 0, sizeof w);
+    w.pieces = pieces;
+    w.mesh = mesh;
+    threads = threads < 1 ? 1 : threads > MAX_THREADS ? MAX_THREADS : threads;
     size_t n = npieces ? npieces : 1;
     w.voff = malloc((n + 1) * sizeof *w.voff);
     w.new_verts = malloc(n * sizeof *w.new_verts);
     w.kept_tris = malloc(n * sizeof *w.kept_tris);
+    w.distinct = malloc(n * sizeof *w.distinct);
     w.piece_st = calloc(n, sizeof *w.piece_st);
-    bool ok = w.voff && w.new_verts && w.kept_tris && w.piece_st;
-    size_t total = 0;
+    bool ok = w.voff && w.new_verts && w.kept_tris && w.distinct && w.piece_st;
+    size_t total = 0, largest = 0;
     for (size_t k = 0; ok && k < npieces; k++) {
         w.voff[k] = total;
         total += pieces[k].nverts;
+        largest = pieces[k].nverts > largest ? pieces[k].nverts : largest;
     }
     ok = ok && total < MAX_PIECE_VERTICES;
     if (ok) {
         w.voff[npieces] = total;
-        size_t cap = 16;
-        while (cap < SLOTS_PER_VERTEX * total)
-            cap *= 2;
-        w.mask = cap - 1;
-        w.slots = calloc(cap, sizeof *w.slots); /* all-zero bytes: every slot empty */
+        w.local_cap = 16;
+        while (w.local_cap < SLOTS_PER_VERTEX * largest)
+            w.local_cap *= 2;
+        w.local = malloc((size_t)threads * w.local_cap * sizeof *w.local);
         size_t room = total ? total : 1;
         w.at = malloc(room * sizeof *w.at);
         w.slot = malloc(room * sizeof *w.slot);
         w.rep = malloc(room * sizeof *w.rep);
         w.index = malloc(room * sizeof *w.index);
-        ok = w.slots && w.at && w.slot && w.rep && w.index &&
+        ok = w.local && w.at && w.slot && w.rep && w.index &&
              weld_all(&w, npieces, threads, cost);
     }
     for (size_t k = 0; ok && k < npieces; k++) {
@@ -301,6 +364,8 @@ bool ism_weld(const ism_cell_out *pieces, size_t npieces, int threads, ism_mesh 
         st->dropped_triangles += p->dropped_triangles;
     }
     free(w.slots);
+    free(w.local);
+    free(w.distinct);
     free(w.at);
     free(w.slot);
     free(w.rep);
