@@ -99,18 +99,6 @@ static void run_blocks(builder *w, size_t n, void (*fn)(void *, size_t, int))
     ism_parallel_for_costed(w->threads, w->nblocks, fn, w, w->cost);
 }
 
-/* Turns the per-block counts into offsets; returns the total. */
-static size_t prefix(size_t *v, size_t n)
-{
-    size_t sum = 0;
-    for (size_t k = 0; k < n; k++) {
-        size_t c = v[k];
-        v[k] = sum;
-        sum += c;
-    }
-    return sum;
-}
-
 /* ---- the corners of the leaves ------------------------------------------------------ */
 
 static void count_leaves(void *ctx, size_t blk, int thread)
@@ -376,13 +364,13 @@ static bool distinct_corners(builder *w, size_t *out)
     for (size_t blk = 0; blk < w->nblocks; blk++)
         finest = w->finest[blk] > finest ? w->finest[blk] : finest;
     w->pk = (packing){t->grid.depth - finest, finest + 1}; /* coordinates 0 .. 2^finest */
-    size_t n = 8 * prefix(w->per_block, w->nblocks), room = n ? n : 1;
+    size_t n = 8 * ism_counts_to_offsets(w->per_block, w->nblocks), room = n ? n : 1;
     if (!(w->k = malloc(room * sizeof *w->k)) || !(w->tk = malloc(room * sizeof *w->tk)))
         return false;
     run_blocks(w, t->n, gather_corners);
     radix_sort(w, w->k, NULL, w->tk, NULL, n, 3 * w->pk.cb);
     run_blocks(w, n, count_distinct);
-    *out = prefix(w->per_block, w->nblocks);
+    *out = ism_counts_to_offsets(w->per_block, w->nblocks);
     run_blocks(w, n, copy_distinct);
     uint64_t *s = w->k;
     w->k = w->tk, w->tk = s;

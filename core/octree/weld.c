@@ -225,18 +225,6 @@ static void write_piece(void *ctx, size_t k, int thread)
     }
 }
 
-/* Turns per-piece counts into where each piece starts; returns the total. */
-static size_t prefix(size_t *v, size_t n)
-{
-    size_t sum = 0;
-    for (size_t k = 0; k < n; k++) {
-        size_t c = v[k];
-        v[k] = sum;
-        sum += c;
-    }
-    return sum;
-}
-
 /* Normals where ∇f vanished: the mean of the adjacent triangles' normals. */
 static void fill_missing_normals(ism_mesh *m)
 {
@@ -304,13 +292,13 @@ static bool weld_all(welder *w, size_t npieces, int threads, ism_par_cost *cost)
         return false;
     ism_parallel_for_costed(threads, npieces, insert_piece, w, cost);
     ism_parallel_for_costed(threads, npieces, resolve_piece, w, cost);
-    size_t nverts = prefix(w->new_verts, npieces);
+    size_t nverts = ism_counts_to_offsets(w->new_verts, npieces);
     if (!ism_mesh_reserve(m, nverts, 0))
         return false;
     m->nverts = nverts;
     ism_parallel_for_costed(threads, npieces, place_piece, w, cost);
     ism_parallel_for_costed(threads, npieces, map_piece, w, cost);
-    size_t ntris = prefix(w->kept_tris, npieces);
+    size_t ntris = ism_counts_to_offsets(w->kept_tris, npieces);
     if (!ism_mesh_reserve(m, 0, ntris))
         return false;
     m->ntris = ntris;

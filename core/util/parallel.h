@@ -30,6 +30,19 @@ void ism_parallel_for_costed(int threads, size_t ntasks,
                              void (*fn)(void *ctx, size_t task, int thread), void *ctx,
                              ism_par_cost *cost);
 
+/* Turns per-task counts into where each task's output starts (an exclusive prefix sum, in
+ * place); returns the total. What a loop counted per task, the next one writes at. */
+static inline size_t ism_counts_to_offsets(size_t *v, size_t n)
+{
+    size_t sum = 0;
+    for (size_t k = 0; k < n; k++) {
+        size_t c = v[k];
+        v[k] = sum;
+        sum += c;
+    }
+    return sum;
+}
+
 /* Number of online processors (at least 1). */
 int ism_cpu_count(void);
 
