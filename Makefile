@@ -146,6 +146,11 @@ clean:
 # ---------------------------------------------------------------------------------------
 # Objects, libraries, programs
 
+# The batched interval evaluator runs in round-down mode: gcc must keep its operations as
+# written (no -(a*b) for a*(-b), no folding that assumes round-to-nearest); no trapping
+# (FP traps are never enabled) lets it compute both sides of a select and so vectorise it.
+$(OUT)/obj/core/eval/eval_interval_batch.o: CFLAGS += -frounding-math -fno-trapping-math
+
 $(OUT)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) $(CFLAGS) -c $< -o $@

@@ -1,93 +1,138 @@
 /* eval_interval_batch.c — the interval evaluator over many boxes at once (an octree node's
- * eight children, say): registers hold the lower and upper bounds of up to ISM_IV_CHUNK
- * boxes as two arrays, and each instruction is one loop over the boxes of the chunk. The
- * common operations are the branch-free ones of interval_ops.h, so these loops vectorise;
- * the rest (powers, sqrt, exp, log, trigonometry) run box by box. Bounds equal
- * ism_eval_interval's bit for bit (the same functions, the same rounding).
+ * eight children, say): registers hold the lower bounds and the NEGATED upper bounds of up to
+ * ISM_IV_CHUNK boxes as two arrays, and each instruction is one loop over the boxes.
  *
- * Speed: one switch per instruction per chunk, loops of a whole chunk with restrict
- * pointers (no instruction writes a register it reads) and a trip count known to be a
- * multiple of the vector width, so gcc emits straight vector code without alias or
- * remainder checks; a NaN bound becomes its infinity by one max/min (x86's maxpd/minpd
- * return the second operand on NaN, which is exactly nan_to); the boxes are packed and
- * unpacked by vectorised loops too. */
+ * Outward rounding by the rounding mode: the whole batch runs rounding toward -inf (one
+ * MXCSR write per call, restored at the end), so a lower bound is the operation itself, and
+ * an upper bound hi is kept as nh = -hi, for which rounding down is rounding hi up: a + b is
+ * [al + bl, -(anh + bnh)] with two additions and nothing else. Each bound is the correctly
+ * rounded outward one, at least as tight as ism_eval_interval's one-ulp widening of a
+ * rounded-to-nearest value (so these intervals lie inside the single-box ones, up to the
+ * libm operations, which run box by box in round-to-nearest with interval_ops.h's rules).
+ *
+ * Vector code: one switch per instruction per chunk, loops over a whole number of AVX2
+ * vectors with restrict pointers (no instruction writes a register it reads), NaN bounds
+ * (inf - inf, 0 * inf) made infinite or 0 by selects. This file is compiled with
+ * -frounding-math (Makefile) so gcc keeps every operation as written (no -(a*b) for
+ * a*(-b)). */
 #include "core/eval/interval_ops.h"
 #include "core/eval/workspace.h"
 
+#include <fenv.h>
 #include <string.h>
+#if defined(__x86_64__) || defined(__i386__)
+#include <xmmintrin.h>
+#endif
 
 /* Lanes are processed in multiples of this (one AVX2 vector of doubles). */
 #define LANES 4
 
 #define ALWAYS_INLINE inline __attribute__((always_inline))
 
-/* nan_to(v, -inf) and nan_to(v, +inf) as a single max / min (equal for every v). */
-static ALWAYS_INLINE double lo_sane(double v) { return ism_max(v, -INFINITY); }
-static ALWAYS_INLINE double hi_sane(double v) { return ism_min(v, INFINITY); }
-
 /* Tells gcc that m is a whole number of vectors (no remainder loop). */
 #define WHOLE_VECTORS(m) \
     do { if ((m) % LANES != 0) __builtin_unreachable(); } while (0)
 
-#define IV_KERNEL_RR(NAME, FN)                                                               \
-    static ALWAYS_INLINE void NAME(double *restrict ol, double *restrict oh,                 \
-                                   const double *restrict al, const double *restrict ah,     \
-                                   const double *restrict bl, const double *restrict bh,     \
+/* ---- the rounding mode ---- */
+
+#if defined(__x86_64__) || defined(__i386__)
+typedef unsigned rounding;
+/* MXCSR's rounding-control field (bits 13-14) and its round-down value. */
+#define MXCSR_RC_MASK 0x6000u
+#define MXCSR_RC_DOWN 0x2000u
+#define MXCSR_RC_NEAREST 0x0000u
+static ALWAYS_INLINE rounding rounding_get(void) { return _mm_getcsr(); }
+static ALWAYS_INLINE void rounding_set(rounding r)
+{
+    __asm__ volatile("" ::: "memory"); /* no load or store moves across the switch */
+    _mm_setcsr(r);
+    __asm__ volatile("" ::: "memory");
+}
+static ALWAYS_INLINE rounding rounding_down(rounding r) { return (r & ~MXCSR_RC_MASK) | MXCSR_RC_DOWN; }
+static ALWAYS_INLINE rounding rounding_nearest(rounding r) { return (r & ~MXCSR_RC_MASK) | MXCSR_RC_NEAREST; }
+#else
+typedef int rounding;
+static ALWAYS_INLINE rounding rounding_get(void) { return fegetround(); }
+static ALWAYS_INLINE void rounding_set(rounding r) { fesetround(r); }
+static ALWAYS_INLINE rounding rounding_down(rounding r) { (void)r; return FE_DOWNWARD; }
+static ALWAYS_INLINE rounding rounding_nearest(rounding r) { (void)r; return FE_TONEAREST; }
+#endif
+
+/* ---- the operations, rounding down; (l, nh) is [l, -nh] ---- */
+
+/* A NaN bound (inf - inf) becomes -inf: the whole side (for nh, hi = +inf). */
+static ALWAYS_INLINE double sane(double v) { return v == v ? v : -INFINITY; }
+
+#define KERNEL_RR(NAME, BODY)                                                                \
+    static ALWAYS_INLINE void NAME(double *restrict ol, double *restrict onh,                \
+                                   const double *restrict al, const double *restrict anh,    \
+                                   const double *restrict bl, const double *restrict bnh,    \
                                    size_t m)                                                 \
     {                                                                                        \
         WHOLE_VECTORS(m);                                                                    \
         for (size_t j = 0; j < m; j++) {                                                     \
-            ism_interval r = FN(iv(al[j], ah[j]), iv(bl[j], bh[j]));                         \
-            ol[j] = lo_sane(r.lo);                                                           \
-            oh[j] = hi_sane(r.hi);                                                           \
+            BODY                                                                             \
         }                                                                                    \
     }
-#define IV_KERNEL_RC(NAME, FN)                                                               \
-    static ALWAYS_INLINE void NAME(double *restrict ol, double *restrict oh,                 \
-                                   const double *restrict al, const double *restrict ah,     \
+#define KERNEL_RC(NAME, BODY)                                                                \
+    static ALWAYS_INLINE void NAME(double *restrict ol, double *restrict onh,                \
+                                   const double *restrict al, const double *restrict anh,    \
                                    double c, size_t m)                                       \
     {                                                                                        \
         WHOLE_VECTORS(m);                                                                    \
         for (size_t j = 0; j < m; j++) {                                                     \
-            ism_interval r = FN(iv(al[j], ah[j]), c);                                        \
-            ol[j] = lo_sane(r.lo);                                                           \
-            oh[j] = hi_sane(r.hi);                                                           \
+            BODY                                                                             \
         }                                                                                    \
     }
 
-static inline ism_interval iv_c_sub_rc(ism_interval a, double c) { return iv_c_sub(c, a); }
-static inline ism_interval iv_c_div_rc(ism_interval a, double c) { return iv_c_div(c, a); }
-static inline ism_interval iv_min_rc(ism_interval a, double c) { return iv_min(a, iv(c, c)); }
-static inline ism_interval iv_max_rc(ism_interval a, double c) { return iv_max(a, iv(c, c)); }
-static inline ism_interval iv_neg_rc(ism_interval a, double c) { (void)c; return iv_neg(a); }
-static inline ism_interval iv_square_rc(ism_interval a, double c) { (void)c; return iv_square(a); }
-static inline ism_interval iv_abs_rc(ism_interval a, double c) { (void)c; return iv_abs(a); }
-static inline ism_interval iv_copy_rc(ism_interval a, double c) { (void)c; return a; }
+/* a + b = [al + bl, ah + bh]; a - b = [al - bh, ah - bl] = [al + bnh, -(anh + bl)]. */
+KERNEL_RR(k_add, ol[j] = sane(al[j] + bl[j]); onh[j] = sane(anh[j] + bnh[j]);)
+KERNEL_RR(k_sub, ol[j] = sane(al[j] + bnh[j]); onh[j] = sane(anh[j] + bl[j]);)
+KERNEL_RC(k_add_c, ol[j] = sane(al[j] + c); onh[j] = sane(anh[j] - c);)
+/* c - a = [c - ah, c - al] = [c + anh, -(al - c)]. */
+KERNEL_RC(k_c_sub, ol[j] = sane(c + anh[j]); onh[j] = sane(al[j] - c);)
+/* c > 0: [al c, ah c] = [al c, -(anh c)]; c < 0: [ah c, al c] = [anh (-c), -(al (-c))]. */
+KERNEL_RC(k_mul_cpos, ol[j] = sane(al[j] * c); onh[j] = sane(anh[j] * c);)
+KERNEL_RC(k_mul_cneg, ol[j] = sane(anh[j] * -c); onh[j] = sane(al[j] * -c);)
+KERNEL_RC(k_neg, ol[j] = anh[j]; onh[j] = al[j]; (void)c;)
+KERNEL_RC(k_copy, ol[j] = al[j]; onh[j] = anh[j]; (void)c;)
+KERNEL_RR(k_min, ol[j] = ism_min(al[j], bl[j]); onh[j] = ism_max(anh[j], bnh[j]);)
+KERNEL_RR(k_max, ol[j] = ism_max(al[j], bl[j]); onh[j] = ism_min(anh[j], bnh[j]);)
+KERNEL_RC(k_min_c, ol[j] = ism_min(al[j], c); onh[j] = ism_max(anh[j], -c);)
+KERNEL_RC(k_max_c, ol[j] = ism_max(al[j], c); onh[j] = ism_min(anh[j], -c);)
 
-IV_KERNEL_RR(k_add, iv_add)
-IV_KERNEL_RR(k_sub, iv_sub)
-IV_KERNEL_RR(k_mul, iv_mul)
-IV_KERNEL_RR(k_div, iv_div)
-IV_KERNEL_RR(k_min, iv_min)
-IV_KERNEL_RR(k_max, iv_max)
-IV_KERNEL_RC(k_add_c, iv_add_c)
-IV_KERNEL_RC(k_c_sub, iv_c_sub_rc)
-IV_KERNEL_RC(k_mul_cpos, iv_mul_cpos)
-IV_KERNEL_RC(k_mul_cneg, iv_mul_cneg)
-IV_KERNEL_RC(k_div_c, iv_div_c)
-IV_KERNEL_RC(k_c_div, iv_c_div_rc)
-IV_KERNEL_RC(k_min_c, iv_min_rc)
-IV_KERNEL_RC(k_max_c, iv_max_rc)
-IV_KERNEL_RC(k_neg, iv_neg_rc)
-IV_KERNEL_RC(k_square, iv_square_rc)
-IV_KERNEL_RC(k_abs, iv_abs_rc)
-IV_KERNEL_RC(k_copy, iv_copy_rc)
+/* a^2: the lower bound is the square of the least |x| over a, max(al, -ah, 0) = max(al,
+ * anh, 0) (iv_square's choice, without a branch); the upper bound from -al*al and -ah*ah
+ * rounded down. */
+static ALWAYS_INLINE ism_interval square_lane(double l, double nh)
+{
+    double h = -nh, least = ism_max(ism_max(l, nh), 0.0);
+    return iv(least * least, ism_min(l * -l, nh * h));
+}
+KERNEL_RC(k_square, ism_interval r = square_lane(al[j], anh[j]); ol[j] = r.lo; onh[j] = r.hi;
+          (void)c;)
 
-/* The operations without a branch-free form, box by box. */
-static ism_interval scalar_op(const ism_instr *in, ism_interval a)
+/* a * b: the least of the four products for lo, the least of their negations for nh (a
+ * product 0 * inf counts as 0, as in iv_mul). */
+static ALWAYS_INLINE ism_interval mul_lane(double al, double anh, double bl, double bnh)
+{
+    double ah = -anh, bh = -bnh;
+    return iv(min4(mul0(al, bl), mul0(al, bh), mul0(ah, bl), mul0(ah, bh)),
+              min4(mul0(al, -bl), mul0(al, bnh), mul0(anh, bl), mul0(ah, bnh)));
+}
+KERNEL_RR(k_mul, ism_interval r = mul_lane(al[j], anh[j], bl[j], bnh[j]); ol[j] = r.lo;
+          onh[j] = r.hi;)
+
+/* ---- the other operations: box by box with interval_ops.h, in round-to-nearest ---- */
+
+static ism_interval nearest_op(const ism_instr *in, ism_interval a, ism_interval b)
 {
     switch (in->op) {
     case ISM_OP_MUL_RC: return iv_mul_c(a, in->imm);
+    case ISM_OP_DIV_RR: return iv_div(a, b);
+    case ISM_OP_DIV_RC: return iv_div_c(a, in->imm);
+    case ISM_OP_DIV_CR: return iv_c_div(in->imm, a);
+    case ISM_OP_ABS: return iv_abs(a);
     case ISM_OP_POWI: return iv_powi(a, in->b);
     case ISM_OP_POWC: return iv_powc(a, in->imm);
     case ISM_OP_SQRT: return iv_sqrt(a);
@@ -100,86 +145,107 @@ static ism_interval scalar_op(const ism_instr *in, ism_interval a)
     }
 }
 
-static void run_scalar(const ism_instr *in, double *ol, double *oh, const double *al,
-                       const double *ah, size_t m)
+static void run_nearest(const ism_instr *in, double *ol, double *onh, const double *al,
+                        const double *anh, const double *bl, const double *bnh, size_t m,
+                        rounding mode)
 {
+    rounding_set(rounding_nearest(mode));
     for (size_t j = 0; j < m; j++) {
-        ism_interval r = ism_iv_sane(scalar_op(in, iv(al[j], ah[j])));
+        ism_interval r = ism_iv_sane(nearest_op(in, iv(al[j], -anh[j]), iv(bl[j], -bnh[j])));
         ol[j] = r.lo;
-        oh[j] = r.hi;
+        onh[j] = -r.hi;
     }
+    rounding_set(rounding_down(mode));
 }
 
 /* One instruction over the first m lanes (a multiple of LANES) of every register. */
-static ALWAYS_INLINE void chunk_op(const ism_instr *in, double *lo, double *hi, size_t m)
+static ALWAYS_INLINE void chunk_op(const ism_instr *in, double *lo, double *nh, size_t m,
+                                   rounding mode)
 {
-    double *ol = lo + (size_t)in->out * ISM_IV_CHUNK, *oh = hi + (size_t)in->out * ISM_IV_CHUNK;
-    const double *al = lo + (size_t)in->a * ISM_IV_CHUNK, *ah = hi + (size_t)in->a * ISM_IV_CHUNK;
+    double *ol = lo + (size_t)in->out * ISM_IV_CHUNK, *onh = nh + (size_t)in->out * ISM_IV_CHUNK;
+    const double *al = lo + (size_t)in->a * ISM_IV_CHUNK, *anh = nh + (size_t)in->a * ISM_IV_CHUNK;
     size_t b = (size_t)(ism_op_has_reg_b(in->op) ? in->b : in->a) * ISM_IV_CHUNK;
-    const double *bl = lo + b, *bh = hi + b;
+    const double *bl = lo + b, *bnh = nh + b;
     const double c = in->imm;
     switch (in->op) {
     case ISM_OP_CONST:
-        for (size_t j = 0; j < m; j++)
-            ol[j] = oh[j] = c;
+        for (size_t j = 0; j < m; j++) {
+            ol[j] = c;
+            onh[j] = -c;
+        }
         break;
-    case ISM_OP_COPY: k_copy(ol, oh, al, ah, c, m); break;
-    case ISM_OP_ADD_RR: k_add(ol, oh, al, ah, bl, bh, m); break;
-    case ISM_OP_ADD_RC: k_add_c(ol, oh, al, ah, c, m); break;
-    case ISM_OP_SUB_RR: k_sub(ol, oh, al, ah, bl, bh, m); break;
-    case ISM_OP_SUB_CR: k_c_sub(ol, oh, al, ah, c, m); break;
-    case ISM_OP_MUL_RR: k_mul(ol, oh, al, ah, bl, bh, m); break;
+    case ISM_OP_COPY: k_copy(ol, onh, al, anh, c, m); break;
+    case ISM_OP_ADD_RR: k_add(ol, onh, al, anh, bl, bnh, m); break;
+    case ISM_OP_ADD_RC: k_add_c(ol, onh, al, anh, c, m); break;
+    case ISM_OP_SUB_RR: k_sub(ol, onh, al, anh, bl, bnh, m); break;
+    case ISM_OP_SUB_CR: k_c_sub(ol, onh, al, anh, c, m); break;
+    case ISM_OP_MUL_RR: k_mul(ol, onh, al, anh, bl, bnh, m); break;
     case ISM_OP_MUL_RC:
         if (c > 0.0)
-            k_mul_cpos(ol, oh, al, ah, c, m);
+            k_mul_cpos(ol, onh, al, anh, c, m);
         else if (c < 0.0)
-            k_mul_cneg(ol, oh, al, ah, c, m);
+            k_mul_cneg(ol, onh, al, anh, c, m);
         else
-            run_scalar(in, ol, oh, al, ah, m);
+            run_nearest(in, ol, onh, al, anh, bl, bnh, m, mode);
         break;
-    case ISM_OP_DIV_RR: k_div(ol, oh, al, ah, bl, bh, m); break;
-    case ISM_OP_DIV_RC: k_div_c(ol, oh, al, ah, c, m); break;
-    case ISM_OP_DIV_CR: k_c_div(ol, oh, al, ah, c, m); break;
-    case ISM_OP_MIN_RR: k_min(ol, oh, al, ah, bl, bh, m); break;
-    case ISM_OP_MIN_RC: k_min_c(ol, oh, al, ah, c, m); break;
-    case ISM_OP_MAX_RR: k_max(ol, oh, al, ah, bl, bh, m); break;
-    case ISM_OP_MAX_RC: k_max_c(ol, oh, al, ah, c, m); break;
-    case ISM_OP_NEG: k_neg(ol, oh, al, ah, c, m); break;
-    case ISM_OP_SQUARE: k_square(ol, oh, al, ah, c, m); break;
-    case ISM_OP_ABS: k_abs(ol, oh, al, ah, c, m); break;
-    default: run_scalar(in, ol, oh, al, ah, m); break;
+    case ISM_OP_MIN_RR: k_min(ol, onh, al, anh, bl, bnh, m); break;
+    case ISM_OP_MIN_RC: k_min_c(ol, onh, al, anh, c, m); break;
+    case ISM_OP_MAX_RR: k_max(ol, onh, al, anh, bl, bnh, m); break;
+    case ISM_OP_MAX_RC: k_max_c(ol, onh, al, anh, c, m); break;
+    case ISM_OP_NEG: k_neg(ol, onh, al, anh, c, m); break;
+    case ISM_OP_SQUARE: k_square(ol, onh, al, anh, c, m); break;
+    default: run_nearest(in, ol, onh, al, anh, bl, bnh, m, mode); break;
     }
 }
 
+/* ---- packing ---- */
+
 static ALWAYS_INLINE void pack_box(const double *restrict b, double *restrict lo,
-                                   double *restrict hi, size_t j)
+                                   double *restrict nh, size_t j)
 {
     double l = b[2 * j], h = b[2 * j + 1];
     lo[j] = l <= h ? l : -INFINITY;
-    hi[j] = l <= h ? h : INFINITY;
+    nh[j] = l <= h ? -h : -INFINITY;
+}
+
+/* Four boxes' bounds (l0 h0 l1 h1 | l2 h2 l3 h3) split into lows and negated highs. */
+typedef double vec4 __attribute__((vector_size(4 * sizeof(double))));
+typedef long long lvec4 __attribute__((vector_size(4 * sizeof(long long))));
+static ALWAYS_INLINE void pack_four(const double *b, double *lo, double *nh)
+{
+    vec4 p, q;
+    memcpy(&p, b, sizeof p);
+    memcpy(&q, b + 4, sizeof q);
+    vec4 l = __builtin_shuffle(p, q, (lvec4){ 0, 2, 4, 6 });
+    vec4 h = __builtin_shuffle(p, q, (lvec4){ 1, 3, 5, 7 });
+    lvec4 ok = l <= h;
+    vec4 whole = { -INFINITY, -INFINITY, -INFINITY, -INFINITY };
+    vec4 vl = (vec4)(((lvec4)l & ok) | ((lvec4)whole & ~ok));
+    vec4 vnh = (vec4)(((lvec4)-h & ok) | ((lvec4)whole & ~ok));
+    memcpy(lo, &vl, sizeof vl);
+    memcpy(nh, &vnh, sizeof vnh);
 }
 
 /* Box coordinates into a register: n lanes, then lanes n..m-1 repeat the last box. The
- * boxes are read as a flat array of bounds (lo, hi, lo, hi, ...), whole vectors first (so
- * gcc vectorises without a remainder loop), then the rest. */
-static ALWAYS_INLINE void pack(const ism_interval *v, double *restrict lo, double *restrict hi,
+ * boxes are read as a flat array of bounds (lo, hi, lo, hi, ...), four at a time, then
+ * the rest. */
+static ALWAYS_INLINE void pack(const ism_interval *v, double *restrict lo, double *restrict nh,
                                size_t n, size_t m)
 {
     const double *restrict b = &v[0].lo;
     size_t whole = n / LANES * LANES;
-    WHOLE_VECTORS(whole);
-    for (size_t j = 0; j < whole; j++)
-        pack_box(b, lo, hi, j);
+    for (size_t j = 0; j < whole; j += LANES)
+        pack_four(b + 2 * j, lo + j, nh + j);
     for (size_t j = whole; j < n; j++)
-        pack_box(b, lo, hi, j);
+        pack_box(b, lo, nh, j);
     for (size_t j = n; j < m; j++) {
         lo[j] = lo[n - 1];
-        hi[j] = hi[n - 1];
+        nh[j] = nh[n - 1];
     }
 }
 
 /* The result register's first n lanes into out, likewise. */
-static ALWAYS_INLINE void unpack(const double *restrict lo, const double *restrict hi,
+static ALWAYS_INLINE void unpack(const double *restrict lo, const double *restrict nh,
                                  ism_interval *out, size_t n)
 {
     double *restrict o = &out[0].lo;
@@ -187,40 +253,44 @@ static ALWAYS_INLINE void unpack(const double *restrict lo, const double *restri
     WHOLE_VECTORS(whole);
     for (size_t j = 0; j < whole; j++) {
         o[2 * j] = lo[j];
-        o[2 * j + 1] = hi[j];
+        o[2 * j + 1] = -nh[j];
     }
     for (size_t j = whole; j < n; j++) {
         o[2 * j] = lo[j];
-        o[2 * j + 1] = hi[j];
+        o[2 * j + 1] = -nh[j];
     }
 }
 
 /* n <= ISM_IV_CHUNK boxes through the whole tape. */
-static ALWAYS_INLINE void chunk(const ism_tape *t, double *lo, double *hi,
+static ALWAYS_INLINE void chunk(const ism_tape *t, double *lo, double *nh,
                                 const ism_interval *x, const ism_interval *y,
-                                const ism_interval *z, ism_interval *out, size_t n)
+                                const ism_interval *z, ism_interval *out, size_t n,
+                                rounding mode)
 {
     size_t m = (n + LANES - 1) / LANES * LANES;
-    pack(x, lo + ISM_REG_X * ISM_IV_CHUNK, hi + ISM_REG_X * ISM_IV_CHUNK, n, m);
-    pack(y, lo + ISM_REG_Y * ISM_IV_CHUNK, hi + ISM_REG_Y * ISM_IV_CHUNK, n, m);
-    pack(z, lo + ISM_REG_Z * ISM_IV_CHUNK, hi + ISM_REG_Z * ISM_IV_CHUNK, n, m);
+    pack(x, lo + ISM_REG_X * ISM_IV_CHUNK, nh + ISM_REG_X * ISM_IV_CHUNK, n, m);
+    pack(y, lo + ISM_REG_Y * ISM_IV_CHUNK, nh + ISM_REG_Y * ISM_IV_CHUNK, n, m);
+    pack(z, lo + ISM_REG_Z * ISM_IV_CHUNK, nh + ISM_REG_Z * ISM_IV_CHUNK, n, m);
     for (size_t i = 0; i < t->len; i++)
-        chunk_op(&t->code[i], lo, hi, m);
+        chunk_op(&t->code[i], lo, nh, m, mode);
     size_t r = (size_t)t->result * ISM_IV_CHUNK;
-    unpack(lo + r, hi + r, out, n);
+    unpack(lo + r, nh + r, out, n);
 }
 
+/* Every chunk in round-down mode (the caller's mode restored after), compiled for AVX2
+ * and for the x86-64 baseline, chosen at run time (see eval_double.c). */
 #define CHUNKS_BODY                                                                     \
+    rounding mode = rounding_get();                                                     \
+    rounding_set(rounding_down(mode));                                                  \
     for (size_t done = 0; done < n; done += ISM_IV_CHUNK) {                             \
         size_t k = n - done < ISM_IV_CHUNK ? n - done : ISM_IV_CHUNK;                   \
-        chunk(t, lo, hi, x + done, y + done, z + done, out + done, k);                  \
-    }
+        chunk(t, lo, nh, x + done, y + done, z + done, out + done, k, mode);            \
+    }                                                                                   \
+    rounding_set(mode);
 
-/* Every chunk, compiled for AVX2 and for the x86-64 baseline, chosen at run time (see
- * eval_double.c). */
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 __attribute__((target("avx2")))
-static void chunks_avx2(const ism_tape *t, double *lo, double *hi, const ism_interval *x,
+static void chunks_avx2(const ism_tape *t, double *lo, double *nh, const ism_interval *x,
                         const ism_interval *y, const ism_interval *z, ism_interval *out,
                         size_t n)
 {
@@ -229,7 +299,7 @@ static void chunks_avx2(const ism_tape *t, double *lo, double *hi, const ism_int
 #define HAVE_AVX2_PATH 1
 #endif
 
-static void chunks_base(const ism_tape *t, double *lo, double *hi, const ism_interval *x,
+static void chunks_base(const ism_tape *t, double *lo, double *nh, const ism_interval *x,
                         const ism_interval *y, const ism_interval *z, ism_interval *out,
                         size_t n)
 {

@@ -26,7 +26,7 @@ struct ism_eval_ws {
     double *batch;            /* nregs * ISM_EVAL_BATCH doubles, register-major */
     double *scalar;           /* nregs */
     ism_interval *iv;         /* nregs */
-    double *iv_lo, *iv_hi;    /* nregs * ISM_IV_CHUNK each: batched interval bounds */
+    double *iv_lo, *iv_hi;    /* nregs * ISM_IV_CHUNK each: batched lower bounds, negated upper */
     ism_dual *dual;           /* nregs */
     ism_jet *jet;             /* nregs */
     uint8_t *choice;          /* code_cap: min/max branch proved by the last interval pass */

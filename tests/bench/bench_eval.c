@@ -293,7 +293,8 @@ int main(void)
         printf("%s interval %.6g\n", sf->name, time_interval(t, ws, sf->half, &width));
         printf("%s ivbatch %.6g\n", sf->name,
                time_interval_batch(t, ws, sf->half, &width_batch));
-        printf("%s ivsame %d\n", sf->name, width_batch == width);
+        /* The batch rounds each bound correctly outward, the single box by one ulp more. */
+        printf("%s ivtighter %d\n", sf->name, width_batch <= width);
         tnode *root = tree_of(t, t->len - 1);
         printf("%s tree %.6g\n", sf->name, time_tree(root, &p));
         fflush(stdout);

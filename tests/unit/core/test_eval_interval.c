@@ -106,8 +106,14 @@ Test(eval_interval, outward_rounding_moves_at_least_one_ulp)
     cr_expect_eq(up1(INFINITY), INFINITY);
 }
 
-/* The batched interval evaluator gives exactly the single-box bounds, box by box, for
- * chunks of every size (also past its internal chunk and with a partial last group). */
+/* Relative slack of the batch's width over the single box's: the batch rounds each bound
+ * correctly outward (the single box one ulp further), so it is never wider but for the
+ * last bits of libm results (sin, exp, ...) taken on slightly different arguments. */
+#define BATCH_WIDTH_SLACK 1e-9
+
+/* The batched interval evaluator, for chunks of every size (also past its internal chunk
+ * and with a partial last group): box by box an interval as tight as the single-box one
+ * (within BATCH_WIDTH_SLACK), finite where that one is, and holding every sample of f. */
 static void check_batch_matches_single(const char *name, const ism_tape *t, const double *within,
                                        size_t nboxes, uint64_t seed)
 {
@@ -129,12 +135,23 @@ static void check_batch_matches_single(const char *name, const ism_tape *t, cons
         done += n;
         step = step * 3 + 1; /* 1, 4, 13, 40, 121, ... */
     }
+    double x[PTS], y[PTS], z[PTS], f[PTS];
     for (size_t b = 0; b < nboxes; b++) {
         ism_interval r = ism_eval_interval(t, ws, bx[b], by[b], bz[b]);
         cr_assert(sane(out[b]), "%s: batch box %zu [%g, %g]", name, b, out[b].lo, out[b].hi);
-        cr_assert(r.lo == out[b].lo && r.hi == out[b].hi,
+        cr_assert(out[b].lo >= r.lo - BATCH_WIDTH_SLACK * (r.hi - r.lo)
+                      && out[b].hi <= r.hi + BATCH_WIDTH_SLACK * (r.hi - r.lo),
                   "%s: box %zu single [%.17g, %.17g] batch [%.17g, %.17g]", name, b, r.lo, r.hi,
                   out[b].lo, out[b].hi);
+        if (b % 8 != 0)
+            continue;
+        box one = { bx[b], by[b], bz[b] };
+        sample_box(&rng, &one, x, y, z);
+        ism_eval_batch(t, ws, x, y, z, f, PTS);
+        for (int i = 0; i < PTS; i++)
+            cr_assert(isnan(f[i]) || (out[b].lo <= f[i] && f[i] <= out[b].hi),
+                      "%s: batch box %zu [%.17g, %.17g] misses f = %.17g", name, b, out[b].lo,
+                      out[b].hi, f[i]);
     }
     free(bx);
     free(by);
@@ -143,7 +160,7 @@ static void check_batch_matches_single(const char *name, const ism_tape *t, cons
     ism_eval_ws_free(ws);
 }
 
-Test(eval_interval, batch_equals_single_boxes)
+Test(eval_interval, batch_within_single_boxes)
 {
     size_t nboxes = test_scaled(1500);
     for (size_t s = 0; s < TEST_NSURFACES; s++) {
