@@ -98,26 +98,36 @@ static bool link_edge_ends(cut_state *s, uint32_t i, uint32_t a, uint32_t b)
     return true;
 }
 
+uint32_t cut_find_cut_edge(const cut_state *s, uint32_t a, uint32_t b)
+{
+    if (a >= s->cap_ehead)
+        return NONE;
+    for (uint32_t end = s->ehead[a]; end != NONE; end = s->enext[end]) {
+        const ism_cut_edge *e = &s->c->edges[end / 2];
+        if ((end % 2 ? e->a : e->b) == b)
+            return end / 2;
+    }
+    return NONE;
+}
+
 bool cut_add_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t fn)
 {
-    bool added;
-    uint32_t i = ism_key_map_add(&s->onmap, cut_edge_key(a, b), &added);
-    if (i == ISM_KEY_NONE)
-        return false;
-    if (!added)
+    if (cut_find_cut_edge(s, a, b) != NONE)
         return true;
-    if (!ism_grow((void **)&s->c->edges, &s->cap_edges, (size_t)i + 1, sizeof *s->c->edges, CUT_FIRST))
+    size_t i = s->c->nedges;
+    if (i >= UINT32_MAX / 2 ||
+        !ism_grow((void **)&s->c->edges, &s->cap_edges, i + 1, sizeof *s->c->edges, CUT_FIRST))
         return false;
     s->c->edges[i] = (ism_cut_edge){a, b, fn, {ISM_CUT_NO_BRANCH, ISM_CUT_NO_BRANCH}};
-    s->c->nedges = (size_t)i + 1;
-    return link_edge_ends(s, i, a, b);
+    s->c->nedges = i + 1;
+    return link_edge_ends(s, (uint32_t)i, a, b);
 }
 
 bool cut_split_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t v, uint32_t fn)
 {
-    uint32_t e = ism_key_map_find(&s->onmap, cut_edge_key(a, b));
+    uint32_t e = cut_find_cut_edge(s, a, b);
     uint32_t br[2] = {ISM_CUT_NO_BRANCH, ISM_CUT_NO_BRANCH};
-    if (e != ISM_KEY_NONE) {
+    if (e != NONE) {
         s->c->edges[e].fn = NONE;
         memcpy(br, s->c->edges[e].branch, sizeof br);
     }
@@ -127,8 +137,8 @@ bool cut_split_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t v, uint32
 
 bool cut_set_branches(cut_state *s, uint32_t a, uint32_t b, const uint32_t br[2])
 {
-    uint32_t e = ism_key_map_find(&s->onmap, cut_edge_key(a, b));
-    if (e == ISM_KEY_NONE)
+    uint32_t e = cut_find_cut_edge(s, a, b);
+    if (e == NONE)
         return false;
     memcpy(s->c->edges[e].branch, br, sizeof s->c->edges[e].branch);
     return true;
@@ -289,11 +299,11 @@ static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
         len2 += (b[c] - a[c]) * (b[c] - a[c]);
     }
     uint32_t e = cut_vcurve_of(s, u) == NONE || cut_vcurve_of(s, w) == NONE
-                     ? ISM_KEY_NONE
-                     : ism_key_map_find(&s->onmap, cut_edge_key(u, w));
-    uint32_t j = e == ISM_KEY_NONE ? NONE : s->c->edges[e].fn;
+                     ? NONE
+                     : cut_find_cut_edge(s, u, w);
+    uint32_t j = e == NONE ? NONE : s->c->edges[e].fn;
     for (int c = 0; c < 2; c++) /* when u-w lies on a crease: its two branches */
-        s->ev->pair[c] = e == ISM_KEY_NONE ? ISM_CUT_NO_BRANCH : s->c->edges[e].branch[c];
+        s->ev->pair[c] = e == NONE ? ISM_CUT_NO_BRANCH : s->c->edges[e].branch[c];
     double len = fmax(sqrt(len2), fmax(s->reach[u], s->reach[w]));
     if ((j != NONE || (!refine_on_face(s, k, a, b, len, p) &&
                        !refine_across(s, k, a, b, len, p))) &&
@@ -675,7 +685,6 @@ bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
 {
     cut_state s = {.ev = ev, .m = m, .c = c, .tol = tol, .slot = SIZE_MAX};
     ism_key_map_init(&s.split);
-    ism_key_map_init(&s.onmap);
     ism_key_map_init(&s.zero);
     bool ok = parents_init(&s);
     for (size_t k = 0; k < ev->nfns && ok; k++)
@@ -687,7 +696,6 @@ bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
     if (!ok)
         free(s.parent);
     ism_key_map_free(&s.split);
-    ism_key_map_free(&s.onmap);
     ism_key_map_free(&s.zero);
     free(s.zero_edge);
     free(s.split_v);

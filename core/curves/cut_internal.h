@@ -41,7 +41,6 @@ typedef struct cut_state {
     ism_key_map split;       /* edge key -> index into split_v */
     uint32_t *split_v;
     size_t cap_split;
-    ism_key_map onmap;       /* cut edge key -> index into c->edges (fn CUT_NONE: replaced) */
     uint32_t *vcurve;        /* per vertex: the first function it lies on, CUT_NONE when none */
     size_t cap_vcurve;
     size_t cap_edges;
@@ -85,6 +84,11 @@ uint32_t *cut_parents_copy(const cut_state *s, size_t nt);
 /* Notes that vertex v lies on curve fn (the first such curve is kept). */
 bool cut_set_vcurve(cut_state *s, uint32_t v, uint32_t fn);
 uint32_t cut_vcurve_of(const cut_state *s, uint32_t v);
+
+/* The cut edge a-b (either way round; fn CUT_NONE: replaced) by a walk of a's list, or
+ * CUT_NONE. (A hash of all cut edges, probed at random, cost a tenth of the benchmark's cut;
+ * a vertex has a handful.) */
+uint32_t cut_find_cut_edge(const cut_state *s, uint32_t a, uint32_t b);
 
 /* Records edge a-b as lying on curve fn (once; listed at both ends: ehead / enext). */
 bool cut_add_cut_edge(cut_state *s, uint32_t a, uint32_t b, uint32_t fn);
