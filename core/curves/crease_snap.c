@@ -27,30 +27,6 @@ typedef struct snap_star {
     size_t n;
 } snap_star;
 
-/* Triangle tv's corners, v's taken at pv. */
-static void corners(const ism_mesh *m, const uint32_t *tv, uint32_t v, const double *pv,
-                    const double *p[3])
-{
-    for (int i = 0; i < 3; i++)
-        p[i] = tv[i] == v ? pv : m->pos + 3 * (size_t)tv[i];
-}
-
-static void tri_normal(const ism_mesh *m, const uint32_t *tv, uint32_t v, const double *pv,
-                       double n[3])
-{
-    const double *p[3];
-    corners(m, tv, v, pv, p);
-    double a[3], c[3];
-    for (int k = 0; k < 3; k++) {
-        a[k] = p[1][k] - p[0][k];
-        c[k] = p[2][k] - p[0][k];
-    }
-    n[0] = a[1] * c[2] - a[2] * c[1];
-    n[1] = a[2] * c[0] - a[0] * c[2];
-    n[2] = a[0] * c[1] - a[1] * c[0];
-    ism_normalise3(n);
-}
-
 /* Whether every edge from v is in exactly two of the star's triangles (a closed fan: not at
  * the box, not on a non-manifold edge). */
 static bool closed_fan(const ism_mesh *m, const snap_star *st, uint32_t v)
@@ -109,8 +85,10 @@ static bool try_snap(cut_state *s, ism_branches *b, uint32_t *label, const snap_
     for (size_t i = 0; i < st->n; i++) {
         const uint32_t *tv = m->tri + 3 * (size_t)st->tri[i];
         double n0[3], n1[3];
-        tri_normal(m, tv, v, m->pos + 3 * (size_t)v, n0);
-        tri_normal(m, tv, v, p, n1);
+        cut_tri_normal(m, tv, v, m->pos + 3 * (size_t)v, n0);
+        cut_tri_normal(m, tv, v, p, n1);
+        ism_normalise3(n0);
+        ism_normalise3(n1);
         if (!(ism_dot3(n0, n1) >= CREASE_SNAP_TURN_COS))
             return false;
     }

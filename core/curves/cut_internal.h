@@ -154,6 +154,11 @@ bool cut_on_no_other(const cut_state *s, uint32_t v, size_t k);
  * free it). False when out of memory. */
 bool cut_ring_triangles(const ism_mesh *m, uint32_t v, uint32_t **out, size_t *n);
 
+/* The (unnormalised) normal of triangle tv, by its winding, with its corner `moved` taken
+ * at p. */
+void cut_tri_normal(const ism_mesh *m, const uint32_t *tv, uint32_t moved, const double *p,
+                    double n[3]);
+
 /* Whether u may move to p: its triangles among tris (but those with vertex skip; NONE for
  * none) keep their orientation, and (need_node) g_k's signs round it change at least four
  * times once u is on the curve. */

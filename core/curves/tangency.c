@@ -184,8 +184,8 @@ bool cut_ring_triangles(const ism_mesh *m, uint32_t v, uint32_t **out, size_t *n
     return ok;
 }
 
-static void tri_normal(const ism_mesh *m, const uint32_t *tv, uint32_t moved, const double *p,
-                       double n[3])
+void cut_tri_normal(const ism_mesh *m, const uint32_t *tv, uint32_t moved, const double *p,
+                    double n[3])
 {
     const double *q[3];
     for (int i = 0; i < 3; i++)
@@ -211,8 +211,8 @@ bool cut_can_move(cut_state *s, const uint32_t *tris, size_t nt, uint32_t u,
         if (at < 0 || tv[0] == skip || tv[1] == skip || tv[2] == skip)
             continue;
         double a[3], b[3];
-        tri_normal(m, tv, NONE, NULL, a);
-        tri_normal(m, tv, u, p, b);
+        cut_tri_normal(m, tv, NONE, NULL, a);
+        cut_tri_normal(m, tv, u, p, b);
         double ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
         if (!(ab > TANG_MIN_COS * sqrt(ism_sqdist3(a, (double[3]){0, 0, 0}) *
                                        ism_sqdist3(b, (double[3]){0, 0, 0}))))

@@ -63,6 +63,18 @@ static const float *corner_normal(const ism_mesh *m, const float *cn, size_t t, 
     return cn + 9 * t + 3 * i;
 }
 
+/* m cut along f's crease (Newton to a thousandth of the crease tolerance × diag). */
+static void cut_crease(const ism_tape *t, double diag, ism_mesh *m, ism_cut *cut)
+{
+    ism_cut_fn crease;
+    cr_assert(ism_cut_crease_fn(t, &crease));
+    ism_cut_eval ev;
+    cr_assert(ism_cut_eval_init(&ev, t, &crease, 1));
+    memset(cut, 0, sizeof *cut);
+    cr_assert(ism_cut_mesh(&ev, 1e-3 * CREASE_TOL_REL * diag, m, cut));
+    ism_cut_eval_free(&ev);
+}
+
 static void mesh_crease(const pf_surface *s, const double box[6], crease_run *r)
 {
     ism_tape *t = pf_compile(s);
@@ -82,14 +94,8 @@ static void mesh_crease(const pf_surface *s, const double box[6], crease_run *r)
     r->ntris = m.ntris, r->euler = p.euler, r->components = p.components;
     r->missed = (size_t)st.error_missed_nodes;
     r->diag = sqrt(3) * (box[3] - box[0]);
-    ism_cut_fn crease;
-    cr_assert(ism_cut_crease_fn(t, &crease));
-    ism_cut_eval ev;
-    cr_assert(ism_cut_eval_init(&ev, t, &crease, 1));
     ism_cut cut;
-    memset(&cut, 0, sizeof cut);
-    cr_assert(ism_cut_mesh(&ev, 1e-3 * CREASE_TOL_REL * r->diag, &m, &cut));
-    ism_cut_eval_free(&ev);
+    cut_crease(t, r->diag, &m, &cut);
     float *cn = malloc(9 * m.ntris * sizeof *cn);
     cr_assert(ism_crease_corner_normals(t, &m, &cut, cn));
     const double cos_spheres = (1 - SEP * SEP + RAD * RAD) / (2 * RAD), want = acos(cos_spheres) * 180 / M_PI;
@@ -221,14 +227,8 @@ static void lattice_crease(int w)
     ism_locus l;
     pf_run_surface_bounded(t, box, 3, LATTICE_DEPTH, LATTICE_E, &m, &l);
     double diag = sqrt(3) * (box[3] - box[0]), r = sqrt(1 - 0.25 * LATTICE_SEP * LATTICE_SEP);
-    ism_cut_fn crease;
-    cr_assert(ism_cut_crease_fn(t, &crease));
-    ism_cut_eval ev;
-    cr_assert(ism_cut_eval_init(&ev, t, &crease, 1));
     ism_cut cut;
-    memset(&cut, 0, sizeof cut);
-    cr_assert(ism_cut_mesh(&ev, 1e-3 * CREASE_TOL_REL * diag, &m, &cut));
-    ism_cut_eval_free(&ev);
+    cut_crease(t, diag, &m, &cut);
     uint8_t *deg = calloc(m.nverts, 1);
     double arcs = 0, chords = 0, short_by = 0, worst = 0;
     for (size_t i = 0; i < cut.nedges; i++) {
