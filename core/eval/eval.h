@@ -36,9 +36,10 @@ void ism_eval_batch(const ism_tape *t, ism_eval_ws *ws, const double *x, const d
 ism_interval ism_eval_interval(const ism_tape *t, ism_eval_ws *ws, ism_interval x,
                                ism_interval y, ism_interval z);
 
-/* The intervals of n boxes at once: out[i] encloses f over x[i] × y[i] × z[i], the same
- * bounds ism_eval_interval gives for that box, computed in vectorised loops over the boxes
- * (added for the octree's eight children; several times faster per box). */
+/* The intervals of n boxes at once: out[i] encloses f over x[i] × y[i] × z[i] (outward
+ * rounded), no wider than ism_eval_interval's for that box but for the last bits of libm
+ * results (its bounds are rounded outward exactly, the single box's one ulp further),
+ * computed in vectorised loops over the boxes. The caller's rounding mode is kept. */
 void ism_eval_interval_batch(const ism_tape *t, ism_eval_ws *ws, const ism_interval *x,
                              const ism_interval *y, const ism_interval *z, ism_interval *out,
                              size_t n);

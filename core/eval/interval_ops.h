@@ -9,9 +9,9 @@
  * correctly rounded) are pushed by four ulps. A NaN bound (inf - inf, 0 * inf) never
  * escapes: ism_iv_sane turns it into the matching infinity.
  *
- * The common operations are written without branches (selects only) so that the batched
- * interval evaluator, which runs them lane by lane, vectorises; both evaluators share them
- * and so compute the same bounds. */
+ * The common operations are written without branches (selects only). The batched interval
+ * evaluator rounds by the rounding mode instead and uses these for its box-by-box operations
+ * (libm functions, division, powers, abs) only. */
 #ifndef ISM_INTERVAL_OPS_H
 #define ISM_INTERVAL_OPS_H
 
