@@ -28,13 +28,19 @@ static void mesh_of(const ism_tape *t, const double box[6], int dmax, double max
     cr_assert_eq(ism_polygonise(t, &o, m, st, &err), ISM_POLY_OK, "%s", err.message);
 }
 
+/* n bytes at p and q equal (either may be NULL when n is 0). */
+static bool same_bytes(const void *p, const void *q, size_t n)
+{
+    return n == 0 || memcmp(p, q, n) == 0;
+}
+
 static bool same_mesh(const ism_mesh *a, const ism_mesh *b)
 {
     return a->nverts == b->nverts && a->ntris == b->ntris && a->nsegs == b->nsegs &&
-           memcmp(a->pos, b->pos, a->nverts * 3 * sizeof *a->pos) == 0 &&
-           memcmp(a->normal, b->normal, a->nverts * 3 * sizeof *a->normal) == 0 &&
-           memcmp(a->tri, b->tri, a->ntris * 3 * sizeof *a->tri) == 0 &&
-           memcmp(a->seg, b->seg, a->nsegs * 2 * sizeof *a->seg) == 0;
+           same_bytes(a->pos, b->pos, a->nverts * 3 * sizeof *a->pos) &&
+           same_bytes(a->normal, b->normal, a->nverts * 3 * sizeof *a->normal) &&
+           same_bytes(a->tri, b->tri, a->ntris * 3 * sizeof *a->tri) &&
+           same_bytes(a->seg, b->seg, a->nsegs * 2 * sizeof *a->seg);
 }
 
 /* The scalar mesh on one thread against the batched one on 1, 2 and 4; returns the
