@@ -180,15 +180,14 @@ static void expect_sheet(const ism_mesh *m, const ism_locus *l, const ism_cut *c
         cr_expect_eq(l->sheets[0].triangles, right_before, "%s: parents' range changed", what);
 }
 
-/* Runs check on expr's tape in base shifted off the lattice by 1e-3 and by 0.37 of a finest
- * cell at depth 6 (depth 5 and only the second under sanitizers). */
-static void in_shifted_boxes(const char *expr, const double base[6],
+/* Runs check on expr's tape at depth d in base shifted off the lattice by 1e-3 and by 0.37
+ * of a finest cell (only the second under sanitizers). */
+static void in_shifted_boxes(const char *expr, const double base[6], int d,
                              void (*check)(const ism_tape *t, const double box[6], int d,
                                            int which))
 {
     const pf_surface s = {expr, NULL, 0, NULL, 0};
     ism_tape *t = pf_compile(&s);
-    int d = 6 - pf_quick();
     for (int which = pf_first_box() ? 1 : 0; which < 2; which++) {
         double box[6];
         pf_sweep_box(base, d, which, box);
@@ -242,9 +241,8 @@ static void touching_spheres(const ism_tape *t, const double box[6], int d, int 
     cr_expect_eq(pf_vertex_cones(&m, point), 2, "%s", what);
     cr_expect_gt(before.needles, 0, "%s: nothing to mend", what);
     cr_expect_eq(after.needles, 0, "%s: %zu needles", what, after.needles);
-    /* measured 25.2° and 23.2° at depth 6; 13.2° at depth 5 (sanitizer runs) */
-    if (!pf_quick())
-        cr_expect_geq(after.min_angle_away, 20.0, "%s: %.2f", what, after.min_angle_away);
+    /* measured 25.2° and 23.2° at depth 6 (21.4° in the sanitizer build's box) */
+    cr_expect_geq(after.min_angle_away, 20.0, "%s: %.2f", what, after.min_angle_away);
     cr_expect_leq(after.centroid_error, before.centroid_error, "%s", what);
     cr_expect_leq(after.vertex_error, fmax(1e-9, before.vertex_error), "%s", what);
     expect_kept(&m, &cut, &k, what);
@@ -257,7 +255,11 @@ static void touching_spheres(const ism_tape *t, const double box[6], int d, int 
 Test(remesh_needles, touching_spheres_keep_topology_and_lose_needles)
 {
     const double base[6] = {-2.2, -1.2, -1.2, 2.2, 1.2, 1.2};
-    in_shifted_boxes(SPHERES, base, touching_spheres);
+    /* depth 6 in every build: at depth 5 (the sanitizer depth until ci6) the quality pass
+     * leaves 16 needles (min angle 0.56°) in the 0.37-cell box since 467be20 gave a lone
+     * point's ball its start radius — a known fault of the pass recorded in the issue's note,
+     * not a property this test may drop; depth 6 costs ~3 s under the sanitizer */
+    in_shifted_boxes(SPHERES, base, 6, touching_spheres);
 }
 
 /* ---- Steiner's Roman surface ---- */
@@ -422,5 +424,5 @@ static void steiner(const ism_tape *t, const double box[6], int d, int which)
 Test(remesh_needles, steiner_double_lines_split_and_topology_kept)
 {
     const double base[6] = {-1, -1, -1, 1, 1, 1};
-    in_shifted_boxes(STEINER, base, steiner);
+    in_shifted_boxes(STEINER, base, 6 - pf_quick(), steiner);
 }
