@@ -135,7 +135,11 @@ class Daemon:
         if self.port is None:
             self.stop()
             raise RuntimeError("isomeshd did not report its port:\n" + self.log())
-        self.wait_ready(timeout=max(1, deadline - time.time()))
+        try:
+            self.wait_ready(timeout=max(1, deadline - time.time()))
+        except RuntimeError:
+            self.stop()  # never leave a daemon behind a failed start
+            raise
         return self
 
     def wait_ready(self, timeout=15):
