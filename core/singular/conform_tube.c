@@ -4,6 +4,7 @@
  * points become mesh vertices, and every rim loop — one per side of each sheet — is zipped
  * to them (conform_zip.c), so each curve edge ends up with the crossing sheets' triangles. */
 #include "core/singular/conform_internal.h"
+#include "core/singular/curve_cell.h"
 #include "core/util/vec3.h"
 
 #include <math.h>
@@ -283,7 +284,22 @@ static bool group_init(cf_run *r, const size_t *idx, size_t n, group *g)
     return true;
 }
 
+/* The surgery round a group of curves, on the scale of its cells (set by cf_conform_curves). */
+static bool conform_group(cf_run *r, const size_t *idx, size_t n);
+
 bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
+{
+    /* the group's scale: the finest cell its curves ask for, where the octree split its nodes
+     * (curve_cell.h), else the depth's */
+    double depth_cell = r->c.cell;
+    for (size_t i = 0; i < n; i++)
+        r->c.cell = fmin(r->c.cell, ism_curve_cell(&r->l->curves[idx[i]], depth_cell));
+    bool ok = conform_group(r, idx, n);
+    r->c.cell = depth_cell;
+    return ok;
+}
+
+static bool conform_group(cf_run *r, const size_t *idx, size_t n)
 {
     cf_ctx *c = &r->c;
     group g;

@@ -3,10 +3,12 @@
 #include "core/singular/surface.h"
 #include "core/singular/conform.h"
 #include "core/singular/covered.h"
+#include "core/singular/curve_cell.h"
 #include "core/singular/find.h"
 #include "core/singular/sheets.h"
 #include "core/octree/node_balls.h"
 #include "core/util/clock.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -69,18 +71,25 @@ static bool add_segment(ball_list *l, const double a[3], const double b[3], doub
     return true;
 }
 
+/* The depth's cell: the box's longest side / 2^depth. */
+static double finest_cell(const double box[6], int depth)
+{
+    return ldexp(fmax(box[3] - box[0], fmax(box[4] - box[1], box[5] - box[2])), -depth);
+}
+
 /* The balls around the locus where hidden pieces are not chased (see ism_poly_options): one
  * at each point, a row along each curve. malloc'd in *out (NULL when there are none); false
  * when memory ran out. */
 static bool quiet_balls(const ism_locus *l, const ism_locus_options *lo, ball_list *out)
 {
     memset(out, 0, sizeof *out);
-    double r = QUIET_SHARE * ism_conform_min_radius(lo);
+    double r0 = QUIET_SHARE * ism_conform_min_radius(lo), finest = finest_cell(lo->box, lo->max_depth);
     for (size_t i = 0; i < l->npoints; i++)
-        if (!add_ball(out, l->points[i].p, r))
+        if (!add_ball(out, l->points[i].p, r0 * ism_point_curve_cell(l, i, finest) / finest))
             return false;
     for (size_t c = 0; c < l->ncurves; c++) {
         const ism_sing_curve *cu = &l->curves[c];
+        double r = r0 * ism_curve_cell(cu, finest) / finest;
         for (size_t i = 0; i < cu->n; i++) {
             size_t j = i + 1 < cu->n ? i + 1 : cu->closed ? 0 : i;
             if (!add_segment(out, cu->xyz + 3 * i, cu->xyz + 3 * j, r))
@@ -102,6 +111,69 @@ static bool quiet_balls(const ism_locus *l, const ism_locus_options *lo, ball_li
 /* The ball reaches the neighbouring nodes: a piece joining two nodes is fine all along. */
 #define NODE_REACH 1.0
 
+/* Along a double curve that asks for cells finer than the depth's (curve_cell.h) the nodes
+ * are split down to that cell within CURVE_REACH of its cells of the curve: the tube the
+ * conformance pass cuts there (2.5 cells, widened up to ×1.4⁶ until its rim is clear of the
+ * other sheet) then lies in split nodes, its rim on triangles of the curve's scale. */
+#define CURVE_REACH 8.0
+/* The cell is one of the octree's (curve_cell.h): nodes are split while larger than this
+ * many of it, so one of its size stays whole whatever the rounding of its sides. */
+#define SPLIT_ABOVE 1.5
+/* ... the balls along it at most this many radii apart (their union then holds a tube of
+ * 0.97 of the radius). */
+#define CURVE_BALL_SPACING 0.5
+
+/* Appends a ball (centre p, radius r, cell) at out[*m] unless *m reached ISM_NODE_BALLS_MAX
+ * (then only counts it). */
+static void put_ball(double (*out)[ISM_NODE_BALL_FIELDS], size_t *m, const double p[3], double r,
+                     double cell)
+{
+    if (*m < ISM_NODE_BALLS_MAX) {
+        memcpy(out[*m], p, 3 * sizeof *p);
+        out[*m][ISM_NODE_BALL_R] = r;
+        out[*m][ISM_NODE_BALL_CELL] = cell;
+    }
+    (*m)++;
+}
+
+/* Appends the balls along the double curves that ask for cells finer than `finest` to
+ * out[0 .. n): at every point and along each segment, CURVE_BALL_SPACING radii apart at
+ * most. A curve whose balls do not all fit under ISM_NODE_BALLS_MAX gets none (the mesh
+ * there is then the depth's). Returns the new count. */
+static size_t curve_balls(const ism_locus *l, double finest, double (*out)[ISM_NODE_BALL_FIELDS],
+                          size_t n)
+{
+    for (size_t k = 0; k < l->ncurves; k++) {
+        const ism_sing_curve *cu = &l->curves[k];
+        double cell = ism_curve_cell(cu, finest);
+        if (!(cell < finest))
+            continue;
+        double r = CURVE_REACH * cell, since = INFINITY;
+        size_t m = n, segs = cu->closed ? cu->n : cu->n - 1;
+        for (size_t i = 0; i <= segs && m <= ISM_NODE_BALLS_MAX; i++) {
+            const double *p = cu->xyz + 3 * (i % cu->n);
+            if (i > 0) {
+                const double *a = cu->xyz + 3 * (i - 1);
+                double len = sqrt(ism_sqdist3(a, p));
+                for (double t = CURVE_BALL_SPACING * r - since; t < len; t += CURVE_BALL_SPACING * r) {
+                    double q[3];
+                    for (int j = 0; j < 3; j++)
+                        q[j] = a[j] + t / len * (p[j] - a[j]);
+                    put_ball(out, &m, q, r, SPLIT_ABOVE * cell);
+                }
+                since = fmod(since + len, CURVE_BALL_SPACING * r);
+            }
+            if (i == 0 || i == segs) {
+                put_ball(out, &m, p, r, SPLIT_ABOVE * cell);
+                since = 0;
+            }
+        }
+        if (m <= ISM_NODE_BALLS_MAX)
+            n = m;
+    }
+    return n;
+}
+
 /* The balls for the certified nodes with a finite clearance whose cell is finer than the
  * depth's (the first ISM_NODE_BALLS_MAX in the locus's order). Where the depth's cells are
  * that fine already, the flatness test refines round the apex to depth.max by itself, and
@@ -109,9 +181,7 @@ static bool quiet_balls(const ism_locus *l, const ism_locus_options *lo, ball_li
 static size_t node_balls(const ism_locus *l, const ism_poly_options *po,
                          double (*out)[ISM_NODE_BALL_FIELDS])
 {
-    double side = fmax(po->box[3] - po->box[0],
-                       fmax(po->box[4] - po->box[1], po->box[5] - po->box[2]));
-    double finest = ldexp(side, -po->max_depth);
+    double finest = finest_cell(po->box, po->max_depth);
     size_t n = 0;
     for (size_t i = 0; i < l->npoints && n < ISM_NODE_BALLS_MAX; i++) {
         const ism_sing_point *p = &l->points[i];
@@ -125,7 +195,7 @@ static size_t node_balls(const ism_locus *l, const ism_poly_options *po,
         out[n][ISM_NODE_BALL_CELL] = c / NODE_CELLS;
         n++;
     }
-    return n;
+    return curve_balls(l, finest, out, n);
 }
 
 enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options *po,

@@ -1,0 +1,34 @@
+/* curve_cell.h — the cell a double curve asks for: the size of the octree's cells (and of the
+ * conformance pass's tube, in those cells) along a certified double curve, from the curve's
+ * own extent rather than the depth's lattice. At a coarse depth the tube round a curve
+ * started at 2.5 cells of the depth — about the surface's size (Steiner's half-axes are 0.5
+ * long, depth 3 in ±1 has cells of 0.25) — and swallowed the sheets or fitted with the wrong
+ * topology; split along the curve first ("protect the features, then mesh"), the tube is
+ * sized by the local cell. */
+#ifndef ISM_CURVE_CELL_H
+#define ISM_CURVE_CELL_H
+
+#include <stddef.h>
+#include "core/singular/locus.h"
+
+/* The cell double curve cu asks for: the first of finest / 2^k (the octree's cells below the
+ * depth's cell `finest`) no larger than its span (the farthest of its points from its first:
+ * an open curve's length when straight, a closed one's diameter) / ISM_CURVE_CELLS, at most
+ * ISM_CURVE_MAX_HALVINGS halvings. Whiskers and curves of fewer than 2 points ask for
+ * `finest`. */
+double ism_curve_cell(const ism_sing_curve *cu, double finest);
+
+/* The smallest cell any double curve ending at point i asks for (`finest` when none). */
+double ism_point_curve_cell(const ism_locus *l, size_t i, double finest);
+
+/* Cells across a double curve's span: at depths whose cells are this fine the conformance
+ * tube (2.5 cells, widened ×1.4 until its rim is clear) fits each sheet beside the curve.
+ * Measured on the sweep's three boxes: Steiner's half-axes (span 0.5) fit from cells of
+ * 0.0625 (depth 5 in ±1; depth 4, 0.125, gave χ −4 | −1 | −5 for 5), the cross-cap's segment
+ * (span 1) from 0.15 (depth 4 in ±1.2; 0.3 gave χ 1 for 2 in the 0.37-cell box). */
+#define ISM_CURVE_CELLS 8.0
+/* Halvings below the depth's cell at most: the lattice holds ISM_THIN_EXTRA_DEPTH (8) levels
+ * below depth.max, and a curve that asks for more is tiny next to the box. */
+#define ISM_CURVE_MAX_HALVINGS 8
+
+#endif
