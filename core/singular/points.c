@@ -497,13 +497,16 @@ static bool from_unique_box(ctx *x, size_t i, uint8_t *box_fate)
 }
 
 /* Newton from start within [lo, hi]; a certified point on the surface is a candidate.
- * False only when out of memory. */
+ * *off (may be NULL) is set when the point reached is a critical point proved off the
+ * surface. False only when out of memory. */
 static bool certified_from(ctx *x, const double start[3], const double lo[3],
-                           const double hi[3], double half)
+                           const double hi[3], double half, bool *off)
 {
     ism_sing_point pt;
-    return !(resolve(x, start, lo, hi, x->cell, half, &pt) == FOUND && pt.certified)
-           || add_cand(x, &pt, UINT32_MAX, SIZE_MAX);
+    int r = resolve(x, start, lo, hi, x->cell, half, &pt);
+    if (off && r == OFF_SURFACE)
+        *off = true;
+    return !(r == FOUND && pt.certified) || add_cand(x, &pt, UINT32_MAX, SIZE_MAX);
 }
 
 /* One box of a cluster searched again as a box of its own, BELOW_CELL_DEPTH levels below
@@ -527,7 +530,7 @@ static bool search_below(ctx *x, const ism_lbox *b, const double lo[3], const do
     x->out->evals_jet += sub.evals_jet;
     for (size_t j = 0; ok && j < sub.nboxes; j++)
         if (sub.boxes[j].flags & (ISM_LBOX_PROJECTED | ISM_LBOX_UNIQUE))
-            ok = certified_from(x, sub.boxes[j].q, lo, hi, half);
+            ok = certified_from(x, sub.boxes[j].q, lo, hi, half, NULL);
     if (ok && sub.incomplete && !x->out->incomplete) {
         x->out->incomplete = true;
         snprintf(x->out->incomplete_why, sizeof x->out->incomplete_why,
@@ -555,7 +558,8 @@ enum { BELOW_RANK3 = 0,      /* rank 3, not a Krawczyk box (an extended cluster)
  * its box shifted 0.37 cell (cells 0.33 × 0.2 × 0.2): the origin's cell joins the cells
  * between it and the sphere, whose projections reach only the saddle at (0.377, 0, 0) off
  * the surface, and Newton from the origin's cell centre left it; the isolated point was
- * lost. */
+ * lost. BELOW_UNPROJECTED also serves an extended cluster one of whose starts reached a
+ * critical point off the surface (from_cluster). */
 static bool below_cell_starts(ctx *x, uint32_t id, const uint32_t *label, const double lo[3],
                                const double hi[3], double half, int which)
 {
@@ -578,7 +582,15 @@ static bool below_cell_starts(ctx *x, uint32_t id, const uint32_t *label, const 
 
 /* An isolated cluster: Newton from its first projection, within the cluster grown by a
  * cell. Rank-3 projections of an extended cluster, and rank-2 ones whose cubic term along
- * the null direction is not 0 (cusps): only certified points are kept. */
+ * the null direction is not 0 (cusps): only certified points are kept. When one of those
+ * starts reaches a critical point proved off the surface, the cluster's cells are coarse
+ * enough to join the surface with critical structure off it, and Newton from a cell's centre
+ * may have been drawn there from a point in the cell: its unprojected boxes are searched
+ * below the cell (BELOW_UNPROJECTED), as in a point cluster. The heart at depth 3 (cell
+ * 0.375): one cluster for the whole surface with the lobes' critical points (±0.53, 0, 0.65)
+ * and (±0.79, 0, 0.96) off it; Newton from the four cells round the cusp (0, 0, 1) went
+ * towards them, and the cusp was lost. Finer, those cells are excluded by F (heart, depths
+ * 6-7: no off-surface start, no extra work). */
 static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint32_t *label,
                          uint8_t *fate)
 {
@@ -608,6 +620,7 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
         return r != FOUND || add_cand(x, &pt, id, SIZE_MAX);
     }
     size_t tried = 0, probed = 0;
+    bool off = false; /* a start reached a critical point off the surface */
     double starts[EXTENDED_STARTS_MAX][3], probes[CUSP_PROBES_MAX][3];
     for (size_t i = c->first_projected; i < l->nboxes && tried < EXTENDED_STARTS_MAX; i++) {
         const ism_lbox *b = &l->boxes[i];
@@ -629,10 +642,12 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
         if (seen)
             continue;
         memcpy(starts[tried++], b->q, sizeof starts[0]);
-        if (!certified_from(x, b->q, lo, hi, half))
+        if (!certified_from(x, b->q, lo, hi, half, &off))
             return false;
     }
-    return below_cell_starts(x, id, label, lo, hi, half, BELOW_RANK3) && !x->pc.oom;
+    return below_cell_starts(x, id, label, lo, hi, half, BELOW_RANK3)
+           && (!off || below_cell_starts(x, id, label, lo, hi, half, BELOW_UNPROJECTED))
+           && !x->pc.oom;
 }
 
 static bool same_point(const ctx *x, const ism_sing_point *a, const ism_sing_point *b)

@@ -33,7 +33,20 @@
  *    disc over the box's square, sharing the apex: χ = 1 + 1 − 1 = 1, two boundary loops,
  *    the apex one vertex with 2 cones. Before, the ball grew (×1.4 up to 6 times) while its
  *    rim saw the other horn or nappe close by, until it swallowed both into one loop: horn
- *    χ 2 (one cone), the cone χ 2 or 0 in the shifted boxes. */
+ *    χ 2 (one cone), the cone χ 2 or 0 in the shifted boxes.
+ *  - heart, f = g³ − z³ h, g = x² + 9/4 y² + z² − 1, h = x² + 9/80 y²: ∂f/∂x = 2x(3g² − z³),
+ *    ∂f/∂y = (9/40) y (60 g² − z³), ∂f/∂z = 6 z g² − 3 z² h. With z = 0, f = 0 gives g = 0:
+ *    the equator ellipse, where ∇f = 0 but f ~ g³ − z³ h keeps the zero set a smooth graph
+ *    g = z h^(1/3) (no singular curve of the surface). With z ≠ 0 and x ≠ 0: 3g² = z³ and
+ *    2g² = z h give h = 2z²/3, and f = 0 gives z = 1/12, then y = 0 (60 g² ≠ z³) and x² = h
+ *    against x² = 1 + g − z² ≈ 1: none. With x = 0, y ≠ 0: 60 g² = z³, h = z²/30, f = 0 gives
+ *    z ≈ 0.004 and then g ≈ −1 against g > 0: none. With x = y = 0: h = 0, so g = 0, z = ±1.
+ *    So exactly two singular points, (0, 0, ±1). There H = ∓diag(2, 9/40, 0) and along the
+ *    null direction f(0, 0, ±1 + w) = (±2w + w²)³ changes sign: two cusps, each a mesh
+ *    vertex. Before, at depth 3 (cell 0.375) the heart's candidate cells formed one cluster
+ *    with critical points off the surface (the lobes' (±0.53, 0, 0.65), (±0.79, 0, 0.96));
+ *    the top cusp's four cells did not project (Newton from their centres went towards
+ *    those points) and were never searched: 1 cusp of 2, in all three boxes. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include "core/util/vec3.h"
@@ -166,4 +179,36 @@ Test(coarse_points, lone_points_keep_their_ball)
         check_lone(cone, box, 3, 1, true, "wide cone", which);
     }
     ism_tape_free(cone);
+}
+
+Test(coarse_points, heart_two_cusps)
+{
+    ism_tape *t = pf_compile(&(pf_surface){
+        "(x^2 + 9/4*y^2 + z^2 - 1)^3 - x^2*z^3 - 9/80*y^2*z^3", NULL, 0, NULL, 0});
+    const double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
+    const double want[2][3] = {{0, 0, -1}, {0, 0, 1}}; /* points are sorted by z */
+    double tol = 1e-9 * sqrt(3 * 3.0 * 3.0);
+    for (int which = pf_first_box() - 1; which <= 1; which++) {
+        double box[6];
+        pf_sweep_box(base, 3, which, box);
+        ism_mesh m;
+        ism_locus l;
+        pf_run_surface(t, box, 3, 3, &m, &l);
+        const char *place = place_name(which);
+        cr_expect_eq(l.npoints, 2, "heart d3 %s: %zu singular points, want 2", place, l.npoints);
+        cr_expect_eq(l.ncurves, 0, "heart d3 %s: %zu singular curves", place, l.ncurves);
+        for (size_t i = 0; i < l.npoints && i < 2; i++) {
+            const ism_sing_point *p = &l.points[i];
+            cr_expect(p->certified && p->type == ISM_SING_CUSP, "heart d3 %s: point %zu is %s%s",
+                      place, i, p->certified ? "" : "uncertified ", ism_sing_type_name(p->type));
+            cr_expect(ism_dist3(p->p, want[i]) <= tol,
+                      "heart d3 %s: point (%g, %g, %g), want (0, 0, %g)", place, p->p[0],
+                      p->p[1], p->p[2], want[i][2]);
+            cr_expect(vertex_at(&m, p->p) != UINT32_MAX,
+                      "heart d3 %s: the cusp at z = %g is no mesh vertex", place, p->p[2]);
+        }
+        ism_locus_free(&l);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
 }
