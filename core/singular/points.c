@@ -496,25 +496,27 @@ static bool from_unique_box(ctx *x, size_t i, uint8_t *box_fate)
     return r != FOUND || add_cand(x, &pt, UINT32_MAX, i);
 }
 
-/* Newton from start within [lo, hi]; a certified point on the surface is a candidate.
- * *off (may be NULL) is set when the point reached is a critical point proved off the
- * surface. False only when out of memory. */
+/* Newton from start within [lo, hi]; a certified point on the surface whose Hessian has
+ * rank min_rank or more is a candidate. *off (may be NULL) is set when the point reached is a
+ * critical point proved off the surface. False only when out of memory. */
 static bool certified_from(ctx *x, const double start[3], const double lo[3],
-                           const double hi[3], double half, bool *off)
+                           const double hi[3], double half, int min_rank, bool *off)
 {
     ism_sing_point pt;
     int r = resolve(x, start, lo, hi, x->cell, half, &pt);
     if (off && r == OFF_SURFACE)
         *off = true;
-    return !(r == FOUND && pt.certified) || add_cand(x, &pt, UINT32_MAX, SIZE_MAX);
+    return !(r == FOUND && pt.certified && ism_sing_rank(pt.eig, x->out->hessian_scale) >= min_rank)
+           || add_cand(x, &pt, UINT32_MAX, SIZE_MAX);
 }
 
 /* One box of a cluster searched again as a box of its own, BELOW_CELL_DEPTH levels below
- * the search cell (search.h): Newton from every sub-cell projected or proved to hold one
- * zero of ∇f, within lo..hi; only certified points are kept. A sub-search cut short
- * (budget, deadline) marks the locus incomplete. False only when out of memory. */
+ * the search cell (search.h): Newton from every sub-cell projected (with a Hessian of rank
+ * min_rank or more there) or proved to hold one zero of ∇f, within lo..hi; only certified
+ * points of that rank are kept. A sub-search cut short (budget, deadline) marks the locus
+ * incomplete. False only when out of memory. */
 static bool search_below(ctx *x, const ism_lbox *b, const double lo[3], const double hi[3],
-                         double half)
+                         double half, int min_rank)
 {
     ism_locus_options so = *x->o;
     memcpy(so.box, b->lo, sizeof so.box[0] * 3);
@@ -529,8 +531,9 @@ static bool search_below(ctx *x, const ism_lbox *b, const double lo[3], const do
     x->out->evals_interval += sub.evals_interval;
     x->out->evals_jet += sub.evals_jet;
     for (size_t j = 0; ok && j < sub.nboxes; j++)
-        if (sub.boxes[j].flags & (ISM_LBOX_PROJECTED | ISM_LBOX_UNIQUE))
-            ok = certified_from(x, sub.boxes[j].q, lo, hi, half, NULL);
+        if ((sub.boxes[j].flags & ISM_LBOX_UNIQUE)
+            || ((sub.boxes[j].flags & ISM_LBOX_PROJECTED) && sub.boxes[j].rank >= min_rank))
+            ok = certified_from(x, sub.boxes[j].q, lo, hi, half, min_rank, NULL);
     if (ok && sub.incomplete && !x->out->incomplete) {
         x->out->incomplete = true;
         snprintf(x->out->incomplete_why, sizeof x->out->incomplete_why,
@@ -541,8 +544,13 @@ static bool search_below(ctx *x, const ism_lbox *b, const double lo[3], const do
 }
 
 /* Which boxes of a cluster below_cell_starts searches again. */
-enum { BELOW_RANK3 = 0,      /* rank 3, not a Krawczyk box (an extended cluster) */
-       BELOW_UNPROJECTED = 1 /* Newton from the centre left the cell (a point cluster) */ };
+enum { BELOW_RANK3 = 0,       /* rank 3, not a Krawczyk box (an extended cluster) */
+       BELOW_UNPROJECTED = 1, /* Newton from the centre left the cell (a point cluster) */
+       BELOW_UNPROJECTED_ISOLATED = 2 /* the same in an extended cluster, for points of
+                                         Hessian rank 2 or 3 only (cusps, A3 points, nodes,
+                                         isolated points): points of rank 0 or 1 there are
+                                         the ends of its curves (pinch, triple points),
+                                         which the curve stage finds and types */ };
 
 /* The boxes of cluster id that `which` selects, each searched below the cell (search_below),
  * at most BELOW_CELL_BOXES_MAX of them. BELOW_RANK3, in an extended cluster: each may hold
@@ -558,7 +566,7 @@ enum { BELOW_RANK3 = 0,      /* rank 3, not a Krawczyk box (an extended cluster)
  * its box shifted 0.37 cell (cells 0.33 × 0.2 × 0.2): the origin's cell joins the cells
  * between it and the sphere, whose projections reach only the saddle at (0.377, 0, 0) off
  * the surface, and Newton from the origin's cell centre left it; the isolated point was
- * lost. BELOW_UNPROJECTED also serves an extended cluster one of whose starts reached a
+ * lost. BELOW_UNPROJECTED_ISOLATED: an extended cluster one of whose starts reached a
  * critical point off the surface (from_cluster). */
 static bool below_cell_starts(ctx *x, uint32_t id, const uint32_t *label, const double lo[3],
                                const double hi[3], double half, int which)
@@ -574,7 +582,7 @@ static bool below_cell_starts(ctx *x, uint32_t id, const uint32_t *label, const 
         if (label[i] != id || (b->flags & ISM_LBOX_UNIQUE) || !want)
             continue;
         boxes++;
-        if (!search_below(x, b, lo, hi, half))
+        if (!search_below(x, b, lo, hi, half, which == BELOW_UNPROJECTED_ISOLATED ? 2 : 0))
             return false;
     }
     return true;
@@ -586,7 +594,7 @@ static bool below_cell_starts(ctx *x, uint32_t id, const uint32_t *label, const 
  * starts reaches a critical point proved off the surface, the cluster's cells are coarse
  * enough to join the surface with critical structure off it, and Newton from a cell's centre
  * may have been drawn there from a point in the cell: its unprojected boxes are searched
- * below the cell (BELOW_UNPROJECTED), as in a point cluster. The heart at depth 3 (cell
+ * below the cell for points of rank 2 or 3 (BELOW_UNPROJECTED_ISOLATED). The heart at depth 3 (cell
  * 0.375): one cluster for the whole surface with the lobes' critical points (±0.53, 0, 0.65)
  * and (±0.79, 0, 0.96) off it; Newton from the four cells round the cusp (0, 0, 1) went
  * towards them, and the cusp was lost. Finer, those cells are excluded by F (heart, depths
@@ -642,11 +650,11 @@ static bool from_cluster(ctx *x, const cluster_info *c, uint32_t id, const uint3
         if (seen)
             continue;
         memcpy(starts[tried++], b->q, sizeof starts[0]);
-        if (!certified_from(x, b->q, lo, hi, half, &off))
+        if (!certified_from(x, b->q, lo, hi, half, 0, &off))
             return false;
     }
     return below_cell_starts(x, id, label, lo, hi, half, BELOW_RANK3)
-           && (!off || below_cell_starts(x, id, label, lo, hi, half, BELOW_UNPROJECTED))
+           && (!off || below_cell_starts(x, id, label, lo, hi, half, BELOW_UNPROJECTED_ISOLATED))
            && !x->pc.oom;
 }
 
