@@ -11,14 +11,21 @@
  * libm operations, which run box by box in round-to-nearest with interval_ops.h's rules).
  *
  * Vector code: one switch per instruction per chunk, loops over a whole number of AVX2
- * vectors with restrict pointers (no instruction writes a register it reads), NaN bounds
- * (inf - inf, 0 * inf) made infinite or 0 by selects. This file is compiled with
+ * vectors with restrict pointers (no instruction writes a register it reads).
+ *
+ * No NaN from inf - inf: every register keeps lo < +inf and nh < +inf (an interval holds a
+ * finite number), so sums and products by a finite constant never meet +inf and -inf and
+ * need no check; the few places that could break it (constants, the boxes, the box-by-box
+ * operations) clamp +inf to DBL_MAX, which only widens a degenerate [inf, inf]. Products
+ * of two registers can still be 0 * inf: one test per vector, and a vector that has one
+ * counts it as 0 (iv_mul's rule). This file is compiled with
  * -frounding-math (Makefile) so gcc keeps every operation as written (no -(a*b) for
  * a*(-b)). */
 #include "core/eval/interval_ops.h"
 #include "core/eval/workspace.h"
 
 #include <fenv.h>
+#include <float.h>
 #include <string.h>
 #if defined(__x86_64__) || defined(__i386__)
 #include <xmmintrin.h>
@@ -60,8 +67,13 @@ static ALWAYS_INLINE rounding rounding_nearest(rounding r) { (void)r; return FE_
 
 /* ---- the operations, rounding down; (l, nh) is [l, -nh] ---- */
 
-/* A NaN bound (inf - inf) becomes -inf: the whole side (for nh, hi = +inf). */
-static ALWAYS_INLINE double sane(double v) { return v == v ? v : -INFINITY; }
+/* A NaN bound becomes -inf (the whole side; for nh, hi = +inf), and +inf becomes DBL_MAX
+ * (the register invariant above): one max and one min. */
+static ALWAYS_INLINE double sane(double v)
+{
+    double m = v > -INFINITY ? v : -INFINITY;
+    return m < DBL_MAX ? m : DBL_MAX;
+}
 
 #define KERNEL_RR(NAME, BODY)                                                                \
     static ALWAYS_INLINE void NAME(double *restrict ol, double *restrict onh,                \
@@ -70,7 +82,7 @@ static ALWAYS_INLINE double sane(double v) { return v == v ? v : -INFINITY; }
                                    size_t m)                                                 \
     {                                                                                        \
         WHOLE_VECTORS(m);                                                                    \
-        for (size_t j = 0; j < m; j++) {                                                     \
+        _Pragma("GCC unroll 2") for (size_t j = 0; j < m; j++) {                             \
             BODY                                                                             \
         }                                                                                    \
     }
@@ -80,20 +92,22 @@ static ALWAYS_INLINE double sane(double v) { return v == v ? v : -INFINITY; }
                                    double c, size_t m)                                       \
     {                                                                                        \
         WHOLE_VECTORS(m);                                                                    \
-        for (size_t j = 0; j < m; j++) {                                                     \
+        _Pragma("GCC unroll 2") for (size_t j = 0; j < m; j++) {                             \
             BODY                                                                             \
         }                                                                                    \
     }
 
-/* a + b = [al + bl, ah + bh]; a - b = [al - bh, ah - bl] = [al + bnh, -(anh + bl)]. */
-KERNEL_RR(k_add, ol[j] = sane(al[j] + bl[j]); onh[j] = sane(anh[j] + bnh[j]);)
-KERNEL_RR(k_sub, ol[j] = sane(al[j] + bnh[j]); onh[j] = sane(anh[j] + bl[j]);)
-KERNEL_RC(k_add_c, ol[j] = sane(al[j] + c); onh[j] = sane(anh[j] - c);)
+/* a + b = [al + bl, ah + bh]; a - b = [al - bh, ah - bl] = [al + bnh, -(anh + bl)]. With
+ * every operand below +inf (and c finite: chunk_op checks) no sum is NaN, and rounding down
+ * turns an overflow to +inf into DBL_MAX, so the results stay below +inf. */
+KERNEL_RR(k_add, ol[j] = al[j] + bl[j]; onh[j] = anh[j] + bnh[j];)
+KERNEL_RR(k_sub, ol[j] = al[j] + bnh[j]; onh[j] = anh[j] + bl[j];)
+KERNEL_RC(k_add_c, ol[j] = al[j] + c; onh[j] = anh[j] - c;)
 /* c - a = [c - ah, c - al] = [c + anh, -(al - c)]. */
-KERNEL_RC(k_c_sub, ol[j] = sane(c + anh[j]); onh[j] = sane(al[j] - c);)
+KERNEL_RC(k_c_sub, ol[j] = c + anh[j]; onh[j] = al[j] - c;)
 /* c > 0: [al c, ah c] = [al c, -(anh c)]; c < 0: [ah c, al c] = [anh (-c), -(al (-c))]. */
-KERNEL_RC(k_mul_cpos, ol[j] = sane(al[j] * c); onh[j] = sane(anh[j] * c);)
-KERNEL_RC(k_mul_cneg, ol[j] = sane(anh[j] * -c); onh[j] = sane(al[j] * -c);)
+KERNEL_RC(k_mul_cpos, ol[j] = al[j] * c; onh[j] = anh[j] * c;)
+KERNEL_RC(k_mul_cneg, ol[j] = anh[j] * -c; onh[j] = al[j] * -c;)
 KERNEL_RC(k_neg, ol[j] = anh[j]; onh[j] = al[j]; (void)c;)
 KERNEL_RC(k_copy, ol[j] = al[j]; onh[j] = anh[j]; (void)c;)
 KERNEL_RR(k_min, ol[j] = ism_min(al[j], bl[j]); onh[j] = ism_max(anh[j], bnh[j]);)
@@ -123,6 +137,28 @@ static ALWAYS_INLINE ism_interval mul_lane(double al, double anh, double bl, dou
 KERNEL_RR(k_mul, ism_interval r = mul_lane(al[j], anh[j], bl[j], bnh[j]); ol[j] = r.lo;
           onh[j] = r.hi;)
 
+/* a * b without the test for 0 * inf: returns nonzero when some lane may have had one (a
+ * product NaN, or the sum of the four lower products NaN: then k_mul runs again). The upper
+ * products are the lower ones' operands with a sign changed, so NaN in the same places. */
+static ALWAYS_INLINE long long k_mul_finite(double *restrict ol, double *restrict onh,
+                                            const double *restrict al,
+                                            const double *restrict anh,
+                                            const double *restrict bl,
+                                            const double *restrict bnh, size_t m)
+{
+    long long bad = 0;
+    WHOLE_VECTORS(m);
+    _Pragma("GCC unroll 2") for (size_t j = 0; j < m; j++) {
+        double ah = -anh[j], bh = -bnh[j];
+        double p1 = al[j] * bl[j], p2 = al[j] * bh, p3 = ah * bl[j], p4 = ah * bh;
+        ol[j] = min4(p1, p2, p3, p4);
+        onh[j] = min4(al[j] * -bl[j], al[j] * bnh[j], anh[j] * bl[j], ah * bnh[j]);
+        double sum = (p1 + p2) + (p3 + p4);
+        bad |= (long long)(sum != sum);
+    }
+    return bad;
+}
+
 /* ---- the other operations: box by box with interval_ops.h, in round-to-nearest ---- */
 
 static ism_interval nearest_op(const ism_instr *in, ism_interval a, ism_interval b)
@@ -151,11 +187,21 @@ static void run_nearest(const ism_instr *in, double *ol, double *onh, const doub
 {
     rounding_set(rounding_nearest(mode));
     for (size_t j = 0; j < m; j++) {
-        ism_interval r = ism_iv_sane(nearest_op(in, iv(al[j], -anh[j]), iv(bl[j], -bnh[j])));
-        ol[j] = r.lo;
-        onh[j] = -r.hi;
+        ism_interval r = nearest_op(in, iv(al[j], -anh[j]), iv(bl[j], -bnh[j]));
+        ol[j] = sane(r.lo);
+        onh[j] = sane(-r.hi);
     }
     rounding_set(rounding_down(mode));
+}
+
+/* After an operation with an infinite constant (max(a, inf), a + inf): the invariant back. */
+static ALWAYS_INLINE void sanitize(double *restrict ol, double *restrict onh, size_t m)
+{
+    WHOLE_VECTORS(m);
+    for (size_t j = 0; j < m; j++) {
+        ol[j] = sane(ol[j]);
+        onh[j] = sane(onh[j]);
+    }
 }
 
 /* One instruction over the first m lanes (a multiple of LANES) of every register. */
@@ -170,8 +216,8 @@ static ALWAYS_INLINE void chunk_op(const ism_instr *in, double *lo, double *nh, 
     switch (in->op) {
     case ISM_OP_CONST:
         for (size_t j = 0; j < m; j++) {
-            ol[j] = c;
-            onh[j] = -c;
+            ol[j] = sane(c);
+            onh[j] = sane(-c);
         }
         break;
     case ISM_OP_COPY: k_copy(ol, onh, al, anh, c, m); break;
@@ -179,7 +225,10 @@ static ALWAYS_INLINE void chunk_op(const ism_instr *in, double *lo, double *nh, 
     case ISM_OP_ADD_RC: k_add_c(ol, onh, al, anh, c, m); break;
     case ISM_OP_SUB_RR: k_sub(ol, onh, al, anh, bl, bnh, m); break;
     case ISM_OP_SUB_CR: k_c_sub(ol, onh, al, anh, c, m); break;
-    case ISM_OP_MUL_RR: k_mul(ol, onh, al, anh, bl, bnh, m); break;
+    case ISM_OP_MUL_RR:
+        if (k_mul_finite(ol, onh, al, anh, bl, bnh, m))
+            k_mul(ol, onh, al, anh, bl, bnh, m);
+        break;
     case ISM_OP_MUL_RC:
         if (c > 0.0)
             k_mul_cpos(ol, onh, al, anh, c, m);
@@ -196,6 +245,8 @@ static ALWAYS_INLINE void chunk_op(const ism_instr *in, double *lo, double *nh, 
     case ISM_OP_SQUARE: k_square(ol, onh, al, anh, c, m); break;
     default: run_nearest(in, ol, onh, al, anh, bl, bnh, m, mode); break;
     }
+    if (!isfinite(c) && !ism_op_has_reg_b(in->op))
+        sanitize(ol, onh, m);
 }
 
 /* ---- packing ---- */
@@ -204,13 +255,18 @@ static ALWAYS_INLINE void pack_box(const double *restrict b, double *restrict lo
                                    double *restrict nh, size_t j)
 {
     double l = b[2 * j], h = b[2 * j + 1];
-    lo[j] = l <= h ? l : -INFINITY;
-    nh[j] = l <= h ? -h : -INFINITY;
+    lo[j] = l <= h ? sane(l) : -INFINITY;
+    nh[j] = l <= h ? sane(-h) : -INFINITY;
 }
 
-/* Four boxes' bounds (l0 h0 l1 h1 | l2 h2 l3 h3) split into lows and negated highs. */
 typedef double vec4 __attribute__((vector_size(4 * sizeof(double))));
 typedef long long lvec4 __attribute__((vector_size(4 * sizeof(long long))));
+
+/* Lanes of v above most become most (a macro: a function returning a vector would change
+ * the ABI between the AVX2 and baseline paths). */
+#define CLAMP4(v, most) ((vec4)(((lvec4)(v) & ((v) < (most))) | ((lvec4)(most) & ~((v) < (most)))))
+
+/* Four boxes' bounds (l0 h0 l1 h1 | l2 h2 l3 h3) split into lows and negated highs. */
 static ALWAYS_INLINE void pack_four(const double *b, double *lo, double *nh)
 {
     vec4 p, q;
@@ -220,8 +276,11 @@ static ALWAYS_INLINE void pack_four(const double *b, double *lo, double *nh)
     vec4 h = __builtin_shuffle(p, q, (lvec4){ 1, 3, 5, 7 });
     lvec4 ok = l <= h;
     vec4 whole = { -INFINITY, -INFINITY, -INFINITY, -INFINITY };
+    vec4 most = { DBL_MAX, DBL_MAX, DBL_MAX, DBL_MAX }, nh4 = -h;
+    l = CLAMP4(l, most); /* the register invariant: below +inf */
+    nh4 = CLAMP4(nh4, most);
     vec4 vl = (vec4)(((lvec4)l & ok) | ((lvec4)whole & ~ok));
-    vec4 vnh = (vec4)(((lvec4)-h & ok) | ((lvec4)whole & ~ok));
+    vec4 vnh = (vec4)(((lvec4)nh4 & ok) | ((lvec4)whole & ~ok));
     memcpy(lo, &vl, sizeof vl);
     memcpy(nh, &vnh, sizeof vnh);
 }
