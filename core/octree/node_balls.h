@@ -1,7 +1,9 @@
 /* node_balls.h — the balls around certified nodes (cone apices) where the octree splits
  * nodes until they are fine enough to see both nappes (ism_poly_options.node_balls): at a
  * coarse depth a nappe closing into a small piece between nodes crosses no edge of the
- * depth's cells and is lost, and the node is then joined with one cone. */
+ * depth's cells and is lost, and the node is then joined with one cone. The same balls
+ * along certified double curves split the nodes down to the curve's own cell
+ * (core/singular/curve_cell.h). */
 #ifndef ISM_NODE_BALLS_H
 #define ISM_NODE_BALLS_H
 

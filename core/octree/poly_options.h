@@ -52,10 +52,12 @@ typedef struct ism_poly_options {
      * then goes ISM_THIN_BLIND_DEPTH levels deep only. */
     const double (*quiet)[4];
     size_t nquiet;
-    /* Balls around the certified nodes found from f (node_balls.h: x, y, z, radius, cell;
-     * at most ISM_NODE_BALLS_MAX): a node meeting one is split until it is no larger than
-     * the ball's cell, below max_depth too (down to the lattice's last level), so both
-     * nappes of the cone cross cell edges there. NULL for none. */
+    /* Balls around the certified nodes found from f and along its double curves
+     * (node_balls.h: x, y, z, radius, cell; at most ISM_NODE_BALLS_MAX): a node meeting one
+     * is split until it is no larger than the ball's cell, below max_depth too (down to the
+     * lattice's last level), so both nappes of a cone cross cell edges there and a double
+     * curve's tube is cut in cells of the curve's scale (core/singular/curve_cell.h). NULL
+     * for none. */
     const double (*node_balls)[5];
     size_t nnode_balls;
     /* Optional progress report, fraction in [0, 1], from the calling thread or a worker

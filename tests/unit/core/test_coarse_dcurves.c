@@ -115,7 +115,8 @@ static size_t find_root(size_t *parent, size_t i)
 }
 
 /* Chains of the non-manifold edges: cut at every vertex of degree ≠ 2, the pieces counted
- * (a closed chain through degree-2 vertices only is one). */
+ * (a closed chain through degree-2 vertices only is one): n edges, less one for every join
+ * of two pieces at a vertex of degree 2. */
 static size_t count_chains(const edge *e, size_t n, const size_t *degree, size_t nverts)
 {
     size_t *parent = malloc((n + 1) * sizeof *parent), *via = malloc((nverts + 1) * sizeof *via);
@@ -124,19 +125,20 @@ static size_t count_chains(const edge *e, size_t n, const size_t *degree, size_t
         parent[i] = i;
     for (size_t v = 0; v < nverts; v++)
         via[v] = SIZE_MAX;
+    size_t chains = n;
     for (size_t i = 0; i < n; i++)
         for (int s = 0; s < 2; s++) {
             uint32_t v = s ? e[i].b : e[i].a;
             if (degree[v] != 2)
                 continue;
-            if (via[v] == SIZE_MAX)
+            if (via[v] == SIZE_MAX) {
                 via[v] = i;
-            else
-                parent[find_root(parent, i)] = find_root(parent, via[v]);
+                continue;
+            }
+            size_t a = find_root(parent, i), b = find_root(parent, via[v]);
+            chains -= a != b;
+            parent[a] = b;
         }
-    size_t chains = 0;
-    for (size_t i = 0; i < n; i++)
-        chains += find_root(parent, i) == i;
     free(parent);
     free(via);
     return chains;
