@@ -4,6 +4,8 @@
  * the crossing is first interpolated linearly, then moved onto f = g = 0 by Newton. An edge
  * already lying on an earlier curve is split at the crossing of the two curves (Newton on
  * f, g₁, g₂), and its cut edge replaced by the two halves. */
+#include "core/curves/crease_refine.h"
+#include "core/curves/cut_compact.h"
 #include "core/curves/cut_internal.h"
 #include <limits.h>
 #include <math.h>
@@ -648,9 +650,10 @@ static long mesh_euler(const ism_mesh *m)
     return chi;
 }
 
-/* The crease cut by branches; where it leaves a crack (the mesh's Euler characteristic
- * changes: a vertex whose branch ties, a triple junction it cannot resolve) the mesh is
- * restored and cut by the sign of a − b of the top min/max instead. */
+/* The crease cut by branches, then refined beside it (crease_refine.h); where the cut leaves
+ * a crack (the mesh's Euler characteristic changes: a vertex whose branch ties, a triple
+ * junction it cannot resolve) the mesh is restored and cut by the sign of a − b of the top
+ * min/max instead. */
 static bool crease_or_top(cut_state *s, size_t k)
 {
     ism_mesh *m = s->m;
@@ -675,6 +678,9 @@ static bool crease_or_top(cut_state *s, size_t k)
         for (size_t i = ne; i < s->c->nedges; i++)
             s->c->edges[i].fn = NONE;
         ok = cut_one(s, k);
+    } else if (ok) {
+        size_t added;
+        ok = cut_crease_refine(s, k, &added);
     }
     free(tri);
     free(parent);
@@ -689,8 +695,10 @@ bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
     bool ok = parents_init(&s);
     for (size_t k = 0; k < ev->nfns && ok; k++)
         ok = ev->fns[k].kind == ISM_CUT_CREASE ? crease_or_top(&s, k) : cut_one(&s, k);
-    if (ok)
+    if (ok) {
         finish(&s);
+        ok = ism_cut_compact(m, c);
+    }
     free(c->tri_parent);
     c->tri_parent = ok ? s.parent : NULL;
     if (!ok)

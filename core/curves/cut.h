@@ -17,7 +17,9 @@ void ism_cut_free(ism_cut *c);
 /* Cuts m along every function of ev in turn (c initialised to zeros by the caller). tol is
  * the distance both surfaces must be within at curve vertices (1e-10 × the box diagonal
  * asks the issue's precision). Triangle winding is kept; normals of new vertices are ∇f's
- * direction, oriented like their edge's. False when out of memory. */
+ * direction, oriented like their edge's. Vertices no triangle, segment or cut edge uses are
+ * dropped at the end (the others keep their order; indices renumbered). False when out of
+ * memory. */
 bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c);
 
 #endif

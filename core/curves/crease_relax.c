@@ -1,0 +1,140 @@
+/* crease_relax.c — the thin triangles beside a crease fattened by moving their corner off
+ * the crease (crease_relax.h). The candidates' triangles are gathered once (a CSR of vertex
+ * to triangles over the candidates only); each candidate moves to the mean of its star's
+ * other corners on the surface, kept only where that helps: same branch, no triangle turned
+ * over, the star's smallest angle larger. */
+#include "core/curves/crease_relax.h"
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "core/util/vec3.h"
+
+#define NONE CUT_NONE
+/* A star triangle's new normal keeps this cosine with its old one (60°: not turned over). */
+#define CREASE_RELAX_TURN_COS 0.5
+/* Newton steps along the branch's gradient back onto its zero set (the mean of a star lies
+ * within its sagitta of the surface: two or three suffice). */
+#define CREASE_RELAX_NEWTON 4
+/* Triangles round a vertex handled (a mesh vertex has 3–12; more: left where it is). */
+#define CREASE_RELAX_STAR_MAX 64
+
+double cut_min_angle(const ism_mesh *m, const uint32_t *tv, uint32_t moved, const double *p)
+{
+    const double *q[3];
+    for (int i = 0; i < 3; i++)
+        q[i] = tv[i] == moved ? p : m->pos + 3 * (size_t)tv[i];
+    double best = 180;
+    for (int i = 0; i < 3; i++) {
+        double u[3], v[3];
+        for (int c = 0; c < 3; c++) {
+            u[c] = q[(i + 1) % 3][c] - q[i][c];
+            v[c] = q[(i + 2) % 3][c] - q[i][c];
+        }
+        double nn = ism_norm3(u) * ism_norm3(v);
+        double a = nn > 0 ? acos(fmax(-1.0, fmin(1.0, ism_dot3(u, v) / nn))) : 0;
+        best = fmin(best, a * (180 / M_PI));
+    }
+    return best;
+}
+
+/* Candidates: third corners (off the crease) of thin triangles on crease edges. */
+static void mark_candidates(cut_state *s, size_t k, const uint8_t *on, uint8_t *cand)
+{
+    const ism_mesh *m = s->m;
+    for (size_t t = 0; t < m->ntris; t++) {
+        const uint32_t *tv = m->tri + 3 * t;
+        for (int i = 0; i < 3; i++) {
+            uint32_t a = tv[i], b = tv[(i + 1) % 3], c = tv[(i + 2) % 3];
+            if (on[c] || !on[a] || !on[b])
+                continue;
+            uint32_t e = cut_find_cut_edge(s, a, b);
+            if (e != NONE && s->c->edges[e].fn == k &&
+                cut_min_angle(m, tv, NONE, NULL) < CREASE_RELAX_THIN_DEG)
+                cand[c] = 1;
+        }
+    }
+}
+
+/* Moves candidate v (its triangles star[0..n)) when that helps; true when moved. */
+static bool relax_vertex(cut_state *s, uint32_t v, const uint32_t *star, size_t n)
+{
+    ism_mesh *m = s->m;
+    double *pv = m->pos + 3 * (size_t)v, p[3] = {0, 0, 0};
+    for (size_t i = 0; i < n; i++)
+        for (int j = 0; j < 3; j++) {
+            uint32_t w = m->tri[3 * (size_t)star[i] + j];
+            for (int c = 0; w != v && c < 3; c++)
+                p[c] += m->pos[3 * (size_t)w + c] / (double)(2 * n);
+        }
+    uint32_t A, B;
+    if (!ism_branches_at(s->branches, pv, &A) || A == ISM_BRANCH_NONE)
+        return false;
+    for (int it = 0; it < CREASE_RELAX_NEWTON; it++) {
+        double g[3], f = ism_branches_gradient(s->branches, A, p, g), gg = ism_dot3(g, g);
+        if (!(gg > 0) || !isfinite(f) || f == 0)
+            break;
+        for (int c = 0; c < 3; c++)
+            p[c] -= f * g[c] / gg;
+    }
+    if (!ism_branches_at(s->branches, p, &B) || B != A)
+        return false;
+    double before = 180, after = 180;
+    for (size_t i = 0; i < n; i++) {
+        const uint32_t *tv = m->tri + 3 * (size_t)star[i];
+        double o[3], q[3];
+        cut_tri_normal(m, tv, NONE, NULL, o);
+        cut_tri_normal(m, tv, v, p, q);
+        if (!(ism_dot3(o, q) >= CREASE_RELAX_TURN_COS * ism_norm3(o) * ism_norm3(q)))
+            return false;
+        before = fmin(before, cut_min_angle(m, tv, NONE, NULL));
+        after = fmin(after, cut_min_angle(m, tv, v, p));
+    }
+    if (!(after > before))
+        return false;
+    float nrm[3];
+    cut_normal_at(s, p, m->normal + 3 * (size_t)v, nrm);
+    memcpy(pv, p, sizeof p);
+    memcpy(m->normal + 3 * (size_t)v, nrm, sizeof nrm);
+    return true;
+}
+
+bool cut_crease_relax(cut_state *s, size_t k, size_t *moved)
+{
+    const ism_mesh *m = s->m;
+    size_t nv = m->nverts;
+    *moved = 0;
+    uint8_t *on = calloc(nv + 1, 1), *cand = calloc(nv + 1, 1);
+    uint32_t *first = calloc(nv + 2, sizeof *first), *tris = NULL;
+    bool ok = on && cand && first;
+    for (size_t i = 0; ok && i < s->c->nedges; i++)
+        if (s->c->edges[i].fn == k)
+            on[s->c->edges[i].a] = on[s->c->edges[i].b] = 1;
+    if (ok)
+        mark_candidates(s, k, on, cand);
+    for (size_t i = 0; ok && i < 3 * m->ntris; i++) /* the candidates' stars, as a CSR */
+        first[m->tri[i] + 1] += cand[m->tri[i]];
+    for (size_t v = 0; ok && v < nv; v++)
+        first[v + 1] += first[v];
+    if (ok && first[nv] && !(tris = malloc(first[nv] * sizeof *tris)))
+        ok = false;
+    for (size_t t = 0; ok && tris && t < m->ntris; t++)
+        for (int j = 0; j < 3; j++) {
+            uint32_t v = m->tri[3 * t + j];
+            if (cand[v])
+                tris[first[v]++] = (uint32_t)t;
+        }
+    for (size_t v = nv; ok && tris && v > 0; v--) /* first[v] ran to the next one's start */
+        first[v] = first[v - 1];
+    if (ok && tris)
+        first[0] = 0;
+    for (size_t v = 0; ok && tris && v < nv; v++) {
+        size_t n = first[v + 1] - first[v];
+        if (cand[v] && n >= 3 && n <= CREASE_RELAX_STAR_MAX)
+            *moved += relax_vertex(s, (uint32_t)v, tris + first[v], n);
+    }
+    free(on);
+    free(cand);
+    free(first);
+    free(tris);
+    return ok;
+}

@@ -1,0 +1,23 @@
+/* crease_relax.h — thin triangles on a crease's edges mended by moving their corner off the
+ * crease: a triangle whose third corner hovers over the crease edge (or nearly on one of its
+ * ends) has a flat normal that is noise, and splitting it only makes more of them. */
+#ifndef ISM_CREASE_RELAX_H
+#define ISM_CREASE_RELAX_H
+
+#include <stddef.h>
+#include "core/curves/cut_internal.h"
+
+/* A triangle on a crease edge with an angle under this is thin (degrees): its flat normal is
+ * off the surface's by more than the curvature explains, and halving it keeps its shape. */
+#define CREASE_RELAX_THIN_DEG 10.0
+
+/* The smallest angle (degrees) of triangle tv with its corner `moved` at p (NONE: none). */
+double cut_min_angle(const ism_mesh *m, const uint32_t *tv, uint32_t moved, const double *p);
+
+/* Each vertex off crease k that is the third corner of a triangle on one of its cut edges
+ * whose smallest angle is under CREASE_RELAX_THIN_DEG goes to the centroid of its neighbours,
+ * put back on its branch's zero set, when it stays on its branch, none of its triangles
+ * turns over and their smallest angle grows. *moved counts them. False when out of memory. */
+bool cut_crease_relax(cut_state *s, size_t k, size_t *moved);
+
+#endif
