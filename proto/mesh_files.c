@@ -10,12 +10,16 @@
 /* A crease's other sides in PLY: the corners with a normal of their own (w->corner_at) get
  * vertices of their own, appended after the mesh's (whose indices stay), one per vertex and
  * distinct normal, so each side's triangles stay joined and shade with their branch's
- * normal. */
+ * normal. A vertex whose every corner has a normal of its own (its own normal, ∇f, is not
+ * bit for bit either side's) lends its row to its first side instead: no row of the file is
+ * left unused. */
 typedef struct ply_sides {
     size_t n;             /* extra vertices */
     uint32_t *vertex;     /* per extra vertex: the mesh vertex it copies */
     const float **normal; /* per extra vertex: its normal (into w->corner_normal) */
     uint32_t *corner;     /* per corner with its own normal (as w->corner_at): its vertex */
+    const float **row;    /* per mesh vertex: the normal its row carries when it lends it to
+                             a side (NULL: its own) */
 } ply_sides;
 
 typedef struct side_key {
@@ -37,6 +41,21 @@ static void ply_sides_free(ply_sides *p)
     free(p->vertex);
     free((void *)p->normal);
     free(p->corner);
+    free((void *)p->row);
+}
+
+/* Per mesh vertex: 1 when a corner without a normal of its own uses it (calloc'd; NULL when
+ * out of memory). */
+static uint8_t *plain_corners(const ism_mesh *m, const ism_wire_mesh *w, size_t nc)
+{
+    uint8_t *plain = calloc(m->nverts + 1, 1);
+    for (size_t c = 0, j = 0; plain && c < 3 * m->ntris; c++) {
+        if (j < nc && w->corner_at[j] == c)
+            j++;
+        else
+            plain[m->tri[c]] = 1;
+    }
+    return plain;
 }
 
 static bool ply_sides_build(const ism_mesh *m, const ism_wire_mesh *w, ply_sides *p)
@@ -49,22 +68,33 @@ static bool ply_sides_build(const ism_mesh *m, const ism_wire_mesh *w, ply_sides
     p->vertex = malloc(nc * sizeof *p->vertex);
     p->normal = malloc(nc * sizeof *p->normal);
     p->corner = malloc(nc * sizeof *p->corner);
-    if (!key || !p->vertex || !p->normal || !p->corner) {
+    p->row = calloc(m->nverts + 1, sizeof *p->row);
+    uint8_t *plain = plain_corners(m, w, nc);
+    if (!key || !p->vertex || !p->normal || !p->corner || !p->row || !plain) {
         free(key);
+        free(plain);
         ply_sides_free(p);
         return false;
     }
     for (size_t j = 0; j < nc; j++)
         key[j] = (side_key){m->tri[w->corner_at[j]], (uint32_t)j, w->corner_normal + 3 * j};
     qsort(key, nc, sizeof *key, cmp_side);
+    uint32_t at = 0;
     for (size_t i = 0; i < nc; i++) {
-        if (!i || cmp_side(&key[i], &key[i - 1])) {
-            p->vertex[p->n] = key[i].vertex;
+        uint32_t v = key[i].vertex;
+        if (i && !cmp_side(&key[i], &key[i - 1])) {
+            p->corner[key[i].j] = at;
+        } else if (!plain[v] && !p->row[v]) { /* the vertex's own row, unused otherwise */
+            p->row[v] = key[i].normal;
+            p->corner[key[i].j] = at = v;
+        } else {
+            p->vertex[p->n] = v;
             p->normal[p->n++] = key[i].normal;
+            p->corner[key[i].j] = at = (uint32_t)(m->nverts + p->n - 1);
         }
-        p->corner[key[i].j] = (uint32_t)(m->nverts + p->n - 1);
     }
     free(key);
+    free(plain);
     return true;
 }
 
@@ -143,7 +173,8 @@ bool ism_write_ply_wire(const ism_mesh *m, const ism_wire_mesh *w, ism_write_fn 
     ism_sink_init(s, write, ctx);
     ply_header(s, m, w, sides.n);
     for (size_t i = 0; i < m->nverts; i++)
-        ply_vertex(s, m, w, i, w->normal ? w->normal + 3 * i : NULL);
+        ply_vertex(s, m, w, i,
+                   sides.row && sides.row[i] ? sides.row[i] : w->normal ? w->normal + 3 * i : NULL);
     for (size_t i = 0; i < sides.n; i++)
         ply_vertex(s, m, w, sides.vertex[i], sides.normal[i]);
     ply_faces(s, m, w, &sides);

@@ -15,6 +15,8 @@
 /* Newton steps along the branch's gradient back onto its zero set (the mean of a star lies
  * within its sagitta of the surface: two or three suffice). */
 #define CREASE_RELAX_NEWTON 4
+/* The shortest move toward the mean tried, as a share of the whole way (1, 1/2, 1/4). */
+#define CREASE_RELAX_LEAST_STEP 0.25
 /* Triangles round a vertex handled (a mesh vertex has 3–12; more: left where it is). */
 #define CREASE_RELAX_STAR_MAX 64
 
@@ -55,27 +57,13 @@ static void mark_candidates(cut_state *s, size_t k, const uint8_t *on, uint8_t *
     }
 }
 
-/* Moves candidate v (its triangles star[0..n)) when that helps; true when moved. */
-static bool relax_vertex(cut_state *s, uint32_t v, const uint32_t *star, size_t n)
+/* Whether v may go to p (on its branch A's zero set already): p on branch A, none of its
+ * triangles star[0..n) turned over, their smallest angle larger. */
+static bool helps(cut_state *s, uint32_t v, uint32_t A, const uint32_t *star, size_t n,
+                  const double *p)
 {
-    ism_mesh *m = s->m;
-    double *pv = m->pos + 3 * (size_t)v, p[3] = {0, 0, 0};
-    for (size_t i = 0; i < n; i++)
-        for (int j = 0; j < 3; j++) {
-            uint32_t w = m->tri[3 * (size_t)star[i] + j];
-            for (int c = 0; w != v && c < 3; c++)
-                p[c] += m->pos[3 * (size_t)w + c] / (double)(2 * n);
-        }
-    uint32_t A, B;
-    if (!ism_branches_at(s->branches, pv, &A) || A == ISM_BRANCH_NONE)
-        return false;
-    for (int it = 0; it < CREASE_RELAX_NEWTON; it++) {
-        double g[3], f = ism_branches_gradient(s->branches, A, p, g), gg = ism_dot3(g, g);
-        if (!(gg > 0) || !isfinite(f) || f == 0)
-            break;
-        for (int c = 0; c < 3; c++)
-            p[c] -= f * g[c] / gg;
-    }
+    const ism_mesh *m = s->m;
+    uint32_t B;
     if (!ism_branches_at(s->branches, p, &B) || B != A)
         return false;
     double before = 180, after = 180;
@@ -89,13 +77,55 @@ static bool relax_vertex(cut_state *s, uint32_t v, const uint32_t *star, size_t 
         before = fmin(before, cut_min_angle(m, tv, NONE, NULL));
         after = fmin(after, cut_min_angle(m, tv, v, p));
     }
-    if (!(after > before))
+    return after > before;
+}
+
+/* Moves candidate v (its triangles star[0..n)) toward the mean of its star's other corners
+ * (all the way, else a half or a quarter of it: the whole way may cross the crease where it
+ * bends round v), put back on its branch, when that helps; true when moved. */
+static bool relax_vertex(cut_state *s, uint32_t v, const uint32_t *star, size_t n,
+                         const uint8_t *on)
+{
+    ism_mesh *m = s->m;
+    double *pv = m->pos + 3 * (size_t)v, mean[2][3] = {{0, 0, 0}, {0, 0, 0}};
+    size_t count[2] = {0, 0};
+    for (size_t i = 0; i < n; i++)
+        for (int j = 0; j < 3; j++) {
+            uint32_t w = m->tri[3 * (size_t)star[i] + j];
+            count[0] += w != v;
+            count[1] += w != v && !on[w];
+            for (int c = 0; w != v && c < 3; c++) {
+                mean[0][c] += m->pos[3 * (size_t)w + c];
+                mean[1][c] += on[w] ? 0 : m->pos[3 * (size_t)w + c];
+            }
+        }
+    for (int k = 0; k < 2; k++)
+        for (int c = 0; c < 3 && count[k]; c++)
+            mean[k][c] /= (double)count[k];
+    uint32_t A;
+    if (!ism_branches_at(s->branches, pv, &A) || A == ISM_BRANCH_NONE)
         return false;
-    float nrm[3];
-    cut_normal_at(s, p, m->normal + 3 * (size_t)v, nrm);
-    memcpy(pv, p, sizeof p);
-    memcpy(m->normal + 3 * (size_t)v, nrm, sizeof nrm);
-    return true;
+    for (int k = 0; k < 2; k++) /* the whole star's mean, then its corners' off the crease */
+    for (double lambda = 1; count[k] && lambda >= CREASE_RELAX_LEAST_STEP; lambda *= 0.5) {
+        double p[3];
+        for (int c = 0; c < 3; c++)
+            p[c] = pv[c] + lambda * (mean[k][c] - pv[c]);
+        for (int it = 0; it < CREASE_RELAX_NEWTON; it++) {
+            double g[3], f = ism_branches_gradient(s->branches, A, p, g), gg = ism_dot3(g, g);
+            if (!(gg > 0) || !isfinite(f) || f == 0)
+                break;
+            for (int c = 0; c < 3; c++)
+                p[c] -= f * g[c] / gg;
+        }
+        if (!helps(s, v, A, star, n, p))
+            continue;
+        float nrm[3];
+        cut_normal_at(s, p, m->normal + 3 * (size_t)v, nrm);
+        memcpy(pv, p, sizeof p);
+        memcpy(m->normal + 3 * (size_t)v, nrm, sizeof nrm);
+        return true;
+    }
+    return false;
 }
 
 bool cut_crease_relax(cut_state *s, size_t k, size_t *moved)
@@ -130,7 +160,7 @@ bool cut_crease_relax(cut_state *s, size_t k, size_t *moved)
     for (size_t v = 0; ok && tris && v < nv; v++) {
         size_t n = first[v + 1] - first[v];
         if (cand[v] && n >= 3 && n <= CREASE_RELAX_STAR_MAX)
-            *moved += relax_vertex(s, (uint32_t)v, tris + first[v], n);
+            *moved += relax_vertex(s, (uint32_t)v, tris + first[v], n, on);
     }
     free(on);
     free(cand);

@@ -145,6 +145,35 @@ def parse_ply_corners(data):
     return faces
 
 
+def unused_ply_rows(data):
+    """Vertex rows of a binary PLY (float x y z nx ny nz first) that no face uses."""
+    head_end = data.index(b"end_header\n") + len(b"end_header\n")
+    head = data[:head_end].decode()
+    nv = int(head.split("element vertex ")[1].split()[0])
+    nt = int(head.split("element face ")[1].split()[0])
+    vhead, fhead = head.split("element vertex")[1].split("element face")
+    vbytes = 4 * vhead.count("property float") + vhead.count("property uchar")
+    fextra = 4 * fhead.count("property uint") + fhead.count("property uchar")
+    used, at = bytearray(nv), head_end + vbytes * nv
+    for _ in range(nt):
+        for i in struct.unpack_from("<3i", data, at + 1):
+            used[i] = 1
+        at += 13 + fextra
+    return nv - sum(used)
+
+
+def unused_obj_vertices(text):
+    """`v` lines of an OBJ that no face or line uses."""
+    nv, used = 0, set()
+    for line in text.splitlines():
+        w = line.split()
+        if w and w[0] == "v":
+            nv += 1
+        elif w and w[0] in ("f", "l"):
+            used.update(int(x.split("/")[0]) for x in w[1:])
+    return nv - len(used)
+
+
 def parse_obj_corners(text):
     """[(corner positions, corner normals)] per face of an OBJ with `f v//n` faces."""
     v, vn, faces = [], [], []
@@ -358,9 +387,12 @@ class CurveOutputsTest(unittest.TestCase):
                 elif fmt == "ply":  # crease sides on vertices of their own
                     faces = parse_ply_corners(out)
                     quantum = 2e-7  # float32 positions
+                    self.assertEqual(unused_ply_rows(out), 0, "vertex rows no face uses")
                 else:
                     faces = parse_obj_corners(out.decode())
                     quantum = 1e-7  # 9 significant digits
+                    self.assertEqual(unused_obj_vertices(out.decode()), 0,
+                                     "vertices no face or line uses")
                 checked, crease = self.assert_branch_normals(faces, quantum)
                 self.assertGreater(checked, 0.9 * 3 * len(faces))
                 self.assertGreater(crease, 500, "crease points with both sides decided")
