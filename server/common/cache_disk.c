@@ -247,6 +247,12 @@ int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, const void 
                  ((uint64_t)ism_get_le32(hdr + 8) | (uint64_t)ism_get_le32(hdr + 12) << 32) ==
                      (uint64_t)len;
     if (sound && !ism_file_memo_holds(d->sent_ok, name, &st)) {
+        /* A file changed moments ago could not be remembered as checked, so each send would
+         * read it whole on the caller's (a polling) thread: it waits, the caller's bytes go. */
+        if (!ism_file_memo_settled(&st)) {
+            close(fd);
+            return -1;
+        }
         int same = payload_equals(fd, payload, len);
         if (same == 0)
             drop_corrupt(d, rel, name, "payload differs from the bytes it was stored with",

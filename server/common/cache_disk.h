@@ -43,9 +43,9 @@ void ism_cache_disk_set_max(ism_cache_tier *t, unsigned long long max_bytes);
  * copying it (sendfile). -1 otherwise; a file whose payload differs is dropped as damaged
  * (logged and counted like a bad read). The payload is compared with the caller's bytes the
  * first time the file is opened here and again whenever the file has changed since
- * (file_memo.h: its inode, size or change time differ, or it changed moments before the
- * last comparison), so a file written to after it was stored is never sent; one left
- * untouched is sent without being read. */
+ * (file_memo.h: its inode, size or change time differ), so a file written to after it was
+ * stored is never sent; one left untouched is sent without being read. A file changed
+ * moments before (not settled, file_memo.h) is neither compared nor sent: -1. */
 int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, const void *payload,
                                 size_t len, long long *offset);
 

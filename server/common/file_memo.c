@@ -14,9 +14,15 @@
  * more, so 1024 of them are at least 1 GB of cache) in a table of about 140 KB. */
 #define FILE_MEMO_SLOTS 1024
 /* A file changed less than this before its check is checked again at every use: file times
- * are taken from the kernel's coarse clock (a tick of 1-10 ms), so two changes within one
- * tick look like one; two seconds is far beyond any tick. */
-#define FILE_MEMO_RACY_NS 2000000000LL
+ * are taken from the kernel's coarse clock (a tick of 1-10 ms behind the real one), so two
+ * changes within one tick look like one; 50 ms is five of the longest ticks. (It was 2 s for
+ * every file: 450 clients arriving within 2 s of a 8.3 MB mesh's store each had it compared
+ * in full on a polling thread, 3.7 GB read, and /healthz waited 0.2-0.7 s behind them.) */
+#define FILE_MEMO_RACY_NS 50000000LL
+/* The same for a file whose change time is a whole second (nanoseconds 0): its file system
+ * may keep whole seconds (ext4 with small inodes) or two (FAT), so a change up to 2 s later
+ * can share its time; 3 s is past that and a tick. */
+#define FILE_MEMO_RACY_WHOLE_SECONDS_NS 3000000000LL
 
 typedef struct record {
     char name[ISM_CACHE_NAME_MAX]; /* "" when the slot is free */
@@ -69,13 +75,18 @@ bool ism_file_memo_holds(ism_file_memo *m, const char *name, const struct stat *
     return holds;
 }
 
-void ism_file_memo_put(ism_file_memo *m, const char *name, const struct stat *st)
+bool ism_file_memo_settled(const struct stat *st)
 {
     struct timespec now;
     clock_gettime(CLOCK_REALTIME, &now);
     long long age_ns = (long long)(now.tv_sec - st->st_ctim.tv_sec) * 1000000000LL +
                        (now.tv_nsec - st->st_ctim.tv_nsec);
-    if (!m || age_ns < FILE_MEMO_RACY_NS || strlen(name) >= ISM_CACHE_NAME_MAX)
+    return age_ns >= (st->st_ctim.tv_nsec ? FILE_MEMO_RACY_NS : FILE_MEMO_RACY_WHOLE_SECONDS_NS);
+}
+
+void ism_file_memo_put(ism_file_memo *m, const char *name, const struct stat *st)
+{
+    if (!m || !ism_file_memo_settled(st) || strlen(name) >= ISM_CACHE_NAME_MAX)
         return;
     pthread_mutex_lock(&m->lock);
     record *r = slot_of(m, name);

@@ -19,10 +19,14 @@ void ism_file_memo_free(ism_file_memo *m);
 /* Whether name was checked while it had the identity st has now. */
 bool ism_file_memo_holds(ism_file_memo *m, const char *name, const struct stat *st);
 
-/* Records that name, with identity st, was checked just now. A file changed moments before
- * (FILE_MEMO_RACY_NS) is not recorded: file times come from a coarse clock, so a second
- * change in the same tick would leave the identity as it was. Evicts another name's record
- * when its slot is taken (the memo is bounded). */
+/* Whether a check of the file with identity st, made now, could be recorded: it last changed
+ * long enough ago that no later change can share its change time (file times come from a
+ * coarse clock, and some file systems keep whole seconds). */
+bool ism_file_memo_settled(const struct stat *st);
+
+/* Records that name, with identity st, was checked just now — only when st is settled (above):
+ * a second change in the same tick would leave the identity as it was. Evicts another name's
+ * record when its slot is taken (the memo is bounded). */
 void ism_file_memo_put(ism_file_memo *m, const char *name, const struct stat *st);
 
 #endif

@@ -16,6 +16,7 @@
 #include "server/common/cache_disk.h"
 #include "proto/request.h"
 #include "server/common/cache_mem.h"
+#include "server/common/file_memo.h"
 
 #define KEY_A "aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa"
 #define KEY_B "0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef"
@@ -230,6 +231,20 @@ static void flip_byte(const char *path, long offset)
     close(fd);
 }
 
+/* Waits (bounded) until the file at path has settled (file_memo.h): a check of it now could be
+ * remembered, so open_payload compares it. */
+static void wait_settled(const char *path)
+{
+    struct stat st;
+    for (int i = 0; i < 1000; i++) {
+        cr_assert_eq(stat(path, &st), 0);
+        if (ism_file_memo_settled(&st))
+            return;
+        usleep(10000);
+    }
+    cr_assert_fail("%s never settled", path);
+}
+
 Test(cache_disk, a_file_is_sent_only_while_it_holds_the_callers_bytes)
 {
     char *dir = temp_dir();
@@ -237,9 +252,18 @@ Test(cache_disk, a_file_is_sent_only_while_it_holds_the_callers_bytes)
     ism_blob *b = filled(n, 7), *other = filled(n, 8);
     char *path = file_of(dir, KEY_A ".stl");
     ism_cache_tier *d = ism_cache_disk_new(dir, 1 << 20);
+    /* other bytes of the same length than the file's: not sent, the file dropped as damaged */
+    d->put(d, KEY_A ".stl", other);
+    ism_cache_disk_flush(d);
+    wait_settled(path);
+    long long off = -1;
+    cr_assert_eq(ism_cache_disk_open_payload(d, KEY_A ".stl", b->data, n, &off), -1);
+    cr_assert_eq(atomic_load(&d->counters.corrupt), 1);
+    cr_assert_neq(access(path, F_OK), 0);
+    /* the caller's bytes: sent */
     d->put(d, KEY_A ".stl", b);
     ism_cache_disk_flush(d);
-    long long off = -1;
+    wait_settled(path);
     int fd = ism_cache_disk_open_payload(d, KEY_A ".stl", b->data, n, &off);
     cr_assert_geq(fd, 0);
     cr_assert_eq(off, 24);
@@ -247,19 +271,26 @@ Test(cache_disk, a_file_is_sent_only_while_it_holds_the_callers_bytes)
     cr_assert_eq(pread(fd, sent, n, off), (ssize_t)n);
     cr_assert_eq(memcmp(sent, b->data, n), 0);
     close(fd);
-    /* other bytes of the same length: not sent, the file dropped as damaged */
-    cr_assert_eq(ism_cache_disk_open_payload(d, KEY_A ".stl", other->data, n, &off), -1);
-    cr_assert_eq(atomic_load(&d->counters.corrupt), 1);
-    cr_assert_neq(access(path, F_OK), 0);
     /* a byte flipped on disk after a send (first payload byte, the middle, the last) */
     long flips[] = {24, 24 + (long)n / 2, 24 + (long)n - 1};
     for (int i = 0; i < 3; i++) {
         d->put(d, KEY_A ".stl", b);
         ism_cache_disk_flush(d);
+        wait_settled(path);
         fd = ism_cache_disk_open_payload(d, KEY_A ".stl", b->data, n, &off);
         cr_assert_geq(fd, 0);
         close(fd);
         flip_byte(path, flips[i]);
+        /* changed moments ago: neither sent nor read (so not found damaged yet) */
+        struct stat st;
+        cr_assert_eq(stat(path, &st), 0);
+        if (!ism_file_memo_settled(&st)) {
+            cr_assert_eq(ism_cache_disk_open_payload(d, KEY_A ".stl", b->data, n, &off), -1,
+                         "flip at %ld was sent at once", flips[i]);
+            cr_assert_eq(atomic_load(&d->counters.corrupt), 1 + (unsigned long long)i);
+            cr_assert_eq(access(path, F_OK), 0);
+        }
+        wait_settled(path);
         cr_assert_eq(ism_cache_disk_open_payload(d, KEY_A ".stl", b->data, n, &off), -1,
                      "flip at %ld was sent", flips[i]);
         cr_assert_eq(atomic_load(&d->counters.corrupt), 2 + (unsigned long long)i);
