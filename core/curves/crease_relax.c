@@ -80,6 +80,23 @@ static bool helps(cut_state *s, uint32_t v, uint32_t A, const uint32_t *star, si
     return after > before;
 }
 
+/* Whether the star of v (its triangles star[0..n)) is a closed fan: each neighbour in
+ * exactly two of them (not at the box, not on a non-manifold edge, where moving v would
+ * tear the surface or leave the locus). */
+static bool closed_fan(const ism_mesh *m, uint32_t v, const uint32_t *star, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        for (int j = 0; j < 3; j++) {
+            uint32_t w = m->tri[3 * (size_t)star[i] + j], seen = 0;
+            for (size_t k = 0; w != v && k < n; k++)
+                for (int c = 0; c < 3; c++)
+                    seen += m->tri[3 * (size_t)star[k] + c] == w;
+            if (w != v && seen != 2)
+                return false;
+        }
+    return true;
+}
+
 /* Moves candidate v (its triangles star[0..n)) toward the mean of its star's other corners
  * (all the way, else a half or a quarter of it: the whole way may cross the crease where it
  * bends round v), put back on its branch, when that helps; true when moved. */
@@ -103,7 +120,8 @@ static bool relax_vertex(cut_state *s, uint32_t v, const uint32_t *star, size_t 
         for (int c = 0; c < 3 && count[k]; c++)
             mean[k][c] /= (double)count[k];
     uint32_t A;
-    if (!ism_branches_at(s->branches, pv, &A) || A == ISM_BRANCH_NONE)
+    if (!closed_fan(m, v, star, n) || !ism_branches_at(s->branches, pv, &A) ||
+        A == ISM_BRANCH_NONE)
         return false;
     for (int k = 0; k < 2; k++) /* the whole star's mean, then its corners' off the crease */
     for (double lambda = 1; count[k] && lambda >= CREASE_RELAX_LEAST_STEP; lambda *= 0.5) {

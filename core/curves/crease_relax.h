@@ -16,8 +16,8 @@ double cut_min_angle(const ism_mesh *m, const uint32_t *tv, uint32_t moved, cons
 
 /* Each vertex off crease k that is the third corner of a triangle on one of its cut edges
  * whose smallest angle is under CREASE_RELAX_THIN_DEG goes to the centroid of its neighbours,
- * put back on its branch's zero set, when it stays on its branch, none of its triangles
- * turns over and their smallest angle grows. *moved counts them. False when out of memory. */
+ * put back on its branch's zero set, when its star is a closed fan, it stays on its branch,
+ * none of its triangles turns over and their smallest angle grows. *moved counts them. False when out of memory. */
 bool cut_crease_relax(cut_state *s, size_t k, size_t *moved);
 
 #endif
