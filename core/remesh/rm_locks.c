@@ -26,6 +26,17 @@ static int cmp_u64(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
+/* Normals n1 and n2 face opposite ways across ∇f at v; where ∇f vanishes (a singular
+ * point: the conformance's fan around it, whose rim may fold back on itself) v has no say
+ * and the edge's other end decides. */
+static bool turned_at(const rm_pass *p, uint32_t v, const double *n1, const double *n2)
+{
+    const double *g = p->normal + 3 * v;
+    if (g[0] == 0 && g[1] == 0 && g[2] == 0)
+        return true;
+    return (ism_dot3(n1, g) > 0) != (ism_dot3(n2, g) > 0);
+}
+
 /* Edge {a, b} of triangles t1, t2 bends by more than the crease angle, and is no fold: a
  * fold (one triangle turned over against its neighbours, a polygoniser artefact) has its two
  * triangles facing opposite ways across ∇f at the edge's ends, a crease has both facing
@@ -42,9 +53,7 @@ static bool is_crease(const rm_pass *p, uint32_t a, uint32_t b, uint32_t t1, uin
         rm_is_cap(P + 3 * u[0], P + 3 * u[1], P + 3 * u[2]) ||
         rm_is_cap(P + 3 * w[0], P + 3 * w[1], P + 3 * w[2]))
         return false; /* a cap's normal says nothing of a bend */
-    const double *ga = p->normal + 3 * a, *gb = p->normal + 3 * b;
-    bool fold = (ism_dot3(n1, ga) > 0) != (ism_dot3(n2, ga) > 0) && (ism_dot3(n1, gb) > 0) != (ism_dot3(n2, gb) > 0);
-    return !fold;
+    return !(turned_at(p, a, n1, n2) && turned_at(p, b, n1, n2));
 }
 
 bool rm_edge_free(const rm_pass *p, uint32_t a, uint32_t b)
