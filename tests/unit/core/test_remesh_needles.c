@@ -279,7 +279,7 @@ static void touching_spheres(const ism_tape *t, const double box[6], int d, int 
                 "the point %.2f -> %.2f, centroid error %.3g -> %.3g, folds %zu -> %zu", what, st.collapses,
                 st.inserts, before.needles, after.needles, before.min_angle_away, after.min_angle_away,
                 before.centroid_error, after.centroid_error, before.folds, after.folds);
-    /* the fan at the point needs collapses in the 0.37-cell box (254 at depth 5, 174 at 6);
+    /* the fan at the point needs collapses in the 0.37-cell box (257 at depth 5, 174 at 6);
      * elsewhere flips and moves may mend everything alone */
     if (which == 1)
         cr_expect_gt(st.collapses, 0, "%s", what);
@@ -291,8 +291,8 @@ static void touching_spheres(const ism_tape *t, const double box[6], int d, int 
     cr_expect_eq(pf_vertex_cones(&m, point), 2, "%s", what);
     cr_expect_gt(before.needles, 0, "%s: nothing to mend", what);
     cr_expect_eq(after.needles, 0, "%s: %zu needles", what, after.needles);
-    /* measured 26.6°, 25.2° and 21.4° at depth 6; at depth 5 21.6° and 25.6°, and 14.7° in
-     * the 0.37-cell box beside pleats the conformance leaves (folds below: 149 -> 12), so
+    /* measured 26.6°, 25.2° and 21.4° at depth 6; at depth 5 21.6° and 25.6°, and 19.0° in
+     * the 0.37-cell box beside pleats the conformance leaves (folds below: 149 -> 7), so
      * there the issue's bound for singular presets, no triangle under 10° but at the point */
     cr_expect_geq(after.min_angle_away, d >= 6 || which < 1 ? 20.0 : NEEDLE_DEG, "%s: %.2f", what,
                   after.min_angle_away);
@@ -323,6 +323,8 @@ Test(remesh_needles, touching_spheres_keep_topology_and_lose_needles)
 /* ---- Steiner's Roman surface ---- */
 
 #define STEINER "x^2*y^2 + y^2*z^2 + z^2*x^2 + x*y*z"
+/* Needles the pass may leave on it (measured below). */
+#define STEINER_NEEDLES_LEFT 10
 
 /* Triangles under NEEDLE_DEG, and the largest |f| / |∇f| at the centroids and vertices. */
 static void steiner_shape(const ism_mesh *m, const ism_tape *t, shape *s)
@@ -459,7 +461,8 @@ static void steiner(const ism_tape *t, const double box[6], int d, int which)
     cr_log_info("%s: %zu collapses, %zu inserts; under %g°: %zu -> %zu; centroid error "
                 "%.3g -> %.3g", what, st.collapses, st.inserts, NEEDLE_DEG, before.needles,
                 after.needles, before.centroid_error, after.centroid_error);
-    cr_expect_gt(st.inserts, 0, "%s", what);
+    if (which >= 0)
+        cr_expect_gt(st.inserts, 0, "%s", what);
     /* RP² immersed with a triple point and six half-segments of double line: χ = 5 */
     cr_expect_eq(a.euler, 5, "%s: χ = %ld", what, a.euler);
     cr_expect_eq(b.euler, 5, "%s: χ = %ld before", what, b.euler);
@@ -467,6 +470,11 @@ static void steiner(const ism_tape *t, const double box[6], int d, int which)
     cr_expect_eq(a.boundary_edges, 0, "%s", what);
     cr_expect_eq(a.components, 1, "%s", what);
     cr_expect_leq(4 * after.needles, before.needles, "%s", what);
+    /* left beside the double lines, where both ends of a short edge are locked (the issue's
+     * goal is none): 0 / 1 / 8 in the lattice / 1e-3 / 0.37-cell boxes at depth 6, 9 in the
+     * last at depth 5 (the sanitizer's); 13 and 16 (13 at depth 5) before the pass mended
+     * the needles its last flips and moves leave */
+    cr_expect_leq(after.needles, STEINER_NEEDLES_LEFT, "%s: %zu needles", what, after.needles);
     cr_expect_leq(after.centroid_error, before.centroid_error, "%s", what);
     cr_expect_leq(a.max_dist, fmax(1e-9, b.max_dist), "%s", what);
     cr_expect_eq(nea, neb, "%s: %zu label edges, %zu before", what, nea, neb);
@@ -482,5 +490,6 @@ static void steiner(const ism_tape *t, const double box[6], int d, int which)
 Test(remesh_needles, steiner_double_lines_split_and_topology_kept)
 {
     const double base[6] = {-1, -1, -1, 1, 1, 1};
-    in_shifted_boxes(STEINER, base, 6 - pf_quick(), steiner);
+    /* all three boxes: its own box has no needle left and needs no insertion at depth 5 */
+    in_boxes(STEINER, base, 6 - pf_quick(), pf_quick() ? 1 : -1, steiner);
 }
