@@ -18,14 +18,30 @@
  *    z axis between its pinch points (0, 0, 0) and (0, 0, 1): χ = 1 + 1 = 2, one chain.
  *  - two unit spheres centred (±1/4, 0, 0): χ = 2 + 2 − χ(circle) = 4, one component, the
  *    non-manifold edges one closed chain on the circle x = 0, y² + z² = 1 − 1/16.
- * Every non-manifold edge has exactly 4 triangles (two sheets crossing), every vertex of the
- * chains lies on its curve within 1e-9 × the diagonal (the curves' traced points), and the
- * chains' ends and junctions are the pinch and triple points within 1e-9 × the diagonal. */
+ *  - the figure-8 Klein bottle (klein-bottle preset, an immersed Klein bottle, χ 0), f = A (B²
+ *    − 8z²) + 16 x z B with A = r² + 2y − 1, B = r² − 2y − 1, r² = x² + y² + z²: on the circle
+ *    z = 0, x² + (y − 1)² = 2 (B = 0) f and ∇f vanish, and across it f ≈ A B² + 16 x B z −
+ *    8 A z², indefinite everywhere on the circle (discriminant 256 x² + 32 A² > 0; A = x = 0
+ *    would need y = 0, x² = 1 there): two sheets cross along the whole circle, its only self-
+ *    intersection. χ = 0 − χ(circle) = 0, one closed chain. Its lowest point, z ≈ −3.652 (f's
+ *    sign over slices z = c, bisected), is cut off by the preset's ±4 box shifted 0.37 cell at
+ *    depth 3 (z ≥ −3.59): here the box is ±4.5, which every placement keeps whole. Before, at
+ *    depths 3 and 4 the tube swallowed the crossing: χ 2 and 1, no non-manifold edge.
+ *  - the coordinate planes xyz = 0 in ±1: three squares glued along the three axes' segments,
+ *    which meet at the origin: χ = 3 − 3 + 1 = 1, one component, a boundary on the box; the
+ *    non-manifold edges are 6 chains from the origin (degree 6) to the axes' exits from the
+ *    box (degree 1, each face's centre line meets the box there). Before, at depth 3 in both
+ *    shifted boxes the planes came out as 3 separate components without a non-manifold edge.
+ * Every non-manifold edge has exactly 4 triangles (two sheets crossing; at the triple point 6
+ * chains meet), every vertex of the chains lies on its curve within 1e-9 × the diagonal (the
+ * curves' traced points), and the chains' ends and junctions are the pinch and triple points
+ * (or the box exits) within 1e-9 × the diagonal. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include "core/util/vec3.h"
 #include "tests/unit/core/poly_fixture.h"
 
@@ -43,6 +59,8 @@ typedef struct dcurve_case {
     size_t hub_degree;
     size_t chains;            /* chains between ends and hubs, or closed */
     curve_dist_fn dist;
+    bool axes_exit;           /* the surface leaves the box: the ends are where the three axes
+                                 leave the placed box, and a boundary is expected */
 } dcurve_case;
 
 static double dist_axes(const double p[3])
@@ -61,15 +79,25 @@ static double dist_circle(const double p[3])
     return hypot(p[0], hypot(p[1], p[2]) - sqrt(1 - 1.0 / 16));
 }
 
+static double dist_klein_circle(const double p[3])
+{
+    return hypot(p[2], hypot(p[0], p[1] - 1) - sqrt(2));
+}
+
 static const dcurve_case CASES[] = {
     {"steiner-roman", "x^2*y^2 + y^2*z^2 + z^2*x^2 + x*y*z", {-1, -1, -1, 1, 1, 1}, 5, 6,
      {{0.5, 0, 0}, {-0.5, 0, 0}, {0, 0.5, 0}, {0, -0.5, 0}, {0, 0, 0.5}, {0, 0, -0.5}}, 1,
-     {0, 0, 0}, 6, 6, dist_axes},
+     {0, 0, 0}, 6, 6, dist_axes, false},
     {"cross-cap", "4*x^2*(x^2 + y^2 + z^2 + z) + y^2*(y^2 + z^2 - 1)",
      {-1.2, -1.2, -1.2, 1.2, 1.2, 1.2}, 2, 2, {{0, 0, 0}, {0, 0, 1}}, 0, {0, 0, 0}, 0, 1,
-     dist_z_axis},
+     dist_z_axis, false},
     {"crossing-spheres", "((x - 0.25)^2 + y^2 + z^2 - 1)*((x + 0.25)^2 + y^2 + z^2 - 1)",
-     {-1.8, -1.3, -1.3, 1.8, 1.3, 1.3}, 4, 0, {{0}}, 0, {0, 0, 0}, 0, 1, dist_circle},
+     {-1.8, -1.3, -1.3, 1.8, 1.3, 1.3}, 4, 0, {{0}}, 0, {0, 0, 0}, 0, 1, dist_circle, false},
+    {"klein-bottle", "(x^2 + y^2 + z^2 + 2*y - 1)*((x^2 + y^2 + z^2 - 2*y - 1)^2 - 8*z^2) + "
+     "16*x*z*(x^2 + y^2 + z^2 - 2*y - 1)", {-4.5, -4.5, -4.5, 4.5, 4.5, 4.5}, 0, 0, {{0}}, 0,
+     {0, 0, 0}, 0, 1, dist_klein_circle, false},
+    {"coordinate-planes", "x*y*z", {-1, -1, -1, 1, 1, 1}, 1, 6, {{0}}, 1, {0, 0, 0}, 6, 6,
+     dist_axes, true},
 };
 
 /* An edge (a < b) and how many triangles hold it. */
@@ -209,11 +237,17 @@ static void check_case(const dcurve_case *c, int d, int which)
     pf_run_surface(t, box, 3, d, &m, &l);
     pf_props pr;
     pf_measure(&m, t, &pr);
-    cr_expect(pr.euler == c->euler && pr.components == 1 && pr.boundary_edges == 0,
-              "%s: χ %ld, %zu components, %zu boundary edges; want %ld, 1, 0", what, pr.euler,
-              pr.components, pr.boundary_edges, c->euler);
+    cr_expect(pr.euler == c->euler && pr.components == 1 &&
+                  (pr.boundary_edges > 0) == c->axes_exit,
+              "%s: χ %ld, %zu components, %zu boundary edges; want %ld, 1, %s", what, pr.euler,
+              pr.components, pr.boundary_edges, c->euler, c->axes_exit ? "some" : "0");
     double diag = sqrt(ism_sqdist3(box, box + 3));
-    check_chains(c, &m, diag, what);
+    dcurve_case placed = *c;
+    for (int k = 0; c->axes_exit && k < 6; k++) { /* (x0, 0, 0), (x1, 0, 0), (0, y0, 0), ... */
+        memset(placed.end[k], 0, sizeof placed.end[k]);
+        placed.end[k][k / 2] = box[k / 2 + 3 * (k % 2)];
+    }
+    check_chains(&placed, &m, diag, what);
     ism_locus_free(&l);
     ism_mesh_free(&m);
     ism_tape_free(t);
@@ -239,4 +273,14 @@ Test(coarse_dcurves, cross_cap)
 Test(coarse_dcurves, crossing_spheres)
 {
     run_case(2);
+}
+
+Test(coarse_dcurves, klein_bottle)
+{
+    run_case(3);
+}
+
+Test(coarse_dcurves, coordinate_planes)
+{
+    run_case(4);
 }
