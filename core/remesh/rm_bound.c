@@ -1,27 +1,61 @@
 /* rm_bound.c — distances to f = 0 measured with a Newton step, and the bound checks built on
  * them (rm_bound.h). */
 #include "core/remesh/rm_bound.h"
+#include "core/remesh/rm_memo.h"
 #include "core/util/vec3.h"
 
 #include <math.h>
 
-/* f/|∇f| at x into *s1 and, unless |*s1| > limit, where the Newton step from x lands into *s2
- * (0 otherwise). False where ∇f vanishes or f is not finite. */
-static bool two_steps(rm_pass *p, const double x[3], double limit, double *s1, double *s2)
+/* The Newton step at x into e: s1 = f/|∇f| and y, where the step lands (state S1), or
+ * FAIL1 where ∇f vanishes or f is not finite. */
+static void first_step(rm_pass *p, const double x[3], rm_memo_entry *e)
 {
     double g[3], fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
     double g2 = ism_dot3(g, g), gn = sqrt(g2);
+    if (!isfinite(fv) || !(gn > p->gthresh)) {
+        e->state = RM_MEMO_FAIL1;
+        return;
+    }
+    e->s1 = fv / gn;
+    double s = fv / g2;
+    for (int k = 0; k < 3; k++)
+        e->y[k] = x[k] - s * g[k];
+    e->state = RM_MEMO_S1;
+}
+
+/* f/|∇f| where the step lands into e->s2 (state S2), or FAIL2. */
+static void second_step(rm_pass *p, rm_memo_entry *e)
+{
+    double h[3], fy = ism_eval_gradient(p->f, p->ws, e->y[0], e->y[1], e->y[2], h);
+    double hn = sqrt(ism_dot3(h, h));
+    if (!isfinite(fy) || !(hn > p->gthresh)) {
+        e->state = RM_MEMO_FAIL2;
+        return;
+    }
+    e->s2 = fy / hn;
+    e->state = RM_MEMO_S2;
+}
+
+/* f/|∇f| at x into *s1 and, unless |*s1| > limit, where the Newton step from x lands into *s2
+ * (0 otherwise). False where ∇f vanishes or f is not finite. Each step is taken once per
+ * point while the pass's memo (rm_memo.h) remembers it. */
+static bool two_steps(rm_pass *p, const double x[3], double limit, double *s1, double *s2)
+{
+    rm_memo_entry own = {.state = RM_MEMO_EMPTY};
+    rm_memo_entry *e = p->memo ? rm_memo_slot(p->memo, x) : &own;
+    if (e->state == RM_MEMO_EMPTY)
+        first_step(p, x, e);
     *s2 = 0;
-    if (!isfinite(fv) || !(gn > p->gthresh))
+    if (e->state == RM_MEMO_FAIL1)
         return false;
-    *s1 = fv / gn;
+    *s1 = e->s1;
     if (fabs(*s1) > limit)
         return true;
-    double s = fv / g2, y[3] = {x[0] - s * g[0], x[1] - s * g[1], x[2] - s * g[2]};
-    double h[3], fy = ism_eval_gradient(p->f, p->ws, y[0], y[1], y[2], h), hn = sqrt(ism_dot3(h, h));
-    if (!isfinite(fy) || !(hn > p->gthresh))
+    if (e->state == RM_MEMO_S1)
+        second_step(p, e);
+    if (e->state == RM_MEMO_FAIL2)
         return false;
-    *s2 = fy / hn;
+    *s2 = e->s2;
     return true;
 }
 
@@ -51,12 +85,14 @@ bool rm_bound_triangle(rm_pass *p, const double *a, const double *b, const doubl
     return rm_bound_distance(p, m, p->max_error) <= p->max_error;
 }
 
-double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x)
+/* The largest distance over v's fan with v at x, each point measured with limit: as soon
+ * as one measures above stop, that one (the rest are not measured). */
+static double fan_worst(rm_pass *p, uint32_t v, const double *x, double limit, double stop)
 {
     const rm_mesh *r = &p->r;
     const double *P = r->m->pos;
-    double worst = 0;
-    for (uint32_t i = 0; i < r->count[v]; i++) {
+    double worst = rm_bound_distance(p, x, limit);
+    for (uint32_t i = 0; i < r->count[v] && worst <= stop; i++) {
         const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
         const double *q[3];
         for (int k = 0; k < 3; k++)
@@ -68,14 +104,25 @@ double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x)
             m[j] = 0.5 * (x[j] + q[(k + 1) % 3][j]);
         }
         /* each edge at v is the next edge of exactly one triangle of a closed fan */
-        worst = fmax(worst, fmax(rm_bound_distance(p, g, INFINITY),
-                                 rm_bound_distance(p, m, INFINITY)));
+        worst = fmax(worst, rm_bound_distance(p, g, limit));
+        if (worst <= stop)
+            worst = fmax(worst, rm_bound_distance(p, m, limit));
     }
-    return fmax(worst, rm_bound_distance(p, x, INFINITY));
+    return worst;
 }
 
+double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x)
+{
+    return fan_worst(p, v, x, INFINITY, INFINITY);
+}
+
+/* Each point is measured against the bound it must meet (a point beyond it fails either
+ * way, rm_bound_distance), and the first to fail ends the measure. */
 bool rm_bound_fan(rm_pass *p, uint32_t v, const double *x)
 {
-    double now = rm_bound_fan_worst(p, v, x);
-    return now <= p->max_error || now <= rm_bound_fan_worst(p, v, p->r.m->pos + 3 * (size_t)v);
+    double e = p->max_error;
+    if (fan_worst(p, v, x, e, e) <= e)
+        return true;
+    double before = rm_bound_fan_worst(p, v, p->r.m->pos + 3 * (size_t)v);
+    return fan_worst(p, v, x, before, before) <= before;
 }

@@ -39,6 +39,7 @@ typedef struct rm_pass {
                                centroid and edge midpoint within max_error, measured with a
                                Newton step, whatever they were before; collapses, insertions
                                and slides measure with the step too, midpoints included */
+    struct rm_memo *memo;   /* distances measured by point (rm_memo.h; NULL: none kept) */
     size_t flips, moves, collapses, inserts;
 } rm_pass;
 

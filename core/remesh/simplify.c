@@ -1,8 +1,11 @@
 /* simplify.c — the simplification in order (simplify.h): ∇f normals and protection, then
  * rounds of collapses (sp_collapse.c), each followed by Lawson flips and one relaxation sweep
  * under the measured bound (rm_flip.c, rm_relax.c with bounded set), until a round merges
- * little; a last round of flips, then the renumbering. */
+ * little; a last round of flips, then the renumbering. The pass's measures are remembered by
+ * point (rm_memo.h): a centroid or midpoint measured by a verdict, a trial or a move is not
+ * measured again while it stays where it is. */
 #include "core/remesh/simplify.h"
+#include "core/remesh/rm_memo.h"
 #include "core/remesh/rm_pass.h"
 #include "core/remesh/sp_collapse.h"
 #include "core/remesh/sp_place.h"
@@ -72,8 +75,10 @@ bool ism_remesh_simplify(ism_mesh *m, const ism_remesh_options *o, ism_simplify_
     size_t nv = m->nverts, nt = m->ntris;
     bool ok = rm_pass_open(&p, m, o, 0);
     p.bounded = true;
-    if (ok)
+    if (ok) {
+        p.memo = rm_memo_new(m->nverts); /* NULL: every measure is taken afresh */
         memset(p.active, 1, m->nverts);
+    }
     for (int round = 0; ok && round < ISM_SP_ROUNDS && !stopped(o); round++) {
         size_t live = live_vertices(&p);
         size_t made = sp_collapse_round(&p, o->cancel, &ok);
@@ -93,6 +98,8 @@ bool ism_remesh_simplify(ism_mesh *m, const ism_remesh_options *o, ism_simplify_
     st->flips = p.flips;
     st->moves = p.moves;
     st->stopped = stopped(o);
+    rm_memo_free(p.memo);
+    p.memo = NULL;
     if (!rm_pass_close(&p, nv, nt, ren))
         ok = false;
     st->triangles_after = m->ntris;

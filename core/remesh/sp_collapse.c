@@ -178,12 +178,13 @@ static enum verdict merge_verdict(rm_pass *p, const rm_merge *g, double *x, doub
     sp_stencil s[SP_MAX_STENCILS];
     int ns = sp_stencils(p, fan, n, g->v, g->w, s);
     double before, after, near = ISM_SP_TRIAL_REACH * p->max_error;
-    if (!ns || !sp_place(p, s, ns, near, x, gx, &before) ||
-        !((after = sp_measure(p, s, ns, x, near)) <= near))
+    if (!ns || !sp_place(p, s, ns, near, x, gx, &before))
         return REFUSED;
-    for (uint32_t i = 0; i < n; i++) /* the offset moved x a little: shape again */
+    for (uint32_t i = 0; i < n; i++) /* the offset moved x a little: shape again, unmeasured */
         if (!shape_ok(p, g, fan[i], x, floor_sine))
             return REFUSED;
+    if (!((after = sp_measure(p, s, ns, x, near)) <= near))
+        return REFUSED;
     return after <= p->max_error ? WITHIN : NEAR;
 }
 

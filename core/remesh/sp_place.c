@@ -149,8 +149,8 @@ bool sp_offset_vertex(rm_pass *p, uint32_t v)
     rm_fan f;
     rm_fan_measure(p, v, &f);
     if (!n || !sp_place(p, s, n, p->max_error, x, g, &before) ||
-        !(sp_measure(p, s, n, x, before) < before) ||
-        !rm_fan_accepts(p, v, x, &f))
+        !rm_fan_accepts(p, v, x, &f) || /* the shape first: it measures nothing */
+        !(sp_measure(p, s, n, x, before) < before))
         return false;
     rm_commit_move(p, v, x, g);
     p->moves++;

@@ -1,0 +1,43 @@
+/* rm_memo.h — distances to f = 0 remembered by point (rm_memo.c): the simplification measures
+ * the same centroid, edge midpoint or vertex again and again (a merge's verdict, then its
+ * trial, the ring's moves, the sweep after), each time with one or two evaluations of f and
+ * ∇f. A direct-mapped table keyed on the point's exact bits keeps what rm_bound.c's Newton
+ * measure found there, so a repeat costs a lookup and returns bit for bit what a fresh
+ * measure would (f is pure; nothing else enters the measure). */
+#ifndef ISM_RM_MEMO_H
+#define ISM_RM_MEMO_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+/* What an entry knows about its point x. */
+enum rm_memo_state {
+    RM_MEMO_EMPTY = 0,
+    RM_MEMO_FAIL1, /* ∇f vanishes at x or f is not finite there */
+    RM_MEMO_S1,    /* s1 = f/|∇f| at x, and y, where the Newton step from x lands */
+    RM_MEMO_S2,    /* s1 and s2 = f/|∇f| at y */
+    RM_MEMO_FAIL2, /* s1; ∇f vanishes at y or f is not finite there */
+};
+
+typedef struct rm_memo_entry {
+    double x[3], y[3];
+    double s1, s2;
+    uint32_t state;
+} rm_memo_entry;
+
+typedef struct rm_memo {
+    rm_memo_entry *e;
+    unsigned bits;
+} rm_memo;
+
+/* A table sized for a mesh of nverts vertices (between 2^10 and 2^16 entries). NULL when out
+ * of memory (the measures then go without it). */
+rm_memo *rm_memo_new(size_t nverts);
+void rm_memo_free(rm_memo *m);
+
+/* The entry for x: x's own (its state says what it knows) or, on a miss, the slot emptied
+ * and keyed on x for the caller to fill. */
+rm_memo_entry *rm_memo_slot(rm_memo *m, const double x[3]);
+
+#endif
