@@ -28,9 +28,13 @@ void ism_remesh_renumber_free(ism_remesh_renumber *ren)
     memset(ren, 0, sizeof *ren);
 }
 
+/* Triangles whose smallest angle's sine is within this factor of the smallest sine so far
+ * have their angle measured (an arc tangent): the sine alone orders them up to rounding. */
+#define ISM_RM_SINE_TIE 1.000001
+
 double ism_remesh_min_angle(const ism_mesh *m)
 {
-    double worst = 90;
+    double worst = 90, least = INFINITY;
     for (size_t t = 0; t < m->ntris; t++) {
         const uint32_t *v = m->tri + 3 * t;
         if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2])
@@ -38,8 +42,12 @@ double ism_remesh_min_angle(const ism_mesh *m)
         const double *a = m->pos + 3 * v[0], *b = m->pos + 3 * v[1], *c = m->pos + 3 * v[2];
         double n[3], area = rm_cross(a, b, c, n);
         double l = fmax(rm_dist(a, b), fmax(rm_dist(b, c), rm_dist(c, a)));
-        if (area > 1e-12 * l * l) /* the analysis's degenerate-triangle rule */
+        double sine = rm_min_sine(a, b, c);
+        if (area > 1e-12 * l * l && /* the analysis's degenerate-triangle rule */
+            sine <= least * ISM_RM_SINE_TIE) {
+            least = fmin(least, sine);
             worst = fmin(worst, rm_min_angle(a, b, c) * 180 / M_PI);
+        }
     }
     return worst;
 }
@@ -50,6 +58,8 @@ static bool stopped(const ism_remesh_options *o) { return o->cancel && *o->cance
  * split needles' thin halves (from the split needles' corners only). */
 static void mend_needles(rm_pass *p, bool *ok)
 {
+    if (!(p->poorest < sin(ISM_RM_COLLAPSE_DEG * M_PI / 180)))
+        return; /* no triangle under ISM_RM_COLLAPSE_DEG since rm_mark_active looked */
     rm_collapse_active(p, ok);
     if (*ok && rm_insert_active(p, ok) && *ok)
         rm_flip_from(p, p->touched, ok);

@@ -15,9 +15,6 @@
 #include <math.h>
 #include <string.h>
 
-/* Triangles whose smallest angle is under this (degrees) have their edges tried: the
- * issue's goal on smooth surfaces; better triangles are left to flips and relaxation. */
-#define ISM_RM_COLLAPSE_DEG 20.0
 /* A removed vertex, and the kept one after the merge, have at most this many triangles:
  * higher valences make poor angles anyway. */
 #define ISM_RM_COLLAPSE_MAX_DEGREE 16

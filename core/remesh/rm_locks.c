@@ -56,16 +56,20 @@ static bool is_crease(const rm_pass *p, uint32_t a, uint32_t b, uint32_t t1, uin
     return !(turned_at(p, a, n1, n2) && turned_at(p, b, n1, n2));
 }
 
-bool rm_edge_free(const rm_pass *p, uint32_t a, uint32_t b)
+/* rm_edge_free for the oriented manifold edge {a, b} of triangles t[0], t[1]. */
+static bool manifold_edge_free(const rm_pass *p, uint32_t a, uint32_t b, const uint32_t t[2])
 {
     const rm_mesh *r = &p->r;
-    uint32_t t[2];
-    int n;
-    if (!rm_edge_triangles(r, a, b, t, &n))
-        return false;
     if (rm_label(r, t[0]) != rm_label(r, t[1]))
         return false;
     return !rm_edge_locked(r, a, b) && !is_crease(p, a, b, t[0], t[1]);
+}
+
+bool rm_edge_free(const rm_pass *p, uint32_t a, uint32_t b)
+{
+    uint32_t t[2];
+    int n;
+    return rm_edge_triangles(&p->r, a, b, t, &n) && manifold_edge_free(p, a, b, t);
 }
 
 /* Every edge at v free, and the triangles one closed fan (walked across those edges). */
@@ -81,8 +85,8 @@ static bool fan_free(const rm_pass *p, uint32_t v)
         int k = rm_corner(r->m, t, v);
         uint32_t ab[2], prev = tri[3 * t + (k + 2) % 3];
         int c;
-        if (tri[3 * t + (k + 1) % 3] == v || prev == v || !rm_edge_free(p, v, prev) ||
-            !rm_edge_triangles(r, v, prev, ab, &c))
+        if (tri[3 * t + (k + 1) % 3] == v || prev == v ||
+            !rm_edge_triangles(r, v, prev, ab, &c) || !manifold_edge_free(p, v, prev, ab))
             return false;
         t = ab[0];
     } while (t != t0 && ++steps <= n);

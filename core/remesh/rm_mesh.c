@@ -78,23 +78,19 @@ bool rm_edge_locked(const rm_mesh *r, uint32_t a, uint32_t b)
     return lo < r->nlocked_edges && r->locked_edges[lo] == key;
 }
 
-int rm_corner(const ism_mesh *m, uint32_t t, uint32_t v)
-{
-    for (int k = 0; k < 3; k++)
-        if (m->tri[3 * t + k] == v)
-            return k;
-    return -1;
-}
-
 bool rm_edge_triangles(const rm_mesh *r, uint32_t a, uint32_t b, uint32_t t[2], int *n)
 {
     const uint32_t *tri = r->m->tri;
     int forward = 0, backward = 0;
     *n = 0;
+    const uint32_t *slot = r->vt + r->start[a];
     for (uint32_t i = 0; i < r->count[a]; i++) {
-        uint32_t s = r->vt[r->start[a] + i];
-        int k = rm_corner(r->m, s, a);
-        uint32_t next = tri[3 * s + (k + 1) % 3], prev = tri[3 * s + (k + 2) % 3];
+        uint32_t s = slot[i];
+        const uint32_t *c = tri + 3 * (size_t)s;
+        /* a's two neighbours in the winding, without a remainder by 3 (the pass's hottest
+           loop: flips and the protection ask for every edge) */
+        uint32_t next = c[0] == a ? c[1] : c[1] == a ? c[2] : c[0];
+        uint32_t prev = c[0] == a ? c[2] : c[1] == a ? c[0] : c[1];
         if (next == b) {
             t[0] = s;
             forward++;
@@ -154,38 +150,12 @@ bool rm_slot_add(rm_mesh *r, uint32_t v, uint32_t t)
     return true;
 }
 
-double rm_dist(const double *p, const double *q)
-{
-    double d[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
-    return sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-}
-
-double rm_cross(const double *a, const double *b, const double *c, double n[3])
-{
-    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    n[0] = u[1] * v[2] - u[2] * v[1];
-    n[1] = u[2] * v[0] - u[0] * v[2];
-    n[2] = u[0] * v[1] - u[1] * v[0];
-    return sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-}
-
 double rm_angle(const double *p, const double *q, const double *s)
 {
     double n[3], len = rm_cross(p, q, s, n);
     double dot = (q[0] - p[0]) * (s[0] - p[0]) + (q[1] - p[1]) * (s[1] - p[1]) +
                  (q[2] - p[2]) * (s[2] - p[2]);
     return len == 0 && dot == 0 ? 0 : atan2(len, dot);
-}
-
-double rm_min_sine(const double *a, const double *b, const double *c)
-{
-    /* 2 area = |AB x AC| = product of the two sides at the smallest angle × its sine; those
-     * are the two longest sides */
-    double n[3], twice_area = rm_cross(a, b, c, n);
-    double ab = rm_dist(a, b), bc = rm_dist(b, c), ca = rm_dist(c, a);
-    double shortest = fmin(ab, fmin(bc, ca)), prod = ab * bc * ca;
-    return prod > 0 ? twice_area * shortest / prod : 0;
 }
 
 double rm_min_angle(const double *a, const double *b, const double *c)

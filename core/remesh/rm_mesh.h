@@ -6,6 +6,7 @@
 #ifndef ISM_RM_MESH_H
 #define ISM_RM_MESH_H
 
+#include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -62,7 +63,13 @@ bool rm_edge_locked(const rm_mesh *r, uint32_t a, uint32_t b);
 bool rm_edge_triangles(const rm_mesh *r, uint32_t a, uint32_t b, uint32_t t[2], int *n);
 
 /* Position k (0..2) of vertex v in triangle t, or -1. */
-int rm_corner(const ism_mesh *m, uint32_t t, uint32_t v);
+static inline int rm_corner(const ism_mesh *m, uint32_t t, uint32_t v)
+{
+    for (int k = 0; k < 3; k++)
+        if (m->tri[3 * t + k] == v)
+            return k;
+    return -1;
+}
 
 /* Removes triangle t from / adds it to vertex v's slot. Adding fails when the slot is full. */
 void rm_slot_remove(rm_mesh *r, uint32_t v, uint32_t t);
@@ -79,18 +86,40 @@ bool rm_slot_reserve(rm_mesh *r, uint32_t v, uint32_t n);
  * steiner-roman: caps beside the double lines taken for creases, their vertices locked). */
 #define ISM_RM_CAP_DEG 160.0
 
-/* Geometry. */
-double rm_dist(const double *p, const double *q);
+/* Geometry (the small helpers inline: the pass calls them for every triangle of a fan at
+ * every step). */
+/* (b - a) x (c - a), not normalised; returns its length. */
+static inline double rm_cross(const double *a, const double *b, const double *c, double n[3])
+{
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    n[0] = u[1] * v[2] - u[2] * v[1];
+    n[1] = u[2] * v[0] - u[0] * v[2];
+    n[2] = u[0] * v[1] - u[1] * v[0];
+    return sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+static inline double rm_dist(const double *p, const double *q)
+{
+    double d[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
+    return sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+}
 /* The angle at p between p->q and p->s (radians, 0 for a zero-length side). */
 double rm_angle(const double *p, const double *q, const double *s);
 /* The smallest of the triangle's three angles (radians). */
 double rm_min_angle(const double *a, const double *b, const double *c);
 /* Its sine (0 for a degenerate triangle): the smallest angle is at most 60°, where the sine
  * still grows with the angle, so comparisons need no arc tangent. */
-double rm_min_sine(const double *a, const double *b, const double *c);
+static inline double rm_min_sine(const double *a, const double *b, const double *c)
+{
+    /* 2 area = |AB x AC| = product of the two sides at the smallest angle × its sine; those
+     * are the two longest sides */
+    double n[3], twice_area = rm_cross(a, b, c, n);
+    double ab = rm_dist(a, b), bc = rm_dist(b, c), ca = rm_dist(c, a);
+    double shortest = bc < ca ? bc : ca, prod = ab * bc * ca; /* no libm fmin call */
+    shortest = ab < shortest ? ab : shortest;
+    return prod > 0 ? twice_area * shortest / prod : 0;
+}
 /* True when the triangle's largest angle is at least ISM_RM_CAP_DEG. */
 bool rm_is_cap(const double *a, const double *b, const double *c);
-/* (b - a) x (c - a), not normalised; returns its length. */
-double rm_cross(const double *a, const double *b, const double *c, double n[3]);
 
 #endif

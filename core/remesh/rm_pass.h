@@ -19,6 +19,10 @@
  * a little to raise bad ones nearby), and vertices far from any triangle under it are not
  * relaxed at all. */
 #define ISM_RM_COMFORT_DEG 35.0
+/* Triangles whose smallest angle is under this (degrees) have their edges tried by the
+ * collapses (rm_collapse.c): the issue's goal on smooth surfaces; better triangles are left to
+ * flips and relaxation. */
+#define ISM_RM_COLLAPSE_DEG 20.0
 
 typedef struct rm_pass {
     rm_mesh r;
@@ -40,6 +44,10 @@ typedef struct rm_pass {
                                Newton step, whatever they were before; collapses, insertions
                                and slides measure with the step too, midpoints included */
     struct rm_memo *memo;   /* distances measured by point (rm_memo.h; NULL: none kept) */
+    double poorest;         /* the smallest sine of a triangle's smallest angle when
+                               rm_mark_active last looked: flips, moves and collapses never
+                               make a triangle worse than that, so while it is at least
+                               sin(ISM_RM_COLLAPSE_DEG) there is no needle to mend */
     size_t flips, moves, collapses, inserts;
 } rm_pass;
 
@@ -99,7 +107,7 @@ void rm_collapse_bounds(rm_pass *p);
 bool rm_compact(rm_mesh *r, size_t nverts_before, size_t ntris_before, ism_remesh_renumber *ren);
 
 /* Marks the active vertices: those of triangles whose smallest angle is below
- * ISM_RM_COMFORT_DEG, and their neighbours. Returns how many there are. */
+ * ISM_RM_COMFORT_DEG, and their neighbours; sets poorest. Returns how many there are. */
 size_t rm_mark_active(rm_pass *p);
 
 /* Tries to move free vertex v toward its fan's centroid (rm_relax.c); true when it moved. */

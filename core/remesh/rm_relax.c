@@ -111,7 +111,8 @@ void rm_fan_measure(const rm_pass *p, uint32_t v, rm_fan *f)
         const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
         const double *a = P + 3 * t[0], *b = P + 3 * t[1], *c = P + 3 * t[2];
         double n[3], w = 0.5 * rm_cross(a, b, c, n);
-        f->min_sine = fmin(f->min_sine, rm_min_sine(a, b, c));
+        double sine = rm_min_sine(a, b, c);
+        f->min_sine = sine < f->min_sine ? sine : f->min_sine; /* no libm call */
         for (int k = 0; k < 3; k++) {
             f->centroid[k] += w * (a[k] + b[k] + c[k]) / 3;
             f->normal[k] += n[k];
@@ -141,7 +142,8 @@ bool rm_fan_accepts(const rm_pass *p, uint32_t v, const double x[3], const rm_fa
         double n1[3], l1 = rm_cross(q[0], q[1], q[2], n1);
         if (!(ism_dot3(f->normal, n1) > turn * ln * l1))
             return false;
-        worst = fmin(worst, rm_min_sine(q[0], q[1], q[2]));
+        double sine = rm_min_sine(q[0], q[1], q[2]);
+        worst = sine < worst ? sine : worst;
     }
     return worst >= f->min_sine || worst >= sin(ISM_RM_COMFORT_DEG * M_PI / 180);
 }
@@ -169,7 +171,8 @@ static double fan_centroid_error(rm_pass *p, uint32_t v, const double *x)
         const double *q[3];
         for (int k = 0; k < 3; k++)
             q[k] = t[k] == v ? x : r->m->pos + 3 * (size_t)t[k];
-        worst = fmax(worst, rm_centroid_distance(p, q[0], q[1], q[2]));
+        double d = rm_centroid_distance(p, q[0], q[1], q[2]); /* never NaN */
+        worst = d > worst ? d : worst;
     }
     return worst;
 }
@@ -227,10 +230,15 @@ size_t rm_mark_active(rm_pass *p)
     const rm_mesh *r = &p->r;
     double comfort = sin(ISM_RM_COMFORT_DEG * M_PI / 180);
     memset(p->active, 0, m->nverts);
+    p->poorest = 1;
     for (size_t t = 0; t < m->ntris; t++) {
         const uint32_t *v = m->tri + 3 * t;
-        if (!r->dead[t] &&
-            rm_min_sine(m->pos + 3 * v[0], m->pos + 3 * v[1], m->pos + 3 * v[2]) < comfort)
+        if (r->dead[t])
+            continue;
+        double s = rm_min_sine(m->pos + 3 * v[0], m->pos + 3 * v[1], m->pos + 3 * v[2]);
+        if (s < p->poorest)
+            p->poorest = s;
+        if (s < comfort)
             p->active[v[0]] = p->active[v[1]] = p->active[v[2]] = 1;
     }
     for (size_t v = 0; v < m->nverts; v++) /* 1 = near a poor triangle, 2 = its neighbour */
