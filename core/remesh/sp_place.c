@@ -156,13 +156,3 @@ bool sp_offset_vertex(rm_pass *p, uint32_t v)
     p->moves++;
     return true;
 }
-
-size_t sp_offset_sweep(rm_pass *p)
-{
-    const rm_mesh *r = &p->r;
-    size_t moves = 0;
-    for (size_t v = 0; v < r->m->nverts; v++)
-        if (!r->locked[v] && r->count[v] && p->active[v])
-            moves += sp_offset_vertex(p, (uint32_t)v);
-    return moves;
-}

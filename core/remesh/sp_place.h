@@ -44,9 +44,4 @@ double sp_measure(rm_pass *p, const sp_stencil *s, int n, const double x[3], dou
  * fan and keeps the fan's shape (rm_fan_accepts); true when it moved. */
 bool sp_offset_vertex(rm_pass *p, uint32_t v);
 
-/* One sweep over the free active vertices: each moves to its balancing offset when that
- * lowers the largest distance of its fan and keeps the fan's shape (rm_fan_accepts). Returns
- * the moves made. */
-size_t sp_offset_sweep(rm_pass *p);
-
 #endif
