@@ -86,8 +86,12 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
         for (int round = 0; round < ISM_RM_ROUNDS && !stopped(o); round++) {
             if (!rm_mark_active(&p))
                 break;
-            if (rm_flip_active(&p, &ok) && round == 0)
-                rm_lock_vertices(&p, o); /* caps flipped away: their false creases go */
+            if (round == 0) /* the flips' corners: only their fans change */
+                ok = (p.flipped = calloc(p.r.cap_verts ? p.r.cap_verts : 1, 1)) != NULL;
+            if (ok && rm_flip_active(&p, &ok) && round == 0)
+                rm_lock_vertices(&p, o, p.flipped); /* caps flipped away: false creases go */
+            free(p.flipped);
+            p.flipped = NULL;
             if (!ok || stopped(o))
                 break;
             if (round >= ISM_RM_COLLAPSE_ROUND)

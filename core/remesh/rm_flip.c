@@ -130,6 +130,8 @@ static void do_flip(rm_pass *p, const quad *q)
     rm_slot_remove(&p->r, q->b, q->t1);
     rm_slot_add(&p->r, q->c, q->t2);
     rm_slot_add(&p->r, q->d, q->t1);
+    if (p->flipped)
+        p->flipped[q->a] = p->flipped[q->b] = p->flipped[q->c] = p->flipped[q->d] = 1;
 }
 
 /* A stack of edges (vertex pairs) still to test. */

@@ -161,10 +161,12 @@ static bool box_slidable(const rm_pass *p, uint32_t v)
     return false;
 }
 
-void rm_lock_vertices(rm_pass *p, const ism_remesh_options *o)
+void rm_lock_vertices(rm_pass *p, const ism_remesh_options *o, const uint8_t *only)
 {
     rm_mesh *r = &p->r;
     for (size_t v = 0; v < r->m->nverts; v++) {
+        if (only && !only[v])
+            continue; /* its fan and normal as they were: its protection too */
         const double *n = p->normal + 3 * v;
         bool vanishes = n[0] == 0 && n[1] == 0 && n[2] == 0;
         r->locked[v] = vanishes || !fan_free(p, (uint32_t)v);
@@ -183,6 +185,6 @@ bool rm_lock_features(rm_pass *p, const ism_remesh_options *o)
 {
     if (!copy_locked_edges(&p->r, o))
         return false;
-    rm_lock_vertices(p, o);
+    rm_lock_vertices(p, o, NULL);
     return true;
 }

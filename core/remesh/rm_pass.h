@@ -44,6 +44,8 @@ typedef struct rm_pass {
                                Newton step, whatever they were before; collapses, insertions
                                and slides measure with the step too, midpoints included */
     struct rm_memo *memo;   /* distances measured by point (rm_memo.h; NULL: none kept) */
+    uint8_t *flipped;       /* per vertex, when not NULL: set on the four corners of every
+                               flip (remesh.c asks, to look at only their protection again) */
     double poorest;         /* the smallest sine of a triangle's smallest angle when
                                rm_mark_active last looked: flips, moves and collapses never
                                make a triangle worse than that, so while it is at least
@@ -76,8 +78,9 @@ bool rm_lock_features(rm_pass *p, const ism_remesh_options *o);
 
 /* Recomputes the vertex protection (r.locked, slide) from the mesh as it is now: after flips
  * have replaced caps, whose noisy normals looked like creases. Features that flips never
- * change (boundary, non-manifold, labels, locked edges and points) stay protected. */
-void rm_lock_vertices(rm_pass *p, const ism_remesh_options *o);
+ * change (boundary, non-manifold, labels, locked edges and points) stay protected. With
+ * only, just the vertices it marks (whose fans changed) are looked at again. */
+void rm_lock_vertices(rm_pass *p, const ism_remesh_options *o, const uint8_t *only);
 
 /* True when edge {a, b} is free: an oriented manifold edge, one label, not locked, no crease. */
 bool rm_edge_free(const rm_pass *p, uint32_t a, uint32_t b);
