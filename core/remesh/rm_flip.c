@@ -86,12 +86,10 @@ static bool not_delaunay(const double *A, const double *B, const double *C, cons
     return sc * cd + cc * sd < -ISM_RM_FLIP_MARGIN * scale;
 }
 
-/* The geometric tests of a flip (the combinatorial ones passed). */
+/* The geometric tests of a flip (the combinatorial ones and the Delaunay test passed). */
 static bool flip_improves(rm_pass *p, const quad *q)
 {
     const double *A = P(p, q->a), *B = P(p, q->b), *C = P(p, q->c), *D = P(p, q->d);
-    if (!not_delaunay(A, B, C, D))
-        return false;
     double n1[3], n2[3], m1[3], m2[3];
     double l1 = rm_cross(A, B, C, n1), l2 = rm_cross(B, A, D, n2);
     double k1 = rm_cross(A, D, C, m1), k2 = rm_cross(B, C, D, m2);
@@ -159,9 +157,10 @@ static bool push(edge_stack *s, uint32_t a, uint32_t b)
 static bool try_flip(rm_pass *p, uint32_t a, uint32_t b, quad *q)
 {
     const rm_mesh *r = &p->r;
-    if (!find_quad(p, a, b, q) || edge_exists(r, q->c, q->d) || !rm_slot_room(r, q->c) ||
-        !rm_slot_room(r, q->d) || !degree_allows(r, a) || !degree_allows(r, b) ||
-        !flip_improves(p, q))
+    if (!find_quad(p, a, b, q) || /* the Delaunay test first: most edges fail it, cheaply */
+        !not_delaunay(P(p, q->a), P(p, q->b), P(p, q->c), P(p, q->d)) ||
+        edge_exists(r, q->c, q->d) || !rm_slot_room(r, q->c) || !rm_slot_room(r, q->d) ||
+        !degree_allows(r, a) || !degree_allows(r, b) || !flip_improves(p, q))
         return false;
     do_flip(p, q);
     return true;
