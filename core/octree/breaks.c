@@ -65,6 +65,7 @@ typedef struct builder {
     const ism_octree *t;
     ism_breaks *b;
     packing pk;
+    ism_pool *pool;
     int threads;
     ism_par_cost *cost;
     size_t nblocks;
@@ -96,7 +97,7 @@ static range block(const builder *w, size_t blk)
 static void run_blocks(builder *w, size_t n, void (*fn)(void *, size_t, int))
 {
     w->n = n;
-    ism_parallel_for_costed(w->threads, w->nblocks, fn, w, w->cost);
+    ism_pool_for(w->pool, w->nblocks, fn, w, w->cost);
 }
 
 /* ---- the corners of the leaves ------------------------------------------------------ */
@@ -391,7 +392,7 @@ static void builder_free(builder *w)
     free(w->next[1]);
 }
 
-bool ism_breaks_build(ism_breaks *b, const ism_octree *t, int threads, ism_par_cost *cost)
+bool ism_breaks_build(ism_breaks *b, const ism_octree *t, ism_pool *pool, ism_par_cost *cost)
 {
     memset(b, 0, sizeof *b);
     builder w;
@@ -399,7 +400,8 @@ bool ism_breaks_build(ism_breaks *b, const ism_octree *t, int threads, ism_par_c
     w.t = t;
     w.b = b;
     w.cost = cost;
-    w.threads = threads < 1 ? 1 : threads;
+    w.pool = pool;
+    w.threads = ism_pool_threads(pool);
     /* one block per thread; a tree with few leaves has few nodes too: one block */
     w.nblocks = 8 * t->n < MIN_PARALLEL_CORNERS ? 1 : (size_t)w.threads;
     size_t m = 0;

@@ -27,10 +27,10 @@ typedef struct ism_breaks {
 } ism_breaks;
 
 /* Registers the corners of every non-empty leaf, each with its successor on the three
- * lattice lines through it, working on `threads` threads (what their loops cost is added to
- * *cost when not NULL); every query answers the same for any thread count. False when out
+ * lattice lines through it, working on the threads of pool (NULL: the calling thread alone;
+ * what their loops cost is added to *cost when not NULL); every query answers the same for any thread count. False when out
  * of memory. */
-bool ism_breaks_build(ism_breaks *b, const ism_octree *t, int threads, ism_par_cost *cost);
+bool ism_breaks_build(ism_breaks *b, const ism_octree *t, ism_pool *pool, ism_par_cost *cost);
 void ism_breaks_free(ism_breaks *b);
 
 /* The registered point p, or NULL. */

@@ -509,7 +509,7 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
     atomic_init(&b.nodes_total, 1);
     atomic_init(&b.tasks_done, 0);
     pthread_mutex_init(&b.progress_lock, NULL);
-    int nthreads = p->threads < 1 ? 1 : p->threads;
+    int nthreads = p->pool ? ism_pool_threads(p->pool) : p->threads < 1 ? 1 : p->threads;
     node_vec top = {0};
     defer_list deferred = {0, NULL, 0};
     enum ism_build_status status = ISM_BUILD_OK;
@@ -543,7 +543,10 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
             status = ISM_BUILD_NO_MEMORY;
             goto done;
         }
-    ism_parallel_for_costed(nthreads, b.ntasks, run_task, &b, p->cost);
+    if (p->pool)
+        ism_pool_for(p->pool, b.ntasks, run_task, &b, p->cost);
+    else
+        ism_parallel_for_costed(nthreads, b.ntasks, run_task, &b, p->cost);
     if ((status = atomic_load(&b.failed)) != ISM_BUILD_OK)
         goto done;
     if (!join_tasks(&b, &top))

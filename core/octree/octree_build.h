@@ -38,6 +38,8 @@ typedef struct ism_octree_build_params {
                                          ism_poly_options): NULL for none */
     size_t nnode_balls;
     int threads;
+    ism_pool *pool;                   /* the threads to build on (pool.h), or NULL: `threads`
+                                         threads made for the build */
     size_t max_nodes;                 /* stop with ISM_BUILD_TOO_BIG beyond this */
     const ism_split_set *force_split; /* nodes split whatever the flatness test says (their
                                          emitted triangles missed max_error): NULL for none */

@@ -339,7 +339,7 @@ static void keep_for_next_round(phase2 *p, carry *c)
  * emitted is kept in c for it; leaves that emit what they emitted in c's round are copied
  * from there. */
 static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_options *o,
-                                              const ism_octree *tree, int threads,
+                                              const ism_octree *tree, ism_pool *pool,
                                               progress *prog, ism_mesh *mesh,
                                               ism_poly_stats *st, double *t_weld,
                                               phase_meter *outer, ism_split_set *next,
@@ -357,11 +357,12 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     p.max_triangles = o->max_triangles < by_memory ? o->max_triangles : by_memory;
     atomic_init(&p.status, ISM_POLY_OK);
     enum ism_poly_status status = ISM_POLY_NO_MEMORY;
+    int threads = ism_pool_threads(pool);
 
     double t0 = ism_now_ms();
     phase_meter m;
     meter_start(&m);
-    if (!ism_breaks_build(&breaks, tree, threads, &m.par))
+    if (!ism_breaks_build(&breaks, tree, pool, &m.par))
         goto done;
     meter_stop_inside(&m, st, ISM_PHASE_CRACKS, outer);
     st->time_ms[ISM_PHASE_CRACKS] = ism_now_ms() - t0;
@@ -402,7 +403,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         if (!(cx->s.ws = ism_eval_ws_new(f)) || !round_cache(c, threads, t, &cx->cache))
             goto done;
     }
-    ism_parallel_for_costed(threads, p.nchunks, run_chunk, &p, &outer->par);
+    ism_pool_for(pool, p.nchunks, run_chunk, &p, &outer->par);
     status = atomic_load(&p.status);
     for (int t = 0; t < threads; t++)
         add_cell_stats(st, &p.ctx[t].c);
@@ -421,7 +422,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     t0 = ism_now_ms();
     meter_start(&m);
     ism_weld_stats ws;
-    status = ism_weld(p.out, p.nchunks, threads, mesh, &ws, &m.par) ? ISM_POLY_OK
+    status = ism_weld(p.out, p.nchunks, pool, mesh, &ws, &m.par) ? ISM_POLY_OK
                                                                       : ISM_POLY_NO_MEMORY;
     meter_stop_inside(&m, st, ISM_PHASE_MESH, outer);
     *t_weld = ism_now_ms() - t0;
@@ -484,7 +485,7 @@ static enum ism_poly_status fail_with(enum ism_poly_status s, const ism_poly_opt
  * round's tree and leaf outputs (empty in the first), whose decisions the octree takes
  * over and whose leaves are copied where they still hold; replaced by this round's when
  * another round may follow. */
-static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options *o, int threads,
+static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options *o, ism_pool *pool,
                                       progress *prog, const ism_split_set *split,
                                       ism_split_set *next, ism_mesh *mesh, ism_poly_stats *st,
                                       carry *prev)
@@ -519,7 +520,8 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
         .nquiet = o->nquiet,
         .node_balls = o->node_balls,
         .nnode_balls = o->nnode_balls,
-        .threads = threads,
+        .threads = ism_pool_threads(pool),
+        .pool = pool,
         .max_nodes = o->max_memory / 4 / sizeof(ism_node),
         .force_split = split,
         .scalar_eval = o->scalar_eval,
@@ -549,7 +551,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     prog->span = span * 0.55 / 0.95;
     double t_weld = 0;
     meter_start(&m);
-    status = polygonise_leaves(f, o, &tree, threads, prog, mesh, st, &t_weld, &m, next,
+    status = polygonise_leaves(f, o, &tree, pool, prog, mesh, st, &t_weld, &m, next,
                                prev);
     ism_octree_free(&prev->tree);
     if (next && next->n)
@@ -587,7 +589,9 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
     if (!ism_poly_options_check(o, err))
         return ISM_POLY_BAD_OPTIONS;
     double t_start = ism_now_ms();
-    int threads = thread_count(o);
+    /* one pool for every round and phase: threads made once per call */
+    ism_pool *pool = ism_pool_new(thread_count(o));
+    int threads = ism_pool_threads(pool);
     ism_split_set split = {0}, next = {0};
     carry prev;
     memset(&prev, 0, sizeof prev);
@@ -600,7 +604,7 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
         progress prog = {o, PTHREAD_MUTEX_INITIALIZER, r ? 0.95 : 0, r ? 0 : 0.95};
         memset(&round, 0, sizeof round);
         next.n = 0;
-        status = one_round(f, o, threads, &prog, &split, last ? NULL : &next, mesh, &round,
+        status = one_round(f, o, pool, &prog, &split, last ? NULL : &next, mesh, &round,
                            &prev);
         add_round_costs(&costs, &round);
         if (status != ISM_POLY_OK || !next.n)
@@ -615,6 +619,7 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
         if (status != ISM_POLY_OK)
             break;
     }
+    ism_pool_free(pool);
     ism_split_set_free(&split);
     ism_split_set_free(&next);
     ism_octree_free(&prev.tree);

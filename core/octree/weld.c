@@ -284,29 +284,29 @@ static bool alloc_table(welder *w, size_t npieces)
     return w->slots != NULL;
 }
 
-static bool weld_all(welder *w, size_t npieces, int threads, ism_par_cost *cost)
+static bool weld_all(welder *w, size_t npieces, ism_pool *pool, ism_par_cost *cost)
 {
     ism_mesh *m = w->mesh;
-    ism_parallel_for_costed(threads, npieces, dedupe_piece, w, cost);
+    ism_pool_for(pool, npieces, dedupe_piece, w, cost);
     if (!alloc_table(w, npieces))
         return false;
-    ism_parallel_for_costed(threads, npieces, insert_piece, w, cost);
-    ism_parallel_for_costed(threads, npieces, resolve_piece, w, cost);
+    ism_pool_for(pool, npieces, insert_piece, w, cost);
+    ism_pool_for(pool, npieces, resolve_piece, w, cost);
     size_t nverts = ism_counts_to_offsets(w->new_verts, npieces);
     if (!ism_mesh_reserve(m, nverts, 0))
         return false;
     m->nverts = nverts;
-    ism_parallel_for_costed(threads, npieces, place_piece, w, cost);
-    ism_parallel_for_costed(threads, npieces, map_piece, w, cost);
+    ism_pool_for(pool, npieces, place_piece, w, cost);
+    ism_pool_for(pool, npieces, map_piece, w, cost);
     size_t ntris = ism_counts_to_offsets(w->kept_tris, npieces);
     if (!ism_mesh_reserve(m, 0, ntris))
         return false;
     m->ntris = ntris;
-    ism_parallel_for_costed(threads, npieces, write_piece, w, cost);
+    ism_pool_for(pool, npieces, write_piece, w, cost);
     return add_segments(w, npieces);
 }
 
-bool ism_weld(const ism_cell_out *pieces, size_t npieces, int threads, ism_mesh *mesh,
+bool ism_weld(const ism_cell_out *pieces, size_t npieces, ism_pool *pool, ism_mesh *mesh,
               ism_weld_stats *st, ism_par_cost *cost)
 {
     memset(st, 0, sizeof *st);
@@ -314,7 +314,8 @@ bool ism_weld(const ism_cell_out *pieces, size_t npieces, int threads, ism_mesh 
     memset(&w, 0, sizeof w);
     w.pieces = pieces;
     w.mesh = mesh;
-    threads = threads < 1 ? 1 : threads > MAX_THREADS ? MAX_THREADS : threads;
+    int threads = ism_pool_threads(pool);
+    threads = threads > MAX_THREADS ? MAX_THREADS : threads;
     size_t n = npieces ? npieces : 1;
     w.voff = malloc((n + 1) * sizeof *w.voff);
     w.new_verts = malloc(n * sizeof *w.new_verts);
@@ -341,7 +342,7 @@ bool ism_weld(const ism_cell_out *pieces, size_t npieces, int threads, ism_mesh 
         w.rep = malloc(room * sizeof *w.rep);
         w.index = malloc(room * sizeof *w.index);
         ok = w.local && w.at && w.slot && w.rep && w.index &&
-             weld_all(&w, npieces, threads, cost);
+             weld_all(&w, npieces, pool, cost);
     }
     for (size_t k = 0; ok && k < npieces; k++) {
         const ism_weld_stats *p = &w.piece_st[k];

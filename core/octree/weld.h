@@ -17,11 +17,11 @@ typedef struct ism_weld_stats {
     uint64_t dropped_triangles;  /* triangles that collapsed to an edge when welded */
 } ism_weld_stats;
 
-/* Appends the pieces, in order, to mesh (which must be empty), working on `threads` threads
- * (what their loops cost is added to *cost when not NULL); the mesh is the same byte for
- * byte for any thread count. False when out of memory or when the pieces hold 2^30
+/* Appends the pieces, in order, to mesh (which must be empty), working on the threads of
+ * pool (NULL: the calling thread alone; what their loops cost is added to *cost when not
+ * NULL); the mesh is the same byte for byte for any thread count. False when out of memory or when the pieces hold 2^30
  * vertices or more. */
-bool ism_weld(const ism_cell_out *pieces, size_t npieces, int threads, ism_mesh *mesh,
+bool ism_weld(const ism_cell_out *pieces, size_t npieces, ism_pool *pool, ism_mesh *mesh,
               ism_weld_stats *st, ism_par_cost *cost);
 
 #endif

@@ -1,4 +1,5 @@
-/* parallel.c — a fork/join loop over numbered tasks on pthreads, and what it cost. Each
+/* parallel.c — a fork/join loop over numbered tasks on a pool's threads (pool.h), and what
+ * it cost. Each
  * thread starts on its own contiguous block of task numbers (neighbouring tasks share
  * memoised work, so a thread keeps its locality); one that runs dry steals the upper half of
  * the largest block left. A block is one atomic word (next and end task), claimed from the
@@ -7,7 +8,6 @@
 #include "core/util/parallel.h"
 #include "core/util/clock.h"
 
-#include <pthread.h>
 #include <stdalign.h>
 #include <stdatomic.h>
 #include <stdbool.h>
@@ -21,20 +21,23 @@ typedef struct block {
     alignas(ISM_CACHE_LINE) _Atomic uint64_t range; /* a line each: claims do not bounce */
 } block;
 
+struct loop;
+
+typedef struct worker {
+    alignas(ISM_CACHE_LINE) struct loop *l; /* a line each: written per task */
+    int id;
+    double cpu_ms;     /* the thread's CPU while it ran tasks */
+    double longest_ms; /* its longest task's */
+} worker;
+
 typedef struct loop {
     void (*fn)(void *, size_t, int);
     void *ctx;
     int threads;
     bool timed;        /* each task's CPU is read (for an ism_par_cost) */
     block blocks[MAX_THREADS];
+    worker w[MAX_THREADS];
 } loop;
-
-typedef struct worker {
-    loop *l;
-    int id;
-    double cpu_ms;     /* the thread's CPU while it ran tasks */
-    double longest_ms; /* its longest task's */
-} worker;
 
 static uint64_t pack(uint32_t lo, uint32_t hi) { return (uint64_t)lo << 32 | hi; }
 static uint32_t lo_of(uint64_t r) { return (uint32_t)(r >> 32); }
@@ -103,23 +106,25 @@ static void run_tasks(worker *w)
     w->cpu_ms = l->timed ? ism_thread_cpu_ms() - t0 : 0;
 }
 
-static void *thread_main(void *arg)
+/* The pool's job: thread id runs tasks until none is left anywhere. */
+static void run_job(void *arg, int id)
 {
-    run_tasks(arg);
-    return NULL;
+    loop *l = arg;
+    run_tasks(&l->w[id]);
 }
 
 /* Loops too long for a packed block, run in slices. */
-static void run_in_slices(int threads, size_t ntasks, void (*fn)(void *, size_t, int),
+static void run_in_slices(ism_pool *pool, size_t ntasks, void (*fn)(void *, size_t, int),
                           void *ctx, ism_par_cost *cost);
 
-void ism_parallel_for_costed(int threads, size_t ntasks, void (*fn)(void *, size_t, int),
-                             void *ctx, ism_par_cost *cost)
+void ism_pool_for(ism_pool *pool, size_t ntasks, void (*fn)(void *, size_t, int), void *ctx,
+                  ism_par_cost *cost)
 {
     if (ntasks > UINT32_MAX) {
-        run_in_slices(threads, ntasks, fn, ctx, cost);
+        run_in_slices(pool, ntasks, fn, ctx, cost);
         return;
     }
+    int threads = ism_pool_threads(pool);
     if (threads > MAX_THREADS)
         threads = MAX_THREADS;
     if ((size_t)threads > ntasks)
@@ -130,37 +135,38 @@ void ism_parallel_for_costed(int threads, size_t ntasks, void (*fn)(void *, size
     l.fn = fn;
     l.ctx = ctx;
     l.timed = cost != NULL;
-    pthread_t tid[MAX_THREADS];
-    worker w[MAX_THREADS];
-    int started = 0;
-    for (int i = 0; i < threads; i++) /* blocks for every thread before any starts */
+    for (int i = 0; i < threads; i++) { /* blocks for every thread before any starts */
         atomic_init(&l.blocks[i].range, pack((uint32_t)(ntasks * (size_t)i / (size_t)threads),
                                              (uint32_t)(ntasks * (size_t)(i + 1) /
                                                         (size_t)threads)));
-    l.threads = threads;
-    w[0] = (worker){&l, 0, 0, 0};
-    for (int i = 1; i < threads; i++) {
-        w[i] = (worker){&l, i, 0, 0};
-        if (pthread_create(&tid[i], NULL, thread_main, &w[i]) != 0)
-            break; /* fewer threads: the calling thread steals the blocks of the others */
-        started = i;
+        l.w[i] = (worker){&l, i, 0, 0};
     }
-    run_tasks(&w[0]);
-    for (int i = 1; i <= started; i++)
-        pthread_join(tid[i], NULL);
+    l.threads = threads;
+    ism_pool_run(pool, threads, run_job, &l);
     if (!cost)
         return;
     double busiest = 0, longest = 0, all = 0;
-    int ran = started + 1;
-    for (int i = 0; i < ran; i++) {
-        all += w[i].cpu_ms;
-        busiest = w[i].cpu_ms > busiest ? w[i].cpu_ms : busiest;
-        longest = w[i].longest_ms > longest ? w[i].longest_ms : longest;
+    for (int i = 0; i < threads; i++) {
+        all += l.w[i].cpu_ms;
+        busiest = l.w[i].cpu_ms > busiest ? l.w[i].cpu_ms : busiest;
+        longest = l.w[i].longest_ms > longest ? l.w[i].longest_ms : longest;
     }
     cost->cpu_ms += all;
-    cost->caller_ms += w[0].cpu_ms;
+    cost->caller_ms += l.w[0].cpu_ms;
     cost->busiest_ms += busiest;
-    cost->even_ms += all / ran > longest ? all / ran : longest;
+    cost->even_ms += all / threads > longest ? all / threads : longest;
+}
+
+void ism_parallel_for_costed(int threads, size_t ntasks, void (*fn)(void *, size_t, int),
+                             void *ctx, ism_par_cost *cost)
+{
+    if (threads > MAX_THREADS)
+        threads = MAX_THREADS;
+    if ((size_t)threads > ntasks)
+        threads = (int)ntasks;
+    ism_pool *pool = threads > 1 ? ism_pool_new(threads) : NULL;
+    ism_pool_for(pool, ntasks, fn, ctx, cost); /* no pool: the calling thread alone */
+    ism_pool_free(pool);
 }
 
 /* Task numbers offset into a slice: fn sees the loop's own numbering. */
@@ -176,13 +182,13 @@ static void slice_task(void *arg, size_t task, int thread)
     s->fn(s->ctx, s->first + task, thread);
 }
 
-static void run_in_slices(int threads, size_t ntasks, void (*fn)(void *, size_t, int),
+static void run_in_slices(ism_pool *pool, size_t ntasks, void (*fn)(void *, size_t, int),
                           void *ctx, ism_par_cost *cost)
 {
     for (size_t first = 0; first < ntasks; first += UINT32_MAX) {
         slice s = {fn, ctx, first};
         size_t n = ntasks - first < UINT32_MAX ? ntasks - first : UINT32_MAX;
-        ism_parallel_for_costed(threads, n, slice_task, &s, cost);
+        ism_pool_for(pool, n, slice_task, &s, cost);
     }
 }
 

@@ -1,10 +1,13 @@
-/* parallel.h — runs numbered tasks on a few threads (a shared atomic counter hands out task
- * numbers). Each call creates and joins its own threads: no pool, no global state. The
- * order in which tasks run is not fixed, so tasks must write only to their own slots. */
+/* parallel.h — runs numbered tasks on a few threads (work stealing over blocks of task
+ * numbers): on the threads of a pool the caller keeps (pool.h), or on threads made and
+ * joined for one loop. No global state. The order in which tasks run is not fixed, so tasks
+ * must write only to their own slots. */
 #ifndef ISM_PARALLEL_H
 #define ISM_PARALLEL_H
 
 #include <stddef.h>
+
+#include "core/util/pool.h"
 
 /* Bytes of a cache line: per-thread state written often is aligned to it, so two threads'
  * writes never share a line (false sharing). */
@@ -20,8 +23,14 @@ typedef struct ism_par_cost {
     double cpu_ms, caller_ms, busiest_ms, even_ms;
 } ism_par_cost;
 
-/* Calls fn(ctx, task, thread) once for every task in [0, ntasks), on `threads` threads
- * (thread is 0..threads-1, so per-thread state can be indexed by it). */
+/* Calls fn(ctx, task, thread) once for every task in [0, ntasks), on the threads of pool
+ * (thread is 0..ism_pool_threads(pool)-1, so per-thread state can be indexed by it; a NULL
+ * pool runs every task on the calling thread), adding what the loop cost to *cost (when not
+ * NULL). */
+void ism_pool_for(ism_pool *pool, size_t ntasks, void (*fn)(void *ctx, size_t task, int thread),
+                  void *ctx, ism_par_cost *cost);
+
+/* The same on `threads` threads made for this loop alone (thread is 0..threads-1). */
 void ism_parallel_for(int threads, size_t ntasks, void (*fn)(void *ctx, size_t task, int thread),
                       void *ctx);
 

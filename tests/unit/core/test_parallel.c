@@ -73,3 +73,43 @@ Test(parallel, plain_loop_sums_every_task)
     ism_parallel_for(2, 500, add_offset, &sum);
     cr_expect_eq(atomic_load(&sum), (size_t)500 * 501 / 2);
 }
+
+/* One pool, many loops (what one polygonise call does): every task of every loop once, on a
+ * thread number below the pool's, for loops narrower and wider than the pool. */
+Test(parallel, pool_runs_many_loops)
+{
+    ism_pool *pool = ism_pool_new(3);
+    cr_assert_not_null(pool);
+    cr_assert_eq(ism_pool_threads(pool), 3);
+    tally *t = calloc(1, sizeof *t);
+    cr_assert_not_null(t);
+    t->threads = 3;
+    const size_t counts[] = {0, 1, 2, 3, 7, 1000, MAX_TASKS, 5};
+    for (int round = 0; round < 40; round++) {
+        size_t n = counts[round % (sizeof counts / sizeof *counts)];
+        for (size_t i = 0; i < MAX_TASKS; i++)
+            atomic_store(&t->runs[i], 0);
+        t->heavy_below = round % 2 ? n / 2 : 0;
+        ism_pool_for(pool, n, task, t, NULL);
+        for (size_t i = 0; i < MAX_TASKS; i++)
+            cr_assert_eq(atomic_load(&t->runs[i]), i < n, "loop %d (%zu tasks): task %zu ran %d times",
+                         round, n, i, atomic_load(&t->runs[i]));
+    }
+    cr_expect_eq(atomic_load(&t->bad_thread), 0, "a thread number out of range");
+    free(t);
+    ism_pool_free(pool);
+}
+
+/* A NULL pool is one thread: the caller runs every task as thread 0. */
+Test(parallel, no_pool_runs_on_the_caller)
+{
+    tally *t = calloc(1, sizeof *t);
+    cr_assert_not_null(t);
+    t->threads = 1;
+    ism_pool_for(NULL, 100, task, t, NULL);
+    for (size_t i = 0; i < 100; i++)
+        cr_assert_eq(atomic_load(&t->runs[i]), 1);
+    cr_expect_eq(atomic_load(&t->bad_thread), 0);
+    cr_expect_eq(ism_pool_threads(NULL), 1);
+    free(t);
+}
