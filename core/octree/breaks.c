@@ -5,7 +5,7 @@
  *
  * Built on several threads: every step is a loop over equal blocks of an array (ism_parallel_
  * for), with prefix sums over the blocks between loops — the corners gathered per block of
- * nodes, an LSD radix sort whose passes count and scatter per block (stable, so the order
+ * nodes (less those a small filter saw among the block's recent leaves), an LSD radix sort whose passes count and scatter per block (stable, so the order
  * is the one a single thread makes), duplicates dropped per block, and the table filled with
  * compare-and-swap on empty slots. The table's contents do not depend on the thread count;
  * where a point lands in its probe run may, which no query can see. */
@@ -23,6 +23,12 @@
 /* Slots of the point this many places ahead are asked for while the current one is filled:
  * the table is larger than the caches, and independent misses overlap. */
 #define LOOKAHEAD 16
+/* Slots of the filter that drops a leaf's corner when one of the last leaves gathered in
+ * its block had it (a direct-mapped table of recent corners): leaves come depth-first, so
+ * siblings and cousins sharing corners are close in the order, and the sort gets a fraction
+ * of the 8 corners a leaf; 4096 keys (32 KB) stay in the first-level cache. The duplicates
+ * that slip through are dropped after the sort, as before. */
+#define CORNER_FILTER_BITS 12
 /* Below this many corners one block does all (a loop's threads cost more than they save). */
 #define MIN_PARALLEL_CORNERS (1u << 15)
 
@@ -70,6 +76,7 @@ typedef struct builder {
     ism_par_cost *cost;
     size_t nblocks;
     size_t *per_block;        /* a count per block (prefix sums turn them into offsets) */
+    size_t *gathered;         /* per block: corners kept by the filter (then offsets) */
     int *finest;              /* per block of nodes: the deepest leaf level */
     size_t *count;            /* radix sort: RADIX counts per block */
     /* the distinct points keyed along z (sorted); room for a sort with payload */
@@ -119,6 +126,8 @@ static void count_leaves(void *ctx, size_t blk, int thread)
     w->finest[blk] = finest;
 }
 
+/* The block's leaves' corners into w->tk at 8 per leaf before it, less the ones the filter
+ * has seen; how many into w->gathered[blk]. */
 static void gather_corners(void *ctx, size_t blk, int thread)
 {
     (void)thread;
@@ -126,7 +135,9 @@ static void gather_corners(void *ctx, size_t blk, int thread)
     const ism_grid *g = &w->t->grid;
     const ism_node *nodes = w->t->nodes;
     const packing pk = w->pk;
-    uint64_t *k = w->k + 8 * w->per_block[blk];
+    uint64_t *first = w->tk + 8 * w->per_block[blk], *k = first;
+    uint64_t seen[1u << CORNER_FILTER_BITS]; /* key + 1, 0: empty */
+    memset(seen, 0, sizeof seen);
     range r = block(w, blk);
     for (size_t i = r.lo; i < r.hi; i++) {
         const ism_node *nd = &nodes[i];
@@ -137,9 +148,25 @@ static void gather_corners(void *ctx, size_t blk, int thread)
             int32_t p[3];
             for (int a = 0; a < 3; a++)
                 p[a] = nd->org[a] + ((c >> a) & 1) * s;
-            *k++ = pack(&pk, 2, p);
+            uint64_t key = pack(&pk, 2, p);
+            uint64_t *slot = &seen[ism_cache_mix(key) & ((1u << CORNER_FILTER_BITS) - 1)];
+            if (*slot == key + 1)
+                continue;
+            *slot = key + 1;
+            *k++ = key;
         }
     }
+    w->gathered[blk] = (size_t)(k - first);
+}
+
+/* The block's gathered corners from w->tk to their place in w->k, blocks end to end. */
+static void pack_gathered(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    builder *w = ctx;
+    size_t end = blk + 1 < w->nblocks ? w->gathered[blk + 1] : w->n;
+    memcpy(w->k + w->gathered[blk], w->tk + 8 * w->per_block[blk],
+           (end - w->gathered[blk]) * sizeof *w->k);
 }
 
 /* ---- LSD radix sort ------------------------------------------------------------------- */
@@ -369,6 +396,8 @@ static bool distinct_corners(builder *w, size_t *out)
     if (!(w->k = malloc(room * sizeof *w->k)) || !(w->tk = malloc(room * sizeof *w->tk)))
         return false;
     run_blocks(w, t->n, gather_corners);
+    n = ism_counts_to_offsets(w->gathered, w->nblocks);
+    run_blocks(w, n, pack_gathered);
     radix_sort(w, w->k, NULL, w->tk, NULL, n, 3 * w->pk.cb);
     run_blocks(w, n, count_distinct);
     *out = ism_counts_to_offsets(w->per_block, w->nblocks);
@@ -381,6 +410,7 @@ static bool distinct_corners(builder *w, size_t *out)
 static void builder_free(builder *w)
 {
     free(w->per_block);
+    free(w->gathered);
     free(w->finest);
     free(w->count);
     free(w->k);
@@ -406,6 +436,7 @@ bool ism_breaks_build(ism_breaks *b, const ism_octree *t, ism_pool *pool, ism_pa
     w.nblocks = 8 * t->n < MIN_PARALLEL_CORNERS ? 1 : (size_t)w.threads;
     size_t m = 0;
     bool ok = (w.per_block = malloc(w.nblocks * sizeof *w.per_block)) &&
+              (w.gathered = malloc(w.nblocks * sizeof *w.gathered)) &&
               (w.finest = malloc(w.nblocks * sizeof *w.finest)) &&
               (w.count = malloc(w.nblocks * RADIX * sizeof *w.count)) &&
               distinct_corners(&w, &m) && alloc_points(&w, m);
