@@ -6,6 +6,7 @@
 #include "core/eval/interval_jet.h"
 #include "core/eval/interval_ops.h"
 #include "core/expr/tape.h"
+#include "core/util/cache_line.h"
 
 #include <stdbool.h>
 #include <stdlib.h>
@@ -23,11 +24,11 @@ ism_ivjet_ws *ism_ivjet_ws_new(const ism_tape *t)
 {
     if (!t)
         return NULL;
-    ism_ivjet_ws *ws = malloc(sizeof *ws);
+    ism_ivjet_ws *ws = ism_line_alloc(sizeof *ws); /* lines of its own: per thread */
     if (!ws)
         return NULL;
     ws->nregs = t->nregs;
-    ws->r = malloc(t->nregs * sizeof *ws->r);
+    ws->r = ism_line_alloc(t->nregs * sizeof *ws->r);
     if (!ws->r) {
         free(ws);
         return NULL;

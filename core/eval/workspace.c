@@ -1,5 +1,8 @@
-/* workspace.c — creating and freeing evaluation workspaces (see workspace.h). */
+/* workspace.c — creating and freeing evaluation workspaces (see workspace.h). Every array
+ * has cache lines of its own: a thread writes its registers on every evaluation, and the
+ * workspaces of several threads are made one after the other by one thread. */
 #include "core/eval/workspace.h"
+#include "core/util/cache_line.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -8,23 +11,24 @@ ism_eval_ws *ism_eval_ws_new(const ism_tape *t)
 {
     if (!t)
         return NULL;
-    ism_eval_ws *ws = calloc(1, sizeof *ws);
+    ism_eval_ws *ws = ism_line_alloc(sizeof *ws);
     if (!ws)
         return NULL;
+    memset(ws, 0, sizeof *ws);
     size_t n = t->nregs;
     size_t cap = t->origin_len > t->len ? t->origin_len : t->len;
     ws->nregs = t->nregs;
     ws->code_cap = cap;
-    ws->batch = aligned_alloc(64, ((n * ISM_EVAL_BATCH * sizeof(double)) + 63) / 64 * 64);
-    ws->scalar = malloc(n * sizeof *ws->scalar);
-    ws->iv = malloc(n * sizeof *ws->iv);
-    ws->iv_lo = aligned_alloc(64, n * ISM_IV_CHUNK * sizeof(double));
-    ws->iv_hi = aligned_alloc(64, n * ISM_IV_CHUNK * sizeof(double));
-    ws->dual = malloc(n * sizeof *ws->dual);
-    ws->jet = malloc(n * sizeof *ws->jet);
-    ws->choice = malloc(cap ? cap : 1);
-    ws->needed = malloc(n);
-    ws->trig = malloc(sizeof *ws->trig);
+    ws->batch = ism_line_alloc(n * ISM_EVAL_BATCH * sizeof(double));
+    ws->scalar = ism_line_alloc(n * sizeof *ws->scalar);
+    ws->iv = ism_line_alloc(n * sizeof *ws->iv);
+    ws->iv_lo = ism_line_alloc(n * ISM_IV_CHUNK * sizeof(double));
+    ws->iv_hi = ism_line_alloc(n * ISM_IV_CHUNK * sizeof(double));
+    ws->dual = ism_line_alloc(n * sizeof *ws->dual);
+    ws->jet = ism_line_alloc(n * sizeof *ws->jet);
+    ws->choice = ism_line_alloc(cap);
+    ws->needed = ism_line_alloc(n);
+    ws->trig = ism_line_alloc(sizeof *ws->trig);
     if (!ws->trig || !ws->batch || !ws->scalar || !ws->iv || !ws->iv_lo || !ws->iv_hi || !ws->dual || !ws->jet || !ws->choice
         || !ws->needed) {
         ism_eval_ws_free(ws);

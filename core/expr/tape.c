@@ -1,5 +1,6 @@
 /* tape.c — allocating, freeing and measuring compiled tapes (layout in tape.h). */
 #include "core/expr/tape.h"
+#include "core/util/cache_line.h"
 
 #include <stdlib.h>
 
@@ -7,7 +8,8 @@ ism_tape *ism_tape_alloc(size_t cap, uint32_t nregs)
 {
     if (cap > (SIZE_MAX - sizeof(ism_tape)) / sizeof(ism_instr))
         return NULL;
-    ism_tape *t = malloc(sizeof *t + (cap ? cap : 1) * sizeof(ism_instr));
+    /* lines of its own: a thread rewrites its shortened tapes node after node */
+    ism_tape *t = ism_line_alloc(sizeof *t + (cap ? cap : 1) * sizeof(ism_instr));
     if (!t)
         return NULL;
     t->len = 0;

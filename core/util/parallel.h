@@ -7,11 +7,9 @@
 
 #include <stddef.h>
 
+#include "core/util/cache_line.h"
 #include "core/util/pool.h"
 
-/* Bytes of a cache line: per-thread state written often is aligned to it, so two threads'
- * writes never share a line (false sharing). */
-#define ISM_CACHE_LINE 64
 
 /* What parallel loops cost, in CPU milliseconds of each thread (CLOCK_THREAD_CPUTIME_ID),
  * added up over the loops it was passed to: all threads together; the calling thread's
