@@ -16,7 +16,11 @@ the minimum of each figure is kept (the machine is shared). Printed per surface:
   fair critical path (it counts the serial part, the longest tasks and any work the second
   thread adds), the same with the busiest threads, and the balance of the parallel loops
   as they ran (their CPU / (2 x busiest));
-  whether both thread counts made the same mesh (hash of positions, normals, triangles).
+  whether both thread counts made the same mesh (hash of positions, normals, triangles);
+  the machine's own share of the extra CPU: two one-thread runs side by side (two processes,
+  nothing shared but the hardware) against one alone — on an idle machine the second busy
+  core alone slows the first (shared caches and memory, the host's clock and siblings), so
+  2t/1t CPU divided by this pair/alone CPU is what the threads themselves add.
 
 Asserts nothing; exits 0 unless a run fails.
 
@@ -43,6 +47,19 @@ def run(exe, name, depth, threads):
     return json.loads(r.stdout)
 
 
+def run_pair(exe, name, depth):
+    """Two one-thread runs at once, as separate processes: their mean polygoniser CPU."""
+    procs = [subprocess.Popen([exe, name, str(depth), "1"], stdout=subprocess.PIPE, text=True)
+             for _ in range(2)]
+    cpu = []
+    for p in procs:
+        out, _ = p.communicate(timeout=RUN_TIMEOUT_S)
+        if p.returncode != 0:
+            raise RuntimeError("%s %s %d 1 (pair): failed" % (exe, name, depth))
+        cpu.append(sum(json.loads(out)["cpu_ms"]))
+    return sum(cpu) / 2
+
+
 def minimum(runs):
     """Each figure's minimum over the runs (lists element-wise)."""
     out = dict(runs[0])
@@ -60,7 +77,7 @@ def load_line(load):
         load, cores, " — NOT idle: wall times follow the scheduler's share" if load > cores else "")
 
 
-def report(name, depth, one, two, load, hashes):
+def report(name, depth, one, two, load, hashes, pair_cpu):
     s = sum(one["serial_ms"]) / sum(one["cpu_ms"])
     amdahl = 1 / (s + (1 - s) / 2)
     crit2 = sum(two["critical_ms"])
@@ -88,6 +105,10 @@ def report(name, depth, one, two, load, hashes):
     print("serial fraction %.3f -> Amdahl bound x%.2f; estimate from CPU x%.2f fair split, "
           "x%.2f as the threads ran (parallel loops' balance %.2f, 2t/1t CPU %.2f)" % (
               s, amdahl, estimate, as_ran, balance, sum(two["cpu_ms"]) / sum(one["cpu_ms"])))
+    machine = pair_cpu / sum(one["cpu_ms"])
+    print("two 1-thread processes side by side: CPU %.0f ms each, x%.3f of one alone (the "
+          "machine's share); 2t/1t CPU over it x%.3f (what the threads add)" % (
+              pair_cpu, machine, sum(two["cpu_ms"]) / sum(one["cpu_ms"]) / machine))
     idle = load <= os.cpu_count()
     print("RESULT threads %s d%d: 2 threads x%.2f wall (goal >= %.1f: %s), estimate x%.2f, "
           "Amdahl bound x%.2f; %s" % (
@@ -114,14 +135,17 @@ def main():
             continue
         depth -= 2 if args.quick else 0
         runs = {1: [], 2: []}
+        pairs = []
         load = os.getloadavg()[0]
         for _ in range(args.repeats):
             for t in (1, 2):
                 r = run(exe, name, depth, t)
                 runs[t].append(r)
                 load = max(load, os.getloadavg()[0])
+            pairs.append(run_pair(exe, name, depth))
         hashes = {r["hash"] for t in runs for r in runs[t]}
-        ok = report(name, depth, minimum(runs[1]), minimum(runs[2]), load, hashes) and ok
+        ok = report(name, depth, minimum(runs[1]), minimum(runs[2]), load, hashes,
+                    min(pairs)) and ok
     return 0 if ok else 1
 
 
