@@ -61,6 +61,9 @@ typedef struct refine_state {
     refine_split *split;
     uint32_t *vert;     /* per split: its new vertex (NONE: left whole) */
     size_t cap_split, cap_vert;
+    uint32_t *label;    /* per vertex: its branch once looked up (LABEL_UNKNOWN before; a
+                           vertex keeps its branch: the relaxation moves none across) */
+    size_t cap_label;
     ism_key_map side;   /* crease edge key -> index into sides */
     uint32_t (*sides)[2]; /* the triangles on a crease edge (NONE: none yet) */
     size_t cap_sides;
@@ -85,6 +88,26 @@ static double side_miss(ism_branches *br, uint32_t A, const double *a, const dou
     if (!(nn > 0) || !isfinite(nn))
         return 0;
     return acos(fmin(1.0, fabs(ism_dot3(n, g)) / nn)) * (180 / M_PI);
+}
+
+/* A vertex whose branch is not looked up yet (branches are numbered below ISM_BRANCH_MAX). */
+#define LABEL_UNKNOWN (ISM_BRANCH_NONE - 1)
+
+/* The branch of vertex v (ISM_BRANCH_NONE: a tie), looked up once; false when out of
+ * memory. */
+static bool label_of(refine_state *st, uint32_t v, uint32_t *A)
+{
+    size_t old = st->cap_label;
+    if (!ism_grow((void **)&st->label, &st->cap_label, (size_t)v + 1, sizeof *st->label,
+                  CUT_FIRST))
+        return false;
+    for (size_t i = old; i < st->cap_label; i++)
+        st->label[i] = LABEL_UNKNOWN;
+    if (st->label[v] == LABEL_UNKNOWN &&
+        !ism_branches_at(st->s->branches, st->s->m->pos + 3 * (size_t)v, &st->label[v]))
+        return false;
+    *A = st->label[v];
+    return true;
 }
 
 /* Asks edge u-w split (once), for the split `by` of a crease edge (NONE: it is one); its
@@ -147,7 +170,7 @@ static bool check_triangle(refine_state *st, uint32_t t)
             continue;
         uint32_t A;
         const double *pc = m->pos + 3 * (size_t)c;
-        if (!ism_branches_at(st->s->branches, pc, &A))
+        if (!label_of(st, c, &A))
             return false;
         if (A == ISM_BRANCH_NONE ||
             !(side_miss(st->s->branches, A, m->pos + 3 * (size_t)a, m->pos + 3 * (size_t)b,
@@ -363,6 +386,7 @@ bool cut_crease_refine(cut_state *s, size_t k, size_t *added)
     ism_key_map_free(&st.edge);
     ism_key_map_free(&st.side);
     free(st.sides);
+    free(st.label);
     free(st.split);
     free(st.vert);
     free(st.on);

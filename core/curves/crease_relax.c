@@ -20,12 +20,15 @@
 /* Triangles round a vertex handled (a mesh vertex has 3–12; more: left where it is). */
 #define CREASE_RELAX_STAR_MAX 64
 
-double cut_min_angle(const ism_mesh *m, const uint32_t *tv, uint32_t moved, const double *p)
+/* The largest cosine of triangle tv's corner angles with its corner `moved` at p (NONE:
+ * none): the cosine of its smallest angle, compared as such (no acos per triangle). */
+static double max_corner_cos(const ism_mesh *m, const uint32_t *tv, uint32_t moved,
+                             const double *p)
 {
     const double *q[3];
     for (int i = 0; i < 3; i++)
         q[i] = tv[i] == moved ? p : m->pos + 3 * (size_t)tv[i];
-    double best = 180;
+    double best = -1;
     for (int i = 0; i < 3; i++) {
         double u[3], v[3];
         for (int c = 0; c < 3; c++) {
@@ -33,8 +36,7 @@ double cut_min_angle(const ism_mesh *m, const uint32_t *tv, uint32_t moved, cons
             v[c] = q[(i + 2) % 3][c] - q[i][c];
         }
         double nn = ism_norm3(u) * ism_norm3(v);
-        double a = nn > 0 ? acos(fmax(-1.0, fmin(1.0, ism_dot3(u, v) / nn))) : 0;
-        best = fmin(best, a * (180 / M_PI));
+        best = fmax(best, nn > 0 ? ism_dot3(u, v) / nn : 1);
     }
     return best;
 }
@@ -43,6 +45,7 @@ double cut_min_angle(const ism_mesh *m, const uint32_t *tv, uint32_t moved, cons
 static void mark_candidates(cut_state *s, size_t k, const uint8_t *on, uint8_t *cand)
 {
     const ism_mesh *m = s->m;
+    const double thin_cos = cos(CREASE_RELAX_THIN_DEG * (M_PI / 180));
     for (size_t t = 0; t < m->ntris; t++) {
         const uint32_t *tv = m->tri + 3 * t;
         for (int i = 0; i < 3; i++) {
@@ -51,7 +54,7 @@ static void mark_candidates(cut_state *s, size_t k, const uint8_t *on, uint8_t *
                 continue;
             uint32_t e = cut_find_cut_edge(s, a, b);
             if (e != NONE && s->c->edges[e].fn == k &&
-                cut_min_angle(m, tv, NONE, NULL) < CREASE_RELAX_THIN_DEG)
+                max_corner_cos(m, tv, NONE, NULL) > thin_cos)
                 cand[c] = 1;
         }
     }
@@ -66,7 +69,7 @@ static bool helps(cut_state *s, uint32_t v, uint32_t A, const uint32_t *star, si
     uint32_t B;
     if (!ism_branches_at(s->branches, p, &B) || B != A)
         return false;
-    double before = 180, after = 180;
+    double before = -1, after = -1; /* the star's smallest angle's cosine */
     for (size_t i = 0; i < n; i++) {
         const uint32_t *tv = m->tri + 3 * (size_t)star[i];
         double o[3], q[3];
@@ -74,10 +77,10 @@ static bool helps(cut_state *s, uint32_t v, uint32_t A, const uint32_t *star, si
         cut_tri_normal(m, tv, v, p, q);
         if (!(ism_dot3(o, q) >= CREASE_RELAX_TURN_COS * ism_norm3(o) * ism_norm3(q)))
             return false;
-        before = fmin(before, cut_min_angle(m, tv, NONE, NULL));
-        after = fmin(after, cut_min_angle(m, tv, v, p));
+        before = fmax(before, max_corner_cos(m, tv, NONE, NULL));
+        after = fmax(after, max_corner_cos(m, tv, v, p));
     }
-    return after > before;
+    return after < before;
 }
 
 /* Whether the star of v (its triangles star[0..n)) is a closed fan: each neighbour in

@@ -11,9 +11,6 @@
  * off the surface's by more than the curvature explains, and halving it keeps its shape. */
 #define CREASE_RELAX_THIN_DEG 10.0
 
-/* The smallest angle (degrees) of triangle tv with its corner `moved` at p (NONE: none). */
-double cut_min_angle(const ism_mesh *m, const uint32_t *tv, uint32_t moved, const double *p);
-
 /* Each vertex off crease k that is the third corner of a triangle on one of its cut edges
  * whose smallest angle is under CREASE_RELAX_THIN_DEG goes to the centroid of its neighbours,
  * put back on its branch's zero set, when its star is a closed fan, it stays on its branch,
