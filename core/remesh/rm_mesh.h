@@ -109,15 +109,19 @@ double rm_angle(const double *p, const double *q, const double *s);
 double rm_min_angle(const double *a, const double *b, const double *c);
 /* Its sine (0 for a degenerate triangle): the smallest angle is at most 60°, where the sine
  * still grows with the angle, so comparisons need no arc tangent. */
-static inline double rm_min_sine(const double *a, const double *b, const double *c)
+/* The same from twice the area and the three sides (for callers that have them already). */
+static inline double rm_sine_of(double twice_area, double ab, double bc, double ca)
 {
     /* 2 area = |AB x AC| = product of the two sides at the smallest angle × its sine; those
      * are the two longest sides */
-    double n[3], twice_area = rm_cross(a, b, c, n);
-    double ab = rm_dist(a, b), bc = rm_dist(b, c), ca = rm_dist(c, a);
     double shortest = bc < ca ? bc : ca, prod = ab * bc * ca; /* no libm fmin call */
     shortest = ab < shortest ? ab : shortest;
     return prod > 0 ? twice_area * shortest / prod : 0;
+}
+static inline double rm_min_sine(const double *a, const double *b, const double *c)
+{
+    double n[3], twice_area = rm_cross(a, b, c, n);
+    return rm_sine_of(twice_area, rm_dist(a, b), rm_dist(b, c), rm_dist(c, a));
 }
 /* True when the triangle's largest angle is at least ISM_RM_CAP_DEG. */
 bool rm_is_cap(const double *a, const double *b, const double *c);

@@ -110,14 +110,17 @@ void rm_fan_measure(const rm_pass *p, uint32_t v, rm_fan *f)
     for (uint32_t i = 0; i < r->count[v]; i++) {
         const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
         const double *a = P + 3 * t[0], *b = P + 3 * t[1], *c = P + 3 * t[2];
-        double n[3], w = 0.5 * rm_cross(a, b, c, n);
-        double sine = rm_min_sine(a, b, c);
+        double n[3], twice = rm_cross(a, b, c, n), w = 0.5 * twice;
+        /* side[k] joins corners k and k + 1: each side measured once */
+        double side[3] = {rm_dist(a, b), rm_dist(b, c), rm_dist(c, a)};
+        double sine = rm_sine_of(twice, side[0], side[1], side[2]);
         f->min_sine = sine < f->min_sine ? sine : f->min_sine; /* no libm call */
+        int j = t[0] == v ? 0 : t[1] == v ? 1 : 2;
         for (int k = 0; k < 3; k++) {
             f->centroid[k] += w * (a[k] + b[k] + c[k]) / 3;
             f->normal[k] += n[k];
-            if (t[k] != v) {
-                f->mean_edge += rm_dist(P + 3 * v, P + 3 * t[k]);
+            if (t[k] != v) { /* the side between v's corner j and corner k */
+                f->mean_edge += side[(k + 1) % 3 == j ? k : j];
                 edges++;
             }
         }
@@ -142,7 +145,7 @@ bool rm_fan_accepts(const rm_pass *p, uint32_t v, const double x[3], const rm_fa
         double n1[3], l1 = rm_cross(q[0], q[1], q[2], n1);
         if (!(ism_dot3(f->normal, n1) > turn * ln * l1))
             return false;
-        double sine = rm_min_sine(q[0], q[1], q[2]);
+        double sine = rm_sine_of(l1, rm_dist(q[0], q[1]), rm_dist(q[1], q[2]), rm_dist(q[2], q[0]));
         worst = sine < worst ? sine : worst;
     }
     return worst >= f->min_sine || worst >= sin(ISM_RM_COMFORT_DEG * M_PI / 180);
