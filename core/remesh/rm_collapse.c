@@ -185,23 +185,35 @@ static bool collapse_triangle(rm_pass *p, uint32_t t, bool *ok)
     return false;
 }
 
-void rm_collapse_bounds(rm_pass *p)
+/* The farthest from f = 0 of the centroids (or, with midpoints, of the edge midpoints) of
+ * the ntris triangles tri over the places pos, at most max_error when there is one. */
+static double farthest(rm_pass *p, const double *pos, const uint32_t *tri, size_t ntris,
+                       bool midpoints)
 {
-    const ism_mesh *m = p->r.m;
-    double c = 0, e = 0;
-    for (size_t t = 0; t < m->ntris; t++) {
-        const uint32_t *v = m->tri + 3 * t;
-        const double *q[3] = {P(p, v[0]), P(p, v[1]), P(p, v[2])};
+    double far = 0;
+    for (size_t t = 0; t < ntris; t++) {
+        const uint32_t *v = tri + 3 * t;
+        const double *q[3] = {pos + 3 * (size_t)v[0], pos + 3 * (size_t)v[1],
+                              pos + 3 * (size_t)v[2]};
         if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2])
             continue;
-        c = fmax(c, rm_centroid_distance(p, q[0], q[1], q[2]));
-        for (int k = 0; k < 3; k++)
+        if (!midpoints)
+            far = fmax(far, rm_centroid_distance(p, q[0], q[1], q[2]));
+        for (int k = 0; midpoints && k < 3; k++)
             if (v[k] < v[(k + 1) % 3]) /* each edge once from each side: twice at most */
-                e = fmax(e, rm_midpoint_distance(p, q[k], q[(k + 1) % 3]));
+                far = fmax(far, rm_midpoint_distance(p, q[k], q[(k + 1) % 3]));
     }
-    double cap = p->max_error > 0 ? p->max_error : INFINITY;
-    p->centroid_bound = fmin(c, cap);
-    p->midpoint_bound = fmin(e, cap);
+    return fmin(far, p->max_error > 0 ? p->max_error : INFINITY);
+}
+
+void rm_collapse_bounds(rm_pass *p)
+{
+    p->centroid_bound = farthest(p, p->r.m->pos, p->r.m->tri, p->r.m->ntris, false);
+}
+
+void rm_midpoint_bound(rm_pass *p, const double *pos, const uint32_t *tri, size_t ntris)
+{
+    p->midpoint_bound = farthest(p, pos, tri, ntris, true);
 }
 
 size_t rm_collapse_active(rm_pass *p, bool *ok)

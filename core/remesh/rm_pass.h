@@ -100,8 +100,13 @@ size_t rm_collapse_active(rm_pass *p, bool *ok);
  * that edge (rm_insert.c), within the room reserved; returns the insertions made. *ok false
  * when out of memory. */
 size_t rm_insert_active(rm_pass *p, bool *ok);
-/* Sets the bounds collapses keep to (centroid_bound, midpoint_bound) from the mesh as it is. */
+/* Sets centroid_bound (what flips, moves, collapses and insertions keep to) from the mesh as
+ * it is. */
 void rm_collapse_bounds(rm_pass *p);
+/* Sets midpoint_bound (what collapses and insertions keep to) from the ntris triangles tri
+ * over the places pos: the mesh as the pass found it, kept by the caller until the first
+ * collapse needs it. */
+void rm_midpoint_bound(rm_pass *p, const double *pos, const uint32_t *tri, size_t ntris);
 
 /* Drops the dead triangles and gone vertices from the mesh (which had nverts_before and
  * ntris_before when the pass began), keeps the vertices in order and orders the triangles by
