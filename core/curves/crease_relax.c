@@ -66,9 +66,6 @@ static bool helps(cut_state *s, uint32_t v, uint32_t A, const uint32_t *star, si
                   const double *p)
 {
     const ism_mesh *m = s->m;
-    uint32_t B;
-    if (!ism_branches_at(s->branches, p, &B) || B != A)
-        return false;
     double before = -1, after = -1; /* the star's smallest angle's cosine */
     for (size_t i = 0; i < n; i++) {
         const uint32_t *tv = m->tri + 3 * (size_t)star[i];
@@ -80,7 +77,8 @@ static bool helps(cut_state *s, uint32_t v, uint32_t A, const uint32_t *star, si
         before = fmax(before, max_corner_cos(m, tv, NONE, NULL));
         after = fmax(after, max_corner_cos(m, tv, v, p));
     }
-    return after < before;
+    uint32_t B; /* last: the branch costs a tape shortening */
+    return after < before && ism_branches_at(s->branches, p, &B) && B == A;
 }
 
 /* Whether the star of v (its triangles star[0..n)) is a closed fan: each neighbour in
