@@ -11,6 +11,7 @@
 #include <fcntl.h>
 #include <pthread.h>
 #include <signal.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -62,6 +63,7 @@ typedef struct disk_tier {
      * the pruner's correction never counts a file twice or drops one it never saw. */
     pthread_mutex_t dir_lock;
     ism_file_memo *sent_ok; /* files whose payload was found equal to the bytes to send */
+    atomic_bool comparing;  /* a payload comparison runs (open_payload): one at a time */
 } disk_tier;
 
 /* ---- helpers ------------------------------------------------------------------------- */
@@ -247,9 +249,12 @@ int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, const void 
                  ((uint64_t)ism_get_le32(hdr + 8) | (uint64_t)ism_get_le32(hdr + 12) << 32) ==
                      (uint64_t)len;
     if (sound && !ism_file_memo_holds(d->sent_ok, name, &st)) {
-        /* A file changed moments ago could not be remembered as checked, so each send would
-         * read it whole on the caller's (a polling) thread: it waits, the caller's bytes go. */
-        if (!ism_file_memo_settled(&st)) {
+        /* The caller's bytes go instead of the file (which waits) while a check would hold
+         * up the caller's (a polling) thread for nothing: when the file changed moments ago
+         * (the check could not be remembered, so every send would read it whole), and while
+         * another thread compares (clients that arrive together ask for the same file: a
+         * second compare would stall a second polling thread, and so on up to all). */
+        if (!ism_file_memo_settled(&st) || atomic_exchange(&d->comparing, true)) {
             close(fd);
             return -1;
         }
@@ -259,6 +264,7 @@ int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, const void 
                          (long long)st.st_size);
         else if (same == 1)
             ism_file_memo_put(d->sent_ok, name, &st);
+        atomic_store(&d->comparing, false);
         sound = same == 1;
     }
     if (!sound) {

@@ -45,7 +45,8 @@ void ism_cache_disk_set_max(ism_cache_tier *t, unsigned long long max_bytes);
  * first time the file is opened here and again whenever the file has changed since
  * (file_memo.h: its inode, size or change time differ), so a file written to after it was
  * stored is never sent; one left untouched is sent without being read. A file changed
- * moments before (not settled, file_memo.h) is neither compared nor sent: -1. */
+ * moments before (not settled, file_memo.h), or any while another thread compares one, is
+ * neither compared nor sent: -1 (one compare at a time holds up one thread at most). */
 int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, const void *payload,
                                 size_t len, long long *offset);
 
