@@ -7,14 +7,18 @@
 
 enum { BOTH = 0, ONLY_A = 1, ONLY_B = 2 };
 
+/* Strictly: the intervals enclose every double evaluation at a point of the box (each
+ * operation rounds monotonically, the intervals outward), so a.hi < b.lo makes a < b there
+ * and min(a, b) exactly a — its value and its gradient; where they may touch, a tie
+ * (min picks b, and -0 against +0) would make the shortened tape differ. */
 static uint8_t min_choice(ism_interval a, ism_interval b)
 {
-    return a.hi <= b.lo ? ONLY_A : b.hi <= a.lo ? ONLY_B : BOTH;
+    return a.hi < b.lo ? ONLY_A : b.hi < a.lo ? ONLY_B : BOTH;
 }
 
 static uint8_t max_choice(ism_interval a, ism_interval b)
 {
-    return a.lo >= b.hi ? ONLY_A : b.lo >= a.hi ? ONLY_B : BOTH;
+    return a.lo > b.hi ? ONLY_A : b.lo > a.hi ? ONLY_B : BOTH;
 }
 
 static ism_interval interval_op(const ism_instr *in, const ism_interval *r, uint8_t *choice)

@@ -48,7 +48,9 @@ static void pair(walk *w, int32_t a, int32_t b)
             pair(w, x->child + k, y->child + k);
         return;
     }
-    if (y->state == ISM_NODE_LEAF && x->state == ISM_NODE_LEAF && y->flags == x->flags) {
+    /* (the tape numbers may differ: either tape gives the same values in the leaf) */
+    if (y->state == ISM_NODE_LEAF && x->state == ISM_NODE_LEAF &&
+        ((y->flags ^ x->flags) & ISM_NODE_FLAG_BITS) == 0) {
         w->match[b] = w->before_leaf[a];
         return;
     }

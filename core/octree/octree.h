@@ -46,11 +46,29 @@ typedef struct ism_node {
     uint8_t thin;    /* the hidden-piece search's verdict here (ISM_NODE_THIN_*), 0 if none ran */
 } ism_node;
 
+/* A leaf's flags hold, above the bits of ism_node_flags, which tape its cell evaluates:
+ * 0 for f itself, k for tree->tapes[k - 1], f shortened by intervals over the leaf's closed
+ * box (its min/max decided strictly there, so equal to f bit for bit, values and
+ * gradients, at every point of the box: shorten.c). A tree holds at most ISM_OCTREE_TAPES
+ * of them (6 bits); leaves past that evaluate f. */
+#define ISM_NODE_TAPE_SHIFT 2
+#define ISM_NODE_FLAG_BITS ((1u << ISM_NODE_TAPE_SHIFT) - 1u)
+#define ISM_OCTREE_TAPES 63
+
 typedef struct ism_octree {
     ism_grid grid;
     ism_node *nodes;
     size_t n, cap;
+    struct ism_tape *tapes[ISM_OCTREE_TAPES]; /* the leaves' shortened tapes (owned) */
+    size_t ntapes;
 } ism_octree;
+
+/* The tape leaf nd's cell evaluates inside its box, or NULL for f itself. */
+static inline const struct ism_tape *ism_leaf_tape(const ism_octree *t, const ism_node *nd)
+{
+    unsigned k = (unsigned)nd->flags >> ISM_NODE_TAPE_SHIFT;
+    return k ? t->tapes[k - 1] : NULL;
+}
 
 /* Does the node's closed box hold no point of f = 0 (empty, or a zero-free leaf)? */
 static inline bool ism_node_void(const ism_node *nd)

@@ -4,6 +4,7 @@
 #include "core/octree/octree_build.h"
 #include "core/octree/sampler.h"
 #include "core/octree/cell_cache.h"
+#include "core/octree/leaf_tapes.h"
 #include "core/octree/node_balls.h"
 #include "core/octree/quiet.h"
 #include "core/octree/thin_search.h"
@@ -60,6 +61,7 @@ typedef struct build {
     const ism_octree *previous;  /* p->previous when it may be used, else NULL */
     thread_state *threads;
     int shortening;
+    ism_leaf_tapes leaf_tapes;   /* the leaves' shortened tapes (octree.h) */
     /* written rarely, read by every node; the counters below live on lines of their own */
     atomic_int failed;           /* an enum ism_build_status other than OK */
     alignas(ISM_CACHE_LINE) atomic_size_t nodes_total; /* in batches (NODE_BATCH) */
@@ -376,6 +378,10 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     }
     if (leaf) {
         v->v[i].state = ISM_NODE_LEAF;
+        /* the tape its cell evaluates: sub, shortened over this box or an ancestor's */
+        if (sub != b->p->tape && !(v->v[i].flags & ISM_NODE_ZERO_FREE))
+            v->v[i].flags |= (uint8_t)(ism_leaf_tapes_number(&b->leaf_tapes, sub)
+                                       << ISM_NODE_TAPE_SHIFT);
         return true;
     }
     if ((th->new_nodes += 8) >= NODE_BATCH && !count_nodes(b, th))
@@ -514,7 +520,9 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
     defer_list deferred = {0, NULL, 0};
     enum ism_build_status status = ISM_BUILD_OK;
 
-    if (!ism_quiet_init(&b.quiet, p->quiet, p->nquiet) || !init_threads(&b, nthreads)) {
+    b.previous = p->previous && p->previous->n ? p->previous : NULL;
+    if (!ism_quiet_init(&b.quiet, p->quiet, p->nquiet) || !init_threads(&b, nthreads) ||
+        !ism_leaf_tapes_init(&b.leaf_tapes, b.previous)) {
         status = ISM_BUILD_NO_MEMORY;
         goto done;
     }
@@ -524,7 +532,6 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
         goto done;
     }
     deferred.level = p->max_depth < TOP_LEVEL ? p->max_depth : TOP_LEVEL;
-    b.previous = p->previous && p->previous->n ? p->previous : NULL;
     if (grow(&b, &b.threads[0], &top, 0, p->tape, p->max_depth, &deferred, b.previous ? 0 : -1,
              NULL))
         count_nodes(&b, &b.threads[0]);
@@ -562,14 +569,18 @@ done:
     free(deferred.v);
     pthread_mutex_destroy(&b.progress_lock);
     if (status != ISM_BUILD_OK) {
+        ism_leaf_tapes_free(&b.leaf_tapes);
         free(top.v);
         t->nodes = NULL;
         t->n = t->cap = 0;
+        t->ntapes = 0;
         return status;
     }
     t->nodes = top.v;
     t->n = top.n;
     t->cap = top.cap;
+    ism_leaf_tapes_give(&b.leaf_tapes, t);
+    ism_leaf_tapes_free(&b.leaf_tapes);
     return ISM_BUILD_OK;
 }
 
@@ -578,4 +589,7 @@ void ism_octree_free(ism_octree *t)
     free(t->nodes);
     t->nodes = NULL;
     t->n = t->cap = 0;
+    for (size_t k = 0; k < t->ntapes; k++)
+        ism_tape_free(t->tapes[k]);
+    t->ntapes = 0;
 }

@@ -144,6 +144,18 @@ typedef struct phase2 {
                                     follow; else NULL */
 } phase2;
 
+/* The leaf's shortened tape (octree.h) for the sampler inside the leaf's closed box. */
+static void leaf_sampler(ism_cell_ctx *cx, int32_t leaf)
+{
+    const ism_node *nd = &cx->tree->nodes[leaf];
+    cx->s.local = ism_leaf_tape(cx->tree, nd);
+    int32_t steps = ism_grid_cell_steps(&cx->tree->grid, nd->level);
+    for (int a = 0; a < 3; a++) {
+        cx->s.local_box[a] = ism_grid_coord(&cx->tree->grid, a, nd->org[a]);
+        cx->s.local_box[3 + a] = ism_grid_coord(&cx->tree->grid, a, nd->org[a] + steps);
+    }
+}
+
 /* Leaf i of chunk into out: copied from the last round when it emits the same there, else
  * polygonised (and measured under max_error). */
 static bool one_leaf(phase2 *p, ism_cell_ctx *cx, size_t chunk, size_t i, ism_cell_out *out)
@@ -155,12 +167,15 @@ static bool one_leaf(phase2 *p, ism_cell_ctx *cx, size_t chunk, size_t i, ism_ce
         if (!ism_leaf_memo_copy(p->memo, (size_t)p->reuse[i], out, &cx->stats, &err))
             return false;
     } else {
-        if (!ism_cell_polygonise(cx, p->leaves[i], out))
-            return false;
-        if (p->leaf_error && !ism_crease_split(&cx->s, out, t0))
-            return false; /* under max_error: cut along a CSG crease before measuring */
-        if (p->leaf_error)
+        leaf_sampler(cx, p->leaves[i]);
+        bool ok = ism_cell_polygonise(cx, p->leaves[i], out) &&
+                  /* under max_error: cut along a CSG crease before measuring */
+                  (!p->leaf_error || ism_crease_split(&cx->s, out, t0));
+        if (ok && p->leaf_error)
             err = (float)ism_emitted_error(&cx->s, out, t0, INFINITY);
+        cx->s.local = NULL;
+        if (!ok)
+            return false;
     }
     if (p->leaf_error)
         p->leaf_error[i] = err;

@@ -12,19 +12,34 @@
 typedef struct ism_sampler {
     const ism_tape *tape;
     ism_eval_ws *ws;
+    /* Optional: a tape that gives tape's values and gradients bit for bit at the points of
+     * the closed box local_box (lo xyz, hi xyz) — a leaf's tape shortened by intervals over
+     * its box (octree.h) — used there by ism_sample_f / ism_sample_grad; NULL for none. */
+    const ism_tape *local;
+    double local_box[6];
     uint64_t n_point, n_gradient, n_interval;
 } ism_sampler;
+
+/* The tape to evaluate at p: the local one inside its box, else f's. */
+static inline const ism_tape *ism_sampler_tape_at(const ism_sampler *s, const double p[3])
+{
+    const double *b = s->local_box;
+    if (s->local && p[0] >= b[0] && p[1] >= b[1] && p[2] >= b[2] && p[0] <= b[3] &&
+        p[1] <= b[4] && p[2] <= b[5])
+        return s->local;
+    return s->tape;
+}
 
 static inline double ism_sample_f(ism_sampler *s, const double p[3])
 {
     s->n_point++;
-    return ism_eval_point(s->tape, s->ws, p[0], p[1], p[2]);
+    return ism_eval_point(ism_sampler_tape_at(s, p), s->ws, p[0], p[1], p[2]);
 }
 
 static inline double ism_sample_grad(ism_sampler *s, const double p[3], double g[3])
 {
     s->n_gradient++;
-    return ism_eval_gradient(s->tape, s->ws, p[0], p[1], p[2], g);
+    return ism_eval_gradient(ism_sampler_tape_at(s, p), s->ws, p[0], p[1], p[2], g);
 }
 
 /* |f| / |∇f| at p: the first-order distance to f = 0. 0 where f is exactly 0 (on the surface,

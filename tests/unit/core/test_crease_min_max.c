@@ -166,7 +166,7 @@ Test(crease_min_max, branch_is_the_one_f_takes)
     const pf_surface forms[2] = {as_min, as_max};
     for (int fm = 0; fm < 2; fm++) {
         ism_tape *t = pf_compile(&forms[fm]);
-        ism_sampler s = {t, ism_eval_ws_new(t), 0, 0, 0};
+        ism_sampler s = {.tape = t, .ws = ism_eval_ws_new(t)};
         for (int i = 0; i < 9 * 9 * 9; i++) {
             double p[3] = {-1.3 + 0.37 * (i % 9), -1.3 + 0.31 * (i / 9 % 9),
                            -1.3 + 0.29 * (i / 81)};
