@@ -218,11 +218,16 @@ def build_libfive_mesher(build, libfive_dir):
     src = os.path.join(HERE, "libfive_mesher.cc")
     exe = os.path.join(build, "bench", "libfive_mesher")
     if os.path.exists(exe) and os.path.getmtime(exe) >= max(os.path.getmtime(src),
-                                                            os.path.getmtime(lib)):
+                                                            os.path.getmtime(lib),
+                                                            os.path.getmtime(__file__)):
         return exe, None
     os.makedirs(os.path.dirname(exe), exist_ok=True)
-    argv = ["g++", "-std=c++17", "-O2", "-I", inc, "-I", "/usr/include/eigen3", "-o", exe, src,
-            lib, f"-Wl,-rpath,{os.path.dirname(lib)}", "-pthread"]
+    # libfive's CMakeLists.txt compiles with -march=native: Eigen's alignment (hence the
+    # layout of libfive::Mesh) must match, or freeing the mesh corrupts the heap ("double
+    # free or corruption", every run counted as not reaching the target)
+    argv = ["g++", "-std=c++17", "-O2", "-march=native", "-DEIGEN_NO_DEBUG", "-I", inc, "-I",
+            "/usr/include/eigen3", "-o", exe, src, lib, f"-Wl,-rpath,{os.path.dirname(lib)}",
+            "-pthread"]
     r = subprocess.run(argv, capture_output=True, text=True)
     if r.returncode != 0:
         return None, "libfive_mesher did not build: " + r.stderr.strip()[-300:]
