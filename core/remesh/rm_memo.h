@@ -31,9 +31,9 @@ typedef struct rm_memo {
     unsigned bits;
 } rm_memo;
 
-/* A table sized for a mesh of nverts vertices (between 2^10 and 2^16 entries). NULL when out
- * of memory (the measures then go without it). */
-rm_memo *rm_memo_new(size_t nverts);
+/* An empty table (a fixed 2^10 slots, small enough to stay in cache). NULL when out of
+ * memory (the measures then go without it). */
+rm_memo *rm_memo_new(void);
 void rm_memo_free(rm_memo *m);
 
 /* The entry for x: x's own (its state says what it knows) or, on a miss, the slot emptied

@@ -77,7 +77,7 @@ bool ism_remesh_simplify(ism_mesh *m, const ism_remesh_options *o, ism_simplify_
     bool ok = rm_pass_open(&p, m, o, 0);
     p.bounded = true;
     if (ok) {
-        p.memo = rm_memo_new(m->nverts); /* NULL: every measure is taken afresh */
+        p.memo = rm_memo_new(); /* NULL: every measure is taken afresh */
         memset(p.active, 1, m->nverts);
     }
     for (int round = 0; ok && round < ISM_SP_ROUNDS && !stopped(o); round++) {

@@ -1,7 +1,7 @@
 /* test_rm_memo.c — the point-keyed table of Newton measures (core/remesh/rm_memo.c): a slot
  * hands back what was stored for a point only to that very point, bit for bit — not to its
  * neighbour one ulp away, not to −0.0 for +0.0 — whatever else has been stored since (a
- * direct-mapped table evicts, it never mixes), and the table's size follows the mesh's. */
+ * direct-mapped table evicts, it never mixes). */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdint.h>
@@ -34,7 +34,7 @@ static void store(rm_memo *m, const double x[3])
 
 Test(rm_memo, a_slot_answers_only_its_own_point)
 {
-    rm_memo *m = rm_memo_new(100);
+    rm_memo *m = rm_memo_new();
     cr_assert_not_null(m);
     size_t hits = 0;
     for (unsigned i = 0; i < POINTS; i++) {
@@ -69,23 +69,11 @@ Test(rm_memo, a_slot_answers_only_its_own_point)
 
 Test(rm_memo, signed_zero_is_its_own_point)
 {
-    rm_memo *m = rm_memo_new(1);
+    rm_memo *m = rm_memo_new();
     double plus[3] = {0.0, 0.5, 0.25}, minus[3] = {-0.0, 0.5, 0.25};
     rm_memo_entry *e = rm_memo_slot(m, plus);
     e->state = RM_MEMO_S1;
     e->s1 = 1.0;
     cr_assert_eq(rm_memo_slot(m, minus)->state, RM_MEMO_EMPTY);
     rm_memo_free(m);
-}
-
-Test(rm_memo, size_follows_the_mesh)
-{
-    rm_memo *small = rm_memo_new(10), *big = rm_memo_new(1000000);
-    cr_assert_eq(small->bits, 10);
-    cr_assert_eq(big->bits, 16);
-    rm_memo *mid = rm_memo_new(3000); /* 4 slots a vertex: 12,000 -> 2^14 */
-    cr_assert_eq(mid->bits, 14);
-    rm_memo_free(small);
-    rm_memo_free(big);
-    rm_memo_free(mid);
 }
