@@ -289,11 +289,11 @@ static bool conform_group(cf_run *r, const size_t *idx, size_t n);
 
 bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n)
 {
-    /* the group's scale: the finest cell its curves ask for, where the octree split its nodes
+    /* the group's scale: the finest cell the octree split its nodes to along its curves
      * (curve_cell.h), else the depth's */
     double depth_cell = r->c.cell;
     for (size_t i = 0; i < n; i++)
-        r->c.cell = fmin(r->c.cell, ism_curve_cell(&r->l->curves[idx[i]], depth_cell));
+        r->c.cell = fmin(r->c.cell, ism_curve_mesh_cell(&r->l->curves[idx[i]], depth_cell));
     bool ok = conform_group(r, idx, n);
     r->c.cell = depth_cell;
     return ok;

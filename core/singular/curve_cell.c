@@ -19,13 +19,18 @@ double ism_curve_cell(const ism_sing_curve *cu, double finest)
     return cell;
 }
 
+double ism_curve_mesh_cell(const ism_sing_curve *cu, double finest)
+{
+    return cu->split_cell > 0 && cu->split_cell < finest ? cu->split_cell : finest;
+}
+
 double ism_point_curve_cell(const ism_locus *l, size_t i, double finest)
 {
     double cell = finest;
     for (size_t k = 0; k < l->ncurves; k++) {
         const ism_sing_curve *cu = &l->curves[k];
         if (!cu->closed && (cu->end_point[0] == (int)i || cu->end_point[1] == (int)i))
-            cell = fmin(cell, ism_curve_cell(cu, finest));
+            cell = fmin(cell, ism_curve_mesh_cell(cu, finest));
     }
     return cell;
 }

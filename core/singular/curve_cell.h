@@ -18,7 +18,13 @@
  * `finest`. */
 double ism_curve_cell(const ism_sing_curve *cu, double finest);
 
-/* The smallest cell any double curve ending at point i asks for (`finest` when none). */
+/* The cell the mesh along curve cu has: its split_cell where the octree split its nodes
+ * (ism_sing_curve), else `finest`. The conformance tube and the quiet balls are sized by it:
+ * sized by the cell the curve asks for on a mesh that was not split there, the tube is too
+ * narrow for the depth's triangles. */
+double ism_curve_mesh_cell(const ism_sing_curve *cu, double finest);
+
+/* The smallest ism_curve_mesh_cell of the curves ending at point i (`finest` when none). */
 double ism_point_curve_cell(const ism_locus *l, size_t i, double finest);
 
 /* Cells across a double curve's span: at depths whose cells are this fine the conformance

@@ -118,6 +118,8 @@ typedef struct ism_sing_curve {
     int end_type[2];       /* enum ism_end_type of the first and last point (unused when
                               closed) */
     int end_point[2];      /* index into ism_locus.points of the point it ends at, or -1 */
+    double split_cell;     /* the cell the octree split its nodes to along it, finer than
+                              the depth's (core/singular/curve_cell.h), or 0: the depth's */
 } ism_sing_curve;
 
 /* A candidate box of the search: neither excluded by intervals nor certified as one point. */

@@ -89,7 +89,7 @@ static bool quiet_balls(const ism_locus *l, const ism_locus_options *lo, ball_li
             return false;
     for (size_t c = 0; c < l->ncurves; c++) {
         const ism_sing_curve *cu = &l->curves[c];
-        double r = r0 * ism_curve_cell(cu, finest) / finest;
+        double r = r0 * ism_curve_mesh_cell(cu, finest) / finest;
         for (size_t i = 0; i < cu->n; i++) {
             size_t j = i + 1 < cu->n ? i + 1 : cu->closed ? 0 : i;
             if (!add_segment(out, cu->xyz + 3 * i, cu->xyz + 3 * j, r))
@@ -140,11 +140,11 @@ static void put_ball(double (*out)[ISM_NODE_BALL_FIELDS], size_t *m, const doubl
  * out[0 .. n): at every point and along each segment, CURVE_BALL_SPACING radii apart at
  * most. A curve whose balls do not all fit under ISM_NODE_BALLS_MAX gets none (the mesh
  * there is then the depth's). Returns the new count. */
-static size_t curve_balls(const ism_locus *l, double finest, double (*out)[ISM_NODE_BALL_FIELDS],
+static size_t curve_balls(ism_locus *l, double finest, double (*out)[ISM_NODE_BALL_FIELDS],
                           size_t n)
 {
     for (size_t k = 0; k < l->ncurves; k++) {
-        const ism_sing_curve *cu = &l->curves[k];
+        ism_sing_curve *cu = &l->curves[k];
         double cell = ism_curve_cell(cu, finest);
         if (!(cell < finest))
             continue;
@@ -168,8 +168,10 @@ static size_t curve_balls(const ism_locus *l, double finest, double (*out)[ISM_N
                 since = 0;
             }
         }
-        if (m <= ISM_NODE_BALLS_MAX)
+        if (m <= ISM_NODE_BALLS_MAX) {
             n = m;
+            cu->split_cell = cell;
+        }
     }
     return n;
 }
@@ -178,7 +180,7 @@ static size_t curve_balls(const ism_locus *l, double finest, double (*out)[ISM_N
  * depth's (the first ISM_NODE_BALLS_MAX in the locus's order). Where the depth's cells are
  * that fine already, the flatness test refines round the apex to depth.max by itself, and
  * the octree is left as it was. */
-static size_t node_balls(const ism_locus *l, const ism_poly_options *po,
+static size_t node_balls(ism_locus *l, const ism_poly_options *po,
                          double (*out)[ISM_NODE_BALL_FIELDS])
 {
     double finest = finest_cell(po->box, po->max_depth);
@@ -214,21 +216,21 @@ enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options 
         return ISM_POLY_NO_MEMORY;
     double t1 = ism_now_ms(), c1 = ism_cpu_ms();
     ism_poly_options pq = *po;
+    /* the split balls first: they record the curves' split cells, which size the quiet balls */
+    double(*nodes)[ISM_NODE_BALL_FIELDS] = malloc(ISM_NODE_BALLS_MAX * sizeof *nodes);
+    if (!nodes)
+        return ISM_POLY_NO_MEMORY;
+    pq.nnode_balls = node_balls(locus, po, nodes);
+    pq.node_balls = (const double (*)[ISM_NODE_BALL_FIELDS])nodes;
     ball_list balls;
     if (!quiet_balls(locus, &lo, &balls)) {
         free(balls.b);
+        free(nodes);
         return ISM_POLY_NO_MEMORY;
     }
     double none[1][4] = {{0, 0, 0, 0}}; /* the locus is known, and empty */
     pq.quiet = balls.n ? (const double (*)[4])balls.b : (const double (*)[4])none;
     pq.nquiet = balls.n;
-    double(*nodes)[ISM_NODE_BALL_FIELDS] = malloc(ISM_NODE_BALLS_MAX * sizeof *nodes);
-    if (!nodes) {
-        free(balls.b);
-        return ISM_POLY_NO_MEMORY;
-    }
-    pq.nnode_balls = node_balls(locus, po, nodes);
-    pq.node_balls = (const double (*)[ISM_NODE_BALL_FIELDS])nodes;
     if (locus->incomplete) { /* points may be missing: chase as without a locus (bounded) */
         pq.quiet = NULL;
         pq.nquiet = 0;
