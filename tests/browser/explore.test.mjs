@@ -511,37 +511,50 @@ describe('box and inspection', { timeout: 300000 }, () => {
     const plainCut = await viewShot(page, 'spheres-cut-plain.png');
 
     // Turn the render mode on with the cut: a new occlusion is computed. Record every animation
-    // frame (its time and look) and answer a click while it runs.
-    await page.evaluate(() => {
-      const rec = { frames: [], click: null, done: false, drawnBefore: window.isomeshViewer.frames, longTasks: [] };
-      window.aoRecord = rec;
-      // Main-thread tasks over 50 ms (the Long Tasks API), printed below.
-      rec.observer = new PerformanceObserver((l) => {
-        for (const e of l.getEntries()) rec.longTasks.push({ t: e.startTime, ms: e.duration });
-      });
-      rec.observer.observe({ type: 'longtask' });
-      const view = document.getElementById('view');
-      const tick = () => {
-        rec.frames.push({ t: performance.now(), look: view.dataset.look, state: view.dataset.occlusion });
-        if (view.dataset.look === 'occlusion') { rec.done = true; return; }
+    // frame (its time and look) and answer a click while it runs. On a loaded machine the bake
+    // (~1.5 s) can end before the test's click reaches the page: that attempt proves nothing
+    // either way, so it is repeated with a new cut (each cut is baked anew; offsets down to
+    // -0.02 still keep the whole left sphere, x <= -0.1, and cut the right one away).
+    const attempt = async () => {
+      await page.evaluate(() => {
+        const rec = { frames: [], click: null, done: false, drawnBefore: window.isomeshViewer.frames, longTasks: [] };
+        window.aoRecord = rec;
+        // Main-thread tasks over 50 ms (the Long Tasks API), printed below.
+        rec.observer = new PerformanceObserver((l) => {
+          for (const e of l.getEntries()) rec.longTasks.push({ t: e.startTime, ms: e.duration });
+        });
+        rec.observer.observe({ type: 'longtask' });
+        const view = document.getElementById('view');
+        const tick = () => {
+          rec.frames.push({ t: performance.now(), look: view.dataset.look, state: view.dataset.occlusion });
+          if (view.dataset.look === 'occlusion') { rec.done = true; return; }
+          requestAnimationFrame(tick);
+        };
         requestAnimationFrame(tick);
-      };
-      requestAnimationFrame(tick);
-    });
-    await page.check('#occlusion');
-    await page.waitForFunction(() => document.getElementById('view').dataset.occlusion === 'computing', null, { timeout: 30000, polling: 20 });
-    await page.evaluate(() => document.addEventListener('click', () => {
-      window.aoRecord.click = { t: performance.now(), state: document.getElementById('view').dataset.occlusion };
-    }, { once: true }));
-    await page.click('#preset-about');
-    await page.waitForFunction(() => window.aoRecord.done, null, { timeout: 120000 });
-    await page.waitForSelector('#message', { state: 'hidden' });
-    const rec = await page.evaluate(() => {
-      const r = window.aoRecord;
-      r.observer.disconnect();
-      delete r.observer;
-      return { ...r, drawn: window.isomeshViewer.frames - r.drawnBefore };
-    });
+      });
+      await page.check('#occlusion');
+      await page.waitForFunction(() => document.getElementById('view').dataset.occlusion === 'computing', null, { timeout: 30000, polling: 20 });
+      await page.evaluate(() => document.addEventListener('click', () => {
+        window.aoRecord.click = { t: performance.now(), state: document.getElementById('view').dataset.occlusion };
+      }, { once: true }));
+      await page.click('#preset-about');
+      await page.waitForFunction(() => window.aoRecord.done, null, { timeout: 120000 });
+      await page.waitForSelector('#message', { state: 'hidden' });
+      return page.evaluate(() => {
+        const r = window.aoRecord;
+        r.observer.disconnect();
+        delete r.observer;
+        return { ...r, drawn: window.isomeshViewer.frames - r.drawnBefore };
+      });
+    };
+    let rec = await attempt();
+    for (const offset of ['-0.01', '-0.02']) {
+      if (rec.click && rec.click.state === 'computing') break;
+      console.log(`# the bake ended before the click arrived (${JSON.stringify(rec.click)}): again at x = ${offset}`);
+      await page.uncheck('#occlusion');
+      await page.$eval('#clip-offset', (e, v) => { e.value = v; e.dispatchEvent(new Event('input', { bubbles: true })); }, offset);
+      rec = await attempt();
+    }
     const busy = rec.frames.filter((f) => f.state === 'computing');
     const gaps = rec.frames.slice(1).map((f, i) => f.t - rec.frames[i].t);
     const span = busy.length ? busy.at(-1).t - busy[0].t : 0;
