@@ -195,10 +195,9 @@ static bool split_three(crease_state *cs, const uint32_t t[3])
 static bool tie_edge_side(crease_state *cs, uint32_t a, uint32_t b, uint32_t A)
 {
     bool added;
-    uint32_t i = ism_key_map_add(&cs->tie_edge, cut_edge_key(a, b), &added);
-    if (i == ISM_KEY_NONE ||
-        !ism_grow((void **)&cs->tie_side, &cs->cap_tie, (size_t)i + 1, sizeof *cs->tie_side,
-                  CUT_FIRST))
+    uint32_t i = cut_edge_slot(&cs->tie_edge, a, b, (void **)&cs->tie_side, &cs->cap_tie,
+                               sizeof *cs->tie_side, &added);
+    if (i == CUT_NONE)
         return false;
     if (added) {
         cs->tie_side[i] = A;

@@ -116,10 +116,9 @@ static bool want_split(refine_state *st, uint32_t u, uint32_t w, uint32_t A, uin
                        uint32_t *at)
 {
     bool added;
-    uint32_t i = ism_key_map_add(&st->edge, cut_edge_key(u, w), &added);
-    if (i == ISM_KEY_NONE ||
-        !ism_grow((void **)&st->split, &st->cap_split, (size_t)i + 1, sizeof *st->split,
-                  CUT_FIRST))
+    uint32_t i = cut_edge_slot(&st->edge, u, w, (void **)&st->split, &st->cap_split,
+                               sizeof *st->split, &added);
+    if (i == CUT_NONE)
         return false;
     refine_split *sp = &st->split[i];
     if (added)
@@ -143,10 +142,9 @@ static uint32_t crease_edge(const refine_state *st, uint32_t a, uint32_t b)
 static bool note_side(refine_state *st, uint32_t a, uint32_t b, uint32_t t)
 {
     bool added;
-    uint32_t i = ism_key_map_add(&st->side, cut_edge_key(a, b), &added);
-    if (i == ISM_KEY_NONE ||
-        !ism_grow((void **)&st->sides, &st->cap_sides, (size_t)i + 1, sizeof *st->sides,
-                  CUT_FIRST))
+    uint32_t i = cut_edge_slot(&st->side, a, b, (void **)&st->sides, &st->cap_sides,
+                               sizeof *st->sides, &added);
+    if (i == CUT_NONE)
         return false;
     if (added)
         st->sides[i][0] = st->sides[i][1] = NONE;

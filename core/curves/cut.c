@@ -29,6 +29,15 @@ uint64_t cut_edge_key(uint32_t a, uint32_t b)
     return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
 }
 
+uint32_t cut_edge_slot(ism_key_map *map, uint32_t a, uint32_t b, void **arr, size_t *cap,
+                       size_t elem, bool *added)
+{
+    uint32_t i = ism_key_map_add(map, cut_edge_key(a, b), added);
+    if (i == ISM_KEY_NONE || !ism_grow(arr, cap, (size_t)i + 1, elem, CUT_FIRST))
+        return CUT_NONE;
+    return i;
+}
+
 void ism_cut_free(ism_cut *c)
 {
     free(c->edges);
@@ -208,9 +217,9 @@ static double g_at(void *ctx, const double p[3])
 bool cut_split_slot(cut_state *s, uint32_t u, uint32_t w, uint32_t *slot, uint32_t *v)
 {
     bool added;
-    uint32_t i = ism_key_map_add(&s->split, cut_edge_key(u, w), &added);
-    if (i == ISM_KEY_NONE || !ism_grow((void **)&s->split_v, &s->cap_split, (size_t)i + 1,
-                                       sizeof *s->split_v, CUT_FIRST))
+    uint32_t i = cut_edge_slot(&s->split, u, w, (void **)&s->split_v, &s->cap_split,
+                               sizeof *s->split_v, &added);
+    if (i == CUT_NONE)
         return false;
     *slot = i;
     *v = added ? NONE : s->split_v[i];
@@ -357,10 +366,9 @@ static bool emit(cut_state *s, uint32_t a, uint32_t b, uint32_t c)
 static bool note_zero_edge(cut_state *s, uint32_t a, uint32_t b, int sign)
 {
     bool added;
-    uint32_t i = ism_key_map_add(&s->zero, cut_edge_key(a, b), &added);
-    if (i == ISM_KEY_NONE ||
-        !ism_grow((void **)&s->zero_edge, &s->cap_zero, (size_t)i + 1, sizeof *s->zero_edge,
-                  CUT_FIRST))
+    uint32_t i = cut_edge_slot(&s->zero, a, b, (void **)&s->zero_edge, &s->cap_zero,
+                               sizeof *s->zero_edge, &added);
+    if (i == CUT_NONE)
         return false;
     if (added)
         s->zero_edge[i] = (cut_zero_edge){a, b, 0, 0};

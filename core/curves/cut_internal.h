@@ -74,6 +74,11 @@ typedef struct cut_state {
 } cut_state;
 
 uint64_t cut_edge_key(uint32_t a, uint32_t b);
+/* The slot of edge a-b in map, with *arr (elem bytes a slot) grown to hold it; *added when the
+ * edge is new (its slot then holds nothing yet: the caller fills it). CUT_NONE when out of
+ * memory. */
+uint32_t cut_edge_slot(ism_key_map *map, uint32_t a, uint32_t b, void **arr, size_t *cap,
+                       size_t elem, bool *added);
 
 /* Appends triangle (a, b, c) as a piece of s->from (its parent). False when out of memory. */
 bool cut_add_triangle(cut_state *s, uint32_t a, uint32_t b, uint32_t c);

@@ -107,20 +107,19 @@ bool ism_mesh_bounds(const ism_mesh *m, double lo[3], double hi[3])
     return true;
 }
 
-bool ism_mesh_drop_loose(ism_mesh *m)
+void ism_mesh_compact(ism_mesh *m, uint32_t *used)
 {
-    uint32_t *map = malloc((m->nverts ? m->nverts : 1) * sizeof *map);
-    if (!map)
-        return false;
-    for (size_t v = 0; v < m->nverts; v++)
-        map[v] = UINT32_MAX;
     for (size_t i = 0; i < 3 * m->ntris; i++)
-        map[m->tri[i]] = 0;
+        used[m->tri[i]] = 1;
+    for (size_t i = 0; i < 2 * m->nsegs; i++)
+        used[m->seg[i]] = 1;
     size_t nv = 0;
     for (size_t v = 0; v < m->nverts; v++) {
-        if (map[v] == UINT32_MAX)
+        if (!used[v]) {
+            used[v] = UINT32_MAX;
             continue;
-        map[v] = (uint32_t)nv;
+        }
+        used[v] = (uint32_t)nv;
         memmove(m->pos + 3 * nv, m->pos + 3 * v, 3 * sizeof *m->pos);
         if (m->normal)
             memmove(m->normal + 3 * nv, m->normal + 3 * v, 3 * sizeof *m->normal);
@@ -128,8 +127,18 @@ bool ism_mesh_drop_loose(ism_mesh *m)
     }
     m->nverts = nv;
     for (size_t i = 0; i < 3 * m->ntris; i++)
-        m->tri[i] = map[m->tri[i]];
+        m->tri[i] = used[m->tri[i]];
+    for (size_t i = 0; i < 2 * m->nsegs; i++)
+        m->seg[i] = used[m->seg[i]];
+}
+
+bool ism_mesh_drop_loose(ism_mesh *m)
+{
+    uint32_t *used = calloc(m->nverts ? m->nverts : 1, sizeof *used);
+    if (!used)
+        return false;
     m->nsegs = 0;
-    free(map);
+    ism_mesh_compact(m, used);
+    free(used);
     return true;
 }

@@ -38,6 +38,12 @@ bool ism_mesh_add_segment(ism_mesh *m, uint32_t a, uint32_t b);
 /* Bytes held by the mesh's arrays (for memory budgets). */
 size_t ism_mesh_bytes(const ism_mesh *m);
 
+/* Drops every vertex that no triangle or segment uses and that used[v] (nonzero) does not
+ * keep; the others keep their order, triangles and segments are renumbered, and used[v]
+ * becomes old vertex v's new index (UINT32_MAX: dropped) for what the caller indexes beside
+ * the mesh. used: m->nverts entries. */
+void ism_mesh_compact(ism_mesh *m, uint32_t *used);
+
 /* Drops the segments and every vertex no triangle uses, keeping the others in order
  * (triangles renumbered). For a mesh whose one-dimensional parts travel elsewhere (the
  * singular locus carries whiskers as curves). False when out of memory (m unchanged). */
