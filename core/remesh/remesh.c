@@ -85,7 +85,7 @@ static void drop_found(found *k)
 
 /* Collapses, then insertions beside the needles collapses cannot reach, then flips of the
  * split needles' thin halves (from the split needles' corners only). */
-static void mend_needles(rm_pass *p, found *k, bool *ok)
+static void mend_needles(rm_pass *p, found *k, bool last, bool *ok)
 {
     if (!(p->poorest < sin(ISM_RM_COLLAPSE_DEG * M_PI / 180)))
         return; /* no triangle under ISM_RM_COLLAPSE_DEG since rm_mark_active looked */
@@ -94,7 +94,7 @@ static void mend_needles(rm_pass *p, found *k, bool *ok)
         drop_found(k);
     }
     rm_collapse_active(p, ok);
-    if (*ok && rm_insert_active(p, ok) && *ok)
+    if (*ok && rm_insert_active(p, last, ok) && *ok)
         rm_flip_from(p, p->touched, ok);
 }
 
@@ -131,7 +131,7 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
             if (!ok || stopped(o))
                 break;
             if (round >= ISM_RM_COLLAPSE_ROUND)
-                mend_needles(&p, &k, &ok);
+                mend_needles(&p, &k, false, &ok);
             if (!ok || stopped(o))
                 break;
             size_t moved = rm_relax_sweep(&p);
@@ -144,7 +144,7 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
            test, unseen since the last collapse sweep): klein-bottle 2 / 2 / 1 triangles
            under 10° in its own / 1e-3 / 0.37-cell boxes -> 0, kummer-16 0.37-cell 16 -> 1 */
         if (ok && !stopped(o))
-            mend_needles(&p, &k, &ok);
+            mend_needles(&p, &k, true, &ok);
         for (size_t v = 0; v < m->nverts; v++)
             st->locked_vertices += p.r.locked[v] && p.r.count[v];
     }

@@ -86,10 +86,11 @@ static bool not_delaunay(const double *A, const double *B, const double *C, cons
     return sc * cd + cc * sd < -ISM_RM_FLIP_MARGIN * scale;
 }
 
-/* The geometric tests of a flip (the combinatorial ones and the Delaunay test passed). */
-static bool flip_improves(rm_pass *p, const quad *q)
+/* The geometric tests of flipping AB to CD in (A, B, C), (B, A, D) (the combinatorial ones
+ * and the Delaunay test passed). */
+static bool flip_improves_at(rm_pass *p, const double *A, const double *B, const double *C,
+                             const double *D)
 {
-    const double *A = P(p, q->a), *B = P(p, q->b), *C = P(p, q->c), *D = P(p, q->d);
     double n1[3], n2[3], m1[3], m2[3];
     double l1 = rm_cross(A, B, C, n1), l2 = rm_cross(B, A, D, n2);
     double k1 = rm_cross(A, D, C, m1), k2 = rm_cross(B, C, D, m2);
@@ -116,6 +117,17 @@ static bool flip_improves(rm_pass *p, const quad *q)
     double now = fmax(rm_centroid_distance(p, A, D, C), rm_centroid_distance(p, B, C, D));
     return now <= p->centroid_bound ||
            now <= fmax(rm_centroid_distance(p, A, B, C), rm_centroid_distance(p, B, A, D));
+}
+
+static bool flip_improves(rm_pass *p, const quad *q)
+{
+    return flip_improves_at(p, P(p, q->a), P(p, q->b), P(p, q->c), P(p, q->d));
+}
+
+bool rm_flip_would_pass(rm_pass *p, const double *A, const double *B, const double *C,
+                        const double *D)
+{
+    return not_delaunay(A, B, C, D) && flip_improves_at(p, A, B, C, D);
 }
 
 /* (a, b, c), (b, a, d) -> (a, d, c), (b, c, d): winding kept, incidence updated. */

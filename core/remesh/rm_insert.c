@@ -14,6 +14,9 @@
 #include <math.h>
 #include <string.h>
 
+/* The thin halves' Lawson test must pass by this much (radians): rm_flip.c's margin keeps
+ * four points of a circle from flipping, and the flip must happen for the split to pay. */
+#define ISM_RM_INSERT_FLIP_MARGIN 1e-6
 /* Needles under this smallest angle (degrees) are mended by insertion: the count the issue
  * measures; between it and 20° the flips and moves do well enough. */
 #define ISM_RM_INSERT_DEG 10.0
@@ -27,9 +30,6 @@
  * fraction of an edge (rm_relax.c's ISM_RM_NEWTON_STEPS and _REL). */
 #define ISM_RM_INSERT_NEWTON_STEPS 8
 #define ISM_RM_INSERT_NEWTON_REL 1e-6
-/* The thin halves' Lawson test must pass by this much (radians): rm_flip.c's margin keeps
- * four points of a circle from flipping, and the flip must happen for the split to pay. */
-#define ISM_RM_INSERT_FLIP_MARGIN 1e-6
 
 static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * v; }
 
@@ -143,18 +143,25 @@ static bool centroids_ok(rm_pass *p, const uint32_t abc[3], const double *x)
                            rm_midpoint_distance(p, c, x) <= mid);
 }
 
-/* The thin triangle (p, q, x) of a split (pq a long side of the needle) will be flipped
- * away: the angles at x and at the vertex across pq sum above π (the Lawson test), so the
- * split is not left with two needles where it had one. */
-static bool flippable(const rm_pass *p, uint32_t a, uint32_t b, const double *x)
+/* The thin triangle (a, b, x) of a split (ab a long side of the needle) will be flipped
+ * away, so the split is not left with two needles where it had one: the angles at x and at
+ * the vertex y across ab sum above π (the Lawson test), and when no relaxation follows
+ * (last), the flip of ab to xy passes every test of a flip now (rm_flip.c). Rounds that
+ * relax after the split get their flips later (steiner-roman's own box: 2 needles left
+ * with the Lawson test alone, 17 with the whole test in every round), but after the last
+ * mending a thin half stays: near Steiner's pinch points its quad bends too much to flip
+ * (0.37-cell box: 24 of the 45 needles left were such halves). */
+static bool flippable(rm_pass *p, uint32_t a, uint32_t b, const double *x, bool last)
 {
     uint32_t two[2];
     int n;
     if (!rm_edge_triangles(&p->r, a, b, two, &n))
         return false;
     const uint32_t *o = p->r.m->tri + 3 * two[1]; /* runs b -> a */
-    uint32_t y = o[(rm_corner(p->r.m, two[1], a) + 1) % 3];
-    return rm_angle(x, P(p, a), P(p, b)) + rm_angle(P(p, y), P(p, a), P(p, b)) >
+    const double *y = P(p, o[(rm_corner(p->r.m, two[1], a) + 1) % 3]);
+    if (last)
+        return rm_flip_would_pass(p, P(p, a), P(p, b), x, y);
+    return rm_angle(x, P(p, a), P(p, b)) + rm_angle(y, P(p, a), P(p, b)) >
            M_PI + ISM_RM_INSERT_FLIP_MARGIN;
 }
 
@@ -201,7 +208,7 @@ static bool split(rm_pass *p, uint32_t t, const uint32_t abc[3], const double *x
     return true;
 }
 
-size_t rm_insert_active(rm_pass *p, bool *ok)
+size_t rm_insert_active(rm_pass *p, bool last, bool *ok)
 {
     rm_mesh *r = &p->r;
     double poor = sin(ISM_RM_INSERT_DEG * M_PI / 180);
@@ -216,8 +223,7 @@ size_t rm_insert_active(rm_pass *p, bool *ok)
             !(rm_min_sine(P(p, v[0]), P(p, v[1]), P(p, v[2])) < poor) ||
             !needle(p, (uint32_t)t, abc) || !new_place(p, abc, x, g) ||
             !faces_kept(p, abc, x) || !centroids_ok(p, abc, x) ||
-            !flippable(p, abc[1], abc[2], x) ||
-            !flippable(p, abc[2], abc[0], x))
+            !flippable(p, abc[1], abc[2], x, last) || !flippable(p, abc[2], abc[0], x, last))
             continue;
         *ok = split(p, (uint32_t)t, abc, x, g);
         made += *ok;

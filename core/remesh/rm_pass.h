@@ -91,15 +91,22 @@ size_t rm_flip_active(rm_pass *p, bool *ok);
 /* The same, starting from the edges of triangles with a vertex marked in seed. */
 size_t rm_flip_from(rm_pass *p, const uint8_t *seed, bool *ok);
 
+/* The geometric tests a flip of AB to CD in the triangles (A, B, C), (B, A, D) must pass
+ * (the Delaunay test, bends, facing, smallest angle, distances): for a quad that does not
+ * exist yet (rm_insert.c asks before splitting). */
+bool rm_flip_would_pass(rm_pass *p, const double *A, const double *B, const double *C,
+                        const double *D);
+
 /* Collapses edges of triangles with a small angle (rm_collapse.c) where the topology, the
  * features and the distance to f = 0 allow it; returns the collapses made. Removed
  * triangles are marked dead and removed vertices gone (rm_compact drops them). *ok false
  * when out of memory. */
 size_t rm_collapse_active(rm_pass *p, bool *ok);
 /* Splits needles under 10° whose short edge joins two locked vertices at a new vertex beside
- * that edge (rm_insert.c), within the room reserved; returns the insertions made. *ok false
- * when out of memory. */
-size_t rm_insert_active(rm_pass *p, bool *ok);
+ * that edge (rm_insert.c), within the room reserved; returns the insertions made. With last
+ * (no relaxation follows), only where the split's thin halves can be flipped away at once.
+ * *ok false when out of memory. */
+size_t rm_insert_active(rm_pass *p, bool last, bool *ok);
 /* Sets centroid_bound (what flips, moves, collapses and insertions keep to) from the mesh as
  * it is. */
 void rm_collapse_bounds(rm_pass *p);

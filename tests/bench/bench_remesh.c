@@ -3,10 +3,16 @@
  * conformance, as the CLI runs it) and the mesh after the pass, measured by the analysis:
  * smallest angle, triangles under 10°, largest distance from f = 0 at centroids, edge
  * midpoints and vertices, χ, non-manifold edges and points, components, boundary loops; and
- * the pass's flips, moves and time. Asserts nothing.
+ * the pass's flips, moves and time; and a census of the triangles under 10° by what they
+ * touch (a singular point, the double curve, the boundary, nothing) and of the folded edges.
+ * Asserts nothing.
  *
  *   bench_remesh PRESET [SHIFT...]     SHIFT: fractions of a finest cell (default 0 1e-3 0.37)
+ *   CENSUS_VERBOSE=1 bench_remesh ...  also lists each needle (angle, centroid, distance to
+ *                                      the nearest point, what its corners touch)
  */
+#include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,7 +22,101 @@
 #include "core/singular/surface.h"
 #include "proto/request.h"
 
-static void row(const char *tag, const ism_mesh *m, const ism_tape *t)
+/* Edge key (lower index high) and its triangle, sorted to group an edge's triangles. */
+static int cmp_key(const void *a, const void *b)
+{
+    const uint64_t *x = a, *y = b;
+    return x[0] < y[0] ? -1 : x[0] > y[0];
+}
+
+static void normal_of(const ism_mesh *m, size_t t, double n[3])
+{
+    const double *a = m->pos + 3 * m->tri[3 * t], *b = m->pos + 3 * m->tri[3 * t + 1],
+                 *c = m->pos + 3 * m->tri[3 * t + 2];
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    n[0] = u[1] * v[2] - u[2] * v[1];
+    n[1] = u[2] * v[0] - u[0] * v[2];
+    n[2] = u[0] * v[1] - u[1] * v[0];
+}
+
+/* The needles (triangles under 10°) by what they touch: a vertex at one of the locus's points
+ * (allowed by issue 15), else a vertex of a non-manifold edge (the double curve), else a
+ * boundary vertex, else nothing; and the folds: edges of two triangles whose normals meet at
+ * more than 90°, all of them and those with no end on a non-manifold edge or at a point. */
+static void census(const ism_mesh *m, const ism_locus *l, const float *angle)
+{
+    size_t nh = 3 * m->ntris;
+    uint64_t *h = malloc((nh ? nh : 1) * 2 * sizeof *h);
+    uint8_t *mark = calloc(m->nverts ? m->nverts : 1, 1); /* 1 point, 2 nm edge, 4 boundary */
+    if (!h || !mark)
+        goto out;
+    for (size_t t = 0; t < m->ntris; t++)
+        for (int k = 0; k < 3; k++) {
+            uint64_t a = m->tri[3 * t + k], b = m->tri[3 * t + (k + 1) % 3];
+            h[2 * (3 * t + k)] = a < b ? a << 32 | b : b << 32 | a;
+            h[2 * (3 * t + k) + 1] = t;
+        }
+    qsort(h, nh, 2 * sizeof *h, cmp_key);
+    for (size_t i = 0, j; i < nh; i = j) {
+        for (j = i; j < nh && h[2 * j] == h[2 * i]; j++)
+            ;
+        uint8_t bit = j - i == 1 ? 4 : j - i > 2 ? 2 : 0;
+        mark[h[2 * i] >> 32] |= bit;
+        mark[h[2 * i] & 0xffffffffu] |= bit;
+    }
+    double far = 0;
+    for (size_t i = 0; i < l->npoints; i++) {
+        size_t best = 0;
+        double bd = INFINITY;
+        for (size_t v = 0; v < m->nverts; v++) {
+            const double *p = m->pos + 3 * v, *q = l->points[i].p;
+            double d = hypot(hypot(p[0] - q[0], p[1] - q[1]), p[2] - q[2]);
+            if (d < bd)
+                bd = d, best = v;
+        }
+        if (m->nverts)
+            mark[best] |= 1, far = fmax(far, bd);
+    }
+    size_t by[4] = {0}, folds = 0, away = 0;
+    for (size_t t = 0; t < m->ntris; t++) {
+        if (!(angle[t] > 0 && angle[t] < 10))
+            continue;
+        uint8_t any = mark[m->tri[3 * t]] | mark[m->tri[3 * t + 1]] | mark[m->tri[3 * t + 2]];
+        by[any & 1 ? 0 : any & 2 ? 1 : any & 4 ? 2 : 3]++;
+        if (getenv("CENSUS_VERBOSE")) {
+            const uint32_t *v = m->tri + 3 * t;
+            double c[3], pd = INFINITY;
+            for (int j = 0; j < 3; j++)
+                c[j] = (m->pos[3 * v[0] + j] + m->pos[3 * v[1] + j] + m->pos[3 * v[2] + j]) / 3;
+            for (size_t i = 0; i < l->npoints; i++)
+                pd = fmin(pd, hypot(hypot(c[0] - l->points[i].p[0], c[1] - l->points[i].p[1]),
+                                    c[2] - l->points[i].p[2]));
+            printf("   T%zu %.2f° (%.4f %.4f %.4f) pt %.4f marks %d %d %d\n", t, angle[t],
+                   c[0], c[1], c[2], pd, mark[v[0]], mark[v[1]], mark[v[2]]);
+        }
+    }
+    for (size_t i = 0; i + 1 < nh; i++) {
+        if (h[2 * i] != h[2 * i + 2] || (i + 2 < nh && h[2 * i + 4] == h[2 * i]) ||
+            (i > 0 && h[2 * i - 2] == h[2 * i]))
+            continue;
+        double n1[3], n2[3];
+        normal_of(m, h[2 * i + 1], n1);
+        normal_of(m, h[2 * i + 3], n2);
+        if (n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2] < 0) {
+            folds++;
+            away += !((mark[h[2 * i] >> 32] | mark[h[2 * i] & 0xffffffffu]) & 3);
+        }
+    }
+    printf("      needles at a point %zu, on the double curve %zu, at the boundary %zu, "
+           "elsewhere %zu; folds %zu (%zu away from features); point vertices within %.2g\n",
+           by[0], by[1], by[2], by[3], folds, away, far);
+out:
+    free(h);
+    free(mark);
+}
+
+static void row(const char *tag, const ism_mesh *m, const ism_tape *t, const ism_locus *l)
 {
     ism_analysis a;
     ism_error err;
@@ -31,6 +131,7 @@ static void row(const char *tag, const ism_mesh *m, const ism_tape *t)
     printf("%-5s %8zu %7.2f %6zu %10.3g %10.3g %10.3g %4ld %5zu %4zu %5zu %3zu\n", tag, m->ntris,
            a.min_angle, under, a.max_dist_centroid, a.max_dist_midpoint, a.max_dist_vertex,
            a.euler, a.nonmanifold_edges, a.npoints, a.components, a.boundary_loops);
+    census(m, l, a.triangle_min_angle);
     ism_analysis_free(&a);
 }
 
@@ -65,11 +166,11 @@ static bool run(const char *name, double shift)
     bool ok = t && ism_mesh_surface(t, &o, &m, &l, &ps, &cs, &tm, &err) == ISM_POLY_OK;
     if (ok) {
         printf("%s, box shifted by %g of a finest cell\n", name, shift);
-        row("raw", &m, t);
+        row("raw", &m, t, &l);
         ok = ism_quality_pass(t, &l, NULL, o.max_error, NULL, &m, &rs, &err);
     }
     if (ok) {
-        row("good", &m, t);
+        row("good", &m, t, &l);
         printf("      flips %zu, moves %zu, collapses %zu, inserts %zu, locked vertices %zu, "
                "%.0f ms\n", rs.flips, rs.moves, rs.collapses, rs.inserts, rs.locked_vertices,
                rs.time_ms);

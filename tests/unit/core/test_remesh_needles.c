@@ -323,8 +323,8 @@ Test(remesh_needles, touching_spheres_keep_topology_and_lose_needles)
 /* ---- Steiner's Roman surface ---- */
 
 #define STEINER "x^2*y^2 + y^2*z^2 + z^2*x^2 + x*y*z"
-/* Needles the pass may leave on it (measured below). */
-#define STEINER_NEEDLES_LEFT 10
+/* Needles the pass may leave on it at depth d (measured below). */
+#define STEINER_NEEDLES_LEFT(d) ((d) >= 6 ? 6 : 8)
 
 /* Triangles under NEEDLE_DEG, and the largest |f| / |∇f| at the centroids and vertices. */
 static void steiner_shape(const ism_mesh *m, const ism_tape *t, shape *s)
@@ -471,10 +471,12 @@ static void steiner(const ism_tape *t, const double box[6], int d, int which)
     cr_expect_eq(a.components, 1, "%s", what);
     cr_expect_leq(4 * after.needles, before.needles, "%s", what);
     /* left beside the double lines, where both ends of a short edge are locked (the issue's
-     * goal is none): 0 / 1 / 8 in the lattice / 1e-3 / 0.37-cell boxes at depth 6, 9 in the
-     * last at depth 5 (the sanitizer's); 13 and 16 (13 at depth 5) before the pass mended
+     * goal is none): 0 / 1 / 6 in the lattice / 1e-3 / 0.37-cell boxes at depth 6, 8 in the
+     * last at depth 5 (the sanitizer's); 0 / 1 / 8 and 9 when the last mending split needles
+     * whose thin halves no flip could take; 13 and 16 (13 at depth 5) before the pass mended
      * the needles its last flips and moves leave */
-    cr_expect_leq(after.needles, STEINER_NEEDLES_LEFT, "%s: %zu needles", what, after.needles);
+    cr_expect_leq(after.needles, STEINER_NEEDLES_LEFT(d), "%s: %zu needles", what,
+                  after.needles);
     cr_expect_leq(after.centroid_error, before.centroid_error, "%s", what);
     cr_expect_leq(a.max_dist, fmax(1e-9, b.max_dist), "%s", what);
     cr_expect_eq(nea, neb, "%s: %zu label edges, %zu before", what, nea, neb);
