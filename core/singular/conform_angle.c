@@ -1,8 +1,6 @@
-/* conform_angle.c — the tube's starting radius from the angle at which the two sheets cross
- * along a double curve. Across the curve f ≈ ½ (λ₊ a² + λ₋ b²) in the Hessian's eigenframe
- * (a, b normal to the curve, λ₊ > 0 > λ₋), so the sheets are the lines b = ±u a with
- * u = √(λ₊ / −λ₋) and cross at the angle φ, |tan φ| = 2u / |1 − u²|. A rim point on one
- * sheet at distance s from the curve has the other sheet s |tan φ| away along its normal:
+/* conform_angle.c — the tube's starting radius from the angle φ at which the two sheets
+ * cross along a double curve (crossing_angle.h). A rim point on one sheet at distance s from
+ * the curve has the other sheet s |tan φ| away along its normal:
  *
  *          sheet 2
  *            ╲    │ s |tan φ|
@@ -13,14 +11,11 @@
  * was made, found unclear and made again 1.4 times wider. Starting at the radius the angle
  * asks for skips that round and a wider tube than needed. */
 #include "core/singular/conform_internal.h"
-#include "core/util/sym3.h"
+#include "core/singular/crossing_angle.h"
 
 #include <math.h>
 #include <stdlib.h>
 
-/* Points sampled per curve at most (evenly by index): the angle changes slowly along a
- * curve, and each sample costs a Hessian evaluation. */
-#define ANGLE_SAMPLES 64
 /* The radius asked for is this much beyond the one the angle gives: the rim's vertices lie
  * just outside the cut, a little off the sheets, on a curved surface. */
 #define ANGLE_MARGIN 1.1
@@ -35,26 +30,21 @@ static int cmp_double(const void *a, const void *b)
  * crossing: a pinch or triple point, a whisker, rounding). */
 static double needed_at(cf_ctx *c, const double p[3])
 {
-    double g[3], h[6], eig[3];
-    ism_eval_hessian(c->f, c->ws, p[0], p[1], p[2], g, h);
-    ism_sym3_eigen(h, eig, NULL);
-    if (!(eig[2] > 0 && eig[0] < 0))
-        return NAN;
-    double u = sqrt(eig[2] / -eig[0]), tan_phi = 2 * u / fabs(1 - u * u);
-    if (!isfinite(u))
+    double tan_phi = ism_crossing_tan_at(c->f, c->ws, p);
+    if (isnan(tan_phi))
         return NAN;
     return ANGLE_MARGIN * CF_CLEAR_CELLS * c->cell / tan_phi; /* 0 when tan φ is infinite */
 }
 
 double cf_crossing_radius(cf_ctx *c, const cf_polyline *pl, size_t npl)
 {
-    double *need = malloc((npl * ANGLE_SAMPLES + 1) * sizeof *need);
+    double *need = malloc((npl * ISM_CROSSING_SAMPLES + 1) * sizeof *need);
     if (!need)
         return 0; /* the cut widens as before */
     size_t n = 0;
     for (size_t k = 0; k < npl; k++) {
-        size_t step = pl[k].n > ANGLE_SAMPLES ? pl[k].n / ANGLE_SAMPLES : 1;
-        for (size_t i = 0, taken = 0; i < pl[k].n && taken < ANGLE_SAMPLES; i += step, taken++) {
+        size_t step = pl[k].n > ISM_CROSSING_SAMPLES ? pl[k].n / ISM_CROSSING_SAMPLES : 1;
+        for (size_t i = 0, taken = 0; i < pl[k].n && taken < ISM_CROSSING_SAMPLES; i += step, taken++) {
             double r = needed_at(c, pl[k].p + 3 * i);
             if (!isnan(r))
                 need[n++] = r;

@@ -3,6 +3,7 @@
 #include "core/singular/surface.h"
 #include "core/singular/conform.h"
 #include "core/singular/covered.h"
+#include "core/singular/crossing_angle.h"
 #include "core/singular/curve_cell.h"
 #include "core/singular/find.h"
 #include "core/singular/sheets.h"
@@ -136,19 +137,24 @@ static void put_ball(double (*out)[ISM_NODE_BALL_FIELDS], size_t *m, const doubl
     (*m)++;
 }
 
-/* Appends the balls along the double curves that ask for cells finer than `finest` to
- * out[0 .. n): at every point and along each segment, CURVE_BALL_SPACING radii apart at
- * most. A curve whose balls do not all fit under ISM_NODE_BALLS_MAX gets none (the mesh
- * there is then the depth's). Returns the new count. */
-static size_t curve_balls(ism_locus *l, double finest, double (*out)[ISM_NODE_BALL_FIELDS],
-                          size_t n)
+/* Appends the balls along the double curves that ask for cells finer than `finest` (by
+ * their span and the angle their sheets cross at, measured with f on ws) to out[0 .. n): at
+ * every point and along each segment, CURVE_BALL_SPACING radii apart at most. A curve whose
+ * balls do not all fit under ISM_NODE_BALLS_MAX gets none (the mesh there is then the
+ * depth's). Returns the new count. */
+static size_t curve_balls(const ism_tape *f, ism_eval_ws *ws, ism_locus *l, double finest,
+                          double (*out)[ISM_NODE_BALL_FIELDS], size_t n)
 {
     for (size_t k = 0; k < l->ncurves; k++) {
         ism_sing_curve *cu = &l->curves[k];
-        double cell = ism_curve_cell(cu, finest);
+        if (cu->kind != ISM_CURVE_DOUBLE || cu->n < 2)
+            continue;
+        double tan_phi = ism_curve_crossing_tan(f, ws, cu->xyz, cu->n);
+        double cell = ism_curve_cell(cu, finest, tan_phi);
         if (!(cell < finest))
             continue;
-        double r = CURVE_REACH * cell, since = INFINITY;
+        /* fmax: a NAN angle leaves the reach as it is */
+        double r = CURVE_REACH * fmax(1, ISM_CURVE_FULL_TAN / tan_phi) * cell, since = INFINITY;
         size_t m = n, segs = cu->closed ? cu->n : cu->n - 1;
         for (size_t i = 0; i <= segs && m <= ISM_NODE_BALLS_MAX; i++) {
             const double *p = cu->xyz + 3 * (i % cu->n);
@@ -180,8 +186,8 @@ static size_t curve_balls(ism_locus *l, double finest, double (*out)[ISM_NODE_BA
  * depth's (the first ISM_NODE_BALLS_MAX in the locus's order). Where the depth's cells are
  * that fine already, the flatness test refines round the apex to depth.max by itself, and
  * the octree is left as it was. */
-static size_t node_balls(ism_locus *l, const ism_poly_options *po,
-                         double (*out)[ISM_NODE_BALL_FIELDS])
+static size_t node_balls(const ism_tape *f, ism_eval_ws *ws, ism_locus *l,
+                         const ism_poly_options *po, double (*out)[ISM_NODE_BALL_FIELDS])
 {
     double finest = finest_cell(po->box, po->max_depth);
     size_t n = 0;
@@ -197,7 +203,7 @@ static size_t node_balls(ism_locus *l, const ism_poly_options *po,
         out[n][ISM_NODE_BALL_CELL] = c / NODE_CELLS;
         n++;
     }
-    return curve_balls(l, finest, out, n);
+    return curve_balls(f, ws, l, finest, out, n);
 }
 
 enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options *po,
@@ -218,9 +224,14 @@ enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options 
     ism_poly_options pq = *po;
     /* the split balls first: they record the curves' split cells, which size the quiet balls */
     double(*nodes)[ISM_NODE_BALL_FIELDS] = malloc(ISM_NODE_BALLS_MAX * sizeof *nodes);
-    if (!nodes)
+    ism_eval_ws *ws = ism_eval_ws_new(f);
+    if (!nodes || !ws) {
+        free(nodes);
+        ism_eval_ws_free(ws);
         return ISM_POLY_NO_MEMORY;
-    pq.nnode_balls = node_balls(locus, po, nodes);
+    }
+    pq.nnode_balls = node_balls(f, ws, locus, po, nodes);
+    ism_eval_ws_free(ws);
     pq.node_balls = (const double (*)[ISM_NODE_BALL_FIELDS])nodes;
     ball_list balls;
     if (!quiet_balls(locus, &lo, &balls)) {

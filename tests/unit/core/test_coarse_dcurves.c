@@ -32,6 +32,14 @@
  *    non-manifold edges are 6 chains from the origin (degree 6) to the axes' exits from the
  *    box (degree 1, each face's centre line meets the box there). Before, at depth 3 in both
  *    shifted boxes the planes came out as 3 separate components without a non-manifold edge.
+ *  - sheets crossing at a shallow angle (depths 3–5): two unit spheres centred (±1/10, 0, 0)
+ *    cross on the circle x = 0, y² + z² = 1 − 1/100 at θ = acos(1 − 0.2²/2) = 11.5°; a unit
+ *    sphere at the origin and one of radius 0.8 centred (1/4, 0, 0) cross on the circle
+ *    x = (1/16 + 1 − 0.64) / (1/2) = 0.845, y² + z² = 1 − 0.845² at θ = acos((1 + 0.64 −
+ *    1/16) / 1.6) = 9.6°: χ 4, one component, one closed chain. Before, the tube the angle
+ *    asks for (8 cells of the span's cell) was as large as the spheres: the first pair had
+ *    χ −1 with 25 artefacts at depths 3–4 and χ 2 without a non-manifold edge at depth 5, the
+ *    second χ 2 without a non-manifold edge at depths 3–5.
  * Every non-manifold edge has exactly 4 triangles (two sheets crossing; at the triple point 6
  * chains meet), every vertex of the chains lies on its curve within 1e-9 × the diagonal (the
  * curves' traced points), and the chains' ends and junctions are the pinch and triple points
@@ -79,6 +87,16 @@ static double dist_circle(const double p[3])
     return hypot(p[0], hypot(p[1], p[2]) - sqrt(1 - 1.0 / 16));
 }
 
+static double dist_shallow_circle(const double p[3])
+{
+    return hypot(p[0], hypot(p[1], p[2]) - sqrt(1 - 1.0 / 100));
+}
+
+static double dist_unequal_circle(const double p[3])
+{
+    return hypot(p[0] - 0.845, hypot(p[1], p[2]) - sqrt(1 - 0.845 * 0.845));
+}
+
 static double dist_klein_circle(const double p[3])
 {
     return hypot(p[2], hypot(p[0], p[1] - 1) - sqrt(2));
@@ -98,6 +116,12 @@ static const dcurve_case CASES[] = {
      {0, 0, 0}, 0, 1, dist_klein_circle, false},
     {"coordinate-planes", "x*y*z", {-1, -1, -1, 1, 1, 1}, 1, 6, {{0}}, 1, {0, 0, 0}, 6, 6,
      dist_axes, true},
+    {"shallow-spheres", "((x - 0.1)^2 + y^2 + z^2 - 1)*((x + 0.1)^2 + y^2 + z^2 - 1)",
+     {-1.8, -1.3, -1.3, 1.8, 1.3, 1.3}, 4, 0, {{0}}, 0, {0, 0, 0}, 0, 1, dist_shallow_circle,
+     false},
+    {"unequal-spheres", "(x^2 + y^2 + z^2 - 1)*((x - 0.25)^2 + y^2 + z^2 - 0.64)",
+     {-1.3, -1.3, -1.3, 1.3, 1.3, 1.3}, 4, 0, {{0}}, 0, {0, 0, 0}, 0, 1, dist_unequal_circle,
+     false},
 };
 
 /* An edge (a < b) and how many triangles hold it. */
@@ -253,11 +277,16 @@ static void check_case(const dcurve_case *c, int d, int which)
     ism_tape_free(t);
 }
 
-static void run_case(size_t i)
+static void run_depths(size_t i, int dmax)
 {
-    for (int d = 3; d <= 4; d++)
+    for (int d = 3; d <= dmax; d++)
         for (int which = pf_first_box() - 1; which <= 1; which++)
             check_case(&CASES[i], d, which);
+}
+
+static void run_case(size_t i)
+{
+    run_depths(i, 4);
 }
 
 Test(coarse_dcurves, steiner_roman)
@@ -283,4 +312,15 @@ Test(coarse_dcurves, klein_bottle)
 Test(coarse_dcurves, coordinate_planes)
 {
     run_case(4);
+}
+
+/* Depths 3–5 (3–4 under ISOMESH_TEST_QUICK): at depth 5 the span's cell is the depth's. */
+Test(coarse_dcurves, shallow_crossing_spheres)
+{
+    run_depths(5, 5 - pf_quick());
+}
+
+Test(coarse_dcurves, shallow_unequal_spheres)
+{
+    run_depths(6, 5 - pf_quick());
 }
