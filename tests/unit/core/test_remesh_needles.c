@@ -53,7 +53,7 @@ typedef struct shape {
 
 /* Edges of exactly two triangles whose normals meet at more than FOLD_DEG: one of the two is
  * turned over against the other (a smooth sphere bends a few degrees per edge). */
-#define FOLD_DEG 120.0
+#define FOLD_DEG 90.0
 
 static int cmp_key(const void *a, const void *b)
 {
@@ -279,7 +279,7 @@ static void touching_spheres(const ism_tape *t, const double box[6], int d, int 
                 "the point %.2f -> %.2f, centroid error %.3g -> %.3g, folds %zu -> %zu", what, st.collapses,
                 st.inserts, before.needles, after.needles, before.min_angle_away, after.min_angle_away,
                 before.centroid_error, after.centroid_error, before.folds, after.folds);
-    /* the fan at the point needs collapses in the 0.37-cell box (257 at depth 5, 174 at 6);
+    /* the fan at the point needs collapses in the 0.37-cell box (11 at depth 5, 174 at 6);
      * elsewhere flips and moves may mend everything alone */
     if (which == 1)
         cr_expect_gt(st.collapses, 0, "%s", what);
@@ -291,13 +291,15 @@ static void touching_spheres(const ism_tape *t, const double box[6], int d, int 
     cr_expect_eq(pf_vertex_cones(&m, point), 2, "%s", what);
     cr_expect_gt(before.needles, 0, "%s: nothing to mend", what);
     cr_expect_eq(after.needles, 0, "%s: %zu needles", what, after.needles);
-    /* measured 26.6°, 25.2° and 21.4° at depth 6; at depth 5 21.6° and 25.6°, and 19.0° in
-     * the 0.37-cell box beside pleats the conformance leaves (folds below: 149 -> 7), so
-     * there the issue's bound for singular presets, no triangle under 10° but at the point */
-    cr_expect_geq(after.min_angle_away, d >= 6 || which < 1 ? 20.0 : NEEDLE_DEG, "%s: %.2f", what,
-                  after.min_angle_away);
-    cr_expect_leq(after.folds, before.folds, "%s: folds %zu -> %zu", what, before.folds,
-                  after.folds);
+    /* measured 26.6°, 25.2° and 21.4° at depth 6; at depth 5 21.6°, 25.6° and 25.9° (19.0° in
+     * the 0.37-cell box while the conformance's fan there was folded) */
+    cr_expect_geq(after.min_angle_away, 20.0, "%s: %.2f", what, after.min_angle_away);
+    /* the conformance's fan at the point is not folded: at depth 5 in the 0.37-cell box its
+     * rim loop stepped backwards round the point 23 times at the start radius (149 edges over
+     * 120° before the pass, 7 after) until the ball grew past the polygoniser's pleats */
+    cr_expect_eq(before.folds, 0, "%s: %zu folded edges after the conformance", what,
+                 before.folds);
+    cr_expect_eq(after.folds, 0, "%s: %zu folded edges after the pass", what, after.folds);
     cr_expect_leq(after.centroid_error, before.centroid_error, "%s", what);
     cr_expect_leq(after.vertex_error, fmax(1e-9, before.vertex_error), "%s", what);
     expect_kept(&m, &cut, &k, what);
