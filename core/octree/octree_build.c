@@ -58,6 +58,7 @@ typedef struct build {
     const ism_octree_build_params *p;
     const ism_grid *grid;
     ism_quiet quiet;             /* index of p->quiet */
+    ism_node_balls node_balls;   /* index of p->node_balls */
     const ism_octree *previous;  /* p->previous when it may be used, else NULL */
     thread_state *threads;
     int shortening;
@@ -176,7 +177,7 @@ static bool near_node(const build *b, const ism_node *nd)
         return false;
     double lo[3], hi[3];
     node_box(b->grid, nd, lo, hi);
-    return ism_node_balls_split(b->p->node_balls, b->p->nnode_balls, lo, hi);
+    return ism_node_balls_split(&b->node_balls, lo, hi);
 }
 
 /* A search's verdict, with the counts ism_node.thin keeps (searches, undecided). */
@@ -521,7 +522,9 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
     enum ism_build_status status = ISM_BUILD_OK;
 
     b.previous = p->previous && p->previous->n ? p->previous : NULL;
-    if (!ism_quiet_init(&b.quiet, p->quiet, p->nquiet) || !init_threads(&b, nthreads) ||
+    if (!ism_quiet_init(&b.quiet, p->quiet, p->nquiet) ||
+        !ism_node_balls_init(&b.node_balls, p->node_balls, p->nnode_balls) ||
+        !init_threads(&b, nthreads) ||
         !ism_leaf_tapes_init(&b.leaf_tapes, b.previous)) {
         status = ISM_BUILD_NO_MEMORY;
         goto done;
@@ -562,6 +565,7 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
 done:
     free_threads(&b, nthreads, stats);
     ism_quiet_free(&b.quiet);
+    ism_node_balls_free(&b.node_balls);
     if (b.task_out)
         for (size_t k = 0; k < b.ntasks; k++)
             free(b.task_out[k].v);

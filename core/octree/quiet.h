@@ -1,19 +1,17 @@
 /* quiet.h — the balls where the octree does not chase hidden pieces (ism_poly_options.quiet:
  * around the singular locus, whose mesh the conformance pass rebuilds), indexed in a uniform
- * grid of cells as large as the largest radius, so a query reads the 27 cells around a box's
- * centre whatever the number of balls. */
+ * grid of cells as large as the largest radius (ball_grid.h), so a query reads the 27 cells
+ * around a box's centre whatever the number of balls. */
 #ifndef ISM_QUIET_H
 #define ISM_QUIET_H
 
 #include <stdbool.h>
 #include <stddef.h>
-#include <stdint.h>
+#include "core/octree/ball_grid.h"
 
 typedef struct ism_quiet {
     const double (*ball)[4]; /* x, y, z, radius (not owned) */
-    double origin[3], cell;  /* the grid: cells of side `cell` from origin */
-    uint64_t *key;           /* per entry: (cell key << 32) | ball index, sorted */
-    size_t n;
+    ism_ball_grid grid;
 } ism_quiet;
 
 /* Indexes n balls (kept by the caller while q is used). False when memory ran out. */
