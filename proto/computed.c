@@ -4,6 +4,7 @@
 #include "proto/computed.h"
 #include "proto/request.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -69,6 +70,22 @@ static void put_polylines(ism_frame_builder *b, const ism_polylines *p)
     put_array(b, p->n ? p->verts : NULL, p->n ? p->start[p->n] : 0, sizeof *p->verts);
 }
 
+/* A double as the u64 of its bits (the entry is little endian, as the host). */
+static void put_f64(ism_frame_builder *b, double v)
+{
+    uint64_t u;
+    memcpy(&u, &v, sizeof u);
+    ism_frame_put_u64(b, u);
+}
+
+static double get_f64(ism_frame_cursor *c)
+{
+    uint64_t u = ism_frame_get_u64(c);
+    double v;
+    memcpy(&v, &u, sizeof v);
+    return v;
+}
+
 static void put_locus(ism_frame_builder *b, const ism_locus *l)
 {
     ism_frame_put_u64(b, l->npoints);
@@ -82,6 +99,11 @@ static void put_locus(ism_frame_builder *b, const ism_locus *l)
         const ism_sing_curve *cv = &l->curves[i];
         ism_frame_put_u32(b, (uint32_t)cv->kind);
         ism_frame_put_u32(b, cv->closed);
+        for (int e = 0; e < 2; e++) {
+            ism_frame_put_u32(b, (uint32_t)cv->end_type[e]);
+            ism_frame_put_u32(b, (uint32_t)cv->end_point[e]); /* -1: UINT32_MAX */
+        }
+        put_f64(b, cv->split_cell);
         put_array(b, cv->xyz, 3 * cv->n, sizeof(double));
     }
 }
@@ -237,11 +259,20 @@ static bool get_locus(reader *r, ism_locus *l)
         memset(&cv, 0, sizeof cv);
         cv.kind = (int)ism_frame_get_u32(&r->cur);
         cv.closed = ism_frame_get_u32(&r->cur) != 0;
-        cv.end_point[0] = cv.end_point[1] = -1;
+        bool ends_ok = true;
+        for (int e = 0; e < 2; e++) {
+            uint32_t type = ism_frame_get_u32(&r->cur), point = ism_frame_get_u32(&r->cur);
+            ends_ok = ends_ok && type < ISM_END_TYPES &&
+                      (point == UINT32_MAX || point < l->npoints);
+            cv.end_type[e] = (int)type;
+            cv.end_point[e] = point == UINT32_MAX ? -1 : (int)point;
+        }
+        cv.split_cell = get_f64(&r->cur);
         size_t len;
         ism_frame_cursor peek = r->cur;
         ism_frame_get_bytes(&peek, &len);
         if (r->cur.failed || peek.failed || cv.kind < 0 || cv.kind >= ISM_CURVE_KINDS ||
+            !ends_ok || !(cv.split_cell >= 0 && cv.split_cell < INFINITY) ||
             len % (3 * sizeof(double)))
             return bad(r, "singular curve");
         cv.n = len / (3 * sizeof(double));

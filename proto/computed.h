@@ -4,8 +4,10 @@
  * (server/common/pipeline.h), so asking for a second format never polygonises again.
  *
  * Its binary form is the cache entry "<surface key>.mesh" (the surface key names the surface
- * and its accuracy, not the encoding: proto/request.h). Entry format, version 1, all numbers
- * little endian, built from the length-prefixed fields of proto/frame.h:
+ * and its accuracy, not the encoding: proto/request.h). Entry format, version 4 (the
+ * singular curves' ends and split cells added, so the locus read back is the one the mesh was
+ * conformed to), all numbers little endian, built from the length-prefixed fields of
+ * proto/frame.h:
  *
  *   bytes "ISMS", u32 version (ISM_COMPUTED_VERSION), string surface key (64 hex),
  *   u32 empty, u64 nverts, u64 ntris,
@@ -18,7 +20,9 @@
  *   bytes points (u32), bytes point_kind (u8), bytes point_class (u8),
  *   polylines arcs (of the requested curves), bytes arc_kind (u8), bytes arc_curve (u32),
  *   u64 singular points, each: bytes xyz (f64 x 3), u32 type, u32 certified,
- *   u64 singular curves, each: u32 kind, u32 closed, bytes xyz (f64 x 3 x n),
+ *   u64 singular curves, each: u32 kind, u32 closed, per end (2): u32 end type, u32 end point
+ *   (index into the singular points; 0xffffffff: none), u64 split cell (the bits of an f64:
+ *   the cell the octree split its nodes to along it, 0: the depth's), bytes xyz (f64 x 3 x n),
  *   bytes corner_at (u32 x n, ascending corner indices 3 t + k < 3 ntris),
  *   bytes corner_normal (f32 x 3 x n) (both empty when no crease corner),
  *   bytes timings (f64 x ISM_TIME_COUNT), bytes features JSON, bytes stats JSON.
@@ -39,7 +43,7 @@
 #include "proto/stats.h"
 #include "proto/wire_mesh.h"
 
-#define ISM_COMPUTED_VERSION 3
+#define ISM_COMPUTED_VERSION 4
 /* The cache entry's extension ("<surface key>.mesh"). */
 #define ISM_COMPUTED_EXT "mesh"
 

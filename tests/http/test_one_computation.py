@@ -107,6 +107,30 @@ class OneComputationTest(unittest.TestCase):
                     self.assertEqual(r.status, 200)
                     self.assertEqual(r.body, body, "%s of %s differs" % (fmt, key))
 
+    def test_stored_surface_with_split_double_curve(self):
+        """Two spheres crossing at 29° at depth 3: the octree is split along their double
+        circle (core/singular/curve_cell.h) and the entry keeps the locus with the curve's ends
+        and split cell (computed.h, version 4). The glb, which draws the locus, and the obj
+        encoded from the stored surface are the bytes a fresh daemon computes for them."""
+        req = {"preset": "crossing-spheres",
+               "box": [-1.8003, -1.2991, -1.3007, 1.7996, 1.3002, 1.2993],
+               "depth": {"min": 3, "max": 3}}
+        with Daemon("--workers", "1") as d:
+            first = d.post("/v1/mesh?format=ply", req, timeout=300)
+            self.assertEqual(first.status, 200, first.body[:300])
+            p0, s0 = self.counters(d)
+            stored = {fmt: d.post("/v1/mesh?format=" + fmt, req, timeout=300)
+                      for fmt in ("glb", "obj")}
+            self.assertEqual(self.counters(d), (p0, s0 + 2), "encoded from the stored surface")
+            feats = d.get("/v1/meshes/%s/features" % first.header("ETag").strip('"')).json()
+            self.assertEqual([c["kind"] for c in feats["curves"]], ["double"])
+        with Daemon("--workers", "1") as fresh:
+            for fmt, r in stored.items():
+                self.assertEqual(r.status, 200, r.body[:300])
+                f = fresh.post("/v1/mesh?format=" + fmt, req, timeout=300)
+                self.assertEqual(f.status, 200)
+                self.assertEqual(f.body, r.body, "%s from the stored surface differs" % fmt)
+
     def test_get_of_another_format_is_encoded_not_polygonised(self):
         with Daemon("--workers", "1") as d:
             r = d.post("/v1/mesh", with_(params={"a": 0.9}))

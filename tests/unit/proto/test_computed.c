@@ -17,7 +17,7 @@ static float *floats(size_t n, float base)
 }
 
 /* Two triangles on four vertices, a boundary loop, one feature point, one singular point and
- * one closed singular curve. */
+ * one closed singular curve (its ends typed, and split finer than the depth). */
 static void make(ism_computed *c)
 {
     ism_computed_init(c);
@@ -71,7 +71,9 @@ static void make(ism_computed *c)
     c->features.point_class[0] = 3;
     ism_sing_point sp = {.p = {0.1, 0.2, 0.3}, .type = ISM_SING_NODE, .certified = true};
     ism_locus_add_point(&c->locus, &sp);
-    ism_sing_curve cv = {.kind = ISM_CURVE_WHISKER, .closed = true, .n = 2};
+    ism_sing_curve cv = {.kind = ISM_CURVE_WHISKER, .closed = true, .n = 2,
+                         .end_type = {ISM_END_POINT, ISM_END_BOX}, .end_point = {0, -1},
+                         .split_cell = 0.0625};
     cv.xyz = malloc(6 * sizeof(double));
     for (int i = 0; i < 6; i++)
         cv.xyz[i] = i / 7.0;
@@ -133,6 +135,11 @@ Test(computed, round_trip)
     cr_assert(c.locus.curves[0].closed);
     cr_assert_eq(c.locus.curves[0].kind, ISM_CURVE_WHISKER);
     cr_assert_eq(c.locus.curves[0].xyz[5], 5 / 7.0);
+    cr_assert_eq(c.locus.curves[0].end_type[0], ISM_END_POINT);
+    cr_assert_eq(c.locus.curves[0].end_type[1], ISM_END_BOX);
+    cr_assert_eq(c.locus.curves[0].end_point[0], 0);
+    cr_assert_eq(c.locus.curves[0].end_point[1], -1);
+    cr_assert_eq(c.locus.curves[0].split_cell, 0.0625); /* the octree's cell along it */
     cr_assert_str_eq(c.features_json, "{\"version\":2}");
     cr_assert_str_eq(c.stats_json, "{\"warnings\":[]}");
     cr_assert_eq(c.timings_ms[ISM_TIME_POLYGONISE], 12.5);
@@ -183,6 +190,20 @@ Test(computed, truncated_or_altered_entries_are_refused)
     cr_assert(ism_computed_write(&bad, &b));
     cr_assert_not(ism_computed_read(b.data, b.len, &c, why, sizeof why));
     cr_assert_str_eq(why, "polyline vertex out of range");
+    ism_frame_builder_free(&b);
+    bad.features.boundaries.verts[2] = 2;
+    bad.locus.curves[0].end_point[1] = 1; /* of 1 singular point */
+    memset(&b, 0, sizeof b);
+    cr_assert(ism_computed_write(&bad, &b));
+    cr_assert_not(ism_computed_read(b.data, b.len, &c, why, sizeof why));
+    cr_assert_str_eq(why, "singular curve");
+    ism_frame_builder_free(&b);
+    bad.locus.curves[0].end_point[1] = -1;
+    bad.locus.curves[0].split_cell = -1;
+    memset(&b, 0, sizeof b);
+    cr_assert(ism_computed_write(&bad, &b));
+    cr_assert_not(ism_computed_read(b.data, b.len, &c, why, sizeof why));
+    cr_assert_str_eq(why, "singular curve");
     ism_frame_builder_free(&b);
     ism_computed_free(&bad);
 }
