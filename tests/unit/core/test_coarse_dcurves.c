@@ -34,11 +34,11 @@
  *    shifted boxes the planes came out as 3 separate components without a non-manifold edge.
  *  - sheets crossing at a shallow angle (depths 3–5): two unit spheres centred (±1/10, 0, 0)
  *    cross on the circle x = 0, y² + z² = 1 − 1/100 at θ = acos(1 − 0.2²/2) = 11.5°; a unit
- *    sphere at the origin and one of radius 0.8 centred (1/4, 0, 0) cross on the circle
- *    x = (1/16 + 1 − 0.64) / (1/2) = 0.845, y² + z² = 1 − 0.845² at θ = acos((1 + 0.64 −
- *    1/16) / 1.6) = 9.6°: χ 4, one component, one closed chain. Before, the tube the angle
- *    asks for (8 cells of the span's cell) was as large as the spheres: the first pair had
- *    χ −1 with 25 artefacts at depths 3–4 and χ 2 without a non-manifold edge at depth 5, the
+ *    sphere at the origin and one of radius 0.8 centred (0.3, 0, 0) cross on the circle
+ *    x = (0.09 + 1 − 0.64) / 0.6 = 0.75, y² + z² = 1 − 0.75² at θ = acos((1 + 0.64 − 0.09)
+ *    / 1.6) = 14.4°: χ 4, one component, one closed chain. Before, the tube the angle asks
+ *    for (8 cells of the span's cell) was as large as the spheres: the first pair had χ −1
+ *    with 25 artefacts at depths 3–4 and χ 2 without a non-manifold edge at depth 5, the
  *    second χ 2 without a non-manifold edge at depths 3–5.
  *  - nine planes, sin πx sin πy sin πz = 0 in ±1.5 (x, y, z ∈ {−1, 0, 1}): 27 lines, each
  *    crossed by 3 planes at 3 triple points, so 108 double curves (4 pieces a line, 2 of them
@@ -102,7 +102,7 @@ static double dist_shallow_circle(const double p[3])
 
 static double dist_unequal_circle(const double p[3])
 {
-    return hypot(p[0] - 0.845, hypot(p[1], p[2]) - sqrt(1 - 0.845 * 0.845));
+    return hypot(p[0] - 0.75, hypot(p[1], p[2]) - sqrt(1 - 0.75 * 0.75));
 }
 
 static double dist_klein_circle(const double p[3])
@@ -127,7 +127,7 @@ static const dcurve_case CASES[] = {
     {"shallow-spheres", "((x - 0.1)^2 + y^2 + z^2 - 1)*((x + 0.1)^2 + y^2 + z^2 - 1)",
      {-1.8, -1.3, -1.3, 1.8, 1.3, 1.3}, 4, 0, {{0}}, 0, {0, 0, 0}, 0, 1, dist_shallow_circle,
      false},
-    {"unequal-spheres", "(x^2 + y^2 + z^2 - 1)*((x - 0.25)^2 + y^2 + z^2 - 0.64)",
+    {"unequal-spheres", "(x^2 + y^2 + z^2 - 1)*((x - 0.3)^2 + y^2 + z^2 - 0.64)",
      {-1.3, -1.3, -1.3, 1.3, 1.3, 1.3}, 4, 0, {{0}}, 0, {0, 0, 0}, 0, 1, dist_unequal_circle,
      false},
 };
