@@ -9,7 +9,8 @@
  *
  *   bench_remesh PRESET [SHIFT...]     SHIFT: fractions of a finest cell (default 0 1e-3 0.37)
  *   CENSUS_VERBOSE=1 bench_remesh ...  also lists each needle (angle, centroid, distance to
- *                                      the nearest point, what its corners touch)
+ *                                      the nearest point, what its corners touch) and each
+ *                                      turned-over fold's end points
  */
 #include <math.h>
 #include <stdint.h>
@@ -40,11 +41,25 @@ static void normal_of(const ism_mesh *m, size_t t, double n[3])
     n[2] = u[0] * v[1] - u[1] * v[0];
 }
 
+/* Normals n1 and n2 lie on opposite sides of ∇f at p (a triangle turned over against the
+ * surface's orientation, not a crease, where both face ∇f's side); false where ∇f vanishes. */
+static bool turned(const ism_tape *t, ism_eval_ws *ws, const double *p, const double *n1,
+                   const double *n2)
+{
+    double g[3];
+    ism_eval_gradient(t, ws, p[0], p[1], p[2], g);
+    double a = n1[0] * g[0] + n1[1] * g[1] + n1[2] * g[2];
+    double b = n2[0] * g[0] + n2[1] * g[1] + n2[2] * g[2];
+    return (a > 0 && b < 0) || (a < 0 && b > 0);
+}
+
 /* The needles (triangles under 10°) by what they touch: a vertex at one of the locus's points
  * (allowed by issue 15), else a vertex of a non-manifold edge (the double curve), else a
  * boundary vertex, else nothing; and the folds: edges of two triangles whose normals meet at
- * more than 90°, all of them and those with no end on a non-manifold edge or at a point. */
-static void census(const ism_mesh *m, const ism_locus *l, const float *angle)
+ * more than 90°, all of them, those with no end on a non-manifold edge or at a point, and of
+ * those the ones turned over against ∇f at both ends (not creases). */
+static void census(const ism_mesh *m, const ism_locus *l, const ism_tape *tape,
+                   const float *angle)
 {
     size_t nh = 3 * m->ntris;
     uint64_t *h = malloc((nh ? nh : 1) * 2 * sizeof *h);
@@ -78,7 +93,8 @@ static void census(const ism_mesh *m, const ism_locus *l, const float *angle)
         if (m->nverts)
             mark[best] |= 1, far = fmax(far, bd);
     }
-    size_t by[4] = {0}, folds = 0, away = 0;
+    size_t by[4] = {0}, folds = 0, away = 0, flipped = 0;
+    ism_eval_ws *ws = ism_eval_ws_new(tape);
     for (size_t t = 0; t < m->ntris; t++) {
         if (!(angle[t] > 0 && angle[t] < 10))
             continue;
@@ -104,13 +120,24 @@ static void census(const ism_mesh *m, const ism_locus *l, const float *angle)
         normal_of(m, h[2 * i + 1], n1);
         normal_of(m, h[2 * i + 3], n2);
         if (n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2] < 0) {
+            uint32_t a = h[2 * i] >> 32, b = h[2 * i] & 0xffffffffu;
+            bool clear = !((mark[a] | mark[b]) & 3);
             folds++;
-            away += !((mark[h[2 * i] >> 32] | mark[h[2 * i] & 0xffffffffu]) & 3);
+            away += clear;
+            bool over = clear && ws && turned(tape, ws, m->pos + 3 * a, n1, n2) &&
+                        turned(tape, ws, m->pos + 3 * b, n1, n2);
+            flipped += over;
+            if (over && getenv("CENSUS_VERBOSE"))
+                printf("   F (%.4f %.4f %.4f)-(%.4f %.4f %.4f)\n", m->pos[3 * a],
+                       m->pos[3 * a + 1], m->pos[3 * a + 2], m->pos[3 * b], m->pos[3 * b + 1],
+                       m->pos[3 * b + 2]);
         }
     }
+    ism_eval_ws_free(ws);
     printf("      needles at a point %zu, on the double curve %zu, at the boundary %zu, "
-           "elsewhere %zu; folds %zu (%zu away from features); point vertices within %.2g\n",
-           by[0], by[1], by[2], by[3], folds, away, far);
+           "elsewhere %zu; folds %zu (%zu away from features, %zu of them turned over); point "
+           "vertices within %.2g\n",
+           by[0], by[1], by[2], by[3], folds, away, flipped, far);
 out:
     free(h);
     free(mark);
@@ -131,7 +158,7 @@ static void row(const char *tag, const ism_mesh *m, const ism_tape *t, const ism
     printf("%-5s %8zu %7.2f %6zu %10.3g %10.3g %10.3g %4ld %5zu %4zu %5zu %3zu\n", tag, m->ntris,
            a.min_angle, under, a.max_dist_centroid, a.max_dist_midpoint, a.max_dist_vertex,
            a.euler, a.nonmanifold_edges, a.npoints, a.components, a.boundary_loops);
-    census(m, l, a.triangle_min_angle);
+    census(m, l, t, a.triangle_min_angle);
     ism_analysis_free(&a);
 }
 
