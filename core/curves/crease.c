@@ -109,7 +109,7 @@ static uint32_t crease_vertex(crease_state *cs, uint32_t u, uint32_t w)
     double n[3];
     for (int c = 0; c < 3; c++)
         n[c] = (double)s->m->normal[3 * (size_t)u + c] + s->m->normal[3 * (size_t)w + c];
-    bool across = cut_plane_along(a, b, n, p, plane);
+    bool across = ism_cut_plane_along(a, b, n, p, plane);
     if (!ism_branches_refine(cs->b, A, ks, 1, across ? plane : NULL, s->tol, max_move, p)) {
         bool again = (ga < 0) != (gb < 0);
         if (again)

@@ -67,6 +67,7 @@ typedef struct refine_state {
     ism_key_map side;   /* crease edge key -> index into sides */
     uint32_t (*sides)[2]; /* the triangles on a crease edge (NONE: none yet) */
     size_t cap_sides;
+    cut_relax_memo relax; /* the relaxation's failed stars, kept from pass to pass */
 } refine_state;
 
 /* The flat normal of triangle (a, b, c) against branch A's gradient at the midpoint of a-b,
@@ -375,7 +376,8 @@ bool cut_crease_refine(cut_state *s, size_t k, size_t *added)
     bool ok = s->branches != NULL && mark_crease(&st);
     for (int pass = 0; ok && pass < CREASE_REFINE_PASSES; pass++) {
         size_t n = 0, moved = 0;
-        ok = cut_crease_relax(s, k, &moved) && refine_pass(&st, &n) && mark_crease(&st);
+        ok = cut_crease_relax(s, k, &st.relax, &moved) && refine_pass(&st, &n) &&
+             mark_crease(&st);
         *added += n;
         if (!n)
             break;
@@ -388,5 +390,6 @@ bool cut_crease_refine(cut_state *s, size_t k, size_t *added)
     free(st.split);
     free(st.vert);
     free(st.on);
+    cut_relax_memo_free(&st.relax);
     return ok;
 }

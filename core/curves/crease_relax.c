@@ -7,6 +7,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include "core/util/grow.h"
 #include "core/util/vec3.h"
 
 #define NONE CUT_NONE
@@ -60,25 +61,41 @@ static void mark_candidates(cut_state *s, size_t k, const uint8_t *on, uint8_t *
     }
 }
 
-/* Whether v may go to p (on its branch A's zero set already): p on branch A, none of its
- * triangles star[0..n) turned over, their smallest angle larger. */
-static bool helps(cut_state *s, uint32_t v, uint32_t A, const uint32_t *star, size_t n,
-                  const double *p)
+/* What a move of a star's centre is measured against, the same for every move tried: its
+ * triangles' normals and the cosine of their smallest angle. */
+typedef struct star_before {
+    double normal[CREASE_RELAX_STAR_MAX][3];
+    double worst;
+} star_before;
+
+static void measure_star(const ism_mesh *m, const uint32_t *star, size_t n, star_before *sb)
 {
-    const ism_mesh *m = s->m;
-    double before = -1, after = -1; /* the star's smallest angle's cosine */
+    sb->worst = -1;
     for (size_t i = 0; i < n; i++) {
         const uint32_t *tv = m->tri + 3 * (size_t)star[i];
-        double o[3], q[3];
-        cut_tri_normal(m, tv, NONE, NULL, o);
+        cut_tri_normal(m, tv, NONE, NULL, sb->normal[i]);
+        sb->worst = fmax(sb->worst, max_corner_cos(m, tv, NONE, NULL));
+    }
+}
+
+/* Whether v may go to p (on its branch A's zero set already): p on branch A, none of its
+ * triangles star[0..n) turned over, their smallest angle larger (each of them: the star's
+ * smallest angle after the move is larger than before). */
+static bool helps(cut_state *s, uint32_t v, uint32_t A, const uint32_t *star, size_t n,
+                  const star_before *sb, const double *p)
+{
+    const ism_mesh *m = s->m;
+    for (size_t i = 0; i < n; i++) {
+        const uint32_t *tv = m->tri + 3 * (size_t)star[i];
+        const double *o = sb->normal[i];
+        double q[3];
         cut_tri_normal(m, tv, v, p, q);
-        if (!(ism_dot3(o, q) >= CREASE_RELAX_TURN_COS * ism_norm3(o) * ism_norm3(q)))
+        if (!(ism_dot3(o, q) >= CREASE_RELAX_TURN_COS * ism_norm3(o) * ism_norm3(q)) ||
+            !(max_corner_cos(m, tv, v, p) < sb->worst))
             return false;
-        before = fmax(before, max_corner_cos(m, tv, NONE, NULL));
-        after = fmax(after, max_corner_cos(m, tv, v, p));
     }
     uint32_t B; /* last: the branch costs a tape shortening */
-    return after < before && ism_branches_at(s->branches, p, &B) && B == A;
+    return ism_branches_at(s->branches, p, &B) && B == A;
 }
 
 /* Whether the star of v (its triangles star[0..n)) is a closed fan: each neighbour in
@@ -96,6 +113,43 @@ static bool closed_fan(const ism_mesh *m, uint32_t v, const uint32_t *star, size
                 return false;
         }
     return true;
+}
+
+/* splitmix64's finaliser: every bit of x spread over the result. */
+static uint64_t mix64(uint64_t x)
+{
+    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+    return x ^ (x >> 31);
+}
+
+/* The signature of v's star as relax_vertex reads it: each triangle's corners in order, their
+ * places (bit for bit) and whether they lie on the crease, summed over the triangles (their
+ * order is not the star's). Never 0. */
+static uint64_t star_signature(const ism_mesh *m, uint32_t v, const uint32_t *star, size_t n,
+                               const uint8_t *on)
+{
+    uint64_t sum = mix64(v);
+    for (size_t i = 0; i < n; i++) {
+        uint64_t h = 0;
+        for (int j = 0; j < 3; j++) {
+            uint32_t w = m->tri[3 * (size_t)star[i] + j];
+            h = mix64(h ^ ((uint64_t)w << 1 | on[w]));
+            for (int c = 0; c < 3; c++) {
+                uint64_t bits;
+                memcpy(&bits, m->pos + 3 * (size_t)w + c, sizeof bits);
+                h = mix64(h ^ bits);
+            }
+        }
+        sum += h;
+    }
+    return sum ? sum : 1;
+}
+
+void cut_relax_memo_free(cut_relax_memo *memo)
+{
+    free(memo->failed);
+    memset(memo, 0, sizeof *memo);
 }
 
 /* Moves candidate v (its triangles star[0..n)) toward the mean of its star's other corners
@@ -124,6 +178,8 @@ static bool relax_vertex(cut_state *s, uint32_t v, const uint32_t *star, size_t 
     if (!closed_fan(m, v, star, n) || !ism_branches_at(s->branches, pv, &A) ||
         A == ISM_BRANCH_NONE)
         return false;
+    star_before sb;
+    measure_star(m, star, n, &sb);
     for (int k = 0; k < 2; k++) /* the whole star's mean, then its corners' off the crease */
     for (double lambda = 1; count[k] && lambda >= CREASE_RELAX_LEAST_STEP; lambda *= 0.5) {
         double p[3];
@@ -136,7 +192,7 @@ static bool relax_vertex(cut_state *s, uint32_t v, const uint32_t *star, size_t 
             for (int c = 0; c < 3; c++)
                 p[c] -= f * g[c] / gg;
         }
-        if (!helps(s, v, A, star, n, p))
+        if (!helps(s, v, A, star, n, &sb, p))
             continue;
         float nrm[3];
         cut_normal_at(s, p, m->normal + 3 * (size_t)v, nrm);
@@ -147,14 +203,18 @@ static bool relax_vertex(cut_state *s, uint32_t v, const uint32_t *star, size_t 
     return false;
 }
 
-bool cut_crease_relax(cut_state *s, size_t k, size_t *moved)
+bool cut_crease_relax(cut_state *s, size_t k, cut_relax_memo *memo, size_t *moved)
 {
     const ism_mesh *m = s->m;
-    size_t nv = m->nverts;
+    size_t nv = m->nverts, old = memo->cap;
     *moved = 0;
     uint8_t *on = calloc(nv + 1, 1), *cand = calloc(nv + 1, 1);
     uint32_t *first = calloc(nv + 2, sizeof *first), *tris = NULL;
-    bool ok = on && cand && first;
+    bool ok = on && cand && first &&
+              ism_grow((void **)&memo->failed, &memo->cap, nv + 1, sizeof *memo->failed,
+                       CUT_FIRST);
+    if (ok)
+        memset(memo->failed + old, 0, (memo->cap - old) * sizeof *memo->failed);
     for (size_t i = 0; ok && i < s->c->nedges; i++)
         if (s->c->edges[i].fn == k)
             on[s->c->edges[i].a] = on[s->c->edges[i].b] = 1;
@@ -178,8 +238,14 @@ bool cut_crease_relax(cut_state *s, size_t k, size_t *moved)
         first[0] = 0;
     for (size_t v = 0; ok && tris && v < nv; v++) {
         size_t n = first[v + 1] - first[v];
-        if (cand[v] && n >= 3 && n <= CREASE_RELAX_STAR_MAX)
-            *moved += relax_vertex(s, (uint32_t)v, tris + first[v], n, on);
+        if (!cand[v] || n < 3 || n > CREASE_RELAX_STAR_MAX)
+            continue;
+        uint64_t sig = star_signature(m, (uint32_t)v, tris + first[v], n, on);
+        if (memo->failed[v] == sig)
+            continue; /* the same star failed before */
+        bool went = relax_vertex(s, (uint32_t)v, tris + first[v], n, on);
+        memo->failed[v] = went ? 0 : sig;
+        *moved += went;
     }
     free(on);
     free(cand);

@@ -158,7 +158,7 @@ bool cut_set_branches(cut_state *s, uint32_t a, uint32_t b, const uint32_t br[2]
 void cut_normal_at(cut_state *s, const double p[3], const float ref[3], float out[3])
 {
     double g[3];
-    ism_eval_gradient(s->ev->f, s->ev->fws, p[0], p[1], p[2], g);
+    ism_cut_f_gradient(s->ev, p, g);
     double n = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
     double d = ref ? g[0] * ref[0] + g[1] * ref[1] + g[2] * ref[2] : 1;
     double k = n > 0 ? (d < 0 ? -1 / n : 1 / n) : 0;
@@ -265,31 +265,15 @@ static bool refine_on_face(cut_state *s, size_t k, const double *a, const double
     return true;
 }
 
-bool cut_plane_along(const double a[3], const double b[3], const double n[3], const double p[3],
-                     double plane[4])
-{
-    double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    double c[3] = {d[1] * n[2] - d[2] * n[1], d[2] * n[0] - d[0] * n[2],
-                   d[0] * n[1] - d[1] * n[0]};
-    double l = ism_norm3(c);
-    if (!(l > 0) || !isfinite(l))
-        return false;
-    for (int k = 0; k < 3; k++)
-        plane[k] = c[k] / l;
-    plane[3] = ism_dot3(plane, p);
-    return true;
-}
-
 /* Puts p (on edge a-b of length len) on curve k in the plane across the edge (∇f at p and
- * the edge: cut_plane_along). False (p kept) when Newton fails there (the curve runs along
+ * the edge: ism_cut_plane_along). False (p kept) when Newton fails there (the curve runs along
  * the edge). */
 static bool refine_across(cut_state *s, size_t k, const double *a, const double *b, double len,
                           double p[3])
 {
-    double g[3], plane[4], q[3] = {p[0], p[1], p[2]};
-    ism_eval_gradient(s->ev->f, s->ev->fws, p[0], p[1], p[2], g);
-    if (s->ev->fns[k].kind == ISM_CUT_CREASE || !cut_plane_along(a, b, g, p, plane) ||
-        !ism_cut_refine_on_plane(s->ev, k, plane, s->tol, CUT_MAX_MOVE_EDGES * len, q))
+    double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, q[3] = {p[0], p[1], p[2]};
+    if (s->ev->fns[k].kind == ISM_CUT_CREASE ||
+        !ism_cut_refine_across(s->ev, k, d, s->tol, CUT_MAX_MOVE_EDGES * len, q))
         return false;
     memcpy(p, q, sizeof q);
     return true;

@@ -178,13 +178,48 @@ static double system_at(ism_cut_eval *ev, const size_t *ks, int nk, const double
     return worst;
 }
 
-/* Newton on f, the nk functions ks and the plane (NULL for none): at most 3 equations. */
-static bool refine(ism_cut_eval *ev, const size_t *ks, int nk, const double plane[4],
-                   double tol, double max_move, double p[3])
+/* The unit normal of the plane holding dir and n (n × dir normalised); false when parallel. */
+static bool across_normal(const double dir[3], const double n[3], double out[3])
 {
-    double x[3] = {p[0], p[1], p[2]}, r[3], J[3][3];
-    int m = nk + 1 + (plane != NULL);
+    double c[3] = {dir[1] * n[2] - dir[2] * n[1], dir[2] * n[0] - dir[0] * n[2],
+                   dir[0] * n[1] - dir[1] * n[0]};
+    double l = ism_norm3(c);
+    if (!(l > 0) || !isfinite(l))
+        return false;
+    for (int k = 0; k < 3; k++)
+        out[k] = c[k] / l;
+    return true;
+}
+
+bool ism_cut_plane_along(const double a[3], const double b[3], const double n[3],
+                         const double p[3], double plane[4])
+{
+    double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    if (!across_normal(d, n, plane))
+        return false;
+    plane[3] = ism_dot3(plane, p);
+    return true;
+}
+
+/* Newton on f, the nk functions ks and the plane (NULL for none): at most 3 equations. With
+ * dir (plane NULL), the plane through p holding dir and ∇f(p) is made from the first
+ * evaluation. */
+static bool refine(ism_cut_eval *ev, const size_t *ks, int nk, const double plane[4],
+                   const double dir[3], double tol, double max_move, double p[3])
+{
+    double x[3] = {p[0], p[1], p[2]}, r[3], J[3][3], across[4];
     double worst = system_at(ev, ks, nk, plane, x, r, J);
+    if (dir) { /* its row as system_at would have made it */
+        if (!across_normal(dir, J[0], across))
+            return false;
+        across[3] = ism_dot3(across, x);
+        memcpy(J[nk + 1], across, 3 * sizeof *across);
+        r[nk + 1] = ism_dot3(across, x) - across[3];
+        double d = fabs(r[nk + 1]) / sqrt(ism_dot3(across, across));
+        worst = d > worst ? d : worst;
+        plane = across;
+    }
+    int m = nk + 1 + (plane != NULL);
     for (int it = 0; it <= CUT_NEWTON_ITERS; it++) {
         if (!isfinite(worst))
             return false;
@@ -193,6 +228,9 @@ static bool refine(ism_cut_eval *ev, const size_t *ks, int nk, const double plan
             if (ism_dot3(d, d) > max_move * max_move)
                 return false;
             memcpy(p, x, sizeof x);
+            memcpy(ev->last_p, x, sizeof x);
+            memcpy(ev->last_grad, J[0], sizeof J[0]);
+            ev->last_ok = true;
             return true;
         }
         double step[3];
@@ -218,13 +256,27 @@ static bool refine(ism_cut_eval *ev, const size_t *ks, int nk, const double plan
 bool ism_cut_refine(ism_cut_eval *ev, const size_t *ks, int nk, double tol, double max_move,
                     double p[3])
 {
-    return refine(ev, ks, nk, NULL, tol, max_move, p);
+    return refine(ev, ks, nk, NULL, NULL, tol, max_move, p);
 }
 
 bool ism_cut_refine_on_plane(ism_cut_eval *ev, size_t k, const double plane[4], double tol,
                              double max_move, double p[3])
 {
-    return refine(ev, &k, 1, plane, tol, max_move, p);
+    return refine(ev, &k, 1, plane, NULL, tol, max_move, p);
+}
+
+bool ism_cut_refine_across(ism_cut_eval *ev, size_t k, const double dir[3], double tol,
+                           double max_move, double p[3])
+{
+    return refine(ev, &k, 1, NULL, dir, tol, max_move, p);
+}
+
+void ism_cut_f_gradient(ism_cut_eval *ev, const double p[3], double grad[3])
+{
+    if (ev->last_ok && !memcmp(ev->last_p, p, sizeof ev->last_p))
+        memcpy(grad, ev->last_grad, sizeof ev->last_grad);
+    else
+        ism_eval_gradient(ev->f, ev->fws, p[0], p[1], p[2], grad);
 }
 
 void ism_cut_residuals(ism_cut_eval *ev, size_t k, const double p[3], double *df, double *dg)

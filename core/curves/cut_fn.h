@@ -38,6 +38,9 @@ typedef struct ism_cut_eval {
                             edge); unset (ISM_CUT_NO_BRANCH): the top min/max's a − b */
     const double *box;   /* the meshed box (xmin ymin zmin xmax ymax zmax) or NULL: a curve
                             leaving the mesh through a box face ends on that face */
+    double last_p[3];    /* where the last successful Newton ended, and ∇f there (its last */
+    double last_grad[3]; /* evaluation: a new vertex's normal needs no evaluation of its own) */
+    bool last_ok;        /* false until then */
 } ism_cut_eval;
 
 /* The crease function of f when f's tape has a min or max (CSG); false otherwise. The crease
@@ -70,6 +73,23 @@ bool ism_cut_refine(ism_cut_eval *ev, const size_t *ks, int nk, double tol, doub
  * its tangent, where the minimum-norm step could run to the other branch). */
 bool ism_cut_refine_on_plane(ism_cut_eval *ev, size_t k, const double plane[4], double tol,
                              double max_move, double p[3]);
+
+/* The plane through p containing the edge direction b − a and the normal n: a point of the
+ * edge's curve kept in it stays across the curve from the edge, so the points of consecutive
+ * edges follow each other along the curve, and it does not slide along the curve past an
+ * earlier one that the edge's ends are beside (a point free to slide goes to the foot of the
+ * perpendicular). False when the edge and n are parallel. */
+bool ism_cut_plane_along(const double a[3], const double b[3], const double n[3],
+                         const double p[3], double plane[4]);
+
+/* As ism_cut_refine_on_plane, the plane through p holding dir (an edge's direction) and ∇f
+ * at p: a point of an edge's curve kept across the curve from the edge (the gradient is the
+ * one Newton's first step evaluates). False (p kept) also when dir ∥ ∇f. */
+bool ism_cut_refine_across(ism_cut_eval *ev, size_t k, const double dir[3], double tol,
+                           double max_move, double p[3]);
+
+/* ∇f at p into grad: the last Newton's when it ended at p, else evaluated. */
+void ism_cut_f_gradient(ism_cut_eval *ev, const double p[3], double grad[3]);
 
 /* The largest |value| / |gradient| of f and of g_k at p (the distance to each set). */
 void ism_cut_residuals(ism_cut_eval *ev, size_t k, const double p[3], double *df, double *dg);

@@ -122,14 +122,6 @@ void cut_bisect(cut_sign_fn fn, void *ctx, const double a[3], const double b[3],
  * no guide to the sign). */
 void cut_normal_at(cut_state *s, const double p[3], const float ref[3], float out[3]);
 
-/* The plane through p containing the edge direction b − a and the normal n: a point of the
- * edge's curve kept in it stays across the curve from the edge, so the points of consecutive
- * edges follow each other along the curve, and it does not slide along the curve past an
- * earlier one that the edge's ends are beside (a point free to slide goes to the foot of the
- * perpendicular). False when the edge and n are parallel. */
-bool cut_plane_along(const double a[3], const double b[3], const double n[3], const double p[3],
-                     double plane[4]);
-
 /* Emits triangle (l u w) split by a cut from p on l-u to q on l-w: (l p q) and the quad
  * (p u w q) by its shorter diagonal (winding kept). */
 bool cut_emit_lone(cut_state *s, uint32_t l, uint32_t u, uint32_t w, uint32_t p, uint32_t q);

@@ -42,6 +42,21 @@ static void quadric(uint64_t *s, char *buf, size_t n)
              a[0], c[0], a[1], c[1], a[2], c[2], r * r);
 }
 
+/* FNV-1a over the cut mesh's positions and triangles and the cut's edges: equal hashes, the
+ * same results bit for bit (a change meant to save work only can be checked by it). */
+static uint64_t result_hash(const ism_mesh *m, const ism_cut *c)
+{
+    uint64_t h = 1469598103934665603ULL;
+    const unsigned char *parts[3] = {(const void *)m->pos, (const void *)m->tri,
+                                     (const void *)c->edges};
+    size_t len[3] = {3 * m->nverts * sizeof *m->pos, 3 * m->ntris * sizeof *m->tri,
+                     c->nedges * sizeof *c->edges};
+    for (int k = 0; k < 3; k++)
+        for (size_t i = 0; i < len[k]; i++)
+            h = (h ^ parts[k][i]) * 1099511628211ULL;
+    return h;
+}
+
 int main(int argc, char **argv)
 {
     int depth = 8, nq = 200, threads = 0;
@@ -94,11 +109,12 @@ int main(int argc, char **argv)
            "\"vertices\": %zu, \"edges\": %zu, \"faces\": %zu, \"euler_ok\": %s, "
            "\"euler\": %ld, \"unrefined\": %zu, \"mesh_ms\": %.1f, \"cut_ms\": %.1f, "
            "\"cut_cpu_ms\": %.1f, \"ms_per_pair\": %.5f, \"seed_ms_per_pair\": %.3f, "
-           "\"ratio\": %.5f, \"cpu_ratio\": %.5f}\n",
+           "\"ratio\": %.5f, \"cpu_ratio\": %.5f, \"hash\": \"%016llx\"}\n",
            nq, depth, tris_before, m.ntris, arr.nvertices, arr.nedges, arr.nfaces,
            arr.euler_ok ? "true" : "false", arr.euler_arr, cut.unrefined, t1 - t0, t3 - t2,
            c3 - c2, pair_ms, SEED_MS_PER_PAIR, pair_ms / SEED_MS_PER_PAIR,
-           arr.nedges ? (c3 - c2) / (double)arr.nedges / SEED_MS_PER_PAIR : 0);
+           arr.nedges ? (c3 - c2) / (double)arr.nedges / SEED_MS_PER_PAIR : 0,
+           (unsigned long long)result_hash(&m, &cut));
     ism_arrangement_free(&arr);
     ism_cut_free(&cut);
     for (int i = 0; i < nq; i++)
