@@ -5,6 +5,7 @@
  * (hashing the mesh's 3 T triangle sides, with its rehashes, was about a seventh of the
  * cut and arrangement's time on the benchmark). */
 #include "core/curves/arr_internal.h"
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -84,6 +85,15 @@ static bool file_edges(const ism_mesh *m, arr_mesh_edges *e)
     e->n = n;
     free(start);
     return true;
+}
+
+size_t arr_mesh_edge_count(const ism_mesh *m)
+{
+    arr_mesh_edges e;
+    memset(&e, 0, sizeof e);
+    size_t n = file_edges(m, &e) ? e.n : SIZE_MAX;
+    arr_mesh_edges_free(&e);
+    return n;
 }
 
 bool arr_mesh_edges_build(const ism_mesh *m, const ism_cut *c, arr_mesh_edges *e)

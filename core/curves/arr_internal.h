@@ -27,6 +27,8 @@ typedef struct arr_mesh_edges {
 uint32_t arr_edge_find(const arr_mesh_edges *e, uint32_t a, uint32_t b);
 bool arr_mesh_edges_build(const ism_mesh *m, const ism_cut *c, arr_mesh_edges *e);
 void arr_mesh_edges_free(arr_mesh_edges *e);
+/* The number of distinct edges of the mesh's triangles (SIZE_MAX when out of memory). */
+size_t arr_mesh_edge_count(const ism_mesh *m);
 
 
 /* Faces: triangles reordered, tri_face and faces filled; comp gets each triangle's mesh

@@ -57,8 +57,13 @@ static bool same_code(const ism_tape *x, const ism_tape *y)
 
 bool ism_branches_at(ism_branches *b, const double p[3], uint32_t *id)
 {
+    return ism_branches_in_box(b, p, p, id);
+}
+
+bool ism_branches_in_box(ism_branches *b, const double lo[3], const double hi[3], uint32_t *id)
+{
     *id = ISM_BRANCH_NONE;
-    ism_interval x = {p[0], p[0]}, y = {p[1], p[1]}, z = {p[2], p[2]};
+    ism_interval x = {lo[0], hi[0]}, y = {lo[1], hi[1]}, z = {lo[2], hi[2]};
     if (!ism_tape_shorten(b->f, b->fws, x, y, z, b->scratch, NULL))
         return true; /* nothing decided: no min/max, or a tie */
     const ism_tape *t = b->scratch;

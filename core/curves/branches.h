@@ -37,6 +37,11 @@ void ism_branches_free(ism_branches *b);
  * or a new branch finds no room. False only when out of memory. */
 bool ism_branches_at(ism_branches *b, const double p[3], uint32_t *id);
 
+/* The branch f takes everywhere in the box lo..hi, when the box decides every min/max on
+ * the way to f (at each point inside, ism_branches_at gives the same); ISM_BRANCH_NONE when
+ * it does not. False only when out of memory. */
+bool ism_branches_in_box(ism_branches *b, const double lo[3], const double hi[3], uint32_t *id);
+
 /* f_i at p with its gradient. */
 double ism_branches_gradient(ism_branches *b, uint32_t i, const double p[3], double grad[3]);
 

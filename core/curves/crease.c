@@ -23,6 +23,7 @@
  * such triangles left T-junctions against their split neighbours: the crack that sent
  * three balls to the fallback cut, 420 triangles at the default depth.) */
 #include "core/curves/branches.h"
+#include "core/curves/crease_label.h"
 #include "core/curves/crease_snap.h"
 #include "core/curves/crease_weld.h"
 #include "core/curves/cut_internal.h"
@@ -394,12 +395,7 @@ static bool label_vertices(crease_state *cs)
 {
     const ism_mesh *m = cs->s->m;
     cs->label = malloc((m->nverts + 1) * sizeof *cs->label);
-    if (!cs->label)
-        return false;
-    for (size_t v = 0; v < m->nverts; v++)
-        if (!ism_branches_at(cs->b, m->pos + 3 * v, &cs->label[v]))
-            return false;
-    return true;
+    return cs->label && cut_crease_label(cs->b, m, cs->label);
 }
 
 bool cut_crease(cut_state *s, size_t k)

@@ -338,17 +338,24 @@ static bool refine_pass(refine_state *st, size_t *added)
         *added += st->vert[i] != NONE;
     }
     uint32_t *old = malloc(3 * nt * sizeof *old), *parent = cut_parents_copy(s, nt);
-    bool ok = old && parent;
+    uint8_t *end = calloc(m->nverts + 1, 1); /* an end of a split edge */
+    bool ok = old && parent && end;
+    for (size_t i = 0; ok && i < n; i++)
+        if (st->vert[i] != NONE)
+            end[st->split[i].u] = end[st->split[i].w] = 1;
     if (ok) {
         memcpy(old, m->tri, 3 * nt * sizeof *old);
         m->ntris = 0;
     }
     for (size_t t = 0; ok && t < nt; t++) {
+        const uint32_t *tv = old + 3 * t;
         s->from = parent[t];
-        ok = emit_split(st, old + 3 * t);
+        ok = end[tv[0]] || end[tv[1]] || end[tv[2]] ? emit_split(st, tv)
+                                                      : cut_add_triangle(s, tv[0], tv[1], tv[2]);
     }
     free(old);
     free(parent);
+    free(end);
     return ok;
 }
 
