@@ -19,26 +19,17 @@
 #include <string.h>
 
 #include "core/analysis/analysis.h"
+#include "core/analysis/edges.h"
 #include "core/remesh/quality_pass.h"
+#include "core/remesh/rm_mesh.h"
 #include "core/singular/surface.h"
 #include "proto/request.h"
 
-/* Edge key (lower index high) and its triangle, sorted to group an edge's triangles. */
-static int cmp_key(const void *a, const void *b)
-{
-    const uint64_t *x = a, *y = b;
-    return x[0] < y[0] ? -1 : x[0] > y[0];
-}
-
+/* The (unnormalised) normal of triangle t from its winding. */
 static void normal_of(const ism_mesh *m, size_t t, double n[3])
 {
-    const double *a = m->pos + 3 * m->tri[3 * t], *b = m->pos + 3 * m->tri[3 * t + 1],
-                 *c = m->pos + 3 * m->tri[3 * t + 2];
-    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    n[0] = u[1] * v[2] - u[2] * v[1];
-    n[1] = u[2] * v[0] - u[0] * v[2];
-    n[2] = u[0] * v[1] - u[1] * v[0];
+    const uint32_t *v = m->tri + 3 * t;
+    rm_cross(m->pos + 3 * (size_t)v[0], m->pos + 3 * (size_t)v[1], m->pos + 3 * (size_t)v[2], n);
 }
 
 /* Normals n1 and n2 lie on opposite sides of ∇f at p (a triangle turned over against the
@@ -61,24 +52,16 @@ static bool turned(const ism_tape *t, ism_eval_ws *ws, const double *p, const do
 static void census(const ism_mesh *m, const ism_locus *l, const ism_tape *tape,
                    const float *angle)
 {
-    size_t nh = 3 * m->ntris;
-    uint64_t *h = malloc((nh ? nh : 1) * 2 * sizeof *h);
+    ism_an_edge_table et;
     uint8_t *mark = calloc(m->nverts ? m->nverts : 1, 1); /* 1 point, 2 nm edge, 4 boundary */
-    if (!h || !mark)
+    bool have_edges = mark && ism_an_edge_table_build(m, &et);
+    if (!have_edges)
         goto out;
-    for (size_t t = 0; t < m->ntris; t++)
-        for (int k = 0; k < 3; k++) {
-            uint64_t a = m->tri[3 * t + k], b = m->tri[3 * t + (k + 1) % 3];
-            h[2 * (3 * t + k)] = a < b ? a << 32 | b : b << 32 | a;
-            h[2 * (3 * t + k) + 1] = t;
-        }
-    qsort(h, nh, 2 * sizeof *h, cmp_key);
-    for (size_t i = 0, j; i < nh; i = j) {
-        for (j = i; j < nh && h[2 * j] == h[2 * i]; j++)
-            ;
-        uint8_t bit = j - i == 1 ? 4 : j - i > 2 ? 2 : 0;
-        mark[h[2 * i] >> 32] |= bit;
-        mark[h[2 * i] & 0xffffffffu] |= bit;
+    for (uint32_t e = 0; e < et.nedges; e++) {
+        uint32_t n = ism_an_edge_count(&et, e), lo, hi;
+        ism_an_edge_ends(m, &et, e, &lo, &hi);
+        mark[lo] |= n == 1 ? 4 : n > 2 ? 2 : 0;
+        mark[hi] |= n == 1 ? 4 : n > 2 ? 2 : 0;
     }
     double far = 0;
     for (size_t i = 0; i < l->npoints; i++) {
@@ -112,15 +95,15 @@ static void census(const ism_mesh *m, const ism_locus *l, const ism_tape *tape,
                    c[0], c[1], c[2], pd, mark[v[0]], mark[v[1]], mark[v[2]]);
         }
     }
-    for (size_t i = 0; i + 1 < nh; i++) {
-        if (h[2 * i] != h[2 * i + 2] || (i + 2 < nh && h[2 * i + 4] == h[2 * i]) ||
-            (i > 0 && h[2 * i - 2] == h[2 * i]))
+    for (uint32_t e = 0; e < et.nedges; e++) {
+        if (ism_an_edge_count(&et, e) != 2)
             continue;
+        uint32_t a, b;
+        ism_an_edge_ends(m, &et, e, &a, &b);
         double n1[3], n2[3];
-        normal_of(m, h[2 * i + 1], n1);
-        normal_of(m, h[2 * i + 3], n2);
+        normal_of(m, et.edge_he[et.edge_start[e]] / 3, n1);
+        normal_of(m, et.edge_he[et.edge_start[e] + 1] / 3, n2);
         if (n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2] < 0) {
-            uint32_t a = h[2 * i] >> 32, b = h[2 * i] & 0xffffffffu;
             bool clear = !((mark[a] | mark[b]) & 3);
             folds++;
             away += clear;
@@ -139,7 +122,8 @@ static void census(const ism_mesh *m, const ism_locus *l, const ism_tape *tape,
            "vertices within %.2g\n",
            by[0], by[1], by[2], by[3], folds, away, flipped, far);
 out:
-    free(h);
+    if (have_edges)
+        ism_an_edge_table_free(&et);
     free(mark);
 }
 

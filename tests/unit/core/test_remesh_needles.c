@@ -18,6 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/analysis/edges.h"
 #include "core/remesh/quality_pass.h"
 #include "core/singular/conform.h"
 #include "tests/unit/core/poly_fixture.h"
@@ -503,26 +504,19 @@ Test(remesh_needles, steiner_double_lines_split_and_topology_kept)
  * double line with its sheets' far vertices as apexes, found from the mesh alone. */
 static size_t needles_on_double_lines(const ism_mesh *m)
 {
-    size_t nh = 3 * m->ntris, found = 0;
-    uint64_t *h = malloc((nh ? nh : 1) * 2 * sizeof *h); /* (edge key, triangle) */
+    ism_an_edge_table et;
     uint8_t *hit = calloc(m->ntris ? m->ntris : 1, 1);
-    cr_assert(h && hit);
-    for (size_t t = 0; t < m->ntris; t++)
-        for (int k = 0; k < 3; k++) {
-            uint64_t a = m->tri[3 * t + k], b = m->tri[3 * t + (k + 1) % 3];
-            h[2 * (3 * t + k)] = a < b ? a << 32 | b : b << 32 | a;
-            h[2 * (3 * t + k) + 1] = t;
-        }
-    qsort(h, nh, 2 * sizeof *h, cmp_key);
-    for (size_t i = 0, j; i < nh; i = j) {
-        for (j = i; j < nh && h[2 * j] == h[2 * i]; j++)
-            ;
-        for (size_t k = i; j - i > 2 && k < j; k++)
-            hit[h[2 * k + 1]] = 1;
+    cr_assert(hit && ism_an_edge_table_build(m, &et));
+    for (uint32_t e = 0; e < et.nedges; e++) {
+        if (ism_an_edge_count(&et, e) <= 2)
+            continue;
+        for (uint32_t k = et.edge_start[e]; k < et.edge_start[e + 1]; k++)
+            hit[et.edge_he[k] / 3] = 1;
     }
+    size_t found = 0;
     for (size_t t = 0; t < m->ntris; t++)
         found += hit[t] && pf_tri_min_angle(m, t) < NEEDLE_DEG;
-    free(h);
+    ism_an_edge_table_free(&et);
     free(hit);
     return found;
 }
