@@ -11,6 +11,7 @@
  * where a point lands in its probe run may, which no query can see. */
 #include "core/octree/breaks.h"
 #include "core/util/grow.h"
+#include "core/util/zeroed.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -364,7 +365,8 @@ static bool fill_table(builder *w, size_t n)
     size_t cap = 16;
     while (cap < SLOTS_PER_POINT * n)
         cap *= 2;
-    if (!(w->b->slots = calloc(cap, sizeof *w->b->slots)))
+    /* zeroed by writing: the inserts' probes read a slot before they write it */
+    if (!(w->b->slots = ism_zeroed_alloc(w->pool, cap, sizeof *w->b->slots, w->cost)))
         return false;
     w->b->mask = cap - 1;
     w->b->n = n;

@@ -11,6 +11,7 @@
 #include "core/octree/zero_free.h"
 #include "core/util/parallel.h"
 #include "core/util/grow.h"
+#include "core/util/zeroed.h"
 
 #include <pthread.h>
 #include <stdalign.h>
@@ -61,6 +62,7 @@ typedef struct build {
     ism_node_balls node_balls;   /* index of p->node_balls */
     const ism_octree *previous;  /* p->previous when it may be used, else NULL */
     thread_state *threads;
+    ism_point_entry *corner_memos; /* the threads' memos, end to end (thread_state.corners) */
     int shortening;
     ism_leaf_tapes leaf_tapes;   /* the leaves' shortened tapes (octree.h) */
     /* written rarely, read by every node; the counters below live on lines of their own */
@@ -439,12 +441,19 @@ static bool init_threads(build *b, int nthreads)
     if (!b->threads)
         return false;
     memset(b->threads, 0, (size_t)nthreads * sizeof *b->threads);
+    /* zeroed by writing (zeroed.h): a lookup reads its slot before it fills it. 2^16
+     * entries of 40 bytes: each thread's memo starts on a cache line of its own. */
+    size_t memo = (size_t)1 << CORNER_CACHE_BITS;
+    b->corner_memos = ism_zeroed_alloc(b->p->pool, (size_t)nthreads * memo,
+                                       sizeof *b->corner_memos, b->p->cost);
+    if (!b->corner_memos)
+        return false;
     for (int t = 0; t < nthreads; t++) {
         thread_state *th = &b->threads[t];
         th->s.tape = b->p->tape;
         th->s.ws = ism_eval_ws_new(b->p->tape);
-        th->corners = calloc((size_t)1 << CORNER_CACHE_BITS, sizeof *th->corners);
-        if (!th->s.ws || !th->corners || !ism_thin_ws_init(&th->thin, b->p->tape))
+        th->corners = b->corner_memos + (size_t)t * memo;
+        if (!th->s.ws || !ism_thin_ws_init(&th->thin, b->p->tape))
             return false;
         if (b->shortening)
             for (int l = 0; l <= b->p->thin_depth; l++)
@@ -474,12 +483,12 @@ static void free_threads(build *b, int nthreads, ism_octree_build_stats *st)
         st->n_interval += th->s.n_interval;
         if (th->s.ws)
             ism_eval_ws_free(th->s.ws);
-        free(th->corners);
         for (int l = 0; l <= ISM_GRID_MAX_DEPTH; l++)
             if (th->tapes[l])
                 ism_tape_free(th->tapes[l]);
     }
     free(b->threads);
+    free(b->corner_memos);
 }
 
 /* Appends every task's subtree to the top array, in task order, fixing child indices. */

@@ -12,6 +12,7 @@
  * shared table; resolve (count new vertices); place (write them); map (count kept
  * triangles); write the triangles. */
 #include "core/octree/weld.h"
+#include "core/util/zeroed.h"
 
 #include <math.h>
 #include <stdatomic.h>
@@ -272,7 +273,7 @@ static bool add_segments(const welder *w, size_t npieces)
 }
 
 /* The shared table, sized by the positions first in their pieces. */
-static bool alloc_table(welder *w, size_t npieces)
+static bool alloc_table(welder *w, size_t npieces, ism_pool *pool, ism_par_cost *cost)
 {
     size_t distinct = 0, cap = 16;
     for (size_t k = 0; k < npieces; k++)
@@ -280,7 +281,8 @@ static bool alloc_table(welder *w, size_t npieces)
     while (cap < SLOTS_PER_VERTEX * distinct)
         cap *= 2;
     w->mask = cap - 1;
-    w->slots = calloc(cap, sizeof *w->slots); /* all-zero bytes: every slot empty */
+    /* all-zero bytes: every slot empty (zeroed by writing: inserts read a slot first) */
+    w->slots = ism_zeroed_alloc(pool, cap, sizeof *w->slots, cost);
     return w->slots != NULL;
 }
 
@@ -288,7 +290,7 @@ static bool weld_all(welder *w, size_t npieces, ism_pool *pool, ism_par_cost *co
 {
     ism_mesh *m = w->mesh;
     ism_pool_for(pool, npieces, dedupe_piece, w, cost);
-    if (!alloc_table(w, npieces))
+    if (!alloc_table(w, npieces, pool, cost))
         return false;
     ism_pool_for(pool, npieces, insert_piece, w, cost);
     ism_pool_for(pool, npieces, resolve_piece, w, cost);
