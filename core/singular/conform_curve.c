@@ -1,6 +1,9 @@
 /* conform_curve.c — a singular curve's polyline as the conformance pass queries it: the
  * arclength parameter of each point, and the nearest point of the polyline to a query point
- * (distance, parameter, foot) through a uniform grid of its segments. */
+ * (distance, parameter, foot) through a uniform grid of its segments. Each grid cell also
+ * keeps the box of its segments' parts inside it: a cell whose box is farther than the
+ * nearest segment found so far is not read (a segment's nearest point to q lies in one of
+ * the cells it is filed in, inside that cell's box). */
 #include "core/singular/conform_internal.h"
 
 #include <math.h>
@@ -47,8 +50,25 @@ static void seg_box(const cf_polyline *pl, size_t s, double lo[3], double hi[3])
     }
 }
 
-/* Visits the grid cells of every segment: counts (fill == false) or fills the CSR lists. */
-static void grid_pass(cf_polyline *pl, bool fill)
+/* The passes over the grid cells of every segment: count them, file the segments, then
+ * grow each cell's box by the part of the segment's box inside the cell. */
+enum { GRID_COUNT, GRID_FILL, GRID_BOX };
+
+/* The box of segment s within cell (i, j, k) grown by pad (unbounded past the grid's outer
+ * faces, where cell_range clamps) merged into the cell's box. */
+static void clip_into(cf_polyline *pl, size_t c, const int ijk[3], const double lo[3],
+                      const double hi[3], double pad)
+{
+    double *b = pl->g_box[pl->g_start[c]];
+    for (int k = 0; k < 3; k++) {
+        double clo = ijk[k] == 0 ? -INFINITY : pl->lo[k] + ijk[k] * pl->step - pad;
+        double chi = ijk[k] == pl->dim[k] - 1 ? INFINITY : pl->lo[k] + (ijk[k] + 1) * pl->step + pad;
+        b[k] = fmin(b[k], fmax(lo[k], clo));
+        b[3 + k] = fmax(b[3 + k], fmin(hi[k], chi));
+    }
+}
+
+static void grid_pass(cf_polyline *pl, int pass, double pad)
 {
     for (size_t s = 0; s < nseg(pl); s++) {
         double lo[3], hi[3];
@@ -59,10 +79,12 @@ static void grid_pass(cf_polyline *pl, bool fill)
             for (int j = a[1]; j <= b[1]; j++)
                 for (int i = a[0]; i <= b[0]; i++) {
                     size_t c = cell_index(pl, i, j, k);
-                    if (fill)
+                    if (pass == GRID_FILL)
                         pl->g_seg[pl->g_start[c]++] = (uint32_t)s;
-                    else
+                    else if (pass == GRID_COUNT)
                         pl->g_start[c + 1]++;
+                    else
+                        clip_into(pl, c, (const int[3]){ i, j, k }, lo, hi, pad);
                 }
     }
 }
@@ -104,16 +126,27 @@ bool cf_polyline_init(cf_polyline *pl, const double *p, size_t n, bool closed, d
     pl->g_start = calloc(cells + 1, sizeof *pl->g_start);
     if (!pl->g_start)
         return false;
-    grid_pass(pl, false);
+    grid_pass(pl, GRID_COUNT, 0);
     for (size_t c = 0; c < cells; c++)
         pl->g_start[c + 1] += pl->g_start[c];
     pl->g_seg = malloc((pl->g_start[cells] + 1) * sizeof *pl->g_seg);
-    if (!pl->g_seg)
+    pl->g_box = malloc((pl->g_start[cells] + 1) * sizeof *pl->g_box);
+    if (!pl->g_seg || !pl->g_box)
         return false;
-    grid_pass(pl, true);
+    grid_pass(pl, GRID_FILL, 0);
     for (size_t c = cells; c > 0; c--)
         pl->g_start[c] = pl->g_start[c - 1];
     pl->g_start[0] = 0;
+    for (size_t c = 0; c < cells; c++)
+        for (int k = 0; k < 3; k++) {
+            pl->g_box[pl->g_start[c]][k] = INFINITY;
+            pl->g_box[pl->g_start[c]][3 + k] = -INFINITY;
+        }
+    /* the cells' own sides are computed, not the floor() that filed the segments: grown by
+     * far more than their rounding */
+    double mag = fmax(fmax(fabs(lo[0]), fabs(hi[0])),
+                      fmax(fmax(fabs(lo[1]), fabs(hi[1])), fmax(fabs(lo[2]), fabs(hi[2]))));
+    grid_pass(pl, GRID_BOX, CF_QUERY_SLACK * (pl->step + mag));
     return true;
 }
 
@@ -122,11 +155,56 @@ void cf_polyline_free(cf_polyline *pl)
     free(pl->s);
     free(pl->g_start);
     free(pl->g_seg);
+    free(pl->g_box);
     memset(pl, 0, sizeof *pl);
 }
 
+/* Squared distance from q to segment sg of the polyline, its parameter t on the segment and
+ * the foot f = p0 + t (p1 - p0). */
+static double seg_dist2(const cf_polyline *pl, size_t sg, const double q[3], double *t_out,
+                        double f[3])
+{
+    const double *p0 = pt(pl, sg), *p1 = pt(pl, sg + 1);
+    double d[3], w[3], dd = 0, dw = 0;
+    for (int m = 0; m < 3; m++) {
+        d[m] = p1[m] - p0[m];
+        w[m] = q[m] - p0[m];
+        dd += d[m] * d[m];
+        dw += d[m] * w[m];
+    }
+    double t = dd > 0 ? fmin(1, fmax(0, dw / dd)) : 0, e = 0;
+    for (int m = 0; m < 3; m++) {
+        f[m] = p0[m] + t * d[m];
+        e += (q[m] - f[m]) * (q[m] - f[m]);
+    }
+    *t_out = t;
+    return e;
+}
+
+/* Whether cell c's segments may hold one nearer to q than best (a squared distance): its
+ * box is no farther, by more than the rounding of the distances, than sqrt(best). */
+static bool cell_may_hold(const cf_polyline *pl, size_t c, const double q[3], double best,
+                          double mag)
+{
+    if (pl->g_start[c] == pl->g_start[c + 1])
+        return false;
+    if (!(best < INFINITY))
+        return true;
+    const double *b = pl->g_box[pl->g_start[c]];
+    double d2 = 0;
+    for (int k = 0; k < 3; k++) {
+        double e = fmax(0, fmax(b[k] - q[k], q[k] - b[3 + k]));
+        d2 += e * e;
+    }
+    double r = sqrt(best);
+    r += CF_QUERY_SLACK * (r + mag);
+    return d2 <= r * r;
+}
+
 /* The nearest point of the segments filed in the cells within `within` of q (INFINITY when
- * none lies that close). */
+ * none lies that close). A cell whose box is farther than the nearest so far is skipped:
+ * none of its segments would have replaced it (the first of equals is kept), so the answer
+ * is the one of reading them all. */
 static double nearest_within(const cf_polyline *pl, const double q[3], double within, double *s,
                              double foot[3])
 {
@@ -139,26 +217,16 @@ static double nearest_within(const cf_polyline *pl, const double q[3], double wi
     }
     int a[3], b[3];
     cell_range(pl, lo, hi, a, b);
-    double best = INFINITY;
+    double best = INFINITY, mag = fmax(fabs(q[0]), fmax(fabs(q[1]), fabs(q[2])));
     for (int k = a[2]; k <= b[2]; k++)
         for (int j = a[1]; j <= b[1]; j++)
             for (int i = a[0]; i <= b[0]; i++) {
                 size_t c = cell_index(pl, i, j, k);
+                if (!cell_may_hold(pl, c, q, best, mag))
+                    continue;
                 for (uint32_t x = pl->g_start[c]; x < pl->g_start[c + 1]; x++) {
                     size_t sg = pl->g_seg[x];
-                    const double *p0 = pt(pl, sg), *p1 = pt(pl, sg + 1);
-                    double d[3], w[3], dd = 0, dw = 0;
-                    for (int m = 0; m < 3; m++) {
-                        d[m] = p1[m] - p0[m];
-                        w[m] = q[m] - p0[m];
-                        dd += d[m] * d[m];
-                        dw += d[m] * w[m];
-                    }
-                    double t = dd > 0 ? fmin(1, fmax(0, dw / dd)) : 0, e = 0, f[3];
-                    for (int m = 0; m < 3; m++) {
-                        f[m] = p0[m] + t * d[m];
-                        e += (q[m] - f[m]) * (q[m] - f[m]);
-                    }
+                    double t, f[3], e = seg_dist2(pl, sg, q, &t, f);
                     if (e < best) {
                         best = e;
                         if (s)
@@ -169,6 +237,69 @@ static double nearest_within(const cf_polyline *pl, const double q[3], double wi
                     }
                 }
             }
+    best = sqrt(best);
+    return best <= within ? best : INFINITY;
+}
+
+/* The smallest squared distance to the segments filed in cell (i, j, k), below best. */
+static double cell_min2(const cf_polyline *pl, int i, int j, int k, const double q[3], double best,
+                        double mag)
+{
+    size_t c = cell_index(pl, i, j, k);
+    if (!cell_may_hold(pl, c, q, best, mag))
+        return best;
+    for (uint32_t x = pl->g_start[c]; x < pl->g_start[c + 1]; x++) {
+        double t, f[3];
+        best = fmin(best, seg_dist2(pl, pl->g_seg[x], q, &t, f));
+    }
+    return best;
+}
+
+/* The cells at Chebyshev distance ring (in cells) from cell c, within the grid: the smallest
+ * squared distance of their segments to q, below best. */
+static double ring_min2(const cf_polyline *pl, const int c[3], int ring, const double q[3],
+                        double best, double mag)
+{
+    int a[3], b[3];
+    for (int k = 0; k < 3; k++) {
+        a[k] = c[k] - ring < 0 ? 0 : c[k] - ring;
+        b[k] = c[k] + ring >= pl->dim[k] ? pl->dim[k] - 1 : c[k] + ring;
+    }
+    for (int k = a[2]; k <= b[2]; k++)
+        for (int j = a[1]; j <= b[1]; j++) {
+            bool shell = abs(k - c[2]) == ring || abs(j - c[1]) == ring;
+            if (shell) {
+                for (int i = a[0]; i <= b[0]; i++)
+                    best = cell_min2(pl, i, j, k, q, best, mag);
+                continue;
+            }
+            if (c[0] - ring >= 0)
+                best = cell_min2(pl, c[0] - ring, j, k, q, best, mag);
+            if (ring > 0 && c[0] + ring < pl->dim[0])
+                best = cell_min2(pl, c[0] + ring, j, k, q, best, mag);
+        }
+    return best;
+}
+
+/* The distance alone (no parameter or foot asked): the cells are read in rings round q's
+ * own, nearest first. A segment's nearest point to q lies in a cell the segment is filed in;
+ * one in ring k + 1 or beyond is at least k cells from q, so once the nearest found is that
+ * close (by more than the rounding of the cell indices) the rest cannot be nearer. The answer
+ * is the same minimum over every segment within `within` as nearest_within's. */
+static double nearest_distance(const cf_polyline *pl, const double q[3], double within)
+{
+    double mag = fmax(fabs(q[0]), fmax(fabs(q[1]), fabs(q[2])));
+    int c[3], rings = 0;
+    cell_range(pl, q, q, c, c);
+    for (int k = 0; k < 3; k++)
+        rings = pl->dim[k] > rings ? pl->dim[k] : rings;
+    double best = INFINITY;
+    for (int ring = 0; ring < rings; ring++) {
+        best = ring_min2(pl, c, ring, q, best, mag);
+        double clear = ring * pl->step - CF_QUERY_SLACK * (ring * pl->step + mag);
+        if (clear > within || (clear > 0 && best <= clear * clear))
+            break;
+    }
     best = sqrt(best);
     return best <= within ? best : INFINITY;
 }
@@ -194,6 +325,8 @@ double cf_polyline_nearest(const cf_polyline *pl, const double q[3], double with
     /* widening searches: a point found within w is the nearest of all (every segment within
      * w was seen), so a far `within` costs little where something is near; a near `within`
      * is searched at once (a miss would pay for every widening) */
+    if (!s && !foot)
+        return nearest_distance(pl, q, within);
     if (within <= NEAR_STEPS * pl->step)
         return nearest_within(pl, q, within, s, foot);
     for (double w = pl->step; w < within; w *= 2) {

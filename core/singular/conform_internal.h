@@ -138,6 +138,8 @@ typedef struct cf_polyline {
     double step;            /* grid cell side */
     int dim[3];
     uint32_t *g_start, *g_seg; /* segments per grid cell (CSR) */
+    double (*g_box)[6];     /* at g_start[c]: the box of cell c's segments clipped to the
+                               cell (grown by the rounding slack): lo xyz, hi xyz */
 } cf_polyline;
 
 /* ---- conform_mesh.c: incidence, dead marks, growth ---- */
