@@ -109,8 +109,8 @@ static void extrapolate(steps *h, double step[3], const double p[3], const ism_n
 ism_newton_result ism_sing_newton(const ism_tape *t, ism_eval_ws *ws, double p[3],
                                   const ism_newton_opts *o, uint64_t *evals)
 {
-    ism_newton_result r = { false, 0, INFINITY };
-    double g[3], h[6], step[3];
+    ism_newton_result r = { false, 0, INFINITY, { 0 }, { 0 } };
+    double *g = r.grad, *h = r.hess, step[3]; /* every exit leaves the jet of the final p */
     jet_at(t, ws, p, g, h, evals);
     r.grad_norm = ism_norm3(g);
     steps hist = { { 0 }, 0.0, 0.0 };

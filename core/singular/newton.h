@@ -36,6 +36,7 @@ typedef struct ism_newton_result {
     bool converged;   /* the last step was below tol */
     int iterations;
     double grad_norm; /* |∇f| at the final point */
+    double grad[3], hess[6]; /* ism_eval_hessian's ∇f and H at the final point */
 } ism_newton_result;
 
 typedef struct ism_newton_opts {

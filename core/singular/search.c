@@ -93,6 +93,7 @@ typedef struct search {
     const ism_locus_options *o;
     int depth;
     double lo[3], hi[3], ext[3];
+    double unit;            /* 2^-depth: a lattice step as a fraction of the box */
     worker *workers;
     int threads;
     /* the level being expanded */
@@ -106,7 +107,7 @@ typedef struct search {
 
 static double coord(const search *s, int k, uint32_t i)
 {
-    return i >= (1u << s->depth) ? s->hi[k] : s->lo[k] + s->ext[k] * ldexp((double)i, -s->depth);
+    return i >= (1u << s->depth) ? s->hi[k] : s->lo[k] + s->ext[k] * ((double)i * s->unit);
 }
 
 static void cell_box(const search *s, const scell *c, ism_interval x[3])
@@ -215,15 +216,16 @@ static ism_lbox candidate(const search *s, worker *w, const ism_interval x[3])
     ism_newton_opts no = { ISM_SING_PINV_REL, width, SEARCH_GN_TOL * width, SEARCH_GN_ITERS,
                            lo, hi, true };
     ism_newton_result r = ism_sing_newton(s->t, w->ws, b.q, &no, &w->evals_jet);
-    if (r.converged)
+    double eig[3];
+    if (r.converged) { /* Newton's last jet is the one at b.q */
         b.flags |= ISM_LBOX_PROJECTED;
-    else
+    } else {
         for (int k = 0; k < 3; k++)
             b.q[k] = x[k].lo + 0.5 * (x[k].hi - x[k].lo);
-    double g[3], h[6], eig[3];
-    ism_eval_hessian(s->t, w->ws, b.q[0], b.q[1], b.q[2], g, h);
-    w->evals_jet++;
-    ism_sym3_eigen(h, eig, NULL);
+        ism_eval_hessian(s->t, w->ws, b.q[0], b.q[1], b.q[2], r.grad, r.hess);
+        w->evals_jet++;
+    }
+    ism_sym3_eigen(r.hess, eig, NULL);
     b.rank = (uint8_t)ism_sing_rank(eig, s->hscale);
     return b;
 }
@@ -479,7 +481,7 @@ bool ism_sing_search(const ism_tape *f, const ism_locus_options *o, ism_locus *o
     double t0 = ism_now_ms();
     if (!check_options(o, err))
         return false;
-    search s = { .t = f, .o = o, .depth = o->max_depth };
+    search s = { .t = f, .o = o, .depth = o->max_depth, .unit = ldexp(1.0, -o->max_depth) };
     for (int k = 0; k < 3; k++) {
         s.lo[k] = o->box[k];
         s.hi[k] = o->box[k + 3];
