@@ -56,17 +56,17 @@ static ism_interval ivc(double c) { return iv(c, c); }
  * exactly 0 says the register does not depend on that variable, which the kink rule uses. */
 static bool is_zero(ism_interval u) { return u.lo == 0.0 && u.hi == 0.0; }
 
-static ism_interval mulz(ism_interval a, ism_interval b)
+static inline ism_interval mulz(ism_interval a, ism_interval b)
 {
     return is_zero(a) || is_zero(b) ? ivc(0.0) : iv_mul(a, b);
 }
 
-static ism_interval addz(ism_interval a, ism_interval b)
+static inline ism_interval addz(ism_interval a, ism_interval b)
 {
     return is_zero(a) ? b : is_zero(b) ? a : iv_add(a, b);
 }
 
-static ism_interval subz(ism_interval a, ism_interval b)
+static inline ism_interval subz(ism_interval a, ism_interval b)
 {
     return is_zero(b) ? a : is_zero(a) ? iv_neg(b) : iv_sub(a, b);
 }
@@ -96,7 +96,7 @@ static void set_zero_derivs(ism_ivjet *o, int second)
 }
 
 /* u'_i u'_j, the square when i = j (tighter: never negative). */
-static ism_interval dd(const ism_ivjet *a, int e)
+static inline ism_interval dd(const ism_ivjet *a, int e)
 {
     int i = HI[e], j = HJ[e];
     if (is_zero(a->d[i]) || is_zero(a->d[j]))
@@ -254,7 +254,7 @@ static void op_add(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, int sub
     for (int k = 0; k < 3; k++)
         o->d[k] = fn(a->d[k], b->d[k]);
     for (int e = 0; second && e < 6; e++)
-        o->h[e] = fn(a->h[e], b->h[e]);
+        o->h[e] = sub ? subz(a->h[e], b->h[e]) : addz(a->h[e], b->h[e]);
 }
 
 /* (ab)' = a'b + ab', (ab)'' = a''b + ab'' + a'b'^T + b'a'^T. */
