@@ -407,8 +407,12 @@ static int nearest_curve(const cf_polyline *pl, size_t npl, const double p[3], d
                          double *u, double foot[3])
 {
     int best = -1;
-    double bd = INFINITY;
+    double bd = INFINITY, mag = fmax(fabs(p[0]), fmax(fabs(p[1]), fabs(p[2])));
     for (size_t k = 0; k < npl; k++) {
+        /* a curve whose box is farther than the nearest so far can be neither nearer nor
+         * as near (the first of equals is kept) */
+        if (isfinite(bd) && cf_polyline_box_distance(&pl[k], p) > bd + CF_QUERY_SLACK * (bd + mag))
+            continue;
         double uk, fk[3], d = cf_polyline_nearest(&pl[k], p, reach, &uk, fk);
         if (d < bd) {
             bd = d;
