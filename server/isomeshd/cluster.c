@@ -33,6 +33,9 @@
                                         tick: bounds the script, and each try mends one */
 #define NEWEST_SCAN "64"             /* a user's entries taken that a give-back compares
                                         (the first so many: more than any user runs) */
+#define TIE_SCAN "64"                /* users tied for the fewest running that a take compares
+                                        for the one served longest ago (more than a service
+                                        has; past it, a window that moves with the turn) */
 #define ORPHAN_CHECK_NS 100000000LL  /* a computation wanted by no request here (its origin's
                                         own, run here) asks this often whether another daemon
                                         waits for it, and stops when none does */
@@ -76,6 +79,9 @@
  *   P nwait  hash user -> its entries not taken yet
  *   P wait   sorted set: the users with an entry to take and below their running limit,
  *            scored by their entries taken (the fewest first)
+ *   P served hash user -> the service's count of takes (P turns) when it last got a worker:
+ *            ties in P wait go to the user served longest ago (none yet: first), as one
+ *            daemon's fair queue does (job_queue.c's last_turn)
  * refresh(p, u) recomputes u's three from its streams (a handful of commands whatever the
  * number of users) and is called by every script that changes them; streams left with
  * nothing are removed. stream_user(p, s): the user of stream s. */
@@ -97,7 +103,8 @@
     "  if waiting > 0 and (lim <= 0 or run < lim) then redis.call('zadd', p .. 'wait', run, u) " \
     "  else redis.call('zrem', p .. 'wait', u) end " \
     "  if run == 0 and waiting == 0 then " \
-    "    redis.call('del', q, r) redis.call('hdel', p .. 'ulim', u) end end "
+    "    redis.call('del', q, r) redis.call('hdel', p .. 'ulim', u) " \
+    "    redis.call('hdel', p .. 'served', u) end end "
 
 /* KEYS stream, job hash, ulim; ARGV user, max entries, name, key, fmt, req, max running,
  * ttl, consumer, key prefix. {entry id, its stream}, or false when the user already has max
@@ -134,8 +141,10 @@ static const char ENQUEUE_LUA[] =
  * entry idle for a lock lifetime, among the users with entries taken: XPENDING IDLE scans the
  * whole list, where XAUTOCLAIM would look at its first few only; a deleted one is
  * acknowledged, a canceled or abandoned one dropped), else reads a new one from the user with
- * the fewest running, below its limit (P wait's first), ties taken in turn: its given-back
- * entries first (P r:<user>), then its stream. A user P wait names that has nothing to read
+ * the fewest running, below its limit (P wait's first), of those tied the one served longest
+ * ago (P served; before, the turn alone chose, and a user whose computations had all just
+ * ended could take the worker ahead of a user waiting with none): its given-back entries
+ * first (P r:<user>), then its stream. A user P wait names that has nothing to read
  * leaves it (at most TAKE_TRIES of them per call). */
 static const char TAKE_LUA[] =
     NOW_MS_LUA ABANDONED_LUA REFRESH_LUA
@@ -150,6 +159,7 @@ static const char TAKE_LUA[] =
     "    if redis.call('hget', jk, 'id') == e[1] then "
     "      redis.call('hset', jk, 'state', 'running', 'daemon', ARGV[2], 'started_ms', now_ms()) "
     "      redis.call('pexpire', jk, ARGV[6]) end end "
+    "  redis.call('hset', p .. 'served', u, redis.call('incr', p .. 'turns')) "
     "  refresh(p, u) "
     "  return {u, s, e[1], e[2], claimed} end "
     "local function dropped(s, e) "
@@ -180,8 +190,15 @@ static const char TAKE_LUA[] =
     "  local first = redis.call('zrange', KEYS[1], 0, 0, 'WITHSCORES') "
     "  if #first == 0 then return false end "
     "  local ties = redis.call('zcount', KEYS[1], first[2], first[2]) "
-    "  local u = redis.call('zrangebyscore', KEYS[1], first[2], first[2], 'LIMIT', "
-    "    tonumber(ARGV[4]) % ties, 1)[1] "
+    "  local from = ties > " TIE_SCAN " and tonumber(ARGV[4]) % (ties - " TIE_SCAN " + 1) or 0 "
+    "  local tied = redis.call('zrangebyscore', KEYS[1], first[2], first[2], 'LIMIT', from, "
+    "    " TIE_SCAN ") "
+    "  local last = redis.call('hmget', p .. 'served', unpack(tied)) "
+    "  local u, least = nil, nil "
+    "  for i, v in ipairs(tied) do "
+    "    local n = tonumber(last[i] or '0') or 0 "
+    "    if not least or n < least then u, least = v, n end "
+    "  end "
     "  for _, s in ipairs({p .. 'r:' .. u, p .. 'q:' .. u}) do "
     "    if redis.call('exists', s) == 1 then "
     "      local r = redis.call('xreadgroup', 'group', 'workers', ARGV[2], 'count', 1, "

@@ -16,6 +16,8 @@
  *                 listed the users instead, computes them once and drops the set. Daemons
  *                 of the two layouts must not share one queue: upgrade them all at once)
  *   P ulim        hash user -> the user's running limit (0: none), from its latest entry
+ *   P turns, P served  a count of every take, and hash user -> that count at the user's
+ *                 last take: of the users tied in P wait, the one served longest ago is next
  *   P job:<name>  hash: state (queued, running, done, failed), progress, status and error
  *                 (failed), the daemon running it, its origin (the daemon that queued it),
  *                 its entry's id and stream, queued_ms, started_ms, ended_ms on Redis's

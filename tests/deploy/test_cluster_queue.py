@@ -144,7 +144,8 @@ class ClusterQueueTest(unittest.TestCase):
             q, st = float(mine[b"queued_ms"]), float(mine[b"started_ms"])
             # no job of the first user got a worker while the second user's job waited
             overtook = [f for f in facts if q < float(f[b"started_ms"]) < st]
-            self.assertEqual(overtook, [], (q, st))
+            self.assertEqual(overtook, [], (q, st, sorted(
+                (f[b"started_ms"], f.get(b"ended_ms"), f[b"daemon"]) for f in facts)))
             # and it started within one job time of the first worker freed (the first end of
             # a job running when it came), in the first user's median job time as recorded
             # (ended - started) for the jobs that ran unpaused, on the same loaded machine

@@ -7,6 +7,10 @@ that the order of heartbeats and takes is the test's, not the machine's:
   heartbeat keeps it while the newer one may go (before: the older one went);
 * the given-back entry is its user's next: after the waiting user's entry, the freed worker
   takes it before the user's entry queued behind it (before: after it);
+* of users tied for the fewest running, the one served longest ago is next: a user whose
+  computations all end before any daemon takes again (a loaded machine runs every FINISH
+  first) does not take the worker from a user who waited for it, whatever the daemon's turn
+  (before: the turn chose, and turn 0 gave it to the first user);
 * the users' kept counts (P run, P nwait, P wait) say at every step what the streams hold."""
 import os
 import sys
@@ -39,9 +43,9 @@ class ClusterScriptsTest(unittest.TestCase):
                      P + "ulim", user, "100", name, "k", "drc", "{}", "0", TTL, "origin", P)
         return got[0].decode()
 
-    def take(self, daemon):
+    def take(self, daemon, turn=0):
         got = self.r("EVAL", self.lua["TAKE_LUA"], 2, P + "wait", P + "run", P, daemon, TTL,
-                     "0", "0", TTL)
+                     str(turn), "0", TTL)
         if not got:
             return None
         fields = dict(zip(got[3][::2], got[3][1::2]))
@@ -51,6 +55,10 @@ class ClusterScriptsTest(unittest.TestCase):
     def beat(self, e):
         return self.r("EVAL", self.lua["HEARTBEAT_LUA"], 2, e["stream"], P + "job:" + e["name"],
                       e["daemon"], e["id"], "0.5", TTL, P, e["name"], "0", "1", e["user"])
+
+    def finish(self, e):
+        self.r("EVAL", self.lua["FINISH_LUA"], 2, e["stream"], P + "job:" + e["name"], e["id"],
+               "done", "200", "", TTL, P)
 
     def kept(self):
         run = self.r("HGETALL", P + "run")
@@ -102,6 +110,27 @@ class ClusterScriptsTest(unittest.TestCase):
         self.assertEqual(self.kept(), ({}, {}, {}))
         self.assertEqual(self.r("KEYS", P + "[qr]:*"), [])
         self.assertIsNone(self.take("d1"))
+
+    def test_of_users_tied_for_fewest_running_the_one_served_longest_ago_is_next(self):
+        for turn in range(3):  # whatever the daemon's turn
+            self.r("FLUSHALL")
+            for name in ("a", "b", "c", "d"):
+                self.enqueue("u", name)
+            held = [self.take(d) for d in ("d1", "d2", "d3")]
+            self.enqueue("v", "w")
+            for e in held:  # every one ends before any daemon takes again
+                self.finish(e)
+            self.assertEqual(self.kept(), ({}, {"u": 1, "v": 1}, {"u": 0, "v": 0}))
+            first = self.take("d1", turn)
+            self.assertEqual((turn, first["user"]), (turn, "v"))
+            # now u runs fewer: its last one next, then nothing
+            self.assertEqual(self.take("d2", turn)["name"], "d")
+            self.assertIsNone(self.take("d3", turn))
+        # a user with nothing left is forgotten (its served count too)
+        for e in (first, {"stream": P + "q:u", "name": "d", "id": self.r(
+                "XPENDING", P + "q:u", "workers", "-", "+", 1)[0][0].decode()}):
+            self.finish(e)
+        self.assertEqual(self.r("HGETALL", P + "served"), [])
 
 
 if __name__ == "__main__":
