@@ -3,6 +3,7 @@
  * larger or smaller one, dead instructions dropped), and the shortened tape compared with
  * the branches seen so far, instruction by instruction. */
 #include "core/curves/branches.h"
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include "core/eval/eval.h"
@@ -97,6 +98,18 @@ bool ism_branches_in_box(ism_branches *b, const double lo[3], const double hi[3]
 double ism_branches_gradient(ism_branches *b, uint32_t i, const double p[3], double grad[3])
 {
     return ism_eval_gradient(b->tape[i], b->ws[i], p[0], p[1], p[2], grad);
+}
+
+void ism_branches_project(ism_branches *b, uint32_t i, int steps, double tol, double p[3])
+{
+    for (int it = 0; it < steps; it++) {
+        double g[3], f = ism_branches_gradient(b, i, p, g), gg = g[0] * g[0] + g[1] * g[1] +
+                                                              g[2] * g[2];
+        if (!(gg > 0) || !isfinite(f) || f * f <= tol * tol * gg)
+            break;
+        for (int c = 0; c < 3; c++)
+            p[c] -= f * g[c] / gg;
+    }
 }
 
 bool ism_branches_refine(ism_branches *b, uint32_t a, const size_t *ks, int nk,

@@ -45,6 +45,10 @@ bool ism_branches_in_box(ism_branches *b, const double lo[3], const double hi[3]
 /* f_i at p with its gradient. */
 double ism_branches_gradient(ism_branches *b, uint32_t i, const double p[3], double grad[3]);
 
+/* Newton steps along f_i's gradient (at most steps) moving p toward f_i = 0, until
+ * |f_i| ≤ tol |∇f_i| (p then lies within tol of it). Nothing checks where p ends. */
+void ism_branches_project(ism_branches *b, uint32_t i, int steps, double tol, double p[3]);
+
 /* Newton puts p on f_a = 0 and f_k = 0 for the nk (1 or 2) branches in ks (crease points,
  * triple points), as ism_cut_refine; with plane (n, c; NULL for none) also on n·p = c. False
  * (p kept) when it fails or out of memory. */

@@ -34,8 +34,8 @@
  * shape, and need more); the gyroid ball at depth 7 needs 5–6 in the lattice box (four
  * left 6 edges over 2°, beside triangles of 3.7°). */
 #define CREASE_REFINE_PASSES 6
-/* Newton steps along the branch's gradient putting an edge's midpoint on its zero set (it
- * starts within the edge's sagitta of it: quadratic convergence ends in two or three). */
+/* Newton steps at most along the branch's gradient putting an edge's midpoint on its zero set
+ * (it starts within the edge's sagitta of it: quadratic convergence ends in two or three). */
 #define CREASE_REFINE_NEWTON 4
 /* A half of a triangle beside a split crease edge must keep this cosine with the triangle's
  * normal (60°, as the snap's star: no half turned over or folded up). */
@@ -246,13 +246,7 @@ static uint32_t side_midpoint(refine_state *st, const refine_split *sp, bool *ac
     for (int i = 0; i < 3; i++)
         p[i] = q[i] = 0.5 * (u[i] + w[i]);
     double reach = CREASE_REFINE_MOVE * ism_dist3(u, w);
-    for (int it = 0; it < CREASE_REFINE_NEWTON; it++) {
-        double g[3], f = ism_branches_gradient(s->branches, sp->A, q, g), gg = ism_dot3(g, g);
-        if (!(gg > 0) || !isfinite(f) || f == 0)
-            break;
-        for (int i = 0; i < 3; i++)
-            q[i] -= f * g[i] / gg;
-    }
+    ism_branches_project(s->branches, sp->A, CREASE_REFINE_NEWTON, s->tol, q);
     if (ism_sqdist3(p, q) <= reach * reach)
         memcpy(p, q, sizeof p);
     uint32_t B;

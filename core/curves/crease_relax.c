@@ -185,13 +185,7 @@ static bool relax_vertex(cut_state *s, uint32_t v, const uint32_t *star, size_t 
         double p[3];
         for (int c = 0; c < 3; c++)
             p[c] = pv[c] + lambda * (mean[k][c] - pv[c]);
-        for (int it = 0; it < CREASE_RELAX_NEWTON; it++) {
-            double g[3], f = ism_branches_gradient(s->branches, A, p, g), gg = ism_dot3(g, g);
-            if (!(gg > 0) || !isfinite(f) || f == 0)
-                break;
-            for (int c = 0; c < 3; c++)
-                p[c] -= f * g[c] / gg;
-        }
+        ism_branches_project(s->branches, A, CREASE_RELAX_NEWTON, s->tol, p);
         if (!helps(s, v, A, star, n, &sb, p))
             continue;
         float nrm[3];
