@@ -16,7 +16,10 @@ the closed-form lengths; V - E + F per component matches on the two nappes. Thre
 overlapping balls (min of three spheres, in the lattice box and two shifted off it): the
 crease is three arcs between the two triple points where all three spheres meet (closed
 form: the circumcentre of the centres, +-z), each a vertex of degree 3 within 1e-9 x diagonal,
-every arc point within that of two of the spheres; the mesh stays a sphere (chi 2). The
+every arc point within that of two of the spheres; the mesh stays a sphere (chi 2); cut by
+planes a tenth and a fiftieth of a cell past the triple points' heights (two loops each, one
+a small curved triangle round the triple point's dimple), 14 / 27 / 15 with no mesh edge
+across the crease. The
 gyroid-ball preset (max of the gyroid G and the ball B, its box and the two shifted ones):
 every point of its crease arcs (the mesh's crease vertices in full precision) lies within
 1e-9 x diagonal of G = 0 and of B = 0, each evaluated here in closed form."""
@@ -236,6 +239,84 @@ class CurvesTest(unittest.TestCase):
                     for i in range(0, len(arc), 3):
                         near = sorted(sphere_dist(arc[i:i + 3], c) for c in centres)
                         self.assertLess(near[1], tol, arc[i:i + 3])
+
+    def test_three_balls_sections_beside_the_triple_points(self):
+        """Planes z = c a fraction of a cell off the triple points' heights +-z0 (issue 14's
+        near-triple straddles): above the top one the union's section is two loops — the
+        outer one and a small curved triangle round the dimple over the triple point, each
+        crossing the three crease arcs — and its mirror below the bottom one likewise, so
+        the arrangement is V 2 + 12, E 3 x 5 crease pieces + 12 section arcs, F 15 (chi 2),
+        the crossings of degree 4 and the triple points of degree 3. No mesh edge joins two
+        points on different balls' sides unless one lies on the crease (the closed-form
+        nearest sphere), and every section point lies on its plane and on a sphere."""
+        centres = [(0.6, 0, 0), (-0.3, 0.52, 0), (-0.3, -0.52, 0)]
+        expr = "min(" + ", ".join(f"(x - {cx})^2 + (y - {cy})^2 + z^2 - 0.5"
+                                  for cx, cy, _ in centres) + ")"
+        x0 = (0.36 - 0.09 - 0.52 ** 2) / 1.8
+        z0 = math.sqrt(0.5 - (0.6 - x0) ** 2)
+        depth, side = 6, 3.0
+        cell = side / 2 ** depth
+        tol = 1e-9 * math.sqrt(3) * side
+        heights = (z0 + 0.1 * cell, -z0 - 0.02 * cell)
+
+        def values(p):  # each ball's function; f is their min
+            return [(p[0] - c[0]) ** 2 + (p[1] - c[1]) ** 2 + p[2] ** 2 - 0.5 for c in centres]
+
+        for shift in (0.0, 1e-3 * cell, 0.37 * cell):
+            with self.subTest(shift=shift):
+                d = [shift, 0.61 * shift, -0.83 * shift]
+                box = [-side / 2 + d[0], -side / 2 + d[1], -side / 2 + d[2],
+                       side / 2 + d[0], side / 2 + d[1], side / 2 + d[2]]
+                curves = [{"kind": "plane", "normal": [0, 0, 1], "offsets": list(heights)}]
+                req = os.path.join(self.dir, "request.json")
+                with open(req, "w") as fh:
+                    json.dump({"expr": expr, "box": box, "depth": {"max": depth},
+                               "curves": curves}, fh)
+                obj, feat = os.path.join(self.dir, "m.obj"), os.path.join(self.dir, "f.json")
+                proc = subprocess.run([ISOMESH, req, "-o", obj, "--features", feat],
+                                      capture_output=True, text=True, timeout=120)
+                self.assertEqual(proc.returncode, 0, proc.stderr)
+                with open(feat) as fh:
+                    a = json.load(fh)["arrangement"]
+                self.assertTrue(a["euler"]["ok"])
+                self.assertEqual(a["euler"]["mesh"], 2)
+                self.assertEqual((len(a["vertices"]), len(a["edges"]), len(a["faces"])),
+                                 (14, 27, 15))
+                self.assertEqual(sorted(v["degree"] for v in a["vertices"]), [3] * 2 + [4] * 12)
+                verts, tris, lines = [], [], []
+                with open(obj) as fh:
+                    for line in fh:
+                        w = line.split()
+                        if w and w[0] == "v":
+                            verts.append(tuple(map(float, w[1:4])))
+                        elif w and w[0] == "f":
+                            tris.append([int(x.split("/")[0]) - 1 for x in w[1:4]])
+                        elif w and w[0] == "l":
+                            lines.append([int(x) - 1 for x in w[1:]])
+                side_of, on = [], []
+                for p in verts:  # the ball f takes there, and whether p is on the crease
+                    g = values(p)
+                    order = sorted(range(3), key=lambda i: g[i])
+                    grad = max(2 * math.dist(p, (c[0], c[1], 0)) for c in centres)
+                    side_of.append(order[0])
+                    on.append((g[order[1]] - g[order[0]]) / grad < tol)
+                straddle = [(verts[t[i]], verts[t[(i + 1) % 3]]) for t in tris for i in range(3)
+                            if not on[t[i]] and not on[t[(i + 1) % 3]]
+                            and side_of[t[i]] != side_of[t[(i + 1) % 3]]]
+                self.assertGreater(sum(on), 100)  # the crease's vertices told apart
+                self.assertEqual(straddle, [], "mesh edges across the crease")
+                for chain in lines:
+                    for v in chain:
+                        p = verts[v]
+                        g = min(values(p))
+                        near = min(range(3), key=lambda i: values(p)[i])
+                        r = math.dist(p, (centres[near][0], centres[near][1], 0))
+                        self.assertLess(abs(g) / (2 * r), tol, p)
+                sec = [v for chain in lines for v in chain
+                       if min(abs(verts[v][2] - h) for h in heights) < 1e-6]
+                self.assertGreater(len(sec), 20)
+                for v in sec:
+                    self.assertLess(min(abs(verts[v][2] - h) for h in heights), tol)
 
     def test_gyroid_ball_crease_vertices_on_both_branches(self):
         side, depth = 3.0, 6
