@@ -357,7 +357,7 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         node_corners(b->grid, th, b->p->tape, &nd, &k);
         const ism_tape *saved = th->s.tape;
         th->s.tape = sub;
-        bool flat = ism_plot_test(&th->s, &b->p->flatness, lo, hi, &k);
+        bool flat = ism_plot_test(&th->s, th->thin.jet, &b->p->flatness, lo, hi, &k);
         th->s.tape = saved;
         leaf = flat || nd.level >= limit;
         /* a leaf proven free of f = 0 emits nothing and hides no piece: skipped from here */

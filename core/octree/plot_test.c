@@ -6,6 +6,7 @@
 #include "core/octree/cell_error.h"
 #include "core/octree/crease_split.h"
 #include "core/octree/edge_roots.h"
+#include "core/octree/graph_cert.h"
 
 #include <math.h>
 #include <string.h>
@@ -78,8 +79,8 @@ static int crease_cell(ism_sampler *s, const ism_flatness *fl, const ism_corners
     return 1; /* polygons the estimate cannot follow: the measurement after decides */
 }
 
-bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
-                   const double hi[3], const ism_corners *k)
+bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
+                   const double lo[3], const double hi[3], const ism_corners *k)
 {
     double p[8][3], f[8], n[8][3];
     memcpy(p, k->p, sizeof p);
@@ -98,8 +99,14 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
     if (crease >= 0)
         return crease;
     bool measured_only = fl->max_error > 0 && size <= CREASE_CELL_ERRORS * fl->max_error;
-    if (!measured_only && !normals_agree(n, fl->normal_cos))
-        return false;
+    /* under an error bound a node whose corners disagree may still be one graph (graph
+     * cert.h): then its roots, faces and measured error decide as below */
+    bool graph = false;
+    if (!measured_only && !normals_agree(n, fl->normal_cos)) {
+        if (!(fl->max_error > 0 && ism_graph_certified(s->tape, jet, lo, hi, &s->n_interval)))
+            return false;
+        graph = true;
+    }
 
     double roots[12][3], centroid[3] = {0, 0, 0};
     int nroots = 0, face_cross[6] = {0}, ndisagree = 0, disagree[12];
@@ -113,7 +120,7 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
             /* signs agree, gradients do not: maybe two roots (a small node under an error
              * bound leaves them to the edge roots and the measurement, below) */
             if (ism_dot3(n[c0], n[c1]) <= fl->gradient_test) {
-                if (!measured_only)
+                if (!measured_only && !graph)
                     return false;
                 disagree[ndisagree++] = e;
             }
@@ -132,6 +139,13 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
     for (int k = 0; k < 6 && !measured_only; k++)
         if (face_cross[k] > 2)
             return false; /* a saddle on a face: two curves, look closer */
+    for (int i = 0; graph && i < ndisagree; i++) {
+        /* a graph may still dip through an edge twice: the polygon would miss it */
+        int c0, c1, faces[2];
+        ism_cube_edge(disagree[i], &c0, &c1, faces);
+        if (!no_roots(s, fl, k, c0, c1))
+            return false;
+    }
     if (nroots == 0) {
         /* no edge crossed: two roots on an edge are the only sign of the surface here
          * (a tube or a wedge tip between the corners), so it is looked for */
@@ -146,6 +160,8 @@ bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
     double err;
     if (fl->max_error > 0 && ism_cell_error(s, k, fl->max_error, &err))
         return err <= fl->max_error;
+    if (graph)
+        return false; /* polygons the measurement cannot follow: the corner test's path */
     for (int a = 0; a < 3; a++)
         centroid[a] /= nroots;
 

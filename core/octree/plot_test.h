@@ -8,6 +8,7 @@
 
 #include <stdbool.h>
 #include "core/octree/corners.h"
+#include "core/eval/interval_jet.h"
 #include "core/octree/sampler.h"
 
 typedef struct ism_flatness {
@@ -25,8 +26,10 @@ typedef struct ism_flatness {
 } ism_flatness;
 
 /* lo, hi: the node's world box; k: its corner values. True when the node may be plotted
- * at this size. */
-bool ism_plot_test(ism_sampler *s, const ism_flatness *fl, const double lo[3],
-                   const double hi[3], const ism_corners *k);
+ * at this size. jet (interval gradients; NULL for none): under max_error a node whose
+ * corner gradients disagree is still plotted when f is proven one graph in it
+ * (graph_cert.h) and its roots and measured error pass. */
+bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
+                   const double lo[3], const double hi[3], const ism_corners *k);
 
 #endif

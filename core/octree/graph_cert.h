@@ -1,0 +1,21 @@
+/* graph_cert.h — a proof that f = 0 is one graph inside an octree node: f strictly monotone
+ * along one direction over the whole box (by interval gradients), so every line in that
+ * direction meets the surface at most once there — no closed piece, fold or second sheet
+ * hides in the node. Under an error bound this replaces the corner-gradient agreement of the
+ * flatness test (plot_test.c), which sampled 8 corners and asked for 26°: on the torus the
+ * corners near the tube's core disagree long after the surface in the node is a gentle
+ * graph. */
+#ifndef ISM_GRAPH_CERT_H
+#define ISM_GRAPH_CERT_H
+
+#include <stdbool.h>
+#include <stdint.h>
+#include "core/eval/interval_jet.h"
+
+/* True when ∇f(box) · d > 0 (or < 0) at every point of the box lo..hi, for d the midpoint
+ * of ∇f's enclosure; false when that cannot be shown (the enclosure holds a direction
+ * across d, f has a kink in the box, or jet does not fit t). *intervals counts the call. */
+bool ism_graph_certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
+                         const double hi[3], uint64_t *intervals);
+
+#endif
