@@ -4,6 +4,7 @@
 #include "core/octree/crease_split.h"
 #include "core/octree/edge_roots.h"
 #include "core/octree/refine.h"
+#include "core/octree/straddle.h"
 #include "core/octree/triangulate.h"
 
 #include <math.h>
@@ -121,7 +122,8 @@ static bool loop_tris(ism_sampler *s, const double (*p)[3], int n, ism_cell_out 
 
 /* The node's edge roots, each with the two faces its edge lies on; false when a corner is
  * exactly on the surface (its roots are shared by several edges). */
-static bool edge_roots(ism_sampler *s, const ism_corners *k, root_pt *r, int *n)
+static bool edge_roots(ism_sampler *s, const ism_corners *k, double shift, const double *box,
+                       root_pt *r, int *n)
 {
     *n = 0;
     for (int c = 0; c < 8; c++)
@@ -133,8 +135,10 @@ static bool edge_roots(ism_sampler *s, const ism_corners *k, root_pt *r, int *n)
         if ((k->f[c0] < 0) == (k->f[c1] < 0))
             continue;
         double t = ism_regula_falsi(s, k->p[c0], k->p[c1], k->f[c0], k->f[c1]);
+        double p[3];
         for (int a = 0; a < 3; a++)
-            r[*n].p[a] = k->p[c0][a] + t * (k->p[c1][a] - k->p[c0][a]);
+            p[a] = k->p[c0][a] + t * (k->p[c1][a] - k->p[c0][a]);
+        ism_straddle_point(s, shift, box, p, r[*n].p);
         (*n)++;
     }
     return true;
@@ -143,11 +147,11 @@ static bool edge_roots(ism_sampler *s, const ism_corners *k, root_pt *r, int *n)
 /* The polygons through the node's edge roots, measured one by one (cut NULL) or
  * triangulated into cut, split along f's crease and measured there. */
 static bool cell_loops(ism_sampler *s, const ism_corners *k, ism_cell_out *cut, double bound,
-                       double *err)
+                       double shift, const double *box, double *err)
 {
     root_pt r[MAX_ROOTS];
     int n;
-    if (!edge_roots(s, k, r, &n))
+    if (!edge_roots(s, k, shift, box, r, &n))
         return false;
     /* on_face[f]: the roots on face f; exactly two or none make clean polygons */
     int on_face[6][2], count[6] = {0};
@@ -187,16 +191,17 @@ static bool cell_loops(ism_sampler *s, const ism_corners *k, ism_cell_out *cut, 
     return true;
 }
 
-bool ism_cell_error(ism_sampler *s, const ism_corners *k, double bound, double *err)
+bool ism_cell_error(ism_sampler *s, const ism_corners *k, double bound, double shift,
+                    const double box[6], double *err)
 {
-    return cell_loops(s, k, NULL, bound, err);
+    return cell_loops(s, k, NULL, bound, shift, box, err);
 }
 
 bool ism_cell_error_cut(ism_sampler *s, const ism_corners *k, double bound, double *err)
 {
     ism_cell_out cut;
     memset(&cut, 0, sizeof cut);
-    bool ok = cell_loops(s, k, &cut, bound, err);
+    bool ok = cell_loops(s, k, &cut, bound, 0, NULL, err);
     free(cut.verts);
     free(cut.tris);
     return ok;

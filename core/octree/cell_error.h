@@ -17,8 +17,10 @@
  * points — so that the caller decides by another rule. *err is +inf when f or ∇f is not
  * finite at a measuring point. The measuring stops at the first point beyond bound (*err is
  * then its distance): whether the node meets bound is the same as with every point
- * measured (INFINITY measures them all). */
-bool ism_cell_error(ism_sampler *s, const ism_corners *k, double bound, double *err);
+ * measured (INFINITY measures them all). shift > 0: the roots are first moved as
+ * straddle.h moves vertices (box: the request's). */
+bool ism_cell_error(ism_sampler *s, const ism_corners *k, double bound, double shift,
+                    const double box[6], double *err);
 
 /* The same with the triangles first split along the crease of f's top min/max, as the
  * polygoniser splits them under an error bound (crease_split.h). Also false when out of

@@ -158,7 +158,8 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
         return true;
     }
     double err;
-    if (fl->max_error > 0 && ism_cell_error(s, k, fl->max_error, &err))
+    if (fl->max_error > 0 &&
+        ism_cell_error(s, k, fl->max_error, fl->straddle_shift, fl->box, &err))
         return err <= fl->max_error;
     if (graph)
         return false; /* polygons the measurement cannot follow: the corner test's path */

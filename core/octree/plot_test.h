@@ -23,6 +23,9 @@ typedef struct ism_flatness {
                               node would emit must lie within this distance of the surface,
                               measured at their centroids and edge midpoints (cell_error.h);
                               0: the paper's tests above */
+    double straddle_shift; /* > 0: the node's polygons are measured with their vertices
+                              moved as straddle.h moves them, by this much */
+    double box[6];         /* the request's box (straddle.h keeps its faces' vertices) */
 } ism_flatness;
 
 /* lo, hi: the node's world box; k: its corner values. True when the node may be plotted

@@ -41,6 +41,10 @@ typedef struct ism_poly_options {
                                afresh (default off: a round takes the last round's tree over
                                and copies the leaves its splits cannot have changed,
                                leaf_memo.h — the same mesh, for less; on is for tests) */
+    bool straddle;          /* under max_error, on a surface without min/max and without a
+                               singular locus: vertices where the surface bends one way move
+                               0.9 E toward its convex side so the mesh straddles it, and
+                               nodes are sized for that (straddle.h); default off */
     bool scalar_eval;       /* evaluate the octree node by node: no batched intervals over a
                                node's children and no zero-free leaves (octree.h) — the same
                                mesh bit for bit, for more; on is for tests (default off) */

@@ -12,6 +12,7 @@
 #include "core/octree/leaf_memo.h"
 #include "core/octree/octree_build.h"
 #include "core/octree/refine.h"
+#include "core/octree/straddle.h"
 #include "core/octree/weld.h"
 #include "core/util/parallel.h"
 
@@ -101,6 +102,12 @@ bool ism_poly_options_check(const ism_poly_options *o, ism_error *err)
     return true;
 }
 
+/* The distance vertices move under the straddle option (straddle.h), 0 when they stay. */
+static double straddle_shift(const ism_tape *f, const ism_poly_options *o)
+{
+    return o->straddle ? ism_straddle_shift(f, o->max_error, o->nquiet || o->nnode_balls) : 0;
+}
+
 /* Progress reports from several threads, mapped into one [0, 1] range. */
 typedef struct progress {
     const ism_poly_options *o;
@@ -138,6 +145,7 @@ typedef struct phase2 {
     atomic_int status;           /* enum ism_poly_status */
     progress *prog;
     float *leaf_error;           /* under max_error: what each leaf's triangles measured */
+    double straddle;             /* > 0: vertices are moved by this much (straddle.h) */
     const ism_leaf_memo *memo;   /* the last round's leaves, or NULL */
     const int32_t *reuse;        /* per leaf: its leaf in memo to copy, or -1; or NULL */
     ism_leaf_rec *rec;           /* per leaf: where its output went, when another round may
@@ -171,8 +179,12 @@ static bool one_leaf(phase2 *p, ism_cell_ctx *cx, size_t chunk, size_t i, ism_ce
         bool ok = ism_cell_polygonise(cx, p->leaves[i], out) &&
                   /* under max_error: cut along a CSG crease before measuring */
                   (!p->leaf_error || ism_crease_split(&cx->s, out, t0));
-        if (ok && p->leaf_error)
-            err = (float)ism_emitted_error(&cx->s, out, t0, INFINITY);
+        double e = 0;
+        if (ok && p->leaf_error && p->straddle > 0)
+            ok = ism_straddle_emitted_error(&cx->s, p->straddle, p->o->box, out, v0, t0, &e);
+        else if (ok && p->leaf_error)
+            e = ism_emitted_error(&cx->s, out, t0, INFINITY);
+        err = (float)e;
         cx->s.local = NULL;
         if (!ok)
             return false;
@@ -371,6 +383,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     size_t by_memory = o->max_memory / BYTES_PER_TRIANGLE;
     p.max_triangles = o->max_triangles < by_memory ? o->max_triangles : by_memory;
     atomic_init(&p.status, ISM_POLY_OK);
+    p.straddle = straddle_shift(f, o);
     enum ism_poly_status status = ISM_POLY_NO_MEMORY;
     int threads = ism_pool_threads(pool);
 
@@ -439,6 +452,8 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     ism_weld_stats ws;
     status = ism_weld(p.out, p.nchunks, pool, mesh, &ws, &m.par) ? ISM_POLY_OK
                                                                       : ISM_POLY_NO_MEMORY;
+    if (status == ISM_POLY_OK)
+        ism_straddle_mesh(&p.ctx[0].c.s, p.straddle, o->box, mesh);
     meter_stop_inside(&m, st, ISM_PHASE_MESH, outer);
     *t_weld = ism_now_ms() - t0;
     st->zero_vertices = ws.zero_vertices;
@@ -530,7 +545,8 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
                                 ism_grid_cell_size(&tree.grid, o->max_depth),
                      .double_root_eps = o->double_root_eps,
                      .double_root_iters = o->double_root_iters,
-                     .max_error = o->max_error},
+                     .max_error = o->max_error,
+                     .straddle_shift = straddle_shift(f, o)},
         .quiet = o->quiet,
         .nquiet = o->nquiet,
         .node_balls = o->node_balls,
@@ -546,6 +562,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
         .progress_ctx = prog,
         .cost = &m.par,
     };
+    memcpy(bp.flatness.box, o->box, sizeof bp.flatness.box);
     ism_octree_build_stats bs;
     enum ism_poly_status status = from_build(ism_octree_build(&tree, &bp, &bs));
     st->nodes_visited = bs.visited;

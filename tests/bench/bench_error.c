@@ -235,6 +235,7 @@ static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, 
     o.max_error = e;
     o.max_depth = depth;
     o.threads = 1;
+    o.straddle = getenv("ISM_STRADDLE") != NULL; /* TEMP */
     ism_mesh mesh;
     ism_mesh_init(&mesh);
     ism_locus locus;

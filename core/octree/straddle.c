@@ -1,0 +1,118 @@
+/* straddle.c — vertices moved toward the convex side by a share of the bound (straddle.h). */
+#include "core/octree/straddle.h"
+#include "core/octree/refine.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The share of E a vertex moves. Chords of a surface bending one way lie on its concave
+ * side by their sag s >= 0; moved by σE the vertex errs σE and a chord point |s − σE|, so
+ * polygons with s <= (1 + σ) E meet E. Below 1 so that a vertex stays strictly within E
+ * whatever rounds the first-order distance; 0.9 gives sag room 1.9 E (cells ×1.38). */
+#define STRADDLE_SHARE 0.9
+/* A vertex this close to a face of the box (relative to the box) is on it: it stays. */
+#define BOX_FACE_REL 1e-12
+
+static void cross(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* The tangential Hessian's quadratic form in an orthonormal basis t1, t2 of the plane
+ * across n: a, b, c of [[a, b], [b, c]]. */
+static void tangential(const double h[6], const double n[3], double *a, double *b, double *c)
+{
+    double t1[3], t2[3];
+    /* t1: n crossed with the axis least along it */
+    int k = fabs(n[0]) <= fabs(n[1]) && fabs(n[0]) <= fabs(n[2]) ? 0
+            : fabs(n[1]) <= fabs(n[2]) ? 1
+                                       : 2;
+    double e[3] = {0, 0, 0};
+    e[k] = 1;
+    cross(n, e, t1);
+    ism_normalise3(t1);
+    cross(n, t1, t2);
+    const double H[3][3] = {{h[0], h[1], h[2]}, {h[1], h[3], h[4]}, {h[2], h[4], h[5]}};
+    double Ht1[3], Ht2[3];
+    for (int i = 0; i < 3; i++) {
+        Ht1[i] = H[i][0] * t1[0] + H[i][1] * t1[1] + H[i][2] * t1[2];
+        Ht2[i] = H[i][0] * t2[0] + H[i][1] * t2[1] + H[i][2] * t2[2];
+    }
+    *a = ism_dot3(t1, Ht1);
+    *b = ism_dot3(t1, Ht2);
+    *c = ism_dot3(t2, Ht2);
+}
+
+static bool on_box_face(const double box[6], const double p[3])
+{
+    for (int k = 0; k < 3; k++) {
+        double tol = BOX_FACE_REL * (box[3 + k] - box[k]);
+        if (!(p[k] > box[k] + tol && p[k] < box[3 + k] - tol))
+            return true;
+    }
+    return false;
+}
+
+bool ism_straddle_point(ism_sampler *s, double shift, const double box[6], const double p[3],
+                        double q[3])
+{
+    memcpy(q, p, 3 * sizeof *q);
+    if (!(shift > 0) || on_box_face(box, p))
+        return false;
+    double g[3], h[6];
+    s->n_gradient++;
+    double f = ism_eval_hessian(s->tape, s->ws, p[0], p[1], p[2], g, h);
+    double gl = ism_norm3(g);
+    if (!isfinite(f) || !(gl > 0) || !isfinite(gl))
+        return false;
+    double n[3] = {g[0] / gl, g[1] / gl, g[2] / gl}, a, b, c;
+    tangential(h, n, &a, &b, &c);
+    if (!(a * c - b * b > 0) || !isfinite(a))
+        return false; /* a saddle, a parabolic point, or no Hessian: chords on both sides */
+    /* f grows along the tangent plane (a > 0): the surface bends toward f < 0, its chords
+     * lie there, and the vertex moves toward f > 0 (along ∇f); the other way round else */
+    double step = a > 0 ? shift : -shift;
+    /* the point where f's first-order model reaches f(p) + step |∇f| */
+    for (int k = 0; k < 3; k++)
+        q[k] = p[k] + step * n[k];
+    return true;
+}
+
+bool ism_straddle_emitted_error(ism_sampler *s, double shift, const double box[6],
+                                ism_cell_out *out, size_t first_vert, size_t first_tri,
+                                double *err)
+{
+    size_t n = out->nverts - first_vert;
+    double (*keep)[3] = malloc((n ? n : 1) * sizeof *keep);
+    if (!keep)
+        return false;
+    for (size_t i = 0; i < n; i++) {
+        double *p = out->verts[first_vert + i].p;
+        memcpy(keep[i], p, sizeof keep[i]);
+        ism_straddle_point(s, shift, box, keep[i], p);
+    }
+    *err = ism_emitted_error(s, out, first_tri, INFINITY);
+    for (size_t i = 0; i < n; i++)
+        memcpy(out->verts[first_vert + i].p, keep[i], sizeof keep[i]);
+    free(keep);
+    return true;
+}
+
+void ism_straddle_mesh(ism_sampler *s, double shift, const double box[6], ism_mesh *m)
+{
+    for (size_t v = 0; shift > 0 && v < m->nverts; v++) {
+        double q[3];
+        if (ism_straddle_point(s, shift, box, &m->pos[3 * v], q))
+            memcpy(&m->pos[3 * v], q, sizeof q);
+    }
+}
+
+double ism_straddle_shift(const ism_tape *t, double max_error, bool has_locus)
+{
+    if (!(max_error > 0) || has_locus || ism_tape_has_min_max(t))
+        return 0;
+    return STRADDLE_SHARE * max_error;
+}

@@ -1,0 +1,38 @@
+/* straddle.h — under an error bound, a mesh vertex on f = 0 where the surface bends the same
+ * way in every direction (both principal curvatures of one sign: sphere-like, not a saddle)
+ * is moved toward the surface's convex side by a fixed share of the bound. The chords of
+ * such a surface all lie on its concave side, so the mesh then straddles the surface: its
+ * vertices err by the shift and its centroids and edge midpoints by their sag minus it, and
+ * polygons whose sag reaches (1 + share) × E still meet E — cells about √1.9 times larger.
+ *
+ * The move is a pure function of the point (f, ∇f and the Hessian there, and the box), so
+ * every node that shares a vertex predicts, measures and emits the same position. */
+#ifndef ISM_STRADDLE_H
+#define ISM_STRADDLE_H
+
+#include <stdbool.h>
+#include "core/mesh/mesh.h"
+#include "core/octree/cell_types.h"
+#include "core/octree/sampler.h"
+
+/* shift: the distance a vertex moves (0: none); box: the request's box (lo xyz, hi xyz),
+ * whose faces' vertices stay where they are. Writes p moved (or p itself) to q; true when
+ * it moved. */
+bool ism_straddle_point(ism_sampler *s, double shift, const double box[6], const double p[3],
+                        double q[3]);
+
+/* The distance to f = 0 (refine.h's measure, every point) of out's triangles from first_tri
+ * on with the vertices from first_vert on moved; out is left as it was. False when out of
+ * memory. */
+bool ism_straddle_emitted_error(ism_sampler *s, double shift, const double box[6],
+                                ism_cell_out *out, size_t first_vert, size_t first_tri,
+                                double *err);
+
+/* Every vertex of a finished mesh moved (the positions the nodes were measured with). */
+void ism_straddle_mesh(ism_sampler *s, double shift, const double box[6], ism_mesh *m);
+
+/* The shift for bound E on tape t: STRADDLE_SHARE × E where the move applies (a tape without
+ * min/max, whose creases the move would blur; no singular locus known), else 0. */
+double ism_straddle_shift(const ism_tape *t, double max_error, bool has_locus);
+
+#endif
