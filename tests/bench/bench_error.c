@@ -5,10 +5,12 @@
  * to f = 0, in closed form for the sphere and the torus, else the length of the Newton
  * projection q <- q - f ∇f / |∇f|² (on the tape compiled from the same expression).
  *
- *   bench_error mesh NAME E [DEPTH [raw]]  isomesh (core/singular/surface.h: the locus, the
+ *   bench_error mesh NAME E [DEPTH [raw] [straddle]]
+ *                                        isomesh (core/singular/surface.h: the locus, the
  *                                        polygoniser, conformance, then the simplification
  *                                        within E as the service does by default; raw: not
- *                                        it), one thread
+ *                                        it; straddle: the polygoniser's straddle option,
+ *                                        core/octree/straddle.h), one thread
  *   bench_error measure NAME FILE.ply    a mesh from another tool (binary little-endian PLY:
  *                                        double x y z, faces as uchar count + int32 indices)
  *   bench_error eval NAME X,Y,Z[;...]    f at points (to check the other tools' formulas)
@@ -227,7 +229,7 @@ static ism_tape *compile(const surface *s)
 }
 
 static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, int depth,
-                    bool simplify)
+                    bool simplify, bool straddle)
 {
     ism_poly_options o;
     ism_poly_options_default(&o);
@@ -235,7 +237,7 @@ static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, 
     o.max_error = e;
     o.max_depth = depth;
     o.threads = 1;
-    o.straddle = getenv("ISM_STRADDLE") != NULL; /* TEMP */
+    o.straddle = straddle;
     ism_mesh mesh;
     ism_mesh_init(&mesh);
     ism_locus locus;
@@ -269,6 +271,15 @@ static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, 
     ism_locus_free(&locus);
     ism_mesh_free(&mesh);
     return 0;
+}
+
+/* Is word one of argv[from..argc)? */
+static bool has_word(int argc, char **argv, int from, const char *word)
+{
+    for (int i = from; i < argc; i++)
+        if (strcmp(argv[i], word) == 0)
+            return true;
+    return false;
 }
 
 static int cmd_measure(const measurer *m, const char *path)
@@ -325,7 +336,7 @@ int main(int argc, char **argv)
     if (argc == 2 && strcmp(argv[1], "list") == 0)
         return cmd_list();
     if (argc < 4) {
-        fprintf(stderr, "usage: bench_error mesh NAME E [DEPTH [raw]] | measure NAME FILE.ply | "
+        fprintf(stderr, "usage: bench_error mesh NAME E [DEPTH [raw] [straddle]] | measure NAME FILE.ply | "
                         "eval NAME X,Y,Z[;...] | list\n");
         return 2;
     }
@@ -337,7 +348,7 @@ int main(int argc, char **argv)
     int rc = 2;
     if (strcmp(argv[1], "mesh") == 0)
         rc = cmd_mesh(s, t, &m, atof(argv[3]), argc > 4 ? atoi(argv[4]) : 10,
-                      !(argc > 5 && strcmp(argv[5], "raw") == 0));
+                      !has_word(argc, argv, 5, "raw"), has_word(argc, argv, 5, "straddle"));
     else if (strcmp(argv[1], "measure") == 0)
         rc = cmd_measure(&m, argv[3]);
     else if (strcmp(argv[1], "eval") == 0)

@@ -1,0 +1,156 @@
+/* test_straddle.c — the polygoniser's straddle option (core/octree/straddle.h) under
+ * max_error: on the sphere and the torus every vertex, centroid and edge midpoint lies within
+ * E of the surface (closed-form distances), in boxes on the octree lattice and shifted off it
+ * by 1e-3 and 0.37 of a finest cell; the sphere's vertices sit outside it (its convex side),
+ * the torus's outer vertices outside its tube and its saddle-shaped inner ones on it; the
+ * meshes have fewer triangles than without the option; a surface with a min/max is left
+ * exactly as it was. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <string.h>
+#include "poly_fixture.h"
+
+static const ism_param sphere_r[] = {{"r", 1}};
+static const pf_surface sphere = {"x^2 + y^2 + z^2 - r^2", sphere_r, 1, NULL, 0};
+static const ism_param torus_rr[] = {{"R", 1}, {"r", 0.3}};
+static const pf_surface torus = {"(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)",
+                                 torus_rr, 2, NULL, 0};
+/* Two unit balls' union (a min: a crease where they meet). */
+static const pf_surface balls = {"min(x^2 + y^2 + z^2 - 1, (x - 1)^2 + y^2 + z^2 - 1)", NULL,
+                                 0, NULL, 0};
+
+/* Signed closed-form distances (> 0 outside). */
+static double sphere_signed(const double p[3])
+{
+    return sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 1;
+}
+
+static double torus_signed(const double p[3])
+{
+    double ring = sqrt(p[0] * p[0] + p[1] * p[1]) - 1;
+    return sqrt(ring * ring + p[2] * p[2]) - 0.3;
+}
+
+#define SAFETY_DEPTH 10
+#define FINEST (3.0 / (1 << SAFETY_DEPTH))
+static const double shifts[] = {0, 1e-3 * FINEST, 0.37 * FINEST};
+
+static void run(const ism_tape *t, double shift, double e, bool straddle, ism_mesh *m)
+{
+    ism_poly_options o;
+    ism_poly_options_default(&o);
+    for (int k = 0; k < 3; k++) {
+        o.box[k] = -1.5 + shift;
+        o.box[3 + k] = 1.5 + shift;
+    }
+    o.max_depth = SAFETY_DEPTH;
+    o.max_error = e;
+    o.straddle = straddle;
+    ism_poly_stats st;
+    ism_error err;
+    ism_mesh_init(m);
+    cr_assert_eq(ism_polygonise(t, &o, m, &st, &err), ISM_POLY_OK, "%s", err.message);
+    cr_assert_eq(st.error_missed_nodes, 0);
+}
+
+/* The largest distance at vertices, centroids and edge midpoints. */
+static double worst_distance(const ism_mesh *m, double (*dist)(const double *))
+{
+    double worst = 0;
+    for (size_t v = 0; v < m->nverts; v++)
+        worst = fmax(worst, fabs(dist(m->pos + 3 * v)));
+    for (size_t t = 0; t < m->ntris; t++) {
+        const double *v[3];
+        for (int k = 0; k < 3; k++)
+            v[k] = m->pos + 3 * (size_t)m->tri[3 * t + k];
+        double c[3], mid[3];
+        for (int k = 0; k < 3; k++) {
+            for (int a = 0; a < 3; a++) {
+                c[a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
+                mid[a] = (v[k][a] + v[(k + 1) % 3][a]) / 2;
+            }
+            worst = fmax(worst, fmax(fabs(dist(c)), fabs(dist(mid))));
+        }
+    }
+    return worst;
+}
+
+/* Every box: within E, and at most `ratio` of the triangles without the option. */
+static void check(const pf_surface *s, double (*dist)(const double *), double e, double ratio,
+                  void (*vertices)(const ism_mesh *, double))
+{
+    ism_tape *t = pf_compile(s);
+    for (size_t i = (size_t)pf_first_box(); i < sizeof shifts / sizeof shifts[0]; i++) {
+        ism_mesh plain, moved;
+        run(t, shifts[i], e, false, &plain);
+        run(t, shifts[i], e, true, &moved);
+        double worst = worst_distance(&moved, dist);
+        cr_expect_leq(worst, e, "%s E %g shift %g: a point %g from the surface", s->expr, e,
+                      shifts[i], worst);
+        cr_expect_lt((double)moved.ntris, ratio * (double)plain.ntris,
+                     "%s E %g shift %g: %zu triangles, %zu without straddling", s->expr, e,
+                     shifts[i], moved.ntris, plain.ntris);
+        vertices(&moved, e);
+        ism_mesh_free(&plain);
+        ism_mesh_free(&moved);
+    }
+    ism_tape_free(t);
+}
+
+/* The sphere curves one way everywhere: every vertex moved out by 0.9 E (box faces aside:
+ * the sphere does not reach them). */
+static void sphere_vertices(const ism_mesh *m, double e)
+{
+    for (size_t v = 0; v < m->nverts; v++) {
+        double d = sphere_signed(m->pos + 3 * v);
+        cr_assert(d > 0.85 * e && d < 0.95 * e, "vertex %zu at %g (E %g)", v, d, e);
+    }
+}
+
+/* Outside the ring's circle (x² + y² > 1, both curvatures one sign) vertices move out of the
+ * tube; on the inner side (a saddle) they stay on it. Beside the circles x² + y² = 1 where
+ * the curvature changes sign either may hold. */
+static void torus_vertices(const ism_mesh *m, double e)
+{
+    size_t out = 0, on = 0;
+    for (size_t v = 0; v < m->nverts; v++) {
+        const double *p = m->pos + 3 * v;
+        double ring = sqrt(p[0] * p[0] + p[1] * p[1]) - 1, d = torus_signed(p);
+        if (ring > 0.05) {
+            cr_assert(d > 0.85 * e && d < 0.95 * e, "outer vertex %zu at %g (E %g)", v, d, e);
+            out++;
+        } else if (ring < -0.05) {
+            cr_assert(fabs(d) < 1e-3 * e, "inner vertex %zu at %g (E %g)", v, d, e);
+            on++;
+        }
+    }
+    cr_assert(out > 100 && on > 100, "%zu outer, %zu inner vertices", out, on);
+}
+
+/* At these bounds the octree's levels fall so that straddling saves about a third
+ * (measured: sphere 1e-3 17,192 -> 12,008, torus 3e-3 13,792 -> 8,816 on the lattice). */
+Test(straddle, sphere_within_the_bound_with_fewer_triangles)
+{
+    check(&sphere, sphere_signed, 1e-3, 0.85, sphere_vertices);
+}
+
+Test(straddle, torus_within_the_bound_with_fewer_triangles)
+{
+    check(&torus, torus_signed, 3e-3, 0.85, torus_vertices);
+}
+
+/* A min/max's crease is not straddled: the same mesh bit for bit. */
+Test(straddle, min_max_surface_unchanged)
+{
+    ism_tape *t = pf_compile(&balls);
+    ism_mesh plain, moved;
+    run(t, 0.37 * FINEST, 1e-2, false, &plain);
+    run(t, 0.37 * FINEST, 1e-2, true, &moved);
+    cr_assert_eq(plain.nverts, moved.nverts);
+    cr_assert_eq(plain.ntris, moved.ntris);
+    cr_assert(memcmp(plain.pos, moved.pos, 3 * plain.nverts * sizeof *plain.pos) == 0);
+    cr_assert(memcmp(plain.tri, moved.tri, 3 * plain.ntris * sizeof *plain.tri) == 0);
+    ism_mesh_free(&plain);
+    ism_mesh_free(&moved);
+    ism_tape_free(t);
+}
