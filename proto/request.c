@@ -467,6 +467,21 @@ static bool decode_simplify(const json_t *v, ism_request *req, ism_req_error *er
     return true;
 }
 
+/* "straddle": true or false (after "max_error"; default false). The polygoniser then moves
+ * vertices where the surface bends one way toward its convex side by 0.9 E and sizes the
+ * cells for it (core/octree/straddle.h): fewer triangles within the same bound. Only a
+ * bound says how far a vertex may move, so true without one is refused. */
+static bool decode_straddle(const json_t *v, ism_request *req, ism_req_error *err)
+{
+    if (!json_is_boolean(v))
+        return bad(err, "$.straddle", "expected true or false, got %s", type_name(v));
+    if (json_is_true(v) && !(req->poly.max_error > 0))
+        return bad(err, "$.straddle", "the vertices move by a share of \"max_error\": give "
+                                      "max_error too");
+    req->poly.straddle = json_is_true(v);
+    return true;
+}
+
 /* "quality": "raw" or "good" (ism_quality_lookup). */
 static bool decode_quality(const json_t *v, ism_request *req, ism_req_error *err)
 {
@@ -613,7 +628,7 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
 {
     static const char *const known[] = {"expr", "preset", "params", "let", "box", "depth",
                                         "max_error", "quality", "tolerances", "output", "curves",
-                                        "preview", "simplify", NULL};
+                                        "preview", "simplify", "straddle", NULL};
     if (!json_is_object(root))
         return bad(err, "$", "a request is a JSON object, got %s", type_name(root));
     if (!check_fields(root, "$", known, err))
@@ -669,6 +684,8 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
         return false;
     req->simplify = req->poly.max_error > 0;
     if ((v = json_object_get(root, "simplify")) && !decode_simplify(v, req, err))
+        return false;
+    if ((v = json_object_get(root, "straddle")) && !decode_straddle(v, req, err))
         return false;
     if ((v = json_object_get(root, "quality")) && !decode_quality(v, req, err))
         return false;

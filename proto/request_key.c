@@ -51,6 +51,10 @@ static void write_max_error(ism_jw *w, const ism_request *req)
     ism_jw_number(w, req->poly.max_error);
     ism_jw_key(w, "simplify"); /* its meshes differ from the polygoniser's under the bound */
     ism_jw_bool(w, req->simplify);
+    if (req->poly.straddle) { /* only when asked for: other keys stay as they were */
+        ism_jw_key(w, "straddle");
+        ism_jw_bool(w, true);
+    }
 }
 
 /* The quality pass, only when asked for (keys of requests without it stay as they were). */

@@ -53,6 +53,9 @@ static const char usage_text[] =
     "                           at every new centroid and edge midpoint; features, topology\n"
     "                           and orientation kept): the fewest triangles for the error\n"
     "      --no-simplify        under --max-error, keep the polygoniser's triangles\n"
+    "      --straddle           under --max-error, move vertices where the surface bends\n"
+    "                           one way 0.9 E toward its convex side and size the cells for\n"
+    "                           it: fewer triangles within E (no min/max, no singular locus)\n"
     "      --max-triangles N    budget; stop with an error beyond it (default 4000000)\n"
     "      --quality Q          raw (default): the polygoniser's triangles; good: then\n"
     "                           flip edges toward Delaunay and relax vertices along the\n"
@@ -69,7 +72,7 @@ static const char usage_text[] =
 
 enum long_only {
     OPT_LET = 256, OPT_SURFACE, OPT_SURFACES, OPT_LIST, OPT_THREADS, OPT_MAX_TRIS,
-    OPT_MAX_ERROR, OPT_NO_SIMPLIFY, OPT_STATS, OPT_WORKER, OPT_FEATURES, OPT_QUALITY,
+    OPT_MAX_ERROR, OPT_NO_SIMPLIFY, OPT_STRADDLE, OPT_STATS, OPT_WORKER, OPT_FEATURES, OPT_QUALITY,
     OPT_TOLERANCE, /* OPT_TOLERANCE + i: the table's tolerance i */
 };
 
@@ -87,6 +90,7 @@ static const struct option base_options[] = {
     {"max-error", required_argument, 0, OPT_MAX_ERROR},
     {"quality", required_argument, 0, OPT_QUALITY},
     {"no-simplify", no_argument, 0, OPT_NO_SIMPLIFY},
+    {"straddle", no_argument, 0, OPT_STRADDLE},
     {"output", required_argument, 0, 'o'},
     {"stats", no_argument, 0, OPT_STATS},
     {"features", required_argument, 0, OPT_FEATURES},
@@ -158,6 +162,7 @@ static bool apply_option(ism_cli_run *run, int opt, const char *arg)
         return true;
     }
     case OPT_NO_SIMPLIFY: run->no_simplify = true; return true;
+    case OPT_STRADDLE: o->straddle = true; return true;
     case OPT_QUALITY:
         if ((run->quality = ism_quality_lookup(arg)) >= 0)
             return true;

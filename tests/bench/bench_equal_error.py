@@ -21,6 +21,7 @@ and <= 0.2 x VTK's at every target; <= 1.5 µs CPU per triangle on the gyroid.
 Asserts nothing; exits 0 unless it cannot run.
 
   bench_equal_error.py --build build/release [--quick] [--only NAME] [--libfive DIR]
+                       [--tools isomesh,libfive,vtk,skimage] [--straddle]
 """
 import argparse
 import json
@@ -87,6 +88,7 @@ class Tool:
 
 class Isomesh(Tool):
     name = "isomesh"
+    words = ()  # bench_error's extra words ("straddle": the polygoniser's straddle option)
 
     def start(self, s, e):
         return 1 / e
@@ -95,7 +97,7 @@ class Isomesh(Tool):
         return f"E={1 / x:.3g}"
 
     def run(self, s, x):
-        r = run([self.bench, "mesh", s["name"], repr(1 / x), str(ISO_DEPTH)])
+        r = run([self.bench, "mesh", s["name"], repr(1 / x), str(ISO_DEPTH), *self.words])
         return r and dict(cpu_s=max(r["cpu_s"], CPU_RESOLUTION_S), triangles=r["triangles"],
                           max_c=r["max_c"])
 
@@ -317,6 +319,8 @@ def main():
     ap.add_argument("--only", default="", help="surfaces whose name contains this")
     ap.add_argument("--libfive", default=LIBFIVE_DIR)
     ap.add_argument("--tools", default="isomesh,libfive,vtk,skimage")
+    ap.add_argument("--straddle", action="store_true",
+                    help="isomesh with the straddle option (core/octree/straddle.h)")
     args = ap.parse_args()
     build = os.path.abspath(args.build)
     bench = os.path.join(build, "bench", "bench_error")
@@ -329,6 +333,8 @@ def main():
     try:
         wanted = args.tools.split(",")
         tools = [Isomesh(bench, tmp)] if "isomesh" in wanted else []
+        if args.straddle and tools:
+            tools[0].words = ("straddle",)
         five = None
         if "libfive" in wanted:
             five, why = build_libfive_mesher(build, args.libfive)
