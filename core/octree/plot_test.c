@@ -23,6 +23,12 @@
  * triangles, max centroid distance 0.0303 both, χ −18 both. */
 #define CREASE_CELL_ERRORS 4.0
 
+/* The screen of graph_node_passes: a polygon's triangles err less than the sag at its
+ * centroid (a quad's diagonal midpoint is its centroid; a fan's triangles lie between the
+ * centre on f = 0 and the sides), so a node whose roots' centroid lies several bounds off
+ * the surface cannot meet E; 4 leaves room for the secant roots' own error. */
+#define CENTROID_SAG_ERRORS 4.0
+
 static bool normals_agree(const double (*n)[3], double normal_cos)
 {
     for (int i = 0; i < 8; i++)
@@ -79,6 +85,30 @@ static int crease_cell(ism_sampler *s, const ism_flatness *fl, const ism_corners
     return 1; /* polygons the estimate cannot follow: the measurement after decides */
 }
 
+/* A node whose corner gradients disagree, under an error bound, crossed at nroots > 0 edges:
+ * its secant roots' centroid (sum of the roots) within CENTROID_SAG_ERRORS (E + shift) of the surface — a cheap
+ * screen before the exact roots (most such nodes are far too coarse) — f proven one graph
+ * over the box, and no root on a same-sign edge whose gradients disagree (a graph may dip
+ * through an edge twice; the polygon would miss it). The measurement decides after. */
+static bool graph_node_passes(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
+                              const double lo[3], const double hi[3], const ism_corners *k,
+                              const double sum[3], int nroots, const int *disagree,
+                              int ndisagree)
+{
+    double c[3] = {sum[0] / nroots, sum[1] / nroots, sum[2] / nroots};
+    if (!(ism_sample_dist(s, c) <= CENTROID_SAG_ERRORS * (fl->max_error + fl->straddle_shift)))
+        return false;
+    if (!ism_graph_certified(s->tape, jet, lo, hi, &s->n_interval))
+        return false;
+    for (int i = 0; i < ndisagree; i++) {
+        int c0, c1, faces[2];
+        ism_cube_edge(disagree[i], &c0, &c1, faces);
+        if (!no_roots(s, fl, k, c0, c1))
+            return false;
+    }
+    return true;
+}
+
 bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
                    const double lo[3], const double hi[3], const ism_corners *k)
 {
@@ -100,10 +130,10 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
         return crease;
     bool measured_only = fl->max_error > 0 && size <= CREASE_CELL_ERRORS * fl->max_error;
     /* under an error bound a node whose corners disagree may still be one graph (graph
-     * cert.h): then its roots, faces and measured error decide as below */
+     * cert.h): then its roots, faces and measured error decide (graph_node_passes) */
     bool graph = false;
     if (!measured_only && !normals_agree(n, fl->normal_cos)) {
-        if (!(fl->max_error > 0 && ism_graph_certified(s->tape, jet, lo, hi, &s->n_interval)))
+        if (!(fl->max_error > 0))
             return false;
         graph = true;
     }
@@ -139,13 +169,12 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
     for (int k = 0; k < 6 && !measured_only; k++)
         if (face_cross[k] > 2)
             return false; /* a saddle on a face: two curves, look closer */
-    for (int i = 0; graph && i < ndisagree; i++) {
-        /* a graph may still dip through an edge twice: the polygon would miss it */
-        int c0, c1, faces[2];
-        ism_cube_edge(disagree[i], &c0, &c1, faces);
-        if (!no_roots(s, fl, k, c0, c1))
-            return false;
-    }
+    if (graph && nroots == 0)
+        return false; /* nothing crossed: split as without a bound (an empty leaf there
+                       * would only add tile lines beside its finer neighbours) */
+    if (graph && !graph_node_passes(s, jet, fl, lo, hi, k, centroid, nroots, disagree,
+                                    ndisagree))
+        return false;
     if (nroots == 0) {
         /* no edge crossed: two roots on an edge are the only sign of the surface here
          * (a tube or a wedge tip between the corners), so it is looked for */
