@@ -35,6 +35,7 @@ import unittest
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from boxes import placements  # noqa: E402
 from test_curve_outputs import ball, ball_grad, gyroid, gyroid_grad  # noqa: E402
+from test_surfaces_file import read_obj  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
@@ -42,6 +43,14 @@ ISOMESH = os.path.join(BUILD, "isomesh")
 
 DEPTH = 7
 SIDE = 2.6
+# Three overlapping balls of radius sqrt 0.5 (min of the three) and their triple points
+# (x0, 0, +-z0), equidistant from the centres: x0 on the x axis with (0.6 - x0)^2 =
+# (x0 + 0.3)^2 + 0.52^2, then z0^2 = 0.5 - (0.6 - x0)^2.
+BALLS3 = [(0.6, 0, 0), (-0.3, 0.52, 0), (-0.3, -0.52, 0)]
+BALLS3_EXPR = "min(" + ", ".join(f"(x - {cx})^2 + (y - {cy})^2 + z^2 - 0.5"
+                                 for cx, cy, _ in BALLS3) + ")"
+BALLS3_X0 = (0.36 - 0.09 - 0.52 ** 2) / 1.8
+BALLS3_Z0 = math.sqrt(0.5 - (0.6 - BALLS3_X0) ** 2)
 SHIFT = 0.37 * SIDE / 2 ** DEPTH
 
 
@@ -203,13 +212,7 @@ class CurvesTest(unittest.TestCase):
                                             tol)
 
     def test_three_balls_crease_arcs_and_triple_points(self):
-        centres = [(0.6, 0, 0), (-0.3, 0.52, 0), (-0.3, -0.52, 0)]
-        expr = "min(" + ", ".join(f"(x - {cx})^2 + (y - {cy})^2 + z^2 - 0.5"
-                                  for cx, cy, _ in centres) + ")"
-        # Equidistant from the centres: x0 on the x axis with (0.6 - x0)^2 = (x0 + 0.3)^2 +
-        # 0.52^2, then z^2 = 0.5 - (0.6 - x0)^2.
-        x0 = (0.36 - 0.09 - 0.52 ** 2) / 1.8
-        z0 = math.sqrt(0.5 - (0.6 - x0) ** 2)
+        centres, expr, x0, z0 = BALLS3, BALLS3_EXPR, BALLS3_X0, BALLS3_Z0
         depth, side = 6, 3.0
         cell = side / 2 ** depth
         tol = 1e-9 * math.sqrt(3) * side
@@ -249,11 +252,7 @@ class CurvesTest(unittest.TestCase):
         the crossings of degree 4 and the triple points of degree 3. No mesh edge joins two
         points on different balls' sides unless one lies on the crease (the closed-form
         nearest sphere), and every section point lies on its plane and on a sphere."""
-        centres = [(0.6, 0, 0), (-0.3, 0.52, 0), (-0.3, -0.52, 0)]
-        expr = "min(" + ", ".join(f"(x - {cx})^2 + (y - {cy})^2 + z^2 - 0.5"
-                                  for cx, cy, _ in centres) + ")"
-        x0 = (0.36 - 0.09 - 0.52 ** 2) / 1.8
-        z0 = math.sqrt(0.5 - (0.6 - x0) ** 2)
+        centres, expr, z0 = BALLS3, BALLS3_EXPR, BALLS3_Z0
         depth, side = 6, 3.0
         cell = side / 2 ** depth
         tol = 1e-9 * math.sqrt(3) * side
@@ -283,16 +282,10 @@ class CurvesTest(unittest.TestCase):
                 self.assertEqual((len(a["vertices"]), len(a["edges"]), len(a["faces"])),
                                  (14, 27, 15))
                 self.assertEqual(sorted(v["degree"] for v in a["vertices"]), [3] * 2 + [4] * 12)
-                verts, tris, lines = [], [], []
+                verts, tris = read_obj(obj)
                 with open(obj) as fh:
-                    for line in fh:
-                        w = line.split()
-                        if w and w[0] == "v":
-                            verts.append(tuple(map(float, w[1:4])))
-                        elif w and w[0] == "f":
-                            tris.append([int(x.split("/")[0]) - 1 for x in w[1:4]])
-                        elif w and w[0] == "l":
-                            lines.append([int(x) - 1 for x in w[1:]])
+                    lines = [[int(x) - 1 for x in w.split()[1:]] for w in fh
+                             if w.startswith("l ")]
                 side_of, on = [], []
                 for p in verts:  # the ball f takes there, and whether p is on the crease
                     g = values(p)
