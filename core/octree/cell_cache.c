@@ -1,18 +1,20 @@
 /* cell_cache.c — allocation of the per-thread lattice point and segment memos, and their
  * passing from one max_error round to the next. */
 #include "core/octree/cell_cache.h"
+#include "core/util/zeroed.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-bool ism_cell_cache_init(ism_cell_cache *c)
+bool ism_cell_cache_init(ism_cell_cache *c, ism_pool *pool, ism_par_cost *cost)
 {
-    size_t bytes = ((size_t)1 << ISM_POINT_CACHE_BITS) * sizeof *c->points;
-    c->points = aligned_alloc(_Alignof(ism_lattice_entry), bytes);
-    if (c->points)
-        memset(c->points, 0, bytes);
-    c->segments = calloc((size_t)1 << ISM_SEGMENT_CACHE_BITS, sizeof *c->segments);
-    c->quiet = calloc((size_t)1 << ISM_QUIET_CACHE_BITS, sizeof *c->quiet);
+    /* zeroed by writing (zeroed.h): every lookup reads its slot before it fills it; a cache
+     * line start is the lattice entries' alignment */
+    c->points = ism_zeroed_alloc(pool, (size_t)1 << ISM_POINT_CACHE_BITS, sizeof *c->points,
+                                 cost);
+    c->segments = ism_zeroed_alloc(pool, (size_t)1 << ISM_SEGMENT_CACHE_BITS,
+                                   sizeof *c->segments, cost);
+    c->quiet = ism_zeroed_alloc(pool, (size_t)1 << ISM_QUIET_CACHE_BITS, sizeof *c->quiet, cost);
     c->round = 1;
     return c->points && c->segments && c->quiet;
 }

@@ -13,6 +13,7 @@
 #include "core/octree/edge_roots.h"
 #include "core/octree/grid.h"
 #include "core/octree/sampler.h"
+#include "core/util/parallel.h"
 
 #define ISM_POINT_CACHE_BITS 15
 #define ISM_SEGMENT_CACHE_BITS 14
@@ -53,7 +54,9 @@ typedef struct ism_cell_cache {
     uint32_t round;  /* the current max_error round (from 1) */
 } ism_cell_cache;
 
-bool ism_cell_cache_init(ism_cell_cache *c);
+/* A thread's empty memo, zeroed on pool's threads (what that cost added to *cost when not
+ * NULL). False when out of memory (free what was made with ism_cell_cache_free). */
+bool ism_cell_cache_init(ism_cell_cache *c, ism_pool *pool, ism_par_cost *cost);
 void ism_cell_cache_free(ism_cell_cache *c);
 
 /* The memo kept for another max_error round of the same f and lattice: f, ∇f and segment

@@ -310,15 +310,17 @@ typedef struct carry {
     int ncaches;
 } carry;
 
-/* Thread t's memo for this round: the last round's, or a new one. */
-static bool round_cache(carry *c, int threads, int t, ism_cell_cache *out)
+/* Thread t's memo for this round: the last round's, or a new one (zeroed on pool). */
+static bool round_cache(carry *c, ism_pool *pool, ism_par_cost *cost, int t,
+                        ism_cell_cache *out)
 {
+    int threads = ism_pool_threads(pool);
     if (!c->caches) {
         if (!(c->caches = calloc((size_t)threads, sizeof *c->caches)))
             return false;
         c->ncaches = threads;
         for (int k = 0; k < threads; k++)
-            if (!ism_cell_cache_init(&c->caches[k]))
+            if (!ism_cell_cache_init(&c->caches[k], pool, cost))
                 return false;
     } else if (t == 0) {
         for (int k = 0; k < c->ncaches; k++)
@@ -428,7 +430,8 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         /* corner fans only where no singular locus is known: beside a double curve they
          * changed what the conformance pass rebuilt (Steiner at E = 0.01: χ 5 -> −1) */
         cx->max_error = o->nquiet ? 0 : o->max_error;
-        if (!(cx->s.ws = ism_eval_ws_new(f)) || !round_cache(c, threads, t, &cx->cache))
+        if (!(cx->s.ws = ism_eval_ws_new(f)) ||
+            !round_cache(c, pool, &outer->par, t, &cx->cache))
             goto done;
     }
     ism_pool_for(pool, p.nchunks, run_chunk, &p, &outer->par);
