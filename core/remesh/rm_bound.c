@@ -6,11 +6,11 @@
 
 #include <math.h>
 
-/* The Newton step at x into e: s1 = f/|∇f| and y, where the step lands (state S1), or
+/* The Newton step at x into e: s1 = f/|∇f|, ∇f and y, where the step lands (state S1), or
  * FAIL1 where ∇f vanishes or f is not finite. */
 static void first_step(rm_pass *p, const double x[3], rm_memo_entry *e)
 {
-    double g[3], fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
+    double *g = e->g, fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
     double g2 = ism_dot3(g, g), gn = sqrt(g2);
     if (!isfinite(fv) || !(gn > p->gthresh)) {
         e->state = RM_MEMO_FAIL1;
@@ -23,7 +23,9 @@ static void first_step(rm_pass *p, const double x[3], rm_memo_entry *e)
     e->state = RM_MEMO_S1;
 }
 
-/* f/|∇f| where the step lands into e->s2 (state S2), or FAIL2. */
+/* f/|∇f| where the step lands into e->s2 (state S2), or FAIL2. (f alone over |∇f| at x
+ * would cost half as much, but |∇f| changes along the step as much as the term itself is
+ * worth: the torus at E 3e-3 then ends 7e-6 E beyond the bound.) */
 static void second_step(rm_pass *p, rm_memo_entry *e)
 {
     double h[3], fy = ism_eval_gradient(p->f, p->ws, e->y[0], e->y[1], e->y[2], h);
@@ -34,6 +36,19 @@ static void second_step(rm_pass *p, rm_memo_entry *e)
     }
     e->s2 = fy / hn;
     e->state = RM_MEMO_S2;
+}
+
+bool rm_bound_gradient(rm_pass *p, const double x[3], double g[3])
+{
+    rm_memo_entry own = {.state = RM_MEMO_EMPTY};
+    rm_memo_entry *e = p->memo ? rm_memo_slot(p->memo, x) : &own;
+    if (e->state == RM_MEMO_EMPTY)
+        first_step(p, x, e);
+    if (e->state == RM_MEMO_FAIL1)
+        return false;
+    for (int k = 0; k < 3; k++)
+        g[k] = e->g[k];
+    return true;
 }
 
 /* f/|∇f| at x into *s1 and, unless |*s1| > limit, where the Newton step from x lands into *s2
@@ -77,11 +92,23 @@ bool rm_bound_edge(rm_pass *p, const double *a, const double *b)
     return rm_bound_distance(p, m, p->max_error) <= p->max_error;
 }
 
+/* a + b + c with the two smallest added first: symmetric in its arguments. */
+static double sum3(double a, double b, double c)
+{
+    double lo = a < b ? a : b, hi = a < b ? b : a;
+    return c < hi ? (lo < c ? lo + c : c + lo) + hi : (lo + hi) + c;
+}
+
+void rm_centroid(const double *a, const double *b, const double *c, double m[3])
+{
+    for (int k = 0; k < 3; k++)
+        m[k] = sum3(a[k], b[k], c[k]) / 3;
+}
+
 bool rm_bound_triangle(rm_pass *p, const double *a, const double *b, const double *c)
 {
     double m[3];
-    for (int k = 0; k < 3; k++)
-        m[k] = (a[k] + b[k] + c[k]) / 3;
+    rm_centroid(a, b, c, m);
     return rm_bound_distance(p, m, p->max_error) <= p->max_error;
 }
 
@@ -99,10 +126,9 @@ static double fan_worst(rm_pass *p, uint32_t v, const double *x, double limit, d
             q[k] = t[k] == v ? x : P + 3 * (size_t)t[k];
         int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
         double g[3], m[3];
-        for (int j = 0; j < 3; j++) {
-            g[j] = (q[0][j] + q[1][j] + q[2][j]) / 3;
+        rm_centroid(q[0], q[1], q[2], g);
+        for (int j = 0; j < 3; j++)
             m[j] = 0.5 * (x[j] + q[(k + 1) % 3][j]);
-        }
         /* each edge at v is the next edge of exactly one triangle of a closed fan */
         worst = fmax(worst, rm_bound_distance(p, g, limit));
         if (worst <= stop)

@@ -19,6 +19,15 @@ double rm_bound_distance(rm_pass *p, const double x[3], double limit);
  * changes it by about δ. A model's input: bounds are checked with rm_bound_distance. */
 double rm_bound_signed(rm_pass *p, const double x[3]);
 
+/* ∇f at x into g, through the pass's memo: the measures at x that follow cost nothing more.
+ * False where ∇f vanishes or f is not finite (as rm_bound_distance's INFINITY). */
+bool rm_bound_gradient(rm_pass *p, const double x[3], double g[3]);
+
+/* The centroid of abc into m, summed in an order fixed by the values (each coordinate's two
+ * smallest first): the same bits whichever corner comes first, so the memo (rm_memo.h)
+ * knows a centroid however a caller lists its triangle's corners. */
+void rm_centroid(const double *a, const double *b, const double *c, double m[3]);
+
 /* True when the midpoint of ab lies within max_error of f = 0. */
 bool rm_bound_edge(rm_pass *p, const double *a, const double *b);
 /* True when the centroid of abc lies within max_error of f = 0. */

@@ -15,13 +15,13 @@
 enum rm_memo_state {
     RM_MEMO_EMPTY = 0,
     RM_MEMO_FAIL1, /* ∇f vanishes at x or f is not finite there */
-    RM_MEMO_S1,    /* s1 = f/|∇f| at x, and y, where the Newton step from x lands */
-    RM_MEMO_S2,    /* s1 and s2 = f/|∇f| at y */
-    RM_MEMO_FAIL2, /* s1; ∇f vanishes at y or f is not finite there */
+    RM_MEMO_S1,    /* s1 = f/|∇f| at x, ∇f there (g), and y, where the Newton step lands */
+    RM_MEMO_S2,    /* those and s2 = f/|∇f| at y */
+    RM_MEMO_FAIL2, /* those; ∇f vanishes at y or f is not finite there */
 };
 
 typedef struct rm_memo_entry {
-    double x[3], y[3];
+    double x[3], y[3], g[3];
     double s1, s2;
     uint32_t state;
 } rm_memo_entry;

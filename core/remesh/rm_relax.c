@@ -48,8 +48,7 @@ double rm_midpoint_distance(rm_pass *p, const double *a, const double *b)
 double rm_centroid_distance(rm_pass *p, const double *a, const double *b, const double *c)
 {
     double m[3];
-    for (int k = 0; k < 3; k++)
-        m[k] = (a[k] + b[k] + c[k]) / 3;
+    rm_centroid(a, b, c, m);
     return rm_distance(p, m);
 }
 
@@ -201,7 +200,7 @@ static bool keep_offset(rm_pass *p, const double *pos, double x[3], double g[3])
         return false;
     for (int k = 0; k < 3; k++)
         x[k] += d * g[k] / gn;
-    return isfinite(ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g));
+    return rm_bound_gradient(p, x, g); /* the fan's measure at x takes it from there */
 }
 
 bool rm_relax_vertex(rm_pass *p, uint32_t v)

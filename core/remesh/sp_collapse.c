@@ -161,27 +161,39 @@ static bool distances_ok(rm_pass *p, const rm_merge *g, const uint32_t *fan, uin
  * (worth a trial with the ring settled, sp_trial.h). */
 enum verdict { REFUSED, WITHIN, NEAR };
 
-/* All tests of merging g->v into g->w placed at x; with gx, the merged vertex may move off x
- * to its balancing offset (sp_place.h), and gx gets ∇f where it lands. */
-static enum verdict merge_verdict(rm_pass *p, const rm_merge *g, double *x, double *gx)
+/* The triangles a merge changes and the smallest sine they may end with. */
+typedef struct merged {
+    uint32_t fan[2 * ISM_RM_MERGE_MAX_DEGREE], n;
+    double floor_sine;
+} merged;
+
+/* The merge's link condition, and orientation and shape of every triangle of the merged
+ * fan with g->w at x (w_moves: w's own triangles change too); *mg gets the fan. */
+static bool shapes_ok(const rm_pass *p, const rm_merge *g, const double *x, bool w_moves,
+                      merged *mg)
 {
     if (!rm_merge_link_ok(&p->r, g))
-        return REFUSED;
-    bool w_moves = gx || memcmp(x, P(p, g->w), 3 * sizeof *x) != 0;
-    uint32_t fan[2 * ISM_RM_MERGE_MAX_DEGREE], n = merged_fan(p, g, w_moves, fan);
-    double floor_sine = fmin(fans_min_sine(p, g), sin(ISM_SP_MIN_DEG * M_PI / 180));
-    for (uint32_t i = 0; i < n; i++)
-        if (!shape_ok(p, g, fan[i], x, floor_sine))
-            return REFUSED;
-    if (!gx)
-        return distances_ok(p, g, fan, n, x) ? WITHIN : REFUSED;
+        return false;
+    mg->n = merged_fan(p, g, w_moves, mg->fan);
+    mg->floor_sine = fmin(fans_min_sine(p, g), sin(ISM_SP_MIN_DEG * M_PI / 180));
+    for (uint32_t i = 0; i < mg->n; i++)
+        if (!shape_ok(p, g, mg->fan[i], x, mg->floor_sine))
+            return false;
+    return true;
+}
+
+/* The distance tests of merging g->v into g->w at x, which moves to its balancing offset
+ * (sp_place.h; gx gets ∇f where it lands), after shapes_ok passed near x. */
+static enum verdict placed_verdict(rm_pass *p, const rm_merge *g, const merged *mg, double *x,
+                                   double *gx)
+{
     sp_stencil s[SP_MAX_STENCILS];
-    int ns = sp_stencils(p, fan, n, g->v, g->w, s);
+    int ns = sp_stencils(p, mg->fan, mg->n, g->v, g->w, s);
     double before, after, near = ISM_SP_TRIAL_REACH * p->max_error;
     if (!ns || !sp_place(p, s, ns, near, x, gx, &before))
         return REFUSED;
-    for (uint32_t i = 0; i < n; i++) /* the offset moved x a little: shape again, unmeasured */
-        if (!shape_ok(p, g, fan[i], x, floor_sine))
+    for (uint32_t i = 0; i < mg->n; i++) /* where x ends: shape again, unmeasured */
+        if (!shape_ok(p, g, mg->fan[i], x, mg->floor_sine))
             return REFUSED;
     if (!((after = sp_measure(p, s, ns, x, near)) <= near))
         return REFUSED;
@@ -233,21 +245,29 @@ static bool into(rm_pass *p, uint32_t v, uint32_t w, bool *ok)
     if (!rm_merge_find(&p->r, v, w, ISM_SP_MAX_DEGREE, &g))
         return false;
     double x[3] = {P(p, w)[0], P(p, w)[1], P(p, w)[2]};
-    return merge(p, &g, merge_verdict(p, &g, x, NULL), x, NULL, ok);
+    merged mg;
+    enum verdict vd = shapes_ok(p, &g, x, false, &mg) && distances_ok(p, &g, mg.fan, mg.n, x)
+                          ? WITHIN
+                          : REFUSED;
+    return merge(p, &g, vd, x, NULL, ok);
 }
 
-/* Both ends free: merged at the midpoint put on f = 0, then placed from there. */
+/* Both ends free: merged at the midpoint put on f = 0, then placed from there. The shapes
+ * are tested at the midpoint, before Newton evaluates anything (gyroid-ball: 3 merges in 4
+ * fail them), and again where the merged vertex ends. */
 static bool at_middle(rm_pass *p, uint32_t a, uint32_t b, bool *ok)
 {
     rm_merge g;
+    merged mg;
     const double *A = P(p, a), *B = P(p, b);
     double len = rm_dist(A, B), x[3], mid[3], gx[3];
     for (int k = 0; k < 3; k++)
         x[k] = mid[k] = 0.5 * (A[k] + B[k]);
     if (!rm_merge_find(&p->r, a, b, ISM_SP_MAX_DEGREE, &g) || p->r.locked[b] ||
-        !rm_project(p, x, len, -1, gx) || !(rm_dist(x, mid) <= ISM_SP_PROJECT_MAX_REL * len))
+        !shapes_ok(p, &g, mid, true, &mg) || !rm_project(p, x, len, -1, gx) ||
+        !(rm_dist(x, mid) <= ISM_SP_PROJECT_MAX_REL * len))
         return false;
-    return merge(p, &g, merge_verdict(p, &g, x, gx), x, gx, ok);
+    return merge(p, &g, placed_verdict(p, &g, &mg, x, gx), x, gx, ok);
 }
 
 static bool collapse_edge(rm_pass *p, uint32_t a, uint32_t b, bool *ok)

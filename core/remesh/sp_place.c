@@ -59,8 +59,10 @@ int sp_stencils(const rm_pass *p, const uint32_t *fan, uint32_t n, uint32_t v, u
 /* The stencil's point with the moving vertex at x, and its weight in the vertex's offset. */
 static double point(const sp_stencil *s, const double *x, double y[3])
 {
-    for (int k = 0; k < 3; k++)
-        y[k] = !s->a ? x[k] : !s->b ? 0.5 * (x[k] + s->a[k]) : (x[k] + s->a[k] + s->b[k]) / 3;
+    if (s->a && s->b)
+        rm_centroid(x, s->a, s->b, y);
+    for (int k = 0; k < 3 && !(s->a && s->b); k++)
+        y[k] = !s->a ? x[k] : 0.5 * (x[k] + s->a[k]);
     return !s->a ? 1.0 : !s->b ? 0.5 : 1.0 / 3;
 }
 
@@ -119,13 +121,12 @@ bool sp_place(rm_pass *p, const sp_stencil *s, int n, double limit, double x[3],
     double delta = best_offset(&l, SP_PLACE_RANGE * p->max_error);
     if (!(model(&l, delta) <= SP_PLACE_SLACK * limit))
         return false; /* the model already says no: nothing to measure */
-    ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
-    double gn = sqrt(ism_dot3(g, g));
-    if (!(gn > p->gthresh) || !isfinite(gn))
+    if (!rm_bound_gradient(p, x, g)) /* measured with the vertex's stencil above */
         return false;
+    double gn = sqrt(ism_dot3(g, g));
     for (int k = 0; k < 3; k++)
         x[k] += delta * g[k] / gn;
-    return isfinite(ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g));
+    return rm_bound_gradient(p, x, g); /* the measure at x that follows takes it from there */
 }
 
 double sp_measure(rm_pass *p, const sp_stencil *s, int n, const double x[3], double stop)
