@@ -111,32 +111,13 @@ static bool fan_within(rm_pass *p, uint32_t v)
     return true;
 }
 
-/* Marks in off the ring's vertices beside a point of w's fan beyond max_error: the corners
- * of a centroid, the far end of an edge midpoint. */
-static void offenders(rm_pass *p, const sp_snapshot *s, uint32_t w, bool *off)
-{
-    const rm_mesh *r = &p->r;
-    const double *P = r->m->pos, *W = P + 3 * (size_t)w;
-    for (uint32_t i = 0; i < r->count[w]; i++) {
-        const uint32_t *t = r->m->tri + 3 * r->vt[r->start[w] + i];
-        int k = t[0] == w ? 0 : t[1] == w ? 1 : 2;
-        uint32_t a = t[(k + 1) % 3], b = t[(k + 2) % 3];
-        bool cen = !rm_bound_triangle(p, P + 3 * (size_t)t[0], P + 3 * (size_t)t[1],
-                                      P + 3 * (size_t)t[2]);
-        bool mid = !rm_bound_edge(p, W, P + 3 * (size_t)a);
-        for (int j = 0; j < s->nring; j++)
-            off[j] |= (s->ring[j] == a && (cen || mid)) || (s->ring[j] == b && cen);
-    }
-}
-
 bool sp_ring_settle(rm_pass *p, const sp_snapshot *s, uint32_t w)
 {
     const rm_mesh *r = &p->r;
-    bool moved[SP_TRIAL_MAX_RING] = {false}, off[SP_TRIAL_MAX_RING] = {false};
-    offenders(p, s, w, off);
+    bool moved[SP_TRIAL_MAX_RING] = {false};
     for (int i = 0; i < s->nring; i++) {
         uint32_t u = s->ring[i];
-        if (!off[i] || u == w || r->locked[u] || r->gone[u] || !r->count[u])
+        if (u == w || r->locked[u] || r->gone[u] || !r->count[u])
             continue;
         moved[i] = rm_relax_vertex(p, u);
         moved[i] |= sp_offset_vertex(p, u);

@@ -45,14 +45,10 @@ bool sp_snapshot_take(const rm_pass *p, const rm_merge *g, sp_snapshot *s);
  * trial leaves nothing for the next round to try again). */
 void sp_snapshot_restore(rm_pass *p, const sp_snapshot *s);
 
-/* After the merge: each free neighbour of w beside a point of w's fan beyond max_error (a
- * centroid's corner, an edge midpoint's far end), then w, relaxes toward its fan's centroid
- * and takes its balancing offset, under the pass's usual tests; true when then every
- * centroid, edge midpoint and vertex of the triangles around a moved vertex lies within
- * max_error. The other neighbours stay: they move no point beyond the bound, and settling
- * the whole ring cost 4 times the evaluations for 0.3-2% fewer triangles (callgrind and
- * bench_error at E 3e-3: sphere 1084 -> 1072 triangles, torus 1844 -> 1864, gyroid-ball
- * 17,002 -> 17,152). */
+/* After the merge: each free vertex of the ring (w's neighbours, then w) relaxes toward its
+ * fan's centroid and takes its balancing offset, under the pass's usual tests; true when
+ * then every centroid, edge midpoint and vertex of the triangles around a moved vertex lies
+ * within max_error. */
 bool sp_ring_settle(rm_pass *p, const sp_snapshot *s, uint32_t w);
 
 #endif
