@@ -6,11 +6,11 @@
 #include <string.h>
 
 /* Slots, as a power of two: 2^10 (96 KB with ∇f kept) stays in the L2 cache. Most repeats
- * come within a merge's verdict and trial, a few hundred points apart; a table sized to catch the sweep's
- * repeats too (4 slots a vertex) made every lookup a cache miss — min CPU of 3-4 alternating
- * runs, bench_error mesh S 3e-3 10, simplification ms at 2^10 / 2^12 / 2^14 / no table:
- * sphere 47.5 / 58.2 / 77.4 / 51.4, torus 222 / 221 / 287 / 211, gyroid-ball 1091 / 1361 / — /
- * 1312 (2^11: 1232). */
+ * come within a merge's verdict and trial, a few hundred points apart; a table sized to
+ * catch the sweep's repeats too (4 slots a vertex) made every lookup a cache miss — min CPU
+ * of 3-4 alternating runs, bench_error mesh S 3e-3 10, simplification ms at 2^10 / 2^12 /
+ * 2^14 / no table: sphere 47.5 / 58.2 / 77.4 / 51.4, torus 222 / 221 / 287 / 211,
+ * gyroid-ball 1091 / 1361 / — / 1312 (2^11: 1232). */
 #define RM_MEMO_BITS 10
 
 rm_memo *rm_memo_new(void)
