@@ -85,19 +85,23 @@ static int crease_cell(ism_sampler *s, const ism_flatness *fl, const ism_corners
     return 1; /* polygons the estimate cannot follow: the measurement after decides */
 }
 
-/* A node whose corner gradients disagree, under an error bound, crossed at nroots > 0 edges:
- * its secant roots' centroid (sum of the roots) within CENTROID_SAG_ERRORS (E + shift) of the surface — a cheap
- * screen before the exact roots (most such nodes are far too coarse) — f proven one graph
- * over the box, and no root on a same-sign edge whose gradients disagree (a graph may dip
- * through an edge twice; the polygon would miss it). The measurement decides after. */
+/* A node whose corner gradients disagree, under an error bound: when crossed (nroots > 0),
+ * its secant roots' centroid (their sum / nroots) within CENTROID_SAG_ERRORS (E + shift) of
+ * the surface — a cheap screen before the exact roots (most such nodes are far too coarse) —
+ * then f proven one graph over the box, and no root on a same-sign edge whose gradients
+ * disagree (a graph may dip through an edge twice; the polygon would miss it). The
+ * measurement decides after. */
 static bool graph_node_passes(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
                               const double lo[3], const double hi[3], const ism_corners *k,
                               const double sum[3], int nroots, const int *disagree,
                               int ndisagree)
 {
-    double c[3] = {sum[0] / nroots, sum[1] / nroots, sum[2] / nroots};
-    if (!(ism_sample_dist(s, c) <= CENTROID_SAG_ERRORS * (fl->max_error + fl->straddle_shift)))
-        return false;
+    if (nroots > 0) {
+        double c[3] = {sum[0] / nroots, sum[1] / nroots, sum[2] / nroots};
+        double room = CENTROID_SAG_ERRORS * (fl->max_error + fl->straddle_shift);
+        if (!(ism_sample_dist(s, c) <= room))
+            return false;
+    }
     if (!ism_graph_certified(s->tape, jet, lo, hi, &s->n_interval))
         return false;
     for (int i = 0; i < ndisagree; i++) {
@@ -169,9 +173,6 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
     for (int k = 0; k < 6 && !measured_only; k++)
         if (face_cross[k] > 2)
             return false; /* a saddle on a face: two curves, look closer */
-    if (graph && nroots == 0)
-        return false; /* nothing crossed: split as without a bound (an empty leaf there
-                       * would only add tile lines beside its finer neighbours) */
     if (graph && !graph_node_passes(s, jet, fl, lo, hi, k, centroid, nroots, disagree,
                                     ndisagree))
         return false;
