@@ -16,17 +16,6 @@
 #define CURVE_MIN_SPACING 0.5
 /* Curve segments are gathered in runs at most this many tube radii across. */
 #define CHUNK_RHO 2.0
-/* Where the sheets cross at a small angle the polygoniser pleats beside the curve (two unit
- * spheres crossing at 29°, depth 7: within 3–4 cells of the double circle, where the sheets
- * are under two cells apart), and the tube's rim (about 3 cells) runs through the pleats: a
- * rim loop steps backwards along the curve, and the zip's rings and triangles turn over
- * there (902 edges turned against ∇f in the preset's own box). The tube then grows by
- * FOLD_GROW while a rim loop round a lone closed curve steps backwards, up to FOLD_CELLS
- * cells, as long as it cuts as many rim loops as at the start (a merge of two sheets' rims
- * is never taken), and keeps the cut with the fewest backward steps (own box: 48, 16, 0 at
- * 3.6, 4.3, 5.2 cells; 0 folds after). */
-#define FOLD_GROW 1.2
-#define FOLD_CELLS 8.0
 
 typedef struct tube {
     const cf_polyline *pl;
@@ -114,74 +103,6 @@ static bool tri_in_tube(const cf_ctx *c, uint32_t t, void *arg)
                 return true;
     }
     return false;
-}
-
-/* How many steps of the rim loops round a lone closed curve go backwards along it (the
- * feet of two consecutive rim vertices against the loop's winding): the zip's rings and
- * triangles turn over there. 0 for other groups. */
-static size_t rim_back_steps(const tube *tb, const cf_ctx *c, const cf_loops *ls)
-{
-    const cf_polyline *pl = &tb->pl[0];
-    size_t count = 0;
-    for (size_t i = 0; tb->n == 1 && pl->closed && i < ls->n; i++) {
-        const cf_loop *l = &ls->l[i];
-        double prev = 0, total = 0;
-        size_t back = 0, fwd = 0;
-        for (size_t j = 0; l->closed && j <= l->n; j++) {
-            double s;
-            if (!isfinite(cf_polyline_nearest(pl, c->m->pos + 3 * (size_t)l->v[j % l->n],
-                                              INFINITY, &s, NULL)))
-                return 0;
-            double d = s - prev;
-            d -= pl->length * round(d / pl->length);
-            if (j > 0) {
-                total += d;
-                back += d < 0;
-                fwd += d > 0;
-            }
-            prev = s;
-        }
-        if (fabs(total) > pl->length / 2) /* winding round the curve */
-            count += total > 0 ? back : fwd;
-    }
-    return count;
-}
-
-/* Puts back the cut and cuts the tube again at radius r. */
-static bool recut(cf_ctx *c, const cf_cutter *cut, tube *tb, double r, size_t nt0, size_t nv0,
-                  cf_loops *ls, uint32_t **rm, size_t *nrm)
-{
-    cf_undo(c, *rm, *nrm, nt0, nv0);
-    free(*rm);
-    cf_loops_free(ls);
-    tb->r = r;
-    return cf_cut_clean(c, cut, &tb->r, INFINITY, ls, rm, nrm);
-}
-
-/* While the rim loops step backwards, cuts again FOLD_GROW times wider up to FOLD_CELLS
- * cells (FOLD_GROW's comment) and keeps the cut with the fewest backward steps (the first
- * of equals); false when out of memory. */
-static bool cut_past_pleats(cf_ctx *c, const cf_cutter *cut, tube *tb, size_t nt0, size_t nv0,
-                            cf_loops *ls, uint32_t **rm, size_t *nrm)
-{
-    double r = tb->r, best_r = r, max_r = FOLD_CELLS * c->cell;
-    size_t nloops = ls->n, best = rim_back_steps(tb, c, ls), steps = best;
-    while (!c->stopped && steps > 0 && r * FOLD_GROW <= max_r) {
-        r *= FOLD_GROW;
-        if (!recut(c, cut, tb, r, nt0, nv0, ls, rm, nrm))
-            return false;
-        if (c->stopped || ls->n != nloops)
-            break;
-        steps = rim_back_steps(tb, c, ls);
-        if (steps < best) {
-            best = steps;
-            best_r = tb->r;
-        }
-        r = tb->r;
-    }
-    if (c->stopped || (tb->r == best_r && ls->n == nloops))
-        return true;
-    return recut(c, cut, tb, best_r, nt0, nv0, ls, rm, nrm);
 }
 
 /* The triangles whose boxes meet a segment's box grown by r, for every segment of the
@@ -414,8 +335,6 @@ static bool conform_group(cf_run *r, const size_t *idx, size_t n)
     uint32_t *rm = NULL;
     cf_loops ls = {0};
     ok = cf_cut_clean(c, &cut, &tb.r, INFINITY, &ls, &rm, &nrm);
-    if (ok && !c->stopped && ls.n > 0)
-        ok = cut_past_pleats(c, &cut, &tb, nt0, nv0, &ls, &rm, &nrm);
     if (ok && c->stopped) {
         c->st->items_stopped++;
     } else if (ok && ls.n == 0) {
