@@ -85,6 +85,19 @@ static int crease_cell(ism_sampler *s, const ism_flatness *fl, const ism_corners
     return 1; /* polygons the estimate cannot follow: the measurement after decides */
 }
 
+/* No root on any of the n cube edges listed (no_roots on each). */
+static bool edges_rootless(ism_sampler *s, const ism_flatness *fl, const ism_corners *k,
+                           const int *edges, int n)
+{
+    for (int i = 0; i < n; i++) {
+        int c0, c1, faces[2];
+        ism_cube_edge(edges[i], &c0, &c1, faces);
+        if (!no_roots(s, fl, k, c0, c1))
+            return false;
+    }
+    return true;
+}
+
 /* A node whose corner gradients disagree, under an error bound: when crossed (nroots > 0),
  * its secant roots' centroid (their sum / nroots) within CENTROID_SAG_ERRORS (E + shift) of
  * the surface — a cheap screen before the exact roots (most such nodes are far too coarse) —
@@ -104,13 +117,7 @@ static bool graph_node_passes(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatn
     }
     if (!ism_graph_certified(s->tape, jet, lo, hi, &s->n_interval))
         return false;
-    for (int i = 0; i < ndisagree; i++) {
-        int c0, c1, faces[2];
-        ism_cube_edge(disagree[i], &c0, &c1, faces);
-        if (!no_roots(s, fl, k, c0, c1))
-            return false;
-    }
-    return true;
+    return edges_rootless(s, fl, k, disagree, ndisagree);
 }
 
 bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
@@ -179,13 +186,7 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
     if (nroots == 0) {
         /* no edge crossed: two roots on an edge are the only sign of the surface here
          * (a tube or a wedge tip between the corners), so it is looked for */
-        for (int i = 0; i < ndisagree; i++) {
-            int c0, c1, faces[2];
-            ism_cube_edge(disagree[i], &c0, &c1, faces);
-            if (!no_roots(s, fl, k, c0, c1))
-                return false;
-        }
-        return true;
+        return edges_rootless(s, fl, k, disagree, ndisagree);
     }
     double err;
     if (fl->max_error > 0 &&

@@ -38,12 +38,19 @@ static void second_step(rm_pass *p, rm_memo_entry *e)
     e->state = RM_MEMO_S2;
 }
 
+/* x's memo entry (own when the pass keeps no memo) with its first step taken. */
+static rm_memo_entry *stepped(rm_pass *p, const double x[3], rm_memo_entry *own)
+{
+    rm_memo_entry *e = p->memo ? rm_memo_slot(p->memo, x) : own;
+    if (e->state == RM_MEMO_EMPTY)
+        first_step(p, x, e);
+    return e;
+}
+
 bool rm_bound_gradient(rm_pass *p, const double x[3], double g[3])
 {
     rm_memo_entry own = {.state = RM_MEMO_EMPTY};
-    rm_memo_entry *e = p->memo ? rm_memo_slot(p->memo, x) : &own;
-    if (e->state == RM_MEMO_EMPTY)
-        first_step(p, x, e);
+    rm_memo_entry *e = stepped(p, x, &own);
     if (e->state == RM_MEMO_FAIL1)
         return false;
     for (int k = 0; k < 3; k++)
@@ -57,9 +64,7 @@ bool rm_bound_gradient(rm_pass *p, const double x[3], double g[3])
 static bool two_steps(rm_pass *p, const double x[3], double limit, double *s1, double *s2)
 {
     rm_memo_entry own = {.state = RM_MEMO_EMPTY};
-    rm_memo_entry *e = p->memo ? rm_memo_slot(p->memo, x) : &own;
-    if (e->state == RM_MEMO_EMPTY)
-        first_step(p, x, e);
+    rm_memo_entry *e = stepped(p, x, &own);
     *s2 = 0;
     if (e->state == RM_MEMO_FAIL1)
         return false;
