@@ -453,18 +453,27 @@ static bool decode_max_error(const json_t *v, const json_t *depth, ism_request *
     return true;
 }
 
+/* A boolean at path that only an error bound makes meaningful: true without "max_error"
+ * is refused with why (its reason). */
+static bool decode_bound_flag(const json_t *v, const ism_request *req, const char *path,
+                              const char *why, bool *out, ism_req_error *err)
+{
+    if (!json_is_boolean(v))
+        return bad(err, path, "expected true or false, got %s", type_name(v));
+    if (json_is_true(v) && !(req->poly.max_error > 0))
+        return bad(err, path, "%s: give max_error too", why);
+    *out = json_is_true(v);
+    return true;
+}
+
 /* "simplify": true or false (after "max_error"). Under an error bound the mesh is simplified
  * unless it says false: asking for E is asking for the fewest triangles within E. Without a
  * bound there is nothing to keep the simplification honest, so true is refused. */
 static bool decode_simplify(const json_t *v, ism_request *req, ism_req_error *err)
 {
-    if (!json_is_boolean(v))
-        return bad(err, "$.simplify", "expected true or false, got %s", type_name(v));
-    if (json_is_true(v) && !(req->poly.max_error > 0))
-        return bad(err, "$.simplify", "the simplification keeps the mesh within \"max_error\": "
-                                      "give max_error too");
-    req->simplify = json_is_true(v);
-    return true;
+    return decode_bound_flag(v, req, "$.simplify",
+                             "the simplification keeps the mesh within \"max_error\"",
+                             &req->simplify, err);
 }
 
 /* "straddle": true or false (after "max_error"; default false). The polygoniser then moves
@@ -473,13 +482,9 @@ static bool decode_simplify(const json_t *v, ism_request *req, ism_req_error *er
  * bound says how far a vertex may move, so true without one is refused. */
 static bool decode_straddle(const json_t *v, ism_request *req, ism_req_error *err)
 {
-    if (!json_is_boolean(v))
-        return bad(err, "$.straddle", "expected true or false, got %s", type_name(v));
-    if (json_is_true(v) && !(req->poly.max_error > 0))
-        return bad(err, "$.straddle", "the vertices move by a share of \"max_error\": give "
-                                      "max_error too");
-    req->poly.straddle = json_is_true(v);
-    return true;
+    return decode_bound_flag(v, req, "$.straddle",
+                             "the vertices move by a share of \"max_error\"",
+                             &req->poly.straddle, err);
 }
 
 /* "quality": "raw" or "good" (ism_quality_lookup). */
