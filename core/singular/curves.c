@@ -58,16 +58,28 @@
 #define CURVES_TRIPLE_BRANCHES 3
 
 /* Projections of Hessian rank ≤ 1 (pinch and triple points, where curves meet) probed for
- * seeds (degenerate_seeds), distinct points at most: a few per curve end at a coarse depth;
- * a double sheet's rank-1 boxes (10⁵ of them) project onto as many distinct points, and no
- * probe there gives a seed (the Hessian across has rank 1). */
-#define CURVES_DEGENERATE_PROBES_MAX 32
+ * seeds (degenerate_seeds): the probing stops after this many distinct points none of whose
+ * probes landed on a curve. A double sheet's rank-1 boxes (10⁵ of them) project onto as many
+ * distinct points, and no probe there lands (the Hessian across has rank 1); the heart's ring
+ * of H = 0 on a smooth sheet neither. Points whose probes land do not count: nine planes
+ * sin πx sin πy sin πz in ±1.9 at depth 3 project onto 27 triple points and 24 more just
+ * outside the box (±2), every one of them a curve's end; a cap of 32 distinct points there
+ * left the 7 last triple points without curves (84 of 108, typed degenerate). */
+#define CURVES_DEGENERATE_BARREN_MAX 32
+/* Distinct rank ≤ 1 projections probed at most (each is compared with every earlier one):
+ * an arrangement of 10 × 10 × 10 planes has 1000 triple points; more points where curves
+ * meet than this, at the search's depth, would be a locus too fine for its cells. */
+#define CURVES_DEGENERATE_PROBES_MAX 1024
 /* The probe's step along a null direction of the Hessian there (cells): well off the point,
  * where the curve's Hessian across has its full rank 2, well inside the cell. */
 #define CURVES_DEGENERATE_STEP_CELLS 0.25
 /* Without rank-2 seeds, more rank ≤ 1 boxes than this are a double sheet's (each its own
  * point, none a curve's end): the stage returns without building its index, as before. */
 #define CURVES_DEGENERATE_BOXES_MAX 1024
+/* A probe's seed counts as on a curve traced already within this fraction of the probe's
+ * step (and tr->delta): the branch through q on the probe's far side passes a step away
+ * (straight on) or more, the branch the probe landed on at 0. */
+#define CURVES_DEGENERATE_NEAR 0.5
 /* Two rank ≤ 1 projections this close (cells) are one point, probed once: a pinch or
  * triple point is one point seen from several boxes; a curve of them (the heart's ring
  * z = 0, where H vanishes on a smooth sheet) is probed once a cell. */
@@ -266,12 +278,12 @@ static bool seed_point(ism_ctracer *tr, const ism_lbox *bx, int iters, ism_cpoin
     return ism_cjet_seed_ok(s, tr->io->hessian_scale, tr->diag, 1.0);
 }
 
-/* Traces the curve through the seed s of box bx (unless a curve traced already passes
- * there). */
-static void trace_from(ism_ctracer *tr, ism_lbox *bx, const ism_cpoint *seed)
+/* Traces the curve through the seed s of box bx unless a curve traced already passes within
+ * near of it. */
+static void trace_from(ism_ctracer *tr, ism_lbox *bx, const ism_cpoint *seed, double near)
 {
     ism_cpoint s = *seed;
-    if (ism_cindex_near_segment(&tr->idx, s.p, tr->delta)) {
+    if (ism_cindex_near_segment(&tr->idx, s.p, near)) {
         bx->flags |= ISM_LBOX_USED; /* on a curve traced already */
         return;
     }
@@ -294,7 +306,7 @@ static void trace_seed(ism_ctracer *tr, ism_lbox *bx)
 {
     ism_cpoint s;
     if (seed_point(tr, bx, CURVES_SEED_IT, &s))
-        trace_from(tr, bx, &s);
+        trace_from(tr, bx, &s, tr->delta);
 }
 
 /* Types the ends at points, now that every branch is known: a point where ≥ 3 branches end
@@ -352,9 +364,10 @@ static bool in_small_loop(const ism_locus *io, const double q[3])
     return false;
 }
 
-/* Whether p lies within tr->delta of a segment of the curves io holds before this stage
+/* Whether p lies within near of a segment of the curves io holds before this stage
  * (curves[0 .. first)): the curve index holds only the curves traced here. */
-static bool near_earlier_curve(const ism_ctracer *tr, const double p[3], size_t first)
+static bool near_earlier_curve(const ism_ctracer *tr, const double p[3], size_t first,
+                               double near)
 {
     for (size_t c = 0; c < first; c++) {
         const ism_sing_curve *cu = &tr->io->curves[c];
@@ -362,21 +375,42 @@ static bool near_earlier_curve(const ism_ctracer *tr, const double p[3], size_t 
         for (size_t i = 0; i < segs; i++) {
             const double *a = cu->xyz + 3 * i, *b = cu->xyz + 3 * ((i + 1) % cu->n);
             double d2 = ism_sqdist_segment3(p, a, b);
-            if (d2 <= tr->delta * tr->delta)
+            if (d2 <= near * near)
                 return true;
         }
     }
     return false;
 }
 
+/* Half the way from q to the box's boundary along v (side 0) or −v (side 1), when q is in
+ * the box; infinity otherwise. A curve from a triple point to a face closer than a probe's
+ * step is seeded halfway: nine planes in ±1.9 shifted 0.37 cell at depth 3 have 48 such
+ * stubs, 0.009 to 0.095 long, from the triple points at ±2 (the step is 0.12). */
+static double inside_step(const ism_ctracer *tr, const double q[3], const double v[3], int side)
+{
+    if (!ism_ctracer_inside(tr, q))
+        return INFINITY;
+    double t = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        double w = side ? -v[k] : v[k];
+        if (w > 0)
+            t = fmin(t, (tr->box[k + 3] - q[k]) / w);
+        else if (w < 0)
+            t = fmin(t, (tr->box[k] - q[k]) / w);
+    }
+    return 0.5 * t;
+}
+
 /* Seeds next to a projection q of Hessian rank ≤ 1 (a pinch or triple point): a step of
- * CURVES_DEGENERATE_STEP_CELLS each way along every null direction of the Hessian at q, each
- * tried as a seed box of its own (seed_point decides). At a coarse depth the boxes along a
+ * CURVES_DEGENERATE_STEP_CELLS (at most halfway to the box's boundary) each way along every
+ * null direction of the Hessian at q, each tried as a seed box of its own (seed_point
+ * decides). At a coarse depth the boxes along a
  * curve may all project onto its end points, leaving no rank-2 seed: the cross-cap at depth
  * 3 in ±1.2 (cell 0.3, the z axis on cell edges) projected onto (0, 0, −1), (0, 0, 0) and
  * (0, 0, 1) only, and its double segment and whiskers were not traced at all (no point
- * either: the points stage starts only from rank ≥ 2 in such a cluster). */
-static void degenerate_seeds(ism_ctracer *tr, const ism_lbox *bx, size_t first_curve)
+ * either: the points stage starts only from rank ≥ 2 in such a cluster). Returns whether
+ * some probe landed on a curve (traced now or before). */
+static bool degenerate_seeds(ism_ctracer *tr, const ism_lbox *bx, size_t first_curve)
 {
     double g[3], h[6], eig[3], vec[3][3];
     ism_eval_hessian(tr->jet.f, tr->jet.ws, bx->q[0], bx->q[1], bx->q[2], g, h);
@@ -389,42 +423,101 @@ static void degenerate_seeds(ism_ctracer *tr, const ism_lbox *bx, size_t first_c
             for (int k = 0; k < 3; k++)
                 vec[i][k] = i == k;
     double d = CURVES_DEGENERATE_STEP_CELLS * tr->cell;
+    bool landed = false;
     for (int i = 0; i < 3 && !tr->stop && !tr->oom; i++) {
         if (m > 0 && fabs(eig[i]) > zero)
             continue; /* not a null direction */
         for (int side = 0; side < 2 && ism_ctracer_go(tr); side++) {
+            double step = (side ? -1.0 : 1.0) * fmin(d, inside_step(tr, bx->q, vec[i], side));
             ism_lbox probe = *bx;
             for (int k = 0; k < 3; k++)
-                probe.q[k] = bx->q[k] + (side ? -d : d) * vec[i][k];
+                probe.q[k] = bx->q[k] + step * vec[i][k];
             probe.rank = 2;
             ism_cpoint sp;
-            if (seed_point(tr, &probe, CURVES_DEGENERATE_IT, &sp) &&
-                !near_earlier_curve(tr, sp.p, first_curve))
-                trace_from(tr, &probe, &sp);
+            if (!seed_point(tr, &probe, CURVES_DEGENERATE_IT, &sp))
+                continue;
+            landed = true;
+            /* a branch ending at q passes |step| from the probe on the far side */
+            double near = fmin(tr->delta, CURVES_DEGENERATE_NEAR * fabs(step));
+            if (!near_earlier_curve(tr, sp.p, first_curve, near))
+                trace_from(tr, &probe, &sp, near);
         }
     }
+    return landed;
 }
 
-/* Every distinct rank ≤ 1 projection (at most CURVES_DEGENERATE_PROBES_MAX) probed for seeds
- * (degenerate_seeds). */
+/* Whether q lies farther outside the box than a probe's step: no probe from there starts
+ * inside (the search's boxes at the box's faces project onto points up to a cell out: nine
+ * planes in ±1.9 at depth 4 onto 23 triple points at ±2, 0.1 out, the step 0.06). */
+static bool out_of_reach(const ism_ctracer *tr, const double q[3])
+{
+    double d = CURVES_DEGENERATE_STEP_CELLS * tr->cell, out2 = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double o = fmax(tr->box[k] - q[k], q[k] - tr->box[k + 3]);
+        out2 += o > 0.0 ? o * o : 0.0;
+    }
+    return out2 > d * d;
+}
+
+/* The points probed so far (degenerate_seeds), and how many of them gave nothing. */
+typedef struct probed {
+    double (*p)[3];
+    size_t n, cap, barren;
+} probed;
+
+/* Probes q (degenerate_seeds) unless a point within same of it was probed already; false
+ * when out of memory. */
+static bool probe_once(ism_ctracer *tr, probed *pr, const double q[3], double same,
+                       size_t first_curve)
+{
+    for (size_t s = 0; s < pr->n; s++)
+        if (ism_dist3(pr->p[s], q) <= same)
+            return true;
+    if (pr->n == pr->cap) {
+        size_t grown = pr->cap ? 2 * pr->cap : 64;
+        double (*more)[3] = realloc(pr->p, grown * sizeof *more);
+        if (!more)
+            return false;
+        pr->p = more;
+        pr->cap = grown;
+    }
+    memcpy(pr->p[pr->n++], q, sizeof pr->p[0]);
+    ism_lbox bx = {.rank = 2, .flags = ISM_LBOX_PROJECTED};
+    memcpy(bx.q, q, sizeof bx.q);
+    pr->barren += !degenerate_seeds(tr, &bx, first_curve);
+    return true;
+}
+
+static bool probing(const ism_ctracer *tr, const probed *pr)
+{
+    return pr->n < CURVES_DEGENERATE_PROBES_MAX && pr->barren < CURVES_DEGENERATE_BARREN_MAX &&
+           !tr->stop && !tr->oom;
+}
+
+/* Every distinct rank ≤ 1 projection within a probe's reach of the box probed for seeds
+ * (degenerate_seeds), until CURVES_DEGENERATE_BARREN_MAX of them gave nothing or
+ * CURVES_DEGENERATE_PROBES_MAX were probed; then every point where a curve traced here
+ * ends, for its other branches, until no new curve comes: nine planes in ±1.9 shifted 0.37
+ * cell at depth 3 have triple points at y = −2, 0.009 inside the box, onto which no box
+ * projects; the curves from y = −1 end there, and the 16 stubs to the face start there. */
 static void trace_degenerate(ism_ctracer *tr, size_t first_curve)
 {
-    double seen[CURVES_DEGENERATE_PROBES_MAX][3];
-    size_t nseen = 0;
+    probed pr = {0};
     ism_locus *io = tr->io;
-    for (size_t b = 0; b < io->nboxes && nseen < CURVES_DEGENERATE_PROBES_MAX && !tr->stop &&
-                       !tr->oom; b++) {
+    double same = CURVES_DEGENERATE_SAME_CELLS * tr->cell;
+    for (size_t b = 0; b < io->nboxes && probing(tr, &pr); b++) {
         const ism_lbox *bx = &io->boxes[b];
-        if (!is_degenerate(bx) || in_small_loop(io, bx->q))
-            continue;
-        bool same = false;
-        for (size_t s = 0; s < nseen && !same; s++)
-            same = ism_dist3(seen[s], bx->q) <= CURVES_DEGENERATE_SAME_CELLS * tr->cell;
-        if (same)
-            continue;
-        memcpy(seen[nseen++], bx->q, sizeof seen[0]);
-        degenerate_seeds(tr, bx, first_curve);
+        if (is_degenerate(bx) && !out_of_reach(tr, bx->q) && !in_small_loop(io, bx->q) &&
+            !probe_once(tr, &pr, bx->q, same, first_curve))
+            tr->oom = true;
     }
+    for (size_t c = first_curve; c < io->ncurves && probing(tr, &pr); c++)
+        for (int e = 0; e < 2 && !io->curves[c].closed; e++) {
+            int j = io->curves[c].end_point[e];
+            if (j >= 0 && !probe_once(tr, &pr, io->points[j].p, tr->delta, first_curve))
+                tr->oom = true;
+        }
+    free(pr.p);
 }
 
 bool ism_sing_trace_curves(const ism_tape *f, const ism_locus_options *o, ism_locus *io,
