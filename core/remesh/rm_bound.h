@@ -11,7 +11,9 @@
 /* The distance from x to f = 0: |f|/|∇f| at x (the Newton step's length) plus |f|/|∇f| where
  * that step lands — by the triangle inequality no less than the distance to the zero set
  * when the landing point's estimate is (second order there). INFINITY where ∇f vanishes or
- * f is not finite; above limit, the first term alone (the step is not taken). */
+ * f is not finite; above limit, or at most half of it (of max_error when limit is infinite),
+ * the first term alone: the step is not taken (its residual, second order, cannot carry a
+ * point from half the bound beyond it; rm_bound.c). */
 double rm_bound_distance(rm_pass *p, const double x[3], double limit);
 
 /* The signed distance from x to f = 0 to first order, positive where f is: f/|∇f| at x
