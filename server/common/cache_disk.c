@@ -4,6 +4,7 @@
 #include "server/common/cache_disk.h"
 #include "core/util/le_bytes.h"
 #include "server/common/fd_io.h"
+#include "server/common/fd_keep.h"
 #include "server/common/file_memo.h"
 
 #include <dirent.h>
@@ -63,6 +64,7 @@ typedef struct disk_tier {
      * the pruner's correction never counts a file twice or drops one it never saw. */
     pthread_mutex_t dir_lock;
     ism_file_memo *sent_ok; /* files whose payload was found equal to the bytes to send */
+    ism_fd_keep *kept;      /* those files kept open for the next send (open_payload) */
     atomic_bool comparing;  /* a payload comparison runs (open_payload): one at a time */
 } disk_tier;
 
@@ -137,6 +139,7 @@ static void forget(disk_tier *d, unsigned long long bytes)
 static void drop_corrupt(disk_tier *d, const char *rel, const char *name, const char *why,
                          long long counted)
 {
+    ism_fd_keep_drop(d->kept, name);
     pthread_mutex_lock(&d->dir_lock);
     if (unlinkat(d->root_fd, rel, 0) == 0 && counted >= 0)
         forget(d, (unsigned long long)counted);
@@ -230,6 +233,23 @@ static int payload_equals(int fd, const unsigned char *payload, size_t len)
     return same;
 }
 
+/* The file kept open for name (fd_keep.h) when it still holds the payload found equal to the
+ * caller's: still in the directory, of the payload's size, unchanged since the comparison
+ * (file_memo.h). Else -1, and the kept file is let go. */
+static int kept_payload(disk_tier *d, const char *name, size_t len)
+{
+    int fd = ism_fd_keep_get(d->kept, name);
+    if (fd < 0)
+        return -1;
+    struct stat st;
+    if (fstat(fd, &st) == 0 && st.st_nlink > 0 && (uint64_t)st.st_size == (uint64_t)len + HEADER_SIZE &&
+        ism_file_memo_holds(d->sent_ok, name, &st))
+        return fd;
+    close(fd);
+    ism_fd_keep_drop(d->kept, name);
+    return -1;
+}
+
 int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, const void *payload,
                                 size_t len, long long *offset)
 {
@@ -237,7 +257,11 @@ int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, const void 
     char rel[ISM_CACHE_NAME_MAX + 4];
     if (d->root_fd < 0 || !rel_path(rel, name))
         return -1;
-    int fd = openat(d->root_fd, rel, O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+    *offset = HEADER_SIZE;
+    int fd = kept_payload(d, name, len);
+    if (fd >= 0)
+        return fd;
+    fd = openat(d->root_fd, rel, O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
     if (fd < 0)
         return -1;
     struct stat st;
@@ -271,7 +295,8 @@ int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, const void 
         close(fd);
         return -1;
     }
-    *offset = HEADER_SIZE;
+    if (ism_file_memo_holds(d->sent_ok, name, &st))
+        ism_fd_keep_put(d->kept, name, fd); /* the next send skips the open and the header */
     return fd;
 }
 
@@ -594,6 +619,7 @@ static void prune(disk_tier *d, unsigned long long max)
             char rel[ISM_CACHE_NAME_MAX + 4];
             snprintf(rel, sizeof rel, "%.2s/%s", l.v[i].name, l.v[i].name);
             if (unlinkat(d->root_fd, rel, 0) == 0) {
+                ism_fd_keep_drop(d->kept, l.v[i].name); /* its space is freed now */
                 freed += l.v[i].size;
                 removed++;
             }
@@ -699,6 +725,7 @@ static void disk_close(ism_cache_tier *t)
     pthread_cond_destroy(&d->idle);
     pthread_cond_destroy(&d->prune_wake);
     ism_file_memo_free(d->sent_ok);
+    ism_fd_keep_free(d->kept);
     free(d);
 }
 
@@ -732,6 +759,7 @@ ism_cache_tier *ism_cache_disk_new(const char *dir, size_t max_pending)
     d->root_fd = -1;
     d->max_pending = max_pending;
     d->sent_ok = ism_file_memo_new(); /* NULL: every send compares */
+    d->kept = ism_fd_keep_new();      /* NULL: every send opens the file */
     pthread_mutex_init(&d->lock, NULL);
     pthread_mutex_init(&d->dir_lock, NULL);
     pthread_cond_init(&d->wake, NULL);

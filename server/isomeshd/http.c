@@ -438,9 +438,10 @@ static void client_left(void *ctx, void *req)
 }
 
 /* Descriptors a connection may hold at once: its socket and the cache file its answer is
- * sent from (respond.c, bodies of SENDFILE_MIN or more). */
+ * sent from (respond.c: large bodies, or any mesh while many connections are open). */
 #define FDS_PER_CONNECTION 2u
-/* Descriptors beside the connections': workers' pipes, cache files being written, logs. */
+/* Descriptors beside the connections': workers' pipes, cache files being written or kept open
+ * for sending (server/common/fd_keep.c, 64), logs. */
 #define FDS_BESIDE 256u
 
 /* Grows the process's descriptor table now to hold n descriptors (at most RLIMIT_NOFILE).

@@ -305,6 +305,61 @@ Test(cache_disk, a_file_is_sent_only_while_it_holds_the_callers_bytes)
     free(dir);
 }
 
+/* After a send the file stays open for the next (fd_keep.h); a file removed from the directory
+ * or replaced by another is not sent from that descriptor. */
+Test(cache_disk, a_file_kept_open_is_not_sent_once_removed_or_replaced)
+{
+    char *dir = temp_dir(), *dir2 = temp_dir();
+    size_t n = 100 * 1000;
+    ism_blob *b = filled(n, 9), *other = filled(n, 10);
+    char *path = file_of(dir, KEY_A ".drc"), *path2 = file_of(dir2, KEY_A ".drc");
+    ism_cache_tier *d = ism_cache_disk_new(dir, 1 << 20), *d2 = ism_cache_disk_new(dir2, 1 << 20);
+    d->put(d, KEY_A ".drc", b);
+    ism_cache_disk_flush(d);
+    wait_settled(path);
+    long long off = -1;
+    int fd = ism_cache_disk_open_payload(d, KEY_A ".drc", b->data, n, &off);
+    cr_assert_geq(fd, 0);
+    close(fd);
+    cr_assert_eq(unlink(path), 0);
+    cr_assert_eq(ism_cache_disk_open_payload(d, KEY_A ".drc", b->data, n, &off), -1,
+                 "a removed file was sent");
+    /* stored again: a new file, sent from itself, then from the descriptor kept of it */
+    d->put(d, KEY_A ".drc", b);
+    ism_cache_disk_flush(d);
+    wait_settled(path);
+    struct stat now, sent;
+    cr_assert_eq(stat(path, &now), 0);
+    unsigned char *got = malloc(n);
+    for (int i = 0; i < 2; i++) {
+        fd = ism_cache_disk_open_payload(d, KEY_A ".drc", b->data, n, &off);
+        cr_assert_geq(fd, 0);
+        cr_assert_eq(fstat(fd, &sent), 0);
+        cr_assert_eq(sent.st_ino, now.st_ino, "sent from a file no longer in the directory");
+        cr_assert_eq(pread(fd, got, n, off), (ssize_t)n);
+        cr_assert_eq(memcmp(got, b->data, n), 0);
+        close(fd);
+    }
+    /* a sound file of other bytes renamed over it: neither it nor the kept one is sent */
+    d2->put(d2, KEY_A ".drc", other);
+    ism_cache_disk_flush(d2);
+    cr_assert_eq(rename(path2, path), 0);
+    wait_settled(path);
+    cr_assert_eq(ism_cache_disk_open_payload(d, KEY_A ".drc", b->data, n, &off), -1,
+                 "the replaced file was sent, or its replacement holding other bytes");
+    d->close(d);
+    d2->close(d2);
+    free(got);
+    free(path);
+    free(path2);
+    ism_blob_unref(b);
+    ism_blob_unref(other);
+    remove_tree(dir);
+    remove_tree(dir2);
+    free(dir);
+    free(dir2);
+}
+
 Test(cache_disk, unwritable_directory_stores_nothing_and_says_so)
 {
     /* a path under a regular file can never be created, even by root */

@@ -1,0 +1,26 @@
+/* fd_keep.h — a bounded table of open files kept by name, so that a file sent often is opened
+ * once, not once per send: a lookup hands out a duplicate of the kept descriptor (the caller
+ * owns and closes it; the table's own copy stays open until the name's slot is taken by
+ * another name, the name is dropped, or the table is freed). */
+#ifndef ISM_FD_KEEP_H
+#define ISM_FD_KEEP_H
+
+#include <stdbool.h>
+
+typedef struct ism_fd_keep ism_fd_keep;
+
+/* An empty table (NULL when out of memory). Safe to use from several threads. */
+ism_fd_keep *ism_fd_keep_new(void);
+/* Closes every kept descriptor and frees the table (NULL: nothing). */
+void ism_fd_keep_free(ism_fd_keep *k);
+
+/* A new descriptor (close-on-exec) for the file kept under name, -1 when none is kept (or
+ * the duplicate could not be made). */
+int ism_fd_keep_get(ism_fd_keep *k, const char *name);
+/* Keeps a duplicate of fd under name (fd stays the caller's); the name's slot may have held
+ * another file, which is closed. No effect when the duplicate cannot be made. */
+void ism_fd_keep_put(ism_fd_keep *k, const char *name, int fd);
+/* Closes the file kept under name, if any. */
+void ism_fd_keep_drop(ism_fd_keep *k, const char *name);
+
+#endif

@@ -1,0 +1,95 @@
+/* test_fd_keep.c — the table of kept files (server/common/fd_keep.h): a lookup hands out a new
+ * descriptor of the kept file (not the table's own, which the caller may close), names do not
+ * mix, a dropped name and a freed table hold no descriptor. */
+#include <criterion/criterion.h>
+#include <dirent.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "server/common/fd_keep.h"
+
+#define NAME_A "aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa.drc"
+#define NAME_B "0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef.drc"
+
+/* The number of descriptors this process holds (/proc/self/fd, less the listing's own). */
+static int open_descriptors(void)
+{
+    DIR *d = opendir("/proc/self/fd");
+    cr_assert_not_null(d);
+    int n = 0;
+    for (struct dirent *e; (e = readdir(d));)
+        n += e->d_name[0] != '.';
+    closedir(d);
+    return n - 1;
+}
+
+/* A temporary file holding text, open for reading; unlinked at once (the descriptor keeps it). */
+static int temp_file(const char *text)
+{
+    char path[] = "/tmp/ism_fd_keep_XXXXXX";
+    int fd = mkstemp(path);
+    cr_assert_geq(fd, 0);
+    cr_assert_eq(write(fd, text, strlen(text)), (ssize_t)strlen(text));
+    unlink(path);
+    return fd;
+}
+
+static void assert_reads(int fd, const char *text)
+{
+    char buf[64] = {0};
+    cr_assert_eq(pread(fd, buf, sizeof buf - 1, 0), (ssize_t)strlen(text));
+    cr_assert_str_eq(buf, text);
+}
+
+Test(fd_keep, a_lookup_gives_a_new_descriptor_of_the_kept_file_and_names_do_not_mix)
+{
+    int before = open_descriptors();
+    ism_fd_keep *k = ism_fd_keep_new();
+    cr_assert_not_null(k);
+    cr_assert_eq(ism_fd_keep_get(k, NAME_A), -1);
+    int a = temp_file("first file");
+    ism_fd_keep_put(k, NAME_A, a);
+    close(a); /* the table holds its own */
+    cr_assert_eq(ism_fd_keep_get(k, NAME_B), -1);
+    int got1 = ism_fd_keep_get(k, NAME_A), got2 = ism_fd_keep_get(k, NAME_A);
+    cr_assert_geq(got1, 0);
+    cr_assert_neq(got1, got2);
+    assert_reads(got1, "first file");
+    close(got1); /* the caller's copy: the next lookup still works */
+    assert_reads(got2, "first file");
+    close(got2);
+    int got = ism_fd_keep_get(k, NAME_A);
+    cr_assert(fcntl(got, F_GETFD) & FD_CLOEXEC);
+    close(got);
+    /* a newer file under the same name replaces the kept one */
+    int b = temp_file("second file");
+    ism_fd_keep_put(k, NAME_A, b);
+    close(b);
+    int got3 = ism_fd_keep_get(k, NAME_A);
+    assert_reads(got3, "second file");
+    close(got3);
+    ism_fd_keep_drop(k, NAME_A);
+    cr_assert_eq(ism_fd_keep_get(k, NAME_A), -1);
+    ism_fd_keep_free(k);
+    cr_assert_eq(open_descriptors(), before);
+}
+
+Test(fd_keep, freeing_closes_every_kept_file)
+{
+    int before = open_descriptors();
+    ism_fd_keep *k = ism_fd_keep_new();
+    char name[80];
+    for (int i = 0; i < 200; i++) { /* more names than slots: taken-over slots close theirs */
+        snprintf(name, sizeof name, "%064d.drc", i);
+        int fd = temp_file(name);
+        ism_fd_keep_put(k, name, fd);
+        close(fd);
+    }
+    cr_assert_gt(open_descriptors(), before);
+    ism_fd_keep_free(k);
+    cr_assert_eq(open_descriptors(), before);
+}
