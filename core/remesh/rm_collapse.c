@@ -42,9 +42,11 @@ static double cos_bend(const double *n, double ln, const double *m, double lm)
     return ln > 0 && lm > 0 ? ism_dot3(n, m) / (ln * lm) : -1;
 }
 
-/* New triangle t (v at w's place) faces the fan's way and bends against the triangle across
- * its outer edge no more than the crease angle or than it did before; *sine gets its
- * smallest angle's sine. */
+/* New triangle t (v at w's place) faces the fan's way, does not turn over against ∇f where
+ * it did not before (Steiner's 0.37-cell box: collapses beside the pinch points turned 9
+ * triangles over once the curvature there no longer read as creases), and bends against
+ * the triangle across its outer edge no more than the crease angle or than it did before;
+ * *sine gets its smallest angle's sine. */
 static bool new_triangle_ok(const rm_pass *p, const rm_merge *g, uint32_t t, const double *fan_n,
                             double *sine)
 {
@@ -55,6 +57,8 @@ static bool new_triangle_ok(const rm_pass *p, const rm_merge *g, uint32_t t, con
     double ln = rm_cross(q[0], q[1], q[2], n), lo = rm_cross(o[0], o[1], o[2], m);
     if (!(cos_bend(fan_n, sqrt(ism_dot3(fan_n, fan_n)), n, ln) >
           cos(ISM_RM_COLLAPSE_MAX_TURN_DEG * M_PI / 180)))
+        return false;
+    if (rm_turns_over(p, p->r.m->tri + 3 * t, g->v, p->normal + 3 * (size_t)g->w, n))
         return false;
     *sine = rm_min_sine(q[0], q[1], q[2]);
     const uint32_t *c = p->r.m->tri + 3 * t;

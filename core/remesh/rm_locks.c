@@ -49,11 +49,16 @@ static bool is_crease(const rm_pass *p, uint32_t a, uint32_t b, uint32_t t1, uin
     const uint32_t *u = m->tri + 3 * t1, *w = m->tri + 3 * t2;
     double l1 = rm_cross(P + 3 * u[0], P + 3 * u[1], P + 3 * u[2], n1);
     double l2 = rm_cross(P + 3 * w[0], P + 3 * w[1], P + 3 * w[2], n2);
-    if (ism_dot3(n1, n2) > cos(ISM_RM_CREASE_DEG * M_PI / 180) * l1 * l2 ||
+    double cosine = ism_dot3(n1, n2) / (l1 * l2);
+    if (!(cosine < cos(ISM_RM_CREASE_DEG * M_PI / 180)) ||
         rm_is_cap(P + 3 * u[0], P + 3 * u[1], P + 3 * u[2]) ||
         rm_is_cap(P + 3 * w[0], P + 3 * w[1], P + 3 * w[2]))
         return false; /* a cap's normal says nothing of a bend */
-    return !(turned_at(p, a, n1, n2) && turned_at(p, b, n1, n2));
+    if (turned_at(p, a, n1, n2) && turned_at(p, b, n1, n2))
+        return false; /* a fold */
+    double ab = rm_dist(P + 3 * a, P + 3 * b);
+    return !(ab > 0 && rm_bend_is_curvature(p, P + 3 * a, P + 3 * b, acos(fmax(-1, cosine)),
+                                            (l1 + l2) / ab));
 }
 
 /* rm_edge_free for the oriented manifold edge {a, b} of triangles t[0], t[1]. */

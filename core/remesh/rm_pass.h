@@ -82,6 +82,12 @@ bool rm_lock_features(rm_pass *p, const ism_remesh_options *o);
  * only, just the vertices it marks (whose fans changed) are looked at again. */
 void rm_lock_vertices(rm_pass *p, const ism_remesh_options *o, const uint8_t *only);
 
+/* True when the bend (radians) between two triangles on the edge ab, whose heights over ab
+ * sum to width, is no more than f's curvature turns its normal across ab over that width
+ * (rm_crease.c): the surface bends there, no crease is there. */
+bool rm_bend_is_curvature(const rm_pass *p, const double *a, const double *b, double bend,
+                          double width);
+
 /* True when edge {a, b} is free: an oriented manifold edge, one label, not locked, no crease. */
 bool rm_edge_free(const rm_pass *p, uint32_t a, uint32_t b);
 
@@ -128,6 +134,16 @@ size_t rm_mark_active(rm_pass *p);
 /* Tries to move free vertex v toward its fan's centroid (rm_relax.c); true when it moved. */
 bool rm_relax_vertex(rm_pass *p, uint32_t v);
 
+/* Moving v to x puts no centroid of its fan farther from f = 0 than the mesh's farthest
+ * before the pass or the fan's farthest now (bounded: every centroid and edge midpoint of
+ * the fan within max_error, rm_bound.h). */
+bool rm_centroids_stay(rm_pass *p, uint32_t v, const double *x);
+
+/* One sweep over the free vertices whose fans face both sides of ∇f (pleats): each moves to
+ * the mean of its neighbours in the tangent plane, back on f = 0, when fewer of its triangles
+ * then face the minority side (rm_unfold.c); returns the moves made. */
+size_t rm_unfold_sweep(rm_pass *p);
+
 /* One sweep of tangential relaxation over the free active vertices; returns the moves made. */
 size_t rm_relax_sweep(rm_pass *p);
 
@@ -143,6 +159,14 @@ typedef struct rm_fan {
 } rm_fan;
 
 void rm_fan_measure(const rm_pass *p, uint32_t v, rm_fan *f);
+
+/* True when the triangle of corners t (vertex indices, read at their places now) would turn
+ * over with normal n (unnormalised) once v (one of its corners, or none) has moved where ∇f's
+ * unit normal is gv: it faces ∇f's side at a corner now and not then (the other corners'
+ * normals as the pass keeps them). Where the surface bends faster than the cells (beside
+ * Steiner's pinch points) a move or merge within the fan's limits can still turn it over. */
+bool rm_turns_over(const rm_pass *p, const uint32_t *t, uint32_t v, const double gv[3],
+                   const double n[3]);
 
 /* True when moving v to x keeps every triangle of its fan facing within a limit of the fan's
  * normal, and leaves the fan's smallest angle no worse (or comfortable). */

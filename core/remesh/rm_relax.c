@@ -1,7 +1,8 @@
 /* rm_relax.c — tangential relaxation: each free vertex moves toward the area-weighted
  * centroid of its triangles' centroids (a step of centroidal smoothing), within the tangent
  * plane of f = 0 there, and is put back on f = 0 by Newton steps along ∇f. A move is kept
- * only when no triangle of the fan turns over, Newton converged close to where it started,
+ * only when no triangle of the fan turns over (against the fan's normal or against ∇f at a
+ * corner), Newton converged close to where it started,
  * the fan's smallest angle does not get worse (or stays above a comfortable angle) and no
  * centroid of the fan ends farther from f = 0 than the mesh's farthest before the pass;
  * otherwise a half step is tried, then the vertex stays. Also ∇f's unit normals and the
@@ -130,6 +131,37 @@ void rm_fan_measure(const rm_pass *p, uint32_t v, rm_fan *f)
     f->mean_edge /= edges > 0 ? edges : 1;
 }
 
+bool rm_turns_over(const rm_pass *p, const uint32_t *t, uint32_t v, const double gv[3],
+                   const double n[3])
+{
+    const double *P = p->r.m->pos;
+    double m[3];
+    rm_cross(P + 3 * (size_t)t[0], P + 3 * (size_t)t[1], P + 3 * (size_t)t[2], m);
+    for (int k = 0; k < 3; k++) {
+        const double *before = p->normal + 3 * (size_t)t[k];
+        if (ism_dot3(m, before) > 0 && !(ism_dot3(n, t[k] == v ? gv : before) > 0))
+            return true;
+    }
+    return false;
+}
+
+/* Moving v to x (∇f there g) turns no triangle of its fan over (rm_turns_over). */
+static bool fan_keeps_facing(const rm_pass *p, uint32_t v, const double *x, const double g[3])
+{
+    const rm_mesh *r = &p->r;
+    for (uint32_t i = 0; i < r->count[v]; i++) {
+        const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
+        const double *q[3];
+        for (int k = 0; k < 3; k++)
+            q[k] = t[k] == v ? x : r->m->pos + 3 * (size_t)t[k];
+        double n[3];
+        rm_cross(q[0], q[1], q[2], n);
+        if (rm_turns_over(p, t, v, g, n))
+            return false;
+    }
+    return true;
+}
+
 bool rm_fan_accepts(const rm_pass *p, uint32_t v, const double x[3], const rm_fan *f)
 {
     const rm_mesh *r = &p->r;
@@ -182,7 +214,7 @@ static double fan_centroid_error(rm_pass *p, uint32_t v, const double *x)
 /* Moving v to x puts no centroid of its fan farther from f = 0 than the mesh's farthest
  * before the pass (centroid_bound) or than the fan's farthest now (bounded: every centroid
  * and edge midpoint of the fan within max_error). */
-static bool centroids_stay(rm_pass *p, uint32_t v, const double *x)
+bool rm_centroids_stay(rm_pass *p, uint32_t v, const double *x)
 {
     if (p->bounded) /* the simplification's rule: within max_error, measured */
         return rm_bound_fan(p, v, x);
@@ -218,7 +250,7 @@ bool rm_relax_vertex(rm_pass *p, uint32_t v)
         if (!rm_project(p, x, f.mean_edge, -1, g) ||
             !(rm_dist(x, tangent) <= ISM_RM_PROJECT_MAX_REL * f.mean_edge) ||
             (p->bounded && !keep_offset(p, pos, x, g)) || !rm_fan_accepts(p, v, x, &f) ||
-            !centroids_stay(p, v, x))
+            !fan_keeps_facing(p, v, x, g) || !rm_centroids_stay(p, v, x))
             continue;
         rm_commit_move(p, v, x, g);
         return true;
