@@ -46,7 +46,17 @@
  *    vertex. Before, at depth 3 (cell 0.375) the heart's candidate cells formed one cluster
  *    with critical points off the surface (the lobes' (±0.53, 0, 0.65), (±0.79, 0, 0.96));
  *    the top cusp's four cells did not project (Newton from their centres went towards
- *    those points) and were never searched: 1 cusp of 2, in all three boxes. */
+ *    those points) and were never searched: 1 cusp of 2, in all three boxes.
+ *  - linked tori (the preset), f = min(T₁, T₂), T₁ = (|p|² + 0.91)² − 4(x² + y²) (R = 1,
+ *    r = 0.3 about the z axis), T₂ the same about the y axis through (1, 0, 0). Each core
+ *    circle passes through the other's centre; a point (1 + cos t, 0, sin t) of the second
+ *    lies sqrt(cos² t + sin² t) = 1 from the first, > 2r: the tubes are disjoint, each a
+ *    smooth torus (r < R), so f has no singular point on f = 0 (where f = T₁ = 0 < T₂ or the
+ *    reverse, ∇f = ∇T_i ≠ 0): χ 0 + 0, two components, no boundary in the box. ∇T₁ = 0 on
+ *    the circle |p|² = 1.09, z = 0 inside the tube, where f = T₁ = −0.36. Before, at depth 5
+ *    (cell 0.14) the natural interval of f over a cell there held 0, and Newton landed on
+ *    that circle (Hessian rank 2, no certificate): 4 uncertified "degenerate points" (14 in
+ *    the 0.37-cell box), their balls cut into the tori: χ 4 in 4 components (2 in 2). */
 #include <criterion/criterion.h>
 #include <math.h>
 #include "core/util/vec3.h"
@@ -207,6 +217,35 @@ Test(coarse_points, heart_two_cusps)
             cr_expect(vertex_at(&m, p->p) != UINT32_MAX,
                       "heart d3 %s: the cusp at z = %g is no mesh vertex", place, p->p[2]);
         }
+        ism_locus_free(&l);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
+
+Test(coarse_points, linked_tori_no_point_off_the_surface)
+{
+    ism_tape *t = pf_compile(&(pf_surface){
+        "min((x^2 + y^2 + z^2 + 0.91)^2 - 4*(x^2 + y^2), "
+        "((x - 1)^2 + y^2 + z^2 + 0.91)^2 - 4*((x - 1)^2 + z^2))", NULL, 0, NULL, 0});
+    const double base[6] = {-1.8, -1.8, -1.8, 2.8, 1.8, 1.8};
+    int d = 5 - pf_quick();
+    for (int which = pf_first_box() - 1; which <= 1; which++) {
+        double box[6];
+        pf_sweep_box(base, d, which, box);
+        ism_mesh m;
+        ism_locus l;
+        pf_run_surface(t, box, 3, d, &m, &l);
+        const char *place = place_name(which);
+        cr_expect(l.npoints == 0 && l.ncurves == 0, "linked tori d%d %s: %zu singular points, "
+                  "%zu curves; want none", d, place, l.npoints, l.ncurves);
+        pf_props pr;
+        pf_measure(&m, t, &pr);
+        cr_expect(pr.euler == 0 && pr.components == 2 && pr.boundary_edges == 0 &&
+                      pr.nonmanifold_edges == 0,
+                  "linked tori d%d %s: χ %ld, %zu components, %zu boundary and %zu non-manifold "
+                  "edges; want two tori: 0, 2, 0, 0", d, place, pr.euler, pr.components,
+                  pr.boundary_edges, pr.nonmanifold_edges);
         ism_locus_free(&l);
         ism_mesh_free(&m);
     }
