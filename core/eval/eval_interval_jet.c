@@ -163,7 +163,9 @@ static void op_powc(ism_ivjet *o, const ism_ivjet *a, double c, int second)
     }
     ism_interval whole = ism_iv_whole();
     ism_interval g1 = c > 1.0 || u.lo > 0.0 ? iv_mul_c(iv_powc(u, c - 1.0), c) : whole;
-    ism_interval g2 = c > 2.0 || u.lo > 0.0 ? iv_mul(falling2(c), iv_powc(u, c - 2.0)) : whole;
+    ism_interval g2 = !second                ? ivc(0.0)
+                      : c > 2.0 || u.lo > 0.0 ? iv_mul(falling2(c), iv_powc(u, c - 2.0))
+                                              : whole;
     chain(o, a, g, g1, g2, second);
 }
 
@@ -182,59 +184,73 @@ static void op_sqrt_log(ism_ivjet *o, const ism_ivjet *a, int is_log, int second
         set_whole_derivs(o, a, a, second);
         return;
     }
-    ism_interval g1, g2;
+    ism_interval g1, g2 = ivc(0.0);
     if (is_log) {
         g1 = iv_c_div(1.0, u);
-        g2 = iv_neg(iv_square(g1));
+        if (second)
+            g2 = iv_neg(iv_square(g1));
     } else {
         g1 = iv_c_div(0.5, g);                       /* 1 / (2 sqrt u) */
-        g2 = iv_mul_c(iv_div(g1, u), -0.5);          /* -1 / (4 u sqrt u) */
+        if (second)
+            g2 = iv_mul_c(iv_div(g1, u), -0.5);      /* -1 / (4 u sqrt u) */
     }
     chain(o, a, g, g1, g2, second);
 }
 
-/* One-argument operations other than the affine ones and the branches. */
+/* g''(U) of a one-argument operation given U, g(U) and g'(U) (the second-order pass only). */
+static ism_interval second_factor(const ism_instr *in, ism_interval u, ism_interval g,
+                                  ism_interval g1)
+{
+    switch (in->op) {
+    case ISM_OP_SQUARE: return ivc(2.0);
+    case ISM_OP_POWI: {
+        unsigned n = in->b;
+        return iv_mul_c(iv_powi(u, n - 2), (double)n * (double)(n - 1));
+    }
+    case ISM_OP_DIV_CR: return iv_c_div(2.0 * in->imm, iv_powi(u, 3)); /* 2c / u^3 */
+    case ISM_OP_SIN: case ISM_OP_COS: return iv_neg(g);
+    case ISM_OP_TAN: return iv_mul_c(iv_mul(g, g1), 2.0); /* 2 tan (1 + tan^2) */
+    default: return g; /* EXP */
+    }
+}
+
+/* One-argument operations other than the affine ones and the branches. The gradient-only
+ * pass (second = 0) computes no g'': heart's search spent 26M of 88.7M instructions in
+ * interval gradients, the power rule's u^(n−2) among them. */
 static void op_unary(ism_ivjet *o, const ism_instr *in, const ism_ivjet *a, int second)
 {
-    ism_interval u = a->v, g, g1, g2;
+    ism_interval u = a->v, g, g1;
     double c = in->imm;
     switch (in->op) {
     case ISM_OP_SQUARE:
         g = iv_square(u);
         g1 = iv_mul_c(u, 2.0);
-        g2 = ivc(2.0);
         break;
     case ISM_OP_POWI: {
         unsigned n = in->b;
         g = iv_powi(u, n);
         g1 = iv_mul_c(iv_powi(u, n - 1), (double)n);
-        g2 = iv_mul_c(iv_powi(u, n - 2), (double)n * (double)(n - 1));
         break;
     }
-    case ISM_OP_DIV_CR: /* c / u: -c / u^2, 2c / u^3 (whole when U holds the pole) */
+    case ISM_OP_DIV_CR: /* c / u: -c / u^2 (whole when U holds the pole) */
         g = iv_c_div(c, u);
         g1 = iv_c_div(-c, iv_square(u));
-        g2 = iv_c_div(2.0 * c, iv_powi(u, 3));
         break;
     case ISM_OP_SIN:
         g = iv_sin(u);
         g1 = iv_cos(u);
-        g2 = iv_neg(g);
         break;
     case ISM_OP_COS:
         g = iv_cos(u);
         g1 = iv_neg(iv_sin(u));
-        g2 = iv_neg(g);
         break;
-    case ISM_OP_TAN: /* 1 + tan^2, 2 tan (1 + tan^2); whole across a pole */
+    case ISM_OP_TAN: /* 1 + tan^2; whole across a pole */
         g = iv_tan(u);
         g1 = iv_add_c(iv_square(g), 1.0);
-        g2 = iv_mul_c(iv_mul(g, g1), 2.0);
         break;
     case ISM_OP_EXP:
         g = iv_exp(u);
         g1 = g;
-        g2 = g;
         break;
     case ISM_OP_POWC: op_powc(o, a, c, second); return;
     case ISM_OP_SQRT: op_sqrt_log(o, a, 0, second); return;
@@ -244,7 +260,7 @@ static void op_unary(ism_ivjet *o, const ism_instr *in, const ism_ivjet *a, int 
         set_whole_derivs(o, a, a, second);
         return;
     }
-    chain(o, a, g, g1, g2, second);
+    chain(o, a, g, g1, second ? second_factor(in, u, g, g1) : ivc(0.0), second);
 }
 
 static void op_add(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, int sub, int second)
