@@ -18,4 +18,8 @@
 bool ism_graph_certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
                          const double hi[3], uint64_t *intervals);
 
+/* The same verdict from an enclosure g of ∇f over a box already computed
+ * (ism_eval_interval_grad): ∇f · d clears 0 over it for d the midpoint of g's gradient. */
+bool ism_graph_from_enclosure(const ism_ivgrad *g);
+
 #endif

@@ -45,6 +45,12 @@ typedef struct ism_poly_options {
                                singular locus: vertices where the surface bends one way move
                                0.9 E toward its convex side so the mesh straddles it, and
                                nodes are sized for that (straddle.h); default off */
+    bool dual;              /* under max_error, on a surface without min/max and without a
+                               singular locus that the box does not cut: one vertex per leaf
+                               on f = 0 and quads across the crossed minimal edges, leaves
+                               sized by the error of those triangles (dual.h; one thread);
+                               where that cannot apply, the primal polygons as without it.
+                               Default off */
     bool scalar_eval;       /* evaluate the octree node by node: no batched intervals over a
                                node's children and no zero-free leaves (octree.h) — the same
                                mesh bit for bit, for more; on is for tests (default off) */

@@ -9,6 +9,7 @@
 #include "core/octree/breaks.h"
 #include "core/octree/cell.h"
 #include "core/octree/crease_split.h"
+#include "core/octree/dual.h"
 #include "core/octree/leaf_memo.h"
 #include "core/octree/octree_build.h"
 #include "core/octree/refine.h"
@@ -616,6 +617,37 @@ static void add_round_costs(ism_poly_stats *total, const ism_poly_stats *r)
     }
 }
 
+/* The dual mesh (dual.h) when asked for and possible: ISM_POLY_OK with the mesh, a failure,
+ * or *tried false (the primal polygons then). */
+static enum ism_poly_status try_dual(const ism_tape *f, const ism_poly_options *o,
+                                     ism_mesh *mesh, ism_poly_stats *stats, bool *tried)
+{
+    *tried = false;
+    if (!o->dual || !ism_dual_wanted(f, o))
+        return ISM_POLY_OK;
+    double t0 = ism_now_ms();
+    ism_dual_stats ds;
+    enum ism_dual_status d = ism_dual_mesh(f, o, mesh, &ds);
+    if (d == ISM_DUAL_NOT_APPLICABLE)
+        return ISM_POLY_OK;
+    *tried = true;
+    stats->threads = 1;
+    stats->error_rounds = ds.rounds;
+    stats->error_missed_nodes = ds.missed;
+    stats->plotting_nodes = ds.leaves;
+    stats->evals_point = ds.evals_point;
+    stats->evals_gradient = ds.evals_gradient;
+    stats->evals_interval = ds.evals_interval;
+    stats->triangles = mesh->ntris;
+    stats->vertices = mesh->nverts;
+    stats->total_ms = ism_now_ms() - t0;
+    stats->time_ms[ISM_PHASE_MESH] = stats->total_ms;
+    return d == ISM_DUAL_OK          ? ISM_POLY_OK
+           : d == ISM_DUAL_TOO_BIG   ? ISM_POLY_TOO_BIG
+           : d == ISM_DUAL_CANCELLED ? ISM_POLY_CANCELLED
+                                     : ISM_POLY_NO_MEMORY;
+}
+
 enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o,
                                     ism_mesh *mesh, ism_poly_stats *stats, ism_error *err)
 {
@@ -623,6 +655,10 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
     ism_mesh_free(mesh);
     if (!ism_poly_options_check(o, err))
         return ISM_POLY_BAD_OPTIONS;
+    bool dual;
+    enum ism_poly_status ds = try_dual(f, o, mesh, stats, &dual);
+    if (dual)
+        return ds == ISM_POLY_OK ? ISM_POLY_OK : fail_with(ds, o, err);
     double t_start = ism_now_ms();
     /* one pool for every round and phase: threads made once per call */
     ism_pool *pool = ism_pool_new(thread_count(o));

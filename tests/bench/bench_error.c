@@ -5,12 +5,13 @@
  * to f = 0, in closed form for the sphere and the torus, else the length of the Newton
  * projection q <- q - f ∇f / |∇f|² (on the tape compiled from the same expression).
  *
- *   bench_error mesh NAME E [DEPTH [raw] [straddle]]
+ *   bench_error mesh NAME E [DEPTH [raw] [straddle] [dual]]
  *                                        isomesh (core/singular/surface.h: the locus, the
  *                                        polygoniser, conformance, then the simplification
  *                                        within E as the service does by default; raw: not
  *                                        it; straddle: the polygoniser's straddle option,
- *                                        core/octree/straddle.h), one thread
+ *                                        core/octree/straddle.h; dual: the dual mesh,
+ *                                        core/octree/dual.h), one thread
  *   bench_error measure NAME FILE.ply    a mesh from another tool (binary little-endian PLY:
  *                                        double x y z, faces as uchar count + int32 indices)
  *   bench_error eval NAME X,Y,Z[;...]    f at points (to check the other tools' formulas)
@@ -229,7 +230,7 @@ static ism_tape *compile(const surface *s)
 }
 
 static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, int depth,
-                    bool simplify, bool straddle)
+                    bool simplify, bool straddle, bool dual)
 {
     ism_poly_options o;
     ism_poly_options_default(&o);
@@ -238,6 +239,7 @@ static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, 
     o.max_depth = depth;
     o.threads = 1;
     o.straddle = straddle;
+    o.dual = dual;
     ism_mesh mesh;
     ism_mesh_init(&mesh);
     ism_locus locus;
@@ -336,7 +338,7 @@ int main(int argc, char **argv)
     if (argc == 2 && strcmp(argv[1], "list") == 0)
         return cmd_list();
     if (argc < 4) {
-        fprintf(stderr, "usage: bench_error mesh NAME E [DEPTH [raw] [straddle]] | measure NAME FILE.ply | "
+        fprintf(stderr, "usage: bench_error mesh NAME E [DEPTH [raw] [straddle] [dual]] | measure NAME FILE.ply | "
                         "eval NAME X,Y,Z[;...] | list\n");
         return 2;
     }
@@ -348,7 +350,8 @@ int main(int argc, char **argv)
     int rc = 2;
     if (strcmp(argv[1], "mesh") == 0)
         rc = cmd_mesh(s, t, &m, atof(argv[3]), argc > 4 ? atoi(argv[4]) : 10,
-                      !has_word(argc, argv, 5, "raw"), has_word(argc, argv, 5, "straddle"));
+                      !has_word(argc, argv, 5, "raw"), has_word(argc, argv, 5, "straddle"),
+                      has_word(argc, argv, 5, "dual"));
     else if (strcmp(argv[1], "measure") == 0)
         rc = cmd_measure(&m, argv[3]);
     else if (strcmp(argv[1], "eval") == 0)

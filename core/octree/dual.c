@@ -1,0 +1,646 @@
+/* dual.c — dual contouring on an octree under an error bound, for surfaces without features
+ * (dual.h): the tree and its leaf tests, the vertices, the minimal-edge walk that makes the
+ * quads, and the measure-and-split rounds. */
+#include "core/octree/dual.h"
+#include "core/eval/interval_jet.h"
+#include "core/octree/corners.h"
+#include "core/octree/edge_roots.h"
+#include "core/octree/graph_cert.h"
+#include "core/octree/grid.h"
+#include "core/octree/sampler.h"
+#include "core/octree/straddle.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Measure-and-split rounds after the first mesh. Each splits the leaves round the triangles
+ * that missed E, so a leaf reaches the size E needs in at most max_depth - min_depth rounds;
+ * 20 covers every depth the options allow. */
+#define DUAL_ROUNDS 20
+/* Newton steps moving a leaf's mean edge root onto f = 0, stopping once a step is below
+ * NEWTON_STOP of the leaf's size (far below any bound a request may ask for). */
+#define NEWTON_STEPS 6
+#define NEWTON_STOP 1e-9
+/* A triangle whose normal makes an angle past 90° with ∇f at its centroid is turned over:
+ * its leaves are split like those of a triangle beyond E. */
+#define TURNED_COS 0.0
+
+enum { DN_INNER, DN_EMPTY, DN_SURF };
+
+typedef struct dnode {
+    ism_ipt o;      /* lattice origin */
+    int32_t child;  /* first of the 8 children (bit 0 = x, 1 = y, 2 = z), -1 for a leaf */
+    int32_t vert;   /* the leaf's vertex, -1 for none yet */
+    uint8_t level;
+    uint8_t kind;
+    uint8_t split;  /* a triangle of this leaf missed E this round */
+    double f[8];    /* f at the corners */
+} dnode;
+
+typedef struct dual {
+    const ism_poly_options *o;
+    ism_grid g;
+    ism_sampler s;
+    ism_ivjet_ws *jet;
+    dnode *n;
+    size_t nn, capn;
+    double *pos;      /* 3 per vertex */
+    int32_t *vleaf;   /* the leaf each vertex belongs to */
+    size_t nv, capv;
+    uint32_t *tri;    /* this round's triangles */
+    size_t nt, capt;
+    double shift;     /* vertices move this far to the convex side (straddle.h), or 0 */
+    bool bad, nomem;
+} dual;
+
+/* The cells round an edge along axis e, in counter-clockwise order seen from +e: their
+ * offsets along axes e + 1 and e + 2 (mod 3). */
+static const int AROUND_U[4] = {0, 1, 1, 0};
+static const int AROUND_V[4] = {0, 0, 1, 1};
+
+static bool grow(void **p, size_t *cap, size_t need, size_t size)
+{
+    if (need <= *cap)
+        return true;
+    size_t c = *cap ? *cap : 64;
+    while (c < need)
+        c *= 2;
+    void *q = realloc(*p, c * size);
+    if (!q)
+        return false;
+    *p = q;
+    *cap = c;
+    return true;
+}
+
+static int child_at(const int bits[3]) { return bits[0] | bits[1] << 1 | bits[2] << 2; }
+
+static void corner_point(const dual *d, const dnode *n, int c, double p[3])
+{
+    int32_t step = ism_grid_cell_steps(&d->g, n->level);
+    for (int a = 0; a < 3; a++)
+        p[a] = ism_grid_coord(&d->g, a, n->o.v[a] + ((c >> a) & 1) * step);
+}
+
+static void node_box(const dual *d, const dnode *n, double lo[3], double hi[3])
+{
+    corner_point(d, n, 0, lo);
+    corner_point(d, n, 7, hi);
+}
+
+static bool touches_box(const dual *d, const dnode *n)
+{
+    int32_t step = ism_grid_cell_steps(&d->g, n->level), last = (int32_t)1 << d->g.depth;
+    for (int a = 0; a < 3; a++)
+        if (n->o.v[a] == 0 || n->o.v[a] + step == last)
+            return true;
+    return false;
+}
+
+/* f kept from 0 along edge c0 -> c1 (axis a, length h) by the mean-value form from both
+ * ends (g: ∇f enclosed over the node, so over the edge). */
+static bool edge_free(const dnode *n, const ism_ivgrad *g, int a, int c0, int c1, double h)
+{
+    double lo = g->d[a].lo * h, hi = g->d[a].hi * h;
+    double low = fmax(n->f[c0] + fmin(0, lo), n->f[c1] - fmax(0, hi));
+    double high = fmin(n->f[c0] + fmax(0, hi), n->f[c1] - fmin(0, lo));
+    return low > 0 || high < 0;
+}
+
+/* What the node's corners and interval say: f and ∇f at the corners, the enclosure of f and
+ * ∇f over the box (have_g false when it has a kink), and the corner gradients' agreement. */
+typedef struct corner_view {
+    double p[8][3], n[8][3];
+    ism_ivgrad g;
+    bool have_g, agree;
+    int monotone; /* bit a: ∇f's a-th component keeps a sign over the box */
+} corner_view;
+
+/* No root on an edge whose ends share a sign: f monotone along its axis, the mean-value
+ * form, the paper's same-sheet test (eq. 1) where the corner gradients agree, or an
+ * interval over the edge. */
+static bool same_sign_edge_clear(dual *d, const dnode *n, const corner_view *v, int e, int c0,
+                                 int c1)
+{
+    int a = e / 4;
+    if (v->have_g && (v->monotone >> a & 1 ||
+                      edge_free(n, &v->g, a, c0, c1, v->p[c1][a] - v->p[c0][a])))
+        return true;
+    if (v->agree && ism_dot3(v->n[c0], v->n[c1]) > d->o->gradient_test)
+        return true;
+    return !ism_segment_may_reach(&d->s, v->p[c0], v->p[c1], 0);
+}
+
+/* Crossed edges on every face 0 or 2 (one curve), and no root on an edge whose ends share
+ * a sign. */
+static bool plain_edges(dual *d, const dnode *n, const corner_view *v)
+{
+    int crossed[6] = {0};
+    for (int e = 0; e < 12; e++) {
+        int c0, c1, faces[2];
+        ism_cube_edge(e, &c0, &c1, faces);
+        if ((n->f[c0] < 0) != (n->f[c1] < 0)) {
+            crossed[faces[0]]++;
+            crossed[faces[1]]++;
+        } else if (!same_sign_edge_clear(d, n, v, e, c0, c1))
+            return false;
+    }
+    for (int k = 0; k < 6; k++)
+        if (crossed[k] > 2)
+            return false;
+    return true;
+}
+
+/* f kept from 0 over the node by the mean-value form from each corner: f(x) = f(c) +
+ * ∇f(ξ)·(x − c) with ∇f in its enclosure g; the 8 enclosures intersected. The natural
+ * interval of a polynomial like the torus's loses to its own dependencies (width ~0.07 in a
+ * cell 0.003 across, 0.02 off the surface, where f is 0.05): cells beside the surface would
+ * be split to the last level. */
+static bool mean_value_free(const dnode *n, const ism_ivgrad *g, const double lo[3],
+                            const double hi[3])
+{
+    double low = -INFINITY, high = INFINITY;
+    for (int c = 0; c < 8; c++) {
+        double a = n->f[c], b = n->f[c];
+        for (int k = 0; k < 3; k++) {
+            double h = hi[k] - lo[k], s = (c >> k) & 1 ? -h : h; /* toward the far side */
+            double p = g->d[k].lo * s, q = g->d[k].hi * s;
+            a += fmin(0, fmin(p, q));
+            b += fmax(0, fmax(p, q));
+        }
+        low = fmax(low, a);
+        high = fmin(high, b);
+    }
+    return low > 0 || high < 0;
+}
+
+/* What node i is: empty (proven free of f = 0), a surface leaf, or to be split. */
+
+/* Any two corner gradients within acos(flat_normal): the paper's one-sheet test, which the
+ * primal polygons use too (plot_test.c). */
+static bool normals_agree(const double (*n)[3], double cos_min)
+{
+    for (int i = 0; i < 8; i++)
+        for (int j = i + 1; j < 8; j++)
+            if (!(ism_dot3(n[i], n[j]) >= cos_min))
+                return false;
+    return true;
+}
+
+/* What node n is: empty (proven free of f = 0), a surface leaf with one sheet (corner
+ * gradients agreeing, or one graph proven by intervals), or to be split. */
+static int classify(dual *d, dnode *n)
+{
+    corner_view v;
+    int neg = 0;
+    for (int c = 0; c < 8; c++) {
+        corner_point(d, n, c, v.p[c]);
+        n->f[c] = ism_sample_grad(&d->s, v.p[c], v.n[c]);
+        double len = ism_normalise3(v.n[c]); /* 0 at a critical point: no agreement there */
+        if (!isfinite(n->f[c]) || !isfinite(len))
+            return DN_INNER;
+        neg += n->f[c] < 0;
+    }
+    if (n->level < d->o->min_depth)
+        return DN_INNER;
+    ism_interval box[3];
+    for (int a = 0; a < 3; a++)
+        box[a] = (ism_interval){v.p[0][a], v.p[7][a]};
+    d->s.n_interval++;
+    v.have_g = ism_eval_interval_grad(d->s.tape, d->jet, box, NULL, NULL, &v.g) == 0;
+    if (v.have_g && (v.g.v.lo > 0 || v.g.v.hi < 0 || mean_value_free(n, &v.g, v.p[0], v.p[7])))
+        return DN_EMPTY;
+    if (neg == 0 || neg == 8)
+        return DN_INNER; /* maybe a piece no corner sees */
+    v.agree = normals_agree((const double (*)[3])v.n, d->o->flat_normal);
+    if (!v.agree && !(v.have_g && ism_graph_from_enclosure(&v.g)))
+        return DN_INNER;
+    v.monotone = 0;
+    for (int a = 0; v.have_g && a < 3; a++)
+        v.monotone |= (v.g.d[a].lo > 0 || v.g.d[a].hi < 0) << a;
+    return plain_edges(d, n, &v) ? DN_SURF : DN_INNER;
+}
+
+static bool new_node(dual *d, ism_ipt o, int level, int32_t *out)
+{
+    if (!grow((void **)&d->n, &d->capn, d->nn + 1, sizeof *d->n))
+        return false;
+    *out = (int32_t)d->nn++;
+    dnode *n = &d->n[*out];
+    memset(n, 0, sizeof *n);
+    n->o = o;
+    n->level = (uint8_t)level;
+    n->child = n->vert = -1;
+    return true;
+}
+
+static void build(dual *d, int32_t i);
+
+/* Node i's 8 children made and built (i is at a level above max_depth). */
+static void split_node(dual *d, int32_t i)
+{
+    int level = d->n[i].level;
+    int32_t half = ism_grid_cell_steps(&d->g, level + 1), first = -1;
+    for (int c = 0; c < 8; c++) {
+        ism_ipt o = d->n[i].o;
+        for (int a = 0; a < 3; a++)
+            o.v[a] += ((c >> a) & 1) * half;
+        int32_t k;
+        if (!new_node(d, o, level + 1, &k)) {
+            d->nomem = true;
+            return;
+        }
+        if (c == 0)
+            first = k;
+    }
+    d->n[i].kind = DN_INNER;
+    d->n[i].child = first;
+    for (int c = 0; c < 8; c++)
+        build(d, first + c);
+}
+
+/* Classifies node i and splits it (recursively) while it is neither empty nor plain. */
+static void build(dual *d, int32_t i)
+{
+    if (d->bad || d->nomem || (d->o->cancel && *d->o->cancel))
+        return;
+    int kind = classify(d, &d->n[i]);
+    d->n[i].kind = (uint8_t)kind;
+    if (kind == DN_SURF && touches_box(d, &d->n[i]))
+        d->bad = true; /* the box cuts the surface: its faces need the primal polygons */
+    if (kind != DN_INNER)
+        return;
+    if (d->n[i].level >= d->o->max_depth)
+        d->bad = true; /* not plain at the deepest level: a feature, not ours */
+    else
+        split_node(d, i);
+}
+
+/* The leaf's vertex: the mean of its edges' roots, moved onto f = 0 by Newton. */
+static bool place_vertex(dual *d, int32_t i)
+{
+    dnode *n = &d->n[i];
+    double m[3] = {0, 0, 0};
+    int roots = 0;
+    for (int e = 0; e < 12; e++) {
+        int c0, c1, faces[2];
+        ism_cube_edge(e, &c0, &c1, faces);
+        if ((n->f[c0] < 0) == (n->f[c1] < 0))
+            continue;
+        double p0[3], p1[3];
+        corner_point(d, n, c0, p0);
+        corner_point(d, n, c1, p1);
+        double t = ism_regula_falsi(&d->s, p0, p1, n->f[c0], n->f[c1]);
+        for (int a = 0; a < 3; a++)
+            m[a] += p0[a] + t * (p1[a] - p0[a]);
+        roots++;
+    }
+    for (int a = 0; a < 3; a++)
+        m[a] /= roots;
+    double size = ism_grid_cell_size(&d->g, n->level);
+    for (int it = 0; it < NEWTON_STEPS; it++) {
+        double g[3];
+        double f = ism_sample_grad(&d->s, m, g), gg = ism_dot3(g, g);
+        if (!isfinite(f) || !(gg > 0) || !isfinite(gg))
+            break;
+        double step = fabs(f) / sqrt(gg);
+        for (int a = 0; a < 3; a++)
+            m[a] -= f * g[a] / gg;
+        if (step < NEWTON_STOP * size)
+            break;
+    }
+    double q[3];
+    if (d->shift > 0 && ism_straddle_point(&d->s, d->shift, d->o->box, m, q))
+        memcpy(m, q, sizeof m);
+    if (!grow((void **)&d->pos, &d->capv, d->nv + 1, 3 * sizeof *d->pos))
+        return false;
+    size_t capl = d->capv;
+    int32_t *vl = realloc(d->vleaf, capl * sizeof *vl);
+    if (!vl)
+        return false;
+    d->vleaf = vl;
+    memcpy(&d->pos[3 * d->nv], m, sizeof m);
+    d->vleaf[d->nv] = i;
+    n->vert = (int32_t)d->nv++;
+    return true;
+}
+
+static bool add_tri(dual *d, uint32_t a, uint32_t b, uint32_t c)
+{
+    if (!grow((void **)&d->tri, &d->capt, d->nt + 1, 3 * sizeof *d->tri))
+        return false;
+    d->tri[3 * d->nt] = a;
+    d->tri[3 * d->nt + 1] = b;
+    d->tri[3 * d->nt + 2] = c;
+    d->nt++;
+    return true;
+}
+
+/* The quad v[0..4) (counter-clockwise seen from ∇f) as two triangles across its shorter
+ * diagonal; a repeated vertex (two sides of the edge in one larger leaf) leaves one. */
+static void emit_quad(dual *d, const uint32_t v[4])
+{
+    uint32_t u[4];
+    int m = 0;
+    for (int k = 0; k < 4; k++)
+        if (v[k] != v[(k + 3) % 4])
+            u[m++] = v[k];
+    bool ok = true;
+    if (m == 3)
+        ok = add_tri(d, u[0], u[1], u[2]);
+    else if (m == 4) {
+        const double *p = d->pos;
+        int a = ism_dist3(&p[3 * u[0]], &p[3 * u[2]]) <= ism_dist3(&p[3 * u[1]], &p[3 * u[3]])
+                    ? 0 : 1;
+        ok = add_tri(d, u[a], u[a + 1], u[a + 2]) && add_tri(d, u[a], u[a + 2], u[(a + 3) % 4]);
+    }
+    if (!ok)
+        d->nomem = true;
+}
+
+/* Four leaves round an edge along axis e: the quad across the smallest one's edge there when
+ * f changes sign along it. */
+static void edge_quad(dual *d, const int32_t c[4], int e)
+{
+    int deepest = 0;
+    for (int k = 1; k < 4; k++)
+        if (d->n[c[k]].level > d->n[c[deepest]].level)
+            deepest = k;
+    const dnode *n = &d->n[c[deepest]];
+    int bits[3];
+    bits[e] = 0;
+    bits[(e + 1) % 3] = 1 - AROUND_U[deepest];
+    bits[(e + 2) % 3] = 1 - AROUND_V[deepest];
+    int c0 = child_at(bits);
+    bits[e] = 1;
+    int c1 = child_at(bits);
+    bool in0 = n->f[c0] < 0, in1 = n->f[c1] < 0;
+    if (in0 == in1)
+        return;
+    uint32_t v[4];
+    for (int k = 0; k < 4; k++) {
+        int32_t vert = d->n[c[k]].vert;
+        if (vert < 0) {
+            d->bad = true; /* cannot happen for plain leaves; never emit a hole */
+            return;
+        }
+        v[in0 ? k : 3 - k] = (uint32_t)vert;
+    }
+    emit_quad(d, v);
+}
+
+static bool is_leaf(const dual *d, int32_t i) { return d->n[i].child < 0; }
+
+/* Node i itself when a leaf, else its child at bits. */
+static int32_t sub(const dual *d, int32_t i, const int bits[3])
+{
+    return is_leaf(d, i) ? i : d->n[i].child + child_at(bits);
+}
+
+static void edge_proc(dual *d, const int32_t c[4], int e)
+{
+    if (is_leaf(d, c[0]) && is_leaf(d, c[1]) && is_leaf(d, c[2]) && is_leaf(d, c[3])) {
+        edge_quad(d, c, e);
+        return;
+    }
+    for (int h = 0; h < 2; h++) {
+        int32_t nc[4];
+        for (int k = 0; k < 4; k++) {
+            int bits[3];
+            bits[e] = h;
+            bits[(e + 1) % 3] = 1 - AROUND_U[k];
+            bits[(e + 2) % 3] = 1 - AROUND_V[k];
+            nc[k] = sub(d, c[k], bits);
+        }
+        edge_proc(d, nc, e);
+    }
+}
+
+/* Two nodes sharing a face across axis a (c0 below, c1 above). */
+static void face_proc(dual *d, int32_t c0, int32_t c1, int a)
+{
+    if (is_leaf(d, c0) && is_leaf(d, c1))
+        return;
+    for (int q = 0; q < 4; q++) {
+        int b0[3], b1[3];
+        b0[a] = 1;
+        b1[a] = 0;
+        b0[(a + 1) % 3] = b1[(a + 1) % 3] = q & 1;
+        b0[(a + 2) % 3] = b1[(a + 2) % 3] = q >> 1;
+        face_proc(d, sub(d, c0, b0), sub(d, c1, b1), a);
+    }
+    for (int j = 1; j < 3; j++) {
+        int e = (a + j) % 3, t = 3 - a - e; /* the edge's axis and the face's other axis */
+        for (int h = 0; h < 2; h++) {
+            int32_t nc[4];
+            for (int k = 0; k < 4; k++) {
+                int ou = AROUND_U[k], ov = AROUND_V[k];
+                int oa = (e + 1) % 3 == a ? ou : ov, ot = (e + 1) % 3 == a ? ov : ou;
+                int bits[3];
+                bits[e] = h;
+                bits[a] = 1 - oa;
+                bits[t] = ot;
+                nc[k] = sub(d, oa ? c1 : c0, bits);
+            }
+            edge_proc(d, nc, e);
+        }
+    }
+}
+
+static void cell_proc(dual *d, int32_t i)
+{
+    if (is_leaf(d, i))
+        return;
+    int32_t first = d->n[i].child;
+    for (int c = 0; c < 8; c++)
+        cell_proc(d, first + c);
+    for (int a = 0; a < 3; a++)
+        for (int q = 0; q < 4; q++) {
+            int b[3];
+            b[(a + 1) % 3] = q & 1;
+            b[(a + 2) % 3] = q >> 1;
+            b[a] = 0;
+            int32_t lo = first + child_at(b);
+            b[a] = 1;
+            face_proc(d, lo, first + child_at(b), a);
+        }
+    for (int e = 0; e < 3; e++)
+        for (int h = 0; h < 2; h++) {
+            int32_t nc[4];
+            for (int k = 0; k < 4; k++) {
+                int bits[3];
+                bits[e] = h;
+                bits[(e + 1) % 3] = AROUND_U[k];
+                bits[(e + 2) % 3] = AROUND_V[k];
+                nc[k] = first + child_at(bits);
+            }
+            edge_proc(d, nc, e);
+        }
+}
+
+/* Does triangle t meet E: centroid and edge midpoints within E of f = 0, facing along ∇f? */
+static bool tri_meets(dual *d, size_t t)
+{
+    const double *p[3];
+    for (int k = 0; k < 3; k++)
+        p[k] = &d->pos[3 * d->tri[3 * t + k]];
+    double E = d->o->max_error;
+    for (int k = 0; k < 3; k++) {
+        double m[3];
+        for (int a = 0; a < 3; a++)
+            m[a] = 0.5 * (p[k][a] + p[(k + 1) % 3][a]);
+        if (!(ism_sample_dist(&d->s, m) <= E))
+            return false;
+    }
+    double c[3], u[3], v[3], nrm[3], g[3];
+    for (int a = 0; a < 3; a++) {
+        c[a] = (p[0][a] + p[1][a] + p[2][a]) / 3;
+        u[a] = p[1][a] - p[0][a];
+        v[a] = p[2][a] - p[0][a];
+    }
+    double f = ism_sample_grad(&d->s, c, g), gl = ism_norm3(g);
+    if (!isfinite(f) || !(gl > 0) || !(fabs(f) / gl <= E))
+        return false;
+    nrm[0] = u[1] * v[2] - u[2] * v[1];
+    nrm[1] = u[2] * v[0] - u[0] * v[2];
+    nrm[2] = u[0] * v[1] - u[1] * v[0];
+    return ism_dot3(nrm, g) > TURNED_COS * ism_norm3(nrm) * gl;
+}
+
+/* The round's mesh: vertices for new surface leaves, then the quads. */
+static void make_triangles(dual *d)
+{
+    for (size_t i = 0; i < d->nn && !d->nomem; i++)
+        if (d->n[i].kind == DN_SURF && is_leaf(d, (int32_t)i) && d->n[i].vert < 0 &&
+            !place_vertex(d, (int32_t)i))
+            d->nomem = true;
+    d->nt = 0;
+    if (!d->nomem)
+        cell_proc(d, 0);
+}
+
+/* Marks the leaves of triangles that miss E; returns how many leaves can still split and
+ * counts the misses at max_depth into *missed. */
+static size_t mark_misses(dual *d, uint64_t *missed)
+{
+    size_t marked = 0;
+    *missed = 0;
+    for (size_t t = 0; t < d->nt; t++) {
+        if (tri_meets(d, t))
+            continue;
+        bool any = false;
+        for (int k = 0; k < 3; k++) {
+            dnode *n = &d->n[d->vleaf[d->tri[3 * t + k]]];
+            if (n->level < d->o->max_depth) {
+                marked += !n->split;
+                n->split = 1;
+                any = true;
+            }
+        }
+        *missed += !any;
+    }
+    return marked;
+}
+
+static void split_marked(dual *d)
+{
+    size_t n = d->nn; /* nodes made by the splits need no visit */
+    for (size_t i = 0; i < n && !d->bad && !d->nomem; i++)
+        if (d->n[i].split) {
+            d->n[i].split = 0;
+            split_node(d, (int32_t)i);
+        }
+}
+
+/* The vertices the triangles use and the triangles, renumbered, into mesh. */
+static bool to_mesh(dual *d, ism_mesh *mesh)
+{
+    uint32_t *map = malloc((d->nv ? d->nv : 1) * sizeof *map);
+    if (!map)
+        return false;
+    memset(map, 0xff, (d->nv ? d->nv : 1) * sizeof *map);
+    bool ok = true;
+    for (size_t t = 0; t < 3 * d->nt && ok; t++) {
+        uint32_t v = d->tri[t];
+        if (map[v] == UINT32_MAX) {
+            double g[3];
+            ism_sample_grad(&d->s, &d->pos[3 * v], g);
+            ism_normalise3(g);
+            float nrm[3] = {(float)g[0], (float)g[1], (float)g[2]};
+            map[v] = ism_mesh_add_vertex(mesh, &d->pos[3 * v], nrm);
+            ok = map[v] != UINT32_MAX;
+        }
+    }
+    for (size_t t = 0; t < d->nt && ok; t++)
+        ok = ism_mesh_add_triangle(mesh, map[d->tri[3 * t]], map[d->tri[3 * t + 1]],
+                                   map[d->tri[3 * t + 2]]);
+    free(map);
+    return ok;
+}
+
+bool ism_dual_wanted(const ism_tape *f, const ism_poly_options *o)
+{
+    return o->max_error > 0 && !o->nquiet && !o->nnode_balls && !ism_tape_has_min_max(f);
+}
+
+static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
+{
+    int32_t root;
+    if (!new_node(d, (ism_ipt){{0, 0, 0}}, 0, &root))
+        return ISM_DUAL_NO_MEMORY;
+    build(d, root);
+    for (int r = 0;; r++) {
+        if (d->o->cancel && *d->o->cancel)
+            return ISM_DUAL_CANCELLED;
+        if (d->nomem)
+            return ISM_DUAL_NO_MEMORY;
+        if (d->bad)
+            return ISM_DUAL_NOT_APPLICABLE;
+        make_triangles(d);
+        if (d->nomem)
+            return ISM_DUAL_NO_MEMORY;
+        if (d->bad)
+            return ISM_DUAL_NOT_APPLICABLE;
+        if (d->nt > d->o->max_triangles)
+            return ISM_DUAL_TOO_BIG;
+        if (r == DUAL_ROUNDS || !mark_misses(d, &st->missed))
+            break;
+        st->rounds++;
+        split_marked(d);
+    }
+    for (size_t i = 0; i < d->nn; i++)
+        st->leaves += d->n[i].child < 0 && d->n[i].kind == DN_SURF;
+    return to_mesh(d, mesh) ? ISM_DUAL_OK : ISM_DUAL_NO_MEMORY;
+}
+
+enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o, ism_mesh *mesh,
+                                   ism_dual_stats *st)
+{
+    memset(st, 0, sizeof *st);
+    ism_mesh_free(mesh);
+    if (!ism_dual_wanted(f, o))
+        return ISM_DUAL_NOT_APPLICABLE;
+    dual d;
+    memset(&d, 0, sizeof d);
+    d.o = o;
+    d.shift = ism_straddle_shift(f, o->max_error, false);
+    ism_grid_init(&d.g, o->box, o->max_depth);
+    d.s.tape = f;
+    d.s.ws = ism_eval_ws_new(f);
+    d.jet = ism_ivjet_ws_new(f);
+    enum ism_dual_status status =
+        d.s.ws && d.jet ? run(&d, mesh, st) : ISM_DUAL_NO_MEMORY;
+    st->evals_point = d.s.n_point;
+    st->evals_gradient = d.s.n_gradient;
+    st->evals_interval = d.s.n_interval;
+    if (status != ISM_DUAL_OK)
+        ism_mesh_free(mesh);
+    ism_eval_ws_free(d.s.ws);
+    ism_ivjet_ws_free(d.jet);
+    free(d.n);
+    free(d.pos);
+    free(d.vleaf);
+    free(d.tri);
+    return status;
+}

@@ -1,0 +1,50 @@
+/* dual.h — under an error bound, a dual-contouring mesh of a surface with nothing to protect:
+ * one vertex per octree leaf, on f = 0 (the mean of the leaf's edge roots moved there by
+ * Newton along ∇f), and a quad across every minimal lattice edge where f changes sign, made
+ * of the vertices of the (three or four) leaves round it. A leaf is kept only when interval
+ * gradients prove the surface one graph over it (graph_cert.h) and its edges and faces are
+ * plain: no root on an edge whose ends share a sign, at most one crossing curve per face; a
+ * leaf whose corners share a sign must be proven free of f = 0. Leaves that a triangle
+ * missing the bound (centroid or an edge midpoint farther than E, or facing against ∇f)
+ * touches are split, and the mesh is made again, until every triangle meets E.
+ *
+ * The primal polygons (polygonise.h) put vertices on cell edges and need cells half the size
+ * for the same error: their chords run along face diagonals. Here a cell of size h makes
+ * triangles of sides about h with every vertex on the surface, so the same E is met about a
+ * level higher (sphere E = 1e-3: ~4 times fewer triangles before any simplification).
+ *
+ * Only for closed surfaces without features: no min/max or abs in f (creases), no singular
+ * locus known (quiet or node balls given), no leaf with the surface touching the box; the
+ * call says "not applicable" then and the caller polygonises as before. One thread. */
+#ifndef ISM_DUAL_H
+#define ISM_DUAL_H
+
+#include <stdint.h>
+#include "core/eval/eval.h"
+#include "core/mesh/mesh.h"
+#include "core/octree/poly_options.h"
+
+enum ism_dual_status {
+    ISM_DUAL_OK = 0,
+    ISM_DUAL_NOT_APPLICABLE, /* a feature, a leaf the tests cannot make plain, or the box */
+    ISM_DUAL_TOO_BIG,        /* o->max_triangles exceeded */
+    ISM_DUAL_NO_MEMORY,
+    ISM_DUAL_CANCELLED,
+};
+
+typedef struct ism_dual_stats {
+    uint64_t rounds;      /* measure-and-split rounds after the first mesh */
+    uint64_t missed;      /* triangles beyond E at the end (leaves already at max_depth) */
+    uint64_t leaves;      /* leaves with a vertex */
+    uint64_t evals_point, evals_gradient, evals_interval;
+} ism_dual_stats;
+
+/* May the dual mesh be tried for f under o? (max_error set, no locus, no min/max in f.) */
+bool ism_dual_wanted(const ism_tape *f, const ism_poly_options *o);
+
+/* The dual mesh of f = 0 in o->box within o->max_error, into mesh (replaced; initialised by
+ * the caller). Deterministic. Anything but ISM_DUAL_OK leaves mesh empty. */
+enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o, ism_mesh *mesh,
+                                   ism_dual_stats *st);
+
+#endif
