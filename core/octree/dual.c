@@ -83,12 +83,6 @@ static void corner_point(const dual *d, const dnode *n, int c, double p[3])
         p[a] = ism_grid_coord(&d->g, a, n->o.v[a] + ((c >> a) & 1) * step);
 }
 
-static void node_box(const dual *d, const dnode *n, double lo[3], double hi[3])
-{
-    corner_point(d, n, 0, lo);
-    corner_point(d, n, 7, hi);
-}
-
 static bool touches_box(const dual *d, const dnode *n)
 {
     int32_t step = ism_grid_cell_steps(&d->g, n->level), last = (int32_t)1 << d->g.depth;
