@@ -1,0 +1,177 @@
+/* test_dual.c — the polygoniser's dual option (core/octree/dual.h) under max_error: on the
+ * sphere and the torus, in boxes on the octree lattice and shifted off it by 1e-3 and 0.37
+ * of a finest cell, every vertex, centroid and edge midpoint lies within E of the surface
+ * (closed-form distances); the mesh is closed, two triangles at every edge, oriented alike
+ * (no directed edge twice), one piece with χ 2 (sphere) or 0 (torus); its triangles number
+ * at most 2.5 times the count of equilateral triangles whose centroids sag E where the
+ * surface bends most (area / (1.299 ρ²), ρ² = 2 E / κ_max), which the primal polygons
+ * exceed. Where the dual mesh cannot apply (a min/max, the box cutting the surface) the
+ * mesh is the primal one bit for bit. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "poly_fixture.h"
+
+static const ism_param sphere_r[] = {{"r", 1}};
+static const pf_surface sphere = {"x^2 + y^2 + z^2 - r^2", sphere_r, 1, NULL, 0};
+static const ism_param torus_rr[] = {{"R", 1}, {"r", 0.3}};
+static const pf_surface torus = {"(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)",
+                                 torus_rr, 2, NULL, 0};
+static const pf_surface balls = {"min(x^2 + y^2 + z^2 - 1, (x - 1)^2 + y^2 + z^2 - 1)", NULL,
+                                 0, NULL, 0};
+
+static double sphere_dist(const double p[3])
+{
+    return fabs(sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 1);
+}
+
+static double torus_dist(const double p[3])
+{
+    double ring = sqrt(p[0] * p[0] + p[1] * p[1]) - 1;
+    return fabs(sqrt(ring * ring + p[2] * p[2]) - 0.3);
+}
+
+#define SAFETY_DEPTH 10
+#define FINEST (3.0 / (1 << SAFETY_DEPTH))
+static const double shifts[] = {0, 1e-3 * FINEST, 0.37 * FINEST};
+/* Equilateral triangles of circumradius ρ on a sphere of radius 1/κ: centroid sag ρ² κ / 2,
+ * area 3√3/4 ρ². The dual mesh's right triangles (two per crossed minimal edge) and the
+ * octree's factor-2 levels cost some over that ideal; 2.5 leaves room for them and not for
+ * the primal polygons (sphere 1e-3: 3.6 times, torus 3e-3: 2.7 times, measured). */
+#define EQUILATERAL_AREA 1.299038105676658
+#define COUNT_ROOM 2.5
+
+static void run(const ism_tape *t, const double box[6], double e, bool dual, ism_mesh *m)
+{
+    ism_poly_options o;
+    ism_poly_options_default(&o);
+    memcpy(o.box, box, sizeof o.box);
+    o.max_depth = SAFETY_DEPTH;
+    o.max_error = e;
+    o.dual = dual;
+    ism_poly_stats st;
+    ism_error err;
+    ism_mesh_init(m);
+    cr_assert_eq(ism_polygonise(t, &o, m, &st, &err), ISM_POLY_OK, "%s", err.message);
+    cr_assert_eq(st.error_missed_nodes, 0);
+}
+
+static void cube_box(double half, double shift, double box[6])
+{
+    for (int k = 0; k < 3; k++) {
+        box[k] = -half + shift;
+        box[3 + k] = half + shift;
+    }
+}
+
+static double worst_distance(const ism_mesh *m, double (*dist)(const double *))
+{
+    double worst = 0;
+    for (size_t v = 0; v < m->nverts; v++)
+        worst = fmax(worst, dist(m->pos + 3 * v));
+    for (size_t t = 0; t < m->ntris; t++) {
+        const double *v[3];
+        for (int k = 0; k < 3; k++)
+            v[k] = m->pos + 3 * (size_t)m->tri[3 * t + k];
+        double c[3], mid[3];
+        for (int k = 0; k < 3; k++) {
+            for (int a = 0; a < 3; a++) {
+                c[a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
+                mid[a] = (v[k][a] + v[(k + 1) % 3][a]) / 2;
+            }
+            worst = fmax(worst, fmax(dist(c), dist(mid)));
+        }
+    }
+    return worst;
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Directed edges: none twice (a closed mesh oriented alike uses each edge once per way). */
+static size_t repeated_directed_edges(const ism_mesh *m)
+{
+    uint64_t *k = malloc(3 * m->ntris * sizeof *k);
+    cr_assert(k);
+    for (size_t t = 0; t < m->ntris; t++)
+        for (int j = 0; j < 3; j++)
+            k[3 * t + j] = (uint64_t)m->tri[3 * t + j] << 32 | m->tri[3 * t + (j + 1) % 3];
+    qsort(k, 3 * m->ntris, sizeof *k, cmp_u64);
+    size_t rep = 0;
+    for (size_t i = 1; i < 3 * m->ntris; i++)
+        rep += k[i] == k[i - 1];
+    free(k);
+    return rep;
+}
+
+static void check(const pf_surface *s, double (*dist)(const double *), double e, double area,
+                  double kappa_max, long euler)
+{
+    ism_tape *t = pf_compile(s);
+    double bound = COUNT_ROOM * area / (EQUILATERAL_AREA * 2 * e / kappa_max);
+    for (size_t i = (size_t)pf_first_box(); i < sizeof shifts / sizeof shifts[0]; i++) {
+        double box[6];
+        cube_box(1.5, shifts[i], box);
+        ism_mesh m;
+        run(t, box, e, true, &m);
+        double worst = worst_distance(&m, dist);
+        cr_expect_leq(worst, e, "%s E %g shift %g: a point %g from the surface", s->expr, e,
+                      shifts[i], worst);
+        pf_props p;
+        pf_measure(&m, t, &p);
+        cr_expect_eq(p.boundary_edges + p.nonmanifold_edges, 0, "shift %g: %zu open, %zu "
+                     "non-manifold edges", shifts[i], p.boundary_edges, p.nonmanifold_edges);
+        cr_expect_eq(repeated_directed_edges(&m), 0, "shift %g: triangles turned over",
+                     shifts[i]);
+        cr_expect_eq(p.euler, euler, "shift %g: χ %ld", shifts[i], p.euler);
+        cr_expect_eq(p.components, 1);
+        cr_expect_lt((double)m.ntris, bound, "%s E %g shift %g: %zu triangles, bound %.0f",
+                     s->expr, e, shifts[i], m.ntris, bound);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
+
+Test(dual, sphere_within_the_bound_closed_and_small)
+{
+    check(&sphere, sphere_dist, 1e-3, 4 * M_PI, 1.0, 2);
+}
+
+/* The tube's own curvature 1/r is the larger one. */
+Test(dual, torus_within_the_bound_closed_and_small)
+{
+    check(&torus, torus_dist, 3e-3, 4 * M_PI * M_PI * 1.0 * 0.3, 1 / 0.3, 0);
+}
+
+static void same_as_primal(const pf_surface *s, double half)
+{
+    ism_tape *t = pf_compile(s);
+    double box[6];
+    cube_box(half, 0.37 * FINEST, box);
+    ism_mesh plain, dual;
+    run(t, box, 1e-2, false, &plain);
+    run(t, box, 1e-2, true, &dual);
+    cr_assert_eq(plain.nverts, dual.nverts);
+    cr_assert_eq(plain.ntris, dual.ntris);
+    cr_assert(memcmp(plain.pos, dual.pos, 3 * plain.nverts * sizeof *plain.pos) == 0);
+    cr_assert(memcmp(plain.tri, dual.tri, 3 * plain.ntris * sizeof *plain.tri) == 0);
+    ism_mesh_free(&plain);
+    ism_mesh_free(&dual);
+    ism_tape_free(t);
+}
+
+/* A min/max's crease needs the primal polygons' cut: the option leaves the mesh alone. */
+Test(dual, min_max_surface_left_to_the_primal_polygons)
+{
+    same_as_primal(&balls, 2.5);
+}
+
+/* The box cuts the sphere: its faces need the primal polygons. */
+Test(dual, surface_cut_by_the_box_left_to_the_primal_polygons)
+{
+    same_as_primal(&sphere, 0.8);
+}
