@@ -487,10 +487,21 @@ static bool decode_straddle(const json_t *v, ism_request *req, ism_req_error *er
                              &req->poly.straddle, err);
 }
 
+/* "dual": true or false (after "max_error"; default false). On a closed surface without
+ * min/max and without a singular locus the polygoniser then makes one vertex per octree leaf
+ * and quads across the crossed lattice edges, cells sized by those triangles' error
+ * (core/octree/dual.h); elsewhere the mesh is as without it. The cells are sized by the
+ * bound, so true without one is refused. */
+static bool decode_dual(const json_t *v, ism_request *req, ism_req_error *err)
+{
+    return decode_bound_flag(v, req, "$.dual", "its cells are sized by \"max_error\"",
+                             &req->poly.dual, err);
+}
+
 /* "quality": "raw" or "good" (ism_quality_lookup). */
 static bool decode_quality(const json_t *v, ism_request *req, ism_req_error *err)
 {
-    const char *name;
+    const char *name = NULL; /* set by read_string (gcc -O2 cannot see it once inlined) */
     if (!read_string(v, "$.quality", &name, err))
         return false;
     int q = ism_quality_lookup(name);
@@ -633,7 +644,7 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
 {
     static const char *const known[] = {"expr", "preset", "params", "let", "box", "depth",
                                         "max_error", "quality", "tolerances", "output", "curves",
-                                        "preview", "simplify", "straddle", NULL};
+                                        "preview", "simplify", "straddle", "dual", NULL};
     if (!json_is_object(root))
         return bad(err, "$", "a request is a JSON object, got %s", type_name(root));
     if (!check_fields(root, "$", known, err))
@@ -689,6 +700,8 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
         return false;
     req->simplify = req->poly.max_error > 0;
     if ((v = json_object_get(root, "simplify")) && !decode_simplify(v, req, err))
+        return false;
+    if ((v = json_object_get(root, "dual")) && !decode_dual(v, req, err))
         return false;
     if ((v = json_object_get(root, "straddle")) && !decode_straddle(v, req, err))
         return false;

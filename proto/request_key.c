@@ -55,6 +55,10 @@ static void write_max_error(ism_jw *w, const ism_request *req)
         ism_jw_key(w, "straddle");
         ism_jw_bool(w, true);
     }
+    if (req->poly.dual) { /* only when asked for: other keys stay as they were */
+        ism_jw_key(w, "dual");
+        ism_jw_bool(w, true);
+    }
 }
 
 /* The quality pass, only when asked for (keys of requests without it stay as they were). */

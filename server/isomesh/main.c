@@ -56,6 +56,9 @@ static const char usage_text[] =
     "      --straddle           under --max-error, move vertices where the surface bends\n"
     "                           one way 0.9 E toward its convex side and size the cells for\n"
     "                           it: fewer triangles within E (no min/max, no singular locus)\n"
+    "      --dual               under --max-error, on a closed surface without min/max and\n"
+    "                           without a singular locus: dual contouring, one vertex per\n"
+    "                           leaf, cells sized by the error (fewer triangles, one thread)\n"
     "      --max-triangles N    budget; stop with an error beyond it (default 4000000)\n"
     "      --quality Q          raw (default): the polygoniser's triangles; good: then\n"
     "                           flip edges toward Delaunay and relax vertices along the\n"
@@ -72,7 +75,7 @@ static const char usage_text[] =
 
 enum long_only {
     OPT_LET = 256, OPT_SURFACE, OPT_SURFACES, OPT_LIST, OPT_THREADS, OPT_MAX_TRIS,
-    OPT_MAX_ERROR, OPT_NO_SIMPLIFY, OPT_STRADDLE, OPT_STATS, OPT_WORKER, OPT_FEATURES, OPT_QUALITY,
+    OPT_MAX_ERROR, OPT_NO_SIMPLIFY, OPT_STRADDLE, OPT_DUAL, OPT_STATS, OPT_WORKER, OPT_FEATURES, OPT_QUALITY,
     OPT_TOLERANCE, /* OPT_TOLERANCE + i: the table's tolerance i */
 };
 
@@ -91,6 +94,7 @@ static const struct option base_options[] = {
     {"quality", required_argument, 0, OPT_QUALITY},
     {"no-simplify", no_argument, 0, OPT_NO_SIMPLIFY},
     {"straddle", no_argument, 0, OPT_STRADDLE},
+    {"dual", no_argument, 0, OPT_DUAL},
     {"output", required_argument, 0, 'o'},
     {"stats", no_argument, 0, OPT_STATS},
     {"features", required_argument, 0, OPT_FEATURES},
@@ -163,6 +167,7 @@ static bool apply_option(ism_cli_run *run, int opt, const char *arg)
     }
     case OPT_NO_SIMPLIFY: run->no_simplify = true; return true;
     case OPT_STRADDLE: o->straddle = true; return true;
+    case OPT_DUAL: o->dual = true; return true;
     case OPT_QUALITY:
         if ((run->quality = ism_quality_lookup(arg)) >= 0)
             return true;

@@ -88,6 +88,8 @@ static const char *const different[] = {
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"depth\": {\"max\": 7}}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"depth\": {\"max\": 7}, "
     "\"straddle\": true}",
+    "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"depth\": {\"max\": 7}, "
+    "\"dual\": true}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"depth\": {\"min\": 2}}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"tolerances\": {\"gradient\": 0.8}}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"tolerances\": {\"double_root_eps\": 1e-8}}",

@@ -36,7 +36,7 @@ static const bad_case bad_cases[] = {
      "from GET /v1/presets)"},
     {"{\"expr\": \"x\", \"colour\": 1}", 400, "bad_request", "$.colour",
      "$.colour: unknown field (expected one of: expr, preset, params, let, box, depth, "
-     "max_error, quality, tolerances, output, curves, preview, simplify, straddle)"},
+     "max_error, quality, tolerances, output, curves, preview, simplify, straddle, dual)"},
     {"{\"expr\": \"x\", \"tolerances\": {\"gradiant\": 0.9}}", 400, "bad_request",
      "$.tolerances.gradiant",
      "$.tolerances.gradiant: unknown field (expected one of: gradient, double_root_eps, "
@@ -49,7 +49,7 @@ static const bad_case bad_cases[] = {
      "curvature_bits, attributes, draco)"},
     {"{\"expr\": \"x\", \"a b\": 1}", 400, "bad_request", "$[\"a b\"]",
      "$[\"a b\"]: unknown field (expected one of: expr, preset, params, let, box, depth, "
-     "max_error, quality, tolerances, output, curves, preview, simplify, straddle)"},
+     "max_error, quality, tolerances, output, curves, preview, simplify, straddle, dual)"},
     /* surface */
     {"{\"expr\": 3}", 400, "bad_request", "$.expr", "$.expr: expected a string, got an integer"},
     {"{\"expr\": \"\"}", 400, "bad_request", "$.expr", "$.expr: the expression is empty"},
@@ -135,6 +135,11 @@ static const bad_case bad_cases[] = {
      "$.straddle: the vertices move by a share of \"max_error\": give max_error too"},
     {"{\"expr\": \"x\", \"max_error\": 0.01, \"straddle\": \"yes\"}", 400, "bad_request",
      "$.straddle", "$.straddle: expected true or false, got a string"},
+    /* dual: a boolean, true only under max_error */
+    {"{\"expr\": \"x\", \"dual\": true}", 400, "bad_request", "$.dual",
+     "$.dual: its cells are sized by \"max_error\": give max_error too"},
+    {"{\"expr\": \"x\", \"max_error\": 0.01, \"dual\": 1}", 400, "bad_request", "$.dual",
+     "$.dual: expected true or false, got an integer"},
     /* quality: "raw" or "good" */
     {"{\"expr\": \"x\", \"quality\": \"best\"}", 400, "bad_request", "$.quality",
      "$.quality: unknown quality \"best\" (raw or good)"},
@@ -342,6 +347,12 @@ Test(request, max_error_decodes_and_sets_the_safety_depth)
     cr_expect(o.straddle, "straddle reaches the polygoniser's options");
     ism_request_free(&req);
 
+    const char *dual = "{\"preset\": \"torus\", \"max_error\": 0.002, \"dual\": true}";
+    cr_assert(ism_request_decode(dual, strlen(dual), &lim, &req, &err), "%s", err.message);
+    ism_request_poly_options(&req, &o);
+    cr_expect(o.dual, "dual reaches the polygoniser's options");
+    ism_request_free(&req);
+
     const char *plain = "{\"preset\": \"torus\"}";
     cr_assert(ism_request_decode(plain, strlen(plain), &lim, &req, &err), "%s", err.message);
     cr_expect_eq(req.poly.max_error, 0);
@@ -349,6 +360,7 @@ Test(request, max_error_decodes_and_sets_the_safety_depth)
     ism_request_poly_options(&req, &o);
     cr_expect_eq(o.max_error, 0);
     cr_expect(!o.straddle);
+    cr_expect(!o.dual);
     ism_request_free(&req);
 }
 

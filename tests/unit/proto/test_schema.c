@@ -65,7 +65,7 @@ Test(schema, fields_are_the_decoders)
 {
     json_t *s = schema();
     json_t *props = json_object_get(s, "properties");
-    cr_expect_eq(json_object_size(props), 14);
+    cr_expect_eq(json_object_size(props), 15);
     known_fields(props, NULL);
     const char *sections[] = {"depth", "tolerances", "output"};
     for (int i = 0; i < 3; i++)
