@@ -111,9 +111,9 @@ typedef struct corner_view {
     int monotone; /* bit a: ∇f's a-th component keeps a sign over the box */
 } corner_view;
 
-/* No root on an edge whose ends share a sign: f monotone along its axis, the mean-value
- * form, the paper's same-sheet test (eq. 1) where the corner gradients agree, or an
- * interval over the edge. */
+/* No root on an edge whose ends share a sign: f monotone along its axis or kept from 0 by
+ * the mean-value form (proofs), else the primal polygons' edge test (plot_test.c): the
+ * paper's same-sheet test (eq. 1) on the ends' gradients, then its double-root search. */
 static bool same_sign_edge_clear(dual *d, const dnode *n, const corner_view *v, int e, int c0,
                                  int c1)
 {
@@ -121,9 +121,14 @@ static bool same_sign_edge_clear(dual *d, const dnode *n, const corner_view *v, 
     if (v->have_g && (v->monotone >> a & 1 ||
                       edge_free(n, &v->g, a, c0, c1, v->p[c1][a] - v->p[c0][a])))
         return true;
-    if (v->agree && ism_dot3(v->n[c0], v->n[c1]) > d->o->gradient_test)
+    const ism_poly_options *o = d->o;
+    if (ism_dot3(v->n[c0], v->n[c1]) > o->gradient_test)
         return true;
-    return !ism_segment_may_reach(&d->s, v->p[c0], v->p[c1], 0);
+    if (!ism_segment_may_reach(&d->s, v->p[c0], v->p[c1], o->double_root_eps))
+        return true;
+    ism_root_params prm = {o->gradient_test, o->double_root_eps, o->double_root_iters, false};
+    double t;
+    return ism_double_root_search(&d->s, &prm, v->p[c0], v->p[c1], n->f[c0], n->f[c1], &t) == 0;
 }
 
 /* Crossed edges on every face 0 or 2 (one curve), and no root on an edge whose ends share
@@ -271,7 +276,8 @@ static void build(dual *d, int32_t i)
         split_node(d, i);
 }
 
-/* The leaf's vertex: the mean of its edges' roots, moved onto f = 0 by Newton. */
+/* The leaf's vertex: the mean of its edges' secant roots, moved onto f = 0 by Newton (the
+ * exact roots would cost a fifth of the whole mesh for a start point Newton forgets). */
 static bool place_vertex(dual *d, int32_t i)
 {
     dnode *n = &d->n[i];
@@ -285,7 +291,7 @@ static bool place_vertex(dual *d, int32_t i)
         double p0[3], p1[3];
         corner_point(d, n, c0, p0);
         corner_point(d, n, c1, p1);
-        double t = ism_regula_falsi(&d->s, p0, p1, n->f[c0], n->f[c1]);
+        double t = n->f[c0] / (n->f[c0] - n->f[c1]); /* the secant root: Newton follows */
         for (int a = 0; a < 3; a++)
             m[a] += p0[a] + t * (p1[a] - p0[a]);
         roots++;
