@@ -35,6 +35,7 @@ typedef struct dnode {
     uint8_t level;
     uint8_t kind;
     uint8_t split;  /* a triangle of this leaf missed E this round */
+    uint8_t surf;   /* a surface leaf in the subtree (the walk skips the others) */
     double f[8];    /* f at the corners */
 } dnode;
 
@@ -187,38 +188,50 @@ static bool normals_agree(const double (*n)[3], double cos_min)
     return true;
 }
 
-/* What node n is: empty (proven free of f = 0), a surface leaf with one sheet (corner
- * gradients agreeing, or one graph proven by intervals), or to be split. */
-static int classify(dual *d, dnode *n)
+/* What node n is (f and the unit gradients at its corners in n->f and v): empty (proven
+ * free of f = 0), a surface leaf with one sheet (corner gradients agreeing, or one graph
+ * proven by interval gradients), or to be split. The interval is taken only where the
+ * corners cannot decide: a node whose corners share a sign, or disagree. */
+static int classify(dual *d, dnode *n, corner_view *v)
 {
-    corner_view v;
     int neg = 0;
     for (int c = 0; c < 8; c++) {
-        corner_point(d, n, c, v.p[c]);
-        n->f[c] = ism_sample_grad(&d->s, v.p[c], v.n[c]);
-        double len = ism_normalise3(v.n[c]); /* 0 at a critical point: no agreement there */
-        if (!isfinite(n->f[c]) || !isfinite(len))
+        if (!isfinite(n->f[c]) || !isfinite(v->n[c][0] + v->n[c][1] + v->n[c][2]))
             return DN_INNER;
         neg += n->f[c] < 0;
     }
     if (n->level < d->o->min_depth)
         return DN_INNER;
-    ism_interval box[3];
+    bool mixed = neg != 0 && neg != 8;
+    v->agree = mixed && normals_agree((const double (*)[3])v->n, d->o->flat_normal);
+    v->have_g = false;
+    v->monotone = 0;
+    if (!v->agree) {
+        ism_interval box[3];
+        for (int a = 0; a < 3; a++)
+            box[a] = (ism_interval){v->p[0][a], v->p[7][a]};
+        d->s.n_interval++;
+        v->have_g = ism_eval_interval_grad(d->s.tape, d->jet, box, NULL, NULL, &v->g) == 0;
+        if (!mixed) /* empty, or maybe a piece no corner sees */
+            return v->have_g && (v->g.v.lo > 0 || v->g.v.hi < 0 ||
+                                 mean_value_free(n, &v->g, v->p[0], v->p[7]))
+                       ? DN_EMPTY
+                       : DN_INNER;
+        if (!v->have_g || !ism_graph_from_enclosure(&v->g))
+            return DN_INNER;
+        for (int a = 0; a < 3; a++)
+            v->monotone |= (v->g.d[a].lo > 0 || v->g.d[a].hi < 0) << a;
+    }
+    return plain_edges(d, n, v) ? DN_SURF : DN_INNER;
+}
+
+/* f and the unit gradient at lattice point q into *f, p, g. */
+static void sample_corner(dual *d, const int32_t q[3], double *f, double p[3], double g[3])
+{
     for (int a = 0; a < 3; a++)
-        box[a] = (ism_interval){v.p[0][a], v.p[7][a]};
-    d->s.n_interval++;
-    v.have_g = ism_eval_interval_grad(d->s.tape, d->jet, box, NULL, NULL, &v.g) == 0;
-    if (v.have_g && (v.g.v.lo > 0 || v.g.v.hi < 0 || mean_value_free(n, &v.g, v.p[0], v.p[7])))
-        return DN_EMPTY;
-    if (neg == 0 || neg == 8)
-        return DN_INNER; /* maybe a piece no corner sees */
-    v.agree = normals_agree((const double (*)[3])v.n, d->o->flat_normal);
-    if (!v.agree && !(v.have_g && ism_graph_from_enclosure(&v.g)))
-        return DN_INNER;
-    v.monotone = 0;
-    for (int a = 0; v.have_g && a < 3; a++)
-        v.monotone |= (v.g.d[a].lo > 0 || v.g.d[a].hi < 0) << a;
-    return plain_edges(d, n, &v) ? DN_SURF : DN_INNER;
+        p[a] = ism_grid_coord(&d->g, a, q[a]);
+    *f = ism_sample_grad(&d->s, p, g);
+    ism_normalise3(g); /* 0 at a critical point: no agreement there */
 }
 
 static bool new_node(dual *d, ism_ipt o, int level, int32_t *out)
@@ -234,13 +247,20 @@ static bool new_node(dual *d, ism_ipt o, int level, int32_t *out)
     return true;
 }
 
-static void build(dual *d, int32_t i);
+static void build(dual *d, int32_t i, corner_view *v);
 
-/* Node i's 8 children made and built (i is at a level above max_depth). */
+/* Node i's 8 children made and built (i is at a level above max_depth): f and ∇f at the 27
+ * lattice points of the children's corners, each taken once. */
 static void split_node(dual *d, int32_t i)
 {
     int level = d->n[i].level;
     int32_t half = ism_grid_cell_steps(&d->g, level + 1), first = -1;
+    double f[27], p[27][3], g[27][3];
+    for (int k = 0; k < 27; k++) {
+        int32_t q[3] = {d->n[i].o.v[0] + k % 3 * half, d->n[i].o.v[1] + k / 3 % 3 * half,
+                        d->n[i].o.v[2] + k / 9 * half};
+        sample_corner(d, q, &f[k], p[k], g[k]);
+    }
     for (int c = 0; c < 8; c++) {
         ism_ipt o = d->n[i].o;
         for (int a = 0; a < 3; a++)
@@ -255,17 +275,33 @@ static void split_node(dual *d, int32_t i)
     }
     d->n[i].kind = DN_INNER;
     d->n[i].child = first;
+    for (int c = 0; c < 8; c++) {
+        corner_view v;
+        dnode *n = &d->n[first + c];
+        for (int k = 0; k < 8; k++) {
+            int at = ((c & 1) + (k & 1)) + 3 * ((c >> 1 & 1) + (k >> 1 & 1)) +
+                     9 * ((c >> 2 & 1) + (k >> 2 & 1));
+            n->f[k] = f[at];
+            memcpy(v.p[k], p[at], sizeof v.p[k]);
+            memcpy(v.n[k], g[at], sizeof v.n[k]);
+        }
+        build(d, first + c, &v);
+    }
+    uint8_t surf = 0;
     for (int c = 0; c < 8; c++)
-        build(d, first + c);
+        surf |= d->n[first + c].surf;
+    d->n[i].surf = surf;
 }
 
-/* Classifies node i and splits it (recursively) while it is neither empty nor plain. */
-static void build(dual *d, int32_t i)
+/* Classifies node i (its corners in n->f and v) and splits it (recursively) while it is
+ * neither empty nor plain. */
+static void build(dual *d, int32_t i, corner_view *v)
 {
     if (d->bad || d->nomem || (d->o->cancel && *d->o->cancel))
         return;
-    int kind = classify(d, &d->n[i]);
+    int kind = classify(d, &d->n[i], v);
     d->n[i].kind = (uint8_t)kind;
+    d->n[i].surf = kind == DN_SURF;
     if (kind == DN_SURF && touches_box(d, &d->n[i]))
         d->bad = true; /* the box cuts the surface: its faces need the primal polygons */
     if (kind != DN_INNER)
@@ -400,6 +436,8 @@ static int32_t sub(const dual *d, int32_t i, const int bits[3])
 
 static void edge_proc(dual *d, const int32_t c[4], int e)
 {
+    if (!d->n[c[0]].surf || !d->n[c[1]].surf || !d->n[c[2]].surf || !d->n[c[3]].surf)
+        return; /* a quad needs a surface leaf on every side */
     if (is_leaf(d, c[0]) && is_leaf(d, c[1]) && is_leaf(d, c[2]) && is_leaf(d, c[3])) {
         edge_quad(d, c, e);
         return;
@@ -420,6 +458,8 @@ static void edge_proc(dual *d, const int32_t c[4], int e)
 /* Two nodes sharing a face across axis a (c0 below, c1 above). */
 static void face_proc(dual *d, int32_t c0, int32_t c1, int a)
 {
+    if (!d->n[c0].surf || !d->n[c1].surf)
+        return;
     if (is_leaf(d, c0) && is_leaf(d, c1))
         return;
     for (int q = 0; q < 4; q++) {
@@ -450,7 +490,7 @@ static void face_proc(dual *d, int32_t c0, int32_t c1, int a)
 
 static void cell_proc(dual *d, int32_t i)
 {
-    if (is_leaf(d, i))
+    if (is_leaf(d, i) || !d->n[i].surf)
         return;
     int32_t first = d->n[i].child;
     for (int c = 0; c < 8; c++)
@@ -589,7 +629,13 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
     int32_t root;
     if (!new_node(d, (ism_ipt){{0, 0, 0}}, 0, &root))
         return ISM_DUAL_NO_MEMORY;
-    build(d, root);
+    corner_view v;
+    int32_t last = (int32_t)1 << d->g.depth;
+    for (int c = 0; c < 8; c++) {
+        int32_t q[3] = {(c & 1) * last, (c >> 1 & 1) * last, (c >> 2 & 1) * last};
+        sample_corner(d, q, &d->n[root].f[c], v.p[c], v.n[c]);
+    }
+    build(d, root, &v);
     for (int r = 0;; r++) {
         if (d->o->cancel && *d->o->cancel)
             return ISM_DUAL_CANCELLED;
