@@ -51,6 +51,8 @@ typedef struct dual {
     size_t nv, capv;
     uint32_t *tri;    /* this round's triangles */
     size_t nt, capt;
+    uint64_t *passed; /* open-addressed keys (tri_key) of triangles that met E, 0: empty */
+    size_t npassed, cappassed;
     double shift;     /* vertices move this far to the convex side (straddle.h), or 0 */
     bool bad, nomem;
 } dual;
@@ -562,13 +564,71 @@ static void make_triangles(dual *d)
 
 /* Marks the leaves of triangles that miss E; returns how many leaves can still split and
  * counts the misses at max_depth into *missed. */
+/* Triangle t's vertices, sorted, in one word (+1: never 0); 0 when the vertices are too
+ * many for 21 bits each (then nothing is remembered). A triangle keeps its vertices'
+ * positions while they exist, so one that met E meets it again. */
+static uint64_t tri_key(const dual *d, size_t t)
+{
+    uint64_t v[3] = {d->tri[3 * t], d->tri[3 * t + 1], d->tri[3 * t + 2]};
+    if (d->nv >= (size_t)1 << 21)
+        return 0;
+    for (int i = 0; i < 2; i++)
+        for (int j = 0; j < 2 - i; j++)
+            if (v[j] > v[j + 1]) {
+                uint64_t x = v[j];
+                v[j] = v[j + 1];
+                v[j + 1] = x;
+            }
+    return (v[0] | v[1] << 21 | v[2] << 42) + 1;
+}
+
+/* The slot of key in the passed set (its own or the empty one where it would go). */
+static size_t passed_slot(const dual *d, uint64_t key)
+{
+    size_t mask = d->cappassed - 1, i = (size_t)(key * 0x9E3779B97F4A7C15ull >> 17) & mask;
+    while (d->passed[i] && d->passed[i] != key)
+        i = (i + 1) & mask;
+    return i;
+}
+
+/* Remembers key (the set kept at most half full; out of memory, it is not remembered). */
+static void remember_passed(dual *d, uint64_t key)
+{
+    if (2 * (d->npassed + 1) > d->cappassed) {
+        size_t old = d->cappassed, cap = old ? 2 * old : 1024;
+        uint64_t *keep = d->passed;
+        d->passed = calloc(cap, sizeof *d->passed);
+        if (!d->passed) {
+            d->passed = keep;
+            return;
+        }
+        d->cappassed = cap;
+        for (size_t i = 0; i < old; i++)
+            if (keep[i])
+                d->passed[passed_slot(d, keep[i])] = keep[i];
+        free(keep);
+    }
+    size_t i = passed_slot(d, key);
+    d->npassed += !d->passed[i];
+    d->passed[i] = key;
+}
+
+/* Marks the leaves of triangles that miss E; returns how many leaves can still split and
+ * counts the misses at max_depth into *missed. Triangles that met E in an earlier round are
+ * not measured again. */
 static size_t mark_misses(dual *d, uint64_t *missed)
 {
     size_t marked = 0;
     *missed = 0;
     for (size_t t = 0; t < d->nt; t++) {
-        if (tri_meets(d, t))
+        uint64_t key = tri_key(d, t);
+        if (key && d->cappassed && d->passed[passed_slot(d, key)] == key)
             continue;
+        if (tri_meets(d, t)) {
+            if (key)
+                remember_passed(d, key); /* out of memory: it is measured again, no more */
+            continue;
+        }
         bool any = false;
         for (int k = 0; k < 3; k++) {
             dnode *n = &d->n[d->vleaf[d->tri[3 * t + k]]];
@@ -650,7 +710,7 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
             return ISM_DUAL_NOT_APPLICABLE;
         if (d->nt > d->o->max_triangles)
             return ISM_DUAL_TOO_BIG;
-        if (r == DUAL_ROUNDS || !mark_misses(d, &st->missed))
+        if (!mark_misses(d, &st->missed) || r == DUAL_ROUNDS)
             break;
         st->rounds++;
         split_marked(d);
@@ -688,5 +748,6 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
     free(d.pos);
     free(d.vleaf);
     free(d.tri);
+    free(d.passed);
     return status;
 }
