@@ -21,7 +21,7 @@ and <= 0.2 x VTK's at every target; <= 1.5 µs CPU per triangle on the gyroid.
 Asserts nothing; exits 0 unless it cannot run.
 
   bench_equal_error.py --build build/release [--quick] [--only NAME] [--libfive DIR]
-                       [--tools isomesh,libfive,vtk,skimage] [--straddle]
+                       [--tools isomesh,libfive,vtk,skimage] [--straddle] [--dual] [--raw]
 """
 import argparse
 import json
@@ -88,7 +88,8 @@ class Tool:
 
 class Isomesh(Tool):
     name = "isomesh"
-    words = ()  # bench_error's extra words ("straddle": the polygoniser's straddle option)
+    words = ()  # bench_error's extra words: "straddle", "dual" (the polygoniser's options),
+    #             "raw" (no simplification)
 
     def start(self, s, e):
         return 1 / e
@@ -321,6 +322,10 @@ def main():
     ap.add_argument("--tools", default="isomesh,libfive,vtk,skimage")
     ap.add_argument("--straddle", action="store_true",
                     help="isomesh with the straddle option (core/octree/straddle.h)")
+    ap.add_argument("--dual", action="store_true",
+                    help="isomesh with the dual option (core/octree/dual.h)")
+    ap.add_argument("--raw", action="store_true",
+                    help="isomesh without the simplification (the request's simplify: false)")
     args = ap.parse_args()
     build = os.path.abspath(args.build)
     bench = os.path.join(build, "bench", "bench_error")
@@ -333,8 +338,9 @@ def main():
     try:
         wanted = args.tools.split(",")
         tools = [Isomesh(bench, tmp)] if "isomesh" in wanted else []
-        if args.straddle and tools:
-            tools[0].words = ("straddle",)
+        if tools:
+            tools[0].words = tuple(w for w, on in (("straddle", args.straddle),
+                                                   ("dual", args.dual), ("raw", args.raw)) if on)
         five = None
         if "libfive" in wanted:
             five, why = build_libfive_mesher(build, args.libfive)

@@ -360,3 +360,20 @@ double pf_vec_angle_deg(const double a[3], const double b[3])
                     (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]));
     return acos(fmax(-1, fmin(1, d))) * 180 / M_PI;
 }
+
+static const ism_param unit_r[] = {{"r", 1}};
+const pf_surface pf_unit_sphere = {"x^2 + y^2 + z^2 - r^2", unit_r, 1, NULL, 0};
+static const ism_param ring_rr[] = {{"R", 1}, {"r", 0.3}};
+const pf_surface pf_ring_torus = {"(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)",
+                                  ring_rr, 2, NULL, 0};
+
+double pf_unit_sphere_dist(const double p[3])
+{
+    return fabs(sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 1);
+}
+
+double pf_ring_torus_dist(const double p[3])
+{
+    double ring = sqrt(p[0] * p[0] + p[1] * p[1]) - 1;
+    return fabs(sqrt(ring * ring + p[2] * p[2]) - 0.3);
+}

@@ -101,4 +101,10 @@ double pf_cell(const double box[6], int d);
  * segments, in the same order. */
 void pf_same_mesh(const ism_mesh *a, const ism_mesh *b, const char *what);
 
+/* The unit sphere and the ring torus R = 1, r = 0.3 about z, with their exact (closed-form)
+ * unsigned distances. */
+extern const pf_surface pf_unit_sphere, pf_ring_torus;
+double pf_unit_sphere_dist(const double p[3]);
+double pf_ring_torus_dist(const double p[3]);
+
 #endif

@@ -13,24 +13,8 @@
 #include <string.h>
 #include "poly_fixture.h"
 
-static const ism_param sphere_r[] = {{"r", 1}};
-static const pf_surface sphere = {"x^2 + y^2 + z^2 - r^2", sphere_r, 1, NULL, 0};
-static const ism_param torus_rr[] = {{"R", 1}, {"r", 0.3}};
-static const pf_surface torus = {"(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)",
-                                 torus_rr, 2, NULL, 0};
 static const pf_surface balls = {"min(x^2 + y^2 + z^2 - 1, (x - 1)^2 + y^2 + z^2 - 1)", NULL,
                                  0, NULL, 0};
-
-static double sphere_dist(const double p[3])
-{
-    return fabs(sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 1);
-}
-
-static double torus_dist(const double p[3])
-{
-    double ring = sqrt(p[0] * p[0] + p[1] * p[1]) - 1;
-    return fabs(sqrt(ring * ring + p[2] * p[2]) - 0.3);
-}
 
 #define SAFETY_DEPTH 10
 #define FINEST (3.0 / (1 << SAFETY_DEPTH))
@@ -138,13 +122,13 @@ static void check(const pf_surface *s, double (*dist)(const double *), double e,
 
 Test(dual, sphere_within_the_bound_closed_and_small)
 {
-    check(&sphere, sphere_dist, 1e-3, 4 * M_PI, 1.0, 2);
+    check(&pf_unit_sphere, pf_unit_sphere_dist, 1e-3, 4 * M_PI, 1.0, 2);
 }
 
 /* The tube's own curvature 1/r is the larger one. */
 Test(dual, torus_within_the_bound_closed_and_small)
 {
-    check(&torus, torus_dist, 3e-3, 4 * M_PI * M_PI * 1.0 * 0.3, 1 / 0.3, 0);
+    check(&pf_ring_torus, pf_ring_torus_dist, 3e-3, 4 * M_PI * M_PI * 1.0 * 0.3, 1 / 0.3, 0);
 }
 
 static void same_as_primal(const pf_surface *s, double half)
@@ -155,10 +139,7 @@ static void same_as_primal(const pf_surface *s, double half)
     ism_mesh plain, dual;
     run(t, box, 1e-2, false, &plain);
     run(t, box, 1e-2, true, &dual);
-    cr_assert_eq(plain.nverts, dual.nverts);
-    cr_assert_eq(plain.ntris, dual.ntris);
-    cr_assert(memcmp(plain.pos, dual.pos, 3 * plain.nverts * sizeof *plain.pos) == 0);
-    cr_assert(memcmp(plain.tri, dual.tri, 3 * plain.ntris * sizeof *plain.tri) == 0);
+    pf_same_mesh(&plain, &dual, s->expr);
     ism_mesh_free(&plain);
     ism_mesh_free(&dual);
     ism_tape_free(t);
@@ -173,5 +154,5 @@ Test(dual, min_max_surface_left_to_the_primal_polygons)
 /* The box cuts the sphere: its faces need the primal polygons. */
 Test(dual, surface_cut_by_the_box_left_to_the_primal_polygons)
 {
-    same_as_primal(&sphere, 0.8);
+    same_as_primal(&pf_unit_sphere, 0.8);
 }
