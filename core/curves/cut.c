@@ -312,7 +312,7 @@ static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
                   (j != NONE && s->ev->fns[j].kind == ISM_CUT_CREASE);
     cut_normal_at(s, p, crease ? NULL : s->m->normal + 3 * (size_t)u, nrm);
     uint32_t v = ism_mesh_add_vertex(s->m, p, nrm);
-    if (v == NONE || !cut_set_vcurve(s, v, (uint32_t)k))
+    if (v == NONE || !cut_set_vcurve(s, v, (uint32_t)k) || !cut_note_residuals(s, v))
         return NONE;
     if (j != NONE && !cut_split_cut_edge(s, u, w, v, j)) /* the earlier curve's edge */
         return NONE;
@@ -492,21 +492,12 @@ static bool push_near(cut_state *s, uint32_t v, uint8_t level)
     return true;
 }
 
-bool cut_mark_near(cut_state *s)
+/* The triangles of list (n) with a corner of the curve's triangles: their corners marked a
+ * ring further, and squared edge lengths into reach. */
+static bool mark_stars(cut_state *s, const uint32_t *list, size_t n)
 {
     const ism_mesh *m = s->m;
-    const uint32_t *list = s->cells.tris;
-    size_t n = s->cells.ntris;
     for (size_t i = 0; i < n; i++) {
-        const uint32_t *tv = m->tri + 3 * (size_t)list[i];
-        signed char a = s->sg[tv[0]];
-        if (a != 0 && a == s->sg[tv[1]] && a == s->sg[tv[2]])
-            continue;
-        for (int c = 0; c < 3; c++)
-            if (!push_near(s, tv[c], 1))
-                return false;
-    }
-    for (size_t i = 0; i < n; i++) { /* a ring further, and squared edge lengths */
         const uint32_t *tv = m->tri + 3 * (size_t)list[i];
         if (s->near[tv[0]] != 1 && s->near[tv[1]] != 1 && s->near[tv[2]] != 1)
             continue;
@@ -519,9 +510,27 @@ bool cut_mark_near(cut_state *s)
             s->reach[b] = d > s->reach[b] ? d : s->reach[b];
         }
     }
+    return true;
+}
+
+bool cut_mark_near(cut_state *s)
+{
+    const ism_mesh *m = s->m;
+    const cut_cells *cl = &s->cells;
+    for (size_t i = 0; i < cl->ntris; i++) { /* the curve's triangles are in crossed cells */
+        const uint32_t *tv = m->tri + 3 * (size_t)cl->tris[i];
+        signed char a = s->sg[tv[0]];
+        if (a != 0 && a == s->sg[tv[1]] && a == s->sg[tv[2]])
+            continue;
+        for (int c = 0; c < 3; c++)
+            if (!push_near(s, tv[c], 1))
+                return false;
+    }
+    if (!mark_stars(s, cl->tris, cl->ntris) || !mark_stars(s, cl->ring_tris, cl->nring))
+        return false;
     for (size_t i = 0; i < s->n_near; i++)
         s->reach[s->near_list[i]] = sqrt(s->reach[s->near_list[i]]);
-    return true;
+    return cut_cells_near_values(s);
 }
 
 void cut_clear_near(cut_state *s)
@@ -548,7 +557,7 @@ static bool classify(cut_state *s, size_t k)
             continue;
         refine_point(s, cut_vcurve_of(s, v), k, s->reach[v], m->pos + 3 * (size_t)v);
         cut_cells_moved(s, m->pos + 3 * (size_t)v, s->reach[v]);
-        if (!cut_set_vcurve(s, v, (uint32_t)k))
+        if (!cut_set_vcurve(s, v, (uint32_t)k) || !cut_note_residuals(s, v))
             return false;
     }
     return true;
@@ -591,25 +600,7 @@ static void finish(cut_state *s)
         if (c->edges[i].fn != NONE)
             c->edges[n++] = c->edges[i];
     c->nedges = n;
-    uint32_t *seen = malloc((s->m->nverts + 1) * sizeof *seen); /* NULL: each end measured */
-    for (size_t v = 0; seen && v < s->m->nverts; v++)
-        seen[v] = NONE;
-    for (size_t i = 0; i < n; i++)
-        for (int e = 0; e < 2; e++) {
-            uint32_t v = e ? c->edges[i].b : c->edges[i].a, fn = c->edges[i].fn;
-            if (seen && c->edges[i].branch[0] == ISM_CUT_NO_BRANCH) {
-                if (seen[v] == fn)
-                    continue; /* measured for this curve already (a crease's g is its edge's) */
-                seen[v] = fn;
-            }
-            double df, dg;
-            memcpy(s->ev->pair, c->edges[i].branch, sizeof s->ev->pair);
-            ism_cut_residuals(s->ev, c->edges[i].fn, s->m->pos + 3 * (size_t)v, &df, &dg);
-            c->worst_f = df > c->worst_f ? df : c->worst_f;
-            c->worst_g = dg > c->worst_g ? dg : c->worst_g;
-        }
-    free(seen);
-    s->ev->pair[0] = s->ev->pair[1] = ISM_CUT_NO_BRANCH;
+    cut_measure_residuals(s);
 }
 
 /* V − E + T of the triangles (vertices and edges counted once, only those triangles use: the
@@ -701,6 +692,7 @@ bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
     cut_cells_free(&s.cells);
     free(s.ehead);
     free(s.enext);
+    free(s.vres);
     if (s.branches) {
         ism_branches_free(s.branches);
         free(s.branches);

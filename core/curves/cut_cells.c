@@ -51,6 +51,7 @@ void cut_cells_free(cut_cells *c)
     free_grid(c);
     free(c->tcell);
     free(c->tris);
+    free(c->ring_tris);
     free(c->verts);
     free(c->vstamp);
     free(c->list);
@@ -370,6 +371,7 @@ static bool list_cells(cut_state *s, size_t k)
             c->list[c->nlist++] = b->cells[j];
         }
     }
+    c->ncrossed = c->nlist;
     size_t from = 0;
     for (uint8_t ring = 2; ring <= CELL_RINGS + 1; ring++) {
         size_t end = c->nlist;
@@ -382,13 +384,38 @@ static bool list_cells(cut_state *s, size_t k)
     return true;
 }
 
-/* The listed cells' triangles into c->tris, ascending (the order a pass over the whole mesh
- * would meet them in): marked in a bitmap, read back word by word. */
+/* The triangles of the listed cells [from, end) into *out, ascending (the order a pass over
+ * the whole mesh would meet them in): marked in a bitmap, read back word by word. */
+static bool cells_triangles(cut_state *s, size_t from, size_t end, uint32_t **out, size_t *n,
+                            size_t *cap)
+{
+    cut_cells *c = &s->cells;
+    size_t words = (s->m->ntris + 63) / 64, total = 0;
+    *n = 0;
+    if (!ism_grow((void **)&c->bits, &c->cap_bits, words + 1, sizeof *c->bits, CUT_FIRST))
+        return false;
+    memset(c->bits, 0, (words + 1) * sizeof *c->bits);
+    for (size_t li = from; li < end; li++) {
+        const cut_cell *cl = &c->cell[c->list[li]];
+        for (size_t i = 0; i < cl->n; i++)
+            c->bits[cl->tri[i] >> 6] |= (uint64_t)1 << (cl->tri[i] & 63);
+        total += cl->n;
+    }
+    if (!ism_grow((void **)out, cap, total + 1, sizeof **out, CUT_FIRST))
+        return false;
+    for (size_t w = 0; w < words; w++)
+        for (uint64_t b = c->bits[w]; b; b &= b - 1)
+            (*out)[(*n)++] = (uint32_t)(64 * w + (size_t)__builtin_ctzll(b));
+    return true;
+}
+
+/* The crossed cells' triangles into c->tris, the ring's into c->ring_tris (every triangle
+ * in c->tris while the grid is not valid). */
 static bool list_triangles(cut_state *s)
 {
     cut_cells *c = &s->cells;
-    size_t nt = s->m->ntris, words = (nt + 63) / 64, total = 0;
-    c->ntris = 0;
+    size_t nt = s->m->ntris;
+    c->ntris = c->nring = 0;
     if (!c->valid) {
         if (!ism_grow((void **)&c->tris, &c->cap_tris, nt + 1, sizeof *c->tris, CUT_FIRST))
             return false;
@@ -396,21 +423,8 @@ static bool list_triangles(cut_state *s)
             c->tris[c->ntris++] = (uint32_t)t;
         return true;
     }
-    if (!ism_grow((void **)&c->bits, &c->cap_bits, words + 1, sizeof *c->bits, CUT_FIRST))
-        return false;
-    memset(c->bits, 0, (words + 1) * sizeof *c->bits);
-    for (size_t li = 0; li < c->nlist; li++) {
-        const cut_cell *cl = &c->cell[c->list[li]];
-        for (size_t i = 0; i < cl->n; i++)
-            c->bits[cl->tri[i] >> 6] |= (uint64_t)1 << (cl->tri[i] & 63);
-        total += cl->n;
-    }
-    if (!ism_grow((void **)&c->tris, &c->cap_tris, total + 1, sizeof *c->tris, CUT_FIRST))
-        return false;
-    for (size_t w = 0; w < words; w++)
-        for (uint64_t b = c->bits[w]; b; b &= b - 1)
-            c->tris[c->ntris++] = (uint32_t)(64 * w + (size_t)__builtin_ctzll(b));
-    return true;
+    return cells_triangles(s, 0, c->ncrossed, &c->tris, &c->ntris, &c->cap_tris) &&
+           cells_triangles(s, c->ncrossed, c->nlist, &c->ring_tris, &c->nring, &c->cap_ring);
 }
 
 static bool grow_stamps(cut_cells *c, size_t nverts)
@@ -426,12 +440,12 @@ static bool grow_stamps(cut_cells *c, size_t nverts)
 /* Number of vertices whose g is gathered for one batch evaluation. */
 #define CELL_BATCH 256
 
-/* g_k at the vertices in c->verts, into gv and sg. */
-static bool evaluate(cut_state *s, size_t k)
+/* g_k at the vertices in c->verts from the from-th on, into gv and sg. */
+static bool evaluate(cut_state *s, size_t k, size_t from)
 {
     cut_cells *c = &s->cells;
     double pos[3 * CELL_BATCH], val[CELL_BATCH];
-    for (size_t i0 = 0; i0 < c->nverts; i0 += CELL_BATCH) {
+    for (size_t i0 = from; i0 < c->nverts; i0 += CELL_BATCH) {
         size_t n = c->nverts - i0 < CELL_BATCH ? c->nverts - i0 : CELL_BATCH;
         for (size_t i = 0; i < n; i++)
             memcpy(pos + 3 * i, s->m->pos + 3 * (size_t)c->verts[i0 + i], 3 * sizeof *pos);
@@ -446,6 +460,19 @@ static bool evaluate(cut_state *s, size_t k)
     return true;
 }
 
+/* Lists vertex v in c->verts unless g_k is known there (stamp k + 1). */
+static bool want_value(cut_cells *c, uint32_t v, uint32_t stamp)
+{
+    if (c->vstamp[v] == stamp)
+        return true;
+    if (!ism_grow((void **)&c->verts, &c->cap_verts, c->nverts + 1, sizeof *c->verts,
+                  CUT_FIRST))
+        return false;
+    c->vstamp[v] = stamp;
+    c->verts[c->nverts++] = v;
+    return true;
+}
+
 bool cut_cells_select(cut_state *s, size_t k)
 {
     cut_cells *c = &s->cells;
@@ -454,18 +481,22 @@ bool cut_cells_select(cut_state *s, size_t k)
         return false;
     uint32_t stamp = (uint32_t)k + 1;
     c->nverts = 0;
-    for (size_t i = 0; i < c->ntris; i++)
-        for (int j = 0; j < 3; j++) {
-            uint32_t v = m->tri[3 * (size_t)c->tris[i] + j];
-            if (c->vstamp[v] == stamp)
-                continue;
-            if (!ism_grow((void **)&c->verts, &c->cap_verts, c->nverts + 1, sizeof *c->verts,
-                          CUT_FIRST))
-                return false;
-            c->vstamp[v] = stamp;
-            c->verts[c->nverts++] = v;
-        }
-    return evaluate(s, k);
+    for (size_t i = 0; i < 3 * c->ntris; i++)
+        if (!want_value(c, m->tri[3 * (size_t)c->tris[i / 3] + i % 3], stamp))
+            return false;
+    return evaluate(s, k, 0);
+}
+
+bool cut_cells_near_values(cut_state *s)
+{
+    cut_cells *c = &s->cells;
+    size_t from = c->nverts;
+    if (!grow_stamps(c, s->m->nverts))
+        return false;
+    for (size_t i = 0; i < s->n_near; i++)
+        if (!want_value(c, s->near_list[i], (uint32_t)s->fn + 1))
+            return false;
+    return evaluate(s, s->fn, from);
 }
 
 signed char cut_sign_of(cut_state *s, uint32_t v)

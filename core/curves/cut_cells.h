@@ -40,9 +40,16 @@ typedef struct cut_cells {
     int over;           /* cells a cell's bounds reach past its grid box (ring search) */
     uint32_t *tcell;    /* per triangle: its cell */
     size_t cap_tcell;
-    uint32_t *tris;     /* the current function's triangles (ascending) */
+    uint32_t *tris;     /* the current function's triangles, in the cells it may cross
+                           (ascending) */
     size_t ntris, cap_tris;
-    uint32_t *verts;    /* their vertices */
+    uint32_t *ring_tris; /* the triangles of the ring round them (ascending): g has one
+                            sign at all their corners (the cells' intervals say so); they
+                            complete the stars of the crossed triangles' corners */
+    size_t nring, cap_ring;
+    size_t ncrossed;    /* the first ncrossed cells of list are the crossed ones */
+    uint32_t *verts;    /* the vertices of tris, then those of the ring's triangles whose g
+                           was asked for (cut_cells_near_values) */
     size_t nverts, cap_verts;
     uint32_t *vstamp;   /* per vertex: the function + 1 whose g it holds in gv / sg */
     size_t cap_vstamp;

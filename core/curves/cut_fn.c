@@ -157,6 +157,13 @@ bool ism_cut_g_batch(ism_cut_eval *ev, size_t k, const double *pos, size_t n, do
     return true;
 }
 
+/* |value| / |gradient| of row i (infinite for a nonzero value of zero gradient). */
+static double row_distance(const double r[3], const double J[3][3], int i)
+{
+    double n = sqrt(ism_dot3(J[i], J[i]));
+    return n > 0 ? fabs(r[i]) / n : (r[i] == 0 ? 0 : INFINITY);
+}
+
 /* Values and gradient rows of f, the functions ks and the plane (n, c; NULL for none) at p;
  * the worst |value| / |gradient|. */
 static double system_at(ism_cut_eval *ev, const size_t *ks, int nk, const double plane[4],
@@ -171,11 +178,29 @@ static double system_at(ism_cut_eval *ev, const size_t *ks, int nk, const double
     }
     double worst = 0;
     for (int i = 0; i <= nk + (plane != NULL); i++) {
-        double n = sqrt(ism_dot3(J[i], J[i]));
-        double d = n > 0 ? fabs(r[i]) / n : (r[i] == 0 ? 0 : INFINITY);
+        double d = row_distance(r, J, i);
         worst = d > worst ? d : worst;
     }
     return worst;
+}
+
+/* Newton ended at x with rows r, J of f and the functions ks: kept for the normal of a new
+ * vertex there (ism_cut_f_gradient) and its residuals (ism_cut_known_residuals). */
+static void note_end(ism_cut_eval *ev, const size_t *ks, int nk, const double x[3],
+                     const double r[3], const double J[3][3])
+{
+    memcpy(ev->last_p, x, sizeof ev->last_p);
+    memcpy(ev->last_grad, J[0], sizeof J[0]);
+    ev->last_ok = true;
+    ism_cut_resid *kept = &ev->last_res;
+    memcpy(kept->p, x, sizeof kept->p);
+    kept->res[0] = row_distance(r, J, 0);
+    kept->nk = 0;
+    for (int i = 0; i < nk; i++)
+        if (ev->fns[ks[i]].kind != ISM_CUT_CREASE) {
+            kept->ks[kept->nk] = (uint32_t)ks[i];
+            kept->res[++kept->nk] = row_distance(r, J, i + 1);
+        }
 }
 
 /* The unit normal of the plane holding dir and n (n × dir normalised); false when parallel. */
@@ -228,9 +253,7 @@ static bool refine(ism_cut_eval *ev, const size_t *ks, int nk, const double plan
             if (ism_dot3(d, d) > max_move * max_move)
                 return false;
             memcpy(p, x, sizeof x);
-            memcpy(ev->last_p, x, sizeof x);
-            memcpy(ev->last_grad, J[0], sizeof J[0]);
-            ev->last_ok = true;
+            note_end(ev, ks, nk, x, r, J);
             return true;
         }
         double step[3];
@@ -287,4 +310,18 @@ void ism_cut_residuals(ism_cut_eval *ev, size_t k, const double p[3], double *df
     *df = nf > 0 ? fabs(f) / nf : fabs(f);
     double v = ism_cut_g(ev, k, p, g), ng = sqrt(ism_dot3(g, g));
     *dg = ng > 0 ? fabs(v) / ng : fabs(v);
+}
+
+bool ism_cut_known_residuals(const ism_cut_resid *r, size_t k, const double p[3], double *df,
+                             double *dg)
+{
+    if (memcmp(r->p, p, sizeof r->p))
+        return false;
+    for (int i = 0; i < r->nk; i++)
+        if (r->ks[i] == k) {
+            *df = r->res[0];
+            *dg = r->res[i + 1];
+            return true;
+        }
+    return false;
 }

@@ -24,6 +24,15 @@ typedef struct ism_cut_fn {
     int source, index;   /* the request's curve entry and its offset / value number */
 } ism_cut_fn;
 
+/* Where a Newton ended (p) and the distances |value| / |gradient| there of f (res[0]) and
+ * of the nk functions ks (res[i + 1]); nk 0: none known. */
+typedef struct ism_cut_resid {
+    double p[3];
+    double res[3];
+    uint32_t ks[2];
+    int nk;
+} ism_cut_resid;
+
 /* Evaluation state for f and the cut functions (one thread). */
 typedef struct ism_cut_eval {
     const ism_tape *f;
@@ -41,6 +50,7 @@ typedef struct ism_cut_eval {
     double last_p[3];    /* where the last successful Newton ended, and ∇f there (its last */
     double last_grad[3]; /* evaluation: a new vertex's normal needs no evaluation of its own) */
     bool last_ok;        /* false until then */
+    ism_cut_resid last_res; /* the residuals there (no evaluation for the final check) */
 } ism_cut_eval;
 
 /* The crease function of f when f's tape has a min or max (CSG); false otherwise. The crease
@@ -93,5 +103,11 @@ void ism_cut_f_gradient(ism_cut_eval *ev, const double p[3], double grad[3]);
 
 /* The largest |value| / |gradient| of f and of g_k at p (the distance to each set). */
 void ism_cut_residuals(ism_cut_eval *ev, size_t k, const double p[3], double *df, double *dg);
+
+/* As ism_cut_residuals, the same numbers, from r without evaluating: true when r's Newton
+ * ended at p (bit for bit) with g_k in its system (a crease's g is never kept: it depends
+ * on the pair of branches); false (nothing written) otherwise. */
+bool ism_cut_known_residuals(const ism_cut_resid *r, size_t k, const double p[3], double *df,
+                             double *dg);
 
 #endif

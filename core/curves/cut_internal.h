@@ -71,6 +71,9 @@ typedef struct cut_state {
     size_t fn;               /* the current function */
     size_t edits;            /* tangency edits of the mesh (moves, splits, merges) so far */
     ism_branches *branches;  /* f's branches, made when a crease is cut (crease.c), or NULL */
+    ism_cut_resid *vres;     /* per vertex: the residuals where Newton put it (cut_resid.c;
+                                nk 0 when none were kept) */
+    size_t cap_vres;
 } cut_state;
 
 uint64_t cut_edge_key(uint32_t a, uint32_t b);
@@ -130,8 +133,9 @@ bool cut_emit_lone(cut_state *s, uint32_t l, uint32_t u, uint32_t w, uint32_t p,
 void cut_longest_edges(const ism_mesh *m, double *len);
 
 /* Marks the vertices near the current curve (near, near_list) and their longest edges
- * (reach: of a vertex a ring further, among the triangles at the curve's corners); the
- * others' reach is left stale. False when out of memory. */
+ * (reach: of a vertex a ring further, among the triangles at the curve's corners), and
+ * has g at all of them in gv and sg; the others' reach is left stale. False when out of
+ * memory. */
 bool cut_mark_near(cut_state *s);
 
 /* Clears the per-vertex scratch of the near vertices. */
@@ -181,9 +185,11 @@ bool cut_node_branches(cut_state *s, size_t k, uint32_t u, double reach);
  * when there is nothing to index). Place: a triangle appended to the mesh. Grow: triangle
  * t's corners changed in place. Moved: a vertex moved to p, its triangles within r of it.
  * Ready: built when not valid or outgrown by the mesh.
- * Select: the triangles near g_k = 0 into cells.tris (ascending; every triangle when the
- * grid is not valid), their vertices not yet seen for k into cells.verts, with g_k at them
- * in gv and sg. Each is a no-op while the grid is not valid; false when out of memory. */
+ * Select: the triangles in the cells g_k = 0 may cross into cells.tris and those of the
+ * ring round them into cells.ring_tris (both ascending; every triangle in cells.tris when
+ * the grid is not valid), the vertices of cells.tris not yet seen for k into cells.verts,
+ * with g_k at them in gv and sg. Each is a no-op while the grid is not valid; false when
+ * out of memory. */
 bool cut_cells_build(cut_state *s);
 /* The grid built when it is not valid or the mesh has outgrown it. */
 bool cut_cells_ready(cut_state *s);
@@ -192,12 +198,24 @@ bool cut_cells_place(cut_state *s, size_t t);
 void cut_cells_grow(cut_state *s, size_t t);
 void cut_cells_moved(cut_state *s, const double p[3], double r);
 bool cut_cells_select(cut_state *s, size_t k);
+/* g of the current function at the near vertices (cut_mark_near) where it is not known yet
+ * (corners of the ring's triangles only: their signs are known, their values were not
+ * needed before), into gv and sg. False when out of memory. */
+bool cut_cells_near_values(cut_state *s);
 
 /* The sign of the current function at vertex v (evaluated when v was not listed for it). */
 signed char cut_sign_of(cut_state *s, uint32_t v);
 
 /* Vertex v lies on the current curve: g taken as exactly 0 there. */
 void cut_on_curve_now(cut_state *s, uint32_t v);
+
+/* Keeps the residuals of the last Newton for vertex v when it ended where v is (the final
+ * measure then needs no evaluation there). False when out of memory. */
+bool cut_note_residuals(cut_state *s, uint32_t v);
+
+/* The largest distances of the cut edges' ends to f = 0 and to their curves into
+ * c->worst_f and c->worst_g: kept residuals where the vertex still is, else evaluated. */
+void cut_measure_residuals(cut_state *s);
 
 /* Finds where g_k = 0 touches the surface or an earlier curve (critical.h) and makes each
  * point a mesh vertex on which g_k is taken as exactly 0, so the cut meets there: a node of

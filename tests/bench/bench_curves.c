@@ -109,12 +109,12 @@ int main(int argc, char **argv)
            "\"vertices\": %zu, \"edges\": %zu, \"faces\": %zu, \"euler_ok\": %s, "
            "\"euler\": %ld, \"unrefined\": %zu, \"mesh_ms\": %.1f, \"cut_ms\": %.1f, "
            "\"cut_cpu_ms\": %.1f, \"ms_per_pair\": %.5f, \"seed_ms_per_pair\": %.3f, "
-           "\"ratio\": %.5f, \"cpu_ratio\": %.5f, \"hash\": \"%016llx\"}\n",
+           "\"ratio\": %.5f, \"cpu_ratio\": %.5f, \"hash\": \"%016llx\", \"worst_f\": %.17g, \"worst_g\": %.17g}\n",
            nq, depth, tris_before, m.ntris, arr.nvertices, arr.nedges, arr.nfaces,
            arr.euler_ok ? "true" : "false", arr.euler_arr, cut.unrefined, t1 - t0, t3 - t2,
            c3 - c2, pair_ms, SEED_MS_PER_PAIR, pair_ms / SEED_MS_PER_PAIR,
            arr.nedges ? (c3 - c2) / (double)arr.nedges / SEED_MS_PER_PAIR : 0,
-           (unsigned long long)result_hash(&m, &cut));
+           (unsigned long long)result_hash(&m, &cut), cut.worst_f, cut.worst_g);
     ism_arrangement_free(&arr);
     ism_cut_free(&cut);
     for (int i = 0; i < nq; i++)
