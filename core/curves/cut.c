@@ -492,8 +492,8 @@ static bool push_near(cut_state *s, uint32_t v, uint8_t level)
     return true;
 }
 
-/* The triangles of list (n) with a corner of the curve's triangles: their corners marked a
- * ring further, and squared edge lengths into reach. */
+/* The triangles of list (n) with a corner of the curve's triangles: listed in stars, their
+ * corners marked a ring further, and squared edge lengths into reach. */
 static bool mark_stars(cut_state *s, const uint32_t *list, size_t n)
 {
     const ism_mesh *m = s->m;
@@ -501,6 +501,10 @@ static bool mark_stars(cut_state *s, const uint32_t *list, size_t n)
         const uint32_t *tv = m->tri + 3 * (size_t)list[i];
         if (s->near[tv[0]] != 1 && s->near[tv[1]] != 1 && s->near[tv[2]] != 1)
             continue;
+        if (!ism_grow((void **)&s->stars, &s->cap_stars, s->nstars + 1, sizeof *s->stars,
+                      CUT_FIRST))
+            return false;
+        s->stars[s->nstars++] = list[i];
         for (int c = 0; c < 3; c++) {
             uint32_t a = tv[c], b = tv[(c + 1) % 3];
             if (!push_near(s, a, 2))
@@ -517,6 +521,7 @@ bool cut_mark_near(cut_state *s)
 {
     const ism_mesh *m = s->m;
     const cut_cells *cl = &s->cells;
+    s->nstars = 0;
     for (size_t i = 0; i < cl->ntris; i++) { /* the curve's triangles are in crossed cells */
         const uint32_t *tv = m->tri + 3 * (size_t)cl->tris[i];
         signed char a = s->sg[tv[0]];
@@ -689,6 +694,7 @@ bool ism_cut_mesh(ism_cut_eval *ev, double tol, ism_mesh *m, ism_cut *c)
     free(s.vs);
     free(s.near);
     free(s.near_list);
+    free(s.stars);
     cut_cells_free(&s.cells);
     free(s.ehead);
     free(s.enext);

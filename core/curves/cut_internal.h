@@ -55,6 +55,8 @@ typedef struct cut_state {
                                 touches, 2 a ring further, 0 farther */
     uint32_t *near_list;     /* the vertices with vs[v].near set */
     size_t n_near, cap_near;
+    uint32_t *stars;         /* the triangles at the curve's corners (near 1: their stars) */
+    size_t nstars, cap_stars;
     size_t slot;             /* the triangle being split (its first piece goes there), or
                                 SIZE_MAX: pieces appended */
     uint32_t *parent;        /* per triangle: the input mesh's triangle it lies in */
@@ -133,9 +135,9 @@ bool cut_emit_lone(cut_state *s, uint32_t l, uint32_t u, uint32_t w, uint32_t p,
 void cut_longest_edges(const ism_mesh *m, double *len);
 
 /* Marks the vertices near the current curve (near, near_list) and their longest edges
- * (reach: of a vertex a ring further, among the triangles at the curve's corners), and
- * has g at all of them in gv and sg; the others' reach is left stale. False when out of
- * memory. */
+ * (reach: of a vertex a ring further, among the triangles at the curve's corners: listed
+ * in stars), and has g at all of them in gv and sg; the others' reach is left stale. False
+ * when out of memory. */
 bool cut_mark_near(cut_state *s);
 
 /* Clears the per-vertex scratch of the near vertices. */

@@ -90,17 +90,15 @@ bool cut_on_no_other(const cut_state *s, uint32_t v, size_t k)
     return c == NONE || c == (uint32_t)k;
 }
 
-/* The sign changes and the spread of g round the curve's corners (near 1) over the
- * triangles of list (n) at them. */
-static void star_changes(cut_state *s, const uint32_t *list, size_t n)
+/* Discrete saddles of g_k near 0 among the corners of the triangles the curve crosses or
+ * touches (near 1: a node's nearest vertex is one), on no other curve. */
+static void surface_seeds(tang_state *ts)
 {
-    const ism_mesh *m = s->m;
+    cut_state *s = ts->s;
     const double *g = s->gv;
     cut_vscratch *vs = s->vs;
-    for (size_t i0 = 0; i0 < n; i0++) {
-        const uint32_t *tv = m->tri + 3 * (size_t)list[i0];
-        if (s->near[tv[0]] != 1 && s->near[tv[1]] != 1 && s->near[tv[2]] != 1)
-            continue;
+    for (size_t i0 = 0; i0 < s->nstars; i0++) { /* the stars of the curve's corners */
+        const uint32_t *tv = s->m->tri + 3 * (size_t)s->stars[i0];
         for (int i = 0; i < 3; i++) {
             uint32_t v = tv[i], u = tv[(i + 1) % 3], w = tv[(i + 2) % 3];
             if (s->near[v] != 1)
@@ -110,17 +108,6 @@ static void star_changes(cut_state *s, const uint32_t *list, size_t n)
             vs[v].spread = fmax(vs[v].spread, fmax(fabs(g[u] - g[v]), fabs(g[w] - g[v])));
         }
     }
-}
-
-/* Discrete saddles of g_k near 0 among the corners of the triangles the curve crosses or
- * touches (near 1: a node's nearest vertex is one), on no other curve. */
-static void surface_seeds(tang_state *ts)
-{
-    cut_state *s = ts->s;
-    const double *g = s->gv;
-    cut_vscratch *vs = s->vs;
-    star_changes(s, s->cells.tris, s->cells.ntris); /* the stars of the curve's corners */
-    star_changes(s, s->cells.ring_tris, s->cells.nring);
     for (size_t i = 0; i < s->n_near; i++) {
         uint32_t v = s->near_list[i];
         if (s->near[v] == 1 && vs[v].changes >= 4 && fabs(g[v]) <= TANG_SEED_SPAN * vs[v].spread &&

@@ -57,6 +57,49 @@ static uint64_t result_hash(const ism_mesh *m, const ism_cut *c)
     return h;
 }
 
+/* FNV-1a over n bytes at p, continuing h. */
+static uint64_t fnv(uint64_t h, const void *p, size_t n)
+{
+    const unsigned char *b = p;
+    for (size_t i = 0; i < n; i++)
+        h = (h ^ b[i]) * 1099511628211ULL;
+    return h;
+}
+
+/* The same over the arrangement, field by field (its structs have padding): vertices,
+ * edges, faces, curves, the edges' vertex chains and the triangles' faces. */
+static uint64_t arrangement_hash(const ism_arrangement *a, size_t ntris)
+{
+    uint64_t h = 1469598103934665603ULL;
+    for (size_t i = 0; i < a->nvertices; i++) {
+        const ism_arr_vertex *v = &a->vertices[i];
+        int f[3] = {v->degree, v->type, v->point};
+        h = fnv(fnv(h, &v->v, sizeof v->v), f, sizeof f);
+    }
+    for (size_t i = 0; i < a->nedges; i++) {
+        const ism_arr_edge *e = &a->edges[i];
+        uint32_t f[4] = {e->from, e->to, e->curve, e->fn};
+        size_t z[2] = {e->first, e->count};
+        h = fnv(fnv(fnv(h, f, sizeof f), &e->length, sizeof e->length), z, sizeof z);
+    }
+    for (size_t i = 0; i < a->nfaces; i++) {
+        const ism_arr_face *f = &a->faces[i];
+        size_t z[2] = {f->first, f->ntris};
+        long l[2] = {f->euler, f->euler_open};
+        uint32_t u[2] = {f->boundary, f->component};
+        h = fnv(fnv(fnv(fnv(h, z, sizeof z), &f->area, sizeof f->area), l, sizeof l), u,
+                sizeof u);
+    }
+    for (size_t i = 0; i < a->ncurves; i++) {
+        const ism_arr_curve *c = &a->curves[i];
+        uint32_t u[2] = {c->fn, c->closed};
+        h = fnv(fnv(fnv(h, u, sizeof u), &c->length, sizeof c->length), &c->nedges,
+                sizeof c->nedges);
+    }
+    h = fnv(h, a->chain, a->nchain * sizeof *a->chain);
+    return a->tri_face ? fnv(h, a->tri_face, ntris * sizeof *a->tri_face) : h;
+}
+
 int main(int argc, char **argv)
 {
     int depth = 8, nq = 200, threads = 0;
@@ -109,12 +152,13 @@ int main(int argc, char **argv)
            "\"vertices\": %zu, \"edges\": %zu, \"faces\": %zu, \"euler_ok\": %s, "
            "\"euler\": %ld, \"unrefined\": %zu, \"mesh_ms\": %.1f, \"cut_ms\": %.1f, "
            "\"cut_cpu_ms\": %.1f, \"ms_per_pair\": %.5f, \"seed_ms_per_pair\": %.3f, "
-           "\"ratio\": %.5f, \"cpu_ratio\": %.5f, \"hash\": \"%016llx\", \"worst_f\": %.17g, \"worst_g\": %.17g}\n",
+           "\"ratio\": %.5f, \"cpu_ratio\": %.5f, \"hash\": \"%016llx\", \"worst_f\": %.17g, \"worst_g\": %.17g, \"arrangement_hash\": \"%016llx\"}\n",
            nq, depth, tris_before, m.ntris, arr.nvertices, arr.nedges, arr.nfaces,
            arr.euler_ok ? "true" : "false", arr.euler_arr, cut.unrefined, t1 - t0, t3 - t2,
            c3 - c2, pair_ms, SEED_MS_PER_PAIR, pair_ms / SEED_MS_PER_PAIR,
            arr.nedges ? (c3 - c2) / (double)arr.nedges / SEED_MS_PER_PAIR : 0,
-           (unsigned long long)result_hash(&m, &cut), cut.worst_f, cut.worst_g);
+           (unsigned long long)result_hash(&m, &cut), cut.worst_f, cut.worst_g,
+           (unsigned long long)arrangement_hash(&arr, m.ntris));
     ism_arrangement_free(&arr);
     ism_cut_free(&cut);
     for (int i = 0; i < nq; i++)

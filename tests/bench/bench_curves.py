@@ -33,6 +33,8 @@ def main():
     print(f"  per half-edge pair: {r['ms_per_pair']:.4f} ms wall, {cpu_pair:.4f} ms CPU; "
           f"seed (CGAL, exact) {r['seed_ms_per_pair']:.3f} ms; ratio {r['ratio']:.4f} wall, "
           f"{cpu_pair / r['seed_ms_per_pair']:.4f} CPU  (goal <= 0.01)")
+    print(f"  result hash {r['hash']}, arrangement hash {r['arrangement_hash']}; curve vertices "
+          f"within {r['worst_f']:.2e} of f = 0, {r['worst_g']:.2e} of their g = 0")
     return 0
 
 
