@@ -258,6 +258,22 @@ class ApiTest(unittest.TestCase):
         err = self.error_of(self.d.post("/v1/mesh", {"preset": "torus", "max_error": "x"}), 400)
         self.assertEqual(err.get("path"), "$.max_error")
 
+    def test_dual_request_within_its_bound(self):
+        dual = self.d.post("/v1/mesh", {"preset": "torus", "max_error": 0.004, "dual": True,
+                                        "simplify": False})
+        self.assertEqual(dual.status, 200)
+        plain = self.d.post("/v1/mesh", {"preset": "torus", "max_error": 0.004, "simplify": False})
+        self.assertNotEqual(plain.header("ETag"), dual.header("ETag"))  # dual is in the key
+        stats = [self.d.get("/v1/meshes/%s/stats" % r.header("ETag").strip('"')).json()
+                 for r in (dual, plain)]
+        acc = stats[0]["analysis"]["accuracy"]
+        worst = max(acc["max_dist_vertex"], acc["max_dist_midpoint"], acc["max_dist_centroid"])
+        self.assertLessEqual(worst, 0.004)
+        # one vertex per cell instead of one per crossed edge: fewer triangles at the bound
+        self.assertLess(stats[0]["mesh"]["triangles"], stats[1]["mesh"]["triangles"])
+        err = self.error_of(self.d.post("/v1/mesh", {"preset": "torus", "dual": True}), 400)
+        self.assertEqual(err.get("path"), "$.dual")
+
     def test_quality_good_through_the_daemon(self):
         r = self.d.post("/v1/mesh", {"preset": "sphere", "quality": "good",
                                      "depth": {"min": 3, "max": 5}})
