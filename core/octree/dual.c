@@ -54,7 +54,7 @@ typedef struct dual {
     uint64_t *passed; /* open-addressed keys (tri_key) of triangles that met E, 0: empty */
     size_t npassed, cappassed;
     double shift;     /* vertices move this far to the convex side (straddle.h), or 0 */
-    bool bad, nomem;
+    bool bad, nomem, too_big;
 } dual;
 
 /* The cells round an edge along axis e, in counter-clockwise order seen from +e: their
@@ -236,8 +236,19 @@ static void sample_corner(dual *d, const int32_t q[3], double *f, double p[3], d
     ism_normalise3(g); /* 0 at a critical point: no agreement there */
 }
 
+/* Bytes the tree and the vertices hold (the triangles are bounded by max_triangles). */
+static size_t held_bytes(const dual *d)
+{
+    return d->capn * sizeof *d->n + d->capv * (3 * sizeof *d->pos + sizeof *d->vleaf);
+}
+
+/* A new node, or false when out of memory or past o->max_memory (too_big set). */
 static bool new_node(dual *d, ism_ipt o, int level, int32_t *out)
 {
+    if (held_bytes(d) > d->o->max_memory) {
+        d->too_big = true;
+        return false;
+    }
     if (!grow((void **)&d->n, &d->capn, d->nn + 1, sizeof *d->n))
         return false;
     *out = (int32_t)d->nn++;
@@ -699,6 +710,8 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
     for (int r = 0;; r++) {
         if (d->o->cancel && *d->o->cancel)
             return ISM_DUAL_CANCELLED;
+        if (d->too_big)
+            return ISM_DUAL_TOO_BIG;
         if (d->nomem)
             return ISM_DUAL_NO_MEMORY;
         if (d->bad)

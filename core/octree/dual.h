@@ -27,7 +27,7 @@
 enum ism_dual_status {
     ISM_DUAL_OK = 0,
     ISM_DUAL_NOT_APPLICABLE, /* a feature, a leaf the tests cannot make plain, or the box */
-    ISM_DUAL_TOO_BIG,        /* o->max_triangles exceeded */
+    ISM_DUAL_TOO_BIG,        /* o->max_triangles or o->max_memory exceeded */
     ISM_DUAL_NO_MEMORY,
     ISM_DUAL_CANCELLED,
 };

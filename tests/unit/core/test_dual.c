@@ -156,3 +156,24 @@ Test(dual, surface_cut_by_the_box_left_to_the_primal_polygons)
 {
     same_as_primal(&pf_unit_sphere, 0.8);
 }
+
+/* The tree is bounded by the memory budget: past it the call stops with "too big". */
+Test(dual, memory_budget_stops_the_tree)
+{
+    ism_tape *t = pf_compile(&pf_unit_sphere);
+    ism_poly_options o;
+    ism_poly_options_default(&o);
+    cube_box(1.5, 0, o.box);
+    o.max_depth = SAFETY_DEPTH;
+    o.max_error = 1e-3;
+    o.dual = true;
+    o.max_memory = 64 << 10; /* ~700 nodes: the sphere at 1e-3 has ~4,900 surface leaves */
+    ism_mesh m;
+    ism_mesh_init(&m);
+    ism_poly_stats st;
+    ism_error err;
+    cr_assert_eq(ism_polygonise(t, &o, &m, &st, &err), ISM_POLY_TOO_BIG);
+    cr_assert_eq(m.ntris, 0);
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+}
