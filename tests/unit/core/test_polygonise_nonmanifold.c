@@ -247,3 +247,19 @@ Test(paper, cone_apex_inside_a_node_is_one_vertex)
     ism_mesh_free(&m);
     ism_tape_free(t);
 }
+
+/* Nine planes sin πx sin πy sin πz = 0 in ±1.5, whose plane x = 0 (and y = 0, z = 0) is a
+ * lattice plane: f vanishes on the whole face tiles there, each emitted as a polygon of its
+ * own, and the other planes' polygons in the cells beside them close across those tiles —
+ * no chain is left open. Before, each such polygon counted as an open chain (360 here at
+ * depth 4; 1464 through the service's meshing at depth 3, "line chains could not be closed"
+ * in its warnings) though its triangles were right. */
+Test(paper, nine_planes_close_across_lattice_plane_tiles)
+{
+    const pf_surface s = {"sin(pi*x)*sin(pi*y)*sin(pi*z)", NULL, 0, NULL, 0};
+    const double box[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
+    ism_mesh m;
+    ism_tape *t = run_paper(&s, box, 4, &m);
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+}
