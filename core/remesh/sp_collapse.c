@@ -43,10 +43,35 @@ typedef struct edge {
     uint32_t a, b;
 } edge;
 
-static int cmp_edge(const void *x, const void *y)
+/* e goes before f: shorter, or as long with the smaller first end. */
+static bool before(const edge *e, const edge *f)
 {
-    const edge *e = x, *f = y;
-    return e->len < f->len ? -1 : e->len > f->len ? 1 : (e->a > f->a) - (e->a < f->a);
+    return e->len < f->len || (e->len == f->len && e->a < f->a);
+}
+
+/* Sorts e[0..n) by before(), keeping the order of equal edges (as libc's merge sort did),
+ * bottom-up with tmp (n edges) as the other buffer: the comparison inlined, a third of
+ * qsort's instructions. Returns the buffer that holds the result. */
+static edge *sort_edges(edge *e, edge *tmp, size_t n)
+{
+    edge *from = e, *to = tmp;
+    for (size_t width = 1; width < n; width *= 2) {
+        for (size_t lo = 0; lo < n; lo += 2 * width) {
+            size_t mid = lo + width < n ? lo + width : n;
+            size_t hi = lo + 2 * width < n ? lo + 2 * width : n;
+            size_t i = lo, j = mid, k = lo;
+            while (i < mid && j < hi)
+                to[k++] = before(&from[j], &from[i]) ? from[j++] : from[i++];
+            while (i < mid)
+                to[k++] = from[i++];
+            while (j < hi)
+                to[k++] = from[j++];
+        }
+        edge *t = from;
+        from = to;
+        to = t;
+    }
+    return from;
 }
 
 static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * (size_t)v; }
@@ -66,15 +91,23 @@ static edge *candidate_edges(const rm_pass *p, size_t *n)
                 e[(*n)++] = (edge){rm_dist(P(p, a), P(p, b)), a, b};
         }
     }
-    if (e)
-        qsort(e, *n, sizeof *e, cmp_edge);
+    edge *tmp = e ? malloc((*n + 1) * sizeof *tmp) : NULL;
+    if (tmp) {
+        edge *sorted = sort_edges(e, tmp, *n);
+        if (sorted != e)
+            memcpy(e, sorted, *n * sizeof *e);
+    } else {
+        free(e);
+        e = NULL;
+    }
+    free(tmp);
     return e;
 }
 
-/* Triangle t of the merged fan (g->v and g->w both read at x) passes orientation and shape;
- * *sine gets its smallest angle's sine. */
-static bool shape_ok(const rm_pass *p, const rm_merge *g, uint32_t t, const double *x,
-                     double floor_sine)
+/* The sine of the smallest angle of triangle t of the merged fan (g->v and g->w both read at
+ * x), or -1 when it fails the orientation tests: turned from its old self, or tilted from
+ * ∇f at a free corner. */
+static double fan_sine(const rm_pass *p, const rm_merge *g, uint32_t t, const double *x)
 {
     const uint32_t *c = p->r.m->tri + 3 * t;
     const double *q[3], *o[3];
@@ -84,7 +117,7 @@ static bool shape_ok(const rm_pass *p, const rm_merge *g, uint32_t t, const doub
     }
     double n[3], m[3], ln = rm_cross(q[0], q[1], q[2], n), lo = rm_cross(o[0], o[1], o[2], m);
     if (!(ln > 0) || !(ism_dot3(n, m) > cos(ISM_SP_MAX_TURN_DEG * M_PI / 180) * ln * lo))
-        return false;
+        return -1;
     for (int k = 0; k < 3; k++) {
         uint32_t u = c[k] == g->v ? g->w : c[k];
         const float *s = p->r.m->normal + 3 * (size_t)u;
@@ -92,9 +125,9 @@ static bool shape_ok(const rm_pass *p, const rm_merge *g, uint32_t t, const doub
         double sign = ism_dot3(m, side) < 0 ? -1 : 1; /* the side the old triangle faced */
         if (!p->r.locked[u] && ls > 0 &&
             !(sign * ism_dot3(n, side) > cos(ISM_SP_MAX_TILT_DEG * M_PI / 180) * ln * ls))
-            return false;
+            return -1;
     }
-    return rm_min_sine(q[0], q[1], q[2]) >= floor_sine;
+    return rm_min_sine(q[0], q[1], q[2]);
 }
 
 /* The triangles the merge changes: v's (and w's when w moves), without t1 and t2. */
@@ -161,30 +194,46 @@ static bool distances_ok(rm_pass *p, const rm_merge *g, const uint32_t *fan, uin
  * (worth a trial with the ring settled, sp_trial.h). */
 enum verdict { REFUSED, WITHIN, NEAR };
 
-/* The triangles a merge changes and the smallest sine they may end with. */
+/* The triangles a merge changes and the smallest sine they may end with (NAN until a
+ * triangle below ISM_SP_MIN_DEG asks for it). */
 typedef struct merged {
     uint32_t fan[2 * ISM_RM_MERGE_MAX_DEGREE], n;
     double floor_sine;
 } merged;
 
-/* The merge's link condition, and orientation and shape of every triangle of the merged
- * fan with g->w at x (w_moves: w's own triangles change too); *mg gets the fan. */
+/* Every triangle of the merged fan with g->w at x passes orientation, and none ends with a
+ * smallest angle below both ISM_SP_MIN_DEG and the smallest of v's and w's fans before —
+ * those fans are measured only when a triangle is below ISM_SP_MIN_DEG (most merges refused
+ * fail orientation; most taken have no angle that small). */
+static bool fan_shapes_ok(const rm_pass *p, const rm_merge *g, merged *mg, const double *x)
+{
+    double least = INFINITY, comfort = sin(ISM_SP_MIN_DEG * M_PI / 180);
+    for (uint32_t i = 0; i < mg->n; i++) {
+        double s = fan_sine(p, g, mg->fan[i], x);
+        if (s < 0)
+            return false;
+        least = fmin(least, s);
+    }
+    if (least >= comfort)
+        return true;
+    if (isnan(mg->floor_sine))
+        mg->floor_sine = fmin(fans_min_sine(p, g), comfort);
+    return least >= mg->floor_sine;
+}
+
+/* The shape tests of every triangle of the merged fan with g->w at x (w_moves: w's own
+ * triangles change too), then the merge's link condition; *mg gets the fan. */
 static bool shapes_ok(const rm_pass *p, const rm_merge *g, const double *x, bool w_moves,
                       merged *mg)
 {
-    if (!rm_merge_link_ok(&p->r, g))
-        return false;
     mg->n = merged_fan(p, g, w_moves, mg->fan);
-    mg->floor_sine = fmin(fans_min_sine(p, g), sin(ISM_SP_MIN_DEG * M_PI / 180));
-    for (uint32_t i = 0; i < mg->n; i++)
-        if (!shape_ok(p, g, mg->fan[i], x, mg->floor_sine))
-            return false;
-    return true;
+    mg->floor_sine = NAN;
+    return fan_shapes_ok(p, g, mg, x) && rm_merge_link_ok(&p->r, g);
 }
 
 /* The distance tests of merging g->v into g->w at x, which moves to its balancing offset
  * (sp_place.h; gx gets ∇f where it lands), after shapes_ok passed near x. */
-static enum verdict placed_verdict(rm_pass *p, const rm_merge *g, const merged *mg, double *x,
+static enum verdict placed_verdict(rm_pass *p, const rm_merge *g, merged *mg, double *x,
                                    double *gx)
 {
     sp_stencil s[SP_MAX_STENCILS];
@@ -192,9 +241,8 @@ static enum verdict placed_verdict(rm_pass *p, const rm_merge *g, const merged *
     double before, after, near = ISM_SP_TRIAL_REACH * p->max_error;
     if (!ns || !sp_place(p, s, ns, near, x, gx, &before))
         return REFUSED;
-    for (uint32_t i = 0; i < mg->n; i++) /* where x ends: shape again, unmeasured */
-        if (!shape_ok(p, g, mg->fan[i], x, mg->floor_sine))
-            return REFUSED;
+    if (!fan_shapes_ok(p, g, mg, x)) /* where x ends: shape again, unmeasured */
+        return REFUSED;
     if (!((after = sp_measure(p, s, ns, x, near)) <= near))
         return REFUSED;
     return after <= p->max_error ? WITHIN : NEAR;
