@@ -1033,7 +1033,17 @@ typedef struct jobtask {
     bool delete;               /* without w: delete the job instead (JOB_DELETE_LUA) */
     char id[40], user[ISMD_QUEUE_USER_MAX], key[65], fmt[8];
     long long created_unix;
+    long long first_try_ns;    /* a write or delete Redis did not take: its first attempt */
 } jobtask;
+
+/* A job's record write or DELETE that Redis did not take (unreachable, or its answer later
+ * than the command timeout on a loaded machine: ISM_REDIS_COMMAND_TIMEOUT_MS) is tried again
+ * this often, for at most JOBTASK_RETRY_FOR_NS; both are idempotent. Dropped, a DELETE the
+ * client was told "canceled" never reached Redis (the job read running everywhere, and a dead
+ * daemon's computation was never found abandoned: it ran on), and a record missing its
+ * cjobs entry kept ABANDONED_LUA from ever finding its computation abandoned. */
+#define JOBTASK_RETRY_NS 200000000LL
+#define JOBTASK_RETRY_FOR_NS 60000000000LL
 
 static long long jobtask_end(jobtask *j)
 {
@@ -1043,7 +1053,8 @@ static long long jobtask_end(jobtask *j)
     return 0;
 }
 
-static void write_record(jobtask *j)
+/* True when Redis took all of it. */
+static bool write_record(jobtask *j)
 {
     char rec[KEY_MAX], created[24];
     ckey(j->c, rec, "jobrec:", j->id);
@@ -1054,21 +1065,24 @@ static void write_record(jobtask *j)
     for (int i = 0; i < 12; i++)
         lens[i] = strlen(argv[i]);
     redisReply *r = ism_cache_redis_call(j->c->redis, "jobrec_write", 12, argv, lens);
-    if (r)
-        freeReplyObject(r);
+    if (!r)
+        return false;
+    freeReplyObject(r);
     const char *exp[] = {"PEXPIRE", rec, JOBREC_TTL_MS};
     size_t elens[] = {7, strlen(rec), strlen(JOBREC_TTL_MS)};
-    if ((r = ism_cache_redis_call(j->c->redis, "jobrec_expire", 3, exp, elens)))
-        freeReplyObject(r);
+    if (!(r = ism_cache_redis_call(j->c->redis, "jobrec_expire", 3, exp, elens)))
+        return false;
+    freeReplyObject(r);
     char name[ISM_CACHE_NAME_MAX], set[KEY_MAX];
     if (!ism_cache_name(name, j->key, j->fmt))
-        return;
+        return true;
     ckey(j->c, set, "cjobs:", name); /* the jobs of one computation (ABANDONED_LUA) */
     const char *args[] = {set, j->id, JOBREC_TTL_MS};
-    run_script(j->c, "cjobs_add", CJOBS_ADD_LUA, 1, args, 3, NULL);
+    return run_script(j->c, "cjobs_add", CJOBS_ADD_LUA, 1, args, 3, NULL) == 0;
 }
 
-static void delete_job(jobtask *j)
+/* True when Redis took it. */
+static bool delete_job(jobtask *j)
 {
     char rec[KEY_MAX], now[24];
     ckey(j->c, rec, "jobrec:", j->id);
@@ -1076,12 +1090,28 @@ static void delete_job(jobtask *j)
     const char *args[] = {rec, ism_cache_redis_prefix(j->c->redis), j->id, JOBREC_TTL_MS, now};
     redisReply *r = NULL;
     if (run_script(j->c, "cluster_job_delete", JOB_DELETE_LUA, 1, args, 5, &r) < 0)
-        return;
+        return false;
     if (r->type == REDIS_REPLY_INTEGER && r->integer == 2) {
         ism_log_field f = ISM_LS("job", j->id);
         ism_log_fields(ISM_LOG_INFO, "cluster_abandoned_computation_canceled", &f, 1);
     }
     freeReplyObject(r);
+    return true;
+}
+
+/* A record write or DELETE: done, or when to try again (JOBTASK_RETRY_NS). */
+static long long write_or_delete(jobtask *j)
+{
+    if (j->delete ? delete_job(j) : write_record(j))
+        return jobtask_end(j);
+    long long now = ism_now_ns();
+    if (!j->first_try_ns)
+        j->first_try_ns = now;
+    if (now - j->first_try_ns < JOBTASK_RETRY_FOR_NS)
+        return now + JOBTASK_RETRY_NS;
+    ism_log_field f[] = {ISM_LS("job", j->id), ISM_LS("what", j->delete ? "delete" : "record")};
+    ism_log_fields(ISM_LOG_WARN, "cluster_job_write_lost", f, 2);
+    return jobtask_end(j);
 }
 
 /* HMGET key fields... into out[] (copies, "" when missing). 1 found (first field set), 0 not,
@@ -1163,13 +1193,8 @@ static long long jobtask_run(ism_redis_task *base, ism_cache_tier *t, bool stopp
     (void)t;
     if (stopping)
         return jobtask_end(j); /* the tier is closing: the scheduler may be gone */
-    if (!j->w) {
-        if (j->delete)
-            delete_job(j);
-        else
-            write_record(j);
-        return jobtask_end(j);
-    }
+    if (!j->w)
+        return write_or_delete(j);
     ism_blob *json = NULL;
     ismd_result r = {.status = lookup(j, &json), .content_type = "application/json"};
     r.body = json;

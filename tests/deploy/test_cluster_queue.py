@@ -519,6 +519,34 @@ class ClusterQueueTest(unittest.TestCase):
         finally:
             s.cleanup()
 
+    def test_a_job_made_while_redis_does_not_answer_is_known_everywhere_once_it_does(self):
+        # The record that lets every daemon answer for a job (and its entry in the set of its
+        # computation's jobs, which tells when a dead daemon's computation is abandoned) is
+        # written on the Redis thread. Redis frozen (SIGSTOP: every command times out), the
+        # job is made all the same; the write is tried again until Redis answers. Before, it
+        # was dropped: the job stayed unknown to the other daemons (404), and a DELETE through
+        # another daemon, answered "canceled", was dropped the same way (its computation ran
+        # on; the dead-daemon test saw it once under load).
+        s = stack.Stack(n=2, daemon_args=HELD + ("--redis-lock-ttl", "1s"),
+                        with_nginx=False).start()
+        try:
+            a, b = s.daemons
+            s.pause_workers()
+            os.kill(s.redis.proc.pid, signal.SIGSTOP)
+            try:
+                job = a.post("/v1/jobs", work(1500), timeout=60).json()
+                self.assertIn(job.get("state"), ("queued", "running"), job)
+                # several command timeouts (ISM_REDIS_COMMAND_TIMEOUT_MS, 250 ms) pass
+                time.sleep(1.5)
+            finally:
+                os.kill(s.redis.proc.pid, signal.SIGCONT)
+            self.assertTrue(stack.wait_until(lambda: b.get(job["url"]).status == 200, 30),
+                            "the job stayed unknown through the other daemon")
+            self.assertEqual(s.redis.command("SMEMBERS", "isomesh:v1:cjobs:%s.%s" % (
+                job["key"], job["format"])), [job["id"].encode()])
+        finally:
+            s.cleanup()
+
     def test_a_daemon_cut_off_past_the_lock_lifetime_keeps_its_requests_computation(self):
         # A live daemon that cannot reach Redis for longer than --redis-lock-ttl (here: frozen
         # by SIGSTOP, so nothing of it reaches Redis: its alive key and its lock expire)
