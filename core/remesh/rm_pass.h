@@ -160,6 +160,10 @@ typedef struct rm_fan {
 
 void rm_fan_measure(const rm_pass *p, uint32_t v, rm_fan *f);
 
+/* The (unnormalised) normal of v's i-th triangle (in its incidence slot) with v read at x;
+ * returns its length (twice the area). */
+double rm_fan_cross(const rm_pass *p, uint32_t v, uint32_t i, const double *x, double n[3]);
+
 /* True when the triangle of corners t (vertex indices, read at their places now) would turn
  * over with normal n (unnormalised) once v (one of its corners, or none) has moved where ∇f's
  * unit normal is gv: it faces ∇f's side at a corner now and not then (the other corners'

@@ -145,18 +145,24 @@ bool rm_turns_over(const rm_pass *p, const uint32_t *t, uint32_t v, const double
     return false;
 }
 
+double rm_fan_cross(const rm_pass *p, uint32_t v, uint32_t i, const double *x, double n[3])
+{
+    const rm_mesh *r = &p->r;
+    const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
+    const double *q[3];
+    for (int k = 0; k < 3; k++)
+        q[k] = t[k] == v ? x : r->m->pos + 3 * (size_t)t[k];
+    return rm_cross(q[0], q[1], q[2], n);
+}
+
 /* Moving v to x (∇f there g) turns no triangle of its fan over (rm_turns_over). */
 static bool fan_keeps_facing(const rm_pass *p, uint32_t v, const double *x, const double g[3])
 {
     const rm_mesh *r = &p->r;
     for (uint32_t i = 0; i < r->count[v]; i++) {
-        const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
-        const double *q[3];
-        for (int k = 0; k < 3; k++)
-            q[k] = t[k] == v ? x : r->m->pos + 3 * (size_t)t[k];
         double n[3];
-        rm_cross(q[0], q[1], q[2], n);
-        if (rm_turns_over(p, t, v, g, n))
+        rm_fan_cross(p, v, i, x, n);
+        if (rm_turns_over(p, r->m->tri + 3 * r->vt[r->start[v] + i], v, g, n))
             return false;
     }
     return true;

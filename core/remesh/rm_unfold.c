@@ -25,12 +25,8 @@ static int minority(const rm_pass *p, uint32_t v, const double *x, const double 
     const rm_mesh *r = &p->r;
     int up = 0, down = 0;
     for (uint32_t i = 0; i < r->count[v]; i++) {
-        const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
-        const double *q[3];
-        for (int k = 0; k < 3; k++)
-            q[k] = t[k] == v ? x : r->m->pos + 3 * (size_t)t[k];
         double n[3];
-        if (!(rm_cross(q[0], q[1], q[2], n) > 0))
+        if (!(rm_fan_cross(p, v, i, x, n) > 0))
             return -1;
         double s = ism_dot3(n, g);
         up += s > 0;
