@@ -10,6 +10,7 @@
 #include "core/eval/eval.h"
 #include "core/singular/curve_trace.h"
 #include "core/singular/search.h"
+#include "core/util/grow.h"
 #include "core/util/sym3.h"
 #include "core/util/vec3.h"
 
@@ -473,14 +474,8 @@ static bool probe_once(ism_ctracer *tr, probed *pr, const double q[3], double sa
     for (size_t s = 0; s < pr->n; s++)
         if (ism_dist3(pr->p[s], q) <= same)
             return true;
-    if (pr->n == pr->cap) {
-        size_t grown = pr->cap ? 2 * pr->cap : 64;
-        double (*more)[3] = realloc(pr->p, grown * sizeof *more);
-        if (!more)
-            return false;
-        pr->p = more;
-        pr->cap = grown;
-    }
+    if (!ism_grow((void **)&pr->p, &pr->cap, pr->n + 1, sizeof pr->p[0], 64))
+        return false;
     memcpy(pr->p[pr->n++], q, sizeof pr->p[0]);
     ism_lbox bx = {.rank = 2, .flags = ISM_LBOX_PROJECTED};
     memcpy(bx.q, q, sizeof bx.q);

@@ -57,20 +57,29 @@ static const locus_case CASES[] = {
        ISM_SING_PINCH, ISM_SING_TRIPLE}}},
 };
 
+/* The locus of expr in base placed by which (pf_sweep_box) at depth d, one thread; *o gets
+ * the options (o->box the placed box). */
+static ism_tape *find_placed(const char *expr, const double base[6], int d, int which,
+                             ism_locus_options *o, ism_locus *l)
+{
+    ism_tape *t = pf_compile(&(pf_surface){expr, NULL, 0, NULL, 0});
+    ism_locus_options_default(o);
+    pf_sweep_box(base, d, which, o->box);
+    o->max_depth = d;
+    o->threads = 1;
+    ism_locus_init(l);
+    ism_error err;
+    cr_assert(ism_locus_find(t, o, l, &err), "%s: %s", expr, err.message);
+    return t;
+}
+
 static void check_case(const locus_case *c, int d, int which)
 {
     const char *place = which < 0 ? "own" : which == 0 ? "1e-3" : "0.37 cell";
     const double base[6] = {-c->half, -c->half, -c->half, c->half, c->half, c->half};
-    ism_tape *t = pf_compile(&(pf_surface){c->expr, NULL, 0, NULL, 0});
     ism_locus_options o;
-    ism_locus_options_default(&o);
-    pf_sweep_box(base, d, which, o.box);
-    o.max_depth = d;
-    o.threads = 1;
     ism_locus l;
-    ism_locus_init(&l);
-    ism_error err;
-    cr_assert(ism_locus_find(t, &o, &l, &err), "%s: %s", c->name, err.message);
+    ism_tape *t = find_placed(c->expr, base, d, which, &o, &l);
     size_t kinds[ISM_CURVE_KINDS] = {0};
     for (size_t i = 0; i < l.ncurves; i++)
         kinds[l.curves[i].kind]++;
@@ -160,16 +169,9 @@ static long grid_segment(const ism_locus *l, const ism_sing_curve *cu, const dou
 static void check_nine_planes(const double base[6], int d, int which)
 {
     const char *place = which < 0 ? "own" : which == 0 ? "1e-3" : "0.37 cell";
-    ism_tape *t = pf_compile(&(pf_surface){"sin(pi*x)*sin(pi*y)*sin(pi*z)", NULL, 0, NULL, 0});
     ism_locus_options o;
-    ism_locus_options_default(&o);
-    pf_sweep_box(base, d, which, o.box);
-    o.max_depth = d;
-    o.threads = 1;
     ism_locus l;
-    ism_locus_init(&l);
-    ism_error err;
-    cr_assert(ism_locus_find(t, &o, &l, &err), "nine planes: %s", err.message);
+    ism_tape *t = find_placed("sin(pi*x)*sin(pi*y)*sin(pi*z)", base, d, which, &o, &l);
     int first[3], n[3];
     for (int a = 0; a < 3; a++)
         n[a] = integers_inside(o.box[a], o.box[a + 3], &first[a]);

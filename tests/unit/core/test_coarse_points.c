@@ -85,6 +85,15 @@ static void expect_one_point(const ism_locus *l, int type, const double want[3],
               what, d, place, p->p[0], p->p[1], p->p[2], want[0], want[1], want[2]);
 }
 
+/* The service's meshing of t in base placed by which (pf_sweep_box) at depths 3..d. */
+static void run_placed(const ism_tape *t, const double base[6], int d, int which, ism_mesh *m,
+                       ism_locus *l)
+{
+    double box[6];
+    pf_sweep_box(base, d, which, box);
+    pf_run_surface(t, box, 3, d, m, l);
+}
+
 Test(coarse_points, isolated_point)
 {
     ism_tape *t = pf_compile(&(pf_surface){
@@ -92,11 +101,9 @@ Test(coarse_points, isolated_point)
     const double base[6] = {-0.8, -0.8, -0.8, 1.8, 0.8, 0.8}, origin[3] = {0, 0, 0};
     for (int d = 3; d <= 4; d++)
         for (int which = pf_first_box() - 1; which <= 1; which++) {
-            double box[6];
-            pf_sweep_box(base, d, which, box);
             ism_mesh m;
             ism_locus l;
-            pf_run_surface(t, box, 3, d, &m, &l);
+            run_placed(t, base, d, which, &m, &l);
             expect_one_point(&l, ISM_SING_ISOLATED, origin, 1e-9, "isolated-point", d, which);
             pf_props pr;
             pf_measure(&m, t, &pr);
@@ -231,11 +238,9 @@ Test(coarse_points, linked_tori_no_point_off_the_surface)
     const double base[6] = {-1.8, -1.8, -1.8, 2.8, 1.8, 1.8};
     int d = 5 - pf_quick();
     for (int which = pf_first_box() - 1; which <= 1; which++) {
-        double box[6];
-        pf_sweep_box(base, d, which, box);
         ism_mesh m;
         ism_locus l;
-        pf_run_surface(t, box, 3, d, &m, &l);
+        run_placed(t, base, d, which, &m, &l);
         const char *place = place_name(which);
         cr_expect(l.npoints == 0 && l.ncurves == 0, "linked tori d%d %s: %zu singular points, "
                   "%zu curves; want none", d, place, l.npoints, l.ncurves);
