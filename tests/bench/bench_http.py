@@ -399,8 +399,11 @@ def throughput(build, tmp):
               "processes; wake/req, prmt/req: their voluntary (a sleeping thread woken) and "
               "involuntary (preempted) context switches per request, from /proc)")
         results, nginx_results, nginx_all_results = {}, {}, {}
+        sendfile = {}
         for conns in (1, 16, 64, 256):
+            before = d.metric("isomesh_sendfile_responses_total")
             results[conns] = wrk(url, conns, secs, pid=d.proc.pid)
+            sendfile[conns] = d.metric("isomesh_sendfile_responses_total") - before
             row("isomeshd GET mesh (all attributes)", conns, results[conns])
             if curl:
                 row("libmicrohttpd alone, same bytes", conns, wrk(curl, conns, secs, pid=ceiling.pid))
@@ -411,6 +414,9 @@ def throughput(build, tmp):
                 nginx_all_results[conns] = wrk(nurl_all, conns, secs,
                                                pid=nginx_workers(nginx_all.pid))
                 row("nginx (a worker per core) the same file", conns, nginx_all_results[conns])
+        print("(isomeshd's answers sent from the cache file, sendfile, at 1/16/64/256 "
+              "connections: %s; respond.c: meshes from 64 KB while 128 or more connections "
+              "are open, else from memory)" % " / ".join("%d" % sendfile[c] for c in sorted(sendfile)))
         pos = {}
         for conns in (1, 16, 64, 256):
             pos[conns] = wrk(url_pos, conns, short, pid=d.proc.pid)
