@@ -723,7 +723,10 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
             return ISM_DUAL_NOT_APPLICABLE;
         if (d->nt > d->o->max_triangles)
             return ISM_DUAL_TOO_BIG;
-        if (!mark_misses(d, &st->missed) || r == DUAL_ROUNDS)
+        size_t marked = mark_misses(d, &st->missed);
+        if (st->missed)
+            return ISM_DUAL_NOT_APPLICABLE; /* beyond E at depth.max: the primal polygons */
+        if (!marked || r == DUAL_ROUNDS)
             break;
         st->rounds++;
         split_marked(d);

@@ -14,8 +14,10 @@
  * level higher (sphere E = 1e-3: ~4 times fewer triangles before any simplification).
  *
  * Only for closed surfaces without features: no min/max or abs in f (creases), no singular
- * locus known (quiet or node balls given), no leaf with the surface touching the box; the
- * call says "not applicable" then and the caller polygonises as before. One thread. */
+ * locus known (quiet or node balls given), no leaf with the surface touching the box; and
+ * only where every triangle meets E before depth.max (two sheets closer than E, where f's
+ * gradient nearly cancels between them, do not); the call says "not applicable" otherwise
+ * and the caller polygonises as before. One thread. */
 #ifndef ISM_DUAL_H
 #define ISM_DUAL_H
 
@@ -34,7 +36,8 @@ enum ism_dual_status {
 
 typedef struct ism_dual_stats {
     uint64_t rounds;      /* measure-and-split rounds after the first mesh */
-    uint64_t missed;      /* triangles beyond E at the end (leaves already at max_depth) */
+    uint64_t missed;      /* triangles beyond E with every leaf at max_depth (then the call
+                             says "not applicable") */
     uint64_t leaves;      /* leaves with a vertex */
     uint64_t evals_point, evals_gradient, evals_interval;
 } ism_dual_stats;
