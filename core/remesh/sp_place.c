@@ -81,8 +81,11 @@ static double model(const lines *l, double delta)
 {
     double worst = 0;
     for (int c = 0; c < 3; c++)
-        if (l->hi[c] >= l->lo[c])
-            worst = fmax(worst, fmax(l->hi[c] + l->w[c] * delta, -(l->lo[c] + l->w[c] * delta)));
+        if (l->hi[c] >= l->lo[c]) { /* finite lines: no libm fmax calls */
+            double up = l->hi[c] + l->w[c] * delta, down = -(l->lo[c] + l->w[c] * delta);
+            double m = up > down ? up : down;
+            worst = m > worst ? m : worst;
+        }
     return worst;
 }
 
@@ -116,8 +119,8 @@ static bool add_lines(rm_pass *p, const sp_stencil *s, int n, bool midpoints, co
         double e = rm_bound_signed(p, y);
         if (!isfinite(e))
             return false;
-        l->hi[c] = fmax(l->hi[c], e);
-        l->lo[c] = fmin(l->lo[c], e);
+        l->hi[c] = e > l->hi[c] ? e : l->hi[c]; /* e is finite */
+        l->lo[c] = e < l->lo[c] ? e : l->lo[c];
     }
     return true;
 }
@@ -155,7 +158,8 @@ double sp_measure(rm_pass *p, const sp_stencil *s, int n, const double x[3], dou
     double worst = 0, y[3];
     for (int k = 0; k < n && worst <= stop; k++) {
         point(&s[k], x, y);
-        worst = fmax(worst, rm_bound_distance(p, y, stop)); /* above stop: one step */
+        double d = rm_bound_distance(p, y, stop); /* above stop: one step; never NaN */
+        worst = d > worst ? d : worst;
     }
     return isfinite(worst) ? worst : INFINITY;
 }
