@@ -24,6 +24,7 @@
  * three balls to the fallback cut, 420 triangles at the default depth.) */
 #include "core/curves/branches.h"
 #include "core/curves/crease_label.h"
+#include "core/curves/crease_micro.h"
 #include "core/curves/crease_snap.h"
 #include "core/curves/crease_weld.h"
 #include "core/curves/cut_internal.h"
@@ -414,11 +415,12 @@ bool cut_crease(cut_state *s, size_t k)
     crease_state cs = {.s = s, .b = s->branches, .k = (uint32_t)k};
     ism_key_map_init(&cs.tie_edge);
     ism_mesh *m = s->m;
-    size_t nt = m->ntris, nv = m->nverts;
+    size_t nv = m->nverts, welded, snapped;
+    bool ok = cut_grow_vertex_arrays(s) && label_vertices(&cs) &&
+              cut_crease_weld_micro(s, cs.label, &welded);
+    size_t nt = m->ntris;
     uint32_t *old = malloc((nt ? nt : 1) * 3 * sizeof *old), *parent = cut_parents_copy(s, nt);
-    size_t snapped;
-    bool ok = old && parent && cut_grow_vertex_arrays(s) && label_vertices(&cs) &&
-              cut_crease_snap(s, cs.b, cs.label, &snapped);
+    ok = ok && old && parent && cut_crease_snap(s, cs.b, cs.label, &snapped);
     if (ok) {
         cut_longest_edges(m, s->reach);
         memcpy(old, m->tri, nt * 3 * sizeof *old);

@@ -14,8 +14,8 @@
  * within 1e-9 × diagonal, no mesh edge across it, and at every crease edge the normals each
  * side carries (what the outputs ship) are that side's branch gradient — the side told by
  * the closed forms at its corner off the edge — so the dihedral angle between the sides is
- * the gradients' angle within 2° at every edge; the flat triangles' own normals within 2° on
- * average and at all but FLAT_OVER_MAX edges (the crease refinement splits the triangles
+ * the gradients' angle within 2° at every edge; the flat triangles' own normals within 2° at
+ * every edge too (FLAT_OVER_MAX: the crease refinement splits the triangles
  * beside it until their flat normals meet their branch's gradient: before it 236 of 5439
  * edges missed 2° at depth 7, 273 of 5348 at 0.37 cell — the gyroid's normal turns ~k ×
  * width / 3 across a triangle), no side folded against the other, and at most 1% of the
@@ -263,10 +263,11 @@ static double ball_at(const double *p, double g[3])
 #define SLIVER_EDGES_REL 0.01
 /* Crease edges whose flat dihedral angle may miss the gradients' by more than DIHEDRAL_DEG:
  * the issue asks none. Measured at depth 7 after the crease refinement (crease_refine.c): 0
- * of 8,406 (lattice), 0 of 8,209 (1e-3 off it), 1 of 8,177 (0.37 cell: 2.45°, beside a
- * triangle of 0.11° that the refinement leaves whole — its crease point would turn it over
- * — and the relaxation cannot fatten without crossing the crease); 236 / 255 / 273 before. */
-#define FLAT_OVER_MAX 1
+ * of 8,388 (lattice), 0 of 8,172 (1e-3 off it), 0 of 8,146 (0.37 cell; worst 1.56 / 1.45 /
+ * 1.59°); 236 / 255 / 273 before the refinement, and 1 of 8,177 at 0.37 cell (2.45°) before
+ * the micro clusters beside the crease were welded (crease_micro.c: three edge roots 3.5e-5
+ * from a lattice corner left a 0.11° sliver no relaxation or split could mend). */
+#define FLAT_OVER_MAX 0
 
 typedef struct crease_sides {
     size_t n, undecided, flat_over, sliver, folded;
