@@ -155,11 +155,26 @@ double rm_fan_cross(const rm_pass *p, uint32_t v, uint32_t i, const double *x, d
     return rm_cross(q[0], q[1], q[2], n);
 }
 
-/* Moving v to x (∇f there g) turns no triangle of its fan over (rm_turns_over). */
-static bool fan_keeps_facing(const rm_pass *p, uint32_t v, const double *x, const double g[3])
+/* Moving v to x (∇f there g) turns no triangle of its fan over (rm_turns_over). Where ∇f at
+ * every corner of the fan lies within 90° − ISM_RM_MAX_TURN_DEG of the fan's normal (or of
+ * its opposite, at every corner) nothing can: rm_fan_accepts keeps each triangle within
+ * ISM_RM_MAX_TURN_DEG of that normal, so each faces one side of ∇f at every corner, before
+ * and after (the smooth parts' fans: no triangle normal is computed). */
+static bool fan_keeps_facing(const rm_pass *p, uint32_t v, const double *x, const double g[3],
+                             const rm_fan *f)
 {
     const rm_mesh *r = &p->r;
-    for (uint32_t i = 0; i < r->count[v]; i++) {
+    double lf = ism_norm3(f->normal), lg = ism_norm3(g), along = ism_dot3(g, f->normal);
+    double side = along < 0 ? -1 : 1; /* the fan may face ∇f's side or the other */
+    double near = cos((90 - ISM_RM_MAX_TURN_DEG) * M_PI / 180) * lf;
+    bool all_near = side * along >= near * lg;
+    for (uint32_t i = 0; i < r->count[v] && all_near; i++) {
+        const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
+        for (int k = 0; k < 3 && all_near; k++)
+            all_near = t[k] == v ||
+                       side * ism_dot3(p->normal + 3 * (size_t)t[k], f->normal) >= near;
+    }
+    for (uint32_t i = 0; i < r->count[v] && !all_near; i++) {
         double n[3];
         rm_fan_cross(p, v, i, x, n);
         if (rm_turns_over(p, r->m->tri + 3 * r->vt[r->start[v] + i], v, g, n))
@@ -256,7 +271,7 @@ bool rm_relax_vertex(rm_pass *p, uint32_t v)
         if (!rm_project(p, x, f.mean_edge, -1, g) ||
             !(rm_dist(x, tangent) <= ISM_RM_PROJECT_MAX_REL * f.mean_edge) ||
             (p->bounded && !keep_offset(p, pos, x, g)) || !rm_fan_accepts(p, v, x, &f) ||
-            !fan_keeps_facing(p, v, x, g) || !rm_centroids_stay(p, v, x))
+            !fan_keeps_facing(p, v, x, g, &f) || !rm_centroids_stay(p, v, x))
             continue;
         rm_commit_move(p, v, x, g);
         return true;

@@ -11,6 +11,7 @@
 #include "core/util/vec3.h"
 
 #include <math.h>
+#include <stdlib.h>
 
 /* The fans unfolded per vertex are at most this large (the polygoniser's have about 6). */
 #define ISM_RM_UNFOLD_MAX_DEGREE 24
@@ -76,14 +77,36 @@ static bool unfold_vertex(rm_pass *p, uint32_t v)
     return true;
 }
 
+/* Marks in side[v] which sides of ∇f at v its triangles face (1: ∇f's, 2: the other): one
+ * normal per triangle, where asking each fan would take three. */
+static void mark_sides(const rm_pass *p, uint8_t *side)
+{
+    const ism_mesh *m = p->r.m;
+    for (size_t t = 0; t < m->ntris; t++) {
+        const uint32_t *v = m->tri + 3 * t;
+        double n[3];
+        if (p->r.dead[t] ||
+            !(rm_cross(m->pos + 3 * (size_t)v[0], m->pos + 3 * (size_t)v[1],
+                       m->pos + 3 * (size_t)v[2], n) > 0))
+            continue;
+        for (int k = 0; k < 3; k++)
+            side[v[k]] |= ism_dot3(n, p->normal + 3 * (size_t)v[k]) > 0 ? 1 : 2;
+    }
+}
+
 size_t rm_unfold_sweep(rm_pass *p)
 {
     const rm_mesh *r = &p->r;
+    uint8_t *side = calloc(r->m->nverts ? r->m->nverts : 1, 1);
+    if (!side)
+        return 0; /* no unfolding this round: the mesh is as valid as before */
+    mark_sides(p, side);
     size_t moves = 0;
     for (size_t v = 0; v < r->m->nverts; v++)
-        if (!r->locked[v] && r->count[v] >= 3 && r->count[v] <= ISM_RM_UNFOLD_MAX_DEGREE &&
-            unfold_vertex(p, (uint32_t)v))
+        if (side[v] == 3 && !r->locked[v] && r->count[v] >= 3 &&
+            r->count[v] <= ISM_RM_UNFOLD_MAX_DEGREE && unfold_vertex(p, (uint32_t)v))
             moves++;
+    free(side);
     p->moves += moves;
     return moves;
 }
