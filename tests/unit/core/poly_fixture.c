@@ -377,3 +377,24 @@ double pf_ring_torus_dist(const double p[3])
     double ring = sqrt(p[0] * p[0] + p[1] * p[1]) - 1;
     return fabs(sqrt(ring * ring + p[2] * p[2]) - 0.3);
 }
+
+double pf_worst_distance(const ism_mesh *m, double (*dist)(const double *))
+{
+    double worst = 0;
+    for (size_t v = 0; v < m->nverts; v++)
+        worst = fmax(worst, fabs(dist(m->pos + 3 * v)));
+    for (size_t t = 0; t < m->ntris; t++) {
+        const double *v[3];
+        for (int k = 0; k < 3; k++)
+            v[k] = m->pos + 3 * (size_t)m->tri[3 * t + k];
+        double c[3], mid[3];
+        for (int k = 0; k < 3; k++) {
+            for (int a = 0; a < 3; a++) {
+                c[a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
+                mid[a] = (v[k][a] + v[(k + 1) % 3][a]) / 2;
+            }
+            worst = fmax(worst, fmax(fabs(dist(c)), fabs(dist(mid))));
+        }
+    }
+    return worst;
+}

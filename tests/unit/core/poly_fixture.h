@@ -107,4 +107,7 @@ extern const pf_surface pf_unit_sphere, pf_ring_torus;
 double pf_unit_sphere_dist(const double p[3]);
 double pf_ring_torus_dist(const double p[3]);
 
+/* The largest |dist| at the mesh's vertices, triangle centroids and edge midpoints. */
+double pf_worst_distance(const ism_mesh *m, double (*dist)(const double *));
+
 #endif

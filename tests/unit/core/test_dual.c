@@ -53,27 +53,6 @@ static void cube_box(double half, double shift, double box[6])
     }
 }
 
-static double worst_distance(const ism_mesh *m, double (*dist)(const double *))
-{
-    double worst = 0;
-    for (size_t v = 0; v < m->nverts; v++)
-        worst = fmax(worst, dist(m->pos + 3 * v));
-    for (size_t t = 0; t < m->ntris; t++) {
-        const double *v[3];
-        for (int k = 0; k < 3; k++)
-            v[k] = m->pos + 3 * (size_t)m->tri[3 * t + k];
-        double c[3], mid[3];
-        for (int k = 0; k < 3; k++) {
-            for (int a = 0; a < 3; a++) {
-                c[a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
-                mid[a] = (v[k][a] + v[(k + 1) % 3][a]) / 2;
-            }
-            worst = fmax(worst, fmax(dist(c), dist(mid)));
-        }
-    }
-    return worst;
-}
-
 static int cmp_u64(const void *a, const void *b)
 {
     uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
@@ -106,7 +85,7 @@ static void check(const pf_surface *s, double (*dist)(const double *), double e,
         cube_box(1.5, shifts[i], box);
         ism_mesh m;
         run(t, box, e, true, &m);
-        double worst = worst_distance(&m, dist);
+        double worst = pf_worst_distance(&m, dist);
         cr_expect_leq(worst, e, "%s E %g shift %g: a point %g from the surface", s->expr, e,
                       shifts[i], worst);
         pf_props p;

@@ -53,28 +53,6 @@ static void run(const ism_tape *t, double shift, double e, bool straddle, ism_me
     cr_assert_eq(st.error_missed_nodes, 0);
 }
 
-/* The largest distance at vertices, centroids and edge midpoints. */
-static double worst_distance(const ism_mesh *m, double (*dist)(const double *))
-{
-    double worst = 0;
-    for (size_t v = 0; v < m->nverts; v++)
-        worst = fmax(worst, fabs(dist(m->pos + 3 * v)));
-    for (size_t t = 0; t < m->ntris; t++) {
-        const double *v[3];
-        for (int k = 0; k < 3; k++)
-            v[k] = m->pos + 3 * (size_t)m->tri[3 * t + k];
-        double c[3], mid[3];
-        for (int k = 0; k < 3; k++) {
-            for (int a = 0; a < 3; a++) {
-                c[a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
-                mid[a] = (v[k][a] + v[(k + 1) % 3][a]) / 2;
-            }
-            worst = fmax(worst, fmax(fabs(dist(c)), fabs(dist(mid))));
-        }
-    }
-    return worst;
-}
-
 /* Every box: within E, and at most `ratio` of the triangles without the option. */
 static void check(const pf_surface *s, double (*dist)(const double *), double e, double ratio,
                   void (*vertices)(const ism_mesh *, double))
@@ -84,7 +62,7 @@ static void check(const pf_surface *s, double (*dist)(const double *), double e,
         ism_mesh plain, moved;
         run(t, shifts[i], e, false, &plain);
         run(t, shifts[i], e, true, &moved);
-        double worst = worst_distance(&moved, dist);
+        double worst = pf_worst_distance(&moved, dist);
         cr_expect_leq(worst, e, "%s E %g shift %g: a point %g from the surface", s->expr, e,
                       shifts[i], worst);
         cr_expect_lt((double)moved.ntris, ratio * (double)plain.ntris,
