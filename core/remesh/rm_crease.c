@@ -11,6 +11,8 @@
 #include "core/util/vec3.h"
 
 #include <math.h>
+#include <stdlib.h>
+#include <string.h>
 
 /* The turn the curvature predicts is compared with the bend after multiplying by this:
  * the rate is taken at the edge's ends, where a ridge narrower than the triangles (whose
@@ -18,12 +20,46 @@
  * crease beside gentle curvature is predicted a turn of a few degrees against its tens. */
 #define ISM_RM_CREASE_CURVE_SLACK 1.0
 
-/* The rate at which the unit normal turns at x when walking across the edge of direction
- * t (unit), radians per unit length; 0 where ∇f vanishes (no normal to turn). */
-static double turn_rate(const rm_pass *p, const double *x, const double t[3])
+void rm_curvature_memo_open(rm_curvature_memo *memo, size_t nverts)
+{
+    memo->gh = malloc((nverts ? nverts : 1) * 9 * sizeof *memo->gh);
+    memo->have = calloc(nverts ? nverts : 1, 1);
+    if (!memo->gh || !memo->have)
+        rm_curvature_memo_close(memo);
+}
+
+void rm_curvature_memo_close(rm_curvature_memo *memo)
+{
+    free(memo->gh);
+    free(memo->have);
+    memo->gh = NULL;
+    memo->have = NULL;
+}
+
+/* ∇f (g) and the Hessian (h) at vertex v, from the memo when it holds them. */
+static void gradient_hessian(const rm_pass *p, uint32_t v, rm_curvature_memo *memo,
+                             double g[3], double h[6])
+{
+    const double *x = p->r.m->pos + 3 * (size_t)v;
+    if (memo && memo->gh && memo->have[v]) {
+        memcpy(g, memo->gh + 9 * (size_t)v, 3 * sizeof *g);
+        memcpy(h, memo->gh + 9 * (size_t)v + 3, 6 * sizeof *h);
+        return;
+    }
+    ism_eval_hessian(p->f, p->ws, x[0], x[1], x[2], g, h);
+    if (memo && memo->gh) {
+        memcpy(memo->gh + 9 * (size_t)v, g, 3 * sizeof *g);
+        memcpy(memo->gh + 9 * (size_t)v + 3, h, 6 * sizeof *h);
+        memo->have[v] = 1;
+    }
+}
+
+/* The rate at which the unit normal turns at vertex v when walking across the edge of
+ * direction t (unit), radians per unit length; 0 where ∇f vanishes (no normal to turn). */
+static double turn_rate(const rm_pass *p, uint32_t v, const double t[3], rm_curvature_memo *memo)
 {
     double g[3], h[6];
-    ism_eval_hessian(p->f, p->ws, x[0], x[1], x[2], g, h);
+    gradient_hessian(p, v, memo, g, h);
     double len = ism_norm3(g);
     if (!(len > p->gthresh) || !isfinite(len))
         return 0;
@@ -42,12 +78,13 @@ static double turn_rate(const rm_pass *p, const double *x, const double t[3])
     return isfinite(rate) ? rate : 0;
 }
 
-bool rm_bend_is_curvature(const rm_pass *p, const double *a, const double *b, double bend,
-                          double width)
+bool rm_bend_is_curvature(const rm_pass *p, uint32_t a, uint32_t b, double bend, double width,
+                          rm_curvature_memo *memo)
 {
-    double t[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double *A = p->r.m->pos + 3 * (size_t)a, *B = p->r.m->pos + 3 * (size_t)b;
+    double t[3] = {B[0] - A[0], B[1] - A[1], B[2] - A[2]};
     if (!(ism_normalise3(t) > 0))
         return false;
-    double rate = fmax(turn_rate(p, a, t), turn_rate(p, b, t));
+    double rate = fmax(turn_rate(p, a, t, memo), turn_rate(p, b, t, memo));
     return bend <= ISM_RM_CREASE_CURVE_SLACK * rate * width;
 }

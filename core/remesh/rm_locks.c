@@ -41,7 +41,8 @@ static bool turned_at(const rm_pass *p, uint32_t v, const double *n1, const doub
  * fold (one triangle turned over against its neighbours, a polygoniser artefact) has its two
  * triangles facing opposite ways across ∇f at the edge's ends, a crease has both facing
  * ∇f's side. */
-static bool is_crease(const rm_pass *p, uint32_t a, uint32_t b, uint32_t t1, uint32_t t2)
+static bool is_crease(const rm_pass *p, uint32_t a, uint32_t b, uint32_t t1, uint32_t t2,
+                      rm_curvature_memo *memo)
 {
     const ism_mesh *m = p->r.m;
     double n1[3], n2[3];
@@ -57,28 +58,29 @@ static bool is_crease(const rm_pass *p, uint32_t a, uint32_t b, uint32_t t1, uin
     if (turned_at(p, a, n1, n2) && turned_at(p, b, n1, n2))
         return false; /* a fold */
     double ab = rm_dist(P + 3 * a, P + 3 * b);
-    return !(ab > 0 && rm_bend_is_curvature(p, P + 3 * a, P + 3 * b, acos(fmax(-1, cosine)),
-                                            (l1 + l2) / ab));
+    return !(ab > 0 && rm_bend_is_curvature(p, a, b, acos(fmax(-1, cosine)), (l1 + l2) / ab,
+                                            memo));
 }
 
 /* rm_edge_free for the oriented manifold edge {a, b} of triangles t[0], t[1]. */
-static bool manifold_edge_free(const rm_pass *p, uint32_t a, uint32_t b, const uint32_t t[2])
+static bool manifold_edge_free(const rm_pass *p, uint32_t a, uint32_t b, const uint32_t t[2],
+                               rm_curvature_memo *memo)
 {
     const rm_mesh *r = &p->r;
     if (rm_label(r, t[0]) != rm_label(r, t[1]))
         return false;
-    return !rm_edge_locked(r, a, b) && !is_crease(p, a, b, t[0], t[1]);
+    return !rm_edge_locked(r, a, b) && !is_crease(p, a, b, t[0], t[1], memo);
 }
 
 bool rm_edge_free(const rm_pass *p, uint32_t a, uint32_t b)
 {
     uint32_t t[2];
     int n;
-    return rm_edge_triangles(&p->r, a, b, t, &n) && manifold_edge_free(p, a, b, t);
+    return rm_edge_triangles(&p->r, a, b, t, &n) && manifold_edge_free(p, a, b, t, NULL);
 }
 
 /* Every edge at v free, and the triangles one closed fan (walked across those edges). */
-static bool fan_free(const rm_pass *p, uint32_t v)
+static bool fan_free(const rm_pass *p, uint32_t v, rm_curvature_memo *memo)
 {
     const rm_mesh *r = &p->r;
     const uint32_t *tri = r->m->tri;
@@ -91,7 +93,7 @@ static bool fan_free(const rm_pass *p, uint32_t v)
         uint32_t ab[2], prev = tri[3 * t + (k + 2) % 3];
         int c;
         if (tri[3 * t + (k + 1) % 3] == v || prev == v ||
-            !rm_edge_triangles(r, v, prev, ab, &c) || !manifold_edge_free(p, v, prev, ab))
+            !rm_edge_triangles(r, v, prev, ab, &c) || !manifold_edge_free(p, v, prev, ab, memo))
             return false;
         t = ab[0];
     } while (t != t0 && ++steps <= n);
@@ -169,14 +171,17 @@ static bool box_slidable(const rm_pass *p, uint32_t v)
 void rm_lock_vertices(rm_pass *p, const ism_remesh_options *o, const uint8_t *only)
 {
     rm_mesh *r = &p->r;
+    rm_curvature_memo memo;
+    rm_curvature_memo_open(&memo, r->m->nverts); /* without room: each bend evaluates */
     for (size_t v = 0; v < r->m->nverts; v++) {
         if (only && !only[v])
             continue; /* its fan and normal as they were: its protection too */
         const double *n = p->normal + 3 * v;
         bool vanishes = n[0] == 0 && n[1] == 0 && n[2] == 0;
-        r->locked[v] = vanishes || !fan_free(p, (uint32_t)v);
+        r->locked[v] = vanishes || !fan_free(p, (uint32_t)v, &memo);
         p->slide[v] = !vanishes && r->locked[v] && r->count[v] && box_slidable(p, (uint32_t)v);
     }
+    rm_curvature_memo_close(&memo);
     for (size_t s = 0; s < 2 * r->m->nsegs; s++)
         r->locked[r->m->seg[s]] = 1, p->slide[r->m->seg[s]] = 0;
     for (size_t i = 0; i < o->nlocked_points; i++) {

@@ -82,11 +82,23 @@ bool rm_lock_features(rm_pass *p, const ism_remesh_options *o);
  * only, just the vertices it marks (whose fans changed) are looked at again. */
 void rm_lock_vertices(rm_pass *p, const ism_remesh_options *o, const uint8_t *only);
 
-/* True when the bend (radians) between two triangles on the edge ab, whose heights over ab
- * sum to width, is no more than f's curvature turns its normal across ab over that width
- * (rm_crease.c): the surface bends there, no crease is there. */
-bool rm_bend_is_curvature(const rm_pass *p, const double *a, const double *b, double bend,
-                          double width);
+/* ∇f and the Hessian at the vertices, each evaluated once while the vertices stay where
+ * they are (one protection pass: an edge is judged from both its ends). */
+typedef struct rm_curvature_memo {
+    double *gh;    /* 9 per vertex: ∇f, then the Hessian (xx xy xz yy yz zz) */
+    uint8_t *have; /* per vertex: gh holds it */
+} rm_curvature_memo;
+
+/* Room for nverts vertices; without it (out of memory) the memo is empty and every lookup
+ * evaluates. rm_curvature_memo_close frees it either way. */
+void rm_curvature_memo_open(rm_curvature_memo *memo, size_t nverts);
+void rm_curvature_memo_close(rm_curvature_memo *memo);
+
+/* True when the bend (radians) between two triangles on the edge of vertices a and b, whose
+ * heights over ab sum to width, is no more than f's curvature turns its normal across ab over
+ * that width (rm_crease.c): the surface bends there, no crease is there. memo may be NULL. */
+bool rm_bend_is_curvature(const rm_pass *p, uint32_t a, uint32_t b, double bend, double width,
+                          rm_curvature_memo *memo);
 
 /* True when edge {a, b} is free: an oriented manifold edge, one label, not locked, no crease. */
 bool rm_edge_free(const rm_pass *p, uint32_t a, uint32_t b);
