@@ -110,8 +110,7 @@ static bool tri_in_tube(const cf_ctx *c, uint32_t t, void *arg)
  * whose box spans at most CHUNK_RHO radii (a run's box and a segment's differ little along
  * the curve; each query reads the grid cells of its box grown by r on every side, so runs
  * about 2r long read the fewest cells per length of curve). */
-static bool gather_near_curves(cf_ctx *c, const cf_polyline *pl, size_t n, double r,
-                               cf_tris *out)
+static bool gather_runs(cf_ctx *c, const cf_polyline *pl, size_t n, double r, cf_tris *out)
 {
     for (size_t k = 0; k < n; k++) {
         size_t segs = pl[k].closed ? pl[k].n : pl[k].n - 1;
@@ -140,6 +139,21 @@ static bool gather_near_curves(cf_ctx *c, const cf_polyline *pl, size_t n, doubl
     return true;
 }
 
+bool cf_gather_near_curves(cf_ctx *c, const cf_polyline *pl, size_t n, double r, cf_tris *out)
+{
+    /* the curves' box grown by r holds every run's query box: one pass over the mesh files
+     * what the runs need, and (ahead by r) what the next widenings need */
+    double blo[3] = {INFINITY, INFINITY, INFINITY}, bhi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++) {
+            blo[k] = fmin(blo[k], pl[i].lo[k]);
+            bhi[k] = fmax(bhi[k], pl[i].hi[k]);
+        }
+    double lo[3], hi[3];
+    cf_query_box(blo, bhi, r, lo, hi);
+    return cf_tgrid_cover(&c->grid, c->m, lo, hi, r) && gather_runs(c, pl, n, r, out);
+}
+
 static bool gather_tube(cf_ctx *c, void *arg, cf_tris *out)
 {
     tube *tb = arg;
@@ -150,12 +164,7 @@ static bool gather_tube(cf_ctx *c, void *arg, cf_tris *out)
             tb->gen_base = c->gen;
         tb->vd_r = tb->r;
     }
-    /* the curves' box grown by r holds every run's query box: one pass over the mesh files
-     * what the runs need, and (ahead by r) what the next widenings need */
-    double lo[3], hi[3];
-    cf_query_box(tb->lo, tb->hi, tb->r, lo, hi);
-    return cf_tgrid_cover(&c->grid, c->m, lo, hi, tb->r) &&
-           gather_near_curves(c, tb->pl, tb->n, tb->r, out);
+    return cf_gather_near_curves(c, tb->pl, tb->n, tb->r, out);
 }
 
 /* The curve's points spaced at least min_step apart (the ends of an open curve kept). */
@@ -335,6 +344,11 @@ static bool conform_group(cf_run *r, const size_t *idx, size_t n)
     uint32_t *rm = NULL;
     cf_loops ls = {0};
     ok = cf_cut_clean(c, &cut, &tb.r, INFINITY, &ls, &rm, &nrm);
+    if (ok && !c->stopped && ls.n > 0 && g.n == 1) { /* a lone curve: past its pleats */
+        ok = cf_cut_past_pleats(c, &g.pl[0], tb.r, &ls, &rm, &nrm);
+        if (!ok || c->stopped)
+            cf_undo(c, rm, nrm, nt0, nv0); /* out of memory or stopped: as before */
+    }
     if (ok && c->stopped) {
         c->st->items_stopped++;
     } else if (ok && ls.n == 0) {
