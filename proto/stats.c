@@ -74,6 +74,7 @@ static void write_fields(ism_jw *w, const void *base, const stat_field *f, size_
 static const stat_field poly_fields[] = {
     P(nodes_visited), P(nodes_excluded), P(plotting_nodes), P(unresolved_nodes),
     P(thin_searched), P(thin_found), P(thin_undecided), P(deep_leaves),
+    P(leaf_tapes), P(short_tape_leaves), P(tape_misses),
     P(error_missed_nodes), P(error_worst), P(error_rounds),
     P(edges_single_root), P(edges_double_root), P(edges_touching), P(edges_many_roots),
     P(zero_vertices), P(polygons), P(two_polygon_nodes), P(degenerate_polygons),

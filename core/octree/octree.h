@@ -46,27 +46,31 @@ typedef struct ism_node {
     uint8_t thin;    /* the hidden-piece search's verdict here (ISM_NODE_THIN_*), 0 if none ran */
 } ism_node;
 
-/* A leaf's flags hold, above the bits of ism_node_flags, which tape its cell evaluates:
- * 0 for f itself, k for tree->tapes[k - 1], f shortened by intervals over the leaf's closed
- * box (its min/max decided strictly there, so equal to f bit for bit, values and
- * gradients, at every point of the box: shorten.c). A tree holds at most ISM_OCTREE_TAPES
- * of them (6 bits); leaves past that evaluate f. */
-#define ISM_NODE_TAPE_SHIFT 2
-#define ISM_NODE_FLAG_BITS ((1u << ISM_NODE_TAPE_SHIFT) - 1u)
-#define ISM_OCTREE_TAPES 63
+/* A leaf evaluates either f itself or f shortened by intervals over the leaf's closed box
+ * (its min/max decided strictly there, so equal to f bit for bit, values and gradients, at
+ * every point of the box: shorten.c). Which one is kept beside the nodes, in the side array
+ * tape_of (one entry per node; NULL when no leaf has a shortened tape): 0 for f itself, k
+ * for tree->tapes[k - 1]. A tree holds at most ISM_OCTREE_TAPES distinct tapes and
+ * ISM_OCTREE_TAPE_BYTES of their code (a bound on memory: a union of n balls has about as
+ * many distinct tapes as groups of balls that meet in one leaf, thousands for n = 200, each
+ * a few hundred bytes); leaves past either limit evaluate f (the same mesh, for more). */
+#define ISM_NODE_FLAG_BITS (ISM_NODE_UNRESOLVED | ISM_NODE_ZERO_FREE)
+#define ISM_OCTREE_TAPES 65535u                /* the numbers fit tape_of's 16 bits */
+#define ISM_OCTREE_TAPE_BYTES ((size_t)64 << 20)
 
 typedef struct ism_octree {
     ism_grid grid;
     ism_node *nodes;
     size_t n, cap;
-    struct ism_tape *tapes[ISM_OCTREE_TAPES]; /* the leaves' shortened tapes (owned) */
+    uint16_t *tape_of;         /* per node: its tape's number (above), or NULL */
+    struct ism_tape **tapes;   /* the leaves' shortened tapes (owned) */
     size_t ntapes;
 } ism_octree;
 
-/* The tape leaf nd's cell evaluates inside its box, or NULL for f itself. */
+/* The tape leaf nd (a node of t) evaluates inside its box, or NULL for f itself. */
 static inline const struct ism_tape *ism_leaf_tape(const ism_octree *t, const ism_node *nd)
 {
-    unsigned k = (unsigned)nd->flags >> ISM_NODE_TAPE_SHIFT;
+    unsigned k = t->tape_of ? t->tape_of[nd - t->nodes] : 0;
     return k ? t->tapes[k - 1] : NULL;
 }
 

@@ -28,6 +28,8 @@
 typedef struct node_vec {
     ism_node *v;
     size_t n, cap;
+    uint16_t *tape;  /* beside v when the build shortens tapes: octree.h's tape_of */
+    size_t tape_cap;
 } node_vec;
 
 /* Nodes at the top levels left for the worker threads: each with the depth its subtree may
@@ -49,9 +51,11 @@ typedef struct thread_state {
                                               writes its counters for every node */
     ism_point_entry *corners; /* memo of f and ∇f at lattice points (pure: never stale) */
     ism_tape *tapes[ISM_GRID_MAX_DEPTH + 1];
+    ism_leaf_tapes_cache tape_cache; /* this thread's hits in build.leaf_tapes */
     ism_thin_ws thin;         /* the hidden-piece search's scratch */
     uint64_t visited, excluded, unresolved;
     uint64_t thin_searched, thin_found, thin_undecided, deep_leaves;
+    uint64_t tape_misses;     /* leaves whose shortened tape found no room in leaf_tapes */
     size_t new_nodes;         /* made since the last batch went to build.nodes_total */
 } thread_state;
 
@@ -75,12 +79,24 @@ typedef struct build {
     pthread_mutex_t progress_lock;
 } build;
 
-static bool vec_push(node_vec *v, const ism_node *nd)
+/* Appends nd, and its tape number when the build keeps them. */
+static bool vec_push(const build *b, node_vec *v, const ism_node *nd, uint16_t tape)
 {
     if (!ism_grow((void **)&v->v, &v->cap, v->n + 1, sizeof *v->v, 256))
         return false;
+    if (b->shortening) {
+        if (!ism_grow((void **)&v->tape, &v->tape_cap, v->n + 1, sizeof *v->tape, 256))
+            return false;
+        v->tape[v->n] = tape;
+    }
     v->v[v->n++] = *nd;
     return true;
+}
+
+/* The tape number node i of the last round's tree kept. */
+static uint16_t previous_tape(const build *b, int32_t i)
+{
+    return b->previous->tape_of ? b->previous->tape_of[i] : 0;
 }
 
 static void node_box(const ism_grid *g, const ism_node *nd, double lo[3], double hi[3])
@@ -266,12 +282,13 @@ static int resolve_limit(const build *b, int limit)
     return limit > resolve ? limit : resolve;
 }
 
-/* The last round's node pv took over for node i when its decision still holds: an empty
+/* The last round's node pi taken over for node i when its decision still holds: an empty
  * node stays empty, a leaf not forced to split now stays a leaf (with its flags). The
  * counters move as the evaluation would have moved them. */
-static bool take_over(build *b, thread_state *th, node_vec *v, size_t i, const ism_node *pv,
+static bool take_over(build *b, thread_state *th, node_vec *v, size_t i, int32_t pi,
                       bool forced)
 {
+    const ism_node *pv = &b->previous->nodes[pi];
     if (pv->state == ISM_NODE_EMPTY) {
         v->v[i].state = ISM_NODE_EMPTY;
         th->excluded++;
@@ -282,6 +299,8 @@ static bool take_over(build *b, thread_state *th, node_vec *v, size_t i, const i
     v->v[i].state = ISM_NODE_LEAF;
     v->v[i].flags = pv->flags;
     v->v[i].thin = pv->thin;
+    if (v->tape)
+        v->tape[i] = previous_tape(b, pi);
     count_thin(th, pv->thin);
     th->unresolved += (pv->flags & ISM_NODE_UNRESOLVED) != 0;
     th->deep_leaves += pv->level > b->p->max_depth;
@@ -332,7 +351,7 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
                    ism_split_set_has(b->p->force_split, ism_node_key(&nd))) ||
                   near_node(b, &nd);
     const ism_node *pv = pi >= 0 ? &b->previous->nodes[pi] : NULL;
-    if (pv && take_over(b, th, v, i, pv, forced))
+    if (pv && take_over(b, th, v, i, pi, forced))
         return true;
     ism_interval range = known ? *known : (ism_interval){0, 0};
     const ism_tape *sub = known ? tape : node_range(b, th, &nd, tape, &range);
@@ -382,9 +401,10 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     if (leaf) {
         v->v[i].state = ISM_NODE_LEAF;
         /* the tape its cell evaluates: sub, shortened over this box or an ancestor's */
-        if (sub != b->p->tape && !(v->v[i].flags & ISM_NODE_ZERO_FREE))
-            v->v[i].flags |= (uint8_t)(ism_leaf_tapes_number(&b->leaf_tapes, sub)
-                                       << ISM_NODE_TAPE_SHIFT);
+        if (sub != b->p->tape && !(v->v[i].flags & ISM_NODE_ZERO_FREE) && !b->p->full_tape) {
+            v->tape[i] = (uint16_t)ism_leaf_tapes_number(&b->leaf_tapes, &th->tape_cache, sub);
+            th->tape_misses += v->tape[i] == 0;
+        }
         return true;
     }
     if ((th->new_nodes += 8) >= NODE_BATCH && !count_nodes(b, th))
@@ -393,7 +413,7 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     for (int k = 0; k < 8; k++) {
         ism_node c = {{0, 0, 0}, -1, (uint8_t)(nd.level + 1), ISM_NODE_LEAF, 0, 0};
         ism_child_origin(b->grid, &nd, k, c.org);
-        if (!vec_push(v, &c))
+        if (!vec_push(b, v, &c, 0))
             return fail(b, ISM_BUILD_NO_MEMORY);
     }
     v->v[i].state = ISM_NODE_SPLIT;
@@ -477,6 +497,7 @@ static void free_threads(build *b, int nthreads, ism_octree_build_stats *st)
         st->thin_undecided += th->thin_undecided;
         st->thin_boxes += th->thin.n_boxes;
         st->deep_leaves += th->deep_leaves;
+        st->tape_misses += th->tape_misses;
         ism_thin_ws_free(&th->thin);
         st->n_point += th->s.n_point;
         st->n_gradient += th->s.n_gradient;
@@ -501,11 +522,13 @@ static bool join_tasks(build *b, node_vec *top)
         if (root.child >= 0)
             root.child += (int32_t)offset;
         top->v[b->tasks[k].node] = root;
+        if (top->tape)
+            top->tape[b->tasks[k].node] = sub->tape[0];
         for (size_t j = 1; j < sub->n; j++) {
             ism_node nd = sub->v[j];
             if (nd.child >= 0)
                 nd.child += (int32_t)offset;
-            if (!vec_push(top, &nd))
+            if (!vec_push(b, top, &nd, top->tape ? sub->tape[j] : 0))
                 return false;
         }
     }
@@ -539,7 +562,7 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
         goto done;
     }
     ism_node root = {{0, 0, 0}, -1, 0, ISM_NODE_LEAF, 0, 0};
-    if (!vec_push(&top, &root)) {
+    if (!vec_push(&b, &top, &root, 0)) {
         status = ISM_BUILD_NO_MEMORY;
         goto done;
     }
@@ -558,7 +581,8 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
         goto done;
     }
     for (size_t k = 0; k < b.ntasks; k++)
-        if (!vec_push(&b.task_out[k], &top.v[b.tasks[k].node])) {
+        if (!vec_push(&b, &b.task_out[k], &top.v[b.tasks[k].node],
+                      top.tape ? top.tape[b.tasks[k].node] : 0)) {
             status = ISM_BUILD_NO_MEMORY;
             goto done;
         }
@@ -576,15 +600,20 @@ done:
     ism_quiet_free(&b.quiet);
     ism_node_balls_free(&b.node_balls);
     if (b.task_out)
-        for (size_t k = 0; k < b.ntasks; k++)
+        for (size_t k = 0; k < b.ntasks; k++) {
             free(b.task_out[k].v);
+            free(b.task_out[k].tape);
+        }
     free(b.task_out);
     free(deferred.v);
     pthread_mutex_destroy(&b.progress_lock);
     if (status != ISM_BUILD_OK) {
         ism_leaf_tapes_free(&b.leaf_tapes);
         free(top.v);
+        free(top.tape);
         t->nodes = NULL;
+        t->tape_of = NULL;
+        t->tapes = NULL;
         t->n = t->cap = 0;
         t->ntapes = 0;
         return status;
@@ -592,6 +621,7 @@ done:
     t->nodes = top.v;
     t->n = top.n;
     t->cap = top.cap;
+    t->tape_of = top.tape;
     ism_leaf_tapes_give(&b.leaf_tapes, t);
     ism_leaf_tapes_free(&b.leaf_tapes);
     return ISM_BUILD_OK;
@@ -600,9 +630,13 @@ done:
 void ism_octree_free(ism_octree *t)
 {
     free(t->nodes);
+    free(t->tape_of);
     t->nodes = NULL;
+    t->tape_of = NULL;
     t->n = t->cap = 0;
     for (size_t k = 0; k < t->ntapes; k++)
         ism_tape_free(t->tapes[k]);
+    free(t->tapes);
+    t->tapes = NULL;
     t->ntapes = 0;
 }

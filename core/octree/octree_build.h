@@ -53,6 +53,8 @@ typedef struct ism_octree_build_params {
                                          included but thin_boxes (boxes searched now) */
     bool scalar_eval;                 /* no batched intervals, no zero-free leaves (the
                                          reference path: ism_poly_options.scalar_eval) */
+    bool full_tape;                   /* leaves evaluate f itself, not a shortened tape (the
+                                         reference path: ism_poly_options.full_tape) */
     const volatile int *cancel;
     void (*progress)(void *ctx, double fraction); /* fraction of subtrees done */
     void *progress_ctx;
@@ -67,6 +69,8 @@ typedef struct ism_octree_build_stats {
     uint64_t thin_undecided; /* ... where the search could neither find nor exclude one */
     uint64_t thin_boxes;     /* boxes those searches examined (in this build only) */
     uint64_t deep_leaves;    /* leaves below max_depth (under hidden pieces) */
+    uint64_t tape_misses;    /* leaves (in this build) whose shortened tape found no room in
+                                the tree's table (octree.h's limits): they evaluate f */
     uint64_t n_point, n_gradient, n_interval;
 } ism_octree_build_stats;
 

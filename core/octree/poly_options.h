@@ -54,6 +54,9 @@ typedef struct ism_poly_options {
     bool scalar_eval;       /* evaluate the octree node by node: no batched intervals over a
                                node's children and no zero-free leaves (octree.h) — the same
                                mesh bit for bit, for more; on is for tests (default off) */
+    bool full_tape;         /* every leaf evaluates f itself, not f shortened by intervals over
+                               its box (octree.h) — the same mesh bit for bit, for more; on is
+                               for tests (default off) */
     /* Balls (x, y, z, radius) whose mesh a later stage rebuilds — around the singular points
      * and along the curves found from f, which the conformance pass refills
      * (core/singular/conform.h): hidden pieces are not chased into them (a horn shrinking to

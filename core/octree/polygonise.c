@@ -497,8 +497,11 @@ static enum ism_poly_status from_build(enum ism_build_status b)
 
 static void count_leaves(const ism_octree *t, ism_poly_stats *st)
 {
-    for (size_t i = 0; i < t->n; i++)
+    for (size_t i = 0; i < t->n; i++) {
         st->plotting_nodes += t->nodes[i].state == ISM_NODE_LEAF;
+        st->short_tape_leaves += t->nodes[i].state == ISM_NODE_LEAF && t->tape_of && t->tape_of[i];
+    }
+    st->leaf_tapes = t->ntapes;
 }
 
 static enum ism_poly_status fail_with(enum ism_poly_status s, const ism_poly_options *o,
@@ -560,6 +563,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
         .max_nodes = o->max_memory / 4 / sizeof(ism_node),
         .force_split = split,
         .scalar_eval = o->scalar_eval,
+        .full_tape = o->full_tape,
         .previous = o->fresh_rounds ? NULL : &prev->tree,
         .cancel = o->cancel,
         .progress = report,
@@ -576,6 +580,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     st->thin_found = bs.thin_found;
     st->thin_undecided = bs.thin_undecided;
     st->deep_leaves = bs.deep_leaves;
+    st->tape_misses = bs.tape_misses;
     double t_tree = ism_now_ms();
     st->time_ms[ISM_PHASE_OCTREE] = t_tree - t_start;
     meter_stop(&m, st, ISM_PHASE_OCTREE);

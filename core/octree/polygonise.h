@@ -51,6 +51,10 @@ typedef struct ism_poly_stats {
     uint64_t thin_found;         /* ... that hid one, and were split (below max depth too) */
     uint64_t thin_undecided;     /* ... where the search could neither find nor exclude one */
     uint64_t deep_leaves;        /* leaves below max depth (meshing the hidden pieces) */
+    uint64_t leaf_tapes;         /* distinct tapes shortened over leaves (octree.h) */
+    uint64_t short_tape_leaves;  /* leaves evaluating one of them instead of f */
+    uint64_t tape_misses;        /* leaves whose shortened tape found no room (a limit of
+                                    octree.h): they evaluate f */
     uint64_t error_missed_nodes; /* under max_error: leaves whose emitted triangles were
                                     measured farther than max_error from the surface (at
                                     centroids and edge midpoints) and could not be split:
