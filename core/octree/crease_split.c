@@ -26,19 +26,36 @@
 /* A vertex whose branch is not looked up yet. */
 #define LABEL_UNKNOWN 2
 
+/* Does t still end in f's top min/max (not decided by the intervals it was shortened by)? */
+static bool top_undecided(const ism_tape *t)
+{
+    static const double any[2] = {0, 0};
+    return ism_top_active_branch(t, any) >= 0;
+}
+
+/* The tape whose top min/max gives f's branches at p bit for bit: the leaf's shortened one
+ * inside its box while it keeps that min/max (its operands are then computed as f's are, by
+ * the same instructions or by a min/max decided strictly), else f's. */
+static const ism_tape *top_tape(const ism_sampler *s, const double p[3])
+{
+    const ism_tape *t = ism_sampler_tape_at(s, p);
+    return t == s->local && !top_undecided(t) ? s->tape : t;
+}
+
 int ism_crease_branch(ism_sampler *s, const double p[3], double g[3])
 {
     double v[2], bg[2][3];
+    const ism_tape *t = top_tape(s, p);
     if (!g) { /* the label alone: values, no gradients */
         s->n_point++;
-        if (!ism_eval_top_values(s->tape, s->ws, p[0], p[1], p[2], v))
+        if (!ism_eval_top_values(t, s->ws, p[0], p[1], p[2], v))
             return -1;
-        return ism_top_active_branch(s->tape, v);
+        return ism_top_active_branch(t, v);
     }
     s->n_gradient++;
-    if (!ism_eval_top_branches(s->tape, s->ws, p[0], p[1], p[2], v, bg))
+    if (!ism_eval_top_branches(t, s->ws, p[0], p[1], p[2], v, bg))
         return -1;
-    int b = ism_top_active_branch(s->tape, v);
+    int b = ism_top_active_branch(t, v);
     memcpy(g, bg[b], sizeof bg[b]);
     return b;
 }
@@ -57,7 +74,7 @@ static bool newton_step(ism_sampler *s, double x[3])
 {
     double v[2], g[2][3];
     s->n_gradient++;
-    ism_eval_top_branches(s->tape, s->ws, x[0], x[1], x[2], v, g);
+    ism_eval_top_branches(top_tape(s, x), s->ws, x[0], x[1], x[2], v, g);
     double step[3];
     if (!isfinite(v[0]) || !isfinite(v[1]) ||
         !ism_min_norm_step(2, (const double (*)[3])g, v, CREASE_PARALLEL_SIN2, step))
@@ -95,7 +112,7 @@ static void crease_point(ism_sampler *s, const double *p0, const double *q0, ism
     const double *ends[2] = {p, q};
     for (int e = 0; e < 2; e++) {
         s->n_point++;
-        ism_eval_top_values(s->tape, s->ws, ends[e][0], ends[e][1], ends[e][2], v);
+        ism_eval_top_values(top_tape(s, ends[e]), s->ws, ends[e][0], ends[e][1], ends[e][2], v);
         d[e] = v[0] - v[1];
     }
     double t = d[0] / (d[0] - d[1]);
@@ -162,15 +179,29 @@ static bool split_labelled(ism_sampler *s, ism_cell_out *out, size_t first_tri, 
     return true;
 }
 
+/* Do all vertices of triangles first_tri..ntris - 1 lie on one branch because the leaf's
+ * shortened tape decides f's top min/max (strictly) over its closed box and holds them all? */
+static bool one_branch(const ism_sampler *s, const ism_cell_out *out, size_t first_tri,
+                       size_t ntris)
+{
+    if (!s->local || top_undecided(s->local))
+        return false;
+    for (size_t i = 3 * first_tri; i < 3 * ntris; i++)
+        if (ism_sampler_tape_at(s, out->verts[out->tris[i]].p) != s->local)
+            return false;
+    return true;
+}
+
 bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
 {
     size_t ntris = out->ntris;
-    if (first_tri == ntris)
+    if (first_tri == ntris || one_branch(s, out, first_tri, ntris))
         return true;
     double v[2];
     const double *p0 = out->verts[out->tris[3 * first_tri]].p;
+    const ism_tape *t0 = top_tape(s, p0);
     s->n_point++;
-    if (!ism_eval_top_values(s->tape, s->ws, p0[0], p0[1], p0[2], v))
+    if (!ism_eval_top_values(t0, s->ws, p0[0], p0[1], p0[2], v))
         return true; /* no min/max at the top of the tape */
     uint32_t lo = UINT32_MAX, hi = 0;
     for (size_t i = 3 * first_tri; i < 3 * ntris; i++) {
@@ -182,7 +213,7 @@ bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
     if (!labels)
         return false;
     memset(labels, LABEL_UNKNOWN, n);
-    labels[out->tris[3 * first_tri] - lo] = (uint8_t)ism_top_active_branch(s->tape, v);
+    labels[out->tris[3 * first_tri] - lo] = (uint8_t)ism_top_active_branch(t0, v);
     bool ok = split_labelled(s, out, first_tri, ntris, labels, lo);
     if (labels != stack)
         free(labels);

@@ -12,9 +12,12 @@
 #include "core/octree/sampler.h"
 
 /* Splits out's triangles from first_tri on (one leaf's) along the crease of s's tape; does
- * nothing when the tape does not end in min/max. A mixed edge's crease point depends on its
- * two end points only (taken in coordinate order), so the leaves sharing an edge find the
- * same point bit for bit and the weld joins them. False when out of memory. */
+ * nothing when the tape does not end in min/max, or when the leaf's shortened tape
+ * (s->local) has that min/max decided over its box and the triangles lie in the box (one
+ * branch there: no crease). Inside the box the shortened tape gives the branches when it
+ * keeps the min/max (bit for bit f's). A mixed edge's crease point depends on its two end
+ * points only (taken in coordinate order), so the leaves sharing an edge find the same
+ * point bit for bit and the weld joins them. False when out of memory. */
 bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri);
 
 /* The branch of f's top min/max active at p (0 or 1), or -1 when the tape does not end in
