@@ -51,6 +51,10 @@ typedef struct thread_state {
                                               writes its counters for every node */
     ism_point_entry *corners; /* memo of f and ∇f at lattice points (pure: never stale) */
     ism_tape *tapes[ISM_GRID_MAX_DEPTH + 1];
+    /* tapes[l]'s number in build.leaf_tapes, known while written[l] == numbered[l]: the
+     * leaves below one shortening share it without a lookup */
+    uint32_t written[ISM_GRID_MAX_DEPTH + 1], numbered[ISM_GRID_MAX_DEPTH + 1];
+    uint16_t number[ISM_GRID_MAX_DEPTH + 1];
     ism_leaf_tapes_cache tape_cache; /* this thread's hits in build.leaf_tapes */
     ism_thin_ws thin;         /* the hidden-piece search's scratch */
     uint64_t visited, excluded, unresolved;
@@ -79,17 +83,27 @@ typedef struct build {
     pthread_mutex_t progress_lock;
 } build;
 
-/* Appends nd, and its tape number when the build keeps them. */
+/* Room for extra more nodes (and their tape numbers when the build keeps them). */
+static bool vec_reserve(const build *b, node_vec *v, size_t extra)
+{
+    return ism_grow((void **)&v->v, &v->cap, v->n + extra, sizeof *v->v, 256) &&
+           (!b->shortening ||
+            ism_grow((void **)&v->tape, &v->tape_cap, v->n + extra, sizeof *v->tape, 256));
+}
+
+/* Appends nd (room reserved) with its tape number. */
+static void vec_put(node_vec *v, const ism_node *nd, uint16_t tape)
+{
+    if (v->tape)
+        v->tape[v->n] = tape;
+    v->v[v->n++] = *nd;
+}
+
 static bool vec_push(const build *b, node_vec *v, const ism_node *nd, uint16_t tape)
 {
-    if (!ism_grow((void **)&v->v, &v->cap, v->n + 1, sizeof *v->v, 256))
+    if (!vec_reserve(b, v, 1))
         return false;
-    if (b->shortening) {
-        if (!ism_grow((void **)&v->tape, &v->tape_cap, v->n + 1, sizeof *v->tape, 256))
-            return false;
-        v->tape[v->n] = tape;
-    }
-    v->v[v->n++] = *nd;
+    vec_put(v, nd, tape);
     return true;
 }
 
@@ -117,10 +131,12 @@ static const ism_tape *node_range(build *b, thread_state *th, const ism_node *nd
     node_box(b->grid, nd, lo, hi);
     ism_interval x = {lo[0], hi[0]}, y = {lo[1], hi[1]}, z = {lo[2], hi[2]};
     th->s.n_interval++;
-    if (b->shortening && th->tapes[nd->level]) /* fills *range whether or not it shortens */
-        return ism_tape_shorten(tape, th->s.ws, x, y, z, th->tapes[nd->level], range)
-                   ? th->tapes[nd->level]
-                   : tape;
+    if (b->shortening && th->tapes[nd->level]) { /* fills *range whether or not it shortens */
+        if (!ism_tape_shorten(tape, th->s.ws, x, y, z, th->tapes[nd->level], range))
+            return tape;
+        th->written[nd->level]++;
+        return th->tapes[nd->level];
+    }
     *range = ism_eval_interval(tape, th->s.ws, x, y, z);
     return tape;
 }
@@ -325,6 +341,27 @@ static void children_ranges(build *b, thread_state *th, const ism_node *nd,
     th->s.n_interval += 8;
 }
 
+/* The number of sub (a shortened tape: th->tapes[l] for some l <= level) in the build's
+ * table, 0 when it finds no room there. */
+static uint16_t tape_number(build *b, thread_state *th, const ism_tape *sub, int level)
+{
+    int l = level;
+    while (l >= 0 && th->tapes[l] != sub)
+        l--;
+    uint16_t k;
+    if (l >= 0 && th->numbered[l] == th->written[l]) {
+        k = th->number[l];
+    } else {
+        k = (uint16_t)ism_leaf_tapes_number(&b->leaf_tapes, &th->tape_cache, sub);
+        if (l >= 0) {
+            th->number[l] = k;
+            th->numbered[l] = th->written[l];
+        }
+    }
+    th->tape_misses += k == 0;
+    return k;
+}
+
 /* Decides node v->v[i] and grows its subtree. Nodes that fail the flatness test are split
  * down to level `limit` (depth.max, or ISM_THIN_RESOLVE_LEVELS deeper below a hidden
  * piece); a would-be leaf that hides a piece is split in any case, down to thin_depth. When
@@ -401,20 +438,19 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     if (leaf) {
         v->v[i].state = ISM_NODE_LEAF;
         /* the tape its cell evaluates: sub, shortened over this box or an ancestor's */
-        if (sub != b->p->tape && !(v->v[i].flags & ISM_NODE_ZERO_FREE) && !b->p->full_tape) {
-            v->tape[i] = (uint16_t)ism_leaf_tapes_number(&b->leaf_tapes, &th->tape_cache, sub);
-            th->tape_misses += v->tape[i] == 0;
-        }
+        if (sub != b->p->tape && !(v->v[i].flags & ISM_NODE_ZERO_FREE) && !b->p->full_tape)
+            v->tape[i] = tape_number(b, th, sub, nd.level);
         return true;
     }
     if ((th->new_nodes += 8) >= NODE_BATCH && !count_nodes(b, th))
         return false;
     size_t first = v->n;
+    if (!vec_reserve(b, v, 8))
+        return fail(b, ISM_BUILD_NO_MEMORY);
     for (int k = 0; k < 8; k++) {
         ism_node c = {{0, 0, 0}, -1, (uint8_t)(nd.level + 1), ISM_NODE_LEAF, 0, 0};
         ism_child_origin(b->grid, &nd, k, c.org);
-        if (!vec_push(b, v, &c, 0))
-            return fail(b, ISM_BUILD_NO_MEMORY);
+        vec_put(v, &c, 0);
     }
     v->v[i].state = ISM_NODE_SPLIT;
     v->v[i].child = (int32_t)first;
