@@ -28,19 +28,30 @@ ism_tape *pf_compile(const pf_surface *s)
     return t;
 }
 
+void pf_options(ism_poly_options *o, const double box[6], int dmin, int dmax)
+{
+    ism_poly_options_default(o);
+    memcpy(o->box, box, sizeof o->box);
+    o->min_depth = dmin;
+    o->max_depth = dmax;
+}
+
+void pf_run_options(const ism_tape *t, const ism_poly_options *o, ism_mesh *m,
+                    ism_poly_stats *st)
+{
+    ism_error err;
+    ism_mesh_init(m);
+    enum ism_poly_status s = ism_polygonise(t, o, m, st, &err);
+    cr_assert_eq(s, ISM_POLY_OK, "polygonise failed: %s", err.message);
+}
+
 void pf_run(const ism_tape *t, const double box[6], int dmin, int dmax, int threads,
             ism_mesh *m, ism_poly_stats *st)
 {
     ism_poly_options o;
-    ism_poly_options_default(&o);
-    memcpy(o.box, box, sizeof o.box);
-    o.min_depth = dmin;
-    o.max_depth = dmax;
+    pf_options(&o, box, dmin, dmax);
     o.threads = threads;
-    ism_error err;
-    ism_mesh_init(m);
-    enum ism_poly_status s = ism_polygonise(t, &o, m, st, &err);
-    cr_assert_eq(s, ISM_POLY_OK, "polygonise failed: %s", err.message);
+    pf_run_options(t, &o, m, st);
 }
 
 void pf_run_surface_bounded(const ism_tape *t, const double box[6], int dmin, int dmax,

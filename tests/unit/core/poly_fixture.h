@@ -40,6 +40,13 @@ int pf_first_box(void);
 
 ism_tape *pf_compile(const pf_surface *s);
 
+/* Default options but for the box and depths given. */
+void pf_options(ism_poly_options *o, const double box[6], int dmin, int dmax);
+
+/* Polygonises with options o; asserts success. */
+void pf_run_options(const ism_tape *t, const ism_poly_options *o, ism_mesh *m,
+                    ism_poly_stats *st);
+
 /* Polygonises with the given box and depths (other options default); asserts success. */
 void pf_run(const ism_tape *t, const double box[6], int dmin, int dmax, int threads,
             ism_mesh *m, ism_poly_stats *st);

@@ -53,16 +53,11 @@ static void mesh_of(const ism_tape *t, const double box[6], int dmax, double max
                     int threads, bool full_tape, ism_mesh *m, ism_poly_stats *st)
 {
     ism_poly_options o;
-    ism_poly_options_default(&o);
-    memcpy(o.box, box, sizeof o.box);
-    o.min_depth = 2;
-    o.max_depth = dmax;
+    pf_options(&o, box, 2, dmax);
     o.max_error = max_error;
     o.threads = threads;
     o.full_tape = full_tape;
-    ism_error err;
-    ism_mesh_init(m);
-    cr_assert_eq(ism_polygonise(t, &o, m, st, &err), ISM_POLY_OK, "%s", err.message);
+    pf_run_options(t, &o, m, st);
 }
 
 /* The full-tape mesh on one thread against the short-tape one on 1, 2 and 4. */
