@@ -33,15 +33,11 @@ static const double shifts[] = {0, 1e-3 * FINEST, 0.37 * FINEST};
 static void run(const ism_tape *t, const double box[6], double e, bool dual, ism_mesh *m)
 {
     ism_poly_options o;
-    ism_poly_options_default(&o);
-    memcpy(o.box, box, sizeof o.box);
-    o.max_depth = SAFETY_DEPTH;
+    pf_options(&o, box, 3, SAFETY_DEPTH); /* 3: the default minimum depth */
     o.max_error = e;
     o.dual = dual;
     ism_poly_stats st;
-    ism_error err;
-    ism_mesh_init(m);
-    cr_assert_eq(ism_polygonise(t, &o, m, &st, &err), ISM_POLY_OK, "%s", err.message);
+    pf_run_options(t, &o, m, &st);
     cr_assert_eq(st.error_missed_nodes, 0);
 }
 
