@@ -4,6 +4,7 @@
 #include "core/octree/dual.h"
 #include "core/eval/interval_jet.h"
 #include "core/octree/corners.h"
+#include "core/octree/dual_cert.h"
 #include "core/octree/edge_roots.h"
 #include "core/octree/graph_cert.h"
 #include "core/octree/grid.h"
@@ -25,6 +26,11 @@
 /* A triangle whose normal makes an angle past 90° with ∇f at its centroid is turned over:
  * its leaves are split like those of a triangle beyond E. */
 #define TURNED_COS 0.0
+/* Sub-boxes tried by the proofs below a node's own enclosure: one halving (8 boxes, 16
+ * interval evaluations) — cheaper than the 8 child nodes it spares (27 gradient samples,
+ * 8 enclosures, later their vertices and triangles); a second halving (64 more) cost more
+ * than it spared on the torus. */
+#define CERT_HALVINGS 1
 
 enum { DN_INNER, DN_EMPTY, DN_SURF };
 
@@ -114,6 +120,31 @@ typedef struct corner_view {
     int monotone; /* bit a: ∇f's a-th component keeps a sign over the box */
 } corner_view;
 
+/* Where surface leaf n lies on the request's box: -1 when f changes sign between its
+ * corners on a face of the box (the box cuts the surface), 1 when f is proven free of 0 on
+ * every such face, 0 when neither is known (split it). */
+static int box_faces_clear(dual *d, const dnode *n, const corner_view *v)
+{
+    int32_t step = ism_grid_cell_steps(&d->g, n->level), last = (int32_t)1 << d->g.depth;
+    for (int a = 0; a < 3; a++)
+        for (int side = 0; side < 2; side++) {
+            if (n->o.v[a] != (side ? last - step : 0))
+                continue;
+            int neg = 0;
+            for (int c = 0; c < 8; c++)
+                neg += ((c >> a & 1) == side) && n->f[c] < 0;
+            if (neg != 0 && neg != 4)
+                return -1;
+            double lo[3], hi[3];
+            memcpy(lo, v->p[0], sizeof lo);
+            memcpy(hi, v->p[7], sizeof hi);
+            lo[a] = hi[a] = side ? v->p[7][a] : v->p[0][a];
+            if (!ism_dual_free(d->s.tape, d->jet, lo, hi, CERT_HALVINGS, true, &d->s.n_interval))
+                return 0;
+        }
+    return 1;
+}
+
 /* No root on an edge whose ends share a sign: f monotone along its axis or kept from 0 by
  * the mean-value form (proofs), else the primal polygons' edge test (plot_test.c): the
  * paper's same-sheet test (eq. 1) on the ends' gradients, then its double-root search. */
@@ -190,6 +221,46 @@ static bool normals_agree(const double (*n)[3], double cos_min)
     return true;
 }
 
+/* v->g (the node's natural enclosure) replaced by the Taylor form's (dual_cert.h); false
+ * when that cannot be had (g kept). */
+static bool tighten(dual *d, corner_view *v)
+{
+    ism_ivgrad g;
+    if (!ism_dual_enclose(d->s.tape, d->jet, v->p[0], v->p[7], &g, &d->s.n_interval))
+        return false;
+    v->g = g;
+    return true;
+}
+
+/* f free of 0 over node n, whose corners share a sign (v->g: its natural enclosure): by the
+ * enclosure or the mean-value form from the corners, then both on the Taylor form, then on
+ * the sub-boxes. */
+static bool empty_proven(dual *d, const dnode *n, corner_view *v)
+{
+    for (int k = 0; k < 2; k++) {
+        if (ism_dual_encl_free(&v->g) || mean_value_free(n, &v->g, v->p[0], v->p[7]))
+            return true;
+        if (k == 0 && !tighten(d, v))
+            return false;
+    }
+    return ism_dual_free(d->s.tape, d->jet, v->p[0], v->p[7], CERT_HALVINGS, false,
+                         &d->s.n_interval);
+}
+
+/* One graph along the corner gradients' mean (the direction the sheet in the node faces)
+ * wherever f may vanish in the node's sub-boxes (the node's own enclosure failed). */
+static bool graph_on_sub_boxes(dual *d, const corner_view *v)
+{
+    double m[3] = {0, 0, 0};
+    for (int c = 0; c < 8; c++)
+        for (int a = 0; a < 3; a++)
+            m[a] += v->n[c][a];
+    if (!(ism_dot3(m, m) > 0))
+        return false;
+    return ism_dual_graph_along(d->s.tape, d->jet, v->p[0], v->p[7], m, CERT_HALVINGS, false,
+                                &d->s.n_interval);
+}
+
 /* What node n is (f and the unit gradients at its corners in n->f and v): empty (proven
  * free of f = 0), a surface leaf with one sheet (corner gradients agreeing, or one graph
  * proven by interval gradients), or to be split. The interval is taken only where the
@@ -209,17 +280,19 @@ static int classify(dual *d, dnode *n, corner_view *v)
     v->have_g = false;
     v->monotone = 0;
     if (!v->agree) {
+        /* the natural interval first (one evaluation, enough on the sphere), then the
+         * Taylor form (two), then the sub-boxes */
         ism_interval box[3];
         for (int a = 0; a < 3; a++)
             box[a] = (ism_interval){v->p[0][a], v->p[7][a]};
         d->s.n_interval++;
         v->have_g = ism_eval_interval_grad(d->s.tape, d->jet, box, NULL, NULL, &v->g) == 0;
+        if (!v->have_g)
+            return DN_INNER; /* a kink in the node */
         if (!mixed) /* empty, or maybe a piece no corner sees */
-            return v->have_g && (v->g.v.lo > 0 || v->g.v.hi < 0 ||
-                                 mean_value_free(n, &v->g, v->p[0], v->p[7]))
-                       ? DN_EMPTY
-                       : DN_INNER;
-        if (!v->have_g || !ism_graph_from_enclosure(&v->g))
+            return empty_proven(d, n, v) ? DN_EMPTY : DN_INNER;
+        if (!ism_graph_from_enclosure(&v->g) &&
+            !(tighten(d, v) && (ism_graph_from_enclosure(&v->g) || graph_on_sub_boxes(d, v))))
             return DN_INNER;
         for (int a = 0; a < 3; a++)
             v->monotone |= (v->g.d[a].lo > 0 || v->g.d[a].hi < 0) << a;
@@ -315,8 +388,15 @@ static void build(dual *d, int32_t i, corner_view *v)
     int kind = classify(d, &d->n[i], v);
     d->n[i].kind = (uint8_t)kind;
     d->n[i].surf = kind == DN_SURF;
-    if (kind == DN_SURF && touches_box(d, &d->n[i]))
-        d->bad = true; /* the box cuts the surface: its faces need the primal polygons */
+    if (kind == DN_SURF && touches_box(d, &d->n[i])) {
+        int clear = box_faces_clear(d, &d->n[i], v);
+        if (clear < 0)
+            d->bad = true; /* the box cuts the surface: its faces need the primal polygons */
+        else if (!clear)
+            kind = DN_INNER; /* split until the box's faces are proven clear */
+        d->n[i].kind = (uint8_t)kind;
+        d->n[i].surf = kind == DN_SURF;
+    }
     if (kind != DN_INNER)
         return;
     if (d->n[i].level >= d->o->max_depth)
@@ -386,8 +466,12 @@ static bool add_tri(dual *d, uint32_t a, uint32_t b, uint32_t c)
     return true;
 }
 
-/* The quad v[0..4) (counter-clockwise seen from ∇f) as two triangles across its shorter
- * diagonal; a repeated vertex (two sides of the edge in one larger leaf) leaves one. */
+/* The quad v[0..4) (counter-clockwise seen from ∇f) as two triangles across the diagonal
+ * whose midpoint lies nearer f = 0; a repeated vertex (two sides of the edge in one larger
+ * leaf) leaves one. Where the surface is a saddle (the torus's inner half) the two diagonals
+ * sag to opposite sides and the shorter one is as often the worse: choosing by distance
+ * took the torus's triangles under 1e-2 / 3e-3 / 1e-3 from 3,616 / 7,120 / 23,744 to
+ * 3,280 / 5,968 / 20,464 for two distance samples per quad. */
 static void emit_quad(dual *d, const uint32_t v[4])
 {
     uint32_t u[4];
@@ -400,8 +484,12 @@ static void emit_quad(dual *d, const uint32_t v[4])
         ok = add_tri(d, u[0], u[1], u[2]);
     else if (m == 4) {
         const double *p = d->pos;
-        int a = ism_dist3(&p[3 * u[0]], &p[3 * u[2]]) <= ism_dist3(&p[3 * u[1]], &p[3 * u[3]])
-                    ? 0 : 1;
+        double m0[3], m1[3];
+        for (int k = 0; k < 3; k++) {
+            m0[k] = 0.5 * (p[3 * u[0] + k] + p[3 * u[2] + k]);
+            m1[k] = 0.5 * (p[3 * u[1] + k] + p[3 * u[3] + k]);
+        }
+        int a = ism_sample_dist(&d->s, m0) <= ism_sample_dist(&d->s, m1) ? 0 : 1;
         ok = add_tri(d, u[a], u[a + 1], u[a + 2]) && add_tri(d, u[a], u[a + 2], u[(a + 3) % 4]);
     }
     if (!ok)
@@ -532,9 +620,13 @@ static void cell_proc(dual *d, int32_t i)
         }
 }
 
-/* Does triangle t meet E: centroid and edge midpoints within E of f = 0, facing along ∇f? */
-static bool tri_meets(dual *d, size_t t)
+/* Does triangle t meet E: centroid and edge midpoints within E of f = 0, facing along ∇f?
+ * 0 when it does, else the corners (bit k: vertex k) whose leaves to split: the two ends of
+ * each edge whose midpoint misses (splitting the third leaf would leave that edge as it
+ * is), all three for the centroid or a turned triangle. */
+static int tri_meets(dual *d, size_t t)
 {
+    int miss = 0;
     const double *p[3];
     for (int k = 0; k < 3; k++)
         p[k] = &d->pos[3 * d->tri[3 * t + k]];
@@ -544,8 +636,10 @@ static bool tri_meets(dual *d, size_t t)
         for (int a = 0; a < 3; a++)
             m[a] = 0.5 * (p[k][a] + p[(k + 1) % 3][a]);
         if (!(ism_sample_dist(&d->s, m) <= E))
-            return false;
+            miss |= 1 << k | 1 << (k + 1) % 3; /* its two ends' leaves */
     }
+    if (miss)
+        return miss;
     double c[3], u[3], v[3], nrm[3], g[3];
     for (int a = 0; a < 3; a++) {
         c[a] = (p[0][a] + p[1][a] + p[2][a]) / 3;
@@ -554,11 +648,11 @@ static bool tri_meets(dual *d, size_t t)
     }
     double f = ism_sample_grad(&d->s, c, g), gl = ism_norm3(g);
     if (!isfinite(f) || !(gl > 0) || !(fabs(f) / gl <= E))
-        return false;
+        return 7;
     nrm[0] = u[1] * v[2] - u[2] * v[1];
     nrm[1] = u[2] * v[0] - u[0] * v[2];
     nrm[2] = u[0] * v[1] - u[1] * v[0];
-    return ism_dot3(nrm, g) > TURNED_COS * ism_norm3(nrm) * gl;
+    return ism_dot3(nrm, g) > TURNED_COS * ism_norm3(nrm) * gl ? 0 : 7;
 }
 
 /* The round's mesh: vertices for new surface leaves, then the quads. */
@@ -635,20 +729,22 @@ static size_t mark_misses(dual *d, uint64_t *missed)
         uint64_t key = tri_key(d, t);
         if (key && d->cappassed && d->passed[passed_slot(d, key)] == key)
             continue;
-        if (tri_meets(d, t)) {
+        int miss = tri_meets(d, t);
+        if (!miss) {
             if (key)
                 remember_passed(d, key); /* out of memory: it is measured again, no more */
             continue;
         }
         bool any = false;
-        for (int k = 0; k < 3; k++) {
-            dnode *n = &d->n[d->vleaf[d->tri[3 * t + k]]];
-            if (n->level < d->o->max_depth) {
-                marked += !n->split;
-                n->split = 1;
-                any = true;
+        for (int pass = 0; pass < 2 && !any; pass++, miss = 7) /* then every leaf of t */
+            for (int k = 0; k < 3; k++) {
+                dnode *n = &d->n[d->vleaf[d->tri[3 * t + k]]];
+                if ((miss >> k & 1) && n->level < d->o->max_depth) {
+                    marked += !n->split;
+                    n->split = 1;
+                    any = true;
+                }
             }
-        }
         *missed += !any;
     }
     return marked;

@@ -1,0 +1,43 @@
+/* dual_cert.h — what the dual mesher (dual.h) proves about one box without making octree
+ * nodes: an enclosure of f and ∇f tighter than the natural interval (second-order Taylor
+ * form round the box's centre, intersected with the natural one), f kept from 0 over the
+ * box, and f = 0 one graph along a direction over it — both tried on sub-boxes when the whole
+ * box's enclosure is too wide.
+ *
+ * Why: the natural interval of a polynomial like the torus's loses to its dependencies (∇f
+ * of width ~2 |∇f| over a cell a third of the tube's radius across), so cells beside the
+ * surface could be proven neither empty nor one sheet and were split, each split costing 27
+ * gradient samples, 8 nodes and later vertices and triangles. The Taylor form's width shrinks
+ * with the square of the box (f) or with the box times the Hessian (∇f).
+ *
+ * Every bound is outward rounded (interval_ops.h): the value and gradient at the centre are
+ * the interval jet of the degenerate box, so the verdicts are proofs. */
+#ifndef ISM_DUAL_CERT_H
+#define ISM_DUAL_CERT_H
+
+#include <stdbool.h>
+#include <stdint.h>
+#include "core/eval/interval_jet.h"
+
+/* Encloses f and ∇f over lo..hi into *g; false (g unset) when f has a kink in the box or the
+ * workspace does not fit t. *intervals counts the interval evaluations made (two). */
+bool ism_dual_enclose(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
+                      const double hi[3], ism_ivgrad *g, uint64_t *intervals);
+
+/* 0 outside the enclosure's value: f has no zero in the box. */
+static inline bool ism_dual_encl_free(const ism_ivgrad *g) { return g->v.lo > 0 || g->v.hi < 0; }
+
+/* f has no zero in lo..hi: the box's enclosure (unless self is false: the caller found it
+ * too wide), else each of its sub-boxes', split down to `halvings` halvings. */
+bool ism_dual_free(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3], const double hi[3],
+                   int halvings, bool self, uint64_t *intervals);
+
+/* ∇f · d > 0 at every point of lo..hi where f may vanish (sub-boxes whose enclosure excludes
+ * 0 are dropped; the others split down to `halvings` halvings): then every line along d
+ * meets f = 0 at most once in the box — between two zeros on it f would have to fall
+ * through 0, at a zero where ∇f · d ≤ 0. d need not be a unit vector. self as above. */
+bool ism_dual_graph_along(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
+                          const double hi[3], const double d[3], int halvings, bool self,
+                          uint64_t *intervals);
+
+#endif
