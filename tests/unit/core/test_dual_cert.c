@@ -1,0 +1,107 @@
+/* test_dual_cert.c — the dual mesher's proofs over a box (core/octree/dual_cert.h): the
+ * Taylor-form enclosure holds f and ∇f at every sample of boxes on, beside and across the
+ * torus, is never wider than the natural interval and is narrower where the torus's
+ * dependencies blow the natural one up (a box 0.05 across beside the tube, proven free of
+ * f = 0 by it while the natural interval holds 0); one graph is refused across two sheets
+ * for every direction, at every depth of sub-boxes, and proven for one sheet. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include "core/eval/eval.h"
+#include "core/octree/dual_cert.h"
+#include "poly_fixture.h"
+
+#define SAMPLES 6 /* per axis, ends included */
+
+static void check_enclosure(const ism_tape *t, ism_ivjet_ws *jw, ism_eval_ws *ws,
+                            const double lo[3], const double hi[3])
+{
+    ism_ivgrad tight, nat;
+    uint64_t n = 0;
+    cr_assert(ism_dual_enclose(t, jw, lo, hi, &tight, &n));
+    cr_assert_eq(n, 2);
+    ism_interval box[3] = {{lo[0], hi[0]}, {lo[1], hi[1]}, {lo[2], hi[2]}};
+    cr_assert_eq(ism_eval_interval_grad(t, jw, box, NULL, NULL, &nat), 0);
+    cr_expect(tight.v.lo >= nat.v.lo && tight.v.hi <= nat.v.hi);
+    for (int a = 0; a < 3; a++)
+        cr_expect(tight.d[a].lo >= nat.d[a].lo && tight.d[a].hi <= nat.d[a].hi);
+    for (int i = 0; i < SAMPLES * SAMPLES * SAMPLES; i++) {
+        double p[3], g[3];
+        int k[3] = {i % SAMPLES, i / SAMPLES % SAMPLES, i / (SAMPLES * SAMPLES)};
+        for (int a = 0; a < 3; a++)
+            p[a] = lo[a] + (hi[a] - lo[a]) * k[a] / (SAMPLES - 1);
+        double f = ism_eval_gradient(t, ws, p[0], p[1], p[2], g);
+        /* the sample's own rounding: a few ulps of the terms of f (each below ~20 here) */
+        double slack = 1e-13;
+        cr_expect(f >= tight.v.lo - slack && f <= tight.v.hi + slack,
+                  "f %g outside [%g, %g] at %g %g %g", f, tight.v.lo, tight.v.hi, p[0], p[1],
+                  p[2]);
+        for (int a = 0; a < 3; a++)
+            cr_expect(g[a] >= tight.d[a].lo - slack && g[a] <= tight.d[a].hi + slack,
+                      "df/dx%d %g outside [%g, %g]", a, g[a], tight.d[a].lo, tight.d[a].hi);
+    }
+}
+
+Test(dual_cert, enclosure_holds_every_sample_and_is_tighter)
+{
+    ism_tape *t = pf_compile(&pf_ring_torus);
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    /* across the tube's outer wall (x = 1.3), beside its inner wall, in the hole, far out */
+    static const double boxes[][6] = {
+        {1.2, -0.1, -0.1, 1.3875, 0.0875, 0.0875},
+        {-0.1875, -1.21875, -0.1875, -0.140625, -1.171875, -0.140625},
+        {-0.2, -0.2, -0.2, 0.2, 0.2, 0.2},
+        {0.9, 0.9, 0.5, 1.5, 1.5, 1.1},
+    };
+    for (size_t b = 0; b < sizeof boxes / sizeof boxes[0]; b++)
+        check_enclosure(t, jw, ws, boxes[b], boxes[b] + 3);
+    ism_eval_ws_free(ws);
+    ism_ivjet_ws_free(jw);
+    ism_tape_free(t);
+}
+
+/* A cell 0.047 across whose corner lies 0.0009 inside the tube: the natural interval holds 0
+ * (it spans about -0.69 .. 0.51 while f stays in -0.18 .. -0.002), the Taylor form does not. */
+Test(dual_cert, cell_beside_the_tube_proven_free_by_the_taylor_form)
+{
+    ism_tape *t = pf_compile(&pf_ring_torus);
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+    const double lo[3] = {-0.1875, -1.21875, -0.1875}, hi[3] = {-0.140625, -1.171875, -0.140625};
+    ism_interval box[3] = {{lo[0], hi[0]}, {lo[1], hi[1]}, {lo[2], hi[2]}};
+    ism_ivgrad nat;
+    cr_assert_eq(ism_eval_interval_grad(t, jw, box, NULL, NULL, &nat), 0);
+    cr_assert(nat.v.lo < 0 && nat.v.hi > 0, "the natural interval [%g, %g]", nat.v.lo,
+              nat.v.hi);
+    uint64_t n = 0;
+    cr_expect(ism_dual_free(t, jw, lo, hi, 0, true, &n));
+    cr_expect_eq(n, 2);
+    /* a box the surface crosses is never proven free, however finely split */
+    const double lo2[3] = {1.25, -0.05, -0.05}, hi2[3] = {1.35, 0.05, 0.05};
+    cr_expect(!ism_dual_free(t, jw, lo2, hi2, 2, true, &n));
+    ism_ivjet_ws_free(jw);
+    ism_tape_free(t);
+}
+
+/* Two concentric spheres (radii 1 and √1.2 ≈ 1.095): a box across both along x has f rising
+ * through one and falling through the other on the same line, so no direction makes one
+ * graph; a box round the inner sheet alone is one graph along x. */
+Test(dual_cert, graph_refused_across_two_sheets_and_proven_for_one)
+{
+    static const pf_surface shell = {"(x^2 + y^2 + z^2 - 1)*(x^2 + y^2 + z^2 - 1.2)", NULL, 0,
+                                     NULL, 0};
+    ism_tape *t = pf_compile(&shell);
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+    uint64_t n = 0;
+    const double lo[3] = {0.95, -0.04, -0.04}, hi[3] = {1.15, 0.04, 0.04};
+    static const double dirs[][3] = {{1, 0, 0}, {-1, 0, 0}, {1, 0.3, -0.2}, {-1, 0.1, 0.1},
+                                     {0, 1, 0}, {0, 0, -1}};
+    for (size_t k = 0; k < sizeof dirs / sizeof dirs[0]; k++)
+        for (int h = 0; h <= 2; h++)
+            cr_expect(!ism_dual_graph_along(t, jw, lo, hi, dirs[k], h, true, &n),
+                      "direction %zu, %d halvings", k, h);
+    const double lo1[3] = {0.96, -0.04, -0.04}, hi1[3] = {1.04, 0.04, 0.04};
+    const double minus_x[3] = {-1, 0, 0}; /* f falls outward through the inner sphere */
+    cr_expect(ism_dual_graph_along(t, jw, lo1, hi1, minus_x, 1, true, &n));
+    ism_ivjet_ws_free(jw);
+    ism_tape_free(t);
+}
