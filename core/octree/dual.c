@@ -3,6 +3,7 @@
  * quads, and the measure-and-split rounds. */
 #include "core/octree/dual.h"
 #include "core/eval/interval_jet.h"
+#include "core/octree/cell_cache.h"
 #include "core/octree/corners.h"
 #include "core/octree/dual_cert.h"
 #include "core/octree/edge_roots.h"
@@ -31,6 +32,9 @@
  * 8 enclosures, later their vertices and triangles); a second halving (64 more) cost more
  * than it spared on the torus. */
 #define CERT_HALVINGS 1
+/* The lattice point memo: 2^15 entries of 40 bytes (1.3 MB), the size the octree's own
+ * corner memo uses (cell_cache.h); a collision only recomputes. */
+#define DUAL_POINT_BITS ISM_POINT_CACHE_BITS
 
 enum { DN_INNER, DN_EMPTY, DN_SURF };
 
@@ -45,6 +49,66 @@ typedef struct dnode {
     double f[8];    /* f at the corners */
 } dnode;
 
+/* An open-addressed map from 64-bit keys (never 0; 0 marks an empty slot) to doubles, kept
+ * at most half full. */
+typedef struct keyed {
+    uint64_t *key;
+    double *val;
+    size_t n, cap;
+} keyed;
+
+static size_t keyed_slot(const keyed *k, uint64_t key)
+{
+    size_t mask = k->cap - 1, i = (size_t)(key * 0x9E3779B97F4A7C15ull >> 17) & mask;
+    while (k->key[i] && k->key[i] != key)
+        i = (i + 1) & mask;
+    return i;
+}
+
+/* key's value, or NULL. */
+static const double *keyed_get(const keyed *k, uint64_t key)
+{
+    if (!k->cap)
+        return NULL;
+    size_t i = keyed_slot(k, key);
+    return k->key[i] ? &k->val[i] : NULL;
+}
+
+/* Sets key's value; out of memory, nothing is kept (a memo then recomputes, no more). */
+static void keyed_put(keyed *k, uint64_t key, double val)
+{
+    if (2 * (k->n + 1) > k->cap) {
+        keyed old = *k, grown = {NULL, NULL, 0, old.cap ? 2 * old.cap : 1024};
+        grown.key = calloc(grown.cap, sizeof *grown.key);
+        grown.val = malloc(grown.cap * sizeof *grown.val);
+        if (!grown.key || !grown.val) {
+            free(grown.key);
+            free(grown.val);
+            return;
+        }
+        for (size_t i = 0; i < old.cap; i++)
+            if (old.key[i]) {
+                size_t j = keyed_slot(&grown, old.key[i]);
+                grown.key[j] = old.key[i];
+                grown.val[j] = old.val[i];
+            }
+        grown.n = old.n;
+        free(old.key);
+        free(old.val);
+        *k = grown;
+    }
+    size_t i = keyed_slot(k, key);
+    k->n += !k->key[i];
+    k->key[i] = key;
+    k->val[i] = val;
+}
+
+static void keyed_free(keyed *k)
+{
+    free(k->key);
+    free(k->val);
+}
+
 typedef struct dual {
     const ism_poly_options *o;
     ism_grid g;
@@ -57,8 +121,10 @@ typedef struct dual {
     size_t nv, capv;
     uint32_t *tri;    /* this round's triangles */
     size_t nt, capt;
-    uint64_t *passed; /* open-addressed keys (tri_key) of triangles that met E, 0: empty */
-    size_t npassed, cappassed;
+    keyed passed;       /* triangles (tri_key) that met E */
+    keyed mid;          /* vertex pairs (pair_key): the distance of their midpoint to f = 0 */
+    ism_point_entry *points; /* f and ∇f at lattice points (cell_cache.h) */
+    int ec0[12], ec1[12], ef[12][2]; /* the cube's edges: ends and faces (ism_cube_edge) */
     double shift;     /* vertices move this far to the convex side (straddle.h), or 0 */
     bool bad, nomem, too_big;
 } dual;
@@ -171,11 +237,10 @@ static bool plain_edges(dual *d, const dnode *n, const corner_view *v)
 {
     int crossed[6] = {0};
     for (int e = 0; e < 12; e++) {
-        int c0, c1, faces[2];
-        ism_cube_edge(e, &c0, &c1, faces);
+        int c0 = d->ec0[e], c1 = d->ec1[e];
         if ((n->f[c0] < 0) != (n->f[c1] < 0)) {
-            crossed[faces[0]]++;
-            crossed[faces[1]]++;
+            crossed[d->ef[e][0]]++;
+            crossed[d->ef[e][1]]++;
         } else if (!same_sign_edge_clear(d, n, v, e, c0, c1))
             return false;
     }
@@ -300,12 +365,16 @@ static int classify(dual *d, dnode *n, corner_view *v)
     return plain_edges(d, n, v) ? DN_SURF : DN_INNER;
 }
 
-/* f and the unit gradient at lattice point q into *f, p, g. */
+/* f and the unit gradient at lattice point q into *f, p, g: through the point memo, as
+ * neighbouring nodes share corners (a split's 27 points hold the parent's 8 and the 18 on
+ * its faces and edges that the neighbours' splits sample too). */
 static void sample_corner(dual *d, const int32_t q[3], double *f, double p[3], double g[3])
 {
     for (int a = 0; a < 3; a++)
         p[a] = ism_grid_coord(&d->g, a, q[a]);
-    *f = ism_sample_grad(&d->s, p, g);
+    const ism_point_entry *e = ism_point_memo(d->points, DUAL_POINT_BITS, q, p, &d->s);
+    *f = e->f;
+    memcpy(g, e->g, sizeof e->g);
     ism_normalise3(g); /* 0 at a critical point: no agreement there */
 }
 
@@ -413,8 +482,7 @@ static bool place_vertex(dual *d, int32_t i)
     double m[3] = {0, 0, 0};
     int roots = 0;
     for (int e = 0; e < 12; e++) {
-        int c0, c1, faces[2];
-        ism_cube_edge(e, &c0, &c1, faces);
+        int c0 = d->ec0[e], c1 = d->ec1[e];
         if ((n->f[c0] < 0) == (n->f[c1] < 0))
             continue;
         double p0[3], p1[3];
@@ -466,6 +534,23 @@ static bool add_tri(dual *d, uint32_t a, uint32_t b, uint32_t c)
     return true;
 }
 
+/* The distance to f = 0 of the midpoint of vertices a and b (ism_sample_dist), measured
+ * once: a mesh edge is measured by both its triangles, a quad's diagonal when it is chosen,
+ * and vertices keep their positions from round to round. */
+static double mid_dist(dual *d, uint32_t a, uint32_t b)
+{
+    uint64_t key = (a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a) + 1;
+    const double *known = keyed_get(&d->mid, key);
+    if (known)
+        return *known;
+    double m[3];
+    for (int k = 0; k < 3; k++)
+        m[k] = 0.5 * (d->pos[3 * a + k] + d->pos[3 * b + k]);
+    double dist = ism_sample_dist(&d->s, m);
+    keyed_put(&d->mid, key, dist);
+    return dist;
+}
+
 /* The quad v[0..4) (counter-clockwise seen from ∇f) as two triangles across the diagonal
  * whose midpoint lies nearer f = 0; a repeated vertex (two sides of the edge in one larger
  * leaf) leaves one. Where the surface is a saddle (the torus's inner half) the two diagonals
@@ -483,13 +568,7 @@ static void emit_quad(dual *d, const uint32_t v[4])
     if (m == 3)
         ok = add_tri(d, u[0], u[1], u[2]);
     else if (m == 4) {
-        const double *p = d->pos;
-        double m0[3], m1[3];
-        for (int k = 0; k < 3; k++) {
-            m0[k] = 0.5 * (p[3 * u[0] + k] + p[3 * u[2] + k]);
-            m1[k] = 0.5 * (p[3 * u[1] + k] + p[3 * u[3] + k]);
-        }
-        int a = ism_sample_dist(&d->s, m0) <= ism_sample_dist(&d->s, m1) ? 0 : 1;
+        int a = mid_dist(d, u[0], u[2]) <= mid_dist(d, u[1], u[3]) ? 0 : 1;
         ok = add_tri(d, u[a], u[a + 1], u[a + 2]) && add_tri(d, u[a], u[a + 2], u[(a + 3) % 4]);
     }
     if (!ok)
@@ -631,13 +710,9 @@ static int tri_meets(dual *d, size_t t)
     for (int k = 0; k < 3; k++)
         p[k] = &d->pos[3 * d->tri[3 * t + k]];
     double E = d->o->max_error;
-    for (int k = 0; k < 3; k++) {
-        double m[3];
-        for (int a = 0; a < 3; a++)
-            m[a] = 0.5 * (p[k][a] + p[(k + 1) % 3][a]);
-        if (!(ism_sample_dist(&d->s, m) <= E))
+    for (int k = 0; k < 3; k++)
+        if (!(mid_dist(d, d->tri[3 * t + k], d->tri[3 * t + (k + 1) % 3]) <= E))
             miss |= 1 << k | 1 << (k + 1) % 3; /* its two ends' leaves */
-    }
     if (miss)
         return miss;
     double c[3], u[3], v[3], nrm[3], g[3];
@@ -687,37 +762,6 @@ static uint64_t tri_key(const dual *d, size_t t)
     return (v[0] | v[1] << 21 | v[2] << 42) + 1;
 }
 
-/* The slot of key in the passed set (its own or the empty one where it would go). */
-static size_t passed_slot(const dual *d, uint64_t key)
-{
-    size_t mask = d->cappassed - 1, i = (size_t)(key * 0x9E3779B97F4A7C15ull >> 17) & mask;
-    while (d->passed[i] && d->passed[i] != key)
-        i = (i + 1) & mask;
-    return i;
-}
-
-/* Remembers key (the set kept at most half full; out of memory, it is not remembered). */
-static void remember_passed(dual *d, uint64_t key)
-{
-    if (2 * (d->npassed + 1) > d->cappassed) {
-        size_t old = d->cappassed, cap = old ? 2 * old : 1024;
-        uint64_t *keep = d->passed;
-        d->passed = calloc(cap, sizeof *d->passed);
-        if (!d->passed) {
-            d->passed = keep;
-            return;
-        }
-        d->cappassed = cap;
-        for (size_t i = 0; i < old; i++)
-            if (keep[i])
-                d->passed[passed_slot(d, keep[i])] = keep[i];
-        free(keep);
-    }
-    size_t i = passed_slot(d, key);
-    d->npassed += !d->passed[i];
-    d->passed[i] = key;
-}
-
 /* Marks the leaves of triangles that miss E; returns how many leaves can still split and
  * counts the misses at max_depth into *missed. Triangles that met E in an earlier round are
  * not measured again. */
@@ -727,12 +771,12 @@ static size_t mark_misses(dual *d, uint64_t *missed)
     *missed = 0;
     for (size_t t = 0; t < d->nt; t++) {
         uint64_t key = tri_key(d, t);
-        if (key && d->cappassed && d->passed[passed_slot(d, key)] == key)
+        if (key && keyed_get(&d->passed, key))
             continue;
         int miss = tri_meets(d, t);
         if (!miss) {
             if (key)
-                remember_passed(d, key); /* out of memory: it is measured again, no more */
+                keyed_put(&d->passed, key, 0); /* out of memory: measured again, no more */
             continue;
         }
         bool any = false;
@@ -847,8 +891,11 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
     d.s.tape = f;
     d.s.ws = ism_eval_ws_new(f);
     d.jet = ism_ivjet_ws_new(f);
+    d.points = calloc((size_t)1 << DUAL_POINT_BITS, sizeof *d.points);
+    for (int e = 0; e < 12; e++)
+        ism_cube_edge(e, &d.ec0[e], &d.ec1[e], d.ef[e]);
     enum ism_dual_status status =
-        d.s.ws && d.jet ? run(&d, mesh, st) : ISM_DUAL_NO_MEMORY;
+        d.s.ws && d.jet && d.points ? run(&d, mesh, st) : ISM_DUAL_NO_MEMORY;
     st->evals_point = d.s.n_point;
     st->evals_gradient = d.s.n_gradient;
     st->evals_interval = d.s.n_interval;
@@ -860,6 +907,8 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
     free(d.pos);
     free(d.vleaf);
     free(d.tri);
-    free(d.passed);
+    keyed_free(&d.passed);
+    keyed_free(&d.mid);
+    free(d.points);
     return status;
 }
