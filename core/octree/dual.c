@@ -11,6 +11,7 @@
 #include "core/octree/grid.h"
 #include "core/octree/sampler.h"
 #include "core/octree/straddle.h"
+#include "core/util/parallel.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -35,6 +36,8 @@
 /* The lattice point memo: 2^15 entries of 40 bytes (1.3 MB), the size the octree's own
  * corner memo uses (cell_cache.h); a collision only recomputes. */
 #define DUAL_POINT_BITS ISM_POINT_CACHE_BITS
+/* Threads at most: the options' own limit (polygonise.c checks o->threads against it). */
+#define DUAL_MAX_THREADS 64
 
 enum { DN_INNER, DN_EMPTY, DN_SURF };
 
@@ -74,29 +77,40 @@ static const double *keyed_get(const keyed *k, uint64_t key)
     return k->key[i] ? &k->val[i] : NULL;
 }
 
+/* Room for `more` new keys without growing (so slots stay put meanwhile); false when out of
+ * memory. */
+static bool keyed_reserve(keyed *k, size_t more)
+{
+    size_t cap = k->cap ? k->cap : 1024;
+    while (2 * (k->n + more) > cap)
+        cap *= 2;
+    if (cap == k->cap)
+        return true;
+    keyed old = *k, grown = {NULL, NULL, old.n, cap};
+    grown.key = calloc(cap, sizeof *grown.key);
+    grown.val = malloc(cap * sizeof *grown.val);
+    if (!grown.key || !grown.val) {
+        free(grown.key);
+        free(grown.val);
+        return false;
+    }
+    for (size_t i = 0; i < old.cap; i++)
+        if (old.key[i]) {
+            size_t j = keyed_slot(&grown, old.key[i]);
+            grown.key[j] = old.key[i];
+            grown.val[j] = old.val[i];
+        }
+    free(old.key);
+    free(old.val);
+    *k = grown;
+    return true;
+}
+
 /* Sets key's value; out of memory, nothing is kept (a memo then recomputes, no more). */
 static void keyed_put(keyed *k, uint64_t key, double val)
 {
-    if (2 * (k->n + 1) > k->cap) {
-        keyed old = *k, grown = {NULL, NULL, 0, old.cap ? 2 * old.cap : 1024};
-        grown.key = calloc(grown.cap, sizeof *grown.key);
-        grown.val = malloc(grown.cap * sizeof *grown.val);
-        if (!grown.key || !grown.val) {
-            free(grown.key);
-            free(grown.val);
-            return;
-        }
-        for (size_t i = 0; i < old.cap; i++)
-            if (old.key[i]) {
-                size_t j = keyed_slot(&grown, old.key[i]);
-                grown.key[j] = old.key[i];
-                grown.val[j] = old.val[i];
-            }
-        grown.n = old.n;
-        free(old.key);
-        free(old.val);
-        *k = grown;
-    }
+    if (!keyed_get(k, key) && !keyed_reserve(k, 1))
+        return;
     size_t i = keyed_slot(k, key);
     k->n += !k->key[i];
     k->key[i] = key;
@@ -109,11 +123,20 @@ static void keyed_free(keyed *k)
     free(k->val);
 }
 
+/* What one thread evaluates f with: its sampler (counters), interval workspace and lattice
+ * point memo. */
+typedef struct worker {
+    ism_sampler s;
+    ism_ivjet_ws *jet;
+    ism_point_entry *points;
+} worker;
+
 typedef struct dual {
     const ism_poly_options *o;
     ism_grid g;
-    ism_sampler s;
-    ism_ivjet_ws *jet;
+    ism_pool *pool;
+    worker *w;        /* one per thread of the pool */
+    int nw;
     dnode *n;
     size_t nn, capn;
     double *pos;      /* 3 per vertex */
@@ -121,9 +144,10 @@ typedef struct dual {
     size_t nv, capv;
     uint32_t *tri;    /* this round's triangles */
     size_t nt, capt;
+    uint32_t *quad;   /* this round's quads, 4 vertices each (add_quad) */
+    size_t nq, capq;
     keyed passed;       /* triangles (tri_key) that met E */
     keyed mid;          /* vertex pairs (pair_key): the distance of their midpoint to f = 0 */
-    ism_point_entry *points; /* f and ∇f at lattice points (cell_cache.h) */
     int ec0[12], ec1[12], ef[12][2]; /* the cube's edges: ends and faces (ism_cube_edge) */
     double shift;     /* vertices move this far to the convex side (straddle.h), or 0 */
     bool bad, nomem, too_big;
@@ -189,7 +213,7 @@ typedef struct corner_view {
 /* Where surface leaf n lies on the request's box: -1 when f changes sign between its
  * corners on a face of the box (the box cuts the surface), 1 when f is proven free of 0 on
  * every such face, 0 when neither is known (split it). */
-static int box_faces_clear(dual *d, const dnode *n, const corner_view *v)
+static int box_faces_clear(dual *d, worker *w, const dnode *n, const corner_view *v)
 {
     int32_t step = ism_grid_cell_steps(&d->g, n->level), last = (int32_t)1 << d->g.depth;
     for (int a = 0; a < 3; a++)
@@ -205,7 +229,7 @@ static int box_faces_clear(dual *d, const dnode *n, const corner_view *v)
             memcpy(lo, v->p[0], sizeof lo);
             memcpy(hi, v->p[7], sizeof hi);
             lo[a] = hi[a] = side ? v->p[7][a] : v->p[0][a];
-            if (!ism_dual_free(d->s.tape, d->jet, lo, hi, CERT_HALVINGS, true, &d->s.n_interval))
+            if (!ism_dual_free(w->s.tape, w->jet, lo, hi, CERT_HALVINGS, true, &w->s.n_interval))
                 return 0;
         }
     return 1;
@@ -214,7 +238,7 @@ static int box_faces_clear(dual *d, const dnode *n, const corner_view *v)
 /* No root on an edge whose ends share a sign: f monotone along its axis or kept from 0 by
  * the mean-value form (proofs), else the primal polygons' edge test (plot_test.c): the
  * paper's same-sheet test (eq. 1) on the ends' gradients, then its double-root search. */
-static bool same_sign_edge_clear(dual *d, const dnode *n, const corner_view *v, int e, int c0,
+static bool same_sign_edge_clear(dual *d, worker *w, const dnode *n, const corner_view *v, int e, int c0,
                                  int c1)
 {
     int a = e / 4;
@@ -224,16 +248,16 @@ static bool same_sign_edge_clear(dual *d, const dnode *n, const corner_view *v, 
     const ism_poly_options *o = d->o;
     if (ism_dot3(v->n[c0], v->n[c1]) > o->gradient_test)
         return true;
-    if (!ism_segment_may_reach(&d->s, v->p[c0], v->p[c1], o->double_root_eps))
+    if (!ism_segment_may_reach(&w->s, v->p[c0], v->p[c1], o->double_root_eps))
         return true;
     ism_root_params prm = {o->gradient_test, o->double_root_eps, o->double_root_iters, false};
     double t;
-    return ism_double_root_search(&d->s, &prm, v->p[c0], v->p[c1], n->f[c0], n->f[c1], &t) == 0;
+    return ism_double_root_search(&w->s, &prm, v->p[c0], v->p[c1], n->f[c0], n->f[c1], &t) == 0;
 }
 
 /* Crossed edges on every face 0 or 2 (one curve), and no root on an edge whose ends share
  * a sign. */
-static bool plain_edges(dual *d, const dnode *n, const corner_view *v)
+static bool plain_edges(dual *d, worker *w, const dnode *n, const corner_view *v)
 {
     int crossed[6] = {0};
     for (int e = 0; e < 12; e++) {
@@ -241,7 +265,7 @@ static bool plain_edges(dual *d, const dnode *n, const corner_view *v)
         if ((n->f[c0] < 0) != (n->f[c1] < 0)) {
             crossed[d->ef[e][0]]++;
             crossed[d->ef[e][1]]++;
-        } else if (!same_sign_edge_clear(d, n, v, e, c0, c1))
+        } else if (!same_sign_edge_clear(d, w, n, v, e, c0, c1))
             return false;
     }
     for (int k = 0; k < 6; k++)
@@ -288,10 +312,10 @@ static bool normals_agree(const double (*n)[3], double cos_min)
 
 /* v->g (the node's natural enclosure) replaced by the Taylor form's (dual_cert.h); false
  * when that cannot be had (g kept). */
-static bool tighten(dual *d, corner_view *v)
+static bool tighten(worker *w, corner_view *v)
 {
     ism_ivgrad g;
-    if (!ism_dual_enclose(d->s.tape, d->jet, v->p[0], v->p[7], &g, &d->s.n_interval))
+    if (!ism_dual_enclose(w->s.tape, w->jet, v->p[0], v->p[7], &g, &w->s.n_interval))
         return false;
     v->g = g;
     return true;
@@ -300,21 +324,21 @@ static bool tighten(dual *d, corner_view *v)
 /* f free of 0 over node n, whose corners share a sign (v->g: its natural enclosure): by the
  * enclosure or the mean-value form from the corners, then both on the Taylor form, then on
  * the sub-boxes. */
-static bool empty_proven(dual *d, const dnode *n, corner_view *v)
+static bool empty_proven(worker *w, const dnode *n, corner_view *v)
 {
     for (int k = 0; k < 2; k++) {
         if (ism_dual_encl_free(&v->g) || mean_value_free(n, &v->g, v->p[0], v->p[7]))
             return true;
-        if (k == 0 && !tighten(d, v))
+        if (k == 0 && !tighten(w, v))
             return false;
     }
-    return ism_dual_free(d->s.tape, d->jet, v->p[0], v->p[7], CERT_HALVINGS, false,
-                         &d->s.n_interval);
+    return ism_dual_free(w->s.tape, w->jet, v->p[0], v->p[7], CERT_HALVINGS, false,
+                         &w->s.n_interval);
 }
 
 /* One graph along the corner gradients' mean (the direction the sheet in the node faces)
  * wherever f may vanish in the node's sub-boxes (the node's own enclosure failed). */
-static bool graph_on_sub_boxes(dual *d, const corner_view *v)
+static bool graph_on_sub_boxes(worker *w, const corner_view *v)
 {
     double m[3] = {0, 0, 0};
     for (int c = 0; c < 8; c++)
@@ -322,15 +346,15 @@ static bool graph_on_sub_boxes(dual *d, const corner_view *v)
             m[a] += v->n[c][a];
     if (!(ism_dot3(m, m) > 0))
         return false;
-    return ism_dual_graph_along(d->s.tape, d->jet, v->p[0], v->p[7], m, CERT_HALVINGS, false,
-                                &d->s.n_interval);
+    return ism_dual_graph_along(w->s.tape, w->jet, v->p[0], v->p[7], m, CERT_HALVINGS, false,
+                                &w->s.n_interval);
 }
 
 /* What node n is (f and the unit gradients at its corners in n->f and v): empty (proven
  * free of f = 0), a surface leaf with one sheet (corner gradients agreeing, or one graph
  * proven by interval gradients), or to be split. The interval is taken only where the
  * corners cannot decide: a node whose corners share a sign, or disagree. */
-static int classify(dual *d, dnode *n, corner_view *v)
+static int classify(dual *d, worker *w, dnode *n, corner_view *v)
 {
     int neg = 0;
     for (int c = 0; c < 8; c++) {
@@ -350,29 +374,29 @@ static int classify(dual *d, dnode *n, corner_view *v)
         ism_interval box[3];
         for (int a = 0; a < 3; a++)
             box[a] = (ism_interval){v->p[0][a], v->p[7][a]};
-        d->s.n_interval++;
-        v->have_g = ism_eval_interval_grad(d->s.tape, d->jet, box, NULL, NULL, &v->g) == 0;
+        w->s.n_interval++;
+        v->have_g = ism_eval_interval_grad(w->s.tape, w->jet, box, NULL, NULL, &v->g) == 0;
         if (!v->have_g)
             return DN_INNER; /* a kink in the node */
         if (!mixed) /* empty, or maybe a piece no corner sees */
-            return empty_proven(d, n, v) ? DN_EMPTY : DN_INNER;
+            return empty_proven(w, n, v) ? DN_EMPTY : DN_INNER;
         if (!ism_graph_from_enclosure(&v->g) &&
-            !(tighten(d, v) && (ism_graph_from_enclosure(&v->g) || graph_on_sub_boxes(d, v))))
+            !(tighten(w, v) && (ism_graph_from_enclosure(&v->g) || graph_on_sub_boxes(w, v))))
             return DN_INNER;
         for (int a = 0; a < 3; a++)
             v->monotone |= (v->g.d[a].lo > 0 || v->g.d[a].hi < 0) << a;
     }
-    return plain_edges(d, n, v) ? DN_SURF : DN_INNER;
+    return plain_edges(d, w, n, v) ? DN_SURF : DN_INNER;
 }
 
 /* f and the unit gradient at lattice point q into *f, p, g: through the point memo, as
  * neighbouring nodes share corners (a split's 27 points hold the parent's 8 and the 18 on
  * its faces and edges that the neighbours' splits sample too). */
-static void sample_corner(dual *d, const int32_t q[3], double *f, double p[3], double g[3])
+static void sample_corner(dual *d, worker *w, const int32_t q[3], double *f, double p[3], double g[3])
 {
     for (int a = 0; a < 3; a++)
         p[a] = ism_grid_coord(&d->g, a, q[a]);
-    const ism_point_entry *e = ism_point_memo(d->points, DUAL_POINT_BITS, q, p, &d->s);
+    const ism_point_entry *e = ism_point_memo(w->points, DUAL_POINT_BITS, q, p, &w->s);
     *f = e->f;
     memcpy(g, e->g, sizeof e->g);
     ism_normalise3(g); /* 0 at a critical point: no agreement there */
@@ -402,83 +426,154 @@ static bool new_node(dual *d, ism_ipt o, int level, int32_t *out)
     return true;
 }
 
-static void build(dual *d, int32_t i, corner_view *v);
-
-/* Node i's 8 children made and built (i is at a level above max_depth): f and ∇f at the 27
- * lattice points of the children's corners, each taken once. */
-static void split_node(dual *d, int32_t i)
+/* Node kind after classification and the check on the request's box: empty, a surface
+ * leaf, or inner (to split; bad set when the box cuts the surface). */
+static int leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad)
 {
-    int level = d->n[i].level;
-    int32_t half = ism_grid_cell_steps(&d->g, level + 1), first = -1;
-    double f[27], p[27][3], g[27][3];
-    for (int k = 0; k < 27; k++) {
-        int32_t q[3] = {d->n[i].o.v[0] + k % 3 * half, d->n[i].o.v[1] + k / 3 % 3 * half,
-                        d->n[i].o.v[2] + k / 9 * half};
-        sample_corner(d, q, &f[k], p[k], g[k]);
-    }
-    for (int c = 0; c < 8; c++) {
-        ism_ipt o = d->n[i].o;
-        for (int a = 0; a < 3; a++)
-            o.v[a] += ((c >> a) & 1) * half;
-        int32_t k;
-        if (!new_node(d, o, level + 1, &k)) {
-            d->nomem = true;
-            return;
-        }
-        if (c == 0)
-            first = k;
-    }
-    d->n[i].kind = DN_INNER;
-    d->n[i].child = first;
-    for (int c = 0; c < 8; c++) {
-        corner_view v;
-        dnode *n = &d->n[first + c];
-        for (int k = 0; k < 8; k++) {
-            int at = ((c & 1) + (k & 1)) + 3 * ((c >> 1 & 1) + (k >> 1 & 1)) +
-                     9 * ((c >> 2 & 1) + (k >> 2 & 1));
-            n->f[k] = f[at];
-            memcpy(v.p[k], p[at], sizeof v.p[k]);
-            memcpy(v.n[k], g[at], sizeof v.n[k]);
-        }
-        build(d, first + c, &v);
-    }
-    uint8_t surf = 0;
-    for (int c = 0; c < 8; c++)
-        surf |= d->n[first + c].surf;
-    d->n[i].surf = surf;
-}
-
-/* Classifies node i (its corners in n->f and v) and splits it (recursively) while it is
- * neither empty nor plain. */
-static void build(dual *d, int32_t i, corner_view *v)
-{
-    if (d->bad || d->nomem || (d->o->cancel && *d->o->cancel))
-        return;
-    int kind = classify(d, &d->n[i], v);
-    d->n[i].kind = (uint8_t)kind;
-    d->n[i].surf = kind == DN_SURF;
-    if (kind == DN_SURF && touches_box(d, &d->n[i])) {
-        int clear = box_faces_clear(d, &d->n[i], v);
+    int kind = classify(d, w, n, v);
+    if (kind == DN_SURF && touches_box(d, n)) {
+        int clear = box_faces_clear(d, w, n, v);
         if (clear < 0)
-            d->bad = true; /* the box cuts the surface: its faces need the primal polygons */
+            *bad = true; /* the box cuts the surface: its faces need the primal polygons */
         else if (!clear)
             kind = DN_INNER; /* split until the box's faces are proven clear */
-        d->n[i].kind = (uint8_t)kind;
-        d->n[i].surf = kind == DN_SURF;
     }
-    if (kind != DN_INNER)
-        return;
-    if (d->n[i].level >= d->o->max_depth)
-        d->bad = true; /* not plain at the deepest level: a feature, not ours */
-    else
-        split_node(d, i);
+    return kind;
 }
 
-/* The leaf's vertex: the mean of its edges' secant roots, moved onto f = 0 by Newton (the
- * exact roots would cost a fifth of the whole mesh for a start point Newton forgets). */
-static bool place_vertex(dual *d, int32_t i)
+/* What splitting one node yields: its 8 children's corner values and kinds. */
+typedef struct split_out {
+    double f[8][8];
+    uint8_t kind[8];
+    bool bad;
+} split_out;
+
+typedef struct split_job {
+    dual *d;
+    const int32_t *nodes;
+    split_out *out;
+} split_job;
+
+/* Task k of a split pass: node nodes[k]'s children classified, from f and ∇f at the 27
+ * lattice points of their corners (each taken once). Reads the tree, writes out[k] only. */
+static void split_task(void *ctx, size_t k, int thread)
 {
-    dnode *n = &d->n[i];
+    split_job *job = ctx;
+    dual *d = job->d;
+    worker *w = &d->w[thread];
+    const dnode *parent = &d->n[job->nodes[k]];
+    split_out *out = &job->out[k];
+    int32_t half = ism_grid_cell_steps(&d->g, parent->level + 1);
+    double f[27], p[27][3], g[27][3];
+    for (int j = 0; j < 27; j++) {
+        int32_t q[3] = {parent->o.v[0] + j % 3 * half, parent->o.v[1] + j / 3 % 3 * half,
+                        parent->o.v[2] + j / 9 * half};
+        sample_corner(d, w, q, &f[j], p[j], g[j]);
+    }
+    out->bad = false;
+    for (int c = 0; c < 8; c++) {
+        corner_view v;
+        dnode n;
+        memset(&n, 0, sizeof n);
+        n.o = parent->o;
+        for (int a = 0; a < 3; a++)
+            n.o.v[a] += ((c >> a) & 1) * half;
+        n.level = (uint8_t)(parent->level + 1);
+        for (int j = 0; j < 8; j++) {
+            int at = ((c & 1) + (j & 1)) + 3 * ((c >> 1 & 1) + (j >> 1 & 1)) +
+                     9 * ((c >> 2 & 1) + (j >> 2 & 1));
+            n.f[j] = f[at];
+            memcpy(v.p[j], p[at], sizeof v.p[j]);
+            memcpy(v.n[j], g[at], sizeof v.n[j]);
+        }
+        memcpy(out->f[c], n.f, sizeof n.f);
+        out->kind[c] = (uint8_t)leaf_kind(d, w, &n, &v, &out->bad);
+    }
+}
+
+/* Every surface flag again, from the leaves up (children come after their parent). */
+static void mark_surface(dual *d)
+{
+    for (size_t i = d->nn; i-- > 0;) {
+        dnode *n = &d->n[i];
+        if (n->child < 0) {
+            n->surf = n->kind == DN_SURF;
+            continue;
+        }
+        uint8_t surf = 0;
+        for (int c = 0; c < 8; c++)
+            surf |= d->n[n->child + c].surf;
+        n->surf = surf;
+    }
+}
+
+/* The nodes in list[0..n) split, and their children that are neither empty nor plain, level
+ * by level, until every leaf is. The children's classifications run on the pool; the nodes
+ * are made in list order, so the tree does not depend on the threads. */
+static void expand(dual *d, const int32_t *list, size_t n)
+{
+    int32_t *cur = malloc((n ? n : 1) * sizeof *cur);
+    split_out *out = NULL;
+    if (!cur)
+        d->nomem = true;
+    else
+        memcpy(cur, list, n * sizeof *cur);
+    while (n && !d->bad && !d->nomem && !d->too_big && !(d->o->cancel && *d->o->cancel)) {
+        int32_t *next = malloc(8 * n * sizeof *next);
+        split_out *grown = realloc(out, n * sizeof *out);
+        if (grown)
+            out = grown;
+        if (!next || !grown) {
+            free(next);
+            d->nomem = true;
+            break;
+        }
+        split_job job = {d, cur, out};
+        ism_pool_for(d->pool, n, split_task, &job, NULL);
+        size_t nn = 0;
+        for (size_t k = 0; k < n && !d->nomem && !d->too_big; k++) {
+            int32_t i = cur[k], first = -1;
+            int level = d->n[i].level + 1;
+            int32_t half = ism_grid_cell_steps(&d->g, level);
+            d->bad |= out[k].bad;
+            for (int c = 0; c < 8; c++) {
+                ism_ipt o = d->n[i].o;
+                int32_t at;
+                for (int a = 0; a < 3; a++)
+                    o.v[a] += ((c >> a) & 1) * half;
+                if (!new_node(d, o, level, &at)) {
+                    d->nomem = !d->too_big;
+                    break;
+                }
+                first = c ? first : at;
+                dnode *ch = &d->n[at];
+                memcpy(ch->f, out[k].f[c], sizeof ch->f);
+                ch->kind = out[k].kind[c];
+                if (ch->kind != DN_INNER)
+                    continue;
+                if (level >= d->o->max_depth)
+                    d->bad = true; /* not plain at the deepest level: a feature, not ours */
+                else
+                    next[nn++] = at;
+            }
+            d->n[i].kind = DN_INNER;
+            d->n[i].child = first;
+        }
+        free(cur);
+        cur = next;
+        n = nn;
+    }
+    free(out);
+    free(cur);
+    mark_surface(d);
+}
+
+/* Leaf i's vertex into pos[3 vert]: the mean of its edges' secant roots, moved onto f = 0
+ * by Newton (the exact roots would cost a fifth of the whole mesh for a start point Newton
+ * forgets), then to the convex side (straddle.h). */
+static void place_vertex(dual *d, worker *w, int32_t i)
+{
+    const dnode *n = &d->n[i];
     double m[3] = {0, 0, 0};
     int roots = 0;
     for (int e = 0; e < 12; e++) {
@@ -498,7 +593,7 @@ static bool place_vertex(dual *d, int32_t i)
     double size = ism_grid_cell_size(&d->g, n->level);
     for (int it = 0; it < NEWTON_STEPS; it++) {
         double g[3];
-        double f = ism_sample_grad(&d->s, m, g), gg = ism_dot3(g, g);
+        double f = ism_sample_grad(&w->s, m, g), gg = ism_dot3(g, g);
         if (!isfinite(f) || !(gg > 0) || !isfinite(gg))
             break;
         double step = fabs(f) / sqrt(gg);
@@ -508,19 +603,55 @@ static bool place_vertex(dual *d, int32_t i)
             break;
     }
     double q[3];
-    if (d->shift > 0 && ism_straddle_point(&d->s, d->shift, d->o->box, m, q))
+    if (d->shift > 0 && ism_straddle_point(&w->s, d->shift, d->o->box, m, q))
         memcpy(m, q, sizeof m);
-    if (!grow((void **)&d->pos, &d->capv, d->nv + 1, 3 * sizeof *d->pos))
-        return false;
+    memcpy(&d->pos[3 * n->vert], m, sizeof m);
+}
+
+typedef struct leaf_job {
+    dual *d;
+    const int32_t *leaves;
+} leaf_job;
+
+static void vertex_task(void *ctx, size_t k, int thread)
+{
+    leaf_job *job = ctx;
+    place_vertex(job->d, &job->d->w[thread], job->leaves[k]);
+}
+
+/* Vertices for the surface leaves that have none, numbered in node order, placed on the
+ * pool. */
+static void make_vertices(dual *d)
+{
+    size_t n = 0;
+    for (size_t i = 0; i < d->nn; i++)
+        n += d->n[i].child < 0 && d->n[i].kind == DN_SURF && d->n[i].vert < 0;
+    int32_t *leaves = malloc((n ? n : 1) * sizeof *leaves);
     size_t capl = d->capv;
-    int32_t *vl = realloc(d->vleaf, capl * sizeof *vl);
-    if (!vl)
-        return false;
-    d->vleaf = vl;
-    memcpy(&d->pos[3 * d->nv], m, sizeof m);
-    d->vleaf[d->nv] = i;
-    n->vert = (int32_t)d->nv++;
-    return true;
+    if (!leaves || !grow((void **)&d->pos, &d->capv, d->nv + n, 3 * sizeof *d->pos)) {
+        free(leaves);
+        d->nomem = true;
+        return;
+    }
+    if (d->capv != capl) {
+        int32_t *vl = realloc(d->vleaf, d->capv * sizeof *vl);
+        if (!vl) {
+            free(leaves);
+            d->nomem = true;
+            return;
+        }
+        d->vleaf = vl;
+    }
+    n = 0;
+    for (size_t i = 0; i < d->nn; i++)
+        if (d->n[i].child < 0 && d->n[i].kind == DN_SURF && d->n[i].vert < 0) {
+            d->n[i].vert = (int32_t)d->nv;
+            d->vleaf[d->nv++] = (int32_t)i;
+            leaves[n++] = (int32_t)i;
+        }
+    leaf_job job = {d, leaves};
+    ism_pool_for(d->pool, n, vertex_task, &job, NULL);
+    free(leaves);
 }
 
 static bool add_tri(dual *d, uint32_t a, uint32_t b, uint32_t c)
@@ -534,46 +665,98 @@ static bool add_tri(dual *d, uint32_t a, uint32_t b, uint32_t c)
     return true;
 }
 
-/* The distance to f = 0 of the midpoint of vertices a and b (ism_sample_dist), measured
- * once: a mesh edge is measured by both its triangles, a quad's diagonal when it is chosen,
- * and vertices keep their positions from round to round. */
-static double mid_dist(dual *d, uint32_t a, uint32_t b)
+/* Vertices a and b in one key (+1: never 0), the same either way round. */
+static uint64_t pair_key(uint32_t a, uint32_t b)
 {
-    uint64_t key = (a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a) + 1;
-    const double *known = keyed_get(&d->mid, key);
-    if (known)
-        return *known;
+    return (a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a) + 1;
+}
+
+/* The distance to f = 0 (ism_sample_dist) of the midpoint of the pair key stands for. */
+static double pair_dist(dual *d, worker *w, uint64_t key)
+{
+    uint32_t a = (uint32_t)((key - 1) >> 32), b = (uint32_t)(key - 1);
     double m[3];
     for (int k = 0; k < 3; k++)
         m[k] = 0.5 * (d->pos[3 * a + k] + d->pos[3 * b + k]);
-    double dist = ism_sample_dist(&d->s, m);
-    keyed_put(&d->mid, key, dist);
-    return dist;
+    return ism_sample_dist(&w->s, m);
 }
 
-/* The quad v[0..4) (counter-clockwise seen from ∇f) as two triangles across the diagonal
- * whose midpoint lies nearer f = 0; a repeated vertex (two sides of the edge in one larger
- * leaf) leaves one. Where the surface is a saddle (the torus's inner half) the two diagonals
- * sag to opposite sides and the shorter one is as often the worse: choosing by distance
- * took the torus's triangles under 1e-2 / 3e-3 / 1e-3 from 3,616 / 7,120 / 23,744 to
- * 3,280 / 5,968 / 20,464 for two distance samples per quad. */
-static void emit_quad(dual *d, const uint32_t v[4])
+/* The midpoint distance of vertices a and b: from the memo, measured here (thread 0) only
+ * when the memo could not keep it. A pair is measured once: a mesh edge is asked for by both
+ * its triangles, a quad's diagonal when it is chosen, and vertices keep their positions from
+ * round to round. */
+static double mid_dist(dual *d, uint32_t a, uint32_t b)
 {
-    uint32_t u[4];
+    uint64_t key = pair_key(a, b);
+    const double *known = keyed_get(&d->mid, key);
+    return known && !isnan(*known) ? *known : pair_dist(d, &d->w[0], key);
+}
+
+typedef struct pair_job {
+    dual *d;
+    const uint64_t *keys;
+    double *dist;
+} pair_job;
+
+static void pair_task(void *ctx, size_t k, int thread)
+{
+    pair_job *job = ctx;
+    job->dist[k] = pair_dist(job->d, &job->d->w[thread], job->keys[k]);
+}
+
+/* The midpoint distances of the n vertex pairs in pairs[0..2n) into the memo: those not
+ * known yet, each once, measured on the pool. */
+static void measure_pairs(dual *d, const uint32_t *pairs, size_t n)
+{
+    uint64_t *keys = malloc((n ? n : 1) * sizeof *keys);
+    size_t *slot = malloc((n ? n : 1) * sizeof *slot);
+    double *dist = malloc((n ? n : 1) * sizeof *dist);
+    if (!keys || !slot || !dist || !keyed_reserve(&d->mid, n)) {
+        free(keys);
+        free(slot);
+        free(dist);
+        return; /* mid_dist measures them one by one */
+    }
+    size_t m = 0;
+    keyed *k = &d->mid;
+    for (size_t j = 0; j < n; j++) {
+        uint64_t key = pair_key(pairs[2 * j], pairs[2 * j + 1]);
+        size_t i = keyed_slot(k, key);
+        if (k->key[i])
+            continue;
+        k->key[i] = key; /* asked for: not again in this batch; no growth till the end */
+        k->val[i] = NAN;
+        k->n++;
+        keys[m] = key;
+        slot[m++] = i;
+    }
+    pair_job job = {d, keys, dist};
+    ism_pool_for(d->pool, m, pair_task, &job, NULL);
+    for (size_t j = 0; j < m; j++)
+        k->val[slot[j]] = dist[j];
+    free(keys);
+    free(slot);
+    free(dist);
+}
+
+/* The quad v[0..4) (counter-clockwise seen from ∇f), kept for emit_quads; a repeated vertex
+ * (two sides of the edge in one larger leaf) leaves a triangle (u[3] = UINT32_MAX). */
+static void add_quad(dual *d, const uint32_t v[4])
+{
+    uint32_t u[4] = {0, 0, 0, UINT32_MAX};
     int m = 0;
     for (int k = 0; k < 4; k++)
         if (v[k] != v[(k + 3) % 4])
             u[m++] = v[k];
-    bool ok = true;
-    if (m == 3)
-        ok = add_tri(d, u[0], u[1], u[2]);
-    else if (m == 4) {
-        int a = mid_dist(d, u[0], u[2]) <= mid_dist(d, u[1], u[3]) ? 0 : 1;
-        ok = add_tri(d, u[a], u[a + 1], u[a + 2]) && add_tri(d, u[a], u[a + 2], u[(a + 3) % 4]);
-    }
-    if (!ok)
+    if (m < 3)
+        return;
+    if (!grow((void **)&d->quad, &d->capq, d->nq + 1, 4 * sizeof *d->quad)) {
         d->nomem = true;
+        return;
+    }
+    memcpy(&d->quad[4 * d->nq++], u, sizeof u);
 }
+
 
 /* Four leaves round an edge along axis e: the quad across the smallest one's edge there when
  * f changes sign along it. */
@@ -603,7 +786,7 @@ static void edge_quad(dual *d, const int32_t c[4], int e)
         }
         v[in0 ? k : 3 - k] = (uint32_t)vert;
     }
-    emit_quad(d, v);
+    add_quad(d, v);
 }
 
 static bool is_leaf(const dual *d, int32_t i) { return d->n[i].child < 0; }
@@ -699,30 +882,67 @@ static void cell_proc(dual *d, int32_t i)
         }
 }
 
-/* Does triangle t meet E: centroid and edge midpoints within E of f = 0, facing along ∇f?
- * 0 when it does, else the corners (bit k: vertex k) whose leaves to split: the two ends of
- * each edge whose midpoint misses (splitting the third leaf would leave that edge as it
- * is), all three for the centroid or a turned triangle. */
-static int tri_meets(dual *d, size_t t)
+/* The round's quads as triangles: each across the diagonal whose midpoint lies nearer
+ * f = 0. Where the surface is a saddle (the torus's inner half) the two diagonals sag to
+ * opposite sides and the shorter one is as often the worse: choosing by distance took the
+ * torus's triangles under 1e-2 / 3e-3 / 1e-3 from 3,616 / 7,120 / 23,744 to 3,280 / 5,968
+ * / 20,464 for two distance samples per quad. */
+static void emit_quads(dual *d)
+{
+    uint32_t *diag = malloc((d->nq ? d->nq : 1) * 4 * sizeof *diag);
+    size_t nd = 0;
+    for (size_t q = 0; diag && q < d->nq; q++) {
+        const uint32_t *u = &d->quad[4 * q];
+        if (u[3] == UINT32_MAX)
+            continue;
+        uint32_t pairs[4] = {u[0], u[2], u[1], u[3]};
+        memcpy(&diag[4 * nd++], pairs, sizeof pairs);
+    }
+    if (diag)
+        measure_pairs(d, diag, 2 * nd);
+    free(diag);
+    d->nt = 0;
+    bool ok = true;
+    for (size_t q = 0; q < d->nq && ok; q++) {
+        const uint32_t *u = &d->quad[4 * q];
+        if (u[3] == UINT32_MAX) {
+            ok = add_tri(d, u[0], u[1], u[2]);
+            continue;
+        }
+        int a = mid_dist(d, u[0], u[2]) <= mid_dist(d, u[1], u[3]) ? 0 : 1;
+        ok = add_tri(d, u[a], u[a + 1], u[a + 2]) && add_tri(d, u[a], u[a + 2], u[(a + 3) % 4]);
+    }
+    if (!ok)
+        d->nomem = true;
+}
+
+/* Triangle t's corners (bit k: vertex k) whose leaves to split for its edges: the two ends
+ * of each edge whose midpoint lies beyond E (splitting the third leaf would leave that edge
+ * as it is). */
+static int edge_misses(dual *d, size_t t)
 {
     int miss = 0;
+    for (int k = 0; k < 3; k++)
+        if (!(mid_dist(d, d->tri[3 * t + k], d->tri[3 * t + (k + 1) % 3]) <= d->o->max_error))
+            miss |= 1 << k | 1 << (k + 1) % 3;
+    return miss;
+}
+
+/* Triangle t's centroid within E of f = 0 and its normal along ∇f there? 0 when so, else 7
+ * (every leaf of t to split). */
+static int centroid_misses(dual *d, worker *w, size_t t)
+{
     const double *p[3];
     for (int k = 0; k < 3; k++)
         p[k] = &d->pos[3 * d->tri[3 * t + k]];
-    double E = d->o->max_error;
-    for (int k = 0; k < 3; k++)
-        if (!(mid_dist(d, d->tri[3 * t + k], d->tri[3 * t + (k + 1) % 3]) <= E))
-            miss |= 1 << k | 1 << (k + 1) % 3; /* its two ends' leaves */
-    if (miss)
-        return miss;
     double c[3], u[3], v[3], nrm[3], g[3];
     for (int a = 0; a < 3; a++) {
         c[a] = (p[0][a] + p[1][a] + p[2][a]) / 3;
         u[a] = p[1][a] - p[0][a];
         v[a] = p[2][a] - p[0][a];
     }
-    double f = ism_sample_grad(&d->s, c, g), gl = ism_norm3(g);
-    if (!isfinite(f) || !(gl > 0) || !(fabs(f) / gl <= E))
+    double f = ism_sample_grad(&w->s, c, g), gl = ism_norm3(g);
+    if (!isfinite(f) || !(gl > 0) || !(fabs(f) / gl <= d->o->max_error))
         return 7;
     nrm[0] = u[1] * v[2] - u[2] * v[1];
     nrm[1] = u[2] * v[0] - u[0] * v[2];
@@ -730,20 +950,18 @@ static int tri_meets(dual *d, size_t t)
     return ism_dot3(nrm, g) > TURNED_COS * ism_norm3(nrm) * gl ? 0 : 7;
 }
 
-/* The round's mesh: vertices for new surface leaves, then the quads. */
-static void make_triangles(dual *d)
+typedef struct tri_job {
+    dual *d;
+    const uint32_t *tris; /* triangle numbers */
+    uint8_t *miss;        /* by position in tris */
+} tri_job;
+
+static void centroid_task(void *ctx, size_t k, int thread)
 {
-    for (size_t i = 0; i < d->nn && !d->nomem; i++)
-        if (d->n[i].kind == DN_SURF && is_leaf(d, (int32_t)i) && d->n[i].vert < 0 &&
-            !place_vertex(d, (int32_t)i))
-            d->nomem = true;
-    d->nt = 0;
-    if (!d->nomem)
-        cell_proc(d, 0);
+    tri_job *job = ctx;
+    job->miss[k] = (uint8_t)centroid_misses(job->d, &job->d->w[thread], job->tris[k]);
 }
 
-/* Marks the leaves of triangles that miss E; returns how many leaves can still split and
- * counts the misses at max_depth into *missed. */
 /* Triangle t's vertices, sorted, in one word (+1: never 0); 0 when the vertices are too
  * many for 21 bits each (then nothing is remembered). A triangle keeps its vertices'
  * positions while they exist, so one that met E meets it again. */
@@ -762,28 +980,55 @@ static uint64_t tri_key(const dual *d, size_t t)
     return (v[0] | v[1] << 21 | v[2] << 42) + 1;
 }
 
-/* Marks the leaves of triangles that miss E; returns how many leaves can still split and
- * counts the misses at max_depth into *missed. Triangles that met E in an earlier round are
- * not measured again. */
+/* Marks the leaves of triangles that miss E (centroid and edge midpoints within E of f = 0,
+ * facing along ∇f); returns how many leaves can still split and counts the misses at
+ * max_depth into *missed. Triangles that met E in an earlier round are not measured again;
+ * the rest have their edges, then the centroids of those whose edges pass, measured on the
+ * pool. */
 static size_t mark_misses(dual *d, uint64_t *missed)
 {
-    size_t marked = 0;
+    size_t marked = 0, np = 0, nc = 0;
     *missed = 0;
+    uint32_t *open = malloc((d->nt ? d->nt : 1) * sizeof *open);
+    uint32_t *pairs = malloc((d->nt ? d->nt : 1) * 6 * sizeof *pairs);
+    uint32_t *cen = malloc((d->nt ? d->nt : 1) * sizeof *cen);
+    uint8_t *miss = malloc(d->nt ? d->nt : 1), *cmiss = malloc(d->nt ? d->nt : 1);
+    if (!open || !pairs || !cen || !miss || !cmiss) {
+        d->nomem = true;
+        goto done;
+    }
     for (size_t t = 0; t < d->nt; t++) {
         uint64_t key = tri_key(d, t);
         if (key && keyed_get(&d->passed, key))
             continue;
-        int miss = tri_meets(d, t);
-        if (!miss) {
+        open[np++] = (uint32_t)t;
+        for (int k = 0; k < 3; k++) {
+            pairs[6 * (np - 1) + 2 * k] = d->tri[3 * t + k];
+            pairs[6 * (np - 1) + 2 * k + 1] = d->tri[3 * t + (k + 1) % 3];
+        }
+    }
+    measure_pairs(d, pairs, 3 * np);
+    for (size_t k = 0; k < np; k++) {
+        miss[k] = (uint8_t)edge_misses(d, open[k]);
+        if (!miss[k])
+            cen[nc++] = open[k];
+    }
+    tri_job job = {d, cen, cmiss};
+    ism_pool_for(d->pool, nc, centroid_task, &job, NULL);
+    for (size_t k = 0, c = 0; k < np; k++) {
+        size_t t = open[k];
+        int m = miss[k] ? miss[k] : cmiss[c++];
+        if (!m) {
+            uint64_t key = tri_key(d, t);
             if (key)
                 keyed_put(&d->passed, key, 0); /* out of memory: measured again, no more */
             continue;
         }
         bool any = false;
-        for (int pass = 0; pass < 2 && !any; pass++, miss = 7) /* then every leaf of t */
-            for (int k = 0; k < 3; k++) {
-                dnode *n = &d->n[d->vleaf[d->tri[3 * t + k]]];
-                if ((miss >> k & 1) && n->level < d->o->max_depth) {
+        for (int pass = 0; pass < 2 && !any; pass++, m = 7) /* then every leaf of t */
+            for (int j = 0; j < 3; j++) {
+                dnode *n = &d->n[d->vleaf[d->tri[3 * t + j]]];
+                if ((m >> j & 1) && n->level < d->o->max_depth) {
                     marked += !n->split;
                     n->split = 1;
                     any = true;
@@ -791,42 +1036,81 @@ static size_t mark_misses(dual *d, uint64_t *missed)
             }
         *missed += !any;
     }
+done:
+    free(open);
+    free(pairs);
+    free(cen);
+    free(miss);
+    free(cmiss);
     return marked;
 }
 
+/* The leaves marked by mark_misses split (expand: their children built level by level). */
 static void split_marked(dual *d)
 {
-    size_t n = d->nn; /* nodes made by the splits need no visit */
-    for (size_t i = 0; i < n && !d->bad && !d->nomem; i++)
+    size_t n = 0;
+    for (size_t i = 0; i < d->nn; i++)
+        n += d->n[i].split;
+    int32_t *list = malloc((n ? n : 1) * sizeof *list);
+    if (!list) {
+        d->nomem = true;
+        return;
+    }
+    n = 0;
+    for (size_t i = 0; i < d->nn; i++)
         if (d->n[i].split) {
             d->n[i].split = 0;
-            split_node(d, (int32_t)i);
+            list[n++] = (int32_t)i;
         }
+    expand(d, list, n);
+    free(list);
 }
 
-/* The vertices the triangles use and the triangles, renumbered, into mesh. */
+typedef struct normal_job {
+    dual *d;
+    const uint32_t *verts;
+    float *nrm;
+} normal_job;
+
+static void normal_task(void *ctx, size_t k, int thread)
+{
+    normal_job *job = ctx;
+    double g[3];
+    ism_sample_grad(&job->d->w[thread].s, &job->d->pos[3 * job->verts[k]], g);
+    ism_normalise3(g);
+    for (int a = 0; a < 3; a++)
+        job->nrm[3 * k + a] = (float)g[a];
+}
+
+/* The vertices the triangles use (their normals from ∇f, on the pool) and the triangles,
+ * renumbered in order of first use, into mesh. */
 static bool to_mesh(dual *d, ism_mesh *mesh)
 {
-    uint32_t *map = malloc((d->nv ? d->nv : 1) * sizeof *map);
-    if (!map)
-        return false;
-    memset(map, 0xff, (d->nv ? d->nv : 1) * sizeof *map);
-    bool ok = true;
-    for (size_t t = 0; t < 3 * d->nt && ok; t++) {
-        uint32_t v = d->tri[t];
-        if (map[v] == UINT32_MAX) {
-            double g[3];
-            ism_sample_grad(&d->s, &d->pos[3 * v], g);
-            ism_normalise3(g);
-            float nrm[3] = {(float)g[0], (float)g[1], (float)g[2]};
-            map[v] = ism_mesh_add_vertex(mesh, &d->pos[3 * v], nrm);
-            ok = map[v] != UINT32_MAX;
+    size_t nv = d->nv ? d->nv : 1;
+    uint32_t *map = malloc(nv * sizeof *map), *used = malloc(nv * sizeof *used);
+    float *nrm = malloc(3 * nv * sizeof *nrm);
+    bool ok = map && used && nrm;
+    size_t nu = 0;
+    if (ok) {
+        memset(map, 0xff, nv * sizeof *map);
+        for (size_t t = 0; t < 3 * d->nt; t++) {
+            uint32_t v = d->tri[t];
+            if (map[v] == UINT32_MAX) {
+                map[v] = (uint32_t)nu;
+                used[nu++] = v;
+            }
         }
+        normal_job job = {d, used, nrm};
+        ism_pool_for(d->pool, nu, normal_task, &job, NULL);
     }
+    for (size_t k = 0; k < nu && ok; k++)
+        ok = ism_mesh_add_vertex(mesh, &d->pos[3 * used[k]], &nrm[3 * k]) == k;
     for (size_t t = 0; t < d->nt && ok; t++)
         ok = ism_mesh_add_triangle(mesh, map[d->tri[3 * t]], map[d->tri[3 * t + 1]],
                                    map[d->tri[3 * t + 2]]);
     free(map);
+    free(used);
+    free(nrm);
     return ok;
 }
 
@@ -842,11 +1126,15 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
         return ISM_DUAL_NO_MEMORY;
     corner_view v;
     int32_t last = (int32_t)1 << d->g.depth;
+    dnode *r0 = &d->n[root];
     for (int c = 0; c < 8; c++) {
         int32_t q[3] = {(c & 1) * last, (c >> 1 & 1) * last, (c >> 2 & 1) * last};
-        sample_corner(d, q, &d->n[root].f[c], v.p[c], v.n[c]);
+        sample_corner(d, &d->w[0], q, &r0->f[c], v.p[c], v.n[c]);
     }
-    build(d, root, &v);
+    r0->kind = (uint8_t)leaf_kind(d, &d->w[0], r0, &v, &d->bad);
+    if (r0->kind == DN_INNER && !d->bad)
+        expand(d, &root, 1);
+    mark_surface(d);
     for (int r = 0;; r++) {
         if (d->o->cancel && *d->o->cancel)
             return ISM_DUAL_CANCELLED;
@@ -856,7 +1144,12 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
             return ISM_DUAL_NO_MEMORY;
         if (d->bad)
             return ISM_DUAL_NOT_APPLICABLE;
-        make_triangles(d);
+        make_vertices(d);
+        d->nq = 0;
+        if (!d->nomem)
+            cell_proc(d, 0);
+        if (!d->nomem && !d->bad)
+            emit_quads(d);
         if (d->nomem)
             return ISM_DUAL_NO_MEMORY;
         if (d->bad)
@@ -864,6 +1157,8 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
         if (d->nt > d->o->max_triangles)
             return ISM_DUAL_TOO_BIG;
         size_t marked = mark_misses(d, &st->missed);
+        if (d->nomem)
+            return ISM_DUAL_NO_MEMORY;
         if (st->missed)
             return ISM_DUAL_NOT_APPLICABLE; /* beyond E at depth.max: the primal polygons */
         if (!marked || r == DUAL_ROUNDS)
@@ -874,6 +1169,13 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
     for (size_t i = 0; i < d->nn; i++)
         st->leaves += d->n[i].child < 0 && d->n[i].kind == DN_SURF;
     return to_mesh(d, mesh) ? ISM_DUAL_OK : ISM_DUAL_NO_MEMORY;
+}
+
+/* Threads for the call: o->threads, or every core (0), at most MAX_THREADS. */
+static int thread_count(const ism_poly_options *o)
+{
+    int n = o->threads > 0 ? o->threads : ism_cpu_count();
+    return n > DUAL_MAX_THREADS ? DUAL_MAX_THREADS : n;
 }
 
 enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o, ism_mesh *mesh,
@@ -888,27 +1190,41 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
     d.o = o;
     d.shift = ism_straddle_shift(f, o->max_error, false);
     ism_grid_init(&d.g, o->box, o->max_depth);
-    d.s.tape = f;
-    d.s.ws = ism_eval_ws_new(f);
-    d.jet = ism_ivjet_ws_new(f);
-    d.points = calloc((size_t)1 << DUAL_POINT_BITS, sizeof *d.points);
     for (int e = 0; e < 12; e++)
         ism_cube_edge(e, &d.ec0[e], &d.ec1[e], d.ef[e]);
-    enum ism_dual_status status =
-        d.s.ws && d.jet && d.points ? run(&d, mesh, st) : ISM_DUAL_NO_MEMORY;
-    st->evals_point = d.s.n_point;
-    st->evals_gradient = d.s.n_gradient;
-    st->evals_interval = d.s.n_interval;
+    d.pool = ism_pool_new(thread_count(o));
+    d.nw = d.pool ? ism_pool_threads(d.pool) : 0;
+    d.w = calloc(d.nw ? (size_t)d.nw : 1, sizeof *d.w);
+    bool ok = d.pool && d.w;
+    for (int k = 0; ok && k < d.nw; k++) {
+        worker *w = &d.w[k];
+        w->s.tape = f;
+        w->s.ws = ism_eval_ws_new(f);
+        w->jet = ism_ivjet_ws_new(f);
+        w->points = calloc((size_t)1 << DUAL_POINT_BITS, sizeof *w->points);
+        ok = w->s.ws && w->jet && w->points;
+    }
+    enum ism_dual_status status = ok ? run(&d, mesh, st) : ISM_DUAL_NO_MEMORY;
+    st->threads = d.nw;
+    for (int k = 0; d.w && k < d.nw; k++) {
+        worker *w = &d.w[k];
+        st->evals_point += w->s.n_point;
+        st->evals_gradient += w->s.n_gradient;
+        st->evals_interval += w->s.n_interval;
+        ism_eval_ws_free(w->s.ws);
+        ism_ivjet_ws_free(w->jet);
+        free(w->points);
+    }
     if (status != ISM_DUAL_OK)
         ism_mesh_free(mesh);
-    ism_eval_ws_free(d.s.ws);
-    ism_ivjet_ws_free(d.jet);
+    free(d.w);
+    ism_pool_free(d.pool);
     free(d.n);
     free(d.pos);
     free(d.vleaf);
     free(d.tri);
+    free(d.quad);
     keyed_free(&d.passed);
     keyed_free(&d.mid);
-    free(d.points);
     return status;
 }

@@ -17,7 +17,8 @@
  * locus known (quiet or node balls given), no leaf with the surface touching the box; and
  * only where every triangle meets E before depth.max (two sheets closer than E, where f's
  * gradient nearly cancels between them, do not); the call says "not applicable" otherwise
- * and the caller polygonises as before. One thread. */
+ * and the caller polygonises as before. The tree's splits, the vertices and the
+ * measurements run on o->threads threads; the mesh is the same on any number. */
 #ifndef ISM_DUAL_H
 #define ISM_DUAL_H
 
@@ -40,6 +41,7 @@ typedef struct ism_dual_stats {
                              says "not applicable") */
     uint64_t leaves;      /* leaves with a vertex */
     uint64_t evals_point, evals_gradient, evals_interval;
+    int threads;          /* threads the call ran on (o->threads, 0: every core) */
 } ism_dual_stats;
 
 /* May the dual mesh be tried for f under o? (max_error set, no locus, no min/max in f.) */

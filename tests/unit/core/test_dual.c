@@ -167,3 +167,35 @@ Test(dual, memory_budget_stops_the_tree)
     ism_mesh_free(&m);
     ism_tape_free(t);
 }
+
+/* The tree's splits, the vertices and the measurements run on the pool: the mesh is the same
+ * bit for bit on 1, 2 and 4 threads (sphere 1e-3: three measure-and-split rounds; torus
+ * 3e-3: saddles and the sub-box proofs), in the box off the lattice. */
+Test(dual, same_mesh_on_1_2_4_threads)
+{
+    const pf_surface *surfaces[2] = {&pf_unit_sphere, &pf_ring_torus};
+    const double errors[2] = {1e-3, 3e-3};
+    for (int s = 0; s < 2; s++) {
+        ism_tape *t = pf_compile(surfaces[s]);
+        double box[6];
+        cube_box(1.5, 0.37 * FINEST, box);
+        ism_mesh one;
+        for (int threads = 1; threads <= 4; threads *= 2) {
+            ism_poly_options o;
+            pf_options(&o, box, 3, SAFETY_DEPTH);
+            o.max_error = errors[s];
+            o.dual = true;
+            o.threads = threads;
+            ism_poly_stats st;
+            ism_mesh m;
+            pf_run_options(t, &o, threads == 1 ? &one : &m, &st);
+            cr_assert_gt(one.ntris, 1000);
+            if (threads > 1) {
+                pf_same_mesh(&one, &m, surfaces[s]->expr);
+                ism_mesh_free(&m);
+            }
+        }
+        ism_mesh_free(&one);
+        ism_tape_free(t);
+    }
+}
