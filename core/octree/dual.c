@@ -123,6 +123,14 @@ static void keyed_free(keyed *k)
     free(k->val);
 }
 
+/* What a parallel loop's tasks share: the mesher, their inputs and their outputs (slot k of
+ * out is task k's alone). */
+typedef struct task_ctx {
+    struct dual *d;
+    const void *in;
+    void *out;
+} task_ctx;
+
 /* What one thread evaluates f with: its sampler (counters), interval workspace and lattice
  * point memo. */
 typedef struct worker {
@@ -238,8 +246,8 @@ static int box_faces_clear(dual *d, worker *w, const dnode *n, const corner_view
 /* No root on an edge whose ends share a sign: f monotone along its axis or kept from 0 by
  * the mean-value form (proofs), else the primal polygons' edge test (plot_test.c): the
  * paper's same-sheet test (eq. 1) on the ends' gradients, then its double-root search. */
-static bool same_sign_edge_clear(dual *d, worker *w, const dnode *n, const corner_view *v, int e, int c0,
-                                 int c1)
+static bool same_sign_edge_clear(dual *d, worker *w, const dnode *n, const corner_view *v,
+                                 int e, int c0, int c1)
 {
     int a = e / 4;
     if (v->have_g && (v->monotone >> a & 1 ||
@@ -392,7 +400,8 @@ static int classify(dual *d, worker *w, dnode *n, corner_view *v)
 /* f and the unit gradient at lattice point q into *f, p, g: through the point memo, as
  * neighbouring nodes share corners (a split's 27 points hold the parent's 8 and the 18 on
  * its faces and edges that the neighbours' splits sample too). */
-static void sample_corner(dual *d, worker *w, const int32_t q[3], double *f, double p[3], double g[3])
+static void sample_corner(dual *d, worker *w, const int32_t q[3], double *f, double p[3],
+                          double g[3])
 {
     for (int a = 0; a < 3; a++)
         p[a] = ism_grid_coord(&d->g, a, q[a]);
@@ -448,21 +457,15 @@ typedef struct split_out {
     bool bad;
 } split_out;
 
-typedef struct split_job {
-    dual *d;
-    const int32_t *nodes;
-    split_out *out;
-} split_job;
-
 /* Task k of a split pass: node nodes[k]'s children classified, from f and ∇f at the 27
  * lattice points of their corners (each taken once). Reads the tree, writes out[k] only. */
 static void split_task(void *ctx, size_t k, int thread)
 {
-    split_job *job = ctx;
+    task_ctx *job = ctx;
     dual *d = job->d;
     worker *w = &d->w[thread];
-    const dnode *parent = &d->n[job->nodes[k]];
-    split_out *out = &job->out[k];
+    const dnode *parent = &d->n[((const int32_t *)job->in)[k]];
+    split_out *out = &((split_out *)job->out)[k];
     int32_t half = ism_grid_cell_steps(&d->g, parent->level + 1);
     double f[27], p[27][3], g[27][3];
     for (int j = 0; j < 27; j++) {
@@ -528,7 +531,7 @@ static void expand(dual *d, const int32_t *list, size_t n)
             d->nomem = true;
             break;
         }
-        split_job job = {d, cur, out};
+        task_ctx job = {d, cur, out};
         ism_pool_for(d->pool, n, split_task, &job, NULL);
         size_t nn = 0;
         for (size_t k = 0; k < n && !d->nomem && !d->too_big; k++) {
@@ -608,15 +611,10 @@ static void place_vertex(dual *d, worker *w, int32_t i)
     memcpy(&d->pos[3 * n->vert], m, sizeof m);
 }
 
-typedef struct leaf_job {
-    dual *d;
-    const int32_t *leaves;
-} leaf_job;
-
 static void vertex_task(void *ctx, size_t k, int thread)
 {
-    leaf_job *job = ctx;
-    place_vertex(job->d, &job->d->w[thread], job->leaves[k]);
+    task_ctx *job = ctx;
+    place_vertex(job->d, &job->d->w[thread], ((const int32_t *)job->in)[k]);
 }
 
 /* Vertices for the surface leaves that have none, numbered in node order, placed on the
@@ -649,7 +647,7 @@ static void make_vertices(dual *d)
             d->vleaf[d->nv++] = (int32_t)i;
             leaves[n++] = (int32_t)i;
         }
-    leaf_job job = {d, leaves};
+    task_ctx job = {d, leaves, NULL};
     ism_pool_for(d->pool, n, vertex_task, &job, NULL);
     free(leaves);
 }
@@ -692,16 +690,11 @@ static double mid_dist(dual *d, uint32_t a, uint32_t b)
     return known && !isnan(*known) ? *known : pair_dist(d, &d->w[0], key);
 }
 
-typedef struct pair_job {
-    dual *d;
-    const uint64_t *keys;
-    double *dist;
-} pair_job;
-
 static void pair_task(void *ctx, size_t k, int thread)
 {
-    pair_job *job = ctx;
-    job->dist[k] = pair_dist(job->d, &job->d->w[thread], job->keys[k]);
+    task_ctx *job = ctx;
+    const uint64_t *keys = job->in;
+    ((double *)job->out)[k] = pair_dist(job->d, &job->d->w[thread], keys[k]);
 }
 
 /* The midpoint distances of the n vertex pairs in pairs[0..2n) into the memo: those not
@@ -730,7 +723,7 @@ static void measure_pairs(dual *d, const uint32_t *pairs, size_t n)
         keys[m] = key;
         slot[m++] = i;
     }
-    pair_job job = {d, keys, dist};
+    task_ctx job = {d, keys, dist};
     ism_pool_for(d->pool, m, pair_task, &job, NULL);
     for (size_t j = 0; j < m; j++)
         k->val[slot[j]] = dist[j];
@@ -950,16 +943,11 @@ static int centroid_misses(dual *d, worker *w, size_t t)
     return ism_dot3(nrm, g) > TURNED_COS * ism_norm3(nrm) * gl ? 0 : 7;
 }
 
-typedef struct tri_job {
-    dual *d;
-    const uint32_t *tris; /* triangle numbers */
-    uint8_t *miss;        /* by position in tris */
-} tri_job;
-
 static void centroid_task(void *ctx, size_t k, int thread)
 {
-    tri_job *job = ctx;
-    job->miss[k] = (uint8_t)centroid_misses(job->d, &job->d->w[thread], job->tris[k]);
+    task_ctx *job = ctx;
+    ((uint8_t *)job->out)[k] =
+        (uint8_t)centroid_misses(job->d, &job->d->w[thread], ((const uint32_t *)job->in)[k]);
 }
 
 /* Triangle t's vertices, sorted, in one word (+1: never 0); 0 when the vertices are too
@@ -1013,7 +1001,7 @@ static size_t mark_misses(dual *d, uint64_t *missed)
         if (!miss[k])
             cen[nc++] = open[k];
     }
-    tri_job job = {d, cen, cmiss};
+    task_ctx job = {d, cen, cmiss};
     ism_pool_for(d->pool, nc, centroid_task, &job, NULL);
     for (size_t k = 0, c = 0; k < np; k++) {
         size_t t = open[k];
@@ -1066,20 +1054,15 @@ static void split_marked(dual *d)
     free(list);
 }
 
-typedef struct normal_job {
-    dual *d;
-    const uint32_t *verts;
-    float *nrm;
-} normal_job;
-
 static void normal_task(void *ctx, size_t k, int thread)
 {
-    normal_job *job = ctx;
+    task_ctx *job = ctx;
     double g[3];
-    ism_sample_grad(&job->d->w[thread].s, &job->d->pos[3 * job->verts[k]], g);
+    uint32_t v = ((const uint32_t *)job->in)[k];
+    ism_sample_grad(&job->d->w[thread].s, &job->d->pos[3 * v], g);
     ism_normalise3(g);
     for (int a = 0; a < 3; a++)
-        job->nrm[3 * k + a] = (float)g[a];
+        ((float *)job->out)[3 * k + a] = (float)g[a];
 }
 
 /* The vertices the triangles use (their normals from ∇f, on the pool) and the triangles,
@@ -1100,7 +1083,7 @@ static bool to_mesh(dual *d, ism_mesh *mesh)
                 used[nu++] = v;
             }
         }
-        normal_job job = {d, used, nrm};
+        task_ctx job = {d, used, nrm};
         ism_pool_for(d->pool, nu, normal_task, &job, NULL);
     }
     for (size_t k = 0; k < nu && ok; k++)
