@@ -287,6 +287,20 @@ double cf_crossing_radius(cf_ctx *c, const cf_polyline *pl, size_t npl);
 bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, size_t npl,
                   const cf_loops *ls, double rho);
 
+/* ---- conform_ears.c: a rim loop's backward steps clipped ---- */
+/* Loop l (closed, winding wind != 0 times round the closed curve pl; u[i] its vertices' foot
+ * arclengths, foot[3 i] the feet) loses the outer ends of its steps backwards along pl: each
+ * such vertex's ear (prev, v, next) becomes a triangle where it turns like the hole and its
+ * new edge steps forwards. l->v, u and foot are compacted in place (l->n lowered). Returns the
+ * ears clipped, -1 when out of memory. */
+int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double *foot,
+                 int wind);
+/* Cuts the spikes of the closed loops of ls: a kept triangle holding a loop vertex's both rim
+ * edges, the vertex's only live triangle, is marked dead (added to the sorted *rm) and the
+ * vertex leaves its loop. False when out of memory (nothing more marked dead; the caller
+ * undoes the cut). */
+bool cf_drop_spikes(cf_ctx *c, cf_loops *ls, uint32_t **rm, size_t *nrm);
+
 /* ---- conform_tube_pleats.c: growing a tube's cut where its rim steps backwards ---- */
 /* Round the lone closed curve pl, whose tube of radius r was cut (*removed, rim loops ls):
  * while a rim loop steps backwards along pl (the polygoniser's pleats), the cut grows there

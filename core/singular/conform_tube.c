@@ -346,6 +346,8 @@ static bool conform_group(cf_run *r, const size_t *idx, size_t n)
     ok = cf_cut_clean(c, &cut, &tb.r, INFINITY, &ls, &rm, &nrm);
     if (ok && !c->stopped && ls.n > 0 && g.n == 1) { /* a lone curve: past its pleats */
         ok = cf_cut_past_pleats(c, &g.pl[0], tb.r, &ls, &rm, &nrm);
+        /* the kept triangles sticking into its hole cut too (conform_ears.c) */
+        ok = ok && (c->stopped || cf_drop_spikes(c, &ls, &rm, &nrm));
         if (!ok || c->stopped)
             cf_undo(c, rm, nrm, nt0, nv0); /* out of memory or stopped: as before */
     }

@@ -526,6 +526,17 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
             found = cid[i] >= 0;
             multi |= cid[i] != cid[0];
         }
+        cf_loop own = {NULL, 0, false}; /* a copy the ears are clipped from */
+        if (ok && found && !multi && pl[cid[0]].closed && l->closed) {
+            long wind = unwrap(&pl[cid[0]], l, u);
+            own = (cf_loop){malloc(l->n * sizeof *own.v), l->n, true};
+            ok = own.v != NULL;
+            for (size_t i = 0; ok && i < l->n; i++)
+                own.v[i] = l->v[i];
+            if (ok && cf_clip_ears(c, &pl[cid[0]], &own, u, foot, (int)wind) < 0)
+                ok = false;
+            l = &own;
+        }
         if (ok && !found) {
             ok = cf_fan_centroid(c, l);
         } else if (ok) {
@@ -535,6 +546,7 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
                                : zip_loop(c, &pl[cid[0]], cv[cid[0]], l, u, row, rho));
             free(row);
         }
+        free(own.v);
         free(u);
         free(foot);
         free(cid);

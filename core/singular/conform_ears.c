@@ -1,0 +1,255 @@
+/* conform_ears.c — clipping a rim loop's backward steps before its rings are made: where a
+ * loop winding round a closed double curve steps backwards along it (its feet's arclength
+ * decreasing against the winding), every ring quad and zip triangle built under that step
+ * turns over (in the chart s = arclength of the foot, d = distance to the curve, the quad
+ * (a_i, a_i+1, b_i+1, b_i) with b = foot + t (a − foot) has the sign of s_i+1 − s_i alone).
+ * The polygoniser's mesh makes such steps all round a curve that crosses its lattice at an
+ * angle: the tube's rim is a staircase whose risers lean back. A riser's outer end is an ear
+ * of the hole — the triangle (prev, v, next) lies in the hole, on the curve's side — and
+ * clipping it (one new triangle, v leaves the loop) replaces the step back and the tread
+ * after it by one step forwards:
+ *
+ *     d  113 ───── 114          the cut's bay between two risers 112→113, 114→111, both
+ *         ╲ ╲ ear   ╲           leaning back: ears (112, 113, 114) then (112, 114, 111)
+ *          112 ──────111        leave the loop 112 → 111, a step forwards
+ *   curve ───────────────── s
+ *
+ * An ear is clipped only when it is oriented like the hole (the chart's turn), its new edge
+ * steps forwards, and no other loop vertex nearby lies inside it.
+ *
+ * The other way a riser leans back: one kept triangle sticking into the hole, its tip a rim
+ * vertex with no other live triangle (a spike). Its two rim edges step back and forth along
+ * the curve; the triangle is cut too (cf_drop_spikes), its third edge joins the rim:
+ *
+ *     2917 ─ 2916           the kept triangle (3464, 3010, 2916) beside the curve: cut,
+ *             │ ╲           the loop runs 2916 → 3464 (forwards) instead of 2916 → 3010
+ *       3010 ─── 3464       (back half a cell) → 3464 */
+#include "core/singular/conform_internal.h"
+#include "core/util/vec3.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+/* Loop vertices this many places on either side of an ear are checked to lie outside it (a
+ * staircase's neighbours; a vertex farther along the loop is farther along the curve). */
+#define EAR_WINDOW 6
+/* A loop keeps at least this many vertices when its spikes are dropped (three: a triangle;
+ * one more, so the hole left is never a lone sliver). */
+#define SPIKE_MIN_LOOP 4
+/* A step forwards shorter than this × the loop's mean edge is a riser too: the ring columns
+ * under it run a sliver apart, nearly across the curve, and the zip's triangle on the
+ * innermost row's riser edge turns over when the curve vertex it is joined to lies behind it
+ * (crossing spheres in the lattice box: 17 such edges 0.5 cells from the double circle, the
+ * riser's feet 0.014 cells apart). */
+#define EAR_MIN_STEP 0.25
+/* An ear's height over its new edge is at least this × that edge's length (in the chart): a
+ * flatter one is a sliver along a straight stretch of rim (two rim vertices a rounding apart
+ * on it), whose normal says nothing about the sheet. */
+#define EAR_MIN_HEIGHT 0.1
+/* Clipping passes over the loop at most (each clips a riser's ears; a riser clipped lets its
+ * neighbour's ear through on the next pass). */
+#define EAR_PASSES 4
+
+/* s − t wrapped into (−L/2, L/2]: the short way round a closed curve of length L. */
+static double wrapped(double s, double t, double L)
+{
+    double d = s - t;
+    return d - L * round(d / L);
+}
+
+typedef struct chart {
+    const cf_polyline *pl;
+    const double *u, *d; /* per loop vertex: foot arclength, distance to the curve */
+    double sign;         /* +1 when the loop winds with the curve's arclength, −1 against */
+} chart;
+
+/* The step from loop vertex i to j along the winding (positive: forwards). */
+static double step(const chart *ch, size_t i, size_t j)
+{
+    return ch->sign * wrapped(ch->u[j], ch->u[i], ch->pl->length);
+}
+
+/* Twice the signed area of (i, j, k) in the chart, relative to i; negative when the triangle
+ * turns like the hole (the curve lies on its inner side: for a step forwards from i to j and
+ * k nearer the curve, (s_j − s_i)(d_k − d_i) − (d_j − d_i)(s_k − s_i) < 0). */
+static double chart_turn(const chart *ch, size_t i, size_t j, size_t k)
+{
+    double sj = step(ch, i, j), sk = step(ch, i, k);
+    double dj = ch->d[j] - ch->d[i], dk = ch->d[k] - ch->d[i];
+    return sj * dk - dj * sk;
+}
+
+/* True when loop vertex q lies inside or on the chart triangle (a, b, e) (turning like the
+ * hole). */
+static bool inside(const chart *ch, size_t a, size_t b, size_t e, size_t q)
+{
+    return chart_turn(ch, a, b, q) <= 0 && chart_turn(ch, b, e, q) <= 0 &&
+           chart_turn(ch, e, a, q) <= 0;
+}
+
+/* The ear at i (prev p, next n over the live vertices) may be clipped: its new edge steps
+ * forwards more than a riser. */
+static bool ear_ok(const chart *ch, const size_t *prev, const size_t *next, size_t p, size_t i,
+                   size_t n, double riser)
+{
+    double sn = step(ch, p, n), dn = ch->d[n] - ch->d[p];
+    if (p == n || !(sn > riser) || !(chart_turn(ch, p, i, n) < -EAR_MIN_HEIGHT * (sn * sn + dn * dn)))
+        return false;
+    size_t a = prev[p], b = next[n];
+    for (int k = 0; k < EAR_WINDOW; k++, a = prev[a], b = next[b])
+        if ((a != i && a != n && inside(ch, p, i, n, a)) ||
+            (b != i && b != p && inside(ch, p, i, n, b)))
+            return false;
+    return true;
+}
+
+int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double *foot, int wind)
+{
+    size_t n = l->n;
+    if (!pl->closed || !l->closed || wind == 0 || n < 4)
+        return 0;
+    size_t *prev = malloc(n * sizeof *prev), *next = malloc(n * sizeof *next);
+    double *d = malloc(n * sizeof *d);
+    if (!prev || !next || !d) {
+        free(prev);
+        free(next);
+        free(d);
+        return -1;
+    }
+    for (size_t i = 0; i < n; i++) {
+        prev[i] = (i + n - 1) % n;
+        next[i] = (i + 1) % n;
+        d[i] = ism_dist3(c->m->pos + 3 * (size_t)l->v[i], foot + 3 * i);
+    }
+    chart ch = {pl, u, d, wind > 0 ? 1.0 : -1.0};
+    double riser = EAR_MIN_STEP * cf_loop_mean_edge(c, l);
+    size_t live = n, head = 0;
+    int clipped = 0;
+    bool ok = true, any = true;
+    for (int pass = 0; ok && any && pass < EAR_PASSES && live > 3; pass++) {
+        any = false;
+        size_t i = head;
+        for (size_t seen = 0; ok && seen < live && live > 3; seen++) {
+            size_t p = prev[i], nx = next[i];
+            /* a step back into i or out of it: clip i when its ear allows */
+            bool back = !(step(&ch, p, i) > riser) || !(step(&ch, i, nx) > riser);
+            if (back && ear_ok(&ch, prev, next, p, i, nx, riser)) {
+                ok = cf_add_triangle(c, l->v[p], l->v[i], l->v[nx]);
+                next[p] = nx;
+                prev[nx] = p;
+                if (head == i)
+                    head = nx;
+                live--;
+                clipped++;
+                any = true;
+                i = p; /* p's ear changed: look at it again */
+                continue;
+            }
+            i = nx;
+        }
+    }
+    if (ok && clipped > 0) { /* compact the loop, its parameters and feet (a clipped
+                                vertex is its own neighbours' neither: next[prev[i]] != i) */
+        size_t k = 0;
+        for (size_t i = 0; i < n; i++) {
+            if (next[prev[i]] != i)
+                continue;
+            l->v[k] = l->v[i];
+            u[k] = u[i];
+            for (int j = 0; j < 3; j++)
+                foot[3 * k + j] = foot[3 * i + j];
+            k++;
+        }
+        l->n = k;
+    }
+    free(prev);
+    free(next);
+    free(d);
+    return ok ? clipped : -1;
+}
+
+/* Live triangles on the edge ab. */
+static int live_on_edge(const cf_ctx *c, uint32_t a, uint32_t b)
+{
+    cf_inc it;
+    uint32_t t;
+    int n = 0;
+    for (cf_inc_begin(c, a, &it); cf_inc_next(c, &it, &t);) {
+        const uint32_t *w = c->m->tri + 3 * (size_t)t;
+        n += w[0] == b || w[1] == b || w[2] == b;
+    }
+    return n;
+}
+
+/* The one live triangle at v when v has exactly one, it holds p and n too, and a kept
+ * triangle lies across its third edge pn (which then joins the rim); CF_NONE otherwise. */
+static uint32_t lone_triangle(const cf_ctx *c, uint32_t p, uint32_t v, uint32_t n)
+{
+    cf_inc it;
+    uint32_t t, only = CF_NONE;
+    size_t count = 0;
+    for (cf_inc_begin(c, v, &it); cf_inc_next(c, &it, &t) && count < 2;) {
+        only = t;
+        count++;
+    }
+    if (count != 1)
+        return CF_NONE;
+    const uint32_t *w = c->m->tri + 3 * (size_t)only;
+    bool has_p = w[0] == p || w[1] == p || w[2] == p, has_n = w[0] == n || w[1] == n || w[2] == n;
+    return has_p && has_n && live_on_edge(c, p, n) == 2 ? only : CF_NONE;
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+bool cf_drop_spikes(cf_ctx *c, cf_loops *ls, uint32_t **rm, size_t *nrm)
+{
+    uint32_t *add = NULL;
+    size_t na = 0, cap = 0;
+    bool ok = true;
+    for (size_t k = 0; ok && k < ls->n; k++) {
+        cf_loop *l = &ls->l[k];
+        if (!l->closed)
+            continue;
+        size_t m = 0;
+        for (size_t i = 0; i < l->n; i++) {
+            uint32_t p = m > 0 ? l->v[m - 1] : l->v[l->n - 1], v = l->v[i];
+            uint32_t n = l->v[(i + 1) % l->n];
+            uint32_t t = ok && l->n - (i - m) > SPIKE_MIN_LOOP ? lone_triangle(c, p, v, n) : CF_NONE;
+            if (t != CF_NONE && na == cap) {
+                uint32_t *a = realloc(add, (cap = cap ? 2 * cap : 16) * sizeof *a);
+                ok = a != NULL;
+                add = ok ? a : add;
+            }
+            if (t == CF_NONE || !ok) {
+                l->v[m++] = v;
+                continue;
+            }
+            add[na++] = t;
+            c->dead[t] = 1;
+        }
+        l->n = m;
+    }
+    /* merged into the sorted list from its end (the few added sorted first) */
+    uint32_t *r = ok && na ? realloc(*rm, (*nrm + na) * sizeof *r) : *rm;
+    if (na && !r) {
+        ok = false;
+        r = *rm;
+    }
+    *rm = r;
+    if (ok && na) {
+        qsort(add, na, sizeof *add, cmp_u32);
+        size_t i = *nrm, j = na, o = *nrm + na;
+        while (j > 0)
+            r[--o] = i > 0 && r[i - 1] > add[j - 1] ? r[--i] : add[--j];
+        *nrm += na;
+    } else if (!ok) { /* out of memory: the triangles marked are listed all the same */
+        for (size_t j = 0; j < na; j++)
+            c->dead[add[j]] = 0;
+    }
+    free(add);
+    return ok;
+}
