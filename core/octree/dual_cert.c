@@ -16,45 +16,58 @@ static ism_interval meet(ism_interval a, ism_interval b)
     return iv(fmax(a.lo, b.lo), fmin(a.hi, b.hi));
 }
 
-bool ism_dual_enclose(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
-                      const double hi[3], ism_ivgrad *g, uint64_t *intervals)
+bool ism_dual_taylor(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
+                     const double hi[3], ism_dual_model *m, uint64_t *intervals)
 {
-    ism_interval box[3], mid[3], dx[3];
+    ism_interval box[3], mid[3];
     for (int a = 0; a < 3; a++) {
-        double c = 0.5 * lo[a] + 0.5 * hi[a];
+        m->c[a] = 0.5 * lo[a] + 0.5 * hi[a];
         box[a] = iv(lo[a], hi[a]);
-        mid[a] = iv(c, c);
-        dx[a] = iv_sub(box[a], mid[a]); /* the box round its centre, rounded outward */
+        mid[a] = iv(m->c[a], m->c[a]);
     }
-    ism_ivjet j;
-    ism_ivgrad c;
     *intervals += 2;
-    if (ism_eval_interval_jet(t, jet, box, NULL, NULL, &j) != 0 ||
-        ism_eval_interval_grad(t, jet, mid, NULL, NULL, &c) != 0)
-        return false;
-    /* ∇f(x) = ∇f(c) + H(ξ)(x − c), ξ in the box */
+    return ism_eval_interval_jet(t, jet, box, NULL, NULL, &m->box) == 0 &&
+           ism_eval_interval_grad(t, jet, mid, NULL, NULL, &m->at) == 0;
+}
+
+bool ism_dual_over(const ism_dual_model *m, const double lo[3], const double hi[3],
+                   ism_ivgrad *g)
+{
+    const ism_ivjet *j = &m->box;
+    const ism_ivgrad *c = &m->at;
+    ism_interval dx[3];
+    for (int a = 0; a < 3; a++) /* the part round the centre, rounded outward */
+        dx[a] = iv_sub(iv(lo[a], hi[a]), iv(m->c[a], m->c[a]));
+    /* ∇f(x) = ∇f(c) + H(ξ)(x − c), ξ between c and x: in the model's box */
     for (int a = 0; a < 3; a++) {
-        ism_interval d = c.d[a];
+        ism_interval d = c->d[a];
         for (int b = 0; b < 3; b++)
-            d = iv_add(d, iv_mul(j.h[hess_at(a, b)], dx[b]));
-        g->d[a] = meet(j.d[a], d);
+            d = iv_add(d, iv_mul(j->h[hess_at(a, b)], dx[b]));
+        g->d[a] = meet(j->d[a], d);
     }
     /* f(x) = f(c) + ∇f(c)·(x − c) + ½ (x − c)ᵀ H(ξ) (x − c); the diagonal terms take the
-     * square's [0, r²], the two equal off-diagonal ones are counted once at twice their
+     * square's range, the two equal off-diagonal ones are counted once at twice their
      * weight (H's xy entry times δx δy, twice, halved). */
-    ism_interval v2 = c.v, v1 = c.v;
+    ism_interval v2 = c->v, v1 = c->v;
     for (int a = 0; a < 3; a++) {
-        v2 = iv_add(v2, iv_mul(c.d[a], dx[a]));
-        v2 = iv_add(v2, iv_mul_c(iv_mul(j.h[hess_at(a, a)], iv_square(dx[a])), 0.5));
+        v2 = iv_add(v2, iv_mul(c->d[a], dx[a]));
+        v2 = iv_add(v2, iv_mul_c(iv_mul(j->h[hess_at(a, a)], iv_square(dx[a])), 0.5));
         for (int b = a + 1; b < 3; b++)
-            v2 = iv_add(v2, iv_mul(j.h[hess_at(a, b)], iv_mul(dx[a], dx[b])));
+            v2 = iv_add(v2, iv_mul(j->h[hess_at(a, b)], iv_mul(dx[a], dx[b])));
         v1 = iv_add(v1, iv_mul(g->d[a], dx[a])); /* the mean-value form on the new ∇f */
     }
-    g->v = meet(j.v, meet(v1, v2));
+    g->v = meet(j->v, meet(v1, v2));
     for (int a = 0; a < 3; a++)
         if (!(g->d[a].lo <= g->d[a].hi))
             return false; /* NaN in a bound: no enclosure */
     return g->v.lo <= g->v.hi;
+}
+
+bool ism_dual_enclose(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
+                      const double hi[3], ism_ivgrad *g, uint64_t *intervals)
+{
+    ism_dual_model m;
+    return ism_dual_taylor(t, jet, lo, hi, &m, intervals) && ism_dual_over(&m, lo, hi, g);
 }
 
 /* The sub-box k (bit a: upper half along a) of lo..hi. */
@@ -67,52 +80,67 @@ static void sub_box(const double lo[3], const double hi[3], int k, double sl[3],
     }
 }
 
-bool ism_dual_free(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3], const double hi[3],
-                   int halvings, bool self, uint64_t *intervals)
+/* ∇f · d over g's box: its interval. */
+static ism_interval slope_along(const ism_ivgrad *g, const double d[3])
+{
+    ism_interval slope = iv(0, 0);
+    for (int a = 0; a < 3; a++)
+        slope = iv_add(slope, iv_mul_c(g->d[a], d[a]));
+    return slope;
+}
+
+/* What a box's enclosure proves: 1 (free of 0, or — when d is not NULL — ∇f · d > 0 all
+ * over it), -1 (∇f · d ≤ 0 all over a box where f may vanish: no proof below it either),
+ * 0 (nothing: split). */
+static int verdict(const ism_ivgrad *g, const double *d)
+{
+    if (ism_dual_encl_free(g))
+        return 1;
+    if (!d)
+        return 0;
+    ism_interval slope = slope_along(g, d);
+    return slope.lo > 0 ? 1 : slope.hi <= 0 ? -1 : 0;
+}
+
+/* The proof (verdict) on lo..hi, whose model is m: from m itself, else on the sub-boxes —
+ * each first from m (no evaluation: a sub-box of m's box), then from its own model. */
+static bool prove(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
+                  const double lo[3], const double hi[3], const double *d, int halvings,
+                  uint64_t *intervals)
 {
     ism_ivgrad g;
-    if (self) {
-        if (!ism_dual_enclose(t, jet, lo, hi, &g, intervals))
-            return false;
-        if (ism_dual_encl_free(&g))
-            return true;
-    }
-    if (halvings <= 0)
+    if (!ism_dual_over(m, lo, hi, &g))
         return false;
+    int v = verdict(&g, d);
+    if (v || halvings <= 0)
+        return v > 0;
     for (int k = 0; k < 8; k++) {
         double sl[3], sh[3];
         sub_box(lo, hi, k, sl, sh);
-        if (!ism_dual_free(t, jet, sl, sh, halvings - 1, true, intervals))
+        if (!ism_dual_over(m, sl, sh, &g))
+            return false;
+        v = verdict(&g, d);
+        if (v < 0)
+            return false;
+        if (v > 0)
+            continue;
+        ism_dual_model sm;
+        if (!ism_dual_taylor(t, jet, sl, sh, &sm, intervals) ||
+            !prove(t, jet, &sm, sl, sh, d, halvings - 1, intervals))
             return false;
     }
     return true;
 }
 
-bool ism_dual_graph_along(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
-                          const double hi[3], const double d[3], int halvings, bool self,
-                          uint64_t *intervals)
+bool ism_dual_free(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
+                   const double lo[3], const double hi[3], int halvings, uint64_t *intervals)
 {
-    if (self) {
-        ism_ivgrad g;
-        if (!ism_dual_enclose(t, jet, lo, hi, &g, intervals))
-            return false;
-        if (ism_dual_encl_free(&g))
-            return true;
-        ism_interval slope = iv(0, 0);
-        for (int a = 0; a < 3; a++)
-            slope = iv_add(slope, iv_mul_c(g.d[a], d[a]));
-        if (slope.lo > 0)
-            return true;
-        if (slope.hi <= 0)
-            return false; /* ∇f·d ≤ 0 all over a box where f may vanish */
-    }
-    if (halvings <= 0)
-        return false;
-    for (int k = 0; k < 8; k++) {
-        double sl[3], sh[3];
-        sub_box(lo, hi, k, sl, sh);
-        if (!ism_dual_graph_along(t, jet, sl, sh, d, halvings - 1, true, intervals))
-            return false;
-    }
-    return true;
+    return prove(t, jet, m, lo, hi, NULL, halvings, intervals);
+}
+
+bool ism_dual_graph_along(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
+                          const double lo[3], const double hi[3], const double d[3],
+                          int halvings, uint64_t *intervals)
+{
+    return prove(t, jet, m, lo, hi, d, halvings, intervals);
 }

@@ -19,25 +19,45 @@
 #include <stdint.h>
 #include "core/eval/interval_jet.h"
 
-/* Encloses f and ∇f over lo..hi into *g; false (g unset) when f has a kink in the box or the
- * workspace does not fit t. *intervals counts the interval evaluations made (two). */
+/* A second-order Taylor model of f over a box: f and ∇f at the box's centre c (the interval
+ * jet of the degenerate box [c, c]: exact up to outward rounding) and the natural enclosure
+ * of f, ∇f and the Hessian over the box. */
+typedef struct ism_dual_model {
+    double c[3];
+    ism_ivgrad at;
+    ism_ivjet box;
+} ism_dual_model;
+
+/* The model of f over lo..hi; false when f has a kink in the box or the workspace does not
+ * fit t. *intervals counts the interval evaluations made (two). */
+bool ism_dual_taylor(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
+                     const double hi[3], ism_dual_model *m, uint64_t *intervals);
+
+/* Encloses f and ∇f over lo..hi — the model's box or any box inside it (no evaluation) —
+ * into *g: the Taylor form round c intersected with the natural enclosure. False when a
+ * bound is not a number. */
+bool ism_dual_over(const ism_dual_model *m, const double lo[3], const double hi[3],
+                   ism_ivgrad *g);
+
+/* Both in one: f and ∇f over lo..hi by its own model. */
 bool ism_dual_enclose(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
                       const double hi[3], ism_ivgrad *g, uint64_t *intervals);
 
 /* 0 outside the enclosure's value: f has no zero in the box. */
 static inline bool ism_dual_encl_free(const ism_ivgrad *g) { return g->v.lo > 0 || g->v.hi < 0; }
 
-/* f has no zero in lo..hi: the box's enclosure (unless self is false: the caller found it
- * too wide), else each of its sub-boxes', split down to `halvings` halvings. */
-bool ism_dual_free(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3], const double hi[3],
-                   int halvings, bool self, uint64_t *intervals);
+/* f has no zero in lo..hi (m: its model): by m's enclosure, else on each sub-box, split
+ * down to `halvings` halvings — first by m (no evaluation), then by the sub-box's own
+ * model. */
+bool ism_dual_free(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
+                   const double lo[3], const double hi[3], int halvings, uint64_t *intervals);
 
 /* ∇f · d > 0 at every point of lo..hi where f may vanish (sub-boxes whose enclosure excludes
- * 0 are dropped; the others split down to `halvings` halvings): then every line along d
- * meets f = 0 at most once in the box — between two zeros on it f would have to fall
- * through 0, at a zero where ∇f · d ≤ 0. d need not be a unit vector. self as above. */
-bool ism_dual_graph_along(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
-                          const double hi[3], const double d[3], int halvings, bool self,
-                          uint64_t *intervals);
+ * 0 are dropped; the others split down to `halvings` halvings, as for ism_dual_free): then
+ * every line along d meets f = 0 at most once in the box — between two zeros on it f would
+ * have to fall through 0, at a zero where ∇f · d ≤ 0. d need not be a unit vector. */
+bool ism_dual_graph_along(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
+                          const double lo[3], const double hi[3], const double d[3],
+                          int halvings, uint64_t *intervals);
 
 #endif
