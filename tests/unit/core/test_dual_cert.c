@@ -28,6 +28,26 @@ static bool graph_box(const ism_tape *t, ism_ivjet_ws *jw, const double lo[3],
            ism_dual_graph_along(t, jw, &m, lo, hi, d, halvings, n);
 }
 
+/* f and ∇f at a grid of samples of lo..hi inside the enclosure e, up to the sample's own
+ * rounding (a few ulps of the terms of f, each below ~20 here). */
+static void check_samples(const ism_tape *t, ism_eval_ws *ws, const double lo[3],
+                          const double hi[3], const ism_ivgrad *e)
+{
+    const double slack = 1e-13;
+    for (int i = 0; i < SAMPLES * SAMPLES * SAMPLES; i++) {
+        double p[3], g[3];
+        int k[3] = {i % SAMPLES, i / SAMPLES % SAMPLES, i / (SAMPLES * SAMPLES)};
+        for (int a = 0; a < 3; a++)
+            p[a] = lo[a] + (hi[a] - lo[a]) * k[a] / (SAMPLES - 1);
+        double f = ism_eval_gradient(t, ws, p[0], p[1], p[2], g);
+        cr_expect(f >= e->v.lo - slack && f <= e->v.hi + slack,
+                  "f %g outside [%g, %g] at %g %g %g", f, e->v.lo, e->v.hi, p[0], p[1], p[2]);
+        for (int a = 0; a < 3; a++)
+            cr_expect(g[a] >= e->d[a].lo - slack && g[a] <= e->d[a].hi + slack,
+                      "df/dx%d %g outside [%g, %g]", a, g[a], e->d[a].lo, e->d[a].hi);
+    }
+}
+
 static void check_enclosure(const ism_tape *t, ism_ivjet_ws *jw, ism_eval_ws *ws,
                             const double lo[3], const double hi[3])
 {
@@ -40,21 +60,7 @@ static void check_enclosure(const ism_tape *t, ism_ivjet_ws *jw, ism_eval_ws *ws
     cr_expect(tight.v.lo >= nat.v.lo && tight.v.hi <= nat.v.hi);
     for (int a = 0; a < 3; a++)
         cr_expect(tight.d[a].lo >= nat.d[a].lo && tight.d[a].hi <= nat.d[a].hi);
-    for (int i = 0; i < SAMPLES * SAMPLES * SAMPLES; i++) {
-        double p[3], g[3];
-        int k[3] = {i % SAMPLES, i / SAMPLES % SAMPLES, i / (SAMPLES * SAMPLES)};
-        for (int a = 0; a < 3; a++)
-            p[a] = lo[a] + (hi[a] - lo[a]) * k[a] / (SAMPLES - 1);
-        double f = ism_eval_gradient(t, ws, p[0], p[1], p[2], g);
-        /* the sample's own rounding: a few ulps of the terms of f (each below ~20 here) */
-        double slack = 1e-13;
-        cr_expect(f >= tight.v.lo - slack && f <= tight.v.hi + slack,
-                  "f %g outside [%g, %g] at %g %g %g", f, tight.v.lo, tight.v.hi, p[0], p[1],
-                  p[2]);
-        for (int a = 0; a < 3; a++)
-            cr_expect(g[a] >= tight.d[a].lo - slack && g[a] <= tight.d[a].hi + slack,
-                      "df/dx%d %g outside [%g, %g]", a, g[a], tight.d[a].lo, tight.d[a].hi);
-    }
+    check_samples(t, ws, lo, hi, &tight);
 }
 
 /* The model of a box, read over one of its octants (no evaluation), holds f and ∇f at the
@@ -74,16 +80,7 @@ static void check_octant(const ism_tape *t, ism_ivjet_ws *jw, ism_eval_ws *ws,
     ism_ivgrad whole, part;
     cr_assert(ism_dual_over(&m, lo, hi, &whole) && ism_dual_over(&m, sl, sh, &part));
     cr_expect(part.v.hi - part.v.lo <= whole.v.hi - whole.v.lo);
-    for (int i = 0; i < SAMPLES * SAMPLES * SAMPLES; i++) {
-        double p[3], g[3];
-        int j[3] = {i % SAMPLES, i / SAMPLES % SAMPLES, i / (SAMPLES * SAMPLES)};
-        for (int a = 0; a < 3; a++)
-            p[a] = sl[a] + (sh[a] - sl[a]) * j[a] / (SAMPLES - 1);
-        double f = ism_eval_gradient(t, ws, p[0], p[1], p[2], g);
-        cr_expect(f >= part.v.lo - 1e-13 && f <= part.v.hi + 1e-13, "octant %d: f %g", k, f);
-        for (int a = 0; a < 3; a++)
-            cr_expect(g[a] >= part.d[a].lo - 1e-13 && g[a] <= part.d[a].hi + 1e-13);
-    }
+    check_samples(t, ws, sl, sh, &part);
 }
 
 Test(dual_cert, enclosure_holds_every_sample_and_is_tighter)
