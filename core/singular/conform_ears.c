@@ -88,12 +88,14 @@ static bool inside(const chart *ch, size_t a, size_t b, size_t e, size_t q)
 }
 
 /* The ear at i (prev p, next n over the live vertices) may be clipped: its new edge steps
- * forwards more than a riser. */
+ * forwards (by less than a riser at times: a short tread after a riser, crossing spheres at
+ * depth 8 in the 1e-3 box, 34 edges turned over when the new edge had to step a riser's
+ * length). */
 static bool ear_ok(const chart *ch, const size_t *prev, const size_t *next, size_t p, size_t i,
-                   size_t n, double riser)
+                   size_t n)
 {
     double sn = step(ch, p, n), dn = ch->d[n] - ch->d[p];
-    if (p == n || !(sn > riser) || !(chart_turn(ch, p, i, n) < -EAR_MIN_HEIGHT * (sn * sn + dn * dn)))
+    if (p == n || !(sn > 0) || !(chart_turn(ch, p, i, n) < -EAR_MIN_HEIGHT * (sn * sn + dn * dn)))
         return false;
     size_t a = prev[p], b = next[n];
     for (int k = 0; k < EAR_WINDOW; k++, a = prev[a], b = next[b])
@@ -133,7 +135,7 @@ int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double
             size_t p = prev[i], nx = next[i];
             /* a step back into i or out of it: clip i when its ear allows */
             bool back = !(step(&ch, p, i) > riser) || !(step(&ch, i, nx) > riser);
-            if (back && ear_ok(&ch, prev, next, p, i, nx, riser)) {
+            if (back && ear_ok(&ch, prev, next, p, i, nx)) {
                 ok = cf_add_triangle(c, l->v[p], l->v[i], l->v[nx]);
                 next[p] = nx;
                 prev[nx] = p;
