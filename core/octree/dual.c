@@ -37,6 +37,10 @@
 /* The lattice point memo: 2^15 entries of 40 bytes (1.3 MB), the size the octree's own
  * corner memo uses (cell_cache.h); a collision only recomputes. */
 #define DUAL_POINT_BITS ISM_POINT_CACHE_BITS
+/* The tree walk's calls on nodes of this level or below run on the pool: at the default
+ * minimum depth 3, up to 512 cells and their faces and edges, enough tasks for a few
+ * threads to share evenly. */
+#define WALK_SPLIT_LEVEL 3
 /* Threads at most: the options' own limit (polygonise.c checks o->threads against it). */
 #define DUAL_MAX_THREADS 64
 
@@ -124,6 +128,14 @@ static void keyed_free(keyed *k)
     free(k->val);
 }
 
+/* Quads (4 vertices each, counter-clockwise seen from ∇f; u[3] = UINT32_MAX for a
+ * triangle) and what went wrong making them. */
+typedef struct quads {
+    uint32_t *q;
+    size_t n, cap;
+    bool nomem, bad; /* bad: a leaf round a crossed edge without a vertex */
+} quads;
+
 /* What a parallel loop's tasks share: the mesher, their inputs and their outputs (slot k of
  * out is task k's alone). */
 typedef struct task_ctx {
@@ -153,8 +165,7 @@ typedef struct dual {
     size_t nv, capv;
     uint32_t *tri;    /* this round's triangles */
     size_t nt, capt;
-    uint32_t *quad;   /* this round's quads, 4 vertices each (add_quad) */
-    size_t nq, capq;
+    quads q;          /* this round's quads (make_quads) */
     keyed passed;       /* triangles (tri_key) that met E */
     keyed mid;          /* vertex pairs (pair_key): the distance of their midpoint to f = 0 */
     int ec0[12], ec1[12], ef[12][2]; /* the cube's edges: ends and faces (ism_cube_edge) */
@@ -743,9 +754,52 @@ static void measure_pairs(dual *d, const uint32_t *pairs, size_t n)
     free(dist);
 }
 
-/* The quad v[0..4) (counter-clockwise seen from ∇f), kept for emit_quads; a repeated vertex
- * (two sides of the edge in one larger leaf) leaves a triangle (u[3] = UINT32_MAX). */
-static void add_quad(dual *d, const uint32_t v[4])
+/* A call of the tree walk put off to run on the pool: a cell (c[0]), a face (c[0] below
+ * c[1] across axis) or an edge (c[0..4) round an edge along axis). */
+typedef struct walk_call {
+    int32_t c[4];
+    int8_t kind, axis;
+} walk_call;
+
+enum { WALK_CELL, WALK_FACE, WALK_EDGE };
+
+/* The walk's state: the tree, where quads go, and — on the calling thread only — the calls
+ * reaching WALK_SPLIT_LEVEL, put off instead of made. */
+typedef struct walk {
+    const dual *d;
+    quads *out;
+    bool deferring;   /* false: make every call */
+    walk_call *defer;
+    size_t nd, capd;
+    bool nomem;
+} walk;
+
+/* Put off a call on nodes c[0..n) when the walk defers and one of them reaches the level;
+ * true when it did (or could not: then nomem). */
+static bool put_off(walk *wk, int kind, int axis, const int32_t *c, int n)
+{
+    if (!wk->deferring)
+        return false;
+    int level = 0;
+    for (int k = 0; k < n; k++)
+        level = wk->d->n[c[k]].level > level ? wk->d->n[c[k]].level : level;
+    if (level < WALK_SPLIT_LEVEL)
+        return false;
+    if (!grow((void **)&wk->defer, &wk->capd, wk->nd + 1, sizeof *wk->defer)) {
+        wk->nomem = true;
+        return true;
+    }
+    walk_call *call = &wk->defer[wk->nd++];
+    memset(call, 0, sizeof *call);
+    memcpy(call->c, c, (size_t)n * sizeof *c);
+    call->kind = (int8_t)kind;
+    call->axis = (int8_t)axis;
+    return true;
+}
+
+/* The quad v[0..4) into out; a repeated vertex (two sides of the edge in one larger leaf)
+ * leaves a triangle. */
+static void add_quad(quads *out, const uint32_t v[4])
 {
     uint32_t u[4] = {0, 0, 0, UINT32_MAX};
     int m = 0;
@@ -754,18 +808,18 @@ static void add_quad(dual *d, const uint32_t v[4])
             u[m++] = v[k];
     if (m < 3)
         return;
-    if (!grow((void **)&d->quad, &d->capq, d->nq + 1, 4 * sizeof *d->quad)) {
-        d->nomem = true;
+    if (!grow((void **)&out->q, &out->cap, out->n + 1, 4 * sizeof *out->q)) {
+        out->nomem = true;
         return;
     }
-    memcpy(&d->quad[4 * d->nq++], u, sizeof u);
+    memcpy(&out->q[4 * out->n++], u, sizeof u);
 }
-
 
 /* Four leaves round an edge along axis e: the quad across the smallest one's edge there when
  * f changes sign along it. */
-static void edge_quad(dual *d, const int32_t c[4], int e)
+static void edge_quad(walk *wk, const int32_t c[4], int e)
 {
+    const dual *d = wk->d;
     int deepest = 0;
     for (int k = 1; k < 4; k++)
         if (d->n[c[k]].level > d->n[c[deepest]].level)
@@ -785,12 +839,12 @@ static void edge_quad(dual *d, const int32_t c[4], int e)
     for (int k = 0; k < 4; k++) {
         int32_t vert = d->n[c[k]].vert;
         if (vert < 0) {
-            d->bad = true; /* cannot happen for plain leaves; never emit a hole */
+            wk->out->bad = true; /* cannot happen for plain leaves; never emit a hole */
             return;
         }
         v[in0 ? k : 3 - k] = (uint32_t)vert;
     }
-    add_quad(d, v);
+    add_quad(wk->out, v);
 }
 
 static bool is_leaf(const dual *d, int32_t i) { return d->n[i].child < 0; }
@@ -801,14 +855,17 @@ static int32_t sub(const dual *d, int32_t i, const int bits[3])
     return is_leaf(d, i) ? i : d->n[i].child + child_at(bits);
 }
 
-static void edge_proc(dual *d, const int32_t c[4], int e)
+static void edge_proc(walk *wk, const int32_t c[4], int e)
 {
+    const dual *d = wk->d;
     if (!d->n[c[0]].surf || !d->n[c[1]].surf || !d->n[c[2]].surf || !d->n[c[3]].surf)
         return; /* a quad needs a surface leaf on every side */
     if (is_leaf(d, c[0]) && is_leaf(d, c[1]) && is_leaf(d, c[2]) && is_leaf(d, c[3])) {
-        edge_quad(d, c, e);
+        edge_quad(wk, c, e);
         return;
     }
+    if (put_off(wk, WALK_EDGE, e, c, 4))
+        return;
     for (int h = 0; h < 2; h++) {
         int32_t nc[4];
         for (int k = 0; k < 4; k++) {
@@ -818,16 +875,20 @@ static void edge_proc(dual *d, const int32_t c[4], int e)
             bits[(e + 2) % 3] = 1 - AROUND_V[k];
             nc[k] = sub(d, c[k], bits);
         }
-        edge_proc(d, nc, e);
+        edge_proc(wk, nc, e);
     }
 }
 
 /* Two nodes sharing a face across axis a (c0 below, c1 above). */
-static void face_proc(dual *d, int32_t c0, int32_t c1, int a)
+static void face_proc(walk *wk, int32_t c0, int32_t c1, int a)
 {
+    const dual *d = wk->d;
     if (!d->n[c0].surf || !d->n[c1].surf)
         return;
     if (is_leaf(d, c0) && is_leaf(d, c1))
+        return;
+    int32_t pair[2] = {c0, c1};
+    if (put_off(wk, WALK_FACE, a, pair, 2))
         return;
     for (int q = 0; q < 4; q++) {
         int b0[3], b1[3];
@@ -835,7 +896,7 @@ static void face_proc(dual *d, int32_t c0, int32_t c1, int a)
         b1[a] = 0;
         b0[(a + 1) % 3] = b1[(a + 1) % 3] = q & 1;
         b0[(a + 2) % 3] = b1[(a + 2) % 3] = q >> 1;
-        face_proc(d, sub(d, c0, b0), sub(d, c1, b1), a);
+        face_proc(wk, sub(d, c0, b0), sub(d, c1, b1), a);
     }
     for (int j = 1; j < 3; j++) {
         int e = (a + j) % 3, t = 3 - a - e; /* the edge's axis and the face's other axis */
@@ -850,18 +911,21 @@ static void face_proc(dual *d, int32_t c0, int32_t c1, int a)
                 bits[t] = ot;
                 nc[k] = sub(d, oa ? c1 : c0, bits);
             }
-            edge_proc(d, nc, e);
+            edge_proc(wk, nc, e);
         }
     }
 }
 
-static void cell_proc(dual *d, int32_t i)
+static void cell_proc(walk *wk, int32_t i)
 {
+    const dual *d = wk->d;
     if (is_leaf(d, i) || !d->n[i].surf)
+        return;
+    if (put_off(wk, WALK_CELL, 0, &i, 1))
         return;
     int32_t first = d->n[i].child;
     for (int c = 0; c < 8; c++)
-        cell_proc(d, first + c);
+        cell_proc(wk, first + c);
     for (int a = 0; a < 3; a++)
         for (int q = 0; q < 4; q++) {
             int b[3];
@@ -870,7 +934,7 @@ static void cell_proc(dual *d, int32_t i)
             b[a] = 0;
             int32_t lo = first + child_at(b);
             b[a] = 1;
-            face_proc(d, lo, first + child_at(b), a);
+            face_proc(wk, lo, first + child_at(b), a);
         }
     for (int e = 0; e < 3; e++)
         for (int h = 0; h < 2; h++) {
@@ -882,8 +946,58 @@ static void cell_proc(dual *d, int32_t i)
                 bits[(e + 2) % 3] = AROUND_V[k];
                 nc[k] = first + child_at(bits);
             }
-            edge_proc(d, nc, e);
+            edge_proc(wk, nc, e);
         }
+}
+
+/* Deferred walk call k (in) made into its own quads (out[k]). */
+static void walk_task(void *ctx, size_t k, int thread)
+{
+    (void)thread;
+    task_ctx *job = ctx;
+    const walk_call *call = &((const walk_call *)job->in)[k];
+    walk wk = {job->d, &((quads *)job->out)[k], false, NULL, 0, 0, false};
+    if (call->kind == WALK_CELL)
+        cell_proc(&wk, call->c[0]);
+    else if (call->kind == WALK_FACE)
+        face_proc(&wk, call->c[0], call->c[1], call->axis);
+    else
+        edge_proc(&wk, call->c, call->axis);
+}
+
+/* The round's quads into d->q: the walk's top levels on this thread, the calls below them
+ * on the pool, their quads joined in the calls' order (the same on any number of
+ * threads). */
+static void make_quads(dual *d)
+{
+    d->q.n = 0;
+    walk wk = {d, &d->q, true, NULL, 0, 0, false};
+    cell_proc(&wk, 0);
+    quads *part = calloc(wk.nd ? wk.nd : 1, sizeof *part);
+    if (!part || wk.nomem) {
+        free(part);
+        free(wk.defer);
+        d->nomem = true;
+        return;
+    }
+    task_ctx job = {d, wk.defer, part};
+    ism_pool_for(d->pool, wk.nd, walk_task, &job, NULL);
+    for (size_t k = 0; k < wk.nd; k++) {
+        d->nomem |= part[k].nomem;
+        d->bad |= part[k].bad;
+        if (!d->nomem && part[k].n) {
+            if (grow((void **)&d->q.q, &d->q.cap, d->q.n + part[k].n, 4 * sizeof *d->q.q)) {
+                memcpy(&d->q.q[4 * d->q.n], part[k].q, 4 * part[k].n * sizeof *d->q.q);
+                d->q.n += part[k].n;
+            } else
+                d->nomem = true;
+        }
+        free(part[k].q);
+    }
+    d->nomem |= d->q.nomem;
+    d->bad |= d->q.bad;
+    free(part);
+    free(wk.defer);
 }
 
 /* The round's quads as triangles: each across the diagonal whose midpoint lies nearer
@@ -893,10 +1007,10 @@ static void cell_proc(dual *d, int32_t i)
  * / 20,464 for two distance samples per quad. */
 static void emit_quads(dual *d)
 {
-    uint32_t *diag = malloc((d->nq ? d->nq : 1) * 4 * sizeof *diag);
+    uint32_t *diag = malloc((d->q.n ? d->q.n : 1) * 4 * sizeof *diag);
     size_t nd = 0;
-    for (size_t q = 0; diag && q < d->nq; q++) {
-        const uint32_t *u = &d->quad[4 * q];
+    for (size_t q = 0; diag && q < d->q.n; q++) {
+        const uint32_t *u = &d->q.q[4 * q];
         if (u[3] == UINT32_MAX)
             continue;
         uint32_t pairs[4] = {u[0], u[2], u[1], u[3]};
@@ -907,8 +1021,8 @@ static void emit_quads(dual *d)
     free(diag);
     d->nt = 0;
     bool ok = true;
-    for (size_t q = 0; q < d->nq && ok; q++) {
-        const uint32_t *u = &d->quad[4 * q];
+    for (size_t q = 0; q < d->q.n && ok; q++) {
+        const uint32_t *u = &d->q.q[4 * q];
         if (u[3] == UINT32_MAX) {
             ok = add_tri(d, u[0], u[1], u[2]);
             continue;
@@ -1139,9 +1253,8 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
         if (d->bad)
             return ISM_DUAL_NOT_APPLICABLE;
         make_vertices(d);
-        d->nq = 0;
         if (!d->nomem)
-            cell_proc(d, 0);
+            make_quads(d);
         if (!d->nomem && !d->bad)
             emit_quads(d);
         if (d->nomem)
@@ -1217,7 +1330,7 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
     free(d.pos);
     free(d.vleaf);
     free(d.tri);
-    free(d.quad);
+    free(d.q.q);
     keyed_free(&d.passed);
     keyed_free(&d.mid);
     return status;
