@@ -593,39 +593,60 @@ static void expand(dual *d, const int32_t *list, size_t n)
     mark_surface(d);
 }
 
-/* Leaf i's vertex into pos[3 vert]: the mean of its edges' secant roots, moved onto f = 0
- * by Newton (the exact roots would cost a fifth of the whole mesh for a start point Newton
- * forgets), then to the convex side (straddle.h). */
-static void place_vertex(dual *d, worker *w, int32_t i)
+/* m moved onto f = 0 by Newton along ∇f, stopping once a step is below NEWTON_STOP of
+ * size; false when it could not finish a step (∇f vanishing or not finite). */
+static bool newton_onto(worker *w, double m[3], double size)
 {
-    const dnode *n = &d->n[i];
-    double m[3] = {0, 0, 0};
-    int roots = 0;
-    for (int e = 0; e < 12; e++) {
-        int c0 = d->ec0[e], c1 = d->ec1[e];
-        if ((n->f[c0] < 0) == (n->f[c1] < 0))
-            continue;
-        double p0[3], p1[3];
-        corner_point(d, n, c0, p0);
-        corner_point(d, n, c1, p1);
-        double t = n->f[c0] / (n->f[c0] - n->f[c1]); /* the secant root: Newton follows */
-        for (int a = 0; a < 3; a++)
-            m[a] += p0[a] + t * (p1[a] - p0[a]);
-        roots++;
-    }
-    for (int a = 0; a < 3; a++)
-        m[a] /= roots;
-    double size = ism_grid_cell_size(&d->g, n->level);
     for (int it = 0; it < NEWTON_STEPS; it++) {
         double g[3];
         double f = ism_sample_grad(&w->s, m, g), gg = ism_dot3(g, g);
         if (!isfinite(f) || !(gg > 0) || !isfinite(gg))
-            break;
+            return false;
         double step = fabs(f) / sqrt(gg);
         for (int a = 0; a < 3; a++)
             m[a] -= f * g[a] / gg;
         if (step < NEWTON_STOP * size)
             break;
+    }
+    return true;
+}
+
+/* Leaf i's vertex into pos[3 vert]: its centre moved onto f = 0 by Newton when that lands in
+ * the leaf's closed box, else the mean of its edges' secant roots so moved (the exact roots
+ * would cost a fifth of the whole mesh for a start point Newton forgets); then to the convex
+ * side (straddle.h). The centre's foot spaces the vertices about a leaf apart where the
+ * roots' mean bunches them toward the leaf's crossed corner (edges up to two leaves long):
+ * raw triangles sphere 1e-2 / 3e-3 / 1e-3 1,068 / 3,496 / 8,556 -> 828 / 3,108 / 8,220,
+ * torus 3,280 / 5,968 / 20,464 -> 3,536 / 5,792 / 17,472 (-9% over the six). */
+static void place_vertex(dual *d, worker *w, int32_t i)
+{
+    const dnode *n = &d->n[i];
+    double m[3], lo[3], hi[3], size = ism_grid_cell_size(&d->g, n->level);
+    corner_point(d, n, 0, lo);
+    corner_point(d, n, 7, hi);
+    for (int a = 0; a < 3; a++)
+        m[a] = 0.5 * lo[a] + 0.5 * hi[a];
+    bool inside = newton_onto(w, m, size);
+    for (int a = 0; a < 3; a++)
+        inside &= m[a] >= lo[a] && m[a] <= hi[a];
+    if (!inside) {
+        int roots = 0;
+        memset(m, 0, sizeof m);
+        for (int e = 0; e < 12; e++) {
+            int c0 = d->ec0[e], c1 = d->ec1[e];
+            if ((n->f[c0] < 0) == (n->f[c1] < 0))
+                continue;
+            double p0[3], p1[3];
+            corner_point(d, n, c0, p0);
+            corner_point(d, n, c1, p1);
+            double t = n->f[c0] / (n->f[c0] - n->f[c1]); /* the secant root */
+            for (int a = 0; a < 3; a++)
+                m[a] += p0[a] + t * (p1[a] - p0[a]);
+            roots++;
+        }
+        for (int a = 0; a < 3; a++)
+            m[a] /= roots;
+        newton_onto(w, m, size);
     }
     double q[3];
     if (d->shift > 0 && ism_straddle_point(&w->s, d->shift, d->o->box, m, q))

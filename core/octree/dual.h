@@ -1,12 +1,13 @@
 /* dual.h — under an error bound, a dual-contouring mesh of a surface with nothing to protect:
- * one vertex per octree leaf, on f = 0 (the mean of the leaf's edge roots moved there by
- * Newton along ∇f), and a quad across every minimal lattice edge where f changes sign, made
- * of the vertices of the (three or four) leaves round it. A leaf is kept only when interval
- * gradients prove the surface one graph over it (graph_cert.h) and its edges and faces are
- * plain: no root on an edge whose ends share a sign, at most one crossing curve per face; a
- * leaf whose corners share a sign must be proven free of f = 0. Leaves that a triangle
- * missing the bound (centroid or an edge midpoint farther than E, or facing against ∇f)
- * touches are split, and the mesh is made again, until every triangle meets E.
+ * one vertex per octree leaf, on f = 0 (the leaf's centre, or the mean of its edge roots,
+ * moved there by Newton along ∇f), and a quad across every minimal lattice edge where f
+ * changes sign, made of the vertices of the (three or four) leaves round it. A leaf is kept
+ * only when its corner gradients agree or interval gradients prove the surface one graph
+ * over it (graph_cert.h, dual_cert.h) and its edges and faces are plain: no root on an edge
+ * whose ends share a sign, at most one crossing curve per face; a leaf whose corners share a
+ * sign must be proven free of f = 0. The leaves at the ends of a triangle's edge whose
+ * midpoint lies farther than E (all three for its centroid, or facing against ∇f) are
+ * split, and the mesh is made again, until every triangle meets E.
  *
  * The primal polygons (polygonise.h) put vertices on cell edges and need cells half the size
  * for the same error: their chords run along face diagonals. Here a cell of size h makes

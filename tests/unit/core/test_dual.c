@@ -27,10 +27,11 @@ static const double shifts[] = {0, 1e-3 * FINEST, 0.37 * FINEST};
 /* Equilateral triangles of circumradius ρ on a sphere of radius 1/κ: centroid sag ρ² κ / 2,
  * area 3√3/4 ρ². The dual mesh's right triangles (two per crossed minimal edge) and the
  * octree's factor-2 levels cost some over that ideal: measured in the three boxes, sphere
- * 1e-3 1.77–1.83 times, torus 3e-3 1.18–1.20 times (leaves split only at a missing edge's
- * ends, quads cut across the diagonal nearer the surface). The rooms leave ~10% over that
- * and fail the dual mesh that split every leaf of a missing triangle across the shorter
- * diagonal (2.04 and 1.96 times) and the primal polygons (3.6 and 2.7 times). */
+ * 1e-3 1.61–1.70 times, torus 3e-3 1.14 times (vertices at the foot of the leaf's centre,
+ * leaves split only at a missing edge's ends, quads cut across the diagonal nearer the
+ * surface). The rooms leave over 15% and fail the dual mesh that split every leaf of a
+ * missing triangle across the shorter diagonal (2.04 and 1.96 times) and the primal
+ * polygons (3.6 and 2.7 times). */
 #define EQUILATERAL_AREA 1.299038105676658
 #define SPHERE_ROOM 2.0
 #define TORUS_ROOM 1.4
