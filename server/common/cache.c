@@ -32,8 +32,16 @@ bool ism_cache_name_valid(const char *name)
 
 bool ism_cache_name(char out[ISM_CACHE_NAME_MAX], const char *key, const char *ext)
 {
-    int n = snprintf(out, ISM_CACHE_NAME_MAX, "%s.%s", key, ext);
-    return n > 0 && n < ISM_CACHE_NAME_MAX && ism_cache_name_valid(out);
+    /* "key.ext" by copies (snprintf's format parsing cost more than the checks) */
+    size_t k = strlen(key), e = strlen(ext);
+    if (k + 1 + e >= ISM_CACHE_NAME_MAX) {
+        out[0] = 0;
+        return false;
+    }
+    memcpy(out, key, k);
+    out[k] = '.';
+    memcpy(out + k + 1, ext, e + 1);
+    return ism_cache_name_valid(out);
 }
 
 bool ism_cache_add_tier(ism_cache *c, ism_cache_tier *t)

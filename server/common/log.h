@@ -33,6 +33,11 @@ typedef struct ism_log_field {
 void ism_log_fields(ism_log_level level, const char *event, const ism_log_field *fields,
                     size_t n);
 
+/* Writes d with three decimals, as printf's "%.3f" and the ISM_LF_NUM fields show it, into
+ * out (cap bytes, terminated); returns its length. For other text carrying the same numbers
+ * once per request (the Server-Timing header). */
+size_t ism_log_number(char *out, size_t cap, double d);
+
 /* Background writing (for a server's event loop): lines go into a bounded in-memory queue
  * that one thread writes out, in writes of whole lines of at most 4096 bytes (so they never
  * mix with other processes' lines on a shared pipe). A full queue drops the line instead of

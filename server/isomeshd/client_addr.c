@@ -75,10 +75,15 @@ static void forwarded_for(const char *xff, const char *trusted, char *out, size_
     }
 }
 
-void ismd_client_address(struct MHD_Connection *c, const char *trusted_proxy, char *out,
-                         size_t cap)
+void ismd_client_address(struct MHD_Connection *c, const char *peer, const char *trusted_proxy,
+                         char *out, size_t cap)
 {
-    ismd_peer_address(c, out, cap);
+    if (peer && cap) { /* a copy, not snprintf: this runs for every request */
+        size_t n = strnlen(peer, cap - 1);
+        memcpy(out, peer, n);
+        out[n] = 0;
+    } else
+        ismd_peer_address(c, out, cap);
     if (!trusted_proxy[0] || !ismd_address_listed(trusted_proxy, out))
         return;
     const char *real = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "X-Real-IP");

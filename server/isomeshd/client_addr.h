@@ -13,11 +13,12 @@ bool ismd_address_listed(const char *list, const char *addr);
 
 /* The peer's IP address as text ("-" when unknown). */
 void ismd_peer_address(struct MHD_Connection *c, char *out, size_t cap);
-/* The client: the peer address, or when the peer is one of trusted_proxy (comma-separated
- * addresses; "" = none) the address its X-Real-IP header names, else the rightmost address
- * of X-Forwarded-For that is not a trusted proxy — only well-formed IP literals are taken
- * (a malformed entry stops the walk at the last trusted address). */
-void ismd_client_address(struct MHD_Connection *c, const char *trusted_proxy, char *out,
-                         size_t cap);
+/* The client: the peer address (peer, or read from c when NULL), or when the peer is one of
+ * trusted_proxy (comma-separated addresses; "" = none) the address its X-Real-IP header
+ * names, else the rightmost address of X-Forwarded-For that is not a trusted proxy — only
+ * well-formed IP literals are taken (a malformed entry stops the walk at the last trusted
+ * address). */
+void ismd_client_address(struct MHD_Connection *c, const char *peer, const char *trusted_proxy,
+                         char *out, size_t cap);
 
 #endif

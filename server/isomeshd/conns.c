@@ -51,6 +51,7 @@ typedef struct holder {
 
 struct ismd_conn {
     int fd;
+    char addr[ADDR_MAX];       /* the peer's address as text, as opened (never changes) */
     holder *h;                 /* NULL once the table closed it (or refused it) */
     phase phase;
     long long since_ns;        /* start of the phase */
@@ -245,6 +246,7 @@ ismd_conn *ismd_conns_opened(ismd_conns *t, int fd, const char *addr)
     if (!c)
         return NULL;
     c->fd = fd;
+    snprintf(c->addr, sizeof c->addr, "%s", addr);
     c->phase = P_READY;
     c->since_ns = ism_now_ns();
     node_init(&c->link);
@@ -271,6 +273,11 @@ ismd_conn *ismd_conns_opened(ismd_conns *t, int fd, const char *addr)
     }
     pthread_mutex_unlock(&t->lock);
     return c;
+}
+
+const char *ismd_conns_peer(const ismd_conn *c)
+{
+    return c ? c->addr : NULL;
 }
 
 void ismd_conns_closed(ismd_conns *t, ismd_conn *c)

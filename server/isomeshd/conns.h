@@ -59,6 +59,10 @@ void ismd_conns_stop(ismd_conns *t);
 ismd_conn *ismd_conns_opened(ismd_conns *t, int fd, const char *addr);
 /* libmicrohttpd is done with c (before it closes the socket). */
 void ismd_conns_closed(ismd_conns *t, ismd_conn *c);
+/* The peer address c was opened with (NULL for NULL): set once, read without the lock, valid
+ * until c is closed — every request's client address starts from it (client_addr.h) instead
+ * of formatting the socket address again. */
+const char *ismd_conns_peer(const ismd_conn *c);
 
 /* c's request headers are complete; req is the caller's context for it; body: its body is
  * still to be received. */

@@ -121,7 +121,8 @@ static enum MHD_Result first_call(ismd_server *s, struct MHD_Connection *conn, c
     const union MHD_ConnectionInfo *ci = MHD_get_connection_info(conn, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
     r->cn = ci ? ci->socket_context : NULL;
     ismd_conns_request(s->conns, r->cn, r, true); /* a body may follow until the next call */
-    ismd_client_address(conn, s->cfg->trusted_proxy, r->client, sizeof r->client);
+    ismd_client_address(conn, ismd_conns_peer(r->cn), s->cfg->trusted_proxy, r->client,
+                        sizeof r->client);
     ismd_auth_identify(s->auth, ismd_header(r, MHD_HTTP_HEADER_AUTHORIZATION), r->client, &r->who);
     *con_cls = r;
     atomic_fetch_add(&s->open_requests, 1);

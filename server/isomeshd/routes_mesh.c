@@ -24,10 +24,19 @@ static void add_timing(ismd_req *r, struct MHD_Response *resp)
 {
     char t[512];
     double total = (ism_now_ns() - r->t0_ns) / 1e6;
-    if (r->cache && !strcmp(r->cache, "hit"))
-        snprintf(t, sizeof t, "parse;dur=%.3f, cache;desc=\"hit\", total;dur=%.3f", r->parse_ms,
-                 total);
-    else
+    if (r->cache && !strcmp(r->cache, "hit")) { /* every cached answer: no snprintf */
+        char parse[40], all[40];
+        ism_log_number(parse, sizeof parse, r->parse_ms);
+        ism_log_number(all, sizeof all, total);
+        size_t n = 0;
+        const char *parts[] = {"parse;dur=", parse, ", cache;desc=\"hit\", total;dur=", all};
+        for (size_t i = 0; i < sizeof parts / sizeof parts[0]; i++) {
+            size_t len = strlen(parts[i]);
+            memcpy(t + n, parts[i], len); /* at most 10 + 39 + 29 + 39 bytes */
+            n += len;
+        }
+        t[n] = 0;
+    } else
         snprintf(t, sizeof t, "parse;dur=%.3f, queue;dur=%.3f, worker;dur=%.3f%s%s, total;dur=%.3f",
                  r->parse_ms, r->queue_ms, r->worker_ms, r->timing[0] ? ", " : "", r->timing,
                  total);
@@ -204,10 +213,11 @@ enum MHD_Result ismd_route_mesh_get(ismd_req *r)
 {
     ismd_server *s = r->srv;
     char name[ISM_CACHE_NAME_MAX], reqname[ISM_CACHE_NAME_MAX];
-    if (!ism_cache_name(name, r->key, r->fmt) || !ism_cache_name(reqname, r->key, "request.json"))
+    if (!ism_cache_name(name, r->key, r->fmt))
         return ismd_respond_error(r, 404, "not_found", "no such mesh");
     if (etag_matches(ismd_header(r, MHD_HTTP_HEADER_IF_NONE_MATCH), r->key) &&
-        (ism_cache_has(&s->cache, name) || ism_cache_has(&s->cache, reqname))) {
+        (ism_cache_has(&s->cache, name) ||
+         (ism_cache_name(reqname, r->key, "request.json") && ism_cache_has(&s->cache, reqname)))) {
         struct MHD_Response *resp = MHD_create_response_from_buffer(0, "", MHD_RESPMEM_PERSISTENT);
         char etag[80];
         snprintf(etag, sizeof etag, "\"%s\"", r->key);

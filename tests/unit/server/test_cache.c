@@ -62,6 +62,25 @@ Test(cache_names, only_keys_and_known_kinds)
     cr_assert_not(ism_cache_name(name, "abc", "drc"));
     cr_assert(ism_key_valid(KEY_A));
     cr_assert_not(ism_key_valid(KEY_A "a"));
+    cr_assert_not(ism_key_valid(""));
+    /* one wrong byte anywhere (the check has no early exit: every position counts) */
+    const char bad[] = {'A', 'F', 'g', '/', ':', '`', '.', ' ', '\x80', '0' - 1};
+    for (int pos = 0; pos < 64; pos++)
+        for (size_t b = 0; b < sizeof bad; b++) {
+            char key[65];
+            memcpy(key, KEY_A, 65);
+            key[pos] = bad[b];
+            cr_assert_not(ism_key_valid(key), "byte %d = 0x%02x", pos, (unsigned char)bad[b]);
+        }
+    char shorter[64];
+    memcpy(shorter, KEY_A, 63);
+    shorter[63] = 0;
+    cr_assert_not(ism_key_valid(shorter));
+    /* a name that would not fit: refused, never cut short */
+    char ext[ISM_CACHE_NAME_MAX];
+    memset(ext, 'a', sizeof ext - 1);
+    ext[sizeof ext - 1] = 0;
+    cr_assert_not(ism_cache_name(name, KEY_A, ext));
 }
 
 static void name_n(char out[ISM_CACHE_NAME_MAX], int i)

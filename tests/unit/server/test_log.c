@@ -5,6 +5,7 @@
 #include <criterion/criterion.h>
 #include <ctype.h>
 #include <limits.h>
+#include <math.h>
 #include <jansson.h>
 #include <pthread.h>
 #include <signal.h>
@@ -116,6 +117,36 @@ Test(log, integers_and_timestamp_match_printf)
         line = strchr(line, '\n') + 1;
     }
     free(c.text);
+}
+
+/* Numbers (ISM_LF_NUM, Server-Timing) are written without printf: compared with printf's own
+ * "%.3f" on values of every magnitude, both signs, exact thousandths and values just beside
+ * them, and the non-finite ones printf writes itself. */
+Test(log, numbers_match_printf)
+{
+    const double fixed[] = {0.0, -0.0, 0.0004, -0.0004, 0.0006, 1.25, 0.001, 0.999, 0.9996,
+                            12.5, 999.9999, 1e-9, 123456789.123, -42.042, 1e14 + 0.25, 1e15,
+                            -1e16, 3.0e300, INFINITY, -INFINITY, NAN};
+    char got[64], want[400];
+    for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++) {
+        size_t n = ism_log_number(got, sizeof got, fixed[i]);
+        snprintf(want, sizeof want, "%.3f", fixed[i]);
+        cr_assert_str_eq(got, strlen(want) < sizeof got ? want : got, "%.17g", fixed[i]);
+        cr_assert_eq(n, strlen(got));
+    }
+    /* milliseconds as a request's timings give them: microsecond steps, away from halves */
+    unsigned seed = 12345;
+    for (int i = 0; i < 20000; i++) {
+        seed = seed * 1103515245u + 12345u;
+        double v = (double)(seed % 100000000u) / 1e6 + 1e-7; /* [0, 100) ms */
+        if (i & 1)
+            v = -v;
+        ism_log_number(got, sizeof got, v);
+        snprintf(want, sizeof want, "%.3f", v);
+        cr_assert_str_eq(got, want, "%.17g", v);
+    }
+    cr_assert_eq(ism_log_number(got, 4, 1234.5), 3); /* a short buffer: printf's truncation */
+    cr_assert_str_eq(got, "123");
 }
 
 Test(log, text_values_with_spaces_are_quoted)
