@@ -4,6 +4,7 @@
  * too and a last mending of the needles those leave; then the mesh is renumbered without
  * what collapses removed. */
 #include "core/remesh/remesh.h"
+#include "core/remesh/rm_cbound.h"
 #include "core/remesh/rm_pass.h"
 #include "core/util/clock.h"
 
@@ -54,9 +55,10 @@ double ism_remesh_min_angle(const ism_mesh *m)
 
 static bool stopped(const ism_remesh_options *o) { return o->cancel && *o->cancel; }
 
-/* The mesh as the pass found it, kept until the first mending measures its farthest edge
- * midpoint (midpoint_bound): most passes never mend (the smooth presets' needles are gone
- * by round 2), and the midpoints are 3 in 5 of the distances measured before the rounds. */
+/* The mesh as the pass found it, kept until the pass ends: a mending may measure its
+ * farthest edge midpoint (rm_midpoint_within); most passes never mend (the smooth presets'
+ * needles are gone by round 2), and the midpoints are 3 in 5 of the distances measured
+ * before the rounds. */
 typedef struct found {
     double *pos;
     uint32_t *tri;
@@ -85,14 +87,10 @@ static void drop_found(found *k)
 
 /* Collapses, then insertions beside the needles collapses cannot reach, then flips of the
  * split needles' thin halves (from the split needles' corners only). */
-static void mend_needles(rm_pass *p, found *k, bool last, bool *ok)
+static void mend_needles(rm_pass *p, bool last, bool *ok)
 {
     if (!(p->poorest < sin(ISM_RM_COLLAPSE_DEG * M_PI / 180)))
         return; /* no triangle under ISM_RM_COLLAPSE_DEG since rm_mark_active looked */
-    if (k->pos) {
-        rm_midpoint_bound(p, k->pos, k->tri, k->ntris);
-        drop_found(k);
-    }
     rm_collapse_active(p, ok);
     if (*ok && rm_insert_active(p, last, ok) && *ok)
         rm_flip_from(p, p->touched, ok);
@@ -115,10 +113,10 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
        (rm_bound.h), whatever the mesh before: the simplified mesh's vertices sit off f = 0 */
     p.bounded = o->max_error > 0;
     found k = {0};
-    if (ok && !keep_found(&k, m))
+    if (ok && (!keep_found(&k, m) || (!p.bounded && !rm_cbound_open(&p))))
         ok = false;
     if (ok) {
-        rm_collapse_bounds(&p);
+        rm_collapse_bounds(&p, k.pos, k.tri, k.ntris);
         for (int round = 0; round < ISM_RM_ROUNDS && !stopped(o); round++) {
             if (!rm_mark_active(&p))
                 break;
@@ -131,7 +129,7 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
             if (!ok || stopped(o))
                 break;
             if (round >= ISM_RM_COLLAPSE_ROUND)
-                mend_needles(&p, &k, false, &ok);
+                mend_needles(&p, false, &ok);
             if (!ok || stopped(o))
                 break;
             size_t moved = rm_unfold_sweep(&p) + rm_relax_sweep(&p);
@@ -144,7 +142,7 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
            test, unseen since the last collapse sweep): klein-bottle 2 / 2 / 1 triangles
            under 10° in its own / 1e-3 / 0.37-cell boxes -> 0, kummer-16 0.37-cell 16 -> 1 */
         if (ok && !stopped(o))
-            mend_needles(&p, &k, true, &ok);
+            mend_needles(&p, true, &ok);
         for (size_t v = 0; v < m->nverts; v++)
             st->locked_vertices += p.r.locked[v] && p.r.count[v];
     }

@@ -8,6 +8,8 @@
  * faces the fan's way and bends no more than a crease against its outer neighbour; the
  * smallest angle of the fan grows; and no new centroid or edge midpoint lies farther from
  * f = 0 than the farthest of the fan's before. */
+#include "core/remesh/rm_bound.h"
+#include "core/remesh/rm_cbound.h"
 #include "core/remesh/rm_merge.h"
 #include "core/remesh/rm_pass.h"
 #include "core/util/vec3.h"
@@ -100,10 +102,11 @@ static bool distance_ok(rm_pass *p, const rm_merge *g)
 {
     double new_c, new_m, old_c, old_m;
     fan_distances(p, g, true, &new_c, &new_m);
-    if (new_c <= p->centroid_bound && new_m <= p->midpoint_bound)
+    bool c_ok = new_c <= p->centroid_bound;
+    if (c_ok && rm_midpoint_within(p, new_m))
         return true; /* within the mesh's before: the fan's own need not be asked */
     fan_distances(p, g, false, &old_c, &old_m);
-    return new_c <= fmax(old_c, p->centroid_bound) && new_m <= fmax(old_m, p->midpoint_bound);
+    return (c_ok || new_c <= old_c) && (new_m <= old_m || rm_midpoint_within(p, new_m));
 }
 
 /* Every test of merging g->v into g->w; g->after gets the new fan's smallest sine. The
@@ -144,6 +147,7 @@ static bool do_merge(rm_pass *p, const rm_merge *g)
         return false;
     for (uint32_t i = 0; i < n; i++) {
         const uint32_t *c = p->r.m->tri + 3 * fan[i];
+        rm_shape_changed(p, fan[i]);
         for (int k = 0; k < 3; k++)
             p->active[c[k]] = 1, p->touched[c[k]] = 2;
     }
@@ -189,20 +193,41 @@ static bool collapse_triangle(rm_pass *p, uint32_t t, bool *ok)
     return false;
 }
 
+/* Triangles whose edge midpoints give midpoint_low: those with the farthest centroids, where
+ * the mesh's farthest midpoints lie too (gyroid-ball: along its crease). */
+#define ISM_RM_MIDPOINT_LOW_TRIS 16
+
 /* The farthest from f = 0 of the centroids (or, with midpoints, of the edge midpoints) of
- * the ntris triangles tri over the places pos, at most max_error when there is one. */
+ * the ntris triangles tri over the places pos, at most max_error when there is one. With
+ * top (centroids only; ISM_RM_MIDPOINT_LOW_TRIS entries, -1 where none), the triangles with
+ * the farthest centroids, farthest first; each centroid's distance is kept (rm_cbound.h). */
 static double farthest(rm_pass *p, const double *pos, const uint32_t *tri, size_t ntris,
-                       bool midpoints)
+                       bool midpoints, int64_t *top)
 {
-    double far = 0;
+    double far = 0, topd[ISM_RM_MIDPOINT_LOW_TRIS];
+    for (int i = 0; top && i < ISM_RM_MIDPOINT_LOW_TRIS; i++)
+        top[i] = -1, topd[i] = -1;
     for (size_t t = 0; t < ntris; t++) {
         const uint32_t *v = tri + 3 * t;
         const double *q[3] = {pos + 3 * (size_t)v[0], pos + 3 * (size_t)v[1],
                               pos + 3 * (size_t)v[2]};
         if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2])
             continue;
-        if (!midpoints)
-            far = fmax(far, rm_centroid_distance(p, q[0], q[1], q[2]));
+        if (!midpoints) {
+            double m[3];
+            rm_centroid(q[0], q[1], q[2], m);
+            double d = rm_distance(p, m);
+            rm_cbound_set(p, (uint32_t)t, m, d);
+            far = fmax(far, d);
+            int i = ISM_RM_MIDPOINT_LOW_TRIS; /* insertion into the short list, farthest first */
+            while (top && i > 0 && d > topd[i - 1]) {
+                if (i < ISM_RM_MIDPOINT_LOW_TRIS)
+                    top[i] = top[i - 1], topd[i] = topd[i - 1];
+                i--;
+            }
+            if (top && i < ISM_RM_MIDPOINT_LOW_TRIS)
+                top[i] = (int64_t)t, topd[i] = d;
+        }
         for (int k = 0; midpoints && k < 3; k++)
             if (v[k] < v[(k + 1) % 3]) /* each edge once from each side: twice at most */
                 far = fmax(far, rm_midpoint_distance(p, q[k], q[(k + 1) % 3]));
@@ -210,14 +235,33 @@ static double farthest(rm_pass *p, const double *pos, const uint32_t *tri, size_
     return fmin(far, p->max_error > 0 ? p->max_error : INFINITY);
 }
 
-void rm_collapse_bounds(rm_pass *p)
+void rm_collapse_bounds(rm_pass *p, const double *pos, const uint32_t *tri, size_t ntris)
 {
-    p->centroid_bound = farthest(p, p->r.m->pos, p->r.m->tri, p->r.m->ntris, false);
+    int64_t top[ISM_RM_MIDPOINT_LOW_TRIS];
+    p->found_pos = pos;
+    p->found_tri = tri;
+    p->found_ntris = ntris;
+    p->midpoint_known = false;
+    p->centroid_bound = farthest(p, pos, tri, ntris, false, top);
+    double low = 0;
+    for (int i = 0; i < ISM_RM_MIDPOINT_LOW_TRIS && top[i] >= 0; i++) {
+        const uint32_t *v = tri + 3 * top[i];
+        for (int k = 0; k < 3; k++)
+            low = fmax(low, rm_midpoint_distance(p, pos + 3 * (size_t)v[k],
+                                                 pos + 3 * (size_t)v[(k + 1) % 3]));
+    }
+    p->midpoint_low = fmin(low, p->max_error > 0 ? p->max_error : INFINITY);
 }
 
-void rm_midpoint_bound(rm_pass *p, const double *pos, const uint32_t *tri, size_t ntris)
+bool rm_midpoint_within(rm_pass *p, double d)
 {
-    p->midpoint_bound = farthest(p, pos, tri, ntris, true);
+    if (d <= p->midpoint_low)
+        return true;
+    if (!p->midpoint_known) {
+        p->midpoint_bound = farthest(p, p->found_pos, p->found_tri, p->found_ntris, true, NULL);
+        p->midpoint_known = true;
+    }
+    return d <= p->midpoint_bound;
 }
 
 size_t rm_collapse_active(rm_pass *p, bool *ok)

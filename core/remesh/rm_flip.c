@@ -8,6 +8,7 @@
  * cap (an angle near 180°) has no normal to speak of: its bend is not asked, and the bound
  * is the largest of the quad's five edges. */
 #include "core/remesh/rm_bound.h"
+#include "core/remesh/rm_cbound.h"
 #include "core/remesh/rm_pass.h"
 #include "core/util/vec3.h"
 
@@ -29,6 +30,8 @@
 
 typedef struct quad {
     uint32_t a, b, c, d, t1, t2;
+    double cen[2][4]; /* what the test knew of (a, d, c) and (b, c, d)'s centroids
+                         (rm_cbound.h: a point and the distance there), for the flip to keep */
 } quad;
 
 static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * v; }
@@ -46,6 +49,7 @@ static bool find_quad(const rm_pass *p, uint32_t a, uint32_t b, quad *q)
     const uint32_t *tri = r->m->tri;
     q->a = a;
     q->b = b;
+    q->cen[0][3] = q->cen[1][3] = INFINITY;
     q->t1 = t[0];
     q->t2 = t[1];
     q->c = tri[3 * t[0] + (rm_corner(r->m, t[0], a) + 2) % 3];
@@ -86,10 +90,48 @@ static bool not_delaunay(const double *A, const double *B, const double *C, cons
     return sc * cd + cc * sd < -ISM_RM_FLIP_MARGIN * scale;
 }
 
+/* The new triangles (A, D, C), (B, C, D) put no centroid farther from f = 0 than the mesh's
+ * farthest before the pass or the old triangles' farthest. With q (the quad of a mesh
+ * edge; NULL for one not made yet), a new centroid that what the old triangles know says
+ * stays within centroid_bound is not measured (rm_cbound.h; as rm_centroids_stay: a
+ * measured one beyond the bound decides alone); q keeps what is known of the new ones. */
+static bool centroids_ok(rm_pass *p, const double *A, const double *B, const double *C,
+                         const double *D, quad *q)
+{
+    const double *tri[2][3] = {{A, D, C}, {B, C, D}};
+    double now = 0;
+    for (int i = 0; i < 2; i++) {
+        double m[3], *keep = q ? q->cen[i] : NULL;
+        rm_centroid(tri[i][0], tri[i][1], tri[i][2], m);
+        if (q && p->cen_ref) { /* the nearer bound of the two old triangles' */
+            uint32_t from = rm_cbound_at(p, q->t1, m) <= rm_cbound_at(p, q->t2, m) ? q->t1 : q->t2;
+            if (rm_cbound_within(p, from, m)) {
+                memcpy(keep, p->cen_ref + 4 * (size_t)from, 4 * sizeof *keep);
+                continue;
+            }
+        }
+        double d = rm_distance(p, m); /* never NaN */
+        if (keep)
+            memcpy(keep, m, sizeof m), keep[3] = d;
+        now = d > now ? d : now;
+    }
+    if (now <= p->centroid_bound)
+        return true;
+    double old[2], m[3];
+    const double *was[2][3] = {{A, B, C}, {B, A, D}};
+    for (int i = 0; i < 2; i++) {
+        rm_centroid(was[i][0], was[i][1], was[i][2], m);
+        old[i] = q ? rm_cbound_exact(p, i ? q->t2 : q->t1, m) : NAN;
+        if (isnan(old[i]))
+            old[i] = rm_distance(p, m);
+    }
+    return now <= fmax(old[0], old[1]);
+}
+
 /* The geometric tests of flipping AB to CD in (A, B, C), (B, A, D) (the combinatorial ones
- * and the Delaunay test passed). */
+ * and the Delaunay test passed); q as centroids_ok. */
 static bool flip_improves_at(rm_pass *p, const double *A, const double *B, const double *C,
-                             const double *D)
+                             const double *D, quad *q)
 {
     double n1[3], n2[3], m1[3], m2[3];
     double l1 = rm_cross(A, B, C, n1), l2 = rm_cross(B, A, D, n2);
@@ -111,23 +153,18 @@ static bool flip_improves_at(rm_pass *p, const double *A, const double *B, const
         bound = fmax(fmax(bound, fmax(rm_midpoint_distance(p, A, C),
                                       rm_midpoint_distance(p, C, B))),
                      fmax(rm_midpoint_distance(p, B, D), rm_midpoint_distance(p, D, A)));
-    if (!(rm_midpoint_distance(p, C, D) <= bound))
-        return false;
-    /* the new triangles' centroids no farther than the mesh's before or the old ones' */
-    double now = fmax(rm_centroid_distance(p, A, D, C), rm_centroid_distance(p, B, C, D));
-    return now <= p->centroid_bound ||
-           now <= fmax(rm_centroid_distance(p, A, B, C), rm_centroid_distance(p, B, A, D));
+    return rm_midpoint_distance(p, C, D) <= bound && centroids_ok(p, A, B, C, D, q);
 }
 
-static bool flip_improves(rm_pass *p, const quad *q)
+static bool flip_improves(rm_pass *p, quad *q)
 {
-    return flip_improves_at(p, P(p, q->a), P(p, q->b), P(p, q->c), P(p, q->d));
+    return flip_improves_at(p, P(p, q->a), P(p, q->b), P(p, q->c), P(p, q->d), q);
 }
 
 bool rm_flip_would_pass(rm_pass *p, const double *A, const double *B, const double *C,
                         const double *D)
 {
-    return not_delaunay(A, B, C, D) && flip_improves_at(p, A, B, C, D);
+    return not_delaunay(A, B, C, D) && flip_improves_at(p, A, B, C, D, NULL);
 }
 
 /* (a, b, c), (b, a, d) -> (a, d, c), (b, c, d): winding kept, incidence updated. */
@@ -140,6 +177,10 @@ static void do_flip(rm_pass *p, const quad *q)
     rm_slot_remove(&p->r, q->b, q->t1);
     rm_slot_add(&p->r, q->c, q->t2);
     rm_slot_add(&p->r, q->d, q->t1);
+    rm_shape_changed(p, q->t1);
+    rm_shape_changed(p, q->t2);
+    rm_cbound_set(p, q->t1, q->cen[0], q->cen[0][3]);
+    rm_cbound_set(p, q->t2, q->cen[1], q->cen[1][3]);
     if (p->flipped)
         p->flipped[q->a] = p->flipped[q->b] = p->flipped[q->c] = p->flipped[q->d] = 1;
 }

@@ -8,6 +8,7 @@
  * (their long sides are free edges, so the flips can replace them). The new triangles keep
  * the needle's origin (its label, its place in a range of triangles); χ is kept (one vertex,
  * three edges, two triangles more). */
+#include "core/remesh/rm_cbound.h"
 #include "core/remesh/rm_pass.h"
 #include "core/util/vec3.h"
 
@@ -137,10 +138,15 @@ static bool centroids_ok(rm_pass *p, const uint32_t abc[3], const double *x)
     if (!(rm_centroid_distance(p, a, b, x) <= bound &&
           rm_centroid_distance(p, b, c, x) <= bound && rm_centroid_distance(p, c, a, x) <= bound))
         return false;
-    double mid = fmax(own, p->midpoint_bound);
-    return !p->bounded || (rm_midpoint_distance(p, a, x) <= mid &&
-                           rm_midpoint_distance(p, b, x) <= mid &&
-                           rm_midpoint_distance(p, c, x) <= mid);
+    if (!p->bounded)
+        return true;
+    const double *end[3] = {a, b, c};
+    for (int k = 0; k < 3; k++) {
+        double d = rm_midpoint_distance(p, end[k], x);
+        if (!(d <= own || rm_midpoint_within(p, d)))
+            return false;
+    }
+    return true;
 }
 
 /* The thin triangle (a, b, x) of a split (ab a long side of the needle) will be flipped
@@ -195,6 +201,11 @@ static bool split(rm_pass *p, uint32_t t, const uint32_t abc[3], const double *x
     uint32_t *tri = r->m->tri + 3 * t;
     tri[0] = a, tri[1] = b, tri[2] = v;
     uint32_t t1 = add_triangle(p, t, b, c, v), t2 = add_triangle(p, t, c, a, v);
+    rm_shape_changed(p, t);
+    rm_shape_changed(p, t1);
+    rm_shape_changed(p, t2);
+    rm_cbound_copy(p, t1, t); /* within the needle: near its centroid */
+    rm_cbound_copy(p, t2, t);
     rm_slot_remove(r, c, t);
     rm_slot_add(r, b, t1);
     rm_slot_add(r, c, t1);

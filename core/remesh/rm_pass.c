@@ -36,6 +36,9 @@ bool rm_pass_close(rm_pass *p, size_t nverts_before, size_t ntris_before,
     free(p->active);
     free(p->slide);
     free(p->touched);
+    free(p->sine);
+    free(p->cen_ref);
+    free(p->cen_keep);
     ism_eval_ws_free(p->ws);
     memset(p, 0, sizeof *p);
     return ok;

@@ -37,7 +37,14 @@ typedef struct rm_pass {
                               a corner of a split needle (rm_insert.c) */
     double centroid_bound;  /* collapses may put a centroid this far from f = 0 (the mesh's
                                farthest before the pass, at most max_error) */
-    double midpoint_bound;  /* the same for edge midpoints */
+    double midpoint_bound;  /* the same for edge midpoints, measured on the mesh as found
+                               (found_*) when first needed (rm_midpoint_within) */
+    double midpoint_low;    /* at most midpoint_bound: the farthest midpoint of the
+                               triangles with the farthest centroids (rm_collapse_bounds) */
+    bool midpoint_known;    /* midpoint_bound has been measured */
+    const double *found_pos; /* the mesh as the pass found it (the caller keeps it) */
+    const uint32_t *found_tri;
+    size_t found_ntris;
     bool bounded;           /* the rule under max_error (rm_bound.h; the simplification, and
                                the quality pass given a bound): flips and moves keep every
                                centroid and edge midpoint within max_error, measured with a
@@ -50,6 +57,15 @@ typedef struct rm_pass {
                                rm_mark_active last looked: flips, moves and collapses never
                                make a triangle worse than that, so while it is at least
                                sin(ISM_RM_COLLAPSE_DEG) there is no needle to mend */
+    double *sine;           /* per triangle, or NULL: the sine of its smallest angle as
+                               rm_mark_active last measured it (NAN: its shape changed
+                               since, rm_shape_changed) */
+    double *cen_ref;        /* 4 per triangle, without an error bound (rm_cbound.h): a
+                               point last measured at its centroid and the distance there
+                               (INFINITY: none) */
+    double *cen_keep;       /* a fan's centroids measured for a move not yet made */
+    uint32_t cen_keep_cap, cen_keep_v; /* its room; the vertex (UINT32_MAX: none kept) */
+    double cen_keep_x[3];   /* where that vertex would go */
     size_t flips, moves, collapses, inserts;
 } rm_pass;
 
@@ -125,13 +141,15 @@ size_t rm_collapse_active(rm_pass *p, bool *ok);
  * (no relaxation follows), only where the split's thin halves can be flipped away at once.
  * *ok false when out of memory. */
 size_t rm_insert_active(rm_pass *p, bool last, bool *ok);
-/* Sets centroid_bound (what flips, moves, collapses and insertions keep to) from the mesh as
- * it is. */
-void rm_collapse_bounds(rm_pass *p);
-/* Sets midpoint_bound (what collapses and insertions keep to) from the ntris triangles tri
- * over the places pos: the mesh as the pass found it, kept by the caller until the first
- * collapse needs it. */
-void rm_midpoint_bound(rm_pass *p, const double *pos, const uint32_t *tri, size_t ntris);
+/* Sets centroid_bound (what flips, moves, collapses and insertions keep to) and
+ * midpoint_low from the mesh as it is, which is the mesh as found: the ntris triangles tri
+ * over the places pos, a copy the caller keeps while the pass runs. */
+void rm_collapse_bounds(rm_pass *p, const double *pos, const uint32_t *tri, size_t ntris);
+/* True when distance d is at most midpoint_bound (what collapses and insertions keep to),
+ * measured over the found mesh the first time midpoint_low does not decide: most passes
+ * never mend, and most mendings never ask past midpoint_low (gyroid-ball: 141,000 midpoints
+ * measured for the 76 collapses' checks). */
+bool rm_midpoint_within(rm_pass *p, double d);
 
 /* Drops the dead triangles and gone vertices from the mesh (which had nverts_before and
  * ntris_before when the pass began), keeps the vertices in order and orders the triangles by
@@ -140,8 +158,17 @@ void rm_midpoint_bound(rm_pass *p, const double *pos, const uint32_t *tri, size_
 bool rm_compact(rm_mesh *r, size_t nverts_before, size_t ntris_before, ism_remesh_renumber *ren);
 
 /* Marks the active vertices: those of triangles whose smallest angle is below
- * ISM_RM_COMFORT_DEG, and their neighbours; sets poorest. Returns how many there are. */
+ * ISM_RM_COMFORT_DEG, and their neighbours; sets poorest. Returns how many there are. Each
+ * triangle's sine is measured again only when its shape changed since (sine). */
 size_t rm_mark_active(rm_pass *p);
+
+/* Triangle t changed its corners or their places (a move, flip, collapse or split): what
+ * the pass remembers of its shape is gone. */
+static inline void rm_shape_changed(rm_pass *p, uint32_t t)
+{
+    if (p->sine)
+        p->sine[t] = NAN;
+}
 
 /* Tries to move free vertex v toward its fan's centroid (rm_relax.c); true when it moved. */
 bool rm_relax_vertex(rm_pass *p, uint32_t v);

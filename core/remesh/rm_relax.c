@@ -8,6 +8,7 @@
  * otherwise a half step is tried, then the vertex stays. Also ∇f's unit normals and the
  * distance estimate the pass uses. */
 #include "core/remesh/rm_bound.h"
+#include "core/remesh/rm_cbound.h"
 #include "core/remesh/rm_pass.h"
 #include "core/analysis/select.h"
 #include "core/util/vec3.h"
@@ -209,6 +210,9 @@ void rm_commit_move(rm_pass *p, uint32_t v, const double x[3], const double g[3]
     float *mn = p->r.m->normal + 3 * v;
     double len = sqrt(ism_dot3(g, g));
     double side = mn[0] * g[0] + mn[1] * g[1] + mn[2] * g[2] < 0 ? -1 : 1;
+    rm_cbound_moved(p, v, x);
+    for (uint32_t i = 0; i < p->r.count[v]; i++)
+        rm_shape_changed(p, p->r.vt[p->r.start[v] + i]);
     memcpy(pos, x, 3 * sizeof *x);
     for (int k = 0; k < 3; k++) {
         n[k] = g[k] / len;
@@ -216,17 +220,23 @@ void rm_commit_move(rm_pass *p, uint32_t v, const double x[3], const double g[3]
     }
 }
 
-/* The farthest of the fan's centroids from f = 0 with v at x. */
-static double fan_centroid_error(rm_pass *p, uint32_t v, const double *x)
+/* The farthest of v's fan's centroids from f = 0 with v where it is: as measured last where
+ * that was at the centroid as it is (rm_cbound.h), else measured now (and kept). */
+static double fan_centroid_error(rm_pass *p, uint32_t v)
 {
     const rm_mesh *r = &p->r;
+    const double *P = r->m->pos;
     double worst = 0;
     for (uint32_t i = 0; i < r->count[v]; i++) {
-        const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
-        const double *q[3];
-        for (int k = 0; k < 3; k++)
-            q[k] = t[k] == v ? x : r->m->pos + 3 * (size_t)t[k];
-        double d = rm_centroid_distance(p, q[0], q[1], q[2]); /* never NaN */
+        uint32_t t = r->vt[r->start[v] + i];
+        const uint32_t *c = r->m->tri + 3 * (size_t)t;
+        double m[3];
+        rm_centroid(P + 3 * (size_t)c[0], P + 3 * (size_t)c[1], P + 3 * (size_t)c[2], m);
+        double d = rm_cbound_exact(p, t, m);
+        if (isnan(d)) {
+            d = rm_distance(p, m); /* never NaN */
+            rm_cbound_set(p, t, m, d);
+        }
         worst = d > worst ? d : worst;
     }
     return worst;
@@ -234,13 +244,35 @@ static double fan_centroid_error(rm_pass *p, uint32_t v, const double *x)
 
 /* Moving v to x puts no centroid of its fan farther from f = 0 than the mesh's farthest
  * before the pass (centroid_bound) or than the fan's farthest now (bounded: every centroid
- * and edge midpoint of the fan within max_error). */
+ * and edge midpoint of the fan within max_error). A centroid known to stay within
+ * centroid_bound (rm_cbound_within) is not measured: when every measured one is within it
+ * too the move passes as it would have, and when one is beyond it that one is the fan's
+ * farthest whatever the others measure. The measures are kept for the move (rm_cbound_fan). */
 bool rm_centroids_stay(rm_pass *p, uint32_t v, const double *x)
 {
     if (p->bounded) /* the simplification's rule: within max_error, measured */
         return rm_bound_fan(p, v, x);
-    double now = fan_centroid_error(p, v, x);
-    return now <= p->centroid_bound || now <= fan_centroid_error(p, v, p->r.m->pos + 3 * v);
+    const rm_mesh *r = &p->r;
+    double now = 0, *keep = rm_cbound_fan(p, v, x);
+    for (uint32_t i = 0; i < r->count[v]; i++) {
+        uint32_t t = r->vt[r->start[v] + i];
+        const uint32_t *c = r->m->tri + 3 * (size_t)t;
+        const double *q[3];
+        for (int k = 0; k < 3; k++)
+            q[k] = c[k] == v ? x : r->m->pos + 3 * (size_t)c[k];
+        double m[3];
+        rm_centroid(q[0], q[1], q[2], m);
+        if (rm_cbound_within(p, t, m))
+            continue;
+        double d = rm_distance(p, m); /* never NaN */
+        if (keep)
+            memcpy(keep + 4 * i, m, sizeof m), keep[4 * i + 3] = d;
+        now = d > now ? d : now;
+    }
+    bool stays = now <= p->centroid_bound || now <= fan_centroid_error(p, v);
+    if (!stays)
+        rm_cbound_drop(p);
+    return stays;
 }
 
 /* The simplification's vertices sit off f = 0 by a balancing offset (sp_place.h): x, just
@@ -286,11 +318,19 @@ size_t rm_mark_active(rm_pass *p)
     double comfort = sin(ISM_RM_COMFORT_DEG * M_PI / 180);
     memset(p->active, 0, m->nverts);
     p->poorest = 1;
+    if (!p->sine && (p->sine = malloc((r->cap_tris ? r->cap_tris : 1) * sizeof *p->sine)))
+        for (size_t t = 0; t < r->cap_tris; t++)
+            p->sine[t] = NAN; /* (out of memory: measured every time) */
     for (size_t t = 0; t < m->ntris; t++) {
         const uint32_t *v = m->tri + 3 * t;
         if (r->dead[t])
             continue;
-        double s = rm_min_sine(m->pos + 3 * v[0], m->pos + 3 * v[1], m->pos + 3 * v[2]);
+        double s = p->sine ? p->sine[t] : NAN;
+        if (isnan(s)) {
+            s = rm_min_sine(m->pos + 3 * v[0], m->pos + 3 * v[1], m->pos + 3 * v[2]);
+            if (p->sine)
+                p->sine[t] = s;
+        }
         if (s < p->poorest)
             p->poorest = s;
         if (s < comfort)
