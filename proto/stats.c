@@ -144,6 +144,13 @@ static void write_poly(ism_jw *w, const ism_poly_stats *s)
 {
     static const char *const phase[ISM_PHASE_COUNT] = {"octree", "polygons", "cracks", "mesh"};
     ism_jw_object(w);
+    ism_jw_key(w, "mesher"); /* which one made the mesh, and why not the dual one */
+    ism_jw_string(w, ism_mesher_name(s->mesher));
+    ism_jw_key(w, "dual_declined");
+    if (s->dual_declined == ISM_DUAL_WHY_NONE)
+        ism_jw_null(w);
+    else
+        ism_jw_string(w, ism_dual_reason_name(s->dual_declined));
     write_fields(w, s, poly_fields, NFIELDS(poly_fields));
     ism_jw_key(w, "threads");
     ism_jw_int(w, s->threads);

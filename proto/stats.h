@@ -5,7 +5,9 @@
  *
  *   {"key", "mesher", "version", "format", "bytes", "features_bytes", "empty",
  *    "mesh": {"vertices", "triangles", "encoded_points", "encoded_faces"},
- *    "polygoniser": {... ism_poly_stats fields ..., "time_ms": {"octree", "polygons",
+ *    "polygoniser": {"mesher": "primal" | "straddle" | "dual", "dual_declined": null or a
+ *                    reason (core/octree/mesher.h's table), ... ism_poly_stats fields ...,
+ *                    "time_ms": {"octree", "polygons",
  *                    "cracks", "mesh", "total"}},
  *    "analysis": {..., "accuracy": {"max_dist_vertex", ..., "max_error", "met"}},
  *    "singular": {locus counts (features.h), "artefacts", "nonmanifold_edges_off",

@@ -171,6 +171,7 @@ typedef struct dual {
     int ec0[12], ec1[12], ef[12][2]; /* the cube's edges: ends and faces (ism_cube_edge) */
     double shift;     /* vertices move this far to the convex side (straddle.h), or 0 */
     bool bad, nomem, too_big;
+    enum ism_dual_reason why; /* the first reason bad was set for (mesher.h) */
 } dual;
 
 /* The cells round an edge along axis e, in counter-clockwise order seen from +e: their
@@ -457,6 +458,14 @@ static bool new_node(dual *d, ism_ipt o, int level, int32_t *out)
     return true;
 }
 
+/* The dual mesh cannot be made, for reason why (the first one given is kept). */
+static void decline(dual *d, enum ism_dual_reason why)
+{
+    if (!d->bad)
+        d->why = why;
+    d->bad = true;
+}
+
 /* Node kind after classification and the check on the request's box: empty, a surface
  * leaf, or inner (to split; bad set when the box cuts the surface). */
 static int leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad)
@@ -560,7 +569,8 @@ static void expand(dual *d, const int32_t *list, size_t n)
             int32_t i = cur[k], first = -1;
             int level = d->n[i].level + 1;
             int32_t half = ism_grid_cell_steps(&d->g, level);
-            d->bad |= out[k].bad;
+            if (out[k].bad) /* the box cuts the surface (leaf_kind) */
+                decline(d, ISM_DUAL_WHY_BOX_CUT);
             for (int c = 0; c < 8; c++) {
                 ism_ipt o = d->n[i].o;
                 int32_t at;
@@ -577,7 +587,7 @@ static void expand(dual *d, const int32_t *list, size_t n)
                 if (ch->kind != DN_INNER)
                     continue;
                 if (level >= d->o->max_depth)
-                    d->bad = true; /* not plain at the deepest level: a feature, not ours */
+                    decline(d, ISM_DUAL_WHY_NOT_PLAIN); /* at the deepest level: a feature */
                 else
                     next[nn++] = at;
             }
@@ -1005,7 +1015,8 @@ static void make_quads(dual *d)
     ism_pool_for(d->pool, wk.nd, walk_task, &job, NULL);
     for (size_t k = 0; k < wk.nd; k++) {
         d->nomem |= part[k].nomem;
-        d->bad |= part[k].bad;
+        if (part[k].bad) /* a crossed edge without a vertex (edge_quad) */
+            decline(d, ISM_DUAL_WHY_OPEN_EDGE);
         if (!d->nomem && part[k].n) {
             if (grow((void **)&d->q.q, &d->q.cap, d->q.n + part[k].n, 4 * sizeof *d->q.q)) {
                 memcpy(&d->q.q[4 * d->q.n], part[k].q, 4 * part[k].n * sizeof *d->q.q);
@@ -1016,7 +1027,8 @@ static void make_quads(dual *d)
         free(part[k].q);
     }
     d->nomem |= d->q.nomem;
-    d->bad |= d->q.bad;
+    if (d->q.bad)
+        decline(d, ISM_DUAL_WHY_OPEN_EDGE);
     free(part);
     free(wk.defer);
 }
@@ -1245,7 +1257,9 @@ static bool to_mesh(dual *d, ism_mesh *mesh)
 
 bool ism_dual_wanted(const ism_tape *f, const ism_poly_options *o)
 {
-    return o->max_error > 0 && !o->nquiet && !o->nnode_balls && !ism_tape_has_min_max(f);
+    ism_poly_options asked = *o;
+    asked.dual = true;
+    return ism_dual_declined_before(f, &asked) == ISM_DUAL_WHY_NONE;
 }
 
 static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
@@ -1260,7 +1274,10 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
         int32_t q[3] = {(c & 1) * last, (c >> 1 & 1) * last, (c >> 2 & 1) * last};
         sample_corner(d, &d->w[0], q, &r0->f[c], v.p[c], v.n[c]);
     }
-    r0->kind = (uint8_t)leaf_kind(d, &d->w[0], r0, &v, &d->bad);
+    bool cut = false;
+    r0->kind = (uint8_t)leaf_kind(d, &d->w[0], r0, &v, &cut);
+    if (cut)
+        decline(d, ISM_DUAL_WHY_BOX_CUT);
     if (r0->kind == DN_INNER && !d->bad)
         expand(d, &root, 1);
     mark_surface(d);
@@ -1272,7 +1289,7 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
         if (d->nomem)
             return ISM_DUAL_NO_MEMORY;
         if (d->bad)
-            return ISM_DUAL_NOT_APPLICABLE;
+            return st->declined = d->why, ISM_DUAL_NOT_APPLICABLE;
         make_vertices(d);
         if (!d->nomem)
             make_quads(d);
@@ -1281,14 +1298,16 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
         if (d->nomem)
             return ISM_DUAL_NO_MEMORY;
         if (d->bad)
-            return ISM_DUAL_NOT_APPLICABLE;
+            return st->declined = d->why, ISM_DUAL_NOT_APPLICABLE;
         if (d->nt > d->o->max_triangles)
             return ISM_DUAL_TOO_BIG;
         size_t marked = mark_misses(d, &st->missed);
         if (d->nomem)
             return ISM_DUAL_NO_MEMORY;
-        if (st->missed)
-            return ISM_DUAL_NOT_APPLICABLE; /* beyond E at depth.max: the primal polygons */
+        if (st->missed) { /* beyond E at depth.max: the primal polygons */
+            st->declined = ISM_DUAL_WHY_ERROR;
+            return ISM_DUAL_NOT_APPLICABLE;
+        }
         if (!marked || r == DUAL_ROUNDS)
             break;
         st->rounds++;
@@ -1311,8 +1330,12 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
 {
     memset(st, 0, sizeof *st);
     ism_mesh_free(mesh);
-    if (!ism_dual_wanted(f, o))
+    if (!ism_dual_wanted(f, o)) {
+        ism_poly_options asked = *o;
+        asked.dual = true;
+        st->declined = ism_dual_declined_before(f, &asked);
         return ISM_DUAL_NOT_APPLICABLE;
+    }
     dual d;
     memset(&d, 0, sizeof d);
     d.o = o;

@@ -26,6 +26,7 @@
 #include <stdint.h>
 #include "core/eval/eval.h"
 #include "core/mesh/mesh.h"
+#include "core/octree/mesher.h"
 #include "core/octree/poly_options.h"
 
 enum ism_dual_status {
@@ -43,9 +44,11 @@ typedef struct ism_dual_stats {
     uint64_t leaves;      /* leaves with a vertex */
     uint64_t evals_point, evals_gradient, evals_interval;
     int threads;          /* threads the call ran on (o->threads, 0: every core) */
+    enum ism_dual_reason declined; /* why "not applicable" (mesher.h), else NONE */
 } ism_dual_stats;
 
-/* May the dual mesh be tried for f under o? (max_error set, no locus, no min/max in f.) */
+/* May the dual mesh be tried for f under o? (max_error set, no locus, no min/max in f:
+ * ism_dual_declined_before, mesher.h; o->dual is not looked at.) */
 bool ism_dual_wanted(const ism_tape *f, const ism_poly_options *o);
 
 /* The dual mesh of f = 0 in o->box within o->max_error, into mesh (replaced; initialised by

@@ -623,19 +623,22 @@ static void add_round_costs(ism_poly_stats *total, const ism_poly_stats *r)
 }
 
 /* The dual mesh (dual.h) when asked for and possible: ISM_POLY_OK with the mesh, a failure,
- * or *tried false (the primal polygons then). */
+ * or *tried false (the primal polygons then, stats->dual_declined saying why). */
 static enum ism_poly_status try_dual(const ism_tape *f, const ism_poly_options *o,
                                      ism_mesh *mesh, ism_poly_stats *stats, bool *tried)
 {
     *tried = false;
-    if (!o->dual || !ism_dual_wanted(f, o))
+    if ((stats->dual_declined = ism_dual_declined_before(f, o)) != ISM_DUAL_WHY_NONE)
         return ISM_POLY_OK;
     double t0 = ism_now_ms();
     ism_dual_stats ds;
     enum ism_dual_status d = ism_dual_mesh(f, o, mesh, &ds);
-    if (d == ISM_DUAL_NOT_APPLICABLE)
+    if (d == ISM_DUAL_NOT_APPLICABLE) {
+        stats->dual_declined = ds.declined;
         return ISM_POLY_OK;
+    }
     *tried = true;
+    stats->mesher = ISM_MESHER_DUAL;
     stats->threads = 1;
     stats->error_rounds = ds.rounds;
     stats->error_missed_nodes = ds.missed;
@@ -702,8 +705,11 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
     ism_leaf_memo_free(&prev.memo);
     free_caches(&prev);
     uint64_t rounds = stats->error_rounds;
+    enum ism_dual_reason declined = stats->dual_declined;
     *stats = round;
     stats->error_rounds = rounds;
+    stats->mesher = straddle_shift(f, o) > 0 ? ISM_MESHER_STRADDLE : ISM_MESHER_PRIMAL;
+    stats->dual_declined = declined;
     stats->threads = threads;
     stats->evals_point = costs.evals_point;
     stats->evals_gradient = costs.evals_gradient;

@@ -10,6 +10,7 @@
 #include "core/expr/expr.h"
 #include "core/mesh/mesh.h"
 #include "core/octree/grid.h"
+#include "core/octree/mesher.h"
 #include "core/octree/poly_options.h"
 
 /* Hard limit of depth.max (cells are addressed by integer coordinates on a lattice that also
@@ -42,6 +43,8 @@ enum ism_poly_phase { ISM_PHASE_OCTREE, ISM_PHASE_POLYGONS, ISM_PHASE_CRACKS, IS
                       ISM_PHASE_COUNT };
 
 typedef struct ism_poly_stats {
+    enum ism_mesher mesher;      /* which mesher made the mesh (mesher.h) */
+    enum ism_dual_reason dual_declined; /* when not the dual one, why (NONE when it did) */
     uint64_t nodes_visited;      /* octree nodes examined */
     uint64_t nodes_excluded;     /* nodes whose interval proved them empty */
     uint64_t plotting_nodes;     /* leaves that produced polygons */

@@ -7,7 +7,7 @@
  * centroids sag E where the surface bends most (area / (1.299 ρ²), ρ² = 2 E / κ_max),
  * which the primal polygons exceed; the mesh is the same bit for bit on 1, 2 and 4 threads.
  * Where the dual mesh cannot apply (a min/max, the box cutting the surface) the mesh is the
- * primal one bit for bit. */
+ * primal one bit for bit, and the stats name the mesher and the reason. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -36,7 +36,10 @@ static const double shifts[] = {0, 1e-3 * FINEST, 0.37 * FINEST};
 #define SPHERE_ROOM 2.0
 #define TORUS_ROOM 1.4
 
-static void run(const ism_tape *t, const double box[6], double e, bool dual, ism_mesh *m)
+/* The mesh of t in box under E, with the dual option or not; the stats must name the mesher
+ * `made` and the reason `why` the dual one did not make it (core/octree/mesher.h). */
+static void run(const ism_tape *t, const double box[6], double e, bool dual, ism_mesh *m,
+                enum ism_mesher made, enum ism_dual_reason why)
 {
     ism_poly_options o;
     pf_options(&o, box, 3, SAFETY_DEPTH); /* 3: the default minimum depth */
@@ -45,6 +48,10 @@ static void run(const ism_tape *t, const double box[6], double e, bool dual, ism
     ism_poly_stats st;
     pf_run_options(t, &o, m, &st);
     cr_assert_eq(st.error_missed_nodes, 0);
+    cr_expect_eq(st.mesher, made, "mesher %s, expected %s", ism_mesher_name(st.mesher),
+                 ism_mesher_name(made));
+    cr_expect_eq(st.dual_declined, why, "declined for %s, expected %s",
+                 ism_dual_reason_name(st.dual_declined), ism_dual_reason_name(why));
 }
 
 static void cube_box(double half, double shift, double box[6])
@@ -86,7 +93,7 @@ static void check(const pf_surface *s, double (*dist)(const double *), double e,
         double box[6];
         cube_box(1.5, shifts[i], box);
         ism_mesh m;
-        run(t, box, e, true, &m);
+        run(t, box, e, true, &m, ISM_MESHER_DUAL, ISM_DUAL_WHY_NONE);
         double worst = pf_worst_distance(&m, dist);
         cr_expect_leq(worst, e, "%s E %g shift %g: a point %g from the surface", s->expr, e,
                       shifts[i], worst);
@@ -117,14 +124,14 @@ Test(dual, torus_within_the_bound_closed_and_small)
           TORUS_ROOM);
 }
 
-static void same_as_primal(const pf_surface *s, double half, double e)
+static void same_as_primal(const pf_surface *s, double half, double e, enum ism_dual_reason why)
 {
     ism_tape *t = pf_compile(s);
     double box[6];
     cube_box(half, 0.37 * FINEST, box);
     ism_mesh plain, dual;
-    run(t, box, e, false, &plain);
-    run(t, box, e, true, &dual);
+    run(t, box, e, false, &plain, ISM_MESHER_PRIMAL, ISM_DUAL_WHY_OFF);
+    run(t, box, e, true, &dual, ISM_MESHER_PRIMAL, why);
     pf_same_mesh(&plain, &dual, s->expr);
     ism_mesh_free(&plain);
     ism_mesh_free(&dual);
@@ -134,19 +141,50 @@ static void same_as_primal(const pf_surface *s, double half, double e)
 /* A min/max's crease needs the primal polygons' cut: the option leaves the mesh alone. */
 Test(dual, min_max_surface_left_to_the_primal_polygons)
 {
-    same_as_primal(&balls, 2.5, 1e-2);
+    same_as_primal(&balls, 2.5, 1e-2, ISM_DUAL_WHY_MIN_MAX);
 }
 
 /* The box cuts the sphere: its faces need the primal polygons. */
 Test(dual, surface_cut_by_the_box_left_to_the_primal_polygons)
 {
-    same_as_primal(&pf_unit_sphere, 0.8, 1e-2);
+    same_as_primal(&pf_unit_sphere, 0.8, 1e-2, ISM_DUAL_WHY_BOX_CUT);
 }
 
 /* Where the dual triangles cannot meet E the primal polygons are kept. */
 Test(dual, close_sheets_left_to_the_primal_polygons)
 {
-    same_as_primal(&close_pair, 1.5, 5e-3);
+    same_as_primal(&close_pair, 1.5, 5e-3, ISM_DUAL_WHY_ERROR);
+}
+
+/* The reasons known before meshing, in their order: no bound, asked not to, a singular locus
+ * (quiet balls or node balls given), min/max in f; none for a plain sphere under a bound. */
+Test(dual, reasons_decided_before_meshing)
+{
+    ism_tape *sphere = pf_compile(&pf_unit_sphere), *two = pf_compile(&balls);
+    ism_poly_options o;
+    ism_poly_options_default(&o);
+    cr_expect_eq(ism_dual_declined_before(sphere, &o), ISM_DUAL_WHY_NO_BOUND);
+    o.dual = true;
+    cr_expect_eq(ism_dual_declined_before(sphere, &o), ISM_DUAL_WHY_NO_BOUND);
+    o.max_error = 1e-2;
+    cr_expect_eq(ism_dual_declined_before(sphere, &o), ISM_DUAL_WHY_NONE);
+    cr_expect_eq(ism_dual_declined_before(two, &o), ISM_DUAL_WHY_MIN_MAX);
+    const double ball[1][4] = {{0, 0, 1, 0.1}};
+    o.quiet = ball;
+    o.nquiet = 1;
+    cr_expect_eq(ism_dual_declined_before(sphere, &o), ISM_DUAL_WHY_LOCUS);
+    cr_expect_eq(ism_dual_declined_before(two, &o), ISM_DUAL_WHY_LOCUS);
+    o.dual = false;
+    cr_expect_eq(ism_dual_declined_before(sphere, &o), ISM_DUAL_WHY_OFF);
+    /* every reason has a name the stats write and a sentence, and the names are distinct */
+    for (int r = 1; r < ISM_DUAL_WHY_COUNT; r++) {
+        cr_expect(*ism_dual_reason_name(r) && *ism_dual_reason_text(r), "reason %d", r);
+        for (int q = 1; q < r; q++)
+            cr_expect_str_neq(ism_dual_reason_name(r), ism_dual_reason_name(q));
+    }
+    cr_expect_str_eq(ism_dual_reason_name(ISM_DUAL_WHY_LOCUS), "singular_locus");
+    ism_tape_free(sphere);
+    ism_tape_free(two);
 }
 
 /* The tree is bounded by the memory budget: past it the call stops with "too big". */

@@ -1,0 +1,52 @@
+/* mesher.c — the meshers' and the dual mesher's reasons' names (mesher.h), and the reasons
+ * decided before meshing. */
+#include "core/octree/mesher.h"
+
+#include <stddef.h>
+
+static const char *const mesher_names[ISM_MESHER_COUNT] = {"primal", "straddle", "dual"};
+
+static const struct {
+    const char *name, *text;
+} reasons[ISM_DUAL_WHY_COUNT] = {
+    [ISM_DUAL_WHY_NONE] = {"", "the dual mesh was made"},
+    [ISM_DUAL_WHY_NO_BOUND] = {"no_bound", "no max_error: the dual cells are sized by it"},
+    [ISM_DUAL_WHY_OFF] = {"off", "asked for the primal polygons (dual: false)"},
+    [ISM_DUAL_WHY_LOCUS] = {"singular_locus",
+                            "singular points or curves: the primal polygons conform to them"},
+    [ISM_DUAL_WHY_MIN_MAX] = {"min_max", "min/max/abs in f: creases one vertex per cell rounds"},
+    [ISM_DUAL_WHY_BOX_CUT] = {"box_cut", "the surface meets the box: it is open there"},
+    [ISM_DUAL_WHY_NOT_PLAIN] = {"not_plain", "a cell at depth.max holds more than one plain "
+                                             "sheet (close sheets or a singular point)"},
+    [ISM_DUAL_WHY_ERROR] = {"error_at_max_depth",
+                            "a triangle beyond max_error with its cells at depth.max"},
+    [ISM_DUAL_WHY_OPEN_EDGE] = {"open_edge", "a crossed edge without its cells' vertices"},
+};
+
+const char *ism_mesher_name(enum ism_mesher m)
+{
+    return (unsigned)m < ISM_MESHER_COUNT ? mesher_names[m] : NULL;
+}
+
+const char *ism_dual_reason_name(enum ism_dual_reason r)
+{
+    return (unsigned)r < ISM_DUAL_WHY_COUNT ? reasons[r].name : NULL;
+}
+
+const char *ism_dual_reason_text(enum ism_dual_reason r)
+{
+    return (unsigned)r < ISM_DUAL_WHY_COUNT ? reasons[r].text : "";
+}
+
+enum ism_dual_reason ism_dual_declined_before(const ism_tape *f, const ism_poly_options *o)
+{
+    if (!(o->max_error > 0))
+        return ISM_DUAL_WHY_NO_BOUND;
+    if (!o->dual)
+        return ISM_DUAL_WHY_OFF;
+    if (o->nquiet || o->nnode_balls)
+        return ISM_DUAL_WHY_LOCUS;
+    if (ism_tape_has_min_max(f))
+        return ISM_DUAL_WHY_MIN_MAX;
+    return ISM_DUAL_WHY_NONE;
+}
