@@ -80,10 +80,11 @@ typedef struct ism_request {
     ism_poly_options poly;
     int quality;               /* enum ism_quality: "raw" (default) or "good" (the quality
                                   pass after meshing, core/remesh/) */
-    bool simplify;             /* under max_error: the simplification after meshing
-                                  (core/remesh/simplify.h); "simplify": false turns it off.
-                                  Set from max_error when not given; true without
-                                  max_error is refused (400) */
+    int simplify_when;         /* enum ism_simplify_when: under max_error, the
+                                  simplification after meshing (core/remesh/simplify.h):
+                                  after the primal polygons only when "simplify" is not
+                                  given, always when true, never when false (or without
+                                  max_error; true without it is refused, 400) */
     enum ism_format format;
     int position_bits;         /* Draco position quantisation (6..24) */
     int normal_bits;           /* Draco normal quantisation (4..16) */
@@ -98,6 +99,18 @@ typedef struct ism_request {
                                   features); positions and normals are sent.
                                   Not with "curves" or "quality": "good" (400). */
 } ism_request;
+
+/* When the simplification runs under max_error. Not asked (the default): after the primal
+ * polygons only. The dual mesh (the default mesher under a bound, core/octree/mesher.h) is
+ * already within the bound at about libfive's cost; simplifying it costs 0.9-5.7 times its
+ * meshing for 0.16-0.33 of its triangles (callgrind, sphere and torus at 1e-2..1e-3: README,
+ * "Under an error bound"), so it runs on a dual mesh only when asked ("simplify": true,
+ * --simplify). The primal polygons (every other surface) keep the simplified default. */
+enum ism_simplify_when { ISM_SIMPLIFY_NEVER, ISM_SIMPLIFY_PRIMAL, ISM_SIMPLIFY_ALWAYS };
+
+/* Does the simplification run after a mesh the mesher `made` (enum ism_mesher), for when and
+ * the bound max_error (0: none, never)? */
+bool ism_simplify_after(int when, double max_error, int made);
 
 /* What the operator allows. */
 typedef struct ism_request_limits {

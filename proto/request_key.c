@@ -49,16 +49,16 @@ static void write_max_error(ism_jw *w, const ism_request *req)
         return;
     ism_jw_key(w, "max_error");
     ism_jw_number(w, req->poly.max_error);
-    ism_jw_key(w, "simplify"); /* its meshes differ from the polygoniser's under the bound */
-    ism_jw_bool(w, req->simplify);
+    if (req->simplify_when != ISM_SIMPLIFY_PRIMAL) { /* given (the default is no value) */
+        ism_jw_key(w, "simplify");
+        ism_jw_bool(w, req->simplify_when == ISM_SIMPLIFY_ALWAYS);
+    }
     if (req->poly.straddle) { /* only when asked for: other keys stay as they were */
         ism_jw_key(w, "straddle");
         ism_jw_bool(w, true);
     }
-    if (req->poly.dual) { /* only when asked for: other keys stay as they were */
-        ism_jw_key(w, "dual");
-        ism_jw_bool(w, true);
-    }
+    ism_jw_key(w, "dual"); /* on by default since mesher-17: always said */
+    ism_jw_bool(w, req->poly.dual);
 }
 
 /* The quality pass, only when asked for (keys of requests without it stay as they were). */

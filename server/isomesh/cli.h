@@ -18,8 +18,12 @@ typedef struct ism_cli_run {
     const char *features_output;/* --features */
     bool box_given, depth_given, print_stats;
     int quality;                /* --quality: enum ism_quality (raw unless given) */
-    bool no_simplify;           /* --no-simplify: under --max-error, the polygoniser's
-                                   triangles without the simplification */
+    int simplify_when;          /* enum ism_simplify_when (proto/request.h): under
+                                   --max-error, the simplification after the primal polygons
+                                   only (default), always (--simplify) or never
+                                   (--no-simplify) */
+    bool no_dual;               /* --no-dual: under --max-error, the primal polygons even
+                                   where the dual mesh (the default) applies */
     ism_param *params;          /* names owned */
     size_t nparams;
     ism_let *lets;              /* names and sources owned */

@@ -1,6 +1,7 @@
 /* cli_args.c — parsing and checking the `isomesh` command's flag values (numbers, boxes,
  * depths, NAME=VALUE pairs), each failure a one-line message naming the flag. */
 #include "server/isomesh/cli.h"
+#include "proto/request.h"
 
 #include <errno.h>
 #include <math.h>
@@ -12,6 +13,7 @@ void ism_cli_run_init(ism_cli_run *run)
 {
     memset(run, 0, sizeof *run);
     ism_poly_options_default(&run->options);
+    run->simplify_when = ISM_SIMPLIFY_PRIMAL;
 }
 
 bool ism_cli_parse_double(const char *flag, const char *s, double *out)

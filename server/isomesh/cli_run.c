@@ -374,6 +374,7 @@ int ism_cli_run_surface(ism_cli_run *run)
         return st;
     if (run->options.max_error > 0 && !run->depth_given) /* as a request does: the bound */
         run->options.max_depth = ISM_REQ_DEFAULT_MAX_DEPTH_LIMIT; /* decides, not the depth */
+    run->options.dual = run->options.max_error > 0 && !run->no_dual; /* as a request does */
     double timings[ISM_TIME_COUNT] = {0};
     double t0 = ism_now_ms();
     ism_error err;
@@ -408,7 +409,7 @@ int ism_cli_run_surface(ism_cli_run *run)
     if (mesh.ntris == 0)
         explain_empty(&locus);
     ism_simplify_stats ss;
-    bool simplify = run->options.max_error > 0 && !run->no_simplify;
+    bool simplify = ism_simplify_after(run->simplify_when, run->options.max_error, ps.mesher);
     if (simplify &&
         !ism_simplify_pass(tape, &locus, NULL, run->options.max_error, NULL, &mesh, &ss, &err)) {
         fprintf(stderr, "isomesh: %s\n", ism_error_format(&err, msg, sizeof msg));

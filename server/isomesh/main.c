@@ -12,6 +12,7 @@
 #include "server/isomesh/cli.h"
 #include "core/octree/tolerances.h"
 #include "core/remesh/quality_pass.h"
+#include "proto/request.h"
 #include "server/isomesh/sandbox.h"
 #include "server/isomesh/worker.h"
 
@@ -51,14 +52,20 @@ static const char usage_text[] =
     "                           flatness test (--flat-plane) decides. With it, edges are\n"
     "                           then collapsed wherever the mesh stays within E (measured\n"
     "                           at every new centroid and edge midpoint; features, topology\n"
-    "                           and orientation kept): the fewest triangles for the error\n"
+    "                           and orientation kept): the fewest triangles for the error.\n"
+    "                           On a closed surface without min/max and without a singular\n"
+    "                           locus the mesh is made by dual contouring: one vertex per\n"
+    "                           leaf, cells sized by the error (fewer triangles, one thread);\n"
+    "                           the stats' polygoniser.mesher says which mesher ran and\n"
+    "                           dual_declined why not the dual one. A dual mesh is not\n"
+    "                           simplified unless --simplify (it costs ~10x the meshing)\n"
+    "      --no-dual            under --max-error, the primal polygons everywhere\n"
+    "      --dual               the default under --max-error (kept for scripts)\n"
+    "      --simplify           under --max-error, simplify a dual mesh too\n"
     "      --no-simplify        under --max-error, keep the polygoniser's triangles\n"
-    "      --straddle           under --max-error, move vertices where the surface bends\n"
-    "                           one way 0.9 E toward its convex side and size the cells for\n"
-    "                           it: fewer triangles within E (no min/max, no singular locus)\n"
-    "      --dual               under --max-error, on a closed surface without min/max and\n"
-    "                           without a singular locus: dual contouring, one vertex per\n"
-    "                           leaf, cells sized by the error (fewer triangles, one thread)\n"
+    "      --straddle           under --max-error, move the primal polygons' vertices where\n"
+    "                           the surface bends one way 0.9 E toward its convex side and\n"
+    "                           size the cells for it (no min/max, no singular locus)\n"
     "      --max-triangles N    budget; stop with an error beyond it (default 4000000)\n"
     "      --quality Q          raw (default): the polygoniser's triangles; good: then\n"
     "                           flip edges toward Delaunay and relax vertices along the\n"
@@ -75,7 +82,7 @@ static const char usage_text[] =
 
 enum long_only {
     OPT_LET = 256, OPT_SURFACE, OPT_SURFACES, OPT_LIST, OPT_THREADS, OPT_MAX_TRIS,
-    OPT_MAX_ERROR, OPT_NO_SIMPLIFY, OPT_STRADDLE, OPT_DUAL, OPT_STATS, OPT_WORKER, OPT_FEATURES, OPT_QUALITY,
+    OPT_MAX_ERROR, OPT_NO_SIMPLIFY, OPT_SIMPLIFY, OPT_STRADDLE, OPT_DUAL, OPT_NO_DUAL, OPT_STATS, OPT_WORKER, OPT_FEATURES, OPT_QUALITY,
     OPT_TOLERANCE, /* OPT_TOLERANCE + i: the table's tolerance i */
 };
 
@@ -93,8 +100,10 @@ static const struct option base_options[] = {
     {"max-error", required_argument, 0, OPT_MAX_ERROR},
     {"quality", required_argument, 0, OPT_QUALITY},
     {"no-simplify", no_argument, 0, OPT_NO_SIMPLIFY},
+    {"simplify", no_argument, 0, OPT_SIMPLIFY},
     {"straddle", no_argument, 0, OPT_STRADDLE},
     {"dual", no_argument, 0, OPT_DUAL},
+    {"no-dual", no_argument, 0, OPT_NO_DUAL},
     {"output", required_argument, 0, 'o'},
     {"stats", no_argument, 0, OPT_STATS},
     {"features", required_argument, 0, OPT_FEATURES},
@@ -165,9 +174,11 @@ static bool apply_option(ism_cli_run *run, int opt, const char *arg)
         o->max_triangles = (size_t)n;
         return true;
     }
-    case OPT_NO_SIMPLIFY: run->no_simplify = true; return true;
+    case OPT_NO_SIMPLIFY: run->simplify_when = ISM_SIMPLIFY_NEVER; return true;
+    case OPT_SIMPLIFY: run->simplify_when = ISM_SIMPLIFY_ALWAYS; return true;
     case OPT_STRADDLE: o->straddle = true; return true;
-    case OPT_DUAL: o->dual = true; return true;
+    case OPT_DUAL: run->no_dual = false; return true;
+    case OPT_NO_DUAL: run->no_dual = true; return true;
     case OPT_QUALITY:
         if ((run->quality = ism_quality_lookup(arg)) >= 0)
             return true;

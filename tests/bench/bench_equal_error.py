@@ -21,7 +21,10 @@ and <= 0.2 x VTK's at every target; <= 1.5 µs CPU per triangle on the gyroid.
 Asserts nothing; exits 0 unless it cannot run.
 
   bench_equal_error.py --build build/release [--quick] [--only NAME] [--libfive DIR]
-                       [--tools isomesh,libfive,vtk,skimage] [--straddle] [--dual] [--raw]
+                       [--tools isomesh,libfive,vtk,skimage] [--primal] [--straddle]
+                       [--raw | --simplify]
+(isomesh as a request under max_error by default: the dual mesh where it applies, the primal
+polygons simplified elsewhere; --primal: the default before mesher-17)
 """
 import argparse
 import json
@@ -88,8 +91,9 @@ class Tool:
 
 class Isomesh(Tool):
     name = "isomesh"
-    words = ()  # bench_error's extra words: "straddle", "dual" (the polygoniser's options),
-    #             "raw" (no simplification)
+    words = ()  # bench_error's extra words: "primal" (not the dual mesh, the default where
+    #             it applies), "straddle" (the polygoniser's option), "raw" (no
+    #             simplification), "simplify" (the dual mesh simplified too)
 
     def start(self, s, e):
         return 1 / e
@@ -322,10 +326,17 @@ def main():
     ap.add_argument("--tools", default="isomesh,libfive,vtk,skimage")
     ap.add_argument("--straddle", action="store_true",
                     help="isomesh with the straddle option (core/octree/straddle.h)")
+    ap.add_argument("--primal", action="store_true",
+                    help="isomesh without the dual mesh (the request's dual: false; the dual "
+                         "mesh, core/octree/dual.h, is the default under a bound)")
     ap.add_argument("--dual", action="store_true",
-                    help="isomesh with the dual option (core/octree/dual.h)")
+                    help="the default (kept for old command lines): the dual mesh where it "
+                         "applies")
     ap.add_argument("--raw", action="store_true",
-                    help="isomesh without the simplification (the request's simplify: false)")
+                    help="isomesh without the simplification (the request's simplify: false; "
+                         "by default only the primal polygons are simplified)")
+    ap.add_argument("--simplify", action="store_true",
+                    help="the dual mesh simplified too (the request's simplify: true)")
     args = ap.parse_args()
     build = os.path.abspath(args.build)
     bench = os.path.join(build, "bench", "bench_error")
@@ -339,8 +350,11 @@ def main():
         wanted = args.tools.split(",")
         tools = [Isomesh(bench, tmp)] if "isomesh" in wanted else []
         if tools:
+            if args.raw and args.simplify:
+                sys.exit("bench_equal_error: --raw and --simplify contradict each other")
             tools[0].words = tuple(w for w, on in (("straddle", args.straddle),
-                                                   ("dual", args.dual), ("raw", args.raw)) if on)
+                                                   ("primal", args.primal), ("raw", args.raw),
+                                                   ("simplify", args.simplify)) if on)
         five = None
         if "libfive" in wanted:
             five, why = build_libfive_mesher(build, args.libfive)

@@ -5,13 +5,17 @@
  * to f = 0, in closed form for the sphere and the torus, else the length of the Newton
  * projection q <- q - f ∇f / |∇f|² (on the tape compiled from the same expression).
  *
- *   bench_error mesh NAME E [DEPTH [raw] [straddle] [dual]]
- *                                        isomesh (core/singular/surface.h: the locus, the
- *                                        polygoniser, conformance, then the simplification
- *                                        within E as the service does by default; raw: not
- *                                        it; straddle: the polygoniser's straddle option,
- *                                        core/octree/straddle.h; dual: the dual mesh,
- *                                        core/octree/dual.h), one thread
+ *   bench_error mesh NAME E [DEPTH [raw|simplify] [primal] [straddle]]
+ *                                        isomesh as the service does by default (core/
+ *                                        singular/surface.h: the locus, the dual mesh where
+ *                                        it applies, core/octree/dual.h, else the primal
+ *                                        polygons and conformance, then the simplification
+ *                                        within E after the primal polygons only); raw: no
+ *                                        simplification; simplify: after the dual mesh too;
+ *                                        primal: not the dual mesh ("dual": false); straddle:
+ *                                        the polygoniser's straddle option, core/octree/
+ *                                        straddle.h ("dual" is accepted: the default), one
+ *                                        thread
  *   bench_error measure NAME FILE.ply    a mesh from another tool (binary little-endian PLY:
  *                                        double x y z, faces as uchar count + int32 indices)
  *   bench_error eval NAME X,Y,Z[;...]    f at points (to check the other tools' formulas)
@@ -229,8 +233,11 @@ static ism_tape *compile(const surface *s)
     return t;
 }
 
+/* When the simplification runs: as proto/request.h's ism_simplify_when (not linked here). */
+enum simplify_when { SIMPLIFY_NEVER, SIMPLIFY_PRIMAL, SIMPLIFY_ALWAYS };
+
 static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, int depth,
-                    bool simplify, bool straddle, bool dual)
+                    enum simplify_when when, bool straddle, bool dual)
 {
     ism_poly_options o;
     ism_poly_options_default(&o);
@@ -253,6 +260,8 @@ static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, 
     double c0 = cpu_seconds();
     enum ism_poly_status st = ism_mesh_surface(t, &o, &mesh, &locus, &ps, &cs, &times, &err);
     double c1 = cpu_seconds();
+    bool simplify = when == SIMPLIFY_ALWAYS ||
+                    (when == SIMPLIFY_PRIMAL && ps.mesher != ISM_MESHER_DUAL);
     if (st == ISM_POLY_OK && simplify && !ism_simplify_pass(t, &locus, NULL, e, NULL, &mesh, &ss, &err))
         st = ISM_POLY_NO_MEMORY;
     double cpu = cpu_seconds() - c0;
@@ -265,11 +274,12 @@ static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, 
            "\"poly_ms\": %.3f, \"singular_ms\": %.3f, \"simplify_ms\": %.3f, "
            "\"triangles_raw\": %zu, \"triangles\": %zu, "
            "\"max_c\": %.6g, \"max_m\": %.6g, \"mean_c\": %.6g, \"rounds\": %llu, "
-           "\"missed\": %llu}\n",
+           "\"missed\": %llu, \"mesher\": \"%s\", \"dual_declined\": \"%s\"}\n",
            cpu, 1e3 * (c1 - c0), 1e3 * (cpu_seconds() - c1), times.polygonise_ms,
            times.singular_ms, ss.time_ms,
            simplify ? ss.triangles_before : es.triangles, es.triangles, es.max, es.max_mid,
-           es.mean, (unsigned long long)ps.error_rounds, (unsigned long long)ps.error_missed_nodes);
+           es.mean, (unsigned long long)ps.error_rounds, (unsigned long long)ps.error_missed_nodes,
+           ism_mesher_name(ps.mesher), ism_dual_reason_name(ps.dual_declined));
     ism_locus_free(&locus);
     ism_mesh_free(&mesh);
     return 0;
@@ -338,7 +348,7 @@ int main(int argc, char **argv)
     if (argc == 2 && strcmp(argv[1], "list") == 0)
         return cmd_list();
     if (argc < 4) {
-        fprintf(stderr, "usage: bench_error mesh NAME E [DEPTH [raw] [straddle] [dual]] | measure NAME FILE.ply | "
+        fprintf(stderr, "usage: bench_error mesh NAME E [DEPTH [raw|simplify] [primal] [straddle]] | measure NAME FILE.ply | "
                         "eval NAME X,Y,Z[;...] | list\n");
         return 2;
     }
@@ -350,8 +360,10 @@ int main(int argc, char **argv)
     int rc = 2;
     if (strcmp(argv[1], "mesh") == 0)
         rc = cmd_mesh(s, t, &m, atof(argv[3]), argc > 4 ? atoi(argv[4]) : 10,
-                      !has_word(argc, argv, 5, "raw"), has_word(argc, argv, 5, "straddle"),
-                      has_word(argc, argv, 5, "dual"));
+                      has_word(argc, argv, 5, "raw")        ? SIMPLIFY_NEVER
+                      : has_word(argc, argv, 5, "simplify") ? SIMPLIFY_ALWAYS
+                                                            : SIMPLIFY_PRIMAL,
+                      has_word(argc, argv, 5, "straddle"), !has_word(argc, argv, 5, "primal"));
     else if (strcmp(argv[1], "measure") == 0)
         rc = cmd_measure(&m, argv[3]);
     else if (strcmp(argv[1], "eval") == 0)

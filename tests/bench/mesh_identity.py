@@ -2,7 +2,8 @@
 """mesh_identity.py — the check that a speed change changes no mesh: the PLY md5 of every preset
 of the gallery (its own box and depths, one thread), of a set of presets in boxes shifted off the
 octree lattice (by 1e-3, and by 0.37 / -0.23 / 0.41 of a finest cell) on two threads, and of
-max_error runs (several rounds, lattice and shifted boxes, 1 and 2 threads), through the CLI.
+max_error runs of the primal polygons (several rounds, lattice and shifted boxes, 1 and 2 threads)
+and of the dual mesh (the default under a bound), through the CLI.
 `--save FILE` records them; `--check FILE` runs again and names every run whose mesh differs.
 Not part of `make test` (a few minutes on two cores); run it before and after a change:
 
@@ -27,9 +28,12 @@ from sweep_singular import boxes, presets  # noqa: E402  (the gallery and the sh
 # Presets also run in the shifted boxes, on two threads: smooth, crease, singular, lattice-plane.
 SHIFTED = ("sphere", "torus", "gyroid-ball", "klein-bottle", "steiner-roman", "kummer-16-nodes",
            "cube-minus-ball", "helicoid", "double-torus", "whitney-umbrella")
-# max_error runs (preset, E, depth.max): one to five refinement rounds each.
+# max_error runs of the primal polygons (preset, E, depth.max; --no-dual: under a bound the
+# dual mesh is the default where it applies): one to five refinement rounds each.
 ERROR_RUNS = (("sphere", 1e-3, 10), ("torus", 3e-3, 10), ("torus", 6e-4, 10),
               ("gyroid-ball", 1e-2, 10), ("klein-bottle", 1e-2, 9), ("double-torus", 3e-3, 9))
+# ... and of the default under a bound, the dual mesh (core/octree/dual.h) where it applies.
+DUAL_RUNS = (("sphere", 1e-3, 10), ("torus", 3e-3, 10), ("double-torus", 3e-3, 9))
 
 
 def md5_of_run(exe, name, box, depth, extra, timeout):
@@ -65,7 +69,13 @@ def runs(ps):
         for label, box in boxes(p["box"], dmax):
             for t in ("1", "2") if label != "1e-3" else ("2",):
                 out.append((f"{name} {label} E{e:g} d{d} t{t}", name, box, d,
-                            ["--max-error", repr(e), "--threads", t]))
+                            ["--max-error", repr(e), "--threads", t, "--no-dual"]))
+    for name, e, dmax in DUAL_RUNS:
+        p = by_name[name]
+        d = f"{p['depth']['min']}:{dmax}"
+        for label, box in boxes(p["box"], dmax):
+            out.append((f"{name} {label} E{e:g} d{d} t1 dual", name, box, d,
+                        ["--max-error", repr(e), "--threads", "1"]))
     return out
 
 

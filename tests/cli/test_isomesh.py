@@ -233,6 +233,10 @@ class TestIsomesh(unittest.TestCase):
         self.assertEqual(acc["max_error"], 0.01)
         self.assertIs(acc["met"], True)
         self.assertEqual(s["warnings"], [])
+        # the default under a bound: the dual mesh, not simplified
+        self.assertEqual((s["polygoniser"]["mesher"], s["polygoniser"]["dual_declined"]),
+                         ("dual", None))
+        self.assertNotIn("simplify", s)
         worst = self.sphere_between_vertices(path)
         self.assertLessEqual(worst, 0.01 + 1e-6)  # float32 positions in the PLY
         self.assertAlmostEqual(max(acc["max_dist_centroid"], acc["max_dist_midpoint"]), worst,
@@ -251,17 +255,35 @@ class TestIsomesh(unittest.TestCase):
         self.assertIn(f"{s['polygoniser']['error_missed_nodes']} cells could not be split further",
                       s["warnings"][0])
         self.assertGreater(s["polygoniser"]["error_missed_nodes"], 0)
-        # no bound: met and max_error are null
+        # depth 4 is too coarse for the dual mesh as well: the primal polygons, and why
+        self.assertEqual(s["polygoniser"]["mesher"], "primal")
+        self.assertEqual(s["polygoniser"]["dual_declined"], "error_at_max_depth")
+        # --no-dual: the primal polygons, simplified; --simplify: the dual mesh simplified too
+        for flags, mesher, why, simplified in ((("--no-dual",), "primal", "off", True),
+                                               (("--simplify",), "dual", None, True),
+                                               (("--no-dual", "--no-simplify"), "primal", "off",
+                                                False)):
+            p = run(*sphere, "--max-error", "0.01", *flags, "--stats")
+            self.assertEqual(p.returncode, 0, p.stderr)
+            s = json.loads(p.stdout)
+            self.assertEqual((s["polygoniser"]["mesher"], s["polygoniser"]["dual_declined"]),
+                             (mesher, why), flags)
+            self.assertEqual("simplify" in s, simplified, flags)
+            self.assertIs(s["analysis"]["accuracy"]["met"], True, flags)
+        # no bound: met and max_error are null, the primal polygons
         p = run(*sphere, "-d", "3:5", "--stats")
-        acc = json.loads(p.stdout)["analysis"]["accuracy"]
+        s = json.loads(p.stdout)
+        acc = s["analysis"]["accuracy"]
         self.assertIsNone(acc["max_error"])
         self.assertIsNone(acc["met"])
+        self.assertEqual(s["polygoniser"]["dual_declined"], "no_bound")
 
     def test_help(self):
         p = run("--help")
         self.assertEqual(p.returncode, 0)
         for flag in ("--expr", "--param", "--let", "--box", "--depth", "--surface", "--surfaces",
                      "--stats", "--output", "--worker", "--threads", "--max-error",
+                     "--no-dual", "--simplify", "--no-simplify",
                      "--gradient-test", "--double-root-eps", "--double-root-iters",
                      "--stitch-tol", "--flat-normal", "--flat-plane"):
             self.assertIn(flag, p.stdout)

@@ -114,9 +114,10 @@ class SmoothSurfaces(unittest.TestCase):
         for name, centre, half, chi, dist in self.CASES:
             for box in shifted_boxes(centre, half):
                 with self.subTest(surface=name, box=box):
-                    # the quality pass on the polygoniser's own triangles (the
+                    # the quality pass on the primal polygons' own triangles (the
                     # simplification under --max-error would leave it nothing to mend)
-                    extra = ("--max-error", repr(self.E), "--no-simplify") if dist else ()
+                    extra = (("--max-error", repr(self.E), "--no-simplify", "--no-dual")
+                             if dist else ())
                     verts, tris, stats = run_surface(name, box, "good", extra)
                     good = min(min_angle_deg(*(verts[i] for i in t)) for t in tris)
                     # the raw mesh was worse than the goal (else this tests nothing)

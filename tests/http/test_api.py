@@ -258,19 +258,49 @@ class ApiTest(unittest.TestCase):
         err = self.error_of(self.d.post("/v1/mesh", {"preset": "torus", "max_error": "x"}), 400)
         self.assertEqual(err.get("path"), "$.max_error")
 
-    def test_dual_request_within_its_bound(self):
-        dual = self.d.post("/v1/mesh", {"preset": "torus", "max_error": 0.004, "dual": True,
-                                        "simplify": False})
-        self.assertEqual(dual.status, 200)
-        plain = self.d.post("/v1/mesh", {"preset": "torus", "max_error": 0.004, "simplify": False})
-        self.assertNotEqual(plain.header("ETag"), dual.header("ETag"))  # dual is in the key
-        stats = [self.d.get("/v1/meshes/%s/stats" % r.header("ETag").strip('"')).json()
-                 for r in (dual, plain)]
-        acc = stats[0]["analysis"]["accuracy"]
-        worst = max(acc["max_dist_vertex"], acc["max_dist_midpoint"], acc["max_dist_centroid"])
-        self.assertLessEqual(worst, 0.004)
+    def test_dual_mesh_by_default_under_a_bound(self):
+        def stats(r):
+            self.assertEqual(r.status, 200)
+            return self.d.get("/v1/meshes/%s/stats" % r.header("ETag").strip('"')).json()
+
+        # under max_error the dual mesh is the default on a closed smooth surface: within the
+        # bound, not simplified, and the stats say which mesher made it
+        sphere = stats(self.d.post("/v1/mesh", {"preset": "sphere", "max_error": 0.01}))
+        self.assertEqual(sphere["polygoniser"]["mesher"], "dual")
+        self.assertIsNone(sphere["polygoniser"]["dual_declined"])
+        self.assertNotIn("simplify", sphere)
+        acc = sphere["analysis"]["accuracy"]
+        self.assertLessEqual(max(acc["max_dist_vertex"], acc["max_dist_midpoint"],
+                                 acc["max_dist_centroid"]), 0.01)
+        self.assertEqual(sphere["analysis"]["euler"], 2)
+        # "dual": false asks for the primal polygons (another key), simplified by default
+        torus = [self.d.post("/v1/mesh", dict({"preset": "torus", "max_error": 0.004}, **extra))
+                 for extra in ({}, {"dual": True}, {"dual": False, "simplify": False},
+                               {"dual": False})]
+        self.assertEqual(torus[0].header("ETag"), torus[1].header("ETag"))  # the default
+        self.assertEqual(len({r.header("ETag") for r in torus}), 3)
+        dual, asked, primal, simplified = [stats(r) for r in torus]
+        self.assertEqual(dual["polygoniser"]["mesher"], "dual")
+        self.assertEqual(primal["polygoniser"]["mesher"], "primal")
+        self.assertEqual(primal["polygoniser"]["dual_declined"], "off")
+        self.assertNotIn("simplify", primal)
+        self.assertIn("simplify", simplified)
+        for s in (dual, primal):
+            acc = s["analysis"]["accuracy"]
+            worst = max(acc["max_dist_vertex"], acc["max_dist_midpoint"], acc["max_dist_centroid"])
+            self.assertLessEqual(worst, 0.004)
         # one vertex per cell instead of one per crossed edge: fewer triangles at the bound
-        self.assertLess(stats[0]["mesh"]["triangles"], stats[1]["mesh"]["triangles"])
+        self.assertLess(dual["mesh"]["triangles"], primal["mesh"]["triangles"])
+        # the Klein bottle's double curve: the primal polygons, and the reason
+        klein = stats(self.d.post("/v1/mesh", {"preset": "klein-bottle", "max_error": 0.05,
+                                               "depth": {"max": 6}}))
+        self.assertEqual(klein["polygoniser"]["mesher"], "primal")
+        self.assertEqual(klein["polygoniser"]["dual_declined"], "singular_locus")
+        self.assertIn("simplify", klein)  # a primal mesh is simplified by default
+        # without a bound: the primal polygons; "dual": true alone is refused
+        plain = stats(self.d.post("/v1/mesh", {"preset": "sphere", "depth": {"max": 4}}))
+        self.assertEqual(plain["polygoniser"]["mesher"], "primal")
+        self.assertEqual(plain["polygoniser"]["dual_declined"], "no_bound")
         err = self.error_of(self.d.post("/v1/mesh", {"preset": "torus", "dual": True}), 400)
         self.assertEqual(err.get("path"), "$.dual")
 

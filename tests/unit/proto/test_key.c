@@ -52,6 +52,15 @@ static const char *const same[][7] = {
      "{\"preset\": \"torus\", \"params\": {\"R\": 1, \"r\": 0.3}, \"depth\": {\"max\": 7}}",
      "{\"expr\": \"" TORUS "\", \"params\": {\"r\": 0.3, \"R\": 1}, \"box\": [-1.5,-1.5,-1.5,1.5,1.5,1.5]}",
      NULL},
+    /* under a bound: the dual mesh is the default; with dual false "simplify" left out
+     * means true (only primal polygons can come, and those are simplified by default) */
+    {"{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02}",
+     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"dual\": true}",
+     NULL},
+    {"{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"dual\": false}",
+     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"dual\": false, "
+     "\"simplify\": true}",
+     NULL},
     /* -0 is 0 */
     {"{\"expr\": \"x + y + z - 0.5\", \"box\": [-0.0, 0, 0, 1, 1, 1]}",
      "{\"expr\": \"x + y + z - 0.5\", \"box\": [0, -0, 0, 1, 1, 1]}",
@@ -89,7 +98,12 @@ static const char *const different[] = {
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"depth\": {\"max\": 7}, "
     "\"straddle\": true}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"depth\": {\"max\": 7}, "
-    "\"dual\": true}",
+    "\"dual\": false}",
+    /* the dual mesh (the default) simplified too, or never: both differ from the default */
+    "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"depth\": {\"max\": 7}, "
+    "\"simplify\": true}",
+    "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"depth\": {\"max\": 7}, "
+    "\"simplify\": false}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"depth\": {\"min\": 2}}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"tolerances\": {\"gradient\": 0.8}}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"tolerances\": {\"double_root_eps\": 1e-8}}",
