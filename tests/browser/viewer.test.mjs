@@ -10,7 +10,7 @@ import { describe, it, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import { createRequire } from 'node:module';
-import { startDaemon, stopDaemon, startBrowser, stopBrowser, watchErrors } from './lib/harness.mjs';
+import { startDaemon, stopDaemon, startBrowser, stopBrowser, watchErrors, artifact } from './lib/harness.mjs';
 import { waitForMesh, loads, openViewer, jobPosts, statsPanel, viewShot, settledHref } from './lib/page.mjs';
 import { pixelStats, changedShare } from './lib/png.mjs';
 import { decodeDraco, ATTRIBUTE_IDS } from './lib/draco.mjs';
@@ -338,12 +338,40 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
     assert.match(panel.max_error.text, acc.met ? /\(met\)/ : /\(not met\)/);
     assert.equal(Number(panel.max_dist_between.value), Math.max(acc.max_dist_midpoint, acc.max_dist_centroid));
     assert.match(await settledHref(page), /err=0\.004/);
+    // under a bound the server's default mesher is the dual one on the sphere; the panel says so
+    assert.equal(s.polygoniser.mesher, 'dual');
+    assert.equal(panel.mesher.text, 'dual');
+    assert.equal(panel.mesher.value, 'dual');
+    assert.equal(await page.isDisabled('#mesher'), false);
+    // asking for the primal polygons: another mesh, and the panel gives the reason
+    const primal = await loads(page);
+    await page.selectOption('#mesher', 'primal');
+    await waitForMesh(page, primal);
+    const sp = await getJSON(`/v1/meshes/${await meshKey()}/stats`);
+    assert.equal(sp.polygoniser.mesher, 'primal');
+    assert.equal(sp.polygoniser.dual_declined, 'off');
+    assert.equal((await statsPanel(page)).mesher.text, 'primal (dual off)');
+    assert.match(await settledHref(page), /mesher=primal/);
+    await page.evaluate(() => document.getElementById('stats-section').scrollIntoView());
+    fs.writeFileSync(artifact('stats-mesher-primal.png'), await page.locator('#stats-section').screenshot());
+    fs.writeFileSync(artifact('box-mesher-control.png'), await page.locator('#box-section').screenshot());
+    const straddle = await loads(page);
+    await page.selectOption('#mesher', 'straddle');
+    await waitForMesh(page, straddle);
+    assert.equal((await getJSON(`/v1/meshes/${await meshKey()}/stats`)).polygoniser.mesher, 'straddle');
+    assert.equal((await statsPanel(page)).mesher.text, 'straddle (dual off)');
+    const dual = await loads(page);
+    await page.selectOption('#mesher', 'dual');
+    await waitForMesh(page, dual);
+    assert.equal((await statsPanel(page)).mesher.text, 'dual');
     const back = await loads(page);
     await page.fill('#max-error', '');
     await page.locator('#max-error').press('Tab');
     await waitForMesh(page, back);
     assert.equal(await page.isDisabled('#depth-max'), false);
+    assert.equal(await page.isDisabled('#mesher'), true, 'the meshers differ only under a bound');
     assert.equal((await statsPanel(page)).max_error.text, 'off');
+    assert.equal((await statsPanel(page)).mesher.text, 'primal (no max error)');
   });
 
   it('asks for the quality pass and shows the triangles\' shape', async () => {

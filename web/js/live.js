@@ -74,6 +74,8 @@ export function previewBody(body) {
   if (d.max <= previewDepth && b.max_error === undefined && b.quality === undefined) return null;
   b.depth = { min: Math.min(d.min, PREVIEW_MIN_DEPTH), max: previewDepth };
   delete b.max_error;   // a preview is coarse by depth, whatever the error bound asks
+  delete b.dual;        // ... so the bound's meshers do not apply (refused without it)
+  delete b.straddle;
   delete b.quality;     // ... and shows the raw triangles: the pass is for the final mesh
   delete b.curves;      // the curves are drawn on the refined mesh
   b.output = { ...(b.output || {}), attributes: ['normal'] };   // a preview is shaded

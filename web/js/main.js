@@ -254,6 +254,8 @@ function syncControls() {
   $('max-error').value = state.maxError > 0 ? String(state.maxError) : '';
   $('depth-max').disabled = state.maxError > 0;
   $('quality-good').checked = state.quality === 'good';
+  $('mesher').value = state.mesher;
+  $('mesher').disabled = !(state.maxError > 0);  // the meshers differ only under a bound
   $('color-mode').value = state.color;
   $('show-edges').checked = state.show.edges;
   $('show-points').checked = state.show.points;
@@ -980,7 +982,7 @@ function applyFragment(fragment) {
       if (ranges[k]) ranges[k] = [Math.min(ranges[k][0], v), Math.max(ranges[k][1], v)];
     }
   }
-  for (const k of ['box', 'depth', 'maxError', 'quality', 'color', 'clip', 'show', 'wire', 'occlusion', 'shadows', 'curves']) if (s[k] !== undefined) state[k] = s[k];
+  for (const k of ['box', 'depth', 'maxError', 'quality', 'mesher', 'color', 'clip', 'show', 'wire', 'occlusion', 'shadows', 'curves']) if (s[k] !== undefined) state[k] = s[k];
   pendingView = s.view || null;
   state.view = s.view || null;
   shownIdentity = null;
@@ -1083,6 +1085,11 @@ function wire() {
     $('max-error').removeAttribute('aria-invalid');
     state.maxError = text === '' ? null : e;
     $('depth-max').disabled = state.maxError > 0;
+    $('mesher').disabled = !(state.maxError > 0);
+    requestChanged();
+  });
+  $('mesher').addEventListener('change', () => {
+    state.mesher = $('mesher').value;
     requestChanged();
   });
   $('quality-good').addEventListener('change', () => {

@@ -20,6 +20,9 @@ export const COLOR_ATTRIBUTES = {
   mean: ['normal', 'mean_curvature'], gauss: ['normal', 'gauss_curvature'],
 };
 const FEATURES = ['edges', 'points', 'boundary', 'box', 'curves'];
+// The meshers a request under a bound may ask for (proto/request.schema.json "dual",
+// "straddle"); the first is the default.
+export const MESHERS = ['dual', 'primal', 'straddle'];
 const DEFAULT_BOX = [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5];
 
 export function defaultState() {
@@ -31,6 +34,9 @@ export function defaultState() {
     depth: { min: 3, max: 7 },
     maxError: null,         // the error bound (model units), null: the depth decides
     quality: 'raw',         // 'good': the server's quality pass after meshing
+    mesher: 'dual',         // under maxError: 'dual' (the server's default: the dual mesh
+                            // where it applies), 'primal' ("dual": false) or 'straddle'
+                            // (the primal polygons with straddled vertices)
     view: null,             // {pos: [3], target: [3]}
     color: 'shaded',
     clip: { on: false, axis: 'z', offset: 0, flip: false, cap: true },
@@ -56,6 +62,8 @@ export function requestBody(state, paramNames) {
   if (state.maxError > 0) {
     body.depth = { min: state.depth.min };  // depth.max: the server's limit, a safety net
     body.max_error = state.maxError;
+    if (state.mesher !== 'dual') body.dual = false;  // the dual mesh is the server's default
+    if (state.mesher === 'straddle') body.straddle = true;
   } else {
     body.depth = { min: state.depth.min, max: state.depth.max };
   }
@@ -84,6 +92,7 @@ export function encodeState(state, paramNames) {
   q.set('depth', `${state.depth.min},${state.depth.max}`);
   if (state.maxError > 0) q.set('err', num(state.maxError));
   if (state.quality === 'good') q.set('quality', 'good');
+  if (state.mesher !== 'dual') q.set('mesher', state.mesher);
   if (state.view) q.set('cam', [...state.view.pos, ...state.view.target].map(short).join(','));
   if (state.color !== 'shaded') q.set('color', state.color);
   if (state.clip.on) q.set('clip', [state.clip.axis, short(state.clip.offset)].concat(state.clip.flip ? ['flip'] : []).join(','));
@@ -134,6 +143,9 @@ export function decodeState(fragment) {
   }
   if (q.has('quality')) {
     if (['raw', 'good'].includes(q.get('quality'))) s.quality = q.get('quality'); else s.problems.push('quality');
+  }
+  if (q.has('mesher')) {
+    if (MESHERS.includes(q.get('mesher'))) s.mesher = q.get('mesher'); else s.problems.push('mesher');
   }
   if (q.has('cam')) {
     const c = numbers(q.get('cam'), 6);

@@ -46,6 +46,22 @@ export function clearStats() {
   document.getElementById('warnings').textContent = '';
 }
 
+// Why the dual mesher did not make the mesh, in words (the reasons' table:
+// core/octree/mesher.h, proto/openapi.yaml).
+const DUAL_DECLINED = {
+  no_bound: 'no max error', off: 'dual off', singular_locus: 'singular locus',
+  min_max: 'min/max in f', box_cut: 'the box cuts the surface',
+  not_plain: 'not one sheet at depth max', error_at_max_depth: 'error not met at depth max',
+  open_edge: 'open edge',
+};
+
+// "dual", or "primal (singular locus)": the mesher and why not the dual one.
+function mesherText(poly) {
+  if (!poly.mesher) return '–';
+  const why = poly.dual_declined;
+  return why ? `${poly.mesher} (${DUAL_DECLINED[why] || why.replace(/_/g, ' ')})` : poly.mesher;
+}
+
 // result: loader.js's result.
 export function showStats(result) {
   const s = result.stats || {};
@@ -79,6 +95,8 @@ export function showStats(result) {
       Number.isFinite(between) ? between : null);
   const met = acc.met === true ? ' (met)' : acc.met === false ? ' (not met)' : '';
   put('max_error', acc.max_error > 0 ? `${fmt.sig(acc.max_error)}${met}` : 'off', acc.max_error);
+  const poly = s.polygoniser || {};
+  put('mesher', mesherText(poly), poly.mesher);
   put('compute_ms', fmt.ms(t.total), t.total);
   const cache = result.viewerCache ? 'viewer (no request)' : `server ${result.serverCache}`;
   put('cache', cache, result.viewerCache ? 'viewer' : result.serverCache);
