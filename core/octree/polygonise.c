@@ -639,7 +639,7 @@ static enum ism_poly_status try_dual(const ism_tape *f, const ism_poly_options *
     }
     *tried = true;
     stats->mesher = ISM_MESHER_DUAL;
-    stats->threads = 1;
+    stats->threads = ds.threads;
     stats->error_rounds = ds.rounds;
     stats->error_missed_nodes = ds.missed;
     stats->plotting_nodes = ds.leaves;
