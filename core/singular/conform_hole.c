@@ -439,13 +439,6 @@ static bool rim_loops(cf_ctx *c, uint32_t **rm, size_t *n, cf_loops *out)
     return ok;
 }
 
-bool cf_cut_more(cf_ctx *c, const cf_cutter *cut, uint32_t **removed, size_t *nremoved,
-                 cf_loops *ls)
-{
-    memset(ls, 0, sizeof *ls);
-    return cut_more(c, cut, removed, nremoved) && rim_loops(c, removed, nremoved, ls);
-}
-
 void cf_undo(cf_ctx *c, const uint32_t *removed, size_t nremoved, size_t ntris, size_t nverts)
 {
     for (size_t i = 0; i < nremoved; i++)

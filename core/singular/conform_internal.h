@@ -232,11 +232,6 @@ typedef struct cf_cutter {
  * returns no loop. */
 bool cf_cut_clean(cf_ctx *c, const cf_cutter *cut, double *radius, double max_radius,
                   cf_loops *ls, uint32_t **removed, size_t *nremoved);
-/* Marks dead the live triangles the cutter selects now (added to the sorted *removed), and
- * chains the whole hole's rim into ls again (ls emptied first; the triangles cut before
- * stay cut). False when out of memory (ls then empty, *removed still lists what is dead). */
-bool cf_cut_more(cf_ctx *c, const cf_cutter *cut, uint32_t **removed, size_t *nremoved,
-                 cf_loops *ls);
 /* Undoes a cut whose refilling failed: revives the triangles, drops everything appended
  * since (ntris, nverts). */
 void cf_undo(cf_ctx *c, const uint32_t *removed, size_t nremoved, size_t ntris, size_t nverts);
@@ -300,19 +295,6 @@ int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double
  * vertex leaves its loop. False when out of memory (nothing more marked dead; the caller
  * undoes the cut). */
 bool cf_drop_spikes(cf_ctx *c, cf_loops *ls, uint32_t **rm, size_t *nrm);
-
-/* ---- conform_tube_pleats.c: growing a tube's cut where its rim steps backwards ---- */
-/* Round the lone closed curve pl, whose tube of radius r was cut (*removed, rim loops ls):
- * while a rim loop steps backwards along pl (the polygoniser's pleats), the cut grows there
- * only, in steps, as long as that lowers the backward steps (conform_tube_pleats.c). False
- * when out of memory; then, or stopped, *removed lists every triangle cut (the caller undoes
- * them). */
-bool cf_cut_past_pleats(cf_ctx *c, const cf_polyline *pl, double r, cf_loops *ls,
-                        uint32_t **removed, size_t *nremoved);
-/* Appends to out (after cf_tgrid_begin) every live triangle whose box meets the box of a
- * segment of the n polylines grown by r: a superset of those within r of them
- * (conform_tube.c). False when out of memory. */
-bool cf_gather_near_curves(cf_ctx *c, const cf_polyline *pl, size_t n, double r, cf_tris *out);
 
 /* ---- conform_point.c, conform_tube.c: the two surgeries ---- */
 /* Point i of the locus made one vertex shared by its cones. False only when out of memory

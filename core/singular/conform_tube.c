@@ -139,7 +139,11 @@ static bool gather_runs(cf_ctx *c, const cf_polyline *pl, size_t n, double r, cf
     return true;
 }
 
-bool cf_gather_near_curves(cf_ctx *c, const cf_polyline *pl, size_t n, double r, cf_tris *out)
+/* Appends to out (after cf_tgrid_begin) every live triangle whose box meets the box of a
+ * segment of the n polylines grown by r: a superset of those within r of them. False when out
+ * of memory. */
+static bool gather_near_curves(cf_ctx *c, const cf_polyline *pl, size_t n, double r,
+                               cf_tris *out)
 {
     /* the curves' box grown by r holds every run's query box: one pass over the mesh files
      * what the runs need, and (ahead by r) what the next widenings need */
@@ -164,7 +168,7 @@ static bool gather_tube(cf_ctx *c, void *arg, cf_tris *out)
             tb->gen_base = c->gen;
         tb->vd_r = tb->r;
     }
-    return cf_gather_near_curves(c, tb->pl, tb->n, tb->r, out);
+    return gather_near_curves(c, tb->pl, tb->n, tb->r, out);
 }
 
 /* The curve's points spaced at least min_step apart (the ends of an open curve kept). */
@@ -344,12 +348,11 @@ static bool conform_group(cf_run *r, const size_t *idx, size_t n)
     uint32_t *rm = NULL;
     cf_loops ls = {0};
     ok = cf_cut_clean(c, &cut, &tb.r, INFINITY, &ls, &rm, &nrm);
-    if (ok && !c->stopped && ls.n > 0 && g.n == 1) { /* a lone curve: past its pleats */
-        ok = cf_cut_past_pleats(c, &g.pl[0], tb.r, &ls, &rm, &nrm);
-        /* the kept triangles sticking into its hole cut too (conform_ears.c) */
-        ok = ok && (c->stopped || cf_drop_spikes(c, &ls, &rm, &nrm));
-        if (!ok || c->stopped)
-            cf_undo(c, rm, nrm, nt0, nv0); /* out of memory or stopped: as before */
+    if (ok && !c->stopped && ls.n > 0 && g.n == 1) {
+        /* a lone curve: the kept triangles sticking into its hole cut too (conform_ears.c) */
+        ok = cf_drop_spikes(c, &ls, &rm, &nrm);
+        if (!ok)
+            cf_undo(c, rm, nrm, nt0, nv0); /* out of memory: as before */
     }
     if (ok && c->stopped) {
         c->st->items_stopped++;

@@ -1,10 +1,9 @@
 /* test_tube_folds.c — few triangles turned over beside a double curve after the conformance.
  * The figure-8 Klein bottle (the klein-bottle preset, depth 8) crosses itself along a closed
  * curve in z = 0; where the polygoniser pleats beside it, the conformance tube's rim loops
- * stepped backwards along the curve and the zip's rings turned over. The tube grows along
- * those stretches (conform_tube_pleats.c), and the rim's backward steps left are smoothed
- * before the rings (conform_ears.c: kept spikes cut, leaning risers' ears clipped). Two
- * crossing spheres (29°) pleat all round their double circle: there only the smoothing acts.
+ * stepped backwards along the curve and the zip's rings turned over. The rim's backward
+ * steps are now smoothed before the rings (conform_ears.c: kept spikes cut, leaning risers'
+ * ears clipped). Two crossing spheres (29°) pleat all round their double circle.
  *
  * Counted: edges away from the double curve (neither end on a non-manifold edge) whose two
  * triangles' normals point to opposite sides of ∇f at both its ends (a crease keeps both on
@@ -22,9 +21,9 @@
 
 #define KLEIN "(x^2 + y^2 + z^2 + 2*y - 1)*((x^2 + y^2 + z^2 - 2*y - 1)^2 - 8*z^2) + " \
               "16*x*z*(x^2 + y^2 + z^2 - 2*y - 1)"
-/* Turned-over edges allowed per box at depth 8: 0 / 0 / 0 with the growth and the rim's
- * smoothing, 3 / 2 / 7 with the growth alone, 69 / 67 / 7 with neither (the pleats' backward
- * steps are in the first two boxes). */
+/* Turned-over edges allowed per box at depth 8: 0 / 0 / 0 with the rim's smoothing, 69 / 67
+ * / 7 without it (the pleats' backward steps are in the first two boxes; growing the tube
+ * past them, the smoothing's forerunner, left 3 / 2 / 7). */
 #define FOLDS_MAX 24
 
 /* Two unit spheres whose centres are 1/2 apart on x (the crossing-spheres preset, its box and
