@@ -73,19 +73,22 @@ bool ism_remesh_simplify(ism_mesh *m, const ism_remesh_options *o, ism_simplify_
     if (!(o->max_error > 0))
         return ism_error_set(err, "simplification: needs max_error above 0");
     rm_pass p;
+    sp_history h = {0};
     size_t nv = m->nverts, nt = m->ntris;
-    bool ok = rm_pass_open(&p, m, o, 0);
+    bool ok = rm_pass_open(&p, m, o, 0) && sp_history_open(&h, &p);
     p.bounded = true;
     if (ok) {
         p.memo = rm_memo_new(); /* NULL: every measure is taken afresh */
+        p.flipped = h.flipped;
         memset(p.active, 1, m->nverts);
     }
     for (int round = 0; ok && round < ISM_SP_ROUNDS && !stopped(o); round++) {
         size_t live = live_vertices(&p);
-        size_t made = sp_collapse_round(&p, o->cancel, &ok);
+        size_t made = sp_collapse_round(&p, &h, o->cancel, &ok);
         st->rounds++;
         if (ok && !stopped(o))
             even_out(&p, &ok);
+        sp_history_flips(&h, m->nverts);
         if ((double)made < ISM_SP_MIN_GAIN * (double)live)
             break;
     }
@@ -101,6 +104,8 @@ bool ism_remesh_simplify(ism_mesh *m, const ism_remesh_options *o, ism_simplify_
     st->stopped = stopped(o);
     rm_memo_free(p.memo);
     p.memo = NULL;
+    p.flipped = NULL;
+    sp_history_free(&h);
     if (!rm_pass_close(&p, nv, nt, ren))
         ok = false;
     st->triangles_after = m->ntris;

@@ -33,14 +33,18 @@
 #define ISM_SP_PROJECT_MAX_REL 0.5
 /* A merge measuring up to this × max_error on its own is tried with its ring settled
  * (sp_trial.h). Sphere at E = 7.9e-4 (marching cubes' 64³ error, 17,192 triangles): 4720
- * triangles without trials, 4314 / 4136 / 4024 with reach 1.15 / 1.25 / 1.4. */
-#define ISM_SP_TRIAL_REACH 1.4
+ * triangles without trials, 4314 / 4136 / 4024 with reach 1.15 / 1.25 / 1.4. Not 1.4: the
+ * trials measuring 1.3 to 1.4 × E merged 86 of 484 times on that sphere (41 of 355 on the
+ * torus at 2.4e-3) for 172K of its 1.18M evaluations of f; with the ring settled as now,
+ * 1.4 -> 1.3 took the sphere's simplification from 4,072 to 4,098 triangles, the torus's
+ * from 2,310 to 2,294 (callgrind bench_error mesh S E 10). */
+#define ISM_SP_TRIAL_REACH 1.3
 /* Edges between polls of the cancel flag. */
 #define ISM_SP_POLL_EDGES 512
 
 typedef struct edge {
     double len;
-    uint32_t a, b;
+    uint32_t a, b, corner; /* corner: 3 t + k, a the triangle's corner k and b its next */
 } edge;
 
 /* e goes before f: shorter, or as long with the smaller first end. */
@@ -76,9 +80,66 @@ static edge *sort_edges(edge *e, edge *tmp, size_t n)
 
 static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * (size_t)v; }
 
-/* The edges with a free end and an active one (each once), shortest first; *n gets how
- * many. NULL when out of memory. */
-static edge *candidate_edges(const rm_pass *p, size_t *n)
+bool sp_history_open(sp_history *h, const rm_pass *p)
+{
+    h->clock = 0;
+    h->changed = calloc(p->r.cap_verts ? p->r.cap_verts : 1, sizeof *h->changed);
+    h->refused = calloc(p->r.cap_tris ? 3 * p->r.cap_tris : 1, sizeof *h->refused);
+    h->flipped = calloc(p->r.cap_verts ? p->r.cap_verts : 1, 1);
+    return h->changed && h->refused && h->flipped;
+}
+
+void sp_history_free(sp_history *h)
+{
+    free(h->changed);
+    free(h->refused);
+    free(h->flipped);
+    memset(h, 0, sizeof *h);
+}
+
+void sp_history_flips(sp_history *h, size_t nverts)
+{
+    h->clock++;
+    for (size_t v = 0; v < nverts; v++)
+        if (h->flipped[v]) {
+            h->changed[v] = h->clock;
+            h->flipped[v] = 0;
+        }
+}
+
+/* Stamps w's fan, just made by a merge (its corners are every vertex whose fan changed). */
+static void stamp_fan(const rm_pass *p, sp_history *h, uint32_t w)
+{
+    const rm_mesh *r = &p->r;
+    h->clock++;
+    for (uint32_t i = 0; i < r->count[w]; i++) {
+        const uint32_t *c = r->m->tri + 3 * r->vt[r->start[w] + i];
+        h->changed[c[0]] = h->changed[c[1]] = h->changed[c[2]] = h->clock;
+    }
+}
+
+/* True when the edge of corner `corner` was refused and no fan at a vertex of its ends'
+ * fans has changed since. */
+static bool refused_still(const rm_pass *p, const sp_history *h, uint32_t corner, uint32_t a,
+                          uint32_t b)
+{
+    const rm_mesh *r = &p->r;
+    uint32_t when = h->refused[corner];
+    if (!when)
+        return false;
+    const uint32_t ends[2] = {a, b};
+    for (int e = 0; e < 2; e++)
+        for (uint32_t i = 0; i < r->count[ends[e]]; i++) {
+            const uint32_t *c = r->m->tri + 3 * r->vt[r->start[ends[e]] + i];
+            if (h->changed[c[0]] > when || h->changed[c[1]] > when || h->changed[c[2]] > when)
+                return false;
+        }
+    return true;
+}
+
+/* The edges with a free end and an active one (each once), not refused with nothing changed
+ * around them since, shortest first; *n gets how many. NULL when out of memory. */
+static edge *candidate_edges(const rm_pass *p, const sp_history *h, size_t *n)
 {
     const ism_mesh *m = p->r.m;
     edge *e = malloc((3 * m->ntris + 1) * sizeof *e);
@@ -86,9 +147,10 @@ static edge *candidate_edges(const rm_pass *p, size_t *n)
     for (size_t t = 0; e && t < m->ntris; t++) {
         const uint32_t *c = m->tri + 3 * t;
         for (int k = 0; e && !p->r.dead[t] && k < 3; k++) {
-            uint32_t a = c[k], b = c[(k + 1) % 3];
-            if (a < b && !(p->r.locked[a] && p->r.locked[b]) && (p->active[a] || p->active[b]))
-                e[(*n)++] = (edge){rm_dist(P(p, a), P(p, b)), a, b};
+            uint32_t a = c[k], b = c[(k + 1) % 3], corner = (uint32_t)(3 * t + k);
+            if (a < b && !(p->r.locked[a] && p->r.locked[b]) &&
+                (p->active[a] || p->active[b]) && !refused_still(p, h, corner, a, b))
+                e[(*n)++] = (edge){rm_dist(P(p, a), P(p, b)), a, b, corner};
         }
     }
     edge *tmp = e ? malloc((*n + 1) * sizeof *tmp) : NULL;
@@ -326,10 +388,10 @@ static bool collapse_edge(rm_pass *p, uint32_t a, uint32_t b, bool *ok)
     return locked[a] ? into(p, b, a, ok) : into(p, a, b, ok);
 }
 
-size_t sp_collapse_round(rm_pass *p, const volatile int *cancel, bool *ok)
+size_t sp_collapse_round(rm_pass *p, sp_history *h, const volatile int *cancel, bool *ok)
 {
     size_t n, made = 0;
-    edge *e = candidate_edges(p, &n);
+    edge *e = candidate_edges(p, h, &n);
     *ok = e != NULL;
     memset(p->touched, 0, p->r.cap_verts);
     memset(p->active, 0, p->r.cap_verts);
@@ -339,7 +401,12 @@ size_t sp_collapse_round(rm_pass *p, const volatile int *cancel, bool *ok)
         uint32_t a = e[i].a, b = e[i].b;
         if (p->r.gone[a] || p->r.gone[b] || p->touched[a] || p->touched[b])
             continue;
-        made += collapse_edge(p, a, b, ok);
+        if (collapse_edge(p, a, b, ok)) {
+            made++;
+            stamp_fan(p, h, p->r.gone[a] ? b : a);
+        } else {
+            h->refused[e[i].corner] = h->clock;
+        }
     }
     free(e);
     return made;

@@ -111,13 +111,43 @@ static bool fan_within(rm_pass *p, uint32_t v)
     return true;
 }
 
+/* Marks in beyond[] (by ring index) the corners other than w of each triangle of w's fan
+ * whose centroid lies beyond max_error, and the far end of each edge at w whose midpoint
+ * does: the vertices whose moves can bring those points back. (The points were measured by
+ * the verdict just before: the memo answers.) */
+static void mark_beyond(rm_pass *p, const sp_snapshot *s, uint32_t w, bool *beyond)
+{
+    const rm_mesh *r = &p->r;
+    const double *P = r->m->pos;
+    uint32_t mark[3 * ISM_RM_MERGE_MAX_DEGREE];
+    int n = 0;
+    for (uint32_t i = 0; i < r->count[w]; i++) {
+        const uint32_t *t = r->m->tri + 3 * r->vt[r->start[w] + i];
+        bool centroid = !rm_bound_triangle(p, P + 3 * (size_t)t[0], P + 3 * (size_t)t[1],
+                                           P + 3 * (size_t)t[2]);
+        for (int k = 0; k < 3; k++) {
+            uint32_t u = t[k], next = t[(k + 1) % 3];
+            bool edge = (u == w || next == w) &&
+                        !rm_bound_edge(p, P + 3 * (size_t)u, P + 3 * (size_t)next);
+            if ((centroid || edge) && u != w && n < 3 * ISM_RM_MERGE_MAX_DEGREE)
+                mark[n++] = u;
+            if (edge && next != w && n < 3 * ISM_RM_MERGE_MAX_DEGREE)
+                mark[n++] = next;
+        }
+    }
+    for (int i = 0; i < s->nring; i++)
+        for (int j = 0; j < n && !beyond[i]; j++)
+            beyond[i] = s->ring[i] == mark[j];
+}
+
 bool sp_ring_settle(rm_pass *p, const sp_snapshot *s, uint32_t w)
 {
     const rm_mesh *r = &p->r;
-    bool moved[SP_TRIAL_MAX_RING] = {false};
+    bool moved[SP_TRIAL_MAX_RING] = {false}, beyond[SP_TRIAL_MAX_RING] = {false};
+    mark_beyond(p, s, w, beyond);
     for (int i = 0; i < s->nring; i++) {
         uint32_t u = s->ring[i];
-        if (u == w || r->locked[u] || r->gone[u] || !r->count[u])
+        if (u == w || !beyond[i] || r->locked[u] || r->gone[u] || !r->count[u])
             continue;
         moved[i] = rm_relax_vertex(p, u);
         moved[i] |= sp_offset_vertex(p, u);
