@@ -136,6 +136,11 @@ static const flag FLAGS[] = {
     {"http-threads", K_INT, 1, 256, "N",
      "threads serving HTTP connections (at least; two per core are started)",
      "1", NULL}, /* at least: http.c starts as many as the connection limit needs */
+    {"tcp-congestion", K_STRING, 0, 0, "NAME",
+     "TCP congestion control of the daemon's connections (one of "
+     "net.ipv4.tcp_allowed_congestion_control, e.g. reno, cubic); behind nginx on the same "
+     "host, where the system's is bbr without the fq qdisc, a non-pacing one costs less CPU",
+     NULL, "the system's"},
     {"max-depth", K_INT, 1, 16, "N", "deepest octree a request may ask for",
      "10", NULL},
     {"max-triangles", K_INT, 1, 1000000000LL, "N",
@@ -160,6 +165,20 @@ static const flag FLAGS[] = {
 #define NFLAGS (sizeof FLAGS / sizeof FLAGS[0])
 
 /* ---- value parsers ------------------------------------------------------------------- */
+
+/* A kernel congestion control's name: lower-case letters, digits, '_' (at most 15: the
+ * kernel's TCP_CA_NAME_MAX with its terminator). Whether the kernel has it is known only
+ * when the listening socket takes it (http.c). */
+static bool valid_congestion_name(const char *v)
+{
+    size_t n = strlen(v);
+    if (n == 0 || n > 15)
+        return false;
+    for (const char *p = v; *p; p++)
+        if (!((*p >= 'a' && *p <= 'z') || (*p >= '0' && *p <= '9') || *p == '_'))
+            return false;
+    return true;
+}
 
 /* "ADDR[,ADDR...]": IPv4 or IPv6 literals. */
 static bool valid_address_list(const char *v)
@@ -297,7 +316,10 @@ static const char *describe(const flag *f)
         return buf;
     case K_DURATION: return "expected a duration like 60, 90s, 500ms, 2m (1 ms to 7 days)";
     case K_PATH: return "expected a path shorter than 4096 bytes";
-    case K_STRING: return "expected a short string without control characters";
+    case K_STRING:
+        return !strcmp(f->name, "tcp-congestion")
+                   ? "expected a congestion control's name (a-z, 0-9, _; at most 15)"
+                   : "expected a short string without control characters";
     case K_LOGFMT: return "expected text or json";
     case K_BOOL: return "expected true or false";
     case K_ORDER: return "expected fair or fifo";
@@ -383,6 +405,9 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
         if (!strcmp(name, "trusted-proxy"))
             return valid_address_list(v) &&
                    set_path(cfg->trusted_proxy, sizeof cfg->trusted_proxy, v);
+        if (!strcmp(name, "tcp-congestion"))
+            return valid_congestion_name(v) &&
+                   set_path(cfg->tcp_congestion, sizeof cfg->tcp_congestion, v);
         return set_path(cfg->cors_origin, sizeof cfg->cors_origin, v);
     case K_LOGFMT: return ism_log_parse_format(v, &cfg->log_format);
     case K_BOOL: {

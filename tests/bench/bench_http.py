@@ -364,6 +364,18 @@ def free_port():
     return port
 
 
+def non_pacing_congestion():
+    """reno when the system's congestion control is bbr and reno may be chosen, else None."""
+    try:
+        with open("/proc/sys/net/ipv4/tcp_congestion_control") as f:
+            system = f.read().strip()
+        with open("/proc/sys/net/ipv4/tcp_allowed_congestion_control") as f:
+            allowed = f.read().split()
+    except OSError:
+        return None
+    return "reno" if system == "bbr" and "reno" in allowed else None
+
+
 def start_ceiling(build, tmp, body):
     """build/bench/http_ceiling: libmicrohttpd alone serving the same bytes."""
     prog = os.path.join(build, "bench", "http_ceiling")
@@ -414,6 +426,25 @@ def throughput(build, tmp):
                 nginx_all_results[conns] = wrk(nurl_all, conns, secs,
                                                pid=nginx_workers(nginx_all.pid))
                 row("nginx (a worker per core) the same file", conns, nginx_all_results[conns])
+        alt = non_pacing_congestion()
+        if alt:
+            # isomesh's daemon with --tcp-congestion (http.c: bbr without fq paces every
+            # socket with a kernel timer; nginx's one-sendfile answers barely pay it)
+            d2 = start_daemon(build, tmp, "--workers", "2", "--tcp-congestion", alt)
+            try:
+                url2, _ = cached_url(d2, MESH_REQ)
+                for conns in (64, 256):
+                    r = wrk(url2, conns, secs, pid=d2.proc.pid)
+                    row("isomeshd --tcp-congestion %s" % alt, conns, r)
+                    if conns in nginx_all_results:
+                        n = nginx_all_results[conns]
+                        print("  beside nginx (a worker per core): req/s %.2fx, p99 %.2fx, CPU/req "
+                              "%.2fx, equal share %.2fx" % (
+                                  r["rps"] / n["rps"], r["p99"] / n["p99"] if n["p99"] else 0,
+                                  r["cpu_us"] / n["cpu_us"], equal_share(r, n)))
+            finally:
+                d2.stop(timeout=30)
+                d2.cleanup()
         print("(isomeshd's answers sent from the cache file, sendfile, at 1/16/64/256 "
               "connections: %s; respond.c: meshes from 64 KB while 128 or more connections "
               "are open, else from memory)" % " / ".join("%d" % sendfile[c] for c in sorted(sendfile)))

@@ -6,7 +6,9 @@ that README.md's prose and deploy/README.md's limits table state are --help's, a
 that table gives for deploy/isomeshd.conf are the file's."""
 import json
 import os
+import http.client
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -135,6 +137,8 @@ class ConfigTest(unittest.TestCase):
             ("--job-timeout", "0"), ("--max-body", "10"), ("--max-depth", "17"),
             ("--listen", "nohost"), ("--listen", "1.2.3.4:99999"), ("--listen", "::1:80"),
             ("--log-format", "xml"), ("--max-triangles", "1e6"), ("--cache-dir", ""),
+            ("--tcp-congestion", "Cubic"), ("--tcp-congestion", "a" * 16),
+            ("--tcp-congestion", ""),
         ]
         for flag, value in cases:
             r = run(flag, value)
@@ -182,6 +186,43 @@ class ConfigTest(unittest.TestCase):
                 self.assertEqual(len(r.stderr.strip().splitlines()), 1)
             r = run("--config", os.path.join(tmp, "missing.conf"))
             self.assertEqual(r.returncode, 2)
+
+    def test_tcp_congestion_is_the_accepted_sockets(self):
+        """--tcp-congestion NAME: the daemon's end of a connection uses NAME (read back with
+        ss, the kernel's view), a name the kernel lacks stops the start with a message."""
+        try:
+            with open("/proc/sys/net/ipv4/tcp_allowed_congestion_control") as f:
+                allowed = f.read().split()
+            with open("/proc/sys/net/ipv4/tcp_congestion_control") as f:
+                system = f.read().strip()
+        except OSError:
+            self.skipTest("no /proc/sys/net/ipv4")
+        other = [n for n in allowed if n != system]  # so the option, not the default, shows
+        if not other or not shutil.which("ss"):
+            self.skipTest("no congestion control besides the system's, or no ss")
+        with Daemon("--workers", "1", "--tcp-congestion", other[0]) as d:
+            conn = http.client.HTTPConnection("127.0.0.1", d.port, timeout=30)
+            try:
+                conn.request("GET", "/healthz")
+                r = conn.getresponse()
+                r.read()
+                self.assertEqual(r.status, 200)
+                mine = conn.sock.getsockname()[1]
+                out = subprocess.run(
+                    ["ss", "-tinH", "state", "established",
+                     "( sport = :%d and dport = :%d )" % (d.port, mine)],
+                    stdout=subprocess.PIPE, text=True, timeout=10).stdout
+            finally:
+                conn.close()
+            self.assertRegex(out, r"\b%s\b" % other[0], out)
+            self.assertNotRegex(out, r"\b%s\b" % system, out)
+        d = Daemon("--workers", "1", "--tcp-congestion", "nosuchcontrol")
+        try:
+            with self.assertRaises(Exception):
+                d.start(timeout=10)
+            self.assertIn("--tcp-congestion nosuchcontrol", d.log())
+        finally:
+            d.cleanup()
 
     def test_json_log_lines(self):
         d = Daemon("--workers", "1", log_format="json")
