@@ -102,8 +102,8 @@ typedef struct ism_request {
 
 /* When the simplification runs under max_error. Not asked (the default): after the primal
  * polygons only. The dual mesh (the default mesher under a bound, core/octree/mesher.h) is
- * already within the bound at about libfive's cost; simplifying it costs 0.9-5.7 times its
- * meshing for 0.16-0.33 of its triangles (callgrind, sphere and torus at 1e-2..1e-3: README,
+ * already within the bound at about libfive's cost; simplifying it costs 1.3-6.7 times its
+ * meshing for 0.18-0.40 of its triangles (callgrind, sphere and torus at 1e-2..1e-3: README,
  * "Under an error bound"), so it runs on a dual mesh only when asked ("simplify": true,
  * --simplify). The primal polygons (every other surface) keep the simplified default. */
 enum ism_simplify_when { ISM_SIMPLIFY_NEVER, ISM_SIMPLIFY_PRIMAL, ISM_SIMPLIFY_ALWAYS };
