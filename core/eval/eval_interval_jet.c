@@ -44,13 +44,34 @@ void ism_ivjet_ws_free(ism_ivjet_ws *ws)
     free(ws);
 }
 
-/* One evaluation: second = 0 leaves the Hessian entries untouched (unused). */
-typedef struct pass {
-    ism_ivjet *r;
-    int second;
-} pass;
-
 static ism_interval ivc(double c) { return iv(c, c); }
+
+/* The steps of one instruction are inlined into each of run's two variants (every partial,
+ * or those of a tape's free_of), so the first pays nothing for the second's tests. */
+#define ALWAYS_INLINE inline __attribute__((always_inline))
+
+/* What one instruction computes, as bits: D(k) the partial in variable k, H(e) the Hessian
+ * entry e, SECOND whether Hessian entries are kept at all (without it they are left
+ * untouched: unused). A first partial outside the bits is one in a variable the
+ * instruction's value does not depend on (the tape's free_of): the rules below make it
+ * exactly 0 (every exact 0 stays one, see is_zero), so it is written as 0 without work and
+ * the results are bit for bit those of computing it. The second-order pass computes every
+ * partial: at a kink the rule below gives the mixed entry (x, z) of a value free of z the
+ * whole line when its x partial is not 0, so second partials are not always 0 there (and
+ * skipping the first ones alone saved nothing measurable). On the heart's tape 8 of 14
+ * instructions depend on fewer than three variables. */
+#define D(k) (1u << (k))
+#define H(e) (8u << (e))
+#define SECOND (1u << 9)
+#define H_ALL (H(0) | H(1) | H(2) | H(3) | H(4) | H(5))
+#define DO_D(w, k) (((w) & D(k)) != 0)
+#define DO_H(w, e) (((w) & H(e)) != 0)
+
+/* The bits for an instruction whose value depends on the variables in deps. */
+static inline unsigned want_of(unsigned deps, int second)
+{
+    return second ? D(0) | D(1) | D(2) | SECOND | H_ALL : deps;
+}
 
 /* Exact zeros stay exact (outward rounding would widen 0 to ±2^-1074): a derivative that is
  * exactly 0 says the register does not depend on that variable, which the kink rule uses. */
@@ -74,24 +95,25 @@ static inline ism_interval subz(ism_interval a, ism_interval b)
 /* Whole-line derivatives of a result of a and b that is not differentiable in the box (a
  * kink, a pole), except in the variables on which neither a nor b depends (derivatives
  * exactly 0): there the result does not change either. */
-static void set_whole_derivs(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, int second)
+static void set_whole_derivs(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, unsigned w)
 {
     bool flat[3];
     for (int k = 0; k < 3; k++) {
-        flat[k] = is_zero(a->d[k]) && is_zero(b->d[k]);
+        flat[k] = !DO_D(w, k) || (is_zero(a->d[k]) && is_zero(b->d[k]));
         o->d[k] = flat[k] ? ivc(0.0) : ism_iv_whole();
     }
-    for (int e = 0; second && e < 6; e++) {
-        bool zero = flat[HI[e]] && flat[HJ[e]] && is_zero(a->h[e]) && is_zero(b->h[e]);
+    for (int e = 0; (w & SECOND) && e < 6; e++) {
+        bool zero = !DO_H(w, e) || (flat[HI[e]] && flat[HJ[e]] && is_zero(a->h[e])
+                                    && is_zero(b->h[e]));
         o->h[e] = zero ? ivc(0.0) : ism_iv_whole();
     }
 }
 
-static void set_zero_derivs(ism_ivjet *o, int second)
+static ALWAYS_INLINE void set_zero_derivs(ism_ivjet *o, unsigned w)
 {
     for (int k = 0; k < 3; k++)
         o->d[k] = ivc(0.0);
-    for (int k = 0; second && k < 6; k++)
+    for (int k = 0; (w & SECOND) && k < 6; k++)
         o->h[k] = ivc(0.0);
 }
 
@@ -105,14 +127,14 @@ static inline ism_interval dd(const ism_ivjet *a, int e)
 }
 
 /* The chain rule for out = g(a) given g(U), g'(U), g''(U). */
-static void chain(ism_ivjet *o, const ism_ivjet *a, ism_interval g, ism_interval g1,
-                  ism_interval g2, int second)
+static ALWAYS_INLINE void chain(ism_ivjet *o, const ism_ivjet *a, ism_interval g, ism_interval g1,
+                  ism_interval g2, unsigned w)
 {
     o->v = g;
     for (int k = 0; k < 3; k++)
-        o->d[k] = mulz(g1, a->d[k]);
-    for (int e = 0; second && e < 6; e++)
-        o->h[e] = addz(mulz(g1, a->h[e]), mulz(g2, dd(a, e)));
+        o->d[k] = DO_D(w, k) ? mulz(g1, a->d[k]) : ivc(0.0);
+    for (int e = 0; (w & SECOND) && e < 6; e++)
+        o->h[e] = DO_H(w, e) ? addz(mulz(g1, a->h[e]), mulz(g2, dd(a, e))) : ivc(0.0);
 }
 
 static ism_interval lin_copy(ism_interval u, double c) { (void)c; return u; }
@@ -121,26 +143,26 @@ static ism_interval lin_mul(ism_interval u, double c) { return iv_mul_c(u, c); }
 static ism_interval lin_div(ism_interval u, double c) { return iv_div_c(u, c); }
 
 /* Applies fn(., c) to the value and every derivative of a. */
-static void each(ism_ivjet *o, const ism_ivjet *a, ism_interval (*fn)(ism_interval, double),
-                 double c, int second)
+static ALWAYS_INLINE void each(ism_ivjet *o, const ism_ivjet *a, ism_interval (*fn)(ism_interval, double),
+                 double c, unsigned w)
 {
     o->v = fn(a->v, c);
     for (int k = 0; k < 3; k++)
-        o->d[k] = is_zero(a->d[k]) ? a->d[k] : fn(a->d[k], c);
-    for (int e = 0; second && e < 6; e++)
-        o->h[e] = is_zero(a->h[e]) ? a->h[e] : fn(a->h[e], c);
+        o->d[k] = !DO_D(w, k) ? ivc(0.0) : is_zero(a->d[k]) ? a->d[k] : fn(a->d[k], c);
+    for (int e = 0; (w & SECOND) && e < 6; e++)
+        o->h[e] = !DO_H(w, e) ? ivc(0.0) : is_zero(a->h[e]) ? a->h[e] : fn(a->h[e], c);
 }
 
 /* out = s * a + shift for a constant factor s: derivatives scale exactly as the value. */
-static void affine(ism_ivjet *o, const ism_ivjet *a, int op, double c, int second)
+static ALWAYS_INLINE void affine(ism_ivjet *o, const ism_ivjet *a, int op, double c, unsigned w)
 {
     switch (op) {
-    case ISM_OP_NEG: each(o, a, lin_neg, c, second); break;
-    case ISM_OP_SUB_CR: each(o, a, lin_neg, c, second); o->v = iv_c_sub(c, a->v); break;
-    case ISM_OP_MUL_RC: each(o, a, lin_mul, c, second); break;
-    case ISM_OP_DIV_RC: each(o, a, lin_div, c, second); break;
-    case ISM_OP_ADD_RC: each(o, a, lin_copy, c, second); o->v = iv_add_c(a->v, c); break;
-    default: each(o, a, lin_copy, c, second); break; /* COPY */
+    case ISM_OP_NEG: each(o, a, lin_neg, c, w); break;
+    case ISM_OP_SUB_CR: each(o, a, lin_neg, c, w); o->v = iv_c_sub(c, a->v); break;
+    case ISM_OP_MUL_RC: each(o, a, lin_mul, c, w); break;
+    case ISM_OP_DIV_RC: each(o, a, lin_div, c, w); break;
+    case ISM_OP_ADD_RC: each(o, a, lin_copy, c, w); o->v = iv_add_c(a->v, c); break;
+    default: each(o, a, lin_copy, c, w); break; /* COPY */
     }
 }
 
@@ -152,49 +174,49 @@ static ism_interval falling2(double c)
 
 /* max(u, 0)^c, c not an integer: smooth for u > 0, constant for u < 0, and at 0 the first
  * derivative is continuous only for c > 1, the second only for c > 2. */
-static void op_powc(ism_ivjet *o, const ism_ivjet *a, double c, int second)
+static void op_powc(ism_ivjet *o, const ism_ivjet *a, double c, unsigned w)
 {
     ism_interval u = a->v;
     ism_interval g = iv_powc(u, c);
     if (u.hi <= 0.0) {
         o->v = g;
-        set_zero_derivs(o, second);
+        set_zero_derivs(o, w);
         return;
     }
     ism_interval whole = ism_iv_whole();
     ism_interval g1 = c > 1.0 || u.lo > 0.0 ? iv_mul_c(iv_powc(u, c - 1.0), c) : whole;
-    ism_interval g2 = !second                ? ivc(0.0)
+    ism_interval g2 = !(w & SECOND)          ? ivc(0.0)
                       : c > 2.0 || u.lo > 0.0 ? iv_mul(falling2(c), iv_powc(u, c - 2.0))
                                               : whole;
-    chain(o, a, g, g1, g2, second);
+    chain(o, a, g, g1, g2, w);
 }
 
 /* sqrt(max(u, 0)) and log(max(u, 0)): constant below 0, unbounded derivatives at 0+. */
-static void op_sqrt_log(ism_ivjet *o, const ism_ivjet *a, int is_log, int second)
+static void op_sqrt_log(ism_ivjet *o, const ism_ivjet *a, int is_log, unsigned w)
 {
     ism_interval u = a->v;
     ism_interval g = is_log ? iv_log(u) : iv_sqrt(u);
     if (u.hi <= 0.0) {
         o->v = g;
-        set_zero_derivs(o, second);
+        set_zero_derivs(o, w);
         return;
     }
     if (!(u.lo > 0.0)) {
         o->v = g;
-        set_whole_derivs(o, a, a, second);
+        set_whole_derivs(o, a, a, w);
         return;
     }
     ism_interval g1, g2 = ivc(0.0);
     if (is_log) {
         g1 = iv_c_div(1.0, u);
-        if (second)
+        if (w & SECOND)
             g2 = iv_neg(iv_square(g1));
     } else {
         g1 = iv_c_div(0.5, g);                       /* 1 / (2 sqrt u) */
-        if (second)
+        if (w & SECOND)
             g2 = iv_mul_c(iv_div(g1, u), -0.5);      /* -1 / (4 u sqrt u) */
     }
-    chain(o, a, g, g1, g2, second);
+    chain(o, a, g, g1, g2, w);
 }
 
 /* g''(U) of a one-argument operation given U, g(U) and g'(U) (the second-order pass only). */
@@ -217,7 +239,7 @@ static ism_interval second_factor(const ism_instr *in, ism_interval u, ism_inter
 /* One-argument operations other than the affine ones and the branches. The gradient-only
  * pass (second = 0) computes no g'': heart's search spent 26M of 88.7M instructions in
  * interval gradients, the power rule's u^(n−2) among them. */
-static void op_unary(ism_ivjet *o, const ism_instr *in, const ism_ivjet *a, int second)
+static ALWAYS_INLINE void op_unary(ism_ivjet *o, const ism_instr *in, const ism_ivjet *a, unsigned w)
 {
     ism_interval u = a->v, g, g1;
     double c = in->imm;
@@ -252,34 +274,40 @@ static void op_unary(ism_ivjet *o, const ism_instr *in, const ism_ivjet *a, int 
         g = iv_exp(u);
         g1 = g;
         break;
-    case ISM_OP_POWC: op_powc(o, a, c, second); return;
-    case ISM_OP_SQRT: op_sqrt_log(o, a, 0, second); return;
-    case ISM_OP_LOG: op_sqrt_log(o, a, 1, second); return;
+    case ISM_OP_POWC: op_powc(o, a, c, w); return;
+    case ISM_OP_SQRT: op_sqrt_log(o, a, 0, w); return;
+    case ISM_OP_LOG: op_sqrt_log(o, a, 1, w); return;
     default:
         o->v = ism_iv_whole();
-        set_whole_derivs(o, a, a, second);
+        set_whole_derivs(o, a, a, w);
         return;
     }
-    chain(o, a, g, g1, second ? second_factor(in, u, g, g1) : ivc(0.0), second);
+    chain(o, a, g, g1, (w & SECOND) ? second_factor(in, u, g, g1) : ivc(0.0), w);
 }
 
-static void op_add(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, int sub, int second)
+static ALWAYS_INLINE void op_add(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, int sub, unsigned w)
 {
     ism_interval (*fn)(ism_interval, ism_interval) = sub ? subz : addz;
     o->v = sub ? iv_sub(a->v, b->v) : iv_add(a->v, b->v);
     for (int k = 0; k < 3; k++)
-        o->d[k] = fn(a->d[k], b->d[k]);
-    for (int e = 0; second && e < 6; e++)
-        o->h[e] = sub ? subz(a->h[e], b->h[e]) : addz(a->h[e], b->h[e]);
+        o->d[k] = DO_D(w, k) ? fn(a->d[k], b->d[k]) : ivc(0.0);
+    for (int e = 0; (w & SECOND) && e < 6; e++)
+        o->h[e] = !DO_H(w, e) ? ivc(0.0)
+                  : sub       ? subz(a->h[e], b->h[e])
+                              : addz(a->h[e], b->h[e]);
 }
 
 /* (ab)' = a'b + ab', (ab)'' = a''b + ab'' + a'b'^T + b'a'^T. */
-static void op_mul(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, int second)
+static ALWAYS_INLINE void op_mul(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, unsigned w)
 {
     o->v = iv_mul(a->v, b->v);
     for (int k = 0; k < 3; k++)
-        o->d[k] = addz(mulz(a->d[k], b->v), mulz(a->v, b->d[k]));
-    for (int e = 0; second && e < 6; e++) {
+        o->d[k] = DO_D(w, k) ? addz(mulz(a->d[k], b->v), mulz(a->v, b->d[k])) : ivc(0.0);
+    for (int e = 0; (w & SECOND) && e < 6; e++) {
+        if (!DO_H(w, e)) {
+            o->h[e] = ivc(0.0);
+            continue;
+        }
         int i = HI[e], j = HJ[e];
         ism_interval cross = addz(mulz(a->d[i], b->d[j]), mulz(a->d[j], b->d[i]));
         o->h[e] = addz(addz(mulz(a->h[e], b->v), mulz(a->v, b->h[e])), cross);
@@ -287,19 +315,27 @@ static void op_mul(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, int sec
 }
 
 /* q = a / b: q' = (a' - q b') / b, q'' = (a'' - q' b'^T - b' q'^T - q b'') / b. */
-static void op_div(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, int second)
+static void op_div(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, unsigned w)
 {
     ism_interval q = iv_div(a->v, b->v);
     o->v = q;
     if (!(b->v.lo > 0.0 || b->v.hi < 0.0)) {
-        set_whole_derivs(o, a, b, second);
+        set_whole_derivs(o, a, b, w);
         return;
     }
     for (int k = 0; k < 3; k++) {
+        if (!DO_D(w, k)) {
+            o->d[k] = ivc(0.0);
+            continue;
+        }
         ism_interval num = subz(a->d[k], mulz(q, b->d[k]));
         o->d[k] = is_zero(num) ? num : iv_div(num, b->v);
     }
-    for (int e = 0; second && e < 6; e++) {
+    for (int e = 0; (w & SECOND) && e < 6; e++) {
+        if (!DO_H(w, e)) {
+            o->h[e] = ivc(0.0);
+            continue;
+        }
         int i = HI[e], j = HJ[e];
         ism_interval cross = addz(mulz(o->d[i], b->d[j]), mulz(b->d[i], o->d[j]));
         ism_interval num = subz(subz(a->h[e], cross), mulz(q, b->h[e]));
@@ -308,12 +344,12 @@ static void op_div(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, int sec
 }
 
 /* Copies the derivatives of src into o (the value of o is set by the caller). */
-static void take_derivs(ism_ivjet *o, const ism_ivjet *src, int second)
+static ALWAYS_INLINE void take_derivs(ism_ivjet *o, const ism_ivjet *src, unsigned w)
 {
     for (int k = 0; k < 3; k++)
-        o->d[k] = src->d[k];
-    for (int e = 0; second && e < 6; e++)
-        o->h[e] = src->h[e];
+        o->d[k] = DO_D(w, k) ? src->d[k] : ivc(0.0);
+    for (int e = 0; (w & SECOND) && e < 6; e++)
+        o->h[e] = DO_H(w, e) ? src->h[e] : ivc(0.0);
 }
 
 /* Which branch of a min/max/abs the box decides: A, B, or FREE when both may be active.
@@ -333,7 +369,7 @@ static int decided_branch(const ism_instr *in, ism_interval a, ism_interval b)
 /* min, max, abs: the value is always the natural enclosure; the derivatives are those of
  * the decided (or forced) branch, the whole line at a free kink. Returns 1 at a free kink. */
 static int op_branch(ism_ivjet *o, const ism_instr *in, const ism_ivjet *r, uint8_t force,
-                     int second)
+                     unsigned w)
 {
     const ism_ivjet *a = &r[in->a];
     ism_ivjet cst = { 0 };
@@ -351,75 +387,87 @@ static int op_branch(ism_ivjet *o, const ism_instr *in, const ism_ivjet *r, uint
     if (side == ISM_BRANCH_FREE)
         side = force;
     if (side == ISM_BRANCH_FREE) {
-        set_whole_derivs(o, a, b, second);
+        set_whole_derivs(o, a, b, w);
         return 1;
     }
     if (in->op != ISM_OP_ABS) {
-        take_derivs(o, side == ISM_BRANCH_A ? a : b, second);
+        take_derivs(o, side == ISM_BRANCH_A ? a : b, w);
         return 0;
     }
     ism_interval v = o->v;
-    affine(o, a, side == ISM_BRANCH_A ? ISM_OP_COPY : ISM_OP_NEG, 0.0, second);
+    affine(o, a, side == ISM_BRANCH_A ? ISM_OP_COPY : ISM_OP_NEG, 0.0, w);
     o->v = v;
     return 0;
 }
 
 /* One instruction; returns 1 when it is a free kink. */
-static int jet_op(const ism_instr *in, ism_ivjet *r, uint8_t force, int second)
+static ALWAYS_INLINE int jet_op(const ism_instr *in, ism_ivjet *r, uint8_t force, unsigned w)
 {
     ism_ivjet *o = &r[in->out];
     const ism_ivjet *a = &r[in->a];
     switch (in->op) {
     case ISM_OP_CONST:
         o->v = ivc(in->imm);
-        set_zero_derivs(o, second);
+        set_zero_derivs(o, w);
         return 0;
     case ISM_OP_COPY: case ISM_OP_ADD_RC: case ISM_OP_SUB_CR: case ISM_OP_MUL_RC:
     case ISM_OP_DIV_RC: case ISM_OP_NEG:
-        affine(o, a, in->op, in->imm, second);
+        affine(o, a, in->op, in->imm, w);
         return 0;
-    case ISM_OP_ADD_RR: op_add(o, a, &r[in->b], 0, second); return 0;
-    case ISM_OP_SUB_RR: op_add(o, a, &r[in->b], 1, second); return 0;
-    case ISM_OP_MUL_RR: op_mul(o, a, &r[in->b], second); return 0;
-    case ISM_OP_DIV_RR: op_div(o, a, &r[in->b], second); return 0;
+    case ISM_OP_ADD_RR: op_add(o, a, &r[in->b], 0, w); return 0;
+    case ISM_OP_SUB_RR: op_add(o, a, &r[in->b], 1, w); return 0;
+    case ISM_OP_MUL_RR: op_mul(o, a, &r[in->b], w); return 0;
+    case ISM_OP_DIV_RR: op_div(o, a, &r[in->b], w); return 0;
     case ISM_OP_MIN_RR: case ISM_OP_MIN_RC: case ISM_OP_MAX_RR: case ISM_OP_MAX_RC:
     case ISM_OP_ABS:
-        return op_branch(o, in, r, force, second);
+        return op_branch(o, in, r, force, w);
     default:
-        op_unary(o, in, a, second);
+        op_unary(o, in, a, w);
         return 0;
     }
 }
 
-static void sanitize(ism_ivjet *o, int second)
+/* The partials outside w are 0 already. */
+static ALWAYS_INLINE void sanitize(ism_ivjet *o, unsigned w)
 {
     o->v = ism_iv_sane(o->v);
     for (int k = 0; k < 3; k++)
-        o->d[k] = ism_iv_sane(o->d[k]);
-    for (int e = 0; second && e < 6; e++)
-        o->h[e] = ism_iv_sane(o->h[e]);
+        if (DO_D(w, k))
+            o->d[k] = ism_iv_sane(o->d[k]);
+    for (int e = 0; (w & SECOND) && e < 6; e++)
+        if (DO_H(w, e))
+            o->h[e] = ism_iv_sane(o->h[e]);
 }
 
-static size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
-                  const uint8_t *force, uint8_t *kinks, int second, ism_ivjet *out)
+static ALWAYS_INLINE size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
+                                const uint8_t *force, uint8_t *kinks, int second, ism_ivjet *out)
 {
+    const unsigned all = want_of(7u, second);
     if (!ws || !t || ws->nregs < t->nregs) {
         ism_ivjet any = { .d = { { -1.0, 1.0 } } }; /* depends on x: whole everywhere */
         out->v = ism_iv_whole();
-        set_whole_derivs(out, &any, &any, second);
+        set_whole_derivs(out, &any, &any, all);
         return (size_t)-1;
     }
     ism_ivjet *r = ws->r;
     for (int k = 0; k < 3; k++) {
         r[k].v = box[k].lo <= box[k].hi ? box[k] : ism_iv_whole();
-        set_zero_derivs(&r[k], second);
+        set_zero_derivs(&r[k], all);
         r[k].d[k] = ivc(1.0);
     }
     size_t nkinks = 0;
     for (size_t i = 0; i < t->len; i++) {
         const ism_instr *in = &t->code[i];
-        int kink = jet_op(in, r, force ? force[i] : ISM_BRANCH_FREE, second);
-        sanitize(&r[in->out], second);
+        uint8_t f = force ? force[i] : ISM_BRANCH_FREE;
+        int kink;
+        if (in->free_of == 0 || second) { /* the second pass computes every partial */
+            kink = jet_op(in, r, f, all);
+            sanitize(&r[in->out], all);
+        } else {
+            unsigned w = want_of(ISM_FREE_ALL & ~(unsigned)in->free_of, second);
+            kink = jet_op(in, r, f, w);
+            sanitize(&r[in->out], w);
+        }
         nkinks += (size_t)kink;
         if (kinks)
             kinks[i] = (uint8_t)kink;

@@ -147,6 +147,7 @@ ism_tape *ism_tape_partial(const ism_tape *t, int axis)
     b.t->result = res;
     b.t->nregs = b.next;
     b.t->origin_len = b.t->len;
+    (void)ism_tape_mark_free(b.t); /* out of memory: free_of stays 0, which claims nothing */
     free(val);
     free(tan);
     return b.t;

@@ -168,6 +168,10 @@ ism_tape *ism_emit_tape(const ism_graph *g, uint32_t root)
             t->origin_len = count;
             t->nregs = em.next_reg;
             t->result = em.reg_of[root];
+            if (!ism_tape_mark_free(t)) {
+                ism_tape_free(t);
+                t = NULL;
+            }
         }
     }
     free(order);

@@ -34,3 +34,27 @@ size_t ism_tape_registers(const ism_tape *t)
 {
     return t->nregs;
 }
+
+bool ism_tape_mark_free(ism_tape *t)
+{
+    uint8_t *dep = malloc(t->nregs > ISM_FIRST_FREE_REG ? t->nregs : ISM_FIRST_FREE_REG);
+    if (!dep)
+        return false;
+    for (uint32_t r = 0; r < t->nregs; r++)
+        dep[r] = 0;
+    dep[ISM_REG_X] = 1u;
+    dep[ISM_REG_Y] = 2u;
+    dep[ISM_REG_Z] = 4u;
+    for (size_t i = 0; i < t->len; i++) {
+        ism_instr *in = &t->code[i];
+        uint8_t d = 0;
+        if (ism_op_has_reg_a(in->op))
+            d |= dep[in->a];
+        if (ism_op_has_reg_b(in->op))
+            d |= dep[in->b];
+        dep[in->out] = d;
+        in->free_of = (uint8_t)(ISM_FREE_ALL & ~d);
+    }
+    free(dep);
+    return true;
+}

@@ -8,6 +8,7 @@
 #ifndef ISM_TAPE_H
 #define ISM_TAPE_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 #include "core/expr/expr.h"
@@ -44,6 +45,12 @@ enum ism_opcode {
 
 typedef struct ism_instr {
     uint8_t op;
+    /* Bit k (x, y, z) set: the instruction's value is proven not to depend on variable k
+     * (ism_tape_mark_free computes it from the data flow once per compiled tape). 0 claims
+     * nothing, so a tape built without it (or edited: shortening only ever narrows what a
+     * value depends on) stays correct; derivative evaluators skip the partials it names,
+     * which are exactly 0. Sits in the padding after op: the instruction stays 24 bytes. */
+    uint8_t free_of;
     uint32_t out;
     uint32_t a;
     uint32_t b;     /* second register, or the integer exponent of POWI */
@@ -66,6 +73,14 @@ struct ism_tape {
 
 /* Allocates an empty tape with room for cap instructions (NULL when out of memory). */
 ism_tape *ism_tape_alloc(size_t cap, uint32_t nregs);
+
+/* The three variables' bits of free_of. */
+#define ISM_FREE_ALL 7u
+
+/* Sets every instruction's free_of from the data flow of t (registers x, y, z depend on
+ * themselves, a constant on nothing, every other value on what its operands depend on).
+ * Returns false (t unchanged) when out of memory. */
+bool ism_tape_mark_free(ism_tape *t);
 
 /* True for opcodes whose second operand is register b. */
 static inline int ism_op_has_reg_b(int op)

@@ -6,8 +6,10 @@
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "core/eval/interval_jet.h"
+#include "core/expr/tape.h"
 #include "test_eval_surfaces.h"
 
 enum { PTS = 48 };
@@ -113,26 +115,27 @@ Test(eval_interval_jet, encloses_point_jets_of_example_surfaces)
 }
 
 /* Every operation, including domain edges, poles and kinks. */
+static const char *const OPS_EXPRS[] = {
+    "x^2 + 2*y^2 - 3*z^2 + 0.5*x*z", "x^2 + z^2 - y^3", "x*y*z - x/(1 + y^2)",
+    "sin(3*x)*cos(2*y) + sin(y*z)", "exp(x/2 - y^2) * z", "exp(-x^2 - y^2) - 0.5",
+    "(x + y) / (z^2 + 1) - 1/(x + 5)", "(x - y) / (x + y + 0.1)", "1 / x + y / (z - 0.5)",
+    "3/(x + 4) - 2*y/(z + 3)", "tan(x + y)", "tan(x/2) + y*z", "log(x^2 + y^2 + 1) - z^3",
+    "log(x) * y", "sqrt(x) + sqrt(y - z)", "sqrt(x + 3) * (y - z)^2",
+    "pow(abs(x), 0.7) - pow(y, 2.5)", "pow(x, 1.5) * z", "pow(x, -1.5)",
+    "pow(x^2 + 0.1, y)", "x^5 - 3*x^3*y^2 + y^4*z - z^7/5", "x^-3 + y^-2",
+    "abs(x) - abs(y*z)", "min(x, y, z) * max(x, -y)", "max(x^2 - 1, -z) / (2 - sin(y))",
+    "min(x, 0.25) + max(y*z, -0.5)", "(x^2 + y^2 + z^2 - 0.5)^2", "-x^2 - y^4 + 7",
+    "((x-1)^2 + y^2 + z^2 - 1)*((x+1)^2 + y^2 + z^2 - 1)",
+    "sin(4*x)*cos(4*y) + sin(4*y)*cos(4*z) + sin(4*z)*cos(4*x)",
+};
+
 Test(eval_interval_jet, encloses_point_jets_of_every_operation)
 {
-    static const char *exprs[] = {
-        "x^2 + 2*y^2 - 3*z^2 + 0.5*x*z", "x^2 + z^2 - y^3", "x*y*z - x/(1 + y^2)",
-        "sin(3*x)*cos(2*y) + sin(y*z)", "exp(x/2 - y^2) * z", "exp(-x^2 - y^2) - 0.5",
-        "(x + y) / (z^2 + 1) - 1/(x + 5)", "(x - y) / (x + y + 0.1)", "1 / x + y / (z - 0.5)",
-        "3/(x + 4) - 2*y/(z + 3)", "tan(x + y)", "tan(x/2) + y*z", "log(x^2 + y^2 + 1) - z^3",
-        "log(x) * y", "sqrt(x) + sqrt(y - z)", "sqrt(x + 3) * (y - z)^2",
-        "pow(abs(x), 0.7) - pow(y, 2.5)", "pow(x, 1.5) * z", "pow(x, -1.5)",
-        "pow(x^2 + 0.1, y)", "x^5 - 3*x^3*y^2 + y^4*z - z^7/5", "x^-3 + y^-2",
-        "abs(x) - abs(y*z)", "min(x, y, z) * max(x, -y)", "max(x^2 - 1, -z) / (2 - sin(y))",
-        "min(x, 0.25) + max(y*z, -0.5)", "(x^2 + y^2 + z^2 - 0.5)^2", "-x^2 - y^4 + 7",
-        "((x-1)^2 + y^2 + z^2 - 1)*((x+1)^2 + y^2 + z^2 - 1)",
-        "sin(4*x)*cos(4*y) + sin(4*y)*cos(4*z) + sin(4*z)*cos(4*x)",
-    };
     const double within[6] = { -2, -2, -2, 2, 2, 2 };
     size_t nboxes = test_scaled(300);
-    for (size_t i = 0; i < sizeof exprs / sizeof exprs[0]; i++) {
-        ism_tape *t = compile(exprs[i]);
-        check_jets(exprs[i], t, within, nboxes, 17 + i);
+    for (size_t i = 0; i < sizeof OPS_EXPRS / sizeof OPS_EXPRS[0]; i++) {
+        ism_tape *t = compile(OPS_EXPRS[i]);
+        check_jets(OPS_EXPRS[i], t, within, nboxes, 17 + i);
         ism_tape_free(t);
     }
 }
@@ -279,4 +282,90 @@ Test(eval_interval_jet, degenerate_box_is_tight)
     ism_ivjet_ws_free(jw);
     ism_eval_ws_free(ws);
     ism_tape_free(t);
+}
+
+/* The compiler's free_of (core/expr/tape.h) from the expression's own variables. */
+Test(eval_interval_jet, free_of_names_the_variables_a_value_lacks)
+{
+    ism_tape *t = compile("x^2 + 3*y - sin(z)*y");
+    int whole = 0;
+    for (size_t i = 0; i < t->len; i++) {
+        const ism_instr *in = &t->code[i];
+        if (in->op == ISM_OP_SQUARE)
+            cr_expect_eq(in->free_of, 6u, "x^2 lacks y and z");
+        if (in->op == ISM_OP_SIN)
+            cr_expect_eq(in->free_of, 3u, "sin(z) lacks x and y");
+        if (in->op == ISM_OP_MUL_RC)
+            cr_expect_eq(in->free_of, 5u, "3 y lacks x and z");
+        whole += in->free_of == 0;
+    }
+    cr_expect_eq(t->code[t->len - 1].free_of, 0u, "f depends on all three");
+    cr_expect(whole >= 1 && whole < (int)t->len);
+    ism_tape_free(t);
+}
+
+/* Skipping the partials free_of names changes no bit: each expression's tape evaluated as
+ * compiled and with free_of cleared (claiming nothing) gives the same interval jets and
+ * gradients to the bit, over random boxes, single points among them (where a partial that
+ * does depend on a variable can still be exactly 0), and the same point Hessians where they
+ * are finite. */
+static bool same_bits(const void *a, const void *b, size_t n) { return memcmp(a, b, n) == 0; }
+
+static void same_without_free_of(const char *name, ism_tape *t, ism_tape *plain,
+                                 const double *within, uint64_t seed)
+{
+    for (size_t i = 0; i < plain->len; i++)
+        plain->code[i].free_of = 0;
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    cr_assert(jw && ws);
+    test_rng rng = { seed };
+    size_t nboxes = test_scaled(200);
+    for (size_t n = 0; n < nboxes; n++) {
+        ism_interval b[3];
+        random_box(&rng, within, b);
+        ism_ivjet J1, J2;
+        ism_ivgrad G1, G2;
+        size_t k1 = ism_eval_interval_jet(t, jw, b, NULL, NULL, &J1);
+        size_t k2 = ism_eval_interval_jet(plain, jw, b, NULL, NULL, &J2);
+        cr_assert(k1 == k2 && same_bits(&J1, &J2, sizeof J1), "%s: interval jet differs", name);
+        k1 = ism_eval_interval_grad(t, jw, b, NULL, NULL, &G1);
+        k2 = ism_eval_interval_grad(plain, jw, b, NULL, NULL, &G2);
+        cr_assert(k1 == k2 && same_bits(&G1, &G2, sizeof G1), "%s: gradient differs", name);
+        double p[3], g1[3], g2[3], h1[6], h2[6];
+        for (int k = 0; k < 3; k++)
+            p[k] = test_uniform(&rng, b[k].lo, b[k].hi);
+        double f1 = ism_eval_hessian(t, ws, p[0], p[1], p[2], g1, h1);
+        double f2 = ism_eval_hessian(plain, ws, p[0], p[1], p[2], g2, h2);
+        bool finite = isfinite(f2);
+        for (int k = 0; k < 3; k++)
+            finite = finite && isfinite(g2[k]) && isfinite(h2[k]) && isfinite(h2[k + 3]);
+        if (!finite)
+            continue; /* 0 · inf: NaN without free_of, 0 with it (eval_hessian.c) */
+        cr_assert(same_bits(&f1, &f2, sizeof f1), "%s: point value differs", name);
+        for (int k = 0; k < 6; k++)
+            cr_assert(k >= 3 || g1[k] == g2[k], "%s: point gradient differs", name);
+        for (int k = 0; k < 6; k++)
+            cr_assert(h1[k] == h2[k], "%s: point Hessian differs", name);
+    }
+    ism_ivjet_ws_free(jw);
+    ism_eval_ws_free(ws);
+}
+
+Test(eval_interval_jet, free_of_changes_no_bit)
+{
+    const double within[6] = { -2, -2, -2, 2, 2, 2 };
+    for (size_t i = 0; i < sizeof OPS_EXPRS / sizeof OPS_EXPRS[0]; i++) {
+        ism_tape *t = compile(OPS_EXPRS[i]), *plain = compile(OPS_EXPRS[i]);
+        same_without_free_of(OPS_EXPRS[i], t, plain, within, 900 + i);
+        ism_tape_free(t);
+        ism_tape_free(plain);
+    }
+    for (size_t s = 0; s < TEST_NSURFACES; s++) {
+        ism_tape *t = test_surface_compile(&TEST_SURFACES[s]);
+        ism_tape *plain = test_surface_compile(&TEST_SURFACES[s]);
+        same_without_free_of(TEST_SURFACES[s].name, t, plain, TEST_SURFACES[s].box, 950 + s);
+        ism_tape_free(t);
+        ism_tape_free(plain);
+    }
 }
