@@ -16,70 +16,74 @@
 static const int HI[6] = { 0, 0, 0, 1, 1, 2 };
 static const int HJ[6] = { 0, 1, 2, 1, 2, 2 };
 
-static ism_jet jet_mul(const ism_jet *a, const ism_jet *b)
+/* Each rule writes its result into o, which is never one of its operands (no instruction
+ * writes a register it reads, tape.h): no jet is copied on the way. */
+static inline void jet_mul(ism_jet *o, const ism_jet *a, const ism_jet *b)
 {
-    ism_jet r;
-    r.v = a->v * b->v;
+    o->v = a->v * b->v;
     for (int k = 0; k < 3; k++)
-        r.d[k] = a->d[k] * b->v + a->v * b->d[k];
+        o->d[k] = a->d[k] * b->v + a->v * b->d[k];
     for (int k = 0; k < 6; k++)
-        r.h[k] = a->h[k] * b->v + a->v * b->h[k] + a->d[HI[k]] * b->d[HJ[k]]
-                 + a->d[HJ[k]] * b->d[HI[k]];
-    return r;
+        o->h[k] = a->h[k] * b->v + a->v * b->h[k] + a->d[HI[k]] * b->d[HJ[k]]
+                  + a->d[HJ[k]] * b->d[HI[k]];
 }
 
 /* q = a / b: q' = (a' - q b') / b, q'' = (a'' - q' b'^T - b' q'^T - q b'') / b. */
-static ism_jet jet_div(const ism_jet *a, const ism_jet *b)
+static inline void jet_div(ism_jet *o, const ism_jet *a, const ism_jet *b)
 {
-    ism_jet r;
-    r.v = a->v / b->v;
+    o->v = a->v / b->v;
     for (int k = 0; k < 3; k++)
-        r.d[k] = (a->d[k] - r.v * b->d[k]) / b->v;
+        o->d[k] = (a->d[k] - o->v * b->d[k]) / b->v;
     for (int k = 0; k < 6; k++)
-        r.h[k] = (a->h[k] - r.d[HI[k]] * b->d[HJ[k]] - b->d[HI[k]] * r.d[HJ[k]]
-                  - r.v * b->h[k]) / b->v;
-    return r;
+        o->h[k] = (a->h[k] - o->d[HI[k]] * b->d[HJ[k]] - b->d[HI[k]] * o->d[HJ[k]]
+                   - o->v * b->h[k]) / b->v;
 }
 
-static ism_jet jet_binary(int op, const ism_jet *a, const ism_jet *b)
+static inline void jet_binary(ism_jet *o, int op, const ism_jet *a, const ism_jet *b)
 {
-    ism_jet r;
     double s = op == ISM_OP_SUB_RR ? -1.0 : 1.0;
     switch (op) {
     case ISM_OP_ADD_RR:
     case ISM_OP_SUB_RR:
-        r.v = a->v + s * b->v;
+        o->v = a->v + s * b->v;
         for (int k = 0; k < 3; k++)
-            r.d[k] = a->d[k] + s * b->d[k];
+            o->d[k] = a->d[k] + s * b->d[k];
         for (int k = 0; k < 6; k++)
-            r.h[k] = a->h[k] + s * b->h[k];
-        return r;
-    case ISM_OP_MUL_RR: return jet_mul(a, b);
-    case ISM_OP_DIV_RR: return jet_div(a, b);
-    case ISM_OP_MIN_RR: return a->v < b->v ? *a : *b;
-    default: return a->v > b->v ? *a : *b; /* ISM_OP_MAX_RR */
+            o->h[k] = a->h[k] + s * b->h[k];
+        return;
+    case ISM_OP_MUL_RR: jet_mul(o, a, b); return;
+    case ISM_OP_DIV_RR: jet_div(o, a, b); return;
+    case ISM_OP_MIN_RR: *o = a->v < b->v ? *a : *b; return;
+    default: *o = a->v > b->v ? *a : *b; return; /* ISM_OP_MAX_RR */
     }
 }
 
-static ism_jet jet_op(const ism_instr *in, const ism_jet *r)
+static inline void jet_op(const ism_instr *in, ism_jet *r)
 {
-    if (ism_op_has_reg_b(in->op))
-        return jet_binary(in->op, &r[in->a], &r[in->b]);
-    ism_jet out = { 0 };
+    ism_jet *o = &r[in->out];
+    if (ism_op_has_reg_b(in->op)) {
+        jet_binary(o, in->op, &r[in->a], &r[in->b]);
+        return;
+    }
     if (in->op == ISM_OP_CONST) {
-        out.v = in->imm;
-        return out;
+        *o = (ism_jet){ 0 };
+        o->v = in->imm;
+        return;
     }
     const ism_jet *a = &r[in->a];
     ism_chain ch = ism_unary_chain(in, a->v);
-    out.v = ch.g;
-    if (ch.g1 == 0.0 && ch.g2 == 0.0)
-        return out;
+    o->v = ch.g;
+    if (ch.g1 == 0.0 && ch.g2 == 0.0) {
+        for (int k = 0; k < 3; k++)
+            o->d[k] = 0.0;
+        for (int k = 0; k < 6; k++)
+            o->h[k] = 0.0;
+        return;
+    }
     for (int k = 0; k < 3; k++)
-        out.d[k] = ch.g1 * a->d[k];
+        o->d[k] = ch.g1 * a->d[k];
     for (int k = 0; k < 6; k++)
-        out.h[k] = ch.g1 * a->h[k] + ch.g2 * a->d[HI[k]] * a->d[HJ[k]];
-    return out;
+        o->h[k] = ch.g1 * a->h[k] + ch.g2 * a->d[HI[k]] * a->d[HJ[k]];
 }
 
 /* Index of the Hessian entry (k, k). */
@@ -114,7 +118,7 @@ static void one_var_op(const ism_instr *in, ism_jet *r, int k)
             h = (a->h[e] - d * b->d[k] - b->d[k] * d - v * b->h[e]) / b->v;
             break;
         default: /* min, max: the jet of the operand taken */
-            *o = jet_binary(in->op, a, b);
+            jet_binary(o, in->op, a, b);
             return;
         }
     } else {
@@ -163,7 +167,7 @@ double ism_eval_hessian(const ism_tape *t, ism_eval_ws *ws, double x, double y, 
         if (k >= 0 && c->op != ISM_OP_CONST)
             one_var_op(c, r, k);
         else
-            r[c->out] = jet_op(c, r);
+            jet_op(c, r);
     }
     const ism_jet *f = &r[t->result];
     for (int k = 0; k < 3; k++)

@@ -55,11 +55,10 @@ static ism_interval ivc(double c) { return iv(c, c); }
  * untouched: unused). A first partial outside the bits is one in a variable the
  * instruction's value does not depend on (the tape's free_of): the rules below make it
  * exactly 0 (every exact 0 stays one, see is_zero), so it is written as 0 without work and
- * the results are bit for bit those of computing it. The second-order pass computes every
- * partial: at a kink the rule below gives the mixed entry (x, z) of a value free of z the
- * whole line when its x partial is not 0, so second partials are not always 0 there (and
- * skipping the first ones alone saved nothing measurable). On the heart's tape 8 of 14
- * instructions depend on fewer than three variables. */
+ * the results are bit for bit those of computing it. Second partials likewise, but only
+ * for values no kink feeds (the tape's smooth): at a kink set_whole_derivs makes the mixed
+ * entry (x, z) of a value free of z the whole line when its x partial is not 0. On the
+ * heart's tape 8 of 14 instructions depend on fewer than three variables. */
 #define D(k) (1u << (k))
 #define H(e) (8u << (e))
 #define SECOND (1u << 9)
@@ -67,10 +66,23 @@ static ism_interval ivc(double c) { return iv(c, c); }
 #define DO_D(w, k) (((w) & D(k)) != 0)
 #define DO_H(w, e) (((w) & H(e)) != 0)
 
-/* The bits for an instruction whose value depends on the variables in deps. */
-static inline unsigned want_of(unsigned deps, int second)
+/* The H bits of each set of variables (bit 0 x, 1 y, 2 z): entry (i, j) needs both i, j. */
+static const unsigned H_OF[8] = {
+    0u,                              /* none */
+    H(0),                            /* x: xx */
+    H(3),                            /* y: yy */
+    H(0) | H(1) | H(3),              /* x y */
+    H(5),                            /* z: zz */
+    H(0) | H(2) | H(5),              /* x z */
+    H(3) | H(4) | H(5),              /* y z */
+    H_ALL,
+};
+
+/* The bits for an instruction whose value depends on the variables in deps, in the first
+ * or the second-order pass; smooth: nothing that may kink feeds it (tape.h). */
+static inline unsigned want_of(unsigned deps, int second, bool smooth)
 {
-    return second ? D(0) | D(1) | D(2) | SECOND | H_ALL : deps;
+    return !second ? deps : deps | SECOND | (smooth ? H_OF[deps] : H_ALL);
 }
 
 /* Exact zeros stay exact (outward rounding would widen 0 to ±2^-1074): a derivative that is
@@ -442,7 +454,7 @@ static ALWAYS_INLINE void sanitize(ism_ivjet *o, unsigned w)
 static ALWAYS_INLINE size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
                                 const uint8_t *force, uint8_t *kinks, int second, ism_ivjet *out)
 {
-    const unsigned all = want_of(7u, second);
+    const unsigned all = want_of(7u, second, false);
     if (!ws || !t || ws->nregs < t->nregs) {
         ism_ivjet any = { .d = { { -1.0, 1.0 } } }; /* depends on x: whole everywhere */
         out->v = ism_iv_whole();
@@ -460,11 +472,11 @@ static ALWAYS_INLINE size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_i
         const ism_instr *in = &t->code[i];
         uint8_t f = force ? force[i] : ISM_BRANCH_FREE;
         int kink;
-        if (in->free_of == 0 || second) { /* the second pass computes every partial */
+        if (in->free_of == 0) {
             kink = jet_op(in, r, f, all);
             sanitize(&r[in->out], all);
         } else {
-            unsigned w = want_of(ISM_FREE_ALL & ~(unsigned)in->free_of, second);
+            unsigned w = want_of(ISM_FREE_ALL & ~(unsigned)in->free_of, second, in->smooth);
             kink = jet_op(in, r, f, w);
             sanitize(&r[in->out], w);
         }

@@ -35,6 +35,22 @@ size_t ism_tape_registers(const ism_tape *t)
     return t->nregs;
 }
 
+/* Operations the interval jet may find non-differentiable in a box (a kink, a pole, the
+ * edge of a clipped domain). */
+static bool may_kink(int op)
+{
+    switch (op) {
+    case ISM_OP_DIV_RR: case ISM_OP_SQRT: case ISM_OP_LOG: case ISM_OP_ABS:
+    case ISM_OP_MIN_RR: case ISM_OP_MIN_RC: case ISM_OP_MAX_RR: case ISM_OP_MAX_RC:
+        return true;
+    default:
+        return false;
+    }
+}
+
+/* Per register: bits 0-2 the variables it depends on, bit 3 set when it may kink. */
+#define REG_KINK 8u
+
 bool ism_tape_mark_free(ism_tape *t)
 {
     uint8_t *dep = malloc(t->nregs > ISM_FIRST_FREE_REG ? t->nregs : ISM_FIRST_FREE_REG);
@@ -47,13 +63,14 @@ bool ism_tape_mark_free(ism_tape *t)
     dep[ISM_REG_Z] = 4u;
     for (size_t i = 0; i < t->len; i++) {
         ism_instr *in = &t->code[i];
-        uint8_t d = 0;
+        uint8_t d = may_kink(in->op) ? REG_KINK : 0u;
         if (ism_op_has_reg_a(in->op))
             d |= dep[in->a];
         if (ism_op_has_reg_b(in->op))
             d |= dep[in->b];
         dep[in->out] = d;
         in->free_of = (uint8_t)(ISM_FREE_ALL & ~d);
+        in->smooth = (d & REG_KINK) == 0;
     }
     free(dep);
     return true;

@@ -51,6 +51,11 @@ typedef struct ism_instr {
      * value depends on) stays correct; derivative evaluators skip the partials it names,
      * which are exactly 0. Sits in the padding after op: the instruction stays 24 bytes. */
     uint8_t free_of;
+    /* 1: no operation that may be non-differentiable in a box (min, max, abs, division by a
+     * register, sqrt, log) feeds this value (ism_tape_mark_free): then its second partials
+     * in a variable it does not depend on are 0 as well, even under the interval jet's
+     * kink rule (which makes them the whole line otherwise). 0 claims nothing. */
+    uint8_t smooth;
     uint32_t out;
     uint32_t a;
     uint32_t b;     /* second register, or the integer exponent of POWI */
@@ -77,9 +82,10 @@ ism_tape *ism_tape_alloc(size_t cap, uint32_t nregs);
 /* The three variables' bits of free_of. */
 #define ISM_FREE_ALL 7u
 
-/* Sets every instruction's free_of from the data flow of t (registers x, y, z depend on
- * themselves, a constant on nothing, every other value on what its operands depend on).
- * Returns false (t unchanged) when out of memory. */
+/* Sets every instruction's free_of and smooth from the data flow of t (registers x, y, z
+ * depend on themselves, a constant on nothing, every other value on what its operands depend
+ * on; a value is smooth when its operation and its operands are). Returns false (t
+ * unchanged) when out of memory. */
 bool ism_tape_mark_free(ism_tape *t);
 
 /* True for opcodes whose second operand is register b. */

@@ -301,6 +301,18 @@ Test(eval_interval_jet, free_of_names_the_variables_a_value_lacks)
     }
     cr_expect_eq(t->code[t->len - 1].free_of, 0u, "f depends on all three");
     cr_expect(whole >= 1 && whole < (int)t->len);
+    for (size_t i = 0; i < t->len; i++)
+        cr_expect_eq(t->code[i].smooth, 1u, "a polynomial and sin: nothing kinks");
+    ism_tape_free(t);
+    t = compile("sqrt(x^2 + 1) * y + z^2");
+    for (size_t i = 0; i < t->len; i++) {
+        const ism_instr *in = &t->code[i];
+        if (in->op == ISM_OP_SQRT || in->op == ISM_OP_MUL_RR)
+            cr_expect_eq(in->smooth, 0u, "sqrt and what it feeds may kink");
+        if (in->op == ISM_OP_SQUARE)
+            cr_expect_eq(in->smooth, 1u);
+    }
+    cr_expect_eq(t->code[t->len - 1].smooth, 0u);
     ism_tape_free(t);
 }
 
@@ -314,8 +326,10 @@ static bool same_bits(const void *a, const void *b, size_t n) { return memcmp(a,
 static void same_without_free_of(const char *name, ism_tape *t, ism_tape *plain,
                                  const double *within, uint64_t seed)
 {
-    for (size_t i = 0; i < plain->len; i++)
+    for (size_t i = 0; i < plain->len; i++) {
         plain->code[i].free_of = 0;
+        plain->code[i].smooth = 0;
+    }
     ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
     ism_eval_ws *ws = ism_eval_ws_new(t);
     cr_assert(jw && ws);
