@@ -12,6 +12,10 @@
 #include "core/eval/deriv_rules.h"
 #include "core/eval/workspace.h"
 
+/* The loops over the 3 first and 6 second partials are unrolled by pragma: gcc -O2 keeps
+ * them rolled, a table lookup of HI/HJ and a branch per entry (the heart's Hessian, 1,870
+ * instructions a point rolled, 1,527 unrolled; the same operations in the same order). */
+
 /* The (i, j) index pairs of the six Hessian entries. */
 static const int HI[6] = { 0, 0, 0, 1, 1, 2 };
 static const int HJ[6] = { 0, 1, 2, 1, 2, 2 };
@@ -21,9 +25,9 @@ static const int HJ[6] = { 0, 1, 2, 1, 2, 2 };
 static inline void jet_mul(ism_jet *o, const ism_jet *a, const ism_jet *b)
 {
     o->v = a->v * b->v;
-    for (int k = 0; k < 3; k++)
+    _Pragma("GCC unroll 6") for (int k = 0; k < 3; k++)
         o->d[k] = a->d[k] * b->v + a->v * b->d[k];
-    for (int k = 0; k < 6; k++)
+    _Pragma("GCC unroll 6") for (int k = 0; k < 6; k++)
         o->h[k] = a->h[k] * b->v + a->v * b->h[k] + a->d[HI[k]] * b->d[HJ[k]]
                   + a->d[HJ[k]] * b->d[HI[k]];
 }
@@ -32,9 +36,9 @@ static inline void jet_mul(ism_jet *o, const ism_jet *a, const ism_jet *b)
 static inline void jet_div(ism_jet *o, const ism_jet *a, const ism_jet *b)
 {
     o->v = a->v / b->v;
-    for (int k = 0; k < 3; k++)
+    _Pragma("GCC unroll 6") for (int k = 0; k < 3; k++)
         o->d[k] = (a->d[k] - o->v * b->d[k]) / b->v;
-    for (int k = 0; k < 6; k++)
+    _Pragma("GCC unroll 6") for (int k = 0; k < 6; k++)
         o->h[k] = (a->h[k] - o->d[HI[k]] * b->d[HJ[k]] - b->d[HI[k]] * o->d[HJ[k]]
                    - o->v * b->h[k]) / b->v;
 }
@@ -46,9 +50,9 @@ static inline void jet_binary(ism_jet *o, int op, const ism_jet *a, const ism_je
     case ISM_OP_ADD_RR:
     case ISM_OP_SUB_RR:
         o->v = a->v + s * b->v;
-        for (int k = 0; k < 3; k++)
+        _Pragma("GCC unroll 6") for (int k = 0; k < 3; k++)
             o->d[k] = a->d[k] + s * b->d[k];
-        for (int k = 0; k < 6; k++)
+        _Pragma("GCC unroll 6") for (int k = 0; k < 6; k++)
             o->h[k] = a->h[k] + s * b->h[k];
         return;
     case ISM_OP_MUL_RR: jet_mul(o, a, b); return;
@@ -74,15 +78,15 @@ static inline void jet_op(const ism_instr *in, ism_jet *r)
     ism_chain ch = ism_unary_chain(in, a->v);
     o->v = ch.g;
     if (ch.g1 == 0.0 && ch.g2 == 0.0) {
-        for (int k = 0; k < 3; k++)
+        _Pragma("GCC unroll 6") for (int k = 0; k < 3; k++)
             o->d[k] = 0.0;
-        for (int k = 0; k < 6; k++)
+        _Pragma("GCC unroll 6") for (int k = 0; k < 6; k++)
             o->h[k] = 0.0;
         return;
     }
-    for (int k = 0; k < 3; k++)
+    _Pragma("GCC unroll 6") for (int k = 0; k < 3; k++)
         o->d[k] = ch.g1 * a->d[k];
-    for (int k = 0; k < 6; k++)
+    _Pragma("GCC unroll 6") for (int k = 0; k < 6; k++)
         o->h[k] = ch.g1 * a->h[k] + ch.g2 * a->d[HI[k]] * a->d[HJ[k]];
 }
 
@@ -148,15 +152,15 @@ double ism_eval_hessian(const ism_tape *t, ism_eval_ws *ws, double x, double y, 
                         double grad[3], double hess[6])
 {
     if (!ism_ws_fits(ws, t)) {
-        for (int k = 0; k < 3; k++)
+        _Pragma("GCC unroll 6") for (int k = 0; k < 3; k++)
             grad[k] = NAN;
-        for (int k = 0; k < 6; k++)
+        _Pragma("GCC unroll 6") for (int k = 0; k < 6; k++)
             hess[k] = NAN;
         return NAN;
     }
     ism_jet *r = ws->jet;
     const double in[3] = { x, y, z };
-    for (int k = 0; k < 3; k++) {
+    _Pragma("GCC unroll 6") for (int k = 0; k < 3; k++) {
         r[k] = (ism_jet){ 0 };
         r[k].v = in[k];
         r[k].d[k] = 1.0;
@@ -170,9 +174,9 @@ double ism_eval_hessian(const ism_tape *t, ism_eval_ws *ws, double x, double y, 
             jet_op(c, r);
     }
     const ism_jet *f = &r[t->result];
-    for (int k = 0; k < 3; k++)
+    _Pragma("GCC unroll 6") for (int k = 0; k < 3; k++)
         grad[k] = f->d[k];
-    for (int k = 0; k < 6; k++)
+    _Pragma("GCC unroll 6") for (int k = 0; k < 6; k++)
         hess[k] = f->h[k];
     return f->v;
 }
