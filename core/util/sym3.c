@@ -10,7 +10,10 @@
  * only guards against NaN input. */
 #define SYM3_MAX_SWEEPS 32
 
-static void rotate(double a[3][3], double v[3][3], int p, int q)
+/* Inlined into the sweep with constant p, q (its three calls), whose indexing then folds
+ * away: the singular search's Newton steps spend most of their pseudo-inverse here. */
+static inline __attribute__((always_inline)) void rotate(double a[3][3], double v[3][3], int p,
+                                                         int q)
 {
     if (a[p][q] == 0.0)
         return;
