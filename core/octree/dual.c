@@ -1,6 +1,9 @@
 /* dual.c — dual contouring on an octree under an error bound, for surfaces without features
- * (dual.h): the tree and its leaf tests, the vertices, the minimal-edge walk that makes the
- * quads, and the measure-and-split rounds. */
+ * (dual.h): the tree and its leaf tests (the interval proofs in dual_cert.c), the vertices,
+ * the minimal-edge walk that makes the quads, and the measure-and-split rounds. The work is
+ * cut into tasks for the pool whose outputs land in their own slots and are joined in a
+ * fixed order (children level by level, walk calls, vertex pairs, triangles), so the mesh
+ * does not depend on the number of threads. */
 #include "core/octree/dual.h"
 #include "core/eval/interval_jet.h"
 #include "core/octree/cell_cache.h"
