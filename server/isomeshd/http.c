@@ -384,7 +384,10 @@ static void mhd_log(void *cls, const char *fmt, va_list ap)
  * 7 MB mesh parked ~1.8 GB in the kernel (past the host's TCP memory-pressure mark) and the
  * polling thread spent seconds copying it (/healthz waited 5-11 s). Bytes in flight (the
  * congestion window) are not limited by this, so fast clients on long links keep their
- * speed. */
+ * speed. Nor does it cost throughput: without it (the kernel's default, no bound) a cached
+ * 331 KB mesh at 256 connections cost the same, server and wrk CPU together 277 against 285
+ * us per request by sendfile, 276 against 278 from memory (task-clock, medians of 3, bbr,
+ * load 18-20). */
 #define NOTSENT_LOWAT (256u << 10)
 /* Connections libmicrohttpd may hold beyond --max-connections: those the connection table
  * closed and libmicrohttpd has not freed yet (an evicted connection waiting for a computation
