@@ -10,6 +10,7 @@
 
 #include <stdbool.h>
 #include <stdlib.h>
+#include <string.h>
 
 struct ism_ivjet_ws {
     uint32_t nregs;
@@ -89,7 +90,13 @@ static inline unsigned want_of(unsigned deps, int second, bool smooth)
 
 /* Exact zeros stay exact (outward rounding would widen 0 to ±2^-1074): a derivative that is
  * exactly 0 says the register does not depend on that variable, which the kink rule uses. */
-static bool is_zero(ism_interval u) { return u.lo == 0.0 && u.hi == 0.0; }
+static inline bool is_zero(ism_interval u)
+{
+    uint64_t lo, hi; /* both bounds ±0: their bits but the signs are 0 (one test, no branch) */
+    memcpy(&lo, &u.lo, sizeof lo);
+    memcpy(&hi, &u.hi, sizeof hi);
+    return ((lo | hi) << 1) == 0;
+}
 
 static inline ism_interval mulz(ism_interval a, ism_interval b)
 {
@@ -116,10 +123,12 @@ static void set_whole_derivs(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *
         flat[k] = !DO_D(w, k) || (is_zero(a->d[k]) && is_zero(b->d[k]));
         o->d[k] = flat[k] ? ivc(0.0) : ism_iv_whole();
     }
-    for (int e = 0; (w & SECOND) && e < 6; e++) {
-        bool zero = !DO_H(w, e) || (flat[HI[e]] && flat[HJ[e]] && is_zero(a->h[e])
-                                    && is_zero(b->h[e]));
-        o->h[e] = zero ? ivc(0.0) : ism_iv_whole();
+    if (w & SECOND) {
+        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++) {
+            bool zero = !DO_H(w, e) || (flat[HI[e]] && flat[HJ[e]] && is_zero(a->h[e])
+                                        && is_zero(b->h[e]));
+            o->h[e] = zero ? ivc(0.0) : ism_iv_whole();
+        }
     }
 }
 
@@ -127,12 +136,14 @@ static ALWAYS_INLINE void set_zero_derivs(ism_ivjet *o, unsigned w)
 {
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         o->d[k] = ivc(0.0);
-    for (int k = 0; (w & SECOND) && k < 6; k++)
-        o->h[k] = ivc(0.0);
+    if (w & SECOND) {
+        _Pragma("GCC unroll 6") for (int k = 0; k < 6; k++)
+            o->h[k] = ivc(0.0);
+    }
 }
 
 /* u'_i u'_j, the square when i = j (tighter: never negative). */
-static inline ism_interval dd(const ism_ivjet *a, int e)
+static ALWAYS_INLINE ism_interval dd(const ism_ivjet *a, int e)
 {
     int i = HI[e], j = HJ[e];
     if (is_zero(a->d[i]) || is_zero(a->d[j]))
@@ -147,8 +158,10 @@ static ALWAYS_INLINE void chain(ism_ivjet *o, const ism_ivjet *a, ism_interval g
     o->v = g;
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         o->d[k] = DO_D(w, k) ? mulz(g1, a->d[k]) : ivc(0.0);
-    for (int e = 0; (w & SECOND) && e < 6; e++)
-        o->h[e] = DO_H(w, e) ? addz(mulz(g1, a->h[e]), mulz(g2, dd(a, e))) : ivc(0.0);
+    if (w & SECOND) {
+        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+            o->h[e] = DO_H(w, e) ? addz(mulz(g1, a->h[e]), mulz(g2, dd(a, e))) : ivc(0.0);
+    }
 }
 
 static ism_interval lin_copy(ism_interval u, double c) { (void)c; return u; }
@@ -163,8 +176,10 @@ static ALWAYS_INLINE void each(ism_ivjet *o, const ism_ivjet *a, ism_interval (*
     o->v = fn(a->v, c);
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         o->d[k] = !DO_D(w, k) ? ivc(0.0) : is_zero(a->d[k]) ? a->d[k] : fn(a->d[k], c);
-    for (int e = 0; (w & SECOND) && e < 6; e++)
-        o->h[e] = !DO_H(w, e) ? ivc(0.0) : is_zero(a->h[e]) ? a->h[e] : fn(a->h[e], c);
+    if (w & SECOND) {
+        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+            o->h[e] = !DO_H(w, e) ? ivc(0.0) : is_zero(a->h[e]) ? a->h[e] : fn(a->h[e], c);
+    }
 }
 
 /* out = s * a + shift for a constant factor s: derivatives scale exactly as the value. */
@@ -305,10 +320,12 @@ static ALWAYS_INLINE void op_add(ism_ivjet *o, const ism_ivjet *a, const ism_ivj
     o->v = sub ? iv_sub(a->v, b->v) : iv_add(a->v, b->v);
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         o->d[k] = DO_D(w, k) ? fn(a->d[k], b->d[k]) : ivc(0.0);
-    for (int e = 0; (w & SECOND) && e < 6; e++)
-        o->h[e] = !DO_H(w, e) ? ivc(0.0)
-                  : sub       ? subz(a->h[e], b->h[e])
-                              : addz(a->h[e], b->h[e]);
+    if (w & SECOND) {
+        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+            o->h[e] = !DO_H(w, e) ? ivc(0.0)
+                      : sub       ? subz(a->h[e], b->h[e])
+                                  : addz(a->h[e], b->h[e]);
+    }
 }
 
 /* (ab)' = a'b + ab', (ab)'' = a''b + ab'' + a'b'^T + b'a'^T. */
@@ -317,14 +334,16 @@ static ALWAYS_INLINE void op_mul(ism_ivjet *o, const ism_ivjet *a, const ism_ivj
     o->v = iv_mul(a->v, b->v);
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         o->d[k] = DO_D(w, k) ? addz(mulz(a->d[k], b->v), mulz(a->v, b->d[k])) : ivc(0.0);
-    for (int e = 0; (w & SECOND) && e < 6; e++) {
-        if (!DO_H(w, e)) {
-            o->h[e] = ivc(0.0);
-            continue;
+    if (w & SECOND) {
+        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++) {
+            if (!DO_H(w, e)) {
+                o->h[e] = ivc(0.0);
+                continue;
+            }
+            int i = HI[e], j = HJ[e];
+            ism_interval cross = addz(mulz(a->d[i], b->d[j]), mulz(a->d[j], b->d[i]));
+            o->h[e] = addz(addz(mulz(a->h[e], b->v), mulz(a->v, b->h[e])), cross);
         }
-        int i = HI[e], j = HJ[e];
-        ism_interval cross = addz(mulz(a->d[i], b->d[j]), mulz(a->d[j], b->d[i]));
-        o->h[e] = addz(addz(mulz(a->h[e], b->v), mulz(a->v, b->h[e])), cross);
     }
 }
 
@@ -345,15 +364,17 @@ static void op_div(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, unsigne
         ism_interval num = subz(a->d[k], mulz(q, b->d[k]));
         o->d[k] = is_zero(num) ? num : iv_div(num, b->v);
     }
-    for (int e = 0; (w & SECOND) && e < 6; e++) {
-        if (!DO_H(w, e)) {
-            o->h[e] = ivc(0.0);
-            continue;
+    if (w & SECOND) {
+        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++) {
+            if (!DO_H(w, e)) {
+                o->h[e] = ivc(0.0);
+                continue;
+            }
+            int i = HI[e], j = HJ[e];
+            ism_interval cross = addz(mulz(o->d[i], b->d[j]), mulz(b->d[i], o->d[j]));
+            ism_interval num = subz(subz(a->h[e], cross), mulz(q, b->h[e]));
+            o->h[e] = is_zero(num) ? num : iv_div(num, b->v);
         }
-        int i = HI[e], j = HJ[e];
-        ism_interval cross = addz(mulz(o->d[i], b->d[j]), mulz(b->d[i], o->d[j]));
-        ism_interval num = subz(subz(a->h[e], cross), mulz(q, b->h[e]));
-        o->h[e] = is_zero(num) ? num : iv_div(num, b->v);
     }
 }
 
@@ -362,8 +383,10 @@ static ALWAYS_INLINE void take_derivs(ism_ivjet *o, const ism_ivjet *src, unsign
 {
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         o->d[k] = DO_D(w, k) ? src->d[k] : ivc(0.0);
-    for (int e = 0; (w & SECOND) && e < 6; e++)
-        o->h[e] = DO_H(w, e) ? src->h[e] : ivc(0.0);
+    if (w & SECOND) {
+        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+            o->h[e] = DO_H(w, e) ? src->h[e] : ivc(0.0);
+    }
 }
 
 /* Which branch of a min/max/abs the box decides: A, B, or FREE when both may be active.
@@ -448,9 +471,11 @@ static ALWAYS_INLINE void sanitize(ism_ivjet *o, unsigned w)
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         if (DO_D(w, k))
             o->d[k] = ism_iv_sane(o->d[k]);
-    for (int e = 0; (w & SECOND) && e < 6; e++)
-        if (DO_H(w, e))
-            o->h[e] = ism_iv_sane(o->h[e]);
+    if (w & SECOND) {
+        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+            if (DO_H(w, e))
+                o->h[e] = ism_iv_sane(o->h[e]);
+    }
 }
 
 static ALWAYS_INLINE size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
