@@ -1,6 +1,6 @@
 /* conform_ears.c — clipping a rim loop's backward steps before its rings are made: where a
- * loop winding round a closed double curve steps backwards along it (its feet's arclength
- * decreasing against the winding), every ring quad and zip triangle built under that step
+ * loop along a double curve steps backwards along it (its feet's arclength decreasing
+ * against the way the loop runs), every ring quad and zip triangle built under that step
  * turns over (in the chart s = arclength of the foot, d = distance to the curve, the quad
  * (a_i, a_i+1, b_i+1, b_i) with b = foot + t (a − foot) has the sign of s_i+1 − s_i alone).
  * The polygoniser's mesh makes such steps all round a curve that crosses its lattice at an
@@ -46,27 +46,37 @@
  * flatter one is a sliver along a straight stretch of rim (two rim vertices a rounding apart
  * on it), whose normal says nothing about the sheet. */
 #define EAR_MIN_HEIGHT 0.1
+/* The way a loop runs along an open curve (or beside a stretch of a closed one, without
+ * winding round it) is read from its steps this many edges either side of a vertex... */
+#define DIR_WINDOW 3
+/* ... where their sum is at least this share of their lengths (a rim turning round a pinch
+ * point, or zigzagging, is left as it is) and this many mean rim edges long (the window's six
+ * edges run about six along a curve; round its end, where the feet stay at the end point,
+ * rounding would give any sign). */
+#define DIR_AGREE 0.5
+#define DIR_TRAVEL 1.0
 /* Clipping passes over the loop at most (each clips a riser's ears; a riser clipped lets its
  * neighbour's ear through on the next pass). */
 #define EAR_PASSES 4
 
-/* s − t wrapped into (−L/2, L/2]: the short way round a closed curve of length L. */
-static double wrapped(double s, double t, double L)
+/* s − t along the curve: wrapped into (−L/2, L/2] on a closed curve of length L (the short
+ * way round). */
+static double diff(const cf_polyline *pl, double s, double t)
 {
     double d = s - t;
-    return d - L * round(d / L);
+    return pl->closed ? d - pl->length * round(d / pl->length) : d;
 }
 
 typedef struct chart {
-    const cf_polyline *pl;
+    const cf_polyline *pl; /* the curve of the vertices compared (one run's) */
     const double *u, *d; /* per loop vertex: foot arclength, distance to the curve */
-    double sign;         /* +1 when the loop winds with the curve's arclength, −1 against */
+    double sign;         /* +1 when the loop runs with the curve's arclength here, −1 against */
 } chart;
 
-/* The step from loop vertex i to j along the winding (positive: forwards). */
+/* The step from loop vertex i to j along the loop's way (positive: forwards). */
 static double step(const chart *ch, size_t i, size_t j)
 {
-    return ch->sign * wrapped(ch->u[j], ch->u[i], ch->pl->length);
+    return ch->sign * diff(ch->pl, ch->u[j], ch->u[i]);
 }
 
 /* Twice the signed area of (i, j, k) in the chart, relative to i; negative when the triangle
@@ -90,57 +100,112 @@ static bool inside(const chart *ch, size_t a, size_t b, size_t e, size_t q)
 /* The ear at i (prev p, next n over the live vertices) may be clipped: its new edge steps
  * forwards (by less than a riser at times: a short tread after a riser, crossing spheres at
  * depth 8 in the 1e-3 box, 34 edges turned over when the new edge had to step a riser's
- * length). */
+ * length). The ends of an open loop are their own neighbours (never clipped). */
 static bool ear_ok(const chart *ch, const size_t *prev, const size_t *next, size_t p, size_t i,
                    size_t n)
 {
     double sn = step(ch, p, n), dn = ch->d[n] - ch->d[p];
-    if (p == n || !(sn > 0) || !(chart_turn(ch, p, i, n) < -EAR_MIN_HEIGHT * (sn * sn + dn * dn)))
+    if (p == n || p == i || n == i || !(sn > 0) ||
+        !(chart_turn(ch, p, i, n) < -EAR_MIN_HEIGHT * (sn * sn + dn * dn)))
         return false;
     size_t a = prev[p], b = next[n];
     for (int k = 0; k < EAR_WINDOW; k++, a = prev[a], b = next[b])
-        if ((a != i && a != n && inside(ch, p, i, n, a)) ||
-            (b != i && b != p && inside(ch, p, i, n, b)))
+        if ((a != i && a != n && a != p && inside(ch, p, i, n, a)) ||
+            (b != i && b != p && b != n && inside(ch, p, i, n, b)))
             return false;
     return true;
 }
 
-int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double *foot, int wind)
+/* The way the loop runs along the curve at each vertex (sg[i] = ±1), or 0 where it is not
+ * clear: round the closed curve it winds (wind != 0), the winding's everywhere; else the
+ * sign of the steps over DIR_WINDOW edges each side where they agree (|sum| at least
+ * DIR_AGREE of the sum of their lengths) and move at least travel along the curve (a rim
+ * round the end of an open curve — a pinch point, a box exit — has its feet at that end). */
+static void directions(const cf_polyline *pl, const cf_loop *l, const double *u,
+                       const int *cid, int wind, double travel, double *sg)
 {
     size_t n = l->n;
-    if (!pl->closed || !l->closed || wind == 0 || n < 4)
+    for (size_t i = 0; i < n; i++) {
+        if (wind != 0) {
+            sg[i] = wind > 0 ? 1 : -1;
+            continue;
+        }
+        sg[i] = 0;
+        if (!l->closed && (i < DIR_WINDOW || i + DIR_WINDOW >= n))
+            continue;
+        const cf_polyline *c = &pl[cid ? cid[i] : 0];
+        double sum = 0, len = 0;
+        bool one = true; /* the window along one curve of the group */
+        for (size_t k = 0; k < 2 * DIR_WINDOW && one; k++) {
+            size_t a = (i + n - DIR_WINDOW + k) % n, b = (a + 1) % n;
+            one = !cid || (cid[a] == cid[i] && cid[b] == cid[i]);
+            double dd = diff(c, u[b], u[a]);
+            sum += dd;
+            len += fabs(dd);
+        }
+        if (one && fabs(sum) >= travel && fabs(sum) >= DIR_AGREE * len)
+            sg[i] = sum > 0 ? 1 : -1;
+    }
+}
+
+/* Every live vertex within EAR_WINDOW + 1 places of i on i's curve (a loop along several
+ * curves: an ear and the vertices it is checked against all along one). */
+static bool window_on(const int *cid, const size_t *prev, const size_t *next, size_t i)
+{
+    size_t a = i, b = i;
+    for (int k = 0; k <= EAR_WINDOW; k++, a = prev[a], b = next[b])
+        if (cid[a] != cid[i] || cid[b] != cid[i])
+            return false;
+    return true;
+}
+
+int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double *foot,
+                 int *cid, int wind)
+{
+    size_t n = l->n;
+    if (n < 5 || (wind != 0 && !(pl->closed && l->closed)))
         return 0;
     size_t *prev = malloc(n * sizeof *prev), *next = malloc(n * sizeof *next);
-    double *d = malloc(n * sizeof *d);
-    if (!prev || !next || !d) {
+    double *d = malloc(n * sizeof *d), *sg = malloc(n * sizeof *sg);
+    uint8_t *gone = calloc(n, 1);
+    if (!prev || !next || !d || !sg || !gone) {
         free(prev);
         free(next);
         free(d);
+        free(sg);
+        free(gone);
         return -1;
     }
     for (size_t i = 0; i < n; i++) {
-        prev[i] = (i + n - 1) % n;
-        next[i] = (i + 1) % n;
+        prev[i] = l->closed || i > 0 ? (i + n - 1) % n : i;
+        next[i] = l->closed || i + 1 < n ? (i + 1) % n : i;
         d[i] = ism_dist3(c->m->pos + 3 * (size_t)l->v[i], foot + 3 * i);
     }
-    chart ch = {pl, u, d, wind > 0 ? 1.0 : -1.0};
-    double riser = EAR_MIN_STEP * cf_loop_mean_edge(c, l);
-    size_t live = n, head = 0;
+    double edge = cf_loop_mean_edge(c, l), riser = EAR_MIN_STEP * edge;
+    directions(pl, l, u, cid, wind, DIR_TRAVEL * edge, sg);
+    chart ch = {pl, u, d, 1};
+    size_t live = n;
     int clipped = 0;
     bool ok = true, any = true;
-    for (int pass = 0; ok && any && pass < EAR_PASSES && live > 3; pass++) {
+    for (int pass = 0; ok && any && pass < EAR_PASSES && live > 4; pass++) {
         any = false;
-        size_t i = head;
-        for (size_t seen = 0; ok && seen < live && live > 3; seen++) {
+        size_t i = 0;
+        while (gone[i])
+            i++;
+        for (size_t seen = 0; ok && seen < live && live > 4; seen++) {
             size_t p = prev[i], nx = next[i];
-            /* a step back into i or out of it: clip i when its ear allows */
-            bool back = !(step(&ch, p, i) > riser) || !(step(&ch, i, nx) > riser);
+            ch.sign = sg[i];
+            ch.pl = &pl[cid ? cid[i] : 0];
+            /* a step back into i or out of it: clip i when its ear allows (the loop running
+             * the same way at its neighbours) */
+            bool back = sg[i] != 0 && sg[p] == sg[i] && sg[nx] == sg[i] &&
+                        (!cid || window_on(cid, prev, next, i)) &&
+                        (!(step(&ch, p, i) > riser) || !(step(&ch, i, nx) > riser));
             if (back && ear_ok(&ch, prev, next, p, i, nx)) {
                 ok = cf_add_triangle(c, l->v[p], l->v[i], l->v[nx]);
                 next[p] = nx;
                 prev[nx] = p;
-                if (head == i)
-                    head = nx;
+                gone[i] = 1;
                 live--;
                 clipped++;
                 any = true;
@@ -150,14 +215,15 @@ int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double
             i = nx;
         }
     }
-    if (ok && clipped > 0) { /* compact the loop, its parameters and feet (a clipped
-                                vertex is its own neighbours' neither: next[prev[i]] != i) */
+    if (ok && clipped > 0) { /* compact the loop, its parameters and feet */
         size_t k = 0;
         for (size_t i = 0; i < n; i++) {
-            if (next[prev[i]] != i)
+            if (gone[i])
                 continue;
             l->v[k] = l->v[i];
             u[k] = u[i];
+            if (cid)
+                cid[k] = cid[i];
             for (int j = 0; j < 3; j++)
                 foot[3 * k + j] = foot[3 * i + j];
             k++;
@@ -167,6 +233,8 @@ int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double
     free(prev);
     free(next);
     free(d);
+    free(sg);
+    free(gone);
     return ok ? clipped : -1;
 }
 

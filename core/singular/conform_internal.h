@@ -283,13 +283,16 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
                   const cf_loops *ls, double rho);
 
 /* ---- conform_ears.c: a rim loop's backward steps clipped ---- */
-/* Loop l (closed, winding wind != 0 times round the closed curve pl; u[i] its vertices' foot
- * arclengths, foot[3 i] the feet) loses the outer ends of its steps backwards along pl: each
- * such vertex's ear (prev, v, next) becomes a triangle where it turns like the hole and its
- * new edge steps forwards. l->v, u and foot are compacted in place (l->n lowered). Returns the
- * ears clipped, -1 when out of memory. */
+/* Loop l along the curves pl (cid[i] the curve of vertex i, NULL: all on pl[0]; u[i] its
+ * foot's arclength on it, foot[3 i] the foot; wind != 0: a closed loop winding that many
+ * times round the closed curve pl[0]) loses the outer ends of its steps backwards along its
+ * curve: each such vertex's ear (prev, v, next) becomes a triangle where it turns like the
+ * hole and its new edge steps forwards. The way forwards is the winding's, else read from
+ * the loop's steps nearby along one curve (nothing clipped where they disagree or barely move:
+ * round the end of an open curve, at a junction of curves). l->v, u, foot and cid are
+ * compacted in place (l->n lowered). Returns the ears clipped, -1 when out of memory. */
 int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double *foot,
-                 int wind);
+                 int *cid, int wind);
 /* Cuts the spikes of the closed loops of ls: a kept triangle holding a loop vertex's both rim
  * edges, the vertex's only live triangle, is marked dead (added to the sorted *rm) and the
  * vertex leaves its loop. False when out of memory (nothing more marked dead; the caller

@@ -527,13 +527,17 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
             multi |= cid[i] != cid[0];
         }
         cf_loop own = {NULL, 0, false}; /* a copy the ears are clipped from */
-        if (ok && found && !multi && pl[cid[0]].closed && l->closed) {
-            long wind = unwrap(&pl[cid[0]], l, u);
-            own = (cf_loop){malloc(l->n * sizeof *own.v), l->n, true};
+        if (ok && found) {
+            /* the winding round a closed curve (0 along an open one, or several) */
+            long wind = multi ? 0 : unwrap(&pl[cid[0]], l, u);
+            own = (cf_loop){malloc(l->n * sizeof *own.v), l->n, l->closed};
             ok = own.v != NULL;
             for (size_t i = 0; ok && i < l->n; i++)
                 own.v[i] = l->v[i];
-            if (ok && cf_clip_ears(c, &pl[cid[0]], &own, u, foot, (int)wind) < 0)
+            if (multi)
+                smooth_ids(cid, l->n, l->closed);
+            if (ok && cf_clip_ears(c, multi ? pl : &pl[cid[0]], &own, u, foot,
+                                   multi ? cid : NULL, (int)wind) < 0)
                 ok = false;
             l = &own;
         }
@@ -541,7 +545,6 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
             ok = cf_fan_centroid(c, l);
         } else if (ok) {
             uint32_t *row = make_rows(c, l, foot);
-            smooth_ids(cid, l->n, l->closed);
             ok = row && (multi ? zip_multi(c, pl, cv, l, cid, row, rho)
                                : zip_loop(c, &pl[cid[0]], cv[cid[0]], l, u, row, rho));
             free(row);

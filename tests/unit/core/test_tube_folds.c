@@ -12,6 +12,7 @@
  * into one double curve takes as many vertices as edges), one component, no boundary, the
  * non-manifold edges one closed chain, each of 4 triangles. */
 #include <criterion/criterion.h>
+#include <limits.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -101,7 +102,7 @@ static size_t turned_folds(const ism_mesh *m, const ism_tape *f, const char *wha
 typedef struct case_ {
     const char *name, *expr;
     double base[6];
-    long euler;
+    long euler;           /* LONG_MIN: no closed-form figures (a box cuts the surface) */
     size_t folds_max;
 } case_;
 
@@ -118,11 +119,13 @@ static void run_case(const case_ *k, int d, int which)
     pf_props p;
     pf_measure(&m, f, &p);
     size_t nm = 0;
-    cr_expect(p.euler == k->euler && p.components == 1 && p.boundary_edges == 0,
-              "%s: χ %ld, %zu components, %zu boundary edges; want %ld, 1, 0", what, p.euler,
-              p.components, p.boundary_edges, k->euler);
-    cr_expect(pf_nm_edges_one_closed_curve(&m, &nm), "%s: the %zu non-manifold edges are not "
-              "one closed chain", what, nm);
+    if (k->euler != LONG_MIN) {
+        cr_expect(p.euler == k->euler && p.components == 1 && p.boundary_edges == 0,
+                  "%s: χ %ld, %zu components, %zu boundary edges; want %ld, 1, 0", what,
+                  p.euler, p.components, p.boundary_edges, k->euler);
+        cr_expect(pf_nm_edges_one_closed_curve(&m, &nm), "%s: the %zu non-manifold edges are "
+                  "not one closed chain", what, nm);
+    }
     size_t folds = turned_folds(&m, f, what);
     cr_log_info("%s: %zu edges turned over", what, folds);
     cr_expect(folds <= k->folds_max, "%s: %zu edges turned over against ∇f beside the double "
@@ -149,4 +152,22 @@ Test(tube_folds, crossing_spheres_few_turned_over)
                             SPHERE_FOLDS_MAX};
     for (int which = pf_quick() ? 0 : -1; which <= (pf_quick() ? 0 : 1); which++)
         run_case(&k, 7 - pf_quick(), which);
+}
+
+/* Open double curves: the Whitney umbrella x² = y² z (a double half-line from its pinch point
+ * to the box) and Steiner's surface (three double segments meeting at the origin, each
+ * ending in two pinch points), depth 7 in the presets' boxes. Turned-over edges own / 1e-3 /
+ * 0.37-cell box: Whitney 0 / 0 / 4 (0 / 54 / 31 before the rim's smoothing), Steiner
+ * 18 / 42 / 114 (342 / 129 / 251; those left lie beside the pinch points, where a rim turns
+ * round its curve's end; at depth 6, the sanitizer's, the 1e-3 box has 124 either way).
+ * Folds only: the boxes cut both surfaces. */
+Test(tube_folds, open_curves_few_turned_over)
+{
+    static const case_ k[2] = {
+        {"whitney umbrella", "x^2 - y^2*z", {-1, -1, -1, 1, 1, 1}, LONG_MIN, 8},
+        {"steiner", "x^2*y^2 + y^2*z^2 + z^2*x^2 + x*y*z", {-1, -1, -1, 1, 1, 1}, LONG_MIN, 160},
+    };
+    for (int i = 0; i < 2; i++)
+        for (int which = pf_quick() ? 0 : -1; which <= (pf_quick() ? 0 : 1); which++)
+            run_case(&k[i], 7 - pf_quick(), which);
 }
