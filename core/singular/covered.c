@@ -33,13 +33,28 @@ static void cells_of(double x, double lo, double cell, int64_t n, int64_t *c0, i
     *c1 = *c1 < 0 ? 0 : *c1 >= n ? n - 1 : *c1;
 }
 
-/* Marks hit[] for every finest box's cell (cells: key → number) that holds vertex p. */
+/* Whether some index in [a, b] is marked in row (a lattice row's cells that hold a box). */
+static bool any_in(const uint8_t *row, int64_t a, int64_t b)
+{
+    for (int64_t i = a; i <= b; i++)
+        if (row[i])
+            return true;
+    return false;
+}
+
+/* Marks hit[] for every finest box's cell (cells: key → number) that holds vertex p. A vertex
+ * whose cell range misses every box's row on some axis (rows[k][i]: a box's cell has index i
+ * on axis k) holds none: most of a mesh lies away from the few rows of its candidates. */
 static void hit_cells(const ism_key_map *cells, uint8_t *hit, const double p[3],
-                      const double lo[3], const double cell[3], int64_t n)
+                      const double lo[3], const double cell[3], int64_t n,
+                      uint8_t *const rows[3])
 {
     int64_t a[3], b[3], c[3];
-    for (int k = 0; k < 3; k++)
+    for (int k = 2; k >= 0; k--) { /* z first: candidates often lie in few z rows (the heart) */
         cells_of(p[k], lo[k], cell[k], n, &a[k], &b[k]);
+        if (!any_in(rows[k], a[k], b[k]))
+            return;
+    }
     for (c[0] = a[0]; c[0] <= b[0]; c[0]++)
         for (c[1] = a[1]; c[1] <= b[1]; c[1]++)
             for (c[2] = a[2]; c[2] <= b[2]; c[2]++) {
@@ -53,7 +68,7 @@ static void hit_cells(const ism_key_map *cells, uint8_t *hit, const double p[3],
  * point or curve already explains: marking them again changes nothing) as a number in
  * cells. */
 static bool box_cells(const ism_locus *l, const double lo[3], const double cell[3],
-                      ism_key_map *cells, uint32_t *which)
+                      int64_t n, ism_key_map *cells, uint32_t *which, uint8_t *const rows[3])
 {
     for (size_t i = 0; i < l->nboxes; i++) {
         const ism_lbox *b = &l->boxes[i];
@@ -66,6 +81,9 @@ static bool box_cells(const ism_locus *l, const double lo[3], const double cell[
         which[i] = finest ? ism_key_map_add(cells, cell_key(c), &added) : UINT32_MAX;
         if (finest && which[i] == ISM_KEY_NONE)
             return false;
+        for (int k = 0; finest && k < 3; k++)
+            if (c[k] >= 0 && c[k] < n)
+                rows[k][c[k]] = 1;
     }
     return true;
 }
@@ -84,19 +102,22 @@ bool ism_locus_mark_covered(ism_locus *l, const ism_locus_options *o, const ism_
     ism_key_map_init(&cells);
     uint32_t *which = malloc(l->nboxes * sizeof *which);
     uint8_t *used = calloc(m->nverts + 1, 1), *hit = NULL;
-    bool ok = which && used && box_cells(l, lo, cell, &cells, which) &&
-              (hit = calloc(cells.n + 1, 1));
+    uint8_t *rows[3] = { calloc((size_t)n, 1), calloc((size_t)n, 1), calloc((size_t)n, 1) };
+    bool ok = which && used && rows[0] && rows[1] && rows[2] &&
+              box_cells(l, lo, cell, n, &cells, which, rows) && (hit = calloc(cells.n + 1, 1));
     if (ok && cells.n > 0) {
         for (size_t t = 0; t < 3 * m->ntris; t++) /* triangle corners: segments cover nothing */
             used[m->tri[t]] = 1;
         for (size_t v = 0; v < m->nverts; v++)
             if (used[v])
-                hit_cells(&cells, hit, m->pos + 3 * v, lo, cell, n);
+                hit_cells(&cells, hit, m->pos + 3 * v, lo, cell, n, rows);
         for (size_t i = 0; i < l->nboxes; i++)
             if (which[i] != UINT32_MAX && hit[which[i]])
                 l->boxes[i].flags |= ISM_LBOX_USED;
     }
     ism_key_map_free(&cells);
+    for (int k = 0; k < 3; k++)
+        free(rows[k]);
     free(which);
     free(used);
     free(hit);

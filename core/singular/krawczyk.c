@@ -6,7 +6,7 @@
 #include <stdbool.h>
 
 /* Index of entry (i, j) of a symmetric 3×3 matrix in xx xy xz yy yz zz order. */
-static int sym(int i, int j)
+static inline int sym(int i, int j)
 {
     static const int idx[3][3] = { { 0, 1, 2 }, { 1, 3, 4 }, { 2, 4, 5 } };
     return idx[i][j];
@@ -53,16 +53,16 @@ int ism_krawczyk(const ism_interval x[3], const double c[3], const ism_interval 
     if (!mid_inverse(h, y))
         return ISM_KRAWCZYK_UNKNOWN;
     ism_interval dx[3];
-    for (int j = 0; j < 3; j++)
+    _Pragma("GCC unroll 3") for (int j = 0; j < 3; j++)
         dx[j] = iv_sub(x[j], iv(c[j], c[j]));
     bool inner = true, empty = false;
-    for (int i = 0; i < 3; i++) {
+    _Pragma("GCC unroll 3") for (int i = 0; i < 3; i++) {
         ism_interval acc = iv(c[i], c[i]);
-        for (int m = 0; m < 3; m++)
+        _Pragma("GCC unroll 3") for (int m = 0; m < 3; m++)
             acc = iv_sub(acc, iv_mul_c(gc[m], y[i][m]));
-        for (int j = 0; j < 3; j++) {
+        _Pragma("GCC unroll 3") for (int j = 0; j < 3; j++) {
             ism_interval e = iv(i == j ? 1.0 : 0.0, i == j ? 1.0 : 0.0);
-            for (int m = 0; m < 3; m++)
+            _Pragma("GCC unroll 3") for (int m = 0; m < 3; m++)
                 e = iv_sub(e, iv_mul_c(h[sym(m, j)], y[i][m]));
             acc = iv_add(acc, iv_mul(ism_iv_sane(e), dx[j]));
         }
