@@ -150,7 +150,7 @@ static bool some_piece_may_vanish(const search *s, worker *w, const ism_interval
 /* Σ_j a_j (x_j − c_j) added to base. */
 static ism_interval add_linear(ism_interval base, const ism_interval a[3], const ism_interval dx[3])
 {
-    for (int j = 0; j < 3; j++)
+    _Pragma("GCC unroll 3") for (int j = 0; j < 3; j++)
         base = iv_add(base, iv_mul(a[j], dx[j]));
     return base;
 }
@@ -160,7 +160,7 @@ static int smooth_tests(const search *s, worker *w, const ism_interval x[3], con
 {
     double c[3];
     ism_interval cx[3], dx[3];
-    for (int k = 0; k < 3; k++) {
+    _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++) {
         c[k] = 0.5 * x[k].lo + 0.5 * x[k].hi;
         cx[k] = iv(c[k], c[k]);
         dx[k] = iv_sub(x[k], cx[k]);
@@ -174,7 +174,7 @@ static int smooth_tests(const search *s, worker *w, const ism_interval x[3], con
     ism_eval_interval_jet(s->t, w->jw, x, NULL, NULL, &j);
     w->evals_jet++;
     static const int row[3][3] = { { 0, 1, 2 }, { 1, 3, 4 }, { 2, 4, 5 } };
-    for (int i = 0; i < 3; i++) {
+    _Pragma("GCC unroll 3") for (int i = 0; i < 3; i++) {
         ism_interval hrow[3] = { j.h[row[i][0]], j.h[row[i][1]], j.h[row[i][2]] };
         if (!holds0(add_linear(gc.d[i], hrow, dx)))
             return EXCLUDED;
