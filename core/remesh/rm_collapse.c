@@ -216,8 +216,8 @@ static double farthest(rm_pass *p, const double *pos, const uint32_t *tri, size_
         if (!midpoints) {
             double m[3];
             rm_centroid(q[0], q[1], q[2], m);
-            double d = rm_distance(p, m);
-            rm_cbound_set(p, (uint32_t)t, m, d);
+            double gn = 0, d = p->cen_ref ? rm_cbound_distance(p, m, &gn) : rm_distance(p, m);
+            rm_cbound_set(p, (uint32_t)t, m, d, gn);
             far = fmax(far, d);
             int i = ISM_RM_MIDPOINT_LOW_TRIS; /* insertion into the short list, farthest first */
             while (top && i > 0 && d > topd[i - 1]) {
@@ -277,7 +277,7 @@ size_t rm_collapse_active(rm_pass *p, bool *ok)
             const uint32_t *v = m->tri + 3 * t;
             /* a triangle no collapse came near since the last sweep fails as it did */
             if (!p->r.dead[t] && (p->touched[v[0]] | p->touched[v[1]] | p->touched[v[2]]) &&
-                rm_min_sine(P(p, v[0]), P(p, v[1]), P(p, v[2])) < poor &&
+                rm_tri_sine(p, (uint32_t)t) < poor &&
                 collapse_triangle(p, (uint32_t)t, ok))
                 made++;
         }

@@ -30,7 +30,7 @@
 
 typedef struct quad {
     uint32_t a, b, c, d, t1, t2;
-    double cen[2][4]; /* what the test knew of (a, d, c) and (b, c, d)'s centroids
+    double cen[2][RM_CBOUND_REC]; /* what the test knew of (a, d, c) and (b, c, d)'s centroids
                          (rm_cbound.h: a point and the distance there), for the flip to keep */
 } quad;
 
@@ -50,6 +50,7 @@ static bool find_quad(const rm_pass *p, uint32_t a, uint32_t b, quad *q)
     q->a = a;
     q->b = b;
     q->cen[0][3] = q->cen[1][3] = INFINITY;
+    q->cen[0][4] = q->cen[1][4] = 0;
     q->t1 = t[0];
     q->t2 = t[1];
     q->c = tri[3 * t[0] + (rm_corner(r->m, t[0], a) + 2) % 3];
@@ -86,8 +87,11 @@ static bool not_delaunay(const double *A, const double *B, const double *C, cons
     double cd = ism_dot3((double[3]){A[0] - D[0], A[1] - D[1], A[2] - D[2]},
                      (double[3]){B[0] - D[0], B[1] - D[1], B[2] - D[2]});
     /* sin(γ + δ) |CA||CB||DA||DB| = sc cd + cc sd */
+    double sum = sc * cd + cc * sd;
+    if (!(sum < 0))
+        return false; /* most edges: the margin's scale need not be known */
     double scale = sqrt((cc * cc + sc * sc) * (cd * cd + sd * sd));
-    return sc * cd + cc * sd < -ISM_RM_FLIP_MARGIN * scale;
+    return sum < -ISM_RM_FLIP_MARGIN * scale;
 }
 
 /* The new triangles (A, D, C), (B, C, D) put no centroid farther from f = 0 than the mesh's
@@ -106,13 +110,13 @@ static bool centroids_ok(rm_pass *p, const double *A, const double *B, const dou
         if (q && p->cen_ref) { /* the nearer bound of the two old triangles' */
             uint32_t from = rm_cbound_at(p, q->t1, m) <= rm_cbound_at(p, q->t2, m) ? q->t1 : q->t2;
             if (rm_cbound_within(p, from, m)) {
-                memcpy(keep, p->cen_ref + 4 * (size_t)from, 4 * sizeof *keep);
+                memcpy(keep, p->cen_ref + RM_CBOUND_REC * (size_t)from, sizeof q->cen[i]);
                 continue;
             }
         }
-        double d = rm_distance(p, m); /* never NaN */
+        double gn = 0, d = p->cen_ref ? rm_cbound_distance(p, m, &gn) : rm_distance(p, m);
         if (keep)
-            memcpy(keep, m, sizeof m), keep[3] = d;
+            memcpy(keep, m, sizeof m), keep[3] = d, keep[4] = gn;
         now = d > now ? d : now;
     }
     if (now <= p->centroid_bound)
@@ -179,8 +183,8 @@ static void do_flip(rm_pass *p, const quad *q)
     rm_slot_add(&p->r, q->d, q->t1);
     rm_shape_changed(p, q->t1);
     rm_shape_changed(p, q->t2);
-    rm_cbound_set(p, q->t1, q->cen[0], q->cen[0][3]);
-    rm_cbound_set(p, q->t2, q->cen[1], q->cen[1][3]);
+    rm_cbound_set(p, q->t1, q->cen[0], q->cen[0][3], q->cen[0][4]);
+    rm_cbound_set(p, q->t2, q->cen[1], q->cen[1][3], q->cen[1][4]);
     if (p->flipped)
         p->flipped[q->a] = p->flipped[q->b] = p->flipped[q->c] = p->flipped[q->d] = 1;
 }

@@ -227,11 +227,10 @@ size_t rm_insert_active(rm_pass *p, bool last, bool *ok)
     *ok = true;
     memset(p->touched, 0, r->cap_verts);
     for (size_t t = 0; t < nt && *ok; t++) {
-        const uint32_t *v = r->m->tri + 3 * t;
         uint32_t abc[3];
         double x[3], g[3];
         if (r->dead[t] || r->m->nverts >= r->cap_verts || r->m->ntris + 2 > r->cap_tris ||
-            !(rm_min_sine(P(p, v[0]), P(p, v[1]), P(p, v[2])) < poor) ||
+            !(rm_tri_sine(p, (uint32_t)t) < poor) ||
             !needle(p, (uint32_t)t, abc) || !new_place(p, abc, x, g) ||
             !faces_kept(p, abc, x) || !centroids_ok(p, abc, x) ||
             !flippable(p, abc[1], abc[2], x, last) || !flippable(p, abc[2], abc[0], x, last))

@@ -79,8 +79,20 @@ bool rm_edge_free(const rm_pass *p, uint32_t a, uint32_t b)
     return rm_edge_triangles(&p->r, a, b, t, &n) && manifold_edge_free(p, a, b, t, NULL);
 }
 
+/* What one protection pass has found of each edge, by triangle side (side j of triangle t
+ * runs from its corner j to corner j + 1): whether it is free and the triangle across it.
+ * Both ends' fans walk every edge, and an edge's verdict is the same from either end (the
+ * two normals, the ends and the direction across swap: every test is symmetric in them,
+ * bit for bit); each is asked once. */
+typedef struct edge_memo {
+    uint8_t *state;   /* 3 per triangle: 0 not asked, 1 free, 2 not */
+    uint32_t *across; /* 3 per triangle: the triangle across a free side */
+} edge_memo;
+
+enum { EDGE_UNASKED, EDGE_FREE, EDGE_HELD };
+
 /* Every edge at v free, and the triangles one closed fan (walked across those edges). */
-static bool fan_free(const rm_pass *p, uint32_t v, rm_curvature_memo *memo)
+static bool fan_free(const rm_pass *p, uint32_t v, rm_curvature_memo *memo, edge_memo *em)
 {
     const rm_mesh *r = &p->r;
     const uint32_t *tri = r->m->tri;
@@ -91,9 +103,28 @@ static bool fan_free(const rm_pass *p, uint32_t v, rm_curvature_memo *memo)
     do {
         int k = rm_corner(r->m, t, v);
         uint32_t ab[2], prev = tri[3 * t + (k + 2) % 3];
+        size_t side = 3 * (size_t)t + (size_t)(k + 2) % 3; /* prev -> v */
         int c;
-        if (tri[3 * t + (k + 1) % 3] == v || prev == v ||
-            !rm_edge_triangles(r, v, prev, ab, &c) || !manifold_edge_free(p, v, prev, ab, memo))
+        if (tri[3 * t + (k + 1) % 3] == v || prev == v)
+            return false;
+        if (em->state && em->state[side] != EDGE_UNASKED) {
+            if (em->state[side] != EDGE_FREE)
+                return false;
+            t = em->across[side];
+            continue;
+        }
+        bool manifold = rm_edge_triangles(r, v, prev, ab, &c);
+        bool free = manifold && manifold_edge_free(p, v, prev, ab, memo);
+        if (em->state) {
+            em->state[side] = free ? EDGE_FREE : EDGE_HELD;
+            if (manifold) { /* ab[0] runs v -> prev: its side from v's corner */
+                size_t other = 3 * (size_t)ab[0] + (size_t)rm_corner(r->m, ab[0], v);
+                em->state[other] = em->state[side];
+                em->across[side] = ab[0];
+                em->across[other] = t;
+            }
+        }
+        if (!free)
             return false;
         t = ab[0];
     } while (t != t0 && ++steps <= n);
@@ -173,14 +204,22 @@ void rm_lock_vertices(rm_pass *p, const ism_remesh_options *o, const uint8_t *on
     rm_mesh *r = &p->r;
     rm_curvature_memo memo;
     rm_curvature_memo_open(&memo, r->m->nverts); /* without room: each bend evaluates */
+    size_t sides = 3 * (r->m->ntris ? r->m->ntris : 1);
+    edge_memo em = {calloc(sides, 1), malloc(sides * sizeof *em.across)};
+    if (!em.state || !em.across) { /* without room: each edge is asked from both ends */
+        free(em.state);
+        em.state = NULL;
+    }
     for (size_t v = 0; v < r->m->nverts; v++) {
         if (only && !only[v])
             continue; /* its fan and normal as they were: its protection too */
         const double *n = p->normal + 3 * v;
         bool vanishes = n[0] == 0 && n[1] == 0 && n[2] == 0;
-        r->locked[v] = vanishes || !fan_free(p, (uint32_t)v, &memo);
+        r->locked[v] = vanishes || !fan_free(p, (uint32_t)v, &memo, &em);
         p->slide[v] = !vanishes && r->locked[v] && r->count[v] && box_slidable(p, (uint32_t)v);
     }
+    free(em.state);
+    free(em.across);
     rm_curvature_memo_close(&memo);
     for (size_t s = 0; s < 2 * r->m->nsegs; s++)
         r->locked[r->m->seg[s]] = 1, p->slide[r->m->seg[s]] = 0;

@@ -87,6 +87,8 @@ bool rm_edge_triangles(const rm_mesh *r, uint32_t a, uint32_t b, uint32_t t[2], 
     for (uint32_t i = 0; i < r->count[a]; i++) {
         uint32_t s = slot[i];
         const uint32_t *c = tri + 3 * (size_t)s;
+        if (c[0] != b && c[1] != b && c[2] != b)
+            continue; /* most of a's triangles */
         /* a's two neighbours in the winding, without a remainder by 3 (the pass's hottest
            loop: flips and the protection ask for every edge) */
         uint32_t next = c[0] == a ? c[1] : c[1] == a ? c[2] : c[0];
@@ -167,9 +169,17 @@ double rm_min_angle(const double *a, const double *b, const double *c)
     return ca <= ab ? rm_angle(b, c, a) : rm_angle(c, a, b);
 }
 
+/* The angle at p of (p, q, s) is at least ISM_RM_CAP_DEG. An angle whose sides' dot
+ * product is not negative is at most 90° (its cosine not negative): no cap there, and the
+ * arc tangent is not asked (most corners). */
+static bool cap_at(const double *p, const double *q, const double *s)
+{
+    double dot = (q[0] - p[0]) * (s[0] - p[0]) + (q[1] - p[1]) * (s[1] - p[1]) +
+                 (q[2] - p[2]) * (s[2] - p[2]);
+    return dot < 0 && cos(rm_angle(p, q, s)) < cos(ISM_RM_CAP_DEG * M_PI / 180);
+}
+
 bool rm_is_cap(const double *a, const double *b, const double *c)
 {
-    double cap = cos(ISM_RM_CAP_DEG * M_PI / 180);
-    return cos(rm_angle(a, b, c)) < cap || cos(rm_angle(b, c, a)) < cap ||
-           cos(rm_angle(c, a, b)) < cap;
+    return cap_at(a, b, c) || cap_at(b, c, a) || cap_at(c, a, b);
 }

@@ -60,12 +60,13 @@ typedef struct rm_pass {
     double *sine;           /* per triangle, or NULL: the sine of its smallest angle as
                                rm_mark_active last measured it (NAN: its shape changed
                                since, rm_shape_changed) */
-    double *cen_ref;        /* 4 per triangle, without an error bound (rm_cbound.h): a
-                               point last measured at its centroid and the distance there
-                               (INFINITY: none) */
+    double *cen_ref;        /* RM_CBOUND_REC per triangle, without an error bound
+                               (rm_cbound.h): a point last measured at its centroid, the
+                               distance there (INFINITY: none) and |∇f| there */
     double *cen_keep;       /* a fan's centroids measured for a move not yet made */
     uint32_t cen_keep_cap, cen_keep_v; /* its room; the vertex (UINT32_MAX: none kept) */
     double cen_keep_x[3];   /* where that vertex would go */
+    double cen_gradient_min; /* |∇f| below which a record bounds nothing (rm_cbound.h) */
     size_t flips, moves, collapses, inserts;
 } rm_pass;
 
@@ -168,6 +169,21 @@ static inline void rm_shape_changed(rm_pass *p, uint32_t t)
 {
     if (p->sine)
         p->sine[t] = NAN;
+}
+
+/* The sine of triangle t's smallest angle (rm_min_sine of its corners in order), measured
+ * once while its shape holds (sine). */
+static inline double rm_tri_sine(rm_pass *p, uint32_t t)
+{
+    double s = p->sine ? p->sine[t] : NAN;
+    if (isnan(s)) {
+        const uint32_t *v = p->r.m->tri + 3 * (size_t)t;
+        const double *x = p->r.m->pos;
+        s = rm_min_sine(x + 3 * (size_t)v[0], x + 3 * (size_t)v[1], x + 3 * (size_t)v[2]);
+        if (p->sine)
+            p->sine[t] = s;
+    }
+    return s;
 }
 
 /* Tries to move free vertex v toward its fan's centroid (rm_relax.c); true when it moved. */

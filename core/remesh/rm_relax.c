@@ -234,8 +234,9 @@ static double fan_centroid_error(rm_pass *p, uint32_t v)
         rm_centroid(P + 3 * (size_t)c[0], P + 3 * (size_t)c[1], P + 3 * (size_t)c[2], m);
         double d = rm_cbound_exact(p, t, m);
         if (isnan(d)) {
-            d = rm_distance(p, m); /* never NaN */
-            rm_cbound_set(p, t, m, d);
+            double gn;
+            d = rm_cbound_distance(p, m, &gn); /* never NaN */
+            rm_cbound_set(p, t, m, d, gn);
         }
         worst = d > worst ? d : worst;
     }
@@ -261,12 +262,16 @@ bool rm_centroids_stay(rm_pass *p, uint32_t v, const double *x)
         for (int k = 0; k < 3; k++)
             q[k] = c[k] == v ? x : r->m->pos + 3 * (size_t)c[k];
         double m[3];
-        rm_centroid(q[0], q[1], q[2], m);
+        for (int k = 0; k < 3; k++) /* near enough for the bound; the exact one if measured */
+            m[k] = (q[0][k] + q[1][k] + q[2][k]) / 3;
         if (rm_cbound_within(p, t, m))
             continue;
-        double d = rm_distance(p, m); /* never NaN */
-        if (keep)
-            memcpy(keep + 4 * i, m, sizeof m), keep[4 * i + 3] = d;
+        rm_centroid(q[0], q[1], q[2], m);
+        double gn, d = rm_cbound_distance(p, m, &gn); /* never NaN */
+        if (keep) {
+            double *k = keep + RM_CBOUND_REC * i;
+            memcpy(k, m, sizeof m), k[3] = d, k[4] = gn;
+        }
         now = d > now ? d : now;
     }
     bool stays = now <= p->centroid_bound || now <= fan_centroid_error(p, v);
@@ -325,12 +330,7 @@ size_t rm_mark_active(rm_pass *p)
         const uint32_t *v = m->tri + 3 * t;
         if (r->dead[t])
             continue;
-        double s = p->sine ? p->sine[t] : NAN;
-        if (isnan(s)) {
-            s = rm_min_sine(m->pos + 3 * v[0], m->pos + 3 * v[1], m->pos + 3 * v[2]);
-            if (p->sine)
-                p->sine[t] = s;
-        }
+        double s = rm_tri_sine(p, (uint32_t)t);
         if (s < p->poorest)
             p->poorest = s;
         if (s < comfort)
