@@ -499,10 +499,14 @@ static unsigned http_threads(const ismd_config *cfg)
  * wrk's side 114-176 against 93-123, both together 203-277 against 158-205 (nginx 146-169);
  * the timer's softirq and lock work (perf: _raw_spin_unlock_irqrestore under tcp_write_xmit,
  * 24 us per request on wrk's side) goes away. nginx on the same host with bbr barely pays
- * it (1-3 us). Why libmicrohttpd's sends pay more is not known (its answers go as headers,
- * then 128 KB sendfile calls under TCP_CORK; its sockets' bbr bandwidth estimates were lower,
- * 32-175 Gbit/s against nginx's 130-216 in ss -ti). Not the default: towards far clients over
- * lossy links bbr is the better choice. */
+ * it (1-3 us). The cause (strace, then a throwaway epoll server sending the same bytes each
+ * way, wrk at 256 connections, bbr, medians of 3, server + wrk CPU us per request, load
+ * 17-19): libmicrohttpd 0.9.75 sends a file answer's 364-byte header block on its own and
+ * pushes it (sendto, then TCP_CORK off and on) before the 128 KB sendfile calls. That alone
+ * costs 234 against 132 with the headers held back (MSG_MORE); libmicrohttpd's whole sequence
+ * 267-314, nginx 139-189. Only a sender of our own could keep the headers back (see
+ * respond.c: 0.9.75 writes them itself). Not the default: towards far clients over lossy
+ * links bbr is the better choice. */
 static bool set_congestion(int listen_fd, const char *name)
 {
     if (!name[0])
