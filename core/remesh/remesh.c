@@ -132,7 +132,7 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
                 mend_needles(&p, false, &ok);
             if (!ok || stopped(o))
                 break;
-            size_t moved = rm_unfold_sweep(&p) + rm_relax_sweep(&p);
+            size_t moved = rm_unfold_sweep(&p) + rm_relax_sweep(&p, UINT8_MAX);
             if (!(moved + rm_slide_sweep(&p)))
                 break;
         }

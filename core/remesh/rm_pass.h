@@ -199,8 +199,9 @@ bool rm_centroids_stay(rm_pass *p, uint32_t v, const double *x);
  * then face the minority side (rm_unfold.c); returns the moves made. */
 size_t rm_unfold_sweep(rm_pass *p);
 
-/* One sweep of tangential relaxation over the free active vertices; returns the moves made. */
-size_t rm_relax_sweep(rm_pass *p);
+/* One sweep of tangential relaxation over the free active vertices whose mark is at most
+ * most (UINT8_MAX: every active one); returns the moves made. */
+size_t rm_relax_sweep(rm_pass *p, uint8_t most);
 
 /* One sweep sliding the active box-boundary vertices (slide) along their boundary curve
  * toward the middle of their two boundary neighbours (rm_slide.c); returns the moves made. */

@@ -349,11 +349,12 @@ size_t rm_mark_active(rm_pass *p)
     return n;
 }
 
-size_t rm_relax_sweep(rm_pass *p)
+size_t rm_relax_sweep(rm_pass *p, uint8_t most)
 {
     size_t moves = 0;
     for (size_t v = 0; v < p->r.m->nverts; v++)
-        if (p->active[v] && !p->r.locked[v] && p->r.count[v] && rm_relax_vertex(p, (uint32_t)v))
+        if (p->active[v] && p->active[v] <= most && !p->r.locked[v] && p->r.count[v] &&
+            rm_relax_vertex(p, (uint32_t)v))
             moves++;
     p->moves += moves;
     return moves;
