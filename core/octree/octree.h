@@ -30,10 +30,13 @@ enum ism_node_flags {
  * max_error round can take the node over without searching again: the number of searches
  * (the whole node, or each face whose corners share a sign), how many of them could not
  * decide, and whether a piece was found (the node was split and its subtree may go
- * ISM_THIN_RESOLVE_LEVELS past depth.max). A node makes at most 6 searches. */
+ * ISM_THIN_RESOLVE_LEVELS past depth.max, unless the piece was found where f has a kink,
+ * ISM_NODE_THIN_AT_KINK: then only nodes that still hide it split). A node makes at most 7
+ * searches (itself and its 6 faces). */
 #define ISM_NODE_THIN_SEARCHES(t) ((t) & 7)
 #define ISM_NODE_THIN_UNDECIDED(t) (((t) >> 3) & 7)
 #define ISM_NODE_THIN_FOUND 0x40
+#define ISM_NODE_THIN_AT_KINK 0x80
 #define ISM_NODE_THIN_PACK(searches, undecided, found) \
     ((uint8_t)((searches) | (undecided) << 3 | ((found) ? ISM_NODE_THIN_FOUND : 0)))
 

@@ -19,8 +19,12 @@ enum ism_thin_verdict {
     ISM_THIN_FOUND,     /* a point of the node where s·f < 0: a hidden piece */
     ISM_THIN_UNDECIDED, /* neither within the search's levels and budget (f touching 0
                            without a sign change, as a double sheet f = g² does) */
-    ISM_THIN_KINKED,    /* not searched: f has a min/max/abs kink in the box (a CSG crease,
-                           whose slivers past the corners no depth resolves) */
+    ISM_THIN_FOUND_KINKED, /* as FOUND, in a box where f has a min/max/abs kink (a CSG
+                              crease): the point may be on a sliver of the solid's wedge
+                              poking past the corners, found at every depth, which the box's
+                              edges see; the caller tells it from a piece of its own
+                              (octree_build.c) */
+    ISM_THIN_KINKED,    /* not probed (ism_thin_probe only): f may have a kink in the box */
 };
 
 /* One thread's scratch for the search (serves the tape it was made for and every tape

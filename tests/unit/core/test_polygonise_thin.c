@@ -233,3 +233,88 @@ Test(thin, horn_cyclide_depth_8, .timeout = 120)
     if (!pf_quick())
         check_horn(8, 2);
 }
+
+/* The cube [−1, 1]³ minus the ball of radius 1.4 < √2 (f = max(cube, ball)): what is left is
+ * 12 bars along the cube's edges, joined at its 8 corners. Along the edge through (0, 1, 1)
+ * the bar's section is {(1 − a)² + (1 − b)² ≥ 1.96 − x², a, b ≥ 0}, legs (0.04 + x²)/2 about:
+ * 0.02 at the edge's middle, a quarter of a depth-5 cell of the box ±1.3, where no lattice
+ * line crosses it. A solid of 8 corners joined by 12 bars has genus 12 − 8 + 1 = 5: its
+ * surface has χ = 2 − 2·5 = −8, in one piece (losing the bars left the 8 corners: χ 16, 8
+ * pieces). Every hidden piece here lies on a crease (a wedge's tip, in a node where f has a
+ * kink), where slivers past the corners are found at every depth: the chase must follow the
+ * bars without refining every crease, so the triangles stay within twice those of the same
+ * run without the hidden-piece search. */
+static void check_frame(int dmax, int which)
+{
+    const double base[6] = {-1.3, -1.3, -1.3, 1.3, 1.3, 1.3};
+    pf_surface s = {"max(max(abs(x), abs(y), abs(z)) - 1, 1.4^2 - (x^2 + y^2 + z^2))", NULL, 0,
+                    NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    double box[6];
+    pf_sweep_box(base, dmax, which, box);
+    ism_poly_options o;
+    pf_options(&o, box, 3, dmax);
+    ism_mesh m, blind;
+    ism_poly_stats st;
+    pf_run_options(t, &o, &m, &st);
+    o.thin_search = false;
+    pf_run_options(t, &o, &blind, &st);
+    pf_props p;
+    pf_measure(&m, t, &p);
+    cr_expect_eq(p.euler, -8, "depth %d box %d: χ = %ld", dmax, which, p.euler);
+    cr_expect_eq(p.components, 1, "depth %d box %d: %zu components", dmax, which, p.components);
+    cr_expect_eq(p.boundary_edges + p.nonmanifold_edges, 0,
+                 "depth %d box %d: %zu boundary, %zu non-manifold edges", dmax, which,
+                 p.boundary_edges, p.nonmanifold_edges);
+    /* each bar's middle is in the mesh: vertices with |x| ≤ 0.1 (legs ≤ 0.025 there) within
+     * 0.03 of the edge through (0, ±1, ±1), and so on for y and z */
+    for (int bar = 0; bar < 12; bar++) {
+        int axis = bar / 4, u = (axis + 1) % 3, w = (axis + 2) % 3;
+        double cu = bar & 1 ? 1 : -1, cw = bar & 2 ? 1 : -1;
+        size_t near = 0;
+        for (size_t v = 0; v < m.nverts; v++) {
+            const double *q = &m.pos[3 * v];
+            near += fabs(q[axis]) <= 0.1 && fabs(q[u] - cu) <= 0.03 && fabs(q[w] - cw) <= 0.03;
+        }
+        cr_expect_geq(near, 3, "depth %d box %d: bar %d: %zu vertices at its middle", dmax,
+                      which, bar, near);
+    }
+    cr_expect_leq(m.ntris, 2 * blind.ntris, "depth %d box %d: %zu triangles, %zu without the "
+                  "search", dmax, which, m.ntris, blind.ntris);
+    ism_mesh_free(&m);
+    ism_mesh_free(&blind);
+    ism_tape_free(t);
+}
+
+Test(thin, cube_minus_ball_bars_thinner_than_a_cell)
+{
+    for (int which = pf_first_box() - 1; which < 2; which++)
+        for (int d = 5; d <= 6; d++)
+            check_frame(d, which);
+}
+
+/* Two balls of radius 0.5 whose centres are 0.9992 apart overlap in a lens (f = max of the
+ * two: one kink) of radius √(0.25 − 0.4996²) = 0.020 and 0.0008 thick, a third of a depth-5
+ * cell of the box ±1 across: a piece of its own although its crease is one circle. It is
+ * a closed surface, χ = 2, in one piece (off the lattice by 0.37 cell it was lost). */
+Test(thin, lens_of_two_balls_thinner_than_a_cell)
+{
+    pf_surface s = {"max((x - 0.4996)^2 + (y - 0.01)^2 + (z - 0.013)^2 - 0.25, "
+                    "(x + 0.4996)^2 + (y - 0.01)^2 + (z - 0.013)^2 - 0.25)",
+                    NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double base[6] = {-1, -1, -1, 1, 1, 1};
+    for (int which = pf_first_box() - 1; which < 2; which++) {
+        double box[6];
+        ism_mesh m;
+        pf_props p;
+        pf_run_placed(t, base, 5, which, box, &m, &p);
+        cr_expect_eq(p.euler, 2, "box %d: χ = %ld", which, p.euler);
+        cr_expect_eq(p.components, 1, "box %d: %zu components", which, p.components);
+        cr_expect_eq(p.boundary_edges + p.nonmanifold_edges, 0,
+                     "box %d: %zu boundary, %zu non-manifold edges", which, p.boundary_edges,
+                     p.nonmanifold_edges);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
