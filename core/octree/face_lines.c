@@ -765,7 +765,14 @@ static bool emit_regular(ism_cell_ctx *cx, const ism_tile *t, int a, int b)
     return emit(cx, a, b, ISM_LINE_REGULAR);
 }
 
-/* f = 0 on the whole tile: at every boundary point and at the centre. */
+/* Points of a tile (fractions of its sides) where a zero tile is confirmed besides its
+ * centre: on no line through two of the tile's corners or side midpoints, so the lines of
+ * f = 0 that run through those (Clebsch's cubic in its own box: on the plane z = −1,
+ * f = −3xy(x + y), zero on two sides of a tile and on its diagonal through the centre) do
+ * not pass for a plane of zeros. */
+static const double ZERO_TILE_PROBES[2][2] = {{0.3090, 0.7236}, {0.6910, 0.2764}};
+
+/* f = 0 on the whole tile: at every boundary point, at the centre and at the probes. */
 static bool is_zero_tile(ism_cell_ctx *cx, const ism_tile *t)
 {
     for (size_t i = 0; i < cx->nbp; i++)
@@ -773,7 +780,19 @@ static bool is_zero_tile(ism_cell_ctx *cx, const ism_tile *t)
             return false;
     double c[3];
     tile_centre(cx, t, c);
-    return fabs(ism_sample_f(&cx->s, c)) <= cx->roots.eps;
+    if (!(fabs(ism_sample_f(&cx->s, c)) <= cx->roots.eps))
+        return false;
+    const ism_grid *g = &cx->tree->grid;
+    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    double u0 = ism_grid_coord(g, u, t->u0), u1 = ism_grid_coord(g, u, t->u1);
+    double v0 = ism_grid_coord(g, v, t->v0), v1 = ism_grid_coord(g, v, t->v1);
+    for (int k = 0; k < 2; k++) {
+        c[u] = u0 + ZERO_TILE_PROBES[k][0] * (u1 - u0);
+        c[v] = v0 + ZERO_TILE_PROBES[k][1] * (v1 - v0);
+        if (!(fabs(ism_sample_f(&cx->s, c)) <= cx->roots.eps))
+            return false;
+    }
+    return true;
 }
 
 /* Bisection steps for a crossing hidden in a zero run: halves the segment down to 2^-52 of
