@@ -116,14 +116,23 @@ void rm_fan_measure(const rm_pass *p, uint32_t v, rm_fan *f)
         double side[3] = {rm_dist(a, b), rm_dist(b, c), rm_dist(c, a)};
         double sine = rm_sine_of(twice, side[0], side[1], side[2]);
         f->min_sine = sine < f->min_sine ? sine : f->min_sine; /* no libm call */
-        int j = t[0] == v ? 0 : t[1] == v ? 1 : 2;
         for (int k = 0; k < 3; k++) {
             f->centroid[k] += w * (a[k] + b[k] + c[k]) / 3;
             f->normal[k] += n[k];
-            if (t[k] != v) { /* the side between v's corner j and corner k */
-                f->mean_edge += side[(k + 1) % 3 == j ? k : j];
-                edges++;
-            }
+        }
+        /* the sides at v's corner j, one per other corner k in order (side[k] joins corners k
+           and k + 1): j = 0: sides 0, 2; j = 1: 0, 1; j = 2: 2, 1 */
+        int j = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+        if ((t[0] == v) + (t[1] == v) + (t[2] == v) == 1) {
+            f->mean_edge += side[j == 2 ? 2 : 0];
+            f->mean_edge += side[j == 0 ? 2 : 1];
+            edges += 2;
+        } else { /* a collapsed triangle: v at two corners */
+            for (int k = 0; k < 3; k++)
+                if (t[k] != v) {
+                    f->mean_edge += side[(k + 1) % 3 == j ? k : j];
+                    edges++;
+                }
         }
         area += w;
     }
