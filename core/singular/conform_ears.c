@@ -269,12 +269,6 @@ static uint32_t lone_triangle(const cf_ctx *c, uint32_t p, uint32_t v, uint32_t 
     return has_p && has_n && live_on_edge(c, p, n) == 2 ? only : CF_NONE;
 }
 
-static int cmp_u32(const void *a, const void *b)
-{
-    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-    return x < y ? -1 : x > y;
-}
-
 bool cf_drop_spikes(cf_ctx *c, cf_loops *ls, uint32_t **rm, size_t *nrm)
 {
     uint32_t *add = NULL;
@@ -311,7 +305,7 @@ bool cf_drop_spikes(cf_ctx *c, cf_loops *ls, uint32_t **rm, size_t *nrm)
     }
     *rm = r;
     if (ok && na) {
-        qsort(add, na, sizeof *add, cmp_u32);
+        cf_sort_u32(add, na);
         size_t i = *nrm, j = na, o = *nrm + na;
         while (j > 0)
             r[--o] = i > 0 && r[i - 1] > add[j - 1] ? r[--i] : add[--j];

@@ -286,12 +286,6 @@ static bool chain_rim(const rim_edge *e, size_t ne, cf_loops *ls)
     return ok;
 }
 
-static int cmp_u32(const void *a, const void *b)
-{
-    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-    return x < y ? -1 : x > y;
-}
-
 /* The live triangles the cutter selects, in increasing order: its candidates, sorted, then
  * tested one by one. */
 static bool select_triangles(cf_ctx *c, const cf_cutter *cut, uint32_t **out, size_t *nout)
@@ -302,8 +296,7 @@ static bool select_triangles(cf_ctx *c, const cf_cutter *cut, uint32_t **out, si
         free(cand.t);
         return false;
     }
-    if (cand.n) /* qsort's array may not be NULL, even for no element */
-        qsort(cand.t, cand.n, sizeof *cand.t, cmp_u32);
+    cf_sort_u32(cand.t, cand.n);
     size_t n = 0;
     for (size_t i = 0; i < cand.n && !cf_poll(c, 1); i++)
         if (!c->dead[cand.t[i]] && cut->near(c, cand.t[i], cut->arg))
@@ -385,7 +378,7 @@ static bool absorb_islands(cf_ctx *c, const rim_edge *e, size_t ne, uint32_t **r
         *grew = true;
     }
     if (*grew)
-        qsort(*rm, *n, sizeof **rm, cmp_u32);
+        cf_sort_u32(*rm, *n);
     return true;
 }
 

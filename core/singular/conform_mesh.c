@@ -26,6 +26,61 @@ bool cf_grow(void **v, size_t *cap, size_t need, size_t sz)
     return true;
 }
 
+/* Below this many keys an insertion sort beats the radix passes' counting. */
+#define SORT_SMALL 32
+
+void cf_sort_u32(uint32_t *a, size_t n)
+{
+    /* equal keys are indistinguishable: any correct sort gives qsort's array */
+    if (n < SORT_SMALL) {
+        for (size_t i = 1; i < n; i++) {
+            uint32_t x = a[i];
+            size_t j = i;
+            for (; j > 0 && a[j - 1] > x; j--)
+                a[j] = a[j - 1];
+            a[j] = x;
+        }
+        return;
+    }
+    uint32_t *tmp = malloc(n * sizeof *tmp);
+    if (!tmp) { /* out of memory: sorted in place all the same */
+        for (size_t gap = n / 2; gap > 0; gap /= 2) /* shell sort: no extra memory */
+            for (size_t i = gap; i < n; i++) {
+                uint32_t x = a[i];
+                size_t j = i;
+                for (; j >= gap && a[j - gap] > x; j -= gap)
+                    a[j] = a[j - gap];
+                a[j] = x;
+            }
+        return;
+    }
+    /* least significant byte first; a byte every key shares is not a pass (triangle
+     * numbers rarely reach the top byte) */
+    uint32_t all_or = 0, all_and = ~0u;
+    for (size_t i = 0; i < n; i++) {
+        all_or |= a[i];
+        all_and &= a[i];
+    }
+    uint32_t *src = a, *dst = tmp;
+    for (int shift = 0; shift < 32; shift += 8) {
+        if ((((all_or ^ all_and) >> shift) & 0xff) == 0)
+            continue;
+        size_t count[257] = {0};
+        for (size_t i = 0; i < n; i++)
+            count[((src[i] >> shift) & 0xff) + 1]++;
+        for (int b = 0; b < 256; b++)
+            count[b + 1] += count[b];
+        for (size_t i = 0; i < n; i++)
+            dst[count[(src[i] >> shift) & 0xff]++] = src[i];
+        uint32_t *t = src;
+        src = dst;
+        dst = t;
+    }
+    if (src != a)
+        memcpy(a, src, n * sizeof *a);
+    free(tmp);
+}
+
 /* The CSR incidence of the triangles present now (dead ones left out). */
 static bool build_incidence(cf_ctx *c)
 {
