@@ -21,7 +21,21 @@ static uint8_t max_choice(ism_interval a, ism_interval b)
     return a.lo > b.hi ? ONLY_A : b.lo > a.hi ? ONLY_B : BOTH;
 }
 
-static ism_interval interval_op(const ism_instr *in, const ism_interval *r, uint8_t *choice)
+/* sin or cos over a: the bounds' sines and cosines as pairs from the workspace's memo
+ * (trig_pair.h: bit for bit what sin and cos return), so the gyroid's sin x and cos x of one
+ * box cost one sincos per bound instead of two calls each. */
+static ism_interval trig_op(int op, ism_interval a, ism_trig_cache *trig)
+{
+    if (!iv_trig_resolves(a))
+        return iv(-1.0, 1.0);
+    double s1, c1, s2, c2;
+    ism_trig_pair(trig, a.lo, &s1, &c1);
+    ism_trig_pair(trig, a.hi, &s2, &c2);
+    return op == ISM_OP_SIN ? iv_sin_at(a, s1, s2) : iv_cos_at(a, c1, c2);
+}
+
+static ism_interval interval_op(const ism_instr *in, const ism_interval *r, uint8_t *choice,
+                                ism_trig_cache *trig)
 {
     ism_interval a = r[in->a];
     double c = in->imm;
@@ -47,8 +61,7 @@ static ism_interval interval_op(const ism_instr *in, const ism_interval *r, uint
     case ISM_OP_POWI: return iv_powi(a, in->b);
     case ISM_OP_POWC: return iv_powc(a, c);
     case ISM_OP_SQRT: return iv_sqrt(a);
-    case ISM_OP_SIN: return iv_sin(a);
-    case ISM_OP_COS: return iv_cos(a);
+    case ISM_OP_SIN: case ISM_OP_COS: return trig_op(in->op, a, trig);
     case ISM_OP_TAN: return iv_tan(a);
     case ISM_OP_EXP: return iv_exp(a);
     case ISM_OP_LOG: return iv_log(a);
@@ -74,7 +87,7 @@ ism_interval ism_interval_run(const ism_tape *t, ism_eval_ws *ws, ism_interval x
     uint8_t scratch = 0;
     for (size_t i = 0; i < t->len; i++) {
         const ism_instr *in = &t->code[i];
-        r[in->out] = ism_iv_sane(interval_op(in, r, choices ? &choices[i] : &scratch));
+        r[in->out] = ism_iv_sane(interval_op(in, r, choices ? &choices[i] : &scratch, ws->trig));
     }
     return r[t->result];
 }

@@ -256,12 +256,16 @@ static inline int may_contain(double lo, double hi, double phase, double period)
     return holds_integer((lo - phase) / period - tol, (hi - phase) / period + tol);
 }
 
-static inline ism_interval iv_sin(ism_interval a)
+/* Whether sin and cos over a resolve to less than their whole range: a narrower than a
+ * period and its bounds within ISM_TRIG_LIMIT. */
+static inline int iv_trig_resolves(ism_interval a)
 {
-    if (!(a.hi - a.lo < 2.0 * M_PI) || !(fabs(a.lo) < ISM_TRIG_LIMIT)
-        || !(fabs(a.hi) < ISM_TRIG_LIMIT))
-        return iv(-1.0, 1.0);
-    double s1 = sin(a.lo), s2 = sin(a.hi);
+    return a.hi - a.lo < 2.0 * M_PI && fabs(a.lo) < ISM_TRIG_LIMIT && fabs(a.hi) < ISM_TRIG_LIMIT;
+}
+
+/* sin over a (iv_trig_resolves(a)) given s1 = sin(a.lo), s2 = sin(a.hi). */
+static inline ism_interval iv_sin_at(ism_interval a, double s1, double s2)
+{
     double lo = ism_max(down4(ism_min(s1, s2)), -1.0), hi = ism_min(up4(ism_max(s1, s2)), 1.0);
     if (may_contain(a.lo, a.hi, M_PI / 2, 2.0 * M_PI))
         hi = 1.0;
@@ -270,18 +274,29 @@ static inline ism_interval iv_sin(ism_interval a)
     return iv(lo, hi);
 }
 
-static inline ism_interval iv_cos(ism_interval a)
+/* cos over a (iv_trig_resolves(a)) given c1 = cos(a.lo), c2 = cos(a.hi). */
+static inline ism_interval iv_cos_at(ism_interval a, double c1, double c2)
 {
-    if (!(a.hi - a.lo < 2.0 * M_PI) || !(fabs(a.lo) < ISM_TRIG_LIMIT)
-        || !(fabs(a.hi) < ISM_TRIG_LIMIT))
-        return iv(-1.0, 1.0);
-    double c1 = cos(a.lo), c2 = cos(a.hi);
     double lo = ism_max(down4(ism_min(c1, c2)), -1.0), hi = ism_min(up4(ism_max(c1, c2)), 1.0);
     if (may_contain(a.lo, a.hi, 0.0, 2.0 * M_PI))
         hi = 1.0;
     if (may_contain(a.lo, a.hi, M_PI, 2.0 * M_PI))
         lo = -1.0;
     return iv(lo, hi);
+}
+
+static inline ism_interval iv_sin(ism_interval a)
+{
+    if (!iv_trig_resolves(a))
+        return iv(-1.0, 1.0);
+    return iv_sin_at(a, sin(a.lo), sin(a.hi));
+}
+
+static inline ism_interval iv_cos(ism_interval a)
+{
+    if (!iv_trig_resolves(a))
+        return iv(-1.0, 1.0);
+    return iv_cos_at(a, cos(a.lo), cos(a.hi));
 }
 
 static inline ism_interval iv_tan(ism_interval a)
