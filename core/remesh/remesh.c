@@ -113,7 +113,8 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
        (rm_bound.h), whatever the mesh before: the simplified mesh's vertices sit off f = 0 */
     p.bounded = o->max_error > 0;
     found k = {0};
-    if (ok && (!keep_found(&k, m) || (!p.bounded && !rm_cbound_open(&p))))
+    if (ok && (!keep_found(&k, m) ||
+               (!p.bounded && !o->measure_all_centroids && !rm_cbound_open(&p))))
         ok = false;
     if (ok) {
         rm_collapse_bounds(&p, k.pos, k.tri, k.ntris);

@@ -4,6 +4,7 @@
 #ifndef ISM_REMESH_TYPES_H
 #define ISM_REMESH_TYPES_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 #include "core/expr/expr.h"
@@ -21,6 +22,9 @@ typedef struct ism_remesh_options {
     size_t nlocked_points;
     const volatile int *cancel;    /* polled between sweeps; non-zero stops early (the mesh is
                                       valid after every sweep) */
+    bool measure_all_centroids;    /* the reference path: every centroid a check asks about is
+                                      measured (no per-triangle record, rm_cbound.h); the
+                                      meshes are the same (tests compare) */
 } ism_remesh_options;
 
 typedef struct ism_remesh_stats {

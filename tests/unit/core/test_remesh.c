@@ -3,7 +3,11 @@
  * f = 0 kept; a hemisphere cut by the box keeps every boundary vertex on the cut (in the face,
  * on f = 0) and every boundary edge, and its needles at the cut are mended. (Collapses and the
  * renumbering: test_remesh_collapse.c; non-manifold edges and points:
- * tests/cli/test_quality.py, through the conformance that makes them.) */
+ * tests/cli/test_quality.py, through the conformance that makes them.) The per-triangle
+ * centroid record (rm_cbound.h), a bound taken rather than a measure, leaves the gyroid in a
+ * ball (its crease, where |∇f| jumps) and Steiner's surface (where the centroid rule refuses
+ * moves: taking every centroid as within the bound changes its mesh) bit for bit as the
+ * reference path that measures them all. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -169,4 +173,53 @@ Test(remesh, box_cut_boundary_slides_along_the_cut)
         ism_mesh_free(&m);
     }
     ism_tape_free(t);
+}
+
+/* The pass on f's mesh in box at depth 3:d, with the centroid record and on the reference
+ * path, into m1 and m2. */
+static void both_paths(const ism_tape *t, const double box[6], int d, ism_mesh *m1, ism_mesh *m2)
+{
+    ism_poly_stats ps;
+    ism_mesh_init(m1);
+    ism_mesh_init(m2);
+    pf_run(t, box, 3, d, 1, m1, &ps);
+    pf_run(t, box, 3, d, 1, m2, &ps);
+    ism_remesh_options o = {.f = t};
+    ism_remesh_stats st;
+    ism_error err;
+    cr_assert(ism_remesh_quality(m1, &o, &st, NULL, &err), "%s", err.message);
+    o.measure_all_centroids = true;
+    cr_assert(ism_remesh_quality(m2, &o, &st, NULL, &err), "%s", err.message);
+    cr_assert_gt(st.moves, 100, "the pass moved %zu vertices", st.moves);
+}
+
+/* f's meshes in the box ±half at depth 3:d, in the lattice box and off it by 1e-3 and 0.37 of
+ * a cell: the same bits on both paths. */
+static void same_on_both_paths(const pf_surface *s, double half, int d)
+{
+    ism_tape *t = pf_compile(s);
+    for (int b = 0; b < 3; b++) {
+        double c = (b == 0 ? 0 : b == 1 ? 1e-3 : 0.37) * 2 * half / (1 << d);
+        const double box[6] = {-half + c, -half - c, -half + c, half + c, half - c, half + c};
+        ism_mesh m1, m2;
+        both_paths(t, box, d, &m1, &m2);
+        cr_assert_eq(m1.nverts, m2.nverts, "%s box %d", s->expr, b);
+        cr_assert_eq(m1.ntris, m2.ntris, "%s box %d", s->expr, b);
+        cr_expect(!memcmp(m1.pos, m2.pos, 3 * m1.nverts * sizeof *m1.pos), "%s box %d", s->expr, b);
+        cr_expect(!memcmp(m1.tri, m2.tri, 3 * m1.ntris * sizeof *m1.tri), "%s box %d", s->expr, b);
+        ism_mesh_free(&m1);
+        ism_mesh_free(&m2);
+    }
+    ism_tape_free(t);
+}
+
+Test(remesh, centroid_record_leaves_the_reference_mesh)
+{
+    ism_param k = {.name = "k", .value = 4};
+    pf_surface gyroid = {.expr = "max(sin(k*x)*cos(k*y) + sin(k*y)*cos(k*z) + "
+                                 "sin(k*z)*cos(k*x), x^2 + y^2 + z^2 - 1.96)",
+                         .params = &k, .nparams = 1};
+    pf_surface steiner = {.expr = "x^2*y^2 + y^2*z^2 + z^2*x^2 + x*y*z"};
+    same_on_both_paths(&gyroid, 1.5, 6 - pf_quick());
+    same_on_both_paths(&steiner, 1.0, 6 - pf_quick());
 }
