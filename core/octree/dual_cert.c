@@ -30,14 +30,45 @@ bool ism_dual_taylor(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
            ism_eval_interval_grad(t, jet, mid, NULL, NULL, &m->at) == 0;
 }
 
+/* x − c over lo..hi, rounded outward. */
+static void round_centre(const ism_dual_model *m, const double lo[3], const double hi[3],
+                         ism_interval dx[3])
+{
+    for (int a = 0; a < 3; a++)
+        dx[a] = iv_sub(iv(lo[a], hi[a]), iv(m->c[a], m->c[a]));
+}
+
+/* f(x) = f(c) + ∇f(c)·(x − c) + ½ (x − c)ᵀ H(ξ) (x − c) over x − c ∈ dx; the diagonal terms
+ * take the square's range, the two equal off-diagonal ones are counted once at twice their
+ * weight (H's xy entry times δx δy, twice, halved). */
+static ism_interval second_order(const ism_dual_model *m, const ism_interval dx[3])
+{
+    const ism_ivjet *j = &m->box;
+    ism_interval v2 = m->at.v;
+    for (int a = 0; a < 3; a++) {
+        v2 = iv_add(v2, iv_mul(m->at.d[a], dx[a]));
+        v2 = iv_add(v2, iv_mul_c(iv_mul(j->h[hess_at(a, a)], iv_square(dx[a])), 0.5));
+        for (int b = a + 1; b < 3; b++)
+            v2 = iv_add(v2, iv_mul(j->h[hess_at(a, b)], iv_mul(dx[a], dx[b])));
+    }
+    return v2;
+}
+
+ism_interval ism_dual_second_order(const ism_dual_model *m, const double lo[3],
+                                   const double hi[3])
+{
+    ism_interval dx[3];
+    round_centre(m, lo, hi, dx);
+    return second_order(m, dx);
+}
+
 bool ism_dual_over(const ism_dual_model *m, const double lo[3], const double hi[3],
                    ism_ivgrad *g)
 {
     const ism_ivjet *j = &m->box;
     const ism_ivgrad *c = &m->at;
     ism_interval dx[3];
-    for (int a = 0; a < 3; a++) /* the part round the centre, rounded outward */
-        dx[a] = iv_sub(iv(lo[a], hi[a]), iv(m->c[a], m->c[a]));
+    round_centre(m, lo, hi, dx);
     /* ∇f(x) = ∇f(c) + H(ξ)(x − c), ξ between c and x: in the model's box */
     for (int a = 0; a < 3; a++) {
         ism_interval d = c->d[a];
@@ -45,17 +76,9 @@ bool ism_dual_over(const ism_dual_model *m, const double lo[3], const double hi[
             d = iv_add(d, iv_mul(j->h[hess_at(a, b)], dx[b]));
         g->d[a] = meet(j->d[a], d);
     }
-    /* f(x) = f(c) + ∇f(c)·(x − c) + ½ (x − c)ᵀ H(ξ) (x − c); the diagonal terms take the
-     * square's range, the two equal off-diagonal ones are counted once at twice their
-     * weight (H's xy entry times δx δy, twice, halved). */
-    ism_interval v2 = c->v, v1 = c->v;
-    for (int a = 0; a < 3; a++) {
-        v2 = iv_add(v2, iv_mul(c->d[a], dx[a]));
-        v2 = iv_add(v2, iv_mul_c(iv_mul(j->h[hess_at(a, a)], iv_square(dx[a])), 0.5));
-        for (int b = a + 1; b < 3; b++)
-            v2 = iv_add(v2, iv_mul(j->h[hess_at(a, b)], iv_mul(dx[a], dx[b])));
+    ism_interval v2 = second_order(m, dx), v1 = c->v;
+    for (int a = 0; a < 3; a++)
         v1 = iv_add(v1, iv_mul(g->d[a], dx[a])); /* the mean-value form on the new ∇f */
-    }
     g->v = meet(j->v, meet(v1, v2));
     for (int a = 0; a < 3; a++)
         if (!(g->d[a].lo <= g->d[a].hi))

@@ -39,6 +39,12 @@ bool ism_dual_taylor(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
 bool ism_dual_over(const ism_dual_model *m, const double lo[3], const double hi[3],
                    ism_ivgrad *g);
 
+/* f over lo..hi (the model's box or one inside it) by the second-order Taylor form alone
+ * (no meet with the other forms, no evaluation): the part of ism_dual_over a caller that
+ * already met the natural and mean-value forms needs. */
+ism_interval ism_dual_second_order(const ism_dual_model *m, const double lo[3],
+                                   const double hi[3]);
+
 /* Both in one: f and ∇f over lo..hi by its own model. */
 bool ism_dual_enclose(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
                       const double hi[3], ism_ivgrad *g, uint64_t *intervals);

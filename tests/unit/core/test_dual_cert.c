@@ -7,6 +7,7 @@
 #include <criterion/criterion.h>
 #include <math.h>
 #include "core/eval/eval.h"
+#include "core/eval/interval_ops.h"
 #include "core/octree/dual_cert.h"
 #include "poly_fixture.h"
 
@@ -147,6 +148,68 @@ Test(dual_cert, graph_refused_across_two_sheets_and_proven_for_one)
     const double lo1[3] = {0.96, -0.04, -0.04}, hi1[3] = {1.04, 0.04, 0.04};
     const double minus_x[3] = {-1, 0, 0}; /* f falls outward through the inner sphere */
     cr_expect(graph_box(t, jw, lo1, hi1, minus_x, 1, &n));
+    ism_ivjet_ws_free(jw);
+    ism_tape_free(t);
+}
+
+/* f at every sample of lo..hi inside the second-order form of the model m (read over
+ * lo..hi, inside m's box). */
+static void check_second_order(const ism_tape *t, ism_eval_ws *ws, const ism_dual_model *m,
+                               const double lo[3], const double hi[3])
+{
+    ism_interval v = ism_dual_second_order(m, lo, hi);
+    for (int i = 0; i < SAMPLES * SAMPLES * SAMPLES; i++) {
+        double p[3];
+        int k[3] = {i % SAMPLES, i / SAMPLES % SAMPLES, i / (SAMPLES * SAMPLES)};
+        for (int a = 0; a < 3; a++)
+            p[a] = lo[a] + (hi[a] - lo[a]) * k[a] / (SAMPLES - 1);
+        double f = ism_eval_point(t, ws, p[0], p[1], p[2]);
+        cr_expect(f >= v.lo - 1e-13 && f <= v.hi + 1e-13, "f %g outside [%g, %g]", f, v.lo,
+                  v.hi);
+    }
+}
+
+/* The singular-point search's second-order test (core/singular/search.c): a cell 0.19
+ * across round the torus's circle of minima (radius √(R² + r²), f = -0.36 there, ∇f = 0)
+ * that the first-order form f(c) + ∇F(X)·(X − c) cannot keep from 0 (its ∇F is too wide),
+ * while f's second-order form does; a cell the surface crosses is never kept from 0. The
+ * form holds f at every sample of each cell and of its octants (read from the cell's model). */
+Test(dual_cert, second_order_form_clears_the_circle_of_minima)
+{
+    ism_tape *t = pf_compile(&pf_ring_torus);
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    const double s = sqrt(1.09), h = 0.09375;
+    const double cells[2][6] = {{s - h, -h, -h, s + h, h, h},            /* round the minima */
+                                {1.3 - h, -h, -h, 1.3 + h, h, h}};       /* across the wall */
+    for (int b = 0; b < 2; b++) {
+        const double *lo = cells[b], *hi = cells[b] + 3;
+        ism_dual_model m;
+        uint64_t n = 0;
+        cr_assert(ism_dual_taylor(t, jw, lo, hi, &m, &n));
+        ism_interval first = m.at.v;
+        for (int a = 0; a < 3; a++)
+            first = iv_add(first, iv_mul(m.box.d[a], iv_sub(iv(lo[a], hi[a]),
+                                                             iv(m.c[a], m.c[a]))));
+        ism_interval second = ism_dual_second_order(&m, lo, hi);
+        cr_expect(first.lo < 0 && first.hi > 0, "cell %d: first-order [%g, %g]", b, first.lo,
+                  first.hi);
+        if (b == 0)
+            cr_expect(second.hi < 0, "second-order [%g, %g]", second.lo, second.hi);
+        else
+            cr_expect(second.lo < 0 && second.hi > 0);
+        check_second_order(t, ws, &m, lo, hi);
+        for (int k = 0; k < 8; k++) {
+            double sl[3], sh[3];
+            for (int a = 0; a < 3; a++) {
+                double mid = 0.5 * (lo[a] + hi[a]);
+                sl[a] = (k >> a & 1) ? mid : lo[a];
+                sh[a] = (k >> a & 1) ? hi[a] : mid;
+            }
+            check_second_order(t, ws, &m, sl, sh);
+        }
+    }
+    ism_eval_ws_free(ws);
     ism_ivjet_ws_free(jw);
     ism_tape_free(t);
 }
