@@ -172,7 +172,7 @@ static double seg_dist2(const cf_polyline *pl, size_t sg, const double q[3], dou
         dd += d[m] * d[m];
         dw += d[m] * w[m];
     }
-    double t = dd > 0 ? fmin(1, fmax(0, dw / dd)) : 0, e = 0;
+    double t = dd > 0 ? cf_min2(1, cf_max2(0, dw / dd)) : 0, e = 0;
     for (int m = 0; m < 3; m++) {
         f[m] = p0[m] + t * d[m];
         e += (q[m] - f[m]) * (q[m] - f[m]);
@@ -193,7 +193,7 @@ static bool cell_may_hold(const cf_polyline *pl, size_t c, const double q[3], do
     const double *b = pl->g_box[pl->g_start[c]];
     double d2 = 0;
     for (int k = 0; k < 3; k++) {
-        double e = fmax(0, fmax(b[k] - q[k], q[k] - b[3 + k]));
+        double e = cf_max2(0, cf_max2(b[k] - q[k], q[k] - b[3 + k]));
         d2 += e * e;
     }
     double r = sqrt(best);
@@ -250,7 +250,7 @@ static double cell_min2(const cf_polyline *pl, int i, int j, int k, const double
         return best;
     for (uint32_t x = pl->g_start[c]; x < pl->g_start[c + 1]; x++) {
         double t, f[3];
-        best = fmin(best, seg_dist2(pl, pl->g_seg[x], q, &t, f));
+        best = cf_min2(best, seg_dist2(pl, pl->g_seg[x], q, &t, f));
     }
     return best;
 }
@@ -283,8 +283,9 @@ static double ring_min2(const cf_polyline *pl, const int c[3], int ring, const d
 
 /* The distance alone (no parameter or foot asked): the cells are read in rings round q's
  * own, nearest first. A segment's nearest point to q lies in a cell the segment is filed in;
- * one in ring k + 1 or beyond is at least k cells from q, so once the nearest found is that
- * close (by more than the rounding of the cell indices) the rest cannot be nearer. The answer
+ * one in ring k + 1 or beyond lies past a face of the block of rings 0..k, so once the
+ * nearest found is no farther than that face (by more than the rounding of the cell sides)
+ * the rest cannot be nearer. The answer
  * is the same minimum over every segment within `within` as nearest_within's. */
 static double nearest_distance(const cf_polyline *pl, const double q[3], double within)
 {
@@ -296,7 +297,19 @@ static double nearest_distance(const cf_polyline *pl, const double q[3], double 
     double best = INFINITY;
     for (int ring = 0; ring < rings; ring++) {
         best = ring_min2(pl, c, ring, q, best, mag);
-        double clear = ring * pl->step - CF_QUERY_SLACK * (ring * pl->step + mag);
+        /* the cells not read lie past the faces of the block of rings read, on the sides
+         * where the grid goes on: q's distance to the nearest such face (at least ring
+         * cells, more by q's place in its own cell) */
+        double gap = INFINITY;
+        for (int k = 0; k < 3; k++) {
+            if (c[k] - ring > 0)
+                gap = fmin(gap, q[k] - (pl->lo[k] + (c[k] - ring) * pl->step));
+            if (c[k] + ring + 1 < pl->dim[k])
+                gap = fmin(gap, pl->lo[k] + (c[k] + ring + 1) * pl->step - q[k]);
+        }
+        if (gap == INFINITY)
+            break; /* every cell read */
+        double clear = gap - CF_QUERY_SLACK * (fabs(gap) + pl->step + mag);
         if (clear > within || (clear > 0 && best <= clear * clear))
             break;
     }
@@ -308,7 +321,7 @@ double cf_polyline_box_distance(const cf_polyline *pl, const double q[3])
 {
     double d2 = 0;
     for (int k = 0; k < 3; k++) {
-        double e = fmax(0, fmax(pl->lo[k] - q[k], q[k] - pl->hi[k]));
+        double e = cf_max2(0, cf_max2(pl->lo[k] - q[k], q[k] - pl->hi[k]));
         d2 += e * e;
     }
     return sqrt(d2);

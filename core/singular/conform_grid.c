@@ -46,27 +46,14 @@ static int64_t coord(const cf_tgrid *g, double x, int k, double s)
     return !(i > 0) ? 0 : i >= COORD_MAX ? COORD_MAX : (int64_t)i;
 }
 
-/* min and max by comparison: libm's fmin/fmax are calls, and the box of every triangle of
- * the mesh is taken once per pass (positions are finite; -0 and +0 compare equal, so either
- * gives the same cells and the same answers) */
-static double min2(double a, double b)
-{
-    return b < a ? b : a;
-}
-
-static double max2(double a, double b)
-{
-    return b > a ? b : a;
-}
-
 static void tri_box(const ism_mesh *m, uint32_t t, double lo[3], double hi[3])
 {
     const uint32_t *v = m->tri + 3 * (size_t)t;
     for (int k = 0; k < 3; k++) {
         double a = m->pos[3 * (size_t)v[0] + k], b = m->pos[3 * (size_t)v[1] + k],
                d = m->pos[3 * (size_t)v[2] + k];
-        lo[k] = min2(a, min2(b, d));
-        hi[k] = max2(a, max2(b, d));
+        lo[k] = cf_min2(a, cf_min2(b, d));
+        hi[k] = cf_max2(a, cf_max2(b, d));
     }
 }
 
@@ -116,7 +103,7 @@ static bool file_triangle(cf_tgrid *g, const ism_mesh *m, uint32_t t)
         return false;
     double lo[3], hi[3], s = g->side;
     tri_box(m, t, lo, hi);
-    double e = max2(hi[0] - lo[0], max2(hi[1] - lo[1], hi[2] - lo[2]));
+    double e = cf_max2(hi[0] - lo[0], cf_max2(hi[1] - lo[1], hi[2] - lo[2]));
     int level = 0;
     while (level < TOP_LEVEL && !(e <= s)) {
         s *= 2;
@@ -151,8 +138,8 @@ static bool file_triangle(cf_tgrid *g, const ism_mesh *m, uint32_t t)
         }
     }
     for (int k = 0; k < 3; k++) { /* the union of the boxes ever filed there */
-        cb[k] = min2(cb[k], lo[k]);
-        cb[k + 3] = max2(cb[k + 3], hi[k]);
+        cb[k] = cf_min2(cb[k], lo[k]);
+        cb[k + 3] = cf_max2(cb[k + 3], hi[k]);
     }
     uint32_t *link = &g->head[cell];
     if (t < g->base)
@@ -238,7 +225,7 @@ void cf_tgrid_begin(cf_tgrid *g)
 
 bool cf_tris_push(cf_tris *out, uint32_t t)
 {
-    if (!cf_grow((void **)&out->t, &out->cap, out->n + 1, sizeof *out->t))
+    if (out->n == out->cap && !cf_grow((void **)&out->t, &out->cap, out->n + 1, sizeof *out->t))
         return false;
     out->t[out->n++] = t;
     return true;

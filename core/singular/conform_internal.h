@@ -211,6 +211,20 @@ bool cf_tris_push(cf_tris *out, uint32_t t);
  * magnitude): the tests they prefilter compare distances computed in floating point, a few
  * ulps off, and must never lose a triangle at exactly the radius. */
 #define CF_QUERY_SLACK 1e-9
+
+/* min and max by comparison: libm's fmin/fmax are calls, and these run once per triangle
+ * box, grid cell and segment of the pass's queries. For finite operands the same as fmin /
+ * fmax (-0 and +0 compare equal: either gives the same boxes, distances and answers); with
+ * a NaN in b, a is returned, as fmin/fmax return the number when a is one. */
+static inline double cf_min2(double a, double b)
+{
+    return b < a ? b : a;
+}
+
+static inline double cf_max2(double a, double b)
+{
+    return b > a ? b : a;
+}
 /* The box around the segment ab (a point when a = b) grown by r and the slack. */
 void cf_query_box(const double a[3], const double b[3], double r, double lo[3], double hi[3]);
 

@@ -363,10 +363,15 @@ bool cf_compact(cf_ctx *c)
             use[m->tri[3 * t + k]] |= c->dead[t] ? 1 : 2;
     for (size_t s = 0; s < 2 * m->nsegs; s++)
         use[m->seg[s]] |= 2;
+    /* the copies move down by whole elements (nt <= t, nv <= v): a source is read before
+     * any later destination overwrites it, and element by element costs no libc call */
     size_t nt = 0;
     for (size_t t = 0; t < m->ntris; t++)
-        if (!c->dead[t])
-            memmove(m->tri + 3 * nt++, m->tri + 3 * t, 3 * sizeof *m->tri);
+        if (!c->dead[t]) {
+            for (int k = 0; k < 3; k++)
+                m->tri[3 * nt + k] = m->tri[3 * t + k];
+            nt++;
+        }
     m->ntris = nt;
     memset(c->dead, 0, nt);
     size_t nv = 0;
@@ -376,8 +381,10 @@ bool cf_compact(cf_ctx *c)
             continue;
         }
         map[v] = (uint32_t)nv;
-        memmove(m->pos + 3 * nv, m->pos + 3 * v, 3 * sizeof *m->pos);
-        memmove(m->normal + 3 * nv, m->normal + 3 * v, 3 * sizeof *m->normal);
+        for (int k = 0; k < 3; k++) {
+            m->pos[3 * nv + k] = m->pos[3 * v + k];
+            m->normal[3 * nv + k] = m->normal[3 * v + k];
+        }
         c->singular[nv] = c->singular[v];
         nv++;
     }

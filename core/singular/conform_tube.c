@@ -81,16 +81,16 @@ static bool tri_in_tube(const cf_ctx *c, uint32_t t, void *arg)
     if (edge <= tb->reach && !(dmin <= tb->r + edge))
         return false;
     /* the corners, the edge midpoints and the centroid: a triangle the curve passes through
-     * has one of them within half its longest edge of the curve */
-    double q[7][3];
+     * has one of them within half its longest edge of the curve. The corners are known to be
+     * farther than r from every curve (vd is the nearest curve's distance, or beyond the
+     * tube's box grown by r + reach when not finite; a query within r would find the same
+     * nearest segment), so only the other four are asked. */
+    double q[4][3];
     for (int k = 0; k < 3; k++) {
-        q[0][k] = a[k];
-        q[1][k] = b[k];
-        q[2][k] = d[k];
-        q[3][k] = (a[k] + b[k]) / 2;
-        q[4][k] = (b[k] + d[k]) / 2;
-        q[5][k] = (d[k] + a[k]) / 2;
-        q[6][k] = (a[k] + b[k] + d[k]) / 3;
+        q[0][k] = (a[k] + b[k]) / 2;
+        q[1][k] = (b[k] + d[k]) / 2;
+        q[2][k] = (d[k] + a[k]) / 2;
+        q[3][k] = (a[k] + b[k] + d[k]) / 3;
     }
     /* near the rim of the cut only: the curves nearest its corners (all of them when a
      * corner is beyond the memo's reach, a triangle longer than reach) */
@@ -98,7 +98,7 @@ static bool tri_in_tube(const cf_ctx *c, uint32_t t, void *arg)
     for (size_t i = 0; i < tb->n; i++) {
         if (!all && vc[0] != i && vc[1] != i && vc[2] != i)
             continue;
-        for (int j = 0; j < 7; j++)
+        for (int j = 0; j < 4; j++)
             if (isfinite(cf_polyline_nearest(&tb->pl[i], q[j], tb->r, NULL, NULL)))
                 return true;
     }
