@@ -10,7 +10,7 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from harness import SLOW, Daemon, draco_counts, in_background, process_alive, sphere  # noqa: E402
+from harness import SLOW, SLOWER, Daemon, draco_counts, in_background, process_alive, sphere  # noqa: E402
 
 
 class WorkerTest(unittest.TestCase):
@@ -19,13 +19,13 @@ class WorkerTest(unittest.TestCase):
         self.assertEqual(r.json()["error"]["code"], code)
 
     def test_deadline_gives_504_and_a_fresh_worker(self):
-        # 5 s: far below the slow request's time (gyroid at depth 10: tens of seconds), far
+        # 5 s: far below SLOWER's time (gyroid, k = 8, depth 10, quality pass: 12 s and more), far
         # above the small sphere's even on a machine busy with other work.
         with Daemon("--workers", "1", "--job-timeout", "5s") as d:
             old = d.workers()
             self.assertEqual(len(old), 1)
             t0 = time.time()
-            r = d.post("/v1/mesh", SLOW)
+            r = d.post("/v1/mesh", SLOWER)
             self.assert_error(r, 504, "deadline_exceeded")
             self.assertLess(time.time() - t0, 30)
             self.assertTrue(d.wait_metric("isomesh_worker_restarts_total", 1, reason="deadline"))
@@ -38,7 +38,7 @@ class WorkerTest(unittest.TestCase):
             self.assertNotEqual(new, old)
             self.assertEqual(d.metric("isomesh_computations_total", outcome="deadline"), 1)
             # the same slow request as a job fails the same way
-            job = d.post("/v1/jobs", SLOW).json()
+            job = d.post("/v1/jobs", SLOWER).json()
             deadline = time.time() + 30
             while time.time() < deadline:
                 j = d.get(job["url"]).json()
