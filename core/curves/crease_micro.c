@@ -93,12 +93,6 @@ static bool join_micro_edges(micro_state *ms)
     return ok;
 }
 
-/* The unnormalised normal of triangle tv. */
-static void normal_of(const ism_mesh *m, const uint32_t *tv, double n[3])
-{
-    cut_tri_normal(m, tv, NONE, NULL, n);
-}
-
 /* Whether the triangles t (n of them, each with corner r) form a closed fan round r of
  * distinct triangles, each facing within CREASE_MICRO_TURN_COS of N. */
 static bool good_fan(const ism_mesh *m, uint32_t r, const uint32_t (*t)[3], size_t n,
@@ -106,7 +100,7 @@ static bool good_fan(const ism_mesh *m, uint32_t r, const uint32_t (*t)[3], size
 {
     for (size_t i = 0; i < n; i++) {
         double q[3];
-        normal_of(m, t[i], q);
+        cut_tri_normal(m, t[i], NONE, NULL, q); /* unnormalised */
         if (!(ism_dot3(q, N) >= CREASE_MICRO_TURN_COS * ism_norm3(q) * ism_norm3(N)))
             return false;
         for (int c = 0; c < 3; c++) {
@@ -150,7 +144,7 @@ static bool weld_set(micro_state *ms, uint32_t r, const uint32_t *members, size_
     for (size_t i = 0; i < n; i++) {
         const uint32_t *tv = m->tri + 3 * (size_t)idx[i];
         double q[3];
-        normal_of(m, tv, q);
+        cut_tri_normal(m, tv, NONE, NULL, q);
         for (int c = 0; c < 3; c++)
             N[c] += q[c];
         uint32_t v[3];
@@ -161,7 +155,6 @@ static bool weld_set(micro_state *ms, uint32_t r, const uint32_t *members, size_
     }
     if (!live || !good_fan(m, r, (const uint32_t (*)[3])out, live, N))
         return false;
-    live = 0;
     for (size_t i = 0; i < n; i++) { /* the same renaming, now in the mesh */
         uint32_t *tv = m->tri + 3 * (size_t)idx[i];
         for (int c = 0; c < 3; c++)
@@ -206,15 +199,12 @@ bool cut_crease_weld_micro(cut_state *s, const uint32_t *label, size_t *welded)
         start[v + 2] += start[v + 1];
     for (size_t v = 0; ok && v < nv; v++)
         members[start[ms.uf[v] + 1]++] = (uint32_t)v;
-    size_t dropped = 0;
     for (size_t r = 0; ok && r < nv; r++) {
         size_t nm = start[r + 1] - start[r];
-        if (nm > 1 && weld_set(&ms, (uint32_t)r, members + start[r], nm)) {
+        if (nm > 1 && weld_set(&ms, (uint32_t)r, members + start[r], nm))
             *welded += nm - 1;
-            dropped++;
-        }
     }
-    if (ok && dropped)
+    if (ok && *welded) /* some set welded: its dead triangles go */
         drop_dead(&ms);
     free(ms.first);
     free(ms.star);

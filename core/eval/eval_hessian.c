@@ -167,8 +167,8 @@ double ism_eval_hessian(const ism_tape *t, ism_eval_ws *ws, double x, double y, 
     }
     for (size_t i = 0; i < t->len; i++) {
         const ism_instr *c = &t->code[i];
-        int k = c->free_of ? one_var(c->free_of) : -1;
-        if (k >= 0 && c->op != ISM_OP_CONST)
+        int k = one_var(c->free_of); /* -1 for a constant (free of all) or no mask (0) */
+        if (k >= 0)
             one_var_op(c, r, k);
         else
             jet_op(c, r);

@@ -14,6 +14,7 @@
 #include "core/octree/grid.h"
 #include "core/octree/sampler.h"
 #include "core/octree/straddle.h"
+#include "core/util/grow.h"
 #include "core/util/parallel.h"
 
 #include <math.h>
@@ -182,19 +183,10 @@ typedef struct dual {
 static const int AROUND_U[4] = {0, 1, 1, 0};
 static const int AROUND_V[4] = {0, 0, 1, 1};
 
+/* The arrays below start at 64 elements (ism_grow's first allocation). */
 static bool grow(void **p, size_t *cap, size_t need, size_t size)
 {
-    if (need <= *cap)
-        return true;
-    size_t c = *cap ? *cap : 64;
-    while (c < need)
-        c *= 2;
-    void *q = realloc(*p, c * size);
-    if (!q)
-        return false;
-    *p = q;
-    *cap = c;
-    return true;
+    return ism_grow(p, cap, need, size, 64);
 }
 
 static int child_at(const int bits[3]) { return bits[0] | bits[1] << 1 | bits[2] << 2; }
@@ -1282,8 +1274,9 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
     if (cut)
         decline(d, ISM_DUAL_WHY_BOX_CUT);
     if (r0->kind == DN_INNER && !d->bad)
-        expand(d, &root, 1);
-    mark_surface(d);
+        expand(d, &root, 1); /* ends with mark_surface */
+    else
+        mark_surface(d);
     for (int r = 0;; r++) {
         if (d->o->cancel && *d->o->cancel)
             return ISM_DUAL_CANCELLED;
@@ -1333,12 +1326,10 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
 {
     memset(st, 0, sizeof *st);
     ism_mesh_free(mesh);
-    if (!ism_dual_wanted(f, o)) {
-        ism_poly_options asked = *o;
-        asked.dual = true;
-        st->declined = ism_dual_declined_before(f, &asked);
+    ism_poly_options asked = *o; /* ism_dual_wanted's question, keeping the reason */
+    asked.dual = true;
+    if ((st->declined = ism_dual_declined_before(f, &asked)) != ISM_DUAL_WHY_NONE)
         return ISM_DUAL_NOT_APPLICABLE;
-    }
     dual d;
     memset(&d, 0, sizeof d);
     d.o = o;

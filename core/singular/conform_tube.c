@@ -139,25 +139,6 @@ static bool gather_runs(cf_ctx *c, const cf_polyline *pl, size_t n, double r, cf
     return true;
 }
 
-/* Appends to out (after cf_tgrid_begin) every live triangle whose box meets the box of a
- * segment of the n polylines grown by r: a superset of those within r of them. False when out
- * of memory. */
-static bool gather_near_curves(cf_ctx *c, const cf_polyline *pl, size_t n, double r,
-                               cf_tris *out)
-{
-    /* the curves' box grown by r holds every run's query box: one pass over the mesh files
-     * what the runs need, and (ahead by r) what the next widenings need */
-    double blo[3] = {INFINITY, INFINITY, INFINITY}, bhi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t i = 0; i < n; i++)
-        for (int k = 0; k < 3; k++) {
-            blo[k] = fmin(blo[k], pl[i].lo[k]);
-            bhi[k] = fmax(bhi[k], pl[i].hi[k]);
-        }
-    double lo[3], hi[3];
-    cf_query_box(blo, bhi, r, lo, hi);
-    return cf_tgrid_cover(&c->grid, c->m, lo, hi, r) && gather_runs(c, pl, n, r, out);
-}
-
 static bool gather_tube(cf_ctx *c, void *arg, cf_tris *out)
 {
     tube *tb = arg;
@@ -168,7 +149,12 @@ static bool gather_tube(cf_ctx *c, void *arg, cf_tris *out)
             tb->gen_base = c->gen;
         tb->vd_r = tb->r;
     }
-    return gather_near_curves(c, tb->pl, tb->n, tb->r, out);
+    /* the curves' box grown by r holds every run's query box: one pass over the mesh files
+     * what the runs need, and (ahead by r) what the next widenings need */
+    double lo[3], hi[3];
+    cf_query_box(tb->lo, tb->hi, tb->r, lo, hi);
+    return cf_tgrid_cover(&c->grid, c->m, lo, hi, tb->r) &&
+           gather_runs(c, tb->pl, tb->n, tb->r, out);
 }
 
 /* The curve's points spaced at least min_step apart (the ends of an open curve kept). */

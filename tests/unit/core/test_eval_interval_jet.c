@@ -357,8 +357,8 @@ static void same_without_free_of(const char *name, ism_tape *t, ism_tape *plain,
         if (!finite)
             continue; /* 0 · inf: NaN without free_of, 0 with it (eval_hessian.c) */
         cr_assert(same_bits(&f1, &f2, sizeof f1), "%s: point value differs", name);
-        for (int k = 0; k < 6; k++)
-            cr_assert(k >= 3 || g1[k] == g2[k], "%s: point gradient differs", name);
+        for (int k = 0; k < 3; k++)
+            cr_assert(g1[k] == g2[k], "%s: point gradient differs", name);
         for (int k = 0; k < 6; k++)
             cr_assert(h1[k] == h2[k], "%s: point Hessian differs", name);
     }

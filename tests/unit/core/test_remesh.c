@@ -193,14 +193,15 @@ static void both_paths(const ism_tape *t, const double box[6], int d, ism_mesh *
     cr_assert_gt(st.moves, 100, "the pass moved %zu vertices", st.moves);
 }
 
-/* f's meshes in the box ±half at depth 3:d, in the lattice box and off it by 1e-3 and 0.37 of
- * a cell: the same bits on both paths. */
+/* f's meshes in the box ±half at depth 3:d, in the lattice box and the fixture's two boxes off
+ * it (pf_sweep_box: by 1e-3, and by fractions of a cell): the same bits on both paths. */
 static void same_on_both_paths(const pf_surface *s, double half, int d)
 {
     ism_tape *t = pf_compile(s);
-    for (int b = 0; b < 3; b++) {
-        double c = (b == 0 ? 0 : b == 1 ? 1e-3 : 0.37) * 2 * half / (1 << d);
-        const double box[6] = {-half + c, -half - c, -half + c, half + c, half - c, half + c};
+    const double base[6] = {-half, -half, -half, half, half, half};
+    for (int b = -1; b < 2; b++) {
+        double box[6];
+        pf_sweep_box(base, d, b, box);
         ism_mesh m1, m2;
         both_paths(t, box, d, &m1, &m2);
         cr_assert_eq(m1.nverts, m2.nverts, "%s box %d", s->expr, b);
