@@ -480,12 +480,6 @@ static bool decode_simplify(const json_t *v, ism_request *req, ism_req_error *er
     return true;
 }
 
-bool ism_simplify_after(int when, double max_error, int made)
-{
-    return max_error > 0 && (when == ISM_SIMPLIFY_ALWAYS ||
-                             (when == ISM_SIMPLIFY_PRIMAL && made != ISM_MESHER_DUAL));
-}
-
 /* "straddle": true or false (after "max_error"; default false). The polygoniser then moves
  * vertices where the surface bends one way toward its convex side by 0.9 E and sizes the
  * cells for it (core/octree/straddle.h): fewer triangles within the same bound. Only a

@@ -100,18 +100,6 @@ typedef struct ism_request {
                                   Not with "curves" or "quality": "good" (400). */
 } ism_request;
 
-/* When the simplification runs under max_error. Not asked (the default): after the primal
- * polygons only. The dual mesh (the default mesher under a bound, core/octree/mesher.h) is
- * already within the bound at about libfive's cost; simplifying it costs 1.3-6.7 times its
- * meshing for 0.18-0.40 of its triangles (callgrind, sphere and torus at 1e-2..1e-3: README,
- * "Under an error bound"), so it runs on a dual mesh only when asked ("simplify": true,
- * --simplify). The primal polygons (every other surface) keep the simplified default. */
-enum ism_simplify_when { ISM_SIMPLIFY_NEVER, ISM_SIMPLIFY_PRIMAL, ISM_SIMPLIFY_ALWAYS };
-
-/* Does the simplification run after a mesh the mesher `made` (enum ism_mesher), for when and
- * the bound max_error (0: none, never)? */
-bool ism_simplify_after(int when, double max_error, int made);
-
 /* What the operator allows. */
 typedef struct ism_request_limits {
     int max_depth;             /* highest depth.max accepted (capped at ISM_MAX_DEPTH_LIMIT) */

@@ -50,3 +50,9 @@ enum ism_dual_reason ism_dual_declined_before(const ism_tape *f, const ism_poly_
         return ISM_DUAL_WHY_MIN_MAX;
     return ISM_DUAL_WHY_NONE;
 }
+
+bool ism_simplify_after(int when, double max_error, int made)
+{
+    return max_error > 0 && (when == ISM_SIMPLIFY_ALWAYS ||
+                             (when == ISM_SIMPLIFY_PRIMAL && made != ISM_MESHER_DUAL));
+}

@@ -18,7 +18,7 @@ typedef struct ism_cli_run {
     const char *features_output;/* --features */
     bool box_given, depth_given, print_stats;
     int quality;                /* --quality: enum ism_quality (raw unless given) */
-    int simplify_when;          /* enum ism_simplify_when (proto/request.h): under
+    int simplify_when;          /* enum ism_simplify_when (core/octree/mesher.h): under
                                    --max-error, the simplification after the primal polygons
                                    only (default), always (--simplify) or never
                                    (--no-simplify) */

@@ -1,7 +1,6 @@
 /* cli_args.c — parsing and checking the `isomesh` command's flag values (numbers, boxes,
  * depths, NAME=VALUE pairs), each failure a one-line message naming the flag. */
 #include "server/isomesh/cli.h"
-#include "proto/request.h"
 
 #include <errno.h>
 #include <math.h>

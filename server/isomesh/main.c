@@ -12,7 +12,6 @@
 #include "server/isomesh/cli.h"
 #include "core/octree/tolerances.h"
 #include "core/remesh/quality_pass.h"
-#include "proto/request.h"
 #include "server/isomesh/sandbox.h"
 #include "server/isomesh/worker.h"
 

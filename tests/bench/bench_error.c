@@ -233,11 +233,8 @@ static ism_tape *compile(const surface *s)
     return t;
 }
 
-/* When the simplification runs: as proto/request.h's ism_simplify_when (not linked here). */
-enum simplify_when { SIMPLIFY_NEVER, SIMPLIFY_PRIMAL, SIMPLIFY_ALWAYS };
-
 static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, int depth,
-                    enum simplify_when when, bool straddle, bool dual)
+                    enum ism_simplify_when when, bool straddle, bool dual)
 {
     ism_poly_options o;
     ism_poly_options_default(&o);
@@ -260,8 +257,7 @@ static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, 
     double c0 = cpu_seconds();
     enum ism_poly_status st = ism_mesh_surface(t, &o, &mesh, &locus, &ps, &cs, &times, &err);
     double c1 = cpu_seconds();
-    bool simplify = when == SIMPLIFY_ALWAYS ||
-                    (when == SIMPLIFY_PRIMAL && ps.mesher != ISM_MESHER_DUAL);
+    bool simplify = ism_simplify_after(when, e, ps.mesher);
     if (st == ISM_POLY_OK && simplify && !ism_simplify_pass(t, &locus, NULL, e, NULL, &mesh, &ss, &err))
         st = ISM_POLY_NO_MEMORY;
     double cpu = cpu_seconds() - c0;
@@ -360,9 +356,9 @@ int main(int argc, char **argv)
     int rc = 2;
     if (strcmp(argv[1], "mesh") == 0)
         rc = cmd_mesh(s, t, &m, atof(argv[3]), argc > 4 ? atoi(argv[4]) : 10,
-                      has_word(argc, argv, 5, "raw")        ? SIMPLIFY_NEVER
-                      : has_word(argc, argv, 5, "simplify") ? SIMPLIFY_ALWAYS
-                                                            : SIMPLIFY_PRIMAL,
+                      has_word(argc, argv, 5, "raw")        ? ISM_SIMPLIFY_NEVER
+                      : has_word(argc, argv, 5, "simplify") ? ISM_SIMPLIFY_ALWAYS
+                                                            : ISM_SIMPLIFY_PRIMAL,
                       has_word(argc, argv, 5, "straddle"), !has_word(argc, argv, 5, "primal"));
     else if (strcmp(argv[1], "measure") == 0)
         rc = cmd_measure(&m, argv[3]);
