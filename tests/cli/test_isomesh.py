@@ -7,8 +7,12 @@ import json
 import os
 import struct
 import subprocess
+import sys
 import tempfile
 import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from boxes import placements  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
@@ -222,9 +226,9 @@ class TestIsomesh(unittest.TestCase):
                 worst = max(worst, abs((x * x + y * y + z * z) ** 0.5 - 1))
         return worst
 
-    def test_max_error_met_and_missed(self):
-        sphere = ["-e", "x^2 + y^2 + z^2 - 1", "-b", "-1.5,-1.5,-1.5,1.5,1.5,1.5"]
-        path = self.out("s.ply")
+    def check_met(self, sphere, path):
+        """The unit sphere under --max-error 0.01 with the box in `sphere`: within E (measured
+        from the closed form), the dual mesh by default, the flags' meshers."""
         # met: no warning, and the mesh is within E (measured here, from the closed form)
         p = run(*sphere, "--max-error", "0.01", "-o", path, "--stats")
         self.assertEqual(p.returncode, 0, p.stderr)
@@ -243,6 +247,27 @@ class TestIsomesh(unittest.TestCase):
                                delta=0.05 * worst)
         for k in ("vertex", "midpoint", "centroid"):
             self.assertLessEqual(acc[f"p99_dist_{k}"], acc[f"max_dist_{k}"])
+        # --no-dual: the primal polygons, simplified; --simplify: the dual mesh simplified too
+        for flags, mesher, why, simplified in ((("--no-dual",), "primal", "off", True),
+                                               (("--simplify",), "dual", None, True),
+                                               (("--no-dual", "--no-simplify"), "primal", "off",
+                                                False)):
+            p = run(*sphere, "--max-error", "0.01", *flags, "--stats")
+            self.assertEqual(p.returncode, 0, p.stderr)
+            s = json.loads(p.stdout)
+            self.assertEqual((s["polygoniser"]["mesher"], s["polygoniser"]["dual_declined"]),
+                             (mesher, why), flags)
+            self.assertEqual("simplify" in s, simplified, flags)
+            self.assertIs(s["analysis"]["accuracy"]["met"], True, flags)
+
+    def test_max_error_met_and_missed(self):
+        sphere = ["-e", "x^2 + y^2 + z^2 - 1", "-b", "-1.5,-1.5,-1.5,1.5,1.5,1.5"]
+        path = self.out("s.ply")
+        # met, in the lattice box and off it (depth 10's cells, the bound's safety limit)
+        for box in placements([-1.5] * 3 + [1.5] * 3, 3 / 2 ** 10):
+            with self.subTest(box=box):
+                self.check_met(["-e", "x^2 + y^2 + z^2 - 1", "-b", ",".join(map(repr, box))],
+                               path)
         # missed: depth 4 cannot reach 1e-3; one warning with the count and the worst
         p = run(*sphere, "--max-error", "0.001", "-d", "3:4", "-o", path, "--stats")
         s = json.loads(p.stdout)
@@ -258,18 +283,6 @@ class TestIsomesh(unittest.TestCase):
         # depth 4 is too coarse for the dual mesh as well: the primal polygons, and why
         self.assertEqual(s["polygoniser"]["mesher"], "primal")
         self.assertEqual(s["polygoniser"]["dual_declined"], "error_at_max_depth")
-        # --no-dual: the primal polygons, simplified; --simplify: the dual mesh simplified too
-        for flags, mesher, why, simplified in ((("--no-dual",), "primal", "off", True),
-                                               (("--simplify",), "dual", None, True),
-                                               (("--no-dual", "--no-simplify"), "primal", "off",
-                                                False)):
-            p = run(*sphere, "--max-error", "0.01", *flags, "--stats")
-            self.assertEqual(p.returncode, 0, p.stderr)
-            s = json.loads(p.stdout)
-            self.assertEqual((s["polygoniser"]["mesher"], s["polygoniser"]["dual_declined"]),
-                             (mesher, why), flags)
-            self.assertEqual("simplify" in s, simplified, flags)
-            self.assertIs(s["analysis"]["accuracy"]["met"], True, flags)
         # no bound: met and max_error are null, the primal polygons
         p = run(*sphere, "-d", "3:5", "--stats")
         s = json.loads(p.stdout)
