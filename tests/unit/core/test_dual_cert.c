@@ -138,16 +138,22 @@ Test(dual_cert, graph_refused_across_two_sheets_and_proven_for_one)
     ism_tape *t = pf_compile(&shell);
     ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
     uint64_t n = 0;
-    const double lo[3] = {0.95, -0.04, -0.04}, hi[3] = {1.15, 0.04, 0.04};
     static const double dirs[][3] = {{1, 0, 0}, {-1, 0, 0}, {1, 0.3, -0.2}, {-1, 0.1, 0.1},
                                      {0, 1, 0}, {0, 0, -1}};
-    for (size_t k = 0; k < sizeof dirs / sizeof dirs[0]; k++)
-        for (int h = 0; h <= 2; h++)
-            cr_expect(!graph_box(t, jw, lo, hi, dirs[k], h, &n),
-                      "direction %zu, %d halvings", k, h);
-    const double lo1[3] = {0.96, -0.04, -0.04}, hi1[3] = {1.04, 0.04, 0.04};
     const double minus_x[3] = {-1, 0, 0}; /* f falls outward through the inner sphere */
-    cr_expect(graph_box(t, jw, lo1, hi1, minus_x, 1, &n));
+    /* the boxes on the x axis, then moved off it in y and z by 1e-3 and by an irrational
+     * fraction (√2 − 1) of their width */
+    const double moves[3] = {0, 1e-3 * 0.08, (M_SQRT2 - 1) * 0.08};
+    for (int m = 0; m < 3; m++) {
+        double d = moves[m];
+        const double lo[3] = {0.95, -0.04 + d, -0.04 + d}, hi[3] = {1.15, 0.04 + d, 0.04 + d};
+        for (size_t k = 0; k < sizeof dirs / sizeof dirs[0]; k++)
+            for (int h = 0; h <= 2; h++)
+                cr_expect(!graph_box(t, jw, lo, hi, dirs[k], h, &n),
+                          "move %d, direction %zu, %d halvings", m, k, h);
+        const double lo1[3] = {0.96, -0.04 + d, -0.04 + d}, hi1[3] = {1.04, 0.04 + d, 0.04 + d};
+        cr_expect(graph_box(t, jw, lo1, hi1, minus_x, 1, &n), "move %d", m);
+    }
     ism_ivjet_ws_free(jw);
     ism_tape_free(t);
 }
@@ -182,8 +188,16 @@ Test(dual_cert, second_order_form_clears_the_circle_of_minima)
     const double s = sqrt(1.09), h = 0.09375;
     const double cells[2][6] = {{s - h, -h, -h, s + h, h, h},            /* round the minima */
                                 {1.3 - h, -h, -h, 1.3 + h, h, h}};       /* across the wall */
-    for (int b = 0; b < 2; b++) {
-        const double *lo = cells[b], *hi = cells[b] + 3;
+    /* each cell as placed (symmetric in y and z: ∇f(c) has no y, z part) and moved off that
+     * symmetry in y and z by 1e-3 and by an irrational fraction (√2 − 1) of its width */
+    const double moves[3] = {0, 1e-3 * 2 * h, (M_SQRT2 - 1) * 2 * h};
+    for (int b = 0; b < 6; b++) {
+        double lo[3], hi[3];
+        for (int a = 0; a < 3; a++) {
+            double mv = a ? moves[b / 2] : 0;
+            lo[a] = cells[b % 2][a] + mv;
+            hi[a] = cells[b % 2][a + 3] + mv;
+        }
         ism_dual_model m;
         uint64_t n = 0;
         cr_assert(ism_dual_taylor(t, jw, lo, hi, &m, &n));
@@ -194,10 +208,10 @@ Test(dual_cert, second_order_form_clears_the_circle_of_minima)
         ism_interval second = ism_dual_second_order(&m, lo, hi);
         cr_expect(first.lo < 0 && first.hi > 0, "cell %d: first-order [%g, %g]", b, first.lo,
                   first.hi);
-        if (b == 0)
-            cr_expect(second.hi < 0, "second-order [%g, %g]", second.lo, second.hi);
+        if (b % 2 == 0)
+            cr_expect(second.hi < 0, "cell %d: second-order [%g, %g]", b, second.lo, second.hi);
         else
-            cr_expect(second.lo < 0 && second.hi > 0);
+            cr_expect(second.lo < 0 && second.hi > 0, "cell %d", b);
         check_second_order(t, ws, &m, lo, hi);
         for (int k = 0; k < 8; k++) {
             double sl[3], sh[3];
