@@ -342,6 +342,7 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
     assert.equal(s.polygoniser.mesher, 'dual');
     assert.equal(panel.mesher.text, 'dual');
     assert.equal(panel.mesher.value, 'dual');
+    assert.equal(panel.dual_declined.text, '–');
     assert.equal(await page.isDisabled('#mesher'), false);
     // asking for the primal polygons: another mesh, and the panel gives the reason
     const primal = await loads(page);
@@ -350,7 +351,10 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
     const sp = await getJSON(`/v1/meshes/${await meshKey()}/stats`);
     assert.equal(sp.polygoniser.mesher, 'primal');
     assert.equal(sp.polygoniser.dual_declined, 'off');
-    assert.equal((await statsPanel(page)).mesher.text, 'primal (dual off)');
+    const sp2 = await statsPanel(page);
+    assert.equal(sp2.mesher.text, 'primal');
+    assert.equal(sp2.dual_declined.text, 'dual off');
+    assert.equal(sp2.dual_declined.value, 'off');
     assert.match(await settledHref(page), /mesher=primal/);
     await page.evaluate(() => document.getElementById('stats-section').scrollIntoView());
     fs.writeFileSync(artifact('stats-mesher-primal.png'), await page.locator('#stats-section').screenshot());
@@ -359,11 +363,15 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
     await page.selectOption('#mesher', 'straddle');
     await waitForMesh(page, straddle);
     assert.equal((await getJSON(`/v1/meshes/${await meshKey()}/stats`)).polygoniser.mesher, 'straddle');
-    assert.equal((await statsPanel(page)).mesher.text, 'straddle (dual off)');
+    const ss = await statsPanel(page);
+    assert.equal(ss.mesher.text, 'straddle');
+    assert.equal(ss.dual_declined.text, 'dual off');
     const dual = await loads(page);
     await page.selectOption('#mesher', 'dual');
     await waitForMesh(page, dual);
-    assert.equal((await statsPanel(page)).mesher.text, 'dual');
+    const sd = await statsPanel(page);
+    assert.equal(sd.mesher.text, 'dual');
+    assert.equal(sd.dual_declined.text, '–');
     const back = await loads(page);
     await page.fill('#max-error', '');
     await page.locator('#max-error').press('Tab');
@@ -371,7 +379,9 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
     assert.equal(await page.isDisabled('#depth-max'), false);
     assert.equal(await page.isDisabled('#mesher'), true, 'the meshers differ only under a bound');
     assert.equal((await statsPanel(page)).max_error.text, 'off');
-    assert.equal((await statsPanel(page)).mesher.text, 'primal (no max error)');
+    const sn = await statsPanel(page);
+    assert.equal(sn.mesher.text, 'primal');
+    assert.equal(sn.dual_declined.text, 'no max error');
   });
 
   it('asks for the quality pass and shows the triangles\' shape', async () => {

@@ -55,11 +55,10 @@ const DUAL_DECLINED = {
   open_edge: 'open edge',
 };
 
-// "dual", or "primal (singular locus)": the mesher and why not the dual one.
-function mesherText(poly) {
-  if (!poly.mesher) return '–';
-  const why = poly.dual_declined;
-  return why ? `${poly.mesher} (${DUAL_DECLINED[why] || why.replace(/_/g, ' ')})` : poly.mesher;
+// Why not the dual mesher, in words ('–' when it made the mesh or was not asked about); a row
+// of its own, so the mesher's name stays one short line in the narrow panel.
+function declinedText(why) {
+  return why ? (DUAL_DECLINED[why] || why.replace(/_/g, ' ')) : '–';
 }
 
 // result: loader.js's result.
@@ -96,7 +95,8 @@ export function showStats(result) {
   const met = acc.met === true ? ' (met)' : acc.met === false ? ' (not met)' : '';
   put('max_error', acc.max_error > 0 ? `${fmt.sig(acc.max_error)}${met}` : 'off', acc.max_error);
   const poly = s.polygoniser || {};
-  put('mesher', mesherText(poly), poly.mesher);
+  put('mesher', poly.mesher || '–', poly.mesher);
+  put('dual_declined', declinedText(poly.dual_declined), poly.dual_declined);
   put('compute_ms', fmt.ms(t.total), t.total);
   const cache = result.viewerCache ? 'viewer (no request)' : `server ${result.serverCache}`;
   put('cache', cache, result.viewerCache ? 'viewer' : result.serverCache);
