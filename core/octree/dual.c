@@ -8,6 +8,7 @@
 #include "core/eval/interval_jet.h"
 #include "core/octree/cell_cache.h"
 #include "core/octree/corners.h"
+#include "core/octree/dual_balls.h"
 #include "core/octree/dual_cert.h"
 #include "core/octree/edge_roots.h"
 #include "core/octree/graph_cert.h"
@@ -48,7 +49,7 @@
 /* Threads at most: the options' own limit (polygonise.c checks o->threads against it). */
 #define DUAL_MAX_THREADS 64
 
-enum { DN_INNER, DN_EMPTY, DN_SURF };
+enum { DN_INNER, DN_EMPTY, DN_SURF, DN_HOLE }; /* DN_HOLE: a leaf meeting a point's hole */
 
 typedef struct dnode {
     ism_ipt o;      /* lattice origin */
@@ -174,6 +175,8 @@ typedef struct dual {
     keyed mid;          /* vertex pairs (pair_key): the distance of their midpoint to f = 0 */
     int ec0[12], ec1[12], ef[12][2]; /* the cube's edges: ends and faces (ism_cube_edge) */
     double shift;     /* vertices move this far to the convex side (straddle.h), or 0 */
+    const ism_dual_ball *balls; /* round the isolated singular points (dual_balls.h) */
+    size_t nballs;
     bool bad, nomem, too_big;
     enum ism_dual_reason why; /* the first reason bad was set for (mesher.h) */
 } dual;
@@ -465,6 +468,15 @@ static void decline(dual *d, enum ism_dual_reason why)
  * leaf, or inner (to split; bad set when the box cuts the surface). */
 static int leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad)
 {
+    if (d->nballs) { /* round a singular point: split, or a hole leaf (dual_balls.h) */
+        int hole = ism_dual_balls_node(d->balls, d->nballs, v->p[0], v->p[7],
+                                       ism_grid_cell_size(&d->g, n->level),
+                                       n->level >= d->o->max_depth);
+        if (hole == 0 || (hole == 1 && n->level < d->o->min_depth))
+            return DN_INNER;
+        if (hole == 1)
+            return DN_HOLE;
+    }
     int kind = classify(d, w, n, v);
     if (kind == DN_SURF && touches_box(d, n)) {
         int clear = box_faces_clear(d, w, n, v);
@@ -474,6 +486,17 @@ static int leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad)
             kind = DN_INNER; /* split until the box's faces are proven clear */
     }
     return kind;
+}
+
+/* Does node n lie within a singular point's limit (dual_balls.h)? There a leaf at the
+ * deepest level that the proofs cannot make plain (a node's nappes closer than a cell along
+ * its flat direction) joins the point's hole, which the clip and the fan then close. */
+static bool near_point(const dual *d, const dnode *n)
+{
+    double lo[3], hi[3];
+    corner_point(d, n, 0, lo);
+    corner_point(d, n, 7, hi);
+    return ism_dual_balls_near(d->balls, d->nballs, lo, hi);
 }
 
 /* What splitting one node yields: its 8 children's corner values and kinds. */
@@ -581,10 +604,12 @@ static void expand(dual *d, const int32_t *list, size_t n)
                 ch->kind = out[k].kind[c];
                 if (ch->kind != DN_INNER)
                     continue;
-                if (level >= d->o->max_depth)
-                    decline(d, ISM_DUAL_WHY_NOT_PLAIN); /* at the deepest level: a feature */
-                else
+                if (level < d->o->max_depth)
                     next[nn++] = at;
+                else if (near_point(d, ch))
+                    ch->kind = DN_HOLE; /* sheets a cell apart beside a node: its hole */
+                else
+                    decline(d, ISM_DUAL_WHY_NOT_PLAIN); /* at the deepest level: a feature */
             }
             d->n[i].kind = DN_INNER;
             d->n[i].child = first;
@@ -1314,6 +1339,78 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
     return to_mesh(d, mesh) ? ISM_DUAL_OK : ISM_DUAL_NO_MEMORY;
 }
 
+/* The tree, the vertices, the triangles and the memos freed and zeroed (the pool, the
+ * workers and the options kept): for the next try, or the end. */
+static void forget(dual *d)
+{
+    free(d->n);
+    free(d->pos);
+    free(d->vleaf);
+    free(d->tri);
+    free(d->q.q);
+    keyed_free(&d->passed);
+    keyed_free(&d->mid);
+    d->n = NULL;
+    d->pos = NULL;
+    d->vleaf = NULL;
+    d->tri = NULL;
+    d->nn = d->capn = d->nv = d->capv = d->nt = d->capt = 0;
+    memset(&d->q, 0, sizeof d->q);
+    memset(&d->passed, 0, sizeof d->passed);
+    memset(&d->mid, 0, sizeof d->mid);
+    d->bad = d->nomem = d->too_big = false;
+    d->why = ISM_DUAL_WHY_NONE;
+}
+
+/* run, and round the isolated singular points o->dual_points (dual_balls.h): the mesh with a
+ * hole at each, clipped and fanned to the point; where a fan misses E or its rim is not
+ * two loops (one for each nappe), that ball is halved and the mesh made again, up to
+ * ISM_DUAL_BALL_SHRINKS times (then "point_fan"). */
+static enum ism_dual_status run_round_points(dual *d, ism_mesh *mesh, ism_dual_stats *st)
+{
+    size_t n = d->o->ndual_points;
+    if (!n)
+        return run(d, mesh, st);
+    ism_dual_ball *balls = malloc(n * sizeof *balls);
+    int *shrink = calloc(n, sizeof *shrink);
+    uint8_t *missed = malloc(n);
+    enum ism_dual_status status = balls && shrink && missed ? ISM_DUAL_OK : ISM_DUAL_NO_MEMORY;
+    d->balls = balls;
+    d->nballs = n;
+    while (status == ISM_DUAL_OK) {
+        for (size_t k = 0; k < n; k++)
+            ism_dual_ball_make(&balls[k], d->o->dual_points[k], d->o->box, d->o->max_error,
+                               shrink[k]);
+        forget(d);
+        ism_mesh_free(mesh);
+        st->leaves = st->missed = 0;
+        if ((status = run(d, mesh, st)) != ISM_DUAL_OK)
+            break;
+        size_t which;
+        enum ism_fan_status fan =
+            ism_dual_balls_fan(mesh, &d->w[0].s, balls, n, d->o->max_error, &which, missed);
+        if (fan == ISM_FAN_OK)
+            break;
+        if (fan == ISM_FAN_NO_MEMORY)
+            status = ISM_DUAL_NO_MEMORY;
+        else {
+            if (fan == ISM_FAN_BAD)
+                missed[which] = 1;
+            for (size_t k = 0; k < n && status == ISM_DUAL_OK; k++)
+                if (missed[k] && shrink[k]++ == ISM_DUAL_BALL_SHRINKS) {
+                    st->declined = ISM_DUAL_WHY_POINT_FAN;
+                    status = ISM_DUAL_NOT_APPLICABLE;
+                }
+        }
+    }
+    free(missed);
+    free(balls);
+    free(shrink);
+    d->balls = NULL;
+    d->nballs = 0;
+    return status;
+}
+
 /* Threads for the call: o->threads, or every core (0), at most MAX_THREADS. */
 static int thread_count(const ism_poly_options *o)
 {
@@ -1349,7 +1446,7 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
         w->points = calloc((size_t)1 << DUAL_POINT_BITS, sizeof *w->points);
         ok = w->s.ws && w->jet && w->points;
     }
-    enum ism_dual_status status = ok ? run(&d, mesh, st) : ISM_DUAL_NO_MEMORY;
+    enum ism_dual_status status = ok ? run_round_points(&d, mesh, st) : ISM_DUAL_NO_MEMORY;
     st->threads = d.nw;
     for (int k = 0; d.w && k < d.nw; k++) {
         worker *w = &d.w[k];
@@ -1364,12 +1461,6 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
         ism_mesh_free(mesh);
     free(d.w);
     ism_pool_free(d.pool);
-    free(d.n);
-    free(d.pos);
-    free(d.vleaf);
-    free(d.tri);
-    free(d.q.q);
-    keyed_free(&d.passed);
-    keyed_free(&d.mid);
+    forget(&d);
     return status;
 }

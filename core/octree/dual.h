@@ -15,7 +15,9 @@
  * level higher (sphere E = 1e-3: ~4 times fewer triangles before any simplification).
  *
  * Only for closed surfaces without features: no min/max or abs in f (creases), no singular
- * locus known (quiet or node balls given), no leaf with the surface touching the box; and
+ * locus known (quiet or node balls given) but isolated certified nodes and isolated points
+ * (o->dual_points: a hole round each, clipped and fanned to the point, dual_balls.h), no
+ * leaf with the surface touching the box; and
  * only where every triangle meets E before depth.max (two sheets closer than E, where f's
  * gradient nearly cancels between them, do not); the call says "not applicable" otherwise
  * and the caller polygonises as before. The tree's splits, the vertices and the

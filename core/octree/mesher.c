@@ -21,6 +21,10 @@ static const struct {
     [ISM_DUAL_WHY_ERROR] = {"error_at_max_depth",
                             "a triangle beyond max_error with its cells at depth.max"},
     [ISM_DUAL_WHY_OPEN_EDGE] = {"open_edge", "a crossed edge without its cells' vertices"},
+    [ISM_DUAL_WHY_POINT_TYPE] = {"point_type", "a singular point that is not a certified node "
+                                               "or isolated point (a cusp ...)"},
+    [ISM_DUAL_WHY_POINT_FAN] = {"point_fan", "no two rim loops round a node, or its apex fan "
+                                             "beyond max_error at the smallest ball"},
 };
 
 const char *ism_mesher_name(enum ism_mesher m)
@@ -44,7 +48,10 @@ enum ism_dual_reason ism_dual_declined_before(const ism_tape *f, const ism_poly_
         return ISM_DUAL_WHY_NO_BOUND;
     if (!o->dual)
         return ISM_DUAL_WHY_OFF;
-    if (o->nquiet || o->nnode_balls)
+    if (o->dual_points_other)
+        return ISM_DUAL_WHY_POINT_TYPE;
+    /* a locus of nodes and isolated points only is meshed round (dual_balls.h) */
+    if ((o->nquiet || o->nnode_balls) && !o->ndual_points)
         return ISM_DUAL_WHY_LOCUS;
     if (ism_tape_has_min_max(f))
         return ISM_DUAL_WHY_MIN_MAX;

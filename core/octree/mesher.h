@@ -19,7 +19,7 @@ enum ism_mesher {
 };
 
 /* Why the dual mesher did not make the mesh. In the order they are decided: the first four
- * before any meshing (ism_dual_declined_before), the others by the dual mesher itself, which
+ * (and POINT_TYPE, in LOCUS's place) before any meshing (ism_dual_declined_before), the others by the dual mesher itself, which
  * then gives the mesh back to the primal polygons. */
 enum ism_dual_reason {
     ISM_DUAL_WHY_NONE = 0,     /* it did: the mesh is the dual one */
@@ -34,6 +34,11 @@ enum ism_dual_reason {
     ISM_DUAL_WHY_ERROR,        /* a triangle beyond max_error with its cells at depth.max */
     ISM_DUAL_WHY_OPEN_EDGE,    /* a crossed edge without its cells' vertices (not expected:
                                   never a hole) */
+    ISM_DUAL_WHY_POINT_TYPE,   /* the locus is points only, but one is not a certified node
+                                  or isolated point (a cusp ...): no apex fan for it */
+    ISM_DUAL_WHY_POINT_FAN,    /* round a node the ball's sphere did not cut two rim loops,
+                                  or a fan triangle stayed beyond max_error at the smallest
+                                  ball (dual_balls.h) */
     ISM_DUAL_WHY_COUNT
 };
 

@@ -46,7 +46,8 @@ typedef struct ism_poly_options {
                                0.9 E toward its convex side so the mesh straddles it, and
                                nodes are sized for that (straddle.h); default off */
     bool dual;              /* under max_error, on a surface without min/max and without a
-                               singular locus that the box does not cut: one vertex per leaf
+                               singular locus (but isolated nodes and isolated points:
+                               dual_points) that the box does not cut: one vertex per leaf
                                on f = 0 and quads across the crossed minimal edges, leaves
                                sized by the error of those triangles (dual.h; one thread);
                                where that cannot apply, the primal polygons as without it.
@@ -73,6 +74,17 @@ typedef struct ism_poly_options {
      * for none. */
     const double (*node_balls)[5];
     size_t nnode_balls;
+    /* The locus found from f when it is isolated certified points only (no curves, none
+     * uncertified, the search complete), each a node or an isolated point: x, y, z, the
+     * point's clearance (ism_locus_clearance; INFINITY alone) and its nappes (2 for a node,
+     * 0 for an isolated point). The dual mesher then meshes round them (dual_balls.h)
+     * instead of declining. NULL otherwise. */
+    const double (*dual_points)[5];
+    size_t ndual_points;
+    /* The locus is points only, but one of them is neither a certified node nor an isolated
+     * point (a cusp, a degenerate contact, an uncertified point): the dual mesher declines
+     * with its own reason (mesher.h). */
+    bool dual_points_other;
     /* Optional progress report, fraction in [0, 1], from the calling thread or a worker
      * thread (serialised by the polygoniser). */
     void (*progress)(void *ctx, double fraction);

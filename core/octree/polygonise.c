@@ -100,6 +100,8 @@ bool ism_poly_options_check(const ism_poly_options *o, ism_error *err)
         return ism_error_set(err, "deadline_ms: must be a finite number >= 0 (0: none)");
     if (o->nnode_balls > ISM_NODE_BALLS_MAX || (o->nnode_balls && !o->node_balls))
         return ism_error_set(err, "node_balls: at most %d, and given", ISM_NODE_BALLS_MAX);
+    if (o->ndual_points && !o->dual_points)
+        return ism_error_set(err, "dual_points: given with their count");
     return true;
 }
 

@@ -206,6 +206,37 @@ static size_t node_balls(const ism_tape *f, ism_eval_ws *ws, ism_locus *l,
     return curve_balls(f, ws, l, finest, out, n);
 }
 
+/* The locus's points for the dual mesher (poly_options.dual_points: x, y, z, clearance,
+ * nappes) when it is isolated points only, every one certified and a node or an isolated
+ * point; *other when it is points only but one is not. malloc'd (NULL with a count of 0
+ * otherwise); false when out of memory. */
+static bool dual_points(const ism_locus *l, double (**out)[5], size_t *n, bool *other)
+{
+    *out = NULL;
+    *n = 0;
+    *other = false;
+    if (l->incomplete || l->ncurves || !l->npoints)
+        return true;
+    for (size_t i = 0; i < l->npoints; i++) {
+        const ism_sing_point *p = &l->points[i];
+        if (!p->certified || (p->type != ISM_SING_NODE && p->type != ISM_SING_ISOLATED)) {
+            *other = true;
+            return true;
+        }
+    }
+    double (*pts)[5] = malloc(l->npoints * sizeof *pts);
+    if (!pts)
+        return false;
+    for (size_t i = 0; i < l->npoints; i++) {
+        memcpy(pts[i], l->points[i].p, 3 * sizeof(double));
+        pts[i][3] = ism_locus_clearance(l, i);
+        pts[i][4] = l->points[i].type == ISM_SING_NODE ? 2 : 0;
+    }
+    *out = pts;
+    *n = l->npoints;
+    return true;
+}
+
 enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options *po,
                                       ism_mesh *mesh, ism_locus *locus, ism_poly_stats *ps,
                                       ism_conform_stats *cs, ism_surface_times *times,
@@ -246,7 +277,15 @@ enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options 
         pq.quiet = NULL;
         pq.nquiet = 0;
     }
+    double (*points)[5];
+    if (!dual_points(locus, &points, &pq.ndual_points, &pq.dual_points_other)) {
+        free(balls.b);
+        free(nodes);
+        return ISM_POLY_NO_MEMORY;
+    }
+    pq.dual_points = (const double (*)[5])points;
     enum ism_poly_status st = ism_polygonise(f, &pq, mesh, ps, err);
+    free(points);
     free(balls.b);
     free(nodes);
     double t2 = ism_now_ms(), c2 = ism_cpu_ms();
@@ -259,7 +298,17 @@ enum ism_poly_status ism_mesh_surface(const ism_tape *f, const ism_poly_options 
     /* Conform first: it may remove and renumber the polygoniser's triangles, while the
      * double sheets are appended after them and recorded as triangle ranges; they leave out
      * the boxes the polygoniser already meshed (a double sheet on a lattice plane). */
-    if (!ism_conform_mesh(f, &lo, locus, mesh, cs, err) ||
+    bool fanned = ps->mesher == ISM_MESHER_DUAL && pq.ndual_points;
+    if (fanned) /* the dual mesh fanned every node's two nappes to one vertex at it
+                   (core/octree/dual_balls.h): conformed already; isolated points carry no
+                   sheet (no vertex, as conform leaves them) */
+        for (size_t i = 0; i < locus->npoints; i++) {
+            bool node = locus->points[i].type == ISM_SING_NODE;
+            locus->points[i].cones = node ? 2 : -1;
+            cs->points_conformed += node;
+            cs->points_skipped += !node;
+        }
+    if ((!fanned && !ism_conform_mesh(f, &lo, locus, mesh, cs, err)) ||
         !ism_locus_mark_covered(locus, &lo, mesh) ||
         !ism_sing_double_sheets_from_search(f, &lo, locus, mesh, err) ||
         !ism_mesh_drop_loose(mesh))

@@ -59,6 +59,11 @@ typedef struct surface {
 #define BARTH6 "max(4*(phi^2*x^2 - y^2)*(phi^2*y^2 - z^2)*(phi^2*z^2 - x^2) - " \
                "(1 + 2*phi)*(x^2 + y^2 + z^2 - 1)^2, x^2 + y^2 + z^2 - 2.25)"
 
+/* Kummer's quartic with its tetrahedral planes written out (proto/presets.c's lets):
+ * closed, 4 real nodes at mu2 = 0.6667 — the dual mesh round isolated points (dual_balls.h). */
+#define KUMMER4 "(x^2 + y^2 + z^2 - mu2)^2 - (3*mu2 - 1)/(3 - mu2)*(w - z - sqrt(2)*x)*" \
+                "(w - z + sqrt(2)*x)*(w + z + sqrt(2)*y)*(w + z - sqrt(2)*y)"
+
 static const surface SURFACES[] = {
     {"sphere", "x^2 + y^2 + z^2 - r^2", {{"r", 1}}, 1, {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5},
      DIST_SPHERE, {1e-2, 3e-3, 1e-3}},
@@ -71,6 +76,8 @@ static const surface SURFACES[] = {
      "(x^2 + y^2 + z^2 + 2*y - 1)*((x^2 + y^2 + z^2 - 2*y - 1)^2 - 8*z^2) + "
      "16*x*z*(x^2 + y^2 + z^2 - 2*y - 1)",
      {{0}}, 0, {-4, -4, -4, 4, 4, 4}, DIST_NEWTON, {3e-2, 1e-2, 3e-3}},
+    {"kummer-4-nodes", KUMMER4, {{"mu2", 0.6667}, {"w", 1}}, 2, {-3, -3, -3, 3, 3, 3},
+     DIST_NEWTON, {1e-2, 3e-3, 1e-3}},
     {"barth-sextic", BARTH6, {{"phi", 1.6180339887498949}}, 1,
      {-1.6, -1.6, -1.6, 1.6, 1.6, 1.6}, DIST_NEWTON, {1e-2, 3e-3, 1e-3}},
 };

@@ -31,7 +31,7 @@ struct Surface {
 
 const Surface SURFACES[] = {
     {"sphere", 1.5}, {"torus", 1.5}, {"gyroid-ball", 1.5}, {"klein-bottle", 4.0},
-    {"barth-sextic", 1.6},
+    {"barth-sextic", 1.6}, {"kummer-4-nodes", 3.0},
 };
 
 Tree sq(const Tree& a) { return square(a); }
@@ -61,6 +61,12 @@ Tree build(const std::string& name)
                      (Tree(p2) * sq(z) - sq(x)) -
                  Tree(1 + 2 * phi) * sq(r2 - Tree(1.0));
         return max(b, r2 - Tree(2.25));
+    }
+    if (name == "kummer-4-nodes") { /* bench_error.c's KUMMER4: mu2 = 0.6667, w = 1 */
+        const double mu2 = 0.6667, w = 1, lambda = (3 * mu2 - 1) / (3 - mu2), s2 = std::sqrt(2.0);
+        Tree p = Tree(w) - z - Tree(s2) * x, q = Tree(w) - z + Tree(s2) * x;
+        Tree r = Tree(w) + z + Tree(s2) * y, s = Tree(w) + z - Tree(s2) * y;
+        return sq(r2 - Tree(mu2)) - Tree(lambda) * p * q * r * s;
     }
     return Tree::invalid();
 }

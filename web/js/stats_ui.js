@@ -52,7 +52,7 @@ const DUAL_DECLINED = {
   no_bound: 'no max error', off: 'dual off', singular_locus: 'singular locus',
   min_max: 'min/max in f', box_cut: 'the box cuts the surface',
   not_plain: 'not one sheet at depth max', error_at_max_depth: 'error not met at depth max',
-  open_edge: 'open edge',
+  open_edge: 'open edge', point_type: 'point not a node', point_fan: 'no fan at a node',
 };
 
 // Why not the dual mesher, in words ('–' when it made the mesh or was not asked about); a row

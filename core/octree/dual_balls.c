@@ -1,0 +1,521 @@
+/* dual_balls.c — the holes, the clip and the apex fans of the dual mesh round isolated
+ * singular points (the design and its figure: dual_balls.h). */
+#include "core/octree/dual_balls.h"
+#include "core/util/vec3.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The clip sphere stays below this share of the point's clearance (two balls then never
+ * meet: 2 × 0.45 < 1) and below this share of its distance to the box (the clip never
+ * reaches the box's faces, where the dual mesher checks the surface apart). */
+#define LIMIT_CLEAR 0.45
+#define LIMIT_BOX 0.9
+/* Nodes meeting the hole are split while larger than r0 / HOLE_LEAVES, and so are those
+ * meeting the grading ball of GRADE r0: the hole's neighbours are then no larger than a
+ * hole leaf, so a rim vertex lies within r0 + 2 √3 r0 / HOLE_LEAVES = 2.73 r0 of the point
+ * and the clip sphere (just beyond the rim) within RIM_REACH r0 of it. */
+#define HOLE_LEAVES 2.0
+#define GRADE 2.0
+#define RIM_REACH 2.8
+/* A fan triangle's sag is its rim chord's: a chord of a leaf (r0 / 2) on the nappe's
+ * section (radius ~ 0.7 × 2.5 r0 on a right cone) sags r0 / 57, the triangle's centroid
+ * about two thirds of that, and the nappes bend off their rulings on top: r0 starts at
+ * FAN_E × E (a miss halves the ball). Kummer's quartic (mu2 = 2/3, 4 nodes) at E 1e-3 missed
+ * at 48 E in every ball and met it at 24 E. */
+#define FAN_E 24.0
+/* The clip sphere lies this much beyond the farthest rim vertex (relative), so no rim
+ * vertex sits on it. */
+#define RIM_MARGIN 1e-3
+/* Newton steps moving a cut point onto f = 0 (a cut lies on a chord within E of f = 0:
+ * two steps reach far below E; more only where ∇f is small). */
+#define CUT_NEWTON 4
+
+void ism_dual_ball_make(ism_dual_ball *b, const double pt[5], const double box[6],
+                        double max_error, int shrink)
+{
+    double to_box = INFINITY;
+    for (int a = 0; a < 3; a++)
+        to_box = fmin(to_box, fmin(pt[a] - box[a], box[a + 3] - pt[a]));
+    memcpy(b->p, pt, sizeof b->p);
+    b->limit = fmin(LIMIT_CLEAR * pt[3], LIMIT_BOX * to_box);
+    b->r0 = ldexp(fmin(b->limit / RIM_REACH, FAN_E * max_error), -shrink);
+    b->leaf = b->r0 / HOLE_LEAVES;
+    b->nappes = (int)pt[4];
+}
+
+/* Squared distance from p to the closed box lo..hi. */
+static double box_d2(const double p[3], const double lo[3], const double hi[3])
+{
+    double d2 = 0;
+    for (int a = 0; a < 3; a++) {
+        double e = fmax(lo[a] - p[a], fmax(p[a] - hi[a], 0.0));
+        d2 += e * e;
+    }
+    return d2;
+}
+
+int ism_dual_balls_node(const ism_dual_ball *b, size_t n, const double lo[3], const double hi[3],
+                        double size, bool at_max)
+{
+    for (size_t k = 0; k < n; k++) {
+        double d2 = box_d2(b[k].p, lo, hi);
+        if (d2 <= b[k].r0 * b[k].r0)
+            return size <= b[k].leaf || at_max ? 1 : 0;
+        if (d2 <= GRADE * GRADE * b[k].r0 * b[k].r0 && size > b[k].leaf && !at_max)
+            return 0;
+    }
+    return -1;
+}
+
+bool ism_dual_balls_near(const ism_dual_ball *b, size_t n, const double lo[3],
+                         const double hi[3])
+{
+    for (size_t k = 0; k < n; k++)
+        if (box_d2(b[k].p, lo, hi) < b[k].limit * b[k].limit)
+            return true;
+    return false;
+}
+
+/* ---- edges of the mesh, by sorting ------------------------------------------------------ */
+
+typedef struct edge_ref {
+    uint64_t key; /* min << 32 | max */
+    uint32_t tri; /* 3 t + k: the edge from corner k to corner k + 1 of triangle t */
+} edge_ref;
+
+static int by_key(const void *a, const void *b)
+{
+    uint64_t x = ((const edge_ref *)a)->key, y = ((const edge_ref *)b)->key;
+    return (x > y) - (x < y);
+}
+
+static uint64_t undirected(uint32_t a, uint32_t b)
+{
+    return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+}
+
+/* The mesh's edges sorted (3 per triangle); NULL when out of memory. */
+static edge_ref *sorted_edges(const ism_mesh *m)
+{
+    edge_ref *e = malloc((3 * m->ntris + 1) * sizeof *e);
+    if (!e)
+        return NULL;
+    for (size_t t = 0; t < m->ntris; t++)
+        for (int k = 0; k < 3; k++)
+            e[3 * t + k] = (edge_ref){undirected(m->tri[3 * t + k], m->tri[3 * t + (k + 1) % 3]),
+                                      (uint32_t)(3 * t + k)};
+    qsort(e, 3 * m->ntris, sizeof *e, by_key);
+    return e;
+}
+
+/* ---- the clip --------------------------------------------------------------------------- */
+
+typedef struct clip {
+    ism_mesh *m;
+    ism_sampler *s;
+    const ism_dual_ball *b;
+    size_t n;
+    double *r1;        /* per ball: the clip sphere's radius (0: nothing to clip) */
+    uint64_t *cut;     /* sorted undirected edges cut by a sphere */
+    uint32_t *cutv;    /* their cut points' vertices */
+    size_t ncut, capcut;
+    uint32_t *tri;     /* the triangles kept or made */
+    size_t nt, capt;
+    uint32_t *rim;     /* directed rim edges (from, to, ball) */
+    size_t nrim, caprim;
+    bool nomem;
+} clip;
+
+/* Appends k records of 3 words (triangles, rim edges) to *a holding *n of them. */
+static bool push(uint32_t **a, size_t *n, size_t *cap, const uint32_t *v, size_t k)
+{
+    if (*n + k > *cap) {
+        size_t c = *cap ? 2 * *cap : 256;
+        while (c < *n + k)
+            c *= 2;
+        uint32_t *g = realloc(*a, 3 * c * sizeof *g);
+        if (!g)
+            return false;
+        *a = g;
+        *cap = c;
+    }
+    memcpy(*a + 3 * *n, v, 3 * k * sizeof *v);
+    *n += k;
+    return true;
+}
+
+/* The ball whose clip sphere holds vertex v, or n. */
+static size_t ball_of(const clip *c, uint32_t v)
+{
+    const double *p = c->m->pos + 3 * (size_t)v;
+    for (size_t k = 0; k < c->n; k++)
+        if (c->r1[k] > 0 && ism_sqdist3(p, c->b[k].p) < c->r1[k] * c->r1[k])
+            return k;
+    return c->n;
+}
+
+/* Does segment a-b come within r of p? */
+static bool segment_meets(const double a[3], const double b[3], const double p[3], double r)
+{
+    double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double w[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+    double dd = ism_dot3(d, d), t = dd > 0 ? fmin(1, fmax(0, ism_dot3(w, d) / dd)) : 0;
+    double q[3] = {a[0] + t * d[0], a[1] + t * d[1], a[2] + t * d[2]};
+    return ism_sqdist3(q, p) < r * r;
+}
+
+/* The point where edge a (inside ball k's sphere) - b (outside) crosses it, moved onto
+ * f = 0 by Newton. */
+static void cut_point(clip *c, size_t k, uint32_t a, uint32_t b, double out[3])
+{
+    const double *pa = c->m->pos + 3 * (size_t)a, *pb = c->m->pos + 3 * (size_t)b;
+    const double *p = c->b[k].p;
+    double d[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]};
+    double w[3] = {pa[0] - p[0], pa[1] - p[1], pa[2] - p[2]};
+    /* |w + t d|² = r1²: the root in (0, 1) */
+    double A = ism_dot3(d, d), B = ism_dot3(w, d), C = ism_dot3(w, w) - c->r1[k] * c->r1[k];
+    double t = (-B + sqrt(fmax(0, B * B - A * C))) / A;
+    t = fmin(1, fmax(0, t));
+    for (int j = 0; j < 3; j++)
+        out[j] = pa[j] + t * d[j];
+    for (int it = 0; it < CUT_NEWTON; it++) {
+        double g[3], f = ism_sample_grad(c->s, out, g), gg = ism_dot3(g, g);
+        if (!isfinite(f) || !(gg > 0))
+            break;
+        for (int j = 0; j < 3; j++)
+            out[j] -= f * g[j] / gg;
+    }
+}
+
+static int by_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* The vertex at the cut of edge a-b (made in collect_cuts). */
+static uint32_t cut_vertex(const clip *c, uint32_t a, uint32_t b)
+{
+    uint64_t key = undirected(a, b);
+    const uint64_t *at = bsearch(&key, c->cut, c->ncut, sizeof key, by_u64);
+    return at ? c->cutv[at - c->cut] : UINT32_MAX;
+}
+
+/* Every edge with one end inside a sphere and one outside gets its cut vertex (once). */
+static enum ism_fan_status collect_cuts(clip *c, size_t *which)
+{
+    ism_mesh *m = c->m;
+    size_t cap = 0;
+    for (size_t t = 0; t < m->ntris; t++)
+        for (int j = 0; j < 3; j++) {
+            uint32_t a = m->tri[3 * t + j], b = m->tri[3 * t + (j + 1) % 3];
+            size_t ka = ball_of(c, a), kb = ball_of(c, b);
+            if (ka == kb)
+                continue;
+            if (ka < c->n && kb < c->n) {
+                *which = ka; /* an edge from one ball into another: balls too close */
+                return ISM_FAN_BAD;
+            }
+            if (c->ncut == cap) {
+                cap = cap ? 2 * cap : 256;
+                uint64_t *g = realloc(c->cut, cap * sizeof *g);
+                if (!g)
+                    return ISM_FAN_NO_MEMORY;
+                c->cut = g;
+            }
+            c->cut[c->ncut++] = undirected(a, b);
+        }
+    qsort(c->cut, c->ncut, sizeof *c->cut, by_u64);
+    size_t u = 0;
+    for (size_t i = 0; i < c->ncut; i++)
+        if (!u || c->cut[i] != c->cut[u - 1])
+            c->cut[u++] = c->cut[i];
+    c->ncut = u;
+    c->cutv = malloc((u ? u : 1) * sizeof *c->cutv);
+    if (!c->cutv)
+        return ISM_FAN_NO_MEMORY;
+    for (size_t i = 0; i < u; i++) {
+        uint32_t a = (uint32_t)(c->cut[i] >> 32), b = (uint32_t)c->cut[i];
+        size_t ka = ball_of(c, a);
+        double q[3], g[3];
+        if (ka < c->n)
+            cut_point(c, ka, a, b, q);
+        else
+            cut_point(c, ball_of(c, b), b, a, q);
+        ism_sample_grad(c->s, q, g);
+        ism_normalise3(g);
+        float nrm[3] = {(float)g[0], (float)g[1], (float)g[2]};
+        c->cutv[i] = ism_mesh_add_vertex(m, q, nrm);
+        if (c->cutv[i] == UINT32_MAX)
+            return ISM_FAN_NO_MEMORY;
+    }
+    return ISM_FAN_OK;
+}
+
+/* Triangle t kept, dropped or cut; its edges on a sphere into the rim. */
+static enum ism_fan_status clip_triangle(clip *c, size_t t, size_t *which)
+{
+    const uint32_t *v = c->m->tri + 3 * t;
+    size_t kb[3];
+    int in = 0;
+    for (int j = 0; j < 3; j++) {
+        kb[j] = ball_of(c, v[j]);
+        in += kb[j] < c->n;
+    }
+    if (in == 0) {
+        for (size_t k = 0; k < c->n; k++)
+            for (int j = 0; j < 3 && c->r1[k] > 0; j++)
+                if (segment_meets(c->m->pos + 3 * (size_t)v[j],
+                                  c->m->pos + 3 * (size_t)v[(j + 1) % 3], c->b[k].p, c->r1[k])) {
+                    *which = k; /* an edge across the sphere with both ends outside */
+                    return ISM_FAN_BAD;
+                }
+        return push(&c->tri, &c->nt, &c->capt, v, 1) ? ISM_FAN_OK : ISM_FAN_NO_MEMORY;
+    }
+    if (in == 3)
+        return ISM_FAN_OK;
+    /* rotate so that corner 0 is the odd one out (inside when in = 1, outside when 2) */
+    int r = 0;
+    for (int j = 0; j < 3; j++)
+        if ((kb[j] < c->n) == (in == 1))
+            r = j;
+    uint32_t a = v[r], b = v[(r + 1) % 3], d = v[(r + 2) % 3];
+    size_t k = kb[r] < c->n ? kb[r] : kb[(r + 1) % 3];
+    uint32_t xab = cut_vertex(c, a, b), xda = cut_vertex(c, d, a);
+    bool ok;
+    if (in == 1) { /* b, d outside: the quad b d xda xab */
+        uint32_t q[6] = {b, d, xda, b, xda, xab}, e[3] = {xda, xab, (uint32_t)k};
+        ok = push(&c->tri, &c->nt, &c->capt, q, 2) && push(&c->rim, &c->nrim, &c->caprim, e, 1);
+    } else { /* a outside: the triangle a xab xda */
+        uint32_t q[3] = {a, xab, xda}, e[3] = {xab, xda, (uint32_t)k};
+        ok = push(&c->tri, &c->nt, &c->capt, q, 1) && push(&c->rim, &c->nrim, &c->caprim, e, 1);
+    }
+    return ok ? ISM_FAN_OK : ISM_FAN_NO_MEMORY;
+}
+
+/* The clip spheres: just beyond each ball's farthest rim vertex (the ends of the mesh's
+ * boundary edges round it); BAD when a boundary vertex is near no ball or the rim reaches
+ * past a ball's limit. */
+static enum ism_fan_status clip_radii(clip *c, const edge_ref *e, size_t ne, size_t *which)
+{
+    for (size_t i = 0; i < ne;) {
+        size_t j = i + 1;
+        while (j < ne && e[j].key == e[i].key)
+            j++;
+        if (j - i == 1) { /* a boundary edge: the rim of a hole */
+            uint32_t ends[2] = {(uint32_t)(e[i].key >> 32), (uint32_t)e[i].key};
+            for (int h = 0; h < 2; h++) {
+                const double *p = c->m->pos + 3 * (size_t)ends[h];
+                size_t k = 0;
+                while (k < c->n && !(ism_sqdist3(p, c->b[k].p) < c->b[k].limit * c->b[k].limit))
+                    k++;
+                if (k == c->n) {
+                    *which = 0;
+                    return ISM_FAN_BAD;
+                }
+                c->r1[k] = fmax(c->r1[k], sqrt(ism_sqdist3(p, c->b[k].p)) * (1 + RIM_MARGIN));
+                if (!(c->r1[k] < c->b[k].limit)) {
+                    *which = k;
+                    return ISM_FAN_BAD;
+                }
+            }
+        }
+        i = j;
+    }
+    return ISM_FAN_OK;
+}
+
+/* Rim edges of ball k chained into loops: each rim vertex starts one edge and ends one.
+ * Returns the loops, or -1 when the rim is not a union of loops. */
+static long count_loops(const clip *c, size_t k, const uint32_t *next_of, uint8_t *seen)
+{
+    long loops = 0;
+    for (size_t i = 0; i < c->nrim; i++) {
+        if (c->rim[3 * i + 2] != k || seen[i])
+            continue;
+        size_t at = i, steps = 0;
+        while (!seen[at] && steps <= c->nrim) {
+            seen[at] = 1;
+            steps++;
+            uint32_t to = c->rim[3 * at + 1];
+            at = next_of[to];
+            if (at == UINT32_MAX)
+                return -1;
+        }
+        if (at != i)
+            return -1; /* a chain that closes on another edge than it started from */
+        loops++;
+    }
+    return loops;
+}
+
+/* Within E: the triangle's centroid and edge midpoints. */
+static bool within(ism_sampler *s, const ism_mesh *m, const uint32_t *v, double e)
+{
+    const double *p[3] = {m->pos + 3 * (size_t)v[0], m->pos + 3 * (size_t)v[1],
+                          m->pos + 3 * (size_t)v[2]};
+    double q[3];
+    for (int a = 0; a < 3; a++)
+        q[a] = (p[0][a] + p[1][a] + p[2][a]) / 3;
+    if (!(ism_sample_dist(s, q) <= e))
+        return false;
+    for (int j = 0; j < 3; j++) {
+        for (int a = 0; a < 3; a++)
+            q[a] = 0.5 * (p[j][a] + p[(j + 1) % 3][a]);
+        if (!(ism_sample_dist(s, q) <= e))
+            return false;
+    }
+    return true;
+}
+
+/* The rims fanned to their points (after the kept and cut triangles in c->tri), each new
+ * triangle measured; MISS names a ball whose fan or cut misses E. */
+static enum ism_fan_status fan_rims(clip *c, size_t kept, double max_error, size_t *which,
+                                    uint8_t *missed)
+{
+    ism_mesh *m = c->m;
+    size_t nv = m->nverts;
+    uint32_t *next_of = malloc((nv + 1) * sizeof *next_of);
+    uint8_t *seen = calloc(c->nrim + 1, 1);
+    enum ism_fan_status st = next_of && seen ? ISM_FAN_OK : ISM_FAN_NO_MEMORY;
+    if (st == ISM_FAN_OK) {
+        memset(next_of, 0xff, (nv + 1) * sizeof *next_of);
+        for (size_t i = 0; i < c->nrim && st == ISM_FAN_OK; i++) {
+            if (next_of[c->rim[3 * i]] != UINT32_MAX) { /* two rim edges leave one vertex */
+                *which = c->rim[3 * i + 2];
+                st = ISM_FAN_BAD;
+            }
+            next_of[c->rim[3 * i]] = (uint32_t)i;
+        }
+    }
+    for (size_t k = 0; k < c->n && st == ISM_FAN_OK; k++) {
+        long loops = count_loops(c, k, next_of, seen);
+        if (loops != c->b[k].nappes) {
+            *which = k;
+            st = ISM_FAN_BAD;
+            break;
+        }
+        if (!loops)
+            continue;
+        float none[3] = {0, 0, 0}; /* ∇f = 0 at the point: no normal */
+        uint32_t apex = ism_mesh_add_vertex(m, c->b[k].p, none);
+        if (apex == UINT32_MAX) {
+            st = ISM_FAN_NO_MEMORY;
+            break;
+        }
+        for (size_t i = 0; i < c->nrim && st == ISM_FAN_OK; i++)
+            if (c->rim[3 * i + 2] == k) {
+                uint32_t t[3] = {c->rim[3 * i + 1], c->rim[3 * i], apex};
+                if (!push(&c->tri, &c->nt, &c->capt, t, 1))
+                    st = ISM_FAN_NO_MEMORY;
+            }
+    }
+    /* the cut triangles (after the kept ones) and the fans against E; every ball with a
+     * miss is named in missed */
+    for (size_t t = kept; t < c->nt && (st == ISM_FAN_OK || st == ISM_FAN_MISS); t++)
+        if (!within(c->s, m, c->tri + 3 * t, max_error)) {
+            size_t k = c->n; /* the ball whose clip sphere is nearest a corner */
+            double best = INFINITY;
+            for (int j = 0; j < 3; j++)
+                for (size_t b = 0; b < c->n; b++) {
+                    double d = sqrt(ism_sqdist3(m->pos + 3 * (size_t)c->tri[3 * t + j],
+                                                c->b[b].p)) - c->r1[b];
+                    if (c->r1[b] > 0 && d < best) {
+                        best = d;
+                        k = b;
+                    }
+                }
+            *which = k < c->n ? k : 0;
+            missed[*which] = 1;
+            st = ISM_FAN_MISS;
+        }
+    free(next_of);
+    free(seen);
+    return st;
+}
+
+/* Every edge of m in exactly two triangles (the fans closed every hole). */
+static enum ism_fan_status closed(const ism_mesh *m)
+{
+    edge_ref *e = sorted_edges(m);
+    if (!e)
+        return ISM_FAN_NO_MEMORY;
+    size_t ne = 3 * m->ntris;
+    enum ism_fan_status st = ISM_FAN_OK;
+    for (size_t i = 0; i < ne && st == ISM_FAN_OK;) {
+        size_t j = i + 1;
+        while (j < ne && e[j].key == e[i].key)
+            j++;
+        if (j - i != 2)
+            st = ISM_FAN_BAD;
+        i = j;
+    }
+    free(e);
+    return st;
+}
+
+enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_dual_ball *b,
+                                       size_t n, double max_error, size_t *which,
+                                       uint8_t *missed)
+{
+    *which = 0;
+    memset(missed, 0, n);
+    clip c = {.m = m, .s = s, .b = b, .n = n};
+    c.r1 = calloc(n ? n : 1, sizeof *c.r1);
+    edge_ref *e = sorted_edges(m);
+    enum ism_fan_status st = c.r1 && e ? ISM_FAN_OK : ISM_FAN_NO_MEMORY;
+    if (st == ISM_FAN_OK)
+        st = clip_radii(&c, e, 3 * m->ntris, which);
+    free(e);
+    size_t nv0 = m->nverts, nt0 = m->ntris; /* the dual mesh's own */
+    if (st == ISM_FAN_OK)
+        st = collect_cuts(&c, which);
+    for (size_t t = 0; t < nt0 && st == ISM_FAN_OK; t++)
+        st = clip_triangle(&c, t, which);
+    /* the triangles kept whole first, then the cut ones (a cut vertex among their corners):
+     * fan_rims measures from `kept` on */
+    size_t kept = 0, placed = 0;
+    uint32_t *order = st == ISM_FAN_OK ? malloc((3 * c.nt + 1) * sizeof *order) : NULL;
+    if (st == ISM_FAN_OK && !order)
+        st = ISM_FAN_NO_MEMORY;
+    for (int pass = 0; order && pass < 2; pass++)
+        for (size_t t = 0; t < c.nt; t++) {
+            const uint32_t *v = c.tri + 3 * t;
+            bool whole = v[0] < nv0 && v[1] < nv0 && v[2] < nv0;
+            if (whole == (pass == 0))
+                memcpy(order + 3 * placed++, v, 3 * sizeof *v);
+        }
+    if (order) {
+        for (size_t t = 0; t < c.nt; t++)
+            kept += c.tri[3 * t] < nv0 && c.tri[3 * t + 1] < nv0 && c.tri[3 * t + 2] < nv0;
+        memcpy(c.tri, order, 3 * c.nt * sizeof *order);
+        free(order);
+    }
+    if (st == ISM_FAN_OK)
+        st = fan_rims(&c, kept, max_error, which, missed);
+    if (st == ISM_FAN_OK) {
+        if (!ism_mesh_reserve(m, m->nverts, c.nt))
+            st = ISM_FAN_NO_MEMORY;
+        else {
+            memcpy(m->tri, c.tri, 3 * c.nt * sizeof *c.tri);
+            m->ntris = c.nt;
+            uint32_t *used = calloc(m->nverts + 1, sizeof *used);
+            if (!used)
+                st = ISM_FAN_NO_MEMORY;
+            else {
+                ism_mesh_compact(m, used);
+                free(used);
+                st = closed(m);
+            }
+        }
+    }
+    free(c.r1);
+    free(c.cut);
+    free(c.cutv);
+    free(c.tri);
+    free(c.rim);
+    return st;
+}

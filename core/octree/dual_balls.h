@@ -1,0 +1,78 @@
+/* dual_balls.h — the dual mesh (dual.h) round isolated singular points: certified nodes
+ * (cone apices, ∇f = 0 with an indefinite Hessian) and isolated points (definite Hessian).
+ * The dual mesher's proofs cannot hold where ∇f vanishes, so round each point p a hole is
+ * left (leaves meeting the ball of radius r0 place no vertex), the mesh round it is clipped
+ * by the sphere |x − p| = r1 beyond the hole's rim, and every rim loop on that sphere (one
+ * per nappe) is fanned to one vertex at p: the node becomes one mesh vertex shared by its
+ * cones, as the primal path's conformance makes it (core/singular/conform.h). An isolated
+ * point has no surface round it: no loop, no vertex (the primal path puts none either).
+ *
+ *            certified leaves (proofs hold)
+ *        \  .  .  .  .  .  .  .  .  .  /     r0: the hole; leaves meeting it are no
+ *         \ .  .  .______.  .  .  .  ./          larger than r0 / HOLE_LEAVES and hold
+ *          \. . ./ hole   \. .  .  . /           no vertex (no proof needed there)
+ *     nappe \  . | r0 . p  | .  .  . / nappe r1: the clip; every vertex of a triangle
+ *            \___|____*____|________/            with an edge on the hole's rim lies
+ *           rim loop  |  (fan to p)              inside it; triangles inside are
+ *           on the    |                          dropped, those across are cut on the
+ *           sphere r1 |                          sphere, the cut points moved onto f = 0
+ *
+ * The fan's triangles (and the cut ones) are measured like the dual mesh's own: centroid
+ * and edge midpoints within E of f = 0. A ruling from the apex lies on a quadratic cone
+ * exactly and within O(r² |f'''| / |H|) of a node's surface, so where a fan misses E the
+ * ball shrinks (ISM_DUAL_BALL_SHRINK) and the dual mesh is made again. */
+#ifndef ISM_DUAL_BALLS_H
+#define ISM_DUAL_BALLS_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include "core/mesh/mesh.h"
+#include "core/octree/sampler.h"
+
+typedef struct ism_dual_ball {
+    double p[3];  /* the certified point */
+    double r0;    /* the hole: leaves meeting the ball place no vertex */
+    double leaf;  /* a node meeting the hole is split while larger than this */
+    double limit; /* the clip sphere's radius stays below this (balls apart, in the box) */
+    int nappes;   /* rim loops the clip must cut: 2 round a node, 0 round an isolated point */
+} ism_dual_ball;
+
+/* How many times a ball may halve before the dual mesher declines (point_fan). */
+#define ISM_DUAL_BALL_SHRINKS 5
+
+/* The ball round point pt (x, y, z, clearance, nappes: poly_options.dual_points) in box
+ * under the bound E, halved `shrink` times: r0 a share of the clearance, of the distance to
+ * the box and of what E allows the fan. */
+void ism_dual_ball_make(ism_dual_ball *b, const double pt[5], const double box[6],
+                        double max_error, int shrink);
+
+/* What a node lo..hi of side `size` is next to the balls: -1 meets none (the dual mesher's
+ * own tests), 0 meets a hole and is larger than its leaf (split), 1 a hole leaf (no vertex;
+ * also at the last level, at_max). */
+int ism_dual_balls_node(const ism_dual_ball *b, size_t n, const double lo[3], const double hi[3],
+                        double size, bool at_max);
+
+/* Does the box lo..hi meet the ball of radius `limit` round one of the points? */
+bool ism_dual_balls_near(const ism_dual_ball *b, size_t n, const double lo[3],
+                         const double hi[3]);
+
+enum ism_fan_status {
+    ISM_FAN_OK = 0,
+    ISM_FAN_MISS,   /* a fan or cut triangle beyond E round ball *which: shrink it */
+    ISM_FAN_BAD,    /* a node's sphere did not cut two loops, a rim beyond the limit, a
+                       triangle across the sphere with no vertex inside, or the mesh not
+                       closed after the fans */
+    ISM_FAN_NO_MEMORY,
+};
+
+/* Clips the closed-but-for-the-holes mesh m round each ball and fans its rim loops to the
+ * ball's point (one vertex per node; nothing for an isolated point); measures the new
+ * triangles against E with s. On anything but OK, m is left in an unspecified state (the
+ * caller makes the mesh again or gives up). *which: the ball a MISS or BAD is about;
+ * missed[0..n): 1 for every ball with a triangle beyond E (MISS). */
+enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_dual_ball *b,
+                                       size_t n, double max_error, size_t *which,
+                                       uint8_t *missed);
+
+#endif

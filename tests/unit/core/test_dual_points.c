@@ -1,0 +1,276 @@
+/* test_dual_points.c — the dual mesh round isolated singular points (core/octree/dual_balls.h)
+ * through the service's meshing (core/singular/surface.h), in the box as given and shifted
+ * off the lattice by 1e-3 and by 0.37 of a finest cell:
+ * - Kummer's quartic at mu2 = 2/3 (4 real nodes, closed): the dual mesher makes the mesh;
+ *   the locus holds its 4 certified nodes; the mesh is closed (every edge in two triangles)
+ *   with exactly 4 non-manifold vertices, one at each node, each joining 2 cones; χ and
+ *   components those of the primal path's mesh of the same surface and box; every
+ *   centroid and edge midpoint within E of f = 0 (Newton projection in this file).
+ * - a sphere with an isolated point beside it (r² ((x - 1)² + y² + z² - 1/4): definite
+ *   Hessian at the origin): the dual mesh, no vertex at the point (the primal path puts
+ *   none either), one closed piece with χ 2, closed-form distances at centroids and
+ *   midpoints.
+ * - a cusp (x² + z² − y³ closed by a sphere-like quartic term) declines with its own reason.
+ */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "core/eval/eval.h"
+#include "core/octree/mesher.h"
+#include "core/singular/surface.h"
+#include "poly_fixture.h"
+
+#define DEPTH 9
+
+static const ism_param kummer_params[] = {{"mu2", 0.6667}, {"w", 1}};
+static const ism_let kummer_lets[] = {
+    {"lambda", "(3*mu2 - 1)/(3 - mu2)"}, {"p", "w - z - sqrt(2)*x"},
+    {"q", "w - z + sqrt(2)*x"},          {"r", "w + z + sqrt(2)*y"},
+    {"s", "w + z - sqrt(2)*y"},
+};
+static const pf_surface kummer4 = {"(x^2 + y^2 + z^2 - mu2)^2 - lambda*p*q*r*s",
+                                   kummer_params, 2, kummer_lets, 5};
+/* Known: Kummer's family has 4 real nodes for 1/3 < mu2 < 1 (and 16 from 1 to 3). */
+#define KUMMER4_NODES 4
+
+static const pf_surface acnode_sphere = {"(x^2 + y^2 + z^2)*((x - 1)^2 + y^2 + z^2 - 0.25)",
+                                         NULL, 0, NULL, 0};
+
+/* The service's meshing of t in box under E, the dual mesher allowed or not. */
+static void mesh_surface(const ism_tape *t, const double box[6], double e, bool dual,
+                         ism_mesh *m, ism_locus *l, ism_poly_stats *ps)
+{
+    ism_poly_options o;
+    pf_options(&o, box, 3, DEPTH);
+    o.max_error = e;
+    o.dual = dual;
+    o.threads = 1;
+    ism_mesh_init(m);
+    ism_locus_init(l);
+    ism_conform_stats cs;
+    ism_surface_times times;
+    ism_error err;
+    cr_assert_eq(ism_mesh_surface(t, &o, m, l, ps, &cs, &times, &err), ISM_POLY_OK, "%s",
+                 err.message);
+}
+
+/* Distance from p to f = 0 by Newton's projection (the last iterate's distance plus its
+ * |f| / |∇f| when it does not settle: an over-estimate). */
+static double newton_dist(const ism_tape *t, ism_eval_ws *ws, const double p[3])
+{
+    double q[3] = {p[0], p[1], p[2]}, g[3], last = 0;
+    for (int it = 0; it < 50; it++) {
+        double f = ism_eval_gradient(t, ws, q[0], q[1], q[2], g);
+        double gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+        if (!(gg > 0) || !isfinite(f))
+            break;
+        last = fabs(f) / sqrt(gg);
+        if (last < 1e-13) {
+            last = 0;
+            break;
+        }
+        for (int k = 0; k < 3; k++)
+            q[k] -= f * g[k] / gg;
+    }
+    double d2 = 0;
+    for (int k = 0; k < 3; k++)
+        d2 += (q[k] - p[k]) * (q[k] - p[k]);
+    return sqrt(d2) + last;
+}
+
+/* The farthest centroid or edge midpoint from f = 0, by dist (NULL: Newton on t); the
+ * triangles whose normal points against ∇f at their centroid into *turned (the mesh is
+ * oriented along ∇f, fans included). */
+static double worst(const ism_mesh *m, const ism_tape *t, double (*dist)(const double *),
+                    size_t *turned)
+{
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    cr_assert(ws);
+    double w = 0;
+    *turned = 0;
+    for (size_t i = 0; i < m->ntris; i++) {
+        const double *p[3];
+        for (int j = 0; j < 3; j++)
+            p[j] = m->pos + 3 * (size_t)m->tri[3 * i + j];
+        double q[4][3], g[3], n[3];
+        for (int a = 0; a < 3; a++) {
+            q[0][a] = (p[0][a] + p[1][a] + p[2][a]) / 3;
+            for (int j = 0; j < 3; j++)
+                q[1 + j][a] = 0.5 * (p[j][a] + p[(j + 1) % 3][a]);
+        }
+        for (int k = 0; k < 4; k++)
+            w = fmax(w, dist ? dist(q[k]) : newton_dist(t, ws, q[k]));
+        ism_eval_gradient(t, ws, q[0][0], q[0][1], q[0][2], g);
+        pf_tri_normal(m, i, n);
+        *turned += n[0] * g[0] + n[1] * g[1] + n[2] * g[2] < 0;
+    }
+    ism_eval_ws_free(ws);
+    return w;
+}
+
+/* Vertices joining more than one cone of triangles, and of them those at a locus point. */
+static void nm_vertices(const ism_mesh *m, const ism_locus *l, size_t *nm, size_t *at_points,
+                        size_t *cones_each)
+{
+    *nm = *at_points = 0;
+    *cones_each = 0;
+    for (uint32_t v = 0; v < m->nverts; v++) {
+        size_t c = pf_vertex_cones(m, v);
+        if (c < 2)
+            continue;
+        (*nm)++;
+        for (size_t i = 0; i < l->npoints; i++)
+            if (sqrt(pow(m->pos[3 * v] - l->points[i].p[0], 2) +
+                     pow(m->pos[3 * v + 1] - l->points[i].p[1], 2) +
+                     pow(m->pos[3 * v + 2] - l->points[i].p[2], 2)) < 1e-9) {
+                (*at_points)++;
+                *cones_each = *cones_each ? (*cones_each == c ? c : 0) : c;
+            }
+    }
+}
+
+Test(dual_points, kummer_nodes_one_vertex_each_as_the_primal_path)
+{
+    ism_tape *t = pf_compile(&kummer4);
+    static const double base[6] = {-3, -3, -3, 3, 3, 3};
+    const double es[] = {1e-2, 3e-3};
+    for (int which = pf_first_box() - 1; which < 2; which++)
+        for (size_t k = 0; k < sizeof es / sizeof es[0]; k++) {
+            double box[6];
+            pf_sweep_box(base, DEPTH, which, box);
+            ism_mesh m, mp;
+            ism_locus l, lp;
+            ism_poly_stats ps, pp;
+            mesh_surface(t, box, es[k], true, &m, &l, &ps);
+            mesh_surface(t, box, es[k], false, &mp, &lp, &pp);
+            cr_expect_eq(ps.mesher, ISM_MESHER_DUAL, "box %d E %g: mesher %s (%s)", which,
+                         es[k], ism_mesher_name(ps.mesher),
+                         ism_dual_reason_name(ps.dual_declined));
+            cr_expect_eq(pp.mesher, ISM_MESHER_PRIMAL);
+            size_t nodes = 0;
+            for (size_t i = 0; i < l.npoints; i++)
+                nodes += l.points[i].type == ISM_SING_NODE && l.points[i].certified &&
+                         l.points[i].cones == 2;
+            cr_expect_eq(nodes, KUMMER4_NODES, "box %d E %g: %zu nodes with 2 cones", which,
+                         es[k], nodes);
+            pf_props p, q;
+            pf_measure(&m, t, &p);
+            pf_measure(&mp, t, &q);
+            cr_expect_eq(p.boundary_edges + p.nonmanifold_edges, 0, "box %d E %g: %zu open "
+                         "%zu non-manifold edges", which, es[k], p.boundary_edges,
+                         p.nonmanifold_edges);
+            cr_expect_eq(p.euler, q.euler, "box %d E %g: χ %ld, primal %ld", which, es[k],
+                         p.euler, q.euler);
+            cr_expect_eq(p.components, q.components, "box %d E %g: %zu pieces, primal %zu",
+                         which, es[k], p.components, q.components);
+            size_t nm, at, cones;
+            nm_vertices(&m, &l, &nm, &at, &cones);
+            cr_expect(nm == KUMMER4_NODES && at == KUMMER4_NODES && cones == 2,
+                      "box %d E %g: %zu non-manifold vertices, %zu at nodes, cones %zu", which,
+                      es[k], nm, at, cones);
+            size_t turned;
+            double w = worst(&m, t, NULL, &turned);
+            cr_expect_leq(w, es[k], "box %d E %g: a centroid or midpoint %g away", which,
+                          es[k], w);
+            cr_expect_eq(turned, 0, "box %d E %g: %zu triangles against ∇f", which, es[k],
+                         turned);
+            ism_mesh_free(&m);
+            ism_mesh_free(&mp);
+            ism_locus_free(&l);
+            ism_locus_free(&lp);
+        }
+    ism_tape_free(t);
+}
+
+/* Distance to the sphere of radius 1/2 round (1, 0, 0). */
+static double small_sphere_dist(const double *p)
+{
+    return fabs(sqrt((p[0] - 1) * (p[0] - 1) + p[1] * p[1] + p[2] * p[2]) - 0.5);
+}
+
+Test(dual_points, isolated_point_beside_a_sphere)
+{
+    ism_tape *t = pf_compile(&acnode_sphere);
+    static const double base[6] = {-0.9, -1.5, -1.5, 2.1, 1.5, 1.5};
+    for (int which = pf_first_box() - 1; which < 2; which++) {
+        double box[6], e = 3e-3;
+        pf_sweep_box(base, DEPTH, which, box);
+        ism_mesh m;
+        ism_locus l;
+        ism_poly_stats ps;
+        mesh_surface(t, box, e, true, &m, &l, &ps);
+        cr_expect_eq(ps.mesher, ISM_MESHER_DUAL, "box %d: mesher %s (%s)", which,
+                     ism_mesher_name(ps.mesher), ism_dual_reason_name(ps.dual_declined));
+        cr_expect(l.npoints == 1 && l.points[0].type == ISM_SING_ISOLATED,
+                  "box %d: %zu points", which, l.npoints);
+        pf_props p;
+        pf_measure(&m, t, &p);
+        cr_expect_eq(p.boundary_edges + p.nonmanifold_edges, 0);
+        cr_expect_eq(p.euler, 2, "box %d: χ %ld", which, p.euler);
+        cr_expect_eq(p.components, 1, "box %d: %zu pieces", which, p.components);
+        size_t turned;
+        double w = worst(&m, t, small_sphere_dist, &turned);
+        cr_expect_leq(w, e, "box %d: a centroid or midpoint %g away", which, w);
+        cr_expect_eq(turned, 0, "box %d: %zu triangles against ∇f", which, turned);
+        ism_mesh_free(&m);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
+
+Test(dual_points, cusp_declines_with_its_reason)
+{
+    /* x² + z² = y³ near the origin, closed far off by the quartic term: one cusp */
+    static const pf_surface cusp = {"x^2 + z^2 - y^3 + (x^2 + y^2 + z^2)^2", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&cusp);
+    static const double box[6] = {-1.3, -1.2, -1.1, 1.1, 1.2, 1.3};
+    ism_mesh m;
+    ism_locus l;
+    ism_poly_stats ps;
+    mesh_surface(t, box, 1e-2, true, &m, &l, &ps);
+    bool cusp_found = false;
+    for (size_t i = 0; i < l.npoints; i++)
+        cusp_found |= l.points[i].type == ISM_SING_CUSP;
+    cr_expect(cusp_found, "no cusp in the locus (%zu points)", l.npoints);
+    cr_expect_eq(ps.mesher, ISM_MESHER_PRIMAL);
+    cr_expect_eq(ps.dual_declined, ISM_DUAL_WHY_POINT_TYPE, "declined for %s",
+                 ism_dual_reason_name(ps.dual_declined));
+    ism_mesh_free(&m);
+    ism_locus_free(&l);
+    ism_tape_free(t);
+}
+
+/* Before meshing: a locus of points the dual mesher takes (dual_points given) lets it try
+ * where the quiet balls alone decline; points of another type decline with their reason,
+ * after "off" and before min/max. */
+Test(dual_points, reasons_decided_before_meshing)
+{
+    static const pf_surface sphere = {"x^2 + y^2 + z^2 - 1", NULL, 0, NULL, 0};
+    static const pf_surface two = {"min(x^2 + y^2 + z^2 - 1, (x - 1)^2 + y^2 + z^2 - 1)", NULL,
+                                   0, NULL, 0};
+    ism_tape *s = pf_compile(&sphere), *m = pf_compile(&two);
+    ism_poly_options o;
+    ism_poly_options_default(&o);
+    o.dual = true;
+    o.max_error = 1e-2;
+    const double ball[1][4] = {{0, 0, 1, 0.1}};
+    const double point[1][5] = {{0, 0, 1, INFINITY, 2}};
+    o.quiet = ball;
+    o.nquiet = 1;
+    cr_expect_eq(ism_dual_declined_before(s, &o), ISM_DUAL_WHY_LOCUS);
+    o.dual_points = point;
+    o.ndual_points = 1;
+    cr_expect_eq(ism_dual_declined_before(s, &o), ISM_DUAL_WHY_NONE);
+    cr_expect_eq(ism_dual_declined_before(m, &o), ISM_DUAL_WHY_MIN_MAX);
+    o.dual_points = NULL;
+    o.ndual_points = 0;
+    o.dual_points_other = true;
+    cr_expect_eq(ism_dual_declined_before(m, &o), ISM_DUAL_WHY_POINT_TYPE);
+    o.dual = false;
+    cr_expect_eq(ism_dual_declined_before(s, &o), ISM_DUAL_WHY_OFF);
+    cr_expect_str_eq(ism_dual_reason_name(ISM_DUAL_WHY_POINT_TYPE), "point_type");
+    cr_expect_str_eq(ism_dual_reason_name(ISM_DUAL_WHY_POINT_FAN), "point_fan");
+    ism_tape_free(s);
+    ism_tape_free(m);
+}
