@@ -49,44 +49,41 @@ struct MHD_Response *ismd_response_blob(ism_blob *b, const char *content_type)
  * 128 KB, three TCP_CORK/NODELAY setsockopt, open, fstat, pread, close), from memory in 2
  * (recv, one sendmsg of headers and body). */
 #define SENDFILE_MIN ((size_t)1 << 20)
-/* Smaller bodies (from SENDFILE_BUSY_MIN) go from their file too while at least
- * BUSY_CONNECTIONS connections are open: their answers wait in the kernel together (a request
- * is complete for libmicrohttpd once its answer is queued: at 256 connections under 128 were
- * ever in progress), the copy then writes into socket pages no longer in cache, and the
- * file's pages, shared by every answer, stay in it. Measured with the file kept open
- * (cache_disk.c: no open, fstat of the header or pread per send), 330 KB mesh, wrk beside
- * nginx in the same run, load 20-23, daemon CPU us per request: at 256 connections memory
- * 177/174/146/163, sendfile 160/145/142/154 (nginx 92-98; libmicrohttpd alone 126-138 from
- * memory, 85-106 by sendfile); at 16 sendfile still costs more (118/115/124 against
- * 93/87/109), at 64 about the same (126/138/103 against 127/116/142). Counting the reader's
- * CPU too (wrk's, on loopback: the kernel's receive and ACK work lands on either side; perf
- * stat task-clock of both, medians of 3 x 5 s, 256 connections, load 17-21): with the system's
- * bbr, sendfile 285 us per request together against 278 from memory (the copy saved here
- * comes back as pacing work on the reader's side, http.c set_congestion); with
- * --tcp-congestion cubic 162 against 187.
+/* Smaller bodies go from memory at any number of connections. libmicrohttpd 0.9.75 sends a
+ * body it must read (from a file, a callback or an iovec) after pushing its header block
+ * alone: connection.c 3943-3976 calls MHD_send_hdr_and_body_ without the body and with
+ * complete_response false, so push_hdr is set (mhd_send.c 949-955) and the 364-byte block
+ * leaves as a segment of its own before the first sendfile; a body in memory goes out in the
+ * same sendmsg as the header block (mhd_send.c 1047-1062). Under the system's bbr without the
+ * fq qdisc (http.c set_congestion) that lone segment costs the reader a wake-up, and both
+ * sides pacing work and tail loss probes. Until 2026-11-27 bodies from 64 KB went from their
+ * file once 128 connections were open (to keep the copy out of cold socket pages). Measured
+ * against memory (cached 331 KB mesh, 256 connections, wrk -t2 5 s, bbr, medians of 4
+ * alternated rounds beside nginx, load 11-15; counters from /proc/net/snmp and netstat per
+ * request, both ends of loopback; CPU from task-clock): segments 14.9 -> 11.4 (nginx 10.3),
+ * tail loss probes 0.89 -> 0.41 (0.26), wrk's CPU us 153 -> 104 (85), the daemon's 77 -> 83
+ * (48: the copy), both 230 -> 187 (133). Kernel memory per slow reader stays bounded by
+ * NOTSENT_LOWAT (http.c).
  *
- * Why not an own sender (the headers, then one sendfile of the whole body, as nginx does):
- * libmicrohttpd 0.9.75 always writes the header block and the body of an answer itself. Its
- * header block always carries its own Content-Length of the response's size (connection.c
- * build_header_response: "Content-Length" from r->total_size, lines 2163-2176), which an
- * application's header only doubles (response.c 544: allowed by
- * MHD_RF_INSANITY_HEADER_CONTENT_LENGTH, then sent beside it); it leaves the body out only
- * for HEAD, 304, 204 and 1xx (is_reply_body_needed, 1731-1752); MHD_RF_HEAD_ONLY_RESPONSE
- * came in 1.0.0. Taking the socket over is the upgrade path, which requires a 101 answer
+ * Why not an own sender (the header block held back with MSG_MORE, then one sendfile, as nginx
+ * does): libmicrohttpd 0.9.75 always writes the header block and the body of an answer
+ * itself. Its header block always carries its own Content-Length of the response's size
+ * (connection.c build_header_response, 2163-2176), which an application's header only
+ * doubles (response.c 544, MHD_RF_INSANITY_HEADER_CONTENT_LENGTH); it leaves the body out
+ * only for HEAD, 304, 204 and 1xx (is_reply_body_needed, 1731-1752; MHD_RF_HEAD_ONLY_RESPONSE
+ * came in 1.0.0). Taking the socket over is the upgrade path, which requires a 101 answer
  * (MHD_queue_response, 5145) and ends the connection for libmicrohttpd (no keep-alive after
- * it). Suspending and writing the answer ourselves leaves libmicrohttpd an answer of its
- * own to write when resumed. Its file answers send 128 KB per sendfile call
- * (MHD_SENFILE_CHUNK_, mhd_send.c 69) with a TCP_CORK/NODELAY setsockopt around each. */
-#define SENDFILE_BUSY_MIN ((size_t)64 << 10)
-#define BUSY_CONNECTIONS 128
+ * it). Suspending and writing the answer ourselves leaves libmicrohttpd an answer of its own
+ * to write when resumed. Nor does corking the socket around its file answer help: once a
+ * body of more than one 128 KB sendfile chunk (MHD_SENFILE_CHUNK_, mhd_send.c 69) has been
+ * sent, libmicrohttpd takes the socket for corked and pushes each later header block by
+ * setting TCP_NODELAY (post_send_setopt), which sends it whatever the cork. */
 
 struct MHD_Response *ismd_response_cached(ismd_server *s, const char *name, ism_blob *b,
                                           const char *content_type)
 {
     long long offset = 0;
-    bool from_file = b->len >= SENDFILE_MIN ||
-                     (b->len >= SENDFILE_BUSY_MIN &&
-                      atomic_load(&s->metrics.connections) >= BUSY_CONNECTIONS);
+    bool from_file = b->len >= SENDFILE_MIN;
     int fd = from_file && s->disk
                  ? ism_cache_disk_open_payload(s->disk, name, b->data, b->len, &offset)
                  : -1;

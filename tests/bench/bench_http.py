@@ -446,8 +446,8 @@ def throughput(build, tmp):
                 d2.stop(timeout=30)
                 d2.cleanup()
         print("(isomeshd's answers sent from the cache file, sendfile, at 1/16/64/256 "
-              "connections: %s; respond.c: meshes from 64 KB while 128 or more connections "
-              "are open, else from memory)" % " / ".join("%d" % sendfile[c] for c in sorted(sendfile)))
+              "connections: %s; respond.c: bodies from 1 MB, smaller ones from memory, "
+              "where the header block leaves in the same send as the body)" % " / ".join("%d" % sendfile[c] for c in sorted(sendfile)))
         pos = {}
         for conns in (1, 16, 64, 256):
             pos[conns] = wrk(url_pos, conns, short, pid=d.proc.pid)

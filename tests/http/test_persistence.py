@@ -5,12 +5,15 @@ counted, and the mesh recomputed and correct; an unwritable cache directory stil
 every request and counts the failed stores; a large cached body is sent from its disk file
 (sendfile), byte for byte the body computed, and from memory while the file changed moments
 ago or when it does not match: a wrong length, or a byte flipped on disk after it was sent from
-(the file is then dropped as damaged)."""
+(the file is then dropped as damaged); a mid-size body goes from memory (its header block in
+the same send as the body) however many connections are open."""
 import glob
 import os
 import shutil
+import socket
 import sys
 import tempfile
+import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -18,6 +21,10 @@ from harness import Daemon, draco_counts, http_request, sphere, wait_until  # no
 
 SENDFILE_MIN = 1 << 20  # server/isomeshd/respond.c: smaller bodies are copied
 LARGE = {"preset": "gyroid-ball", "depth": {"max": 6}, "output": {"format": "stl"}}
+MID = {"preset": "sphere", "depth": {"max": 6}, "output": {"format": "stl"}}  # 269 KB
+# respond.c sent bodies from 64 KB by sendfile once this many connections were open (until
+# 2026-11-27): libmicrohttpd then pushes the header block alone, which bbr makes expensive
+BUSY_CONNECTIONS = 128
 
 
 class PersistenceTest(unittest.TestCase):
@@ -150,6 +157,40 @@ class PersistenceTest(unittest.TestCase):
             # the log comes through a pipe read by a thread: the line may follow the answer
             wait_until("the drop logged", lambda: "cache_corrupt_entry_dropped" in d.log())
             self.assertFalse(os.path.exists(path))
+
+    def test_a_mid_size_body_goes_from_memory_with_many_connections_open(self):
+        with Daemon("--workers", "1", cache_dir=self.cache) as d:
+            first = d.post("/v1/mesh", MID)
+            self.assertEqual(first.status, 200)
+            self.assertTrue(64 << 10 <= len(first.body) < SENDFILE_MIN, len(first.body))
+            key = first.header("ETag").strip('"')
+            url = "/v1/meshes/%s.stl" % key
+            wait_until("the file on disk", lambda: glob.glob(
+                os.path.join(self.cache, "**", "%s.stl" % key), recursive=True))
+            path = self.cache_file(key, "stl")
+            wait_until("the file complete",
+                       lambda: os.path.getsize(path) == len(first.body) + 24)
+            idle = []
+            try:
+                for _ in range(BUSY_CONNECTIONS + 8):
+                    idle.append(socket.create_connection(("127.0.0.1", d.port), timeout=10))
+                wait_until("the connections counted",
+                           lambda: d.metric("isomesh_connections") >= BUSY_CONNECTIONS + 8)
+                sent = d.metric("isomesh_sendfile_responses_total")
+                # past file_memo.c's settling time (3 s even for whole-second file times): the
+                # old rule sent from the file by then
+                until = time.time() + 3.5
+                while True:
+                    got = d.get(url)
+                    self.assertEqual(got.status, 200)
+                    self.assertEqual(got.body, first.body)
+                    self.assertEqual(d.metric("isomesh_sendfile_responses_total"), sent)
+                    if time.time() > until:
+                        break
+                    time.sleep(0.25)
+            finally:
+                for c in idle:
+                    c.close()
 
     def test_unwritable_cache_dir_still_serves(self):
         blocker = os.path.join(self.tmp, "file")
