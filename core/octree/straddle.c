@@ -56,11 +56,12 @@ static bool on_box_face(const double box[6], const double p[3])
     return false;
 }
 
-bool ism_straddle_point(ism_sampler *s, double shift, const double box[6], const double p[3],
-                        double q[3])
+/* The unit normal n = ∇f/|∇f| at p and f's tangential Hessian there (a, b, c as
+ * tangential() gives them); false at the box's faces and where f, ∇f or |∇f| is not usable. */
+static bool local_form(ism_sampler *s, const double box[6], const double p[3], double n[3],
+                       double *a, double *b, double *c)
 {
-    memcpy(q, p, 3 * sizeof *q);
-    if (!(shift > 0) || on_box_face(box, p))
+    if (on_box_face(box, p))
         return false;
     double g[3], h[6];
     s->n_gradient++;
@@ -68,14 +69,45 @@ bool ism_straddle_point(ism_sampler *s, double shift, const double box[6], const
     double gl = ism_norm3(g);
     if (!isfinite(f) || !(gl > 0) || !isfinite(gl))
         return false;
-    double n[3] = {g[0] / gl, g[1] / gl, g[2] / gl}, a, b, c;
-    tangential(h, n, &a, &b, &c);
+    for (int k = 0; k < 3; k++)
+        n[k] = g[k] / gl;
+    tangential(h, n, a, b, c);
+    return true;
+}
+
+bool ism_straddle_point(ism_sampler *s, double shift, const double box[6], const double p[3],
+                        double q[3])
+{
+    memcpy(q, p, 3 * sizeof *q);
+    double n[3], a, b, c;
+    if (!(shift > 0) || !local_form(s, box, p, n, &a, &b, &c))
+        return false;
     if (!(a * c - b * b > 0) || !isfinite(a))
         return false; /* a saddle, a parabolic point, or no Hessian: chords on both sides */
     /* f grows along the tangent plane (a > 0): the surface bends toward f < 0, its chords
      * lie there, and the vertex moves toward f > 0 (along ∇f); the other way round else */
     double step = a > 0 ? shift : -shift;
     /* the point where f's first-order model reaches f(p) + step |∇f| */
+    for (int k = 0; k < 3; k++)
+        q[k] = p[k] + step * n[k];
+    return true;
+}
+
+bool ism_straddle_balanced_point(ism_sampler *s, double shift, const double box[6],
+                                 const double p[3], double q[3])
+{
+    memcpy(q, p, 3 * sizeof *q);
+    double n[3], a, b, c;
+    if (!(shift > 0) || !local_form(s, box, p, n, &a, &b, &c))
+        return false;
+    /* the tangential Hessian's eigenvalues l1 >= l2: their sum and difference */
+    double sum = a + c, diff = sqrt((a - c) * (a - c) + 4 * b * b);
+    if (!isfinite(sum) || !isfinite(diff) || !(fabs(sum) > 0))
+        return false; /* no Hessian, or chords as far to each side: no move */
+    /* (l1 + l2) / (l1 - l2) capped at ±STRADDLE_SHARE: the full shift wherever the cap
+     * binds (every point bending one way, where diff < |sum|: ism_straddle_point's move) */
+    double step = fabs(sum) >= STRADDLE_SHARE * diff ? (sum > 0 ? shift : -shift)
+                                                     : shift / STRADDLE_SHARE * (sum / diff);
     for (int k = 0; k < 3; k++)
         q[k] = p[k] + step * n[k];
     return true;

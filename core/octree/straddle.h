@@ -21,6 +21,17 @@
 bool ism_straddle_point(ism_sampler *s, double shift, const double box[6], const double p[3],
                         double q[3]);
 
+/* As ism_straddle_point, at saddles and parabolic points too: a chord of length L along a
+ * tangent direction where f's tangential Hessian over |∇f| is l lies l L² / 8 below the
+ * surface (along ∇f), l between the eigenvalues l2 <= l1. A move by d along ∇f leaves the
+ * chords within s (l1 - l2) / 2 of the surface (s = L² / 8) when d = s (l1 + l2) / 2, so
+ * with d = E (l1 + l2) / (l1 - l2), capped at ±shift, the chords meet E up to s = 2 E /
+ * (l1 - l2) (saddles: sag room 1/(1 - r) times the unmoved vertex's, r the capped ratio)
+ * and up to (E + shift) / l1 where the cap binds (one-way bending: the move above). A pure
+ * function of the point, like the move above. */
+bool ism_straddle_balanced_point(ism_sampler *s, double shift, const double box[6],
+                                 const double p[3], double q[3]);
+
 /* The distance to f = 0 (refine.h's measure, every point) of out's triangles from first_tri
  * on with the vertices from first_vert on moved; out is left as it was. False when out of
  * memory. */

@@ -4,10 +4,12 @@
  * by 1e-3 and 0.37 of a finest cell; the sphere's vertices sit outside it (its convex side),
  * the torus's outer vertices outside its tube and its saddle-shaped inner ones on it; the
  * meshes have fewer triangles than without the option; a surface with a min/max is left
- * exactly as it was. */
+ * exactly as it was. The balanced move the dual mesh uses (ism_straddle_balanced_point) on
+ * closed-form saddles and bowls: the share of E their principal curvatures give. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <string.h>
+#include "core/octree/straddle.h"
 #include "poly_fixture.h"
 
 static const ism_param sphere_r[] = {{"r", 1}};
@@ -129,4 +131,43 @@ Test(straddle, min_max_surface_unchanged)
     ism_mesh_free(&plain);
     ism_mesh_free(&moved);
     ism_tape_free(t);
+}
+
+/* z = a x² − b y² (f = a x² − b y² − z): at the origin ∇f = (0, 0, −1) and the tangential
+ * Hessian has eigenvalues 2a and −2b, so the balanced move is E (a − b) / (a + b) along
+ * −z, capped at ±0.9 E (the straddle share): a bowl (b < 0) and a cylinder (b = 0) take the
+ * cap, exactly the move ism_straddle_point makes; the symmetric saddle does not move. */
+Test(straddle, balanced_move_on_saddles_and_bowls)
+{
+    static const struct {
+        double a, b, share; /* the move as a share of E along +z; NAN: none */
+    } cases[] = {
+        {1, 1, NAN}, {2, 1, -1.0 / 3}, {1, 2, 1.0 / 3}, {5, 1, -2.0 / 3}, {1, 0, -0.9},
+        {1, -1, -0.9}, {0, 3, 0.9}, {19, 1, -0.9}, {3, 2, -0.2},
+    };
+    const double e = 1e-2, box[6] = {-1, -1, -1, 1, 1, 1}, p[3] = {0, 0, 0};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        ism_param prm[2] = {{"a", cases[i].a}, {"b", cases[i].b}};
+        pf_surface s = {"a*x^2 - b*y^2 - z", prm, 2, NULL, 0};
+        ism_tape *t = pf_compile(&s);
+        ism_sampler smp;
+        memset(&smp, 0, sizeof smp);
+        smp.tape = t;
+        smp.ws = ism_eval_ws_new(t);
+        cr_assert(smp.ws);
+        double q[3], r[3];
+        bool moved = ism_straddle_balanced_point(&smp, 0.9 * e, box, p, q);
+        cr_assert_eq(moved, !isnan(cases[i].share), "a %g b %g", cases[i].a, cases[i].b);
+        double want = isnan(cases[i].share) ? 0 : cases[i].share * e;
+        cr_assert(fabs(q[0]) == 0 && fabs(q[1]) == 0 && fabs(q[2] - want) < 1e-12 * e,
+                  "a %g b %g: moved to (%g, %g, %g), expected z %g", cases[i].a, cases[i].b,
+                  q[0], q[1], q[2], want);
+        if (fabs(cases[i].share) == 0.9) { /* the cap: ism_straddle_point's move, bit for bit */
+            bool one_way = ism_straddle_point(&smp, 0.9 * e, box, p, r);
+            cr_assert(!one_way || memcmp(q, r, sizeof q) == 0, "a %g b %g", cases[i].a,
+                      cases[i].b);
+        }
+        ism_eval_ws_free(smp.ws);
+        ism_tape_free(t);
+    }
 }
