@@ -344,7 +344,8 @@ def main():
     ap.add_argument("--measure", choices=("centroid", "all"), default="centroid",
                     help="centroid (default, issue 16's measure): the largest centroid "
                          "distance; all: the largest at centroids, edge midpoints and corners "
-                         "(isomesh's own bound)")
+                         "(isomesh's own bound; for smooth surfaces: a corner on a singular "
+                         "point, where Newton does not converge, reads as far)")
     args = ap.parse_args()
     global MEASURE
     MEASURE = "max_all" if args.measure == "all" else "max_c"
