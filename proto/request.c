@@ -466,18 +466,14 @@ static bool decode_bound_flag(const json_t *v, const ism_request *req, const cha
     return true;
 }
 
-/* "simplify": true or false (after "max_error"). Under an error bound a primal mesh is
- * simplified unless it says false, a dual one only when it says true (ism_simplify_when,
- * request.h). Without a bound there is nothing to keep the simplification honest, so true is
- * refused. */
+/* "simplify": true or false (after "max_error"; default false, whichever mesher runs:
+ * ism_simplify_after). Without a bound there is nothing to keep the simplification honest,
+ * so true is refused. */
 static bool decode_simplify(const json_t *v, ism_request *req, ism_req_error *err)
 {
-    bool on;
-    if (!decode_bound_flag(v, req, "$.simplify",
-                           "the simplification keeps the mesh within \"max_error\"", &on, err))
-        return false;
-    req->simplify_when = on ? ISM_SIMPLIFY_ALWAYS : ISM_SIMPLIFY_NEVER;
-    return true;
+    return decode_bound_flag(v, req, "$.simplify",
+                             "the simplification keeps the mesh within \"max_error\"",
+                             &req->simplify, err);
 }
 
 /* "straddle": true or false (after "max_error"; default false). The polygoniser then moves
@@ -496,16 +492,11 @@ static bool decode_straddle(const json_t *v, ism_request *req, ism_req_error *er
  * leaf and quads across the crossed lattice edges, cells sized by those triangles' error
  * (core/octree/dual.h); elsewhere, or with false, the primal polygons (the stats say which,
  * and why, core/octree/mesher.h). The cells are sized by the bound, so true without one is
- * refused. With false a primal mesh is all there can be: "simplify" left out then means
- * true (one key for one meaning). */
+ * refused. */
 static bool decode_dual(const json_t *v, ism_request *req, ism_req_error *err)
 {
-    if (!decode_bound_flag(v, req, "$.dual", "its cells are sized by \"max_error\"",
-                           &req->poly.dual, err))
-        return false;
-    if (!req->poly.dual && req->simplify_when == ISM_SIMPLIFY_PRIMAL)
-        req->simplify_when = ISM_SIMPLIFY_ALWAYS;
-    return true;
+    return decode_bound_flag(v, req, "$.dual", "its cells are sized by \"max_error\"",
+                             &req->poly.dual, err);
 }
 
 /* "quality": "raw" or "good" (ism_quality_lookup). */
@@ -708,9 +699,9 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
     if ((v = json_object_get(root, "max_error")) &&
         !decode_max_error(v, depth, req, depth_limit, err))
         return false;
-    /* under a bound: the dual mesh where it applies, simplified only when asked */
+    /* under a bound: the dual mesh where it applies, any mesh simplified only when asked */
     req->poly.dual = req->poly.max_error > 0;
-    req->simplify_when = req->poly.max_error > 0 ? ISM_SIMPLIFY_PRIMAL : ISM_SIMPLIFY_NEVER;
+    req->simplify = false;
     if ((v = json_object_get(root, "simplify")) && !decode_simplify(v, req, err))
         return false;
     if ((v = json_object_get(root, "dual")) && !decode_dual(v, req, err))

@@ -80,11 +80,11 @@ typedef struct ism_request {
     ism_poly_options poly;
     int quality;               /* enum ism_quality: "raw" (default) or "good" (the quality
                                   pass after meshing, core/remesh/) */
-    int simplify_when;         /* enum ism_simplify_when: under max_error, the
-                                  simplification after meshing (core/remesh/simplify.h):
-                                  after the primal polygons only when "simplify" is not
-                                  given, always when true, never when false (or without
-                                  max_error; true without it is refused, 400) */
+    bool simplify;             /* "simplify": under max_error, the simplification after
+                                  meshing (core/remesh/simplify.h) when true; false (the
+                                  default, ism_simplify_after in core/octree/mesher.h) keeps
+                                  the mesher's triangles; true without max_error is
+                                  refused, 400 */
     enum ism_format format;
     int position_bits;         /* Draco position quantisation (6..24) */
     int normal_bits;           /* Draco normal quantisation (4..16) */

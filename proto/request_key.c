@@ -49,10 +49,11 @@ static void write_max_error(ism_jw *w, const ism_request *req)
         return;
     ism_jw_key(w, "max_error");
     ism_jw_number(w, req->poly.max_error);
-    if (req->simplify_when != ISM_SIMPLIFY_PRIMAL) { /* given (the default is no value) */
-        ism_jw_key(w, "simplify");
-        ism_jw_bool(w, req->simplify_when == ISM_SIMPLIFY_ALWAYS);
-    }
+    /* Always said under a bound, as "dual" is: the default changed after mesher-18 (from
+     * "after the primal polygons" to "only when asked"), and a key or canonical request
+     * that leaves the choice out could not say which default it was made under. */
+    ism_jw_key(w, "simplify");
+    ism_jw_bool(w, req->simplify);
     if (req->poly.straddle) { /* only when asked for: other keys stay as they were */
         ism_jw_key(w, "straddle");
         ism_jw_bool(w, true);

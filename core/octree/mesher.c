@@ -58,8 +58,7 @@ enum ism_dual_reason ism_dual_declined_before(const ism_tape *f, const ism_poly_
     return ISM_DUAL_WHY_NONE;
 }
 
-bool ism_simplify_after(int when, double max_error, int made)
+bool ism_simplify_after(bool asked, double max_error)
 {
-    return max_error > 0 && (when == ISM_SIMPLIFY_ALWAYS ||
-                             (when == ISM_SIMPLIFY_PRIMAL && made != ISM_MESHER_DUAL));
+    return asked && max_error > 0;
 }

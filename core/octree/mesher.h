@@ -52,16 +52,13 @@ const char *ism_dual_reason_text(enum ism_dual_reason r);
  * tape only), or ISM_DUAL_WHY_NONE when the dual mesher may try. */
 enum ism_dual_reason ism_dual_declined_before(const ism_tape *f, const ism_poly_options *o);
 
-/* When the simplification runs under max_error. Not asked (the default): after the primal
- * polygons only. The dual mesh (the default mesher under a bound, above) is
- * already within the bound at about libfive's cost; simplifying it costs 1.3-6.7 times its
- * meshing for 0.18-0.40 of its triangles (callgrind, sphere and torus at 1e-2..1e-3: README,
- * "Under an error bound"), so it runs on a dual mesh only when asked ("simplify": true,
- * --simplify). The primal polygons (every other surface) keep the simplified default. */
-enum ism_simplify_when { ISM_SIMPLIFY_NEVER, ISM_SIMPLIFY_PRIMAL, ISM_SIMPLIFY_ALWAYS };
-
-/* Does the simplification run after a mesh the mesher `made` (enum ism_mesher), for when and
- * the bound max_error (0: none, never)? */
-bool ism_simplify_after(int when, double max_error, int made);
+/* Does the simplification run after meshing? One policy for every mesher: only when asked
+ * ("simplify": true, --simplify) and under an error bound (0: none, never). The mesh any
+ * mesher makes under max_error is already within it; the default is that mesh, the cheap one.
+ * Simplifying costs 1.3-6.7 times a dual mesh's meshing (callgrind, sphere and torus at
+ * 1e-2..1e-3: README, "Under an error bound") and 1.0-1.5 times the primal polygons' CPU
+ * (Klein bottle 1e-2, Barth's sextic 3e-3: bench_error mesh S E 10 simplify) for 0.14-0.40
+ * of the triangles: asking for E and the fewest triangles is asking for "simplify" too. */
+bool ism_simplify_after(bool asked, double max_error);
 
 #endif

@@ -423,7 +423,7 @@ static bool cut_curves(const ism_request *req, const ism_tape *tape,
                                         &err))
         return fail_with(r, 500, "no_memory", "%s", err.message);
     c->timings_ms[ISM_TIME_SINGULAR] += ism_now_ms() - t; /* the curves are singular stages too */
-    if (ism_simplify_after(req->simplify_when, req->poly.max_error, s->ps.mesher)) {
+    if (ism_simplify_after(req->simplify, req->poly.max_error)) {
         if (!ism_simplify_pass(tape, &c->locus, &s->cut, req->poly.max_error,
                                hooks ? hooks->cancel : NULL, &c->mesh, &s->ss, &err))
             return fail_with(r, 500, "no_memory", "%s", err.message);

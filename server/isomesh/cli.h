@@ -18,10 +18,9 @@ typedef struct ism_cli_run {
     const char *features_output;/* --features */
     bool box_given, depth_given, print_stats;
     int quality;                /* --quality: enum ism_quality (raw unless given) */
-    int simplify_when;          /* enum ism_simplify_when (core/octree/mesher.h): under
-                                   --max-error, the simplification after the primal polygons
-                                   only (default), always (--simplify) or never
-                                   (--no-simplify) */
+    bool simplify;              /* --simplify: under --max-error, the simplification after
+                                   meshing (ism_simplify_after, core/octree/mesher.h); off
+                                   unless given (--no-simplify, the default, kept for scripts) */
     bool no_dual;               /* --no-dual: under --max-error, the primal polygons even
                                    where the dual mesh (the default) applies */
     ism_param *params;          /* names owned */

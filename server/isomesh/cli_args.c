@@ -12,7 +12,6 @@ void ism_cli_run_init(ism_cli_run *run)
 {
     memset(run, 0, sizeof *run);
     ism_poly_options_default(&run->options);
-    run->simplify_when = ISM_SIMPLIFY_PRIMAL;
 }
 
 bool ism_cli_parse_double(const char *flag, const char *s, double *out)

@@ -409,7 +409,7 @@ int ism_cli_run_surface(ism_cli_run *run)
     if (mesh.ntris == 0)
         explain_empty(&locus);
     ism_simplify_stats ss;
-    bool simplify = ism_simplify_after(run->simplify_when, run->options.max_error, ps.mesher);
+    bool simplify = ism_simplify_after(run->simplify, run->options.max_error);
     if (simplify &&
         !ism_simplify_pass(tape, &locus, NULL, run->options.max_error, NULL, &mesh, &ss, &err)) {
         fprintf(stderr, "isomesh: %s\n", ism_error_format(&err, msg, sizeof msg));

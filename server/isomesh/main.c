@@ -48,20 +48,20 @@ static const char usage_text[] =
     "      --max-error E        subdivide until the triangles lie within E of the surface\n"
     "                           (model units, measured at centroids and edge midpoints);\n"
     "                           depth MAX is then only a safety limit. Default: off, the\n"
-    "                           flatness test (--flat-plane) decides. With it, edges are\n"
-    "                           then collapsed wherever the mesh stays within E (measured\n"
-    "                           at every new centroid and edge midpoint; features, topology\n"
-    "                           and orientation kept): the fewest triangles for the error.\n"
-    "                           On a closed surface without min/max and without a singular\n"
-    "                           locus the mesh is made by dual contouring: one vertex per\n"
-    "                           leaf, cells sized by the error (fewer triangles, one thread);\n"
-    "                           the stats' polygoniser.mesher says which mesher ran and\n"
-    "                           dual_declined why not the dual one. A dual mesh is not\n"
-    "                           simplified unless --simplify (it costs ~10x the meshing)\n"
+    "                           flatness test (--flat-plane) decides. On a closed surface\n"
+    "                           without min/max and without a singular locus the mesh is\n"
+    "                           made by dual contouring: one vertex per leaf, cells sized\n"
+    "                           by the error (fewer triangles, one thread); the stats'\n"
+    "                           polygoniser.mesher says which mesher ran and dual_declined\n"
+    "                           why not the dual one. Either mesh is the mesher's own,\n"
+    "                           within E, not simplified unless --simplify\n"
     "      --no-dual            under --max-error, the primal polygons everywhere\n"
     "      --dual               the default under --max-error (kept for scripts)\n"
-    "      --simplify           under --max-error, simplify a dual mesh too\n"
-    "      --no-simplify        under --max-error, keep the polygoniser's triangles\n"
+    "      --simplify           under --max-error, then collapse edges wherever the mesh\n"
+    "                           stays within E (measured at every new centroid and edge\n"
+    "                           midpoint; features, topology and orientation kept): the\n"
+    "                           fewest triangles for the error, at 1-7x the meshing's CPU\n"
+    "      --no-simplify        the default: the mesher's triangles (kept for scripts)\n"
     "      --straddle           under --max-error, move the primal polygons' vertices where\n"
     "                           the surface bends one way 0.9 E toward its convex side and\n"
     "                           size the cells for it (no min/max, no singular locus)\n"
@@ -173,8 +173,8 @@ static bool apply_option(ism_cli_run *run, int opt, const char *arg)
         o->max_triangles = (size_t)n;
         return true;
     }
-    case OPT_NO_SIMPLIFY: run->simplify_when = ISM_SIMPLIFY_NEVER; return true;
-    case OPT_SIMPLIFY: run->simplify_when = ISM_SIMPLIFY_ALWAYS; return true;
+    case OPT_NO_SIMPLIFY: run->simplify = false; return true;
+    case OPT_SIMPLIFY: run->simplify = true; return true;
     case OPT_STRADDLE: o->straddle = true; return true;
     case OPT_DUAL: run->no_dual = false; return true;
     case OPT_NO_DUAL: run->no_dual = true; return true;

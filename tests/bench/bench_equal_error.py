@@ -27,7 +27,9 @@ Asserts nothing; exits 0 unless it cannot run.
                        [--tools isomesh,libfive,vtk,skimage] [--primal] [--straddle]
                        [--raw | --simplify] [--measure centroid|all]
 (isomesh as a request under max_error by default: the dual mesh where it applies, the primal
-polygons simplified elsewhere; --primal: the default before mesher-17)
+polygons elsewhere, neither simplified; --simplify: then simplified within E (the fewest
+triangles; the primal polygons' default up to mesher-18); --raw: the default, kept for old
+command lines; --primal: the default before mesher-17)
 """
 import argparse
 import json
@@ -96,8 +98,8 @@ class Tool:
 class Isomesh(Tool):
     name = "isomesh"
     words = ()  # bench_error's extra words: "primal" (not the dual mesh, the default where
-    #             it applies), "straddle" (the polygoniser's option), "raw" (no
-    #             simplification), "simplify" (the dual mesh simplified too)
+    #             it applies), "straddle" (the polygoniser's option), "simplify" (then
+    #             the simplification within E; without it none, whichever mesher ran)
 
     def start(self, s, e):
         return 1 / e
@@ -337,10 +339,11 @@ def main():
                     help="the default (kept for old command lines): the dual mesh where it "
                          "applies")
     ap.add_argument("--raw", action="store_true",
-                    help="isomesh without the simplification (the request's simplify: false; "
-                         "by default only the primal polygons are simplified)")
+                    help="the default (kept for old command lines): no simplification, the "
+                         "request's simplify: false")
     ap.add_argument("--simplify", action="store_true",
-                    help="the dual mesh simplified too (the request's simplify: true)")
+                    help="then the simplification within E, whichever mesher ran (the "
+                         "request's simplify: true)")
     ap.add_argument("--measure", choices=("centroid", "all"), default="centroid",
                     help="centroid (default, issue 16's measure): the largest centroid "
                          "distance; all: the largest at centroids, edge midpoints and corners "
@@ -364,7 +367,7 @@ def main():
             if args.raw and args.simplify:
                 sys.exit("bench_equal_error: --raw and --simplify contradict each other")
             tools[0].words = tuple(w for w, on in (("straddle", args.straddle),
-                                                   ("primal", args.primal), ("raw", args.raw),
+                                                   ("primal", args.primal),
                                                    ("simplify", args.simplify)) if on)
         five = None
         if "libfive" in wanted:

@@ -9,9 +9,9 @@
  *                                        isomesh as the service does by default (core/
  *                                        singular/surface.h: the locus, the dual mesh where
  *                                        it applies, core/octree/dual.h, else the primal
- *                                        polygons and conformance, then the simplification
- *                                        within E after the primal polygons only); raw: no
- *                                        simplification; simplify: after the dual mesh too;
+ *                                        polygons and conformance; no simplification);
+ *                                        simplify: then the simplification within E ("raw",
+ *                                        the default, is accepted for old scripts);
  *                                        primal: not the dual mesh ("dual": false); straddle:
  *                                        the polygoniser's straddle option, core/octree/
  *                                        straddle.h ("dual" is accepted: the default), one
@@ -246,7 +246,7 @@ static ism_tape *compile(const surface *s)
 }
 
 static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, int depth,
-                    enum ism_simplify_when when, bool straddle, bool dual)
+                    bool asked, bool straddle, bool dual)
 {
     ism_poly_options o;
     ism_poly_options_default(&o);
@@ -269,10 +269,10 @@ static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, 
     double c0 = cpu_seconds();
     enum ism_poly_status st = ism_mesh_surface(t, &o, &mesh, &locus, &ps, &cs, &times, &err);
     double c1 = cpu_seconds();
-    bool simplify = ism_simplify_after(when, e, ps.mesher);
+    bool simplify = ism_simplify_after(asked, e);
     if (st == ISM_POLY_OK && simplify && !ism_simplify_pass(t, &locus, NULL, e, NULL, &mesh, &ss, &err))
         st = ISM_POLY_NO_MEMORY;
-    double cpu = cpu_seconds() - c0;
+    double c2 = cpu_seconds(), cpu = c2 - c0;
     if (st != ISM_POLY_OK) {
         fprintf(stderr, "bench_error: %s: %s\n", s->name, err.message);
         return 1;
@@ -284,7 +284,7 @@ static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, 
            "\"max_c\": %.6g, \"max_m\": %.6g, \"max_v\": %.6g, \"max_all\": %.6g, "
            "\"mean_c\": %.6g, \"rounds\": %llu, "
            "\"missed\": %llu, \"mesher\": \"%s\", \"dual_declined\": \"%s\"}\n",
-           cpu, 1e3 * (c1 - c0), 1e3 * (cpu_seconds() - c1), times.polygonise_ms,
+           cpu, 1e3 * (c1 - c0), 1e3 * (c2 - c1), times.polygonise_ms,
            times.singular_ms, ss.time_ms,
            simplify ? ss.triangles_before : es.triangles, es.triangles, es.max, es.max_mid,
            es.max_vert, fmax(es.max, fmax(es.max_mid, es.max_vert)), es.mean, (unsigned long long)ps.error_rounds, (unsigned long long)ps.error_missed_nodes,
@@ -373,9 +373,7 @@ int main(int argc, char **argv)
     int rc = 2;
     if (strcmp(argv[1], "mesh") == 0)
         rc = cmd_mesh(s, t, &m, atof(argv[3]), argc > 4 ? atoi(argv[4]) : 10,
-                      has_word(argc, argv, 5, "raw")        ? ISM_SIMPLIFY_NEVER
-                      : has_word(argc, argv, 5, "simplify") ? ISM_SIMPLIFY_ALWAYS
-                                                            : ISM_SIMPLIFY_PRIMAL,
+                      has_word(argc, argv, 5, "simplify"),
                       has_word(argc, argv, 5, "straddle"), !has_word(argc, argv, 5, "primal"));
     else if (strcmp(argv[1], "measure") == 0)
         rc = cmd_measure(&m, argv[3], has_word(argc, argv, 4, "all"));

@@ -351,6 +351,7 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
     const sp = await getJSON(`/v1/meshes/${await meshKey()}/stats`);
     assert.equal(sp.polygoniser.mesher, 'primal');
     assert.equal(sp.polygoniser.dual_declined, 'off');
+    assert.equal(sp.simplify, undefined, 'the primal polygons are not simplified unless asked');
     const sp2 = await statsPanel(page);
     assert.equal(sp2.mesher.text, 'primal');
     assert.equal(sp2.dual_declined.text, 'dual off');
@@ -372,12 +373,32 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
     const sd = await statsPanel(page);
     assert.equal(sd.mesher.text, 'dual');
     assert.equal(sd.dual_declined.text, '–');
+    // simplify: off by default for every mesher (the mesher's own triangles); checked, the
+    // stats carry the simplification's block and fewer triangles, still within the bound
+    assert.equal(await page.isChecked('#simplify'), false);
+    assert.equal(await page.isDisabled('#simplify'), false);
+    const sdj = await getJSON(`/v1/meshes/${await meshKey()}/stats`);
+    assert.equal(sdj.simplify, undefined);
+    const simp = await loads(page);
+    await page.check('#simplify');
+    await waitForMesh(page, simp);
+    const ssj = await getJSON(`/v1/meshes/${await meshKey()}/stats`);
+    assert.ok(ssj.simplify, 'the simplification ran');
+    assert.ok(ssj.mesh.triangles < sdj.mesh.triangles, `${ssj.mesh.triangles} < ${sdj.mesh.triangles}`);
+    const sacc = ssj.analysis.accuracy;
+    assert.ok(Math.max(sacc.max_dist_midpoint, sacc.max_dist_centroid, sacc.max_dist_vertex) <= 0.004);
+    assert.match(await settledHref(page), /simplify=1/);
+    const unsimp = await loads(page);
+    await page.uncheck('#simplify');
+    await waitForMesh(page, unsimp);
+    assert.doesNotMatch(await settledHref(page), /simplify=/);
     const back = await loads(page);
     await page.fill('#max-error', '');
     await page.locator('#max-error').press('Tab');
     await waitForMesh(page, back);
     assert.equal(await page.isDisabled('#depth-max'), false);
     assert.equal(await page.isDisabled('#mesher'), true, 'the meshers differ only under a bound');
+    assert.equal(await page.isDisabled('#simplify'), true, 'only a bound keeps it honest');
     assert.equal((await statsPanel(page)).max_error.text, 'off');
     const sn = await statsPanel(page);
     assert.equal(sn.mesher.text, 'primal');

@@ -273,19 +273,23 @@ class ApiTest(unittest.TestCase):
         self.assertLessEqual(max(acc["max_dist_vertex"], acc["max_dist_midpoint"],
                                  acc["max_dist_centroid"]), 0.01)
         self.assertEqual(sphere["analysis"]["euler"], 2)
-        # "dual": false asks for the primal polygons (another key), simplified by default
+        # "dual": false asks for the primal polygons (another key), not simplified either
+        # unless asked: one policy for every mesher
         torus = [self.d.post("/v1/mesh", dict({"preset": "torus", "max_error": 0.004}, **extra))
-                 for extra in ({}, {"dual": True}, {"dual": False, "simplify": False},
-                               {"dual": False})]
+                 for extra in ({}, {"dual": True}, {"dual": False},
+                               {"dual": False, "simplify": False},
+                               {"dual": False, "simplify": True})]
         self.assertEqual(torus[0].header("ETag"), torus[1].header("ETag"))  # the default
+        self.assertEqual(torus[2].header("ETag"), torus[3].header("ETag"))  # its default
         self.assertEqual(len({r.header("ETag") for r in torus}), 3)
-        dual, asked, primal, simplified = [stats(r) for r in torus]
+        dual, primal, simplified = [stats(torus[i]) for i in (0, 2, 4)]
         self.assertEqual(dual["polygoniser"]["mesher"], "dual")
         self.assertEqual(primal["polygoniser"]["mesher"], "primal")
         self.assertEqual(primal["polygoniser"]["dual_declined"], "off")
         self.assertNotIn("simplify", primal)
         self.assertIn("simplify", simplified)
-        for s in (dual, primal):
+        self.assertLess(simplified["mesh"]["triangles"], primal["mesh"]["triangles"])
+        for s in (dual, primal, simplified):
             acc = s["analysis"]["accuracy"]
             worst = max(acc["max_dist_vertex"], acc["max_dist_midpoint"], acc["max_dist_centroid"])
             self.assertLessEqual(worst, 0.004)
@@ -296,7 +300,7 @@ class ApiTest(unittest.TestCase):
                                                "depth": {"max": 6}}))
         self.assertEqual(klein["polygoniser"]["mesher"], "primal")
         self.assertEqual(klein["polygoniser"]["dual_declined"], "singular_locus")
-        self.assertIn("simplify", klein)  # a primal mesh is simplified by default
+        self.assertNotIn("simplify", klein)  # a primal mesh too only when asked
         # without a bound: the primal polygons; "dual": true alone is refused
         plain = stats(self.d.post("/v1/mesh", {"preset": "sphere", "depth": {"max": 4}}))
         self.assertEqual(plain["polygoniser"]["mesher"], "primal")

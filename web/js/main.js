@@ -256,6 +256,8 @@ function syncControls() {
   $('quality-good').checked = state.quality === 'good';
   $('mesher').value = state.mesher;
   $('mesher').disabled = !(state.maxError > 0);  // the meshers differ only under a bound
+  $('simplify').checked = state.simplify;
+  $('simplify').disabled = !(state.maxError > 0);  // the bound keeps it honest
   $('color-mode').value = state.color;
   $('show-edges').checked = state.show.edges;
   $('show-points').checked = state.show.points;
@@ -982,7 +984,7 @@ function applyFragment(fragment) {
       if (ranges[k]) ranges[k] = [Math.min(ranges[k][0], v), Math.max(ranges[k][1], v)];
     }
   }
-  for (const k of ['box', 'depth', 'maxError', 'quality', 'mesher', 'color', 'clip', 'show', 'wire', 'occlusion', 'shadows', 'curves']) if (s[k] !== undefined) state[k] = s[k];
+  for (const k of ['box', 'depth', 'maxError', 'quality', 'mesher', 'simplify', 'color', 'clip', 'show', 'wire', 'occlusion', 'shadows', 'curves']) if (s[k] !== undefined) state[k] = s[k];
   pendingView = s.view || null;
   state.view = s.view || null;
   shownIdentity = null;
@@ -1086,10 +1088,15 @@ function wire() {
     state.maxError = text === '' ? null : e;
     $('depth-max').disabled = state.maxError > 0;
     $('mesher').disabled = !(state.maxError > 0);
+    $('simplify').disabled = !(state.maxError > 0);
     requestChanged();
   });
   $('mesher').addEventListener('change', () => {
     state.mesher = $('mesher').value;
+    requestChanged();
+  });
+  $('simplify').addEventListener('change', () => {
+    state.simplify = $('simplify').checked;
     requestChanged();
   });
   $('quality-good').addEventListener('change', () => {

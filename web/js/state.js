@@ -3,7 +3,8 @@
 // parameters, box, depth, view, colour mode, clipping and toggles.
 //
 // Fragment keys (URLSearchParams): preset=NAME | expr=TEXT, p.NAME=VALUE per parameter,
-// box=xmin,ymin,zmin,xmax,ymax,zmax, depth=MIN,MAX, err=MAX_ERROR, quality=good, cam=px,py,pz,tx,ty,tz,
+// box=xmin,ymin,zmin,xmax,ymax,zmax, depth=MIN,MAX, err=MAX_ERROR, mesher=primal|straddle,
+// simplify=1, quality=good, cam=px,py,pz,tx,ty,tz,
 // color=shaded|mean|gauss|cells, clip=AXIS,OFFSET[,flip], hide=edges,points,boundary,box,curves,
 // wire=1, axes=1, ao=1 (the render mode with ambient occlusion), shadows=1 (the render mode's
 // soft shadows), curves=JSON list of the
@@ -37,6 +38,8 @@ export function defaultState() {
     mesher: 'dual',         // under maxError: 'dual' (the server's default: the dual mesh
                             // where it applies), 'primal' ("dual": false) or 'straddle'
                             // (the primal polygons with straddled vertices)
+    simplify: false,        // under maxError: "simplify": true, the fewest triangles within
+                            // it (the server's default, for every mesher: the mesher's own)
     view: null,             // {pos: [3], target: [3]}
     color: 'shaded',
     clip: { on: false, axis: 'z', offset: 0, flip: false, cap: true },
@@ -64,6 +67,7 @@ export function requestBody(state, paramNames) {
     body.max_error = state.maxError;
     if (state.mesher !== 'dual') body.dual = false;  // the dual mesh is the server's default
     if (state.mesher === 'straddle') body.straddle = true;
+    if (state.simplify) body.simplify = true;  // off: the server's default
   } else {
     body.depth = { min: state.depth.min, max: state.depth.max };
   }
@@ -93,6 +97,7 @@ export function encodeState(state, paramNames) {
   if (state.maxError > 0) q.set('err', num(state.maxError));
   if (state.quality === 'good') q.set('quality', 'good');
   if (state.mesher !== 'dual') q.set('mesher', state.mesher);
+  if (state.simplify) q.set('simplify', '1');
   if (state.view) q.set('cam', [...state.view.pos, ...state.view.target].map(short).join(','));
   if (state.color !== 'shaded') q.set('color', state.color);
   if (state.clip.on) q.set('clip', [state.clip.axis, short(state.clip.offset)].concat(state.clip.flip ? ['flip'] : []).join(','));
@@ -146,6 +151,9 @@ export function decodeState(fragment) {
   }
   if (q.has('mesher')) {
     if (MESHERS.includes(q.get('mesher'))) s.mesher = q.get('mesher'); else s.problems.push('mesher');
+  }
+  if (q.has('simplify')) {
+    if (['0', '1'].includes(q.get('simplify'))) s.simplify = q.get('simplify') === '1'; else s.problems.push('simplify');
   }
   if (q.has('cam')) {
     const c = numbers(q.get('cam'), 6);

@@ -52,14 +52,15 @@ static const char *const same[][7] = {
      "{\"preset\": \"torus\", \"params\": {\"R\": 1, \"r\": 0.3}, \"depth\": {\"max\": 7}}",
      "{\"expr\": \"" TORUS "\", \"params\": {\"r\": 0.3, \"R\": 1}, \"box\": [-1.5,-1.5,-1.5,1.5,1.5,1.5]}",
      NULL},
-    /* under a bound: the dual mesh is the default; with dual false "simplify" left out
-     * means true (only primal polygons can come, and those are simplified by default) */
+    /* under a bound: the dual mesh is the default, no simplification unless asked (for
+     * the primal polygons too: one policy) */
     {"{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02}",
      "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"dual\": true}",
+     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"simplify\": false}",
      NULL},
     {"{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"dual\": false}",
      "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"dual\": false, "
-     "\"simplify\": true}",
+     "\"simplify\": false}",
      NULL},
     /* -0 is 0 */
     {"{\"expr\": \"x + y + z - 0.5\", \"box\": [-0.0, 0, 0, 1, 1, 1]}",
@@ -99,11 +100,11 @@ static const char *const different[] = {
     "\"straddle\": true}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"depth\": {\"max\": 7}, "
     "\"dual\": false}",
-    /* the dual mesh (the default) simplified too, or never: both differ from the default */
+    /* simplified: differs from the default (not simplified), on either mesher */
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"depth\": {\"max\": 7}, "
     "\"simplify\": true}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"depth\": {\"max\": 7}, "
-    "\"simplify\": false}",
+    "\"dual\": false, \"simplify\": true}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"depth\": {\"min\": 2}}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"tolerances\": {\"gradient\": 0.8}}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"tolerances\": {\"double_root_eps\": 1e-8}}",
@@ -181,6 +182,39 @@ Test(key, key_is_blake2b_of_material_naming_the_mesher_version)
     free(m);
     ism_tape_free(t);
     ism_request_free(&req);
+}
+
+/* Under a bound the simplification's choice is written out even when left at its default
+ * (false since the one policy of ism_simplify_after): material made under the old default
+ * ("after the primal polygons") said nothing, so a key that leaves it out could mean either.
+ * Without a bound it is not written (keys of plain requests stay as they were). */
+Test(key, material_and_canonical_say_the_simplify_default_under_a_bound)
+{
+    const char *bound = "{\"preset\": \"klein-bottle\", \"max_error\": 0.01}";
+    const char *plain = "{\"preset\": \"klein-bottle\"}";
+    const char *jsons[2] = {bound, plain};
+    for (int i = 0; i < 2; i++) {
+        ism_request req;
+        ism_req_error err;
+        cr_assert(ism_request_decode(jsons[i], strlen(jsons[i]), NULL, &req, &err), "%s",
+                  err.message);
+        ism_tape *t = ism_request_compile(&req, &err);
+        cr_assert_not_null(t);
+        char *m = ism_request_key_material(&req, t, NULL);
+        char *c = ism_request_canonical(&req, NULL);
+        cr_assert(m && c);
+        if (i == 0) {
+            cr_expect_not_null(strstr(m, "\"simplify\":false"), "%s", m);
+            cr_expect_not_null(strstr(c, "\"simplify\":false"), "%s", c);
+        } else {
+            cr_expect_null(strstr(m, "simplify"), "%s", m);
+            cr_expect_null(strstr(c, "simplify"), "%s", c);
+        }
+        free(m);
+        free(c);
+        ism_tape_free(t);
+        ism_request_free(&req);
+    }
 }
 
 Test(key, canonical_request_decodes_to_the_same_key_and_itself)

@@ -325,28 +325,35 @@ Test(request, max_error_decodes_and_sets_the_safety_depth)
     cr_assert(ism_request_decode(bound, strlen(bound), &lim, &req, &err), "%s", err.message);
     cr_expect_eq(req.poly.max_error, 0.002);
     cr_expect_eq(req.poly.max_depth, 9);
-    /* under a bound: the dual mesh by default, simplified only after the primal polygons */
-    cr_expect_eq(req.simplify_when, ISM_SIMPLIFY_PRIMAL);
+    /* under a bound: the dual mesh by default, no mesh simplified unless asked */
+    cr_expect(!req.simplify);
     ism_request_poly_options(&req, &o);
     cr_expect_eq(o.max_error, 0.002);
     cr_expect_eq(o.max_depth, 9);
     cr_expect(o.dual, "a bound asks for the dual mesh unless it says false");
-    cr_expect(!ism_simplify_after(req.simplify_when, 0.002, ISM_MESHER_DUAL));
-    cr_expect(ism_simplify_after(req.simplify_when, 0.002, ISM_MESHER_PRIMAL));
-    cr_expect(ism_simplify_after(req.simplify_when, 0.002, ISM_MESHER_STRADDLE));
+    cr_expect(!ism_simplify_after(req.simplify, 0.002));
     ism_request_free(&req);
 
     const char *asked = "{\"preset\": \"torus\", \"max_error\": 0.002, \"simplify\": true}";
     cr_assert(ism_request_decode(asked, strlen(asked), &lim, &req, &err), "%s", err.message);
-    cr_expect(ism_simplify_after(req.simplify_when, 0.002, ISM_MESHER_DUAL));
+    cr_expect(ism_simplify_after(req.simplify, 0.002));
+    cr_expect(!ism_simplify_after(req.simplify, 0), "never without a bound");
     ism_request_free(&req);
 
-    /* dual false: only the primal polygons can come, and they are simplified by default */
+    /* dual false: the primal polygons, not simplified either unless asked (one policy) */
     const char *primal = "{\"preset\": \"torus\", \"max_error\": 0.002, \"dual\": false}";
     cr_assert(ism_request_decode(primal, strlen(primal), &lim, &req, &err), "%s", err.message);
     ism_request_poly_options(&req, &o);
     cr_expect(!o.dual);
-    cr_expect_eq(req.simplify_when, ISM_SIMPLIFY_ALWAYS);
+    cr_expect(!req.simplify);
+    ism_request_free(&req);
+
+    /* either order of the two keys */
+    const char *both_asked = "{\"preset\": \"torus\", \"max_error\": 0.002, \"simplify\": true, "
+                             "\"dual\": false}";
+    cr_assert(ism_request_decode(both_asked, strlen(both_asked), &lim, &req, &err), "%s",
+              err.message);
+    cr_expect(req.simplify && !req.poly.dual);
     ism_request_free(&req);
 
     const char *both = "{\"preset\": \"torus\", \"max_error\": 0.002, \"depth\": {\"max\": 6}}";
@@ -356,8 +363,8 @@ Test(request, max_error_decodes_and_sets_the_safety_depth)
 
     const char *raw = "{\"preset\": \"torus\", \"max_error\": 0.002, \"simplify\": false}";
     cr_assert(ism_request_decode(raw, strlen(raw), &lim, &req, &err), "%s", err.message);
-    cr_expect_eq(req.simplify_when, ISM_SIMPLIFY_NEVER);
-    cr_expect(!ism_simplify_after(req.simplify_when, 0.002, ISM_MESHER_PRIMAL));
+    cr_expect(!req.simplify);
+    cr_expect(!ism_simplify_after(req.simplify, 0.002));
     ism_request_free(&req);
 
     const char *moved = "{\"preset\": \"torus\", \"max_error\": 0.002, \"straddle\": true}";
@@ -375,7 +382,7 @@ Test(request, max_error_decodes_and_sets_the_safety_depth)
     const char *plain = "{\"preset\": \"torus\"}";
     cr_assert(ism_request_decode(plain, strlen(plain), &lim, &req, &err), "%s", err.message);
     cr_expect_eq(req.poly.max_error, 0);
-    cr_expect_eq(req.simplify_when, ISM_SIMPLIFY_NEVER);
+    cr_expect(!req.simplify);
     ism_request_poly_options(&req, &o);
     cr_expect_eq(o.max_error, 0);
     cr_expect(!o.straddle);
