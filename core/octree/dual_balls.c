@@ -29,6 +29,13 @@
 /* The clip sphere lies this much beyond the farthest rim vertex (relative), so no rim
  * vertex sits on it. */
 #define RIM_MARGIN 1e-3
+/* A chord between two vertices just outside a clip sphere dips into it (by L² / 8 r1 for a
+ * chord of length L): the sphere then grows to the farther end's distance, at most this
+ * many times (each a scan of the triangles), before the ball counts as bad and shrinks.
+ * (kummer-4-nodes off the lattice still makes one or two meshes again at 1e-2 / 3e-3 /
+ * 1e-3: there the rim itself reaches the limit, the nappes a cell apart along the nodes'
+ * flat directions up to 0.2 from them; half the ball then fits.) */
+#define SETTLE_STEPS 8
 /* Newton steps moving a cut point onto f = 0 (a cut lies on a chord within E of f = 0:
  * two steps reach far below E; more only where ∇f is small). */
 #define CUT_NEWTON 4
@@ -206,6 +213,45 @@ static bool segment_meets(const double a[3], const double b[3], const double p[3
     return ism_sqdist3(q, p) < r * r;
 }
 
+/* The clip spheres grown until no edge with both ends outside one dips into it (up to
+ * SETTLE_STEPS scans; never to a ball's limit), and c->ball found for them. */
+static enum ism_fan_status settle_radii(clip *c, size_t *which)
+{
+    const ism_mesh *m = c->m;
+    size_t last = 0; /* the ball grown last */
+    for (int step = 0;; step++) {
+        free(c->ball);
+        if (!find_balls(c))
+            return ISM_FAN_NO_MEMORY;
+        bool grown = false;
+        for (size_t t = 0; t < m->ntris; t++)
+            for (int j = 0; j < 3; j++) {
+                uint32_t a = m->tri[3 * t + j], b = m->tri[3 * t + (j + 1) % 3];
+                if (c->ball[a] < c->n || c->ball[b] < c->n)
+                    continue;
+                const double *pa = m->pos + 3 * (size_t)a, *pb = m->pos + 3 * (size_t)b;
+                for (size_t k = 0; k < c->n; k++)
+                    if (c->r1[k] > 0 && segment_meets(pa, pb, c->b[k].p, c->r1[k])) {
+                        double far = fmax(ism_sqdist3(pa, c->b[k].p), ism_sqdist3(pb, c->b[k].p));
+                        c->r1[k] = fmax(c->r1[k], sqrt(far) * (1 + RIM_MARGIN));
+                        grown = true;
+                        last = k;
+                        if (!(c->r1[k] < c->b[k].limit)) {
+                            *which = k;
+                            return ISM_FAN_BAD;
+                        }
+                    }
+            }
+        if (!grown)
+            return ISM_FAN_OK;
+        if (step == SETTLE_STEPS) {
+            *which = last;
+            return ISM_FAN_BAD;
+        }
+    }
+}
+
+
 /* The point where edge a (inside ball k's sphere) - b (outside) crosses it, moved onto
  * f = 0 by Newton. */
 static void cut_point(clip *c, size_t k, uint32_t a, uint32_t b, double out[3])
@@ -295,7 +341,7 @@ static enum ism_fan_status collect_cuts(clip *c, size_t *which)
 }
 
 /* Triangle t kept, dropped or cut; its edges on a sphere into the rim. */
-static enum ism_fan_status clip_triangle(clip *c, size_t t, size_t *which)
+static enum ism_fan_status clip_triangle(clip *c, size_t t)
 {
     const uint32_t *v = c->m->tri + 3 * t;
     size_t kb[3];
@@ -304,16 +350,8 @@ static enum ism_fan_status clip_triangle(clip *c, size_t t, size_t *which)
         kb[j] = ball_of(c, v[j]);
         in += kb[j] < c->n;
     }
-    if (in == 0) {
-        for (size_t k = 0; k < c->n; k++)
-            for (int j = 0; j < 3 && c->r1[k] > 0; j++)
-                if (segment_meets(c->m->pos + 3 * (size_t)v[j],
-                                  c->m->pos + 3 * (size_t)v[(j + 1) % 3], c->b[k].p, c->r1[k])) {
-                    *which = k; /* an edge across the sphere with both ends outside */
-                    return ISM_FAN_BAD;
-                }
+    if (in == 0) /* no edge of it dips into a sphere (settle_radii) */
         return push(&c->tri, &c->nt, &c->capt, v, 1) ? ISM_FAN_OK : ISM_FAN_NO_MEMORY;
-    }
     if (in == 3)
         return ISM_FAN_OK;
     /* rotate so that corner 0 is the odd one out (inside when in = 1, outside when 2) */
@@ -512,12 +550,12 @@ enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_du
         st = clip_radii(&c, e, ne, which);
     free(e);
     size_t nv0 = m->nverts, nt0 = m->ntris; /* the dual mesh's own */
-    if (st == ISM_FAN_OK && !find_balls(&c))
-        st = ISM_FAN_NO_MEMORY;
+    if (st == ISM_FAN_OK)
+        st = settle_radii(&c, which);
     if (st == ISM_FAN_OK)
         st = collect_cuts(&c, which);
     for (size_t t = 0; t < nt0 && st == ISM_FAN_OK; t++)
-        st = clip_triangle(&c, t, which);
+        st = clip_triangle(&c, t);
     /* the triangles kept whole first, then the cut ones (a cut vertex among their corners):
      * fan_rims measures from `kept` on */
     size_t kept = 0, placed = 0;

@@ -11,7 +11,7 @@
  *   none either), one closed piece with χ 2, closed-form distances at centroids and
  *   midpoints.
  * - a cusp (x² + z² − y³ closed by a sphere-like quartic term) declines with its own reason.
- */
+ * - the same mesh on 1, 2 and 4 threads. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -38,14 +38,14 @@ static const pf_surface acnode_sphere = {"(x^2 + y^2 + z^2)*((x - 1)^2 + y^2 + z
                                          NULL, 0, NULL, 0};
 
 /* The service's meshing of t in box under E, the dual mesher allowed or not. */
-static void mesh_surface(const ism_tape *t, const double box[6], double e, bool dual,
-                         ism_mesh *m, ism_locus *l, ism_poly_stats *ps)
+static void mesh_surface_on(const ism_tape *t, const double box[6], double e, bool dual,
+                            int threads, ism_mesh *m, ism_locus *l, ism_poly_stats *ps)
 {
     ism_poly_options o;
     pf_options(&o, box, 3, DEPTH);
     o.max_error = e;
     o.dual = dual;
-    o.threads = 1;
+    o.threads = threads;
     ism_mesh_init(m);
     ism_locus_init(l);
     ism_conform_stats cs;
@@ -53,6 +53,13 @@ static void mesh_surface(const ism_tape *t, const double box[6], double e, bool 
     ism_error err;
     cr_assert_eq(ism_mesh_surface(t, &o, m, l, ps, &cs, &times, &err), ISM_POLY_OK, "%s",
                  err.message);
+}
+
+/* ... on one thread. */
+static void mesh_surface(const ism_tape *t, const double box[6], double e, bool dual,
+                         ism_mesh *m, ism_locus *l, ism_poly_stats *ps)
+{
+    mesh_surface_on(t, box, e, dual, 1, m, l, ps);
 }
 
 /* Distance from p to f = 0 by Newton's projection (the last iterate's distance plus its
@@ -180,6 +187,31 @@ Test(dual_points, kummer_nodes_one_vertex_each_as_the_primal_path)
             ism_locus_free(&l);
             ism_locus_free(&lp);
         }
+    ism_tape_free(t);
+}
+
+/* The clip and the fans run on one thread after the dual mesh's pool: the mesh is the same
+ * bit for bit on 1, 2 and 4 threads (the 0.37-cell box, where balls are made again). */
+Test(dual_points, same_mesh_on_1_2_4_threads)
+{
+    ism_tape *t = pf_compile(&kummer4);
+    static const double base[6] = {-3, -3, -3, 3, 3, 3};
+    double box[6];
+    pf_sweep_box(base, DEPTH, 1, box);
+    ism_mesh m[3];
+    ism_locus l[3];
+    ism_poly_stats ps;
+    static const int threads[3] = {1, 2, 4};
+    for (int k = 0; k < 3; k++) {
+        mesh_surface_on(t, box, 3e-3, true, threads[k], &m[k], &l[k], &ps);
+        cr_expect_eq(ps.mesher, ISM_MESHER_DUAL);
+    }
+    pf_same_mesh(&m[0], &m[1], "1 and 2 threads");
+    pf_same_mesh(&m[0], &m[2], "1 and 4 threads");
+    for (int k = 0; k < 3; k++) {
+        ism_mesh_free(&m[k]);
+        ism_locus_free(&l[k]);
+    }
     ism_tape_free(t);
 }
 
