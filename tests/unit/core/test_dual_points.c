@@ -6,11 +6,14 @@
  *   with exactly 4 non-manifold vertices, one at each node, each joining 2 cones; χ and
  *   components those of the primal path's mesh of the same surface and box; every
  *   centroid and edge midpoint within E of f = 0 (Newton projection in this file).
+ * - the spindle torus (R = 1/2, r = 1; its two nodes are quadratic cones): the same, with
+ *   closed-form distances.
  * - a sphere with an isolated point beside it (r² ((x - 1)² + y² + z² - 1/4): definite
  *   Hessian at the origin): the dual mesh, no vertex at the point (the primal path puts
  *   none either), one closed piece with χ 2, closed-form distances at centroids and
  *   midpoints.
- * - a cusp (x² + z² − y³ closed by a sphere-like quartic term) declines with its own reason.
+ * - a cusp (x² + z² − y³ closed by a sphere-like quartic term) declines with its own reason;
+ *   kummer-16-nodes (open: its funnels leave the box) with box_cut.
  * - the same mesh on 1, 2 and 4 threads. */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -215,6 +218,87 @@ Test(dual_points, same_mesh_on_1_2_4_threads)
     ism_tape_free(t);
 }
 
+/* The spindle torus: points at distance r = 1 from the circle of radius R = 1/2 (R < r):
+ * an outer apple and an inner lemon meeting at two nodes (0, 0, ±√(r² − R²)), each a
+ * quadratic cone where the meridian circles cross. */
+#define SPINDLE_R 0.5
+#define SPINDLE_r 1.0
+static const pf_surface spindle = {"(x^2 + y^2 + z^2 + 0.25 - 1)^2 - 4*0.25*(x^2 + y^2)", NULL,
+                                   0, NULL, 0};
+
+/* Closed-form distance to the spindle torus: in p's meridian half-plane (ρ ≥ 0) the surface
+ * is the two arcs, within ρ ≥ 0, of the circles of radius r round (±R, 0); the nearest
+ * point of an arc is p's radial projection when that lies on the arc, else the nearer of
+ * its ends, the nodes (0, ±h). */
+static double spindle_dist(const double *p)
+{
+    double rho = sqrt(p[0] * p[0] + p[1] * p[1]), z = p[2];
+    double h = sqrt(SPINDLE_r * SPINDLE_r - SPINDLE_R * SPINDLE_R), best = INFINITY;
+    for (int side = -1; side <= 1; side += 2) {
+        double c = side * SPINDLE_R, dr = rho - c, len = sqrt(dr * dr + z * z);
+        double qrho = c + SPINDLE_r * dr / len;
+        double d = qrho >= 0 ? fabs(len - SPINDLE_r)
+                             : fmin(hypot(rho, z - h), hypot(rho, z + h));
+        best = fmin(best, d);
+    }
+    return best;
+}
+
+/* The spindle torus's two nodes: each one vertex joining 2 cones, the topology of the primal
+ * path's mesh, closed-form distances within E at every centroid and edge midpoint. */
+Test(dual_points, spindle_torus_nodes_closed_form)
+{
+    ism_tape *t = pf_compile(&spindle);
+    /* not ±2: there the equators' outermost points (ρ = 1.5, 0.5) are lattice corners where
+     * f = 0 and the surface is tangent to the cells' faces, which the dual mesher cannot
+     * prove plain (not_plain; a limit of the dual mesher, not of the points) */
+    static const double base[6] = {-2.1, -2.1, -2.1, 1.9, 1.9, 1.9};
+    const double es[] = {1e-2, 3e-3};
+    for (int which = pf_first_box() - 1; which < 2; which++)
+        for (size_t k = 0; k < sizeof es / sizeof es[0]; k++) {
+            double box[6];
+            pf_sweep_box(base, DEPTH, which, box);
+            ism_mesh m, mp;
+            ism_locus l, lp;
+            ism_poly_stats ps, pp;
+            mesh_surface(t, box, es[k], true, &m, &l, &ps);
+            mesh_surface(t, box, es[k], false, &mp, &lp, &pp);
+            cr_expect_eq(ps.mesher, ISM_MESHER_DUAL, "box %d E %g: mesher %s (%s)", which,
+                         es[k], ism_mesher_name(ps.mesher),
+                         ism_dual_reason_name(ps.dual_declined));
+            size_t nodes = 0;
+            for (size_t i = 0; i < l.npoints; i++)
+                nodes += l.points[i].type == ISM_SING_NODE && l.points[i].certified &&
+                         l.points[i].cones == 2 && fabs(l.points[i].p[0]) < 1e-9 &&
+                         fabs(l.points[i].p[1]) < 1e-9 &&
+                         fabs(fabs(l.points[i].p[2]) - sqrt(0.75)) < 1e-9;
+            cr_expect_eq(nodes, 2, "box %d E %g: %zu nodes at (0, 0, ±√3/2) with 2 cones",
+                         which, es[k], nodes);
+            pf_props p, q;
+            pf_measure(&m, t, &p);
+            pf_measure(&mp, t, &q);
+            cr_expect_eq(p.boundary_edges + p.nonmanifold_edges, 0);
+            cr_expect_eq(p.euler, q.euler, "box %d E %g: χ %ld, primal %ld", which, es[k],
+                         p.euler, q.euler);
+            cr_expect_eq(p.components, q.components, "box %d E %g: %zu pieces, primal %zu",
+                         which, es[k], p.components, q.components);
+            size_t nm, at, cones, turned;
+            nm_vertices(&m, &l, &nm, &at, &cones);
+            cr_expect(nm == 2 && at == 2 && cones == 2, "box %d E %g: %zu non-manifold "
+                      "vertices, %zu at nodes, cones %zu", which, es[k], nm, at, cones);
+            double w = worst(&m, t, spindle_dist, &turned);
+            cr_expect_leq(w, es[k], "box %d E %g: a centroid or midpoint %g away", which,
+                          es[k], w);
+            cr_expect_eq(turned, 0, "box %d E %g: %zu triangles against ∇f", which, es[k],
+                         turned);
+            ism_mesh_free(&m);
+            ism_mesh_free(&mp);
+            ism_locus_free(&l);
+            ism_locus_free(&lp);
+        }
+    ism_tape_free(t);
+}
+
 /* Distance to the sphere of radius 1/2 round (1, 0, 0). */
 static double small_sphere_dist(const double *p)
 {
@@ -248,6 +332,31 @@ Test(dual_points, isolated_point_beside_a_sphere)
         ism_mesh_free(&m);
         ism_locus_free(&l);
     }
+    ism_tape_free(t);
+}
+
+/* Kummer's quartic at mu2 = 2 (16 real nodes) leaves every box through its four funnels:
+ * the dual mesher declines for the box (box_cut), not for its nodes, and the primal path
+ * conforms all 16. */
+Test(dual_points, kummer_16_declines_for_the_box)
+{
+    static const ism_param p16[] = {{"mu2", 2}, {"w", 1}};
+    const pf_surface k16 = {kummer4.expr, p16, 2, kummer_lets, 5};
+    ism_tape *t = pf_compile(&k16);
+    static const double box[6] = {-3, -3, -3, 3, 3, 3};
+    ism_mesh m;
+    ism_locus l;
+    ism_poly_stats ps;
+    mesh_surface(t, box, 1e-2, true, &m, &l, &ps);
+    size_t nodes = 0;
+    for (size_t i = 0; i < l.npoints; i++)
+        nodes += l.points[i].type == ISM_SING_NODE && l.points[i].cones == 2;
+    cr_expect_eq(nodes, 16, "%zu nodes with 2 cones", nodes);
+    cr_expect_eq(ps.mesher, ISM_MESHER_PRIMAL);
+    cr_expect_eq(ps.dual_declined, ISM_DUAL_WHY_BOX_CUT, "declined for %s",
+                 ism_dual_reason_name(ps.dual_declined));
+    ism_mesh_free(&m);
+    ism_locus_free(&l);
     ism_tape_free(t);
 }
 
