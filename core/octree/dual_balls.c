@@ -78,10 +78,10 @@ int ism_dual_balls_node(const ism_dual_ball *b, size_t n, const double lo[3], co
 }
 
 bool ism_dual_balls_near(const ism_dual_ball *b, size_t n, const double lo[3],
-                         const double hi[3])
+                         const double hi[3], double size)
 {
     for (size_t k = 0; k < n; k++)
-        if (box_d2(b[k].p, lo, hi) < b[k].limit * b[k].limit)
+        if (size <= b[k].leaf && box_d2(b[k].p, lo, hi) < b[k].limit * b[k].limit)
             return true;
     return false;
 }

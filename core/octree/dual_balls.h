@@ -53,9 +53,10 @@ void ism_dual_ball_make(ism_dual_ball *b, const double pt[5], const double box[6
 int ism_dual_balls_node(const ism_dual_ball *b, size_t n, const double lo[3], const double hi[3],
                         double size, bool at_max);
 
-/* Does the box lo..hi meet the ball of radius `limit` round one of the points? */
+/* Does the box lo..hi, of side `size` (0: any), meet the ball of radius `limit` round one of
+ * the points whose hole leaves are no smaller? */
 bool ism_dual_balls_near(const ism_dual_ball *b, size_t n, const double lo[3],
-                         const double hi[3]);
+                         const double hi[3], double size);
 
 enum ism_fan_status {
     ISM_FAN_OK = 0,
