@@ -137,8 +137,9 @@ bool rm_flip_would_pass(rm_pass *p, const double *A, const double *B, const doub
  * triangles are marked dead and removed vertices gone (rm_compact drops them). *ok false
  * when out of memory. */
 size_t rm_collapse_active(rm_pass *p, bool *ok);
-/* Splits needles under 10° whose short edge joins two locked vertices at a new vertex beside
- * that edge (rm_insert.c), within the room reserved; returns the insertions made. With last
+/* Splits needles under 10° that the collapses left (their short edge joins two locked
+ * vertices, or its collapse was refused) at a new vertex beside that edge (rm_insert.c),
+ * within the room reserved; returns the insertions made. With last
  * (no relaxation follows), only where the split's thin halves can be flipped away at once.
  * *ok false when out of memory. */
 size_t rm_insert_active(rm_pass *p, bool last, bool *ok);
