@@ -16,6 +16,15 @@
  * room to spare. */
 #define ISM_RM_SLIDE_KEEP_ORDER 0.05
 
+/* A slide may leave the boundary edges' midpoints and the vertex this × the fan's mean edge
+ * from f = 0 whatever they were: rounding. Where a box face cuts the surface in straight
+ * lines (whitney-umbrella's top face z = 1: x = ±y) every boundary point measures rounding
+ * (1e-17) and any slide another, so each was refused by chance; 1e-12 of an edge lies far
+ * above that and far below the polygoniser's own vertex error (~1e-8). Whitney in the 1e-3
+ * / 0.37-cell boxes: needles under 10° at the boundary 10 / 5 -> 3 / 2 (those left have a
+ * corner where the surface crosses an edge of the box: no plane to slide in). */
+#define ISM_RM_SLIDE_ROUNDING 1e-12
+
 /* The two boundary neighbours of v (one triangle on the edge) and the axis of the box plane
  * the three share; false when they are not found. */
 static bool boundary_neighbours(const rm_pass *p, uint32_t v, uint32_t nb[2], int *axis)
@@ -75,7 +84,8 @@ static bool slide_vertex(rm_pass *p, uint32_t v)
     const double *a = p->r.m->pos + 3 * nb[0], *b = p->r.m->pos + 3 * nb[1];
     rm_fan f;
     rm_fan_measure(p, v, &f);
-    double bound = fmax(p->max_error, boundary_error(p, pos, a, b));
+    double bound = fmax(fmax(p->max_error, boundary_error(p, pos, a, b)),
+                        ISM_RM_SLIDE_ROUNDING * f.mean_edge);
     for (double step = 1; step >= 0.5; step *= 0.5) {
         double x[3], g[3];
         for (int k = 0; k < 3; k++)

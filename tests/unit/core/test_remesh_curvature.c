@@ -9,7 +9,9 @@
  * edges, components unchanged; vertices no farther from f = 0 than before; and no more
  * triangles turned over against ∇f than before. Then the figure-8 Klein bottle, whose mesh
  * has pleats beside its double curve (edges whose triangles face opposite sides of ∇f at both
- * ends, ∇f from the closed form): none after the pass, χ = 0 and the double curve kept. */
+ * ends, ∇f from the closed form): none after the pass, χ = 0 and the double curve kept.
+ * Last Whitney's box faces at the preset's depth: no needle on a face (off the box's edges)
+ * after the pass, every boundary vertex still on its face. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
@@ -209,4 +211,84 @@ Test(remesh_curvature, klein_no_turned_edge)
      * / 5 left while flips and moves were all the pass had (at depth 6: 8 / 5 / 1 -> 8 / 0 / 0) */
     const pass_case c = {KLEIN, {-4, -4, -4, 4, 4, 4}, 7 - pf_quick(), klein_gradient, nowhere};
     in_three_boxes(&c);
+}
+
+/* Faces of the box vertex p lies on (within FACE_TOL). */
+static int faces_at(const double *p, const double box[6])
+{
+    int n = 0;
+    for (int k = 0; k < 3; k++)
+        n += fabs(p[k] - box[k]) <= FACE_TOL || fabs(p[k] - box[k + 3]) <= FACE_TOL;
+    return n;
+}
+
+/* Needles under NEEDLE_DEG with a corner on a box face and none on an edge of the box (two
+ * faces: no plane to slide in), and vertices of boundary edges off every face. */
+static void face_needles(const ism_mesh *m, const double box[6], size_t *needles, size_t *off)
+{
+    *needles = *off = 0;
+    for (size_t t = 0; t < m->ntris; t++) {
+        int most = 0;
+        for (int k = 0; k < 3; k++) {
+            int n = faces_at(m->pos + 3 * (size_t)m->tri[3 * t + k], box);
+            most = n > most ? n : most;
+        }
+        *needles += most == 1 && pf_tri_min_angle(m, t) < NEEDLE_DEG;
+    }
+    ism_an_edge_table et;
+    cr_assert(ism_an_edge_table_build(m, &et));
+    for (uint32_t e = 0; e < et.nedges; e++) {
+        uint32_t lo, hi;
+        ism_an_edge_ends(m, &et, e, &lo, &hi);
+        if (ism_an_edge_count(&et, e) == 1)
+            *off += (faces_at(m->pos + 3 * (size_t)lo, box) == 0) +
+                    (faces_at(m->pos + 3 * (size_t)hi, box) == 0);
+    }
+    ism_an_edge_table_free(&et);
+}
+
+/* Whitney's top face z = 1 cuts it in two straight lines (x = ±y): every boundary point
+ * there measures rounding from f = 0, and while a slide had to measure no more than that
+ * (rm_slide.c) the needles on its short boundary edges stayed (preset depth, in this test's
+ * lattice / 1e-3 / 0.37-cell boxes: 0 / 19 / 8 left by the pass, 0 / 0 / 0 since). */
+static void whitney_faces(const ism_tape *t, const double box[6], int which)
+{
+    ism_mesh m;
+    ism_locus l;
+    pf_run_surface(t, box, 3, 7, &m, &l);
+    pf_props b, a;
+    pf_measure(&m, t, &b);
+    size_t before, after, off_b, off_a;
+    face_needles(&m, box, &before, &off_b);
+    ism_remesh_stats st;
+    ism_error err;
+    cr_assert(ism_quality_pass(t, &l, NULL, 0, NULL, &m, &st, &err), "%s", err.message);
+    pf_measure(&m, t, &a);
+    face_needles(&m, box, &after, &off_a);
+    cr_log_info("whitney box %d: needles at a face (off the box's edges) %zu -> %zu", which,
+                before, after);
+    cr_expect_gt(before, 0, "box %d: nothing to mend", which);
+    cr_expect_eq(after, 0, "box %d: %zu needles at a face", which, after);
+    cr_expect_eq(off_b, 0, "box %d", which);
+    cr_expect_eq(off_a, 0, "box %d: %zu boundary vertices left their face", which, off_a);
+    cr_expect_eq(a.euler, b.euler, "box %d: χ %ld -> %ld", which, b.euler, a.euler);
+    cr_expect_eq(a.boundary_edges, b.boundary_edges, "box %d", which);
+    cr_expect_eq(a.nonmanifold_edges, b.nonmanifold_edges, "box %d", which);
+    cr_expect_eq(a.components, b.components, "box %d", which);
+    cr_expect_leq(a.max_dist, fmax(1e-9, b.max_dist), "box %d", which);
+    ism_locus_free(&l);
+    ism_mesh_free(&m);
+}
+
+Test(remesh_curvature, whitney_boundary_slides_on_straight_cuts)
+{
+    const pf_surface s = {WHITNEY, NULL, 0, NULL, 0};
+    const double base[6] = {-1, -1, -1, 1, 1, 1};
+    ism_tape *t = pf_compile(&s);
+    for (int which = pf_first_box() ? 1 : -1; which < 2; which++) {
+        double box[6];
+        pf_sweep_box(base, 7, which, box);
+        whitney_faces(t, box, which);
+    }
+    ism_tape_free(t);
 }
