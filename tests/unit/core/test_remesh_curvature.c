@@ -144,6 +144,17 @@ static void measure(const ism_mesh *m, const double box[6], const pass_case *c, 
     s->turned = turned_edges(m, c->grad);
 }
 
+/* The pass kept the topology report (χ, non-manifold and boundary edges, components) of b
+ * in a, and no vertex moved farther from f = 0 than the farthest before. */
+static void expect_kept(const pf_props *b, const pf_props *a, int which)
+{
+    cr_expect_eq(a->euler, b->euler, "box %d: χ %ld -> %ld", which, b->euler, a->euler);
+    cr_expect_eq(a->nonmanifold_edges, b->nonmanifold_edges, "box %d", which);
+    cr_expect_eq(a->boundary_edges, b->boundary_edges, "box %d", which);
+    cr_expect_eq(a->components, b->components, "box %d", which);
+    cr_expect_leq(a->max_dist, fmax(1e-9, b->max_dist), "box %d", which);
+}
+
 /* The pass on c's mesh in box: no needle away from the singular set and the box faces, no
  * turned edge, and the topology report and the vertices' distance from f = 0 kept. */
 static void check(const ism_tape *t, const double box[6], const pass_case *c, int which)
@@ -167,11 +178,7 @@ static void check(const ism_tape *t, const double box[6], const pass_case *c, in
     cr_expect_gt(before.needles + before.turned, 0, "box %d: nothing to mend", which);
     cr_expect_eq(after.needles, 0, "box %d: %zu needles", which, after.needles);
     cr_expect_eq(after.turned, 0, "box %d: %zu turned edges", which, after.turned);
-    cr_expect_eq(a.euler, b.euler, "box %d: χ %ld -> %ld", which, b.euler, a.euler);
-    cr_expect_eq(a.nonmanifold_edges, b.nonmanifold_edges, "box %d", which);
-    cr_expect_eq(a.boundary_edges, b.boundary_edges, "box %d", which);
-    cr_expect_eq(a.components, b.components, "box %d", which);
-    cr_expect_leq(a.max_dist, fmax(1e-9, b.max_dist), "box %d", which);
+    expect_kept(&b, &a, which);
     ism_locus_free(&l);
     ism_mesh_free(&m);
 }
@@ -271,11 +278,7 @@ static void whitney_faces(const ism_tape *t, const double box[6], int which)
     cr_expect_eq(after, 0, "box %d: %zu needles at a face", which, after);
     cr_expect_eq(off_b, 0, "box %d", which);
     cr_expect_eq(off_a, 0, "box %d: %zu boundary vertices left their face", which, off_a);
-    cr_expect_eq(a.euler, b.euler, "box %d: χ %ld -> %ld", which, b.euler, a.euler);
-    cr_expect_eq(a.boundary_edges, b.boundary_edges, "box %d", which);
-    cr_expect_eq(a.nonmanifold_edges, b.nonmanifold_edges, "box %d", which);
-    cr_expect_eq(a.components, b.components, "box %d", which);
-    cr_expect_leq(a.max_dist, fmax(1e-9, b.max_dist), "box %d", which);
+    expect_kept(&b, &a, which);
     ism_locus_free(&l);
     ism_mesh_free(&m);
 }
