@@ -243,8 +243,44 @@ static void count_thin(thread_state *th, uint8_t thin)
     th->thin_found += (thin & ISM_NODE_THIN_FOUND) != 0;
 }
 
-/* Does the polygoniser's edge search (edge_roots.h, as the cells will run it) find a root
- * on one of the node's edges: on face `face`'s four, or on all twelve when face < 0? */
+/* Points along the straight path between two root pairs' middles (edges_see): the
+ * other-sign region joins them when f has the other sign at all of them. A bar between two
+ * pairs 0.08 apart leaves a gap of 0.05 (cube minus ball r = 1.41, below): 8 points are
+ * 0.009 apart. */
+#define JOIN_SAMPLES 8
+
+/* Do f's values at JOIN_SAMPLES points strictly between p and q all have the sign opposite
+ * to `sign`? */
+static bool joined(ism_sampler *s, const double p[3], const double q[3], int sign)
+{
+    for (int i = 1; i <= JOIN_SAMPLES; i++) {
+        double t = (double)i / (JOIN_SAMPLES + 1), x[3];
+        for (int j = 0; j < 3; j++)
+            x[j] = p[j] + t * (q[j] - p[j]);
+        double f = ism_sample_f(s, x);
+        if (!(sign > 0 ? f < 0 : f > 0))
+            return false;
+    }
+    return true;
+}
+
+static int root_of(int *up, int i)
+{
+    while (up[i] != i)
+        i = up[i];
+    return i;
+}
+
+/* Does the polygoniser's edge search (edge_roots.h, as the cells will run it) see the piece
+ * found at a kink on the node's edges: on face `face`'s four, or on all twelve when face < 0?
+ * It does when some edge holds a root pair and the other-sign region joins the pairs' middles
+ * pairwise along straight paths (one sliver, one loop of the cells). Pairs that the region
+ * does not join there may be two ends of one bar that passes between them unseen: cube minus
+ * ball r = 1.41 (bars 1/13 of a depth-5 cell), box ±1.3 moved by 0.37 cell, has a lattice
+ * plane 0.0063 inside a cube face, past the bars' middle section (0.006) but not their ends,
+ * so the plane met each bar only near the node's two ends and the cells capped the ends
+ * apart (χ −2, three bars cut). A crease's wedge crossing the node leaves a strip on a face
+ * that joins its pairs. */
 static bool edges_see(const build *b, thread_state *th, const ism_tape *sub,
                       const ism_corners *k, int face)
 {
@@ -253,23 +289,38 @@ static bool edges_see(const build *b, thread_state *th, const ism_tape *sub,
                            true}; /* asked only where f has a kink */
     const ism_tape *saved = th->s.tape;
     th->s.tape = sub;
-    bool seen = false;
-    for (int e = 0; e < 12 && !seen; e++) {
+    double mid[12][3];
+    int up[12], n = 0, sign = 0;
+    for (int e = 0; e < 12; e++) {
         int c0, c1, faces[2];
         ism_cube_edge(e, &c0, &c1, faces);
         if (face >= 0 && faces[0] != face && faces[1] != face)
             continue;
-        /* ism_segment_roots's path to its first root, without refining it (the box's
-         * corners share a sign: only the double-root search can find one) */
+        /* ism_segment_roots's path to its first pair (the box's corners share a sign: only
+         * the double-root search can find one); t: a point between the two roots */
+        const double *a = k->p[c0], *z = k->p[c1];
         double t;
-        seen = !ism_segment_rootless(&prm, k->p[c0], k->p[c1], k->f[c0], k->f[c1], k->g[c0],
-                                     k->g[c1]) &&
-               ism_segment_may_reach(&th->s, k->p[c0], k->p[c1], 0) &&
-               ism_double_root_search(&th->s, &prm, k->p[c0], k->p[c1], k->f[c0], k->f[c1],
-                                      &t) != 0;
+        int found = 0;
+        if (!ism_segment_rootless(&prm, a, z, k->f[c0], k->f[c1], k->g[c0], k->g[c1]) &&
+            ism_segment_may_reach(&th->s, a, z, 0))
+            found = ism_double_root_search(&th->s, &prm, a, z, k->f[c0], k->f[c1], &t);
+        if (found == 0)
+            continue;
+        sign = k->f[c0] < 0 ? -1 : 1;
+        for (int j = 0; j < 3; j++)
+            mid[n][j] = a[j] + t * (z[j] - a[j]);
+        up[n] = n;
+        /* a tangent point (1) joins nothing: the cells see a touching point there */
+        for (int i = 0; i < n && found == 2; i++)
+            if (root_of(up, i) != root_of(up, n) && joined(&th->s, mid[i], mid[n], sign))
+                up[root_of(up, i)] = root_of(up, n);
+        n++;
     }
+    int groups = 0;
+    for (int i = 0; i < n; i++)
+        groups += root_of(up, i) == i;
     th->s.tape = saved;
-    return seen;
+    return groups == 1;
 }
 
 /* The verdict as ism_node.thin keeps it. */
@@ -310,8 +361,9 @@ static enum ism_thin_verdict search_box(const build *b, thread_state *th, const 
  * there. What the edges do not see is a piece of its own: a bar thinner than the node
  * passing through it (its section an island on two faces), a lens where two balls overlap
  * (the wedge's planes curved), a piece inside it. So a piece found where f has a kink
- * counts when the node's edges see no root, or, in a face whose four corners share a sign
- * (all six of a node whose edges see the sliver), when the face's four edges see none:
+ * counts when the node's edges see no root (or see pairs that the piece does not join:
+ * edges_see), or, in a face whose four corners share a sign (all six of a node whose edges
+ * see the sliver), when the face's four edges see none:
  *
  *        sliver: its wedge crosses an edge      bar: an island in the face
  *        +─────────────────+                    +─────────────────+
@@ -320,6 +372,10 @@ static enum ism_thin_verdict search_box(const build *b, thread_state *th, const 
  *        │      ╱    ╲     │                    │     ╱  ╲        │
  *        +─────×──────×────+                    │    ╱____╲       │
  *             two roots on the edge             +─────────────────+
+ *
+ * The preview's coarse search (b->p->thin_coarse) probes whole nodes, and the faces of
+ * nodes with both signs only where f has a kink (without them a bar found in a split node
+ * met its unsplit neighbour's face in an island: cracks).
  *
  * Cost (own boxes, depth 7, one thread), where nothing is hidden: the gyroid ball searches
  * 4,425 boxes, most at its crease, 2,051M -> 2,141M instructions (+4.4%); cube minus ball
@@ -339,11 +395,11 @@ static uint8_t hides_piece(build *b, thread_state *th, const ism_node *nd, const
     bool one_sign = sign != 0 && sign == face_sign(k, 1);
     if (one_sign) {
         v = search_box(b, th, sub, k, lo, hi, sign, -1, &tally);
-        if (b->p->thin_coarse || v != ISM_THIN_KINKED)
+        if (v != ISM_THIN_KINKED)
             return thin_bits(&tally, v); /* else islands in its faces still count */
     }
-    if (b->p->thin_coarse)
-        return 0;
+    if (b->p->thin_coarse && !ism_tape_has_min_max(sub))
+        return thin_bits(&tally, v);
     for (int face = 0; face < 6 && v != ISM_THIN_FOUND && v != ISM_THIN_FOUND_KINKED; face++) {
         int s = face_sign(k, face);
         if (s == 0)

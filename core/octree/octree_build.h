@@ -28,7 +28,8 @@ typedef struct ism_octree_build_params {
     int thin_depth;                   /* >= max_depth: a node hiding a piece of the surface
                                          from its corners (thin_search.h) is split down to
                                          here; the grid must be at least this deep */
-    bool thin_coarse;                 /* whole nodes only, no resolve levels
+    bool thin_coarse;                 /* whole nodes only (faces too where f has a
+                                         kink), no resolve levels
                                          (ism_poly_options.thin_coarse) */
     ism_flatness flatness;
     const double (*quiet)[4];         /* balls hidden pieces are not chased into (see

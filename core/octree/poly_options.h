@@ -32,9 +32,10 @@ typedef struct ism_poly_options {
                                below max_depth (thin_search.h; default on) */
     bool thin_coarse;       /* with thin_search, the live preview's cheaper search: only
                                nodes whose eight corners share a sign are searched (a small
-                               closed piece or a tube inside them; not the islands in the faces
-                               of nodes with both signs, mostly the nappes round singular
-                               points), by Newton probes without interval proofs
+                               closed piece or a tube inside them; the islands in the faces of
+                               nodes with both signs, mostly the nappes round singular points,
+                               only where f has a min/max kink: a CSG frame's thin bars pass
+                               through faces there), by Newton probes without interval proofs
                                (ism_thin_probe), and a piece found is split only while it
                                stays hidden, not ISM_THIN_RESOLVE_LEVELS further (default off) */
     bool fresh_rounds;      /* under max_error, build every round's octree and polygons

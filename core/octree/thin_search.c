@@ -185,13 +185,13 @@ enum ism_thin_verdict ism_thin_probe(ism_sampler *s, const double lo[3], const d
     double scratch[3];
     if (!found)
         found = scratch;
-    if (ism_tape_has_min_max(s->tape))
-        return ISM_THIN_KINKED;
+    enum ism_thin_verdict hit =
+        ism_tape_has_min_max(s->tape) ? ISM_THIN_FOUND_KINKED : ISM_THIN_FOUND;
     ism_interval x[3];
     for (int k = 0; k < 3; k++)
         x[k] = iv(lo[k], hi[k]);
     if (probe(s, x, sign, found))
-        return ISM_THIN_FOUND;
+        return hit;
     for (int c = 0; c < 8; c++) {
         bool twin = false; /* the same octant as an earlier one: the box is flat there */
         ism_interval o[3];
@@ -201,7 +201,7 @@ enum ism_thin_verdict ism_thin_probe(ism_sampler *s, const double lo[3], const d
             o[k] = (c >> k) & 1 ? iv(m, hi[k]) : iv(lo[k], m);
         }
         if (!twin && probe(s, o, sign, found))
-            return ISM_THIN_FOUND;
+            return hit;
     }
     return ISM_THIN_UNDECIDED;
 }

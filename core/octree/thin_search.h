@@ -24,7 +24,8 @@ enum ism_thin_verdict {
                               poking past the corners, found at every depth, which the box's
                               edges see; the caller tells it from a piece of its own
                               (octree_build.c) */
-    ISM_THIN_KINKED,    /* not probed (ism_thin_probe only): f may have a kink in the box */
+    ISM_THIN_KINKED,    /* not returned by the searches: the caller's verdict on a piece
+                           found at a kink that the box's edges see (octree_build.c) */
 };
 
 /* One thread's scratch for the search (serves the tape it was made for and every tape
@@ -39,10 +40,10 @@ typedef struct ism_thin_ws {
  * proof. ISM_THIN_FOUND as ism_thin_search; otherwise ISM_THIN_UNDECIDED (nothing found,
  * nothing proven). A ball or a tube a fifth of the box across is reached from the nearest
  * of those centres (each step lands past f = 0); a piece the probes miss is missing from
- * the preview only. ISM_THIN_KINKED, not probed, when s->tape (shortened to the node) still
- * holds a min or max: a CSG crease may cross the box, whose slivers past the corners the
- * probes would find at every level (the gyroid ball at depth 4: 132 "pieces", +22%
- * triangles). */
+ * the preview only. ISM_THIN_FOUND_KINKED instead of FOUND when s->tape (shortened to the
+ * node) still holds a min or max: a CSG crease may cross the box, whose slivers past the
+ * corners the probes find at every level (the gyroid ball at depth 4: 132 "pieces", +22%
+ * triangles, when each counted); the caller keeps only what the box's edges do not see. */
 enum ism_thin_verdict ism_thin_probe(ism_sampler *s, const double lo[3], const double hi[3],
                                      int sign, double found[3]);
 

@@ -457,8 +457,9 @@ static bool cut_curves(const ism_request *req, const ism_tape *tape,
  * the coarse search for pieces hidden from the cells' corners (thin_coarse: Newton probes
  * in nodes whose corners all share a sign, so a small ball or a thin tube between the
  * lattice lines still shows, followed only while it stays hidden; +9% CPU over the presets'
- * previews at depth 4). The full search also looks at the faces of
- * nodes with both signs, and without a locus it chases every singular point's nappes
+ * previews at depth 4; where f has a min/max kink also in the faces of nodes with both
+ * signs, so a CSG frame's thin bars show). The full search looks at those faces
+ * everywhere, and without a locus it chases every singular point's nappes
  * ISM_THIN_BLIND_DEPTH levels down (kummer at depth 4: 12584 triangles and 749 ms instead
  * of 1880 and 97 ms at load 24); the refined mesh has them. */
 static bool polygonise_preview(const ism_tape *tape, const ism_poly_options *po,

@@ -202,6 +202,42 @@ class ApiTest(unittest.TestCase):
                         gaps = [zs[0] - box[2]] + [q - p for p, q in zip(zs, zs[1:])] + [box[5] - zs[-1]]
                         self.assertLessEqual(max(gaps), 1.01 * cell, what)   # no length of it missing
 
+    def test_preview_keeps_the_bars_of_a_csg_frame(self):
+        """The cube [-1, 1]^3 minus the ball of radius 1.4 is a frame of 12 bars joined at 8
+        corners (genus 12 - 8 + 1 = 5: chi = 2 - 2*5 = -8, one piece, closed); at its middle a
+        bar is 0.02 across, an eighth of a depth-4 cell of the box +-1.3, between the lattice
+        lines. A preview at depth 4 keeps every bar (it dropped them all: chi 16, the 8
+        corners apart), in the box as given and shifted by 1e-3 and by 0.37 of a cell. chi,
+        pieces and open edges are counted from the OBJ's faces."""
+        cell = 2.6 / 2 ** 4
+        for shift in (0.0, 1e-3, 0.37 * cell):
+            box = [-1.3 + shift] * 3 + [1.3 + shift] * 3
+            r = self.d.post("/v1/mesh?format=obj", {"preset": "cube-minus-ball", "params": {"r": 1.4},
+                                                    "box": box, "preview": True,
+                                                    "depth": {"min": 3, "max": 4}})
+            self.assertEqual(r.status, 200, r.body[:300])
+            lines = r.body.decode().splitlines()
+            nverts = sum(1 for l in lines if l.startswith("v "))
+            faces = [[int(w.split("/")[0]) - 1 for w in l.split()[1:]] for l in lines if l.startswith("f ")]
+            edges = {}
+            up = list(range(nverts))
+
+            def root(v):
+                while up[v] != v:
+                    up[v] = up[up[v]]
+                    v = up[v]
+                return v
+            for f in faces:
+                for a, b in zip(f, f[1:] + f[:1]):
+                    e = (min(a, b), max(a, b))
+                    edges[e] = edges.get(e, 0) + 1
+                    up[root(a)] = root(b)
+            used = {v for f in faces for v in f}
+            chi = len(used) - len(edges) + len(faces)
+            self.assertEqual(chi, -8, shift)
+            self.assertEqual(len({root(v) for v in used}), 1, shift)
+            self.assertEqual([n for n in edges.values() if n != 2], [], shift)
+
     def test_stats_and_features(self):
         key = self.d.post("/v1/mesh", sphere(0.66)).header("ETag").strip('"')
         stats = self.d.get("/v1/meshes/%s/stats" % key)
