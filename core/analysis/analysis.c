@@ -14,9 +14,14 @@
 #include "core/analysis/quality.h"
 #include "core/analysis/implicit.h"
 #include "core/analysis/accuracy.h"
+#include "core/analysis/blocks.h"
 
 #include <stdlib.h>
 #include <string.h>
+
+/* Below this many triangles the passes run on the calling thread: they take less than
+ * starting a thread does (tens of microseconds). */
+#define POOL_MIN_TRIANGLES 8192
 
 static void count_collapsed(const ism_mesh *m, ism_analysis *a)
 {
@@ -40,10 +45,14 @@ bool ism_analyse(const ism_mesh *m, const ism_tape *f, const ism_analysis_option
     count_collapsed(m, a);
     ism_an_edge_table et;
     ism_an_vertex_facts vf = {0};
-    bool ok = ism_an_edge_table_build(m, &et);
+    /* the passes' threads, made once (the ones that evaluate f run on blocks.c's) */
+    int threads = ism_an_threads(o->threads);
+    ism_pool *pool = threads > 1 && m->ntris >= POOL_MIN_TRIANGLES ? ism_pool_new(threads) : NULL;
+    bool ok = ism_an_edge_table_build_on(m, pool, &et);
     ok = ok && ism_an_classify_vertices(m, &et, &vf, a) && ism_an_find_curves(m, &et, &vf, a) &&
          ism_an_find_points(m, &vf, a) && ism_an_topology(m, &et, &vf, a) &&
-         ism_an_count_duplicates(m, &et, a) && ism_an_triangle_quality(m, a);
+         ism_an_count_duplicates(m, &et, a) && ism_an_triangle_quality(m, pool, a);
+    ism_pool_free(pool);
     free(vf.cone_sets); /* the rest needs only per-vertex facts and the edges */
     vf.cone_sets = NULL;
     ok = ok && ism_an_implicit_figures(m, f, o, &vf, a);

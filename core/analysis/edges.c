@@ -1,8 +1,12 @@
 /* edges.c — the edge table of a triangle mesh: every distinct vertex pair of the triangles,
  * numbered in (smaller, larger) order, with the half-edges that lie on it. Built in linear
  * time by bucketing the half-edges on their smaller vertex (a counting sort) and sorting each
- * small bucket on the larger vertex; only a vertex of huge degree costs a real sort. */
+ * small bucket on the larger vertex; only a vertex of huge degree costs a real sort. Every
+ * step runs in blocks on a pool's threads (counts and bucket places by atomic increments;
+ * a bucket's sort on (larger vertex, half-edge) makes its order the same whoever filled it;
+ * edges numbered per block from prefix sums), so the table is the same on any number. */
 #include "core/analysis/edges.h"
+#include "core/util/parallel.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -60,76 +64,152 @@ static bool sort_bucket(const uint32_t *tri, uint32_t *he, size_t n)
     return true;
 }
 
-/* Counting sort of the half-edges of non-collapsed triangles on their smaller vertex.
- * Returns the number of half-edges placed; bucket v is edge_he[start[v] .. start[v + 1]). */
-static size_t bucket_half_edges(const ism_mesh *m, uint32_t *start, uint32_t *edge_he)
+/* Work per task of the build's loops: fixed sizes, so the table never depends on the
+ * number of threads (it would not anyway: every step below writes a result that is the
+ * same whichever thread made it). A few thousand items: a task is tens of microseconds,
+ * far above what handing it out costs. */
+#define TRI_BLOCK 4096
+#define VERT_BLOCK 2048
+#define HE_BLOCK 16384
+
+typedef struct builder {
+    const ism_mesh *m;
+    ism_an_edge_table *et;
+    uint32_t *start;  /* nverts + 1: bucket v is edge_he[start[v] .. start[v + 1]) */
+    uint32_t *cursor; /* nverts: the next free place in each bucket while filling */
+    size_t total;     /* half-edges in the buckets */
+    size_t *runs;     /* per block of half-edges: edges starting in it, then their offsets */
+    int failed;       /* a bucket's sort found no memory */
+} builder;
+
+static size_t blocks_of(size_t n, size_t per) { return (n + per - 1) / per; }
+
+/* Bucket sizes: the half-edges of non-collapsed triangles counted on their smaller vertex
+ * (start[v + 1]); the collapsed triangles' half-edges get no edge. */
+static void count_block(void *ctx, size_t blk, int thread)
 {
-    size_t nv = m->nverts, nt = m->ntris;
-    memset(start, 0, (nv + 1) * sizeof *start);
-    for (size_t t = 0; t < nt; t++)
-        if (!ism_an_tri_collapsed(m->tri, t))
-            for (uint32_t h = (uint32_t)(3 * t); h < 3 * t + 3; h++)
-                start[he_lo(m->tri, h) + 1]++;
-    for (size_t v = 0; v < nv; v++)
-        start[v + 1] += start[v];
-    size_t total = start[nv];
-    /* fill using start[v] as a cursor, then shift back */
-    for (size_t t = 0; t < nt; t++)
-        if (!ism_an_tri_collapsed(m->tri, t))
-            for (uint32_t h = (uint32_t)(3 * t); h < 3 * t + 3; h++)
-                edge_he[start[he_lo(m->tri, h)]++] = h;
-    memmove(start + 1, start, nv * sizeof *start);
-    start[0] = 0;
-    return total;
+    (void)thread;
+    builder *w = ctx;
+    const uint32_t *tri = w->m->tri;
+    size_t lo = blk * TRI_BLOCK, hi = lo + TRI_BLOCK < w->m->ntris ? lo + TRI_BLOCK : w->m->ntris;
+    for (size_t t = lo; t < hi; t++) {
+        if (ism_an_tri_collapsed(tri, t)) {
+            for (size_t h = 3 * t; h < 3 * t + 3; h++)
+                w->et->he_edge[h] = ISM_AN_NONE;
+            continue;
+        }
+        for (uint32_t h = (uint32_t)(3 * t); h < 3 * t + 3; h++)
+            __atomic_fetch_add(&w->start[he_lo(tri, h) + 1], 1, __ATOMIC_RELAXED);
+    }
 }
 
-/* Numbers the runs of equal (lo, hi) in the bucketed, sorted half-edges. */
-static bool number_edges(const ism_mesh *m, size_t total, ism_an_edge_table *et)
+/* Each half-edge into its bucket, at a place the bucket's cursor hands out (the order inside
+ * a bucket is whatever the threads made: the bucket's sort fixes it). */
+static void fill_block(void *ctx, size_t blk, int thread)
 {
-    size_t n = 0;
-    for (size_t i = 0; i < total; i++)
-        if (i == 0 || he_lo(m->tri, et->edge_he[i]) != he_lo(m->tri, et->edge_he[i - 1]) ||
-            he_hi(m->tri, et->edge_he[i]) != he_hi(m->tri, et->edge_he[i - 1]))
-            n++;
-    et->nedges = n;
-    et->edge_start = malloc((n + 1) * sizeof *et->edge_start);
-    if (!et->edge_start)
-        return false;
-    uint32_t e = ISM_AN_NONE;
-    for (size_t i = 0; i < total; i++) {
+    (void)thread;
+    builder *w = ctx;
+    const uint32_t *tri = w->m->tri;
+    size_t lo = blk * TRI_BLOCK, hi = lo + TRI_BLOCK < w->m->ntris ? lo + TRI_BLOCK : w->m->ntris;
+    for (size_t t = lo; t < hi; t++)
+        if (!ism_an_tri_collapsed(tri, t))
+            for (uint32_t h = (uint32_t)(3 * t); h < 3 * t + 3; h++)
+                w->et->edge_he[__atomic_fetch_add(&w->cursor[he_lo(tri, h)], 1,
+                                                  __ATOMIC_RELAXED)] = h;
+}
+
+static void sort_block(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    builder *w = ctx;
+    size_t lo = blk * VERT_BLOCK, hi = lo + VERT_BLOCK < w->m->nverts ? lo + VERT_BLOCK
+                                                                      : w->m->nverts;
+    for (size_t v = lo; v < hi; v++)
+        if (!sort_bucket(w->m->tri, w->et->edge_he + w->start[v], w->start[v + 1] - w->start[v]))
+            __atomic_store_n(&w->failed, 1, __ATOMIC_RELAXED);
+}
+
+/* Half-edge i of the sorted buckets starts a run of equal (lo, hi): a new edge. */
+static bool starts_edge(const uint32_t *tri, const uint32_t *edge_he, size_t i)
+{
+    return i == 0 || he_lo(tri, edge_he[i]) != he_lo(tri, edge_he[i - 1]) ||
+           he_hi(tri, edge_he[i]) != he_hi(tri, edge_he[i - 1]);
+}
+
+static void count_runs(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    builder *w = ctx;
+    size_t lo = blk * HE_BLOCK, hi = lo + HE_BLOCK < w->total ? lo + HE_BLOCK : w->total, n = 0;
+    for (size_t i = lo; i < hi; i++)
+        n += starts_edge(w->m->tri, w->et->edge_he, i);
+    w->runs[blk] = n;
+}
+
+/* The block's edges numbered from the count of those before it. */
+static void number_runs(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    builder *w = ctx;
+    ism_an_edge_table *et = w->et;
+    size_t lo = blk * HE_BLOCK, hi = lo + HE_BLOCK < w->total ? lo + HE_BLOCK : w->total;
+    uint32_t e = (uint32_t)w->runs[blk] - 1; /* the edge running into the block (wraps at 0) */
+    for (size_t i = lo; i < hi; i++) {
         uint32_t h = et->edge_he[i];
-        if (i == 0 || he_lo(m->tri, h) != he_lo(m->tri, et->edge_he[i - 1]) ||
-            he_hi(m->tri, h) != he_hi(m->tri, et->edge_he[i - 1]))
+        if (starts_edge(w->m->tri, et->edge_he, i))
             et->edge_start[++e] = (uint32_t)i;
         et->he_edge[h] = e;
     }
-    et->edge_start[n] = (uint32_t)total;
+}
+
+/* Buckets of half-edges on their smaller vertex (a counting sort), each sorted on the larger
+ * vertex, runs of equal pairs numbered as edges: every step a loop over blocks on pool. */
+static bool build_table(builder *w, ism_pool *pool)
+{
+    const ism_mesh *m = w->m;
+    ism_an_edge_table *et = w->et;
+    size_t nv = m->nverts, tblocks = blocks_of(m->ntris, TRI_BLOCK);
+    memset(w->start, 0, (nv + 1) * sizeof *w->start);
+    ism_pool_for(pool, tblocks, count_block, w, NULL);
+    for (size_t v = 0; v < nv; v++)
+        w->start[v + 1] += w->start[v];
+    w->total = w->start[nv];
+    memcpy(w->cursor, w->start, (nv ? nv : 1) * sizeof *w->cursor);
+    ism_pool_for(pool, tblocks, fill_block, w, NULL);
+    ism_pool_for(pool, blocks_of(nv, VERT_BLOCK), sort_block, w, NULL);
+    size_t hblocks = blocks_of(w->total, HE_BLOCK);
+    if (w->failed || !(w->runs = malloc((hblocks ? hblocks : 1) * sizeof *w->runs)))
+        return false;
+    ism_pool_for(pool, hblocks, count_runs, w, NULL);
+    et->nedges = ism_counts_to_offsets(w->runs, hblocks);
+    if (!(et->edge_start = malloc((et->nedges + 1) * sizeof *et->edge_start)))
+        return false;
+    ism_pool_for(pool, hblocks, number_runs, w, NULL);
+    et->edge_start[et->nedges] = (uint32_t)w->total;
     return true;
+}
+
+bool ism_an_edge_table_build_on(const ism_mesh *m, ism_pool *pool, ism_an_edge_table *et)
+{
+    memset(et, 0, sizeof *et);
+    size_t nh = 3 * m->ntris;
+    builder w = {.m = m, .et = et};
+    w.start = malloc((m->nverts + 1) * sizeof *w.start);
+    w.cursor = malloc((m->nverts ? m->nverts : 1) * sizeof *w.cursor);
+    et->edge_he = malloc((nh ? nh : 1) * sizeof *et->edge_he);
+    et->he_edge = malloc((nh ? nh : 1) * sizeof *et->he_edge);
+    bool ok = w.start && w.cursor && et->edge_he && et->he_edge && build_table(&w, pool);
+    free(w.start);
+    free(w.cursor);
+    free(w.runs);
+    if (!ok)
+        ism_an_edge_table_free(et);
+    return ok;
 }
 
 bool ism_an_edge_table_build(const ism_mesh *m, ism_an_edge_table *et)
 {
-    memset(et, 0, sizeof *et);
-    size_t nh = 3 * m->ntris;
-    uint32_t *start = malloc((m->nverts + 1) * sizeof *start);
-    et->edge_he = malloc((nh ? nh : 1) * sizeof *et->edge_he);
-    et->he_edge = malloc((nh ? nh : 1) * sizeof *et->he_edge);
-    if (!start || !et->edge_he || !et->he_edge)
-        goto fail;
-    for (size_t h = 0; h < nh; h++)
-        et->he_edge[h] = ISM_AN_NONE;
-    size_t total = bucket_half_edges(m, start, et->edge_he);
-    for (size_t v = 0; v < m->nverts; v++)
-        if (!sort_bucket(m->tri, et->edge_he + start[v], start[v + 1] - start[v]))
-            goto fail;
-    if (!number_edges(m, total, et))
-        goto fail;
-    free(start);
-    return true;
-fail:
-    free(start);
-    ism_an_edge_table_free(et);
-    return false;
+    return ism_an_edge_table_build_on(m, NULL, et);
 }
 
 void ism_an_edge_table_free(ism_an_edge_table *et)

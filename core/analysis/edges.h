@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <stdbool.h>
 #include "core/mesh/mesh.h"
+#include "core/util/pool.h"
 
 #define ISM_AN_NONE UINT32_MAX
 
@@ -38,6 +39,9 @@ static inline uint32_t ism_an_edge_count(const ism_an_edge_table *et, uint32_t e
 
 /* Builds the table of m's edges; false on allocation failure (et then holds nothing). */
 bool ism_an_edge_table_build(const ism_mesh *m, ism_an_edge_table *et);
+
+/* The same on the threads of pool (NULL: the calling thread); the same table on any number. */
+bool ism_an_edge_table_build_on(const ism_mesh *m, ism_pool *pool, ism_an_edge_table *et);
 void ism_an_edge_table_free(ism_an_edge_table *et);
 
 /* Both end points of edge e, smaller first. */
