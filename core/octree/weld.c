@@ -226,35 +226,121 @@ static void write_piece(void *ctx, size_t k, int thread)
     }
 }
 
-/* Normals where ∇f vanished: the mean of the adjacent triangles' normals. */
-static void fill_missing_normals(ism_mesh *m)
+/* Vertices or triangles per task of the normal fill-in below: fixed, so its sums run in the
+ * same order on any number of threads. */
+#define FILL_BLOCK 8192
+
+/* The vertices whose ∇f vanished (singular points) and the triangles around them. */
+typedef struct filler {
+    ism_mesh *m;
+    uint32_t *number; /* per vertex: 1 + its place among the vertices without a normal; 0 */
+    size_t *per_block; /* such vertices (then triangles touching them) per block, then where
+                          the block's start */
+    uint32_t *touching; /* the triangles with such a corner, in triangle order */
+    double *acc;        /* per such vertex: the sum of its triangles' normals */
+} filler;
+
+static size_t fill_end(size_t blk, size_t n)
 {
-    size_t missing = 0;
-    for (size_t i = 0; i < 3 * m->nverts; i += 3)
-        missing += m->normal[i] == 0 && m->normal[i + 1] == 0 && m->normal[i + 2] == 0;
-    if (!missing)
+    return (blk + 1) * FILL_BLOCK < n ? (blk + 1) * FILL_BLOCK : n;
+}
+
+static bool no_normal(const float *n) { return n[0] == 0 && n[1] == 0 && n[2] == 0; }
+
+static void count_missing(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    filler *f = ctx;
+    size_t n = 0;
+    for (size_t v = blk * FILL_BLOCK; v < fill_end(blk, f->m->nverts); v++)
+        n += no_normal(f->m->normal + 3 * v);
+    f->per_block[blk] = n;
+}
+
+static void number_missing(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    filler *f = ctx;
+    uint32_t next = (uint32_t)f->per_block[blk];
+    for (size_t v = blk * FILL_BLOCK; v < fill_end(blk, f->m->nverts); v++)
+        f->number[v] = no_normal(f->m->normal + 3 * v) ? ++next : 0;
+}
+
+static bool touches(const filler *f, size_t t)
+{
+    const uint32_t *c = f->m->tri + 3 * t;
+    return f->number[c[0]] || f->number[c[1]] || f->number[c[2]];
+}
+
+static void count_touching(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    filler *f = ctx;
+    size_t n = 0;
+    for (size_t t = blk * FILL_BLOCK; t < fill_end(blk, f->m->ntris); t++)
+        n += touches(f, t);
+    f->per_block[blk] = n;
+}
+
+static void list_touching(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    filler *f = ctx;
+    uint32_t *out = f->touching + f->per_block[blk];
+    for (size_t t = blk * FILL_BLOCK; t < fill_end(blk, f->m->ntris); t++)
+        if (touches(f, t))
+            *out++ = (uint32_t)t;
+}
+
+static void set_missing(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    filler *f = ctx;
+    for (size_t v = blk * FILL_BLOCK; v < fill_end(blk, f->m->nverts); v++)
+        if (f->number[v])
+            unit_normal(f->acc + 3 * (f->number[v] - 1), f->m->normal + 3 * v);
+}
+
+/* Normals where ∇f vanished: the mean of the adjacent triangles' normals, added up in
+ * triangle order on the calling thread; finding those vertices and triangles runs in
+ * blocks on pool. */
+static void fill_missing_normals(ism_mesh *m, ism_pool *pool, ism_par_cost *cost)
+{
+    size_t vblocks = (m->nverts + FILL_BLOCK - 1) / FILL_BLOCK;
+    size_t tblocks = (m->ntris + FILL_BLOCK - 1) / FILL_BLOCK;
+    size_t most = vblocks > tblocks ? vblocks : tblocks;
+    filler f = {m, NULL, malloc((most ? most : 1) * sizeof(size_t)), NULL, NULL};
+    if (!f.per_block)
         return;
-    double *acc = calloc(m->nverts * 3, sizeof *acc);
-    if (!acc)
-        return;
-    for (size_t t = 0; t < m->ntris; t++) {
-        const uint32_t *tri = m->tri + 3 * t;
-        const double *a = m->pos + 3 * tri[0], *b = m->pos + 3 * tri[1], *c = m->pos + 3 * tri[2];
-        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-        double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-        double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
-                       u[0] * v[1] - u[1] * v[0]};
-        for (int k = 0; k < 3; k++)
-            for (int j = 0; j < 3; j++)
-                acc[3 * tri[k] + j] += n[j];
+    ism_pool_for(pool, vblocks, count_missing, &f, cost);
+    size_t missing = ism_counts_to_offsets(f.per_block, vblocks);
+    if (missing && (f.number = malloc(m->nverts * sizeof *f.number)) &&
+        (f.acc = calloc(3 * missing, sizeof *f.acc))) {
+        ism_pool_for(pool, vblocks, number_missing, &f, cost);
+        ism_pool_for(pool, tblocks, count_touching, &f, cost);
+        size_t ntouch = ism_counts_to_offsets(f.per_block, tblocks);
+        if ((f.touching = malloc((ntouch ? ntouch : 1) * sizeof *f.touching))) {
+            ism_pool_for(pool, tblocks, list_touching, &f, cost);
+            for (size_t i = 0; i < ntouch; i++) {
+                const uint32_t *tri = m->tri + 3 * f.touching[i];
+                const double *a = m->pos + 3 * tri[0], *b = m->pos + 3 * tri[1],
+                             *c = m->pos + 3 * tri[2];
+                double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+                double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+                double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                               u[0] * v[1] - u[1] * v[0]};
+                for (int k = 0; k < 3; k++)
+                    if (f.number[tri[k]])
+                        for (int j = 0; j < 3; j++)
+                            f.acc[3 * (f.number[tri[k]] - 1) + j] += n[j];
+            }
+            ism_pool_for(pool, vblocks, set_missing, &f, cost);
+        }
     }
-    for (size_t i = 0; i < m->nverts; i++) {
-        float *vn = m->normal + 3 * i;
-        if (vn[0] != 0 || vn[1] != 0 || vn[2] != 0)
-            continue;
-        unit_normal(acc + 3 * i, vn);
-    }
-    free(acc);
+    free(f.per_block);
+    free(f.number);
+    free(f.touching);
+    free(f.acc);
 }
 
 /* The one-edge polygons, in piece order (few: no loop of their own). */
@@ -366,6 +452,6 @@ bool ism_weld(const ism_cell_out *pieces, size_t npieces, ism_pool *pool, ism_me
     free(w.kept_tris);
     free(w.piece_st);
     if (ok)
-        fill_missing_normals(mesh);
+        fill_missing_normals(mesh, pool, cost);
     return ok;
 }
