@@ -51,28 +51,6 @@ void ism_sink_printf(ism_sink *s, const char *fmt, ...)
     ism_sink_put(s, line, (size_t)n);
 }
 
-void ism_sink_u8(ism_sink *s, uint8_t v) { ism_sink_put(s, &v, 1); }
-
-void ism_sink_u16le(ism_sink *s, uint16_t v)
-{
-    unsigned char b[2] = {(unsigned char)v, (unsigned char)(v >> 8)};
-    ism_sink_put(s, b, 2);
-}
-
-void ism_sink_u32le(ism_sink *s, uint32_t v)
-{
-    unsigned char b[4] = {(unsigned char)v, (unsigned char)(v >> 8), (unsigned char)(v >> 16),
-                          (unsigned char)(v >> 24)};
-    ism_sink_put(s, b, 4);
-}
-
-void ism_sink_f32le(ism_sink *s, float v)
-{
-    uint32_t u;
-    memcpy(&u, &v, 4);
-    ism_sink_u32le(s, u);
-}
-
 bool ism_sink_finish(ism_sink *s)
 {
     flush(s);
