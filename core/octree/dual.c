@@ -1,6 +1,7 @@
 /* dual.c — dual contouring on an octree under an error bound, for surfaces without features
  * (dual.h): the tree and its leaf tests (the interval proofs in dual_cert.c), the vertices,
- * the minimal-edge walk that makes the quads, and the measure-and-split rounds. The work is
+ * the minimal-edge walk that makes the quads, their triangles (two, or four round a centre),
+ * and the measure-and-split rounds. The work is
  * cut into tasks for the pool whose outputs land in their own slots and are joined in a
  * fixed order (children level by level, walk calls, vertex pairs, triangles), so the mesh
  * does not depend on the number of threads. */
@@ -173,6 +174,7 @@ typedef struct dual {
     quads q;          /* this round's quads (make_quads) */
     keyed passed;       /* triangles (tri_key) that met E */
     keyed mid;          /* vertex pairs (pair_key): the distance of their midpoint to f = 0 */
+    keyed fans;         /* quads (quad_key) cut as a fan: their centre vertex */
     int ec0[12], ec1[12], ef[12][2]; /* the cube's edges: ends and faces (ism_cube_edge) */
     double shift;     /* vertices move at most this far along ∇f (straddle.h), or 0 */
     const ism_dual_ball *balls; /* round the isolated singular points (dual_balls.h) */
@@ -705,6 +707,21 @@ static void vertex_task(void *ctx, size_t k, int thread)
     place_vertex(job->d, &job->d->w[thread], ((const int32_t *)job->in)[k]);
 }
 
+/* Room for n more vertices (positions and leaves); false when out of memory. */
+static bool reserve_vertices(dual *d, size_t n)
+{
+    size_t capl = d->capv;
+    if (!grow((void **)&d->pos, &d->capv, d->nv + n, 3 * sizeof *d->pos))
+        return false;
+    if (d->capv != capl) {
+        int32_t *vl = realloc(d->vleaf, d->capv * sizeof *vl);
+        if (!vl)
+            return false;
+        d->vleaf = vl;
+    }
+    return true;
+}
+
 /* Vertices for the surface leaves that have none, numbered in node order, placed on the
  * pool. */
 static void make_vertices(dual *d)
@@ -713,20 +730,10 @@ static void make_vertices(dual *d)
     for (size_t i = 0; i < d->nn; i++)
         n += d->n[i].child < 0 && d->n[i].kind == DN_SURF && d->n[i].vert < 0;
     int32_t *leaves = malloc((n ? n : 1) * sizeof *leaves);
-    size_t capl = d->capv;
-    if (!leaves || !grow((void **)&d->pos, &d->capv, d->nv + n, 3 * sizeof *d->pos)) {
+    if (!leaves || !reserve_vertices(d, n)) {
         free(leaves);
         d->nomem = true;
         return;
-    }
-    if (d->capv != capl) {
-        int32_t *vl = realloc(d->vleaf, d->capv * sizeof *vl);
-        if (!vl) {
-            free(leaves);
-            d->nomem = true;
-            return;
-        }
-        d->vleaf = vl;
     }
     n = 0;
     for (size_t i = 0; i < d->nn; i++)
@@ -1068,40 +1075,6 @@ static void make_quads(dual *d)
     free(wk.defer);
 }
 
-/* The round's quads as triangles: each across the diagonal whose midpoint lies nearer
- * f = 0. Where the surface is a saddle (the torus's inner half) the two diagonals sag to
- * opposite sides and the shorter one is as often the worse: choosing by distance took the
- * torus's triangles under 1e-2 / 3e-3 / 1e-3 from 3,616 / 7,120 / 23,744 to 3,280 / 5,968
- * / 20,464 for two distance samples per quad. */
-static void emit_quads(dual *d)
-{
-    uint32_t *diag = malloc((d->q.n ? d->q.n : 1) * 4 * sizeof *diag);
-    size_t nd = 0;
-    for (size_t q = 0; diag && q < d->q.n; q++) {
-        const uint32_t *u = &d->q.q[4 * q];
-        if (u[3] == UINT32_MAX)
-            continue;
-        uint32_t pairs[4] = {u[0], u[2], u[1], u[3]};
-        memcpy(&diag[4 * nd++], pairs, sizeof pairs);
-    }
-    if (diag)
-        measure_pairs(d, diag, 2 * nd);
-    free(diag);
-    d->nt = 0;
-    bool ok = true;
-    for (size_t q = 0; q < d->q.n && ok; q++) {
-        const uint32_t *u = &d->q.q[4 * q];
-        if (u[3] == UINT32_MAX) {
-            ok = add_tri(d, u[0], u[1], u[2]);
-            continue;
-        }
-        int a = mid_dist(d, u[0], u[2]) <= mid_dist(d, u[1], u[3]) ? 0 : 1;
-        ok = add_tri(d, u[a], u[a + 1], u[a + 2]) && add_tri(d, u[a], u[a + 2], u[(a + 3) % 4]);
-    }
-    if (!ok)
-        d->nomem = true;
-}
-
 /* Triangle t's corners (bit k: vertex k) whose leaves to split for its edges: the two ends
  * of each edge whose midpoint lies beyond E (splitting the third leaf would leave that edge
  * as it is). */
@@ -1161,55 +1134,87 @@ static uint64_t tri_key(const dual *d, size_t t)
     return (v[0] | v[1] << 21 | v[2] << 42) + 1;
 }
 
-/* Marks the leaves of triangles that miss E (centroid and edge midpoints within E of f = 0,
- * facing along ∇f); returns how many leaves can still split and counts the misses at
- * max_depth into *missed. Triangles that met E in an earlier round are not measured again;
- * the rest have their edges, then the centroids of those whose edges pass, measured on the
- * pool. */
-static size_t mark_misses(dual *d, uint64_t *missed)
+/* The miss masks of triangles list[0..n) into miss[0..n) (edge_misses, else
+ * centroid_misses; 0: within E). Triangles that met E in an earlier round (d->passed) read 0
+ * unmeasured; the rest have their edges, then the centroids of those whose edges pass,
+ * measured on the pool, and are remembered when they pass. */
+static void measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t *miss)
 {
-    size_t marked = 0, np = 0, nc = 0;
-    *missed = 0;
-    uint32_t *open = malloc((d->nt ? d->nt : 1) * sizeof *open);
-    uint32_t *pairs = malloc((d->nt ? d->nt : 1) * 6 * sizeof *pairs);
-    uint32_t *cen = malloc((d->nt ? d->nt : 1) * sizeof *cen);
-    uint8_t *miss = malloc(d->nt ? d->nt : 1), *cmiss = malloc(d->nt ? d->nt : 1);
-    if (!open || !pairs || !cen || !miss || !cmiss) {
+    size_t np = 0, nc = 0;
+    uint32_t *open = malloc((n ? n : 1) * sizeof *open);
+    uint32_t *pairs = malloc((n ? n : 1) * 6 * sizeof *pairs);
+    uint32_t *cen = malloc((n ? n : 1) * sizeof *cen);
+    size_t *at = malloc((n ? n : 1) * sizeof *at);
+    uint8_t *emiss = malloc(n ? n : 1), *cmiss = malloc(n ? n : 1);
+    if (!open || !pairs || !cen || !at || !emiss || !cmiss) {
         d->nomem = true;
         goto done;
     }
-    for (size_t t = 0; t < d->nt; t++) {
+    for (size_t k = 0; k < n; k++) {
+        uint32_t t = list[k];
         uint64_t key = tri_key(d, t);
+        miss[k] = 0;
         if (key && keyed_get(&d->passed, key))
             continue;
-        open[np++] = (uint32_t)t;
-        for (int k = 0; k < 3; k++) {
-            pairs[6 * (np - 1) + 2 * k] = d->tri[3 * t + k];
-            pairs[6 * (np - 1) + 2 * k + 1] = d->tri[3 * t + (k + 1) % 3];
+        at[np] = k;
+        open[np++] = t;
+        for (int e = 0; e < 3; e++) {
+            pairs[6 * (np - 1) + 2 * e] = d->tri[3 * t + e];
+            pairs[6 * (np - 1) + 2 * e + 1] = d->tri[3 * t + (e + 1) % 3];
         }
     }
     measure_pairs(d, pairs, 3 * np);
     for (size_t k = 0; k < np; k++) {
-        miss[k] = (uint8_t)edge_misses(d, open[k]);
-        if (!miss[k])
+        emiss[k] = (uint8_t)edge_misses(d, open[k]);
+        if (!emiss[k])
             cen[nc++] = open[k];
     }
     task_ctx job = {d, cen, cmiss};
     ism_pool_for(d->pool, nc, centroid_task, &job, NULL);
     for (size_t k = 0, c = 0; k < np; k++) {
-        size_t t = open[k];
-        int m = miss[k] ? miss[k] : cmiss[c++];
-        if (!m) {
-            uint64_t key = tri_key(d, t);
-            if (key)
-                keyed_put(&d->passed, key, 0); /* out of memory: measured again, no more */
+        int m = emiss[k] ? emiss[k] : cmiss[c++];
+        miss[at[k]] = (uint8_t)m;
+        uint64_t key = m ? 0 : tri_key(d, open[k]);
+        if (key)
+            keyed_put(&d->passed, key, 0); /* out of memory: measured again, no more */
+    }
+done:
+    free(open);
+    free(pairs);
+    free(cen);
+    free(at);
+    free(emiss);
+    free(cmiss);
+}
+
+/* Marks the leaves of triangles that miss E (centroid and edge midpoints within E of f = 0,
+ * facing along ∇f: measure_triangles); returns how many leaves can still split and counts
+ * the misses at max_depth into *missed. A fan's centre (emit_quads) belongs to no leaf. */
+static size_t mark_misses(dual *d, uint64_t *missed)
+{
+    size_t marked = 0;
+    *missed = 0;
+    uint32_t *all = malloc((d->nt ? d->nt : 1) * sizeof *all);
+    uint8_t *miss = malloc(d->nt ? d->nt : 1);
+    if (!all || !miss) {
+        d->nomem = true;
+        free(all);
+        free(miss);
+        return 0;
+    }
+    for (size_t t = 0; t < d->nt; t++)
+        all[t] = (uint32_t)t;
+    measure_triangles(d, all, d->nt, miss);
+    for (size_t t = 0; t < d->nt && !d->nomem; t++) {
+        int m = miss[t];
+        if (!m)
             continue;
-        }
         bool any = false;
         for (int pass = 0; pass < 2 && !any; pass++, m = 7) /* then every leaf of t */
             for (int j = 0; j < 3; j++) {
-                dnode *n = &d->n[d->vleaf[d->tri[3 * t + j]]];
-                if ((m >> j & 1) && n->level < d->o->max_depth) {
+                int32_t leaf = d->vleaf[d->tri[3 * t + j]];
+                dnode *n = leaf < 0 ? NULL : &d->n[leaf];
+                if (n && (m >> j & 1) && n->level < d->o->max_depth) {
                     marked += !n->split;
                     n->split = 1;
                     any = true;
@@ -1217,13 +1222,168 @@ static size_t mark_misses(dual *d, uint64_t *missed)
             }
         *missed += !any;
     }
-done:
-    free(open);
-    free(pairs);
-    free(cen);
+    free(all);
     free(miss);
-    free(cmiss);
     return marked;
+}
+
+/* Quad u's vertices in one key (+1: never 0) when every index fits 16 bits, else 0 (then
+ * nothing is remembered). */
+static uint64_t quad_key(const dual *d, const uint32_t *u)
+{
+    if (d->nv >= 0xffff)
+        return 0;
+    return ((uint64_t)u[0] << 48 | (uint64_t)u[1] << 32 | (uint64_t)u[2] << 16 | u[3]) + 1;
+}
+
+/* Task k: the centre of the quad at in[k] into out[3k..3k+3): the mean of its corners moved
+ * onto f = 0 by Newton and then as a leaf's vertex is (place_vertex); NaN when Newton cannot
+ * finish. A pure function of the corners, like the vertices. */
+static void fan_task(void *ctx, size_t k, int thread)
+{
+    task_ctx *job = ctx;
+    dual *d = job->d;
+    worker *w = &d->w[thread];
+    const uint32_t *u = &d->q.q[4 * ((const uint32_t *)job->in)[k]];
+    double m[3] = {0, 0, 0}, size = 0, q[3], *out = &((double *)job->out)[3 * k];
+    for (int j = 0; j < 4; j++)
+        for (int a = 0; a < 3; a++)
+            m[a] += 0.25 * d->pos[3 * u[j] + a];
+    for (int j = 0; j < 2; j++) {
+        double l = 0;
+        for (int a = 0; a < 3; a++) {
+            double t = d->pos[3 * u[j + 2] + a] - d->pos[3 * u[j] + a];
+            l += t * t;
+        }
+        size = fmax(size, sqrt(l));
+    }
+    if (!newton_onto(w, m, size)) {
+        out[0] = out[1] = out[2] = NAN;
+        return;
+    }
+    if (d->shift > 0 && ism_straddle_balanced_point(&w->s, d->shift, d->o->box, m, q))
+        memcpy(m, q, sizeof m);
+    memcpy(out, m, sizeof m);
+}
+
+/* The round's quads as triangles. Each is cut across the diagonal whose midpoint lies nearer
+ * f = 0 — where the surface is a saddle (the torus's inner half) the two diagonals sag to
+ * opposite sides and the shorter one is as often the worse: choosing by distance took the
+ * torus's triangles under 1e-2 / 3e-3 / 1e-3 from 3,616 / 7,120 / 23,744 to 3,280 / 5,968
+ * / 20,464 for two distance samples per quad —, and when those two triangles miss E, into
+ * four round a centre on f = 0 (fan_task) instead: their longest edges are the quad's sides,
+ * which sag half as far as its diagonal (κ s² / 8 against κ s² / 4 for a square of side s),
+ * so a quad that the diagonal would have split its leaves for (four times the quads, twice
+ * the triangles' count each) may meet E as it is. Whether a fan meets E is measured like
+ * any triangle (mark_misses); a quad once cut as a fan keeps its centre (d->fans). */
+static void emit_quads(dual *d)
+{
+    size_t nq = d->q.n;
+    uint32_t *diag = malloc((nq ? nq : 1) * 4 * sizeof *diag);
+    uint32_t *first = malloc((nq ? nq : 1) * sizeof *first), *list = NULL, *fq = NULL;
+    uint8_t *fan = calloc(nq ? nq : 1, 1), *miss = NULL;
+    double *centre = NULL;
+    size_t nd = 0, nl = 0, nf = 0;
+    bool ok = diag && first && fan;
+    for (size_t q = 0; ok && q < nq; q++) {
+        const uint32_t *u = &d->q.q[4 * q];
+        if (u[3] == UINT32_MAX)
+            continue;
+        uint32_t pairs[4] = {u[0], u[2], u[1], u[3]};
+        memcpy(&diag[4 * nd++], pairs, sizeof pairs);
+    }
+    if (ok)
+        measure_pairs(d, diag, 2 * nd);
+    d->nt = 0;
+    for (size_t q = 0; q < nq && ok; q++) {
+        const uint32_t *u = &d->q.q[4 * q];
+        first[q] = (uint32_t)d->nt;
+        if (u[3] == UINT32_MAX) {
+            ok = add_tri(d, u[0], u[1], u[2]);
+            continue;
+        }
+        uint64_t key = quad_key(d, u);
+        const double *known = key ? keyed_get(&d->fans, key) : NULL;
+        int a = mid_dist(d, u[0], u[2]) <= mid_dist(d, u[1], u[3]) ? 0 : 1;
+        ok = add_tri(d, u[a], u[a + 1], u[a + 2]) && add_tri(d, u[a], u[a + 2], u[(a + 3) % 4]);
+        if (known) { /* cut as a fan in an earlier round: its centre kept */
+            fan[q] = 2;
+            first[q] = (uint32_t)*known; /* the centre's index (its triangles not measured) */
+        }
+    }
+    /* the diagonals' triangles measured (those of quads known as fans aside) */
+    list = ok ? malloc((d->nt ? d->nt : 1) * sizeof *list) : NULL;
+    miss = ok ? malloc(d->nt ? d->nt : 1) : NULL;
+    ok = ok && list && miss;
+    for (size_t q = 0; ok && q < nq; q++)
+        if (d->q.q[4 * q + 3] != UINT32_MAX && !fan[q]) {
+            list[nl++] = first[q];
+            list[nl++] = first[q] + 1;
+        }
+    if (ok)
+        measure_triangles(d, list, nl, miss);
+    for (size_t q = 0, k = 0; ok && q < nq; q++)
+        if (d->q.q[4 * q + 3] != UINT32_MAX && !fan[q]) {
+            fan[q] = miss[k] || miss[k + 1];
+            k += 2;
+        }
+    /* the new fans' centres, on the pool; numbered in quad order */
+    fq = ok ? malloc((nq ? nq : 1) * sizeof *fq) : NULL;
+    ok = ok && fq;
+    for (size_t q = 0; ok && q < nq; q++)
+        if (fan[q] == 1)
+            fq[nf++] = (uint32_t)q;
+    centre = ok ? malloc((nf ? nf : 1) * 3 * sizeof *centre) : NULL;
+    ok = ok && centre && reserve_vertices(d, nf);
+    if (ok) {
+        task_ctx job = {d, fq, centre};
+        ism_pool_for(d->pool, nf, fan_task, &job, NULL);
+        ok = keyed_reserve(&d->fans, nf);
+    }
+    for (size_t k = 0; ok && k < nf; k++) {
+        uint32_t q = fq[k];
+        if (isnan(centre[3 * k])) {
+            fan[q] = 0; /* no centre: the diagonal's triangles (split as they miss) */
+            continue;
+        }
+        memcpy(&d->pos[3 * d->nv], &centre[3 * k], 3 * sizeof *centre);
+        d->vleaf[d->nv] = -1; /* a fan's centre: no leaf of its own */
+        uint64_t key = quad_key(d, &d->q.q[4 * q]);
+        if (key)
+            keyed_put(&d->fans, key, (double)d->nv);
+        first[q] = (uint32_t)d->nv++; /* now the centre's index */
+    }
+    /* the triangles again, each fan's four in place of its quad's two */
+    if (ok && (nf || d->fans.n)) {
+        size_t nt = d->nt;
+        uint32_t *kept = malloc((nt ? nt : 1) * 3 * sizeof *kept);
+        ok = kept != NULL;
+        if (ok)
+            memcpy(kept, d->tri, nt * 3 * sizeof *kept);
+        d->nt = 0;
+        for (size_t q = 0, t = 0; ok && q < nq; q++) {
+            const uint32_t *u = &d->q.q[4 * q];
+            size_t own = u[3] == UINT32_MAX ? 1 : 2;
+            if (fan[q]) {
+                for (int j = 0; ok && j < 4; j++)
+                    ok = add_tri(d, u[j], u[(j + 1) % 4], first[q]);
+            } else
+                for (size_t j = 0; ok && j < own; j++)
+                    ok = add_tri(d, kept[3 * (t + j)], kept[3 * (t + j) + 1],
+                                 kept[3 * (t + j) + 2]);
+            t += own;
+        }
+        free(kept);
+    }
+    if (!ok)
+        d->nomem = true;
+    free(diag);
+    free(first);
+    free(list);
+    free(fq);
+    free(fan);
+    free(miss);
+    free(centre);
 }
 
 /* The leaves marked by mark_misses split (expand: their children built level by level). */
@@ -1365,6 +1525,7 @@ static void forget(dual *d)
     free(d->q.q);
     keyed_free(&d->passed);
     keyed_free(&d->mid);
+    keyed_free(&d->fans);
     d->n = NULL;
     d->pos = NULL;
     d->vleaf = NULL;
@@ -1373,6 +1534,7 @@ static void forget(dual *d)
     memset(&d->q, 0, sizeof d->q);
     memset(&d->passed, 0, sizeof d->passed);
     memset(&d->mid, 0, sizeof d->mid);
+    memset(&d->fans, 0, sizeof d->fans);
     d->bad = d->nomem = d->too_big = false;
     d->why = ISM_DUAL_WHY_NONE;
 }

@@ -1,7 +1,9 @@
 /* dual.h — under an error bound, a dual-contouring mesh of a surface with nothing to protect:
- * one vertex per octree leaf, on f = 0 (the leaf's centre, or the mean of its edge roots,
- * moved there by Newton along ∇f), and a quad across every minimal lattice edge where f
- * changes sign, made of the vertices of the (three or four) leaves round it. A leaf is kept
+ * one vertex per octree leaf, within E of f = 0 (the leaf's centre, or the mean of its edge
+ * roots, moved there by Newton along ∇f, then to straddle the surface, straddle.h), and a
+ * quad across every minimal lattice edge where f changes sign, made of the vertices of the
+ * (three or four) leaves round it: two triangles, or four round a centre placed as a vertex
+ * is where the two miss E (their longest edges then the quad's sides). A leaf is kept
  * only when its corner gradients agree or interval gradients prove the surface one graph
  * over it (graph_cert.h, dual_cert.h) and its edges and faces are plain: no root on an edge
  * whose ends share a sign, at most one crossing curve per face; a leaf whose corners share a
