@@ -4,7 +4,8 @@
  * point), and the roots of lattice segments. All are pure functions of their lattice
  * coordinates, so a hit returns exactly what a recomputation would: the cache only saves
  * time, never changes the mesh. Direct-mapped: a collision simply overwrites. The octree
- * build memoises node corners through a lookup of the same kind (ism_point_memo). */
+ * build memoises node corners through a lookup of the same kind (ism_point_memo), and what
+ * its flatness test finds on node edges and at corners (ism_node_memo). */
 #ifndef ISM_CELL_CACHE_H
 #define ISM_CELL_CACHE_H
 
@@ -64,6 +65,52 @@ void ism_cell_cache_free(ism_cell_cache *c);
  * (the leaves, so the break points, changed) and the quiet tiles are forgotten (a tile's
  * sides may have gained break points). */
 void ism_cell_cache_next_round(ism_cell_cache *c);
+
+/* The octree build's memo of single roots on node edges (cell_error.c: regula falsi between
+ * two corners of opposite sign). Up to four nodes of one level share an edge, and each
+ * tested node measures its would-be triangles from its edges' roots: on Barth's sextic at
+ * E = 3e-3 that was 190,088 root searches of ~10 evaluations for 44,128 nodes. The root is
+ * a pure function of the edge's lattice points — their coordinates, f there (the corner
+ * memo) and f along the edge, which a node's shortened tape gives bit for bit inside its
+ * closed box (sampler.h) — so a hit returns what the search would. 2^13 entries of 24
+ * bytes a thread: a depth-first subtree's neighbours test their shared edges close in
+ * time. */
+#define ISM_ROOT_MEMO_BITS 13
+
+typedef struct ism_root_entry {
+    uint64_t a, b; /* lattice keys of the edge's first and second corner (+1), 0: empty */
+    double t;      /* the root's parameter from a to b */
+} ism_root_entry;
+
+static inline ism_root_entry *ism_root_slot(ism_root_entry *table, uint64_t a, uint64_t b)
+{
+    uint64_t h = ism_cache_mix(a * 0x9e3779b97f4a7c15ull ^ b);
+    return &table[h & (((uint64_t)1 << ISM_ROOT_MEMO_BITS) - 1)];
+}
+
+/* ... and of the branch of f's top min/max at node corners (plot_test.c's crease cells:
+ * under max_error every node whose tape keeps that min/max labels its 8 corners, 503,096
+ * labels for 109,632 nodes on Barth's sextic at 3e-3, while a lattice point is a corner of
+ * up to 8 nodes of a level and of nodes of every level below). Only labels of nodes whose
+ * shortened tape keeps the top min/max are asked for, and those give f's own label bit for
+ * bit (crease_split.h): a pure function of the lattice point. */
+#define ISM_LABEL_MEMO_BITS 13
+
+typedef struct ism_label_entry {
+    uint64_t key;  /* lattice key of the point (+1), 0: empty */
+    int32_t label; /* 0 or 1: ism_crease_branch's answer (never -1: not kept) */
+} ism_label_entry;
+
+/* A build thread's memos (tables of 2^ISM_ROOT_MEMO_BITS and 2^ISM_LABEL_MEMO_BITS). */
+typedef struct ism_node_memo {
+    ism_root_entry *roots;
+    ism_label_entry *labels;
+} ism_node_memo;
+
+static inline ism_label_entry *ism_label_slot(ism_label_entry *table, uint64_t key)
+{
+    return &table[ism_cache_mix(key) & (((uint64_t)1 << ISM_LABEL_MEMO_BITS) - 1)];
+}
 
 /* The entry of lattice point ip in a direct-mapped table of 2^bits point entries. */
 static inline ism_point_entry *ism_point_slot(ism_point_entry *table, int bits,

@@ -1,6 +1,7 @@
 /* cell_error.c — the distance to f = 0 of the triangles a node would emit, measured at their
  * centroids and edge midpoints (see cell_error.h). */
 #include "core/octree/cell_error.h"
+#include "core/octree/cell_cache.h"
 #include "core/octree/crease_split.h"
 #include "core/octree/edge_roots.h"
 #include "core/octree/refine.h"
@@ -134,7 +135,16 @@ static bool edge_roots(ism_sampler *s, const ism_corners *k, double shift, const
         ism_cube_edge(e, &c0, &c1, r[*n].face);
         if ((k->f[c0] < 0) == (k->f[c1] < 0))
             continue;
-        double t = ism_regula_falsi(s, k->p[c0], k->p[c1], k->f[c0], k->f[c1]);
+        double t;
+        ism_root_entry *m =
+            k->memo ? ism_root_slot(k->memo->roots, k->key[c0], k->key[c1]) : NULL;
+        if (m && m->a == k->key[c0] && m->b == k->key[c1]) {
+            t = m->t;
+        } else {
+            t = ism_regula_falsi(s, k->p[c0], k->p[c1], k->f[c0], k->f[c1]);
+            if (m)
+                *m = (ism_root_entry){k->key[c0], k->key[c1], t};
+        }
         double p[3];
         for (int a = 0; a < 3; a++)
             p[a] = k->p[c0][a] + t * (k->p[c1][a] - k->p[c0][a]);

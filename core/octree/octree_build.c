@@ -51,6 +51,8 @@ typedef struct thread_state {
     alignas(ISM_CACHE_LINE) ism_sampler s; /* threads' states in lines of their own: each
                                               writes its counters for every node */
     ism_point_entry *corners; /* memo of f and ∇f at lattice points (pure: never stale) */
+    ism_node_memo memo;       /* memo of roots on node edges and crease labels at corners
+                                 (cell_cache.h; pure too) */
     ism_tape *tapes[ISM_GRID_MAX_DEPTH + 1];
     /* tapes[l]'s number in build.leaf_tapes, known while written[l] == numbered[l]: the
      * leaves below one shortening share it without a lookup */
@@ -72,6 +74,8 @@ typedef struct build {
     const ism_octree *previous;  /* p->previous when it may be used, else NULL */
     thread_state *threads;
     ism_point_entry *corner_memos; /* the threads' memos, end to end (thread_state.corners) */
+    ism_root_entry *root_memos;    /* ... and thread_state.memo's */
+    ism_label_entry *label_memos;
     int shortening;
     ism_leaf_tapes leaf_tapes;   /* the leaves' shortened tapes (octree.h) */
     /* written rarely, read by every node; the counters below live on lines of their own */
@@ -165,7 +169,9 @@ static void node_corners(const ism_grid *g, thread_state *th, const ism_tape *ta
             ism_point_memo(th->corners, CORNER_CACHE_BITS, ip[c], k->p[c], &th->s);
         k->f[c] = e->f;
         memcpy(k->g[c], e->g, sizeof k->g[c]);
+        k->key[c] = ism_lattice_key(ip[c]);
     }
+    k->memo = th->memo.roots ? &th->memo : NULL; /* none on the reference path */
     th->s.tape = saved;
 }
 
@@ -641,11 +647,25 @@ static bool init_threads(build *b, int nthreads)
                                        sizeof *b->corner_memos, b->p->cost);
     if (!b->corner_memos)
         return false;
+    /* the node memos (none on the scalar reference path, poly_options.h) */
+    size_t roots = (size_t)1 << ISM_ROOT_MEMO_BITS, labels = (size_t)1 << ISM_LABEL_MEMO_BITS;
+    if (!b->p->scalar_eval) {
+        b->root_memos = ism_zeroed_alloc(b->p->pool, (size_t)nthreads * roots,
+                                         sizeof *b->root_memos, b->p->cost);
+        b->label_memos = ism_zeroed_alloc(b->p->pool, (size_t)nthreads * labels,
+                                          sizeof *b->label_memos, b->p->cost);
+        if (!b->root_memos || !b->label_memos)
+            return false;
+    }
     for (int t = 0; t < nthreads; t++) {
         thread_state *th = &b->threads[t];
         th->s.tape = b->p->tape;
         th->s.ws = ism_eval_ws_new(b->p->tape);
         th->corners = b->corner_memos + (size_t)t * memo;
+        if (b->root_memos) {
+            th->memo.roots = b->root_memos + (size_t)t * roots;
+            th->memo.labels = b->label_memos + (size_t)t * labels;
+        }
         if (!th->s.ws || !ism_thin_ws_init(&th->thin, b->p->tape))
             return false;
         if (b->shortening)
@@ -683,6 +703,8 @@ static void free_threads(build *b, int nthreads, ism_octree_build_stats *st)
     }
     free(b->threads);
     free(b->corner_memos);
+    free(b->root_memos);
+    free(b->label_memos);
 }
 
 /* Appends every task's subtree to the top array, in task order, fixing child indices. */

@@ -3,6 +3,7 @@
  * and the distance of their centroid to the surface (the paper), or, under an error bound,
  * the distance of the node's would-be triangles to the surface (cell_error.h). */
 #include "core/octree/plot_test.h"
+#include "core/octree/cell_cache.h"
 #include "core/octree/cell_error.h"
 #include "core/octree/crease_split.h"
 #include "core/octree/edge_roots.h"
@@ -53,6 +54,19 @@ static bool no_roots(ism_sampler *s, const ism_flatness *fl, const ism_corners *
     return ism_double_root_search(s, &prm, k->p[c0], k->p[c1], k->f[c0], k->f[c1], &t) == 0;
 }
 
+/* The branch of f's top min/max at corner c (ism_crease_branch), through the thread's memo
+ * when there is one (only asked while the node's tape keeps that min/max: crease_cell). */
+static int corner_branch(ism_sampler *s, const ism_corners *k, int c)
+{
+    ism_label_entry *m = k->memo ? ism_label_slot(k->memo->labels, k->key[c]) : NULL;
+    if (m && m->key == k->key[c])
+        return m->label;
+    int b = ism_crease_branch(s, k->p[c], NULL);
+    if (m && b >= 0)
+        *m = (ism_label_entry){k->key[c], b};
+    return b;
+}
+
 /* Under an error bound, a node whose corners lie on both branches of f's top min/max (a
  * CSG crease may pass through it): f's own corner gradients mix the two branches' and never
  * agree, so the node is judged by each branch's gradients at its own corners instead, and
@@ -62,10 +76,13 @@ static bool no_roots(ism_sampler *s, const ism_flatness *fl, const ism_corners *
  * 10: 586,994 -> 117,882, max centroid distance 2.3e-3 -> 1.18e-3. */
 static int crease_cell(ism_sampler *s, const ism_flatness *fl, const ism_corners *k)
 {
+    static const double any[2] = {0, 0};
+    if (ism_top_active_branch(s->tape, any) < 0)
+        return -1; /* the node's tape has no top min/max left: no label (crease_split.h) */
     double n[8][3];
     int branch[8], seen = 0;
     for (int c = 0; c < 8; c++) { /* labels first: most nodes lie on one branch */
-        if ((branch[c] = ism_crease_branch(s, k->p[c], NULL)) < 0)
+        if ((branch[c] = corner_branch(s, k, c)) < 0)
             return -1;
         seen |= 1 << branch[c];
     }

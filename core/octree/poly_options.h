@@ -54,8 +54,10 @@ typedef struct ism_poly_options {
                                where that cannot apply, the primal polygons as without it.
                                Default off */
     bool scalar_eval;       /* evaluate the octree node by node: no batched intervals over a
-                               node's children and no zero-free leaves (octree.h) — the same
-                               mesh bit for bit, for more; on is for tests (default off) */
+                               node's children, no zero-free leaves (octree.h) and no memo of
+                               edge roots and crease labels between nodes (cell_cache.h's
+                               ism_node_memo) — the same mesh bit for bit, for more; on is
+                               for tests (default off) */
     bool full_tape;         /* every leaf evaluates f itself, not f shortened by intervals over
                                its box (octree.h) — the same mesh bit for bit, for more; on is
                                for tests (default off) */

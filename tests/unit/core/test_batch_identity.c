@@ -3,7 +3,10 @@
  * changes no mesh: every example surface, in its box and 0.37 of a finest cell off the
  * lattice, and under an error bound (several rounds), gives bit for bit the mesh of the
  * node-by-node path (scalar_eval), on 1, 2 and 4 threads; and the batched path is really
- * taken (it evaluates f fewer times on the torus, where most leaves are zero-free). */
+ * taken (it evaluates f fewer times on the torus, where most leaves are zero-free). The
+ * node-by-node path also keeps no memo of edge roots and crease labels between nodes
+ * (cell_cache.h's ism_node_memo): under a bound, on a CSG sextic and the Klein bottle in
+ * three boxes, the memos change no bit either and save evaluations. */
 #include <criterion/criterion.h>
 #include <string.h>
 #include "poly_fixture.h"
@@ -99,4 +102,40 @@ Test(batch_identity, error_bound_rounds)
                 cr_expect_lt(evals[1], evals[0], "torus: batched path not taken (%llu >= %llu)",
                              (unsigned long long)evals[1], (unsigned long long)evals[0]);
         }
+}
+
+/* The build's memos of edge roots and crease labels (under max_error: cell_error.c's roots,
+ * plot_test.c's crease cells) are pure: Barth's nodal sextic cut by a ball (a max(): crease
+ * labels) and the Klein bottle (roots only), each at a bound that takes a few hundred
+ * tested nodes, in its box, moved by 1e-3 and by (sqrt 2 - 1) / 2 of a finest cell; the
+ * mesh bit for bit that of the path without them on 1, 2 and 4 threads (a thread's memo
+ * holds what its own nodes found: a schedule changes the hits, never a value). */
+Test(batch_identity, node_memo_under_a_bound)
+{
+    static const test_surface surfaces[] = {
+        {"barth-in-a-ball",
+         "max(4*(phi^2*x^2 - y^2)*(phi^2*y^2 - z^2)*(phi^2*z^2 - x^2) - "
+         "(1 + 2*phi)*(x^2 + y^2 + z^2 - 1)^2, x^2 + y^2 + z^2 - 2.25)",
+         {{"phi", 1.6180339887498949}}, 1, {{0}}, 0, {-1.6, -1.6, -1.6, 1.6, 1.6, 1.6}, 0},
+        {"klein-bottle",
+         "(x^2 + y^2 + z^2 + 2*y - 1)*((x^2 + y^2 + z^2 - 2*y - 1)^2 - 8*z^2) + "
+         "16*x*z*(x^2 + y^2 + z^2 - 2*y - 1)",
+         {{0}}, 0, {{0}}, 0, {-4, -4, -4, 4, 4, 4}, 1},
+    };
+    static const double bound[] = {3e-2, 6e-2};
+    int dmax = 7 - pf_quick();
+    for (size_t i = 0; i < 2; i++) {
+        const test_surface *s = &surfaces[i];
+        double cell = (s->box[3] - s->box[0]) / (1 << dmax);
+        const double shifts[] = {0, 1e-3, 0.5 * (1.4142135623730951 - 1) * cell};
+        for (int b = pf_first_box(); b < 3; b++) {
+            double box[6];
+            for (int k = 0; k < 6; k++)
+                box[k] = s->box[k] + shifts[b];
+            uint64_t evals[2];
+            check(s, box, dmax, bound[i], evals);
+            cr_expect_lt(evals[1], evals[0], "%s box %d: no fewer evaluations (%llu >= %llu)",
+                         s->name, b, (unsigned long long)evals[1], (unsigned long long)evals[0]);
+        }
+    }
 }
