@@ -1540,9 +1540,9 @@ static void forget(dual *d)
 }
 
 /* run, and round the isolated singular points o->dual_points (dual_balls.h): the mesh with a
- * hole at each, clipped and fanned to the point; where a fan misses E or its rim is not
- * two loops (one for each nappe), that ball is halved and the mesh made again, up to
- * ISM_DUAL_BALL_SHRINKS times (then "point_fan"). */
+ * hole at each, clipped and fanned to the point; where a fan misses E or a rim is not its
+ * node's two loops (one for each nappe), every such ball is halved and the mesh made again,
+ * each ball up to ISM_DUAL_BALL_SHRINKS times (then "point_fan"). */
 static enum ism_dual_status run_round_points(dual *d, ism_mesh *mesh, ism_dual_stats *st)
 {
     size_t n = d->o->ndual_points;
@@ -1563,21 +1563,23 @@ static enum ism_dual_status run_round_points(dual *d, ism_mesh *mesh, ism_dual_s
         st->leaves = st->missed = 0;
         if ((status = run(d, mesh, st)) != ISM_DUAL_OK)
             break;
-        size_t which;
         enum ism_fan_status fan =
-            ism_dual_balls_fan(mesh, &d->w[0].s, balls, n, d->o->max_error, &which, missed);
+            ism_dual_balls_fan(mesh, &d->w[0].s, balls, n, d->o->max_error, missed);
         if (fan == ISM_FAN_OK)
             break;
-        if (fan == ISM_FAN_NO_MEMORY)
+        if (fan == ISM_FAN_NO_MEMORY) {
             status = ISM_DUAL_NO_MEMORY;
-        else {
-            if (fan == ISM_FAN_BAD)
-                missed[which] = 1;
-            for (size_t k = 0; k < n && status == ISM_DUAL_OK; k++)
-                if (missed[k] && shrink[k]++ == ISM_DUAL_BALL_SHRINKS) {
-                    st->declined = ISM_DUAL_WHY_POINT_FAN;
-                    status = ISM_DUAL_NOT_APPLICABLE;
-                }
+            break;
+        }
+        bool any = false, spent = false; /* every ball marked halves, all in one more try */
+        for (size_t k = 0; k < n; k++)
+            if (missed[k]) {
+                any = true;
+                spent |= shrink[k]++ == ISM_DUAL_BALL_SHRINKS; /* at its smallest already */
+            }
+        if (!any || spent) {
+            st->declined = ISM_DUAL_WHY_POINT_FAN;
+            status = ISM_DUAL_NOT_APPLICABLE;
         }
     }
     free(missed);

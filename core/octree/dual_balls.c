@@ -153,6 +153,8 @@ typedef struct clip {
     size_t n;
     double *r1;        /* per ball: the clip sphere's radius (0: nothing to clip) */
     uint32_t *ball;    /* per vertex of the dual mesh: the ball whose sphere holds it, or n */
+    uint8_t *shrink;   /* per ball: 1 when it is to be halved (the caller's) */
+    bool marked;       /* a ball was marked in shrink */
     uint64_t *cut;     /* sorted undirected edges cut by a sphere */
     uint32_t *cutv;    /* their cut points' vertices */
     size_t ncut, capcut;
@@ -213,17 +215,30 @@ static bool segment_meets(const double a[3], const double b[3], const double p[3
     return ism_sqdist3(q, p) < r * r;
 }
 
+/* Ball k marked to be halved. */
+static void mark(clip *c, size_t k)
+{
+    c->shrink[k] = 1;
+    c->marked = true;
+}
+
 /* The clip spheres grown until no edge with both ends outside one dips into it (up to
- * SETTLE_STEPS scans; never to a ball's limit), and c->ball found for them. */
-static enum ism_fan_status settle_radii(clip *c, size_t *which)
+ * SETTLE_STEPS scans; never to a ball's limit: such balls, and those still growing after
+ * the last scan, are marked), and c->ball found for them. */
+static enum ism_fan_status settle_radii(clip *c)
 {
     const ism_mesh *m = c->m;
-    size_t last = 0; /* the ball grown last */
+    uint8_t *grew = malloc(c->n + 1);
+    if (!grew)
+        return ISM_FAN_NO_MEMORY;
     for (int step = 0;; step++) {
         free(c->ball);
-        if (!find_balls(c))
+        if (!find_balls(c)) {
+            free(grew);
             return ISM_FAN_NO_MEMORY;
+        }
         bool grown = false;
+        memset(grew, 0, c->n);
         for (size_t t = 0; t < m->ntris; t++)
             for (int j = 0; j < 3; j++) {
                 uint32_t a = m->tri[3 * t + j], b = m->tri[3 * t + (j + 1) % 3];
@@ -231,22 +246,22 @@ static enum ism_fan_status settle_radii(clip *c, size_t *which)
                     continue;
                 const double *pa = m->pos + 3 * (size_t)a, *pb = m->pos + 3 * (size_t)b;
                 for (size_t k = 0; k < c->n; k++)
-                    if (c->r1[k] > 0 && segment_meets(pa, pb, c->b[k].p, c->r1[k])) {
+                    if (c->r1[k] > 0 && !c->shrink[k] &&
+                        segment_meets(pa, pb, c->b[k].p, c->r1[k])) {
                         double far = fmax(ism_sqdist3(pa, c->b[k].p), ism_sqdist3(pb, c->b[k].p));
                         c->r1[k] = fmax(c->r1[k], sqrt(far) * (1 + RIM_MARGIN));
                         grown = true;
-                        last = k;
-                        if (!(c->r1[k] < c->b[k].limit)) {
-                            *which = k;
-                            return ISM_FAN_BAD;
-                        }
+                        grew[k] = 1;
+                        if (!(c->r1[k] < c->b[k].limit))
+                            mark(c, k);
                     }
             }
-        if (!grown)
-            return ISM_FAN_OK;
-        if (step == SETTLE_STEPS) {
-            *which = last;
-            return ISM_FAN_BAD;
+        if (!grown || step == SETTLE_STEPS || c->marked) {
+            for (size_t k = 0; grown && step == SETTLE_STEPS && k < c->n; k++)
+                if (grew[k])
+                    mark(c, k);
+            free(grew);
+            return c->marked ? ISM_FAN_BAD : ISM_FAN_OK;
         }
     }
 }
@@ -290,7 +305,7 @@ static uint32_t cut_vertex(const clip *c, uint32_t a, uint32_t b)
 }
 
 /* Every edge with one end inside a sphere and one outside gets its cut vertex (once). */
-static enum ism_fan_status collect_cuts(clip *c, size_t *which)
+static enum ism_fan_status collect_cuts(clip *c)
 {
     ism_mesh *m = c->m;
     size_t cap = 0;
@@ -300,9 +315,10 @@ static enum ism_fan_status collect_cuts(clip *c, size_t *which)
             size_t ka = ball_of(c, a), kb = ball_of(c, b);
             if (ka == kb)
                 continue;
-            if (ka < c->n && kb < c->n) {
-                *which = ka; /* an edge from one ball into another: balls too close */
-                return ISM_FAN_BAD;
+            if (ka < c->n && kb < c->n) { /* an edge from one ball into another */
+                mark(c, ka);
+                mark(c, kb);
+                continue;
             }
             if (c->ncut == cap) {
                 cap = cap ? 2 * cap : 256;
@@ -313,6 +329,8 @@ static enum ism_fan_status collect_cuts(clip *c, size_t *which)
             }
             c->cut[c->ncut++] = undirected(a, b);
         }
+    if (c->marked)
+        return ISM_FAN_BAD;
     qsort(c->cut, c->ncut, sizeof *c->cut, by_u64);
     size_t u = 0;
     for (size_t i = 0; i < c->ncut; i++)
@@ -374,9 +392,9 @@ static enum ism_fan_status clip_triangle(clip *c, size_t t)
 }
 
 /* The clip spheres: just beyond each ball's farthest rim vertex (the ends of the mesh's
- * boundary edges round it); BAD when a boundary vertex is near no ball or the rim reaches
- * past a ball's limit. */
-static enum ism_fan_status clip_radii(clip *c, const edge_ref *e, size_t ne, size_t *which)
+ * boundary edges round it); BAD when a boundary vertex is near no ball (nothing marked:
+ * no ball can help) or a rim reaches past its ball's limit (marked). */
+static enum ism_fan_status clip_radii(clip *c, const edge_ref *e, size_t ne)
 {
     for (size_t i = 0; i < ne;) {
         size_t j = i + 1;
@@ -389,20 +407,16 @@ static enum ism_fan_status clip_radii(clip *c, const edge_ref *e, size_t ne, siz
                 size_t k = 0;
                 while (k < c->n && !(ism_sqdist3(p, c->b[k].p) < c->b[k].limit * c->b[k].limit))
                     k++;
-                if (k == c->n) {
-                    *which = 0;
+                if (k == c->n)
                     return ISM_FAN_BAD;
-                }
                 c->r1[k] = fmax(c->r1[k], sqrt(ism_sqdist3(p, c->b[k].p)) * (1 + RIM_MARGIN));
-                if (!(c->r1[k] < c->b[k].limit)) {
-                    *which = k;
-                    return ISM_FAN_BAD;
-                }
+                if (!(c->r1[k] < c->b[k].limit))
+                    mark(c, k);
             }
         }
         i = j;
     }
-    return ISM_FAN_OK;
+    return c->marked ? ISM_FAN_BAD : ISM_FAN_OK;
 }
 
 /* Rim edges of ball k chained into loops: each rim vertex starts one edge and ends one.
@@ -429,15 +443,23 @@ static long count_loops(const clip *c, size_t k, const uint32_t *next_of, uint8_
     return loops;
 }
 
-/* Within E: the triangle's centroid and edge midpoints. */
+/* The triangle meets E as the dual mesh's own do (dual.c): its centroid and edge midpoints
+ * within E of f = 0, its normal along ∇f at the centroid. */
 static bool within(ism_sampler *s, const ism_mesh *m, const uint32_t *v, double e)
 {
     const double *p[3] = {m->pos + 3 * (size_t)v[0], m->pos + 3 * (size_t)v[1],
                           m->pos + 3 * (size_t)v[2]};
-    double q[3];
-    for (int a = 0; a < 3; a++)
+    double q[3], g[3], u[3], w[3], nrm[3];
+    for (int a = 0; a < 3; a++) {
         q[a] = (p[0][a] + p[1][a] + p[2][a]) / 3;
-    if (!(ism_sample_dist(s, q) <= e))
+        u[a] = p[1][a] - p[0][a];
+        w[a] = p[2][a] - p[0][a];
+    }
+    double f = ism_sample_grad(s, q, g), gl = ism_norm3(g);
+    nrm[0] = u[1] * w[2] - u[2] * w[1];
+    nrm[1] = u[2] * w[0] - u[0] * w[2];
+    nrm[2] = u[0] * w[1] - u[1] * w[0];
+    if (!isfinite(f) || !(gl > 0) || !(fabs(f) / gl <= e) || !(ism_dot3(nrm, g) > 0))
         return false;
     for (int j = 0; j < 3; j++) {
         for (int a = 0; a < 3; a++)
@@ -449,9 +471,9 @@ static bool within(ism_sampler *s, const ism_mesh *m, const uint32_t *v, double 
 }
 
 /* The rims fanned to their points (after the kept and cut triangles in c->tri), each new
- * triangle measured; MISS names a ball whose fan or cut misses E. */
-static enum ism_fan_status fan_rims(clip *c, size_t kept, double max_error, size_t *which,
-                                    uint8_t *missed)
+ * triangle measured; BAD marks the balls whose rims are not their nappes' loops, MISS
+ * those whose fans or cuts miss E or face against ∇f. */
+static enum ism_fan_status fan_rims(clip *c, size_t kept, double max_error)
 {
     ism_mesh *m = c->m;
     size_t nv = m->nverts;
@@ -460,22 +482,19 @@ static enum ism_fan_status fan_rims(clip *c, size_t kept, double max_error, size
     enum ism_fan_status st = next_of && seen ? ISM_FAN_OK : ISM_FAN_NO_MEMORY;
     if (st == ISM_FAN_OK) {
         memset(next_of, 0xff, (nv + 1) * sizeof *next_of);
-        for (size_t i = 0; i < c->nrim && st == ISM_FAN_OK; i++) {
-            if (next_of[c->rim[3 * i]] != UINT32_MAX) { /* two rim edges leave one vertex */
-                *which = c->rim[3 * i + 2];
-                st = ISM_FAN_BAD;
-            }
+        for (size_t i = 0; i < c->nrim; i++) {
+            if (next_of[c->rim[3 * i]] != UINT32_MAX) /* two rim edges leave one vertex */
+                mark(c, c->rim[3 * i + 2]);
             next_of[c->rim[3 * i]] = (uint32_t)i;
         }
     }
+    for (size_t k = 0; k < c->n && st == ISM_FAN_OK; k++)
+        if (!c->shrink[k] && count_loops(c, k, next_of, seen) != c->b[k].nappes)
+            mark(c, k);
+    if (st == ISM_FAN_OK && c->marked)
+        st = ISM_FAN_BAD;
     for (size_t k = 0; k < c->n && st == ISM_FAN_OK; k++) {
-        long loops = count_loops(c, k, next_of, seen);
-        if (loops != c->b[k].nappes) {
-            *which = k;
-            st = ISM_FAN_BAD;
-            break;
-        }
-        if (!loops)
+        if (!c->b[k].nappes)
             continue;
         float none[3] = {0, 0, 0}; /* ∇f = 0 at the point: no normal */
         uint32_t apex = ism_mesh_add_vertex(m, c->b[k].p, none);
@@ -505,8 +524,7 @@ static enum ism_fan_status fan_rims(clip *c, size_t kept, double max_error, size
                         k = b;
                     }
                 }
-            *which = k < c->n ? k : 0;
-            missed[*which] = 1;
+            mark(c, k < c->n ? k : 0);
             st = ISM_FAN_MISS;
         }
     free(next_of);
@@ -535,25 +553,23 @@ static enum ism_fan_status closed(const ism_mesh *m, const ism_dual_ball *b, siz
 }
 
 enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_dual_ball *b,
-                                       size_t n, double max_error, size_t *which,
-                                       uint8_t *missed)
+                                       size_t n, double max_error, uint8_t *shrink)
 {
-    *which = 0;
-    memset(missed, 0, n);
-    clip c = {.m = m, .s = s, .b = b, .n = n};
+    memset(shrink, 0, n);
+    clip c = {.m = m, .s = s, .b = b, .n = n, .shrink = shrink};
     c.r1 = calloc(n ? n : 1, sizeof *c.r1);
     edge_ref *e = NULL;
     size_t ne = 0;
     enum ism_fan_status st =
         c.r1 && sorted_edges(m, b, n, &e, &ne) ? ISM_FAN_OK : ISM_FAN_NO_MEMORY;
     if (st == ISM_FAN_OK)
-        st = clip_radii(&c, e, ne, which);
+        st = clip_radii(&c, e, ne);
     free(e);
     size_t nv0 = m->nverts, nt0 = m->ntris; /* the dual mesh's own */
     if (st == ISM_FAN_OK)
-        st = settle_radii(&c, which);
+        st = settle_radii(&c);
     if (st == ISM_FAN_OK)
-        st = collect_cuts(&c, which);
+        st = collect_cuts(&c);
     for (size_t t = 0; t < nt0 && st == ISM_FAN_OK; t++)
         st = clip_triangle(&c, t);
     /* the triangles kept whole first, then the cut ones (a cut vertex among their corners):
@@ -576,7 +592,7 @@ enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_du
         free(order);
     }
     if (st == ISM_FAN_OK)
-        st = fan_rims(&c, kept, max_error, which, missed);
+        st = fan_rims(&c, kept, max_error);
     if (st == ISM_FAN_OK) {
         if (!ism_mesh_reserve(m, m->nverts, c.nt))
             st = ISM_FAN_NO_MEMORY;

@@ -70,10 +70,9 @@ enum ism_fan_status {
 /* Clips the closed-but-for-the-holes mesh m round each ball and fans its rim loops to the
  * ball's point (one vertex per node; nothing for an isolated point); measures the new
  * triangles against E with s. On anything but OK, m is left in an unspecified state (the
- * caller makes the mesh again or gives up). *which: the ball a MISS or BAD is about;
- * missed[0..n): 1 for every ball with a triangle beyond E (MISS). */
+ * caller makes the mesh again or gives up). shrink[0..n): 1 for every ball a MISS or BAD
+ * is about, to be halved; a BAD with none marked cannot be helped by the balls. */
 enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_dual_ball *b,
-                                       size_t n, double max_error, size_t *which,
-                                       uint8_t *missed);
+                                       size_t n, double max_error, uint8_t *shrink);
 
 #endif
