@@ -5,6 +5,7 @@
 #include "core/octree/sampler.h"
 #include "core/octree/cell_cache.h"
 #include "core/octree/edge_roots.h"
+#include "core/octree/face_memo.h"
 #include "core/octree/leaf_tapes.h"
 #include "core/octree/node_balls.h"
 #include "core/octree/quiet.h"
@@ -60,6 +61,7 @@ typedef struct thread_state {
     uint16_t number[ISM_GRID_MAX_DEPTH + 1];
     ism_leaf_tapes_cache tape_cache; /* this thread's hits in build.leaf_tapes */
     ism_thin_ws thin;         /* the hidden-piece search's scratch */
+    ism_face_memo faces;      /* its verdicts on faces, for the node across (face_memo.h) */
     uint64_t visited, excluded, unresolved;
     uint64_t thin_searched, thin_found, thin_undecided, deep_leaves;
     uint64_t tape_misses;     /* leaves whose shortened tape found no room in leaf_tapes */
@@ -256,9 +258,15 @@ static void count_thin(thread_state *th, uint8_t thin)
 #define JOIN_SAMPLES 8
 
 /* Do f's values at JOIN_SAMPLES points strictly between p and q all have the sign opposite
- * to `sign`? */
-static bool joined(ism_sampler *s, const double p[3], const double q[3], int sign)
+ * to `sign`? The same points, bit for bit, for (q, p): the two nodes beside a face ask
+ * about its edges in orders of their own (face_memo.h keeps one answer for both). */
+static bool joined(ism_sampler *s, const double *p, const double *q, int sign)
 {
+    if (p[0] > q[0] || (p[0] == q[0] && (p[1] > q[1] || (p[1] == q[1] && p[2] > q[2])))) {
+        const double *r = p;
+        p = q;
+        q = r;
+    }
     for (int i = 1; i <= JOIN_SAMPLES; i++) {
         double t = (double)i / (JOIN_SAMPLES + 1), x[3];
         for (int j = 0; j < 3; j++)
@@ -351,6 +359,38 @@ static enum ism_thin_verdict search_box(const build *b, thread_state *th, const 
     return v;
 }
 
+/* The number of sub (a shortened tape: th->tapes[l] for some l <= level) in the build's
+ * table, 0 when it finds no room there. */
+static uint16_t tape_number_of(build *b, thread_state *th, const ism_tape *sub, int level)
+{
+    int l = level;
+    while (l >= 0 && th->tapes[l] != sub)
+        l--;
+    uint16_t k;
+    if (l >= 0 && th->numbered[l] == th->written[l]) {
+        k = th->number[l];
+    } else {
+        k = (uint16_t)ism_leaf_tapes_number(&b->leaf_tapes, &th->tape_cache, sub);
+        if (l >= 0) {
+            th->number[l] = k;
+            th->numbered[l] = th->written[l];
+        }
+    }
+    return k;
+}
+
+/* The same for a leaf's tape, counting the misses. */
+static uint16_t tape_number(build *b, thread_state *th, const ism_tape *sub, int level)
+{
+    uint16_t k = tape_number_of(b, th, sub, level);
+    th->tape_misses += k == 0;
+    return k;
+}
+
+/* face_memo.h's verdict for a face where f keeps its sign by the face's interval (no
+ * search ran), beside enum ism_thin_verdict's. */
+#define FACE_CLEAR 0xff
+
 /* A would-be leaf may hold a piece of the surface that no edge crosses (thin_search.h):
  * with all corners of one sign, anywhere in it; with both signs, behind a face whose four
  * corners share a sign — a nappe or a thin tube piercing the face in a closed curve that
@@ -383,9 +423,14 @@ static enum ism_thin_verdict search_box(const build *b, thread_state *th, const 
  * nodes with both signs only where f has a kink (without them a bar found in a split node
  * met its unsplit neighbour's face in an island: cracks).
  *
- * Cost (own boxes, depth 7, one thread), where nothing is hidden: the gyroid ball searches
- * 4,425 boxes, most at its crease, 2,051M -> 2,141M instructions (+4.4%); cube minus ball
- * (r = 1.3) 1,443M -> 1,518M (+5.2%); the search at kinks is one level deep (thin_search.c). */
+ * Cost (own boxes, depth 7, one thread: `isomesh --surface S --threads 1`), where nothing is
+ * hidden: the gyroid ball searches 4,425 boxes, most at its crease; skipping every node whose
+ * tape keeps a min/max would cost 1,850M instructions, the search there 2,048M (+10.7%),
+ * two thirds of it on faces (searches 5.1% of the run, their intervals 1.7%); cube minus ball
+ * (r = 1.3) 1,397M -> 1,537M (+10.0%). A face's verdict is kept for the node across it
+ * (face_memo.h): 2,027M and 1,514M, meshes the same; only 7.5% / 4% of the faces looked up
+ * are found there (the node across is mostly a leaf of another size, or flat). The search at
+ * kinks is one level deep (thin_search.c). */
 static uint8_t hides_piece(build *b, thread_state *th, const ism_node *nd, const ism_tape *sub,
                            const ism_corners *k)
 {
@@ -406,24 +451,48 @@ static uint8_t hides_piece(build *b, thread_state *th, const ism_node *nd, const
     }
     if (b->p->thin_coarse && !ism_tape_has_min_max(sub))
         return thin_bits(&tally, v);
+    /* the faces' verdicts are kept for the node across, under sub's number in the leaf
+     * tapes' table (0: the build's own tape; none when the table has no room) */
+    unsigned number = sub == b->p->tape ? 0 : tape_number_of(b, th, sub, nd->level);
+    bool memo = sub == b->p->tape || number != 0;
+    uint32_t what = ism_face_memo_what(nd->level, 0, number);
+    int32_t steps = ism_grid_cell_steps(b->grid, nd->level);
     for (int face = 0; face < 6 && v != ISM_THIN_FOUND && v != ISM_THIN_FOUND_KINKED; face++) {
         int s = face_sign(k, face);
         if (s == 0)
             continue;
+        int axis = face / 2;
+        uint64_t where =
+            ism_face_memo_where(nd->org, axis, nd->org[axis] + (face % 2 ? steps : 0));
+        uint32_t face_what = what | ism_face_memo_what(0, axis, 0);
+        uint8_t kept;
+        if (memo && ism_face_memo_get(&th->faces, where, face_what, &kept)) {
+            if (kept != FACE_CLEAR) { /* counted as the search it stands for */
+                v = (enum ism_thin_verdict)kept;
+                tally.searches++;
+                tally.undecided += v == ISM_THIN_UNDECIDED;
+            }
+            continue;
+        }
         double flo[3], fhi[3];
         memcpy(flo, lo, sizeof flo);
         memcpy(fhi, hi, sizeof fhi);
         if (face % 2)
-            flo[face / 2] = hi[face / 2];
+            flo[axis] = hi[axis];
         else
-            fhi[face / 2] = lo[face / 2];
+            fhi[axis] = lo[axis];
         th->s.n_interval++;
         ism_interval r = ism_eval_interval(sub, th->s.ws, (ism_interval){flo[0], fhi[0]},
                                            (ism_interval){flo[1], fhi[1]},
                                            (ism_interval){flo[2], fhi[2]});
-        if (!(r.lo <= 0 && r.hi >= 0))
-            continue; /* f keeps a sign on the whole face */
+        if (!(r.lo <= 0 && r.hi >= 0)) { /* f keeps a sign on the whole face */
+            if (memo)
+                ism_face_memo_put(&th->faces, where, face_what, FACE_CLEAR);
+            continue;
+        }
         v = search_box(b, th, sub, k, flo, fhi, s, face, &tally);
+        if (memo)
+            ism_face_memo_put(&th->faces, where, face_what, (uint8_t)v);
     }
     return thin_bits(&tally, v);
 }
@@ -478,27 +547,6 @@ static void children_ranges(build *b, thread_state *th, const ism_node *nd,
     }
     ism_eval_interval_batch(tape, th->s.ws, box[0], box[1], box[2], range, 8);
     th->s.n_interval += 8;
-}
-
-/* The number of sub (a shortened tape: th->tapes[l] for some l <= level) in the build's
- * table, 0 when it finds no room there. */
-static uint16_t tape_number(build *b, thread_state *th, const ism_tape *sub, int level)
-{
-    int l = level;
-    while (l >= 0 && th->tapes[l] != sub)
-        l--;
-    uint16_t k;
-    if (l >= 0 && th->numbered[l] == th->written[l]) {
-        k = th->number[l];
-    } else {
-        k = (uint16_t)ism_leaf_tapes_number(&b->leaf_tapes, &th->tape_cache, sub);
-        if (l >= 0) {
-            th->number[l] = k;
-            th->numbered[l] = th->written[l];
-        }
-    }
-    th->tape_misses += k == 0;
-    return k;
 }
 
 /* Decides node v->v[i] and grows its subtree. Nodes that fail the flatness test are split
