@@ -140,6 +140,8 @@ typedef struct cf_polyline {
     uint32_t *g_start, *g_seg; /* segments per grid cell (CSR) */
     double (*g_box)[6];     /* at g_start[c]: the box of cell c's segments clipped to the
                                cell (grown by the rounding slack): lo xyz, hi xyz */
+    bool pinch[2];          /* its first / last point is a pinch point (set by the caller
+                               after cf_polyline_init; open curves only) */
 } cf_polyline;
 
 /* ---- conform_mesh.c: incidence, dead marks, growth ---- */
@@ -290,6 +292,32 @@ double cf_polyline_box_distance(const cf_polyline *pl, const double q[3]);
  * sheet (CF_CLEAR_CELLS along the normals), from the angle the two sheets cross at along
  * them (the median over sampled points; 0 where none is a transversal crossing). */
 double cf_crossing_radius(cf_ctx *c, const cf_polyline *pl, size_t npl);
+
+/* ---- conform_pinch.c: the rim beside a pinch point ---- */
+/* Rim vertices whose feet lie this many tube radii (arclength) or less from a pinch end of
+ * their curve are read in the umbrella's chart there: the cap round the end, where the feet
+ * stop telling the way the rim runs (one radius), and as much again for the windows the ears
+ * read their direction over on either side. */
+#define CF_PINCH_REACH_RHO 2.0
+/* The umbrella's chart at a pinch point: the point, the curve's unit tangent there (into the
+ * curve), the direction the two sheets lie apart in (n) and the fold's (e = c × n). */
+typedef struct cf_pinch {
+    double p[3], c[3], n[3], e[3];
+    bool on;
+} cf_pinch;
+/* The charts of the pinch ends of the npl polylines: out[2 k + e] for end e of pl[k] (on
+ * false where it is no pinch point), the tangent read over the tube radius rho. */
+void cf_pinch_ends(cf_ctx *c, const cf_polyline *pl, size_t npl, double rho, cf_pinch *out);
+/* The chart of a pinch end of pl[k] within `reach` (arclength) of the foot parameter s, or
+ * NULL. */
+const cf_pinch *cf_pinch_near(const cf_pinch *ends, const cf_polyline *pl, int k, double s,
+                              double reach);
+/* The runs of loop l whose vertices' feet (curve cid[i], parameter u[i]) lie within reach of
+ * one pinch end lose their steps backwards in the chart's sheet parameter (cf_clip_ears on
+ * the run); l->v, u, foot and cid are compacted in place. Returns the ears clipped, -1 when
+ * out of memory. */
+int cf_pinch_ears(cf_ctx *c, const cf_pinch *ends, const cf_polyline *pl, cf_loop *l,
+                  double *u, double *foot, int *cid, double reach, double rho);
 
 /* ---- conform_zip.c: zipping loops to a curve ---- */
 /* Refills the hole loops cut around a group of npl double curves (meeting at shared end

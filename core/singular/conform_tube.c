@@ -279,6 +279,8 @@ static bool group_init(cf_run *r, const size_t *idx, size_t n, group *g)
         if (!cf_polyline_init(&g->pl[k], g->pts[k], m, cu->closed && m >= 3, r0) ||
             !(g->cv[k] = malloc(m * sizeof *g->cv[k])))
             return false;
+        for (int e = 0; e < 2 && !g->pl[k].closed; e++)
+            g->pl[k].pinch[e] = cu->end_type[e] == ISM_END_PINCH;
     }
     return true;
 }

@@ -513,6 +513,10 @@ static void smooth_ids(int *cid, size_t n, bool closed)
 bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, size_t npl,
                   const cf_loops *ls, double rho)
 {
+    cf_pinch *ends = malloc(2 * npl * sizeof *ends);
+    if (!ends)
+        return false;
+    cf_pinch_ends(c, pl, npl, rho, ends);
     for (size_t k = 0; k < ls->n && !c->stopped; k++) {
         const cf_loop *l = &ls->l[k];
         double *u = malloc(l->n * sizeof *u), *foot = malloc(3 * l->n * sizeof *foot);
@@ -536,6 +540,9 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
                 own.v[i] = l->v[i];
             if (multi)
                 smooth_ids(cid, l->n, l->closed);
+            if (ok && cf_pinch_ears(c, ends, pl, &own, u, foot, cid,
+                                              CF_PINCH_REACH_RHO * rho, rho) < 0)
+                ok = false;
             if (ok && cf_clip_ears(c, multi ? pl : &pl[cid[0]], &own, u, foot,
                                    multi ? cid : NULL, (int)wind) < 0)
                 ok = false;
@@ -553,8 +560,11 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
         free(u);
         free(foot);
         free(cid);
-        if (!ok)
+        if (!ok) {
+            free(ends);
             return false;
+        }
     }
+    free(ends);
     return true;
 }

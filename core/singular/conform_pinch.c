@@ -1,0 +1,203 @@
+/* conform_pinch.c — a tube's rim beside a pinch point smoothed in the chart of the umbrella
+ * there. Near a pinch point the surface is, to first order, Whitney's umbrella x² = y² z:
+ * the double curve along z > 0 (the tangent c), the two sheets x = ±y √z lying apart along
+ * the Hessian's one eigenvector of non-zero eigenvalue (n, rank 1 at a pinch point), folded
+ * into each other round the line x = z = 0 (e = c × n) with radius y² / 2. Its smooth chart
+ * is (y, v) with v = x / y: the sheet's own parameter, v < 0 on one sheet, v > 0 on the
+ * other, and a tube's rim round the curve's end runs monotone in v from one sheet round the
+ * fold onto the other:
+ *
+ *      z (c)  ╲   ╱  sheets x = ±y√z            a rim vertex q: s = rho · (q·n) / (q·e),
+ *       │      ╲ ╱                              the parameter the rim runs along; a step
+ *   ────●───────●────── fold (e)                back in s is an ear of the hole
+ *     pinch    ╱ ╲   the rim's cap (q), feet at the pinch
+ *
+ * Along the curve the rim's feet say which way it runs (conform_ears.c); round the curve's end
+ * they all lie at the pinch, and the polygoniser's vertices beside the fold — narrower there
+ * than a cell — step back and forth across it. Every ring quad and zip triangle under such a
+ * step turns over (cross-cap, depth 6, in its own box: 28 edges, all on the rings beside the
+ * fold). Each run of rim vertices whose feet lie within CF_PINCH_REACH_RHO tube radii of a
+ * pinch point is read in the chart (s above, the distance to the tangent line) and its
+ * backward steps are clipped as ears (cf_clip_ears: one triangle each, where it turns like
+ * the hole). */
+#include "core/singular/conform_internal.h"
+#include "core/util/vec3.h"
+
+#include "core/util/sym3.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+/* The tangent at the pinch is the chord to the curve point this many tube radii along it (a
+ * tracer's first steps from a pinch point wander by a rounding; the presets' double segments
+ * are straight, and a curved one is nearly so across a tube's width). */
+#define PINCH_TANGENT_RHO 1.0
+
+void cf_pinch_ends(cf_ctx *c, const cf_polyline *pl, size_t npl, double rho, cf_pinch *out)
+{
+    for (size_t k = 0; k < npl; k++)
+        for (int e = 0; e < 2; e++) {
+            cf_pinch *ch = &out[2 * k + e];
+            ch->on = false;
+            if (pl[k].closed || pl[k].n < 2 || !pl[k].pinch[e])
+                continue;
+            /* the end point and the first curve point PINCH_TANGENT_RHO rho or more from it */
+            size_t end = e ? pl[k].n - 1 : 0, j = end;
+            for (size_t i = 1; i < pl[k].n; i++) {
+                j = e ? pl[k].n - 1 - i : i;
+                if (fabs(pl[k].s[j] - pl[k].s[end]) >= PINCH_TANGENT_RHO * rho)
+                    break;
+            }
+            const double *p = pl[k].p + 3 * end, *q = pl[k].p + 3 * j;
+            double d[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]}, len = ism_norm3(d);
+            /* the sheets' direction apart: the Hessian's eigenvector of the largest |λ| (its
+             * rank is 1 at a pinch point), made normal to the tangent */
+            double g[3], h[6], eig[3], vec[3][3];
+            ism_eval_hessian(c->f, c->ws, p[0], p[1], p[2], g, h);
+            ism_sym3_eigen(h, eig, vec);
+            int big = fabs(eig[0]) > fabs(eig[2]) ? 0 : 2;
+            if (!(len > 0) || !isfinite(eig[big]) || eig[big] == 0)
+                continue;
+            for (int i = 0; i < 3; i++) {
+                ch->p[i] = p[i];
+                ch->c[i] = d[i] / len;
+                ch->n[i] = vec[big][i];
+            }
+            double nc = ism_dot3(ch->n, ch->c);
+            for (int i = 0; i < 3; i++)
+                ch->n[i] -= nc * ch->c[i];
+            if (!(ism_normalise3(ch->n) > 0))
+                continue;
+            ch->e[0] = ch->c[1] * ch->n[2] - ch->c[2] * ch->n[1];
+            ch->e[1] = ch->c[2] * ch->n[0] - ch->c[0] * ch->n[2];
+            ch->e[2] = ch->c[0] * ch->n[1] - ch->c[1] * ch->n[0];
+            ch->on = true;
+        }
+}
+
+const cf_pinch *cf_pinch_near(const cf_pinch *ends, const cf_polyline *pl, int k, double s,
+                              double reach)
+{
+    for (int e = 0; e < 2; e++) {
+        const cf_pinch *ch = &ends[2 * (size_t)k + e];
+        if (ch->on && (e ? pl[k].length - s : s) <= reach)
+            return ch;
+    }
+    return NULL;
+}
+
+/* The point's coordinates in the chart's frame: along the tangent, the sheets' normal, the
+ * fold. */
+static void frame(const cf_pinch *ch, const double q[3], double *h, double *xn, double *xe)
+{
+    double d[3] = {q[0] - ch->p[0], q[1] - ch->p[1], q[2] - ch->p[2]};
+    *h = ism_dot3(d, ch->c);
+    *xn = ism_dot3(d, ch->n);
+    *xe = ism_dot3(d, ch->e);
+}
+
+/* Runs of at least this many loop vertices in one pinch chart are smoothed (cf_clip_ears
+ * reads a direction over DIR_WINDOW edges each side and never clips an open run's ends). */
+#define PINCH_RUN_MIN 8
+
+int cf_pinch_ears(cf_ctx *c, const cf_pinch *ends, const cf_polyline *pl, cf_loop *l,
+                  double *u, double *foot, int *cid, double reach, double rho)
+{
+    size_t n = l->n;
+    if (n < PINCH_RUN_MIN)
+        return 0;
+    const cf_pinch **ch = malloc(n * sizeof *ch);
+    uint32_t *v = malloc(n * sizeof *v);
+    double *s = malloc(n * sizeof *s), *ft = malloc(3 * n * sizeof *ft);
+    size_t *src = malloc(n * sizeof *src);
+    bool *keep = malloc(n * sizeof *keep);
+    int clipped = 0;
+    if (!ch || !v || !s || !ft || !src || !keep) {
+        clipped = -1;
+        goto done;
+    }
+    for (size_t i = 0; i < n; i++) {
+        ch[i] = cf_pinch_near(ends, pl, cid[i], u[i], reach);
+        keep[i] = true;
+    }
+    /* a closed loop is read from a change of chart (none: one run all round, closed) */
+    size_t start = 0;
+    bool whole = false;
+    if (l->closed) {
+        while (start < n && ch[start] == ch[(start + n - 1) % n])
+            start++;
+        whole = start == n;
+        start = whole ? 0 : start;
+    }
+    cf_polyline flat = {0}; /* an open parameter line: steps are differences of s */
+    for (size_t a = 0; a < n;) {
+        size_t i0 = (start + a) % n;
+        const cf_pinch *cur = ch[i0];
+        size_t len = 0;
+        while (a + len < n && cur && ch[(start + a + len) % n] == cur)
+            len++;
+        if (!cur || len < PINCH_RUN_MIN) {
+            a += len ? len : 1;
+            continue;
+        }
+        /* the run in the chart: s = rho × (along n) / (along the fold), the sheet's own
+         * parameter (x / y on x² = y² z), monotone along a rim that goes round the pinch;
+         * the distance to the tangent line beside it */
+        for (size_t j = 0; j < len; j++) {
+            size_t i = (i0 + j) % n;
+            const double *q = c->m->pos + 3 * (size_t)l->v[i];
+            double h, xn, xe;
+            frame(cur, q, &h, &xn, &xe);
+            v[j] = l->v[i];
+            src[j] = i;
+            s[j] = fabs(xe) > 0 ? rho * xn / xe : (xn >= 0 ? 1 : -1) * INFINITY;
+            for (int k = 0; k < 3; k++)
+                ft[3 * j + k] = cur->p[k] + h * cur->c[k];
+        }
+        bool finite = true;
+        for (size_t j = 0; j < len; j++)
+            finite = finite && isfinite(s[j]);
+        a += len;
+        if (!finite)
+            continue;
+        cf_loop run = {v, len, whole};
+        int got = cf_clip_ears(c, &flat, &run, s, ft, NULL, 0);
+        if (got < 0) {
+            clipped = -1;
+            goto done;
+        }
+        if (got == 0)
+            continue;
+        /* the run's vertices left, in order: mark the others gone */
+        size_t r = 0;
+        for (size_t j = 0; j < len; j++) {
+            if (r < run.n && v[r] == l->v[src[j]])
+                r++;
+            else
+                keep[src[j]] = false;
+        }
+        clipped += got;
+    }
+    if (clipped > 0) {
+        size_t k = 0;
+        for (size_t i = 0; i < n; i++) {
+            if (!keep[i])
+                continue;
+            l->v[k] = l->v[i];
+            u[k] = u[i];
+            cid[k] = cid[i];
+            for (int j = 0; j < 3; j++)
+                foot[3 * k + j] = foot[3 * i + j];
+            k++;
+        }
+        l->n = k;
+    }
+done:
+    free(ch);
+    free(v);
+    free(s);
+    free(ft);
+    free(src);
+    free(keep);
+    return clipped;
+}
