@@ -1,25 +1,36 @@
-/* conform_pinch.c — a tube's rim beside a pinch point smoothed in the chart of the umbrella
- * there. Near a pinch point the surface is, to first order, Whitney's umbrella x² = y² z:
- * the double curve along z > 0 (the tangent c), the two sheets x = ±y √z lying apart along
- * the Hessian's one eigenvector of non-zero eigenvalue (n, rank 1 at a pinch point), folded
- * into each other round the line x = z = 0 (e = c × n) with radius y² / 2. Its smooth chart
- * is (y, v) with v = x / y: the sheet's own parameter, v < 0 on one sheet, v > 0 on the
- * other, and a tube's rim round the curve's end runs monotone in v from one sheet round the
- * fold onto the other:
+/* conform_pinch.c — a tube's rim and rings beside a pinch point, in the chart of the umbrella
+ * there. Near a pinch point the surface is, to first order, Whitney's umbrella x² = y² z: the
+ * double curve along z > 0 (the tangent c), the two sheets x = ±y √z lying apart along the
+ * Hessian's one eigenvector of non-zero eigenvalue (n: rank 1 at a pinch point), folded into
+ * each other round the line x = z = 0 (e = c × n) with radius y² / 2 — under a cell within a
+ * few cells of the point. Its smooth chart is (y, v) with v = x / y, the sheet's own
+ * parameter: v < 0 on one sheet, v > 0 on the other, and a tube's rim round the curve's end
+ * runs monotone in v from one sheet round the fold onto the other:
  *
- *      z (c)  ╲   ╱  sheets x = ±y√z            a rim vertex q: s = rho · (q·n) / (q·e),
- *       │      ╲ ╱                              the parameter the rim runs along; a step
- *   ────●───────●────── fold (e)                back in s is an ear of the hole
- *     pinch    ╱ ╲   the rim's cap (q), feet at the pinch
+ *      z (c)  ╲   ╱  sheets x = ±y√z       rim vertex q (frame coordinates h, xn, xe):
+ *       │      ╲ ╱                         s = rho · xn / xe, the parameter the rim runs
+ *   ────●───────●────── fold (e)           along; ring point at fraction t: (t xn, t xe)
+ *     pinch    ╱ ╲   the rim's cap          at height h, moved along c onto f = 0
  *
- * Along the curve the rim's feet say which way it runs (conform_ears.c); round the curve's end
- * they all lie at the pinch, and the polygoniser's vertices beside the fold — narrower there
- * than a cell — step back and forth across it. Every ring quad and zip triangle under such a
- * step turns over (cross-cap, depth 6, in its own box: 28 edges, all on the rings beside the
- * fold). Each run of rim vertices whose feet lie within CF_PINCH_REACH_RHO tube radii of a
- * pinch point is read in the chart (s above, the distance to the tangent line) and its
- * backward steps are clipped as ears (cf_clip_ears: one triangle each, where it turns like
- * the hole). */
+ * Rim: along the curve the feet say which way the rim runs (conform_ears.c); round the
+ * curve's end they all lie at the pinch, and the polygoniser's vertices beside the fold step
+ * back and forth across it. Each run of rim vertices whose feet lie within
+ * CF_PINCH_REACH_RHO tube radii of a pinch point is read in the chart (s, and the distance to
+ * the tangent line) and its backward steps are clipped as ears (cf_clip_ears).
+ *
+ * Rings (loops zipped to one curve; a loop along several is zipped by its rim's feet, and
+ * its rings stay where those put them): elsewhere a ring point is foot + t (q − foot) moved
+ * onto f = 0 along ∇f. On the cap
+ * that is P + t (q − P) (the foot is the pinch point), below the fold's vertex at the smaller
+ * section (z = −x² on a cross-cap), where ∇f points along the curve on the fold and across
+ * it on the sheets: Newton slid the ring points onto the fold from either sheet, out of their
+ * order round it, and every ladder quad between two swapped points turned over (cross-cap,
+ * depth 7, lattice box: all 32 turned-over edges, on rings 1.8 and 3.8 cells out, running
+ * +, −, +, − across the fold). Here the foot is taken on the tangent line (past the end for
+ * the cap) and the ring point moves along the tangent only: its place across the curve — its
+ * order round the rim — stays the rim vertex's scaled by t; on the umbrella itself
+ * (t x, t y, z) lies on x² = y² z when (x, y, z) does. The zip then reads each ring vertex's
+ * parameter from where it went (cf_pinch_param). */
 #include "core/singular/conform_internal.h"
 #include "core/util/vec3.h"
 
@@ -28,10 +39,13 @@
 #include <math.h>
 #include <stdlib.h>
 
-/* The tangent at the pinch is the chord to the curve point this many tube radii along it (a
- * tracer's first steps from a pinch point wander by a rounding; the presets' double segments
- * are straight, and a curved one is nearly so across a tube's width). */
+/* The tangent at the pinch is the chord to the curve point this many tube radii along it: the
+ * direction across the width the chart is used over (the presets' double segments are
+ * straight; a curved one bends little across a tube's width). */
 #define PINCH_TANGENT_RHO 1.0
+/* Newton steps along the tangent (the section is near-linear in it: a few suffice, as for
+ * cf_project). */
+#define PINCH_STEPS 8
 
 void cf_pinch_ends(cf_ctx *c, const cf_polyline *pl, size_t npl, double rho, cf_pinch *out)
 {
@@ -71,8 +85,17 @@ void cf_pinch_ends(cf_ctx *c, const cf_polyline *pl, size_t npl, double rho, cf_
             ch->e[0] = ch->c[1] * ch->n[2] - ch->c[2] * ch->n[1];
             ch->e[1] = ch->c[2] * ch->n[0] - ch->c[0] * ch->n[2];
             ch->e[2] = ch->c[0] * ch->n[1] - ch->c[1] * ch->n[0];
+            ch->end = e;
             ch->on = true;
         }
+}
+
+double cf_pinch_param(const cf_pinch *ch, const cf_polyline *pl, const double q[3])
+{
+    double h = (q[0] - ch->p[0]) * ch->c[0] + (q[1] - ch->p[1]) * ch->c[1] +
+               (q[2] - ch->p[2]) * ch->c[2];
+    h = fmin(fmax(h, 0.0), pl->length);
+    return ch->end ? pl->length - h : h;
 }
 
 const cf_pinch *cf_pinch_near(const cf_pinch *ends, const cf_polyline *pl, int k, double s,
@@ -94,6 +117,36 @@ static void frame(const cf_pinch *ch, const double q[3], double *h, double *xn, 
     *h = ism_dot3(d, ch->c);
     *xn = ism_dot3(d, ch->n);
     *xe = ism_dot3(d, ch->e);
+}
+
+void cf_pinch_ring_point(cf_ctx *c, const cf_pinch *ch, const double q[3], double t,
+                         double out[3])
+{
+    double h, xn, xe, foot[3], p[3];
+    frame(ch, q, &h, &xn, &xe);
+    for (int k = 0; k < 3; k++) {
+        foot[k] = ch->p[k] + h * ch->c[k];
+        p[k] = foot[k] + t * (q[k] - foot[k]);
+        out[k] = p[k];
+    }
+    /* the section moves by (1 − t²) of the fold's depth below the rim (z = −x² on a
+     * cross-cap): at most the ring's distance to the rim */
+    double max_move = ism_dist3(q, foot), z = 0;
+    cf_poll(c, 1);
+    for (int it = 0; it < PINCH_STEPS; it++) {
+        double x[3] = {p[0] + z * ch->c[0], p[1] + z * ch->c[1], p[2] + z * ch->c[2]}, g[3];
+        double fv = ism_eval_gradient(c->f, c->ws, x[0], x[1], x[2], g);
+        double gc = ism_dot3(g, ch->c);
+        if (fv == 0)
+            break;
+        z = fabs(gc) > 0 && isfinite(fv) ? z - fv / gc : NAN;
+        if (!(fabs(z) <= max_move)) { /* no root of the section nearby: as elsewhere */
+            cf_project(c, out, 0.5 * t * ism_dist3(q, foot));
+            return;
+        }
+    }
+    for (int k = 0; k < 3; k++)
+        out[k] = p[k] + z * ch->c[k];
 }
 
 /* Runs of at least this many loop vertices in one pinch chart are smoothed (cf_clip_ears

@@ -86,6 +86,18 @@ static uint32_t curve_vertex(const cf_polyline *pl, const uint32_t *cv, long J)
     return cv[fold_index(pl, J, &p)];
 }
 
+/* A row vertex is at a pinch point's parameter when nearer it than this share of the gap to
+ * the curve's next vertex (nearer the pinch point than that vertex). */
+#define PINCH_NEAR_GAP 0.5
+
+/* Unfolded curve index J is a pinch end of the curve. */
+static bool at_pinch(const cf_polyline *pl, long J)
+{
+    double p;
+    size_t k = fold_index(pl, J, &p);
+    return !pl->closed && ((k == 0 && pl->pinch[0]) || (k == pl->n - 1 && pl->pinch[1]));
+}
+
 /* The index among s[0..top] whose parameter is nearest x. */
 static long nearest_point(const cf_polyline *pl, size_t top, double x)
 {
@@ -139,6 +151,16 @@ static bool zip_seq(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv, const 
         if (!adv_row && i < m && curve_moved &&
             curve_vertex(pl, cv, J + dir) == curve_vertex(pl, cv, J - dir))
             adv_row = true;
+        /* a row vertex at a pinch point's parameter (nearer it than the curve's vertex before:
+         * the rim's cap round the curve's end, on the fold between the sheets) is reached
+         * from the pinch point: the curve's vertices before it go to the row's vertex on the
+         * sheet they lie on (fanned from the vertex on the fold, their triangles spanned the
+         * two sheets: cross-cap, depth 6, centroids 0.27 cells off f = 0 by |f| / |∇f| beside
+         * its pinch point at (0, 0, 1), twice the farthest elsewhere) */
+        if (adv_row && J != Jb && i < m && at_pinch(pl, J + dir) &&
+            fabs(U[i + 1] - curve_param(pl, J + dir)) <
+                PINCH_NEAR_GAP * fabs(curve_param(pl, J + dir) - curve_param(pl, J)))
+            adv_row = false;
         uint32_t cj = curve_vertex(pl, cv, J);
         if (adv_row) {
             key = fmax(key, dir * U[i + 1]);
@@ -174,15 +196,25 @@ static bool zip_open_seq(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv,
                    curve_index_near(pl, U[len - 1]));
 }
 
-static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot)
+/* The loop's rings (rings of the vertices beside a pinch point in its chart when ends is not
+ * NULL: u[i] then becomes the parameter of the innermost ring's vertex). */
+static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot, const cf_polyline *pl,
+                           const cf_pinch *ends, const int *cid, double *u, double rho)
 {
+    const cf_pinch **ch = malloc(l->n * sizeof *ch);
+    if (!ch)
+        return NULL;
+    for (size_t i = 0; i < l->n; i++)
+        ch[i] = ends ? cf_pinch_near(ends, pl, cid[i], u[i], CF_PINCH_REACH_RHO * rho) : NULL;
     double width = 0;
     for (size_t i = 0; i < l->n; i++)
         width += ism_dist3(c->m->pos + 3 * (size_t)l->v[i], foot + 3 * i) / (double)l->n;
     int rings = cf_ring_count(width, cf_loop_mean_edge(c, l));
     uint32_t *rows = malloc(2 * l->n * sizeof *rows);
-    if (!rows)
+    if (!rows) {
+        free((void *)ch);
         return NULL;
+    }
     uint32_t *outer = rows, *inner = rows + l->n;
     for (size_t i = 0; i < l->n; i++)
         outer[i] = l->v[i];
@@ -191,25 +223,37 @@ static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot)
         for (size_t i = 0; i < l->n; i++) {
             const double *v = c->m->pos + 3 * (size_t)l->v[i], *q = foot + 3 * i;
             double p[3];
-            for (int k = 0; k < 3; k++)
-                p[k] = q[k] + t * (v[k] - q[k]);
-            cf_project(c, p, 0.5 * t * ism_dist3(v, q));
+            if (ch[i]) {
+                cf_pinch_ring_point(c, ch[i], v, t, p);
+            } else {
+                for (int k = 0; k < 3; k++)
+                    p[k] = q[k] + t * (v[k] - q[k]);
+                cf_project(c, p, 0.5 * t * ism_dist3(v, q));
+            }
             if ((inner[i] = cf_add_vertex(c, p, false)) == CF_NONE) {
                 free(rows);
+                free((void *)ch);
                 return NULL;
             }
             c->st->vertices_added++;
         }
         if (!cf_ladder(c, outer, inner, l->n, l->closed)) {
             free(rows);
+            free((void *)ch);
             return NULL;
         }
         uint32_t *t2 = outer;
         outer = inner;
         inner = t2;
     }
-    for (size_t i = 0; i < l->n; i++)
+    for (size_t i = 0; i < l->n; i++) {
         rows[i] = outer[i]; /* innermost first */
+        /* a ring vertex moved along the tangent (onto the fold, beside a pinch point) is
+         * zipped by where it went */
+        if (ch[i] && rings > 0)
+            u[i] = cf_pinch_param(ch[i], &pl[cid[i]], c->m->pos + 3 * (size_t)outer[i]);
+    }
+    free((void *)ch);
     return rows;
 }
 
@@ -540,8 +584,8 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
                 own.v[i] = l->v[i];
             if (multi)
                 smooth_ids(cid, l->n, l->closed);
-            if (ok && cf_pinch_ears(c, ends, pl, &own, u, foot, cid,
-                                              CF_PINCH_REACH_RHO * rho, rho) < 0)
+            if (ok && cf_pinch_ears(c, ends, pl, &own, u, foot, cid, CF_PINCH_REACH_RHO * rho,
+                                    rho) < 0)
                 ok = false;
             if (ok && cf_clip_ears(c, multi ? pl : &pl[cid[0]], &own, u, foot,
                                    multi ? cid : NULL, (int)wind) < 0)
@@ -551,7 +595,9 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
         if (ok && !found) {
             ok = cf_fan_centroid(c, l);
         } else if (ok) {
-            uint32_t *row = make_rows(c, l, foot);
+            /* a loop along several curves is zipped by its rim's feet (zip_multi): its
+             * rings stay where the rim's feet put them */
+            uint32_t *row = make_rows(c, l, foot, pl, multi ? NULL : ends, cid, u, rho);
             ok = row && (multi ? zip_multi(c, pl, cv, l, cid, row, rho)
                                : zip_loop(c, &pl[cid[0]], cv[cid[0]], l, u, row, rho));
             free(row);

@@ -329,8 +329,10 @@ Test(remesh_needles, touching_spheres_keep_topology_and_lose_needles)
 /* ---- Steiner's Roman surface ---- */
 
 #define STEINER "x^2*y^2 + y^2*z^2 + z^2*x^2 + x*y*z"
-/* Needles the pass may leave on it at depth d (measured below). */
-#define STEINER_NEEDLES_LEFT(d) ((d) >= 6 ? 7 : 9)
+/* Needles the pass may leave on it at depth d (measured below; 8 in the 0.37-cell box at
+ * depth 6 since the rim beside the pinch points is smoothed in the umbrella's chart,
+ * conform_pinch.c, 7 before). */
+#define STEINER_NEEDLES_LEFT(d) ((d) >= 6 ? 8 : 9)
 
 /* Triangles under NEEDLE_DEG, and the largest |f| / |∇f| at the centroids and vertices. */
 static void steiner_shape(const ism_mesh *m, const ism_tape *t, shape *s)

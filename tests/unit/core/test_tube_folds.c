@@ -95,16 +95,79 @@ static size_t turned_folds(const ism_mesh *m, const ism_tape *f, const char *wha
     return folds;
 }
 
-/* One surface with a closed double curve: its preset's box base placed by pf_sweep_box
- * (which), meshed to depth d; asserts the closed-form figures (χ euler, one component, no
- * boundary, the non-manifold edges one closed chain of 4 triangles each) and at most
- * folds_max edges turned over. */
+/* One surface with double curves: its preset's box base placed by pf_sweep_box (which),
+ * meshed to depth d; asserts the closed-form figures (χ euler, one component, no boundary,
+ * the non-manifold edges one closed chain — or, with ends, open chains from the junction to
+ * the pinch points — of 4 triangles each) and at most folds_max edges turned over. */
 typedef struct case_ {
     const char *name, *expr;
     double base[6];
     long euler;           /* LONG_MIN: no closed-form figures (a box cuts the surface) */
     size_t folds_max;
+    size_t nends;         /* > 0: the non-manifold edges end at these points (pinch points) */
+    double ends[6][3];
+    int junction;         /* the non-manifold edges meeting at the origin (0: none meet) */
 } case_;
+
+static uint32_t root_of(uint32_t *parent, uint32_t v)
+{
+    while (parent[v] != v)
+        v = parent[v] = parent[parent[v]];
+    return v;
+}
+
+/* The non-manifold edges as a graph: one connected piece whose vertices of one edge lie at
+ * k->ends (each end once, within 1e-6: the certified pinch points' vertices) and whose one
+ * vertex of more than two (k->junction of them) lies at the origin; the rest meet two. */
+static void expect_open_chains(const ism_mesh *m, const case_ *k, const char *what)
+{
+    size_t nh = 3 * m->ntris;
+    half *h = malloc((nh + 1) * sizeof *h);
+    uint32_t *deg = calloc(m->nverts + 1, sizeof *deg), *parent = malloc((m->nverts + 1) * 4);
+    cr_assert(h && deg && parent);
+    for (uint32_t v = 0; v < m->nverts; v++)
+        parent[v] = v;
+    for (size_t t = 0; t < m->ntris; t++)
+        for (int j = 0; j < 3; j++) {
+            uint32_t a = m->tri[3 * t + j], b = m->tri[3 * t + (j + 1) % 3];
+            h[3 * t + j] = (half){a < b ? a : b, a < b ? b : a, (uint32_t)t};
+        }
+    qsort(h, nh, sizeof *h, half_cmp);
+    for (size_t i = 0, j; i < nh; i = j) {
+        for (j = i; j < nh && !half_cmp(&h[i], &h[j]); j++)
+            ;
+        if (j - i > 2) {
+            deg[h[i].a]++;
+            deg[h[i].b]++;
+            parent[root_of(parent, h[i].a)] = root_of(parent, h[i].b);
+        }
+    }
+    size_t ends = 0, junctions = 0, pieces = 0, matched[6] = {0};
+    for (uint32_t v = 0; v < m->nverts; v++) {
+        if (!deg[v])
+            continue;
+        pieces += root_of(parent, v) == v;
+        const double *p = m->pos + 3 * (size_t)v;
+        if (deg[v] == 1) {
+            ends++;
+            for (size_t e = 0; e < k->nends; e++)
+                matched[e] += ism_dist3(p, k->ends[e]) <= 1e-6;
+        } else if (deg[v] > 2) {
+            junctions++;
+            cr_expect(deg[v] == (uint32_t)k->junction && ism_norm3(p) <= 1e-6, "%s: %u "
+                      "non-manifold edges meet at (%g %g %g)", what, deg[v], p[0], p[1], p[2]);
+        }
+    }
+    cr_expect(pieces == 1 && ends == k->nends && junctions == (k->junction > 0),
+              "%s: non-manifold edges in %zu pieces with %zu ends and %zu junctions, want 1, "
+              "%zu, %d", what, pieces, ends, junctions, k->nends, k->junction > 0);
+    for (size_t e = 0; e < k->nends; e++)
+        cr_expect_eq(matched[e], 1, "%s: %zu ends of the non-manifold edges at pinch point "
+                     "(%g %g %g)", what, matched[e], k->ends[e][0], k->ends[e][1], k->ends[e][2]);
+    free(h);
+    free(deg);
+    free(parent);
+}
 
 static void run_case(const case_ *k, int d, int which)
 {
@@ -123,8 +186,11 @@ static void run_case(const case_ *k, int d, int which)
         cr_expect(p.euler == k->euler && p.components == 1 && p.boundary_edges == 0,
                   "%s: χ %ld, %zu components, %zu boundary edges; want %ld, 1, 0", what,
                   p.euler, p.components, p.boundary_edges, k->euler);
-        cr_expect(pf_nm_edges_one_closed_curve(&m, &nm), "%s: the %zu non-manifold edges are "
-                  "not one closed chain", what, nm);
+        if (k->nends > 0)
+            expect_open_chains(&m, k, what);
+        else
+            cr_expect(pf_nm_edges_one_closed_curve(&m, &nm), "%s: the %zu non-manifold edges "
+                      "are not one closed chain", what, nm);
     }
     size_t folds = turned_folds(&m, f, what);
     cr_log_info("%s: %zu edges turned over", what, folds);
@@ -138,7 +204,8 @@ static void run_case(const case_ *k, int d, int which)
 Test(tube_folds, klein_bottle_few_turned_over)
 {
     /* χ 0: a Klein bottle; the preset's box */
-    static const case_ k = {"klein bottle", KLEIN, {-4, -4, -4, 4, 4, 4}, 0, FOLDS_MAX};
+    static const case_ k = {"klein bottle", KLEIN, {-4, -4, -4, 4, 4, 4}, 0, FOLDS_MAX, 0,
+                            {{0}}, 0};
     /* the sanitizer runs the 1e-3 box */
     for (int which = pf_quick() ? 0 : -1; which <= (pf_quick() ? 0 : 1); which++)
         run_case(&k, 8, which);
@@ -149,25 +216,50 @@ Test(tube_folds, crossing_spheres_few_turned_over)
     /* two spheres (χ 2 each) glued along one circle (as many vertices as edges): χ 4; the
      * preset's box */
     static const case_ k = {"crossing spheres", SPHERES, {-1.8, -1.3, -1.3, 1.8, 1.3, 1.3}, 4,
-                            SPHERE_FOLDS_MAX};
+                            SPHERE_FOLDS_MAX, 0, {{0}}, 0};
     for (int which = pf_quick() ? 0 : -1; which <= (pf_quick() ? 0 : 1); which++)
         run_case(&k, 7 - pf_quick(), which);
 }
 
-/* Open double curves: the Whitney umbrella x² = y² z (a double half-line from its pinch point
- * to the box) and Steiner's surface (three double segments meeting at the origin, each
- * ending in two pinch points), depth 7 in the presets' boxes. Turned-over edges own / 1e-3 /
- * 0.37-cell box: Whitney 0 / 0 / 4 (0 / 54 / 31 before the rim's smoothing), Steiner
- * 18 / 42 / 114 (342 / 129 / 251; those left lie beside the pinch points, where a rim turns
- * round its curve's end; at depth 6, the sanitizer's, the 1e-3 box has 124 either way).
- * Folds only: the boxes cut both surfaces. */
-Test(tube_folds, open_curves_few_turned_over)
+/* Double curves that end in pinch points (core/singular/conform_pinch.c: the rim and rings
+ * round a curve's end in the umbrella's chart), depth 6 and 7, three boxes each:
+ *  - the cross-cap 4x²(x² + y² + z² + z) + y²(y² + z² − 1), an immersed RP² (χ 1) in its
+ *    preset's box (it holds the surface whole: y² + z² ≤ 1 where f = 0): one double segment
+ *    on the z axis between the pinch points (0, 0, 0) and (0, 0, 1), whose preimage is one
+ *    circle (2 : 1 but at the pinch points): χ = 1 − 0 + 1 = 2; the non-manifold edges one
+ *    chain between the two pinch points.
+ *  - Steiner's Roman surface x²y² + y²z² + z²x² + xyz (an immersed RP²): three double
+ *    segments on the axes through the triple point at the origin, ending in the six pinch
+ *    points ±1/2 on the axes: χ = 1 + 6 − 2 = 5 (test_coarse_dcurves.c); the non-manifold
+ *    edges six chains from the origin (6 edges meet there) to the pinch points.
+ *  - the Whitney umbrella x² = y² z (the box cuts it: folds only).
+ * Turned-over edges own / 1e-3 / 0.37-cell box, before (main 114a18d) → now:
+ *    cross-cap d6 28 / 40 / 54 → 0 / 14 / 20, d7 32 / 31 / 51 → 0 / 14 / 30;
+ *    Steiner d6 18 / 124 / 103 → 18 / 40 / 61, d7 18 / 42 / 114 → 18 / 43 / 114 (its loops
+ *    run along several curves and keep their rings where the rim's feet put them; the 18 of
+ *    the lattice box lie at the rim's corners between two axes, 10 cells from the triple
+ *    point, the rest beside the pinch points);
+ *    Whitney d6 0 / 0 / 2, d7 0 / 0 / 4 either way. */
+#define CROSS_CAP_FOLDS_MAX 32
+#define STEINER_FOLDS_MAX(d) ((d) >= 7 ? 120 : 64)
+#define WHITNEY_FOLDS_MAX 8
+
+Test(tube_folds, pinch_points_few_turned_over)
 {
-    static const case_ k[2] = {
-        {"whitney umbrella", "x^2 - y^2*z", {-1, -1, -1, 1, 1, 1}, LONG_MIN, 8},
-        {"steiner", "x^2*y^2 + y^2*z^2 + z^2*x^2 + x*y*z", {-1, -1, -1, 1, 1, 1}, LONG_MIN, 160},
-    };
-    for (int i = 0; i < 2; i++)
-        for (int which = pf_quick() ? 0 : -1; which <= (pf_quick() ? 0 : 1); which++)
-            run_case(&k[i], 7 - pf_quick(), which);
+    for (int d = 6; d <= 7 - pf_quick(); d++) {
+        const case_ k[3] = {
+            {"cross-cap", "4*x^2*(x^2 + y^2 + z^2 + z) + y^2*(y^2 + z^2 - 1)",
+             {-1.2, -1.2, -1.2, 1.2, 1.2, 1.2}, 2, CROSS_CAP_FOLDS_MAX, 2,
+             {{0, 0, 0}, {0, 0, 1}}, 0},
+            {"steiner", "x^2*y^2 + y^2*z^2 + z^2*x^2 + x*y*z", {-1, -1, -1, 1, 1, 1}, 5,
+             STEINER_FOLDS_MAX(d), 6,
+             {{0.5, 0, 0}, {-0.5, 0, 0}, {0, 0.5, 0}, {0, -0.5, 0}, {0, 0, 0.5}, {0, 0, -0.5}},
+             6},
+            {"whitney umbrella", "x^2 - y^2*z", {-1, -1, -1, 1, 1, 1}, LONG_MIN,
+             WHITNEY_FOLDS_MAX, 0, {{0}}, 0},
+        };
+        for (int i = 0; i < 3; i++)
+            for (int which = pf_quick() ? 0 : -1; which <= (pf_quick() ? 0 : 1); which++)
+                run_case(&k[i], d, which);
+    }
 }
