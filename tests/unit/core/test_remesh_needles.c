@@ -619,10 +619,12 @@ static void cross_cap_shape(const ism_mesh *m, const ism_locus *l, size_t *needl
 }
 
 /* Needles the pass may leave away from the cross-cap's points at the preset's depth, 7, in
- * the lattice / 1e-3 / 0.37-cell boxes: 6 / 2 / 2 measured (10 / 4 / 2 while an insertion
- * needed both ends of the needle's short edge locked: needles folded round a locked hub
- * beside a pinch point, whose collapses would turn triangles over, were left). */
-static const size_t cross_cap_left[3] = {7, 3, 3};
+ * the lattice / 1e-3 / 0.37-cell boxes: 1 / 0 / 4 measured since the conformance makes the
+ * rim and rings round the pinch points in the umbrella's chart (conform_pinch.c); 6 / 2 / 2
+ * before (10 / 4 / 2 while an insertion needed both ends of the needle's short edge locked:
+ * needles folded round a locked hub beside a pinch point, whose collapses would turn
+ * triangles over, were left). */
+static const size_t cross_cap_left[3] = {7, 3, 4};
 
 static void cross_cap_case(const ism_tape *t, const double box[6], int d, int which)
 {
@@ -643,7 +645,10 @@ static void cross_cap_case(const ism_tape *t, const double box[6], int d, int wh
                 "points %zu -> %zu; centroid %.3g -> %.3g, midpoint %.3g -> %.3g", which, d,
                 st.collapses, st.inserts, before, after, cen_b, cen_a, mid_b, mid_a);
     cr_expect_gt(before, 0, "box %d: nothing to mend", which);
-    cr_expect_gt(st.inserts, 0, "box %d", which);
+    /* insertion mends what collapses leave (the 1e-3 box: 2055 -> 0 needles by collapses
+       and flips alone since conform_pinch.c) */
+    cr_expect(st.inserts > 0 || after == 0, "box %d: no insertion, %zu needles left", which,
+              after);
     cr_expect_leq(after, cross_cap_left[which + 1], "box %d: %zu needles", which, after);
     cr_expect_eq(a.euler, b.euler, "box %d: χ %ld -> %ld", which, b.euler, a.euler);
     cr_expect_eq(a.nonmanifold_edges, b.nonmanifold_edges, "box %d", which);
