@@ -43,6 +43,13 @@
 /* The lattice point memo: 2^15 entries of 40 bytes (1.3 MB), the size the octree's own
  * corner memo uses (cell_cache.h); a collision only recomputes. */
 #define DUAL_POINT_BITS ISM_POINT_CACHE_BITS
+/* ... but the memo starts at 2^11 entries (80 KB) and grows with the tree, to four entries
+ * a node (points_for): a small job neither faults in nor, in a long-lived worker, zeroes
+ * 1.3 MB per thread (callgrind, the worker's pipeline run twice: 1.1M instructions of
+ * memset a request and thread; a fresh process: ~320 page faults instead). Values are f and
+ * ∇f at lattice points, so what the memo holds changes no mesh. */
+#define DUAL_POINT_MIN_BITS 11
+#define DUAL_POINT_ENTRIES_PER_NODE 4
 /* The tree walk's calls on nodes of this level or below run on the pool: at the default
  * minimum depth 3, up to 512 cells and their faces and edges, enough tasks for a few
  * threads to share evenly. */
@@ -156,6 +163,7 @@ typedef struct worker {
     ism_sampler s;
     ism_ivjet_ws *jet;
     ism_point_entry *points;
+    int bits; /* points holds 2^bits entries */
 } worker;
 
 typedef struct dual {
@@ -433,7 +441,7 @@ static void sample_corner(dual *d, worker *w, const int32_t q[3], double *f, dou
 {
     for (int a = 0; a < 3; a++)
         p[a] = ism_grid_coord(&d->g, a, q[a]);
-    const ism_point_entry *e = ism_point_memo(w->points, DUAL_POINT_BITS, q, p, &w->s);
+    const ism_point_entry *e = ism_point_memo(w->points, w->bits, q, p, &w->s);
     *f = e->f;
     memcpy(g, e->g, sizeof e->g);
     ism_normalise3(g); /* 0 at a critical point: no agreement there */
@@ -574,6 +582,34 @@ static void mark_surface(dual *d)
     }
 }
 
+/* Every thread's point memo grown to DUAL_POINT_ENTRIES_PER_NODE entries for each of
+ * `nodes` nodes (at most 2^DUAL_POINT_BITS), its entries moved to their slots in the larger
+ * table (one of two meeting there kept); false (nomem set) when out of memory. */
+static bool points_for(dual *d, size_t nodes)
+{
+    int bits = DUAL_POINT_MIN_BITS;
+    while (bits < DUAL_POINT_BITS && ((size_t)1 << bits) < DUAL_POINT_ENTRIES_PER_NODE * nodes)
+        bits++;
+    for (int k = 0; k < d->nw; k++) {
+        worker *w = &d->w[k];
+        if (w->bits >= bits)
+            continue;
+        ism_point_entry *grown = calloc((size_t)1 << bits, sizeof *grown);
+        if (!grown) {
+            d->nomem = true;
+            return false;
+        }
+        uint64_t mask = ((uint64_t)1 << bits) - 1;
+        for (size_t i = 0; i < (size_t)1 << w->bits; i++)
+            if (w->points[i].key)
+                grown[ism_cache_mix(w->points[i].key) & mask] = w->points[i];
+        free(w->points);
+        w->points = grown;
+        w->bits = bits;
+    }
+    return true;
+}
+
 /* The nodes in list[0..n) split, and their children that are neither empty nor plain, level
  * by level, until every leaf is. The children's classifications run on the pool; the nodes
  * are made in list order, so the tree does not depend on the threads. */
@@ -593,6 +629,10 @@ static void expand(dual *d, const int32_t *list, size_t n)
         if (!next || !grown) {
             free(next);
             d->nomem = true;
+            break;
+        }
+        if (!points_for(d, d->nn + 8 * n)) {
+            free(next);
             break;
         }
         task_ctx job = {d, cur, out};
@@ -1642,7 +1682,8 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
         w->s.tape = f;
         w->s.ws = ism_eval_ws_new(f);
         w->jet = ism_ivjet_ws_new(f);
-        w->points = calloc((size_t)1 << DUAL_POINT_BITS, sizeof *w->points);
+        w->bits = DUAL_POINT_MIN_BITS;
+        w->points = calloc((size_t)1 << w->bits, sizeof *w->points);
         ok = w->s.ws && w->jet && w->points;
     }
     enum ism_dual_status status = ok ? run_round_points(&d, mesh, st) : ISM_DUAL_NO_MEMORY;
