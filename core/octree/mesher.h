@@ -19,8 +19,8 @@ enum ism_mesher {
 };
 
 /* Why the dual mesher did not make the mesh. In the order they are decided: the first four
- * (and POINT_TYPE, in LOCUS's place) before any meshing (ism_dual_declined_before), the others by the dual mesher itself, which
- * then gives the mesh back to the primal polygons. */
+ * (and POINT_TYPE, in LOCUS's place) before any meshing (ism_dual_declined_before), the
+ * others by the dual mesher itself, which then gives the mesh back to the primal polygons. */
 enum ism_dual_reason {
     ISM_DUAL_WHY_NONE = 0,     /* it did: the mesh is the dual one */
     ISM_DUAL_WHY_NO_BOUND,     /* no max_error: the dual cells are sized by the bound */
