@@ -62,6 +62,7 @@ typedef struct thread_state {
     ism_leaf_tapes_cache tape_cache; /* this thread's hits in build.leaf_tapes */
     ism_thin_ws thin;         /* the hidden-piece search's scratch */
     ism_face_memo faces;      /* its verdicts on faces, for the node across (face_memo.h) */
+    ism_pair_memo pairs;      /* ... and the root pairs on edges it asked for */
     uint64_t visited, excluded, unresolved;
     uint64_t thin_searched, thin_found, thin_undecided, deep_leaves;
     uint64_t tape_misses;     /* leaves whose shortened tape found no room in leaf_tapes */
@@ -313,11 +314,23 @@ static bool edges_see(const build *b, thread_state *th, const ism_tape *sub,
         /* ism_segment_roots's path to its first pair (the box's corners share a sign: only
          * the double-root search can find one); t: a point between the two roots */
         const double *a = k->p[c0], *z = k->p[c1];
-        double t;
+        double t = 0;
         int found = 0;
         if (!ism_segment_rootless(&prm, a, z, k->f[c0], k->f[c1], k->g[c0], k->g[c1]) &&
-            ism_segment_may_reach(&th->s, a, z, 0))
-            found = ism_double_root_search(&th->s, &prm, a, z, k->f[c0], k->f[c1], &t);
+            ism_segment_may_reach(&th->s, a, z, 0)) {
+            /* no memo on the scalar reference path (poly_options.h) */
+            ism_pair_entry none, *m = b->p->scalar_eval
+                                          ? &none
+                                          : ism_pair_memo_slot(&th->pairs, k->key[c0] + 1,
+                                                               k->key[c1] + 1);
+            if (!b->p->scalar_eval && m->a == k->key[c0] + 1 && m->b == k->key[c1] + 1) {
+                found = m->found;
+                t = m->t;
+            } else {
+                found = ism_double_root_search(&th->s, &prm, a, z, k->f[c0], k->f[c1], &t);
+                *m = (ism_pair_entry){k->key[c0] + 1, k->key[c1] + 1, t, found};
+            }
+        }
         if (found == 0)
             continue;
         sign = k->f[c0] < 0 ? -1 : 1;
@@ -429,8 +442,10 @@ static uint16_t tape_number(build *b, thread_state *th, const ism_tape *sub, int
  * two thirds of it on faces (searches 5.1% of the run, their intervals 1.7%); cube minus ball
  * (r = 1.3) 1,397M -> 1,537M (+10.0%). A face's verdict is kept for the node across it
  * (face_memo.h): 2,027M and 1,514M, meshes the same; only 7.5% / 4% of the faces looked up
- * are found there (the node across is mostly a leaf of another size, or flat). The search at
- * kinks is one level deep (thin_search.c). */
+ * are found there (the node across is mostly a leaf of another size, or flat). An edge's
+ * root pair is kept for the nodes beside it too (ism_pair_memo; after the build's own edge
+ * memos, cell_cache.h: 1,990M -> 1,983M and 1,478M -> 1,459M). The search at kinks is one
+ * level deep (thin_search.c). */
 static uint8_t hides_piece(build *b, thread_state *th, const ism_node *nd, const ism_tape *sub,
                            const ism_corners *k)
 {
@@ -452,9 +467,10 @@ static uint8_t hides_piece(build *b, thread_state *th, const ism_node *nd, const
     if (b->p->thin_coarse && !ism_tape_has_min_max(sub))
         return thin_bits(&tally, v);
     /* the faces' verdicts are kept for the node across, under sub's number in the leaf
-     * tapes' table (0: the build's own tape; none when the table has no room) */
+     * tapes' table (0: the build's own tape; none when the table has no room, nor on the
+     * scalar reference path) */
     unsigned number = sub == b->p->tape ? 0 : tape_number_of(b, th, sub, nd->level);
-    bool memo = sub == b->p->tape || number != 0;
+    bool memo = !b->p->scalar_eval && (sub == b->p->tape || number != 0);
     uint32_t what = ism_face_memo_what(nd->level, 0, number);
     int32_t steps = ism_grid_cell_steps(b->grid, nd->level);
     for (int face = 0; face < 6 && v != ISM_THIN_FOUND && v != ISM_THIN_FOUND_KINKED; face++) {
