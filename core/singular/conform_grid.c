@@ -13,10 +13,11 @@
  * The polygoniser's triangles are filed lazily: only those whose box meets the region the
  * surgeries have asked for (the locus grown by their radius), found by one pass over them
  * per widening of that region; most of a mesh lies far from its singular locus.
- * Cost: O(T) box tests per widening of the covered region, and the filing of the triangles
- * in it; a query reads the cells its box meets at each level in use and the triangles filed
+ * Cost: O(T) box tests per widening of the covered region (in blocks on the pass's threads),
+ * and the filing of the triangles in it (in triangle order, on the calling thread); a query reads the cells its box meets at each level in use and the triangles filed
  * there. */
 #include "core/singular/conform_internal.h"
+#include "core/util/parallel.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -169,38 +170,74 @@ static bool box_inside(const double lo[3], const double hi[3], const double box[
     return true;
 }
 
+/* Triangles per task of a cover pass: fixed, so the triangles it files, and their order,
+ * are the same on any number of threads. */
+#define COVER_BLOCK 8192
+
+/* One pass over the first `base` triangles: the ones not filed yet whose boxes meet want,
+ * per block in triangle order (found on the grid's threads, filed after on the caller's). */
+typedef struct cover_pass {
+    const cf_tgrid *g;
+    const ism_mesh *m;
+    double want[6];
+    cf_tris *found; /* per block */
+    int failed;
+} cover_pass;
+
+/* Which of want's six planes p lies beyond (a bit each). */
+static uint8_t outcode(const double *p, const double want[6])
+{
+    uint8_t o = 0;
+    for (int k = 0; k < 3; k++)
+        o |= (uint8_t)((p[k] < want[k]) << (2 * k) | (p[k] > want[k + 3]) << (2 * k + 1));
+    return o;
+}
+
+/* a triangle's box misses the box exactly when its three corners lie beyond one of the
+ * box's six planes: the AND of their outcodes */
+static void cover_block(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    cover_pass *c = ctx;
+    const ism_mesh *m = c->m;
+    size_t lo = blk * COVER_BLOCK, hi = lo + COVER_BLOCK < c->g->base ? lo + COVER_BLOCK
+                                                                      : c->g->base;
+    for (size_t t = lo; t < hi; t++) {
+        if (c->g->cell_of[t] != CF_NONE)
+            continue;
+        const uint32_t *v = m->tri + 3 * t;
+        if (!(outcode(m->pos + 3 * (size_t)v[0], c->want) &
+              outcode(m->pos + 3 * (size_t)v[1], c->want) &
+              outcode(m->pos + 3 * (size_t)v[2], c->want)) &&
+            !cf_tris_push(&c->found[blk], (uint32_t)t))
+            __atomic_store_n(&c->failed, 1, __ATOMIC_RELAXED);
+    }
+}
+
 bool cf_tgrid_cover(cf_tgrid *g, const ism_mesh *m, const double lo[3], const double hi[3],
                     double ahead)
 {
     if (box_inside(lo, hi, g->cover))
         return true;
-    double want[6];
+    cover_pass c = {.g = g, .m = m};
     for (int k = 0; k < 3; k++) {
-        want[k] = fmin(g->cover[k], lo[k] - ahead);
-        want[k + 3] = fmax(g->cover[k + 3], hi[k] + ahead);
+        c.want[k] = fmin(g->cover[k], lo[k] - ahead);
+        c.want[k + 3] = fmax(g->cover[k + 3], hi[k] + ahead);
     }
     g->cover_passes++;
-    /* a triangle's box misses the box exactly when its three corners lie beyond one of the
-     * box's six planes: one outcode per vertex (read in order), their AND per triangle */
-    uint8_t *out = malloc(m->nverts + 1);
-    if (!out)
+    size_t nblocks = (g->base + COVER_BLOCK - 1) / COVER_BLOCK;
+    if (!(c.found = calloc(nblocks ? nblocks : 1, sizeof *c.found)))
         return false;
-    for (size_t v = 0; v < m->nverts; v++) {
-        const double *p = m->pos + 3 * v;
-        uint8_t o = 0;
-        for (int k = 0; k < 3; k++)
-            o |= (uint8_t)((p[k] < want[k]) << (2 * k) | (p[k] > want[k + 3]) << (2 * k + 1));
-        out[v] = o;
+    ism_parallel_for(nblocks > 1 ? g->threads : 1, nblocks, cover_block, &c);
+    bool ok = !c.failed;
+    for (size_t b = 0; b < nblocks; b++) {
+        for (size_t i = 0; ok && i < c.found[b].n; i++)
+            ok = file_triangle(g, m, c.found[b].t[i]);
+        free(c.found[b].t);
     }
-    bool ok = true;
-    for (size_t t = 0; ok && t < g->base; t++) {
-        const uint32_t *v = m->tri + 3 * t;
-        if (g->cell_of[t] == CF_NONE && !(out[v[0]] & out[v[1]] & out[v[2]]))
-            ok = file_triangle(g, m, (uint32_t)t);
-    }
-    free(out);
+    free(c.found);
     if (ok)
-        memcpy(g->cover, want, sizeof want);
+        memcpy(g->cover, c.want, sizeof c.want);
     return ok;
 }
 

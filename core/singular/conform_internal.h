@@ -40,6 +40,7 @@ typedef struct cf_tgrid {
     size_t base;            /* triangles 0 .. base-1 are the mesh's at cf_tgrid_init */
     double cover[6];        /* every one of those whose box meets this box is filed */
     size_t cover_passes;    /* passes over them that filed more */
+    int threads;            /* threads of those passes (1: the calling thread alone) */
     size_t per_level[CF_TGRID_LEVELS];
 } cf_tgrid;
 
@@ -83,6 +84,7 @@ typedef struct cf_ctx {
     bool stopped;           /* set once a poll found a reason to stop: every loop ends */
     double origin[3], extent; /* the box's low corner and longest side */
     double cell;            /* finest octree cell: the scale of the surgery */
+    int threads;            /* the grid's passes over the mesh run on this many */
     ism_conform_stats *st;
 } cf_ctx;
 

@@ -119,6 +119,7 @@ bool cf_ctx_prepare(cf_ctx *c)
     if (!build_incidence(c) ||
         !cf_tgrid_init(&c->grid, c->origin, c->extent, c->cell, m->ntris))
         return false;
+    c->grid.threads = c->threads;
     c->indexed = true;
     return true;
 }
