@@ -1,6 +1,7 @@
 /* octree_build.c — the subdivision of the search box: the top two levels on the calling
  * thread, then one task per level-2 node on the worker threads, each growing its subtree
- * in its own node array; the arrays are joined in task order afterwards. */
+ * in its own node array; the arrays are joined in task order afterwards (each copied to its
+ * place, known from a prefix sum, on the threads). */
 #include "core/octree/octree_build.h"
 #include "core/octree/sampler.h"
 #include "core/octree/cell_cache.h"
@@ -771,26 +772,59 @@ static void free_threads(build *b, int nthreads, ism_octree_build_stats *st)
     free(b->label_memos);
 }
 
-/* Appends every task's subtree to the top array, in task order, fixing child indices. */
-static bool join_tasks(build *b, node_vec *top)
+/* The join: where each task's subtree lands in the top array (at[k]: its node 1's place). */
+typedef struct joiner {
+    build *b;
+    node_vec *top;
+    size_t *at;
+} joiner;
+
+/* Task k's subtree copied to its place, child indices moved by the same offset. */
+static void join_task(void *ctx, size_t k, int thread)
 {
-    for (size_t k = 0; k < b->ntasks; k++) {
-        node_vec *sub = &b->task_out[k];
-        size_t offset = top->n - 1; /* local index j > 0 lands at offset + j */
-        ism_node root = sub->v[0];
-        if (root.child >= 0)
-            root.child += (int32_t)offset;
-        top->v[b->tasks[k].node] = root;
+    (void)thread;
+    joiner *j = ctx;
+    const node_vec *sub = &j->b->task_out[k];
+    node_vec *top = j->top;
+    size_t offset = j->at[k] - 1; /* local index i > 0 lands at offset + i */
+    ism_node root = sub->v[0];
+    if (root.child >= 0)
+        root.child += (int32_t)offset;
+    top->v[j->b->tasks[k].node] = root;
+    if (top->tape)
+        top->tape[j->b->tasks[k].node] = sub->tape[0];
+    for (size_t i = 1; i < sub->n; i++) {
+        ism_node nd = sub->v[i];
+        if (nd.child >= 0)
+            nd.child += (int32_t)offset;
+        top->v[offset + i] = nd;
         if (top->tape)
-            top->tape[b->tasks[k].node] = sub->tape[0];
-        for (size_t j = 1; j < sub->n; j++) {
-            ism_node nd = sub->v[j];
-            if (nd.child >= 0)
-                nd.child += (int32_t)offset;
-            if (!vec_push(b, top, &nd, top->tape ? sub->tape[j] : 0))
-                return false;
-        }
+            top->tape[offset + i] = sub->tape[i];
     }
+}
+
+/* Appends every task's subtree to the top array, in task order, fixing child indices: the
+ * places from a prefix sum, the copies on the build's threads (one task per subtree). */
+static bool join_tasks(build *b, node_vec *top, int nthreads)
+{
+    size_t *at = malloc((b->ntasks ? b->ntasks : 1) * sizeof *at), n = top->n;
+    if (!at)
+        return false;
+    for (size_t k = 0; k < b->ntasks; k++) {
+        at[k] = n;
+        n += b->task_out[k].n - 1;
+    }
+    if (!vec_reserve(b, top, n - top->n)) {
+        free(at);
+        return false;
+    }
+    joiner j = {b, top, at};
+    if (b->p->pool)
+        ism_pool_for(b->p->pool, b->ntasks, join_task, &j, b->p->cost);
+    else
+        ism_parallel_for_costed(nthreads, b->ntasks, join_task, &j, b->p->cost);
+    top->n = n;
+    free(at);
     return true;
 }
 
@@ -851,7 +885,7 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
         ism_parallel_for_costed(nthreads, b.ntasks, run_task, &b, p->cost);
     if ((status = atomic_load(&b.failed)) != ISM_BUILD_OK)
         goto done;
-    if (!join_tasks(&b, &top))
+    if (!join_tasks(&b, &top, nthreads))
         status = ISM_BUILD_NO_MEMORY;
 
 done:
