@@ -331,7 +331,8 @@ static enum ism_fan_status collect_cuts(clip *c)
         }
     if (c->marked)
         return ISM_FAN_BAD;
-    qsort(c->cut, c->ncut, sizeof *c->cut, by_u64);
+    if (c->ncut) /* an isolated point alone cuts nothing: c->cut is NULL (qsort's is nonnull) */
+        qsort(c->cut, c->ncut, sizeof *c->cut, by_u64);
     size_t u = 0;
     for (size_t i = 0; i < c->ncut; i++)
         if (!u || c->cut[i] != c->cut[u - 1])
