@@ -18,7 +18,11 @@
  * MHD_resume_connection from another thread only sets a flag that the next MHD_run reads;
  * nothing in the epoll set becomes readable. ism_http_resume writes the owning loop's
  * eventfd after resuming, and the loop drains it before running the daemon, so a resume that
- * lands after MHD_run read the flag leaves the descriptor readable for the next poll. */
+ * lands after MHD_run read the flag leaves the descriptor readable for the next poll.
+ *
+ * With an own sender (http_front.h) the daemons have no listening socket: each thread's front
+ * accepts, answers what its hook takes and hands the rest to the thread's daemon, polled
+ * beside it. */
 #include "server/common/http_loops.h"
 
 #include <errno.h>
@@ -47,6 +51,7 @@
 
 typedef struct loop {
     struct MHD_Daemon *d;
+    ism_front *front; /* NULL: libmicrohttpd accepts (no own sender) */
     int epoll_fd;
     int wake_fd; /* an eventfd: readable after a resume of one of d's connections */
     pthread_t thread;
@@ -87,17 +92,23 @@ static void drain_fd(int fd)
 static void *loop_main(void *arg)
 {
     loop *l = arg;
-    struct pollfd p[3] = {{.fd = l->epoll_fd, .events = POLLIN},
+    struct pollfd p[4] = {{.fd = l->epoll_fd, .events = POLLIN},
                           {.fd = l->wake_fd, .events = POLLIN},
-                          {.fd = l->set->stop_fd, .events = POLLIN}};
+                          {.fd = l->set->stop_fd, .events = POLLIN},
+                          {.fd = l->front ? ism_front_fd(l->front) : -1, .events = POLLIN}};
     MHD_run(l->d); /* the first run puts the listening socket in the epoll set */
     while (!atomic_load(&l->set->stopping)) {
-        if (poll(p, 3, wait_ms(l->d)) < 0 && errno != EINTR)
+        int ms = wait_ms(l->d);
+        if (l->front)
+            ms = ism_front_wait_ms(l->front, ms);
+        if (poll(p, 4, ms) < 0 && errno != EINTR)
             ism_logf(ISM_LOG_WARN, "http_poll", "%s", strerror(errno));
         if (atomic_load(&l->set->stopping))
             break;
         if (p[1].revents)
             drain_fd(l->wake_fd); /* before the run, which takes every resume made so far */
+        if (l->front)
+            ism_front_run(l->front); /* connections it hands over are run just below */
         MHD_run(l->d);
     }
     return NULL;
@@ -141,6 +152,7 @@ void ism_http_loops_stop(ism_http_loops *s)
             pthread_join(s->loops[i].thread, NULL);
     for (unsigned i = 0; i < s->n; i++) {
         loop *l = &s->loops[i];
+        ism_front_free(l->front); /* before its daemon: nothing more is handed over */
         if (l->d) {
             MHD_quiesce_daemon(l->d); /* so that stopping does not close the socket */
             MHD_stop_daemon(l->d);
@@ -156,15 +168,22 @@ void ism_http_loops_stop(ism_http_loops *s)
 
 static bool start_daemon(ism_http_loops *s, loop *l, unsigned flags, int listen_fd,
                          unsigned limit, MHD_AccessHandlerCallback ah, void *ah_cls,
-                         const struct MHD_OptionItem *opts)
+                         const struct MHD_OptionItem *opts, const ism_front_hooks *front)
 {
     l->set = s;
-    l->d = MHD_start_daemon(flags | MHD_USE_EPOLL, 0, NULL, NULL, ah, ah_cls,
-                            MHD_OPTION_LISTEN_SOCKET, listen_fd,
-                            MHD_OPTION_CONNECTION_LIMIT, limit,
-                            MHD_OPTION_ARRAY, opts,
-                            MHD_OPTION_END);
+    if (front) /* the front accepts; libmicrohttpd gets connections from it */
+        l->d = MHD_start_daemon(flags | MHD_USE_EPOLL | MHD_USE_NO_LISTEN_SOCKET, 0, NULL, NULL,
+                                ah, ah_cls, MHD_OPTION_CONNECTION_LIMIT, limit,
+                                MHD_OPTION_ARRAY, opts, MHD_OPTION_END);
+    else
+        l->d = MHD_start_daemon(flags | MHD_USE_EPOLL, 0, NULL, NULL, ah, ah_cls,
+                                MHD_OPTION_LISTEN_SOCKET, listen_fd,
+                                MHD_OPTION_CONNECTION_LIMIT, limit,
+                                MHD_OPTION_ARRAY, opts,
+                                MHD_OPTION_END);
     if (!l->d)
+        return false;
+    if (front && !(l->front = ism_front_new(front, listen_fd, l->d)))
         return false;
     const union MHD_DaemonInfo *di = MHD_get_daemon_info(l->d, MHD_DAEMON_INFO_EPOLL_FD);
     if (!di)
@@ -175,12 +194,15 @@ static bool start_daemon(ism_http_loops *s, loop *l, unsigned flags, int listen_
 
 bool ism_http_loops_start(ism_http_loops *s, unsigned flags, int listen_fd, unsigned conn_limit,
                           MHD_AccessHandlerCallback ah, void *ah_cls,
-                          const struct MHD_OptionItem *opts)
+                          const struct MHD_OptionItem *opts, const ism_front_hooks *front)
 {
-    unsigned limit = (conn_limit + s->n - 1) / s->n;
+    /* libmicrohttpd accepting: each daemon takes new connections until it holds its share.
+     * The front accepting: it hands a connection to its own thread's daemon whatever the
+     * others hold, so each daemon may hold them all (the caller's rules bound the total). */
+    unsigned limit = front ? conn_limit : (conn_limit + s->n - 1) / s->n;
     /* Every daemon exists before any thread runs: ism_http_resume reads the whole table. */
     for (unsigned i = 0; i < s->n; i++)
-        if (!start_daemon(s, &s->loops[i], flags, listen_fd, limit, ah, ah_cls, opts)) {
+        if (!start_daemon(s, &s->loops[i], flags, listen_fd, limit, ah, ah_cls, opts, front)) {
             ism_logf(ISM_LOG_ERROR, "http_start_failed",
                      "libmicrohttpd daemon %u of %u did not start", i + 1, s->n);
             return false;
@@ -213,6 +235,9 @@ void ism_http_resume(ism_http_loops *s, struct MHD_Connection *c)
 
 void ism_http_loops_quiesce(ism_http_loops *s)
 {
-    for (unsigned i = 0; i < s->n; i++)
+    for (unsigned i = 0; i < s->n; i++) {
         MHD_quiesce_daemon(s->loops[i].d); /* takes the socket out of the epoll set itself */
+        if (s->loops[i].front)
+            ism_front_quiesce(s->loops[i].front);
+    }
 }

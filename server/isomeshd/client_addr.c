@@ -12,10 +12,14 @@
 void ismd_peer_address(struct MHD_Connection *c, char *out, size_t cap)
 {
     const union MHD_ConnectionInfo *ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+    ismd_sockaddr_text(ci ? ci->client_addr : NULL, out, cap);
+}
+
+void ismd_sockaddr_text(const struct sockaddr *sa, char *out, size_t cap)
+{
     snprintf(out, cap, "-");
-    if (!ci || !ci->client_addr)
+    if (!sa)
         return;
-    const struct sockaddr *sa = ci->client_addr;
     if (sa->sa_family == AF_INET)
         inet_ntop(AF_INET, &((const struct sockaddr_in *)sa)->sin_addr, out, (socklen_t)cap);
     else if (sa->sa_family == AF_INET6)

@@ -5,6 +5,7 @@
 #define ISMD_CLIENT_ADDR_H
 
 #include <microhttpd.h>
+#include <sys/socket.h>
 #include <stdbool.h>
 #include <stddef.h>
 
@@ -13,6 +14,8 @@ bool ismd_address_listed(const char *list, const char *addr);
 
 /* The peer's IP address as text ("-" when unknown). */
 void ismd_peer_address(struct MHD_Connection *c, char *out, size_t cap);
+/* The IP address of sa as text ("-" for NULL or another family). */
+void ismd_sockaddr_text(const struct sockaddr *sa, char *out, size_t cap);
 /* The client: the peer address (peer, or read from c when NULL), or when the peer is one of
  * trusted_proxy (comma-separated addresses; "" = none) the address its X-Real-IP header
  * names, else the rightmost address of X-Forwarded-For that is not a trusted proxy — only

@@ -141,6 +141,11 @@ static const flag FLAGS[] = {
      "net.ipv4.tcp_allowed_congestion_control, e.g. reno, cubic); behind nginx on the same "
      "host, where the system's is bbr without the fq qdisc, a non-pacing one costs less CPU",
      NULL, "the system's"},
+    {"own-sender", K_BOOL, 0, 0, "",
+     "cached meshes are sent by the daemon's own sender (header block held back, then "
+     "sendfile, as nginx sends a file) where libmicrohttpd would push the header block "
+     "alone (respond.c); other requests, and idle connections, stay libmicrohttpd's",
+     "off", NULL},
     {"max-depth", K_INT, 1, 16, "N", "deepest octree a request may ask for",
      "10", NULL},
     {"max-triangles", K_INT, 1, 1000000000LL, "N",
@@ -411,7 +416,9 @@ static bool apply(ismd_config *cfg, const flag *f, const char *v)
         return set_path(cfg->cors_origin, sizeof cfg->cors_origin, v);
     case K_LOGFMT: return ism_log_parse_format(v, &cfg->log_format);
     case K_BOOL: {
-        bool *b = !strcmp(name, "cluster") ? &cfg->cluster : &cfg->private_mode;
+        bool *b = !strcmp(name, "cluster")      ? &cfg->cluster
+                  : !strcmp(name, "own-sender") ? &cfg->own_sender
+                                                : &cfg->private_mode;
         if (!strcmp(v, "true") || !strcmp(v, "yes") || !strcmp(v, "1") || !strcmp(v, "on"))
             *b = true;
         else if (!strcmp(v, "false") || !strcmp(v, "no") || !strcmp(v, "0") || !strcmp(v, "off"))

@@ -33,6 +33,7 @@ typedef struct ismd_config {
     double body_timeout_s;    /* a request's body arrives within this of its headers */
     int http_threads;         /* at least this many HTTP threads (http.c may start more) */
     char tcp_congestion[16];  /* congestion control of accepted sockets; "" = the system's */
+    bool own_sender;          /* cached meshes sent by http_front.h (--own-sender) */
     int max_depth;
     size_t max_triangles;
     char web_root[4096];      /* "" = no viewer */

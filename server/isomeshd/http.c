@@ -23,6 +23,8 @@
 #include "server/isomeshd/client_addr.h"
 #include "server/isomeshd/errors.h"
 #include "server/common/http_loops.h"
+#include "server/isomeshd/own_sender.h"
+#include "server/isomeshd/request_log.h"
 #include "server/isomeshd/respond.h"
 #include "server/isomeshd/routes.h"
 
@@ -291,6 +293,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
 
 /* ---- completion: log line, metrics, cleanup ------------------------------------------ */
 
+
 static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
                          enum MHD_RequestTerminationCode toe)
 {
@@ -306,27 +309,8 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
         ismd_sched_unlock(&s->sched);
     }
     ismd_conns_request_done(s->conns, r->cn);
-    const char *cut = ismd_conns_cut_reason(s->conns, r->cn);
-    double secs = (ism_now_ns() - r->t0_ns) / 1e9;
-    /* no answer: the body came too slowly, or the client left */
-    unsigned status = r->status                          ? r->status
-                      : cut && !strcmp(cut, "body_deadline") ? 408
-                                                             : 499;
-    ismd_metrics_request(&s->metrics, r->route, status, secs, r->bytes);
-    ism_log_field f[] = {
-        ISM_LS("method", r->method),
-        ISM_LS("path", r->path),
-        ISM_LI("status", status),
-        ISM_LI("bytes", r->bytes),
-        ISM_LN("ms", secs * 1e3),
-        ISM_LS("cache", r->cache),
-        ISM_LS("key", r->key[0] ? r->key : NULL),
-        ISM_LS("client", r->client),
-        ISM_LS("user", r->who.state == ISMD_AUTH_OK ? r->who.user : NULL),
-        ISM_LS("end", toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? "ok" : "aborted"),
-        ISM_LS("closed", cut ? cut : r->client_left ? "client_left" : NULL),
-    };
-    ism_log_fields(ISM_LOG_INFO, "request", f, sizeof f / sizeof f[0]);
+    ismd_request_record(r, toe == MHD_REQUEST_TERMINATED_COMPLETED_OK,
+                        ismd_conns_cut_reason(s->conns, r->cn));
     ism_blob_unref(r->r_body);
     ism_blob_unref(r->r_stats);
     ism_blob_unref(r->r_features);
@@ -401,6 +385,11 @@ static void mhd_log(void *cls, const char *fmt, va_list ap)
  * connections). Requests whose line and headers do not fit are answered 414 / 431, as
  * before, only sooner. */
 #define CONNECTION_MEMORY (16u << 10)
+/* With --own-sender, a connection that has waited this long for its next request goes to
+ * libmicrohttpd, whose connection table (conns.h) then holds it: limits, fairness and
+ * deadlines see every idle connection after at most this long. A client that asks again
+ * within it (a script, a benchmark, a viewer fetching meshes) stays with the own sender. */
+#define OWN_SENDER_IDLE_S 0.5
 /* Kernel queue of connections not yet accepted (a burst of new clients waits here). */
 #define LISTEN_BACKLOG 1024u
 
@@ -542,7 +531,11 @@ bool ismd_http_start(ismd_server *s, int listen_fd)
         return false;
     unsigned limit = s->cfg->max_conns + CUT_ROOM(s->cfg->max_conns) +
                      ismd_conns_refused_room(s->cfg->max_conns);
-    reserve_descriptors(listen_fd, FDS_PER_CONNECTION * limit + FDS_BESIDE);
+    /* the own sender holds at most max_conns more (each thread its share), idle ones for
+     * OWN_SENDER_IDLE_S before libmicrohttpd's table sees them */
+    unsigned threads = http_threads(s->cfg);
+    unsigned own = s->cfg->own_sender ? s->cfg->max_conns : 0;
+    reserve_descriptors(listen_fd, FDS_PER_CONNECTION * (limit + own) + FDS_BESIDE);
     struct MHD_OptionItem opts[] = {
         {MHD_OPTION_EXTERNAL_LOGGER, (intptr_t)mhd_log, s},
         {MHD_OPTION_NOTIFY_COMPLETED, (intptr_t)on_completed, s},
@@ -555,9 +548,18 @@ bool ismd_http_start(ismd_server *s, int listen_fd)
         {MHD_OPTION_END, 0, NULL},
     };
     /* s->loops is set before any thread runs: resumes (other threads) read it. */
-    s->loops = ism_http_loops_new(http_threads(s->cfg));
+    s->loops = ism_http_loops_new(threads);
+    ism_front_hooks front = {
+        .answer = ismd_own_answer,
+        .done = ismd_own_done,
+        .cls = s,
+        .max_conns = own / threads + 1,
+        .idle_s = OWN_SENDER_IDLE_S,
+        .stall_s = s->cfg->conn_timeout_s,
+    };
     if (!s->loops || !ism_http_loops_start(s->loops, MHD_ALLOW_SUSPEND_RESUME | MHD_USE_ERROR_LOG,
-                                           listen_fd, limit, on_request, s, opts)) {
+                                           listen_fd, limit, on_request, s, opts,
+                                           s->cfg->own_sender ? &front : NULL)) {
         ism_logf(ISM_LOG_ERROR, "http_start_failed", "libmicrohttpd did not start");
         ism_http_loops_stop(s->loops);
         s->loops = NULL;

@@ -118,20 +118,28 @@ struct MHD_Response *ismd_response_text(const char *text, const char *content_ty
     return resp;
 }
 
+void ismd_add_to_response(void *ctx, const char *name, const char *value)
+{
+    MHD_add_response_header(ctx, name, value);
+}
+
+void ismd_common_headers(const ismd_config *cfg, ismd_add_header add, void *ctx)
+{
+    if (cfg->cors_origin[0]) {
+        add(ctx, MHD_HTTP_HEADER_ACCESS_CONTROL_ALLOW_ORIGIN, cfg->cors_origin);
+        add(ctx, "Access-Control-Expose-Headers",
+            "ETag, Location, X-Cache, Server-Timing, Retry-After, WWW-Authenticate");
+        if (strcmp(cfg->cors_origin, "*") != 0)
+            add(ctx, MHD_HTTP_HEADER_VARY, "Origin");
+    }
+    add(ctx, "X-Content-Type-Options", "nosniff");
+}
+
 enum MHD_Result ismd_send(ismd_req *r, unsigned status, struct MHD_Response *resp)
 {
     if (!resp)
         return MHD_NO;
-    const ismd_config *cfg = r->srv->cfg;
-    if (cfg->cors_origin[0]) {
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_ACCESS_CONTROL_ALLOW_ORIGIN, cfg->cors_origin);
-        MHD_add_response_header(resp, "Access-Control-Expose-Headers",
-                                "ETag, Location, X-Cache, Server-Timing, Retry-After, "
-                                "WWW-Authenticate");
-        if (strcmp(cfg->cors_origin, "*") != 0)
-            MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY, "Origin");
-    }
-    MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
+    ismd_common_headers(r->srv->cfg, ismd_add_to_response, resp);
     r->status = status;
     enum MHD_Result ok = MHD_queue_response(r->conn, status, resp);
     MHD_destroy_response(resp);

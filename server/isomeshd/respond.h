@@ -8,6 +8,13 @@
 
 /* Adds CORS and nosniff headers, records status and size, queues and releases resp. */
 enum MHD_Result ismd_send(ismd_req *r, unsigned status, struct MHD_Response *resp);
+/* A header of an answer, to whatever writes it (libmicrohttpd's response, or own_sender.c's
+ * header block). */
+typedef void (*ismd_add_header)(void *ctx, const char *name, const char *value);
+/* Adds a header to the libmicrohttpd response ctx. */
+void ismd_add_to_response(void *ctx, const char *name, const char *value);
+/* The headers ismd_send adds to every answer (CORS as configured, nosniff), in order. */
+void ismd_common_headers(const ismd_config *cfg, ismd_add_header add, void *ctx);
 /* The response for cached entry name whose bytes are b: from its file in the disk cache
  * (libmicrohttpd sends it with sendfile, no copy through user space) when b is large and the
  * file holds exactly b's bytes (cache_disk.h compares them whenever the file changed), else

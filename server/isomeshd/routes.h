@@ -5,6 +5,7 @@
 #define ISMD_ROUTES_H
 
 #include "server/isomeshd/http_types.h"
+#include "server/isomeshd/respond.h"
 
 /* Finds url's route: sets r->route, r->allow (NULL: 404, answered once the body is read),
  * r->want and the path parameters (r->key, r->fmt, r->id). */
@@ -32,6 +33,9 @@ enum MHD_Result ismd_respond_job_refused(ismd_req *r, const ismd_job_refusal *wh
 
 enum MHD_Result ismd_route_mesh_post(ismd_req *r);       /* POST /v1/mesh */
 enum MHD_Result ismd_route_mesh_get(ismd_req *r);        /* GET /v1/meshes/{key}.{fmt} */
+/* The headers of a mesh answer to r (its key, fmt, route and cache; Date and Content-Length
+ * are the sender's), in the order they are sent. */
+void ismd_mesh_headers(ismd_req *r, ismd_add_header add, void *ctx);
 enum MHD_Result ismd_route_mesh_json(ismd_req *r);       /* GET /v1/meshes/{key}/stats|features */
 enum MHD_Result ismd_route_jobs_post(ismd_req *r);       /* POST /v1/jobs */
 enum MHD_Result ismd_route_jobs_list(ismd_req *r);       /* GET /v1/jobs */

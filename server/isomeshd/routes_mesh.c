@@ -20,9 +20,9 @@
 
 #define IMMUTABLE "public, max-age=31536000, immutable"
 
-static void add_timing(ismd_req *r, struct MHD_Response *resp)
+/* The Server-Timing value of r's answer. */
+static void timing_of(ismd_req *r, char t[512])
 {
-    char t[512];
     double total = (ism_now_ns() - r->t0_ns) / 1e6;
     if (r->cache && !strcmp(r->cache, "hit")) { /* every cached answer: no snprintf */
         char parse[40], all[40];
@@ -37,10 +37,27 @@ static void add_timing(ismd_req *r, struct MHD_Response *resp)
         }
         t[n] = 0;
     } else
-        snprintf(t, sizeof t, "parse;dur=%.3f, queue;dur=%.3f, worker;dur=%.3f%s%s, total;dur=%.3f",
+        snprintf(t, 512, "parse;dur=%.3f, queue;dur=%.3f, worker;dur=%.3f%s%s, total;dur=%.3f",
                  r->parse_ms, r->queue_ms, r->worker_ms, r->timing[0] ? ", " : "", r->timing,
                  total);
-    MHD_add_response_header(resp, "Server-Timing", t);
+}
+
+void ismd_mesh_headers(ismd_req *r, ismd_add_header add, void *ctx)
+{
+    char etag[80], loc[128], timing[512];
+    snprintf(etag, sizeof etag, "\"%s\"", r->key);
+    add(ctx, MHD_HTTP_HEADER_CONTENT_TYPE, ism_format_mime_of(r->fmt));
+    add(ctx, MHD_HTTP_HEADER_ETAG, etag);
+    add(ctx, "X-Cache", r->cache ? r->cache : "miss");
+    if (r->route == ISMD_R_MESH) {
+        snprintf(loc, sizeof loc, "/v1/meshes/%s.%s", r->key, r->fmt);
+        add(ctx, MHD_HTTP_HEADER_LOCATION, loc);
+        add(ctx, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
+    } else {
+        add(ctx, MHD_HTTP_HEADER_CACHE_CONTROL, IMMUTABLE);
+    }
+    timing_of(r, timing);
+    add(ctx, "Server-Timing", timing);
 }
 
 static enum MHD_Result answer_failure(ismd_req *r)
@@ -110,24 +127,12 @@ static enum MHD_Result answer_mesh(ismd_req *r)
     if (r->links)
         return answer_links(r);
     char name[ISM_CACHE_NAME_MAX];
-    struct MHD_Response *resp =
-        ism_cache_name(name, r->key, r->fmt)
-            ? ismd_response_cached(r->srv, name, r->r_body, ism_format_mime_of(r->fmt))
-            : ismd_response_blob(r->r_body, ism_format_mime_of(r->fmt));
+    struct MHD_Response *resp = ism_cache_name(name, r->key, r->fmt)
+                                    ? ismd_response_cached(r->srv, name, r->r_body, NULL)
+                                    : ismd_response_blob(r->r_body, NULL);
     if (!resp)
         return MHD_NO;
-    char etag[80], loc[128];
-    snprintf(etag, sizeof etag, "\"%s\"", r->key);
-    snprintf(loc, sizeof loc, "/v1/meshes/%s.%s", r->key, r->fmt);
-    MHD_add_response_header(resp, MHD_HTTP_HEADER_ETAG, etag);
-    MHD_add_response_header(resp, "X-Cache", r->cache ? r->cache : "miss");
-    if (r->route == ISMD_R_MESH) {
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_LOCATION, loc);
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
-    } else {
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, IMMUTABLE);
-    }
-    add_timing(r, resp);
+    ismd_mesh_headers(r, ismd_add_to_response, resp);
     r->bytes = r->r_body->len;
     return ismd_send(r, 200, resp);
 }

@@ -288,7 +288,7 @@ def versus_nginx(results, nginx, which):
                                                            "wake/req ratio", "cores ratio",
                                                            "equal share", "runq us/req"))
     met = cost_met = True
-    for conns in sorted(nginx):
+    for conns in sorted(set(nginx) & set(results)):
         i, n = results[conns], nginx[conns]
         rr, pr = i["rps"] / n["rps"], i["p99"] / n["p99"] if n["p99"] else float("inf")
         cr = i["cpu_us"] / n["cpu_us"]
@@ -414,6 +414,27 @@ def start_ceiling(build, tmp, body):
     return wait_serving(p, port, "/")
 
 
+def variant_rows(build, tmp, args, label, conns_list, secs, nginx_all):
+    """Rows of a daemon started with args beside nginx (a worker per core): {conns: figures}."""
+    d = start_daemon(build, tmp, "--workers", "2", *args)
+    out = {}
+    try:
+        url, _ = cached_url(d, MESH_REQ)
+        for conns in conns_list:
+            r = out[conns] = wrk(url, conns, secs, pid=d.proc.pid)
+            row(label, conns, r)
+            if conns in nginx_all:
+                n = nginx_all[conns]
+                print("  beside nginx (a worker per core): req/s %.2fx, p99 %.2fx, CPU/req "
+                      "%.2fx, equal share %.2fx" % (
+                          r["rps"] / n["rps"], r["p99"] / n["p99"] if n["p99"] else 0,
+                          r["cpu_us"] / n["cpu_us"], equal_share(r, n)))
+    finally:
+        d.stop(timeout=30)
+        d.cleanup()
+    return out
+
+
 def throughput(build, tmp):
     d = start_daemon(build, tmp, "--workers", "2")
     nginx = nginx_all = ceiling = None
@@ -455,21 +476,11 @@ def throughput(build, tmp):
         if alt:
             # isomesh's daemon with --tcp-congestion (http.c: bbr without fq paces every
             # socket with a kernel timer; nginx's one-sendfile answers barely pay it)
-            d2 = start_daemon(build, tmp, "--workers", "2", "--tcp-congestion", alt)
-            try:
-                url2, _ = cached_url(d2, MESH_REQ)
-                for conns in (64, 256):
-                    r = wrk(url2, conns, secs, pid=d2.proc.pid)
-                    row("isomeshd --tcp-congestion %s" % alt, conns, r)
-                    if conns in nginx_all_results:
-                        n = nginx_all_results[conns]
-                        print("  beside nginx (a worker per core): req/s %.2fx, p99 %.2fx, CPU/req "
-                              "%.2fx, equal share %.2fx" % (
-                                  r["rps"] / n["rps"], r["p99"] / n["p99"] if n["p99"] else 0,
-                                  r["cpu_us"] / n["cpu_us"], equal_share(r, n)))
-            finally:
-                d2.stop(timeout=30)
-                d2.cleanup()
+            variant_rows(build, tmp, ["--tcp-congestion", alt], "isomeshd --tcp-congestion " + alt,
+                         (64, 256), secs, nginx_all_results)
+        # the daemon's own sender (http_front.h): the header block held back, then sendfile
+        own = variant_rows(build, tmp, ["--own-sender"], "isomeshd --own-sender", (16, 64, 256),
+                           secs, nginx_all_results)
         print("(isomeshd's answers sent from the cache file, sendfile, at 1/16/64/256 "
               "connections: %s; respond.c: bodies from 1 MB, smaller ones from memory, "
               "where the header block leaves in the same send as the body)" % " / ".join("%d" % sendfile[c] for c in sorted(sendfile)))
@@ -487,6 +498,7 @@ def throughput(build, tmp):
             versus_nginx(results, nginx_results, "1 worker")
         if nginx_all_results:
             versus_nginx(results, nginx_all_results, "a worker per core")
+            versus_nginx(own, nginx_all_results, "a worker per core; isomeshd --own-sender")
         print("\n" + load_line())
         print("/healthz every 50 ms while %d slow readers fetch the %.1f MB OBJ (16 KB per "
               "0.2 s each)" % (SLOW_READERS, len(obj) / 1e6))

@@ -92,7 +92,7 @@ int main(int argc, char **argv)
                                     {MHD_OPTION_END, 0, NULL}};
     ism_http_loops *d = lfd < 0 ? NULL : ism_http_loops_new(threads);
     if (!d || !ism_http_loops_start(d, MHD_ALLOW_SUSPEND_RESUME, lfd, CONNECTION_LIMIT, answer,
-                                    NULL, opts)) {
+                                    NULL, opts, NULL)) {
         ism_http_loops_stop(d);
         fprintf(stderr, "http_ceiling: cannot listen on port %s\n", argv[1]);
         return 1;

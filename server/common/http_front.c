@@ -1,0 +1,311 @@
+/* http_front.c — the own sender of http_front.h: accepting, peeking at request heads, answering
+ * with a held-back header block and sendfile, handing connections to libmicrohttpd, and the
+ * idle and stall deadlines of the connections it holds. */
+#include "server/common/http_front.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/epoll.h>
+#include <sys/sendfile.h>
+#include <unistd.h>
+
+#include "core/util/clock.h"
+#include "server/common/log.h"
+
+/* Bytes of a request head looked at: a longer head goes to libmicrohttpd (which answers 431
+ * beyond its own memory limit). Browsers' heads are 0.5-2 KB. */
+#define HEAD_PEEK 8192
+/* New connections taken per wake: the listening socket wakes one front per connection
+ * (EPOLLEXCLUSIVE), so a burst spreads over the threads that are free. */
+#define ACCEPT_BATCH 4
+/* How often the deadlines are checked: they are coarse (seconds). */
+#define SCAN_NS 100000000LL
+#define EVENTS 64
+/* Out of descriptors (or memory) for a new connection: accepting pauses this long (the
+ * listening socket stays readable, so retrying at once would spin). */
+#define ACCEPT_PAUSE_NS 100000000LL
+
+typedef struct fconn {
+    int fd;
+    struct sockaddr_storage peer;
+    socklen_t peer_len;
+    bool sending, corked;
+    ism_front_answer a;
+    size_t head_sent, body_sent;
+    long long deadline_ns;
+    struct fconn *prev, *next;
+} fconn;
+
+struct ism_front {
+    ism_front_hooks h;
+    int listen_fd, ep;
+    struct MHD_Daemon *d;
+    atomic_bool quiesced;
+    long long paused_until_ns; /* 0: the listening socket is in ep */
+    fconn *head;
+    unsigned n;
+    long long next_scan_ns;
+};
+
+static long long after(double s)
+{
+    return ism_now_ns() + (long long)(s * 1e9);
+}
+
+static void unlink_conn(ism_front *f, fconn *c)
+{
+    if (c->prev)
+        c->prev->next = c->next;
+    else
+        f->head = c->next;
+    if (c->next)
+        c->next->prev = c->prev;
+    f->n--;
+    epoll_ctl(f->ep, EPOLL_CTL_DEL, c->fd, NULL);
+}
+
+static void drop(ism_front *f, fconn *c)
+{
+    unlink_conn(f, c);
+    close(c->fd);
+    free(c);
+}
+
+/* To libmicrohttpd, with whatever the client sent still unread in the socket. */
+static void give(ism_front *f, int fd, const struct sockaddr_storage *peer, socklen_t len)
+{
+    if (MHD_add_connection(f->d, fd, (const struct sockaddr *)peer, len) != MHD_YES)
+        ism_logf(ISM_LOG_WARN, "http_front", "libmicrohttpd refused a connection: %s",
+                 strerror(errno)); /* it closed the socket */
+}
+
+static void give_conn(ism_front *f, fconn *c)
+{
+    unlink_conn(f, c);
+    if (c->corked) { /* libmicrohttpd takes the cork state of a socket it gets for unknown */
+        int zero = 0;
+        setsockopt(c->fd, IPPROTO_TCP, TCP_CORK, &zero, sizeof zero);
+    }
+    give(f, c->fd, &c->peer, c->peer_len);
+    free(c);
+}
+
+/* 1: a is sent whole (and pushed); 0: the socket is full; -1: the connection failed. */
+static int send_some(fconn *c)
+{
+    while (c->head_sent < c->a.head_len) {
+        ssize_t n = send(c->fd, c->a.head + c->head_sent, c->a.head_len - c->head_sent,
+                         MSG_MORE | MSG_NOSIGNAL);
+        if (n < 0)
+            return errno == EAGAIN || errno == EWOULDBLOCK ? 0 : -1;
+        c->head_sent += (size_t)n;
+    }
+    if (!c->corked) { /* segments stay full until the push below (kept for the next answers) */
+        int one = 1;
+        setsockopt(c->fd, IPPROTO_TCP, TCP_CORK, &one, sizeof one);
+        c->corked = true;
+    }
+    while (c->body_sent < c->a.len) {
+        off_t off = (off_t)(c->a.offset + (long long)c->body_sent);
+        ssize_t n = sendfile(c->fd, c->a.fd, &off, c->a.len - c->body_sent);
+        if (n < 0)
+            return errno == EAGAIN || errno == EWOULDBLOCK ? 0 : -1;
+        if (n == 0)
+            return -1; /* the file is shorter than promised */
+        c->body_sent += (size_t)n;
+    }
+    int one = 1; /* pushes the last partial segment; the cork stays */
+    setsockopt(c->fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+    return 1;
+}
+
+/* Sends what c has to send, then answers the requests that have arrived, until the socket
+ * is full or empty; hands c over or closes it when that is its end. */
+static void serve(ism_front *f, fconn *c)
+{
+    for (;;) {
+        if (c->sending) {
+            size_t moved = c->head_sent + c->body_sent;
+            int st = send_some(c);
+            if (st == 0) {
+                if (c->head_sent + c->body_sent != moved || !moved)
+                    c->deadline_ns = after(f->h.stall_s); /* moved, or just started */
+                return;
+            }
+            c->sending = false;
+            f->h.done(f->h.cls, &c->a, st > 0);
+            if (st < 0) {
+                drop(f, c);
+                return;
+            }
+            c->deadline_ns = after(f->h.idle_s);
+        }
+        char buf[HEAD_PEEK];
+        ssize_t n = recv(c->fd, buf, sizeof buf, MSG_PEEK);
+        if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK))
+            return;
+        if (n <= 0) { /* closed by the client, or failed */
+            drop(f, c);
+            return;
+        }
+        const char *end = memmem(buf, (size_t)n, "\r\n\r\n", 4);
+        size_t len = end ? (size_t)(end + 4 - buf) : 0;
+        if (!end || atomic_load(&f->quiesced) ||
+            !f->h.answer(f->h.cls, buf, len, (const struct sockaddr *)&c->peer, c->peer_len,
+                         &c->a)) {
+            give_conn(f, c); /* a head still arriving, or a request not ours */
+            return;
+        }
+        if (recv(c->fd, buf, len, 0) != (ssize_t)len) { /* peeked bytes: cannot fail */
+            f->h.done(f->h.cls, &c->a, false);
+            drop(f, c);
+            return;
+        }
+        c->sending = true;
+        c->head_sent = c->body_sent = 0;
+    }
+}
+
+static void accept_some(ism_front *f)
+{
+    for (int i = 0; i < ACCEPT_BATCH && !atomic_load(&f->quiesced); i++) {
+        struct sockaddr_storage peer;
+        socklen_t len = sizeof peer;
+        int fd = accept4(f->listen_fd, (struct sockaddr *)&peer, &len,
+                         SOCK_NONBLOCK | SOCK_CLOEXEC);
+        if (fd < 0) {
+            if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
+                ism_logf(ISM_LOG_WARN, "http_accept", "%s: accepting pauses", strerror(errno));
+                epoll_ctl(f->ep, EPOLL_CTL_DEL, f->listen_fd, NULL);
+                f->paused_until_ns = ism_now_ns() + ACCEPT_PAUSE_NS;
+            } else if (errno != EAGAIN && errno != EWOULDBLOCK && errno != ECONNABORTED)
+                ism_logf(ISM_LOG_WARN, "http_accept", "%s", strerror(errno));
+            return;
+        }
+        fconn *c = f->n < f->h.max_conns ? calloc(1, sizeof *c) : NULL;
+        if (!c) {
+            give(f, fd, &peer, len);
+            continue;
+        }
+        c->fd = fd;
+        c->peer = peer;
+        c->peer_len = len;
+        c->deadline_ns = after(f->h.idle_s);
+        struct epoll_event ev = {.events = EPOLLIN | EPOLLOUT | EPOLLRDHUP | EPOLLET,
+                                 .data.ptr = c};
+        if (epoll_ctl(f->ep, EPOLL_CTL_ADD, fd, &ev) != 0) {
+            free(c);
+            give(f, fd, &peer, len);
+            continue;
+        }
+        c->next = f->head;
+        if (f->head)
+            f->head->prev = c;
+        f->head = c;
+        f->n++;
+        serve(f, c); /* the request has often arrived with the connection */
+    }
+}
+
+static void listen_again(ism_front *f, long long now)
+{
+    if (!f->paused_until_ns || now < f->paused_until_ns)
+        return;
+    f->paused_until_ns = 0;
+    struct epoll_event ev = {.events = EPOLLIN | EPOLLEXCLUSIVE, .data.ptr = NULL};
+    if (!atomic_load(&f->quiesced))
+        epoll_ctl(f->ep, EPOLL_CTL_ADD, f->listen_fd, &ev);
+}
+
+static void check_deadlines(ism_front *f)
+{
+    long long now = ism_now_ns();
+    listen_again(f, now);
+    if (now < f->next_scan_ns)
+        return;
+    f->next_scan_ns = now + SCAN_NS;
+    for (fconn *c = f->head, *next; c; c = next) {
+        next = c->next;
+        if (now < c->deadline_ns)
+            continue;
+        if (c->sending) { /* a reader that stopped reading */
+            f->h.done(f->h.cls, &c->a, false);
+            drop(f, c);
+        } else {
+            give_conn(f, c);
+        }
+    }
+}
+
+ism_front *ism_front_new(const ism_front_hooks *h, int listen_fd, struct MHD_Daemon *d)
+{
+    ism_front *f = calloc(1, sizeof *f);
+    if (!f)
+        return NULL;
+    f->h = *h;
+    f->listen_fd = listen_fd;
+    f->d = d;
+    f->ep = epoll_create1(EPOLL_CLOEXEC);
+    struct epoll_event ev = {.events = EPOLLIN | EPOLLEXCLUSIVE, .data.ptr = NULL};
+    int fl = fcntl(listen_fd, F_GETFL); /* every front accepts: none may block in accept */
+    if (f->ep < 0 || fl < 0 || fcntl(listen_fd, F_SETFL, fl | O_NONBLOCK) != 0 ||
+        epoll_ctl(f->ep, EPOLL_CTL_ADD, listen_fd, &ev) != 0) {
+        ism_logf(ISM_LOG_ERROR, "http_start_failed", "front epoll: %s", strerror(errno));
+        if (f->ep >= 0)
+            close(f->ep);
+        free(f);
+        return NULL;
+    }
+    return f;
+}
+
+int ism_front_fd(const ism_front *f)
+{
+    return f->ep;
+}
+
+void ism_front_run(ism_front *f)
+{
+    struct epoll_event evs[EVENTS];
+    int n = epoll_wait(f->ep, evs, EVENTS, 0);
+    for (int i = 0; i < n; i++) {
+        if (!evs[i].data.ptr)
+            accept_some(f);
+        else
+            serve(f, evs[i].data.ptr);
+    }
+    check_deadlines(f);
+}
+
+int ism_front_wait_ms(const ism_front *f, int max_ms)
+{
+    if (!f->head && !f->paused_until_ns)
+        return max_ms;
+    long long ms = (f->next_scan_ns - ism_now_ns()) / 1000000 + 1;
+    return ms < 0 ? 0 : ms < max_ms ? (int)ms : max_ms;
+}
+
+void ism_front_quiesce(ism_front *f)
+{
+    atomic_store(&f->quiesced, true);
+    epoll_ctl(f->ep, EPOLL_CTL_DEL, f->listen_fd, NULL);
+}
+
+void ism_front_free(ism_front *f)
+{
+    if (!f)
+        return;
+    while (f->head) {
+        fconn *c = f->head;
+        if (c->sending)
+            f->h.done(f->h.cls, &c->a, false);
+        drop(f, c);
+    }
+    close(f->ep);
+    free(f);
+}

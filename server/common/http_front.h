@@ -1,0 +1,62 @@
+/* http_front.h — an own sender beside libmicrohttpd (http_loops.h, isomeshd --own-sender): a
+ * polling thread accepts connections itself; a request whose head has fully arrived is shown
+ * (peeked, not read) to a hook, which may answer it with a header block and a file range, sent
+ * as nginx sends a static file: the header block held back (MSG_MORE), then sendfile, then one
+ * push. Every other request goes, with its connection, to the thread's libmicrohttpd daemon
+ * (MHD_add_connection), which reads it from the socket as if it had accepted the connection
+ * itself; so does a connection idle longer than idle_s (libmicrohttpd and the caller's
+ * connection rules then hold it). Why: libmicrohttpd 0.9.75 (and 1.0.1) pushes a file answer's
+ * header block as a segment of its own (server/isomeshd/respond.c), which bbr makes
+ * expensive. One front per polling thread, used only by it (ism_front_quiesce excepted). */
+#ifndef ISM_HTTP_FRONT_H
+#define ISM_HTTP_FRONT_H
+
+#include <microhttpd.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <sys/socket.h>
+
+/* Longest header block a hook may write (isomeshd's cached answer: ~420 bytes with CORS). */
+#define ISM_FRONT_HEAD_MAX 1024
+
+typedef struct ism_front_answer {
+    char head[ISM_FRONT_HEAD_MAX]; /* the status line and headers, ending in CRLF CRLF */
+    size_t head_len;
+    int fd;                         /* the body: len bytes of fd from offset (fd is the hook's) */
+    long long offset;
+    size_t len;
+    void *ctx;                      /* the hook's own, given back to done */
+} ism_front_answer;
+
+typedef struct ism_front_hooks {
+    /* The request head (len bytes, request line and headers up to CRLF CRLF; no body may
+     * follow) from peer: true with *a filled to answer it here, false to leave it (and the
+     * connection) to libmicrohttpd. */
+    bool (*answer)(void *cls, const char *head, size_t len, const struct sockaddr *peer,
+                   socklen_t peer_len, ism_front_answer *a);
+    /* a was sent whole (sent) or its connection failed or stalled (!sent): a->fd and a->ctx
+     * are the hook's to release. */
+    void (*done)(void *cls, ism_front_answer *a, bool sent);
+    void *cls;
+    unsigned max_conns; /* connections one front holds; beyond, new ones go at once */
+    double idle_s;      /* a connection waiting this long for a request goes */
+    double stall_s;     /* an answer that moves no byte this long: its connection is closed */
+} ism_front_hooks;
+
+typedef struct ism_front ism_front;
+
+/* A front on listen_fd (non-blocking, shared with the other fronts: each is woken for a new
+ * connection alone, EPOLLEXCLUSIVE) handing connections to d. NULL on failure (logged). */
+ism_front *ism_front_new(const ism_front_hooks *h, int listen_fd, struct MHD_Daemon *d);
+/* The descriptor to poll for input: readable when the front has work. */
+int ism_front_fd(const ism_front *f);
+/* Accepts, answers and hands over what is ready, closes what timed out. */
+void ism_front_run(ism_front *f);
+/* Milliseconds until the front's next deadline (at most max_ms). */
+int ism_front_wait_ms(const ism_front *f, int max_ms);
+/* Stops accepting (any thread). */
+void ism_front_quiesce(ism_front *f);
+/* Closes every connection it holds (answers under way end !sent) and frees f (NULL: none). */
+void ism_front_free(ism_front *f);
+
+#endif

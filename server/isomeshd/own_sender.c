@@ -1,0 +1,198 @@
+/* own_sender.c — the cached mesh GETs that isomeshd's own sender answers (own_sender.h,
+ * http_front.h, --own-sender): which requests it takes, the header block it writes for them
+ * (the headers libmicrohttpd would send for the same answer, from the same functions:
+ * routes_mesh.c ismd_mesh_headers, respond.c ismd_common_headers), and their log line and
+ * metrics (request_log.h). It takes a request only when nothing in it could
+ * change the answer: GET of /v1/meshes/{key}.{fmt} over HTTP/1.1, no query or escapes, only
+ * the headers below, no token needed, no trusted proxy, the mesh cached in memory and its
+ * disk file sound (cache_disk.h). Everything else — HEAD, If-None-Match, Range, a body, a
+ * mesh to compute — is libmicrohttpd's, as before. */
+#include "server/isomeshd/own_sender.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "core/util/clock.h"
+#include "proto/request.h"
+#include "server/common/cache_disk.h"
+#include "server/isomeshd/client_addr.h"
+#include "server/isomeshd/request_log.h"
+#include "server/isomeshd/respond.h"
+#include "server/isomeshd/routes.h"
+
+#define PREFIX "GET /v1/meshes/"
+#define PREFIX_LEN (sizeof PREFIX - 1)
+#define VERSION " HTTP/1.1\r\n"
+#define VERSION_LEN (sizeof VERSION - 1)
+
+/* A request header that cannot change a cached mesh's answer (any other — If-None-Match,
+ * Range, Authorization, X-Forwarded-For, Content-Length, Expect, ... — leaves the request to
+ * libmicrohttpd); Connection only as keep-alive. */
+static bool harmless(const char *name, size_t n, const char *value, size_t vn)
+{
+    static const char *const names[] = {"host",          "user-agent",      "accept",
+                                        "accept-encoding", "accept-language", "cache-control",
+                                        "pragma",        "referer",         "origin"};
+    if (n == 10 && !strncasecmp(name, "connection", 10))
+        return vn == 10 && !strncasecmp(value, "keep-alive", 10);
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
+        if (strlen(names[i]) == n && !strncasecmp(name, names[i], n))
+            return true;
+    return false;
+}
+
+/* The header lines of head (after its request line) are all harmless, one of them Host. */
+static bool headers_harmless(const char *p, const char *end)
+{
+    int hosts = 0;
+    while (p < end) {
+        const char *eol = memchr(p, '\r', (size_t)(end - p));
+        if (!eol || eol + 1 >= end || eol[1] != '\n')
+            return false;
+        if (eol == p)
+            return hosts == 1; /* the empty line */
+        const char *colon = memchr(p, ':', (size_t)(eol - p));
+        if (!colon || colon == p || *p == ' ' || *p == '\t')
+            return false; /* malformed, or a folded line */
+        const char *v = colon + 1, *ve = eol;
+        while (v < ve && (*v == ' ' || *v == '\t'))
+            v++;
+        while (ve > v && (ve[-1] == ' ' || ve[-1] == '\t'))
+            ve--;
+        if (!harmless(p, (size_t)(colon - p), v, (size_t)(ve - v)))
+            return false;
+        hosts += (colon - p == 4 && !strncasecmp(p, "host", 4));
+        p = eol + 2;
+    }
+    return false;
+}
+
+typedef struct block {
+    char *buf;
+    size_t len, cap;
+    bool full;
+} block;
+
+static void put(block *b, const char *s, size_t n)
+{
+    if (b->len + n > b->cap) {
+        b->full = true;
+        return;
+    }
+    memcpy(b->buf + b->len, s, n);
+    b->len += n;
+}
+
+static void add_line(void *ctx, const char *name, const char *value)
+{
+    block *b = ctx;
+    put(b, name, strlen(name));
+    put(b, ": ", 2);
+    put(b, value, strlen(value));
+    put(b, "\r\n", 2);
+}
+
+/* "Date: Fri, 27 Nov 2026 05:42:40 GMT\r\n" as libmicrohttpd writes it (RFC 9110's IMF-fixdate,
+ * whatever the locale). */
+static void date_line(block *b)
+{
+    static const char days[7][4] = {"Sun", "Mon", "Tue", "Wed", "Thu", "Fri", "Sat"};
+    static const char months[12][4] = {"Jan", "Feb", "Mar", "Apr", "May", "Jun",
+                                       "Jul", "Aug", "Sep", "Oct", "Nov", "Dec"};
+    time_t now = time(NULL);
+    struct tm tm;
+    gmtime_r(&now, &tm);
+    char line[64];
+    int n = snprintf(line, sizeof line, "Date: %s, %02d %s %04d %02d:%02d:%02d GMT\r\n",
+                     days[tm.tm_wday], tm.tm_mday, months[tm.tm_mon], tm.tm_year + 1900,
+                     tm.tm_hour, tm.tm_min, tm.tm_sec);
+    put(b, line, (size_t)n);
+}
+
+bool ismd_own_answer(void *cls, const char *head, size_t len, const struct sockaddr *peer,
+                     socklen_t peer_len, ism_front_answer *a)
+{
+    (void)peer_len;
+    ismd_server *s = cls;
+    const char *end = head + len;
+    if (len < PREFIX_LEN || memcmp(head, PREFIX, PREFIX_LEN) != 0 || !s->disk ||
+        s->cfg->trusted_proxy[0] ||
+        ismd_auth_route_needs_token(s->auth, ISMD_R_MESH_FILE, "GET"))
+        return false;
+    const char *key = head + PREFIX_LEN;
+    const char *sp = memchr(key, ' ', (size_t)(end - key));
+    if (!sp || sp - key < ISM_KEY_HEX_LEN + 2 || key[ISM_KEY_HEX_LEN] != '.' ||
+        (size_t)(end - sp) < VERSION_LEN || memcmp(sp, VERSION, VERSION_LEN) != 0)
+        return false;
+    char fmt[8];
+    size_t fmt_len = (size_t)(sp - key) - ISM_KEY_HEX_LEN - 1;
+    if (fmt_len >= sizeof fmt)
+        return false;
+    memcpy(fmt, key + ISM_KEY_HEX_LEN + 1, fmt_len);
+    fmt[fmt_len] = 0;
+    if (ism_format_lookup(fmt) < 0 || !headers_harmless(sp + VERSION_LEN, end))
+        return false;
+    ismd_req *r = calloc(1, sizeof *r);
+    if (!r)
+        return false;
+    r->srv = s;
+    r->t0_ns = ism_now_ns();
+    memcpy(r->key, key, ISM_KEY_HEX_LEN);
+    r->key[ISM_KEY_HEX_LEN] = 0;
+    memcpy(r->fmt, fmt, fmt_len + 1);
+    char name[ISM_CACHE_NAME_MAX];
+    long long offset = 0;
+    int fd = -1;
+    if (ism_key_valid(r->key) && ism_cache_name(name, r->key, r->fmt) &&
+        (r->r_body = ism_cache_get(&s->cache, name, NULL)))
+        fd = ism_cache_disk_open_payload(s->disk, name, r->r_body->data, r->r_body->len, &offset);
+    if (fd < 0) { /* not cached, or no sound file: libmicrohttpd's (it counts the lookup) */
+        ism_blob_unref(r->r_body);
+        free(r);
+        return false;
+    }
+    atomic_fetch_add(&s->metrics.mesh_hits, 1);
+    atomic_fetch_add(&s->metrics.sendfile_responses, 1);
+    r->route = ISMD_R_MESH_FILE;
+    r->cache = "hit";
+    r->status = 200;
+    r->bytes = r->r_body->len;
+    snprintf(r->method, sizeof r->method, "GET");
+    snprintf(r->path, sizeof r->path, "%.*s", (int)(sp - key + 11), key - 11);
+    ismd_sockaddr_text(peer, r->client, sizeof r->client);
+    block b = {a->head, 0, sizeof a->head, false};
+    put(&b, "HTTP/1.1 200 OK\r\n", 17);
+    date_line(&b);
+    ismd_mesh_headers(r, add_line, &b);
+    ismd_common_headers(s->cfg, add_line, &b);
+    char length[32];
+    snprintf(length, sizeof length, "%zu", r->r_body->len);
+    add_line(&b, "Content-Length", length);
+    put(&b, "\r\n", 2);
+    if (b.full) { /* a CORS origin of hundreds of bytes: libmicrohttpd's */
+        close(fd);
+        ism_blob_unref(r->r_body);
+        free(r);
+        return false;
+    }
+    a->head_len = b.len;
+    a->fd = fd;
+    a->offset = offset;
+    a->len = r->r_body->len;
+    a->ctx = r;
+    return true;
+}
+
+void ismd_own_done(void *cls, ism_front_answer *a, bool sent)
+{
+    (void)cls;
+    ismd_req *r = a->ctx;
+    close(a->fd);
+    ismd_request_record(r, sent, NULL);
+    ism_blob_unref(r->r_body);
+    free(r);
+}

@@ -1,0 +1,35 @@
+/* request_log.c — the end of a request (request_log.h): its line in the log and its count and
+ * duration in the metrics, the same for libmicrohttpd's requests (http.c) and the own
+ * sender's (own_sender.c). */
+#include "server/isomeshd/request_log.h"
+
+#include <string.h>
+
+#include "core/util/clock.h"
+#include "server/common/log.h"
+#include "server/isomeshd/metrics.h"
+
+void ismd_request_record(ismd_req *r, bool completed, const char *cut)
+{
+    ismd_server *s = r->srv;
+    double secs = (ism_now_ns() - r->t0_ns) / 1e9;
+    /* no answer: the body came too slowly, or the client left */
+    unsigned status = r->status                          ? r->status
+                      : cut && !strcmp(cut, "body_deadline") ? 408
+                                                             : 499;
+    ismd_metrics_request(&s->metrics, r->route, status, secs, r->bytes);
+    ism_log_field f[] = {
+        ISM_LS("method", r->method),
+        ISM_LS("path", r->path),
+        ISM_LI("status", status),
+        ISM_LI("bytes", r->bytes),
+        ISM_LN("ms", secs * 1e3),
+        ISM_LS("cache", r->cache),
+        ISM_LS("key", r->key[0] ? r->key : NULL),
+        ISM_LS("client", r->client),
+        ISM_LS("user", r->who.state == ISMD_AUTH_OK ? r->who.user : NULL),
+        ISM_LS("end", completed ? "ok" : "aborted"),
+        ISM_LS("closed", cut ? cut : r->client_left ? "client_left" : NULL),
+    };
+    ism_log_fields(ISM_LOG_INFO, "request", f, sizeof f / sizeof f[0]);
+}

@@ -1,0 +1,174 @@
+"""test_own_sender.py — isomeshd --own-sender (server/common/http_front.c,
+server/isomeshd/own_sender.c): a cached mesh GET is answered by the daemon's own sender (header
+block held back, then sendfile) with the same header block libmicrohttpd writes for it (Date and
+the Server-Timing durations aside) and the same body; several requests on one connection, also
+pipelined, are answered in order, and one the own sender does not take (HEAD, If-None-Match, an
+unknown header) hands the connection to libmicrohttpd mid-stream without losing a byte; a reader
+that stops reading holds up nobody and is closed after --conn-timeout; an idle connection goes to
+libmicrohttpd's connection table."""
+import os
+import re
+import socket
+import sys
+import tempfile
+import shutil
+import time
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from harness import Daemon, http_request, sphere, wait_until  # noqa: E402
+
+SENT = "isomesh_sendfile_responses_total"  # the own sender's answers count here
+BIG = {"preset": "gyroid-ball", "depth": {"max": 6}, "output": {"format": "stl"}}  # 2.9 MB
+
+
+def read_answer(s, buf, head_only=False):
+    """One answer from socket s (buf: bytes already read) -> (status, header block, body, rest)."""
+    while b"\r\n\r\n" not in buf:
+        more = s.recv(65536)
+        if not more:
+            raise AssertionError("connection closed mid-answer: %r" % buf[:200])
+        buf += more
+    head, _, buf = buf.partition(b"\r\n\r\n")
+    status = int(head.split(b" ", 2)[1])
+    m = re.search(rb"\r\ncontent-length: *(\d+)", head, re.I)
+    n = 0 if head_only or status == 304 or not m else int(m.group(1))
+    while len(buf) < n:
+        more = s.recv(1 << 20)
+        if not more:
+            raise AssertionError("connection closed mid-body")
+        buf += more
+    return status, head, buf[:n], buf[n:]
+
+
+def strip_varying(head):
+    return re.sub(rb"Date: [^\r]*|dur=[0-9.]+", b"", head)
+
+
+class OwnSenderTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.mkdtemp(prefix="isomeshd_own_")
+        cls.d = Daemon("--workers", "1", "--own-sender", "--conn-timeout", "3",
+                       "--cors-origin", "https://viewer.example",
+                       cache_dir=os.path.join(cls.tmp, "cache")).start()
+        first = cls.d.post("/v1/mesh", sphere(0.77))
+        assert first.status == 200, first.body[:200]
+        cls.body = first.body
+        cls.key = first.header("ETag").strip('"')
+        cls.path = "/v1/meshes/%s.drc" % cls.key
+        cls.get = b"GET %s HTTP/1.1\r\nHost: t\r\n\r\n" % cls.path.encode()
+
+        def by_own_sender():  # once the cache file has settled (file_memo.h)
+            before = cls.d.metric(SENT)
+            s = socket.create_connection(("127.0.0.1", cls.d.port), timeout=30)
+            s.sendall(cls.get)
+            read_answer(s, b"")
+            s.close()
+            return cls.d.metric(SENT) == before + 1
+        wait_until("an answer by the own sender", by_own_sender)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.d.stop()
+        cls.d.cleanup()
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    def connect(self):
+        return socket.create_connection(("127.0.0.1", self.d.port), timeout=30)
+
+    def test_header_block_and_body_are_libmicrohttpds(self):
+        s = self.connect()
+        before = self.d.metric(SENT)
+        s.sendall(self.get)
+        status, own_head, own_body, rest = read_answer(s, b"")
+        self.assertEqual(self.d.metric(SENT), before + 1)
+        # an unknown header leaves the request to libmicrohttpd (from memory: no sendfile)
+        s.sendall(self.get.replace(b"\r\n\r\n", b"\r\nX-Probe: 1\r\n\r\n"))
+        status2, mhd_head, mhd_body, rest = read_answer(s, rest)
+        s.close()
+        self.assertEqual(self.d.metric(SENT), before + 1)
+        self.assertEqual((status, status2), (200, 200))
+        self.assertEqual(own_body, self.body)
+        self.assertEqual(mhd_body, self.body)
+        self.assertEqual(strip_varying(own_head), strip_varying(mhd_head))
+        self.assertIn(b"Access-Control-Allow-Origin: https://viewer.example", own_head)
+        self.assertRegex(own_head, rb"\r\nDate: \w{3}, \d\d \w{3} \d{4} \d\d:\d\d:\d\d GMT\r\n")
+        self.assertTrue(own_head.endswith(b"\r\nContent-Length: %d" % len(self.body)))
+        wait_until("the own sender's log line", lambda: re.search(
+            r"request method=GET path=%s status=200 bytes=%d .*end=ok" % (
+                re.escape(self.path), len(self.body)), self.d.log()))
+
+    def test_pipelined_requests_then_a_handover(self):
+        s = self.connect()
+        before = self.d.metric(SENT)
+        head = b"HEAD %s HTTP/1.1\r\nHost: t\r\n\r\n" % self.path.encode()
+        inm = b"GET %s HTTP/1.1\r\nHost: t\r\nIf-None-Match: \"%s\"\r\n\r\n" % (
+            self.path.encode(), self.key.encode())
+        s.sendall(self.get * 3 + head + inm + self.get)
+        rest = b""
+        for _ in range(3):
+            status, _, body, rest = read_answer(s, rest)
+            self.assertEqual((status, body), (200, self.body))
+        status, hh, body, rest = read_answer(s, rest, head_only=True)
+        self.assertEqual((status, body), (200, b""))
+        self.assertIn(b"Content-Length: %d" % len(self.body), hh)
+        status, _, _, rest = read_answer(s, rest)
+        self.assertEqual(status, 304)
+        status, _, body, rest = read_answer(s, rest)
+        self.assertEqual((status, body, rest), (200, self.body, b""))
+        s.close()
+        self.assertEqual(self.d.metric(SENT), before + 3)  # the rest were libmicrohttpd's
+
+    def test_a_reader_that_stops_reading_blocks_nobody(self):
+        big = self.d.post("/v1/mesh", BIG)
+        self.assertEqual(big.status, 200)
+        path = "/v1/meshes/%s.stl" % big.header("ETag").strip('"')
+        get = b"GET %s HTTP/1.1\r\nHost: t\r\n\r\n" % path.encode()
+        time.sleep(0.2)  # the file settles (file_memo.h: 50 ms)
+        stalled = []
+        try:
+            for _ in range(12):
+                s = socket.socket()
+                s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)  # a tiny window
+                s.connect(("127.0.0.1", self.d.port))
+                s.sendall(get)
+                stalled.append(s)
+            time.sleep(0.3)
+            for _ in range(5):
+                t0 = time.time()
+                s = self.connect()
+                s.sendall(self.get)
+                status, _, body, _ = read_answer(s, b"")
+                s.close()
+                self.assertEqual((status, body), (200, self.body))
+                self.assertLess(time.time() - t0, 1.0)
+                self.assertEqual(http_request(self.d.port, "GET", "/healthz").status, 200)
+            # no byte moves for --conn-timeout (3 s): closed, logged as aborted
+            wait_until("the stalled answers ended", lambda: len(re.findall(
+                r"path=%s status=200 .*end=aborted" % re.escape(path), self.d.log())) >= 12,
+                timeout=20)
+        finally:
+            for s in stalled:
+                s.close()
+
+    def test_an_idle_connection_goes_to_libmicrohttpd(self):
+        s = self.connect()
+        sent = self.d.metric(SENT)
+        s.sendall(self.get)
+        status, _, body, _ = read_answer(s, b"")
+        self.assertEqual((status, body), (200, self.body))
+        self.assertEqual(self.d.metric(SENT), sent + 1)
+        # held by the own sender until idle for 0.5 s (http.c OWN_SENDER_IDLE_S; deadlines
+        # checked every 0.1 s), then libmicrohttpd's (its table's rules hold it)
+        time.sleep(1.5)
+        sent = self.d.metric(SENT)
+        s.sendall(self.get)
+        status, _, body, _ = read_answer(s, b"")
+        s.close()
+        self.assertEqual((status, body), (200, self.body))
+        self.assertEqual(self.d.metric(SENT), sent)  # libmicrohttpd's now, from memory
+
+
+if __name__ == "__main__":
+    unittest.main()
