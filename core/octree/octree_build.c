@@ -468,10 +468,12 @@ static uint8_t hides_piece(build *b, thread_state *th, const ism_node *nd, const
     if (b->p->thin_coarse && !ism_tape_has_min_max(sub))
         return thin_bits(&tally, v);
     /* the faces' verdicts are kept for the node across, under sub's number in the leaf
-     * tapes' table (0: the build's own tape; none when the table has no room, nor on the
-     * scalar reference path) */
-    unsigned number = sub == b->p->tape ? 0 : tape_number_of(b, th, sub, nd->level);
-    bool memo = !b->p->scalar_eval && (sub == b->p->tape || number != 0);
+     * tapes' table (0: the build's own tape), the number this leaf takes anyway; none when
+     * the table has no room, when leaves keep the full tape (the table stays empty), nor
+     * on the scalar reference path */
+    bool own = sub == b->p->tape;
+    unsigned number = own || b->p->full_tape ? 0 : tape_number_of(b, th, sub, nd->level);
+    bool memo = !b->p->scalar_eval && (own || number != 0);
     uint32_t what = ism_face_memo_what(nd->level, 0, number);
     int32_t steps = ism_grid_cell_steps(b->grid, nd->level);
     for (int face = 0; face < 6 && v != ISM_THIN_FOUND && v != ISM_THIN_FOUND_KINKED; face++) {
