@@ -68,7 +68,9 @@ double ism_regula_falsi(ism_sampler *s, const double a[3], const double b[3], do
 bool ism_segment_may_reach(ism_sampler *s, const double a[3], const double b[3], double eps);
 
 /* The paper's double-root bisection on a→b (fa, fb of the same sign): returns 2 and a
- * split point t (one root each side), 1 and the tangent point t (|f| < eps), or 0. */
+ * split point t (one root each side), 1 and the tangent point t (|f| < eps), or 0 — early,
+ * the same answer, once an interval over what is left of the bracket proves that no later
+ * halving could see a sign change or |f| < eps (edge_roots.c). */
 int ism_double_root_search(ism_sampler *s, const ism_root_params *prm, const double a[3],
                            const double b[3], double fa, double fb, double *t);
 

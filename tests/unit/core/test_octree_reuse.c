@@ -14,6 +14,11 @@
 
 #define MAX_DEPTH 7
 #define MAX_ERROR 1e-2
+/* A reused tree costs at most this share of a fresh build's gradients. Measured on the torus
+ * 0.53-0.54 (three boxes): the fresh build's double-root searches stop early since their
+ * bracket's interval answers (edge_roots.c), so it no longer spends twice the reused
+ * build's gradients (it did: the bound was 0.5); the gyroid ball and the thin torus lower. */
+#define REUSE_GRADIENTS 0.6
 
 static const ism_param torus_rr[] = {{"R", 1}, {"r", 0.3}};
 static const pf_surface torus = {"(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)",
@@ -126,7 +131,9 @@ static void check(const pf_surface *s, const run_case *cases, size_t ncases, boo
         cr_expect_eq(sf.thin_undecided, sr.thin_undecided);
         if (pieces)
             cr_expect_gt(sf.thin_found, 0, "shift %g: no hidden piece found", shift);
-        cr_expect_lt(sr.n_gradient * 2, sf.n_gradient, "shift %g: %llu gradients of %llu",
+        /* far less: at most REUSE_GRADIENTS of the fresh build's gradients */
+        cr_expect_lt((double)sr.n_gradient, REUSE_GRADIENTS * (double)sf.n_gradient,
+                     "shift %g: %llu gradients of %llu",
                      shift, (unsigned long long)sr.n_gradient,
                      (unsigned long long)sf.n_gradient);
         ism_octree_free(&first);
