@@ -505,6 +505,16 @@ def throughput(build, tmp):
         print("%-40s %8s %8s %8s %8s" % ("server", "answers", "p50 ms", "p99 ms", "max ms"))
         slow = slow_readers(d.port, obj_url[len("http://127.0.0.1:%d" % d.port):], "/healthz")
         slow_row("isomeshd", slow)
+        d3 = start_daemon(build, tmp, "--workers", "2", "--own-sender")
+        try:  # the slow readers held by the own sender, /healthz libmicrohttpd's
+            url3, _ = cached_url(d3, MESH_REQ)
+            obj3 = url3[:-len("drc")] + "obj"
+            http_get(obj3)
+            slow_row("isomeshd --own-sender",
+                     slow_readers(d3.port, obj3[len("http://127.0.0.1:%d" % d3.port):], "/healthz"))
+        finally:
+            d3.stop(timeout=30)
+            d3.cleanup()
         if nurl:
             nport = int(nurl.split(":")[2].split("/")[0])
             nslow = slow_readers(nport, "/m.obj", "/healthz")
