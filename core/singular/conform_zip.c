@@ -542,6 +542,28 @@ static bool zip_multi(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *c
     return ok;
 }
 
+/* The feet of a loop along several curves where it passes from one curve's run to the next
+ * (the first vertex of each run, zip_multi's boundary vertex) and the two curves share an
+ * end (a junction: a triple point): that end. The rim there turns the corner between the two
+ * tubes, about as far from both curves, and its rings are drawn towards the junction —
+ * towards one curve's foot, the corner's ring vertex fell in line with the rim beside it and
+ * the ladder quad there stood on edge (Steiner's surface, depth 7: 18 edges turned over in
+ * every box at the six corners between two axes, 10 cells from the triple point). */
+static void junction_feet(const cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv,
+                          const cf_loop *l, const int *cid, double *foot)
+{
+    size_t n = l->n;
+    for (size_t i = l->closed ? 0 : 1; i < n; i++) {
+        int k = cid[i], j = cid[(i + n - 1) % n];
+        double a = shared_end(pl, cv, k, j, c->m->pos + 3 * (size_t)l->v[i]);
+        if (isnan(a))
+            continue;
+        const double *e = pl[k].p + 3 * (a > 0 ? pl[k].n - 1 : 0);
+        for (int d = 0; d < 3; d++)
+            foot[3 * i + d] = e[d];
+    }
+}
+
 /* A vertex claimed by another curve than both its neighbours (which agree) follows them. */
 static void smooth_ids(int *cid, size_t n, bool closed)
 {
@@ -595,6 +617,8 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
         if (ok && !found) {
             ok = cf_fan_centroid(c, l);
         } else if (ok) {
+            if (multi)
+                junction_feet(c, pl, cv, l, cid, foot);
             /* a loop along several curves is zipped by its rim's feet (zip_multi): its
              * rings stay where the rim's feet put them */
             uint32_t *row = make_rows(c, l, foot, pl, multi ? NULL : ends, cid, u, rho);

@@ -329,10 +329,8 @@ Test(remesh_needles, touching_spheres_keep_topology_and_lose_needles)
 /* ---- Steiner's Roman surface ---- */
 
 #define STEINER "x^2*y^2 + y^2*z^2 + z^2*x^2 + x*y*z"
-/* Needles the pass may leave on it at depth d (measured below; 8 in the 0.37-cell box at
- * depth 6 since the rim beside the pinch points is smoothed in the umbrella's chart,
- * conform_pinch.c, 7 before). */
-#define STEINER_NEEDLES_LEFT(d) ((d) >= 6 ? 8 : 9)
+/* Needles the pass may leave on it at depth d (measured below). */
+#define STEINER_NEEDLES_LEFT(d) ((d) >= 6 ? 7 : 9)
 
 /* Triangles under NEEDLE_DEG, and the largest |f| / |∇f| at the centroids and vertices. */
 static void steiner_shape(const ism_mesh *m, const ism_tape *t, shape *s)
@@ -469,11 +467,13 @@ static void steiner(const ism_tape *t, const double box[6], int d, int which)
     cr_log_info("%s: %zu collapses, %zu inserts; under %g°: %zu -> %zu; centroid error "
                 "%.3g -> %.3g", what, st.collapses, st.inserts, NEEDLE_DEG, before.needles,
                 after.needles, before.centroid_error, after.centroid_error);
-    /* at depth 5 (the sanitizer's) the 0.37-cell box's needles beside the double lines are
-     * collapsed instead since bends that f's curvature explains lock no vertex (rm_crease.c):
-     * 0 insertions, 208 collapses, 965 -> 7 needles */
-    if (which >= 0 && d >= 6)
-        cr_expect_gt(st.inserts, 0, "%s", what);
+    /* no insertion is asked for here any more: since the conformance draws the rings at the
+     * corners between two axes towards the triple point (conform_zip.c junction_feet), the
+     * pass mends the needles by collapses and flips alone (0 insertions in every box at
+     * depth 6, needles 0 / 0 / 7; 20 / 28 / 46 insertions before). At depth 5 (the
+     * sanitizer's) the 0.37-cell box's needles beside the double lines were collapsed too
+     * since bends that f's curvature explains lock no vertex (rm_crease.c): 0 insertions,
+     * 208 collapses, 965 -> 7 needles. The cross-cap's case below exercises insertion. */
     /* RP² immersed with a triple point and six half-segments of double line: χ = 5 */
     cr_expect_eq(a.euler, 5, "%s: χ = %ld", what, a.euler);
     cr_expect_eq(b.euler, 5, "%s: χ = %ld before", what, b.euler);
