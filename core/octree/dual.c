@@ -12,6 +12,7 @@
 #include "core/octree/dual_balls.h"
 #include "core/octree/dual_cert.h"
 #include "core/octree/edge_roots.h"
+#include "core/octree/face_memo.h"
 #include "core/octree/graph_cert.h"
 #include "core/octree/grid.h"
 #include "core/octree/sampler.h"
@@ -157,13 +158,17 @@ typedef struct task_ctx {
     void *out;
 } task_ctx;
 
-/* What one thread evaluates f with: its sampler (counters), interval workspace and lattice
- * point memo. */
+/* What one thread evaluates f with: its sampler (counters), interval workspace, lattice
+ * point memo and same-sign edge memo. */
 typedef struct worker {
     ism_sampler s;
     ism_ivjet_ws *jet;
     ism_point_entry *points;
     int bits; /* points holds 2^bits entries */
+    /* Same-sign edges' root searches (same_sign_edge_clear), made on the first search only
+     * (a sphere never searches: no 128 KB to fault in); NULL: none yet, or no memory. */
+    ism_pair_memo *pairs;
+    bool pairs_tried;
 } worker;
 
 typedef struct dual {
@@ -277,6 +282,40 @@ static int box_faces_clear(dual *d, worker *w, const dnode *n, const corner_view
     return 1;
 }
 
+/* The search for a root pair on edge c0 -> c1 of node n (ends of one sign): 0 when there
+ * is none. A function of the edge's two lattice points alone (f on the full tape between
+ * their coordinates), and up to four nodes of a level share an edge (torus at 1e-2: 432
+ * searches of 11.7K instructions each, 5.1M of 68M), so the answer is kept per thread under
+ * the ends' lattice keys (face_memo.h): a hit answers what the search would, bit for bit. */
+static int edge_root_pair(dual *d, worker *w, const dnode *n, const corner_view *v, int c0,
+                          int c1)
+{
+    const ism_poly_options *o = d->o;
+    int32_t step = ism_grid_cell_steps(&d->g, n->level), q0[3], q1[3];
+    for (int a = 0; a < 3; a++) {
+        q0[a] = n->o.v[a] + ((c0 >> a) & 1) * step;
+        q1[a] = n->o.v[a] + ((c1 >> a) & 1) * step;
+    }
+    uint64_t k0 = ism_lattice_key(q0) + 1, k1 = ism_lattice_key(q1) + 1;
+    if (!w->pairs_tried) {
+        w->pairs_tried = true;
+        w->pairs = calloc(1, sizeof *w->pairs); /* NULL: every search made */
+    }
+    ism_pair_entry none, *m = w->pairs ? ism_pair_memo_slot(w->pairs, k0, k1) : &none;
+    if (w->pairs && m->a == k0 && m->b == k1)
+        return m->found;
+    int found = 0;
+    double t = 0;
+    if (ism_segment_may_reach(&w->s, v->p[c0], v->p[c1], o->double_root_eps)) {
+        ism_root_params prm = {o->gradient_test, o->double_root_eps, o->double_root_iters,
+                               false};
+        found = ism_double_root_search(&w->s, &prm, v->p[c0], v->p[c1], n->f[c0], n->f[c1],
+                                       &t);
+    }
+    *m = (ism_pair_entry){k0, k1, t, found};
+    return found;
+}
+
 /* No root on an edge whose ends share a sign: f monotone along its axis or kept from 0 by
  * the mean-value form (proofs), else the primal polygons' edge test (plot_test.c): the
  * paper's same-sheet test (eq. 1) on the ends' gradients, then its double-root search. */
@@ -287,14 +326,9 @@ static bool same_sign_edge_clear(dual *d, worker *w, const dnode *n, const corne
     if (v->have_g && (v->monotone >> a & 1 ||
                       edge_free(n, &v->g, a, c0, c1, v->p[c1][a] - v->p[c0][a])))
         return true;
-    const ism_poly_options *o = d->o;
-    if (ism_dot3(v->n[c0], v->n[c1]) > o->gradient_test)
+    if (ism_dot3(v->n[c0], v->n[c1]) > d->o->gradient_test)
         return true;
-    if (!ism_segment_may_reach(&w->s, v->p[c0], v->p[c1], o->double_root_eps))
-        return true;
-    ism_root_params prm = {o->gradient_test, o->double_root_eps, o->double_root_iters, false};
-    double t;
-    return ism_double_root_search(&w->s, &prm, v->p[c0], v->p[c1], n->f[c0], n->f[c1], &t) == 0;
+    return edge_root_pair(d, w, n, v, c0, c1) == 0;
 }
 
 /* Crossed edges on every face 0 or 2 (one curve), and no root on an edge whose ends share
@@ -1696,6 +1730,7 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
         ism_eval_ws_free(w->s.ws);
         ism_ivjet_ws_free(w->jet);
         free(w->points);
+        free(w->pairs);
     }
     if (status != ISM_DUAL_OK)
         ism_mesh_free(mesh);
