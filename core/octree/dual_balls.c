@@ -589,7 +589,8 @@ enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_du
     if (order) {
         for (size_t t = 0; t < c.nt; t++)
             kept += c.tri[3 * t] < nv0 && c.tri[3 * t + 1] < nv0 && c.tri[3 * t + 2] < nv0;
-        memcpy(c.tri, order, 3 * c.nt * sizeof *order);
+        if (c.nt) /* none kept: c.tri is NULL (memcpy's is nonnull) */
+            memcpy(c.tri, order, 3 * c.nt * sizeof *order);
         free(order);
     }
     if (st == ISM_FAN_OK)
@@ -598,7 +599,8 @@ enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_du
         if (!ism_mesh_reserve(m, m->nverts, c.nt))
             st = ISM_FAN_NO_MEMORY;
         else {
-            memcpy(m->tri, c.tri, 3 * c.nt * sizeof *c.tri);
+            if (c.nt)
+                memcpy(m->tri, c.tri, 3 * c.nt * sizeof *c.tri);
             m->ntris = c.nt;
             uint32_t *used = calloc(m->nverts + 1, sizeof *used);
             if (!used)
