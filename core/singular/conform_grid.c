@@ -170,9 +170,9 @@ static bool box_inside(const double lo[3], const double hi[3], const double box[
     return true;
 }
 
-/* Triangles per task of a cover pass: fixed, so the triangles it files, and their order,
- * are the same on any number of threads. */
-#define COVER_BLOCK 8192
+/* Vertices or triangles per task of a cover pass: fixed, so the triangles it files, and
+ * their order, are the same on any number of threads. */
+#define COVER_BLOCK 16384
 
 /* One pass over the first `base` triangles: the ones not filed yet whose boxes meet want,
  * per block in triangle order (found on the grid's threads, filed after on the caller's). */
@@ -180,17 +180,28 @@ typedef struct cover_pass {
     const cf_tgrid *g;
     const ism_mesh *m;
     double want[6];
-    cf_tris *found; /* per block */
+    uint8_t *out;   /* per vertex: which of want's six planes it lies beyond (a bit each) */
+    cf_tris *found; /* per block of triangles */
     int failed;
 } cover_pass;
 
-/* Which of want's six planes p lies beyond (a bit each). */
-static uint8_t outcode(const double *p, const double want[6])
+static size_t cover_end(size_t blk, size_t n)
 {
-    uint8_t o = 0;
-    for (int k = 0; k < 3; k++)
-        o |= (uint8_t)((p[k] < want[k]) << (2 * k) | (p[k] > want[k + 3]) << (2 * k + 1));
-    return o;
+    return (blk + 1) * COVER_BLOCK < n ? (blk + 1) * COVER_BLOCK : n;
+}
+
+static void outcode_block(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    cover_pass *c = ctx;
+    for (size_t v = blk * COVER_BLOCK; v < cover_end(blk, c->m->nverts); v++) {
+        const double *p = c->m->pos + 3 * v;
+        uint8_t o = 0;
+        for (int k = 0; k < 3; k++)
+            o |= (uint8_t)((p[k] < c->want[k]) << (2 * k) |
+                           (p[k] > c->want[k + 3]) << (2 * k + 1));
+        c->out[v] = o;
+    }
 }
 
 /* a triangle's box misses the box exactly when its three corners lie beyond one of the
@@ -199,16 +210,10 @@ static void cover_block(void *ctx, size_t blk, int thread)
 {
     (void)thread;
     cover_pass *c = ctx;
-    const ism_mesh *m = c->m;
-    size_t lo = blk * COVER_BLOCK, hi = lo + COVER_BLOCK < c->g->base ? lo + COVER_BLOCK
-                                                                      : c->g->base;
-    for (size_t t = lo; t < hi; t++) {
-        if (c->g->cell_of[t] != CF_NONE)
-            continue;
-        const uint32_t *v = m->tri + 3 * t;
-        if (!(outcode(m->pos + 3 * (size_t)v[0], c->want) &
-              outcode(m->pos + 3 * (size_t)v[1], c->want) &
-              outcode(m->pos + 3 * (size_t)v[2], c->want)) &&
+    const uint8_t *out = c->out;
+    for (size_t t = blk * COVER_BLOCK; t < cover_end(blk, c->g->base); t++) {
+        const uint32_t *v = c->m->tri + 3 * t;
+        if (c->g->cell_of[t] == CF_NONE && !(out[v[0]] & out[v[1]] & out[v[2]]) &&
             !cf_tris_push(&c->found[blk], (uint32_t)t))
             __atomic_store_n(&c->failed, 1, __ATOMIC_RELAXED);
     }
@@ -225,17 +230,23 @@ bool cf_tgrid_cover(cf_tgrid *g, const ism_mesh *m, const double lo[3], const do
         c.want[k + 3] = fmax(g->cover[k + 3], hi[k] + ahead);
     }
     g->cover_passes++;
-    size_t nblocks = (g->base + COVER_BLOCK - 1) / COVER_BLOCK;
-    if (!(c.found = calloc(nblocks ? nblocks : 1, sizeof *c.found)))
-        return false;
-    ism_parallel_for(nblocks > 1 ? g->threads : 1, nblocks, cover_block, &c);
-    bool ok = !c.failed;
-    for (size_t b = 0; b < nblocks; b++) {
+    size_t vblocks = (m->nverts + COVER_BLOCK - 1) / COVER_BLOCK;
+    size_t tblocks = (g->base + COVER_BLOCK - 1) / COVER_BLOCK;
+    c.out = malloc(m->nverts + 1);
+    c.found = calloc(tblocks ? tblocks : 1, sizeof *c.found);
+    bool ok = c.out && c.found;
+    if (ok) {
+        ism_parallel_for(vblocks > 1 ? g->threads : 1, vblocks, outcode_block, &c);
+        ism_parallel_for(tblocks > 1 ? g->threads : 1, tblocks, cover_block, &c);
+        ok = !c.failed;
+    }
+    for (size_t b = 0; c.found && b < tblocks; b++) {
         for (size_t i = 0; ok && i < c.found[b].n; i++)
             ok = file_triangle(g, m, c.found[b].t[i]);
         free(c.found[b].t);
     }
     free(c.found);
+    free(c.out);
     if (ok)
         memcpy(g->cover, c.want, sizeof c.want);
     return ok;
