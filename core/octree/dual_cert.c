@@ -138,7 +138,7 @@ static int verdict(const ism_ivgrad *g, const double *d)
  * the torus at 1e-2 ~2,300 boxes a mesh). -1 also when there is no enclosure (a bound not
  * a number): no proof. */
 static int verdict_over(const ism_dual_model *m, const double lo[3], const double hi[3],
-                        const double *d)
+                        const double *d, ism_interval *v)
 {
     ism_interval dx[3];
     round_centre(m, lo, hi, dx);
@@ -146,7 +146,20 @@ static int verdict_over(const ism_dual_model *m, const double lo[3], const doubl
     if (v2.lo > 0 || v2.hi < 0)
         return 1;
     ism_ivgrad g;
-    return over_dx(m, dx, v2, &g) ? verdict(&g, d) : -1;
+    if (!over_dx(m, dx, v2, &g))
+        return -1;
+    *v = g.v;
+    return verdict(&g, d);
+}
+
+/* How nearly f's enclosure v (holding 0) is centred on 0: min(−lo, hi) / width, in [0, ½].
+ * A sub-box whose enclosure is nearly one-signed is the likelier to be proven by its own
+ * model; the most centred ones are tried first, so a proof that fails (the box holds the
+ * surface) fails before the models of the sub-boxes beside it are made. */
+static double centred(ism_interval v)
+{
+    double w = v.hi - v.lo;
+    return w > 0 ? fmin(-v.lo, v.hi) / w : 0.5;
 }
 
 /* The proof (verdict) on lo..hi, whose model is m: from m itself, else on the sub-boxes —
@@ -155,18 +168,32 @@ static bool prove(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
                   const double lo[3], const double hi[3], const double *d, int halvings,
                   uint64_t *intervals)
 {
-    int v = verdict_over(m, lo, hi, d);
+    ism_interval encl;
+    int v = verdict_over(m, lo, hi, d, &encl);
     if (v || halvings <= 0)
         return v > 0;
+    /* the proof holds when it holds on every sub-box: first every verdict m gives (no
+     * evaluation), then each undecided sub-box by its own model, most centred first */
+    int open[8], nopen = 0;
+    double score[8];
     for (int k = 0; k < 8; k++) {
         double sl[3], sh[3];
         sub_box(lo, hi, k, sl, sh);
-        v = verdict_over(m, sl, sh, d);
+        v = verdict_over(m, sl, sh, d, &encl);
         if (v < 0)
             return false;
         if (v > 0)
             continue;
+        score[k] = centred(encl);
+        int at = nopen++;
+        for (; at > 0 && score[open[at - 1]] < score[k]; at--)
+            open[at] = open[at - 1]; /* stable: equal scores keep sub-box order */
+        open[at] = k;
+    }
+    for (int i = 0; i < nopen; i++) {
+        double sl[3], sh[3];
         ism_dual_model sm;
+        sub_box(lo, hi, open[i], sl, sh);
         if (!ism_dual_taylor(t, jet, sl, sh, &sm, intervals) ||
             !prove(t, jet, &sm, sl, sh, d, halvings - 1, intervals))
             return false;
