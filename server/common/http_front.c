@@ -38,6 +38,7 @@ typedef struct fconn {
     ism_front_answer a;
     size_t head_sent, body_sent;
     long long deadline_ns;
+    void *ctx; /* the hooks' (opened) */
     struct fconn *prev, *next;
 } fconn;
 
@@ -72,16 +73,23 @@ static void unlink_conn(ism_front *f, fconn *c)
 static void drop(ism_front *f, fconn *c)
 {
     unlink_conn(f, c);
+    if (c->ctx && f->h.closed)
+        f->h.closed(f->h.cls, c->ctx);
     close(c->fd);
     free(c);
 }
 
 /* To libmicrohttpd, with whatever the client sent still unread in the socket. */
-static void give(ism_front *f, int fd, const struct sockaddr_storage *peer, socklen_t len)
+static void give(ism_front *f, int fd, const struct sockaddr_storage *peer, socklen_t len,
+                 void *ctx)
 {
+    if (ctx && f->h.handing)
+        f->h.handing(f->h.cls, ctx);
     if (MHD_add_connection(f->d, fd, (const struct sockaddr *)peer, len) != MHD_YES)
         ism_logf(ISM_LOG_WARN, "http_front", "libmicrohttpd refused a connection: %s",
                  strerror(errno)); /* it closed the socket */
+    if (ctx && f->h.handing)
+        f->h.handing(f->h.cls, NULL);
 }
 
 static void give_conn(ism_front *f, fconn *c)
@@ -91,7 +99,7 @@ static void give_conn(ism_front *f, fconn *c)
         int zero = 0;
         setsockopt(c->fd, IPPROTO_TCP, TCP_CORK, &zero, sizeof zero);
     }
-    give(f, c->fd, &c->peer, c->peer_len);
+    give(f, c->fd, &c->peer, c->peer_len, c->ctx);
     free(c);
 }
 
@@ -139,6 +147,8 @@ static void serve(ism_front *f, fconn *c)
             }
             c->sending = false;
             f->h.done(f->h.cls, &c->a, st > 0);
+            if (c->ctx && f->h.busy)
+                f->h.busy(f->h.cls, c->ctx, false);
             if (st < 0) {
                 drop(f, c);
                 return;
@@ -168,6 +178,8 @@ static void serve(ism_front *f, fconn *c)
         }
         c->sending = true;
         c->head_sent = c->body_sent = 0;
+        if (c->ctx && f->h.busy)
+            f->h.busy(f->h.cls, c->ctx, true);
     }
 }
 
@@ -189,7 +201,16 @@ static void accept_some(ism_front *f)
         }
         fconn *c = f->n < f->h.max_conns ? calloc(1, sizeof *c) : NULL;
         if (!c) {
-            give(f, fd, &peer, len);
+            give(f, fd, &peer, len, NULL);
+            continue;
+        }
+        bool keep = true;
+        c->ctx = f->h.opened ? f->h.opened(f->h.cls, fd, (const struct sockaddr *)&peer, len,
+                                           &keep)
+                             : NULL;
+        if (!keep) { /* refused by the caller's rules: libmicrohttpd answers or closes it */
+            give(f, fd, &peer, len, c->ctx);
+            free(c);
             continue;
         }
         c->fd = fd;
@@ -199,8 +220,8 @@ static void accept_some(ism_front *f)
         struct epoll_event ev = {.events = EPOLLIN | EPOLLOUT | EPOLLRDHUP | EPOLLET,
                                  .data.ptr = c};
         if (epoll_ctl(f->ep, EPOLL_CTL_ADD, fd, &ev) != 0) {
+            give(f, fd, &peer, len, c->ctx);
             free(c);
-            give(f, fd, &peer, len);
             continue;
         }
         c->next = f->head;

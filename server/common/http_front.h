@@ -4,8 +4,8 @@
  * as nginx sends a static file: the header block held back (MSG_MORE), then sendfile, then one
  * push. Every other request goes, with its connection, to the thread's libmicrohttpd daemon
  * (MHD_add_connection), which reads it from the socket as if it had accepted the connection
- * itself; so does a connection idle longer than idle_s (libmicrohttpd and the caller's
- * connection rules then hold it). Why: libmicrohttpd 0.9.75 (and 1.0.1) pushes a file answer's
+ * itself; so does a connection idle longer than idle_s. The caller's connection rules see the
+ * front's connections from their accept through the opened/busy/closed/handing hooks. Why: libmicrohttpd 0.9.75 (and 1.0.1) pushes a file answer's
  * header block as a segment of its own (server/isomeshd/respond.c), which bbr makes
  * expensive. One front per polling thread, used only by it (ism_front_quiesce excepted). */
 #ifndef ISM_HTTP_FRONT_H
@@ -37,6 +37,19 @@ typedef struct ism_front_hooks {
     /* a was sent whole (sent) or its connection failed or stalled (!sent): a->fd and a->ctx
      * are the hook's to release. */
     void (*done)(void *cls, ism_front_answer *a, bool sent);
+    /* The caller's connection rules (optional, all four or none), so that the connections
+     * the front holds count where libmicrohttpd's do. opened: a connection accepted; returns
+     * its context (NULL: none) and sets *keep false when the rules refuse it, which then goes
+     * to libmicrohttpd at once (to be answered or closed there). busy: conn starts (true) or
+     * ends (false) an answer. closed: the front closed conn itself. handing: conn goes to
+     * libmicrohttpd, called with it just before MHD_add_connection and with NULL just after
+     * (the caller adopts conn in libmicrohttpd's connection notification of that call, and
+     * releases it when none came). */
+    void *(*opened)(void *cls, int fd, const struct sockaddr *peer, socklen_t peer_len,
+                    bool *keep);
+    void (*busy)(void *cls, void *conn, bool busy);
+    void (*closed)(void *cls, void *conn);
+    void (*handing)(void *cls, void *conn);
     void *cls;
     unsigned max_conns; /* connections one front holds; beyond, new ones go at once */
     double idle_s;      /* a connection waiting this long for a request goes */

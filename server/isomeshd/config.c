@@ -144,7 +144,8 @@ static const flag FLAGS[] = {
     {"own-sender", K_BOOL, 0, 0, "",
      "cached meshes are sent by the daemon's own sender (header block held back, then "
      "sendfile, as nginx sends a file) where libmicrohttpd would push the header block "
-     "alone (respond.c); other requests, and idle connections, stay libmicrohttpd's",
+     "alone (respond.c); other requests, and idle connections, stay libmicrohttpd's; "
+     "its connections count against the same limits",
      "off", NULL},
     {"max-depth", K_INT, 1, 16, "N", "deepest octree a request may ask for",
      "10", NULL},

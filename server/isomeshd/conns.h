@@ -1,4 +1,5 @@
-/* conns.h — the table of open HTTP connections (libmicrohttpd's socket contexts): which address
+/* conns.h — the table of open HTTP connections (libmicrohttpd's socket contexts, and with
+ * --own-sender those its own sender holds, own_conns.h): which address
  * holds how many, and what each one is doing. It owns three rules libmicrohttpd lacks:
  *
  *  - one connection limit, fair across addresses: below it everyone gets in; at it, a

@@ -23,6 +23,7 @@
 #include "server/isomeshd/client_addr.h"
 #include "server/isomeshd/errors.h"
 #include "server/common/http_loops.h"
+#include "server/isomeshd/own_conns.h"
 #include "server/isomeshd/own_sender.h"
 #include "server/isomeshd/request_log.h"
 #include "server/isomeshd/respond.h"
@@ -386,9 +387,9 @@ static void mhd_log(void *cls, const char *fmt, va_list ap)
  * before, only sooner. */
 #define CONNECTION_MEMORY (16u << 10)
 /* With --own-sender, a connection that has waited this long for its next request goes to
- * libmicrohttpd, whose connection table (conns.h) then holds it: limits, fairness and
- * deadlines see every idle connection after at most this long. A client that asks again
- * within it (a script, a benchmark, a viewer fetching meshes) stays with the own sender. */
+ * libmicrohttpd (its entry in the connection table, conns.h, which counts it from its accept,
+ * goes along: own_conns.h). A client that asks again within it (a script, a benchmark, a
+ * viewer fetching meshes) stays with the own sender. */
 #define OWN_SENDER_IDLE_S 0.5
 /* Kernel queue of connections not yet accepted (a burst of new clients waits here). */
 #define LISTEN_BACKLOG 1024u
@@ -402,6 +403,11 @@ static void on_connection(void *cls, struct MHD_Connection *conn, void **socket_
     if (code == MHD_CONNECTION_NOTIFY_CLOSED) {
         ismd_conns_closed(s->conns, *socket_context);
         *socket_context = NULL;
+        return;
+    }
+    ismd_conn *own = ismd_own_adopt(); /* handed over by the own sender: already counted */
+    if (own) {
+        *socket_context = own;
         return;
     }
     const union MHD_ConnectionInfo *ci = MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CONNECTION_FD);
@@ -552,6 +558,10 @@ bool ismd_http_start(ismd_server *s, int listen_fd)
     ism_front_hooks front = {
         .answer = ismd_own_answer,
         .done = ismd_own_done,
+        .opened = ismd_own_opened,
+        .busy = ismd_own_busy,
+        .closed = ismd_own_closed,
+        .handing = ismd_own_handing,
         .cls = s,
         .max_conns = own / threads + 1,
         .idle_s = OWN_SENDER_IDLE_S,

@@ -16,7 +16,7 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from harness import Daemon, http_request, sphere, wait_until  # noqa: E402
+from harness import Daemon, http_request, parse_metrics, sphere, wait_until  # noqa: E402
 
 SENT = "isomesh_sendfile_responses_total"  # the own sender's answers count here
 BIG = {"preset": "gyroid-ball", "depth": {"max": 6}, "output": {"format": "stl"}}  # 2.9 MB
@@ -168,6 +168,94 @@ class OwnSenderTest(unittest.TestCase):
         s.close()
         self.assertEqual((status, body), (200, self.body))
         self.assertEqual(self.d.metric(SENT), sent)  # libmicrohttpd's now, from memory
+
+
+class CapCounts:
+    """--client-conns and isomesh_connections see the connections the own sender holds as they
+    see libmicrohttpd's (server/isomeshd/own_conns.c): beyond the cap a connection is refused
+    (503), the count is exact, a connection handed to libmicrohttpd is not counted twice, and
+    closed ones leave the count. The same assertions hold without the flag (OWN = False)."""
+    CAP = 4
+    OWN = True
+
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.mkdtemp(prefix="isomeshd_cap_")
+        flags = ("--own-sender",) if cls.OWN else ()
+        cls.d = Daemon("--workers", "1", "--client-conns", str(cls.CAP), *flags,
+                       cache_dir=os.path.join(cls.tmp, "cache")).start()
+        first = cls.d.post("/v1/mesh", sphere(0.77))
+        assert first.status == 200, first.body[:200]
+        cls.body = first.body
+        cls.get = b"GET /v1/meshes/%s.drc HTTP/1.1\r\nHost: t\r\n\r\n" % (
+            first.header("ETag").strip('"').encode())
+        time.sleep(0.2)  # the cache file settles (file_memo.h: 50 ms)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.d.stop()
+        cls.d.cleanup()
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    def metrics(self):
+        """Over one kept-alive connection from another address (under its own cap, counted
+        as one throughout; a connection per scrape would linger in the count)."""
+        if not hasattr(self, "scraper"):
+            self.scraper = socket.create_connection(("127.0.0.1", self.d.port), timeout=30,
+                                                    source_address=("127.0.0.2", 0))
+        self.scraper.sendall(b"GET /metrics HTTP/1.1\r\nHost: t\r\n\r\n")
+        status, _, body, _ = read_answer(self.scraper, b"")
+        self.assertEqual(status, 200)
+        return parse_metrics(body.decode())
+
+    def tearDown(self):
+        if hasattr(self, "scraper"):
+            self.scraper.close()
+
+    def test_the_address_cap_and_the_count_see_every_connection(self):
+        refused = 'isomesh_connections_closed_total{reason="refused"}'
+        wait_until("only the scraper connected", lambda: self.metrics()["isomesh_connections"] == 1)
+        m0 = self.metrics()
+        held = []
+        try:
+            for _ in range(self.CAP):  # each answered, then held (the own sender's: idle < 0.5 s)
+                s = socket.create_connection(("127.0.0.1", self.d.port), timeout=30)
+                s.sendall(self.get)
+                status, _, body, _ = read_answer(s, b"")
+                self.assertEqual((status, body), (200, self.body))
+                held.append(s)
+            extra = socket.create_connection(("127.0.0.1", self.d.port), timeout=30)
+            extra.sendall(self.get)
+            status, head, _, _ = read_answer(extra, b"")
+            self.assertEqual(status, 503, head)  # as libmicrohttpd refuses beyond the cap
+            self.assertIn(b"Retry-After", head)
+            self.assertEqual(extra.recv(1), b"")  # and closed
+            extra.close()
+            m = self.metrics()
+            if self.OWN:  # the held ones were the own sender's answers
+                self.assertEqual(m.get(SENT, 0) - m0.get(SENT, 0), self.CAP)
+            self.assertEqual(m[refused] - m0.get(refused, 0), 1)
+            self.assertEqual(m["isomesh_connections"], self.CAP + 1)  # + the scraper
+            # idle past 0.5 s the own sender's go to libmicrohttpd with their entry
+            time.sleep(1.2)
+            self.assertEqual(self.metrics()["isomesh_connections"], self.CAP + 1)
+            for s in held:  # and still answer
+                s.sendall(self.get)
+                status, _, body, _ = read_answer(s, b"")
+                self.assertEqual((status, body), (200, self.body))
+        finally:
+            for s in held:
+                s.close()
+        wait_until("the closed connections left the count",
+                   lambda: self.metrics()["isomesh_connections"] == 1)
+
+
+class OwnSenderCapTest(CapCounts, unittest.TestCase):
+    OWN = True
+
+
+class LibmicrohttpdCapTest(CapCounts, unittest.TestCase):
+    OWN = False
 
 
 if __name__ == "__main__":
