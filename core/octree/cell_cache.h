@@ -88,6 +88,26 @@ static inline ism_root_entry *ism_root_slot(ism_root_entry *table, uint64_t a, u
     return &table[h & (((uint64_t)1 << ISM_ROOT_MEMO_BITS) - 1)];
 }
 
+/* ... and of root pairs on edges whose ends share a sign (ism_double_root_search): where a
+ * piece found at a CSG kink may be a sliver (octree_build.c edges_see) and where the dual
+ * mesher asks an edge for a hidden pair (dual.c edge_root_pair). Up to four nodes of a
+ * level share an edge, and the answer is a function of the edge's two lattice points and
+ * of f along it, which every node's shortened tape gives bit for bit inside its closed box
+ * (sampler.h): a hit answers what the search would. 2^12 entries of 32 bytes a thread. */
+#define ISM_PAIR_MEMO_BITS 12
+
+typedef struct ism_pair_entry {
+    uint64_t a, b; /* lattice keys of the edge's first and second corner (+1), 0: empty */
+    double t;      /* the search's point between the two roots, or its tangent point */
+    int32_t found; /* the search's answer: 0, 1 or 2 */
+} ism_pair_entry;
+
+static inline ism_pair_entry *ism_pair_slot(ism_pair_entry *table, uint64_t a, uint64_t b)
+{
+    uint64_t h = ism_cache_mix(a * 0x9e3779b97f4a7c15ull ^ b);
+    return &table[h & (((uint64_t)1 << ISM_PAIR_MEMO_BITS) - 1)];
+}
+
 /* ... and of the branch of f's top min/max at node corners (plot_test.c's crease cells:
  * under max_error every node whose tape keeps that min/max labels its 8 corners, 503,096
  * labels for 109,632 nodes on Barth's sextic at 3e-3, while a lattice point is a corner of
@@ -101,10 +121,12 @@ typedef struct ism_label_entry {
     int32_t label; /* 0 or 1: ism_crease_branch's answer (never -1: not kept) */
 } ism_label_entry;
 
-/* A build thread's memos (tables of 2^ISM_ROOT_MEMO_BITS and 2^ISM_LABEL_MEMO_BITS). */
+/* A build thread's memos (tables of 2^ISM_ROOT_MEMO_BITS, 2^ISM_LABEL_MEMO_BITS and
+ * 2^ISM_PAIR_MEMO_BITS entries; all NULL on the scalar reference path). */
 typedef struct ism_node_memo {
     ism_root_entry *roots;
     ism_label_entry *labels;
+    ism_pair_entry *pairs;
 } ism_node_memo;
 
 static inline ism_label_entry *ism_label_slot(ism_label_entry *table, uint64_t key)

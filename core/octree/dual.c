@@ -12,7 +12,6 @@
 #include "core/octree/dual_balls.h"
 #include "core/octree/dual_cert.h"
 #include "core/octree/edge_roots.h"
-#include "core/octree/face_memo.h"
 #include "core/octree/graph_cert.h"
 #include "core/octree/grid.h"
 #include "core/octree/sampler.h"
@@ -167,7 +166,7 @@ typedef struct worker {
     int bits; /* points holds 2^bits entries */
     /* Same-sign edges' root searches (same_sign_edge_clear), made on the first search only
      * (a sphere never searches: no 128 KB to fault in); NULL: none yet, or no memory. */
-    ism_pair_memo *pairs;
+    ism_pair_entry *pairs; /* 2^ISM_PAIR_MEMO_BITS entries (cell_cache.h), or NULL */
     bool pairs_tried;
 } worker;
 
@@ -286,7 +285,7 @@ static int box_faces_clear(dual *d, worker *w, const dnode *n, const corner_view
  * is none. A function of the edge's two lattice points alone (f on the full tape between
  * their coordinates), and up to four nodes of a level share an edge (torus at 1e-2: 432
  * searches of 11.7K instructions each, 5.1M of 68M), so the answer is kept per thread under
- * the ends' lattice keys (face_memo.h): a hit answers what the search would, bit for bit. */
+ * the ends' lattice keys (cell_cache.h ism_pair_entry): a hit answers what the search would, bit for bit. */
 static int edge_root_pair(dual *d, worker *w, const dnode *n, const corner_view *v, int c0,
                           int c1)
 {
@@ -299,10 +298,11 @@ static int edge_root_pair(dual *d, worker *w, const dnode *n, const corner_view 
     uint64_t k0 = ism_lattice_key(q0) + 1, k1 = ism_lattice_key(q1) + 1;
     if (!w->pairs_tried) {
         w->pairs_tried = true;
-        w->pairs = calloc(1, sizeof *w->pairs); /* NULL: every search made */
+        /* NULL: every search made */
+        w->pairs = calloc((size_t)1 << ISM_PAIR_MEMO_BITS, sizeof *w->pairs);
     }
-    ism_pair_entry none, *m = w->pairs ? ism_pair_memo_slot(w->pairs, k0, k1) : &none;
-    if (w->pairs && m->a == k0 && m->b == k1)
+    ism_pair_entry none = {0}, *m = w->pairs ? ism_pair_slot(w->pairs, k0, k1) : &none;
+    if (m->a == k0 && m->b == k1) /* keys are + 1: none never answers */
         return m->found;
     int found = 0;
     double t = 0;

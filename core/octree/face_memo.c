@@ -1,5 +1,4 @@
-/* face_memo.c — one thread's direct-mapped memos of face verdicts and edge root pairs (see
- * face_memo.h). */
+/* face_memo.c — one thread's direct-mapped memo of face verdicts (see face_memo.h). */
 #include "core/octree/face_memo.h"
 
 /* Lattice coordinates take 20 bits (ISM_GRID_MAX_DEPTH 19: at most 2^19); 21 each, and
@@ -41,10 +40,4 @@ void ism_face_memo_put(ism_face_memo *m, uint64_t where, uint32_t what, uint8_t 
     e->where = where;
     e->what = what;
     e->verdict = verdict;
-}
-
-ism_pair_entry *ism_pair_memo_slot(ism_pair_memo *m, uint64_t a, uint64_t b)
-{
-    uint64_t h = (a * 0x9e3779b97f4a7c15u ^ b) * 0xbf58476d1ce4e5b9u;
-    return &m->e[h >> (64 - ISM_PAIR_MEMO_BITS)];
 }

@@ -1,7 +1,8 @@
-/* face_memo.h — one thread's memos of what the hidden-piece search finds on what nodes
- * share (octree_build.c hides_piece): verdicts on faces, and root pairs on edges.
+/* face_memo.h — one thread's memo of what the hidden-piece search finds on what nodes
+ * share (octree_build.c hides_piece): verdicts on faces (root pairs on edges are
+ * cell_cache.h's ism_pair_entry).
  *
- * Faces. A face whose four corners share a sign is searched for an
+ * A face whose four corners share a sign is searched for an
  * island by each of the two nodes of one level beside it; the second finds the first's
  * verdict here. An entry holds the face's place on the lattice and the number of the tape
  * that searched it (leaf_tapes.h: equal numbers, equal code), and the search is a function
@@ -42,25 +43,5 @@ bool ism_face_memo_get(const ism_face_memo *m, uint64_t where, uint32_t what,
                        uint8_t *verdict);
 
 void ism_face_memo_put(ism_face_memo *m, uint64_t where, uint32_t what, uint8_t verdict);
-
-/* Edges. Where the piece found at a kink may be a sliver, the node's edges are asked for a
- * root pair (ism_double_root_search between two corners of one sign), and up to four nodes
- * of a level share an edge. The answer is a function of the edge's two lattice points and
- * of f's values along it, which every node's shortened tape gives bit for bit inside its
- * closed box (sampler.h), so a hit answers what the search would. Entries per thread: */
-#define ISM_PAIR_MEMO_BITS 12
-
-typedef struct ism_pair_entry {
-    uint64_t a, b; /* lattice keys of the edge's first and second corner, + 1; 0: empty */
-    double t;      /* the search's point between the two roots, or its tangent point */
-    int32_t found; /* the search's answer: 0, 1 or 2 */
-} ism_pair_entry;
-
-typedef struct ism_pair_memo {
-    ism_pair_entry e[1u << ISM_PAIR_MEMO_BITS];
-} ism_pair_memo; /* all zero: empty */
-
-/* The entry where the edge from key a to key b (lattice keys + 1) is or would be kept. */
-ism_pair_entry *ism_pair_memo_slot(ism_pair_memo *m, uint64_t a, uint64_t b);
 
 #endif

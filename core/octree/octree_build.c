@@ -63,7 +63,6 @@ typedef struct thread_state {
     ism_leaf_tapes_cache tape_cache; /* this thread's hits in build.leaf_tapes */
     ism_thin_ws thin;         /* the hidden-piece search's scratch */
     ism_face_memo faces;      /* its verdicts on faces, for the node across (face_memo.h) */
-    ism_pair_memo pairs;      /* ... and the root pairs on edges it asked for */
     uint64_t visited, excluded, unresolved;
     uint64_t thin_searched, thin_found, thin_undecided, deep_leaves;
     uint64_t tape_misses;     /* leaves whose shortened tape found no room in leaf_tapes */
@@ -79,6 +78,7 @@ typedef struct build {
     thread_state *threads;
     ism_point_entry *corner_memos; /* the threads' memos, end to end (thread_state.corners) */
     ism_root_entry *root_memos;    /* ... and thread_state.memo's */
+    ism_pair_entry *pair_memos;
     ism_label_entry *label_memos;
     int shortening;
     ism_leaf_tapes leaf_tapes;   /* the leaves' shortened tapes (octree.h) */
@@ -320,11 +320,11 @@ static bool edges_see(const build *b, thread_state *th, const ism_tape *sub,
         if (!ism_segment_rootless(&prm, a, z, k->f[c0], k->f[c1], k->g[c0], k->g[c1]) &&
             ism_segment_may_reach(&th->s, a, z, 0)) {
             /* no memo on the scalar reference path (poly_options.h) */
-            ism_pair_entry none, *m = b->p->scalar_eval
-                                          ? &none
-                                          : ism_pair_memo_slot(&th->pairs, k->key[c0] + 1,
-                                                               k->key[c1] + 1);
-            if (!b->p->scalar_eval && m->a == k->key[c0] + 1 && m->b == k->key[c1] + 1) {
+            ism_pair_entry none = {0}, /* keys are + 1: never a hit */
+                *m = th->memo.pairs ? ism_pair_slot(th->memo.pairs, k->key[c0] + 1,
+                                                    k->key[c1] + 1)
+                                    : &none;
+            if (m->a == k->key[c0] + 1 && m->b == k->key[c1] + 1) {
                 found = m->found;
                 t = m->t;
             } else {
@@ -444,7 +444,7 @@ static uint16_t tape_number(build *b, thread_state *th, const ism_tape *sub, int
  * (r = 1.3) 1,397M -> 1,537M (+10.0%). A face's verdict is kept for the node across it
  * (face_memo.h): 2,027M and 1,514M, meshes the same; only 7.5% / 4% of the faces looked up
  * are found there (the node across is mostly a leaf of another size, or flat). An edge's
- * root pair is kept for the nodes beside it too (ism_pair_memo; after the build's own edge
+ * root pair is kept for the nodes beside it too (cell_cache.h ism_pair_entry; after the build's own edge
  * memos, cell_cache.h: 1,990M -> 1,983M and 1,478M -> 1,459M). The search at kinks is one
  * level deep (thin_search.c). */
 static uint8_t hides_piece(build *b, thread_state *th, const ism_node *nd, const ism_tape *sub,
@@ -716,12 +716,15 @@ static bool init_threads(build *b, int nthreads)
         return false;
     /* the node memos (none on the scalar reference path, poly_options.h) */
     size_t roots = (size_t)1 << ISM_ROOT_MEMO_BITS, labels = (size_t)1 << ISM_LABEL_MEMO_BITS;
+    size_t pairs = (size_t)1 << ISM_PAIR_MEMO_BITS;
     if (!b->p->scalar_eval) {
         b->root_memos = ism_zeroed_alloc(b->p->pool, (size_t)nthreads * roots,
                                          sizeof *b->root_memos, b->p->cost);
         b->label_memos = ism_zeroed_alloc(b->p->pool, (size_t)nthreads * labels,
                                           sizeof *b->label_memos, b->p->cost);
-        if (!b->root_memos || !b->label_memos)
+        b->pair_memos = ism_zeroed_alloc(b->p->pool, (size_t)nthreads * pairs,
+                                         sizeof *b->pair_memos, b->p->cost);
+        if (!b->root_memos || !b->label_memos || !b->pair_memos)
             return false;
     }
     for (int t = 0; t < nthreads; t++) {
@@ -732,6 +735,7 @@ static bool init_threads(build *b, int nthreads)
         if (b->root_memos) {
             th->memo.roots = b->root_memos + (size_t)t * roots;
             th->memo.labels = b->label_memos + (size_t)t * labels;
+            th->memo.pairs = b->pair_memos + (size_t)t * pairs;
         }
         if (!th->s.ws || !ism_thin_ws_init(&th->thin, b->p->tape))
             return false;
@@ -772,6 +776,7 @@ static void free_threads(build *b, int nthreads, ism_octree_build_stats *st)
     free(b->corner_memos);
     free(b->root_memos);
     free(b->label_memos);
+    free(b->pair_memos);
 }
 
 /* The join: where each task's subtree lands in the top array (at[k]: its node 1's place). */
