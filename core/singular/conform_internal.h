@@ -317,14 +317,14 @@ const cf_pinch *cf_pinch_near(const cf_pinch *ends, const cf_polyline *pl, int k
                               double reach);
 /* The curve parameter of q's height along the chart's tangent (within the curve pl). */
 double cf_pinch_param(const cf_pinch *ch, const cf_polyline *pl, const double q[3]);
-/* The runs of loop l whose vertices' feet (curve cid[i], parameter u[i]) lie within reach of
- * one pinch end lose their steps backwards in the chart's sheet parameter (cf_clip_ears on
- * the run); l->v, u, foot and cid are compacted in place. Returns the ears clipped, -1 when
- * out of memory. */
 /* The ring point at fraction t from rim vertex q's foot on the tangent line to q, moved onto
  * f = 0 along the tangent (cf_project's move where that finds no root near). */
 void cf_pinch_ring_point(cf_ctx *c, const cf_pinch *ch, const double q[3], double t,
                          double out[3]);
+/* The runs of loop l whose vertices' feet (curve cid[i], parameter u[i]) lie within reach of
+ * one pinch end lose their steps backwards in the chart's sheet parameter (cf_clip_ears on
+ * the run); l->v, u, foot and cid are compacted in place. Returns the ears clipped, -1 when
+ * out of memory. */
 int cf_pinch_ears(cf_ctx *c, const cf_pinch *ends, const cf_polyline *pl, cf_loop *l,
                   double *u, double *foot, int *cid, double reach, double rho);
 
