@@ -222,11 +222,11 @@ void rm_lock_vertices(rm_pass *p, const ism_remesh_options *o, const uint8_t *on
     free(em.across);
     rm_curvature_memo_close(&memo);
     for (size_t s = 0; s < 2 * r->m->nsegs; s++)
-        r->locked[r->m->seg[s]] = 1, p->slide[r->m->seg[s]] = 0;
+        r->locked[r->m->seg[s]] = RM_PINNED, p->slide[r->m->seg[s]] = 0;
     for (size_t i = 0; i < o->nlocked_points; i++) {
         uint32_t v = nearest_vertex(r, o->locked_points + 3 * i);
         if (v != UINT32_MAX)
-            r->locked[v] = 1, p->slide[v] = 0;
+            r->locked[v] = RM_PINNED, p->slide[v] = 0;
     }
 }
 

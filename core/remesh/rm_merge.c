@@ -8,22 +8,27 @@ static uint32_t slot(const rm_mesh *r, uint32_t v, uint32_t i) { return r->vt[r-
 
 bool rm_merge_find(const rm_mesh *r, uint32_t v, uint32_t w, uint32_t max_degree, rm_merge *g)
 {
+    return !r->locked[v] && rm_merge_find_any(r, v, w, max_degree, g);
+}
+
+bool rm_merge_find_any(const rm_mesh *r, uint32_t v, uint32_t w, uint32_t max_degree,
+                       rm_merge *g)
+{
     uint32_t t[2];
     int n;
     if (max_degree > ISM_RM_MERGE_MAX_DEGREE)
         max_degree = ISM_RM_MERGE_MAX_DEGREE;
-    if (r->locked[v] || r->gone[v] || r->gone[w] || r->count[v] < 3 ||
+    if (r->gone[v] || r->gone[w] || r->count[v] < 3 ||
         r->count[v] > max_degree || !rm_edge_triangles(r, v, w, t, &n))
         return false;
     const uint32_t *tri = r->m->tri;
-    g->v = v, g->w = w, g->t1 = t[0], g->t2 = t[1];
+    g->v = v, g->w = w, g->t1 = t[0], g->t2 = t[1], g->along = false;
     g->c = tri[3 * t[0] + (rm_corner(r->m, t[0], v) + 2) % 3];
     g->d = tri[3 * t[1] + (rm_corner(r->m, t[1], w) + 2) % 3];
     return g->c != g->d && r->count[w] + r->count[v] - 4 <= max_degree;
 }
 
-/* v's neighbours into nb (at most 2 × ISM_RM_MERGE_MAX_DEGREE); returns how many. */
-static int neighbours(const rm_mesh *r, uint32_t v, uint32_t *nb)
+int rm_merge_neighbours(const rm_mesh *r, uint32_t v, uint32_t *nb)
 {
     int n = 0;
     for (uint32_t i = 0; i < r->count[v]; i++) {
@@ -42,7 +47,7 @@ static int neighbours(const rm_mesh *r, uint32_t v, uint32_t *nb)
 bool rm_merge_link_ok(const rm_mesh *r, const rm_merge *g)
 {
     uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE];
-    int n = neighbours(r, g->v, nb);
+    int n = rm_merge_neighbours(r, g->v, nb);
     for (uint32_t i = 0; i < r->count[g->w]; i++) {
         const uint32_t *t = r->m->tri + 3 * slot(r, g->w, i);
         int cd = 0;

@@ -16,12 +16,21 @@
 typedef struct rm_merge {
     uint32_t v, w, t1, t2, c, d;
     double after; /* the caller's score (the new fan's smallest sine) */
+    bool along;   /* the caller's: merged along a crease (rm_collapse.c) */
 } rm_merge;
 
 /* Fills g for merging v into w when vw is an oriented manifold edge, neither is gone, v is
  * not locked, has from 3 to max_degree triangles, and the merged fan has at most max_degree
  * (at most ISM_RM_MERGE_MAX_DEGREE); false otherwise. */
 bool rm_merge_find(const rm_mesh *r, uint32_t v, uint32_t w, uint32_t max_degree, rm_merge *g);
+/* The same whether v is locked or not (a crease vertex merged along its crease: the caller
+ * has checked that the crease allows it). */
+bool rm_merge_find_any(const rm_mesh *r, uint32_t v, uint32_t w, uint32_t max_degree,
+                       rm_merge *g);
+
+/* v's distinct neighbours into nb (room for 2 × ISM_RM_MERGE_MAX_DEGREE, v having at most
+ * ISM_RM_MERGE_MAX_DEGREE triangles); returns how many. */
+int rm_merge_neighbours(const rm_mesh *r, uint32_t v, uint32_t *nb);
 
 /* The link condition: no neighbour of w other than v, c, d is a neighbour of v (counted over
  * every sheet at w), and where v has three triangles, w has none on c and d already. Then

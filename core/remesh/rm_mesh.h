@@ -24,7 +24,8 @@ typedef struct rm_mesh {
     uint32_t *count;          /* triangles in vertex v's slot */
     uint32_t *vt;             /* incident triangle indices */
     size_t nvt, cap_vt;       /* entries of vt handed out to slots, allocated */
-    uint8_t *locked;          /* per vertex: never moved */
+    uint8_t *locked;          /* per vertex: never moved (RM_PINNED: never removed either,
+                                 a given point's vertex or a segment's end) */
     uint8_t *gone;            /* per vertex: removed by a collapse (in no triangle) */
     uint8_t *dead;            /* per triangle: removed by a collapse (in no slot) */
     uint32_t *origin;         /* per triangle: the triangle before the pass it was cut from
@@ -36,6 +37,10 @@ typedef struct rm_mesh {
     uint64_t *locked_edges;   /* sorted keys (rm_edge_key) of edges never flipped */
     size_t nlocked_edges;
 } rm_mesh;
+
+/* A locked vertex's value of r->locked when it may not even be merged along a crease
+ * (rm_collapse.c): a given point's vertex, a segment's end. */
+#define RM_PINNED 2
 
 /* Builds the incidence of m (r zeroed by the caller), with room for extra vertices and
  * 2 × extra triangles more (in m too). False when out of memory. */
