@@ -141,8 +141,11 @@ static void serve(ism_front *f, fconn *c)
             size_t moved = c->head_sent + c->body_sent;
             int st = send_some(c);
             if (st == 0) {
-                if (c->head_sent + c->body_sent != moved || !moved)
-                    c->deadline_ns = after(f->h.stall_s); /* moved, or just started */
+                /* only bytes moved push the deadline back (set where the answer starts): a
+                 * wake-up for bytes arriving must not, or a client trickling them holds an
+                 * answer stalled before its first byte for ever */
+                if (c->head_sent + c->body_sent != moved)
+                    c->deadline_ns = after(f->h.stall_s);
                 return;
             }
             c->sending = false;
@@ -178,6 +181,7 @@ static void serve(ism_front *f, fconn *c)
         }
         c->sending = true;
         c->head_sent = c->body_sent = 0;
+        c->deadline_ns = after(f->h.stall_s);
         if (c->ctx && f->h.busy)
             f->h.busy(f->h.cls, c->ctx, true);
     }

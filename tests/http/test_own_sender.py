@@ -4,8 +4,8 @@ block held back, then sendfile) with the same header block libmicrohttpd writes 
 the Server-Timing durations aside) and the same body; several requests on one connection, also
 pipelined, are answered in order, and one the own sender does not take (HEAD, If-None-Match, an
 unknown header) hands the connection to libmicrohttpd mid-stream without losing a byte; a reader
-that stops reading holds up nobody and is closed after --conn-timeout; an idle connection goes to
-libmicrohttpd's connection table."""
+that stops reading holds up nobody and is closed after --conn-timeout, also when it keeps sending
+bytes; an idle connection goes to libmicrohttpd's connection table."""
 import os
 import re
 import socket
@@ -150,6 +150,43 @@ class OwnSenderTest(unittest.TestCase):
                 timeout=20)
         finally:
             for s in stalled:
+                s.close()
+
+    def test_trickled_bytes_do_not_hold_a_stalled_answer(self):
+        """Bytes arriving while an answer does not move leave its stall deadline alone: pipelined
+        GETs fill the socket (one answer stalls, often before its first byte), then one byte a
+        second comes in and nothing is read; each connection is closed within --conn-timeout
+        (3 s) of its last moved byte, plus slack for the 0.1 s deadline scan and the load."""
+        get = self.get * 400  # 400 answers: far more than the socket buffers hold
+        conns = []
+        try:
+            # where an answer stalls follows the socket buffers' sizes: over these windows
+            # some stall between two answers (the case that was held for ever)
+            for window in (32768, 65536, 100000, 131072, 200000, 262144, 400000, 600000):
+                s = socket.socket()
+                s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, window)
+                s.settimeout(30)
+                s.connect(("127.0.0.1", self.d.port))
+                s.sendall(get)
+                conns.append(s)
+            t0 = time.time()
+            limit = 3 + 4  # --conn-timeout + slack
+
+            def established(s):  # tcp_info's first byte: tcpi_state (1: ESTABLISHED)
+                return s.getsockopt(socket.IPPROTO_TCP, socket.TCP_INFO, 8)[0] == 1
+            while time.time() - t0 < limit and any(established(s) for s in conns):
+                time.sleep(1.0)
+                for s in conns:
+                    if established(s):
+                        try:
+                            s.send(b"X")  # a head that never ends, one byte a second
+                        except OSError:
+                            pass  # closed meanwhile
+            open_ = sum(established(s) for s in conns)
+            self.assertEqual(open_, 0, "%d connections still held after %.1f s" % (
+                open_, time.time() - t0))
+        finally:
+            for s in conns:
                 s.close()
 
     def test_an_idle_connection_goes_to_libmicrohttpd(self):
