@@ -5,12 +5,12 @@
  * arrays and are summed in item order, so the figures never depend on the thread count. */
 #include "core/analysis/accuracy.h"
 #include "core/analysis/blocks.h"
+#include "core/util/parallel.h"
 #include "core/analysis/select.h"
 
 #include <math.h>
 #include <stdlib.h>
 
-#define BLOCK 1024
 #define PERCENTILE 0.99 /* the "p99" figures: 99 of 100 points are at most this far */
 
 typedef struct sample_pass {
@@ -34,8 +34,8 @@ static void centroid_block(void *ctx, ism_eval_ws *ws, size_t block)
 {
     sample_pass *sp = ctx;
     const ism_mesh *m = sp->m;
-    size_t end = (block + 1) * BLOCK < sp->nitems ? (block + 1) * BLOCK : sp->nitems;
-    for (size_t t = block * BLOCK; t < end; t++) {
+    size_t end = ism_block_end(block, ISM_AN_EVAL_BLOCK, sp->nitems);
+    for (size_t t = block * ISM_AN_EVAL_BLOCK; t < end; t++) {
         sp->dist[t] = NAN;
         if (ism_an_tri_collapsed(m->tri, t))
             continue;
@@ -50,8 +50,8 @@ static void centroid_block(void *ctx, ism_eval_ws *ws, size_t block)
 static void midpoint_block(void *ctx, ism_eval_ws *ws, size_t block)
 {
     sample_pass *sp = ctx;
-    size_t end = (block + 1) * BLOCK < sp->nitems ? (block + 1) * BLOCK : sp->nitems;
-    for (size_t e = block * BLOCK; e < end; e++) {
+    size_t end = ism_block_end(block, ISM_AN_EVAL_BLOCK, sp->nitems);
+    for (size_t e = block * ISM_AN_EVAL_BLOCK; e < end; e++) {
         uint32_t lo, hi;
         ism_an_edge_ends(sp->m, sp->et, (uint32_t)e, &lo, &hi);
         const double *a = sp->m->pos + 3 * (size_t)lo, *b = sp->m->pos + 3 * (size_t)hi;
@@ -83,7 +83,8 @@ static bool sample(const ism_mesh *m, const ism_tape *f, const ism_an_edge_table
 {
     sample_pass sp = {m, f, et, threshold, malloc((nitems ? nitems : 1) * sizeof(double)),
                       nitems};
-    bool ok = sp.dist && ism_an_run_blocks(f, threads, (nitems + BLOCK - 1) / BLOCK, fn, &sp);
+    bool ok = sp.dist &&
+              ism_an_run_blocks(f, threads, ism_blocks(nitems, ISM_AN_EVAL_BLOCK), fn, &sp);
     if (ok)
         ism_an_distance_figures(sp.dist, nitems, out);
     free(sp.dist);

@@ -1,4 +1,5 @@
-/* blocks.h — the block-parallel runner (blocks.c) the passes that evaluate f use. */
+/* blocks.h — the block-parallel runner (blocks.c) the passes that evaluate f use, and the
+ * fixed block sizes of the analysis's parallel loops. */
 #ifndef ISM_AN_BLOCKS_H
 #define ISM_AN_BLOCKS_H
 
@@ -6,6 +7,14 @@
 #include <stdbool.h>
 #include "core/expr/expr.h"
 #include "core/eval/eval.h"
+
+/* Items per task of the analysis's parallel loops. Fixed, so what a task writes (its own
+ * slots) never depends on the number of threads; a task is tens of microseconds, far above
+ * what handing it out costs. Triangles per task of the loops over triangles (the edge
+ * table's, the quality measures); vertices or edges per task of the loops that evaluate f
+ * (a few evaluations each, so fewer per task). */
+#define ISM_AN_TRI_BLOCK 4096
+#define ISM_AN_EVAL_BLOCK 1024
 
 /* Runs fn(ctx, ws, block) for every block < nblocks on up to `threads` threads, each with its
  * own workspace for f. Blocks are independent; results must not depend on which thread ran

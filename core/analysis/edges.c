@@ -6,6 +6,7 @@
  * a bucket's sort on (larger vertex, half-edge) makes its order the same whoever filled it;
  * edges numbered per block from prefix sums), so the table is the same on any number. */
 #include "core/analysis/edges.h"
+#include "core/analysis/blocks.h"
 #include "core/util/parallel.h"
 
 #include <stdlib.h>
@@ -64,11 +65,10 @@ static bool sort_bucket(const uint32_t *tri, uint32_t *he, size_t n)
     return true;
 }
 
-/* Work per task of the build's loops: fixed sizes, so the table never depends on the
- * number of threads (it would not anyway: every step below writes a result that is the
- * same whichever thread made it). A few thousand items: a task is tens of microseconds,
- * far above what handing it out costs. */
-#define TRI_BLOCK 4096
+/* Work per task of the build's loops (over triangles: blocks.h's ISM_AN_TRI_BLOCK): fixed
+ * sizes, so the table never depends on the number of threads (it would not anyway: every
+ * step below writes a result that is the same whichever thread made it). A few thousand
+ * items: a task is tens of microseconds, far above what handing it out costs. */
 #define VERT_BLOCK 2048
 #define HE_BLOCK 16384
 
@@ -82,8 +82,6 @@ typedef struct builder {
     int failed;       /* a bucket's sort found no memory */
 } builder;
 
-static size_t blocks_of(size_t n, size_t per) { return (n + per - 1) / per; }
-
 /* Bucket sizes: the half-edges of non-collapsed triangles counted on their smaller vertex
  * (start[v + 1]); the collapsed triangles' half-edges get no edge. */
 static void count_block(void *ctx, size_t blk, int thread)
@@ -91,7 +89,7 @@ static void count_block(void *ctx, size_t blk, int thread)
     (void)thread;
     builder *w = ctx;
     const uint32_t *tri = w->m->tri;
-    size_t lo = blk * TRI_BLOCK, hi = lo + TRI_BLOCK < w->m->ntris ? lo + TRI_BLOCK : w->m->ntris;
+    size_t lo = blk * ISM_AN_TRI_BLOCK, hi = ism_block_end(blk, ISM_AN_TRI_BLOCK, w->m->ntris);
     for (size_t t = lo; t < hi; t++) {
         if (ism_an_tri_collapsed(tri, t)) {
             for (size_t h = 3 * t; h < 3 * t + 3; h++)
@@ -110,7 +108,7 @@ static void fill_block(void *ctx, size_t blk, int thread)
     (void)thread;
     builder *w = ctx;
     const uint32_t *tri = w->m->tri;
-    size_t lo = blk * TRI_BLOCK, hi = lo + TRI_BLOCK < w->m->ntris ? lo + TRI_BLOCK : w->m->ntris;
+    size_t lo = blk * ISM_AN_TRI_BLOCK, hi = ism_block_end(blk, ISM_AN_TRI_BLOCK, w->m->ntris);
     for (size_t t = lo; t < hi; t++)
         if (!ism_an_tri_collapsed(tri, t))
             for (uint32_t h = (uint32_t)(3 * t); h < 3 * t + 3; h++)
@@ -122,8 +120,7 @@ static void sort_block(void *ctx, size_t blk, int thread)
 {
     (void)thread;
     builder *w = ctx;
-    size_t lo = blk * VERT_BLOCK, hi = lo + VERT_BLOCK < w->m->nverts ? lo + VERT_BLOCK
-                                                                      : w->m->nverts;
+    size_t lo = blk * VERT_BLOCK, hi = ism_block_end(blk, VERT_BLOCK, w->m->nverts);
     for (size_t v = lo; v < hi; v++)
         if (!sort_bucket(w->m->tri, w->et->edge_he + w->start[v], w->start[v + 1] - w->start[v]))
             __atomic_store_n(&w->failed, 1, __ATOMIC_RELAXED);
@@ -140,7 +137,7 @@ static void count_runs(void *ctx, size_t blk, int thread)
 {
     (void)thread;
     builder *w = ctx;
-    size_t lo = blk * HE_BLOCK, hi = lo + HE_BLOCK < w->total ? lo + HE_BLOCK : w->total, n = 0;
+    size_t lo = blk * HE_BLOCK, hi = ism_block_end(blk, HE_BLOCK, w->total), n = 0;
     for (size_t i = lo; i < hi; i++)
         n += starts_edge(w->m->tri, w->et->edge_he, i);
     w->runs[blk] = n;
@@ -152,7 +149,7 @@ static void number_runs(void *ctx, size_t blk, int thread)
     (void)thread;
     builder *w = ctx;
     ism_an_edge_table *et = w->et;
-    size_t lo = blk * HE_BLOCK, hi = lo + HE_BLOCK < w->total ? lo + HE_BLOCK : w->total;
+    size_t lo = blk * HE_BLOCK, hi = ism_block_end(blk, HE_BLOCK, w->total);
     uint32_t e = (uint32_t)w->runs[blk] - 1; /* the edge running into the block (wraps at 0) */
     for (size_t i = lo; i < hi; i++) {
         uint32_t h = et->edge_he[i];
@@ -168,7 +165,7 @@ static bool build_table(builder *w, ism_pool *pool)
 {
     const ism_mesh *m = w->m;
     ism_an_edge_table *et = w->et;
-    size_t nv = m->nverts, tblocks = blocks_of(m->ntris, TRI_BLOCK);
+    size_t nv = m->nverts, tblocks = ism_blocks(m->ntris, ISM_AN_TRI_BLOCK);
     memset(w->start, 0, (nv + 1) * sizeof *w->start);
     ism_pool_for(pool, tblocks, count_block, w, NULL);
     for (size_t v = 0; v < nv; v++)
@@ -176,8 +173,8 @@ static bool build_table(builder *w, ism_pool *pool)
     w->total = w->start[nv];
     memcpy(w->cursor, w->start, (nv ? nv : 1) * sizeof *w->cursor);
     ism_pool_for(pool, tblocks, fill_block, w, NULL);
-    ism_pool_for(pool, blocks_of(nv, VERT_BLOCK), sort_block, w, NULL);
-    size_t hblocks = blocks_of(w->total, HE_BLOCK);
+    ism_pool_for(pool, ism_blocks(nv, VERT_BLOCK), sort_block, w, NULL);
+    size_t hblocks = ism_blocks(w->total, HE_BLOCK);
     if (w->failed || !(w->runs = malloc((hblocks ? hblocks : 1) * sizeof *w->runs)))
         return false;
     ism_pool_for(pool, hblocks, count_runs, w, NULL);

@@ -11,6 +11,7 @@
 #include "core/analysis/curvature.h"
 #include "core/analysis/accuracy.h"
 #include "core/analysis/blocks.h"
+#include "core/util/parallel.h"
 #include "core/analysis/select.h"
 #include "core/util/vec3.h"
 
@@ -18,7 +19,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define BLOCK 1024
 #define NEWTON_STALL 1e-6 /* stop Newton where |∇f| fell below this fraction of its start */
 
 typedef struct implicit_pass {
@@ -76,8 +76,8 @@ static void store_curvature(ism_analysis *a, size_t v, const double g[3], const 
 static void vertex_block(void *ctx, ism_eval_ws *ws, size_t block)
 {
     implicit_pass *ip = ctx;
-    size_t end = (block + 1) * BLOCK < ip->m->nverts ? (block + 1) * BLOCK : ip->m->nverts;
-    for (size_t v = block * BLOCK; v < end; v++) {
+    size_t end = ism_block_end(block, ISM_AN_EVAL_BLOCK, ip->m->nverts);
+    for (size_t v = block * ISM_AN_EVAL_BLOCK; v < end; v++) {
         ip->gnorm[v] = NAN;
         if (ip->vf->corners[v] == 0)
             continue;
@@ -186,7 +186,7 @@ bool ism_an_implicit_figures(const ism_mesh *m, const ism_tape *f, const ism_ana
     if (!f || !(o->curvature || o->accuracy))
         return true;
     size_t n = m->nverts ? m->nverts : 1;
-    size_t vblocks = (m->nverts + BLOCK - 1) / BLOCK;
+    size_t vblocks = ism_blocks(m->nverts, ISM_AN_EVAL_BLOCK);
     implicit_pass ip = {.m = m, .f = f, .o = o, .vf = vf, .a = a};
     ip.fval = malloc(n * sizeof *ip.fval);
     ip.gnorm = malloc(n * sizeof *ip.gnorm);

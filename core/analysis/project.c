@@ -7,6 +7,7 @@
 #include "core/analysis/checks.h"
 #include "core/analysis/options.h"
 #include "core/analysis/blocks.h"
+#include "core/util/parallel.h"
 #include "core/analysis/select.h"
 #include "core/util/vec3.h"
 
@@ -14,7 +15,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define BLOCK 1024
 #define CONVERGED_REL 1e-6 /* last Newton step below this fraction of the shortest edge */
 
 enum outcome { KEPT_FEATURE, KEPT_SINGULAR, KEPT_FAR, MOVED };
@@ -50,8 +50,8 @@ static void shortest_edges(const ism_mesh *m, double *shortest)
 static void gnorm_block(void *ctx, ism_eval_ws *ws, size_t block)
 {
     project_pass *pp = ctx;
-    size_t end = (block + 1) * BLOCK < pp->m->nverts ? (block + 1) * BLOCK : pp->m->nverts;
-    for (size_t v = block * BLOCK; v < end; v++) {
+    size_t end = ism_block_end(block, ISM_AN_EVAL_BLOCK, pp->m->nverts);
+    for (size_t v = block * ISM_AN_EVAL_BLOCK; v < end; v++) {
         const double *p = pp->m->pos + 3 * v;
         double g[3];
         ism_eval_gradient(pp->f, ws, p[0], p[1], p[2], g);
@@ -68,7 +68,7 @@ static bool find_threshold(project_pass *pp, const ism_analysis_options *o)
     }
     size_t nv = pp->m->nverts, n = 0;
     pp->gnorm = malloc((nv ? nv : 1) * sizeof *pp->gnorm);
-    if (!pp->gnorm || !ism_an_run_blocks(pp->f, o->threads, (nv + BLOCK - 1) / BLOCK,
+    if (!pp->gnorm || !ism_an_run_blocks(pp->f, o->threads, ism_blocks(nv, ISM_AN_EVAL_BLOCK),
                                          gnorm_block, pp))
         return false;
     for (size_t v = 0; v < nv; v++)
@@ -120,8 +120,8 @@ static enum outcome project_vertex(project_pass *pp, ism_eval_ws *ws, size_t v)
 static void project_block(void *ctx, ism_eval_ws *ws, size_t block)
 {
     project_pass *pp = ctx;
-    size_t end = (block + 1) * BLOCK < pp->m->nverts ? (block + 1) * BLOCK : pp->m->nverts;
-    for (size_t v = block * BLOCK; v < end; v++)
+    size_t end = ism_block_end(block, ISM_AN_EVAL_BLOCK, pp->m->nverts);
+    for (size_t v = block * ISM_AN_EVAL_BLOCK; v < end; v++)
         pp->outcome[v] = (uint8_t)project_vertex(pp, ws, v);
 }
 
@@ -162,7 +162,8 @@ bool ism_analysis_project(ism_mesh *m, const ism_tape *f, const ism_analysis *a,
     bool ok = pp.shortest && pp.outcome && pp.move && find_threshold(&pp, o);
     if (ok) {
         shortest_edges(m, pp.shortest);
-        ok = ism_an_run_blocks(f, o->threads, (m->nverts + BLOCK - 1) / BLOCK, project_block, &pp);
+        ok = ism_an_run_blocks(f, o->threads, ism_blocks(m->nverts, ISM_AN_EVAL_BLOCK),
+                               project_block, &pp);
     }
     if (ok && out)
         tally(&pp, out);

@@ -5,6 +5,7 @@
  * threads; what adds them up runs in triangle order after, so the figures are the same on
  * any number of threads. */
 #include "core/analysis/quality.h"
+#include "core/analysis/blocks.h"
 #include "core/analysis/edges.h"
 #include "core/analysis/select.h"
 #include "core/util/parallel.h"
@@ -104,9 +105,6 @@ static void angle_statistics(ism_analysis *a, float *good, size_t ngood)
     }
 }
 
-/* Triangles per task of the measuring loop (fixed: what a task writes is its own slots). */
-#define TRI_BLOCK 4096
-
 /* Each triangle's measures, made on the threads: half its area, its smallest angle (-1:
  * degenerate) and its aspect ratio. */
 typedef struct measures {
@@ -119,7 +117,7 @@ static void measure_block(void *ctx, size_t blk, int thread)
 {
     (void)thread;
     measures *w = ctx;
-    size_t lo = blk * TRI_BLOCK, hi = lo + TRI_BLOCK < w->m->ntris ? lo + TRI_BLOCK : w->m->ntris;
+    size_t lo = blk * ISM_AN_TRI_BLOCK, hi = ism_block_end(blk, ISM_AN_TRI_BLOCK, w->m->ntris);
     for (size_t t = lo; t < hi; t++) {
         double ratio = 1;
         w->area[t] = 0.5 * measure_triangle(w->m, t, &w->angle[t], &ratio);
@@ -139,7 +137,7 @@ bool ism_an_triangle_quality(const ism_mesh *m, ism_pool *pool, ism_analysis *a)
     bool ok = a->triangle_min_angle && a->vertex_area && good && aspect && w.area && w.angle &&
               w.ratio;
     if (ok) {
-        ism_pool_for(pool, (nt + TRI_BLOCK - 1) / TRI_BLOCK, measure_block, &w, NULL);
+        ism_pool_for(pool, ism_blocks(nt, ISM_AN_TRI_BLOCK), measure_block, &w, NULL);
         /* the sums in triangle order, as one thread makes them */
         size_t ngood = 0;
         a->min_angle = 0;

@@ -185,16 +185,11 @@ typedef struct cover_pass {
     int failed;
 } cover_pass;
 
-static size_t cover_end(size_t blk, size_t n)
-{
-    return (blk + 1) * COVER_BLOCK < n ? (blk + 1) * COVER_BLOCK : n;
-}
-
 static void outcode_block(void *ctx, size_t blk, int thread)
 {
     (void)thread;
     cover_pass *c = ctx;
-    for (size_t v = blk * COVER_BLOCK; v < cover_end(blk, c->m->nverts); v++) {
+    for (size_t v = blk * COVER_BLOCK; v < ism_block_end(blk, COVER_BLOCK, c->m->nverts); v++) {
         const double *p = c->m->pos + 3 * v;
         uint8_t o = 0;
         for (int k = 0; k < 3; k++)
@@ -211,7 +206,7 @@ static void cover_block(void *ctx, size_t blk, int thread)
     (void)thread;
     cover_pass *c = ctx;
     const uint8_t *out = c->out;
-    for (size_t t = blk * COVER_BLOCK; t < cover_end(blk, c->g->base); t++) {
+    for (size_t t = blk * COVER_BLOCK; t < ism_block_end(blk, COVER_BLOCK, c->g->base); t++) {
         const uint32_t *v = c->m->tri + 3 * t;
         if (c->g->cell_of[t] == CF_NONE && !(out[v[0]] & out[v[1]] & out[v[2]]) &&
             !cf_tris_push(&c->found[blk], (uint32_t)t))
@@ -230,8 +225,8 @@ bool cf_tgrid_cover(cf_tgrid *g, const ism_mesh *m, const double lo[3], const do
         c.want[k + 3] = fmax(g->cover[k + 3], hi[k] + ahead);
     }
     g->cover_passes++;
-    size_t vblocks = (m->nverts + COVER_BLOCK - 1) / COVER_BLOCK;
-    size_t tblocks = (g->base + COVER_BLOCK - 1) / COVER_BLOCK;
+    size_t vblocks = ism_blocks(m->nverts, COVER_BLOCK);
+    size_t tblocks = ism_blocks(g->base, COVER_BLOCK);
     c.out = malloc(m->nverts + 1);
     c.found = calloc(tblocks ? tblocks : 1, sizeof *c.found);
     bool ok = c.out && c.found;

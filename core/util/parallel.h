@@ -50,6 +50,16 @@ static inline size_t ism_counts_to_offsets(size_t *v, size_t n)
     return sum;
 }
 
+/* Blocks of `per` items that cover n items (the last one may be short). */
+static inline size_t ism_blocks(size_t n, size_t per) { return (n + per - 1) / per; }
+
+/* Where block blk of `per` items ends among n items: min((blk + 1) * per, n) (it starts at
+ * blk * per). */
+static inline size_t ism_block_end(size_t blk, size_t per, size_t n)
+{
+    return (blk + 1) * per < n ? (blk + 1) * per : n;
+}
+
 /* Number of online processors (at least 1). */
 int ism_cpu_count(void);
 
