@@ -742,10 +742,10 @@ static void gyroid_ball_shape(const ism_mesh *m, double cell, crease_shape *s)
 }
 
 /* Needles beside the crease the pass may leave at the preset's depth, 7, in the lattice /
- * 1e-3 / 0.37-cell boxes: 157 / 164 / 193 measured (340 / 326 / 391 while the crease's
+ * 1e-3 / 0.37-cell boxes: 115 / 135 / 129 measured (340 / 326 / 391 while the crease's
  * vertices, as close as 1/400 of a cell, were never merged into each other: rm_collapse.c's
- * crease merges). */
-static const size_t crease_left[3] = {170, 175, 205};
+ * crease merges; 157 / 164 / 193 while such a merge had to raise its fan's smallest angle). */
+static const size_t crease_left[3] = {125, 145, 140};
 
 static void gyroid_ball_case(const ism_tape *t, const double box[6], int d, int which)
 {
