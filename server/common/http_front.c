@@ -29,6 +29,12 @@
 /* Out of descriptors (or memory) for a new connection: accepting pauses this long (the
  * listening socket stays readable, so retrying at once would spin). */
 #define ACCEPT_PAUSE_NS 100000000LL
+/* Work one connection gets per wake-up, after which it goes back to the end of the queue
+ * (a client reading as fast as loopback delivers would otherwise keep its thread from
+ * epoll_wait, the deadlines and libmicrohttpd's connections): 2 MB of body, the default of
+ * nginx's sendfile_max_chunk for the same loop; 8 answers bound pipelined small ones. */
+#define WAKE_BYTES ((size_t)2 << 20)
+#define WAKE_ANSWERS 8
 
 typedef struct fconn {
     int fd;
@@ -103,14 +109,17 @@ static void give_conn(ism_front *f, fconn *c)
     free(c);
 }
 
-/* 1: a is sent whole (and pushed); 0: the socket is full; -1: the connection failed. */
-static int send_some(fconn *c)
+enum { SENT_WHOLE = 1, SOCKET_FULL = 0, SEND_FAILED = -1, WAKE_SPENT = 2 };
+
+/* Sends what is left of c's answer, at most *budget bytes (taken off it): SENT_WHOLE (and
+ * pushed), SOCKET_FULL, SEND_FAILED, or WAKE_SPENT with the socket still taking bytes. */
+static int send_some(fconn *c, size_t *budget)
 {
     while (c->head_sent < c->a.head_len) {
         ssize_t n = send(c->fd, c->a.head + c->head_sent, c->a.head_len - c->head_sent,
                          MSG_MORE | MSG_NOSIGNAL);
         if (n < 0)
-            return errno == EAGAIN || errno == EWOULDBLOCK ? 0 : -1;
+            return errno == EAGAIN || errno == EWOULDBLOCK ? SOCKET_FULL : SEND_FAILED;
         c->head_sent += (size_t)n;
     }
     if (!c->corked) { /* segments stay full until the push below (kept for the next answers) */
@@ -119,44 +128,64 @@ static int send_some(fconn *c)
         c->corked = true;
     }
     while (c->body_sent < c->a.len) {
+        if (!*budget)
+            return WAKE_SPENT;
+        size_t want = c->a.len - c->body_sent;
         off_t off = (off_t)(c->a.offset + (long long)c->body_sent);
-        ssize_t n = sendfile(c->fd, c->a.fd, &off, c->a.len - c->body_sent);
+        ssize_t n = sendfile(c->fd, c->a.fd, &off, want < *budget ? want : *budget);
         if (n < 0)
-            return errno == EAGAIN || errno == EWOULDBLOCK ? 0 : -1;
+            return errno == EAGAIN || errno == EWOULDBLOCK ? SOCKET_FULL : SEND_FAILED;
         if (n == 0)
-            return -1; /* the file is shorter than promised */
+            return SEND_FAILED; /* the file is shorter than promised */
         c->body_sent += (size_t)n;
+        *budget -= (size_t)n;
     }
     int one = 1; /* pushes the last partial segment; the cork stays */
     setsockopt(c->fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-    return 1;
+    return SENT_WHOLE;
+}
+
+/* Back to the end of the queue: MOD reports a ready socket again, edge-triggered or not
+ * (should it fail, c's deadline still ends it). */
+static void requeue(ism_front *f, fconn *c)
+{
+    struct epoll_event ev = {.events = EPOLLIN | EPOLLOUT | EPOLLRDHUP | EPOLLET, .data.ptr = c};
+    epoll_ctl(f->ep, EPOLL_CTL_MOD, c->fd, &ev);
 }
 
 /* Sends what c has to send, then answers the requests that have arrived, until the socket
- * is full or empty; hands c over or closes it when that is its end. */
+ * is full or empty or this wake-up's share is spent (then c is queued again); hands c over
+ * or closes it when that is its end. */
 static void serve(ism_front *f, fconn *c)
 {
-    for (;;) {
+    size_t budget = WAKE_BYTES;
+    for (unsigned answers = 0;;) {
         if (c->sending) {
             size_t moved = c->head_sent + c->body_sent;
-            int st = send_some(c);
-            if (st == 0) {
+            int st = send_some(c, &budget);
+            if (st == SOCKET_FULL || st == WAKE_SPENT) {
                 /* only bytes moved push the deadline back (set where the answer starts): a
                  * wake-up for bytes arriving must not, or a client trickling them holds an
                  * answer stalled before its first byte for ever */
                 if (c->head_sent + c->body_sent != moved)
                     c->deadline_ns = after(f->h.stall_s);
+                if (st == WAKE_SPENT)
+                    requeue(f, c);
                 return;
             }
             c->sending = false;
-            f->h.done(f->h.cls, &c->a, st > 0);
+            f->h.done(f->h.cls, &c->a, st == SENT_WHOLE);
             if (c->ctx && f->h.busy)
                 f->h.busy(f->h.cls, c->ctx, false);
-            if (st < 0) {
+            if (st == SEND_FAILED) {
                 drop(f, c);
                 return;
             }
             c->deadline_ns = after(f->h.idle_s);
+            if (++answers == WAKE_ANSWERS) {
+                requeue(f, c);
+                return;
+            }
         }
         char buf[HEAD_PEEK];
         ssize_t n = recv(c->fd, buf, sizeof buf, MSG_PEEK);

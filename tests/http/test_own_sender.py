@@ -120,6 +120,35 @@ class OwnSenderTest(unittest.TestCase):
         s.close()
         self.assertEqual(self.d.metric(SENT), before + 3)  # the rest were libmicrohttpd's
 
+    def test_long_pipelines_and_large_answers_arrive_whole(self):
+        """Past a wake-up's share (http_front.c: 8 answers, 2 MB) the connection is queued
+        again: 20 pipelined answers and two 2.9 MB ones arrive whole and in order, all the own
+        sender's. A 4 MB window lets more than 2 MB go in one wake-up."""
+        big = self.d.post("/v1/mesh", BIG)
+        self.assertEqual(big.status, 200)
+        self.assertGreater(len(big.body), 2 << 20)
+        get_big = b"GET /v1/meshes/%s.stl HTTP/1.1\r\nHost: t\r\n\r\n" % (
+            big.header("ETag").strip('"').encode())
+        time.sleep(0.2)  # the file settles (file_memo.h: 50 ms)
+        s = socket.socket()
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
+        s.settimeout(30)
+        s.connect(("127.0.0.1", self.d.port))
+        before = self.d.metric(SENT)
+        s.sendall(self.get * 20 + get_big * 2 + self.get)
+        rest = b""
+        for _ in range(20):
+            status, _, body, rest = read_answer(s, rest)
+            self.assertEqual((status, body), (200, self.body))
+        for _ in range(2):
+            status, _, body, rest = read_answer(s, rest)
+            self.assertEqual(status, 200)
+            self.assertEqual(body, big.body)
+        status, _, body, rest = read_answer(s, rest)
+        self.assertEqual((status, body, rest), (200, self.body, b""))
+        s.close()
+        self.assertEqual(self.d.metric(SENT), before + 23)
+
     def test_a_reader_that_stops_reading_blocks_nobody(self):
         big = self.d.post("/v1/mesh", BIG)
         self.assertEqual(big.status, 200)
