@@ -183,6 +183,10 @@ bool ismd_own_answer(void *cls, const char *head, size_t len, const struct socka
     a->fd = fd;
     a->offset = offset;
     a->len = r->r_body->len;
+    /* sent from the file: holding the blob until done would keep an evicted mesh in memory,
+     * outside the cache's budget, for as long as the reader stalls */
+    ism_blob_unref(r->r_body);
+    r->r_body = NULL;
     a->ctx = r;
     return true;
 }
@@ -193,6 +197,5 @@ void ismd_own_done(void *cls, ism_front_answer *a, bool sent)
     ismd_req *r = a->ctx;
     close(a->fd);
     ismd_request_record(r, sent, NULL);
-    ism_blob_unref(r->r_body);
     free(r);
 }
