@@ -1,6 +1,7 @@
 /* dual_balls.c — the holes, the clip and the apex fans of the dual mesh round isolated
  * singular points (the design and its figure: dual_balls.h). */
 #include "core/octree/dual_balls.h"
+#include "core/util/grow.h"
 #include "core/util/vec3.h"
 
 #include <math.h>
@@ -168,16 +169,8 @@ typedef struct clip {
 /* Appends k records of 3 words (triangles, rim edges) to *a holding *n of them. */
 static bool push(uint32_t **a, size_t *n, size_t *cap, const uint32_t *v, size_t k)
 {
-    if (*n + k > *cap) {
-        size_t c = *cap ? 2 * *cap : 256;
-        while (c < *n + k)
-            c *= 2;
-        uint32_t *g = realloc(*a, 3 * c * sizeof *g);
-        if (!g)
-            return false;
-        *a = g;
-        *cap = c;
-    }
+    if (!ism_grow((void **)a, cap, *n + k, 3 * sizeof **a, 256))
+        return false;
     memcpy(*a + 3 * *n, v, 3 * k * sizeof *v);
     *n += k;
     return true;
@@ -308,7 +301,6 @@ static uint32_t cut_vertex(const clip *c, uint32_t a, uint32_t b)
 static enum ism_fan_status collect_cuts(clip *c)
 {
     ism_mesh *m = c->m;
-    size_t cap = 0;
     for (size_t t = 0; t < m->ntris; t++)
         for (int j = 0; j < 3; j++) {
             uint32_t a = m->tri[3 * t + j], b = m->tri[3 * t + (j + 1) % 3];
@@ -320,13 +312,8 @@ static enum ism_fan_status collect_cuts(clip *c)
                 mark(c, kb);
                 continue;
             }
-            if (c->ncut == cap) {
-                cap = cap ? 2 * cap : 256;
-                uint64_t *g = realloc(c->cut, cap * sizeof *g);
-                if (!g)
-                    return ISM_FAN_NO_MEMORY;
-                c->cut = g;
-            }
+            if (!ism_grow((void **)&c->cut, &c->capcut, c->ncut + 1, sizeof *c->cut, 256))
+                return ISM_FAN_NO_MEMORY;
             c->cut[c->ncut++] = undirected(a, b);
         }
     if (c->marked)
