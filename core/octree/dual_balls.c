@@ -105,13 +105,13 @@ static uint64_t undirected(uint32_t a, uint32_t b)
     return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
 }
 
-/* Is p within a ball's limit? */
-static bool near_a_ball(const ism_dual_ball *b, size_t n, const double p[3])
+/* The first ball whose limit holds p, or n when none does. */
+static size_t limit_ball(const ism_dual_ball *b, size_t n, const double p[3])
 {
-    for (size_t k = 0; k < n; k++)
-        if (ism_sqdist3(p, b[k].p) < b[k].limit * b[k].limit)
-            return true;
-    return false;
+    size_t k = 0;
+    while (k < n && !(ism_sqdist3(p, b[k].p) < b[k].limit * b[k].limit))
+        k++;
+    return k;
 }
 
 /* The mesh's edges with an end within a ball's limit, sorted, into *e (*ne of them); false
@@ -133,7 +133,7 @@ static bool sorted_edges(const ism_mesh *m, const ism_dual_ball *b, size_t n, ed
         return false;
     }
     for (size_t v = 0; v < m->nverts; v++)
-        near[v] = near_a_ball(b, n, m->pos + 3 * v);
+        near[v] = limit_ball(b, n, m->pos + 3 * v) < n;
     for (size_t t = 0; t < m->ntris; t++)
         for (int k = 0; k < 3; k++) {
             uint32_t u = m->tri[3 * t + k], w = m->tri[3 * t + (k + 1) % 3];
@@ -174,12 +174,6 @@ static bool push(uint32_t **a, size_t *n, size_t *cap, const uint32_t *v, size_t
     memcpy(*a + 3 * *n, v, 3 * k * sizeof *v);
     *n += k;
     return true;
-}
-
-/* The ball whose clip sphere holds vertex v (one of the dual mesh's own), or n. */
-static size_t ball_of(const clip *c, uint32_t v)
-{
-    return c->ball[v];
 }
 
 /* c->ball for the dual mesh's vertices; false when out of memory. */
@@ -304,7 +298,7 @@ static enum ism_fan_status collect_cuts(clip *c)
     for (size_t t = 0; t < m->ntris; t++)
         for (int j = 0; j < 3; j++) {
             uint32_t a = m->tri[3 * t + j], b = m->tri[3 * t + (j + 1) % 3];
-            size_t ka = ball_of(c, a), kb = ball_of(c, b);
+            size_t ka = c->ball[a], kb = c->ball[b];
             if (ka == kb)
                 continue;
             if (ka < c->n && kb < c->n) { /* an edge from one ball into another */
@@ -330,12 +324,12 @@ static enum ism_fan_status collect_cuts(clip *c)
         return ISM_FAN_NO_MEMORY;
     for (size_t i = 0; i < u; i++) {
         uint32_t a = (uint32_t)(c->cut[i] >> 32), b = (uint32_t)c->cut[i];
-        size_t ka = ball_of(c, a);
+        size_t ka = c->ball[a];
         double q[3], g[3];
         if (ka < c->n)
             cut_point(c, ka, a, b, q);
         else
-            cut_point(c, ball_of(c, b), b, a, q);
+            cut_point(c, c->ball[b], b, a, q);
         ism_sample_grad(c->s, q, g);
         ism_normalise3(g);
         float nrm[3] = {(float)g[0], (float)g[1], (float)g[2]};
@@ -353,7 +347,7 @@ static enum ism_fan_status clip_triangle(clip *c, size_t t)
     size_t kb[3];
     int in = 0;
     for (int j = 0; j < 3; j++) {
-        kb[j] = ball_of(c, v[j]);
+        kb[j] = c->ball[v[j]];
         in += kb[j] < c->n;
     }
     if (in == 0) /* no edge of it dips into a sphere (settle_radii) */
@@ -392,9 +386,7 @@ static enum ism_fan_status clip_radii(clip *c, const edge_ref *e, size_t ne)
             uint32_t ends[2] = {(uint32_t)(e[i].key >> 32), (uint32_t)e[i].key};
             for (int h = 0; h < 2; h++) {
                 const double *p = c->m->pos + 3 * (size_t)ends[h];
-                size_t k = 0;
-                while (k < c->n && !(ism_sqdist3(p, c->b[k].p) < c->b[k].limit * c->b[k].limit))
-                    k++;
+                size_t k = limit_ball(c->b, c->n, p);
                 if (k == c->n)
                     return ISM_FAN_BAD;
                 c->r1[k] = fmax(c->r1[k], sqrt(ism_sqdist3(p, c->b[k].p)) * (1 + RIM_MARGIN));
