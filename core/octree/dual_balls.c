@@ -558,16 +558,17 @@ enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_du
     uint32_t *order = st == ISM_FAN_OK ? malloc((3 * c.nt + 1) * sizeof *order) : NULL;
     if (st == ISM_FAN_OK && !order)
         st = ISM_FAN_NO_MEMORY;
-    for (int pass = 0; order && pass < 2; pass++)
+    for (int pass = 0; order && pass < 2; pass++) {
         for (size_t t = 0; t < c.nt; t++) {
             const uint32_t *v = c.tri + 3 * t;
             bool whole = v[0] < nv0 && v[1] < nv0 && v[2] < nv0;
             if (whole == (pass == 0))
                 memcpy(order + 3 * placed++, v, 3 * sizeof *v);
         }
+        if (pass == 0)
+            kept = placed;
+    }
     if (order) {
-        for (size_t t = 0; t < c.nt; t++)
-            kept += c.tri[3 * t] < nv0 && c.tri[3 * t + 1] < nv0 && c.tri[3 * t + 2] < nv0;
         if (c.nt) /* none kept: c.tri is NULL (memcpy's is nonnull) */
             memcpy(c.tri, order, 3 * c.nt * sizeof *order);
         free(order);
