@@ -1208,10 +1208,10 @@ static uint64_t tri_key(const dual *d, size_t t)
     return (v[0] | v[1] << 21 | v[2] << 42) + 1;
 }
 
-/* The miss masks of triangles list[0..n) into miss[0..n) (edge_misses, else
- * centroid_misses; 0: within E). Triangles that met E in an earlier round (d->passed) read 0
- * unmeasured; the rest have their edges, then the centroids of those whose edges pass,
- * measured on the pool, and are remembered when they pass. */
+/* The miss masks of triangles list[0..n) (list NULL: triangles 0..n) into miss[0..n)
+ * (edge_misses, else centroid_misses; 0: within E). Triangles that met E in an earlier round
+ * (d->passed) read 0 unmeasured; the rest have their edges, then the centroids of those whose
+ * edges pass, measured on the pool, and are remembered when they pass. */
 static void measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t *miss)
 {
     size_t np = 0, nc = 0;
@@ -1225,7 +1225,7 @@ static void measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t *
         goto done;
     }
     for (size_t k = 0; k < n; k++) {
-        uint32_t t = list[k];
+        uint32_t t = list ? list[k] : (uint32_t)k;
         uint64_t key = tri_key(d, t);
         miss[k] = 0;
         if (key && keyed_get(&d->passed, key))
@@ -1268,17 +1268,12 @@ static size_t mark_misses(dual *d, uint64_t *missed)
 {
     size_t marked = 0;
     *missed = 0;
-    uint32_t *all = malloc((d->nt ? d->nt : 1) * sizeof *all);
     uint8_t *miss = malloc(d->nt ? d->nt : 1);
-    if (!all || !miss) {
+    if (!miss) {
         d->nomem = true;
-        free(all);
-        free(miss);
         return 0;
     }
-    for (size_t t = 0; t < d->nt; t++)
-        all[t] = (uint32_t)t;
-    measure_triangles(d, all, d->nt, miss);
+    measure_triangles(d, NULL, d->nt, miss);
     for (size_t t = 0; t < d->nt && !d->nomem; t++) {
         int m = miss[t];
         if (!m)
@@ -1296,7 +1291,6 @@ static size_t mark_misses(dual *d, uint64_t *missed)
             }
         *missed += !any;
     }
-    free(all);
     free(miss);
     return marked;
 }
