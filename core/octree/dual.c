@@ -517,9 +517,9 @@ static void decline(dual *d, enum ism_dual_reason why)
  * leaf, or inner (to split; bad set when the box cuts the surface). */
 static int leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad)
 {
+    double size = ism_grid_cell_size(&d->g, n->level);
     if (d->nballs) { /* round a singular point: split, or a hole leaf (dual_balls.h) */
-        int hole = ism_dual_balls_node(d->balls, d->nballs, v->p[0], v->p[7],
-                                       ism_grid_cell_size(&d->g, n->level),
+        int hole = ism_dual_balls_node(d->balls, d->nballs, v->p[0], v->p[7], size,
                                        n->level >= d->o->max_depth);
         if (hole == 0 || (hole == 1 && n->level < d->o->min_depth))
             return DN_INNER;
@@ -528,8 +528,7 @@ static int leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad)
     }
     int kind = classify(d, w, n, v);
     if (kind == DN_INNER && d->nballs &&
-        ism_dual_balls_near(d->balls, d->nballs, v->p[0], v->p[7],
-                            ism_grid_cell_size(&d->g, n->level)))
+        ism_dual_balls_near(d->balls, d->nballs, v->p[0], v->p[7], size))
         return DN_HOLE; /* not plain near a point, as small as its hole's leaves (near_point) */
     if (kind == DN_SURF && touches_box(d, n)) {
         int clear = box_faces_clear(d, w, n, v);
