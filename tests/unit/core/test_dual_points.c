@@ -369,20 +369,25 @@ Test(dual_points, kummer_16_declines_for_the_box)
     static const ism_param p16[] = {{"mu2", 2}, {"w", 1}};
     const pf_surface k16 = {kummer4.expr, p16, 2, kummer_lets, 5};
     ism_tape *t = pf_compile(&k16);
-    static const double box[6] = {-3, -3, -3, 3, 3, 3};
-    ism_mesh m;
-    ism_locus l;
-    ism_poly_stats ps;
-    mesh_surface(t, box, 1e-2, true, &m, &l, &ps);
-    size_t nodes = 0;
-    for (size_t i = 0; i < l.npoints; i++)
-        nodes += l.points[i].type == ISM_SING_NODE && l.points[i].cones == 2;
-    cr_expect_eq(nodes, 16, "%zu nodes with 2 cones", nodes);
-    cr_expect_eq(ps.mesher, ISM_MESHER_PRIMAL);
-    cr_expect_eq(ps.dual_declined, ISM_DUAL_WHY_BOX_CUT, "declined for %s",
-                 ism_dual_reason_name(ps.dual_declined));
-    ism_mesh_free(&m);
-    ism_locus_free(&l);
+    static const double base[6] = {-3, -3, -3, 3, 3, 3};
+    for (int which = pf_first_box() - 1; which < 2; which++) {
+        double box[6];
+        pf_sweep_box(base, DEPTH, which, box);
+        ism_mesh m;
+        ism_locus l;
+        ism_poly_stats ps;
+        mesh_surface(t, box, 1e-2, true, &m, &l, &ps);
+        size_t nodes = 0;
+        for (size_t i = 0; i < l.npoints; i++)
+            nodes += l.points[i].type == ISM_SING_NODE && l.points[i].cones == 2;
+        cr_expect_eq(nodes, 16, "box %d: %zu nodes with 2 cones", which, nodes);
+        cr_expect_eq(ps.mesher, ISM_MESHER_PRIMAL, "box %d: mesher %s", which,
+                     ism_mesher_name(ps.mesher));
+        cr_expect_eq(ps.dual_declined, ISM_DUAL_WHY_BOX_CUT, "box %d: declined for %s", which,
+                     ism_dual_reason_name(ps.dual_declined));
+        ism_mesh_free(&m);
+        ism_locus_free(&l);
+    }
     ism_tape_free(t);
 }
 
