@@ -40,6 +40,10 @@
 /* Newton steps moving a cut point onto f = 0 (a cut lies on a chord within E of f = 0:
  * two steps reach far below E; more only where ∇f is small). */
 #define CUT_NEWTON 4
+/* A triangle whose normal makes an angle past 90° with ∇f at its centroid is turned over:
+ * it misses like a triangle beyond E (ism_dual_centroid_within; the dual mesh then splits
+ * its leaves, a fan shrinks its ball). */
+#define TURNED_COS 0.0
 
 void ism_dual_ball_make(ism_dual_ball *b, const double pt[5], const double box[6],
                         double max_error, int shrink)
@@ -423,25 +427,33 @@ static long count_loops(const clip *c, size_t k, const uint32_t *next_of, uint8_
     return loops;
 }
 
+bool ism_dual_centroid_within(ism_sampler *s, const double *p[3], double e)
+{
+    double c[3], u[3], v[3], nrm[3], g[3];
+    for (int a = 0; a < 3; a++) {
+        c[a] = (p[0][a] + p[1][a] + p[2][a]) / 3;
+        u[a] = p[1][a] - p[0][a];
+        v[a] = p[2][a] - p[0][a];
+    }
+    double f = ism_sample_grad(s, c, g), gl = ism_norm3(g);
+    if (!isfinite(f) || !(gl > 0) || !(fabs(f) / gl <= e))
+        return false;
+    nrm[0] = u[1] * v[2] - u[2] * v[1];
+    nrm[1] = u[2] * v[0] - u[0] * v[2];
+    nrm[2] = u[0] * v[1] - u[1] * v[0];
+    return ism_dot3(nrm, g) > TURNED_COS * ism_norm3(nrm) * gl;
+}
+
 /* The triangle meets E as the dual mesh's own do (dual.c): its centroid and edge midpoints
  * within E of f = 0, its normal along ∇f at the centroid. */
 static bool within(ism_sampler *s, const ism_mesh *m, const uint32_t *v, double e)
 {
     const double *p[3] = {m->pos + 3 * (size_t)v[0], m->pos + 3 * (size_t)v[1],
                           m->pos + 3 * (size_t)v[2]};
-    double q[3], g[3], u[3], w[3], nrm[3];
-    for (int a = 0; a < 3; a++) {
-        q[a] = (p[0][a] + p[1][a] + p[2][a]) / 3;
-        u[a] = p[1][a] - p[0][a];
-        w[a] = p[2][a] - p[0][a];
-    }
-    double f = ism_sample_grad(s, q, g), gl = ism_norm3(g);
-    nrm[0] = u[1] * w[2] - u[2] * w[1];
-    nrm[1] = u[2] * w[0] - u[0] * w[2];
-    nrm[2] = u[0] * w[1] - u[1] * w[0];
-    if (!isfinite(f) || !(gl > 0) || !(fabs(f) / gl <= e) || !(ism_dot3(nrm, g) > 0))
+    if (!ism_dual_centroid_within(s, p, e))
         return false;
     for (int j = 0; j < 3; j++) {
+        double q[3];
         for (int a = 0; a < 3; a++)
             q[a] = 0.5 * (p[j][a] + p[(j + 1) % 3][a]);
         if (!(ism_sample_dist(s, q) <= e))

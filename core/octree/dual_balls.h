@@ -67,6 +67,11 @@ enum ism_fan_status {
     ISM_FAN_NO_MEMORY,
 };
 
+/* The centroid of triangle p[0..3) within e of f = 0 (|f| / |∇f| there) and the triangle's
+ * normal not turned over against ∇f there: the centroid half of the measure the dual mesh's
+ * triangles (dual.c) and the fans (ism_dual_balls_fan) meet. */
+bool ism_dual_centroid_within(ism_sampler *s, const double *p[3], double e);
+
 /* Clips the closed-but-for-the-holes mesh m round each ball and fans its rim loops to the
  * ball's point (one vertex per node; nothing for an isolated point); measures the new
  * triangles against E with s. On anything but OK, m is left in an unspecified state (the
