@@ -78,13 +78,13 @@ void ism_an_distance_figures(double *dist, size_t n, ism_an_distances *out)
 }
 
 static bool sample(const ism_mesh *m, const ism_tape *f, const ism_an_edge_table *et,
-                   double threshold, int threads, size_t nitems, ism_an_block_fn fn,
+                   double threshold, ism_pool *pool, size_t nitems, ism_an_block_fn fn,
                    ism_an_distances *out)
 {
     sample_pass sp = {m, f, et, threshold, malloc((nitems ? nitems : 1) * sizeof(double)),
                       nitems};
     bool ok = sp.dist &&
-              ism_an_run_blocks(f, threads, ism_blocks(nitems, ISM_AN_EVAL_BLOCK), fn, &sp);
+              ism_an_run_blocks(f, pool, ism_blocks(nitems, ISM_AN_EVAL_BLOCK), fn, &sp);
     if (ok)
         ism_an_distance_figures(sp.dist, nitems, out);
     free(sp.dist);
@@ -92,12 +92,12 @@ static bool sample(const ism_mesh *m, const ism_tape *f, const ism_an_edge_table
 }
 
 bool ism_an_between_vertices(const ism_mesh *m, const ism_tape *f, const ism_an_edge_table *et,
-                             int threads, ism_analysis *a)
+                             ism_pool *pool, ism_analysis *a)
 {
     ism_an_distances c = {0}, e = {0};
     double th = a->singular_threshold;
-    if (!sample(m, f, et, th, threads, m->ntris, centroid_block, &c) ||
-        !sample(m, f, et, th, threads, et->nedges, midpoint_block, &e))
+    if (!sample(m, f, et, th, pool, m->ntris, centroid_block, &c) ||
+        !sample(m, f, et, th, pool, et->nedges, midpoint_block, &e))
         return false;
     a->max_dist_centroid = c.max;
     a->mean_dist_centroid = c.mean;

@@ -9,6 +9,7 @@
 #include "core/expr/expr.h"
 #include "core/analysis/analysis_types.h"
 #include "core/analysis/edges.h"
+#include "core/util/pool.h"
 
 /* Maximum, mean and 99th percentile of the distances that are not NaN (reorders dist);
  * skipped: how many were NaN. */
@@ -19,8 +20,9 @@ typedef struct ism_an_distances {
 void ism_an_distance_figures(double *dist, size_t n, ism_an_distances *out);
 
 /* Distances at triangle centroids and edge midpoints (after ism_an_implicit_figures, which
- * sets the singular threshold); false when out of memory. */
+ * sets the singular threshold), evaluated on the threads of pool (NULL: the calling thread);
+ * false when out of memory. */
 bool ism_an_between_vertices(const ism_mesh *m, const ism_tape *f, const ism_an_edge_table *et,
-                             int threads, ism_analysis *a);
+                             ism_pool *pool, ism_analysis *a);
 
 #endif

@@ -19,8 +19,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Below this many triangles the passes run on the calling thread: they take less than
- * starting a thread does (tens of microseconds). */
+/* Below this many triangles the passes that do not evaluate f run on the calling thread:
+ * they take less than starting a thread does (tens of microseconds). */
 #define POOL_MIN_TRIANGLES 8192
 
 static void count_collapsed(const ism_mesh *m, ism_analysis *a)
@@ -45,19 +45,21 @@ bool ism_analyse(const ism_mesh *m, const ism_tape *f, const ism_analysis_option
     count_collapsed(m, a);
     ism_an_edge_table et;
     ism_an_vertex_facts vf = {0};
-    /* the passes' threads, made once (the ones that evaluate f run on blocks.c's) */
-    int threads = ism_an_threads(o->threads);
-    ism_pool *pool = threads > 1 && m->ntris >= POOL_MIN_TRIANGLES ? ism_pool_new(threads) : NULL;
+    /* the passes' threads, made once for all of them: worth it for a mesh of many
+     * triangles, or when f is evaluated at more than one block of vertices (a few
+     * evaluations each, far more than the triangle passes' work per item) */
+    bool evaluates = f && (o->curvature || o->accuracy) && m->nverts > ISM_AN_EVAL_BLOCK;
+    ism_pool *pool = ism_an_pool_new(o->threads, m->ntris >= POOL_MIN_TRIANGLES || evaluates);
     bool ok = ism_an_edge_table_build_on(m, pool, &et);
     ok = ok && ism_an_classify_vertices(m, &et, &vf, a) && ism_an_find_curves(m, &et, &vf, a) &&
          ism_an_find_points(m, &vf, a) && ism_an_topology(m, &et, &vf, a) &&
          ism_an_count_duplicates(m, &et, a) && ism_an_triangle_quality(m, pool, a);
-    ism_pool_free(pool);
     free(vf.cone_sets); /* the rest needs only per-vertex facts and the edges */
     vf.cone_sets = NULL;
-    ok = ok && ism_an_implicit_figures(m, f, o, &vf, a);
+    ok = ok && ism_an_implicit_figures(m, f, o, &vf, pool, a);
     if (ok && f && o->accuracy)
-        ok = ism_an_between_vertices(m, f, &et, o->threads, a);
+        ok = ism_an_between_vertices(m, f, &et, pool, a);
+    ism_pool_free(pool);
     ism_an_edge_table_free(&et);
     ism_an_vertex_facts_free(&vf);
     if (!ok) {

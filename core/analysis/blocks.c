@@ -1,26 +1,20 @@
 /* blocks.c — runs independent blocks of analysis work (vertex or triangle ranges that
- * evaluate f) on a few threads, each with its own evaluation workspace, handing out blocks
- * from an atomic counter. Results land in per-block slots, so they never depend on which
- * thread ran what. */
+ * evaluate f) on the threads of the analysis's pool (parallel.h's ism_pool_for), each
+ * thread with its own evaluation workspace. Results land in per-block slots, so they never
+ * depend on which thread ran what. */
 #include "core/analysis/blocks.h"
+#include "core/util/parallel.h"
 
-#include <pthread.h>
-#include <stdatomic.h>
+#include <stdlib.h>
 #include <unistd.h>
 
 #define MAX_THREADS 64
 
-typedef struct block_queue {
+typedef struct block_run {
     ism_an_block_fn fn;
     void *ctx;
-    size_t nblocks;
-    atomic_size_t next;
-} block_queue;
-
-typedef struct worker {
-    block_queue *q;
-    ism_eval_ws *ws;
-} worker;
+    ism_eval_ws **ws; /* per thread of the pool */
+} block_run;
 
 int ism_an_threads(int t)
 {
@@ -31,50 +25,33 @@ int ism_an_threads(int t)
     return t < MAX_THREADS ? t : MAX_THREADS;
 }
 
-static void drain(block_queue *q, ism_eval_ws *ws)
+ism_pool *ism_an_pool_new(int t, bool worth)
 {
-    for (;;) {
-        size_t b = atomic_fetch_add(&q->next, 1);
-        if (b >= q->nblocks)
-            return;
-        q->fn(q->ctx, ws, b);
-    }
+    int threads = ism_an_threads(t);
+    return threads > 1 && worth ? ism_pool_new(threads) : NULL;
 }
 
-static void *worker_main(void *arg)
+static void run_block(void *ctx, size_t block, int thread)
 {
-    worker *w = arg;
-    drain(w->q, w->ws);
-    return NULL;
+    block_run *r = ctx;
+    r->fn(r->ctx, r->ws[thread], block);
 }
 
-bool ism_an_run_blocks(const ism_tape *f, int threads, size_t nblocks, ism_an_block_fn fn,
+bool ism_an_run_blocks(const ism_tape *f, ism_pool *pool, size_t nblocks, ism_an_block_fn fn,
                        void *ctx)
 {
-    block_queue q = {.fn = fn, .ctx = ctx, .nblocks = nblocks};
-    atomic_init(&q.next, 0);
-    int nt = ism_an_threads(threads);
-    if ((size_t)nt > nblocks)
-        nt = nblocks ? (int)nblocks : 1;
-    worker w[MAX_THREADS];
-    pthread_t tid[MAX_THREADS];
-    bool started[MAX_THREADS] = {false};
-    for (int i = 0; i < nt; i++)
-        w[i] = (worker){.q = &q, .ws = ism_eval_ws_new(f)};
-    if (!w[0].ws) {
-        for (int i = 1; i < nt; i++)
-            if (w[i].ws)
-                ism_eval_ws_free(w[i].ws);
-        return false;
+    int nt = ism_pool_threads(pool);
+    ism_eval_ws **ws = calloc((size_t)nt, sizeof *ws);
+    bool ok = ws != NULL;
+    for (int i = 0; ok && i < nt; i++)
+        ok = (ws[i] = ism_eval_ws_new(f)) != NULL;
+    if (ok) {
+        block_run r = {.fn = fn, .ctx = ctx, .ws = ws};
+        ism_pool_for(pool, nblocks, run_block, &r, NULL);
     }
-    for (int i = 1; i < nt; i++)
-        started[i] = w[i].ws && pthread_create(&tid[i], NULL, worker_main, &w[i]) == 0;
-    drain(&q, w[0].ws); /* the calling thread works too, and finishes alone if need be */
-    for (int i = 1; i < nt; i++)
-        if (started[i])
-            pthread_join(tid[i], NULL);
-    for (int i = 0; i < nt; i++)
-        if (w[i].ws)
-            ism_eval_ws_free(w[i].ws);
-    return true;
+    for (int i = 0; ws && i < nt; i++)
+        if (ws[i])
+            ism_eval_ws_free(ws[i]);
+    free(ws);
+    return ok;
 }

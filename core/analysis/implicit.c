@@ -1,7 +1,7 @@
 /* implicit.c — the figures that need f itself: curvature at every vertex (one Hessian
  * evaluation each), the singular flag where ∇f vanishes, the distance estimate |f|/|∇f| at
  * vertices (between vertices: accuracy.c), and the Newton projection distance. The evaluations run
- * in blocks on several threads (blocks.c); per-vertex results go to arrays and per-block
+ * in blocks on the analysis's threads (blocks.c); per-vertex results go to arrays and per-block
  * partial sums are added in block order, so the figures never depend on the thread count.
  *
  * "Vanishing" is relative to the function's own scale: |∇f| <= singular_rel * G where G is
@@ -181,7 +181,7 @@ static bool allocate_outputs(const ism_mesh *m, const ism_analysis_options *o, i
 }
 
 bool ism_an_implicit_figures(const ism_mesh *m, const ism_tape *f, const ism_analysis_options *o,
-                             const ism_an_vertex_facts *vf, ism_analysis *a)
+                             const ism_an_vertex_facts *vf, ism_pool *pool, ism_analysis *a)
 {
     if (!f || !(o->curvature || o->accuracy))
         return true;
@@ -192,7 +192,7 @@ bool ism_an_implicit_figures(const ism_mesh *m, const ism_tape *f, const ism_ana
     ip.gnorm = malloc(n * sizeof *ip.gnorm);
     ip.newton = calloc(n, sizeof *ip.newton);
     bool ok = ip.fval && ip.gnorm && ip.newton && allocate_outputs(m, o, a) &&
-              ism_an_run_blocks(f, o->threads, vblocks, vertex_block, &ip) && gradient_scale(&ip);
+              ism_an_run_blocks(f, pool, vblocks, vertex_block, &ip) && gradient_scale(&ip);
     if (ok)
         vertex_figures(&ip);
     free(ip.fval);

@@ -8,10 +8,12 @@
 #include "core/expr/expr.h"
 #include "core/analysis/analysis_types.h"
 #include "core/analysis/vertices.h"
+#include "core/util/pool.h"
 
-/* Curvature and accuracy from f (needs vertex_area, corners); false when out of memory. */
+/* Curvature and accuracy from f (needs vertex_area, corners), evaluated on the threads of
+ * pool (NULL: the calling thread); false when out of memory. */
 bool ism_an_implicit_figures(const ism_mesh *m, const ism_tape *f, const ism_analysis_options *o,
-                             const ism_an_vertex_facts *vf, ism_analysis *a);
+                             const ism_an_vertex_facts *vf, ism_pool *pool, ism_analysis *a);
 
 /* Clamps to ±1e30 and turns NaN into 0, for float outputs. */
 float ism_an_finite_float(double x);

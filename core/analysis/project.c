@@ -29,6 +29,7 @@ typedef struct project_pass {
     double *gnorm;     /* per vertex, for the scale when the analysis has none */
     uint8_t *outcome;  /* per vertex */
     double *move;      /* per vertex */
+    ism_pool *pool;    /* the evaluations' threads (NULL: the calling thread) */
 } project_pass;
 
 static void shortest_edges(const ism_mesh *m, double *shortest)
@@ -68,7 +69,7 @@ static bool find_threshold(project_pass *pp, const ism_analysis_options *o)
     }
     size_t nv = pp->m->nverts, n = 0;
     pp->gnorm = malloc((nv ? nv : 1) * sizeof *pp->gnorm);
-    if (!pp->gnorm || !ism_an_run_blocks(pp->f, o->threads, ism_blocks(nv, ISM_AN_EVAL_BLOCK),
+    if (!pp->gnorm || !ism_an_run_blocks(pp->f, pp->pool, ism_blocks(nv, ISM_AN_EVAL_BLOCK),
                                          gnorm_block, pp))
         return false;
     for (size_t v = 0; v < nv; v++)
@@ -156,13 +157,15 @@ bool ism_analysis_project(ism_mesh *m, const ism_tape *f, const ism_analysis *a,
         return false;
     size_t n = m->nverts ? m->nverts : 1;
     project_pass pp = {.m = m, .f = f, .a = a, .steps = o->newton_steps};
+    /* threads made once for both loops, when there is more than one block of vertices */
+    pp.pool = ism_an_pool_new(o->threads, m->nverts > ISM_AN_EVAL_BLOCK);
     pp.shortest = malloc(n * sizeof *pp.shortest);
     pp.outcome = malloc(n);
     pp.move = calloc(n, sizeof *pp.move);
     bool ok = pp.shortest && pp.outcome && pp.move && find_threshold(&pp, o);
     if (ok) {
         shortest_edges(m, pp.shortest);
-        ok = ism_an_run_blocks(f, o->threads, ism_blocks(m->nverts, ISM_AN_EVAL_BLOCK),
+        ok = ism_an_run_blocks(f, pp.pool, ism_blocks(m->nverts, ISM_AN_EVAL_BLOCK),
                                project_block, &pp);
     }
     if (ok && out)
@@ -171,5 +174,6 @@ bool ism_analysis_project(ism_mesh *m, const ism_tape *f, const ism_analysis *a,
     free(pp.outcome);
     free(pp.move);
     free(pp.gnorm);
+    ism_pool_free(pp.pool);
     return ok ? true : ism_an_fail(err, "projection: out of memory");
 }
