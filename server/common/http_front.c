@@ -198,8 +198,7 @@ static void serve(ism_front *f, fconn *c)
         const char *end = memmem(buf, (size_t)n, "\r\n\r\n", 4);
         size_t len = end ? (size_t)(end + 4 - buf) : 0;
         if (!end || atomic_load(&f->quiesced) ||
-            !f->h.answer(f->h.cls, buf, len, (const struct sockaddr *)&c->peer, c->peer_len,
-                         &c->a)) {
+            !f->h.answer(f->h.cls, buf, len, c->ctx, &c->a)) {
             give_conn(f, c); /* a head still arriving, or a request not ours */
             return;
         }
@@ -238,8 +237,7 @@ static void accept_some(ism_front *f)
             continue;
         }
         bool keep = true;
-        c->ctx = f->h.opened ? f->h.opened(f->h.cls, fd, (const struct sockaddr *)&peer, len,
-                                           &keep)
+        c->ctx = f->h.opened ? f->h.opened(f->h.cls, fd, (const struct sockaddr *)&peer, &keep)
                              : NULL;
         if (!keep) { /* refused by the caller's rules: libmicrohttpd answers or closes it */
             give(f, fd, &peer, len, c->ctx);

@@ -30,10 +30,9 @@ typedef struct ism_front_answer {
 
 typedef struct ism_front_hooks {
     /* The request head (len bytes, request line and headers up to CRLF CRLF; no body may
-     * follow) from peer: true with *a filled to answer it here, false to leave it (and the
-     * connection) to libmicrohttpd. */
-    bool (*answer)(void *cls, const char *head, size_t len, const struct sockaddr *peer,
-                   socklen_t peer_len, ism_front_answer *a);
+     * follow) on conn (opened's context, NULL without that hook): true with *a filled to
+     * answer it here, false to leave it (and the connection) to libmicrohttpd. */
+    bool (*answer)(void *cls, const char *head, size_t len, void *conn, ism_front_answer *a);
     /* a was sent whole (sent) or its connection failed or stalled (!sent): a->fd and a->ctx
      * are the hook's to release. */
     void (*done)(void *cls, ism_front_answer *a, bool sent);
@@ -45,8 +44,7 @@ typedef struct ism_front_hooks {
      * libmicrohttpd, called with it just before MHD_add_connection and with NULL just after
      * (the caller adopts conn in libmicrohttpd's connection notification of that call, and
      * releases it when none came). */
-    void *(*opened)(void *cls, int fd, const struct sockaddr *peer, socklen_t peer_len,
-                    bool *keep);
+    void *(*opened)(void *cls, int fd, const struct sockaddr *peer, bool *keep);
     void (*busy)(void *cls, void *conn, bool busy);
     void (*closed)(void *cls, void *conn);
     void (*handing)(void *cls, void *conn);

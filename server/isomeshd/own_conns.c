@@ -16,11 +16,9 @@
  * across that call. */
 static _Thread_local ismd_conn *handing_over;
 
-void *ismd_own_opened(void *cls, int fd, const struct sockaddr *peer, socklen_t peer_len,
-                      bool *keep)
+void *ismd_own_opened(void *cls, int fd, const struct sockaddr *peer, bool *keep)
 {
     ismd_server *s = cls;
-    (void)peer_len;
     char addr[64];
     ismd_sockaddr_text(peer, addr, sizeof addr);
     ismd_conn *c = ismd_conns_opened(s->conns, fd, addr);

@@ -11,8 +11,7 @@
 #include "server/isomeshd/conns.h"
 
 /* http_front.h's connection hooks; cls is the ismd_server. */
-void *ismd_own_opened(void *cls, int fd, const struct sockaddr *peer, socklen_t peer_len,
-                      bool *keep);
+void *ismd_own_opened(void *cls, int fd, const struct sockaddr *peer, bool *keep);
 void ismd_own_busy(void *cls, void *conn, bool busy);
 void ismd_own_closed(void *cls, void *conn);
 void ismd_own_handing(void *cls, void *conn);

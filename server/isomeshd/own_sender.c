@@ -19,7 +19,7 @@
 #include "core/util/clock.h"
 #include "proto/request.h"
 #include "server/common/cache_disk.h"
-#include "server/isomeshd/client_addr.h"
+#include "server/isomeshd/conns.h"
 #include "server/isomeshd/request_log.h"
 #include "server/isomeshd/respond.h"
 #include "server/isomeshd/routes.h"
@@ -113,10 +113,8 @@ static void date_line(block *b)
     put(b, line, (size_t)n);
 }
 
-bool ismd_own_answer(void *cls, const char *head, size_t len, const struct sockaddr *peer,
-                     socklen_t peer_len, ism_front_answer *a)
+bool ismd_own_answer(void *cls, const char *head, size_t len, void *conn, ism_front_answer *a)
 {
-    (void)peer_len;
     ismd_server *s = cls;
     const char *end = head + len;
     if (len < PREFIX_LEN || memcmp(head, PREFIX, PREFIX_LEN) != 0 || !s->disk ||
@@ -163,7 +161,8 @@ bool ismd_own_answer(void *cls, const char *head, size_t len, const struct socka
     r->bytes = r->r_body->len;
     snprintf(r->method, sizeof r->method, "GET");
     snprintf(r->path, sizeof r->path, "%.*s", (int)(sp - key + 11), key - 11);
-    ismd_sockaddr_text(peer, r->client, sizeof r->client);
+    const char *peer = ismd_conns_peer(conn); /* formatted once, at accept (own_conns.c) */
+    snprintf(r->client, sizeof r->client, "%s", peer ? peer : "-");
     block b = {a->head, 0, sizeof a->head, false};
     put(&b, "HTTP/1.1 200 OK\r\n", 17);
     date_line(&b);

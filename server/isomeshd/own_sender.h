@@ -7,8 +7,7 @@
 #include "server/isomeshd/http_types.h"
 
 /* http_front.h's answer hook; cls is the ismd_server. */
-bool ismd_own_answer(void *cls, const char *head, size_t len, const struct sockaddr *peer,
-                     socklen_t peer_len, ism_front_answer *a);
+bool ismd_own_answer(void *cls, const char *head, size_t len, void *conn, ism_front_answer *a);
 /* http_front.h's done hook: the log line and metrics, the file and the body released. */
 void ismd_own_done(void *cls, ism_front_answer *a, bool sent);
 

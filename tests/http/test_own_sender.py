@@ -78,11 +78,16 @@ class OwnSenderTest(unittest.TestCase):
         return socket.create_connection(("127.0.0.1", self.d.port), timeout=30)
 
     def test_header_block_and_body_are_libmicrohttpds(self):
-        s = self.connect()
+        s = socket.create_connection(("127.0.0.1", self.d.port), timeout=30,
+                                     source_address=("127.0.0.3", 0))
         before = self.d.metric(SENT)
         s.sendall(self.get)
         status, own_head, own_body, rest = read_answer(s, b"")
         self.assertEqual(self.d.metric(SENT), before + 1)
+        # its log line names the address its connection's entry was opened with
+        wait_until("the own sender's log line", lambda: re.search(
+            r"request method=GET path=%s status=200 .*client=127\.0\.0\.3 .*end=ok" % (
+                re.escape(self.path)), self.d.log()))
         # an unknown header leaves the request to libmicrohttpd (from memory: no sendfile)
         s.sendall(self.get.replace(b"\r\n\r\n", b"\r\nX-Probe: 1\r\n\r\n"))
         status2, mhd_head, mhd_body, rest = read_answer(s, rest)
