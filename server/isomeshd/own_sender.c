@@ -97,19 +97,25 @@ static void add_line(void *ctx, const char *name, const char *value)
 }
 
 /* "Date: Fri, 27 Nov 2026 05:42:40 GMT\r\n" as libmicrohttpd writes it (RFC 9110's IMF-fixdate,
- * whatever the locale). */
+ * whatever the locale). It changes once a second: each polling thread formats it then, not on
+ * every answer (the cached-hit path has no snprintf, as routes_mesh.c's timing_of). */
 static void date_line(block *b)
 {
     static const char days[7][4] = {"Sun", "Mon", "Tue", "Wed", "Thu", "Fri", "Sat"};
     static const char months[12][4] = {"Jan", "Feb", "Mar", "Apr", "May", "Jun",
                                        "Jul", "Aug", "Sep", "Oct", "Nov", "Dec"};
+    static _Thread_local time_t last = (time_t)-1;
+    static _Thread_local char line[64];
+    static _Thread_local int n;
     time_t now = time(NULL);
-    struct tm tm;
-    gmtime_r(&now, &tm);
-    char line[64];
-    int n = snprintf(line, sizeof line, "Date: %s, %02d %s %04d %02d:%02d:%02d GMT\r\n",
+    if (now != last) {
+        struct tm tm;
+        gmtime_r(&now, &tm);
+        n = snprintf(line, sizeof line, "Date: %s, %02d %s %04d %02d:%02d:%02d GMT\r\n",
                      days[tm.tm_wday], tm.tm_mday, months[tm.tm_mon], tm.tm_year + 1900,
                      tm.tm_hour, tm.tm_min, tm.tm_sec);
+        last = now;
+    }
     put(b, line, (size_t)n);
 }
 

@@ -6,6 +6,7 @@ pipelined, are answered in order, and one the own sender does not take (HEAD, If
 unknown header) hands the connection to libmicrohttpd mid-stream without losing a byte; a reader
 that stops reading holds up nobody and is closed after --conn-timeout, also when it keeps sending
 bytes; an idle connection goes to libmicrohttpd's connection table."""
+import email.utils
 import os
 import re
 import socket
@@ -99,6 +100,21 @@ class OwnSenderTest(unittest.TestCase):
         self.assertEqual(strip_varying(own_head), strip_varying(mhd_head))
         self.assertIn(b"Access-Control-Allow-Origin: https://viewer.example", own_head)
         self.assertRegex(own_head, rb"\r\nDate: \w{3}, \d\d \w{3} \d{4} \d\d:\d\d:\d\d GMT\r\n")
+        # the Date line is formatted once a second per polling thread: the clock's, and a
+        # later one a second on (4 connections: whichever threads they land on)
+        def date_of(head):
+            text = re.search(rb"\r\nDate: ([^\r]*)", head).group(1).decode()
+            return email.utils.parsedate_to_datetime(text).timestamp()
+        self.assertLess(abs(date_of(own_head) - time.time()), 5)
+        time.sleep(1.1)
+        for _ in range(4):
+            s = self.connect()
+            s.sendall(self.get)
+            status, later_head, _, _ = read_answer(s, b"")
+            s.close()
+            self.assertGreaterEqual(date_of(later_head) - date_of(own_head), 1,
+                                    (own_head, later_head))
+        self.assertEqual(self.d.metric(SENT), before + 5)
         self.assertTrue(own_head.endswith(b"\r\nContent-Length: %d" % len(self.body)))
         wait_until("the own sender's log line", lambda: re.search(
             r"request method=GET path=%s status=200 bytes=%d .*end=ok" % (
