@@ -411,6 +411,49 @@ static bool empty_proven(worker *w, const dnode *n, corner_view *v)
                          &w->s.n_interval);
 }
 
+/* f >= 0 over node n, whose corners are all >= 0 and one of them, c, exactly 0 (a sheet
+ * through a lattice point, tangent there to a lattice plane as the sphere of radius 1 is at
+ * (1, 0, 0) in the box +-2): with "f >= 0 is outside" the node is empty, but no enclosure
+ * shows it (f is 0 at c, and every bound is pushed an ulp outward, so f's lower bound is
+ * below 0 however tight the form). Taylor's theorem from c instead, in signs: with
+ * w_a = s_a (x − c)_a >= 0 (s_a = +1 when c is on the node's low side along a),
+ * f(x) = f(c) + Σ ∇f(c)_a s_a w_a + ½ Σ_ab s_a s_b H_ab(ξ) w_a w_b, ξ in the node;
+ * each linear term is >= 0 when ∇f(c)_a s_a >= 0, and the quadratic one when every
+ * s_a s_b H_ab's enclosure (m: the node's Taylor model) has its lower bound, minus the
+ * negative parts t_ab (an ulp below 0 where H_ab is 0 at the node's face) beside it, >= 0:
+ * w_a w_b <= (w_a² + w_b²) / 2 gives ½ Σ_a w_a² (H_aa − Σ_{b≠a} t_ab). The sum of
+ * the t_ab is doubled against its own rounding. ∇f(c) is the sampled gradient, taken as
+ * exact as the sampled 0 at c is (corner signs are samples everywhere in this file). */
+static bool touch_empty(const dnode *n, const corner_view *v)
+{
+    if (!v->have_model)
+        return false;
+    const ism_interval *h = v->model.box.h;
+    for (int c = 0; c < 8; c++) {
+        if (n->f[c] != 0)
+            continue;
+        double s[3];
+        bool ok = true;
+        for (int a = 0; a < 3; a++) {
+            s[a] = (c >> a & 1) ? -1.0 : 1.0;
+            ok = ok && v->n[c][a] * s[a] >= 0;
+        }
+        for (int a = 0; a < 3 && ok; a++) {
+            double t = 0;
+            for (int b = 0; b < 3; b++) {
+                ism_interval hab = h[ism_dual_hess_at(a, b)];
+                ok = ok && hab.lo <= hab.hi; /* not NaN */
+                if (b != a)
+                    t += s[a] * s[b] > 0 ? max_of(0, -hab.lo) : max_of(0, hab.hi);
+            }
+            ok = ok && h[ism_dual_hess_at(a, a)].lo >= 2 * t;
+        }
+        if (ok)
+            return true;
+    }
+    return false;
+}
+
 /* One graph along the corner gradients' mean (the direction the sheet in the node faces)
  * wherever f may vanish in the node's sub-boxes (the node's own enclosure failed). */
 static bool graph_on_sub_boxes(worker *w, const corner_view *v)
@@ -454,7 +497,8 @@ static int classify(dual *d, worker *w, dnode *n, corner_view *v)
         if (!v->have_g)
             return DN_INNER; /* a kink in the node */
         if (!mixed) /* empty, or maybe a piece no corner sees */
-            return empty_proven(w, n, v) ? DN_EMPTY : DN_INNER;
+            return empty_proven(w, n, v) || (neg == 0 && touch_empty(n, v)) ? DN_EMPTY
+                                                                           : DN_INNER;
         if (!ism_graph_from_enclosure(&v->g) &&
             !(tighten(w, v) && (ism_graph_from_enclosure(&v->g) || graph_on_sub_boxes(w, v))))
             return DN_INNER;

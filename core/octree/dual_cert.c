@@ -4,13 +4,6 @@
 
 #include <math.h>
 
-/* The Hessian pairs in ism_ivjet's order (xx xy xz yy yz zz). */
-static int hess_at(int a, int b)
-{
-    static const int AT[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
-    return AT[a][b];
-}
-
 static ism_interval meet(ism_interval a, ism_interval b)
 {
     return iv(fmax(a.lo, b.lo), fmin(a.hi, b.hi));
@@ -47,9 +40,9 @@ static ism_interval second_order(const ism_dual_model *m, const ism_interval dx[
     ism_interval v2 = m->at.v;
     for (int a = 0; a < 3; a++) {
         v2 = iv_add(v2, iv_mul(m->at.d[a], dx[a]));
-        v2 = iv_add(v2, iv_mul_c(iv_mul(j->h[hess_at(a, a)], iv_square(dx[a])), 0.5));
+        v2 = iv_add(v2, iv_mul_c(iv_mul(j->h[ism_dual_hess_at(a, a)], iv_square(dx[a])), 0.5));
         for (int b = a + 1; b < 3; b++)
-            v2 = iv_add(v2, iv_mul(j->h[hess_at(a, b)], iv_mul(dx[a], dx[b])));
+            v2 = iv_add(v2, iv_mul(j->h[ism_dual_hess_at(a, b)], iv_mul(dx[a], dx[b])));
     }
     return v2;
 }
@@ -72,7 +65,7 @@ static bool over_dx(const ism_dual_model *m, const ism_interval dx[3], ism_inter
     for (int a = 0; a < 3; a++) {
         ism_interval d = c->d[a];
         for (int b = 0; b < 3; b++)
-            d = iv_add(d, iv_mul(j->h[hess_at(a, b)], dx[b]));
+            d = iv_add(d, iv_mul(j->h[ism_dual_hess_at(a, b)], dx[b]));
         g->d[a] = meet(j->d[a], d);
     }
     ism_interval v1 = c->v;

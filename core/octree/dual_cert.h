@@ -49,6 +49,13 @@ ism_interval ism_dual_second_order(const ism_dual_model *m, const double lo[3],
 bool ism_dual_enclose(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
                       const double hi[3], ism_ivgrad *g, uint64_t *intervals);
 
+/* The Hessian pair (a, b) in ism_ivjet's order (xx xy xz yy yz zz). */
+static inline int ism_dual_hess_at(int a, int b)
+{
+    static const int AT[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+    return AT[a][b];
+}
+
 /* 0 outside the enclosure's value: f has no zero in the box. */
 static inline bool ism_dual_encl_free(const ism_ivgrad *g) { return g->v.lo > 0 || g->v.hi < 0; }
 

@@ -6,7 +6,8 @@
  * at most 1.2 (sphere) or 1.05 (torus) times the count of equilateral triangles whose
  * centroids sag E where the surface bends most (area / (1.299 ρ²), ρ² = 2 E / κ_max),
  * which the primal polygons exceed (at the coarse bound 1e-2: 1.2 and 2.0 times); the mesh
- * is the same bit for bit on 1, 2 and 4 threads.
+ * is the same bit for bit on 1, 2 and 4 threads. A sheet through lattice corners (f exactly
+ * 0 there, tangent to the lattice planes) is meshed dual too.
  * Where the dual mesh cannot apply (a min/max, the box cutting the surface) the mesh is the
  * primal one bit for bit, and the stats name the mesher and the reason. */
 #include <criterion/criterion.h>
@@ -41,6 +42,8 @@ static const double shifts[] = {0, 1e-3 * FINEST, 0.37 * FINEST};
 #define SPHERE_ROOM 1.2
 #define TORUS_ROOM 1.05
 #define COARSE_TORUS_ROOM 2.0
+/* A sheet through lattice corners (sheet_through_lattice_corners): measured there. */
+#define CORNER_ROOM 2.0
 
 /* The mesh of t in box under E, with the dual option or not; the stats must name the mesher
  * `made` and the reason `why` the dual one did not make it (core/octree/mesher.h). */
@@ -90,14 +93,17 @@ static size_t repeated_directed_edges(const ism_mesh *m)
     return rep;
 }
 
-static void check(const pf_surface *s, double (*dist)(const double *), double e, double area,
-                  double kappa_max, long euler, double room)
+/* check() in the cube of half-width `half` and its two shifts (the same fractions of its
+ * own finest cell), from box `first` on. */
+static void check_in(const pf_surface *s, double (*dist)(const double *), double e,
+                     double area, double kappa_max, long euler, double room, double half,
+                     int first)
 {
     ism_tape *t = pf_compile(s);
     double bound = room * area / (EQUILATERAL_AREA * 2 * e / kappa_max);
-    for (size_t i = (size_t)pf_first_box(); i < sizeof shifts / sizeof shifts[0]; i++) {
+    for (size_t i = (size_t)first; i < sizeof shifts / sizeof shifts[0]; i++) {
         double box[6];
-        cube_box(1.5, shifts[i], box);
+        cube_box(half, shifts[i] * half / 1.5, box);
         ism_mesh m;
         run(t, box, e, true, &m, ISM_MESHER_DUAL, ISM_DUAL_WHY_NONE);
         double worst = pf_worst_distance(&m, dist);
@@ -116,6 +122,12 @@ static void check(const pf_surface *s, double (*dist)(const double *), double e,
         ism_mesh_free(&m);
     }
     ism_tape_free(t);
+}
+
+static void check(const pf_surface *s, double (*dist)(const double *), double e, double area,
+                  double kappa_max, long euler, double room)
+{
+    check_in(s, dist, e, area, kappa_max, euler, room, 1.5, pf_first_box());
 }
 
 Test(dual, sphere_within_the_bound_closed_and_small)
@@ -139,6 +151,35 @@ Test(dual, coarse_bound_within_and_small)
     check(&pf_unit_sphere, pf_unit_sphere_dist, 1e-2, 4 * M_PI, 1.0, 2, SPHERE_ROOM);
     check(&pf_ring_torus, pf_ring_torus_dist, 1e-2, 4 * M_PI * M_PI * 1.0 * 0.3, 1 / 0.3, 0,
           COARSE_TORUS_ROOM);
+}
+
+/* A torus of tube radius 1/4 round the unit circle: its outer equator (x² + y² = 25/16)
+ * meets the axes at ±5/4, points of the lattice of the box ±5/2 (the cell of depth 2 is
+ * 5/4 across), where f is exactly 0. */
+static const pf_surface quarter_torus = {"(x^2 + y^2 + z^2 + 1 - 0.0625)^2 - 4*(x^2 + y^2)",
+                                         NULL, 0, NULL, 0};
+
+static double quarter_torus_dist(const double p[3])
+{
+    double ring = sqrt(p[0] * p[0] + p[1] * p[1]) - 1;
+    return fabs(sqrt(ring * ring + p[2] * p[2]) - 0.25);
+}
+
+/* A sheet through lattice corners, tangent there to the lattice planes: the unit sphere in
+ * the box ±2 (the cell of depth 3 is 1/2 across: (±1, 0, 0) and the rest are corners where
+ * f is exactly 0) and the torus above in ±5/2. The nodes outside the sheet beside such a
+ * corner hold f >= 0 with f = 0 at the corner, which no enclosure proves; the dual mesh
+ * took them for features at depth.max (not_plain) until touch_empty (dual.c). Dual,
+ * closed, χ from the genus, within E at every centroid and midpoint — also in the two
+ * shifted boxes (dual before too). Triangles at 1e-2 in the three boxes, times the ideal
+ * of `check`: sphere 840 / 570 / 570, 1.74 / 1.18 / 1.18; torus 1,952 / 1,648 / 1,656,
+ * 1.28 / 1.08 / 1.09 (more on the lattice: not looked into). CORNER_ROOM 2.0 leaves 15%. */
+Test(dual, sheet_through_lattice_corners)
+{
+    check_in(&pf_unit_sphere, pf_unit_sphere_dist, 1e-2, 4 * M_PI, 1.0, 2, CORNER_ROOM, 2.0,
+             0);
+    check_in(&quarter_torus, quarter_torus_dist, 1e-2, 4 * M_PI * M_PI * 0.25, 4.0, 0,
+             CORNER_ROOM, 2.5, 0);
 }
 
 static void same_as_primal(const pf_surface *s, double half, double e, enum ism_dual_reason why)
