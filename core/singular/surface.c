@@ -15,11 +15,40 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The depth's cell: the box's longest side / 2^depth. */
+static double finest_cell(const double box[6], int depth)
+{
+    return ldexp(fmax(box[3] - box[0], fmax(box[4] - box[1], box[5] - box[2])), -depth);
+}
+
+/* Under max_error the singular stage's scale (locus search depth, conformance tube and
+ * balls, the curves' split cells) is the first depth whose cell is at most this many E, not
+ * depth.max, which is then only a safety limit. 4: Klein bottle at E 1e-2 (box 8) gets depth
+ * 8, the mesh depth.max 8 gave (31,834 triangles; depth.max 10 made 42,792, 16 made 605,632
+ * in the tube); on klein, steiner-roman, whitney-umbrella, cross-cap and crossing-spheres at
+ * depth.max 10 in the own, +1e-3 and 0.37-cell boxes the singular report (points, curves,
+ * χ, components, non-manifold points/curves, boundary, certified, artefacts) was identical
+ * to the depth-10 stage's and every centroid/midpoint within E. */
+#define SINGULAR_CELLS_PER_E 4.0
+/* ... and never shallower than the locus search's own default depth (locus.c), at which
+ * every preset's points and curves are found: a coarse E must not make the search miss one. */
+#define SINGULAR_MIN_DEPTH 7
+
+int ism_singular_depth(const ism_poly_options *po)
+{
+    if (!(po->max_error > 0) || po->max_depth <= SINGULAR_MIN_DEPTH)
+        return po->max_depth;
+    int d = SINGULAR_MIN_DEPTH;
+    while (d < po->max_depth && finest_cell(po->box, d) > SINGULAR_CELLS_PER_E * po->max_error)
+        d++;
+    return d;
+}
+
 void ism_locus_options_from_poly(const ism_poly_options *po, ism_locus_options *lo)
 {
     ism_locus_options_default(lo);
     memcpy(lo->box, po->box, sizeof lo->box);
-    lo->max_depth = po->max_depth;
+    lo->max_depth = ism_singular_depth(po);
     lo->threads = po->threads;
     lo->cancel = po->cancel;
     lo->deadline_ms = po->deadline_ms;
@@ -70,12 +99,6 @@ static bool add_segment(ball_list *l, const double a[3], const double b[3], doub
             return false;
     }
     return true;
-}
-
-/* The depth's cell: the box's longest side / 2^depth. */
-static double finest_cell(const double box[6], int depth)
-{
-    return ldexp(fmax(box[3] - box[0], fmax(box[4] - box[1], box[5] - box[2])), -depth);
 }
 
 /* The balls around the locus where hidden pieces are not chased (see ism_poly_options): one
@@ -189,7 +212,7 @@ static size_t curve_balls(const ism_tape *f, ism_eval_ws *ws, ism_locus *l, doub
 static size_t node_balls(const ism_tape *f, ism_eval_ws *ws, ism_locus *l,
                          const ism_poly_options *po, double (*out)[ISM_NODE_BALL_FIELDS])
 {
-    double finest = finest_cell(po->box, po->max_depth);
+    double finest = finest_cell(po->box, ism_singular_depth(po));
     size_t n = 0;
     for (size_t i = 0; i < l->npoints && n < ISM_NODE_BALLS_MAX; i++) {
         const ism_sing_point *p = &l->points[i];

@@ -20,8 +20,12 @@ typedef struct ism_surface_times {
                                                   threads; ism_cpu_ms) */
 } ism_surface_times;
 
-/* The locus options that go with polygoniser options: the same box, depth, threads,
- * cancellation and deadline. */
+/* The depth that sizes the singular stage: depth.max, or under max_error the first depth (not
+ * below 7) whose cell is at most 4 E (surface.c). */
+int ism_singular_depth(const ism_poly_options *po);
+
+/* The locus options that go with polygoniser options: the same box, depth
+ * (ism_singular_depth), threads, cancellation and deadline. */
 void ism_locus_options_from_poly(const ism_poly_options *po, ism_locus_options *lo);
 
 /* Meshes f = 0 in po->box: mesh (initialised by the caller) gets the conforming mesh, locus

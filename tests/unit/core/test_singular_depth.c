@@ -1,0 +1,76 @@
+/* test_singular_depth.c — under an error bound depth.max is only a safety limit for the
+ * singular stage too (core/singular/surface.c ism_singular_depth): the locus search, the
+ * conformance tube and the curves' split cells are sized from E, so the Klein bottle at
+ * E = 1e-2 makes the same mesh with depth.max 8 and 10 (before: 31,834 and 42,792 triangles,
+ * the tube's share growing with depth.max), in the own box and off the lattice, with the
+ * same topology (χ 0, one component, one double curve closed) and within E at centroids and
+ * edge midpoints. */
+#include <criterion/criterion.h>
+#include <string.h>
+#include "core/analysis/analysis.h"
+#include "core/singular/surface.h"
+#include "tests/unit/core/poly_fixture.h"
+
+#define KLEIN "(x^2 + y^2 + z^2 + 2*y - 1)*((x^2 + y^2 + z^2 - 2*y - 1)^2 - 8*z^2) + " \
+              "16*x*z*(x^2 + y^2 + z^2 - 2*y - 1)"
+#define E 1e-2
+
+/* The rule itself: no bound -> depth.max; box 8 at E 1e-2 -> 8 (cell 1/32 <= 4 E), never
+ * below 7 (a coarse E), never above depth.max. */
+Test(singular_depth, from_the_bound)
+{
+    ism_poly_options po;
+    ism_poly_options_default(&po);
+    const double box[6] = {-4, -4, -4, 4, 4, 4};
+    memcpy(po.box, box, sizeof box);
+    po.max_depth = 10;
+    cr_expect_eq(ism_singular_depth(&po), 10, "no bound: depth.max");
+    po.max_error = E;
+    cr_expect_eq(ism_singular_depth(&po), 8);
+    po.max_depth = 16;
+    cr_expect_eq(ism_singular_depth(&po), 8);
+    po.max_error = 1e-3; /* cell <= 4e-3: 8 / 2^11 */
+    cr_expect_eq(ism_singular_depth(&po), 11);
+    po.max_error = 1;
+    cr_expect_eq(ism_singular_depth(&po), 7);
+    po.max_depth = 6;
+    cr_expect_eq(ism_singular_depth(&po), 6);
+}
+
+Test(singular_depth, klein_depth_max_is_only_a_limit)
+{
+    const pf_surface s = {KLEIN, NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double base[6] = {-4, -4, -4, 4, 4, 4};
+    for (int which = pf_first_box() - 1; which < 2; which++) {
+        double box[6];
+        pf_sweep_box(base, 10, which, box);
+        ism_mesh m8, m10;
+        ism_locus l8, l10;
+        pf_run_surface_bounded(t, box, 3, 8, E, &m8, &l8);
+        pf_run_surface_bounded(t, box, 3, 10, E, &m10, &l10);
+        pf_same_mesh(&m8, &m10, "depth.max 8 and 10 under E 1e-2");
+        cr_expect_eq(l10.ncurves, 1, "box %d: %zu curves", which, l10.ncurves);
+        pf_props p;
+        pf_measure(&m10, t, &p);
+        cr_expect_eq(p.euler, 0, "box %d: χ %ld", which, p.euler);
+        cr_expect_eq(p.components, 1, "box %d: %zu components", which, p.components);
+        size_t nm = 0;
+        cr_expect(pf_nm_edges_one_closed_curve(&m10, &nm), "box %d: the double curve", which);
+        ism_analysis_options ao;
+        ism_analysis_options_default(&ao);
+        ao.curvature = false;
+        ao.threads = 1;
+        ism_analysis a;
+        ism_error err;
+        cr_assert(ism_analyse(&m10, t, &ao, &a, &err), "analyse: %s", err.message);
+        cr_expect_leq(a.max_dist_centroid, E, "box %d: centroid %g", which, a.max_dist_centroid);
+        cr_expect_leq(a.max_dist_midpoint, E, "box %d: midpoint %g", which, a.max_dist_midpoint);
+        ism_analysis_free(&a);
+        ism_locus_free(&l8);
+        ism_locus_free(&l10);
+        ism_mesh_free(&m8);
+        ism_mesh_free(&m10);
+    }
+    ism_tape_free(t);
+}
