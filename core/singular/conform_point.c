@@ -36,6 +36,21 @@
  * start (a merge of two sheets' rims is never taken); with no star-shaped cut within that,
  * the start radius is kept. */
 #define STAR_GROW 1.2
+/* NODE_SEEK: a node (certified: the surface passes through it) with other parts of the locus
+ * in the box seeks the mesh round it up to its clearance, not SEEK_CELLS finest cells: under
+ * an error bound the cells near a node are sized by E, not by the finest depth, and the
+ * polygoniser may cap both nappes farther than 8 finest cells from it (Chmutov's quartic at
+ * E = 1e-2, depth 10 at most (cell 0.0023), box ±1.2 moved by 0.37 / -0.23 / 0.41 of a
+ * depth-9 cell: nothing within 0.019 of the node (-1/√2, 0, 1/√2), the node left out).
+ * The first radius that cuts any mesh is kept, so the nearest sheet is taken.
+ *
+ * A node (a cone of two nappes) whose cut finds one rim loop: the polygoniser capped the other
+ * nappe beyond the start radius (its cells sized by the error bound, not by the node). The
+ * ball then grows by SEEK_GROW, up to SEEK_CELLS × the larger of the finest cell and the
+ * loop's mean edge (never past the clearance), until it cuts two loops; with none, the
+ * radius it had is kept. Chmutov's quartic at E = 1e-2 in the box ±1.2 moved by 1e-3: two
+ * of its 12 nodes cut one loop of 4 vertices at radius 0.013, the other nappe capped; at
+ * 0.37 cell off the lattice three (χ 6 and 8 instead of 4). */
 
 static bool in_box(const double box[6], const double p[3], double slack)
 {
@@ -132,6 +147,24 @@ static bool recut(cf_ctx *c, const cf_cutter *cut, ball *b, double r, double cle
     return cut_ball(c, cut, b, clear_r, ls, rm, nrm);
 }
 
+/* For a node whose cut holds fewer than two loops: cuts again at balls SEEK_GROW times larger
+ * up to max_r; the first cut with two loops or more is kept, else the cut at the radius it
+ * started from. False when out of memory. */
+static bool cut_both_nappes(cf_ctx *c, const cf_cutter *cut, ball *b, double clear_r,
+                            double max_r, size_t nt0, size_t nv0, cf_loops *ls, uint32_t **rm,
+                            size_t *nrm)
+{
+    double r0 = b->r;
+    while (!c->stopped && ls->n < 2) {
+        double next = b->r * SEEK_GROW;
+        if (next > max_r)
+            return recut(c, cut, b, r0, clear_r, nt0, nv0, ls, rm, nrm);
+        if (!recut(c, cut, b, next, clear_r, nt0, nv0, ls, rm, nrm))
+            return false;
+    }
+    return true;
+}
+
 /* While the cut's loops step backwards round the point, cuts again at a ball STAR_GROW times
  * larger up to max_r; the first star-shaped cut with as many loops is kept, else the cut at
  * the radius it started from. False when out of memory. */
@@ -175,7 +208,9 @@ bool cf_conform_point(cf_run *r, size_t i)
     uint32_t *rm;
     cf_loops ls;
     double clear_r = RHO_SEPARATION * ism_locus_clearance(r->l, i);
-    double seek_r = fmin(clear_r, SEEK_CELLS * c->cell);
+    double star_r = fmin(clear_r, SEEK_CELLS * c->cell);
+    /* see NODE_SEEK's comment */
+    double seek_r = pt->type == ISM_SING_NODE && isfinite(clear_r) ? clear_r : star_r;
     for (;;) {
         /* a lone point keeps its ball's radius (see SEEK_GROW's comment) */
         if (!cut_ball(c, &cut, &b, clear_r, &ls, &rm, &nrm))
@@ -192,7 +227,12 @@ bool cf_conform_point(cf_run *r, size_t i)
         cf_loops_free(&ls);
         b.r *= SEEK_GROW;
     }
-    if (ls.n > 0 && !cut_star_shaped(c, &cut, &b, clear_r, seek_r, nt0, nv0, &ls, &rm, &nrm))
+    if (ls.n == 1 && pt->type == ISM_SING_NODE) { /* see NODE_SEEK's comment */
+        double both_r = fmin(clear_r, SEEK_CELLS * fmax(c->cell, cf_loop_mean_edge(c, &ls.l[0])));
+        if (!cut_both_nappes(c, &cut, &b, clear_r, both_r, nt0, nv0, &ls, &rm, &nrm))
+            return false;
+    }
+    if (ls.n > 0 && !cut_star_shaped(c, &cut, &b, clear_r, star_r, nt0, nv0, &ls, &rm, &nrm))
         return false;
     if (c->stopped) {
         c->st->items_stopped++;

@@ -8,7 +8,9 @@
  *   centroid and edge midpoint within E of f = 0 (Newton projection in this file).
  * - the spindle torus (R = 1/2, r = 1; its two nodes are quadratic cones): the same, with
  *   closed-form distances.
- * - Chmutov's quartic (12 nodes joining 8 lobes): χ 4 = 8 × 2 − 12, 12 two-cone vertices.
+ * - Chmutov's quartic (12 nodes joining 8 lobes): χ 4 = 8 × 2 − 12, 12 two-cone vertices;
+ *   the same from the primal path and its conformance pass (--no-dual, depth 10 at most);
+ *   Cayley's cubic there too (4 nodes, χ 2).
  * - a sphere with an isolated point beside it (r² ((x - 1)² + y² + z² - 1/4): definite
  *   Hessian at the origin): the dual mesh, no vertex at the point (the primal path puts
  *   none either), one closed piece with χ 2, closed-form distances at centroids and
@@ -41,12 +43,14 @@ static const pf_surface kummer4 = {"(x^2 + y^2 + z^2 - mu2)^2 - lambda*p*q*r*s",
 static const pf_surface acnode_sphere = {"(x^2 + y^2 + z^2)*((x - 1)^2 + y^2 + z^2 - 0.25)",
                                          NULL, 0, NULL, 0};
 
-/* The service's meshing of t in box under E, the dual mesher allowed or not. */
-static void mesh_surface_on(const ism_tape *t, const double box[6], double e, bool dual,
-                            int threads, ism_mesh *m, ism_locus *l, ism_poly_stats *ps)
+/* The service's meshing of t in box under E down to depth dmax at most, the dual mesher
+ * allowed or not. */
+static void mesh_surface_to(const ism_tape *t, const double box[6], double e, bool dual,
+                            int threads, int dmax, ism_mesh *m, ism_locus *l,
+                            ism_poly_stats *ps)
 {
     ism_poly_options o;
-    pf_options(&o, box, 3, DEPTH);
+    pf_options(&o, box, 3, dmax);
     o.max_error = e;
     o.dual = dual;
     o.threads = threads;
@@ -57,6 +61,13 @@ static void mesh_surface_on(const ism_tape *t, const double box[6], double e, bo
     ism_error err;
     cr_assert_eq(ism_mesh_surface(t, &o, m, l, ps, &cs, &times, &err), ISM_POLY_OK, "%s",
                  err.message);
+}
+
+/* ... down to DEPTH. */
+static void mesh_surface_on(const ism_tape *t, const double box[6], double e, bool dual,
+                            int threads, ism_mesh *m, ism_locus *l, ism_poly_stats *ps)
+{
+    mesh_surface_to(t, box, e, dual, threads, DEPTH, m, l, ps);
 }
 
 /* ... on one thread. */
@@ -141,29 +152,38 @@ static void nm_vertices(const ism_mesh *m, const ism_locus *l, size_t *nm, size_
     }
 }
 
-/* The dual mesh of t in box under e round `nodes` nodes, checked: made by the dual mesher,
- * closed, the locus's certified nodes `nodes` with 2 cones each (and where `at` says, when
- * given), exactly `nodes` non-manifold vertices, each at a node and joining 2 cones, every
- * centroid and midpoint within e (dist, or Newton on t when NULL), none facing against ∇f.
- * Its measures in *p; m and l freed. */
-static void expect_fanned(const ism_tape *t, const double box[6], double e, size_t nodes,
-                          bool (*at)(const double *), double (*dist)(const double *),
-                          int which, pf_props *p)
+/* How expect_joined meshes: by the dual mesher (else the primal path and its conformance
+ * pass); a surface the box cuts (open edges allowed). */
+#define JOIN_DUAL 1
+#define JOIN_OPEN 2
+
+/* The mesh of t in box under e round `nodes` nodes, checked: made by the dual mesher (or the
+ * primal path with its conformance pass without JOIN_DUAL in how), down to depth dmax at
+ * most, closed (unless JOIN_OPEN), the locus's certified nodes `nodes` with 2 cones each
+ * (and where `at` says, when given), exactly `nodes` non-manifold vertices, each at a node
+ * and joining 2 cones, every centroid and midpoint within e (dist, or Newton on t when
+ * NULL), none facing against ∇f. Its measures in *p; m and l freed. */
+static void expect_joined(const ism_tape *t, const double box[6], double e, int how,
+                          int dmax, size_t nodes, bool (*at)(const double *),
+                          double (*dist)(const double *), int which, pf_props *p)
 {
     ism_mesh m;
     ism_locus l;
     ism_poly_stats ps;
-    mesh_surface(t, box, e, true, &m, &l, &ps);
-    cr_expect_eq(ps.mesher, ISM_MESHER_DUAL, "box %d E %g: mesher %s (%s)", which, e,
-                 ism_mesher_name(ps.mesher), ism_dual_reason_name(ps.dual_declined));
+    bool dual = how & JOIN_DUAL;
+    mesh_surface_to(t, box, e, dual, 1, dmax, &m, &l, &ps);
+    cr_expect_eq(ps.mesher, dual ? ISM_MESHER_DUAL : ISM_MESHER_PRIMAL, "box %d E %g: mesher "
+                 "%s (%s)", which, e, ism_mesher_name(ps.mesher),
+                 ism_dual_reason_name(ps.dual_declined));
     size_t found = 0;
     for (size_t i = 0; i < l.npoints; i++)
         found += l.points[i].type == ISM_SING_NODE && l.points[i].certified &&
                  l.points[i].cones == 2 && (!at || at(l.points[i].p));
     cr_expect_eq(found, nodes, "box %d E %g: %zu nodes with 2 cones", which, e, found);
     pf_measure(&m, t, p);
-    cr_expect_eq(p->boundary_edges + p->nonmanifold_edges, 0, "box %d E %g: %zu open, %zu "
-                 "non-manifold edges", which, e, p->boundary_edges, p->nonmanifold_edges);
+    size_t open = how & JOIN_OPEN ? 0 : p->boundary_edges;
+    cr_expect_eq(open + p->nonmanifold_edges, 0, "box %d E %g: %zu open, %zu non-manifold "
+                 "edges", which, e, p->boundary_edges, p->nonmanifold_edges);
     size_t nm, on, cones, turned;
     nm_vertices(&m, &l, &nm, &on, &cones);
     cr_expect(nm == nodes && on == nodes && cones == 2, "box %d E %g: %zu non-manifold "
@@ -173,6 +193,14 @@ static void expect_fanned(const ism_tape *t, const double box[6], double e, size
     cr_expect_eq(turned, 0, "box %d E %g: %zu triangles against ∇f", which, e, turned);
     ism_mesh_free(&m);
     ism_locus_free(&l);
+}
+
+/* expect_joined on the dual mesher's mesh. */
+static void expect_fanned(const ism_tape *t, const double box[6], double e, size_t nodes,
+                          bool (*at)(const double *), double (*dist)(const double *),
+                          int which, pf_props *p)
+{
+    expect_joined(t, box, e, JOIN_DUAL, DEPTH, nodes, at, dist, which, p);
 }
 
 /* χ and pieces (pf_measure) of the primal path's mesh of t in box under e. */
@@ -302,27 +330,70 @@ static bool chmutov_node(const double *q)
     return zero == 1 && half == 2;
 }
 
-/* Chmutov's quartic T4(x) + T4(y) + T4(z) + 1 = 0: 12 real nodes (one coordinate 0, two at
- * ±1/√2), where its 8 lobes (one per octant) touch pairwise across the coordinate planes:
- * 12 non-manifold vertices with 2 cones each, χ = 8 × 2 − 12 = 4, one piece through the
- * vertices (pf_measure joins pieces at shared vertices) — in all three boxes, where the
- * primal path at 1e-2 reports χ 6 and 8 with 10 and 8 non-manifold points in the two boxes
- * off the lattice (measured at 9c8ed1b; not asserted here). */
-Test(dual_points, chmutov_twelve_nodes_eight_lobes)
+/* expect_joined(how, dmax, nodes, at) on surface sf in the cube ±half at E 1e-2 in all three
+ * boxes, and its χ `euler` and one piece through the vertices (pf_measure joins pieces at
+ * shared vertices). */
+static void joined_in_three_boxes(const pf_surface *sf, double half, int how, int dmax,
+                                  size_t nodes, bool (*at)(const double *), long euler)
 {
-    static const pf_surface chmutov = {"8*(x^4 + y^4 + z^4) - 8*(x^2 + y^2 + z^2) + 4", NULL,
-                                       0, NULL, 0};
-    ism_tape *t = pf_compile(&chmutov);
-    static const double base[6] = {-1.2, -1.2, -1.2, 1.2, 1.2, 1.2};
+    ism_tape *t = pf_compile(sf);
+    const double base[6] = {-half, -half, -half, half, half, half};
     for (int which = pf_first_box() - 1; which < 2; which++) {
         double box[6];
         pf_sweep_box(base, DEPTH, which, box);
         pf_props p;
-        expect_fanned(t, box, 1e-2, 12, chmutov_node, NULL, which, &p);
-        cr_expect_eq(p.euler, 4, "box %d: χ %ld", which, p.euler);
+        expect_joined(t, box, 1e-2, how, dmax, nodes, at, NULL, which, &p);
+        cr_expect_eq(p.euler, euler, "box %d: χ %ld", which, p.euler);
         cr_expect_eq(p.components, 1, "box %d: %zu pieces", which, p.components);
     }
     ism_tape_free(t);
+}
+
+/* Chmutov's quartic T4(x) + T4(y) + T4(z) + 1 = 0: 12 real nodes (one coordinate 0, two at
+ * ±1/√2), where its 8 lobes (one per octant) touch pairwise across the coordinate planes:
+ * 12 non-manifold vertices with 2 cones each, χ = 8 × 2 − 12 = 4, one piece through the
+ * vertices — in all three boxes, by the dual mesher. */
+static const pf_surface chmutov = {"8*(x^4 + y^4 + z^4) - 8*(x^2 + y^2 + z^2) + 4", NULL, 0,
+                                   NULL, 0};
+
+Test(dual_points, chmutov_twelve_nodes_eight_lobes)
+{
+    joined_in_three_boxes(&chmutov, 1.2, JOIN_DUAL, DEPTH, 12, chmutov_node, 4);
+}
+
+/* The same on the primal path (--no-dual), depth 10 at most (the CLI's limit under a bound):
+ * its conformance pass cuts a ball round each node and fans every rim loop to one vertex
+ * there. Under the error bound the cells near a node are sized by E, not by the finest
+ * depth, and off the lattice the polygoniser capped one nappe (or both) farther than the
+ * 8 finest cells the ball looked within: χ 6 and 8 with 10 and 8 non-manifold vertices in
+ * the +1e-3 and 0.37-cell boxes before (depth 9 happened to pass: its cells are twice as
+ * wide). The ball now seeks the mesh up to the node's clearance and grows until it cuts
+ * both nappes. */
+Test(dual_points, chmutov_primal_path_joins_twelve_nodes)
+{
+    joined_in_three_boxes(&chmutov, 1.2, 0, DEPTH + 1, 12, chmutov_node, 4);
+}
+
+/* A node of Cayley's cubic 4 (x² + y² + z²) + 16 xyz − 1: every coordinate ±1/2, their
+ * product −1/8 (there f = 4 · 3/4 − 2 − 1 = 0 and ∂f/∂x = 8x + 16yz = ±4 ∓ 4 = 0). */
+static bool cayley_node(const double *q)
+{
+    bool halves = true;
+    for (int a = 0; a < 3; a++)
+        halves = halves && fabs(fabs(q[a]) - 0.5) < 1e-9;
+    return halves && q[0] * q[1] * q[2] < 0;
+}
+
+/* Cayley's nodal cubic in ±1.3 on the primal path, E 1e-2, depth 10 at most: its 4 nodes join
+ * the central piece (a sphere through them) to 4 funnels that leave the box (4 disks), one
+ * cone each: χ = 2 + 4 − 4 = 2, exactly 4 non-manifold vertices with 2 cones, no
+ * non-manifold edge, one piece through the vertices. Before the node's ball sought its mesh
+ * past 8 finest cells, the box as given gave 4 nodes with one cone (χ 6, no non-manifold
+ * vertex) and the shifted boxes 3 of them (χ 5). */
+Test(dual_points, cayley_primal_path_joins_four_nodes)
+{
+    static const pf_surface cayley = {"4*(x^2 + y^2 + z^2) + 16*x*y*z - 1", NULL, 0, NULL, 0};
+    joined_in_three_boxes(&cayley, 1.3, JOIN_OPEN, DEPTH + 1, 4, cayley_node, 2);
 }
 
 /* Distance to the sphere of radius 1/2 round (1, 0, 0). */
