@@ -82,10 +82,15 @@ typedef struct ism_root_entry {
     double t;      /* the root's parameter from a to b */
 } ism_root_entry;
 
+/* The slot of the edge from key a to key b in a direct-mapped table of 2^bits edge entries. */
+static inline size_t ism_edge_slot(uint64_t a, uint64_t b, int bits)
+{
+    return (size_t)(ism_cache_mix(a * 0x9e3779b97f4a7c15ull ^ b) & (((uint64_t)1 << bits) - 1));
+}
+
 static inline ism_root_entry *ism_root_slot(ism_root_entry *table, uint64_t a, uint64_t b)
 {
-    uint64_t h = ism_cache_mix(a * 0x9e3779b97f4a7c15ull ^ b);
-    return &table[h & (((uint64_t)1 << ISM_ROOT_MEMO_BITS) - 1)];
+    return &table[ism_edge_slot(a, b, ISM_ROOT_MEMO_BITS)];
 }
 
 /* ... and of root pairs on edges whose ends share a sign (ism_double_root_search): where a
@@ -104,8 +109,7 @@ typedef struct ism_pair_entry {
 
 static inline ism_pair_entry *ism_pair_slot(ism_pair_entry *table, uint64_t a, uint64_t b)
 {
-    uint64_t h = ism_cache_mix(a * 0x9e3779b97f4a7c15ull ^ b);
-    return &table[h & (((uint64_t)1 << ISM_PAIR_MEMO_BITS) - 1)];
+    return &table[ism_edge_slot(a, b, ISM_PAIR_MEMO_BITS)];
 }
 
 /* ... and of the branch of f's top min/max at node corners (plot_test.c's crease cells:
