@@ -22,7 +22,7 @@ void ism_locus_options_default(ism_locus_options *o)
         o->box[k] = -1.0;
         o->box[k + 3] = 1.0;
     }
-    o->max_depth = 7;
+    o->max_depth = ISM_LOCUS_DEFAULT_DEPTH;
     o->max_boxes = LOCUS_DEFAULT_MAX_BOXES;
 }
 

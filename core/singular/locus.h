@@ -146,6 +146,10 @@ typedef struct ism_double_sheet {
     double area;
 } ism_double_sheet;
 
+/* The search's default depth (ism_locus_options_default): every preset's points and curves
+ * are found at it; the singular stage under a bound never goes shallower (surface.c). */
+#define ISM_LOCUS_DEFAULT_DEPTH 7
+
 typedef struct ism_locus_options {
     double box[6];             /* xmin ymin zmin xmax ymax zmax */
     int max_depth;             /* search cells no smaller than box side / 2^max_depth */

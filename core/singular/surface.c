@@ -30,9 +30,9 @@ static double finest_cell(const double box[6], int depth)
  * χ, components, non-manifold points/curves, boundary, certified, artefacts) was identical
  * to the depth-10 stage's and every centroid/midpoint within E. */
 #define SINGULAR_CELLS_PER_E 4.0
-/* ... and never shallower than the locus search's own default depth (locus.c), at which
- * every preset's points and curves are found: a coarse E must not make the search miss one. */
-#define SINGULAR_MIN_DEPTH 7
+/* ... and never shallower than the locus search's own default depth, at which every
+ * preset's points and curves are found: a coarse E must not make the search miss one. */
+#define SINGULAR_MIN_DEPTH ISM_LOCUS_DEFAULT_DEPTH
 
 int ism_singular_depth(const ism_poly_options *po)
 {
