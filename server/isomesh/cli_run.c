@@ -7,6 +7,7 @@
 
 #include "core/analysis/analysis.h"
 #include "core/mesh/write_mesh.h"
+#include "core/octree/mesher.h"
 #include "proto/presets.h"
 #include "proto/features.h"
 #include "proto/request.h"
@@ -335,6 +336,15 @@ static void explain_empty(const ism_locus *l)
                 "and %zu singular curves (see --features)\n", l->npoints, l->ncurves);
 }
 
+/* --dual asked for the dual mesh and the dual mesher declined: says why; exit status 1. */
+static int dual_declined(enum ism_dual_reason why)
+{
+    fprintf(stderr, "isomesh: --dual: the dual mesher declined (%s: %s); without --dual the "
+            "primal polygons make the mesh\n", ism_dual_reason_name(why),
+            ism_dual_reason_text(why));
+    return 1;
+}
+
 static bool nothing_to_do(const ism_cli_run *run)
 {
     if (run->output || run->print_stats || run->features_output)
@@ -387,6 +397,12 @@ int ism_cli_run_surface(ism_cli_run *run)
         fprintf(stderr, "isomesh: %s\n", ism_error_format(&err, msg, sizeof msg));
         return 2;
     }
+    enum ism_dual_reason why; /* known before meshing (min/max in f): no mesh made */
+    if (run->require_dual &&
+        (why = ism_dual_declined_before(tape, &run->options)) != ISM_DUAL_WHY_NONE) {
+        ism_tape_free(tape);
+        return dual_declined(why);
+    }
     double t1 = ism_now_ms();
     timings[ISM_TIME_COMPILE] = t1 - t0;
     ism_mesh mesh;
@@ -405,6 +421,10 @@ int ism_cli_run_surface(ism_cli_run *run)
     if (ps_status != ISM_POLY_OK) {
         fprintf(stderr, "isomesh: %s\n", ism_error_format(&err, msg, sizeof msg));
         status = ps_status == ISM_POLY_BAD_OPTIONS ? 2 : 1;
+        goto done;
+    }
+    if (run->require_dual && ps.mesher != ISM_MESHER_DUAL) {
+        status = dual_declined(ps.dual_declined);
         goto done;
     }
     if (mesh.ntris == 0)

@@ -56,7 +56,10 @@ static const char usage_text[] =
     "                           why not the dual one. Either mesh is the mesher's own,\n"
     "                           within E, not simplified unless --simplify\n"
     "      --no-dual            under --max-error, the primal polygons everywhere\n"
-    "      --dual               the default under --max-error (kept for scripts)\n"
+    "      --dual               under --max-error, the dual mesh or nothing: when the dual\n"
+    "                           mesher declines (min/max in f, a singular curve, the box\n"
+    "                           cuts the surface ...), fail with its reason (exit status 1)\n"
+    "                           and write no file\n"
     "      --simplify           under --max-error, then collapse edges wherever the mesh\n"
     "                           stays within E (measured at every new centroid and edge\n"
     "                           midpoint; features, topology and orientation kept): the\n"
@@ -77,7 +80,9 @@ static const char usage_text[] =
     "                           (certified points, singular curves, double sheets) and the\n"
     "                           mesh's non-manifold edges and points checked against it\n"
     "  -h, --help               this text\n"
-    "exit status: 0 done, 1 the run failed (budget, memory), 2 bad input.\n";
+    "With a request file only -o, --stats, --features and --threads apply: the file says\n"
+    "everything about the surface and its mesh.\n"
+    "exit status: 0 done, 1 the run failed (budget, memory, --dual declined), 2 bad input.\n";
 
 enum long_only {
     OPT_LET = 256, OPT_SURFACE, OPT_SURFACES, OPT_LIST, OPT_THREADS, OPT_MAX_TRIS,
@@ -151,6 +156,64 @@ static bool parse_tolerance(ism_poly_options *o, const ism_tolerance *t, const c
     return true;
 }
 
+/* The flag's long name ("max-error"; -o is "output"), for messages. */
+static const char *flag_name(const struct option *opts, int opt)
+{
+    for (const struct option *o = opts; o->name; o++)
+        if (o->val == opt)
+            return o->name;
+    return "?";
+}
+
+/* Is a flag's value really the next flag (`--surface -o x.ply`: the value was forgotten)?
+ * Exactly one of the short flags, or -- and a long flag's name (numbers like -1 are values). */
+static bool is_flag(const struct option *opts, const char *arg)
+{
+    if (arg[0] != '-')
+        return false;
+    if (arg[1] && !arg[2] && strchr("epbdoh", arg[1]))
+        return true;
+    if (arg[1] != '-')
+        return false;
+    size_t n = strcspn(arg + 2, "=");
+    for (const struct option *o = opts; o->name; o++)
+        if (strlen(o->name) == n && strncmp(o->name, arg + 2, n) == 0)
+            return true;
+    return false;
+}
+
+/* Flags that apply beside a request file: where the result goes and how many threads. */
+static bool applies_to_request_file(int opt)
+{
+    return opt == 'o' || opt == OPT_STATS || opt == OPT_FEATURES || opt == OPT_THREADS;
+}
+
+/* The flags' combinations; false after printing the error (exit status 2). */
+static bool check_combination(const ism_cli_run *run, const char *request_file)
+{
+    if (request_file && run->surface_flag) {
+        fprintf(stderr, "isomesh: --%s: not with a request file (%s says everything about the "
+                "surface and its mesh: set it there); beside one only -o, --stats, --features "
+                "and --threads apply\n", run->surface_flag, request_file);
+        return false;
+    }
+    if (run->require_dual && run->no_dual) {
+        fprintf(stderr, "isomesh: --dual and --no-dual: give one of them\n");
+        return false;
+    }
+    if (run->require_dual && !(run->options.max_error > 0)) {
+        fprintf(stderr, "isomesh: --dual needs --max-error E: the dual mesher sizes its cells "
+                "by the bound\n");
+        return false;
+    }
+    if (run->surfaces_file && !run->surface) {
+        fprintf(stderr, "isomesh: --surfaces %s needs --surface NAME: which of its surfaces\n",
+                run->surfaces_file);
+        return false;
+    }
+    return true;
+}
+
 /* Applies one option to the run; false (after printing the error) on a bad value. */
 static bool apply_option(ism_cli_run *run, int opt, const char *arg)
 {
@@ -165,7 +228,13 @@ static bool apply_option(ism_cli_run *run, int opt, const char *arg)
     case 'd': return ism_cli_parse_depth(arg, &o->min_depth, &o->max_depth) &&
                      (run->depth_given = true);
     case OPT_THREADS: return ism_cli_parse_int("--threads", arg, 0, 64, &o->threads);
-    case OPT_MAX_ERROR: return ism_cli_parse_double("--max-error", arg, &o->max_error);
+    case OPT_MAX_ERROR:
+        if (!ism_cli_parse_double("--max-error", arg, &o->max_error))
+            return false;
+        if (o->max_error >= 0)
+            return true;
+        fprintf(stderr, "isomesh: --max-error: %s is below 0 (a distance; 0: off)\n", arg);
+        return false;
     case OPT_MAX_TRIS: {
         int n;
         if (!ism_cli_parse_int("--max-triangles", arg, 1, 2000000000, &n))
@@ -176,7 +245,7 @@ static bool apply_option(ism_cli_run *run, int opt, const char *arg)
     case OPT_NO_SIMPLIFY: run->simplify = false; return true;
     case OPT_SIMPLIFY: run->simplify = true; return true;
     case OPT_STRADDLE: o->straddle = true; return true;
-    case OPT_DUAL: run->no_dual = false; return true;
+    case OPT_DUAL: run->require_dual = true; return true;
     case OPT_NO_DUAL: run->no_dual = true; return true;
     case OPT_QUALITY:
         if ((run->quality = ism_quality_lookup(arg)) >= 0)
@@ -229,20 +298,33 @@ int main(int argc, char **argv)
             ism_cli_run_free(&run);
             return 2;
         }
+        const char *name = flag_name(long_options, opt);
+        if (optarg && is_flag(long_options, optarg)) {
+            fprintf(stderr, "isomesh: missing value for --%s (the next word, '%s', is a flag)\n",
+                    name, optarg);
+            ism_cli_run_free(&run);
+            return 2;
+        }
+        if (!applies_to_request_file(opt) && !run.surface_flag)
+            run.surface_flag = name;
         if (!apply_option(&run, opt, optarg)) {
             ism_cli_run_free(&run);
             return 2;
         }
     }
     int status;
-    if (list)
-        status = ism_cli_list_surfaces(&run);
-    else if (optind == argc - 1)
-        status = ism_cli_run_request_file(&run, argv[optind]);
-    else if (optind < argc) {
-        fprintf(stderr, "isomesh: unexpected argument '%s' (try --help)\n", argv[optind]);
+    const char *request_file = optind == argc - 1 ? argv[optind] : NULL;
+    if (optind < argc - 1) {
+        fprintf(stderr, "isomesh: unexpected argument '%s': one request file at most, and -o "
+                "FILE for the output (try --help)\n", argv[optind + 1]);
         status = 2;
-    } else
+    } else if (!list && !check_combination(&run, request_file))
+        status = 2;
+    else if (list)
+        status = ism_cli_list_surfaces(&run);
+    else if (request_file)
+        status = ism_cli_run_request_file(&run, request_file);
+    else
         status = ism_cli_run_surface(&run);
     ism_cli_run_free(&run);
     return status;

@@ -155,6 +155,21 @@ class TestIsomesh(unittest.TestCase):
             (["--surface", "nope", "-o", "a.ply"], "nope"),
             (["--frobnicate"], "unknown option"),
             (["-e", "x", "--threads", "-1", "-o", "a.ply"], "--threads"),
+            (["-e", "x", "--max-error", "-1", "-o", "a.ply"], "--max-error"),
+            (["-e", "x", "--max-error", "abc", "-o", "a.ply"], "--max-error"),
+            (["-e", "x", "--max-triangles", "0", "-o", "a.ply"], "--max-triangles"),
+            (["-e", "x", "--quality", "best", "-o", "a.ply"], "--quality"),
+            (["-e", "x", "--let", "=x", "-o", "a.ply"], "--let"),
+            # a flag's value forgotten: the next flag is not taken as its value
+            (["--surface", "-o", "a.ply"], "missing value for --surface"),
+            (["-e", "x", "-o", "--stats"], "missing value for --output"),
+            (["-e", "x", "--features", "--stats", "-o", "a.ply"], "missing value for --features"),
+            # a surfaces file without the name of the surface to take from it
+            (["-e", "x", "--surfaces", "examples/surfaces.json", "-o", "a.ply"], "--surface NAME"),
+            # --dual: only under a bound, and not beside --no-dual
+            (["-e", "x", "--dual", "-o", "a.ply"], "--dual needs --max-error"),
+            (["-e", "x", "--max-error", "0.1", "--dual", "--no-dual", "-o", "a.ply"],
+             "--dual and --no-dual"),
         ]
         for args, needle in cases:
             p = run(*[a if not a.startswith("a.") else self.out(a) for a in args])
@@ -250,6 +265,51 @@ class TestIsomesh(unittest.TestCase):
         p = run(req, "-o", path)
         self.assertEqual(p.returncode, 2)
         self.assertIn("depht", p.stderr)
+        # the file says everything about the surface: a surface flag beside it is refused
+        # (it used to be ignored without a word), naming the flag; -o --stats --threads apply
+        os.remove(path)
+        for flags, needle in ((("--max-error", "0.1"), "--max-error"),
+                              (("-d", "1:2"), "--depth"),
+                              (("--quality", "good"), "--quality"),
+                              (("--no-dual",), "--no-dual"),
+                              (("--flat-plane", "0.1"), "--flat-plane")):
+            p = run(req, *flags, "-o", path)
+            self.assertEqual(p.returncode, 2, flags)
+            self.assertEqual(len(p.stderr.strip().splitlines()), 1, p.stderr)
+            self.assertIn(needle + ": not with a request file", p.stderr)
+            self.assertFalse(os.path.exists(path))
+        p = run(req, path)
+        self.assertEqual(p.returncode, 2)
+        self.assertIn(f"unexpected argument '{path}'", p.stderr)
+
+    def test_dual_means_the_dual_mesh_or_a_failure_saying_why(self):
+        """--dual: the dual mesh, or exit status 1 with the dual mesher's reason (the stats'
+        dual_declined name and its sentence) and no file; without --dual the same runs make
+        the primal polygons."""
+        path = self.out("m.ply")
+        sphere = ("-e", "x^2 + y^2 + z^2 - 1", "-b", "-1.5,-1.5,-1.5,1.5,1.5,1.5")
+        p = run(*sphere, "--max-error", "0.01", "--dual", "-o", path, "--stats")
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertEqual(json.loads(p.stdout)["polygoniser"]["mesher"], "dual")
+        self.assertTrue(os.path.exists(path))
+        os.remove(path)
+        # declined before meshing (min/max in f), by the locus (a double line), by the box
+        # (it cuts the sphere: open there)
+        for args, why in ((("-e", "max(x^2 + y^2 + z^2 - 1, z - 0.5)", *sphere[2:]), "min_max"),
+                          (("-e", "x*y", "-d", "2:6"), "singular_locus"),
+                          (("-e", "x^2 + y^2 + z^2 - 1", "-b", "-0.5,-1.5,-1.5,1.5,1.5,1.5"),
+                           "box_cut")):
+            extra = ("--max-error", "0.05")
+            p = run(*args, *extra, "--dual", "-o", path, "--stats")
+            self.assertEqual(p.returncode, 1, (args, p.stderr))
+            self.assertEqual(len(p.stderr.strip().splitlines()), 1, p.stderr)
+            self.assertIn(f"--dual: the dual mesher declined ({why}: ", p.stderr)
+            self.assertEqual(p.stdout, "", "no stats for a failed run")
+            self.assertFalse(os.path.exists(path), "no file for a failed run")
+            q = run(*args, *extra, "--stats")
+            self.assertEqual(q.returncode, 0, q.stderr)
+            poly = json.loads(q.stdout)["polygoniser"]
+            self.assertEqual((poly["mesher"], poly["dual_declined"]), ("primal", why), args)
 
     def sphere_between_vertices(self, path):
         """The largest exact distance |p| - 1 at triangle centroids and edge midpoints."""
@@ -336,7 +396,7 @@ class TestIsomesh(unittest.TestCase):
         self.assertEqual(p.returncode, 0)
         for flag in ("--expr", "--param", "--let", "--box", "--depth", "--surface", "--surfaces",
                      "--stats", "--output", "--worker", "--threads", "--max-error",
-                     "--no-dual", "--simplify", "--no-simplify",
+                     "--no-dual", "--dual", "--simplify", "--no-simplify",
                      "--gradient-test", "--double-root-eps", "--double-root-iters",
                      "--stitch-tol", "--flat-normal", "--flat-plane"):
             self.assertIn(flag, p.stdout)
