@@ -134,6 +134,11 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
             if (!ok || stopped(o))
                 break;
             size_t moved = rm_unfold_sweep(&p) + rm_relax_sweep(&p, UINT8_MAX);
+            /* crease vertices move once the collapses have merged the crowded ones (from
+               round 0: gyroid-ball's smallest angle 0.66 -> 0.53°, merges refused beside
+               vertices just snapped; from ISM_RM_COLLAPSE_ROUND 0.92°) */
+            if (round >= ISM_RM_COLLAPSE_ROUND)
+                moved += rm_crease_slide_sweep(&p);
             if (!(moved + rm_slide_sweep(&p)))
                 break;
         }

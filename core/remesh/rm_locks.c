@@ -11,11 +11,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Dihedral (between the normals of an edge's two triangles) above which the edge is a crease
- * of the surface: the polygoniser's meshes bend by a few degrees per edge on smooth parts
- * (about 4° on the sphere preset, rarely 25° on tight curvature), while a max/min crease
- * meets at tens of degrees. Neither flipped across nor moved along. */
-#define ISM_RM_CREASE_DEG 40.0
 /* Boundary vertices with more triangles than this are not slid (the fan walk keeps its
  * neighbours on the stack; the polygoniser's vertices have about 6). */
 #define ISM_RM_SLIDE_MAX_DEGREE 32

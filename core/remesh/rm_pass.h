@@ -19,6 +19,12 @@
  * a little to raise bad ones nearby), and vertices far from any triangle under it are not
  * relaxed at all. */
 #define ISM_RM_COMFORT_DEG 35.0
+/* Dihedral (between the normals of an edge's two triangles) above which the edge is a crease
+ * of the surface: the polygoniser's meshes bend by a few degrees per edge on smooth parts
+ * (about 4° on the sphere preset, rarely 25° on tight curvature), while a max/min crease
+ * meets at tens of degrees. Neither flipped across nor moved
+ * along (rm_locks.c), but for a crease vertex sliding along its crease (rm_crease_slide.c). */
+#define ISM_RM_CREASE_DEG 40.0
 /* Triangles whose smallest angle is under this (degrees) have their edges tried by the
  * collapses (rm_collapse.c): the issue's goal on smooth surfaces; better triangles are left to
  * flips and relaxation. */
@@ -207,6 +213,11 @@ size_t rm_relax_sweep(rm_pass *p, uint8_t most);
 /* One sweep sliding the active box-boundary vertices (slide) along their boundary curve
  * toward the middle of their two boundary neighbours (rm_slide.c); returns the moves made. */
 size_t rm_slide_sweep(rm_pass *p);
+
+/* One sweep (or a few, while vertices move) sliding the active crease vertices of a min/max
+ * crease chain along the crease curve toward the middle of their two crease neighbours, on
+ * both branches (rm_crease_slide.c); returns the moves made. */
+size_t rm_crease_slide_sweep(rm_pass *p);
 
 /* The fan of v: the sine of its smallest angle, mean edge length, the area-weighted centroid
  * and normal (the sum of the triangles' cross products: well defined even where a needle's

@@ -1,0 +1,304 @@
+/* rm_crease_slide.c — crease vertices moved onto and along their crease. Where f's top is
+ * min(a, b) or max(a, b) (a CSG union or intersection) the surface has a crease on the curve
+ * a = b = 0, and the pass locks the vertices round it (rm_locks.c). Without a bound the
+ * polygoniser puts none of them on that curve: they are its edge roots, each on one branch's
+ * surface and up to a fraction of a cell off the other's (the gyroid ball: about 1/8 of a
+ * cell), spaced as the cells cut them (1/400 of a cell to a cell apart), and every triangle
+ * between two near ones and a far one is a needle no flip mends. Here a locked vertex v
+ * whose triangles form one closed manifold fan (no boundary, no non-manifold edge, none of
+ * the caller's locked edges, one label) and which lies within ISM_RM_CREASE_NEAR_REL of its
+ * mean edge of both branches' zero sets is
+ *   - snapped onto the crease: its nearest point of a = b = 0 (minimum-norm Newton steps on
+ *     the two equations), when v is not on it yet;
+ *   - slid along it, when it is on it (within ISM_RM_CREASE_ON_REL) and exactly two of its
+ *     neighbours are too (a chain: a crease corner, or a crease met twice, has more): toward
+ *     the middle of those two, back onto a = b = 0 by the same steps, kept between them in
+ *     order; a half and a quarter step are tried after the whole one.
+ * Either way v ends on both surfaces (within ISM_RM_CREASE_ON_REL of its mean edge). The
+ * branches are f's top min/max, or the top of f shortened over the fan's box (a nested
+ * min/max whose other operands the box proves dominated: three-balls); a fan with neither
+ * (steinmetz's and the cube's max(...) − 1) is left alone. A move is kept only when each
+ * triangle of the fan stays within ISM_RM_CREASE_SLIDE_TURN_DEG of its own normal before
+ * (across a crease the fan's mean normal says nothing), no outer edge of the fan bends past
+ * the crease angle by more than ISM_RM_CREASE_SLIDE_BEND_DEG over what it did, the fan's
+ * smallest angle grows, and the distances the relaxation keeps are kept (rm_centroids_stay:
+ * under max_error every centroid and edge midpoint of the fan within it, rm_bound.h). ∇f
+ * vanishing at v (a singular point) leaves it alone, as does RM_PINNED. */
+#include "core/remesh/rm_bound.h"
+#include "core/remesh/rm_pass.h"
+#include "core/util/min_norm.h"
+#include "core/util/vec3.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Fans of more triangles than this are not slid (the fan walk keeps them on the stack; the
+ * polygoniser's crease vertices have about 6). */
+#define ISM_RM_CREASE_SLIDE_MAX_DEGREE 24
+/* A vertex is on the crease when both branches measure within this × v's mean edge of 0
+ * (|a| / |∇a|, first order): Newton's landing points measure rounding (~1e-15 of an edge);
+ * the polygoniser's edge roots beside the crease 1e-5 of an edge and more. A moved vertex
+ * must end this close. */
+#define ISM_RM_CREASE_ON_REL 1e-9
+/* A vertex is beside the crease, and snapped onto it, when both branches measure within
+ * this × its mean edge: the gyroid ball's locked vertices lie up to ~0.3 of an edge off the
+ * other branch's surface; farther, the nearest crease point would be another vertex's. */
+#define ISM_RM_CREASE_NEAR_REL 0.5
+/* Minimum-norm Newton steps onto a = b = 0 (quadratic: from a fraction of an edge off, 3-4
+ * reach rounding), and when the step counts as converged (× the mean edge). */
+#define ISM_RM_CREASE_NEWTON_STEPS 8
+#define ISM_RM_CREASE_NEWTON_REL 1e-12
+/* The branches' gradients count as parallel (the crease not transversal: no curve to slide
+ * on) when the 2 × 2 normal system's determinant is under this share of its diagonal's
+ * product (crease_split.c's rule: a crossing angle under 1e-6 rad). */
+#define ISM_RM_CREASE_PARALLEL 1e-12
+/* Newton may land at most this × the mean edge from where it started (farther: it found
+ * another part of the crease curve). */
+#define ISM_RM_CREASE_PROJECT_MAX_REL 0.5
+/* The slid vertex keeps this share of the chord ab clear at either end: the crease stays in
+ * order (rm_slide.c's rule for box boundaries). */
+#define ISM_RM_CREASE_KEEP_ORDER 0.05
+/* A triangle may turn at most this (degrees) from its own normal before (a crease merge's
+ * limit, rm_collapse.c: across a crease the fan's mean normal says nothing). */
+#define ISM_RM_CREASE_SLIDE_TURN_DEG 60.0
+/* An outer edge of the fan may bend this much (degrees) more than before when past the
+ * crease angle (rm_collapse.c's ISM_RM_CROWD_BEND_DEG for merges along a crease): moving
+ * along a curved crease turns the triangles on it a little either way. */
+#define ISM_RM_CREASE_SLIDE_BEND_DEG 10.0
+
+/* One vertex's fan: the triangles in order round v (tri[i] runs v, ring[i], then the next
+ * ring vertex), its two neighbours on the crease when it slides, and the tape. */
+typedef struct crease_fan {
+    uint32_t n, tri[ISM_RM_CREASE_SLIDE_MAX_DEGREE], ring[ISM_RM_CREASE_SLIDE_MAX_DEGREE];
+    uint32_t end[2];   /* v's two neighbours on the crease (sliding) */
+    const ism_tape *f; /* the tape whose top min/max gives the branches there */
+} crease_fan;
+
+static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * (size_t)v; }
+
+/* The triangles of v as one closed fan of oriented manifold edges, none locked by the
+ * caller, of one label: tri[i] and tri[i + 1] share the edge v ring[i + 1]. False otherwise. */
+static bool walk_fan(const rm_pass *p, uint32_t v, crease_fan *c)
+{
+    const rm_mesh *r = &p->r;
+    const uint32_t *tri = r->m->tri;
+    uint32_t n = r->count[v];
+    if (n < 3 || n > ISM_RM_CREASE_SLIDE_MAX_DEGREE)
+        return false;
+    uint32_t t = r->vt[r->start[v]];
+    for (uint32_t i = 0; i < n; i++) {
+        int k = rm_corner(r->m, t, v);
+        uint32_t next = tri[3 * t + (k + 1) % 3], prev = tri[3 * t + (k + 2) % 3], two[2];
+        int count;
+        if (next == v || prev == v || !rm_edge_triangles(r, v, prev, two, &count) ||
+            rm_edge_locked(r, v, prev) || rm_label(r, two[0]) != rm_label(r, two[1]))
+            return false;
+        c->tri[i] = t;
+        c->ring[i] = next; /* tri[i] runs v -> next -> prev; tri[i + 1] runs v -> prev */
+        t = two[0];        /* the triangle running v -> prev */
+        if (i + 1 < n && t == c->tri[0])
+            return false; /* a fan shorter than v's triangles: v joins two sheets */
+    }
+    c->n = n;
+    return t == c->tri[0];
+}
+
+/* Both branches' values and gradients at x, in the fan's tape; false where it has none. */
+static bool branches(rm_pass *p, const ism_tape *f, const double x[3], double val[2],
+                     double g[2][3])
+{
+    return ism_eval_top_branches(f, p->ws, x[0], x[1], x[2], val, g) && isfinite(val[0]) &&
+           isfinite(val[1]);
+}
+
+/* x lies within tol of both branches' zero sets (first order). */
+static bool on_crease(rm_pass *p, const ism_tape *f, const double x[3], double tol)
+{
+    double val[2], g[2][3];
+    if (!branches(p, f, x, val, g))
+        return false;
+    for (int s = 0; s < 2; s++)
+        if (!(fabs(val[s]) <= tol * ism_norm3(g[s])))
+            return false;
+    return true;
+}
+
+/* The tape for v's fan: f, or f shortened over the fan's box when f's top branches do not
+ * both vanish at v (a nested min/max whose other operands the box proves dominated). */
+static const ism_tape *fan_tape(rm_pass *p, uint32_t v, const crease_fan *c, double tol,
+                                ism_tape *local)
+{
+    const double *x = P(p, v);
+    if (on_crease(p, p->f, x, tol))
+        return p->f;
+    if (!local)
+        return NULL;
+    ism_interval box[3];
+    for (int k = 0; k < 3; k++)
+        box[k].lo = box[k].hi = x[k];
+    for (uint32_t i = 0; i < c->n; i++)
+        for (int k = 0; k < 3; k++) {
+            box[k].lo = fmin(box[k].lo, P(p, c->ring[i])[k]);
+            box[k].hi = fmax(box[k].hi, P(p, c->ring[i])[k]);
+        }
+    if (!ism_tape_shorten(p->f, p->ws, box[0], box[1], box[2], local, NULL))
+        return NULL;
+    return on_crease(p, local, x, tol) ? local : NULL;
+}
+
+/* The angle (radians) between the normals of two triangles given by corner pointers. */
+static double bend(const double *const a[3], const double *const b[3])
+{
+    double n[3], m[3];
+    double ln = rm_cross(a[0], a[1], a[2], n), lm = rm_cross(b[0], b[1], b[2], m);
+    if (!(ln > 0 && lm > 0))
+        return M_PI;
+    return acos(fmax(-1, fmin(1, ism_dot3(n, m) / (ln * lm))));
+}
+
+/* The corners of v's i-th fan triangle with v at x. */
+static void fan_corners(const rm_pass *p, const crease_fan *c, uint32_t v, uint32_t i,
+                        const double *x, const double *q[3])
+{
+    const uint32_t *t = p->r.m->tri + 3 * (size_t)c->tri[i];
+    for (int k = 0; k < 3; k++)
+        q[k] = t[k] == v ? x : P(p, t[k]);
+}
+
+/* v's fan and what it may do: 1 snap onto the crease (v near it, not on it), 2 slide along
+ * it (v on it, exactly two of its neighbours on it: c->end), 0 nothing. */
+static int find_chain(rm_pass *p, uint32_t v, double mean_edge, ism_tape *local,
+                      crease_fan *c)
+{
+    if (!walk_fan(p, v, c))
+        return 0;
+    if (!(c->f = fan_tape(p, v, c, ISM_RM_CREASE_NEAR_REL * mean_edge, local)))
+        return 0;
+    double on = ISM_RM_CREASE_ON_REL * mean_edge;
+    if (!on_crease(p, c->f, P(p, v), on))
+        return 1;
+    int ends = 0;
+    for (uint32_t i = 0; i < c->n; i++)
+        if (on_crease(p, c->f, P(p, c->ring[i]), on)) {
+            if (ends == 2)
+                return 0; /* a corner, or a crease met again */
+            c->end[ends++] = c->ring[i];
+        }
+    if (ends != 2)
+        return 0;
+    return 2;
+}
+
+/* Minimum-norm Newton steps from x onto both branches of the fan's tape; false when a step
+ * fails or it does not converge. */
+static bool to_crease(rm_pass *p, const ism_tape *f, double x[3], double scale)
+{
+    for (int it = 0; it < ISM_RM_CREASE_NEWTON_STEPS; it++) {
+        double val[2], g[2][3], step[3];
+        if (!branches(p, f, x, val, g) ||
+            !ism_min_norm_step(2, (const double (*)[3])g, val, ISM_RM_CREASE_PARALLEL, step))
+            return false;
+        for (int k = 0; k < 3; k++)
+            x[k] += step[k];
+        if (ism_norm3(step) <= ISM_RM_CREASE_NEWTON_REL * scale)
+            return true;
+    }
+    return false;
+}
+
+/* x lies between a and b along their chord, away from both ends. */
+static bool in_order(const double *x, const double *a, const double *b)
+{
+    double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, ax[3];
+    for (int k = 0; k < 3; k++)
+        ax[k] = x[k] - a[k];
+    double l2 = ism_dot3(ab, ab), t = l2 > 0 ? ism_dot3(ax, ab) / l2 : 0;
+    return t > ISM_RM_CREASE_KEEP_ORDER && t < 1 - ISM_RM_CREASE_KEEP_ORDER;
+}
+
+/* The fan with v at x: every triangle within the turn limit of its own normal before, no
+ * outer edge bending against its neighbour past the crease angle or by more than
+ * ISM_RM_CREASE_SLIDE_BEND_DEG over what it did; *sine gets its smallest sine. */
+static bool fan_shape_ok(rm_pass *p, uint32_t v, const crease_fan *c, const double *x,
+                         double *sine)
+{
+    const double *pos = P(p, v);
+    double turn = cos(ISM_RM_CREASE_SLIDE_TURN_DEG * M_PI / 180);
+    double crease = ISM_RM_CREASE_DEG * M_PI / 180, more = ISM_RM_CREASE_SLIDE_BEND_DEG * M_PI / 180;
+    *sine = INFINITY;
+    for (uint32_t i = 0; i < c->n; i++) {
+        const double *q[3], *o[3];
+        fan_corners(p, c, v, i, x, q);
+        fan_corners(p, c, v, i, pos, o);
+        double n[3], m[3], ln = rm_cross(q[0], q[1], q[2], n), lm = rm_cross(o[0], o[1], o[2], m);
+        if (!(ism_dot3(n, m) > turn * ln * lm))
+            return 0;
+        *sine = fmin(*sine, rm_sine_of(ln, rm_dist(q[0], q[1]), rm_dist(q[1], q[2]),
+                                       rm_dist(q[2], q[0])));
+        /* the outer edge (not v's): bends against the triangle across it */
+        const uint32_t *t = p->r.m->tri + 3 * (size_t)c->tri[i];
+        int k = rm_corner(p->r.m, c->tri[i], v);
+        uint32_t a = t[(k + 1) % 3], b = t[(k + 2) % 3], two[2];
+        int count;
+        if (!rm_edge_triangles(&p->r, a, b, two, &count))
+            continue; /* not manifold: its bend is no crease test's */
+        uint32_t s = two[0] == c->tri[i] ? two[1] : two[0];
+        const uint32_t *u = p->r.m->tri + 3 * (size_t)s;
+        const double *z[3] = {P(p, u[0]), P(p, u[1]), P(p, u[2])};
+        double before = bend(o, z);
+        if (!(bend(q, z) <= fmax(crease, before + more)))
+            return 0;
+    }
+    return true;
+}
+
+/* Tries to move v onto the crease (snap) or along it (slide); true when it moved. */
+static bool slide_vertex(rm_pass *p, uint32_t v, ism_tape *local)
+{
+    rm_fan f;
+    rm_fan_measure(p, v, &f);
+    crease_fan c;
+    int kind = find_chain(p, v, f.mean_edge, local, &c);
+    if (!kind)
+        return false;
+    const double *pos = P(p, v);
+    const double *a = kind == 2 ? P(p, c.end[0]) : pos, *b = kind == 2 ? P(p, c.end[1]) : pos;
+    /* a slide tries the whole way to the middle, then a half and a quarter; a snap the
+       nearest crease point only */
+    for (double step = 1; step >= (kind == 2 ? 0.25 : 1); step *= 0.5) {
+        double x[3], start[3], g[3], sine;
+        for (int k = 0; k < 3; k++)
+            x[k] = start[k] = pos[k] + step * (0.5 * (a[k] + b[k]) - pos[k]);
+        if (!to_crease(p, c.f, x, f.mean_edge) ||
+            !(rm_dist(x, start) <= ISM_RM_CREASE_PROJECT_MAX_REL * f.mean_edge) ||
+            !on_crease(p, c.f, x, ISM_RM_CREASE_ON_REL * f.mean_edge) ||
+            (kind == 2 && !in_order(x, a, b)) || !fan_shape_ok(p, v, &c, x, &sine) ||
+            !(sine > f.min_sine))
+            continue;
+        ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
+        if (!(ism_norm3(g) > p->gthresh) || !rm_centroids_stay(p, v, x))
+            continue;
+        rm_commit_move(p, v, x, g);
+        return true;
+    }
+    return false;
+}
+
+size_t rm_crease_slide_sweep(rm_pass *p)
+{
+    const rm_mesh *r = &p->r;
+    if (!ism_tape_has_min_max(p->f))
+        return 0; /* no min/max: no crease of branches */
+    /* room for f shortened over a fan's box (out of memory: f's own top only) */
+    ism_tape *local = ism_tape_new_like(p->f);
+    size_t moves = 0;
+    for (size_t v = 0; v < r->m->nverts; v++) {
+        const double *n = p->normal + 3 * v;
+        if (p->active[v] && r->locked[v] == 1 && r->count[v] && !r->gone[v] && !p->slide[v] &&
+            !(n[0] == 0 && n[1] == 0 && n[2] == 0) && slide_vertex(p, (uint32_t)v, local))
+            moves++;
+    }
+    ism_tape_free(local);
+    p->moves += moves;
+    return moves;
+}
