@@ -337,7 +337,7 @@ describe('box and inspection', { timeout: 300000 }, () => {
       assert.deepEqual(got.types, ['end', 'end', 'end', 'end', 'singular_point']);
       assert.equal(got.apex.degree, 4);
       assert.ok(Math.hypot(...got.apex.xyz) < 1e-9, `the apex at the origin (${got.apex.xyz})`);
-      assert.deepEqual(got.node, ['1', '1 curves meeting a singular point']);
+      assert.deepEqual(got.node, ['1', '1 singular point on the curves']); // one, in the singular
       assert.deepEqual(got.ends, ['4', '4 curve ends at the box']);
       assert.equal(got.drawn, 1, 'one marker at the node');
       assert.deepEqual(cone.errors, []);

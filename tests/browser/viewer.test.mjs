@@ -11,7 +11,7 @@ import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import { createRequire } from 'node:module';
 import { startDaemon, stopDaemon, startBrowser, stopBrowser, watchErrors, artifact } from './lib/harness.mjs';
-import { waitForMesh, loads, openViewer, jobPosts, statsPanel, viewShot, settledHref } from './lib/page.mjs';
+import { waitForMesh, loads, openViewer, jobPosts, statsPanel, viewShot, settledHref, wrappedStats } from './lib/page.mjs';
 import { pixelStats, changedShare } from './lib/png.mjs';
 import { decodeDraco, ATTRIBUTE_IDS } from './lib/draco.mjs';
 import { pickSingularPoints, nearest } from './lib/pick.mjs';
@@ -321,6 +321,40 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
     assert.equal(await page.isHidden('#message'), true);
   });
 
+  it('every stats row fits one line of the panel, at the widest values', async () => {
+    // the page's own stats_ui.js module (the same URL: the same instance) fed the widest figures
+    // each row can show, with every reason the dual mesher can give; the panel put back after
+    const saved = await page.evaluate(() => ['stats', 'warnings'].map((id) => document.getElementById(id).innerHTML));
+    const reasons = await page.evaluate(async () => Object.keys((await import('/js/stats_ui.js')).DUAL_DECLINED));
+    for (const why of ['no_bound', 'off', 'singular_locus', 'min_max', 'box_cut', 'not_plain',
+      'error_at_max_depth', 'open_edge', 'point_type', 'point_fan']) assert.ok(reasons.includes(why), why);
+    for (const why of [null, ...reasons]) {
+      for (const viewerCache of [false, true]) {
+        await page.evaluate(async ({ why, viewerCache }) => {
+          const { showStats } = await import('/js/stats_ui.js');
+          const n = 4000000, d = 1.23e-11, a = 1.23e-4; // the triangle budget; distances are >= 0
+          showStats({
+            stats: {
+              mesh: { triangles: n, vertices: n },
+              analysis: {
+                euler: -123456, components: n, nonmanifold_edges: n, nonmanifold_points: n,
+                nonmanifold_curves: n, boundary_edges: n,
+                quality: { min_angle: a, share_under_10: 0.999, angle_hist: Array(18).fill(1), aspect_max: 1.23e12, aspect_p99: 1.23e12 },
+                accuracy: { max_error: 1.23e-11, met: false, max_dist_vertex: d, max_dist_midpoint: d, max_dist_centroid: d, p99_dist_midpoint: d, p99_dist_centroid: d },
+              },
+              remesh: { min_angle_before: a, min_angle_after: a, flips: n, moves: n },
+              polygoniser: { mesher: 'straddle', dual_declined: why },
+              timings_ms: { total: 123456 }, warnings: [],
+            },
+            viewerCache, serverCache: 'miss', transferred: 999e6, drcBytes: 999e6,
+          });
+        }, { why, viewerCache });
+        assert.deepEqual(await wrappedStats(page), [], `dual_declined ${why}, viewer cache ${viewerCache}`);
+      }
+    }
+    await page.evaluate((html) => ['stats', 'warnings'].forEach((id, i) => { document.getElementById(id).innerHTML = html[i]; }), saved);
+  });
+
   it('asks for a max error and shows what was reached', async () => {
     await choosePreset('sphere');
     await page.evaluate(() => { document.getElementById('box-section').open = true; });
@@ -343,6 +377,7 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
     assert.equal(panel.mesher.text, 'dual');
     assert.equal(panel.mesher.value, 'dual');
     assert.equal(panel.dual_declined.text, '–');
+    assert.deepEqual(await wrappedStats(page), [], 'every stats row on one line');
     assert.equal(await page.isDisabled('#mesher'), false);
     // asking for the primal polygons: another mesh, and the panel gives the reason
     const primal = await loads(page);
@@ -403,6 +438,8 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
     const sn = await statsPanel(page);
     assert.equal(sn.mesher.text, 'primal');
     assert.equal(sn.dual_declined.text, 'no max error');
+    // the primal sphere's "between vertices (max, p99)" value wrapped to two lines (NOTE11)
+    assert.deepEqual(await wrappedStats(page), [], 'every stats row on one line');
   });
 
   it('asks for the quality pass and shows the triangles\' shape', async () => {
@@ -419,6 +456,8 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
     assert.deepEqual(JSON.parse(panel.angle_hist.value), q.angle_hist);
     assert.equal(q.angle_hist.reduce((a, b) => a + b, 0), s.mesh.triangles - q.degenerate_triangles);
     assert.equal(Number(panel.remesh.value), s.remesh.min_angle_after);
+    assert.equal(panel.remesh_edits.text, `${s.remesh.flips.toLocaleString('en-US')}, ${s.remesh.moves.toLocaleString('en-US')}`);
+    assert.deepEqual(await wrappedStats(page), [], 'every stats row on one line');
     assert.equal(Number(panel.aspect.value), q.aspect_max);
     assert.equal(Number(panel.share_under_10.value), q.share_under_10);
     assert.match(await settledHref(page), /quality=good/);
@@ -426,6 +465,7 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
     await page.uncheck('#quality-good');
     await waitForMesh(page, back);
     assert.equal((await statsPanel(page)).remesh.text, 'off');
+    assert.equal((await statsPanel(page)).remesh_edits.text, '–');
   });
 
   it('the clip cap fills the cut where f < 0, computed from f', async () => {
@@ -674,6 +714,11 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
       await choosePreset(name);
       await page.evaluate(() => document.activeElement && document.activeElement.blur());
       assertRendered(await viewShot(page, `${name}.png`), name);
+      // the key counts in words that agree with the count ("1 double curve", "4 nodes")
+      const key = await page.evaluate(() => [...document.querySelectorAll('#key-types span')].map((e) => [e.dataset.count, e.textContent]));
+      for (const [n, text] of key) assert.equal(/^1 \S+s\b/.test(text), false, `${text} (${n})`);
+      if (name === 'klein-bottle') assert.ok(key.some(([n, t]) => n === '1' && t === '1 double curve'), JSON.stringify(key));
+      if (name === 'kummer-4-nodes') assert.ok(key.some(([n, t]) => n === '4' && t === '4 nodes'), JSON.stringify(key));
       if (extra) {
         await page.check('#clip-on');
         await page.selectOption('#clip-axis', extra);

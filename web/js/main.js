@@ -294,14 +294,20 @@ function syncClipSlider() {
 }
 
 const FEATURE_LABELS = { edges: 'singular curve segments', points: 'singular points', boundary: 'boundary edges' };
+// The key's words for a point type or curve kind: one, and more than one ("1 double curve").
 const TYPE_LABELS = {
-  node: 'nodes', isolated: 'isolated points', cusp: 'cusps', degenerate: 'degenerate points',
-  pinch: 'pinch points', triple: 'triple points', double: 'double curves', whisker: 'whiskers',
-  section: 'sections', level: 'level curves', intersection: 'intersections', silhouette: 'silhouettes',
-  crease: 'creases', crossing: 'curve crossings', branch: 'curve branch points', end: 'curve ends at the box',
-  loop: 'closed curves meeting nothing', double_curve: 'curves meeting a double curve',
-  singular_point: 'curves meeting a singular point',
+  node: ['node', 'nodes'], isolated: ['isolated point', 'isolated points'], cusp: ['cusp', 'cusps'],
+  degenerate: ['degenerate point', 'degenerate points'], pinch: ['pinch point', 'pinch points'],
+  triple: ['triple point', 'triple points'], double: ['double curve', 'double curves'],
+  whisker: ['whisker', 'whiskers'], section: ['section', 'sections'], level: ['level curve', 'level curves'],
+  intersection: ['intersection', 'intersections'], silhouette: ['silhouette', 'silhouettes'],
+  crease: ['crease', 'creases'], crossing: ['curve crossing', 'curve crossings'],
+  branch: ['curve branch point', 'curve branch points'], end: ['curve end at the box', 'curve ends at the box'],
+  loop: ['closed curve meeting nothing', 'closed curves meeting nothing'],
+  double_curve: ['curve point on a double curve', 'curve points on a double curve'],
+  singular_point: ['singular point on the curves', 'singular points on the curves'],
 };
+const typeLabel = (t, n) => (TYPE_LABELS[t] ? TYPE_LABELS[t][n === 1 ? 0 : 1] : t);
 const hex = (c) => `#${c.toString(16).padStart(6, '0')}`;
 
 // The feature key: counts per layer, the point types and curve kinds present (each with its
@@ -338,7 +344,7 @@ function syncFeatureKey(counts, made) {
       span.className = `key-type-${t}`;
       span.dataset.count = String(n);
       span.style.setProperty('--swatch', hex(color ?? 0xffffff));
-      span.textContent = `${n} ${TYPE_LABELS[t] || t}`;
+      span.textContent = `${n} ${typeLabel(t, n)}`;
       types.append(span);
     }
     const sheets = viewer.data && viewer.data.mesh && viewer.data.mesh.attributes.double_sheet;

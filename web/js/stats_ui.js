@@ -46,19 +46,29 @@ export function clearStats() {
   document.getElementById('warnings').textContent = '';
 }
 
-// Why the dual mesher did not make the mesh, in words (the reasons' table:
-// core/octree/mesher.h, proto/openapi.yaml).
-const DUAL_DECLINED = {
-  no_bound: 'no max error', off: 'dual off', singular_locus: 'singular locus',
-  min_max: 'min/max in f', box_cut: 'the box cuts the surface',
-  not_plain: 'not one sheet at depth max', error_at_max_depth: 'error not met at depth max',
-  open_edge: 'open edge', point_type: 'point not a node', point_fan: 'no fan at a node',
+// Why the dual mesher did not make the mesh: a few words for the cell (short enough for one
+// line of the panel: tests/browser/viewer.test.mjs) and a sentence for its tooltip (the
+// reasons' table: core/octree/mesher.h, proto/openapi.yaml).
+export const DUAL_DECLINED = {
+  no_bound: ['no max error', 'no max error: the dual cells are sized by it'],
+  off: ['dual off', 'asked for the primal polygons'],
+  singular_locus: ['singular locus', 'singular points or curves: the primal polygons conform to them'],
+  min_max: ['min/max in f', 'min/max/abs in f: creases, which one vertex per cell would round'],
+  box_cut: ['box cuts surface', 'the surface meets the box: it is open there'],
+  not_plain: ['not one sheet', 'a cell at depth max holds more than one sheet (close sheets or a singular point)'],
+  error_at_max_depth: ['error at depth max', 'a triangle beyond the max error with its cells at depth max'],
+  open_edge: ['open edge', 'a crossed edge without its cells\' vertices'],
+  point_type: ['point not a node', 'a singular point that is not a certified node or isolated point (a cusp …)'],
+  point_fan: ['no fan at a node', 'no two rim loops round a node, or its fan beyond the max error'],
 };
 
-// Why not the dual mesher, in words ('–' when it made the mesh or was not asked about); a row
-// of its own, so the mesher's name stays one short line in the narrow panel.
-function declinedText(why) {
-  return why ? (DUAL_DECLINED[why] || why.replace(/_/g, ' ')) : '–';
+// Why not the dual mesher, in words ('–' when it made the mesh or was not asked about), and
+// the cell's tooltip; a row of its own, so the mesher's name stays one short line.
+function showDeclined(why) {
+  const words = why ? (DUAL_DECLINED[why] || [why.replace(/_/g, ' '), why]) : ['–', ''];
+  put('dual_declined', words[0], why);
+  const c = cell('dual_declined');
+  if (c) c.title = words[1];
 }
 
 // result: loader.js's result.
@@ -84,9 +94,10 @@ export function showStats(result) {
   put('aspect', Number.isFinite(q.aspect_max) ? `${fmt.sig(q.aspect_max)}, ${fmt.sig(q.aspect_p99)}` : '–',
       Number.isFinite(q.aspect_max) ? q.aspect_max : null);
   const rm = s.remesh;
-  put('remesh', rm ? `${fmt.sig(rm.min_angle_before)}° → ${fmt.sig(rm.min_angle_after)}° ` +
-      `(${fmt.count(rm.flips)} flips, ${fmt.count(rm.moves)} moves)` : 'off',
+  put('remesh', rm ? `${fmt.sig(rm.min_angle_before)}° → ${fmt.sig(rm.min_angle_after)}°` : 'off',
       rm ? rm.min_angle_after : null);
+  put('remesh_edits', rm ? `${fmt.count(rm.flips)}, ${fmt.count(rm.moves)}` : '–',
+      rm ? rm.flips + rm.moves : null);
   put('max_dist', fmt.sig(acc.max_dist_vertex), acc.max_dist_vertex);
   const between = Math.max(acc.max_dist_midpoint, acc.max_dist_centroid);
   const p99 = Math.max(acc.p99_dist_midpoint, acc.p99_dist_centroid);
@@ -96,9 +107,9 @@ export function showStats(result) {
   put('max_error', acc.max_error > 0 ? `${fmt.sig(acc.max_error)}${met}` : 'off', acc.max_error);
   const poly = s.polygoniser || {};
   put('mesher', poly.mesher || '–', poly.mesher);
-  put('dual_declined', declinedText(poly.dual_declined), poly.dual_declined);
+  showDeclined(poly.dual_declined);
   put('compute_ms', fmt.ms(t.total), t.total);
-  const cache = result.viewerCache ? 'viewer (no request)' : `server ${result.serverCache}`;
+  const cache = result.viewerCache ? 'this page' : `server ${result.serverCache}`; // page: no request
   put('cache', cache, result.viewerCache ? 'viewer' : result.serverCache);
   put('bytes', fmt.bytes(result.transferred), result.transferred);
   put('draco_bytes', fmt.bytes(result.drcBytes), result.drcBytes);

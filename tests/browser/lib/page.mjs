@@ -61,3 +61,15 @@ export async function settledHref(page, timeout = 20000) {
     await page.waitForTimeout(300);
   }
 }
+
+// The stats panel's labels and values whose text takes more than one line (the histogram
+// aside): a value split over two lines misreads, so each row should fit the panel's width.
+// Lines are counted from the text's own boxes (a cell stretches to its row's height).
+export async function wrappedStats(page) {
+  return page.evaluate(() => [...document.querySelectorAll('#stats dt, #stats dd:not(.hist)')]
+    .filter((e) => {
+      const r = document.createRange();
+      r.selectNodeContents(e);
+      return new Set([...r.getClientRects()].map((b) => Math.round(b.bottom))).size > 1;
+    }).map((e) => e.textContent));
+}
