@@ -313,9 +313,22 @@ static void singular_warnings(ism_jw *w, const ism_locus *l, const ism_locus_che
     }
 }
 
+/* worst (> e) to the fewest significant digits, at least 3, that still read as more than e:
+ * "up to 0.00451", never "up to 0.004" beside max_error 0.004, nor 17 digits of noise. */
+static void format_beyond(double worst, double e, char *buf, size_t n)
+{
+    for (int digits = 3; digits <= 17; digits++) {
+        snprintf(buf, n, "%.*g", digits, worst);
+        if (strtod(buf, NULL) > e)
+            return;
+    }
+}
+
 /* Under an error bound, one warning and only when the bound was not met: by the analysed
  * mesh when there is an analysis, else by the polygoniser's measurements of the cells it
- * could not split further. */
+ * could not split further. When no cell was left beyond the bound, the far triangles are not
+ * the octree's (the conformance round singular points and curves makes them): a larger
+ * depth.max would not help, and the warning says so instead of suggesting it. */
 static void write_error_warning(ism_jw *w, const ism_stats_input *in)
 {
     const ism_poly_stats *s = in->poly;
@@ -323,13 +336,19 @@ static void write_error_warning(ism_jw *w, const ism_stats_input *in)
     double worst = in->analysis ? worst_distance(in->analysis) : s ? s->error_worst : 0;
     if (worst <= in->max_error && (in->analysis || cells == 0))
         return;
-    char msg[300], e[32], x[32];
+    char msg[400], e[32], x[32];
     ism_jw_format_double(in->max_error, e);
-    ism_jw_format_double(worst, x);
-    snprintf(msg, sizeof msg, "max_error %s was not met: the mesh is up to %s from the "
-             "surface; %llu cells could not be split further (at depth.max, or after the last "
-             "refinement round): a larger depth.max may reach it", e, x,
-             (unsigned long long)cells);
+    format_beyond(worst, in->max_error, x, sizeof x);
+    if (cells)
+        snprintf(msg, sizeof msg, "max_error %s was not met: the mesh is up to %s from the "
+                 "surface; %llu cells could not be split further (at depth.max, or after the "
+                 "last refinement round): a larger depth.max may reach it", e, x,
+                 (unsigned long long)cells);
+    else
+        snprintf(msg, sizeof msg, "max_error %s was not met: the mesh is up to %s from the "
+                 "surface, though every octree cell met it: the triangles beyond it were made "
+                 "where the mesh conforms to singular points and curves, and a larger "
+                 "depth.max does not change them", e, x);
     ism_jw_string(w, msg);
 }
 

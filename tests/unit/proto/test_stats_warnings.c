@@ -1,0 +1,81 @@
+/* test_stats_warnings.c — the stats' warning when max_error was not met (proto/stats.c): the
+ * worst distance to as few digits as still read above the bound (never 17 digits, never a
+ * number equal to the bound), the cells left at depth.max counted when there are some, and,
+ * when every octree cell met the bound, no advice to raise depth.max (it would not help). */
+#include <criterion/criterion.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "proto/stats.h"
+
+/* The one warning of a run with bound e, worst distance worst (at a centroid) and cells
+ * octree cells left beyond the bound; "" when there is none. Caller frees. */
+static char *warning(double e, double worst, uint64_t cells)
+{
+    ism_poly_stats poly;
+    ism_analysis an;
+    memset(&poly, 0, sizeof poly);
+    memset(&an, 0, sizeof an);
+    poly.error_missed_nodes = cells;
+    an.max_dist_centroid = worst;
+    ism_stats_input in;
+    memset(&in, 0, sizeof in);
+    in.poly = &poly;
+    in.analysis = &an;
+    in.max_error = e;
+    size_t len;
+    char *text = ism_stats_surface_json(&in, &len);
+    cr_assert(text);
+    json_t *root = json_loadb(text, len, 0, NULL);
+    cr_assert(root, "%s", text);
+    json_t *w = json_object_get(root, "warnings");
+    cr_assert(json_array_size(w) <= 1, "%s", text);
+    char *out = strdup(json_array_size(w) ? json_string_value(json_array_get(w, 0)) : "");
+    json_decref(root);
+    free(text);
+    return out;
+}
+
+Test(stats_warnings, missed_bound_with_cells_at_the_limit)
+{
+    char *w = warning(0.001, 0.0012345678901234, 17);
+    cr_assert(strstr(w, "max_error 0.001 was not met: the mesh is up to 0.00123 from"), "%s", w);
+    cr_assert(strstr(w, "17 cells could not be split further"), "%s", w);
+    cr_assert(strstr(w, "a larger depth.max may reach it"), "%s", w);
+    free(w);
+}
+
+Test(stats_warnings, missed_bound_with_no_cell_left_does_not_advise_depth)
+{
+    /* Whitney's umbrella at 0.004 (NOTE11): 0.0045082436088348015 beside the pinch point */
+    char *w = warning(0.004, 0.0045082436088348015, 0);
+    cr_assert(strstr(w, "max_error 0.004 was not met: the mesh is up to 0.00451 from"), "%s", w);
+    cr_assert(strstr(w, "every octree cell met it"), "%s", w);
+    cr_assert(!strstr(w, "0 cells"), "%s", w);
+    cr_assert(!strstr(w, "may reach it"), "%s", w);
+    free(w);
+}
+
+Test(stats_warnings, the_worst_reads_above_the_bound)
+{
+    /* 3 digits would print 0.004, the bound itself: as many digits as tell them apart */
+    char *w = warning(0.004, 0.0040001, 2);
+    cr_assert(strstr(w, "up to 0.0040001 from"), "%s", w);
+    free(w);
+    /* one ulp-scale above: the printed number still parses above the bound */
+    double e = 1e-3, worst = nextafter(nextafter(e, 1), 1);
+    w = warning(e, worst, 2);
+    const char *at = strstr(w, "up to ");
+    cr_assert(at, "%s", w);
+    cr_assert_gt(strtod(at + 6, NULL), e, "%s", w);
+    free(w);
+}
+
+Test(stats_warnings, met_bound_no_warning)
+{
+    char *w = warning(0.004, 0.004, 0);
+    cr_assert_str_eq(w, "");
+    free(w);
+}
