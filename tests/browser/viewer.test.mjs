@@ -353,6 +353,16 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
       }
     }
     await page.evaluate((html) => ['stats', 'warnings'].forEach((id, i) => { document.getElementById(id).innerHTML = html[i]; }), saved);
+    // the checkboxes' own words on one line, their hints below them (they were squeezed into a
+    // column one word wide beside the hint)
+    await page.evaluate(() => { document.getElementById('box-section').open = true; });
+    const words = await page.evaluate(() => ['simplify', 'quality-good'].map((id) => {
+      const text = [...document.getElementById(id).parentElement.childNodes].find((c) => c.nodeType === 3 && c.textContent.trim());
+      const r = document.createRange();
+      r.selectNodeContents(text);
+      return [text.textContent.trim(), new Set([...r.getClientRects()].map((b) => Math.round(b.bottom))).size];
+    }));
+    assert.deepEqual(words, [['simplify within the bound', 1], ['quality: good', 1]]);
   });
 
   it('asks for a max error and shows what was reached', async () => {
