@@ -425,6 +425,16 @@ static bool decode_tolerances(const json_t *v, ism_request *req, ism_req_error *
     return true;
 }
 
+/* v > 0 to three significant digits into buf (32 bytes), rounded up (dir 1), down (-1) or to
+ * nearest (0): a limit in a message, without 17 digits of a box diagonal. */
+static const char *three_digits(double v, int dir, char *buf)
+{
+    double unit = pow(10, floor(log10(v)) - 2), q = v / unit;
+    q = dir > 0 ? ceil(q) : dir < 0 ? floor(q) : nearbyint(q);
+    snprintf(buf, 32, "%.3g", q * unit);
+    return buf;
+}
+
 /* "max_error": E > 0 in model units, at least ISM_REQ_MIN_ERROR_REL of the box diagonal and
  * at most the diagonal. Without an explicit depth.max, the operator's depth limit becomes
  * the safety limit: the bound, not the preset's depth, decides. */
@@ -436,17 +446,19 @@ static bool decode_max_error(const json_t *v, const json_t *depth, ism_request *
         return false;
     for (int k = 0; k < 3; k++)
         d2 += (req->poly.box[k + 3] - req->poly.box[k]) * (req->poly.box[k + 3] - req->poly.box[k]);
-    char b[32], c[32];
+    char b[32], c[32], d[32], g[32];
     if (!(e > 0))
         return over(err, "$.max_error", "%s must be above 0 (a distance in model units)",
                     num(e, b));
-    if (!in_range(e, ISM_REQ_MIN_ERROR_REL * sqrt(d2), sqrt(d2), "$.max_error", err)) {
-        snprintf(err->message + strlen(err->message),
-                 sizeof err->message - strlen(err->message),
-                 " (%s of the box diagonal %s .. the diagonal)", num(ISM_REQ_MIN_ERROR_REL, b),
-                 num(sqrt(d2), c));
-        return false;
-    }
+    /* the limits to three digits, rounded inwards: a value copied from the message passes */
+    double diag = sqrt(d2), lo = ISM_REQ_MIN_ERROR_REL * diag;
+    if (e < lo)
+        return over(err, "$.max_error", "%s is below the minimum %s (%s of the box diagonal %s)",
+                    num(e, b), three_digits(lo, 1, c), num(ISM_REQ_MIN_ERROR_REL, d),
+                    three_digits(diag, 0, g));
+    if (e > diag)
+        return over(err, "$.max_error", "%s is above the limit %s (the box diagonal)",
+                    num(e, b), three_digits(diag, -1, c));
     req->poly.max_error = e;
     if (!(depth && json_object_get(depth, "max")))
         req->poly.max_depth = depth_limit;

@@ -118,9 +118,9 @@ static const bad_case bad_cases[] = {
     {"{\"expr\": \"x\", \"max_error\": -0.1}", 422, "over_limit", "$.max_error",
      "$.max_error: -0.1 must be above 0*"},
     {"{\"expr\": \"x\", \"max_error\": 3e-9}", 422, "over_limit", "$.max_error",
-     "$.max_error: 3e-09 is below the minimum 3.46*"},
+     "$.max_error: 3e-09 is below the minimum 3.47e-09 (1e-09 of the box diagonal 3.46)"},
     {"{\"expr\": \"x\", \"max_error\": 3.5}", 422, "over_limit", "$.max_error",
-     "$.max_error: 3.5 is above the limit 3.46*"},
+     "$.max_error: 3.5 is above the limit 3.46 (the box diagonal)"},
     {"{\"expr\": \"x\", \"max_error\": \"1e-3\"}", 400, "bad_request", "$.max_error",
      "$.max_error: expected a number, got a string"},
     {"{\"expr\": \"x\", \"max_error\": null}", 400, "bad_request", "$.max_error",
@@ -212,6 +212,31 @@ Test(request, bad_requests_have_exact_status_path_and_message)
                   err.message, c->message);
         ism_request_free(&req); /* must be safe after a failure */
     }
+}
+
+Test(request, max_error_limits_in_the_message_pass_when_copied)
+{
+    /* the messages give the limits to three digits, rounded inwards (box diagonal 2 sqrt 3 =
+     * 3.4641...: minimum 3.47e-09, limit 3.46): the numbers a user copies from them pass, in
+     * the default box and in a box whose diagonal has many digits */
+    const char *ok[] = {"{\"expr\": \"x\", \"max_error\": 3.47e-09}",
+                        "{\"expr\": \"x\", \"max_error\": 3.46}",
+                        "{\"expr\": \"x\", \"box\": [0, 0, 0, 1, 2, 3], \"max_error\": 3.75e-09}",
+                        "{\"expr\": \"x\", \"box\": [0, 0, 0, 1, 2, 3], \"max_error\": 3.74}"};
+    for (size_t i = 0; i < sizeof ok / sizeof ok[0]; i++) {
+        ism_request req;
+        ism_req_error err;
+        cr_expect(ism_request_decode(ok[i], strlen(ok[i]), NULL, &req, &err), "%s: %s", ok[i],
+                  err.message);
+        ism_request_free(&req);
+    }
+    const char *below = "{\"expr\": \"x\", \"box\": [0, 0, 0, 1, 2, 3], \"max_error\": 1e-9}";
+    ism_request req;
+    ism_req_error err;
+    cr_assert(!ism_request_decode(below, strlen(below), NULL, &req, &err));
+    cr_expect_str_eq(err.message, "$.max_error: 1e-09 is below the minimum 3.75e-09 (1e-09 of "
+                                  "the box diagonal 3.74)");
+    ism_request_free(&req);
 }
 
 Test(request, json_syntax_errors_carry_line_and_column)
