@@ -746,6 +746,13 @@ bool ism_request_decode(const char *json, size_t len, const ism_request_limits *
     if (len > ISM_REQ_MAX_BYTES)
         return ism_req_error_set(err, 422, "too_large", "$", "the request is %zu bytes, above "
                                  "the limit %d", len, ISM_REQ_MAX_BYTES);
+    size_t blank = 0;
+    while (blank < len && strchr(" \t\r\n", json[blank]))
+        blank++;
+    if (blank == len) /* say so, not "'[' or '{' expected near end of file" */
+        return ism_req_error_set(err, 400, "bad_json", "", "the request body is empty: send a "
+                                 "JSON object, e.g. {\"preset\": \"sphere\"} (GET /v1/presets "
+                                 "lists the names)");
     json_error_t je;
     json_t *root = json_loadb(json, len, JSON_REJECT_DUPLICATES, &je);
     if (!root) {

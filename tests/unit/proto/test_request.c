@@ -23,12 +23,14 @@ typedef struct bad_case {
 static const bad_case bad_cases[] = {
     /* JSON itself (jansson flags: duplicates, UTF-8, trailing garbage, NaN, overflow) */
     {"{\"expr\": \"x\",", 400, "bad_json", "", "invalid JSON at line 1, column *"},
+    {"", 400, "bad_json", "", "the request body is empty: send a JSON object, e.g. "
+     "{\"preset\": \"sphere\"} (GET /v1/presets lists the names)"},
+    {" \r\n\t", 400, "bad_json", "", "the request body is empty*"},
     {"{\"expr\": \"x\", \"expr\": \"y\"}", 400, "bad_json", "", "invalid JSON at line 1*"},
     {"{\"expr\": \"x\xff\"}", 400, "bad_json", "", "invalid JSON at line 1*"},
     {"{\"expr\": \"x\"} x", 400, "bad_json", "", "invalid JSON at line 1*"},
     {"{\"expr\": \"x\", \"box\": [NaN, 0, 0, 1, 1, 1]}", 400, "bad_json", "", "invalid JSON*"},
     {"{\"expr\": \"x\", \"box\": [1e999, 0, 0, 1, 1, 1]}", 400, "bad_json", "", "invalid JSON*"},
-    {"", 400, "bad_json", "", "invalid JSON*"},
     /* shape */
     {"[1]", 400, "bad_request", "$", "$: a request is a JSON object, got an array"},
     {"{}", 400, "bad_request", "$",
