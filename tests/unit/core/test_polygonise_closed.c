@@ -6,6 +6,7 @@
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
+#include "core/eval/eval.h"
 #include "poly_fixture.h"
 
 static const ism_param sphere_r[] = {{"r", 1}};
@@ -145,4 +146,51 @@ Test(closed, random_blobs_are_closed_manifolds, .timeout = 120)
         ism_mesh_free(&m);
         ism_tape_free(t);
     }
+}
+
+/* The sphere r = 1.5 in the box ±1.6 passes through lattice points where f's sign is rounding
+ * noise: at (±0.2, ±0.5, −1.4) and (±0.5, ±0.2, −1.4) the lattice's −1.6 + 64 × 3.2/2^d is
+ * −1.4000000000000001 and f rounds to +4.4e-16 (at z = +1.4 to −4.4e-16). Each lattice
+ * segment from such a point found a root 1e-15 away; the node on the negative side cut off
+ * its corner by a triangle of those three roots that lies in its lower face in floating point,
+ * which that face's owner never emits: 8 holes of three zero-length edges, χ −6 at depth 7
+ * (the clipped Barth sextic max(B, r² − 2.25) in the box ±1.6: χ −32, 12 open edges, against
+ * −28 in shifted boxes). The lattice point is a zero point where the interval over it holds 0
+ * (face_lines.c zero_by_rounding). A sphere: closed, χ 2, one piece, in the lattice box, moved
+ * by 1e-3 and by a fraction of a cell; with and without an error bound (primal polygons). */
+Test(closed, sphere_through_lattice_points_within_rounding)
+{
+    static const ism_param r15[] = {{"r", 1.5}};
+    const pf_surface s = {"x^2 + y^2 + z^2 - r^2", r15, 1, NULL, 0};
+    const double base[6] = {-1.6, -1.6, -1.6, 1.6, 1.6, 1.6};
+    ism_tape *t = pf_compile(&s);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    /* the premise: f at the lattice point (0.2, 0.5, −1.4) of the box ±1.6 is not 0, but
+     * within rounding (lattice coordinates lo + step × i, the polygoniser's grid.h) */
+    double step = 3.2 / 1024, q[3] = {-1.6 + step * 576, -1.6 + step * 672, -1.6 + step * 64};
+    double fq = ism_eval_point(t, ws, q[0], q[1], q[2]);
+    cr_expect(fq != 0 && fabs(fq) < 1e-15, "f at the lattice point (0.2, 0.5, -1.4): %g", fq);
+    ism_eval_ws_free(ws);
+    for (int which = pf_first_box() - 1; which < 2; which++)
+        for (int run = 0; run < 3; run++) {
+            int d = run == 0 ? 7 : 8;
+            double box[6];
+            pf_sweep_box(base, d, which, box);
+            ism_poly_options o;
+            pf_options(&o, box, 3, d);
+            if (run == 2)
+                o.max_error = 3e-3; /* the primal polygons under a bound (o.dual is off) */
+            ism_mesh m;
+            ism_poly_stats st;
+            pf_run_options(t, &o, &m, &st);
+            pf_props p;
+            pf_measure(&m, t, &p);
+            cr_expect_eq(p.boundary_edges + p.nonmanifold_edges, 0,
+                         "box %d run %d: %zu boundary, %zu non-manifold edges", which, run,
+                         p.boundary_edges, p.nonmanifold_edges);
+            cr_expect_eq(p.euler, 2, "box %d run %d: χ %ld", which, run, p.euler);
+            cr_expect_eq(p.components, 1, "box %d run %d: %zu pieces", which, run, p.components);
+            ism_mesh_free(&m);
+        }
+    ism_tape_free(t);
 }
