@@ -285,19 +285,26 @@ static void walk_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint
     }
 }
 
-/* The roots of the canonical segment lo→hi, with roots closer than the stitching tolerance
- * merged into one double root (paper Fig. 3b). */
+/* The roots of the canonical segment lo→hi, with two roots closer than the stitching
+ * tolerance merged into one double root (paper Fig. 3b) when f between them stays within
+ * the double-root eps — the search's own rule for a touching root: two sheets crossing just
+ * off the segment (x² − y² at y = δ: f = −δ² between roots 2δ apart), a double line the
+ * face's walk then sees lying in it. Where f between them goes beyond eps, the other sign
+ * holds a piece of its own and both crossings stay: the tip of a CSG bar's section grazed
+ * by the segment (cube minus ball r = 1.41, 0.37 of a cell off the lattice at depth 7: roots
+ * 2e-6 apart, f −1e-6 between; merged, both faces at that edge joined their two crossings
+ * through the one touching point, and the node's loop passed through it twice). */
 static void compute_segment(ism_cell_ctx *cx, const ism_bpoint *lo, const ism_bpoint *hi,
                             ism_seg_roots *out)
 {
     ism_segment_roots(&cx->s, &cx->roots, lo->p, hi->p, lo->f, hi->f, lo->g, hi->g, out);
     if (out->n == 2 && out->r[1].t - out->r[0].t < cx->stitch_tol) {
-        /* Two roots closer than the stitching tolerance: one double root (paper Fig. 3b). */
         ism_root m = out->r[0];
         m.t = 0.5 * (out->r[0].t + out->r[1].t);
         for (int k = 0; k < 3; k++)
             m.p[k] = lo->p[k] + m.t * (hi->p[k] - lo->p[k]);
-        ism_sample_grad(&cx->s, m.p, m.g);
+        if (!(fabs(ism_sample_grad(&cx->s, m.p, m.g)) < cx->roots.eps))
+            return; /* two sign changes, a piece between them */
         m.kind = ISM_ROOT_TOUCH;
         out->r[0] = m;
         out->n = 1;
