@@ -91,6 +91,27 @@ static bool prepend_let(ism_cli_run *run, size_t at, const char *name, const cha
     return true;
 }
 
+/* A -p that the built-in surface does not have is refused, as a request's "params" is:
+ * a misspelt name would otherwise be ignored without a word. */
+static bool preset_has_params(const ism_cli_run *run, const ism_preset *p)
+{
+    for (size_t i = 0; i < run->nparams; i++) {
+        bool known = false;
+        for (size_t k = 0; k < p->nparams && !known; k++)
+            known = strcmp(run->params[i].name, p->params[k].name) == 0;
+        if (known)
+            continue;
+        char names[256] = "none";
+        for (size_t k = 0, at = 0; k < p->nparams && at < sizeof names; k++)
+            at += (size_t)snprintf(names + at, sizeof names - at, "%s%s", k ? ", " : "",
+                                   p->params[k].name);
+        fprintf(stderr, "isomesh: --param %s: the surface '%s' has no parameter %s (it has %s)\n",
+                run->params[i].name, p->name, run->params[i].name, names);
+        return false;
+    }
+    return true;
+}
+
 static bool use_preset(ism_cli_run *run, const ism_preset *p)
 {
     run->expr = p->expr;
@@ -226,6 +247,8 @@ static int resolve_surface(ism_cli_run *run)
             fprintf(stderr, "isomesh: no built-in surface named '%s' (try --list)\n", run->surface);
             return 2;
         }
+        if (!preset_has_params(run, p))
+            return 2;
         return use_preset(run, p) ? 0 : 1;
     }
     if (!run->expr) {

@@ -153,6 +153,9 @@ class TestIsomesh(unittest.TestCase):
             (["-e", "x", "-o", "a.xyz"], "extension"),
             (["-e", "x"], "nothing to do"),
             (["--surface", "nope", "-o", "a.ply"], "nope"),
+            # a parameter the built-in surface does not have (the API refuses it too)
+            (["--surface", "torus", "-p", "Q=1", "-o", "a.ply"],
+             "--param Q: the surface 'torus' has no parameter Q (it has R, r)"),
             (["--frobnicate"], "unknown option"),
             (["-e", "x", "--threads", "-1", "-o", "a.ply"], "--threads"),
             (["-e", "x", "--max-error", "-1", "-o", "a.ply"], "--max-error"),
