@@ -1,30 +1,38 @@
-/* rm_crease_slide.c — crease vertices moved onto and along their crease. Where f's top is
- * min(a, b) or max(a, b) (a CSG union or intersection) the surface has a crease on the curve
- * a = b = 0, and the pass locks the vertices round it (rm_locks.c). Without a bound the
- * polygoniser puts none of them on that curve: they are its edge roots, each on one branch's
- * surface and up to a fraction of a cell off the other's (the gyroid ball: about 1/8 of a
- * cell), spaced as the cells cut them (1/400 of a cell to a cell apart), and every triangle
- * between two near ones and a far one is a needle no flip mends. Here a locked vertex v
- * whose triangles form one closed manifold fan (no boundary, no non-manifold edge, none of
- * the caller's locked edges, one label) and which lies within ISM_RM_CREASE_NEAR_REL of its
- * mean edge of both branches' zero sets is
- *   - snapped onto the crease: its nearest point of a = b = 0 (minimum-norm Newton steps on
- *     the two equations), when v is not on it yet;
+/* rm_crease_slide.c — vertices beside a min/max crease moved onto it and along it. Where f's
+ * top is min(a, b) or max(a, b) (a CSG union or intersection) the surface has a crease on
+ * the curve a = b = 0. Without a bound the polygoniser puts no vertex on that curve: its
+ * vertices there are edge roots, each on one branch's surface and up to a fraction of a cell
+ * off the other's (the gyroid ball: about 1/8 of a cell), a chamfer of thin triangles spaced
+ * as the cells cut it (1/400 of a cell to a cell apart); the pass locks most of them as a
+ * crease (rm_locks.c), and every triangle between two near ones and a far one is a needle
+ * no flip mends. Here a vertex v (locked or free, not RM_PINNED, ∇f not vanishing) whose
+ * triangles form one closed manifold fan (no boundary, no non-manifold edge, none of the
+ * caller's locked edges, one label) and which lies within ISM_RM_CREASE_NEAR_REL of its mean
+ * edge of both branches' zero sets is, the first that passes:
+ *   - merged with its nearest neighbour w, when w is closer than ISM_RM_CREASE_CROWD of the
+ *     mean edge and beside the crease too, the merged vertex put on the crease nearest
+ *     their middle (two vertices of the two surfaces crowding the crease become one on it;
+ *     the link condition keeps the topology, rm_merge.h);
+ *   - snapped onto the crease, its nearest point of a = b = 0, when v is not on it yet;
  *   - slid along it, when it is on it (within ISM_RM_CREASE_ON_REL) and exactly two of its
  *     neighbours are too (a chain: a crease corner, or a crease met twice, has more): toward
- *     the middle of those two, back onto a = b = 0 by the same steps, kept between them in
- *     order; a half and a quarter step are tried after the whole one.
- * Either way v ends on both surfaces (within ISM_RM_CREASE_ON_REL of its mean edge). The
- * branches are f's top min/max, or the top of f shortened over the fan's box (a nested
- * min/max whose other operands the box proves dominated: three-balls); a fan with neither
- * (steinmetz's and the cube's max(...) − 1) is left alone. A move is kept only when each
- * triangle of the fan stays within ISM_RM_CREASE_SLIDE_TURN_DEG of its own normal before
- * (across a crease the fan's mean normal says nothing), no outer edge of the fan bends past
- * the crease angle by more than ISM_RM_CREASE_SLIDE_BEND_DEG over what it did, the fan's
- * smallest angle grows, and the distances the relaxation keeps are kept (rm_centroids_stay:
- * under max_error every centroid and edge midpoint of the fan within it, rm_bound.h). ∇f
- * vanishing at v (a singular point) leaves it alone, as does RM_PINNED. */
+ *     the middle of those two, kept between them in order; a half and a quarter step are
+ *     tried after the whole one.
+ * Points go onto a = b = 0 by minimum-norm Newton steps on the two branches, and a moved
+ * vertex ends within ISM_RM_CREASE_ON_REL of its mean edge of both surfaces and locked (on
+ * the crease: the relaxation would move it off). The branches are f's top min/max, or the
+ * top of f shortened over the fan's box (a nested min/max whose other operands the box
+ * proves dominated: three-balls); a fan with neither (steinmetz's and the cube's
+ * max(...) − 1) is left alone. A move is kept only when each triangle stays within
+ * ISM_RM_CREASE_SLIDE_TURN_DEG of its own normal before (across a crease the fan's mean
+ * normal says nothing), no outer edge bends past the crease angle by more than
+ * ISM_RM_CREASE_SLIDE_BEND_DEG over what it did, the smallest angle of the fan (of both fans,
+ * for a merge) grows, and the distances the pass keeps are kept (centroids: rm_centroids_stay
+ * for a move, the fans' farthest or the mesh's for a merge, midpoints too; under max_error
+ * every centroid and edge midpoint of the fan within it, rm_bound.h). */
 #include "core/remesh/rm_bound.h"
+#include "core/remesh/rm_cbound.h"
+#include "core/remesh/rm_merge.h"
 #include "core/remesh/rm_pass.h"
 #include "core/util/min_norm.h"
 #include "core/util/vec3.h"
@@ -65,6 +73,11 @@
  * crease angle (rm_collapse.c's ISM_RM_CROWD_BEND_DEG for merges along a crease): moving
  * along a curved crease turns the triangles on it a little either way. */
 #define ISM_RM_CREASE_SLIDE_BEND_DEG 10.0
+/* Two vertices beside the crease nearer than this × the mean edge crowd it: merged into one
+ * on it (rm_collapse.c's ISM_RM_CROWD for merges along a crease). */
+#define ISM_RM_CREASE_CROWD 0.25
+/* A merged fan has at most this many triangles (rm_collapse.c's limit). */
+#define ISM_RM_CREASE_MERGE_MAX_DEGREE 16
 
 /* One vertex's fan: the triangles in order round v (tri[i] runs v, ring[i], then the next
  * ring vertex), its two neighbours on the crease when it slides, and the tape. */
@@ -252,6 +265,110 @@ static bool fan_shape_ok(rm_pass *p, uint32_t v, const crease_fan *c, const doub
     return true;
 }
 
+/* The merged fan of g (v into w, w then at x) against the two fans before: every new
+ * triangle within the turn limit of its own normal before, its outer edge bending no more
+ * than fan_shape_ok allows, its centroid and the midpoints of the edges at x within what
+ * the pass keeps, and the smallest angle grown over both fans'. */
+static bool merged_fan_ok(rm_pass *p, const rm_merge *g, const double *x)
+{
+    const rm_mesh *r = &p->r;
+    double turn = cos(ISM_RM_CREASE_SLIDE_TURN_DEG * M_PI / 180);
+    double crease = ISM_RM_CREASE_DEG * M_PI / 180, more = ISM_RM_CREASE_SLIDE_BEND_DEG * M_PI / 180;
+    double old_sine = INFINITY, new_sine = INFINITY, old_cen = 0, new_cen = 0;
+    double old_mid = 0, new_mid = 0;
+    uint32_t ends[2] = {g->v, g->w};
+    for (int e = 0; e < 2; e++) {
+        uint32_t u = ends[e];
+        for (uint32_t i = 0; i < r->count[u]; i++) {
+            uint32_t t = r->vt[r->start[u] + i];
+            const uint32_t *c = r->m->tri + 3 * (size_t)t;
+            const double *o[3], *q[3];
+            for (int k = 0; k < 3; k++) {
+                o[k] = P(p, c[k]);
+                q[k] = c[k] == g->v || c[k] == g->w ? x : o[k];
+            }
+            double m[3], ln = rm_cross(o[0], o[1], o[2], m);
+            old_sine = fmin(old_sine, rm_sine_of(ln, rm_dist(o[0], o[1]), rm_dist(o[1], o[2]),
+                                                 rm_dist(o[2], o[0])));
+            old_cen = fmax(old_cen, rm_centroid_distance(p, o[0], o[1], o[2]));
+            int at = rm_corner(r->m, t, u);
+            old_mid = fmax(old_mid, rm_midpoint_distance(p, o[at], o[(at + 1) % 3]));
+            if (t == g->t1 || t == g->t2)
+                continue;
+            double n[3], lq = rm_cross(q[0], q[1], q[2], n);
+            if (!(ism_dot3(n, m) > turn * lq * ln))
+                return false;
+            new_sine = fmin(new_sine, rm_sine_of(lq, rm_dist(q[0], q[1]), rm_dist(q[1], q[2]),
+                                                 rm_dist(q[2], q[0])));
+            double cen = rm_centroid_distance(p, q[0], q[1], q[2]);
+            double mid = rm_midpoint_distance(p, x, q[(at + 1) % 3]);
+            if (p->bounded && !(cen <= p->max_error && mid <= p->max_error))
+                return false;
+            new_cen = fmax(new_cen, cen);
+            new_mid = fmax(new_mid, mid);
+            uint32_t a = c[(at + 1) % 3], b = c[(at + 2) % 3], two[2];
+            int count;
+            if (a == g->v || a == g->w || b == g->v || b == g->w ||
+                !rm_edge_triangles(r, a, b, two, &count))
+                continue;
+            const uint32_t *z = r->m->tri + 3 * (size_t)(two[0] == t ? two[1] : two[0]);
+            const double *w3[3] = {P(p, z[0]), P(p, z[1]), P(p, z[2])};
+            if (!(bend(q, w3) <= fmax(crease, bend(o, w3) + more)))
+                return false;
+        }
+    }
+    return new_sine > old_sine && (new_cen <= p->centroid_bound || new_cen <= old_cen) &&
+           (new_mid <= p->midpoint_low || new_mid <= old_mid);
+}
+
+/* v's nearest neighbour w closer than ISM_RM_CREASE_CROWD × v's mean edge, beside the
+ * crease too: v merged into w and w put on the crease nearest their middle (two vertices
+ * of the two surfaces crowding at the crease become one on it). True when done; *ok false
+ * when out of memory. */
+static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan *f, bool *ok)
+{
+    const rm_mesh *r = &p->r;
+    uint32_t w = UINT32_MAX;
+    double best = ISM_RM_CREASE_CROWD * f->mean_edge;
+    for (uint32_t i = 0; i < c->n; i++) {
+        double d = rm_dist(P(p, v), P(p, c->ring[i]));
+        if (d < best && r->locked[c->ring[i]] != RM_PINNED)
+            best = d, w = c->ring[i];
+    }
+    crease_fan cw;
+    rm_merge g;
+    if (w == UINT32_MAX || !walk_fan(p, w, &cw) ||
+        !on_crease(p, c->f, P(p, w), ISM_RM_CREASE_NEAR_REL * f->mean_edge) ||
+        !rm_merge_find_any(r, v, w, ISM_RM_CREASE_MERGE_MAX_DEGREE, &g) ||
+        !rm_merge_link_ok(r, &g))
+        return false;
+    double x[3], mid[3], grad[3];
+    for (int k = 0; k < 3; k++)
+        x[k] = mid[k] = 0.5 * (P(p, v)[k] + P(p, w)[k]);
+    if (!to_crease(p, c->f, x, f->mean_edge) ||
+        !(rm_dist(x, mid) <= ISM_RM_CREASE_PROJECT_MAX_REL * f->mean_edge) ||
+        !on_crease(p, c->f, x, ISM_RM_CREASE_ON_REL * f->mean_edge) ||
+        !merged_fan_ok(p, &g, x))
+        return false;
+    ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], grad);
+    if (!(ism_norm3(grad) > p->gthresh))
+        return false;
+    uint32_t fan[ISM_RM_MERGE_MAX_DEGREE], n;
+    if (!(*ok = rm_merge_apply(&p->r, &g, fan, &n)))
+        return false;
+    rm_cbound_drop(p);
+    rm_commit_move(p, w, x, grad);
+    for (uint32_t i = 0; i < r->count[w]; i++) {
+        const uint32_t *t = r->m->tri + 3 * (size_t)r->vt[r->start[w] + i];
+        for (int k = 0; k < 3; k++)
+            p->active[t[k]] = 1;
+    }
+    p->active[v] = p->slide[v] = 0;
+    p->r.locked[w] = 1; /* on the crease now: kept there */
+    p->collapses++;
+    return true;
+}
+
 /* Tries to move v onto the crease (snap) or along it (slide); true when it moved. */
 static bool slide_vertex(rm_pass *p, uint32_t v, ism_tape *local)
 {
@@ -261,6 +378,9 @@ static bool slide_vertex(rm_pass *p, uint32_t v, ism_tape *local)
     int kind = find_chain(p, v, f.mean_edge, local, &c);
     if (!kind)
         return false;
+    bool ok = true;
+    if (snap_merge(p, v, &c, &f, &ok))
+        return true;
     const double *pos = P(p, v);
     const double *a = kind == 2 ? P(p, c.end[0]) : pos, *b = kind == 2 ? P(p, c.end[1]) : pos;
     /* a slide tries the whole way to the middle, then a half and a quarter; a snap the
@@ -279,6 +399,7 @@ static bool slide_vertex(rm_pass *p, uint32_t v, ism_tape *local)
         if (!(ism_norm3(g) > p->gthresh) || !rm_centroids_stay(p, v, x))
             continue;
         rm_commit_move(p, v, x, g);
+        p->r.locked[v] = 1; /* on the crease: kept there (the relaxation would move it off) */
         return true;
     }
     return false;
@@ -294,7 +415,7 @@ size_t rm_crease_slide_sweep(rm_pass *p)
     size_t moves = 0;
     for (size_t v = 0; v < r->m->nverts; v++) {
         const double *n = p->normal + 3 * v;
-        if (p->active[v] && r->locked[v] == 1 && r->count[v] && !r->gone[v] && !p->slide[v] &&
+        if (p->active[v] && r->locked[v] != RM_PINNED && r->count[v] && !r->gone[v] && !p->slide[v] &&
             !(n[0] == 0 && n[1] == 0 && n[2] == 0) && slide_vertex(p, (uint32_t)v, local))
             moves++;
     }
@@ -302,3 +423,4 @@ size_t rm_crease_slide_sweep(rm_pass *p)
     p->moves += moves;
     return moves;
 }
+

@@ -214,9 +214,10 @@ size_t rm_relax_sweep(rm_pass *p, uint8_t most);
  * toward the middle of their two boundary neighbours (rm_slide.c); returns the moves made. */
 size_t rm_slide_sweep(rm_pass *p);
 
-/* One sweep (or a few, while vertices move) sliding the active crease vertices of a min/max
- * crease chain along the crease curve toward the middle of their two crease neighbours, on
- * both branches (rm_crease_slide.c); returns the moves made. */
+/* One sweep over the active vertices beside a min/max crease (rm_crease_slide.c): each is
+ * merged with a crowding neighbour onto the crease, snapped onto it, or slid along it toward
+ * the middle of its two neighbours on it, on both branches; returns the moves and merges
+ * made (merges also count in collapses). */
 size_t rm_crease_slide_sweep(rm_pass *p);
 
 /* The fan of v: the sine of its smallest angle, mean edge length, the area-weighted centroid
