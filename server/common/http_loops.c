@@ -171,15 +171,17 @@ static bool start_daemon(ism_http_loops *s, loop *l, unsigned flags, int listen_
                          const struct MHD_OptionItem *opts, const ism_front_hooks *front)
 {
     l->set = s;
+    /* opts first: its first item is the external logger, which libmicrohttpd wants before any
+     * other option (else it warns at every start, on the standard logger too) */
     if (front) /* the front accepts; libmicrohttpd gets connections from it */
         l->d = MHD_start_daemon(flags | MHD_USE_EPOLL | MHD_USE_NO_LISTEN_SOCKET, 0, NULL, NULL,
-                                ah, ah_cls, MHD_OPTION_CONNECTION_LIMIT, limit,
-                                MHD_OPTION_ARRAY, opts, MHD_OPTION_END);
+                                ah, ah_cls, MHD_OPTION_ARRAY, opts,
+                                MHD_OPTION_CONNECTION_LIMIT, limit, MHD_OPTION_END);
     else
         l->d = MHD_start_daemon(flags | MHD_USE_EPOLL, 0, NULL, NULL, ah, ah_cls,
+                                MHD_OPTION_ARRAY, opts,
                                 MHD_OPTION_LISTEN_SOCKET, listen_fd,
                                 MHD_OPTION_CONNECTION_LIMIT, limit,
-                                MHD_OPTION_ARRAY, opts,
                                 MHD_OPTION_END);
     if (!l->d)
         return false;

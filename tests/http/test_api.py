@@ -42,6 +42,14 @@ class ApiTest(unittest.TestCase):
         self.assertTrue(err["message"])
         return err
 
+    def test_start_log_is_quiet(self):
+        """No warning at an ordinary start: libmicrohttpd warned four times (one per loop)
+        that MHD_OPTION_EXTERNAL_LOGGER was not its first option, noise on every `make run`."""
+        lines = self.d._log_lines()
+        start = lines[:next(i for i, line in enumerate(lines) if "listening" in line) + 1]
+        self.assertEqual([line for line in start if " warn " in line or "level=warn" in line
+                          or "http_library" in line], [], "\n".join(start))
+
     # ---- meshes ----------------------------------------------------------------------
     def test_mesh_miss_then_hit_with_headers_and_decodable_draco(self):
         req = sphere(0.91)
