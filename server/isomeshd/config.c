@@ -638,6 +638,13 @@ static int next_flag(int argc, char **argv, int *i, const char **name, size_t *n
         fprintf(stderr, "isomeshd: %s needs a value (see --help)\n", a);
         return 2;
     }
+    const char *next = argv[*i + 1];
+    if (!strncmp(next, "--", 2) && find_flag(next + 2, strcspn(next + 2, "="))) {
+        /* `--listen --cache-dir DIR`: the value was forgotten, not "--cache-dir" */
+        fprintf(stderr, "isomeshd: %s needs a value (the next word, '%s', is a flag)\n", a,
+                next);
+        return 2;
+    }
     *value = argv[++*i];
     return 0;
 }

@@ -150,6 +150,12 @@ class ConfigTest(unittest.TestCase):
             r = run(*args)
             self.assertEqual(r.returncode, 2, args)
             self.assertEqual(len(r.stderr.strip().splitlines()), 1, args)
+        # a value forgotten: the next flag is not taken as it (it was, and then its own value
+        # was called an unexpected argument)
+        r = run("--listen", "--cache-dir", "/tmp/x")
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertEqual(r.stderr.strip(),
+                         "isomeshd: --listen needs a value (the next word, '--cache-dir', is a flag)")
 
     def test_config_file_and_flags_override_it(self):
         with tempfile.TemporaryDirectory() as tmp:
