@@ -140,10 +140,20 @@ void ismd_route_find(ismd_req *r, const char *url)
     r->route = d->id;
     r->allow = d->allow;
     r->want = d->want;
-    if (!d->allow) {
+    if (!d->allow) { /* what a well-formed URL of that kind looks like */
         r->early_status = 404;
         r->early_code = "not_found";
-        snprintf(r->early_msg, sizeof r->early_msg, "nothing here");
+        if (d->id == ISMD_R_JOB)
+            snprintf(r->early_msg, sizeof r->early_msg, "no such job: a job is /v1/jobs/ID "
+                     "(and /events), ID the %d hex digits POST /v1/jobs answers", JOB_ID_LEN);
+        else if (d->id == ISMD_R_MESH_FILE)
+            snprintf(r->early_msg, sizeof r->early_msg, "no such mesh: a mesh is "
+                     "/v1/meshes/KEY.FORMAT, /v1/meshes/KEY/stats or /features, KEY the %d hex "
+                     "digits of a job's key, FORMAT drc, glb, ply, obj, stl or png",
+                     ISM_KEY_HEX_LEN);
+        else
+            snprintf(r->early_msg, sizeof r->early_msg, "nothing here: the API is described "
+                     "at GET /v1/openapi.yaml");
     }
 }
 

@@ -261,9 +261,17 @@ class ApiTest(unittest.TestCase):
     def test_unknown_meshes_are_404(self):
         self.error_of(self.d.get("/v1/meshes/%s.drc" % ("ab" * 32)), 404)
         self.error_of(self.d.get("/v1/meshes/%s/stats" % ("cd" * 32)), 404)
-        self.error_of(self.d.get("/v1/meshes/xyz.drc"), 404)
-        self.error_of(self.d.get("/v1/meshes/%s.exe" % ("ab" * 32)), 404)
-        self.error_of(self.d.get("/v1/meshes/%s.DRC" % ("ab" * 32)), 404)
+        # a malformed URL says what a mesh URL looks like (it said "nothing here")
+        for bad in ("xyz.drc", "%s.exe" % ("ab" * 32), "%s.DRC" % ("ab" * 32)):
+            msg = self.error_of(self.d.get("/v1/meshes/" + bad), 404)["message"]
+            self.assertIn("/v1/meshes/KEY.FORMAT", msg)
+            self.assertIn("64 hex digits", msg)
+        msg = self.error_of(self.d.get("/v1/jobs/xyz"), 404)["message"]
+        self.assertIn("/v1/jobs/ID", msg)
+        self.assertIn("32 hex digits", msg)
+        msg = self.error_of(self.d.get("/v1/nope"), 404)["message"]
+        self.assertIn("GET /v1/openapi.yaml", msg)
+        self.assertEqual(self.d.get("/v1/openapi.yaml").status, 200)
 
     # ---- errors ----------------------------------------------------------------------
     def test_bad_json_is_400_with_a_position(self):
