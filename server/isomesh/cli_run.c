@@ -18,6 +18,7 @@
 #include "server/common/fd_io.h"
 #include "server/common/pipeline.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <jansson.h>
 #include <limits.h>
@@ -267,11 +268,26 @@ static const char *extension(const char *path)
     return dot && (!slash || dot > slash) ? dot + 1 : "";
 }
 
+/* The output's format: its extension in lower case (m.PLY is a PLY file) into buf (8 bytes),
+ * "" when too long to be one. */
+static const char *format_of(const char *path, char buf[8])
+{
+    const char *ext = extension(path);
+    size_t n = strlen(ext);
+    if (n >= 8)
+        n = 0;
+    for (size_t i = 0; i < n; i++)
+        buf[i] = (char)tolower((unsigned char)ext[i]);
+    buf[n] = 0;
+    return buf;
+}
+
 typedef bool (*writer_fn)(const ism_mesh *, ism_write_fn, void *);
 
 static writer_fn writer_for(const char *path)
 {
-    const char *ext = extension(path);
+    char buf[8];
+    const char *ext = format_of(path, buf);
     if (strcmp(ext, "ply") == 0)
         return ism_write_ply;
     if (strcmp(ext, "obj") == 0)
@@ -482,8 +498,10 @@ int ism_cli_run_surface(ism_cli_run *run)
     if (run->features_output && status == 0 && !write_features(run->features_output, &prod))
         status = 1;
     timings[ISM_TIME_TOTAL] = ism_now_ms() - t0;
-    if (run->print_stats && status == 0)
-        print_stats(&prod, extension(run->output ? run->output : ""), timings);
+    if (run->print_stats && status == 0) {
+        char fmt[8];
+        print_stats(&prod, format_of(run->output ? run->output : "", fmt), timings);
+    }
     if (analysed) {
         ism_locus_check_free(&chk);
         ism_analysis_free(&an);
@@ -512,7 +530,16 @@ int ism_cli_run_request_file(ism_cli_run *run, const char *path)
 {
     if (nothing_to_do(run))
         return 2;
-    const char *format = run->output ? extension(run->output) : NULL;
+    char fmt[8];
+    const char *format = run->output ? format_of(run->output, fmt) : NULL;
+    if (format && ism_format_lookup(format) < 0) {
+        fprintf(stderr, "isomesh: -o %s: unknown extension '.%s' (a request file writes",
+                run->output, extension(run->output));
+        for (int f = 0; f < ISM_FORMAT_COUNT; f++)
+            fprintf(stderr, "%s.%s", f ? ", " : " ", ism_format_name((enum ism_format)f));
+        fprintf(stderr, ")\n");
+        return 2;
+    }
     size_t len;
     char *json = read_file(path, &len);
     if (!json)

@@ -97,6 +97,13 @@ class TestIsomesh(unittest.TestCase):
             x, y, z = verts[i][:3]
             self.assertAlmostEqual((x * x + y * y + z * z) ** 0.5, r, delta=0.02 * r)
 
+    def test_extension_in_any_case(self):
+        path = self.out("S.OBJ")
+        p = run("-e", "x^2 + y^2 + z^2 - 0.8", "-d", "2:4", "-o", path)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        verts, faces = read_obj(path)
+        self.assert_closed_sphere(verts, faces, 0.8 ** 0.5)
+
     def test_ply_obj_stl_of_a_sphere(self):
         for ext in ("ply", "obj", "stl"):
             path = self.out("s." + ext)
@@ -284,6 +291,17 @@ class TestIsomesh(unittest.TestCase):
         p = run(req, path)
         self.assertEqual(p.returncode, 2)
         self.assertIn(f"unexpected argument '{path}'", p.stderr)
+        # the extension names the format in any case; an unknown one is the -o's fault
+        with open(req, "w") as f:
+            json.dump({"preset": "sphere", "depth": {"min": 3, "max": 5}}, f)
+        upper = self.out("S.PLY")
+        p = run(req, "-o", upper)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertEqual(slurp(upper)[:4], b"ply\n")
+        p = run(req, "-o", self.out("s.xyz"))
+        self.assertEqual(p.returncode, 2)
+        self.assertIn("-o " + self.out("s.xyz") + ": unknown extension '.xyz' (a request file "
+                      "writes .drc, .glb, .ply, .obj, .stl, .png)", p.stderr)
 
     def test_dual_means_the_dual_mesh_or_a_failure_saying_why(self):
         """--dual: the dual mesh, or exit status 1 with the dual mesher's reason (the stats'
