@@ -7,6 +7,7 @@
 #include "core/eval/interval_ops.h"
 
 #include <math.h>
+#include <string.h>
 
 /* Sub-boxes down to 1/2^THIN_SEARCH_LEVELS of the node: a piece that the Newton probes
  * miss from the node's centre is found from the centre of a box this much smaller (a tube
@@ -49,10 +50,13 @@ static bool keeps_sign(ism_interval v, int sign) { return sign > 0 ? v.lo > 0 : 
 static bool flat_along(const ism_interval x[3], int k) { return x[k].lo == x[k].hi; }
 
 /* Newton from the box's centre toward f = 0 and a little past it, clamped to the box (in a
- * face, along the gradient's part in the face's plane). */
+ * face, along the gradient's part in the face's plane). A step back to the point of two steps
+ * before ends the probe: from there it would only visit those two points again (a 2-cycle
+ * across a kink, between a CSG wedge's two planes, or clamped on a wall), both evaluated
+ * without the other sign. */
 static bool probe(ism_sampler *s, const ism_interval x[3], int sign, double found[3])
 {
-    double p[3], size = INFINITY;
+    double p[3], before[3] = {NAN, NAN, NAN}, size = INFINITY; /* NaN: equal to nothing */
     for (int k = 0; k < 3; k++) {
         p[k] = 0.5 * x[k].lo + 0.5 * x[k].hi;
         if (!flat_along(x, k))
@@ -72,14 +76,17 @@ static bool probe(ism_sampler *s, const ism_interval x[3], int sign, double foun
         double gg = ism_dot3(g, g);
         if (it == PROBE_STEPS || !(gg > 0) || !isfinite(gg) || !isfinite(f))
             return false;
-        double t = (1 + PROBE_OVERSHOOT) * f / gg, moved = 0;
+        double t = (1 + PROBE_OVERSHOOT) * f / gg, moved = 0, last[3];
+        memcpy(last, p, sizeof last);
         for (int k = 0; k < 3; k++) {
             double q = fmin(fmax(p[k] - t * g[k], x[k].lo), x[k].hi);
             moved += fabs(q - p[k]);
             p[k] = q;
         }
-        if (!(moved > PROBE_MIN_MOVE * size))
+        if (!(moved > PROBE_MIN_MOVE * size) ||
+            (p[0] == before[0] && p[1] == before[1] && p[2] == before[2]))
             return false;
+        memcpy(before, last, sizeof before);
     }
     return false;
 }
@@ -192,6 +199,10 @@ enum ism_thin_verdict ism_thin_probe(ism_sampler *s, const double lo[3], const d
         x[k] = iv(lo[k], hi[k]);
     if (probe(s, x, sign, found))
         return hit;
+    /* the octants (quadrants in a face) in one batched interval: a probe never leaves its
+     * box, so where the interval keeps the corners' sign it cannot find the other one */
+    ism_interval ox[8], oy[8], oz[8], kept[8];
+    int n = 0;
     for (int c = 0; c < 8; c++) {
         bool twin = false; /* the same octant as an earlier one: the box is flat there */
         ism_interval o[3];
@@ -200,7 +211,16 @@ enum ism_thin_verdict ism_thin_probe(ism_sampler *s, const double lo[3], const d
             twin |= ((c >> k) & 1) && flat_along(x, k);
             o[k] = (c >> k) & 1 ? iv(m, hi[k]) : iv(lo[k], m);
         }
-        if (!twin && probe(s, o, sign, found))
+        if (twin)
+            continue;
+        ox[n] = o[0], oy[n] = o[1], oz[n] = o[2];
+        n++;
+    }
+    s->n_interval += (uint64_t)n;
+    ism_eval_interval_batch(s->tape, s->ws, ox, oy, oz, kept, (size_t)n);
+    for (int c = 0; c < n; c++) {
+        ism_interval o[3] = {ox[c], oy[c], oz[c]};
+        if (!keeps_sign(kept[c], sign) && probe(s, o, sign, found))
             return hit;
     }
     return ISM_THIN_UNDECIDED;

@@ -36,9 +36,10 @@ typedef struct ism_thin_ws {
 } ism_thin_ws;
 
 /* The live preview's search (ism_poly_options.thin_coarse): Newton probes only, from the
- * box's centre and the centres of its eight octants (four quadrants in a face), no interval
- * proof. ISM_THIN_FOUND as ism_thin_search; otherwise ISM_THIN_UNDECIDED (nothing found,
- * nothing proven). A ball or a tube a fifth of the box across is reached from the nearest
+ * box's centre and the centres of its eight octants (four quadrants in a face) — an octant
+ * only where one batched interval over the eight leaves the other sign possible (a probe
+ * stays in its box) — no interval proof. ISM_THIN_FOUND as ism_thin_search; otherwise
+ * ISM_THIN_UNDECIDED (nothing found, nothing proven). A ball or a tube a fifth of the box across is reached from the nearest
  * of those centres (each step lands past f = 0); a piece the probes miss is missing from
  * the preview only. ISM_THIN_FOUND_KINKED instead of FOUND when s->tape (shortened to the
  * node) still holds a min or max: a CSG crease may cross the box, whose slivers past the

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "core/analysis/analysis.h"
+#include "core/octree/thin_search.h"
 #include "core/singular/check.h"
 #include "core/singular/surface.h"
 #include "tests/unit/core/poly_fixture.h"
@@ -404,5 +405,30 @@ Test(thin, lens_of_two_balls_thinner_than_a_cell)
                      p.nonmanifold_edges);
         ism_mesh_free(&m);
     }
+    ism_tape_free(t);
+}
+
+/* The preview's probes (ism_thin_probe) where f has a kink and nothing is hidden: f =
+ * max(x, −x) + 1 ≥ 1 over the box x ∈ [−1, 2], y, z ∈ [−1, 1]. From the centre (x = 0.5,
+ * f 1.5, ∇f (1, 0, 0)) Newton with its overshoot leaves the box and is clamped to x = −1,
+ * then, on the other branch, to x = 2, then back to x = −1: a 2-cycle between the walls,
+ * which ends the probe after 3 gradients (it ran all PROBE_STEPS + 1 = 7). The eight octants,
+ * where f ≥ 0.5 (x ≤ 0.5) and f ≥ 1.5 (x ≥ 0.5) by their natural intervals in one batch, are
+ * not probed: a probe stays in its box, so it cannot find the other sign there (they were:
+ * 8 probes more). */
+Test(thin, kinked_probe_ends_at_a_two_cycle_and_skips_what_keeps_the_sign)
+{
+    pf_surface s = {"max(x, -x) + 1", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    ism_sampler smp = {.tape = t, .ws = ism_eval_ws_new(t)};
+    cr_assert(smp.ws);
+    const double lo[3] = {-1, -1, -1}, hi[3] = {2, 1, 1};
+    double found[3];
+    enum ism_thin_verdict v = ism_thin_probe(&smp, lo, hi, 1, found);
+    cr_expect_eq(v, ISM_THIN_UNDECIDED, "verdict %d", (int)v);
+    cr_expect_eq(smp.n_gradient, 3, "%llu gradients", (unsigned long long)smp.n_gradient);
+    cr_expect_eq(smp.n_interval, 8, "%llu intervals (the octants in one batch)",
+                 (unsigned long long)smp.n_interval);
+    ism_eval_ws_free(smp.ws);
     ism_tape_free(t);
 }
