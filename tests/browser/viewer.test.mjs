@@ -365,6 +365,34 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
     assert.deepEqual(words, [['simplify within the bound', 1], ['quality: good', 1]]);
   });
 
+  it('line colours of different meanings are far apart (CIE76 ΔE ≥ 30)', async () => {
+    // the cube's creases were drawn 0xfa5708, ΔE 25 from the boundary edges' orange and 22
+    // from the artefacts' red: on a CSG surface they read as boundary edges
+    const colours = await page.evaluate(async () => {
+      const f = await import('/js/features.js');
+      const c = await import('/js/curves.js');
+      return { boundary: f.FEATURE_COLORS.boundary, artefacts: f.FEATURE_COLORS.artefacts,
+        singular: f.FEATURE_COLORS.edges, whisker: f.CURVE_KIND_COLORS.whisker, ...c.CUT_KIND_COLORS };
+    });
+    const lab = (h) => {
+      const lin = (v) => (v <= 0.04045 ? v / 12.92 : ((v + 0.055) / 1.055) ** 2.4);
+      const [r, g, b] = [16, 8, 0].map((s) => lin(((h >> s) & 255) / 255));
+      const t = (v) => (v > 0.008856 ? Math.cbrt(v) : 7.787 * v + 16 / 116);
+      const x = t((0.4124 * r + 0.3576 * g + 0.1805 * b) / 0.95047), y = t(0.2126 * r + 0.7152 * g + 0.0722 * b);
+      const z = t((0.0193 * r + 0.1192 * g + 0.9505 * b) / 1.08883);
+      return [116 * y - 16, 500 * (x - y), 200 * (y - z)];
+    };
+    const names = Object.keys(colours);
+    assert.ok(names.includes('crease') && names.includes('section'), names.join());
+    for (let i = 0; i < names.length; i++) {
+      for (let j = i + 1; j < names.length; j++) {
+        const [a, b] = [lab(colours[names[i]]), lab(colours[names[j]])];
+        const d = Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+        assert.ok(d >= 30, `${names[i]} and ${names[j]}: ΔE ${d.toFixed(1)}`);
+      }
+    }
+  });
+
   it('asks for a max error and shows what was reached', async () => {
     await choosePreset('sphere');
     await page.evaluate(() => { document.getElementById('box-section').open = true; });

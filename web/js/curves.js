@@ -10,7 +10,7 @@ import { fatLines, markers, CURVE_KIND_COLORS, FEATURE_COLORS } from './features
 
 // One colour per kind of requested curve (proto/glb.c uses the same).
 export const CUT_KIND_COLORS = {
-  section: 0xff4fa3, level: 0x3b87ff, intersection: 0xffbf0a, silhouette: 0xe6e6e6, crease: 0xfa5708,
+  section: 0xff4fa3, level: 0x3b87ff, intersection: 0xffbf0a, silhouette: 0xe6e6e6, crease: 0xa855f7,
 };
 // One colour per arrangement vertex type (features JSON arrangement.vertices[].type); the
 // two on the singular locus take the colours of the double curves and singular points.
