@@ -44,11 +44,6 @@
  * be the crease's own, bending by tens of degrees, and moving v by a hair changes that by a
  * little either way. */
 #define ISM_RM_CROWD_BEND_DEG 10.0
-/* A merge along a crease that leaves fewer triangles under ISM_RM_COLLAPSE_DEG may lower its
- * fan's smallest sine to this share of it (the collapses' own rule: it must grow). gyroid-ball
- * needles under 10° in bench_remesh's boxes 157 / 155 / 207 -> 115 / 113 / 149, its smallest
- * angle 0.53 / 0.41 / 0.27° -> 0.66 / 0.66 / 0.40°. */
-#define ISM_RM_CROWD_SINE_FLOOR 0.5
 /* Sweeps over the triangles per call: a collapse leaves its neighbours' needles for the next. */
 #define ISM_RM_COLLAPSE_SWEEPS 3
 

@@ -268,14 +268,18 @@ static bool fan_shape_ok(rm_pass *p, uint32_t v, const crease_fan *c, const doub
 /* The merged fan of g (v into w, w then at x) against the two fans before: every new
  * triangle within the turn limit of its own normal before, its outer edge bending no more
  * than fan_shape_ok allows, its centroid and the midpoints of the edges at x within what
- * the pass keeps, and the smallest angle grown over both fans'. */
+ * the pass keeps, and the smallest angle grown over both fans' — or, as for merges along a
+ * crease (rm_collapse.c), fewer triangles under ISM_RM_COLLAPSE_DEG and no sine below
+ * ISM_RM_CROWD_SINE_FLOOR of the smallest before (needles along a crease come in strips:
+ * bench_remesh gyroid-ball 54 / 51 / 86 -> 48 / 46 / 73 needles, the same smallest angle). */
 static bool merged_fan_ok(rm_pass *p, const rm_merge *g, const double *x)
 {
     const rm_mesh *r = &p->r;
     double turn = cos(ISM_RM_CREASE_SLIDE_TURN_DEG * M_PI / 180);
     double crease = ISM_RM_CREASE_DEG * M_PI / 180, more = ISM_RM_CREASE_SLIDE_BEND_DEG * M_PI / 180;
     double old_sine = INFINITY, new_sine = INFINITY, old_cen = 0, new_cen = 0;
-    double old_mid = 0, new_mid = 0;
+    double old_mid = 0, new_mid = 0, poor = sin(ISM_RM_COLLAPSE_DEG * M_PI / 180);
+    int poor_before = 0, poor_after = 0; /* t1 and t2 counted once, from v's fan */
     uint32_t ends[2] = {g->v, g->w};
     for (int e = 0; e < 2; e++) {
         uint32_t u = ends[e];
@@ -288,8 +292,11 @@ static bool merged_fan_ok(rm_pass *p, const rm_merge *g, const double *x)
                 q[k] = c[k] == g->v || c[k] == g->w ? x : o[k];
             }
             double m[3], ln = rm_cross(o[0], o[1], o[2], m);
-            old_sine = fmin(old_sine, rm_sine_of(ln, rm_dist(o[0], o[1]), rm_dist(o[1], o[2]),
-                                                 rm_dist(o[2], o[0])));
+            double so = rm_sine_of(ln, rm_dist(o[0], o[1]), rm_dist(o[1], o[2]),
+                                   rm_dist(o[2], o[0]));
+            bool once = e == 0 || rm_corner(r->m, t, g->v) < 0;
+            old_sine = fmin(old_sine, so);
+            poor_before += once && so < poor;
             old_cen = fmax(old_cen, rm_centroid_distance(p, o[0], o[1], o[2]));
             int at = rm_corner(r->m, t, u);
             old_mid = fmax(old_mid, rm_midpoint_distance(p, o[at], o[(at + 1) % 3]));
@@ -298,8 +305,10 @@ static bool merged_fan_ok(rm_pass *p, const rm_merge *g, const double *x)
             double n[3], lq = rm_cross(q[0], q[1], q[2], n);
             if (!(ism_dot3(n, m) > turn * lq * ln))
                 return false;
-            new_sine = fmin(new_sine, rm_sine_of(lq, rm_dist(q[0], q[1]), rm_dist(q[1], q[2]),
-                                                 rm_dist(q[2], q[0])));
+            double sn = rm_sine_of(lq, rm_dist(q[0], q[1]), rm_dist(q[1], q[2]),
+                                   rm_dist(q[2], q[0]));
+            new_sine = fmin(new_sine, sn);
+            poor_after += once && sn < poor;
             double cen = rm_centroid_distance(p, q[0], q[1], q[2]);
             double mid = rm_midpoint_distance(p, x, q[(at + 1) % 3]);
             if (p->bounded && !(cen <= p->max_error && mid <= p->max_error))
@@ -317,7 +326,9 @@ static bool merged_fan_ok(rm_pass *p, const rm_merge *g, const double *x)
                 return false;
         }
     }
-    return new_sine > old_sine && (new_cen <= p->centroid_bound || new_cen <= old_cen) &&
+    bool fewer = poor_after < poor_before && new_sine > ISM_RM_CROWD_SINE_FLOOR * old_sine;
+    return (new_sine > old_sine || fewer) &&
+           (new_cen <= p->centroid_bound || new_cen <= old_cen) &&
            (new_mid <= p->midpoint_low || new_mid <= old_mid);
 }
 

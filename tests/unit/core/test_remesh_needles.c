@@ -775,11 +775,11 @@ static void gyroid_ball_shape(const ism_mesh *m, double cell, const double *befo
 }
 
 /* Needles beside the crease the pass may leave at the preset's depth, 7, in the lattice /
- * 1e-3 / 0.37-cell boxes: 54 / 77 / 44 measured since vertices beside the crease are merged
+ * 1e-3 / 0.37-cell boxes: 48 / 73 / 37 measured since vertices beside the crease are merged
  * onto it, snapped onto it and slid along it (rm_crease_slide.c); 115 / 135 / 129 before (340 / 326 / 391 while the crease's
  * vertices, as close as 1/400 of a cell, were never merged into each other: rm_collapse.c's
  * crease merges; 157 / 164 / 193 while such a merge had to raise its fan's smallest angle). */
-static const size_t crease_left[3] = {62, 88, 52};
+static const size_t crease_left[3] = {55, 82, 44};
 
 static void gyroid_ball_case(const ism_tape *t, const double box[6], int d, int which)
 {
