@@ -7,7 +7,8 @@
  * itself; so does a connection idle longer than idle_s. The caller's connection rules see the
  * front's connections from their accept through the opened/busy/closed/handing hooks. Why: libmicrohttpd 0.9.75 (and 1.0.1) pushes a file answer's
  * header block as a segment of its own (server/isomeshd/respond.c), which bbr makes
- * expensive. One front per polling thread, used only by it (ism_front_quiesce excepted). */
+ * expensive. One front per polling thread, used only by it (ism_front_quiesce and the
+ * hand-over of a new connection between fronts excepted). */
 #ifndef ISM_HTTP_FRONT_H
 #define ISM_HTTP_FRONT_H
 
@@ -57,12 +58,23 @@ typedef struct ism_front_hooks {
 typedef struct ism_front ism_front;
 
 /* A front on listen_fd (non-blocking, shared with the other fronts: each is woken for a new
- * connection alone, EPOLLEXCLUSIVE) handing connections to d. NULL on failure (logged). */
-ism_front *ism_front_new(const ism_front_hooks *h, int listen_fd, struct MHD_Daemon *d);
-/* The descriptor to poll for input: readable when the front has work. */
-int ism_front_fd(const ism_front *f);
-/* Accepts, answers and hands over what is ready, closes what timed out. */
-void ism_front_run(ism_front *f);
+ * connection alone, EPOLLEXCLUSIVE) handing connections to d; peer: another front on the same
+ * socket (NULL: the first), whose group it joins: a front accepting a connection gives it to
+ * the one of the group holding the fewest, to be served by that one's thread. Every front of
+ * a group is made before any of them runs, and freed after all have stopped running. NULL on
+ * failure (logged). */
+ism_front *ism_front_new(const ism_front_hooks *h, int listen_fd, struct MHD_Daemon *d,
+                         ism_front *peer);
+/* fd (the caller's, readable when it has work: level-triggered) joins the front's epoll set
+ * so that the polling thread sleeps in one epoll_wait; its bit index (0-3), -1 on failure
+ * (logged). Why one wait: the listening socket wakes one front per connection only when its
+ * thread sleeps in epoll_wait on that set (EPOLLEXCLUSIVE); a thread in poll() on the set's
+ * descriptor is woken for every connection, every thread, and the first takes it. */
+int ism_front_watch(ism_front *f, int fd);
+/* Waits up to timeout_ms (0: not at all) for work, then accepts, answers and hands over what
+ * is ready and closes what timed out. Returns the watched descriptors found ready, bit i for
+ * ism_front_watch's index i. */
+unsigned ism_front_run(ism_front *f, int timeout_ms);
 /* Milliseconds until the front's next deadline (at most max_ms). */
 int ism_front_wait_ms(const ism_front *f, int max_ms);
 /* Stops accepting (any thread). */

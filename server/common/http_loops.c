@@ -21,8 +21,11 @@
  * lands after MHD_run read the flag leaves the descriptor readable for the next poll.
  *
  * With an own sender (http_front.h) the daemons have no listening socket: each thread's front
- * accepts, answers what its hook takes and hands the rest to the thread's daemon, polled
- * beside it. */
+ * accepts, answers what its hook takes and hands the rest to the thread's daemon, and the
+ * thread sleeps in epoll_wait on the front's set, which watches the daemon's epoll descriptor
+ * and the wake and stop descriptors too (in poll() on the set's descriptor, every thread was
+ * woken for every new connection: the kernel ends an EPOLLEXCLUSIVE wake-up at a set only
+ * when a thread waits in epoll_wait on it). */
 #include "server/common/http_loops.h"
 
 #include <errno.h>
@@ -54,6 +57,7 @@ typedef struct loop {
     ism_front *front; /* NULL: libmicrohttpd accepts (no own sender) */
     int epoll_fd;
     int wake_fd; /* an eventfd: readable after a resume of one of d's connections */
+    int wake_bit; /* with a front: wake_fd's bit in ism_front_run's answer */
     pthread_t thread;
     bool running;
     ism_http_loops *set;
@@ -89,26 +93,41 @@ static void drain_fd(int fd)
         ism_logf(ISM_LOG_WARN, "http_wake", "eventfd: %s", strerror(errno));
 }
 
+/* With an own sender: one epoll_wait on the front's set, which also watches the daemon's
+ * epoll set and the wake and stop descriptors (start_daemon; http_front.h ism_front_watch:
+ * the listening socket's EPOLLEXCLUSIVE wakes one thread per connection only so). */
+static void front_loop(loop *l)
+{
+    while (!atomic_load(&l->set->stopping)) {
+        int ms = ism_front_wait_ms(l->front, wait_ms(l->d));
+        /* connections it hands over are run just below */
+        unsigned fired = ism_front_run(l->front, ms);
+        if (atomic_load(&l->set->stopping))
+            break;
+        if (fired >> l->wake_bit & 1)
+            drain_fd(l->wake_fd); /* before the run, which takes every resume made so far */
+        MHD_run(l->d);
+    }
+}
+
 static void *loop_main(void *arg)
 {
     loop *l = arg;
-    struct pollfd p[4] = {{.fd = l->epoll_fd, .events = POLLIN},
-                          {.fd = l->wake_fd, .events = POLLIN},
-                          {.fd = l->set->stop_fd, .events = POLLIN},
-                          {.fd = l->front ? ism_front_fd(l->front) : -1, .events = POLLIN}};
     MHD_run(l->d); /* the first run puts the listening socket in the epoll set */
+    if (l->front) {
+        front_loop(l);
+        return NULL;
+    }
+    struct pollfd p[3] = {{.fd = l->epoll_fd, .events = POLLIN},
+                          {.fd = l->wake_fd, .events = POLLIN},
+                          {.fd = l->set->stop_fd, .events = POLLIN}};
     while (!atomic_load(&l->set->stopping)) {
-        int ms = wait_ms(l->d);
-        if (l->front)
-            ms = ism_front_wait_ms(l->front, ms);
-        if (poll(p, 4, ms) < 0 && errno != EINTR)
+        if (poll(p, 3, wait_ms(l->d)) < 0 && errno != EINTR)
             ism_logf(ISM_LOG_WARN, "http_poll", "%s", strerror(errno));
         if (atomic_load(&l->set->stopping))
             break;
         if (p[1].revents)
             drain_fd(l->wake_fd); /* before the run, which takes every resume made so far */
-        if (l->front)
-            ism_front_run(l->front); /* connections it hands over are run just below */
         MHD_run(l->d);
     }
     return NULL;
@@ -185,13 +204,16 @@ static bool start_daemon(ism_http_loops *s, loop *l, unsigned flags, int listen_
                                 MHD_OPTION_END);
     if (!l->d)
         return false;
-    if (front && !(l->front = ism_front_new(front, listen_fd, l->d)))
+    if (front && !(l->front = ism_front_new(front, listen_fd, l->d,
+                                            l == s->loops ? NULL : s->loops[0].front)))
         return false;
     const union MHD_DaemonInfo *di = MHD_get_daemon_info(l->d, MHD_DAEMON_INFO_EPOLL_FD);
     if (!di)
         return false;
     l->epoll_fd = di->epoll_fd;
-    return true;
+    return !l->front || (ism_front_watch(l->front, l->epoll_fd) >= 0 &&
+                         (l->wake_bit = ism_front_watch(l->front, l->wake_fd)) >= 0 &&
+                         ism_front_watch(l->front, s->stop_fd) >= 0);
 }
 
 bool ism_http_loops_start(ism_http_loops *s, unsigned flags, int listen_fd, unsigned conn_limit,

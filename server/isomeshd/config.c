@@ -134,7 +134,8 @@ static const flag FLAGS[] = {
      "at least 1s",
      "60s", NULL},
     {"http-threads", K_INT, 1, 256, "N",
-     "threads serving HTTP connections (at least; two per core are started)",
+     "threads serving HTTP connections (at least; two per core are started, one per core "
+     "with the own sender)",
      "1", NULL}, /* at least: http.c starts as many as the connection limit needs */
     {"tcp-congestion", K_STRING, 0, 0, "NAME",
      "TCP congestion control of the daemon's connections (one of "

@@ -193,6 +193,9 @@ bool ismd_own_answer(void *cls, const char *head, size_t len, void *conn, ism_fr
     ism_blob_unref(r->r_body);
     r->r_body = NULL;
     a->ctx = r;
+    /* open until done, as libmicrohttpd's requests: a stop lets the answers under way finish
+     * (ismd_http_stop waits for them, bounded) */
+    atomic_fetch_add(&s->open_requests, 1);
     return true;
 }
 
@@ -202,5 +205,6 @@ void ismd_own_done(void *cls, ism_front_answer *a, bool sent)
     ismd_req *r = a->ctx;
     close(a->fd);
     ismd_request_record(r, sent, NULL);
+    atomic_fetch_sub(&r->srv->open_requests, 1);
     free(r);
 }

@@ -48,6 +48,9 @@ QUICK = os.environ.get("ISOMESH_TEST_QUICK") == "1"
 MESH_REQ = {"preset": "kummer-16-nodes", "depth": {"max": 8}}
 MESH_REQ_POSITIONS = {"preset": "kummer-16-nodes", "depth": {"max": 8},
                       "output": {"attributes": []}}
+# A mesh of over 1 MB of Draco (gyroid-ball at depth 9, ~1.5 MB): sent from the cache file in
+# both modes (respond.c SENDFILE_MIN; the own sender always), where the header block differs.
+MESH_REQ_BIG = {"preset": "gyroid-ball", "depth": {"max": 9}}
 
 
 def start_daemon(build, tmp, *args):
@@ -414,12 +417,12 @@ def start_ceiling(build, tmp, body):
     return wait_serving(p, port, "/")
 
 
-def variant_rows(build, tmp, args, label, conns_list, secs, nginx_all):
+def variant_rows(build, tmp, args, label, conns_list, secs, nginx_all, req=MESH_REQ):
     """Rows of a daemon started with args beside nginx (a worker per core): {conns: figures}."""
     d = start_daemon(build, tmp, "--workers", "2", *args)
     out = {}
     try:
-        url, _ = cached_url(d, MESH_REQ)
+        url, _ = cached_url(d, req)
         for conns in conns_list:
             r = out[conns] = wrk(url, conns, secs, pid=d.proc.pid)
             row(label, conns, r)
@@ -441,9 +444,10 @@ def throughput(build, tmp):
     try:
         url, body = cached_url(d, MESH_REQ)
         url_pos, _ = cached_url(d, MESH_REQ_POSITIONS)
+        url_big, big = cached_url(d, MESH_REQ_BIG)
         obj_url = url[:-len("drc")] + "obj"
         obj = http_get(obj_url)
-        files = {"m.drc": body, "m.obj": obj, "healthz": b"ok\n"}
+        files = {"m.drc": body, "m.obj": obj, "healthz": b"ok\n", "big.drc": big}
         nginx, nurl = start_nginx(tmp, files)
         nginx_all, nurl_all = start_nginx(tmp, files, "auto")
         ceiling, curl = start_ceiling(build, tmp, body)
@@ -481,6 +485,17 @@ def throughput(build, tmp):
         # the daemon's own sender (http_front.h): the header block held back, then sendfile
         own = variant_rows(build, tmp, ["--own-sender"], "isomeshd --own-sender", (16, 64, 256),
                            secs, nginx_all_results)
+        if nurl_all:  # the >= 1 MB mesh: both modes send it from the cache file
+            nbig = nurl_all.rsplit("/", 1)[0] + "/big.drc"
+            big_d, big_n = {}, {}
+            for conns in (16, 64, 256):
+                big_d[conns] = wrk(url_big, conns, short, pid=d.proc.pid)
+                row("isomeshd GET mesh of %.1f MB" % (len(big) / 1e6), conns, big_d[conns])
+                big_n[conns] = wrk(nbig, conns, short, pid=nginx_workers(nginx_all.pid))
+                row("nginx (a worker per core) the same file", conns, big_n[conns])
+            big_own = variant_rows(build, tmp, ["--own-sender"],
+                                   "isomeshd --own-sender %.1f MB" % (len(big) / 1e6),
+                                   (16, 64, 256), short, big_n, req=MESH_REQ_BIG)
         print("(isomeshd's answers sent from the cache file, sendfile, at 1/16/64/256 "
               "connections: %s; respond.c: bodies from 1 MB, smaller ones from memory, "
               "where the header block leaves in the same send as the body)" % " / ".join("%d" % sendfile[c] for c in sorted(sendfile)))
@@ -499,6 +514,9 @@ def throughput(build, tmp):
         if nginx_all_results:
             versus_nginx(results, nginx_all_results, "a worker per core")
             versus_nginx(own, nginx_all_results, "a worker per core; isomeshd --own-sender")
+            versus_nginx(big_d, big_n, "a worker per core; the %.1f MB mesh" % (len(big) / 1e6))
+            versus_nginx(big_own, big_n, "a worker per core; isomeshd --own-sender; the %.1f MB "
+                         "mesh" % (len(big) / 1e6))
         print("\n" + load_line())
         print("/healthz every 50 ms while %d slow readers fetch the %.1f MB OBJ (16 KB per "
               "0.2 s each)" % (SLOW_READERS, len(obj) / 1e6))

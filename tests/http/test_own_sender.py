@@ -13,6 +13,7 @@ import socket
 import sys
 import tempfile
 import shutil
+import signal
 import time
 import unittest
 
@@ -20,7 +21,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from harness import Daemon, http_request, parse_metrics, sphere, wait_until  # noqa: E402
 
 SENT = "isomesh_sendfile_responses_total"  # the own sender's answers count here
-BIG = {"preset": "gyroid-ball", "depth": {"max": 6}, "output": {"format": "stl"}}  # 2.9 MB
+BIG = {"preset": "gyroid-ball", "depth": {"max": 6}, "output": {"format": "stl"}}  # 4.4 MB
 
 
 def read_answer(s, buf, head_only=False):
@@ -143,7 +144,7 @@ class OwnSenderTest(unittest.TestCase):
 
     def test_long_pipelines_and_large_answers_arrive_whole(self):
         """Past a wake-up's share (http_front.c: 8 answers, 2 MB) the connection is queued
-        again: 20 pipelined answers and two 2.9 MB ones arrive whole and in order, all the own
+        again: 20 pipelined answers and two 4.4 MB ones arrive whole and in order, all the own
         sender's. A 4 MB window lets more than 2 MB go in one wake-up."""
         big = self.d.post("/v1/mesh", BIG)
         self.assertEqual(big.status, 200)
@@ -257,6 +258,265 @@ class OwnSenderTest(unittest.TestCase):
         self.assertEqual(self.d.metric(SENT), sent)  # libmicrohttpd's now, from memory
 
 
+def start_with_sphere(cls, prefix, *args):
+    """cls.d: a daemon started with args in cls.tmp (a new directory), the sphere r 0.77
+    computed: cls.body its Draco bytes, cls.get a GET of them as bytes."""
+    cls.tmp = tempfile.mkdtemp(prefix=prefix)
+    cls.d = Daemon("--workers", "1", *args, cache_dir=os.path.join(cls.tmp, "cache")).start()
+    first = cls.d.post("/v1/mesh", sphere(0.77))
+    assert first.status == 200, first.body[:200]
+    cls.body = first.body
+    cls.get = b"GET /v1/meshes/%s.drc HTTP/1.1\r\nHost: t\r\n\r\n" % (
+        first.header("ETag").strip('"').encode())
+
+
+def fd_count(pid):
+    """Descriptors process pid holds (/proc): sockets, cache files being sent, pipes."""
+    return len(os.listdir("/proc/%d/fd" % pid))
+
+
+def big_get(d):
+    """POST of BIG -> (its body, a GET of it as bytes), once its cache file has settled."""
+    big = d.post("/v1/mesh", BIG)
+    assert big.status == 200, big.body[:200]
+    assert len(big.body) > 2 << 20
+    time.sleep(0.2)  # the file settles (file_memo.h: 50 ms)
+    return big.body, b"GET /v1/meshes/%s.stl HTTP/1.1\r\nHost: t\r\n\r\n" % (
+        big.header("ETag").strip('"').encode())
+
+
+def small_window_socket(port, window=16384):
+    s = socket.socket()
+    s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, window)
+    s.settimeout(30)
+    s.connect(("127.0.0.1", port))
+    return s
+
+
+def own_get(d, get):
+    """One GET on its own connection -> (status, body), asserting the own sender answered."""
+    before = d.metric(SENT)
+    s = socket.create_connection(("127.0.0.1", d.port), timeout=30)
+    s.sendall(get)
+    status, _, body, _ = read_answer(s, b"")
+    s.close()
+    assert d.metric(SENT) == before + 1, "not the own sender's"
+    return status, body
+
+
+class HandoverPaths(unittest.TestCase):
+    """The own sender's connection paths a hostile client can reach, each ending with nothing
+    left behind (descriptors, the connection count) and the daemon still answering by its own
+    sender: clients closing mid-body, a burst of new connections at once, a head in pieces
+    (handed over unread), silent and trickling connections under the header deadline."""
+
+    @classmethod
+    def setUpClass(cls):
+        start_with_sphere(cls, "isomeshd_paths_", "--own-sender", "--conn-timeout", "3",
+                          "--header-timeout", "1", "--max-connections", "600")
+        cls.big, cls.big_get = big_get(cls.d)
+        # each file opened once (the cache keeps it open for the next send: fd_keep.h), so
+        # the descriptors counted before a test are those after it
+        wait_until("the small mesh by the own sender",
+                   lambda: own_get(cls.d, cls.get) == (200, cls.body))
+        assert own_get(cls.d, cls.big_get) == (200, cls.big)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.d.stop()
+        cls.d.cleanup()
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    def settled(self, fds0):
+        """Waits (bounded) until the daemon holds fds0 descriptors again and counts no
+        connection but none, then checks it still answers by its own sender."""
+        wait_until("the descriptors back to %d (now %d)" % (fds0, fd_count(self.d.proc.pid)),
+                   lambda: fd_count(self.d.proc.pid) <= fds0, timeout=15)
+        wait_until("no connection counted", lambda: self.d.metric("isomesh_connections") <= 1,
+                   timeout=15)  # the scrape's own
+        self.assertEqual(own_get(self.d, self.get), (200, self.body))
+
+    def test_clients_closing_mid_body_leave_nothing_behind(self):
+        get = self.big_get
+        wait_until("idle", lambda: self.d.metric("isomesh_connections") <= 1, timeout=15)
+        fds0 = fd_count(self.d.proc.pid)
+        aborted0 = self.d.log_count("end=aborted", 0, timeout=0)
+        socks = []
+        for i in range(8):
+            s = small_window_socket(self.d.port)
+            s.sendall(get if i % 2 else get * 3)  # some with answers still queued behind
+            got = b""
+            while len(got) < 65536:
+                got += s.recv(65536)
+            self.assertTrue(got.startswith(b"HTTP/1.1 200 OK\r\n"))
+            if i % 4 == 3:  # an abortive close (RST) for some, FIN with unread bytes (RST too)
+                s.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, b"\x01\0\0\0\0\0\0\0")
+            socks.append(s)
+        for s in socks:
+            s.close()
+        # each ends as aborted on its next wake-up, not at the 3 s stall deadline's
+        self.assertGreaterEqual(self.d.log_count("end=aborted", aborted0 + 8, timeout=15),
+                                aborted0 + 8)
+        self.settled(fds0)
+
+    def test_a_burst_of_new_connections_is_answered_whole(self):
+        """300 connections at once (libmicrohttpd's own epoll loop once answered none of a
+        burst of 128, ../shared/STACK.md), each with a cached GET already sent: every answer
+        whole, all the own sender's, and nothing left once they close."""
+        wait_until("idle", lambda: self.d.metric("isomesh_connections") <= 1, timeout=15)
+        fds0 = fd_count(self.d.proc.pid)
+        sent = self.d.metric(SENT)
+        socks = []
+        try:
+            for _ in range(300):
+                s = socket.create_connection(("127.0.0.1", self.d.port), timeout=30)
+                s.sendall(self.get)
+                socks.append(s)
+            for s in socks:
+                status, _, body, rest = read_answer(s, b"")
+                self.assertEqual((status, body, rest), (200, self.body, b""))
+        finally:
+            for s in socks:
+                s.close()
+        self.assertEqual(self.d.metric(SENT), sent + 300)
+        self.settled(fds0)
+
+    def test_a_head_in_pieces_goes_to_libmicrohttpd_unread(self):
+        sent = self.d.metric(SENT)
+        s = socket.create_connection(("127.0.0.1", self.d.port), timeout=30)
+        cut = self.get.index(b"Host")
+        s.sendall(self.get[:cut])
+        time.sleep(0.3)  # the front peeks a head without its end: libmicrohttpd's now
+        s.sendall(self.get[cut:] + self.get)
+        rest = b""
+        for _ in range(2):
+            status, _, body, rest = read_answer(s, rest)
+            self.assertEqual((status, body), (200, self.body))
+        s.close()
+        self.assertEqual(self.d.metric(SENT), sent)  # both libmicrohttpd's (from memory)
+
+    def test_the_header_deadline_holds_for_the_own_senders_connections(self):
+        """--header-timeout 1 s counts from a connection's accept (or its last answer) whether
+        the own sender or libmicrohttpd holds it: a silent connection, one trickling a head and
+        one answered once and then silent are all closed within it plus slack."""
+        wait_until("idle", lambda: self.d.metric("isomesh_connections") <= 1, timeout=15)
+        fds0 = fd_count(self.d.proc.pid)
+        silent = socket.create_connection(("127.0.0.1", self.d.port), timeout=30)
+        trickle = socket.create_connection(("127.0.0.1", self.d.port), timeout=30)
+        answered = socket.create_connection(("127.0.0.1", self.d.port), timeout=30)
+        answered.sendall(self.get)
+        status, _, body, _ = read_answer(answered, b"")
+        self.assertEqual((status, body), (200, self.body))
+        t0 = time.time()
+        socks = (silent, trickle, answered)
+        closed = set()
+        i = 0
+        while len(closed) < 3 and time.time() - t0 < 1 + 4:
+            try:
+                trickle.send(self.get[i:i + 1])  # a byte per 0.2 s: never a whole head
+                i += 1
+            except OSError:
+                closed.add(trickle)
+            for s in socks:
+                s.setblocking(False)
+                try:
+                    if s.recv(65536) == b"":
+                        closed.add(s)
+                except BlockingIOError:
+                    pass
+                except OSError:
+                    closed.add(s)
+            time.sleep(0.2)
+        n = len(closed)
+        for s in socks:
+            s.close()
+        self.assertEqual(n, 3, "%d of 3 closed after %.1f s" % (n, time.time() - t0))
+        self.settled(fds0)
+
+
+class EvictedMidAnswer(unittest.TestCase):
+    """The own sender sends from the cache file's descriptor and lets the mesh's memory go
+    when its answer starts (own_sender.c): with the mesh evicted from memory (--cache-mem 12M)
+    and its file pruned from disk (--cache-disk-max 8M) while a slow reader is mid-body, the
+    bytes that reader gets are still the mesh's, whole."""
+
+    def test_a_mesh_evicted_mid_answer_still_arrives_whole(self):
+        tmp = tempfile.mkdtemp(prefix="isomeshd_evict_")
+        cache = os.path.join(tmp, "cache")
+        d = Daemon("--workers", "1", "--own-sender", "--conn-timeout", "60",
+                   "--cache-mem", "12M", "--cache-disk-max", "8M", cache_dir=cache).start()
+        try:
+            body, get = big_get(d)
+            key = re.search(rb"/v1/meshes/(\w+)\.", get).group(1).decode()
+
+            def on_disk():
+                return [f for _, _, fs in os.walk(cache) for f in fs if key in f]
+            wait_until("the mesh's cache file", on_disk)
+            s = small_window_socket(d.port)
+            sent = d.metric(SENT)
+            s.sendall(get)
+            got = b""
+            while len(got) < 65536:
+                got += s.recv(65536)
+            self.assertEqual(d.metric(SENT), sent + 1)
+            evicted = d.metric("isomesh_cache_evictions_total", tier="memory")
+            for k in range(2):  # 2 more meshes of ~4.4 MB: past both tiers' bounds
+                r = d.post("/v1/mesh", dict(BIG, params={"k": 10.5 + k}))
+                self.assertEqual(r.status, 200)
+            self.assertGreater(d.metric("isomesh_cache_evictions_total", tier="memory"), evicted)
+            wait_until("the mesh's file pruned", lambda: not on_disk(), timeout=30)
+            status, head, whole, rest = read_answer(s, got)
+            s.close()
+            self.assertEqual((status, rest), (200, b""))
+            self.assertEqual(len(whole), len(body))
+            self.assertEqual(whole, body)
+        finally:
+            d.stop()
+            d.cleanup()
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+class ShutdownInFlight(unittest.TestCase):
+    """SIGTERM with the own sender's answers under way: an answer that keeps moving is let
+    finish (as libmicrohttpd's are: ismd_http_stop waits up to 3 s for open requests), a
+    stalled one does not hold the stop beyond that, and the daemon exits cleanly."""
+
+    def test_an_answer_under_way_finishes_and_a_stalled_one_does_not_hold_the_stop(self):
+        tmp = tempfile.mkdtemp(prefix="isomeshd_stop_")
+        d = Daemon("--workers", "1", "--own-sender", "--conn-timeout", "30",
+                   cache_dir=os.path.join(tmp, "cache")).start()
+        try:
+            body, get = big_get(d)
+            reader = small_window_socket(d.port, 65536)
+            stalled = small_window_socket(d.port, 4096)
+            sent = d.metric(SENT)
+            reader.sendall(get)
+            stalled.sendall(get)
+            got = b""
+            while len(got) < 65536:
+                got += reader.recv(65536)
+            wait_until("both answers started", lambda: d.metric(SENT) == sent + 2)
+            t0 = time.time()
+            d.proc.send_signal(signal.SIGTERM)
+            # nothing read for 0.5 s (the stop is under way: the old stop had cut the answer
+            # by then), then the rest as fast as it comes, well within the 3 s the stop waits
+            time.sleep(0.5)
+            status, _, whole, rest = read_answer(reader, got)
+            reader.close()
+            self.assertEqual((status, rest), (200, b""))
+            self.assertEqual(len(whole), len(body))
+            self.assertEqual(whole, body)
+            rc = d.proc.wait(timeout=20)
+            self.assertEqual(rc, 0, d.log())
+            self.assertLess(time.time() - t0, 3 + 5)  # the 3 s drain + slack
+            self.assertIn("end=aborted", d.log())  # the stalled one, cut at the stop
+            stalled.close()
+        finally:
+            d.stop()
+            d.cleanup()
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
 class CapCounts:
     """--client-conns and isomesh_connections see the connections the own sender holds as they
     see libmicrohttpd's (server/isomeshd/own_conns.c): beyond the cap a connection is refused
@@ -267,15 +527,8 @@ class CapCounts:
 
     @classmethod
     def setUpClass(cls):
-        cls.tmp = tempfile.mkdtemp(prefix="isomeshd_cap_")
         flags = ("--own-sender",) if cls.OWN else ()
-        cls.d = Daemon("--workers", "1", "--client-conns", str(cls.CAP), *flags,
-                       cache_dir=os.path.join(cls.tmp, "cache")).start()
-        first = cls.d.post("/v1/mesh", sphere(0.77))
-        assert first.status == 200, first.body[:200]
-        cls.body = first.body
-        cls.get = b"GET /v1/meshes/%s.drc HTTP/1.1\r\nHost: t\r\n\r\n" % (
-            first.header("ETag").strip('"').encode())
+        start_with_sphere(cls, "isomeshd_cap_", "--client-conns", str(cls.CAP), *flags)
         time.sleep(0.2)  # the cache file settles (file_memo.h: 50 ms)
 
     @classmethod
