@@ -286,6 +286,7 @@ describe('box and inspection', { timeout: 300000 }, () => {
       hash: location.hash }));
     let f = await facts();
     assert.deepEqual([f.drawn, f.sections, f.cells], [3, 3, 4]);
+    assert.match(await page.textContent('#curve-facts'), /; V − E \+ F = χ = 2\. /, 'the Euler check with its number');
     const zones = [Math.PI / 2, 1.5 * Math.PI];
     for (const a of f.faces) assert.ok(zones.some((z) => Math.abs(a - z) / z < 0.01), `cell area ${a} is a zone's 2 pi h`);
     assert.match(decodeURIComponent(f.hash), /curves=\[\{"kind":"plane","axis":"z","count":3\}\]/);

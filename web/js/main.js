@@ -844,6 +844,9 @@ function wireCurves() {
   });
 }
 
+// "1 vertex", "2 vertices".
+const count = (n, one, many) => `${n} ${n === 1 ? one : many}`;
+
 // What the panel says under the list: curves drawn, cells, the Euler check.
 function showCurveFacts(result) {
   const f = result.features || {};
@@ -852,8 +855,10 @@ function showCurveFacts(result) {
   document.body.dataset.curvesDrawn = String(drawn);
   document.body.dataset.cells = String(a ? a.faces.length : 0);
   $('curve-facts').textContent = a
-    ? `${drawn} curve${drawn === 1 ? '' : 's'} drawn; ${a.faces.length} cells, ${a.vertices.length} vertices, ${a.edges.length} edges; ` +
-      `V − E + F ${a.euler.ok ? '= χ' : '≠ χ (check failed)'}. Colour the cells with Display ▸ Colour; click a cell or a curve for its facts.`
+    ? `${count(drawn, 'curve', 'curves')} drawn; ${count(a.faces.length, 'cell', 'cells')}, ` +
+      `${count(a.vertices.length, 'vertex', 'vertices')}, ${count(a.edges.length, 'edge', 'edges')}; ` +
+      (a.euler.ok ? `V − E + F = χ = ${a.euler.mesh}` : `V − E + F = ${a.euler.arrangement} but χ = ${a.euler.mesh}: the check failed`) +
+      '. Colour the cells with Display ▸ Colour; click a cell or a curve for its facts.'
     : '';
 }
 
