@@ -177,7 +177,9 @@ bool ism_conform_mesh(const ism_tape *f, const ism_locus_options *o, ism_locus *
     bool ok = r.c.ws && r.point_vertex;
     for (size_t i = 0; ok && i < locus->npoints; i++)
         r.point_vertex[i] = CF_NONE;
+    size_t nt0 = mesh->ntris;
     ok = ok && run_items(&r);
+    ok = ok && (r.c.stopped || cf_refine_refill(&r.c, nt0, o->max_error));
     if (ok && stop_now(&r))
         say_cut_short(&r);
     /* compaction also after a failure: what was refilled stays, nothing is left dead */

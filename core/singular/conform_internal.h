@@ -84,6 +84,8 @@ typedef struct cf_ctx {
     bool stopped;           /* set once a poll found a reason to stop: every loop ends */
     double origin[3], extent; /* the box's low corner and longest side */
     double cell;            /* finest octree cell: the scale of the surgery */
+    double refill_reach;    /* conform_refine.c: how far from f = 0 a move may leave a
+                               centroid */
     int threads;            /* the grid's passes over the mesh run on this many */
     ism_conform_stats *st;
 } cf_ctx;
@@ -351,6 +353,13 @@ int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double
  * vertex leaves its loop. False when out of memory (nothing more marked dead; the caller
  * undoes the cut). */
 bool cf_drop_spikes(cf_ctx *c, cf_loops *ls, uint32_t **rm, size_t *nrm);
+
+/* ---- conform_refine.c: the refill's triangles checked ---- */
+/* The live triangles from nt0 on (made by the pass) facing against ∇f are untangled: their
+ * vertices not on the locus nor on a boundary moved to their neighbours' mean, onto f = 0
+ * (no centroid round them left farther than a share of a cell, or max_error > 0).
+ * False only when out of memory. */
+bool cf_refine_refill(cf_ctx *c, size_t nt0, double max_error);
 
 /* ---- conform_point.c, conform_tube.c: the two surgeries ---- */
 /* Point i of the locus made one vertex shared by its cones. False only when out of memory

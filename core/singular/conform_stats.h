@@ -22,6 +22,11 @@ typedef struct ism_conform_stats {
     size_t cuts_widened;       /* cuts made again wider because another sheet came near
                                   their rim (the polygoniser's confusion reached further) */
     size_t triangles_removed, triangles_added;
+    size_t refill_turned;      /* the pass's triangles facing against ∇f before untangling
+                                  (conform_refine.c) */
+    size_t refill_untangled;   /* moves of the pass's vertices that turned triangles back */
+    size_t refill_work;        /* the units of `work` the untangling took (after the
+                                  surgeries) */
     size_t vertices_added, vertices_removed;
     size_t work;               /* units of work done: candidate triangles tested, rim edges
                                   and rim vertices checked, vertices projected, triangles

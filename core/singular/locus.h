@@ -157,6 +157,8 @@ typedef struct ism_locus_options {
     int threads;               /* 0 = online cores */
     const volatile int *cancel;/* polled; non-zero stops the search (incomplete) */
     double deadline_ms;        /* ism_now_ms() past which the stage stops (0 = none) */
+    double max_error;          /* the mesh's error bound (0 = none): the conformance's
+                                  untangling leaves no centroid farther (conform_refine.c) */
     size_t conform_work_max;   /* budget of the conformance pass's units of work
                                   (ism_conform_stats.work; 0 = none): beyond, it stops as at
                                   the deadline */

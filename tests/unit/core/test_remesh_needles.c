@@ -626,8 +626,10 @@ static void cross_cap_shape(const ism_mesh *m, const ism_locus *l, size_t *needl
  * rim and rings round the pinch points in the umbrella's chart (conform_pinch.c); 6 / 2 / 2
  * before (10 / 4 / 2 while an insertion needed both ends of the needle's short edge locked:
  * needles folded round a locked hub beside a pinch point, whose collapses would turn
- * triangles over, were left). */
-static const size_t cross_cap_left[3] = {7, 3, 4};
+ * triangles over, were left); 1 / 1 / 5 since the conformance untangles its turned rings
+ * (conform_refine.c: the 1e-3 box had 14 turned-over edges beside (0, 0, 1), the 0.37-cell
+ * box 30). */
+static const size_t cross_cap_left[3] = {7, 3, 5};
 
 static void cross_cap_case(const ism_tape *t, const double box[6], int d, int which)
 {
@@ -648,9 +650,10 @@ static void cross_cap_case(const ism_tape *t, const double box[6], int d, int wh
                 "points %zu -> %zu; centroid %.3g -> %.3g, midpoint %.3g -> %.3g", which, d,
                 st.collapses, st.inserts, before, after, cen_b, cen_a, mid_b, mid_a);
     cr_expect_gt(before, 0, "box %d: nothing to mend", which);
-    /* insertion mends what collapses leave (the 1e-3 box: 2055 -> 0 needles by collapses
-       and flips alone since conform_pinch.c) */
-    cr_expect(st.inserts > 0 || after == 0, "box %d: no insertion, %zu needles left", which,
+    /* insertion mends what collapses leave (the 1e-3 box: 2048 -> 1 needle by collapses
+       and flips alone since conform_pinch.c and conform_refine.c; the 0.37-cell box still
+       inserts) */
+    cr_expect(st.inserts > 0 || after <= 1, "box %d: no insertion, %zu needles left", which,
               after);
     cr_expect_leq(after, cross_cap_left[which + 1], "box %d: %zu needles", which, after);
     cr_expect_eq(a.euler, b.euler, "box %d: χ %ld -> %ld", which, b.euler, a.euler);

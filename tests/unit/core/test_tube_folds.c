@@ -240,10 +240,20 @@ Test(tube_folds, crossing_spheres_few_turned_over)
  *    rings were drawn towards it: conform_zip.c junction_feet; the rest lie beside the pinch
  *    points: its loops run along several curves and are zipped by the rim's feet, so their
  *    rings are not made in the umbrella's chart);
- *    Whitney d6 0 / 0 / 2, d7 0 / 0 / 4 either way. */
-#define CROSS_CAP_FOLDS_MAX 32
-#define STEINER_FOLDS_MAX(d) ((d) >= 7 ? 100 : 48)
-#define WHITNEY_FOLDS_MAX 8
+ *    Whitney d6 0 / 0 / 2, d7 0 / 0 / 4 either way.
+ * The rest in the shifted boxes were ring vertices out of order (the move along the tangent
+ * beside a pinch point grows with the rim vertex's distance from the curve; the rim crossing
+ * the fold with vertices a hundredth of a cell apart): untangled once every surgery is done
+ * (conform_refine.c), own / 1e-3 / 0.37-cell (an irrational 0.414 / −0.236 / 0.732 of a cell)
+ * → cross-cap d6 0 / 0 / 4 (1), d7 0 / 0 / 9 (1); Steiner d6 0 / 12 / 10 (13), d7 0 / 18 / 20
+ * (11): those left lie 1.4–3.5 cells from a pinch point across its fold, tighter than a cell,
+ * where a move would pull a centroid more than 0.35 cell off f = 0; Whitney d6 0 / 0 / 0 (1),
+ * d7 0 / 0 / 2 (1). The bounds sit a little above the worst box (the polygoniser's vertices
+ * that zigzag move with the box); the old code fails the cross-cap's and Steiner's shifted
+ * boxes at d6 and d7. */
+#define CROSS_CAP_FOLDS_MAX 12
+#define STEINER_FOLDS_MAX(d) ((d) >= 7 ? 24 : 16)
+#define WHITNEY_FOLDS_MAX 4
 
 Test(tube_folds, pinch_points_few_turned_over)
 {

@@ -1,0 +1,260 @@
+/* conform_refine.c — the refill's triangles checked once every surgery is done: those turned
+ * over (facing against ∇f) are untangled.
+ *
+ * A ring vertex is placed from its rim vertex alone (conform_zip.c, conform_pinch.c): beside a
+ * pinch point the move along the curve's tangent that puts it on f = 0 grows with the rim
+ * vertex's distance from the curve (the umbrella's higher-order terms), so two rim vertices a
+ * hundredth of a cell apart along the curve but at different distances from it swap their
+ * rings' order and a whole strip of ladder quads turns over (cross-cap, depth 7, +1e-3 box: 14
+ * edges on two columns 13–20 cells from its pinch point at (0, 0, 1)); where the rim crosses
+ * the fold its own vertices zigzag a hundredth of a cell apart (0.37-cell box); Steiner's loops
+ * along several curves keep the rings their rim's feet give. A turned triangle's vertices that
+ * may move (not on the locus, not on a boundary) go to the mean of their neighbours, moved
+ * back onto f = 0 along ∇f (by at most half their mean distance: never onto another sheet) —
+ * kept where no more triangles round them face against ∇f than before (a strip straightens
+ * over a few rounds, each vertex alone rarely undoes a fold).
+ *
+ *     rim    a0 ──── a1            a1's ring vertex r1 fell behind r0: the quad (a0 a1 r1 r0)
+ *             │   ╳   │            crosses itself; r1 to the mean of a1, r0, r2 and its inner
+ *     ring   r1 ──── r0            neighbour puts it back between them
+ */
+#include "core/singular/conform_internal.h"
+#include "core/util/vec3.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Rounds of untangling: each moves every vertex of the turned triangles once (measured on
+ * the cross-cap and Steiner at depths 6 and 7 in three boxes: 16 rounds left the same folds
+ * as 6). */
+#define UNTANGLE_ROUNDS 6
+/* Vertices with more triangles than this are not moved (the refill's have 6, the
+ * polygoniser's a dozen at most; the fan's neighbours are listed on the stack). */
+#define MOVE_FAN_MAX 32
+/* A moved vertex must end this near f = 0 (× the finest cell, by |f| / |∇f|), or as near as
+ * it was: cf_project's Newton reaches 1e-8 cell in three steps from a fraction of a cell. */
+#define RELAX_ON_SURFACE 1e-6
+/* ... and leave no centroid round it farther from f = 0 than it was or than this many finest
+ * cells (under max_error, than E if less): beside a pinch point the fold is tighter than a
+ * cell and the neighbours' mean can pull a triangle across it. The polygoniser's own
+ * centroids reach 0.15–0.25 cell at depth 5 (Steiner, conform/steiner_roman_pinch_and_triple
+ * _points: near the locus at most twice the rest); 0.35: Steiner d7 turned-over edges 0 / 18
+ * / 20 against 0 / 22 / 23 at 0.1, the depth-5 centroids 0.0154 (0.0259 unbounded). */
+#define RELAX_CENTROID_CELLS 0.35
+/* Rounds of splitting: each halves the longest edge of every triangle over E (a triangle
+ * 2^(k/2) times too long needs about k rounds; the refill's triangles are about as long as
+ * the polygoniser's beside them, which met E). */
+#define SPLIT_ROUNDS 8
+/* Newton steps of the distance measure (from within a fraction of a cell of f = 0 a few
+ * give the foot to rounding). */
+#define MEASURE_STEPS 6
+/* The first-order estimate |f| / |∇f| is at least half the distance next to a double curve
+ * (f ≈ l1 l2: the estimate is d1 d2 / |d2 n1 + d1 n2|); points it puts under this share of E
+ * are within E without Newton. */
+#define ESTIMATE_SHARE 0.25
+
+static void tri_normal(const ism_mesh *m, uint32_t t, double n[3])
+{
+    const uint32_t *v = m->tri + 3 * (size_t)t;
+    const double *a = m->pos + 3 * (size_t)v[0], *b = m->pos + 3 * (size_t)v[1],
+                 *d = m->pos + 3 * (size_t)v[2];
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+    n[0] = u[1] * w[2] - u[2] * w[1];
+    n[1] = u[2] * w[0] - u[0] * w[2];
+    n[2] = u[0] * w[1] - u[1] * w[0];
+}
+
+/* Triangle t faces against ∇f: at its centroid, or at two of its corners (their normals, ∇f's
+ * direction where they were made; 0 at the locus). A triangle across a tight fold (beside a
+ * pinch point, where ∇f turns by half a turn within a cell) can face along ∇f at its centroid
+ * and against it at both ends of its edge on the fold. */
+static bool turned(cf_ctx *c, uint32_t t)
+{
+    const uint32_t *v = c->m->tri + 3 * (size_t)t;
+    double p[3], n[3], g[3];
+    tri_normal(c->m, t, n);
+    int against = 0;
+    for (int k = 0; k < 3; k++) {
+        const float *vn = c->m->normal + 3 * (size_t)v[k];
+        against += n[0] * vn[0] + n[1] * vn[1] + n[2] * vn[2] < 0;
+    }
+    if (against >= 2)
+        return true;
+    for (int k = 0; k < 3; k++)
+        p[k] = (c->m->pos[3 * (size_t)v[0] + k] + c->m->pos[3 * (size_t)v[1] + k] +
+                c->m->pos[3 * (size_t)v[2] + k]) / 3;
+    ism_eval_gradient(c->f, c->ws, p[0], p[1], p[2], g);
+    return ism_dot3(n, g) < 0;
+}
+
+/* |f| / |∇f| at p (INFINITY where ∇f vanishes). */
+static double off_surface(cf_ctx *c, const double p[3])
+{
+    double g[3], fv = ism_eval_gradient(c->f, c->ws, p[0], p[1], p[2], g), gl = ism_norm3(g);
+    return gl > 0 ? fabs(fv) / gl : INFINITY;
+}
+
+/* Turned triangles round vertex v; *worst: the farthest of their centroids from f = 0. */
+static size_t turned_round(cf_ctx *c, uint32_t v, double *worst)
+{
+    cf_inc it;
+    uint32_t t;
+    size_t n = 0;
+    *worst = 0;
+    cf_inc_begin(c, v, &it);
+    while (cf_inc_next(c, &it, &t)) {
+        n += turned(c, t);
+        const uint32_t *w = c->m->tri + 3 * (size_t)t;
+        double q[3];
+        for (int k = 0; k < 3; k++)
+            q[k] = (c->m->pos[3 * (size_t)w[0] + k] + c->m->pos[3 * (size_t)w[1] + k] +
+                    c->m->pos[3 * (size_t)w[2] + k]) / 3;
+        *worst = fmax(*worst, off_surface(c, q));
+    }
+    return n;
+}
+
+/* The vertex's normal from ∇f at its place (as cf_add_vertex sets it). */
+static void set_normal(cf_ctx *c, uint32_t v)
+{
+    const double *p = c->m->pos + 3 * (size_t)v;
+    double g[3];
+    ism_eval_gradient(c->f, c->ws, p[0], p[1], p[2], g);
+    double len = ism_norm3(g);
+    for (int k = 0; k < 3; k++)
+        c->m->normal[3 * (size_t)v + k] = len > 0 && isfinite(len) ? (float)(g[k] / len) : 0.0f;
+}
+
+/* Moves vertex v to the mean of its neighbours projected onto f = 0, kept when no more
+ * triangles round it face against ∇f (and some did before). True when it moved. */
+static bool relax(cf_ctx *c, uint32_t v)
+{
+    double *p = c->m->pos + 3 * (size_t)v, mean[3] = {0, 0, 0}, old[3] = {p[0], p[1], p[2]};
+    double spread = 0;
+    size_t n = 0;
+    cf_inc it;
+    uint32_t t;
+    cf_inc_begin(c, v, &it);
+    while (cf_inc_next(c, &it, &t))
+        for (int k = 0; k < 3; k++) {
+            uint32_t w = c->m->tri[3 * (size_t)t + k];
+            if (w == v)
+                continue;
+            const double *q = c->m->pos + 3 * (size_t)w;
+            for (int j = 0; j < 3; j++)
+                mean[j] += q[j];
+            spread += ism_dist3(q, old);
+            n++;
+        }
+    if (n == 0)
+        return false;
+    for (int j = 0; j < 3; j++)
+        mean[j] /= (double)n;
+    double worst0, worst1;
+    size_t before = turned_round(c, v, &worst0);
+    double off0 = off_surface(c, old);
+    for (int j = 0; j < 3; j++)
+        p[j] = mean[j];
+    /* back onto f = 0, by at most half the neighbours' mean distance: never onto another
+     * sheet; a move Newton cannot bring as near f = 0 as the vertex was is refused (beside a
+     * fold the mean can lie where no foot is near) */
+    cf_project(c, p, 0.5 * spread / (double)n);
+    size_t after = off_surface(c, p) <= fmax(off0, RELAX_ON_SURFACE * c->cell)
+                       ? turned_round(c, v, &worst1)
+                       : SIZE_MAX;
+    if ((after < before || (after == before && before > 0)) && worst1 <= fmax(worst0, c->refill_reach)) {
+        set_normal(c, v);
+        return true;
+    }
+    for (int j = 0; j < 3; j++)
+        p[j] = old[j];
+    return false;
+}
+
+/* Not on the locus, and inside the mesh: its triangles close a fan round it (as many as
+ * its neighbours; one more neighbour on a boundary — a box face — where it must stay). */
+static bool movable(cf_ctx *c, uint32_t v)
+{
+    if (c->singular[v])
+        return false;
+    uint32_t nb[2 * MOVE_FAN_MAX], t;
+    size_t ntri = 0, nnb = 0;
+    cf_inc it;
+    cf_inc_begin(c, v, &it);
+    while (cf_inc_next(c, &it, &t)) {
+        if (++ntri > MOVE_FAN_MAX)
+            return false;
+        for (int k = 0; k < 3; k++) {
+            uint32_t w = c->m->tri[3 * (size_t)t + k];
+            size_t j = 0;
+            while (j < nnb && nb[j] != w)
+                j++;
+            if (w != v && j == nnb)
+                nb[nnb++] = w;
+        }
+    }
+    return ntri > 0 && nnb == ntri;
+}
+
+/* The movable vertices of the turned live triangles from nt0 on, each once (memo stamp). */
+static bool collect_turned(cf_ctx *c, size_t nt0, cf_tris *out, size_t *nturned)
+{
+    out->n = 0;
+    *nturned = 0;
+    if (!cf_memo_reset(c))
+        return false;
+    for (size_t t = nt0; t < c->m->ntris && !cf_poll(c, 1); t++) {
+        if (c->dead[t] || !turned(c, (uint32_t)t))
+            continue;
+        ++*nturned;
+        for (int k = 0; k < 3; k++) {
+            uint32_t v = c->m->tri[3 * t + k];
+            if (c->memo_gen[v] == c->gen)
+                continue;
+            c->memo_gen[v] = c->gen;
+            if (!movable(c, v))
+                continue;
+            if (!cf_tris_push(out, v))
+                return false;
+        }
+    }
+    return true;
+}
+
+static bool untangle(cf_ctx *c, size_t nt0)
+{
+    cf_tris vs = {0};
+    bool ok = true;
+    for (int round = 0; ok && round < UNTANGLE_ROUNDS && !c->stopped; round++) {
+        size_t nturned;
+        ok = collect_turned(c, nt0, &vs, &nturned);
+        if (round == 0)
+            c->st->refill_turned = nturned;
+        if (!ok || vs.n == 0)
+            break;
+        size_t moved = 0;
+        for (size_t i = 0; i < vs.n; i++)
+            moved += relax(c, vs.t[i]);
+        c->st->refill_untangled += moved;
+        if (moved == 0)
+            break;
+    }
+    free(vs.t);
+    return ok;
+}
+
+bool cf_refine_refill(cf_ctx *c, size_t nt0, double max_error)
+{
+    c->refill_reach = RELAX_CENTROID_CELLS * c->cell;
+    if (max_error > 0)
+        c->refill_reach = fmin(c->refill_reach, max_error);
+    if (c->m->ntris == nt0 || !c->indexed)
+        return true;
+    size_t w0 = c->st->work;
+    bool ok = untangle(c, nt0);
+    c->st->refill_work = c->st->work - w0;
+    return ok;
+}
