@@ -458,7 +458,12 @@ int ism_cli_run_surface(ism_cli_run *run)
     double t2 = ism_now_ms();
     int status = 0;
     if (ps_status != ISM_POLY_OK) {
-        fprintf(stderr, "isomesh: %s\n", ism_error_format(&err, msg, sizeof msg));
+        /* the budget's flag and the knobs that make the mesh smaller */
+        const char *hint = ps_status != ISM_POLY_TOO_BIG ? ""
+                           : run->options.max_error > 0
+                               ? ": --max-triangles raises it, a larger --max-error makes fewer"
+                               : ": --max-triangles raises it, a smaller -d MAX makes fewer";
+        fprintf(stderr, "isomesh: %s%s\n", ism_error_format(&err, msg, sizeof msg), hint);
         status = ps_status == ISM_POLY_BAD_OPTIONS ? 2 : 1;
         goto done;
     }

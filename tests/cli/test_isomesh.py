@@ -193,6 +193,7 @@ class TestIsomesh(unittest.TestCase):
         p = run("--surface", "gyroid-ball", "-d", "3:8", "--max-triangles", "1000", "-o", path)
         self.assertEqual(p.returncode, 1)
         self.assertIn("budget", p.stderr)
+        self.assertIn("MiB): --max-triangles raises it, a smaller -d MAX makes fewer", p.stderr)
         self.assertEqual(os.listdir(self.dir), [])
 
     def test_surfaces_file(self):
