@@ -271,6 +271,11 @@ int main(int argc, char **argv)
         strcmp(argv[2], "--sandbox-selftest") == 0)
         return ism_sandbox_selftest(argv[3]);
 
+    if (argc == 1) { /* nothing given: how to start, rather than "nothing to do" */
+        fprintf(stderr, "usage: isomesh --surface NAME -o FILE | -e EXPR -o FILE | REQUEST.json "
+                "-o FILE (--list: the surfaces; --help: every option)\n");
+        return 2;
+    }
     ism_cli_run run;
     ism_cli_run_init(&run);
     bool list = false;

@@ -164,6 +164,7 @@ class TestIsomesh(unittest.TestCase):
             (["--surface", "torus", "-p", "Q=1", "-o", "a.ply"],
              "--param Q: the surface 'torus' has no parameter Q (it has R, r)"),
             (["--frobnicate"], "unknown option"),
+            ([], "usage: isomesh --surface NAME -o FILE"),
             (["-e", "x", "--threads", "-1", "-o", "a.ply"], "--threads"),
             (["-e", "x", "--max-error", "-1", "-o", "a.ply"], "--max-error"),
             (["-e", "x", "--max-error", "abc", "-o", "a.ply"], "--max-error"),
