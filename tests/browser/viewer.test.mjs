@@ -756,6 +756,9 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
       const key = await page.evaluate(() => [...document.querySelectorAll('#key-types span')].map((e) => [e.dataset.count, e.textContent]));
       for (const [n, text] of key) assert.equal(/^1 \S+s\b/.test(text), false, `${text} (${n})`);
       if (name === 'klein-bottle') assert.ok(key.some(([n, t]) => n === '1' && t === '1 double curve'), JSON.stringify(key));
+      // the points layer's swatch is no point type's colour (the points are drawn by type)
+      const swatch = await page.evaluate(() => getComputedStyle(document.querySelector('#feature-key .key-points'), '::before').backgroundColor);
+      assert.equal(swatch, 'rgba(0, 0, 0, 0)', `${name}: the singular points layer's swatch ${swatch}`);
       if (name === 'kummer-4-nodes') assert.ok(key.some(([n, t]) => n === '4' && t === '4 nodes'), JSON.stringify(key));
       if (extra) {
         await page.check('#clip-on');
