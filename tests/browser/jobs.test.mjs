@@ -86,6 +86,23 @@ describe('viewer and jobs', { timeout: 150000 }, () => {
     }
   });
 
+  it('a job past its deadline says which knobs make a lighter mesh', async () => {
+    // a daemon of its own whose deadline the slow request passes
+    const strict = await startDaemon(['--workers', '1', '--job-timeout', '300ms']);
+    const page = await browser.context.newPage();
+    const errors = watchErrors(page);
+    try {
+      await page.goto(strict.base + '/' + SLOW_FRAGMENT);
+      await page.waitForFunction(() => /deadline/.test(document.getElementById('message').textContent), null, { timeout: 30000 });
+      const text = await page.textContent('#message');
+      assert.match(text, /^Took too long: .*deadline.*\. A smaller depth max, a larger max error or a smaller box makes a lighter mesh\./);
+      assert.deepEqual(errors, []);
+    } finally {
+      await page.close();
+      await stopDaemon(strict);
+    }
+  });
+
   it('says the server is busy, counts down its Retry-After, and retries', async () => {
     // Occupy the only worker and the only queue place: the next computation gets 503.
     const blockers = [];

@@ -738,6 +738,10 @@ function failed(e, body) {
     message('The server cannot be reached.', 'error', { label: 'Retry', run: () => compute(body) });
     return;
   }
+  if (e.status === 504) { // the job's deadline: say which knobs make a lighter mesh
+    message(`Took too long: ${e.message}. A smaller depth max, a larger max error or a smaller box makes a lighter mesh.`, 'error');
+    return;
+  }
   message(`The server answered ${e.status}: ${e.message}`, 'error');
 }
 
