@@ -13,7 +13,14 @@ The truth then differs between boxes, so each box's expected boundary loops come
 boxes keep whole, χ + caps and boundary loops - caps are what must agree.
 
   sweep_singular.py [--build build/release] [--depths 6,7,8,9] [--presets a,b] [--jobs 2]
-                    [--cache FILE.jsonl] [--extra ARG ...]
+                    [--cache FILE.jsonl] [--max-error-rel R] [--extra ARG ...]
+
+--max-error-rel R runs the path users get under an error bound: --max-error E with E = R x the
+largest width of each box (the dual mesher where it applies, the singular stage sized from E).
+Each row then also shows which mesher ran (d dual / p primal and why not dual) and the accuracy
+block's verdict (worst of vertex, midpoint and centroid distance over E; met); a row is flagged
+when the mesher differs between boxes (MESHER), E is missed (MISS), or `met` disagrees with the
+measured worst distance (METBAD).
 
 --cache keeps finished runs (keyed by preset, box, depth, extra arguments and the binary's
 mtime), so an interrupted sweep resumes where it stopped."""
@@ -63,6 +70,11 @@ def summary(stats):
     an = {k: v for k, v in stats["analysis"].items() if k not in ("quality", "accuracy")}
     return {"singular": stats["singular"], "analysis": an,
             "thin_found": stats["polygoniser"]["thin_found"],
+            "mesher": stats["polygoniser"].get("mesher"),
+            "why": stats["polygoniser"].get("dual_declined"),
+            "acc": {k: stats["analysis"]["accuracy"].get(k) for k in
+                    ("max_dist_vertex", "max_dist_midpoint", "max_dist_centroid", "max_error",
+                     "met")},
             "ms": round(stats["timings_ms"]["total"])}
 
 
@@ -77,7 +89,20 @@ def counts(r):
             "comp": an["components"], "nmp": an["nonmanifold_points"],
             "nmc": an["nonmanifold_curves"], "bl": an["boundary_loops"],
             "art": sg["artefacts"], "nme": an["nonmanifold_edges"], "inc": sg["incomplete"],
-            "thin": r["thin_found"], "ms": r["ms"]}
+            "thin": r["thin_found"], "ms": r["ms"], **bound(r)}
+
+
+def bound(r):
+    """Under --max-error-rel: which mesher ran and whether E was met (worst of vertices,
+    midpoints, centroids over E; `met` as the stats say it; metbad when the two disagree)."""
+    a = r.get("acc")
+    if not a or not a.get("max_error"):
+        return {}
+    worst = max(a["max_dist_vertex"], a["max_dist_midpoint"], a["max_dist_centroid"])
+    q = worst / a["max_error"]
+    why = r.get("why")
+    return {"mesher": (r.get("mesher") or "?")[0] + (f":{why}" if why else ""),
+            "met": a["met"], "q": q, "metbad": bool(a["met"]) != (q <= 1)}
 
 
 def run(exe, name, box, depth, extra, timeout):
@@ -106,6 +131,7 @@ def main():
     ap.add_argument("--cache", default="")
     ap.add_argument("--timeout", type=float, default=900)
     ap.add_argument("--extra", nargs="*", default=[])
+    ap.add_argument("--max-error-rel", type=float, default=0)
     args = ap.parse_args()
     exe = os.path.abspath(os.path.join(args.build, "isomesh"))  # the runs start in a temp dir
     stamp = os.path.getmtime(exe)
@@ -126,14 +152,18 @@ def main():
     for p in ps:
         for d in depths:
             for label, box in boxes(p["box"], d):
-                k = json.dumps([p["name"], box, d, args.extra, stamp])
-                jobs.append((p["name"], d, label, box, k))
+                extra = list(args.extra)
+                if args.max_error_rel:  # E from this box's own largest width
+                    e = args.max_error_rel * max(box[a + 3] - box[a] for a in range(3))
+                    extra += ["--max-error", repr(e)]
+                k = json.dumps([p["name"], box, d, extra, stamp])
+                jobs.append((p["name"], d, label, box, k, extra))
 
     def one(j):
-        name, d, label, box, k = j
+        name, d, label, box, k, extra = j
         if k in cache:
             return j, cache[k]
-        v = run(exe, name, box, d, args.extra, args.timeout)
+        v = run(exe, name, box, d, extra, args.timeout)
         if args.cache:
             with open(args.cache, "a") as f:
                 f.write(json.dumps({"k": k, "v": v}) + "\n")
@@ -141,7 +171,7 @@ def main():
 
     res = {}
     with ThreadPoolExecutor(args.jobs) as ex:
-        for (name, d, label, box, k), v in ex.map(one, jobs):
+        for (name, d, label, box, k, _), v in ex.map(one, jobs):
             res[(name, d, label)] = v
 
     def cut_caps(p, d):
@@ -172,15 +202,24 @@ def main():
                              f"χ{v['chi']:<4}k{v['comp']:<2}np{v['nmp']:<2}nc{v['nmc']:<2}b{v['bl']:<2}"
                              f"A{v['art']}" + (" INC" if v["inc"] else "") +
                              (f" T{v['thin']}" if v["thin"] else "") +
-                             (f" cut{v['cut']}" if v.get("cut") else ""))
+                             (f" cut{v['cut']}" if v.get("cut") else "") +
+                             (f" {v['mesher']} q{v['q']:.2f}{'' if v['met'] else ' MISS'}"
+                              if "mesher" in v else ""))
             art = any(v["art"] for v in ok)
+            extra_flags = []
+            if len({v.get("mesher") for v in ok}) > 1:
+                extra_flags.append("MESHER")
+            if any("met" in v and not v["met"] for v in ok):
+                extra_flags.append("MISS")
+            if any(v.get("metbad") for v in ok):
+                extra_flags.append("METBAD")
             flag = ""
-            if diff or art or len(ok) < len(row):
-                flag = " <-- " + ",".join(diff) + (" ART" if art else "") + \
+            if diff or art or len(ok) < len(row) or extra_flags:
+                flag = " <-- " + ",".join(diff + extra_flags) + (" ART" if art else "") + \
                        (" ERR" if len(ok) < len(row) else "")
-                bad.append((p["name"], d, diff, art))
+                bad.append((p["name"], d, diff + extra_flags, art))
             print(f"{p['name']:<18}{d:>2}  " + "  |  ".join(f"{c:<50}" for c in cells) + flag)
-    print(f"\n{len(bad)} (preset, depth) rows disagree or have artefacts:")
+    print(f"\n{len(bad)} (preset, depth) rows disagree, have artefacts, change mesher or miss E:")
     for name, d, diff, art in bad:
         print(f"  {name} d{d}: {','.join(diff)}{' artefacts' if art else ''}")
     return 0
