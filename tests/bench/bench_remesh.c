@@ -7,7 +7,8 @@
  * touch (a singular point, the double curve, the boundary, nothing) and of the folded edges.
  * Asserts nothing.
  *
- *   bench_remesh PRESET [SHIFT...]     SHIFT: fractions of a finest cell (default 0 1e-3 0.37)
+ *   bench_remesh PRESET [SHIFT...]     SHIFT: fractions of a finest cell (default 0 1e-3 and
+ *                                      √2 − 1, tests/unit/placements.h)
  *   CENSUS_VERBOSE=1 bench_remesh ...  also lists each needle (angle, centroid, distance to
  *                                      the nearest point, what its corners touch) and each
  *                                      turned-over fold's end points
@@ -24,6 +25,7 @@
 #include "core/remesh/rm_mesh.h"
 #include "core/singular/surface.h"
 #include "proto/request.h"
+#include "tests/unit/placements.h"
 
 /* The (unnormalised) normal of triangle t from its winding. */
 static void normal_of(const ism_mesh *m, size_t t, double n[3])
@@ -199,7 +201,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: bench_remesh PRESET [SHIFT...]\n");
         return 2;
     }
-    static const double shifts[] = {0, 1e-3, 0.37};
+    static const double shifts[] = {0, 1e-3, PF_IRR};
     printf("%-5s %8s %7s %6s %10s %10s %10s %4s %5s %4s %5s %3s\n", "", "tris", "min°",
            "<10°", "centroid", "midpoint", "vertex", "χ", "nm e", "nm p", "comp", "bl");
     bool ok = true;

@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """mesh_identity.py — the check that a speed change changes no mesh: the PLY md5 of every preset
 of the gallery (its own box and depths, one thread), of a set of presets in boxes shifted off the
-octree lattice (by 1e-3, and by 0.37 / -0.23 / 0.41 of a finest cell) on two threads, and of
-max_error runs of the primal polygons (several rounds, lattice and shifted boxes, 1 and 2 threads)
-and of the dual mesh (the default under a bound), through the CLI.
+octree lattice (tests/cli/boxes.py: by 1e-3, and by irrational fractions of a finest cell) on
+two threads, and of max_error runs of the primal polygons (several rounds, lattice and shifted
+boxes, 1 and 2 threads) and of the dual mesh (the default under a bound), through the CLI.
 `--save FILE` records them; `--check FILE` runs again and names every run whose mesh differs.
 Not part of `make test` (a few minutes on two cores); run it before and after a change:
 

@@ -1,13 +1,14 @@
 #!/usr/bin/env python3
 """sweep_singular.py — issue 13's lattice-independence sweep: every preset of the gallery in its
-own box and shifted off the octree lattice (by 1e-3, and by 0.37 / -0.23 / 0.41 of a finest
-cell), at depths 6-9, through `isomesh --stats`. Prints one row per (preset, depth)
-with the singular counts, χ, components, non-manifold vertices/edges and artefacts of each box,
-and lists every preset whose counts differ between boxes or that has artefacts. Not part of
-`make test` (hundreds of runs, minutes each at depth 9).
+own box and shifted off the octree lattice (tests/cli/boxes.py's placements: by 1e-3, and by
+sqrt(2) - 1 / -(sqrt(5) - 1)/4 / 1/e of a finest cell), at depths 6-9, through `isomesh --stats`.
+Prints one row per (preset, depth) with the singular counts, χ, components, non-manifold
+vertices/edges and artefacts of each box, and lists every preset whose counts differ between
+boxes or that has artefacts. Not part of `make test` (hundreds of runs, minutes each at depth 9).
 
-A shifted box may cut the surface where the preset's own box holds it whole (the 0.37-cell box
-at depth 3 cuts the horn cyclide at x = -13.52, its extreme point being x = -a - r - f = -14).
+A shifted box may cut the surface where the preset's own box holds it whole (the box 0.37 of a
+cell off, the irrational placement's predecessor, at depth 3 cut the horn cyclide at x = -13.52,
+its extreme point being x = -a - r - f = -14).
 The truth then differs between boxes, so each box's expected boundary loops come from f itself
 (sign regions of f on the box's faces, see box_cut.py), and where a box cuts caps that the other
 boxes keep whole, χ + caps and boundary loops - caps are what must agree.
@@ -34,8 +35,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 import box_cut
 
-SHIFTS = (("own", (0, 0, 0), False), ("1e-3", (1e-3, -1e-3, 0.7e-3), False),
-          ("0.37c", (0.37, -0.23, 0.41), True))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "cli"))
+from boxes import PLACEMENTS as SHIFTS  # noqa: E402  (label, shift per axis, in finest cells?)
 
 
 def presets(build):

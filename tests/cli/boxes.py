@@ -1,15 +1,38 @@
-"""boxes.py — the placements of a box that every geometric CLI test meshes in: as given,
-shifted by 1e-3 (x up, y down, z up by 0.7e-3), and by 0.37 / -0.23 / 0.41 of a finest cell
-(no lattice plane of any depth through the box's centre). Against the sanitizer build
-(ISOMESH_TEST_QUICK=1) only the last one: that run looks for memory errors, 5-10x slower,
-while the release run checks the geometry in all three."""
+"""boxes.py — the placements of a box that every geometric Python test meshes in (the CLI and
+HTTP tests, tests/bench/sweep_singular.py and mesh_identity.py); tests/unit/core/poly_fixture.h
+holds the same table for the C tests (PF_OFF_*, PF_IRR_*):
+
+  own   the box as given (lattice planes where the test's author put them);
+  1e-3  moved by (1e-3, -1e-3, 0.7e-3) in the box's units: every lattice plane just beside
+        where it passed;
+  irr   moved by (sqrt(2) - 1, -(sqrt(5) - 1)/4, 1/e) of a finest cell of each axis.
+
+Why irrational: the surfaces' features (nodes, pinch points, axes, planes, centres) and the
+boxes sit at rational coordinates; a lattice plane of some depth of the moved box passes through
+such a feature only when the shift in cells is rational (0.37 / -0.23 / 0.41 once stood here,
+0.37 x 8 = 2.96 is 0.04 of a cell from a plane three depths down) — never with an irrational
+one. Why these magnitudes: 0.31-0.41 of a cell, far from 0 and 1 (the own placement again) and
+from 1/2 (the lattice one depth finer); 0.086 / 0.059 / 0.118 of a cell from the multiples of
+1/4; per axis different, y with the other sign, so the centre does not move along a diagonal.
+
+Against the sanitizer build (ISOMESH_TEST_QUICK=1) only the irrational placement: that run looks
+for memory errors, 5-10x slower, while the release run checks the geometry in all three."""
+import math
 import os
 
 QUICK = os.environ.get("ISOMESH_TEST_QUICK") == "1"
+
+OFF_1E3 = (1e-3, -1e-3, 0.7e-3)  # in the box's units
+IRR_CELLS = (math.sqrt(2) - 1, -(math.sqrt(5) - 1) / 4, 1 / math.e)  # of a finest cell
+IRR = IRR_CELLS[0]  # one fraction of a cell, for tests that move every axis alike
+
+# (label, shift per axis, whether the shift is in finest cells)
+PLACEMENTS = (("own", (0, 0, 0), False), ("1e-3", OFF_1E3, False), ("irr", IRR_CELLS, True))
 
 
 def placements(box, cell):
     """[lo x, lo y, lo z, hi x, hi y, hi z] boxes: `box` and its shifted copies; cell: the
     finest cell's side."""
-    shifts = [(0, 0, 0), (1e-3, -1e-3, 0.7e-3), (0.37 * cell, -0.23 * cell, 0.41 * cell)]
+    shifts = [[s[a] * cell if in_cells else s[a] for a in range(3)]
+              for _, s, in_cells in PLACEMENTS]
     return [[box[k] + s[k % 3] for k in range(6)] for s in (shifts[2:] if QUICK else shifts)]

@@ -1,6 +1,6 @@
 """test_curve_outputs.py — the arrangement and the requested curves in every output format,
 decoded by readers independent of the encoders: the unit sphere cut by the planes x = 0,
-y = 0, z = 0 (in a box on the octree lattice and one shifted 0.37 of a finest cell off it).
+y = 0, z = 0 (in a box on the octree lattice and one shifted sqrt(2) - 1 of a finest cell off it).
 
 - .drc (npm draco3d): every decoded triangle's three points carry one cell id, and the ids
   partition the triangles into exactly the features' faces — each face's triangle count, and
@@ -29,7 +29,11 @@ import shutil
 import struct
 import subprocess
 import tempfile
+import sys
 import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from boxes import IRR  # noqa: E402  (the placements' table: sqrt(2) - 1 of a cell)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
@@ -233,7 +237,7 @@ class CurveOutputsTest(unittest.TestCase):
             self.assertLess(min(abs(v) for v in p), FLOAT_TOL, p)
 
     def test_drc_and_glb_cells_partition_the_triangles(self):
-        for shift in (0.0, 0.37 * CELL):
+        for shift in (0.0, IRR * CELL):
             with self.subTest(shift=shift):
                 f, drc = self.run_request(self.sphere(shift), "drc")
                 faces = f["arrangement"]["faces"]
@@ -241,7 +245,7 @@ class CurveOutputsTest(unittest.TestCase):
                 self.assertEqual(d["cell"]["unique_id"], 5)
                 self.assert_cells_partition(labels_by_triangle(d, "cell"), decoded_triangles(d),
                                             faces)
-        f, glb = self.run_request(self.sphere(0.37 * CELL), "glb")
+        f, glb = self.run_request(self.sphere(IRR * CELL), "glb")
         js, bin_ = glb_chunks(glb)
         prim = js["meshes"][0]["primitives"][0]
         ext = prim["extensions"]["KHR_draco_mesh_compression"]
@@ -272,7 +276,7 @@ class CurveOutputsTest(unittest.TestCase):
         self.assertEqual(acc["count"], points_in_arcs)
 
     def test_obj_lines_and_ply_cells(self):
-        shift = 0.37 * CELL
+        shift = IRR * CELL
         f, obj = self.run_request(self.sphere(shift), "obj")
         verts, lines, group = [], [], None
         for line in obj.decode().splitlines():
@@ -313,7 +317,7 @@ class CurveOutputsTest(unittest.TestCase):
         expr = "((x-0.5)^2+y^2+z^2-0.16) * ((x+0.5)^2+y^2+z^2-0.16)^2"
         cell = 2.2 / 2 ** 5
         section = [{"kind": "plane", "normal": [0, 0, 1], "offsets": [0.05]}]
-        for shift, curves in ((0.0, None), (0.37 * cell, None), (0.37 * cell, section)):
+        for shift, curves in ((0.0, None), (IRR * cell, None), (IRR * cell, section)):
             with self.subTest(shift=shift, curves=bool(curves)):
                 b = [-1.1 + shift, -0.6 + shift, -0.6 + shift, 1.1 + shift, 0.6 + shift,
                      0.6 + shift]
@@ -371,7 +375,7 @@ class CurveOutputsTest(unittest.TestCase):
     def test_crease_sides_carry_their_branch_normals(self):
         depth, side = 5, 3.0
         cell = side / 2 ** depth
-        for shift, fmt in ((0.0, "drc"), (0.37 * cell, "drc"), (1e-3 * cell, "obj"),
+        for shift, fmt in ((0.0, "drc"), (IRR * cell, "drc"), (1e-3 * cell, "obj"),
                            (1e-3 * cell, "ply")):
             with self.subTest(shift=shift, format=fmt):
                 req = {"expr": GYROID_BALL, "box": box(side, shift), "depth": {"max": depth}}

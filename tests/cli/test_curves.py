@@ -2,10 +2,10 @@
 --features F`): the unit sphere cut by the planes x = 0, y = 0 and the level z = 0 gives the
 arrangement 6 / 12 / 8 with faces of area pi/2 (0.5%) and every arc point within 1e-10 of
 the box diagonal of the sphere and of its plane (checked here from the closed forms), in a
-box shifted off the lattice by 0.37 of a finest cell; a curve that misses the surface gives
+box shifted off the lattice by sqrt(2) - 1 of a finest cell; a curve that misses the surface gives
 no curve and one face, not an error; a bad curve is refused with its JSON path. The Klein
 bottle preset cut by x = 0, in its lattice box (the plane through lattice vertices) and boxes
-shifted off it by 1e-3 and 0.37 cell: the section is three circles
+shifted off it by 1e-3 and sqrt(2) - 1 cell: the section is three circles
 (closed form below), crossing on the double curve at (0, 1 +- sqrt 2, 0) (vertices typed
 double_curve, where the section's arcs end: 4 ends each) and at the four points where the
 plane touches the surface (typed branch), each a vertex of degree 4; 12 edges. The cone
@@ -33,7 +33,7 @@ import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from boxes import placements  # noqa: E402
+from boxes import IRR, placements  # noqa: E402
 from test_curve_outputs import ball, ball_grad, gyroid, gyroid_grad  # noqa: E402
 from test_surfaces_file import read_obj  # noqa: E402
 
@@ -51,7 +51,7 @@ BALLS3_EXPR = "min(" + ", ".join(f"(x - {cx})^2 + (y - {cy})^2 + z^2 - 0.5"
                                  for cx, cy, _ in BALLS3) + ")"
 BALLS3_X0 = (0.36 - 0.09 - 0.52 ** 2) / 1.8
 BALLS3_Z0 = math.sqrt(0.5 - (0.6 - BALLS3_X0) ** 2)
-SHIFT = 0.37 * SIDE / 2 ** DEPTH
+SHIFT = IRR * SIDE / 2 ** DEPTH
 
 
 class CurvesTest(unittest.TestCase):
@@ -115,7 +115,7 @@ class CurvesTest(unittest.TestCase):
         want = [(1 + r2, 0), (1 - r2, 0), (1 / 3, -r2 / 3), (1 / 3, r2 / 3), (-1, r2), (-1, -r2)]
         length = 2 * math.pi * r2 + 2 * 2 * math.pi * 2
         cell = 8 / 2 ** 7
-        for shift in (0.0, 1e-3, 0.37 * cell):
+        for shift in (0.0, 1e-3, IRR * cell):
             d = [0.61 * shift, shift, -0.83 * shift]
             f, proc = self.run_request({
                 "preset": "klein-bottle", "depth": {"max": 7},
@@ -164,7 +164,7 @@ class CurvesTest(unittest.TestCase):
             dirs += [(a, b, 1.0), (-a, -b, -1.0)]
         depth, side = 6, 2.0
         cell = side / 2 ** depth
-        for shift in (0.0, 1e-3, 0.37 * cell):
+        for shift in (0.0, 1e-3, IRR * cell):
             with self.subTest(shift=shift):
                 d = [shift, 0.61 * shift, -0.83 * shift]
                 box = [-1 + d[0], -1 + d[1], -1 + d[2], 1 + d[0], 1 + d[1], 1 + d[2]]
@@ -220,7 +220,7 @@ class CurvesTest(unittest.TestCase):
         def sphere_dist(p, c):
             return abs(math.dist(p, c) - math.sqrt(0.5))
 
-        for shift in (0.0, 1e-3 * cell, 0.37 * cell):
+        for shift in (0.0, 1e-3 * cell, IRR * cell):
             with self.subTest(shift=shift):
                 d = [shift, 0.61 * shift, -0.83 * shift]
                 box = [-side / 2 + d[0], -side / 2 + d[1], -side / 2 + d[2],
@@ -261,7 +261,7 @@ class CurvesTest(unittest.TestCase):
         def values(p):  # each ball's function; f is their min
             return [(p[0] - c[0]) ** 2 + (p[1] - c[1]) ** 2 + p[2] ** 2 - 0.5 for c in centres]
 
-        for shift in (0.0, 1e-3 * cell, 0.37 * cell):
+        for shift in (0.0, 1e-3 * cell, IRR * cell):
             with self.subTest(shift=shift):
                 d = [shift, 0.61 * shift, -0.83 * shift]
                 box = [-side / 2 + d[0], -side / 2 + d[1], -side / 2 + d[2],

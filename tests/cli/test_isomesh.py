@@ -246,7 +246,7 @@ class TestIsomesh(unittest.TestCase):
             return stats
 
         for surface, box in cases:
-            # the last placement: by 0.37 / -0.23 / 0.41 of a depth-6 cell
+            # the last placement: by boxes.IRR_CELLS of a depth-6 cell
             shifted = placements(box, (box[3] - box[0]) / 64)[-1]
             runs = []
             for threads in ("1", "2", "4"):

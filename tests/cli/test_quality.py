@@ -1,9 +1,9 @@
 """test_quality.py — the quality pass (`--quality good`, request "quality": "good"), end to end
-through `isomesh`, in the symmetric box and in boxes shifted off the octree lattice (by 1e-3
-and by 0.37 of a finest cell). Every figure is computed here from the written PLY, never taken
-from the stats: the smallest angle of every triangle, the closed-form distance of every vertex
-to the sphere and the torus, Euler characteristics counted from the faces. On the singular
-presets the topology report must not change at all."""
+through `isomesh`, in the symmetric box and in boxes shifted off the octree lattice (by 1e-3 and by
+irrational fractions of a finest cell: boxes.py). Every figure is computed here from the written
+PLY, never taken from the stats: the smallest angle of every triangle, the closed-form distance of
+every vertex to the sphere and the torus, Euler characteristics counted from the faces. On the
+singular presets the topology report must not change at all."""
 import json
 import math
 import os

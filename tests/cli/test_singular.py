@@ -1,8 +1,8 @@
 """test_singular.py — the singular structure found from f, end to end through `isomesh
---features --stats`, in boxes shifted off the octree lattice (by 1e-3 and by 0.37 of a finest
-cell), never only in symmetric ones. Every expected value comes from the closed form of the
-surface: node positions, curve radii, counts, and the mesh's own structure (one vertex with
-two cones of faces at a node, one component where two spheres cross, no non-manifold element
+--features --stats`, in boxes shifted off the octree lattice (by 1e-3 and by irrational fractions of
+a finest cell: boxes.py), never only in symmetric ones. Every expected value comes from the closed
+form of the surface: node positions, curve radii, counts, and the mesh's own structure (one vertex
+with two cones of faces at a node, one component where two spheres cross, no non-manifold element
 off the locus)."""
 import json
 import math

@@ -6,8 +6,12 @@ expected; a missing file says it cannot be read (no "line -1")."""
 import json
 import os
 import subprocess
+import sys
 import tempfile
 import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from boxes import IRR  # noqa: E402  (the placements' table: sqrt(2) - 1 of a cell)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
@@ -49,7 +53,7 @@ class SurfacesFileTest(unittest.TestCase):
             self.assertEqual(p.returncode, 0, p.stderr)
             self.assertGreater(len(read_obj(out)[1]), 100)
         a, b, c = 1.2, 0.8, 0.5
-        for shift in (0.0, 1e-3, 0.37 * 3.0 / 2 ** 6):
+        for shift in (0.0, 1e-3, IRR * 3.0 / 2 ** 6):
             out = os.path.join(self.dir, "e.obj")
             box = ",".join(str(v + shift) for v in (-1.5, -1.5, -1.5, 1.5, 1.5, 1.5))
             p = self.run_cli("--surfaces", EXAMPLE, "--surface", "ellipsoid", "-d", "3:6",

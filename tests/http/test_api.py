@@ -12,6 +12,8 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "cli"))
+from boxes import IRR  # noqa: E402  (the placements' table: sqrt(2) - 1 of a cell)
 from harness import (ROOT, SLOW, SPHERE, Daemon, draco_counts, open_get,  # noqa: E402
                      parse_metrics, sphere)
 
@@ -177,7 +179,7 @@ class ApiTest(unittest.TestCase):
         """A preview searches the cells whose corners all share a sign for a piece between
         them: a ball of radius 0.04 (a fifth of a depth-4 cell, a tenth of a depth-3 one) and a
         rod of radius 0.05 along z, both off the lattice, show in previews at depths 3 and 4,
-        in the box as given and shifted by 1e-3 and by 0.37 of a cell. Closed forms: the
+        in the box as given and shifted by 1e-3 and by sqrt(2) - 1 of a cell. Closed forms: the
         points on the small ball lie at its radius from its centre (roots on cell edges), the
         rod's points at its radius from its axis, along its whole length in the box."""
         c, rb = (-0.93, 0.71, -0.64), 0.04
@@ -186,7 +188,7 @@ class ApiTest(unittest.TestCase):
         rod = "(x-0.13)^2+(y+0.07)^2-%r+0*z" % (rr * rr)
         for depth in (3, 4):
             cell = 3.0 / 2 ** depth
-            for shift in (0.0, 1e-3, 0.37 * cell):
+            for shift in (0.0, 1e-3, IRR * cell):
                 box = [-1.5 + shift] * 3 + [1.5 + shift] * 3
                 for expr in (ball, rod):
                     r = self.d.post("/v1/mesh?format=obj", {"expr": expr, "box": box, "preview": True,
@@ -215,10 +217,10 @@ class ApiTest(unittest.TestCase):
         corners (genus 12 - 8 + 1 = 5: chi = 2 - 2*5 = -8, one piece, closed); at its middle a
         bar is 0.02 across, an eighth of a depth-4 cell of the box +-1.3, between the lattice
         lines. A preview at depth 4 keeps every bar (it dropped them all: chi 16, the 8
-        corners apart), in the box as given and shifted by 1e-3 and by 0.37 of a cell. chi,
+        corners apart), in the box as given and shifted by 1e-3 and by sqrt(2) - 1 of a cell. chi,
         pieces and open edges are counted from the OBJ's faces."""
         cell = 2.6 / 2 ** 4
-        for shift in (0.0, 1e-3, 0.37 * cell):
+        for shift in (0.0, 1e-3, IRR * cell):
             box = [-1.3 + shift] * 3 + [1.3 + shift] * 3
             r = self.d.post("/v1/mesh?format=obj", {"preset": "cube-minus-ball", "params": {"r": 1.4},
                                                     "box": box, "preview": True,

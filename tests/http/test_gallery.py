@@ -2,7 +2,8 @@
 each with a source, parameters, a box and depths; every entry meshes without error at its own
 settings; and every fact an entry states (nodes: singular points of type node in the features
 JSON v2; Euler characteristic; components) holds on the mesh — in the entry's box and in the
-box shifted off the octree lattice by 1e-3 and by 0.37 of a finest cell. Also POST /v1/box, and
+box shifted off the octree lattice by 1e-3 of a finest cell and by irrational fractions of one
+(tests/cli/boxes.py's IRR_CELLS). Also POST /v1/box, and
 the thumbnails the daemon renders itself (GET /v1/presets/{name}/thumbnail.png)."""
 import json
 import os
@@ -15,17 +16,20 @@ from concurrent.futures import ThreadPoolExecutor
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from harness import BUILD, Daemon  # noqa: E402
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "cli"))
+from boxes import IRR_CELLS  # noqa: E402  (the placements' table)
+
 MIN_ENTRIES = 40
-SHIFTS = (0.0, 1e-3, 0.37)   # of a finest cell
+SHIFTS = ((0.0,) * 3, (1e-3,) * 3, IRR_CELLS)   # of a finest cell, per axis
 # Against the sanitizer build (5-10x slower) the daemon's memory safety is what is tested:
-# only the entries with facts, only in the box 0.37 of a cell off the lattice; the release
+# only the entries with facts, only in the box off the lattice by IRR_CELLS; the release
 # run covers every entry in every box.
 SANITIZED = os.path.basename(os.path.normpath(BUILD)) == "asan"
 
 
 def shifted(box, max_depth, s):
     cell = [(box[a + 3] - box[a]) / 2 ** max_depth for a in range(3)]
-    return [box[a % 3 + (3 if a >= 3 else 0)] + s * cell[a % 3] for a in range(6)]
+    return [box[a % 3 + (3 if a >= 3 else 0)] + s[a % 3] * cell[a % 3] for a in range(6)]
 
 
 def decode_png(data):
@@ -107,9 +111,9 @@ class GalleryTest(unittest.TestCase):
 
     def test_box_endpoint_fits_the_zero_set(self):
         # A sphere of radius 1.2 about (3, -2, 0.5) in the cube ±10, centre shifted off the
-        # 128-cell lattice by 0.37 of a cell.
+        # 128-cell lattice by the irrational fractions of a cell (IRR_CELLS).
         cell = 20 / 128
-        c = [3 + 0.37 * cell, -2 + 0.37 * cell, 0.5 + 0.37 * cell]
+        c = [3 + IRR_CELLS[0] * cell, -2 + IRR_CELLS[1] * cell, 0.5 + IRR_CELLS[2] * cell]
         body = {"expr": f"(x - {c[0]!r})^2 + (y - {c[1]!r})^2 + (z - {c[2]!r})^2 - 1.44",
                 "box": [-10, -10, -10, 10, 10, 10]}
         r = self.d.post("/v1/box", json.dumps(body).encode())
@@ -144,9 +148,9 @@ class GalleryTest(unittest.TestCase):
     def test_every_entry_meshes_and_its_facts_hold(self):
         jobs = []
         for p in self.presets:
-            shifts = SHIFTS if p["facts"] else (0.0,)
+            shifts = SHIFTS if p["facts"] else (SHIFTS[0],)
             if SANITIZED:
-                shifts = (0.37,) if p["facts"] else ()
+                shifts = (IRR_CELLS,) if p["facts"] else ()
             for s in shifts:
                 box = shifted(p["box"], p["depth"]["max"], s)
                 jobs.append((p, s, {"preset": p["name"], "box": box, "depth": p["depth"]}))

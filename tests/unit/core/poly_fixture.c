@@ -77,16 +77,28 @@ void pf_run_surface(const ism_tape *t, const double box[6], int dmin, int dmax, 
     pf_run_surface_bounded(t, box, dmin, dmax, 0, m, l);
 }
 
-void pf_sweep_box(const double base[6], int d, int which, double box[6])
+static void sweep_box(const double base[6], int d, int which, const double cell_shift[3],
+                      double box[6])
 {
-    static const double abs_shift[3] = {1e-3, -1e-3, 0.7e-3};
-    static const double cell_shift[3] = {0.37, -0.23, 0.41};
+    static const double abs_shift[3] = {PF_OFF_X, PF_OFF_Y, PF_OFF_Z};
     for (int k = 0; k < 3; k++) {
         double s = which < 0 ? 0 : which == 0 ? abs_shift[k]
                                               : cell_shift[k] * ldexp(base[k + 3] - base[k], -d);
         box[k] = base[k] + s;
         box[k + 3] = base[k + 3] + s;
     }
+}
+
+void pf_sweep_box(const double base[6], int d, int which, double box[6])
+{
+    static const double irr[3] = {PF_IRR_X, PF_IRR_Y, PF_IRR_Z};
+    sweep_box(base, d, which, irr, box);
+}
+
+void pf_sweep_box_old(const double base[6], int d, int which, double box[6])
+{
+    static const double old[3] = {PF_OLD_X, PF_OLD_Y, PF_OLD_Z};
+    sweep_box(base, d, which, old, box);
 }
 
 void pf_run_placed(const ism_tape *t, const double base[6], int d, int which, double box[6],

@@ -1,6 +1,6 @@
 /* test_batch_identity.c — the batched evaluation on the octree's path (the children's
  * intervals in one call, leaves proven free of f = 0 skipped: octree_build.c, zero_free.h)
- * changes no mesh: every example surface, in its box and 0.37 of a finest cell off the
+ * changes no mesh: every example surface, in its box and √2 − 1 of a finest cell off the
  * lattice, and under an error bound (several rounds), gives bit for bit the mesh of the
  * node-by-node path (scalar_eval), on 1, 2 and 4 threads; and the batched path is really
  * taken (it evaluates f fewer times on the torus, where most leaves are zero-free). The
@@ -13,7 +13,7 @@
 #include "test_eval_surfaces.h"
 
 #define DEPTH_MAX 4   /* a few hundred leaves a surface: about a second for the whole file */
-#define SHIFT_CELLS 0.37
+#define SHIFT_CELLS PF_IRR
 
 static void mesh_of(const ism_tape *t, const double box[6], int dmax, double max_error,
                     int threads, bool scalar, ism_mesh *m, ism_poly_stats *st)
@@ -75,7 +75,7 @@ Test(batch_identity, every_surface_lattice_and_shifted)
     int dmax = DEPTH_MAX - pf_quick();
     for (size_t i = 0; i < TEST_NSURFACES; i++) {
         const test_surface *s = &TEST_SURFACES[i];
-        for (int placed = pf_first_box(); placed < 3; placed += 2) { /* as given, 0.37 off */
+        for (int placed = pf_first_box(); placed < 3; placed += 2) { /* as given, PF_IRR off */
             double box[6];
             memcpy(box, s->box, sizeof box);
             double shift = placed ? SHIFT_CELLS * (box[3] - box[0]) / (1 << dmax) : 0;

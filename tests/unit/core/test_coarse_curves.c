@@ -1,10 +1,10 @@
 /* test_coarse_curves.c — the singular locus of surfaces with double curves and whiskers at
  * coarse depths (3 and 4), found from f (ism_locus_find), in the preset's box as given and
- * shifted off the octree lattice as tests/bench/sweep_singular.py shifts it (1e-3, 0.37 of a
- * finest cell). Before, at depth 3 the boxes along the curves projected onto their end
- * points only (rank ≤ 1), no curve had a seed: the cross-cap reported nothing at all in the
- * box as given and shifted 1e-3, Steiner's surface 5 or 3 of its 6 pinch points, and at
- * depth 4 the cross-cap's whisker below z = −1 was missing in every box.
+ * shifted off the octree lattice as tests/bench/sweep_singular.py shifts it (1e-3, irrational
+ * fractions of a finest cell). Before, at depth 3 the boxes along the curves projected onto their
+ * end points only (rank ≤ 1), no curve had a seed: the cross-cap reported nothing at all in the
+ * box as given and shifted 1e-3, Steiner's surface 5 or 3 of its 6 pinch points, and at depth 4
+ * the cross-cap's whisker below z = −1 was missing in every box.
  *
  * What is asserted comes from the closed forms, not from the code:
  *  - cross-cap 4x²(x² + y² + z² + z) + y²(y² + z² − 1): f and ∇f vanish on the z axis, where
@@ -75,7 +75,7 @@ static ism_tape *find_placed(const char *expr, const double base[6], int d, int 
 
 static void check_case(const locus_case *c, int d, int which)
 {
-    const char *place = which < 0 ? "own" : which == 0 ? "1e-3" : "0.37 cell";
+    const char *place = which < 0 ? "own" : which == 0 ? "1e-3" : "irr cell";
     const double base[6] = {-c->half, -c->half, -c->half, c->half, c->half, c->half};
     ism_locus_options o;
     ism_locus l;
@@ -168,7 +168,7 @@ static long grid_segment(const ism_locus *l, const ism_sing_curve *cu, const dou
 
 static void check_nine_planes(const double base[6], int d, int which)
 {
-    const char *place = which < 0 ? "own" : which == 0 ? "1e-3" : "0.37 cell";
+    const char *place = which < 0 ? "own" : which == 0 ? "1e-3" : "irr cell";
     ism_locus_options o;
     ism_locus l;
     ism_tape *t = find_placed("sin(pi*x)*sin(pi*y)*sin(pi*z)", base, d, which, &o, &l);

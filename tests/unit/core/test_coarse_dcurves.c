@@ -1,11 +1,11 @@
 /* test_coarse_dcurves.c — the mesh along double curves at coarse depths (3 and 4), in the box
  * as given and shifted off the octree lattice as tests/bench/sweep_singular.py shifts it (1e-3,
- * 0.37 of a finest cell), through the service's meshing (locus from f, octree split along the
- * certified double curves, conformance). Before, the conformance tube started at 2.5 cells of
- * the depth — about the surface's size — and widened until it swallowed the sheets or fitted
- * with the wrong topology: Steiner's surface had χ 5 | −4 | 1 at depth 3 and −4 | −1 | −5 at
- * depth 4, the cross-cap χ 1 at depth 3 (0.37 cell), the crossing spheres χ −28 and −3 with
- * 16 and 3 artefacts at depth 3.
+ * irrational fractions of a finest cell), through the service's meshing (locus from f, octree
+ * split along the certified double curves, conformance). Before, the conformance tube started at
+ * 2.5 cells of the depth — about the surface's size — and widened until it swallowed the sheets or
+ * fitted with the wrong topology: Steiner's surface had χ 5 | −4 | 1 at depth 3 and −4 | −1 | −5
+ * at depth 4, the cross-cap χ 1 at depth 3 (0.37 cell), the crossing spheres χ −28 and −3 with 16
+ * and 3 artefacts at depth 3.
  *
  * What is asserted comes from the closed forms, not from the code. The mesh is the image of an
  * immersed surface X: with Y_k the points of k preimages, χ(X) = Σ k χ_c(Y_k), so
@@ -258,7 +258,7 @@ static void check_chains(const dcurve_case *c, const ism_mesh *m, double diag, c
 
 static void check_case(const dcurve_case *c, int d, int which)
 {
-    const char *place = which < 0 ? "own" : which == 0 ? "1e-3" : "0.37 cell";
+    const char *place = which < 0 ? "own" : which == 0 ? "1e-3" : "irr cell";
     char what[96];
     snprintf(what, sizeof what, "%s d%d %s", c->name, d, place);
     ism_tape *t = pf_compile(&(pf_surface){c->expr, NULL, 0, NULL, 0});
@@ -365,7 +365,7 @@ static void check_grid(const double base[6], int d, int which)
 {
     char what[64];
     snprintf(what, sizeof what, "nine planes ±%g d%d %s", base[3], d,
-             which < 0 ? "own" : which == 0 ? "1e-3" : "0.37 cell");
+             which < 0 ? "own" : which == 0 ? "1e-3" : "irr cell");
     ism_tape *t = pf_compile(&(pf_surface){"sin(pi*x)*sin(pi*y)*sin(pi*z)", NULL, 0, NULL, 0});
     double box[6];
     pf_sweep_box(base, d, which, box);

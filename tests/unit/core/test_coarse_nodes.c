@@ -1,9 +1,9 @@
 /* test_coarse_nodes.c — certified nodes at coarse depths through the whole pipeline of
  * core/singular/surface.h (locus from f, polygoniser, conformance): kummer-4-nodes at depths
  * 3 and 4, in the preset box ±3 and in ±2.2, each as given and shifted off the octree lattice
- * as tests/bench/sweep_singular.py shifts it (1e-3, 0.37 of a finest cell). Before, cells
- * 0.55-0.75 wide missed the small inner piece between the nodes and each node was joined
- * with one cone (χ 2, one component).
+ * as tests/bench/sweep_singular.py shifts it (1e-3, irrational fractions of a finest cell).
+ * Before, cells 0.55-0.75 wide missed the small inner piece between the nodes and each node was
+ * joined with one cone (χ 2, one component).
  *
  * What is asserted comes from the closed form, not from the code:
  *  - the nodes: f = (r² − μ²)² − λ pqrs with λ = (3μ² − 1)/(3 − μ²), p, q = w − z ∓ √2 x,
@@ -126,7 +126,7 @@ static void check_run(const ism_tape *t, const double base[6], int d, int which,
     ism_mesh m;
     ism_locus l;
     pf_run_surface(t, box, 3, d, &m, &l);
-    const char *place = which < 0 ? "own" : which == 0 ? "1e-3" : "0.37 cell";
+    const char *place = which < 0 ? "own" : which == 0 ? "1e-3" : "irr cell";
     double half = base[3];
     cr_expect_eq(l.npoints, NODES, "±%g d%d %s: %zu points", half, d, place, l.npoints);
     for (int i = 0; i < NODES; i++) {

@@ -1,10 +1,10 @@
 /* test_conform.c — the conformance pass (core/singular/conform.h) on closed forms, each in a
- * symmetric box and in boxes shifted off the octree lattice by 1e-3 and by 0.37 of a finest
- * cell: a node becomes one vertex with two cones, two spheres touching one vertex with two
- * cones, two spheres crossing one component whose only non-manifold edges lie on the circle
- * (four triangles each) with χ = 2 + 2 − 0 = 4; nothing else non-manifold, and the refilled
- * triangles no farther from f = 0 (at their centroids) than twice the rest of the mesh. The
- * loci are built here from the closed forms (Kummer's nodes by Newton on ∇f from a grid). */
+ * symmetric box and in boxes shifted off the octree lattice by 1e-3 and by an irrational
+ * fraction of a finest cell: a node becomes one vertex with two cones, two spheres touching one
+ * vertex with two cones, two spheres crossing one component whose only non-manifold edges lie on
+ * the circle (four triangles each) with χ = 2 + 2 − 0 = 4; nothing else non-manifold, and the
+ * refilled triangles no farther from f = 0 (at their centroids) than twice the rest of the mesh.
+ * The loci are built here from the closed forms (Kummer's nodes by Newton on ∇f from a grid). */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
@@ -20,7 +20,7 @@
  * 2.5 cells, or 1.25 × the longest edge there): centroids this close are "near". */
 #define NEAR_CELLS 4.0
 
-/* Box shifts: none, 1e-3, and 0.37 of a finest cell, along an oblique direction. */
+/* Box shifts: none, 1e-3, and √2 − 1 of a finest cell (PF_IRR), along an oblique direction. */
 static const double shift_dir[3] = {1.0, 0.61, -0.83};
 
 static void shifted_box(const double base[6], double s, double box[6])
@@ -31,9 +31,15 @@ static void shifted_box(const double base[6], double s, double box[6])
     }
 }
 
+/* which 2 moves by `cells` finest cells: PF_IRR, or PF_OLD in a test marked FIXME(issue 13). */
+static double shift_amount_at(int which, const double base[6], int dmax, double cells)
+{
+    return which == 0 ? 0 : which == 1 ? 1e-3 : cells * pf_cell(base, dmax);
+}
+
 static double shift_amount(int which, const double base[6], int dmax)
 {
-    return which == 0 ? 0 : which == 1 ? 1e-3 : 0.37 * pf_cell(base, dmax);
+    return shift_amount_at(which, base, dmax, PF_IRR);
 }
 
 static void add_point(ism_locus *l, double x, double y, double z, int type)
@@ -279,7 +285,7 @@ static void find_nodes(const ism_tape *t, double half, ism_locus *l)
 /* Kummer's quartic with `params`: its nodes (Newton from a grid over [-half, half]^3,
  * expected `count` of them) each one vertex with two cones, at each depth and box shift. */
 static void kummer_nodes(const ism_param *params, int count, double half, int dmin, int dmax,
-                         int first_shift)
+                         int first_shift, double cells)
 {
     const pf_surface s = {"(x^2 + y^2 + z^2 - mu2)^2 - lambda*p*q*r*s", params, 2, kummer_lets, 5};
     ism_tape *t = pf_compile(&s);
@@ -292,7 +298,7 @@ static void kummer_nodes(const ism_param *params, int count, double half, int dm
     for (int d = dmin; d <= dmax; d++)
         for (int w = first_shift; w < 3; w++) {
             double box[6];
-            shifted_box(base, shift_amount(w, base, d), box);
+            shifted_box(base, shift_amount_at(w, base, d, cells), box);
             ism_locus l;
             ism_locus_init(&l);
             for (size_t i = 0; i < nodes.npoints; i++)
@@ -314,15 +320,20 @@ static void kummer_nodes(const ism_param *params, int count, double half, int dm
 
 Test(conform, kummer_four_nodes)
 {
-    kummer_nodes(kummer4, 4, 2, 6 - pf_quick(), 7 - pf_quick(), 0);
+    kummer_nodes(kummer4, 4, 2, 6 - pf_quick(), 7 - pf_quick(), 0, PF_IRR);
 }
 
 Test(conform, kummer_sixteen_nodes)
 {
     /* depth 6 even in quick runs (at depth 5 a nappe is lost next to a node, its
      * neighbours half a cell away); the shifted boxes only, and under sanitizers only the
-     * 0.37-cell one (a second of polygonising each, more under sanitizers) */
-    kummer_nodes(kummer16, 16, 2.5, 6, 6, pf_quick() ? 2 : 1);
+     * last one (a second of polygonising each, more under sanitizers).
+     * FIXME(issue 13): fails at the irrational placement (PF_IRR along (1, 0.61, −0.83)): the
+     * conformance's refill round the nodes is not measured against f — centroids near the
+     * nodes 0.0328 off f = 0 against 0.0147 elsewhere (2.24×, want ≤ 2×); every other fact
+     * holds there. Left on the old rational placement until core/singular/conform*.c's refill
+     * measures its triangles. */
+    kummer_nodes(kummer16, 16, 2.5, 6, 6, pf_quick() ? 2 : 1, PF_OLD);
 }
 
 /* ---- two unit spheres touching at the origin ---- */
@@ -636,11 +647,16 @@ Test(conform, steiner_roman_pinch_and_triple_points)
     /* depth 5 in every box: 0.37 cell off the lattice the tube once enclosed a kept
      * triangle by a pinch point, whose rim (a loop of three) was zipped to the curve: a
      * non-manifold edge 0.03 off the axes and a boundary edge. Depth 6 in the shifted boxes
-     * (release runs only) */
+     * (release runs only).
+     * FIXME(issue 13): fails at the irrational placement (PF_IRR along (1, 0.61, −0.83)), depth
+     * 5: the conformance's refill round the pinch points is not measured against f — centroids
+     * near the locus 0.0445 off f = 0 against 0.0178 elsewhere (2.5×, want ≤ 2×); every other
+     * fact holds there (χ 5, 6 curves, the non-manifold edges). Left on the old rational
+     * placement until core/singular/conform*.c's refill measures its triangles. */
     for (int pass = 0; pass < (pf_quick() ? 3 : 5); pass++) {
         int dmax = pass < 3 ? 5 : 6, w = pass < 3 ? pass : pass - 2;
         double box[6];
-        shifted_box(base, shift_amount(w, base, dmax), box);
+        shifted_box(base, shift_amount_at(w, base, dmax, PF_OLD), box);
         ism_locus l;
         ism_locus_init(&l);
         add_point(&l, 0, 0, 0, ISM_SING_TRIPLE);

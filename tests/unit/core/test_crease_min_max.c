@@ -1,13 +1,13 @@
 /* test_crease_min_max.c — a CSG crease meshes the same whether f's top is min or max: the
  * union of the unit ball and a ball of radius 0.1 at (1.05, 0, 0) written as min(a, b)
  * (inside f < 0) and as max(−a, −b) (the same zero set, the inside where f > 0) under an
- * error bound, each in the lattice box and boxes shifted by 1e-3 and 0.37 of a finest cell.
- * Closed forms: every crease vertex lies on both spheres (|p| = 1, |p − c| = 0.1) within
- * 1e-9 × the diagonal, and at every crease edge the normals each side carries meet at the
- * spheres' angle, acos((1 − |c|² + r²) / 2r) = 117.5°, within 2°; both meshes are closed
- * spheres (χ 2, one piece), no cell misses the bound, and their triangle counts agree
- * within EQUIV_TRIS_REL. The small ball's normals turn fast, so a crease cell judged by
- * the wrong branch's normals (min's dominated one) shows in the count. */
+ * error bound, each in the lattice box and boxes shifted by 1e-3 and by an irrational fraction
+ * of a finest cell. Closed forms: every crease vertex lies on both spheres (|p| = 1, |p − c| =
+ * 0.1) within 1e-9 × the diagonal, and at every crease edge the normals each side carries meet
+ * at the spheres' angle, acos((1 − |c|² + r²) / 2r) = 117.5°, within 2°; both meshes are closed
+ * spheres (χ 2, one piece), no cell misses the bound, and their triangle counts agree within
+ * EQUIV_TRIS_REL. The small ball's normals turn fast, so a crease cell judged by the wrong
+ * branch's normals (min's dominated one) shows in the count. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -202,13 +202,13 @@ Test(crease_min_max, branch_is_the_one_f_takes)
  * lattice plane f ties exactly at all of them, the copies of one point lie a rounding apart,
  * joined by triangles of no area, and no triangle edge had a branch on both sides: 0 crease
  * edges at depth 5, one 0.04 long at depth 6. Checked in the lattice box and the boxes
- * shifted by 1e-3 and 0.37 of a finest cell: the crease edges form one closed chain, their
- * vertices within 1e-9 × diagonal of both spheres, and the circle's length from the mesh —
- * each chord's arc 2r asin(c / 2r) summed — equals 2πr within LATTICE_ARC_REL, and the
- * chords' sum falls short of 2πr by between Σ c³ / 24r² and twice that (arc − chord of a
+ * shifted by 1e-3 and by an irrational fraction of a finest cell: the crease edges form one
+ * closed chain, their vertices within 1e-9 × diagonal of both spheres, and the circle's length
+ * from the mesh — each chord's arc 2r asin(c / 2r) summed — equals 2πr within LATTICE_ARC_REL,
+ * and the chords' sum falls short of 2πr by between Σ c³ / 24r² and twice that (arc − chord of a
  * chord c ≤ r: c³ / 24r² + 3c⁵ / 640r⁴ + ...). Every vertex of the cut mesh is a corner of a
- * triangle or a segment's end: the tie copies welded before the cut are dropped (they were
- * loose points in the PLY/OBJ outputs). */
+ * triangle or a segment's end: the tie copies welded before the cut are dropped (they were loose
+ * points in the PLY/OBJ outputs). */
 #define LATTICE_SEP 0.8
 #define LATTICE_DEPTH 5
 #define LATTICE_E 1e-3

@@ -37,9 +37,12 @@
 
 static const double shift_dir[3] = {1.0, 0.61, -0.83};
 
+/* which 0: base as given; 1: moved by 1e-3; 2: by PF_IRR of a finest cell; 3: by PF_OLD (only
+ * for a test marked FIXME(issue 13)) — along shift_dir. */
 static void shifted(const double base[6], int which, int dmax, double box[6])
 {
-    double s = which == 0 ? 0 : which == 1 ? 1e-3 : 0.37 * pf_cell(base, dmax);
+    double cells = which == 2 ? PF_IRR : PF_OLD;
+    double s = which == 0 ? 0 : which == 1 ? 1e-3 : cells * pf_cell(base, dmax);
     for (int k = 0; k < 3; k++) {
         box[k] = base[k] + s * shift_dir[k];
         box[k + 3] = base[k + 3] + s * shift_dir[k];
@@ -517,7 +520,12 @@ static void gyroid_crease(int which)
 
 Test(curves, gyroid_ball_crease) { gyroid_crease(0); }
 Test(curves, gyroid_ball_crease_shift_1e3) { gyroid_crease(1); }
-Test(curves, gyroid_ball_crease_shift_037) { gyroid_crease(2); }
+/* FIXME(issue 13): fails at the irrational placement (PF_IRR along shift_dir, depth 7): 2 of
+ * 8,282 crease edges have flat dihedral angles off the gradients' by more than 2° (worst 9.2°,
+ * each beside a triangle with an angle under 6.5°: slivers next to the crease that neither
+ * crease_refine.c nor crease_micro.c mends); 4 sliver sides, no fold. Left on the old rational
+ * placement (0.37 of a cell) until core/curves mends those slivers. */
+Test(curves, gyroid_ball_crease_shift_037) { gyroid_crease(3); }
 
 /* ---- Viviani's curve: the unit sphere ∩ the cylinder (x − ½)² + y² = ¼ ---- */
 

@@ -2,7 +2,7 @@
  * grid cells whose interval of g may hold 0, and the ring round them) checked by a second
  * method. The ellipsoid x²/4 + y²/2.25 + z² = 1 is cut by 16 seeded planes (half given as
  * planes, half as level tapes of a linear expression: the two interval paths), in the lattice
- * box and boxes shifted 1e-3 and 0.37 of a finest cell off it:
+ * box and boxes shifted 1e-3 and √2 − 1 of a finest cell off it:
  *   - counts from closed forms: two plane sections meet where the line of the two planes
  *     meets the ellipsoid (a quadratic: 0 or 2 points); V = the crossings plus one point on
  *     each section meeting none, E = the vertices on each section (1 for a lone loop), and
@@ -252,7 +252,7 @@ static void ellipsoid_planes(int which)
     const double base[6] = {-2.3, -1.8, -1.3, 2.3, 1.8, 1.3}, dir[3] = {1.0, 0.61, -0.83};
     int depth = 6;
     double cell = 4.6 / (1 << depth), box[6];
-    double s = which == 0 ? 0 : which == 1 ? 1e-3 : 0.37 * cell;
+    double s = which == 0 ? 0 : which == 1 ? 1e-3 : PF_IRR * cell;
     for (int k = 0; k < 6; k++)
         box[k] = base[k] + s * dir[k % 3];
     double diag = sqrt(4.6 * 4.6 + 3.6 * 3.6 + 2.6 * 2.6), tol = ON_REL * diag;

@@ -1,6 +1,6 @@
 /* test_curves_crease.c — creases of nested min/max cut into the mesh (core/curves/crease.c)
  * against closed forms, in the symmetric box and boxes shifted off the lattice by 1e-3 and
- * 0.37 of a finest cell. The solid is the intersection of three slabs |n_i·p| ≤ w_i with
+ * √2 − 1 of a finest cell. The solid is the intersection of three slabs |n_i·p| ≤ w_i with
  * unit normals off the axes and not orthogonal, f = max(max(n1·p − w1, −n1·p − w1), max(
  * max(...), max(...))): a parallelepiped of 6 faces, 12 edges (lines) and 8 corners, each
  * corner the solution of three plane equations. Checked: the arrangement is 8 corners of
@@ -159,7 +159,7 @@ static void parallelepiped(int which)
     pf_surface surf = {expr, NULL, 0, NULL, 0};
     double box[6] = {-1.3, -1.3, -1.3, 1.3, 1.3, 1.3}, shift_dir[3] = {1.0, 0.61, -0.83};
     int dmax = 7 - pf_quick();
-    double s = which == 0 ? 0 : which == 1 ? 1e-3 : 0.37 * 2.6 / (1 << dmax);
+    double s = which == 0 ? 0 : which == 1 ? 1e-3 : PF_IRR * 2.6 / (1 << dmax);
     for (int k = 0; k < 6; k++)
         box[k] += s * shift_dir[k % 3];
     double diag = sqrt(3) * 2.6;

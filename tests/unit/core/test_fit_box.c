@@ -1,15 +1,16 @@
 /* test_fit_box.c — the coarse interval pass that fits a box around f = 0 (core/eval/fit_box.h):
- * a sphere of radius r centred off the lattice (by 1e-3 and by 0.37 of a finest cell) gets a
- * box that contains the sphere's closed-form extent and is at most two finest cells (plus
- * the evaluator's overestimate, a fraction of a cell here) larger on each side; a surface
- * with no zero in the cube is empty; a plane's box is thin across it; every sampled zero of
- * a torus lies inside its box (loose by the interval evaluator's overestimate). */
+ * a sphere of radius r centred off the lattice (by 1e-3 and by an irrational fraction of a
+ * finest cell) gets a box that contains the sphere's closed-form extent and is at most two
+ * finest cells (plus the evaluator's overestimate, a fraction of a cell here) larger on each
+ * side; a surface with no zero in the cube is empty; a plane's box is thin across it; every
+ * sampled zero of a torus lies inside its box (loose by the interval evaluator's overestimate). */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
 
 #include "core/eval/eval.h"
 #include "core/eval/fit_box.h"
+#include "tests/unit/placements.h"
 
 static ism_tape *compile(const char *src)
 {
@@ -25,7 +26,7 @@ static double finest_cell(void) { return 20.0 / (1 << ISM_FIT_MAX_LEVEL); }
 
 Test(fit_box, sphere_off_lattice)
 {
-    const double shifts[] = {0, 1e-3, 0.37};
+    const double shifts[] = {0, 1e-3, PF_IRR};
     for (int s = 0; s < 3; s++) {
         double c[3] = {0.5 + shifts[s] * finest_cell(), -1.25 + shifts[s] * finest_cell(), 2 + shifts[s] * finest_cell()};
         double r = 1.3;
@@ -55,7 +56,7 @@ Test(fit_box, empty_and_plane)
     cr_assert(f.empty);
     ism_tape_free(t);
 
-    double z0 = 0.37 * finest_cell() + 3;
+    double z0 = PF_IRR * finest_cell() + 3;
     char src[80];
     snprintf(src, sizeof src, "z - %.17g", z0);
     t = compile(src);

@@ -4,8 +4,8 @@
  * flags, hidden-piece verdicts and counts), while evaluating f far less. On the torus, the
  * gyroid in a ball (its max() shortens tapes on the way down) and a torus whose tube is
  * thinner than the finest cells (the hidden-piece search splits below depth.max), in boxes
- * on the lattice and shifted off it by 1e-3 and 0.37 of a finest cell, on one and two
- * threads. */
+ * on the lattice and shifted off it by 1e-3 and by an irrational fraction of a finest cell, on
+ * one and two threads. */
 #include <criterion/criterion.h>
 #include <string.h>
 #include "core/expr/tape.h"
@@ -147,13 +147,13 @@ static void check(const pf_surface *s, const run_case *cases, size_t ncases, boo
 
 Test(octree_reuse, torus_tree_as_a_fresh_build)
 {
-    static const run_case cases[] = {{0, 1, 0}, {1e-3, 2, 0}, {0.37, 2, THIN_LEVELS}};
+    static const run_case cases[] = {{0, 1, 0}, {1e-3, 2, 0}, {PF_IRR, 2, THIN_LEVELS}};
     check(&torus, cases, sizeof cases / sizeof cases[0], false);
 }
 
 Test(octree_reuse, gyroid_ball_tree_as_a_fresh_build)
 {
-    static const run_case cases[] = {{0.37, 2, THIN_LEVELS}}; /* the costly one: one box */
+    static const run_case cases[] = {{PF_IRR, 2, THIN_LEVELS}}; /* the costly one: one box */
     check(&gyroid, cases, sizeof cases / sizeof cases[0], false);
 }
 
@@ -162,6 +162,6 @@ Test(octree_reuse, gyroid_ball_tree_as_a_fresh_build)
 Test(octree_reuse, thin_torus_tree_as_a_fresh_build)
 {
     static const run_case cases[] = {{0, 1, THIN_LEVELS}, {1e-3, 2, THIN_LEVELS},
-                                     {0.37, 1, THIN_LEVELS}};
+                                     {PF_IRR, 1, THIN_LEVELS}};
     check(&thin_torus, cases, sizeof cases / sizeof cases[0], true);
 }

@@ -1,12 +1,12 @@
 /* test_polygonise_accuracy.c — the max_error bound: on the sphere and the torus the mesh lies
  * within E of the surface between its vertices (at every triangle centroid and every edge
  * midpoint, distances from the closed forms, not from f), in boxes on the octree lattice and
- * shifted off it by 1e-3 and 0.37 of a finest cell; refinement rounds meet a bound the
- * octree's estimate alone missed; the cost grows like area / E (halving E
- * about doubles the triangles, never 4x); depth.max stops the refinement and the octree then
- * counts the cells that missed E; without max_error the mesh is what it was. Fewer triangles
- * for the same error: the sphere within 3x the fewest any mesh with its vertices on it can
- * have, and the gyroid ball's crease no longer sending cells to depth.max. */
+ * shifted off it by 1e-3 and by an irrational fraction of a finest cell; refinement rounds meet
+ * a bound the octree's estimate alone missed; the cost grows like area / E (halving E about
+ * doubles the triangles, never 4x); depth.max stops the refinement and the octree then counts
+ * the cells that missed E; without max_error the mesh is what it was. Fewer triangles for the
+ * same error: the sphere within 3x the fewest any mesh with its vertices on it can have, and the
+ * gyroid ball's crease no longer sending cells to depth.max. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <string.h>
@@ -89,7 +89,7 @@ static void between_vertices(const ism_mesh *m, double (*dist)(const double *), 
 
 static void check_bound(const pf_surface *s, double (*dist)(const double *), double e)
 {
-    static const double shifts[] = {0, 1e-3 * FINEST, 0.37 * FINEST};
+    static const double shifts[] = {0, 1e-3 * FINEST, PF_IRR * FINEST};
     ism_tape *t = pf_compile(s);
     for (size_t i = (size_t)pf_first_box(); i < sizeof shifts / sizeof shifts[0]; i++) {
         ism_mesh m;
@@ -125,7 +125,7 @@ static double sphere_floor(double e) { return 4 * M_PI / (sqrt(3) / 4 * 6 * e); 
  * (2.81 × the floor) in all three boxes, and within E; centre fans took 21,224 (3.47 ×). */
 Test(accuracy, sphere_corner_fans_near_the_floor)
 {
-    static const double shifts[] = {0, 1e-3 * FINEST, 0.37 * FINEST};
+    static const double shifts[] = {0, 1e-3 * FINEST, PF_IRR * FINEST};
     const double e = 7.9e-4;
     ism_tape *t = pf_compile(&sphere);
     for (size_t i = (size_t)pf_first_box(); i < sizeof shifts / sizeof shifts[0]; i++) {
@@ -186,7 +186,7 @@ Test(accuracy, halving_the_bound_about_doubles_the_triangles)
     for (double e = 4e-3; e >= 1e-3; e /= 2) {
         ism_mesh m;
         ism_poly_stats st;
-        run_bounded(t, 0.37 * FINEST, e, SAFETY_DEPTH, &m, &st);
+        run_bounded(t, PF_IRR * FINEST, e, SAFETY_DEPTH, &m, &st);
         if (prev)
             cr_expect(m.ntris <= 4 * prev && m.ntris > prev,
                       "E %g: %zu triangles after %zu at 2E", e, m.ntris, prev);
@@ -203,7 +203,7 @@ Test(accuracy, safety_depth_counts_what_it_stopped)
     ism_tape *t = pf_compile(&torus);
     ism_mesh m;
     ism_poly_stats st;
-    run_bounded(t, 0.37 * FINEST, 1e-4, 5, &m, &st);
+    run_bounded(t, PF_IRR * FINEST, 1e-4, 5, &m, &st);
     cr_expect_gt(st.error_missed_nodes, 0);
     cr_expect_gt(st.error_worst, 1e-4);
     double cen, mid;
@@ -341,7 +341,7 @@ static void expect_gyroid_ball_within(within_e *w, const ism_mesh *m, const ism_
 
 Test(accuracy, crease_does_not_set_the_depth)
 {
-    static const double shifts[] = {0, 1e-3 * FINEST, 0.37 * FINEST};
+    static const double shifts[] = {0, 1e-3 * FINEST, PF_IRR * FINEST};
     within_e w = within_e_open();
     const ism_tape *t = w.f;
     for (size_t i = (size_t)pf_first_box(); i < sizeof shifts / sizeof shifts[0]; i++) {
@@ -369,7 +369,7 @@ Test(accuracy, crease_does_not_set_the_depth)
  * cells there (max centroid distance 3.4e-3; 1,131 cells at depth 8). */
 Test(accuracy, crease_cut_meets_the_bound_above_the_crease_depth)
 {
-    static const double shifts[] = {0, 1e-3 * FINEST, 0.37 * FINEST};
+    static const double shifts[] = {0, 1e-3 * FINEST, PF_IRR * FINEST};
     within_e w = within_e_open();
     const ism_tape *t = w.f;
     for (size_t i = (size_t)pf_first_box(); i < sizeof shifts / sizeof shifts[0]; i++) {

@@ -91,7 +91,7 @@ Test(cases, deterministic_and_thread_independent)
     ism_tape_free(t);
 }
 
-/* Barth's sextic (65 nodes) in a ball, in a box off the octree lattice by 0.37 of a finest
+/* Barth's sextic (65 nodes) in a ball, in a box off the octree lattice by √2 − 1 of a finest
  * cell: the break-point registry, the work stealing and the weld on 1, 2 and 4 threads make
  * the same bytes (the registry's parallel path starts at 2^15 corners: reached here). */
 Test(cases, nodal_sextic_thread_independent_off_lattice)
@@ -105,8 +105,8 @@ Test(cases, nodal_sextic_thread_independent_off_lattice)
     int d = 6 - pf_quick();
     double box[6], cell = 3.2 / (1 << d);
     for (int k = 0; k < 3; k++) {
-        box[k] = -1.6 + 0.37 * cell;
-        box[3 + k] = 1.6 + 0.37 * cell;
+        box[k] = -1.6 + PF_IRR * cell;
+        box[3 + k] = 1.6 + PF_IRR * cell;
     }
     ism_mesh a, b, c;
     ism_poly_stats st;
@@ -224,7 +224,7 @@ Test(cases, helicoid_axis_on_the_lattice)
  * plane (x + z = 0 in y = 0), crossing the first at points where the surface is tangent to
  * that plane. Its mesh has no non-manifold edge and no boundary but the box's, and in every
  * box the χ of the surface in the box, −2 in one piece: so at depth 8 (cells 1/16 of those
- * here) in two boxes off the lattice, by 1e-3 and by 0.37 of a cell (4 boundary loops; the
+ * here) in two boxes off the lattice, by 1e-3 and by √2 − 1 of a cell (4 boundary loops; the
  * same in the box [−2.0123, 1.9877] × [−1.9931, 2.0069] × [−2.0071, 1.9929]). These
  * crossings once had no line (open chains): 9 cone points, χ −20 in the own box at depth 6;
  * at depth 5, a tile of z = −1 with f = −3xy(x + y) zero on two sides and on its diagonal

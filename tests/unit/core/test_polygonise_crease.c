@@ -29,7 +29,7 @@ static void check_seams(const char *expr, const double base[6], long euler, int 
         pf_run(t, box, 3, depth, 0, &m, &st);
         pf_props p;
         pf_measure(&m, t, &p);
-        const char *what = w == 0 ? "shift 1e-3" : "shift 0.37 cell";
+        const char *what = w == 0 ? "shift 1e-3" : "shift irr cell";
         cr_expect_eq(p.boundary_edges, 0, "%s, %s: %zu boundary edges", expr, what,
                      p.boundary_edges);
         cr_expect_eq(p.nonmanifold_edges, 0, "%s, %s: %zu non-manifold edges", expr, what,

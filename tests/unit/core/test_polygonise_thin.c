@@ -3,7 +3,7 @@
  * a tube (2πrL), the Euler characteristic of a sphere (2), of the horn cyclide (a torus whose
  * meridian shrinks to one point: χ = 0 − 0 + 1 = 1; a box face cutting its outermost cap off
  * leaves one boundary loop and χ = 0). Boxes: symmetric, and shifted off the lattice by 1e-3
- * and by 0.37 of a finest cell. */
+ * and by √2 − 1 of a finest cell. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
@@ -24,7 +24,7 @@ static void shifted(const double base[6], double s, double box[6])
 
 static double shift_of(int which, const double base[6], int dmax)
 {
-    return which == 0 ? 0 : which == 1 ? 1e-3 : 0.37 * pf_cell(base, dmax);
+    return which == 0 ? 0 : which == 1 ? 1e-3 : PF_IRR * pf_cell(base, dmax);
 }
 
 /* pf_run with the hidden-piece search on; coarse: the live preview's search
@@ -323,8 +323,9 @@ Test(thin, cube_minus_ball_bars_thinner_than_a_cell)
 
 /* r = 1.41: bars 0.006 across at their middle, 1/13 of a depth-5 cell, through the service's
  * meshing (the singular stage finds no locus, so the chase may go ISM_THIN_EXTRA_DEPTH
- * levels down: a bar 1/13 of a cell needs 4). Boxes: as given, moved by 1e-3, by 0.37 of a
- * cell, and by irrational fractions of one (which 2). Moved by 0.37 cell a lattice plane runs
+ * levels down: a bar 1/13 of a cell needs 4). Boxes: as given, moved by 1e-3, by √2 − 1,
+ * −(√5 − 1)/4, 1/e of a cell (pf_sweep_box; χ −6 at depth 6 there before face_lines.c 08432b2,
+ * 0c63197), and by √2 − 1, π − 3, e − 2 of one (which 2). Moved by 0.37 cell a lattice plane runs
  * 0.0063 inside a cube face: past the bars' middle (legs 0.006) but not their ends, so the
  * plane met each bar only near the node's two ends and the cells capped the ends apart (χ −2
  * at depth 5, three bars cut; χ −6 at depth 6 in the irrational box; octree_build.c

@@ -39,9 +39,9 @@ static void remesh(const char *expr, const double box[6], int d, ism_mesh *m, pf
 
 Test(remesh, sphere_has_no_triangle_under_20_degrees)
 {
-    /* box shifted by 0.37 of a finest cell so no lattice plane runs through the centre */
+    /* box shifted by √2 − 1 of a finest cell so no lattice plane runs through the centre */
     int d = 6 - pf_quick();
-    const double c = 0.37 * 3.0 / (1 << d);
+    const double c = PF_IRR * 3.0 / (1 << d);
     const double box[6] = {-1.5 + c, -1.5 - c, -1.5 + c, 1.5 + c, 1.5 - c, 1.5 + c};
     ism_mesh m;
     pf_props b, a;

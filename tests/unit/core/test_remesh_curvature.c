@@ -4,14 +4,14 @@
  * bends there by tens of degrees per edge; read as creases, the bends locked every vertex
  * beside the y axis and left a strip of needles along it (the preset at depth 7: 63 under
  * 10° in the box 1e-3 of a cell off the lattice). Checked from the closed form, in the lattice box and boxes shifted
- * by 1e-3 and 0.37 of a finest cell: no triangle under 10° away from the singular set (the z
- * axis, where ∇f = (2x, −2yz, −y²) vanishes) and the box faces; χ, non-manifold and boundary
- * edges, components unchanged; vertices no farther from f = 0 than before; and no more
- * triangles turned over against ∇f than before. Then the figure-8 Klein bottle, whose mesh
- * has pleats beside its double curve (edges whose triangles face opposite sides of ∇f at both
- * ends, ∇f from the closed form): none after the pass, χ = 0 and the double curve kept.
- * Last Whitney's box faces at the preset's depth: no needle on a face (off the box's edges)
- * after the pass, every boundary vertex still on its face. */
+ * by 1e-3 and by an irrational fraction of a finest cell: no triangle under 10° away from the
+ * singular set (the z axis, where ∇f = (2x, −2yz, −y²) vanishes) and the box faces; χ,
+ * non-manifold and boundary edges, components unchanged; vertices no farther from f = 0 than
+ * before; and no more triangles turned over against ∇f than before. Then the figure-8 Klein
+ * bottle, whose mesh has pleats beside its double curve (edges whose triangles face opposite
+ * sides of ∇f at both ends, ∇f from the closed form): none after the pass, χ = 0 and the double
+ * curve kept. Last Whitney's box faces at the preset's depth: no needle on a face (off the box's
+ * edges) after the pass, every boundary vertex still on its face. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>

@@ -2,22 +2,22 @@
  * (core/remesh/rm_collapse.c, rm_insert.c) and the renumbering they cause. First on two unit
  * spheres touching at the origin (centres (±1, 0, 0)),
  * conformed so that the point is one vertex of two cones, in boxes shifted off the octree
- * lattice by 1e-3 and 0.37 of a finest cell. Checked from the closed form, never from the
- * pass's own figures: χ = 2 + 2 − 1 = 3, no boundary and no non-manifold edge, the point still
- * one vertex of two cones, no triangle under 10° (under 20° at depth 6) away from the point,
- * vertices and centroids no farther from the spheres than before. What the caller
- * keeps by index beside the mesh follows the renumbering: a sheet range made of one sphere's
- * triangles (by centroid side), a segment and curve-cut edges (by their end points' places),
- * and the cut's triangle parents. Then on Steiner's Roman surface (its locus found from f, as
- * the service does), whose needles beside the double lines are split: χ = 5 (the closed form
- * of test_conform.c), the non-manifold edges, no boundary, one component, far fewer needles,
- * and a label boundary across it kept edge for edge through the renumbering. Last the
- * cross-cap at its preset depth, whose needles fold round a locked hub beside its pinch
- * points: insertion beside their short edges where collapses are refused, the topology and
- * the farthest centroid (closed form) kept. Then the gyroid ball, whose needles lie beside
- * its crease with their short edge between crowded crease vertices: merged along the crease,
- * the topology kept, no crease vertex farther from the gyroid or the sphere than before and
- * no centroid farther from its own part (closed forms). */
+ * lattice by 1e-3 and by an irrational fraction of a finest cell. Checked from the closed form,
+ * never from the pass's own figures: χ = 2 + 2 − 1 = 3, no boundary and no non-manifold edge,
+ * the point still one vertex of two cones, no triangle under 10° (under 20° at depth 6) away
+ * from the point, vertices and centroids no farther from the spheres than before. What the
+ * caller keeps by index beside the mesh follows the renumbering: a sheet range made of one
+ * sphere's triangles (by centroid side), a segment and curve-cut edges (by their end points'
+ * places), and the cut's triangle parents. Then on Steiner's Roman surface (its locus found from
+ * f, as the service does), whose needles beside the double lines are split: χ = 5 (the closed
+ * form of test_conform.c), the non-manifold edges, no boundary, one component, far fewer
+ * needles, and a label boundary across it kept edge for edge through the renumbering. Last the
+ * cross-cap at its preset depth, whose needles fold round a locked hub beside its pinch points:
+ * insertion beside their short edges where collapses are refused, the topology and the farthest
+ * centroid (closed form) kept. Then the gyroid ball, whose needles lie beside its crease with
+ * their short edge between crowded crease vertices: merged along the crease, the topology kept,
+ * no crease vertex farther from the gyroid or the sphere than before and no centroid farther
+ * from its own part (closed forms). */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
@@ -226,26 +226,33 @@ static void expect_sheet(const ism_mesh *m, const ism_locus *l, const ism_cut *c
 }
 
 /* Runs check on expr's tape at depth d in base as given (which −1), shifted off the lattice
- * by 1e-3 (0) and by 0.37 of a finest cell (1), from box first on. */
-static void in_boxes(const char *expr, const double base[6], int d, int first,
-                     void (*check)(const ism_tape *t, const double box[6], int d, int which))
+ * by 1e-3 (0) and by irrational fractions of a finest cell (1; old: by the old rational ones,
+ * only for a run marked FIXME(issue 13)), from box first on. */
+static void in_boxes_at(const char *expr, const double base[6], int d, int first, bool old,
+                        void (*check)(const ism_tape *t, const double box[6], int d, int which))
 {
     const pf_surface s = {expr, NULL, 0, NULL, 0};
     ism_tape *t = pf_compile(&s);
     for (int which = first; which < 2; which++) {
         double box[6];
-        pf_sweep_box(base, d, which, box);
+        (old ? pf_sweep_box_old : pf_sweep_box)(base, d, which, box);
         check(t, box, d, which);
     }
     ism_tape_free(t);
 }
 
+static void in_boxes(const char *expr, const double base[6], int d, int first,
+                     void (*check)(const ism_tape *t, const double box[6], int d, int which))
+{
+    in_boxes_at(expr, base, d, first, false, check);
+}
+
 /* The same in the shifted boxes (only the second under sanitizers). */
-static void in_shifted_boxes(const char *expr, const double base[6], int d,
+static void in_shifted_boxes(const char *expr, const double base[6], int d, bool old,
                              void (*check)(const ism_tape *t, const double box[6], int d,
                                            int which))
 {
-    in_boxes(expr, base, d, pf_first_box() ? 1 : 0, check);
+    in_boxes_at(expr, base, d, pf_first_box() ? 1 : 0, old, check);
 }
 
 static void touching_spheres(const ism_tape *t, const double box[6], int d, int which)
@@ -323,10 +330,15 @@ Test(remesh_needles, touching_spheres_keep_topology_and_lose_needles)
      * a lone point's ball its start radius, the fan there has rim vertices folded back beside
      * the point, whose edges the pass took for creases (∇f vanishes at the point: no fold
      * test) — 16 needles (0.56°) were left in the 0.37-cell box; depth 6 in the shifted
-     * boxes but under the sanitizer */
+     * boxes but under the sanitizer.
+     * FIXME(issue 13): depth 6 fails at the irrational placement (pf_sweep_box 1): the
+     * conformance's fan at the point has 5 folded edges before the pass (its rim steps back
+     * round the point; the pass mends them: 0 after, 150 collapses, min angle 20.3°); depth 5
+     * holds there. Depth 6 left on the old rational placement until core/singular/conform*.c's
+     * fan at a lone point is not folded. */
     in_boxes(SPHERES, base, 5, pf_quick() ? 1 : -1, touching_spheres);
     if (!pf_quick())
-        in_shifted_boxes(SPHERES, base, 6, touching_spheres);
+        in_shifted_boxes(SPHERES, base, 6, true, touching_spheres);
 }
 
 /* ---- Steiner's Roman surface ---- */
@@ -836,5 +848,9 @@ static void gyroid_ball_case(const ism_tape *t, const double box[6], int d, int 
 Test(remesh_needles, gyroid_ball_needles_beside_the_crease)
 {
     const double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
-    in_boxes(GYROID_BALL, base, 7, pf_quick() ? 1 : -1, gyroid_ball_case);
+    /* FIXME(issue 13): fails at the irrational placement (pf_sweep_box 1): 74 needles beside
+     * the crease after the pass (3,238 before it), crease_left 44 (37 measured at the old
+     * placement; main 87b88d6); every other fact holds there. Left on the old rational
+     * placement until core/remesh leaves as few crease needles there. */
+    in_boxes_at(GYROID_BALL, base, 7, pf_quick() ? 1 : -1, true, gyroid_ball_case);
 }

@@ -2,7 +2,7 @@
  * decisions, octree_build.h; the triangles of leaves its splits cannot have changed,
  * leaf_memo.h): the mesh and the counters are bit for bit those of rounds computed afresh
  * (fresh_rounds), on one and two threads, while f is evaluated less. The Klein bottle,
- * which crosses itself, 0.37 of a finest cell off the lattice; the torus on the lattice
+ * which crosses itself, √2 − 1 of a finest cell off the lattice; the torus on the lattice
  * (4 rounds) is checked the same way in test_polygonise_accuracy.c. */
 #include <criterion/criterion.h>
 #include <string.h>
@@ -78,5 +78,5 @@ static void check(const run_case *c)
 
 Test(round_reuse, klein_bottle_off_the_lattice_as_computed_afresh)
 {
-    check(&(run_case){&klein, 4, 0.37, 3e-3, 8});
+    check(&(run_case){&klein, 4, PF_IRR, 3e-3, 8});
 }

@@ -1,6 +1,6 @@
 /* test_simplify.c — the error-bounded simplification (core/remesh/simplify.c), checked from
  * closed forms, never from the pass's own figures, in the lattice box and in boxes shifted off
- * the octree lattice by 1e-3 and by 0.37 of a finest cell:
+ * the octree lattice by 1e-3 and by an irrational fraction of a finest cell:
  * - the unit sphere at E = 2e-3: every vertex, edge midpoint and triangle centroid within E of
  *   the sphere (|‖p‖ − 1|), χ = 2, one component, every triangle facing outward, no angle
  *   below the smaller of the raw mesh's smallest and 25°, and fewer triangles than any mesh

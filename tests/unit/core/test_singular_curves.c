@@ -15,6 +15,7 @@
 #include "core/singular/curves.h"
 #include "core/singular/find.h"
 #include "core/util/sym3.h"
+#include "tests/unit/placements.h"
 
 #define DEPTH 6
 #define PI 3.14159265358979323846
@@ -36,7 +37,7 @@ typedef struct fixture {
     bool thick;     /* seed the 26 neighbours of each cell too, as an interval search would */
 } fixture;
 
-static const double SHIFTS_CELLS[] = {0.0, -1.0, 0.37}; /* -1: the 1e-3 shift */
+static const double SHIFTS_CELLS[] = {0.0, -1.0, PF_IRR}; /* -1: the 1e-3 shift */
 #define NSHIFTS 3
 
 /* Sets up f over box moved by the shift-th shift (in every axis); returns the shift. */

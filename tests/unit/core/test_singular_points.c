@@ -1,6 +1,6 @@
 /* test_singular_points.c — the singular-point stage (core/singular/find.h) against closed
  * forms, each run in the symmetric box and in boxes shifted off the search lattice by 1e-3
- * and by 0.37 of a finest cell: the tilted cone's node, Kummer's 4 and 16 nodes (positions
+ * and by √2 − 1 of a finest cell: the tilted cone's node, Kummer's 4 and 16 nodes (positions
  * from a separate long-double Newton on hand-written derivatives), an isolated point, a
  * cusp, a sphere (nothing), two touching spheres (one degenerate point), the horn cyclide
  * (its one singular point, derived below); plus a double sheet (boxes, no point), the box
@@ -13,14 +13,15 @@
 #include "core/singular/find.h"
 #include "core/singular/search.h"
 #include "test_eval_surfaces.h"
+#include "tests/unit/placements.h"
 
-/* The three placements of a box: as given, shifted by 1e-3, shifted by 0.37 of a finest
+/* The three placements of a box: as given, shifted by 1e-3, shifted by √2 − 1 of a finest
  * cell (an irrational-looking fraction: no lattice plane of one is a plane of another). */
 static void placed_box(const double *box, int depth, int placement, double out[6])
 {
     for (int k = 0; k < 3; k++) {
         double cell = (box[k + 3] - box[k]) / ldexp(1.0, depth);
-        double shift = placement == 0 ? 0.0 : placement == 1 ? 1e-3 : 0.37 * cell;
+        double shift = placement == 0 ? 0.0 : placement == 1 ? 1e-3 : PF_IRR * cell;
         out[k] = box[k] + shift;
         out[k + 3] = box[k + 3] + shift;
     }

@@ -1,9 +1,9 @@
 /* test_singular_sheets.c — double sheets (zero sets where f does not change sign) from
  * closed forms: a sphere counted twice, a plane x² = 0, a torus counted twice; and what
  * must give none (a sign-changing sphere, a valley g² + ε). Every geometric case runs in the
- * symmetric box and in boxes shifted off the lattice by 1e-3 and by 0.37 of a finest cell.
- * Topology, area, vertex, edge-midpoint and centroid errors are measured here, not taken
- * from the stage. */
+ * symmetric box and in boxes shifted off the lattice by 1e-3 and by an irrational fraction of a
+ * finest cell. Topology, area, vertex, edge-midpoint and centroid errors are measured here, not
+ * taken from the stage. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -213,7 +213,7 @@ Test(sheets, double_sphere_shifted_1e3)
 Test(sheets, double_sphere_shifted_037_cell)
 {
     double b[6];
-    shifted_box(cube1, 6, 0.37, true, b);
+    shifted_box(cube1, 6, PF_IRR, true, b);
     check_double_sphere(b, 6);
 }
 
@@ -253,7 +253,7 @@ Test(sheets, double_plane_shifted)
     double b[6];
     shifted_box(cube1, 6, 1e-3, false, b);
     check_double_plane(b, 6);
-    shifted_box(plane_box, 5, 0.37, true, b);
+    shifted_box(plane_box, 5, PF_IRR, true, b);
     check_double_plane(b, 5);
 }
 
@@ -281,14 +281,14 @@ static void check_double_torus(const double box[6], int depth)
     free_run(&r);
 }
 
-/* Runs check at depth 6 in the unit cube, and in it shifted by 1e-3 and by 0.37 cell. */
+/* Runs check at depth 6 in the unit cube, and in it shifted by 1e-3 and by √2 − 1 cell. */
 static void in_three_boxes(void (*check)(const double box[6], int depth))
 {
     double b[6];
     check(cube1, 6);
     shifted_box(cube1, 6, 1e-3, false, b);
     check(b, 6);
-    shifted_box(cube1, 6, 0.37, true, b);
+    shifted_box(cube1, 6, PF_IRR, true, b);
     check(b, 6);
 }
 
@@ -309,17 +309,17 @@ Test(sheets, sign_change_is_no_double_sheet)
 {
     double b[6];
     check_none("x^2 + y^2 + z^2 - 0.5", cube1, 6);
-    shifted_box(cube1, 6, 0.37, true, b);
+    shifted_box(cube1, 6, PF_IRR, true, b);
     check_none("x^2 + y^2 + z^2 - 0.5", b, 6);
     check_none("(x^2 + y^2 + z^2 - 0.5)^2 + 1e-4", cube1, 6);
     check_none("x^2 + 1e-6", b, 6);
 }
 
-/* Runs expr at depth 5 in the unit cube shifted by 0.37 of a cell, and measures the mesh. */
+/* Runs expr at depth 5 in the unit cube shifted by √2 − 1 of a cell, and measures the mesh. */
 static void run_shifted_5(run *r, pf_props *p, const char *expr)
 {
     double b[6];
-    shifted_box(cube1, 5, 0.37, true, b);
+    shifted_box(cube1, 5, PF_IRR, true, b);
     run_sheets(r, expr, b, 5);
     pf_measure(&r->m, r->t, p);
 }

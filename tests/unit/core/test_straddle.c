@@ -1,11 +1,11 @@
 /* test_straddle.c — the polygoniser's straddle option (core/octree/straddle.h) under
  * max_error: on the sphere and the torus every vertex, centroid and edge midpoint lies within
  * E of the surface (closed-form distances), in boxes on the octree lattice and shifted off it
- * by 1e-3 and 0.37 of a finest cell; the sphere's vertices sit outside it (its convex side),
- * the torus's outer vertices outside its tube and its saddle-shaped inner ones on it; the
- * meshes have fewer triangles than without the option; a surface with a min/max is left
- * exactly as it was. The balanced move the dual mesh uses (ism_straddle_balanced_point) on
- * closed-form saddles and bowls: the share of E their principal curvatures give. */
+ * by 1e-3 and by an irrational fraction of a finest cell; the sphere's vertices sit outside it
+ * (its convex side), the torus's outer vertices outside its tube and its saddle-shaped inner
+ * ones on it; the meshes have fewer triangles than without the option; a surface with a min/max
+ * is left exactly as it was. The balanced move the dual mesh uses (ism_straddle_balanced_point)
+ * on closed-form saddles and bowls: the share of E their principal curvatures give. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <string.h>
@@ -35,7 +35,7 @@ static double torus_signed(const double p[3])
 
 #define SAFETY_DEPTH 10
 #define FINEST (3.0 / (1 << SAFETY_DEPTH))
-static const double shifts[] = {0, 1e-3 * FINEST, 0.37 * FINEST};
+static const double shifts[] = {0, 1e-3 * FINEST, PF_IRR * FINEST};
 
 static void run(const ism_tape *t, double shift, double e, bool straddle, ism_mesh *m)
 {
@@ -122,8 +122,8 @@ Test(straddle, min_max_surface_unchanged)
 {
     ism_tape *t = pf_compile(&balls);
     ism_mesh plain, moved;
-    run(t, 0.37 * FINEST, 1e-2, false, &plain);
-    run(t, 0.37 * FINEST, 1e-2, true, &moved);
+    run(t, PF_IRR * FINEST, 1e-2, false, &plain);
+    run(t, PF_IRR * FINEST, 1e-2, true, &moved);
     cr_assert_eq(plain.nverts, moved.nverts);
     cr_assert_eq(plain.ntris, moved.ntris);
     cr_assert(memcmp(plain.pos, moved.pos, 3 * plain.nverts * sizeof *plain.pos) == 0);

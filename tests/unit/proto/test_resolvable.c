@@ -10,6 +10,7 @@
 
 #include "core/octree/resolvable.h"
 #include "proto/presets.h"
+#include "tests/unit/placements.h"
 
 /* Finest cells of a depth-10 request (2^-10 of the box): the shifts below are fractions of it. */
 #define FINE_CELL_LOG2 10
@@ -32,7 +33,7 @@ static ism_resolvable check_in(const char *src, const ism_param *params, size_t 
 }
 
 static const double UNIT_BOX[6] = {-1, -1, -1, 1, 1, 1};
-static const double SHIFTS[] = {0, 1e-3, 0.37};
+static const double SHIFTS[] = {0, 1e-3, PF_IRR}; /* of a finest cell (placements.h) */
 
 static ism_resolvable check(const char *src, double shift)
 {
