@@ -571,9 +571,30 @@ static bool search_below(ctx *x, const ism_lbox *b, const double lo[3], const do
     return ok;
 }
 
+/* Newton from b's centre converged inside b itself. A projection the search accepted in the
+ * cell grown by half (ISM_LBOX_PROJECTED) may lie outside the cell: a rank-3 one there is a
+ * critical point Newton was drawn to from the cell — the heart at depth 3 in its box moved by
+ * (√2 − 1, −(√5 − 1)/4, 1/e) cell: the cusp (0, 0, 1)'s cell projected onto the critical point
+ * (0, 0.441, 0.810) off the surface, 0.18 beyond the cell, and the cusp was lost. Such a cell
+ * is searched below as an unprojected one; a rank-2 projection outside (a curve's point) is
+ * the curve stage's. */
+static bool projected_inside(const ism_lbox *b)
+{
+    if (!(b->flags & ISM_LBOX_PROJECTED))
+        return false;
+    if (b->rank < 3)
+        return true;
+    for (int k = 0; k < 3; k++)
+        if (b->q[k] < b->lo[k] || b->q[k] > b->hi[k])
+            return false;
+    return true;
+}
+
 /* Which boxes of a cluster below_cell_starts searches again. */
 enum { BELOW_RANK3 = 0,       /* rank 3, not a Krawczyk box (an extended cluster) */
-       BELOW_UNPROJECTED = 1, /* Newton from the centre left the cell (a point cluster) */
+       BELOW_UNPROJECTED = 1, /* Newton from the centre left the cell (a point cluster):
+                                 not projected, or projected outside onto a rank-3 point
+                                 (projected_inside) */
        BELOW_UNPROJECTED_ISOLATED = 2 /* the same in an extended cluster, for points of
                                          Hessian rank 2 or 3 only (cusps, A3 points, nodes,
                                          isolated points): points of rank 0 or 1 there are
@@ -606,7 +627,7 @@ static bool below_cell_starts(ctx *x, uint32_t id, const uint32_t *label, const 
     size_t boxes = 0;
     for (size_t i = 0; i < l->nboxes && boxes < BELOW_CELL_BOXES_MAX; i++) {
         const ism_lbox *b = &l->boxes[i];
-        bool want = which == BELOW_RANK3 ? b->rank == 3 : !(b->flags & ISM_LBOX_PROJECTED);
+        bool want = which == BELOW_RANK3 ? b->rank == 3 : !projected_inside(b);
         if (label[i] != id || (b->flags & ISM_LBOX_UNIQUE) || !want)
             continue;
         boxes++;

@@ -199,10 +199,10 @@ Test(coarse_points, lone_points_keep_their_ball)
     ism_tape_free(cone);
 }
 
-/* FIXME(issue 13): fails at the irrational placement (pf_sweep_box 1, depth 3): the locus
- * finds 1 singular point, the cusp (0, 0, −1) only, and calls the search complete — the cusp
- * (0, 0, 1) is lost (with 1/e of a cell in z replaced by 0.1 … 0.45 both are found). Left on
- * the old rational placement (pf_sweep_box_old) until core/singular's search keeps it. */
+/* In the irrational placement (pf_sweep_box 1) the cell of the cusp (0, 0, 1) projected onto
+ * the critical point (0, 0.441, 0.810) off the surface, outside the cell: the cusp was lost
+ * (1 point, the search complete) until such cells were searched below (points.c
+ * projected_inside). */
 Test(coarse_points, heart_two_cusps)
 {
     ism_tape *t = pf_compile(&(pf_surface){
@@ -212,7 +212,7 @@ Test(coarse_points, heart_two_cusps)
     double tol = 1e-9 * sqrt(3 * 3.0 * 3.0);
     for (int which = pf_first_box() - 1; which <= 1; which++) {
         double box[6];
-        pf_sweep_box_old(base, 3, which, box);
+        pf_sweep_box(base, 3, which, box);
         ism_mesh m;
         ism_locus l;
         pf_run_surface(t, box, 3, 3, &m, &l);
