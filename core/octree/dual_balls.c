@@ -444,9 +444,7 @@ bool ism_dual_centroid_within(ism_sampler *s, const double *p[3], double e)
     return ism_dot3(nrm, g) > TURNED_COS * ism_norm3(nrm) * gl;
 }
 
-/* The triangle meets E as the dual mesh's own do (dual.c): its centroid and edge midpoints
- * within E of f = 0, its normal along ∇f at the centroid. */
-static bool within(ism_sampler *s, const ism_mesh *m, const uint32_t *v, double e)
+bool ism_dual_triangle_within(ism_sampler *s, const ism_mesh *m, const uint32_t *v, double e)
 {
     const double *p[3] = {m->pos + 3 * (size_t)v[0], m->pos + 3 * (size_t)v[1],
                           m->pos + 3 * (size_t)v[2]};
@@ -504,7 +502,7 @@ static enum ism_fan_status fan_rims(clip *c, size_t kept, double max_error)
     /* the cut triangles (after the kept ones) and the fans against E; every ball with a
      * miss is named in missed */
     for (size_t t = kept; t < c->nt && (st == ISM_FAN_OK || st == ISM_FAN_MISS); t++)
-        if (!within(c->s, m, c->tri + 3 * t, max_error)) {
+        if (!ism_dual_triangle_within(c->s, m, c->tri + 3 * t, max_error)) {
             size_t k = c->n; /* the ball whose clip sphere is nearest a corner */
             double best = INFINITY;
             for (int j = 0; j < 3; j++)

@@ -72,6 +72,12 @@ enum ism_fan_status {
  * triangles (dual.c) and the fans (ism_dual_balls_fan) meet. */
 bool ism_dual_centroid_within(ism_sampler *s, const double *p[3], double e);
 
+/* Triangle v[0..3) of m meets E as the dual mesh's own do (dual.c): its centroid
+ * (ism_dual_centroid_within) and edge midpoints within e of f = 0, its normal along ∇f at
+ * the centroid. The fans and cuts round the balls and the box's cuts (dual_box.h) are
+ * measured so. */
+bool ism_dual_triangle_within(ism_sampler *s, const ism_mesh *m, const uint32_t *v, double e);
+
 /* Clips the closed-but-for-the-holes mesh m round each ball and fans its rim loops to the
  * ball's point (one vertex per node; nothing for an isolated point); measures the new
  * triangles against E with s. On anything but OK, m is left in an unspecified state (the

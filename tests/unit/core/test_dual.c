@@ -8,8 +8,9 @@
  * which the primal polygons exceed (at the coarse bound 1e-2: 1.2 and 2.0 times); the mesh
  * is the same bit for bit on 1, 2 and 4 threads. A sheet through lattice corners (f exactly
  * 0 there, tangent to the lattice planes) is meshed dual too.
- * Where the dual mesh cannot apply (a min/max, the box cutting the surface) the mesh is the
- * primal one bit for bit, and the stats name the mesher and the reason. */
+ * Where the dual mesh cannot apply (a min/max; a box cutting the surface is clipped:
+ * test_dual_box.c) the mesh is the primal one bit for bit, and the stats name the mesher and
+ * the reason. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -214,12 +215,6 @@ static void same_as_primal(const pf_surface *s, double half, double e, enum ism_
 Test(dual, min_max_surface_left_to_the_primal_polygons)
 {
     same_as_primal(&balls, 2.5, 1e-2, ISM_DUAL_WHY_MIN_MAX);
-}
-
-/* The box cuts the sphere: its faces need the primal polygons. */
-Test(dual, surface_cut_by_the_box_left_to_the_primal_polygons)
-{
-    same_as_primal(&pf_unit_sphere, 0.8, 1e-2, ISM_DUAL_WHY_BOX_CUT);
 }
 
 /* Where the dual triangles cannot meet E the primal polygons are kept. */

@@ -1,0 +1,301 @@
+/* test_dual_box.c — the dual mesh of surfaces the box cuts (core/octree/dual_box.h): made in
+ * a grown box and clipped by the given one's planes. Each surface in its box as given and
+ * shifted off the lattice by 1e-3 and by 0.37 / -0.23 / 0.41 of a finest cell (pf_sweep_box):
+ * - a sphere of radius 1.2 in the box ±1: each face cuts a circle of radius √0.44, so the
+ *   mesh is the sphere less 6 caps: dual, χ = 2 − 6 = −4, one piece, 6 boundary loops;
+ * - a cylinder of radius 0.6 along z in ±1: cut by the two z faces, χ 0, 2 loops;
+ * - Kummer's quartic with 16 real nodes in ±3 (its funnels leave every box) at E 1e-2 through
+ *   the service's meshing: dual, 16 non-manifold vertices at the certified nodes joining 2
+ *   cones each, χ, pieces and boundary loops those of the primal path's mesh.
+ * Everywhere: the boundary loops as many as f's sign regions on the box's faces say (counted
+ * on a lattice of the faces, no mesh involved: k disjoint closed curves on the box's surface
+ * part it into k + 1 regions), every boundary vertex on a face plane (exactly) and on f = 0
+ * (|f| / |∇f| ≤ 1e-9 × the box's diagonal), every other edge in two triangles, every
+ * centroid and edge midpoint within E (closed form, or Newton for Kummer), none turned
+ * against ∇f. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "core/eval/eval.h"
+#include "core/octree/dual_box.h"
+#include "core/octree/mesher.h"
+#include "core/singular/surface.h"
+#include "poly_fixture.h"
+
+#define DEPTH 9
+/* Samples per face side for the sign regions: the smallest loop here (the sphere's circles,
+ * radius 0.66 in a face of side 2) spans 60 of them. */
+#define FACE_SAMPLES 96
+/* A boundary vertex's |f| / |∇f| bound, relative to the box's diagonal (dual_box.c's Newton
+ * stops at 1e-14 of it and accepts 1e-11). */
+#define ON_F 1e-9
+
+static const pf_surface sphere12 = {"x^2 + y^2 + z^2 - 1.44", NULL, 0, NULL, 0};
+static const pf_surface cylinder = {"x^2 + y^2 - 0.36", NULL, 0, NULL, 0};
+
+static double sphere12_dist(const double *p)
+{
+    return fabs(sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 1.2);
+}
+
+static double cylinder_dist(const double *p) { return fabs(hypot(p[0], p[1]) - 0.6); }
+
+/* Closed loops of f = 0 on the box's faces from f's signs alone: sign regions of the faces'
+ * lattice (4-neighbours across face edges too) less one; 0 when f keeps one sign there. */
+static size_t face_loops(const ism_tape *t, const double box[6])
+{
+    const int n = FACE_SAMPLES, side = n + 1;
+    size_t np = (size_t)side * side * side;
+    signed char *sg = calloc(np, 1);
+    int *stack = malloc(np * sizeof *stack);
+    uint8_t *seen = calloc(np, 1);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    cr_assert(sg && stack && seen && ws);
+    for (int i = 0; i <= n; i++)
+        for (int j = 0; j <= n; j++)
+            for (int k = 0; k <= n; k++) {
+                if (i && i < n && j && j < n && k && k < n)
+                    continue;
+                double p[3];
+                int ijk[3] = {i, j, k};
+                for (int a = 0; a < 3; a++)
+                    p[a] = box[a] + (box[a + 3] - box[a]) * ijk[a] / n;
+                double f = ism_eval_point(t, ws, p[0], p[1], p[2]);
+                sg[((size_t)i * side + j) * side + k] = f > 0 ? 1 : f < 0 ? -1 : 2;
+            }
+    size_t regions = 0;
+    for (size_t s = 0; s < np; s++) {
+        if (!sg[s] || sg[s] == 2 || seen[s])
+            continue;
+        regions++;
+        int top = 0;
+        stack[top++] = (int)s;
+        seen[s] = 1;
+        while (top) {
+            int q = stack[--top], ijk[3] = {q / side / side, q / side % side, q % side};
+            for (int a = 0; a < 3; a++)
+                for (int d = -1; d <= 1; d += 2) {
+                    int r[3] = {ijk[0], ijk[1], ijk[2]};
+                    r[a] += d;
+                    if (r[a] < 0 || r[a] > n)
+                        continue;
+                    size_t at = ((size_t)r[0] * side + r[1]) * side + r[2];
+                    if (sg[at] == sg[s] && !seen[at]) {
+                        seen[at] = 1;
+                        stack[top++] = (int)at;
+                    }
+                }
+        }
+    }
+    free(sg);
+    free(stack);
+    free(seen);
+    ism_eval_ws_free(ws);
+    return regions ? regions - 1 : 0;
+}
+
+typedef struct edge_use {
+    uint32_t a, b; /* a < b */
+    uint32_t n;
+} edge_use;
+
+static int by_ends(const void *x, const void *y)
+{
+    const edge_use *p = x, *q = y;
+    return p->a != q->a ? (p->a > q->a) - (p->a < q->a) : (p->b > q->b) - (p->b < q->b);
+}
+
+static uint32_t find(uint32_t *up, uint32_t v)
+{
+    while (up[v] != v)
+        v = up[v] = up[up[v]];
+    return v;
+}
+
+/* The mesh's boundary (edges in one triangle): its loops (pieces of the boundary edges'
+ * graph, every boundary vertex meeting exactly two of them, else the count is SIZE_MAX), the
+ * edges in more than two triangles into *nm, and every boundary vertex checked on a face
+ * plane of box and on f = 0. */
+static size_t boundary_loops(const ism_mesh *m, const ism_tape *t, const double box[6],
+                             size_t *nm)
+{
+    size_t ne = 3 * m->ntris;
+    edge_use *e = malloc((ne + 1) * sizeof *e);
+    uint32_t *deg = calloc(m->nverts + 1, sizeof *deg), *up = malloc((m->nverts + 1) * 4);
+    cr_assert(e && deg && up);
+    for (size_t i = 0; i < ne; i++) {
+        uint32_t a = m->tri[i], b = m->tri[i / 3 * 3 + (i + 1) % 3];
+        e[i] = (edge_use){a < b ? a : b, a < b ? b : a, 1};
+    }
+    qsort(e, ne, sizeof *e, by_ends);
+    for (uint32_t v = 0; v < m->nverts; v++)
+        up[v] = v;
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    double diag = sqrt(pow(box[3] - box[0], 2) + pow(box[4] - box[1], 2) +
+                       pow(box[5] - box[2], 2)), worst_f = 0;
+    size_t off_plane = 0;
+    *nm = 0;
+    for (size_t i = 0; i < ne;) {
+        size_t j = i + 1;
+        while (j < ne && e[j].a == e[i].a && e[j].b == e[i].b)
+            j++;
+        *nm += j - i > 2;
+        if (j - i == 1) {
+            uint32_t ends[2] = {e[i].a, e[i].b};
+            deg[ends[0]]++;
+            deg[ends[1]]++;
+            up[find(up, ends[0])] = find(up, ends[1]);
+        }
+        i = j;
+    }
+    size_t loops = 0;
+    bool simple = true;
+    for (uint32_t v = 0; v < m->nverts; v++) {
+        if (!deg[v])
+            continue;
+        simple &= deg[v] == 2;
+        loops += find(up, v) == v;
+        const double *p = m->pos + 3 * (size_t)v;
+        bool on = false;
+        for (int a = 0; a < 6; a++)
+            on |= p[a % 3] == box[a];
+        off_plane += !on;
+        double g[3], f = ism_eval_gradient(t, ws, p[0], p[1], p[2], g);
+        worst_f = fmax(worst_f, fabs(f) / sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]));
+    }
+    cr_expect_eq(off_plane, 0, "%zu boundary vertices off the box's planes", off_plane);
+    cr_expect_leq(worst_f, ON_F * diag, "a boundary vertex %g from f = 0", worst_f);
+    ism_eval_ws_free(ws);
+    free(e);
+    free(deg);
+    free(up);
+    return simple ? loops : SIZE_MAX;
+}
+
+/* The farthest centroid or edge midpoint by dist (NULL: Newton on t) and the triangles
+ * turned against ∇f at their centroid. */
+static double newton_dist(const ism_tape *t, ism_eval_ws *ws, const double p[3])
+{
+    double q[3] = {p[0], p[1], p[2]}, g[3], last = 0;
+    for (int it = 0; it < 50; it++) {
+        double f = ism_eval_gradient(t, ws, q[0], q[1], q[2], g);
+        double gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+        if (!(gg > 0) || !isfinite(f))
+            break;
+        last = fabs(f) / sqrt(gg);
+        if (last < 1e-13) {
+            last = 0;
+            break;
+        }
+        for (int k = 0; k < 3; k++)
+            q[k] -= f * g[k] / gg;
+    }
+    return sqrt(pow(q[0] - p[0], 2) + pow(q[1] - p[1], 2) + pow(q[2] - p[2], 2)) + last;
+}
+
+static double worst(const ism_mesh *m, const ism_tape *t, double (*dist)(const double *),
+                    size_t *turned)
+{
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    double w = 0;
+    *turned = 0;
+    for (size_t i = 0; i < m->ntris; i++) {
+        const double *p[3];
+        for (int j = 0; j < 3; j++)
+            p[j] = m->pos + 3 * (size_t)m->tri[3 * i + j];
+        double q[4][3], g[3], n[3];
+        for (int a = 0; a < 3; a++) {
+            q[0][a] = (p[0][a] + p[1][a] + p[2][a]) / 3;
+            for (int j = 0; j < 3; j++)
+                q[1 + j][a] = 0.5 * (p[j][a] + p[(j + 1) % 3][a]);
+        }
+        for (int k = 0; k < 4; k++)
+            w = fmax(w, dist ? dist(q[k]) : newton_dist(t, ws, q[k]));
+        ism_eval_gradient(t, ws, q[0][0], q[0][1], q[0][2], g);
+        pf_tri_normal(m, i, n);
+        *turned += n[0] * g[0] + n[1] * g[1] + n[2] * g[2] < 0;
+    }
+    ism_eval_ws_free(ws);
+    return w;
+}
+
+/* The dual mesh of s in each of the three boxes from base under e: dual, χ, one piece, the
+ * loops f's signs say (and `loops`), on the planes and on f = 0, within e. */
+static void expect_clipped(const pf_surface *s, double (*dist)(const double *),
+                           const double base[6], double e, long chi, size_t loops)
+{
+    ism_tape *t = pf_compile(s);
+    for (int which = pf_first_box() - 1; which < 2; which++) {
+        double box[6];
+        pf_sweep_box(base, DEPTH, which, box);
+        ism_poly_options o;
+        pf_options(&o, box, 3, DEPTH);
+        o.max_error = e;
+        o.dual = true;
+        o.threads = 1;
+        ism_mesh m;
+        ism_poly_stats ps;
+        ism_mesh_init(&m);
+        pf_run_options(t, &o, &m, &ps);
+        cr_expect_eq(ps.mesher, ISM_MESHER_DUAL, "box %d: mesher %s (%s)", which,
+                     ism_mesher_name(ps.mesher), ism_dual_reason_name(ps.dual_declined));
+        pf_props p;
+        pf_measure(&m, t, &p);
+        size_t nm, bl = boundary_loops(&m, t, box, &nm), fl = face_loops(t, box), turned;
+        cr_expect_eq(fl, loops, "box %d: f's signs say %zu loops", which, fl);
+        cr_expect_eq(bl, fl, "box %d: %zu boundary loops, f says %zu", which, bl, fl);
+        cr_expect_eq(nm, 0, "box %d: %zu edges in 3+ triangles", which, nm);
+        cr_expect_eq(p.euler, chi, "box %d: χ %ld", which, p.euler);
+        cr_expect_eq(p.components, 1, "box %d: %zu pieces", which, p.components);
+        double w = worst(&m, t, dist, &turned);
+        cr_expect_leq(w, e, "box %d: a centroid or midpoint %g from f = 0", which, w);
+        cr_expect_eq(turned, 0, "box %d: %zu triangles against ∇f", which, turned);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
+
+/* The grown box: the given one's faces on the lattice planes 1 and 2^L − 1 of level L. */
+Test(dual_box, grown_box_puts_the_faces_on_the_margin_lattice)
+{
+    static const double box[6] = {-3, -1, 0.5, 3, 2, 0.75};
+    double g[6];
+    ism_dual_box_grow(box, 4, g);
+    for (int a = 0; a < 3; a++) {
+        double cell = (g[a + 3] - g[a]) / 16;
+        cr_expect_float_eq(g[a] + cell, box[a], 1e-15 * fabs(g[a + 3] - g[a]));
+        cr_expect_float_eq(g[a] + 15 * cell, box[a + 3], 1e-15 * fabs(g[a + 3] - g[a]));
+    }
+}
+
+Test(dual_box, sphere_cut_by_every_face_six_circles)
+{
+    static const double base[6] = {-1, -1, -1, 1, 1, 1};
+    expect_clipped(&sphere12, sphere12_dist, base, 1e-2, -4, 6);
+    expect_clipped(&sphere12, sphere12_dist, base, 3e-3, -4, 6);
+}
+
+Test(dual_box, cylinder_cut_by_two_faces)
+{
+    static const double base[6] = {-1, -1, -1, 1, 1, 1};
+    expect_clipped(&cylinder, cylinder_dist, base, 1e-2, 0, 2);
+}
+
+/* A small sphere whose cap pokes through the face x = 1 between the first look's samples
+ * (its circle, radius 0.067 round (0.0625, 0.0625), misses the points 1/8 apart): the tree
+ * finds the cut (box_cut), the mesh is made again in the grown box: a disc, χ 1, one loop. */
+static const pf_surface poking = {"(x - 1.06)^2 + (y - 0.0625)^2 + (z - 0.0625)^2 - 0.0081",
+                                  NULL, 0, NULL, 0};
+
+static double poking_dist(const double *p)
+{
+    return fabs(sqrt(pow(p[0] - 1.06, 2) + pow(p[1] - 0.0625, 2) + pow(p[2] - 0.0625, 2)) -
+                0.09);
+}
+
+Test(dual_box, cap_between_the_face_samples)
+{
+    static const double base[6] = {-1, -1, -1, 1, 1, 1};
+    expect_clipped(&poking, poking_dist, base, 2e-3, 1, 1);
+}
