@@ -584,8 +584,8 @@ static int leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad)
         ism_dual_balls_near(d->balls, d->nballs, v->p[0], v->p[7], size))
         return DN_HOLE; /* not plain near a point, as small as its hole's leaves (near_point) */
     if (kind == DN_SURF && touches_box(d, n) && d->inner) {
-        if (n->level <= ISM_DUAL_BOX_LEVEL)
-            kind = DN_INNER; /* into the margin's outer half (dual_box.h) */
+        if (n->level < ISM_DUAL_BOX_LEVEL)
+            kind = DN_INNER; /* no larger than the margin's cells (dual_box.h) */
     } else if (kind == DN_SURF && touches_box(d, n)) {
         int clear = box_faces_clear(d, w, n, v);
         if (clear < 0)
@@ -1271,6 +1271,24 @@ static uint64_t tri_key(const dual *d, size_t t)
     return (v[0] | v[1] << 21 | v[2] << 42) + 1;
 }
 
+/* Does the clip drop triangle t whole: every corner beyond one plane of the request's box by
+ * more than the snap (dual_box.h)? Such a triangle is not measured: the clip measures every
+ * piece it makes. */
+static bool beyond_inner(const dual *d, size_t t)
+{
+    double snap = ISM_DUAL_BOX_SNAP * d->o->max_error;
+    for (int a = 0; a < 6; a++) {
+        int beyond = 0;
+        for (int j = 0; j < 3; j++) {
+            double x = d->pos[3 * (size_t)d->tri[3 * t + j] + a % 3];
+            beyond += a < 3 ? x < d->inner[a] - snap : x > d->inner[a] + snap;
+        }
+        if (beyond == 3)
+            return true;
+    }
+    return false;
+}
+
 /* The miss masks of triangles list[0..n) (list NULL: triangles 0..n) into miss[0..n)
  * (edge_misses, else centroid_misses; 0: within E). Triangles that met E in an earlier round
  * (d->passed) read 0 unmeasured; the rest have their edges, then the centroids of those whose
@@ -1291,7 +1309,7 @@ static void measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t *
         uint32_t t = list ? list[k] : (uint32_t)k;
         uint64_t key = tri_key(d, t);
         miss[k] = 0;
-        if (key && keyed_get(&d->passed, key))
+        if ((key && keyed_get(&d->passed, key)) || (d->inner && beyond_inner(d, t)))
             continue;
         at[np] = k;
         open[np++] = t;
@@ -1832,7 +1850,7 @@ static enum ism_dual_status run_in_grown_box(dual *d, ism_mesh *mesh, ism_dual_s
 {
     const ism_poly_options *given = d->o;
     st->declined = ISM_DUAL_WHY_BOX_CUT;
-    if (given->max_depth <= ISM_DUAL_BOX_LEVEL + 1) /* no level for the margin's leaves */
+    if (given->max_depth <= ISM_DUAL_BOX_LEVEL) /* no level for the margin's leaves */
         return ISM_DUAL_NOT_APPLICABLE;
     /* Not yet round singular points: kummer-16-nodes in ±3 at 1e-2 is clipped right in its
      * own box (χ 0, 11 pieces, 6 loops, 16 nodes: the primal path's) but its balls fail in
@@ -1910,7 +1928,7 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
     }
     /* a box whose faces f is seen to cross is grown at once (dual_box.h); one that cuts the
      * surface only between the face samples is found by the tree (box_cut), then grown */
-    bool cut = ok && ism_dual_box_seen_cut(&d.w[0].s, o->box, ISM_DUAL_BOX_LEVEL);
+    bool cut = ok && ism_dual_box_seen_cut(&d.w[0].s, o->box, ISM_DUAL_BOX_LOOK);
     enum ism_dual_status status = !ok  ? ISM_DUAL_NO_MEMORY
                                   : cut ? run_in_grown_box(&d, mesh, st)
                                         : run_round_points(&d, mesh, st);

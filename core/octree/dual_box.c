@@ -21,13 +21,25 @@
  * declines. */
 #define CUT_SETTLED 1e-11
 
+/* The margins in level cells beyond the first, low and high side per axis: fractions of the
+ * golden ratio's powers, so that no lattice plane of the grown box lies at a simple
+ * fraction of the given one: symmetric surfaces hold lines and points of f = 0 exactly on the
+ * given box's centre planes (the helicoid's y = z = 0, the Clebsch cubic's x = 0, y = -1,
+ * Scherk's x = ±y at z = 0), and a lattice edge in the surface is a leaf the tests cannot
+ * make plain at any depth (not_plain: helicoid, Scherk and Clebsch in their own boxes at
+ * 2e-3 of the box, with the margins a whole cell). */
+static const double MARGIN_LO[3] = {0.381966011250105, 0.236067977499790, 0.145898033750315};
+static const double MARGIN_HI[3] = {0.145898033750315, 0.381966011250105, 0.236067977499790};
+
 void ism_dual_box_grow(const double box[6], int level, double grown[6])
 {
-    double cells = ldexp(1, level); /* the box spans cells - 2 of them */
+    double cells = ldexp(1, level);
     for (int a = 0; a < 3; a++) {
-        double cell = (box[a + 3] - box[a]) / (cells - 2);
-        grown[a] = box[a] - cell;
-        grown[a + 3] = box[a + 3] + cell;
+        /* W' = W + (2 + lo + hi) W' / cells */
+        double shares = 2 + MARGIN_LO[a] + MARGIN_HI[a];
+        double cell = (box[a + 3] - box[a]) / (cells - shares);
+        grown[a] = box[a] - (1 + MARGIN_LO[a]) * cell;
+        grown[a + 3] = box[a + 3] + (1 + MARGIN_HI[a]) * cell;
     }
 }
 
