@@ -18,8 +18,9 @@
  *
  * Only for closed surfaces without features: no min/max or abs in f (creases), no singular
  * locus known (quiet or node balls given) but isolated certified nodes and isolated points
- * (o->dual_points: a hole round each, clipped and fanned to the point, dual_balls.h), no
- * leaf with the surface touching the box; and
+ * (o->dual_points: a hole round each, clipped and fanned to the point, dual_balls.h); a
+ * surface the box cuts (without such points) is meshed in a larger box and clipped by the
+ * box's planes (dual_box.h); and
  * only where every triangle meets E before depth.max (two sheets closer than E, where f's
  * gradient nearly cancels between them, do not); the call says "not applicable" otherwise
  * and the caller polygonises as before. The tree's splits, the vertices and the

@@ -28,7 +28,9 @@ enum ism_dual_reason {
     ISM_DUAL_WHY_LOCUS,        /* singular points or curves known from f: they need the primal
                                   polygons' conformance (core/singular) */
     ISM_DUAL_WHY_MIN_MAX,      /* min/max/abs in f: creases, which one vertex per cell rounds */
-    ISM_DUAL_WHY_BOX_CUT,      /* the surface meets the box: it is open there */
+    ISM_DUAL_WHY_BOX_CUT,      /* the box cuts the surface where the clip cannot apply
+                                  (dual_box.h): singular points too, a cut point not settled
+                                  onto f = 0 in its plane, a margin leaf's vertex inside */
     ISM_DUAL_WHY_NOT_PLAIN,    /* a cell at depth.max still holds more than one plain sheet
                                   (sheets closer than a cell, an uncertified singular point) */
     ISM_DUAL_WHY_ERROR,        /* a triangle beyond max_error with its cells at depth.max */

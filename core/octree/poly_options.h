@@ -48,7 +48,9 @@ typedef struct ism_poly_options {
                                nodes are sized for that (straddle.h); default off */
     bool dual;              /* under max_error, on a surface without min/max and without a
                                singular locus (but isolated nodes and isolated points:
-                               dual_points) that the box does not cut: one vertex per leaf
+                               dual_points, where the box cuts nothing; a surface the box
+                               cuts is meshed in a larger box and clipped: dual_box.h)
+                               : one vertex per leaf
                                on f = 0 and quads across the crossed minimal edges, leaves
                                sized by the error of those triangles (dual.h; one thread);
                                where that cannot apply, the primal polygons as without it.
