@@ -20,6 +20,10 @@
  * or a move longer than the cut edge: f = 0 nearly tangent to the plane there) the clip
  * declines. */
 #define CUT_SETTLED 1e-11
+/* A vertex nearer the plane than this many times the farthest move of a cut point on its
+ * edges is snapped onto it (snap_to): the sliver beside it folds once the cut points' moves
+ * reach its height. */
+#define SNAP_MOVES 2.0
 
 /* The margins in level cells beyond the first, low and high side per axis: fractions of the
  * golden ratio's powers, so that no lattice plane of the grown box lies at a simple
@@ -80,6 +84,8 @@ typedef struct bclip {
     size_t capon;
     double *sd;       /* per vertex: its signed distance beyond this pass's plane */
     size_t capsd;
+    double *need;     /* per vertex: the farthest a cut point on its edges moved (snap_to) */
+    size_t capneed;
     uint64_t *cut;    /* sorted undirected edges crossing this pass's plane */
     uint32_t *cutv;   /* their cut points' vertices */
     size_t ncut, capcut, capcutv;
@@ -146,8 +152,10 @@ static bool settle(bclip *c, uint8_t held, double q[3], double reach)
 }
 
 /* The point where edge a-b crosses plane p, settled onto f = 0 in the planes its ends share
- * and p; false when it does not settle within the edge's length. */
-static bool cut_point(bclip *c, int p, uint8_t held, uint32_t a, uint32_t b, double out[3])
+ * and p (*moved: how far from the edge); false when it does not settle within the edge's
+ * length. */
+static bool cut_point(bclip *c, int p, uint8_t held, uint32_t a, uint32_t b, double out[3],
+                      double *moved)
 {
     const double *pa = c->m->pos + 3 * (size_t)a, *pb = c->m->pos + 3 * (size_t)b;
     if (pb[0] < pa[0] || (pb[0] == pa[0] && (pb[1] < pa[1] || (pb[1] == pa[1] && pb[2] < pa[2])))) {
@@ -160,30 +168,34 @@ static bool cut_point(bclip *c, int p, uint8_t held, uint32_t a, uint32_t b, dou
         pa = pb;
         pb = px;
     }
-    double t = c->sd[a] / (c->sd[a] - c->sd[b]);
+    double t = c->sd[a] / (c->sd[a] - c->sd[b]), start[3];
     for (int j = 0; j < 3; j++)
-        out[j] = pa[j] + t * (pb[j] - pa[j]);
-    return settle(c, (uint8_t)(held | 1u << p), out, sqrt(ism_sqdist3(pa, pb)));
+        out[j] = start[j] = pa[j] + t * (pb[j] - pa[j]);
+    bool ok = settle(c, (uint8_t)(held | 1u << p), out, sqrt(ism_sqdist3(pa, pb)));
+    *moved = sqrt(ism_sqdist3(out, start));
+    return ok;
 }
 
-/* Vertices within c->snap of plane p (either side) settled onto it and onto f = 0 (where
- * that stays within 2 snap; else left): a corner just inside beside cut points pushed out
+/* Vertices nearer plane p (either side) than the cut points on their edges moved (twice
+ * that, at most c->snap) settled onto it and onto f = 0 (where that stays within the same
+ * reach; else left), their sd made 0: a corner just inside beside cut points pushed out
  * onto f = 0 made slivers turned over (a sphere of radius 0.09 cut at 1e-3 of its vertex
- * rows: 6 of 48 cut triangles at E 2e-3). */
-static void snap_to(bclip *c, int p)
+ * rows: 6 of 48 cut triangles at E 2e-3). The reach follows the cut points' moves, not E:
+ * snapped by E, a vertex's own triangles, once split smaller than E, kept missing it (the
+ * unit sphere cut at x = -0.5 at E 0.05: error_at_max_depth). */
+static void snap_to(bclip *c, int p, size_t nv)
 {
     ism_mesh *m = c->m;
-    int a = p / 2;
-    double at = c->box[a + 3 * (p & 1)];
-    for (size_t v = 0; v < m->nverts; v++) {
-        double *x = m->pos + 3 * v;
-        if (c->on[v] >> p & 1 || !(fabs(x[a] - at) < c->snap) || x[a] == at)
+    for (size_t v = 0; v < nv; v++) {
+        double reach = fmin(c->snap, SNAP_MOVES * c->need[v]);
+        if (!(fabs(c->sd[v]) < reach) || c->sd[v] == 0)
             continue;
-        double q[3] = {x[0], x[1], x[2]}, g[3];
-        if (!settle(c, (uint8_t)(c->on[v] | 1u << p), q, 2 * c->snap))
+        double q[3] = {m->pos[3 * v], m->pos[3 * v + 1], m->pos[3 * v + 2]}, g[3];
+        if (!settle(c, (uint8_t)(c->on[v] | 1u << p), q, reach))
             continue;
-        memcpy(x, q, sizeof q);
+        memcpy(m->pos + 3 * v, q, sizeof q);
         c->on[v] |= (uint8_t)(1u << p);
+        c->sd[v] = 0;
         ism_sample_grad(c->s, q, g);
         ism_normalise3(g);
         for (int j = 0; j < 3; j++)
@@ -219,9 +231,11 @@ static enum ism_box_clip_status cut_points(bclip *c, int p)
     for (size_t i = 0; i < u; i++) {
         uint32_t a = (uint32_t)(c->cut[i] >> 32), b = (uint32_t)c->cut[i];
         uint8_t held = (uint8_t)(c->on[a] & c->on[b]);
-        double q[3], g[3];
-        if (!cut_point(c, p, held, a, b, q))
+        double q[3], g[3], moved;
+        if (!cut_point(c, p, held, a, b, q, &moved))
             return ISM_BOX_CLIP_BAD;
+        c->need[a] = fmax(c->need[a], moved);
+        c->need[b] = fmax(c->need[b], moved);
         ism_sample_grad(c->s, q, g);
         ism_normalise3(g);
         float nrm[3] = {(float)g[0], (float)g[1], (float)g[2]};
@@ -288,17 +302,20 @@ static enum ism_box_clip_status clip_plane(bclip *c, int p)
     int a = p / 2;
     double at = c->box[a + 3 * (p & 1)];
     if (!ism_grow((void **)&c->sd, &c->capsd, m->nverts, sizeof *c->sd, 1024) ||
+        !ism_grow((void **)&c->need, &c->capneed, m->nverts, sizeof *c->need, 1024) ||
         !ism_grow((void **)&c->on, &c->capon, m->nverts, 1, 1024))
         return ISM_BOX_CLIP_NO_MEMORY;
-    snap_to(c, p);
     size_t nv = m->nverts;
-    for (size_t v = 0; v < nv; v++) /* beyond the plane: > 0; on it (made so): 0 */
+    for (size_t v = 0; v < nv; v++) { /* beyond the plane: > 0; on it (made so): 0 */
         c->sd[v] = c->on[v] >> p & 1 ? 0
                    : p & 1         ? m->pos[3 * v + a] - at
                                    : at - m->pos[3 * v + a];
+        c->need[v] = 0;
+    }
     enum ism_box_clip_status st = cut_points(c, p);
     if (st != ISM_BOX_CLIP_OK)
         return st;
+    snap_to(c, p, nv); /* the cuts on a snapped vertex's edges are left unused */
     c->nt = 0;
     for (size_t t = 0; t < m->ntris; t++)
         if (!clip_triangle(c, t))
@@ -363,6 +380,7 @@ enum ism_box_clip_status ism_dual_box_clip(ism_mesh *m, ism_sampler *s, const do
     }
     free(c.on);
     free(c.sd);
+    free(c.need);
     free(c.cut);
     free(c.cutv);
     free(c.tri);

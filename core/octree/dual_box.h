@@ -44,11 +44,10 @@
  * margins) 30.7M, 92.0M, 186.5M, 45.4M, 185.5M. */
 #define ISM_DUAL_BOX_LEVEL 3
 
-/* Vertices nearer a plane than this share of E are settled onto it and onto f = 0 before
- * the cut: a cut point moves up to about E off its chord onto f = 0, so a corner nearer
- * than that is what turns a sliver over (a sphere of radius 0.09 poking through a face at
- * E 2e-3: 6 of 48 cut triangles turned without). The triangles with such a corner are
- * measured with the cut ones. */
+/* Vertices are snapped onto a plane (and onto f = 0) before the cut when nearer it than
+ * twice the farthest move of a cut point on their edges, and never farther than this share
+ * of E (dual_box.c snap_to); the triangles with such a corner are measured with the cut
+ * ones, and the dual mesher's probe takes every triangle with a corner this near a plane. */
 #define ISM_DUAL_BOX_SNAP 1.0
 
 /* The grown box of box: each axis widened on either side by 1.15-1.39 cells of level

@@ -311,16 +311,21 @@ class TestIsomesh(unittest.TestCase):
         the primal polygons."""
         path = self.out("m.ply")
         sphere = ("-e", "x^2 + y^2 + z^2 - 1", "-b", "-1.5,-1.5,-1.5,1.5,1.5,1.5")
-        p = run(*sphere, "--max-error", "0.01", "--dual", "-o", path, "--stats")
-        self.assertEqual(p.returncode, 0, p.stderr)
-        self.assertEqual(json.loads(p.stdout)["polygoniser"]["mesher"], "dual")
-        self.assertTrue(os.path.exists(path))
-        os.remove(path)
+        # the sphere, and the sphere cut by the box (meshed in a larger box and clipped:
+        # core/octree/dual_box.h; one boundary loop)
+        for box, loops in ((sphere[2:], 0), (("-b", "-0.5,-1.5,-1.5,1.5,1.5,1.5"), 1)):
+            p = run(*sphere[:2], *box, "--max-error", "0.01", "--dual", "-o", path, "--stats")
+            self.assertEqual(p.returncode, 0, p.stderr)
+            s = json.loads(p.stdout)
+            self.assertEqual(s["polygoniser"]["mesher"], "dual")
+            self.assertEqual(s["analysis"]["boundary_loops"], loops)
+            self.assertTrue(os.path.exists(path))
+            os.remove(path)
         # declined before meshing (min/max in f), by the locus (a double line), by the box
-        # (it cuts the sphere: open there)
+        # (it cuts a cone whose apex is a node: no clip beside singular points yet)
         for args, why in ((("-e", "max(x^2 + y^2 + z^2 - 1, z - 0.5)", *sphere[2:]), "min_max"),
                           (("-e", "x*y", "-d", "2:6"), "singular_locus"),
-                          (("-e", "x^2 + y^2 + z^2 - 1", "-b", "-0.5,-1.5,-1.5,1.5,1.5,1.5"),
+                          (("-e", "x^2 + y^2 - z^2", "-b", "-1,-1.1,-1.2,1.3,1.1,1"),
                            "box_cut")):
             extra = ("--max-error", "0.05")
             p = run(*args, *extra, "--dual", "-o", path, "--stats")
