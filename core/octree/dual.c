@@ -1271,22 +1271,29 @@ static uint64_t tri_key(const dual *d, size_t t)
     return (v[0] | v[1] << 21 | v[2] << 42) + 1;
 }
 
-/* Does the clip drop triangle t whole: every corner beyond one plane of the request's box by
- * more than the snap (dual_box.h)? Such a triangle is not measured: the clip measures every
- * piece it makes. */
-static bool beyond_inner(const dual *d, size_t t)
+/* What the clip by the request's box (dual_box.h) does to triangle t: CLIP_DROPS it whole
+ * (every corner beyond one plane by more than the snap: not measured here, the clip measures
+ * every piece it makes), CLIP_TOUCHES it (a plane across it, or a corner within the snap of
+ * one: the probe clips it, mark_cut_misses), or keeps it as it is (CLIP_KEEPS). */
+enum { CLIP_KEEPS, CLIP_TOUCHES, CLIP_DROPS };
+
+static int clip_of(const dual *d, size_t t)
 {
     double snap = ISM_DUAL_BOX_SNAP * d->o->max_error;
+    int touches = 0;
     for (int a = 0; a < 6; a++) {
-        int beyond = 0;
+        int beyond = 0, far = 0;
         for (int j = 0; j < 3; j++) {
-            double x = d->pos[3 * (size_t)d->tri[3 * t + j] + a % 3];
-            beyond += a < 3 ? x < d->inner[a] - snap : x > d->inner[a] + snap;
+            double x = d->pos[3 * (size_t)d->tri[3 * t + j] + a % 3], w = d->inner[a];
+            beyond += a < 3 ? x < w : x > w;
+            far += a < 3 ? x < w - snap : x > w + snap;
+            touches |= fabs(x - w) < snap;
         }
-        if (beyond == 3)
-            return true;
+        if (far == 3)
+            return CLIP_DROPS;
+        touches |= beyond && beyond < 3;
     }
-    return false;
+    return touches ? CLIP_TOUCHES : CLIP_KEEPS;
 }
 
 /* The miss masks of triangles list[0..n) (list NULL: triangles 0..n) into miss[0..n)
@@ -1309,7 +1316,7 @@ static void measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t *
         uint32_t t = list ? list[k] : (uint32_t)k;
         uint64_t key = tri_key(d, t);
         miss[k] = 0;
-        if ((key && keyed_get(&d->passed, key)) || (d->inner && beyond_inner(d, t)))
+        if ((key && keyed_get(&d->passed, key)) || (d->inner && clip_of(d, t) == CLIP_DROPS))
             continue;
         at[np] = k;
         open[np++] = t;
@@ -1376,25 +1383,6 @@ static size_t mark_misses(dual *d, uint64_t *missed)
     return marked;
 }
 
-/* Will the clip change triangle t: a plane of the request's box across it (a corner on each
- * side) or a corner within the snap of one (dual_box.h)? */
-static bool crosses_inner(const dual *d, size_t t)
-{
-    double snap = ISM_DUAL_BOX_SNAP * d->o->max_error;
-    for (int a = 0; a < 6; a++) {
-        int beyond = 0;
-        for (int j = 0; j < 3; j++) {
-            double x = d->pos[3 * (size_t)d->tri[3 * t + j] + a % 3];
-            beyond += a < 3 ? x < d->inner[a] : x > d->inner[a];
-            if (fabs(x - d->inner[a]) < snap)
-                return true;
-        }
-        if (beyond && beyond < 3)
-            return true;
-    }
-    return false;
-}
-
 /* In the grown box: the triangles across the request's box's planes clipped as the final
  * mesh will be (dual_box.h), and the leaves of each with a piece beyond E marked to split;
  * returns how many can still split and counts the misses at max_depth into *missed. A cut
@@ -1410,7 +1398,7 @@ static size_t mark_cut_misses(dual *d, uint64_t *missed)
     if (ok)
         memset(map, 0xff, (d->nv + 1) * sizeof *map);
     for (size_t t = 0; t < d->nt && ok; t++) {
-        if (!crosses_inner(d, t))
+        if (clip_of(d, t) != CLIP_TOUCHES)
             continue;
         uint32_t v[3];
         for (int j = 0; j < 3 && ok; j++) {

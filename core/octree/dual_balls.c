@@ -1,6 +1,7 @@
 /* dual_balls.c — the holes, the clip and the apex fans of the dual mesh round isolated
  * singular points (the design and its figure: dual_balls.h). */
 #include "core/octree/dual_balls.h"
+#include "core/octree/edge_keys.h"
 #include "core/util/grow.h"
 #include "core/util/vec3.h"
 
@@ -104,11 +105,6 @@ static int by_key(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-static uint64_t undirected(uint32_t a, uint32_t b)
-{
-    return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
-}
-
 /* The first ball whose limit holds p, or n when none does. */
 static size_t limit_ball(const ism_dual_ball *b, size_t n, const double p[3])
 {
@@ -142,7 +138,7 @@ static bool sorted_edges(const ism_mesh *m, const ism_dual_ball *b, size_t n, ed
         for (int k = 0; k < 3; k++) {
             uint32_t u = m->tri[3 * t + k], w = m->tri[3 * t + (k + 1) % 3];
             if (near[u] || near[w])
-                (*e)[(*ne)++] = (edge_ref){undirected(u, w), (uint32_t)(3 * t + k)};
+                (*e)[(*ne)++] = (edge_ref){ism_edge_key(u, w), (uint32_t)(3 * t + k)};
         }
     free(near);
     qsort(*e, *ne, sizeof **e, by_key);
@@ -281,18 +277,10 @@ static void cut_point(clip *c, size_t k, uint32_t a, uint32_t b, double out[3])
     }
 }
 
-static int by_u64(const void *a, const void *b)
-{
-    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-    return (x > y) - (x < y);
-}
-
 /* The vertex at the cut of edge a-b (made in collect_cuts). */
 static uint32_t cut_vertex(const clip *c, uint32_t a, uint32_t b)
 {
-    uint64_t key = undirected(a, b);
-    const uint64_t *at = bsearch(&key, c->cut, c->ncut, sizeof key, by_u64);
-    return at ? c->cutv[at - c->cut] : UINT32_MAX;
+    return ism_edge_key_vertex(c->cut, c->cutv, c->ncut, a, b);
 }
 
 /* Every edge with one end inside a sphere and one outside gets its cut vertex (once). */
@@ -312,17 +300,12 @@ static enum ism_fan_status collect_cuts(clip *c)
             }
             if (!ism_grow((void **)&c->cut, &c->capcut, c->ncut + 1, sizeof *c->cut, 256))
                 return ISM_FAN_NO_MEMORY;
-            c->cut[c->ncut++] = undirected(a, b);
+            c->cut[c->ncut++] = ism_edge_key(a, b);
         }
     if (c->marked)
         return ISM_FAN_BAD;
-    if (c->ncut) /* an isolated point alone cuts nothing: c->cut is NULL (qsort's is nonnull) */
-        qsort(c->cut, c->ncut, sizeof *c->cut, by_u64);
-    size_t u = 0;
-    for (size_t i = 0; i < c->ncut; i++)
-        if (!u || c->cut[i] != c->cut[u - 1])
-            c->cut[u++] = c->cut[i];
-    c->ncut = u;
+    /* an isolated point alone cuts nothing: c->cut is NULL */
+    size_t u = c->ncut = ism_edge_keys_unique(c->cut, c->ncut);
     c->cutv = malloc((u ? u : 1) * sizeof *c->cutv);
     if (!c->cutv)
         return ISM_FAN_NO_MEMORY;

@@ -2,6 +2,7 @@
  * by the request's box (the design and its figure: dual_box.h). */
 #include "core/octree/dual_box.h"
 #include "core/octree/dual_balls.h"
+#include "core/octree/edge_keys.h"
 #include "core/util/grow.h"
 #include "core/util/vec3.h"
 
@@ -95,23 +96,10 @@ typedef struct bclip {
     size_t capsrc, capnsrc;
 } bclip;
 
-static uint64_t undirected(uint32_t a, uint32_t b)
-{
-    return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
-}
-
-static int by_u64(const void *a, const void *b)
-{
-    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-    return (x > y) - (x < y);
-}
-
 /* The vertex at the cut of edge a-b (made in cut_points). */
 static uint32_t cut_vertex(const bclip *c, uint32_t a, uint32_t b)
 {
-    uint64_t key = undirected(a, b);
-    const uint64_t *at = bsearch(&key, c->cut, c->ncut, sizeof key, by_u64);
-    return at ? c->cutv[at - c->cut] : UINT32_MAX;
+    return ism_edge_key_vertex(c->cut, c->cutv, c->ncut, a, b);
 }
 
 /* Does edge a-b cross the plane strictly (one end inside, one outside)? */
@@ -215,16 +203,11 @@ static enum ism_box_clip_status cut_points(bclip *c, int p)
                 continue;
             if (!ism_grow((void **)&c->cut, &c->capcut, c->ncut + 1, sizeof *c->cut, 256))
                 return ISM_BOX_CLIP_NO_MEMORY;
-            c->cut[c->ncut++] = undirected(a, b);
+            c->cut[c->ncut++] = ism_edge_key(a, b);
         }
     if (!c->ncut)
         return ISM_BOX_CLIP_OK;
-    qsort(c->cut, c->ncut, sizeof *c->cut, by_u64);
-    size_t u = 0;
-    for (size_t i = 0; i < c->ncut; i++)
-        if (!u || c->cut[i] != c->cut[u - 1])
-            c->cut[u++] = c->cut[i];
-    c->ncut = u;
+    size_t u = c->ncut = ism_edge_keys_unique(c->cut, c->ncut);
     if (!ism_grow((void **)&c->cutv, &c->capcutv, u, sizeof *c->cutv, 256) ||
         !ism_grow((void **)&c->on, &c->capon, m->nverts + u, 1, 1024))
         return ISM_BOX_CLIP_NO_MEMORY;
