@@ -61,7 +61,9 @@ typedef struct surface {
                "(1 + 2*phi)*(x^2 + y^2 + z^2 - 1)^2, x^2 + y^2 + z^2 - 2.25)"
 
 /* Kummer's quartic with its tetrahedral planes written out (proto/presets.c's lets):
- * closed, 4 real nodes at mu2 = 0.6667 — the dual mesh round isolated points (dual_balls.h). */
+ * closed, 4 real nodes at mu2 = 0.6667 — the dual mesh round isolated points (dual_balls.h);
+ * 16 at mu2 = 2, leaving every box through four funnels (kummer-16-nodes: a box cut and
+ * nodes, issue 16's Kummer-like target). */
 #define KUMMER4 "(x^2 + y^2 + z^2 - mu2)^2 - (3*mu2 - 1)/(3 - mu2)*(w - z - sqrt(2)*x)*" \
                 "(w - z + sqrt(2)*x)*(w + z + sqrt(2)*y)*(w + z - sqrt(2)*y)"
 
@@ -78,6 +80,8 @@ static const surface SURFACES[] = {
      "16*x*z*(x^2 + y^2 + z^2 - 2*y - 1)",
      {{0}}, 0, {-4, -4, -4, 4, 4, 4}, DIST_NEWTON, {3e-2, 1e-2, 3e-3}},
     {"kummer-4-nodes", KUMMER4, {{"mu2", 0.6667}, {"w", 1}}, 2, {-3, -3, -3, 3, 3, 3},
+     DIST_NEWTON, {1e-2, 3e-3, 1e-3}},
+    {"kummer-16-nodes", KUMMER4, {{"mu2", 2}, {"w", 1}}, 2, {-3, -3, -3, 3, 3, 3},
      DIST_NEWTON, {1e-2, 3e-3, 1e-3}},
     {"barth-sextic", BARTH6, {{"phi", 1.6180339887498949}}, 1,
      {-1.6, -1.6, -1.6, 1.6, 1.6, 1.6}, DIST_NEWTON, {1e-2, 3e-3, 1e-3}},

@@ -31,7 +31,7 @@ struct Surface {
 
 const Surface SURFACES[] = {
     {"sphere", 1.5}, {"torus", 1.5}, {"gyroid-ball", 1.5}, {"klein-bottle", 4.0},
-    {"barth-sextic", 1.6}, {"kummer-4-nodes", 3.0},
+    {"barth-sextic", 1.6}, {"kummer-4-nodes", 3.0}, {"kummer-16-nodes", 3.0},
 };
 
 Tree sq(const Tree& a) { return square(a); }
@@ -62,8 +62,10 @@ Tree build(const std::string& name)
                  Tree(1 + 2 * phi) * sq(r2 - Tree(1.0));
         return max(b, r2 - Tree(2.25));
     }
-    if (name == "kummer-4-nodes") { /* bench_error.c's KUMMER4: mu2 = 0.6667, w = 1 */
-        const double mu2 = 0.6667, w = 1, lambda = (3 * mu2 - 1) / (3 - mu2), s2 = std::sqrt(2.0);
+    if (name == "kummer-4-nodes" || name == "kummer-16-nodes") {
+        /* bench_error.c's KUMMER4: mu2 = 0.6667 (4 nodes) or 2 (16), w = 1 */
+        const double mu2 = name == "kummer-4-nodes" ? 0.6667 : 2.0, w = 1;
+        const double lambda = (3 * mu2 - 1) / (3 - mu2), s2 = std::sqrt(2.0);
         Tree p = Tree(w) - z - Tree(s2) * x, q = Tree(w) - z + Tree(s2) * x;
         Tree r = Tree(w) + z + Tree(s2) * y, s = Tree(w) + z - Tree(s2) * y;
         return sq(r2 - Tree(mu2)) - Tree(lambda) * p * q * r * s;
