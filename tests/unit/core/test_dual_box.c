@@ -1,6 +1,6 @@
 /* test_dual_box.c — the dual mesh of surfaces the box cuts (core/octree/dual_box.h): made in
  * a grown box and clipped by the given one's planes. Each surface in its box as given and
- * shifted off the lattice by 1e-3 and by 0.37 / -0.23 / 0.41 of a finest cell (pf_sweep_box):
+ * shifted off the lattice by 1e-3 and by irrational fractions of a finest cell (pf_sweep_box):
  * - a sphere of radius 1.2 in the box ±1: each face cuts a circle of radius √0.44, so the
  *   mesh is the sphere less 6 caps: dual, χ = 2 − 6 = −4, one piece, 6 boundary loops;
  * - a cylinder of radius 0.6 along z in ±1: cut by the two z faces, χ 0, 2 loops;
