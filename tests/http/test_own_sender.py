@@ -43,6 +43,16 @@ def read_answer(s, buf, head_only=False):
     return status, head, buf[:n], buf[n:]
 
 
+def answer_of(d, get):
+    """get on a connection of its own -> (status, body, whether the own sender answered it)."""
+    before = d.metric(SENT)
+    s = socket.create_connection(("127.0.0.1", d.port), timeout=30)
+    s.sendall(get)
+    status, _, body, _ = read_answer(s, b"")
+    s.close()
+    return status, body, d.metric(SENT) == before + 1
+
+
 def strip_varying(head):
     return re.sub(rb"Date: [^\r]*|dur=[0-9.]+", b"", head)
 
@@ -61,14 +71,8 @@ class OwnSenderTest(unittest.TestCase):
         cls.path = "/v1/meshes/%s.drc" % cls.key
         cls.get = b"GET %s HTTP/1.1\r\nHost: t\r\n\r\n" % cls.path.encode()
 
-        def by_own_sender():  # once the cache file has settled (file_memo.h)
-            before = cls.d.metric(SENT)
-            s = socket.create_connection(("127.0.0.1", cls.d.port), timeout=30)
-            s.sendall(cls.get)
-            read_answer(s, b"")
-            s.close()
-            return cls.d.metric(SENT) == before + 1
-        wait_until("an answer by the own sender", by_own_sender)
+        # once the cache file has settled (file_memo.h)
+        wait_until("an answer by the own sender", lambda: answer_of(cls.d, cls.get)[2])
 
     @classmethod
     def tearDownClass(cls):
@@ -276,13 +280,16 @@ def fd_count(pid):
 
 
 def big_get(d):
-    """POST of BIG -> (its body, a GET of it as bytes), once its cache file has settled."""
+    """POST of BIG -> (its body, a GET of it as bytes), once the own sender answers that GET:
+    the cache file is written after the answer (a queue) and is sent from only once settled
+    (cache_disk.c, file_memo.h: 50 ms)."""
     big = d.post("/v1/mesh", BIG)
     assert big.status == 200, big.body[:200]
     assert len(big.body) > 2 << 20
-    time.sleep(0.2)  # the file settles (file_memo.h: 50 ms)
-    return big.body, b"GET /v1/meshes/%s.stl HTTP/1.1\r\nHost: t\r\n\r\n" % (
+    get = b"GET /v1/meshes/%s.stl HTTP/1.1\r\nHost: t\r\n\r\n" % (
         big.header("ETag").strip('"').encode())
+    wait_until("the big mesh by the own sender", lambda: answer_of(d, get)[2])
+    return big.body, get
 
 
 def small_window_socket(port, window=16384):
@@ -291,17 +298,6 @@ def small_window_socket(port, window=16384):
     s.settimeout(30)
     s.connect(("127.0.0.1", port))
     return s
-
-
-def own_get(d, get):
-    """One GET on its own connection -> (status, body), asserting the own sender answered."""
-    before = d.metric(SENT)
-    s = socket.create_connection(("127.0.0.1", d.port), timeout=30)
-    s.sendall(get)
-    status, _, body, _ = read_answer(s, b"")
-    s.close()
-    assert d.metric(SENT) == before + 1, "not the own sender's"
-    return status, body
 
 
 class HandoverPaths(unittest.TestCase):
@@ -317,9 +313,7 @@ class HandoverPaths(unittest.TestCase):
         cls.big, cls.big_get = big_get(cls.d)
         # each file opened once (the cache keeps it open for the next send: fd_keep.h), so
         # the descriptors counted before a test are those after it
-        wait_until("the small mesh by the own sender",
-                   lambda: own_get(cls.d, cls.get) == (200, cls.body))
-        assert own_get(cls.d, cls.big_get) == (200, cls.big)
+        wait_until("the small mesh by the own sender", lambda: answer_of(cls.d, cls.get)[2])
 
     @classmethod
     def tearDownClass(cls):
@@ -334,7 +328,7 @@ class HandoverPaths(unittest.TestCase):
                    lambda: fd_count(self.d.proc.pid) <= fds0, timeout=15)
         wait_until("no connection counted", lambda: self.d.metric("isomesh_connections") <= 1,
                    timeout=15)  # the scrape's own
-        self.assertEqual(own_get(self.d, self.get), (200, self.body))
+        self.assertEqual(answer_of(self.d, self.get), (200, self.body, True))
 
     def test_clients_closing_mid_body_leave_nothing_behind(self):
         get = self.big_get
@@ -436,22 +430,21 @@ class HandoverPaths(unittest.TestCase):
 
 class EvictedMidAnswer(unittest.TestCase):
     """The own sender sends from the cache file's descriptor and lets the mesh's memory go
-    when its answer starts (own_sender.c): with the mesh evicted from memory (--cache-mem 12M)
-    and its file pruned from disk (--cache-disk-max 8M) while a slow reader is mid-body, the
-    bytes that reader gets are still the mesh's, whole."""
+    when its answer starts (own_sender.c): with the mesh evicted from memory (--cache-mem 12M
+    holds one such mesh: the next evicts it) and its file unlinked (as the disk pruner does)
+    while a slow reader is mid-body, the bytes that reader gets are still the mesh's, whole."""
 
     def test_a_mesh_evicted_mid_answer_still_arrives_whole(self):
         tmp = tempfile.mkdtemp(prefix="isomeshd_evict_")
         cache = os.path.join(tmp, "cache")
         d = Daemon("--workers", "1", "--own-sender", "--conn-timeout", "60",
-                   "--cache-mem", "12M", "--cache-disk-max", "8M", cache_dir=cache).start()
+                   "--cache-mem", "12M", cache_dir=cache).start()
         try:
             body, get = big_get(d)
-            key = re.search(rb"/v1/meshes/(\w+)\.", get).group(1).decode()
-
-            def on_disk():
-                return [f for _, _, fs in os.walk(cache) for f in fs if key in f]
-            wait_until("the mesh's cache file", on_disk)
+            name = re.search(rb"/v1/meshes/(\w+\.stl)", get).group(1).decode()
+            files = [os.path.join(top, f) for top, _, fs in os.walk(cache) for f in fs
+                     if f == name]
+            self.assertEqual(len(files), 1)
             s = small_window_socket(d.port)
             sent = d.metric(SENT)
             s.sendall(get)
@@ -460,11 +453,10 @@ class EvictedMidAnswer(unittest.TestCase):
                 got += s.recv(65536)
             self.assertEqual(d.metric(SENT), sent + 1)
             evicted = d.metric("isomesh_cache_evictions_total", tier="memory")
-            for k in range(2):  # 2 more meshes of ~4.4 MB: past both tiers' bounds
-                r = d.post("/v1/mesh", dict(BIG, params={"k": 10.5 + k}))
-                self.assertEqual(r.status, 200)
+            r = d.post("/v1/mesh", dict(BIG, params={"k": 10.5}))  # another ~4.4 MB mesh
+            self.assertEqual(r.status, 200)
             self.assertGreater(d.metric("isomesh_cache_evictions_total", tier="memory"), evicted)
-            wait_until("the mesh's file pruned", lambda: not on_disk(), timeout=30)
+            os.unlink(files[0])
             status, head, whole, rest = read_answer(s, got)
             s.close()
             self.assertEqual((status, rest), (200, b""))
