@@ -425,20 +425,35 @@ static bool empty_proven(worker *w, const dnode *n, corner_view *v)
  * negative parts t_ab (an ulp below 0 where H_ab is 0 at the node's face) beside it, >= 0:
  * w_a w_b <= (w_a² + w_b²) / 2 gives ½ Σ_a w_a² (H_aa − Σ_{b≠a} t_ab). The sum of
  * the t_ab is doubled against its own rounding. ∇f(c) is the sampled gradient, taken as
- * exact as the sampled 0 at c is (corner signs are samples everywhere in this file). */
+ * exact as the sampled 0 at c is (corner signs are samples everywhere in this file).
+ *
+ * The same expansion proves a node empty from a corner where f(c) > 0 is tiny and some
+ * ∇f(c)_a s_a < 0 but small: a sheet passing a corner at a critical value of one coordinate
+ * (tanglecube's z⁴ − 5 z² at z = √2.5, box ±3 moved by 0.37 / −0.23 / 0.41 of a depth-9
+ * cell, E = 3e-3: f(c) = 1.44e-5, ∂f/∂z = −3.2e-3, min f in the node 1.41e-5; the enclosures
+ * round the centre are 8.6e-5 wide, so the node was split to depth.max and the dual mesh
+ * declined, not_plain, in that box only). There each axis adds at least the minimum of
+ * G_a w + ½ D_a w² over w in [0, h_a], with G_a the lower bound of s_a ∇f(c)_a — from the
+ * model, ∇f(centre) + H (c − centre), not a sample — and D_a = H_aa − 2 Σ_{b≠a} t_ab; the
+ * node is empty when f(c) plus these minima stays above CORNER_ROUNDING of their sizes. */
+/* The sums above are of a few products in plain floating point (the enclosures themselves
+ * are rounded outward): their error is ~1e-15 of the terms' sizes, kept far below this. The
+ * d9 cells of that tanglecube box have f(c) = 3.4e-4 and a dip of 3.3e-4 along z (min f in
+ * the node 1.41e-5): a margin of half f(c) did not prove them. */
+#define CORNER_ROUNDING 1e-9
 static bool touch_empty(const dnode *n, const corner_view *v)
 {
     if (!v->have_model)
         return false;
     const ism_interval *h = v->model.box.h;
     for (int c = 0; c < 8; c++) {
-        if (n->f[c] != 0)
+        if (!(n->f[c] >= 0))
             continue;
-        double s[3];
+        double s[3], low = 0; /* low: the sum of the axes' minima (f(c) > 0) */
         bool ok = true;
         for (int a = 0; a < 3; a++) {
             s[a] = (c >> a & 1) ? -1.0 : 1.0;
-            ok = ok && v->n[c][a] * s[a] >= 0;
+            ok = ok && (n->f[c] != 0 || v->n[c][a] * s[a] >= 0);
         }
         for (int a = 0; a < 3 && ok; a++) {
             double t = 0;
@@ -448,9 +463,27 @@ static bool touch_empty(const dnode *n, const corner_view *v)
                 if (b != a)
                     t += s[a] * s[b] > 0 ? max_of(0, -hab.lo) : max_of(0, hab.hi);
             }
-            ok = ok && h[ism_dual_hess_at(a, a)].lo >= 2 * t;
+            double d_a = h[ism_dual_hess_at(a, a)].lo - 2 * t;
+            if (n->f[c] == 0) {
+                ok = ok && d_a >= 0;
+                continue;
+            }
+            /* G_a: s_a ∇f(c)_a's lower bound, ∇f(c) in ∇f(centre) + H (c − centre) */
+            ism_interval g = v->model.at.d[a];
+            for (int b = 0; b < 3; b++) {
+                ism_interval hab = h[ism_dual_hess_at(a, b)];
+                double off = v->p[c][b] - v->model.c[b];
+                g.lo += off >= 0 ? hab.lo * off : hab.hi * off;
+                g.hi += off >= 0 ? hab.hi * off : hab.lo * off;
+            }
+            double g_a = s[a] > 0 ? g.lo : -g.hi, w = fabs(v->p[7][a] - v->p[0][a]);
+            double at_w = g_a * w + 0.5 * d_a * w * w, least = fmin(0, at_w);
+            if (g_a < 0 && d_a > 0 && -g_a / d_a < w)
+                least = -g_a * g_a / (2 * d_a); /* the parabola's vertex inside [0, w] */
+            ok = ok && isfinite(least);
+            low += least;
         }
-        if (ok)
+        if (ok && (n->f[c] == 0 || n->f[c] + low > CORNER_ROUNDING * (n->f[c] - low)))
             return true;
     }
     return false;
