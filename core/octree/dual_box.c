@@ -25,6 +25,10 @@
  * edges is snapped onto it (snap_to): the sliver beside it folds once the cut points' moves
  * reach its height. */
 #define SNAP_MOVES 2.0
+/* ... and settled onto f = 0 within this many E of where it was: a vertex of the dual mesh
+ * lies up to 0.9 E off f = 0 by design (straddle.h), so a move in the plane onto the curve
+ * f = 0 can be a few E (the sphere of radius 0.09 at 2e-3: 2.3e-3). */
+#define SNAP_REACH 4.0
 
 /* The margins in level cells beyond the first, low and high side per axis: fractions of the
  * golden ratio's powers, so that no lattice plane of the grown box lies at a simple
@@ -164,13 +168,12 @@ static bool cut_point(bclip *c, int p, uint8_t held, uint32_t a, uint32_t b, dou
     return ok;
 }
 
-/* Vertices nearer plane p (either side) than the cut points on their edges moved (twice
- * that, at most c->snap) settled onto it and onto f = 0 (where that stays within the same
- * reach; else left), their sd made 0: a corner just inside beside cut points pushed out
- * onto f = 0 made slivers turned over (a sphere of radius 0.09 cut at 1e-3 of its vertex
- * rows: 6 of 48 cut triangles at E 2e-3). The reach follows the cut points' moves, not E:
- * snapped by E, a vertex's own triangles, once split smaller than E, kept missing it (the
- * unit sphere cut at x = -0.5 at E 0.05: error_at_max_depth). */
+/* Vertices nearer plane p (either side) than twice the farthest move of a cut point on their
+ * edges, or whose pieces would turn against ∇f (mark_turned), and never farther than c->snap,
+ * settled onto it and onto f = 0 (where that stays within SNAP_REACH E; else left), their sd
+ * made 0. The reach follows the cut points' moves, not E: snapped whenever within E, a
+ * vertex's own triangles, once split smaller than E, kept missing it (the unit sphere cut at
+ * x = -0.5 at E 0.05: error_at_max_depth). */
 static void snap_to(bclip *c, int p, size_t nv)
 {
     ism_mesh *m = c->m;
@@ -179,7 +182,7 @@ static void snap_to(bclip *c, int p, size_t nv)
         if (!(fabs(c->sd[v]) < reach) || c->sd[v] == 0)
             continue;
         double q[3] = {m->pos[3 * v], m->pos[3 * v + 1], m->pos[3 * v + 2]}, g[3];
-        if (!settle(c, (uint8_t)(c->on[v] | 1u << p), q, reach))
+        if (!settle(c, (uint8_t)(c->on[v] | 1u << p), q, SNAP_REACH * c->snap))
             continue;
         memcpy(m->pos + 3 * v, q, sizeof q);
         c->on[v] |= (uint8_t)(1u << p);
@@ -253,13 +256,10 @@ static double mid_dist(bclip *c, uint32_t a, uint32_t b)
     return ism_sample_dist(c->s, q);
 }
 
-/* Triangle t clipped by this pass's plane (Sutherland-Hodgman): its corners inside or on the
- * plane and the cut points of its crossing edges, in order; a quad is cut across its diagonal
- * nearer f = 0, fewer than 3 points make nothing (a corner or an edge on the plane). */
-static bool clip_triangle(bclip *c, size_t t)
+/* Triangle v clipped by this pass's plane (Sutherland-Hodgman) into out: its corners inside
+ * or on the plane and the cut points of its crossing edges, in order; returns how many. */
+static int clip_polygon(const bclip *c, const uint32_t *v, uint32_t out[4])
 {
-    const uint32_t *v = c->m->tri + 3 * t, from = c->src[t];
-    uint32_t out[4];
     int n = 0;
     for (int j = 0; j < 3; j++) {
         uint32_t a = v[j], b = v[(j + 1) % 3];
@@ -268,6 +268,59 @@ static bool clip_triangle(bclip *c, size_t t)
         if (crosses(c, a, b))
             out[n++] = cut_vertex(c, a, b);
     }
+    return n;
+}
+
+/* Does triangle a b d face against ∇f at its centroid? */
+static bool turned(bclip *c, uint32_t a, uint32_t b, uint32_t d)
+{
+    const double *p = c->m->pos + 3 * (size_t)a, *q = c->m->pos + 3 * (size_t)b,
+                 *r = c->m->pos + 3 * (size_t)d;
+    double u[3], w[3], n[3], m[3], g[3];
+    for (int j = 0; j < 3; j++) {
+        u[j] = q[j] - p[j];
+        w[j] = r[j] - p[j];
+        m[j] = (p[j] + q[j] + r[j]) / 3;
+    }
+    n[0] = u[1] * w[2] - u[2] * w[1];
+    n[1] = u[2] * w[0] - u[0] * w[2];
+    n[2] = u[0] * w[1] - u[1] * w[0];
+    ism_sample_grad(c->s, m, g);
+    return !(ism_dot3(n, g) > 0);
+}
+
+/* The corner alone on its side of plane p of every crossing triangle whose pieces would turn
+ * against ∇f (any three consecutive points of its clipped polygon) is to be snapped:
+ * c->need set to the snap's limit. A corner a hair inside, with two cut points beside it
+ * moved onto f = 0, or a hair outside, between two nearly coincident ones, makes such
+ * slivers at any depth (a sphere of radius 0.09 poking through a face at E 2e-3 declined
+ * error_at_max_depth in main's irrational box; 1e-3 in its own). */
+static void mark_turned(bclip *c)
+{
+    ism_mesh *m = c->m;
+    for (size_t t = 0; t < m->ntris; t++) {
+        const uint32_t *v = m->tri + 3 * t;
+        int in = (c->sd[v[0]] <= 0) + (c->sd[v[1]] <= 0) + (c->sd[v[2]] <= 0);
+        if (!crosses(c, v[0], v[1]) && !crosses(c, v[1], v[2]) && !crosses(c, v[2], v[0]))
+            continue;
+        uint32_t out[4];
+        int n = clip_polygon(c, v, out);
+        bool bad = false;
+        for (int k = 0; k < n && !bad && n >= 3; k++)
+            bad = turned(c, out[k], out[(k + 1) % n], out[(k + 2) % n]);
+        for (int j = 0; bad && j < 3; j++)
+            if ((c->sd[v[j]] <= 0) == (in == 1))
+                c->need[v[j]] = c->snap;
+    }
+}
+
+/* Triangle t clipped by this pass's plane (clip_polygon); a quad is cut across its diagonal
+ * nearer f = 0, fewer than 3 points make nothing (a corner or an edge on the plane). */
+static bool clip_triangle(bclip *c, size_t t)
+{
+    const uint32_t *v = c->m->tri + 3 * t, from = c->src[t];
+    uint32_t out[4];
+    int n = clip_polygon(c, v, out);
     if (n == 3)
         return push(c, out[0], out[1], out[2], from);
     if (n == 4) {
@@ -298,6 +351,7 @@ static enum ism_box_clip_status clip_plane(bclip *c, int p)
     enum ism_box_clip_status st = cut_points(c, p);
     if (st != ISM_BOX_CLIP_OK)
         return st;
+    mark_turned(c);
     snap_to(c, p, nv); /* the cuts on a snapped vertex's edges are left unused */
     c->nt = 0;
     for (size_t t = 0; t < m->ntris; t++)
