@@ -179,7 +179,8 @@ bool ism_conform_mesh(const ism_tape *f, const ism_locus_options *o, ism_locus *
         r.point_vertex[i] = CF_NONE;
     size_t nt0 = mesh->ntris;
     ok = ok && run_items(&r);
-    ok = ok && (r.c.stopped || cf_refine_refill(&r.c, nt0, o->max_error));
+    int limit = o->limit_depth > 0 ? o->limit_depth : o->max_depth;
+    ok = ok && (r.c.stopped || cf_refine_refill(&r.c, nt0, o->max_error, ldexp(side, -limit)));
     if (ok && stop_now(&r))
         say_cut_short(&r);
     /* compaction also after a failure: what was refilled stays, nothing is left dead */

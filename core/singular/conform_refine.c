@@ -1,18 +1,34 @@
-/* conform_refine.c — the refill's triangles checked once every surgery is done: those turned
- * over (facing against ∇f) are untangled.
+/* conform_refine.c — the refill's triangles checked once every surgery is done: under an
+ * error bound those farther than E are halved, then those turned over (facing against ∇f)
+ * are untangled.
  *
- * A ring vertex is placed from its rim vertex alone (conform_zip.c, conform_pinch.c): beside a
- * pinch point the move along the curve's tangent that puts it on f = 0 grows with the rim
- * vertex's distance from the curve (the umbrella's higher-order terms), so two rim vertices a
- * hundredth of a cell apart along the curve but at different distances from it swap their
- * rings' order and a whole strip of ladder quads turns over (cross-cap, depth 7, +1e-3 box: 14
- * edges on two columns 13–20 cells from its pinch point at (0, 0, 1)); where the rim crosses
- * the fold its own vertices zigzag a hundredth of a cell apart (0.37-cell box); Steiner's loops
- * along several curves keep the rings their rim's feet give. A turned triangle's vertices that
- * may move (not on the locus, not on a boundary) go to the mean of their neighbours, moved
- * back onto f = 0 along ∇f (by at most half their mean distance: never onto another sheet) —
- * kept where no more triangles round them face against ∇f than before (a strip straightens
- * over a few rounds, each vertex alone rarely undoes a fold).
+ * Halving (max_error > 0). Each live triangle the pass made is measured at its centroid and
+ * edge midpoints: |f| / |∇f| first (one evaluation), then, where that is not well within E,
+ * Newton's projection along ∇f (the distance to the point it reaches bounds the distance to
+ * f = 0 from above). Beside a double curve Newton from a point by one sheet reaches that
+ * sheet, the one the triangle lies on. A triangle over E has its longest edge of two
+ * triangles (an edge of more is a double curve's) halved at its midpoint moved onto f = 0,
+ * both triangles on it replaced by halves; a round measures only the last round's halves.
+ * The halving stops where the halves would be shorter than the finest cell of depth.max (the
+ * octree's own limit), where the midpoint finds no foot within half the edge, or where a
+ * half would face against ∇f (across a fold tighter than the edge, beside a pinch point):
+ * such triangles are counted (refill_over_error) and the analysis says met: false. Steiner,
+ * Whitney and the cross-cap at E = 2e-3 × the box's width then lie within E in the own,
+ * +1e-3 and 0.37-cell boxes (closed form; 1.47 E before), at 1e-3 × width within 1.11 E.
+ *
+ * Untangling. A ring vertex is placed from its rim vertex alone (conform_zip.c,
+ * conform_pinch.c): beside a pinch point the move along the curve's tangent that puts it on
+ * f = 0 grows with the rim vertex's distance from the curve (the umbrella's higher-order
+ * terms), so two rim vertices a hundredth of a cell apart along the curve but at different
+ * distances from it swap their rings' order and a whole strip of ladder quads turns over
+ * (cross-cap, depth 7, +1e-3 box: 14 edges on two columns 13–20 cells from its pinch point
+ * at (0, 0, 1)); where the rim crosses the fold its own vertices zigzag a hundredth of a cell
+ * apart (0.37-cell box); Steiner's loops along several curves keep the rings their rim's feet
+ * give. A turned triangle's vertices that may move (not on the locus, not on a boundary) go
+ * to the mean of their neighbours, moved back onto f = 0 along ∇f (by at most half their mean
+ * distance: never onto another sheet) — kept where no more triangles round them face against
+ * ∇f than before (a strip straightens over a few rounds, each vertex alone rarely undoes a
+ * fold).
  *
  *     rim    a0 ──── a1            a1's ring vertex r1 fell behind r0: the quad (a0 a1 r1 r0)
  *             │   ╳   │            crosses itself; r1 to the mean of a1, r0, r2 and its inner
@@ -51,9 +67,9 @@
  * give the foot to rounding). */
 #define MEASURE_STEPS 6
 /* The first-order estimate |f| / |∇f| is at least half the distance next to a double curve
- * (f ≈ l1 l2: the estimate is d1 d2 / |d2 n1 + d1 n2|); points it puts under this share of E
- * are within E without Newton. */
-#define ESTIMATE_SHARE 0.25
+ * (f ≈ l1 l2: the estimate is d1 d2 / |d2 n1 + d1 n2| ≥ min(d1, d2) / 2) and about the
+ * distance elsewhere; points it puts under this share of E are within E without Newton. */
+#define ESTIMATE_SHARE 0.5
 
 static void tri_normal(const ism_mesh *m, uint32_t t, double n[3])
 {
@@ -153,7 +169,7 @@ static bool relax(cf_ctx *c, uint32_t v)
         return false;
     for (int j = 0; j < 3; j++)
         mean[j] /= (double)n;
-    double worst0, worst1;
+    double worst0, worst1 = INFINITY;
     size_t before = turned_round(c, v, &worst0);
     double off0 = off_surface(c, old);
     for (int j = 0; j < 3; j++)
@@ -165,7 +181,8 @@ static bool relax(cf_ctx *c, uint32_t v)
     size_t after = off_surface(c, p) <= fmax(off0, RELAX_ON_SURFACE * c->cell)
                        ? turned_round(c, v, &worst1)
                        : SIZE_MAX;
-    if ((after < before || (after == before && before > 0)) && worst1 <= fmax(worst0, c->refill_reach)) {
+    bool fewer = after < before || (after == before && before > 0);
+    if (fewer && worst1 <= fmax(worst0, c->refill_reach)) {
         set_normal(c, v);
         return true;
     }
@@ -246,15 +263,192 @@ static bool untangle(cf_ctx *c, size_t nt0)
     return ok;
 }
 
-bool cf_refine_refill(cf_ctx *c, size_t nt0, double max_error)
+/* An upper bound of p's distance to f = 0 when it may exceed E (Newton's foot), else the
+ * first-order estimate. */
+static double measure(cf_ctx *c, const double p[3], double E)
 {
+    double g[3], x[3] = {p[0], p[1], p[2]};
+    double fv = ism_eval_gradient(c->f, c->ws, x[0], x[1], x[2], g), gg = ism_dot3(g, g);
+    if (fv == 0)
+        return 0;
+    if (gg > 0 && fabs(fv) / sqrt(gg) < ESTIMATE_SHARE * E)
+        return fabs(fv) / sqrt(gg);
+    for (int it = 0; it < MEASURE_STEPS && fv != 0; it++) {
+        if (!(gg > 0) || !isfinite(fv))
+            return INFINITY;
+        for (int k = 0; k < 3; k++)
+            x[k] -= fv * g[k] / gg;
+        fv = ism_eval_gradient(c->f, c->ws, x[0], x[1], x[2], g);
+        gg = ism_dot3(g, g);
+    }
+    /* not converged: the residual's first-order step added (an estimate, not a bound) */
+    double rest = fv == 0 ? 0 : gg > 0 ? fabs(fv) / sqrt(gg) : INFINITY;
+    return ism_dist3(x, p) + rest;
+}
+
+/* Live triangles on the edge (a, b). */
+static size_t edge_tris(const cf_ctx *c, uint32_t a, uint32_t b, uint32_t *out, size_t cap)
+{
+    cf_inc it;
+    uint32_t t;
+    size_t n = 0;
+    cf_inc_begin(c, a, &it);
+    while (cf_inc_next(c, &it, &t)) {
+        const uint32_t *v = c->m->tri + 3 * (size_t)t;
+        if (v[0] == b || v[1] == b || v[2] == b) {
+            if (n < cap)
+                out[n] = t;
+            n++;
+        }
+    }
+    return n;
+}
+
+/* The edge of triangle t to split: its longest edge of two triangles whose length is at
+ * least 2 min_edge (k: the edge from corner k to k + 1), or -1. */
+static int edge_to_split(const cf_ctx *c, uint32_t t, double min_edge)
+{
+    const uint32_t *v = c->m->tri + 3 * (size_t)t;
+    int best = -1;
+    double bl = 2 * min_edge;
+    for (int k = 0; k < 3; k++) {
+        uint32_t a = v[k], b = v[(k + 1) % 3], tt[3];
+        double len = ism_dist3(c->m->pos + 3 * (size_t)a, c->m->pos + 3 * (size_t)b);
+        if (len >= bl && edge_tris(c, a, b, tt, 3) == 2) {
+            bl = len;
+            best = k;
+        }
+    }
+    return best;
+}
+
+/* The two triangles that would replace triangle t when its edge (a, b) is halved at m: their
+ * corners in t's winding (false when t does not hold the edge that way round). */
+static bool halves(const cf_ctx *c, uint32_t t, uint32_t a, uint32_t b, uint32_t m,
+                   uint32_t out[2][3])
+{
+    const uint32_t *v = c->m->tri + 3 * (size_t)t;
+    for (int k = 0; k < 3; k++) {
+        uint32_t s = v[k], e = v[(k + 1) % 3], o = v[(k + 2) % 3];
+        if ((s == a && e == b) || (s == b && e == a)) {
+            out[0][0] = s, out[0][1] = m, out[0][2] = o;
+            out[1][0] = m, out[1][1] = e, out[1][2] = o;
+            return true;
+        }
+    }
+    return false;
+}
+
+/* Splits edge (a, b) (two live triangles) at its midpoint moved onto f = 0 along ∇f, unless the
+ * midpoint finds no foot within half the edge or a half would face against ∇f where its
+ * triangle did not (across a fold tighter than the edge: the split would turn it over). True
+ * when split (*ok false only when out of memory). */
+static bool split_edge(cf_ctx *c, uint32_t a, uint32_t b, cf_tris *removed, bool *ok)
+{
+    uint32_t tt[3];
+    *ok = true;
+    if (edge_tris(c, a, b, tt, 3) != 2)
+        return false; /* an earlier split this round changed it */
+    const double *pa = c->m->pos + 3 * (size_t)a, *pb = c->m->pos + 3 * (size_t)b;
+    double mid[3] = {(pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2, (pa[2] + pb[2]) / 2};
+    double len = ism_dist3(pa, pb);
+    cf_project(c, mid, 0.5 * len);
+    if (!(off_surface(c, mid) <= RELAX_ON_SURFACE * c->cell))
+        return false;
+    size_t nt = c->m->ntris, nv = c->m->nverts;
+    uint32_t m = cf_add_vertex(c, mid, false), h[2][2][3];
+    if (m == CF_NONE || !halves(c, tt[0], a, b, m, h[0]) || !halves(c, tt[1], a, b, m, h[1])) {
+        *ok = m != CF_NONE;
+        if (m != CF_NONE)
+            cf_truncate(c, nt, nv);
+        return false;
+    }
+    bool was[2] = {turned(c, tt[0]), turned(c, tt[1])};
+    for (int i = 0; i < 2; i++)
+        for (int j = 0; j < 2; j++)
+            *ok = *ok && cf_add_triangle(c, h[i][j][0], h[i][j][1], h[i][j][2]);
+    bool worse = false;
+    for (size_t t = nt; *ok && t < c->m->ntris; t++)
+        worse |= turned(c, (uint32_t)t) && !was[(t - nt) / 2];
+    if (!*ok || worse || c->m->ntris != nt + 4) {
+        cf_truncate(c, nt, nv);
+        return false;
+    }
+    c->dead[tt[0]] = c->dead[tt[1]] = 1;
+    *ok = cf_tris_push(removed, tt[0]) && cf_tris_push(removed, tt[1]);
+    c->st->vertices_added++;
+    c->st->refill_splits++;
+    return true;
+}
+
+static bool split_over(cf_ctx *c, size_t nt0, double E, double min_edge, cf_tris *removed)
+{
+    cf_tris edges = {0}, overs = {0}; /* edges as pairs a, b; the triangles over E */
+    bool ok = true;
+    size_t lo = nt0, stuck = 0; /* triangles from lo on not measured yet; over E, unsplit */
+    for (int round = 0; ok && round < SPLIT_ROUNDS && !c->stopped; round++) {
+        edges.n = overs.n = 0;
+        size_t split = 0, hi = c->m->ntris;
+        /* a triangle measured within E stays so (a split only replaces the two triangles
+         * on its edge, by halves appended): each round measures the halves of the last */
+        for (size_t t = lo; ok && t < hi && !cf_poll(c, 4); t++) {
+            if (c->dead[t])
+                continue;
+            const uint32_t *v = c->m->tri + 3 * t;
+            const double *p[3] = {c->m->pos + 3 * (size_t)v[0], c->m->pos + 3 * (size_t)v[1],
+                                  c->m->pos + 3 * (size_t)v[2]};
+            double q[4][3];
+            for (int k = 0; k < 3; k++) {
+                q[0][k] = (p[0][k] + p[1][k] + p[2][k]) / 3;
+                for (int j = 0; j < 3; j++)
+                    q[1 + j][k] = (p[j][k] + p[(j + 1) % 3][k]) / 2;
+            }
+            bool far = false;
+            for (int j = 0; j < 4 && !far; j++)
+                far = measure(c, q[j], E) > E;
+            if (!far)
+                continue;
+            int k = edge_to_split(c, (uint32_t)t, min_edge);
+            ok = cf_tris_push(&overs, (uint32_t)t) &&
+                 (k < 0 || (cf_tris_push(&edges, v[k]) && cf_tris_push(&edges, v[(k + 1) % 3])));
+        }
+        for (size_t i = 0; ok && i + 1 < edges.n; i += 2)
+            split += split_edge(c, edges.t[i], edges.t[i + 1], removed, &ok);
+        /* over this round and not halved (one halved by a neighbour's split is measured
+         * again as halves) */
+        for (size_t i = 0; i < overs.n; i++)
+            stuck += !c->dead[overs.t[i]];
+        lo = hi;
+        if (split == 0)
+            break;
+    }
+    /* the last round's halves not measured when the rounds ran out: not counted */
+    c->st->refill_over_error = stuck;
+    free(edges.t);
+    free(overs.t);
+    return ok;
+}
+
+bool cf_refine_refill(cf_ctx *c, size_t nt0, double max_error, double min_edge)
+{
+    if (c->m->ntris == nt0 || !c->indexed)
+        return true;
     c->refill_reach = RELAX_CENTROID_CELLS * c->cell;
     if (max_error > 0)
         c->refill_reach = fmin(c->refill_reach, max_error);
-    if (c->m->ntris == nt0 || !c->indexed)
-        return true;
-    size_t w0 = c->st->work;
-    bool ok = untangle(c, nt0);
+    size_t w0 = c->st->work, nt1 = c->m->ntris;
+    cf_tris removed = {0};
+    bool ok = !(max_error > 0) || split_over(c, nt0, max_error, min_edge, &removed);
+    /* a polygoniser's triangle halved counts as removed by the pass, a refill triangle halved
+     * as never added; the halves as added */
+    size_t refill_halved = 0;
+    for (size_t i = 0; i < removed.n; i++) {
+        c->st->triangles_removed += removed.t[i] < nt0;
+        refill_halved += removed.t[i] >= nt0;
+    }
+    c->st->triangles_added += c->m->ntris - nt1 - refill_halved;
+    free(removed.t);
+    ok = ok && untangle(c, nt0);
     c->st->refill_work = c->st->work - w0;
     return ok;
 }

@@ -158,7 +158,10 @@ typedef struct ism_locus_options {
     const volatile int *cancel;/* polled; non-zero stops the search (incomplete) */
     double deadline_ms;        /* ism_now_ms() past which the stage stops (0 = none) */
     double max_error;          /* the mesh's error bound (0 = none): the conformance's
+                                  triangles are measured and halved until within it, and the
                                   untangling leaves no centroid farther (conform_refine.c) */
+    int limit_depth;           /* depth.max: no edge of the conformance is halved below its
+                                  finest cell (0 = max_depth) */
     size_t conform_work_max;   /* budget of the conformance pass's units of work
                                   (ism_conform_stats.work; 0 = none): beyond, it stops as at
                                   the deadline */

@@ -50,6 +50,7 @@ void ism_locus_options_from_poly(const ism_poly_options *po, ism_locus_options *
     memcpy(lo->box, po->box, sizeof lo->box);
     lo->max_depth = ism_singular_depth(po);
     lo->max_error = po->max_error > 0 ? po->max_error : 0;
+    lo->limit_depth = po->max_depth;
     lo->threads = po->threads;
     lo->cancel = po->cancel;
     lo->deadline_ms = po->deadline_ms;
