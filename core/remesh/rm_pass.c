@@ -37,6 +37,7 @@ bool rm_pass_close(rm_pass *p, size_t nverts_before, size_t ntris_before,
     free(p->slide);
     free(p->touched);
     free(p->sine);
+    free(p->crease_tried);
     free(p->cen_ref);
     free(p->cen_keep);
     ism_eval_ws_free(p->ws);

@@ -73,6 +73,9 @@ typedef struct rm_pass {
     double *sine;           /* per triangle, or NULL: the sine of its smallest angle as
                                rm_mark_active last measured it (NAN: its shape changed
                                since, rm_shape_changed) */
+    double *crease_tried;   /* per vertex, or NULL: its fan's sines summed when
+                               rm_crease_slide_sweep last asked it and nothing passed (NAN:
+                               not asked): a fan that has not changed fails again */
     double *cen_ref;        /* RM_CBOUND_REC per triangle, without an error bound
                                (rm_cbound.h): a point last measured at its centroid, the
                                distance there (INFINITY: none) and |∇f| there */

@@ -790,11 +790,11 @@ static void gyroid_ball_shape(const ism_mesh *m, double cell, const double *befo
 }
 
 /* Needles beside the crease the pass may leave at the preset's depth, 7, in the lattice /
- * 1e-3 / 0.37-cell boxes: 48 / 73 / 37 measured since vertices beside the crease are merged
+ * 1e-3 / 0.37-cell boxes: 48 / 81 / 40 measured since vertices beside the crease are merged
  * onto it, snapped onto it and slid along it (rm_crease_slide.c); 115 / 135 / 129 before (340 / 326 / 391 while the crease's
  * vertices, as close as 1/400 of a cell, were never merged into each other: rm_collapse.c's
  * crease merges; 157 / 164 / 193 while such a merge had to raise its fan's smallest angle). */
-static const size_t crease_left[3] = {55, 82, 44};
+static const size_t crease_left[3] = {56, 92, 48};
 
 static void gyroid_ball_case(const ism_tape *t, const double box[6], int d, int which)
 {
