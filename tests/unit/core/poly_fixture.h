@@ -119,6 +119,15 @@ extern const pf_surface pf_unit_sphere, pf_ring_torus;
 double pf_unit_sphere_dist(const double p[3]);
 double pf_ring_torus_dist(const double p[3]);
 
+/* Distance from p to f = 0 by Newton's projection (the last iterate's distance plus its
+ * |f| / |∇f| when it does not settle: an over-estimate). */
+double pf_newton_dist(const ism_tape *t, ism_eval_ws *ws, const double p[3]);
+
+/* The farthest centroid or edge midpoint from f = 0, by dist (NULL: pf_newton_dist on t); the
+ * triangles whose normal points against ∇f at their centroid into *turned. */
+double pf_worst_turned(const ism_mesh *m, const ism_tape *t, double (*dist)(const double *),
+                       size_t *turned);
+
 /* The largest |dist| at the mesh's vertices, triangle centroids and edge midpoints. */
 double pf_worst_distance(const ism_mesh *m, double (*dist)(const double *));
 

@@ -173,53 +173,6 @@ static size_t boundary_loops(const ism_mesh *m, const ism_tape *t, const double 
     return simple ? loops : SIZE_MAX;
 }
 
-/* The farthest centroid or edge midpoint by dist (NULL: Newton on t) and the triangles
- * turned against ∇f at their centroid. */
-static double newton_dist(const ism_tape *t, ism_eval_ws *ws, const double p[3])
-{
-    double q[3] = {p[0], p[1], p[2]}, g[3], last = 0;
-    for (int it = 0; it < 50; it++) {
-        double f = ism_eval_gradient(t, ws, q[0], q[1], q[2], g);
-        double gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
-        if (!(gg > 0) || !isfinite(f))
-            break;
-        last = fabs(f) / sqrt(gg);
-        if (last < 1e-13) {
-            last = 0;
-            break;
-        }
-        for (int k = 0; k < 3; k++)
-            q[k] -= f * g[k] / gg;
-    }
-    return sqrt(pow(q[0] - p[0], 2) + pow(q[1] - p[1], 2) + pow(q[2] - p[2], 2)) + last;
-}
-
-static double worst(const ism_mesh *m, const ism_tape *t, double (*dist)(const double *),
-                    size_t *turned)
-{
-    ism_eval_ws *ws = ism_eval_ws_new(t);
-    double w = 0;
-    *turned = 0;
-    for (size_t i = 0; i < m->ntris; i++) {
-        const double *p[3];
-        for (int j = 0; j < 3; j++)
-            p[j] = m->pos + 3 * (size_t)m->tri[3 * i + j];
-        double q[4][3], g[3], n[3];
-        for (int a = 0; a < 3; a++) {
-            q[0][a] = (p[0][a] + p[1][a] + p[2][a]) / 3;
-            for (int j = 0; j < 3; j++)
-                q[1 + j][a] = 0.5 * (p[j][a] + p[(j + 1) % 3][a]);
-        }
-        for (int k = 0; k < 4; k++)
-            w = fmax(w, dist ? dist(q[k]) : newton_dist(t, ws, q[k]));
-        ism_eval_gradient(t, ws, q[0][0], q[0][1], q[0][2], g);
-        pf_tri_normal(m, i, n);
-        *turned += n[0] * g[0] + n[1] * g[1] + n[2] * g[2] < 0;
-    }
-    ism_eval_ws_free(ws);
-    return w;
-}
-
 /* The dual mesh of s in each of the three boxes from base under e: dual, χ, one piece, the
  * loops f's signs say (and `loops`), on the planes and on f = 0, within e. */
 static void expect_clipped(const pf_surface *s, double (*dist)(const double *),
@@ -248,7 +201,7 @@ static void expect_clipped(const pf_surface *s, double (*dist)(const double *),
         cr_expect_eq(nm, 0, "box %d: %zu edges in 3+ triangles", which, nm);
         cr_expect_eq(p.euler, chi, "box %d: χ %ld", which, p.euler);
         cr_expect_eq(p.components, 1, "box %d: %zu pieces", which, p.components);
-        double w = worst(&m, t, dist, &turned);
+        double w = pf_worst_turned(&m, t, dist, &turned);
         cr_expect_leq(w, e, "box %d: a centroid or midpoint %g from f = 0", which, w);
         cr_expect_eq(turned, 0, "box %d: %zu triangles against ∇f", which, turned);
         ism_mesh_free(&m);

@@ -77,60 +77,6 @@ static void mesh_surface(const ism_tape *t, const double box[6], double e, bool 
     mesh_surface_on(t, box, e, dual, 1, m, l, ps);
 }
 
-/* Distance from p to f = 0 by Newton's projection (the last iterate's distance plus its
- * |f| / |∇f| when it does not settle: an over-estimate). */
-static double newton_dist(const ism_tape *t, ism_eval_ws *ws, const double p[3])
-{
-    double q[3] = {p[0], p[1], p[2]}, g[3], last = 0;
-    for (int it = 0; it < 50; it++) {
-        double f = ism_eval_gradient(t, ws, q[0], q[1], q[2], g);
-        double gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
-        if (!(gg > 0) || !isfinite(f))
-            break;
-        last = fabs(f) / sqrt(gg);
-        if (last < 1e-13) {
-            last = 0;
-            break;
-        }
-        for (int k = 0; k < 3; k++)
-            q[k] -= f * g[k] / gg;
-    }
-    double d2 = 0;
-    for (int k = 0; k < 3; k++)
-        d2 += (q[k] - p[k]) * (q[k] - p[k]);
-    return sqrt(d2) + last;
-}
-
-/* The farthest centroid or edge midpoint from f = 0, by dist (NULL: Newton on t); the
- * triangles whose normal points against ∇f at their centroid into *turned (the mesh is
- * oriented along ∇f, fans included). */
-static double worst(const ism_mesh *m, const ism_tape *t, double (*dist)(const double *),
-                    size_t *turned)
-{
-    ism_eval_ws *ws = ism_eval_ws_new(t);
-    cr_assert(ws);
-    double w = 0;
-    *turned = 0;
-    for (size_t i = 0; i < m->ntris; i++) {
-        const double *p[3];
-        for (int j = 0; j < 3; j++)
-            p[j] = m->pos + 3 * (size_t)m->tri[3 * i + j];
-        double q[4][3], g[3], n[3];
-        for (int a = 0; a < 3; a++) {
-            q[0][a] = (p[0][a] + p[1][a] + p[2][a]) / 3;
-            for (int j = 0; j < 3; j++)
-                q[1 + j][a] = 0.5 * (p[j][a] + p[(j + 1) % 3][a]);
-        }
-        for (int k = 0; k < 4; k++)
-            w = fmax(w, dist ? dist(q[k]) : newton_dist(t, ws, q[k]));
-        ism_eval_gradient(t, ws, q[0][0], q[0][1], q[0][2], g);
-        pf_tri_normal(m, i, n);
-        *turned += n[0] * g[0] + n[1] * g[1] + n[2] * g[2] < 0;
-    }
-    ism_eval_ws_free(ws);
-    return w;
-}
-
 /* Vertices joining more than one cone of triangles, and of them those at a locus point. */
 static void nm_vertices(const ism_mesh *m, const ism_locus *l, size_t *nm, size_t *at_points,
                         size_t *cones_each)
@@ -188,7 +134,7 @@ static void expect_joined(const ism_tape *t, const double box[6], double e, int 
     nm_vertices(&m, &l, &nm, &on, &cones);
     cr_expect(nm == nodes && on == nodes && cones == 2, "box %d E %g: %zu non-manifold "
               "vertices, %zu at nodes, cones %zu", which, e, nm, on, cones);
-    double w = worst(&m, t, dist, &turned);
+    double w = pf_worst_turned(&m, t, dist, &turned);
     cr_expect_leq(w, e, "box %d E %g: a centroid or midpoint %g away", which, e, w);
     cr_expect_eq(turned, 0, "box %d E %g: %zu triangles against ∇f", which, e, turned);
     ism_mesh_free(&m);
@@ -428,7 +374,7 @@ Test(dual_points, isolated_point_beside_a_sphere)
         cr_expect_eq(p.euler, 2, "box %d: χ %ld", which, p.euler);
         cr_expect_eq(p.components, 1, "box %d: %zu pieces", which, p.components);
         size_t turned;
-        double w = worst(&m, t, small_sphere_dist, &turned);
+        double w = pf_worst_turned(&m, t, small_sphere_dist, &turned);
         cr_expect_leq(w, e, "box %d: a centroid or midpoint %g away", which, w);
         cr_expect_eq(turned, 0, "box %d: %zu triangles against ∇f", which, turned);
         ism_mesh_free(&m);
