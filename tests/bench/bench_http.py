@@ -10,7 +10,9 @@ same run:
    from memory with isomeshd's thread model (build/bench/http_ceiling) and nginx serving them as a static file (sendfile;
    one worker process, and one per core). Then isomeshd's figures as ratios of both. Also the
    same mesh with positions only (~100 KB), and POST /v1/mesh of the request (decode + key +
-   cache hit) at 16 connections.
+   cache hit) at 16 connections. The same rows with isomeshd --own-sender (its one polling
+   thread per core, and four), and a mesh over 1 MB (gyroid-ball at depth 9, ~1.55 MB of
+   Draco, sent from the cache file in both modes) beside nginx.
 2. Slow readers: 450 connections fetching the same mesh as OBJ (~7 MB) and reading 16 KB per
    0.2 s, while one client asks for /healthz every 50 ms: its latency (p50, p99, max),
    isomeshd beside nginx (a static /healthz file, the same OBJ).
@@ -485,6 +487,11 @@ def throughput(build, tmp):
         # the daemon's own sender (http_front.h): the header block held back, then sendfile
         own = variant_rows(build, tmp, ["--own-sender"], "isomeshd --own-sender", (16, 64, 256),
                            secs, nginx_all_results)
+        # its threads as the default's (http.c: one per core with the own sender, two without):
+        # fewer wake-ups per request against a larger share of a loaded machine's CPU
+        own4 = variant_rows(build, tmp, ["--own-sender", "--http-threads", "4"],
+                            "isomeshd --own-sender --http-threads 4", (16, 64, 256), secs,
+                            nginx_all_results)
         if nurl_all:  # the >= 1 MB mesh: both modes send it from the cache file
             nbig = nurl_all.rsplit("/", 1)[0] + "/big.drc"
             big_d, big_n = {}, {}
@@ -514,6 +521,8 @@ def throughput(build, tmp):
         if nginx_all_results:
             versus_nginx(results, nginx_all_results, "a worker per core")
             versus_nginx(own, nginx_all_results, "a worker per core; isomeshd --own-sender")
+            versus_nginx(own4, nginx_all_results, "a worker per core; isomeshd --own-sender "
+                         "--http-threads 4")
             versus_nginx(big_d, big_n, "a worker per core; the %.1f MB mesh" % (len(big) / 1e6))
             versus_nginx(big_own, big_n, "a worker per core; isomeshd --own-sender; the %.1f MB "
                          "mesh" % (len(big) / 1e6))
