@@ -341,8 +341,15 @@ static const char FINISH_LUA[] =
 /* KEYS jobrec; ARGV key prefix, job id, ttl, now ms. DELETE of a job through a daemon that
  * does not hold it: the job's record says canceled (the job's own flag: its computation may
  * be shared), and its id goes to the set of the daemon holding it, which lets go of that job
- * as a DELETE there would (and takes the flag back when the job had finished first). A dead
- * daemon lets go of nothing: when the job was the last thing anyone wanted of its
+ * as a DELETE there would (and takes the flag back when the job had finished first:
+ * UNDELETE_LUA). The flag is 'final' when that daemon is not alive: it cannot have finished
+ * the job first as far as the cluster knows, the client is told canceled and the
+ * computation may be stopped as abandoned, so the job stays canceled even if a computation
+ * started over for other requests there finishes it before it takes the set (seen at load
+ * 20: test_a_daemon_cut_off_past_the_lock_lifetime_keeps_its_requests_computation read done
+ * after the DELETE answered canceled). A live daemon takes the set within DELETES_TICK_NS,
+ * so its flag stays '1'. A dead daemon lets go of nothing: when the job was the last thing
+ * anyone wanted of its
  * computation (ABANDONED_LUA), the computation is flagged canceled here, a waiting entry
  * deleted, a running one stopped by its executor's next heartbeat, a pending one dropped by
  * the daemon re-claiming it. 0 when no daemon recorded the job, 2 when its computation was
@@ -351,7 +358,9 @@ static const char JOB_DELETE_LUA[] =
     ABANDONED_LUA REFRESH_LUA
     "local d = redis.call('hget', KEYS[1], 'daemon') "
     "if not d then return 0 end "
-    "redis.call('hset', KEYS[1], 'cancel', '1') "
+    "if redis.call('hget', KEYS[1], 'cancel') ~= 'final' then "
+    "  redis.call('hset', KEYS[1], 'cancel', "
+    "    redis.call('exists', ARGV[1] .. 'alive:' .. d) == 1 and '1' or 'final') end "
     "local s = ARGV[1] .. 'deleted:' .. d "
     "redis.call('sadd', s, ARGV[2]) "
     "redis.call('pexpire', s, ARGV[3]) "
@@ -371,6 +380,14 @@ static const char JOB_DELETE_LUA[] =
     "   and not redis.call('xpending', cs, 'workers', id, id, 1)[1] then "
     "  redis.call('xdel', cs, id) refresh(ARGV[1], stream_user(ARGV[1], cs)) end "
     "return 2";
+
+/* KEYS jobrec. A job deleted through another daemon (JOB_DELETE_LUA) had finished here
+ * first: its record says its end rather than canceled, unless the DELETE found this daemon
+ * dead (the flag is 'final'). 1 when the flag was taken back, 0 when it stays. */
+static const char UNDELETE_LUA[] =
+    "if redis.call('hget', KEYS[1], 'cancel') == 'final' then return 0 end "
+    "redis.call('hdel', KEYS[1], 'cancel') "
+    "return 1";
 
 /* KEYS stream, job hash; ARGV id, key prefix. The executor's flight was canceled here
  * (nobody waits for it any more): the entry goes, its job hash says canceled. */
@@ -887,16 +904,19 @@ static void count_waiting(ismd_cluster *c)
 }
 
 /* A job deleted through another daemon had finished first (or is forgotten): its record
- * says what this daemon says, its end rather than canceled. */
-static void undelete(ismd_cluster *c, const char *id)
+ * says what this daemon says, its end rather than canceled (UNDELETE_LUA). 1 taken back, 0
+ * the DELETE found this daemon dead (the job stays canceled), -1 Redis unavailable. */
+static int undelete(ismd_cluster *c, const char *id)
 {
     char rec[KEY_MAX];
     ckey(c, rec, "jobrec:", id);
-    const char *argv[] = {"HDEL", rec, "cancel"};
-    size_t lens[] = {4, strlen(rec), 6};
-    redisReply *r = ism_cache_redis_call(c->redis, "jobrec_undelete", 3, argv, lens);
-    if (r)
-        freeReplyObject(r);
+    const char *args[] = {rec};
+    redisReply *r = NULL;
+    if (run_script(c, "jobrec_undelete", UNDELETE_LUA, 1, args, 1, &r) < 0)
+        return -1;
+    int back = r->type == REDIS_REPLY_INTEGER && r->integer == 0 ? 0 : 1;
+    freeReplyObject(r);
+    return back;
 }
 
 /* Lets go of the jobs here that were deleted through other daemons (JOB_DELETE_LUA), each
@@ -918,10 +938,21 @@ static void take_deletes(ismd_cluster *c)
         ismd_job *job = ismd_jobs_find(c->jobs, id);
         bool live = job && ismd_jobs_cancel(c->jobs, c->sched, job);
         ismd_redis_tasks_leave(c->tasks);
-        if (!live)
-            undelete(c, id);
+        bool revoked = false;
+        if (!live && undelete(c, id) == 0 && job && ismd_redis_tasks_enter(c->tasks)) {
+            /* found dead when deleted: the job reads canceled here as everywhere (looked
+             * up again: the table may have dropped it while the lock was not held) */
+            if ((job = ismd_jobs_find(c->jobs, id))) {
+                ismd_jobs_revoke(c->jobs, job);
+                revoked = true;
+            }
+            ismd_redis_tasks_leave(c->tasks);
+        }
         ism_log_field f[] = {ISM_LS("job", id),
-                             ISM_LS("was", live ? "live" : job ? "finished" : "unknown")};
+                             ISM_LS("was", live      ? "live"
+                                           : revoked ? "finished_after_the_delete"
+                                           : job     ? "finished"
+                                                     : "unknown")};
         ism_log_fields(ISM_LOG_INFO, "cluster_job_deleted", f, 2);
     }
     freeReplyObject(r);

@@ -24,7 +24,8 @@
  *                 clock (one clock for every daemon), and alone (its last heartbeat: 1 when
  *                 it may be given back); expires
  *   P jobrec:<id> hash: a job (POST /v1/jobs) of any daemon: user, key, fmt, created, the
- *                 daemon holding it, and cancel once deleted, so that every daemon answers
+ *                 daemon holding it, and cancel once deleted (1, or final when that daemon
+ *                 was not alive: never taken back), so that every daemon answers
  *                 GET and DELETE /v1/jobs/{id}; expires
  *   P deleted:<daemon>  set: ids of that daemon's jobs deleted through other daemons
  *   P cjobs:<name> set: ids of the jobs (any daemon's) recorded for that computation
@@ -58,7 +59,9 @@
  * fails its requests: an executor's cancel only detaches its own waiter (requests there keep
  * the flight), and an origin reading its computation canceled starts over (shared_cache.c's
  * remote), computing it itself while Redis is unreachable. The cost is a computation done
- * twice at worst.
+ * twice at worst. A job of it deleted meanwhile stays canceled (its record's flag is final:
+ * the DELETE found its daemon dead), on every daemon, even when the computation started
+ * over finishes it there before that daemon takes the DELETE.
  *
  * The origin (shared_cache.c, on the Redis thread) adds a computation it holds the lock of to
  * its user's stream (refused when the user already has its --user-jobs there: cluster-wide),

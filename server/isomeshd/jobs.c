@@ -372,6 +372,18 @@ bool ismd_jobs_cancel(ismd_jobs *j, ismd_sched *s, ismd_job *job)
     return true;
 }
 
+void ismd_jobs_revoke(ismd_jobs *j, ismd_job *job)
+{
+    (void)j;
+    if (!finished(job) || job->state == ISMD_JOB_CANCELED)
+        return;
+    job->state = ISMD_JOB_CANCELED;
+    job->status = 0;
+    ism_blob_set(&job->stats, NULL);
+    ism_blob_set(&job->error, NULL);
+    notify(job);
+}
+
 static json_t *json_from_blob(const ism_blob *b)
 {
     return b ? json_loadb((const char *)b->data, b->len, 0, NULL) : NULL;

@@ -79,6 +79,11 @@ bool ismd_job_state_parse(const char *s, ismd_job_state *out);
 json_t *ismd_jobs_list_json(const ismd_jobs *j, const char *user, size_t max);
 /* Cancels a live job (no effect on a finished one). True when it was live. */
 bool ismd_jobs_cancel(ismd_jobs *j, ismd_sched *s, ismd_job *job);
+/* A finished job whose DELETE was made while this daemon looked dead to the cluster (cut off
+ * from Redis past a lock lifetime, cluster.h): that DELETE was the cancel (its client was
+ * told canceled, its computation stopped as abandoned), so the job reads canceled here too,
+ * even when a computation started over for other requests finished it since. */
+void ismd_jobs_revoke(ismd_jobs *j, ismd_job *job);
 
 /* An event-stream response following job (NULL when out of memory). conn is the connection
  * the response will be queued on, served by one of loops' threads (each event resumes it

@@ -132,6 +132,31 @@ class ClusterScriptsTest(unittest.TestCase):
             self.finish(e)
         self.assertEqual(self.r("HGETALL", P + "served"), [])
 
+    def test_a_job_deleted_while_its_daemon_looked_dead_stays_canceled(self):
+        # A DELETE through another daemon flags the job's record. When the daemon holding the
+        # job is alive, it takes the flag back if it finds the job finished (it finished
+        # first); when the DELETE found it dead (cut off past a lock lifetime: no alive key),
+        # the DELETE was the cancel and the flag is final: a computation started over there
+        # for other requests that finishes the job before the daemon takes its deleted set
+        # must not turn it into done (before: the flag went, the job read done after its
+        # client was told canceled — test_cluster_queue's cut-off test at load 20).
+        for alive in (True, False):
+            d, job = "dA%d" % alive, "j%d" % alive
+            rec = P + "jobrec:" + job
+            self.r("HSET", rec, "user", "u", "daemon", d)  # no key: no computation looked at
+            if alive:
+                self.r("SET", P + "alive:" + d, "1")
+            for _ in range(2):  # a retried DELETE changes nothing
+                self.assertEqual(self.r("EVAL", self.lua["JOB_DELETE_LUA"], 1, rec, P, job,
+                                        TTL, "0"), 1)
+                self.assertEqual(self.r("HGET", rec, "cancel"), b"1" if alive else b"final")
+                self.assertEqual(self.r("SMEMBERS", P + "deleted:" + d), [job.encode()])
+                self.r("SET", P + "alive:" + d, "1")  # the cut-off daemon is back
+            # its daemon takes the set and finds the job finished
+            self.assertEqual(self.r("EVAL", self.lua["UNDELETE_LUA"], 1, rec),
+                             1 if alive else 0)
+            self.assertEqual(self.r("HGET", rec, "cancel"), None if alive else b"final")
+
 
 if __name__ == "__main__":
     unittest.main()
