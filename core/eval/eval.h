@@ -70,6 +70,11 @@ double ism_eval_hessian(const ism_tape *t, ism_eval_ws *ws, double x, double y, 
 /* Whether t holds a min or max (f may have a C0 crease where its operands are equal). */
 bool ism_tape_has_min_max(const ism_tape *t);
 
+/* Whether t's only min, max or abs is its last instruction, min(a, b) or max(a, b) of two
+ * registers giving f (a CSG union or intersection of two smooth branches: one crease, where
+ * they are equal; ism_eval_top_branches gives both). */
+bool ism_tape_top_min_max_only(const ism_tape *t);
+
 /* A tape with room for any shortened version of t (free with ism_tape_free). */
 ism_tape *ism_tape_new_like(const ism_tape *t);
 

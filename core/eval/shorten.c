@@ -39,6 +39,17 @@ bool ism_tape_has_min_max(const ism_tape *t)
     return false;
 }
 
+bool ism_tape_top_min_max_only(const ism_tape *t)
+{
+    static const double any[2] = {0, 0};
+    if (ism_top_active_branch(t, any) < 0)
+        return false;
+    for (size_t i = 0; i + 1 < t->len; i++)
+        if (is_min_max(t->code[i].op) || t->code[i].op == ISM_OP_ABS)
+            return false;
+    return true;
+}
+
 /* The instruction a decided min/max becomes. */
 static ism_instr decided(const ism_instr *in, uint8_t choice)
 {

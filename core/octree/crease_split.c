@@ -87,7 +87,7 @@ static bool newton_step(ism_sampler *s, double x[3])
 /* CREASE_NEWTON_STEPS steps from x (false when one fails), ending early where x comes back
  * to where it was two steps before — a fixed point, or a 2-cycle of rounding: the steps left
  * would only repeat those two, so the last one's result is known. */
-static bool newton_steps(ism_sampler *s, double x[3])
+bool ism_crease_newton(ism_sampler *s, double x[3])
 {
     double back[2][3]; /* back[it % 2]: x before step it */
     for (int it = 0; it < CREASE_NEWTON_STEPS; it++) {
@@ -121,7 +121,7 @@ static void crease_point(ism_sampler *s, const double *p0, const double *q0, ism
     double lin[3], x[3];
     for (int k = 0; k < 3; k++)
         lin[k] = x[k] = p[k] + t * (q[k] - p[k]);
-    bool ok = newton_steps(s, x);
+    bool ok = ism_crease_newton(s, x);
     if (!ok || !(ism_dist3(x, lin) <= CREASE_REACH_EDGES * ism_dist3(p, q))) {
         memcpy(x, lin, sizeof x); /* onto f = 0 along ∇f at least */
         for (int it = 0; it < CREASE_NEWTON_STEPS; it++) {

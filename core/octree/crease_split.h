@@ -24,4 +24,10 @@ bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri);
  * min/max. g: that branch's gradient there (may be NULL). */
 int ism_crease_branch(ism_sampler *s, const double p[3], double g[3]);
 
+/* x moved onto a = b = 0 for the branches a, b of f's top min/max by minimum-norm Newton
+ * steps (up to 8; fewer once x repeats): false when a step fails (the branches' gradients
+ * parallel, or a value not finite) or the tape does not end in min/max. Where x lands is
+ * the caller's to check (it may be a distant part of the crease). */
+bool ism_crease_newton(ism_sampler *s, double x[3]);
+
 #endif

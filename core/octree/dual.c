@@ -12,6 +12,7 @@
 #include "core/octree/dual_balls.h"
 #include "core/octree/dual_box.h"
 #include "core/octree/dual_cert.h"
+#include "core/octree/dual_crease.h"
 #include "core/octree/edge_roots.h"
 #include "core/octree/graph_cert.h"
 #include "core/octree/grid.h"
@@ -54,8 +55,19 @@
 #define WALK_SPLIT_LEVEL 3
 /* Threads at most: the options' own limit (polygonise.c checks o->threads against it). */
 #define DUAL_MAX_THREADS 64
+/* A crease leaf this many E across or less is judged by the measurement alone (crease_kind,
+ * dual_crease.h's `small`): the primal path's rule for such nodes (cell_error.c, 4 E). */
+#define CREASE_MEASURED_CELLS 4.0
+/* Crease vertices of two leaves this close (a share of the box's smallest side) are one
+ * point (weld_crease). */
+#define WELD_TOL 1e-12
 
-enum { DN_INNER, DN_EMPTY, DN_SURF, DN_HOLE }; /* DN_HOLE: a leaf meeting a point's hole */
+/* DN_HOLE: a leaf meeting a point's hole; DN_CREASE: a surface leaf whose vertex lies on f's
+ * crease (dual_crease.h) */
+enum { DN_INNER, DN_EMPTY, DN_SURF, DN_HOLE, DN_CREASE };
+
+/* A leaf with a vertex: plain, or on the crease. */
+static bool has_sheet(int kind) { return kind == DN_SURF || kind == DN_CREASE; }
 
 typedef struct dnode {
     ism_ipt o;      /* lattice origin */
@@ -178,6 +190,8 @@ typedef struct dual {
     size_t nn, capn;
     double *pos;      /* 3 per vertex */
     int32_t *vleaf;   /* the leaf each vertex belongs to */
+    int32_t *vtwin;   /* the next vertex of a leaf sharing this one's point, -1: none (two
+                         leaves' crease vertices welded: weld_crease) */
     size_t nv, capv;
     uint32_t *tri;    /* this round's triangles */
     size_t nt, capt;
@@ -190,6 +204,7 @@ typedef struct dual {
     const ism_dual_ball *balls; /* round the isolated singular points (dual_balls.h) */
     size_t nballs;
     const double *inner; /* the request's box when the tree's is grown round it (dual_box.h) */
+    bool crease; /* f = min/max(a, b), its only one: nodes with the kink go to dual_crease.h */
     bool bad, nomem, too_big;
     enum ism_dual_reason why; /* the first reason bad was set for (mesher.h) */
 } dual;
@@ -245,6 +260,7 @@ typedef struct corner_view {
     ism_ivgrad g;
     ism_dual_model model; /* f's Taylor model over the box (dual_cert.h), when have_model */
     bool have_g, have_model, agree;
+    bool kinked;  /* split for the crease (dual_crease.h): at depth.max it declines min_max */
     int monotone; /* bit a: ∇f's a-th component keeps a sign over the box */
 } corner_view;
 
@@ -330,9 +346,8 @@ static bool same_sign_edge_clear(dual *d, worker *w, const dnode *n, const corne
     return edge_root_pair(d, w, n, v, c0, c1) == 0;
 }
 
-/* Crossed edges on every face 0 or 2 (one curve), and no root on an edge whose ends share
- * a sign. */
-static bool plain_edges(dual *d, worker *w, const dnode *n, const corner_view *v)
+/* Crossed edges on every face 0 or 2 (one curve): from the corners' signs alone. */
+static bool plain_faces(const dual *d, const dnode *n)
 {
     int crossed[6] = {0};
     for (int e = 0; e < 12; e++) {
@@ -340,12 +355,25 @@ static bool plain_edges(dual *d, worker *w, const dnode *n, const corner_view *v
         if ((n->f[c0] < 0) != (n->f[c1] < 0)) {
             crossed[d->ef[e][0]]++;
             crossed[d->ef[e][1]]++;
-        } else if (!same_sign_edge_clear(d, w, n, v, e, c0, c1))
-            return false;
+        }
     }
     for (int k = 0; k < 6; k++)
         if (crossed[k] > 2)
             return false;
+    return true;
+}
+
+/* Crossed edges on every face 0 or 2 (one curve), and no root on an edge whose ends share
+ * a sign (the faces first: signs alone). */
+static bool plain_edges(dual *d, worker *w, const dnode *n, const corner_view *v)
+{
+    if (!plain_faces(d, n))
+        return false;
+    for (int e = 0; e < 12; e++) {
+        int c0 = d->ec0[e], c1 = d->ec1[e];
+        if ((n->f[c0] < 0) == (n->f[c1] < 0) && !same_sign_edge_clear(d, w, n, v, e, c0, c1))
+            return false;
+    }
     return true;
 }
 
@@ -357,19 +385,7 @@ static bool plain_edges(dual *d, worker *w, const dnode *n, const corner_view *v
 static bool mean_value_free(const dnode *n, const ism_ivgrad *g, const double lo[3],
                             const double hi[3])
 {
-    double low = -INFINITY, high = INFINITY;
-    for (int c = 0; c < 8; c++) {
-        double a = n->f[c], b = n->f[c];
-        for (int k = 0; k < 3; k++) {
-            double h = hi[k] - lo[k], s = (c >> k) & 1 ? -h : h; /* toward the far side */
-            double p = g->d[k].lo * s, q = g->d[k].hi * s;
-            a += min_of(0, min_of(p, q));
-            b += max_of(0, max_of(p, q));
-        }
-        low = max_of(low, a);
-        high = min_of(high, b);
-    }
-    return low > 0 || high < 0;
+    return ism_dual_mean_value_sign(n->f, g, lo, hi) != 0;
 }
 
 /* What node i is: empty (proven free of f = 0), a surface leaf, or to be split. */
@@ -503,6 +519,30 @@ static bool graph_on_sub_boxes(worker *w, const corner_view *v)
                                 CERT_HALVINGS, &w->s.n_interval);
 }
 
+/* What a node with f's crease kink in its box is (dual_crease.h): empty, a leaf with its
+ * vertex on the crease or a plain leaf of one branch (each with plain edges), or to split
+ * (v->kinked). */
+static int crease_kind(dual *d, worker *w, dnode *n, corner_view *v)
+{
+    double x[3];
+    bool small = ism_grid_cell_size(&d->g, n->level) <= CREASE_MEASURED_CELLS * d->o->max_error;
+    enum ism_crease_node k = ism_dual_crease_node(&w->s, w->jet, (const double (*)[3])v->p,
+                                                  n->f, d->o->flat_normal, small, x);
+    int kind = k == ISM_CREASE_EMPTY    ? DN_EMPTY
+               : k == ISM_CREASE_VERTEX ? DN_CREASE
+               : k == ISM_CREASE_SMOOTH ? DN_SURF
+                                        : DN_INNER;
+    /* a leaf with the kink at most 4 E across is judged by the measurement alone (as
+     * cell_error.c judges the primal polygons'): the crease's wedge pokes through the
+     * same-sign edges beside it at every level (two roots), so splitting for them went on
+     * to depth.max. Its faces still hold one crossing curve each (two on a face made
+     * Barth's sextic at 1e-2 non-manifold along 4 edges by the crease). */
+    if (has_sheet(kind) && (small ? !plain_faces(d, n) : !plain_edges(d, w, n, v)))
+        kind = DN_INNER;
+    v->kinked = kind == DN_INNER;
+    return kind;
+}
+
 /* What node n is (f and the unit gradients at its corners in n->f and v): empty (proven
  * free of f = 0), a surface leaf with one sheet (corner gradients agreeing, or one graph
  * proven by interval gradients), or to be split. The interval is taken only where the
@@ -531,16 +571,19 @@ static int classify(dual *d, worker *w, dnode *n, corner_view *v)
     v->agree = mixed && normals_agree((const double (*)[3])v->n, d->o->flat_normal);
     v->have_g = v->have_model = false;
     v->monotone = 0;
-    if (!v->agree) {
+    if (!v->agree || d->crease) { /* with a crease, agreeing corners may straddle it */
         /* the natural interval first (one evaluation, enough on the sphere), then the
          * Taylor form (two), then the sub-boxes */
         ism_interval box[3];
         for (int a = 0; a < 3; a++)
             box[a] = (ism_interval){v->p[0][a], v->p[7][a]};
         w->s.n_interval++;
-        v->have_g = ism_eval_interval_grad(w->s.tape, w->jet, box, NULL, NULL, &v->g) == 0;
-        if (!v->have_g)
-            return DN_INNER; /* a kink in the node */
+        size_t kinks = ism_eval_interval_grad(w->s.tape, w->jet, box, NULL, NULL, &v->g);
+        v->have_g = kinks == 0;
+        if (!v->have_g) /* a kink in the node */
+            return d->crease && kinks != (size_t)-1 ? crease_kind(d, w, n, v) : DN_INNER;
+        if (v->agree)
+            return plain_edges(d, w, n, v) ? DN_SURF : DN_INNER;
         if (!mixed) /* empty, or maybe a piece no corner sees */
             return empty_proven(w, n, v) || (neg == 0 && touch_empty(n, v)) ? DN_EMPTY
                                                                            : DN_INNER;
@@ -570,7 +613,8 @@ static void sample_corner(dual *d, worker *w, const int32_t q[3], double *f, dou
 /* Bytes the tree and the vertices hold (the triangles are bounded by max_triangles). */
 static size_t held_bytes(const dual *d)
 {
-    return d->capn * sizeof *d->n + d->capv * (3 * sizeof *d->pos + sizeof *d->vleaf);
+    return d->capn * sizeof *d->n +
+           d->capv * (3 * sizeof *d->pos + sizeof *d->vleaf + sizeof *d->vtwin);
 }
 
 /* A new node, or false when out of memory or past o->max_memory (too_big set). */
@@ -616,10 +660,10 @@ static int leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad)
     if (kind == DN_INNER && d->nballs &&
         ism_dual_balls_near(d->balls, d->nballs, v->p[0], v->p[7], size))
         return DN_HOLE; /* not plain near a point, as small as its hole's leaves (near_point) */
-    if (kind == DN_SURF && touches_box(d, n) && d->inner) {
+    if (has_sheet(kind) && touches_box(d, n) && d->inner) {
         if (n->level < ISM_DUAL_BOX_LEVEL)
             kind = DN_INNER; /* no larger than the margin's cells (dual_box.h) */
-    } else if (kind == DN_SURF && touches_box(d, n)) {
+    } else if (has_sheet(kind) && touches_box(d, n)) {
         int clear = box_faces_clear(d, w, n, v);
         if (clear < 0)
             *bad = true; /* the box cuts the surface: its faces need the primal polygons */
@@ -648,6 +692,7 @@ static bool near_point(const dual *d, const dnode *n, double size)
 typedef struct split_out {
     double f[8][8];
     uint8_t kind[8];
+    uint8_t kinked; /* bit c: child c split for the crease (corner_view.kinked) */
     bool bad;
 } split_out;
 
@@ -668,8 +713,10 @@ static void split_task(void *ctx, size_t k, int thread)
         sample_corner(d, w, q, &f[j], p[j], g[j]);
     }
     out->bad = false;
+    out->kinked = 0;
     for (int c = 0; c < 8; c++) {
         corner_view v;
+        v.kinked = false;
         dnode n;
         memset(&n, 0, sizeof n);
         n.o = parent->o;
@@ -685,6 +732,7 @@ static void split_task(void *ctx, size_t k, int thread)
         }
         memcpy(out->f[c], n.f, sizeof n.f);
         out->kind[c] = (uint8_t)leaf_kind(d, w, &n, &v, &out->bad);
+        out->kinked |= (uint8_t)(v.kinked << c);
     }
 }
 
@@ -694,7 +742,7 @@ static void mark_surface(dual *d)
     for (size_t i = d->nn; i-- > 0;) {
         dnode *n = &d->n[i];
         if (n->child < 0) {
-            n->surf = n->kind == DN_SURF;
+            n->surf = has_sheet(n->kind);
             continue;
         }
         uint8_t surf = 0;
@@ -785,6 +833,8 @@ static void expand(dual *d, const int32_t *list, size_t n)
                     next[nn++] = at;
                 else if (near_point(d, ch, 0))
                     ch->kind = DN_HOLE; /* sheets a cell apart beside a node: its hole */
+                else if (out[k].kinked >> c & 1)
+                    decline(d, ISM_DUAL_WHY_MIN_MAX); /* the crease not resolved */
                 else
                     decline(d, ISM_DUAL_WHY_NOT_PLAIN); /* at the deepest level: a feature */
             }
@@ -853,6 +903,11 @@ static void place_vertex(dual *d, worker *w, int32_t i)
     double m[3], lo[3], hi[3], size = ism_grid_cell_size(&d->g, n->level);
     corner_point(d, n, 0, lo);
     corner_point(d, n, 7, hi);
+    if (n->kind == DN_CREASE && (ism_dual_crease_vertex(&w->s, lo, hi, m) ||
+                                 ism_dual_crease_near(&w->s, lo, hi, m))) {
+        memcpy(&d->pos[3 * n->vert], m, sizeof m); /* on the crease, as classify found it */
+        return;
+    }
     for (int a = 0; a < 3; a++)
         m[a] = 0.5 * lo[a] + 0.5 * hi[a];
     bool inside = newton_onto(w, m, size);
@@ -873,8 +928,9 @@ static void place_vertex(dual *d, worker *w, int32_t i)
                 m[a] += p0[a] + t * (p1[a] - p0[a]);
             roots++;
         }
-        for (int a = 0; a < 3; a++)
-            m[a] /= roots;
+        for (int a = 0; a < 3; a++) /* no crossed edge (a small crease-side leaf not shown
+                                        empty, dual_crease.h): from the centre again */
+            m[a] = roots ? m[a] / roots : 0.5 * lo[a] + 0.5 * hi[a];
         newton_onto(w, m, size);
     }
     double q[3];
@@ -897,20 +953,60 @@ static bool reserve_vertices(dual *d, size_t n)
         return false;
     if (d->capv != capl) {
         int32_t *vl = realloc(d->vleaf, d->capv * sizeof *vl);
-        if (!vl)
+        if (vl)
+            d->vleaf = vl;
+        int32_t *vt = vl ? realloc(d->vtwin, d->capv * sizeof *vt) : NULL;
+        if (!vt)
             return false;
-        d->vleaf = vl;
+        d->vtwin = vt;
     }
     return true;
+}
+
+/* Two crease leaves that found one point (within WELD_TOL of the box: Newton's rounding is
+ * ~1e-16 of it, any bound far above) share one vertex: the later leaf takes the earlier
+ * vertex and its own joins that one's twin chain (mark_misses splits every leaf on it).
+ * Without it the two make triangles of no area (the lens's crease on the lattice plane
+ * x = 0: every such triangle counted as turned over, split to depth.max). New vertices are
+ * from nv0 on. */
+static void weld_crease(dual *d, size_t nv0)
+{
+    size_t n = 0;
+    for (size_t i = 0; i < d->nn; i++)
+        n += d->n[i].child < 0 && d->n[i].kind == DN_CREASE && d->n[i].vert >= 0;
+    uint32_t *ids = malloc((n ? n : 1) * sizeof *ids), *to = malloc((n ? n : 1) * sizeof *to);
+    int32_t *at = malloc((n ? n : 1) * sizeof *at);
+    n = 0;
+    for (size_t i = 0; ids && at && i < d->nn; i++)
+        if (d->n[i].child < 0 && d->n[i].kind == DN_CREASE && d->n[i].vert >= 0) {
+            at[n] = (int32_t)i;
+            ids[n++] = (uint32_t)d->n[i].vert;
+        }
+    double size = fmin(d->o->box[3] - d->o->box[0],
+                       fmin(d->o->box[4] - d->o->box[1], d->o->box[5] - d->o->box[2]));
+    if (!ids || !to || !at || !ism_dual_weld(d->pos, ids, n, WELD_TOL * size, to))
+        d->nomem = true;
+    for (size_t k = 0; !d->nomem && k < n; k++) {
+        uint32_t u = ids[k], r = to[k];
+        if (u == r || u < nv0)
+            continue;
+        d->n[at[k]].vert = (int32_t)r;
+        d->vtwin[u] = d->vtwin[r];
+        d->vtwin[r] = (int32_t)u;
+    }
+    free(ids);
+    free(to);
+    free(at);
 }
 
 /* Vertices for the surface leaves that have none, numbered in node order, placed on the
  * pool. */
 static void make_vertices(dual *d)
 {
+    size_t nv0 = d->nv;
     size_t n = 0;
     for (size_t i = 0; i < d->nn; i++)
-        n += d->n[i].child < 0 && d->n[i].kind == DN_SURF && d->n[i].vert < 0;
+        n += d->n[i].child < 0 && has_sheet(d->n[i].kind) && d->n[i].vert < 0;
     int32_t *leaves = malloc((n ? n : 1) * sizeof *leaves);
     if (!leaves || !reserve_vertices(d, n)) {
         free(leaves);
@@ -919,14 +1015,17 @@ static void make_vertices(dual *d)
     }
     n = 0;
     for (size_t i = 0; i < d->nn; i++)
-        if (d->n[i].child < 0 && d->n[i].kind == DN_SURF && d->n[i].vert < 0) {
+        if (d->n[i].child < 0 && has_sheet(d->n[i].kind) && d->n[i].vert < 0) {
             d->n[i].vert = (int32_t)d->nv;
+            d->vtwin[d->nv] = -1;
             d->vleaf[d->nv++] = (int32_t)i;
             leaves[n++] = (int32_t)i;
         }
     task_ctx job = {d, leaves, NULL};
     ism_pool_for(d->pool, n, vertex_task, &job, NULL);
     free(leaves);
+    if (d->crease && n)
+        weld_crease(d, nv0);
 }
 
 static bool add_tri(dual *d, uint32_t a, uint32_t b, uint32_t c)
@@ -953,7 +1052,7 @@ static double pair_dist(dual *d, worker *w, uint64_t key)
     double m[3];
     for (int k = 0; k < 3; k++)
         m[k] = 0.5 * (d->pos[3 * a + k] + d->pos[3 * b + k]);
-    return ism_sample_dist(&w->s, m);
+    return ism_dual_dist(&w->s, m, d->o->max_error);
 }
 
 /* The midpoint distance of vertices a and b: from the memo, measured here (thread 0) only
@@ -1401,15 +1500,16 @@ static size_t mark_misses(dual *d, uint64_t *missed)
             continue;
         bool any = false;
         for (int pass = 0; pass < 2 && !any; pass++, m = 7) /* then every leaf of t */
-            for (int j = 0; j < 3; j++) {
-                int32_t leaf = d->vleaf[d->tri[3 * t + j]];
-                dnode *n = leaf < 0 ? NULL : &d->n[leaf];
-                if (n && (m >> j & 1) && n->level < d->o->max_depth) {
-                    marked += !n->split;
-                    n->split = 1;
-                    any = true;
+            for (int j = 0; j < 3; j++)
+                for (int32_t v = (int32_t)d->tri[3 * t + j]; v >= 0; v = d->vtwin[v]) {
+                    int32_t leaf = d->vleaf[v]; /* every leaf on a welded vertex */
+                    dnode *n = leaf < 0 ? NULL : &d->n[leaf];
+                    if (n && n->child < 0 && (m >> j & 1) && n->level < d->o->max_depth) {
+                        marked += !n->split;
+                        n->split = 1;
+                        any = true;
+                    }
                 }
-            }
         *missed += !any;
     }
     free(miss);
@@ -1459,7 +1559,8 @@ static size_t mark_cut_misses(dual *d, uint64_t *missed)
         for (int j = 0; j < 3; j++) {
             int32_t leaf = d->vleaf[d->tri[3 * from[k] + j]];
             dnode *nd = leaf < 0 ? NULL : &d->n[leaf];
-            if (nd && nd->level < d->o->max_depth) {
+            /* a welded crease vertex's first leaf may have split (weld_crease) */
+            if (nd && nd->child < 0 && nd->level < d->o->max_depth) {
                 marked += !nd->split;
                 nd->split = 1;
                 any = true;
@@ -1471,6 +1572,35 @@ static size_t mark_cut_misses(dual *d, uint64_t *missed)
     free(map);
     free(from);
     free(miss);
+    return marked;
+}
+
+/* With a crease (dual_crease.h): the leaves at the ends of every mesh edge more than two
+ * triangles share, and of every vertex joining two fans, marked to split (two crease pieces
+ * in one small leaf, judged by the measurement alone, join two sheets there: Barth's
+ * clipped sextic at 1e-2 had 4 such edges, then one such vertex); at depth.max the crease is
+ * not followed (min_max). Returns the leaves newly marked. */
+static size_t mark_not_manifold(dual *d)
+{
+    uint32_t *ends = malloc((d->nt ? 6 * d->nt : 1) * sizeof *ends);
+    size_t n = ends ? ism_dual_not_manifold(d->tri, d->nt, d->nv, ends) : (size_t)-1;
+    size_t marked = 0;
+    if (n == (size_t)-1) {
+        d->nomem = true;
+        n = 0;
+    }
+    for (size_t k = 0; k < n; k++)
+        for (int32_t v = (int32_t)ends[k]; v >= 0; v = d->vtwin[v]) {
+            int32_t leaf = d->vleaf[v];
+            dnode *nd = leaf < 0 ? NULL : &d->n[leaf];
+            if (!nd || nd->child >= 0)
+                continue;
+            if (nd->level >= d->o->max_depth)
+                decline(d, ISM_DUAL_WHY_MIN_MAX);
+            marked += !nd->split;
+            nd->split = 1;
+        }
+    free(ends);
     return marked;
 }
 
@@ -1615,6 +1745,7 @@ static void emit_quads(dual *d)
         }
         memcpy(&d->pos[3 * d->nv], &centre[3 * k], 3 * sizeof *centre);
         d->vleaf[d->nv] = -1; /* a fan's centre: no leaf of its own */
+        d->vtwin[d->nv] = -1;
         uint64_t key = quad_key(d, &d->q.q[4 * q]);
         if (key)
             keyed_put(&d->fans, key, (double)d->nv);
@@ -1730,6 +1861,7 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
     if (!new_node(d, (ism_ipt){{0, 0, 0}}, 0, &root))
         return ISM_DUAL_NO_MEMORY;
     corner_view v;
+    v.kinked = false;
     int32_t last = (int32_t)1 << d->g.depth;
     dnode *r0 = &d->n[root];
     for (int c = 0; c < 8; c++) {
@@ -1769,6 +1901,8 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
         size_t marked = mark_misses(d, &st->missed);
         if (!d->nomem && !marked && !st->missed && d->inner)
             marked = mark_cut_misses(d, &st->missed);
+        if (d->crease)
+            marked += mark_not_manifold(d);
         if (d->nomem)
             return ISM_DUAL_NO_MEMORY;
         if (d->bad)
@@ -1783,7 +1917,7 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
         split_marked(d);
     }
     for (size_t i = 0; i < d->nn; i++)
-        st->leaves += d->n[i].child < 0 && d->n[i].kind == DN_SURF;
+        st->leaves += d->n[i].child < 0 && has_sheet(d->n[i].kind);
     return to_mesh(d, mesh) ? ISM_DUAL_OK : ISM_DUAL_NO_MEMORY;
 }
 
@@ -1794,6 +1928,7 @@ static void forget(dual *d)
     free(d->n);
     free(d->pos);
     free(d->vleaf);
+    free(d->vtwin);
     free(d->tri);
     free(d->q.q);
     keyed_free(&d->passed);
@@ -1802,6 +1937,7 @@ static void forget(dual *d)
     d->n = NULL;
     d->pos = NULL;
     d->vleaf = NULL;
+    d->vtwin = NULL;
     d->tri = NULL;
     d->nn = d->capn = d->nv = d->capv = d->nt = d->capt = 0;
     memset(&d->q, 0, sizeof d->q);
@@ -1930,6 +2066,7 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
     dual d;
     memset(&d, 0, sizeof d);
     d.o = o;
+    d.crease = o->dual_crease && ism_tape_top_min_max_only(f);
     d.shift = ism_straddle_shift(f, o->max_error, false);
     ism_grid_init(&d.g, o->box, o->max_depth);
     for (int e = 0; e < 12; e++)

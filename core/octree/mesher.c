@@ -54,7 +54,9 @@ enum ism_dual_reason ism_dual_declined_before(const ism_tape *f, const ism_poly_
     /* a locus of nodes and isolated points only is meshed round (dual_balls.h) */
     if ((o->nquiet || o->nnode_balls) && !o->ndual_points)
         return ISM_DUAL_WHY_LOCUS;
-    if (ism_tape_has_min_max(f))
+    /* one min/max at f's top is a crease the dual mesher can follow when asked
+       (dual_crease.h) */
+    if (ism_tape_has_min_max(f) && !(o->dual_crease && ism_tape_top_min_max_only(f)))
         return ISM_DUAL_WHY_MIN_MAX;
     return ISM_DUAL_WHY_NONE;
 }

@@ -27,7 +27,9 @@ enum ism_dual_reason {
     ISM_DUAL_WHY_OFF,          /* asked not to ("dual": false, --no-dual) */
     ISM_DUAL_WHY_LOCUS,        /* singular points or curves known from f: they need the primal
                                   polygons' conformance (core/singular) */
-    ISM_DUAL_WHY_MIN_MAX,      /* min/max/abs in f: creases, which one vertex per cell rounds */
+    ISM_DUAL_WHY_MIN_MAX,      /* min/max/abs in f: creases, which one vertex per cell rounds
+                                  (with o->dual_crease, one min/max at f's top is followed,
+                                  dual_crease.h: then its crease not followed at depth.max) */
     ISM_DUAL_WHY_BOX_CUT,      /* the box cuts the surface where the clip cannot apply
                                   (dual_box.h): singular points too, a cut point not settled
                                   onto f = 0 in its plane, a margin leaf's vertex inside */

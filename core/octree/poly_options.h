@@ -55,6 +55,12 @@ typedef struct ism_poly_options {
                                sized by the error of those triangles (dual.h; one thread);
                                where that cannot apply, the primal polygons as without it.
                                Default off */
+    bool dual_crease;       /* with dual: also f = min/max(a, b) whose only min/max that is,
+                               its crease followed by vertices on a = b = 0 (dual_crease.h).
+                               Default off, and not asked for by requests: where it cannot
+                               follow the crease before depth.max (Barth's clipped sextic in
+                               its lattice box at 1e-2..1e-3, gyroid-ball) the failed try
+                               costs 35-75% more than the primal polygons alone */
     bool scalar_eval;       /* evaluate the octree node by node: no batched intervals over a
                                node's children, no zero-free leaves (octree.h) and no memo of
                                edge roots and crease labels between nodes (cell_cache.h's
