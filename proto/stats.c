@@ -73,6 +73,7 @@ static void write_fields(ism_jw *w, const void *base, const stat_field *f, size_
 #define P(m) FIELD(ism_poly_stats, m)
 static const stat_field poly_fields[] = {
     P(nodes_visited), P(nodes_excluded), P(plotting_nodes), P(unresolved_nodes),
+    P(unflat_nodes), P(unflat_worst),
     P(thin_searched), P(thin_found), P(thin_undecided), P(deep_leaves),
     P(leaf_tapes), P(short_tape_leaves), P(tape_misses),
     P(error_missed_nodes), P(error_worst), P(error_rounds),
@@ -352,6 +353,26 @@ static void write_error_warning(ism_jw *w, const ism_stats_input *in)
     ism_jw_string(w, msg);
 }
 
+/* Without an error bound, only the cells at depth.max a larger depth.max could improve:
+ * not on a crease nor the singular locus (their non-flatness is the feature, at every
+ * depth) and measured beyond the flatness test's tolerance (ism_poly_stats.unflat_nodes),
+ * with the worst distance reached so a user can judge it. */
+static void write_flatness_warning(ism_jw *w, const ism_poly_stats *s)
+{
+    char msg[300], x[32];
+    if (s->unflat_worst > 0) {
+        snprintf(x, sizeof x, "%.3g", s->unflat_worst);
+        snprintf(msg, sizeof msg, "%llu cells at the maximum depth were not flat enough: their "
+                 "triangles are up to %s from the surface; a larger depth.max or a max_error "
+                 "would bring them closer", (unsigned long long)s->unflat_nodes, x);
+    } else {
+        snprintf(msg, sizeof msg, "%llu cells at the maximum depth were not flat enough: a "
+                 "larger depth.max or a max_error would bring them closer",
+                 (unsigned long long)s->unflat_nodes);
+    }
+    ism_jw_string(w, msg);
+}
+
 /* What the polygoniser could not resolve, said in words (DESIGN.md: say so in the stats
  * instead of producing silent garbage). */
 static void write_warnings(ism_jw *w, const ism_stats_input *in)
@@ -368,12 +389,8 @@ static void write_warnings(ism_jw *w, const ism_stats_input *in)
     }
     if (in->max_error > 0)
         write_error_warning(w, in);
-    else if (s && s->unresolved_nodes) {
-        snprintf(msg, sizeof msg, "%llu cells at the maximum depth were not flat enough: "
-                 "a larger depth.max may show more detail",
-                 (unsigned long long)s->unresolved_nodes);
-        ism_jw_string(w, msg);
-    }
+    else if (s && s->unflat_nodes)
+        write_flatness_warning(w, s);
     if (s && s->open_chains) {
         snprintf(msg, sizeof msg, "%llu line chains could not be closed into polygons",
                  (unsigned long long)s->open_chains);

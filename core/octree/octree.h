@@ -24,6 +24,10 @@ enum ism_node_flags {
                                 so it emits nothing and its faces yield no tile (as an empty
                                 node's); it stays a leaf, so its corners still break the
                                 lattice lines (breaks.c) and no neighbour's segments change */
+    ISM_NODE_UNFLAT = 4,     /* without max_error: an unresolved leaf neither on a crease (its
+                                tape keeps a min/max) nor meeting a quiet ball (the singular
+                                locus): its triangles are measured against the flatness
+                                tolerance for the stats' warning (polygonise.c) */
 };
 
 /* What the hidden-piece search (thin_search.h) decided at a node, kept so that the next

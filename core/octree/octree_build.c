@@ -568,6 +568,17 @@ static void children_ranges(build *b, thread_state *th, const ism_node *nd,
     th->s.n_interval += 8;
 }
 
+/* Without max_error, is an unresolved leaf (lo..hi, tape sub) one a larger depth.max could
+ * improve? Not on a crease (sub keeps a min/max: a C0 kink fails the corner gradients at
+ * every level) nor where the singular locus is (a quiet ball meets it: two sheets or a cone
+ * fail them at every level, and the conformance pass rebuilds the mesh there). Its emitted
+ * triangles are then measured (polygonise.c); under max_error the error rounds report. */
+static bool unflat(const build *b, const ism_tape *sub, const double lo[3], const double hi[3])
+{
+    return b->p->flatness.max_error <= 0 && !ism_tape_has_min_max(sub) &&
+           !ism_quiet_meets(&b->quiet, lo, hi);
+}
+
 /* Decides node v->v[i] and grows its subtree. Nodes that fail the flatness test are split
  * down to level `limit` (depth.max, or ISM_THIN_RESOLVE_LEVELS deeper below a hidden
  * piece); a would-be leaf that hides a piece is split in any case, down to thin_depth. When
@@ -642,6 +653,8 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         if (leaf && !flat) {
             v->v[i].flags |= ISM_NODE_UNRESOLVED;
             th->unresolved++;
+            if (unflat(b, sub, lo, hi))
+                v->v[i].flags |= ISM_NODE_UNFLAT;
         }
         th->deep_leaves += leaf && nd.level > b->p->max_depth;
     }

@@ -219,9 +219,7 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
         for (int a = 0; a < 3; a++)
             normal[a] += n[c][a];
     ism_normalise3(normal);
-    double tol = fl->plane_frac * size;
-    if (tol > fl->abs_tol)
-        tol = fl->abs_tol;
+    double tol = ism_flat_tolerance(fl->plane_frac, fl->abs_tol, size);
     if (fl->max_error > 0)
         tol = fl->max_error; /* polygons cell_error cannot follow: the paper's tests at E */
     for (int r = 0; r < nroots; r++) {
@@ -234,4 +232,10 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
     double fc = ism_sample_grad(s, centroid, g);
     double gl = ism_norm3(g);
     return gl > 0 && fabs(fc) / gl <= tol;
+}
+
+double ism_flat_tolerance(double plane_frac, double abs_tol, double size)
+{
+    double tol = plane_frac * size;
+    return tol > abs_tol ? abs_tol : tol;
 }

@@ -28,6 +28,10 @@ typedef struct ism_flatness {
     double box[6];         /* the request's box (straddle.h keeps its faces' vertices) */
 } ism_flatness;
 
+/* The flatness test's tolerance for a node `size` across: plane_frac × size, at most
+ * abs_tol (how far its edge roots may lie off their plane, and their centroid off f = 0). */
+double ism_flat_tolerance(double plane_frac, double abs_tol, double size);
+
 /* lo, hi: the node's world box; k: its corner values. True when the node may be plotted
  * at this size. jet (interval gradients; NULL for none): under max_error a node whose
  * corner gradients disagree is still plotted when f is proven one graph in it

@@ -46,6 +46,12 @@
 #define ISM_FLAT_ABS_FRACTION 0.25
 #endif
 #define MAX_THREADS 64
+
+/* The flatness test's cap in world units (above). */
+static double flat_abs_tol(const ism_octree *tree, const ism_poly_options *o)
+{
+    return ISM_FLAT_ABS_FRACTION * ism_grid_cell_size(&tree->grid, o->max_depth);
+}
 /* Under max_error, up to this many rounds of octree + polygons, each splitting the leaves
  * whose triangles measured farther than the bound (a leaf's polygons depend on its
  * neighbours' tiles, which the octree's estimate cannot see, and a split changes its
@@ -132,6 +138,8 @@ static void report(void *ctx, double fraction)
  * writes for every node and evaluation do not share a line with another thread's. */
 typedef struct padded_ctx {
     alignas(ISM_CACHE_LINE) ism_cell_ctx c;
+    uint64_t unflat;             /* ism_poly_stats.unflat_nodes, this thread's */
+    double unflat_worst;
 } padded_ctx;
 
 typedef struct phase2 {
@@ -148,6 +156,7 @@ typedef struct phase2 {
     atomic_int status;           /* enum ism_poly_status */
     progress *prog;
     float *leaf_error;           /* under max_error: what each leaf's triangles measured */
+    double flat_abs;             /* without it: the flatness test's abs_tol (plot_test.h) */
     double straddle;             /* > 0: vertices are moved by this much (straddle.h) */
     const ism_leaf_memo *memo;   /* the last round's leaves, or NULL */
     const int32_t *reuse;        /* per leaf: its leaf in memo to copy, or -1; or NULL */
@@ -167,10 +176,31 @@ static void leaf_sampler(ism_cell_ctx *cx, int32_t leaf)
     }
 }
 
+/* Without max_error: a leaf marked ISM_NODE_UNFLAT (octree_build.c) whose emitted
+ * triangles (from t0 on) lie farther from the surface than the flatness test allows a node
+ * of its size, at their centroids and edge midpoints (|f| / |∇f|, ism_emitted_error: what
+ * the analysis's accuracy block measures), is counted with its distance. */
+static void measure_unflat(const phase2 *p, padded_ctx *pc, int32_t leaf,
+                           const ism_cell_out *out, size_t t0)
+{
+    const ism_node *nd = &p->tree->nodes[leaf];
+    if (!(nd->flags & ISM_NODE_UNFLAT) || out->ntris == t0)
+        return;
+    double tol = ism_flat_tolerance(p->o->flat_plane, p->flat_abs,
+                                    ism_grid_cell_size(&p->tree->grid, nd->level));
+    double e = ism_emitted_error(&pc->c.s, out, t0, INFINITY);
+    if (!(e > tol))
+        return;
+    pc->unflat++;
+    if (isfinite(e) && e > pc->unflat_worst)
+        pc->unflat_worst = e;
+}
+
 /* Leaf i of chunk into out: copied from the last round when it emits the same there, else
  * polygonised (and measured under max_error). */
-static bool one_leaf(phase2 *p, ism_cell_ctx *cx, size_t chunk, size_t i, ism_cell_out *out)
+static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell_out *out)
 {
+    ism_cell_ctx *cx = &pc->c;
     ism_cell_stats before = cx->stats;
     size_t v0 = out->nverts, t0 = out->ntris, s0 = out->nsegs;
     float err = 0;
@@ -188,6 +218,8 @@ static bool one_leaf(phase2 *p, ism_cell_ctx *cx, size_t chunk, size_t i, ism_ce
         else if (ok && p->leaf_error)
             e = ism_emitted_error(&cx->s, out, t0, INFINITY);
         err = (float)e;
+        if (ok && !p->leaf_error)
+            measure_unflat(p, pc, p->leaves[i], out, t0);
         cx->s.local = NULL;
         if (!ok)
             return false;
@@ -210,12 +242,12 @@ static void run_chunk(void *arg, size_t chunk, int thread)
         atomic_store(&p->status, ISM_POLY_CANCELLED);
         return;
     }
-    ism_cell_ctx *cx = &p->ctx[thread].c;
+    padded_ctx *pc = &p->ctx[thread];
     ism_cell_out *out = &p->out[chunk];
     size_t first = chunk * p->chunk_leaves;
     size_t last = first + p->chunk_leaves < p->nleaves ? first + p->chunk_leaves : p->nleaves;
     for (size_t i = first; i < last; i++)
-        if (!one_leaf(p, cx, chunk, i, out)) {
+        if (!one_leaf(p, pc, chunk, i, out)) {
             atomic_store(&p->status, ISM_POLY_NO_MEMORY);
             return;
         }
@@ -385,6 +417,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     p.tree = tree;
     p.breaks = &breaks;
     p.prog = prog;
+    p.flat_abs = flat_abs_tol(tree, o);
     size_t by_memory = o->max_memory / BYTES_PER_TRIANGLE;
     p.max_triangles = o->max_triangles < by_memory ? o->max_triangles : by_memory;
     atomic_init(&p.status, ISM_POLY_OK);
@@ -439,8 +472,11 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     }
     ism_pool_for(pool, p.nchunks, run_chunk, &p, &outer->par);
     status = atomic_load(&p.status);
-    for (int t = 0; t < threads; t++)
+    for (int t = 0; t < threads; t++) {
         add_cell_stats(st, &p.ctx[t].c);
+        st->unflat_nodes += p.ctx[t].unflat;
+        st->unflat_worst = fmax(st->unflat_worst, p.ctx[t].unflat_worst);
+    }
     if (status != ISM_POLY_OK)
         goto done;
     if (p.leaf_error && !collect_misses(&p, o, next, st)) {
@@ -550,8 +586,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
         .flatness = {.gradient_test = o->gradient_test,
                      .normal_cos = o->flat_normal,
                      .plane_frac = o->flat_plane,
-                     .abs_tol = ISM_FLAT_ABS_FRACTION *
-                                ism_grid_cell_size(&tree.grid, o->max_depth),
+                     .abs_tol = flat_abs_tol(&tree, o),
                      .double_root_eps = o->double_root_eps,
                      .double_root_iters = o->double_root_iters,
                      .max_error = o->max_error,

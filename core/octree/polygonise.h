@@ -49,6 +49,13 @@ typedef struct ism_poly_stats {
     uint64_t nodes_excluded;     /* nodes whose interval proved them empty */
     uint64_t plotting_nodes;     /* leaves that produced polygons */
     uint64_t unresolved_nodes;   /* leaves at max depth that failed flatness or polygonisation */
+    uint64_t unflat_nodes;       /* without max_error: of those, the ones a larger depth.max
+                                    could improve: not on a crease (min/max) nor meeting the
+                                    singular locus's balls and tubes (ISM_NODE_UNFLAT), their
+                                    emitted triangles farther from the surface than the
+                                    flatness test allows a node of their size */
+    double unflat_worst;         /* the largest distance measured on them (centroids and edge
+                                    midpoints, |f| / |∇f|; 0 when none) */
     uint64_t thin_searched;      /* would-be leaves whose corners all had one sign, searched
                                     for a piece of the surface they hide (thin_search.h) */
     uint64_t thin_found;         /* ... that hid one, and were split (below max depth too) */

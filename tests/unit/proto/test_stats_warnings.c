@@ -1,7 +1,8 @@
 /* test_stats_warnings.c — the stats' warning when max_error was not met (proto/stats.c): the
  * worst distance to as few digits as still read above the bound (never 17 digits, never a
  * number equal to the bound), the cells left at depth.max counted when there are some, and,
- * when every octree cell met the bound, no advice to raise depth.max (it would not help). */
+ * when every octree cell met the bound, no advice to raise depth.max (it would not help);
+ * without a bound, the cells not flat enough at depth.max only when depth would help. */
 #include <criterion/criterion.h>
 #include <jansson.h>
 #include <math.h>
@@ -77,5 +78,46 @@ Test(stats_warnings, met_bound_no_warning)
 {
     char *w = warning(0.004, 0.004, 0);
     cr_assert_str_eq(w, "");
+    free(w);
+}
+
+/* Without a bound: the warning about cells not flat enough at depth.max (their count and the
+ * worst distance of their triangles), said only for cells a larger depth.max could improve
+ * (unflat_nodes), never for the unresolved cells on creases and the singular locus. */
+static char *flat_warning(uint64_t unresolved, uint64_t unflat, double worst)
+{
+    ism_poly_stats poly;
+    memset(&poly, 0, sizeof poly);
+    poly.unresolved_nodes = unresolved;
+    poly.unflat_nodes = unflat;
+    poly.unflat_worst = worst;
+    ism_stats_input in;
+    memset(&in, 0, sizeof in);
+    in.poly = &poly;
+    size_t len;
+    char *text = ism_stats_surface_json(&in, &len);
+    cr_assert(text);
+    json_t *root = json_loadb(text, len, 0, NULL);
+    cr_assert(root, "%s", text);
+    json_t *w = json_object_get(root, "warnings");
+    cr_assert(json_array_size(w) <= 1, "%s", text);
+    char *out = strdup(json_array_size(w) ? json_string_value(json_array_get(w, 0)) : "");
+    json_decref(root);
+    free(text);
+    return out;
+}
+
+Test(stats_warnings, flatness_only_where_depth_helps)
+{
+    char *w = flat_warning(2352, 0, 0); /* the cube: every unresolved cell on its edges */
+    cr_assert_str_eq(w, "");
+    free(w);
+    w = flat_warning(128, 96, 0.036461459449809);
+    cr_assert(strstr(w, "96 cells at the maximum depth were not flat enough"), "%s", w);
+    cr_assert(strstr(w, "up to 0.0365 from the surface"), "%s", w);
+    free(w);
+    w = flat_warning(10, 3, 0); /* none measurable (no finite distance): the count alone */
+    cr_assert(strstr(w, "3 cells at the maximum depth"), "%s", w);
+    cr_assert(!strstr(w, "up to"), "%s", w);
     free(w);
 }
