@@ -11,6 +11,22 @@
 
 #include "proto/stats.h"
 
+/* The one warning the stats of `in` give; "" when there is none. Caller frees. */
+static char *first_warning(const ism_stats_input *in)
+{
+    size_t len;
+    char *text = ism_stats_surface_json(in, &len);
+    cr_assert(text);
+    json_t *root = json_loadb(text, len, 0, NULL);
+    cr_assert(root, "%s", text);
+    json_t *w = json_object_get(root, "warnings");
+    cr_assert(json_array_size(w) <= 1, "%s", text);
+    char *out = strdup(json_array_size(w) ? json_string_value(json_array_get(w, 0)) : "");
+    json_decref(root);
+    free(text);
+    return out;
+}
+
 /* The one warning of a run with bound e, worst distance worst (at a centroid) and cells
  * octree cells left beyond the bound; "" when there is none. Caller frees. */
 static char *warning(double e, double worst, uint64_t cells)
@@ -26,17 +42,7 @@ static char *warning(double e, double worst, uint64_t cells)
     in.poly = &poly;
     in.analysis = &an;
     in.max_error = e;
-    size_t len;
-    char *text = ism_stats_surface_json(&in, &len);
-    cr_assert(text);
-    json_t *root = json_loadb(text, len, 0, NULL);
-    cr_assert(root, "%s", text);
-    json_t *w = json_object_get(root, "warnings");
-    cr_assert(json_array_size(w) <= 1, "%s", text);
-    char *out = strdup(json_array_size(w) ? json_string_value(json_array_get(w, 0)) : "");
-    json_decref(root);
-    free(text);
-    return out;
+    return first_warning(&in);
 }
 
 Test(stats_warnings, missed_bound_with_cells_at_the_limit)
@@ -94,17 +100,7 @@ static char *flat_warning(uint64_t unresolved, uint64_t unflat, double worst)
     ism_stats_input in;
     memset(&in, 0, sizeof in);
     in.poly = &poly;
-    size_t len;
-    char *text = ism_stats_surface_json(&in, &len);
-    cr_assert(text);
-    json_t *root = json_loadb(text, len, 0, NULL);
-    cr_assert(root, "%s", text);
-    json_t *w = json_object_get(root, "warnings");
-    cr_assert(json_array_size(w) <= 1, "%s", text);
-    char *out = strdup(json_array_size(w) ? json_string_value(json_array_get(w, 0)) : "");
-    json_decref(root);
-    free(text);
-    return out;
+    return first_warning(&in);
 }
 
 Test(stats_warnings, flatness_only_where_depth_helps)
