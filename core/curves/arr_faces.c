@@ -1,7 +1,11 @@
 /* arr_faces.c — the arrangement's faces: triangles joined across every mesh edge that lies on
  * no curve are one face; faces are numbered by their first triangle and the mesh's triangles
  * reordered so each face is one range; per face its area, closed and open Euler
- * characteristics and the number of boundary cycles. */
+ * characteristics and the number of boundary cycles. A vertex off the curves that faces
+ * share without an edge — a node where two cones of the mesh meet, each cone a face of its
+ * own — is one vertex of the mesh: the open characteristics count it once, in the first of
+ * its faces (the one whose mesh component the Euler check gives it), so that they sum to
+ * the mesh's χ. */
 #include "core/curves/arr_internal.h"
 #include <math.h>
 #include <stdlib.h>
@@ -102,6 +106,7 @@ static bool reorder(ism_mesh *m, arr_mesh_edges *e, const uint32_t *fid, size_t 
 
 typedef struct face_scratch {
     uint32_t *vstamp, *estamp, *rstamp, *vpar, *touched;
+    uint8_t *vcounted; /* per vertex: an earlier face's open characteristic counted it */
 } face_scratch;
 
 /* Area, Euler characteristics and boundary cycles of face f. */
@@ -119,7 +124,10 @@ static void measure_face(const ism_mesh *m, const arr_mesh_edges *e, face_scratc
             if (s->vstamp[v] != f + 1) {
                 s->vstamp[v] = f + 1;
                 V++;
-                Vin += !e->v_on_curve[v];
+                if (!e->v_on_curve[v] && !s->vcounted[v]) {
+                    s->vcounted[v] = 1;
+                    Vin++;
+                }
             }
             if (s->estamp[k] == f + 1)
                 continue;
@@ -156,8 +164,9 @@ static bool measure_faces(const ism_mesh *m, const arr_mesh_edges *e, ism_arrang
         .rstamp = calloc(m->nverts + 1, sizeof(uint32_t)),
         .vpar = malloc((m->nverts + 1) * sizeof(uint32_t)),
         .touched = malloc((6 * m->ntris + 1) * sizeof(uint32_t)),
+        .vcounted = calloc(m->nverts + 1, 1),
     };
-    bool ok = s.vstamp && s.estamp && s.rstamp && s.vpar && s.touched;
+    bool ok = s.vstamp && s.estamp && s.rstamp && s.vpar && s.touched && s.vcounted;
     if (ok) {
         for (size_t v = 0; v < m->nverts; v++)
             s.vpar[v] = (uint32_t)v;
@@ -169,6 +178,7 @@ static bool measure_faces(const ism_mesh *m, const arr_mesh_edges *e, ism_arrang
     free(s.rstamp);
     free(s.vpar);
     free(s.touched);
+    free(s.vcounted);
     return ok;
 }
 

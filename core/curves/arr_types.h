@@ -38,7 +38,9 @@ typedef struct ism_arr_face {
     size_t first, ntris; /* its triangles in the reordered mesh */
     double area;
     long euler;          /* V − E + T of its closed triangles (disk 1, annulus 0) */
-    long euler_open;     /* the same without the elements on curves (sums to χ) */
+    long euler_open;     /* the same without the elements on curves (sums to χ): a vertex
+                            off the curves shared by several faces (a node joining two
+                            cones) counts in the first of them only */
     uint32_t boundary;   /* boundary cycles (connected parts of its border) */
     uint32_t component;  /* the mesh component it lies in */
 } ism_arr_face;
