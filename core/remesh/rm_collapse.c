@@ -14,7 +14,8 @@
  * than its other neighbours; every vertex the crease keeps stays where it was (on both
  * surfaces), and the triangles on both sides are re-fanned to w (crease_merge_find). Such a
  * merge is tested against each triangle's own normal before (the fan's mean normal across a
- * crease says nothing) and its bends may grow by ISM_RM_CROWD_BEND_DEG. The polygoniser's
+ * crease says nothing) and its bends may grow by ISM_RM_CROWD_BEND_DEG (rm_crease_tri_ok,
+ * which rm_crease_slide.c's moves along min/max creases share). The polygoniser's
  * crease points on the gyroid ball lie as close as 5e-5 where its cells are 0.023: 264 of
  * its 340 needles had their short edge between two such vertices (bench_remesh gyroid-ball,
  * needles under 10° in its three boxes: 340 / 335 / 424 -> 115 / 113 / 149). The caller's
@@ -30,20 +31,9 @@
 #include <math.h>
 #include <string.h>
 
-/* A removed vertex, and the kept one after the merge, have at most this many triangles:
- * higher valences make poor angles anyway. */
-#define ISM_RM_COLLAPSE_MAX_DEGREE 16
-/* A new triangle facing more than this from the old fan's normal is a fold (the relaxation's
- * limit, ISM_RM_MAX_TURN_DEG in rm_relax.c). */
-#define ISM_RM_COLLAPSE_MAX_TURN_DEG 60.0
 /* A new triangle may bend against its outer neighbour by at most this (degrees), or by no more
  * than the old triangle did: the crease angle of rm_locks.c, so a collapse makes no crease. */
 #define ISM_RM_COLLAPSE_MAX_BEND_DEG 40.0
-/* A merge along a crease may bend a new triangle against its outer neighbour by this
- * much (degrees) more than before, beyond the crease angle: at a crease the outer edge may
- * be the crease's own, bending by tens of degrees, and moving v by a hair changes that by a
- * little either way. */
-#define ISM_RM_CROWD_BEND_DEG 10.0
 /* Sweeps over the triangles per call: a collapse leaves its neighbours' needles for the next. */
 #define ISM_RM_COLLAPSE_SWEEPS 3
 
@@ -62,38 +52,56 @@ static double cos_bend(const double *n, double ln, const double *m, double lm)
     return ln > 0 && lm > 0 ? ism_dot3(n, m) / (ln * lm) : -1;
 }
 
+bool rm_crease_tri_ok(const rm_pass *p, uint32_t t, uint32_t a, uint32_t b,
+                      const double *o[3], const double *q[3])
+{
+    double n[3], m[3], u[3];
+    double ln = rm_cross(q[0], q[1], q[2], n), lo = rm_cross(o[0], o[1], o[2], m);
+    if (!(cos_bend(m, lo, n, ln) > cos(ISM_RM_COLLAPSE_MAX_TURN_DEG * M_PI / 180)))
+        return false;
+    uint32_t s = rm_merge_across(&p->r, a, b, t);
+    if (s == UINT32_MAX)
+        return true; /* not manifold: its bend is no crease test's */
+    const uint32_t *z = p->r.m->tri + 3 * (size_t)s;
+    double lu = rm_cross(P(p, z[0]), P(p, z[1]), P(p, z[2]), u);
+    double now = cos_bend(n, ln, u, lu), before = cos_bend(m, lo, u, lu);
+    /* a crease's edge bends as it did, give or take the hair moved */
+    before = cos(fmin(M_PI, acos(fmax(-1, fmin(1, before))) + ISM_RM_CROWD_BEND_DEG * M_PI / 180));
+    return now >= fmin(before, cos(ISM_RM_CREASE_DEG * M_PI / 180));
+}
+
 /* New triangle t (v at w's place) faces the fan's way, does not turn over against ∇f where
  * it did not before (Steiner's 0.37-cell box: collapses beside the pinch points turned 9
  * triangles over once the curvature there no longer read as creases), and bends against
  * the triangle across its outer edge no more than the crease angle or than it did before;
- * *sine gets its smallest angle's sine. */
+ * along a crease, rm_crease_tri_ok. *sine gets its smallest angle's sine. */
 static bool new_triangle_ok(const rm_pass *p, const rm_merge *g, uint32_t t, const double *fan_n,
                             double *sine)
 {
     const double *q[3], *o[3];
     corners(p, t, g->v, P(p, g->w), q);
     corners(p, t, g->v, P(p, g->v), o);
-    double n[3], m[3], u[3];
-    double ln = rm_cross(q[0], q[1], q[2], n), lo = rm_cross(o[0], o[1], o[2], m);
-    if (g->along ? !(cos_bend(m, lo, n, ln) > cos(ISM_RM_COLLAPSE_MAX_TURN_DEG * M_PI / 180))
-                 : !(cos_bend(fan_n, sqrt(ism_dot3(fan_n, fan_n)), n, ln) >
-                     cos(ISM_RM_COLLAPSE_MAX_TURN_DEG * M_PI / 180)))
-        return false;
-    if (!g->along && rm_turns_over(p, p->r.m->tri + 3 * t, g->v, p->normal + 3 * (size_t)g->w, n))
-        return false;
-    *sine = rm_min_sine(q[0], q[1], q[2]);
     const uint32_t *c = p->r.m->tri + 3 * t;
     int k = rm_corner(p->r.m, t, g->v);
-    uint32_t a = c[(k + 1) % 3], b = c[(k + 2) % 3], s = rm_merge_across(&p->r, a, b, t);
+    uint32_t a = c[(k + 1) % 3], b = c[(k + 2) % 3];
+    if (g->along) {
+        *sine = rm_min_sine(q[0], q[1], q[2]);
+        return rm_crease_tri_ok(p, t, a, b, o, q);
+    }
+    double n[3], m[3], u[3];
+    double ln = rm_cross(q[0], q[1], q[2], n), lo = rm_cross(o[0], o[1], o[2], m);
+    if (!(cos_bend(fan_n, sqrt(ism_dot3(fan_n, fan_n)), n, ln) >
+          cos(ISM_RM_COLLAPSE_MAX_TURN_DEG * M_PI / 180)) ||
+        rm_turns_over(p, c, g->v, p->normal + 3 * (size_t)g->w, n))
+        return false;
+    *sine = rm_min_sine(q[0], q[1], q[2]);
+    uint32_t s = rm_merge_across(&p->r, a, b, t);
     if (s == UINT32_MAX)
         return true;
     const uint32_t *z = p->r.m->tri + 3 * s;
     double lu = rm_cross(P(p, z[0]), P(p, z[1]), P(p, z[2]), u);
-    double now = cos_bend(n, ln, u, lu), before = cos_bend(m, lo, u, lu);
-    if (g->along) /* a crease's edge bends as it did, give or take the hair moved */
-        before = cos(fmin(M_PI, acos(fmax(-1, fmin(1, before))) +
-                                    ISM_RM_CROWD_BEND_DEG * M_PI / 180));
-    return now >= fmin(before, cos(ISM_RM_COLLAPSE_MAX_BEND_DEG * M_PI / 180));
+    return cos_bend(n, ln, u, lu) >=
+           fmin(cos_bend(m, lo, u, lu), cos(ISM_RM_COLLAPSE_MAX_BEND_DEG * M_PI / 180));
 }
 
 /* No new centroid or new edge's midpoint farther from f = 0 than the farthest of the old
@@ -189,13 +197,6 @@ static bool do_merge(rm_pass *p, const rm_merge *g)
     p->active[g->v] = p->slide[g->v] = 0;
     return true;
 }
-
-/* A crease vertex nearer a neighbour than this × its mean edge crowds the crease: merged
- * into it, the crease moves by at most that much (the gyroid ball's crease vertices 1/20 to
- * 1/400 of a cell apart, its edges about a cell; while a merge also asked for exactly two
- * crease edges at v, 0.1 left 246 / 245 / 335 needles in bench_remesh's boxes, 0.25 240 /
- * 239 / 321). */
-#define ISM_RM_CROWD 0.25
 
 static double mean_edge(const rm_pass *p, uint32_t v, const uint32_t *nb, uint32_t n)
 {

@@ -10,7 +10,7 @@
  * triangles form one closed manifold fan (no boundary, no non-manifold edge, none of the
  * caller's locked edges, one label) and which lies within ISM_RM_CREASE_NEAR_REL of its mean
  * edge of both branches' zero sets is, the first that passes:
- *   - merged with its nearest neighbour w, when w is closer than ISM_RM_CREASE_CROWD of the
+ *   - merged with its nearest neighbour w, when w is closer than ISM_RM_CROWD of the
  *     mean edge and beside the crease too, the merged vertex put on the crease nearest
  *     their middle (two vertices of the two surfaces crowding the crease become one on it;
  *     the link condition keeps the topology, rm_merge.h);
@@ -25,9 +25,9 @@
  * top of f shortened over the fan's box (a nested min/max whose other operands the box
  * proves dominated: three-balls); a fan with neither (steinmetz's and the cube's
  * max(...) − 1) is left alone. A move is kept only when each triangle stays within
- * ISM_RM_CREASE_SLIDE_TURN_DEG of its own normal before (across a crease the fan's mean
+ * ISM_RM_COLLAPSE_MAX_TURN_DEG of its own normal before (across a crease the fan's mean
  * normal says nothing), no outer edge bends past the crease angle by more than
- * ISM_RM_CREASE_SLIDE_BEND_DEG over what it did, the smallest angle of the fan (of both fans,
+ * ISM_RM_CROWD_BEND_DEG over what it did (rm_crease_tri_ok), the smallest angle of the fan (of both fans,
  * for a merge) grows, and the distances the pass keeps are kept (centroids: rm_centroids_stay
  * for a move, the fans' farthest or the mesh's for a merge, midpoints too; under max_error
  * every centroid and edge midpoint of the fan within it, rm_bound.h). */
@@ -64,28 +64,15 @@
 /* Newton may land at most this × the mean edge from where it started (farther: it found
  * another part of the crease curve). */
 #define ISM_RM_CREASE_PROJECT_MAX_REL 0.5
-/* The slid vertex keeps this share of the chord ab clear at either end: the crease stays in
- * order (rm_slide.c's rule for box boundaries). */
-#define ISM_RM_CREASE_KEEP_ORDER 0.05
-/* A triangle may turn at most this (degrees) from its own normal before (a crease merge's
- * limit, rm_collapse.c: across a crease the fan's mean normal says nothing). */
-#define ISM_RM_CREASE_SLIDE_TURN_DEG 60.0
-/* An outer edge of the fan may bend this much (degrees) more than before when past the
- * crease angle (rm_collapse.c's ISM_RM_CROWD_BEND_DEG for merges along a crease): moving
- * along a curved crease turns the triangles on it a little either way. */
-#define ISM_RM_CREASE_SLIDE_BEND_DEG 10.0
-/* Two vertices beside the crease nearer than this × the mean edge crowd it: merged into one
- * on it (rm_collapse.c's ISM_RM_CROWD for merges along a crease). */
-#define ISM_RM_CREASE_CROWD 0.25
-/* A merged fan has at most this many triangles (rm_collapse.c's limit). */
-#define ISM_RM_CREASE_MERGE_MAX_DEGREE 16
 
 /* One vertex's fan: the triangles in order round v (tri[i] runs v, ring[i], then the next
- * ring vertex), its two neighbours on the crease when it slides, and the tape. */
+ * ring vertex), its two neighbours on the crease when it slides, the tape, and what the
+ * tape's branches measured at v. */
 typedef struct crease_fan {
     uint32_t n, tri[ISM_RM_CREASE_SLIDE_MAX_DEGREE], ring[ISM_RM_CREASE_SLIDE_MAX_DEGREE];
     uint32_t end[2];   /* v's two neighbours on the crease (sliding) */
     const ism_tape *f; /* the tape whose top min/max gives the branches there */
+    double val[2], gn[2]; /* the branches' values and gradient lengths at v in f */
 } crease_fan;
 
 static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * (size_t)v; }
@@ -125,26 +112,34 @@ static bool branches(rm_pass *p, const ism_tape *f, const double x[3], double va
            isfinite(val[1]);
 }
 
-/* x lies within tol of both branches' zero sets (first order). */
-static bool on_crease(rm_pass *p, const ism_tape *f, const double x[3], double tol)
+/* x lies within tol of both branches' zero sets (first order). val and gn, when not NULL,
+ * get the branches' values and gradient lengths there (when they are finite). */
+static bool on_crease(rm_pass *p, const ism_tape *f, const double x[3], double tol,
+                      double *val, double *gn)
 {
-    double val[2], g[2][3];
-    if (!branches(p, f, x, val, g))
+    double v[2], g[2][3], n[2];
+    if (!branches(p, f, x, v, g))
         return false;
+    for (int s = 0; s < 2; s++) {
+        n[s] = ism_norm3(g[s]);
+        if (val)
+            val[s] = v[s], gn[s] = n[s];
+    }
     for (int s = 0; s < 2; s++)
-        if (!(fabs(val[s]) <= tol * ism_norm3(g[s])))
+        if (!(fabs(v[s]) <= tol * n[s]))
             return false;
     return true;
 }
 
 /* The tape for v's fan: f, or f shortened over the fan's box when f's top branches do not
  * both vanish at v (a nested min/max whose other operands the box proves dominated). NULL:
- * none. */
-static const ism_tape *fan_tape(rm_pass *p, uint32_t v, double tol, ism_tape *local)
+ * none. val and gn get what the returned tape's branches measure at v. */
+static const ism_tape *fan_tape(rm_pass *p, uint32_t v, double tol, ism_tape *local,
+                                double val[2], double gn[2])
 {
     const rm_mesh *r = &p->r;
     const double *x = P(p, v);
-    if (on_crease(p, p->f, x, tol))
+    if (on_crease(p, p->f, x, tol, val, gn))
         return p->f;
     if (!local)
         return NULL;
@@ -161,17 +156,7 @@ static const ism_tape *fan_tape(rm_pass *p, uint32_t v, double tol, ism_tape *lo
     }
     if (!ism_tape_shorten(p->f, p->ws, box[0], box[1], box[2], local, NULL))
         return NULL;
-    return on_crease(p, local, x, tol) ? local : NULL;
-}
-
-/* The angle (radians) between the normals of two triangles given by corner pointers. */
-static double bend(const double *const a[3], const double *const b[3])
-{
-    double n[3], m[3];
-    double ln = rm_cross(a[0], a[1], a[2], n), lm = rm_cross(b[0], b[1], b[2], m);
-    if (!(ln > 0 && lm > 0))
-        return M_PI;
-    return acos(fmax(-1, fmin(1, ism_dot3(n, m) / (ln * lm))));
+    return on_crease(p, local, x, tol, val, gn) ? local : NULL;
 }
 
 /* The corners of v's i-th fan triangle with v at x. */
@@ -188,15 +173,16 @@ static void fan_corners(const rm_pass *p, const crease_fan *c, uint32_t v, uint3
 static int find_chain(rm_pass *p, uint32_t v, double mean_edge, ism_tape *local,
                       crease_fan *c)
 {
-    if (!(c->f = fan_tape(p, v, ISM_RM_CREASE_NEAR_REL * mean_edge, local)) ||
+    if (!(c->f = fan_tape(p, v, ISM_RM_CREASE_NEAR_REL * mean_edge, local, c->val, c->gn)) ||
         !walk_fan(p, v, c))
         return 0;
     double on = ISM_RM_CREASE_ON_REL * mean_edge;
-    if (!on_crease(p, c->f, P(p, v), on))
-        return 1;
+    for (int s = 0; s < 2; s++) /* on_crease at v, from what fan_tape measured */
+        if (!(fabs(c->val[s]) <= on * c->gn[s]))
+            return 1;
     int ends = 0;
     for (uint32_t i = 0; i < c->n; i++)
-        if (on_crease(p, c->f, P(p, c->ring[i]), on)) {
+        if (on_crease(p, c->f, P(p, c->ring[i]), on, NULL, NULL)) {
             if (ends == 2)
                 return 0; /* a corner, or a crease met again */
             c->end[ends++] = c->ring[i];
@@ -227,59 +213,26 @@ static bool to_crease(rm_pass *p, const ism_tape *f, double x[3], double scale)
     return false;
 }
 
-/* x lies between a and b along their chord, away from both ends. */
-static bool in_order(const double *x, const double *a, const double *b)
-{
-    double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, ax[3];
-    for (int k = 0; k < 3; k++)
-        ax[k] = x[k] - a[k];
-    double l2 = ism_dot3(ab, ab), t = l2 > 0 ? ism_dot3(ax, ab) / l2 : 0;
-    return t > ISM_RM_CREASE_KEEP_ORDER && t < 1 - ISM_RM_CREASE_KEEP_ORDER;
-}
-
-/* The fan with v at x: every triangle within the turn limit of its own normal before, no
- * outer edge bending against its neighbour past the crease angle or by more than
- * ISM_RM_CREASE_SLIDE_BEND_DEG over what it did; *sine gets its smallest sine. */
+/* The fan with v at x: every triangle and its outer edge (not v's) as rm_crease_tri_ok
+ * allows; *sine gets its smallest sine. */
 static bool fan_shape_ok(rm_pass *p, uint32_t v, const crease_fan *c, const double *x,
                          double *sine)
 {
     const double *pos = P(p, v);
-    double turn = cos(ISM_RM_CREASE_SLIDE_TURN_DEG * M_PI / 180);
-    double crease = ISM_RM_CREASE_DEG * M_PI / 180, more = ISM_RM_CREASE_SLIDE_BEND_DEG * M_PI / 180;
     *sine = INFINITY;
     for (uint32_t i = 0; i < c->n; i++) {
         const double *q[3], *o[3];
         fan_corners(p, c, v, i, x, q);
         fan_corners(p, c, v, i, pos, o);
-        double n[3], m[3], ln = rm_cross(q[0], q[1], q[2], n), lm = rm_cross(o[0], o[1], o[2], m);
-        if (!(ism_dot3(n, m) > turn * ln * lm))
-            return 0;
-        *sine = fmin(*sine, rm_sine_of(ln, rm_dist(q[0], q[1]), rm_dist(q[1], q[2]),
-                                       rm_dist(q[2], q[0])));
-        /* the outer edge (not v's): bends against the triangle across it */
         const uint32_t *t = p->r.m->tri + 3 * (size_t)c->tri[i];
         int k = rm_corner(p->r.m, c->tri[i], v);
-        uint32_t a = t[(k + 1) % 3], b = t[(k + 2) % 3], two[2];
-        int count;
-        if (!rm_edge_triangles(&p->r, a, b, two, &count))
-            continue; /* not manifold: its bend is no crease test's */
-        uint32_t s = two[0] == c->tri[i] ? two[1] : two[0];
-        const uint32_t *u = p->r.m->tri + 3 * (size_t)s;
-        const double *z[3] = {P(p, u[0]), P(p, u[1]), P(p, u[2])};
-        double before = bend(o, z);
-        if (!(bend(q, z) <= fmax(crease, before + more)))
-            return 0;
+        if (!rm_crease_tri_ok(p, c->tri[i], t[(k + 1) % 3], t[(k + 2) % 3], o, q))
+            return false;
+        *sine = fmin(*sine, rm_min_sine(q[0], q[1], q[2]));
     }
     return true;
 }
 
-/* The merged fan of g (v into w, w then at x) against the two fans before: every new
- * triangle within the turn limit of its own normal before, its outer edge bending no more
- * than fan_shape_ok allows, its centroid and the midpoints of the edges at x within what
- * the pass keeps, and the smallest angle grown over both fans' — or, as for merges along a
- * crease (rm_collapse.c), fewer triangles under ISM_RM_COLLAPSE_DEG and no sine below
- * ISM_RM_CROWD_SINE_FLOOR of the smallest before (needles along a crease come in strips:
- * bench_remesh gyroid-ball 54 / 51 / 86 -> 48 / 46 / 73 needles, the same smallest angle). */
 /* The corners of triangle t with v and w read at x (new) or where they are (old). */
 static void merge_corners(const rm_pass *p, const rm_merge *g, uint32_t t, const double *x,
                           const double *o[3], const double *q[3])
@@ -312,11 +265,15 @@ static void merge_distances(rm_pass *p, const rm_merge *g, const double *x, bool
         }
 }
 
+/* The merged fan of g (v into w, w then at x) against the two fans before: every new
+ * triangle and its outer edge as rm_crease_tri_ok allows, its centroid and the midpoints of the edges at x within what
+ * the pass keeps, and the smallest angle grown over both fans' — or, as for merges along a
+ * crease (rm_collapse.c), fewer triangles under ISM_RM_COLLAPSE_DEG and no sine below
+ * ISM_RM_CROWD_SINE_FLOOR of the smallest before (needles along a crease come in strips:
+ * bench_remesh gyroid-ball 54 / 51 / 86 -> 48 / 46 / 73 needles, the same smallest angle). */
 static bool merged_fan_ok(rm_pass *p, const rm_merge *g, const double *x)
 {
     const rm_mesh *r = &p->r;
-    double turn = cos(ISM_RM_CREASE_SLIDE_TURN_DEG * M_PI / 180);
-    double crease = ISM_RM_CREASE_DEG * M_PI / 180, more = ISM_RM_CREASE_SLIDE_BEND_DEG * M_PI / 180;
     double old_sine = INFINITY, new_sine = INFINITY, poor = sin(ISM_RM_COLLAPSE_DEG * M_PI / 180);
     int poor_before = 0, poor_after = 0; /* t1 and t2 counted once, from v's fan */
     uint32_t ends[2] = {g->v, g->w};
@@ -325,32 +282,20 @@ static bool merged_fan_ok(rm_pass *p, const rm_merge *g, const double *x)
             uint32_t t = r->vt[r->start[ends[e]] + i];
             const double *o[3], *q[3];
             merge_corners(p, g, t, x, o, q);
-            double m[3], ln = rm_cross(o[0], o[1], o[2], m);
-            double so = rm_sine_of(ln, rm_dist(o[0], o[1]), rm_dist(o[1], o[2]),
-                                   rm_dist(o[2], o[0]));
+            double so = rm_min_sine(o[0], o[1], o[2]);
             bool once = e == 0 || rm_corner(r->m, t, g->v) < 0;
             old_sine = fmin(old_sine, so);
             poor_before += once && so < poor;
             if (t == g->t1 || t == g->t2)
                 continue;
-            double n[3], lq = rm_cross(q[0], q[1], q[2], n);
-            if (!(ism_dot3(n, m) > turn * lq * ln))
-                return false;
-            double sn = rm_sine_of(lq, rm_dist(q[0], q[1]), rm_dist(q[1], q[2]),
-                                   rm_dist(q[2], q[0]));
-            new_sine = fmin(new_sine, sn);
-            poor_after += once && sn < poor;
+            /* t's outer edge (not at ends[e]) has neither v nor w: only t1 and t2 have both */
             const uint32_t *c = r->m->tri + 3 * (size_t)t;
             int at = rm_corner(r->m, t, ends[e]);
-            uint32_t a = c[(at + 1) % 3], b = c[(at + 2) % 3], two[2];
-            int count;
-            if (a == g->v || a == g->w || b == g->v || b == g->w ||
-                !rm_edge_triangles(r, a, b, two, &count))
-                continue;
-            const uint32_t *z = r->m->tri + 3 * (size_t)(two[0] == t ? two[1] : two[0]);
-            const double *w3[3] = {P(p, z[0]), P(p, z[1]), P(p, z[2])};
-            if (!(bend(q, w3) <= fmax(crease, bend(o, w3) + more)))
+            if (!rm_crease_tri_ok(p, t, c[(at + 1) % 3], c[(at + 2) % 3], o, q))
                 return false;
+            double sn = rm_min_sine(q[0], q[1], q[2]);
+            new_sine = fmin(new_sine, sn);
+            poor_after += once && sn < poor;
         }
     bool fewer = poor_after < poor_before && new_sine > ISM_RM_CROWD_SINE_FLOOR * old_sine;
     if (!(new_sine > old_sine || fewer))
@@ -366,15 +311,15 @@ static bool merged_fan_ok(rm_pass *p, const rm_merge *g, const double *x)
            (new_mid <= p->midpoint_low || new_mid <= old_mid);
 }
 
-/* v's nearest neighbour w closer than ISM_RM_CREASE_CROWD × v's mean edge, beside the
- * crease too: v merged into w and w put on the crease nearest their middle (two vertices
- * of the two surfaces crowding at the crease become one on it). True when done; *ok false
- * when out of memory. */
-static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan *f, bool *ok)
+/* v's nearest neighbour w closer than ISM_RM_CROWD × v's mean edge, beside the crease too:
+ * v merged into w and w put on the crease nearest their middle (two vertices of the two
+ * surfaces crowding at the crease become one on it). True when done; false also when out
+ * of memory (rm_merge_apply then changes nothing). */
+static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan *f)
 {
     const rm_mesh *r = &p->r;
     uint32_t w = UINT32_MAX;
-    double best = ISM_RM_CREASE_CROWD * f->mean_edge;
+    double best = ISM_RM_CROWD * f->mean_edge;
     for (uint32_t i = 0; i < c->n; i++) {
         double d = rm_dist(P(p, v), P(p, c->ring[i]));
         if (d < best && r->locked[c->ring[i]] != RM_PINNED)
@@ -383,8 +328,8 @@ static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan
     crease_fan cw;
     rm_merge g;
     if (w == UINT32_MAX || !walk_fan(p, w, &cw) ||
-        !on_crease(p, c->f, P(p, w), ISM_RM_CREASE_NEAR_REL * f->mean_edge) ||
-        !rm_merge_find_any(r, v, w, ISM_RM_CREASE_MERGE_MAX_DEGREE, &g) ||
+        !on_crease(p, c->f, P(p, w), ISM_RM_CREASE_NEAR_REL * f->mean_edge, NULL, NULL) ||
+        !rm_merge_find_any(r, v, w, ISM_RM_COLLAPSE_MAX_DEGREE, &g) ||
         !rm_merge_link_ok(r, &g))
         return false;
     double x[3], mid[3], grad[3];
@@ -398,7 +343,7 @@ static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan
     if (!(ism_norm3(grad) > p->gthresh))
         return false;
     uint32_t fan[ISM_RM_MERGE_MAX_DEGREE], n;
-    if (!(*ok = rm_merge_apply(&p->r, &g, fan, &n)))
+    if (!rm_merge_apply(&p->r, &g, fan, &n))
         return false;
     rm_cbound_drop(p);
     rm_commit_move(p, w, x, grad);
@@ -422,8 +367,7 @@ static bool slide_vertex(rm_pass *p, uint32_t v, ism_tape *local)
     int kind = find_chain(p, v, f.mean_edge, local, &c);
     if (!kind)
         return false;
-    bool ok = true;
-    if (snap_merge(p, v, &c, &f, &ok))
+    if (snap_merge(p, v, &c, &f))
         return true;
     const double *pos = P(p, v);
     const double *a = kind == 2 ? P(p, c.end[0]) : pos, *b = kind == 2 ? P(p, c.end[1]) : pos;
@@ -435,7 +379,7 @@ static bool slide_vertex(rm_pass *p, uint32_t v, ism_tape *local)
             x[k] = start[k] = pos[k] + step * (0.5 * (a[k] + b[k]) - pos[k]);
         if (!to_crease(p, c.f, x, f.mean_edge) ||
             !(rm_dist(x, start) <= ISM_RM_CREASE_PROJECT_MAX_REL * f.mean_edge) ||
-            (kind == 2 && !in_order(x, a, b)) || !fan_shape_ok(p, v, &c, x, &sine) ||
+            (kind == 2 && !rm_in_order(x, a, b)) || !fan_shape_ok(p, v, &c, x, &sine) ||
             !(sine > f.min_sine))
             continue;
         ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);

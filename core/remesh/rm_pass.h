@@ -37,6 +37,31 @@
  * 0.40° (rm_collapse.c's merges). */
 #define ISM_RM_CROWD_SINE_FLOOR 0.5
 
+/* A removed vertex, and the kept one after the merge, have at most this many triangles
+ * (rm_collapse.c's collapses, rm_crease_slide.c's merges onto a crease): higher valences
+ * make poor angles anyway. */
+#define ISM_RM_COLLAPSE_MAX_DEGREE 16
+/* A new triangle facing more than this from the old fan's normal is a fold (the relaxation's
+ * limit, ISM_RM_MAX_TURN_DEG in rm_relax.c); across a crease (rm_crease_tri_ok) the limit
+ * is against the triangle's own normal before, the fan's mean normal saying nothing there. */
+#define ISM_RM_COLLAPSE_MAX_TURN_DEG 60.0
+/* A merge or move along a crease (rm_crease_tri_ok) may bend a new triangle against its
+ * outer neighbour by this much (degrees) more than before, beyond the crease angle: at a
+ * crease the outer edge may be the crease's own, bending by tens of degrees, and moving a
+ * vertex by a hair (or along a curved crease) changes that by a little either way. */
+#define ISM_RM_CROWD_BEND_DEG 10.0
+/* A crease vertex nearer a neighbour than this × its mean edge crowds the crease: merged
+ * into it (rm_collapse.c), or both merged into one on a min/max crease (rm_crease_slide.c),
+ * the crease moves by at most that much (the gyroid ball's crease vertices 1/20 to 1/400
+ * of a cell apart, its edges about a cell; while a merge also asked for exactly two crease
+ * edges at v, 0.1 left 246 / 245 / 335 needles in bench_remesh's boxes, 0.25 240 / 239 /
+ * 321). */
+#define ISM_RM_CROWD 0.25
+/* A vertex slid along a curve (rm_slide.c's box boundaries, rm_crease_slide.c's creases)
+ * is refused outside this fraction of the span between its two neighbours on the curve
+ * (measured along their chord): the curve stays in order with room to spare. */
+#define ISM_RM_SLIDE_KEEP_ORDER 0.05
+
 typedef struct rm_pass {
     rm_mesh r;
     const ism_tape *f;
@@ -148,6 +173,15 @@ size_t rm_flip_from(rm_pass *p, const uint8_t *seed, bool *ok);
 bool rm_flip_would_pass(rm_pass *p, const double *A, const double *B, const double *C,
                         const double *D);
 
+/* Triangle t, whose corners are o[] before and q[] after a merge or move along a crease,
+ * keeps its outer edge {a, b} (the one not at the vertex moved): q's normal stays within
+ * ISM_RM_COLLAPSE_MAX_TURN_DEG of o's (its own before: across a crease the fan's mean
+ * normal says nothing), and against the triangle across ab (rm_merge_across; none: no
+ * test) q bends by at most the crease angle or by ISM_RM_CROWD_BEND_DEG more than o did.
+ * A degenerate q or o fails (rm_collapse.c). */
+bool rm_crease_tri_ok(const rm_pass *p, uint32_t t, uint32_t a, uint32_t b,
+                      const double *o[3], const double *q[3]);
+
 /* Collapses edges of triangles with a small angle (rm_collapse.c) where the topology, the
  * features and the distance to f = 0 allow it; returns the collapses made. Removed
  * triangles are marked dead and removed vertices gone (rm_compact drops them). *ok false
@@ -219,6 +253,10 @@ size_t rm_unfold_sweep(rm_pass *p);
 /* One sweep of tangential relaxation over the free active vertices whose mark is at most
  * most (UINT8_MAX: every active one); returns the moves made. */
 size_t rm_relax_sweep(rm_pass *p, uint8_t most);
+
+/* x lies between a and b along their chord, inside ISM_RM_SLIDE_KEEP_ORDER of either end
+ * (rm_slide.c). */
+bool rm_in_order(const double *x, const double *a, const double *b);
 
 /* One sweep sliding the active box-boundary vertices (slide) along their boundary curve
  * toward the middle of their two boundary neighbours (rm_slide.c); returns the moves made. */

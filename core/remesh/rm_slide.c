@@ -11,11 +11,6 @@
 #include <math.h>
 #include <string.h>
 
-/* A slide is refused when it would take a vertex outside this fraction of the span between
- * its boundary neighbours (measured along the chord): the boundary stays in order with
- * room to spare. */
-#define ISM_RM_SLIDE_KEEP_ORDER 0.05
-
 /* A slide may leave the boundary edges' midpoints and the vertex this × the fan's mean edge
  * from f = 0 whatever they were: rounding. Where a box face cuts the surface in straight
  * lines (whitney-umbrella's top face z = 1: x = ±y) every boundary point measures rounding
@@ -61,8 +56,7 @@ static double boundary_error(rm_pass *p, const double *x, const double *a, const
     return fmax(rm_distance(p, ma), rm_distance(p, mb));
 }
 
-/* x lies between a and b along their chord, away from both ends. */
-static bool in_order(const double *x, const double *a, const double *b)
+bool rm_in_order(const double *x, const double *a, const double *b)
 {
     double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, l2 = 0, t = 0;
     for (int k = 0; k < 3; k++) {
@@ -96,7 +90,7 @@ static bool slide_vertex(rm_pass *p, uint32_t v)
             continue;
         x[axis] = pos[axis]; /* exactly on the box face */
         ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
-        if (!(rm_dist(x, start) <= 0.5 * f.mean_edge) || !in_order(x, a, b) ||
+        if (!(rm_dist(x, start) <= 0.5 * f.mean_edge) || !rm_in_order(x, a, b) ||
             !(boundary_error(p, x, a, b) <= bound) || !(rm_distance(p, x) <= bound) ||
             !rm_fan_accepts(p, v, x, &f) || (p->bounded && !rm_bound_fan(p, v, x)))
             continue;

@@ -848,9 +848,9 @@ static void gyroid_ball_case(const ism_tape *t, const double box[6], int d, int 
 Test(remesh_needles, gyroid_ball_needles_beside_the_crease)
 {
     const double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
-    /* FIXME(issue 13): fails at the irrational placement (pf_sweep_box 1): 74 needles beside
-     * the crease after the pass (3,238 before it), crease_left 44 (37 measured at the old
-     * placement; main 87b88d6); every other fact holds there. Left on the old rational
+    /* FIXME(issue 13): fails at the irrational placement (pf_sweep_box 1): 78 needles beside
+     * the crease after the pass (3,238 before it), crease_left 48 (40 measured at the old
+     * placement; main f030748); every other fact holds there. Left on the old rational
      * placement until core/remesh leaves as few crease needles there. */
     in_boxes_at(GYROID_BALL, base, 7, pf_quick() ? 1 : -1, true, gyroid_ball_case);
 }
