@@ -27,10 +27,10 @@
  * max(...) − 1) is left alone. A move is kept only when each triangle stays within
  * ISM_RM_COLLAPSE_MAX_TURN_DEG of its own normal before (across a crease the fan's mean
  * normal says nothing), no outer edge bends past the crease angle by more than
- * ISM_RM_CROWD_BEND_DEG over what it did (rm_crease_tri_ok), the smallest angle of the fan (of both fans,
- * for a merge) grows, and the distances the pass keeps are kept (centroids: rm_centroids_stay
- * for a move, the fans' farthest or the mesh's for a merge, midpoints too; under max_error
- * every centroid and edge midpoint of the fan within it, rm_bound.h). */
+ * ISM_RM_CROWD_BEND_DEG over what it did (rm_crease_tri_ok), the smallest angle of the fan
+ * (of both fans, for a merge) grows, and the distances the pass keeps are kept (centroids:
+ * rm_centroids_stay for a move, the fans' farthest or the mesh's for a merge, midpoints too;
+ * under max_error every centroid and edge midpoint of the fan within it, rm_bound.h). */
 #include "core/remesh/rm_bound.h"
 #include "core/remesh/rm_cbound.h"
 #include "core/remesh/rm_merge.h"
@@ -266,11 +266,12 @@ static void merge_distances(rm_pass *p, const rm_merge *g, const double *x, bool
 }
 
 /* The merged fan of g (v into w, w then at x) against the two fans before: every new
- * triangle and its outer edge as rm_crease_tri_ok allows, its centroid and the midpoints of the edges at x within what
- * the pass keeps, and the smallest angle grown over both fans' — or, as for merges along a
- * crease (rm_collapse.c), fewer triangles under ISM_RM_COLLAPSE_DEG and no sine below
- * ISM_RM_CROWD_SINE_FLOOR of the smallest before (needles along a crease come in strips:
- * bench_remesh gyroid-ball 54 / 51 / 86 -> 48 / 46 / 73 needles, the same smallest angle). */
+ * triangle and its outer edge as rm_crease_tri_ok allows, its centroid and the midpoints of
+ * the edges at x within what the pass keeps, and the smallest angle grown over both fans' —
+ * or, as for merges along a crease (rm_collapse.c), fewer triangles under
+ * ISM_RM_COLLAPSE_DEG and no sine below ISM_RM_CROWD_SINE_FLOOR of the smallest before
+ * (needles along a crease come in strips: bench_remesh gyroid-ball 54 / 51 / 86 -> 48 / 46
+ * / 73 needles, the same smallest angle). */
 static bool merged_fan_ok(rm_pass *p, const rm_merge *g, const double *x)
 {
     const rm_mesh *r = &p->r;
