@@ -5,6 +5,7 @@
 #include "proto/json_writer.h"
 
 #include <stddef.h>
+#include <stdio.h>
 #include <string.h>
 
 #define COUNT(a) (sizeof(a) / sizeof((a)[0]))
@@ -235,6 +236,21 @@ const ism_preset *ism_preset_find(const char *name)
         if (strcmp(presets[i].name, name) == 0)
             return &presets[i];
     return NULL;
+}
+
+bool ism_preset_has_param(const ism_preset *p, const char *name)
+{
+    for (size_t k = 0; k < p->nparams; k++)
+        if (strcmp(p->params[k].name, name) == 0)
+            return true;
+    return false;
+}
+
+void ism_preset_param_names(const ism_preset *p, char *buf, size_t n)
+{
+    snprintf(buf, n, "none");
+    for (size_t k = 0, at = 0; k < p->nparams && at < n; k++)
+        at += (size_t)snprintf(buf + at, n - at, "%s%s", k ? ", " : "", p->params[k].name);
 }
 
 static void write_preset(ism_jw *w, const ism_preset *p)

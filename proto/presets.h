@@ -6,6 +6,7 @@
 #ifndef ISM_PRESETS_H
 #define ISM_PRESETS_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include "core/expr/expr.h"
 
@@ -43,6 +44,12 @@ size_t ism_preset_count(void);
 const ism_preset *ism_preset_at(size_t i);
 /* The preset called name, or NULL. */
 const ism_preset *ism_preset_find(const char *name);
+/* Does the preset have a parameter called name? (a request's "params" and the CLI's -p
+ * refuse a name it has not: a misspelt one would otherwise be ignored without a word) */
+bool ism_preset_has_param(const ism_preset *p, const char *name);
+/* The preset's parameter names joined by ", " into buf (n bytes, cut short if it must),
+ * or "none" when it has none: the "(it has ...)" of those refusals. */
+void ism_preset_param_names(const ism_preset *p, char *buf, size_t n);
 
 /* {"presets": [{"name", "title", "about", "expr", "let": [[name, source]...], "params":
  * [{"name", "default", "min", "max"}...], "box": [6], "depth": {"min", "max"}, "source",

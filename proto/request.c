@@ -129,14 +129,24 @@ static bool read_int(const json_t *v, const char *path, int *out, ism_req_error 
     return true;
 }
 
-static bool in_range(double v, double lo, double hi, const char *path, ism_req_error *err)
+/* v within [lo, hi], or a 422 naming the bound it crosses, shown as lo_text / hi_text (NULL:
+ * the bound itself, num()). */
+static bool in_range_shown(double v, double lo, double hi, const char *lo_text,
+                           const char *hi_text, const char *path, ism_req_error *err)
 {
     char b[32], c[32];
     if (v < lo)
-        return over(err, path, "%s is below the minimum %s", num(v, b), num(lo, c));
+        return over(err, path, "%s is below the minimum %s", num(v, b),
+                    lo_text ? lo_text : num(lo, c));
     if (v > hi)
-        return over(err, path, "%s is above the limit %s", num(v, b), num(hi, c));
+        return over(err, path, "%s is above the limit %s", num(v, b),
+                    hi_text ? hi_text : num(hi, c));
     return true;
+}
+
+static bool in_range(double v, double lo, double hi, const char *path, ism_req_error *err)
+{
+    return in_range_shown(v, lo, hi, NULL, NULL, path, err);
 }
 
 static bool read_string(const json_t *v, const char *path, const char **out, ism_req_error *err)
@@ -238,19 +248,11 @@ static bool decode_params(const json_t *v, const ism_preset *preset, ism_request
         double d;
         if (!check_name(key, p, "parameter", err) || !read_number(val, p, &d, err))
             return false;
-        if (preset) {
-            bool known = false;
-            char names[200] = "";
-            for (size_t i = 0; i < preset->nparams; i++) {
-                known = known || strcmp(preset->params[i].name, key) == 0;
-                strncat(names, preset->params[i].name, sizeof names - strlen(names) - 1);
-                if (i + 1 < preset->nparams)
-                    strncat(names, ", ", sizeof names - strlen(names) - 1);
-            }
-            if (!known)
-                return bad(err, p, "preset '%s' has no parameter '%s'%s%s%s", preset->name, key,
-                           preset->nparams ? " (it has " : " (it has none)",
-                           preset->nparams ? names : "", preset->nparams ? ")" : "");
+        if (preset && !ism_preset_has_param(preset, key)) {
+            char names[200];
+            ism_preset_param_names(preset, names, sizeof names);
+            return bad(err, p, "preset '%s' has no parameter '%s' (it has %s)", preset->name,
+                       key, names);
         }
         if (!set_param(req, key, d, err))
             return false;
@@ -452,13 +454,16 @@ static bool decode_max_error(const json_t *v, const json_t *depth, ism_request *
                     num(e, b));
     /* the limits to three digits, rounded inwards: a value copied from the message passes */
     double diag = sqrt(d2), lo = ISM_REQ_MIN_ERROR_REL * diag;
-    if (e < lo)
-        return over(err, "$.max_error", "%s is below the minimum %s (%s of the box diagonal %s)",
-                    num(e, b), three_digits(lo, 1, c), num(ISM_REQ_MIN_ERROR_REL, d),
-                    three_digits(diag, 0, g));
-    if (e > diag)
-        return over(err, "$.max_error", "%s is above the limit %s (the box diagonal)",
-                    num(e, b), three_digits(diag, -1, c));
+    if (!in_range_shown(e, lo, diag, three_digits(lo, 1, c), three_digits(diag, -1, g),
+                        "$.max_error", err)) {
+        size_t at = strlen(err->message);
+        if (e < lo)
+            snprintf(err->message + at, sizeof err->message - at, " (%s of the box diagonal %s)",
+                     num(ISM_REQ_MIN_ERROR_REL, d), three_digits(diag, 0, g));
+        else
+            snprintf(err->message + at, sizeof err->message - at, " (the box diagonal)");
+        return false;
+    }
     req->poly.max_error = e;
     if (!(depth && json_object_get(depth, "max")))
         req->poly.max_depth = depth_limit;

@@ -24,8 +24,6 @@ typedef struct ism_cli_run {
     bool no_dual;               /* --no-dual: under --max-error, the primal polygons even
                                    where the dual mesh (the default) applies */
     bool require_dual;          /* --dual: the dual mesh or a failure naming why not */
-    const char *surface_flag;   /* the first flag given that describes the surface or its
-                                   mesh (refused beside a request file, which says it all) */
     ism_param *params;          /* names owned */
     size_t nparams;
     ism_let *lets;              /* names and sources owned */

@@ -97,15 +97,10 @@ static bool prepend_let(ism_cli_run *run, size_t at, const char *name, const cha
 static bool preset_has_params(const ism_cli_run *run, const ism_preset *p)
 {
     for (size_t i = 0; i < run->nparams; i++) {
-        bool known = false;
-        for (size_t k = 0; k < p->nparams && !known; k++)
-            known = strcmp(run->params[i].name, p->params[k].name) == 0;
-        if (known)
+        if (ism_preset_has_param(p, run->params[i].name))
             continue;
-        char names[256] = "none";
-        for (size_t k = 0, at = 0; k < p->nparams && at < sizeof names; k++)
-            at += (size_t)snprintf(names + at, sizeof names - at, "%s%s", k ? ", " : "",
-                                   p->params[k].name);
+        char names[256];
+        ism_preset_param_names(p, names, sizeof names);
         fprintf(stderr, "isomesh: --param %s: the surface '%s' has no parameter %s (it has %s)\n",
                 run->params[i].name, p->name, run->params[i].name, names);
         return false;

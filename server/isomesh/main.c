@@ -166,13 +166,17 @@ static const char *flag_name(const struct option *opts, int opt)
     return "?";
 }
 
+/* getopt's short options (a leading ':' reports a missing value as ':'); is_flag reads the
+ * same string, so a short flag added here is known there too. */
+static const char short_opts[] = ":e:p:b:d:o:h";
+
 /* Is a flag's value really the next flag (`--surface -o x.ply`: the value was forgotten)?
  * Exactly one of the short flags, or -- and a long flag's name (numbers like -1 are values). */
 static bool is_flag(const struct option *opts, const char *arg)
 {
     if (arg[0] != '-')
         return false;
-    if (arg[1] && !arg[2] && strchr("epbdoh", arg[1]))
+    if (arg[1] && !arg[2] && arg[1] != ':' && strchr(short_opts, arg[1]))
         return true;
     if (arg[1] != '-')
         return false;
@@ -190,12 +194,13 @@ static bool applies_to_request_file(int opt)
 }
 
 /* The flags' combinations; false after printing the error (exit status 2). */
-static bool check_combination(const ism_cli_run *run, const char *request_file)
+static bool check_combination(const ism_cli_run *run, const char *request_file,
+                              const char *surface_flag)
 {
-    if (request_file && run->surface_flag) {
+    if (request_file && surface_flag) {
         fprintf(stderr, "isomesh: --%s: not with a request file (%s says everything about the "
                 "surface and its mesh: set it there); beside one only -o, --stats, --features "
-                "and --threads apply\n", run->surface_flag, request_file);
+                "and --threads apply\n", surface_flag, request_file);
         return false;
     }
     if (run->require_dual && run->no_dual) {
@@ -279,11 +284,14 @@ int main(int argc, char **argv)
     ism_cli_run run;
     ism_cli_run_init(&run);
     bool list = false;
+    /* the first flag given that describes the surface or its mesh (refused beside a request
+     * file, which says it all) */
+    const char *surface_flag = NULL;
     int opt;
     struct option long_options[NBASE_OPTIONS + ISM_TOLERANCE_COUNT + 1];
     all_options(long_options);
     opterr = 0;
-    while ((opt = getopt_long(argc, argv, ":e:p:b:d:o:h", long_options, NULL)) != -1) {
+    while ((opt = getopt_long(argc, argv, short_opts, long_options, NULL)) != -1) {
         if (opt == 'h') {
             print_usage();
             ism_cli_run_free(&run);
@@ -311,8 +319,8 @@ int main(int argc, char **argv)
             ism_cli_run_free(&run);
             return 2;
         }
-        if (!applies_to_request_file(opt) && !run.surface_flag)
-            run.surface_flag = name;
+        if (!applies_to_request_file(opt) && !surface_flag)
+            surface_flag = name;
         if (!apply_option(&run, opt, optarg)) {
             ism_cli_run_free(&run);
             return 2;
@@ -324,7 +332,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "isomesh: unexpected argument '%s': one request file at most, and -o "
                 "FILE for the output (try --help)\n", argv[optind + 1]);
         status = 2;
-    } else if (!list && !check_combination(&run, request_file))
+    } else if (!list && !check_combination(&run, request_file, surface_flag))
         status = 2;
     else if (list)
         status = ism_cli_list_surfaces(&run);
