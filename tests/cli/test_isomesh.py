@@ -173,6 +173,11 @@ class TestIsomesh(unittest.TestCase):
             (["-e", "x", "--let", "=x", "-o", "a.ply"], "--let"),
             # a flag's value forgotten: the next flag is not taken as its value
             (["--surface", "-o", "a.ply"], "missing value for --surface"),
+            # every short flag getopt knows, and not the ':' that starts its option string
+            *((["--surface", f, "-o", "a.ply"],
+               f"missing value for --surface (the next word, '{f}', is a flag)")
+              for f in ("-e", "-p", "-b", "-d", "-h")),
+            (["--surface", "-:", "-o", "a.ply"], "no built-in surface named '-:'"),
             (["-e", "x", "-o", "--stats"], "missing value for --output"),
             (["-e", "x", "--features", "--stats", "-o", "a.ply"], "missing value for --features"),
             # a surfaces file without the name of the surface to take from it
@@ -311,20 +316,29 @@ class TestIsomesh(unittest.TestCase):
         the primal polygons."""
         path = self.out("m.ply")
         sphere = ("-e", "x^2 + y^2 + z^2 - 1", "-b", "-1.5,-1.5,-1.5,1.5,1.5,1.5")
+
+        def placed(box6):
+            """-b of box6 in each of its placements (tests/cli/boxes.py; cell: a 64th)."""
+            cell = tuple((box6[a + 3] - box6[a]) / 64 for a in range(3))
+            return [("-b", ",".join(map(repr, b))) for b in placements(box6, cell)]
         # the sphere, and the sphere cut by the box (meshed in a larger box and clipped:
-        # core/octree/dual_box.h; one boundary loop)
-        for box, loops in ((sphere[2:], 0), (("-b", "-0.5,-1.5,-1.5,1.5,1.5,1.5"), 1)):
-            p = run(*sphere[:2], *box, "--max-error", "0.01", "--dual", "-o", path, "--stats")
-            self.assertEqual(p.returncode, 0, p.stderr)
-            s = json.loads(p.stdout)
-            self.assertEqual(s["polygoniser"]["mesher"], "dual")
-            self.assertEqual(s["analysis"]["boundary_loops"], loops)
-            self.assertTrue(os.path.exists(path))
-            os.remove(path)
-        # declined before meshing (min/max in f), by the locus (a double line), by the box
-        # (it cuts a cone whose apex is a node: no clip beside singular points yet)
+        # core/octree/dual_box.h; one boundary loop), in the lattice boxes and off them (the
+        # cut plane x = -0.5 a lattice plane, then not)
+        for box6, loops in (([-1.5] * 3 + [1.5] * 3, 0), ([-0.5, -1.5, -1.5, 1.5, 1.5, 1.5], 1)):
+            for box in placed(box6):
+                p = run(*sphere[:2], *box, "--max-error", "0.01", "--dual", "-o", path, "--stats")
+                self.assertEqual(p.returncode, 0, (box, p.stderr))
+                s = json.loads(p.stdout)
+                self.assertEqual(s["polygoniser"]["mesher"], "dual", box)
+                self.assertEqual(s["analysis"]["boundary_loops"], loops, box)
+                self.assertTrue(os.path.exists(path), box)
+                os.remove(path)
+        # declined before meshing (min/max in f), by the locus (a double line: in the box
+        # +-1 it lies on lattice planes, off them in the shifted boxes), by the box (it cuts
+        # a cone whose apex is a node: no clip beside singular points yet)
         for args, why in ((("-e", "max(x^2 + y^2 + z^2 - 1, z - 0.5)", *sphere[2:]), "min_max"),
-                          (("-e", "x*y", "-d", "2:6"), "singular_locus"),
+                          *((("-e", "x*y", "-d", "2:6", *box), "singular_locus")
+                            for box in placed([-1] * 3 + [1] * 3)),
                           (("-e", "x^2 + y^2 - z^2", "-b", "-1,-1.1,-1.2,1.3,1.1,1"),
                            "box_cut")):
             extra = ("--max-error", "0.05")
