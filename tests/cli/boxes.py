@@ -32,7 +32,8 @@ PLACEMENTS = (("own", (0, 0, 0), False), ("1e-3", OFF_1E3, False), ("irr", IRR_C
 
 def placements(box, cell):
     """[lo x, lo y, lo z, hi x, hi y, hi z] boxes: `box` and its shifted copies; cell: the
-    finest cell's side."""
-    shifts = [[s[a] * cell if in_cells else s[a] for a in range(3)]
+    finest cell's side, or a tuple of the three sides (a box that is not a cube)."""
+    c = cell if isinstance(cell, tuple) else (cell,) * 3
+    shifts = [[s[a] * c[a] if in_cells else s[a] for a in range(3)]
               for _, s, in_cells in PLACEMENTS]
     return [[box[k] + s[k % 3] for k in range(6)] for s in (shifts[2:] if QUICK else shifts)]

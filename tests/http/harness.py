@@ -12,11 +12,14 @@ import re
 import shutil
 import signal
 import subprocess
+import sys
 import tempfile
 import threading
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+# tests/cli/boxes.py (the placements every geometric test meshes in) importable as `boxes`
+sys.path.insert(0, os.path.join(ROOT, "tests", "cli"))
 BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
 ISOMESHD = os.path.join(BUILD, "isomeshd")
 QUICK = os.environ.get("ISOMESH_TEST_QUICK") == "1"

@@ -12,10 +12,9 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "cli"))
-from boxes import IRR  # noqa: E402  (the placements' table: sqrt(2) - 1 of a cell)
 from harness import (ROOT, SLOW, SPHERE, Daemon, draco_counts, open_get,  # noqa: E402
                      parse_metrics, sphere)
+from boxes import placements  # noqa: E402  (tests/cli; path set by harness)
 
 ORIGIN = "https://viewer.example"
 
@@ -179,24 +178,23 @@ class ApiTest(unittest.TestCase):
         """A preview searches the cells whose corners all share a sign for a piece between
         them: a ball of radius 0.04 (a fifth of a depth-4 cell, a tenth of a depth-3 one) and a
         rod of radius 0.05 along z, both off the lattice, show in previews at depths 3 and 4,
-        in the box as given and shifted by 1e-3 and by sqrt(2) - 1 of a cell. Closed forms: the
-        points on the small ball lie at its radius from its centre (roots on cell edges), the
-        rod's points at its radius from its axis, along its whole length in the box."""
+        in the box as given and in its placements off the lattice (tests/cli/boxes.py). Closed
+        forms: the points on the small ball lie at its radius from its centre (roots on cell
+        edges), the rod's points at its radius from its axis, along its whole length in the box."""
         c, rb = (-0.93, 0.71, -0.64), 0.04
         a, rr = (0.13, -0.07), 0.05
         ball = "((x-0.31)^2+(y+0.23)^2+(z-0.17)^2-0.25)*((x+0.93)^2+(y-0.71)^2+(z+0.64)^2-%r)" % (rb * rb)
         rod = "(x-0.13)^2+(y+0.07)^2-%r+0*z" % (rr * rr)
         for depth in (3, 4):
             cell = 3.0 / 2 ** depth
-            for shift in (0.0, 1e-3, IRR * cell):
-                box = [-1.5 + shift] * 3 + [1.5 + shift] * 3
+            for box in placements([-1.5] * 3 + [1.5] * 3, cell):
                 for expr in (ball, rod):
                     r = self.d.post("/v1/mesh?format=obj", {"expr": expr, "box": box, "preview": True,
                                                             "depth": {"min": 3, "max": depth}})
                     self.assertEqual(r.status, 200, r.body[:300])
                     pts = [tuple(map(float, l.split()[1:4])) for l in r.body.decode().splitlines()
                            if l.startswith("v ")]
-                    what = (depth, shift, expr[:20])
+                    what = (depth, box, expr[:20])
                     if expr is ball:
                         near = [sum((p[k] - c[k]) ** 2 for k in range(3)) ** 0.5 for p in pts]
                         on = [d for d in near if d < 0.5]
@@ -217,11 +215,10 @@ class ApiTest(unittest.TestCase):
         corners (genus 12 - 8 + 1 = 5: chi = 2 - 2*5 = -8, one piece, closed); at its middle a
         bar is 0.02 across, an eighth of a depth-4 cell of the box +-1.3, between the lattice
         lines. A preview at depth 4 keeps every bar (it dropped them all: chi 16, the 8
-        corners apart), in the box as given and shifted by 1e-3 and by sqrt(2) - 1 of a cell. chi,
+        corners apart), in the box as given and in its placements off the lattice (boxes.py). chi,
         pieces and open edges are counted from the OBJ's faces."""
         cell = 2.6 / 2 ** 4
-        for shift in (0.0, 1e-3, IRR * cell):
-            box = [-1.3 + shift] * 3 + [1.3 + shift] * 3
+        for box in placements([-1.3] * 3 + [1.3] * 3, cell):
             r = self.d.post("/v1/mesh?format=obj", {"preset": "cube-minus-ball", "params": {"r": 1.4},
                                                     "box": box, "preview": True,
                                                     "depth": {"min": 3, "max": 4}})
@@ -244,9 +241,9 @@ class ApiTest(unittest.TestCase):
                     up[root(a)] = root(b)
             used = {v for f in faces for v in f}
             chi = len(used) - len(edges) + len(faces)
-            self.assertEqual(chi, -8, shift)
-            self.assertEqual(len({root(v) for v in used}), 1, shift)
-            self.assertEqual([n for n in edges.values() if n != 2], [], shift)
+            self.assertEqual(chi, -8, box)
+            self.assertEqual(len({root(v) for v in used}), 1, box)
+            self.assertEqual([n for n in edges.values() if n != 2], [], box)
 
     def test_stats_and_features(self):
         key = self.d.post("/v1/mesh", sphere(0.66)).header("ETag").strip('"')

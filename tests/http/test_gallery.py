@@ -2,8 +2,8 @@
 each with a source, parameters, a box and depths; every entry meshes without error at its own
 settings; and every fact an entry states (nodes: singular points of type node in the features
 JSON v2; Euler characteristic; components) holds on the mesh — in the entry's box and in the
-box shifted off the octree lattice by 1e-3 of a finest cell and by irrational fractions of one
-(tests/cli/boxes.py's IRR_CELLS). Also POST /v1/box, and
+placements of tests/cli/boxes.py off the octree lattice (moved by (1e-3, -1e-3, 0.7e-3) and by
+irrational fractions of a finest cell, IRR_CELLS). Also POST /v1/box, and
 the thumbnails the daemon renders itself (GET /v1/presets/{name}/thumbnail.png)."""
 import json
 import os
@@ -15,21 +15,23 @@ from concurrent.futures import ThreadPoolExecutor
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from harness import BUILD, Daemon  # noqa: E402
-
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "cli"))
-from boxes import IRR_CELLS  # noqa: E402  (the placements' table)
+from boxes import IRR_CELLS, placements  # noqa: E402  (tests/cli; path set by harness)
 
 MIN_ENTRIES = 40
-SHIFTS = ((0.0,) * 3, (1e-3,) * 3, IRR_CELLS)   # of a finest cell, per axis
 # Against the sanitizer build (5-10x slower) the daemon's memory safety is what is tested:
 # only the entries with facts, only in the box off the lattice by IRR_CELLS; the release
-# run covers every entry in every box.
+# run covers the entries with facts in every placement, the others in their own box.
 SANITIZED = os.path.basename(os.path.normpath(BUILD)) == "asan"
 
 
-def shifted(box, max_depth, s):
-    cell = [(box[a + 3] - box[a]) / 2 ** max_depth for a in range(3)]
-    return [box[a % 3 + (3 if a >= 3 else 0)] + s[a % 3] * cell[a % 3] for a in range(6)]
+def entry_boxes(p):
+    """The boxes an entry is meshed in: boxes.placements of its box with its finest cell per
+    axis (its own box first, the irrational placement last)."""
+    boxes = placements(p["box"], tuple((p["box"][a + 3] - p["box"][a]) / 2 ** p["depth"]["max"]
+                                       for a in range(3)))
+    if SANITIZED:
+        return boxes[-1:] if p["facts"] else []
+    return boxes if p["facts"] else boxes[:1]
 
 
 def decode_png(data):
@@ -148,17 +150,13 @@ class GalleryTest(unittest.TestCase):
     def test_every_entry_meshes_and_its_facts_hold(self):
         jobs = []
         for p in self.presets:
-            shifts = SHIFTS if p["facts"] else (SHIFTS[0],)
-            if SANITIZED:
-                shifts = (IRR_CELLS,) if p["facts"] else ()
-            for s in shifts:
-                box = shifted(p["box"], p["depth"]["max"], s)
-                jobs.append((p, s, {"preset": p["name"], "box": box, "depth": p["depth"]}))
+            for box in entry_boxes(p):
+                jobs.append((p, box, {"preset": p["name"], "box": box, "depth": p["depth"]}))
         with ThreadPoolExecutor(max_workers=2) as pool:
             results = list(pool.map(lambda j: self.mesh(j[2]), jobs))
         failures = []
         for (p, s, _), (stats, features) in zip(jobs, results):
-            where = f"{p['name']} (shift {s} cell)"
+            where = f"{p['name']} (box {s})"
             if stats is None:
                 failures.append(f"{where}: {features}")
                 continue
