@@ -660,15 +660,17 @@ static int leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad)
     if (kind == DN_INNER && d->nballs &&
         ism_dual_balls_near(d->balls, d->nballs, v->p[0], v->p[7], size))
         return DN_HOLE; /* not plain near a point, as small as its hole's leaves (near_point) */
-    if (has_sheet(kind) && touches_box(d, n) && d->inner) {
-        if (n->level < ISM_DUAL_BOX_LEVEL)
-            kind = DN_INNER; /* no larger than the margin's cells (dual_box.h) */
-    } else if (has_sheet(kind) && touches_box(d, n)) {
-        int clear = box_faces_clear(d, w, n, v);
-        if (clear < 0)
-            *bad = true; /* the box cuts the surface: its faces need the primal polygons */
-        else if (!clear)
-            kind = DN_INNER; /* split until the box's faces are proven clear */
+    if (has_sheet(kind) && touches_box(d, n)) {
+        if (d->inner) {
+            if (n->level < ISM_DUAL_BOX_LEVEL)
+                kind = DN_INNER; /* no larger than the margin's cells (dual_box.h) */
+        } else {
+            int clear = box_faces_clear(d, w, n, v);
+            if (clear < 0)
+                *bad = true; /* the box cuts the surface: its faces need the primal polygons */
+            else if (!clear)
+                kind = DN_INNER; /* split until the box's faces are proven clear */
+        }
     }
     return kind;
 }

@@ -337,9 +337,9 @@ static enum ism_box_clip_status clip_plane(bclip *c, int p)
     ism_mesh *m = c->m;
     int a = p / 2;
     double at = c->box[a + 3 * (p & 1)];
+    /* c->on covers m->nverts already: sized by ism_dual_box_clip, grown by cut_points */
     if (!ism_grow((void **)&c->sd, &c->capsd, m->nverts, sizeof *c->sd, 1024) ||
-        !ism_grow((void **)&c->need, &c->capneed, m->nverts, sizeof *c->need, 1024) ||
-        !ism_grow((void **)&c->on, &c->capon, m->nverts, 1, 1024))
+        !ism_grow((void **)&c->need, &c->capneed, m->nverts, sizeof *c->need, 1024))
         return ISM_BOX_CLIP_NO_MEMORY;
     size_t nv = m->nverts;
     for (size_t v = 0; v < nv; v++) { /* beyond the plane: > 0; on it (made so): 0 */
@@ -407,14 +407,8 @@ enum ism_box_clip_status ism_dual_box_clip(ism_mesh *m, ism_sampler *s, const do
     }
     if (st == ISM_BOX_CLIP_OK && cs->missed)
         st = ISM_BOX_CLIP_MISS;
-    if (st == ISM_BOX_CLIP_OK) {
-        uint32_t *used = calloc(m->nverts + 1, sizeof *used);
-        if (!used)
-            st = ISM_BOX_CLIP_NO_MEMORY;
-        else
-            ism_mesh_compact(m, used);
-        free(used);
-    }
+    if (st == ISM_BOX_CLIP_OK && !ism_mesh_drop_loose(m))
+        st = ISM_BOX_CLIP_NO_MEMORY;
     free(c.on);
     free(c.sd);
     free(c.need);

@@ -90,13 +90,19 @@ static void unlink_conn(ism_front *f, fconn *c)
     epoll_ctl(f->ep, EPOLL_CTL_DEL, c->fd, NULL);
 }
 
-static void drop(ism_front *f, fconn *c)
+/* The end of a connection no longer linked: the closed hook, its socket, its entry. */
+static void release(ism_front *f, fconn *c)
 {
-    unlink_conn(f, c);
     if (c->ctx && f->h.closed)
         f->h.closed(f->h.cls, c->ctx);
     close(c->fd);
     free(c);
+}
+
+static void drop(ism_front *f, fconn *c)
+{
+    unlink_conn(f, c);
+    release(f, c);
 }
 
 /* To libmicrohttpd, with whatever the client sent still unread in the socket. */
@@ -464,10 +470,7 @@ void ism_front_free(ism_front *f)
     }
     for (fconn *c = f->inbox, *next; c; c = next) { /* handed in, never held */
         next = c->next;
-        if (c->ctx && f->h.closed)
-            f->h.closed(f->h.cls, c->ctx);
-        close(c->fd);
-        free(c);
+        release(f, c);
     }
     close(f->in_fd);
     close(f->ep);

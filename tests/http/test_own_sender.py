@@ -60,16 +60,9 @@ def strip_varying(head):
 class OwnSenderTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
-        cls.tmp = tempfile.mkdtemp(prefix="isomeshd_own_")
-        cls.d = Daemon("--workers", "1", "--own-sender", "--conn-timeout", "3",
-                       "--cors-origin", "https://viewer.example",
-                       cache_dir=os.path.join(cls.tmp, "cache")).start()
-        first = cls.d.post("/v1/mesh", sphere(0.77))
-        assert first.status == 200, first.body[:200]
-        cls.body = first.body
-        cls.key = first.header("ETag").strip('"')
+        start_with_sphere(cls, "isomeshd_own_", "--own-sender", "--conn-timeout", "3",
+                          "--cors-origin", "https://viewer.example")
         cls.path = "/v1/meshes/%s.drc" % cls.key
-        cls.get = b"GET %s HTTP/1.1\r\nHost: t\r\n\r\n" % cls.path.encode()
 
         # once the cache file has settled (file_memo.h)
         wait_until("an answer by the own sender", lambda: answer_of(cls.d, cls.get)[2])
@@ -264,14 +257,14 @@ class OwnSenderTest(unittest.TestCase):
 
 def start_with_sphere(cls, prefix, *args):
     """cls.d: a daemon started with args in cls.tmp (a new directory), the sphere r 0.77
-    computed: cls.body its Draco bytes, cls.get a GET of them as bytes."""
+    computed: cls.body its Draco bytes, cls.key its cache key, cls.get a GET of them as bytes."""
     cls.tmp = tempfile.mkdtemp(prefix=prefix)
     cls.d = Daemon("--workers", "1", *args, cache_dir=os.path.join(cls.tmp, "cache")).start()
     first = cls.d.post("/v1/mesh", sphere(0.77))
     assert first.status == 200, first.body[:200]
     cls.body = first.body
-    cls.get = b"GET /v1/meshes/%s.drc HTTP/1.1\r\nHost: t\r\n\r\n" % (
-        first.header("ETag").strip('"').encode())
+    cls.key = first.header("ETag").strip('"')
+    cls.get = b"GET /v1/meshes/%s.drc HTTP/1.1\r\nHost: t\r\n\r\n" % cls.key.encode()
 
 
 def fd_count(pid):
@@ -321,6 +314,12 @@ class HandoverPaths(unittest.TestCase):
         cls.d.cleanup()
         shutil.rmtree(cls.tmp, ignore_errors=True)
 
+    def idle_fds(self):
+        """Waits (bounded) until the daemon counts no connection but the scrape's own, then
+        -> the descriptors it holds (settled's fds0)."""
+        wait_until("idle", lambda: self.d.metric("isomesh_connections") <= 1, timeout=15)
+        return fd_count(self.d.proc.pid)
+
     def settled(self, fds0):
         """Waits (bounded) until the daemon holds fds0 descriptors again and counts no
         connection but none, then checks it still answers by its own sender."""
@@ -332,8 +331,7 @@ class HandoverPaths(unittest.TestCase):
 
     def test_clients_closing_mid_body_leave_nothing_behind(self):
         get = self.big_get
-        wait_until("idle", lambda: self.d.metric("isomesh_connections") <= 1, timeout=15)
-        fds0 = fd_count(self.d.proc.pid)
+        fds0 = self.idle_fds()
         aborted0 = self.d.log_count("end=aborted", 0, timeout=0)
         socks = []
         for i in range(8):
@@ -357,8 +355,7 @@ class HandoverPaths(unittest.TestCase):
         """300 connections at once (libmicrohttpd's own epoll loop once answered none of a
         burst of 128, ../shared/STACK.md), each with a cached GET already sent: every answer
         whole, all the own sender's, and nothing left once they close."""
-        wait_until("idle", lambda: self.d.metric("isomesh_connections") <= 1, timeout=15)
-        fds0 = fd_count(self.d.proc.pid)
+        fds0 = self.idle_fds()
         sent = self.d.metric(SENT)
         socks = []
         try:
@@ -393,8 +390,7 @@ class HandoverPaths(unittest.TestCase):
         """--header-timeout 1 s counts from a connection's accept (or its last answer) whether
         the own sender or libmicrohttpd holds it: a silent connection, one trickling a head and
         one answered once and then silent are all closed within it plus slack."""
-        wait_until("idle", lambda: self.d.metric("isomesh_connections") <= 1, timeout=15)
-        fds0 = fd_count(self.d.proc.pid)
+        fds0 = self.idle_fds()
         silent = socket.create_connection(("127.0.0.1", self.d.port), timeout=30)
         trickle = socket.create_connection(("127.0.0.1", self.d.port), timeout=30)
         answered = socket.create_connection(("127.0.0.1", self.d.port), timeout=30)
