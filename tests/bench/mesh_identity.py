@@ -3,7 +3,8 @@
 of the gallery (its own box and depths, one thread), of a set of presets in boxes shifted off the
 octree lattice (tests/cli/boxes.py: by 1e-3, and by irrational fractions of a finest cell) on
 two threads, and of max_error runs of the primal polygons (several rounds, lattice and shifted
-boxes, 1 and 2 threads) and of the dual mesh (the default under a bound), through the CLI.
+boxes, 1 and 2 threads) and of the dual mesh (the default under a bound; also where the box cuts
+the surface), through the CLI.
 `--save FILE` records them; `--check FILE` runs again and names every run whose mesh differs.
 Not part of `make test` (a few minutes on two cores); run it before and after a change:
 
@@ -34,6 +35,10 @@ ERROR_RUNS = (("sphere", 1e-3, 10), ("torus", 3e-3, 10), ("torus", 6e-4, 10),
               ("gyroid-ball", 1e-2, 10), ("klein-bottle", 1e-2, 9), ("double-torus", 3e-3, 9))
 # ... and of the default under a bound, the dual mesh (core/octree/dual.h) where it applies.
 DUAL_RUNS = (("sphere", 1e-3, 10), ("torus", 3e-3, 10), ("double-torus", 3e-3, 9))
+# ... and of the dual mesh clipped by a box that cuts the surface (core/octree/dual_box.c):
+# E = 2e-3 and 2e-3 / 3 of the box's largest width (the presets' own checks), depth.max 10.
+CUT_RUNS = ("hyperboloid", "catenoid", "scherk", "helicoid", "clebsch-cubic")
+CUT_REL = (2e-3, 2e-3 / 3)
 
 
 def md5_of_run(exe, name, box, depth, extra, timeout):
@@ -76,6 +81,14 @@ def runs(ps):
         for label, box in boxes(p["box"], dmax):
             out.append((f"{name} {label} E{e:g} d{d} t1 dual", name, box, d,
                         ["--max-error", repr(e), "--threads", "1"]))
+    for name in CUT_RUNS:
+        p = by_name[name]
+        d = f"{p['depth']['min']}:10"
+        for label, box in boxes(p["box"], 10):
+            for rel in CUT_REL:
+                e = rel * max(box[a + 3] - box[a] for a in range(3))
+                out.append((f"{name} {label} E{rel:.3g}w d{d} t1 cut", name, box, d,
+                            ["--max-error", repr(e), "--threads", "1"]))
     return out
 
 
