@@ -96,9 +96,11 @@ static void write_xyz(ism_jw *w, const ism_mesh *m, uint32_t v)
         ism_jw_float(w, (float)m->pos[3 * (size_t)v + k]);
 }
 
-/* Polylines of mesh vertices; on (may be NULL) gives each line's "on_locus". Returns edges. */
+/* Polylines of mesh vertices; on (may be NULL) gives each line's "on_locus" and vert_on (per
+ * polyline vertex) its "off_edges": the edges with an end off the locus, the ones the check
+ * counts. Returns edges. */
 static size_t write_lines(ism_jw *w, const ism_mesh *m, const ism_polylines *p,
-                          const uint8_t *on)
+                          const uint8_t *on, const uint8_t *vert_on)
 {
     size_t edges = 0;
     ism_jw_array(w);
@@ -110,6 +112,12 @@ static size_t write_lines(ism_jw *w, const ism_mesh *m, const ism_polylines *p,
         if (on) {
             ism_jw_key(w, "on_locus");
             ism_jw_bool(w, on[i]);
+            ism_jw_key(w, "off_edges");
+            ism_jw_array(w);
+            for (uint32_t j = s; j + 1 < e; j++)
+                if (!(vert_on[j] && vert_on[j + 1]))
+                    ism_jw_uint(w, j - s);
+            ism_jw_array_end(w);
         }
         ism_jw_key(w, "xyz");
         ism_jw_array(w);
@@ -297,12 +305,13 @@ char *ism_features_json(const ism_mesh *m, const ism_features *f, size_t *len)
     write_locus(&w, m, f);
     ism_jw_key(&w, "nonmanifold_edges");
     const ism_locus_check *chk = f->check;
-    bool check_fits = chk && chk->curve_on && chk->point_on;
-    size_t curve_edges = write_lines(&w, m, &f->curves, check_fits ? chk->curve_on : NULL);
+    bool check_fits = chk && chk->curve_on && chk->curve_vert_on && chk->point_on;
+    size_t curve_edges = write_lines(&w, m, &f->curves, check_fits ? chk->curve_on : NULL,
+                                     check_fits ? chk->curve_vert_on : NULL);
     ism_jw_key(&w, "nonmanifold_points");
     write_mesh_points(&w, m, f);
     ism_jw_key(&w, "boundaries");
-    size_t boundary_edges = write_lines(&w, m, &f->boundaries, NULL);
+    size_t boundary_edges = write_lines(&w, m, &f->boundaries, NULL, NULL);
     if (f->arrangement) {
         ism_jw_key(&w, "arrangement");
         ism_features_arrangement_json(&w, m, f->arrangement);

@@ -20,7 +20,9 @@
  *                "vertex", "point" (singular_point: index into singular_points)}]}
  *    "arrangement": {...} (only when curves were requested; features_curves.c),
  *    "double_sheets": [{"first_triangle", "triangles", "area"}],
- *    "nonmanifold_edges": [{"closed", "on_locus", "xyz"}],   chains of mesh edges of > 2 triangles
+ *    "nonmanifold_edges": [{"closed", "on_locus", "off_edges", "xyz"}],   chains of mesh edges
+ *              of > 2 triangles; off_edges: the chain's edges (edge j joins points j and j + 1)
+ *              with an end off the locus, the ones counts.artefacts counts
  *    "nonmanifold_points": [{"xyz", "class", "kind", "on_locus"}],
  *    "boundaries": [{"closed", "xyz"}],
  *    "incomplete": bool, "incomplete_why": string (only when incomplete),

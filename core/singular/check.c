@@ -1,7 +1,8 @@
 /* check.c — the mesh against the locus (contract in check.h). The locus's curve segments go
  * into a uniform grid of buckets; a mesh vertex is on the locus when it is within the
  * tolerance of a singular point (filed by position in a hash of small cells) or of a segment
- * in its bucket's neighbourhood. Each singular point's vertex is found in one pass over the
+ * in its bucket's neighbourhood (the tolerance plus the segment's bulge: how far the curve
+ * itself may bend from that chord). Each singular point's vertex is found in one pass over the
  * vertices, and the cones of faces at those vertices in one pass over the triangles: a
  * vertex's triangles, joined when they share an edge through the vertex. */
 #include "core/singular/check.h"
@@ -24,6 +25,7 @@ typedef struct seg_grid {
     int side;
     size_t nsegs;
     const double **a, **b; /* segment ends, per segment */
+    double *bulge;         /* per segment: how far the curve may bend from its chord */
     uint32_t *start;       /* side³ + 1 bucket starts into idx */
     uint32_t *idx;         /* segment numbers, bucketed */
 } seg_grid;
@@ -49,11 +51,12 @@ static size_t bucket_index(const seg_grid *g, int i, int j, int k)
     return ((size_t)i * g->side + j) * g->side + k;
 }
 
-/* Visits every bucket of a segment: counting (idx == NULL) or filling. */
+/* Visits every bucket of a segment (its box grown by pad and its bulge): counting
+ * (idx == NULL) or filling. */
 static void place(seg_grid *g, size_t s, double pad, uint32_t *fill)
 {
     int i0[3], i1[3];
-    seg_range(g, g->a[s], g->b[s], pad, i0, i1);
+    seg_range(g, g->a[s], g->b[s], pad + g->bulge[s], i0, i1);
     for (int i = i0[0]; i <= i1[0]; i++)
         for (int j = i0[1]; j <= i1[1]; j++)
             for (int k = i0[2]; k <= i1[2]; k++) {
@@ -69,8 +72,50 @@ static void grid_free(seg_grid *g)
 {
     free(g->a);
     free(g->b);
+    free(g->bulge);
     free(g->start);
     free(g->idx);
+}
+
+/* The curvature of the circle through p, q, r (Menger: 4 × area / product of the sides);
+ * 0 when two of them coincide. */
+static double curvature3(const double p[3], const double q[3], const double r[3])
+{
+    double u[3], v[3], x[3];
+    for (int k = 0; k < 3; k++) {
+        u[k] = q[k] - p[k];
+        v[k] = r[k] - p[k];
+    }
+    x[0] = u[1] * v[2] - u[2] * v[1];
+    x[1] = u[2] * v[0] - u[0] * v[2];
+    x[2] = u[0] * v[1] - u[1] * v[0];
+    double sides = ism_dist3(p, q) * ism_dist3(q, r) * ism_dist3(p, r);
+    return sides > 0 ? 2 * ism_norm3(x) / sides : 0;
+}
+
+/* How far the curve may lie from the chord from point i to point i + 1 of cv. The traced
+ * points sit on the curve (within 1e-9 × diagonal, locus.h), but a chord of length h of a
+ * curve of curvature k is up to its sagitta h² k / 8 from the arc it cuts (1.3e-5 for the
+ * 0.01 steps of a circle of radius 0.97, over 1e-6 × a diagonal of 5): a vertex the mesh
+ * puts exactly on the curve between two traced points must not count as off. k is the
+ * curvature of the circle through the segment and a neighbouring point, at each end; the
+ * smaller of the two is taken, so a kink of the polyline at one end (a curve turning at a
+ * singular point, where no arc bends) gives no allowance, and it is doubled for the change
+ * of curvature along one step. It never exceeds h / 8 (the sagitta of an arc turning 56°
+ * over one chord, far past the few degrees a trace at cell steps turns). A segment without neighbours (a curve
+ * of two points) gets none. */
+static double chord_bulge(const ism_sing_curve *cv, size_t i)
+{
+    size_t n = cv->n, j = (i + 1) % n;
+    const double *a = cv->xyz + 3 * i, *b = cv->xyz + 3 * j;
+    double h = ism_dist3(a, b), k = INFINITY;
+    if (n >= 3 && (i > 0 || cv->closed))
+        k = fmin(k, curvature3(cv->xyz + 3 * ((i + n - 1) % n), a, b));
+    if (n >= 3 && (j + 1 < n || cv->closed))
+        k = fmin(k, curvature3(a, b, cv->xyz + 3 * ((j + 1) % n)));
+    if (k == INFINITY)
+        return 0;
+    return fmin(2 * h * h * k / 8, h / 8);
 }
 
 /* Segments of every curve (a closed curve also joins its last point to its first). */
@@ -90,8 +135,9 @@ static bool grid_build(seg_grid *g, const ism_locus *l, const double box[6], dou
     size_t cells = (size_t)g->side * g->side * g->side;
     g->a = malloc((n ? n : 1) * sizeof *g->a);
     g->b = malloc((n ? n : 1) * sizeof *g->b);
+    g->bulge = malloc((n ? n : 1) * sizeof *g->bulge);
     g->start = calloc(cells + 1, sizeof *g->start);
-    if (!g->a || !g->b || !g->start)
+    if (!g->a || !g->b || !g->bulge || !g->start)
         return false;
     for (size_t c = 0; c < l->ncurves; c++) {
         const ism_sing_curve *cv = &l->curves[c];
@@ -99,6 +145,7 @@ static bool grid_build(seg_grid *g, const ism_locus *l, const double box[6], dou
         for (size_t i = 0; i < segs; i++) {
             g->a[g->nsegs] = cv->xyz + 3 * i;
             g->b[g->nsegs] = cv->xyz + 3 * ((i + 1) % cv->n);
+            g->bulge[g->nsegs] = chord_bulge(cv, i);
             g->nsegs++;
         }
     }
@@ -226,9 +273,12 @@ static bool near_locus(const ism_locus *l, const point_grid *pg, const seg_grid 
         return false;
     size_t c = bucket_index(g, bucket_of(g, p[0], 0), bucket_of(g, p[1], 1),
                             bucket_of(g, p[2], 2));
-    for (uint32_t j = g->start[c]; j < g->start[c + 1]; j++)
-        if (ism_sqdist_segment3(p, g->a[g->idx[j]], g->b[g->idx[j]]) <= t2)
+    for (uint32_t j = g->start[c]; j < g->start[c + 1]; j++) {
+        uint32_t s = g->idx[j];
+        double r = tol + g->bulge[s];
+        if (ism_sqdist_segment3(p, g->a[s], g->b[s]) <= r * r)
             return true;
+    }
     return false;
 }
 
@@ -336,6 +386,7 @@ static bool cones_at_points(const ism_mesh *m, const uint32_t *vertex, size_t np
 void ism_locus_check_free(ism_locus_check *c)
 {
     free(c->curve_on);
+    free(c->curve_vert_on);
     free(c->point_on);
     free(c->point_vertex);
     free(c->point_cones);
@@ -355,6 +406,7 @@ static void check_curves(const ism_locus *l, const point_grid *pg, const seg_gri
                 out->nonmanifold_edges++;
                 out->nonmanifold_edges_off += !(on && prev_on);
             }
+            out->curve_vert_on[j] = on;
             prev_on = on;
             all = all && on;
         }
@@ -375,10 +427,12 @@ bool ism_locus_check_mesh(const ism_locus *l, const double box[6], const ism_mes
     double *best2 = malloc((l->npoints ? l->npoints : 1) * sizeof *best2);
     bool ok = grid_build(&g, l, box, tol) && point_grid_build(&pg, l, box, tol) && best2;
     out->curve_on = calloc(a->ncurves ? a->ncurves : 1, 1);
+    size_t nchain = a->ncurves ? a->curve_start[a->ncurves] : 0;
+    out->curve_vert_on = calloc(nchain ? nchain : 1, 1);
     out->point_on = calloc(a->npoints ? a->npoints : 1, 1);
     out->point_vertex = malloc((l->npoints ? l->npoints : 1) * sizeof *out->point_vertex);
     out->point_cones = calloc(l->npoints ? l->npoints : 1, sizeof *out->point_cones);
-    ok = ok && out->curve_on && out->point_on && out->point_vertex && out->point_cones;
+    ok = ok && out->curve_on && out->curve_vert_on && out->point_on && out->point_vertex && out->point_cones;
     if (ok) {
         check_curves(l, &pg, &g, m, a, tol, out);
         out->nonmanifold_points = a->npoints;

@@ -13,9 +13,10 @@
 #include "core/singular/locus.h"
 
 /* A mesh element is on the locus when it lies within this fraction of the box diagonal of a
- * singular point or curve. Conformed vertices sit within 1e-9 × diagonal (locus.h); the
- * margin allows for the curve's chords between its traced points (a polyline with steps of
- * a finest cell bends from the true curve by about step² × curvature / 8). */
+ * singular point or of a chord of a curve's traced polyline, plus that chord's own bulge
+ * (check.c: step² × curvature / 4, twice the sagitta; a chord of 0.01 on a circle of
+ * radius 1 is 1.25e-5 from the arc, more than this fraction of a diagonal of 5). Conformed
+ * vertices sit within 1e-9 × diagonal (locus.h); the margin is for the traced points. */
 #define ISM_LOCUS_ON_REL 1e-6
 
 typedef struct ism_locus_check {
@@ -26,6 +27,9 @@ typedef struct ism_locus_check {
     size_t artefacts;               /* the two _off counts added */
     uint8_t *curve_on;              /* per analysis curve (a->ncurves): 1 when every vertex
                                        of the chain is on the locus */
+    uint8_t *curve_vert_on;         /* per chain vertex (as a->curve_verts, a->curve_start[
+                                       a->ncurves] of them): 1 when on the locus; a chain's
+                                       edge is off (counted) when either end is off */
     uint8_t *point_on;              /* per analysis point (a->npoints) */
     /* For each singular point of the locus: the mesh vertex at its position (within the
      * tolerance) or UINT32_MAX, and the number of cones of faces there (0 without vertex). */

@@ -26,7 +26,11 @@ every point of its crease arcs (the mesh's crease vertices in full precision) li
 presets with nodes cut by the viewer's three z planes (-0.5, 0, 0.5), in their own boxes and
 the two shifted ones: the arrangement's V - E + F equals V - E + T counted here from the
 written mesh's own triangles, and its check passes (a node off the curves, where two cones
-each a face of their own meet, was counted once per face: kummer-4-nodes gave 4 for chi 0)."""
+each a face of their own meet, was counted once per face: kummer-4-nodes gave 4 for chi 0).
+The crossing-spheres preset cut by the same planes (three boxes): the six cut vertices lie
+within 1e-9 of the closed-form double circle x = 0, y^2 + z^2 = 1 - d^2/4, and they and the
+double-curve chain count as on the locus (artefacts 0): the check allows each chord of the
+traced circle its bulge (it counted 10 edges off, the chain 305 in the viewer)."""
 import json
 import math
 import os
@@ -359,6 +363,23 @@ class CurvesTest(unittest.TestCase):
                     e = f["arrangement"]["euler"]
                     self.assertGreater(sum(p["type"] == "node" for p in f["singular_points"]), 0)
                     self.assertEqual((e["mesh"], e["arrangement"], e["ok"]), (chi, chi, True))
+
+    def test_crossing_spheres_cut_on_the_double_circle_is_no_artefact(self):
+        base = [-1.8, -1.3, -1.3, 1.8, 1.3, 1.3]  # the preset's box, depth.max 7
+        r = math.sqrt(1 - 0.5 ** 2 / 4)  # d = 0.5: the spheres cross on x = 0, |(y, z)| = r
+        planes = [{"kind": "plane", "normal": [0, 0, 1], "offsets": [-0.5, 0, 0.5]}]
+        for box in placements(base, 3.6 / 2 ** 7):
+            with self.subTest(box=box):
+                f, proc = self.run_request({"preset": "crossing-spheres", "box": box,
+                                            "curves": planes})
+                self.assertIsNotNone(f, proc.stderr)
+                cut = [v["xyz"] for v in f["arrangement"]["vertices"]
+                       if v["type"] == "double_curve"]
+                self.assertEqual(sorted(round(p[2], 6) for p in cut), [-0.5, -0.5, 0, 0, 0.5, 0.5])
+                worst = max(max(abs(p[0]), abs(math.hypot(p[1], p[2]) - r)) for p in cut)
+                self.assertLess(worst, 1e-9, "cut vertices off the closed-form double circle")
+                self.assertEqual(f["counts"]["artefacts"], 0)
+                self.assertTrue(all(c["on_locus"] for c in f["nonmanifold_edges"]))
 
     def test_a_curve_missing_the_surface_is_no_curve(self):
         f, proc = self.run_request(self.sphere(0.0, [{"kind": "plane", "normal": [0, 0, 1],

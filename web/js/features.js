@@ -103,7 +103,10 @@ export function buildFeatures(f, radius, clippingPlanes) {
     made.counts.edges += pos.length / 6;
   }
   made.kinds = tally(curves, 'kind');
-  const offEdges = (f.nonmanifold_edges || []).filter((c) => c.on_locus === false);
+  // Only the edges the check counts (off_edges: an end off the locus), so the key's number
+  // equals counts.artefacts; a whole chain when the JSON lists no off_edges.
+  const offEdges = (f.nonmanifold_edges || []).filter((c) => c.on_locus === false)
+    .flatMap((c) => (Array.isArray(c.off_edges) ? c.off_edges.map((j) => ({ xyz: c.xyz.slice(3 * j, 3 * j + 6) })) : [c]));
   const offPos = segments(offEdges);
   if (offPos.length) made.edges.add(fatLines(offPos, FEATURE_COLORS.artefacts, 2, clippingPlanes));
   group.add(made.edges);

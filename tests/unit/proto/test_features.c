@@ -215,6 +215,14 @@ Test(features, locus_and_check_in_the_json)
                                                         "node")), 1);
         json_t *chain = json_array_get(json_object_get(doc, "nonmanifold_edges"), 0);
         cr_expect_eq(json_is_true(json_object_get(chain, "on_locus")), !wrong);
+        /* the edges the check counts, by number: all of the chain's or none */
+        size_t counted = 0;
+        for (size_t c = 0; c < json_array_size(json_object_get(doc, "nonmanifold_edges")); c++)
+            counted += json_array_size(json_object_get(
+                json_array_get(json_object_get(doc, "nonmanifold_edges"), c), "off_edges"));
+        cr_expect_eq(counted, chk.nonmanifold_edges_off);
+        json_t *first = json_array_get(json_object_get(chain, "off_edges"), 0);
+        cr_expect(wrong ? json_integer_value(first) == 0 : first == NULL);
         json_decref(doc);
         free(text);
         ism_features_free(&f);
