@@ -368,7 +368,7 @@ class CurvesTest(unittest.TestCase):
         base = [-1.8, -1.3, -1.3, 1.8, 1.3, 1.3]  # the preset's box, depth.max 7
         r = math.sqrt(1 - 0.5 ** 2 / 4)  # d = 0.5: the spheres cross on x = 0, |(y, z)| = r
         planes = [{"kind": "plane", "normal": [0, 0, 1], "offsets": [-0.5, 0, 0.5]}]
-        for box in placements(base, 3.6 / 2 ** 7):
+        for box in placements(base, tuple((base[a + 3] - base[a]) / 2 ** 7 for a in range(3))):
             with self.subTest(box=box):
                 f, proc = self.run_request({"preset": "crossing-spheres", "box": box,
                                             "curves": planes})
