@@ -907,6 +907,119 @@ static int zero_run_tangent_end(const ism_cell_ctx *cx, const ism_tile *t)
     return -1;
 }
 
+/* Probes beside a zero run (singular_run): this fraction of the run's length off it
+ * (beside_signs), or of the tile's extent across the run into the tile (the end rule) — near
+ * enough to see the sign f keeps beside the run, far enough for f there (second order in
+ * the offset where the run is singular: 4x²(z² + z) beside the cross-cap's axis) to stand
+ * above the root finder's eps. */
+#define SINGULAR_RUN_PROBE_FRAC 0.05
+/* The search for where f's signs beside a singular run change starts this fraction of the
+ * run inside either end (beside an end, which is itself singular, the signs are its own). */
+#define SINGULAR_RUN_END_GAP (1.0 / 1024)
+
+/* The signs of f beside the run's lattice line at coordinate x along it, off by ±d across
+ * both other axes, as 8 bits (2 per probe: f < -eps, f > eps); the same for every tile that
+ * holds the run. */
+static unsigned beside_signs(ism_cell_ctx *cx, const double on[3], int along, double x, double d)
+{
+    unsigned code = 0;
+    for (int k = 1; k <= 2; k++)
+        for (int sgn = -1; sgn <= 1; sgn += 2) {
+            double q[3] = {on[0], on[1], on[2]};
+            q[along] = x;
+            q[(along + k) % 3] += sgn * d;
+            double f = ism_sample_f(&cx->s, q);
+            code = code << 2 | (unsigned)(f < -cx->roots.eps) | (unsigned)(f > cx->roots.eps) << 1;
+        }
+    return code;
+}
+
+/* A zero run along which ∇f vanishes (a singular lattice line: the cross-cap's z axis in its
+ * own box) that the tile's one crossing E leaves for (the boundary's signs before the run's
+ * start A and after its end B differ). ∇f = 0 there (at A and B under TANGENT_PLANE_REL of
+ * |∇f| at E), so zero_run_crossing's derivative test and zero_run_tangent_end's tangency
+ * test see nothing. The line meets the run where f's sign beside it changes:
+ *
+ *   - inside the run: the signs beside the run (beside_signs, every tile holding the run
+ *     the same samples) differ near its two ends; P by bisection over the run's canonical
+ *     direction, so all its tiles find the same P bit for bit. Face x = 0 of the cell
+ *     y in [-h, 0], z in [0.994, 1.013]: f = y²(y² + z² − 1), the circle y² + z² = 1 leaves
+ *     the axis at the pinch point P = (0, 0, 1);
+ *   - else at one end, the one whose outer sign differs from f beside the run in the tile
+ *     (three probes, one sign):
+ *
+ *     A ═══════════════ B ++++++     face y = 0 of the cell x, y in [0, h], z in [-h, 0],
+ *     −    f < 0 beside    \         B the pinch point 0: f = 4x²(x² + z² + z) is 0 on the
+ *     −    the run          E        axis A..B, negative beside it, positive on the side
+ *                                    z = 0 after B: the circle x² + (z + ½)² = ¼ joins E to B
+ *
+ * Returns the run's first event index (its `after` is 0) with *end = -1 and *P set (inside),
+ * or with *end the end's event index; -1 when no run qualifies. */
+static int singular_run(ism_cell_ctx *cx, const ism_tile *t, double gcross, int *end,
+                        ism_fpoint *P)
+{
+    const ism_grid *g = &cx->tree->grid;
+    double gzero = TANGENT_PLANE_REL * gcross; /* ∇f "vanishes": rounding of an exact 0 */
+    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3, ne = (int)cx->nev;
+    *end = -1;
+    for (int i = 0; i < ne; i++) {
+        int j = (i + 1) % ne;
+        const ism_fevent *a = &cx->ev[i], *b = &cx->ev[j];
+        if (a == b || a->after != 0 || b->before != 0 || a->before == 0 || b->after == 0 ||
+            a->before == b->after || !(ism_norm3(a->pt.g) <= gzero) ||
+            !(ism_norm3(b->pt.g) <= gzero))
+            continue;
+        int along = a->pt.p[u] != b->pt.p[u] ? u : v, perp = along == u ? v : u;
+        if (a->pt.p[perp] != b->pt.p[perp])
+            continue;
+        bool up = a->pt.p[along] < b->pt.p[along];
+        const ism_fevent *lo = up ? a : b, *hi = up ? b : a;
+        double x0 = lo->pt.p[along], x1 = hi->pt.p[along], len = x1 - x0;
+        double d = SINGULAR_RUN_PROBE_FRAC * len;
+        double s0 = x0 + SINGULAR_RUN_END_GAP * len, s1 = x1 - SINGULAR_RUN_END_GAP * len;
+        unsigned c0 = beside_signs(cx, lo->pt.p, along, s0, d);
+        if (beside_signs(cx, lo->pt.p, along, s1, d) != c0) {
+            for (int k = 0; k < ZERO_RUN_BISECTIONS && s1 - s0 > 0; k++) {
+                double m = 0.5 * (s0 + s1);
+                if (m <= s0 || m >= s1)
+                    break;
+                if (beside_signs(cx, lo->pt.p, along, m, d) == c0)
+                    s0 = m;
+                else
+                    s1 = m;
+            }
+            double q[3] = {lo->pt.p[0], lo->pt.p[1], lo->pt.p[2]};
+            q[along] = 0.5 * (s0 + s1);
+            memcpy(P->p, q, sizeof P->p);
+            ism_sample_grad(&cx->s, q, P->g);
+            P->flags = ISM_FP_ZERO;
+            return i;
+        }
+        /* one sign beside the run: the line leaves at the end whose outer sign differs */
+        int32_t plo = perp == u ? t->u0 : t->v0, phi = perp == u ? t->u1 : t->v1;
+        double c0p = ism_grid_coord(g, perp, plo), c1p = ism_grid_coord(g, perp, phi);
+        double inward = a->pt.p[perp] == c0p ? c1p - c0p : c0p - c1p;
+        int sign = 0;
+        bool agree = true;
+        for (int k = 1; k <= 3 && agree; k++) {
+            double q[3] = {a->pt.p[0], a->pt.p[1], a->pt.p[2]};
+            q[along] += 0.25 * k * (b->pt.p[along] - a->pt.p[along]);
+            q[perp] += SINGULAR_RUN_PROBE_FRAC * inward;
+            double f = ism_sample_f(&cx->s, q);
+            int sg = fabs(f) <= cx->roots.eps ? 0 : ism_sign(f);
+            agree = sg != 0 && (sign == 0 || sg == sign);
+            sign = sg;
+        }
+        if (!agree)
+            continue;
+        if (sign == a->before || sign == b->after) {
+            *end = sign == a->before ? j : i; /* f keeps A's outer sign beside: leaves at B */
+            return i;
+        }
+    }
+    return -1;
+}
+
 /* The tile as a quiet-tile memo entry (lattice coordinates take 20 bits, the axis 2). */
 static ism_quiet_tile quiet_key(const ism_tile *t)
 {
@@ -964,6 +1077,18 @@ bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
     }
     ism_fpoint hidden;
     int hidden_run = nc % 2 == 1 ? zero_run_crossing(cx, t, &hidden) : -1;
+    int singular_end = -1;
+    if (nc == 1 && hidden_run < 0) { /* ... or leaves a singular run (∇f = 0 along it) */
+        double gcross = 0;
+        for (int i = 0; i < ne; i++) {
+            const ism_fevent *e = &cx->ev[i];
+            if (e->before != 0 && e->after != 0 && e->before != e->after)
+                gcross = ism_norm3(e->pt.g);
+        }
+        int run = singular_run(cx, t, gcross, &singular_end, &hidden);
+        if (run >= 0 && singular_end < 0)
+            hidden_run = run;
+    }
     nc = 0;
     for (int i = 0; i < ne; i++) {
         ism_fevent *e = &cx->ev[i];
@@ -991,6 +1116,8 @@ bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
         nc = 0;
     }
     int end = nc == 1 ? zero_run_tangent_end(cx, t) : -1;
+    if (nc == 1 && end < 0)
+        end = singular_end;
     if (end >= 0) { /* ... or left it at its end */
         if (!emit(cx, end, cross[0], ISM_LINE_REGULAR))
             return false;

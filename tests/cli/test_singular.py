@@ -199,7 +199,8 @@ def preset(name, box, depth):
 PRESET_BOXES = {"kummer-4-nodes": [-3, -3, -3, 3, 3, 3], "kummer-16-nodes": [-3, -3, -3, 3, 3, 3],
                 "steiner-roman": [-1, -1, -1, 1, 1, 1], "klein-bottle": [-4, -4, -4, 4, 4, 4],
                 "sphere": [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5], "torus": [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5],
-                "heart": [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5]}
+                "heart": [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5],
+                "cross-cap": [-1.2, -1.2, -1.2, 1.2, 1.2, 1.2]}
 
 
 class PresetsOffTheLatticeTest(unittest.TestCase):
@@ -269,6 +270,33 @@ class PresetsOffTheLatticeTest(unittest.TestCase):
             kinds = sorted(c["kind"] for c in feats["curves"])
             self.assertEqual(kinds, ["double"] * 6 + ["whisker"] * 6)
             self.assertEqual(stats["analysis"]["euler"], 5)
+
+    def test_cross_cap_chains_close_round_the_zero_axis(self):
+        # 4x²(x² + y² + z² + z) + y²(y² + z² − 1) is 0 (and ∇f with it) on the whole z axis: a
+        # double segment between the pinch points (0, 0, 0) and (0, 0, 1), whiskers beyond.
+        # In the own box the axis runs along cell edges; the cells beside z = 0, z = ±1 had a
+        # face line leave that zero edge at a singular point (an end at z = 0, inside it at
+        # z = ±1), which the walk dropped: 28 open chains at depths 6 and 7 (face_lines.c,
+        # singular_run). In every box: no open chain, χ 2 and one component (as
+        # tube_folds/pinch_points_few_turned_over counts the mesh), one non-manifold chain
+        # from pinch point to pinch point, nothing else non-manifold.
+        for depth in (6, 7):
+            for stats, feats in self.run_preset("cross-cap", depth):
+                self.assertEqual(stats["polygoniser"]["open_chains"], 0)
+                self.assertEqual(stats["analysis"]["euler"], 2)
+                self.assertEqual(stats["analysis"]["components"], 1)
+                pinch = sorted(p["xyz"][2] for p in feats["singular_points"] if p["type"] == "pinch")
+                self.assertEqual(len(pinch), 2)
+                self.assertLess(max(abs(pinch[0]), abs(pinch[1] - 1)), 1e-9)
+                chains = feats["nonmanifold_edges"]
+                self.assertEqual(len(chains), 1)
+                self.assertFalse(chains[0]["closed"])
+                xyz = chains[0]["xyz"]
+                ends = sorted((xyz[0:3], xyz[-3:]), key=lambda p: p[2])
+                self.assertLess(math.dist(ends[0], (0, 0, 0)), 1e-6)
+                self.assertLess(math.dist(ends[1], (0, 0, 1)), 1e-6)
+                self.assertEqual([p["kind"] for p in feats["nonmanifold_points"]],
+                                 ["curve_end", "curve_end"])
 
     def test_klein_bottle_self_intersection_circle(self):
         # The figure-8 Klein bottle crosses itself along x² + (y − 1)² = 2 in z = 0.
