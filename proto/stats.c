@@ -337,19 +337,19 @@ static void write_error_warning(ism_jw *w, const ism_stats_input *in)
     double worst = in->analysis ? worst_distance(in->analysis) : s ? s->error_worst : 0;
     if (worst <= in->max_error && (in->analysis || cells == 0))
         return;
-    char msg[400], e[32], x[32];
+    char msg[400], e[32], x[32], tail[200];
     ism_jw_format_double(in->max_error, e);
     format_beyond(worst, in->max_error, x, sizeof x);
     if (cells)
-        snprintf(msg, sizeof msg, "max_error %s was not met: the mesh is up to %s from the "
-                 "surface; %llu cells could not be split further (at depth.max, or after the "
-                 "last refinement round): a larger depth.max may reach it", e, x,
+        snprintf(tail, sizeof tail, "; %llu cells could not be split further (at depth.max, or "
+                 "after the last refinement round): a larger depth.max may reach it",
                  (unsigned long long)cells);
     else
-        snprintf(msg, sizeof msg, "max_error %s was not met: the mesh is up to %s from the "
-                 "surface, though every octree cell met it: the triangles beyond it were made "
-                 "where the mesh conforms to singular points and curves, and a larger "
-                 "depth.max does not change them", e, x);
+        snprintf(tail, sizeof tail, ", though every octree cell met it: the triangles beyond "
+                 "it were made where the mesh conforms to singular points and curves, and a "
+                 "larger depth.max does not change them");
+    snprintf(msg, sizeof msg, "max_error %s was not met: the mesh is up to %s from the "
+             "surface%s", e, x, tail);
     ism_jw_string(w, msg);
 }
 
@@ -359,17 +359,13 @@ static void write_error_warning(ism_jw *w, const ism_stats_input *in)
  * with the worst distance reached so a user can judge it. */
 static void write_flatness_warning(ism_jw *w, const ism_poly_stats *s)
 {
-    char msg[300], x[32];
-    if (s->unflat_worst > 0) {
-        snprintf(x, sizeof x, "%.3g", s->unflat_worst);
-        snprintf(msg, sizeof msg, "%llu cells at the maximum depth were not flat enough: their "
-                 "triangles are up to %s from the surface; a larger depth.max or a max_error "
-                 "would bring them closer", (unsigned long long)s->unflat_nodes, x);
-    } else {
-        snprintf(msg, sizeof msg, "%llu cells at the maximum depth were not flat enough: a "
-                 "larger depth.max or a max_error would bring them closer",
-                 (unsigned long long)s->unflat_nodes);
-    }
+    char msg[300], mid[96] = ":"; /* the clause between the count and the advice */
+    if (s->unflat_worst > 0)
+        snprintf(mid, sizeof mid, ": their triangles are up to %.3g from the surface;",
+                 s->unflat_worst);
+    snprintf(msg, sizeof msg, "%llu cells at the maximum depth were not flat enough%s a larger "
+             "depth.max or a max_error would bring them closer",
+             (unsigned long long)s->unflat_nodes, mid);
     ism_jw_string(w, msg);
 }
 
