@@ -178,6 +178,8 @@ typedef struct worker {
      * (a sphere never searches: no 128 KB to fault in); NULL: none yet, or no memory. */
     ism_pair_entry *pairs; /* 2^ISM_PAIR_MEMO_BITS entries (cell_cache.h), or NULL */
     bool pairs_tried;
+    uint8_t *force; /* with a crease: a tape-length zeroed buffer, the top's branch forced by
+                       dual_crease.c's enclosures (ism_dual_crease_node); else NULL */
 } worker;
 
 typedef struct dual {
@@ -524,10 +526,10 @@ static bool graph_on_sub_boxes(worker *w, const corner_view *v)
  * (v->kinked). */
 static int crease_kind(dual *d, worker *w, dnode *n, corner_view *v)
 {
-    double x[3];
     bool small = ism_grid_cell_size(&d->g, n->level) <= CREASE_MEASURED_CELLS * d->o->max_error;
-    enum ism_crease_node k = ism_dual_crease_node(&w->s, w->jet, (const double (*)[3])v->p,
-                                                  n->f, d->o->flat_normal, small, x);
+    enum ism_crease_node k = ism_dual_crease_node(&w->s, w->jet, w->force,
+                                                  (const double (*)[3])v->p, n->f,
+                                                  d->o->flat_normal, small);
     int kind = k == ISM_CREASE_EMPTY    ? DN_EMPTY
                : k == ISM_CREASE_VERTEX ? DN_CREASE
                : k == ISM_CREASE_SMOOTH ? DN_SURF
@@ -2084,7 +2086,10 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
         w->jet = ism_ivjet_ws_new(f);
         w->bits = DUAL_POINT_MIN_BITS;
         w->points = calloc((size_t)1 << w->bits, sizeof *w->points);
-        ok = w->s.ws && w->jet && w->points;
+        size_t len = ism_tape_length(f);
+        if (d.crease)
+            w->force = calloc(len ? len : 1, 1);
+        ok = w->s.ws && w->jet && w->points && (!d.crease || w->force);
     }
     /* a box whose faces f is seen to cross is grown at once (dual_box.h); one that cuts the
      * surface only between the face samples is found by the tree (box_cut), then grown */
@@ -2104,6 +2109,7 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
         ism_ivjet_ws_free(w->jet);
         free(w->points);
         free(w->pairs);
+        free(w->force);
     }
     if (status != ISM_DUAL_OK)
         ism_mesh_free(mesh);

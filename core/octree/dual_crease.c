@@ -88,7 +88,7 @@
 #define SWITCH_MARGIN 2.0
 
 /* Halvings of a node whose corners share a sign, when neither branch alone keeps f from 0
- * over it (sign_by_halves): one (8 boxes of half its size, each two interval evaluations). */
+ * over it (halves_sign): one (8 boxes of half its size, each two interval evaluations). */
 #define EMPTY_HALVINGS 1
 /* Newton from a start may reach a crease point just outside the node where the crease
  * clips it: it starts again this many times from that point pulled into the box. */
@@ -133,22 +133,17 @@ static bool top_is_max(const ism_tape *t)
 }
 
 /* Branch k's enclosure over box lo..hi (the top min/max forced to it) into *g; false when
- * the workspace does not fit. */
-static bool branch_enclosure(ism_sampler *s, ism_ivjet_ws *jet, const double lo[3],
-                             const double hi[3], int k, ism_ivgrad *g)
+ * the workspace does not fit. force: the caller's tape-length buffer, zero but for its last
+ * entry, which this sets. */
+static bool branch_enclosure(ism_sampler *s, ism_ivjet_ws *jet, uint8_t *force,
+                             const double lo[3], const double hi[3], int k, ism_ivgrad *g)
 {
-    size_t len = ism_tape_length(s->tape);
-    uint8_t *force = calloc(len ? len : 1, 1);
-    if (!force)
-        return false;
-    force[len - 1] = k ? ISM_BRANCH_B : ISM_BRANCH_A;
+    force[ism_tape_length(s->tape) - 1] = k ? ISM_BRANCH_B : ISM_BRANCH_A;
     ism_interval box[3];
     for (int a = 0; a < 3; a++)
         box[a] = (ism_interval){lo[a], hi[a]};
     s->n_interval++;
-    size_t r = ism_eval_interval_grad(s->tape, jet, box, force, NULL, g);
-    free(force);
-    return r != (size_t)-1;
+    return ism_eval_interval_grad(s->tape, jet, box, force, NULL, g) != (size_t)-1;
 }
 
 /* f's sign over the box from its branches' signs sa, sb (1, -1; 0: not shown): max(a, b) > 0
@@ -159,22 +154,28 @@ static int combined(const ism_tape *t, int sa, int sb)
     return sa == up || sb == up ? up : sa == -up && sb == -up ? -up : 0;
 }
 
-/* f's sign over lo..hi by its branches' enclosures, else by its 8 halves' (levels more
- * times): near the crease f may keep a sign that neither branch keeps alone (outside the
- * wedge of a max, a > 0 on one side and b > 0 on the other). 0: not shown. */
-static int sign_by_halves(ism_sampler *s, ism_ivjet_ws *jet, const double lo[3],
-                          const double hi[3], int levels)
+/* f's sign over lo..hi by its branches' enclosures (0: not shown). */
+static int enclosure_sign(ism_sampler *s, ism_ivjet_ws *jet, uint8_t *force,
+                          const double lo[3], const double hi[3])
 {
     int sg[2];
     for (int k = 0; k < 2; k++) {
         ism_ivgrad g;
-        if (!branch_enclosure(s, jet, lo, hi, k, &g))
+        if (!branch_enclosure(s, jet, force, lo, hi, k, &g))
             return 0;
         sg[k] = g.v.lo > 0 ? 1 : g.v.hi < 0 ? -1 : 0;
     }
-    int sign = combined(s->tape, sg[0], sg[1]);
-    if (sign || !levels)
-        return sign;
+    return combined(s->tape, sg[0], sg[1]);
+}
+
+/* f's sign over lo..hi by its 8 halves' enclosures, a half not shown by its own 8 halves'
+ * (levels deep in all): near the crease f may keep a sign that neither branch keeps alone
+ * over the whole box (outside the wedge of a max, a > 0 on one side and b > 0 on the
+ * other). The box's own enclosures are the caller's (branch_sign). 0: not shown. */
+static int halves_sign(ism_sampler *s, ism_ivjet_ws *jet, uint8_t *force, const double lo[3],
+                       const double hi[3], int levels)
+{
+    int sign = 0;
     for (int c = 0; c < 8; c++) {
         double l[3], h[3];
         for (int a = 0; a < 3; a++) {
@@ -182,7 +183,9 @@ static int sign_by_halves(ism_sampler *s, ism_ivjet_ws *jet, const double lo[3],
             l[a] = (c >> a & 1) ? mid : lo[a];
             h[a] = (c >> a & 1) ? hi[a] : mid;
         }
-        int here = sign_by_halves(s, jet, l, h, levels - 1);
+        int here = enclosure_sign(s, jet, force, l, h);
+        if (!here && levels > 1)
+            here = halves_sign(s, jet, force, l, h, levels - 1);
         if (!here || (c && here != sign))
             return 0;
         sign = here;
@@ -192,11 +195,11 @@ static int sign_by_halves(ism_sampler *s, ism_ivjet_ws *jet, const double lo[3],
 
 /* The sign branch k keeps over the box (1, -1; 0: not shown): its own enclosure, then the
  * mean-value form from its corner values bv[c][k]. */
-static int branch_sign(ism_sampler *s, ism_ivjet_ws *jet, const double lo[3],
+static int branch_sign(ism_sampler *s, ism_ivjet_ws *jet, uint8_t *force, const double lo[3],
                        const double hi[3], const double bv[8][2], int k)
 {
     ism_ivgrad g;
-    if (!branch_enclosure(s, jet, lo, hi, k, &g))
+    if (!branch_enclosure(s, jet, force, lo, hi, k, &g))
         return 0;
     if (g.v.lo > 0 || g.v.hi < 0)
         return g.v.lo > 0 ? 1 : -1;
@@ -265,12 +268,13 @@ static int crossings_branch(ism_sampler *s, const double (*p)[3], const double f
     return k;
 }
 
-/* Is x within CORNER_REACH of the box's size of the box along every axis? (NaN: no.) */
-static bool within_reach(const double x[3], const double lo[3], const double hi[3])
+/* Is x within `share` of the box's size of the box along every axis? (NaN: no.) */
+static bool within_share(const double x[3], const double lo[3], const double hi[3],
+                         double share)
 {
     bool near = true;
     for (int a = 0; a < 3; a++) {
-        double grow = CORNER_REACH * (hi[a] - lo[a]);
+        double grow = share * (hi[a] - lo[a]);
         near &= x[a] >= lo[a] - grow && x[a] <= hi[a] + grow;
     }
     return near;
@@ -309,7 +313,7 @@ bool ism_dual_crease_vertex(ism_sampler *s, const double lo[3], const double hi[
             x[a] = start < 0 ? 0.5 * lo[a] + 0.5 * hi[a] : (start >> a & 1) ? hi[a] : lo[a];
         if (crease_from(s, lo, hi, x))
             return true;
-        if (start < 0 && !within_reach(x, lo, hi))
+        if (start < 0 && !within_share(x, lo, hi, CORNER_REACH))
             return false; /* the crease nearest the centre is far: none in the box */
     }
     return false;
@@ -321,19 +325,15 @@ bool ism_dual_crease_near(ism_sampler *s, const double lo[3], const double hi[3]
         x[a] = 0.5 * lo[a] + 0.5 * hi[a];
     if (!ism_crease_newton(s, x))
         return false;
-    bool near = true;
-    for (int a = 0; a < 3; a++) {
-        double grow = NEAR_SHARE * (hi[a] - lo[a]);
-        near &= x[a] >= lo[a] - grow && x[a] <= hi[a] + grow;
-    }
-    return near;
+    return within_share(x, lo, hi, NEAR_SHARE);
 }
 
-enum ism_crease_node ism_dual_crease_node(ism_sampler *s, ism_ivjet_ws *jet,
+enum ism_crease_node ism_dual_crease_node(ism_sampler *s, ism_ivjet_ws *jet, uint8_t *force,
                                           const double (*p)[3], const double f[8],
-                                          double cos_min, bool small, double vertex[3])
+                                          double cos_min, bool small)
 {
     const ism_tape *t = s->tape;
+    double vertex[3]; /* the crease point, found again by the caller (place_vertex) */
     int neg = 0;
     for (int c = 0; c < 8; c++)
         neg += f[c] < 0;
@@ -344,9 +344,9 @@ enum ism_crease_node ism_dual_crease_node(ism_sampler *s, ism_ivjet_ws *jet,
             if (!ism_eval_top_values(t, s->ws, p[c][0], p[c][1], p[c][2], bv[c]))
                 return ISM_CREASE_SPLIT;
         }
-        int sa = branch_sign(s, jet, p[0], p[7], (const double (*)[2])bv, 0);
-        int sb = branch_sign(s, jet, p[0], p[7], (const double (*)[2])bv, 1);
-        if (combined(t, sa, sb) || sign_by_halves(s, jet, p[0], p[7], EMPTY_HALVINGS) != 0)
+        int sa = branch_sign(s, jet, force, p[0], p[7], (const double (*)[2])bv, 0);
+        int sb = branch_sign(s, jet, force, p[0], p[7], (const double (*)[2])bv, 1);
+        if (combined(t, sa, sb) || halves_sign(s, jet, force, p[0], p[7], EMPTY_HALVINGS) != 0)
             return ISM_CREASE_EMPTY;
         if (!small)
             return ISM_CREASE_SPLIT;

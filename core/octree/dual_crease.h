@@ -27,12 +27,13 @@ enum ism_crease_node {
 /* Node lo..hi with corners p[8] (bit 0 = x, 1 = y, 2 = z), f at them in f[8], judged as
  * above; cos_min: the one-sheet test's agreement (flat_normal); small: the node is judged
  * by the measurement alone (no agreement asked; with crossings on both branches and no
- * crease point in it, ism_dual_crease_near's point). vertex: the crease point for
- * ISM_CREASE_VERTEX (ism_dual_crease_vertex's, else ism_dual_crease_near's: a function of
- * the box alone, found again the same way by the caller). */
-enum ism_crease_node ism_dual_crease_node(ism_sampler *s, ism_ivjet_ws *jet,
+ * crease point in it, ism_dual_crease_near's point). force: a zeroed buffer of s's tape
+ * length, the caller's per thread (its last entry is overwritten). The crease point of an
+ * ISM_CREASE_VERTEX node is ism_dual_crease_vertex's, else ism_dual_crease_near's: a
+ * function of the box alone, which the caller finds again the same way. */
+enum ism_crease_node ism_dual_crease_node(ism_sampler *s, ism_ivjet_ws *jet, uint8_t *force,
                                           const double (*p)[3], const double f[8],
-                                          double cos_min, bool small, double vertex[3]);
+                                          double cos_min, bool small);
 
 /* The crease point Newton reaches from the box's centre into x; false when Newton fails or
  * it lies farther than half the box's size outside the box along an axis. */
