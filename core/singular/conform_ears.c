@@ -238,19 +238,6 @@ int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double
     return ok ? clipped : -1;
 }
 
-/* Live triangles on the edge ab. */
-static int live_on_edge(const cf_ctx *c, uint32_t a, uint32_t b)
-{
-    cf_inc it;
-    uint32_t t;
-    int n = 0;
-    for (cf_inc_begin(c, a, &it); cf_inc_next(c, &it, &t);) {
-        const uint32_t *w = c->m->tri + 3 * (size_t)t;
-        n += w[0] == b || w[1] == b || w[2] == b;
-    }
-    return n;
-}
-
 /* The one live triangle at v when v has exactly one, it holds p and n too, and a kept
  * triangle lies across its third edge pn (which then joins the rim); CF_NONE otherwise. */
 static uint32_t lone_triangle(const cf_ctx *c, uint32_t p, uint32_t v, uint32_t n)
@@ -266,7 +253,7 @@ static uint32_t lone_triangle(const cf_ctx *c, uint32_t p, uint32_t v, uint32_t 
         return CF_NONE;
     const uint32_t *w = c->m->tri + 3 * (size_t)only;
     bool has_p = w[0] == p || w[1] == p || w[2] == p, has_n = w[0] == n || w[1] == n || w[2] == n;
-    return has_p && has_n && live_on_edge(c, p, n) == 2 ? only : CF_NONE;
+    return has_p && has_n && cf_live_on_edge(c, p, n, NULL, 0) == 2 ? only : CF_NONE;
 }
 
 bool cf_drop_spikes(cf_ctx *c, cf_loops *ls, uint32_t **rm, size_t *nrm)

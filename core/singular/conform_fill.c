@@ -30,30 +30,24 @@
  * rings: a ring of a few chords sags far off a thin, round sheet. */
 #define FINE_RING_MIN 8
 
-/* |f| / |∇f| at p (INFINITY where ∇f vanishes). */
-static double distance_estimate(cf_ctx *c, const double p[3], double g[3], double *fv)
-{
-    *fv = ism_eval_gradient(c->f, c->ws, p[0], p[1], p[2], g);
-    double gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-    return gl > 0 ? fabs(*fv) / gl : INFINITY;
-}
-
-void cf_project(cf_ctx *c, double p[3], double max_move)
+double cf_project(cf_ctx *c, double p[3], double max_move)
 {
     cf_poll(c, 1);
     double q[3] = {p[0], p[1], p[2]}, g[3], fv;
-    double d0 = distance_estimate(c, q, g, &fv), d = d0;
+    double d0 = cf_distance_estimate(c, q, g, &fv), d = d0;
     for (int it = 0; it < PROJECT_STEPS && d > PROJECT_DONE * c->cell && isfinite(d); it++) {
         double gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2], before[3] = {q[0], q[1], q[2]};
         for (int k = 0; k < 3; k++)
             q[k] -= fv * g[k] / gg;
         if (q[0] == before[0] && q[1] == before[1] && q[2] == before[2])
             break; /* a fixed point: the steps left would repeat this one exactly */
-        d = distance_estimate(c, q, g, &fv);
+        d = cf_distance_estimate(c, q, g, &fv);
     }
-    if (isfinite(d) && d < d0 && ism_dist3(p, q) <= max_move)
-        for (int k = 0; k < 3; k++)
-            p[k] = q[k];
+    if (!(isfinite(d) && d < d0 && ism_dist3(p, q) <= max_move))
+        return d0;
+    for (int k = 0; k < 3; k++)
+        p[k] = q[k];
+    return d;
 }
 
 int cf_ring_count(double width, double edge)

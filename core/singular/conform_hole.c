@@ -75,22 +75,6 @@ double cf_point_triangle_d2(const double q[3], const double a[3], const double b
     return ism_dot3(r, r);
 }
 
-/* Live triangles containing both a and b, and the last one found. */
-static int live_on_edge(const cf_ctx *c, uint32_t a, uint32_t b, uint32_t *which)
-{
-    int n = 0;
-    cf_inc it;
-    uint32_t t;
-    for (cf_inc_begin(c, a, &it); cf_inc_next(c, &it, &t);) {
-        const uint32_t *v = c->m->tri + 3 * (size_t)t;
-        if (v[0] != b && v[1] != b && v[2] != b)
-            continue;
-        n++;
-        *which = t;
-    }
-    return n;
-}
-
 static int cmp_rim(const void *pa, const void *pb)
 {
     const rim_edge *a = pa, *b = pb;
@@ -111,7 +95,7 @@ static bool rim_edges(cf_ctx *c, const uint32_t *rm, size_t nrm, rim_edge **out,
         const uint32_t *v = c->m->tri + 3 * (size_t)rm[i];
         for (int k = 0; k < 3; k++) {
             uint32_t a = v[k], b = v[(k + 1) % 3], t = 0;
-            if (live_on_edge(c, a, b, &t) != 1)
+            if (cf_live_on_edge(c, a, b, &t, 1) != 1)
                 continue;
             const uint32_t *w = c->m->tri + 3 * (size_t)t;
             bool ab = (w[0] == a && w[1] == b) || (w[1] == a && w[2] == b) ||

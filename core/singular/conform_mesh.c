@@ -245,21 +245,36 @@ bool cf_inc_next(const cf_ctx *c, cf_inc *it, uint32_t *t)
     return false;
 }
 
+/* The unit normal ∇f / |∇f| at p into n; false (n left as it was) where |∇f| is 0 or not
+ * finite. Inlined into both callers: cf_add_vertex as cheap as when it held these lines. */
+static inline __attribute__((always_inline)) bool normal_at(cf_ctx *c, const double p[3],
+                                                       float n[3])
+{
+    double g[3];
+    ism_eval_gradient(c->f, c->ws, p[0], p[1], p[2], g);
+    double len = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    if (!(len > 0 && isfinite(len)))
+        return false;
+    for (int k = 0; k < 3; k++)
+        n[k] = (float)(g[k] / len);
+    return true;
+}
+
+void cf_set_normal(cf_ctx *c, uint32_t v)
+{
+    float n[3] = {0, 0, 0};
+    normal_at(c, c->m->pos + 3 * (size_t)v, n);
+    for (int k = 0; k < 3; k++)
+        c->m->normal[3 * (size_t)v + k] = n[k];
+}
+
 uint32_t cf_add_vertex(cf_ctx *c, const double p[3], bool singular)
 {
     if (!cf_grow((void **)&c->singular, &c->cap_singular, c->m->nverts + 1, 1))
         return CF_NONE;
     float n[3] = {0, 0, 0};
-    if (!singular) {
-        double g[3];
-        ism_eval_gradient(c->f, c->ws, p[0], p[1], p[2], g);
-        double len = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-        if (len > 0 && isfinite(len))
-            for (int k = 0; k < 3; k++)
-                n[k] = (float)(g[k] / len);
-        else
-            singular = true;
-    }
+    if (!singular && !normal_at(c, p, n))
+        singular = true;
     uint32_t v = ism_mesh_add_vertex(c->m, p, n);
     if (v != CF_NONE)
         c->singular[v] = singular;

@@ -86,31 +86,28 @@ static void tri_normal(const ism_mesh *m, uint32_t t, double n[3])
 /* Triangle t faces against ∇f: at its centroid, or at two of its corners (their normals, ∇f's
  * direction where they were made; 0 at the locus). A triangle across a tight fold (beside a
  * pinch point, where ∇f turns by half a turn within a cell) can face along ∇f at its centroid
- * and against it at both ends of its edge on the fold. */
-static bool turned(cf_ctx *c, uint32_t t)
+ * and against it at both ends of its edge on the fold. off (when not NULL): the centroid's
+ * |f| / |∇f| (INFINITY where ∇f vanishes), from the same evaluation. */
+static bool turned(cf_ctx *c, uint32_t t, double *off)
 {
     const uint32_t *v = c->m->tri + 3 * (size_t)t;
-    double p[3], n[3], g[3];
+    double p[3], n[3], g[3], fv;
     tri_normal(c->m, t, n);
     int against = 0;
     for (int k = 0; k < 3; k++) {
         const float *vn = c->m->normal + 3 * (size_t)v[k];
         against += n[0] * vn[0] + n[1] * vn[1] + n[2] * vn[2] < 0;
     }
-    if (against >= 2)
+    if (against >= 2 && !off)
         return true;
     for (int k = 0; k < 3; k++)
         p[k] = (c->m->pos[3 * (size_t)v[0] + k] + c->m->pos[3 * (size_t)v[1] + k] +
                 c->m->pos[3 * (size_t)v[2] + k]) / 3;
-    ism_eval_gradient(c->f, c->ws, p[0], p[1], p[2], g);
-    return ism_dot3(n, g) < 0;
-}
-
-/* |f| / |∇f| at p (INFINITY where ∇f vanishes). */
-static double off_surface(cf_ctx *c, const double p[3])
-{
-    double g[3], fv = ism_eval_gradient(c->f, c->ws, p[0], p[1], p[2], g), gl = ism_norm3(g);
-    return gl > 0 ? fabs(fv) / gl : INFINITY;
+    if (off)
+        *off = cf_distance_estimate(c, p, g, &fv);
+    else
+        ism_eval_gradient(c->f, c->ws, p[0], p[1], p[2], g);
+    return against >= 2 || ism_dot3(n, g) < 0;
 }
 
 /* Turned triangles round vertex v; *worst: the farthest of their centroids from f = 0. */
@@ -122,31 +119,17 @@ static size_t turned_round(cf_ctx *c, uint32_t v, double *worst)
     *worst = 0;
     cf_inc_begin(c, v, &it);
     while (cf_inc_next(c, &it, &t)) {
-        n += turned(c, t);
-        const uint32_t *w = c->m->tri + 3 * (size_t)t;
-        double q[3];
-        for (int k = 0; k < 3; k++)
-            q[k] = (c->m->pos[3 * (size_t)w[0] + k] + c->m->pos[3 * (size_t)w[1] + k] +
-                    c->m->pos[3 * (size_t)w[2] + k]) / 3;
-        *worst = fmax(*worst, off_surface(c, q));
+        double o;
+        n += turned(c, t, &o);
+        *worst = fmax(*worst, o);
     }
     return n;
 }
 
-/* The vertex's normal from ∇f at its place (as cf_add_vertex sets it). */
-static void set_normal(cf_ctx *c, uint32_t v)
-{
-    const double *p = c->m->pos + 3 * (size_t)v;
-    double g[3];
-    ism_eval_gradient(c->f, c->ws, p[0], p[1], p[2], g);
-    double len = ism_norm3(g);
-    for (int k = 0; k < 3; k++)
-        c->m->normal[3 * (size_t)v + k] = len > 0 && isfinite(len) ? (float)(g[k] / len) : 0.0f;
-}
-
 /* Moves vertex v to the mean of its neighbours projected onto f = 0, kept when no more
- * triangles round it face against ∇f (and some did before). True when it moved. */
-static bool relax(cf_ctx *c, uint32_t v)
+ * triangles round it face against ∇f (and some did before) and no centroid round it ends
+ * farther from f = 0 than it was or than reach. True when it moved. */
+static bool relax(cf_ctx *c, uint32_t v, double reach)
 {
     double *p = c->m->pos + 3 * (size_t)v, mean[3] = {0, 0, 0}, old[3] = {p[0], p[1], p[2]};
     double spread = 0;
@@ -171,19 +154,19 @@ static bool relax(cf_ctx *c, uint32_t v)
         mean[j] /= (double)n;
     double worst0, worst1 = INFINITY;
     size_t before = turned_round(c, v, &worst0);
-    double off0 = off_surface(c, old);
+    double g[3], fv, off0 = cf_distance_estimate(c, old, g, &fv);
     for (int j = 0; j < 3; j++)
         p[j] = mean[j];
     /* back onto f = 0, by at most half the neighbours' mean distance: never onto another
      * sheet; a move Newton cannot bring as near f = 0 as the vertex was is refused (beside a
      * fold the mean can lie where no foot is near) */
-    cf_project(c, p, 0.5 * spread / (double)n);
-    size_t after = off_surface(c, p) <= fmax(off0, RELAX_ON_SURFACE * c->cell)
+    double off = cf_project(c, p, 0.5 * spread / (double)n);
+    size_t after = off <= fmax(off0, RELAX_ON_SURFACE * c->cell)
                        ? turned_round(c, v, &worst1)
                        : SIZE_MAX;
     bool fewer = after < before || (after == before && before > 0);
-    if (fewer && worst1 <= fmax(worst0, c->refill_reach)) {
-        set_normal(c, v);
+    if (fewer && worst1 <= fmax(worst0, reach)) {
+        cf_set_normal(c, v);
         return true;
     }
     for (int j = 0; j < 3; j++)
@@ -224,7 +207,7 @@ static bool collect_turned(cf_ctx *c, size_t nt0, cf_tris *out, size_t *nturned)
     if (!cf_memo_reset(c))
         return false;
     for (size_t t = nt0; t < c->m->ntris && !cf_poll(c, 1); t++) {
-        if (c->dead[t] || !turned(c, (uint32_t)t))
+        if (c->dead[t] || !turned(c, (uint32_t)t, NULL))
             continue;
         ++*nturned;
         for (int k = 0; k < 3; k++) {
@@ -241,7 +224,7 @@ static bool collect_turned(cf_ctx *c, size_t nt0, cf_tris *out, size_t *nturned)
     return true;
 }
 
-static bool untangle(cf_ctx *c, size_t nt0)
+static bool untangle(cf_ctx *c, size_t nt0, double reach)
 {
     cf_tris vs = {0};
     bool ok = true;
@@ -254,7 +237,7 @@ static bool untangle(cf_ctx *c, size_t nt0)
             break;
         size_t moved = 0;
         for (size_t i = 0; i < vs.n; i++)
-            moved += relax(c, vs.t[i]);
+            moved += relax(c, vs.t[i], reach);
         c->st->refill_untangled += moved;
         if (moved == 0)
             break;
@@ -286,24 +269,6 @@ static double measure(cf_ctx *c, const double p[3], double E)
     return ism_dist3(x, p) + rest;
 }
 
-/* Live triangles on the edge (a, b). */
-static size_t edge_tris(const cf_ctx *c, uint32_t a, uint32_t b, uint32_t *out, size_t cap)
-{
-    cf_inc it;
-    uint32_t t;
-    size_t n = 0;
-    cf_inc_begin(c, a, &it);
-    while (cf_inc_next(c, &it, &t)) {
-        const uint32_t *v = c->m->tri + 3 * (size_t)t;
-        if (v[0] == b || v[1] == b || v[2] == b) {
-            if (n < cap)
-                out[n] = t;
-            n++;
-        }
-    }
-    return n;
-}
-
 /* The edge of triangle t to split: its longest edge of two triangles whose length is at
  * least 2 min_edge (k: the edge from corner k to k + 1), or -1. */
 static int edge_to_split(const cf_ctx *c, uint32_t t, double min_edge)
@@ -314,7 +279,7 @@ static int edge_to_split(const cf_ctx *c, uint32_t t, double min_edge)
     for (int k = 0; k < 3; k++) {
         uint32_t a = v[k], b = v[(k + 1) % 3], tt[3];
         double len = ism_dist3(c->m->pos + 3 * (size_t)a, c->m->pos + 3 * (size_t)b);
-        if (len >= bl && edge_tris(c, a, b, tt, 3) == 2) {
+        if (len >= bl && cf_live_on_edge(c, a, b, tt, 3) == 2) {
             bl = len;
             best = k;
         }
@@ -347,13 +312,12 @@ static bool split_edge(cf_ctx *c, uint32_t a, uint32_t b, cf_tris *removed, bool
 {
     uint32_t tt[3];
     *ok = true;
-    if (edge_tris(c, a, b, tt, 3) != 2)
+    if (cf_live_on_edge(c, a, b, tt, 3) != 2)
         return false; /* an earlier split this round changed it */
     const double *pa = c->m->pos + 3 * (size_t)a, *pb = c->m->pos + 3 * (size_t)b;
     double mid[3] = {(pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2, (pa[2] + pb[2]) / 2};
     double len = ism_dist3(pa, pb);
-    cf_project(c, mid, 0.5 * len);
-    if (!(off_surface(c, mid) <= RELAX_ON_SURFACE * c->cell))
+    if (!(cf_project(c, mid, 0.5 * len) <= RELAX_ON_SURFACE * c->cell))
         return false;
     size_t nt = c->m->ntris, nv = c->m->nverts;
     uint32_t m = cf_add_vertex(c, mid, false), h[2][2][3];
@@ -363,13 +327,13 @@ static bool split_edge(cf_ctx *c, uint32_t a, uint32_t b, cf_tris *removed, bool
             cf_truncate(c, nt, nv);
         return false;
     }
-    bool was[2] = {turned(c, tt[0]), turned(c, tt[1])};
+    bool was[2] = {turned(c, tt[0], NULL), turned(c, tt[1], NULL)};
     for (int i = 0; i < 2; i++)
         for (int j = 0; j < 2; j++)
             *ok = *ok && cf_add_triangle(c, h[i][j][0], h[i][j][1], h[i][j][2]);
     bool worse = false;
     for (size_t t = nt; *ok && t < c->m->ntris; t++)
-        worse |= turned(c, (uint32_t)t) && !was[(t - nt) / 2];
+        worse |= turned(c, (uint32_t)t, NULL) && !was[(t - nt) / 2];
     if (!*ok || worse || c->m->ntris != nt + 4) {
         cf_truncate(c, nt, nv);
         return false;
@@ -433,9 +397,9 @@ bool cf_refine_refill(cf_ctx *c, size_t nt0, double max_error, double min_edge)
 {
     if (c->m->ntris == nt0 || !c->indexed)
         return true;
-    c->refill_reach = RELAX_CENTROID_CELLS * c->cell;
+    double reach = RELAX_CENTROID_CELLS * c->cell;
     if (max_error > 0)
-        c->refill_reach = fmin(c->refill_reach, max_error);
+        reach = fmin(reach, max_error);
     size_t w0 = c->st->work, nt1 = c->m->ntris;
     cf_tris removed = {0};
     bool ok = !(max_error > 0) || split_over(c, nt0, max_error, min_edge, &removed);
@@ -448,7 +412,7 @@ bool cf_refine_refill(cf_ctx *c, size_t nt0, double max_error, double min_edge)
     }
     c->st->triangles_added += c->m->ntris - nt1 - refill_halved;
     free(removed.t);
-    ok = ok && untangle(c, nt0);
+    ok = ok && untangle(c, nt0, reach);
     c->st->refill_work = c->st->work - w0;
     return ok;
 }

@@ -79,34 +79,20 @@ static double foot_distance(const ism_tape *f, ism_eval_ws *ws, const double p[3
         return best; /* well within E: the other starts can only find it nearer */
     for (int s = 1; s < 7; s++) {
         double x[3] = {p[0], p[1], p[2]};
-        if (s > 0)
-            x[(s - 1) / 2] += (s % 2 ? 0.25 : -0.25) * E;
+        x[(s - 1) / 2] += (s % 2 ? 0.25 : -0.25) * E;
         best = fmin(best, foot_from(f, ws, p, x));
     }
     return best;
 }
 
-/* The farthest centroid or edge midpoint of m from f = 0. */
-static double worst_point(const ism_mesh *m, const ism_tape *f, double E)
+/* foot_distance for pf_worst_turned's callback: the case's tape, workspace and E. */
+static const ism_tape *pe_f;
+static ism_eval_ws *pe_ws;
+static double pe_E;
+
+static double pe_dist(const double *p)
 {
-    ism_eval_ws *ws = ism_eval_ws_new(f);
-    cr_assert(ws);
-    double worst = 0;
-    for (size_t t = 0; t < m->ntris; t++) {
-        const double *p[3];
-        for (int k = 0; k < 3; k++)
-            p[k] = m->pos + 3 * (size_t)m->tri[3 * t + k];
-        double q[4][3];
-        for (int k = 0; k < 3; k++) {
-            q[0][k] = (p[0][k] + p[1][k] + p[2][k]) / 3;
-            for (int j = 0; j < 3; j++)
-                q[1 + j][k] = (p[j][k] + p[(j + 1) % 3][k]) / 2;
-        }
-        for (int j = 0; j < 4; j++)
-            worst = fmax(worst, foot_distance(f, ws, q[j], E));
-    }
-    ism_eval_ws_free(ws);
-    return worst;
+    return foot_distance(pe_f, pe_ws, p, pe_E);
 }
 
 static void pinch_case(const char *name, const char *expr, const double base[6])
@@ -123,7 +109,13 @@ static void pinch_case(const char *name, const char *expr, const double base[6])
         ism_mesh m;
         ism_locus l;
         pf_run_surface_bounded(t, box, 3, 10, E, &m, &l);
-        double worst = worst_point(&m, t, E);
+        pe_f = t;
+        pe_ws = ism_eval_ws_new(t);
+        pe_E = E;
+        cr_assert(pe_ws);
+        size_t turned;
+        double worst = pf_worst_turned(&m, t, pe_dist, &turned);
+        ism_eval_ws_free(pe_ws);
         ism_analysis_options ao;
         ism_analysis_options_default(&ao);
         ao.curvature = false;
