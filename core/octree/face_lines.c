@@ -835,6 +835,15 @@ static bool is_zero_tile(ism_cell_ctx *cx, const ism_tile *t)
  * its length, the resolution of its coordinates. */
 #define ZERO_RUN_BISECTIONS 52
 
+/* P as the point q found on a zero run (zero_run_crossing, singular_run): f = 0 there, its
+ * gradient sampled. */
+static void zero_run_point(ism_cell_ctx *cx, const double q[3], ism_fpoint *P)
+{
+    memcpy(P->p, q, sizeof P->p);
+    ism_sample_grad(&cx->s, q, P->g);
+    P->flags = ISM_FP_ZERO;
+}
+
 /* A line of f = 0 that leaves a zero run of the tile's boundary into the tile (a smooth
  * surface containing a lattice line and crossing the lattice plane there: the helicoid's
  * axis on the plane x = 0, where its ruling at z = π/4 lies in the plane too):
@@ -874,9 +883,7 @@ static int zero_run_crossing(ism_cell_ctx *cx, const ism_tile *t, ism_fpoint *P)
         q[along] = 0.5 * (x0 + x1);
         if (!(q[along] > lo->pt.p[along] && q[along] < hi->pt.p[along]))
             continue;
-        memcpy(P->p, q, sizeof P->p);
-        ism_sample_grad(&cx->s, q, P->g);
-        P->flags = ISM_FP_ZERO;
+        zero_run_point(cx, q, P);
         return i;
     }
     return -1;
@@ -990,9 +997,7 @@ static int singular_run(ism_cell_ctx *cx, const ism_tile *t, double gcross, int 
             }
             double q[3] = {lo->pt.p[0], lo->pt.p[1], lo->pt.p[2]};
             q[along] = 0.5 * (s0 + s1);
-            memcpy(P->p, q, sizeof P->p);
-            ism_sample_grad(&cx->s, q, P->g);
-            P->flags = ISM_FP_ZERO;
+            zero_run_point(cx, q, P);
             return i;
         }
         /* one sign beside the run: the line leaves at the end whose outer sign differs */

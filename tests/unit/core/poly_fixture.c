@@ -61,13 +61,19 @@ void pf_run_surface_bounded(const ism_tape *t, const double box[6], int dmin, in
     ism_poly_options_default(&o);
     memcpy(o.box, box, sizeof o.box);
     o.min_depth = dmin, o.max_depth = dmax, o.threads = 1, o.max_error = max_error;
-    ism_poly_stats ps;
+    pf_mesh_surface_with(t, &o, m, l, NULL);
+}
+
+void pf_mesh_surface_with(const ism_tape *t, const ism_poly_options *o, ism_mesh *m,
+                          ism_locus *l, ism_poly_stats *ps)
+{
+    ism_poly_stats own;
     ism_conform_stats cs;
     ism_surface_times tm;
     ism_error err;
     ism_mesh_init(m);
     ism_locus_init(l);
-    enum ism_poly_status s = ism_mesh_surface(t, &o, m, l, &ps, &cs, &tm, &err);
+    enum ism_poly_status s = ism_mesh_surface(t, o, m, l, ps ? ps : &own, &cs, &tm, &err);
     cr_assert_eq(s, ISM_POLY_OK, "meshing the surface failed: %s", err.message);
 }
 
@@ -474,4 +480,14 @@ double pf_worst_turned(const ism_mesh *m, const ism_tape *t, double (*dist)(cons
     }
     ism_eval_ws_free(ws);
     return w;
+}
+
+void pf_analyse_plain(const ism_mesh *m, const ism_tape *t, ism_analysis *a)
+{
+    ism_analysis_options ao;
+    ism_analysis_options_default(&ao);
+    ao.curvature = false;
+    ao.threads = 1;
+    ism_error err;
+    cr_assert(ism_analyse(m, t, &ao, a, &err), "analyse: %s", err.message);
 }

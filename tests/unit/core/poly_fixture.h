@@ -6,6 +6,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include "core/analysis/analysis.h"
 #include "core/expr/expr.h"
 #include "core/mesh/mesh.h"
 #include "core/octree/polygonise.h"
@@ -58,6 +59,11 @@ void pf_run_surface(const ism_tape *t, const double box[6], int dmin, int dmax, 
                     ism_locus *l);
 
 /* The same under an error bound max_error (> 0; 0: none). */
+/* The service's meshing (ism_mesh_surface) of t under o into fresh m and l, asserted OK; its
+ * polygoniser stats into *ps (NULL: not kept). */
+void pf_mesh_surface_with(const ism_tape *t, const ism_poly_options *o, ism_mesh *m,
+                          ism_locus *l, ism_poly_stats *ps);
+
 void pf_run_surface_bounded(const ism_tape *t, const double box[6], int dmin, int dmax,
                             double max_error, ism_mesh *m, ism_locus *l);
 
@@ -127,6 +133,10 @@ double pf_newton_dist(const ism_tape *t, ism_eval_ws *ws, const double p[3]);
  * triangles whose normal points against ∇f at their centroid into *turned. */
 double pf_worst_turned(const ism_mesh *m, const ism_tape *t, double (*dist)(const double *),
                        size_t *turned);
+
+/* The service's analysis of m on one thread without curvature (distances at vertices, centroids
+ * and midpoints): asserts it ran; the caller frees *a. */
+void pf_analyse_plain(const ism_mesh *m, const ism_tape *t, ism_analysis *a);
 
 /* The largest |dist| at the mesh's vertices, triangle centroids and edge midpoints. */
 double pf_worst_distance(const ism_mesh *m, double (*dist)(const double *));

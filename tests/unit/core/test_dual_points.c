@@ -54,13 +54,7 @@ static void mesh_surface_to(const ism_tape *t, const double box[6], double e, bo
     o.max_error = e;
     o.dual = dual;
     o.threads = threads;
-    ism_mesh_init(m);
-    ism_locus_init(l);
-    ism_conform_stats cs;
-    ism_surface_times times;
-    ism_error err;
-    cr_assert_eq(ism_mesh_surface(t, &o, m, l, ps, &cs, &times, &err), ISM_POLY_OK, "%s",
-                 err.message);
+    pf_mesh_surface_with(t, &o, m, l, ps);
 }
 
 /* ... down to DEPTH. */

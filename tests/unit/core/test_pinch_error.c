@@ -116,13 +116,8 @@ static void pinch_case(const char *name, const char *expr, const double base[6])
         size_t turned;
         double worst = pf_worst_turned(&m, t, pe_dist, &turned);
         ism_eval_ws_free(pe_ws);
-        ism_analysis_options ao;
-        ism_analysis_options_default(&ao);
-        ao.curvature = false;
-        ao.threads = 1;
         ism_analysis a;
-        ism_error err;
-        cr_assert(ism_analyse(&m, t, &ao, &a, &err), "analyse: %s", err.message);
+        pf_analyse_plain(&m, t, &a);
         bool met = fmax(a.max_dist_centroid, a.max_dist_midpoint) <= E;
         cr_log_info("%s E %g box %d: closed form %.3f E, analysis centroid %.3f E midpoint %.3f E, "
                     "%zu triangles", name, E, which, worst / E, a.max_dist_centroid / E,

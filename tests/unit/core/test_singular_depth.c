@@ -57,13 +57,8 @@ Test(singular_depth, klein_depth_max_is_only_a_limit)
         cr_expect_eq(p.components, 1, "box %d: %zu components", which, p.components);
         size_t nm = 0;
         cr_expect(pf_nm_edges_one_closed_curve(&m10, &nm), "box %d: the double curve", which);
-        ism_analysis_options ao;
-        ism_analysis_options_default(&ao);
-        ao.curvature = false;
-        ao.threads = 1;
         ism_analysis a;
-        ism_error err;
-        cr_assert(ism_analyse(&m10, t, &ao, &a, &err), "analyse: %s", err.message);
+        pf_analyse_plain(&m10, t, &a);
         cr_expect_leq(a.max_dist_centroid, E, "box %d: centroid %g", which, a.max_dist_centroid);
         cr_expect_leq(a.max_dist_midpoint, E, "box %d: midpoint %g", which, a.max_dist_midpoint);
         ism_analysis_free(&a);
