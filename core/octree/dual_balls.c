@@ -424,7 +424,8 @@ bool ism_dual_centroid_within(ism_sampler *s, const double *p[3], double e)
         v[a] = p[2][a] - p[0][a];
     }
     double f = ism_sample_grad(s, c, g), gl = ism_norm3(g);
-    if (!isfinite(f) || !(gl > 0) || !(ism_dual_kink_dist(s, c, fabs(f) / gl, e) <= e))
+    if (!isfinite(f) || !(gl > 0) ||
+        !(ism_dual_kink_dist(s, c, ism_dual_plain_dist(s, c, f, g, e), e) <= e))
         return false;
     nrm[0] = u[1] * v[2] - u[2] * v[1];
     nrm[1] = u[2] * v[0] - u[0] * v[2];

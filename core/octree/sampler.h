@@ -42,20 +42,26 @@ static inline double ism_sample_grad(ism_sampler *s, const double p[3], double g
     return ism_eval_gradient(ism_sampler_tape_at(s, p), s->ws, p[0], p[1], p[2], g);
 }
 
-/* |f| / |∇f| at p: the first-order distance to f = 0. 0 where f is exactly 0 (on the surface,
- * even where ∇f vanishes: a cone's apex); +inf where there is no estimate: f or ∇f not
- * finite, or ∇f vanishing where f is not 0 (a critical point of f off the surface is not on
- * it, however small f). */
-static inline double ism_sample_dist(ism_sampler *s, const double p[3])
+/* |f| / |∇f| from f and ∇f at a point: the first-order distance to f = 0. 0 where f is
+ * exactly 0 (on the surface, even where ∇f vanishes: a cone's apex); +inf where there is no
+ * estimate: f or ∇f not finite, or ∇f vanishing where f is not 0 (a critical point of f off
+ * the surface is not on it, however small f). */
+static inline double ism_first_order_dist(double f, const double g[3])
 {
-    double g[3];
-    double f = ism_sample_grad(s, p, g);
     if (f == 0)
         return 0;
     double gl = ism_norm3(g);
     if (!isfinite(f) || !isfinite(gl) || !(gl > 0))
         return INFINITY;
     return fabs(f) / gl;
+}
+
+/* ism_first_order_dist of f and ∇f at p. */
+static inline double ism_sample_dist(ism_sampler *s, const double p[3])
+{
+    double g[3];
+    double f = ism_sample_grad(s, p, g);
+    return ism_first_order_dist(f, g);
 }
 
 /* -1, 0 or +1. */

@@ -27,8 +27,6 @@ static const pf_surface balls = {"min(x^2 + y^2 + z^2 - 1, (x - 1)^2 + y^2 + z^2
 #define SAFETY_DEPTH 10
 #define FINEST (3.0 / (1 << SAFETY_DEPTH))
 static const double shifts[] = {0, 1e-3 * FINEST, PF_IRR * FINEST};
-/* The old rational placement last: only for a run marked FIXME(issue 13). */
-static const double shifts_old[] = {0, 1e-3 * FINEST, PF_OLD * FINEST};
 /* Equilateral triangles of circumradius ρ on a sphere of radius 1/κ: centroid sag ρ² κ / 2,
  * area 3√3/4 ρ². The dual mesh's right triangles (two per crossed minimal edge) and the
  * octree's factor-2 levels cost some over that ideal: measured in the three boxes, sphere
@@ -96,12 +94,13 @@ static size_t repeated_directed_edges(const ism_mesh *m)
     return rep;
 }
 
-/* check() in the cube of half-width `half` and its two shifts sh[1], sh[2] (shifts or
- * shifts_old: the same fractions of its own finest cell), from box `first` on. */
-static void check_at(const pf_surface *s, double (*dist)(const double *), double e,
+/* check() in the cube of half-width `half` and its two shifts (the same fractions of its
+ * own finest cell), from box `first` on. */
+static void check_in(const pf_surface *s, double (*dist)(const double *), double e,
                      double area, double kappa_max, long euler, double room, double half,
-                     int first, const double sh[3])
+                     int first)
 {
+    const double *sh = shifts;
     ism_tape *t = pf_compile(s);
     double bound = room * area / (EQUILATERAL_AREA * 2 * e / kappa_max);
     for (size_t i = (size_t)first; i < 3; i++) {
@@ -125,13 +124,6 @@ static void check_at(const pf_surface *s, double (*dist)(const double *), double
         ism_mesh_free(&m);
     }
     ism_tape_free(t);
-}
-
-static void check_in(const pf_surface *s, double (*dist)(const double *), double e,
-                     double area, double kappa_max, long euler, double room, double half,
-                     int first)
-{
-    check_at(s, dist, e, area, kappa_max, euler, room, half, first, shifts);
 }
 
 static void check(const pf_surface *s, double (*dist)(const double *), double e, double area,
@@ -159,13 +151,11 @@ Test(dual, torus_within_the_bound_closed_and_small)
 Test(dual, coarse_bound_within_and_small)
 {
     check(&pf_unit_sphere, pf_unit_sphere_dist, 1e-2, 4 * M_PI, 1.0, 2, SPHERE_ROOM);
-    /* FIXME(issue 13): fails at the irrational placement (PF_IRR of a finest cell on every
-     * axis): one centroid or midpoint of the torus's dual mesh 0.0100006 from the surface, E
-     * 0.01 (1.00006 E: the mesher's first-order measure passes it, the closed form does not);
-     * every other fact holds there. Left on the old rational placement until
-     * core/octree/dual*.c measures that point within E. */
-    check_at(&pf_ring_torus, pf_ring_torus_dist, 1e-2, 4 * M_PI * M_PI * 1.0 * 0.3, 1 / 0.3, 0,
-             COARSE_TORUS_ROOM, 1.5, pf_first_box(), shifts_old);
+    /* In the irrational box a midpoint of the torus's first-order measure 0.985 E is 1.00006 E
+     * from the tube (closed form): the mesher measures it one Newton step further
+     * (dual_crease.c ism_dual_plain_dist) and splits. */
+    check(&pf_ring_torus, pf_ring_torus_dist, 1e-2, 4 * M_PI * M_PI * 1.0 * 0.3, 1 / 0.3, 0,
+          COARSE_TORUS_ROOM);
 }
 
 /* A torus of tube radius 1/4 round the unit circle: its outer equator (x² + y² = 25/16)
