@@ -1487,7 +1487,42 @@ done:
 
 /* Marks the leaves of triangles that miss E (centroid and edge midpoints within E of f = 0,
  * facing along ∇f: measure_triangles); returns how many leaves can still split and counts
- * the misses at max_depth into *missed. A fan's centre (emit_quads) belongs to no leaf. */
+ * the misses at max_depth into *missed. A fan's centre (emit_quads) belongs to no leaf: a
+ * fan's triangle whose leaves are at max_depth splits the fan's other leaves
+ * (mark_fan_leaves). */
+/* Marks leaf (a leaf not yet split, above depth.max) to split; true when it can. */
+static bool mark_leaf(dual *d, int32_t leaf, size_t *marked)
+{
+    dnode *n = leaf < 0 ? NULL : &d->n[leaf];
+    if (!n || n->child >= 0 || n->level >= d->o->max_depth)
+        return false;
+    *marked += !n->split;
+    n->split = 1;
+    return true;
+}
+
+/* A fan's triangle t (emit_quads: the fan's centre c is corner 2 of each of its four, which
+ * follow one another) whose own leaves are at depth.max: the leaves of the fan's other
+ * corners are marked instead (the quad's far side). A quad between leaves two levels apart
+ * is a sliver whose centre may fall beyond its near side: the spindle torus at E 1e-2 in the
+ * irrational box had a fan triangle turned over between two depth-9 leaves and two depth-7
+ * ones (where the quad's other diagonal met E) and declined (error_at_max_depth). True when
+ * one can split. */
+static bool mark_fan_leaves(dual *d, size_t t, size_t *marked)
+{
+    uint32_t c = d->tri[3 * t + 2];
+    if (d->vleaf[c] >= 0)
+        return false;
+    bool any = false;
+    size_t lo = t >= 3 ? t - 3 : 0, hi = t + 3 < d->nt ? t + 3 : d->nt - 1;
+    for (size_t u = lo; u <= hi; u++)
+        if (d->tri[3 * u + 2] == c)
+            for (int j = 0; j < 2; j++)
+                for (int32_t v = (int32_t)d->tri[3 * u + j]; v >= 0; v = d->vtwin[v])
+                    any |= mark_leaf(d, d->vleaf[v], marked);
+    return any;
+}
+
 static size_t mark_misses(dual *d, uint64_t *missed)
 {
     size_t marked = 0;
@@ -1505,15 +1540,11 @@ static size_t mark_misses(dual *d, uint64_t *missed)
         bool any = false;
         for (int pass = 0; pass < 2 && !any; pass++, m = 7) /* then every leaf of t */
             for (int j = 0; j < 3; j++)
-                for (int32_t v = (int32_t)d->tri[3 * t + j]; v >= 0; v = d->vtwin[v]) {
-                    int32_t leaf = d->vleaf[v]; /* every leaf on a welded vertex */
-                    dnode *n = leaf < 0 ? NULL : &d->n[leaf];
-                    if (n && n->child < 0 && (m >> j & 1) && n->level < d->o->max_depth) {
-                        marked += !n->split;
-                        n->split = 1;
-                        any = true;
-                    }
-                }
+                for (int32_t v = (int32_t)d->tri[3 * t + j]; v >= 0; v = d->vtwin[v])
+                    /* every leaf on a welded vertex */
+                    any |= (m >> j & 1) && mark_leaf(d, d->vleaf[v], &marked);
+        if (!any) /* a fan's triangle: the quad's other leaves */
+            any = mark_fan_leaves(d, t, &marked);
         *missed += !any;
     }
     free(miss);

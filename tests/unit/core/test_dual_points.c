@@ -242,17 +242,16 @@ Test(dual_points, spindle_torus_nodes_closed_form)
     /* not ±2: there the equators' outermost points (ρ = 1.5, 0.5) are lattice corners where
      * f = 0 and the surface is tangent to the cells' faces, which the dual mesher cannot
      * prove plain (not_plain; a limit of the dual mesher, not of the points).
-     * FIXME(issue 13): fails at the irrational placement (pf_sweep_box), E 1e-2: the dual
-     * mesher declines (error_at_max_depth: a leaf misses E at DEPTH) and the primal path
-     * meshes it, whose mesh holds every other fact (2 nodes with 2 cones, closed, within E).
-     * Left on the old rational placement (pf_sweep_box_old) until core/octree/dual*.c meets E
-     * there. */
+     * In the irrational box at E 1e-2 the dual mesher declined (error_at_max_depth) until a
+     * fan's sliver between leaves two levels apart split its far leaves (dual.c
+     * mark_fan_leaves) and a clip sphere stopped swallowing its nappe within one scan
+     * (dual_balls.c segment_dips). */
     static const double base[6] = {-2.1, -2.1, -2.1, 1.9, 1.9, 1.9};
     const double es[] = {1e-2, 3e-3};
     for (int which = pf_first_box() - 1; which < 2; which++)
         for (size_t k = 0; k < sizeof es / sizeof es[0]; k++) {
             double box[6];
-            pf_sweep_box_old(base, DEPTH, which, box);
+            pf_sweep_box(base, DEPTH, which, box);
             pf_props p, q;
             expect_fanned(t, box, es[k], 2, on_spindle_axis, spindle_dist, which, &p);
             primal_props(t, box, es[k], &q);
