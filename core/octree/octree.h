@@ -26,8 +26,11 @@ enum ism_node_flags {
                                 lattice lines (breaks.c) and no neighbour's segments change */
     ISM_NODE_UNFLAT = 4,     /* without max_error: an unresolved leaf neither on a crease (its
                                 tape keeps a min/max) nor meeting a quiet ball (the singular
-                                locus): its triangles are measured against the flatness
-                                tolerance for the stats' warning (polygonise.c) */
+                                locus) nor within 1 / (4 flat_plane) of its sizes of one's
+                                centre (octree_build.c unflat: a node's cone bends beyond the
+                                tolerance there at every depth): its triangles are
+                                measured against the flatness tolerance for the stats'
+                                warning (polygonise.c) */
 };
 
 /* What the hidden-piece search (thin_search.h) decided at a node, kept so that the next

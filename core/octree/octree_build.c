@@ -571,12 +571,22 @@ static void children_ranges(build *b, thread_state *th, const ism_node *nd,
 /* Without max_error, is an unresolved leaf (lo..hi, tape sub) one a larger depth.max could
  * improve? Not on a crease (sub keeps a min/max: a C0 kink fails the corner gradients at
  * every level) nor where the singular locus is (a quiet ball meets it: two sheets or a cone
- * fail them at every level, and the conformance pass rebuilds the mesh there). Its emitted
- * triangles are then measured (polygonise.c); under max_error the error rounds report. */
+ * fail them at every level, and the conformance pass rebuilds the mesh there) or beside it:
+ * a cone bends across its rulings with radius r tan α at distance r from its apex (α its
+ * half-opening), so a cell of size h there holds a polygon (face diagonal √2 h) that leaves
+ * its plane by h² / (4 r tan α) — beyond the flatness tolerance flat_plane h for
+ * r < h / (4 flat_plane tan α), 5 cells on a right cone (tan α = 1) at the default 0.05, at
+ * every depth (the cone is self-similar: the double cone in boxes moved off the lattice by
+ * 1e-3 and by irrational fractions warned for 4 / 6 / 6 and 13 / 13 / 13 cells at depth.max
+ * 6 / 7 / 8, 2.8-3.7 cells from its node, their worst distance halving with each level as
+ * the locus's own cells do).
+ * Narrower cones than right ones still warn there. Its emitted triangles are then measured
+ * (polygonise.c); under max_error the error rounds report. */
 static bool unflat(const build *b, const ism_tape *sub, const double lo[3], const double hi[3])
 {
+    double pf = b->p->flatness.plane_frac, cone = pf > 0 ? (hi[0] - lo[0]) / (4 * pf) : 0;
     return b->p->flatness.max_error <= 0 && !ism_tape_has_min_max(sub) &&
-           !ism_quiet_meets(&b->quiet, lo, hi);
+           !ism_quiet_near(&b->quiet, lo, hi, cone);
 }
 
 /* Decides node v->v[i] and grows its subtree. Nodes that fail the flatness test are split

@@ -50,8 +50,9 @@ typedef struct ism_poly_stats {
     uint64_t plotting_nodes;     /* leaves that produced polygons */
     uint64_t unresolved_nodes;   /* leaves at max depth that failed flatness or polygonisation */
     uint64_t unflat_nodes;       /* without max_error: of those, the ones a larger depth.max
-                                    could improve: not on a crease (min/max) nor meeting the
-                                    singular locus's balls and tubes (ISM_NODE_UNFLAT), their
+                                    could improve: not on a crease (min/max) nor meeting or
+                                    beside the singular locus's balls and tubes
+                                    (ISM_NODE_UNFLAT), their
                                     emitted triangles farther from the surface than the
                                     flatness test allows a node of their size */
     double unflat_worst;         /* the largest distance measured on them (centroids and edge

@@ -47,32 +47,44 @@ bool ism_quiet_holds(const ism_quiet *q, const double lo[3], const double hi[3])
     return false;
 }
 
-static bool meets(const double *b, const double lo[3], const double hi[3])
+/* Does the box come within max(radius, reach) of ball b's centre? */
+static bool near(const double *b, const double lo[3], const double hi[3], double reach)
 {
-    double near = 0;
+    double d2 = 0, r = b[3] > reach ? b[3] : reach;
     for (int a = 0; a < 3; a++) {
         double d = b[a] < lo[a] ? lo[a] - b[a] : b[a] > hi[a] ? b[a] - hi[a] : 0;
-        near += d * d;
+        d2 += d * d;
     }
-    return near < b[3] * b[3];
+    return d2 < r * r;
 }
 
-/* A meeting ball's centre lies within one grid cell (the largest radius) of the box: the
- * cells from lo's to hi's, grown by one. */
-bool ism_quiet_meets(const ism_quiet *q, const double lo[3], const double hi[3])
+/* A ball within reach has its centre within one grid cell (the largest radius) plus reach of
+ * the box: the cells from lo's to hi's, grown by that many — or every ball, when they are
+ * fewer than those cells (a reach of 5 cells round balls of 2 reads 9³ grid cells: the
+ * double cone's one ball made that +2.6% of the run). */
+bool ism_quiet_near(const ism_quiet *q, const double lo[3], const double hi[3], double reach)
 {
     const ism_ball_grid *g = &q->grid;
     if (g->n == 0)
         return false;
-    int64_t c0[3], c1[3];
+    int64_t c0[3], c1[3], k = 1 + (int64_t)ceil(reach / g->cell);
     ism_ball_grid_cell_of(g, lo, c0);
     ism_ball_grid_cell_of(g, hi, c1);
+    double cells = 1;
+    for (int a = 0; a < 3; a++)
+        cells *= (double)(c1[a] - c0[a] + 1 + 2 * k);
+    if ((double)g->n <= cells) {
+        for (size_t i = 0; i < g->n; i++)
+            if (near(q->ball[g->key[i] & UINT32_MAX], lo, hi, reach))
+                return true;
+        return false;
+    }
     int64_t c[3];
-    for (c[0] = c0[0] - 1; c[0] <= c1[0] + 1; c[0]++)
-        for (c[1] = c0[1] - 1; c[1] <= c1[1] + 1; c[1]++)
-            for (c[2] = c0[2] - 1; c[2] <= c1[2] + 1; c[2]++)
+    for (c[0] = c0[0] - k; c[0] <= c1[0] + k; c[0]++)
+        for (c[1] = c0[1] - k; c[1] <= c1[1] + k; c[1]++)
+            for (c[2] = c0[2] - k; c[2] <= c1[2] + k; c[2]++)
                 for (size_t i = ism_ball_grid_first(g, c); ism_ball_grid_in(g, i, c); i++)
-                    if (meets(q->ball[g->key[i] & UINT32_MAX], lo, hi))
+                    if (near(q->ball[g->key[i] & UINT32_MAX], lo, hi, reach))
                         return true;
     return false;
 }

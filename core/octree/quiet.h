@@ -21,7 +21,8 @@ void ism_quiet_free(ism_quiet *q);
 /* Does the box lo..hi lie inside one of the balls? */
 bool ism_quiet_holds(const ism_quiet *q, const double lo[3], const double hi[3]);
 
-/* Does the box lo..hi meet one of the balls (the nearest point of the box inside it)? */
-bool ism_quiet_meets(const ism_quiet *q, const double lo[3], const double hi[3]);
+/* Does the box lo..hi meet one of the balls (the nearest point of the box inside it) or come
+ * within `reach` (>= 0) of a ball's centre? */
+bool ism_quiet_near(const ism_quiet *q, const double lo[3], const double hi[3], double reach);
 
 #endif
