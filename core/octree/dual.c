@@ -545,6 +545,25 @@ static int crease_kind(dual *d, worker *w, dnode *n, corner_view *v)
     return kind;
 }
 
+/* Does f fall from its zero at corner c into the node along each of the node's three edges
+ * from c (the unit gradient's component along each, taken into the node, below 0)? Then the
+ * sheet through c crosses the node transversally, cutting off the corner: the node's three
+ * crossed edges (the other seven corners < 0, 0 counting as > 0) have their roots at c and
+ * the node is a plain leaf whose vertex is c, the nodes round c having theirs elsewhere
+ * (Barth's sextic through the lattice point (1/2, 1/2, 1/2) with ∇f along (1, 1, 1), the
+ * sphere r = 1.5 through (1.4, -0.2, -0.5) in the box ±1.6: at every level). Not so where
+ * the sheet is tangent to a lattice line through c (tooth at (0, 1, 1)) or ∇f vanishes
+ * there (a cone's apex). */
+static bool zero_corner_transverse(const corner_view *v, int c)
+{
+    bool down = true;
+    for (int a = 0; a < 3; a++) {
+        double into = (c >> a & 1) ? -v->n[c][a] : v->n[c][a];
+        down &= into < 0;
+    }
+    return down;
+}
+
 /* What node n is (f and the unit gradients at its corners in n->f and v): empty (proven
  * free of f = 0), a surface leaf with one sheet (corner gradients agreeing, or one graph
  * proven by interval gradients), or to be split. The interval is taken only where the
@@ -564,10 +583,11 @@ static int classify(dual *d, worker *w, dnode *n, corner_view *v)
      * is that corner, so is the leaf's vertex, and so are those of the leaves round it —
      * triangles of no area, at every level alike. Split, so the mesh declines at depth.max
      * (not_plain) before vertices and measurements: meshing them to find the misses cost
-     * tooth 1e-2 +11.5% and spindle-cyclide +30.8% of the whole run (callgrind). */
+     * tooth 1e-2 +11.5% and spindle-cyclide +30.8% of the whole run (callgrind). A sheet
+     * crossing the lattice point transversally (zero_corner_transverse) is a plain case. */
     if (neg == 7)
         for (int c = 0; c < 8; c++)
-            if (n->f[c] == 0)
+            if (n->f[c] == 0 && !zero_corner_transverse(v, c))
                 return DN_INNER;
     bool mixed = neg != 0 && neg != 8;
     v->agree = mixed && normals_agree((const double (*)[3])v->n, d->o->flat_normal);
@@ -598,7 +618,8 @@ static int classify(dual *d, worker *w, dnode *n, corner_view *v)
     return plain_edges(d, w, n, v) ? DN_SURF : DN_INNER;
 }
 
-/* f and the unit gradient at lattice point q into *f, p, g: through the point memo, as
+/* f and the unit gradient at lattice point q into *f, p, g (f 0 where its sign is rounding
+ * noise: ism_sample_zero_by_rounding): through the point memo, as
  * neighbouring nodes share corners (a split's 27 points hold the parent's 8 and the 18 on
  * its faces and edges that the neighbours' splits sample too). */
 static void sample_corner(dual *d, worker *w, const int32_t q[3], double *f, double p[3],
@@ -609,7 +630,10 @@ static void sample_corner(dual *d, worker *w, const int32_t q[3], double *f, dou
     const ism_point_entry *e = ism_point_memo(w->points, w->bits, q, p, &w->s);
     *f = e->f;
     memcpy(g, e->g, sizeof e->g);
-    ism_normalise3(g); /* 0 at a critical point: no agreement there */
+    double gn = ism_normalise3(g); /* 0 at a critical point: no agreement there */
+    const double *st = d->g.step, step = min_of(st[0], min_of(st[1], st[2]));
+    if (*f != 0 && ism_sample_zero_by_rounding(&w->s, p, *f, gn, step))
+        *f = 0; /* a zero for every node sharing the point, as the primal tiles take it */
 }
 
 /* Bytes the tree and the vertices hold (the triangles are bounded by max_triangles). */

@@ -118,6 +118,7 @@ int ism_dual_mean_value_sign(const double f[8], const ism_ivgrad *g, const doubl
                              const double hi[3])
 {
     double low = -INFINITY, high = INFINITY;
+    bool touch = false;
     for (int c = 0; c < 8; c++) {
         double a = f[c], b = f[c];
         for (int k = 0; k < 3; k++) {
@@ -126,10 +127,11 @@ int ism_dual_mean_value_sign(const double f[8], const ism_ivgrad *g, const doubl
             a += min_of(0, min_of(p, q));
             b += max_of(0, max_of(p, q));
         }
+        touch |= f[c] == 0 && a == 0; /* f >= 0 from a zero corner: only zeros added */
         low = max_of(low, a);
         high = min_of(high, b);
     }
-    return low > 0 ? 1 : high < 0 ? -1 : 0;
+    return low > 0 || touch ? 1 : high < 0 ? -1 : 0;
 }
 
 /* Is f's top instruction a max (else a min)? */

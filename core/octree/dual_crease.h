@@ -46,7 +46,10 @@ bool ism_dual_crease_vertex(ism_sampler *s, const double lo[3], const double hi[
                             double x[3]);
 
 /* f kept from 0 over box lo..hi by the mean-value form from its 8 corners (values f[8],
- * ∇f enclosed in g over the box): 1 when f > 0 there, -1 when f < 0, 0 when not shown. */
+ * ∇f enclosed in g over the box): 1 when f > 0 there, -1 when f < 0, 0 when not shown.
+ * Also 1 when f >= 0 there from a corner where f is exactly 0 (the mesh's f = 0 counts as
+ * outside: the node holds no f < 0, the sheet only touches its corner — Barth's sextic
+ * through a lattice point). */
 int ism_dual_mean_value_sign(const double f[8], const ism_ivgrad *g, const double lo[3],
                              const double hi[3]);
 

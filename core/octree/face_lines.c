@@ -65,11 +65,6 @@
  * of the unit gradients at a line's two ends: 1 each when the ends see one sheet) differ by
  * less than this per line are a tie, broken by the centre's sign. */
 #define FAMILY_SCORE_MARGIN 0.1
-/* A lattice point whose first-order distance to f = 0 is under this fraction of a finest
- * lattice step is asked whether f's sign there is rounding noise (one interval over the
- * point). Rounding moves f by some ulps of its terms: roots that near a lattice point are
- * 1e-15 of a unit box away; 1e-9 of a step keeps the interval off every other point. */
-#define ZERO_ROUNDING_NEAR 1e-9
 
 bool ism_flines_push(ism_flines *l, const ism_fpoint *a, const ism_fpoint *b, int kind)
 {
@@ -88,26 +83,10 @@ static ism_lattice_entry *lattice_slot(ism_cell_ctx *cx, const int32_t ip[3])
                              (((uint64_t)1 << ISM_POINT_CACHE_BITS) - 1)];
 }
 
-/* Is f at lattice point p (value f, |∇f| gn) zero within its rounding: the outward-rounded
- * interval of f over the point itself holds 0, so the sign the evaluation gave is noise?
- * Asked only where the surface passes nearer than ZERO_ROUNDING_NEAR of a finest lattice
- * step (first order): elsewhere the sign is far above any rounding. */
-static bool zero_by_rounding(ism_cell_ctx *cx, const double p[3], double f, double gn)
-{
-    const ism_grid *g = &cx->tree->grid;
-    double step = fmin(g->step[0], fmin(g->step[1], g->step[2]));
-    if (!(fabs(f) <= ZERO_ROUNDING_NEAR * gn * step))
-        return false;
-    cx->s.n_interval++;
-    ism_interval r = ism_eval_interval(ism_sampler_tape_at(&cx->s, p), cx->s.ws,
-                                       (ism_interval){p[0], p[0]}, (ism_interval){p[1], p[1]},
-                                       (ism_interval){p[2], p[2]});
-    return r.lo <= 0 && r.hi >= 0;
-}
-
 /* Lattice point ip through the thread's memo: f and ∇f there, and its successors on its
  * lattice lines from the break-point registry (one probe there per memo miss). f is 0 where
- * its sign is rounding noise (zero_by_rounding): a zero point for every tile that meets it
+ * its sign is rounding noise (ism_sample_zero_by_rounding): a zero point for every tile that
+ * meets it
  * (the sphere r = 1.5 in the box ±1.6 has f = +4.4e-16 at (0.2, 0.5, -1.4): each lattice
  * segment from there found a root 1e-15 away, the one node on the negative side cut off its
  * corner by a triangle of those three roots lying in its lower face in floating point, which
@@ -123,7 +102,9 @@ static const ism_lattice_entry *lattice_entry(ism_cell_ctx *cx, const int32_t ip
         e->key = key;
         e->f = ism_sample_grad(&cx->s, p, e->g);
         e->gn = ism_norm3(e->g);
-        if (e->f != 0 && zero_by_rounding(cx, p, e->f, e->gn))
+        const double *st = cx->tree->grid.step;
+        if (e->f != 0 && ism_sample_zero_by_rounding(&cx->s, p, e->f, e->gn,
+                                                     fmin(st[0], fmin(st[1], st[2]))))
             e->f = 0;
         e->round = 0;
     }

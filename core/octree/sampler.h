@@ -4,6 +4,7 @@
 #ifndef ISM_SAMPLER_H
 #define ISM_SAMPLER_H
 
+#include <stdbool.h>
 #include <stdint.h>
 #include <math.h>
 #include "core/eval/eval.h"
@@ -62,6 +63,30 @@ static inline double ism_sample_dist(ism_sampler *s, const double p[3])
     double g[3];
     double f = ism_sample_grad(s, p, g);
     return ism_first_order_dist(f, g);
+}
+
+/* A lattice point whose first-order distance to f = 0 is under this fraction of a finest
+ * lattice step is asked whether f's sign there is rounding noise (one interval over the
+ * point). Rounding moves f by some ulps of its terms: roots that near a lattice point are
+ * 1e-15 of a unit box away; 1e-9 of a step keeps the interval off every other point. */
+#define ISM_ZERO_ROUNDING_NEAR 1e-9
+
+/* Is f at lattice point p (value f, |∇f| gn; step: the finest lattice step) zero within its
+ * rounding: the outward-rounded interval of f over the point itself holds 0, so the sign the
+ * evaluation gave is noise? Asked only where the surface passes nearer than
+ * ISM_ZERO_ROUNDING_NEAR of a step (first order): elsewhere the sign is far above any
+ * rounding. The primal tiles (face_lines.c) and the dual mesher's corners (dual.c) then take
+ * f there as 0, the same for every cell sharing the point. */
+static inline bool ism_sample_zero_by_rounding(ism_sampler *s, const double p[3], double f,
+                                               double gn, double step)
+{
+    if (!(fabs(f) <= ISM_ZERO_ROUNDING_NEAR * gn * step))
+        return false;
+    s->n_interval++;
+    ism_interval r = ism_eval_interval(ism_sampler_tape_at(s, p), s->ws,
+                                       (ism_interval){p[0], p[0]}, (ism_interval){p[1], p[1]},
+                                       (ism_interval){p[2], p[2]});
+    return r.lo <= 0 && r.hi >= 0;
 }
 
 /* -1, 0 or +1. */
