@@ -205,6 +205,7 @@ typedef struct dual {
     double shift;     /* vertices move at most this far along ∇f (straddle.h), or 0 */
     const ism_dual_ball *balls; /* round the isolated singular points (dual_balls.h) */
     size_t nballs;
+    ism_dual_ball_cover cover; /* the balls by where they reach (nodes ask only those) */
     const double *inner; /* the request's box when the tree's is grown round it (dual_box.h) */
     bool crease; /* f = min/max(a, b), its only one: nodes with the kink go to dual_crease.h */
     bool bad, nomem, too_big;
@@ -675,7 +676,7 @@ static int leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad)
 {
     double size = ism_grid_cell_size(&d->g, n->level);
     if (d->nballs) { /* round a singular point: split, or a hole leaf (dual_balls.h) */
-        int hole = ism_dual_balls_node(d->balls, d->nballs, v->p[0], v->p[7], size,
+        int hole = ism_dual_balls_node(d->balls, d->nballs, &d->cover, v->p[0], v->p[7], size,
                                        n->level >= d->o->max_depth);
         if (hole == 0 || (hole == 1 && n->level < d->o->min_depth))
             return DN_INNER;
@@ -684,7 +685,7 @@ static int leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad)
     }
     int kind = classify(d, w, n, v);
     if (kind == DN_INNER && d->nballs &&
-        ism_dual_balls_near(d->balls, d->nballs, v->p[0], v->p[7], size))
+        ism_dual_balls_near(d->balls, d->nballs, &d->cover, v->p[0], v->p[7], size))
         return DN_HOLE; /* not plain near a point, as small as its hole's leaves (near_point) */
     if (has_sheet(kind) && touches_box(d, n)) {
         if (d->inner) {
@@ -713,7 +714,7 @@ static bool near_point(const dual *d, const dnode *n, double size)
     double lo[3], hi[3];
     corner_point(d, n, 0, lo);
     corner_point(d, n, 7, hi);
-    return ism_dual_balls_near(d->balls, d->nballs, lo, hi, size);
+    return ism_dual_balls_near(d->balls, d->nballs, &d->cover, lo, hi, size);
 }
 
 /* What splitting one node yields: its 8 children's corner values and kinds. */
@@ -2026,6 +2027,8 @@ static enum ism_dual_status run_round_points(dual *d, ism_mesh *mesh, ism_dual_s
         for (size_t k = 0; k < n; k++)
             ism_dual_ball_make(&balls[k], d->o->dual_points[k], d->inner ? d->inner : d->o->box,
                                d->o->max_error, shrink[k]);
+        ism_dual_ball_cover_free(&d->cover);
+        ism_dual_ball_cover_init(&d->cover, balls, n);
         forget(d);
         ism_mesh_free(mesh);
         st->leaves = st->missed = 0;
@@ -2053,6 +2056,7 @@ static enum ism_dual_status run_round_points(dual *d, ism_mesh *mesh, ism_dual_s
     free(missed);
     free(balls);
     free(shrink);
+    ism_dual_ball_cover_free(&d->cover);
     d->balls = NULL;
     d->nballs = 0;
     return status;

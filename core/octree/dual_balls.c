@@ -75,10 +75,148 @@ static double box_d2(const double p[3], const double lo[3], const double hi[3])
     return d2;
 }
 
-int ism_dual_balls_node(const ism_dual_ball *b, size_t n, const double lo[3], const double hi[3],
-                        double size, bool at_max)
+/* The cover's cells: at most this many along an axis (the balls' limits set the side; a
+ * tiny limit would make the grid huge for no gain: a cell then lists one ball or none). */
+#define COVER_MAX_DIM 64
+/* A limit's bounding box is filed this much larger (relative): the tests compare squared
+ * distances, the filing coordinates; rounding differs by ulps. */
+#define COVER_ROUNDING 1e-9
+
+/* The cell along axis a holding coordinate x, clamped to the grid: the one map from
+ * coordinates to cells (filing and asking agree, monotone in x). */
+static inline int32_t cover_index(const ism_dual_ball_cover *c, int a, double x)
 {
-    for (size_t k = 0; k < n; k++) {
+    double t = (x - c->lo[a]) * c->inv;
+    return t >= 0 ? (t < c->dim[a] ? (int32_t)t : c->dim[a] - 1) : 0;
+}
+
+void ism_dual_ball_cover_init(ism_dual_ball_cover *c, const ism_dual_ball *b, size_t n)
+{
+    memset(c, 0, sizeof *c);
+    double reach = 0, width = 0, box[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY,
+                                           -INFINITY};
+    for (size_t k = 0; k < n; k++) { /* the node tests reach GRADE r0 < limit (RIM_REACH) */
+        reach = reach > b[k].limit ? reach : b[k].limit;
+        for (int a = 0; a < 3; a++) {
+            box[a] = fmin(box[a], b[k].p[a] - 2 * b[k].limit);
+            box[a + 3] = fmax(box[a + 3], b[k].p[a] + 2 * b[k].limit);
+        }
+    }
+    for (int a = 0; a < 3; a++)
+        width = width > box[a + 3] - box[a] ? width : box[a + 3] - box[a];
+    if (!n || !(reach > 0) || !isfinite(reach) || !(width > 0) || n > UINT32_MAX)
+        return; /* no grid: every ball asked */
+    double cell = fmax(reach, width / COVER_MAX_DIM);
+    size_t cells = 1;
+    if (!(cell > 0) || !isfinite(cell) || !isfinite(width))
+        return;
+    for (int a = 0; a < 3; a++) {
+        c->lo[a] = box[a];
+        c->dim[a] = (int32_t)ceil((box[a + 3] - box[a]) / cell);
+        c->dim[a] = c->dim[a] < 1 ? 1 : c->dim[a] > COVER_MAX_DIM ? COVER_MAX_DIM : c->dim[a];
+        cells *= (size_t)c->dim[a];
+    }
+    c->start = calloc(cells + 1, sizeof *c->start);
+    int32_t (*span)[2][3] = malloc(n * sizeof *span);
+    if (!c->start || !span) {
+        free(span);
+        ism_dual_ball_cover_free(c);
+        return;
+    }
+    c->cell = cell;
+    c->inv = 1 / cell;
+    size_t total = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        for (size_t k = 0; k < n; k++) {
+            int32_t *s0 = span[k][0], *s1 = span[k][1];
+            double r = b[k].limit * (1 + COVER_ROUNDING);
+            for (int a = 0; a < 3; a++) { /* the cells the limit's bounding box meets */
+                s0[a] = cover_index(c, a, b[k].p[a] - r);
+                s1[a] = cover_index(c, a, b[k].p[a] + r);
+            }
+            for (int32_t z = s0[2]; z <= s1[2]; z++)
+                for (int32_t y = s0[1]; y <= s1[1]; y++)
+                    for (int32_t x = s0[0]; x <= s1[0]; x++) {
+                        size_t at = ((size_t)z * c->dim[1] + y) * c->dim[0] + x;
+                        if (pass)
+                            c->idx[c->start[at]++] = (uint32_t)k; /* ascending k */
+                        else
+                            c->start[at + 1]++, total++;
+                    }
+        }
+        if (pass)
+            break;
+        for (size_t i = 0; i < cells; i++) /* counts -> starts (shifted: filled by pass 1) */
+            c->start[i + 1] += c->start[i];
+        c->idx = malloc((total ? total : 1) * sizeof *c->idx);
+        if (!c->idx) {
+            free(span);
+            ism_dual_ball_cover_free(c);
+            return;
+        }
+    }
+    for (size_t i = cells; i > 0; i--) /* pass 1 moved each start to its cell's end */
+        c->start[i] = c->start[i - 1];
+    c->start[0] = 0;
+    free(span);
+}
+
+void ism_dual_ball_cover_free(ism_dual_ball_cover *c)
+{
+    free(c->start);
+    free(c->idx);
+    memset(c, 0, sizeof *c);
+}
+
+/* The balls box lo..hi asks: the list of the one cell holding it into *first (length into
+ * *len; none when the box lies off the grid, which holds every limit), or false when it
+ * spans cells, reaches off the grid or there is none (ask all). */
+static bool cover_cell(const ism_dual_ball_cover *c, const double lo[3], const double hi[3],
+                       const uint32_t **first, size_t *len)
+{
+    if (!c || !(c->cell > 0))
+        return false;
+    size_t at = 0;
+    bool off = false, span = false;
+    for (int a = 2; a >= 0; a--) {
+        double l = (lo[a] - c->lo[a]) * c->inv, h = (hi[a] - c->lo[a]) * c->inv;
+        off |= h < 0 || l >= c->dim[a];
+        span |= !(l >= 0 && h < c->dim[a]) || (int32_t)l != (int32_t)h;
+        at = at * (size_t)c->dim[a] + (size_t)cover_index(c, a, lo[a]);
+    }
+    if (!off && span)
+        return false;
+    *first = c->idx + (off ? 0 : c->start[at]);
+    *len = off ? 0 : c->start[at + 1] - c->start[at];
+    return true;
+}
+
+/* Ball k of the n asked for box lo..hi: the cover's list when it has one, else all. */
+typedef struct ball_scan {
+    const uint32_t *list;
+    size_t n;
+    bool listed;
+} ball_scan;
+
+static ball_scan scan_of(const ism_dual_ball_cover *c, size_t n, const double lo[3],
+                         const double hi[3])
+{
+    ball_scan s = {NULL, n, false};
+    s.listed = cover_cell(c, lo, hi, &s.list, &s.n);
+    return s;
+}
+
+static inline size_t scan_at(const ball_scan *s, size_t i)
+{
+    return s->listed ? s->list[i] : i;
+}
+
+int ism_dual_balls_node(const ism_dual_ball *b, size_t n, const ism_dual_ball_cover *cv,
+                        const double lo[3], const double hi[3], double size, bool at_max)
+{
+    ball_scan sc = scan_of(cv, n, lo, hi);
+    for (size_t i = 0; i < sc.n; i++) {
+        size_t k = scan_at(&sc, i);
         double d2 = box_d2(b[k].p, lo, hi);
         if (d2 <= b[k].r0 * b[k].r0)
             return size <= b[k].leaf || at_max ? 1 : 0;
@@ -88,12 +226,15 @@ int ism_dual_balls_node(const ism_dual_ball *b, size_t n, const double lo[3], co
     return -1;
 }
 
-bool ism_dual_balls_near(const ism_dual_ball *b, size_t n, const double lo[3],
-                         const double hi[3], double size)
+bool ism_dual_balls_near(const ism_dual_ball *b, size_t n, const ism_dual_ball_cover *cv,
+                         const double lo[3], const double hi[3], double size)
 {
-    for (size_t k = 0; k < n; k++)
+    ball_scan sc = scan_of(cv, n, lo, hi);
+    for (size_t i = 0; i < sc.n; i++) {
+        size_t k = scan_at(&sc, i);
         if (size <= b[k].leaf && box_d2(b[k].p, lo, hi) < b[k].limit * b[k].limit)
             return true;
+    }
     return false;
 }
 
@@ -111,12 +252,16 @@ static int by_key(const void *a, const void *b)
 }
 
 /* The first ball whose limit holds p, or n when none does. */
-static size_t limit_ball(const ism_dual_ball *b, size_t n, const double p[3])
+static size_t limit_ball(const ism_dual_ball *b, size_t n, const ism_dual_ball_cover *cv,
+                         const double p[3])
 {
-    size_t k = 0;
-    while (k < n && !(ism_sqdist3(p, b[k].p) < b[k].limit * b[k].limit))
-        k++;
-    return k;
+    ball_scan sc = scan_of(cv, n, p, p);
+    for (size_t i = 0; i < sc.n; i++) {
+        size_t k = scan_at(&sc, i);
+        if (ism_sqdist3(p, b[k].p) < b[k].limit * b[k].limit)
+            return k;
+    }
+    return n;
 }
 
 /* The mesh's edges with an end within a ball's limit, sorted, into *e (*ne of them); false
@@ -125,8 +270,8 @@ static size_t limit_ball(const ism_dual_ball *b, size_t n, const double p[3])
  * the clip never touches them (the rims lie within the limits: clip_radii). Sorting only
  * these, not the whole mesh: kummer-4-nodes 1e-3, 117M -> M instructions for the clip and
  * fans. */
-static bool sorted_edges(const ism_mesh *m, const ism_dual_ball *b, size_t n, edge_ref **e,
-                         size_t *ne)
+static bool sorted_edges(const ism_mesh *m, const ism_dual_ball *b, size_t n,
+                         const ism_dual_ball_cover *cv, edge_ref **e, size_t *ne)
 {
     uint8_t *near = malloc(m->nverts + 1);
     *e = malloc((3 * m->ntris + 1) * sizeof **e);
@@ -138,7 +283,7 @@ static bool sorted_edges(const ism_mesh *m, const ism_dual_ball *b, size_t n, ed
         return false;
     }
     for (size_t v = 0; v < m->nverts; v++)
-        near[v] = limit_ball(b, n, m->pos + 3 * v) < n;
+        near[v] = limit_ball(b, n, cv, m->pos + 3 * v) < n;
     for (size_t t = 0; t < m->ntris; t++)
         for (int k = 0; k < 3; k++) {
             uint32_t u = m->tri[3 * t + k], w = m->tri[3 * t + (k + 1) % 3];
@@ -164,6 +309,7 @@ typedef struct clip {
     uint64_t *cut;     /* sorted undirected edges cut by a sphere */
     uint32_t *cutv;    /* their cut points' vertices */
     size_t ncut, capcut;
+    ism_dual_ball_cover cover; /* the balls by their limits (every r1 stays below: marked) */
     uint32_t *tri;     /* the triangles kept or made */
     size_t nt, capt;
     uint32_t *rim;     /* directed rim edges (from, to, ball) */
@@ -189,9 +335,13 @@ static bool find_balls(clip *c)
         return false;
     for (size_t v = 0; v < c->m->nverts; v++) {
         const double *p = c->m->pos + 3 * v;
-        size_t k = 0;
-        while (k < c->n && !(c->r1[k] > 0 && ism_sqdist3(p, c->b[k].p) < c->r1[k] * c->r1[k]))
-            k++;
+        ball_scan sc = scan_of(&c->cover, c->n, p, p);
+        size_t k = c->n;
+        for (size_t i = 0; i < sc.n && k == c->n; i++) {
+            size_t j = scan_at(&sc, i);
+            if (c->r1[j] > 0 && ism_sqdist3(p, c->b[j].p) < c->r1[j] * c->r1[j])
+                k = j;
+        }
         c->ball[v] = (uint32_t)k;
     }
     return true;
@@ -244,7 +394,14 @@ static enum ism_fan_status settle_radii(clip *c)
                 if (c->ball[a] < c->n || c->ball[b] < c->n)
                     continue;
                 const double *pa = m->pos + 3 * (size_t)a, *pb = m->pos + 3 * (size_t)b;
-                for (size_t k = 0; k < c->n; k++)
+                double lo[3], hi[3];
+                for (int q = 0; q < 3; q++) {
+                    lo[q] = pa[q] < pb[q] ? pa[q] : pb[q];
+                    hi[q] = pa[q] < pb[q] ? pb[q] : pa[q];
+                }
+                ball_scan sc = scan_of(&c->cover, c->n, lo, hi);
+                for (size_t i = 0; i < sc.n; i++) {
+                    size_t k = scan_at(&sc, i);
                     if (c->r1[k] > 0 && !c->shrink[k] &&
                         segment_dips(pa, pb, c->b[k].p, c->r1[k])) {
                         double far = fmax(ism_sqdist3(pa, c->b[k].p), ism_sqdist3(pb, c->b[k].p));
@@ -254,6 +411,7 @@ static enum ism_fan_status settle_radii(clip *c)
                         if (!(c->r1[k] < c->b[k].limit))
                             mark(c, k);
                     }
+                }
             }
         if (!grown || step == SETTLE_STEPS || c->marked) {
             for (size_t k = 0; grown && step == SETTLE_STEPS && k < c->n; k++)
@@ -385,7 +543,7 @@ static enum ism_fan_status clip_radii(clip *c, const edge_ref *e, size_t ne)
             uint32_t ends[2] = {(uint32_t)(e[i].key >> 32), (uint32_t)e[i].key};
             for (int h = 0; h < 2; h++) {
                 const double *p = c->m->pos + 3 * (size_t)ends[h];
-                size_t k = limit_ball(c->b, c->n, p);
+                size_t k = limit_ball(c->b, c->n, &c->cover, p);
                 if (k == c->n)
                     return ISM_FAN_BAD;
                 c->r1[k] = fmax(c->r1[k], sqrt(ism_sqdist3(p, c->b[k].p)) * (1 + RIM_MARGIN));
@@ -522,11 +680,12 @@ static enum ism_fan_status fan_rims(clip *c, size_t kept, double max_error)
 }
 
 /* Every edge of m near a ball in exactly two triangles (the fans closed every hole). */
-static enum ism_fan_status closed(const ism_mesh *m, const ism_dual_ball *b, size_t n)
+static enum ism_fan_status closed(const ism_mesh *m, const ism_dual_ball *b, size_t n,
+                                   const ism_dual_ball_cover *cv)
 {
     edge_ref *e;
     size_t ne;
-    if (!sorted_edges(m, b, n, &e, &ne))
+    if (!sorted_edges(m, b, n, cv, &e, &ne))
         return ISM_FAN_NO_MEMORY;
     enum ism_fan_status st = ISM_FAN_OK;
     for (size_t i = 0; i < ne && st == ISM_FAN_OK;) {
@@ -547,10 +706,11 @@ enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_du
     memset(shrink, 0, n);
     clip c = {.m = m, .s = s, .b = b, .n = n, .shrink = shrink};
     c.r1 = calloc(n ? n : 1, sizeof *c.r1);
+    ism_dual_ball_cover_init(&c.cover, b, n);
     edge_ref *e = NULL;
     size_t ne = 0;
     enum ism_fan_status st =
-        c.r1 && sorted_edges(m, b, n, &e, &ne) ? ISM_FAN_OK : ISM_FAN_NO_MEMORY;
+        c.r1 && sorted_edges(m, b, n, &c.cover, &e, &ne) ? ISM_FAN_OK : ISM_FAN_NO_MEMORY;
     if (st == ISM_FAN_OK)
         st = clip_radii(&c, e, ne);
     free(e);
@@ -597,11 +757,12 @@ enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_du
             else {
                 ism_mesh_compact(m, used);
                 free(used);
-                st = closed(m, b, n);
+                st = closed(m, b, n, &c.cover);
             }
         }
     }
     free(c.r1);
+    ism_dual_ball_cover_free(&c.cover);
     free(c.ball);
     free(c.cut);
     free(c.cutv);

@@ -38,6 +38,24 @@ typedef struct ism_dual_ball {
     int nappes;   /* rim loops the clip must cut: 2 round a node, 0 round an isolated point */
 } ism_dual_ball;
 
+/* The balls filed by where they reach: a uniform grid over their limits, each cell listing (in
+ * ascending order) the balls whose limit ball meets the cell's box (by bounding boxes), so a
+ * box inside one cell asks only those; a box across cells, or no grid, asks every ball.
+ * Answers are those of asking every ball in order, bit for bit. */
+typedef struct ism_dual_ball_cover {
+    double lo[3], cell; /* the grid's origin and cell side; cell 0: no grid */
+    double inv;         /* 1 / cell */
+    int32_t dim[3];
+    uint32_t *start;    /* per cell (x fastest): its first entry in idx; one more at the end */
+    uint32_t *idx;
+} ism_dual_ball_cover;
+
+/* Files the n balls b (limits made) over the box their limits span (grown by a limit: a
+ * box off it meets none); a cover without a grid (every ball asked) when there are none or
+ * memory runs out. */
+void ism_dual_ball_cover_init(ism_dual_ball_cover *c, const ism_dual_ball *b, size_t n);
+void ism_dual_ball_cover_free(ism_dual_ball_cover *c);
+
 /* How many times a ball may halve before the dual mesher declines (point_fan). */
 #define ISM_DUAL_BALL_SHRINKS 5
 
@@ -47,16 +65,16 @@ typedef struct ism_dual_ball {
 void ism_dual_ball_make(ism_dual_ball *b, const double pt[5], const double box[6],
                         double max_error, int shrink);
 
-/* What a node lo..hi of side `size` is next to the balls: -1 meets none (the dual mesher's
- * own tests), 0 meets a hole and is larger than its leaf (split), 1 a hole leaf (no vertex;
- * also at the last level, at_max). */
-int ism_dual_balls_node(const ism_dual_ball *b, size_t n, const double lo[3], const double hi[3],
-                        double size, bool at_max);
+/* What a node lo..hi of side `size` is next to the balls (cv: their cover, or NULL): -1
+ * meets none (the dual mesher's own tests), 0 meets a hole and is larger than its leaf
+ * (split), 1 a hole leaf (no vertex; also at the last level, at_max). */
+int ism_dual_balls_node(const ism_dual_ball *b, size_t n, const ism_dual_ball_cover *cv,
+                        const double lo[3], const double hi[3], double size, bool at_max);
 
 /* Does the box lo..hi, of side `size` (0: any), meet the ball of radius `limit` round one of
- * the points whose hole leaves are no smaller? */
-bool ism_dual_balls_near(const ism_dual_ball *b, size_t n, const double lo[3],
-                         const double hi[3], double size);
+ * the points whose hole leaves are no smaller? (cv: the balls' cover, or NULL.) */
+bool ism_dual_balls_near(const ism_dual_ball *b, size_t n, const ism_dual_ball_cover *cv,
+                         const double lo[3], const double hi[3], double size);
 
 enum ism_fan_status {
     ISM_FAN_OK = 0,
