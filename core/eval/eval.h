@@ -54,6 +54,13 @@ double ism_eval_gradient(const ism_tape *t, ism_eval_ws *ws, double x, double y,
 bool ism_eval_top_branches(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
                            double val[2], double grad[2][3]);
 
+/* ism_eval_top_branches, also when f passes that min/max on through one-operand steps (f =
+ * g(max(a, b)), g a chain of steps each reading only the one before: max(...) − 1 in the
+ * cube and steinmetz): the values and gradients of g(a) and g(b), whose zero sets meet on
+ * f's crease where g(a) = g(b) = 0. False when f has no such min/max. */
+bool ism_eval_crease_branches(const ism_tape *t, ism_eval_ws *ws, double x, double y,
+                              double z, double val[2], double grad[2][3]);
+
 /* ism_eval_top_branches' values alone (bit for bit the same), for a fraction of its cost. */
 bool ism_eval_top_values(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
                          double val[2]);

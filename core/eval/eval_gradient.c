@@ -157,24 +157,54 @@ double ism_eval_gradient(const ism_tape *t, ism_eval_ws *ws, double x, double y,
     return f->v;
 }
 
-bool ism_eval_top_branches(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
-                           double val[2], double grad[2][3])
+/* The index of t's min(a, b) or max(a, b) of two registers that f passes on through one-
+ * operand steps alone (each reads only the step before's result: - 1, × c, a copy, ...),
+ * with through: any such steps; without: none (it is the last instruction). t->len: none. */
+static size_t crease_top(const ism_tape *t, bool through)
 {
-    if (!t->len || !ism_ws_fits(ws, t))
+    if (!t->len || t->code[t->len - 1].out != t->result)
+        return t->len;
+    size_t i = t->len - 1;
+    while (through && i > 0 && t->code[i].op != ISM_OP_MIN_RR &&
+           t->code[i].op != ISM_OP_MAX_RR && t->code[i].op != ISM_OP_CONST &&
+           !ism_op_has_reg_b(t->code[i].op) && t->code[i].a == t->code[i - 1].out)
+        i--;
+    return t->code[i].op == ISM_OP_MIN_RR || t->code[i].op == ISM_OP_MAX_RR ? i : t->len;
+}
+
+/* Both branches at the point: the min/max at index top's two operands, each passed through
+ * the steps after it (what f would be if that branch alone were taken). */
+static bool branches_at(const ism_tape *t, size_t top, ism_eval_ws *ws, double x, double y,
+                        double z, double val[2], double grad[2][3])
+{
+    if (top >= t->len || !ism_ws_fits(ws, t))
         return false;
-    const ism_instr *top = &t->code[t->len - 1];
-    if ((top->op != ISM_OP_MIN_RR && top->op != ISM_OP_MAX_RR) || top->out != t->result)
-        return false;
+    const ism_instr *mm = &t->code[top];
     ism_dual *r = ws->dual;
     r[ISM_REG_X] = (ism_dual){ x, { 1.0, 0.0, 0.0 } };
     r[ISM_REG_Y] = (ism_dual){ y, { 0.0, 1.0, 0.0 } };
     r[ISM_REG_Z] = (ism_dual){ z, { 0.0, 0.0, 1.0 } };
-    for (size_t i = 0; i + 1 < t->len; i++)
+    for (size_t i = 0; i < top; i++)
         dual_step(&t->code[i], r, ws->trig);
-    const ism_dual *br[2] = {&r[top->a], &r[top->b]};
+    const ism_dual br[2] = {r[mm->a], r[mm->b]}; /* the steps after may reuse a's, b's */
     for (int s = 0; s < 2; s++) {
-        val[s] = br[s]->v;
-        memcpy(grad[s], br[s]->d, sizeof grad[s]);
+        r[mm->out] = br[s];
+        for (size_t i = top + 1; i < t->len; i++)
+            dual_step(&t->code[i], r, ws->trig);
+        val[s] = r[t->result].v;
+        memcpy(grad[s], r[t->result].d, sizeof grad[s]);
     }
     return true;
+}
+
+bool ism_eval_top_branches(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
+                           double val[2], double grad[2][3])
+{
+    return branches_at(t, crease_top(t, false), ws, x, y, z, val, grad);
+}
+
+bool ism_eval_crease_branches(const ism_tape *t, ism_eval_ws *ws, double x, double y,
+                              double z, double val[2], double grad[2][3])
+{
+    return branches_at(t, crease_top(t, true), ws, x, y, z, val, grad);
 }

@@ -21,13 +21,17 @@
  *     tried after the whole one.
  * Points go onto a = b = 0 by minimum-norm Newton steps on the two branches, and a moved
  * vertex ends within ISM_RM_CREASE_ON_REL of its mean edge of both surfaces and locked (on
- * the crease: the relaxation would move it off). The branches are f's top min/max, or the
- * top of f shortened over the fan's box (a nested min/max whose other operands the box
- * proves dominated: three-balls); a fan with neither (steinmetz's and the cube's
- * max(...) − 1) is left alone. A move is kept only when each triangle stays within
- * ISM_RM_COLLAPSE_MAX_TURN_DEG of its own normal before (across a crease the fan's mean
- * normal says nothing), no outer edge bends past the crease angle by more than
- * ISM_RM_CROWD_BEND_DEG over what it did (rm_crease_tri_ok), the smallest angle of the fan
+ * the crease: the relaxation would move it off). The branches are those of f's last
+ * min/max, passed on through the one-operand steps after it (the cube's and steinmetz's
+ * max(...) − 1: ism_eval_crease_branches), or the same of f shortened over the fan's box
+ * (a nested min/max whose other operands the box proves dominated: three-balls, the
+ * cube's edges); a fan with neither is left alone. A move is kept only when each triangle
+ * stays within ISM_RM_COLLAPSE_MAX_TURN_DEG of its own normal before (across a crease the
+ * fan's mean normal says nothing) and no outer edge bends past the crease angle by more
+ * than ISM_RM_CROWD_BEND_DEG over what it did (rm_crease_tri_ok) — or, a chamfer triangle
+ * ending on one of the two surfaces, faces within ISM_RM_CREASE_FACE_DEG of that branch's
+ * normal at the crease point and bends by no more than the crease's own angle and
+ * ISM_RM_CROWD_BEND_DEG (tri_ok) —, the smallest angle of the fan
  * (of both fans, for a merge) grows, and the distances the pass keeps are kept (centroids:
  * rm_centroids_stay for a move, the fans' farthest or the mesh's for a merge, midpoints too;
  * under max_error every centroid and edge midpoint of the fan within it, rm_bound.h). */
@@ -62,8 +66,18 @@
  * product (crease_split.c's rule: a crossing angle under 1e-6 rad). */
 #define ISM_RM_CREASE_PARALLEL 1e-12
 /* Newton may land at most this × the mean edge from where it started (farther: it found
- * another part of the crease curve). */
-#define ISM_RM_CREASE_PROJECT_MAX_REL 0.5
+ * another part of the crease curve). A vertex within ISM_RM_CREASE_NEAR_REL of both surfaces
+ * lies up to about that / sin(crease angle) from the crease along its own surface: the
+ * cube-minus-ball's face meets its sphere at 40°, and 0.5 refused 1,635 snaps in its
+ * irrational box (bench_remesh needles 373 -> 359 there with 1.0; gyroid-ball 48 / 46 / 74 /
+ * 54 -> 45 / 43 / 70 / 50). */
+#define ISM_RM_CREASE_PROJECT_MAX_REL 1.0
+/* A triangle of a fan moved onto the crease may face within this (degrees) of either
+ * branch's normal there, whatever it faced before (tri_ok): a chamfer triangle between the
+ * two surfaces faces neither, and turns by up to the crease's angle (140° on the
+ * cube-minus-ball) once its corner is on the crease. bench_remesh cube-minus-ball, 0.37-cell
+ * box: 359 needles with the turn limit alone, 174 with 30°, 119 with 45°. */
+#define ISM_RM_CREASE_FACE_DEG 45.0
 
 /* One vertex's fan: the triangles in order round v (tri[i] runs v, ring[i], then the next
  * ring vertex), its two neighbours on the crease when it slides, the tape, and what the
@@ -108,7 +122,7 @@ static bool walk_fan(const rm_pass *p, uint32_t v, crease_fan *c)
 static bool branches(rm_pass *p, const ism_tape *f, const double x[3], double val[2],
                      double g[2][3])
 {
-    return ism_eval_top_branches(f, p->ws, x[0], x[1], x[2], val, g) && isfinite(val[0]) &&
+    return ism_eval_crease_branches(f, p->ws, x[0], x[1], x[2], val, g) && isfinite(val[0]) &&
            isfinite(val[1]);
 }
 
@@ -213,24 +227,74 @@ static bool to_crease(rm_pass *p, const ism_tape *f, double x[3], double scale)
     return false;
 }
 
-/* The fan with v at x: every triangle and its outer edge (not v's) as rm_crease_tri_ok
- * allows; *sine gets its smallest sine. */
+/* The two branches' unit normals at a crease point (oriented as ∇f on each side: f is the
+ * branch there) and the cosine of the crease's angle between them. */
+typedef struct crease_frame {
+    double n[2][3], cos_angle;
+} crease_frame;
+
+static bool frame_at(rm_pass *p, const ism_tape *f, const double x[3], crease_frame *cf)
+{
+    double val[2], g[2][3];
+    if (!branches(p, f, x, val, g))
+        return false;
+    for (int s = 0; s < 2; s++) {
+        double l = ism_norm3(g[s]);
+        if (!(l > 0))
+            return false;
+        for (int k = 0; k < 3; k++)
+            cf->n[s][k] = g[s][k] / l;
+    }
+    cf->cos_angle = ism_dot3(cf->n[0], cf->n[1]);
+    return true;
+}
+
+/* rm_crease_tri_ok, or (cf not NULL) the triangle ends on one of the two surfaces meeting
+ * at the crease: q faces within ISM_RM_CREASE_FACE_DEG of a branch's normal at the crease
+ * point and bends against the triangle across its outer edge ab by no more than the
+ * crease's own angle and ISM_RM_CROWD_BEND_DEG (a chamfer triangle between the two
+ * surfaces turns by up to the crease angle as its corner goes onto the crease, and its
+ * neighbour across the crease bends by that angle). */
+static bool tri_ok(const rm_pass *p, const crease_frame *cf, uint32_t t, uint32_t a,
+                   uint32_t b, const double *o[3], const double *q[3])
+{
+    if (rm_crease_tri_ok(p, t, a, b, o, q))
+        return true;
+    double n[3], ln = rm_cross(q[0], q[1], q[2], n);
+    if (!cf || !(ln > 0))
+        return false;
+    double face = cos(ISM_RM_CREASE_FACE_DEG * M_PI / 180) * ln;
+    if (!(ism_dot3(n, cf->n[0]) > face || ism_dot3(n, cf->n[1]) > face))
+        return false;
+    uint32_t s = rm_merge_across(&p->r, a, b, t);
+    if (s == UINT32_MAX)
+        return true;
+    const uint32_t *z = p->r.m->tri + 3 * (size_t)s;
+    double u[3], lu = rm_cross(P(p, z[0]), P(p, z[1]), P(p, z[2]), u);
+    double most = acos(fmax(-1, fmin(1, cf->cos_angle))) + ISM_RM_CROWD_BEND_DEG * M_PI / 180;
+    return lu > 0 && ism_dot3(n, u) >= cos(fmin(M_PI, most)) * ln * lu;
+}
+
+/* The fan with v at x: every triangle and its outer edge (not v's) as tri_ok allows (cf: the
+ * crease there, NULL: rm_crease_tri_ok alone), and its smallest sine over min_sine. */
 static bool fan_shape_ok(rm_pass *p, uint32_t v, const crease_fan *c, const double *x,
-                         double *sine)
+                         const crease_frame *cf, double min_sine)
 {
     const double *pos = P(p, v);
-    *sine = INFINITY;
+    double sine = INFINITY;
     for (uint32_t i = 0; i < c->n; i++) {
         const double *q[3], *o[3];
         fan_corners(p, c, v, i, x, q);
         fan_corners(p, c, v, i, pos, o);
         const uint32_t *t = p->r.m->tri + 3 * (size_t)c->tri[i];
         int k = rm_corner(p->r.m, c->tri[i], v);
-        if (!rm_crease_tri_ok(p, c->tri[i], t[(k + 1) % 3], t[(k + 2) % 3], o, q))
+        if (!tri_ok(p, cf, c->tri[i], t[(k + 1) % 3], t[(k + 2) % 3], o, q))
             return false;
-        *sine = fmin(*sine, rm_min_sine(q[0], q[1], q[2]));
+        sine = fmin(sine, rm_min_sine(q[0], q[1], q[2]));
     }
-    return true;
+    /* (leaving fewer triangles under ISM_RM_COLLAPSE_DEG instead, as the merges may, made
+       caps of 6.8° beside the cube-minus-ball's crease in its own box: 0 needles -> 18) */
+    return sine > min_sine;
 }
 
 /* The corners of triangle t with v and w read at x (new) or where they are (old). */
@@ -266,13 +330,14 @@ static void merge_distances(rm_pass *p, const rm_merge *g, const double *x, bool
 }
 
 /* The merged fan of g (v into w, w then at x) against the two fans before: every new
- * triangle and its outer edge as rm_crease_tri_ok allows, its centroid and the midpoints of
+ * triangle and its outer edge as tri_ok allows, its centroid and the midpoints of
  * the edges at x within what the pass keeps, and the smallest angle grown over both fans' —
  * or, as for merges along a crease (rm_collapse.c), fewer triangles under
  * ISM_RM_COLLAPSE_DEG and no sine below ISM_RM_CROWD_SINE_FLOOR of the smallest before
  * (needles along a crease come in strips: bench_remesh gyroid-ball 54 / 51 / 86 -> 48 / 46
  * / 73 needles, the same smallest angle). */
-static bool merged_fan_ok(rm_pass *p, const rm_merge *g, const double *x)
+static bool merged_fan_ok(rm_pass *p, const rm_merge *g, const double *x,
+                          const crease_frame *cf)
 {
     const rm_mesh *r = &p->r;
     double old_sine = INFINITY, new_sine = INFINITY, poor = sin(ISM_RM_COLLAPSE_DEG * M_PI / 180);
@@ -292,7 +357,7 @@ static bool merged_fan_ok(rm_pass *p, const rm_merge *g, const double *x)
             /* t's outer edge (not at ends[e]) has neither v nor w: only t1 and t2 have both */
             const uint32_t *c = r->m->tri + 3 * (size_t)t;
             int at = rm_corner(r->m, t, ends[e]);
-            if (!rm_crease_tri_ok(p, t, c[(at + 1) % 3], c[(at + 2) % 3], o, q))
+            if (!tri_ok(p, cf, t, c[(at + 1) % 3], c[(at + 2) % 3], o, q))
                 return false;
             double sn = rm_min_sine(q[0], q[1], q[2]);
             new_sine = fmin(new_sine, sn);
@@ -336,9 +401,10 @@ static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan
     double x[3], mid[3], grad[3];
     for (int k = 0; k < 3; k++)
         x[k] = mid[k] = 0.5 * (P(p, v)[k] + P(p, w)[k]);
+    crease_frame cf;
     if (!to_crease(p, c->f, x, f->mean_edge) ||
         !(rm_dist(x, mid) <= ISM_RM_CREASE_PROJECT_MAX_REL * f->mean_edge) ||
-        !merged_fan_ok(p, &g, x))
+        !merged_fan_ok(p, &g, x, frame_at(p, c->f, x, &cf) ? &cf : NULL))
         return false;
     ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], grad);
     if (!(ism_norm3(grad) > p->gthresh))
@@ -375,13 +441,14 @@ static bool slide_vertex(rm_pass *p, uint32_t v, ism_tape *local)
     /* a slide tries the whole way to the middle, then a half and a quarter; a snap the
        nearest crease point only */
     for (double step = 1; step >= (kind == 2 ? 0.25 : 1); step *= 0.5) {
-        double x[3], start[3], g[3], sine;
+        double x[3], start[3], g[3];
         for (int k = 0; k < 3; k++)
             x[k] = start[k] = pos[k] + step * (0.5 * (a[k] + b[k]) - pos[k]);
+        crease_frame cf;
         if (!to_crease(p, c.f, x, f.mean_edge) ||
             !(rm_dist(x, start) <= ISM_RM_CREASE_PROJECT_MAX_REL * f.mean_edge) ||
-            (kind == 2 && !rm_in_order(x, a, b)) || !fan_shape_ok(p, v, &c, x, &sine) ||
-            !(sine > f.min_sine))
+            (kind == 2 && !rm_in_order(x, a, b)) ||
+            !fan_shape_ok(p, v, &c, x, frame_at(p, c.f, x, &cf) ? &cf : NULL, f.min_sine))
             continue;
         ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
         if (!(ism_norm3(g) > p->gthresh) || !rm_centroids_stay(p, v, x))

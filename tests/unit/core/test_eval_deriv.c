@@ -185,3 +185,48 @@ Test(eval_deriv, sines_and_cosines_of_many_arguments)
     ism_eval_ws_free(ws);
     ism_tape_free(t);
 }
+
+/* The crease branches of f = g(max(a, b)), g one-operand steps (ism_eval_crease_branches):
+ * g(a) and g(b) with their gradients by the closed form, in either order; the top-only
+ * evaluator declines such an f, and a two-operand step after the max ends the chain. */
+Test(eval_deriv, crease_branches_through_one_operand_steps)
+{
+    ism_error err;
+    /* 2 max(x, y^2) - 1 at (0.3, 0.6, 0.1): 2x - 1 = -0.4, ∇ (2, 0, 0); 2y^2 - 1 = -0.28,
+       ∇ (0, 4y, 0) = (0, 2.4, 0); sqrt(max(x, y^2) + 3): sqrt(3.3), ∇ (1/(2 sqrt 3.3), 0, 0)
+       and sqrt(3.36), ∇ (0, 2y/(2 sqrt 3.36), 0) */
+    const char *exprs[2] = {"2*max(x, y^2) - 1", "sqrt(max(x, y^2) + 3)"};
+    const double x = 0.3, y = 0.6, z = 0.1;
+    const double want[2][2][4] = {
+        {{-0.4, 2, 0, 0}, {-0.28, 0, 2.4, 0}},
+        {{sqrt(3.3), 0.5 / sqrt(3.3), 0, 0}, {sqrt(3.36), 0, y / sqrt(3.36), 0}},
+    };
+    for (int e = 0; e < 2; e++) {
+        ism_tape *t = ism_tape_compile(exprs[e], NULL, 0, NULL, 0, NULL, &err);
+        cr_assert_not_null(t, "%s", exprs[e]);
+        ism_eval_ws *ws = ism_eval_ws_new(t);
+        double val[2], g[2][3];
+        cr_expect_not(ism_eval_top_branches(t, ws, x, y, z, val, g), "%s", exprs[e]);
+        cr_assert(ism_eval_crease_branches(t, ws, x, y, z, val, g), "%s", exprs[e]);
+        int first = fabs(val[0] - want[e][0][0]) < fabs(val[0] - want[e][1][0]) ? 0 : 1;
+        for (int s = 0; s < 2; s++) {
+            const double *w = want[e][s == 0 ? first : 1 - first];
+            cr_expect(fabs(val[s] - w[0]) < 1e-14, "%s: branch %d %.17g vs %.17g", exprs[e],
+                      s, val[s], w[0]);
+            for (int k = 0; k < 3; k++)
+                cr_expect(fabs(g[s][k] - w[1 + k]) < 1e-14, "%s: branch %d ∂%d %.17g vs %.17g",
+                          exprs[e], s, k, g[s][k], w[1 + k]);
+        }
+        /* f is the larger branch (g increasing) */
+        cr_expect_eq(ism_eval_point(t, ws, x, y, z), fmax(val[0], val[1]), "%s", exprs[e]);
+        ism_eval_ws_free(ws);
+        ism_tape_free(t);
+    }
+    ism_tape *t = ism_tape_compile("max(x, y^2) * z", NULL, 0, NULL, 0, NULL, &err);
+    cr_assert_not_null(t);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    double val[2], g[2][3];
+    cr_expect_not(ism_eval_crease_branches(t, ws, x, y, z, val, g), "max(x, y^2) * z");
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+}
