@@ -385,9 +385,10 @@ int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double
 bool cf_drop_spikes(cf_ctx *c, cf_loops *ls, uint32_t **rm, size_t *nrm);
 
 /* ---- conform_refine.c: the refill's triangles checked ---- */
-/* The live triangles from nt0 on (made by the pass): with max_error > 0 those with a centroid
- * or edge midpoint farther than max_error from f = 0 have their longest edge off the locus
- * halved (no half shorter than min_edge); then those facing against ∇f are untangled, their
+/* The live triangles from nt0 on (made by the pass): those with a centroid or edge midpoint
+ * farther than max_error from f = 0 have their longest edge off the locus halved (no half
+ * shorter than min_edge; max_error 0: a quarter of the finest cell, halves of half a cell at
+ * least); then those facing against ∇f are untangled, their
  * vertices not on the locus nor on a boundary moved to their neighbours' mean, onto f = 0
  * (no centroid round them left farther than a share of a cell, or max_error). False only
  * when out of memory. */

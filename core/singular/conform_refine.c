@@ -1,8 +1,9 @@
-/* conform_refine.c — the refill's triangles checked once every surgery is done: under an
- * error bound those farther than E are halved, then those turned over (facing against ∇f)
- * are untangled.
+/* conform_refine.c — the refill's triangles checked once every surgery is done: those
+ * farther than E from f = 0 (max_error, or without one a quarter of the finest cell: what the
+ * polygoniser's flatness test held its cells to) are halved, then those turned over (facing
+ * against ∇f) are untangled.
  *
- * Halving (max_error > 0). Each live triangle the pass made is measured at its centroid and
+ * Halving. Each live triangle the pass made is measured at its centroid and
  * edge midpoints: |f| / |∇f| first (one evaluation), then, where that is not well within E,
  * Newton's projection along ∇f (the distance to the point it reaches bounds the distance to
  * f = 0 from above). Beside a double curve Newton from a point by one sheet reaches that
@@ -63,6 +64,19 @@
  * 2^(k/2) times too long needs about k rounds; the refill's triangles are about as long as
  * the polygoniser's beside them, which met E). */
 #define SPLIT_ROUNDS 8
+/* Without max_error the refill is held to what the polygoniser's cells round it met: the
+ * flatness test's absolute tolerance at depth.max (ISM_FLAT_ABS_FRACTION of the finest cell,
+ * polygonise.c), an E of this many finest cells. The refill's rows are as far apart as the
+ * rim's vertices, and its rim edges are the polygoniser's longest there (1.5 cells beside a
+ * cone's apex, where the surface bends fastest): unmeasured, Kummer's 16 nodes at depth 6 in
+ * the irrational box had refill centroids 0.35 cell off f = 0 against 0.16 elsewhere, Steiner's
+ * pinch points at depth 5 0.71 cell against 0.29 (conform/kummer_sixteen_nodes,
+ * steiner_roman_pinch_and_triple_points). */
+#define UNBOUNDED_ERROR_CELLS 0.25
+/* ... and halved down to halves of this many finest cells (edges of a cell or more are
+ * halved): without a bound the finest cell is the mesh's own scale, and the polygoniser's
+ * triangles there, cut by the cells' faces, are no larger than a cell and often half. */
+#define UNBOUNDED_MIN_EDGE_CELLS 0.5
 /* Newton steps of the distance measure (from within a fraction of a cell of f = 0 a few
  * give the foot to rounding). */
 #define MEASURE_STEPS 6
@@ -402,7 +416,9 @@ bool cf_refine_refill(cf_ctx *c, size_t nt0, double max_error, double min_edge)
         reach = fmin(reach, max_error);
     size_t w0 = c->st->work, nt1 = c->m->ntris;
     cf_tris removed = {0};
-    bool ok = !(max_error > 0) || split_over(c, nt0, max_error, min_edge, &removed);
+    bool bounded = max_error > 0;
+    bool ok = split_over(c, nt0, bounded ? max_error : UNBOUNDED_ERROR_CELLS * c->cell,
+                         bounded ? min_edge : UNBOUNDED_MIN_EDGE_CELLS * c->cell, &removed);
     /* a polygoniser's triangle halved counts as removed by the pass, a refill triangle halved
      * as never added; the halves as added */
     size_t refill_halved = 0;

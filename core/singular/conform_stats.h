@@ -25,11 +25,13 @@ typedef struct ism_conform_stats {
     size_t refill_turned;      /* the pass's triangles facing against ∇f before untangling
                                   (conform_refine.c) */
     size_t refill_untangled;   /* moves of the pass's vertices that turned triangles back */
-    size_t refill_splits;      /* under max_error: edges of the pass's triangles halved
-                                  because a centroid or midpoint was farther than E */
+    size_t refill_splits;      /* edges of the pass's triangles halved because a centroid
+                                  or midpoint was farther than E (max_error; without one a
+                                  quarter of the finest cell, conform_refine.c) */
     size_t refill_over_error;  /* ... triangles left farther than E (the edge to halve would
-                                  be shorter than the finest cell of depth.max, or its
-                                  midpoint finds no foot, or a half would turn over) */
+                                  be shorter than the finest cell of depth.max — half of it
+                                  without max_error — or its midpoint finds no foot, or a
+                                  half would turn over) */
     size_t refill_work;        /* the units of `work` the untangling took (after the
                                   surgeries) */
     size_t vertices_added, vertices_removed;

@@ -157,7 +157,8 @@ typedef struct ism_locus_options {
     int threads;               /* 0 = online cores */
     const volatile int *cancel;/* polled; non-zero stops the search (incomplete) */
     double deadline_ms;        /* ism_now_ms() past which the stage stops (0 = none) */
-    double max_error;          /* the mesh's error bound (0 = none): the conformance's
+    double max_error;          /* the mesh's error bound (0 = none; the halving then
+                                  uses a quarter of the finest cell): the conformance's
                                   triangles are measured and halved until within it, and the
                                   untangling leaves no centroid farther (conform_refine.c) */
     int limit_depth;           /* depth.max: no edge of the conformance is halved below its

@@ -31,15 +31,9 @@ static void shifted_box(const double base[6], double s, double box[6])
     }
 }
 
-/* which 2 moves by `cells` finest cells: PF_IRR, or PF_OLD in a test marked FIXME(issue 13). */
-static double shift_amount_at(int which, const double base[6], int dmax, double cells)
-{
-    return which == 0 ? 0 : which == 1 ? 1e-3 : cells * pf_cell(base, dmax);
-}
-
 static double shift_amount(int which, const double base[6], int dmax)
 {
-    return shift_amount_at(which, base, dmax, PF_IRR);
+    return which == 0 ? 0 : which == 1 ? 1e-3 : PF_IRR * pf_cell(base, dmax);
 }
 
 static void add_point(ism_locus *l, double x, double y, double z, int type)
@@ -285,7 +279,7 @@ static void find_nodes(const ism_tape *t, double half, ism_locus *l)
 /* Kummer's quartic with `params`: its nodes (Newton from a grid over [-half, half]^3,
  * expected `count` of them) each one vertex with two cones, at each depth and box shift. */
 static void kummer_nodes(const ism_param *params, int count, double half, int dmin, int dmax,
-                         int first_shift, double cells)
+                         int first_shift)
 {
     const pf_surface s = {"(x^2 + y^2 + z^2 - mu2)^2 - lambda*p*q*r*s", params, 2, kummer_lets, 5};
     ism_tape *t = pf_compile(&s);
@@ -298,7 +292,7 @@ static void kummer_nodes(const ism_param *params, int count, double half, int dm
     for (int d = dmin; d <= dmax; d++)
         for (int w = first_shift; w < 3; w++) {
             double box[6];
-            shifted_box(base, shift_amount_at(w, base, d, cells), box);
+            shifted_box(base, shift_amount(w, base, d), box);
             ism_locus l;
             ism_locus_init(&l);
             for (size_t i = 0; i < nodes.npoints; i++)
@@ -320,20 +314,18 @@ static void kummer_nodes(const ism_param *params, int count, double half, int dm
 
 Test(conform, kummer_four_nodes)
 {
-    kummer_nodes(kummer4, 4, 2, 6 - pf_quick(), 7 - pf_quick(), 0, PF_IRR);
+    kummer_nodes(kummer4, 4, 2, 6 - pf_quick(), 7 - pf_quick(), 0);
 }
 
 Test(conform, kummer_sixteen_nodes)
 {
     /* depth 6 even in quick runs (at depth 5 a nappe is lost next to a node, its
      * neighbours half a cell away); the shifted boxes only, and under sanitizers only the
-     * last one (a second of polygonising each, more under sanitizers).
-     * FIXME(issue 13): fails at the irrational placement (PF_IRR along (1, 0.61, −0.83)): the
-     * conformance's refill round the nodes is not measured against f — centroids near the
-     * nodes 0.0328 off f = 0 against 0.0147 elsewhere (2.24×, want ≤ 2×); every other fact
-     * holds there. Left on the old rational placement until core/singular/conform*.c's refill
-     * measures its triangles. */
-    kummer_nodes(kummer16, 16, 2.5, 6, 6, pf_quick() ? 2 : 1, PF_OLD);
+     * last one (a second of polygonising each, more under sanitizers). Centroids near the
+     * nodes / elsewhere in the irrational box 0.0226 / 0.0147 (0.0328 / 0.0147, 2.24×, while
+     * the refill was not measured against f without a bound: its rim edges beside a node are
+     * the polygoniser's longest, 1.5 cells; conform_refine.c now halves them). */
+    kummer_nodes(kummer16, 16, 2.5, 6, 6, pf_quick() ? 2 : 1);
 }
 
 /* ---- two unit spheres touching at the origin ---- */
@@ -647,16 +639,14 @@ Test(conform, steiner_roman_pinch_and_triple_points)
     /* depth 5 in every box: 0.37 cell off the lattice the tube once enclosed a kept
      * triangle by a pinch point, whose rim (a loop of three) was zipped to the curve: a
      * non-manifold edge 0.03 off the axes and a boundary edge. Depth 6 in the shifted boxes
-     * (release runs only).
-     * FIXME(issue 13): fails at the irrational placement (PF_IRR along (1, 0.61, −0.83)), depth
-     * 5: the conformance's refill round the pinch points is not measured against f — centroids
-     * near the locus 0.0445 off f = 0 against 0.0178 elsewhere (2.5×, want ≤ 2×); every other
-     * fact holds there (χ 5, 6 curves, the non-manifold edges). Left on the old rational
-     * placement until core/singular/conform*.c's refill measures its triangles. */
+     * (release runs only). Centroids near the locus / elsewhere, depth 5 in the irrational
+     * box: 0.0264 / 0.0170 (0.0445 / 0.0178, 2.5×, while the refill was not measured against
+     * f without a bound: ring rows 1.5 cells apart across the fold beside a pinch point;
+     * conform_refine.c now halves them). */
     for (int pass = 0; pass < (pf_quick() ? 3 : 5); pass++) {
         int dmax = pass < 3 ? 5 : 6, w = pass < 3 ? pass : pass - 2;
         double box[6];
-        shifted_box(base, shift_amount_at(w, base, dmax, PF_OLD), box);
+        shifted_box(base, shift_amount(w, base, dmax), box);
         ism_locus l;
         ism_locus_init(&l);
         add_point(&l, 0, 0, 0, ISM_SING_TRIPLE);
