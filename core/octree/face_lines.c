@@ -674,6 +674,35 @@ static int joined_where_paths_cross(ism_cell_ctx *cx, const ism_tile *t, const i
     return s == 0 ? -1 : s == cx->ev[cross[0]].after;
 }
 
+/* Does one of lines l[0..n) join two crossings on one side of tile t (a chord) with no arc
+ * of f = 0 across the tile from its middle (ism_lift_chord finds none: f keeps the chord's
+ * inner sign up to the far side)? Then the inner sign's region is no cap cut off by the chord
+ * but crosses the tile, joining its two arcs: the other family's lines are the true ones. The
+ * paths of arcs_joined miss such a region where it is a wedge narrower than their samples
+ * near the chord: the double torus's seam (f = min of two tori, mirror images in x = 1.1),
+ * box moved by (0.37, −0.23, 0.41) of a depth-8 cell, E 0.0116, where the crease passes 1e-5
+ * from the lattice edge y = −1.015734375, z = 0.0525625: that edge holds two roots 1.8e-5
+ * apart; the tile above it (x from 0.927 to 1.108, z to 0.1026) has them and two crossings
+ * at its top right, and the wedge between the tori's sheets widens from the two roots to the
+ * corner. Joined as a chord, the chord's lift ran up the mirror plane inside the wedge and
+ * found nothing; the node above then held a flat triangle in its lower face (the chord and
+ * the lifted line of the face below), which face_flat leaves to the face's owner — whose
+ * own line on that edge was lifted, so nobody emitted it: a crack of 4 edges (χ −3, one
+ * boundary loop, instead of −2 and none). */
+static bool unlifted_chord(ism_cell_ctx *cx, const ism_tile *t, const pair *l, int n)
+{
+    for (int i = 0; i < n; i++) {
+        const ism_fpoint *pa = &cx->ev[l[i].a].pt, *pb = &cx->ev[l[i].b].pt;
+        double from, to;
+        int axis;
+        ism_fpoint mid;
+        if (on_one_side(cx, t, pa->p, pb->p, &axis, &from, &to) &&
+            !ism_lift_chord(&cx->s, pa, pb, axis, to, &mid))
+            return true;
+    }
+    return false;
+}
+
 /* The subtle case, 4 crossings k0..k3 in walking order around the tile, x where the chords
  * k0-k2 and k1-k3 meet (is_crossing_x):
  *
@@ -749,6 +778,9 @@ static int pair_crossings(ism_cell_ctx *cx, const ism_tile *t, const int *cross,
         tile_centre(cx, t, c);
         plus = ism_sample_f(&cx->s, c) < 0; /* centre negative: cut off the + arcs */
     }
+    if (nc == 4 && unlifted_chord(cx, t, plus ? fp : fm, plus ? np : nm) &&
+        !unlifted_chord(cx, t, plus ? fm : fp, plus ? nm : np))
+        plus = !plus; /* see unlifted_chord */
     memcpy(lines, plus ? fp : fm, (size_t)(plus ? np : nm) * sizeof *lines);
     return plus ? np : nm;
 }
@@ -763,18 +795,12 @@ static bool emit(ism_cell_ctx *cx, int a, int b, int kind)
  * same chord for its own arc, and four polygons would share one edge). */
 static bool emit_regular(ism_cell_ctx *cx, const ism_tile *t, int a, int b)
 {
-    const ism_grid *g = &cx->tree->grid;
     const ism_fpoint *pa = &cx->ev[a].pt, *pb = &cx->ev[b].pt;
-    for (int k = 1; k <= 2; k++) {
-        int axis = (t->axis + k) % 3;
-        int32_t lo = k == 1 ? t->u0 : t->v0, hi = k == 1 ? t->u1 : t->v1;
-        double side0 = ism_grid_coord(g, axis, lo), side1 = ism_grid_coord(g, axis, hi);
-        double at = pa->p[axis];
-        ism_fpoint mid;
-        if (pb->p[axis] != at || (at != side0 && at != side1))
-            continue;
-        if (!ism_lift_chord(&cx->s, pa, pb, axis, at == side0 ? side1 : side0, &mid))
-            break;
+    double from, to;
+    int axis;
+    ism_fpoint mid;
+    if (on_one_side(cx, t, pa->p, pb->p, &axis, &from, &to) &&
+        ism_lift_chord(&cx->s, pa, pb, axis, to, &mid)) {
         cx->stats.lifted_chords++;
         return ism_flines_push(&cx->lines, pa, &mid, ISM_LINE_REGULAR) &&
                ism_flines_push(&cx->lines, &mid, pb, ISM_LINE_REGULAR);
