@@ -27,7 +27,9 @@
 #define DELETES_TICK_NS 100000000LL  /* DELETEs of its jobs through other daemons are looked
                                         for this often: a tenth of a second is quick enough
                                         for a client, and one SPOP each time costs Redis little */
-#define DELETES_PER_TICK "64"        /* of them, taken at once at most */
+#define DELETES_PER_TICK 64          /* of them, taken at once at most */
+#define TEXT_OF(n) #n
+#define TEXT(n) TEXT_OF(n)
 #define TAKE_TRIES "8"               /* users a take may find with nothing to read (their
                                         P wait entry stale) before it gives up until the next
                                         tick: bounds the script, and each try mends one */
@@ -601,7 +603,7 @@ int ismd_cluster_view(ismd_cluster *c, const char *name, const char *id, ismd_cj
     return 0;
 }
 
-void ismd_cluster_cancel(ismd_cluster *c, const char *name, const char *stream, const char *id)
+bool ismd_cluster_cancel(ismd_cluster *c, const char *name, const char *stream, const char *id)
 {
     char job[KEY_MAX], want[KEY_MAX], now[24];
     ckey(c, job, "job:", name);
@@ -611,10 +613,11 @@ void ismd_cluster_cancel(ismd_cluster *c, const char *name, const char *stream, 
                           ism_cache_redis_prefix(c->redis)};
     redisReply *r = NULL;
     if (run_script(c, "cluster_cancel", CANCEL_LUA, 3, args, 7, &r) < 0)
-        return;
+        return false;
     if (r->type == REDIS_REPLY_INTEGER && r->integer == 0)
         log_kept(name, "origin");
     freeReplyObject(r);
+    return true;
 }
 
 void ismd_cluster_want(ismd_cluster *c, const char *name, bool want)
@@ -921,25 +924,38 @@ static int undelete(ismd_cluster *c, const char *id)
 
 /* Lets go of the jobs here that were deleted through other daemons (JOB_DELETE_LUA), each
  * as a DELETE here would: the job is canceled, its computation stops only when nothing else
- * here waits for it. */
+ * here waits for it. The ids are read (SRANDMEMBER) and removed only once handled (SREM):
+ * a SPOP whose answer came later than the command timeout (ISM_REDIS_COMMAND_TIMEOUT_MS, on
+ * a loaded machine) had taken them from Redis for nobody, and those jobs were never let go
+ * of (seen in a CI run: redis_unavailable what=cluster_deletes). Handling an id twice (its
+ * SREM lost the same way, or a retried DELETE) changes nothing: a job canceled here keeps
+ * its record's flag. */
 static void take_deletes(ismd_cluster *c)
 {
     char set[KEY_MAX];
     ckey(c, set, "deleted:", c->consumer);
-    const char *argv[] = {"SPOP", set, DELETES_PER_TICK};
-    size_t lens[] = {4, strlen(set), strlen(DELETES_PER_TICK)};
+    const char *argv[] = {"SRANDMEMBER", set, TEXT(DELETES_PER_TICK)};
+    size_t lens[] = {11, strlen(set), strlen(TEXT(DELETES_PER_TICK))};
     redisReply *r = ism_cache_redis_call(c->redis, "cluster_deletes", 3, argv, lens);
     if (!r)
         return;
-    for (size_t i = 0; r->type == REDIS_REPLY_ARRAY && i < r->elements; i++) {
+    const char *done[2 + DELETES_PER_TICK] = {"SREM", set};
+    size_t done_lens[2 + DELETES_PER_TICK] = {4, strlen(set)};
+    int ndone = 2;
+    for (size_t i = 0; r->type == REDIS_REPLY_ARRAY && i < r->elements && i < DELETES_PER_TICK;
+         i++) {
         const char *id = reply_str(r->element[i]);
         if (!id || !ismd_redis_tasks_enter(c->tasks))
-            continue;
+            continue; /* stays in the set: the next tick */
         ismd_job *job = ismd_jobs_find(c->jobs, id);
         bool live = job && ismd_jobs_cancel(c->jobs, c->sched, job);
+        bool canceled = job && !live && ismd_job_canceled(job);
         ismd_redis_tasks_leave(c->tasks);
         bool revoked = false;
-        if (!live && undelete(c, id) == 0 && job && ismd_redis_tasks_enter(c->tasks)) {
+        int back = live || canceled ? 1 : undelete(c, id);
+        if (back < 0)
+            continue; /* Redis did not answer: the next tick */
+        if (back == 0 && job && ismd_redis_tasks_enter(c->tasks)) {
             /* found dead when deleted: the job reads canceled here as everywhere (looked
              * up again: the table may have dropped it while the lock was not held) */
             if ((job = ismd_jobs_find(c->jobs, id))) {
@@ -948,13 +964,21 @@ static void take_deletes(ismd_cluster *c)
             }
             ismd_redis_tasks_leave(c->tasks);
         }
+        done[ndone] = id;
+        done_lens[ndone++] = strlen(id);
         ism_log_field f[] = {ISM_LS("job", id),
-                             ISM_LS("was", live      ? "live"
-                                           : revoked ? "finished_after_the_delete"
-                                           : job     ? "finished"
-                                                     : "unknown")};
+                             ISM_LS("was", live       ? "live"
+                                           : canceled ? "canceled"
+                                           : revoked  ? "finished_after_the_delete"
+                                           : job      ? "finished"
+                                                      : "unknown")};
         ism_log_fields(ISM_LOG_INFO, "cluster_job_deleted", f, 2);
     }
+    redisReply *gone = ndone > 2 ? ism_cache_redis_call(c->redis, "cluster_deletes_taken",
+                                                        ndone, done, done_lens)
+                                 : NULL;
+    if (gone) /* else lost: those ids are handled again (no change) next tick */
+        freeReplyObject(gone);
     freeReplyObject(r);
 }
 

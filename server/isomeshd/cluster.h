@@ -153,8 +153,8 @@ int ismd_cluster_enqueue(ismd_cluster *c, const char *name, const char *key, con
 int ismd_cluster_view(ismd_cluster *c, const char *name, const char *id, ismd_cj_view *v);
 /* Nobody here waits for entry id (of stream) any more: unless another daemon waits for the
  * computation (ismd_cluster_want), a waiting entry is deleted and a running one told to stop
- * (its executor sees the cancel at its next heartbeat). */
-void ismd_cluster_cancel(ismd_cluster *c, const char *name, const char *stream, const char *id);
+ * (its executor sees the cancel at its next heartbeat). False when Redis did not take it. */
+bool ismd_cluster_cancel(ismd_cluster *c, const char *name, const char *stream, const char *id);
 /* want: a request here waits for name, whose lock another daemon holds (shared_cache.h step
  * 1); recorded for one lock lifetime, so call it again every third of that. !want: no more.
  * A computation somebody wants is not canceled when its origin's requests all leave: the

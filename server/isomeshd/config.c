@@ -134,8 +134,8 @@ static const flag FLAGS[] = {
      "at least 1s",
      "60s", NULL},
     {"http-threads", K_INT, 1, 256, "N",
-     "threads serving HTTP connections (at least; two per core are started, one per core "
-     "with the own sender)",
+     "threads serving HTTP connections (at least; one per core is started with the own "
+     "sender, two per core with --own-sender=off)",
      "1", NULL}, /* at least: http.c starts as many as the connection limit needs */
     {"tcp-congestion", K_STRING, 0, 0, "NAME",
      "TCP congestion control of the daemon's connections (one of "
@@ -146,8 +146,10 @@ static const flag FLAGS[] = {
      "cached meshes are sent by the daemon's own sender (header block held back, then "
      "sendfile, as nginx sends a file) where libmicrohttpd would push the header block "
      "alone (respond.c); other requests, and idle connections, stay libmicrohttpd's; "
-     "its connections count against the same limits",
-     "off", NULL},
+     "its connections count against the same limits; not started behind --trusted-proxy "
+     "or with --private (it would take no request there); --own-sender=off leaves every "
+     "connection to libmicrohttpd",
+     "on", NULL},
     {"max-depth", K_INT, 1, 16, "N", "deepest octree a request may ask for",
      "10", NULL},
     {"max-triangles", K_INT, 1, 1000000000LL, "N",

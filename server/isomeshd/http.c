@@ -480,6 +480,15 @@ static void reserve_descriptors(int any_fd, unsigned n)
  * against 10-12 with 4 threads (bench_http's slow-reader rows). */
 #define OWN_THREADS_PER_CORE 1u
 
+/* Whether the own sender runs (--own-sender, on by default). Not behind a --trusted-proxy
+ * nor with --private: its hook (own_sender.c) leaves every request to libmicrohttpd there
+ * (X-Real-IP names the client; a token is needed), so a front would only add a peek and a
+ * hand-over to each connection and halve the polling threads. */
+static bool own_sender_runs(const ismd_config *cfg)
+{
+    return cfg->own_sender && !cfg->trusted_proxy[0] && !cfg->private_mode;
+}
+
 /* The thread model (http_loops.c): THREADS_PER_CORE polling threads per core, each with its
  * own libmicrohttpd daemon and epoll set on the shared listening socket (--http-threads may
  * ask for more). Why epoll: poll() walks every connection of its thread on each pass
@@ -491,7 +500,7 @@ static void reserve_descriptors(int any_fd, unsigned n)
 static unsigned http_threads(const ismd_config *cfg)
 {
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    unsigned n = (cfg->own_sender ? OWN_THREADS_PER_CORE : THREADS_PER_CORE) *
+    unsigned n = (own_sender_runs(cfg) ? OWN_THREADS_PER_CORE : THREADS_PER_CORE) *
                  (cores > 0 ? (unsigned)cores : 1u);
     return (unsigned)cfg->http_threads > n ? (unsigned)cfg->http_threads : n;
 }
@@ -551,7 +560,7 @@ bool ismd_http_start(ismd_server *s, int listen_fd)
     /* the own sender holds at most max_conns more (each thread its share), idle ones for
      * OWN_SENDER_IDLE_S before libmicrohttpd's table sees them */
     unsigned threads = http_threads(s->cfg);
-    unsigned own = s->cfg->own_sender ? s->cfg->max_conns : 0;
+    unsigned own = own_sender_runs(s->cfg) ? s->cfg->max_conns : 0;
     reserve_descriptors(listen_fd, FDS_PER_CONNECTION * (limit + own) + FDS_BESIDE);
     struct MHD_OptionItem opts[] = {
         {MHD_OPTION_EXTERNAL_LOGGER, (intptr_t)mhd_log, s},
@@ -580,7 +589,7 @@ bool ismd_http_start(ismd_server *s, int listen_fd)
     };
     if (!s->loops || !ism_http_loops_start(s->loops, MHD_ALLOW_SUSPEND_RESUME | MHD_USE_ERROR_LOG,
                                            listen_fd, limit, on_request, s, opts,
-                                           s->cfg->own_sender ? &front : NULL)) {
+                                           own ? &front : NULL)) {
         ism_logf(ISM_LOG_ERROR, "http_start_failed", "libmicrohttpd did not start");
         ism_http_loops_stop(s->loops);
         s->loops = NULL;

@@ -361,6 +361,11 @@ const char *ismd_job_user(const ismd_job *job)
     return job->user;
 }
 
+bool ismd_job_canceled(const ismd_job *job)
+{
+    return job->state == ISMD_JOB_CANCELED;
+}
+
 bool ismd_jobs_cancel(ismd_jobs *j, ismd_sched *s, ismd_job *job)
 {
     (void)j;

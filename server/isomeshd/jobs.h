@@ -77,6 +77,8 @@ bool ismd_job_state_parse(const char *s, ismd_job_state *out);
 /* {"jobs": [...]}: the jobs of user (NULL: everyone's), newest first, at most max, without
  * their stats; "truncated": true when more were left out. */
 json_t *ismd_jobs_list_json(const ismd_jobs *j, const char *user, size_t max);
+/* Whether the job ended canceled (a DELETE, or ismd_jobs_revoke). */
+bool ismd_job_canceled(const ismd_job *job);
 /* Cancels a live job (no effect on a finished one). True when it was live. */
 bool ismd_jobs_cancel(ismd_jobs *j, ismd_sched *s, ismd_job *job);
 /* A finished job whose DELETE was made while this daemon looked dead to the cluster (cut off

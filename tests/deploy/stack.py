@@ -15,6 +15,7 @@ import socket
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -164,6 +165,117 @@ class Redis:
                 pass
         self.stop()
         shutil.rmtree(self.tmp, ignore_errors=True)
+
+
+class RedisProxy:
+    """A TCP relay in front of Redis for one daemon, which can hold back one exchange on a
+    deleted:<daemon> set (cluster.c take_deletes): after hold(names, seconds), the first
+    command on such a set named one of names (bytes, e.g. b"SRANDMEMBER") is kept from Redis
+    (before=True), or Redis runs it and its answer, when not an empty list, is kept from the
+    daemon (before=False), for `seconds` (past the daemon's command timeout,
+    ISM_REDIS_COMMAND_TIMEOUT_MS); its connection is then closed: the daemon never hears
+    back, as on a loaded machine. `held` is set once that happened."""
+
+    def __init__(self, redis_port):
+        self.redis_port = redis_port
+        self.listener = socket.create_server(("127.0.0.1", 0))
+        self.port = self.listener.getsockname()[1]
+        self.armed = None  # (names, seconds, before) of the exchange to hold
+        self.held = threading.Event()
+        self.lock = threading.Lock()
+        self.socks = []
+
+    def start(self):
+        threading.Thread(target=self._accept, daemon=True).start()
+        return self
+
+    def hold(self, names, seconds, before=False):
+        with self.lock:
+            self.held.clear()
+            self.armed = (tuple(names), seconds, before)
+
+    def _accept(self):
+        while True:
+            try:
+                client, _ = self.listener.accept()
+            except OSError:
+                return  # closed
+            try:
+                server = socket.create_connection(("127.0.0.1", self.redis_port), timeout=5)
+            except OSError:
+                client.close()
+                continue
+            server.settimeout(None)
+            watch = threading.Event()  # the command on its way is the one to hold the answer of
+            with self.lock:
+                self.socks += [client, server]
+            threading.Thread(target=self._commands, args=(client, server, watch),
+                             daemon=True).start()
+            threading.Thread(target=self._answers, args=(server, client, watch),
+                             daemon=True).start()
+
+    def _take(self, data, before):
+        """The seconds to hold data's exchange for (the hold disarmed), else None."""
+        with self.lock:
+            if not self.armed or self.armed[2] != before:
+                return None
+            names, seconds, _ = self.armed
+            if before and not (b"deleted:" in data and any(n in data for n in names)):
+                return None
+            if not before and data.startswith(b"*0\r\n"):
+                return None  # an empty set read: nothing to lose
+            self.armed = None
+            return seconds
+
+    def _commands(self, client, server, watch):
+        try:
+            while True:
+                data = client.recv(65536)
+                if not data:
+                    break
+                hold = self._take(data, True)
+                if hold is not None:
+                    time.sleep(hold)
+                    self.held.set()
+                    break  # never sent to Redis
+                with self.lock:
+                    names = self.armed[0] if self.armed else ()
+                if b"deleted:" in data and any(n in data for n in names):
+                    watch.set()  # the daemon sends one command and waits for its answer
+                server.sendall(data)
+        except OSError:
+            pass
+        self._close(client, server)
+
+    def _answers(self, server, client, watch):
+        try:
+            while True:
+                data = server.recv(65536)
+                if not data:
+                    break
+                if watch.is_set():
+                    watch.clear()
+                    hold = self._take(data, False)
+                    if hold is not None:
+                        time.sleep(hold)
+                        self.held.set()
+                        break  # never delivered
+                client.sendall(data)
+        except OSError:
+            pass
+        self._close(client, server)
+
+    def _close(self, *socks):
+        for s in socks:
+            try:
+                s.close()
+            except OSError:
+                pass
+
+    def cleanup(self):
+        self.listener.close()
+        with self.lock:
+            self._close(*self.socks)
 
 
 def wait_stored(redis, key, fmt="drc", timeout=30):
@@ -324,8 +436,11 @@ def gunzip(data):
 class Stack:
     """Redis, n daemons sharing it, nginx in front. Stopped by cleanup() whatever happened."""
 
-    def __init__(self, n=2, daemon_args=(), with_nginx=True):
+    def __init__(self, n=2, daemon_args=(), with_nginx=True, redis_for=None):
+        """redis_for(i, port): the Redis port daemon i is given (default: Redis's own; a
+        RedisProxy's to come between them)."""
         self.redis = Redis()
+        self.redis_for = redis_for or (lambda i, port: port)
         self.daemons = []
         self.nginx = None
         self.n = n
@@ -336,8 +451,8 @@ class Stack:
     def start(self):
         try:
             self.redis.start()
-            for _ in range(self.n):
-                d = harness.Daemon("--redis", "127.0.0.1:%d" % self.redis.port,
+            for i in range(self.n):
+                d = harness.Daemon("--redis", "127.0.0.1:%d" % self.redis_for(i, self.redis.port),
                                    "--workers", "2", *self.daemon_args)
                 self.daemons.append(d)
                 d.start()

@@ -23,6 +23,9 @@ sys.path.insert(0, os.path.join(ROOT, "tests", "cli"))
 BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
 ISOMESHD = os.path.join(BUILD, "isomeshd")
 QUICK = os.environ.get("ISOMESH_TEST_QUICK") == "1"
+# Flags every daemon of the tests gets before its own (which override them): a whole suite in
+# another mode, e.g. ISOMESHD_TEST_ARGS=--own-sender=off for libmicrohttpd alone.
+EXTRA_ARGS = os.environ.get("ISOMESHD_TEST_ARGS", "").split()
 
 # Requests used across the tests. SLOW takes seconds (gyroid ball at depth 10: about 1.5 s with
 # two threads on an idle machine, 2026-11-27 — it was 3 s before the evaluators got faster):
@@ -127,7 +130,8 @@ class Daemon:
     # ---- life cycle ------------------------------------------------------------------
     def start(self, timeout=15):
         cmd = self.prefix + [self.binary, "--listen", "127.0.0.1:0", "--cache-dir", self.cache_dir,
-                             "--web-root", self.web_root, "--log-format", self.log_format] + self.args
+                             "--web-root", self.web_root, "--log-format", self.log_format] + \
+            EXTRA_ARGS + self.args
         if self.log_file is None:
             self._spawn_piped(cmd)
         else:

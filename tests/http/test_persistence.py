@@ -6,7 +6,9 @@ every request and counts the failed stores; a large cached body is sent from its
 (sendfile), byte for byte the body computed, and from memory while the file changed moments
 ago or when it does not match: a wrong length, or a byte flipped on disk after it was sent from
 (the file is then dropped as damaged); a mid-size body goes from memory (its header block in
-the same send as the body) however many connections are open."""
+the same send as the body) however many connections are open when libmicrohttpd answers it
+(--own-sender=off: the own sender sends every cached mesh from its file). Every test runs with
+the own sender (the default) and without it (PersistenceWithoutOwnSender)."""
 import glob
 import os
 import shutil
@@ -28,6 +30,8 @@ BUSY_CONNECTIONS = 128
 
 
 class PersistenceTest(unittest.TestCase):
+    MODE = ()  # flags every daemon gets: the own sender, the default
+
     def setUp(self):
         self.tmp = tempfile.mkdtemp(prefix="isomeshd_persist_")
         self.cache = os.path.join(self.tmp, "cache")
@@ -53,7 +57,7 @@ class PersistenceTest(unittest.TestCase):
 
     def test_restart_serves_from_disk_and_detects_a_flipped_byte(self):
         req = sphere(0.93)
-        with Daemon("--workers", "1", cache_dir=self.cache) as d:
+        with Daemon("--workers", "1", *self.MODE, cache_dir=self.cache) as d:
             first = d.post("/v1/mesh", req)
             self.assertEqual(first.status, 200)
             self.assertEqual(first.header("X-Cache"), "miss")
@@ -63,7 +67,7 @@ class PersistenceTest(unittest.TestCase):
             self.assertEqual(rc, 0)
 
         # restart: served from disk, nothing computed
-        with Daemon("--workers", "1", cache_dir=self.cache) as d:
+        with Daemon("--workers", "1", *self.MODE, cache_dir=self.cache) as d:
             got = d.get("/v1/meshes/%s.drc" % key)
             self.assertEqual(got.status, 200)
             self.assertEqual(got.header("X-Cache"), "hit")
@@ -88,7 +92,7 @@ class PersistenceTest(unittest.TestCase):
             b = f.read(1)
             f.seek(-1, os.SEEK_CUR)
             f.write(bytes([b[0] ^ 0x01]))
-        with Daemon("--workers", "1", cache_dir=self.cache) as d:
+        with Daemon("--workers", "1", *self.MODE, cache_dir=self.cache) as d:
             got = d.get("/v1/meshes/%s.drc" % key)
             self.assertEqual(got.status, 200)
             self.assertEqual(got.header("X-Cache"), "miss")
@@ -102,12 +106,12 @@ class PersistenceTest(unittest.TestCase):
             self.assertEqual(d.get("/v1/meshes/%s.drc" % key).header("X-Cache"), "hit")
             self.assertEqual(d.stop(), 0)
         # and the rewritten file is whole again
-        with Daemon("--workers", "1", cache_dir=self.cache) as d:
+        with Daemon("--workers", "1", *self.MODE, cache_dir=self.cache) as d:
             self.assertEqual(d.get("/v1/meshes/%s.drc" % key).header("X-Cache"), "hit")
             self.assertEqual(d.metric("isomesh_cache_corrupt_total", tier="disk"), 0)
 
     def test_a_large_cached_body_is_sent_from_its_disk_file(self):
-        with Daemon("--workers", "1", cache_dir=self.cache) as d:
+        with Daemon("--workers", "1", *self.MODE, cache_dir=self.cache) as d:
             first = d.post("/v1/mesh", LARGE)
             self.assertEqual(first.status, 200)
             self.assertGreater(len(first.body), SENDFILE_MIN)
@@ -159,7 +163,8 @@ class PersistenceTest(unittest.TestCase):
             self.assertFalse(os.path.exists(path))
 
     def test_a_mid_size_body_goes_from_memory_with_many_connections_open(self):
-        with Daemon("--workers", "1", cache_dir=self.cache) as d:
+        # respond.c's rule: libmicrohttpd's answers (the own sender's always go by sendfile)
+        with Daemon("--workers", "1", "--own-sender=off", cache_dir=self.cache) as d:
             first = d.post("/v1/mesh", MID)
             self.assertEqual(first.status, 200)
             self.assertTrue(64 << 10 <= len(first.body) < SENDFILE_MIN, len(first.body))
@@ -196,7 +201,7 @@ class PersistenceTest(unittest.TestCase):
         blocker = os.path.join(self.tmp, "file")
         with open(blocker, "w") as f:
             f.write("a file where the cache directory should be\n")
-        with Daemon("--workers", "1", cache_dir=os.path.join(blocker, "cache")) as d:
+        with Daemon("--workers", "1", *self.MODE, cache_dir=os.path.join(blocker, "cache")) as d:
             first = d.post("/v1/mesh", sphere(0.94))
             self.assertEqual(first.status, 200)
             self.assertGreater(draco_counts(first.body)[1], 0)
@@ -205,7 +210,7 @@ class PersistenceTest(unittest.TestCase):
             self.assertIn("cache_dir_unusable", d.log())
 
     def test_no_memory_tier_reads_disk_every_time(self):
-        with Daemon("--workers", "1", "--cache-mem", "0", cache_dir=self.cache) as d:
+        with Daemon("--workers", "1", *self.MODE, "--cache-mem", "0", cache_dir=self.cache) as d:
             first = d.post("/v1/mesh", sphere(0.95))
             key = first.header("ETag").strip('"')
             for _ in range(3):
@@ -216,6 +221,12 @@ class PersistenceTest(unittest.TestCase):
             self.assertEqual(d.metric("isomesh_computations_started_total"), 1)
             self.assertEqual(d.stop(), 0)  # a clean stop flushes the writes
         self.cache_file(key, "drc")
+
+
+class PersistenceWithoutOwnSender(PersistenceTest):
+    MODE = ("--own-sender=off",)  # libmicrohttpd answers every request
+    # runs without the own sender in PersistenceTest already
+    test_a_mid_size_body_goes_from_memory_with_many_connections_open = None
 
 
 if __name__ == "__main__":
