@@ -790,13 +790,13 @@ static void gyroid_ball_shape(const ism_mesh *m, double cell, const double *befo
 }
 
 /* Needles beside the crease the pass may leave at the preset's depth, 7, in the lattice /
- * 1e-3 / irrational boxes: 19 / 35 / 36 measured since a snap or slide onto the crease may
+ * 1e-3 / irrational boxes: 19 / 26 / 34 measured since a snap or slide onto the crease may
  * turn a triangle to face either surface there and bend it by the crease's own angle
- * (rm_crease_slide.c tri_ok); 48 / 81 / 78 before (the irrational box's 78 kept this test on
+ * (rm_crease_slide.c tri_ok; 19 / 35 / 36 while the facing limit was 45°); 48 / 81 / 78 before (the irrational box's 78 kept this test on
  * the old placement), 115 / 135 / 129 before vertices were merged onto the crease, snapped
  * and slid along it (340 / 326 / 391 while the crease's vertices, as close as 1/400 of a
  * cell, were never merged into each other: rm_collapse.c's crease merges). */
-static const size_t crease_left[3] = {24, 44, 45};
+static const size_t crease_left[3] = {24, 33, 43};
 
 static void gyroid_ball_case(const ism_tape *t, const double box[6], int d, int which)
 {
