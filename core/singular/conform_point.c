@@ -36,6 +36,14 @@
  * start (a merge of two sheets' rims is never taken); with no star-shaped cut within that,
  * the start radius is kept. */
 #define STAR_GROW 1.2
+/* A lone point's ball grows the same way past the polygoniser's folds (an edge whose two
+ * triangles face apart) within SEEK_CELLS cells of it: where a sheet grazes a lattice plane
+ * beside the other sheet the pleat can lie wholly outside a star-shaped rim. Two unit spheres
+ * touching, depth 6, box moved by irrational fractions of a cell: the right sphere meets the
+ * plane x = 0.0285 (0.41 cell) at 13° along the circle r = √(2 × 0.0285) = 3.5 cells, where
+ * the left sphere is 0.8 cell away in the same cells; four edges there fold (123–159°) outside
+ * the 2.5-cell ball (test remesh_needles/touching_spheres_keep_topology_and_lose_needles). A
+ * node or curve with a clearance grows its cut until its rim is clear instead (cf_cut_clean). */
 /* NODE_SEEK: a node (certified: the surface passes through it) with other parts of the locus
  * in the box seeks the mesh round it up to its clearance, not SEEK_CELLS finest cells: under
  * an error bound the cells near a node are sized by E, not by the finest depth, and the
@@ -128,6 +136,35 @@ static bool star_shaped(const cf_ctx *c, const cf_loops *ls, const double p[3])
     return true;
 }
 
+/* *found: a live triangle within r of p has an edge of two live triangles facing apart (their
+ * normals more than 90° apart). False when out of memory. */
+static bool folded_near(cf_ctx *c, const double p[3], double r, bool *found)
+{
+    ball q = {{p[0], p[1], p[2]}, r};
+    cf_tris cand = {0};
+    cf_tgrid_begin(&c->grid);
+    bool ok = gather_ball(c, &q, &cand);
+    *found = false;
+    const double *P = c->m->pos;
+    for (size_t i = 0; ok && !*found && i < cand.n && !cf_poll(c, 1); i++) {
+        uint32_t t = cand.t[i], tt[3];
+        if (c->dead[t] || !tri_in_ball(c, t, &q))
+            continue;
+        const uint32_t *v = c->m->tri + 3 * (size_t)t;
+        double n[3], m[3];
+        turn_round(P + 3 * (size_t)v[1], P + 3 * (size_t)v[2], P + 3 * (size_t)v[0], n);
+        for (int k = 0; k < 3 && !*found; k++) {
+            if (cf_live_on_edge(c, v[k], v[(k + 1) % 3], tt, 3) != 2)
+                continue;
+            const uint32_t *w = c->m->tri + 3 * (size_t)(tt[0] == t ? tt[1] : tt[0]);
+            turn_round(P + 3 * (size_t)w[1], P + 3 * (size_t)w[2], P + 3 * (size_t)w[0], m);
+            *found = ism_dot3(n, m) < 0;
+        }
+    }
+    free(cand.t);
+    return ok;
+}
+
 /* Cuts ball b into *ls, *rm, *nrm, the cut growing while its rim is unclear up to the
  * clearance (a lone point's not at all); false when out of memory. */
 static bool cut_ball(cf_ctx *c, const cf_cutter *cut, ball *b, double clear_r, cf_loops *ls,
@@ -165,25 +202,35 @@ static bool cut_both_nappes(cf_ctx *c, const cf_cutter *cut, ball *b, double cle
     return true;
 }
 
-/* While the cut's loops step backwards round the point, cuts again at a ball STAR_GROW times
- * larger up to max_r; the first star-shaped cut with as many loops is kept, else the cut at
- * the radius it started from. False when out of memory. */
+/* While the cut's loops step backwards round the point — or, past_folds (a lone point), a
+ * fold lies within max_r of it — cuts again at a ball STAR_GROW times larger up to max_r; the
+ * first star-shaped cut with as many loops and no such fold is kept, else the first
+ * star-shaped one, else the cut at the radius it started from. False when out of memory. */
 static bool cut_star_shaped(cf_ctx *c, const cf_cutter *cut, ball *b, double clear_r,
-                            double max_r, size_t nt0, size_t nv0, cf_loops *ls, uint32_t **rm,
-                            size_t *nrm)
+                            double max_r, bool past_folds, size_t nt0, size_t nv0,
+                            cf_loops *ls, uint32_t **rm, size_t *nrm)
 {
-    double r0 = b->r;
+    double back = b->r;
+    bool star_seen = false;
     size_t nloops = ls->n;
-    while (!c->stopped && !star_shaped(c, ls, b->p)) {
+    for (;;) {
+        bool star = star_shaped(c, ls, b->p), fold = false;
+        if (star && !star_seen) {
+            back = b->r;
+            star_seen = true;
+        }
+        if (star && past_folds && !folded_near(c, b->p, max_r, &fold))
+            return false;
+        if (c->stopped || (star && !fold))
+            return true;
         double next = b->r * STAR_GROW;
         if (next > max_r)
-            return recut(c, cut, b, r0, clear_r, nt0, nv0, ls, rm, nrm);
+            return recut(c, cut, b, back, clear_r, nt0, nv0, ls, rm, nrm);
         if (!recut(c, cut, b, next, clear_r, nt0, nv0, ls, rm, nrm))
             return false;
         if (!c->stopped && ls->n != nloops)
-            return recut(c, cut, b, r0, clear_r, nt0, nv0, ls, rm, nrm);
+            return recut(c, cut, b, back, clear_r, nt0, nv0, ls, rm, nrm);
     }
-    return true;
 }
 
 bool cf_conform_point(cf_run *r, size_t i)
@@ -232,7 +279,8 @@ bool cf_conform_point(cf_run *r, size_t i)
         if (!cut_both_nappes(c, &cut, &b, clear_r, both_r, nt0, nv0, &ls, &rm, &nrm))
             return false;
     }
-    if (ls.n > 0 && !cut_star_shaped(c, &cut, &b, clear_r, star_r, nt0, nv0, &ls, &rm, &nrm))
+    if (ls.n > 0 && !cut_star_shaped(c, &cut, &b, clear_r, star_r, !isfinite(clear_r), nt0,
+                                     nv0, &ls, &rm, &nrm))
         return false;
     if (c->stopped) {
         c->st->items_stopped++;

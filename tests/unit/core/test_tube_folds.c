@@ -259,11 +259,20 @@ Test(tube_folds, crossing_spheres_few_turned_over)
  * that zigzag move with the box); the old code fails the cross-cap's and Steiner's shifted
  * boxes at d6 and d7.
  * FIXME(issue 13): fails at pf_sweep_box's irrational placement (√2 − 1, −(√5 − 1)/4, 1/e of
- * a cell): Steiner d7 29 edges turned over (STEINER_FOLDS_MAX 24; main 672458c); the
- * closed-form figures (χ, chains, ends at the pinch points), the cross-cap's and Whitney's folds
- * and Steiner d6 hold there and run there (turned-over edges: cross-cap d6 0, d7 6; Steiner
- * d6 10; Whitney d6 1, d7 1; main eec4064). Steiner d7 alone is left on the old rational
- * placement (pf_sweep_box_old) until core/singular/conform*.c turns fewer over there. */
+ * a cell): Steiner d7 30 edges turned over (STEINER_FOLDS_MAX 24; main 0174f79, the refill
+ * halved without a bound: 29 before). 17 of them are the polygoniser's own, the same edges
+ * in its mesh before the conformance, 8–13 cells from a pinch point and outside the tube: 12
+ * a chain on the lattice plane z = 0.4901 beside (0, 0, 1/2) at (0.09..0.099, −0.084..−0.098),
+ * the tip of the lens the umbrella's two sheets make there (the section z = 0.49 reaches
+ * s = √(z(1 − 2z)) = 0.099 along (1, −1, 0)/√2 and is thinner than a cell: its cells hold
+ * both sheets), 2 beside (0, −1/2, 0), 3 beside (−1/2, 0, 0); the conformance's own 13 lie
+ * 1.4–2.4 cells (9) and 6.5–7 cells (4) from a pinch point. Mending them needs a cap round
+ * each pinch point grown past the polygoniser's folds (as conform_point.c grows a lone point's
+ * ball) or the lens's tip resolved by the polygoniser. The closed-form figures (χ, chains,
+ * ends at the pinch points), the cross-cap's and Whitney's folds and Steiner d6 hold there and
+ * run there (turned-over edges at main 0174f79: cross-cap d6 0, d7 6; Steiner d6 6 (10 before
+ * the refill was halved without a bound); Whitney d6 1, d7 1). Steiner d7 alone is left on
+ * the old rational placement (pf_sweep_box_old). */
 #define CROSS_CAP_FOLDS_MAX 12
 #define STEINER_FOLDS_MAX(d) ((d) >= 7 ? 24 : 16)
 #define WHITNEY_FOLDS_MAX 4
