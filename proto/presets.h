@@ -26,19 +26,26 @@ typedef struct ism_preset {
     const ism_preset_param *params;
     size_t nparams;
     double box[6];
-    int min_depth, max_depth;
+    int min_depth, max_depth;  /* max_depth: the depth path's ("max_error": null) */
     const char *source;        /* where the surface comes from (gallery entries) */
     unsigned facts;            /* which of the stated facts below hold (enum ism_fact bits) */
     int nodes;                 /* singular points of type node in the box */
     int euler;                 /* Euler characteristic of the mesh */
     int components;            /* connected components */
     int singular;              /* singular points of any type (features JSON v2) */
+    int bound_depth;           /* under a bound without depth.max, the safety depth when it
+                                  must be below the operator's limit (0: that limit); see
+                                  ism_preset_bound_depth */
 } ism_preset;
 
 /* The facts a gallery entry states; tests/cli/test_gallery.py checks each against the mesh
  * (in the entry's box and in boxes shifted off the octree lattice). */
 enum ism_fact { ISM_FACT_NODES = 1, ISM_FACT_EULER = 2, ISM_FACT_COMPONENTS = 4,
                 ISM_FACT_SINGULAR = 8 };
+
+/* depth.max of a request under a bound that gives none: the operator's limit, or p's
+ * bound_depth when it has one below it (p NULL: a written-out expression). */
+int ism_preset_bound_depth(const ism_preset *p, int limit);
 
 size_t ism_preset_count(void);
 const ism_preset *ism_preset_at(size_t i);

@@ -437,23 +437,45 @@ static const char *three_digits(double v, int dir, char *buf)
     return buf;
 }
 
-/* "max_error": E > 0 in model units, at least ISM_REQ_MIN_ERROR_REL of the box diagonal and
- * at most the diagonal. Without an explicit depth.max, the operator's depth limit becomes
- * the safety limit: the bound, not the preset's depth, decides. */
-static bool decode_max_error(const json_t *v, const json_t *depth, ism_request *req,
-                             int depth_limit, ism_req_error *err)
+/* The box's diagonal (the scale of max_error's default and limits). */
+static double box_diagonal(const double box[6])
 {
-    double e, d2 = 0;
-    if (!read_number(v, "$.max_error", &e, err))
-        return false;
+    double d2 = 0;
     for (int k = 0; k < 3; k++)
-        d2 += (req->poly.box[k + 3] - req->poly.box[k]) * (req->poly.box[k + 3] - req->poly.box[k]);
+        d2 += (box[k + 3] - box[k]) * (box[k + 3] - box[k]);
+    return sqrt(d2);
+}
+
+double ism_request_default_error(const double box[6])
+{
+    return ISM_REQ_DEFAULT_ERROR_REL * box_diagonal(box);
+}
+
+/* "max_error": E > 0 in model units, at least ISM_REQ_MIN_ERROR_REL of the box diagonal and
+ * at most the diagonal; left out, ISM_REQ_DEFAULT_ERROR_REL of the diagonal (resolved here,
+ * so the key and the canonical request hold the number: an explicit E equal to the default
+ * is the same request); null, no bound (the depth path: flatness tolerances and depth.max
+ * decide). Under a bound without an explicit depth.max, the operator's depth limit becomes
+ * the safety limit: the bound, not the preset's depth, decides (a preset p may set a lower
+ * one: ism_preset_bound_depth). v is NULL when left out. */
+static bool decode_max_error(const json_t *v, const json_t *depth, const ism_preset *p,
+                             ism_request *req, int depth_limit, ism_req_error *err)
+{
+    if (json_is_null(v)) {
+        req->poly.max_error = 0;
+        return true;
+    }
+    double e, diag = box_diagonal(req->poly.box);
+    if (!v)
+        e = ism_request_default_error(req->poly.box);
+    else if (!read_number(v, "$.max_error", &e, err))
+        return false;
     char b[32], c[32], d[32], g[32];
     if (!(e > 0))
         return over(err, "$.max_error", "%s must be above 0 (a distance in model units)",
                     num(e, b));
     /* the limits to three digits, rounded inwards: a value copied from the message passes */
-    double diag = sqrt(d2), lo = ISM_REQ_MIN_ERROR_REL * diag;
+    double lo = ISM_REQ_MIN_ERROR_REL * diag;
     if (!in_range_shown(e, lo, diag, three_digits(lo, 1, c), three_digits(diag, -1, g),
                         "$.max_error", err)) {
         size_t at = strlen(err->message);
@@ -466,7 +488,7 @@ static bool decode_max_error(const json_t *v, const json_t *depth, ism_request *
     }
     req->poly.max_error = e;
     if (!(depth && json_object_get(depth, "max")))
-        req->poly.max_depth = depth_limit;
+        req->poly.max_depth = ism_preset_bound_depth(p, depth_limit);
     return true;
 }
 
@@ -478,7 +500,8 @@ static bool decode_bound_flag(const json_t *v, const ism_request *req, const cha
     if (!json_is_boolean(v))
         return bad(err, path, "expected true or false, got %s", type_name(v));
     if (json_is_true(v) && !(req->poly.max_error > 0))
-        return bad(err, path, "%s: give max_error too", why);
+        return bad(err, path, "%s: not with \"max_error\": null (leave it out for the "
+                   "default bound, or give one)", why);
     *out = json_is_true(v);
     return true;
 }
@@ -713,8 +736,11 @@ static bool decode_root(const json_t *root, ism_request *req, int depth_limit,
     const json_t *depth = json_object_get(root, "depth");
     if (depth && !decode_depth(depth, req, depth_limit, err))
         return false;
-    if ((v = json_object_get(root, "max_error")) &&
-        !decode_max_error(v, depth, req, depth_limit, err))
+    /* a preview is coarse by depth: one that leaves max_error out has no bound */
+    const json_t *bound = json_object_get(root, "max_error");
+    if (!bound && json_is_true(json_object_get(root, "preview")))
+        bound = json_null();
+    if (!decode_max_error(bound, depth, p, req, depth_limit, err))
         return false;
     /* under a bound: the dual mesh where it applies, any mesh simplified only when asked */
     req->poly.dual = req->poly.max_error > 0;

@@ -31,6 +31,17 @@
 #define ISM_REQ_MAX_SOURCE      16384        /* bytes of one expression or let source */
 #define ISM_REQ_MIN_ERROR_REL   1e-9         /* max_error >= this * the box diagonal: finer
                                                 is below what doubles resolve there */
+#define ISM_REQ_DEFAULT_ERROR_REL 1e-3       /* max_error when not given: this * the box
+                                                diagonal. Accuracy is the request's knob
+                                                (issue 15), so a request says how far its
+                                                triangles may lie from f = 0 even when it
+                                                says nothing: 1e-3 of the diagonal is under
+                                                a pixel of a 1,000-pixel view of the box,
+                                                and the dual mesher meets it on the smooth
+                                                presets with good triangles (sphere preset:
+                                                1,068 triangles, smallest angle 25.6 deg,
+                                                where the depth path gave 5,384 and 0.97
+                                                deg). "max_error": null: the depth path */
 #define ISM_REQ_MAX_CURVES      256          /* curves: entries, and offsets + values in all
                                                 (each one cut of the mesh) */
 
@@ -74,8 +85,9 @@ typedef struct ism_request {
     ism_let *lets;             /* in order; names and sources owned */
     size_t nlets;
     char **let_paths;          /* JSON path of each let's source, for errors */
-    /* The polygoniser's options the request sets: box, min_depth, max_depth, max_error (0
-     * when not given: then the flatness tolerances and depth.max decide) and the tolerances
+    /* The polygoniser's options the request sets: box, min_depth, max_depth, max_error
+     * (ISM_REQ_DEFAULT_ERROR_REL of the box diagonal when not given; 0 for "max_error":
+     * null: then the flatness tolerances and depth.max decide) and the tolerances
      * (core/octree/tolerances.h); the others keep ism_poly_options_default's values. */
     ism_poly_options poly;
     int quality;               /* enum ism_quality: "raw" (default) or "good" (the quality
@@ -112,6 +124,10 @@ typedef struct ism_req_error {
     int line, column;          /* 1-based position in the JSON text or the expression; 0 none */
     char message[400];         /* one line, starting with the path when there is one */
 } ism_req_error;
+
+/* The error bound a request (or the CLI) gets when it does not give one:
+ * ISM_REQ_DEFAULT_ERROR_REL of box's diagonal. */
+double ism_request_default_error(const double box[6]);
 
 /* Decodes and validates a JSON request. lim may be NULL for the default limits. On failure
  * returns false, fills err, and leaves req empty (safe to free). */

@@ -42,12 +42,17 @@ static void write_tolerances(ism_jw *w, const ism_request *req)
     ism_jw_object_end(w);
 }
 
-/* The error bound, only when one was given (keys of requests without it stay as they were). */
+/* The error bound as resolved (a request that left it out holds the default's number, so an
+ * explicit E equal to it is the same request), or null for the depth path: always written,
+ * since a request without "max_error" means the default bound (mesher-21 on), and a
+ * canonical request must run again as the same mesh. */
 static void write_max_error(ism_jw *w, const ism_request *req)
 {
-    if (!(req->poly.max_error > 0))
-        return;
     ism_jw_key(w, "max_error");
+    if (!(req->poly.max_error > 0)) {
+        ism_jw_null(w);
+        return;
+    }
     ism_jw_number(w, req->poly.max_error);
     /* Always said under a bound, as "dual" is: the default changed after mesher-18 (from
      * "after the primal polygons" to "only when asked"), and a key or canonical request

@@ -13,6 +13,7 @@ typedef struct ism_cli_run {
     ism_poly_options options;
     const char *expr;           /* -e */
     const char *surface;        /* --surface */
+    const struct ism_preset *preset; /* the built-in preset --surface named, or NULL */
     const char *surfaces_file;  /* --surfaces */
     const char *output;         /* -o */
     const char *features_output;/* --features */
@@ -24,6 +25,8 @@ typedef struct ism_cli_run {
     bool no_dual;               /* --no-dual: under --max-error, the primal polygons even
                                    where the dual mesh (the default) applies */
     bool require_dual;          /* --dual: the dual mesh or a failure naming why not */
+    bool error_given;           /* --max-error E (or off): else the request's default bound,
+                                   ism_request_default_error of the box */
     ism_param *params;          /* names owned */
     size_t nparams;
     ism_let *lets;              /* names and sources owned */

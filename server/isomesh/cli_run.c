@@ -111,6 +111,7 @@ static bool preset_has_params(const ism_cli_run *run, const ism_preset *p)
 static bool use_preset(ism_cli_run *run, const ism_preset *p)
 {
     run->expr = p->expr;
+    run->preset = p;
     for (size_t i = 0; i < p->nlets; i++)
         if (!prepend_let(run, i, p->lets[i].name, p->lets[i].source))
             return false;
@@ -417,8 +418,11 @@ int ism_cli_run_surface(ism_cli_run *run)
     int st = resolve_surface(run);
     if (st)
         return st;
+    if (!run->error_given) /* as a request does: 1e-3 of the box diagonal */
+        run->options.max_error = ism_request_default_error(run->options.box);
     if (run->options.max_error > 0 && !run->depth_given) /* as a request does: the bound */
-        run->options.max_depth = ISM_REQ_DEFAULT_MAX_DEPTH_LIMIT; /* decides, not the depth */
+        run->options.max_depth = /* decides, not the depth */
+            ism_preset_bound_depth(run->preset, ISM_REQ_DEFAULT_MAX_DEPTH_LIMIT);
     run->options.dual = run->options.max_error > 0 && !run->no_dual; /* as a request does */
     double timings[ISM_TIME_COUNT] = {0};
     double t0 = ism_now_ms();

@@ -45,10 +45,12 @@ static const char usage_text[] =
     "  -d, --depth MIN:MAX      subdivision depths (default 3:7; MAX at most 16)\n"
     "      --threads N          threads for this run (default: all cores; output identical)\n"
     "%s"   /* the tolerances, from core/octree/tolerances.h */
-    "      --max-error E        subdivide until the triangles lie within E of the surface\n"
+    "      --max-error E|off    subdivide until the triangles lie within E of the surface\n"
     "                           (model units, measured at centroids and edge midpoints);\n"
-    "                           depth MAX is then only a safety limit. Default: off, the\n"
-    "                           flatness test (--flat-plane) decides. On a closed surface\n"
+    "                           depth MAX is then only a safety limit (default 10 under a\n"
+    "                           bound). Default: 1e-3 x the box diagonal, as a request's.\n"
+    "                           off (or 0): no bound, the flatness test (--flat-plane) and\n"
+    "                           depth MAX decide (the paper's octree). On a closed surface\n"
     "                           without min/max whose singular points, if any, are nodes or\n"
     "                           isolated points (no singular curve) the mesh is made by\n"
     "                           dual contouring: one vertex per leaf, cells sized\n"
@@ -56,17 +58,17 @@ static const char usage_text[] =
     "                           polygoniser.mesher says which mesher ran and dual_declined\n"
     "                           why not the dual one. Either mesh is the mesher's own,\n"
     "                           within E, not simplified unless --simplify\n"
-    "      --no-dual            under --max-error, the primal polygons everywhere\n"
-    "      --dual               under --max-error, the dual mesh or nothing: when the dual\n"
+    "      --no-dual            under a bound, the primal polygons everywhere\n"
+    "      --dual               under a bound, the dual mesh or nothing: when the dual\n"
     "                           mesher declines (min/max in f, a singular curve, the box\n"
     "                           cuts the surface ...), fail with its reason (exit status 1)\n"
     "                           and write no file\n"
-    "      --simplify           under --max-error, then collapse edges wherever the mesh\n"
+    "      --simplify           under a bound, then collapse edges wherever the mesh\n"
     "                           stays within E (measured at every new centroid and edge\n"
     "                           midpoint; features, topology and orientation kept): the\n"
     "                           fewest triangles for the error, at 1-7x the meshing's CPU\n"
     "      --no-simplify        the default: the mesher's triangles (kept for scripts)\n"
-    "      --straddle           under --max-error, move the primal polygons' vertices where\n"
+    "      --straddle           under a bound, move the primal polygons' vertices where\n"
     "                           the surface bends one way 0.9 E toward its convex side and\n"
     "                           size the cells for it (no min/max, no singular locus)\n"
     "      --max-triangles N    budget; stop with an error beyond it (default 4000000)\n"
@@ -207,9 +209,13 @@ static bool check_combination(const ism_cli_run *run, const char *request_file,
         fprintf(stderr, "isomesh: --dual and --no-dual: give one of them\n");
         return false;
     }
-    if (run->require_dual && !(run->options.max_error > 0)) {
-        fprintf(stderr, "isomesh: --dual needs --max-error E: the dual mesher sizes its cells "
-                "by the bound\n");
+    if ((run->require_dual || run->simplify || run->options.straddle) && run->error_given &&
+        !(run->options.max_error > 0)) {
+        fprintf(stderr, "isomesh: --%s needs a bound, not --max-error off: %s\n",
+                run->require_dual ? "dual" : run->simplify ? "simplify" : "straddle",
+                run->require_dual ? "the dual mesher sizes its cells by it"
+                : run->simplify   ? "the simplification keeps the mesh within it"
+                                  : "the vertices move by a share of it");
         return false;
     }
     if (run->surfaces_file && !run->surface) {
@@ -235,11 +241,17 @@ static bool apply_option(ism_cli_run *run, int opt, const char *arg)
                      (run->depth_given = true);
     case OPT_THREADS: return ism_cli_parse_int("--threads", arg, 0, 64, &o->threads);
     case OPT_MAX_ERROR:
+        run->error_given = true;
+        if (strcmp(arg, "off") == 0) {
+            o->max_error = 0;
+            return true;
+        }
         if (!ism_cli_parse_double("--max-error", arg, &o->max_error))
             return false;
         if (o->max_error >= 0)
             return true;
-        fprintf(stderr, "isomesh: --max-error: %s is below 0 (a distance; 0: off)\n", arg);
+        fprintf(stderr, "isomesh: --max-error: %s is below 0 (a distance; off or 0: no "
+                "bound)\n", arg);
         return false;
     case OPT_MAX_TRIS: {
         int n;

@@ -14,7 +14,9 @@
 #include "server/isomeshd/routes.h"
 
 /* Depth of a thumbnail's mesh: 32 cells a side are plenty for 160 x 120 pixels and keep the
- * first request of a gallery page cheap (the deepest preset costs well under a second). */
+ * first request of a gallery page cheap (the deepest preset costs well under a second). The
+ * request asks for the depth path ("max_error": null): a picture this small needs no error
+ * bound, and the default one would refine to depth 5 everywhere near a singular locus. */
 #define THUMB_DEPTH 5
 /* A preset's picture changes only with a new mesher version: browsers may keep it a day. */
 #define THUMB_CACHE_CONTROL "public, max-age=86400"
@@ -43,10 +45,10 @@ enum MHD_Result ismd_route_thumbnail(ismd_req *r)
     const ism_preset *p = ism_preset_find(r->preset ? r->preset : "");
     if (!p)
         return ismd_respond_error(r, 404, "not_found", "no such preset");
-    char body[160];
+    char body[192];
     int min_depth = p->min_depth < THUMB_DEPTH ? p->min_depth : THUMB_DEPTH;
-    snprintf(body, sizeof body, "{\"preset\": \"%s\", \"depth\": {\"min\": %d, \"max\": %d}}",
-             p->name, min_depth, THUMB_DEPTH);
+    snprintf(body, sizeof body, "{\"preset\": \"%s\", \"depth\": {\"min\": %d, \"max\": %d}, "
+             "\"max_error\": null}", p->name, min_depth, THUMB_DEPTH);
     ism_pipeline_result pr;
     memset(&pr, 0, sizeof pr);
     if (!ism_pipeline_key(body, strlen(body), "png", &r->srv->limits, &pr)) {

@@ -60,14 +60,17 @@ def runs(ps):
     """(key, name, box, depth, extra) of every run."""
     out = []
     by_name = {p["name"]: p for p in ps}
+    # the depth path at the preset's depth: --max-error 0 (off; "0" also reads on binaries
+    # from before the default bound, so before and after compare the same runs)
+    off = ["--max-error", "0"]
     for p in ps:
         d = f"{p['depth']['min']}:{p['depth']['max']}"
-        out.append((f"{p['name']} own d{d} t1", p["name"], p["box"], d, ["--threads", "1"]))
+        out.append((f"{p['name']} own d{d} t1", p["name"], p["box"], d, ["--threads", "1", *off]))
     for name in SHIFTED:
         p = by_name[name]
         d = f"{p['depth']['min']}:{p['depth']['max']}"
         for label, box in boxes(p["box"], p["depth"]["max"])[1:]:
-            out.append((f"{name} {label} d{d} t2", name, box, d, ["--threads", "2"]))
+            out.append((f"{name} {label} d{d} t2", name, box, d, ["--threads", "2", *off]))
     for name, e, dmax in ERROR_RUNS:
         p = by_name[name]
         d = f"{p['depth']['min']}:{dmax}"

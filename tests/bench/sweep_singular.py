@@ -157,6 +157,8 @@ def main():
                 if args.max_error_rel:  # E from this box's own largest width
                     e = args.max_error_rel * max(box[a + 3] - box[a] for a in range(3))
                     extra += ["--max-error", repr(e)]
+                elif "--max-error" not in extra:  # the depth path (0: off, any binary)
+                    extra += ["--max-error", "0"]
                 k = json.dumps([p["name"], box, d, extra, stamp])
                 jobs.append((p["name"], d, label, box, k, extra))
 

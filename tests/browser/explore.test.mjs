@@ -199,7 +199,7 @@ describe('box and inspection', { timeout: 300000 }, () => {
     // Two planes x = -0.3 z and y = 0.2 z (box off the lattice): they cross in the line
     // t (-0.3, 0.2, 1), where f = (x + 0.3 z)(y - 0.2 z) and its gradient vanish.
     const n = await loads(page);
-    await page.evaluate(() => { location.hash = `expr=${encodeURIComponent('(x + 0.3*z)*(y - 0.2*z)')}&box=-1.0037,-0.9963,-1,1,1.0029,1&depth=3,5`; });
+    await page.evaluate(() => { location.hash = `expr=${encodeURIComponent('(x + 0.3*z)*(y - 0.2*z)')}&box=-1.0037,-0.9963,-1,1,1.0029,1&depth=3,5&err=off`; });
     await waitForMesh(page, n);
     const spot = await page.evaluate(() => {
       const v = window.isomeshViewer;
@@ -324,7 +324,7 @@ describe('box and inspection', { timeout: 300000 }, () => {
     // x^2 + y^2 = z^2 cut by the plane x = 0 (the stack of one plane along x in a box
     // symmetric about the apex): the lines y = +-z through the node at the origin, one
     // singular_point vertex of degree 4 and four ends at the box.
-    const url = `${daemon.base}/#expr=${encodeURIComponent('x^2 + y^2 - z^2')}&box=-1,-1,-1,1,1,1&depth=3,6` +
+    const url = `${daemon.base}/#expr=${encodeURIComponent('x^2 + y^2 - z^2')}&box=-1,-1,-1,1,1,1&depth=3,6&err=off` +
       `&curves=${encodeURIComponent(JSON.stringify([{ kind: 'plane', axis: 'x', count: 1 }]))}`;
     const cone = await openViewer(browser.context, url);
     try {
@@ -399,7 +399,7 @@ describe('box and inspection', { timeout: 300000 }, () => {
     // double sheet. The pixel at each centre's projection shows its colour.
     const n = await loads(page);
     const expr = '((x-0.5)^2+y^2+z^2-0.16) * ((x+0.5)^2+y^2+z^2-0.16)^2';
-    await page.evaluate((e) => { location.hash = `expr=${encodeURIComponent(e)}&box=-1.1,-0.6,-0.6,1.1,0.6,0.6&depth=3,5&cam=0,-4,0,0,0,0`; }, expr);
+    await page.evaluate((e) => { location.hash = `expr=${encodeURIComponent(e)}&box=-1.1,-0.6,-0.6,1.1,0.6,0.6&depth=3,5&err=off&cam=0,-4,0,0,0,0`; }, expr);
     await waitForMesh(page, n);
     assert.equal(await page.$eval('.key-sheets', (e) => e.hidden), false, 'the key names the double sheets');
     const img = await viewShot(page, 'double-sheet-tint.png');
@@ -422,7 +422,7 @@ describe('box and inspection', { timeout: 300000 }, () => {
     // nothing over its hemisphere (light 1); inside a closed sphere every direction is shut
     // (light 0).
     const n = await loads(page);
-    await page.evaluate(() => { location.hash = 'expr=((x-0.5)%5E2%2By%5E2%2Bz%5E2-0.16)*((x%2B0.5)%5E2%2By%5E2%2Bz%5E2-0.16)&box=-1.1,-0.6,-0.6,1.1,0.6,0.6&depth=3,5&cam=0.6,-3,2,0,0,0'; });
+    await page.evaluate(() => { location.hash = 'expr=((x-0.5)%5E2%2By%5E2%2Bz%5E2-0.16)*((x%2B0.5)%5E2%2By%5E2%2Bz%5E2-0.16)&box=-1.1,-0.6,-0.6,1.1,0.6,0.6&depth=3,5&err=off&cam=0.6,-3,2,0,0,0'; });
     await waitForMesh(page, n);
     await page.evaluate(() => document.activeElement && document.activeElement.blur());
     const plain = await viewShot(page);

@@ -97,7 +97,7 @@ describe('render mode: soft shadows', { timeout: 600000 }, () => {
     const box = [-0.6137, -0.9021, -0.5871, 0.6213, 0.6049, 1.2233];
     const n = await loads(page);
     await page.evaluate(({ expr, box }) => {
-      location.hash = `expr=${encodeURIComponent(expr)}&box=${box.join(',')}&depth=3,6`;
+      location.hash = `expr=${encodeURIComponent(expr)}&box=${box.join(',')}&depth=3,6&err=off`;
     }, { expr, box });
     await waitForMesh(page, n);
     await page.uncheck('#show-box');   // its outline would cross the samples

@@ -309,6 +309,11 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
 
   it('says clearly when a request is over a limit (422)', async () => {
     await page.click('#box-section summary');
+    // depth max is the request's only on the depth path (under a bound it is the server's)
+    const off = await loads(page);
+    await page.fill('#max-error', 'off');
+    await page.locator('#max-error').press('Tab');
+    await waitForMesh(page, off);
     await page.fill('#depth-max', '12');
     await page.locator('#depth-max').press('Tab');
     await page.waitForSelector('#message.error:not([hidden])');
@@ -466,14 +471,32 @@ describe('isomesh viewer', { timeout: 1200000 }, () => {
     await page.uncheck('#simplify');
     await waitForMesh(page, unsimp);
     assert.doesNotMatch(await settledHref(page), /simplify=/);
-    const back = await loads(page);
+    // empty: the server's default bound, 1e-3 x the box diagonal (the placeholder says how
+    // much for this box: the sphere's +-1.5, 3 sqrt 3 across); the request leaves it out
+    const auto = await loads(page);
     await page.fill('#max-error', '');
+    await page.locator('#max-error').press('Tab');
+    await waitForMesh(page, auto);
+    assert.equal(await page.getAttribute('#max-error', 'placeholder'), 'auto: 0.0052 (1e-3 × diagonal)');
+    assert.equal(await page.isDisabled('#depth-max'), true, 'still under a bound');
+    assert.equal(await page.isDisabled('#mesher'), false);
+    const sa = await getJSON(`/v1/meshes/${await meshKey()}/stats`);
+    assert.ok(Math.abs(sa.analysis.accuracy.max_error - 3e-3 * Math.sqrt(3)) < 1e-15, `${sa.analysis.accuracy.max_error}`);
+    assert.equal(sa.analysis.accuracy.met, true);
+    const pa = await statsPanel(page);
+    assert.equal(Number(pa.max_error.value), sa.analysis.accuracy.max_error);
+    assert.equal(pa.max_error.text, '0.0052 (met)');
+    assert.doesNotMatch(await settledHref(page), /err=/);
+    // off: no bound, the depth decides ("max_error": null)
+    const back = await loads(page);
+    await page.fill('#max-error', 'off');
     await page.locator('#max-error').press('Tab');
     await waitForMesh(page, back);
     assert.equal(await page.isDisabled('#depth-max'), false);
     assert.equal(await page.isDisabled('#mesher'), true, 'the meshers differ only under a bound');
     assert.equal(await page.isDisabled('#simplify'), true, 'only a bound keeps it honest');
     assert.equal((await statsPanel(page)).max_error.text, 'off');
+    assert.match(await settledHref(page), /err=off/);
     const sn = await statsPanel(page);
     assert.equal(sn.mesher.text, 'primal');
     assert.equal(sn.dual_declined.text, 'no max error');

@@ -4,6 +4,7 @@ one-line errors with exit status 2 for bad input and the column of an expression
 partial file ever, surfaces from a file and from the built-in list, identical output for one
 and two threads, request files through the service pipeline."""
 import json
+import math
 import os
 import struct
 import subprocess
@@ -182,8 +183,15 @@ class TestIsomesh(unittest.TestCase):
             (["-e", "x", "--features", "--stats", "-o", "a.ply"], "missing value for --features"),
             # a surfaces file without the name of the surface to take from it
             (["-e", "x", "--surfaces", "examples/surfaces.json", "-o", "a.ply"], "--surface NAME"),
-            # --dual: only under a bound, and not beside --no-dual
-            (["-e", "x", "--dual", "-o", "a.ply"], "--dual needs --max-error"),
+            # --dual, --simplify, --straddle: only under a bound, and not beside --no-dual
+            (["-e", "x", "--max-error", "off", "--dual", "-o", "a.ply"],
+             "--dual needs a bound, not --max-error off"),
+            (["-e", "x", "--simplify", "--max-error", "off", "-o", "a.ply"],
+             "--simplify needs a bound, not --max-error off"),
+            (["-e", "x", "--max-error", "0", "--straddle", "-o", "a.ply"],
+             "--straddle needs a bound, not --max-error off"),
+            (["-e", "x", "--max-error", "-1e-3", "-o", "a.ply"], "below 0"),
+            (["-e", "x", "--max-error", "of", "-o", "a.ply"], "--max-error"),
             (["-e", "x", "--max-error", "0.1", "--dual", "--no-dual", "-o", "a.ply"],
              "--dual and --no-dual"),
         ]
@@ -196,11 +204,15 @@ class TestIsomesh(unittest.TestCase):
 
     def test_budget_failure_leaves_no_file(self):
         path = self.out("big.ply")
-        p = run("--surface", "gyroid-ball", "-d", "3:8", "--max-triangles", "1000", "-o", path)
-        self.assertEqual(p.returncode, 1)
-        self.assertIn("budget", p.stderr)
-        self.assertIn("MiB): --max-triangles raises it, a smaller -d MAX makes fewer", p.stderr)
-        self.assertEqual(os.listdir(self.dir), [])
+        # the depth path's knob, then the bound's (the default one: 1e-3 x the diagonal)
+        for flags, knob in ((("--max-error", "off"), "a smaller -d MAX makes fewer"),
+                            ((), "a larger --max-error makes fewer")):
+            p = run("--surface", "gyroid-ball", "-d", "3:8", *flags, "--max-triangles", "1000",
+                    "-o", path)
+            self.assertEqual(p.returncode, 1)
+            self.assertIn("budget", p.stderr)
+            self.assertIn(f"MiB): --max-triangles raises it, {knob}", p.stderr)
+            self.assertEqual(os.listdir(self.dir), [])
 
     def test_surfaces_file(self):
         path = self.out("ring.ply")
@@ -353,8 +365,8 @@ class TestIsomesh(unittest.TestCase):
             poly = json.loads(q.stdout)["polygoniser"]
             self.assertEqual((poly["mesher"], poly["dual_declined"]), ("primal", why), args)
 
-    def sphere_between_vertices(self, path):
-        """The largest exact distance |p| - 1 at triangle centroids and edge midpoints."""
+    def sphere_between_vertices(self, path, r=1.0):
+        """The largest exact distance |p| - r at triangle centroids and edge midpoints."""
         verts, faces = read_ply(path)
         worst = 0.0
         for f in faces:
@@ -362,7 +374,7 @@ class TestIsomesh(unittest.TestCase):
             pts = [[sum(c) / 3 for c in zip(*v)]]
             pts += [[(a + b) / 2 for a, b in zip(v[k], v[(k + 1) % 3])] for k in range(3)]
             for x, y, z in pts:
-                worst = max(worst, abs((x * x + y * y + z * z) ** 0.5 - 1))
+                worst = max(worst, abs((x * x + y * y + z * z) ** 0.5 - r))
         return worst
 
     def check_met(self, sphere, path):
@@ -425,13 +437,39 @@ class TestIsomesh(unittest.TestCase):
         # depth 4 is too coarse for the dual mesh as well: the primal polygons, and why
         self.assertEqual(s["polygoniser"]["mesher"], "primal")
         self.assertEqual(s["polygoniser"]["dual_declined"], "error_at_max_depth")
-        # no bound: met and max_error are null, the primal polygons
-        p = run(*sphere, "-d", "3:5", "--stats")
-        s = json.loads(p.stdout)
-        acc = s["analysis"]["accuracy"]
-        self.assertIsNone(acc["max_error"])
-        self.assertIsNone(acc["met"])
-        self.assertEqual(s["polygoniser"]["dual_declined"], "no_bound")
+        # no bound (off, or 0 as before): met and max_error are null, the primal polygons
+        for off in ("off", "0"):
+            p = run(*sphere, "-d", "3:5", "--max-error", off, "--stats")
+            s = json.loads(p.stdout)
+            acc = s["analysis"]["accuracy"]
+            self.assertIsNone(acc["max_error"])
+            self.assertIsNone(acc["met"])
+            self.assertEqual(s["polygoniser"]["dual_declined"], "no_bound")
+            self.assertEqual(s["warnings"], [])
+
+    def test_default_bound_is_a_thousandth_of_the_box_diagonal(self):
+        """Without --max-error the bound is 1e-3 x the box diagonal, as a request's: the stats
+        say it and whether it was met, the mesh is the same as with that E written out, and
+        the triangles' centroids and edge midpoints lie within it (closed form)."""
+        for box in ([-1.5] * 3 + [1.5] * 3, [-1.0, -2.0, -0.9, 1.3, 1.1, 0.95]):
+            d = math.dist(box[:3], box[3:])
+            b = ",".join(map(repr, box))
+            with self.subTest(box=box):
+                path, again = self.out("d.ply"), self.out("e.ply")
+                p = run("-e", "x^2 + y^2 + z^2 - 0.64", "-b", b, "-o", path, "--stats")
+                self.assertEqual(p.returncode, 0, p.stderr)
+                s = json.loads(p.stdout)
+                acc = s["analysis"]["accuracy"]
+                self.assertAlmostEqual(acc["max_error"], 1e-3 * d, delta=1e-15)
+                self.assertIs(acc["met"], True)
+                self.assertEqual(s["polygoniser"]["mesher"], "dual")
+                worst = self.sphere_between_vertices(path, 0.8)
+                self.assertLessEqual(worst, 1e-3 * d + 1e-6)  # float32 positions
+                p = run("-e", "x^2 + y^2 + z^2 - 0.64", "-b", b, "--max-error", repr(1e-3 * d),
+                        "-o", again)
+                self.assertEqual(p.returncode, 0, p.stderr)
+                with open(path, "rb") as f, open(again, "rb") as g:
+                    self.assertEqual(f.read(), g.read(), "explicit E equal to the default")
 
     def test_help(self):
         p = run("--help")

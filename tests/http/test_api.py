@@ -4,6 +4,7 @@ and features), every client-error status, jobs with polling, server-sent events 
 cancellation, presets and documents, health, CORS, /metrics, and single flight (eight
 identical concurrent requests compute once)."""
 import json
+import math
 import os
 import struct
 import sys
@@ -123,7 +124,7 @@ class ApiTest(unittest.TestCase):
         """"preview": true (live exploration) gives the polygoniser's mesh alone: a decodable
         mesh on the sphere, stats saying which stages were skipped, a key of its own, cached."""
         r = 0.83
-        full_req = dict(sphere(r), depth={"min": 3, "max": 4})
+        full_req = dict(sphere(r), depth={"min": 3, "max": 4}, max_error=None)  # as a preview
         prev_req = dict(full_req, preview=True)
         first = self.d.post("/v1/mesh", prev_req)
         self.assertEqual(first.status, 200, first.body[:300])
@@ -309,6 +310,38 @@ class ApiTest(unittest.TestCase):
         err = self.error_of(self.d.post("/v1/mesh", {"preset": "torus", "max_error": "x"}), 400)
         self.assertEqual(err.get("path"), "$.max_error")
 
+    def test_default_bound_is_a_thousandth_of_the_diagonal_and_null_is_the_depth_path(self):
+        """Without max_error the bound is 1e-3 x the box diagonal: the stats say so and whether
+        it was met; the same E written out is the same request (one cache entry, a hit);
+        "max_error": null asks for the depth path (no bound in the stats, another key)."""
+        base = sphere(0.83)  # box +-1.5: the diagonal is 3 sqrt 3
+        e = 1e-3 * math.sqrt(27)
+        r = self.d.post("/v1/mesh", base)
+        self.assertEqual(r.status, 200, r.body[:300])
+        s = self.d.get("/v1/meshes/%s/stats" % r.header("ETag").strip('"')).json()
+        acc = s["analysis"]["accuracy"]
+        self.assertEqual(acc["max_error"], e)
+        self.assertIs(acc["met"], True)
+        self.assertLessEqual(max(acc["max_dist_midpoint"], acc["max_dist_centroid"]), e)
+        self.assertEqual((s["polygoniser"]["mesher"], s["warnings"]), ("dual", []))
+        same = self.d.post("/v1/mesh", dict(base, max_error=e))
+        self.assertEqual(same.status, 200, same.body[:300])
+        self.assertEqual(same.header("ETag"), r.header("ETag"))
+        self.assertEqual(same.header("X-Cache"), "hit")
+        off = self.d.post("/v1/mesh", dict(base, max_error=None, depth={"max": 6}))
+        self.assertEqual(off.status, 200, off.body[:300])
+        self.assertNotEqual(off.header("ETag"), r.header("ETag"))
+        so = self.d.get("/v1/meshes/%s/stats" % off.header("ETag").strip('"')).json()
+        self.assertIsNone(so["analysis"]["accuracy"]["max_error"])
+        self.assertIsNone(so["analysis"]["accuracy"]["met"])
+        self.assertEqual((so["polygoniser"]["mesher"], so["polygoniser"]["dual_declined"]),
+                         ("primal", "no_bound"))
+        # the bound's options need a bound: refused with null, naming their path
+        for flag in ("dual", "simplify", "straddle"):
+            err = self.error_of(self.d.post("/v1/mesh", dict(base, max_error=None, **{flag: True})),
+                                400)
+            self.assertEqual(err.get("path"), "$." + flag)
+
     def test_dual_mesh_by_default_under_a_bound(self):
         def stats(r):
             self.assertEqual(r.status, 200)
@@ -352,12 +385,16 @@ class ApiTest(unittest.TestCase):
         self.assertEqual(klein["polygoniser"]["mesher"], "primal")
         self.assertEqual(klein["polygoniser"]["dual_declined"], "singular_locus")
         self.assertNotIn("simplify", klein)  # a primal mesh too only when asked
-        # without a bound: the primal polygons; "dual": true alone is refused
-        plain = stats(self.d.post("/v1/mesh", {"preset": "sphere", "depth": {"max": 4}}))
+        # without a bound (null): the primal polygons; "dual": true with null is refused,
+        # with the default bound accepted
+        plain = stats(self.d.post("/v1/mesh", {"preset": "sphere", "depth": {"max": 4},
+                                               "max_error": None}))
         self.assertEqual(plain["polygoniser"]["mesher"], "primal")
         self.assertEqual(plain["polygoniser"]["dual_declined"], "no_bound")
-        err = self.error_of(self.d.post("/v1/mesh", {"preset": "torus", "dual": True}), 400)
+        err = self.error_of(self.d.post("/v1/mesh", {"preset": "torus", "dual": True,
+                                                     "max_error": None}), 400)
         self.assertEqual(err.get("path"), "$.dual")
+        self.assertEqual(self.d.post("/v1/mesh", {"preset": "torus", "dual": True}).status, 200)
 
     def test_quality_good_through_the_daemon(self):
         r = self.d.post("/v1/mesh", {"preset": "sphere", "quality": "good",
@@ -456,7 +493,7 @@ class ApiTest(unittest.TestCase):
         self.assertNotEqual(again["id"], job["id"])
 
     def test_job_events_stream_progress_then_done(self):
-        r = self.d.post("/v1/jobs", {"preset": "torus", "depth": {"max": 8}})
+        r = self.d.post("/v1/jobs", {"preset": "torus", "depth": {"max": 8}, "max_error": None})
         self.assertEqual(r.status, 202)
         job = r.json()
         conn, resp = open_get(self.d.port, job["events_url"])
@@ -570,7 +607,8 @@ class ApiTest(unittest.TestCase):
         self.assertGreater(m["isomesh_polygonise_seconds_count"], 0)
 
     def test_eight_identical_concurrent_requests_compute_once(self):
-        req = {"preset": "torus", "depth": {"max": 8}, "params": {"R": 1, "r": 0.31}}
+        req = {"preset": "torus", "depth": {"max": 8}, "params": {"R": 1, "r": 0.31},
+               "max_error": None}  # the depth path: long enough for the eight to meet
         before = self.d.metric("isomesh_computations_started_total")
         results = [None] * 8
         start = threading.Barrier(8)

@@ -28,7 +28,8 @@ FLOOD = 50
 def flood_request(i):
     """A distinct request per i, each a small fraction of a second of work (depth 5: the order
     of service is what these tests read, not the mesh; depth 7 made the suite 3x costlier)."""
-    return {"preset": "gyroid-ball", "params": {"k": 4 + i / 1000}, "depth": {"max": 5}}
+    return {"preset": "gyroid-ball", "params": {"k": 4 + i / 1000}, "depth": {"max": 5},
+            "max_error": None}
 
 
 def add_token(path, name, *opts):
@@ -213,7 +214,8 @@ class FairnessTest(unittest.TestCase):
             wait_until("the blocker running", lambda: a.job(blocker)["state"] == "running")
             mine = a.submit(flood_request(7))
             # bob asks for the same mesh, written differently (key order, a default spelled out)
-            same = {"depth": {"max": 5, "min": 3}, "params": {"k": 4.007}, "preset": "gyroid-ball"}
+            same = {"depth": {"max": 5, "min": 3}, "params": {"k": 4.007}, "preset": "gyroid-ball",
+                    "max_error": None}
             theirs = b.submit(same)
             self.assertEqual(theirs["key"], mine["key"])
             self.assertEqual(d.metric("isomesh_singleflight_joins_total"), 1)

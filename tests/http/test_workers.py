@@ -75,7 +75,8 @@ class WorkerTest(unittest.TestCase):
             running = d.post("/v1/jobs", SLOW)
             self.assertEqual(running.status, 202)
             self.assertTrue(d.wait_metric("isomesh_workers_busy", 1))
-            queued = d.post("/v1/jobs", {"preset": "gyroid-ball", "depth": {"max": 7}})
+            queued = d.post("/v1/jobs", {"preset": "gyroid-ball", "depth": {"max": 7},
+                                         "max_error": None})
             self.assertEqual(queued.status, 202)
             self.assertEqual(queued.json()["state"], "queued")
             full = d.post("/v1/mesh", sphere(0.71))
@@ -83,7 +84,8 @@ class WorkerTest(unittest.TestCase):
             self.assertTrue(int(full.header("Retry-After")) > 0)
             self.assert_error(d.post("/v1/jobs", sphere(0.72)), 503, "queue_full")
             # an identical request joins the queued computation instead of being refused
-            joined = d.post("/v1/jobs", {"preset": "gyroid-ball", "depth": {"max": 7}})
+            joined = d.post("/v1/jobs", {"preset": "gyroid-ball", "depth": {"max": 7},
+                                         "max_error": None})
             self.assertEqual(joined.status, 202)
             self.assertEqual(d.metric("isomesh_queue_depth"), 1)
             # a cached mesh is still served while the queue is full
@@ -179,7 +181,8 @@ class WorkerTest(unittest.TestCase):
         # the worker dies), and the daemon keeps serving.
         with Daemon("--workers", "1", "--job-memory", "128M", "--job-timeout", "60s") as d:
             self.skip_without_rlimit(d)
-            r = d.post("/v1/mesh", {"preset": "gyroid-ball", "depth": {"max": 10}})
+            r = d.post("/v1/mesh", {"preset": "gyroid-ball", "depth": {"max": 10},
+                                    "max_error": None})
             self.assertIn(r.status, (422, 500), r.body[:300])
             self.assertIn(r.json()["error"]["code"], ("no_memory", "too_big", "worker_crashed"))
             d.wait_ready()

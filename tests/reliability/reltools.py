@@ -29,7 +29,7 @@ def busy_work(k):
     """A request holding a worker for minutes; distinct k, distinct computations."""
     return {"expr": "max(sin(4*x)*cos(4*y) + sin(4*y)*cos(4*z) + sin(4*z)*cos(4*x), "
                     "x^2 + y^2 + z^2 - 1.96) + 1e-9*(%s) + %g*1e-12" % (_SINES, k),
-            "box": [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5], "depth": {"max": 10}}
+            "box": [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5], "depth": {"max": 10}, "max_error": None}
 
 
 def sanitizer_build(path):

@@ -63,7 +63,7 @@ def shard_files(cache):
 
 def heavy(i):
     """Distinct requests with meshes of a few hundred KB to a few MB: slow enough writes."""
-    return {"preset": "gyroid-ball", "depth": {"max": 6 if QUICK else 7},
+    return {"preset": "gyroid-ball", "depth": {"max": 6 if QUICK else 7}, "max_error": None,
             "tolerances": {"gradient": round(0.9 + i / 1e4, 6)}}
 
 

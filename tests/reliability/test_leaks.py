@@ -72,7 +72,8 @@ def run_mix(t, d):
     d.wait_ready()
     # a client that leaves while its computation runs, and one that leaves mid-upload
     with socket.create_connection(("127.0.0.1", port), timeout=10) as s:
-        body = json.dumps({"preset": "gyroid-ball", "depth": {"max": 8}}).encode()
+        body = json.dumps({"preset": "gyroid-ball", "depth": {"max": 8},
+                           "max_error": None}).encode()
         s.sendall(b"POST /v1/mesh HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
                   b"Content-Length: %d\r\n\r\n%s" % (len(body), body))
         t.assertTrue(d.wait_metric("isomesh_suspended_connections", 1))

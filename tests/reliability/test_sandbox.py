@@ -103,7 +103,8 @@ class DaemonWorkersTest(unittest.TestCase):
                         check_mesh(fmt, body)
             # a large computation: threads grow and trim their own heaps (glibc then probes
             # /proc/sys/vm/overcommit_memory, which the sandbox must refuse without killing)
-            big = {"preset": "gyroid-ball", "depth": {"max": 8 if QUICK else 10}}
+            big = {"preset": "gyroid-ball", "depth": {"max": 8 if QUICK else 10},
+                   "max_error": None}
             status, _, body = request(d.port, "POST", "/v1/mesh", big, timeout=660)
             self.assertEqual(status, 200, body[:300])
             check_mesh("drc", body)

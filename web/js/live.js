@@ -71,9 +71,9 @@ export function previewBody(body) {
   const b = JSON.parse(body);
   const d = b.depth || { min: 3, max: 7 };
   const previewDepth = depthFor(b);
-  if (d.max <= previewDepth && b.max_error === undefined && b.quality === undefined) return null;
+  if (d.max <= previewDepth && b.max_error === null && b.quality === undefined) return null;
   b.depth = { min: Math.min(d.min, PREVIEW_MIN_DEPTH), max: previewDepth };
-  delete b.max_error;   // a preview is coarse by depth, whatever the error bound asks
+  b.max_error = null;   // a preview is coarse by depth, whatever the error bound asks
   delete b.dual;        // ... so the bound's meshers do not apply (refused without it)
   delete b.straddle;
   delete b.quality;     // ... and shows the raw triangles: the pass is for the final mesh

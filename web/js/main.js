@@ -9,7 +9,7 @@ import { ARR_VERTEX_COLORS, CUT_KIND_COLORS, MAX_CURVE_REQUESTS, curveRequest, d
 import * as api from './api.js';
 import * as loader from './loader.js';
 import { checkExpression, presetSource } from './expr.js';
-import { defaultState, requestBody, encodeState, decodeState, sensibleRange, COLOR_MODES, COLOR_ATTRIBUTES } from './state.js';
+import { defaultState, requestBody, encodeState, decodeState, sensibleRange, bounded, defaultMaxError, COLOR_MODES, COLOR_ATTRIBUTES } from './state.js';
 import { renderParams } from './params_ui.js';
 import { showStats, clearStats, showLegend } from './stats_ui.js';
 import { niceStep, sig } from './format.js';
@@ -245,19 +245,30 @@ function showPresetChoice() {
 
 const BOX_IDS = ['box-xmin', 'box-ymin', 'box-zmin', 'box-xmax', 'box-ymax', 'box-zmax'];
 
+// The controls that follow the bound: depth max is only the server's safety limit under
+// one; the meshers and the simplification need one; the field's placeholder is the default
+// bound for the box (1e-3 x its diagonal).
+function showBound() {
+  const on = bounded(state);
+  $('depth-max').disabled = on;
+  $('mesher').disabled = !on;  // the meshers differ only under a bound
+  $('simplify').disabled = !on;  // the bound keeps it honest
+  const auto = defaultMaxError(state.box);
+  $('max-error').placeholder = Number.isFinite(auto) && auto > 0
+    ? `auto: ${sig(auto)} (1e-3 × diagonal)` : 'auto (1e-3 × diagonal)';
+}
+
 function syncControls() {
   showPresetChoice();
   if ($('expr').value !== state.expr) $('expr').value = state.expr;
   BOX_IDS.forEach((id, i) => { $(id).value = String(state.box[i]); $(id).removeAttribute('aria-invalid'); });
   $('depth-min').value = String(state.depth.min);
   $('depth-max').value = String(state.depth.max);
-  $('max-error').value = state.maxError > 0 ? String(state.maxError) : '';
-  $('depth-max').disabled = state.maxError > 0;
+  $('max-error').value = state.maxError > 0 ? String(state.maxError) : state.maxError === 'off' ? 'off' : '';
+  showBound();
   $('quality-good').checked = state.quality === 'good';
   $('mesher').value = state.mesher;
-  $('mesher').disabled = !(state.maxError > 0);  // the meshers differ only under a bound
   $('simplify').checked = state.simplify;
-  $('simplify').disabled = !(state.maxError > 0);  // the bound keeps it honest
   $('color-mode').value = state.color;
   $('show-edges').checked = state.show.edges;
   $('show-points').checked = state.show.points;
@@ -1080,6 +1091,7 @@ function wire() {
       state.box = box;
       state.keepBox = true;       // a box typed by hand is kept
       $('keep-box').checked = true;
+      showBound();                // the default bound follows the box
       syncClipSlider();
       requestChanged();
     });
@@ -1093,17 +1105,16 @@ function wire() {
     });
   }
   $('max-error').addEventListener('change', () => {
-    const text = $('max-error').value.trim(), e = Number(text);
-    if (text !== '' && !(e > 0)) {
+    const text = $('max-error').value.trim(), off = text.toLowerCase() === 'off', e = Number(text);
+    if (text !== '' && !off && !(e > 0 && Number.isFinite(e))) {
       $('max-error').setAttribute('aria-invalid', 'true');
-      message('Max error must be a positive distance (or empty).', 'error');
+      message('Max error must be a positive distance, off (the depth decides) or empty (the default).', 'error');
       return;
     }
     $('max-error').removeAttribute('aria-invalid');
-    state.maxError = text === '' ? null : e;
-    $('depth-max').disabled = state.maxError > 0;
-    $('mesher').disabled = !(state.maxError > 0);
-    $('simplify').disabled = !(state.maxError > 0);
+    state.maxError = text === '' ? null : off ? 'off' : e;
+    if (off) $('max-error').value = 'off';
+    showBound();
     requestChanged();
   });
   $('mesher').addEventListener('change', () => {

@@ -3,7 +3,8 @@
 // parameters, box, depth, view, colour mode, clipping and toggles.
 //
 // Fragment keys (URLSearchParams): preset=NAME | expr=TEXT, p.NAME=VALUE per parameter,
-// box=xmin,ymin,zmin,xmax,ymax,zmax, depth=MIN,MAX, err=MAX_ERROR, mesher=primal|straddle,
+// box=xmin,ymin,zmin,xmax,ymax,zmax, depth=MIN,MAX, err=MAX_ERROR|off (absent: the server's
+// default bound), mesher=primal|straddle,
 // simplify=1, quality=good, cam=px,py,pz,tx,ty,tz,
 // color=shaded|mean|gauss|cells, clip=AXIS,OFFSET[,flip], hide=edges,points,boundary,box,curves,
 // wire=1, axes=1, ao=1 (the render mode with ambient occlusion), shadows=1 (the render mode's
@@ -25,6 +26,19 @@ const FEATURES = ['edges', 'points', 'boundary', 'box', 'curves'];
 // "straddle"); the first is the default.
 export const MESHERS = ['dual', 'primal', 'straddle'];
 const DEFAULT_BOX = [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5];
+// The server's error bound when a request gives none: this times the box diagonal
+// (proto/request.h ISM_REQ_DEFAULT_ERROR_REL; the Max error field's placeholder shows it).
+export const DEFAULT_ERROR_REL = 1e-3;
+
+// The server's default bound for a box.
+export function defaultMaxError(box) {
+  return DEFAULT_ERROR_REL * Math.hypot(box[3] - box[0], box[4] - box[1], box[5] - box[2]);
+}
+
+// Is the mesh made under a bound (the default one or a given one)?
+export function bounded(state) {
+  return state.maxError !== 'off';
+}
 
 export function defaultState() {
   return {
@@ -33,7 +47,9 @@ export function defaultState() {
     params: {},             // name -> value
     box: DEFAULT_BOX.slice(),
     depth: { min: 3, max: 7 },
-    maxError: null,         // the error bound (model units), null: the depth decides
+    maxError: null,         // the error bound (model units); null: the server's default
+                            // (DEFAULT_ERROR_REL x the box diagonal); 'off': no bound, the
+                            // depth decides ("max_error": null)
     quality: 'raw',         // 'good': the server's quality pass after meshing
     mesher: 'dual',         // under maxError: 'dual' (the server's default: the dual mesh
                             // where it applies), 'primal' ("dual": false) or 'straddle'
@@ -62,14 +78,15 @@ export function requestBody(state, paramNames) {
   for (const n of paramNames) if (Number.isFinite(state.params[n])) params[n] = state.params[n];
   if (Object.keys(params).length) body.params = params;
   body.box = state.box.slice();
-  if (state.maxError > 0) {
+  if (bounded(state)) {
     body.depth = { min: state.depth.min };  // depth.max: the server's limit, a safety net
-    body.max_error = state.maxError;
+    if (state.maxError > 0) body.max_error = state.maxError;  // else the server's default
     if (state.mesher !== 'dual') body.dual = false;  // the dual mesh is the server's default
     if (state.mesher === 'straddle') body.straddle = true;
     if (state.simplify) body.simplify = true;  // off: the server's default
   } else {
     body.depth = { min: state.depth.min, max: state.depth.max };
+    body.max_error = null;  // the depth path: no bound (left out, the server's default)
   }
   if (state.quality === 'good') body.quality = 'good';
   const curves = (state.curves || []).map((e) => curveRequest(e, state.box)).filter(Boolean);
@@ -95,6 +112,7 @@ export function encodeState(state, paramNames) {
   q.set('box', state.box.map(num).join(','));
   q.set('depth', `${state.depth.min},${state.depth.max}`);
   if (state.maxError > 0) q.set('err', num(state.maxError));
+  else if (state.maxError === 'off') q.set('err', 'off');
   if (state.quality === 'good') q.set('quality', 'good');
   if (state.mesher !== 'dual') q.set('mesher', state.mesher);
   if (state.simplify) q.set('simplify', '1');
@@ -144,7 +162,8 @@ export function decodeState(fragment) {
   }
   if (q.has('err')) {
     const e = Number(q.get('err'));
-    if (e > 0 && Number.isFinite(e)) s.maxError = e; else s.problems.push('err');
+    if (q.get('err') === 'off') s.maxError = 'off';
+    else if (e > 0 && Number.isFinite(e)) s.maxError = e; else s.problems.push('err');
   }
   if (q.has('quality')) {
     if (['raw', 'good'].includes(q.get('quality'))) s.quality = q.get('quality'); else s.problems.push('quality');

@@ -25,12 +25,11 @@ export async function openViewer(context, url) {
   return { page, requests, errors };
 }
 
-// POST /v1/jobs the page made; refinedOnly: leave out live previews (depth.max at most
-// PREVIEW_MAX, web/js/live.js).
-const PREVIEW_MAX = 4;
+// POST /v1/jobs the page made; refinedOnly: leave out live previews ("preview": true,
+// web/js/live.js).
 export function jobPosts(requests, { refinedOnly = false } = {}) {
   return requests.filter((r) => r.method === 'POST' && new URL(r.url).pathname === '/v1/jobs' &&
-    (!refinedOnly || !r.body || JSON.parse(r.body).max_error !== undefined || JSON.parse(r.body).depth.max > PREVIEW_MAX)).length;
+    (!refinedOnly || !r.body || !JSON.parse(r.body).preview)).length;
 }
 
 // The panel's cells: {name: {text, value}}.

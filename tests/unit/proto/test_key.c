@@ -37,9 +37,13 @@ static const char *const same[][7] = {
      "\"params\": {\"unused\": 5}}",
      "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"box\": [-2,-2,-2,2,2,2], \"quality\": \"raw\"}",
      NULL},
-    /* defaults written out or left out, format does not matter */
+    /* defaults written out or left out, format does not matter: the bound is 1e-3 of the
+     * box diagonal (2 sqrt 3), the safety depth the operator's limit (10) */
     {"{\"expr\": \"x^2 + y^2 - 0.25\"}",
-     "{\"expr\": \"x^2 + y^2 - 0.25\", \"depth\": {\"min\": 3, \"max\": 7}, "
+     "{\"expr\": \"x^2 + y^2 - 0.25\", \"max_error\": 0.0034641016151377543}",
+     "{\"expr\": \"x^2 + y^2 - 0.25\", \"max_error\": 0.0034641016151377543, \"dual\": true, "
+     "\"simplify\": false}",
+     "{\"expr\": \"x^2 + y^2 - 0.25\", \"depth\": {\"min\": 3, \"max\": 10}, "
      "\"tolerances\": {\"gradient\": 0.9, \"double_root_eps\": 1e-9, \"double_root_iters\": 25, "
      "\"stitch\": 0.001}, \"output\": {\"format\": \"glb\", \"position_bits\": 14, "
      "\"normal_bits\": 10, \"curvature_bits\": 14, \"attributes\": [\"class\", \"normal\", "
@@ -47,10 +51,17 @@ static const char *const same[][7] = {
      "{\"expr\": \"x^2 + y^2 - 0.25\", \"box\": [-1, -1, -1, 1, 1, 1], \"output\": {\"format\": \"stl\"}}",
      "{\"expr\": \"x^2 + y^2 - 0.25\", \"box\": [-1, -1, -1.0, 1, 1, 1], \"depth\": {\"min\": 3}}",
      NULL},
-    /* a preset and its written-out expression */
+    /* a preset and its written-out expression (default bound 1e-3 * 3 sqrt 3) */
     {"{\"preset\": \"torus\"}",
-     "{\"preset\": \"torus\", \"params\": {\"R\": 1, \"r\": 0.3}, \"depth\": {\"max\": 7}}",
+     "{\"preset\": \"torus\", \"params\": {\"R\": 1, \"r\": 0.3}, \"depth\": {\"max\": 10}}",
      "{\"expr\": \"" TORUS "\", \"params\": {\"r\": 0.3, \"R\": 1}, \"box\": [-1.5,-1.5,-1.5,1.5,1.5,1.5]}",
+     "{\"preset\": \"torus\", \"max_error\": 0.005196152422706632}",
+     NULL},
+    /* the depth path: null, the preset's depth */
+    {"{\"preset\": \"torus\", \"max_error\": null}",
+     "{\"preset\": \"torus\", \"max_error\": null, \"depth\": {\"min\": 3, \"max\": 7}}",
+     "{\"expr\": \"" TORUS "\", \"params\": {\"r\": 0.3, \"R\": 1}, \"box\": [-1.5,-1.5,-1.5,1.5,1.5,1.5], "
+     "\"max_error\": null, \"depth\": {\"max\": 7}}",
      NULL},
     /* under a bound: the dual mesh is the default, no simplification unless asked (for
      * the primal polygons too: one policy) */
@@ -82,7 +93,7 @@ static const char *const same[][7] = {
      "{\"expr\": \"(x^2 + y^2 + z^2 - mu2)^2 - lambda*p*q*r*s\", \"let\": [[\"lambda\", "
      "\"(3*mu2 - 1)/(3 - mu2)\"], [\"p\", \"w - z - sqrt(2)*x\"], [\"q\", \"w - z + sqrt(2)*x\"], "
      "[\"r\", \"w + z + sqrt(2)*y\"], [\"s\", \"w + z - sqrt(2)*y\"]], \"params\": {\"mu2\": "
-     "0.6667, \"w\": 1}, \"box\": [-3,-3,-3,3,3,3], \"depth\": {\"min\": 3, \"max\": 8}}",
+     "0.6667, \"w\": 1}, \"box\": [-3,-3,-3,3,3,3], \"depth\": {\"min\": 3, \"max\": 10}}",
      NULL},
 };
 
@@ -94,6 +105,9 @@ static const char *const different[] = {
     "{\"expr\": \"x^2 + y^2 - z^2 - 1\"}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"box\": [-1, -1, -1, 1, 1, 1.5]}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"depth\": {\"max\": 6}}",
+    "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": null}",
+    "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": null, \"depth\": {\"max\": 10}}",
+    "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.0034641016151377}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.01, \"depth\": {\"max\": 7}}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"depth\": {\"max\": 7}}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": 0.02, \"depth\": {\"max\": 7}, "
@@ -187,11 +201,11 @@ Test(key, key_is_blake2b_of_material_naming_the_mesher_version)
 /* Under a bound the simplification's choice is written out even when left at its default
  * (false since the one policy of ism_simplify_after): material made under the old default
  * ("after the primal polygons") said nothing, so a key that leaves it out could mean either.
- * Without a bound it is not written (keys of plain requests stay as they were). */
+ * Without a bound ("max_error": null) it is not written. */
 Test(key, material_and_canonical_say_the_simplify_default_under_a_bound)
 {
     const char *bound = "{\"preset\": \"klein-bottle\", \"max_error\": 0.01}";
-    const char *plain = "{\"preset\": \"klein-bottle\"}";
+    const char *plain = "{\"preset\": \"klein-bottle\", \"max_error\": null}";
     const char *jsons[2] = {bound, plain};
     for (int i = 0; i < 2; i++) {
         ism_request req;

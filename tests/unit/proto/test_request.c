@@ -125,21 +125,24 @@ static const bad_case bad_cases[] = {
      "$.max_error: 3.5 is above the limit 3.46 (the box diagonal)"},
     {"{\"expr\": \"x\", \"max_error\": \"1e-3\"}", 400, "bad_request", "$.max_error",
      "$.max_error: expected a number, got a string"},
-    {"{\"expr\": \"x\", \"max_error\": null}", 400, "bad_request", "$.max_error",
-     "$.max_error: expected a number, got null"},
-    /* simplify: a boolean, true only under max_error */
-    {"{\"expr\": \"x\", \"simplify\": true}", 400, "bad_request", "$.simplify",
-     "$.simplify: the simplification keeps the mesh within \"max_error\": give max_error too"},
+    {"{\"expr\": \"x\", \"max_error\": [0.01]}", 400, "bad_request", "$.max_error",
+     "$.max_error: expected a number, got an array"},
+    /* simplify: a boolean, true only under a bound (the default one too) */
+    {"{\"expr\": \"x\", \"max_error\": null, \"simplify\": true}", 400, "bad_request",
+     "$.simplify", "$.simplify: the simplification keeps the mesh within \"max_error\": not "
+     "with \"max_error\": null (leave it out for the default bound, or give one)"},
     {"{\"expr\": \"x\", \"max_error\": 0.01, \"simplify\": 1}", 400, "bad_request",
      "$.simplify", "$.simplify: expected true or false, got an integer"},
     /* straddle: a boolean, true only under max_error */
-    {"{\"expr\": \"x\", \"straddle\": true}", 400, "bad_request", "$.straddle",
-     "$.straddle: the vertices move by a share of \"max_error\": give max_error too"},
+    {"{\"expr\": \"x\", \"max_error\": null, \"straddle\": true}", 400, "bad_request",
+     "$.straddle", "$.straddle: the vertices move by a share of \"max_error\": not with "
+     "\"max_error\": null (leave it out for the default bound, or give one)"},
     {"{\"expr\": \"x\", \"max_error\": 0.01, \"straddle\": \"yes\"}", 400, "bad_request",
      "$.straddle", "$.straddle: expected true or false, got a string"},
     /* dual: a boolean, true only under max_error */
-    {"{\"expr\": \"x\", \"dual\": true}", 400, "bad_request", "$.dual",
-     "$.dual: its cells are sized by \"max_error\": give max_error too"},
+    {"{\"dual\": true, \"expr\": \"x\", \"max_error\": null}", 400, "bad_request", "$.dual",
+     "$.dual: its cells are sized by \"max_error\": not with \"max_error\": null (leave it "
+     "out for the default bound, or give one)"},
     {"{\"expr\": \"x\", \"max_error\": 0.01, \"dual\": 1}", 400, "bad_request", "$.dual",
      "$.dual: expected true or false, got an integer"},
     /* quality: "raw" or "good" */
@@ -406,9 +409,24 @@ Test(request, max_error_decodes_and_sets_the_safety_depth)
     cr_expect(o.dual, "dual reaches the polygoniser's options");
     ism_request_free(&req);
 
+    /* left out: the default bound, 1e-3 of the box diagonal (torus box +-1.5: 3 sqrt 3),
+     * with the same safety depth and meshers as an explicit bound */
     const char *plain = "{\"preset\": \"torus\"}";
     cr_assert(ism_request_decode(plain, strlen(plain), &lim, &req, &err), "%s", err.message);
+    cr_expect_float_eq(req.poly.max_error, 1e-3 * 3 * sqrt(3), 1e-15, "%.17g",
+                       req.poly.max_error);
+    cr_expect_eq(req.poly.max_depth, 9);
+    cr_expect(!req.simplify);
+    ism_request_poly_options(&req, &o);
+    cr_expect(o.dual, "the default bound asks for the dual mesh too");
+    cr_expect(!o.straddle);
+    ism_request_free(&req);
+
+    /* null: no bound, the preset's depth and the flatness test decide */
+    const char *off = "{\"preset\": \"torus\", \"max_error\": null}";
+    cr_assert(ism_request_decode(off, strlen(off), &lim, &req, &err), "%s", err.message);
     cr_expect_eq(req.poly.max_error, 0);
+    cr_expect_eq(req.poly.max_depth, 7, "the preset's depth.max");
     cr_expect(!req.simplify);
     ism_request_poly_options(&req, &o);
     cr_expect_eq(o.max_error, 0);
@@ -419,7 +437,8 @@ Test(request, max_error_decodes_and_sets_the_safety_depth)
 
 Test(request, defaults_come_from_the_polygoniser)
 {
-    const char *json = "{\"expr\": \"x^2 + y^2 + z^2 - 1\"}";
+    /* the depth path: without a bound every option is the polygoniser's default */
+    const char *json = "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"max_error\": null}";
     ism_request req;
     ism_req_error err;
     cr_assert(ism_request_decode(json, strlen(json), NULL, &req, &err), "%s", err.message);
@@ -446,6 +465,17 @@ Test(request, defaults_come_from_the_polygoniser)
     ism_error e;
     cr_expect(ism_poly_options_check(&p, &e), "%s", e.message);
     ism_request_free(&req);
+
+    /* left out, the bound is 1e-3 of the default box's diagonal (2 sqrt 3) and the
+     * operator's depth limit is its safety limit */
+    const char *plain = "{\"expr\": \"x^2 + y^2 + z^2 - 1\"}";
+    cr_assert(ism_request_decode(plain, strlen(plain), NULL, &req, &err), "%s", err.message);
+    cr_expect_float_eq(req.poly.max_error, 2e-3 * sqrt(3), 1e-15);
+    cr_expect_eq(req.poly.max_depth, ISM_REQ_DEFAULT_MAX_DEPTH_LIMIT);
+    cr_expect_eq(req.poly.min_depth, o.min_depth);
+    ism_request_poly_options(&req, &p);
+    cr_expect(ism_poly_options_check(&p, &e), "%s", e.message);
+    ism_request_free(&req);
 }
 
 Test(request, every_preset_decodes_compiles_and_passes_the_polygonisers_check)
@@ -453,7 +483,7 @@ Test(request, every_preset_decodes_compiles_and_passes_the_polygonisers_check)
     for (size_t i = 0; i < ism_preset_count(); i++) {
         const ism_preset *p = ism_preset_at(i);
         char json[128];
-        snprintf(json, sizeof json, "{\"preset\": \"%s\"}", p->name);
+        snprintf(json, sizeof json, "{\"preset\": \"%s\", \"max_error\": null}", p->name);
         ism_request req;
         ism_req_error err;
         cr_assert(ism_request_decode(json, strlen(json), NULL, &req, &err), "%s: %s", p->name,
@@ -461,7 +491,8 @@ Test(request, every_preset_decodes_compiles_and_passes_the_polygonisers_check)
         cr_expect_str_eq(req.preset, p->name);
         cr_expect_eq(req.nparams, p->nparams);
         cr_expect_eq(req.nlets, p->nlets);
-        cr_expect_eq(req.poly.max_depth, p->max_depth);
+        cr_expect_eq(req.poly.max_depth, p->max_depth, "%s: the depth path keeps its depth",
+                     p->name);
         for (size_t k = 0; k < p->nparams; k++) {
             cr_expect_leq(p->params[k].min, p->params[k].value, "%s", p->name);
             cr_expect_geq(p->params[k].max, p->params[k].value, "%s", p->name);
