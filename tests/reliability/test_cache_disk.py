@@ -14,7 +14,8 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from reltools import Daemon, draco_counts, request, sphere  # noqa: E402
+from reltools import Daemon, draco_counts, request  # noqa: E402
+from reltools import sphere as bounded_sphere  # noqa: E402
 
 KINDS = ("drc", "stats.json", "features.json", "request.json")
 SURFACE_KINDS = ("mesh",)  # the computed surface every format is encoded from, its own key
@@ -22,6 +23,12 @@ FILES_PER_MESH = len(KINDS) + len(SURFACE_KINDS)
 # A sphere's mesh key is about 18 KB (drc, stats, features, request) and its computed surface
 # about 250 KB: the bound holds about five of each.
 LIMIT = 1600 * 1024
+
+
+def sphere(r):
+    """The sphere of radius r on the depth path ("max_error": null): the sizes above are its
+    (the default bound's dual sphere is a few times smaller and never fills the bound)."""
+    return dict(bounded_sphere(r), max_error=None)
 
 
 def entries(cache):
