@@ -56,8 +56,13 @@
 #define ISM_RM_CREASE_ON_REL 1e-9
 /* A vertex is beside the crease, and snapped onto it, when both branches measure within
  * this × its mean edge: the gyroid ball's locked vertices lie up to ~0.3 of an edge off the
- * other branch's surface; farther, the nearest crease point would be another vertex's. */
-#define ISM_RM_CREASE_NEAR_REL 0.5
+ * other branch's surface, the cube-minus-ball's chamfer vertices (a thin strip of short
+ * edges) farther; beyond an edge the nearest crease point would be another vertex's.
+ * bench_remesh needles (own / 1e-3 / 0.37-cell / √2−1 boxes) with 0.5 -> 0.75 (1.0 gave the
+ * same but gyroid-ball 20 in the last box): cube-minus-ball 0 / 11 / 108 / 124 -> 0 / 3 /
+ * 49 / 58, gyroid-ball 19 / 20 / 24 / 19 -> 16 / 17 / 13 / 21, but the cube 0 / 0 / 0 / 0
+ * -> 0 / 0 / 4 / 4 (as before session 15). */
+#define ISM_RM_CREASE_NEAR_REL 0.75
 /* Minimum-norm Newton steps onto a = b = 0 at most (quadratic: from a fraction of an edge
  * off, 3-4 reach ISM_RM_CREASE_ON_REL). */
 #define ISM_RM_CREASE_NEWTON_STEPS 8
