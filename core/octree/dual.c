@@ -508,6 +508,60 @@ static bool touch_empty(const dnode *n, const corner_view *v)
     return false;
 }
 
+/* The slab widths face_cap tries, as shares of the node's side: the first that proves it. */
+#define CAP_SLABS 3
+
+/* At depth.max, a node whose corners share a sign and which is not proven empty: is every
+ * zero of f in it a cap of a sheet that crosses one of its faces, at most min(E, side / 2)
+ * deep? Proven when, for a slab of depth δ along that face, f has no zero in the rest of
+ * the node (so f keeps the corners' sign there) and every line across the slab meets f = 0
+ * at most once (ism_dual_graph_along): each zero then lies on a line from a point of the face
+ * where f has the other sign, within δ of it. The sheet crosses the face; the leaf beyond it
+ * holds the rest, and that leaf's own corner signs already pass over the crossing curve on
+ * their shared face (no lattice point inside it): the dual mesh misses the cap, no more —
+ * δ ≤ E from the mesh there. Why: a convex fold whose extreme point lies within ~h² / 4R
+ * beyond a lattice plane (R its radius of curvature; h the finest cell) pokes through a face
+ * between the face's lattice points at every depth. Kummer's tropes fold with R 0.1 between
+ * two nodes (1.241, 0, −0.79 between 1.207, ±0.207, −0.707): kummer-16-nodes in its own box
+ * declined not_plain at 1e-2 and 3e-3. Only at depth.max, where the node would decline: no
+ * mesh the dual mesher made before changes. */
+static bool face_cap(dual *d, worker *w, corner_view *v)
+{
+    if (!v->have_model && !tighten(w, v))
+        return false;
+    double h = v->p[7][0] - v->p[0][0];
+    for (int k = 1; k <= CAP_SLABS; k++) {
+        double slab = ldexp(h, -k);
+        if (!(slab <= d->o->max_error))
+            continue;
+        for (int a = 0; a < 3; a++)
+            for (int side = 0; side < 2; side++) {
+                double lo[3], hi[3], slo[3], shi[3], dir[3] = {0, 0, 0};
+                memcpy(lo, v->p[0], sizeof lo);
+                memcpy(hi, v->p[7], sizeof hi);
+                memcpy(slo, lo, sizeof slo);
+                memcpy(shi, hi, sizeof shi);
+                if (side) { /* the face hi[a]: the rest below it */
+                    hi[a] -= slab;
+                    slo[a] = hi[a];
+                } else {
+                    lo[a] += slab;
+                    shi[a] = lo[a];
+                }
+                if (!ism_dual_free(w->s.tape, w->jet, &v->model, lo, hi, CERT_HALVINGS,
+                                   &w->s.n_interval))
+                    continue;
+                for (int sign = -1; sign <= 1; sign += 2) {
+                    dir[a] = sign;
+                    if (ism_dual_graph_along(w->s.tape, w->jet, &v->model, slo, shi, dir,
+                                             CERT_HALVINGS, &w->s.n_interval))
+                        return true;
+                }
+            }
+    }
+    return false;
+}
+
 /* One graph along the corner gradients' mean (the direction the sheet in the node faces)
  * wherever f may vanish in the node's sub-boxes (the node's own enclosure failed). */
 static bool graph_on_sub_boxes(worker *w, const corner_view *v)
@@ -608,8 +662,10 @@ static int classify(dual *d, worker *w, dnode *n, corner_view *v)
         if (v->agree)
             return plain_edges(d, w, n, v) ? DN_SURF : DN_INNER;
         if (!mixed) /* empty, or maybe a piece no corner sees */
-            return empty_proven(w, n, v) || (neg == 0 && touch_empty(n, v)) ? DN_EMPTY
-                                                                           : DN_INNER;
+            return empty_proven(w, n, v) || (neg == 0 && touch_empty(n, v)) ||
+                           (n->level >= d->o->max_depth && face_cap(d, w, v))
+                       ? DN_EMPTY
+                       : DN_INNER;
         if (!ism_graph_from_enclosure(&v->g) &&
             !(tighten(w, v) && (ism_graph_from_enclosure(&v->g) || graph_on_sub_boxes(w, v))))
             return DN_INNER;
@@ -2008,10 +2064,21 @@ static void forget(dual *d)
     d->why = ISM_DUAL_WHY_NONE;
 }
 
+/* A ball halved is stuck when its clip sphere comes out no smaller than this share of the
+ * last try's: its rim is then held by the leaves round the point that the proofs could not
+ * make plain within its limit (they join the hole, near_point), not by the hole, and
+ * halving it again makes the same mesh. kummer-16-nodes 3e-3 depth.max 9, +1e-3 box: the
+ * rim of the node (1, 0, −1) stayed at 0.159-0.160 through five halvings (folds of radius
+ * 0.03-0.04 between it and (0.707, 0, −0.5), a cell 0.017 across), 7 meshes for point_fan. A
+ * ball whose hole sets its rim shrinks it by 0.5-0.8 (the +1e-3 box at 1e-2 before the
+ * turned cuts were mended: 0.099, 0.052, 0.041). */
+#define RIM_STUCK 0.9
+
 /* run, and round the isolated singular points o->dual_points (dual_balls.h): the mesh with a
  * hole at each, clipped and fanned to the point; where a fan misses E or a rim is not its
  * node's two loops (one for each nappe), every such ball is halved and the mesh made again,
- * each ball up to ISM_DUAL_BALL_SHRINKS times (then "point_fan"). */
+ * each ball up to ISM_DUAL_BALL_SHRINKS times (then "point_fan"), and none again once a
+ * halved ball's rim stays put (RIM_STUCK: "point_fan" at once). */
 static enum ism_dual_status run_round_points(dual *d, ism_mesh *mesh, ism_dual_stats *st)
 {
     size_t n = d->o->ndual_points;
@@ -2020,7 +2087,9 @@ static enum ism_dual_status run_round_points(dual *d, ism_mesh *mesh, ism_dual_s
     ism_dual_ball *balls = malloc(n * sizeof *balls);
     int *shrink = calloc(n, sizeof *shrink);
     uint8_t *missed = malloc(n);
-    enum ism_dual_status status = balls && shrink && missed ? ISM_DUAL_OK : ISM_DUAL_NO_MEMORY;
+    double *rim = malloc(n * sizeof *rim), *last = malloc(n * sizeof *last);
+    enum ism_dual_status status =
+        balls && shrink && missed && rim && last ? ISM_DUAL_OK : ISM_DUAL_NO_MEMORY;
     d->balls = balls;
     d->nballs = n;
     while (status == ISM_DUAL_OK) {
@@ -2035,7 +2104,7 @@ static enum ism_dual_status run_round_points(dual *d, ism_mesh *mesh, ism_dual_s
         if ((status = run(d, mesh, st)) != ISM_DUAL_OK)
             break;
         enum ism_fan_status fan =
-            ism_dual_balls_fan(mesh, &d->w[0].s, balls, n, d->o->max_error, missed);
+            ism_dual_balls_fan(mesh, &d->w[0].s, balls, n, d->o->max_error, missed, rim);
         if (fan == ISM_FAN_OK)
             break;
         if (fan == ISM_FAN_NO_MEMORY) {
@@ -2046,7 +2115,11 @@ static enum ism_dual_status run_round_points(dual *d, ism_mesh *mesh, ism_dual_s
         for (size_t k = 0; k < n; k++)
             if (missed[k]) {
                 any = true;
-                spent |= shrink[k]++ == ISM_DUAL_BALL_SHRINKS; /* at its smallest already */
+                /* at its smallest already, or halved last time for nothing */
+                spent |= shrink[k] == ISM_DUAL_BALL_SHRINKS ||
+                         (shrink[k] && !(rim[k] < RIM_STUCK * last[k]));
+                shrink[k]++;
+                last[k] = rim[k];
             }
         if (!any || spent) {
             st->declined = ISM_DUAL_WHY_POINT_FAN;
@@ -2056,6 +2129,8 @@ static enum ism_dual_status run_round_points(dual *d, ism_mesh *mesh, ism_dual_s
     free(missed);
     free(balls);
     free(shrink);
+    free(rim);
+    free(last);
     ism_dual_ball_cover_free(&d->cover);
     d->balls = NULL;
     d->nballs = 0;
@@ -2071,12 +2146,6 @@ static enum ism_dual_status run_in_grown_box(dual *d, ism_mesh *mesh, ism_dual_s
     const ism_poly_options *given = d->o;
     st->declined = ISM_DUAL_WHY_BOX_CUT;
     if (given->max_depth <= ISM_DUAL_BOX_LEVEL) /* no level for the margin's leaves */
-        return ISM_DUAL_NOT_APPLICABLE;
-    /* Not yet round singular points: kummer-16-nodes in ±3 at 1e-2 is clipped right in its
-     * own box (χ 0, 11 pieces, 6 loops, 16 nodes: the primal path's) but its balls fail in
-     * the box moved by 1e-3 (point_fan after 7 meshes: 4.9 s against the primal 1.2 s) and
-     * leaves midway between two nodes on a trope stay not plain in the 0.37-cell one. */
-    if (given->ndual_points)
         return ISM_DUAL_NOT_APPLICABLE;
     ism_poly_options grown = *given;
     ism_dual_box_grow(given->box, ISM_DUAL_BOX_LEVEL, grown.box);

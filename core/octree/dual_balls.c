@@ -39,6 +39,9 @@
  * 1e-3: there the rim itself reaches the limit, the nappes a cell apart along the nodes'
  * flat directions up to 0.2 from them; half the ball then fits.) */
 #define SETTLE_STEPS 8
+/* Rings between a rim and its apex the fans may take (fan_ball) before the ball halves: each
+ * ring shortens the rulings' pieces to 1 / (rings + 1). */
+#define FAN_RINGS 2
 /* Newton steps moving a cut point onto f = 0 (a cut lies on a chord within E of f = 0:
  * two steps reach far below E; more only where ∇f is small). */
 #define CUT_NEWTON 4
@@ -314,6 +317,8 @@ typedef struct clip {
     size_t nt, capt;
     uint32_t *rim;     /* directed rim edges (from, to, ball) */
     size_t nrim, caprim;
+    size_t nv0;        /* the dual mesh's own vertices: 0..nv0, then the cut points */
+    double *chord;     /* per cut point: where its edge crosses the sphere (before Newton) */
     bool nomem;
 } clip;
 
@@ -424,9 +429,21 @@ static enum ism_fan_status settle_radii(clip *c)
 }
 
 
-/* The point where edge a (inside ball k's sphere) - b (outside) crosses it, moved onto
- * f = 0 by Newton. */
-static void cut_point(clip *c, size_t k, uint32_t a, uint32_t b, double out[3])
+/* x moved onto f = 0 by Newton (CUT_NEWTON steps at most; it stays where ∇f vanishes). */
+static void onto_surface(ism_sampler *s, double x[3])
+{
+    for (int it = 0; it < CUT_NEWTON; it++) {
+        double g[3], f = ism_sample_grad(s, x, g), gg = ism_dot3(g, g);
+        if (!isfinite(f) || !(gg > 0))
+            break;
+        for (int j = 0; j < 3; j++)
+            x[j] -= f * g[j] / gg;
+    }
+}
+
+/* The point where edge a (inside ball k's sphere) - b (outside) crosses it into chord, and
+ * into out moved onto f = 0 by Newton. */
+static void cut_point(clip *c, size_t k, uint32_t a, uint32_t b, double chord[3], double out[3])
 {
     const double *pa = c->m->pos + 3 * (size_t)a, *pb = c->m->pos + 3 * (size_t)b;
     const double *p = c->b[k].p;
@@ -437,14 +454,8 @@ static void cut_point(clip *c, size_t k, uint32_t a, uint32_t b, double out[3])
     double t = (-B + sqrt(fmax(0, B * B - A * C))) / A;
     t = fmin(1, fmax(0, t));
     for (int j = 0; j < 3; j++)
-        out[j] = pa[j] + t * d[j];
-    for (int it = 0; it < CUT_NEWTON; it++) {
-        double g[3], f = ism_sample_grad(c->s, out, g), gg = ism_dot3(g, g);
-        if (!isfinite(f) || !(gg > 0))
-            break;
-        for (int j = 0; j < 3; j++)
-            out[j] -= f * g[j] / gg;
-    }
+        chord[j] = out[j] = pa[j] + t * d[j];
+    onto_surface(c->s, out);
 }
 
 /* The vertex at the cut of edge a-b (made in collect_cuts). */
@@ -477,20 +488,21 @@ static enum ism_fan_status collect_cuts(clip *c)
     /* an isolated point alone cuts nothing: c->cut is NULL */
     size_t u = c->ncut = ism_edge_keys_unique(c->cut, c->ncut);
     c->cutv = malloc((u ? u : 1) * sizeof *c->cutv);
-    if (!c->cutv)
+    c->chord = malloc((u ? u : 1) * 3 * sizeof *c->chord);
+    if (!c->cutv || !c->chord)
         return ISM_FAN_NO_MEMORY;
     for (size_t i = 0; i < u; i++) {
         uint32_t a = (uint32_t)(c->cut[i] >> 32), b = (uint32_t)c->cut[i];
         size_t ka = c->ball[a];
         double q[3], g[3];
         if (ka < c->n)
-            cut_point(c, ka, a, b, q);
+            cut_point(c, ka, a, b, &c->chord[3 * i], q);
         else
-            cut_point(c, c->ball[b], b, a, q);
+            cut_point(c, c->ball[b], b, a, &c->chord[3 * i], q);
         ism_sample_grad(c->s, q, g);
         ism_normalise3(g);
         float nrm[3] = {(float)g[0], (float)g[1], (float)g[2]};
-        c->cutv[i] = ism_mesh_add_vertex(m, q, nrm);
+        c->cutv[i] = ism_mesh_add_vertex(m, q, nrm); /* nv0 + i */
         if (c->cutv[i] == UINT32_MAX)
             return ISM_FAN_NO_MEMORY;
     }
@@ -617,6 +629,67 @@ bool ism_dual_triangle_within(ism_sampler *s, const ism_mesh *m, const uint32_t 
     return true;
 }
 
+/* Ball k's rim loops fanned to its apex through `rings` rings of vertices between (ring j of
+ * R at the share 1 - j / (R + 1) of each rim vertex's ruling from the apex, moved onto f = 0
+ * by Newton): the triangles pushed after c->tri's, each measured; MISS when one is beyond E
+ * or turned. next_of: the rim edge leaving each vertex. A ruling lies on a quadratic cone
+ * but a node's surface bends off it by O(r^2 |D^3 f| / |H|): Kummer's 16 nodes sit where
+ * folds of radius ~0.3 x the distance to the node meet, and rims held 0.16 out by the
+ * leaves the proofs cannot make plain there missed E at 3e-3 (up to 1.4 E) however far the
+ * ball was halved (kummer-16-nodes, +1e-3 box, depth.max 9: point_fan). */
+static enum ism_fan_status fan_ball(clip *c, size_t k, uint32_t apex, int rings,
+                                    const uint32_t *next_of, double max_error)
+{
+    ism_mesh *m = c->m;
+    uint32_t *ring = NULL; /* per rim edge i of ball k: the rings' vertices of its start */
+    if (rings && !(ring = malloc(c->nrim * (size_t)rings * sizeof *ring)))
+        return ISM_FAN_NO_MEMORY;
+    const double *p = c->b[k].p;
+    for (size_t i = 0; i < c->nrim && rings; i++) {
+        if (c->rim[3 * i + 2] != k)
+            continue;
+        for (int j = 1; j <= rings; j++) {
+            double share = 1 - (double)j / (rings + 1), x[3], g[3];
+            const double *v = m->pos + 3 * (size_t)c->rim[3 * i];
+            for (int a = 0; a < 3; a++)
+                x[a] = p[a] + share * (v[a] - p[a]);
+            onto_surface(c->s, x);
+            ism_sample_grad(c->s, x, g);
+            ism_normalise3(g);
+            float nrm[3] = {(float)g[0], (float)g[1], (float)g[2]};
+            uint32_t id = ism_mesh_add_vertex(m, x, nrm);
+            if (id == UINT32_MAX) {
+                free(ring);
+                return ISM_FAN_NO_MEMORY;
+            }
+            ring[i * (size_t)rings + (size_t)(j - 1)] = id;
+        }
+    }
+    size_t from = c->nt;
+    for (size_t i = 0; i < c->nrim; i++) {
+        if (c->rim[3 * i + 2] != k)
+            continue;
+        uint32_t a = c->rim[3 * i + 1], b = c->rim[3 * i]; /* to, from */
+        size_t ia = next_of[a];
+        for (int j = 0; j <= rings; j++) {
+            uint32_t a2 = j < rings ? ring[ia * (size_t)rings + (size_t)j] : apex;
+            uint32_t b2 = j < rings ? ring[i * (size_t)rings + (size_t)j] : apex;
+            uint32_t t[6] = {a, b, b2, a, b2, a2};
+            if (!push(&c->tri, &c->nt, &c->capt, t, j < rings ? 2 : 1)) {
+                free(ring);
+                return ISM_FAN_NO_MEMORY;
+            }
+            a = a2;
+            b = b2;
+        }
+    }
+    free(ring);
+    for (size_t t = from; t < c->nt; t++)
+        if (!ism_dual_triangle_within(c->s, m, c->tri + 3 * t, max_error))
+            return ISM_FAN_MISS;
+    return ISM_FAN_OK;
+}
+
 /* The rims fanned to their points (after the kept and cut triangles in c->tri), each new
  * triangle measured; BAD marks the balls whose rims are not their nappes' loops, MISS
  * those whose fans or cuts miss E or face against ∇f. */
@@ -640,25 +713,9 @@ static enum ism_fan_status fan_rims(clip *c, size_t kept, double max_error)
             mark(c, k);
     if (st == ISM_FAN_OK && c->marked)
         st = ISM_FAN_BAD;
-    for (size_t k = 0; k < c->n && st == ISM_FAN_OK; k++) {
-        if (!c->b[k].nappes)
-            continue;
-        float none[3] = {0, 0, 0}; /* ∇f = 0 at the point: no normal */
-        uint32_t apex = ism_mesh_add_vertex(m, c->b[k].p, none);
-        if (apex == UINT32_MAX) {
-            st = ISM_FAN_NO_MEMORY;
-            break;
-        }
-        for (size_t i = 0; i < c->nrim && st == ISM_FAN_OK; i++)
-            if (c->rim[3 * i + 2] == k) {
-                uint32_t t[3] = {c->rim[3 * i + 1], c->rim[3 * i], apex};
-                if (!push(&c->tri, &c->nt, &c->capt, t, 1))
-                    st = ISM_FAN_NO_MEMORY;
-            }
-    }
-    /* the cut triangles (after the kept ones) and the fans against E; every ball with a
-     * miss is named in missed */
-    for (size_t t = kept; t < c->nt && (st == ISM_FAN_OK || st == ISM_FAN_MISS); t++)
+    /* the cut triangles (after the kept ones) against E; every ball with a miss is marked */
+    size_t cuts_end = c->nt;
+    for (size_t t = kept; t < cuts_end && (st == ISM_FAN_OK || st == ISM_FAN_MISS); t++)
         if (!ism_dual_triangle_within(c->s, m, c->tri + 3 * t, max_error)) {
             size_t k = c->n; /* the ball whose clip sphere is nearest a corner */
             double best = INFINITY;
@@ -674,9 +731,57 @@ static enum ism_fan_status fan_rims(clip *c, size_t kept, double max_error)
             mark(c, k < c->n ? k : 0);
             st = ISM_FAN_MISS;
         }
+    /* each node's fans: straight to the apex first, then through more rings until they
+     * meet E (then the ball halves) */
+    for (size_t k = 0; k < c->n && (st == ISM_FAN_OK || st == ISM_FAN_MISS); k++) {
+        if (!c->b[k].nappes)
+            continue;
+        float none[3] = {0, 0, 0}; /* ∇f = 0 at the point: no normal */
+        uint32_t apex = ism_mesh_add_vertex(m, c->b[k].p, none);
+        if (apex == UINT32_MAX) {
+            st = ISM_FAN_NO_MEMORY;
+            break;
+        }
+        size_t start = c->nt;
+        enum ism_fan_status f = ISM_FAN_MISS;
+        for (int rings = 0; rings <= FAN_RINGS && f == ISM_FAN_MISS; rings++) {
+            c->nt = start;
+            f = fan_ball(c, k, apex, rings, next_of, max_error);
+        }
+        if (f == ISM_FAN_NO_MEMORY)
+            st = f;
+        else if (f == ISM_FAN_MISS) {
+            mark(c, k);
+            st = ISM_FAN_MISS;
+        }
+    }
     free(next_of);
     free(seen);
     return st;
+}
+
+/* Cut triangles (c->tri from `kept` on, before the fans) turned against ∇f at their centroid
+ * have their cut points put back where their edges cross the sphere: a piece is then a part
+ * of its triangle, in its plane, facing as it faced. Newton moves a cut point up to ~E, and
+ * where the sphere cuts a thin triangle near its long sides' ends the two cut points lie
+ * closer than that: the piece between them turned over however small the ball (kummer-16-
+ * nodes 1e-2, +1e-3 box: a node's ball halved 5 times, point_fan, cut slivers cos -0.04 to
+ * -0.37). Both triangles sharing a cut edge see the point moved back; the fans from it are
+ * measured as before. */
+static void unturn_cuts(clip *c, size_t kept)
+{
+    ism_mesh *m = c->m;
+    for (size_t t = kept; t < c->nt; t++) {
+        const uint32_t *v = c->tri + 3 * t;
+        const double *p[3] = {m->pos + 3 * (size_t)v[0], m->pos + 3 * (size_t)v[1],
+                              m->pos + 3 * (size_t)v[2]};
+        if (ism_dual_centroid_within(c->s, p, INFINITY))
+            continue;
+        for (int j = 0; j < 3; j++)
+            if (v[j] >= c->nv0)
+                memcpy(m->pos + 3 * (size_t)v[j], &c->chord[3 * (v[j] - c->nv0)],
+                       3 * sizeof *c->chord);
+    }
 }
 
 /* Every edge of m near a ball in exactly two triangles (the fans closed every hole). */
@@ -701,7 +806,7 @@ static enum ism_fan_status closed(const ism_mesh *m, const ism_dual_ball *b, siz
 }
 
 enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_dual_ball *b,
-                                       size_t n, double max_error, uint8_t *shrink)
+                                       size_t n, double max_error, uint8_t *shrink, double *rim)
 {
     memset(shrink, 0, n);
     clip c = {.m = m, .s = s, .b = b, .n = n, .shrink = shrink};
@@ -714,7 +819,7 @@ enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_du
     if (st == ISM_FAN_OK)
         st = clip_radii(&c, e, ne);
     free(e);
-    size_t nv0 = m->nverts, nt0 = m->ntris; /* the dual mesh's own */
+    size_t nv0 = c.nv0 = m->nverts, nt0 = m->ntris; /* the dual mesh's own */
     if (st == ISM_FAN_OK)
         st = settle_radii(&c);
     if (st == ISM_FAN_OK)
@@ -742,8 +847,10 @@ enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_du
             memcpy(c.tri, order, 3 * c.nt * sizeof *order);
         free(order);
     }
-    if (st == ISM_FAN_OK)
+    if (st == ISM_FAN_OK) {
+        unturn_cuts(&c, kept);
         st = fan_rims(&c, kept, max_error);
+    }
     if (st == ISM_FAN_OK) {
         if (!ism_mesh_reserve(m, m->nverts, c.nt))
             st = ISM_FAN_NO_MEMORY;
@@ -761,11 +868,16 @@ enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_du
             }
         }
     }
+    if (c.r1)
+        memcpy(rim, c.r1, n * sizeof *rim);
+    else
+        memset(rim, 0, n * sizeof *rim); /* out of memory: nothing clipped */
     free(c.r1);
     ism_dual_ball_cover_free(&c.cover);
     free(c.ball);
     free(c.cut);
     free(c.cutv);
+    free(c.chord);
     free(c.tri);
     free(c.rim);
     return st;

@@ -100,8 +100,9 @@ bool ism_dual_triangle_within(ism_sampler *s, const ism_mesh *m, const uint32_t 
  * ball's point (one vertex per node; nothing for an isolated point); measures the new
  * triangles against E with s. On anything but OK, m is left in an unspecified state (the
  * caller makes the mesh again or gives up). shrink[0..n): 1 for every ball a MISS or BAD
- * is about, to be halved; a BAD with none marked cannot be helped by the balls. */
+ * is about, to be halved; a BAD with none marked cannot be helped by the balls. rim[0..n):
+ * each ball's clip sphere as far as the clip got (0: none). */
 enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_dual_ball *b,
-                                       size_t n, double max_error, uint8_t *shrink);
+                                       size_t n, double max_error, uint8_t *shrink, double *rim);
 
 #endif

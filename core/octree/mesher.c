@@ -15,8 +15,9 @@ static const struct {
     [ISM_DUAL_WHY_LOCUS] = {"singular_locus",
                             "singular points or curves: the primal polygons conform to them"},
     [ISM_DUAL_WHY_MIN_MAX] = {"min_max", "min/max/abs in f: creases one vertex per cell rounds"},
-    [ISM_DUAL_WHY_BOX_CUT] = {"box_cut", "the box cuts a surface with singular points, or the "
-                                         "clip at its faces failed"},
+    [ISM_DUAL_WHY_BOX_CUT] = {"box_cut", "the box cuts the surface and the clip at its faces "
+                                         "failed (or depth.max leaves no level for the "
+                                         "margin)"},
     [ISM_DUAL_WHY_NOT_PLAIN] = {"not_plain", "a cell at depth.max holds more than one plain "
                                              "sheet (close sheets or a singular point)"},
     [ISM_DUAL_WHY_ERROR] = {"error_at_max_depth",
