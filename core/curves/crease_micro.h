@@ -17,7 +17,7 @@
  * neighbour of another branch, on no curve and no segment, becomes its lowest vertex: its
  * triangles renamed, those left with a repeated corner dropped (s->m->tri and s->parent
  * compacted), when the welded vertex's star is a closed fan of distinct triangles none of
- * which turns against the star's normal. *welded counts the vertices gone. False when out of
+ * which turns more than 60° from its own normal before. *welded counts the vertices gone. False when out of
  * memory. */
 bool cut_crease_weld_micro(cut_state *s, const uint32_t *label, size_t *welded);
 

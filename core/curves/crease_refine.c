@@ -31,9 +31,20 @@
  * gradients' angle by at most twice this, within the issue's 2°. */
 #define CREASE_REFINE_DEG 0.8
 /* Passes at most: each halves the misses of the triangles it splits (thin ones keep their
- * shape, and need more); the gyroid ball at depth 7 needs 5–6 in the lattice box (four
- * left 6 edges over 2°, beside triangles of 3.7°). */
-#define CREASE_REFINE_PASSES 6
+ * shape, and need more); the gyroid ball at depth 7 needs 7 in the lattice box and the one
+ * moved by 1e-3 (the 7th asks nothing; four left 6 edges over 2°, beside triangles of
+ * 3.7°), and in the irrational box still splits a few edges in the 12th (with the
+ * relaxation before every pass: 6 passes left an edge 9.2° off the gradients' angle beside a
+ * 6.5° triangle the 6th made, 8 three up to 2.2°, 10 none but 2 sliver sides, 12 none). */
+#define CREASE_REFINE_PASSES 12
+/* ... the first this many each after a relaxation (crease_relax.h), later ones measuring
+ * only the triangles the last pass made (nothing else moved): past the 6th each splits few
+ * triangles (71 down to 9 new vertices) while the relaxation still moved 280-450 vertices
+ * and every crease triangle was measured again. ism_cut_mesh in the gyroid ball's test
+ * (callgrind, lattice / irrational box): 6 passes 1,284M / 1,287M instructions; 12 with
+ * the relaxation in each 1,456M / 1,832M; so 1,342M / 1,496M, no edge over 2° and no sliver
+ * side in either. */
+#define CREASE_RELAX_PASSES 6
 /* Newton steps at most along the branch's gradient putting an edge's midpoint on its zero set
  * (it starts within the edge's sagitta of it: quadratic convergence ends in two or three). */
 #define CREASE_REFINE_NEWTON 4
@@ -68,6 +79,10 @@ typedef struct refine_state {
     uint32_t (*sides)[2]; /* the triangles on a crease edge (NONE: none yet) */
     size_t cap_sides;
     cut_relax_memo relax; /* the relaxation's failed stars, kept from pass to pass */
+    uint8_t *fresh;     /* per triangle: made by the last pass's splits */
+    size_t cap_fresh;
+    bool all;           /* measure every triangle (a relaxation moved vertices), not only
+                           the fresh ones */
 } refine_state;
 
 /* The flat normal of triangle (a, b, c) against branch A's gradient at the midpoint of a-b,
@@ -154,7 +169,8 @@ static bool note_side(refine_state *st, uint32_t a, uint32_t b, uint32_t t)
 }
 
 /* Triangle t: when it lies on a crease edge with its third corner off the crease and
- * misses, its three edges are asked split. */
+ * misses, its three edges are asked split (measured only when st->all or fresh: a triangle
+ * left whole by the last pass, no vertex moved since, misses as it did, and was asked). */
 static bool check_triangle(refine_state *st, uint32_t t)
 {
     const ism_mesh *m = st->s->m;
@@ -165,7 +181,7 @@ static bool check_triangle(refine_state *st, uint32_t t)
             continue;
         if (!note_side(st, a, b, t))
             return false;
-        if (st->on[c])
+        if (st->on[c] || !(st->all || st->fresh[t]))
             continue;
         uint32_t A;
         const double *pc = m->pos + 3 * (size_t)c;
@@ -344,8 +360,12 @@ static bool refine_pass(refine_state *st, size_t *added)
     for (size_t t = 0; ok && t < nt; t++) {
         const uint32_t *tv = old + 3 * t;
         s->from = parent[t];
-        ok = end[tv[0]] || end[tv[1]] || end[tv[2]] ? emit_split(st, tv)
-                                                      : cut_add_triangle(s, tv[0], tv[1], tv[2]);
+        size_t first = m->ntris;
+        bool split = end[tv[0]] || end[tv[1]] || end[tv[2]];
+        ok = split ? emit_split(st, tv) : cut_add_triangle(s, tv[0], tv[1], tv[2]);
+        ok = ok && ism_grow((void **)&st->fresh, &st->cap_fresh, m->ntris, 1, CUT_FIRST);
+        for (size_t u = first; ok && u < m->ntris; u++)
+            st->fresh[u] = split;
     }
     free(old);
     free(parent);
@@ -377,7 +397,8 @@ bool cut_crease_refine(cut_state *s, size_t k, size_t *added)
     bool ok = s->branches != NULL && mark_crease(&st);
     for (int pass = 0; ok && pass < CREASE_REFINE_PASSES; pass++) {
         size_t n = 0, moved = 0;
-        ok = cut_crease_relax(s, k, &st.relax, &moved) && refine_pass(&st, &n) &&
+        st.all = pass < CREASE_RELAX_PASSES;
+        ok = (!st.all || cut_crease_relax(s, k, &st.relax, &moved)) && refine_pass(&st, &n) &&
              mark_crease(&st);
         *added += n;
         if (!n)
@@ -391,6 +412,7 @@ bool cut_crease_refine(cut_state *s, size_t k, size_t *added)
     free(st.split);
     free(st.vert);
     free(st.on);
+    free(st.fresh);
     cut_relax_memo_free(&st.relax);
     return ok;
 }

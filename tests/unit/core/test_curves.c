@@ -1,6 +1,6 @@
 /* test_curves.c — curves cut on a meshed surface and their arrangement (core/curves/) against
  * closed forms, each in a symmetric box and in boxes shifted off the octree lattice by 1e-3
- * and by 0.37 of a finest cell: the unit sphere cut by the three coordinate planes has 6
+ * and by PF_IRR of a finest cell: the unit sphere cut by the three coordinate planes has 6
  * vertices where two circles cross (degree 4), 12 arcs, 8 faces of area π/2 (each a disk:
  * χ = 1, one boundary cycle), three circles of length 2π; the torus cut by x = 0 has two
  * circles of radius r and two half-tori (annuli: χ = 0, two boundary cycles) of area
@@ -10,7 +10,7 @@
  * Viviani's curve has its degree-4 node at (1, 0, 0) within 1e-9 × the diagonal, one curve,
  * 2 edges, 3 faces; two circles on the sphere that touch at (0.8, 0, 0.6) meet in one
  * crossing of degree 4 with 3 faces of the caps' closed-form areas. The gyroid ball's crease
- * (lattice box and 0.37 cell off it): every crease vertex on the gyroid and the sphere
+ * (lattice box and PF_IRR of a cell off it): every crease vertex on the gyroid and the sphere
  * within 1e-9 × diagonal, no mesh edge across it, and at every crease edge the normals each
  * side carries (what the outputs ship) are that side's branch gradient — the side told by
  * the closed forms at its corner off the edge — so the dihedral angle between the sides is
@@ -37,12 +37,10 @@
 
 static const double shift_dir[3] = {1.0, 0.61, -0.83};
 
-/* which 0: base as given; 1: moved by 1e-3; 2: by PF_IRR of a finest cell; 3: by PF_OLD (only
- * for a test marked FIXME(issue 13)) — along shift_dir. */
+/* which 0: base as given; 1: moved by 1e-3; 2: by PF_IRR of a finest cell — along shift_dir. */
 static void shifted(const double base[6], int which, int dmax, double box[6])
 {
-    double cells = which == 2 ? PF_IRR : PF_OLD;
-    double s = which == 0 ? 0 : which == 1 ? 1e-3 : cells * pf_cell(base, dmax);
+    double s = which == 0 ? 0 : which == 1 ? 1e-3 : PF_IRR * pf_cell(base, dmax);
     for (int k = 0; k < 3; k++) {
         box[k] = base[k] + s * shift_dir[k];
         box[k + 3] = base[k + 3] + s * shift_dir[k];
@@ -269,7 +267,11 @@ static double ball_at(const double *p, double g[3])
  * of 8,388 (lattice), 0 of 8,172 (1e-3 off it), 0 of 8,146 (0.37 cell; worst 1.56 / 1.45 /
  * 1.59°); 236 / 255 / 273 before the refinement, and 1 of 8,177 at 0.37 cell (2.45°) before
  * the micro clusters beside the crease were welded (crease_micro.c: three edge roots 3.5e-5
- * from a lattice corner left a 0.11° sliver no relaxation or split could mend). */
+ * from a lattice corner left a 0.11° sliver no relaxation or split could mend). At the
+ * irrational placement (PF_IRR) 2 of 8,283 (worst 9.2°) until a micro cluster straddling
+ * the crease was welded (its triangles judged against their own normals, not the star's
+ * sum: crease_micro.c good_fan) and the refinement ran up to 12 passes (crease_refine.c):
+ * now 0 of 8,361 / 8,159 / 8,295 (worst 1.56 / 1.45 / 1.53°), no sliver side. */
 #define FLAT_OVER_MAX 0
 
 typedef struct crease_sides {
@@ -520,12 +522,7 @@ static void gyroid_crease(int which)
 
 Test(curves, gyroid_ball_crease) { gyroid_crease(0); }
 Test(curves, gyroid_ball_crease_shift_1e3) { gyroid_crease(1); }
-/* FIXME(issue 13): fails at the irrational placement (PF_IRR along shift_dir, depth 7): 2 of
- * 8,282 crease edges have flat dihedral angles off the gradients' by more than 2° (worst 9.2°,
- * each beside a triangle with an angle under 6.5°: slivers next to the crease that neither
- * crease_refine.c nor crease_micro.c mends); 4 sliver sides, no fold. Left on the old rational
- * placement (0.37 of a cell) until core/curves mends those slivers. */
-Test(curves, gyroid_ball_crease_shift_037) { gyroid_crease(3); }
+Test(curves, gyroid_ball_crease_shift_irr) { gyroid_crease(2); }
 
 /* ---- Viviani's curve: the unit sphere ∩ the cylinder (x − ½)² + y² = ¼ ---- */
 
