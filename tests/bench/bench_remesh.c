@@ -9,6 +9,11 @@
  *
  *   bench_remesh PRESET [SHIFT...]     SHIFT: fractions of a finest cell (default 0 1e-3 and
  *                                      √2 − 1, tests/unit/placements.h)
+ *   bench_remesh --max-error off|E PRESET [SHIFT...]
+ *                                      the request's max_error (default: the request's own,
+ *                                      1e-3 × the box diagonal; off: the depth-driven mesh
+ *                                      every figure in core/README.md's quality pass before
+ *                                      session 15's default bound was measured on)
  *   CENSUS_VERBOSE=1 bench_remesh ...  also lists each needle (angle, centroid, distance to
  *                                      the nearest point, what its corners touch) and each
  *                                      turned-over fold's end points
@@ -150,10 +155,14 @@ static void row(const char *tag, const ism_mesh *m, const ism_tape *t, const ism
 
 /* Meshes the preset in its box moved by shift finest cells (y the other way) and prints the
  * raw and good rows. False when the preset or the meshing fails. */
-static bool run(const char *name, double shift)
+static bool run(const char *name, const char *max_error, double shift)
 {
     char json[256];
-    snprintf(json, sizeof json, "{\"preset\": \"%s\"}", name);
+    if (max_error)
+        snprintf(json, sizeof json, "{\"preset\": \"%s\", \"max_error\": %s}", name,
+                 strcmp(max_error, "off") ? max_error : "null");
+    else
+        snprintf(json, sizeof json, "{\"preset\": \"%s\"}", name);
     ism_request req;
     ism_req_error rerr;
     if (!ism_request_decode(json, strlen(json), NULL, &req, &rerr)) {
@@ -197,8 +206,14 @@ static bool run(const char *name, double shift)
 
 int main(int argc, char **argv)
 {
+    const char *max_error = NULL;
+    if (argc >= 3 && !strcmp(argv[1], "--max-error")) {
+        max_error = argv[2];
+        argv += 2;
+        argc -= 2;
+    }
     if (argc < 2) {
-        fprintf(stderr, "usage: bench_remesh PRESET [SHIFT...]\n");
+        fprintf(stderr, "usage: bench_remesh [--max-error off|E] PRESET [SHIFT...]\n");
         return 2;
     }
     static const double shifts[] = {0, 1e-3, PF_IRR};
@@ -207,8 +222,8 @@ int main(int argc, char **argv)
     bool ok = true;
     if (argc == 2)
         for (size_t i = 0; i < sizeof shifts / sizeof shifts[0]; i++)
-            ok = run(argv[1], shifts[i]) && ok;
+            ok = run(argv[1], max_error, shifts[i]) && ok;
     for (int i = 2; i < argc; i++)
-        ok = run(argv[1], atof(argv[i])) && ok;
+        ok = run(argv[1], max_error, atof(argv[i])) && ok;
     return ok ? 0 : 1;
 }
