@@ -325,6 +325,22 @@ static void format_beyond(double worst, double e, char *buf, size_t n)
     }
 }
 
+/* The bound e as given when that takes at most BOUND_DIGITS significant digits (0.004), else
+ * to 3, rounded down (the default bound, 1e-3 x the box diagonal, is 0.05542562584220407 for
+ * the horn cyclide: "0.0554"): never above e, so a worst distance shown above e reads above
+ * it too. Six digits: a bound anyone types reads back as itself. */
+#define BOUND_DIGITS 6
+static void format_bound(double e, char *buf, size_t n)
+{
+    for (int digits = 1; digits <= BOUND_DIGITS; digits++) {
+        snprintf(buf, n, "%.*g", digits, e);
+        if (strtod(buf, NULL) == e)
+            return;
+    }
+    double unit = pow(10, floor(log10(e)) - 2);
+    snprintf(buf, n, "%.3g", floor(e / unit) * unit);
+}
+
 /* Under an error bound, one warning and only when the bound was not met: by the analysed
  * mesh when there is an analysis, else by the polygoniser's measurements of the cells it
  * could not split further. When no cell was left beyond the bound, the far triangles are not
@@ -338,7 +354,7 @@ static void write_error_warning(ism_jw *w, const ism_stats_input *in)
     if (worst <= in->max_error && (in->analysis || cells == 0))
         return;
     char msg[400], e[32], x[32], tail[200];
-    ism_jw_format_double(in->max_error, e);
+    format_bound(in->max_error, e, sizeof e);
     format_beyond(worst, in->max_error, x, sizeof x);
     if (cells)
         snprintf(tail, sizeof tail, "; %llu cells could not be split further (at depth.max, or "

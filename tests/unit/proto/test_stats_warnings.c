@@ -54,6 +54,24 @@ Test(stats_warnings, missed_bound_with_cells_at_the_limit)
     free(w);
 }
 
+/* The default bound (1e-3 x the box diagonal) is no round number: three digits of it,
+ * rounded down, so the worst distance reads above the bound as shown (0.05546 is 0.0554, not
+ * 0.0555, beside a worst 0.05549); a bound of six digits as given. */
+Test(stats_warnings, a_default_bound_shows_three_digits)
+{
+    char *w = warning(0.05542562584220407, 0.0623101070523262, 8);
+    cr_assert(strstr(w, "max_error 0.0554 was not met: the mesh is up to 0.0623 from"), "%s", w);
+    free(w);
+    w = warning(0.055461, 0.05549, 8);
+    cr_assert(strstr(w, "max_error 0.055461 was not met: the mesh is up to 0.0555 from"), "%s",
+              w);
+    free(w);
+    w = warning(0.0554612345, 0.05549, 8);
+    cr_assert(strstr(w, "max_error 0.0554 was not met: the mesh is up to 0.0555 from"), "%s",
+              w);
+    free(w);
+}
+
 Test(stats_warnings, missed_bound_with_no_cell_left_does_not_advise_depth)
 {
     /* Whitney's umbrella at 0.004 (NOTE11): 0.0045082436088348015 beside the pinch point */
