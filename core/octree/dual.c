@@ -63,16 +63,18 @@
 #define WELD_TOL 1e-12
 
 /* DN_HOLE: a leaf meeting a point's hole; DN_CREASE: a surface leaf whose vertex lies on f's
- * crease (dual_crease.h) */
-enum { DN_INNER, DN_EMPTY, DN_SURF, DN_HOLE, DN_CREASE };
+ * crease (dual_crease.h); DN_PAIR: a leaf at depth.max beside the crease holding a piece of
+ * each branch apart (vert on a, vert2 on b: dual_crease.h ISM_CREASE_PAIR) */
+enum { DN_INNER, DN_EMPTY, DN_SURF, DN_HOLE, DN_CREASE, DN_PAIR };
 
-/* A leaf with a vertex: plain, or on the crease. */
-static bool has_sheet(int kind) { return kind == DN_SURF || kind == DN_CREASE; }
+/* A leaf with a vertex: plain, on the crease, or one per branch. */
+static bool has_sheet(int kind) { return kind == DN_SURF || kind == DN_CREASE || kind == DN_PAIR; }
 
 typedef struct dnode {
     ism_ipt o;      /* lattice origin */
     int32_t child;  /* first of the 8 children (bit 0 = x, 1 = y, 2 = z), -1 for a leaf */
     int32_t vert;   /* the leaf's vertex, -1 for none yet */
+    int32_t vert2;  /* a DN_PAIR leaf's second (branch b's) vertex, else -1 */
     uint8_t level;
     uint8_t kind;
     uint8_t split;  /* a triangle of this leaf missed E this round */
@@ -582,20 +584,32 @@ static bool graph_on_sub_boxes(worker *w, const corner_view *v)
 static int crease_kind(dual *d, worker *w, dnode *n, corner_view *v)
 {
     bool small = ism_grid_cell_size(&d->g, n->level) <= CREASE_MEASURED_CELLS * d->o->max_error;
-    enum ism_crease_node k = ism_dual_crease_node(&w->s, w->jet, w->force,
-                                                  (const double (*)[3])v->p, n->f,
-                                                  d->o->flat_normal, small);
+    bool last = n->level >= d->o->max_depth;
+    const double (*p)[3] = (const double (*)[3])v->p;
+    enum ism_crease_node k = ism_dual_crease_node(&w->s, w->jet, w->force, p, n->f,
+                                                  d->o->flat_normal, small, last);
     int kind = k == ISM_CREASE_EMPTY    ? DN_EMPTY
                : k == ISM_CREASE_VERTEX ? DN_CREASE
                : k == ISM_CREASE_SMOOTH ? DN_SURF
+               : k == ISM_CREASE_PAIR   ? DN_PAIR
                                         : DN_INNER;
     /* a leaf with the kink at most 4 E across is judged by the measurement alone (as
      * cell_error.c judges the primal polygons'): the crease's wedge pokes through the
      * same-sign edges beside it at every level (two roots), so splitting for them went on
      * to depth.max. Its faces still hold one crossing curve each (two on a face made
      * Barth's sextic at 1e-2 non-manifold along 4 edges by the crease). */
-    if (has_sheet(kind) && (small ? !plain_faces(d, n) : !plain_edges(d, w, n, v)))
-        kind = DN_INNER;
+    if (has_sheet(kind) && kind != DN_PAIR &&
+        (small ? !plain_faces(d, n) : !plain_edges(d, w, n, v)))
+        /* at depth.max a crease leaf may have a face crossed four times by two branches'
+           curves (the ridge along its diagonal): its neighbour there is a pair leaf */
+        kind = kind == DN_CREASE && small && last &&
+                       ism_dual_crease_branch_faces(&w->s, p, n->f) >= 0
+                   ? DN_CREASE
+                   : DN_INNER;
+    /* at depth.max a small leaf with plain faces whose crease point Newton missed (more than
+       half a cell outside, or not converging) is a plain leaf: the measurement judges it */
+    if (kind == DN_INNER && k == ISM_CREASE_SPLIT && small && last && plain_faces(d, n))
+        kind = DN_SURF;
     v->kinked = kind == DN_INNER;
     return kind;
 }
@@ -714,7 +728,7 @@ static bool new_node(dual *d, ism_ipt o, int level, int32_t *out)
     memset(n, 0, sizeof *n);
     n->o = o;
     n->level = (uint8_t)level;
-    n->child = n->vert = -1;
+    n->child = n->vert = n->vert2 = -1;
     return true;
 }
 
@@ -993,6 +1007,16 @@ static void place_vertex(dual *d, worker *w, int32_t i)
         memcpy(&d->pos[3 * n->vert], m, sizeof m); /* on the crease, as classify found it */
         return;
     }
+    if (n->kind == DN_PAIR) {
+        for (int k = 0; k < 2; k++) {
+            double p[8][3];
+            for (int c = 0; c < 8; c++)
+                corner_point(d, n, c, p[c]);
+            ism_dual_pair_vertex(&w->s, (const double (*)[3])p, n->f, k, m);
+            memcpy(&d->pos[3 * (k ? n->vert2 : n->vert)], m, sizeof m);
+        }
+        return;
+    }
     for (int a = 0; a < 3; a++)
         m[a] = 0.5 * lo[a] + 0.5 * hi[a];
     bool inside = newton_onto(w, m, size);
@@ -1093,7 +1117,7 @@ static void make_vertices(dual *d)
     for (size_t i = 0; i < d->nn; i++)
         n += d->n[i].child < 0 && has_sheet(d->n[i].kind) && d->n[i].vert < 0;
     int32_t *leaves = malloc((n ? n : 1) * sizeof *leaves);
-    if (!leaves || !reserve_vertices(d, n)) {
+    if (!leaves || !reserve_vertices(d, 2 * n)) { /* a pair leaf has two */
         free(leaves);
         d->nomem = true;
         return;
@@ -1101,9 +1125,11 @@ static void make_vertices(dual *d)
     n = 0;
     for (size_t i = 0; i < d->nn; i++)
         if (d->n[i].child < 0 && has_sheet(d->n[i].kind) && d->n[i].vert < 0) {
-            d->n[i].vert = (int32_t)d->nv;
-            d->vtwin[d->nv] = -1;
-            d->vleaf[d->nv++] = (int32_t)i;
+            for (int k = 0; k <= (d->n[i].kind == DN_PAIR); k++) {
+                *(k ? &d->n[i].vert2 : &d->n[i].vert) = (int32_t)d->nv;
+                d->vtwin[d->nv] = -1;
+                d->vleaf[d->nv++] = (int32_t)i;
+            }
             leaves[n++] = (int32_t)i;
         }
     task_ctx job = {d, leaves, NULL};
@@ -1211,6 +1237,7 @@ typedef struct walk {
     walk_call *defer;
     size_t nd, capd;
     bool nomem;
+    worker *w;        /* evaluates f for edges beside a pair leaf (edge_quad) */
 } walk;
 
 /* Put off a call on nodes c[0..n) when the walk defers and one of them reaches the level;
@@ -1254,8 +1281,22 @@ static void add_quad(quads *out, const uint32_t v[4])
     memcpy(&out->q[4 * out->n++], u, sizeof u);
 }
 
+/* Which branch's zero (dual_crease.h ism_dual_edge_branch) the root of node n's edge c0 -> c1
+ * is; -1 when it cannot tell. */
+static int pair_edge_branch(const dual *d, worker *w, const dnode *n, int c0, int c1)
+{
+    double p[2][3], bv[2][2];
+    for (int j = 0; j < 2; j++) {
+        corner_point(d, n, j ? c1 : c0, p[j]);
+        w->s.n_point++;
+        if (!ism_eval_top_values(w->s.tape, w->s.ws, p[j][0], p[j][1], p[j][2], bv[j]))
+            return -1;
+    }
+    return ism_dual_edge_branch(&w->s, p[0], p[1], bv[0], bv[1]);
+}
+
 /* Four leaves round an edge along axis e: the quad across the smallest one's edge there when
- * f changes sign along it. */
+ * f changes sign along it (beside a pair leaf, its vertex of the edge's branch). */
 static void edge_quad(walk *wk, const int32_t c[4], int e)
 {
     const dual *d = wk->d;
@@ -1274,9 +1315,19 @@ static void edge_quad(walk *wk, const int32_t c[4], int e)
     bool in0 = n->f[c0] < 0, in1 = n->f[c1] < 0;
     if (in0 == in1)
         return;
+    int branch = 0; /* beside a pair leaf: the branch whose zero the edge's root is */
+    for (int k = 0; k < 4; k++)
+        if (d->n[c[k]].kind == DN_PAIR) {
+            branch = pair_edge_branch(d, wk->w, n, c0, c1);
+            if (branch < 0) {
+                wk->out->bad = true;
+                return;
+            }
+            break;
+        }
     uint32_t v[4];
     for (int k = 0; k < 4; k++) {
-        int32_t vert = d->n[c[k]].vert;
+        int32_t vert = branch && d->n[c[k]].kind == DN_PAIR ? d->n[c[k]].vert2 : d->n[c[k]].vert;
         if (vert < 0) {
             wk->out->bad = true; /* cannot happen for plain leaves; never emit a hole */
             return;
@@ -1392,10 +1443,9 @@ static void cell_proc(walk *wk, int32_t i)
 /* Deferred walk call k (in) made into its own quads (out[k]). */
 static void walk_task(void *ctx, size_t k, int thread)
 {
-    (void)thread;
     task_ctx *job = ctx;
     const walk_call *call = &((const walk_call *)job->in)[k];
-    walk wk = {job->d, &((quads *)job->out)[k], false, NULL, 0, 0, false};
+    walk wk = {job->d, &((quads *)job->out)[k], false, NULL, 0, 0, false, &job->d->w[thread]};
     if (call->kind == WALK_CELL)
         cell_proc(&wk, call->c[0]);
     else if (call->kind == WALK_FACE)
@@ -1410,7 +1460,7 @@ static void walk_task(void *ctx, size_t k, int thread)
 static void make_quads(dual *d)
 {
     d->q.n = 0;
-    walk wk = {d, &d->q, true, NULL, 0, 0, false};
+    walk wk = {d, &d->q, true, NULL, 0, 0, false, &d->w[0]};
     cell_proc(&wk, 0);
     quads *part = calloc(wk.nd ? wk.nd : 1, sizeof *part);
     if (!part || wk.nomem) {
@@ -2092,6 +2142,7 @@ static enum ism_dual_status run_round_points(dual *d, ism_mesh *mesh, ism_dual_s
         balls && shrink && missed && rim && last ? ISM_DUAL_OK : ISM_DUAL_NO_MEMORY;
     d->balls = balls;
     d->nballs = n;
+
     while (status == ISM_DUAL_OK) {
         for (size_t k = 0; k < n; k++)
             ism_dual_ball_make(&balls[k], d->o->dual_points[k], d->inner ? d->inner : d->o->box,

@@ -47,6 +47,20 @@
  * on its halves, keep it from 0 as f's max/min needs. Two leaves that found one crease
  * point share its vertex (dual.c weld_crease).
  *
+ * The ridge along a face's diagonal. Where the wedge of a max (the solid between the two
+ * sheets beside the crease) runs along a face diagonal, the face is crossed four times, two
+ * crossings on each branch, at every level alike (Barth's sextic in its own box at 3e-3, and
+ * at 1e-3). A small leaf at depth.max whose crossed edges each belong to one branch
+ * (ism_dual_edge_branch: the branch changing sign along the edge whose secant root lets it be
+ * active) with at most two of a branch on any face is then meshed rather than declined: with
+ * a crease point, its one vertex on the crease; without, when each branch has a piece (three
+ * crossed edges or more), a pair leaf with a vertex per branch (ism_dual_pair_vertex), the
+ * quads round an edge taking the vertex of that edge's branch (dual.c edge_quad) — so the
+ * mesh edge from the crease vertex across the four-crossed face is in two quads per branch,
+ * not four. Only at depth.max: where the split would decline, so no mesh made before
+ * changes. A small leaf at depth.max with plain faces whose crease point Newton missed is a
+ * plain leaf. The measurement judges all of them (a miss at depth.max declines).
+ *
  * Measuring: |f| / |∇f| is a distance to first order only where the foot along ∇f stays on
  * the active branch's side. Near the switch surface a = b (its first-order distance at most
  * twice f = 0's) the distance is taken as the least of |p − x| + |f(x)| / |∇f(x)| over three
@@ -67,6 +81,7 @@
  * irrational box, and in its own box (f exactly 0 at lattice points) it declines, and the
  * failed try costs 35-75% of the primal path's CPU on top: hence the option. */
 #include "core/octree/dual_crease.h"
+#include "core/octree/corners.h"
 #include "core/octree/crease_split.h"
 #include "core/octree/edge_keys.h"
 #include "core/util/vec3.h"
@@ -93,6 +108,10 @@
  * stays on that branch's side (2: the first-order estimates may each be off by their
  * curvature terms, a factor 2 covers cells where those are below the distances). */
 #define SWITCH_MARGIN 2.0
+
+/* A pair leaf's vertex moves onto its branch's zero until a step is below this share of the
+ * leaf (dual.c's NEWTON_STOP for plain vertices). */
+#define PAIR_STOP 1e-9
 
 /* Halvings of a node whose corners share a sign, when neither branch alone keeps f from 0
  * over it (halves_sign): one (8 boxes of half its size, each two interval evaluations). */
@@ -248,33 +267,66 @@ static bool branch_agrees(const double bg[8][2][3], int k, double cos_min)
 static int crossings_branch(ism_sampler *s, const double (*p)[3], const double f[8],
                             const double bv[8][2])
 {
-    bool is_max = top_is_max(s->tape);
     int k = -1;
     for (int c0 = 0; c0 < 8; c0++)
         for (int a = 0; a < 3; a++) {
-            int c1 = c0 | 1 << a, here = -1;
+            int c1 = c0 | 1 << a;
             if (c1 == c0 || (f[c0] < 0) == (f[c1] < 0))
                 continue;
-            for (int b = 0; b < 2; b++) {
-                if ((bv[c0][b] < 0) == (bv[c1][b] < 0))
-                    continue;
-                double t = bv[c0][b] / (bv[c0][b] - bv[c1][b]), x[3], v[2];
-                for (int q = 0; q < 3; q++)
-                    x[q] = p[c0][q] + t * (p[c1][q] - p[c0][q]);
-                s->n_point++;
-                if (!ism_eval_top_values(s->tape, s->ws, x[0], x[1], x[2], v))
-                    return -1;
-                if (!(is_max ? v[1 - b] <= 0 : v[1 - b] >= 0))
-                    continue;
-                if (here >= 0)
-                    return -1; /* both: the crease beside this edge */
-                here = b;
-            }
+            int here = ism_dual_edge_branch(s, p[c0], p[c1], bv[c0], bv[c1]);
             if (here < 0 || (k >= 0 && here != k))
                 return -1;
             k = here;
         }
     return k;
+}
+
+int ism_dual_edge_branch(ism_sampler *s, const double p0[3], const double p1[3],
+                         const double bv0[2], const double bv1[2])
+{
+    bool is_max = top_is_max(s->tape);
+    int here = -1;
+    for (int b = 0; b < 2; b++) {
+        if ((bv0[b] < 0) == (bv1[b] < 0))
+            continue;
+        double t = bv0[b] / (bv0[b] - bv1[b]), x[3], v[2];
+        for (int q = 0; q < 3; q++)
+            x[q] = p0[q] + t * (p1[q] - p0[q]);
+        s->n_point++;
+        if (!ism_eval_top_values(s->tape, s->ws, x[0], x[1], x[2], v))
+            return -1;
+        if (!(is_max ? v[1 - b] <= 0 : v[1 - b] >= 0))
+            continue;
+        if (here >= 0)
+            return -1; /* both: the crease beside this edge */
+        here = b;
+    }
+    return here;
+}
+
+int ism_dual_crease_branch_faces(ism_sampler *s, const double (*p)[3], const double f[8])
+{
+    int per[6][2] = {{0}}, total[2] = {0, 0};
+    double bv[8][2];
+    for (int c = 0; c < 8; c++) {
+        s->n_point++;
+        if (!ism_eval_top_values(s->tape, s->ws, p[c][0], p[c][1], p[c][2], bv[c]))
+            return -1;
+    }
+    for (int e = 0; e < 12; e++) {
+        int c0, c1, face[2];
+        ism_cube_edge(e, &c0, &c1, face);
+        if ((f[c0] < 0) == (f[c1] < 0))
+            continue;
+        int k = ism_dual_edge_branch(s, p[c0], p[c1], bv[c0], bv[c1]);
+        if (k < 0)
+            return -1;
+        total[k]++;
+        if (++per[face[0]][k] > 2 || ++per[face[1]][k] > 2)
+            return -1;
+    }
+    /* a piece of one branch alone is a curve round a corner or more (3 edges at least) */
+    return total[0] >= 3 && total[1] >= 3 ? 2 : 1;
 }
 
 /* Is x within `share` of the box's size of the box along every axis? (NaN: no.) */
@@ -339,7 +391,7 @@ bool ism_dual_crease_near(ism_sampler *s, const double lo[3], const double hi[3]
 
 enum ism_crease_node ism_dual_crease_node(ism_sampler *s, ism_ivjet_ws *jet, uint8_t *force,
                                           const double (*p)[3], const double f[8],
-                                          double cos_min, bool small)
+                                          double cos_min, bool small, bool last)
 {
     const ism_tape *t = s->tape;
     double vertex[3]; /* the crease point, found again by the caller (place_vertex) */
@@ -378,8 +430,46 @@ enum ism_crease_node ism_dual_crease_node(ism_sampler *s, ism_ivjet_ws *jet, uin
     int k = crossings_branch(s, p, f, (const double (*)[2])bv);
     if (k >= 0 && (k ? one_b : one_a))
         return ISM_CREASE_SMOOTH;
-    return small && ism_dual_crease_near(s, p[0], p[7], vertex) ? ISM_CREASE_VERTEX
-                                                                : ISM_CREASE_SPLIT;
+    if (small && ism_dual_crease_near(s, p[0], p[7], vertex))
+        return ISM_CREASE_VERTEX;
+    return small && last && ism_dual_crease_branch_faces(s, p, f) == 2 ? ISM_CREASE_PAIR
+                                                                        : ISM_CREASE_SPLIT;
+}
+
+void ism_dual_pair_vertex(ism_sampler *s, const double (*p)[3], const double f[8], int k,
+                          double x[3])
+{
+    double bv[8][2], sum[3] = {0, 0, 0}, size = p[7][0] - p[0][0];
+    int roots = 0;
+    for (int c = 0; c < 8; c++) {
+        s->n_point++;
+        ism_eval_top_values(s->tape, s->ws, p[c][0], p[c][1], p[c][2], bv[c]);
+    }
+    for (int e = 0; e < 12; e++) {
+        int c0, c1, face[2];
+        ism_cube_edge(e, &c0, &c1, face);
+        if ((f[c0] < 0) == (f[c1] < 0) ||
+            ism_dual_edge_branch(s, p[c0], p[c1], bv[c0], bv[c1]) != k)
+            continue;
+        double t = bv[c0][k] / (bv[c0][k] - bv[c1][k]); /* branch k's secant root */
+        for (int a = 0; a < 3; a++)
+            sum[a] += p[c0][a] + t * (p[c1][a] - p[c0][a]);
+        roots++;
+    }
+    for (int a = 0; a < 3; a++)
+        x[a] = roots ? sum[a] / roots : 0.5 * p[0][a] + 0.5 * p[7][a];
+    for (int it = 0; it < FOOT_STEPS; it++) { /* onto k = 0 along ∇k */
+        double v[2], g[2][3];
+        s->n_gradient++;
+        ism_eval_top_branches(s->tape, s->ws, x[0], x[1], x[2], v, g);
+        double gg = ism_dot3(g[k], g[k]);
+        if (!isfinite(v[k]) || !(gg > 0) || !isfinite(gg))
+            break;
+        for (int a = 0; a < 3; a++)
+            x[a] -= v[k] * g[k][a] / gg;
+        if (fabs(v[k]) / sqrt(gg) < PAIR_STOP * size)
+            break;
+    }
 }
 
 /* |p − x| + |f(x)| / |∇f(x)| for x: Newton from p along branch k onto k = 0 (INFINITY when a

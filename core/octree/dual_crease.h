@@ -22,6 +22,10 @@ enum ism_crease_node {
                              whose corner gradients agree: a plain leaf of that branch */
     ISM_CREASE_VERTEX,    /* a crease point in the box (vertex), each branch's corner
                              gradients agreeing: the leaf's vertex on the crease */
+    ISM_CREASE_PAIR,      /* at depth.max, small, no crease point in or near the box, the
+                             crossings on both branches, each branch's one piece (curves
+                             of its own crossed edges, at most one per face): a vertex per
+                             branch (ism_dual_crease_branch_faces) */
 };
 
 /* Node lo..hi with corners p[8] (bit 0 = x, 1 = y, 2 = z), f at them in f[8], judged as
@@ -30,10 +34,31 @@ enum ism_crease_node {
  * crease point in it, ism_dual_crease_near's point). force: a zeroed buffer of s's tape
  * length, the caller's per thread (its last entry is overwritten). The crease point of an
  * ISM_CREASE_VERTEX node is ism_dual_crease_vertex's, else ism_dual_crease_near's: a
- * function of the box alone, which the caller finds again the same way. */
+ * function of the box alone, which the caller finds again the same way. last: the node is
+ * at depth.max (ISM_CREASE_PAIR only there: where splitting would decline). */
 enum ism_crease_node ism_dual_crease_node(ism_sampler *s, ism_ivjet_ws *jet, uint8_t *force,
                                           const double (*p)[3], const double f[8],
-                                          double cos_min, bool small);
+                                          double cos_min, bool small, bool last);
+
+/* The branch (0: a, 1: b) whose zero is f's root on the edge p0 -> p1 (p0 the lower end; the
+ * branches' values bv0, bv1 at its ends, f changing sign along it): the branch changing sign
+ * along it whose secant root has the other branch letting it be active there (max: the
+ * other <= 0; min: >= 0); -1 when neither or both. A function of the edge alone: every node
+ * round it labels it so. */
+int ism_dual_edge_branch(ism_sampler *s, const double p0[3], const double p1[3],
+                         const double bv0[2], const double bv1[2]);
+
+/* The node's crossed edges (corners p[8], f[8]) labelled by ism_dual_edge_branch: -1 when one
+ * cannot be labelled or a face holds more than two of one branch (two curves of it); 2 when
+ * each branch has three or more (a piece of each apart: a pair leaf may hold them), else 1
+ * (a face may hold two of each: a ridge along its diagonal, crossed four times). */
+int ism_dual_crease_branch_faces(ism_sampler *s, const double (*p)[3], const double f[8]);
+
+/* Branch k's vertex of a pair leaf (corners p[8], f[8]; ISM_CREASE_PAIR) into x: the mean of
+ * branch k's secant roots on the crossed edges labelled k (ism_dual_edge_branch), moved onto
+ * k = 0 by Newton along ∇k. */
+void ism_dual_pair_vertex(ism_sampler *s, const double (*p)[3], const double f[8], int k,
+                          double x[3]);
 
 /* The crease point Newton reaches from the box's centre into x; false when Newton fails or
  * it lies farther than half the box's size outside the box along an axis. */

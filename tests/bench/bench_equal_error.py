@@ -99,7 +99,8 @@ class Isomesh(Tool):
     name = "isomesh"
     words = ()  # bench_error's extra words: "primal" (not the dual mesh, the default where
     #             it applies), "straddle" (the polygoniser's option), "simplify" (then
-    #             the simplification within E; without it none, whichever mesher ran)
+    #             the simplification within E; without it none, whichever mesher ran),
+    #             "crease" (the dual mesh along a min/max crease: dual_crease)
 
     def start(self, s, e):
         return 1 / e
@@ -338,6 +339,9 @@ def main():
     ap.add_argument("--dual", action="store_true",
                     help="the default (kept for old command lines): the dual mesh where it "
                          "applies")
+    ap.add_argument("--crease", action="store_true",
+                    help="isomesh's dual mesh also along a top min/max's crease (the option "
+                         "dual_crease, off by default: core/octree/dual_crease.h)")
     ap.add_argument("--raw", action="store_true",
                     help="the default (kept for old command lines): no simplification, the "
                          "request's simplify: false")
@@ -368,6 +372,7 @@ def main():
                 sys.exit("bench_equal_error: --raw and --simplify contradict each other")
             tools[0].words = tuple(w for w, on in (("straddle", args.straddle),
                                                    ("primal", args.primal),
+                                                   ("crease", args.crease),
                                                    ("simplify", args.simplify)) if on)
         five = None
         if "libfive" in wanted:

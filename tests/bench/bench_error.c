@@ -5,7 +5,7 @@
  * to f = 0, in closed form for the sphere and the torus, else the length of the Newton
  * projection q <- q - f ∇f / |∇f|² (on the tape compiled from the same expression).
  *
- *   bench_error mesh NAME E [DEPTH [raw|simplify] [primal] [straddle]]
+ *   bench_error mesh NAME E [DEPTH [raw|simplify] [primal] [straddle] [crease]]
  *                                        isomesh as the service does by default (core/
  *                                        singular/surface.h: the locus, the dual mesh where
  *                                        it applies, core/octree/dual.h, else the primal
@@ -14,8 +14,10 @@
  *                                        the default, is accepted for old scripts);
  *                                        primal: not the dual mesh ("dual": false); straddle:
  *                                        the polygoniser's straddle option, core/octree/
- *                                        straddle.h ("dual" is accepted: the default), one
- *                                        thread
+ *                                        straddle.h ("dual" is accepted: the default);
+ *                                        crease: the dual mesh also along a top min/max's
+ *                                        crease (the option dual_crease, off by default,
+ *                                        core/octree/dual_crease.h); one thread
  *   bench_error measure NAME FILE.ply [all]   (all: midpoints and corners too)
  *                                        a mesh from another tool (binary little-endian PLY:
  *                                        double x y z, faces as uchar count + int32 indices)
@@ -250,7 +252,7 @@ static ism_tape *compile(const surface *s)
 }
 
 static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, int depth,
-                    bool asked, bool straddle, bool dual)
+                    bool asked, bool straddle, bool dual, bool crease)
 {
     ism_poly_options o;
     ism_poly_options_default(&o);
@@ -260,6 +262,7 @@ static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, 
     o.threads = 1;
     o.straddle = straddle;
     o.dual = dual;
+    o.dual_crease = crease;
     ism_mesh mesh;
     ism_mesh_init(&mesh);
     ism_locus locus;
@@ -365,7 +368,7 @@ int main(int argc, char **argv)
     if (argc == 2 && strcmp(argv[1], "list") == 0)
         return cmd_list();
     if (argc < 4) {
-        fprintf(stderr, "usage: bench_error mesh NAME E [DEPTH [raw|simplify] [primal] [straddle]] | measure NAME FILE.ply [all] | "
+        fprintf(stderr, "usage: bench_error mesh NAME E [DEPTH [raw|simplify] [primal] [straddle] [crease]] | measure NAME FILE.ply [all] | "
                         "eval NAME X,Y,Z[;...] | list\n");
         return 2;
     }
@@ -378,7 +381,8 @@ int main(int argc, char **argv)
     if (strcmp(argv[1], "mesh") == 0)
         rc = cmd_mesh(s, t, &m, atof(argv[3]), argc > 4 ? atoi(argv[4]) : 10,
                       has_word(argc, argv, 5, "simplify"),
-                      has_word(argc, argv, 5, "straddle"), !has_word(argc, argv, 5, "primal"));
+                      has_word(argc, argv, 5, "straddle"), !has_word(argc, argv, 5, "primal"),
+                      has_word(argc, argv, 5, "crease"));
     else if (strcmp(argv[1], "measure") == 0)
         rc = cmd_measure(&m, argv[3], has_word(argc, argv, 4, "all"));
     else if (strcmp(argv[1], "eval") == 0)
