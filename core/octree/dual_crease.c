@@ -84,6 +84,7 @@
 #include "core/octree/corners.h"
 #include "core/octree/crease_split.h"
 #include "core/octree/edge_keys.h"
+#include "core/util/sort_u64.h"
 #include "core/util/vec3.h"
 
 #include <math.h>
@@ -626,7 +627,7 @@ size_t ism_dual_not_manifold(const uint32_t *tri, size_t nt, size_t nv, uint32_t
         for (int j = 0; j < 3; j++)
             key[3 * t + j] = ism_edge_key(tri[3 * t + j], tri[3 * t + (j + 1) % 3]);
     if (ne)
-        qsort(key, ne, sizeof *key, ism_edge_key_order);
+        ism_sort_u64(key, ne);
     size_t n = 0;
     for (size_t i = 0, j; i < ne; i = j) {
         for (j = i + 1; j < ne && key[j] == key[i]; j++)
@@ -642,7 +643,7 @@ size_t ism_dual_not_manifold(const uint32_t *tri, size_t nt, size_t nv, uint32_t
         for (int j = 0; j < 3; j++)
             key[3 * t + j] = (uint64_t)tri[3 * t + j] << 32 | t;
     if (ne) /* (vertex, triangle) in one word: sorted as edge keys are */
-        qsort(key, ne, sizeof *key, ism_edge_key_order);
+        ism_sort_u64(key, ne);
     for (size_t v = 0; v < nv; v++)
         up[v] = (uint32_t)v;
     for (size_t i = 0, j; i < ne; i = j) {

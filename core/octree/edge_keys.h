@@ -8,6 +8,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include "core/util/sort_u64.h"
 
 static inline uint64_t ism_edge_key(uint32_t a, uint32_t b)
 {
@@ -23,9 +24,9 @@ static inline int ism_edge_key_order(const void *a, const void *b)
 /* keys[0..n) sorted, each once; returns how many are left. */
 static inline size_t ism_edge_keys_unique(uint64_t *keys, size_t n)
 {
-    if (!n) /* keys may be NULL then (qsort's is nonnull) */
+    if (!n) /* keys may be NULL then */
         return 0;
-    qsort(keys, n, sizeof *keys, ism_edge_key_order);
+    ism_sort_u64(keys, n);
     size_t u = 0;
     for (size_t i = 0; i < n; i++)
         if (!u || keys[i] != keys[u - 1])
