@@ -47,6 +47,9 @@ typedef struct fconn {
     struct sockaddr_storage peer;
     socklen_t peer_len;
     bool sending, corked;
+    bool spent;      /* queued again with its wake-up's share spent, the socket not full */
+    unsigned unsent; /* its TCP_NOTSENT_LOWAT (h.unsent_min until adapt_unsent moves it) */
+    long long woke_ns; /* when its answer last found the socket full or started */
     ism_front_answer a;
     size_t head_sent, body_sent;
     long long deadline_ns;
@@ -118,6 +121,12 @@ static void give(ism_front *f, int fd, const struct sockaddr_storage *peer, sock
         f->h.handing(f->h.cls, NULL);
 }
 
+static void set_unsent(fconn *c, unsigned bytes)
+{
+    if (setsockopt(c->fd, IPPROTO_TCP, TCP_NOTSENT_LOWAT, &bytes, sizeof bytes) == 0)
+        c->unsent = bytes;
+}
+
 static void give_conn(ism_front *f, fconn *c)
 {
     unlink_conn(f, c);
@@ -125,6 +134,9 @@ static void give_conn(ism_front *f, fconn *c)
         int zero = 0;
         setsockopt(c->fd, IPPROTO_TCP, TCP_CORK, &zero, sizeof zero);
     }
+    if (c->unsent != f->h.unsent_min) /* libmicrohttpd's copies are bounded by the listening
+                                         socket's (isomeshd http.c NOTSENT_LOWAT) */
+        set_unsent(c, f->h.unsent_min);
     give(f, c->fd, &c->peer, c->peer_len, c->ctx);
     free(c);
 }
@@ -165,6 +177,33 @@ static int send_some(fconn *c, size_t *budget)
     return SENT_WHOLE;
 }
 
+/* The unsent queue a connection gets, adapted at each wake-up that continues a body: the
+ * kernel wakes a writer once less than half its TCP_NOTSENT_LOWAT is unsent, so a body of B
+ * bytes takes about 2B / lowat wake-ups for a reader that is not as fast as loopback (1.55
+ * MB at the listening socket's 256 KB: 6-12; nginx, whose sendfile queues a whole body,
+ * 0.2-0.4 per request at 256 connections). A 4 MB queue for every connection halved the
+ * CPU per 1.55 MB answer at 256 connections, but beside 450 slow readers /healthz's p99
+ * went from ~10 ms to 180-1,000 ms (4 MB queued for each: the kernel's TCP memory under
+ * pressure, long sends on the polling threads). So the queue follows the reader's rate,
+ * the bytes the socket took at this wake-up over the time since the last one: from
+ * KEEP_UP_BPS it doubles (up to unsent_max), below SLOW_BPS it halves (down to unsent_min,
+ * which a slow reader therefore keeps), in between it stays. A wake-up that moved under a
+ * quarter of the queue (bytes arriving, not room made) says nothing. */
+#define KEEP_UP_BPS (512ll << 10) /* 6x bench_http's slow readers (16 KB per 0.2 s) */
+#define SLOW_BPS (160ll << 10)    /* 2x them */
+static void adapt_unsent(ism_front *f, fconn *c, size_t moved, long long now)
+{
+    long long dt = now - c->woke_ns;
+    c->woke_ns = now;
+    if (!f->h.unsent_max || dt <= 0)
+        return;
+    long long bps = (long long)((double)moved * 1e9 / (double)dt);
+    if (bps >= KEEP_UP_BPS && moved >= c->unsent / 4 && c->unsent < f->h.unsent_max)
+        set_unsent(c, c->unsent * 2 < f->h.unsent_max ? c->unsent * 2 : f->h.unsent_max);
+    else if (bps < SLOW_BPS && c->unsent > f->h.unsent_min)
+        set_unsent(c, c->unsent / 2 > f->h.unsent_min ? c->unsent / 2 : f->h.unsent_min);
+}
+
 /* Back to the end of the queue: MOD reports a ready socket again, edge-triggered or not
  * (should it fail, c's deadline still ends it). */
 static void requeue(ism_front *f, fconn *c)
@@ -182,15 +221,21 @@ static void serve(ism_front *f, fconn *c)
     for (unsigned answers = 0;;) {
         if (c->sending) {
             size_t moved = c->head_sent + c->body_sent;
+            bool resumed = c->body_sent && !c->spent; /* the socket full last time, now not */
+            c->spent = false;
             int st = send_some(c, &budget);
+            if (resumed)
+                adapt_unsent(f, c, c->head_sent + c->body_sent - moved, ism_now_ns());
             if (st == SOCKET_FULL || st == WAKE_SPENT) {
                 /* only bytes moved push the deadline back (set where the answer starts): a
                  * wake-up for bytes arriving must not, or a client trickling them holds an
                  * answer stalled before its first byte for ever */
                 if (c->head_sent + c->body_sent != moved)
                     c->deadline_ns = after(f->h.stall_s);
-                if (st == WAKE_SPENT)
+                if (st == WAKE_SPENT) {
+                    c->spent = true;
                     requeue(f, c);
+                }
                 return;
             }
             c->sending = false;
@@ -229,7 +274,8 @@ static void serve(ism_front *f, fconn *c)
         }
         c->sending = true;
         c->head_sent = c->body_sent = 0;
-        c->deadline_ns = after(f->h.stall_s);
+        c->woke_ns = ism_now_ns();
+        c->deadline_ns = c->woke_ns + (long long)(f->h.stall_s * 1e9);
         if (c->ctx && f->h.busy)
             f->h.busy(f->h.cls, c->ctx, true);
     }
@@ -332,6 +378,7 @@ static void accept_some(ism_front *f)
             continue;
         }
         c->fd = fd;
+        c->unsent = f->h.unsent_min; /* the listening socket's, inherited */
         c->peer = peer;
         c->peer_len = len;
         c->deadline_ns = after(f->h.idle_s);

@@ -53,6 +53,11 @@ typedef struct ism_front_hooks {
     unsigned max_conns; /* connections one front holds; beyond, new ones go at once */
     double idle_s;      /* a connection waiting this long for a request goes */
     double stall_s;     /* an answer that moves no byte this long: its connection is closed */
+    /* Unsent bytes a connection may queue in the kernel (TCP_NOTSENT_LOWAT): unsent_min, the
+     * listening socket's (inherited at accept), is what a new connection and a slow reader
+     * get; a reader that keeps up has it doubled up to unsent_max (0: never changed), so a
+     * large answer takes few wake-ups (http_front.c adapt_unsent). */
+    unsigned unsent_min, unsent_max;
 } ism_front_hooks;
 
 typedef struct ism_front ism_front;

@@ -374,6 +374,10 @@ static void mhd_log(void *cls, const char *fmt, va_list ap)
  * us per request by sendfile, 276 against 278 from memory (task-clock, medians of 3, bbr,
  * load 18-20). */
 #define NOTSENT_LOWAT (256u << 10)
+/* The own sender's unsent queue for a reader that keeps up (http_front.c adapt_unsent): twice
+ * its wake-up's share (WAKE_BYTES, 2 MB), so that a sendfile is never cut short by the queue
+ * before the share; the kernel's own bound on a socket's send buffer is tcp_wmem's 4 MB. */
+#define OWN_UNSENT_MAX (4u << 20)
 /* Connections libmicrohttpd may hold beyond --max-connections: those the connection table
  * closed and libmicrohttpd has not freed yet (an evicted connection waiting for a computation
  * lingers until its flight ends). Without room for them, libmicrohttpd's own limit (which
@@ -586,6 +590,8 @@ bool ismd_http_start(ismd_server *s, int listen_fd)
         .max_conns = own / threads + 1,
         .idle_s = OWN_SENDER_IDLE_S,
         .stall_s = s->cfg->conn_timeout_s,
+        .unsent_min = NOTSENT_LOWAT,
+        .unsent_max = OWN_UNSENT_MAX,
     };
     if (!s->loops || !ism_http_loops_start(s->loops, MHD_ALLOW_SUSPEND_RESUME | MHD_USE_ERROR_LOG,
                                            listen_fd, limit, on_request, s, opts,

@@ -288,6 +288,20 @@ def big_get(d):
     return big.body, get
 
 
+def big_daemon(prefix, *args):
+    """(a new directory, a daemon with the own sender and a 30 s --conn-timeout using its cache
+    there, args after; the big mesh's body, a GET of it as bytes) (big_get)."""
+    tmp = tempfile.mkdtemp(prefix=prefix)
+    d = Daemon("--workers", "1", "--own-sender", "--conn-timeout", "30", *args,
+               cache_dir=os.path.join(tmp, "cache")).start()
+    try:
+        return (tmp, d) + big_get(d)
+    except BaseException:
+        d.cleanup()
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
 def small_window_socket(port, window=16384):
     s = socket.socket()
     s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, window)
@@ -467,17 +481,74 @@ class EvictedMidAnswer(unittest.TestCase):
             shutil.rmtree(tmp, ignore_errors=True)
 
 
+def server_queue(port, peer_port):
+    """Bytes the daemon's socket listening on port holds for the client at peer_port that the
+    client has not acknowledged (unsent + in flight: /proc/net/tcp's tx_queue)."""
+    with open("/proc/net/tcp") as f:
+        for line in f.readlines()[1:]:
+            fields = line.split()
+            local, remote = fields[1].split(":"), fields[2].split(":")
+            if int(local[1], 16) == port and int(remote[1], 16) == peer_port:
+                return int(fields[4].split(":")[0], 16)
+    raise AssertionError("no socket of port %d for %d" % (port, peer_port))
+
+
+class UnsentQueue(unittest.TestCase):
+    """The unsent queue follows the reader (http_front.c adapt_unsent): a reader that keeps up
+    has it doubled up to 4 MB (a large answer then takes few wake-ups), so when it stops
+    reading, megabytes wait for it at the daemon; a slow reader keeps the listening socket's
+    256 KB (450 of them with 4 MB each held up /healthz). Both readers' windows are fixed,
+    so what the daemon holds is its own queue."""
+
+    def test_a_reader_that_keeps_up_gets_a_larger_queue_a_slow_one_does_not(self):
+        tmp, d, body, get = big_daemon("isomeshd_unsent_")
+        try:
+            fast = small_window_socket(d.port, 65536)
+            rest = b""
+            seen = []
+            for _ in range(6):  # read as fast as this process can (a loaded machine, a
+                for _ in range(2):  # sanitized daemon: its rate is measured, tries again)
+                    fast.sendall(get)
+                    status, _, got, rest = read_answer(fast, rest)
+                    self.assertEqual((status, got), (200, body))
+                fast.sendall(get)  # and then not
+                time.sleep(0.5)
+                seen.append(server_queue(d.port, fast.getsockname()[1]))
+                if seen[-1] > 1 << 20:  # 256 KB + its window before
+                    break
+                status, _, got, rest = read_answer(fast, rest)
+                self.assertEqual((status, got), (200, body))
+            self.assertGreater(seen[-1], 1 << 20, seen)
+            slow = small_window_socket(d.port, 16384)
+            slow.sendall(get)
+            got = b""
+            for _ in range(10):  # 16 KB per 0.2 s, as bench_http's slow readers
+                got += slow.recv(16384)
+                time.sleep(0.2)
+            queued = server_queue(d.port, slow.getsockname()[1])
+            self.assertLess(queued, 640 << 10)
+            self.assertGreater(queued, 128 << 10)
+            # both still get the whole answer
+            status, _, got, _ = read_answer(slow, got)
+            self.assertEqual((status, got), (200, body))
+            status, _, got, _ = read_answer(fast, rest)
+            self.assertEqual((status, got), (200, body))
+            slow.close()
+            fast.close()
+        finally:
+            d.stop()
+            d.cleanup()
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
 class ShutdownInFlight(unittest.TestCase):
     """SIGTERM with the own sender's answers under way: an answer that keeps moving is let
     finish (as libmicrohttpd's are: ismd_http_stop waits up to 3 s for open requests), a
     stalled one does not hold the stop beyond that, and the daemon exits cleanly."""
 
     def test_an_answer_under_way_finishes_and_a_stalled_one_does_not_hold_the_stop(self):
-        tmp = tempfile.mkdtemp(prefix="isomeshd_stop_")
-        d = Daemon("--workers", "1", "--own-sender", "--conn-timeout", "30",
-                   cache_dir=os.path.join(tmp, "cache")).start()
+        tmp, d, body, get = big_daemon("isomeshd_stop_")
         try:
-            body, get = big_get(d)
             reader = small_window_socket(d.port, 65536)
             stalled = small_window_socket(d.port, 4096)
             sent = d.metric(SENT)
