@@ -76,10 +76,12 @@
  * Measured (callgrind, whole ism_mesh_surface, one thread; tests/unit/core/
  * test_dual_crease.c): cut ball, lens: dual in three boxes at 1e-2 and 3e-3, closed-form
  * distances within E. Barth's clipped sextic (30 nodes in the ball, fanned by
- * dual_balls.c) at 1e-2 in its box shifted by 1e-3: dual, 57,884 triangles against the
- * primal path's 65,590, χ, pieces and nodes the same — but at 3e-3 and 1e-3, in the
- * irrational box, and in its own box (f exactly 0 at lattice points) it declines, and the
- * failed try costs 35-75% of the primal path's CPU on top: hence the option. */
+ * dual_balls.c) in its own box ±1.6 at 1e-2 / 3e-3 / 1e-3: dual, 56,924 / 78,100 / 160,968
+ * triangles against the primal path's 66,064 / 142,560 / 292,752, χ, pieces and nodes the
+ * same, but 4.33G / 5.37G / ~11G instructions against 2.72G / 4.94G / 9.65G; in the box
+ * shifted by 1e-3 dual at 1e-2 only, in the irrational box declined at all three (two crease
+ * leaves sharing a face crossed four times: non-manifold at depth.max), and a failed try
+ * costs up to 75% of the primal path's CPU on top: hence the option, still off. */
 #include "core/octree/dual_crease.h"
 #include "core/octree/corners.h"
 #include "core/octree/crease_split.h"
