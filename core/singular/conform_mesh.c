@@ -4,6 +4,7 @@
  * of the vertices where ∇f vanishes taken from their triangles as the welder does). */
 #include "core/singular/conform_internal.h"
 #include "core/util/clock.h"
+#include "core/util/sort_u64.h"
 #include "core/util/vec3.h"
 
 #include <math.h>
@@ -42,8 +43,8 @@ void cf_sort_u32(uint32_t *a, size_t n)
         }
         return;
     }
-    uint32_t *tmp = malloc(n * sizeof *tmp);
-    if (!tmp) { /* out of memory: sorted in place all the same */
+    uint64_t *w = malloc(n * sizeof *w);
+    if (!w) { /* out of memory: sorted in place all the same */
         for (size_t gap = n / 2; gap > 0; gap /= 2) /* shell sort: no extra memory */
             for (size_t i = gap; i < n; i++) {
                 uint32_t x = a[i];
@@ -54,31 +55,14 @@ void cf_sort_u32(uint32_t *a, size_t n)
             }
         return;
     }
-    /* least significant byte first; a byte every key shares is not a pass (triangle
-     * numbers rarely reach the top byte) */
-    uint32_t all_or = 0, all_and = ~0u;
-    for (size_t i = 0; i < n; i++) {
-        all_or |= a[i];
-        all_and &= a[i];
-    }
-    uint32_t *src = a, *dst = tmp;
-    for (int shift = 0; shift < 32; shift += 8) {
-        if ((((all_or ^ all_and) >> shift) & 0xff) == 0)
-            continue;
-        size_t count[257] = {0};
-        for (size_t i = 0; i < n; i++)
-            count[((src[i] >> shift) & 0xff) + 1]++;
-        for (int b = 0; b < 256; b++)
-            count[b + 1] += count[b];
-        for (size_t i = 0; i < n; i++)
-            dst[count[(src[i] >> shift) & 0xff]++] = src[i];
-        uint32_t *t = src;
-        src = dst;
-        dst = t;
-    }
-    if (src != a)
-        memcpy(a, src, n * sizeof *a);
-    free(tmp);
+    /* the radix sort of 64-bit keys (digits every key shares, the high half here, are no
+       pass) */
+    for (size_t i = 0; i < n; i++)
+        w[i] = a[i];
+    ism_sort_u64(w, n);
+    for (size_t i = 0; i < n; i++)
+        a[i] = (uint32_t)w[i];
+    free(w);
 }
 
 /* The CSR incidence of the triangles present now (dead ones left out). */
