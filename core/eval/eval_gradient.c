@@ -165,8 +165,7 @@ static size_t crease_top(const ism_tape *t, bool through)
     if (!t->len || t->code[t->len - 1].out != t->result)
         return t->len;
     size_t i = t->len - 1;
-    while (through && i > 0 && t->code[i].op != ISM_OP_MIN_RR &&
-           t->code[i].op != ISM_OP_MAX_RR && t->code[i].op != ISM_OP_CONST &&
+    while (through && i > 0 && ism_op_has_reg_a(t->code[i].op) &&
            !ism_op_has_reg_b(t->code[i].op) && t->code[i].a == t->code[i - 1].out)
         i--;
     return t->code[i].op == ISM_OP_MIN_RR || t->code[i].op == ISM_OP_MAX_RR ? i : t->len;

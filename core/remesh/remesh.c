@@ -33,6 +33,18 @@ void ism_remesh_renumber_free(ism_remesh_renumber *ren)
  * have their angle measured (an arc tangent): the sine alone orders them up to rounding. */
 #define ISM_RM_SINE_TIE 1.000001
 
+/* Triangle abc (smallest sine s, twice its area, longest side l) into the smallest angle so
+ * far (worst, degrees) and the least sine: measured when it is not degenerate (the
+ * analysis's rule) and its sine is within ISM_RM_SINE_TIE of the least. */
+static inline void take(const double *a, const double *b, const double *c, double s,
+                        double area, double l, double *least, double *worst)
+{
+    if (area > 1e-12 * l * l && s <= *least * ISM_RM_SINE_TIE) {
+        *least = fmin(*least, s);
+        *worst = fmin(*worst, rm_min_angle(a, b, c) * 180 / M_PI);
+    }
+}
+
 /* The smallest angle of the pass's live triangles, as ism_remesh_min_angle reads the mesh
  * once the pass has closed (the same triangles, corners in the same order), from the sines
  * the pass keeps: the sides and area only of a triangle within ISM_RM_SINE_TIE of the least
@@ -52,10 +64,7 @@ static double pass_min_angle(rm_pass *p)
         const double *a = m->pos + 3 * v[0], *b = m->pos + 3 * v[1], *c = m->pos + 3 * v[2];
         double n[3], area = rm_cross(a, b, c, n);
         double l = fmax(rm_dist(a, b), fmax(rm_dist(b, c), rm_dist(c, a)));
-        if (area > 1e-12 * l * l) { /* the analysis's degenerate-triangle rule */
-            least = fmin(least, s);
-            worst = fmin(worst, rm_min_angle(a, b, c) * 180 / M_PI);
-        }
+        take(a, b, c, s, area, l, &least, &worst);
     }
     return worst;
 }
@@ -75,11 +84,7 @@ static double min_angle_of(const ism_mesh *m, double *sine)
             sine[t] = s;
         if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2])
             continue;
-        if (area > 1e-12 * l * l && /* the analysis's degenerate-triangle rule */
-            s <= least * ISM_RM_SINE_TIE) {
-            least = fmin(least, s);
-            worst = fmin(worst, rm_min_angle(a, b, c) * 180 / M_PI);
-        }
+        take(a, b, c, s, area, l, &least, &worst);
     }
     return worst;
 }
@@ -145,9 +150,8 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
     bool ok = rm_pass_open(&p, m, o, nt / ISM_RM_INSERT_SHARE + ISM_RM_INSERT_MIN);
     /* the sines measured for the smallest angle before are the first rm_mark_active's
        (callgrind gyroid-ball: both measures of every triangle were 12.6M instructions) */
-    if (ok && (p.sine = malloc((p.r.cap_tris ? p.r.cap_tris : 1) * sizeof *p.sine)))
-        for (size_t t = m->ntris; t < p.r.cap_tris; t++)
-            p.sine[t] = NAN;
+    if (ok)
+        rm_sine_open(&p, m->ntris);
     st->min_angle_before = min_angle_of(m, ok ? p.sine : NULL);
     /* under an error bound every step keeps it, measured at centroids and edge midpoints
        (rm_bound.h), whatever the mesh before: the simplified mesh's vertices sit off f = 0 */

@@ -213,38 +213,17 @@ static int find_chain(rm_pass *p, uint32_t v, double mean_edge, ism_tape *local,
     return 2;
 }
 
-/* Minimum-norm Newton steps from x onto both branches of the fan's tape, until x lies
- * within ISM_RM_CREASE_ON_REL × scale of both (on_crease's test, on the values the step
- * would use: no evaluation more); false when a step fails or it does not get there. */
-static bool to_crease(rm_pass *p, const ism_tape *f, double x[3], double scale)
-{
-    double tol = ISM_RM_CREASE_ON_REL * scale;
-    for (int it = 0; it <= ISM_RM_CREASE_NEWTON_STEPS; it++) {
-        double val[2], g[2][3], step[3];
-        if (!branches(p, f, x, val, g))
-            return false;
-        if (fabs(val[0]) <= tol * ism_norm3(g[0]) && fabs(val[1]) <= tol * ism_norm3(g[1]))
-            return true;
-        if (it == ISM_RM_CREASE_NEWTON_STEPS ||
-            !ism_min_norm_step(2, (const double (*)[3])g, val, ISM_RM_CREASE_PARALLEL, step))
-            return false;
-        for (int k = 0; k < 3; k++)
-            x[k] += step[k];
-    }
-    return false;
-}
-
 /* The two branches' unit normals at a crease point (oriented as ∇f on each side: f is the
- * branch there) and the cosine of the crease's angle between them. */
+ * branch there), and what tri_ok compares with them: the cosines of the most a chamfer
+ * triangle may bend (the crease's angle and ISM_RM_CROWD_BEND_DEG, at most 180°) and turn
+ * from a branch's normal (ISM_RM_CREASE_FACE_DEG). */
 typedef struct crease_frame {
-    double n[2][3], cos_angle;
+    double n[2][3], cos_bend, cos_face;
 } crease_frame;
 
-static bool frame_at(rm_pass *p, const ism_tape *f, const double x[3], crease_frame *cf)
+/* cf from the branches' gradients g at a crease point; false where one vanishes. */
+static bool frame_of(const double g[2][3], crease_frame *cf)
 {
-    double val[2], g[2][3];
-    if (!branches(p, f, x, val, g))
-        return false;
     for (int s = 0; s < 2; s++) {
         double l = ism_norm3(g[s]);
         if (!(l > 0))
@@ -252,8 +231,36 @@ static bool frame_at(rm_pass *p, const ism_tape *f, const double x[3], crease_fr
         for (int k = 0; k < 3; k++)
             cf->n[s][k] = g[s][k] / l;
     }
-    cf->cos_angle = ism_dot3(cf->n[0], cf->n[1]);
+    double angle = acos(fmax(-1, fmin(1, ism_dot3(cf->n[0], cf->n[1]))));
+    cf->cos_bend = cos(fmin(M_PI, angle + ISM_RM_CROWD_BEND_DEG * M_PI / 180));
+    cf->cos_face = cos(ISM_RM_CREASE_FACE_DEG * M_PI / 180);
     return true;
+}
+
+/* Minimum-norm Newton steps from x onto both branches of the fan's tape, until x lies
+ * within ISM_RM_CREASE_ON_REL × scale of both (on_crease's test, on the values the step
+ * would use: no evaluation more); false when a step fails or it does not get there. On
+ * success *framed says whether cf holds the crease's frame there, from the gradients the
+ * last step measured (frame_of). */
+static bool to_crease(rm_pass *p, const ism_tape *f, double x[3], double scale,
+                      crease_frame *cf, bool *framed)
+{
+    double tol = ISM_RM_CREASE_ON_REL * scale;
+    for (int it = 0; it <= ISM_RM_CREASE_NEWTON_STEPS; it++) {
+        double val[2], g[2][3], step[3];
+        if (!branches(p, f, x, val, g))
+            return false;
+        if (fabs(val[0]) <= tol * ism_norm3(g[0]) && fabs(val[1]) <= tol * ism_norm3(g[1])) {
+            *framed = frame_of((const double (*)[3])g, cf);
+            return true;
+        }
+        if (it == ISM_RM_CREASE_NEWTON_STEPS ||
+            !ism_min_norm_step(2, (const double (*)[3])g, val, ISM_RM_CREASE_PARALLEL, step))
+            return false;
+        for (int k = 0; k < 3; k++)
+            x[k] += step[k];
+    }
+    return false;
 }
 
 /* rm_crease_tri_ok, or (cf not NULL) the triangle ends on one of the two surfaces meeting
@@ -270,7 +277,7 @@ static bool tri_ok(const rm_pass *p, const crease_frame *cf, uint32_t t, uint32_
     double n[3], ln = rm_cross(q[0], q[1], q[2], n);
     if (!cf || !(ln > 0))
         return false;
-    double face = cos(ISM_RM_CREASE_FACE_DEG * M_PI / 180) * ln;
+    double face = cf->cos_face * ln;
     if (!(ism_dot3(n, cf->n[0]) > face || ism_dot3(n, cf->n[1]) > face))
         return false;
     uint32_t s = rm_merge_across(&p->r, a, b, t);
@@ -278,8 +285,7 @@ static bool tri_ok(const rm_pass *p, const crease_frame *cf, uint32_t t, uint32_
         return true;
     const uint32_t *z = p->r.m->tri + 3 * (size_t)s;
     double u[3], lu = rm_cross(P(p, z[0]), P(p, z[1]), P(p, z[2]), u);
-    double most = acos(fmax(-1, fmin(1, cf->cos_angle))) + ISM_RM_CROWD_BEND_DEG * M_PI / 180;
-    return lu > 0 && ism_dot3(n, u) >= cos(fmin(M_PI, most)) * ln * lu;
+    return lu > 0 && ism_dot3(n, u) >= cf->cos_bend * ln * lu;
 }
 
 /* The fan with v at x: every triangle and its outer edge (not v's) as tri_ok allows (cf: the
@@ -409,9 +415,10 @@ static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan
     for (int k = 0; k < 3; k++)
         x[k] = mid[k] = 0.5 * (P(p, v)[k] + P(p, w)[k]);
     crease_frame cf;
-    if (!to_crease(p, c->f, x, f->mean_edge) ||
+    bool framed = false;
+    if (!to_crease(p, c->f, x, f->mean_edge, &cf, &framed) ||
         !(rm_dist(x, mid) <= ISM_RM_CREASE_PROJECT_MAX_REL * f->mean_edge) ||
-        !merged_fan_ok(p, &g, x, frame_at(p, c->f, x, &cf) ? &cf : NULL))
+        !merged_fan_ok(p, &g, x, framed ? &cf : NULL))
         return false;
     ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], grad);
     if (!(ism_norm3(grad) > p->gthresh))
@@ -452,10 +459,11 @@ static bool slide_vertex(rm_pass *p, uint32_t v, ism_tape *local)
         for (int k = 0; k < 3; k++)
             x[k] = start[k] = pos[k] + step * (0.5 * (a[k] + b[k]) - pos[k]);
         crease_frame cf;
-        if (!to_crease(p, c.f, x, f.mean_edge) ||
+        bool framed = false;
+        if (!to_crease(p, c.f, x, f.mean_edge, &cf, &framed) ||
             !(rm_dist(x, start) <= ISM_RM_CREASE_PROJECT_MAX_REL * f.mean_edge) ||
             (kind == 2 && !rm_in_order(x, a, b)) ||
-            !fan_shape_ok(p, v, &c, x, frame_at(p, c.f, x, &cf) ? &cf : NULL, f.min_sine))
+            !fan_shape_ok(p, v, &c, x, framed ? &cf : NULL, f.min_sine))
             continue;
         ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
         if (!(ism_norm3(g) > p->gthresh) || !rm_centroids_stay(p, v, x))

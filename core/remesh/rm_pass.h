@@ -11,6 +11,8 @@
 #include "core/remesh/remesh_types.h"
 #include "core/remesh/rm_mesh.h"
 
+#include <stdlib.h>
+
 /* |∇f| at most this × the median over the vertices counts as vanishing (a singular point or
  * curve: no tangent plane to move in; the analysis's singular_rel). */
 #define ISM_RM_SINGULAR_REL 1e-6
@@ -220,6 +222,16 @@ static inline void rm_shape_changed(rm_pass *p, uint32_t t)
 {
     if (p->sine)
         p->sine[t] = NAN;
+}
+
+/* Allocates sine for every triangle the pass may hold, those from `from` on not measured yet
+ * (NAN; the caller fills the ones before). Out of memory it stays NULL and rm_tri_sine
+ * measures every time. */
+static inline void rm_sine_open(rm_pass *p, size_t from)
+{
+    if ((p->sine = malloc((p->r.cap_tris ? p->r.cap_tris : 1) * sizeof *p->sine)))
+        for (size_t t = from; t < p->r.cap_tris; t++)
+            p->sine[t] = NAN;
 }
 
 /* The sine of triangle t's smallest angle (rm_min_sine of its corners in order), measured

@@ -332,9 +332,6 @@ size_t rm_mark_active(rm_pass *p)
     double comfort = sin(ISM_RM_COMFORT_DEG * M_PI / 180);
     memset(p->active, 0, m->nverts);
     p->poorest = 1;
-    if (!p->sine && (p->sine = malloc((r->cap_tris ? r->cap_tris : 1) * sizeof *p->sine)))
-        for (size_t t = 0; t < r->cap_tris; t++)
-            p->sine[t] = NAN; /* (out of memory: measured every time) */
     for (size_t t = 0; t < m->ntris; t++) {
         const uint32_t *v = m->tri + 3 * t;
         if (r->dead[t])
