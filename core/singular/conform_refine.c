@@ -29,7 +29,12 @@
  * to the mean of their neighbours, moved back onto f = 0 along ∇f (by at most half their mean
  * distance: never onto another sheet) — kept where no more triangles round them face against
  * ∇f than before (a strip straightens over a few rounds, each vertex alone rarely undoes a
- * fold).
+ * fold). The polygoniser's own turned triangles beside a pinch point are untangled the same
+ * way (those turned when the surgeries end and those round each vertex moved): it pleats the
+ * thin lens an umbrella's two sheets make there, beyond the tube (Steiner, depth 7, irrational
+ * box: 12 edges on the lattice plane z = 0.4901 at the lens's tip, 8–9 cells from (0, 0, 1/2),
+ * 17 such of its 30 turned edges; 22 left, the cross-cap's 6 → 0; test
+ * tube_folds/pinch_points_few_turned_over).
  *
  *     rim    a0 ──── a1            a1's ring vertex r1 fell behind r0: the quad (a0 a1 r1 r0)
  *             │   ╳   │            crosses itself; r1 to the mean of a1, r0, r2 and its inner
@@ -47,6 +52,14 @@
  * the cross-cap and Steiner at depths 6 and 7 in three boxes: 16 rounds left the same folds
  * as 6). */
 #define UNTANGLE_ROUNDS 6
+/* The polygoniser's turned triangles are untangled within this many finest cells of a pinch
+ * point: beside it the umbrella's two sheets make a lens thinner than a cell (Steiner's at
+ * 1/2 − z below (0, 0, 1/2) reaches s = √(z(1 − 2z)) across), where its cells hold both sheets
+ * and pleat; at depth 7 in the irrational box its turned triangles there lie 8–13 cells from
+ * a pinch point, outside the tube. Elsewhere its turned triangles are left: untangling every
+ * one took crossing-spheres' conformance (no pinch point) 224.5M → 275.7M instructions and the
+ * cross-cap's 92.6M → 102.1M (callgrind, d7). */
+#define PINCH_FOLD_CELLS 16.0
 /* Vertices with more triangles than this are not moved (the refill's have 6, the
  * polygoniser's a dozen at most; the fan's neighbours are listed on the stack). */
 #define MOVE_FAN_MAX 32
@@ -213,14 +226,49 @@ static bool movable(cf_ctx *c, uint32_t v)
     return ntri > 0 && nnb == ntri;
 }
 
-/* The movable vertices of the turned live triangles from nt0 on, each once (memo stamp). */
-static bool collect_turned(cf_ctx *c, size_t nt0, cf_tris *out, size_t *nturned)
+/* The polygoniser's live triangles (before nt0) within PINCH_FOLD_CELLS of one of the npinch
+ * points pinch (3 each) turned over, into polys: the ones of its triangles the untangling
+ * looks at again, with those round each vertex it moves (a move is kept where no more
+ * triangles round it turn: a fold may pass to a neighbour). False when out of memory. */
+static bool list_polygoniser_turned(cf_ctx *c, size_t nt0, const double *pinch, size_t npinch,
+                                    cf_tris *polys)
+{
+    double r = PINCH_FOLD_CELLS * c->cell;
+    cf_tris cand = {0};
+    bool ok = true;
+    polys->n = 0;
+    cf_tgrid_begin(&c->grid);
+    for (size_t i = 0; ok && i < npinch; i++) {
+        double lo[3], hi[3];
+        cf_query_box(pinch + 3 * i, pinch + 3 * i, r, lo, hi);
+        ok = cf_tgrid_gather(&c->grid, c->m, lo, hi, c->dead, &cand);
+    }
+    for (size_t i = 0; ok && i < cand.n && !cf_poll(c, 1); i++) {
+        uint32_t t = cand.t[i];
+        const uint32_t *v = c->m->tri + 3 * (size_t)t;
+        bool near = false;
+        for (size_t j = 0; j < npinch && !near; j++)
+            near = cf_point_triangle_d2(pinch + 3 * j, c->m->pos + 3 * (size_t)v[0],
+                                        c->m->pos + 3 * (size_t)v[1],
+                                        c->m->pos + 3 * (size_t)v[2]) < r * r;
+        if (t < nt0 && near && turned(c, t, NULL))
+            ok = cf_tris_push(polys, t);
+    }
+    free(cand.t);
+    return ok;
+}
+
+/* The movable vertices of the turned live triangles among polys and from nt0 on, each once
+ * (memo stamp). */
+static bool collect_turned(cf_ctx *c, size_t nt0, const cf_tris *polys, cf_tris *out,
+                           size_t *nturned)
 {
     out->n = 0;
     *nturned = 0;
     if (!cf_memo_reset(c))
         return false;
-    for (size_t t = nt0; t < c->m->ntris && !cf_poll(c, 1); t++) {
+    for (size_t i = 0; i < polys->n + c->m->ntris - nt0 && !cf_poll(c, 1); i++) {
+        size_t t = i < polys->n ? polys->t[i] : nt0 + (i - polys->n);
         if (c->dead[t] || !turned(c, (uint32_t)t, NULL))
             continue;
         ++*nturned;
@@ -238,25 +286,34 @@ static bool collect_turned(cf_ctx *c, size_t nt0, cf_tris *out, size_t *nturned)
     return true;
 }
 
-static bool untangle(cf_ctx *c, size_t nt0, double reach)
+static bool untangle(cf_ctx *c, size_t nt0, const double *pinch, size_t npinch, double reach)
 {
-    cf_tris vs = {0};
-    bool ok = true;
+    cf_tris vs = {0}, polys = {0};
+    bool ok = list_polygoniser_turned(c, nt0, pinch, npinch, &polys);
     for (int round = 0; ok && round < UNTANGLE_ROUNDS && !c->stopped; round++) {
         size_t nturned;
-        ok = collect_turned(c, nt0, &vs, &nturned);
+        ok = collect_turned(c, nt0, &polys, &vs, &nturned);
         if (round == 0)
             c->st->refill_turned = nturned;
         if (!ok || vs.n == 0)
             break;
         size_t moved = 0;
-        for (size_t i = 0; i < vs.n; i++)
-            moved += relax(c, vs.t[i], reach);
+        for (size_t i = 0; ok && i < vs.n; i++) {
+            if (!relax(c, vs.t[i], reach))
+                continue;
+            moved++;
+            cf_inc it;
+            uint32_t t;
+            cf_inc_begin(c, vs.t[i], &it);
+            while (ok && cf_inc_next(c, &it, &t))
+                ok = t >= nt0 || cf_tris_push(&polys, t);
+        }
         c->st->refill_untangled += moved;
         if (moved == 0)
             break;
     }
     free(vs.t);
+    free(polys.t);
     return ok;
 }
 
@@ -407,7 +464,8 @@ static bool split_over(cf_ctx *c, size_t nt0, double E, double min_edge, cf_tris
     return ok;
 }
 
-bool cf_refine_refill(cf_ctx *c, size_t nt0, double max_error, double min_edge)
+bool cf_refine_refill(cf_ctx *c, size_t nt0, double max_error, double min_edge,
+                      const double *pinch, size_t npinch)
 {
     if (c->m->ntris == nt0 || !c->indexed)
         return true;
@@ -428,7 +486,7 @@ bool cf_refine_refill(cf_ctx *c, size_t nt0, double max_error, double min_edge)
     }
     c->st->triangles_added += c->m->ntris - nt1 - refill_halved;
     free(removed.t);
-    ok = ok && untangle(c, nt0, reach);
+    ok = ok && untangle(c, nt0, pinch, npinch, reach);
     c->st->refill_work = c->st->work - w0;
     return ok;
 }

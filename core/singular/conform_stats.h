@@ -22,9 +22,10 @@ typedef struct ism_conform_stats {
     size_t cuts_widened;       /* cuts made again wider because another sheet came near
                                   their rim (the polygoniser's confusion reached further) */
     size_t triangles_removed, triangles_added;
-    size_t refill_turned;      /* the pass's triangles facing against ∇f before untangling
+    size_t refill_turned;      /* the pass's triangles, and the polygoniser's beside pinch
+                                  points, facing against ∇f before untangling
                                   (conform_refine.c) */
-    size_t refill_untangled;   /* moves of the pass's vertices that turned triangles back */
+    size_t refill_untangled;   /* moves of vertices that turned triangles back */
     size_t refill_splits;      /* edges of the pass's triangles halved because a centroid
                                   or midpoint was farther than E (max_error; without one a
                                   quarter of the finest cell, conform_refine.c) */
