@@ -78,7 +78,7 @@
  * distances within E. Barth's clipped sextic (30 nodes in the ball, fanned by
  * dual_balls.c) in its own box ±1.6 at 1e-2 / 3e-3 / 1e-3: dual, 56,924 / 78,100 / 160,968
  * triangles against the primal path's 66,064 / 142,560 / 292,752, χ, pieces and nodes the
- * same, but 4.33G / 5.37G / ~11G instructions against 2.72G / 4.94G / 9.65G; in the box
+ * same, in 3.94G / 5.38G / 9.62G instructions against 2.91G / 4.98G / 9.70G; in the box
  * shifted by 1e-3 dual at 1e-2 only, in the irrational box declined at all three (two crease
  * leaves sharing a face crossed four times: non-manifold at depth.max), and a failed try
  * costs up to 75% of the primal path's CPU on top: hence the option, still off. */
