@@ -427,9 +427,8 @@ static bool decode_tolerances(const json_t *v, ism_request *req, ism_req_error *
     return true;
 }
 
-/* v > 0 to three significant digits into buf (32 bytes), rounded up (dir 1), down (-1) or to
- * nearest (0): a limit in a message, without 17 digits of a box diagonal. */
-static const char *three_digits(double v, int dir, char *buf)
+/* See proto/request.h. */
+const char *ism_three_digits(double v, int dir, char buf[32])
 {
     double unit = pow(10, floor(log10(v)) - 2), q = v / unit;
     q = dir > 0 ? ceil(q) : dir < 0 ? floor(q) : nearbyint(q);
@@ -476,12 +475,12 @@ static bool decode_max_error(const json_t *v, const json_t *depth, const ism_pre
                     num(e, b));
     /* the limits to three digits, rounded inwards: a value copied from the message passes */
     double lo = ISM_REQ_MIN_ERROR_REL * diag;
-    if (!in_range_shown(e, lo, diag, three_digits(lo, 1, c), three_digits(diag, -1, g),
+    if (!in_range_shown(e, lo, diag, ism_three_digits(lo, 1, c), ism_three_digits(diag, -1, g),
                         "$.max_error", err)) {
         size_t at = strlen(err->message);
         if (e < lo)
             snprintf(err->message + at, sizeof err->message - at, " (%s of the box diagonal %s)",
-                     num(ISM_REQ_MIN_ERROR_REL, d), three_digits(diag, 0, g));
+                     num(ISM_REQ_MIN_ERROR_REL, d), ism_three_digits(diag, 0, g));
         else
             snprintf(err->message + at, sizeof err->message - at, " (the box diagonal)");
         return false;

@@ -129,6 +129,10 @@ typedef struct ism_req_error {
  * ISM_REQ_DEFAULT_ERROR_REL of box's diagonal. */
 double ism_request_default_error(const double box[6]);
 
+/* v > 0 to three significant digits into buf, rounded up (dir 1), down (-1) or to nearest (0),
+ * returning buf: a limit or a bound in a message, without 17 digits of a box diagonal. */
+const char *ism_three_digits(double v, int dir, char buf[32]);
+
 /* Decodes and validates a JSON request. lim may be NULL for the default limits. On failure
  * returns false, fills err, and leaves req empty (safe to free). */
 bool ism_request_decode(const char *json, size_t len, const ism_request_limits *lim,

@@ -3,6 +3,7 @@
  * be traced back to the code that counted them. */
 #include "proto/stats.h"
 #include "proto/features.h"
+#include "proto/request.h"
 #include "proto/json_writer.h"
 #include "core/version.h"
 
@@ -330,15 +331,14 @@ static void format_beyond(double worst, double e, char *buf, size_t n)
  * the horn cyclide: "0.0554"): never above e, so a worst distance shown above e reads above
  * it too. Six digits: a bound anyone types reads back as itself. */
 #define BOUND_DIGITS 6
-static void format_bound(double e, char *buf, size_t n)
+static void format_bound(double e, char buf[32])
 {
     for (int digits = 1; digits <= BOUND_DIGITS; digits++) {
-        snprintf(buf, n, "%.*g", digits, e);
+        snprintf(buf, 32, "%.*g", digits, e);
         if (strtod(buf, NULL) == e)
             return;
     }
-    double unit = pow(10, floor(log10(e)) - 2);
-    snprintf(buf, n, "%.3g", floor(e / unit) * unit);
+    ism_three_digits(e, -1, buf);
 }
 
 /* Under an error bound, one warning and only when the bound was not met: by the analysed
@@ -354,7 +354,7 @@ static void write_error_warning(ism_jw *w, const ism_stats_input *in)
     if (worst <= in->max_error && (in->analysis || cells == 0))
         return;
     char msg[400], e[32], x[32], tail[200];
-    format_bound(in->max_error, e, sizeof e);
+    format_bound(in->max_error, e);
     format_beyond(worst, in->max_error, x, sizeof x);
     if (cells)
         snprintf(tail, sizeof tail, "; %llu cells could not be split further (at depth.max, or "

@@ -451,8 +451,11 @@ class TestIsomesh(unittest.TestCase):
     def test_default_bound_is_a_thousandth_of_the_box_diagonal(self):
         """Without --max-error the bound is 1e-3 x the box diagonal, as a request's: the stats
         say it and whether it was met, the mesh is the same as with that E written out, and
-        the triangles' centroids and edge midpoints lie within it (closed form)."""
-        for box in ([-1.5] * 3 + [1.5] * 3, [-1.0, -2.0, -0.9, 1.3, 1.1, 0.95]):
+        the triangles' centroids and edge midpoints lie within it (closed form); in the box
+        +-1.5's placements (boxes.py; the finest cell at the safety depth, 10) and in a box that
+        is not a cube."""
+        cell = 3.0 / 2 ** 10
+        for box in placements([-1.5] * 3 + [1.5] * 3, cell) + [[-1.0, -2.0, -0.9, 1.3, 1.1, 0.95]]:
             d = math.dist(box[:3], box[3:])
             b = ",".join(map(repr, box))
             with self.subTest(box=box):

@@ -324,6 +324,21 @@ class ApiTest(unittest.TestCase):
         self.assertIs(acc["met"], True)
         self.assertLessEqual(max(acc["max_dist_midpoint"], acc["max_dist_centroid"]), e)
         self.assertEqual((s["polygoniser"]["mesher"], s["warnings"]), ("dual", []))
+        # off the lattice too (boxes.py; the finest cell at the safety depth, 10): the bound is
+        # the moved box's diagonal / 1000 and met at centroids and edge midpoints. Against the
+        # reported bound: a moved box's diagonal may differ from 3 sqrt 3 in the last bit.
+        for box in placements(base["box"], 3.0 / 2 ** 10):
+            with self.subTest(box=box):
+                rb = self.d.post("/v1/mesh", dict(base, box=box))
+                self.assertEqual(rb.status, 200, rb.body[:300])
+                sb = self.d.get("/v1/meshes/%s/stats" % rb.header("ETag").strip('"')).json()
+                ab = sb["analysis"]["accuracy"]
+                self.assertTrue(math.isclose(ab["max_error"], 1e-3 * math.dist(box[:3], box[3:]),
+                                             rel_tol=1e-15), ab["max_error"])
+                self.assertIs(ab["met"], True)
+                self.assertLessEqual(max(ab["max_dist_midpoint"], ab["max_dist_centroid"]),
+                                     ab["max_error"])
+                self.assertEqual((sb["polygoniser"]["mesher"], sb["warnings"]), ("dual", []))
         same = self.d.post("/v1/mesh", dict(base, max_error=e))
         self.assertEqual(same.status, 200, same.body[:300])
         self.assertEqual(same.header("ETag"), r.header("ETag"))

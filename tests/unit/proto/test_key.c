@@ -84,6 +84,11 @@ static const char *const same[][7] = {
      "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"preview\": true, \"output\": {\"attributes\": "
      "[\"class\", \"normal\", \"mean_curvature\"]}}",
      NULL},
+    /* a preview that leaves max_error out has no bound: the depth path, as with null
+     * (the server's rule, proto/request.c; the viewer sends null itself) */
+    {"{\"preset\": \"torus\", \"preview\": true}",
+     "{\"preset\": \"torus\", \"preview\": true, \"max_error\": null}",
+     NULL},
     /* bits of attributes that are not sent do not matter */
     {"{\"expr\": \"x - y\", \"output\": {\"attributes\": [\"class\"], \"normal_bits\": 12, \"curvature_bits\": 16}}",
      "{\"expr\": \"x - y\", \"output\": {\"attributes\": [\"class\"]}}",
