@@ -31,6 +31,12 @@ enum ism_node_flags {
                                 tolerance there at every depth): its triangles are
                                 measured against the flatness tolerance for the stats'
                                 warning (polygonise.c) */
+    ISM_NODE_CONFORMED = 8,  /* under max_error: a leaf whose box lies in a quiet ball
+                                (quiet.h: inside the tube or ball the conformance pass cuts
+                                out round the singular locus and meshes again), left whole
+                                though it failed the plot test and not split again when its
+                                triangles miss E: none of them reaches the mesh
+                                (octree_build.c conformed) */
 };
 
 /* What the hidden-piece search (thin_search.h) decided at a node, kept so that the next

@@ -590,6 +590,22 @@ static bool unflat(const build *b, const ism_tape *sub, const double lo[3], cons
            !ism_quiet_near(&b->quiet, lo, hi, cone);
 }
 
+/* Under max_error, may a node that failed the plot test stay whole because the conformance
+ * pass meshes its box again? Its box lies in a quiet ball: inside the tube (or ball) of
+ * CF_RHO_CELLS cells of the singular stage's depth that the pass cuts out round a double
+ * curve or singular point (surface.c quiet_balls: 0.8 of its radius; the pass widens the cut,
+ * never narrows it), so none of its triangles is kept. Along a double curve or at a cone the
+ * plot test fails at every level (two sheets, a zero gradient on the locus), and the error
+ * rounds split such leaves again (their polygons straddle the locus, a cell off it): they
+ * went to depth.max, the safety depth 10 under the default bound, whatever E (crossing
+ * planes: the tube's triangles removed 33,792 at depth 10 against 6,144 at depth 8, the
+ * same 24,704-triangle mesh). A node as large as the ball stays out (its box is not held), so
+ * the tube's rim still lies in cells the plot test and E decided. */
+static bool conformed(const build *b, const double lo[3], const double hi[3])
+{
+    return b->p->flatness.max_error > 0 && ism_quiet_holds(&b->quiet, lo, hi);
+}
+
 /* Decides node v->v[i] and grows its subtree. Nodes that fail the flatness test are split
  * down to level `limit` (depth.max, or ISM_THIN_RESOLVE_LEVELS deeper below a hidden
  * piece); a would-be leaf that hides a piece is split in any case, down to thin_depth. When
@@ -643,7 +659,8 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         th->s.tape = sub;
         bool flat = ism_plot_test(&th->s, th->thin.jet, &b->p->flatness, lo, hi, &k);
         th->s.tape = saved;
-        leaf = flat || nd.level >= limit;
+        bool kept = !flat && nd.level < limit && conformed(b, lo, hi);
+        leaf = flat || kept || nd.level >= limit;
         /* a leaf proven free of f = 0 emits nothing and hides no piece: skipped from here */
         if (leaf && !b->p->scalar_eval &&
             ism_box_zero_free(sub, th->s.ws, th->thin.jet, lo, hi, &k,
@@ -669,7 +686,7 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
                 limit = resolve_limit(b, limit);
         }
         if (leaf && !flat) {
-            v->v[i].flags |= ISM_NODE_UNRESOLVED;
+            v->v[i].flags |= ISM_NODE_UNRESOLVED | (kept ? ISM_NODE_CONFORMED : 0);
             th->unresolved++;
             if (unflat(b, sub, lo, hi))
                 v->v[i].flags |= ISM_NODE_UNFLAT;

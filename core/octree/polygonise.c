@@ -315,16 +315,17 @@ static void add_cell_stats(ism_poly_stats *st, const ism_cell_ctx *cx)
 
 /* Under max_error: the leaves whose triangles measured farther than the bound go into
  * next (to be split by the next round) when they may still be split; the others are
- * counted as missed, with the worst distance among them. */
+ * counted as missed, with the worst distance among them. Leaves the conformance pass meshes
+ * again (ISM_NODE_CONFORMED) are neither: what they emit is cut out. */
 static bool collect_misses(const phase2 *p, const ism_poly_options *o, ism_split_set *next,
                            ism_poly_stats *st)
 {
     st->error_missed_nodes = 0;
     st->error_worst = 0;
     for (size_t i = 0; i < p->nleaves; i++) {
-        if (!(p->leaf_error[i] > o->max_error))
-            continue;
         const ism_node *nd = &p->tree->nodes[p->leaves[i]];
+        if (!(p->leaf_error[i] > o->max_error) || (nd->flags & ISM_NODE_CONFORMED))
+            continue; /* met, or meshed again by the conformance pass (octree.h) */
         if (nd->level < o->max_depth && next) {
             if (!ism_split_set_add(next, ism_node_key(nd)))
                 return false;
