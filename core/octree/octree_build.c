@@ -666,14 +666,15 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
             ism_box_zero_free(sub, th->s.ws, th->thin.jet, lo, hi, &k,
                               b->p->flatness.double_root_eps, &th->s.n_interval))
             v->v[i].flags |= ISM_NODE_ZERO_FREE;
-        else if (leaf && (!flat || ism_plot_blind(&b->p->flatness, lo, hi, &k))) {
+        else if (leaf && !kept && (!flat || ism_plot_blind(&b->p->flatness, lo, hi, &k))) {
             /* A leaf that passed the test blind (ism_plot_blind: under max_error, at most 4 E
              * across, corners of one sign whose gradients disagree) is searched by Newton
              * probes alone, not with the interval proofs. The horn cyclide at E = 0.016,
              * depth 9 (callgrind, one thread): in the box moved by (0.37, −0.23, 0.41) of a
              * cell 1,473M instructions with the horns lost, 4,648M searching such leaves in
              * full, 2,776M probing them (both find the horns: χ 1); in its own box, where
-             * nothing more is found (the same mesh), 2,074M, 3,298M and 2,395M. */
+             * nothing more is found (the same mesh), 2,074M, 3,298M and 2,395M. A kept
+             * leaf (conformed) lies in a quiet ball, where hides_piece searches nothing. */
             v->v[i].thin = hides_piece(b, th, &nd, sub, &k, flat);
             count_thin(th, v->v[i].thin);
         }

@@ -1,5 +1,5 @@
 /* quiet.c — does a box lie in one of the quiet balls (see quiet.h)? The balls' grid
- * (ball_grid.h) is read in the 27 cells around the box's centre. */
+ * (ball_grid.h) is read in the cells that can hold the centre of a ball holding the box. */
 #include "core/octree/quiet.h"
 
 #include <math.h>
@@ -25,25 +25,38 @@ static bool inside(const double *b, const double lo[3], const double hi[3])
     return far < b[3] * b[3];
 }
 
+/* A ball holding the box holds its farthest corner: per axis |mid - centre| + half the side
+ * is below the radius, itself at most the grid's cell. So the box is held by none when its
+ * half-diagonal reaches the cell, and else the centres lie within cell - half the side of mid
+ * on each axis (widened by 1e-9 cell against rounding): the grid cells over that range (2 an
+ * axis mostly, 3 at most) are read, not the 27 round mid's. Coordinate planes at the default
+ * bound: 4,400 instructions a call before. */
 bool ism_quiet_holds(const ism_quiet *q, const double lo[3], const double hi[3])
 {
     const ism_ball_grid *g = &q->grid;
     if (g->n == 0)
         return false;
-    double mid[3];
+    double a0[3], a1[3], half2 = 0;
     for (int a = 0; a < 3; a++) {
-        mid[a] = 0.5 * (lo[a] + hi[a]);
-        if (hi[a] - lo[a] > 2 * g->cell)
-            return false; /* larger than any ball */
+        double mid = 0.5 * (lo[a] + hi[a]), half = 0.5 * (hi[a] - lo[a]);
+        half2 += half * half;
+        double reach = g->cell - half + 1e-9 * g->cell; /* + rounding's share */
+        a0[a] = mid - reach;
+        a1[a] = mid + reach;
     }
-    int64_t c0[3];
-    ism_ball_grid_cell_of(g, mid, c0);
-    for (int d = 0; d < 27; d++) {
-        int64_t c[3] = {c0[0] + d % 3 - 1, c0[1] + d / 3 % 3 - 1, c0[2] + d / 9 - 1};
-        for (size_t i = ism_ball_grid_first(g, c); ism_ball_grid_in(g, i, c); i++)
-            if (inside(q->ball[g->key[i] & UINT32_MAX], lo, hi))
-                return true;
-    }
+    if (!(half2 < g->cell * g->cell))
+        return false; /* larger than any ball */
+    int64_t c0[3], c1[3];
+    ism_ball_grid_cell_of(g, a0, c0);
+    ism_ball_grid_cell_of(g, a1, c1);
+    for (int64_t z = c0[2]; z <= c1[2]; z++)
+        for (int64_t y = c0[1]; y <= c1[1]; y++)
+            for (int64_t x = c0[0]; x <= c1[0]; x++) {
+                int64_t c[3] = {x, y, z};
+                for (size_t i = ism_ball_grid_first(g, c); ism_ball_grid_in(g, i, c); i++)
+                    if (inside(q->ball[g->key[i] & UINT32_MAX], lo, hi))
+                        return true;
+            }
     return false;
 }
 

@@ -1,7 +1,8 @@
 /* quiet.h — the balls where the octree does not chase hidden pieces (ism_poly_options.quiet:
- * around the singular locus, whose mesh the conformance pass rebuilds), indexed in a uniform
- * grid of cells as large as the largest radius (ball_grid.h), so a query reads the 27 cells
- * around a box's centre whatever the number of balls. */
+ * around the singular locus, whose mesh the conformance pass rebuilds) and, under max_error,
+ * does not split nodes they hold (octree_build.c conformed), indexed in a uniform grid of
+ * cells as large as the largest radius (ball_grid.h), so a query reads a few cells around the
+ * box whatever the number of balls. */
 #ifndef ISM_QUIET_H
 #define ISM_QUIET_H
 
