@@ -195,7 +195,7 @@ static void adapt_unsent(ism_front *f, fconn *c, size_t moved, long long now)
 {
     long long dt = now - c->woke_ns;
     c->woke_ns = now;
-    if (!f->h.unsent_max || dt <= 0)
+    if (dt <= 0)
         return;
     long long bps = (long long)((double)moved * 1e9 / (double)dt);
     if (bps >= KEEP_UP_BPS && moved >= c->unsent / 4 && c->unsent < f->h.unsent_max)

@@ -55,8 +55,8 @@ typedef struct ism_front_hooks {
     double stall_s;     /* an answer that moves no byte this long: its connection is closed */
     /* Unsent bytes a connection may queue in the kernel (TCP_NOTSENT_LOWAT): unsent_min, the
      * listening socket's (inherited at accept), is what a new connection and a slow reader
-     * get; a reader that keeps up has it doubled up to unsent_max (0: never changed), so a
-     * large answer takes few wake-ups (http_front.c adapt_unsent). */
+     * get; a reader that keeps up has it doubled up to unsent_max, so a large answer takes
+     * few wake-ups (http_front.c adapt_unsent). */
     unsigned unsent_min, unsent_max;
 } ism_front_hooks;
 

@@ -485,9 +485,10 @@ static void reserve_descriptors(int any_fd, unsigned n)
 #define OWN_THREADS_PER_CORE 1u
 
 /* Whether the own sender runs (--own-sender, on by default). Not behind a --trusted-proxy
- * nor with --private: its hook (own_sender.c) leaves every request to libmicrohttpd there
- * (X-Real-IP names the client; a token is needed), so a front would only add a peek and a
- * hand-over to each connection and halve the polling threads. */
+ * nor with --private: its hook (own_sender.c) is never started there, as it would have to
+ * leave every request to libmicrohttpd (X-Real-IP names the client; a token is needed), and a
+ * front would only add a peek and a hand-over to each connection and halve the polling
+ * threads. */
 static bool own_sender_runs(const ismd_config *cfg)
 {
     return cfg->own_sender && !cfg->trusted_proxy[0] && !cfg->private_mode;

@@ -4,9 +4,10 @@
  * routes_mesh.c ismd_mesh_headers, respond.c ismd_common_headers), and their log line and
  * metrics (request_log.h). It takes a request only when nothing in it could
  * change the answer: GET of /v1/meshes/{key}.{fmt} over HTTP/1.1, no query or escapes, only
- * the headers below, no token needed, no trusted proxy, the mesh cached in memory and its
- * disk file sound (cache_disk.h). Everything else — HEAD, If-None-Match, Range, a body, a
- * mesh to compute — is libmicrohttpd's, as before. */
+ * the headers below, the mesh cached in memory and its disk file sound (cache_disk.h); where
+ * a token could be needed or a trusted proxy names the client, http.c (own_sender_runs) does
+ * not start it. Everything else — HEAD, If-None-Match, Range, a body, a mesh to compute — is
+ * libmicrohttpd's, as before. */
 #include "server/isomeshd/own_sender.h"
 
 #include <stdio.h>
@@ -123,9 +124,7 @@ bool ismd_own_answer(void *cls, const char *head, size_t len, void *conn, ism_fr
 {
     ismd_server *s = cls;
     const char *end = head + len;
-    if (len < PREFIX_LEN || memcmp(head, PREFIX, PREFIX_LEN) != 0 || !s->disk ||
-        s->cfg->trusted_proxy[0] ||
-        ismd_auth_route_needs_token(s->auth, ISMD_R_MESH_FILE, "GET"))
+    if (len < PREFIX_LEN || memcmp(head, PREFIX, PREFIX_LEN) != 0 || !s->disk)
         return false;
     const char *key = head + PREFIX_LEN;
     const char *sp = memchr(key, ' ', (size_t)(end - key));

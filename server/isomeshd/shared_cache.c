@@ -55,7 +55,6 @@ typedef struct task {
     char entry[ISMD_CLUSTER_ID_MAX];
     char stream[ISMD_CLUSTER_KEY_MAX];  /* the entry's stream (another user's when joined) */
     bool wanting;                       /* said so in Redis (ismd_cluster_want) */
-    bool canceled;                      /* T_REMOTE: its cancel was made (or given up) */
     long long cancel_since_ns;          /* the first try of that cancel (0: none yet) */
     long long want_at_ns;               /* when to say it again */
 } task;
@@ -86,7 +85,7 @@ static long long task_end(task *k, ism_cache_tier *t)
     ismd_shared *sh = k->sh;
     if (k->wanting)
         ismd_cluster_want(sh->cluster, k->name, false);
-    if (k->state == T_REMOTE && !k->canceled)
+    if (k->state == T_REMOTE)
         ismd_cluster_cancel(sh->cluster, k->name, k->stream, k->entry);
     if ((k->state == T_HOLD || k->state == T_REMOTE) && !k->lock_lost) {
         ism_cache_redis_flush(t);
@@ -471,14 +470,14 @@ static long long remote(task *k, ism_cache_tier *t, long long now)
         /* again while Redis does not take it (a command timeout on a loaded machine, a
          * reconnect), for at most a lock lifetime: lost, the computation ran on elsewhere
          * for nobody (seen: test_a_delete_whose_set_read_times_out_is_not_lost) */
-        k->canceled = ismd_cluster_cancel(sh->cluster, k->name, k->stream, k->entry);
+        bool taken = ismd_cluster_cancel(sh->cluster, k->name, k->stream, k->entry);
         if (!k->cancel_since_ns)
             k->cancel_since_ns = now;
-        if (!k->canceled && now - k->cancel_since_ns < sh->ttl_ms * 1000000LL) {
+        if (!taken && now - k->cancel_since_ns < sh->ttl_ms * 1000000LL) {
             renew_lock(k, t, now);
             return now + RENEW_RETRY_NS;
         }
-        k->canceled = true;
+        k->state = T_HOLD; /* made or given up */
         return task_end(k, t);
     }
     if (here) {                /* this daemon's executor took it */
