@@ -101,6 +101,12 @@ void pf_sweep_box(const double base[6], int d, int which, double box[6])
     sweep_box(base, d, which, irr, box);
 }
 
+void pf_sweep_box_old(const double base[6], int d, int which, double box[6])
+{
+    static const double old[3] = {PF_OLD_X, PF_OLD_Y, PF_OLD_Z};
+    sweep_box(base, d, which, old, box);
+}
+
 void pf_run_placed(const ism_tape *t, const double base[6], int d, int which, double box[6],
                    ism_mesh *m, pf_props *p)
 {

@@ -116,20 +116,15 @@ Test(crease, double_torus_closed_under_a_bound)
     const pf_surface s = {"min((x^2 + y^2 + z^2 + 0.75)^2 - 4*(x^2 + y^2), "
                           "((x - 2.2)^2 + y^2 + z^2 + 0.75)^2 - 4*((x - 2.2)^2 + y^2))",
                           NULL, 0, NULL, 0};
-    const double base[6] = {-1.8, -1.8, -0.8, 4, 1.8, 0.8}, old[3] = {PF_OLD_X, PF_OLD_Y, PF_OLD_Z};
+    const double base[6] = {-1.8, -1.8, -0.8, 4, 1.8, 0.8};
     const int depth = 8;
     ism_tape *t = pf_compile(&s);
     for (int w = pf_first_box() - 1; w < 3; w++) {
         double box[6];
-        if (w < 2) {
+        if (w < 2)
             pf_sweep_box(base, depth, w, box);
-        } else {
-            for (int k = 0; k < 3; k++) {
-                double c = ldexp(base[k + 3] - base[k], -depth);
-                box[k] = base[k] + old[k] * c;
-                box[k + 3] = base[k + 3] + old[k] * c;
-            }
-        }
+        else
+            pf_sweep_box_old(base, depth, 1, box); /* the regression box */
         ism_poly_options o;
         pf_options(&o, box, 3, depth);
         o.max_error = 2e-3 * (box[3] - box[0]);
