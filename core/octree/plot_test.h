@@ -32,19 +32,17 @@ typedef struct ism_flatness {
  * abs_tol (how far its edge roots may lie off their plane, and their centroid off f = 0). */
 double ism_flat_tolerance(double plane_frac, double abs_tol, double size);
 
-/* Did ism_plot_test pass node lo..hi (corners k) without looking: under max_error, a node
- * small enough to be judged by its measured polygons alone (its corner gradients unread)
- * whose corners all share a sign has no polygon to measure — yet its corner gradients
- * disagree, as round a thin tube inside it, where without a bound the test fails. The
- * octree searches such a leaf for a hidden piece (octree_build.c). */
-bool ism_plot_blind(const ism_flatness *fl, const double lo[3], const double hi[3],
-                    const ism_corners *k);
-
 /* lo, hi: the node's world box; k: its corner values. True when the node may be plotted
  * at this size. jet (interval gradients; NULL for none): under max_error a node whose
  * corner gradients disagree is still plotted when f is proven one graph in it
- * (graph_cert.h) and its roots and measured error pass. */
+ * (graph_cert.h) and its roots and measured error pass.
+ * blind (NULL for none): set when the node would pass without looking: under max_error, a
+ * node small enough to be judged by its measured polygons alone (its corner gradients
+ * unread) whose corners all share a sign has no polygon to measure — yet its corner
+ * gradients disagree, as round a thin tube inside it, where without a bound the test fails.
+ * The octree searches such a leaf for a hidden piece (octree_build.c). False whenever the
+ * test returns false. */
 bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
-                   const double lo[3], const double hi[3], const ism_corners *k);
+                   const double lo[3], const double hi[3], const ism_corners *k, bool *blind);
 
 #endif

@@ -262,10 +262,11 @@ Test(thin, horn_cyclide_depth_8, .timeout = 120)
  * once at most 4 E across (plot_test.c), their corner gradients unread, and a node with no
  * polygon (corners of one sign) measures nothing: the horns, thinner than E within 1.26 of
  * the point (y²/96 < 0.016), passed unseen through such nodes until octree_build.c searched
- * them (blind_leaf). At E = 2e-3 and 5e-4 of the box's 32 (0.064, 0.016), depth 8, in the box
- * moved by irrational fractions of a cell the horns ended ~1 from the point in open loops, the
- * point not joined (χ 2 with no non-manifold point; χ 3 in 3 pieces, 2 loops); the own and
- * 1e-3 placements were right. Each must give what the closed form does, as without a bound. */
+ * them (ism_plot_test's blind, grow). At E = 2e-3 and 5e-4 of the box's 32 (0.064, 0.016),
+ * depth 8, in the box moved by irrational fractions of a cell the horns ended ~1 from the
+ * point in open loops, the point not joined (χ 2 with no non-manifold point; χ 3 in 3
+ * pieces, 2 loops); the own and 1e-3 placements were right. Each must give what the closed
+ * form does, as without a bound. */
 Test(thin, horn_cyclide_under_a_bound, .timeout = 120)
 {
     const test_surface *hs = &TEST_SURFACES[6];
