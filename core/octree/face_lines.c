@@ -505,20 +505,8 @@ static bool wedge_at(ism_cell_ctx *cx, const ism_tile *t, const ism_fevent *apex
 }
 
 typedef struct pair {
-    int a, b;        /* event indices */
-    int lift;        /* the chord's lift (ism_lift_chord), once tried: 0 not tried, 1 in mid,
-                        -1 none */
-    ism_fpoint mid;
+    int a, b; /* event indices */
 } pair;
-
-/* Line a-b, its lift not tried (mid is left unset, not zeroed: it is read only once lift > 0;
- * a compound literal would clear all 72 bytes on every line of every tile). */
-static void set_pair(pair *l, int a, int b)
-{
-    l->a = a;
-    l->b = b;
-    l->lift = 0;
-}
 
 /* Lines of one family: join the two crossings around each arc of sign `cut`. */
 static int family(const ism_cell_ctx *cx, const int *cross, int nc, int cut, pair *out,
@@ -530,7 +518,7 @@ static int family(const ism_cell_ctx *cx, const int *cross, int nc, int cut, pai
         const ism_fevent *e = &cx->ev[cross[i]];
         if (e->after == cut) {
             int j = cross[(i + 1) % nc];
-            set_pair(&out[n++], cross[i], j);
+            out[n++] = (pair){cross[i], j};
             *score += unit_dot(e->pt.g, cx->ev[j].pt.g);
         }
     }
@@ -701,17 +689,15 @@ static int joined_where_paths_cross(ism_cell_ctx *cx, const ism_tile *t, const i
  * the lifted line of the face below), which face_flat leaves to the face's owner — whose
  * own line on that edge was lifted, so nobody emitted it: a crack of 4 edges (χ −3, one
  * boundary loop, instead of −2 and none). */
-static bool unlifted_chord(ism_cell_ctx *cx, const ism_tile *t, pair *l, int n)
+static bool unlifted_chord(ism_cell_ctx *cx, const ism_tile *t, const pair *l, int n)
 {
     for (int i = 0; i < n; i++) {
         const ism_fpoint *pa = &cx->ev[l[i].a].pt, *pb = &cx->ev[l[i].b].pt;
         double from, to;
         int axis;
-        if (!on_one_side(cx, t, pa->p, pb->p, &axis, &from, &to))
-            continue;
-        if (!l[i].lift) /* kept for emit_regular, which lifts the chosen family's chords */
-            l[i].lift = ism_lift_chord(&cx->s, pa, pb, axis, to, &l[i].mid) ? 1 : -1;
-        if (l[i].lift < 0)
+        ism_fpoint mid;
+        if (on_one_side(cx, t, pa->p, pb->p, &axis, &from, &to) &&
+            !ism_lift_chord(&cx->s, pa, pb, axis, to, &mid))
             return true;
     }
     return false;
@@ -745,7 +731,7 @@ static int pair_crossings(ism_cell_ctx *cx, const ism_tile *t, const int *cross,
 {
     *has_apex = false;
     if (nc == 2) {
-        set_pair(&lines[0], cross[0], cross[1]);
+        lines[0] = (pair){cross[0], cross[1]};
         return 1;
     }
     pair fp[MAX_CROSS], fm[MAX_CROSS];
@@ -765,8 +751,8 @@ static int pair_crossings(ism_cell_ctx *cx, const ism_tile *t, const int *cross,
             }
             cx->stats.crossed_faces++;
             *has_apex = kind == ISM_PLANE_APEX;
-            set_pair(&lines[0], cross[0], cross[2]);
-            set_pair(&lines[1], cross[1], cross[3]);
+            lines[0] = (pair){cross[0], cross[2]};
+            lines[1] = (pair){cross[1], cross[3]};
             return 2;
         }
     }
@@ -807,20 +793,19 @@ static bool emit(ism_cell_ctx *cx, int a, int b, int kind)
 /* A line of one polygon; a chord along one side of the tile goes through the point of its
  * arc across the tile instead (face_flat.h: else the tile across that side may hold the
  * same chord for its own arc, and four polygons would share one edge). */
-static bool emit_regular(ism_cell_ctx *cx, const ism_tile *t, const pair *l)
+static bool emit_regular(ism_cell_ctx *cx, const ism_tile *t, int a, int b)
 {
-    const ism_fpoint *pa = &cx->ev[l->a].pt, *pb = &cx->ev[l->b].pt;
+    const ism_fpoint *pa = &cx->ev[a].pt, *pb = &cx->ev[b].pt;
     double from, to;
     int axis;
     ism_fpoint mid;
     if (on_one_side(cx, t, pa->p, pb->p, &axis, &from, &to) &&
-        (l->lift ? l->lift > 0 : ism_lift_chord(&cx->s, pa, pb, axis, to, &mid))) {
-        const ism_fpoint *m = l->lift ? &l->mid : &mid; /* lifted by unlifted_chord: reused */
+        ism_lift_chord(&cx->s, pa, pb, axis, to, &mid)) {
         cx->stats.lifted_chords++;
-        return ism_flines_push(&cx->lines, pa, m, ISM_LINE_REGULAR) &&
-               ism_flines_push(&cx->lines, m, pb, ISM_LINE_REGULAR);
+        return ism_flines_push(&cx->lines, pa, &mid, ISM_LINE_REGULAR) &&
+               ism_flines_push(&cx->lines, &mid, pb, ISM_LINE_REGULAR);
     }
-    return emit(cx, l->a, l->b, ISM_LINE_REGULAR);
+    return emit(cx, a, b, ISM_LINE_REGULAR);
 }
 
 /* Points of a tile (fractions of its sides) where a zero tile is confirmed besides its
@@ -1213,7 +1198,7 @@ bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
         }
     }
     for (int l = 0; l < nl; l++)
-        if (!line_used[l] && !emit_regular(cx, t, &lines[l]))
+        if (!line_used[l] && !emit_regular(cx, t, lines[l].a, lines[l].b))
             return false;
     return true;
 }
