@@ -24,13 +24,14 @@ enum ism_node_flags {
                                 so it emits nothing and its faces yield no tile (as an empty
                                 node's); it stays a leaf, so its corners still break the
                                 lattice lines (breaks.c) and no neighbour's segments change */
-    ISM_NODE_UNFLAT = 4,     /* without max_error: an unresolved leaf neither on a crease (its
-                                tape keeps a min/max) nor meeting a quiet ball (the singular
-                                locus) nor within 1 / (4 flat_plane) of its sizes of one's
-                                centre (octree_build.c unflat: a node's cone bends beyond the
-                                tolerance there at every depth): its triangles are
+    ISM_NODE_UNFLAT = 4,     /* without max_error: an unresolved leaf neither on a crease
+                                (its tape keeps a min/max) nor meeting a quiet ball (the
+                                singular locus; octree_build.c unflat): its triangles are
                                 measured against the flatness tolerance for the stats'
-                                warning (polygonise.c) */
+                                warning, and counted unless a quiet ball has its centre
+                                within 1 / (4 flat_plane) of its sizes (a node's cone bends
+                                beyond the tolerance there at every depth; polygonise.c
+                                measure_unflat) */
     ISM_NODE_CONFORMED = 8,  /* under max_error: a leaf whose box lies in a quiet ball
                                 (quiet.h: inside the tube or ball the conformance pass cuts
                                 out round the singular locus and meshes again), left whole
