@@ -188,6 +188,7 @@ typedef struct worker {
 typedef struct dual {
     const ism_poly_options *o;
     ism_grid g;
+    double finest_step; /* the least of g's finest steps (set_grid): sample_corner's scale */
     ism_pool *pool;
     worker *w;        /* one per thread of the pool */
     int nw;
@@ -248,6 +249,13 @@ static bool touches_box(const dual *d, const dnode *n)
  * a zero aside): libm's are calls, ~150,000 of each per torus mesh at 1e-2 (2% of it). */
 static inline double min_of(double x, double y) { return y < x || x != x ? y : x; }
 static inline double max_of(double x, double y) { return y > x || x != x ? y : x; }
+
+/* The tree's lattice over box down to depth, and its finest step. */
+static void set_grid(dual *d, const double box[6], int depth)
+{
+    ism_grid_init(&d->g, box, depth);
+    d->finest_step = min_of(d->g.step[0], min_of(d->g.step[1], d->g.step[2]));
+}
 
 /* f kept from 0 along edge c0 -> c1 (axis a, length h) by the mean-value form from both
  * ends (g: ∇f enclosed over the node, so over the edge). */
@@ -703,8 +711,7 @@ static void sample_corner(dual *d, worker *w, const int32_t q[3], double *f, dou
     *f = e->f;
     memcpy(g, e->g, sizeof e->g);
     double gn = ism_normalise3(g); /* 0 at a critical point: no agreement there */
-    const double *st = d->g.step, step = min_of(st[0], min_of(st[1], st[2]));
-    if (*f != 0 && ism_sample_zero_by_rounding(&w->s, p, *f, gn, step))
+    if (*f != 0 && ism_sample_zero_by_rounding(&w->s, p, *f, gn, d->finest_step))
         *f = 0; /* a zero for every node sharing the point, as the primal tiles take it */
 }
 
@@ -1009,10 +1016,10 @@ static void place_vertex(dual *d, worker *w, int32_t i)
         return;
     }
     if (n->kind == DN_PAIR) {
+        double p[8][3];
+        for (int c = 0; c < 8; c++)
+            corner_point(d, n, c, p[c]);
         for (int k = 0; k < 2; k++) {
-            double p[8][3];
-            for (int c = 0; c < 8; c++)
-                corner_point(d, n, c, p[c]);
             ism_dual_pair_vertex(&w->s, (const double (*)[3])p, n->f, k, m);
             memcpy(&d->pos[3 * (k ? n->vert2 : n->vert)], m, sizeof m);
         }
@@ -1114,11 +1121,13 @@ static void weld_crease(dual *d, size_t nv0)
 static void make_vertices(dual *d)
 {
     size_t nv0 = d->nv;
-    size_t n = 0;
-    for (size_t i = 0; i < d->nn; i++)
+    size_t n = 0, pairs = 0;
+    for (size_t i = 0; i < d->nn; i++) {
         n += d->n[i].child < 0 && has_sheet(d->n[i].kind) && d->n[i].vert < 0;
+        pairs += d->n[i].child < 0 && d->n[i].kind == DN_PAIR && d->n[i].vert < 0;
+    }
     int32_t *leaves = malloc((n ? n : 1) * sizeof *leaves);
-    if (!leaves || !reserve_vertices(d, 2 * n)) { /* a pair leaf has two */
+    if (!leaves || !reserve_vertices(d, n + pairs)) { /* a pair leaf has two */
         free(leaves);
         d->nomem = true;
         return;
@@ -2177,8 +2186,8 @@ static enum ism_dual_status run_round_points(dual *d, ism_mesh *mesh, ism_dual_s
         st->leaves = st->missed = 0;
         if ((status = run(d, mesh, st)) != ISM_DUAL_OK)
             break;
-        enum ism_fan_status fan =
-            ism_dual_balls_fan(mesh, &d->w[0].s, balls, n, d->o->max_error, missed, rim);
+        enum ism_fan_status fan = ism_dual_balls_fan(mesh, &d->w[0].s, balls, n, &d->cover,
+                                                     d->o->max_error, missed, rim);
         if (fan == ISM_FAN_OK)
             break;
         if (fan == ISM_FAN_NO_MEMORY) {
@@ -2225,7 +2234,7 @@ static enum ism_dual_status run_in_grown_box(dual *d, ism_mesh *mesh, ism_dual_s
     ism_dual_box_grow(given->box, ISM_DUAL_BOX_LEVEL, grown.box);
     d->o = &grown;
     d->inner = given->box;
-    ism_grid_init(&d->g, grown.box, grown.max_depth);
+    set_grid(d, grown.box, grown.max_depth);
     for (int k = 0; k < d->nw; k++) {
         memset(d->w[k].points, 0, ((size_t)1 << d->w[k].bits) * sizeof *d->w[k].points);
         free(d->w[k].pairs);
@@ -2274,7 +2283,7 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
     d.o = o;
     d.crease = o->dual_crease && ism_tape_top_min_max_only(f);
     d.shift = ism_straddle_shift(f, o->max_error, false);
-    ism_grid_init(&d.g, o->box, o->max_depth);
+    set_grid(&d, o->box, o->max_depth);
     for (int e = 0; e < 12; e++)
         ism_cube_edge(e, &d.ec0[e], &d.ec1[e], d.ef[e]);
     d.pool = ism_pool_new(thread_count(o));

@@ -107,12 +107,11 @@ void ism_dual_ball_cover_init(ism_dual_ball_cover *c, const ism_dual_ball *b, si
     }
     for (int a = 0; a < 3; a++)
         width = width > box[a + 3] - box[a] ? width : box[a + 3] - box[a];
-    if (!n || !(reach > 0) || !isfinite(reach) || !(width > 0) || n > UINT32_MAX)
+    if (!n || !(reach > 0) || !isfinite(reach) || !(width > 0) || !isfinite(width) ||
+        n > UINT32_MAX)
         return; /* no grid: every ball asked */
-    double cell = fmax(reach, width / COVER_MAX_DIM);
+    double cell = fmax(reach, width / COVER_MAX_DIM); /* > 0 and finite: reach and width are */
     size_t cells = 1;
-    if (!(cell > 0) || !isfinite(cell) || !isfinite(width))
-        return;
     for (int a = 0; a < 3; a++) {
         c->lo[a] = box[a];
         c->dim[a] = (int32_t)ceil((box[a + 3] - box[a]) / cell);
@@ -120,9 +119,7 @@ void ism_dual_ball_cover_init(ism_dual_ball_cover *c, const ism_dual_ball *b, si
         cells *= (size_t)c->dim[a];
     }
     c->start = calloc(cells + 1, sizeof *c->start);
-    int32_t (*span)[2][3] = malloc(n * sizeof *span);
-    if (!c->start || !span) {
-        free(span);
+    if (!c->start) {
         ism_dual_ball_cover_free(c);
         return;
     }
@@ -131,7 +128,7 @@ void ism_dual_ball_cover_init(ism_dual_ball_cover *c, const ism_dual_ball *b, si
     size_t total = 0;
     for (int pass = 0; pass < 2; pass++) {
         for (size_t k = 0; k < n; k++) {
-            int32_t *s0 = span[k][0], *s1 = span[k][1];
+            int32_t s0[3], s1[3];
             double r = b[k].limit * (1 + COVER_ROUNDING);
             for (int a = 0; a < 3; a++) { /* the cells the limit's bounding box meets */
                 s0[a] = cover_index(c, a, b[k].p[a] - r);
@@ -153,7 +150,6 @@ void ism_dual_ball_cover_init(ism_dual_ball_cover *c, const ism_dual_ball *b, si
             c->start[i + 1] += c->start[i];
         c->idx = malloc((total ? total : 1) * sizeof *c->idx);
         if (!c->idx) {
-            free(span);
             ism_dual_ball_cover_free(c);
             return;
         }
@@ -161,7 +157,6 @@ void ism_dual_ball_cover_init(ism_dual_ball_cover *c, const ism_dual_ball *b, si
     for (size_t i = cells; i > 0; i--) /* pass 1 moved each start to its cell's end */
         c->start[i] = c->start[i - 1];
     c->start[0] = 0;
-    free(span);
 }
 
 void ism_dual_ball_cover_free(ism_dual_ball_cover *c)
@@ -312,7 +307,8 @@ typedef struct clip {
     uint64_t *cut;     /* sorted undirected edges cut by a sphere */
     uint32_t *cutv;    /* their cut points' vertices */
     size_t ncut, capcut;
-    ism_dual_ball_cover cover; /* the balls by their limits (every r1 stays below: marked) */
+    const ism_dual_ball_cover *cover; /* the caller's: the balls by their limits (every r1
+                                         stays below: marked) */
     uint32_t *tri;     /* the triangles kept or made */
     size_t nt, capt;
     uint32_t *rim;     /* directed rim edges (from, to, ball) */
@@ -340,7 +336,7 @@ static bool find_balls(clip *c)
         return false;
     for (size_t v = 0; v < c->m->nverts; v++) {
         const double *p = c->m->pos + 3 * v;
-        ball_scan sc = scan_of(&c->cover, c->n, p, p);
+        ball_scan sc = scan_of(c->cover, c->n, p, p);
         size_t k = c->n;
         for (size_t i = 0; i < sc.n && k == c->n; i++) {
             size_t j = scan_at(&sc, i);
@@ -404,7 +400,7 @@ static enum ism_fan_status settle_radii(clip *c)
                     lo[q] = pa[q] < pb[q] ? pa[q] : pb[q];
                     hi[q] = pa[q] < pb[q] ? pb[q] : pa[q];
                 }
-                ball_scan sc = scan_of(&c->cover, c->n, lo, hi);
+                ball_scan sc = scan_of(c->cover, c->n, lo, hi);
                 for (size_t i = 0; i < sc.n; i++) {
                     size_t k = scan_at(&sc, i);
                     if (c->r1[k] > 0 && !c->shrink[k] &&
@@ -555,7 +551,7 @@ static enum ism_fan_status clip_radii(clip *c, const edge_ref *e, size_t ne)
             uint32_t ends[2] = {(uint32_t)(e[i].key >> 32), (uint32_t)e[i].key};
             for (int h = 0; h < 2; h++) {
                 const double *p = c->m->pos + 3 * (size_t)ends[h];
-                size_t k = limit_ball(c->b, c->n, &c->cover, p);
+                size_t k = limit_ball(c->b, c->n, c->cover, p);
                 if (k == c->n)
                     return ISM_FAN_BAD;
                 c->r1[k] = fmax(c->r1[k], sqrt(ism_sqdist3(p, c->b[k].p)) * (1 + RIM_MARGIN));
@@ -806,16 +802,16 @@ static enum ism_fan_status closed(const ism_mesh *m, const ism_dual_ball *b, siz
 }
 
 enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_dual_ball *b,
-                                       size_t n, double max_error, uint8_t *shrink, double *rim)
+                                       size_t n, const ism_dual_ball_cover *cv,
+                                       double max_error, uint8_t *shrink, double *rim)
 {
     memset(shrink, 0, n);
-    clip c = {.m = m, .s = s, .b = b, .n = n, .shrink = shrink};
+    clip c = {.m = m, .s = s, .b = b, .n = n, .shrink = shrink, .cover = cv};
     c.r1 = calloc(n ? n : 1, sizeof *c.r1);
-    ism_dual_ball_cover_init(&c.cover, b, n);
     edge_ref *e = NULL;
     size_t ne = 0;
     enum ism_fan_status st =
-        c.r1 && sorted_edges(m, b, n, &c.cover, &e, &ne) ? ISM_FAN_OK : ISM_FAN_NO_MEMORY;
+        c.r1 && sorted_edges(m, b, n, cv, &e, &ne) ? ISM_FAN_OK : ISM_FAN_NO_MEMORY;
     if (st == ISM_FAN_OK)
         st = clip_radii(&c, e, ne);
     free(e);
@@ -864,7 +860,7 @@ enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_du
             else {
                 ism_mesh_compact(m, used);
                 free(used);
-                st = closed(m, b, n, &c.cover);
+                st = closed(m, b, n, cv);
             }
         }
     }
@@ -873,7 +869,6 @@ enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_du
     else
         memset(rim, 0, n * sizeof *rim); /* out of memory: nothing clipped */
     free(c.r1);
-    ism_dual_ball_cover_free(&c.cover);
     free(c.ball);
     free(c.cut);
     free(c.cutv);

@@ -101,8 +101,10 @@ bool ism_dual_triangle_within(ism_sampler *s, const ism_mesh *m, const uint32_t 
  * triangles against E with s. On anything but OK, m is left in an unspecified state (the
  * caller makes the mesh again or gives up). shrink[0..n): 1 for every ball a MISS or BAD
  * is about, to be halved; a BAD with none marked cannot be helped by the balls. rim[0..n):
- * each ball's clip sphere as far as the clip got (0: none). */
+ * each ball's clip sphere as far as the clip got (0: none). cv: the cover of b[0..n) (the
+ * caller's, ism_dual_ball_cover_init; one without a grid asks every ball). */
 enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_dual_ball *b,
-                                       size_t n, double max_error, uint8_t *shrink, double *rim);
+                                       size_t n, const ism_dual_ball_cover *cv,
+                                       double max_error, uint8_t *shrink, double *rim);
 
 #endif

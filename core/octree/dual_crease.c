@@ -309,15 +309,11 @@ int ism_dual_edge_branch(ism_sampler *s, const double p0[3], const double p1[3],
     return here;
 }
 
-int ism_dual_crease_branch_faces(ism_sampler *s, const double (*p)[3], const double f[8])
+/* ism_dual_crease_branch_faces with the branches' values at the corners given (bv). */
+static int branch_faces_bv(ism_sampler *s, const double (*p)[3], const double f[8],
+                           const double (*bv)[2])
 {
     int per[6][2] = {{0}}, total[2] = {0, 0};
-    double bv[8][2];
-    for (int c = 0; c < 8; c++) {
-        s->n_point++;
-        if (!ism_eval_top_values(s->tape, s->ws, p[c][0], p[c][1], p[c][2], bv[c]))
-            return -1;
-    }
     for (int e = 0; e < 12; e++) {
         int c0, c1, face[2];
         ism_cube_edge(e, &c0, &c1, face);
@@ -332,6 +328,17 @@ int ism_dual_crease_branch_faces(ism_sampler *s, const double (*p)[3], const dou
     }
     /* a piece of one branch alone is a curve round a corner or more (3 edges at least) */
     return total[0] >= 3 && total[1] >= 3 ? 2 : 1;
+}
+
+int ism_dual_crease_branch_faces(ism_sampler *s, const double (*p)[3], const double f[8])
+{
+    double bv[8][2];
+    for (int c = 0; c < 8; c++) {
+        s->n_point++;
+        if (!ism_eval_top_values(s->tape, s->ws, p[c][0], p[c][1], p[c][2], bv[c]))
+            return -1;
+    }
+    return branch_faces_bv(s, p, f, (const double (*)[2])bv);
 }
 
 /* Is x within `share` of the box's size of the box along every axis? (NaN: no.) */
@@ -437,8 +444,9 @@ enum ism_crease_node ism_dual_crease_node(ism_sampler *s, ism_ivjet_ws *jet, uin
         return ISM_CREASE_SMOOTH;
     if (small && ism_dual_crease_near(s, p[0], p[7], vertex))
         return ISM_CREASE_VERTEX;
-    return small && last && ism_dual_crease_branch_faces(s, p, f) == 2 ? ISM_CREASE_PAIR
-                                                                        : ISM_CREASE_SPLIT;
+    return small && last && branch_faces_bv(s, p, f, (const double (*)[2])bv) == 2
+               ? ISM_CREASE_PAIR
+               : ISM_CREASE_SPLIT;
 }
 
 void ism_dual_pair_vertex(ism_sampler *s, const double (*p)[3], const double f[8], int k,
