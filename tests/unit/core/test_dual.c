@@ -103,27 +103,26 @@ static void check_in(const pf_surface *s, double (*dist)(const double *), double
                      double area, double kappa_max, long euler, double room, double half,
                      int first)
 {
-    const double *sh = shifts;
     ism_tape *t = pf_compile(s);
     double bound = room * area / (EQUILATERAL_AREA * 2 * e / kappa_max);
     for (size_t i = (size_t)first; i < 3; i++) {
         double box[6];
-        cube_box(half, sh[i] * half / 1.5, box);
+        cube_box(half, shifts[i] * half / 1.5, box);
         ism_mesh m;
         run(t, box, e, true, &m, ISM_MESHER_DUAL, ISM_DUAL_WHY_NONE);
         double worst = pf_worst_distance(&m, dist);
         cr_expect_leq(worst, e, "%s E %g shift %g: a point %g from the surface", s->expr, e,
-                      sh[i], worst);
+                      shifts[i], worst);
         pf_props p;
         pf_measure(&m, t, &p);
         cr_expect_eq(p.boundary_edges + p.nonmanifold_edges, 0, "shift %g: %zu open, %zu "
-                     "non-manifold edges", sh[i], p.boundary_edges, p.nonmanifold_edges);
+                     "non-manifold edges", shifts[i], p.boundary_edges, p.nonmanifold_edges);
         cr_expect_eq(repeated_directed_edges(&m), 0, "shift %g: triangles turned over",
-                     sh[i]);
-        cr_expect_eq(p.euler, euler, "shift %g: χ %ld", sh[i], p.euler);
+                     shifts[i]);
+        cr_expect_eq(p.euler, euler, "shift %g: χ %ld", shifts[i], p.euler);
         cr_expect_eq(p.components, 1);
         cr_expect_lt((double)m.ntris, bound, "%s E %g shift %g: %zu triangles, bound %.0f",
-                     s->expr, e, sh[i], m.ntris, bound);
+                     s->expr, e, shifts[i], m.ntris, bound);
         ism_mesh_free(&m);
     }
     ism_tape_free(t);

@@ -415,15 +415,23 @@ Test(dual_crease, barth_in_a_ball_as_the_primal_path)
     ism_tape_free(t);
 }
 
-/* ... and at 3e-3 in its own box, where the ridge runs along depth-10 cells' face diagonals:
+/* ... and at 3e-3, where in its own box the ridge runs along depth-10 cells' face diagonals:
  * the leaves there hold a piece of each branch apart (dual_crease.h ISM_CREASE_PAIR) or
- * their crease point with a face crossed four times (declined min_max before). */
+ * their crease point with a face crossed four times (declined min_max before); the own box
+ * must be dual. The shifted boxes decline today; a dual mesh made there is checked alike. */
 Test(dual_crease, barth_pairs_beside_the_ridge)
 {
     if (pf_quick())
         return;
     ism_tape *t = pf_compile(&barth);
-    static const double box[6] = {-1.6, -1.6, -1.6, 1.6, 1.6, 1.6};
-    cr_expect(barth_as_the_primal_path(t, box, 3e-3, "own box"), "own box 3e-3: declined");
+    static const double base[6] = {-1.6, -1.6, -1.6, 1.6, 1.6, 1.6};
+    for (int which = pf_first_box(); which < 3; which++) {
+        double box[6];
+        char where[16];
+        box_at(base, which, box);
+        snprintf(where, sizeof where, "box %d", which);
+        bool dual = barth_as_the_primal_path(t, box, 3e-3, where);
+        cr_expect(which != 0 || dual, "own box 3e-3: declined");
+    }
     ism_tape_free(t);
 }
