@@ -180,15 +180,8 @@ bool ism_conform_mesh(const ism_tape *f, const ism_locus_options *o, ism_locus *
     size_t nt0 = mesh->ntris;
     ok = ok && run_items(&r);
     int limit = o->limit_depth > 0 ? o->limit_depth : o->max_depth;
-    size_t npinch = 0;
-    double *pinch = malloc((3 * locus->npoints + 1) * sizeof *pinch);
-    ok = ok && pinch;
-    for (size_t i = 0; ok && i < locus->npoints; i++)
-        if (locus->points[i].type == ISM_SING_PINCH)
-            memcpy(pinch + 3 * npinch++, locus->points[i].p, sizeof locus->points[i].p);
     ok = ok && (r.c.stopped || cf_refine_refill(&r.c, nt0, o->max_error, ldexp(side, -limit),
-                                                pinch, npinch));
-    free(pinch);
+                                                locus));
     if (ok && stop_now(&r))
         say_cut_short(&r);
     /* compaction also after a failure: what was refilled stays, nothing is left dead */

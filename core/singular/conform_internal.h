@@ -388,12 +388,12 @@ bool cf_drop_spikes(cf_ctx *c, cf_loops *ls, uint32_t **rm, size_t *nrm);
 /* The live triangles from nt0 on (made by the pass): those with a centroid or edge midpoint
  * farther than max_error from f = 0 have their longest edge off the locus halved (no half
  * shorter than min_edge; max_error 0: a quarter of the finest cell, halves of half a cell at
- * least); then those facing against ∇f, and the polygoniser's near the npinch pinch points
- * (3 coordinates each), are untangled, their vertices not on the locus nor on a boundary
+ * least); then those facing against ∇f, and the polygoniser's near the pinch points of l
+ * (ISM_SING_PINCH), are untangled, their vertices not on the locus nor on a boundary
  * moved to their neighbours' mean, onto f = 0 (no centroid round them left farther than a
  * share of a cell, or max_error). False only when out of memory. */
 bool cf_refine_refill(cf_ctx *c, size_t nt0, double max_error, double min_edge,
-                      const double *pinch, size_t npinch);
+                      const ism_locus *l);
 
 /* ---- conform_point.c, conform_tube.c: the two surgeries ---- */
 /* Point i of the locus made one vertex shared by its cones. False only when out of memory

@@ -148,7 +148,7 @@ static bool folded_near(cf_ctx *c, const double p[3], double r, bool *found)
     const double *P = c->m->pos;
     for (size_t i = 0; ok && !*found && i < cand.n && !cf_poll(c, 1); i++) {
         uint32_t t = cand.t[i], tt[3];
-        if (c->dead[t] || !tri_in_ball(c, t, &q))
+        if (!tri_in_ball(c, t, &q))
             continue;
         const uint32_t *v = c->m->tri + 3 * (size_t)t;
         double n[3], m[3];

@@ -226,32 +226,36 @@ static bool movable(cf_ctx *c, uint32_t v)
     return ntri > 0 && nnb == ntri;
 }
 
-/* The polygoniser's live triangles (before nt0) within PINCH_FOLD_CELLS of one of the npinch
- * points pinch (3 each) turned over, into polys: the ones of its triangles the untangling
+/* The polygoniser's live triangles (before nt0) within PINCH_FOLD_CELLS of one of the pinch
+ * points of l turned over, into polys: the ones of its triangles the untangling
  * looks at again, with those round each vertex it moves (a move is kept where no more
  * triangles round it turn: a fold may pass to a neighbour). False when out of memory. */
-static bool list_polygoniser_turned(cf_ctx *c, size_t nt0, const double *pinch, size_t npinch,
-                                    cf_tris *polys)
+static bool list_polygoniser_turned(cf_ctx *c, size_t nt0, const ism_locus *l, cf_tris *polys)
 {
     double r = PINCH_FOLD_CELLS * c->cell;
     cf_tris cand = {0};
     bool ok = true;
     polys->n = 0;
     cf_tgrid_begin(&c->grid);
-    for (size_t i = 0; ok && i < npinch; i++) {
+    for (size_t i = 0; ok && i < l->npoints; i++) {
+        if (l->points[i].type != ISM_SING_PINCH)
+            continue;
         double lo[3], hi[3];
-        cf_query_box(pinch + 3 * i, pinch + 3 * i, r, lo, hi);
+        cf_query_box(l->points[i].p, l->points[i].p, r, lo, hi);
         ok = cf_tgrid_gather(&c->grid, c->m, lo, hi, c->dead, &cand);
     }
     for (size_t i = 0; ok && i < cand.n && !cf_poll(c, 1); i++) {
         uint32_t t = cand.t[i];
+        if (t >= nt0)
+            continue;
         const uint32_t *v = c->m->tri + 3 * (size_t)t;
         bool near = false;
-        for (size_t j = 0; j < npinch && !near; j++)
-            near = cf_point_triangle_d2(pinch + 3 * j, c->m->pos + 3 * (size_t)v[0],
+        for (size_t j = 0; j < l->npoints && !near; j++)
+            near = l->points[j].type == ISM_SING_PINCH &&
+                   cf_point_triangle_d2(l->points[j].p, c->m->pos + 3 * (size_t)v[0],
                                         c->m->pos + 3 * (size_t)v[1],
                                         c->m->pos + 3 * (size_t)v[2]) < r * r;
-        if (t < nt0 && near && turned(c, t, NULL))
+        if (near && turned(c, t, NULL))
             ok = cf_tris_push(polys, t);
     }
     free(cand.t);
@@ -286,10 +290,10 @@ static bool collect_turned(cf_ctx *c, size_t nt0, const cf_tris *polys, cf_tris 
     return true;
 }
 
-static bool untangle(cf_ctx *c, size_t nt0, const double *pinch, size_t npinch, double reach)
+static bool untangle(cf_ctx *c, size_t nt0, const ism_locus *l, double reach)
 {
     cf_tris vs = {0}, polys = {0};
-    bool ok = list_polygoniser_turned(c, nt0, pinch, npinch, &polys);
+    bool ok = list_polygoniser_turned(c, nt0, l, &polys);
     for (int round = 0; ok && round < UNTANGLE_ROUNDS && !c->stopped; round++) {
         size_t nturned;
         ok = collect_turned(c, nt0, &polys, &vs, &nturned);
@@ -465,7 +469,7 @@ static bool split_over(cf_ctx *c, size_t nt0, double E, double min_edge, cf_tris
 }
 
 bool cf_refine_refill(cf_ctx *c, size_t nt0, double max_error, double min_edge,
-                      const double *pinch, size_t npinch)
+                      const ism_locus *l)
 {
     if (c->m->ntris == nt0 || !c->indexed)
         return true;
@@ -486,7 +490,7 @@ bool cf_refine_refill(cf_ctx *c, size_t nt0, double max_error, double min_edge,
     }
     c->st->triangles_added += c->m->ntris - nt1 - refill_halved;
     free(removed.t);
-    ok = ok && untangle(c, nt0, pinch, npinch, reach);
+    ok = ok && untangle(c, nt0, l, reach);
     c->st->refill_work = c->st->work - w0;
     return ok;
 }
