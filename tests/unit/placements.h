@@ -36,13 +36,11 @@
 #define PF_IRR_Z 0.36787944117144233    /* 1/e */
 #define PF_IRR PF_IRR_X
 
-/* The rational placement this table replaced (0.37, −0.23, 0.41 of a finest cell; PF_OLD: the
- * one fraction). Kept only by the tests marked FIXME(issue 13): each fails at the irrational
- * placement for the reason its comment names (a lattice-luck bug the rational placement hid,
- * in code another change owns) and moves to PF_IRR_* when that is mended. Not for new tests. */
+/* The rational placement this table replaced (0.37, −0.23, 0.41 of a finest cell); kept only
+ * as test_polygonise_crease.c's double-torus regression placement (pf_sweep_box_old). Not for
+ * new tests. */
 #define PF_OLD_X 0.37
 #define PF_OLD_Y (-0.23)
 #define PF_OLD_Z 0.41
-#define PF_OLD PF_OLD_X
 
 #endif
