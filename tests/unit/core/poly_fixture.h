@@ -99,9 +99,9 @@ bool pf_nm_edges_one_closed_curve(const ism_mesh *m, size_t *nedges);
  * depth d); which −1: base as given (so one loop from −1 runs all three). */
 void pf_sweep_box(const double base[6], int d, int which, double box[6]);
 
-/* pf_sweep_box with which 1 at the old rational placement (PF_OLD_*): only for the tests marked
- * FIXME(issue 13) in placements.h's sense, and for a regression case named as such (a box
- * where a bug was found, run beside the three placements). */
+/* pf_sweep_box with which 1 at the old rational placement (PF_OLD_*): only for a regression
+ * case named as such (a box where a bug was found, run beside the three placements — today the
+ * double torus's crease crack); not for new tests. */
 void pf_sweep_box_old(const double base[6], int d, int which, double box[6]);
 
 /* pf_sweep_box(base, d, which, box), then pf_run at depths 3..d (all threads) and
