@@ -7,7 +7,6 @@
 #include "proto/request.h"
 #include "core/curves/branches.h"
 #include "core/curves/crease_normals.h"
-#include "core/eval/eval.h"
 #include "core/util/grow.h"
 
 #include <math.h>
@@ -142,97 +141,18 @@ static bool same_normal(const float *c, const float *v)
     return is_zero3(c) || d >= cos(ISM_CORNER_NORMAL_MIN_ANGLE);
 }
 
-/* A vertex is on the singular locus (a double curve, a pinch or triple point: ∇f = 0, the
- * vertex normal there is noise or the fill's average of every sheet through it, which may lie
- * along the curve) when |∇f| there is below SINGULAR_GRAD_REL × the largest |∇f| at the other
- * corners of a triangle it is in: next to a double curve |∇f| grows linearly with the distance
- * r, so a corner a cell away has |∇f| ~ |H| r, while on the curve it is rounding (Steiner:
- * ~1e-16 against ~1e-2); 1e-6 leaves eight decades between the two. */
-#define SINGULAR_GRAD_REL 1e-6
-
-/* Per vertex of m: |∇f| (NULL when out of memory). */
-static double *gradient_norms(const ism_tape *f, const ism_mesh *m)
-{
-    double *g = malloc((m->nverts ? m->nverts : 1) * sizeof *g);
-    ism_eval_ws *ws = ism_eval_ws_new(f);
-    if (!g || !ws) {
-        free(g);
-        ism_eval_ws_free(ws);
-        return NULL;
-    }
-    for (size_t v = 0; v < m->nverts; v++) {
-        const double *p = m->pos + 3 * v;
-        double d[3];
-        ism_eval_gradient(f, ws, p[0], p[1], p[2], d);
-        double n = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        g[v] = isfinite(n) ? n : 0;
-    }
-    ism_eval_ws_free(ws);
-    return g;
-}
-
-/* The corners of triangle t at vertices on the singular locus get their own sheet's normal:
- * the sum of the triangle's other corners' normals (∇f on the same half-sheet), or ∇f at
- * the centroid when every corner is on the locus. Corners off it keep cn's. */
-static void singular_corners(const ism_tape *f, ism_eval_ws *ws, const ism_mesh *m,
-                             const double *gn, size_t t, float *cn)
-{
-    const uint32_t *tv = m->tri + 3 * t;
-    double top = fmax(gn[tv[0]], fmax(gn[tv[1]], gn[tv[2]]));
-    bool on[3];
-    double s[3] = {0, 0, 0};
-    int off = 0;
-    for (int i = 0; i < 3; i++) {
-        on[i] = gn[tv[i]] <= SINGULAR_GRAD_REL * top;
-        if (!on[i]) {
-            off++;
-            for (int k = 0; k < 3; k++)
-                s[k] += cn[9 * t + 3 * i + k];
-        }
-    }
-    if (off == 3 || !(top > 0))
-        return;
-    if (!off) {
-        double c[3] = {0, 0, 0};
-        for (int i = 0; i < 3; i++)
-            for (int k = 0; k < 3; k++)
-                c[k] += m->pos[3 * (size_t)tv[i] + k] / 3;
-        ism_eval_gradient(f, ws, c[0], c[1], c[2], s);
-    }
-    double n = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
-    if (!(n > 0) || !isfinite(n))
-        return;
-    for (int i = 0; i < 3; i++)
-        if (on[i])
-            for (int k = 0; k < 3; k++)
-                cn[9 * t + 3 * i + k] = (float)(s[k] / n);
-}
-
 bool ism_wire_corner_normals(const ism_tape *f, const ism_mesh *m, const ism_cut *cut,
                              const ism_wire_mesh *w, size_t *n, uint32_t **at, float **normal)
 {
     *n = 0;
     *at = NULL;
     *normal = NULL;
-    if (!w->normal || !m->ntris)
+    if (!w->normal || !m->ntris || !ism_branches_any(f))
         return true;
     if (m->ntris > UINT32_MAX / 3)
         return false; /* corner indices are uint32 */
     float *cn = malloc(m->ntris * 9 * sizeof *cn);
-    double *gn = cn ? gradient_norms(f, m) : NULL;
-    ism_eval_ws *ws = gn ? ism_eval_ws_new(f) : NULL;
-    bool ok = ws != NULL;
-    if (ok && ism_branches_any(f))
-        ok = ism_crease_corner_normals(f, m, cut, cn);
-    else if (ok)
-        for (size_t c = 0; c < 3 * m->ntris; c++)
-            memcpy(cn + 3 * c, w->normal + 3 * (size_t)m->tri[c], 3 * sizeof *cn);
-    for (size_t t = 0; ok && t < m->ntris; t++)
-        singular_corners(f, ws, m, gn, t, cn);
-    free(gn);
-    if (ws)
-        ism_eval_ws_free(ws);
-    if (!ok) {
+    if (!cn || !ism_crease_corner_normals(f, m, cut, cn)) {
         free(cn);
         return false;
     }

@@ -50,11 +50,8 @@ void ism_wire_mesh_free(ism_wire_mesh *w);
 
 /* The corners of w (built from m) whose branch normal (core/curves/crease_normals.h; cut:
  * the mesh's crease edges, NULL when none were cut) differs from the vertex's wire normal by
- * more than ISM_CORNER_NORMAL_MIN_ANGLE, into malloc'd *at / *normal (NULL, *n 0 when none,
- * or no normals in w). Corners at a vertex on the singular locus (∇f = 0 there: a double
- * curve's vertex is shared by two sheets, and its one normal — noise, or the average of
- * every sheet through it — shades the triangles beside the curve as saw teeth) carry their
- * own triangle's sheet normal (issue 13). False when out of memory. */
+ * more than ISM_CORNER_NORMAL_MIN_ANGLE, into malloc'd *at / *normal (NULL, *n 0 when none:
+ * f without min/max, or no normals in w). False when out of memory. */
 bool ism_wire_corner_normals(const ism_tape *f, const ism_mesh *m, const ism_cut *cut,
                              const ism_wire_mesh *w, size_t *n, uint32_t **at, float **normal);
 
