@@ -30,29 +30,29 @@ bool cf_grow(void **v, size_t *cap, size_t need, size_t sz)
 /* Below this many keys an insertion sort beats the radix passes' counting. */
 #define SORT_SMALL 32
 
+/* Shell sort with gaps first_gap, first_gap / 2, ..., 1 (first_gap 1: an insertion sort). */
+static void shell_u32(uint32_t *a, size_t n, size_t first_gap)
+{
+    for (size_t gap = first_gap; gap > 0; gap /= 2)
+        for (size_t i = gap; i < n; i++) {
+            uint32_t x = a[i];
+            size_t j = i;
+            for (; j >= gap && a[j - gap] > x; j -= gap)
+                a[j] = a[j - gap];
+            a[j] = x;
+        }
+}
+
 void cf_sort_u32(uint32_t *a, size_t n)
 {
     /* equal keys are indistinguishable: any correct sort gives qsort's array */
     if (n < SORT_SMALL) {
-        for (size_t i = 1; i < n; i++) {
-            uint32_t x = a[i];
-            size_t j = i;
-            for (; j > 0 && a[j - 1] > x; j--)
-                a[j] = a[j - 1];
-            a[j] = x;
-        }
+        shell_u32(a, n, 1);
         return;
     }
     uint64_t *w = malloc(n * sizeof *w);
-    if (!w) { /* out of memory: sorted in place all the same */
-        for (size_t gap = n / 2; gap > 0; gap /= 2) /* shell sort: no extra memory */
-            for (size_t i = gap; i < n; i++) {
-                uint32_t x = a[i];
-                size_t j = i;
-                for (; j >= gap && a[j - gap] > x; j -= gap)
-                    a[j] = a[j - gap];
-                a[j] = x;
-            }
+    if (!w) { /* out of memory: sorted in place all the same (shell sort: no extra memory) */
+        shell_u32(a, n, n / 2);
         return;
     }
     /* the radix sort of 64-bit keys (digits every key shares, the high half here, are no
