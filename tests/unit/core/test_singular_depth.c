@@ -40,6 +40,22 @@ Test(singular_depth, from_the_bound)
     cr_expect_eq(ism_singular_depth(&po), 6);
 }
 
+/* The depth.max 10 mesh within e at centroids and edge midpoints (box `which`); then both
+ * runs' meshes and loci freed. */
+static void expect_within_and_free(const ism_tape *t, double e, int which, ism_mesh *m8,
+                                   ism_mesh *m10, ism_locus *l8, ism_locus *l10)
+{
+    ism_analysis a;
+    pf_analyse_plain(m10, t, &a);
+    cr_expect_leq(a.max_dist_centroid, e, "box %d: centroid %g", which, a.max_dist_centroid);
+    cr_expect_leq(a.max_dist_midpoint, e, "box %d: midpoint %g", which, a.max_dist_midpoint);
+    ism_analysis_free(&a);
+    ism_locus_free(l8);
+    ism_locus_free(l10);
+    ism_mesh_free(m8);
+    ism_mesh_free(m10);
+}
+
 Test(singular_depth, klein_depth_max_is_only_a_limit)
 {
     const pf_surface s = {KLEIN, NULL, 0, NULL, 0};
@@ -60,15 +76,7 @@ Test(singular_depth, klein_depth_max_is_only_a_limit)
         cr_expect_eq(p.components, 1, "box %d: %zu components", which, p.components);
         size_t nm = 0;
         cr_expect(pf_nm_edges_one_closed_curve(&m10, &nm), "box %d: the double curve", which);
-        ism_analysis a;
-        pf_analyse_plain(&m10, t, &a);
-        cr_expect_leq(a.max_dist_centroid, E, "box %d: centroid %g", which, a.max_dist_centroid);
-        cr_expect_leq(a.max_dist_midpoint, E, "box %d: midpoint %g", which, a.max_dist_midpoint);
-        ism_analysis_free(&a);
-        ism_locus_free(&l8);
-        ism_locus_free(&l10);
-        ism_mesh_free(&m8);
-        ism_mesh_free(&m10);
+        expect_within_and_free(t, E, which, &m8, &m10, &l8, &l10);
     }
     ism_tape_free(t);
 }
@@ -99,15 +107,7 @@ Test(singular_depth, crossing_planes_stop_at_the_tube)
                      which, (unsigned long long)p8.triangles, (unsigned long long)p10.triangles);
         pf_same_mesh(&m8, &m10, "x y = 0: depth.max 8 and 10 under the default bound");
         cr_expect_eq(l10.ncurves, 1, "box %d: %zu curves", which, l10.ncurves);
-        ism_analysis a;
-        pf_analyse_plain(&m10, t, &a);
-        cr_expect_leq(a.max_dist_centroid, e, "box %d: centroid %g", which, a.max_dist_centroid);
-        cr_expect_leq(a.max_dist_midpoint, e, "box %d: midpoint %g", which, a.max_dist_midpoint);
-        ism_analysis_free(&a);
-        ism_locus_free(&l8);
-        ism_locus_free(&l10);
-        ism_mesh_free(&m8);
-        ism_mesh_free(&m10);
+        expect_within_and_free(t, e, which, &m8, &m10, &l8, &l10);
     }
     ism_tape_free(t);
 }
