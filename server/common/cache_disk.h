@@ -26,9 +26,9 @@
 
 #include "server/common/cache.h"
 
-/* A disk tier under dir (created if missing). max_pending bounds the bytes queued for writing.
- * Returns a working tier even when dir is unusable (it then stores nothing); NULL only when
- * out of memory. */
+/* A disk tier under dir (created if missing). max_pending bounds the bytes queued for writing
+ * (an empty queue takes one entry of any size). Returns a working tier even when dir is
+ * unusable (it then stores nothing); NULL only when out of memory. */
 ism_cache_tier *ism_cache_disk_new(const char *dir, size_t max_pending);
 
 /* Whether the directory was usable at start-up. */
