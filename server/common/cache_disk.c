@@ -331,9 +331,9 @@ static void disk_put(ism_cache_tier *t, const char *name, ism_blob *b)
     }
     snprintf(p->name, sizeof p->name, "%s", name);
     pthread_mutex_lock(&d->lock);
-    /* An empty queue takes one entry of any size, so a mesh larger than the bound still
-     * reaches the disk; behind others it waits only while the queue holds max_pending. */
-    if (d->stopping || (d->pending_bytes && d->pending_bytes + b->len > d->max_pending)) {
+    /* skipped only while the queue holds max_pending: an entry of any size joins a queue
+     * below it, so a mesh larger than the bound still reaches the disk */
+    if (d->stopping || d->pending_bytes >= d->max_pending) {
         pthread_mutex_unlock(&d->lock);
         free(p);
         log_store_failure(d, name, "write queue full", 0);

@@ -27,7 +27,7 @@
 #include "server/common/cache.h"
 
 /* A disk tier under dir (created if missing). max_pending bounds the bytes queued for writing
- * (an empty queue takes one entry of any size). Returns a working tier even when dir is
+ * (puts are skipped while it holds that much). Returns a working tier even when dir is
  * unusable (it then stores nothing); NULL only when out of memory. */
 ism_cache_tier *ism_cache_disk_new(const char *dir, size_t max_pending);
 

@@ -410,8 +410,8 @@ static void redis_put(ism_cache_tier *t, const char *name, ism_blob *b)
     }
     strcpy(p->name, name);
     pthread_mutex_lock(&rt->lock);
-    /* as the disk tier: an empty queue takes one entry of any size (up to max_entry) */
-    if (rt->stopping || (rt->pending_bytes && rt->pending_bytes + b->len > rt->cfg.max_pending)) {
+    /* as the disk tier: skipped only while the queue holds max_pending */
+    if (rt->stopping || rt->pending_bytes >= rt->cfg.max_pending) {
         pthread_mutex_unlock(&rt->lock);
         free(p);
         atomic_fetch_add(&t->counters.store_failures, 1);

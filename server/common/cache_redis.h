@@ -42,7 +42,7 @@
 typedef struct ism_redis_settings {
     char host[256];
     unsigned short port;
-    size_t max_pending;      /* bytes queued for writing before puts are skipped */
+    size_t max_pending;      /* puts are skipped while this much is queued */
     size_t max_entry;        /* larger entries are not shared */
     char namespace_[64];     /* keys start "<namespace_>:v1:"; "" = ISM_REDIS_DEFAULT_NAMESPACE */
     char username[128];      /* AUTH on every connection when password is set */

@@ -30,12 +30,14 @@
 #include "server/isomeshd/worker_pool.h"
 
 #define DOC_MAX (8u << 20)
-/* Bytes of new entries waiting for the disk (or Redis) writer, beyond --cache-mem. A writer
- * that falls behind (a loaded machine: 128 connections posting new surfaces) grew a 256 MiB
- * queue by ~30 MiB in 10 s (tests/reliability/test_load.py); a longer queue only delays the
- * writes, so past this the put is skipped (counted in isomesh_cache_store_failures_total; the
- * entry stays in the memory tier). An empty queue still takes one entry of any size. */
-#define DISK_WRITE_QUEUE ((size_t)8 << 20)
+/* Bytes of new entries waiting for the disk (or Redis) writer: a quarter of --cache-mem, at
+ * least DISK_WRITE_QUEUE_MIN. A writer that falls behind (a loaded machine, 128 connections
+ * posting new surfaces) grew a fixed 256 MiB queue by ~30 MiB in 10 s with --cache-mem 4M
+ * (tests/reliability/test_load.py); a longer queue only delays the writes, so while it holds
+ * this much a put is skipped (isomesh_cache_store_failures_total; the entry stays in the memory
+ * tier). The minimum keeps one computation's entries (mesh, body, stats) of a few MiB whole. */
+#define DISK_WRITE_QUEUE_MIN ((size_t)8 << 20)
+#define DISK_WRITE_QUEUE_SHARE 4 /* of --cache-mem */
 #define REDIS_MAX_ENTRY ((size_t)128 << 20) /* larger meshes stay on the daemon that made them */
 #define MAX_STOP_GRACE_S 10.0
 
@@ -151,14 +153,17 @@ static bool setup_cache(ismd_server *s, const ismd_config *cfg)
         if (!mem || !ism_cache_add_tier(&s->cache, mem))
             return false;
     }
-    s->disk = ism_cache_disk_new(cfg->cache_dir, DISK_WRITE_QUEUE);
+    size_t queue = cfg->cache_mem / DISK_WRITE_QUEUE_SHARE;
+    if (queue < DISK_WRITE_QUEUE_MIN)
+        queue = DISK_WRITE_QUEUE_MIN;
+    s->disk = ism_cache_disk_new(cfg->cache_dir, queue);
     if (s->disk)
         ism_cache_disk_set_max(s->disk, cfg->cache_disk_max);
     if (!s->disk || !ism_cache_add_tier(&s->cache, s->disk))
         return false;
     if (!cfg->redis[0])
         return true;
-    ism_redis_settings rs = {.max_pending = DISK_WRITE_QUEUE, .max_entry = REDIS_MAX_ENTRY};
+    ism_redis_settings rs = {.max_pending = queue, .max_entry = REDIS_MAX_ENTRY};
     if (!ism_redis_parse_address(cfg->redis, rs.host, &rs.port)) /* checked by config.c */
         return false;
     snprintf(rs.namespace_, sizeof rs.namespace_, "%s", cfg->redis_namespace);

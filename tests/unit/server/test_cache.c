@@ -408,7 +408,7 @@ Test(cache_disk, write_queue_over_budget_skips_and_counts)
 {
     char *dir = temp_dir();
     ism_cache_tier *d = ism_cache_disk_new(dir, 1000);
-    /* an empty queue takes one entry larger than the budget: a big mesh still reaches disk */
+    /* a queue below its budget takes an entry larger than it: a big mesh still reaches disk */
     ism_blob *big = filled(5000, 2);
     d->put(d, KEY_A ".ply", big);
     ism_cache_disk_flush(d);
