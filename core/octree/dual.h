@@ -13,8 +13,9 @@
  *
  * The primal polygons (polygonise.h) put vertices on cell edges and need cells half the size
  * for the same error: their chords run along face diagonals. Here a cell of size h makes
- * triangles of sides about h with every vertex on the surface, so the same E is met about a
- * level higher (sphere E = 1e-3: ~4 times fewer triangles before any simplification).
+ * triangles of sides about h with every vertex within E of the surface (0.9 E off it, on
+ * the convex side, where the surface bends one way: straddle.h; the stats' vertex distance
+ * reads that, README "Under an error bound"), so the same E is met about a level higher (sphere E = 1e-3: ~4 times fewer triangles before any simplification).
  *
  * Only for closed surfaces without features: no min/max or abs in f (creases), no singular
  * locus known (quiet or node balls given) but isolated certified nodes and isolated points
