@@ -67,10 +67,10 @@ void ism_ball_grid_free(ism_ball_grid *g)
     g->n = 0;
 }
 
-size_t ism_ball_grid_first(const ism_ball_grid *g, const int64_t c[3])
+/* The first entry from a on whose key is at least k. */
+static size_t lower_bound(const ism_ball_grid *g, size_t a, uint64_t k)
 {
-    uint64_t k = (uint64_t)cell_key(c) << 32;
-    size_t a = 0, b = g->n; /* first entry >= k */
+    size_t b = g->n;
     while (a < b) {
         size_t m = a + (b - a) / 2;
         if (g->key[m] < k)
@@ -81,7 +81,30 @@ size_t ism_ball_grid_first(const ism_ball_grid *g, const int64_t c[3])
     return a;
 }
 
-bool ism_ball_grid_in(const ism_ball_grid *g, size_t i, const int64_t c[3])
+/* Cells z .. z1 of one column are read as runs whose masked z coordinates do not wrap: the
+ * keys of a run are consecutive. A run's search starts after the last run's entries when
+ * its keys come later (no axis wrapped in between). */
+bool ism_ball_grid_any(const ism_ball_grid *g, const int64_t c0[3], const int64_t c1[3],
+                       bool (*hit)(uint32_t ball, const void *arg), const void *arg)
 {
-    return i < g->n && g->key[i] >> 32 == cell_key(c);
+    size_t from = 0;
+    uint64_t last = 0; /* the last run's last cell key + 1 (0: none read yet) */
+    for (int64_t x = c0[0]; x <= c1[0]; x++)
+        for (int64_t y = c0[1]; y <= c1[1]; y++)
+            for (int64_t z = c0[2]; z <= c1[2];) {
+                int64_t end = z + (int64_t)(AXIS_MASK - ((uint64_t)z & AXIS_MASK));
+                end = end < c1[2] ? end : c1[2];
+                int64_t a[3] = {x, y, z}, b[3] = {x, y, end};
+                uint64_t ka = cell_key(a), kb = cell_key(b);
+                if (ka < last)
+                    from = 0;
+                size_t i = lower_bound(g, from, ka << 32);
+                for (; i < g->n && g->key[i] >> 32 <= kb; i++)
+                    if (hit((uint32_t)(g->key[i] & UINT32_MAX), arg))
+                        return true;
+                from = i;
+                last = kb + 1;
+                z = end + 1;
+            }
+    return false;
 }

@@ -24,11 +24,11 @@ void ism_ball_grid_free(ism_ball_grid *g);
 /* The cell holding point p. */
 void ism_ball_grid_cell_of(const ism_ball_grid *g, const double p[3], int64_t c[3]);
 
-/* The first entry of cell c (index into key; entries of c follow while ism_ball_grid_in
- * holds). */
-size_t ism_ball_grid_first(const ism_ball_grid *g, const int64_t c[3]);
-
-/* Is entry i (< n) one of cell c's? Its ball is key[i] & UINT32_MAX. */
-bool ism_ball_grid_in(const ism_ball_grid *g, size_t i, const int64_t c[3]);
+/* Does hit(ball index, arg) hold for a ball filed in one of the cells c0..c1 (inclusive on
+ * every axis)? Stops at the first that does. The cells are read a column at a time: a run
+ * of cells along z has consecutive keys, so one binary search finds the run's entries (a
+ * box grown by 4 cells an axis reads 9² columns, not 9³ cells). */
+bool ism_ball_grid_any(const ism_ball_grid *g, const int64_t c0[3], const int64_t c1[3],
+                       bool (*hit)(uint32_t ball, const void *arg), const void *arg);
 
 #endif

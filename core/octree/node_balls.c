@@ -36,6 +36,19 @@ static bool meets(const double *b, double side, const double lo[3], const double
     return d2 <= b[ISM_NODE_BALL_R] * b[ISM_NODE_BALL_R];
 }
 
+/* A query's box and size, for the grid's visit (ism_ball_grid_any). */
+typedef struct query {
+    const ism_node_balls *x;
+    const double *lo, *hi;
+    double side;
+} query;
+
+static bool meets_box(uint32_t ball, const void *arg)
+{
+    const query *k = arg;
+    return meets(k->x->ball[ball], k->side, k->lo, k->hi);
+}
+
 bool ism_node_balls_split(const ism_node_balls *x, const double lo[3], const double hi[3])
 {
     const ism_ball_grid *g = &x->grid;
@@ -59,12 +72,5 @@ bool ism_node_balls_split(const ism_node_balls *x, const double lo[3], const dou
                 return true;
         return false;
     }
-    int64_t c[3];
-    for (c[0] = c0[0]; c[0] <= c1[0]; c[0]++)
-        for (c[1] = c0[1]; c[1] <= c1[1]; c[1]++)
-            for (c[2] = c0[2]; c[2] <= c1[2]; c[2]++)
-                for (size_t i = ism_ball_grid_first(g, c); ism_ball_grid_in(g, i, c); i++)
-                    if (meets(x->ball[g->key[i] & UINT32_MAX], side, lo, hi))
-                        return true;
-    return false;
+    return ism_ball_grid_any(g, c0, c1, meets_box, &(query){x, lo, hi, side});
 }
