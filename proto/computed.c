@@ -33,6 +33,7 @@ void ism_computed_free(ism_computed *c)
     free(c->tri_sheet);
     free(c->corner_at);
     free(c->corner_normal);
+    free(c->corner_locus);
     ism_features_free(&c->features);
     ism_locus_free(&c->locus);
     free(c->features_json);
@@ -142,6 +143,7 @@ bool ism_computed_write(const ism_computed *c, ism_frame_builder *b)
     put_locus(b, &c->locus);
     put_array(b, c->corner_at, w->ncorner_normals, sizeof *c->corner_at);
     put_array(b, c->corner_normal, 3 * w->ncorner_normals, sizeof *c->corner_normal);
+    put_array(b, c->corner_locus, c->corner_locus ? w->ncorner_normals : 0, 1);
     put_array(b, c->timings_ms, ISM_TIME_COUNT, sizeof(double));
     ism_frame_put_bytes(b, c->features_json, c->features_len);
     ism_frame_put_bytes(b, c->stats_json, c->stats_len);
@@ -418,7 +420,8 @@ static bool get_features(reader *r, ism_computed *c)
     return true;
 }
 
-/* The crease corners' normals (after the mesh and the wire). */
+/* The corners' own normals (crease sides, the singular locus's sheets; after the mesh and
+ * the wire). */
 static bool get_corner_normals(reader *r, ism_computed *c)
 {
     size_t len;
@@ -434,13 +437,21 @@ static bool get_corner_normals(reader *r, ism_computed *c)
     if (!get_array(r, 3 * n, sizeof(float), true, &nrm, "corner normals"))
         return false;
     c->corner_normal = nrm;
+    void *on;
+    if (!get_array(r, n, 1, true, &on, "corner locus marks"))
+        return false;
+    c->corner_locus = on;
     for (size_t i = 0; i < n; i++)
         if (c->corner_at[i] >= 3 * c->mesh.ntris || (i && c->corner_at[i] <= c->corner_at[i - 1]))
             return bad(r, "corner index out of order or range");
+    for (size_t i = 0; c->corner_locus && i < n; i++)
+        if (c->corner_locus[i] > 1)
+            return bad(r, "corner locus mark not 0 or 1");
     ism_wire_mesh *w = &c->wire;
     w->ncorner_normals = n;
     w->corner_at = c->corner_at;
     w->corner_normal = c->corner_normal;
+    w->corner_locus = c->corner_locus;
     return true;
 }
 

@@ -4,9 +4,8 @@
  * (server/common/pipeline.h), so asking for a second format never polygonises again.
  *
  * Its binary form is the cache entry "<surface key>.mesh" (the surface key names the surface
- * and its accuracy, not the encoding: proto/request.h). Entry format, version 4 (the
- * singular curves' ends and split cells added, so the locus read back is the one the mesh was
- * conformed to), all numbers little endian, built from the length-prefixed fields of
+ * and its accuracy, not the encoding: proto/request.h). Entry format, version 5 (the
+ * corners' locus marks added: the PLY keeps one row per vertex at the singular locus), all numbers little endian, built from the length-prefixed fields of
  * proto/frame.h:
  *
  *   bytes "ISMS", u32 version (ISM_COMPUTED_VERSION), string surface key (64 hex),
@@ -24,7 +23,9 @@
  *   (index into the singular points; 0xffffffff: none), u64 split cell (the bits of an f64:
  *   the cell the octree split its nodes to along it, 0: the depth's), bytes xyz (f64 x 3 x n),
  *   bytes corner_at (u32 x n, ascending corner indices 3 t + k < 3 ntris),
- *   bytes corner_normal (f32 x 3 x n) (both empty when no crease corner),
+ *   bytes corner_normal (f32 x 3 x n) (both empty when no corner has a normal of its own),
+ *   bytes corner_locus (u8 x n: 1 for a sheet normal at the singular locus, 0 for a crease
+ *   side; empty when no corner is on the locus),
  *   bytes timings (f64 x ISM_TIME_COUNT), bytes features JSON, bytes stats JSON.
  *
  * A reader refuses any other version, magic, length or an index out of range (the entry is
@@ -43,7 +44,7 @@
 #include "proto/stats.h"
 #include "proto/wire_mesh.h"
 
-#define ISM_COMPUTED_VERSION 4
+#define ISM_COMPUTED_VERSION 5
 /* The cache entry's extension ("<surface key>.mesh"). */
 #define ISM_COMPUTED_EXT "mesh"
 
@@ -57,6 +58,7 @@ typedef struct ism_computed {
     uint8_t *tri_sheet;        /* owned, per triangle; NULL when f has no double sheet */
     uint32_t *corner_at;       /* owned: the wire's corner normals (wire_mesh.h), NULL none */
     float *corner_normal;
+    uint8_t *corner_locus;     /* owned: per corner normal, 1 at the singular locus; NULL none */
     ism_features features;     /* owned; features.locus is &locus, check NULL */
     ism_locus locus;           /* singular points and curves (what the glb draws) */
     char *features_json;       /* the features JSON (proto/features.h) */

@@ -7,12 +7,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* A crease's other sides in PLY: the corners with a normal of their own (w->corner_at) get
- * vertices of their own, appended after the mesh's (whose indices stay), one per vertex and
- * distinct normal, so each side's triangles stay joined and shade with their branch's
- * normal. A vertex whose every corner has a normal of its own (its own normal, ∇f, is not
- * bit for bit either side's) lends its row to its first side instead: no row of the file is
- * left unused. */
+/* A crease's other sides in PLY: the corners with a crease side's normal of their own
+ * (w->corner_at, not marked in w->corner_locus) get vertices of their own, appended after the
+ * mesh's (whose indices stay), one per vertex and distinct normal, so each side's triangles
+ * stay joined and shade with their branch's normal. A vertex whose every corner has a normal
+ * of its own (its own normal, ∇f, is not bit for bit either side's) lends its row to its
+ * first side instead: no row of the file is left unused. The corners at the singular locus
+ * with their sheet's normal (marked) stay on their vertex's row: the PLY's vertices are the
+ * mesh's (the stats' count) wherever no crease is cut. */
 typedef struct ply_sides {
     size_t n;             /* extra vertices */
     uint32_t *vertex;     /* per extra vertex: the mesh vertex it copies */
@@ -44,16 +46,21 @@ static void ply_sides_free(ply_sides *p)
     free((void *)p->row);
 }
 
-/* Per mesh vertex: 1 when a corner without a normal of its own uses it (calloc'd; NULL when
- * out of memory). */
+/* Whether entry j of w->corner_at is a crease side's (the PLY gives it a vertex of its own). */
+static bool crease_side(const ism_wire_mesh *w, size_t j)
+{
+    return !w->corner_locus || !w->corner_locus[j];
+}
+
+/* Per mesh vertex: 1 when a corner without a crease side's normal uses it (calloc'd; NULL
+ * when out of memory). */
 static uint8_t *plain_corners(const ism_mesh *m, const ism_wire_mesh *w, size_t nc)
 {
     uint8_t *plain = calloc(m->nverts + 1, 1);
     for (size_t c = 0, j = 0; plain && c < 3 * m->ntris; c++) {
-        if (j < nc && w->corner_at[j] == c)
-            j++;
-        else
-            plain[m->tri[c]] = 1;
+        if (j < nc && w->corner_at[j] == c && crease_side(w, j++))
+            continue;
+        plain[m->tri[c]] = 1;
     }
     return plain;
 }
@@ -76,11 +83,13 @@ static bool ply_sides_build(const ism_mesh *m, const ism_wire_mesh *w, ply_sides
         ply_sides_free(p);
         return false;
     }
+    size_t nk = 0;
     for (size_t j = 0; j < nc; j++)
-        key[j] = (side_key){m->tri[w->corner_at[j]], (uint32_t)j, w->corner_normal + 3 * j};
-    qsort(key, nc, sizeof *key, cmp_side);
+        if (crease_side(w, j))
+            key[nk++] = (side_key){m->tri[w->corner_at[j]], (uint32_t)j, w->corner_normal + 3 * j};
+    qsort(key, nk, sizeof *key, cmp_side);
     uint32_t at = 0;
-    for (size_t i = 0; i < nc; i++) {
+    for (size_t i = 0; i < nk; i++) {
         uint32_t v = key[i].vertex;
         if (i && !cmp_side(&key[i], &key[i - 1])) {
             p->corner[key[i].j] = at;
@@ -134,7 +143,8 @@ static void ply_faces(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w,
         ism_sink_u8(s, 3);
         for (size_t c = 3 * t; c < 3 * t + 3; c++) {
             bool own = sides->n && j < w->ncorner_normals && w->corner_at[j] == c;
-            ism_sink_u32le(s, own ? sides->corner[j++] : m->tri[c]);
+            ism_sink_u32le(s, own && crease_side(w, j) ? sides->corner[j] : m->tri[c]);
+            j += own;
         }
         if (w->tri_cell)
             ism_sink_u32le(s, w->tri_cell[t]);

@@ -6,8 +6,10 @@
  * curves were requested: the arrangement face) and uchar double_sheet (when f has double
  * sheets). A crease vertex's other side (the corners whose branch normal is not the
  * vertex's) gets a vertex of its own per distinct normal, appended after the mesh's vertices
- * (their indices unchanged), so each side shades with its branch's normal. OBJ: core's
- * v / vn / f lines (a crease's other-side corners with `vn` lines of their own), then the
+ * (their indices unchanged), so each side shades with its branch's normal; the corners at
+ * the singular locus with their sheet's normal (wire_mesh.h's corner_locus) stay on their
+ * vertex's row. OBJ: core's v / vn / f lines (a crease's other-side corners and the locus's
+ * sheet corners with `vn` lines of their own; one `v` per mesh vertex), then the
  * features as `l` polylines over the same
  * 1-based vertices: a group `g nonmanifold_curves`, a group `g boundaries` (closed ones
  * repeat their first vertex), and per kind of requested curve a group `g section_curves`,
@@ -25,8 +27,9 @@
 bool ism_write_ply_wire(const ism_mesh *m, const ism_wire_mesh *w, ism_write_fn write,
                         void *ctx);
 
-/* OBJ of m with w's corner normals (a crease's sides: extra `vn` lines those corners use;
- * w may be NULL) and f's curves and boundaries as `l` lines (f may be NULL). */
+/* OBJ of m with w's corner normals (a crease's sides, the locus's sheets: extra `vn` lines
+ * those corners use; w may be NULL) and f's curves and boundaries as `l` lines (f may be
+ * NULL). */
 bool ism_write_obj_features(const ism_mesh *m, const ism_wire_mesh *w, const ism_features *f,
                             ism_write_fn write, void *ctx);
 

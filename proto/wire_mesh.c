@@ -2,11 +2,14 @@
  * be zero at singular points) and the analysis's per-vertex figures into the arrays the
  * encoders send. A zero normal would decode as an arbitrary direction (Draco's octahedral
  * coder) or render black, so it is replaced by the area-weighted normal of the triangles
- * around the vertex (and +z when even that vanishes). */
+ * around the vertex (and +z when even that vanishes). Corners get normals of their own where
+ * one vertex normal cannot serve every triangle round it: a crease's sides (the branch
+ * normals) and the sheets through a vertex on the singular locus (ism_wire_corner_normals). */
 #include "proto/wire_mesh.h"
 #include "proto/request.h"
 #include "core/curves/branches.h"
 #include "core/curves/crease_normals.h"
+#include "core/eval/eval.h"
 #include "core/util/grow.h"
 
 #include <math.h>
@@ -141,40 +144,142 @@ static bool same_normal(const float *c, const float *v)
     return is_zero3(c) || d >= cos(ISM_CORNER_NORMAL_MIN_ANGLE);
 }
 
+/* A vertex is on the singular locus (a double curve, a pinch or triple point: ∇f = 0, the
+ * vertex normal there is noise or the fill's average of every sheet through it, which may lie
+ * along the curve) when |∇f| there is below SINGULAR_GRAD_REL × the largest |∇f| at the other
+ * corners of a triangle it is in: next to a double curve |∇f| grows linearly with the distance
+ * r, so a corner a cell away has |∇f| ~ |H| r, while on the curve it is rounding (Steiner:
+ * ~1e-16 against ~1e-2); 1e-6 leaves eight decades between the two. */
+#define SINGULAR_GRAD_REL 1e-6
+
+/* Per vertex of m: |∇f| (NULL when out of memory). */
+static double *gradient_norms(const ism_tape *f, ism_eval_ws *ws, const ism_mesh *m)
+{
+    double *g = malloc((m->nverts ? m->nverts : 1) * sizeof *g);
+    for (size_t v = 0; g && v < m->nverts; v++) {
+        const double *p = m->pos + 3 * v;
+        double d[3];
+        ism_eval_gradient(f, ws, p[0], p[1], p[2], d);
+        double n = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        g[v] = isfinite(n) ? n : 0;
+    }
+    return g;
+}
+
+/* The corners of triangle t at vertices on the singular locus whose normal in cn is still
+ * their vertex's (no crease side claimed them) get their own sheet's normal: the sum of the
+ * triangle's other corners' normals (∇f on the same half-sheet, so the mesh's sign), or ∇f
+ * at the centroid when every corner is on the locus; marked in on_locus (per corner). */
+static void singular_corners(const ism_tape *f, ism_eval_ws *ws, const ism_mesh *m,
+                             const float *vn, const double *gn, size_t t, float *cn,
+                             uint8_t *on_locus)
+{
+    const uint32_t *tv = m->tri + 3 * t;
+    double top = fmax(gn[tv[0]], fmax(gn[tv[1]], gn[tv[2]]));
+    bool on[3];
+    double s[3] = {0, 0, 0};
+    int off = 0;
+    for (int i = 0; i < 3; i++) {
+        on[i] = gn[tv[i]] <= SINGULAR_GRAD_REL * top;
+        if (!on[i]) {
+            off++;
+            for (int k = 0; k < 3; k++)
+                s[k] += cn[9 * t + 3 * i + k];
+        }
+    }
+    if (off == 3 || !(top > 0))
+        return;
+    if (!off) {
+        double c[3] = {0, 0, 0};
+        for (int i = 0; i < 3; i++)
+            for (int k = 0; k < 3; k++)
+                c[k] += m->pos[3 * (size_t)tv[i] + k] / 3;
+        ism_eval_gradient(f, ws, c[0], c[1], c[2], s);
+    }
+    double n = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+    if (!(n > 0) || !isfinite(n))
+        return;
+    for (int i = 0; i < 3; i++) {
+        float *c = cn + 9 * t + 3 * i;
+        if (!on[i] || !same_normal(c, vn + 3 * (size_t)tv[i]))
+            continue; /* off the locus, or a crease side's: kept */
+        for (int k = 0; k < 3; k++)
+            c[k] = (float)(s[k] / n);
+        on_locus[3 * t + i] = 1;
+    }
+}
+
+/* cn: per corner, its crease side's normal (f with min/max) or its vertex's; then the locus
+ * corners' sheet normals, marked in *on_locus (calloc'd per corner). False when out of
+ * memory. */
+static bool all_corner_normals(const ism_tape *f, const ism_mesh *m, const ism_cut *cut,
+                               const float *vn, float *cn, uint8_t **on_locus)
+{
+    ism_eval_ws *ws = ism_eval_ws_new(f);
+    double *gn = ws ? gradient_norms(f, ws, m) : NULL;
+    *on_locus = gn ? calloc(3 * m->ntris, 1) : NULL;
+    bool ok = *on_locus != NULL;
+    if (ok && ism_branches_any(f))
+        ok = ism_crease_corner_normals(f, m, cut, cn);
+    else if (ok)
+        for (size_t c = 0; c < 3 * m->ntris; c++)
+            memcpy(cn + 3 * c, vn + 3 * (size_t)m->tri[c], 3 * sizeof *cn);
+    for (size_t t = 0; ok && t < m->ntris; t++)
+        singular_corners(f, ws, m, vn, gn, t, cn, *on_locus);
+    free(gn);
+    ism_eval_ws_free(ws);
+    return ok;
+}
+
 bool ism_wire_corner_normals(const ism_tape *f, const ism_mesh *m, const ism_cut *cut,
-                             const ism_wire_mesh *w, size_t *n, uint32_t **at, float **normal)
+                             const ism_wire_mesh *w, size_t *n, uint32_t **at, float **normal,
+                             uint8_t **locus)
 {
     *n = 0;
     *at = NULL;
     *normal = NULL;
-    if (!w->normal || !m->ntris || !ism_branches_any(f))
+    *locus = NULL;
+    if (!w->normal || !m->ntris)
         return true;
     if (m->ntris > UINT32_MAX / 3)
         return false; /* corner indices are uint32 */
     float *cn = malloc(m->ntris * 9 * sizeof *cn);
-    if (!cn || !ism_crease_corner_normals(f, m, cut, cn)) {
+    uint8_t *on = NULL;
+    if (!cn || !all_corner_normals(f, m, cut, w->normal, cn, &on)) {
         free(cn);
+        free(on);
         return false;
     }
     size_t k = 0, cap = 0;
+    bool any_locus = false;
     for (size_t c = 0; c < 3 * m->ntris; c++) {
         if (same_normal(cn + 3 * c, w->normal + 3 * (size_t)m->tri[c]))
             continue;
         if (!ism_grow((void **)at, &cap, k + 1, sizeof **at, 64)) {
             free(cn);
+            free(on);
             free(*at);
             *at = NULL;
             return false;
         }
         memmove(cn + 3 * k, cn + 3 * c, 3 * sizeof *cn); /* compacted in place: k <= c */
+        on[k] = on[c];                                   /* likewise */
+        any_locus |= on[k];
         (*at)[k++] = (uint32_t)c;
     }
     if (!k) {
         free(cn);
+        free(on);
         return true;
     }
     float *shrunk = realloc(cn, k * 3 * sizeof *cn);
     *normal = shrunk ? shrunk : cn;
+    if (any_locus) {
+        uint8_t *o = realloc(on, k);
+        *locus = o ? o : on;
+    } else {
+        free(on);
+    }
     *n = k;
     return true;
 }

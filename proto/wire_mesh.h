@@ -30,6 +30,12 @@ typedef struct ism_wire_mesh {
     size_t ncorner_normals;
     const uint32_t *corner_at;
     const float *corner_normal;
+    /* Per corner of corner_at: 1 when its normal is its triangle's sheet normal at a vertex on
+     * the singular locus (ism_wire_corner_normals), 0 for a crease side (not owned; NULL when
+     * none is). The viewer's formats (drc, glb) split points there and the OBJ gives it a `vn`
+     * of its own; the PLY keeps one row per mesh vertex there (its vertex count is the
+     * stats'), so it reads only the crease sides. */
+    const uint8_t *corner_locus;
     size_t live_triangles;     /* triangles whose three vertex indices differ */
     double bounds[6];          /* of the float positions: xmin ymin zmin xmax ymax zmax */
 } ism_wire_mesh;
@@ -50,9 +56,15 @@ void ism_wire_mesh_free(ism_wire_mesh *w);
 
 /* The corners of w (built from m) whose branch normal (core/curves/crease_normals.h; cut:
  * the mesh's crease edges, NULL when none were cut) differs from the vertex's wire normal by
- * more than ISM_CORNER_NORMAL_MIN_ANGLE, into malloc'd *at / *normal (NULL, *n 0 when none:
- * f without min/max, or no normals in w). False when out of memory. */
+ * more than ISM_CORNER_NORMAL_MIN_ANGLE, into malloc'd *at / *normal (NULL, *n 0 when none,
+ * or no normals in w). Corners at a vertex on the singular locus (∇f = 0 there: a double
+ * curve's vertex is shared by two sheets, and its one normal — noise, or the average of
+ * every sheet through it — shades the triangles beside the curve as saw teeth; issue 13)
+ * that no crease side claims carry their own triangle's sheet normal, marked 1 in malloc'd
+ * *locus (per entry of *at; NULL when no entry is such a corner). False when out of
+ * memory. */
 bool ism_wire_corner_normals(const ism_tape *f, const ism_mesh *m, const ism_cut *cut,
-                             const ism_wire_mesh *w, size_t *n, uint32_t **at, float **normal);
+                             const ism_wire_mesh *w, size_t *n, uint32_t **at, float **normal,
+                             uint8_t **locus);
 
 #endif

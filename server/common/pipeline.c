@@ -575,10 +575,12 @@ static bool gather(const ism_request *req, const ism_tape *tape, ism_pipeline_re
     const ism_analysis *an = s->have_analysis ? &s->an : NULL; /* none in a preview */
     if (!ism_wire_mesh_build(&c->mesh, an, ISM_ATTR_ALL, curvature_limit(req), &c->wire) ||
         !ism_wire_corner_normals(tape, &c->mesh, s->cut.edges ? &s->cut : NULL, &c->wire,
-                                 &c->wire.ncorner_normals, &c->corner_at, &c->corner_normal))
+                                 &c->wire.ncorner_normals, &c->corner_at, &c->corner_normal,
+                                 &c->corner_locus))
         return fail_with(r, 500, "no_memory", "%s", "out of memory preparing the mesh for the wire");
     c->wire.corner_at = c->corner_at;
     c->wire.corner_normal = c->corner_normal;
+    c->wire.corner_locus = c->corner_locus;
     if (s->an.vertex_class && c->mesh.nverts) {
         c->vertex_class = malloc(c->mesh.nverts);
         if (!c->vertex_class)

@@ -84,6 +84,16 @@ static void make(ism_computed *c)
     c->stats_json = strdup("{\"warnings\":[]}");
     c->stats_len = strlen(c->stats_json);
     c->timings_ms[ISM_TIME_POLYGONISE] = 12.5;
+    /* corner 1 a crease side's, corner 4 a sheet normal at the singular locus */
+    c->corner_at = malloc(2 * sizeof *c->corner_at);
+    memcpy(c->corner_at, (uint32_t[]){1, 4}, 2 * sizeof *c->corner_at);
+    c->corner_normal = floats(6, 0.5f);
+    c->corner_locus = malloc(2);
+    memcpy(c->corner_locus, (uint8_t[]){0, 1}, 2);
+    c->wire.ncorner_normals = 2;
+    c->wire.corner_at = c->corner_at;
+    c->wire.corner_normal = c->corner_normal;
+    c->wire.corner_locus = c->corner_locus;
 }
 
 static void entry(ism_frame_builder *b)
@@ -143,6 +153,13 @@ Test(computed, round_trip)
     cr_assert_str_eq(c.features_json, "{\"version\":2}");
     cr_assert_str_eq(c.stats_json, "{\"warnings\":[]}");
     cr_assert_eq(c.timings_ms[ISM_TIME_POLYGONISE], 12.5);
+    cr_assert_eq(c.wire.ncorner_normals, 2);
+    cr_assert_eq(c.wire.corner_at, c.corner_at);
+    cr_assert_eq(c.corner_at[1], 4);
+    cr_assert_eq(memcmp(c.corner_normal, want.corner_normal, 6 * sizeof(float)), 0);
+    cr_assert_eq(c.wire.corner_locus, c.corner_locus);
+    cr_assert_eq(c.corner_locus[0], 0);
+    cr_assert_eq(c.corner_locus[1], 1);
     ism_wire_mesh v;
     ism_computed_wire(&c, ISM_ATTR_CLASS, &v);
     cr_assert_null(v.normal);
@@ -204,6 +221,13 @@ Test(computed, truncated_or_altered_entries_are_refused)
     cr_assert(ism_computed_write(&bad, &b));
     cr_assert_not(ism_computed_read(b.data, b.len, &c, why, sizeof why));
     cr_assert_str_eq(why, "singular curve");
+    ism_frame_builder_free(&b);
+    bad.locus.curves[0].split_cell = 0.0625;
+    bad.corner_locus[0] = 2; /* a mark is 0 or 1 */
+    memset(&b, 0, sizeof b);
+    cr_assert(ism_computed_write(&bad, &b));
+    cr_assert_not(ism_computed_read(b.data, b.len, &c, why, sizeof why));
+    cr_assert_str_eq(why, "corner locus mark not 0 or 1");
     ism_frame_builder_free(&b);
     ism_computed_free(&bad);
 }
