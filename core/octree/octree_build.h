@@ -67,7 +67,8 @@ typedef struct ism_octree_build_stats {
     uint64_t visited, excluded, unresolved;
     uint64_t thin_searched;  /* would-be leaves with one corner sign searched for a piece */
     uint64_t thin_found;     /* ... where one was found (split, below max_depth too) */
-    uint64_t thin_undecided; /* ... where the search could neither find nor exclude one */
+    uint64_t thin_undecided; /* ... where the search with interval proofs could neither find
+                                nor exclude one (empty Newton probes not counted) */
     uint64_t thin_boxes;     /* boxes those searches examined (in this build only) */
     uint64_t deep_leaves;    /* leaves below max_depth (under hidden pieces) */
     uint64_t tape_misses;    /* leaves (in this build) whose shortened tape found no room in

@@ -60,7 +60,9 @@ typedef struct ism_poly_stats {
     uint64_t thin_searched;      /* would-be leaves whose corners all had one sign, searched
                                     for a piece of the surface they hide (thin_search.h) */
     uint64_t thin_found;         /* ... that hid one, and were split (below max depth too) */
-    uint64_t thin_undecided;     /* ... where the search could neither find nor exclude one */
+    uint64_t thin_undecided;     /* ... where the search with interval proofs could neither
+                                    find nor exclude one (Newton probes, which cannot
+                                    exclude, are not counted when they find nothing) */
     uint64_t deep_leaves;        /* leaves below max depth (meshing the hidden pieces) */
     uint64_t leaf_tapes;         /* distinct tapes shortened over leaves (octree.h) */
     uint64_t short_tape_leaves;  /* leaves evaluating one of them instead of f */

@@ -211,6 +211,15 @@ static void check_horn_in(const double box[6], int dmax, double max_error, const
                  chk.nonmanifold_points_off);
     ism_locus_check_free(&chk);
     cr_expect_eq(cs.points_conformed, 1, "%s: %zu points conformed", what, cs.points_conformed);
+    /* under a bound most searches are the blind leaves' Newton probes (octree_build.c), which
+     * cannot exclude a piece: one that finds nothing is no undecided search. Own box, depth
+     * 8, E 0.064 / 0.016: 0 / 64 undecided of 2,204 / 3,724 searches (84 / 308 found);
+     * 2,064 / 2,392 while empty probes counted */
+    if (max_error > 0)
+        cr_expect_leq(4 * ps.thin_undecided, ps.thin_searched - ps.thin_found,
+                      "%s: %llu of %llu searches undecided (%llu found)", what,
+                      (unsigned long long)ps.thin_undecided,
+                      (unsigned long long)ps.thin_searched, (unsigned long long)ps.thin_found);
     /* the point joined: one non-manifold vertex, at (10, 0, 0), where the two horns' cones
      * meet */
     cr_expect_eq(a.npoints, 1, "%s: %zu non-manifold points", what, a.npoints);
