@@ -4,7 +4,9 @@
  * sweep, ending with flips so the last moves' quads are Delaunay too and a last mending of
  * the needles those leave; then the mesh is renumbered without what collapses removed. */
 #include "core/remesh/remesh.h"
+#include "core/remesh/rm_brec.h"
 #include "core/remesh/rm_cbound.h"
+#include "core/remesh/rm_memo.h"
 #include "core/remesh/rm_pass.h"
 #include "core/util/clock.h"
 
@@ -158,8 +160,14 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
     p.bounded = o->max_error > 0;
     found k = {0};
     if (ok && (!keep_found(&k, m) ||
-               (!p.bounded && !o->measure_all_centroids && !rm_cbound_open(&p))))
+               (!p.bounded && !o->measure_all_centroids && !rm_cbound_open(&p)) ||
+               (p.bounded && !o->measure_all_centroids && !rm_brec_open(&p))))
         ok = false;
+    /* under a bound a move's vertex is measured by keep_offset, its fan's check and the
+       offset kept (rm_relax.c), a flip's centroids again by the moves beside it: the
+       simplification's point-keyed memo answers the repeats (NULL: measured afresh) */
+    if (ok && p.bounded)
+        p.memo = rm_memo_new();
     if (ok) {
         rm_collapse_bounds(&p, k.pos, k.tri, k.ntris);
         for (int round = 0; round < ISM_RM_ROUNDS && !stopped(o); round++) {
@@ -199,6 +207,8 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
             st->locked_vertices += p.r.locked[v] && p.r.count[v];
     }
     drop_found(&k);
+    rm_memo_free(p.memo);
+    p.memo = NULL;
     double after = ok && p.r.dead ? pass_min_angle(&p) : NAN;
     st->flips = p.flips;
     st->moves = p.moves;

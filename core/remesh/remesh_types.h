@@ -23,7 +23,8 @@ typedef struct ism_remesh_options {
     const volatile int *cancel;    /* polled between sweeps; non-zero stops early (the mesh is
                                       valid after every sweep) */
     bool measure_all_centroids;    /* the reference path: every centroid a check asks about is
-                                      measured (no per-triangle record, rm_cbound.h); the
+                                      measured (no per-triangle record, rm_cbound.h and,
+                                      under max_error, rm_brec.h); the
                                       meshes are the same (tests compare) */
 } ism_remesh_options;
 

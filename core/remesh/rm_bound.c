@@ -1,6 +1,7 @@
 /* rm_bound.c — distances to f = 0 measured with a Newton step, and the bound checks built on
  * them (rm_bound.h). */
 #include "core/remesh/rm_bound.h"
+#include "core/remesh/rm_brec.h"
 #include "core/remesh/rm_memo.h"
 #include "core/util/vec3.h"
 
@@ -98,6 +99,22 @@ double rm_bound_distance(rm_pass *p, const double x[3], double limit)
     return two_steps(p, x, limit, &s1, &s2) ? fabs(s1) + fabs(s2) : INFINITY;
 }
 
+/* The residual of a first step of length s1 bends by at most κ s1² / 2; the one-step rule
+ * holds for κ × max_error up to 2 (1 - share) / share² (above), so the step's residual is
+ * at most that over 2 max_error, times s1². */
+#define RM_BOUND_RESIDUAL_REL \
+    ((1 - RM_BOUND_ONE_STEP_SHARE) / (RM_BOUND_ONE_STEP_SHARE * RM_BOUND_ONE_STEP_SHARE))
+
+double rm_bound_upper(rm_pass *p, const double x[3])
+{
+    double s1, s2, e = p->max_error;
+    if (!two_steps(p, x, e, &s1, &s2))
+        return INFINITY;
+    double a = fabs(s1);
+    return a <= RM_BOUND_ONE_STEP_SHARE * e ? a + RM_BOUND_RESIDUAL_REL * a * a / e
+                                            : a + fabs(s2);
+}
+
 double rm_bound_signed(rm_pass *p, const double x[3])
 {
     double s1, s2;
@@ -168,8 +185,10 @@ double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x)
 bool rm_bound_fan(rm_pass *p, uint32_t v, const double *x)
 {
     double e = p->max_error;
-    if (fan_worst(p, v, x, e, e) <= e)
+    if (p->brec ? rm_brec_fan_within(p, v, x) : fan_worst(p, v, x, e, e) <= e)
         return true;
+    if (p->brec && rm_brec_fan_known(p, v) <= e)
+        return false; /* the fan lies within the bound now: no farther than it is no gain */
     double before = rm_bound_fan_worst(p, v, p->r.m->pos + 3 * (size_t)v);
     return fan_worst(p, v, x, before, before) <= before;
 }

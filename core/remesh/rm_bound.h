@@ -16,6 +16,13 @@
  * point from half the bound beyond it; rm_bound.c). */
 double rm_bound_distance(rm_pass *p, const double x[3], double limit);
 
+/* An upper bound on the distance from x to f = 0, as far as the bound max_error needs one:
+ * rm_bound_distance with limit max_error, and where it took one step (|f|/|∇f| at most half
+ * the bound) that step's residual at the steepest bend of f's level set the one-step rule
+ * admits (rm_bound.c). Above max_error when x lies beyond it (then only a first step's
+ * length); INFINITY where ∇f vanishes or f is not finite. */
+double rm_bound_upper(rm_pass *p, const double x[3]);
+
 /* The signed distance from x to f = 0 to first order, positive where f is: f/|∇f| at x
  * (INFINITY where ∇f vanishes or f is not finite). Moving x by δ along ∇f's unit vector
  * changes it by about δ. A model's input: bounds are checked with rm_bound_distance. */

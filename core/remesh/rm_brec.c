@@ -1,0 +1,169 @@
+/* rm_brec.c — per-triangle bounds on the distance of the centroid and edge midpoints, and
+ * per-vertex offsets, kept between steps of the quality pass under an error bound
+ * (rm_brec.h). */
+#include "core/remesh/rm_brec.h"
+#include "core/remesh/rm_bound.h"
+#include "core/remesh/rm_cbound.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* What the fan's check found, per triangle of the fan in slot order: the new centroid and
+ * its bound, the new midpoint of the edge from v to the next corner and its bound. */
+#define KEEP_REC 8
+
+bool rm_brec_open(rm_pass *p)
+{
+    size_t n = p->r.cap_tris ? p->r.cap_tris : 1;
+    p->brec = malloc(RM_BREC_REC * n * sizeof *p->brec);
+    size_t nv = p->r.cap_verts ? p->r.cap_verts : 1;
+    p->offset = malloc(4 * nv * sizeof *p->offset);
+    p->brec_keep_v = UINT32_MAX;
+    if (!p->brec || !p->offset)
+        return false;
+    for (size_t i = 0; i < RM_BREC_REC * n; i++) /* no point: every bound infinite */
+        p->brec[i] = i % 4 == 3 ? INFINITY : 0;
+    for (size_t i = 0; i < 4 * nv; i++) /* no point: measured when asked */
+        p->offset[i] = NAN;
+    return true;
+}
+
+/* Room for what v's fan check finds (KEEP_REC per triangle), kept for v at x; NULL when out
+ * of memory (nothing is kept then: the records stay as they were). */
+static double *keep_for(rm_pass *p, uint32_t v, const double x[3])
+{
+    uint32_t n = p->r.count[v];
+    p->brec_keep_v = UINT32_MAX;
+    if (n > p->brec_keep_cap) {
+        double *k = realloc(p->brec_keep, 2 * KEEP_REC * (size_t)n * sizeof *k);
+        if (!k)
+            return NULL;
+        p->brec_keep = k;
+        p->brec_keep_cap = 2 * n;
+    }
+    p->brec_keep_v = v;
+    memcpy(p->brec_keep_x, x, sizeof p->brec_keep_x);
+    return p->brec_keep;
+}
+
+/* The bound at y, which lies where slot s of triangle t's point was before the move (at
+ * y0): that slot's, moved by |y - y0| (rm_brec_at), when ISM_RM_CBOUND_RATIO times it is
+ * within max_error; else measured. */
+static double bound_of(rm_pass *p, uint32_t t, int s, const double y0[3], const double y[3])
+{
+    const double *e = p->brec + RM_BREC_REC * (size_t)t + 4 * s;
+    if (e[0] == y0[0] && e[1] == y0[1] && e[2] == y0[2]) {
+        double u = rm_brec_at(p, t, s, y);
+        if (ISM_RM_CBOUND_RATIO * u <= p->max_error)
+            return u;
+    }
+    return rm_bound_upper(p, y);
+}
+
+bool rm_brec_fan_within(rm_pass *p, uint32_t v, const double x[3])
+{
+    const rm_mesh *r = &p->r;
+    const double *P = r->m->pos, *pos = P + 3 * (size_t)v;
+    double e = p->max_error, *keep = keep_for(p, v, x);
+    if (!(rm_bound_upper(p, x) <= e))
+        return rm_brec_drop(p), false;
+    for (uint32_t i = 0; i < r->count[v]; i++) {
+        uint32_t t = r->vt[r->start[v] + i];
+        const uint32_t *c = r->m->tri + 3 * (size_t)t;
+        int k = c[0] == v ? 0 : c[1] == v ? 1 : 2;
+        const double *o[3], *q[3];
+        for (int j = 0; j < 3; j++) {
+            o[j] = P + 3 * (size_t)c[j];
+            q[j] = c[j] == v ? x : o[j];
+        }
+        double g0[3], g[3], m0[3], m[3];
+        rm_centroid(o[0], o[1], o[2], g0);
+        rm_centroid(q[0], q[1], q[2], g);
+        double bg = bound_of(p, t, 0, g0, g);
+        if (!(bg <= e))
+            return rm_brec_drop(p), false;
+        /* each edge at v is the next edge of exactly one triangle of a closed fan */
+        const double *next = o[(k + 1) % 3];
+        for (int j = 0; j < 3; j++) {
+            m0[j] = 0.5 * (pos[j] + next[j]);
+            m[j] = 0.5 * (x[j] + next[j]);
+        }
+        double bm = bound_of(p, t, 1 + k, m0, m);
+        if (!(bm <= e))
+            return rm_brec_drop(p), false;
+        if (keep) {
+            double *w = keep + KEEP_REC * i;
+            memcpy(w, g, sizeof g), w[3] = bg;
+            memcpy(w + 4, m, sizeof m), w[7] = bm;
+        }
+    }
+    return true;
+}
+
+double rm_brec_fan_known(const rm_pass *p, uint32_t v)
+{
+    const rm_mesh *r = &p->r;
+    const double *P = r->m->pos;
+    double worst = 0;
+    for (uint32_t i = 0; i < r->count[v] && worst <= p->max_error; i++) {
+        uint32_t t = r->vt[r->start[v] + i];
+        const uint32_t *c = r->m->tri + 3 * (size_t)t;
+        int k = c[0] == v ? 0 : c[1] == v ? 1 : 2;
+        double g[3], m[3];
+        rm_centroid(P + 3 * (size_t)c[0], P + 3 * (size_t)c[1], P + 3 * (size_t)c[2], g);
+        for (int j = 0; j < 3; j++)
+            m[j] = 0.5 * (P[3 * (size_t)v + j] + P[3 * (size_t)c[(k + 1) % 3] + j]);
+        const double *eg = p->brec + RM_BREC_REC * (size_t)t, *em = eg + 4 * (1 + k);
+        bool known = eg[0] == g[0] && eg[1] == g[1] && eg[2] == g[2] && em[0] == m[0] &&
+                     em[1] == m[1] && em[2] == m[2];
+        worst = known ? fmax(worst, fmax(eg[3], em[3])) : INFINITY;
+    }
+    return worst;
+}
+
+void rm_brec_moved(rm_pass *p, uint32_t v, const double x[3])
+{
+    const rm_mesh *r = &p->r;
+    if (!p->brec || p->brec_keep_v != v || memcmp(p->brec_keep_x, x, sizeof p->brec_keep_x))
+        return;
+    uint32_t n = r->count[v];
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t t = r->vt[r->start[v] + i];
+        const uint32_t *c = r->m->tri + 3 * (size_t)t;
+        int k = c[0] == v ? 0 : c[1] == v ? 1 : 2;
+        const double *w = p->brec_keep + KEEP_REC * i;
+        rm_brec_set(p, t, 0, w, w[3]);
+        rm_brec_set(p, t, 1 + k, w + 4, w[7]);
+        /* the edge from the corner before v: the next edge of the fan's triangle whose next
+           corner that is (the midpoint's place and bound the same, bit for bit) */
+        uint32_t prev = c[(k + 2) % 3];
+        for (uint32_t j = 0; j < n; j++) {
+            uint32_t u = r->vt[r->start[v] + j];
+            const uint32_t *d = r->m->tri + 3 * (size_t)u;
+            int l = d[0] == v ? 0 : d[1] == v ? 1 : 2;
+            if (d[(l + 1) % 3] == prev) {
+                const double *z = p->brec_keep + KEEP_REC * j;
+                rm_brec_set(p, t, 1 + (k + 2) % 3, z + 4, z[7]);
+                break;
+            }
+        }
+    }
+    rm_brec_drop(p);
+}
+
+double rm_brec_offset(rm_pass *p, uint32_t v)
+{
+    const double *x = p->r.m->pos + 3 * (size_t)v;
+    const double *o = p->offset ? p->offset + 4 * (size_t)v : NULL;
+    if (o && o[0] == x[0] && o[1] == x[1] && o[2] == x[2])
+        return o[3];
+    return rm_bound_signed(p, x);
+}
+
+void rm_brec_offset_set(rm_pass *p, uint32_t v, const double x[3])
+{
+    if (p->offset) {
+        double *o = p->offset + 4 * (size_t)v;
+        o[0] = x[0], o[1] = x[1], o[2] = x[2], o[3] = rm_bound_signed(p, x);
+    }
+}

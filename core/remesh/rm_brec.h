@@ -1,0 +1,78 @@
+/* rm_brec.h — what the quality pass under an error bound knows of each triangle's centroid
+ * and edge midpoints without measuring them again, and of each vertex's offset (rm_brec.c).
+ * Under max_error every move of a vertex has its fan's new centroids and the midpoints of
+ * the edges at the vertex measured with a Newton step (rm_bound.h): 739M of the gyroid-ball
+ * pass's 1,974M instructions at the default bound (callgrind), against 1,406M for the
+ * polygonisation. Each triangle keeps, for its centroid and for the midpoint of each of its
+ * edges, the last point measured there and an upper bound u on that point's distance to
+ * f = 0 (rm_bound_upper: the two-step measure, or one step and its residual). The distance
+ * to a set moves by at most as far as the point moves, so a point s from a kept one lies
+ * within u + s; the pass's measure reads within ISM_RM_CBOUND_RATIO of the distance (the
+ * unbounded record's premise, rm_cbound.h), so when that ratio times u + s is within
+ * max_error the point would measure within it too and is not measured (it then keeps
+ * u + s). Not exact in principle, as rm_cbound.h; measured: no decision changed on 33
+ * preset runs (core/README.md; test remesh/bounded_record_leaves_the_reference_mesh, which
+ * fails without the ratio). A record says something about its point only, whatever the
+ * mesh did since: a slot whose point is not the one asked about knows nothing. Only for the
+ * quality pass (the simplification keeps its own measures, rm_memo.h). */
+#ifndef ISM_RM_BREC_H
+#define ISM_RM_BREC_H
+
+#include "core/remesh/rm_pass.h"
+
+#include <math.h>
+
+/* Points per triangle: the centroid (slot 0), then the midpoint of the edge from corner j to
+ * corner j + 1 (slot 1 + j); each a place and a bound. */
+#define RM_BREC_POINTS 4
+#define RM_BREC_REC (4 * RM_BREC_POINTS)
+
+/* Room for every triangle and vertex the pass may hold (r.cap_tris, r.cap_verts), nothing
+ * known yet. False when out of memory. rm_pass_close frees it. */
+bool rm_brec_open(rm_pass *p);
+
+/* The bound slot s of triangle t gives at x: its bound plus x's distance from its point
+ * (INFINITY when nothing is kept there, or without records). */
+static inline double rm_brec_at(const rm_pass *p, uint32_t t, int s, const double x[3])
+{
+    if (!p->brec)
+        return INFINITY;
+    const double *e = p->brec + RM_BREC_REC * (size_t)t + 4 * s;
+    double d = sqrt((x[0] - e[0]) * (x[0] - e[0]) + (x[1] - e[1]) * (x[1] - e[1]) +
+                    (x[2] - e[2]) * (x[2] - e[2]));
+    return e[3] + d;
+}
+
+/* Slot s of triangle t: x lies within u of f = 0. */
+static inline void rm_brec_set(rm_pass *p, uint32_t t, int s, const double x[3], double u)
+{
+    if (p->brec) {
+        double *e = p->brec + RM_BREC_REC * (size_t)t + 4 * s;
+        e[0] = x[0], e[1] = x[1], e[2] = x[2], e[3] = u;
+    }
+}
+
+/* True when v's fan with v at x lies within max_error: x, every centroid and the midpoint of
+ * every edge at v (v free: a closed fan), each bounded by what its triangle knows or else
+ * measured (rm_bound_upper), in rm_bound_fan's order. What it finds is kept for the move
+ * (rm_brec_moved). */
+bool rm_brec_fan_within(rm_pass *p, uint32_t v, const double x[3]);
+
+/* The largest bound the records give v's fan where it is (INFINITY when one is not known). */
+double rm_brec_fan_known(const rm_pass *p, uint32_t v);
+
+/* v moves to x: the records of its fan take what rm_brec_fan_within found for x. */
+void rm_brec_moved(rm_pass *p, uint32_t v, const double x[3]);
+/* What rm_brec_fan_within found is for no move. */
+static inline void rm_brec_drop(rm_pass *p) { p->brec_keep_v = UINT32_MAX; }
+
+/* The signed distance rm_bound_signed measures at v's place: as kept for that place
+ * (rm_brec_offset_set), bit for bit what it would measure (f is pure), or measured. A
+ * relaxation move keeps a vertex's offset off f = 0 (rm_relax.c): each of the gyroid-ball's
+ * 73,631 moves tried asked it where the vertex stood (97M instructions), though only its
+ * own moves change it. */
+double rm_brec_offset(rm_pass *p, uint32_t v);
+/* v is to be at x: its offset there is kept (a lookup when x was just measured). */
+void rm_brec_offset_set(rm_pass *p, uint32_t v, const double x[3]);
+
+#endif
