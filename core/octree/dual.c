@@ -59,6 +59,20 @@
 /* A crease leaf this many E across or less is judged by the measurement alone (crease_kind,
  * dual_crease.h's `small`): the primal path's rule for such nodes (cell_error.c, 4 E). */
 #define CREASE_MEASURED_CELLS 4.0
+/* A node with both signs at its corners is split without its proofs when the surface at its
+ * centre's foot bends so fast (largest principal curvature k) that a chord as long as the
+ * node (h) sags this many times the room a leaf's chords have, E + the straddle shift:
+ * k h² / 8 > SAG_SPLIT (E + shift). Such a node is split anyway — as not plain, or as a
+ * leaf whose triangles miss E — after proofs, a vertex, triangles and a measure it did not
+ * need. Measured, k h² / 8 / (E + shift) of every two-signed node the mesher made (bench
+ * torus r 0.3 and sphere r 1, E 0.0141 / 3.57e-3 / 1e-3): leaves kept at most 1.93 (torus
+ * 1e-3, 40 of 7,624 depth-5 leaves; every other run 0.55-0.66); nodes split from 2.18 (the
+ * torus's depth-3 cells at 0.0141, 0.375 wide against its tube's radius 0.3) up. A leaf
+ * the rule splits that the measure would have kept costs triangles, never the bound (the
+ * measure still judges every leaf kept). Whole runs (callgrind, isomesh --threads 1):
+ * torus 3e-3 113.5M -> 91.7M, same triangle count; the box-cut presets at E/3 up to 2.4%
+ * fewer triangles (the rounds' order changes which coarse leaves a miss splits). */
+#define SAG_SPLIT 2.0
 /* Crease vertices of two leaves this close (a share of the box's smallest side) are one
  * point (weld_crease). */
 #define WELD_TOL 1e-12
@@ -80,7 +94,9 @@ typedef struct dnode {
     uint8_t kind;
     uint8_t split;  /* a triangle of this leaf missed E this round */
     uint8_t surf;   /* a surface leaf in the subtree (the walk skips the others) */
+    uint8_t placed; /* at holds the vertex place_vertex would make (sag_split made it) */
     double f[8];    /* f at the corners */
+    double at[3];   /* with placed: the leaf's vertex */
 } dnode;
 
 /* An open-addressed map from 64-bit keys (never 0; 0 marks an empty slot) to doubles, kept
@@ -276,6 +292,8 @@ typedef struct corner_view {
     bool have_g, have_model, agree;
     bool kinked;  /* split for the crease (dual_crease.h): at depth.max it declines min_max */
     int monotone; /* bit a: ∇f's a-th component keeps a sign over the box */
+    bool placed;  /* at: the node's vertex, placed by sag_split */
+    double at[3];
 } corner_view;
 
 /* Where surface leaf n lies on the request's box: -1 when f changes sign between its
@@ -642,6 +660,67 @@ static bool zero_corner_transverse(const corner_view *v, int c)
     return down;
 }
 
+/* m moved onto f = 0 by Newton along ∇f, stopping once a step is below NEWTON_STOP of
+ * size; false when it could not finish a step (∇f vanishing or not finite). */
+static bool newton_onto(worker *w, double m[3], double size)
+{
+    for (int it = 0; it < NEWTON_STEPS; it++) {
+        double g[3];
+        double f = ism_sample_grad(&w->s, m, g), gg = ism_dot3(g, g);
+        if (!isfinite(f) || !(gg > 0) || !isfinite(gg))
+            return false;
+        double step = fabs(f) / sqrt(gg);
+        for (int a = 0; a < 3; a++)
+            m[a] -= f * g[a] / gg;
+        if (step < NEWTON_STOP * size)
+            break;
+    }
+    return true;
+}
+
+/* The centre of the box lo..hi (side size) moved onto f = 0 by Newton into m; true when
+ * that lands in the closed box. */
+static bool foot_in_node(worker *w, const double lo[3], const double hi[3], double size,
+                         double m[3])
+{
+    for (int a = 0; a < 3; a++)
+        m[a] = 0.5 * lo[a] + 0.5 * hi[a];
+    bool inside = newton_onto(w, m, size);
+    for (int a = 0; a < 3; a++)
+        inside &= m[a] >= lo[a] && m[a] <= hi[a];
+    return inside;
+}
+
+/* Does the box lo..hi lie in the request's box (always, but in the grown box: dual_box.h)? */
+static bool in_request_box(const dual *d, const double lo[3], const double hi[3])
+{
+    for (int a = 0; d->inner && a < 3; a++)
+        if (lo[a] < d->inner[a] || hi[a] > d->inner[a + 3])
+            return false;
+    return true;
+}
+
+/* Node n, with both signs at its corners, split at once for the sag of a chord its size
+ * (SAG_SPLIT)? Under the straddle move and above depth.max only (no crease, no points:
+ * their leaves place vertices otherwise), and only inside the request's box: in the grown
+ * box's margin the triangles the clip drops are not measured, so leaves there stay coarse
+ * (helicoid at 1.6e-3: kept leaves up to k h² / 8 / (E + shift) = 12 there, 1.27 inside;
+ * splitting them cost 7% more instructions). The centre's foot, moved as place_vertex moves
+ * it, is kept in v for the vertex (the Hessian that moves it gives the curvature), so a node
+ * kept as a leaf costs what it did. */
+static bool sag_split(dual *d, worker *w, const dnode *n, corner_view *v)
+{
+    if (!(d->shift > 0) || d->crease || d->nballs || n->level >= d->o->max_depth ||
+        !in_request_box(d, v->p[0], v->p[7]))
+        return false;
+    double size = ism_grid_cell_size(&d->g, n->level), m[3], bend;
+    if (!foot_in_node(w, v->p[0], v->p[7], size, m))
+        return false;
+    v->placed = true;
+    ism_straddle_balanced_bend(&w->s, d->shift, d->o->box, m, v->at, &bend);
+    return bend * size * size > 8 * SAG_SPLIT * (d->o->max_error + d->shift);
+}
+
 /* What node n is (f and the unit gradients at its corners in n->f and v): empty (proven
  * free of f = 0), a surface leaf with one sheet (corner gradients agreeing, or one graph
  * proven by interval gradients), or to be split. The interval is taken only where the
@@ -649,6 +728,7 @@ static bool zero_corner_transverse(const corner_view *v, int c)
 static int classify(dual *d, worker *w, dnode *n, corner_view *v)
 {
     int neg = 0;
+    v->placed = false;
     for (int c = 0; c < 8; c++) {
         if (!isfinite(n->f[c]) || !isfinite(v->n[c][0] + v->n[c][1] + v->n[c][2]))
             return DN_INNER;
@@ -668,6 +748,8 @@ static int classify(dual *d, worker *w, dnode *n, corner_view *v)
             if (n->f[c] == 0 && !zero_corner_transverse(v, c))
                 return DN_INNER;
     bool mixed = neg != 0 && neg != 8;
+    if (mixed && sag_split(d, w, n, v))
+        return DN_INNER;
     v->agree = mixed && normals_agree((const double (*)[3])v->n, d->o->flat_normal);
     v->have_g = v->have_model = false;
     v->monotone = 0;
@@ -798,7 +880,9 @@ static bool near_point(const dual *d, const dnode *n, double size)
 /* What splitting one node yields: its 8 children's corner values and kinds. */
 typedef struct split_out {
     double f[8][8];
+    double at[8][3]; /* child c's vertex when bit c of placed (sag_split) */
     uint8_t kind[8];
+    uint8_t placed;
     uint8_t kinked; /* bit c: child c split for the crease (corner_view.kinked) */
     bool bad;
 } split_out;
@@ -821,9 +905,10 @@ static void split_task(void *ctx, size_t k, int thread)
     }
     out->bad = false;
     out->kinked = 0;
+    out->placed = 0;
     for (int c = 0; c < 8; c++) {
         corner_view v;
-        v.kinked = false;
+        v.kinked = v.placed = false;
         dnode n;
         memset(&n, 0, sizeof n);
         n.o = parent->o;
@@ -840,6 +925,9 @@ static void split_task(void *ctx, size_t k, int thread)
         memcpy(out->f[c], n.f, sizeof n.f);
         out->kind[c] = (uint8_t)leaf_kind(d, w, &n, &v, &out->bad);
         out->kinked |= (uint8_t)(v.kinked << c);
+        out->placed |= (uint8_t)(v.placed << c);
+        if (v.placed)
+            memcpy(out->at[c], v.at, sizeof v.at);
     }
 }
 
@@ -933,6 +1021,9 @@ static void expand(dual *d, const int32_t *list, size_t n)
                 first = c ? first : at;
                 dnode *ch = &d->n[at];
                 memcpy(ch->f, out[k].f[c], sizeof ch->f);
+                ch->placed = out[k].placed >> c & 1;
+                if (ch->placed)
+                    memcpy(ch->at, out[k].at[c], sizeof ch->at);
                 ch->kind = out[k].kind[c];
                 if (ch->kind != DN_INNER)
                     continue;
@@ -977,24 +1068,6 @@ static bool margin_vertices_outside(const dual *d)
     return true;
 }
 
-/* m moved onto f = 0 by Newton along ∇f, stopping once a step is below NEWTON_STOP of
- * size; false when it could not finish a step (∇f vanishing or not finite). */
-static bool newton_onto(worker *w, double m[3], double size)
-{
-    for (int it = 0; it < NEWTON_STEPS; it++) {
-        double g[3];
-        double f = ism_sample_grad(&w->s, m, g), gg = ism_dot3(g, g);
-        if (!isfinite(f) || !(gg > 0) || !isfinite(gg))
-            return false;
-        double step = fabs(f) / sqrt(gg);
-        for (int a = 0; a < 3; a++)
-            m[a] -= f * g[a] / gg;
-        if (step < NEWTON_STOP * size)
-            break;
-    }
-    return true;
-}
-
 /* Leaf i's vertex into pos[3 vert]: its centre moved onto f = 0 by Newton when that lands in
  * the leaf's closed box, else the mean of its edges' secant roots so moved (the exact roots
  * would cost a fifth of the whole mesh for a start point Newton forgets); then along ∇f by
@@ -1025,12 +1098,11 @@ static void place_vertex(dual *d, worker *w, int32_t i)
         }
         return;
     }
-    for (int a = 0; a < 3; a++)
-        m[a] = 0.5 * lo[a] + 0.5 * hi[a];
-    bool inside = newton_onto(w, m, size);
-    for (int a = 0; a < 3; a++)
-        inside &= m[a] >= lo[a] && m[a] <= hi[a];
-    if (!inside) {
+    if (n->placed) { /* sag_split made it as below */
+        memcpy(&d->pos[3 * n->vert], n->at, sizeof n->at);
+        return;
+    }
+    if (!foot_in_node(w, lo, hi, size, m)) {
         int roots = 0;
         memset(m, 0, sizeof m);
         for (int e = 0; e < 12; e++) {
@@ -2059,7 +2131,7 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
     if (!new_node(d, (ism_ipt){{0, 0, 0}}, 0, &root))
         return ISM_DUAL_NO_MEMORY;
     corner_view v;
-    v.kinked = false;
+    v.kinked = v.placed = false;
     int32_t last = (int32_t)1 << d->g.depth;
     dnode *r0 = &d->n[root];
     for (int c = 0; c < 8; c++) {

@@ -57,9 +57,10 @@ static bool on_box_face(const double box[6], const double p[3])
 }
 
 /* The unit normal n = ∇f/|∇f| at p and f's tangential Hessian there (a, b, c as
- * tangential() gives them); false at the box's faces and where f, ∇f or |∇f| is not usable. */
+ * tangential() gives them; *gl: |∇f|, when gl is not NULL); false at the box's faces and
+ * where f, ∇f or |∇f| is not usable. */
 static bool local_form(ism_sampler *s, const double box[6], const double p[3], double n[3],
-                       double *a, double *b, double *c)
+                       double *a, double *b, double *c, double *glen)
 {
     if (on_box_face(box, p))
         return false;
@@ -72,6 +73,8 @@ static bool local_form(ism_sampler *s, const double box[6], const double p[3], d
     for (int k = 0; k < 3; k++)
         n[k] = g[k] / gl;
     tangential(h, n, a, b, c);
+    if (glen)
+        *glen = gl;
     return true;
 }
 
@@ -80,7 +83,7 @@ bool ism_straddle_point(ism_sampler *s, double shift, const double box[6], const
 {
     memcpy(q, p, 3 * sizeof *q);
     double n[3], a, b, c;
-    if (!(shift > 0) || !local_form(s, box, p, n, &a, &b, &c))
+    if (!(shift > 0) || !local_form(s, box, p, n, &a, &b, &c, NULL))
         return false;
     if (!(a * c - b * b > 0) || !isfinite(a))
         return false; /* a saddle, a parabolic point, or no Hessian: chords on both sides */
@@ -96,12 +99,22 @@ bool ism_straddle_point(ism_sampler *s, double shift, const double box[6], const
 bool ism_straddle_balanced_point(ism_sampler *s, double shift, const double box[6],
                                  const double p[3], double q[3])
 {
+    return ism_straddle_balanced_bend(s, shift, box, p, q, NULL);
+}
+
+bool ism_straddle_balanced_bend(ism_sampler *s, double shift, const double box[6],
+                                const double p[3], double q[3], double *bend)
+{
     memcpy(q, p, 3 * sizeof *q);
-    double n[3], a, b, c;
-    if (!(shift > 0) || !local_form(s, box, p, n, &a, &b, &c))
+    double n[3], a, b, c, gl;
+    if (bend)
+        *bend = 0;
+    if (!(shift > 0) || !local_form(s, box, p, n, &a, &b, &c, &gl))
         return false;
     /* the tangential Hessian's eigenvalues l1 >= l2: their sum and difference */
     double sum = a + c, diff = sqrt((a - c) * (a - c) + 4 * b * b);
+    if (bend && isfinite(sum) && isfinite(diff))
+        *bend = 0.5 * (fabs(sum) + diff) / gl; /* max(|l1|, |l2|) / |∇f| */
     if (!isfinite(sum) || !isfinite(diff) || !(fabs(sum) > 0))
         return false; /* no Hessian, or chords as far to each side: no move */
     /* (l1 + l2) / (l1 - l2) capped at ±STRADDLE_SHARE: the full shift wherever the cap

@@ -32,6 +32,12 @@ bool ism_straddle_point(ism_sampler *s, double shift, const double box[6], const
 bool ism_straddle_balanced_point(ism_sampler *s, double shift, const double box[6],
                                  const double p[3], double q[3]);
 
+/* ism_straddle_balanced_point, and into *bend the surface's largest principal curvature at p
+ * in magnitude (max(|l1|, |l2|) of the tangential Hessian over |∇f|), from the same Hessian;
+ * 0 where the move does not look (shift 0, a face of the box, no usable Hessian). */
+bool ism_straddle_balanced_bend(ism_sampler *s, double shift, const double box[6],
+                                const double p[3], double q[3], double *bend);
+
 /* The distance to f = 0 (refine.h's measure, every point) of out's triangles from first_tri
  * on with the vertices from first_vert on moved; out is left as it was. False when out of
  * memory. */

@@ -162,11 +162,60 @@ Test(straddle, balanced_move_on_saddles_and_bowls)
         cr_assert(fabs(q[0]) == 0 && fabs(q[1]) == 0 && fabs(q[2] - want) < 1e-12 * e,
                   "a %g b %g: moved to (%g, %g, %g), expected z %g", cases[i].a, cases[i].b,
                   q[0], q[1], q[2], want);
+        /* the same move with the curvature beside it: max(|2a|, |2b|) (|∇f| = 1) */
+        double q2[3], bend;
+        cr_assert_eq(ism_straddle_balanced_bend(&smp, 0.9 * e, box, p, q2, &bend), moved);
+        cr_assert(memcmp(q, q2, sizeof q) == 0, "a %g b %g", cases[i].a, cases[i].b);
+        cr_assert(fabs(bend - fmax(fabs(2 * cases[i].a), fabs(2 * cases[i].b))) < 1e-12,
+                  "a %g b %g: bend %g", cases[i].a, cases[i].b, bend);
         if (fabs(cases[i].share) == 0.9) { /* the cap: ism_straddle_point's move, bit for bit */
             bool one_way = ism_straddle_point(&smp, 0.9 * e, box, p, r);
             cr_assert(!one_way || memcmp(q, r, sizeof q) == 0, "a %g b %g", cases[i].a,
                       cases[i].b);
         }
+        ism_eval_ws_free(smp.ws);
+        ism_tape_free(t);
+    }
+}
+
+/* The curvature beside the move (ism_straddle_balanced_bend, dual.c's sag_split reads it) is
+ * the surface's largest principal curvature in magnitude, from f's scale-free form: sphere
+ * r 0.8 anywhere 1.25; ellipsoid x² + y²/4 + 4z² = 1 at (1, 0, 0) a / c² = 4 (a / b² =
+ * 1/4 the other); the torus R 1, r 0.3 at its outer (1.3, 0, 0) and inner (0.7, 0, 0)
+ * equator 1 / r (1 / 1.3 and −1 / 0.7 the other); the hyperboloid x² + y² − z² = 1 at
+ * (1, 0, 0) 1 (a saddle of ±1: no move, the curvature still given); 0 on a box face. */
+Test(straddle, bend_is_the_largest_principal_curvature)
+{
+    static const ism_param sphere_08[] = {{"r", 0.8}};
+    const pf_surface ellipsoid = {"x^2 + y^2/4 + 4*z^2 - 1", NULL, 0, NULL, 0};
+    const pf_surface hyperboloid = {"x^2 + y^2 - z^2 - 1", NULL, 0, NULL, 0};
+    const pf_surface ball = {"x^2 + y^2 + z^2 - r^2", sphere_08, 1, NULL, 0};
+    const double k = 0.8 / sqrt(3);
+    const struct {
+        const pf_surface *s;
+        double p[3], bend;
+        bool moves;
+    } cases[] = {
+        {&ball, {k, -k, k}, 1.25, true},       {&ellipsoid, {1, 0, 0}, 4, true},
+        {&torus, {1.3, 0, 0}, 1 / 0.3, true},  {&torus, {0, 0.7, 0}, 1 / 0.3, true},
+        {&hyperboloid, {1, 0, 0}, 1, false},   {&ball, {0.8, 0, 0}, 0, false},
+    };
+    const double shift = 0.9e-2, box[6] = {-2, -2, -2, 2, 2, 2};
+    const double faced[6] = {-2, -2, -2, 0.8, 2, 2}; /* the last case's point on x = 0.8 */
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        ism_tape *t = pf_compile(cases[i].s);
+        ism_sampler smp;
+        memset(&smp, 0, sizeof smp);
+        smp.tape = t;
+        smp.ws = ism_eval_ws_new(t);
+        cr_assert(smp.ws);
+        double q[3], bend = -1;
+        bool last = i + 1 == sizeof cases / sizeof cases[0];
+        bool moved =
+            ism_straddle_balanced_bend(&smp, shift, last ? faced : box, cases[i].p, q, &bend);
+        cr_expect_eq(moved, cases[i].moves, "case %zu", i);
+        cr_expect(fabs(bend - cases[i].bend) < 1e-12 * (1 + cases[i].bend),
+                  "case %zu: bend %.15g, expected %.15g", i, bend, cases[i].bend);
         ism_eval_ws_free(smp.ws);
         ism_tape_free(t);
     }
