@@ -68,8 +68,9 @@ typedef struct cf_ctx {
     size_t cap_x_head, cap_x_next;
     bool indexed;           /* incidence and grid built */
     cf_tgrid grid;          /* the triangles by position */
-    uint8_t *singular;      /* per vertex: made by the pass where ∇f vanishes (normal from
-                               the adjacent triangles at the end) */
+    uint8_t *singular;      /* per vertex, CF_VERTEX_* bits: made by the pass where ∇f
+                               vanishes (normal from the adjacent triangles at the end), or
+                               pinned (never moved by the untangling); 0 for the rest */
     size_t cap_singular;
     /* Per-vertex memo of one query (a surgery's distances to its curves): memo_d[v],
      * memo_i[v] hold an answer where memo_gen[v] == gen (cf_memo_reset starts a new one). */
@@ -159,6 +160,12 @@ bool cf_ctx_prepare(cf_ctx *c);
 void cf_ctx_free(cf_ctx *c);
 bool cf_add_triangle(cf_ctx *c, uint32_t a, uint32_t b, uint32_t d);
 uint32_t cf_add_vertex(cf_ctx *c, const double p[3], bool singular);
+/* cf_ctx.singular's bits. */
+#define CF_VERTEX_SINGULAR 1
+#define CF_VERTEX_PINNED 2
+/* Vertex v (made by the pass) stays where it is: the untangling (conform_refine.c) moves no
+ * such vertex. */
+void cf_pin_vertex(cf_ctx *c, uint32_t v);
 /* Drops the triangles from ntris and the vertices from nverts on (appended by a surgery
  * that failed) from the mesh, its incidence and its grid. */
 void cf_truncate(cf_ctx *c, size_t ntris, size_t nverts);
@@ -359,6 +366,13 @@ void cf_pinch_ring_point(cf_ctx *c, const cf_pinch *ch, const double q[3], doubl
  * out of memory. */
 int cf_pinch_ears(cf_ctx *c, const cf_pinch *ends, const cf_polyline *pl, cf_loop *l,
                   double *u, double *foot, int *cid, double reach, double rho);
+/* The rim points the rings of loop l are scaled from (q: 3 per vertex): each vertex's
+ * position, but the nearer end's of a rim edge that crosses the fold of one pinch chart
+ * within reach (cf_pinch_near of the feet cid, u) is the edge's point on the fold
+ * (conform_pinch.c). False when out of memory. */
+bool cf_pinch_rim_points(cf_ctx *c, const cf_pinch *ends, const cf_polyline *pl,
+                         const cf_loop *l, const double *u, const int *cid, double reach,
+                         double *q);
 
 /* ---- conform_zip.c: zipping loops to a curve ---- */
 /* Refills the hole loops cut around a group of npl double curves (meeting at shared end

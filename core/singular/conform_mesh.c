@@ -261,8 +261,13 @@ uint32_t cf_add_vertex(cf_ctx *c, const double p[3], bool singular)
         singular = true;
     uint32_t v = ism_mesh_add_vertex(c->m, p, n);
     if (v != CF_NONE)
-        c->singular[v] = singular;
+        c->singular[v] = singular ? CF_VERTEX_SINGULAR : 0;
     return v;
+}
+
+void cf_pin_vertex(cf_ctx *c, uint32_t v)
+{
+    c->singular[v] |= CF_VERTEX_PINNED;
 }
 
 double cf_triangle_longest_edge2(const ism_mesh *m, uint32_t tri)
@@ -323,7 +328,8 @@ static void singular_normals(cf_ctx *c)
         return; /* normals stay 0: "no normal known" */
     for (size_t t = 0; t < m->ntris; t++) {
         const uint32_t *v = m->tri + 3 * t;
-        if (!c->singular[v[0]] && !c->singular[v[1]] && !c->singular[v[2]])
+        if (!((c->singular[v[0]] | c->singular[v[1]] | c->singular[v[2]]) &
+              CF_VERTEX_SINGULAR))
             continue;
         const double *a = m->pos + 3 * (size_t)v[0], *b = m->pos + 3 * (size_t)v[1],
                      *d = m->pos + 3 * (size_t)v[2];
@@ -332,12 +338,12 @@ static void singular_normals(cf_ctx *c)
         double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
                        u[0] * w[1] - u[1] * w[0]};
         for (int k = 0; k < 3; k++)
-            if (c->singular[v[k]])
+            if (c->singular[v[k]] & CF_VERTEX_SINGULAR)
                 for (int j = 0; j < 3; j++)
                     acc[3 * (size_t)v[k] + j] += n[j];
     }
     for (size_t v = 0; v < m->nverts; v++) {
-        if (!c->singular[v])
+        if (!(c->singular[v] & CF_VERTEX_SINGULAR))
             continue;
         double len = sqrt(ism_sqdist3(acc + 3 * v, (const double[3]){0, 0, 0}));
         for (int j = 0; j < 3; j++)

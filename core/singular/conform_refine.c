@@ -24,16 +24,17 @@
  * distances from it swap their rings' order and a whole strip of ladder quads turns over
  * (cross-cap, depth 7, +1e-3 box: 14 edges on two columns 13–20 cells from its pinch point
  * at (0, 0, 1)); where the rim crosses the fold its own vertices zigzag a hundredth of a cell
- * apart (0.37-cell box); Steiner's loops along several curves keep the rings their rim's feet
- * give. A turned triangle's vertices that may move (not on the locus, not on a boundary) go
- * to the mean of their neighbours, moved back onto f = 0 along ∇f (by at most half their mean
- * distance: never onto another sheet) — kept where no more triangles round them face against
+ * apart (0.37-cell box). A turned triangle's vertices that may move (not on the locus, not
+ * pinned on a pinch point's fold, not on a boundary) go to the mean of their neighbours,
+ * moved back onto f = 0 along ∇f (by at most half their mean distance: never onto another
+ * sheet) — kept where no more triangles round them face against
  * ∇f than before (a strip straightens over a few rounds, each vertex alone rarely undoes a
  * fold). The polygoniser's own turned triangles beside a pinch point are untangled the same
  * way (those turned when the surgeries end and those round each vertex moved): it pleats the
  * thin lens an umbrella's two sheets make there, beyond the tube (Steiner, depth 7, irrational
  * box: 12 edges on the lattice plane z = 0.4901 at the lens's tip, 8–9 cells from (0, 0, 1/2),
- * 17 such of its 30 turned edges; 22 left, the cross-cap's 6 → 0; test
+ * 17 such of its 30 turned edges; 22 left, the cross-cap's 6 → 0; the rings on the fold
+ * (conform_pinch.c) took the 9 the pass made: 13 left, all the polygoniser's; test
  * tube_folds/pinch_points_few_turned_over).
  *
  *     rim    a0 ──── a1            a1's ring vertex r1 fell behind r0: the quad (a0 a1 r1 r0)
@@ -201,8 +202,9 @@ static bool relax(cf_ctx *c, uint32_t v, double reach)
     return false;
 }
 
-/* Not on the locus, and inside the mesh: its triangles close a fan round it (as many as
- * its neighbours; one more neighbour on a boundary — a box face — where it must stay). */
+/* Not on the locus nor pinned (cf_pin_vertex), and inside the mesh: its triangles close a
+ * fan round it (as many as its neighbours; one more neighbour on a boundary — a box face —
+ * where it must stay). */
 static bool movable(cf_ctx *c, uint32_t v)
 {
     if (c->singular[v])

@@ -197,9 +197,11 @@ static bool zip_open_seq(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv,
 }
 
 /* The loop's rings (rings of the vertices beside a pinch point in its chart when ends is not
- * NULL: u[i] then becomes the parameter of the innermost ring's vertex). */
+ * NULL: u[i] then becomes the parameter of the innermost ring's vertex), scaled from the rim
+ * points q (cf_pinch_rim_points). */
 static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot, const cf_polyline *pl,
-                           const cf_pinch *ends, const int *cid, double *u, double rho)
+                           const cf_pinch *ends, const int *cid, double *u, double rho,
+                           const double *q)
 {
     const cf_pinch **ch = malloc(l->n * sizeof *ch);
     if (!ch)
@@ -208,7 +210,7 @@ static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot, cons
         ch[i] = ends ? cf_pinch_near(ends, pl, cid[i], u[i], CF_PINCH_REACH_RHO * rho) : NULL;
     double width = 0;
     for (size_t i = 0; i < l->n; i++)
-        width += ism_dist3(c->m->pos + 3 * (size_t)l->v[i], foot + 3 * i) / (double)l->n;
+        width += ism_dist3(q + 3 * i, foot + 3 * i) / (double)l->n;
     int rings = cf_ring_count(width, cf_loop_mean_edge(c, l));
     uint32_t *rows = malloc(2 * l->n * sizeof *rows);
     if (!rows) {
@@ -221,20 +223,29 @@ static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot, cons
     for (int r = rings; r >= 1 && !c->stopped; r--) {
         double t = (double)r / (rings + 1);
         for (size_t i = 0; i < l->n; i++) {
-            const double *v = c->m->pos + 3 * (size_t)l->v[i], *q = foot + 3 * i;
+            const double *v = q + 3 * i, *ft = foot + 3 * i;
             double p[3];
             if (ch[i]) {
                 cf_pinch_ring_point(c, ch[i], v, t, p);
             } else {
                 for (int k = 0; k < 3; k++)
-                    p[k] = q[k] + t * (v[k] - q[k]);
-                cf_project(c, p, 0.5 * t * ism_dist3(v, q));
+                    p[k] = ft[k] + t * (v[k] - ft[k]);
+                cf_project(c, p, 0.5 * t * ism_dist3(v, ft));
             }
             if ((inner[i] = cf_add_vertex(c, p, false)) == CF_NONE) {
                 free(rows);
                 free((void *)ch);
                 return NULL;
             }
+            /* a ring on the fold (cf_pinch_rim_points) stays there: its vertex normals
+             * (∇f along the curve's tangent) are square to both sheets' triangles, and the
+             * untangling read those as turned and moved its vertices onto a sheet, which
+             * joined the two sheets again (Steiner, depth 5, +1e-3 box, conform/steiner_
+             * roman_pinch_and_triple_points: a centroid 0.31 cell off f = 0 beside a pinch
+             * point, 0.20 pinned and 0.25 before the rings on the fold) */
+            const double *rim = c->m->pos + 3 * (size_t)l->v[i];
+            if (ch[i] && (v[0] != rim[0] || v[1] != rim[1] || v[2] != rim[2]))
+                cf_pin_vertex(c, inner[i]);
             c->st->vertices_added++;
         }
         if (!cf_ladder(c, outer, inner, l->n, l->closed)) {
@@ -619,9 +630,13 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
         } else if (ok) {
             if (multi)
                 junction_feet(c, pl, cv, l, cid, foot);
-            /* a loop along several curves is zipped by its rim's feet (zip_multi): its
-             * rings stay where the rim's feet put them */
-            uint32_t *row = make_rows(c, l, foot, pl, multi ? NULL : ends, cid, u, rho);
+            /* every loop's rings beside a pinch point are made in its chart (a loop along
+             * several curves too, zipped by its rim's feet: each of Steiner's four loops
+             * passes three pinch points), those below a rim edge across the fold on it */
+            double *q = malloc(3 * l->n * sizeof *q);
+            ok = q && cf_pinch_rim_points(c, ends, pl, l, u, cid, CF_PINCH_REACH_RHO * rho, q);
+            uint32_t *row = ok ? make_rows(c, l, foot, pl, ends, cid, u, rho, q) : NULL;
+            free(q);
             ok = row && (multi ? zip_multi(c, pl, cv, l, cid, row, rho)
                                : zip_loop(c, &pl[cid[0]], cv[cid[0]], l, u, row, rho));
             free(row);
