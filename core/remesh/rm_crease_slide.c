@@ -9,7 +9,8 @@
  * not RM_PINNED, ∇f not vanishing, as the collapses look only there) whose
  * triangles form one closed manifold fan (no boundary, no non-manifold edge, none of the
  * caller's locked edges, one label) and which lies within ISM_RM_CREASE_NEAR_REL of its mean
- * edge of both branches' zero sets is, the first that passes:
+ * edge of both branches' zero sets (under max_error, or within ISM_RM_CREASE_NEAR_ERRORS
+ * bounds) is, the first that passes:
  *   - merged with its nearest neighbour w, when w is closer than ISM_RM_CROWD of the
  *     mean edge and beside the crease too, the merged vertex put on the crease nearest
  *     their middle (two vertices of the two surfaces crowding the crease become one on it;
@@ -77,6 +78,21 @@
  * irrational box (bench_remesh needles 373 -> 359 there with 1.0; gyroid-ball 48 / 46 / 74 /
  * 54 -> 45 / 43 / 70 / 50). */
 #define ISM_RM_CREASE_PROJECT_MAX_REL 1.0
+/* Under max_error the crease's cells stop at 4 bounds across (plot_test.c's
+ * CREASE_CELL_ERRORS), whatever their triangles' size: the polygoniser's vertices there lie
+ * up to ~2.3 bounds off the other branch's surface (gyroid-ball at its default bound: 0.012
+ * at E 0.0052), on fans whose mean edge can be a tenth of that, so "beside" and "lands
+ * near" also reach this many bounds: within ISM_RM_CREASE_NEAR_ERRORS × max_error of both
+ * surfaces, Newton landing within ISM_RM_CREASE_REACH_ERRORS × max_error (each or its share
+ * of the mean edge, the larger). bench_remesh needles under 10° (own / 1e-3 / 0.37-cell /
+ * √2−1 boxes, default bound): gyroid-ball 49 / 66 / 81 / 78 -> 43 / 58 / 73 / 70,
+ * cube-minus-ball 127 / 137 / 64 / 71 -> 90 / 108 / 52 / 59 (4 and 8: 41 / 58 / 73 / 68 and
+ * 88 / 107 / 50 / 60; 1 and 2: 47 / 63 / 75 / 73). The distance checks under the bound
+ * refused none of these vertices' moves, before or after: what still blocks is the fans'
+ * shape (rm_crease_tri_ok / tri_ok, and the smallest angle not growing) and vertices on the
+ * crease whose neighbours on it are not (no chain to slide along). */
+#define ISM_RM_CREASE_NEAR_ERRORS 2.0
+#define ISM_RM_CREASE_REACH_ERRORS 4.0
 /* A triangle of a fan moved onto the crease may face within this (degrees) of either
  * branch's normal there, whatever it faced before (tri_ok): a chamfer triangle between the
  * two surfaces faces neither, and turns by up to the crease's angle (140° on the
@@ -97,6 +113,18 @@ typedef struct crease_fan {
 } crease_fan;
 
 static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * (size_t)v; }
+
+/* How far from both surfaces a vertex of mean edge `edge` counts as beside the crease, and
+ * how far from its start Newton may land (without a bound: shares of the edge alone). */
+static double near_tol(const rm_pass *p, double edge)
+{
+    return fmax(ISM_RM_CREASE_NEAR_REL * edge, ISM_RM_CREASE_NEAR_ERRORS * p->max_error);
+}
+
+static double reach_tol(const rm_pass *p, double edge)
+{
+    return fmax(ISM_RM_CREASE_PROJECT_MAX_REL * edge, ISM_RM_CREASE_REACH_ERRORS * p->max_error);
+}
 
 /* The triangles of v as one closed fan of oriented manifold edges, none locked by the
  * caller, of one label: tri[i] and tri[i + 1] share the edge v ring[i + 1]. False otherwise. */
@@ -194,7 +222,7 @@ static void fan_corners(const rm_pass *p, const crease_fan *c, uint32_t v, uint3
 static int find_chain(rm_pass *p, uint32_t v, double mean_edge, ism_tape *local,
                       crease_fan *c)
 {
-    if (!(c->f = fan_tape(p, v, ISM_RM_CREASE_NEAR_REL * mean_edge, local, c->val, c->gn)) ||
+    if (!(c->f = fan_tape(p, v, near_tol(p, mean_edge), local, c->val, c->gn)) ||
         !walk_fan(p, v, c))
         return 0;
     double on = ISM_RM_CREASE_ON_REL * mean_edge;
@@ -407,7 +435,7 @@ static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan
     crease_fan cw;
     rm_merge g;
     if (w == UINT32_MAX || !walk_fan(p, w, &cw) ||
-        !on_crease(p, c->f, P(p, w), ISM_RM_CREASE_NEAR_REL * f->mean_edge, NULL, NULL) ||
+        !on_crease(p, c->f, P(p, w), near_tol(p, f->mean_edge), NULL, NULL) ||
         !rm_merge_find_any(r, v, w, ISM_RM_COLLAPSE_MAX_DEGREE, &g) ||
         !rm_merge_link_ok(r, &g))
         return false;
@@ -417,7 +445,7 @@ static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan
     crease_frame cf;
     bool framed = false;
     if (!to_crease(p, c->f, x, f->mean_edge, &cf, &framed) ||
-        !(rm_dist(x, mid) <= ISM_RM_CREASE_PROJECT_MAX_REL * f->mean_edge) ||
+        !(rm_dist(x, mid) <= reach_tol(p, f->mean_edge)) ||
         !merged_fan_ok(p, &g, x, framed ? &cf : NULL))
         return false;
     ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], grad);
@@ -461,7 +489,7 @@ static bool slide_vertex(rm_pass *p, uint32_t v, ism_tape *local)
         crease_frame cf;
         bool framed = false;
         if (!to_crease(p, c.f, x, f.mean_edge, &cf, &framed) ||
-            !(rm_dist(x, start) <= ISM_RM_CREASE_PROJECT_MAX_REL * f.mean_edge) ||
+            !(rm_dist(x, start) <= reach_tol(p, f.mean_edge)) ||
             (kind == 2 && !rm_in_order(x, a, b)) ||
             !fan_shape_ok(p, v, &c, x, framed ? &cf : NULL, f.min_sine))
             continue;

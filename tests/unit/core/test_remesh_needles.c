@@ -918,14 +918,33 @@ static const size_t crease_left[3] = {20, 25, 35};
  * 0.37-cell / √2−1 boxes, every needle: 0 / 39 / 373 / 385 then, 0 / 3 / 49 / 58 now). */
 static const size_t cube_left[3] = {4, 35, 139};
 
-/* Runs the pass on f's mesh in box and checks what crease_shape_of reads of it against
- * left (per box, which + 1) and the topology before. */
-static void crease_case(const ism_tape *t, const double box[6], int d, int which,
-                        const char *name, const crease_pair *cp, const size_t left[3])
+/* Under the default bound, 1e-3 of the box diagonal (depth.max 10; "beside" within a finest
+ * cell of depth 7), needles within a cell of the sphere (gyroid-ball) or of both surfaces
+ * (cube-minus-ball) in the lattice / 1e-3 / irrational boxes: gyroid-ball 49 / 80 / 50 ->
+ * 43 / 77 / 41 and cube-minus-ball 136 / 140 / 193 -> 139 / 134 / 168 once vertices within 2
+ * bounds of both surfaces count as beside the crease and Newton may land 4 bounds away
+ * (rm_crease_slide.c ISM_RM_CREASE_NEAR_ERRORS: the crease's cells stop at 4 bounds across,
+ * their vertices up to ~2.3 bounds off the other surface on fans whose edges are far
+ * shorter). The lattice cube-minus-ball box does not tell the two apart; the others fail
+ * on the code before. Far from the goal (none under 10°): what blocks is the fans' shape,
+ * not the bound (rm_crease_slide.c). */
+static const size_t crease_left_bounded[3] = {46, 79, 46};
+static const size_t cube_left_bounded[3] = {142, 137, 178};
+
+/* Runs the pass on f's mesh in box (under max_error E > 0: both, to depth.max 10) and checks
+ * what crease_shape_of reads of it against left (per box, which + 1) and the topology
+ * before; needles are counted within a finest cell of depth d. Under E every centroid stays
+ * within E or the farthest before (closed forms), and vertices beside the crease may move
+ * off the other surface within E of f = 0 (no moved_kept). */
+static void crease_case_in(const ism_tape *t, const double box[6], int d, double E, int which,
+                           const char *name, const crease_pair *cp, const size_t left[3])
 {
     ism_mesh m;
     ism_locus l;
-    pf_run_surface(t, box, 3, d, &m, &l);
+    if (E > 0)
+        pf_run_surface_bounded(t, box, 3, 10, E, &m, &l);
+    else
+        pf_run_surface(t, box, 3, d, &m, &l);
     double cell = (box[3] - box[0]) / (1 << d);
     pf_props b, a;
     pf_measure(&m, t, &b);
@@ -938,7 +957,7 @@ static void crease_case(const ism_tape *t, const double box[6], int d, int which
     qsort(before, nbefore, 3 * sizeof *before, cmp_place);
     ism_remesh_stats st;
     ism_error err;
-    cr_assert(ism_quality_pass(t, &l, NULL, 0, NULL, &m, &st, &err), "%s", err.message);
+    cr_assert(ism_quality_pass(t, &l, NULL, E, NULL, &m, &st, &err), "%s", err.message);
     pf_measure(&m, t, &a);
     crease_shape_of(&m, cp, cell, before, nbefore, &sa);
     free(before);
@@ -960,10 +979,11 @@ static void crease_case(const ism_tape *t, const double box[6], int d, int which
        that stayed may now count as a crease vertex by its triangles' centroids: 0.0239 ->
        0.0253 in the lattice box, a gyroid vertex the pass did not move), nor any centroid
        farther from its own part's (closed forms) */
-    if (cp->moved_kept)
+    if (cp->moved_kept && !(E > 0)) /* under E the relaxation moves them within E of f = 0 */
         cr_expect_leq(sa.moved_far, sb.crease_far * (1 + 1e-6), "%s box %d: moved %.3g, "
                       "before %.3g", name, which, sa.moved_far, sb.crease_far);
-    cr_expect_leq(sa.centroid_far, sb.centroid_far * (1 + 1e-6), "%s box %d", name, which);
+    cr_expect_leq(sa.centroid_far, fmax(E, sb.centroid_far) * (1 + 1e-6), "%s box %d: %.3g",
+                  name, which, sa.centroid_far);
     cr_expect_leq(a.max_dist, fmax(1e-9, b.max_dist), "%s box %d", name, which);
     /* crease vertices moved onto and along the crease (rm_crease_slide.c) lie on both
        surfaces: within CREASE_ON of both (closed forms) */
@@ -976,22 +996,66 @@ static void crease_case(const ism_tape *t, const double box[6], int d, int which
 
 static void gyroid_ball_case(const ism_tape *t, const double box[6], int d, int which)
 {
-    crease_case(t, box, d, which, "gyroid-ball", &GYROID_PAIR, crease_left);
+    crease_case_in(t, box, d, 0, which, "gyroid-ball", &GYROID_PAIR, crease_left);
 }
 
 static void cube_minus_ball_case(const ism_tape *t, const double box[6], int d, int which)
 {
-    crease_case(t, box, d, which, "cube-minus-ball", &CUBE_PAIR, cube_left);
+    crease_case_in(t, box, d, 0, which, "cube-minus-ball", &CUBE_PAIR, cube_left);
+}
+
+/* The box's default bound: 1e-3 of its diagonal. */
+static double default_bound(const double box[6])
+{
+    return 1e-3 * sqrt((box[3] - box[0]) * (box[3] - box[0]) +
+                       (box[4] - box[1]) * (box[4] - box[1]) +
+                       (box[5] - box[2]) * (box[5] - box[2]));
+}
+
+static void gyroid_ball_bounded(const ism_tape *t, const double box[6], int d, int which)
+{
+    crease_case_in(t, box, d, default_bound(box), which, "gyroid-ball bounded", &GYROID_PAIR,
+                   crease_left_bounded);
+}
+
+static void cube_minus_ball_bounded(const ism_tape *t, const double box[6], int d, int which)
+{
+    crease_case_in(t, box, d, default_bound(box), which, "cube-minus-ball bounded",
+                   &CUBE_PAIR, cube_left_bounded);
+}
+
+typedef void (*crease_check)(const ism_tape *t, const double box[6], int d, int which);
+
+/* The gyroid ball (box ±1.5) and the cube minus a ball (±1.3) at their presets' depth 7, in
+ * the three placements (the irrational one only under sanitizers). */
+static void gyroid_ball_in_boxes(crease_check check)
+{
+    const double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
+    in_boxes(GYROID_BALL, base, 7, pf_quick() ? 1 : -1, check);
+}
+
+static void cube_minus_ball_in_boxes(crease_check check)
+{
+    const double base[6] = {-1.3, -1.3, -1.3, 1.3, 1.3, 1.3};
+    in_boxes(CUBE_MINUS_BALL, base, 7, pf_quick() ? 1 : -1, check);
 }
 
 Test(remesh_needles, gyroid_ball_needles_beside_the_crease)
 {
-    const double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
-    in_boxes(GYROID_BALL, base, 7, pf_quick() ? 1 : -1, gyroid_ball_case);
+    gyroid_ball_in_boxes(gyroid_ball_case);
 }
 
 Test(remesh_needles, cube_minus_ball_needles_beside_the_crease)
 {
-    const double base[6] = {-1.3, -1.3, -1.3, 1.3, 1.3, 1.3};
-    in_boxes(CUBE_MINUS_BALL, base, 7, pf_quick() ? 1 : -1, cube_minus_ball_case);
+    cube_minus_ball_in_boxes(cube_minus_ball_case);
+}
+
+Test(remesh_needles, gyroid_ball_needles_beside_the_crease_under_a_bound)
+{
+    gyroid_ball_in_boxes(gyroid_ball_bounded);
+}
+
+Test(remesh_needles, cube_minus_ball_needles_beside_the_crease_under_a_bound)
+{
+    cube_minus_ball_in_boxes(cube_minus_ball_bounded);
 }
