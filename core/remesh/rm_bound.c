@@ -1,7 +1,6 @@
 /* rm_bound.c — distances to f = 0 measured with a Newton step, and the bound checks built on
  * them (rm_bound.h). */
 #include "core/remesh/rm_bound.h"
-#include "core/remesh/rm_brec.h"
 #include "core/remesh/rm_memo.h"
 #include "core/util/vec3.h"
 
@@ -147,9 +146,7 @@ bool rm_bound_triangle(rm_pass *p, const double *a, const double *b, const doubl
     return rm_bound_distance(p, m, p->max_error) <= p->max_error;
 }
 
-/* The largest distance over v's fan with v at x, each point measured with limit: as soon
- * as one measures above stop, that one (the rest are not measured). */
-static double fan_worst(rm_pass *p, uint32_t v, const double *x, double limit, double stop)
+double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x, double limit, double stop)
 {
     const rm_mesh *r = &p->r;
     const double *P = r->m->pos;
@@ -173,22 +170,4 @@ static double fan_worst(rm_pass *p, uint32_t v, const double *x, double limit, d
         }
     }
     return worst;
-}
-
-double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x)
-{
-    return fan_worst(p, v, x, INFINITY, INFINITY);
-}
-
-/* Each point is measured against the bound it must meet (a point beyond it fails either
- * way, rm_bound_distance), and the first to fail ends the measure. */
-bool rm_bound_fan(rm_pass *p, uint32_t v, const double *x)
-{
-    double e = p->max_error;
-    if (p->brec ? rm_brec_fan_within(p, v, x) : fan_worst(p, v, x, e, e) <= e)
-        return true;
-    if (p->brec && rm_brec_fan_known(p, v) <= e)
-        return false; /* the fan lies within the bound now: no farther than it is no gain */
-    double before = rm_bound_fan_worst(p, v, p->r.m->pos + 3 * (size_t)v);
-    return fan_worst(p, v, x, before, before) <= before;
 }

@@ -43,11 +43,8 @@ bool rm_bound_edge(rm_pass *p, const double *a, const double *b);
 bool rm_bound_triangle(rm_pass *p, const double *a, const double *b, const double *c);
 
 /* The largest distance over v's fan with v at x: its centroids, the midpoints of the edges at
- * v, and x itself (v free: a closed fan). */
-double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x);
-
-/* True when v's fan with v at x lies within max_error (rm_bound_fan_worst), or no farther
- * than with v where it is (a fan the polygoniser left beyond the bound may still improve). */
-bool rm_bound_fan(rm_pass *p, uint32_t v, const double *x);
+ * v, and x itself (v free: a closed fan), each point measured with limit (rm_bound_distance);
+ * as soon as one measures above stop, that one (the rest are not measured). */
+double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x, double limit, double stop);
 
 #endif

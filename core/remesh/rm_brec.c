@@ -167,3 +167,16 @@ void rm_brec_offset_set(rm_pass *p, uint32_t v, const double x[3])
         o[0] = x[0], o[1] = x[1], o[2] = x[2], o[3] = rm_bound_signed(p, x);
     }
 }
+
+/* Each point is measured against the bound it must meet (a point beyond it fails either
+ * way, rm_bound_distance), and the first to fail ends the measure. */
+bool rm_bound_fan(rm_pass *p, uint32_t v, const double *x)
+{
+    double e = p->max_error;
+    if (p->brec ? rm_brec_fan_within(p, v, x) : rm_bound_fan_worst(p, v, x, e, e) <= e)
+        return true;
+    if (p->brec && rm_brec_fan_known(p, v) <= e)
+        return false; /* the fan lies within the bound now: no farther than it is no gain */
+    double before = rm_bound_fan_worst(p, v, p->r.m->pos + 3 * (size_t)v, INFINITY, INFINITY);
+    return rm_bound_fan_worst(p, v, x, before, before) <= before;
+}

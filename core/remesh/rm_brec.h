@@ -52,6 +52,11 @@ static inline void rm_brec_set(rm_pass *p, uint32_t t, int s, const double x[3],
     }
 }
 
+/* True when v's fan with v at x lies within max_error (through the records when they are
+ * open, else measured: rm_bound_fan_worst), or no farther than with v where it is (a fan the
+ * polygoniser left beyond the bound may still improve). */
+bool rm_bound_fan(rm_pass *p, uint32_t v, const double *x);
+
 /* True when v's fan with v at x lies within max_error: x, every centroid and the midpoint of
  * every edge at v (v free: a closed fan), each bounded by what its triangle knows or else
  * measured (rm_bound_upper), in rm_bound_fan's order. What it finds is kept for the move

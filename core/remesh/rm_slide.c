@@ -6,6 +6,7 @@
  * neighbours within the plane and back onto f = 0 by Newton in the plane, so it stays on the
  * box face and on the surface, and the boundary loop keeps its vertices, edges and order. */
 #include "core/remesh/rm_bound.h"
+#include "core/remesh/rm_brec.h"
 #include "core/remesh/rm_pass.h"
 
 #include <math.h>
