@@ -1,32 +1,16 @@
-/* mesh_files.c — the service's PLY (attributes as extra vertex properties, a crease's sides
- * on vertices of their own) and OBJ (features as `l` lines) of mesh_files.h, streamed through
- * core's sink. */
+/* mesh_files.c — the service's PLY (attributes as extra vertex properties, one row per mesh
+ * vertex, a crease vertex's sides' normals summed) and OBJ (features as `l` lines) of
+ * mesh_files.h, streamed through core's sink. */
 #include "proto/mesh_files.h"
 #include "core/mesh/write_sink.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* A crease's other sides in PLY: the corners with a crease side's normal of their own
- * (w->corner_at, not marked in w->corner_locus) get vertices of their own, appended after the
- * mesh's (whose indices stay), one per vertex and distinct normal, so each side's triangles
- * stay joined and shade with their branch's normal. A vertex whose every corner has a normal
- * of its own (its own normal, ∇f, is not bit for bit either side's) lends its row to its
- * first side instead: no row of the file is left unused. The corners at the singular locus
- * with their sheet's normal (marked) stay on their vertex's row: the PLY's vertices are the
- * mesh's (the stats' count) wherever no crease is cut. */
-typedef struct ply_sides {
-    size_t n;             /* extra vertices */
-    uint32_t *vertex;     /* per extra vertex: the mesh vertex it copies */
-    const float **normal; /* per extra vertex: its normal (into w->corner_normal) */
-    uint32_t *corner;     /* per corner with its own normal (as w->corner_at): its vertex */
-    const float **row;    /* per mesh vertex: the normal its row carries when it lends it to
-                             a side (NULL: its own) */
-} ply_sides;
-
 typedef struct side_key {
-    uint32_t vertex, j; /* the mesh vertex, the corner's index in w->corner_at */
-    const float *normal;
+    uint32_t vertex;     /* the mesh vertex */
+    const float *normal; /* a crease side's normal there (into w->corner_normal) */
 } side_key;
 
 /* By vertex, then normal (bit for bit: one branch's normal at one vertex is one value). */
@@ -38,22 +22,14 @@ static int cmp_side(const void *x, const void *y)
     return memcmp(a->normal, b->normal, 3 * sizeof *a->normal);
 }
 
-static void ply_sides_free(ply_sides *p)
-{
-    free(p->vertex);
-    free((void *)p->normal);
-    free(p->corner);
-    free((void *)p->row);
-}
-
-/* Whether entry j of w->corner_at is a crease side's (the PLY gives it a vertex of its own). */
+/* Whether entry j of w->corner_at is a crease side's (not the locus's sheet normal). */
 static bool crease_side(const ism_wire_mesh *w, size_t j)
 {
     return !w->corner_locus || !w->corner_locus[j];
 }
 
 /* Per mesh vertex: 1 when a corner without a crease side's normal uses it (calloc'd; NULL
- * when out of memory). */
+ * when out of memory): the vertex's own normal is then one of its sides'. */
 static uint8_t *plain_corners(const ism_mesh *m, const ism_wire_mesh *w, size_t nc)
 {
     uint8_t *plain = calloc(m->nverts + 1, 1);
@@ -65,54 +41,81 @@ static uint8_t *plain_corners(const ism_mesh *m, const ism_wire_mesh *w, size_t 
     return plain;
 }
 
-static bool ply_sides_build(const ism_mesh *m, const ism_wire_mesh *w, ply_sides *p)
+/* The row normal n of a vertex whose crease-side corners are k[0..nk) (sorted, so one side's
+ * bit-equal normals are adjacent): the sum of its distinct sides' normals and own (the
+ * vertex's, NULL when no plain corner uses it), normalised; n is left as it is when they
+ * cancel. */
+static void sum_sides(const side_key *k, size_t nk, const float *own, float *n)
 {
-    size_t nc = w->normal ? w->ncorner_normals : 0;
-    memset(p, 0, sizeof *p);
-    if (!nc)
-        return true;
-    side_key *key = malloc(nc * sizeof *key);
-    p->vertex = malloc(nc * sizeof *p->vertex);
-    p->normal = malloc(nc * sizeof *p->normal);
-    p->corner = malloc(nc * sizeof *p->corner);
-    p->row = calloc(m->nverts + 1, sizeof *p->row);
+    double s[3] = {0, 0, 0};
+    for (int a = 0; own && a < 3; a++)
+        s[a] = own[a];
+    for (size_t i = 0; i < nk; i++)
+        if (!i || cmp_side(&k[i], &k[i - 1]))
+            for (int a = 0; a < 3; a++)
+                s[a] += k[i].normal[a];
+    double len = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+    if (len > 0 && isfinite(len))
+        for (int a = 0; a < 3; a++)
+            n[a] = (float)(s[a] / len);
+}
+
+/* A crease vertex in PLY: one row per mesh vertex (the file's vertices, edges and faces are the
+ * mesh's, so a reader counting components or χ gets the stats' figures; the per-side normals
+ * travel in drc/glb, split there, and in the OBJ's `vn`), with one normal for every side that
+ * meets there: the normalised sum of the sides' unit normals — each side once (its branch's
+ * normal, and the vertex's own, ∇f, when a corner that no crease side claims uses it), not
+ * per corner or area, so the number of triangles a side happens to have there does not tilt
+ * it. Why the sum and not ∇f: at a crease f is not differentiable, ∇f is the branch the
+ * evaluator's tie took (right on one side, off by the whole crease angle on the other, and a
+ * vertex whose corners are all crease sides has a ∇f that neither side's triangles use); the
+ * sum bisects two sides (each off by half the crease angle, the usual normal of a
+ * polyhedral edge) and points into a cube's corner between three. Where the sides cancel
+ * (a fin folded back on itself) the row keeps ∇f. The corners at the singular locus with their
+ * sheet's normal (w->corner_locus) are not sides: their vertex's row is ∇f's, as without them.
+ * Returns per vertex the normal its row carries: w->normal itself when no crease side is cut
+ * (or no normals are sent), else a copy with the crease vertices' rows summed, also in *owned
+ * for the caller to free (NULL when out of memory). */
+static const float *ply_row_normals(const ism_mesh *m, const ism_wire_mesh *w, float **owned)
+{
+    size_t nc = w->normal ? w->ncorner_normals : 0, nk = 0;
+    *owned = NULL;
+    for (size_t j = 0; j < nc; j++)
+        nk += crease_side(w, j);
+    if (!nk)
+        return w->normal;
+    side_key *key = malloc(nk * sizeof *key);
+    float *row = malloc(3 * m->nverts * sizeof *row);
     uint8_t *plain = plain_corners(m, w, nc);
-    if (!key || !p->vertex || !p->normal || !p->corner || !p->row || !plain) {
+    if (!key || !row || !plain) {
         free(key);
+        free(row);
         free(plain);
-        ply_sides_free(p);
-        return false;
+        return NULL;
     }
-    size_t nk = 0;
+    memcpy(row, w->normal, 3 * m->nverts * sizeof *row);
+    nk = 0;
     for (size_t j = 0; j < nc; j++)
         if (crease_side(w, j))
-            key[nk++] = (side_key){m->tri[w->corner_at[j]], (uint32_t)j, w->corner_normal + 3 * j};
+            key[nk++] = (side_key){m->tri[w->corner_at[j]], w->corner_normal + 3 * j};
     qsort(key, nk, sizeof *key, cmp_side);
-    uint32_t at = 0;
-    for (size_t i = 0; i < nk; i++) {
+    for (size_t i = 0, e; i < nk; i = e) {
         uint32_t v = key[i].vertex;
-        if (i && !cmp_side(&key[i], &key[i - 1])) {
-            p->corner[key[i].j] = at;
-        } else if (!plain[v] && !p->row[v]) { /* the vertex's own row, unused otherwise */
-            p->row[v] = key[i].normal;
-            p->corner[key[i].j] = at = v;
-        } else {
-            p->vertex[p->n] = v;
-            p->normal[p->n++] = key[i].normal;
-            p->corner[key[i].j] = at = (uint32_t)(m->nverts + p->n - 1);
-        }
+        for (e = i + 1; e < nk && key[e].vertex == v; e++)
+            ;
+        sum_sides(key + i, e - i, plain[v] ? w->normal + 3 * (size_t)v : NULL, row + 3 * v);
     }
     free(key);
     free(plain);
-    return true;
+    return *owned = row;
 }
 
-static void ply_header(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w, size_t extra)
+static void ply_header(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w)
 {
     ism_sink_printf(s, "ply\nformat binary_little_endian 1.0\ncomment isomesh\n"
                        "element vertex %zu\n"
                        "property float x\nproperty float y\nproperty float z\n",
-                    m->nverts + extra);
+                    m->nverts);
     if (w->normal)
         ism_sink_printf(s, "property float nx\nproperty float ny\nproperty float nz\n");
     if (w->mean_curvature)
@@ -129,23 +132,17 @@ static void ply_header(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w, s
     ism_sink_printf(s, "end_header\n");
 }
 
-/* Faces (a crease's other-side corners on their own vertices) with their labels (cell,
- * double sheet) as face properties. */
-static void ply_faces(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w,
-                      const ply_sides *sides)
+/* The mesh's faces with their labels (cell, double sheet) as face properties. */
+static void ply_faces(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w)
 {
-    if (!w->tri_cell && !w->tri_sheet && !sides->n) {
+    if (!w->tri_cell && !w->tri_sheet) {
         ism_ply_put_faces(s, m);
         return;
     }
-    size_t j = 0; /* the next corner with a normal of its own */
     for (size_t t = 0; t < m->ntris; t++) {
         ism_sink_u8(s, 3);
-        for (size_t c = 3 * t; c < 3 * t + 3; c++) {
-            bool own = sides->n && j < w->ncorner_normals && w->corner_at[j] == c;
-            ism_sink_u32le(s, own && crease_side(w, j) ? sides->corner[j] : m->tri[c]);
-            j += own;
-        }
+        for (size_t c = 3 * t; c < 3 * t + 3; c++)
+            ism_sink_u32le(s, m->tri[c]);
         if (w->tri_cell)
             ism_sink_u32le(s, w->tri_cell[t]);
         if (w->tri_sheet)
@@ -172,25 +169,23 @@ static void ply_vertex(ism_sink *s, const ism_mesh *m, const ism_wire_mesh *w, s
 bool ism_write_ply_wire(const ism_mesh *m, const ism_wire_mesh *w, ism_write_fn write,
                         void *ctx)
 {
-    ply_sides sides;
-    if (w->nverts != m->nverts || !ply_sides_build(m, w, &sides))
-        return false;
-    ism_sink *s = m->nverts + sides.n <= INT32_MAX ? malloc(sizeof *s) : NULL;
-    if (!s) { /* PLY's int indices could not address every vertex, or out of memory */
-        ply_sides_free(&sides);
+    if (w->nverts != m->nverts || m->nverts > INT32_MAX)
+        return false; /* PLY's int indices could not address every vertex */
+    float *owned;
+    const float *row = ply_row_normals(m, w, &owned);
+    ism_sink *s = !w->normal || row ? malloc(sizeof *s) : NULL;
+    if (!s) {
+        free(owned);
         return false;
     }
     ism_sink_init(s, write, ctx);
-    ply_header(s, m, w, sides.n);
+    ply_header(s, m, w);
     for (size_t i = 0; i < m->nverts; i++)
-        ply_vertex(s, m, w, i,
-                   sides.row && sides.row[i] ? sides.row[i] : w->normal ? w->normal + 3 * i : NULL);
-    for (size_t i = 0; i < sides.n; i++)
-        ply_vertex(s, m, w, sides.vertex[i], sides.normal[i]);
-    ply_faces(s, m, w, &sides);
+        ply_vertex(s, m, w, i, row ? row + 3 * i : NULL);
+    ply_faces(s, m, w);
     bool ok = ism_sink_finish(s);
     free(s);
-    ply_sides_free(&sides);
+    free(owned);
     return ok;
 }
 

@@ -4,11 +4,11 @@
  * mean_curvature, float gauss_curvature (clamped as in Draco's), uchar class (features.h's
  * classes) — and faces as uchar 3 + int indices, then face properties uint cell (when
  * curves were requested: the arrangement face) and uchar double_sheet (when f has double
- * sheets). A crease vertex's other side (the corners whose branch normal is not the
- * vertex's) gets a vertex of its own per distinct normal, appended after the mesh's vertices
- * (their indices unchanged), so each side shades with its branch's normal; the corners at
- * the singular locus with their sheet's normal (wire_mesh.h's corner_locus) stay on their
- * vertex's row. OBJ: core's v / vn / f lines (a crease's other-side corners and the locus's
+ * sheets). One row per mesh vertex and the mesh's faces, so the file is the mesh the stats
+ * describe (vertices, edges, χ): a crease vertex's row carries the normalised sum of its
+ * sides' normals (mesh_files.c says why), the corners at the singular locus with their
+ * sheet's normal (wire_mesh.h's corner_locus) leave their vertex's row as it is; the
+ * per-side and per-sheet normals travel in drc/glb (points split there) and the OBJ. OBJ: core's v / vn / f lines (a crease's other-side corners and the locus's
  * sheet corners with `vn` lines of their own; one `v` per mesh vertex), then the
  * features as `l` polylines over the same
  * 1-based vertices: a group `g nonmanifold_curves`, a group `g boundaries` (closed ones

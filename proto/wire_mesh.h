@@ -33,8 +33,9 @@ typedef struct ism_wire_mesh {
     /* Per corner of corner_at: 1 when its normal is its triangle's sheet normal at a vertex on
      * the singular locus (ism_wire_corner_normals), 0 for a crease side (not owned; NULL when
      * none is). The viewer's formats (drc, glb) split points there and the OBJ gives it a `vn`
-     * of its own; the PLY keeps one row per mesh vertex there (its vertex count is the
-     * stats'), so it reads only the crease sides. */
+     * of its own; the PLY keeps one row per mesh vertex everywhere (its vertex count is the
+     * stats'): a crease vertex's row sums its sides' normals, the locus's marks are left out
+     * of that sum. */
     const uint8_t *corner_locus;
     size_t live_triangles;     /* triangles whose three vertex indices differ */
     double bounds[6];          /* of the float positions: xmin ymin zmin xmax ymax zmax */

@@ -19,8 +19,10 @@ y = 0, z = 0 (in a box on the octree lattice and one shifted sqrt(2) - 1 of a fi
   triangle's branch gradient (closed form, G or B by the sign of B - G at the corner farthest
   from the crease: at the centroid, a sliver along the crease reads the wrong side) within
   1 degree, and at crease points the two sides' normals differ by the angle between grad G
-  and grad B there (within 1 degree); likewise in the .ply (the sides on vertices of their
-  own). Triangles whose side the 14-bit positions cannot decide
+  and grad B there (within 1 degree); likewise in the .ply away from the crease, whose rows
+  are the mesh's vertices (one row per position; a crease point's one normal, the sides' sum,
+  is checked against the closed forms in test_crease_files.py). Triangles whose side the
+  14-bit positions cannot decide
   (every corner closer to the crease than 4 quantisation steps) are left out."""
 import json
 import math
@@ -46,6 +48,7 @@ CELL = SIDE / 2 ** DEPTH
 PLANES = [{"kind": "plane", "normal": n, "offsets": [0]}
           for n in ([1, 0, 0], [0, 1, 0], [0, 0, 1])]
 FLOAT_TOL = 1e-6   # float32 positions of points within 1e-10 of both surfaces
+ON_CREASE = 1e-6   # a float32 crease vertex's distance to the crease (Newton: ~1e-12)
 
 
 def box(side, shift):
@@ -147,6 +150,11 @@ def parse_ply_corners(data):
         at += 13 + fextra
     assert at == len(data)
     return faces
+
+
+def ply_rows(data):
+    """The `element vertex` count of a PLY."""
+    return int(data[:data.index(b"end_header\n")].decode().split("element vertex ")[1].split()[0])
 
 
 def unused_ply_rows(data):
@@ -347,9 +355,12 @@ class CurveOutputsTest(unittest.TestCase):
                 self.assertLess(abs(area - 4 * math.pi * 0.16) / (4 * math.pi * 0.16), 0.01)
 
 
-    def assert_branch_normals(self, faces, quantum):
-        """faces: [(3 positions, 3 normals)]. Returns (corners checked, crease points)."""
-        worst, sides, checked = 0.0, {}, 0
+    def assert_branch_normals(self, faces, quantum, one_row=False):
+        """faces: [(3 positions, 3 normals)]. Returns (corners checked, crease points).
+        one_row (the PLY: one row per mesh vertex): a corner on the crease (within ON_CREASE
+        of both branches) carries its vertex's one normal, the same at every corner there
+        (its value, the sides' sum, is test_crease_files.py's), and is not held to a side."""
+        worst, sides, checked, shared = 0.0, {}, 0, {}
         def crease_dist(c):  # signed distance to the surface B = G (ball side positive)
             d = [a - b for a, b in zip(ball_grad(c), gyroid_grad(c))]
             return (ball(c) - gyroid(c)) / math.sqrt(sum(x * x for x in d))
@@ -362,10 +373,17 @@ class CurveOutputsTest(unittest.TestCase):
                 continue  # the side is below what the positions resolve
             on_ball = margin > 0
             for p, n in zip(pts, nrms):
+                checked += 1
+                if one_row and abs(crease_dist(p)) < ON_CREASE:
+                    shared.setdefault(tuple(p), set()).add(tuple(n))
+                    continue
                 worst = max(worst, angle_deg(n, ball_grad(p) if on_ball else gyroid_grad(p)))
                 sides.setdefault(tuple(p), {}).setdefault(on_ball, set()).add(tuple(n))
-                checked += 1
         self.assertLess(worst, 1.0, "a corner normal is not its branch's gradient")
+        if one_row:
+            self.assertEqual([p for p, s in shared.items() if len(s) > 1], [],
+                             "crease points with more than one normal")
+            return checked, len(shared)
         crease = [p for p, s in sides.items() if len(s) == 2]
         for p in crease:
             want = angle_deg(gyroid_grad(p), ball_grad(p))
@@ -390,16 +408,19 @@ class CurveOutputsTest(unittest.TestCase):
                     faces = [(t, [nrm[d["index"][3 * f_ + k]] for k in range(3)])
                              for f_, t in enumerate(decoded_triangles(d))]
                     quantum = side / 2 ** 14  # 14-bit positions over the box
-                elif fmt == "ply":  # crease sides on vertices of their own
+                elif fmt == "ply":  # one row per mesh vertex, a crease's sides share it
                     faces = parse_ply_corners(out)
                     quantum = 2e-7  # float32 positions
                     self.assertEqual(unused_ply_rows(out), 0, "vertex rows no face uses")
+                    self.assertEqual(ply_rows(out), len({tuple(p) for t, _ in faces
+                                                         for p in t}),
+                                     "one row per vertex position")
                 else:
                     faces = parse_obj_corners(out.decode())
                     quantum = 1e-7  # 9 significant digits
                     self.assertEqual(unused_obj_vertices(out.decode()), 0,
                                      "vertices no face or line uses")
-                checked, crease = self.assert_branch_normals(faces, quantum)
+                checked, crease = self.assert_branch_normals(faces, quantum, fmt == "ply")
                 self.assertGreater(checked, 0.9 * 3 * len(faces))
                 self.assertGreater(crease, 500, "crease points with both sides decided")
 

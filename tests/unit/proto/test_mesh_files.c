@@ -9,8 +9,11 @@
  * their vertex's normal (+z). Checked: those 24 corners and no other get a normal of their
  * own, all marked as the locus's; the PLY is byte for byte the PLY without them (vertex
  * count the mesh's), the OBJ has one `v` per vertex and each of those corners names a `vn`
- * of (0, 1, 0), Draco's point split (corner_split.h) gives each axis vertex one more point;
- * and a crease side (a corner not marked) still gets a PLY vertex of its own. */
+ * of (0, 1, 0), Draco's point split (corner_split.h) gives each axis vertex one more point.
+ * The same 24 corners taken as crease sides instead (marked 0: the y plane one side of a
+ * crease along the axis, the z plane the other, whose normal is the vertex's): the PLY still
+ * has one row per mesh vertex and the mesh's faces, every row but the 5 axis vertices' is the
+ * bare PLY's byte for byte, and theirs carry the sides' normalised sum, (0, 1, 1) / sqrt 2. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
@@ -130,16 +133,55 @@ Test(mesh_files, ply_keeps_the_mesh_vertices_at_the_locus)
     cr_expect_not_null(strstr(with.data, head), "the PLY's vertices are the mesh's");
     cr_assert_eq(with.len, without.len);
     cr_expect_eq(memcmp(with.data, without.data, with.len), 0, "byte for byte");
-
-    /* One corner marked a crease side instead: it gets a vertex of its own, row nverts. */
-    fx.locus[0] = 0;
-    membuf side = {0};
-    cr_assert(ism_write_ply_wire(&fx.m, &fx.w, mem_write, &side));
-    snprintf(head, sizeof head, "element vertex %zu\n", fx.m.nverts + 1);
-    cr_expect_not_null(strstr(side.data, head), "a crease side still splits");
     free(with.data);
     free(without.data);
-    free(side.data);
+    teardown(&fx);
+}
+
+/* Bytes per PLY row with positions and normals only. */
+#define ROW_BYTES (6 * sizeof(float))
+
+Test(mesh_files, ply_crease_sides_share_their_vertex_row)
+{
+    fixture fx;
+    setup_planes(&fx);
+    membuf bare_ply = {0}, crease = {0};
+    ism_wire_mesh bare = fx.w;
+    bare.ncorner_normals = 0;
+    cr_assert(ism_write_ply_wire(&fx.m, &bare, mem_write, &bare_ply));
+    memset(fx.locus, 0, fx.w.ncorner_normals); /* every one a crease side */
+    cr_assert(ism_write_ply_wire(&fx.m, &fx.w, mem_write, &crease));
+    char head[64];
+    snprintf(head, sizeof head, "element vertex %zu\n", fx.m.nverts);
+    cr_expect_not_null(strstr(crease.data, head), "one row per mesh vertex");
+    cr_assert_eq(crease.len, bare_ply.len, "no extra rows");
+    const char *end = strstr(crease.data, "end_header\n");
+    cr_assert_not_null(end);
+    size_t at = (size_t)(end - crease.data) + strlen("end_header\n");
+    size_t faces = at + fx.m.nverts * ROW_BYTES;
+    cr_expect_eq(memcmp(crease.data, bare_ply.data, at), 0, "the same header");
+    cr_expect_eq(memcmp(crease.data + faces, bare_ply.data + faces, crease.len - faces), 0,
+                 "the mesh's faces");
+    size_t axis = 0;
+    const float half = (float)sqrt(0.5);
+    for (uint32_t v = 0; v < fx.m.nverts; v++) {
+        const char *r = crease.data + at + v * ROW_BYTES;
+        if (!on_axis(&fx.m, v)) {
+            cr_expect_eq(memcmp(r, bare_ply.data + at + v * ROW_BYTES, ROW_BYTES), 0,
+                         "row %u", v);
+            continue;
+        }
+        float n[3];
+        memcpy(n, r + 3 * sizeof(float), sizeof n);
+        cr_expect(fabsf(n[0]) < 1e-7f && fabsf(n[1] - half) < 1e-7f &&
+                      fabsf(n[2] - half) < 1e-7f,
+                  "axis vertex %u: (%g, %g, %g), the sides' bisector", v, (double)n[0],
+                  (double)n[1], (double)n[2]);
+        axis++;
+    }
+    cr_expect_eq(axis, N + 1);
+    free(bare_ply.data);
+    free(crease.data);
     teardown(&fx);
 }
 
