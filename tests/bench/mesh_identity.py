@@ -4,7 +4,10 @@ of the gallery (its own box and depths, one thread), of a set of presets in boxe
 octree lattice (tests/cli/boxes.py: by 1e-3, and by irrational fractions of a finest cell) on
 two threads, and of max_error runs of the primal polygons (several rounds, lattice and shifted
 boxes, 1 and 2 threads) and of the dual mesh (the default under a bound; also where the box cuts
-the surface), through the CLI.
+the surface), through the CLI. Those PLYs are core's writer's (positions, ∇f normals); the
+"wire" runs write every preset's PLY as the service sends it (a request file with every
+attribute: proto/mesh_files.c's writer, the crease rows, curvature and class), so a change to
+what the downloads carry shows there.
 `--save FILE` records them; `--check FILE` runs again and names every run whose mesh differs.
 Not part of `make test` (a few minutes on two cores); run it before and after a change:
 
@@ -41,11 +44,24 @@ CUT_RUNS = ("hyperboloid", "catenoid", "scherk", "helicoid", "clebsch-cubic")
 CUT_REL = (2e-3, 2e-3 / 3)
 
 
+# The service's PLY with every attribute (the viewer's download link).
+WIRE_ATTRIBUTES = ["normal", "mean_curvature", "gauss_curvature", "class"]
+
+
 def md5_of_run(exe, name, box, depth, extra, timeout):
+    """extra: the CLI's flags (a list), or a dict: then a request file with those fields."""
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "m.ply")
-        cmd = [exe, "--surface", name, "-b", ",".join(repr(v) for v in box), "-d", depth,
-               "-o", out, *extra]
+        if isinstance(extra, dict):
+            req = os.path.join(tmp, "r.json")
+            lo, hi = depth.split(":")
+            with open(req, "w") as f:
+                json.dump({"preset": name, "box": box, "depth": {"min": int(lo), "max": int(hi)},
+                           **extra}, f)
+            cmd = [exe, req, "-o", out]
+        else:
+            cmd = [exe, "--surface", name, "-b", ",".join(repr(v) for v in box), "-d", depth,
+                   "-o", out, *extra]
         try:
             r = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, cwd=tmp)
         except subprocess.TimeoutExpired:
@@ -66,6 +82,10 @@ def runs(ps):
     for p in ps:
         d = f"{p['depth']['min']}:{p['depth']['max']}"
         out.append((f"{p['name']} own d{d} t1", p["name"], p["box"], d, ["--threads", "1", *off]))
+    for p in ps:  # the same meshes as the service writes them
+        d = f"{p['depth']['min']}:{p['depth']['max']}"
+        out.append((f"{p['name']} own d{d} wire", p["name"], p["box"], d,
+                    {"max_error": None, "output": {"attributes": WIRE_ATTRIBUTES}}))
     for name in SHIFTED:
         p = by_name[name]
         d = f"{p['depth']['min']}:{p['depth']['max']}"
