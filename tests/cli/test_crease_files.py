@@ -27,7 +27,6 @@ import json
 import math
 import os
 import shutil
-import struct
 import subprocess
 import sys
 import tempfile
@@ -35,6 +34,8 @@ import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from boxes import placements  # noqa: E402
+from test_curve_outputs import read_ply  # noqa: E402  (rows, faces, header of a binary PLY)
+from test_double_curve_normals import read_obj  # noqa: E402  (v, vn, faces of `f v//vn`)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
@@ -91,47 +92,6 @@ def triangle_side(vals):
     return side
 
 
-def read_ply(path):
-    """(rows [(x, y, z, nx, ny, nz)], faces [(a, b, c)], header) of the service's binary PLY
-    with float x y z nx ny nz first among its vertex properties."""
-    with open(path, "rb") as fh:
-        data = fh.read()
-    end = data.index(b"end_header\n") + len(b"end_header\n")
-    head = data[:end].decode()
-    nv = int(head.split("element vertex ")[1].split()[0])
-    nf = int(head.split("element face ")[1].split()[0])
-    vhead, fhead = head.split("element vertex")[1].split("element face")
-    assert vhead.split("property")[4].split()[1] == "nx"
-    vbytes = 4 * vhead.count("property float") + vhead.count("property uchar")
-    fextra = 4 * fhead.count("property uint") + fhead.count("property uchar")
-    rows = [struct.unpack_from("<6f", data, end + vbytes * i) for i in range(nv)]
-    at, faces = end + vbytes * nv, []
-    for _ in range(nf):
-        assert data[at] == 3
-        faces.append(struct.unpack_from("<3i", data, at + 1))
-        at += 13 + fextra
-    assert at == len(data)
-    return rows, faces, head
-
-
-def read_obj(path):
-    """(v count, vn count, faces [(a, b, c)] 0-based vertex indices)."""
-    nv = nn = 0
-    faces = []
-    with open(path) as fh:
-        for line in fh:
-            w = line.split()
-            if not w:
-                continue
-            if w[0] == "v":
-                nv += 1
-            elif w[0] == "vn":
-                nn += 1
-            elif w[0] == "f":
-                faces.append(tuple(int(c.split("/")[0]) - 1 for c in w[1:4]))
-    return nv, nn, faces
-
-
 def edge_counts(faces):
     """(edges, boundary edges, non-manifold edges, vertices used) of the faces, triangles
     with a repeated index left out (the stats' collapsed triangles)."""
@@ -178,7 +138,8 @@ class CreaseFilesTest(unittest.TestCase):
         diag = math.sqrt(sum((box[k + 3] - box[k]) ** 2 for k in range(3)))
         ply, stats = self.run_request(preset, box, 1e-2 * diag, "ply")
         mesh, a = stats["mesh"], stats["analysis"]
-        rows, faces, head = read_ply(ply)
+        with open(ply, "rb") as fh:
+            rows, faces, head = read_ply(fh.read())
         self.assertIn("property float mean_curvature\n", head)
         self.assertEqual(len(rows), mesh["vertices"], "one PLY row per mesh vertex")
         self.assertEqual(len(faces), mesh["triangles"])
@@ -219,10 +180,11 @@ class CreaseFilesTest(unittest.TestCase):
 
         obj, ostats = self.run_request(preset, box, 1e-2 * diag, "obj")
         self.assertEqual(ostats["mesh"]["vertices"], mesh["vertices"])
-        nv, nn, ofaces = read_obj(obj)
-        self.assertEqual(nv, mesh["vertices"], "one OBJ `v` per mesh vertex")
-        self.assertEqual(ofaces, faces, "the OBJ's faces are the PLY's")
-        self.assertGreater(nn, nv, "the crease sides' own `vn` lines")
+        v, vn, f = read_obj(obj)
+        self.assertEqual(len(v), mesh["vertices"], "one OBJ `v` per mesh vertex")
+        self.assertEqual([tuple(c[0] for c in t) for t in f], faces,
+                         "the OBJ's faces are the PLY's")
+        self.assertGreater(len(vn), len(v), "the crease sides' own `vn` lines")
         return crease
 
     def test_cube_minus_ball(self):

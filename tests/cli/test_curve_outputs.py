@@ -130,9 +130,9 @@ def angle_deg(u, v):
     return math.degrees(math.acos(max(-1.0, min(1.0, d))))
 
 
-def parse_ply_corners(data):
-    """[(corner positions, corner normals)] per face of a binary PLY with float x y z nx ny nz
-    first among its vertex properties."""
+def read_ply(data):
+    """(rows [(x, y, z, nx, ny, nz)], faces [(a, b, c)], header) of a binary PLY with float
+    x y z nx ny nz first among its vertex properties (the service's, with normals)."""
     head_end = data.index(b"end_header\n") + len(b"end_header\n")
     head = data[:head_end].decode()
     nv = int(head.split("element vertex ")[1].split()[0])
@@ -145,33 +145,28 @@ def parse_ply_corners(data):
     at, faces = head_end + vbytes * nv, []
     for _ in range(nt):
         assert data[at] == 3
-        ids = struct.unpack_from("<3i", data, at + 1)
-        faces.append(([list(rows[i][:3]) for i in ids], [list(rows[i][3:]) for i in ids]))
+        faces.append(struct.unpack_from("<3i", data, at + 1))
         at += 13 + fextra
     assert at == len(data)
-    return faces
+    return rows, faces, head
+
+
+def parse_ply_corners(data):
+    """[(corner positions, corner normals)] per face of read_ply's PLY."""
+    rows, faces, _ = read_ply(data)
+    return [([list(rows[i][:3]) for i in ids], [list(rows[i][3:]) for i in ids])
+            for ids in faces]
 
 
 def ply_rows(data):
     """The `element vertex` count of a PLY."""
-    return int(data[:data.index(b"end_header\n")].decode().split("element vertex ")[1].split()[0])
+    return len(read_ply(data)[0])
 
 
 def unused_ply_rows(data):
-    """Vertex rows of a binary PLY (float x y z nx ny nz first) that no face uses."""
-    head_end = data.index(b"end_header\n") + len(b"end_header\n")
-    head = data[:head_end].decode()
-    nv = int(head.split("element vertex ")[1].split()[0])
-    nt = int(head.split("element face ")[1].split()[0])
-    vhead, fhead = head.split("element vertex")[1].split("element face")
-    vbytes = 4 * vhead.count("property float") + vhead.count("property uchar")
-    fextra = 4 * fhead.count("property uint") + fhead.count("property uchar")
-    used, at = bytearray(nv), head_end + vbytes * nv
-    for _ in range(nt):
-        for i in struct.unpack_from("<3i", data, at + 1):
-            used[i] = 1
-        at += 13 + fextra
-    return nv - sum(used)
+    """Vertex rows of read_ply's PLY that no face uses."""
+    rows, faces, _ = read_ply(data)
+    return len(rows) - len({i for ids in faces for i in ids})
 
 
 def unused_obj_vertices(text):
