@@ -54,8 +54,9 @@ static double bound_of(rm_pass *p, uint32_t t, int s, const double y0[3], const 
     const double *e = p->brec + RM_BREC_REC * (size_t)t + 4 * s;
     if (e[0] == y0[0] && e[1] == y0[1] && e[2] == y0[2]) {
         double u = rm_brec_at(p, t, s, y);
+        p->brec_known++;
         if (ISM_RM_CBOUND_RATIO * u <= p->max_error)
-            return u;
+            return p->brec_skipped++, u;
     }
     return rm_bound_upper(p, y);
 }
@@ -98,6 +99,16 @@ bool rm_brec_fan_within(rm_pass *p, uint32_t v, const double x[3])
         }
     }
     return true;
+}
+
+bool rm_brec_pays(rm_pass *p)
+{
+    if (p->brec && p->brec_known >= RM_BREC_TRIAL &&
+        (double)p->brec_skipped < RM_BREC_MIN_SHARE * (double)p->brec_known) {
+        free(p->brec);
+        p->brec = NULL;
+    }
+    return p->brec != NULL;
 }
 
 double rm_brec_fan_known(const rm_pass *p, uint32_t v)
@@ -173,7 +184,7 @@ void rm_brec_offset_set(rm_pass *p, uint32_t v, const double x[3])
 bool rm_bound_fan(rm_pass *p, uint32_t v, const double *x)
 {
     double e = p->max_error;
-    if (p->brec ? rm_brec_fan_within(p, v, x) : rm_bound_fan_worst(p, v, x, e, e) <= e)
+    if (rm_brec_pays(p) ? rm_brec_fan_within(p, v, x) : rm_bound_fan_worst(p, v, x, e, e) <= e)
         return true;
     if (p->brec && rm_brec_fan_known(p, v) <= e)
         return false; /* the fan lies within the bound now: no farther than it is no gain */

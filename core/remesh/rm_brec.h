@@ -63,6 +63,20 @@ bool rm_bound_fan(rm_pass *p, uint32_t v, const double *x);
  * (rm_brec_moved). */
 bool rm_brec_fan_within(rm_pass *p, uint32_t v, const double x[3]);
 
+/* The records cost a lookup, a distance and the bookkeeping per point (~100 instructions),
+ * worth it where they spare an evaluation often enough: gyroid-ball (f with six sines and
+ * cosines, ~1,050 instructions an evaluation and gradient) takes 34% of the fan's points from
+ * them; the dual meshes of the sphere and torus (~100-400 instructions an evaluation, their
+ * balanced centroids near the bound) 6% and fewer, and the torus's pass grew from 86.1M to
+ * 91.2M instructions with them. Once RM_BREC_TRIAL points have been asked of a record that
+ * held them, and fewer than RM_BREC_MIN_SHARE of them were spared, the records are dropped
+ * for the rest of the pass (the decisions are the same either way). */
+#define RM_BREC_TRIAL 2048
+#define RM_BREC_MIN_SHARE 0.15
+/* True while the records are kept (rm_bound_fan asks before each check); frees them when
+ * they have not paid (above). */
+bool rm_brec_pays(rm_pass *p);
+
 /* The largest bound the records give v's fan where it is (INFINITY when one is not known). */
 double rm_brec_fan_known(const rm_pass *p, uint32_t v);
 
@@ -77,7 +91,8 @@ static inline void rm_brec_drop(rm_pass *p) { p->brec_keep_v = UINT32_MAX; }
  * 73,631 moves tried asked it where the vertex stood (97M instructions), though only its
  * own moves change it. */
 double rm_brec_offset(rm_pass *p, uint32_t v);
-/* v is to be at x: its offset there is kept (a lookup when x was just measured). */
+/* v is to be at x (rm_commit_move): its offset there is kept (a lookup when x was just
+ * measured; nothing without records). */
 void rm_brec_offset_set(rm_pass *p, uint32_t v, const double x[3]);
 
 #endif

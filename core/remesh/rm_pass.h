@@ -117,6 +117,7 @@ typedef struct rm_pass {
     uint32_t brec_keep_cap, brec_keep_v; /* its room; the vertex (UINT32_MAX: none kept) */
     double brec_keep_x[3];  /* where that vertex would go */
     double *offset;         /* 4 per vertex, with brec: a place and rm_bound_signed there */
+    size_t brec_known, brec_skipped; /* points whose slot held them, and of those not measured */
     size_t flips, moves, collapses, inserts;
 } rm_pass;
 

@@ -222,6 +222,7 @@ void rm_commit_move(rm_pass *p, uint32_t v, const double x[3], const double g[3]
     double side = mn[0] * g[0] + mn[1] * g[1] + mn[2] * g[2] < 0 ? -1 : 1;
     rm_cbound_moved(p, v, x);
     rm_brec_moved(p, v, x);
+    rm_brec_offset_set(p, v, x); /* (x was measured by the move's checks: the memo answers) */
     for (uint32_t i = 0; i < p->r.count[v]; i++)
         rm_shape_changed(p, p->r.vt[p->r.start[v] + i]);
     memcpy(pos, x, 3 * sizeof *x);
@@ -324,8 +325,6 @@ bool rm_relax_vertex(rm_pass *p, uint32_t v)
             (p->bounded && !rm_bound_gradient(p, x, g)) || /* the fan's measure at x: here */
             !fan_keeps_facing(p, v, x, g, &f) || !rm_centroids_stay(p, v, x))
             continue;
-        if (p->bounded)
-            rm_brec_offset_set(p, v, x); /* x measured above: the memo answers */
         rm_commit_move(p, v, x, g);
         return true;
     }
