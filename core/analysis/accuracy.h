@@ -19,8 +19,8 @@ typedef struct ism_an_distances {
 } ism_an_distances;
 void ism_an_distance_figures(double *dist, size_t n, ism_an_distances *out);
 
-/* Distances at triangle centroids and edge midpoints (after ism_an_implicit_figures, which
- * sets the singular threshold), evaluated on the threads of pool (NULL: the calling thread);
+/* Distances at triangle centroids and edge midpoints (after ism_an_implicit_figures with
+ * accuracy, which sets the singular threshold and the vertices' distances: false without), evaluated on the threads of pool (NULL: the calling thread);
  * false when out of memory. */
 bool ism_an_between_vertices(const ism_mesh *m, const ism_tape *f, const ism_an_edge_table *et,
                              ism_pool *pool, ism_analysis *a);

@@ -158,9 +158,10 @@ typedef struct ism_analysis {
     float *triangle_min_angle;        /* ntris entries (0 for degenerate triangles) */
 
     /* accuracy: distance estimates |f| / |∇f| at vertices, edge midpoints and triangle
-     * centroids (the mesh between its vertices), each with its maximum, mean and 99th
-     * percentile (the value at rank floor(0.99 (n - 1)) in ascending order), and the Newton
-     * projection distance. Points where |∇f| vanishes are left out (counted in
+     * centroids (the mesh between its vertices; there capped by the bound through the
+     * element's corners, |p − v| + v's distance: dist_bound.h), each with its maximum, mean
+     * and 99th percentile (the value at rank floor(0.99 (n - 1)) in ascending order), and the
+     * Newton projection distance. Points where |∇f| vanishes are left out (counted in
      * accuracy_skipped). The Newton distance iterates p -= f ∇f / |∇f|² (newton_steps times,
      * stopping early where ∇f vanishes) and measures how far p moved. */
     double max_dist_vertex, mean_dist_vertex, p99_dist_vertex;

@@ -26,7 +26,7 @@ typedef struct root_pt {
 static double midpoint_dist(ism_sampler *s, const double *a, const double *b)
 {
     double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
-    return ism_sample_dist(s, m);
+    return ism_sample_dist_between(s, m, (const double *[2]){a, b}, 2);
 }
 
 static double centroid_dist(ism_sampler *s, const double *a, const double *b, const double *c)
@@ -34,7 +34,7 @@ static double centroid_dist(ism_sampler *s, const double *a, const double *b, co
     double m[3];
     for (int k = 0; k < 3; k++)
         m[k] = (a[k] + b[k] + c[k]) / 3;
-    return ism_sample_dist(s, m);
+    return ism_sample_dist_between(s, m, (const double *[3]){a, b, c}, 3);
 }
 
 /* The polygon's centre moved toward f = 0 along ∇f, as triangulate.c fans from it. */

@@ -29,7 +29,7 @@ double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_t
         double c[3];
         for (int a = 0; a < 3; a++)
             c[a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
-        worst = fmax(worst, ism_sample_dist(s, c));
+        worst = fmax(worst, ism_sample_dist_between(s, c, v, 3));
         for (int k = 0; k < 3; k++) {
             /* a fan's or a quad's triangles come in order, each sharing a side with the
              * one before: that side's midpoint (the same bits either way round) was
@@ -38,7 +38,7 @@ double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_t
                 continue;
             const double *p = v[k], *q = v[(k + 1) % 3];
             double m[3] = {(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2};
-            worst = fmax(worst, ism_sample_dist(s, m));
+            worst = fmax(worst, ism_sample_dist_between(s, m, (const double *[2]){p, q}, 2));
         }
     }
     return worst;

@@ -225,11 +225,11 @@ static double corner_fan_error(ism_sampler *s, const ism_fpoint *q, size_t n, si
         double m[3];
         for (int k = 0; k < 3; k++)
             m[k] = (a[k] + b[k] + d[k]) / 3;
-        worst = fmax(worst, ism_sample_dist(s, m));
+        worst = fmax(worst, ism_sample_dist_between(s, m, (const double *[3]){a, b, d}, 3));
         if (i + 2 < n) { /* a-d is a diagonal */
             for (int k = 0; k < 3; k++)
                 m[k] = 0.5 * (a[k] + d[k]);
-            worst = fmax(worst, ism_sample_dist(s, m));
+            worst = fmax(worst, ism_sample_dist_between(s, m, (const double *[2]){a, d}, 2));
         }
     }
     return worst;
