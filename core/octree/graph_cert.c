@@ -1,8 +1,18 @@
 /* graph_cert.c — f strictly monotone along one direction over a node (graph_cert.h). */
 #include "core/octree/graph_cert.h"
 #include "core/eval/interval_ops.h"
+#include "core/expr/tape.h"
 
 #include <math.h>
+#include <string.h>
+
+/* Kinks (min, max or abs whose both branches the box allows) a box is certified across: each
+ * combination of their branches is one enclosure, 2^3 = 8 at most. The cube's corner holds
+ * two (max(max(|x|, |y|), |z|)), a crease of two solids one; more is a node that splits. */
+#define GRAPH_MAX_KINKS 3
+/* The branch bytes of a forced evaluation are on the stack: longer tapes are not certified
+ * across a kink (the CSG presets' tapes are 10-60 instructions). */
+#define GRAPH_MAX_TAPE 256
 
 /* The directional derivative must clear 0 by this fraction of the largest |∇f| the box
  * allows: the enclosure is rounded outward, so a bound of exactly 0 is never proof; a
@@ -10,24 +20,64 @@
  * slope proves the graph, this only keeps rounding out of the verdict. */
 #define MIN_SLOPE_FRACTION 1e-3
 
-bool ism_graph_from_enclosure(const ism_ivgrad *g)
+/* The sign (+1 or −1) with which ∇f · d clears 0 over the enclosure g of ∇f, 0 when it does
+ * not (or g is not finite). */
+static int slope_sign(const ism_ivgrad *g, const double d[3])
 {
-    double d[3], big = 0;
+    double big = 0, low = 0, high = 0;
     for (int a = 0; a < 3; a++) {
         if (!isfinite(g->d[a].lo) || !isfinite(g->d[a].hi))
-            return false;
-        d[a] = 0.5 * g->d[a].lo + 0.5 * g->d[a].hi;
+            return 0;
         big += fmax(fabs(g->d[a].lo), fabs(g->d[a].hi)) * fabs(d[a]);
-    }
-    /* the enclosure of ∇f · d over the box: each term's interval scaled by d[a] */
-    double low = 0, high = 0;
-    for (int a = 0; a < 3; a++) {
+        /* the enclosure of ∇f · d over the box: each term's interval scaled by d[a] */
         double p = g->d[a].lo * d[a], q = g->d[a].hi * d[a];
         low += fmin(p, q);
         high += fmax(p, q);
     }
     double margin = MIN_SLOPE_FRACTION * big;
-    return big > 0 && (low > margin || high < -margin);
+    return !(big > 0) ? 0 : low > margin ? 1 : high < -margin ? -1 : 0;
+}
+
+/* d += the midpoint of g's gradient enclosure. */
+static void add_midpoint(const ism_ivgrad *g, double d[3])
+{
+    for (int a = 0; a < 3; a++)
+        d[a] += 0.5 * g->d[a].lo + 0.5 * g->d[a].hi;
+}
+
+bool ism_graph_from_enclosure(const ism_ivgrad *g)
+{
+    double d[3] = {0, 0, 0};
+    add_midpoint(g, d);
+    return slope_sign(g, d) != 0;
+}
+
+/* Across the n kinks at tape positions at[0..n): ∇f's enclosure with every combination of
+ * their branches forced (interval_jet.h: each holds ∇f wherever those branches are the active
+ * ones, so together they hold it at every point of the box where f is differentiable), and
+ * one direction d (the sum of their midpoints) along which each clears 0 with the same sign.
+ * f is continuous and, along any line, piecewise smooth with its slopes in those enclosures:
+ * strictly monotone along d, one graph. */
+static bool graph_across_kinks(const ism_tape *t, ism_ivjet_ws *jet, const ism_interval box[3],
+                               const size_t *at, int n, uint64_t *intervals)
+{
+    uint8_t force[GRAPH_MAX_TAPE];
+    ism_ivgrad g[1 << GRAPH_MAX_KINKS];
+    memset(force, ISM_BRANCH_FREE, t->len);
+    double d[3] = {0, 0, 0};
+    for (int c = 0; c < 1 << n; c++) {
+        for (int k = 0; k < n; k++)
+            force[at[k]] = (uint8_t)(c >> k & 1 ? ISM_BRANCH_B : ISM_BRANCH_A);
+        (*intervals)++;
+        if (ism_eval_interval_grad(t, jet, box, force, NULL, &g[c]) != 0)
+            return false; /* a kink left free: the forcing did not take (or a misfit) */
+        add_midpoint(&g[c], d);
+    }
+    int sign = slope_sign(&g[0], d);
+    for (int c = 1; c < 1 << n && sign != 0; c++)
+        if (slope_sign(&g[c], d) != sign)
+            return false;
+    return sign != 0;
 }
 
 bool ism_graph_certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
@@ -40,7 +90,21 @@ bool ism_graph_certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3
         box[a] = iv(lo[a], hi[a]);
     ism_ivgrad g;
     (*intervals)++;
-    if (ism_eval_interval_grad(t, jet, box, NULL, NULL, &g) != 0)
-        return false; /* a kink in the box, or a workspace misfit */
-    return ism_graph_from_enclosure(&g);
+    if (t->len > GRAPH_MAX_TAPE) {
+        if (ism_eval_interval_grad(t, jet, box, NULL, NULL, &g) != 0)
+            return false; /* a kink in the box, or a workspace misfit */
+        return ism_graph_from_enclosure(&g);
+    }
+    uint8_t kinks[GRAPH_MAX_TAPE];
+    size_t nk = ism_eval_interval_grad(t, jet, box, NULL, kinks, &g);
+    if (nk == 0)
+        return ism_graph_from_enclosure(&g);
+    if (nk > GRAPH_MAX_KINKS)
+        return false; /* too many kinks (or a workspace misfit: (size_t)-1) */
+    size_t at[GRAPH_MAX_KINKS];
+    int n = 0;
+    for (size_t i = 0; i < t->len && n < (int)nk; i++)
+        if (kinks[i])
+            at[n++] = i;
+    return graph_across_kinks(t, jet, box, at, n, intervals);
 }

@@ -14,7 +14,11 @@
 
 /* True when ∇f(box) · d > 0 (or < 0) at every point of the box lo..hi, for d the midpoint
  * of ∇f's enclosure; false when that cannot be shown (the enclosure holds a direction
- * across d, f has a kink in the box, or jet does not fit t). *intervals counts the call. */
+ * across d, or jet does not fit t). Where f has kinks in the box (min, max, abs whose both
+ * branches the box allows; up to 3), ∇f is enclosed once for each combination of their
+ * branches and d is the sum of those midpoints: every enclosure must clear 0 along it, with
+ * one sign (a CSG crease of two branches each monotone along d: the cube's edges, whose
+ * nodes once split until 4 E across, plot_test.c). *intervals counts the evaluations. */
 bool ism_graph_certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
                          const double hi[3], uint64_t *intervals);
 

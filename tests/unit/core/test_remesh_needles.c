@@ -927,9 +927,12 @@ static const size_t cube_left[3] = {4, 35, 139};
  * their vertices up to ~2.3 bounds off the other surface on fans whose edges are far
  * shorter). The lattice cube-minus-ball box does not tell the two apart; the others fail
  * on the code before. Far from the goal (none under 10°): what blocks is the fans' shape,
- * not the bound (rm_crease_slide.c). */
+ * not the bound (rm_crease_slide.c). cube-minus-ball 171 / 159 / 177 since the octree's
+ * graph certificate crosses min/max kinks (graph_cert.c: crease cells stop where their
+ * measurement meets E, not at 4 bounds across): the pass's input has 26,136 / 26,974 /
+ * 26,998 triangles instead of 43,796 / 44,298 / 44,254, its cells beside the crease larger. */
 static const size_t crease_left_bounded[3] = {46, 79, 46};
-static const size_t cube_left_bounded[3] = {142, 137, 178};
+static const size_t cube_left_bounded[3] = {174, 162, 180};
 
 /* Runs the pass on f's mesh in box (under max_error E > 0: both, to depth.max 10) and checks
  * what crease_shape_of reads of it against left (per box, which + 1) and the topology
