@@ -125,6 +125,14 @@ bool pf_inside_box(const double a[3], const double b[3], const void *arg)
     return in;
 }
 
+double pf_default_error(const double box[6])
+{
+    double d2 = 0;
+    for (int a = 0; a < 3; a++)
+        d2 += (box[a + 3] - box[a]) * (box[a + 3] - box[a]);
+    return 1e-3 * sqrt(d2);
+}
+
 double pf_cell(const double box[6], int d)
 {
     double s = box[3] - box[0];

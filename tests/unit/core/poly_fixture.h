@@ -113,6 +113,10 @@ void pf_run_placed(const ism_tape *t, const double base[6], int d, int which, do
  * pf_count_edges, an edge of a hole, not of the cut by the box. */
 bool pf_inside_box(const double a[3], const double b[3], const void *arg);
 
+/* The service's default error bound for box: 1e-3 × its diagonal (proto/request.h's
+ * ISM_REQ_DEFAULT_ERROR_REL, written out: core tests do not include proto). */
+double pf_default_error(const double box[6]);
+
 /* Finest cell size of the box at depth d (the smallest side / 2^d). */
 double pf_cell(const double box[6], int d);
 

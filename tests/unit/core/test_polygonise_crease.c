@@ -220,10 +220,7 @@ static void check_crease_stops(const char *expr, double (*dist)(const double *),
         ism_poly_options o;
         pf_options(&o, base, 3, stop);
         pf_sweep_box(base, 10, w, o.box);
-        double diag = 0;
-        for (int a = 0; a < 3; a++)
-            diag += (o.box[a + 3] - o.box[a]) * (o.box[a + 3] - o.box[a]);
-        o.max_error = 1e-3 * sqrt(diag);
+        o.max_error = pf_default_error(o.box);
         ism_mesh ms, m10;
         ism_poly_stats ss, s10;
         pf_run_options(t, &o, &ms, &ss);

@@ -176,11 +176,11 @@ Test(thin, small_spheres_coarse_search)
  * (the paper's −14 touched it: a shift toward +x cut the cap off). */
 /* The mesh of the horn cyclide in box (depths 3..dmax, under max_error when > 0: 0 none), its
  * facts checked; what: the run's name in messages. */
-static void check_horn_in(const double box[6], int dmax, double max_error, const char *what)
+/* The service's mesh of the horn cyclide t in box, depths 3..dmax, max_error (0: none), on two
+ * threads with the hidden-piece search; m and l are initialised here. */
+static void horn_mesh(const ism_tape *t, const double box[6], int dmax, double max_error,
+                      ism_mesh *m, ism_locus *l, ism_poly_stats *ps, ism_conform_stats *cs)
 {
-    const test_surface *hs = &TEST_SURFACES[6];
-    cr_assert_str_eq(hs->name, "horn-cyclide");
-    ism_tape *t = test_surface_compile(hs);
     ism_poly_options po;
     ism_poly_options_default(&po);
     memcpy(po.box, box, sizeof po.box);
@@ -189,20 +189,29 @@ static void check_horn_in(const double box[6], int dmax, double max_error, const
     po.threads = 2;
     po.thin_search = true;
     po.max_error = max_error;
-    ism_mesh m;
-    ism_mesh_init(&m);
-    ism_locus l;
-    ism_locus_init(&l);
-    ism_poly_stats ps;
-    ism_conform_stats cs;
+    ism_mesh_init(m);
+    ism_locus_init(l);
     ism_surface_times times;
     ism_error err;
-    cr_assert_eq(ism_mesh_surface(t, &po, &m, &l, &ps, &cs, &times, &err), ISM_POLY_OK, "%s",
+    cr_assert_eq(ism_mesh_surface(t, &po, m, l, ps, cs, &times, &err), ISM_POLY_OK, "%s",
                  err.message);
+}
+
+static void check_horn_in(const double box[6], int dmax, double max_error, const char *what)
+{
+    const test_surface *hs = &TEST_SURFACES[6];
+    cr_assert_str_eq(hs->name, "horn-cyclide");
+    ism_tape *t = test_surface_compile(hs);
+    ism_mesh m;
+    ism_locus l;
+    ism_poly_stats ps;
+    ism_conform_stats cs;
+    horn_mesh(t, box, dmax, max_error, &m, &l, &ps, &cs);
     ism_analysis a;
     analyse(&m, t, &a);
     ism_locus_check chk;
-    cr_assert(ism_locus_check_mesh(&l, po.box, &m, &a, &chk, &err), "check: %s", err.message);
+    ism_error err;
+    cr_assert(ism_locus_check_mesh(&l, box, &m, &a, &chk, &err), "check: %s", err.message);
     cr_expect_eq(a.euler, 1, "%s: χ = %ld", what, a.euler);
     cr_expect_eq(a.components, 1, "%s: %zu components", what, a.components);
     cr_expect_eq(a.boundary_edges, 0, "%s: %zu boundary edges", what, a.boundary_edges);
@@ -349,27 +358,14 @@ Test(thin, horn_cyclide_meets_its_default_bound, .timeout = 120)
     cr_assert_str_eq(hs->name, "horn-cyclide");
     ism_tape *t = test_surface_compile(hs);
     for (int w = pf_first_box() - 1; w < 2; w++) {
-        ism_poly_options po;
-        ism_poly_options_default(&po);
-        pf_sweep_box(hs->box, 10, w, po.box);
-        po.min_depth = 3;
-        po.max_depth = 10;
-        po.threads = 2;
-        double diag = 0;
-        for (int k = 0; k < 3; k++)
-            diag += (po.box[k + 3] - po.box[k]) * (po.box[k + 3] - po.box[k]);
-        const double E = 1e-3 * sqrt(diag);
-        po.max_error = E;
+        double box[6];
+        pf_sweep_box(hs->box, 10, w, box);
+        const double E = pf_default_error(box);
         ism_mesh m;
-        ism_mesh_init(&m);
         ism_locus l;
-        ism_locus_init(&l);
         ism_poly_stats ps;
         ism_conform_stats cs;
-        ism_surface_times times;
-        ism_error err;
-        cr_assert_eq(ism_mesh_surface(t, &po, &m, &l, &ps, &cs, &times, &err), ISM_POLY_OK,
-                     "%s", err.message);
+        horn_mesh(t, box, 10, E, &m, &l, &ps, &cs);
         ism_analysis a;
         pf_analyse_plain(&m, t, &a);
         double measured = fmax(a.max_dist_midpoint, a.max_dist_centroid);
