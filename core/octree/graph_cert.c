@@ -90,17 +90,15 @@ bool ism_graph_certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3
         box[a] = iv(lo[a], hi[a]);
     ism_ivgrad g;
     (*intervals)++;
-    if (t->len > GRAPH_MAX_TAPE) {
-        if (ism_eval_interval_grad(t, jet, box, NULL, NULL, &g) != 0)
-            return false; /* a kink in the box, or a workspace misfit */
-        return ism_graph_from_enclosure(&g);
-    }
-    uint8_t kinks[GRAPH_MAX_TAPE];
-    size_t nk = ism_eval_interval_grad(t, jet, box, NULL, kinks, &g);
+    size_t nk = ism_eval_interval_grad(t, jet, box, NULL, NULL, &g);
     if (nk == 0)
         return ism_graph_from_enclosure(&g);
-    if (nk > GRAPH_MAX_KINKS)
-        return false; /* too many kinks (or a workspace misfit: (size_t)-1) */
+    if (nk > GRAPH_MAX_KINKS || t->len > GRAPH_MAX_TAPE)
+        return false; /* too many kinks (or a workspace misfit: (size_t)-1), a long tape */
+    /* where the kinks are: asked again, only of such a box (the bytes cost every box) */
+    uint8_t kinks[GRAPH_MAX_TAPE];
+    (*intervals)++;
+    ism_eval_interval_grad(t, jet, box, NULL, kinks, &g);
     size_t at[GRAPH_MAX_KINKS];
     int n = 0;
     for (size_t i = 0; i < t->len && n < (int)nk; i++)

@@ -471,6 +471,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     for (int t = 0; t < threads; t++) {
         ism_cell_ctx *cx = &p.ctx[t].c;
         cx->s.tape = f;
+        cx->s.dist_above = o->max_error;
         cx->tree = tree;
         cx->parent = parent;
         cx->breaks = &breaks;

@@ -1,10 +1,22 @@
 /* refine.c — measuring a leaf's emitted triangles and the split set (see refine.h). */
 #include "core/octree/refine.h"
+#include "core/util/dist_bound.h"
 #include "core/util/grow.h"
 
 #include <math.h>
 #include <stdbool.h>
 #include <stdlib.h>
+
+double ism_dist_capped(ism_sampler *s, const double p[3], double d, const double *const *v,
+                       int n)
+{
+    if (!(d * d > ism_nearest_corner_sq(p, v, n)))
+        return d;
+    double dv[ISM_DIST_CORNERS];
+    for (int k = 0; k < n; k++)
+        dv[k] = ism_sample_dist(s, v[k]);
+    return ism_dist_through_corners(d, p, v, dv, n);
+}
 
 /* Is a-b (vertex indices, either way round) a side of triangle t? */
 static bool has_side(const uint32_t *t, uint32_t a, uint32_t b)

@@ -5,6 +5,7 @@
 #ifndef ISM_REFINE_H
 #define ISM_REFINE_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdbool.h>
@@ -12,7 +13,21 @@
 #include "core/octree/octree.h"
 #include "core/octree/sampler.h"
 
-/* The largest |f| / |∇f| (ism_sample_dist) at the centroids and edge midpoints of out's
+/* ism_sample_dist at p, a point between the corners v[0..n) (n <= ISM_DIST_CORNERS) of a
+ * triangle or an edge the polygoniser would emit, capped by the bound through those corners
+ * (core/util/dist_bound.h) where the estimate is finite and passes s->dist_above: their own
+ * distances are evaluated only where it also passes the nearest corner, which near a smooth
+ * surface it never does (a chord sags far less than its length). */
+double ism_dist_capped(ism_sampler *s, const double p[3], double d, const double *const *v,
+                       int n);
+static inline double ism_sample_dist_between(ism_sampler *s, const double p[3],
+                                             const double *const *v, int n)
+{
+    double d = ism_sample_dist(s, p);
+    return d > s->dist_above && isfinite(d) ? ism_dist_capped(s, p, d, v, n) : d;
+}
+
+/* The largest distance (ism_sample_dist_between) at the centroids and edge midpoints of out's
  * triangles from first_tri on: +inf when one of them has no estimate (∇f vanishing where f
  * is not 0, or f not finite), so that leaf is split again. The measuring stops at the first
  * point beyond bound (its distance is returned): whether the triangles meet bound is the

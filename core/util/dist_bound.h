@@ -8,7 +8,7 @@
  * the surface by the canal form (an edge across the tube, half as long as it is 0.0158), and
  * its default bound 0.0554 read "not met". The smaller of the two figures is kept: the bound
  * is a proof, the estimate the usual figure; so a measurement never grows and only an
- * estimate shown too large by the bound shrinks. The polygoniser (sampler.h) and the
+ * estimate shown too large by the bound shrinks. The polygoniser (octree/refine.h) and the
  * analysis (accuracy.c) both measure this way. */
 #ifndef ISM_DIST_BOUND_H
 #define ISM_DIST_BOUND_H
