@@ -727,6 +727,36 @@ Test(singular_points, smooth_surfaces_leave_no_box)
     }
 }
 
+/* The proof that the torus (R 1, r 0.3) has no singular point is cheap, in the three
+ * placements at depth 7. ∇f vanishes on its circle of minima (f = −4R²r² ≈ −0.36, H ≈ 8 across
+ * the tube) and at the origin (f = (R² − r²)² ≈ 0.83), where only f ≠ 0 rules a cell out. The
+ * second-order form round the centre must carry ∇f(c)·(X − c); Taylor round a singular point
+ * p (f(p) = 0, ∇f(p) = 0: f(c) = ½ (c − p)ᵀ H (c − p)) does not, and drops those cells a
+ * level sooner. Measured: 3,491 / 1,755 / 1,794 interval evaluations and 1,481 / 745 / 761
+ * cells before that test, 2,315 / 1,167 / 1,162 and 969 / 489 / 489 with it: the bounds sit
+ * between, ~12% above today's counts. */
+Test(singular_points, smooth_torus_proof_is_cheap)
+{
+    const test_surface *s = &TEST_SURFACES[1];
+    cr_assert_str_eq(s->name, "torus");
+    ism_tape *t = test_surface_compile(s);
+    static const uint64_t intervals_max[3] = { 2600, 1300, 1300 }, visited_max[3] = { 1100, 560,
+                                                                                      560 };
+    for (int placement = 0; placement < 3; placement++) {
+        ism_locus l;
+        find(t, s->box, 7, placement, 1, &l);
+        cr_expect_eq(l.npoints, 0, "placement %d: %zu points", placement, l.npoints);
+        cr_expect_eq(l.nboxes, 0, "placement %d: %zu boxes", placement, l.nboxes);
+        cr_expect_lt(l.evals_interval, intervals_max[placement],
+                     "placement %d: %llu interval evaluations", placement,
+                     (unsigned long long)l.evals_interval);
+        cr_expect_lt(l.boxes_visited, visited_max[placement], "placement %d: %llu cells",
+                     placement, (unsigned long long)l.boxes_visited);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
+
 /* A deadline already past: incomplete, saying so. */
 Test(singular_points, deadline)
 {
