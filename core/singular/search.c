@@ -402,11 +402,11 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
     ism_interval bx[8], by[8], bz[8], f[8];
     scell kids[8];
     uint32_t half = 1u << (s->depth - (int)p->level - 1);
-    for (int m = 0; m < 8; m++) {
-        kids[m] = *p;
+    for (int m = 0; m < 8; m++) { /* the model is filled by classify, not copied */
         kids[m].level = p->level + 1;
+        kids[m].modelled = false;
         for (int k = 0; k < 3; k++)
-            kids[m].i[k] += (m >> k) & 1u ? half : 0u;
+            kids[m].i[k] = p->i[k] + ((m >> k) & 1u ? half : 0u);
         ism_interval x[3];
         cell_box(s, &kids[m], x);
         bx[m] = x[0];
