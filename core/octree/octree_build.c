@@ -234,6 +234,13 @@ typedef struct thin_tally {
     int searches, undecided;
 } thin_tally;
 
+/* One more search of verdict v; probe: by Newton probes only, whose UNDECIDED is no proof. */
+static void tally_add(thin_tally *t, enum ism_thin_verdict v, bool probe)
+{
+    t->searches++;
+    t->undecided += v == ISM_THIN_UNDECIDED && !probe;
+}
+
 /* probe: Newton probes only (ism_thin_probe), as the preview's coarse search everywhere. */
 static enum ism_thin_verdict search(const build *b, thread_state *th, const ism_tape *sub,
                                     const double lo[3], const double hi[3], int sign, bool probe,
@@ -245,8 +252,7 @@ static enum ism_thin_verdict search(const build *b, thread_state *th, const ism_
     enum ism_thin_verdict v = probe ? ism_thin_probe(&th->s, lo, hi, sign, NULL)
                                     : ism_thin_search(&th->s, &th->thin, lo, hi, sign, NULL);
     th->s.tape = saved;
-    tally->searches++;
-    tally->undecided += v == ISM_THIN_UNDECIDED && !probe;
+    tally_add(tally, v, probe);
     return v;
 }
 
@@ -493,8 +499,7 @@ static uint8_t hides_piece(build *b, thread_state *th, const ism_node *nd, const
         if (memo && ism_face_memo_get(&th->faces, where, face_what, &kept)) {
             if (kept != FACE_CLEAR) { /* counted as the search it stands for */
                 v = (enum ism_thin_verdict)kept;
-                tally.searches++;
-                tally.undecided += v == ISM_THIN_UNDECIDED && !b->p->thin_coarse;
+                tally_add(&tally, v, probe || b->p->thin_coarse);
             }
             continue;
         }
