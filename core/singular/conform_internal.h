@@ -159,13 +159,13 @@ void cf_sort_u32(uint32_t *a, size_t n);
 bool cf_ctx_prepare(cf_ctx *c);
 void cf_ctx_free(cf_ctx *c);
 bool cf_add_triangle(cf_ctx *c, uint32_t a, uint32_t b, uint32_t d);
-uint32_t cf_add_vertex(cf_ctx *c, const double p[3], bool singular);
-/* cf_ctx.singular's bits. */
+/* cf_ctx.singular's bits: SINGULAR, a vertex with no normal (also set where ∇f gives none);
+ * PINNED, a vertex (made by the pass) that stays where it is: the untangling
+ * (conform_refine.c) moves no such vertex. */
 #define CF_VERTEX_SINGULAR 1
 #define CF_VERTEX_PINNED 2
-/* Vertex v (made by the pass) stays where it is: the untangling (conform_refine.c) moves no
- * such vertex. */
-void cf_pin_vertex(cf_ctx *c, uint32_t v);
+/* A vertex at p with those bits (false / true: 0 / CF_VERTEX_SINGULAR). */
+uint32_t cf_add_vertex(cf_ctx *c, const double p[3], uint8_t flags);
 /* Drops the triangles from ntris and the vertices from nverts on (appended by a surgery
  * that failed) from the mesh, its incidence and its grid. */
 void cf_truncate(cf_ctx *c, size_t ntris, size_t nverts);
@@ -367,12 +367,11 @@ void cf_pinch_ring_point(cf_ctx *c, const cf_pinch *ch, const double q[3], doubl
 int cf_pinch_ears(cf_ctx *c, const cf_pinch *ends, const cf_polyline *pl, cf_loop *l,
                   double *u, double *foot, int *cid, double reach, double rho);
 /* The rim points the rings of loop l are scaled from (q: 3 per vertex): each vertex's
- * position, but the nearer end's of a rim edge that crosses the fold of one pinch chart
- * within reach (cf_pinch_near of the feet cid, u) is the edge's point on the fold
+ * position, but the nearer end's of a rim edge that crosses the fold of the pinch chart
+ * ch[i] of both its ends (NULL: none) is the edge's point on the fold, on_fold[i] then true
  * (conform_pinch.c). False when out of memory. */
-bool cf_pinch_rim_points(cf_ctx *c, const cf_pinch *ends, const cf_polyline *pl,
-                         const cf_loop *l, const double *u, const int *cid, double reach,
-                         double *q);
+bool cf_pinch_rim_points(cf_ctx *c, const cf_loop *l, const cf_pinch *const *ch, double *q,
+                         bool *on_fold);
 
 /* ---- conform_zip.c: zipping loops to a curve ---- */
 /* Refills the hole loops cut around a group of npl double curves (meeting at shared end

@@ -252,22 +252,17 @@ void cf_set_normal(cf_ctx *c, uint32_t v)
         c->m->normal[3 * (size_t)v + k] = n[k];
 }
 
-uint32_t cf_add_vertex(cf_ctx *c, const double p[3], bool singular)
+uint32_t cf_add_vertex(cf_ctx *c, const double p[3], uint8_t flags)
 {
     if (!cf_grow((void **)&c->singular, &c->cap_singular, c->m->nverts + 1, 1))
         return CF_NONE;
     float n[3] = {0, 0, 0};
-    if (!singular && !normal_at(c, p, n))
-        singular = true;
+    if (!(flags & CF_VERTEX_SINGULAR) && !normal_at(c, p, n))
+        flags |= CF_VERTEX_SINGULAR;
     uint32_t v = ism_mesh_add_vertex(c->m, p, n);
     if (v != CF_NONE)
-        c->singular[v] = singular ? CF_VERTEX_SINGULAR : 0;
+        c->singular[v] = flags;
     return v;
-}
-
-void cf_pin_vertex(cf_ctx *c, uint32_t v)
-{
-    c->singular[v] |= CF_VERTEX_PINNED;
 }
 
 double cf_triangle_longest_edge2(const ism_mesh *m, uint32_t tri)

@@ -272,22 +272,18 @@ done:
  * small fraction of a cell from a neighbour's where the rim crossed the fold near an end:
  * Steiner, depth 6, irrational box, 523 against 417 triangles under 10° within 4 cells of
  * a pinch point, 335 before; the quality pass left 11 needles where 7 are allowed). */
-bool cf_pinch_rim_points(cf_ctx *c, const cf_pinch *ends, const cf_polyline *pl,
-                         const cf_loop *l, const double *u, const int *cid, double reach,
-                         double *q)
+bool cf_pinch_rim_points(cf_ctx *c, const cf_loop *l, const cf_pinch *const *ch, double *q,
+                         bool *on_fold)
 {
     size_t n = l->n, ne = l->closed ? n : n - 1;
     double *x = malloc(2 * (n + 1) * sizeof *x); /* per vertex: xn, xe in its chart */
-    const cf_pinch **ch = malloc((n + 1) * sizeof *ch);
-    if (!x || !ch) {
-        free(x), free((void *)ch);
+    if (!x)
         return false;
-    }
     for (size_t i = 0; i < n; i++) {
         const double *p = c->m->pos + 3 * (size_t)l->v[i];
         for (int d = 0; d < 3; d++)
             q[3 * i + d] = p[d];
-        ch[i] = cf_pinch_near(ends, pl, cid[i], u[i], reach);
+        on_fold[i] = false;
         if (ch[i]) {
             double h;
             frame(ch[i], p, &h, &x[2 * i], &x[2 * i + 1]);
@@ -303,8 +299,8 @@ bool cf_pinch_rim_points(cf_ctx *c, const cf_pinch *ends, const cf_polyline *pl,
         size_t k = w < 0.5 ? i : j;
         for (int d = 0; d < 3; d++)
             q[3 * k + d] = a[d] + w * (b[d] - a[d]);
+        on_fold[k] = true;
     }
     free(x);
-    free((void *)ch);
     return true;
 }

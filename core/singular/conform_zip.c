@@ -196,27 +196,28 @@ static bool zip_open_seq(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv,
                    curve_index_near(pl, U[len - 1]));
 }
 
-/* The loop's rings (rings of the vertices beside a pinch point in its chart when ends is not
- * NULL: u[i] then becomes the parameter of the innermost ring's vertex), scaled from the rim
- * points q (cf_pinch_rim_points). */
+/* The loop's rings (rings of the vertices beside a pinch point in its chart; u[i] then
+ * becomes the parameter of the innermost ring's vertex), scaled from the rim points
+ * (cf_pinch_rim_points). */
 static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot, const cf_polyline *pl,
-                           const cf_pinch *ends, const int *cid, double *u, double rho,
-                           const double *q)
+                           const cf_pinch *ends, const int *cid, double *u, double rho)
 {
     const cf_pinch **ch = malloc(l->n * sizeof *ch);
-    if (!ch)
-        return NULL;
+    double *q = malloc(3 * l->n * sizeof *q);
+    bool *on_fold = malloc(l->n * sizeof *on_fold);
+    uint32_t *rows = NULL;
+    if (!ch || !q || !on_fold)
+        goto done;
     for (size_t i = 0; i < l->n; i++)
-        ch[i] = ends ? cf_pinch_near(ends, pl, cid[i], u[i], CF_PINCH_REACH_RHO * rho) : NULL;
+        ch[i] = cf_pinch_near(ends, pl, cid[i], u[i], CF_PINCH_REACH_RHO * rho);
+    if (!cf_pinch_rim_points(c, l, ch, q, on_fold))
+        goto done;
     double width = 0;
     for (size_t i = 0; i < l->n; i++)
         width += ism_dist3(q + 3 * i, foot + 3 * i) / (double)l->n;
     int rings = cf_ring_count(width, cf_loop_mean_edge(c, l));
-    uint32_t *rows = malloc(2 * l->n * sizeof *rows);
-    if (!rows) {
-        free((void *)ch);
-        return NULL;
-    }
+    if (!(rows = malloc(2 * l->n * sizeof *rows)))
+        goto done;
     uint32_t *outer = rows, *inner = rows + l->n;
     for (size_t i = 0; i < l->n; i++)
         outer[i] = l->v[i];
@@ -232,26 +233,24 @@ static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot, cons
                     p[k] = ft[k] + t * (v[k] - ft[k]);
                 cf_project(c, p, 0.5 * t * ism_dist3(v, ft));
             }
-            if ((inner[i] = cf_add_vertex(c, p, false)) == CF_NONE) {
+            /* a ring on the fold (cf_pinch_rim_points) stays there (pinned): its vertex
+             * normals (∇f along the curve's tangent) are square to both sheets' triangles,
+             * and the untangling read those as turned and moved its vertices onto a sheet,
+             * which joined the two sheets again (Steiner, depth 5, +1e-3 box, conform/
+             * steiner_roman_pinch_and_triple_points: a centroid 0.31 cell off f = 0 beside a
+             * pinch point, 0.20 pinned and 0.25 before the rings on the fold) */
+            inner[i] = cf_add_vertex(c, p, on_fold[i] ? CF_VERTEX_PINNED : 0);
+            if (inner[i] == CF_NONE) {
                 free(rows);
-                free((void *)ch);
-                return NULL;
+                rows = NULL;
+                goto done;
             }
-            /* a ring on the fold (cf_pinch_rim_points) stays there: its vertex normals
-             * (∇f along the curve's tangent) are square to both sheets' triangles, and the
-             * untangling read those as turned and moved its vertices onto a sheet, which
-             * joined the two sheets again (Steiner, depth 5, +1e-3 box, conform/steiner_
-             * roman_pinch_and_triple_points: a centroid 0.31 cell off f = 0 beside a pinch
-             * point, 0.20 pinned and 0.25 before the rings on the fold) */
-            const double *rim = c->m->pos + 3 * (size_t)l->v[i];
-            if (ch[i] && (v[0] != rim[0] || v[1] != rim[1] || v[2] != rim[2]))
-                cf_pin_vertex(c, inner[i]);
             c->st->vertices_added++;
         }
         if (!cf_ladder(c, outer, inner, l->n, l->closed)) {
             free(rows);
-            free((void *)ch);
-            return NULL;
+            rows = NULL;
+            goto done;
         }
         uint32_t *t2 = outer;
         outer = inner;
@@ -264,7 +263,10 @@ static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot, cons
         if (ch[i] && rings > 0)
             u[i] = cf_pinch_param(ch[i], &pl[cid[i]], c->m->pos + 3 * (size_t)outer[i]);
     }
+done:
     free((void *)ch);
+    free(q);
+    free(on_fold);
     return rows;
 }
 
@@ -633,10 +635,7 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
             /* every loop's rings beside a pinch point are made in its chart (a loop along
              * several curves too, zipped by its rim's feet: each of Steiner's four loops
              * passes three pinch points), those below a rim edge across the fold on it */
-            double *q = malloc(3 * l->n * sizeof *q);
-            ok = q && cf_pinch_rim_points(c, ends, pl, l, u, cid, CF_PINCH_REACH_RHO * rho, q);
-            uint32_t *row = ok ? make_rows(c, l, foot, pl, ends, cid, u, rho, q) : NULL;
-            free(q);
+            uint32_t *row = make_rows(c, l, foot, pl, ends, cid, u, rho);
             ok = row && (multi ? zip_multi(c, pl, cv, l, cid, row, rho)
                                : zip_loop(c, &pl[cid[0]], cv[cid[0]], l, u, row, rho));
             free(row);
