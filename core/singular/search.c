@@ -216,10 +216,21 @@ static bool some_row_excludes(const ism_ivgrad *at, const ism_ivjet *j, const is
     return false;
 }
 
+/* The tests on a jet j over a cell holding x (x's own, or its parent's: ξ in x lies in the
+ * parent too, and interval arithmetic is inclusion-monotone, so a test the parent's wider
+ * jet passes the cell's own passes as well): a row of ∇f's mean-value form, Taylor round a
+ * singular point, f's second-order form. */
+static bool jet_excludes(const double c[3], const ism_ivgrad *gc, const ism_ivjet *j,
+                         const ism_interval x[3], const ism_interval dx[3])
+{
+    return some_row_excludes(gc, j, dx) || f_off_singular_taylor(c, gc, j, x)
+           || !holds0(second_order_f(c, gc, j, x));
+}
+
 /* The tests that need f smooth on the cell: mean-value forms of F and ∇F, the second-order
  * form of F, and Krawczyk. */
 static int smooth_tests(const search *s, worker *w, const ism_interval x[3], const ism_ivgrad *g,
-                        scell *cell)
+                        const scell *p, scell *cell)
 {
     double c[3];
     ism_interval cx[3], dx[3];
@@ -233,14 +244,12 @@ static int smooth_tests(const search *s, worker *w, const ism_interval x[3], con
     w->evals_interval++;
     if (!holds0(add_linear(gc.v, g->d, dx)))
         return EXCLUDED;
+    if (p && p->modelled && jet_excludes(c, &gc, &p->m.box, x, dx))
+        return EXCLUDED; /* the parent's jet: no evaluation */
     ism_ivjet j;
     ism_eval_interval_jet(s->t, w->jw, x, NULL, NULL, &j);
     w->evals_jet++;
-    if (some_row_excludes(&gc, &j, dx))
-        return EXCLUDED;
-    if (f_off_singular_taylor(c, &gc, &j, x))
-        return EXCLUDED;
-    if (!holds0(second_order_f(c, &gc, &j, x)))
+    if (jet_excludes(c, &gc, &j, x, dx))
         return EXCLUDED;
     int k = ism_krawczyk(x, c, gc.d, j.h, NULL);
     if (k == ISM_KRAWCZYK_EMPTY)
@@ -277,7 +286,7 @@ static int classify(const search *s, worker *w, const ism_interval x[3], ism_int
     size_t nk = ism_eval_interval_grad(s->t, w->jw, x, NULL, w->kinks, &g);
     w->evals_interval++;
     if (nk == 0)
-        return grad_may_vanish(g.d) ? smooth_tests(s, w, x, &g, cell) : EXCLUDED;
+        return grad_may_vanish(g.d) ? smooth_tests(s, w, x, &g, p, cell) : EXCLUDED;
     if (nk > SEARCH_MAX_SPLIT)
         return SURVIVES;
     return some_piece_may_vanish(s, w, x, nk) ? SURVIVES : EXCLUDED;
