@@ -732,16 +732,18 @@ Test(singular_points, smooth_surfaces_leave_no_box)
  * the tube) and at the origin (f = (R² − r²)² ≈ 0.83), where only f ≠ 0 rules a cell out. The
  * second-order form round the centre must carry ∇f(c)·(X − c); Taylor round a singular point
  * p (f(p) = 0, ∇f(p) = 0: f(c) = ½ (c − p)ᵀ H (c − p)) does not, and drops those cells a
- * level sooner. Measured: 3,491 / 1,755 / 1,794 interval evaluations and 1,481 / 745 / 761
- * cells before that test, 2,315 / 1,167 / 1,162 and 969 / 489 / 489 with it: the bounds sit
- * between, ~12% above today's counts. */
+ * level sooner: 1,481 / 745 / 761 cells before it, 969 / 489 / 489 with it. A child's
+ * gradient rows and jet tests first on its parent's model (no evaluation) then cut interval
+ * evaluations 3,491 / 1,755 / 1,794 (old) → 2,315 / 1,167 / 1,162 (Taylor test alone) →
+ * 1,715 / 867 / 858, and jets 364 / 196 / 190 (parent rows) → 188 / 108 / 110 (parent jet).
+ * Each bound sits ~10-25% above today's count and below the step before. */
 Test(singular_points, smooth_torus_proof_is_cheap)
 {
     const test_surface *s = &TEST_SURFACES[1];
     cr_assert_str_eq(s->name, "torus");
     ism_tape *t = test_surface_compile(s);
-    static const uint64_t intervals_max[3] = { 2600, 1300, 1300 }, visited_max[3] = { 1100, 560,
-                                                                                      560 };
+    static const uint64_t intervals_max[3] = { 1900, 960, 960 }, jets_max[3] = { 240, 135, 135 },
+                          visited_max[3] = { 1100, 560, 560 };
     for (int placement = 0; placement < 3; placement++) {
         ism_locus l;
         find(t, s->box, 7, placement, 1, &l);
@@ -750,6 +752,8 @@ Test(singular_points, smooth_torus_proof_is_cheap)
         cr_expect_lt(l.evals_interval, intervals_max[placement],
                      "placement %d: %llu interval evaluations", placement,
                      (unsigned long long)l.evals_interval);
+        cr_expect_lt(l.evals_jet, jets_max[placement], "placement %d: %llu jets", placement,
+                     (unsigned long long)l.evals_jet);
         cr_expect_lt(l.boxes_visited, visited_max[placement], "placement %d: %llu cells",
                      placement, (unsigned long long)l.boxes_visited);
         ism_locus_free(&l);
