@@ -160,8 +160,8 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
     p.bounded = o->max_error > 0;
     found k = {0};
     if (ok && (!keep_found(&k, m) ||
-               (!p.bounded && !o->measure_all_centroids && !rm_cbound_open(&p)) ||
-               (p.bounded && !o->measure_all_centroids && !rm_brec_open(&p))))
+               (!o->measure_all_centroids &&
+                !(p.bounded ? rm_brec_open(&p) : rm_cbound_open(&p)))))
         ok = false;
     /* under a bound a move's vertex is measured by keep_offset, its fan's check and the
        offset kept (rm_relax.c), a flip's centroids again by the moves beside it: the

@@ -5,12 +5,35 @@
 #include "core/remesh/rm_bound.h"
 #include "core/remesh/rm_cbound.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 /* What the fan's check found, per triangle of the fan in slot order: the new centroid and
  * its bound, the new midpoint of the edge from v to the next corner and its bound. */
 #define KEEP_REC 8
+
+/* Points per triangle: the centroid (slot 0), then the midpoint of the edge from corner j to
+ * corner j + 1 (slot 1 + j); each a place and a bound. */
+#define RM_BREC_POINTS 4
+#define RM_BREC_REC (4 * RM_BREC_POINTS)
+
+/* The bound slot s of triangle t gives at x: its bound plus x's distance from its point
+ * (INFINITY when nothing is kept there). */
+static double rm_brec_at(const rm_pass *p, uint32_t t, int s, const double x[3])
+{
+    const double *e = p->brec + RM_BREC_REC * (size_t)t + 4 * s;
+    double d = sqrt((x[0] - e[0]) * (x[0] - e[0]) + (x[1] - e[1]) * (x[1] - e[1]) +
+                    (x[2] - e[2]) * (x[2] - e[2]));
+    return e[3] + d;
+}
+
+/* Slot s of triangle t: x lies within u of f = 0. */
+static void rm_brec_set(rm_pass *p, uint32_t t, int s, const double x[3], double u)
+{
+    double *e = p->brec + RM_BREC_REC * (size_t)t + 4 * s;
+    e[0] = x[0], e[1] = x[1], e[2] = x[2], e[3] = u;
+}
 
 bool rm_brec_open(rm_pass *p)
 {

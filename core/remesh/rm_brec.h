@@ -20,37 +20,9 @@
 
 #include "core/remesh/rm_pass.h"
 
-#include <math.h>
-
-/* Points per triangle: the centroid (slot 0), then the midpoint of the edge from corner j to
- * corner j + 1 (slot 1 + j); each a place and a bound. */
-#define RM_BREC_POINTS 4
-#define RM_BREC_REC (4 * RM_BREC_POINTS)
-
 /* Room for every triangle and vertex the pass may hold (r.cap_tris, r.cap_verts), nothing
  * known yet. False when out of memory. rm_pass_close frees it. */
 bool rm_brec_open(rm_pass *p);
-
-/* The bound slot s of triangle t gives at x: its bound plus x's distance from its point
- * (INFINITY when nothing is kept there, or without records). */
-static inline double rm_brec_at(const rm_pass *p, uint32_t t, int s, const double x[3])
-{
-    if (!p->brec)
-        return INFINITY;
-    const double *e = p->brec + RM_BREC_REC * (size_t)t + 4 * s;
-    double d = sqrt((x[0] - e[0]) * (x[0] - e[0]) + (x[1] - e[1]) * (x[1] - e[1]) +
-                    (x[2] - e[2]) * (x[2] - e[2]));
-    return e[3] + d;
-}
-
-/* Slot s of triangle t: x lies within u of f = 0. */
-static inline void rm_brec_set(rm_pass *p, uint32_t t, int s, const double x[3], double u)
-{
-    if (p->brec) {
-        double *e = p->brec + RM_BREC_REC * (size_t)t + 4 * s;
-        e[0] = x[0], e[1] = x[1], e[2] = x[2], e[3] = u;
-    }
-}
 
 /* True when v's fan with v at x lies within max_error (through the records when they are
  * open, else measured: rm_bound_fan_worst), or no farther than with v where it is (a fan the
