@@ -44,9 +44,10 @@ bool rm_brec_open(rm_pass *p)
     p->brec_keep_v = UINT32_MAX;
     if (!p->brec || !p->offset)
         return false;
-    for (size_t i = 0; i < RM_BREC_REC * n; i++) /* no point: every bound infinite */
-        p->brec[i] = i % 4 == 3 ? INFINITY : 0;
-    for (size_t i = 0; i < 4 * nv; i++) /* no point: measured when asked */
+    /* no point (NaN matches no place): measured when asked */
+    for (size_t i = 0; i < RM_BREC_REC * n; i++)
+        p->brec[i] = NAN;
+    for (size_t i = 0; i < 4 * nv; i++)
         p->offset[i] = NAN;
     return true;
 }
