@@ -41,7 +41,7 @@ bool rm_brec_open(rm_pass *p)
     p->brec = malloc(RM_BREC_REC * n * sizeof *p->brec);
     size_t nv = p->r.cap_verts ? p->r.cap_verts : 1;
     p->offset = malloc(4 * nv * sizeof *p->offset);
-    p->brec_keep_v = UINT32_MAX;
+    p->cen_keep_v = UINT32_MAX;
     if (!p->brec || !p->offset)
         return false;
     /* no point (NaN matches no place): measured when asked */
@@ -52,22 +52,23 @@ bool rm_brec_open(rm_pass *p)
     return true;
 }
 
-/* Room for what v's fan check finds (KEEP_REC per triangle), kept for v at x; NULL when out
- * of memory (nothing is kept then: the records stay as they were). */
+/* Room for what v's fan check finds (KEEP_REC per triangle, in cen_keep: a pass under a bound
+ * has no rm_cbound records), kept for v at x; NULL when out of memory (nothing is kept then:
+ * the records stay as they were). */
 static double *keep_for(rm_pass *p, uint32_t v, const double x[3])
 {
     uint32_t n = p->r.count[v];
-    p->brec_keep_v = UINT32_MAX;
-    if (n > p->brec_keep_cap) {
-        double *k = realloc(p->brec_keep, 2 * KEEP_REC * (size_t)n * sizeof *k);
+    rm_brec_drop(p);
+    if (n > p->cen_keep_cap) { /* room counted in triangles, as rm_cbound_fan's */
+        double *k = realloc(p->cen_keep, 2 * KEEP_REC * (size_t)n * sizeof *k);
         if (!k)
             return NULL;
-        p->brec_keep = k;
-        p->brec_keep_cap = 2 * n;
+        p->cen_keep = k;
+        p->cen_keep_cap = 2 * n;
     }
-    p->brec_keep_v = v;
-    memcpy(p->brec_keep_x, x, sizeof p->brec_keep_x);
-    return p->brec_keep;
+    p->cen_keep_v = v;
+    memcpy(p->cen_keep_x, x, sizeof p->cen_keep_x);
+    return p->cen_keep;
 }
 
 /* The bound at y, which lies where slot s of triangle t's point was before the move (at
@@ -159,14 +160,14 @@ double rm_brec_fan_known(const rm_pass *p, uint32_t v)
 void rm_brec_moved(rm_pass *p, uint32_t v, const double x[3])
 {
     const rm_mesh *r = &p->r;
-    if (!p->brec || p->brec_keep_v != v || memcmp(p->brec_keep_x, x, sizeof p->brec_keep_x))
+    if (!p->brec || p->cen_keep_v != v || memcmp(p->cen_keep_x, x, sizeof p->cen_keep_x))
         return;
     uint32_t n = r->count[v];
     for (uint32_t i = 0; i < n; i++) {
         uint32_t t = r->vt[r->start[v] + i];
         const uint32_t *c = r->m->tri + 3 * (size_t)t;
         int k = c[0] == v ? 0 : c[1] == v ? 1 : 2;
-        const double *w = p->brec_keep + KEEP_REC * i;
+        const double *w = p->cen_keep + KEEP_REC * i;
         rm_brec_set(p, t, 0, w, w[3]);
         rm_brec_set(p, t, 1 + k, w + 4, w[7]);
         /* the edge from the corner before v: the next edge of the fan's triangle whose next
@@ -177,7 +178,7 @@ void rm_brec_moved(rm_pass *p, uint32_t v, const double x[3])
             const uint32_t *d = r->m->tri + 3 * (size_t)u;
             int l = d[0] == v ? 0 : d[1] == v ? 1 : 2;
             if (d[(l + 1) % 3] == prev) {
-                const double *z = p->brec_keep + KEEP_REC * j;
+                const double *z = p->cen_keep + KEEP_REC * j;
                 rm_brec_set(p, t, 1 + (k + 2) % 3, z + 4, z[7]);
                 break;
             }

@@ -55,7 +55,7 @@ double rm_brec_fan_known(const rm_pass *p, uint32_t v);
 /* v moves to x: the records of its fan take what rm_brec_fan_within found for x. */
 void rm_brec_moved(rm_pass *p, uint32_t v, const double x[3]);
 /* What rm_brec_fan_within found is for no move. */
-static inline void rm_brec_drop(rm_pass *p) { p->brec_keep_v = UINT32_MAX; }
+static inline void rm_brec_drop(rm_pass *p) { p->cen_keep_v = UINT32_MAX; }
 
 /* The signed distance rm_bound_signed measures at v's place: as kept for that place
  * (rm_brec_offset_set), bit for bit what it would measure (f is pure), or measured. A

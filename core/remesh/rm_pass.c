@@ -41,7 +41,6 @@ bool rm_pass_close(rm_pass *p, size_t nverts_before, size_t ntris_before,
     free(p->cen_ref);
     free(p->cen_keep);
     free(p->brec);
-    free(p->brec_keep);
     free(p->offset);
     ism_eval_ws_free(p->ws);
     memset(p, 0, sizeof *p);

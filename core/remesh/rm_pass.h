@@ -106,16 +106,15 @@ typedef struct rm_pass {
     double *cen_ref;        /* RM_CBOUND_REC per triangle, without an error bound
                                (rm_cbound.h): a point last measured at its centroid, the
                                distance there (INFINITY: none) and |∇f| there */
-    double *cen_keep;       /* a fan's centroids measured for a move not yet made */
+    double *cen_keep;       /* what a fan's check found for a move not yet made:
+                               RM_CBOUND_REC or, under a bound, KEEP_REC (rm_brec.c) per
+                               triangle */
     uint32_t cen_keep_cap, cen_keep_v; /* its room; the vertex (UINT32_MAX: none kept) */
     double cen_keep_x[3];   /* where that vertex would go */
     double cen_gradient_min; /* |∇f| below which a record bounds nothing (rm_cbound.h) */
     double *brec;           /* RM_BREC_REC per triangle, under an error bound in the quality
-                               pass (rm_brec.h): its centroid's and edge midpoints' last
+                               pass (rm_brec.c): its centroid's and edge midpoints' last
                                points measured and bounds on their distances */
-    double *brec_keep;      /* what a fan's check found for a move not yet made */
-    uint32_t brec_keep_cap, brec_keep_v; /* its room; the vertex (UINT32_MAX: none kept) */
-    double brec_keep_x[3];  /* where that vertex would go */
     double *offset;         /* 4 per vertex, with brec: a place and rm_bound_signed there */
     size_t brec_known, brec_skipped; /* points whose slot held them, and of those not measured */
     size_t flips, moves, collapses, inserts;
