@@ -148,20 +148,12 @@ bool rm_bound_triangle(rm_pass *p, const double *a, const double *b, const doubl
 
 double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x, double limit, double stop)
 {
-    const rm_mesh *r = &p->r;
-    const double *P = r->m->pos;
     double worst = rm_bound_distance(p, x, limit);
-    for (uint32_t i = 0; i < r->count[v] && worst <= stop; i++) {
-        const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
-        const double *q[3];
-        for (int k = 0; k < 3; k++)
-            q[k] = t[k] == v ? x : P + 3 * (size_t)t[k];
-        int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+    for (uint32_t i = 0; i < p->r.count[v] && worst <= stop; i++) {
+        uint32_t t;
+        int k;
         double g[3], m[3];
-        rm_centroid(q[0], q[1], q[2], g);
-        for (int j = 0; j < 3; j++)
-            m[j] = 0.5 * (x[j] + q[(k + 1) % 3][j]);
-        /* each edge at v is the next edge of exactly one triangle of a closed fan */
+        rm_fan_point(p, v, i, x, &t, &k, g, m);
         double dg = rm_bound_distance(p, g, limit); /* never NaN: no libm fmax call */
         worst = dg > worst ? dg : worst;
         if (worst <= stop) {

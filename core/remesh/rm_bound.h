@@ -42,6 +42,30 @@ bool rm_bound_edge(rm_pass *p, const double *a, const double *b);
 /* True when the centroid of abc lies within max_error of f = 0. */
 bool rm_bound_triangle(rm_pass *p, const double *a, const double *b, const double *c);
 
+/* Triangle i of v's fan: the triangle (*t) and v's corner in it. */
+static inline int rm_fan_corner(const rm_pass *p, uint32_t v, uint32_t i, uint32_t *t)
+{
+    *t = p->r.vt[p->r.start[v] + i];
+    const uint32_t *c = p->r.m->tri + 3 * (size_t)*t;
+    return c[0] == v ? 0 : c[1] == v ? 1 : 2;
+}
+
+/* Triangle i of v's fan with v at x: the triangle (*t), v's corner (*k), the centroid g and
+ * the midpoint m of the edge from v to the next corner (each edge at v is the next edge of
+ * exactly one triangle of a closed fan). */
+static inline void rm_fan_point(const rm_pass *p, uint32_t v, uint32_t i, const double *x,
+                                uint32_t *t, int *k, double g[3], double m[3])
+{
+    *k = rm_fan_corner(p, v, i, t);
+    const uint32_t *c = p->r.m->tri + 3 * (size_t)*t;
+    const double *q[3];
+    for (int j = 0; j < 3; j++)
+        q[j] = c[j] == v ? x : p->r.m->pos + 3 * (size_t)c[j];
+    rm_centroid(q[0], q[1], q[2], g);
+    for (int j = 0; j < 3; j++)
+        m[j] = 0.5 * (x[j] + q[(*k + 1) % 3][j]);
+}
+
 /* The largest distance over v's fan with v at x: its centroids, the midpoints of the edges at
  * v, and x itself (v free: a closed fan), each point measured with limit (rm_bound_distance);
  * as soon as one measures above stop, that one (the rest are not measured). */

@@ -88,32 +88,19 @@ static double bound_of(rm_pass *p, uint32_t t, int s, const double y0[3], const 
 
 bool rm_brec_fan_within(rm_pass *p, uint32_t v, const double x[3])
 {
-    const rm_mesh *r = &p->r;
-    const double *P = r->m->pos, *pos = P + 3 * (size_t)v;
+    const double *pos = p->r.m->pos + 3 * (size_t)v;
     double e = p->max_error, *keep = keep_for(p, v, x);
     if (!(rm_bound_upper(p, x) <= e))
         return rm_brec_drop(p), false;
-    for (uint32_t i = 0; i < r->count[v]; i++) {
-        uint32_t t = r->vt[r->start[v] + i];
-        const uint32_t *c = r->m->tri + 3 * (size_t)t;
-        int k = c[0] == v ? 0 : c[1] == v ? 1 : 2;
-        const double *o[3], *q[3];
-        for (int j = 0; j < 3; j++) {
-            o[j] = P + 3 * (size_t)c[j];
-            q[j] = c[j] == v ? x : o[j];
-        }
+    for (uint32_t i = 0; i < p->r.count[v]; i++) {
+        uint32_t t;
+        int k;
         double g0[3], g[3], m0[3], m[3];
-        rm_centroid(o[0], o[1], o[2], g0);
-        rm_centroid(q[0], q[1], q[2], g);
+        rm_fan_point(p, v, i, pos, &t, &k, g0, m0);
+        rm_fan_point(p, v, i, x, &t, &k, g, m);
         double bg = bound_of(p, t, 0, g0, g);
         if (!(bg <= e))
             return rm_brec_drop(p), false;
-        /* each edge at v is the next edge of exactly one triangle of a closed fan */
-        const double *next = o[(k + 1) % 3];
-        for (int j = 0; j < 3; j++) {
-            m0[j] = 0.5 * (pos[j] + next[j]);
-            m[j] = 0.5 * (x[j] + next[j]);
-        }
         double bm = bound_of(p, t, 1 + k, m0, m);
         if (!(bm <= e))
             return rm_brec_drop(p), false;
@@ -138,17 +125,13 @@ bool rm_brec_pays(rm_pass *p)
 
 double rm_brec_fan_known(const rm_pass *p, uint32_t v)
 {
-    const rm_mesh *r = &p->r;
-    const double *P = r->m->pos;
+    const double *pos = p->r.m->pos + 3 * (size_t)v;
     double worst = 0;
-    for (uint32_t i = 0; i < r->count[v] && worst <= p->max_error; i++) {
-        uint32_t t = r->vt[r->start[v] + i];
-        const uint32_t *c = r->m->tri + 3 * (size_t)t;
-        int k = c[0] == v ? 0 : c[1] == v ? 1 : 2;
+    for (uint32_t i = 0; i < p->r.count[v] && worst <= p->max_error; i++) {
+        uint32_t t;
+        int k;
         double g[3], m[3];
-        rm_centroid(P + 3 * (size_t)c[0], P + 3 * (size_t)c[1], P + 3 * (size_t)c[2], g);
-        for (int j = 0; j < 3; j++)
-            m[j] = 0.5 * (P[3 * (size_t)v + j] + P[3 * (size_t)c[(k + 1) % 3] + j]);
+        rm_fan_point(p, v, i, pos, &t, &k, g, m);
         const double *eg = p->brec + RM_BREC_REC * (size_t)t, *em = eg + 4 * (1 + k);
         bool known = eg[0] == g[0] && eg[1] == g[1] && eg[2] == g[2] && em[0] == m[0] &&
                      em[1] == m[1] && em[2] == m[2];
@@ -164,9 +147,9 @@ void rm_brec_moved(rm_pass *p, uint32_t v, const double x[3])
         return;
     uint32_t n = r->count[v];
     for (uint32_t i = 0; i < n; i++) {
-        uint32_t t = r->vt[r->start[v] + i];
+        uint32_t t;
+        int k = rm_fan_corner(p, v, i, &t);
         const uint32_t *c = r->m->tri + 3 * (size_t)t;
-        int k = c[0] == v ? 0 : c[1] == v ? 1 : 2;
         const double *w = p->cen_keep + KEEP_REC * i;
         rm_brec_set(p, t, 0, w, w[3]);
         rm_brec_set(p, t, 1 + k, w + 4, w[7]);
@@ -174,10 +157,9 @@ void rm_brec_moved(rm_pass *p, uint32_t v, const double x[3])
            corner that is (the midpoint's place and bound the same, bit for bit) */
         uint32_t prev = c[(k + 2) % 3];
         for (uint32_t j = 0; j < n; j++) {
-            uint32_t u = r->vt[r->start[v] + j];
-            const uint32_t *d = r->m->tri + 3 * (size_t)u;
-            int l = d[0] == v ? 0 : d[1] == v ? 1 : 2;
-            if (d[(l + 1) % 3] == prev) {
+            uint32_t u;
+            int l = rm_fan_corner(p, v, j, &u);
+            if (r->m->tri[3 * (size_t)u + (l + 1) % 3] == prev) {
                 const double *z = p->cen_keep + KEEP_REC * j;
                 rm_brec_set(p, t, 1 + (k + 2) % 3, z + 4, z[7]);
                 break;
