@@ -82,18 +82,10 @@ static size_t lower_bound(const ism_ball_grid *g, uint64_t k)
 }
 
 /* Cells z .. z1 of one column are read as runs whose masked z coordinates do not wrap: the
- * keys of a run are consecutive. When the columns are at least as many as the balls (one
- * binary search each), every ball is tried instead. */
+ * keys of a run are consecutive. */
 bool ism_ball_grid_any(const ism_ball_grid *g, const int64_t c0[3], const int64_t c1[3],
                        bool (*hit)(uint32_t ball, const void *arg), const void *arg)
 {
-    double columns = (double)(c1[0] - c0[0] + 1) * (double)(c1[1] - c0[1] + 1);
-    if (columns >= (double)g->n) {
-        for (size_t i = 0; i < g->n; i++)
-            if (hit((uint32_t)(g->key[i] & UINT32_MAX), arg))
-                return true;
-        return false;
-    }
     for (int64_t x = c0[0]; x <= c1[0]; x++)
         for (int64_t y = c0[1]; y <= c1[1]; y++)
             for (int64_t z = c0[2]; z <= c1[2];) {

@@ -27,8 +27,7 @@ void ism_ball_grid_cell_of(const ism_ball_grid *g, const double p[3], int64_t c[
 /* Does hit(ball index, arg) hold for a ball filed in one of the cells c0..c1 (inclusive on
  * every axis)? Stops at the first that does. The cells are read a column at a time: a run
  * of cells along z has consecutive keys, so one binary search finds the run's entries (a
- * box grown by 4 cells an axis reads 9² columns, not 9³ cells); every ball is tried instead
- * when the columns are not fewer than the balls. */
+ * box grown by 4 cells an axis reads 9² columns, not 9³ cells). */
 bool ism_ball_grid_any(const ism_ball_grid *g, const int64_t c0[3], const int64_t c1[3],
                        bool (*hit)(uint32_t ball, const void *arg), const void *arg);
 

@@ -66,7 +66,7 @@ bool ism_node_balls_split(const ism_node_balls *x, const double lo[3], const dou
         for (int a = 0; a < 3; a++)
             cells *= (double)(c1[a] - c0[a] + 1);
     }
-    if (!g->n || !(cells <= NODE_BALLS_SCAN_CELLS)) {
+    if (!g->n || !(cells <= NODE_BALLS_SCAN_CELLS) || cells >= (double)x->n) {
         for (size_t i = 0; i < x->n; i++)
             if (meets(x->ball[i], side, lo, hi))
                 return true;

@@ -29,9 +29,8 @@ void ism_node_balls_free(ism_node_balls *x);
 
 /* Does the box lo..hi meet one of the balls whose cell is smaller than the box's longest
  * side (the node must then be split)? Reads the grid cells within a radius of the box, or
- * every ball when those cells are more than NODE_BALLS_SCAN_CELLS (a box much larger than
- * the balls: the octree's few top nodes) or their columns not fewer than the balls
- * (ism_ball_grid_any). */
+ * every ball when those cells are more than the balls or than NODE_BALLS_SCAN_CELLS (a box
+ * much larger than the balls: the octree's few top nodes). */
 bool ism_node_balls_split(const ism_node_balls *x, const double lo[3], const double hi[3]);
 
 /* Balls a caller passes at most: 5 doubles each, the test above bounded by the cells it

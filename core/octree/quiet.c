@@ -83,12 +83,12 @@ static bool near_box(uint32_t ball, const void *arg)
 }
 
 /* A ball within reach has its centre within one grid cell (the largest radius) plus reach of
- * the box: the cells from lo's to hi's, grown by that many (ism_ball_grid_any tries every
- * ball when the balls are fewer than those cells' columns: a reach of 5 cells round balls of
- * 2 spans 9³ grid cells; read cell by cell, the double cone's one ball made that +2.6% of the
- * run). The grid is read a column at a time (9² binary searches there): Steiner's 636 reach
- * queries (measure_unflat) and 43,364 reach-0 ones (octree_build.c unflat) cost 396M
- * instructions read cell by cell. */
+ * the box: the cells from lo's to hi's, grown by that many — or every ball, when they are
+ * fewer than those cells (a reach of 5 cells round balls of 2 spans 9³ grid cells: read cell
+ * by cell, the double cone's one ball made that +2.6% of the run). The grid is read a column
+ * at a time (ism_ball_grid_any, 9² binary searches there): Steiner's 636 reach queries
+ * (measure_unflat) and 43,364 reach-0 ones (octree_build.c unflat) cost 396M instructions
+ * read cell by cell. */
 bool ism_quiet_near(const ism_quiet *q, const double lo[3], const double hi[3], double reach)
 {
     const ism_ball_grid *g = &q->grid;
@@ -97,6 +97,15 @@ bool ism_quiet_near(const ism_quiet *q, const double lo[3], const double hi[3], 
     int64_t c0[3], c1[3], k = 1 + (int64_t)ceil(reach / g->cell);
     ism_ball_grid_cell_of(g, lo, c0);
     ism_ball_grid_cell_of(g, hi, c1);
+    double cells = 1;
+    for (int a = 0; a < 3; a++)
+        cells *= (double)(c1[a] - c0[a] + 1 + 2 * k);
+    if ((double)g->n <= cells) {
+        for (size_t i = 0; i < g->n; i++)
+            if (near(q->ball[g->key[i] & UINT32_MAX], lo, hi, reach))
+                return true;
+        return false;
+    }
     for (int a = 0; a < 3; a++) {
         c0[a] -= k;
         c1[a] += k;
