@@ -267,18 +267,9 @@ size_t pf_count_edges(const ism_mesh *m, size_t lo, size_t hi,
     return count;
 }
 
-size_t pf_vertex_cones(const ism_mesh *m, uint32_t v)
+/* Fans round v of its n triangles tris (joined when they share a vertex other than v). */
+static size_t cones_of(const ism_mesh *m, uint32_t v, const size_t *tris, size_t n)
 {
-    size_t n = 0, cap = 64;
-    size_t *tris = malloc(cap * sizeof *tris);
-    cr_assert(tris);
-    for (size_t t = 0; t < m->ntris; t++)
-        for (int k = 0; k < 3; k++)
-            if (m->tri[3 * t + k] == v) {
-                if (n == cap)
-                    cr_assert(tris = realloc(tris, (cap *= 2) * sizeof *tris));
-                tris[n++] = t;
-            }
     uint32_t *parent = malloc((n + 1) * sizeof *parent);
     cr_assert(parent);
     for (uint32_t i = 0; i < n; i++)
@@ -297,8 +288,44 @@ size_t pf_vertex_cones(const ism_mesh *m, uint32_t v)
     size_t cones = 0;
     for (uint32_t i = 0; i < n; i++)
         cones += find(parent, i) == i;
-    free(tris);
     free(parent);
+    return cones;
+}
+
+size_t pf_vertex_cones(const ism_mesh *m, uint32_t v)
+{
+    size_t n = 0, cap = 64;
+    size_t *tris = malloc(cap * sizeof *tris);
+    cr_assert(tris);
+    for (size_t t = 0; t < m->ntris; t++)
+        for (int k = 0; k < 3; k++)
+            if (m->tri[3 * t + k] == v) {
+                if (n == cap)
+                    cr_assert(tris = realloc(tris, (cap *= 2) * sizeof *tris));
+                tris[n++] = t;
+            }
+    size_t cones = cones_of(m, v, tris, n);
+    free(tris);
+    return cones;
+}
+
+size_t *pf_all_vertex_cones(const ism_mesh *m)
+{
+    size_t *start = calloc(m->nverts + 2, sizeof *start), *tris = malloc((3 * m->ntris + 1) *
+                                                                         sizeof *tris);
+    size_t *cones = malloc((m->nverts + 1) * sizeof *cones);
+    cr_assert(start && tris && cones);
+    for (size_t i = 0; i < 3 * m->ntris; i++)
+        start[m->tri[i] + 2]++;
+    for (uint32_t v = 0; v < m->nverts; v++)
+        start[v + 2] += start[v + 1];
+    for (size_t t = 0; t < m->ntris; t++) /* triangles in order, as pf_vertex_cones lists */
+        for (int k = 0; k < 3; k++)
+            tris[start[m->tri[3 * t + k] + 1]++] = t;
+    for (uint32_t v = 0; v < m->nverts; v++)
+        cones[v] = cones_of(m, v, tris + start[v], start[v + 1] - start[v]);
+    free(start);
+    free(tris);
     return cones;
 }
 

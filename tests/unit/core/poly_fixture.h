@@ -90,6 +90,10 @@ size_t pf_count_edges(const ism_mesh *m, size_t lo, size_t hi,
  * share an edge through v): 1 for a manifold vertex, 2 where two cones meet. */
 size_t pf_vertex_cones(const ism_mesh *m, uint32_t v);
 
+/* pf_vertex_cones of every vertex (malloc'd, nverts entries; the caller frees): one pass over
+ * the triangles instead of one per vertex. */
+size_t *pf_all_vertex_cones(const ism_mesh *m);
+
 /* True when the non-manifold edges form exactly one closed curve (every vertex on them
  * meets two of them, and they are connected). */
 bool pf_nm_edges_one_closed_curve(const ism_mesh *m, size_t *nedges);

@@ -323,9 +323,10 @@ Test(dual_crease, a_corner_of_three_pieces_declines)
 /* Non-manifold vertices: joining more than one cone of triangles. */
 static size_t nm_vertices(const ism_mesh *m)
 {
-    size_t n = 0;
+    size_t n = 0, *cones = pf_all_vertex_cones(m);
     for (uint32_t v = 0; v < m->nverts; v++)
-        n += pf_vertex_cones(m, v) > 1;
+        n += cones[v] > 1;
+    free(cones);
     return n;
 }
 

@@ -78,8 +78,9 @@ static void nm_vertices(const ism_mesh *m, const ism_locus *l, size_t *nm, size_
 {
     *nm = *at_points = 0;
     *cones_each = 0;
+    size_t *all = pf_all_vertex_cones(m);
     for (uint32_t v = 0; v < m->nverts; v++) {
-        size_t c = pf_vertex_cones(m, v);
+        size_t c = all[v];
         if (c < 2)
             continue;
         (*nm)++;
@@ -91,6 +92,7 @@ static void nm_vertices(const ism_mesh *m, const ism_locus *l, size_t *nm, size_
                 *cones_each = *cones_each ? (*cones_each == c ? c : 0) : c;
             }
     }
+    free(all);
 }
 
 /* How expect_joined meshes: by the dual mesher (else the primal path and its conformance
