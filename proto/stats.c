@@ -353,12 +353,14 @@ static void write_error_warning(ism_jw *w, const ism_stats_input *in)
     double worst = in->analysis ? worst_distance(in->analysis) : s ? s->error_worst : 0;
     if (worst <= in->max_error && (in->analysis || cells == 0))
         return;
-    char msg[400], e[32], x[32], tail[200];
+    char msg[512], e[32], x[32], tail[320];
     format_bound(in->max_error, e);
     format_beyond(worst, in->max_error, x, sizeof x);
     if (cells)
         snprintf(tail, sizeof tail, "; %llu cells could not be split further (at depth.max, or "
-                 "after the last refinement round): a larger depth.max may reach it",
+                 "after the last refinement round): a larger depth.max may reach it (depth.max "
+                 "is only a limit, max_error sets the accuracy: a larger max_error, or null for "
+                 "no bound, asks for less)",
                  (unsigned long long)cells);
     else
         snprintf(tail, sizeof tail, ", though every octree cell met it: the triangles beyond "
