@@ -161,7 +161,10 @@ typedef struct ism_analysis {
      * centroids (the mesh between its vertices; there capped by the bound through the
      * element's corners, |p − v| + v's distance: dist_bound.h), each with its maximum, mean
      * and 99th percentile (the value at rank floor(0.99 (n - 1)) in ascending order), and the
-     * Newton projection distance. Points where |∇f| vanishes are left out (counted in
+     * Newton projection distance. At midpoints and centroids the estimates that could be the
+     * maximum or the 99th percentile are measured again by finding the surface near them
+     * (accuracy.c, nearest.h): beside singular points and curves the estimate overstates.
+     * Points where |∇f| vanishes are left out (counted in
      * accuracy_skipped). The Newton distance iterates p -= f ∇f / |∇f|² (newton_steps times,
      * stopping early where ∇f vanishes) and measures how far p moved. */
     double max_dist_vertex, mean_dist_vertex, p99_dist_vertex;
