@@ -717,7 +717,7 @@ static bool sag_split(dual *d, worker *w, const dnode *n, corner_view *v)
     if (!foot_in_node(w, v->p[0], v->p[7], size, m))
         return false;
     v->placed = true;
-    ism_straddle_balanced_bend(&w->s, d->shift, d->o->box, m, v->at, &bend);
+    ism_straddle_balanced_point(&w->s, d->shift, d->o->box, m, v->at, &bend);
     return bend * size * size > 8 * SAG_SPLIT * (d->o->max_error + d->shift);
 }
 
@@ -1123,7 +1123,7 @@ static void place_vertex(dual *d, worker *w, int32_t i)
         newton_onto(w, m, size);
     }
     double q[3];
-    if (d->shift > 0 && ism_straddle_balanced_point(&w->s, d->shift, d->o->box, m, q))
+    if (d->shift > 0 && ism_straddle_balanced_point(&w->s, d->shift, d->o->box, m, q, NULL))
         memcpy(m, q, sizeof m);
     memcpy(&d->pos[3 * n->vert], m, sizeof m);
 }
@@ -1908,7 +1908,7 @@ static void fan_task(void *ctx, size_t k, int thread)
         out[0] = out[1] = out[2] = NAN;
         return;
     }
-    if (d->shift > 0 && ism_straddle_balanced_point(&w->s, d->shift, d->o->box, m, q))
+    if (d->shift > 0 && ism_straddle_balanced_point(&w->s, d->shift, d->o->box, m, q, NULL))
         memcpy(m, q, sizeof m);
     memcpy(out, m, sizeof m);
 }

@@ -97,13 +97,7 @@ bool ism_straddle_point(ism_sampler *s, double shift, const double box[6], const
 }
 
 bool ism_straddle_balanced_point(ism_sampler *s, double shift, const double box[6],
-                                 const double p[3], double q[3])
-{
-    return ism_straddle_balanced_bend(s, shift, box, p, q, NULL);
-}
-
-bool ism_straddle_balanced_bend(ism_sampler *s, double shift, const double box[6],
-                                const double p[3], double q[3], double *bend)
+                                 const double p[3], double q[3], double *bend)
 {
     memcpy(q, p, 3 * sizeof *q);
     double n[3], a, b, c, gl;

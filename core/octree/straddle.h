@@ -28,15 +28,12 @@ bool ism_straddle_point(ism_sampler *s, double shift, const double box[6], const
  * with d = E (l1 + l2) / (l1 - l2), capped at ±shift, the chords meet E up to s = 2 E /
  * (l1 - l2) (saddles: sag room 1/(1 - r) times the unmoved vertex's, r the capped ratio)
  * and up to (E + shift) / l1 where the cap binds (one-way bending: the move above). A pure
- * function of the point, like the move above. */
+ * function of the point, like the move above. bend (may be NULL): the surface's largest
+ * principal curvature at p in magnitude (max(|l1|, |l2|) of the tangential Hessian over
+ * |∇f|), from the same Hessian; 0 where the move does not look (shift 0, a face of the box,
+ * no usable Hessian). */
 bool ism_straddle_balanced_point(ism_sampler *s, double shift, const double box[6],
-                                 const double p[3], double q[3]);
-
-/* ism_straddle_balanced_point, and into *bend the surface's largest principal curvature at p
- * in magnitude (max(|l1|, |l2|) of the tangential Hessian over |∇f|), from the same Hessian;
- * 0 where the move does not look (shift 0, a face of the box, no usable Hessian). */
-bool ism_straddle_balanced_bend(ism_sampler *s, double shift, const double box[6],
-                                const double p[3], double q[3], double *bend);
+                                 const double p[3], double q[3], double *bend);
 
 /* The distance to f = 0 (refine.h's measure, every point) of out's triangles from first_tri
  * on with the vertices from first_vert on moved; out is left as it was. False when out of

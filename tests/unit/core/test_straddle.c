@@ -156,7 +156,7 @@ Test(straddle, balanced_move_on_saddles_and_bowls)
         smp.ws = ism_eval_ws_new(t);
         cr_assert(smp.ws);
         double q[3], r[3];
-        bool moved = ism_straddle_balanced_point(&smp, 0.9 * e, box, p, q);
+        bool moved = ism_straddle_balanced_point(&smp, 0.9 * e, box, p, q, NULL);
         cr_assert_eq(moved, !isnan(cases[i].share), "a %g b %g", cases[i].a, cases[i].b);
         double want = isnan(cases[i].share) ? 0 : cases[i].share * e;
         cr_assert(fabs(q[0]) == 0 && fabs(q[1]) == 0 && fabs(q[2] - want) < 1e-12 * e,
@@ -164,7 +164,7 @@ Test(straddle, balanced_move_on_saddles_and_bowls)
                   q[0], q[1], q[2], want);
         /* the same move with the curvature beside it: max(|2a|, |2b|) (|∇f| = 1) */
         double q2[3], bend;
-        cr_assert_eq(ism_straddle_balanced_bend(&smp, 0.9 * e, box, p, q2, &bend), moved);
+        cr_assert_eq(ism_straddle_balanced_point(&smp, 0.9 * e, box, p, q2, &bend), moved);
         cr_assert(memcmp(q, q2, sizeof q) == 0, "a %g b %g", cases[i].a, cases[i].b);
         cr_assert(fabs(bend - fmax(fabs(2 * cases[i].a), fabs(2 * cases[i].b))) < 1e-12,
                   "a %g b %g: bend %g", cases[i].a, cases[i].b, bend);
@@ -178,7 +178,7 @@ Test(straddle, balanced_move_on_saddles_and_bowls)
     }
 }
 
-/* The curvature beside the move (ism_straddle_balanced_bend, dual.c's sag_split reads it) is
+/* The curvature beside the move (ism_straddle_balanced_point's bend, dual.c's sag_split reads it) is
  * the surface's largest principal curvature in magnitude, from f's scale-free form: sphere
  * r 0.8 anywhere 1.25; ellipsoid x² + y²/4 + 4z² = 1 at (1, 0, 0) a / c² = 4 (a / b² =
  * 1/4 the other); the torus R 1, r 0.3 at its outer (1.3, 0, 0) and inner (0.7, 0, 0)
@@ -212,7 +212,7 @@ Test(straddle, bend_is_the_largest_principal_curvature)
         double q[3], bend = -1;
         bool last = i + 1 == sizeof cases / sizeof cases[0];
         bool moved =
-            ism_straddle_balanced_bend(&smp, shift, last ? faced : box, cases[i].p, q, &bend);
+            ism_straddle_balanced_point(&smp, shift, last ? faced : box, cases[i].p, q, &bend);
         cr_expect_eq(moved, cases[i].moves, "case %zu", i);
         cr_expect(fabs(bend - cases[i].bend) < 1e-12 * (1 + cases[i].bend),
                   "case %zu: bend %.15g, expected %.15g", i, bend, cases[i].bend);
