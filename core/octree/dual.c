@@ -85,6 +85,11 @@ enum { DN_INNER, DN_EMPTY, DN_SURF, DN_HOLE, DN_CREASE, DN_PAIR };
 /* A leaf with a vertex: plain, on the crease, or one per branch. */
 static bool has_sheet(int kind) { return kind == DN_SURF || kind == DN_CREASE || kind == DN_PAIR; }
 
+/* What sag_split learnt of a node's centre foot (dnode.placed): nothing (it did not look,
+ * or it split the node), the vertex of a node kept as a leaf (in d->at), or a foot outside
+ * the node (place_vertex goes to the secant roots at once). */
+enum { FOOT_UNKNOWN, FOOT_AT, FOOT_OUT };
+
 typedef struct dnode {
     ism_ipt o;      /* lattice origin */
     int32_t child;  /* first of the 8 children (bit 0 = x, 1 = y, 2 = z), -1 for a leaf */
@@ -94,10 +99,13 @@ typedef struct dnode {
     uint8_t kind;
     uint8_t split;  /* a triangle of this leaf missed E this round */
     uint8_t surf;   /* a surface leaf in the subtree (the walk skips the others) */
-    uint8_t placed; /* at holds the vertex place_vertex would make (sag_split made it) */
+    uint8_t placed; /* FOOT_AT: d->at holds the vertex place_vertex would make (sag_split
+                     * made it); FOOT_OUT: the centre's Newton left the node */
     double f[8];    /* f at the corners */
-    double at[3];   /* with placed: the leaf's vertex */
 } dnode;
+/* The mesher's hot array (expand and every sweep over d->n move it): the flags fit in the
+ * padding before f, 96 bytes on LP64; a kept leaf's sag_split vertex lives in d->at. */
+_Static_assert(sizeof(dnode) <= 96, "dnode grew past 96 bytes");
 
 /* An open-addressed map from 64-bit keys (never 0; 0 marks an empty slot) to doubles, kept
  * at most half full. */
@@ -210,6 +218,8 @@ typedef struct dual {
     int nw;
     dnode *n;
     size_t nn, capn;
+    double (*at)[3]; /* by node: the vertex of a node placed FOOT_AT (read only there) */
+    size_t capat;
     double *pos;      /* 3 per vertex */
     int32_t *vleaf;   /* the leaf each vertex belongs to */
     int32_t *vtwin;   /* the next vertex of a leaf sharing this one's point, -1: none (two
@@ -292,7 +302,7 @@ typedef struct corner_view {
     bool have_g, have_model, agree;
     bool kinked;  /* split for the crease (dual_crease.h): at depth.max it declines min_max */
     int monotone; /* bit a: ∇f's a-th component keeps a sign over the box */
-    bool placed;  /* at: the node's vertex, placed by sag_split */
+    uint8_t placed; /* what sag_split found (dnode.placed); FOOT_AT: the vertex in at */
     double at[3];
 } corner_view;
 
@@ -706,19 +716,22 @@ static bool in_request_box(const dual *d, const double lo[3], const double hi[3]
  * box's margin the triangles the clip drops are not measured, so leaves there stay coarse
  * (helicoid at 1.6e-3: kept leaves up to k h² / 8 / (E + shift) = 12 there, 1.27 inside;
  * splitting them cost 7% more instructions). The centre's foot, moved as place_vertex moves
- * it, is kept in v for the vertex (the Hessian that moves it gives the curvature), so a node
- * kept as a leaf costs what it did. */
+ * it, is kept in v for a node kept as a leaf (the Hessian that moves it gives the
+ * curvature), and a foot outside the node is remembered: place_vertex repeats neither. */
 static bool sag_split(dual *d, worker *w, const dnode *n, corner_view *v)
 {
     if (!(d->shift > 0) || d->crease || d->nballs || n->level >= d->o->max_depth ||
         !in_request_box(d, v->p[0], v->p[7]))
         return false;
     double size = ism_grid_cell_size(&d->g, n->level), m[3], bend;
-    if (!foot_in_node(w, v->p[0], v->p[7], size, m))
+    if (!foot_in_node(w, v->p[0], v->p[7], size, m)) {
+        v->placed = FOOT_OUT;
         return false;
-    v->placed = true;
+    }
     ism_straddle_balanced_point(&w->s, d->shift, d->o->box, m, v->at, &bend);
-    return bend * size * size > 8 * SAG_SPLIT * (d->o->max_error + d->shift);
+    bool split = bend * size * size > 8 * SAG_SPLIT * (d->o->max_error + d->shift);
+    v->placed = split ? FOOT_UNKNOWN : FOOT_AT;
+    return split;
 }
 
 /* What node n is (f and the unit gradients at its corners in n->f and v): empty (proven
@@ -728,7 +741,7 @@ static bool sag_split(dual *d, worker *w, const dnode *n, corner_view *v)
 static int classify(dual *d, worker *w, dnode *n, corner_view *v)
 {
     int neg = 0;
-    v->placed = false;
+    v->placed = FOOT_UNKNOWN;
     for (int c = 0; c < 8; c++) {
         if (!isfinite(n->f[c]) || !isfinite(v->n[c][0] + v->n[c][1] + v->n[c][2]))
             return DN_INNER;
@@ -800,7 +813,7 @@ static void sample_corner(dual *d, worker *w, const int32_t q[3], double *f, dou
 /* Bytes the tree and the vertices hold (the triangles are bounded by max_triangles). */
 static size_t held_bytes(const dual *d)
 {
-    return d->capn * sizeof *d->n +
+    return d->capn * sizeof *d->n + d->capat * sizeof *d->at +
            d->capv * (3 * sizeof *d->pos + sizeof *d->vleaf + sizeof *d->vtwin);
 }
 
@@ -819,6 +832,18 @@ static bool new_node(dual *d, ism_ipt o, int level, int32_t *out)
     n->o = o;
     n->level = (uint8_t)level;
     n->child = n->vert = n->vert2 = -1;
+    return true;
+}
+
+/* Node i's sag_split vertex p into d->at (grown only for such nodes); false when out of
+ * memory (nomem set). */
+static bool keep_at(dual *d, int32_t i, const double p[3])
+{
+    if (!grow((void **)&d->at, &d->capat, (size_t)i + 1, sizeof *d->at)) {
+        d->nomem = true;
+        return false;
+    }
+    memcpy(d->at[i], p, sizeof d->at[i]);
     return true;
 }
 
@@ -880,9 +905,9 @@ static bool near_point(const dual *d, const dnode *n, double size)
 /* What splitting one node yields: its 8 children's corner values and kinds. */
 typedef struct split_out {
     double f[8][8];
-    double at[8][3]; /* child c's vertex when bit c of placed (sag_split) */
+    double at[8][3]; /* child c's vertex when placed[c] is FOOT_AT (sag_split) */
     uint8_t kind[8];
-    uint8_t placed;
+    uint8_t placed[8];
     uint8_t kinked; /* bit c: child c split for the crease (corner_view.kinked) */
     bool bad;
 } split_out;
@@ -905,10 +930,10 @@ static void split_task(void *ctx, size_t k, int thread)
     }
     out->bad = false;
     out->kinked = 0;
-    out->placed = 0;
     for (int c = 0; c < 8; c++) {
         corner_view v;
-        v.kinked = v.placed = false;
+        v.kinked = false;
+        v.placed = FOOT_UNKNOWN;
         dnode n;
         memset(&n, 0, sizeof n);
         n.o = parent->o;
@@ -925,8 +950,8 @@ static void split_task(void *ctx, size_t k, int thread)
         memcpy(out->f[c], n.f, sizeof n.f);
         out->kind[c] = (uint8_t)leaf_kind(d, w, &n, &v, &out->bad);
         out->kinked |= (uint8_t)(v.kinked << c);
-        out->placed |= (uint8_t)(v.placed << c);
-        if (v.placed)
+        out->placed[c] = v.placed;
+        if (v.placed == FOOT_AT)
             memcpy(out->at[c], v.at, sizeof v.at);
     }
 }
@@ -1021,9 +1046,9 @@ static void expand(dual *d, const int32_t *list, size_t n)
                 first = c ? first : at;
                 dnode *ch = &d->n[at];
                 memcpy(ch->f, out[k].f[c], sizeof ch->f);
-                ch->placed = out[k].placed >> c & 1;
-                if (ch->placed)
-                    memcpy(ch->at, out[k].at[c], sizeof ch->at);
+                ch->placed = out[k].placed[c];
+                if (ch->placed == FOOT_AT && !keep_at(d, at, out[k].at[c]))
+                    break;
                 ch->kind = out[k].kind[c];
                 if (ch->kind != DN_INNER)
                     continue;
@@ -1098,11 +1123,11 @@ static void place_vertex(dual *d, worker *w, int32_t i)
         }
         return;
     }
-    if (n->placed) { /* sag_split made it as below */
-        memcpy(&d->pos[3 * n->vert], n->at, sizeof n->at);
+    if (n->placed == FOOT_AT) { /* sag_split made it as below */
+        memcpy(&d->pos[3 * n->vert], d->at[i], sizeof m);
         return;
     }
-    if (!foot_in_node(w, lo, hi, size, m)) {
+    if (n->placed == FOOT_OUT || !foot_in_node(w, lo, hi, size, m)) {
         int roots = 0;
         memset(m, 0, sizeof m);
         for (int e = 0; e < 12; e++) {
@@ -2131,7 +2156,8 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
     if (!new_node(d, (ism_ipt){{0, 0, 0}}, 0, &root))
         return ISM_DUAL_NO_MEMORY;
     corner_view v;
-    v.kinked = v.placed = false;
+    v.kinked = false;
+    v.placed = FOOT_UNKNOWN;
     int32_t last = (int32_t)1 << d->g.depth;
     dnode *r0 = &d->n[root];
     for (int c = 0; c < 8; c++) {
@@ -2196,6 +2222,7 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
 static void forget(dual *d)
 {
     free(d->n);
+    free(d->at);
     free(d->pos);
     free(d->vleaf);
     free(d->vtwin);
@@ -2205,11 +2232,12 @@ static void forget(dual *d)
     keyed_free(&d->mid);
     keyed_free(&d->fans);
     d->n = NULL;
+    d->at = NULL;
     d->pos = NULL;
     d->vleaf = NULL;
     d->vtwin = NULL;
     d->tri = NULL;
-    d->nn = d->capn = d->nv = d->capv = d->nt = d->capt = 0;
+    d->nn = d->capn = d->capat = d->nv = d->capv = d->nt = d->capt = 0;
     memset(&d->q, 0, sizeof d->q);
     memset(&d->passed, 0, sizeof d->passed);
     memset(&d->mid, 0, sizeof d->mid);
