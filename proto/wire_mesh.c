@@ -11,6 +11,7 @@
 #include "core/curves/crease_normals.h"
 #include "core/eval/eval.h"
 #include "core/util/grow.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -160,7 +161,7 @@ static double *gradient_norms(const ism_tape *f, ism_eval_ws *ws, const ism_mesh
         const double *p = m->pos + 3 * v;
         double d[3];
         ism_eval_gradient(f, ws, p[0], p[1], p[2], d);
-        double n = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        double n = ism_norm3(d);
         g[v] = isfinite(n) ? n : 0;
     }
     return g;
@@ -196,7 +197,7 @@ static void singular_corners(const ism_tape *f, ism_eval_ws *ws, const ism_mesh 
                 c[k] += m->pos[3 * (size_t)tv[i] + k] / 3;
         ism_eval_gradient(f, ws, c[0], c[1], c[2], s);
     }
-    double n = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+    double n = ism_norm3(s);
     if (!(n > 0) || !isfinite(n))
         return;
     for (int i = 0; i < 3; i++) {
@@ -231,15 +232,18 @@ static bool all_corner_normals(const ism_tape *f, const ism_mesh *m, const ism_c
     return ok;
 }
 
-bool ism_wire_corner_normals(const ism_tape *f, const ism_mesh *m, const ism_cut *cut,
-                             const ism_wire_mesh *w, size_t *n, uint32_t **at, float **normal,
-                             uint8_t **locus)
+bool ism_wire_corner_normals(const ism_tape *f, const ism_analysis *an, const ism_mesh *m,
+                             const ism_cut *cut, const ism_wire_mesh *w, size_t *n,
+                             uint32_t **at, float **normal, uint8_t **locus)
 {
     *n = 0;
     *at = NULL;
     *normal = NULL;
     *locus = NULL;
-    if (!w->normal || !m->ntris)
+    /* no crease sides, and the analysis (|∇f| at every vertex, on the job's threads) found
+     * no vertex where ∇f vanishes: every corner keeps its vertex's normal, so none to look
+     * for (without an analysis, in a preview, |∇f| is evaluated here) */
+    if (!w->normal || !m->ntris || (an && !an->singular_vertices && !ism_branches_any(f)))
         return true;
     if (m->ntris > UINT32_MAX / 3)
         return false; /* corner indices are uint32 */

@@ -574,7 +574,7 @@ static bool gather(const ism_request *req, const ism_tape *tape, ism_pipeline_re
     double t = ism_now_ms();
     const ism_analysis *an = s->have_analysis ? &s->an : NULL; /* none in a preview */
     if (!ism_wire_mesh_build(&c->mesh, an, ISM_ATTR_ALL, curvature_limit(req), &c->wire) ||
-        !ism_wire_corner_normals(tape, &c->mesh, s->cut.edges ? &s->cut : NULL, &c->wire,
+        !ism_wire_corner_normals(tape, an, &c->mesh, s->cut.edges ? &s->cut : NULL, &c->wire,
                                  &c->wire.ncorner_normals, &c->corner_at, &c->corner_normal,
                                  &c->corner_locus))
         return fail_with(r, 500, "no_memory", "%s", "out of memory preparing the mesh for the wire");

@@ -80,7 +80,7 @@ static void setup_planes(fixture *fx)
     cr_assert_not_null(f, "%s", err.message);
     cr_assert(ism_wire_mesh_build(&fx->m, NULL, ISM_ATTR_NORMAL, 0, &fx->w));
     size_t n;
-    cr_assert(ism_wire_corner_normals(f, &fx->m, NULL, &fx->w, &n, &fx->at, &fx->normal,
+    cr_assert(ism_wire_corner_normals(f, NULL, &fx->m, NULL, &fx->w, &n, &fx->at, &fx->normal,
                                       &fx->locus));
     ism_tape_free(f);
     fx->w.ncorner_normals = n;
