@@ -62,9 +62,10 @@ void ism_wire_mesh_free(ism_wire_mesh *w);
  * curve's vertex is shared by two sheets, and its one normal — noise, or the average of
  * every sheet through it — shades the triangles beside the curve as saw teeth; issue 13)
  * that no crease side claims carry their own triangle's sheet normal, marked 1 in malloc'd
- * *locus (per entry of *at; NULL when no entry is such a corner). an: m's analysis (NULL
- * when none, as in a preview): when it counts no singular vertex and f has no branches,
- * nothing is looked for. False when out of memory. */
+ * *locus (per entry of *at; NULL when no entry is such a corner). an: m's analysis with f
+ * evaluated (curvature or accuracy asked, so singular_vertices is counted), or NULL (a
+ * preview): when it counts no singular vertex and f has no branches, nothing is looked
+ * for. False when out of memory. */
 bool ism_wire_corner_normals(const ism_tape *f, const ism_analysis *an, const ism_mesh *m,
                              const ism_cut *cut, const ism_wire_mesh *w, size_t *n,
                              uint32_t **at, float **normal, uint8_t **locus);
