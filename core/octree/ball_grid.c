@@ -67,10 +67,10 @@ void ism_ball_grid_free(ism_ball_grid *g)
     g->n = 0;
 }
 
-/* The first entry whose key is at least k. */
-static size_t lower_bound(const ism_ball_grid *g, uint64_t k)
+/* The first entry from a on whose key is at least k. */
+static size_t lower_bound(const ism_ball_grid *g, size_t a, uint64_t k)
 {
-    size_t a = 0, b = g->n;
+    size_t b = g->n;
     while (a < b) {
         size_t m = a + (b - a) / 2;
         if (g->key[m] < k)
@@ -82,10 +82,13 @@ static size_t lower_bound(const ism_ball_grid *g, uint64_t k)
 }
 
 /* Cells z .. z1 of one column are read as runs whose masked z coordinates do not wrap: the
- * keys of a run are consecutive. */
+ * keys of a run are consecutive. A run's search starts after the last run's entries when
+ * its keys come later (no axis wrapped in between). */
 bool ism_ball_grid_any(const ism_ball_grid *g, const int64_t c0[3], const int64_t c1[3],
                        bool (*hit)(uint32_t ball, const void *arg), const void *arg)
 {
+    size_t from = 0;
+    uint64_t last = 0; /* the last run's last cell key + 1 (0: none read yet) */
     for (int64_t x = c0[0]; x <= c1[0]; x++)
         for (int64_t y = c0[1]; y <= c1[1]; y++)
             for (int64_t z = c0[2]; z <= c1[2];) {
@@ -93,10 +96,14 @@ bool ism_ball_grid_any(const ism_ball_grid *g, const int64_t c0[3], const int64_
                 end = end < c1[2] ? end : c1[2];
                 int64_t a[3] = {x, y, z}, b[3] = {x, y, end};
                 uint64_t ka = cell_key(a), kb = cell_key(b);
-                size_t i = lower_bound(g, ka << 32);
+                if (ka < last)
+                    from = 0;
+                size_t i = lower_bound(g, from, ka << 32);
                 for (; i < g->n && g->key[i] >> 32 <= kb; i++)
                     if (hit((uint32_t)(g->key[i] & UINT32_MAX), arg))
                         return true;
+                from = i;
+                last = kb + 1;
                 z = end + 1;
             }
     return false;
