@@ -3,6 +3,7 @@
  * mesh_files.h, streamed through core's sink. */
 #include "proto/mesh_files.h"
 #include "core/mesh/write_sink.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -34,9 +35,10 @@ static uint8_t *plain_corners(const ism_mesh *m, const ism_wire_mesh *w, size_t 
 {
     uint8_t *plain = calloc(m->nverts + 1, 1);
     for (size_t c = 0, j = 0; plain && c < 3 * m->ntris; c++) {
-        if (j < nc && w->corner_at[j] == c && crease_side(w, j++))
-            continue;
-        plain[m->tri[c]] = 1;
+        bool side = j < nc && w->corner_at[j] == c && crease_side(w, j);
+        j += j < nc && w->corner_at[j] == c;
+        if (!side)
+            plain[m->tri[c]] = 1;
     }
     return plain;
 }
@@ -54,7 +56,7 @@ static void sum_sides(const side_key *k, size_t nk, const float *own, float *n)
         if (!i || cmp_side(&k[i], &k[i - 1]))
             for (int a = 0; a < 3; a++)
                 s[a] += k[i].normal[a];
-    double len = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+    double len = ism_norm3(s);
     if (len > 0 && isfinite(len))
         for (int a = 0; a < 3; a++)
             n[a] = (float)(s[a] / len);

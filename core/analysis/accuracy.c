@@ -17,6 +17,7 @@
 #include "core/analysis/select.h"
 #include "core/analysis/nearest.h"
 #include "core/util/dist_bound.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -61,17 +62,17 @@ static double distance_at(const sample_pass *sp, ism_eval_ws *ws, const double p
 {
     double g[3];
     double fv = ism_eval_gradient(sp->f, ws, p[0], p[1], p[2], g);
-    double gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]), d = fabs(fv) / gn;
+    double gn = ism_norm3(g), d = fabs(fv) / gn;
     if (!(gn > sp->threshold && isfinite(d)))
         d = NAN;
     const double *v[ISM_DIST_CORNERS];
-    double dv[ISM_DIST_CORNERS];
-    for (int k = 0; k < n; k++) {
+    for (int k = 0; k < n; k++)
         v[k] = sp->m->pos + 3 * (size_t)idx[k];
-        dv[k] = sp->singular[idx[k]] ? NAN : (double)sp->vdist[idx[k]];
-    }
     if (!(d * d > ism_nearest_corner_sq(p, v, n)))
         return d; /* NaN stays: skipped, as before the bound (a figure only ever shrinks) */
+    double dv[ISM_DIST_CORNERS];
+    for (int k = 0; k < n; k++)
+        dv[k] = sp->singular[idx[k]] ? NAN : (double)sp->vdist[idx[k]];
     return ism_dist_through_corners(d, p, v, dv, n);
 }
 
