@@ -17,15 +17,24 @@ the grid plus the contouring).
 For each surface, target error E and tool, the tool's one resolution knob (isomesh: the
 requested max_error, depth 10 as the safety limit; libfive: min_feature, max_err left at its
 default; grids: N cells across the box) is searched: doubled or halved until one setting
-meets E and one does not, then 3 geometric bisections; the cheapest setting that met E is
-kept (its CPU the least of 2-4 runs). A run past RUN_CPU_LIMIT_S CPU seconds or a grid
-past MAX_CELLS counts as not reaching E. Goals (issue 16): isomesh's CPU <= 0.5 x libfive's
+meets E and one does not, then 3 geometric bisections (one run each: the error, triangles
+and a first CPU figure). The error is not monotone in the knob (torus: E 0.016 gives 0.0133,
+0.018 gives 0.0125), so every setting that met E may be the cheapest: the few whose first
+CPU figure is near the least (CANDIDATES) and the one with the fewest triangles are timed
+again, each call repeated inside its process until ~TIMED_WORK_S CPU seconds of work (a 4 ms
+run is one scheduler slice at load 20: single runs of one setting spread 4-8 ms), and the
+per-run mean counts. Settings whose means tie within the noise (TIE_FRACTION, or twice the
+means' standard error) count as equally fast, and the one with the fewest triangles is
+kept. The report prints each tool's setting (isomesh: E and the depth limit; libfive:
+min_feature and the octree depth it implies), its triangles, measured error, runs and the
+runs' spread. A run past RUN_CPU_LIMIT_S CPU seconds or a grid past MAX_CELLS counts as not
+reaching E. Goals (issue 16): isomesh's CPU <= 0.5 x libfive's
 and <= 0.2 x VTK's at every target; <= 1.5 µs CPU per triangle on the gyroid.
 Asserts nothing; exits 0 unless it cannot run.
 
   bench_equal_error.py --build build/release [--quick] [--only NAME] [--libfive DIR]
                        [--tools isomesh,libfive,vtk,skimage] [--primal] [--straddle]
-                       [--raw | --simplify] [--measure centroid|all]
+                       [--raw | --simplify] [--measure centroid|all] [--verbose]
 (isomesh as a request under max_error by default: the dual mesh where it applies, the primal
 polygons elsewhere, neither simplified; --simplify: then simplified within E (the fewest
 triangles; the primal polygons' default up to mesher-18); --raw: the default, kept for old
@@ -50,7 +59,16 @@ RUN_WALL_LIMIT_S = 900    # the machine may be loaded 10x: wall time is only a s
 MAX_CELLS = 512           # grids: 513^3 float32 samples (0.5 GB) at most
 ISO_DEPTH = 10            # isomesh's depth.max under max_error (a safety limit)
 BISECTIONS = 3
-QUICK_RUN_S = 0.05        # the chosen setting is run again (3 more times when quicker than this)
+TIMED_WORK_S = 0.1        # a candidate's call is repeated in its process to this much CPU
+MAX_REPEAT = 1000         # ... at most this many times (bench_error.c's MAX_REPEAT)
+CANDIDATES = 4            # settings that met E timed again (least first CPU figure first) ...
+CANDIDATE_FACTOR = 2.0    # ... when their first figure is within this factor of the least
+CANDIDATE_SLACK_S = 0.01  # ... plus this (single runs of a few ms spread 2x under load);
+LONG_CANDIDATE_FACTOR = 1.25  # ... or of this when the least is TIMED_WORK_S or more (a
+#                           call that long is timed once more and the two averaged: runs of
+#                           a second spread a few % where runs of 4 ms spread 2x)
+TIE_FRACTION = 0.05       # means within 5% of the least are a tie (fewer triangles win):
+#                           in-process repeats of one setting spread 1-3% at load 15-25
 CPU_RESOLUTION_S = 1e-4   # shorter CPU times are read as this (no ratio by a zero)
 MAX_RUNS_PER_TARGET = 12
 MEASURE = "max_c"         # bench_error's key the targets are met by (--measure: max_c or max_all)
@@ -75,7 +93,14 @@ def run(argv):
     return out
 
 
-# ---- the tools: each maps a resolution x (larger = finer) to {cpu_s, triangles, max_c} --------
+def timing(r):
+    """A run's CPU figures: the per-call mean, its standard deviation, the calls made."""
+    return dict(cpu_s=max(r["cpu_s"], CPU_RESOLUTION_S), cpu_sd=r.get("cpu_sd", 0.0),
+                runs=r.get("runs", 1))
+
+
+# ---- the tools: each maps a resolution x (larger = finer) to {cpu_s, cpu_sd, runs, triangles,
+# max_c}; run(s, x, repeat) with repeat > 1 times the call again (timing only) ----------------
 
 class Tool:
     name = "?"
@@ -83,16 +108,18 @@ class Tool:
     def __init__(self, bench, tmp):
         self.bench, self.tmp = bench, tmp
 
-    def measure(self, s, ply, inner):
+    def measure(self, s, ply, inner, timing_only=False):
         if inner is None:
             return None
-        m = run([self.bench, "measure", s["name"], ply] + (["all"] if MEASURE == "max_all" else []))
+        m = None if timing_only else run([self.bench, "measure", s["name"], ply] +
+                                         (["all"] if MEASURE == "max_all" else []))
         if os.path.exists(ply):
             os.unlink(ply)
+        if timing_only:
+            return timing(inner)
         if m is None:
             return None
-        return dict(cpu_s=max(inner["cpu_s"], CPU_RESOLUTION_S), triangles=m["triangles"],
-                    max_c=m[MEASURE])
+        return dict(timing(inner), triangles=m["triangles"], max_c=m[MEASURE])
 
 
 class Isomesh(Tool):
@@ -105,13 +132,13 @@ class Isomesh(Tool):
     def start(self, s, e):
         return 1 / e
 
-    def setting(self, x):
-        return f"E={1 / x:.3g}"
+    def setting(self, s, x):
+        return f"E={1 / x:.3g} d<={ISO_DEPTH}"
 
-    def run(self, s, x):
-        r = run([self.bench, "mesh", s["name"], repr(1 / x), str(ISO_DEPTH), *self.words])
-        return r and dict(cpu_s=max(r["cpu_s"], CPU_RESOLUTION_S), triangles=r["triangles"],
-                          max_c=r[MEASURE])
+    def run(self, s, x, repeat=1):
+        r = run([self.bench, "mesh", s["name"], repr(1 / x), str(ISO_DEPTH), *self.words,
+                 f"repeat={repeat}"])
+        return r and dict(timing(r), triangles=r["triangles"], max_c=r[MEASURE])
 
 
 class Grid(Tool):
@@ -125,10 +152,10 @@ class Grid(Tool):
     def start(self, s, e):
         return max(8, round(4 * (s["box"][3] - s["box"][0]) / math.sqrt(e) / 10))
 
-    def setting(self, x):
+    def setting(self, s, x):
         return f"N={x}"
 
-    def run(self, s, x):
+    def run(self, s, x, repeat=1):
         if x > MAX_CELLS:
             return None
         ply = os.path.join(self.tmp, f"{self.tool}-{s['name']}-{x}.ply")
@@ -136,7 +163,15 @@ class Grid(Tool):
                 "--surface", s["name"], "--box=" + ",".join(repr(float(v)) for v in s["box"]),
                 "--cells", str(x), "--out", ply]
         argv += [f"--param={k}={v!r}" for k, v in s["params"].items()]
-        return self.measure(s, ply, run(argv))
+        if repeat == 1:
+            return self.measure(s, ply, run(argv))
+        calls = [run(argv) for _ in range(min(repeat, 3))]  # a process each: at most 3
+        if any(c is None for c in calls):
+            return None
+        cpu = [c["cpu_s"] for c in calls]
+        mean = sum(cpu) / len(cpu)
+        sd = math.sqrt(sum((c - mean) ** 2 for c in cpu) / (len(cpu) - 1)) if len(cpu) > 1 else 0
+        return self.measure(s, ply, dict(cpu_s=mean, cpu_sd=sd, runs=len(cpu)), True)
 
 
 class Libfive(Tool):
@@ -149,12 +184,16 @@ class Libfive(Tool):
     def start(self, s, e):
         return 1 / (2 * math.sqrt(e))
 
-    def setting(self, x):
-        return f"mf={1 / x:.3g}"
+    def setting(self, s, x):
+        """min_feature, and the depth it implies: libfive splits a cell while it is larger
+        than min_feature (the box's side halved per level)."""
+        side = s["box"][3] - s["box"][0]
+        return f"mf={1 / x:.3g} d{max(0, math.ceil(math.log2(side * x)))}"
 
-    def run(self, s, x):
+    def run(self, s, x, repeat=1):
         ply = os.path.join(self.tmp, f"libfive-{s['name']}.ply")
-        return self.measure(s, ply, run([self.exe, "mesh", s["name"], repr(1 / x), "1e-8", ply]))
+        return self.measure(s, ply, run([self.exe, "mesh", s["name"], repr(1 / x), "1e-8", ply,
+                                         str(repeat)]), repeat > 1)
 
 
 def step(tool, x, up):
@@ -208,13 +247,55 @@ def search(tool, s, e, cache):
             hi = m
         else:
             lo = m
-    best_x = min((x for x, r in cache.items() if ok(r)), key=lambda x: cache[x]["cpu_s"])
-    best = dict(cache[best_x])
-    for _ in range(3 if best["cpu_s"] < QUICK_RUN_S else 1):
-        again = tool.run(s, best_x)  # the least disturbed run counts
-        if again and again["cpu_s"] < best["cpu_s"]:
-            best["cpu_s"] = again["cpu_s"]
-    best["setting"] = tool.setting(best_x)
+    return pick(tool, s, {x: r for x, r in cache.items() if ok(r)})
+
+
+def timed(tool, s, x, first):
+    """Setting x's CPU per call: the call repeated in its process to ~TIMED_WORK_S of work
+    (first: its single run from the search, whose error and triangles are kept)."""
+    cpu = max(first["cpu_s"], CPU_RESOLUTION_S)
+    reps = 1 if cpu >= TIMED_WORK_S else max(2, min(MAX_REPEAT, math.ceil(TIMED_WORK_S / cpu)))
+    r = tool.run(s, x, reps)
+    if r is None:
+        return None
+    if reps == 1:  # a long call: its two runs (the search's and this one)
+        a, b = first["cpu_s"], r["cpu_s"]
+        r = dict(r, cpu_s=(a + b) / 2, cpu_sd=abs(a - b) / math.sqrt(2), runs=2)
+    return dict(first, cpu_s=r["cpu_s"], cpu_sd=r["cpu_sd"], runs=r["runs"])
+
+
+def pick(tool, s, met):
+    """Of the settings that met E (x -> single run), the cheapest by timed means; within a
+    tie (TIE_FRACTION, or twice the standard error of the difference) the fewest triangles."""
+    if not met:
+        return None
+    by_cpu = sorted(met, key=lambda x: met[x]["cpu_s"])
+    least = met[by_cpu[0]]["cpu_s"]
+    factor, slack = ((CANDIDATE_FACTOR, CANDIDATE_SLACK_S) if least < TIMED_WORK_S
+                     else (LONG_CANDIDATE_FACTOR, 0))
+    chosen = [x for x in by_cpu if met[x]["cpu_s"] <= factor * least + slack][:CANDIDATES]
+    fewest = min(met, key=lambda x: (met[x]["triangles"], met[x]["cpu_s"]))
+    if fewest not in chosen:
+        chosen.append(fewest)
+    timings = {x: timed(tool, s, x, met[x]) for x in chosen}
+    timings = {x: t for x, t in timings.items() if t is not None}
+    if not timings:
+        return None
+    fastest = min(timings.values(), key=lambda t: t["cpu_s"])
+
+    def ties(t):
+        se = math.sqrt((t["cpu_sd"] ** 2) / t["runs"] + (fastest["cpu_sd"] ** 2) / fastest["runs"])
+        return t["cpu_s"] - fastest["cpu_s"] <= max(TIE_FRACTION * fastest["cpu_s"], 2 * se)
+
+    best_x = min((x for x, t in timings.items() if ties(t)),
+                 key=lambda x: (timings[x]["triangles"], timings[x]["cpu_s"]))
+    best = dict(timings[best_x])
+    best["setting"] = tool.setting(s, best_x)
+    best["candidates"] = [
+        f"{tool.setting(s, x)}: {t['triangles']} tri, {MEASURE} {t['max_c']:.3g}, "
+        f"{1e3 * t['cpu_s']:.2f}±{1e3 * t['cpu_sd']:.2f} ms x{t['runs']}"
+        + (" <" if x == best_x else "")
+        for x, t in sorted(timings.items(), key=lambda xt: xt[1]["cpu_s"])]
     return best
 
 
@@ -275,10 +356,10 @@ def check_formulas(bench, s, libfive):
 
 # ---- the report --------------------------------------------------------------------------------
 
-def bench_surface(s, tools):
+def bench_surface(s, tools, verbose):
     print(f"\n=== {s['name']}  box {s['box']}  targets {s['targets']}")
-    head = (f"{'E':>8} {'tool':<9}{'setting':>12}{'CPU s':>9}{'triangles':>11}{'µs/tri':>8}"
-            f"{'max c':>10}{'iso/tool':>9}")
+    head = (f"{'E':>8} {'tool':<9}{'setting':>17}{'CPU s':>9}{'± sd':>8}{'runs':>6}"
+            f"{'triangles':>11}{'µs/tri':>8}{'max c':>10}{'iso/tool':>9}")
     print(head)
     print("-" * len(head))
     caches = {t.name: {} for t in tools}
@@ -289,12 +370,15 @@ def bench_surface(s, tools):
         for t in tools:
             b = found[t.name]
             if b is None:
-                print(f"{e:>8.2g} {t.name:<9}{'not reached within the limits':>40}")
+                print(f"{e:>8.2g} {t.name:<9}{'not reached within the limits':>45}")
                 continue
             us = 1e6 * b["cpu_s"] / max(b["triangles"], 1)
             ratio = "" if t.name == "isomesh" or not iso else f"{iso['cpu_s'] / b['cpu_s']:9.2f}"
-            print(f"{e:>8.2g} {t.name:<9}{b['setting']:>12}{b['cpu_s']:9.3f}{b['triangles']:>11}"
+            print(f"{e:>8.2g} {t.name:<9}{b['setting']:>17}{b['cpu_s']:9.4f}"
+                  f"{b['cpu_sd']:8.4f}{b['runs']:>6}{b['triangles']:>11}"
                   f"{us:8.2f}{b['max_c']:10.3g}{ratio}")
+            if verbose:
+                print("           timed: " + "; ".join(b["candidates"]))
         sys.stdout.flush()
         rows.append((e, found))
     return rows
@@ -330,6 +414,9 @@ def main():
     ap.add_argument("--quick", action="store_true", help="the coarsest target only")
     ap.add_argument("--only", default="", help="surfaces whose name contains this")
     ap.add_argument("--libfive", default=LIBFIVE_DIR)
+    ap.add_argument("--verbose", action="store_true",
+                    help="under each row, every setting timed again (mean ± sd per call, "
+                         "the runs) and the one kept (<)")
     ap.add_argument("--tools", default="isomesh,libfive,vtk,skimage")
     ap.add_argument("--straddle", action="store_true",
                     help="isomesh with the straddle option (core/octree/straddle.h)")
@@ -404,7 +491,7 @@ def main():
             if bad:
                 print(f"\n=== {s['name']}: skipped, formulas differ from isomesh's: {bad}")
                 continue
-            goals += goal_lines(s["name"], bench_surface(s, tools))
+            goals += goal_lines(s["name"], bench_surface(s, tools, args.verbose))
         print("\n=== goals (PASS/MISS are reports, not assertions)")
         for g in goals:
             print(g)

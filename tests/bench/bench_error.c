@@ -5,7 +5,7 @@
  * to f = 0, in closed form for the sphere and the torus, else the length of the Newton
  * projection q <- q - f ∇f / |∇f|² (on the tape compiled from the same expression).
  *
- *   bench_error mesh NAME E [DEPTH [raw|simplify] [primal] [straddle] [crease]]
+ *   bench_error mesh NAME E [DEPTH [raw|simplify] [primal] [straddle] [crease] [repeat=N]]
  *                                        isomesh as the service does by default (core/
  *                                        singular/surface.h: the locus, the dual mesh where
  *                                        it applies, core/octree/dual.h, else the primal
@@ -17,7 +17,12 @@
  *                                        straddle.h ("dual" is accepted: the default);
  *                                        crease: the dual mesh also along a top min/max's
  *                                        crease (the option dual_crease, off by default,
- *                                        core/octree/dual_crease.h); one thread
+ *                                        core/octree/dual_crease.h); one thread;
+ *                                        repeat=N: the whole call N times in the process
+ *                                        (the same mesh each time), cpu_s their mean and
+ *                                        cpu_sd the runs' standard deviation (a run of a few
+ *                                        ms is one scheduler slice: bench_equal_error.py
+ *                                        repeats it to ~0.1 s of work)
  *   bench_error measure NAME FILE.ply [all]   (all: midpoints and corners too)
  *                                        a mesh from another tool (binary little-endian PLY:
  *                                        double x y z, faces as uchar count + int32 indices)
@@ -46,6 +51,8 @@
 #define STEP_TOL 1e-14
 #define MAX_PLY_HEADER 4096
 #define MAX_POINTS 4096
+/* repeat=N at most (a 4 ms torus run 1,000 times is 4 s) */
+#define MAX_REPEAT 1000
 
 enum dist_kind { DIST_NEWTON, DIST_SPHERE, DIST_TORUS };
 
@@ -251,8 +258,31 @@ static ism_tape *compile(const surface *s)
     return t;
 }
 
+/* One meshing call (the surface pipeline, then the simplification when asked) into *mesh
+ * and *locus (initialised here); its CPU seconds in *cpu, the polygonise part in *poly_cpu.
+ * ISM_POLY_OK or the failure (err says why). */
+static enum ism_poly_status mesh_once(const ism_tape *t, const ism_poly_options *o, bool asked,
+                                      ism_mesh *mesh, ism_locus *locus, ism_poly_stats *ps,
+                                      ism_surface_times *times, ism_simplify_stats *ss,
+                                      double *cpu, double *poly_cpu, ism_error *err)
+{
+    ism_mesh_init(mesh);
+    ism_locus_init(locus);
+    ism_conform_stats cs;
+    memset(ss, 0, sizeof *ss);
+    double c0 = cpu_seconds();
+    enum ism_poly_status st = ism_mesh_surface(t, o, mesh, locus, ps, &cs, times, err);
+    double c1 = cpu_seconds();
+    if (st == ISM_POLY_OK && ism_simplify_after(asked, o->max_error) &&
+        !ism_simplify_pass(t, locus, NULL, o->max_error, NULL, mesh, ss, err))
+        st = ISM_POLY_NO_MEMORY;
+    *cpu = cpu_seconds() - c0;
+    *poly_cpu = c1 - c0;
+    return st;
+}
+
 static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, int depth,
-                    bool asked, bool straddle, bool dual, bool crease)
+                    bool asked, bool straddle, bool dual, bool crease, int repeat)
 {
     ism_poly_options o;
     ism_poly_options_default(&o);
@@ -264,34 +294,40 @@ static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, 
     o.dual = dual;
     o.dual_crease = crease;
     ism_mesh mesh;
-    ism_mesh_init(&mesh);
     ism_locus locus;
-    ism_locus_init(&locus);
     ism_poly_stats ps;
-    ism_conform_stats cs;
     ism_surface_times times;
     ism_error err;
     ism_simplify_stats ss;
-    memset(&ss, 0, sizeof ss);
-    double c0 = cpu_seconds();
-    enum ism_poly_status st = ism_mesh_surface(t, &o, &mesh, &locus, &ps, &cs, &times, &err);
-    double c1 = cpu_seconds();
-    bool simplify = ism_simplify_after(asked, e);
-    if (st == ISM_POLY_OK && simplify && !ism_simplify_pass(t, &locus, NULL, e, NULL, &mesh, &ss, &err))
-        st = ISM_POLY_NO_MEMORY;
-    double c2 = cpu_seconds(), cpu = c2 - c0;
+    double sum = 0, sum2 = 0, cpu = 0, poly_cpu = 0;
+    enum ism_poly_status st = ISM_POLY_OK;
+    for (int r = 0; r < repeat && st == ISM_POLY_OK; r++) {
+        if (r) { /* the same mesh again: only the time is wanted */
+            ism_locus_free(&locus);
+            ism_mesh_free(&mesh);
+        }
+        st = mesh_once(t, &o, asked, &mesh, &locus, &ps, &times, &ss, &cpu, &poly_cpu, &err);
+        sum += cpu;
+        sum2 += cpu * cpu;
+    }
     if (st != ISM_POLY_OK) {
         fprintf(stderr, "bench_error: %s: %s\n", s->name, err.message);
+        ism_locus_free(&locus);
+        ism_mesh_free(&mesh);
         return 1;
     }
+    double mean = sum / repeat;
+    double sd = repeat > 1 ? sqrt(fmax(0, (sum2 - sum * mean) / (repeat - 1))) : 0;
+    bool simplify = ism_simplify_after(asked, e);
     error_stats es = centroid_error(m, mesh.pos, mesh.tri, mesh.ntris, true);
-    printf("{\"cpu_s\": %.6f, \"mesh_cpu_ms\": %.3f, \"simplify_cpu_ms\": %.3f, "
+    printf("{\"cpu_s\": %.6f, \"cpu_sd\": %.6f, \"runs\": %d, \"mesh_cpu_ms\": %.3f, "
+           "\"simplify_cpu_ms\": %.3f, "
            "\"poly_ms\": %.3f, \"singular_ms\": %.3f, \"simplify_ms\": %.3f, "
            "\"triangles_raw\": %zu, \"triangles\": %zu, "
            "\"max_c\": %.6g, \"max_m\": %.6g, \"max_v\": %.6g, \"max_all\": %.6g, "
            "\"mean_c\": %.6g, \"rounds\": %llu, "
            "\"missed\": %llu, \"mesher\": \"%s\", \"dual_declined\": \"%s\"}\n",
-           cpu, 1e3 * (c1 - c0), 1e3 * (c2 - c1), times.polygonise_ms,
+           mean, sd, repeat, 1e3 * poly_cpu, 1e3 * (cpu - poly_cpu), times.polygonise_ms,
            times.singular_ms, ss.time_ms,
            simplify ? ss.triangles_before : es.triangles, es.triangles, es.max, es.max_mid,
            es.max_vert, fmax(es.max, fmax(es.max_mid, es.max_vert)), es.mean, (unsigned long long)ps.error_rounds, (unsigned long long)ps.error_missed_nodes,
@@ -299,6 +335,18 @@ static int cmd_mesh(const surface *s, const ism_tape *t, measurer *m, double e, 
     ism_locus_free(&locus);
     ism_mesh_free(&mesh);
     return 0;
+}
+
+/* N from a word repeat=N among argv[from..argc), else 1; 0 when N is not in 1..MAX_REPEAT. */
+static int repeat_word(int argc, char **argv, int from)
+{
+    for (int i = from; i < argc; i++)
+        if (strncmp(argv[i], "repeat=", 7) == 0) {
+            char *end;
+            long n = strtol(argv[i] + 7, &end, 10);
+            return *end == 0 && n >= 1 && n <= MAX_REPEAT ? (int)n : 0;
+        }
+    return 1;
 }
 
 /* Is word one of argv[from..argc)? */
@@ -368,7 +416,8 @@ int main(int argc, char **argv)
     if (argc == 2 && strcmp(argv[1], "list") == 0)
         return cmd_list();
     if (argc < 4) {
-        fprintf(stderr, "usage: bench_error mesh NAME E [DEPTH [raw|simplify] [primal] [straddle] [crease]] | measure NAME FILE.ply [all] | "
+        fprintf(stderr, "usage: bench_error mesh NAME E [DEPTH [raw|simplify] [primal] [straddle] [crease] "
+                        "[repeat=N]] | measure NAME FILE.ply [all] | "
                         "eval NAME X,Y,Z[;...] | list\n");
         return 2;
     }
@@ -378,11 +427,13 @@ int main(int argc, char **argv)
         return 1;
     measurer m = {s, t, ism_eval_ws_new(t)};
     int rc = 2;
-    if (strcmp(argv[1], "mesh") == 0)
+    if (strcmp(argv[1], "mesh") == 0 && repeat_word(argc, argv, 5) == 0)
+        fprintf(stderr, "bench_error: repeat=N wants N in 1..%d\n", MAX_REPEAT);
+    else if (strcmp(argv[1], "mesh") == 0)
         rc = cmd_mesh(s, t, &m, atof(argv[3]), argc > 4 ? atoi(argv[4]) : 10,
                       has_word(argc, argv, 5, "simplify"),
                       has_word(argc, argv, 5, "straddle"), !has_word(argc, argv, 5, "primal"),
-                      has_word(argc, argv, 5, "crease"));
+                      has_word(argc, argv, 5, "crease"), repeat_word(argc, argv, 5));
     else if (strcmp(argv[1], "measure") == 0)
         rc = cmd_measure(&m, argv[3], has_word(argc, argv, 4, "all"));
     else if (strcmp(argv[1], "eval") == 0)

@@ -5,12 +5,16 @@
 // faces) for bench_error measure. Built by the bench against a libfive built from source in
 // a scratch folder (never part of isomesh's build).
 //
-//   libfive_mesher mesh NAME MIN_FEATURE MAX_ERR OUT.ply   prints {"cpu_s", "triangles"}
+//   libfive_mesher mesh NAME MIN_FEATURE MAX_ERR OUT.ply [REPEAT]
+//                          prints {"cpu_s", "cpu_sd", "runs", "triangles"}: with REPEAT, the
+//                          render call REPEAT times (the same mesh), cpu_s their mean and
+//                          cpu_sd their standard deviation (bench_error.c's repeat=N)
 //   libfive_mesher eval NAME X,Y,Z[;...]                   f at points (float), JSON list
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <ctime>
 #include <string>
 #include <vector>
@@ -103,7 +107,7 @@ bool write_ply(const char* path, const libfive::Mesh& m)
     return std::fclose(f) == 0;
 }
 
-int mesh(const Surface& s, double min_feature, double max_err, const char* out)
+int mesh(const Surface& s, double min_feature, double max_err, const char* out, int repeat)
 {
     Tree t = build(s.name);
     libfive::Region<3> region({-s.half, -s.half, -s.half}, {s.half, s.half, s.half});
@@ -111,14 +115,26 @@ int mesh(const Surface& s, double min_feature, double max_err, const char* out)
     settings.min_feature = min_feature;
     settings.max_err = max_err;
     settings.workers = 1;
-    double c0 = cpu_seconds();
-    auto m = libfive::Mesh::render(t, region, settings);
-    double cpu = cpu_seconds() - c0;
+    std::unique_ptr<libfive::Mesh> m;
+    double sum = 0, sum2 = 0;
+    for (int r = 0; r < repeat; r++) {
+        m.reset();  // the last run's mesh is the one written
+        double c0 = cpu_seconds();
+        m = libfive::Mesh::render(t, region, settings);
+        double cpu = cpu_seconds() - c0;
+        sum += cpu;
+        sum2 += cpu * cpu;
+        if (!m)
+            break;
+    }
     if (!m || !write_ply(out, *m)) {
         std::fprintf(stderr, "libfive_mesher: %s failed\n", s.name);
         return 1;
     }
-    std::printf("{\"cpu_s\": %.6f, \"triangles\": %zu}\n", cpu, m->branes.size());
+    double mean = sum / repeat;
+    double sd = repeat > 1 ? std::sqrt(std::fmax(0.0, (sum2 - sum * mean) / (repeat - 1))) : 0;
+    std::printf("{\"cpu_s\": %.6f, \"cpu_sd\": %.6f, \"runs\": %d, \"triangles\": %zu}\n",
+                mean, sd, repeat, m->branes.size());
     return 0;
 }
 
@@ -144,15 +160,17 @@ int eval(const Surface& s, const char* text)
 int main(int argc, char** argv)
 {
     if (argc < 4) {
-        std::fprintf(stderr, "usage: libfive_mesher mesh NAME MIN_FEATURE MAX_ERR OUT.ply | "
+        std::fprintf(stderr, "usage: libfive_mesher mesh NAME MIN_FEATURE MAX_ERR OUT.ply [REPEAT] | "
                              "eval NAME X,Y,Z[;...]\n");
         return 2;
     }
     for (const Surface& s : SURFACES) {
         if (std::strcmp(s.name, argv[2]) != 0)
             continue;
-        if (std::strcmp(argv[1], "mesh") == 0 && argc == 6)
-            return mesh(s, std::atof(argv[3]), std::atof(argv[4]), argv[5]);
+        int repeat = argc == 7 ? std::atoi(argv[6]) : 1;
+        if (std::strcmp(argv[1], "mesh") == 0 && (argc == 6 || argc == 7) && repeat >= 1 &&
+            repeat <= 1000)
+            return mesh(s, std::atof(argv[3]), std::atof(argv[4]), argv[5], repeat);
         if (std::strcmp(argv[1], "eval") == 0)
             return eval(s, argv[3]);
         return 2;
