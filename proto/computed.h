@@ -4,9 +4,11 @@
  * (server/common/pipeline.h), so asking for a second format never polygonises again.
  *
  * Its binary form is the cache entry "<surface key>.mesh" (the surface key names the surface
- * and its accuracy, not the encoding: proto/request.h). Entry format, version 5 (the
- * corners' locus marks added: the PLY keeps one row per vertex at the singular locus), all numbers little endian, built from the length-prefixed fields of
- * proto/frame.h:
+ * and its accuracy, not the encoding: proto/request.h). Entry format, version 6 (5: the
+ * corners' locus marks added, so the PLY keeps one row per vertex at the singular locus; 6:
+ * the same layout, the locus corners' normals joined per half-sheet (proto/sheet_groups.h),
+ * so a version 5 entry would still send one point per corner), all numbers little endian,
+ * built from the length-prefixed fields of proto/frame.h:
  *
  *   bytes "ISMS", u32 version (ISM_COMPUTED_VERSION), string surface key (64 hex),
  *   u32 empty, u64 nverts, u64 ntris,
@@ -44,7 +46,7 @@
 #include "proto/stats.h"
 #include "proto/wire_mesh.h"
 
-#define ISM_COMPUTED_VERSION 5
+#define ISM_COMPUTED_VERSION 6
 /* The cache entry's extension ("<surface key>.mesh"). */
 #define ISM_COMPUTED_EXT "mesh"
 

@@ -226,13 +226,65 @@ static void obj_cut_curves(ism_sink *s, const ism_features *f)
     }
 }
 
+/* As cmp_side, then by entry (the normal's place in w->corner_normal). */
+static int cmp_side_entry(const void *x, const void *y)
+{
+    const side_key *a = x, *b = y;
+    int c = cmp_side(a, b);
+    return c ? c : (a->normal > b->normal) - (a->normal < b->normal);
+}
+
+/* The OBJ's corner normals, each distinct (vertex, normal) once: corners of one vertex with
+ * bit-equal normals (one half-sheet at the singular locus, one crease side) share one `vn`,
+ * as they share one point in drc/glb (corner_split.c). Listed in order of first use, so a
+ * file without such repeats is the one-`vn`-per-corner file. cn's which and normal are
+ * malloc'd (the caller frees them); false when out of memory. */
+static bool obj_distinct_normals(const ism_mesh *m, const ism_wire_mesh *w,
+                                 ism_obj_corner_normals *cn)
+{
+    size_t n = w->ncorner_normals, k = 0;
+    side_key *key = malloc(n * sizeof *key);
+    uint32_t *first = malloc(n * sizeof *first), *which = malloc(n * sizeof *which);
+    float *normal = malloc(3 * n * sizeof *normal);
+    bool ok = key && first && which && normal;
+    for (size_t j = 0; ok && j < n; j++)
+        key[j] = (side_key){m->tri[w->corner_at[j]], w->corner_normal + 3 * j};
+    if (ok)
+        qsort(key, n, sizeof *key, cmp_side_entry);
+    for (size_t i = 0, e; ok && i < n; i = e) { /* a run's head is its first entry */
+        uint32_t head = (uint32_t)((key[i].normal - w->corner_normal) / 3);
+        for (e = i; e < n && !cmp_side(&key[e], &key[i]); e++)
+            first[(key[e].normal - w->corner_normal) / 3] = head;
+    }
+    for (size_t j = 0; ok && j < n; j++) {
+        if (first[j] == j) {
+            memcpy(normal + 3 * k, w->corner_normal + 3 * j, 3 * sizeof *normal);
+            which[j] = (uint32_t)k++;
+        } else {
+            which[j] = which[first[j]];
+        }
+    }
+    free(key);
+    free(first);
+    if (!ok) {
+        free(which);
+        free(normal);
+        return false;
+    }
+    *cn = (ism_obj_corner_normals){n, w->corner_at, normal, which, k};
+    return true;
+}
+
 bool ism_write_obj_features(const ism_mesh *m, const ism_wire_mesh *w, const ism_features *f,
                             ism_write_fn write, void *ctx)
 {
-    ism_obj_corner_normals cn = {0, NULL, NULL};
-    if (w && w->ncorner_normals)
-        cn = (ism_obj_corner_normals){w->ncorner_normals, w->corner_at, w->corner_normal};
-    if (!ism_write_obj_corners(m, &cn, write, ctx))
+    ism_obj_corner_normals cn = {0, NULL, NULL, NULL, 0};
+    if (w && w->ncorner_normals && !obj_distinct_normals(m, w, &cn))
+        return false;
+    bool written = ism_write_obj_corners(m, &cn, write, ctx);
+    free((void *)cn.which);
+    free((void *)cn.normal);
+    if (!written)
         return false;
     if (!f)
         return true;

@@ -7,6 +7,7 @@
  * normals) and the sheets through a vertex on the singular locus (ism_wire_corner_normals). */
 #include "proto/wire_mesh.h"
 #include "proto/request.h"
+#include "proto/sheet_groups.h"
 #include "core/curves/branches.h"
 #include "core/curves/crease_normals.h"
 #include "core/eval/eval.h"
@@ -227,6 +228,8 @@ static bool all_corner_normals(const ism_tape *f, const ism_mesh *m, const ism_c
             memcpy(cn + 3 * c, vn + 3 * (size_t)m->tri[c], 3 * sizeof *cn);
     for (size_t t = 0; ok && t < m->ntris; t++)
         singular_corners(f, ws, m, vn, gn, t, cn, *on_locus);
+    if (ok)
+        ok = ism_sheet_groups_join(m, *on_locus, cn); /* one normal per half-sheet */
     free(gn);
     ism_eval_ws_free(ws);
     return ok;

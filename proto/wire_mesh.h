@@ -61,8 +61,9 @@ void ism_wire_mesh_free(ism_wire_mesh *w);
  * or no normals in w). Corners at a vertex on the singular locus (∇f = 0 there: a double
  * curve's vertex is shared by two sheets, and its one normal — noise, or the average of
  * every sheet through it — shades the triangles beside the curve as saw teeth; issue 13)
- * that no crease side claims carry their own triangle's sheet normal, marked 1 in malloc'd
- * *locus (per entry of *at; NULL when no entry is such a corner). an: m's analysis with f
+ * that no crease side claims carry their own sheet's normal — one per half-sheet there
+ * (proto/sheet_groups.h), the same float triple for each of its corners — marked 1 in
+ * malloc'd *locus (per entry of *at; NULL when no entry is such a corner). an: m's analysis with f
  * evaluated (curvature or accuracy asked, so singular_vertices is counted), or NULL (a
  * preview): when it counts no singular vertex and f has no branches, nothing is looked
  * for. False when out of memory. */

@@ -20,16 +20,20 @@ bool ism_write_ply(const ism_mesh *m, ism_write_fn write, void *ctx);
  * coordinates with 9 significant digits (float precision). */
 bool ism_write_obj(const ism_mesh *m, ism_write_fn write, void *ctx);
 
-/* Corners with a normal of their own (a crease's sides): at[j] is the corner 3 t + k
- * (ascending), normal[3 j ..] its unit normal. */
+/* Corners with a normal of their own (a crease's sides, the singular locus's sheets): at[j]
+ * is the corner 3 t + k (ascending), normal[3 which[j] ..] its unit normal (which NULL:
+ * normal[3 j ..], and nnormals is n); several corners may share one normal (one half-sheet
+ * at a vertex). */
 typedef struct ism_obj_corner_normals {
     size_t n;
     const uint32_t *at;
     const float *normal;
+    const uint32_t *which;
+    size_t nnormals;
 } ism_obj_corner_normals;
 
-/* As ism_write_obj, with cn's n normals written after the vertices' `vn` lines and used by
- * those corners (`f a//nA ...`); cn NULL or empty writes ism_write_obj's file. */
+/* As ism_write_obj, with cn's nnormals normals written after the vertices' `vn` lines and
+ * used by those corners (`f a//nA ...`); cn NULL or empty writes ism_write_obj's file. */
 bool ism_write_obj_corners(const ism_mesh *m, const ism_obj_corner_normals *cn,
                            ism_write_fn write, void *ctx);
 

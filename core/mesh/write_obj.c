@@ -1,6 +1,7 @@
 /* write_obj.c — Wavefront OBJ text: a comment line, `v` and `vn` lines per vertex (9
- * significant digits, enough for float32 round trips), then one `vn` per corner that has a
- * normal of its own (a crease side), `f a//na b//nb c//nc` per triangle. */
+ * significant digits, enough for float32 round trips), then one `vn` per normal of the
+ * corners that have one of their own (a crease side, a half-sheet at the singular locus),
+ * `f a//na b//nb c//nc` per triangle. */
 #include "core/mesh/write_mesh.h"
 #include "core/mesh/write_sink.h"
 
@@ -18,7 +19,7 @@ bool ism_write_obj_corners(const ism_mesh *m, const ism_obj_corner_normals *cn,
     if (!s)
         return false;
     ism_sink_init(s, write, ctx);
-    size_t ncn = cn ? cn->n : 0;
+    size_t ncn = cn ? cn->n : 0, nn = !ncn ? 0 : cn->which ? cn->nnormals : ncn;
 
     ism_sink_printf(s, "# isomesh: %zu vertices, %zu triangles\n", m->nverts, m->ntris);
     for (size_t i = 0; i < m->nverts; i++) {
@@ -27,15 +28,17 @@ bool ism_write_obj_corners(const ism_mesh *m, const ism_obj_corner_normals *cn,
     }
     for (size_t i = 0; i < m->nverts; i++)
         put_normal(s, m->normal + 3 * i);
-    for (size_t j = 0; j < ncn; j++)
+    for (size_t j = 0; j < nn; j++)
         put_normal(s, cn->normal + 3 * j);
     size_t j = 0; /* the next corner with its own normal */
     for (size_t t = 0; t < m->ntris; t++) {
         ism_sink_printf(s, "f");
         for (size_t c = 3 * t; c < 3 * t + 3; c++) {
             unsigned long v = m->tri[c] + 1UL, n = v;
-            if (j < ncn && cn->at[j] == c)
-                n = m->nverts + ++j;
+            if (j < ncn && cn->at[j] == c) {
+                n = m->nverts + 1 + (cn->which ? cn->which[j] : j);
+                j++;
+            }
             ism_sink_printf(s, " %lu//%lu", v, n);
         }
         ism_sink_printf(s, "\n");

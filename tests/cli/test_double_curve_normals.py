@@ -40,6 +40,8 @@ POSITION_BITS = 14           # the viewer's Draco positions (request.schema.json
 ON_AXIS_DRC = 2 * 2 / (2 ** POSITION_BITS - 1)  # two quantisation steps over the box side
 PINCH_ROOM = 4 * CELL        # the pinch point's umbrella: its normals turn within a cell
 MAX_ANGLE = 30.0             # degrees between a corner's normal line and its face's
+HALF_SHEETS = 4              # at a point of a double segment: 2 sheets x 2 sides of the axis
+TRIPLE_HALF_SHEETS = 12      # at the triple point (the origin): 3 sheets x 4 quadrants
 
 
 def read_obj(path):
@@ -58,6 +60,28 @@ def read_obj(path):
     return v, n, f
 
 
+def on_segment(q, on_axis):
+    """Whether point q lies on one of the double segments, away from the pinch points."""
+    return any(abs(q[(ax + 1) % 3]) < on_axis and abs(q[(ax + 2) % 3]) < on_axis and
+               abs(q[ax]) <= 0.5 - PINCH_ROOM for ax in range(3))
+
+
+def normals_per_curve_vertex(pos, nrm, tris, on_axis):
+    """(vertices on a double segment, the most distinct normals their corners use at one of
+    them, how many use more than their half-sheets: HALF_SHEETS, TRIPLE_HALF_SHEETS at the
+    origin). Points at one position are one vertex (the .drc's split points)."""
+    seen = {}
+    for tri in tris:
+        for vi, ni in tri:
+            q = pos[vi]
+            if on_segment(q, on_axis):
+                seen.setdefault(tuple(q), set()).add(tuple(nrm[ni]))
+    most = max((len(s) for s in seen.values()), default=0)
+    over = sum(len(s) > (TRIPLE_HALF_SHEETS if max(map(abs, q)) < on_axis else HALF_SHEETS)
+               for q, s in seen.items())
+    return len(seen), most, over
+
+
 def curve_corners_off(pos, nrm, tris, on_axis):
     """tris: [((point, normal index) x 3)]. (corners on a double segment away from the pinch
     points, those whose normal line is more than MAX_ANGLE from their triangle's face normal
@@ -72,10 +96,7 @@ def curve_corners_off(pos, nrm, tris, on_axis):
         if lc == 0:
             continue
         for vi, ni in tri:
-            q = pos[vi]
-            on = any(abs(q[(ax + 1) % 3]) < on_axis and abs(q[(ax + 2) % 3]) < on_axis and
-                     abs(q[ax]) <= 0.5 - PINCH_ROOM for ax in range(3))
-            if not on:
+            if not on_segment(pos[vi], on_axis):
                 continue
             m = nrm[ni]
             lm = math.sqrt(sum(x * x for x in m)) or 1
@@ -119,6 +140,10 @@ class DoubleCurveNormalsTest(unittest.TestCase):
                 self.assertGreater(count, 1000)  # the three segments are meshed
                 self.assertEqual(off, 0, f"obj: {off} of {count} corners on a double curve "
                                  f"shade off their sheet by > {MAX_ANGLE}°")
+                nvert, most, over = normals_per_curve_vertex(v, n, f, ON_AXIS)
+                self.assertGreater(nvert, 100)
+                self.assertEqual(over, 0, f"obj: {over} of {nvert} curve vertices use more "
+                                 f"normals than their {HALF_SHEETS} half-sheets (up to {most})")
                 # the .drc the viewer draws: its points split where the sheets meet
                 drc, dstats = self.run_request(box, "drc", ["normal"])
                 r = subprocess.run(["node", DECODE, drc], capture_output=True, text=True,
@@ -136,6 +161,10 @@ class DoubleCurveNormalsTest(unittest.TestCase):
                 self.assertGreaterEqual(dcount, count)  # quantised: a few more beside it
                 self.assertEqual(doff, 0, f"drc: {doff} of {dcount} corners on a double curve "
                                  f"shade off their sheet by > {MAX_ANGLE}°")
+                nvert, most, over = normals_per_curve_vertex(pos, nrm, tris, ON_AXIS_DRC)
+                self.assertGreater(nvert, 100)
+                self.assertEqual(over, 0, f"drc: {over} of {nvert} curve vertices have more "
+                                 f"points than their {HALF_SHEETS} half-sheets (up to {most})")
                 # the PLY with every attribute (the viewer's download link): the mesh's
                 # vertices, no row split for the sheets
                 ply, pstats = self.run_request(box, "ply", None)

@@ -9,7 +9,8 @@
  * their vertex's normal (+z). Checked: those 24 corners and no other get a normal of their
  * own, all marked as the locus's; the PLY is byte for byte the PLY without them (vertex
  * count the mesh's), the OBJ has one `v` per vertex and each of those corners names a `vn`
- * of (0, 1, 0), Draco's point split (corner_split.h) gives each axis vertex one more point.
+ * of (0, 1, 0), one per axis vertex (bit-equal normals at a vertex share their `vn`), Draco's
+ * point split (corner_split.h) gives each axis vertex one more point.
  * The same 24 corners taken as crease sides instead (marked 0: the y plane one side of a
  * crease along the axis, the z plane the other, whose normal is the vertex's): the PLY still
  * has one row per mesh vertex and the mesh's faces, every row but the 5 axis vertices' is the
@@ -193,6 +194,7 @@ Test(mesh_files, obj_and_draco_points_carry_the_sheet_normals)
     cr_assert(ism_write_obj_features(&fx.m, &fx.w, NULL, mem_write, &b));
     size_t nv = 0, nn = 0, nf = 0, sheet = 0;
     float (*vn)[3] = malloc((fx.m.nverts + AXIS_CORNERS) * sizeof *vn);
+    unsigned long *vn_of = calloc(fx.m.nverts, sizeof *vn_of); /* an axis vertex's sheet vn */
     char *save = NULL;
     for (char *line = strtok_r(b.data, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {
         float x, y, z;
@@ -211,6 +213,9 @@ Test(mesh_files, obj_and_draco_points_carry_the_sheet_normals)
                 if (on_axis(&fx.m, (uint32_t)(v[k] - 1)) && in_y_plane(&fx.m, nf)) {
                     cr_expect(n[k] > fx.m.nverts, "a vn of its own");
                     cr_expect(vn[n[k] - 1][1] == 1, "the y plane's normal");
+                    unsigned long *seen = vn_of + (v[k] - 1);
+                    cr_expect(!*seen || *seen == n[k], "one `vn` per axis vertex");
+                    *seen = n[k];
                     sheet++;
                 }
             }
@@ -218,10 +223,13 @@ Test(mesh_files, obj_and_draco_points_carry_the_sheet_normals)
         }
     }
     cr_expect_eq(nv, fx.m.nverts, "one `v` per mesh vertex");
-    cr_expect_eq(nn, fx.m.nverts + AXIS_CORNERS);
+    /* one `vn` per axis vertex: its y plane corners on both sides of the axis share (0, 1, 0),
+     * as they share one Draco point */
+    cr_expect_eq(nn, fx.m.nverts + N + 1, "%zu vn", nn);
     cr_expect_eq(nf, fx.m.ntris);
     cr_expect_eq(sheet, AXIS_CORNERS);
     free(vn);
+    free(vn_of);
     free(b.data);
 
     ism_corner_split s;
