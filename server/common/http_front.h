@@ -1,8 +1,8 @@
 /* http_front.h — an own sender beside libmicrohttpd (http_loops.h, isomeshd --own-sender): a
  * polling thread accepts connections itself; a request whose head has fully arrived is shown
  * (peeked, not read) to a hook, which may answer it with a header block and a file range, sent
- * as nginx sends a static file: the header block held back (MSG_MORE), then sendfile, then one
- * push. Every other request goes, with its connection, to the thread's libmicrohttpd daemon
+ * as nginx sends a static file: the header block held back (MSG_MORE), then sendfile, whose
+ * last chunk leaves at once (TCP_NODELAY, no cork: http_front.c send_some). Every other request goes, with its connection, to the thread's libmicrohttpd daemon
  * (MHD_add_connection), which reads it from the socket as if it had accepted the connection
  * itself; so does a connection idle longer than idle_s. The caller's connection rules see the
  * front's connections from their accept through the opened/busy/closed/handing hooks. Why: libmicrohttpd 0.9.75 (and 1.0.1) pushes a file answer's
