@@ -144,7 +144,7 @@ void ism_frame_header_encode(unsigned char hdr[ISM_FRAME_HEADER_SIZE], ism_frame
 
 static bool known_type(unsigned t)
 {
-    return t >= ISM_FRAME_HELLO && t <= ISM_FRAME_ERROR;
+    return t >= ISM_FRAME_HELLO && t <= ISM_FRAME_SURFACE;
 }
 
 /* Checks a complete header; on success fills type, job and the payload length. */
@@ -494,9 +494,7 @@ bool ism_frame_result_encode(const ism_frame_result *r, ism_frame_builder *head,
     if (r->body_len > UINT32_MAX)
         head->failed = true;
     ism_frame_put_u32(head, (uint32_t)r->body_len); /* the body itself is the second part */
-    if (r->computed_len > UINT32_MAX)
-        head->failed = true;
-    ism_put_le32(tail, (uint32_t)r->computed_len); /* then this, then the computed surface */
+    ism_put_le32(tail, r->surface_len);              /* then this */
     return !head->failed;
 }
 
@@ -518,6 +516,6 @@ bool ism_frame_result_decode(const ism_frame *f, ism_frame_result *r)
     r->features = ism_frame_get_bytes(&c, &r->features_len);
     r->canonical = ism_frame_get_bytes(&c, &r->canonical_len);
     r->body = ism_frame_get_bytes(&c, &r->body_len);
-    r->computed = ism_frame_get_bytes(&c, &r->computed_len);
+    r->surface_len = ism_frame_get_u32(&c);
     return !c.failed && c.left == 0 && r->status >= 100 && r->status <= 599;
 }

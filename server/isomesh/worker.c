@@ -110,8 +110,9 @@ static bool send_result(int fd, uint64_t job, const ism_pipeline_result *pr, lon
     snprintf(r.key, sizeof r.key, "%s", pr->key);
     snprintf(r.surface_key, sizeof r.surface_key, "%s", pr->surface_key);
     r.polygonised = pr->polygonised;
-    r.computed = pr->computed.data;
-    r.computed_len = pr->computed.len;
+    /* a surface over the field's 4 GB is not stored (the frame ceiling is 1 GB anyway) */
+    bool surface = pr->status == 200 && pr->computed.len && pr->computed.len <= UINT32_MAX;
+    r.surface_len = surface ? (uint32_t)pr->computed.len : 0;
     snprintf(r.format, sizeof r.format, "%s", pr->format);
     snprintf(r.content_type, sizeof r.content_type, "%s",
              pr->content_type ? pr->content_type : "application/octet-stream");
@@ -127,9 +128,13 @@ static bool send_result(int fd, uint64_t job, const ism_pipeline_result *pr, lon
     unsigned char tail[4];
     bool ok = ism_frame_result_encode(&r, &head, tail);
     if (ok) {
-        ism_frame_part parts[4] = {{head.data, head.len}, {r.body, r.body_len}, {tail, 4},
-                                   {r.computed, r.computed_len}};
-        ok = ism_frame_write_fd(fd, ISM_FRAME_RESULT, job, parts, 4) == ISM_FRAME_OK;
+        ism_frame_part parts[3] = {{head.data, head.len}, {r.body, r.body_len}, {tail, 4}};
+        ok = ism_frame_write_fd(fd, ISM_FRAME_RESULT, job, parts, 3) == ISM_FRAME_OK;
+        /* the surface after the answer: the daemon has the mesh on its way to the client
+         * while this crosses the pipe (frame.h surface_len) */
+        ism_frame_part surf = {pr->computed.data, pr->computed.len};
+        if (ok && surface)
+            ok = ism_frame_write_fd(fd, ISM_FRAME_SURFACE, job, &surf, 1) == ISM_FRAME_OK;
     } else {
         ok = send_error(fd, job, 500, "result_too_large", "the result does not fit in a frame");
     }

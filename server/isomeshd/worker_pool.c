@@ -3,7 +3,8 @@
  * cancellation, preemption, crash detection, respawn with back-off, shutdown. One surface is
  * polygonised once even when several formats of it are asked for at once: a flight whose
  * surface another worker is polygonising is held (still "running" for the scheduler, on no
- * worker) until that computation ends, then encoded from the stored surface. Starting a
+ * worker) until that computation ends and its surface is stored (the SURFACE frame after the
+ * RESULT: the flight is answered first), then encoded from the stored surface. Starting a
  * process is worker_spawn.h's; Server-Timing entries from the stats server_timing.h's. */
 #include "server/isomeshd/worker_pool.h"
 
@@ -35,8 +36,14 @@
 #define STOP_WAIT_NS 2000000000LL          /* workers get this long to exit on EOF */
 #define MAX_EXPIRED 64
 #define START_TIMEOUT_NS 15000000000LL     /* a worker silent this long after exec is killed */
+/* A worker whose announced SURFACE frame has not arrived this long after its RESULT is killed
+ * (the surface then not stored): the frame ceiling's 1 GB crosses a pipe in ~1-2 s even at
+ * load 9 (5.5 MB in 5-11 ms), so only a stuck worker waits this long. */
+#define SURFACE_WAIT_NS 60000000000LL
 
-typedef enum wstate { W_EMPTY, W_STARTING, W_IDLE, W_BUSY, W_DYING } wstate;
+/* W_STORING: the flight answered, its newly computed surface still crossing the pipe in the
+ * SURFACE frame the RESULT announced (frame.h surface_len); no new job until it is stored. */
+typedef enum wstate { W_EMPTY, W_STARTING, W_IDLE, W_BUSY, W_STORING, W_DYING } wstate;
 
 /* A flight held until its surface, being polygonised by another worker, is stored. */
 typedef struct held {
@@ -54,6 +61,9 @@ typedef struct worker {
     ismd_flight *flight;
     char surface[65];          /* the surface key of flight */
     bool polygonising;         /* flight computes its surface (none was stored) */
+    uint64_t storing_job;      /* W_STORING: the job whose SURFACE frame comes next, */
+    uint32_t storing_len;      /* its announced length, */
+    long long storing_until_ns; /* and when waiting for it ends (SURFACE_WAIT_NS) */
     unsigned char *out;        /* request frame being written */
     size_t out_len, out_off;
     long long spawned_ns, respawn_at_ns;
@@ -85,8 +95,9 @@ static void publish_workers(ismd_pool *p)
 {
     long long ready = 0, busy = 0;
     for (int i = 0; i < p->n; i++) {
-        ready += p->w[i].state == W_IDLE || p->w[i].state == W_BUSY;
-        busy += p->w[i].state == W_BUSY;
+        ready += p->w[i].state == W_IDLE || p->w[i].state == W_BUSY ||
+                 p->w[i].state == W_STORING;
+        busy += p->w[i].state == W_BUSY; /* a job's, not a surface being stored */
     }
     atomic_store(&p->metrics->workers_ready, ready);
     atomic_store(&p->metrics->workers_busy, busy);
@@ -231,14 +242,14 @@ static void protocol_error(ismd_pool *p, worker *w, const char *what)
     kill_worker(p, w, ISMD_RESTART_PROTOCOL);
 }
 
-/* A newly computed surface goes into every tier under its surface key, so any format of it,
- * on any daemon sharing the tiers, is encoded from it. */
-static void cache_computed(ismd_pool *p, const ism_frame_result *fres)
+/* A newly computed surface (a SURFACE frame's payload) goes into every tier under its surface
+ * key, so any format of it, on any daemon sharing the tiers, is encoded from it. */
+static void cache_computed(ismd_pool *p, const char *surface_key, const ism_frame *fr)
 {
     char name[ISM_CACHE_NAME_MAX];
-    if (!fres->computed_len || !ism_cache_name(name, fres->surface_key, ISM_COMPUTED_EXT))
+    if (!fr->len || !ism_cache_name(name, surface_key, ISM_COMPUTED_EXT))
         return;
-    ism_blob *b = ism_blob_copy(fres->computed, fres->computed_len);
+    ism_blob *b = ism_blob_copy(fr->payload, fr->len);
     ism_cache_put(p->cache, name, b);
     ism_blob_unref(b);
 }
@@ -257,14 +268,31 @@ static void cache_result(ismd_pool *p, const ismd_flight *f, ism_blob *body, ism
         ism_cache_put(p->cache, name, canonical);
 }
 
-static void finish_busy(ismd_pool *p, worker *w, ismd_result *r, ismd_outcome o)
+/* Answers w's flight with r; w then waits for the surface_len bytes of its SURFACE frame
+ * (W_STORING), or is idle when none follows. */
+static void finish_busy(ismd_pool *p, worker *w, ismd_result *r, ismd_outcome o,
+                        uint32_t surface_len)
 {
     ismd_flight *f = w->flight;
+    w->storing_job = f->id;
     ismd_sched_lock(p->sched);
     r->queue_ms = (f->started_ns - f->submitted_ns) / 1e6;
     ismd_sched_finish(p->sched, f, r, o);
     ismd_sched_unlock(p->sched);
     w->flight = NULL;
+    w->state = surface_len ? W_STORING : W_IDLE;
+    w->storing_len = surface_len;
+    w->storing_until_ns = ism_now_ns() + SURFACE_WAIT_NS;
+    publish_workers(p);
+}
+
+static void on_surface(ismd_pool *p, worker *w, const ism_frame *fr)
+{
+    if (w->state != W_STORING || fr->job != w->storing_job || fr->len != w->storing_len) {
+        protocol_error(p, w, "surface for no answered job");
+        return;
+    }
+    cache_computed(p, w->surface, fr);
     w->state = W_IDLE;
     publish_workers(p);
 }
@@ -284,6 +312,8 @@ static void on_result(ismd_pool *p, worker *w, const ism_frame *fr)
                                           : &p->metrics->stored_encodings, 1);
     ism_blob *stats = NULL, *features = NULL, *canonical = NULL;
     ismd_outcome o = ISMD_OUT_OK;
+    uint32_t surface_len = 0; /* a SURFACE frame follows (not after a key mismatch: a
+                                 protocol error then, the worker is replaced) */
     if (fres.status == 200 && (strcmp(fres.key, f->key) != 0 || strcmp(fres.format, f->fmt) != 0)) {
         ism_logf(ISM_LOG_ERROR, "worker_key_mismatch", "asked for %s, got %s.%s", f->name,
                  fres.key, fres.format);
@@ -296,7 +326,10 @@ static void on_result(ismd_pool *p, worker *w, const ism_frame *fr)
     } else if (fres.status == 200) {
         r.body = ism_blob_copy(fres.body, fres.body_len);
         r.content_type = ism_format_mime_of(f->fmt);
-        cache_computed(p, &fres);
+        surface_len = fres.surface_len;
+        /* the key the SURFACE frame is stored under: the worker's (it may differ from the
+         * one the daemon keyed the flight's request with, never for a polygonised one) */
+        memcpy(w->surface, fres.surface_key, sizeof w->surface);
         if (fres.stats_len)
             stats = ism_blob_copy(fres.stats, fres.stats_len);
         if (fres.features_len)
@@ -320,7 +353,7 @@ static void on_result(ismd_pool *p, worker *w, const ism_frame *fr)
         r.content_type = "application/json";
         o = fres.status == 400 || fres.status == 422 ? ISMD_OUT_REJECTED : ISMD_OUT_ERROR;
     }
-    finish_busy(p, w, &r, o);
+    finish_busy(p, w, &r, o, surface_len);
     ism_blob_unref(r.body);
     ism_blob_unref(stats);
     ism_blob_unref(features);
@@ -340,7 +373,7 @@ static void on_error_frame(ismd_pool *p, worker *w, const ism_frame *fr)
     }
     ismd_result r = {.status = status, .content_type = "application/json"};
     r.body = ism_blob_copy(json, len);
-    finish_busy(p, w, &r, ISMD_OUT_ERROR);
+    finish_busy(p, w, &r, ISMD_OUT_ERROR, 0);
     ism_blob_unref(r.body);
 }
 
@@ -378,6 +411,9 @@ static void on_frame(ismd_pool *p, worker *w, const ism_frame *fr)
             on_result(p, w, fr);
         else
             on_error_frame(p, w, fr);
+        return;
+    case ISM_FRAME_SURFACE:
+        on_surface(p, w, fr);
         return;
     default:
         protocol_error(p, w, "unexpected frame type");
@@ -500,7 +536,8 @@ static bool encode_request(ismd_pool *p, worker *w, const ismd_flight *f, ism_bl
 static bool polygonising(const ismd_pool *p, const char *surface)
 {
     for (int i = 0; i < p->n; i++)
-        if (p->w[i].state == W_BUSY && p->w[i].flight && p->w[i].polygonising &&
+        if (((p->w[i].state == W_BUSY && p->w[i].flight && p->w[i].polygonising) ||
+             p->w[i].state == W_STORING) &&
             !strcmp(p->w[i].surface, surface))
             return true;
     return false;
@@ -676,12 +713,18 @@ static void enforce(ismd_pool *p, long long now)
     ismd_sched_unlock(p->sched);
     for (size_t i = 0; i < nd; i++)
         kill_worker(p, doomed[i], why[i]);
-    for (int i = 0; i < p->n; i++)
-        if (p->w[i].state == W_STARTING && now - p->w[i].spawned_ns > START_TIMEOUT_NS) {
-            ism_log_field f = ISM_LI("pid", p->w[i].pid);
+    for (int i = 0; i < p->n; i++) {
+        worker *w = &p->w[i];
+        if (w->state == W_STARTING && now - w->spawned_ns > START_TIMEOUT_NS) {
+            ism_log_field f = ISM_LI("pid", w->pid);
             ism_log_fields(ISM_LOG_ERROR, "worker_start_timeout", &f, 1);
-            kill_worker(p, &p->w[i], ISMD_RESTART_PROTOCOL);
+            kill_worker(p, w, ISMD_RESTART_PROTOCOL);
+        } else if (w->state == W_STORING && now > w->storing_until_ns) {
+            ism_log_field f = ISM_LI("pid", w->pid);
+            ism_log_fields(ISM_LOG_ERROR, "worker_surface_timeout", &f, 1);
+            kill_worker(p, w, ISMD_RESTART_PROTOCOL);
         }
+    }
 }
 
 /* ---- the thread ---------------------------------------------------------------------- */
@@ -703,11 +746,12 @@ static int next_timeout_ms(ismd_pool *p, long long now)
     return ms < 0 ? 0 : ms > 1000 ? 1000 : (int)ms;
 }
 
+/* Workers with a job or a surface to store (a stop waits for both, up to its deadline). */
 static int busy_count(ismd_pool *p)
 {
     int n = 0;
     for (int i = 0; i < p->n; i++)
-        n += p->w[i].state == W_BUSY;
+        n += p->w[i].state == W_BUSY || p->w[i].state == W_STORING;
     return n;
 }
 

@@ -101,22 +101,23 @@ def job_payload(json_text, fmt=b"", computed=b""):
             blob(computed))
 
 
-def result_payload(status, body, computed=b""):
+def result_payload(status, body, surface_len=0):
     return (u32(status) + u32(1234) + blob(b"ab" * 32) + blob(b"cd" * 32) + u32(1) +
             blob(b"drc") + blob(b"application/vnd.google.draco") + blob(b'{"triangles": 2}') +
-            blob(b"{}") + blob(b'{"expr": "x"}') + blob(body) + blob(computed))
+            blob(b"{}") + blob(b'{"expr": "x"}') + blob(body) + u32(surface_len))
 
 
 FRAMES = [
     (0x00, frame(1, 0, u32(4242) + blob(b"isomesh 0.1"))),
     (0x01, frame(2, 7, job_payload(b'{"expr": "x^2 + y^2 + z^2 - 1"}'))),
     (0x02, frame(3, 7, u32(500000)) + frame(3, 7, u32(1000000)) +
-     frame(4, 7, result_payload(200, b"DRACO\x02\x02"))),
+     frame(4, 7, result_payload(200, b"DRACO\x02\x02", 16)) +
+     frame(6, 7, b"ISMS" + bytes(12))),  # the surface announced, in a SURFACE frame
     (0x23, frame(5, 9, u32(422) + blob(b'{"error": {"code": "over_limit"}}'))),
     (0x08, frame(2, 1, job_payload(b"{}", b"glb"))[:20] + b"\0\0\0\0" +
      job_payload(b"{}", b"glb")),  # checksum left for the harness to fix (mode bit 3)
     (0x10, result_payload(200, b"body")),    # payload-only mode
-    (0x10, result_payload(200, b"body", b"ISMS" + bytes(12))),  # with a computed surface
+    (0x10, result_payload(200, b"body", 16)),  # announcing a computed surface
     (0x10, job_payload(b'{"preset": "sphere"}', b"ply", b"ISMS" + bytes(12))),
     (0x10, job_payload(b'{"preset": "torus"}', b"stl")),
     (0x44, frame(4, 3, result_payload(500, b""))[:40]),  # truncated
