@@ -101,6 +101,8 @@ typedef struct dnode {
     uint8_t surf;   /* a surface leaf in the subtree (the walk skips the others) */
     uint8_t placed; /* FOOT_AT: d->at holds the vertex place_vertex would make (sag_split
                      * made it); FOOT_OUT: the centre's Newton left the node */
+    uint8_t free_kids; /* bit c: child c's box shown free of f = 0 by this node's own proofs
+                        * (corner_view.free_kids): the child is empty without its own */
     double f[8];    /* f at the corners */
 } dnode;
 /* The mesher's hot array (expand and every sweep over d->n move it): the flags fit in the
@@ -304,6 +306,10 @@ typedef struct corner_view {
     int monotone; /* bit a: ∇f's a-th component keeps a sign over the box */
     uint8_t placed; /* what sag_split found (dnode.placed); FOOT_AT: the vertex in at */
     double at[3];
+    /* In: the node's box was shown free of f = 0 by its parent's proofs (the parent's
+     * free_kids). Out: bit c, child c's box shown free by this node's proofs (dnode). */
+    bool known_free;
+    uint8_t free_kids;
 } corner_view;
 
 /* Where surface leaf n lies on the request's box: -1 when f changes sign between its
@@ -456,10 +462,28 @@ static bool tighten(worker *w, corner_view *v)
     return true;
 }
 
+/* The proof on the sub-boxes of node n's box (empty when d is NULL, else one graph along
+ * d: ism_dual_prove_halves, with v->model), halved at its lattice centre so each sub-box is
+ * a child's box; the children it shows free of f = 0 are kept in v->free_kids, for a split. */
+static bool prove_on_halves(dual *d, worker *w, const dnode *n, corner_view *v,
+                            const double *dir)
+{
+    double mid[3];
+    if (n->level >= d->o->max_depth) /* no children: halve at the centre */
+        for (int a = 0; a < 3; a++)
+            mid[a] = 0.5 * v->p[0][a] + 0.5 * v->p[7][a];
+    else
+        for (int a = 0; a < 3; a++)
+            mid[a] = ism_grid_coord(&d->g, a,
+                                    n->o.v[a] + ism_grid_cell_steps(&d->g, n->level + 1));
+    return ism_dual_prove_halves(w->s.tape, w->jet, &v->model, v->p[0], mid, v->p[7], dir,
+                                 CERT_HALVINGS, &v->free_kids, &w->s.n_interval);
+}
+
 /* f free of 0 over node n, whose corners share a sign (v->g: its natural enclosure): by the
  * enclosure or the mean-value form from the corners, then both on the Taylor form, then on
  * the sub-boxes. */
-static bool empty_proven(worker *w, const dnode *n, corner_view *v)
+static bool empty_proven(dual *d, worker *w, const dnode *n, corner_view *v)
 {
     for (int k = 0; k < 2; k++) {
         if (ism_dual_encl_free(&v->g) || mean_value_free(n, &v->g, v->p[0], v->p[7]))
@@ -467,8 +491,7 @@ static bool empty_proven(worker *w, const dnode *n, corner_view *v)
         if (k == 0 && !tighten(w, v))
             return false;
     }
-    return ism_dual_free(w->s.tape, w->jet, &v->model, v->p[0], v->p[7], CERT_HALVINGS,
-                         &w->s.n_interval);
+    return prove_on_halves(d, w, n, v, NULL);
 }
 
 /* f >= 0 over node n, whose corners are all >= 0 and one of them, c, exactly 0 (a sheet
@@ -603,7 +626,7 @@ static bool face_cap(dual *d, worker *w, corner_view *v)
 
 /* One graph along the corner gradients' mean (the direction the sheet in the node faces)
  * wherever f may vanish in the node's sub-boxes (the node's own enclosure failed). */
-static bool graph_on_sub_boxes(worker *w, const corner_view *v)
+static bool graph_on_sub_boxes(dual *d, worker *w, const dnode *n, corner_view *v)
 {
     double m[3] = {0, 0, 0};
     for (int c = 0; c < 8; c++)
@@ -611,8 +634,7 @@ static bool graph_on_sub_boxes(worker *w, const corner_view *v)
             m[a] += v->n[c][a];
     if (!(ism_dot3(m, m) > 0))
         return false;
-    return ism_dual_graph_along(w->s.tape, w->jet, &v->model, v->p[0], v->p[7], m,
-                                CERT_HALVINGS, &w->s.n_interval);
+    return prove_on_halves(d, w, n, v, m);
 }
 
 /* What a node with f's crease kink in its box is (dual_crease.h): empty, a leaf with its
@@ -761,6 +783,8 @@ static int classify(dual *d, worker *w, dnode *n, corner_view *v)
             if (n->f[c] == 0 && !zero_corner_transverse(v, c))
                 return DN_INNER;
     bool mixed = neg != 0 && neg != 8;
+    if (!mixed && v->known_free)
+        return DN_EMPTY; /* its parent's proofs showed it (dnode.free_kids) */
     if (mixed && sag_split(d, w, n, v))
         return DN_INNER;
     v->agree = mixed && normals_agree((const double (*)[3])v->n, d->o->flat_normal);
@@ -780,12 +804,13 @@ static int classify(dual *d, worker *w, dnode *n, corner_view *v)
         if (v->agree)
             return plain_edges(d, w, n, v) ? DN_SURF : DN_INNER;
         if (!mixed) /* empty, or maybe a piece no corner sees */
-            return empty_proven(w, n, v) || (neg == 0 && touch_empty(n, v)) ||
+            return empty_proven(d, w, n, v) || (neg == 0 && touch_empty(n, v)) ||
                            (n->level >= d->o->max_depth && face_cap(d, w, v))
                        ? DN_EMPTY
                        : DN_INNER;
         if (!ism_graph_from_enclosure(&v->g) &&
-            !(tighten(w, v) && (ism_graph_from_enclosure(&v->g) || graph_on_sub_boxes(w, v))))
+            !(tighten(w, v) &&
+              (ism_graph_from_enclosure(&v->g) || graph_on_sub_boxes(d, w, n, v))))
             return DN_INNER;
         for (int a = 0; a < 3; a++)
             v->monotone |= (v->g.d[a].lo > 0 || v->g.d[a].hi < 0) << a;
@@ -908,6 +933,7 @@ typedef struct split_out {
     double at[8][3]; /* child c's vertex when placed[c] is FOOT_AT (sag_split) */
     uint8_t kind[8];
     uint8_t placed[8];
+    uint8_t free_kids[8]; /* child c's corner_view.free_kids */
     uint8_t kinked; /* bit c: child c split for the crease (corner_view.kinked) */
     bool bad;
 } split_out;
@@ -934,6 +960,8 @@ static void split_task(void *ctx, size_t k, int thread)
         corner_view v;
         v.kinked = false;
         v.placed = FOOT_UNKNOWN;
+        v.known_free = parent->free_kids >> c & 1;
+        v.free_kids = 0;
         dnode n;
         memset(&n, 0, sizeof n);
         n.o = parent->o;
@@ -951,6 +979,7 @@ static void split_task(void *ctx, size_t k, int thread)
         out->kind[c] = (uint8_t)leaf_kind(d, w, &n, &v, &out->bad);
         out->kinked |= (uint8_t)(v.kinked << c);
         out->placed[c] = v.placed;
+        out->free_kids[c] = v.free_kids;
         if (v.placed == FOOT_AT)
             memcpy(out->at[c], v.at, sizeof v.at);
     }
@@ -1047,6 +1076,7 @@ static void expand(dual *d, const int32_t *list, size_t n)
                 dnode *ch = &d->n[at];
                 memcpy(ch->f, out[k].f[c], sizeof ch->f);
                 ch->placed = out[k].placed[c];
+                ch->free_kids = out[k].free_kids[c];
                 if (ch->placed == FOOT_AT && !keep_at(d, at, out[k].at[c]))
                     break;
                 ch->kind = out[k].kind[c];
@@ -2158,6 +2188,8 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
     corner_view v;
     v.kinked = false;
     v.placed = FOOT_UNKNOWN;
+    v.known_free = false;
+    v.free_kids = 0;
     int32_t last = (int32_t)1 << d->g.depth;
     dnode *r0 = &d->n[root];
     for (int c = 0; c < 8; c++) {
@@ -2166,6 +2198,7 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
     }
     bool cut = false;
     r0->kind = (uint8_t)leaf_kind(d, &d->w[0], r0, &v, &cut);
+    r0->free_kids = v.free_kids;
     if (cut)
         decline(d, ISM_DUAL_WHY_BOX_CUT);
     if (r0->kind == DN_INNER && !d->bad)

@@ -93,11 +93,12 @@ bool ism_dual_enclose(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
     return ism_dual_taylor(t, jet, lo, hi, &m, intervals) && ism_dual_over(&m, lo, hi, g);
 }
 
-/* The sub-box k (bit a: upper half along a) of lo..hi. */
-static void sub_box(const double lo[3], const double hi[3], int k, double sl[3], double sh[3])
+/* The sub-box k (bit a: upper half along a) of lo..hi halved at mid (NULL: the centre). */
+static void sub_box(const double lo[3], const double *mid, const double hi[3], int k,
+                    double sl[3], double sh[3])
 {
     for (int a = 0; a < 3; a++) {
-        double m = 0.5 * lo[a] + 0.5 * hi[a];
+        double m = mid ? mid[a] : 0.5 * lo[a] + 0.5 * hi[a];
         sl[a] = (k >> a & 1) ? m : lo[a];
         sh[a] = (k >> a & 1) ? hi[a] : m;
     }
@@ -112,13 +113,14 @@ static ism_interval slope_along(const ism_ivgrad *g, const double d[3])
     return slope;
 }
 
-/* What a box's enclosure proves: 1 (free of 0, or — when d is not NULL — ∇f · d > 0 all
- * over it), -1 (∇f · d ≤ 0 all over a box where f may vanish: no proof below it either),
- * 0 (nothing: split). */
+/* What a box's enclosure proves: FREE (f has no zero in it), 1 (when d is not NULL:
+ * ∇f · d > 0 all over it), -1 (∇f · d ≤ 0 all over a box where f may vanish: no proof
+ * below it either), 0 (nothing: split). */
+enum { FREE = 2 };
 static int verdict(const ism_ivgrad *g, const double *d)
 {
     if (ism_dual_encl_free(g))
-        return 1;
+        return FREE;
     if (!d)
         return 0;
     ism_interval slope = slope_along(g, d);
@@ -127,9 +129,9 @@ static int verdict(const ism_ivgrad *g, const double *d)
 
 /* The verdict on lo..hi by m's enclosure (ism_dual_over), the cheapest part first: when
  * the second-order form alone keeps f from 0, the enclosure's value (its meet with two
- * more forms) does too, and the verdict is 1 without the ∇f bounds (most of the cost; on
- * the torus at 1e-2 ~2,300 boxes a mesh). -1 also when there is no enclosure (a bound not
- * a number): no proof. */
+ * more forms) does too, and the verdict is FREE without the ∇f bounds (most of the cost;
+ * on the torus at 1e-2 ~2,300 boxes a mesh). -1 also when there is no enclosure (a bound
+ * not a number): no proof. */
 static int verdict_over(const ism_dual_model *m, const double lo[3], const double hi[3],
                         const double *d, ism_interval *v)
 {
@@ -137,7 +139,7 @@ static int verdict_over(const ism_dual_model *m, const double lo[3], const doubl
     round_centre(m, lo, hi, dx);
     ism_interval v2 = second_order(m, dx);
     if (v2.lo > 0 || v2.hi < 0)
-        return 1;
+        return FREE;
     ism_ivgrad g;
     if (!over_dx(m, dx, v2, &g))
         return -1;
@@ -156,25 +158,32 @@ static double centred(ism_interval v)
 }
 
 /* The proof (verdict) on lo..hi, whose model is m: from m itself, else on the sub-boxes —
- * each first from m (no evaluation: a sub-box of m's box), then from its own model. */
-static bool prove(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
-                  const double lo[3], const double hi[3], const double *d, int halvings,
-                  uint64_t *intervals)
+ * each first from m (no evaluation: a sub-box of m's box), then from its own model. FREE
+ * when f was shown to have no zero in the box, 1 when the proof holds otherwise, 0 when it
+ * does not. The first halving is at mid (NULL: the centre), and bit k of *free_subs
+ * (NULL: not wanted) is set for every sub-box k shown free on the way, whatever the
+ * verdict. */
+static int prove(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
+                 const double lo[3], const double *mid, const double hi[3], const double *d,
+                 int halvings, uint8_t *free_subs, uint64_t *intervals)
 {
     ism_interval encl;
     int v = verdict_over(m, lo, hi, d, &encl);
     if (v || halvings <= 0)
-        return v > 0;
+        return v > 0 ? v : 0;
     /* the proof holds when it holds on every sub-box: first every verdict m gives (no
      * evaluation), then each undecided sub-box by its own model, most centred first */
     int open[8], nopen = 0;
     double score[8];
+    uint8_t shown = 0;
     for (int k = 0; k < 8; k++) {
         double sl[3], sh[3];
-        sub_box(lo, hi, k, sl, sh);
+        sub_box(lo, mid, hi, k, sl, sh);
         v = verdict_over(m, sl, sh, d, &encl);
+        if (v == FREE)
+            shown |= (uint8_t)(1u << k);
         if (v < 0)
-            return false;
+            break;
         if (v > 0)
             continue;
         score[k] = centred(encl);
@@ -183,26 +192,40 @@ static bool prove(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
             open[at] = open[at - 1]; /* stable: equal scores keep sub-box order */
         open[at] = k;
     }
-    for (int i = 0; i < nopen; i++) {
+    for (int i = 0; v >= 0 && i < nopen; i++) {
         double sl[3], sh[3];
         ism_dual_model sm;
-        sub_box(lo, hi, open[i], sl, sh);
-        if (!ism_dual_taylor(t, jet, sl, sh, &sm, intervals) ||
-            !prove(t, jet, &sm, sl, sh, d, halvings - 1, intervals))
-            return false;
+        sub_box(lo, mid, hi, open[i], sl, sh);
+        v = ism_dual_taylor(t, jet, sl, sh, &sm, intervals)
+                ? prove(t, jet, &sm, sl, NULL, sh, d, halvings - 1, NULL, intervals)
+                : 0;
+        if (v == FREE)
+            shown |= (uint8_t)(1u << open[i]);
+        if (!v)
+            break;
     }
-    return true;
+    if (free_subs)
+        *free_subs |= shown;
+    return v <= 0 ? 0 : shown == 0xff ? FREE : 1;
 }
 
 bool ism_dual_free(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
                    const double lo[3], const double hi[3], int halvings, uint64_t *intervals)
 {
-    return prove(t, jet, m, lo, hi, NULL, halvings, intervals);
+    return prove(t, jet, m, lo, NULL, hi, NULL, halvings, NULL, intervals) > 0;
 }
 
 bool ism_dual_graph_along(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
                           const double lo[3], const double hi[3], const double d[3],
                           int halvings, uint64_t *intervals)
 {
-    return prove(t, jet, m, lo, hi, d, halvings, intervals);
+    return prove(t, jet, m, lo, NULL, hi, d, halvings, NULL, intervals) > 0;
+}
+
+bool ism_dual_prove_halves(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
+                           const double lo[3], const double mid[3], const double hi[3],
+                           const double *d, int halvings, uint8_t *free_subs,
+                           uint64_t *intervals)
+{
+    return prove(t, jet, m, lo, mid, hi, d, halvings, free_subs, intervals) > 0;
 }

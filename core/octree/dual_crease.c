@@ -141,15 +141,24 @@ static inline double max_of(double x, double y) { return y > x || x != x ? y : x
 int ism_dual_mean_value_sign(const double f[8], const ism_ivgrad *g, const double lo[3],
                              const double hi[3])
 {
+    /* the least and the most f may gain along axis k from a corner on side `far` of it
+     * (1: the upper side), toward the other side: two numbers per axis and side, shared by
+     * the four corners there (taken per corner, they were most of the cost) */
+    double gain_lo[3][2], gain_hi[3][2];
+    for (int k = 0; k < 3; k++)
+        for (int far = 0; far < 2; far++) {
+            double h = hi[k] - lo[k], s = far ? -h : h;
+            double p = g->d[k].lo * s, q = g->d[k].hi * s;
+            gain_lo[k][far] = min_of(0, min_of(p, q));
+            gain_hi[k][far] = max_of(0, max_of(p, q));
+        }
     double low = -INFINITY, high = INFINITY;
     bool touch = false;
     for (int c = 0; c < 8; c++) {
         double a = f[c], b = f[c];
         for (int k = 0; k < 3; k++) {
-            double h = hi[k] - lo[k], s = (c >> k) & 1 ? -h : h; /* toward the far side */
-            double p = g->d[k].lo * s, q = g->d[k].hi * s;
-            a += min_of(0, min_of(p, q));
-            b += max_of(0, max_of(p, q));
+            a += gain_lo[k][(c >> k) & 1];
+            b += gain_hi[k][(c >> k) & 1];
         }
         touch |= f[c] == 0 && a == 0; /* f >= 0 from a zero corner: only zeros added */
         low = max_of(low, a);
