@@ -2,7 +2,8 @@
  * centroid of its triangles' centroids (a step of centroidal smoothing), within the tangent
  * plane of f = 0 there, and is put back on f = 0 by Newton steps along ∇f. A move is kept
  * only when no triangle of the fan turns over (against the fan's normal or against ∇f at a
- * corner), Newton converged close to where it started,
+ * corner; tested first at the tangent point, before Newton), Newton converged close to where
+ * it started,
  * the fan's smallest angle does not get worse (or stays above a comfortable angle) and no
  * centroid of the fan ends farther from f = 0 than the mesh's farthest before the pass;
  * otherwise a half step is tried, then the vertex stays. Also ∇f's unit normals and the
@@ -295,8 +296,7 @@ bool rm_centroids_stay(rm_pass *p, uint32_t v, const double *x)
 /* The simplification's vertices sit off f = 0 by a balancing offset (sp_place.h): x, just
  * put on f = 0 (∇f there g), takes the signed distance the vertex had where it stands
  * (rm_brec_offset). ∇f is measured again at x only once the fan's shape passed
- * (rm_relax_vertex): the shape needs no evaluation, and 35,000 of the gyroid-ball's moves
- * under its default bound fail there. False where f cannot be measured. */
+ * (rm_relax_vertex): the shape needs no evaluation. False where f cannot be measured. */
 static bool keep_offset(rm_pass *p, uint32_t v, double x[3], const double g[3])
 {
     double d = rm_brec_offset(p, v), gn = sqrt(ism_dot3(g, g));
@@ -319,7 +319,13 @@ bool rm_relax_vertex(rm_pass *p, uint32_t v)
     for (double step = 1; step >= 0.5; step *= 0.5) {
         double x[3] = {pos[0] + step * d[0], pos[1] + step * d[1], pos[2] + step * d[2]}, g[3];
         double tangent[3] = {x[0], x[1], x[2]};
-        if (!rm_project(p, x, f.mean_edge, -1, g) ||
+        /* the fan's shape first at the tangent point, which needs no evaluation (Newton
+           then moves x off it by under 0.003 of the fan's mean edge in 85% of the tries):
+           on the gyroid-ball at its default bound 34,151 of the 34,166 tries whose shape
+           failed where Newton put x failed there too, each spared its projection (2.1
+           evaluations of f and ∇f), and 5 of 36,400 moves that passed where Newton put x
+           are refused (the shape is still tested there too) */
+        if (!rm_fan_accepts(p, v, tangent, &f) || !rm_project(p, x, f.mean_edge, -1, g) ||
             !(rm_dist(x, tangent) <= ISM_RM_PROJECT_MAX_REL * f.mean_edge) ||
             (p->bounded && !keep_offset(p, v, x, g)) || !rm_fan_accepts(p, v, x, &f) ||
             (p->bounded && !rm_bound_gradient(p, x, g)) || /* the fan's measure at x: here */
