@@ -4,7 +4,8 @@ of the gallery (its own box and depths, one thread), of a set of presets in boxe
 octree lattice (tests/cli/boxes.py: by 1e-3, and by irrational fractions of a finest cell) on
 two threads, and of max_error runs of the primal polygons (several rounds, lattice and shifted
 boxes, 1 and 2 threads) and of the dual mesh (the default under a bound; also where the box cuts
-the surface), through the CLI. Those PLYs are core's writer's (positions, ∇f normals); the
+the surface), and of quality-pass runs (`--quality good`, QUALITY_RUNS: at the default bound
+in the lattice and shifted boxes, and on the depth path), through the CLI. Those PLYs are core's writer's (positions, ∇f normals); the
 "wire" runs write every preset's PLY as the service sends it (a request file with every
 attribute: proto/mesh_files.c's writer, the crease rows, curvature and class), so a change to
 what the downloads carry shows there.
@@ -42,6 +43,11 @@ DUAL_RUNS = (("sphere", 1e-3, 10), ("torus", 3e-3, 10), ("double-torus", 3e-3, 9
 # E = 2e-3 and 2e-3 / 3 of the box's largest width (the presets' own checks), depth.max 10.
 CUT_RUNS = ("hyperboloid", "catenoid", "scherk", "helicoid", "clebsch-cubic")
 CUT_REL = (2e-3, 2e-3 / 3)
+# The quality pass (`--quality good`, core/remesh/): smooth, crease and singular presets at the
+# default bound in the lattice and shifted boxes, and on the depth path in the preset's box.
+QUALITY_RUNS = ("sphere", "torus", "pretzel-genus2", "gyroid-ball", "cube-minus-ball",
+                "klein-bottle", "steiner-roman", "kummer-16-nodes", "cross-cap", "three-balls",
+                "cube")
 
 
 # The service's PLY with every attribute (the viewer's download link).
@@ -112,6 +118,14 @@ def runs(ps):
                 e = rel * max(box[a + 3] - box[a] for a in range(3))
                 out.append((f"{name} {label} E{rel:.3g}w d{d} t1 cut", name, box, d,
                             ["--max-error", repr(e), "--threads", "1"]))
+    for name in QUALITY_RUNS:
+        p = by_name[name]
+        d = f"{p['depth']['min']}:{p['depth']['max']}"
+        for label, box in boxes(p["box"], p["depth"]["max"]):
+            out.append((f"{name} {label} d{d} t1 quality", name, box, d,
+                        ["--quality", "good", "--threads", "1"]))
+        out.append((f"{name} own d{d} t1 quality off", name, p["box"], d,
+                    ["--quality", "good", "--threads", "1", *off]))
     return out
 
 
