@@ -11,10 +11,11 @@
  * caller's locked edges, one label) and which lies within ISM_RM_CREASE_NEAR_REL of its mean
  * edge of both branches' zero sets (under max_error, or within ISM_RM_CREASE_NEAR_ERRORS
  * bounds) is, the first that passes:
- *   - merged with its nearest neighbour w, when w is closer than ISM_RM_CROWD of the
- *     mean edge and beside the crease too, the merged vertex put on the crease nearest
- *     their middle (two vertices of the two surfaces crowding the crease become one on it;
- *     the link condition keeps the topology, rm_merge.h);
+ *   - merged with a neighbour w closer than ISM_RM_CREASE_MERGE_REL of the mean edge and
+ *     beside the crease too (the nearest first, up to ISM_RM_CREASE_MERGE_TRIES of them),
+ *     the merged vertex put on the crease nearest their middle (two vertices of the two
+ *     surfaces across the chamfer become one on it; the link condition keeps the
+ *     topology, rm_merge.h);
  *   - snapped onto the crease, its nearest point of a = b = 0, when v is not on it yet;
  *   - slid along it, when it is on it (within ISM_RM_CREASE_ON_REL) and exactly two of its
  *     neighbours are too (a chain: a crease corner, or a crease met twice, has more): toward
@@ -101,6 +102,21 @@
  * with the turn limit alone, 174 with 30°, 119 with 45°, 108 with 60°; gyroid-ball own /
  * 1e-3 / 0.37-cell / √2−1 boxes 19 / 22 / 35 / 23 with 45°, 19 / 20 / 24 / 19 with 60°. */
 #define ISM_RM_CREASE_FACE_DEG 60.0
+
+/* A vertex beside the crease is merged onto it with a neighbour closer than this × its mean
+ * edge, the nearest first and at most ISM_RM_CREASE_MERGE_TRIES of them (snap_merge). Under
+ * max_error the chamfer across the crease is a strip of triangles about an edge long whose
+ * short sides join a vertex on one surface to one on the other, 0.25-0.5 of the mean edge
+ * apart (gyroid-ball: 0.0125 against edges of 0.07, both ends 2E off the other surface); the
+ * nearest neighbour alone within ISM_RM_CROWD (0.25, the crease merges' own) left them.
+ * bench_remesh needles under 10° (own / 0.37-cell boxes, default bound; measured before
+ * to_crease's last step): gyroid-ball 31 / 68 with the nearest within 0.25, 23 / 54 within
+ * 0.6, 16 / 48 within 0.8, 16 / 49 within 1.0; with up to 3 tried in order 12 / 21 within
+ * 0.8 (16 / 19 within 1.0, 21 / 46 within 0.6; 6 tried: 14 / 21); cube-minus-ball 100 / 50
+ * -> 60 / 29 (the nearest within 0.8) -> 8 / 7 (3 tried). Folds (edges bending over 90°)
+ * fall with them: 1,104 / 1,112 -> 791 / 815 and 2,130 / 1,947 -> 1,529 / 1,337. */
+#define ISM_RM_CREASE_MERGE_REL 0.8
+#define ISM_RM_CREASE_MERGE_TRIES 3
 
 /* One vertex's fan: the triangles in order round v (tri[i] runs v, ring[i], then the next
  * ring vertex), its two neighbours on the crease when it slides, the tape, and what the
@@ -267,7 +283,8 @@ static bool frame_of(const double g[2][3], crease_frame *cf)
 
 /* Minimum-norm Newton steps from x onto both branches of the fan's tape, until x lies
  * within ISM_RM_CREASE_ON_REL × scale of both (on_crease's test, on the values the step
- * would use: no evaluation more); false when a step fails or it does not get there. On
+ * would use: no evaluation more), and one step more; false when a step fails or it does not
+ * get there. On
  * success *framed says whether cf holds the crease's frame there, from the gradients the
  * last step measured (frame_of). */
 static bool to_crease(rm_pass *p, const ism_tape *f, double x[3], double scale,
@@ -280,6 +297,12 @@ static bool to_crease(rm_pass *p, const ism_tape *f, double x[3], double scale,
             return false;
         if (fabs(val[0]) <= tol * ism_norm3(g[0]) && fabs(val[1]) <= tol * ism_norm3(g[1])) {
             *framed = frame_of((const double (*)[3])g, cf);
+            /* one step more, already measured: from within tol it lands at rounding (a
+               merged vertex's fan has edges up to ISM_RM_CREASE_MERGE_REL long, so tol
+               alone left the cube-minus-ball's merged vertices 1.03e-10 off its sphere) */
+            if (ism_min_norm_step(2, (const double (*)[3])g, val, ISM_RM_CREASE_PARALLEL, step))
+                for (int k = 0; k < 3; k++)
+                    x[k] += step[k];
             return true;
         }
         if (it == ISM_RM_CREASE_NEWTON_STEPS ||
@@ -418,23 +441,16 @@ static bool merged_fan_ok(rm_pass *p, const rm_merge *g, const double *x,
            (new_mid <= p->midpoint_low || new_mid <= old_mid);
 }
 
-/* v's nearest neighbour w closer than ISM_RM_CROWD × v's mean edge, beside the crease too:
- * v merged into w and w put on the crease nearest their middle (two vertices of the two
- * surfaces crowding at the crease become one on it). True when done; false also when out
- * of memory (rm_merge_apply then changes nothing). */
-static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan *f)
+/* v merged into its neighbour w beside the crease too, w put on the crease nearest their
+ * middle (two vertices of the two surfaces crowding at the crease become one on it). True
+ * when done; false also when out of memory (rm_merge_apply then changes nothing). */
+static bool merge_onto_crease(rm_pass *p, uint32_t v, uint32_t w, const crease_fan *c,
+                              const rm_fan *f)
 {
     const rm_mesh *r = &p->r;
-    uint32_t w = UINT32_MAX;
-    double best = ISM_RM_CROWD * f->mean_edge;
-    for (uint32_t i = 0; i < c->n; i++) {
-        double d = rm_dist(P(p, v), P(p, c->ring[i]));
-        if (d < best && r->locked[c->ring[i]] != RM_PINNED)
-            best = d, w = c->ring[i];
-    }
     crease_fan cw;
     rm_merge g;
-    if (w == UINT32_MAX || !walk_fan(p, w, &cw) ||
+    if (!walk_fan(p, w, &cw) ||
         !on_crease(p, c->f, P(p, w), near_tol(p, f->mean_edge), NULL, NULL) ||
         !rm_merge_find_any(r, v, w, ISM_RM_COLLAPSE_MAX_DEGREE, &g) ||
         !rm_merge_link_ok(r, &g))
@@ -465,6 +481,30 @@ static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan
     p->r.locked[w] = 1; /* on the crease now: kept there */
     p->collapses++;
     return true;
+}
+
+/* v's neighbours closer than ISM_RM_CREASE_MERGE_REL × v's mean edge, nearest first, at
+ * most ISM_RM_CREASE_MERGE_TRIES of them: the first that merges with v onto the crease
+ * (merge_onto_crease). True when one did. */
+static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan *f)
+{
+    const rm_mesh *r = &p->r;
+    double after = 0; /* the last one tried was this far */
+    for (int k = 0; k < ISM_RM_CREASE_MERGE_TRIES; k++) {
+        uint32_t w = UINT32_MAX;
+        double best = ISM_RM_CREASE_MERGE_REL * f->mean_edge;
+        for (uint32_t i = 0; i < c->n; i++) {
+            double d = rm_dist(P(p, v), P(p, c->ring[i]));
+            if (d < best && d > after && r->locked[c->ring[i]] != RM_PINNED)
+                best = d, w = c->ring[i];
+        }
+        if (w == UINT32_MAX)
+            return false;
+        if (merge_onto_crease(p, v, w, c, f))
+            return true;
+        after = best;
+    }
+    return false;
 }
 
 /* Tries to move v onto the crease (snap) or along it (slide); true when it moved. */

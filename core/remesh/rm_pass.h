@@ -53,8 +53,8 @@
  * vertex by a hair (or along a curved crease) changes that by a little either way. */
 #define ISM_RM_CROWD_BEND_DEG 10.0
 /* A crease vertex nearer a neighbour than this × its mean edge crowds the crease: merged
- * into it (rm_collapse.c), or both merged into one on a min/max crease (rm_crease_slide.c),
- * the crease moves by at most that much (the gyroid ball's crease vertices 1/20 to 1/400
+ * into it (rm_collapse.c; on a min/max crease, where both go onto a = b = 0, farther
+ * neighbours merge too: rm_crease_slide.c ISM_RM_CREASE_MERGE_REL), the crease moves by at most that much (the gyroid ball's crease vertices 1/20 to 1/400
  * of a cell apart, its edges about a cell; while a merge also asked for exactly two crease
  * edges at v, 0.1 left 246 / 245 / 335 needles in bench_remesh's boxes, 0.25 240 / 239 /
  * 321). */

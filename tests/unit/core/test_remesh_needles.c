@@ -901,46 +901,54 @@ static void crease_shape_of(const ism_mesh *m, const crease_pair *cp, double cel
     free(sides);
 }
 
-/* Needles beside the crease the pass may leave at the preset's depth, 7, in the lattice /
- * 1e-3 / irrational boxes: 16 / 20 / 28 measured since a snap or slide onto the crease may
- * turn a triangle to face either surface there and bend it by the crease's own angle
- * (rm_crease_slide.c tri_ok) and vertices within 0.75 of an edge of both surfaces count as
- * beside it (19 / 26 / 34 with 0.5; 19 / 35 / 36 while the facing limit was 45°); 48 / 81 /
- * 78 before (the irrational box's 78 kept this test on
- * the old placement), 115 / 135 / 129 before vertices were merged onto the crease, snapped
- * and slid along it (340 / 326 / 391 while the crease's vertices, as close as 1/400 of a
- * cell, were never merged into each other: rm_collapse.c's crease merges). */
-static const size_t crease_left[3] = {20, 25, 35};
+/* What the pass may leave beside a crease, per box (lattice / 1e-3 / irrational): needles
+ * (crease_shape_of) and folded edges over the whole mesh (count_folds: two triangles whose
+ * normals meet at more than FOLD_DEG; a min/max crease sharper than that counts as well,
+ * the cube minus a ball's at 140°). */
+typedef struct crease_limits {
+    size_t needles[3], folds[3];
+} crease_limits;
+
+/* The gyroid ball at its preset's depth, 7: needles beside the crease 0 / 7 / 9, folds 501 /
+ * 490 / 509 measured since a vertex beside the crease merges onto it with any of its 3
+ * nearest neighbours within 0.8 of its mean edge (rm_crease_slide.c
+ * ISM_RM_CREASE_MERGE_REL); the nearest within 0.25 alone left 16 / 20 / 28 needles and 553
+ * / 538 / 579 folds. Before: 19 / 26 / 34 needles while vertices within 0.5 of an edge
+ * counted as beside the crease, 48 / 81 / 78 before a snap could turn a triangle to face
+ * either surface (tri_ok), 115 / 135 / 129 before vertices were merged onto the crease,
+ * snapped and slid along it (340 / 326 / 391 while the crease's vertices, as close as 1/400
+ * of a cell, were never merged into each other: rm_collapse.c's crease merges). */
+static const crease_limits crease_left = {{2, 10, 12}, {516, 505, 524}};
 
 /* The same for the cube minus a ball at its preset's depth, 7, box ±1.3, needles within a
- * finest cell of both surfaces in the lattice / 1e-3 / irrational boxes: 0 / 28 / 111
- * measured; 0 / 178 / 439 with session 14's rm_crease_slide.c (bench_remesh's own / 1e-3 /
- * 0.37-cell / √2−1 boxes, every needle: 0 / 39 / 373 / 385 then, 0 / 3 / 49 / 58 now). */
-static const size_t cube_left[3] = {4, 35, 139};
+ * finest cell of both surfaces: 0 / 0 / 14, folds 2,067 / 1,957 / 2,461 (0 / 28 / 111 and
+ * 2,796 / 2,498 / 2,770 with the nearest neighbour alone; 0 / 178 / 439 needles with session
+ * 14's rm_crease_slide.c). */
+static const crease_limits cube_left = {{2, 2, 18}, {2129, 2016, 2535}};
 
 /* Under the default bound, 1e-3 of the box diagonal (depth.max 10; "beside" within a finest
  * cell of depth 7), needles within a cell of the sphere (gyroid-ball) or of both surfaces
- * (cube-minus-ball) in the lattice / 1e-3 / irrational boxes: gyroid-ball 49 / 80 / 50 ->
- * 43 / 77 / 41 and cube-minus-ball 136 / 140 / 193 -> 139 / 134 / 168 once vertices within 2
- * bounds of both surfaces count as beside the crease and Newton may land 4 bounds away
- * (rm_crease_slide.c ISM_RM_CREASE_NEAR_ERRORS: the crease's cells stop at 4 bounds across,
+ * (cube-minus-ball): gyroid-ball 13 / 30 / 11 needles and 782 / 843 / 793 folds,
+ * cube-minus-ball 55 / 58 / 74 and 1,706 / 1,626 / 2,229 with the merges onto the crease
+ * reaching 3 neighbours within 0.8 of the mean edge; with the nearest within 0.25 alone
+ * 31 / 70 / 45 and 1,104 / 1,141 / 1,079, 171 / 159 / 177 and 2,436 / 2,230 / 2,898 (the
+ * bounded chamfer: short sides 0.25-0.5 of an edge long join a vertex on one surface to one
+ * on the other, rm_crease_slide.c). Before, gyroid-ball 49 / 80 / 50 -> 43 / 77 / 41 once
+ * vertices within 2 bounds of both surfaces counted as beside the crease and Newton could
+ * land 4 bounds away (ISM_RM_CREASE_NEAR_ERRORS: the crease's cells stop at 4 bounds across,
  * their vertices up to ~2.3 bounds off the other surface on fans whose edges are far
- * shorter). The lattice cube-minus-ball box does not tell the two apart; the others fail
- * on the code before. Far from the goal (none under 10°): what blocks is the fans' shape,
- * not the bound (rm_crease_slide.c). cube-minus-ball 171 / 159 / 177 since the octree's
- * graph certificate crosses min/max kinks (graph_cert.c: crease cells stop where their
- * measurement meets E, not at 4 bounds across): the pass's input has 26,136 / 26,974 /
- * 26,998 triangles instead of 43,796 / 44,298 / 44,254, its cells beside the crease larger. */
-static const size_t crease_left_bounded[3] = {46, 79, 46};
-static const size_t cube_left_bounded[3] = {174, 162, 180};
+ * shorter). Far from the goal (none under 10°) still. */
+static const crease_limits crease_left_bounded = {{16, 36, 14}, {805, 868, 817}};
+static const crease_limits cube_left_bounded = {{66, 70, 89}, {1757, 1675, 2296}};
 
 /* Runs the pass on f's mesh in box (under max_error E > 0: both, to depth.max 10) and checks
- * what crease_shape_of reads of it against left (per box, which + 1) and the topology
+ * what crease_shape_of and count_folds read of it against left (per box, which + 1) and the
+ * topology
  * before; needles are counted within a finest cell of depth d. Under E every centroid stays
  * within E or the farthest before (closed forms), and vertices beside the crease may move
  * off the other surface within E of f = 0 (no moved_kept). */
 static void crease_case_in(const ism_tape *t, const double box[6], int d, double E, int which,
-                           const char *name, const crease_pair *cp, const size_t left[3])
+                           const char *name, const crease_pair *cp, const crease_limits *left)
 {
     ism_mesh m;
     ism_locus l;
@@ -953,6 +961,7 @@ static void crease_case_in(const ism_tape *t, const double box[6], int d, double
     pf_measure(&m, t, &b);
     crease_shape sb, sa;
     crease_shape_of(&m, cp, cell, NULL, 0, &sb);
+    size_t near, folds_before = count_folds(&m, 0, &near, NULL);
     double *before = malloc((m.nverts ? m.nverts : 1) * 3 * sizeof *before);
     cr_assert(before);
     memcpy(before, m.pos, m.nverts * 3 * sizeof *before);
@@ -963,16 +972,19 @@ static void crease_case_in(const ism_tape *t, const double box[6], int d, double
     cr_assert(ism_quality_pass(t, &l, NULL, E, NULL, &m, &st, &err), "%s", err.message);
     pf_measure(&m, t, &a);
     crease_shape_of(&m, cp, cell, before, nbefore, &sa);
+    size_t folds_after = count_folds(&m, 0, &near, NULL);
     free(before);
     cr_log_info("%s box %d: %zu collapses; needles beside the crease %zu -> %zu; "
                 "crease vertices %zu -> %zu, farthest from a surface %.3g -> %.3g; centroid "
                 "%.3g -> %.3g; moved crease vertices at most %.3g from a surface; on the "
-                "crease %zu -> %zu, the farthest %.3g", name, which, st.collapses, sb.needles,
-                sa.needles, sb.crease_vertices, sa.crease_vertices, sb.crease_far,
-                sa.crease_far, sb.centroid_far, sa.centroid_far, sa.moved_far, sb.on_crease,
-                sa.on_crease, sa.on_far);
-    cr_expect_leq(sa.needles, left[which + 1], "%s box %d: %zu needles", name, which,
+                "crease %zu -> %zu, the farthest %.3g; folds %zu -> %zu", name, which,
+                st.collapses, sb.needles, sa.needles, sb.crease_vertices, sa.crease_vertices,
+                sb.crease_far, sa.crease_far, sb.centroid_far, sa.centroid_far, sa.moved_far,
+                sb.on_crease, sa.on_crease, sa.on_far, folds_before, folds_after);
+    cr_expect_leq(sa.needles, left->needles[which + 1], "%s box %d: %zu needles", name, which,
                   sa.needles);
+    cr_expect_leq(folds_after, left->folds[which + 1], "%s box %d: %zu folds", name, which,
+                  folds_after);
     cr_expect_eq(a.euler, b.euler, "%s box %d: χ %ld -> %ld", name, which, b.euler, a.euler);
     cr_expect_eq(a.nonmanifold_edges, b.nonmanifold_edges, "%s box %d", name, which);
     cr_expect_eq(a.boundary_edges, b.boundary_edges, "%s box %d", name, which);
@@ -999,12 +1011,12 @@ static void crease_case_in(const ism_tape *t, const double box[6], int d, double
 
 static void gyroid_ball_case(const ism_tape *t, const double box[6], int d, int which)
 {
-    crease_case_in(t, box, d, 0, which, "gyroid-ball", &GYROID_PAIR, crease_left);
+    crease_case_in(t, box, d, 0, which, "gyroid-ball", &GYROID_PAIR, &crease_left);
 }
 
 static void cube_minus_ball_case(const ism_tape *t, const double box[6], int d, int which)
 {
-    crease_case_in(t, box, d, 0, which, "cube-minus-ball", &CUBE_PAIR, cube_left);
+    crease_case_in(t, box, d, 0, which, "cube-minus-ball", &CUBE_PAIR, &cube_left);
 }
 
 /* The box's default bound: 1e-3 of its diagonal. */
@@ -1018,13 +1030,13 @@ static double default_bound(const double box[6])
 static void gyroid_ball_bounded(const ism_tape *t, const double box[6], int d, int which)
 {
     crease_case_in(t, box, d, default_bound(box), which, "gyroid-ball bounded", &GYROID_PAIR,
-                   crease_left_bounded);
+                   &crease_left_bounded);
 }
 
 static void cube_minus_ball_bounded(const ism_tape *t, const double box[6], int d, int which)
 {
     crease_case_in(t, box, d, default_bound(box), which, "cube-minus-ball bounded",
-                   &CUBE_PAIR, cube_left_bounded);
+                   &CUBE_PAIR, &cube_left_bounded);
 }
 
 typedef void (*crease_check)(const ism_tape *t, const double box[6], int d, int which);
