@@ -121,6 +121,13 @@ static double min_angle_cos(const double *a, const double *b, const double *c)
     return worst; /* cos of the smallest angle: larger is worse */
 }
 
+static void cross(const double a[3], const double b[3], double c[3])
+{
+    c[0] = a[1] * b[2] - a[2] * b[1];
+    c[1] = a[2] * b[0] - a[0] * b[2];
+    c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
 /* Triangle a, b, c's normal against the mean unit gradient at its corners: > 0 when it keeps
  * the surface's orientation, < 0 when it is turned over, 0 when degenerate. */
 static double tri_agreement(const ism_fpoint *a, const ism_fpoint *b, const ism_fpoint *c)
@@ -131,9 +138,7 @@ static double tri_agreement(const ism_fpoint *a, const ism_fpoint *b, const ism_
         e1[k] = b->p[k] - a->p[k];
         e2[k] = c->p[k] - a->p[k];
     }
-    nrm[0] = e1[1] * e2[2] - e1[2] * e2[1];
-    nrm[1] = e1[2] * e2[0] - e1[0] * e2[2];
-    nrm[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    cross(e1, e2, nrm);
     for (int j = 0; j < 3; j++) {
         double u[3] = {v[j]->g[0], v[j]->g[1], v[j]->g[2]};
         if (ism_normalise3(u) > 0)
@@ -207,10 +212,121 @@ static bool fan_from_corner(ism_cell_out *out, size_t base, size_t n, size_t c)
     return true;
 }
 
+/* Twice the signed area of the triangle of plane points a, b, c (> 0: counter-clockwise). */
+static double area2(const double a[2], const double b[2], const double c[2])
+{
+    return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+}
+
+/* Does plane point p lie in the closed triangle a, b, c (counter-clockwise), other than at a
+ * corner's own place? */
+static bool in_ear(const double p[2], const double a[2], const double b[2], const double c[2])
+{
+    const double *v[3] = {a, b, c};
+    for (int k = 0; k < 3; k++)
+        if (p[0] == v[k][0] && p[1] == v[k][1])
+            return false;
+    return area2(a, b, p) >= 0 && area2(b, c, p) >= 0 && area2(c, a, p) >= 0;
+}
+
+/* A polygon that no fan triangulates without turning a triangle over (every corner's fan
+ * folds and the centre's does too; a strip bent round a node's edge, its side along a face
+ * that finer neighbours tile, as the roof of Steiner's lens beside a pinch point at depth
+ * 7, where the fan's apex sat on the strip's own reflex turn): its ears clipped in the plane
+ * across its mean unit gradient, where it is wound counter-clockwise (ism_triangulate_loop's
+ * winding). Each ear is a convex corner whose triangle holds no other corner in that plane
+ * and keeps ∇f's side at its own corners; of those, the one with the largest smallest angle,
+ * lying in none of the node's faces when one such exists. False (nothing emitted) when no
+ * ear is left at some step, or out of memory: the caller fans from its best corner. */
+static bool clip_ears(ism_cell_out *out, size_t base, size_t n, const double node[6],
+                      bool *emitted)
+{
+    *emitted = false;
+    const ism_fpoint *q = out->verts + base;
+    double nrm[3] = {0, 0, 0}, e1[3], e2[3], axis[3] = {0, 0, 0};
+    for (size_t i = 0; i < n; i++) {
+        double u[3] = {q[i].g[0], q[i].g[1], q[i].g[2]};
+        if (ism_normalise3(u) > 0)
+            for (int k = 0; k < 3; k++)
+                nrm[k] += u[k];
+    }
+    if (!(ism_normalise3(nrm) > 0))
+        return true;
+    int least = 0; /* the coordinate axis farthest from the normal */
+    for (int k = 1; k < 3; k++)
+        if (fabs(nrm[k]) < fabs(nrm[least]))
+            least = k;
+    axis[least] = 1;
+    cross(nrm, axis, e1);
+    ism_normalise3(e1);
+    cross(nrm, e1, e2); /* (e1, e2, nrm) right-handed: e1 × e2 = nrm */
+    double (*uv)[2] = malloc(n * sizeof *uv);
+    size_t *left = malloc(n * sizeof *left);
+    uint32_t *tri = malloc(3 * n * sizeof *tri);
+    bool ok = uv && left && tri;
+    for (size_t i = 0; ok && i < n; i++) {
+        uv[i][0] = ism_dot3(q[i].p, e1);
+        uv[i][1] = ism_dot3(q[i].p, e2);
+        left[i] = i;
+    }
+    size_t m = n, nt = 0;
+    while (ok && m >= 3) {
+        size_t best = m;
+        double best_score = HUGE_VAL;
+        for (size_t i = 0; i < m; i++) {
+            size_t a = left[(i + m - 1) % m], b = left[i], c = left[(i + 1) % m];
+            if (!(area2(uv[a], uv[b], uv[c]) > 0) || !(tri_agreement(&q[a], &q[b], &q[c]) > 0))
+                continue;
+            bool empty = true;
+            for (size_t j = 0; j < m && empty; j++)
+                if (j != (i + m - 1) % m && j != i && j != (i + 1) % m)
+                    empty = !in_ear(uv[left[j]], uv[a], uv[b], uv[c]);
+            if (!empty)
+                continue;
+            double score = min_angle_cos(q[a].p, q[b].p, q[c].p) +
+                           (node && ism_in_one_face(node, q[a].p, q[b].p, q[c].p) ? 2 : 0);
+            if (score < best_score)
+                best_score = score, best = i;
+        }
+        if (best == m) {
+            ok = false; /* no ear: the polygon is not simple in that plane */
+            break;
+        }
+        tri[3 * nt] = (uint32_t)left[(best + m - 1) % m];
+        tri[3 * nt + 1] = (uint32_t)left[best];
+        tri[3 * nt + 2] = (uint32_t)left[(best + 1) % m];
+        nt++;
+        memmove(left + best, left + best + 1, (m - best - 1) * sizeof *left);
+        m--;
+    }
+    if (ok && nt == n - 2) {
+        uint32_t b = (uint32_t)base;
+        for (size_t t = 0; ok && t < nt; t++)
+            ok = ism_cell_out_tri(out, b + tri[3 * t], b + tri[3 * t + 1], b + tri[3 * t + 2]);
+        *emitted = true;
+    } else if (!uv || !left || !tri) {
+        ok = false;
+    } else {
+        ok = true; /* no ear: not emitted, not a failure */
+    }
+    free(uv);
+    free(left);
+    free(tri);
+    return ok;
+}
+
+/* The fan from the best corner — or, when that fan folds, the polygon's ears (clip_ears). */
 static bool fan_from_best_corner(ism_cell_out *out, size_t base, size_t n, const double node[6])
 {
-    bool in_face;
-    return fan_from_corner(out, base, n, best_corner(out, base, n, node, &in_face));
+    bool in_face, emitted;
+    size_t c = best_corner(out, base, n, node, &in_face);
+    if (fan_folds(out->verts + base, n, &out->verts[base + c])) {
+        if (!clip_ears(out, base, n, node, &emitted))
+            return false;
+        if (emitted)
+            return true;
+    }
+    return fan_from_corner(out, base, n, c);
 }
 
 /* The largest distance to f = 0 at the centroids of the fan of q[0..n) from corner c and at
