@@ -45,6 +45,23 @@ bool ism_dual_over(const ism_dual_model *m, const double lo[3], const double hi[
 ism_interval ism_dual_second_order(const ism_dual_model *m, const double lo[3],
                                    const double hi[3]);
 
+/* The terms of f's second-order form round c over x − c ∈ dx (at: f and ∇f at c, j: the jet
+ * over a box holding x): lin[a] = ∂f/∂xa(c) · dxa, and quad in ism_ivjet's Hessian order,
+ * ½ H_aa dxa² on the diagonal, H_ab dxa dxb off it. For a caller that sums them twice. */
+typedef struct ism_dual_terms {
+    ism_interval lin[3], quad[6];
+} ism_dual_terms;
+
+void ism_dual_terms_of(const ism_ivgrad *at, const ism_ivjet *j, const ism_interval dx[3],
+                       ism_dual_terms *t);
+
+/* fc + Σ lin + Σ quad: f's second-order form, summed in ism_dual_second_order's order (the
+ * same bounds). */
+ism_interval ism_dual_terms_f(ism_interval fc, const ism_dual_terms *t);
+
+/* Σ quad: ½ (x − c)ᵀ H(X) (x − c) alone. */
+ism_interval ism_dual_terms_quad(const ism_dual_terms *t);
+
 /* Both in one: f and ∇f over lo..hi by its own model. */
 bool ism_dual_enclose(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
                       const double hi[3], ism_ivgrad *g, uint64_t *intervals);

@@ -5,12 +5,14 @@
  * order, so the result never depends on the thread count. A child is tested cheapest first:
  *
  *   F(X) ∌ 0 (batched over the 8 children)  ─▶ dropped
- *   (children of a smooth cell P, centre c) ∇f(c) + H(P)(X − c) ∌ 0 for some row, from
+ *   (children of a smooth cell P, centre p) ∇f(p) + H(P)(X − p) ∌ 0 for some row, from
  *   what P's own tests evaluated, no evaluation  ─▶ dropped
  *   ∂F/∂xi(X) ∌ 0 for some i, for every smooth piece of a min/max/abs kink ─▶ dropped
- *   (smooth cells only) f(c) + ∇F(X)·(X − c) ∌ 0, ∇f(c) + H(X)(X − c) ∌ 0 for some row,
- *   f(c) ∉ ½ (X − c)ᵀ H(X) (X − c) (Taylor round a singular point of the cell),
- *   f(c) + ∇f(c)·(X − c) + ½ (X − c)ᵀ H(X) (X − c) ∌ 0,
+ *   (smooth cells only, c: X's own centre) f(c) + ∇F(X)·(X − c) ∌ 0, or with H the
+ *   parent's H(P) (no evaluation), then the cell's own H(X):
+ *   ∇f(c) + H (X − c) ∌ 0 for some row,
+ *   f(c) ∉ ½ (X − c)ᵀ H (X − c) (Taylor round a singular point of the cell),
+ *   f(c) + ∇f(c)·(X − c) + ½ (X − c)ᵀ H (X − c) ∌ 0,
  *   or Krawczyk's K(X) ∩ X = ∅  ─▶ dropped;   K(X) ⊂ int X  ─▶ one zero of ∇f: kept whole
  *
  * Cells reaching the finest size are the candidates (projected onto ∇f = 0 and ranked). */
@@ -46,17 +48,21 @@
  * costs more than the work). */
 #define SEARCH_PARALLEL_MIN 64
 
-enum { EXCLUDED = 0, SURVIVES = 1, UNIQUE = 2 };
+/* A tested cell's verdict; SMOOTH: it survives, f is smooth on it and its model was filled. */
+enum { EXCLUDED = 0, SURVIVES = 1, UNIQUE = 2, SMOOTH = 3 };
 
-/* A cell; a frontier cell on which f is smooth also carries its Taylor model (centre, f and
- * ∇f there, the jet over the cell: what smooth_tests evaluated), from which its children's
- * ∇f is enclosed with no evaluation (parent_excludes). */
+/* A cell. A frontier cell on which f is smooth has a Taylor model (centre, f and ∇f there,
+ * the jet over the cell: what smooth_tests evaluated), from which its children's ∇f is
+ * enclosed with no evaluation (parent_excludes); the models (~250 bytes) sit beside the
+ * frontier, in its own order, so a cell carries only its model's index. */
 typedef struct scell {
     uint32_t i[3];
     uint32_t level;
-    bool modelled;
-    ism_dual_model m;
+    uint32_t model; /* NO_MODEL: none (f not smooth on it, or the root untested) */
 } scell;
+
+#define NO_MODEL UINT32_MAX
+_Static_assert(sizeof(scell) == 20, "a frontier cell is its lattice position, level and model");
 
 typedef struct keyed_box {
     uint64_t key; /* z, y, x lattice coordinates of the lower corner, then the level */
@@ -69,20 +75,26 @@ typedef struct vec {
     size_t n, cap;
 } vec;
 
-static bool vec_push(vec *v, const void *e, size_t sz)
+/* Appends the n elements at e (of sz bytes each). */
+static bool vec_append(vec *v, const void *e, size_t n, size_t sz)
 {
-    if (v->n == v->cap) {
-        size_t c = v->cap ? 2 * v->cap : 64;
+    if (v->n + n > v->cap) {
+        size_t c = v->cap ? v->cap : 64;
+        while (c < v->n + n)
+            c *= 2;
         void *q = realloc(v->p, c * sz);
         if (!q)
             return false;
         v->p = q;
         v->cap = c;
     }
-    memcpy((char *)v->p + v->n * sz, e, sz);
-    v->n++;
+    if (n)
+        memcpy((char *)v->p + v->n * sz, e, n * sz);
+    v->n += n;
     return true;
 }
+
+static bool vec_push(vec *v, const void *e, size_t sz) { return vec_append(v, e, 1, sz); }
 
 /* Per-thread evaluation state and counters. */
 typedef struct worker {
@@ -92,9 +104,10 @@ typedef struct worker {
     uint64_t visited, evals_interval, evals_jet;
 } worker;
 
-/* One task's output: surviving children and boxes, in the order of its parents. */
+/* One task's output: surviving children (their models indexed within models) and boxes, in
+ * the order of its parents. */
 typedef struct task_out {
-    vec cells, boxes;
+    vec cells, models, boxes;
     bool oom;
 } task_out;
 
@@ -108,6 +121,7 @@ typedef struct search {
     int threads;
     /* the level being expanded */
     const scell *frontier;
+    const ism_dual_model *models; /* the frontier's, by scell.model */
     size_t nfrontier;
     task_out *outs;
     double hscale;          /* the Hessian scale of the box (hessian_scale) */
@@ -165,41 +179,17 @@ static ism_interval add_linear(ism_interval base, const ism_interval a[3], const
     return base;
 }
 
-/* f over the cell x by its second-order Taylor form round the centre c (gc: f and ∇f at c,
- * j: the jet over x; dual_cert.h): its width shrinks with the square of the cell, so near a
- * minimum of f off the surface (the torus's circle of minima inside the tube, where ∇f = 0
- * and only f ≠ 0 rules a cell out) cells are dropped a level sooner than by the first-order
- * form. Pure arithmetic on what smooth_tests evaluated. */
-static ism_interval second_order_f(const double c[3], const ism_ivgrad *gc, const ism_ivjet *j,
-                                   const ism_interval x[3])
-{
-    ism_dual_model m = { .at = *gc, .box = *j };
-    double lo[3], hi[3];
-    for (int k = 0; k < 3; k++) {
-        m.c[k] = c[k];
-        lo[k] = x[k].lo;
-        hi[k] = x[k].hi;
-    }
-    return ism_dual_second_order(&m, lo, hi);
-}
-
-/* f at the centre c against its Taylor expansion round a singular point p of the cell x:
+/* f at the centre c against its Taylor expansion round a singular point p of the cell X:
  * there f(p) = 0 and ∇f(p) = 0, so f(c) = ½ (c − p)ᵀ H(ξ) (c − p) with ξ between p and c, in
- * the cell (gc: f at c, j: the jet over x). The cell holds no singular point when f(c) lies
- * outside ½ (X − c)ᵀ H(X) (X − c). The second-order form round c must also carry
- * ∇f(c)·(X − c), an interval as wide as |∇f(c)| times the cell: this one does not, so it
- * drops cells a level sooner where f ≠ 0 but ∇f is small, the torus's tube round its circle
- * of minima (f = −4R²r² there): 1,481 → 969 cells on the torus. A zero of ∇f off the
- * surface (f ≠ 0) is no singular point, so such cells go too. Pure arithmetic on what
- * smooth_tests evaluated. */
-static bool f_off_singular_taylor(const double c[3], const ism_ivgrad *gc, const ism_ivjet *j,
-                                  const ism_interval x[3])
+ * the cell. The cell holds no singular point when f(c) (fc) lies outside
+ * q = ½ (X − c)ᵀ H(X) (X − c). The second-order form round c must also carry ∇f(c)·(X − c),
+ * an interval as wide as |∇f(c)| times the cell: this one does not, so it drops cells a level
+ * sooner where f ≠ 0 but ∇f is small, the torus's tube round its circle of minima
+ * (f = −4R²r² there): 1,481 → 969 cells on the torus. A zero of ∇f off the surface (f ≠ 0)
+ * is no singular point, so such cells go too. */
+static bool f_off_singular_taylor(ism_interval fc, ism_interval q)
 {
-    ism_ivgrad zero = { .v = iv(0.0, 0.0) };
-    for (int k = 0; k < 3; k++)
-        zero.d[k] = iv(0.0, 0.0);
-    ism_interval q = second_order_f(c, &zero, j, x); /* ½ (x − c)ᵀ H(X) (x − c) */
-    ism_interval r = iv_sub(gc->v, q);
+    ism_interval r = iv_sub(fc, q);
     return r.lo > 0.0 || r.hi < 0.0; /* a NaN bound (∞ − ∞) proves nothing */
 }
 
@@ -207,86 +197,94 @@ static bool f_off_singular_taylor(const double c[3], const ism_ivgrad *gc, const
  * jet over a cell holding X, dx = X − c). */
 static bool some_row_excludes(const ism_ivgrad *at, const ism_ivjet *j, const ism_interval dx[3])
 {
-    static const int row[3][3] = { { 0, 1, 2 }, { 1, 3, 4 }, { 2, 4, 5 } };
     _Pragma("GCC unroll 3") for (int i = 0; i < 3; i++) {
-        ism_interval hrow[3] = { j->h[row[i][0]], j->h[row[i][1]], j->h[row[i][2]] };
+        ism_interval hrow[3] = { j->h[ism_dual_hess_at(i, 0)], j->h[ism_dual_hess_at(i, 1)],
+                                 j->h[ism_dual_hess_at(i, 2)] };
         if (!holds0(add_linear(at->d[i], hrow, dx)))
             return true;
     }
     return false;
 }
 
-/* The tests on a jet j over a cell holding x (x's own, or its parent's: ξ in x lies in the
+/* The tests on a jet j over a cell holding X (X's own, or its parent's: ξ in X lies in the
  * parent too, and interval arithmetic is inclusion-monotone, so a test the parent's wider
- * jet passes the cell's own passes as well): a row of ∇f's mean-value form, Taylor round a
- * singular point, f's second-order form. */
-static bool jet_excludes(const double c[3], const ism_ivgrad *gc, const ism_ivjet *j,
-                         const ism_interval x[3], const ism_interval dx[3])
+ * jet passes the cell's own passes as well), round X's centre c (gc: f and ∇f there,
+ * dx = X − c): a row of ∇f's mean-value form, Taylor round a singular point, and f's
+ * second-order form (dual_cert.h), whose width shrinks with the square of the cell, so near
+ * a minimum of f off the surface (the torus's circle of minima inside the tube, where ∇f = 0
+ * and only f ≠ 0 rules a cell out) cells are dropped a level sooner than by the first-order
+ * form. The last two share the form's terms. Pure arithmetic on what smooth_tests
+ * evaluated. */
+static bool jet_excludes(const ism_ivgrad *gc, const ism_ivjet *j, const ism_interval dx[3])
 {
-    return some_row_excludes(gc, j, dx) || f_off_singular_taylor(c, gc, j, x)
-           || !holds0(second_order_f(c, gc, j, x));
+    if (some_row_excludes(gc, j, dx))
+        return true;
+    ism_dual_terms t;
+    ism_dual_terms_of(gc, j, dx, &t);
+    return f_off_singular_taylor(gc->v, ism_dual_terms_quad(&t))
+           || !holds0(ism_dual_terms_f(gc->v, &t));
 }
 
 /* The tests that need f smooth on the cell: mean-value forms of F and ∇F, the second-order
- * form of F, and Krawczyk. */
+ * form of F, and Krawczyk (pm: the parent's model, or NULL). The cell's own model is built in
+ * *m as they go: valid when the verdict is SMOOTH. */
 static int smooth_tests(const search *s, worker *w, const ism_interval x[3], const ism_ivgrad *g,
-                        const scell *p, scell *cell)
+                        const ism_dual_model *pm, ism_dual_model *m)
 {
-    double c[3];
     ism_interval cx[3], dx[3];
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++) {
-        c[k] = 0.5 * x[k].lo + 0.5 * x[k].hi;
-        cx[k] = iv(c[k], c[k]);
+        m->c[k] = 0.5 * x[k].lo + 0.5 * x[k].hi;
+        cx[k] = iv(m->c[k], m->c[k]);
         dx[k] = iv_sub(x[k], cx[k]);
     }
-    ism_ivgrad gc;
-    ism_eval_interval_grad(s->t, w->jw, cx, NULL, NULL, &gc);
+    ism_eval_interval_grad(s->t, w->jw, cx, NULL, NULL, &m->at);
     w->evals_interval++;
-    if (!holds0(add_linear(gc.v, g->d, dx)))
+    if (!holds0(add_linear(m->at.v, g->d, dx)))
         return EXCLUDED;
-    if (p && p->modelled && jet_excludes(c, &gc, &p->m.box, x, dx))
-        return EXCLUDED; /* the parent's jet: no evaluation */
-    ism_ivjet j;
-    ism_eval_interval_jet(s->t, w->jw, x, NULL, NULL, &j);
+    /* The parent's jet (no evaluation) round the cell's own centre. Its row test is not
+     * parent_excludes' again: that one is round p, before ∇F(X) is evaluated; this one has
+     * ∇f at c (a point) and |x − c| ≤ h/2 where |x − p| reaches h (h: the cell's width). It
+     * drops 16 of the 336 cells that reach it on the torus, 308 of 3,750 on kummer-16, each
+     * sparing a jet. */
+    if (pm && jet_excludes(&m->at, &pm->box, dx))
+        return EXCLUDED;
+    ism_eval_interval_jet(s->t, w->jw, x, NULL, NULL, &m->box);
     w->evals_jet++;
-    if (jet_excludes(c, &gc, &j, x, dx))
+    if (jet_excludes(&m->at, &m->box, dx))
         return EXCLUDED;
-    int k = ism_krawczyk(x, c, gc.d, j.h, NULL);
+    int k = ism_krawczyk(x, m->c, m->at.d, m->box.h, NULL);
     if (k == ISM_KRAWCZYK_EMPTY)
         return EXCLUDED;
-    cell->modelled = true;
-    cell->m = (ism_dual_model){ .c = { c[0], c[1], c[2] }, .at = gc, .box = j };
-    return k == ISM_KRAWCZYK_UNIQUE ? UNIQUE : SURVIVES;
+    return k == ISM_KRAWCZYK_UNIQUE ? UNIQUE : SMOOTH;
 }
 
-/* Whether ∇f excludes 0 on the cell x by the mean-value form of its parent p (f smooth there):
- * ∇f(c) + H(P)(X − c) round p's centre c, no evaluation. On the torus it drops 560 of 968
- * children, most of which the child's own interval gradient (~1,900 instructions) would
- * drop, at ~180 instructions a row. */
-static bool parent_excludes(const scell *p, const ism_interval x[3])
+/* Whether ∇f excludes 0 on the cell x by the mean-value form of its parent P (pm: its model,
+ * f smooth there): ∇f(p) + H(P)(X − p) round P's centre p, no evaluation. On the torus it
+ * drops 560 of 968 children, most of which the child's own interval gradient (~1,900
+ * instructions) would drop, at ~180 instructions a row. */
+static bool parent_excludes(const ism_dual_model *pm, const ism_interval x[3])
 {
-    if (!p || !p->modelled)
+    if (!pm)
         return false;
     ism_interval dx[3];
     for (int k = 0; k < 3; k++)
-        dx[k] = iv_sub(x[k], iv(p->m.c[k], p->m.c[k]));
-    return some_row_excludes(&p->m.at, &p->m.box, dx);
+        dx[k] = iv_sub(x[k], iv(pm->c[k], pm->c[k]));
+    return some_row_excludes(&pm->at, &pm->box, dx);
 }
 
-/* Whether a cell (whose F interval is f; parent p, or NULL for the root) may hold a singular
- * point; a smooth cell kept carries its model out in *cell. */
+/* Whether a cell (whose F interval is f; pm: its parent's model, or NULL) may hold a singular
+ * point; SMOOTH leaves the cell's model in *m. */
 static int classify(const search *s, worker *w, const ism_interval x[3], ism_interval f,
-                    const scell *p, scell *cell)
+                    const ism_dual_model *pm, ism_dual_model *m)
 {
     w->visited++;
-    cell->modelled = false;
-    if (!holds0(f) || parent_excludes(p, x))
+    if (!holds0(f) || parent_excludes(pm, x))
         return EXCLUDED;
     ism_ivgrad g;
     size_t nk = ism_eval_interval_grad(s->t, w->jw, x, NULL, w->kinks, &g);
     w->evals_interval++;
     if (nk == 0)
-        return grad_may_vanish(g.d) ? smooth_tests(s, w, x, &g, p, cell) : EXCLUDED;
+        return grad_may_vanish(g.d) ? smooth_tests(s, w, x, &g, pm, m) : EXCLUDED;
     if (nk > SEARCH_MAX_SPLIT)
         return SURVIVES;
     return some_piece_may_vanish(s, w, x, nk) ? SURVIVES : EXCLUDED;
@@ -358,19 +356,23 @@ static uint64_t cell_key(const scell *c)
     return (uint64_t)c->i[2] << 39 | (uint64_t)c->i[1] << 22 | (uint64_t)c->i[0] << 5 | c->level;
 }
 
-/* Keeps a tested child (whose F interval is f): a frontier cell, a finest candidate or a
- * UNIQUE box. A finest cell where f is unbounded (a pole: 1/(x² + y² + z² − 1/4) would
- * otherwise leave the whole pole sphere) and Newton finds no zero of ∇f is not kept: nothing
- * finer than a cell can be said there, and no later stage could use it. */
-static void keep(search *s, worker *w, task_out *out, const scell *c, const ism_interval x[3],
-                 ism_interval f, int verdict)
+/* Keeps a tested child (whose F interval is f; m: its model when the verdict is SMOOTH): a
+ * frontier cell (with its model), a finest candidate or a UNIQUE box. A finest cell where f
+ * is unbounded (a pole: 1/(x² + y² + z² − 1/4) would otherwise leave the whole pole sphere)
+ * and Newton finds no zero of ∇f is not kept: nothing finer than a cell can be said there,
+ * and no later stage could use it. A level holds far fewer than 2^32 cells (each model is
+ * ~250 bytes; max_boxes), so a model's index fits its field. */
+static void keep(search *s, worker *w, task_out *out, scell c, const ism_dual_model *m,
+                 const ism_interval x[3], ism_interval f, int verdict)
 {
     bool ok;
-    if (verdict == SURVIVES && (int)c->level < s->depth) {
-        ok = vec_push(&out->cells, c, sizeof *c);
+    if (verdict != UNIQUE && (int)c.level < s->depth) {
+        c.model = verdict == SMOOTH ? (uint32_t)out->models.n : NO_MODEL;
+        ok = (verdict != SMOOTH || vec_push(&out->models, m, sizeof *m))
+             && vec_push(&out->cells, &c, sizeof c);
     } else {
-        keyed_box kb = { cell_key(c), { .rank = 0 } };
-        if (verdict == SURVIVES) {
+        keyed_box kb = { cell_key(&c), { .rank = 0 } };
+        if (verdict != UNIQUE) {
             kb.box = candidate(s, w, x);
             if (!(kb.box.flags & ISM_LBOX_PROJECTED) && !(isfinite(f.lo) && isfinite(f.hi)))
                 return;
@@ -411,9 +413,9 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
     ism_interval bx[8], by[8], bz[8], f[8];
     scell kids[8];
     uint32_t half = 1u << (s->depth - (int)p->level - 1);
-    for (int m = 0; m < 8; m++) { /* the model is filled by classify, not copied */
+    for (int m = 0; m < 8; m++) {
         kids[m].level = p->level + 1;
-        kids[m].modelled = false;
+        kids[m].model = NO_MODEL;
         for (int k = 0; k < 3; k++)
             kids[m].i[k] = p->i[k] + ((m >> k) & 1u ? half : 0u);
         ism_interval x[3];
@@ -424,11 +426,13 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
     }
     ism_eval_interval_batch(s->t, w->ws, bx, by, bz, f, 8);
     w->evals_interval += 8;
+    const ism_dual_model *pm = p->model == NO_MODEL ? NULL : &s->models[p->model];
+    ism_dual_model km; /* a child's model, built by its tests */
     for (int m = 0; m < 8; m++) {
         ism_interval x[3] = { bx[m], by[m], bz[m] };
-        int v = classify(s, w, x, f[m], p, &kids[m]);
+        int v = classify(s, w, x, f[m], pm, &km);
         if (v != EXCLUDED)
-            keep(s, w, out, &kids[m], x, f[m], v);
+            keep(s, w, out, kids[m], &km, x, f[m], v);
     }
 }
 
@@ -473,8 +477,33 @@ static bool make_workers(search *s)
     return true;
 }
 
+/* A frontier: its cells and their models. */
+typedef struct level {
+    vec cells, models;
+} level;
+
+/* Appends a task's output to the next frontier l (its model indices moved past the models
+ * before it) and to boxes, and frees it. */
+static bool join(task_out *o, level *l, vec *boxes, bool ok)
+{
+    size_t base = l->models.n;
+    ok = ok && !o->oom
+         && vec_append(&l->models, o->models.p, o->models.n, sizeof(ism_dual_model))
+         && vec_append(boxes, o->boxes.p, o->boxes.n, sizeof(keyed_box));
+    for (size_t i = 0; ok && i < o->cells.n; i++) {
+        scell c = ((const scell *)o->cells.p)[i];
+        if (c.model != NO_MODEL)
+            c.model += (uint32_t)base;
+        ok = vec_push(&l->cells, &c, sizeof c);
+    }
+    free(o->cells.p);
+    free(o->models.p);
+    free(o->boxes.p);
+    return ok;
+}
+
 /* Runs one level: expands the frontier into *next and appends boxes to *boxes. */
-static bool run_level(search *s, vec *next, vec *boxes)
+static bool run_level(search *s, level *next, vec *boxes)
 {
     size_t ntasks = (s->nfrontier + SEARCH_CELLS_PER_TASK - 1) / SEARCH_CELLS_PER_TASK;
     s->outs = calloc(ntasks ? ntasks : 1, sizeof *s->outs);
@@ -483,16 +512,8 @@ static bool run_level(search *s, vec *next, vec *boxes)
     int threads = s->nfrontier < SEARCH_PARALLEL_MIN ? 1 : s->threads;
     ism_parallel_for(threads, ntasks, expand_task, s);
     bool ok = true;
-    for (size_t t = 0; t < ntasks; t++) {
-        task_out *o = &s->outs[t];
-        ok = ok && !o->oom;
-        for (size_t i = 0; ok && i < o->cells.n; i++)
-            ok = vec_push(next, (scell *)o->cells.p + i, sizeof(scell));
-        for (size_t i = 0; ok && i < o->boxes.n; i++)
-            ok = vec_push(boxes, (keyed_box *)o->boxes.p + i, sizeof(keyed_box));
-        free(o->cells.p);
-        free(o->boxes.p);
-    }
+    for (size_t t = 0; t < ntasks; t++)
+        ok = join(&s->outs[t], next, boxes, ok);
     free(s->outs);
     s->outs = NULL;
     return ok;
@@ -514,27 +535,21 @@ static const char *stop_reason(int why)
 }
 
 /* The root cell: tested like any child (its F interval computed alone). */
-static bool seed(search *s, vec *frontier, vec *boxes)
+static bool seed(search *s, level *l, vec *boxes)
 {
-    scell root = { .level = 0 };
+    scell root = { .level = 0, .model = NO_MODEL };
     ism_interval x[3];
     cell_box(s, &root, x);
     worker *w = &s->workers[0];
     ism_interval f = ism_eval_interval(s->t, w->ws, x[0], x[1], x[2]);
     w->evals_interval++;
-    int v = classify(s, w, x, f, NULL, &root);
+    ism_dual_model m;
+    int v = classify(s, w, x, f, NULL, &m);
     if (v == EXCLUDED)
         return true;
-    task_out out = { { 0 }, { 0 }, false };
-    keep(s, w, &out, &root, x, f, v);
-    bool ok = !out.oom;
-    for (size_t i = 0; ok && i < out.cells.n; i++)
-        ok = vec_push(frontier, (scell *)out.cells.p + i, sizeof(scell));
-    for (size_t i = 0; ok && i < out.boxes.n; i++)
-        ok = vec_push(boxes, (keyed_box *)out.boxes.p + i, sizeof(keyed_box));
-    free(out.cells.p);
-    free(out.boxes.p);
-    return ok;
+    task_out out = { .oom = false };
+    keep(s, w, &out, root, &m, x, f, v);
+    return join(&out, l, boxes, true);
 }
 
 static bool check_options(const ism_locus_options *o, ism_error *err)
@@ -548,23 +563,27 @@ static bool check_options(const ism_locus_options *o, ism_error *err)
     return true;
 }
 
-/* Runs the levels; returns false on out of memory. */
+/* Runs the levels into *boxes; returns false on out of memory. */
 static bool subdivide(search *s, vec *boxes)
 {
-    vec frontier = { 0 }, next = { 0 };
-    bool ok = seed(s, &frontier, boxes);
-    for (int level = 0; ok && level < s->depth && frontier.n && !atomic_load(&s->stop); level++) {
-        s->frontier = frontier.p;
-        s->nfrontier = frontier.n;
+    level cur = { { 0 }, { 0 } }, next = { { 0 }, { 0 } };
+    bool ok = seed(s, &cur, boxes);
+    for (int depth = 0; ok && depth < s->depth && cur.cells.n && !atomic_load(&s->stop);
+         depth++) {
+        s->frontier = cur.cells.p;
+        s->models = cur.models.p;
+        s->nfrontier = cur.cells.n;
         atomic_store(&s->kept, boxes->n);
-        next.n = 0;
+        next.cells.n = next.models.n = 0;
         ok = run_level(s, &next, boxes);
-        vec t = frontier;
-        frontier = next;
+        level t = cur;
+        cur = next;
         next = t;
     }
-    free(frontier.p);
-    free(next.p);
+    free(cur.cells.p);
+    free(cur.models.p);
+    free(next.cells.p);
+    free(next.models.p);
     return ok;
 }
 
