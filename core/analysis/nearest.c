@@ -23,7 +23,6 @@
  * whose nearest point is t from q crosses the rays within acos(t / r) of its normal before
  * radius r, so a sheet at 0.95 r or nearer meets a ray. */
 #define RAY_DIRECTIONS 64
-#define GOLDEN_ANGLE 2.39996322972865332 /* π(3 − √5): the Fibonacci sphere's turn */
 /* Bisection steps along a ray: the zero to 2^-16 ≈ 1.5e-5 of the radius (the figures are
  * printed to 3 digits). */
 #define BISECTIONS 16
@@ -92,8 +91,8 @@ static double nearest_ray(const seeker *s, double r, double u[3])
 {
     double best = r;
     for (int i = 0; i < RAY_DIRECTIONS; i++) {
-        double z = 1 - (2 * i + 1.0) / RAY_DIRECTIONS, rho = sqrt(1 - z * z);
-        double v[3] = {rho * cos(i * GOLDEN_ANGLE), rho * sin(i * GOLDEN_ANGLE), z};
+        double v[3];
+        ism_fibonacci_dir(i, RAY_DIRECTIONS, v);
         double t = other_side(s, v, 0.5 * best)   ? bisect(s, v, 0.5 * best)
                    : other_side(s, v, best) ? bisect(s, v, best)
                                             : INFINITY;
@@ -109,14 +108,8 @@ static double nearest_ray(const seeker *s, double r, double u[3])
 /* Tilts u toward ± two directions across it while a ray finds a zero nearer than t. */
 static double tilt(const seeker *s, double u[3], double t)
 {
-    double e[2][3], w[3] = {fabs(u[0]) < 0.6 ? 1 : 0, fabs(u[0]) < 0.6 ? 0 : 1, 0};
-    double c = ism_dot3(w, u);
-    for (int a = 0; a < 3; a++)
-        e[0][a] = w[a] - c * u[a];
-    ism_normalise3(e[0]);
-    e[1][0] = u[1] * e[0][2] - u[2] * e[0][1];
-    e[1][1] = u[2] * e[0][0] - u[0] * e[0][2];
-    e[1][2] = u[0] * e[0][1] - u[1] * e[0][0];
+    double e[2][3];
+    ism_across3(u, e);
     for (double step = TILT_FIRST; step >= TILT_LAST; step *= 0.5) {
         bool nearer = true;
         for (int moves = 0; nearer && moves < TILT_MOVES; moves++) {

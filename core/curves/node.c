@@ -13,21 +13,16 @@
 
 #define NONE CUT_NONE
 
-/* Orthonormal e1, e2 spanning the plane normal to n. */
+/* Orthonormal e1, e2 spanning the plane normal to n (n ≠ 0). */
 static void tangent_basis(const double n[3], double e1[3], double e2[3])
 {
-    double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    double u[3] = {n[0] / l, n[1] / l, n[2] / l};
-    double a[3] = {fabs(u[0]) < 0.6 ? 1 : 0, fabs(u[0]) < 0.6 ? 0 : 1, 0};
-    double d = a[0] * u[0] + a[1] * u[1] + a[2] * u[2];
-    for (int c = 0; c < 3; c++)
-        e1[c] = a[c] - d * u[c];
-    l = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
-    for (int c = 0; c < 3; c++)
-        e1[c] /= l;
-    e2[0] = u[1] * e1[2] - u[2] * e1[1];
-    e2[1] = u[2] * e1[0] - u[0] * e1[2];
-    e2[2] = u[0] * e1[1] - u[1] * e1[0];
+    double u[3] = {n[0], n[1], n[2]}, e[2][3];
+    ism_normalise3(u);
+    ism_across3(u, e);
+    for (int c = 0; c < 3; c++) {
+        e1[c] = e[0][c];
+        e2[c] = e[1][c];
+    }
 }
 
 /* The node's two branch directions in the tangent plane (e1, e2 coordinates): the null

@@ -1,6 +1,7 @@
-/* vec3.h — the small vector helpers on double[3] that the polygoniser, the singular locus
- * and the curves share (dot product, length, normalising, distance), inline, each written
- * once (the same arithmetic, in the same order, wherever it is used). */
+/* vec3.h — the small vector helpers on double[3] that the polygoniser, the singular locus,
+ * the curves and the analysis share (dot product, length, normalising, distance, a frame
+ * across a direction, the Fibonacci sphere's directions), inline, each written once (the same
+ * arithmetic, in the same order, wherever it is used). */
 #ifndef ISM_VEC3_H
 #define ISM_VEC3_H
 
@@ -52,6 +53,35 @@ static inline double ism_sqdist_segment3(const double p[3], const double a[3], c
         d2 += d * d;
     }
     return d2;
+}
+
+/* Two unit directions across the unit vector u, (u, e[0], e[1]) orthonormal and right-handed:
+ * e[0] is the x axis made normal to u — the y axis when u is within 53° of x (|u_x| ≥ 0.6,
+ * then |u_y| ≤ 0.8: the axis kept is never nearer than 37° to u) — and e[1] = u × e[0]. */
+static inline void ism_across3(const double u[3], double e[2][3])
+{
+    double w[3] = {fabs(u[0]) < 0.6 ? 1 : 0, fabs(u[0]) < 0.6 ? 0 : 1, 0};
+    double c = ism_dot3(w, u);
+    for (int a = 0; a < 3; a++)
+        e[0][a] = w[a] - c * u[a];
+    ism_normalise3(e[0]);
+    e[1][0] = u[1] * e[0][2] - u[2] * e[0][1];
+    e[1][1] = u[2] * e[0][0] - u[0] * e[0][2];
+    e[1][2] = u[0] * e[0][1] - u[1] * e[0][0];
+}
+
+/* The golden angle π(3 − √5): the Fibonacci sphere's turn from one point to the next. */
+#define ISM_GOLDEN_ANGLE 2.39996322972865332
+
+/* Direction i (0 ≤ i < n) of the Fibonacci sphere: heights z = 1 − (2i + 1)/n evenly spaced,
+ * each turned by the golden angle from the last; the n directions spread evenly over the unit
+ * sphere, about √(4π / n) apart. */
+static inline void ism_fibonacci_dir(int i, int n, double v[3])
+{
+    double z = 1 - (2 * i + 1.0) / n, rho = sqrt(1 - z * z);
+    v[0] = rho * cos(i * ISM_GOLDEN_ANGLE);
+    v[1] = rho * sin(i * ISM_GOLDEN_ANGLE);
+    v[2] = z;
 }
 
 #endif

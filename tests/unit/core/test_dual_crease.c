@@ -27,6 +27,7 @@
 #include "core/eval/eval.h"
 #include "core/octree/mesher.h"
 #include "core/singular/surface.h"
+#include "core/util/vec3.h"
 #include "poly_fixture.h"
 
 #define DEPTH 9
@@ -45,12 +46,9 @@ static const pf_surface barth = {
     "(1 + 2*phi)*(x^2 + y^2 + z^2 - 1)^2, x^2 + y^2 + z^2 - 2.25)",
     barth_params, 1, NULL, 0};
 
-static double norm3(const double p[3]) { return sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]); }
-
 /* Directions searched round a point Newton puts beyond E (within_e): a Fibonacci sphere of
  * this many, about 3.2° apart, enough to meet any sheet crossing the ball of radius E. */
 #define SIGN_DIRECTIONS 4000
-#define GOLDEN_ANGLE 2.39996322972865332
 
 /* The distance from q to f = 0 for the E test: Newton's projection (pf_newton_dist), or — where
  * that exceeds e — e itself when f changes sign between q and q + e u for a direction u of
@@ -65,8 +63,8 @@ static double within_e(const ism_tape *t, ism_eval_ws *ws, const double q[3], do
         return d;
     bool neg = ism_eval_point(t, ws, q[0], q[1], q[2]) < 0;
     for (int i = 0; i < SIGN_DIRECTIONS; i++) {
-        double z = 1 - (2 * i + 1.0) / SIGN_DIRECTIONS, r = sqrt(1 - z * z);
-        double u[3] = {r * cos(i * GOLDEN_ANGLE), r * sin(i * GOLDEN_ANGLE), z};
+        double u[3];
+        ism_fibonacci_dir(i, SIGN_DIRECTIONS, u);
         if ((ism_eval_point(t, ws, q[0] + e * u[0], q[1] + e * u[1], q[2] + e * u[2]) < 0) != neg)
             return e;
     }
@@ -90,7 +88,7 @@ static double circle_dist(const double p[3], int axis, double at)
  * the circle; the nearest point is a foot on a piece that lies in it, or on the circle. */
 static double cut_ball_dist(const double *p)
 {
-    double best = circle_dist(p, 2, 0.5), r = norm3(p);
+    double best = circle_dist(p, 2, 0.5), r = ism_norm3(p);
     if (r > 0 && p[2] / r <= 0.5)
         best = fmin(best, fabs(r - 1));
     if (p[0] * p[0] + p[1] * p[1] <= RHO * RHO)
@@ -103,7 +101,7 @@ static double lens_dist(const double *p)
 {
     double best = circle_dist(p, 0, 0);
     for (int k = 0; k < 2; k++) {
-        double c = k ? -0.5 : 0.5, q[3] = {p[0] - c, p[1], p[2]}, r = norm3(q);
+        double c = k ? -0.5 : 0.5, q[3] = {p[0] - c, p[1], p[2]}, r = ism_norm3(q);
         /* the foot c + q / r lies in the other ball when its x is on the other centre's
            side of the crease plane (x ≤ 0 for centre +1/2) */
         if (r > 0 && (k ? c + q[0] / r >= 0 : c + q[0] / r <= 0))
@@ -158,7 +156,7 @@ static size_t turned(const ism_mesh *m, const ism_tape *t)
                 c[a] += p[j][a] / 3;
                 e[a] = p[(j + 1) % 3][a] - p[j][a];
             }
-            side = fmax(side, norm3(e));
+            side = fmax(side, ism_norm3(e));
         }
         cr_assert(ism_eval_top_branches(t, ws, c[0], c[1], c[2], val, g));
         pf_tri_normal(m, i, nr);
@@ -167,7 +165,7 @@ static size_t turned(const ism_mesh *m, const ism_tape *t)
             up[k] = nr[0] * g[k][0] + nr[1] * g[k][1] + nr[2] * g[k][2] > 0;
         double gd[3] = {g[0][0] - g[1][0], g[0][1] - g[1][1], g[0][2] - g[1][2]};
         int active = ism_top_active_branch(t, val);
-        bool near = fabs(val[0] - val[1]) <= side * norm3(gd);
+        bool near = fabs(val[0] - val[1]) <= side * ism_norm3(gd);
         n += near ? !up[0] && !up[1] : !up[active];
     }
     ism_eval_ws_free(ws);
@@ -184,7 +182,8 @@ static size_t crease_vertices(const ism_mesh *m, const ism_tape *t, uint8_t *on)
         double val[2], g[2][3];
         const double *p = m->pos + 3 * v;
         cr_assert(ism_eval_top_branches(t, ws, p[0], p[1], p[2], val, g));
-        on[v] = fabs(val[0]) <= ON_CREASE * norm3(g[0]) && fabs(val[1]) <= ON_CREASE * norm3(g[1]);
+        on[v] = fabs(val[0]) <= ON_CREASE * ism_norm3(g[0]) &&
+                fabs(val[1]) <= ON_CREASE * ism_norm3(g[1]);
         n += on[v];
     }
     ism_eval_ws_free(ws);
