@@ -45,9 +45,9 @@ typedef struct sample_pass {
     const uint8_t *singular; /* per vertex: ∇f vanishes there (no distance) */
     double *dist;     /* per item: distance, NaN when skipped or not a point */
     size_t nitems;
-    /* item's point into p, its corners into idx; how many corners */
+    /* item's point into p, its corners into idx; how many corners (0: the item is no point,
+     * a collapsed triangle) */
     int (*point)(const struct sample_pass *sp, size_t item, double p[3], uint32_t idx[3]);
-    bool triangles;      /* the items are triangles (collapsed ones are no point) */
     const double *first; /* per item: the first-order estimate (while measuring again) */
     double rays_below;   /* rays searched from a point whose |∇f| is below this */
     const size_t *again; /* the items to measure again, and how many */
@@ -79,6 +79,8 @@ static double distance_at(const sample_pass *sp, ism_eval_ws *ws, const double p
 static int centroid_of(const sample_pass *sp, size_t t, double c[3], uint32_t idx[3])
 {
     const ism_mesh *m = sp->m;
+    if (ism_an_tri_collapsed(m->tri, t))
+        return 0;
     c[0] = c[1] = c[2] = 0;
     for (int k = 0; k < 3; k++) {
         idx[k] = m->tri[3 * t + k];
@@ -102,13 +104,10 @@ static void estimate_block(void *ctx, ism_eval_ws *ws, size_t block)
     sample_pass *sp = ctx;
     size_t end = ism_block_end(block, ISM_AN_EVAL_BLOCK, sp->nitems);
     for (size_t i = block * ISM_AN_EVAL_BLOCK; i < end; i++) {
-        sp->dist[i] = NAN;
-        if (sp->triangles && ism_an_tri_collapsed(sp->m->tri, i))
-            continue;
         double c[3];
         uint32_t idx[3];
         int n = sp->point(sp, i, c, idx);
-        sp->dist[i] = distance_at(sp, ws, c, idx, n);
+        sp->dist[i] = n ? distance_at(sp, ws, c, idx, n) : NAN;
     }
 }
 
@@ -120,7 +119,7 @@ static void nearest_block(void *ctx, ism_eval_ws *ws, size_t block)
         size_t i = sp->again[j];
         double c[3];
         uint32_t idx[3];
-        sp->point(sp, i, c, idx);
+        sp->point(sp, i, c, idx); /* a point: it has an estimate */
         sp->dist[i] = ism_an_nearest_zero(sp->f, ws, c, sp->first[i], sp->rays_below);
     }
 }
@@ -203,7 +202,6 @@ static bool sample(const ism_mesh *m, const ism_tape *f, const ism_an_edge_table
                       malloc(n * sizeof(double)),
                       nitems,
                       point,
-                      point == centroid_of,
                       NULL,
                       RAYS_BELOW_MEDIAN * a->gradient_scale,
                       NULL,
