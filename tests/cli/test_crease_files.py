@@ -81,10 +81,10 @@ def gyroid_ball_branches(p, k, r2):
 
 
 def triangle_side(vals):
-    """vals: per corner, (value, branch index) highest first. The branch a triangle lies on: the one f = max takes at its corner farthest
-    from the crease (the largest lead of the top branch over the next; the centroid of a
-    sliver along the crease may read the other side), or None when no corner leads by
-    SIDE_MARGIN (float32 positions cannot decide)."""
+    """The branch a triangle lies on: the one f = max takes at its corner farthest from the
+    crease (the largest lead of the top branch over the next; the centroid of a sliver along
+    the crease may read the other side), or None when no corner leads by SIDE_MARGIN (float32
+    positions cannot decide). vals: per corner, its branches' (value, index), highest first."""
     best, side = SIDE_MARGIN, None
     for corner in vals:  # per corner: its branches' values, highest first, with their index
         if corner[0][0] - corner[1][0] > best:
@@ -158,18 +158,18 @@ class CreaseFilesTest(unittest.TestCase):
             for v in f:
                 inc.setdefault(v, []).append(t)
 
-        def ranked(u):  # row u's branch values, highest first, with their index
+        def row_branches(u):  # row u's branches, and their (value, index) highest first
             if u not in at:
-                at[u] = sorted(((val, i) for i, (_, val) in enumerate(branches(rows[u][:3]))),
-                               reverse=True)
+                br = branches(rows[u][:3])
+                at[u] = br, sorted(((val, i) for i, (_, val) in enumerate(br)), reverse=True)
             return at[u]
 
         for v, row in enumerate(rows):
             p, n = row[:3], row[3:]
-            br = branches(p)
+            br = row_branches(v)[0]
             if sum(1 for _, val in br if abs(val) < ON_CREASE) < 2:
                 continue
-            sides = {triangle_side([ranked(u) for u in faces[t]]) for t in inc[v]}
+            sides = {triangle_side([row_branches(u)[1] for u in faces[t]]) for t in inc[v]}
             if None in sides:
                 continue
             want = [sum(br[i][0][k] for i in sides) for k in range(3)]
