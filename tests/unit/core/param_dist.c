@@ -20,7 +20,6 @@
 #define SPACING_SPHERE 0.0056 /* their spacing on the sphere: √(4π / 400000) */
 #define PLANE_HALF 1.1        /* Whitney's (u, v): z = u² ≤ 1 and y = v in the box ±1, and more */
 #define SPACING_PLANE 0.004   /* the plane lattice's step (550² samples) */
-#define GOLDEN_ANGLE 2.39996322972865332
 #define MAX_STARTS 64 /* starts remembered (a few are made: one or two per sheet) */
 #define STEP_LAST 1e-10 /* the pattern search's last step in the domain: far below the 3 digits
                            the tests compare */
@@ -82,11 +81,16 @@ static int cell_of(const param_dist *r, double x)
     return c < 0 ? 0 : c >= r->ncell ? r->ncell - 1 : c;
 }
 
+/* The grid cell c (each within 0..ncell − 1): its index. */
+static size_t cell_at(const param_dist *r, const int c[3])
+{
+    return ((size_t)c[0] * (size_t)r->ncell + (size_t)c[1]) * (size_t)r->ncell + (size_t)c[2];
+}
+
 static size_t cell_index(const param_dist *r, const double p[3])
 {
-    return ((size_t)cell_of(r, p[0]) * (size_t)r->ncell + (size_t)cell_of(r, p[1])) *
-               (size_t)r->ncell +
-           (size_t)cell_of(r, p[2]);
+    int c[3] = {cell_of(r, p[0]), cell_of(r, p[1]), cell_of(r, p[2])};
+    return cell_at(r, c);
 }
 
 /* The domain's samples into r->s (NULL: only counted); returns how many. */
@@ -95,14 +99,12 @@ static size_t domain_samples(const param_dist *r, double *s)
     size_t n = 0;
     if (r->d->sphere) {
         for (int i = 0; i < SAMPLES_SPHERE; i++) {
-            double z = 1 - (2 * i + 1.0) / SAMPLES_SPHERE, rho = sqrt(1 - z * z);
-            if (z < 0)
+            double v[3];
+            ism_fibonacci_dir(i, SAMPLES_SPHERE, v);
+            if (v[2] < 0)
                 break; /* the lower half: S(−s) = S(s) */
-            if (s) {
-                s[3 * n] = rho * cos(i * GOLDEN_ANGLE);
-                s[3 * n + 1] = rho * sin(i * GOLDEN_ANGLE);
-                s[3 * n + 2] = z;
-            }
+            for (int k = 0; s && k < 3; k++)
+                s[3 * n + k] = v[k];
             n++;
         }
         return n;
@@ -183,17 +185,7 @@ static void domain_frame(const param_dist *r, const double s0[3], double e[2][3]
         e[0][1] = e[0][2] = e[1][0] = e[1][2] = 0;
         return;
     }
-    double a[3] = {fabs(s0[0]) < 0.6 ? 1 : 0, fabs(s0[0]) < 0.6 ? 0 : 1, 0};
-    double c = a[0] * s0[0] + a[1] * s0[1] + a[2] * s0[2], n = 0;
-    for (int k = 0; k < 3; k++) {
-        e[0][k] = a[k] - c * s0[k];
-        n += e[0][k] * e[0][k];
-    }
-    for (int k = 0; k < 3; k++)
-        e[0][k] /= sqrt(n);
-    e[1][0] = s0[1] * e[0][2] - s0[2] * e[0][1];
-    e[1][1] = s0[2] * e[0][0] - s0[0] * e[0][2];
-    e[1][2] = s0[0] * e[0][1] - s0[1] * e[0][0];
+    ism_across3(s0, e);
 }
 
 /* The nearest squared distance to q a pattern search over the domain reaches from s0. */
@@ -208,13 +200,11 @@ static double descend(const param_dist *r, const double s0[3], const double q[3]
             for (int k = 0; k < 4; k++) {
                 double t[2] = {at[0] + (k == 0 ? step : k == 1 ? -step : 0),
                                at[1] + (k == 2 ? step : k == 3 ? -step : 0)};
-                double s[3], len = 0;
-                for (int j = 0; j < 3; j++) {
+                double s[3];
+                for (int j = 0; j < 3; j++)
                     s[j] = s0[j] + t[0] * e[0][j] + t[1] * e[1][j];
-                    len += s[j] * s[j];
-                }
-                for (int j = 0; j < 3 && r->d->sphere; j++)
-                    s[j] /= sqrt(len);
+                if (r->d->sphere)
+                    ism_normalise3(s); /* back onto the sphere */
                 double d = sq_to(r, s, q);
                 if (d < best) {
                     best = d;
@@ -263,7 +253,7 @@ static int neighbourhood(const param_dist *r, const double q[3], size_t range[27
                 if (c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] >= r->ncell ||
                     c[1] >= r->ncell || c[2] >= r->ncell)
                     continue;
-                size_t cell = ((size_t)c[0] * r->ncell + (size_t)c[1]) * r->ncell + (size_t)c[2];
+                size_t cell = cell_at(r, c);
                 range[n][0] = r->start[cell];
                 range[n++][1] = r->start[cell + 1];
             }
