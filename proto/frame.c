@@ -32,8 +32,12 @@ const char *ism_frame_status_name(ism_frame_status s)
 
 void ism_frame_free(ism_frame *f)
 {
-    free(f->payload);
+    if (f->release)
+        f->release(f->payload);
+    else
+        free(f->payload);
     f->payload = NULL;
+    f->release = NULL;
     f->len = 0;
 }
 
@@ -303,7 +307,13 @@ ism_frame_status ism_frame_read_fd(ism_frame_reader *r, int fd, ism_frame *f)
             ism_frame_status st = header_check(r->hdr, r->max_payload, &r->cur, &r->want_crc);
             if (st != ISM_FRAME_OK)
                 return st;
-            r->cur.payload = malloc(r->cur.len ? r->cur.len : 1);
+            r->cur.release = NULL;
+            r->cur.payload = r->alloc ? r->alloc(r->cur.type, r->cur.len, &r->cur.release)
+                                      : NULL;
+            if (!r->cur.payload) {
+                r->cur.release = NULL;
+                r->cur.payload = malloc(r->cur.len ? r->cur.len : 1);
+            }
             if (!r->cur.payload)
                 return ISM_FRAME_NO_MEMORY;
             r->have = 0;

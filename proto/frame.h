@@ -62,6 +62,9 @@ typedef struct ism_frame {
     uint64_t job;
     unsigned char *payload;
     size_t len;
+    /* How ism_frame_free lets go of payload: NULL, free(); else the allocator's that gave it
+     * (ism_frame_reader.alloc). */
+    void (*release)(unsigned char *payload);
 } ism_frame;
 
 void ism_frame_free(ism_frame *f);
@@ -96,6 +99,13 @@ ism_frame_status ism_frame_write_fd(int fd, ism_frame_type type, uint64_t job,
 
 /* Incremental reader for one fd: keeps a partial frame between calls, reads no byte past
  * the end of the current frame. */
+/* A reader's own allocator for a payload of len bytes of a frame of type: returns the bytes
+ * and sets *release to what lets go of them, or returns NULL (the reader then mallocs).
+ * Why: isomeshd reads a computed surface straight into the refcounted buffer its cache
+ * keeps, instead of copying megabytes out of the frame. */
+typedef unsigned char *(*ism_frame_alloc_fn)(ism_frame_type type, size_t len,
+                                             void (**release)(unsigned char *payload));
+
 typedef struct ism_frame_reader {
     unsigned char hdr[ISM_FRAME_HEADER_SIZE];
     size_t hdr_have;
@@ -103,6 +113,7 @@ typedef struct ism_frame_reader {
     uint32_t want_crc;
     ism_frame cur;      /* payload being filled once the header is complete */
     size_t have;
+    ism_frame_alloc_fn alloc; /* NULL (ism_frame_reader_init's): malloc */
 } ism_frame_reader;
 
 void ism_frame_reader_init(ism_frame_reader *r, size_t max_payload);

@@ -31,6 +31,11 @@ ism_blob *ism_blob_from_str(const char *s)
     return ism_blob_copy(s, strlen(s));
 }
 
+ism_blob *ism_blob_of_data(unsigned char *data)
+{
+    return (ism_blob *)(void *)(data - offsetof(ism_blob, data));
+}
+
 ism_blob *ism_blob_ref(ism_blob *b)
 {
     if (b)

@@ -18,6 +18,8 @@ ism_blob *ism_blob_new(size_t len);
 /* A blob holding a copy of data. */
 ism_blob *ism_blob_copy(const void *data, size_t len);
 ism_blob *ism_blob_from_str(const char *s);
+/* The blob whose data (b->data, never a pointer into it) this is. */
+ism_blob *ism_blob_of_data(unsigned char *data);
 /* Adds a reference (NULL passes through). */
 ism_blob *ism_blob_ref(ism_blob *b);
 /* Drops a reference (NULL is fine); frees on the last. */

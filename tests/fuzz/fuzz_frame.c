@@ -96,7 +96,7 @@ static void frame_check_payload(const unsigned char *p, size_t n, uint64_t job)
     FUZZ_CHECK(copy != NULL, "out of memory");
     if (n)
         memcpy(copy, p, n);
-    ism_frame f = {ISM_FRAME_REQUEST, job, copy, n};
+    ism_frame f = {.type = ISM_FRAME_REQUEST, .job = job, .payload = copy, .len = n};
     frame_check_job(&f);
     ism_frame_result r;
     FUZZ_CHECK(!ism_frame_result_decode(&f, &r), "a REQUEST frame decoded as a RESULT");

@@ -267,6 +267,73 @@ Test(frame, writer_handles_short_writes_into_a_full_pipe)
     free(payload);
 }
 
+/* A reader's own allocator (isomeshd's: SURFACE payloads into the cache's refcounted buffer). */
+static unsigned char hook_buf[64];
+static int hook_released;
+
+static void hook_release(unsigned char *payload)
+{
+    cr_assert_eq(payload, hook_buf);
+    hook_released++;
+}
+
+static unsigned char *hook_alloc(ism_frame_type type, size_t len,
+                                 void (**release)(unsigned char *payload))
+{
+    if (type != ISM_FRAME_SURFACE || len > sizeof hook_buf)
+        return NULL;
+    *release = hook_release;
+    return hook_buf;
+}
+
+Test(frame, reader_allocator_gets_its_types_and_frees_them)
+{
+    int p[2];
+    cr_assert_eq(pipe(p), 0);
+    static const char surf[] = "ISMS surface entry", prog[] = "\x40\x42\x0f\x00";
+    ism_frame_part a = {surf, sizeof surf}, b = {prog, 4};
+    cr_assert_eq(ism_frame_write_fd(p[1], ISM_FRAME_SURFACE, 5, &a, 1), ISM_FRAME_OK);
+    cr_assert_eq(ism_frame_write_fd(p[1], ISM_FRAME_PROGRESS, 5, &b, 1), ISM_FRAME_OK);
+    ism_frame_reader r;
+    ism_frame_reader_init(&r, 1 << 20);
+    r.alloc = hook_alloc;
+    ism_frame f = {0};
+    cr_assert_eq(ism_frame_read_fd(&r, p[0], &f), ISM_FRAME_OK);
+    cr_assert_eq(f.type, ISM_FRAME_SURFACE);
+    cr_assert_eq(f.payload, hook_buf, "read into the allocator's bytes");
+    cr_assert_eq(f.len, sizeof surf);
+    cr_assert_eq(memcmp(f.payload, surf, sizeof surf), 0);
+    ism_frame_free(&f);
+    cr_assert_eq(hook_released, 1);
+    cr_assert_null(f.payload);
+    cr_assert_eq(ism_frame_read_fd(&r, p[0], &f), ISM_FRAME_OK);
+    cr_assert_eq(f.type, ISM_FRAME_PROGRESS);
+    cr_assert_neq(f.payload, hook_buf, "other types malloc'd");
+    cr_assert_null(f.release);
+    cr_assert_eq(memcmp(f.payload, prog, 4), 0);
+    ism_frame_free(&f);
+    cr_assert_eq(hook_released, 1);
+    /* a surface whose header is in but not its payload: the reader's free lets go of it */
+    cr_assert_eq(ism_frame_write_fd(p[1], ISM_FRAME_SURFACE, 6, &a, 1), ISM_FRAME_OK);
+    cr_assert_eq(fcntl(p[0], F_SETFL, O_NONBLOCK), 0);
+    unsigned char head[ISM_FRAME_HEADER_SIZE + 3];
+    ism_frame_reader r2;
+    ism_frame_reader_init(&r2, 1 << 20);
+    r2.alloc = hook_alloc;
+    int q[2];
+    cr_assert_eq(pipe2(q, O_NONBLOCK), 0);
+    cr_assert_eq(read(p[0], head, sizeof head), (ssize_t)sizeof head);
+    cr_assert_eq(write(q[1], head, sizeof head), (ssize_t)sizeof head);
+    cr_assert_eq(ism_frame_read_fd(&r2, q[0], &f), ISM_FRAME_AGAIN);
+    ism_frame_reader_free(&r2);
+    cr_assert_eq(hook_released, 2);
+    ism_frame_reader_free(&r);
+    close(p[0]);
+    close(p[1]);
+    close(q[0]);
+    close(q[1]);
+}
+
 Test(frame, write_to_a_closed_pipe_fails_cleanly)
 {
     signal(SIGPIPE, SIG_IGN);
