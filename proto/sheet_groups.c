@@ -1,7 +1,8 @@
 /* sheet_groups.c — the half-sheet join of sheet_groups.h: the marked corners listed per
- * vertex, then at each vertex a small agglomeration over the fan edges its triangles share
- * off the locus (a vertex has a few dozen corners at most: a node's fan), each join kept
- * only while the joined normal serves every member. */
+ * vertex, then at each vertex the sets joined over the fan edges its triangles share off the
+ * locus (a vertex has at most a few hundred corners: a node's fans); a set one normal serves
+ * is joined whole, any other by a small agglomeration that keeps each join only while the
+ * joined normal serves every member. */
 #include "proto/sheet_groups.h"
 #include "core/analysis/unionfind.h"
 #include "core/util/vec3.h"
@@ -50,6 +51,7 @@ typedef struct fan_ws {
     fan_pair *pair;  /* 1 per member (each link run of two gives one) */
     uint32_t *parent, *size;
     double *sum;     /* 3 per member: the set's sum of normals at its root */
+    uint8_t *whole;  /* per member: its half-sheet is joined whole */
 } fan_ws;
 
 static bool fan_ws_alloc(fan_ws *s, size_t cap)
@@ -59,7 +61,8 @@ static bool fan_ws_alloc(fan_ws *s, size_t cap)
     s->parent = malloc(cap * sizeof *s->parent);
     s->size = malloc(cap * sizeof *s->size);
     s->sum = malloc(3 * cap * sizeof *s->sum);
-    return s->link && s->pair && s->parent && s->size && s->sum;
+    s->whole = malloc(cap);
+    return s->link && s->pair && s->parent && s->size && s->sum && s->whole;
 }
 
 static void fan_ws_free(fan_ws *s)
@@ -69,13 +72,33 @@ static void fan_ws_free(fan_ws *s)
     free(s->parent);
     free(s->size);
     free(s->sum);
+    free(s->whole);
 }
 
-/* Whether every member of the sets ra and rb is within the angle of the unit u. */
-static bool serves_all(const fan_ws *s, const uint32_t *corner, uint32_t k, uint32_t ra,
-                       uint32_t rb, const double *u, const float *cn)
+/* Every member its own set, its own normal the set's sum. */
+static void singletons(fan_ws *s, const uint32_t *corner, uint32_t k, const float *cn)
 {
-    const double cmin = cos(ISM_SHEET_GROUP_MAX_ANGLE);
+    for (uint32_t i = 0; i < k; i++) {
+        s->parent[i] = i;
+        s->size[i] = 1;
+        for (int d = 0; d < 3; d++)
+            s->sum[3 * i + d] = cn[3 * (size_t)corner[i] + d];
+    }
+}
+
+/* Joins the sets of a and b: the smaller root keeps the size and sum (unionfind.h). */
+static void join_sets(fan_ws *s, uint32_t ra, uint32_t rb, const double *sum)
+{
+    ism_an_uf_union(s->parent, ra, rb);
+    uint32_t r = ra < rb ? ra : rb;
+    s->size[r] = s->size[ra] + s->size[rb];
+    memcpy(s->sum + 3 * r, sum, 3 * sizeof *sum);
+}
+
+/* Whether every member of the sets ra and rb is within cmin (a cosine) of the unit u. */
+static bool serves_all(const fan_ws *s, const uint32_t *corner, uint32_t k, uint32_t ra,
+                       uint32_t rb, const double *u, const float *cn, double cmin)
+{
     for (uint32_t i = 0; i < k; i++) {
         uint32_t r = ism_an_uf_find(s->parent, i);
         if (r != ra && r != rb)
@@ -87,9 +110,11 @@ static bool serves_all(const fan_ws *s, const uint32_t *corner, uint32_t k, uint
     return true;
 }
 
-/* The k >= 2 marked corners corner[] at vertex v; on: per vertex, whether it carries a mark. */
-static void join_vertex(const ism_mesh *m, uint32_t v, const uint32_t *corner, uint32_t k,
-                        const uint8_t *on, float *cn, fan_ws *s)
+/* The pairs of members whose triangles share an edge (v, w), w unmarked, of exactly two of
+ * them (within one sheet: an edge along the locus has four, or a marked end), closest
+ * normals first; their number. */
+static size_t fan_pairs(const ism_mesh *m, uint32_t v, const uint32_t *corner, uint32_t k,
+                        const uint8_t *on, const float *cn, fan_ws *s)
 {
     size_t nl = 0, np = 0;
     for (uint32_t i = 0; i < k; i++) {
@@ -103,20 +128,74 @@ static void join_vertex(const ism_mesh *m, uint32_t v, const uint32_t *corner, u
         for (e = a + 1; e < nl && s->link[e].w == s->link[a].w; e++)
             ;
         uint32_t x = s->link[a].i, y = s->link[a + 1 < e ? a + 1 : a].i;
-        if (e - a == 2 && x != y) /* an edge of exactly two of the fan's triangles */
+        if (e - a == 2 && x != y)
             s->pair[np++] = (fan_pair){dot3f(cn + 3 * (size_t)corner[x],
                                              cn + 3 * (size_t)corner[y]), x, y};
     }
+    qsort(s->pair, np, sizeof *s->pair, cmp_pair);
+    return np;
+}
+
+/* The half-sheets (sets joined over every pair): whole[i] when member i's is served by its
+ * one normal within ISM_SHEET_GROUP_MAX_ANGLE. Leaves those sets in s (parent, size, sum)
+ * and every other member a set of its own. */
+static void whole_half_sheets(fan_ws *s, const uint32_t *corner, uint32_t k, size_t np,
+                              const float *cn)
+{
+    singletons(s, corner, k, cn);
+    for (size_t p = 0; p < np; p++) {
+        uint32_t ra = ism_an_uf_find(s->parent, s->pair[p].a);
+        uint32_t rb = ism_an_uf_find(s->parent, s->pair[p].b);
+        if (ra == rb)
+            continue;
+        double sum[3];
+        for (int d = 0; d < 3; d++)
+            sum[d] = s->sum[3 * ra + d] + s->sum[3 * rb + d];
+        join_sets(s, ra, rb, sum);
+    }
+    const double cmin = cos(ISM_SHEET_GROUP_MAX_ANGLE);
+    for (uint32_t i = 0; i < k; i++)
+        s->whole[i] = 1;
+    for (uint32_t i = 0; i < k; i++) {
+        uint32_t r = ism_an_uf_find(s->parent, i);
+        double len = ism_norm3(s->sum + 3 * r);
+        const float *n = cn + 3 * (size_t)corner[i];
+        double c = len > 0 && isfinite(len)
+                       ? ((double)n[0] * s->sum[3 * r] + (double)n[1] * s->sum[3 * r + 1] +
+                          (double)n[2] * s->sum[3 * r + 2]) / len
+                       : -1;
+        if (c < cmin)
+            s->whole[r] = 0; /* at its root first: members read it below */
+    }
+    for (uint32_t i = 0; i < k; i++) {
+        uint32_t r = ism_an_uf_find(s->parent, i);
+        s->whole[i] = s->whole[r];
+    }
+    for (uint32_t i = 0; i < k; i++) /* the others start apart for the fans */
+        if (!s->whole[i]) {
+            s->parent[i] = i;
+            s->size[i] = 1;
+            for (int d = 0; d < 3; d++)
+                s->sum[3 * i + d] = cn[3 * (size_t)corner[i] + d];
+        }
+}
+
+/* The k >= 2 marked corners corner[] at vertex v; on: per vertex, whether it carries a mark.
+ * A half-sheet whose triangles' normals one normal serves within ISM_SHEET_GROUP_MAX_ANGLE
+ * (a sheet with a tangent plane at v) is joined whole; any other (a cone's nappe, a pinch
+ * point's fan) is joined into fans, closest pairs first, while the fan's normal stays within
+ * ISM_SHEET_FAN_MAX_ANGLE of each member's. */
+static void join_vertex(const ism_mesh *m, uint32_t v, const uint32_t *corner, uint32_t k,
+                        const uint8_t *on, float *cn, fan_ws *s)
+{
+    size_t np = fan_pairs(m, v, corner, k, on, cn, s);
     if (!np)
         return;
-    qsort(s->pair, np, sizeof *s->pair, cmp_pair);
-    for (uint32_t i = 0; i < k; i++) {
-        s->parent[i] = i;
-        s->size[i] = 1;
-        for (int d = 0; d < 3; d++)
-            s->sum[3 * i + d] = cn[3 * (size_t)corner[i] + d];
-    }
+    whole_half_sheets(s, corner, k, np, cn);
+    const double cmin = cos(ISM_SHEET_FAN_MAX_ANGLE);
     for (size_t p = 0; p < np; p++) {
+        if (s->whole[s->pair[p].a])
+            continue;
         uint32_t ra = ism_an_uf_find(s->parent, s->pair[p].a);
         uint32_t rb = ism_an_uf_find(s->parent, s->pair[p].b);
         if (ra == rb)
@@ -129,12 +208,8 @@ static void join_vertex(const ism_mesh *m, uint32_t v, const uint32_t *corner, u
             continue;
         for (int d = 0; d < 3; d++)
             u[d] = sum[d] / len;
-        if (!serves_all(s, corner, k, ra, rb, u, cn))
-            continue;
-        ism_an_uf_union(s->parent, ra, rb);
-        uint32_t r = ra < rb ? ra : rb; /* the smaller root stays (unionfind.h) */
-        s->size[r] = s->size[ra] + s->size[rb];
-        memcpy(s->sum + 3 * r, sum, sizeof sum);
+        if (serves_all(s, corner, k, ra, rb, u, cn, cmin))
+            join_sets(s, ra, rb, sum);
     }
     /* every member read its own normal above; now the sets of two or more get theirs */
     for (uint32_t i = 0; i < k; i++) {

@@ -3,16 +3,18 @@
  * construction:
  * - two planes z = 0 and y = 0 crossing on the x axis (meshes_for_tests.h, n = 4), every
  *   corner at an axis vertex marked, each triangle's normal its plane's tilted about the x
- *   axis by ±8° by side of the axis and ±2° by triangle parity: each of the 5 axis vertices
- *   has 4 half-sheets (2 planes × 2 sides, the sides' normals only ~16° apart, so an angle
- *   rule alone would join them: the axis edges must keep them apart, also when the other
+ *   axis by ±15° by side of the axis and ±6° by triangle parity: each of the 5 axis vertices
+ *   has 4 half-sheets (2 planes × 2 sides; the sides' normals 18–42° apart, so the whole-sheet
+ *   angle alone could join them: the axis edges must keep them apart, also when the other
  *   plane's corners are unmarked, as a crease side's), each half-sheet's corners one float
- *   triple, the normalised sum of its own;
- * - a double cone z² = x² + y² (a node's two nappes, 36 triangles each, outward normals
- *   45° from the axis): every joined normal within the angle of each member's own; the
- *   number of fans per nappe at least n / m, m the most consecutive members whose sum serves
- *   them all (computed here from the closed form), at most twice that (the nappe is joined,
- *   not left per triangle), and never one fan (the tip not rounded into the axis). */
+ *   triple, the normalised sum of its own (its members up to 12° apart: wider than the fan
+ *   angle, so only the whole-sheet rule joins them);
+ * - a double cone z² = x² + y² (a node's two nappes, 72 triangles each, outward normals
+ *   45° from the axis, neighbours 3.5° apart): every joined normal within the fan angle of
+ *   each member's own; the number of fans per nappe at least n / m, m the most consecutive
+ *   members whose sum serves them all (computed here from the closed form), at most twice
+ *   that (the nappe is joined, not left per triangle), and never one fan (the tip not
+ *   rounded into the axis). */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -63,7 +65,7 @@ static void crossing_planes(bool mark_z)
     for (size_t c = 0; c < nc; c++) {
         int plane, side;
         plane_side(&m, c / 3, &plane, &side);
-        double a = side * 8 * DEG + ((c / 3) % 2 ? 2 : -2) * DEG; /* tilt about the x axis */
+        double a = side * 15 * DEG + ((c / 3) % 2 ? 6 : -6) * DEG; /* tilt about the x axis */
         double n[3] = {0, plane ? cos(a) : -sin(a), plane ? sin(a) : cos(a)};
         for (int d = 0; d < 3; d++)
             cn[3 * c + d] = (float)n[d];
@@ -126,7 +128,7 @@ Test(sheet_groups, a_sheets_two_sides_stay_apart_without_the_other_sheet)
     crossing_planes(false);
 }
 
-#define RING 36 /* triangles per nappe */
+#define RING 72 /* triangles per nappe: neighbours' normals 3.5° apart, under the fan angle */
 
 /* The outward unit normal of the cone z = s r (s = ±1) at azimuth phi. */
 static void cone_normal(int s, double phi, double *n)
@@ -137,7 +139,7 @@ static void cone_normal(int s, double phi, double *n)
 }
 
 /* The most consecutive members (normals at azimuths k 2π/RING) whose normalised sum is within
- * the join angle of each: from the closed form, not from the code. */
+ * the fan angle of each: from the closed form, not from the code. */
 static int most_per_fan(void)
 {
     int best = 1;
@@ -154,7 +156,7 @@ static int most_per_fan(void)
             worst = fmax(worst, acos(fmin(1, (n[0] * sum[0] + n[1] * sum[1] + n[2] * sum[2]) /
                                                  len)));
         }
-        if (worst <= ISM_SHEET_GROUP_MAX_ANGLE)
+        if (worst <= ISM_SHEET_FAN_MAX_ANGLE)
             best = k;
     }
     return best;
@@ -201,7 +203,7 @@ Test(sheet_groups, a_nodes_nappes_are_cut_into_fans_within_the_angle)
         int fans = 0;
         for (int i = 0; i < RING; i++) {
             size_t c = 3 * ((size_t)s * RING + (size_t)i);
-            cr_expect_leq(angle_f(cn + 3 * c, in + 3 * c), ISM_SHEET_GROUP_MAX_ANGLE + 1e-6,
+            cr_expect_leq(angle_f(cn + 3 * c, in + 3 * c), ISM_SHEET_FAN_MAX_ANGLE + 1e-6,
                           "nappe %d face %d: %g°", s, i, angle_f(cn + 3 * c, in + 3 * c) / DEG);
             bool seen = false; /* a normal met before on this nappe: the same fan */
             for (int j = 0; j < i && !seen; j++)
