@@ -73,6 +73,18 @@
  * torus 3e-3 113.5M -> 91.7M, same triangle count; the box-cut presets at E/3 up to 2.4%
  * fewer triangles (the rounds' order changes which coarse leaves a miss splits). */
 #define SAG_SPLIT 2.0
+/* children_free's batches are made while the children they showed free (each spared the
+ * interval of f and ∇f, 2-3x a batch's cost) are at least this many per batch so far (the
+ * first split pass past min_depth always batches). With every batch made: kummer-16-nodes
+ * at 1e-2 4.4 (38,328 of 8,658 batches; 1.3-1.9 in its first passes, 5.8 in its largest),
+ * the sphere 4.1-5.4, the torus 0.53 at 1e-2 (2.1 in its first pass, then none: its
+ * natural interval is wide) and 0.06 at 1e-3. Whole runs (bench_error, callgrind) against
+ * no batch: at 1 kummer-16-nodes 1e-2 1,991.9M -> 1,884.6M, sphere 1e-2 / 1.3e-3 7.27M /
+ * 54.30M -> 6.93M / 52.69M, torus 1e-2 / 3.57e-3 / 1.19e-3 +0.8% / +0.5% / +0.2% (the
+ * pass after its first); at 3 the torus saves 0.2% and kummer nothing (off after its first
+ * pass). */
+#define BATCH_PAYS 1
+
 /* Crease vertices of two leaves this close (a share of the box's smallest side) are one
  * point (weld_crease). */
 #define WELD_TOL 1e-12
@@ -240,6 +252,10 @@ typedef struct dual {
     ism_dual_ball_cover cover; /* the balls by where they reach (nodes ask only those) */
     const double *inner; /* the request's box when the tree's is grown round it (dual_box.h) */
     bool crease; /* f = min/max(a, b), its only one: nodes with the kink go to dual_crease.h */
+    /* children_free's batches so far and the children they showed free; batch_on while
+     * they pay (BATCH_PAYS), decided between split passes (the same on any threads) */
+    uint64_t batches, batch_freed;
+    bool batch_on;
     bool bad, nomem, too_big;
     enum ism_dual_reason why; /* the first reason bad was set for (mesher.h) */
 } dual;
@@ -307,7 +323,8 @@ typedef struct corner_view {
     uint8_t placed; /* what sag_split found (dnode.placed); FOOT_AT: the vertex in at */
     double at[3];
     /* In: the node's box was shown free of f = 0 by its parent's proofs (the parent's
-     * free_kids). Out: bit c, child c's box shown free by this node's proofs (dnode). */
+     * free_kids) or its natural interval (children_free). Out: bit c, child c's box shown
+     * free by this node's proofs (dnode). */
     bool known_free;
     uint8_t free_kids;
 } corner_view;
@@ -784,7 +801,7 @@ static int classify(dual *d, worker *w, dnode *n, corner_view *v)
                 return DN_INNER;
     bool mixed = neg != 0 && neg != 8;
     if (!mixed && v->known_free)
-        return DN_EMPTY; /* its parent's proofs showed it (dnode.free_kids) */
+        return DN_EMPTY; /* shown by its parent's proofs or its interval (known_free) */
     if (mixed && sag_split(d, w, n, v))
         return DN_INNER;
     v->agree = mixed && normals_agree((const double (*)[3])v->n, d->o->flat_normal);
@@ -935,8 +952,48 @@ typedef struct split_out {
     uint8_t placed[8];
     uint8_t free_kids[8]; /* child c's corner_view.free_kids */
     uint8_t kinked; /* bit c: child c split for the crease (corner_view.kinked) */
+    uint8_t batch_free; /* bit c: child c shown free by children_free alone */
+    bool batched;       /* children_free made a batch */
     bool bad;
 } split_out;
+
+/* Bit c: child c's box is free of f = 0 by the natural interval of f over it (the 27
+ * points in split_task's order). One batch of eight boxes (ism_eval_interval_batch) costs
+ * less than one box's interval alone — callgrind, per call: torus 912 instructions for the
+ * batch, 644 for one value, 1,947 for one value with ∇f; kummer's quartic 1,602 / 1,286 /
+ * 4,330 — and the proofs of a child whose corners share a sign began with f and ∇f's
+ * natural enclosure, whose value alone shows most such children empty (kummer-16-nodes at
+ * 1e-2: 31,300 of 43,522; the torus, whose natural interval is wide: 136 of 1,008).
+ * Only when some child has corners of one sign (the others' intervals hold 0), the
+ * children are past min_depth (split regardless) and the batches pay (d->batch_on); *batched
+ * tells whether one was made. */
+static uint8_t children_free(const dual *d, worker *w, const dnode *parent,
+                             const double f[27], const double (*p)[3], bool *batched)
+{
+    *batched = false;
+    if (!d->batch_on || parent->level + 1 < d->o->min_depth)
+        return 0;
+    bool any = false;
+    ism_interval x[8], y[8], z[8], out[8];
+    for (int c = 0; c < 8; c++) {
+        int lo = (c & 1) + 3 * (c >> 1 & 1) + 9 * (c >> 2 & 1), neg = 0;
+        for (int j = 0; j < 8; j++)
+            neg += f[lo + (j & 1) + 3 * (j >> 1 & 1) + 9 * (j >> 2 & 1)] < 0;
+        any |= neg == 0 || neg == 8;
+        x[c] = (ism_interval){p[lo][0], p[lo + 13][0]};
+        y[c] = (ism_interval){p[lo][1], p[lo + 13][1]};
+        z[c] = (ism_interval){p[lo][2], p[lo + 13][2]};
+    }
+    if (!any)
+        return 0;
+    *batched = true;
+    w->s.n_interval += 8; /* boxes, as the octree's batches count (octree_build.c) */
+    ism_eval_interval_batch(w->s.tape, w->s.ws, x, y, z, out, 8);
+    uint8_t free_bits = 0;
+    for (int c = 0; c < 8; c++)
+        free_bits |= (uint8_t)((out[c].lo > 0 || out[c].hi < 0) << c);
+    return free_bits;
+}
 
 /* Task k of a split pass: node nodes[k]'s children classified, from f and ∇f at the 27
  * lattice points of their corners (each taken once). Reads the tree, writes out[k] only. */
@@ -956,11 +1013,14 @@ static void split_task(void *ctx, size_t k, int thread)
     }
     out->bad = false;
     out->kinked = 0;
+    uint8_t known = parent->free_kids |
+                    children_free(d, w, parent, f, (const double (*)[3])p, &out->batched);
+    out->batch_free = (uint8_t)(known & ~parent->free_kids);
     for (int c = 0; c < 8; c++) {
         corner_view v;
         v.kinked = false;
         v.placed = FOOT_UNKNOWN;
-        v.known_free = parent->free_kids >> c & 1;
+        v.known_free = known >> c & 1;
         v.free_kids = 0;
         dnode n;
         memset(&n, 0, sizeof n);
@@ -1055,7 +1115,12 @@ static void expand(dual *d, const int32_t *list, size_t n)
             break;
         }
         task_ctx job = {d, cur, out};
+        d->batch_on = d->batch_freed >= BATCH_PAYS * d->batches;
         ism_pool_for(d->pool, n, split_task, &job, NULL);
+        for (size_t k = 0; k < n; k++) {
+            d->batches += out[k].batched;
+            d->batch_freed += (uint64_t)__builtin_popcount(out[k].batch_free);
+        }
         size_t nn = 0;
         for (size_t k = 0; k < n && !d->nomem && !d->too_big; k++) {
             int32_t i = cur[k], first = -1;
