@@ -131,11 +131,8 @@ static void set_unsent(fconn *c, unsigned bytes)
 static void give_conn(ism_front *f, fconn *c)
 {
     unlink_conn(f, c);
-    if (c->nodelay) { /* libmicrohttpd gets the socket as accepted: it tracks its own
-                         TCP_NODELAY and TCP_CORK state from there */
-        int zero = 0;
-        setsockopt(c->fd, IPPROTO_TCP, TCP_NODELAY, &zero, sizeof zero);
-    }
+    /* TCP_NODELAY stays as the own answers left it (set, no cork: libmicrohttpd takes the
+     * Nagle and cork state of a socket it is given for unknown and sets what it needs) */
     if (c->unsent != f->h.unsent_min) /* libmicrohttpd's copies are bounded by the listening
                                          socket's (isomeshd http.c NOTSENT_LOWAT) */
         set_unsent(c, f->h.unsent_min);
