@@ -1,5 +1,5 @@
 """test_singular.py — the singular structure found from f, end to end through `isomesh
---features --stats`, in boxes shifted off the octree lattice (by 1e-3 and by irrational fractions of
+--features --stats` (and the glb's locus nodes), in boxes shifted off the octree lattice (by 1e-3 and by irrational fractions of
 a finest cell: boxes.py), never only in symmetric ones. Every expected value comes from the closed
 form of the surface: node positions, curve radii, counts, and the mesh's own structure (one vertex
 with two cones of faces at a node, one component where two spheres cross, no non-manifold element
@@ -7,6 +7,7 @@ off the locus)."""
 import json
 import math
 import os
+import struct
 import subprocess
 import sys
 import tempfile
@@ -308,6 +309,82 @@ class PresetsOffTheLatticeTest(unittest.TestCase):
                 self.assertLess(abs(xyz[i + 2]), 1e-6)
                 self.assertLess(abs(math.hypot(xyz[i], xyz[i + 1] - 1) - math.sqrt(2)), 1e-6)
             self.assertEqual(stats["analysis"]["euler"], 0)
+
+
+def glb_nodes(data):
+    """{node name: (extras, mode, [float32 positions])} of a glb's non-surface nodes, read
+    from the container by hand (no glTF library)."""
+    jlen = struct.unpack_from("<I", data, 12)[0]
+    js = json.loads(data[20:20 + jlen])
+    blen = struct.unpack_from("<I", data, 20 + jlen)[0]
+    bin_ = data[28 + jlen:28 + jlen + blen]
+    out = {}
+    for n in js["nodes"]:
+        prim = js["meshes"][n["mesh"]]["primitives"][0]
+        if "POSITION" not in prim["attributes"] or "extensions" in prim:
+            continue
+        acc = js["accessors"][prim["attributes"]["POSITION"]]
+        view = js["bufferViews"][acc["bufferView"]]
+        off = view.get("byteOffset", 0) + acc.get("byteOffset", 0)
+        pts = [struct.unpack_from("<3f", bin_, off + 12 * i) for i in range(acc["count"])]
+        out[n["name"]] = (n.get("extras", {}), prim.get("mode", 4), pts)
+    return out
+
+
+class GlbLocusTest(unittest.TestCase):
+    def test_steiner_locus_travels_as_points_and_lines(self):
+        # x²y² + y²z² + z²x² + xyz (closed form, see PresetsOffTheLatticeTest): the triple
+        # point at 0, pinch points at ±1/2 on each axis, double segments |t| < 1/2 on the
+        # axes, whiskers |t| > 1/2 to the box. The glb carries them as a POINTS node
+        # "singular_points" (extras: type, certified, xyz per point) and LINES nodes
+        # "double_curves" / "whiskers" (extras: kind, curves), positions as float32.
+        f32 = 1e-6  # float32 of coordinates ≤ 1.01: half an ulp is 6e-8
+        want = [(0.0, 0.0, 0.0)] + [tuple(s * 0.5 if k == a else 0.0 for k in range(3))
+                                    for a in range(3) for s in (-1, 1)]
+        for box in shifted_boxes(1.0):
+            with self.subTest(box=box), tempfile.TemporaryDirectory() as tmp:
+                out, req = os.path.join(tmp, "m.glb"), os.path.join(tmp, "r.json")
+                with open(req, "w") as f:  # the CLI writes a glb only from a request file
+                    json.dump({"preset": "steiner-roman", "box": box, "max_error": None,
+                               "depth": {"min": 3, "max": MAX_DEPTH}}, f)
+                r = subprocess.run([ISOMESH, req, "-o", out], capture_output=True, text=True,
+                                   timeout=300)
+                self.assertEqual(r.returncode, 0, r.stderr)
+                with open(out, "rb") as f:
+                    nodes = glb_nodes(f.read())
+                ex, mode, pts = nodes["singular_points"]
+                self.assertEqual(mode, 0)  # POINTS
+                self.assertEqual(len(pts), 7)
+                self.assertEqual(sorted(ex["type"]), ["pinch"] * 6 + ["triple"])
+                self.assertEqual(ex["certified"], [True] * 7)
+                xyz = [ex["xyz"][3 * i:3 * i + 3] for i in range(7)]
+                for i, w in enumerate(want):  # each closed-form point exactly once
+                    near = [j for j in range(7) if math.dist(xyz[j], w) < 1e-9 * diagonal(box)]
+                    self.assertEqual(len(near), 1, (w, xyz))
+                    j = near[0]
+                    self.assertEqual(ex["type"][j], "triple" if i == 0 else "pinch")
+                    self.assertLess(math.dist(pts[j], w), f32)
+                for name, kind, inside in (("double_curves", "double", True),
+                                           ("whiskers", "whisker", False)):
+                    ex, mode, pts = nodes[name]
+                    self.assertEqual(mode, 1)  # LINES
+                    self.assertEqual((ex["kind"], ex["curves"]), (kind, 6))
+                    ends = [0, 0, 0]  # points at each axis's far end of the kind's range
+                    for p in pts:
+                        a = max(range(3), key=lambda k: abs(p[k]))
+                        off_axis = max(abs(p[k]) for k in range(3) if k != a)
+                        self.assertLess(off_axis, f32, (name, p))
+                        t = abs(p[a])
+                        if inside:
+                            self.assertLess(t, 0.5 + f32, (name, p))
+                        else:
+                            self.assertGreater(t, 0.5 - f32, (name, p))
+                        self.assertTrue(all(box[k] - f32 <= p[k] <= box[k + 3] + f32
+                                            for k in range(3)), (name, p))
+                        ends[a] += abs(t - 0.5) < f32
+                    # every axis reaches its pinch points (both signs: 2 ends per axis, or
+                    # 4 if the double segment through 0 is cut there into two curves)
+                    self.assertTrue(all(e >= 2 for e in ends), (name, ends))
 
 
 if __name__ == "__main__":
