@@ -19,9 +19,10 @@
 #define ON_SURFACE 1e-6
 /* Stop Newton where |∇f| fell below this fraction of its value at q (a singular point). */
 #define NEWTON_STALL 1e-6
-/* Ray directions, a Fibonacci sphere (~25° apart, every direction within ~15° of one): a sheet
- * whose nearest point is t from q crosses the rays within acos(t / r) of its normal before
- * radius r, so a sheet at 0.95 r or nearer meets a ray. */
+/* Ray directions, a Fibonacci sphere (22-25° apart, every direction within 19.6° of one:
+ * vec3/fibonacci_directions_spread_over_the_sphere): a sheet whose nearest point is t from q
+ * crosses the rays within acos(t / r) of its normal before radius r, so a sheet at 0.94 r or
+ * nearer meets a ray. */
 #define RAY_DIRECTIONS 64
 /* Bisection steps along a ray: the zero to 2^-16 ≈ 1.5e-5 of the radius (the figures are
  * printed to 3 digits). */

@@ -1,0 +1,77 @@
+/* test_vec3.c — vec3.h's frame across a direction (ism_across3) against its closed form, and
+ * the Fibonacci sphere's directions (ism_fibonacci_dir): unit, evenly spaced heights, and the
+ * covering nearest.c's 64 rays rely on (every direction within 19.6° of a ray), measured on a
+ * latitude-longitude grid of probes, not on the set's own construction. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include "core/util/vec3.h"
+
+/* A frame's tolerance: a few roundings of unit-length arithmetic. */
+#define FRAME_TOL 1e-14
+/* nearest.c's ray count and the covering it needs: a sheet at 0.94 r meets a ray within r
+ * when every direction is within acos(0.94) = 19.9° of a ray (measured: 19.52°). */
+#define RAYS 64
+#define RAYS_COVER_COS 0.94
+/* The probes' grid step in degrees (the covering measured to within ~0.25°). */
+#define PROBE_STEP 0.5
+
+static void check_frame(const double u[3])
+{
+    double e[2][3];
+    ism_across3(u, e);
+    cr_assert(fabs(ism_norm3(e[0]) - 1) < FRAME_TOL && fabs(ism_norm3(e[1]) - 1) < FRAME_TOL);
+    cr_assert(fabs(ism_dot3(u, e[0])) < FRAME_TOL && fabs(ism_dot3(u, e[1])) < FRAME_TOL &&
+                  fabs(ism_dot3(e[0], e[1])) < FRAME_TOL,
+              "u (%g, %g, %g)", u[0], u[1], u[2]);
+    double x[3] = {e[0][1] * e[1][2] - e[0][2] * e[1][1], e[0][2] * e[1][0] - e[0][0] * e[1][2],
+                   e[0][0] * e[1][1] - e[0][1] * e[1][0]};
+    cr_assert(fabs(ism_dot3(u, x) - 1) < FRAME_TOL, "right-handed: u · (e0 × e1) = %g",
+              ism_dot3(u, x));
+    /* e0: the axis a (x, or y when |u_x| ≥ 0.6) minus its part along u, normalised:
+     * (δ_ka − u_a u_k) / √(1 − u_a²) */
+    int a = fabs(u[0]) < 0.6 ? 0 : 1;
+    double s = sqrt(1 - u[a] * u[a]);
+    for (int k = 0; k < 3; k++)
+        cr_assert(fabs(e[0][k] - ((k == a) - u[a] * u[k]) / s) < FRAME_TOL,
+                  "u (%g, %g, %g): e0[%d] %.17g", u[0], u[1], u[2], k, e[0][k]);
+}
+
+Test(vec3, across_is_a_right_handed_orthonormal_frame)
+{
+    /* the axes both ways, the seed's switch at |u_x| = 0.6 and beside it, a spread of others */
+    const double fixed[][3] = {{1, 0, 0},     {-1, 0, 0},     {0, 1, 0},
+                               {0, -1, 0},    {0, 0, 1},      {0, 0, -1},
+                               {0.6, 0.8, 0}, {-0.6, 0, 0.8}, {0.6, 0, -0.8},
+                               {0.5999999, 0.8000001, 0}};
+    for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++) {
+        double u[3] = {fixed[i][0], fixed[i][1], fixed[i][2]};
+        ism_normalise3(u);
+        check_frame(u);
+    }
+    for (int i = 0; i < 997; i++) {
+        double u[3];
+        ism_fibonacci_dir(i, 997, u);
+        check_frame(u);
+    }
+}
+
+Test(vec3, fibonacci_directions_spread_over_the_sphere)
+{
+    double d[RAYS][3];
+    for (int i = 0; i < RAYS; i++) {
+        ism_fibonacci_dir(i, RAYS, d[i]);
+        cr_assert(fabs(ism_norm3(d[i]) - 1) < FRAME_TOL);
+        cr_assert(fabs(d[i][2] - (double)(RAYS - 2 * i - 1) / RAYS) < 1e-15, "height %d", i);
+    }
+    double worst = 1;
+    for (double th = 0; th <= 180; th += PROBE_STEP)
+        for (double ph = 0; ph < 360; ph += PROBE_STEP) {
+            double t = th * M_PI / 180, p = ph * M_PI / 180, best = -1;
+            double q[3] = {sin(t) * cos(p), sin(t) * sin(p), cos(t)};
+            for (int i = 0; i < RAYS; i++)
+                best = fmax(best, ism_dot3(q, d[i]));
+            worst = fmin(worst, best);
+        }
+    cr_assert(worst >= RAYS_COVER_COS, "a probe %.2f° from every ray",
+              acos(worst) * 180 / M_PI);
+}
