@@ -116,7 +116,8 @@ typedef struct rm_pass {
                                pass (rm_brec.c): its centroid's and edge midpoints' last
                                points measured and bounds on their distances */
     double *offset;         /* 4 per vertex, with brec: a place and rm_bound_signed there */
-    size_t brec_known, brec_skipped; /* points whose slot held them, and of those not measured */
+    size_t brec_known, brec_skipped; /* points whose slot held them, and of those the ones
+                                        the plain bound spares (rm_brec_pays) */
     size_t flips, moves, collapses, inserts;
 } rm_pass;
 
