@@ -387,5 +387,76 @@ class GlbLocusTest(unittest.TestCase):
                     self.assertTrue(all(e >= 2 for e in ends), (name, ends))
 
 
+OPENAPI = os.path.join(ROOT, "proto", "openapi.yaml")
+JSON_TYPES = {"object": dict, "array": list, "string": str, "boolean": bool, "integer": int,
+              "number": (int, float), "null": type(None)}
+
+
+def schema_errors(value, schema, schemas, path="Features"):
+    """Where value departs from an OpenAPI schema (the subset openapi.yaml uses: $ref, oneOf,
+    type (or a list of types), const, enum, properties, required, items): a field the schema
+    does not name, a required one missing, a wrong type or value, an object documented only
+    as a bare {type: object}. A small reader of its own, no jsonschema dependency."""
+    while "$ref" in schema:
+        schema = schemas[schema["$ref"].split("/")[-1]]
+    if "oneOf" in schema:
+        tries = [schema_errors(value, alt, schemas, path) for alt in schema["oneOf"]]
+        return [] if [] in tries else min(tries, key=len)
+    errs = []
+    types = schema.get("type")
+    if types is not None:
+        types = types if isinstance(types, list) else [types]
+        if not any(isinstance(value, JSON_TYPES[t])
+                   and not (t in ("integer", "number") and isinstance(value, bool))
+                   for t in types):
+            errs.append(f"{path}: {value!r:.40} is not {types}")
+    if "const" in schema and value != schema["const"]:
+        errs.append(f"{path}: {value!r} is not {schema['const']!r}")
+    if "enum" in schema and value not in schema["enum"]:
+        errs.append(f"{path}: {value!r} not in {schema['enum']}")
+    if isinstance(value, dict):
+        props = schema.get("properties")
+        if props is None:
+            errs.append(f"{path}: a bare object in the schema")
+            props = {}
+        errs += [f"{path}: {r} missing" for r in schema.get("required", []) if r not in value]
+        for k, v in value.items():
+            if k in props:
+                errs += schema_errors(v, props[k], schemas, f"{path}.{k}")
+            else:
+                errs.append(f"{path}.{k}: not in openapi.yaml")
+    if isinstance(value, list) and "items" in schema:
+        for i, v in enumerate(value):
+            errs += schema_errors(v, schema["items"], schemas, f"{path}[{i}]")
+    return errs
+
+
+class FeaturesSchemaTest(unittest.TestCase):
+    def test_features_json_is_what_openapi_documents(self):
+        # Every field of the features JSON documented in proto/openapi.yaml (Features), of its
+        # type and enum, the required ones present: on a locus with certified pinch and triple
+        # points and both kinds of curve (Steiner), an uncertified contact with exists_within
+        # and uncertified_reason (two spheres touching), and a double sheet (x², the plane
+        # x = 0: a third of the squared sphere's time).
+        # Fields, not geometry: the irrational placement only (the others run above).
+        import yaml
+        with open(OPENAPI) as f:
+            schemas = yaml.safe_load(f)["components"]["schemas"]
+        cases = (("x^2*y^2 + y^2*z^2 + z^2*x^2 + x*y*z", 1.0),
+                 ("((x-1)^2 + y^2 + z^2 - 1)*((x+1)^2 + y^2 + z^2 - 1)", 2.0),
+                 ("x^2", 1.0))
+        seen = set()
+        for expr, half in cases:
+            box = shifted_boxes(half)[-1]
+            with self.subTest(expr=expr):
+                _, feats = mesh(expr, box, ["--max-error", "off"])
+                self.assertEqual(schema_errors(feats, schemas["Features"], schemas), [])
+                seen |= {k for p in feats["singular_points"] for k in p}
+                seen |= {"double_sheets"} if feats["double_sheets"] else set()
+        # the cases reach the optional fields they are here for
+        self.assertLessEqual({"uncertified_reason", "exists_within", "perturbation",
+                              "double_sheets"}, seen)
+
+
 if __name__ == "__main__":
     unittest.main()
