@@ -247,6 +247,8 @@ class PresetsOffTheLatticeTest(unittest.TestCase):
                 self.assertTrue(all(p["type"] == "node" and p["certified"] and p["cones"] == 2
                                     for p in pts))
                 self.assertEqual(stats["analysis"]["nonmanifold_vertices"], nodes)
+                # nothing else non-manifold: no edge of more than two triangles
+                self.assertEqual(stats["analysis"]["nonmanifold_edges"], 0)
 
     def test_steiner_double_lines_pinch_and_triple_points(self):
         # x²y² + y²z² + z²x² + xyz: the axes are double lines from the triple point at the
