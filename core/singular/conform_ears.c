@@ -160,20 +160,23 @@ static bool window_on(const int *cid, const size_t *prev, const size_t *next, si
 }
 
 int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double *foot,
-                 int *cid, int wind)
+                 int *cid, int wind, double unit)
 {
     size_t n = l->n;
     if (n < 5 || (wind != 0 && !(pl->closed && l->closed)))
         return 0;
     size_t *prev = malloc(n * sizeof *prev), *next = malloc(n * sizeof *next);
     double *d = malloc(n * sizeof *d), *sg = malloc(n * sizeof *sg);
-    uint8_t *gone = calloc(n, 1);
-    if (!prev || !next || !d || !sg || !gone) {
+    double *own = unit > 0 ? malloc(n * sizeof *own) : NULL;
+    uint8_t *gone = calloc(n, 1), *lent = calloc(n, 1);
+    if (!prev || !next || !d || !sg || !gone || !lent || (unit > 0 && !own)) {
         free(prev);
         free(next);
         free(d);
         free(sg);
+        free(own);
         free(gone);
+        free(lent);
         return -1;
     }
     for (size_t i = 0; i < n; i++) {
@@ -183,6 +186,13 @@ int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double
     }
     double edge = cf_loop_mean_edge(c, l), riser = EAR_MIN_STEP * edge;
     directions(pl, l, u, cid, wind, DIR_TRAVEL * edge, sg);
+    if (unit > 0) /* where the mean edge read no way, the chart's own step may */
+        directions(pl, l, u, cid, wind, DIR_TRAVEL * unit, own);
+    for (size_t i = 0; unit > 0 && i < n; i++)
+        if (sg[i] == 0 && own[i] != 0) {
+            sg[i] = own[i];
+            lent[i] = 1;
+        }
     chart ch = {pl, u, d, 1};
     size_t live = n;
     int clipped = 0;
@@ -198,9 +208,11 @@ int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double
             ch.pl = &pl[cid ? cid[i] : 0];
             /* a step back into i or out of it: clip i when its ear allows (the loop running
              * the same way at its neighbours) */
+            double in = step(&ch, p, i), out = step(&ch, i, nx);
             bool back = sg[i] != 0 && sg[p] == sg[i] && sg[nx] == sg[i] &&
                         (!cid || window_on(cid, prev, next, i)) &&
-                        (!(step(&ch, p, i) > riser) || !(step(&ch, i, nx) > riser));
+                        (lent[i] ? in < 0 || out < 0 /* a lent way: only steps backwards */
+                                 : !(in > riser) || !(out > riser));
             if (back && ear_ok(&ch, prev, next, p, i, nx)) {
                 ok = cf_add_triangle(c, l->v[p], l->v[i], l->v[nx]);
                 next[p] = nx;
@@ -234,7 +246,9 @@ int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double
     free(next);
     free(d);
     free(sg);
+    free(own);
     free(gone);
+    free(lent);
     return ok ? clipped : -1;
 }
 

@@ -387,10 +387,13 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
  * curve: each such vertex's ear (prev, v, next) becomes a triangle where it turns like the
  * hole and its new edge steps forwards. The way forwards is the winding's, else read from
  * the loop's steps nearby along one curve (nothing clipped where they disagree or barely move:
- * round the end of an open curve, at a junction of curves). l->v, u, foot and cid are
- * compacted in place (l->n lowered). Returns the ears clipped, -1 when out of memory. */
+ * round the end of an open curve, at a junction of curves). The steps nearby must travel
+ * the loop's mean edge; unit > 0 (a chart whose steps are a fraction of the edges): where
+ * they do not, a way read against unit instead is taken, for steps backwards only. l->v, u,
+ * foot and cid are compacted in place (l->n lowered). Returns the ears clipped, -1 when out
+ * of memory. */
 int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double *foot,
-                 int *cid, int wind);
+                 int *cid, int wind, double unit);
 /* Cuts the spikes of the closed loops of ls: a kept triangle holding a loop vertex's both rim
  * edges, the vertex's only live triangle, is marked dead (added to the sorted *rm) and the
  * vertex leaves its loop. False when out of memory (nothing more marked dead; the caller

@@ -623,7 +623,7 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
                                     rho) < 0)
                 ok = false;
             if (ok && cf_clip_ears(c, multi ? pl : &pl[cid[0]], &own, u, foot,
-                                   multi ? cid : NULL, (int)wind) < 0)
+                                   multi ? cid : NULL, (int)wind, 0) < 0)
                 ok = false;
             l = &own;
         }
