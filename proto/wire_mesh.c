@@ -20,6 +20,18 @@
 
 static bool is_zero3(const float *v) { return v[0] == 0 && v[1] == 0 && v[2] == 0; }
 
+/* Triangle t's normal as it is wound, twice its area long. */
+static void face_cross(const ism_mesh *m, size_t t, double cr[3])
+{
+    const uint32_t *v = m->tri + 3 * t;
+    const double *a = m->pos + 3 * v[0], *b = m->pos + 3 * v[1], *c = m->pos + 3 * v[2];
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    cr[0] = u[1] * w[2] - u[2] * w[1];
+    cr[1] = u[2] * w[0] - u[0] * w[2];
+    cr[2] = u[0] * w[1] - u[1] * w[0];
+}
+
 static void fill_missing_normals(const ism_mesh *m, float *normal)
 {
     size_t missing = 0;
@@ -35,11 +47,8 @@ static void fill_missing_normals(const ism_mesh *m, float *normal)
     if (acc) {
         for (size_t t = 0; t < m->ntris; t++) {
             const uint32_t *v = m->tri + 3 * t;
-            const double *a = m->pos + 3 * v[0], *b = m->pos + 3 * v[1], *c = m->pos + 3 * v[2];
-            double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-            double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-            double cr[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                            u[0] * w[1] - u[1] * w[0]};
+            double cr[3];
+            face_cross(m, t, cr);
             for (int k = 0; k < 3; k++)
                 if (is_zero3(normal + 3 * v[k]))
                     for (int j = 0; j < 3; j++)
@@ -153,6 +162,15 @@ static bool same_normal(const float *c, const float *v)
  * r, so a corner a cell away has |∇f| ~ |H| r, while on the curve it is rounding (Steiner:
  * ~1e-16 against ~1e-2); 1e-6 leaves eight decades between the two. */
 #define SINGULAR_GRAD_REL 1e-6
+/* A sheet normal (∇f at the triangle's corners off the locus) stands for the triangle's own
+ * plane only within this angle of its normal line: sheet_groups.h leaves 10° for it (the
+ * chord against the tangent plane, below that on Steiner's curves at the default bound).
+ * Beside a pinch point the umbrella's tangent plane turns through 90° within a cell, and a
+ * triangle's other corner may lie on the fold, where ∇f points along the curve: its sheet
+ * normal lay in the face itself (Steiner at 1e-3 × the diagonal: 48 corners within a cell
+ * of the six pinch points more than 30° off their face, up to 90°). Past the angle the
+ * corner takes its face's normal, wound as the mesh is (with ∇f). */
+#define SHEET_FACE_MAX_ANGLE (10.0 * 3.14159265358979323846 / 180.0)
 
 /* Per vertex of m: |∇f| (NULL when out of memory). */
 static double *gradient_norms(const ism_tape *f, ism_eval_ws *ws, const ism_mesh *m)
@@ -201,6 +219,14 @@ static void singular_corners(const ism_tape *f, ism_eval_ws *ws, const ism_mesh 
     double n = ism_norm3(s);
     if (!(n > 0) || !isfinite(n))
         return;
+    double face[3];
+    face_cross(m, t, face);
+    double fl = ism_norm3(face);
+    if (fl > 0 && isfinite(fl) && fabs(ism_dot3(face, s)) < cos(SHEET_FACE_MAX_ANGLE) * fl * n) {
+        for (int k = 0; k < 3; k++)
+            s[k] = face[k];
+        n = fl;
+    }
     for (int i = 0; i < 3; i++) {
         float *c = cn + 9 * t + 3 * i;
         if (!on[i] || !same_normal(c, vn + 3 * (size_t)tv[i]))

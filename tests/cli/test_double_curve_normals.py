@@ -6,15 +6,21 @@ which may lie along the axis) shaded every triangle beside the curve as a tooth.
 on a curve must carry a normal along its own triangle's face normal (the line, either sign:
 the plane of a triangle with a corner on the curve is its sheet's to within E), checked in
 the three placements (boxes.py) in what the viewer draws (the .drc, decoded by npm draco3d)
-and in the .obj (`f v//vn`: the corner's own `vn`). Corners within PINCH_ROOM of a pinch
-point (t = ±1/2, where the sheet's tangent plane turns through 90° within a cell) are left
-out. The PLY and OBJ keep the stats' vertices (the "every download link" rule of the viewer
-tests): one `v` line and one PLY row per mesh vertex.
+and in the .obj (`f v//vn`: the corner's own `vn`), up to and at the pinch points (t = ±1/2,
+where the sheet's tangent plane turns through 90° within a cell and a triangle's corner off
+the curve may lie on the fold, where ∇f points along the curve: there a corner takes its
+face's normal, proto/wire_mesh.c). The count of normals per curve vertex (its half-sheets)
+leaves out those within PINCH_ROOM of a pinch point, whose fans turn. The PLY and OBJ keep the
+stats' vertices (the "every download link" rule of the viewer tests): one `v` line and one
+PLY row per mesh vertex.
 
 Cheap on purpose: max_error 1e-2 × the diagonal (given explicitly; the viewer's default is
 1e-3, where three meshes cost 43 s CPU): ~0.1-0.3 s of meshing per run. Measured on the code
 before the sheet normals (3831115), OBJ corners beyond 30°: 2,538 of 3,192 / 1,954 of 2,913 /
-2,180 of 2,899 (own / 1e-3 / irrational); after: 0 of each."""
+2,180 of 2,899 (own / 1e-3 / irrational); after: 0 of each. With the corners within
+PINCH_ROOM of a pinch point counted too, the code before the face fallback (0785440) had
+96 / 74 / 72 of 3,384 / 3,089 / 3,094 beyond 30° here (all within 3.4 cells of a pinch point,
+up to 90°) and 48 / 53 / 49 of ~6,650 at 1e-3 × the diagonal (within a cell of them)."""
 import json
 import math
 import os
@@ -60,10 +66,11 @@ def read_obj(path):
     return v, n, f
 
 
-def on_segment(q, on_axis):
-    """Whether point q lies on one of the double segments, away from the pinch points."""
+def on_segment(q, on_axis, room=0.0):
+    """Whether point q lies on one of the double segments, farther than room from the pinch
+    points (room 0: the pinch points too; the segment's ends are within on_axis of them)."""
     return any(abs(q[(ax + 1) % 3]) < on_axis and abs(q[(ax + 2) % 3]) < on_axis and
-               abs(q[ax]) <= 0.5 - PINCH_ROOM for ax in range(3))
+               abs(q[ax]) <= 0.5 + on_axis - room for ax in range(3))
 
 
 def normals_per_curve_vertex(pos, nrm, tris, on_axis):
@@ -74,7 +81,7 @@ def normals_per_curve_vertex(pos, nrm, tris, on_axis):
     for tri in tris:
         for vi, ni in tri:
             q = pos[vi]
-            if on_segment(q, on_axis):
+            if on_segment(q, on_axis, PINCH_ROOM):
                 seen.setdefault(tuple(q), set()).add(tuple(nrm[ni]))
     most = max((len(s) for s in seen.values()), default=0)
     over = sum(len(s) > (TRIPLE_HALF_SHEETS if max(map(abs, q)) < on_axis else HALF_SHEETS)
@@ -83,9 +90,9 @@ def normals_per_curve_vertex(pos, nrm, tris, on_axis):
 
 
 def curve_corners_off(pos, nrm, tris, on_axis):
-    """tris: [((point, normal index) x 3)]. (corners on a double segment away from the pinch
-    points, those whose normal line is more than MAX_ANGLE from their triangle's face normal
-    line)."""
+    """tris: [((point, normal index) x 3)]. (corners on a double segment, its pinch points
+    included, those whose normal line is more than MAX_ANGLE from their triangle's face
+    normal line)."""
     count = off = 0
     for tri in tris:
         p = [pos[i] for i, _ in tri]
