@@ -5,9 +5,11 @@ Redis (issue 18, item 5): daemon A computes a drc; daemon B, asked for the ply, 
 with --cluster, where the cluster queue picks the daemon that encodes.
 
 A daemon answers before its Redis writes go out (they follow on its Redis thread, in the order
-they were made: the computed surface first, then the mesh, its stats, features and request),
-so B is asked only once the mesh's entries are in Redis (stack.wait_stored): asked sooner, B
-would find no stored surface and polygonise again, and the count would be two."""
+they were made: the mesh, its stats, features and request, then the computed surface, which
+its worker sends after the answer in a SURFACE frame of its own: proto/frame.h), so B is asked
+only once the mesh's entries and the surface are in Redis (stack.wait_stored, then the one
+"<surface key>.mesh"): asked sooner, B would find no stored surface and polygonise again, and
+the count would be two."""
 import os
 import sys
 import unittest
@@ -42,7 +44,8 @@ class OneComputationClusterTest(unittest.TestCase):
             self.assertEqual(r.status, 200, r.body[:300])
             self.assertEqual(polygonisations(s.daemons), 1)
             self.assertTrue(stack.wait_stored(s.redis, r.header("ETag").strip('"')))
-            self.assertEqual(len(s.redis.command("KEYS", "isomesh:v1:*.mesh")), 1)
+            self.assertTrue(stack.wait_until(
+                lambda: len(s.redis.command("KEYS", "isomesh:v1:*.mesh")) == 1, 30))
             for req, fmt in ((base, "ply"), (base, "obj"), (twelve, "drc")):
                 r = b.post("/v1/mesh?format=" + fmt, req)
                 self.assertEqual(r.status, 200, r.body[:300])
