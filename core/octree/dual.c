@@ -483,7 +483,7 @@ static bool tighten(worker *w, corner_view *v)
  * d: ism_dual_prove_halves, with v->model), halved at its lattice centre so each sub-box is
  * a child's box; the children it shows free of f = 0 are kept in v->free_kids, for a split. */
 static bool prove_on_halves(dual *d, worker *w, const dnode *n, corner_view *v,
-                            const double *dir)
+                            const double *dir, bool open_whole)
 {
     double mid[3];
     if (n->level >= d->o->max_depth) /* no children: halve at the centre */
@@ -494,7 +494,7 @@ static bool prove_on_halves(dual *d, worker *w, const dnode *n, corner_view *v,
             mid[a] = ism_grid_coord(&d->g, a,
                                     n->o.v[a] + ism_grid_cell_steps(&d->g, n->level + 1));
     return ism_dual_prove_halves(w->s.tape, w->jet, &v->model, v->p[0], mid, v->p[7], dir,
-                                 CERT_HALVINGS, &v->free_kids, &w->s.n_interval);
+                                 CERT_HALVINGS, open_whole, &v->free_kids, &w->s.n_interval);
 }
 
 /* f free of 0 over node n, whose corners share a sign (v->g: its natural enclosure): by the
@@ -508,7 +508,8 @@ static bool empty_proven(dual *d, worker *w, const dnode *n, corner_view *v)
         if (k == 0 && !tighten(w, v))
             return false;
     }
-    return prove_on_halves(d, w, n, v, NULL);
+    /* v->g is the model's enclosure of the whole box (tighten), just seen to hold 0 */
+    return prove_on_halves(d, w, n, v, NULL, true);
 }
 
 /* f >= 0 over node n, whose corners are all >= 0 and one of them, c, exactly 0 (a sheet
@@ -651,7 +652,7 @@ static bool graph_on_sub_boxes(dual *d, worker *w, const dnode *n, corner_view *
             m[a] += v->n[c][a];
     if (!(ism_dot3(m, m) > 0))
         return false;
-    return prove_on_halves(d, w, n, v, m);
+    return prove_on_halves(d, w, n, v, m, false);
 }
 
 /* What a node with f's crease kink in its box is (dual_crease.h): empty, a leaf with its

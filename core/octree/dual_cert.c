@@ -200,13 +200,13 @@ static double centred(ism_interval v)
  * when f was shown to have no zero in the box, 1 when the proof holds otherwise, 0 when it
  * does not. The first halving is at mid (NULL: the centre), and bit k of *free_subs
  * (NULL: not wanted) is set for every sub-box k shown free on the way, whatever the
- * verdict. */
+ * verdict. open: m's verdict on the whole box is known to be 0 (not taken again). */
 static int prove(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
                  const double lo[3], const double *mid, const double hi[3], const double *d,
-                 int halvings, uint8_t *free_subs, uint64_t *intervals)
+                 int halvings, bool open_whole, uint8_t *free_subs, uint64_t *intervals)
 {
     ism_interval encl;
-    int v = verdict_over(m, lo, hi, d, &encl);
+    int v = open_whole ? 0 : verdict_over(m, lo, hi, d, &encl);
     if (v || halvings <= 0)
         return v > 0 ? v : 0;
     /* the proof holds when it holds on every sub-box: first every verdict m gives (no
@@ -235,7 +235,7 @@ static int prove(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
         ism_dual_model sm;
         sub_box(lo, mid, hi, open[i], sl, sh);
         v = ism_dual_taylor(t, jet, sl, sh, &sm, intervals)
-                ? prove(t, jet, &sm, sl, NULL, sh, d, halvings - 1, NULL, intervals)
+                ? prove(t, jet, &sm, sl, NULL, sh, d, halvings - 1, false, NULL, intervals)
                 : 0;
         if (v == FREE)
             shown |= (uint8_t)(1u << open[i]);
@@ -250,20 +250,20 @@ static int prove(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
 bool ism_dual_free(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
                    const double lo[3], const double hi[3], int halvings, uint64_t *intervals)
 {
-    return prove(t, jet, m, lo, NULL, hi, NULL, halvings, NULL, intervals) > 0;
+    return prove(t, jet, m, lo, NULL, hi, NULL, halvings, false, NULL, intervals) > 0;
 }
 
 bool ism_dual_graph_along(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
                           const double lo[3], const double hi[3], const double d[3],
                           int halvings, uint64_t *intervals)
 {
-    return prove(t, jet, m, lo, NULL, hi, d, halvings, NULL, intervals) > 0;
+    return prove(t, jet, m, lo, NULL, hi, d, halvings, false, NULL, intervals) > 0;
 }
 
 bool ism_dual_prove_halves(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
                            const double lo[3], const double mid[3], const double hi[3],
-                           const double *d, int halvings, uint8_t *free_subs,
-                           uint64_t *intervals)
+                           const double *d, int halvings, bool open_whole,
+                           uint8_t *free_subs, uint64_t *intervals)
 {
-    return prove(t, jet, m, lo, mid, hi, d, halvings, free_subs, intervals) > 0;
+    return prove(t, jet, m, lo, mid, hi, d, halvings, open_whole, free_subs, intervals) > 0;
 }
