@@ -3,7 +3,9 @@
  * into polygons, each polygon triangulated as triangulate.c does it (a triangle as is, a
  * quad along its shorter diagonal, a larger polygon fanned from its centre projected onto
  * f = 0), and the first-order distance |f| / |∇f| taken at every triangle's centroid and
- * every edge's midpoint. This is what the max_error criterion of the octree decides on. */
+ * every edge's midpoint, measured again where it passes the bound (refine.h's
+ * ism_sample_dist_between: the corners' bound, then the surface searched for near the point).
+ * This is what the max_error criterion of the octree decides on. */
 #ifndef ISM_CELL_ERROR_H
 #define ISM_CELL_ERROR_H
 

@@ -472,6 +472,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         ism_cell_ctx *cx = &p.ctx[t].c;
         cx->s.tape = f;
         cx->s.dist_above = o->max_error;
+        cx->s.rays_below = o->nquiet ? INFINITY : 0;
         cx->tree = tree;
         cx->parent = parent;
         cx->breaks = &breaks;

@@ -1,5 +1,6 @@
 /* refine.c — measuring a leaf's emitted triangles and the split set (see refine.h). */
 #include "core/octree/refine.h"
+#include "core/analysis/nearest.h"
 #include "core/util/dist_bound.h"
 #include "core/util/grow.h"
 
@@ -10,12 +11,16 @@
 double ism_dist_capped(ism_sampler *s, const double p[3], double d, const double *const *v,
                        int n)
 {
-    if (!(d * d > ism_nearest_corner_sq(p, v, n)))
-        return d;
-    double dv[ISM_DIST_CORNERS];
-    for (int k = 0; k < n; k++)
-        dv[k] = ism_sample_dist(s, v[k]);
-    return ism_dist_through_corners(d, p, v, dv, n);
+    if (d * d > ism_nearest_corner_sq(p, v, n)) {
+        double dv[ISM_DIST_CORNERS];
+        for (int k = 0; k < n; k++)
+            dv[k] = ism_sample_dist(s, v[k]);
+        d = ism_dist_through_corners(d, p, v, dv, n);
+    }
+    /* f's own tape: the search leaves the leaf's box (the local tape holds only inside) */
+    if (s->dist_above > 0 && d > s->dist_above)
+        d = ism_an_nearest_zero(s->tape, s->ws, p, d, s->rays_below);
+    return d;
 }
 
 /* Is a-b (vertex indices, either way round) a side of triangle t? */

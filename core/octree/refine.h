@@ -14,10 +14,14 @@
 #include "core/octree/sampler.h"
 
 /* ism_sample_dist at p, a point between the corners v[0..n) (n <= ISM_DIST_CORNERS) of a
- * triangle or an edge the polygoniser would emit, capped by the bound through those corners
- * (core/util/dist_bound.h) where the estimate is finite and passes s->dist_above: their own
- * distances are evaluated only where it also passes the nearest corner, which near a smooth
- * surface it never does (a chord sags far less than its length). */
+ * triangle or an edge the polygoniser would emit, where the estimate is finite and passes
+ * s->dist_above (> 0: the polygoniser's max_error) measured again: first capped by the bound
+ * through those corners (core/util/dist_bound.h; their own distances are evaluated only where
+ * the estimate also passes the nearest corner, which near a smooth surface it never does: a
+ * chord sags far less than its length), then, if still beyond dist_above, by the surface
+ * found near p (core/analysis/nearest.h: Newton's foot, and rays where s->rays_below says),
+ * the analysis' own search. Each only lowers the figure, and every point either finds lies
+ * on f = 0, so the figure stays an upper bound of the distance wherever it was lowered. */
 double ism_dist_capped(ism_sampler *s, const double p[3], double d, const double *const *v,
                        int n);
 static inline double ism_sample_dist_between(ism_sampler *s, const double p[3],

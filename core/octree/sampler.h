@@ -23,6 +23,11 @@ typedef struct ism_sampler {
      * is held against (one within it needs no bound; seeking it everywhere cost the Klein
      * bottle's default run 1.6% more instructions for the same mesh); 0: wherever. */
     double dist_above;
+    /* ism_dist_capped searches rays for the nearest sheet (core/analysis/nearest.h) from the
+     * points still beyond dist_above after Newton's foot whose |∇f| is below this: INFINITY
+     * where the caller knows a singular locus (∇f vanishes on the surface there, and beside it
+     * the estimate and the foot overstate), 0 elsewhere (the foot only). */
+    double rays_below;
     uint64_t n_point, n_gradient, n_interval;
 } ism_sampler;
 
