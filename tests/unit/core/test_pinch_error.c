@@ -13,11 +13,13 @@
  * finer E (the halving refused beside the pinch points) until the turned-edge rims (78c2745).
  * The analysis' first-order figures said 1.26 / 1.95 E at centroids / midpoints there
  * (exact 0.89 / 1.11 E) until it searched for the nearest sheet (core/analysis/nearest.c).
- * Exact figures on 8af46cc (max over centroids / midpoints, in E; own / 1e-3 / irr):
- *   E = 2e-3 × width: cross-cap 0.925 / 0.926 / 0.925, Steiner 0.830 / 0.879 / 0.882,
- *                     Whitney 0.793 / 0.970 / 0.981;
- *   E = 1e-3 × width: cross-cap 0.973 / 0.984 / 0.982, Steiner 0.876 / 0.983 / 0.953,
- *                     Whitney 0.882 / 0.986 / 0.995. */
+ * Exact figures (max over centroids and midpoints, in E; own / 1e-3 / irr) on 8af46cc, and
+ * since the octree measures a figure beyond E again near the surface (refine.h):
+ *   E = 2e-3 × width: cross-cap 0.925 / 0.926 / 0.925 -> 0.925 / 0.988 / 0.986,
+ *                     Steiner 0.830 / 0.879 / 0.882 (same), Whitney 0.793 / 0.970 / 0.981 (same);
+ *   E = 1e-3 × width: cross-cap 0.973 / 0.984 / 0.982 -> 0.973 / 0.9995 / 0.982,
+ *                     Steiner 0.876 / 0.983 / 0.953 -> 0.876 / 0.989 / 0.999,
+ *                     Whitney 0.882 / 0.986 / 0.995 (same). */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
