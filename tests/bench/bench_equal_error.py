@@ -100,7 +100,8 @@ def timing(r):
 
 
 # ---- the tools: each maps a resolution x (larger = finer) to {cpu_s, cpu_sd, runs, triangles,
-# max_c}; run(s, x, repeat) with repeat > 1 times the call again (timing only) ----------------
+# max_c}; run(s, x, repeat, timing_only) with repeat > 1 times the call again; with either,
+# timing only (no separate error measurement: isomesh's is in its process anyway) -----------
 
 class Tool:
     name = "?"
@@ -135,7 +136,7 @@ class Isomesh(Tool):
     def setting(self, s, x):
         return f"E={1 / x:.3g} d<={ISO_DEPTH}"
 
-    def run(self, s, x, repeat=1):
+    def run(self, s, x, repeat=1, timing_only=False):
         r = run([self.bench, "mesh", s["name"], repr(1 / x), str(ISO_DEPTH), *self.words,
                  f"repeat={repeat}"])
         return r and dict(timing(r), triangles=r["triangles"], max_c=r[MEASURE])
@@ -155,7 +156,7 @@ class Grid(Tool):
     def setting(self, s, x):
         return f"N={x}"
 
-    def run(self, s, x, repeat=1):
+    def run(self, s, x, repeat=1, timing_only=False):
         if x > MAX_CELLS:
             return None
         ply = os.path.join(self.tmp, f"{self.tool}-{s['name']}-{x}.ply")
@@ -164,7 +165,7 @@ class Grid(Tool):
                 "--cells", str(x), "--out", ply]
         argv += [f"--param={k}={v!r}" for k, v in s["params"].items()]
         if repeat == 1:
-            return self.measure(s, ply, run(argv))
+            return self.measure(s, ply, run(argv), timing_only)
         calls = [run(argv) for _ in range(min(repeat, 3))]  # a process each: at most 3
         if any(c is None for c in calls):
             return None
@@ -190,10 +191,10 @@ class Libfive(Tool):
         side = s["box"][3] - s["box"][0]
         return f"mf={1 / x:.3g} d{max(0, math.ceil(math.log2(side * x)))}"
 
-    def run(self, s, x, repeat=1):
+    def run(self, s, x, repeat=1, timing_only=False):
         ply = os.path.join(self.tmp, f"libfive-{s['name']}.ply")
         return self.measure(s, ply, run([self.exe, "mesh", s["name"], repr(1 / x), "1e-8", ply,
-                                         str(repeat)]), repeat > 1)
+                                         str(repeat)]), repeat > 1 or timing_only)
 
 
 def step(tool, x, up):
@@ -255,7 +256,7 @@ def timed(tool, s, x, first):
     (first: its single run from the search, whose error and triangles are kept)."""
     cpu = max(first["cpu_s"], CPU_RESOLUTION_S)
     reps = 1 if cpu >= TIMED_WORK_S else max(2, min(MAX_REPEAT, math.ceil(TIMED_WORK_S / cpu)))
-    r = tool.run(s, x, reps)
+    r = tool.run(s, x, reps, timing_only=True)
     if r is None:
         return None
     if reps == 1:  # a long call: its two runs (the search's and this one)
