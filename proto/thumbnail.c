@@ -3,6 +3,7 @@
  * headlight plus ambient), faces turned away from the eye in the inside tint, drawn at
  * SUPERSAMPLE x the size by raster.h and averaged down (anti-aliased edges, partial alpha). */
 #include "proto/thumbnail.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -44,13 +45,6 @@ static void normalise(double *v)
         v[k] = n > 0 ? v[k] / n : 0;
 }
 
-static void cross(const double *a, const double *b, double *o)
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 /* The bounding box of the vertices used by triangles (box when there are none). */
 static void bounds(const ism_mesh *m, const double box[6], double lo[3], double hi[3])
 {
@@ -88,9 +82,9 @@ static void camera_fit(const ism_mesh *m, const double box[6], int w, int h, cam
     memcpy(c->back, VIEW_DIR, sizeof c->back);
     normalise(c->back);
     static const double z_up[3] = {0, 0, 1};
-    cross(z_up, c->back, c->right);
+    ism_cross3(z_up, c->back, c->right);
     normalise(c->right);
-    cross(c->back, c->right, c->up);
+    ism_cross3(c->back, c->right, c->up);
     for (int k = 0; k < 3; k++) {
         c->eye[k] = centre[k] + dist * c->back[k];
         c->light[k] = HEADLIGHT[0] * c->right[k] + HEADLIGHT[1] * c->up[k] + HEADLIGHT[2] * c->back[k];
@@ -147,7 +141,7 @@ static void draw_triangle(ism_raster *r, const camera *c, const ism_mesh *m, siz
         e2[k] = d[k] - a[k];
         to_eye[k] = c->eye[k] - a[k];
     }
-    cross(e1, e2, n);
+    ism_cross3(e1, e2, n);
     normalise(n);
     bool inside = dot(n, to_eye) < 0; /* the eye sees the side grad f points away from */
     float p[3][3], col[3][3];

@@ -1,6 +1,7 @@
 /* straddle.c — vertices moved toward the convex side by a share of the bound (straddle.h). */
 #include "core/octree/straddle.h"
 #include "core/octree/refine.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -14,27 +15,13 @@
 /* A vertex this close to a face of the box (relative to the box) is on it: it stays. */
 #define BOX_FACE_REL 1e-12
 
-static void cross(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 /* The tangential Hessian's quadratic form in an orthonormal basis t1, t2 of the plane
- * across n: a, b, c of [[a, b], [b, c]]. */
+ * across n (ism_across_least3): a, b, c of [[a, b], [b, c]]. */
 static void tangential(const double h[6], const double n[3], double *a, double *b, double *c)
 {
-    double t1[3], t2[3];
-    /* t1: n crossed with the axis least along it */
-    int k = fabs(n[0]) <= fabs(n[1]) && fabs(n[0]) <= fabs(n[2]) ? 0
-            : fabs(n[1]) <= fabs(n[2]) ? 1
-                                       : 2;
-    double e[3] = {0, 0, 0};
-    e[k] = 1;
-    cross(n, e, t1);
-    ism_normalise3(t1);
-    cross(n, t1, t2);
+    double t[2][3];
+    ism_across_least3(n, t);
+    const double *t1 = t[0], *t2 = t[1];
     const double H[3][3] = {{h[0], h[1], h[2]}, {h[1], h[3], h[4]}, {h[2], h[4], h[5]}};
     double Ht1[3], Ht2[3];
     for (int i = 0; i < 3; i++) {

@@ -8,6 +8,7 @@
 #include "core/octree/face_flat.h"
 #include "core/octree/refine.h"
 #include "core/util/grow.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -121,13 +122,6 @@ static double min_angle_cos(const double *a, const double *b, const double *c)
     return worst; /* cos of the smallest angle: larger is worse */
 }
 
-static void cross(const double a[3], const double b[3], double c[3])
-{
-    c[0] = a[1] * b[2] - a[2] * b[1];
-    c[1] = a[2] * b[0] - a[0] * b[2];
-    c[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 /* Triangle a, b, c's normal against the mean unit gradient at its corners: > 0 when it keeps
  * the surface's orientation, < 0 when it is turned over, 0 when degenerate. */
 static double tri_agreement(const ism_fpoint *a, const ism_fpoint *b, const ism_fpoint *c)
@@ -138,7 +132,7 @@ static double tri_agreement(const ism_fpoint *a, const ism_fpoint *b, const ism_
         e1[k] = b->p[k] - a->p[k];
         e2[k] = c->p[k] - a->p[k];
     }
-    cross(e1, e2, nrm);
+    ism_cross3(e1, e2, nrm);
     for (int j = 0; j < 3; j++) {
         double u[3] = {v[j]->g[0], v[j]->g[1], v[j]->g[2]};
         if (ism_normalise3(u) > 0)
@@ -243,7 +237,7 @@ static bool clip_ears(ism_cell_out *out, size_t base, size_t n, const double nod
 {
     *emitted = false;
     const ism_fpoint *q = out->verts + base;
-    double nrm[3] = {0, 0, 0}, e1[3], e2[3], axis[3] = {0, 0, 0};
+    double nrm[3] = {0, 0, 0}, e[2][3];
     for (size_t i = 0; i < n; i++) {
         double u[3] = {q[i].g[0], q[i].g[1], q[i].g[2]};
         if (ism_normalise3(u) > 0)
@@ -252,21 +246,14 @@ static bool clip_ears(ism_cell_out *out, size_t base, size_t n, const double nod
     }
     if (!(ism_normalise3(nrm) > 0))
         return true;
-    int least = 0; /* the coordinate axis farthest from the normal */
-    for (int k = 1; k < 3; k++)
-        if (fabs(nrm[k]) < fabs(nrm[least]))
-            least = k;
-    axis[least] = 1;
-    cross(nrm, axis, e1);
-    ism_normalise3(e1);
-    cross(nrm, e1, e2); /* (e1, e2, nrm) right-handed: e1 × e2 = nrm */
+    ism_across_least3(nrm, e); /* (e[0], e[1], nrm) right-handed */
     double (*uv)[2] = malloc(n * sizeof *uv);
     size_t *left = malloc(n * sizeof *left);
     uint32_t *tri = malloc(3 * n * sizeof *tri);
     bool ok = uv && left && tri;
     for (size_t i = 0; ok && i < n; i++) {
-        uv[i][0] = ism_dot3(q[i].p, e1);
-        uv[i][1] = ism_dot3(q[i].p, e2);
+        uv[i][0] = ism_dot3(q[i].p, e[0]);
+        uv[i][1] = ism_dot3(q[i].p, e[1]);
         left[i] = i;
     }
     size_t m = n, nt = 0;

@@ -68,7 +68,7 @@ void ism_cevent_locate_pinch(ism_ctracer *tr, const ism_cpoint *a, const ism_cpo
     double len = sqrt(ism_dot3(u, u)), E[2][3];
     for (int k = 0; k < 3; k++)
         u[k] /= len;
-    ism_cjet_normal_basis(u, E);
+    ism_across_least3(u, E);
     double lo = 0.0, hi = 1.0, dlo = a->D, dhi = b->D;
     int side = 0; /* which end moved last (Illinois halves the other end's value) */
     for (int it = 0; it < CEVENT_PINCH_IT && (hi - lo) * len > CEVENT_PINCH_TOL_REL * tr->diag;

@@ -78,25 +78,6 @@ bool ism_cjet_correct(ism_cjet *j, const double start[3], const double P[2][3],
     return false;
 }
 
-void ism_cjet_normal_basis(const double t[3], double n[2][3])
-{
-    /* Cross with the axis least aligned with t, then complete the right-handed frame. */
-    int a = 0;
-    for (int k = 1; k < 3; k++)
-        if (fabs(t[k]) < fabs(t[a]))
-            a = k;
-    double e[3] = {0, 0, 0};
-    e[a] = 1.0;
-    double u[3] = {t[1] * e[2] - t[2] * e[1], t[2] * e[0] - t[0] * e[2],
-                   t[0] * e[1] - t[1] * e[0]};
-    double l = sqrt(ism_dot3(u, u));
-    for (int k = 0; k < 3; k++)
-        n[0][k] = u[k] / l;
-    n[1][0] = t[1] * n[0][2] - t[2] * n[0][1];
-    n[1][1] = t[2] * n[0][0] - t[0] * n[0][2];
-    n[1][2] = t[0] * n[0][1] - t[1] * n[0][0];
-}
-
 double ism_cjet_normal_dot(const ism_cpoint *a, const ism_cpoint *b)
 {
     const double *x = a->hn, *y = b->hn;
@@ -151,7 +132,7 @@ void ism_cjet_frame(ism_cjet *j, const double p[3], const double *prev_t, ism_cp
     ism_sym3_eigen(h, out->eig, vec);
     out->hnorm = fmax(fabs(out->eig[0]), fabs(out->eig[2]));
     pick_tangent(out->eig, vec, prev_t, out->t);
-    ism_cjet_normal_basis(out->t, out->n);
+    ism_across_least3(out->t, out->n);
     double h0[3], h1[3];
     hess_mul(h, out->n[0], h0);
     hess_mul(h, out->n[1], h1);

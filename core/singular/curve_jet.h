@@ -64,9 +64,6 @@ bool ism_cjet_seed_ok(const ism_cpoint *s, double hessian_scale, double diag,
  * passed through a point where it vanishes. */
 double ism_cjet_normal_dot(const ism_cpoint *a, const ism_cpoint *b);
 
-/* An orthonormal basis n[0], n[1] of the plane normal to the unit vector t. */
-void ism_cjet_normal_basis(const double t[3], double n[2][3]);
-
 /* The frame with its tangent reversed (the other direction of travel). */
 void ism_cjet_reverse(ism_cpoint *c);
 

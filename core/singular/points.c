@@ -344,7 +344,7 @@ static bool on_curve(ctx *x, const ism_sing_point *pt, int rank)
     ism_sym3_eigen(h, eig, vec);
     const double *n = null_vector(eig, vec);
     double E[2][3], big = fmax(fabs(eig[0]), fabs(eig[2]));
-    ism_cjet_normal_basis(n, E);
+    ism_across_least3(n, E);
     double d = CURVE_PROBE_CELLS * x->cell;
     if (rank == 2) {
         double lim = ISM_CURVE_GRAD_REL * fmax(x->out->hessian_scale, big) * x->diag;
@@ -375,7 +375,7 @@ static bool isolated_rank2(ctx *x, const double q[3])
     x->out->evals_jet++;
     ism_sym3_eigen(h, eig, vec);
     const double *n = null_vector(eig, vec);
-    ism_cjet_normal_basis(n, E);
+    ism_across_least3(n, E);
     ism_sing_point pt = { .cones = -1 };
     memcpy(pt.p, q, sizeof pt.p);
     double d = CURVE_PROBE_CELLS * x->cell, big = fmax(fabs(eig[0]), fabs(eig[2]));

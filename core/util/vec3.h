@@ -1,7 +1,7 @@
 /* vec3.h — the small vector helpers on double[3] that the polygoniser, the singular locus,
- * the curves and the analysis share (dot product, length, normalising, distance, a frame
- * across a direction, the Fibonacci sphere's directions), inline, each written once (the same
- * arithmetic, in the same order, wherever it is used). */
+ * the curves and the analysis share (dot and cross products, length, normalising, distance,
+ * frames across a direction, the Fibonacci sphere's directions), inline, each written once
+ * (the same arithmetic, in the same order, wherever it is used). */
 #ifndef ISM_VEC3_H
 #define ISM_VEC3_H
 
@@ -55,6 +55,14 @@ static inline double ism_sqdist_segment3(const double p[3], const double a[3], c
     return d2;
 }
 
+/* c = a × b (c is neither a nor b). */
+static inline void ism_cross3(const double a[3], const double b[3], double c[3])
+{
+    c[0] = a[1] * b[2] - a[2] * b[1];
+    c[1] = a[2] * b[0] - a[0] * b[2];
+    c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
 /* Two unit directions across the unit vector u, (u, e[0], e[1]) orthonormal and right-handed:
  * e[0] is the x axis made normal to u — the y axis when u is within 53° of x (|u_x| ≥ 0.6,
  * then |u_y| ≤ 0.8: the axis kept is never nearer than 37° to u) — and e[1] = u × e[0]. */
@@ -65,9 +73,25 @@ static inline void ism_across3(const double u[3], double e[2][3])
     for (int a = 0; a < 3; a++)
         e[0][a] = w[a] - c * u[a];
     ism_normalise3(e[0]);
-    e[1][0] = u[1] * e[0][2] - u[2] * e[0][1];
-    e[1][1] = u[2] * e[0][0] - u[0] * e[0][2];
-    e[1][2] = u[0] * e[0][1] - u[1] * e[0][0];
+    ism_cross3(u, e[0], e[1]);
+}
+
+/* The same by another construction: e[0] = u × a / |u × a| with a the coordinate axis least
+ * along u (the first of equals), e[1] = u × e[0]; (e[0], e[1], u) right-handed. Its frame is
+ * not ism_across3's, and what its callers compute in it (the triangulation's plane, the
+ * tangential Hessian, a singular curve's normal plane) is the same to the last bit only in
+ * the frame they have always had. */
+static inline void ism_across_least3(const double u[3], double e[2][3])
+{
+    int a = 0;
+    for (int k = 1; k < 3; k++)
+        if (fabs(u[k]) < fabs(u[a]))
+            a = k;
+    double axis[3] = {0, 0, 0};
+    axis[a] = 1;
+    ism_cross3(u, axis, e[0]);
+    ism_normalise3(e[0]);
+    ism_cross3(u, e[0], e[1]);
 }
 
 /* The golden angle π(3 − √5): the Fibonacci sphere's turn from one point to the next. */

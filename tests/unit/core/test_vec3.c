@@ -1,7 +1,8 @@
-/* test_vec3.c — vec3.h's frame across a direction (ism_across3) against its closed form, and
- * the Fibonacci sphere's directions (ism_fibonacci_dir): unit, evenly spaced heights, and the
- * covering nearest.c's 64 rays rely on (every direction within 19.6° of a ray), measured on a
- * latitude-longitude grid of probes, not on the set's own construction. */
+/* test_vec3.c — vec3.h's frames across a direction (ism_across3 against its closed form,
+ * ism_across_least3 normal to the axis least along it), and the Fibonacci sphere's directions
+ * (ism_fibonacci_dir): unit, evenly spaced heights, and the covering nearest.c's 64 rays rely
+ * on (every direction within 19.6° of a ray), measured on a latitude-longitude grid of
+ * probes, not on the set's own construction. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include "core/util/vec3.h"
@@ -15,10 +16,9 @@
 /* The probes' grid step in degrees (the covering measured to within ~0.25°). */
 #define PROBE_STEP 0.5
 
-static void check_frame(const double u[3])
+/* e: orthonormal across u, u · (e[0] × e[1]) = 1 (right-handed). */
+static void check_orthonormal(const double u[3], const double e[2][3])
 {
-    double e[2][3];
-    ism_across3(u, e);
     cr_assert(fabs(ism_norm3(e[0]) - 1) < FRAME_TOL && fabs(ism_norm3(e[1]) - 1) < FRAME_TOL);
     cr_assert(fabs(ism_dot3(u, e[0])) < FRAME_TOL && fabs(ism_dot3(u, e[1])) < FRAME_TOL &&
                   fabs(ism_dot3(e[0], e[1])) < FRAME_TOL,
@@ -27,6 +27,13 @@ static void check_frame(const double u[3])
                    e[0][0] * e[1][1] - e[0][1] * e[1][0]};
     cr_assert(fabs(ism_dot3(u, x) - 1) < FRAME_TOL, "right-handed: u · (e0 × e1) = %g",
               ism_dot3(u, x));
+}
+
+static void check_frame(const double u[3])
+{
+    double e[2][3];
+    ism_across3(u, e);
+    check_orthonormal(u, e);
     /* e0: the axis a (x, or y when |u_x| ≥ 0.6) minus its part along u, normalised:
      * (δ_ka − u_a u_k) / √(1 − u_a²) */
     int a = fabs(u[0]) < 0.6 ? 0 : 1;
@@ -52,6 +59,40 @@ Test(vec3, across_is_a_right_handed_orthonormal_frame)
         double u[3];
         ism_fibonacci_dir(i, 997, u);
         check_frame(u);
+    }
+}
+
+/* ism_across_least3: e[0] normal to the axis a least along u (the first of equals), so a
+ * lies in the plane of u and e[1]. */
+static void check_least(const double u[3])
+{
+    double e[2][3];
+    ism_across_least3(u, e);
+    check_orthonormal(u, e);
+    int a = 0;
+    for (int k = 1; k < 3; k++)
+        a = fabs(u[k]) < fabs(u[a]) ? k : a;
+    cr_assert(fabs(e[0][a]) < FRAME_TOL, "u (%g, %g, %g): e0 along axis %d: %g", u[0], u[1],
+              u[2], a, e[0][a]);
+    /* e1 = u × (u × a) / |u × a| = (u_a u − a) / √(1 − u_a²): its a-th part −√(1 − u_a²) */
+    cr_assert(fabs(e[1][a] + sqrt(1 - u[a] * u[a])) < FRAME_TOL, "u (%g, %g, %g): e1[%d] %g",
+              u[0], u[1], u[2], a, e[1][a]);
+}
+
+Test(vec3, across_least_is_normal_to_the_least_axis)
+{
+    const double fixed[][3] = {{1, 0, 0},  {0, -1, 0},   {0, 0, 1},
+                               {1, 1, 0},  {0, 1, 1},    {1, 1, 1},
+                               {0.3, -0.3, 0.9}, {-0.9, 0.2, 0.2}};
+    for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++) {
+        double u[3] = {fixed[i][0], fixed[i][1], fixed[i][2]};
+        ism_normalise3(u);
+        check_least(u);
+    }
+    for (int i = 0; i < 997; i++) {
+        double u[3];
+        ism_fibonacci_dir(i, 997, u);
+        check_least(u);
     }
 }
 
