@@ -110,8 +110,9 @@ static bool send_result(int fd, uint64_t job, const ism_pipeline_result *pr, lon
     snprintf(r.key, sizeof r.key, "%s", pr->key);
     snprintf(r.surface_key, sizeof r.surface_key, "%s", pr->surface_key);
     r.polygonised = pr->polygonised;
-    /* a surface over the field's 4 GB is not stored (the frame ceiling is 1 GB anyway) */
-    bool surface = pr->status == 200 && pr->computed.len && pr->computed.len <= UINT32_MAX;
+    /* a surface over the frame ceiling (1 GB) is not stored */
+    bool surface = pr->status == 200 && pr->computed.len &&
+                   pr->computed.len <= ISM_FRAME_MAX_PAYLOAD;
     r.surface_len = surface ? (uint32_t)pr->computed.len : 0;
     snprintf(r.format, sizeof r.format, "%s", pr->format);
     snprintf(r.content_type, sizeof r.content_type, "%s",
