@@ -265,14 +265,16 @@ static unsigned char *surface_alloc(ism_frame_type type, size_t len,
 }
 
 /* A newly computed surface (a SURFACE frame's payload) goes into every tier under its surface
- * key, so any format of it, on any daemon sharing the tiers, is encoded from it. */
+ * key, so any format of it, on any daemon sharing the tiers, is encoded from it. A payload not
+ * in a blob (surface_alloc's ism_blob_new failed: out of memory) is not stored: a copy would
+ * need as much again. */
 static void cache_computed(ismd_pool *p, const char *surface_key, const ism_frame *fr)
 {
     char name[ISM_CACHE_NAME_MAX];
-    if (!fr->len || !ism_cache_name(name, surface_key, ISM_COMPUTED_EXT))
+    if (!fr->len || fr->release != release_blob_data ||
+        !ism_cache_name(name, surface_key, ISM_COMPUTED_EXT))
         return;
-    ism_blob *b = fr->release == release_blob_data ? ism_blob_ref(ism_blob_of_data(fr->payload))
-                                                   : ism_blob_copy(fr->payload, fr->len);
+    ism_blob *b = ism_blob_ref(ism_blob_of_data(fr->payload));
     ism_cache_put(p->cache, name, b);
     ism_blob_unref(b);
 }
