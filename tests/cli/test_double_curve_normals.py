@@ -135,6 +135,21 @@ class DoubleCurveNormalsTest(unittest.TestCase):
         self.assertEqual(r.returncode, 0, r.stderr)
         return out, json.loads(r.stdout)
 
+    def check_sheets(self, fmt, pos, nrm, tris, on_axis, min_corners):
+        """In fmt's own vertices (pos, nrm; tris: per corner (position, normal) indices): at
+        least min_corners corners lie on the double curve, each shading along its own sheet,
+        and no curve vertex carries more normals than its HALF_SHEETS half-sheets. Returns
+        how many corners lie on it."""
+        count, off = curve_corners_off(pos, nrm, tris, on_axis)
+        self.assertGreaterEqual(count, min_corners)
+        self.assertEqual(off, 0, f"{fmt}: {off} of {count} corners on a double curve "
+                         f"shade off their sheet by > {MAX_ANGLE}°")
+        nvert, most, over = normals_per_curve_vertex(pos, nrm, tris, on_axis)
+        self.assertGreater(nvert, 100)
+        self.assertEqual(over, 0, f"{fmt}: {over} of {nvert} curve vertices carry more "
+                         f"normals than their {HALF_SHEETS} half-sheets (up to {most})")
+        return count
+
     def test_corners_on_a_double_curve_follow_their_sheet(self):
         for box in placements(BOX, CELL):
             with self.subTest(box=box):
@@ -143,14 +158,8 @@ class DoubleCurveNormalsTest(unittest.TestCase):
                 v, n, f = read_obj(obj)
                 self.assertEqual(len(v), stats["mesh"]["vertices"], "one `v` per vertex")
                 self.assertEqual(len(f), stats["mesh"]["triangles"])
-                count, off = curve_corners_off(v, n, f, ON_AXIS)
-                self.assertGreater(count, 1000)  # the three segments are meshed
-                self.assertEqual(off, 0, f"obj: {off} of {count} corners on a double curve "
-                                 f"shade off their sheet by > {MAX_ANGLE}°")
-                nvert, most, over = normals_per_curve_vertex(v, n, f, ON_AXIS)
-                self.assertGreater(nvert, 100)
-                self.assertEqual(over, 0, f"obj: {over} of {nvert} curve vertices use more "
-                                 f"normals than their {HALF_SHEETS} half-sheets (up to {most})")
+                # more than 1,000 corners: the three segments are meshed
+                count = self.check_sheets("obj", v, n, f, ON_AXIS, 1001)
                 # the .drc the viewer draws: its points split where the sheets meet
                 drc, dstats = self.run_request(box, "drc", ["normal"])
                 r = subprocess.run(["node", DECODE, drc], capture_output=True, text=True,
@@ -164,14 +173,8 @@ class DoubleCurveNormalsTest(unittest.TestCase):
                 ix = d["index"]
                 tris = [[(ix[3 * t + k], ix[3 * t + k]) for k in range(3)]
                         for t in range(d["faces"])]
-                dcount, doff = curve_corners_off(pos, nrm, tris, ON_AXIS_DRC)
-                self.assertGreaterEqual(dcount, count)  # quantised: a few more beside it
-                self.assertEqual(doff, 0, f"drc: {doff} of {dcount} corners on a double curve "
-                                 f"shade off their sheet by > {MAX_ANGLE}°")
-                nvert, most, over = normals_per_curve_vertex(pos, nrm, tris, ON_AXIS_DRC)
-                self.assertGreater(nvert, 100)
-                self.assertEqual(over, 0, f"drc: {over} of {nvert} curve vertices have more "
-                                 f"points than their {HALF_SHEETS} half-sheets (up to {most})")
+                # quantised: a few more corners beside the curve than the obj's
+                self.check_sheets("drc", pos, nrm, tris, ON_AXIS_DRC, count)
                 # the PLY with every attribute (the viewer's download link): the mesh's
                 # vertices, no row split for the sheets
                 ply, pstats = self.run_request(box, "ply", None)
