@@ -120,7 +120,8 @@ static void nearest_block(void *ctx, ism_eval_ws *ws, size_t block)
         double c[3];
         uint32_t idx[3];
         sp->point(sp, i, c, idx); /* a point: it has an estimate */
-        sp->dist[i] = ism_an_nearest_zero(sp->f, ws, c, sp->first[i], sp->rays_below);
+        sp->dist[i] = ism_an_nearest_zero(sp->f, ws, c, sp->first[i], sp->rays_below,
+                                           NULL);
     }
 }
 

@@ -39,11 +39,13 @@ typedef struct seeker {
     const ism_tape *f;
     ism_eval_ws *ws;
     const double *q;
-    bool neg; /* f(q) < 0: the side a sign change leaves */
+    bool neg;         /* f(q) < 0: the side a sign change leaves */
+    uint64_t *counts; /* [0] points, [1] gradients evaluated (nearest.h) */
 } seeker;
 
 static bool other_side(const seeker *s, const double u[3], double t)
 {
+    s->counts[0]++;
     double v = ism_eval_point(s->f, s->ws, s->q[0] + t * u[0], s->q[1] + t * u[1],
                               s->q[2] + t * u[2]);
     return !isnan(v) && (v < 0) != s->neg;
@@ -70,6 +72,7 @@ static double newton_foot(const seeker *s, double d0, double *gq)
     double p[3] = {s->q[0], s->q[1], s->q[2]}, g[3], g_start = 0;
     *gq = NAN;
     for (int i = 0; i <= NEWTON_STEPS; i++) {
+        s->counts[1]++;
         double fv = ism_eval_gradient(s->f, s->ws, p[0], p[1], p[2], g), gn = ism_norm3(g);
         if (i == 0)
             *gq = g_start = gn;
@@ -136,14 +139,18 @@ static double tilt(const seeker *s, double u[3], double t)
 }
 
 double ism_an_nearest_zero(const ism_tape *f, ism_eval_ws *ws, const double q[3], double d0,
-                           double rays_below)
+                           double rays_below, uint64_t counts[2])
 {
     if (!(d0 > 0) || !isfinite(d0))
         return d0;
+    uint64_t own[2] = {0, 0};
+    if (!counts)
+        counts = own;
+    counts[0]++;
     double fq = ism_eval_point(f, ws, q[0], q[1], q[2]);
     if (isnan(fq))
         return d0;
-    seeker s = {f, ws, q, fq < 0};
+    seeker s = {f, ws, q, fq < 0, counts};
     double gq, best = fmin(d0, newton_foot(&s, d0, &gq)), u[3];
     if (!(gq < rays_below))
         return best;

@@ -4,6 +4,7 @@
 #ifndef ISM_AN_NEAREST_H
 #define ISM_AN_NEAREST_H
 
+#include <stdint.h>
 #include "core/expr/expr.h"
 #include "core/eval/eval.h"
 
@@ -12,8 +13,9 @@
  * from q for a sign change of f within that), d0 the first-order estimate at q. Every point
  * found lies on f = 0 (Newton converged, or a sign change narrowed to 1.5e-5 of the radius),
  * so where one is found the result is an upper bound of the true distance; where none is
- * (f keeps its sign round q: a touching or an isolated zero) d0 stands. */
+ * (f keeps its sign round q: a touching or an isolated zero) d0 stands. counts: NULL, or
+ * [0] += the points f was evaluated at and [1] += the gradients (the polygoniser's stats). */
 double ism_an_nearest_zero(const ism_tape *f, ism_eval_ws *ws, const double q[3], double d0,
-                           double rays_below);
+                           double rays_below, uint64_t counts[2]);
 
 #endif

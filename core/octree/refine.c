@@ -18,8 +18,12 @@ double ism_dist_capped(ism_sampler *s, const double p[3], double d, const double
         d = ism_dist_through_corners(d, p, v, dv, n);
     }
     /* f's own tape: the search leaves the leaf's box (the local tape holds only inside) */
-    if (s->dist_above > 0 && d > s->dist_above)
-        d = ism_an_nearest_zero(s->tape, s->ws, p, d, s->rays_below);
+    if (s->dist_above > 0 && d > s->dist_above) {
+        uint64_t counts[2] = {0, 0};
+        d = ism_an_nearest_zero(s->tape, s->ws, p, d, s->rays_below, counts);
+        s->n_point += counts[0];
+        s->n_gradient += counts[1];
+    }
     return d;
 }
 
