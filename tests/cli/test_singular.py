@@ -136,6 +136,34 @@ class SingularCurvesTest(unittest.TestCase):
                 self.assertEqual(stats["singular"]["artefacts"], 0)
                 self.assertEqual(an["boundary_edges"], 0)
 
+    def test_two_spheres_touching_share_one_vertex(self):
+        # Unit spheres centred at x = ±1 touch only at the origin: there f = 0 and ∇f = 0
+        # (a contact, Hessian rank 1: reported uncertified with a proved existence radius).
+        # The mesh: two spheres joined at one vertex where two cones of faces meet, so
+        # χ = 2 + 2 − 1 = 3, one piece through that vertex, nothing else non-manifold and no
+        # curve (the "before": χ = −10 and a short curve 2 cells from the contact).
+        # Box ±2.5: no placement cuts a sphere.
+        expr = "((x-1)^2 + y^2 + z^2 - 1)*((x+1)^2 + y^2 + z^2 - 1)"
+        for box in shifted_boxes(2.5):
+            with self.subTest(box=box):
+                stats, feats = mesh(expr, box, ["--max-error", "off"])
+                pts = feats["singular_points"]
+                self.assertEqual(len(pts), 1, pts)
+                p = pts[0]
+                self.assertEqual((p["type"], p["cones"]), ("degenerate", 2))
+                self.assertLessEqual(math.dist(p["xyz"], (0, 0, 0)), p["exists_within"])
+                self.assertLessEqual(p["exists_within"], 1e-6 * diagonal(box))
+                self.assertEqual(feats["curves"], [])
+                nmp = feats["nonmanifold_points"]
+                self.assertEqual([q["kind"] for q in nmp], ["cones"])
+                self.assertLess(math.dist(nmp[0]["xyz"], (0, 0, 0)), 1e-6)
+                an = stats["analysis"]
+                self.assertEqual((an["nonmanifold_vertices"], an["nonmanifold_edges"]), (1, 0))
+                self.assertEqual(an["vertex_components"], 1, "joined at the contact")
+                self.assertEqual(an["euler"], 3)
+                self.assertEqual(an["boundary_edges"], 0)
+                self.assertEqual(stats["singular"]["artefacts"], 0)
+
     def test_a_whisker_circle_has_no_sheet_and_length_pi(self):
         expr = "(x^2 + y^2 - 0.25)^2 + z^2"
         for box in shifted_boxes(1.0):
