@@ -31,42 +31,6 @@ static void round_centre(const ism_dual_model *m, const double lo[3], const doub
         dx[a] = iv_sub(iv(lo[a], hi[a]), iv(m->c[a], m->c[a]));
 }
 
-/* The diagonal terms take the square's range, the two equal off-diagonal ones are counted
- * once at twice their weight (H's xy entry times δx δy, twice, halved). Inline here (both
- * loops unrolled, the terms kept in registers) for second_order; the search calls them
- * through ism_dual_terms_of / _f. */
-static inline void terms_of(const ism_ivgrad *at, const ism_ivjet *j, const ism_interval dx[3],
-                            ism_dual_terms *t)
-{
-    _Pragma("GCC unroll 3") for (int a = 0; a < 3; a++) {
-        t->lin[a] = iv_mul(at->d[a], dx[a]);
-        t->quad[ism_dual_hess_at(a, a)] =
-            iv_mul_c(iv_mul(j->h[ism_dual_hess_at(a, a)], iv_square(dx[a])), 0.5);
-        _Pragma("GCC unroll 2") for (int b = a + 1; b < 3; b++)
-            t->quad[ism_dual_hess_at(a, b)] =
-                iv_mul(j->h[ism_dual_hess_at(a, b)], iv_mul(dx[a], dx[b]));
-    }
-}
-
-/* Each variable's linear term, then its Hessian row from the diagonal on. */
-static inline ism_interval terms_f(ism_interval fc, const ism_dual_terms *t)
-{
-    _Pragma("GCC unroll 3") for (int a = 0; a < 3; a++) {
-        fc = iv_add(fc, t->lin[a]);
-        _Pragma("GCC unroll 3") for (int b = a; b < 3; b++)
-            fc = iv_add(fc, t->quad[ism_dual_hess_at(a, b)]);
-    }
-    return fc;
-}
-
-void ism_dual_terms_of(const ism_ivgrad *at, const ism_ivjet *j, const ism_interval dx[3],
-                       ism_dual_terms *t)
-{
-    terms_of(at, j, dx, t);
-}
-
-ism_interval ism_dual_terms_f(ism_interval fc, const ism_dual_terms *t) { return terms_f(fc, t); }
-
 ism_interval ism_dual_terms_quad(const ism_dual_terms *t)
 {
     ism_interval q = t->quad[0];
@@ -81,8 +45,8 @@ static __attribute__((noinline)) ism_interval second_order(const ism_dual_model 
                                                           const ism_interval dx[3])
 {
     ism_dual_terms t;
-    terms_of(&m->at, &m->box, dx, &t);
-    return terms_f(m->at.v, &t);
+    ism_dual_terms_of(&m->at, &m->box, dx, &t);
+    return ism_dual_terms_f(m->at.v, &t);
 }
 
 ism_interval ism_dual_second_order(const ism_dual_model *m, const double lo[3],

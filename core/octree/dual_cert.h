@@ -18,6 +18,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 #include "core/eval/interval_jet.h"
+#include "core/eval/interval_ops.h"
 
 /* A second-order Taylor model of f over a box: f and ∇f at the box's centre c (the interval
  * jet of the degenerate box [c, c]: exact up to outward rounding) and the natural enclosure
@@ -45,23 +46,6 @@ bool ism_dual_over(const ism_dual_model *m, const double lo[3], const double hi[
 ism_interval ism_dual_second_order(const ism_dual_model *m, const double lo[3],
                                    const double hi[3]);
 
-/* The terms of f's second-order form round c over x − c ∈ dx (at: f and ∇f at c, j: the jet
- * over a box holding x): lin[a] = ∂f/∂xa(c) · dxa, and quad in ism_ivjet's Hessian order,
- * ½ H_aa dxa² on the diagonal, H_ab dxa dxb off it. For a caller that sums them twice. */
-typedef struct ism_dual_terms {
-    ism_interval lin[3], quad[6];
-} ism_dual_terms;
-
-void ism_dual_terms_of(const ism_ivgrad *at, const ism_ivjet *j, const ism_interval dx[3],
-                       ism_dual_terms *t);
-
-/* fc + Σ lin + Σ quad: f's second-order form, summed in ism_dual_second_order's order (the
- * same bounds). */
-ism_interval ism_dual_terms_f(ism_interval fc, const ism_dual_terms *t);
-
-/* Σ quad: ½ (x − c)ᵀ H(X) (x − c) alone. */
-ism_interval ism_dual_terms_quad(const ism_dual_terms *t);
-
 /* Both in one: f and ∇f over lo..hi by its own model. */
 bool ism_dual_enclose(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
                       const double hi[3], ism_ivgrad *g, uint64_t *intervals);
@@ -72,6 +56,44 @@ static inline int ism_dual_hess_at(int a, int b)
     static const int AT[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
     return AT[a][b];
 }
+
+/* The terms of f's second-order form round c over x − c ∈ dx (at: f and ∇f at c, j: the jet
+ * over a box holding x): lin[a] = ∂f/∂xa(c) · dxa, and quad in ism_ivjet's Hessian order,
+ * ½ H_aa dxa² on the diagonal, H_ab dxa dxb off it (the two equal off-diagonal terms counted
+ * once at twice their weight: H's xy entry times δx δy, twice, halved). For a caller that sums
+ * them twice. Inline (both loops unrolled, the terms kept in registers): dual_cert.c's
+ * second-order form and the singular search's jet test, once per tested cell. */
+typedef struct ism_dual_terms {
+    ism_interval lin[3], quad[6];
+} ism_dual_terms;
+
+static inline void ism_dual_terms_of(const ism_ivgrad *at, const ism_ivjet *j,
+                                     const ism_interval dx[3], ism_dual_terms *t)
+{
+    _Pragma("GCC unroll 3") for (int a = 0; a < 3; a++) {
+        t->lin[a] = iv_mul(at->d[a], dx[a]);
+        t->quad[ism_dual_hess_at(a, a)] =
+            iv_mul_c(iv_mul(j->h[ism_dual_hess_at(a, a)], iv_square(dx[a])), 0.5);
+        _Pragma("GCC unroll 2") for (int b = a + 1; b < 3; b++)
+            t->quad[ism_dual_hess_at(a, b)] =
+                iv_mul(j->h[ism_dual_hess_at(a, b)], iv_mul(dx[a], dx[b]));
+    }
+}
+
+/* fc + Σ lin + Σ quad: f's second-order form, summed in ism_dual_second_order's order (the
+ * same bounds): each variable's linear term, then its Hessian row from the diagonal on. */
+static inline ism_interval ism_dual_terms_f(ism_interval fc, const ism_dual_terms *t)
+{
+    _Pragma("GCC unroll 3") for (int a = 0; a < 3; a++) {
+        fc = iv_add(fc, t->lin[a]);
+        _Pragma("GCC unroll 3") for (int b = a; b < 3; b++)
+            fc = iv_add(fc, t->quad[ism_dual_hess_at(a, b)]);
+    }
+    return fc;
+}
+
+/* Σ quad: ½ (x − c)ᵀ H(X) (x − c) alone. */
+ism_interval ism_dual_terms_quad(const ism_dual_terms *t);
 
 /* 0 outside the enclosure's value: f has no zero in the box. */
 static inline bool ism_dual_encl_free(const ism_ivgrad *g) { return g->v.lo > 0 || g->v.hi < 0; }
