@@ -486,14 +486,14 @@ static bool prove_on_halves(dual *d, worker *w, const dnode *n, corner_view *v,
                             const double *dir, bool open_whole)
 {
     double mid[3];
-    if (n->level >= d->o->max_depth) /* no children: halve at the centre */
-        for (int a = 0; a < 3; a++)
-            mid[a] = 0.5 * v->p[0][a] + 0.5 * v->p[7][a];
-    else
+    const double *at = NULL; /* no children (max_depth): halved at the centre */
+    if (n->level < d->o->max_depth) {
         for (int a = 0; a < 3; a++)
             mid[a] = ism_grid_coord(&d->g, a,
                                     n->o.v[a] + ism_grid_cell_steps(&d->g, n->level + 1));
-    return ism_dual_prove_halves(w->s.tape, w->jet, &v->model, v->p[0], mid, v->p[7], dir,
+        at = mid;
+    }
+    return ism_dual_prove_halves(w->s.tape, w->jet, &v->model, v->p[0], at, v->p[7], dir,
                                  CERT_HALVINGS, open_whole, &v->free_kids, &w->s.n_interval);
 }
 

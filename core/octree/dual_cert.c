@@ -225,7 +225,7 @@ bool ism_dual_graph_along(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_m
 }
 
 bool ism_dual_prove_halves(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
-                           const double lo[3], const double mid[3], const double hi[3],
+                           const double lo[3], const double *mid, const double hi[3],
                            const double *d, int halvings, bool open_whole,
                            uint8_t *free_subs, uint64_t *intervals)
 {

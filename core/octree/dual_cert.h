@@ -114,13 +114,14 @@ bool ism_dual_graph_along(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_m
 
 /* ism_dual_free (d NULL) or ism_dual_graph_along (d not NULL) on a node's box lo..hi whose
  * first halving is at mid (the node's lattice centre: each sub-box is exactly a child's box,
- * bit a of k the upper half along a), with bit k of *free_subs set for every sub-box shown
- * free of 0 on the way, whatever the verdict: such a child is empty without proofs of its
- * own (the sub-boxes are tried in order until one fails, so a bit not set means unknown).
+ * bit a of k the upper half along a; NULL: the box's centre), with bit k of *free_subs set
+ * for every sub-box shown free of 0 on the way, whatever the verdict: such a child is empty
+ * without proofs of its own (the sub-boxes are tried in order until one fails, so a bit not
+ * set means unknown).
  * open_whole: the caller has m's enclosure of the whole box (ism_dual_over) and it
  * proves nothing (it holds 0, and with d its slope along d holds 0): the sub-boxes only. */
 bool ism_dual_prove_halves(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
-                           const double lo[3], const double mid[3], const double hi[3],
+                           const double lo[3], const double *mid, const double hi[3],
                            const double *d, int halvings, bool open_whole,
                            uint8_t *free_subs, uint64_t *intervals);
 
