@@ -414,8 +414,7 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
     scell kids[8];
     uint32_t half = 1u << (s->depth - (int)p->level - 1);
     for (int m = 0; m < 8; m++) {
-        kids[m].level = p->level + 1;
-        kids[m].model = NO_MODEL;
+        kids[m].level = p->level + 1; /* .model: keep sets it */
         for (int k = 0; k < 3; k++)
             kids[m].i[k] = p->i[k] + ((m >> k) & 1u ? half : 0u);
         ism_interval x[3];
@@ -490,11 +489,12 @@ static bool join(task_out *o, level *l, vec *boxes, bool ok)
     ok = ok && !o->oom
          && vec_append(&l->models, o->models.p, o->models.n, sizeof(ism_dual_model))
          && vec_append(boxes, o->boxes.p, o->boxes.n, sizeof(keyed_box));
-    for (size_t i = 0; ok && i < o->cells.n; i++) {
-        scell c = ((const scell *)o->cells.p)[i];
-        if (c.model != NO_MODEL)
-            c.model += (uint32_t)base;
-        ok = vec_push(&l->cells, &c, sizeof c);
+    size_t at = l->cells.n;
+    ok = ok && vec_append(&l->cells, o->cells.p, o->cells.n, sizeof(scell));
+    for (size_t i = at; ok && i < l->cells.n; i++) {
+        scell *c = (scell *)l->cells.p + i;
+        if (c->model != NO_MODEL)
+            c->model += (uint32_t)base;
     }
     free(o->cells.p);
     free(o->models.p);
