@@ -21,9 +21,8 @@ bool ism_write_ply(const ism_mesh *m, ism_write_fn write, void *ctx);
 bool ism_write_obj(const ism_mesh *m, ism_write_fn write, void *ctx);
 
 /* Corners with a normal of their own (a crease's sides, the singular locus's sheets): at[j]
- * is the corner 3 t + k (ascending), normal[3 which[j] ..] its unit normal (which NULL:
- * normal[3 j ..], and nnormals is n); several corners may share one normal (one half-sheet
- * at a vertex). */
+ * is the corner 3 t + k (ascending), normal[3 which[j] ..] its unit normal; several corners
+ * may share one normal (one half-sheet at a vertex). */
 typedef struct ism_obj_corner_normals {
     size_t n;
     const uint32_t *at;

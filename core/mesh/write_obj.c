@@ -19,7 +19,7 @@ bool ism_write_obj_corners(const ism_mesh *m, const ism_obj_corner_normals *cn,
     if (!s)
         return false;
     ism_sink_init(s, write, ctx);
-    size_t ncn = cn ? cn->n : 0, nn = !ncn ? 0 : cn->which ? cn->nnormals : ncn;
+    size_t ncn = cn ? cn->n : 0, nn = ncn ? cn->nnormals : 0;
 
     ism_sink_printf(s, "# isomesh: %zu vertices, %zu triangles\n", m->nverts, m->ntris);
     for (size_t i = 0; i < m->nverts; i++) {
@@ -36,7 +36,7 @@ bool ism_write_obj_corners(const ism_mesh *m, const ism_obj_corner_normals *cn,
         for (size_t c = 3 * t; c < 3 * t + 3; c++) {
             unsigned long v = m->tri[c] + 1UL, n = v;
             if (j < ncn && cn->at[j] == c) {
-                n = m->nverts + 1 + (cn->which ? cn->which[j] : j);
+                n = m->nverts + 1 + cn->which[j];
                 j++;
             }
             ism_sink_printf(s, " %lu//%lu", v, n);
