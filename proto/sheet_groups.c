@@ -9,7 +9,6 @@
 
 #include <math.h>
 #include <stdlib.h>
-#include <string.h>
 
 /* Member i's triangle has the mesh edge (v, w), w off the locus. */
 typedef struct fan_link {
@@ -75,24 +74,23 @@ static void fan_ws_free(fan_ws *s)
     free(s->whole);
 }
 
-/* Every member its own set, its own normal the set's sum. */
-static void singletons(fan_ws *s, const uint32_t *corner, uint32_t k, const float *cn)
+/* Member i its own set, its own normal the set's sum. */
+static void singleton(fan_ws *s, uint32_t i, const uint32_t *corner, const float *cn)
 {
-    for (uint32_t i = 0; i < k; i++) {
-        s->parent[i] = i;
-        s->size[i] = 1;
-        for (int d = 0; d < 3; d++)
-            s->sum[3 * i + d] = cn[3 * (size_t)corner[i] + d];
-    }
+    s->parent[i] = i;
+    s->size[i] = 1;
+    for (int d = 0; d < 3; d++)
+        s->sum[3 * i + d] = cn[3 * (size_t)corner[i] + d];
 }
 
 /* Joins the sets of a and b: the smaller root keeps the size and sum (unionfind.h). */
-static void join_sets(fan_ws *s, uint32_t ra, uint32_t rb, const double *sum)
+static void join_sets(fan_ws *s, uint32_t ra, uint32_t rb)
 {
     ism_an_uf_union(s->parent, ra, rb);
     uint32_t r = ra < rb ? ra : rb;
     s->size[r] = s->size[ra] + s->size[rb];
-    memcpy(s->sum + 3 * r, sum, 3 * sizeof *sum);
+    for (int d = 0; d < 3; d++) /* r is ra or rb: each d reads both before it writes */
+        s->sum[3 * r + d] = s->sum[3 * ra + d] + s->sum[3 * rb + d];
 }
 
 /* Whether every member of the sets ra and rb is within cmin (a cosine) of the unit u. */
@@ -142,16 +140,13 @@ static size_t fan_pairs(const ism_mesh *m, uint32_t v, const uint32_t *corner, u
 static void whole_half_sheets(fan_ws *s, const uint32_t *corner, uint32_t k, size_t np,
                               const float *cn)
 {
-    singletons(s, corner, k, cn);
+    for (uint32_t i = 0; i < k; i++)
+        singleton(s, i, corner, cn);
     for (size_t p = 0; p < np; p++) {
         uint32_t ra = ism_an_uf_find(s->parent, s->pair[p].a);
         uint32_t rb = ism_an_uf_find(s->parent, s->pair[p].b);
-        if (ra == rb)
-            continue;
-        double sum[3];
-        for (int d = 0; d < 3; d++)
-            sum[d] = s->sum[3 * ra + d] + s->sum[3 * rb + d];
-        join_sets(s, ra, rb, sum);
+        if (ra != rb)
+            join_sets(s, ra, rb);
     }
     const double cmin = cos(ISM_SHEET_GROUP_MAX_ANGLE);
     for (uint32_t i = 0; i < k; i++)
@@ -172,12 +167,8 @@ static void whole_half_sheets(fan_ws *s, const uint32_t *corner, uint32_t k, siz
         s->whole[i] = s->whole[r];
     }
     for (uint32_t i = 0; i < k; i++) /* the others start apart for the fans */
-        if (!s->whole[i]) {
-            s->parent[i] = i;
-            s->size[i] = 1;
-            for (int d = 0; d < 3; d++)
-                s->sum[3 * i + d] = cn[3 * (size_t)corner[i] + d];
-        }
+        if (!s->whole[i])
+            singleton(s, i, corner, cn);
 }
 
 /* The k >= 2 marked corners corner[] at vertex v; on: per vertex, whether it carries a mark.
@@ -209,7 +200,7 @@ static void join_vertex(const ism_mesh *m, uint32_t v, const uint32_t *corner, u
         for (int d = 0; d < 3; d++)
             u[d] = sum[d] / len;
         if (serves_all(s, corner, k, ra, rb, u, cn, cmin))
-            join_sets(s, ra, rb, sum);
+            join_sets(s, ra, rb);
     }
     /* every member read its own normal above; now the sets of two or more get theirs */
     for (uint32_t i = 0; i < k; i++) {
