@@ -112,13 +112,13 @@ static bool serves_all(const fan_ws *s, const uint32_t *corner, uint32_t k, uint
  * them (within one sheet: an edge along the locus has four, or a marked end), closest
  * normals first; their number. */
 static size_t fan_pairs(const ism_mesh *m, uint32_t v, const uint32_t *corner, uint32_t k,
-                        const uint8_t *on, const float *cn, fan_ws *s)
+                        const size_t *start, const float *cn, fan_ws *s)
 {
     size_t nl = 0, np = 0;
     for (uint32_t i = 0; i < k; i++) {
         const uint32_t *t = m->tri + 3 * (size_t)(corner[i] / 3);
         for (int j = 0; j < 3; j++)
-            if (t[j] != v && !on[t[j]])
+            if (t[j] != v && start[t[j] + 1] == start[t[j]])
                 s->link[nl++] = (fan_link){t[j], i};
     }
     qsort(s->link, nl, sizeof *s->link, cmp_link);
@@ -171,15 +171,16 @@ static void whole_half_sheets(fan_ws *s, const uint32_t *corner, uint32_t k, siz
             singleton(s, i, corner, cn);
 }
 
-/* The k >= 2 marked corners corner[] at vertex v; on: per vertex, whether it carries a mark.
+/* The k >= 2 marked corners corner[] at vertex v; start: per vertex w, its marked corners'
+ * run start[w]..start[w + 1] (empty: w carries no mark).
  * A half-sheet whose triangles' normals one normal serves within ISM_SHEET_GROUP_MAX_ANGLE
  * (a sheet with a tangent plane at v) is joined whole; any other (a cone's nappe, a pinch
  * point's fan) is joined into fans, closest pairs first, while the fan's normal stays within
  * ISM_SHEET_FAN_MAX_ANGLE of each member's. */
 static void join_vertex(const ism_mesh *m, uint32_t v, const uint32_t *corner, uint32_t k,
-                        const uint8_t *on, float *cn, fan_ws *s)
+                        const size_t *start, float *cn, fan_ws *s)
 {
-    size_t np = fan_pairs(m, v, corner, k, on, cn, s);
+    size_t np = fan_pairs(m, v, corner, k, start, cn, s);
     if (!np)
         return;
     whole_half_sheets(s, corner, k, np, cn);
@@ -217,18 +218,13 @@ bool ism_sheet_groups_join(const ism_mesh *m, const uint8_t *mark, float *cn)
 {
     size_t nc = 3 * m->ntris;
     size_t *start = calloc(m->nverts + 2, sizeof *start);
-    uint8_t *on = calloc(m->nverts + 1, 1);
-    if (!start || !on) {
-        free(start);
-        free(on);
+    if (!start)
         return false;
-    }
     for (size_t c = 0; c < nc; c++)
         if (mark[c])
             start[m->tri[c] + 2]++;
     size_t cap = 0;
     for (size_t v = 0; v < m->nverts; v++) {
-        on[v] = start[v + 2] > 0;
         cap = start[v + 2] > cap ? start[v + 2] : cap;
         start[v + 2] += start[v + 1];
     }
@@ -242,11 +238,10 @@ bool ism_sheet_groups_join(const ism_mesh *m, const uint8_t *mark, float *cn)
         for (size_t v = 0; v < m->nverts; v++)
             if (start[v + 1] - start[v] >= 2)
                 join_vertex(m, (uint32_t)v, corner + start[v],
-                            (uint32_t)(start[v + 1] - start[v]), on, cn, &s);
+                            (uint32_t)(start[v + 1] - start[v]), start, cn, &s);
     }
     fan_ws_free(&s);
     free(corner);
     free(start);
-    free(on);
     return ok;
 }
