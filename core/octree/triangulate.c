@@ -230,8 +230,9 @@ static bool in_ear(const double p[2], const double a[2], const double b[2], cons
  * across its mean unit gradient, where it is wound counter-clockwise (ism_triangulate_loop's
  * winding). Each ear is a convex corner whose triangle holds no other corner in that plane
  * and keeps ∇f's side at its own corners; of those, the one with the largest smallest angle,
- * lying in none of the node's faces when one such exists. False (nothing emitted) when no
- * ear is left at some step, or out of memory: the caller fans from its best corner. */
+ * lying in none of the node's faces when one such exists. *emitted false (nothing emitted)
+ * when no ear is left at some step: the caller fans from its best corner; false out of
+ * memory. */
 static bool clip_ears(ism_cell_out *out, size_t base, size_t n, const double node[6],
                       bool *emitted)
 {
@@ -249,14 +250,14 @@ static bool clip_ears(ism_cell_out *out, size_t base, size_t n, const double nod
     ism_across_least3(nrm, e); /* (e[0], e[1], nrm) right-handed */
     double (*uv)[2] = malloc(n * sizeof *uv);
     size_t *left = malloc(n * sizeof *left);
-    uint32_t *tri = malloc(3 * n * sizeof *tri);
-    bool ok = uv && left && tri;
+    bool ok = uv && left;
     for (size_t i = 0; ok && i < n; i++) {
         uv[i][0] = ism_dot3(q[i].p, e[0]);
         uv[i][1] = ism_dot3(q[i].p, e[1]);
         left[i] = i;
     }
-    size_t m = n, nt = 0;
+    size_t m = n, t0 = out->ntris;
+    uint32_t b0 = (uint32_t)base;
     while (ok && m >= 3) {
         size_t best = m;
         double best_score = HUGE_VAL;
@@ -275,30 +276,21 @@ static bool clip_ears(ism_cell_out *out, size_t base, size_t n, const double nod
             if (score < best_score)
                 best_score = score, best = i;
         }
-        if (best == m) {
-            ok = false; /* no ear: the polygon is not simple in that plane */
-            break;
+        if (best == m) { /* no ear: the polygon is not simple in that plane; none emitted */
+            out->ntris = t0;
+            free(uv);
+            free(left);
+            return true;
         }
-        tri[3 * nt] = (uint32_t)left[(best + m - 1) % m];
-        tri[3 * nt + 1] = (uint32_t)left[best];
-        tri[3 * nt + 2] = (uint32_t)left[(best + 1) % m];
-        nt++;
+        /* q stays valid: emitting grows the triangles, never the vertices */
+        ok = ism_cell_out_tri(out, b0 + (uint32_t)left[(best + m - 1) % m],
+                              b0 + (uint32_t)left[best], b0 + (uint32_t)left[(best + 1) % m]);
         memmove(left + best, left + best + 1, (m - best - 1) * sizeof *left);
         m--;
     }
-    if (ok && nt == n - 2) {
-        uint32_t b = (uint32_t)base;
-        for (size_t t = 0; ok && t < nt; t++)
-            ok = ism_cell_out_tri(out, b + tri[3 * t], b + tri[3 * t + 1], b + tri[3 * t + 2]);
-        *emitted = true;
-    } else if (!uv || !left || !tri) {
-        ok = false;
-    } else {
-        ok = true; /* no ear: not emitted, not a failure */
-    }
+    *emitted = ok;
     free(uv);
     free(left);
-    free(tri);
     return ok;
 }
 
