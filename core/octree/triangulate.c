@@ -171,12 +171,14 @@ static bool fan_in_face(const ism_cell_out *out, size_t base, size_t n, const do
 
 /* The corner whose fan has the largest smallest angle, among the corners whose fan has no
  * turned-over triangle nor one lying in a face of the node (else the fewest such faults:
- * a fold before a face triangle); *in_face: the chosen fan has one of them. */
+ * a fold before a face triangle); *in_face: the chosen fan has one of them; *folds: it has
+ * a turned-over triangle (fan_folds). */
 static size_t best_corner(const ism_cell_out *out, size_t base, size_t n, const double node[6],
-                          bool *in_face)
+                          bool *in_face, bool *folds)
 {
     const ism_fpoint *q = out->verts + base;
     size_t best = 0;
+    bool best_folds = false;
     double best_cos = HUGE_VAL; /* cos + 1 (face) + 2 (fold) may pass 3 */
     for (size_t c = 0; c < n; c++) {
         double worst = -1;
@@ -187,12 +189,14 @@ static size_t best_corner(const ism_cell_out *out, size_t base, size_t n, const 
         }
         if (fan_in_face(out, base, n, q[c].p, node))
             worst += 1; /* only when every corner's fan has one */
-        if (fan_folds(q, n, &q[c]))
+        bool f = fan_folds(q, n, &q[c]);
+        if (f)
             worst += 2; /* only when every corner's fan folds */
         if (worst < best_cos)
-            best_cos = worst, best = c;
+            best_cos = worst, best = c, best_folds = f;
     }
     *in_face = best_cos > 1;
+    *folds = best_folds;
     return best;
 }
 
@@ -297,9 +301,9 @@ static bool clip_ears(ism_cell_out *out, size_t base, size_t n, const double nod
 /* The fan from the best corner — or, when that fan folds, the polygon's ears (clip_ears). */
 static bool fan_from_best_corner(ism_cell_out *out, size_t base, size_t n, const double node[6])
 {
-    bool in_face, emitted;
-    size_t c = best_corner(out, base, n, node, &in_face);
-    if (fan_folds(out->verts + base, n, &out->verts[base + c])) {
+    bool in_face, folds, emitted;
+    size_t c = best_corner(out, base, n, node, &in_face, &folds);
+    if (folds) {
         if (!clip_ears(out, base, n, node, &emitted))
             return false;
         if (emitted)
@@ -340,8 +344,8 @@ static bool corner_fan_within(ism_sampler *s, ism_cell_out *out, size_t base, si
                               const double node[6], double max_error, bool *emitted)
 {
     *emitted = false;
-    bool in_face;
-    size_t c = best_corner(out, base, n, node, &in_face);
+    bool in_face, folds;
+    size_t c = best_corner(out, base, n, node, &in_face, &folds);
     if (in_face || corner_fan_error(s, out->verts + base, n, c, max_error) > max_error)
         return true;
     *emitted = true;
