@@ -135,9 +135,12 @@ static bool across_fold(const cf_ctx *c, uint32_t a, uint32_t b)
  * clear: round the closed curve it winds (wind != 0), the winding's everywhere; else the
  * sign of the steps over DIR_WINDOW edges each side where they agree (|sum| at least
  * DIR_AGREE of the sum of their lengths) and move at least travel along the curve (a rim
- * round the end of an open curve — a pinch point, a box exit — has its feet at that end). */
+ * round the end of an open curve — a pinch point, a box exit — has its feet at that end),
+ * or, when lend_travel > 0, at least lend_travel: then lent[i] = 1 where they move less
+ * than travel (a way lent by the chart's own step; lent is left as it is elsewhere). */
 static void directions(const cf_polyline *pl, const cf_loop *l, const double *u,
-                       const int *cid, int wind, double travel, double *sg)
+                       const int *cid, int wind, double travel, double lend_travel,
+                       double *sg, uint8_t *lent)
 {
     size_t n = l->n;
     for (size_t i = 0; i < n; i++) {
@@ -158,8 +161,11 @@ static void directions(const cf_polyline *pl, const cf_loop *l, const double *u,
             sum += dd;
             len += fabs(dd);
         }
-        if (one && fabs(sum) >= travel && fabs(sum) >= DIR_AGREE * len)
+        if (one && fabs(sum) >= DIR_AGREE * len &&
+            (fabs(sum) >= travel || (lend_travel > 0 && fabs(sum) >= lend_travel))) {
             sg[i] = sum > 0 ? 1 : -1;
+            lent[i] = !(fabs(sum) >= travel);
+        }
     }
 }
 
@@ -182,14 +188,12 @@ int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double
         return 0;
     size_t *prev = malloc(n * sizeof *prev), *next = malloc(n * sizeof *next);
     double *d = malloc(n * sizeof *d), *sg = malloc(n * sizeof *sg);
-    double *own = unit > 0 ? malloc(n * sizeof *own) : NULL;
     uint8_t *gone = calloc(n, 1), *lent = calloc(n, 1);
-    if (!prev || !next || !d || !sg || !gone || !lent || (unit > 0 && !own)) {
+    if (!prev || !next || !d || !sg || !gone || !lent) {
         free(prev);
         free(next);
         free(d);
         free(sg);
-        free(own);
         free(gone);
         free(lent);
         return -1;
@@ -200,14 +204,9 @@ int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double
         d[i] = ism_dist3(c->m->pos + 3 * (size_t)l->v[i], foot + 3 * i);
     }
     double edge = cf_loop_mean_edge(c, l), riser = EAR_MIN_STEP * edge;
-    directions(pl, l, u, cid, wind, DIR_TRAVEL * edge, sg);
-    if (unit > 0) /* where the mean edge read no way, the chart's own step may */
-        directions(pl, l, u, cid, wind, DIR_TRAVEL * unit, own);
-    for (size_t i = 0; unit > 0 && i < n; i++)
-        if (sg[i] == 0 && own[i] != 0) {
-            sg[i] = own[i];
-            lent[i] = 1;
-        }
+    /* where the mean edge reads no way, the chart's own step may (lent) */
+    directions(pl, l, u, cid, wind, DIR_TRAVEL * edge, unit > 0 ? DIR_TRAVEL * unit : 0, sg,
+               lent);
     chart ch = {pl, u, d, 1};
     size_t live = n;
     int clipped = 0;
@@ -262,7 +261,6 @@ int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double
     free(next);
     free(d);
     free(sg);
-    free(own);
     free(gone);
     free(lent);
     return ok ? clipped : -1;
