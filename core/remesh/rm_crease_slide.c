@@ -295,21 +295,20 @@ static bool to_crease(rm_pass *p, const ism_tape *f, double x[3], double scale,
         double val[2], g[2][3], step[3];
         if (!branches(p, f, x, val, g))
             return false;
-        if (fabs(val[0]) <= tol * ism_norm3(g[0]) && fabs(val[1]) <= tol * ism_norm3(g[1])) {
+        /* on: one step more, already measured: from within tol it lands at rounding (a
+           merged vertex's fan has edges up to ISM_RM_CREASE_MERGE_REL long, so tol alone
+           left the cube-minus-ball's merged vertices 1.03e-10 off its sphere) */
+        bool on = fabs(val[0]) <= tol * ism_norm3(g[0]) && fabs(val[1]) <= tol * ism_norm3(g[1]);
+        if (on)
             *framed = frame_of((const double (*)[3])g, cf);
-            /* one step more, already measured: from within tol it lands at rounding (a
-               merged vertex's fan has edges up to ISM_RM_CREASE_MERGE_REL long, so tol
-               alone left the cube-minus-ball's merged vertices 1.03e-10 off its sphere) */
-            if (ism_min_norm_step(2, (const double (*)[3])g, val, ISM_RM_CREASE_PARALLEL, step))
-                for (int k = 0; k < 3; k++)
-                    x[k] += step[k];
-            return true;
-        }
-        if (it == ISM_RM_CREASE_NEWTON_STEPS ||
-            !ism_min_norm_step(2, (const double (*)[3])g, val, ISM_RM_CREASE_PARALLEL, step))
+        else if (it == ISM_RM_CREASE_NEWTON_STEPS)
             return false;
+        if (!ism_min_norm_step(2, (const double (*)[3])g, val, ISM_RM_CREASE_PARALLEL, step))
+            return on;
         for (int k = 0; k < 3; k++)
             x[k] += step[k];
+        if (on)
+            return true;
     }
     return false;
 }

@@ -309,8 +309,8 @@ Test(tube_folds, crossing_spheres_few_turned_over)
  * (conform_pinch.c). Now 0 / 0 / 0 for all three at d6 and d7 (and at d5 on Steiner and
  * Whitney, d8 on all three); the old code fails Steiner's irrational box at both depths. */
 #define CROSS_CAP_FOLDS_MAX 0
-#define STEINER_FOLDS_MAX(d) 0
-#define STEINER_NEAR_MAX(d) 0
+#define STEINER_FOLDS_MAX 0
+#define STEINER_NEAR_MAX 0
 #define WHITNEY_FOLDS_MAX 0
 
 Test(tube_folds, pinch_points_few_turned_over)
@@ -321,9 +321,9 @@ Test(tube_folds, pinch_points_few_turned_over)
              {-1.2, -1.2, -1.2, 1.2, 1.2, 1.2}, 2, CROSS_CAP_FOLDS_MAX, 2,
              {{0, 0, 0}, {0, 0, 1}}, 0, 0},
             {"steiner", "x^2*y^2 + y^2*z^2 + z^2*x^2 + x*y*z", {-1, -1, -1, 1, 1, 1}, 5,
-             STEINER_FOLDS_MAX(d), 6,
+             STEINER_FOLDS_MAX, 6,
              {{0.5, 0, 0}, {-0.5, 0, 0}, {0, 0.5, 0}, {0, -0.5, 0}, {0, 0, 0.5}, {0, 0, -0.5}},
-             6, STEINER_NEAR_MAX(d)},
+             6, STEINER_NEAR_MAX},
             {"whitney umbrella", "x^2 - y^2*z", {-1, -1, -1, 1, 1, 1}, LONG_MIN,
              WHITNEY_FOLDS_MAX, 1, {{0, 0, 0}}, 0, 0},
         };
