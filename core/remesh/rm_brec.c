@@ -45,10 +45,10 @@ static double moved_bound(const double *e, const double y[3], double kappa, doub
                           double *plain)
 {
     double dx[3] = {y[0] - e[0], y[1] - e[1], y[2] - e[2]};
-    double len = sqrt(dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2]), u = e[SLOT_U] + len;
+    double len = ism_norm3(dx), u = e[SLOT_U] + len;
     *plain = u;
     double turn = e[SLOT_TURN] + kappa * len; /* n's turn at y */
-    double along = fabs(e[SLOT_N] * dx[0] + e[SLOT_N + 1] * dx[1] + e[SLOT_N + 2] * dx[2]);
+    double along = fabs(ism_dot3(e + SLOT_N, dx));
     bool normal = e[SLOT_N] != 0 || e[SLOT_N + 1] != 0 || e[SLOT_N + 2] != 0;
     double bent = e[SLOT_U] + along + (e[SLOT_TURN] + kappa * e[SLOT_U]) * len +
                   0.5 * kappa * len * len;
