@@ -424,9 +424,10 @@ JSON_TYPES = {"object": dict, "array": list, "string": str, "boolean": bool, "in
 
 def schema_errors(value, schema, schemas, path="Features"):
     """Where value departs from an OpenAPI schema (the subset openapi.yaml uses: $ref, oneOf,
-    type (or a list of types), const, enum, properties, required, items): a field the schema
-    does not name, a required one missing, a wrong type or value, an object documented only
-    as a bare {type: object}. A small reader of its own, no jsonschema dependency."""
+    type (or a list of types), const, enum, minimum, properties, required, items, minItems,
+    maxItems): a field the schema does not name, a required one missing, a wrong type or
+    value, an object documented only as a bare {type: object}. A small reader of its own, no
+    jsonschema dependency."""
     while "$ref" in schema:
         schema = schemas[schema["$ref"].split("/")[-1]]
     if "oneOf" in schema:
@@ -444,6 +445,14 @@ def schema_errors(value, schema, schemas, path="Features"):
         errs.append(f"{path}: {value!r} is not {schema['const']!r}")
     if "enum" in schema and value not in schema["enum"]:
         errs.append(f"{path}: {value!r} not in {schema['enum']}")
+    number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if "minimum" in schema and number and value < schema["minimum"]:
+        errs.append(f"{path}: {value!r} < {schema['minimum']}")
+    if isinstance(value, list):
+        if len(value) < schema.get("minItems", 0):
+            errs.append(f"{path}: {len(value)} items < {schema['minItems']}")
+        if len(value) > schema.get("maxItems", len(value)):
+            errs.append(f"{path}: {len(value)} items > {schema['maxItems']}")
     if isinstance(value, dict):
         props = schema.get("properties")
         if props is None:
@@ -479,13 +488,58 @@ class FeaturesSchemaTest(unittest.TestCase):
         for expr, half in cases:
             box = shifted_boxes(half)[-1]
             with self.subTest(expr=expr):
-                _, feats = mesh(expr, box, ["--max-error", "off"])
+                stats, feats = mesh(expr, box, ["--max-error", "off"])
                 self.assertEqual(schema_errors(feats, schemas["Features"], schemas), [])
+                self.assert_analysis(stats, schemas)
                 seen |= {k for p in feats["singular_points"] for k in p}
                 seen |= {"double_sheets"} if feats["double_sheets"] else set()
         # the cases reach the optional fields they are here for
         self.assertLessEqual({"uncertified_reason", "exists_within", "perturbation",
                               "double_sheets"}, seen)
+
+    def assert_analysis(self, stats, schemas):
+        """The stats' analysis block against openapi's Stats.analysis, both ways: a field
+        written but not documented fails, and so does a documented one not written (every
+        documented field is required: the writer, proto/stats.c, always writes them all)."""
+        schema = schemas["Stats"]["properties"]["analysis"]
+        self.assertEqual(schema_errors(stats["analysis"], schema, schemas, "analysis"), [])
+        for name, sub in (("analysis", schema), *schema["properties"].items()):
+            if sub.get("type") == "object":
+                self.assertEqual(set(sub.get("required", [])), set(sub["properties"]),
+                                 f"{name}: every documented field is required")
+
+    def test_stats_analysis_is_what_openapi_documents(self):
+        # The analysis block of the stats (23 figures, vertex_classes, quality, accuracy)
+        # documented field by field in openapi's Stats.analysis: under a bound (accuracy's
+        # max_error a number, met a boolean; the cases above have no bound: both null), and
+        # for an empty mesh (every figure 0, genus -1). Then the reader itself: a field
+        # deleted from the schema, or from the stats, is found.
+        import copy
+        import yaml
+        with open(OPENAPI) as f:
+            schemas = yaml.safe_load(f)["components"]["schemas"]
+        runs = []
+        for expr, extra in (("x^2 + y^2 + z^2 - 0.6", ["--max-error", "0.004"]),
+                            ("x^2 + y^2 + z^2 - 100", ["--max-error", "off"])):
+            box = shifted_boxes(1.0)[-1]
+            with self.subTest(expr=expr):
+                stats, _ = mesh(expr, box, extra)
+                self.assert_analysis(stats, schemas)
+                runs.append(stats["analysis"])
+        bounded, empty = runs
+        self.assertEqual((bounded["accuracy"]["max_error"], bounded["accuracy"]["met"]),
+                         (0.004, True))
+        self.assertEqual((empty["edges"], empty["genus"], empty["accuracy"]["met"]), (0, -1, None))
+        self.assertEqual(bounded["genus"], 0)  # a sphere
+        schema = schemas["Stats"]["properties"]["analysis"]
+        for field in schema["properties"]:
+            undocumented = copy.deepcopy(schema)
+            del undocumented["properties"][field]
+            self.assertIn(f"analysis.{field}: not in openapi.yaml",
+                          schema_errors(bounded, undocumented, schemas, "analysis"))
+            missing = {k: v for k, v in bounded.items() if k != field}
+            self.assertIn(f"analysis: {field} missing",
+                          schema_errors(missing, schema, schemas, "analysis"))
 
 
 if __name__ == "__main__":
