@@ -20,7 +20,8 @@
  *   - slid along it, when it is on it (within ISM_RM_CREASE_ON_REL) and exactly two of its
  *     neighbours are too (a chain: a crease corner, or a crease met twice, has more): toward
  *     the middle of those two, kept between them in order; a half and a quarter step are
- *     tried after the whole one.
+ *     tried after the whole one (a vertex on it with fewer than two, a chain's end, is
+ *     only merged).
  * Points go onto a = b = 0 by minimum-norm Newton steps on the two branches, and a moved
  * vertex ends within ISM_RM_CREASE_ON_REL of its mean edge of both surfaces and locked (on
  * the crease: the relaxation would move it off). The branches are those of f's last
@@ -32,7 +33,7 @@
  * fan's mean normal says nothing) and no outer edge bends past the crease angle by more
  * than ISM_RM_CROWD_BEND_DEG over what it did (rm_crease_tri_ok) — or, a chamfer triangle
  * ending on one of the two surfaces, faces within ISM_RM_CREASE_FACE_DEG of that branch's
- * normal at the crease point and bends by no more than the crease's own angle and
+ * normal at the crease point (or no farther from the nearer one than before) and bends by no more than the crease's own angle and
  * ISM_RM_CROWD_BEND_DEG (tri_ok) —, the smallest angle of the fan
  * (of both fans, for a merge) grows, and the distances the pass keeps are kept (centroids:
  * rm_centroids_stay for a move, the fans' farthest or the mesh's for a merge, midpoints too;
@@ -234,7 +235,9 @@ static void fan_corners(const rm_pass *p, const crease_fan *c, uint32_t v, uint3
 }
 
 /* v's fan and what it may do: 1 snap onto the crease (v near it, not on it), 2 slide along
- * it (v on it, exactly two of its neighbours on it: c->end), 0 nothing. */
+ * it (v on it, exactly two of its neighbours on it: c->end), 3 merge only (v on it, fewer
+ * than two of its neighbours on it: the end of a chain), 0 nothing (a crease corner, or
+ * the crease met again: three or more neighbours on it). */
 static int find_chain(rm_pass *p, uint32_t v, double mean_edge, ism_tape *local,
                       crease_fan *c)
 {
@@ -252,9 +255,16 @@ static int find_chain(rm_pass *p, uint32_t v, double mean_edge, ism_tape *local,
                 return 0; /* a corner, or a crease met again */
             c->end[ends++] = c->ring[i];
         }
-    if (ends != 2)
-        return 0;
-    return 2;
+    /* a chain's end (0 or 1 neighbours on the crease: the crease goes on across one of v's
+       triangles) may still merge with a neighbour onto it: the cube minus a ball's own box,
+       a vertex of 3 triangles on the crease at (-0.402, -1, -0.727) beside one 3e-3 along
+       it, whose needle (7.75°) comes back 4 times by the symmetry; chamfer17 counted 78 such
+       vertices on gyroid-ball's own box. bench_remesh needles (default bound, own / 1e-3 /
+       0.37-cell / √2−1 boxes, with tri_ok's "no farther than before"): gyroid-ball 2 / 8 /
+       19 / 27 -> 1 / 8 / 16 / 20, cube-minus-ball 9 / 12 / 6 / 13 -> 6 / 5 / 4 / 7; folds
+       776 / 818 / 809 / 821 -> 733 / 785 / 770 / 774 and 1,526 / 1,472 / 1,329 / 1,381 ->
+       1,404 / 1,330 / 1,261 / 1,309 */
+    return ends == 2 ? 2 : 3;
 }
 
 /* The two branches' unit normals at a crease point (oriented as ∇f on each side: f is the
@@ -315,19 +325,30 @@ static bool to_crease(rm_pass *p, const ism_tape *f, double x[3], double scale,
 
 /* rm_crease_tri_ok, or (cf not NULL) the triangle ends on one of the two surfaces meeting
  * at the crease: q faces within ISM_RM_CREASE_FACE_DEG of a branch's normal at the crease
- * point and bends against the triangle across its outer edge ab by no more than the
- * crease's own angle and ISM_RM_CROWD_BEND_DEG (a chamfer triangle between the two
- * surfaces turns by up to the crease angle as its corner goes onto the crease, and its
- * neighbour across the crease bends by that angle). */
+ * point — or no farther from the nearer of the two than o did — and bends against the
+ * triangle across its outer edge ab by no more than the crease's own angle and
+ * ISM_RM_CROWD_BEND_DEG (a chamfer triangle between the two surfaces turns by up to the
+ * crease angle as its corner goes onto the crease, and its neighbour across the crease
+ * bends by that angle). Under a bound the chamfer holds clusters of triangles a few
+ * thousandths long standing across both surfaces (walls: 80-110° off both normals, the
+ * gyroid ball's own box at (-0.897, -0.422, -0.984)); the 60° alone refused every merge
+ * among them, the "no farther than before" lets them go onto the crease. bench_remesh
+ * needles under 10°, default bound, own / 1e-3 / 0.37-cell / √2−1 boxes: gyroid-ball
+ * 13 / 11 / 20 / 29 -> 2 / 8 / 19 / 27, cube-minus-ball 9 / 12 / 8 / 14 -> 9 / 12 / 6 / 13,
+ * folds (edges bent over 90°) about equal (777 / 812 / 805 / 820 -> 776 / 818 / 809 / 821).
+ * Letting the bend grow by ISM_RM_CROWD_BEND_DEG over the old one's as well changed one
+ * needle. */
 static bool tri_ok(const rm_pass *p, const crease_frame *cf, uint32_t t, uint32_t a,
                    uint32_t b, const double *o[3], const double *q[3])
 {
     if (rm_crease_tri_ok(p, t, a, b, o, q))
         return true;
-    double n[3], ln = rm_cross(q[0], q[1], q[2], n);
+    double n[3], m[3], ln = rm_cross(q[0], q[1], q[2], n), lo = rm_cross(o[0], o[1], o[2], m);
     if (!cf || !(ln > 0))
         return false;
-    double face = cf->cos_face * ln;
+    /* or no farther from the nearer branch's normal than o was (a wall of the chamfer) */
+    double was = lo > 0 ? fmax(ism_dot3(m, cf->n[0]), ism_dot3(m, cf->n[1])) / lo : -1;
+    double face = fmin(cf->cos_face, was) * ln;
     if (!(ism_dot3(n, cf->n[0]) > face || ism_dot3(n, cf->n[1]) > face))
         return false;
     uint32_t s = rm_merge_across(&p->r, a, b, t);
@@ -517,6 +538,8 @@ static bool slide_vertex(rm_pass *p, uint32_t v, ism_tape *local)
         return false;
     if (snap_merge(p, v, &c, &f))
         return true;
+    if (kind == 3)
+        return false; /* on the crease, no chain to slide along */
     const double *pos = P(p, v);
     const double *a = kind == 2 ? P(p, c.end[0]) : pos, *b = kind == 2 ? P(p, c.end[1]) : pos;
     /* a slide tries the whole way to the middle, then a half and a quarter; a snap the

@@ -909,28 +909,34 @@ typedef struct crease_limits {
     size_t needles[3], folds[3];
 } crease_limits;
 
-/* The gyroid ball at its preset's depth, 7: needles beside the crease 0 / 7 / 9, folds 501 /
- * 490 / 509 measured since a vertex beside the crease merges onto it with any of its 3
- * nearest neighbours within 0.8 of its mean edge (rm_crease_slide.c
- * ISM_RM_CREASE_MERGE_REL); the nearest within 0.25 alone left 16 / 20 / 28 needles and 553
+/* The gyroid ball at its preset's depth, 7: needles beside the crease 0 / 4 / 8, folds 480 /
+ * 462 / 492 measured since a chamfer triangle may face no farther from a branch's normal
+ * than before and a crease vertex at a chain's end may merge (rm_crease_slide.c tri_ok,
+ * find_chain); 0 / 7 / 9 and 501 / 490 / 509 before, since a vertex beside the crease merges
+ * onto it with any of its 3 nearest neighbours within 0.8 of its mean edge
+ * (ISM_RM_CREASE_MERGE_REL); the nearest within 0.25 alone left 16 / 20 / 28 needles and 553
  * / 538 / 579 folds. Before: 19 / 26 / 34 needles while vertices within 0.5 of an edge
  * counted as beside the crease, 48 / 81 / 78 before a snap could turn a triangle to face
  * either surface (tri_ok), 115 / 135 / 129 before vertices were merged onto the crease,
  * snapped and slid along it (340 / 326 / 391 while the crease's vertices, as close as 1/400
  * of a cell, were never merged into each other: rm_collapse.c's crease merges). */
-static const crease_limits crease_left = {{2, 10, 12}, {516, 505, 524}};
+static const crease_limits crease_left = {{2, 5, 8}, {490, 475, 500}};
 
 /* The same for the cube minus a ball at its preset's depth, 7, box ±1.3, needles within a
- * finest cell of both surfaces: 0 / 0 / 14, folds 2,067 / 1,957 / 2,461 (0 / 28 / 111 and
+ * finest cell of both surfaces: 0 / 0 / 4, folds 1,974 / 1,841 / 2,399 (0 / 0 / 14 and 2,067
+ * / 1,957 / 2,461 before the chamfer's walls and the chains' ends, 0 / 28 / 111 and
  * 2,796 / 2,498 / 2,770 with the nearest neighbour alone; 0 / 178 / 439 needles with session
  * 14's rm_crease_slide.c). */
-static const crease_limits cube_left = {{2, 2, 18}, {2129, 2016, 2535}};
+static const crease_limits cube_left = {{2, 2, 6}, {2010, 1880, 2440}};
 
 /* Under the default bound, 1e-3 of the box diagonal (depth.max 10; "beside" within a finest
  * cell of depth 7), needles within a cell of the sphere (gyroid-ball) or of both surfaces
- * (cube-minus-ball): gyroid-ball 13 / 30 / 11 needles and 782 / 843 / 793 folds,
- * cube-minus-ball 55 / 58 / 74 and 1,706 / 1,626 / 2,229 with the merges onto the crease
- * reaching 3 neighbours within 0.8 of the mean edge; with the nearest within 0.25 alone
+ * (cube-minus-ball): gyroid-ball 1 / 18 / 7 needles and 733 / 782 / 736 folds,
+ * cube-minus-ball 12 / 15 / 56 and 1,548 / 1,469 / 2,146 since the chamfer's walls (tiny
+ * triangles standing across both surfaces) may merge onto the crease facing no worse than
+ * before and a crease vertex at a chain's end may merge (rm_crease_slide.c); 13 / 30 / 11
+ * and 782 / 843 / 793, 55 / 58 / 74 and 1,706 / 1,626 / 2,229 with the merges onto the
+ * crease reaching 3 neighbours within 0.8 of the mean edge; with the nearest within 0.25 alone
  * 31 / 70 / 45 and 1,104 / 1,141 / 1,079, 171 / 159 / 177 and 2,436 / 2,230 / 2,898 (the
  * bounded chamfer: short sides 0.25-0.5 of an edge long join a vertex on one surface to one
  * on the other, rm_crease_slide.c). Before, gyroid-ball 49 / 80 / 50 -> 43 / 77 / 41 once
@@ -938,8 +944,8 @@ static const crease_limits cube_left = {{2, 2, 18}, {2129, 2016, 2535}};
  * land 4 bounds away (ISM_RM_CREASE_NEAR_ERRORS: the crease's cells stop at 4 bounds across,
  * their vertices up to ~2.3 bounds off the other surface on fans whose edges are far
  * shorter). Far from the goal (none under 10°) still. */
-static const crease_limits crease_left_bounded = {{16, 36, 14}, {805, 868, 817}};
-static const crease_limits cube_left_bounded = {{66, 70, 89}, {1757, 1675, 2296}};
+static const crease_limits crease_left_bounded = {{3, 22, 9}, {750, 800, 755}};
+static const crease_limits cube_left_bounded = {{16, 19, 64}, {1580, 1500, 2190}};
 
 /* Runs the pass on f's mesh in box (under max_error E > 0: both, to depth.max 10) and checks
  * what crease_shape_of and count_folds read of it against left (per box, which + 1) and the
