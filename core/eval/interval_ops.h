@@ -16,6 +16,9 @@
 #define ISM_INTERVAL_OPS_H
 
 #include <math.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include "core/eval/eval.h"
 #include "core/expr/scalar_ops.h"
 
@@ -86,11 +89,36 @@ static inline double max4(double a, double b, double c, double d)
     return ism_max(ism_max(a, b), ism_max(c, d));
 }
 
-static inline ism_interval iv_mul(ism_interval a, ism_interval b)
+/* The product's bounds from its four corner products, each NaN (0 * inf) counted as 0. */
+static inline ism_interval iv_mul_scalar(ism_interval a, ism_interval b)
 {
     double p1 = mul0(a.lo, b.lo), p2 = mul0(a.lo, b.hi), p3 = mul0(a.hi, b.lo),
            p4 = mul0(a.hi, b.hi);
     return iv(down1(min4(p1, p2, p3, p4)), up1(max4(p1, p2, p3, p4)));
+}
+
+/* iv_mul_scalar bit for bit, with the four products two by two in SSE2 lanes: [p1, p3] and
+ * [p2, p4]; minpd / maxpd take the first operand exactly where ism_min / ism_max do (a < b,
+ * a > b; else the second, signed zeros included), so the lanes' min(p1, p2), min(p3, p4)
+ * and then the min of the two are min4's, in min4's order. A NaN product (0 * inf, rare)
+ * takes the scalar path. The interval jets spent ~40 instructions per product, a third of
+ * them the four NaN tests (callgrind, torus at 1e-2). */
+static inline ism_interval iv_mul(ism_interval a, ism_interval b)
+{
+#if defined(__SSE2__)
+    __m128d va = _mm_set_pd(a.hi, a.lo);
+    __m128d q = _mm_mul_pd(va, _mm_set1_pd(b.lo)); /* [p1, p3] */
+    __m128d r = _mm_mul_pd(va, _mm_set1_pd(b.hi)); /* [p2, p4] */
+    if (__builtin_expect(_mm_movemask_pd(_mm_or_pd(_mm_cmpunord_pd(q, q),
+                                                   _mm_cmpunord_pd(r, r))) != 0, 0))
+        return iv_mul_scalar(a, b);
+    __m128d mn = _mm_min_pd(q, r), mx = _mm_max_pd(q, r);
+    double lo = _mm_cvtsd_f64(_mm_min_sd(mn, _mm_unpackhi_pd(mn, mn)));
+    double hi = _mm_cvtsd_f64(_mm_max_sd(mx, _mm_unpackhi_pd(mx, mx)));
+    return iv(down1(lo), up1(hi));
+#else
+    return iv_mul_scalar(a, b);
+#endif
 }
 
 /* a * c for a finite constant c != 0 of known sign (the batched evaluator picks one per
