@@ -424,12 +424,20 @@ JSON_TYPES = {"object": dict, "array": list, "string": str, "boolean": bool, "in
 
 def schema_errors(value, schema, schemas, path="Features"):
     """Where value departs from an OpenAPI schema (the subset openapi.yaml uses: $ref, oneOf,
-    type (or a list of types), const, enum, minimum, properties, required, items, minItems,
+    allOf (of object parts), type (or a list of types), const, enum, minimum, properties, required, items, minItems,
     maxItems): a field the schema does not name, a required one missing, a wrong type or
     value, an object documented only as a bare {type: object}. A small reader of its own, no
     jsonschema dependency."""
     while "$ref" in schema:
         schema = schemas[schema["$ref"].split("/")[-1]]
+    if "allOf" in schema:  # an object made of parts: their properties and required together
+        whole = {"type": "object", "properties": {}, "required": []}
+        for part in schema["allOf"]:
+            while "$ref" in part:
+                part = schemas[part["$ref"].split("/")[-1]]
+            whole["properties"].update(part.get("properties", {}))
+            whole["required"] += part.get("required", [])
+        schema = whole
     if "oneOf" in schema:
         tries = [schema_errors(value, alt, schemas, path) for alt in schema["oneOf"]]
         return [] if [] in tries else min(tries, key=len)
@@ -490,17 +498,21 @@ class FeaturesSchemaTest(unittest.TestCase):
             with self.subTest(expr=expr):
                 stats, feats = mesh(expr, box, ["--max-error", "off"])
                 self.assertEqual(schema_errors(feats, schemas["Features"], schemas), [])
-                self.assert_analysis(stats, schemas)
+                self.assert_stats(stats, schemas)
                 seen |= {k for p in feats["singular_points"] for k in p}
                 seen |= {"double_sheets"} if feats["double_sheets"] else set()
         # the cases reach the optional fields they are here for
         self.assertLessEqual({"uncertified_reason", "exists_within", "perturbation",
                               "double_sheets"}, seen)
 
-    def assert_analysis(self, stats, schemas):
-        """The stats' analysis block against openapi's Stats.analysis, both ways: a field
-        written but not documented fails, and so does a documented one not written (every
-        documented field is required: the writer, proto/stats.c, always writes them all)."""
+    def assert_stats(self, stats, schemas):
+        """The whole stats JSON against openapi's Stats (every field written is documented, of
+        its type), and its analysis block both ways: a field written but not documented
+        fails, and so does a documented one not written (every documented field of the
+        analysis is required: the writer, proto/stats.c, always writes them all)."""
+        self.assertEqual(schema_errors(stats, schemas["Stats"], schemas, "Stats"), [])
+        if "analysis" not in stats:  # a preview
+            return
         schema = schemas["Stats"]["properties"]["analysis"]
         self.assertEqual(schema_errors(stats["analysis"], schema, schemas, "analysis"), [])
         for name, sub in (("analysis", schema), *schema["properties"].items()):
@@ -508,25 +520,39 @@ class FeaturesSchemaTest(unittest.TestCase):
                 self.assertEqual(set(sub.get("required", [])), set(sub["properties"]),
                                  f"{name}: every documented field is required")
 
-    def test_stats_analysis_is_what_openapi_documents(self):
-        # The analysis block of the stats (23 figures, vertex_classes, quality, accuracy)
-        # documented field by field in openapi's Stats.analysis: under a bound (accuracy's
-        # max_error a number, met a boolean; the cases above have no bound: both null), and
-        # for an empty mesh (every figure 0, genus -1). Then the reader itself: a field
+    def test_stats_are_what_openapi_documents(self):
+        # The stats JSON documented in openapi's Stats, and its analysis block (23 figures,
+        # vertex_classes, quality, accuracy) field by field both ways: under a bound with the
+        # simplification and the quality pass (accuracy's max_error a number, met a boolean;
+        # the cases above have no bound: both null), for an empty mesh (every figure 0, genus
+        # -1), and a preview (no analysis; its preview block). Then the reader itself: a field
         # deleted from the schema, or from the stats, is found.
         import copy
         import yaml
         with open(OPENAPI) as f:
             schemas = yaml.safe_load(f)["components"]["schemas"]
+        box = shifted_boxes(1.0)[-1]
         runs = []
-        for expr, extra in (("x^2 + y^2 + z^2 - 0.6", ["--max-error", "0.004"]),
+        for expr, extra in (("x^2 + y^2 + z^2 - 0.6",
+                             ["--max-error", "0.004", "--simplify", "--quality", "good"]),
                             ("x^2 + y^2 + z^2 - 100", ["--max-error", "off"])):
-            box = shifted_boxes(1.0)[-1]
             with self.subTest(expr=expr):
                 stats, _ = mesh(expr, box, extra)
-                self.assert_analysis(stats, schemas)
-                runs.append(stats["analysis"])
-        bounded, empty = runs
+                self.assert_stats(stats, schemas)
+                runs.append(stats)
+        self.assertLessEqual({"simplify", "remesh", "singular"}, set(runs[0]))
+        with tempfile.TemporaryDirectory() as tmp:
+            req = os.path.join(tmp, "preview.json")
+            with open(req, "w") as f:
+                json.dump({"expr": "x^2 + y^2 + z^2 - 0.6", "box": box, "preview": True,
+                           "max_error": None, "depth": {"min": 3, "max": MAX_DEPTH}}, f)
+            r = subprocess.run([ISOMESH, req, "--stats", "-o", os.path.join(tmp, "p.ply")],
+                               capture_output=True, text=True, timeout=300)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            preview = json.loads(r.stdout)
+        self.assertIn("preview", preview)
+        self.assert_stats(preview, schemas)
+        bounded, empty = (s["analysis"] for s in runs)
         self.assertEqual((bounded["accuracy"]["max_error"], bounded["accuracy"]["met"]),
                          (0.004, True))
         self.assertEqual((empty["edges"], empty["genus"], empty["accuracy"]["met"]), (0, -1, None))
