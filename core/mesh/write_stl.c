@@ -3,6 +3,7 @@
  * the three corners as float32, and a zero attribute byte count. */
 #include "core/mesh/write_mesh.h"
 #include "core/mesh/write_sink.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -15,9 +16,9 @@ static void facet_normal(const ism_mesh *m, const uint32_t *v, float out[3])
     const double *a = m->pos + 3 * v[0], *b = m->pos + 3 * v[1], *c = m->pos + 3 * v[2];
     double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
     double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                   u[0] * w[1] - u[1] * w[0]};
-    double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    double n[3];
+    ism_cross3(u, w, n);
+    double len = ism_norm3(n);
     for (int k = 0; k < 3; k++)
         out[k] = len > 0 ? (float)(n[k] / len) : 0.0f;
 }
