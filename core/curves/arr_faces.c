@@ -7,6 +7,7 @@
  * its faces (the one whose mesh component the Euler check gives it), so that they sum to
  * the mesh's χ. */
 #include "core/curves/arr_internal.h"
+#include "core/util/vec3.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -22,9 +23,9 @@ static double tri_area(const ism_mesh *m, const uint32_t *t)
         u[i] = b[i] - a[i];
         v[i] = c[i] - a[i];
     }
-    double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2],
-           z = u[0] * v[1] - u[1] * v[0];
-    return 0.5 * sqrt(x * x + y * y + z * z);
+    double n[3];
+    ism_cross3(u, v, n);
+    return 0.5 * ism_norm3(n);
 }
 
 /* Dense ids 0.. for the roots of parent, in order of each set's smallest member. */

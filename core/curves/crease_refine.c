@@ -97,8 +97,8 @@ static double side_miss(ism_branches *br, uint32_t A, const double *a, const dou
         v[i] = c[i] - a[i];
         mid[i] = 0.5 * (a[i] + b[i]);
     }
-    double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
-                   u[0] * v[1] - u[1] * v[0]};
+    double n[3];
+    ism_cross3(u, v, n);
     ism_branches_gradient(br, A, mid, g);
     double nn = ism_norm3(n) * ism_norm3(g);
     if (!(nn > 0) || !isfinite(nn))

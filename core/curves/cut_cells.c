@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "core/util/grow.h"
+#include "core/util/vec3.h"
 
 /* Triangles per cell at the start (the cell side is √(this × the mean triangle area)): a
  * curve crosses few cells, and a cell's interval test costs about as much as evaluating g
@@ -221,9 +222,9 @@ static bool grid_size(cut_state *s, double lo[3], double hi[3])
             u[a] = q[1][a] - q[0][a];
             w[a] = q[2][a] - q[0][a];
         }
-        double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                       u[0] * w[1] - u[1] * w[0]};
-        area += 0.5 * sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        double n[3];
+        ism_cross3(u, w, n);
+        area += 0.5 * ism_norm3(n);
     }
     double ext = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
     if (!isfinite(ext))

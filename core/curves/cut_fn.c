@@ -203,11 +203,11 @@ static void note_end(ism_cut_eval *ev, const size_t *ks, int nk, const double x[
         }
 }
 
-/* The unit normal of the plane holding dir and n (n × dir normalised); false when parallel. */
+/* The unit normal of the plane holding dir and n (dir × n normalised); false when parallel. */
 static bool across_normal(const double dir[3], const double n[3], double out[3])
 {
-    double c[3] = {dir[1] * n[2] - dir[2] * n[1], dir[2] * n[0] - dir[0] * n[2],
-                   dir[0] * n[1] - dir[1] * n[0]};
+    double c[3];
+    ism_cross3(dir, n, c);
     double l = ism_norm3(c);
     if (!(l > 0) || !isfinite(l))
         return false;

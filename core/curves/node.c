@@ -254,9 +254,7 @@ static void branch_tangent(cut_state *s, size_t k, const double p[3], double R[3
     double gf[3], gg[3], t[3];
     ism_eval_gradient(s->ev->f, s->ev->fws, p[0], p[1], p[2], gf);
     ism_cut_g(s->ev, k, p, gg);
-    t[0] = gf[1] * gg[2] - gf[2] * gg[1];
-    t[1] = gf[2] * gg[0] - gf[0] * gg[2];
-    t[2] = gf[0] * gg[1] - gf[1] * gg[0];
+    ism_cross3(gf, gg, t);
     double l = sqrt(ism_dot3(t, t));
     if (!(l > 0))
         return;

@@ -192,9 +192,7 @@ void cut_tri_normal(const ism_mesh *m, const uint32_t *tv, uint32_t moved, const
         u[c] = q[1][c] - q[0][c];
         w[c] = q[2][c] - q[0][c];
     }
-    n[0] = u[1] * w[2] - u[2] * w[1];
-    n[1] = u[2] * w[0] - u[0] * w[2];
-    n[2] = u[0] * w[1] - u[1] * w[0];
+    ism_cross3(u, w, n);
 }
 
 bool cut_can_move(cut_state *s, const uint32_t *tris, size_t nt, uint32_t u,
