@@ -86,9 +86,7 @@ static double curvature3(const double p[3], const double q[3], const double r[3]
         u[k] = q[k] - p[k];
         v[k] = r[k] - p[k];
     }
-    x[0] = u[1] * v[2] - u[2] * v[1];
-    x[1] = u[2] * v[0] - u[0] * v[2];
-    x[2] = u[0] * v[1] - u[1] * v[0];
+    ism_cross3(u, v, x);
     double sides = ism_dist3(p, q) * ism_dist3(q, r) * ism_dist3(p, r);
     return sides > 0 ? 2 * ism_norm3(x) / sides : 0;
 }

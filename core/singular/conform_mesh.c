@@ -330,8 +330,8 @@ static void singular_normals(cf_ctx *c)
                      *d = m->pos + 3 * (size_t)v[2];
         double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
         double w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-        double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                       u[0] * w[1] - u[1] * w[0]};
+        double n[3];
+        ism_cross3(u, w, n);
         for (int k = 0; k < 3; k++)
             if (c->singular[v[k]] & CF_VERTEX_SINGULAR)
                 for (int j = 0; j < 3; j++)

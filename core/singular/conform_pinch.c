@@ -84,9 +84,7 @@ void cf_pinch_ends(cf_ctx *c, const cf_polyline *pl, size_t npl, double rho, cf_
                 ch->n[i] -= nc * ch->c[i];
             if (!(ism_normalise3(ch->n) > 0))
                 continue;
-            ch->e[0] = ch->c[1] * ch->n[2] - ch->c[2] * ch->n[1];
-            ch->e[1] = ch->c[2] * ch->n[0] - ch->c[0] * ch->n[2];
-            ch->e[2] = ch->c[0] * ch->n[1] - ch->c[1] * ch->n[0];
+            ism_cross3(ch->c, ch->n, ch->e);
             ch->end = e;
             ch->on = true;
         }

@@ -103,9 +103,7 @@ static void turn_round(const double *a, const double *b, const double p[3], doub
 {
     double u[3] = {a[0] - p[0], a[1] - p[1], a[2] - p[2]};
     double w[3] = {b[0] - p[0], b[1] - p[1], b[2] - p[2]};
-    out[0] = u[1] * w[2] - u[2] * w[1];
-    out[1] = u[2] * w[0] - u[0] * w[2];
-    out[2] = u[0] * w[1] - u[1] * w[0];
+    ism_cross3(u, w, out);
 }
 
 /* Closed loop l steps backwards round p somewhere: the turn (a − p) × (b − p) of one of its

@@ -106,9 +106,7 @@ static void tri_normal(const ism_mesh *m, uint32_t t, double n[3])
                  *d = m->pos + 3 * (size_t)v[2];
     double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
     double w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-    n[0] = u[1] * w[2] - u[2] * w[1];
-    n[1] = u[2] * w[0] - u[0] * w[2];
-    n[2] = u[0] * w[1] - u[1] * w[0];
+    ism_cross3(u, w, n);
 }
 
 /* Triangle t faces against ∇f: at its centroid, or at two of its corners (their normals, ∇f's

@@ -2,6 +2,7 @@
  * crossings), a stable grouping of the triangles by component, and the append to the mesh
  * with each component's area (see sheet_assemble.h). */
 #include "core/singular/sheet_assemble.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -20,9 +21,9 @@ static double triangle_area(const double *a, const double *b, const double *c)
 {
     double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
     double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    double x = u[1] * w[2] - u[2] * w[1], y = u[2] * w[0] - u[0] * w[2],
-           z = u[0] * w[1] - u[1] * w[0];
-    return 0.5 * sqrt(x * x + y * y + z * z);
+    double n[3];
+    ism_cross3(u, w, n);
+    return 0.5 * ism_norm3(n);
 }
 
 /* Component number (0, 1, ... in order of first triangle) of each triangle; returns how

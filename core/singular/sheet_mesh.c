@@ -93,9 +93,7 @@ static void add_ctri(const ism_sheet_field *sf, xedge e0, xedge e1, xedge e2, co
         u[k] = q[1][k] - q[0][k];
         v[k] = q[2][k] - q[0][k];
     }
-    nrm[0] = u[1] * v[2] - u[2] * v[1];
-    nrm[1] = u[2] * v[0] - u[0] * v[2];
-    nrm[2] = u[0] * v[1] - u[1] * v[0];
+    ism_cross3(u, v, nrm);
     out[*n] = ism_dot3(nrm, d) >= 0 ? (ctri){{e0, e1, e2}} : (ctri){{e0, e2, e1}};
     (*n)++;
 }
