@@ -600,9 +600,7 @@ bool ism_dual_centroid_within(ism_sampler *s, const double *p[3], double e)
     if (!isfinite(f) || !(gl > 0) ||
         !(ism_dual_kink_dist(s, c, ism_dual_plain_dist(s, c, f, g, e), e) <= e))
         return false;
-    nrm[0] = u[1] * v[2] - u[2] * v[1];
-    nrm[1] = u[2] * v[0] - u[0] * v[2];
-    nrm[2] = u[0] * v[1] - u[1] * v[0];
+    ism_cross3(u, v, nrm);
     if (ism_dot3(nrm, g) > TURNED_COS * ism_norm3(nrm) * gl)
         return true;
     double reach = fmax(ism_norm3(u), ism_norm3(v)); /* beside a crease: either branch */

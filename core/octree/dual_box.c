@@ -282,9 +282,7 @@ static bool turned(bclip *c, uint32_t a, uint32_t b, uint32_t d)
         w[j] = r[j] - p[j];
         m[j] = (p[j] + q[j] + r[j]) / 3;
     }
-    n[0] = u[1] * w[2] - u[2] * w[1];
-    n[1] = u[2] * w[0] - u[0] * w[2];
-    n[2] = u[0] * w[1] - u[1] * w[0];
+    ism_cross3(u, w, n);
     ism_sample_grad(c->s, m, g);
     return !(ism_dot3(n, g) > 0);
 }

@@ -15,6 +15,7 @@
 #include "core/octree/face_flat.h"
 #include "core/octree/singular.h"
 #include "core/util/grow.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -459,9 +460,7 @@ static bool double_line_between(ism_cell_ctx *cx, const ism_tile *t, const ism_f
         return false;
     double nrm[3] = {0, 0, 0};
     nrm[t->axis] = 1;
-    w[0] = nrm[1] * d[2] - nrm[2] * d[1];
-    w[1] = nrm[2] * d[0] - nrm[0] * d[2];
-    w[2] = nrm[0] * d[1] - nrm[1] * d[0];
+    ism_cross3(nrm, d, w);
     ism_normalise3(w);
     double half = DOUBLE_LINE_PROBE * len;
     for (int k = 0; k < 3; k++) {

@@ -12,6 +12,7 @@
  * shared table; resolve (count new vertices); place (write them); map (count kept
  * triangles); write the triangles. */
 #include "core/octree/weld.h"
+#include "core/util/vec3.h"
 #include "core/util/zeroed.h"
 
 #include <math.h>
@@ -327,8 +328,8 @@ static void fill_missing_normals(ism_mesh *m, ism_pool *pool, ism_par_cost *cost
                              *c = m->pos + 3 * tri[2];
                 double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
                 double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-                double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
-                               u[0] * v[1] - u[1] * v[0]};
+                double n[3];
+                ism_cross3(u, v, n);
                 for (int k = 0; k < 3; k++)
                     if (f.number[tri[k]])
                         for (int j = 0; j < 3; j++)
