@@ -27,10 +27,9 @@ static void sub3(const double *a, const double *b, double *out)
 
 static double cross_norm(const double *a, const double *b)
 {
-    double c0 = a[1] * b[2] - a[2] * b[1];
-    double c1 = a[2] * b[0] - a[0] * b[2];
-    double c2 = a[0] * b[1] - a[1] * b[0];
-    return sqrt(c0 * c0 + c1 * c1 + c2 * c2);
+    double c[3];
+    ism_cross3(a, b, c);
+    return ism_norm3(c);
 }
 
 /* Twice the area of triangle t; *angle its smallest angle in degrees (the one opposite the
