@@ -27,9 +27,7 @@ static void face_cross(const ism_mesh *m, size_t t, double cr[3])
     const double *a = m->pos + 3 * v[0], *b = m->pos + 3 * v[1], *c = m->pos + 3 * v[2];
     double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
     double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    cr[0] = u[1] * w[2] - u[2] * w[1];
-    cr[1] = u[2] * w[0] - u[0] * w[2];
-    cr[2] = u[0] * w[1] - u[1] * w[0];
+    ism_cross3(u, w, cr);
 }
 
 static void fill_missing_normals(const ism_mesh *m, float *normal)
