@@ -128,8 +128,8 @@ class Redis:
         cmd = [REDIS_SERVER, REDIS_CONF, "--port", str(self.port), "--bind", "127.0.0.1",
                "--dir", self.tmp, "--save", "", "--appendonly", "no",
                "--logfile", os.path.join(self.tmp, "redis.log"), "--daemonize", "no"] + self.extra
-        self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                     stderr=subprocess.DEVNULL)
+        self.proc = harness.spawn_owned(cmd, stdin=subprocess.DEVNULL,
+                                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
         def ready():
             if self.proc.poll() is not None:
@@ -384,10 +384,10 @@ class Nginx:
         rc, out = nginx_test(self.prefix, self.conf)
         if rc != 0:
             raise RuntimeError("nginx -t failed:\n" + out)
-        self.proc = subprocess.Popen([NGINX, "-p", self.prefix, "-e",
-                                      os.path.join(self.prefix, "error.log"), "-c", self.conf,
-                                      "-g", "daemon off;"], stdin=subprocess.DEVNULL,
-                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        self.proc = harness.spawn_owned([NGINX, "-p", self.prefix, "-e",
+                                         os.path.join(self.prefix, "error.log"), "-c", self.conf,
+                                         "-g", "daemon off;"], stdin=subprocess.DEVNULL,
+                                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
         def ready():
             if self.proc.poll() is not None:

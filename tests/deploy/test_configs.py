@@ -184,9 +184,9 @@ class RedisSettingsTest(unittest.TestCase):
         # Only the port and directory are given here; the rest comes from the file.
         port = stack.free_port()
         tmp = tempfile.mkdtemp(prefix="isomesh_redis_conf_")
-        proc = subprocess.Popen([stack.REDIS_SERVER, stack.REDIS_CONF, "--port", str(port),
-                                 "--dir", tmp], stdout=subprocess.DEVNULL,
-                                stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL)
+        proc = harness.spawn_owned([stack.REDIS_SERVER, stack.REDIS_CONF, "--port", str(port),
+                                    "--dir", tmp], stdout=subprocess.DEVNULL,
+                                   stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL)
         try:
             def ping():
                 try:
@@ -252,9 +252,9 @@ class InstallTest(unittest.TestCase):
         self.assertEqual(argv[0], os.path.join(lib, "isomeshd"))
 
         d = harness.Daemon()
-        d.proc = subprocess.Popen(argv + ["--workers", "1"], stdin=subprocess.DEVNULL,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                                  errors="replace")
+        d.proc = harness.spawn_owned(argv + ["--workers", "1"], stdin=subprocess.DEVNULL,
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                     text=True, errors="replace")
         d.reader = threading.Thread(target=d._read_stderr, daemon=True)
         d.reader.start()
         d.port = port

@@ -63,8 +63,8 @@ def run_daemon(argv):
     """A harness.Daemon around an already made command line (its --listen port known)."""
     port = int(re.search(r"--listen[= ]\S*:(\d+)", " ".join(argv)).group(1))
     d = harness.Daemon()
-    d.proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                              stderr=subprocess.PIPE, text=True, errors="replace")
+    d.proc = harness.spawn_owned(argv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                 stderr=subprocess.PIPE, text=True, errors="replace")
     d.reader = threading.Thread(target=d._read_stderr, daemon=True)
     d.reader.start()
     d.port = port
@@ -179,9 +179,9 @@ class KubernetesTest(unittest.TestCase):
         with open(pw, "w") as f:
             f.write("s3cret\n")
         os.chmod(pw, secret_mode)
-        rproc = subprocess.Popen([stack.REDIS_SERVER, conf_path, "--port", str(redis_port),
-                                  "--dir", self.tmp, "--requirepass", "s3cret"],
-                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        rproc = harness.spawn_owned([stack.REDIS_SERVER, conf_path, "--port", str(redis_port),
+                                     "--dir", self.tmp, "--requirepass", "s3cret"],
+                                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         d = None
         try:
             self.assertTrue(stack.wait_until(lambda: self.redis_ping(redis_port), 10))

@@ -30,7 +30,11 @@ class RedisAccessTest(unittest.TestCase):
     def setUp(self):
         self.tmp = tempfile.TemporaryDirectory()
         self.redis = stack.Redis().start()
-        self.redis.command("ACL", "SETUSER", "isomesh", "on", ">s3cret", "~*", "&*", "+@all")
+        try:  # tearDown does not run when setUp fails: never leave Redis behind
+            self.redis.command("ACL", "SETUSER", "isomesh", "on", ">s3cret", "~*", "&*", "+@all")
+        except BaseException:
+            self.redis.cleanup()
+            raise
         self.addr = "127.0.0.1:%d" % self.redis.port
 
     def tearDown(self):
@@ -141,9 +145,9 @@ class RedisTlsTest(unittest.TestCase):
         """stunnel on a free port to Redis's TLS port, expecting host; returns the port."""
         port = stack.free_port()
         conf = stunnel_conf(self.tmp.name, port, self.tls_port, self.cert, host, name)
-        self.procs.append(subprocess.Popen([stack.STUNNEL, conf], stdin=subprocess.DEVNULL,
-                                           stdout=subprocess.DEVNULL,
-                                           stderr=subprocess.DEVNULL))
+        self.procs.append(harness.spawn_owned([stack.STUNNEL, conf], stdin=subprocess.DEVNULL,
+                                              stdout=subprocess.DEVNULL,
+                                              stderr=subprocess.DEVNULL))
 
         def listening():
             try:

@@ -5,6 +5,7 @@ everywhere, and always stopped (SIGTERM, then SIGKILL after a bound). Plus small
 requests with http.client, /metrics parsing, Draco decoding with Debian's draco_decoder, the
 daemon's worker processes and resident memory from /proc."""
 import collections
+import ctypes
 import http.client
 import json
 import os
@@ -40,6 +41,34 @@ SPHERE = {"preset": "sphere"}
 SLOW = {"preset": "gyroid-ball", "depth": {"max": 10}, "max_error": None}
 SLOWER = {"preset": "gyroid-ball", "params": {"k": 8}, "depth": {"max": 10}, "quality": "good",
           "max_error": None}
+
+
+# Linux prctl(2): PR_SET_PDEATHSIG asks the kernel for a signal when the parent thread ends.
+_PRCTL = ctypes.CDLL(None, use_errno=True).prctl
+PR_SET_PDEATHSIG = 1
+
+
+def spawn_owned(cmd, **kwargs):
+    """subprocess.Popen(cmd, **kwargs) for a server the test runs (isomeshd, redis-server,
+    nginx, stunnel): in a session of its own, and sent SIGTERM when the thread that started it
+    ends (call it from the test's main thread), then stopped by the pid the test holds.
+
+    Its own session: a test that SIGSTOPs a daemon's worker (or Redis) must not share a process
+    group with the shell or runner above it. When that group loses its last tie to the session
+    (the wrapper running the test ends or is killed) while one of its processes is stopped, the
+    kernel sends SIGHUP and then SIGCONT to every process in it (POSIX _exit(), "orphaned
+    process group"): both daemons log `reload_ignored` and the paused worker runs on — what
+    qflake's loop saw in session 17, with no one signalling by name. In a session of its own
+    the server's group is orphaned from the start, so that can never happen to it; and a
+    terminal's SIGINT or SIGHUP reaches only the test, which stops its servers itself.
+    The death signal: out of the test's process group, a server would outlive a test that is
+    killed (run_suites.py's timeout, a job stopped with kill) where it used to share its fate."""
+    parent = os.getpid()
+
+    def tie():
+        if _PRCTL(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0) != 0 or os.getppid() != parent:
+            os._exit(127)  # the test is already gone, or the kernel refused: do not run
+    return subprocess.Popen(cmd, start_new_session=True, preexec_fn=tie, **kwargs)
 
 
 def sphere(r):
@@ -186,17 +215,16 @@ class Daemon:
 
     def _spawn_piped(self, cmd):
         """stderr through a pipe, read line by line into self.lines by a thread."""
-        self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                     stderr=subprocess.PIPE, text=True, errors="replace",
-                                     env=self.env)
+        self.proc = spawn_owned(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                stderr=subprocess.PIPE, text=True, errors="replace", env=self.env)
         self.reader = threading.Thread(target=self._read_stderr, daemon=True)
         self.reader.start()
 
     def _spawn_to_file(self, cmd):
         """stderr straight into log_file: no thread, nothing kept in memory."""
         self.log_fh = open(self.log_file, "w")
-        self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                     stderr=self.log_fh, env=self.env)
+        self.proc = spawn_owned(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                stderr=self.log_fh, env=self.env)
 
     def _read_stderr(self):
         for line in self.proc.stderr:

@@ -66,10 +66,14 @@ class GalleryTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.d = Daemon("--workers", "2")
-        cls.d.start()
-        r = cls.d.get("/v1/presets")
-        assert r.status == 200
-        cls.presets = r.json()["presets"]
+        try:  # tearDownClass does not run when setUpClass fails: never leave the daemon behind
+            cls.d.start()
+            r = cls.d.get("/v1/presets")
+            assert r.status == 200
+            cls.presets = r.json()["presets"]
+        except BaseException:
+            cls.d.cleanup()
+            raise
 
     @classmethod
     def tearDownClass(cls):

@@ -263,8 +263,13 @@ def start_with_sphere(cls, prefix, *args):
     cls.d = Daemon("--workers", "1", *args, cache_dir=os.path.join(cls.tmp, "cache")).start()
     # the depth path's sphere: its body is large enough that 400 answers overflow the
     # socket buffers (the default bound's dual sphere is a few times smaller)
-    first = cls.d.post("/v1/mesh", dict(sphere(0.77), max_error=None))
-    assert first.status == 200, first.body[:200]
+    try:  # the callers' tearDownClass does not run when setUpClass fails
+        first = cls.d.post("/v1/mesh", dict(sphere(0.77), max_error=None))
+        assert first.status == 200, first.body[:200]
+    except BaseException:
+        cls.d.cleanup()
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+        raise
     cls.body = first.body
     cls.key = first.header("ETag").strip('"')
     cls.get = b"GET /v1/meshes/%s.drc HTTP/1.1\r\nHost: t\r\n\r\n" % cls.key.encode()
