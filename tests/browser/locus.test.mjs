@@ -4,7 +4,9 @@
 // segment between 2 pinch points, the rest of the z axis whiskers) and the Whitney umbrella
 // (its handle, z < 0, is a whisker), each in its own box and in the box moved off the lattice
 // by (1e-3, -1e-3, 0.7e-3) and by (√2 − 1, −(√5 − 1)/4, 1/e) of a finest cell
-// (tests/cli/boxes.py), on the depth path (err=off, depth 3..7: every test states its bound).
+// (tests/cli/boxes.py), on the depth path (err=off, depth 3..7), and in its own box under the
+// default bound given explicitly (err = 1e-3 x the box diagonal: the path the viewer takes by
+// default).
 //
 // Read from the page's scene graph (window.isomeshViewer, main.js; features.js draws them):
 // the fat-line objects under the "singular-curves" group, their colour and their segments'
@@ -32,10 +34,13 @@ const DEPTH = 7;   // depth.max of every case (the cross-cap's and Whitney's own
 // fractions of a finest cell.
 const OFF_1E3 = [1e-3, -1e-3, 0.7e-3];
 const IRR_CELLS = [Math.SQRT2 - 1, -(Math.sqrt(5) - 1) / 4, 1 / Math.E];
+// [label, box, err (the URL's: 'off' or the bound)] of each run.
 function placements(box) {
   const cell = [0, 1, 2].map((k) => (box[k + 3] - box[k]) / 2 ** DEPTH);
   const moved = (s) => box.map((v, i) => v + s[i % 3]);
-  return [['own', box], ['1e-3', moved(OFF_1E3)], ['irr', moved(IRR_CELLS.map((s, k) => s * cell[k]))]];
+  const bound = 1e-3 * Math.hypot(box[3] - box[0], box[4] - box[1], box[5] - box[2]);
+  return [['own', box, 'off'], ['1e-3', moved(OFF_1E3), 'off'], ['irr', moved(IRR_CELLS.map((s, k) => s * cell[k])), 'off'],
+    ['bound', box, String(bound)]];
 }
 
 // preset, its own box (proto/presets.c), the curves of each kind the closed form has in it
@@ -111,9 +116,9 @@ function pixelsOf(img, c, skip) {
   return n;
 }
 
-async function showCase(preset, box) {
+async function showCase(preset, box, err) {
   const n = await loads(page);
-  await page.evaluate((h) => { location.hash = h; }, `preset=${preset}&box=${box.map(String).join(',')}&depth=3,${DEPTH}&err=off`);
+  await page.evaluate((h) => { location.hash = h; }, `preset=${preset}&box=${box.map(String).join(',')}&depth=3,${DEPTH}&err=${err}`);
   const key = await waitForMesh(page, n);
   const r = await fetch(`${daemon.base}/v1/meshes/${key}/features`);
   assert.equal(r.status, 200);
@@ -175,10 +180,10 @@ describe('singular curves drawn as lines', { timeout: 600000 }, () => {
   });
 
   for (const [preset, own, want] of CASES) {
-    it(`${preset}: the whiskers and double curves of the features JSON, drawn as lines in 3 boxes`, async () => {
-      for (const [label, box] of placements(own)) {
-        const where = `${preset} (${label} box)`;
-        const f = await showCase(preset, box);
+    it(`${preset}: the whiskers and double curves of the features JSON, drawn as lines in 3 boxes and under the bound`, async () => {
+      for (const [label, box, err] of placements(own)) {
+        const where = `${preset} (${label === 'bound' ? `own box, max_error ${err}` : `${label} box, depth path`})`;
+        const f = await showCase(preset, box, err);
         const colors = await assertDrawn(f, want, where);
         const shown = await viewShot(page, `locus-${preset}-${label}.png`);
         const skip = await keyRect();
