@@ -100,13 +100,24 @@ void ism_cache_put(ism_cache *c, const char *name, ism_blob *b)
         c->tiers[i]->put(c->tiers[i], name, b);
 }
 
-void ism_cache_put_local(ism_cache *c, const char *name, ism_blob *b)
+/* Stores into the tiers whose remote flag is remote. */
+static void put_where(ism_cache *c, const char *name, ism_blob *b, bool remote)
 {
     if (!b || !ism_cache_name_valid(name))
         return;
     for (size_t i = 0; i < c->ntiers; i++)
-        if (!c->tiers[i]->remote)
+        if (c->tiers[i]->remote == remote)
             c->tiers[i]->put(c->tiers[i], name, b);
+}
+
+void ism_cache_put_local(ism_cache *c, const char *name, ism_blob *b)
+{
+    put_where(c, name, b, false);
+}
+
+void ism_cache_put_remote(ism_cache *c, const char *name, ism_blob *b)
+{
+    put_where(c, name, b, true);
 }
 
 void ism_cache_close(ism_cache *c)

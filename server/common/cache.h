@@ -60,8 +60,11 @@ ism_blob *ism_cache_get(ism_cache *c, const char *name, int *tier);
 ism_blob *ism_cache_get_fast(ism_cache *c, const char *name);
 bool ism_cache_has(ism_cache *c, const char *name);
 void ism_cache_put(ism_cache *c, const char *name, ism_blob *b);
-/* Stores into the local tiers only (an entry that came from a remote tier). */
+/* Stores into the local tiers only (an entry that came from a remote tier, or one whose
+ * remote writes wait for another entry: ism_cache_put_remote later). */
 void ism_cache_put_local(ism_cache *c, const char *name, ism_blob *b);
+/* Stores into the remote tiers only (the rest of a put_local). */
+void ism_cache_put_remote(ism_cache *c, const char *name, ism_blob *b);
 /* Closes every tier, slowest last. */
 void ism_cache_close(ism_cache *c);
 

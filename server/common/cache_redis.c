@@ -43,6 +43,14 @@ static const char LOCKED_LUA[] =
     "if t == -2 then return 0 end "
     "if t == -1 or t > tonumber(ARGV[1]) then redis.call('del', KEYS[1]) return 2 end "
     "return 1";
+/* A lock no daemon would have set (LOCKED_LUA) is taken over. */
+static const char LOCK_KIN_LUA[] =
+    "local t = redis.call('pttl', KEYS[1]) "
+    "if t == -1 or t > tonumber(ARGV[2]) then redis.call('del', KEYS[1]) end "
+    "if redis.call('set', KEYS[1], ARGV[1], 'NX', 'PX', ARGV[2]) then return 1 end "
+    "local v = redis.call('get', KEYS[1]) "
+    "if v and string.sub(v, 1, #ARGV[3]) == ARGV[3] then return 2 end "
+    "return 0";
 static const char UNLOCK_LUA[] =
     "if redis.call('get', KEYS[1]) == ARGV[1] then "
     "return redis.call('del', KEYS[1]) else return 0 end";
@@ -541,6 +549,21 @@ int ism_cache_redis_lock(ism_cache_tier *t, const char *name, const char *token,
     int got = r->type == REDIS_REPLY_STATUS ? 1 : r->type == REDIS_REPLY_NIL ? 0 : -1;
     freeReplyObject(r);
     return got;
+}
+
+int ism_cache_redis_lock_kin(ism_cache_tier *t, const char *name, const char *token,
+                             long ttl_ms, const char *kin)
+{
+    redis_tier *rt = (redis_tier *)t;
+    char key[KEY_MAX], ttl[24];
+    if (!rt->ctx || !entry_key(key, rt->lock_prefix, name))
+        return -1;
+    snprintf(ttl, sizeof ttl, "%ld", ttl_ms);
+    const char *argv[] = {"EVAL", LOCK_KIN_LUA, "1", key, token, ttl, kin};
+    size_t lens[] = {4, strlen(LOCK_KIN_LUA), 1, strlen(key), strlen(token), strlen(ttl),
+                     strlen(kin)};
+    long long v = int_command(rt, "lock_kin", 7, argv, lens);
+    return v < 0 || v > 2 ? -1 : (int)v;
 }
 
 static int script(redis_tier *rt, const char *what, const char *lua, const char *name,

@@ -104,6 +104,10 @@ int ism_cache_redis_count(ism_cache_tier *t, const char *const *names, size_t n)
 int ism_cache_redis_locked(ism_cache_tier *t, const char *name, long max_ttl_ms);
 /* 1 when the lock of name was free and is now held with token for ttl_ms, 0 when taken. */
 int ism_cache_redis_lock(ism_cache_tier *t, const char *name, const char *token, long ttl_ms);
+/* The same, but 2 when the lock is taken by a token that starts with kin (another of this
+ * daemon's tasks); a lock without expiry, or with more than ttl_ms left, is taken over. */
+int ism_cache_redis_lock_kin(ism_cache_tier *t, const char *name, const char *token,
+                             long ttl_ms, const char *kin);
 /* 1 when token still held the lock and it now lasts ttl_ms more, 0 when it was lost. */
 int ism_cache_redis_renew(ism_cache_tier *t, const char *name, const char *token, long ttl_ms);
 /* 1 when token held the lock and released it, 0 when it was not the holder. */

@@ -753,7 +753,9 @@ static long long cj_run(ism_redis_task *base, ism_cache_tier *t, bool stopping)
         ismd_redis_tasks_ended(g); /* still a waiter of a flight: leaked, never freed twice */
         return 0;
     }
-    bool finished = j->finished;
+    /* finished, but its entries still wait for its surface (sched.h storing): reported once
+     * they are in Redis, where its origin then reads them */
+    bool finished = j->finished && !ismd_sched_storing(j->c->sched, j->name);
     double progress = j->progress;
     bool orphan = !finished && j->waiter.passive && j->waiter.flight &&
                   ismd_sched_only_passive(j->waiter.flight);
@@ -843,7 +845,7 @@ static bool start_entry(ismd_cluster *c, const redisReply *r)
     snprintf(j->name, sizeof j->name, "%s", name);
     snprintf(j->id, sizeof j->id, "%s", id);
     snprintf(j->user, sizeof j->user, "%s", user);
-    ismd_prefetch_surface(c->cache, c->redis, c->limits, request); /* encode, not polygonise */
+    ismd_prefetch_surface(c->cache, c->redis, c->limits, request, NULL); /* encode, not polygonise */
     bool ok = false;
     if (ismd_redis_tasks_enter(c->tasks)) {
         ismd_submit st = ismd_sched_submit_here(c->sched, key, fmt, request, user, NULL,

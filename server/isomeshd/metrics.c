@@ -337,6 +337,12 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
     gauge(&o, "isomesh_workers", "Worker process slots.", m->workers_total);
     gauge(&o, "isomesh_workers_ready", "Workers running and ready.", m->workers_ready);
     gauge(&o, "isomesh_workers_busy", "Workers computing a mesh.", m->workers_busy);
+    gauge(&o, "isomesh_workers_storing",
+          "Workers whose answer went out and whose newly computed surface is still being "
+          "stored (the mesh's Redis writes wait for it).", m->workers_storing);
+    gauge(&o, "isomesh_flights_held",
+          "Computations waiting for another worker's polygonisation of their surface, to be "
+          "encoded from it once stored.", m->flights_held);
     gauge(&o, "isomesh_jobs_active", "Jobs (POST /v1/jobs) queued or running.", m->jobs_active);
     gauge(&o, "isomesh_event_streams", "Open job event streams.", m->event_streams);
     gauge(&o, "isomesh_connections", "Open HTTP connections (at most --max-connections).",

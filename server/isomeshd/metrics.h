@@ -72,6 +72,9 @@ typedef struct ismd_metrics {
     atomic_llong queue_depth, queue_capacity;
     atomic_llong cluster_queue_depth;        /* --cluster: entries waiting in the whole service */
     atomic_llong workers_total, workers_ready, workers_busy;
+    atomic_llong workers_storing;            /* answered, their new surface still coming */
+    atomic_llong flights_held;               /* waiting for another's polygonisation of their
+                                                surface (worker_pool.c) */
     atomic_llong jobs_active, event_streams, suspended_connections;
     atomic_llong connections;                /* open, as the connection table counts them */
     atomic_llong upload_bytes;               /* request body buffers (--upload-memory) */

@@ -36,6 +36,7 @@ bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s,
 void ismd_sched_destroy(ismd_sched *s)
 {
     free(s->table);
+    free(s->storing);
     if (s->queue)
         s->queue->ops->destroy(s->queue);
     pthread_mutex_destroy(&s->lock);
@@ -439,4 +440,37 @@ void ismd_sched_answer(ismd_sched *s, ismd_flight *f, const ismd_result *r)
         w->done(w, r);
     }
     flight_free(s, f);
+}
+
+/* ---- flights whose entries are still being written (worker_pool.c) -------------------- */
+
+bool ismd_sched_storing_begin(ismd_sched *s, const char *name)
+{
+    if (s->nstoring == s->storing_cap) {
+        size_t cap = s->storing_cap ? 2 * s->storing_cap : 8;
+        char(*grown)[ISM_CACHE_NAME_MAX] = realloc(s->storing, cap * sizeof *grown);
+        if (!grown)
+            return false;
+        s->storing = grown;
+        s->storing_cap = cap;
+    }
+    snprintf(s->storing[s->nstoring++], ISM_CACHE_NAME_MAX, "%s", name);
+    return true;
+}
+
+void ismd_sched_storing_end(ismd_sched *s, const char *name)
+{
+    for (size_t i = 0; i < s->nstoring; i++)
+        if (!strcmp(s->storing[i], name)) {
+            memcpy(s->storing[i], s->storing[--s->nstoring], ISM_CACHE_NAME_MAX);
+            return;
+        }
+}
+
+bool ismd_sched_storing(const ismd_sched *s, const char *name)
+{
+    for (size_t i = 0; i < s->nstoring; i++)
+        if (!strcmp(s->storing[i], name))
+            return true;
+    return false;
 }

@@ -102,6 +102,12 @@ typedef struct ismd_sched {
      * memory. The flight is admitted first (limits checked), then waits there (f->shared). */
     bool (*shared_begin)(void *ctx, ismd_flight *f);
     void *shared_ctx;
+    /* Names of flights answered whose entries are not all written out yet: their surface is
+     * still coming from the worker, and their writes to the remote tiers wait for it
+     * (worker_pool.c), so that Redis never holds a mesh without its surface. The shared
+     * stage keeps such a flight's lock, and the cluster executor its report, until then. */
+    char (*storing)[ISM_CACHE_NAME_MAX];
+    size_t nstoring, storing_cap;
 } ismd_sched;
 
 bool ismd_sched_init(ismd_sched *s, ismd_queue *queue, double job_timeout_s,
@@ -182,5 +188,12 @@ bool ismd_sched_enqueue(ismd_sched *s, ismd_flight *f);
 /* Hands r to every waiter and frees the flight, without counting a computation (an answer
  * from the shared cache, or an error found there). */
 void ismd_sched_answer(ismd_sched *s, ismd_flight *f, const ismd_result *r);
+
+/* The storing list above: name's entries go on being written after its answer (false when
+ * out of memory: the caller writes them at once), they are all written, and whether they
+ * still are being. */
+bool ismd_sched_storing_begin(ismd_sched *s, const char *name);
+void ismd_sched_storing_end(ismd_sched *s, const char *name);
+bool ismd_sched_storing(const ismd_sched *s, const char *name);
 
 #endif

@@ -27,7 +27,9 @@
 #define STOP_WAIT_NS 3000000000LL     /* ismd_shared_stop waits this long for its tasks */
 #define REMOTE_POLL_NS 20000000LL     /* a computation on the cluster queue is looked at */
 
-typedef enum tstate { T_LOOK, T_WAIT, T_HOLD, T_REMOTE } tstate;
+/* T_SURFACE: holding the entry's lock, waiting for another daemon's polygonisation of its
+ * surface (for another format: that daemon holds the surface's lock) to be stored. */
+typedef enum tstate { T_LOOK, T_WAIT, T_HOLD, T_REMOTE, T_SURFACE } tstate;
 
 struct ismd_shared {
     ismd_sched *sched;
@@ -49,6 +51,8 @@ typedef struct task {
     uint64_t flight_id;
     tstate state;
     bool missed, lock_lost;
+    char surface[ISM_CACHE_NAME_MAX];   /* "<surface key>.mesh" once looked for */
+    bool surface_locked;                /* its lock is ours: polygonised here */
     long long poll_ns, renew_at_ns;
     char token[192];
     char user[ISMD_QUEUE_USER_MAX];     /* T_REMOTE: the flight's user and its entry */
@@ -87,11 +91,14 @@ static long long task_end(task *k, ism_cache_tier *t)
         ismd_cluster_want(sh->cluster, k->name, false);
     if (k->state == T_REMOTE)
         ismd_cluster_cancel(sh->cluster, k->name, k->stream, k->entry);
-    if ((k->state == T_HOLD || k->state == T_REMOTE) && !k->lock_lost) {
+    bool holding = k->state == T_HOLD || k->state == T_REMOTE || k->state == T_SURFACE;
+    if (holding && !k->lock_lost) {
         ism_cache_redis_flush(t);
         ism_cache_redis_unlock(t, k->name, k->token);
     }
-    if (k->state != T_HOLD && k->state != T_REMOTE)
+    if (k->surface_locked) /* after the flush: the surface went out with the mesh */
+        ism_cache_redis_unlock(t, k->surface, k->token);
+    if (!holding)
         atomic_fetch_sub(&sh->counters->asking, 1);
     free(k);
     ismd_redis_tasks_ended(sh->tasks);
@@ -267,6 +274,52 @@ static ism_blob *flight_request(task *k)
     return req;
 }
 
+static void renew_lock(task *k, ism_cache_tier *t, long long now);
+
+/* Holding the entry's lock, the flight is computed here: encoded from its surface when that
+ * is stored (copied from Redis first); else polygonised here under the surface's own lock,
+ * or, when another daemon holds that one (it polygonises the surface for another format and
+ * is storing it), queued once that daemon has stored it, to be encoded from it. */
+static long long start_here(task *k, ism_cache_tier *t, long long now)
+{
+    ismd_shared *sh = k->sh;
+    ism_blob *req = flight_request(k);
+    int have = ismd_prefetch_surface(sh->cache, t, sh->limits, req, k->surface);
+    ism_blob_unref(req);
+    if (have == 0 && !k->surface_locked) {
+        /* kin: polygonised by this daemon for another format: the pool holds this flight
+         * behind it (worker_pool.c), no need to wait for Redis */
+        char kin[sizeof sh->instance + 1];
+        snprintf(kin, sizeof kin, "%s/", sh->instance);
+        int got = ism_cache_redis_lock_kin(t, k->surface, k->token, sh->ttl_ms, kin);
+        if (got == 0) { /* polygonised elsewhere: look again as for a lock (wait_more) */
+            if (k->state != T_SURFACE) {
+                k->state = T_SURFACE;
+                k->poll_ns = POLL_MIN_NS;
+                atomic_fetch_add(&sh->counters->lock_waits, 1);
+            } else {
+                k->poll_ns = k->poll_ns * 3 / 2 > POLL_MAX_NS ? POLL_MAX_NS : k->poll_ns * 3 / 2;
+            }
+            renew_lock(k, t, now);
+            return now + k->poll_ns;
+        }
+        k->surface_locked = got == 1; /* -1, Redis failed: polygonised here all the same */
+    }
+    k->state = T_HOLD;
+    if (!to_queue(k))
+        return task_end(k, t); /* gone meanwhile, or refused by the queue: release the lock */
+    return now + HOLD_TICK_NS;
+}
+
+/* T_SURFACE: while the flight still waits here, look at the surface again. */
+static long long surface_wait(task *k, ism_cache_tier *t, long long now)
+{
+    bool need_request = false;
+    if (!still_wanted(k, &need_request))
+        return task_end(k, t);
+    return start_here(k, t, now);
+}
+
 /* Look in Redis; answer, wait, or take the lock and queue the flight. */
 static long long look(task *k, ism_cache_tier *t, long long now)
 {
@@ -334,19 +387,16 @@ static long long look(task *k, ism_cache_tier *t, long long now)
     k->renew_at_ns = now + sh->ttl_ms * 1000000LL / 3;
     if (sh->cluster)
         return to_cluster(k, t, now);
-    ism_blob *req = flight_request(k); /* computed here: from the stored surface if any */
-    ismd_prefetch_surface(sh->cache, t, sh->limits, req);
-    ism_blob_unref(req);
-    if (!to_queue(k))
-        return task_end(k, t); /* gone meanwhile, or refused by the queue: release the lock */
-    return now + HOLD_TICK_NS;
+    return start_here(k, t, now);
 }
 
-/* Extends the lock every third of its lifetime. */
+/* Extends the lock (and the surface's, when held) every third of its lifetime. */
 static void renew_lock(task *k, ism_cache_tier *t, long long now)
 {
     ismd_shared *sh = k->sh;
     if (!k->lock_lost && now >= k->renew_at_ns) {
+        if (k->surface_locked) /* lost, another daemon may polygonise it too: no worse */
+            ism_cache_redis_renew(t, k->surface, k->token, sh->ttl_ms);
         int kept = ism_cache_redis_renew(t, k->name, k->token, sh->ttl_ms);
         if (kept == 0) {
             k->lock_lost = true;
@@ -358,13 +408,15 @@ static void renew_lock(task *k, ism_cache_tier *t, long long now)
     }
 }
 
-/* Holding the lock while the flight computes here: extend it; release it when it ends. */
+/* Holding the lock while the flight computes here: extend it; release it when it ends and
+ * its entries have gone to Redis (after its answer they wait for its surface: sched.h
+ * storing), so that a daemon that then finds the lock gone finds them there. */
 static long long hold(task *k, ism_cache_tier *t, long long now)
 {
     ismd_shared *sh = k->sh;
     if (!ismd_redis_tasks_enter(sh->tasks))
         return task_end(k, t);
-    bool running = my_flight(k, false) != NULL;
+    bool running = my_flight(k, false) != NULL || ismd_sched_storing(sh->sched, k->name);
     ismd_redis_tasks_leave(sh->tasks);
     if (!running)
         return task_end(k, t);
@@ -514,9 +566,10 @@ static long long task_run(ism_redis_task *base, ism_cache_tier *t, bool stopping
     if (stopping || ismd_redis_tasks_stopping(k->sh->tasks))
         return task_end(k, t);
     long long now = ism_now_ns();
-    return k->state == T_HOLD     ? hold(k, t, now)
-           : k->state == T_REMOTE ? remote(k, t, now)
-                                  : look(k, t, now);
+    return k->state == T_HOLD      ? hold(k, t, now)
+           : k->state == T_REMOTE  ? remote(k, t, now)
+           : k->state == T_SURFACE ? surface_wait(k, t, now)
+                                   : look(k, t, now);
 }
 
 /* ---- the hook ------------------------------------------------------------------------ */

@@ -10,9 +10,14 @@
  *      and answer every waiter ("X-Cache: shared"). Nothing is computed here.
  *   3. Otherwise take the lock (SET NX PX, a token naming this daemon and flight) and queue
  *      the flight for a local worker (first copying the surface's stored computed mesh from
- *      Redis, when there is one, so the worker only encodes it); while it computes, the lock is extended every third of
- *      its lifetime; when the flight ends, the results already stored (cache_result puts them
- *      in every tier) are written out and the lock is released.
+ *      Redis, when there is one, so the worker only encodes it). When there is none, the
+ *      surface's own lock ("<surface key>.mesh") is taken too, so that a daemon asked for
+ *      another format of it meanwhile waits (polling as in 1, holding its own lock) for the
+ *      stored surface instead of polygonising it again; held by another daemon, this flight
+ *      waits so. While it computes, the locks are extended every third of their lifetime;
+ *      when the flight has ended and its results are in the tiers (the surface first: the
+ *      mesh's entries reach Redis only after it, worker_pool.c), they are written out and
+ *      the locks released.
  *   A GET of a key unknown here (no local request.json) fetches the canonical request from
  *   Redis in step 2, checks that it still gives its key, and computes the other format.
  *   Redis unreachable at any step: the flight is queued at once and computed here (counted as

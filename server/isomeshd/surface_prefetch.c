@@ -5,22 +5,33 @@
 #include "proto/computed.h"
 #include "server/common/cache_redis.h"
 
-void ismd_prefetch_surface(ism_cache *cache, ism_cache_tier *redis,
-                           const ism_pipeline_limits *limits, const ism_blob *request)
+int ismd_prefetch_surface(ism_cache *cache, ism_cache_tier *redis,
+                          const ism_pipeline_limits *limits, const ism_blob *request,
+                          char *name)
 {
+    char own[ISM_CACHE_NAME_MAX];
+    if (!name)
+        name = own;
+    name[0] = 0;
     if (!request)
-        return;
+        return -1;
     ism_pipeline_result pr;
-    char name[ISM_CACHE_NAME_MAX];
     bool keyed = ism_pipeline_key((const char *)request->data, request->len, NULL, limits,
                                   &pr) &&
                  ism_cache_name(name, pr.surface_key, ISM_COMPUTED_EXT);
     ism_pipeline_result_free(&pr);
-    if (!keyed || ism_cache_has(cache, name))
-        return;
+    if (!keyed) {
+        name[0] = 0;
+        return -1;
+    }
+    if (ism_cache_has(cache, name))
+        return 1;
     const char *argv[1] = {name};
     ism_blob *got = NULL;
-    if (ism_cache_redis_fetch(redis, argv, 1, &got) == 0 && got)
+    if (ism_cache_redis_fetch(redis, argv, 1, &got) != 0)
+        return -1;
+    if (got)
         ism_cache_put_local(cache, name, got);
     ism_blob_unref(got);
+    return got != NULL;
 }

@@ -40,9 +40,20 @@
  * (the surface then not stored): the frame ceiling's 1 GB crosses a pipe in ~1-2 s even at
  * load 9 (5.5 MB in 5-11 ms), so only a stuck worker waits this long. */
 #define SURFACE_WAIT_NS 60000000000LL
+/* The mesh's entries written to the remote tiers after its surface, at most (the RESULT's
+ * mesh, stats, features and request). */
+#define LATER_MAX 4
+/* Tests only (ISOMESHD_TEST_SURFACE_GATE, a path): a SURFACE frame is stored only once that
+ * file exists (looked at this often), so that a test holds a worker in W_STORING for as long
+ * as it needs, whatever the machine's speed. */
+#define GATE_POLL_MS 10
 
 /* W_STORING: the flight answered, its newly computed surface still crossing the pipe in the
- * SURFACE frame the RESULT announced (frame.h surface_len); no new job until it is stored. */
+ * SURFACE frame the RESULT announced (frame.h surface_len); no new job until it is stored.
+ * Meanwhile the mesh's entries are in the local tiers only: their remote writes (Redis) wait
+ * for the surface's, so that another daemon that finds the mesh there finds the surface too
+ * (and encodes other formats from it), and the shared stage keeps the flight's lock until
+ * they are made (sched.h storing). */
 typedef enum wstate { W_EMPTY, W_STARTING, W_IDLE, W_BUSY, W_STORING, W_DYING } wstate;
 
 /* A flight held until its surface, being polygonised by another worker, is stored. */
@@ -64,6 +75,12 @@ typedef struct worker {
     uint64_t storing_job;      /* W_STORING: the job whose SURFACE frame comes next, */
     uint32_t storing_len;      /* its announced length, */
     long long storing_until_ns; /* and when waiting for it ends (SURFACE_WAIT_NS) */
+    char storing_name[ISM_CACHE_NAME_MAX]; /* the flight's name in sched's storing list, or "" */
+    char later_names[LATER_MAX][ISM_CACHE_NAME_MAX]; /* its entries' remote writes, waiting */
+    ism_blob *later[LATER_MAX];
+    int nlater;
+    bool gated;                /* its SURFACE frame arrived, held by the test gate */
+    ism_blob *gated_surface;
     unsigned char *out;        /* request frame being written */
     size_t out_len, out_off;
     long long spawned_ns, respawn_at_ns;
@@ -83,6 +100,8 @@ struct ismd_pool {
     size_t nheld, held_cap;
     atomic_bool stopping;
     long long stop_deadline_ns;
+    char *gate;                /* ISOMESHD_TEST_SURFACE_GATE, or NULL */
+    bool gate_waiting;         /* a surface waits for it */
 };
 
 #define EV_WAKE UINT64_MAX
@@ -93,14 +112,17 @@ struct ismd_pool {
 
 static void publish_workers(ismd_pool *p)
 {
-    long long ready = 0, busy = 0;
+    long long ready = 0, busy = 0, storing = 0;
     for (int i = 0; i < p->n; i++) {
         ready += p->w[i].state == W_IDLE || p->w[i].state == W_BUSY ||
                  p->w[i].state == W_STORING;
         busy += p->w[i].state == W_BUSY; /* a job's, not a surface being stored */
+        storing += p->w[i].state == W_STORING;
     }
     atomic_store(&p->metrics->workers_ready, ready);
     atomic_store(&p->metrics->workers_busy, busy);
+    atomic_store(&p->metrics->workers_storing, storing);
+    atomic_store(&p->metrics->flights_held, (long long)p->nheld);
 }
 
 static void wake(void *ctx)
@@ -167,11 +189,39 @@ static void close_to_fd(ismd_pool *p, worker *w)
     w->out_len = w->out_off = 0;
 }
 
+/* w leaves W_STORING: its surface (NULL when none came: the worker died or is being
+ * stopped) goes into every tier, then its mesh's entries into the remote ones, and the
+ * flight leaves sched's storing list. The remote tiers write in the order they are given
+ * (one queue, one connection), so Redis has the surface before the mesh. */
+static void end_storing(ismd_pool *p, worker *w, ism_blob *surface)
+{
+    char name[ISM_CACHE_NAME_MAX];
+    if (surface && ism_cache_name(name, w->surface, ISM_COMPUTED_EXT))
+        ism_cache_put(p->cache, name, surface);
+    for (int i = 0; i < w->nlater; i++) {
+        ism_cache_put_remote(p->cache, w->later_names[i], w->later[i]);
+        ism_blob_unref(w->later[i]);
+        w->later[i] = NULL;
+    }
+    w->nlater = 0;
+    if (w->storing_name[0]) {
+        ismd_sched_lock(p->sched);
+        ismd_sched_storing_end(p->sched, w->storing_name);
+        ismd_sched_unlock(p->sched);
+        w->storing_name[0] = 0;
+    }
+    ism_blob_unref(w->gated_surface);
+    w->gated_surface = NULL;
+    w->gated = false;
+}
+
 /* Kills w (its flight, if any, must already be finished); EOF on its pipe completes it. */
 static void kill_worker(ismd_pool *p, worker *w, ismd_restart_reason why)
 {
     if (w->state == W_EMPTY || w->state == W_DYING)
         return;
+    if (w->state == W_STORING)
+        end_storing(p, w, NULL);
     kill(w->pid, SIGKILL);
     close_to_fd(p, w);
     w->state = W_DYING;
@@ -207,6 +257,8 @@ static void worker_gone(ismd_pool *p, worker *w)
     char how[128];
     ismd_worker_describe_exit(status, how, sizeof how);
     long long now = ism_now_ns();
+    if (w->state == W_STORING) /* died after its answer, before its surface */
+        end_storing(p, w, NULL);
     bool intended = w->state == W_DYING;
     if (!intended) {
         atomic_fetch_add(&p->metrics->worker_restarts[ISMD_RESTART_CRASH], 1);
@@ -264,46 +316,62 @@ static unsigned char *surface_alloc(ism_frame_type type, size_t len,
     return b->data;
 }
 
-/* A newly computed surface (a SURFACE frame's payload) goes into every tier under its surface
- * key, so any format of it, on any daemon sharing the tiers, is encoded from it. A payload not
- * in a blob (surface_alloc's ism_blob_new failed: out of memory) is not stored: a copy would
- * need as much again. */
-static void cache_computed(ismd_pool *p, const char *surface_key, const ism_frame *fr)
+/* A newly computed surface (a SURFACE frame's payload), as a new reference to the blob it
+ * was read into, to go into every tier under its surface key, so any format of it, on any
+ * daemon sharing the tiers, is encoded from it. NULL for a payload not in a blob
+ * (surface_alloc's ism_blob_new failed: out of memory): a copy would need as much again. */
+static ism_blob *surface_of(const ism_frame *fr)
 {
-    char name[ISM_CACHE_NAME_MAX];
-    if (!fr->len || fr->release != release_blob_data ||
-        !ism_cache_name(name, surface_key, ISM_COMPUTED_EXT))
-        return;
-    ism_blob *b = ism_blob_ref(ism_blob_of_data(fr->payload));
-    ism_cache_put(p->cache, name, b);
-    ism_blob_unref(b);
+    if (!fr->len || fr->release != release_blob_data)
+        return NULL;
+    return ism_blob_ref(ism_blob_of_data(fr->payload));
 }
 
-static void cache_result(ismd_pool *p, const ismd_flight *f, ism_blob *body, ism_blob *stats,
-                         ism_blob *features, ism_blob *canonical)
+/* One entry of a result: into every tier, or (later: its surface follows) into the local
+ * tiers now and into w's list for the remote ones (end_storing). */
+static void cache_entry(ismd_pool *p, worker *w, bool later, const char *key, const char *ext,
+                        ism_blob *b)
 {
     char name[ISM_CACHE_NAME_MAX];
-    if (ism_cache_name(name, f->key, f->fmt))
-        ism_cache_put(p->cache, name, body);
-    if (stats && ism_cache_name(name, f->key, "stats.json"))
-        ism_cache_put(p->cache, name, stats);
-    if (features && ism_cache_name(name, f->key, "features.json"))
-        ism_cache_put(p->cache, name, features);
-    if (canonical && ism_cache_name(name, f->key, "request.json"))
-        ism_cache_put(p->cache, name, canonical);
+    if (!b || !ism_cache_name(name, key, ext))
+        return;
+    if (!later || w->nlater == LATER_MAX) {
+        ism_cache_put(p->cache, name, b);
+        return;
+    }
+    ism_cache_put_local(p->cache, name, b);
+    memcpy(w->later_names[w->nlater], name, sizeof name);
+    w->later[w->nlater++] = ism_blob_ref(b);
+}
+
+static void cache_result(ismd_pool *p, worker *w, bool later, ism_blob *body, ism_blob *stats,
+                         ism_blob *features, ism_blob *canonical)
+{
+    const ismd_flight *f = w->flight;
+    cache_entry(p, w, later, f->key, f->fmt, body);
+    cache_entry(p, w, later, f->key, "stats.json", stats);
+    cache_entry(p, w, later, f->key, "features.json", features);
+    cache_entry(p, w, later, f->key, "request.json", canonical);
 }
 
 /* Answers w's flight with r; w then waits for the surface_len bytes of its SURFACE frame
- * (W_STORING), or is idle when none follows. */
+ * (W_STORING), or is idle when none follows. A flight whose entries wait for that surface
+ * (cache_result's later) goes on sched's storing list in the same hold of its lock: whoever
+ * sees it finished sees it storing. */
 static void finish_busy(ismd_pool *p, worker *w, ismd_result *r, ismd_outcome o,
                         uint32_t surface_len)
 {
     ismd_flight *f = w->flight;
     w->storing_job = f->id;
     ismd_sched_lock(p->sched);
+    bool listed = surface_len && w->nlater && ismd_sched_storing_begin(p->sched, f->name);
+    if (listed)
+        memcpy(w->storing_name, f->name, sizeof w->storing_name);
     r->queue_ms = (f->started_ns - f->submitted_ns) / 1e6;
     ismd_sched_finish(p->sched, f, r, o);
     ismd_sched_unlock(p->sched);
+    if (!listed) /* out of memory for the list: written now, the surface after them */
+        end_storing(p, w, NULL);
     w->flight = NULL;
     w->state = surface_len ? W_STORING : W_IDLE;
     w->storing_len = surface_len;
@@ -311,15 +379,54 @@ static void finish_busy(ismd_pool *p, worker *w, ismd_result *r, ismd_outcome o,
     publish_workers(p);
 }
 
+/* The test gate (GATE_POLL_MS) is open: no gate, or its file exists. */
+static bool gate_open(const ismd_pool *p)
+{
+    return !p->gate || access(p->gate, F_OK) == 0;
+}
+
+static void stored(ismd_pool *p, worker *w, ism_blob *surface)
+{
+    end_storing(p, w, surface);
+    w->state = W_IDLE;
+    publish_workers(p);
+}
+
 static void on_surface(ismd_pool *p, worker *w, const ism_frame *fr)
 {
-    if (w->state != W_STORING || fr->job != w->storing_job || fr->len != w->storing_len) {
+    if (w->state != W_STORING || w->gated || fr->job != w->storing_job ||
+        fr->len != w->storing_len) {
         protocol_error(p, w, "surface for no answered job");
         return;
     }
-    cache_computed(p, w->surface, fr);
-    w->state = W_IDLE;
-    publish_workers(p);
+    ism_blob *b = surface_of(fr);
+    if (!gate_open(p)) { /* stored by gated_due once the gate opens */
+        w->gated = true;
+        w->gated_surface = b;
+        return;
+    }
+    stored(p, w, b);
+    ism_blob_unref(b);
+}
+
+/* Surfaces held by the test gate, stored once it opens. True while some still wait. */
+static bool gated_due(ismd_pool *p)
+{
+    bool open = gate_open(p), waiting = false;
+    for (int i = 0; i < p->n; i++) {
+        worker *w = &p->w[i];
+        if (w->state != W_STORING || !w->gated)
+            continue;
+        if (!open) {
+            waiting = true;
+            continue;
+        }
+        ism_blob *b = w->gated_surface;
+        w->gated_surface = NULL;
+        stored(p, w, b);
+        ism_blob_unref(b);
+    }
+    return waiting;
 }
 
 static void on_result(ismd_pool *p, worker *w, const ism_frame *fr)
@@ -367,7 +474,8 @@ static void on_result(ismd_pool *p, worker *w, const ism_frame *fr)
             r.content_type = "application/json";
             o = ISMD_OUT_ERROR;
         } else {
-            cache_result(p, f, r.body, stats, features, canonical ? canonical : f->request);
+            cache_result(p, w, surface_len > 0, r.body, stats, features,
+                         canonical ? canonical : f->request);
             r.stats = stats;
             r.features = features;
             if (fres.polygonised) /* an encoding alone: the stats' phases are not this run's */
@@ -767,6 +875,8 @@ static int next_timeout_ms(ismd_pool *p, long long now)
             next = p->w[i].respawn_at_ns;
     if (atomic_load(&p->stopping) && next > now + 50000000LL)
         next = now + 50000000LL;
+    if (p->gate_waiting && next > now + GATE_POLL_MS * 1000000LL)
+        next = now + GATE_POLL_MS * 1000000LL;
     long long ms = (next - now + 999999) / 1000000;
     return ms < 0 ? 0 : ms > 1000 ? 1000 : (int)ms;
 }
@@ -808,6 +918,8 @@ static void stop_all(ismd_pool *p)
                         ISMD_OUT_CANCELED);
             kill_worker(p, w, ISMD_RESTART_CANCEL);
         } else if (w->state != W_EMPTY) {
+            if (w->state == W_STORING)
+                end_storing(p, w, NULL);
             close_to_fd(p, w);
             w->state = W_DYING; /* exits on EOF; not counted as a restart */
         }
@@ -856,6 +968,7 @@ static void *pool_main(void *arg)
                 on_readable(p, w);
         }
         now = ism_now_ns();
+        p->gate_waiting = p->gate && gated_due(p);
         enforce(p, now);
         if (atomic_load(&p->stopping) && (busy_count(p) == 0 || now >= p->stop_deadline_ns)) {
             stop_all(p);
@@ -887,7 +1000,10 @@ ismd_pool *ismd_pool_start(const ismd_pool_config *cfg, ismd_sched *sched, ism_c
     p->w = calloc((size_t)p->n, sizeof *p->w);
     p->epfd = epoll_create1(EPOLL_CLOEXEC);
     p->evfd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
-    if (!p->w || p->epfd < 0 || p->evfd < 0)
+    const char *gate = getenv("ISOMESHD_TEST_SURFACE_GATE");
+    if (gate && *gate)
+        p->gate = strdup(gate);
+    if (!p->w || p->epfd < 0 || p->evfd < 0 || (gate && *gate && !p->gate))
         goto fail;
     for (int i = 0; i < p->n; i++) {
         p->w[i].slot = i;
@@ -910,6 +1026,7 @@ fail:
     if (p->evfd >= 0)
         close(p->evfd);
     free(p->w);
+    free(p->gate);
     free(p);
     return NULL;
 }
@@ -930,5 +1047,6 @@ void ismd_pool_stop(ismd_pool *p, double grace_s)
     close(p->evfd);
     free(p->held);
     free(p->w);
+    free(p->gate);
     free(p);
 }

@@ -436,11 +436,13 @@ def gunzip(data):
 class Stack:
     """Redis, n daemons sharing it, nginx in front. Stopped by cleanup() whatever happened."""
 
-    def __init__(self, n=2, daemon_args=(), with_nginx=True, redis_for=None):
+    def __init__(self, n=2, daemon_args=(), with_nginx=True, redis_for=None, env_for=None):
         """redis_for(i, port): the Redis port daemon i is given (default: Redis's own; a
-        RedisProxy's to come between them)."""
+        RedisProxy's to come between them); env_for(i): daemon i's environment (default, or
+        None: this process's)."""
         self.redis = Redis()
         self.redis_for = redis_for or (lambda i, port: port)
+        self.env_for = env_for or (lambda i: None)
         self.daemons = []
         self.nginx = None
         self.n = n
@@ -453,7 +455,7 @@ class Stack:
             self.redis.start()
             for i in range(self.n):
                 d = harness.Daemon("--redis", "127.0.0.1:%d" % self.redis_for(i, self.redis.port),
-                                   "--workers", "2", *self.daemon_args)
+                                   "--workers", "2", *self.daemon_args, env=self.env_for(i))
                 self.daemons.append(d)
                 d.start()
             for d in self.daemons:

@@ -189,6 +189,29 @@ class FailureTest(unittest.TestCase):
         self.assertTrue(stack.wait_until(
             lambda: redis.command("EXISTS", "isomesh:v1:lock:%s.ply" % key) == 0, 10))
 
+    def test_a_surface_lock_without_expiry_is_taken_over(self):
+        # A surface's lock (held by the daemon polygonising it, so that another daemon asked
+        # for another format waits for the stored surface instead of polygonising it again)
+        # left without expiry would hold every other format of it until its deadline.
+        r = self.a.post("/v1/mesh", sphere(0.73))
+        self.assertEqual(r.status, 200)
+        key = r.header("ETag").strip('"')
+        redis = self.s.redis
+        self.assertTrue(stack.wait_stored(redis, key))  # the surface went first
+        names = [k.decode() for k in redis.command("KEYS", "isomesh:v1:*.mesh")
+                 if b":lock:" not in k]
+        self.assertEqual(len(names), 1)
+        surface = names[0][len("isomesh:v1:"):]
+        redis.command("DEL", "isomesh:v1:" + surface)  # b must polygonise it ...
+        redis.command("SET", "isomesh:v1:lock:" + surface, "operator")  # ... under this lock
+        t0 = time.monotonic()
+        got = self.b.get("/v1/meshes/%s.ply" % key, timeout=60)
+        self.assertEqual(got.status, 200, got.body[:300])
+        self.assertLess(time.monotonic() - t0, 5.0)  # not the deadline
+        self.assertEqual(self.b.metric("isomesh_polygonisations_total"), 1)
+        self.assertTrue(stack.wait_until(
+            lambda: redis.command("EXISTS", "isomesh:v1:lock:" + surface) == 0, 10))
+
 
 if __name__ == "__main__":
     unittest.main()

@@ -4,15 +4,18 @@ Redis (issue 18, item 5): daemon A computes a drc; daemon B, asked for the ply, 
 ("<surface key>.mesh"): the polygonisations counted by both daemons add up to one. The same
 with --cluster, where the cluster queue picks the daemon that encodes.
 
-A daemon answers before its Redis writes go out (they follow on its Redis thread, in the order
-they were made: the mesh, its stats, features and request, then the computed surface, which
-its worker sends after the answer in a SURFACE frame of its own: proto/frame.h), so B is asked
-only once the mesh's entries and the surface are in Redis (stack.wait_stored, then the one
-"<surface key>.mesh"): asked sooner, B would find no stored surface and polygonise again, and
-the count would be two."""
+A daemon answers before its Redis writes go out. Its worker sends the computed surface after
+the answer, in a SURFACE frame of its own (proto/frame.h); the mesh, its stats, features and
+request go to Redis only after that surface (worker_pool.c, W_STORING), on one connection, so
+a daemon that finds the mesh in Redis finds the surface there too (stack.wait_stored is
+enough), and the daemon that computed keeps its lock until then. The gated test holds the
+surface's store to show the order without depending on timing."""
 import os
+import shutil
 import sys
+import tempfile
 import unittest
+from concurrent.futures import ThreadPoolExecutor
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import stack  # noqa: E402
@@ -22,6 +25,11 @@ SKIP = stack.missing_programs()
 BASE = {"expr": "x^2 + y^2 - z^2 - 0.2 + b*x*y*z", "params": {"b": 1.3},
         "box": [-1.1, -1.1, -1.1, 1.1, 1.1, 1.1], "depth": {"min": 3, "max": 6}}
 TWELVE = dict(BASE, output={"position_bits": 12})
+
+
+def surfaces(redis):
+    """The stored computed surfaces in redis (not the locks of those being computed)."""
+    return [k for k in redis.command("KEYS", "isomesh:v1:*.mesh") if b":lock:" not in k]
 
 
 def polygonisations(ds):
@@ -45,7 +53,7 @@ class OneComputationClusterTest(unittest.TestCase):
             self.assertEqual(polygonisations(s.daemons), 1)
             self.assertTrue(stack.wait_stored(s.redis, r.header("ETag").strip('"')))
             self.assertTrue(stack.wait_until(
-                lambda: len(s.redis.command("KEYS", "isomesh:v1:*.mesh")) == 1, 30))
+                lambda: len(surfaces(s.redis)) == 1, 30))
             for req, fmt in ((base, "ply"), (base, "obj"), (twelve, "drc")):
                 r = b.post("/v1/mesh?format=" + fmt, req)
                 self.assertEqual(r.status, 200, r.body[:300])
@@ -54,6 +62,60 @@ class OneComputationClusterTest(unittest.TestCase):
             self.assertEqual(encodings(s.daemons), 3)
         finally:
             s.cleanup()
+
+    def test_a_mesh_reaches_redis_after_its_surface(self):
+        # Deterministic, whatever the machine's speed: daemon A's test gate
+        # (ISOMESHD_TEST_SURFACE_GATE) keeps its new surface from being stored until the test
+        # creates the gate file. A answers meanwhile; none of the mesh's entries may reach
+        # Redis before the surface, and A keeps its lock and the surface's. Daemon B, asked
+        # meanwhile for the same drc and for a ply, waits for them (a ply asked for a moment
+        # after A's answer is the case this is for): the drc is then answered from Redis and
+        # the ply encoded from the stored surface. B polygonises nothing.
+        tmp = tempfile.mkdtemp(prefix="isomesh_gate_")
+        gate = os.path.join(tmp, "open")
+        env_a = dict(os.environ, ISOMESHD_TEST_SURFACE_GATE=gate)
+        s = stack.Stack(n=2, with_nginx=False, env_for=lambda i: env_a if i == 0 else None)
+        s.start()
+        try:
+            a, b = s.daemons
+            req = dict(BASE, params={"b": 1.29})
+            r = a.post("/v1/mesh", req)
+            self.assertEqual(r.status, 200, r.body[:300])
+            key = r.header("ETag").strip('"')
+            self.assertTrue(a.wait_metric("isomesh_workers_storing", 1), a.log()[-2000:])
+            entries = ["isomesh:v1:%s.%s" % (key, ext)
+                       for ext in ("drc", "stats.json", "features.json", "request.json")]
+
+            def written():
+                return [n for n in entries if s.redis.command("EXISTS", n) == 1]
+            # on the old order they were there within milliseconds of the answer
+            stack.wait_until(lambda: written(), 1.5)
+            self.assertEqual(written(), [], "the mesh reached Redis before its surface")
+            self.assertEqual(surfaces(s.redis), [])
+            locks = [k.decode() for k in s.redis.command("KEYS", "isomesh:v1:lock:*")]
+            self.assertIn("isomesh:v1:lock:%s.drc" % key, locks, "A let go of its lock early")
+            self.assertEqual(len([k for k in locks if k.endswith(".mesh")]), 1, locks)
+            with ThreadPoolExecutor(2) as ex:
+                same = ex.submit(b.post, "/v1/mesh", req)
+                other = ex.submit(b.post, "/v1/mesh?format=ply", req)
+                self.assertTrue(b.wait_metric("isomesh_redis_lock_waits_total", 2),
+                                b.log()[-2000:])
+                self.assertFalse(same.done() or other.done())
+                open(gate, "w").close()
+                r2, r3 = same.result(), other.result()
+            self.assertEqual(r2.status, 200, r2.body[:300])
+            self.assertEqual(r2.header("X-Cache"), "shared")
+            self.assertEqual(r3.status, 200, r3.body[:300])
+            self.assertEqual(b.metric("isomesh_polygonisations_total"), 0, b.log()[-2000:])
+            self.assertEqual(b.metric("isomesh_stored_encodings_total"), 1)
+            self.assertEqual(a.metric("isomesh_polygonisations_total"), 1)
+            self.assertTrue(stack.wait_stored(s.redis, key))
+            self.assertEqual(len(surfaces(s.redis)), 1)
+            self.assertTrue(stack.wait_until(
+                lambda: s.redis.command("KEYS", "isomesh:v1:lock:*") == [], 10))
+        finally:
+            s.cleanup()
+            shutil.rmtree(tmp, ignore_errors=True)
 
     def test_two_daemons_sharing_redis(self):
         self.run_on([], 1.31)

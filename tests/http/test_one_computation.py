@@ -5,13 +5,17 @@ by exactly one, isomesh_stored_encodings_total by three. The encodings made from
 surface are the very bytes a fresh daemon computes for the same requests, their vertex counts
 agree with the stats, and every answer carries proto/format.c's Content-Type. A second
 accuracy (depth) is a second polygonisation. Formats asked for at the same time, before the
-surface is computed, are one polygonisation too (the pool holds the others behind it)."""
+surface is computed, are one polygonisation too (the pool holds the others behind it), and so
+is a format asked for after the first answer, while its surface is still being stored (the
+test gate holds the store)."""
 import json
 import math
 import os
+import shutil
 import struct
 import subprocess
 import sys
+import tempfile
 import unittest
 from concurrent.futures import ThreadPoolExecutor
 
@@ -63,6 +67,38 @@ class OneComputationTest(unittest.TestCase):
             stats = d.get("/v1/meshes/%s/stats" % answers[0].header("ETag").strip('"')).json()
             self.assertEqual(ply_vertex_count(answers[1].body), stats["mesh"]["vertices"])
             self.assertEqual(self.counters(d), (p0 + 1, s0 + 2))
+
+    def test_a_format_asked_while_the_surface_is_stored_waits_for_it(self):
+        # W_STORING's hold, deterministically: the test gate (ISOMESHD_TEST_SURFACE_GATE)
+        # keeps the drc's surface from being stored until the test creates the gate file, so
+        # a ply of the same surface asked for meanwhile, with a second worker idle, can only
+        # be held (isomesh_flights_held) or polygonised again. Held, it is answered once the
+        # surface is stored, encoded from it: one polygonisation, one stored encoding.
+        tmp = tempfile.mkdtemp(prefix="isomesh_gate_")
+        gate = os.path.join(tmp, "open")
+        req = with_(params={"a": 1.21})
+        env = dict(os.environ, ISOMESHD_TEST_SURFACE_GATE=gate)
+        try:
+            with Daemon("--workers", "2", env=env) as d:
+                p0, s0 = self.counters(d)
+                r = d.post("/v1/mesh?format=drc", req)  # answered before its surface is stored
+                self.assertEqual(r.status, 200, r.body[:300])
+                self.assertTrue(d.wait_metric("isomesh_workers_storing", 1), d.log())
+                with ThreadPoolExecutor(1) as ex:
+                    ply = ex.submit(d.post, "/v1/mesh?format=ply", req, timeout=300)
+                    self.assertTrue(d.wait_metric("isomesh_flights_held", 1),
+                                    "the ply was not held behind the stored surface:\n" + d.log())
+                    self.assertFalse(ply.done())
+                    self.assertEqual(self.counters(d), (p0 + 1, s0))
+                    open(gate, "w").close()
+                    r2 = ply.result()
+                self.assertEqual(r2.status, 200, r2.body[:300])
+                self.assertEqual(r2.header("X-Cache"), "miss")
+                self.assertEqual(self.counters(d), (p0 + 1, s0 + 1))
+                self.assertEqual(d.metric("isomesh_workers_storing"), 0)
+                self.assertEqual(d.metric("isomesh_flights_held"), 0)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
 
     def test_four_encodings_one_polygonisation(self):
         twelve = with_(output={"position_bits": 12, "attributes": ["normal", "class"]})
