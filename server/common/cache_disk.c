@@ -235,17 +235,23 @@ static int payload_equals(int fd, const unsigned char *payload, size_t len)
 
 /* The file kept open for name (fd_keep.h) when it still holds the payload found equal to the
  * caller's: still in the directory, of the payload's size, unchanged since the comparison
- * (file_memo.h). Else -1, and the kept file is let go. */
-static int kept_payload(disk_tier *d, const char *name, size_t len)
+ * (file_memo.h); lent when lease is not NULL (*lease set), else duplicated. Else -1, and the
+ * kept file is let go. */
+static int kept_payload(disk_tier *d, const char *name, size_t len, ism_fd_lease **lease)
 {
-    int fd = ism_fd_keep_get(d->kept, name);
+    int fd = lease ? ism_fd_keep_borrow(d->kept, name, lease) : ism_fd_keep_get(d->kept, name);
     if (fd < 0)
         return -1;
     struct stat st;
     if (fstat(fd, &st) == 0 && st.st_nlink > 0 && (uint64_t)st.st_size == (uint64_t)len + HEADER_SIZE &&
         ism_file_memo_holds(d->sent_ok, name, &st))
         return fd;
-    close(fd);
+    if (lease) {
+        ism_fd_keep_give_back(*lease);
+        *lease = NULL;
+    } else {
+        close(fd);
+    }
     ism_fd_keep_drop(d->kept, name);
     return -1;
 }
@@ -253,12 +259,20 @@ static int kept_payload(disk_tier *d, const char *name, size_t len)
 int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, const void *payload,
                                 size_t len, long long *offset)
 {
+    return ism_cache_disk_borrow_payload(t, name, payload, len, offset, NULL);
+}
+
+int ism_cache_disk_borrow_payload(ism_cache_tier *t, const char *name, const void *payload,
+                                  size_t len, long long *offset, ism_fd_lease **lease)
+{
     disk_tier *d = (disk_tier *)t;
     char rel[ISM_CACHE_NAME_MAX + 4];
+    if (lease)
+        *lease = NULL;
     if (d->root_fd < 0 || !rel_path(rel, name))
         return -1;
     *offset = HEADER_SIZE;
-    int fd = kept_payload(d, name, len);
+    int fd = kept_payload(d, name, len, lease);
     if (fd >= 0)
         return fd;
     fd = openat(d->root_fd, rel, O_RDONLY | O_CLOEXEC | O_NOFOLLOW);

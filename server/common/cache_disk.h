@@ -25,6 +25,7 @@
 #include <stddef.h>
 
 #include "server/common/cache.h"
+#include "server/common/fd_keep.h"
 
 /* A disk tier under dir (created if missing). max_pending bounds the bytes queued for writing
  * (puts are skipped while it holds that much). Returns a working tier even when dir is
@@ -49,6 +50,12 @@ void ism_cache_disk_set_max(ism_cache_tier *t, unsigned long long max_bytes);
  * neither compared nor sent: -1 (one compare at a time holds up one thread at most). */
 int ism_cache_disk_open_payload(ism_cache_tier *t, const char *name, const void *payload,
                                 size_t len, long long *offset);
+/* The same, but a file kept open for sending (fd_keep.h) is lent, not duplicated: then
+ * *lease is set, and the caller gives the descriptor back with ism_fd_keep_give_back instead
+ * of closing it (and must not move its offset: sendfile with an offset); else *lease is NULL
+ * and the descriptor is the caller's to close, as above. */
+int ism_cache_disk_borrow_payload(ism_cache_tier *t, const char *name, const void *payload,
+                                  size_t len, long long *offset, ism_fd_lease **lease);
 
 /* Waits until every queued write is on disk (or failed). */
 void ism_cache_disk_flush(ism_cache_tier *t);

@@ -1,7 +1,9 @@
 /* fd_keep.c — the table of fd_keep.h: FD_KEEP_SLOTS slots, direct-mapped by the name's hash (a
- * newer name takes a slot over), under one read-write lock. A descriptor is duplicated under
- * the lock (read), so a slot taken over (its descriptor closed, under the write lock) never
- * hands out a closed or reused number. Why not a mutex: every cached mesh the own sender
+ * newer name takes a slot over), under one read-write lock. Each kept descriptor is a
+ * reference-counted lease (the slot holds one reference, each borrower one more); it is
+ * duplicated, or lent, under the lock (read), so a slot taken over (its reference let go,
+ * under the write lock) never hands out a closed or reused number, and a lent one is closed
+ * by the last give-back. Why not a mutex: every cached mesh the own sender
  * answers duplicates its file here, on any polling thread; under one mutex the dup syscall
  * made the threads queue (16 connections on 2 threads, one mesh: 0.44 futex calls per
  * request under strace, most of them here), readers now pass each other. */
@@ -9,6 +11,7 @@
 
 #include <fcntl.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -21,9 +24,14 @@
  * alternately stay open; a 65th shares a slot and reopens now and then. */
 #define FD_KEEP_SLOTS 64
 
+struct ism_fd_lease {
+    atomic_int refs;
+    int fd;
+};
+
 typedef struct slot {
     char name[ISM_CACHE_NAME_MAX]; /* "" when free */
-    int fd;
+    ism_fd_lease *kept;            /* NULL when free */
 } slot;
 
 struct ism_fd_keep {
@@ -37,25 +45,25 @@ ism_fd_keep *ism_fd_keep_new(void)
     if (!k)
         return NULL;
     pthread_rwlock_init(&k->lock, NULL);
-    for (unsigned i = 0; i < FD_KEEP_SLOTS; i++)
-        k->slots[i].fd = -1;
     return k;
 }
 
-/* Empties s; returns the descriptor it held (-1: none), for the caller to close once the
+/* Empties s; returns the lease it held (NULL: none), for the caller to give back once the
  * lock is let go (closing the last descriptor of a removed file frees its blocks). */
-static int clear(slot *s)
+static ism_fd_lease *clear(slot *s)
 {
-    int fd = s->fd;
-    s->fd = -1;
+    ism_fd_lease *l = s->kept;
+    s->kept = NULL;
     s->name[0] = 0;
-    return fd;
+    return l;
 }
 
-static void close_if(int fd)
+void ism_fd_keep_give_back(ism_fd_lease *l)
 {
-    if (fd >= 0)
-        close(fd);
+    if (l && atomic_fetch_sub(&l->refs, 1) == 1) {
+        close(l->fd);
+        free(l);
+    }
 }
 
 void ism_fd_keep_free(ism_fd_keep *k)
@@ -63,7 +71,7 @@ void ism_fd_keep_free(ism_fd_keep *k)
     if (!k)
         return;
     for (unsigned i = 0; i < FD_KEEP_SLOTS; i++)
-        close_if(clear(&k->slots[i]));
+        ism_fd_keep_give_back(clear(&k->slots[i]));
     pthread_rwlock_destroy(&k->lock);
     free(k);
 }
@@ -79,25 +87,46 @@ int ism_fd_keep_get(ism_fd_keep *k, const char *name)
         return -1;
     pthread_rwlock_rdlock(&k->lock);
     slot *s = slot_of(k, name);
-    int fd = s->fd >= 0 && !strcmp(s->name, name) ? fcntl(s->fd, F_DUPFD_CLOEXEC, 0) : -1;
+    int fd = s->kept && !strcmp(s->name, name) ? fcntl(s->kept->fd, F_DUPFD_CLOEXEC, 0) : -1;
     pthread_rwlock_unlock(&k->lock);
     return fd;
+}
+
+int ism_fd_keep_borrow(ism_fd_keep *k, const char *name, ism_fd_lease **lease)
+{
+    *lease = NULL;
+    if (!k)
+        return -1;
+    pthread_rwlock_rdlock(&k->lock);
+    slot *s = slot_of(k, name);
+    if (s->kept && !strcmp(s->name, name)) {
+        atomic_fetch_add(&s->kept->refs, 1);
+        *lease = s->kept;
+    }
+    pthread_rwlock_unlock(&k->lock);
+    return *lease ? (*lease)->fd : -1;
 }
 
 void ism_fd_keep_put(ism_fd_keep *k, const char *name, int fd)
 {
     if (!k || strlen(name) >= ISM_CACHE_NAME_MAX)
         return;
-    int mine = fcntl(fd, F_DUPFD_CLOEXEC, 0);
-    if (mine < 0)
+    ism_fd_lease *mine = malloc(sizeof *mine);
+    if (!mine)
         return;
+    mine->fd = fcntl(fd, F_DUPFD_CLOEXEC, 0);
+    if (mine->fd < 0) {
+        free(mine);
+        return;
+    }
+    atomic_init(&mine->refs, 1); /* the slot's */
     pthread_rwlock_wrlock(&k->lock);
     slot *s = slot_of(k, name);
-    int old = clear(s);
-    s->fd = mine;
+    ism_fd_lease *old = clear(s);
+    s->kept = mine;
     strcpy(s->name, name);
     pthread_rwlock_unlock(&k->lock);
-    close_if(old);
+    ism_fd_keep_give_back(old);
 }
 
 void ism_fd_keep_drop(ism_fd_keep *k, const char *name)
@@ -106,7 +135,7 @@ void ism_fd_keep_drop(ism_fd_keep *k, const char *name)
         return;
     pthread_rwlock_wrlock(&k->lock);
     slot *s = slot_of(k, name);
-    int old = !strcmp(s->name, name) ? clear(s) : -1;
+    ism_fd_lease *old = !strcmp(s->name, name) ? clear(s) : NULL;
     pthread_rwlock_unlock(&k->lock);
-    close_if(old);
+    ism_fd_keep_give_back(old);
 }

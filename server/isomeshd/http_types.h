@@ -88,6 +88,7 @@ struct ismd_req {
     bool suspended, ready;
     unsigned r_status;
     ism_blob *r_body, *r_stats, *r_features;
+    struct ism_fd_lease *lease; /* the own sender's body descriptor, when lent (fd_keep.h) */
     const char *r_ctype;
     double queue_ms, worker_ms, parse_ms;
     char timing[256];

@@ -120,6 +120,17 @@ static void date_line(block *b)
     put(b, line, (size_t)n);
 }
 
+/* The body's descriptor goes back: lent by the disk tier's kept files (no syscall; the file
+ * stays open while any answer still sends from it, even once evicted), or closed. */
+static void release_body(ismd_req *r, int fd)
+{
+    if (r->lease)
+        ism_fd_keep_give_back(r->lease);
+    else
+        close(fd);
+    r->lease = NULL;
+}
+
 bool ismd_own_answer(void *cls, const char *head, size_t len, void *conn, ism_front_answer *a)
 {
     ismd_server *s = cls;
@@ -152,7 +163,8 @@ bool ismd_own_answer(void *cls, const char *head, size_t len, void *conn, ism_fr
     int fd = -1;
     if (ism_key_valid(r->key) && ism_cache_name(name, r->key, r->fmt) &&
         (r->r_body = ism_cache_get(&s->cache, name, NULL)))
-        fd = ism_cache_disk_open_payload(s->disk, name, r->r_body->data, r->r_body->len, &offset);
+        fd = ism_cache_disk_borrow_payload(s->disk, name, r->r_body->data, r->r_body->len,
+                                           &offset, &r->lease);
     if (fd < 0) { /* not cached, or no sound file: libmicrohttpd's (it counts the lookup) */
         ism_blob_unref(r->r_body);
         free(r);
@@ -178,7 +190,7 @@ bool ismd_own_answer(void *cls, const char *head, size_t len, void *conn, ism_fr
     add_line(&b, "Content-Length", length);
     put(&b, "\r\n", 2);
     if (b.full) { /* a CORS origin of hundreds of bytes: libmicrohttpd's */
-        close(fd);
+        release_body(r, fd);
         ism_blob_unref(r->r_body);
         free(r);
         return false;
@@ -202,7 +214,7 @@ void ismd_own_done(void *cls, ism_front_answer *a, bool sent)
 {
     (void)cls;
     ismd_req *r = a->ctx;
-    close(a->fd);
+    release_body(r, a->fd);
     ismd_request_record(r, sent, NULL);
     atomic_fetch_sub(&r->srv->open_requests, 1);
     free(r);

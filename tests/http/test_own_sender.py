@@ -485,6 +485,56 @@ class EvictedMidAnswer(unittest.TestCase):
             d.cleanup()
             shutil.rmtree(tmp, ignore_errors=True)
 
+    def test_a_lent_file_dropped_mid_answer_still_arrives_whole_and_is_closed_after(self):
+        # The own sender borrows the disk tier's kept descriptor (fd_keep.h) instead of a
+        # duplicate. Here the kept file is let go while a slow reader's answer still sends
+        # from it: its name is unlinked, and the next GET finds the kept file gone from the
+        # directory, drops it from the table and leaves that GET to libmicrohttpd (from
+        # memory). The reader still gets every byte; once it has, no descriptor of the file
+        # is left (the last borrower closed it).
+        tmp = tempfile.mkdtemp(prefix="isomeshd_lent_")
+        cache = os.path.join(tmp, "cache")
+        d = Daemon("--workers", "1", "--own-sender", "--conn-timeout", "60",
+                   cache_dir=cache).start()
+        try:
+            body, get = big_get(d)  # sent once by the own sender: its file is kept now
+            name = re.search(rb"/v1/meshes/(\w+\.stl)", get).group(1).decode()
+            files = [os.path.join(top, f) for top, _, fs in os.walk(cache) for f in fs
+                     if f == name]
+            self.assertEqual(len(files), 1)
+
+            def open_on_file():
+                fd_dir = "/proc/%d/fd" % d.proc.pid
+                n = 0
+                for fd in os.listdir(fd_dir):
+                    try:
+                        n += name in os.readlink(os.path.join(fd_dir, fd))
+                    except OSError:
+                        pass
+                return n
+            wait_until("only the table's own descriptor", lambda: open_on_file() == 1)
+            s = small_window_socket(d.port)
+            sent = d.metric(SENT)
+            s.sendall(get)
+            got = b""
+            while len(got) < 65536:
+                got += s.recv(65536)
+            self.assertEqual(d.metric(SENT), sent + 1)
+            self.assertEqual(open_on_file(), 1)  # lent, not duplicated
+            os.unlink(files[0])
+            status, other, own = answer_of(d, get)
+            self.assertEqual((status, own), (200, False))  # the table let the file go
+            self.assertEqual(other, body)
+            status, head, whole, rest = read_answer(s, got)
+            s.close()
+            self.assertEqual((status, rest), (200, b""))
+            self.assertEqual(whole, body)
+            self.assertTrue(wait_until("the lent file closed", lambda: open_on_file() == 0))
+        finally:
+            d.stop()
+            d.cleanup()
+            shutil.rmtree(tmp, ignore_errors=True)
+
 
 def server_queue(port, peer_port):
     """Bytes the daemon's socket listening on port holds for the client at peer_port that the

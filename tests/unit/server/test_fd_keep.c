@@ -1,6 +1,8 @@
 /* test_fd_keep.c — the table of kept files (server/common/fd_keep.h): a lookup hands out a new
  * descriptor of the kept file (not the table's own, which the caller may close), names do not
- * mix, a dropped name and a freed table hold no descriptor. */
+ * mix, a dropped name and a freed table hold no descriptor; a borrow lends the table's own
+ * descriptor, which stays open through a drop, a take-over or the table's end until the last
+ * borrower gives it back. */
 #include <criterion/criterion.h>
 #include <dirent.h>
 #include <fcntl.h>
@@ -91,5 +93,57 @@ Test(fd_keep, freeing_closes_every_kept_file)
     }
     cr_assert_gt(open_descriptors(), before);
     ism_fd_keep_free(k);
+    cr_assert_eq(open_descriptors(), before);
+}
+
+Test(fd_keep, a_lent_descriptor_outlives_its_slot_until_the_last_give_back)
+{
+    int before = open_descriptors();
+    ism_fd_keep *k = ism_fd_keep_new();
+    ism_fd_lease *none = (ism_fd_lease *)&before;
+    cr_assert_eq(ism_fd_keep_borrow(k, NAME_A, &none), -1);
+    cr_assert_null(none);
+    int a = temp_file("lent file");
+    ism_fd_keep_put(k, NAME_A, a);
+    close(a);
+    int kept = open_descriptors();
+    cr_assert_eq(kept, before + 1);
+    ism_fd_lease *l1, *l2;
+    int b1 = ism_fd_keep_borrow(k, NAME_A, &l1), b2 = ism_fd_keep_borrow(k, NAME_A, &l2);
+    cr_assert_not_null(l1);
+    cr_assert_geq(b1, 0);
+    cr_assert_eq(b1, b2); /* the kept descriptor itself: no new one */
+    cr_assert_eq(open_descriptors(), kept);
+    cr_assert(fcntl(b1, F_GETFD) & FD_CLOEXEC);
+    ism_fd_lease *other;
+    cr_assert_eq(ism_fd_keep_borrow(k, NAME_B, &other), -1);
+    /* evicted while lent (the pruner drops the name): both borrowers still read it */
+    ism_fd_keep_drop(k, NAME_A);
+    cr_assert_eq(ism_fd_keep_get(k, NAME_A), -1);
+    assert_reads(b1, "lent file");
+    ism_fd_keep_give_back(l1);
+    assert_reads(b2, "lent file");
+    cr_assert_eq(open_descriptors(), kept);
+    ism_fd_keep_give_back(l2); /* the last: closed */
+    cr_assert_eq(open_descriptors(), before);
+    /* a slot taken over by a newer file while lent, and a table freed while lent */
+    int c = temp_file("third file");
+    ism_fd_keep_put(k, NAME_A, c);
+    close(c);
+    ism_fd_lease *l3;
+    int b3 = ism_fd_keep_borrow(k, NAME_A, &l3);
+    int d = temp_file("fourth file");
+    ism_fd_keep_put(k, NAME_A, d);
+    close(d);
+    assert_reads(b3, "third file");
+    ism_fd_lease *l4;
+    int b4 = ism_fd_keep_borrow(k, NAME_A, &l4);
+    assert_reads(b4, "fourth file");
+    ism_fd_keep_free(k);
+    assert_reads(b3, "third file");
+    assert_reads(b4, "fourth file");
+    ism_fd_keep_give_back(l3);
+    ism_fd_keep_give_back(l4);
+    ism_fd_keep_give_back(NULL);
     cr_assert_eq(open_descriptors(), before);
 }
