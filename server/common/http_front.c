@@ -174,8 +174,12 @@ static int send_some(fconn *c, size_t *budget)
         if (!*budget)
             return WAKE_SPENT;
         size_t want = c->a.len - c->body_sent;
+        size_t now = want < *budget ? want : *budget;
         off_t off = (off_t)(c->a.offset + (long long)c->body_sent);
-        ssize_t n = sendfile(c->fd, c->a.fd, &off, want < *budget ? want : *budget);
+        /* a body in memory: the last piece leaves at once, as sendfile's last chunk does */
+        ssize_t n = c->a.mem ? send(c->fd, c->a.mem + c->body_sent, now,
+                                    (now < want ? MSG_MORE : 0) | MSG_NOSIGNAL)
+                             : sendfile(c->fd, c->a.fd, &off, now);
         if (n < 0)
             return errno == EAGAIN || errno == EWOULDBLOCK ? SOCKET_FULL : SEND_FAILED;
         if (n == 0)
@@ -271,6 +275,7 @@ static void serve(ism_front *f, fconn *c)
         }
         const char *end = memmem(buf, (size_t)n, "\r\n\r\n", 4);
         size_t len = end ? (size_t)(end + 4 - buf) : 0;
+        c->a.mem = NULL; /* a file's, unless the hook says otherwise */
         if (!end || atomic_load(&f->quiesced) ||
             !f->h.answer(f->h.cls, buf, len, c->ctx, &c->a)) {
             give_conn(f, c); /* a head still arriving, or a request not ours */

@@ -26,6 +26,8 @@ typedef struct ism_front_answer {
     int fd;                         /* the body: len bytes of fd from offset (fd is the hook's) */
     long long offset;
     size_t len;
+    const unsigned char *mem;       /* or, when not NULL, the len bytes here (the hook keeps
+                                       them until done; fd is then not read) */
     void *ctx;                      /* the hook's own, given back to done */
 } ism_front_answer;
 

@@ -351,6 +351,11 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
            "Cached bodies sent from their disk cache file (sendfile) instead of memory.");
     emit(&o, "isomesh_sendfile_responses_total %llu\n",
          (unsigned long long)atomic_load(&m->sendfile_responses));
+    header(&o, "isomesh_own_memory_responses_total", "counter",
+           "Cached meshes the own sender sent from memory: their disk file missing, not yet "
+           "written or not yet checked (a moment after the computation).");
+    emit(&o, "isomesh_own_memory_responses_total %llu\n",
+         (unsigned long long)atomic_load(&m->own_memory_responses));
     gauge(&o, "isomesh_upload_bytes",
           "Bytes held by request bodies (at most --upload-memory).", m->upload_bytes);
     gauge(&o, "isomesh_suspended_connections", "Connections waiting for a computation.",

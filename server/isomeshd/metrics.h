@@ -79,6 +79,7 @@ typedef struct ismd_metrics {
     atomic_llong connections;                /* open, as the connection table counts them */
     atomic_llong upload_bytes;               /* request body buffers (--upload-memory) */
     atomic_ullong sendfile_responses;        /* bodies sent from their disk cache file */
+    atomic_ullong own_memory_responses;      /* the own sender's from memory (no sound file) */
     struct ism_redis_counters *redis;        /* the shared tier's figures (NULL: no --redis) */
 } ismd_metrics;
 

@@ -4,10 +4,17 @@
  * routes_mesh.c ismd_mesh_headers, respond.c ismd_common_headers), and their log line and
  * metrics (request_log.h). It takes a request only when nothing in it could
  * change the answer: GET of /v1/meshes/{key}.{fmt} over HTTP/1.1, no query or escapes, only
- * the headers below, the mesh cached in memory and its disk file sound (cache_disk.h); where
+ * the headers below, and the mesh cached (its bytes in memory, or on disk); where
  * a token could be needed or a trusted proxy names the client, http.c (own_sender_runs) does
  * not start it. Everything else — HEAD, If-None-Match, Range, a body, a mesh to compute — is
- * libmicrohttpd's, as before. */
+ * libmicrohttpd's, as before.
+ *
+ * The body goes from the cache file (sendfile) when the disk tier finds it sound, else from
+ * the mesh's bytes in memory: a connection handed to libmicrohttpd stays there for good, so
+ * declining a cached mesh whose file is merely not ready (written after the answer, checked
+ * only once settled: cache_disk.h) gave libmicrohttpd every connection a client opened in
+ * the moment after a computation (a burst of 16 right after the POST: all of them, for
+ * their whole life, split unevenly over its loops, 0.5x the req/s: notes/http18.md). */
 #include "server/isomeshd/own_sender.h"
 
 #include <stdio.h>
@@ -121,14 +128,17 @@ static void date_line(block *b)
 }
 
 /* The body's descriptor goes back: lent by the disk tier's kept files (no syscall; the file
- * stays open while any answer still sends from it, even once evicted), or closed. */
+ * stays open while any answer still sends from it, even once evicted), or closed; a body
+ * from memory lets its blob go. */
 static void release_body(ismd_req *r, int fd)
 {
     if (r->lease)
         ism_fd_keep_give_back(r->lease);
-    else
+    else if (fd >= 0)
         close(fd);
     r->lease = NULL;
+    ism_blob_unref(r->r_body);
+    r->r_body = NULL;
 }
 
 bool ismd_own_answer(void *cls, const char *head, size_t len, void *conn, ism_front_answer *a)
@@ -165,13 +175,13 @@ bool ismd_own_answer(void *cls, const char *head, size_t len, void *conn, ism_fr
         (r->r_body = ism_cache_get(&s->cache, name, NULL)))
         fd = ism_cache_disk_borrow_payload(s->disk, name, r->r_body->data, r->r_body->len,
                                            &offset, &r->lease);
-    if (fd < 0) { /* not cached, or no sound file: libmicrohttpd's (it counts the lookup) */
-        ism_blob_unref(r->r_body);
+    if (!r->r_body) { /* not cached: libmicrohttpd's (it counts the lookup) */
         free(r);
         return false;
     }
     atomic_fetch_add(&s->metrics.mesh_hits, 1);
-    atomic_fetch_add(&s->metrics.sendfile_responses, 1);
+    atomic_fetch_add(fd >= 0 ? &s->metrics.sendfile_responses : &s->metrics.own_memory_responses,
+                     1);
     r->route = ISMD_R_MESH_FILE;
     r->cache = "hit";
     r->status = 200;
@@ -191,7 +201,6 @@ bool ismd_own_answer(void *cls, const char *head, size_t len, void *conn, ism_fr
     put(&b, "\r\n", 2);
     if (b.full) { /* a CORS origin of hundreds of bytes: libmicrohttpd's */
         release_body(r, fd);
-        ism_blob_unref(r->r_body);
         free(r);
         return false;
     }
@@ -199,10 +208,13 @@ bool ismd_own_answer(void *cls, const char *head, size_t len, void *conn, ism_fr
     a->fd = fd;
     a->offset = offset;
     a->len = r->r_body->len;
-    /* sent from the file: holding the blob until done would keep an evicted mesh in memory,
-     * outside the cache's budget, for as long as the reader stalls */
-    ism_blob_unref(r->r_body);
-    r->r_body = NULL;
+    if (fd < 0) { /* from memory: the blob is held until done (as libmicrohttpd holds it) */
+        a->mem = r->r_body->data;
+    } else { /* from the file: holding the blob until done would keep an evicted mesh in
+              * memory, outside the cache's budget, for as long as the reader stalls */
+        ism_blob_unref(r->r_body);
+        r->r_body = NULL;
+    }
     a->ctx = r;
     /* open until done, as libmicrohttpd's requests: a stop lets the answers under way finish
      * (ismd_http_stop waits for them, bounded) */

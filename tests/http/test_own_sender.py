@@ -21,6 +21,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from harness import Daemon, http_request, parse_metrics, sphere, wait_until  # noqa: E402
 
 SENT = "isomesh_sendfile_responses_total"  # the own sender's answers count here
+MEM = "isomesh_own_memory_responses_total"  # and those it sent from memory here
 BIG = {"preset": "gyroid-ball", "depth": {"max": 6}, "max_error": None,
        "output": {"format": "stl"}}  # 4.4 MB (the depth path)
 
@@ -530,6 +531,45 @@ class EvictedMidAnswer(unittest.TestCase):
             self.assertEqual((status, rest), (200, b""))
             self.assertEqual(whole, body)
             self.assertTrue(wait_until("the lent file closed", lambda: open_on_file() == 0))
+        finally:
+            d.stop()
+            d.cleanup()
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+class MemoryBody(unittest.TestCase):
+    """A cached mesh whose disk file is not sound is still the own sender's, sent from memory
+    (own_sender.c): a connection handed to libmicrohttpd stays there for good, so declining a
+    mesh whose file is merely not ready (written after the answer, checked once settled) gave
+    libmicrohttpd every connection opened in the moment after a computation. Here the file is
+    gone (unlinked): deterministic, where "not yet settled" lasts 50 ms."""
+
+    def test_a_mesh_without_its_file_is_sent_from_memory_and_the_connection_kept(self):
+        tmp = tempfile.mkdtemp(prefix="isomeshd_mem_")
+        cache = os.path.join(tmp, "cache")
+        d = Daemon("--workers", "1", "--own-sender", cache_dir=cache).start()
+        try:
+            r = d.post("/v1/mesh", sphere(0.61))
+            self.assertEqual(r.status, 200)
+            key = r.header("ETag").strip('"')
+            name = key + ".drc"
+            files = wait_until("the mesh's cache file", lambda: [
+                os.path.join(top, f) for top, _, fs in os.walk(cache) for f in fs if f == name])
+            os.unlink(files[0])
+            get = b"GET /v1/meshes/%s HTTP/1.1\r\nHost: t\r\n\r\n" % name.encode()
+            mem, sent = d.metric(MEM), d.metric(SENT)
+            s = socket.create_connection(("127.0.0.1", d.port), timeout=30)
+            rest = b""
+            for _ in range(2):  # the second on the same connection: still the own sender's
+                s.sendall(get)
+                status, head, body, rest = read_answer(s, rest)
+                self.assertEqual(status, 200)
+                self.assertEqual(body, r.body)
+                self.assertEqual(re.findall(rb"(?im)^content-length: *(\d+)$", head),
+                                 [b"%d" % len(r.body)])
+            s.close()
+            self.assertEqual(d.metric(MEM), mem + 2)
+            self.assertEqual(d.metric(SENT), sent)
         finally:
             d.stop()
             d.cleanup()
