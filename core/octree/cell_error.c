@@ -121,20 +121,33 @@ static bool loop_tris(ism_sampler *s, const double (*p)[3], int n, ism_cell_out 
     return true;
 }
 
-/* The node's edge roots, each with the two faces its edge lies on; false when a corner is
- * exactly on the surface (its roots are shared by several edges). */
+/* The node's edge roots, each with the two faces its edge lies on. A corner exactly on the
+ * surface is one root, on the two faces the surface enters there (none: it only touches the
+ * node); false when an edge lies in f = 0 (two such corners joined: a lattice plane of the
+ * surface), where the roots make no clean polygon. */
 static bool edge_roots(ism_sampler *s, const ism_corners *k, double shift, const double *box,
                        root_pt *r, int *n)
 {
     *n = 0;
-    for (int c = 0; c < 8; c++)
-        if (k->f[c] == 0)
+    for (int c = 0; c < 8; c++) {
+        if (k->f[c] != 0)
+            continue;
+        unsigned m = ism_zero_corner_faces(k->f, c);
+        if (m & ISM_ZERO_EDGE)
             return false;
+        if (!m)
+            continue;
+        for (int f = 0, j = 0; f < 6; f++)
+            if (m >> f & 1)
+                r[*n].face[j++] = f;
+        ism_straddle_point(s, shift, box, k->p[c], r[*n].p);
+        (*n)++;
+    }
     for (int e = 0; e < 12; e++) {
         int c0, c1;
         ism_cube_edge(e, &c0, &c1, r[*n].face);
-        if ((k->f[c0] < 0) == (k->f[c1] < 0))
-            continue;
+        if (k->f[c0] == 0 || k->f[c1] == 0 || (k->f[c0] < 0) == (k->f[c1] < 0))
+            continue; /* no root, or the corner's (above) */
         double t;
         ism_root_entry *m =
             k->memo ? ism_root_slot(k->memo->roots, k->key[c0], k->key[c1]) : NULL;
