@@ -6,6 +6,7 @@
  * through its own vertices, except at the singular locus, where its arcs end. */
 #include "core/curves/arr_internal.h"
 #include "core/util/grow.h"
+#include "core/util/vec3.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -85,12 +86,7 @@ static bool push_chain(graph *g, uint32_t v)
 
 static double seg_length(const ism_mesh *m, uint32_t a, uint32_t b)
 {
-    double d = 0;
-    for (int i = 0; i < 3; i++) {
-        double e = m->pos[3 * (size_t)a + i] - m->pos[3 * (size_t)b + i];
-        d += e * e;
-    }
-    return sqrt(d);
+    return ism_dist3(m->pos + 3 * (size_t)a, m->pos + 3 * (size_t)b);
 }
 
 /* The arc leaving arrangement vertex at mesh vertex v through cut edge ce. */

@@ -322,12 +322,7 @@ static uint32_t split_vertex(cut_state *s, size_t k, uint32_t u, uint32_t w)
 
 static double dist2(const ism_mesh *m, uint32_t a, uint32_t b)
 {
-    double d = 0;
-    for (int c = 0; c < 3; c++) {
-        double e = m->pos[3 * (size_t)a + c] - m->pos[3 * (size_t)b + c];
-        d += e * e;
-    }
-    return d;
+    return ism_sqdist3(m->pos + 3 * (size_t)a, m->pos + 3 * (size_t)b);
 }
 
 /* Emits a piece of the triangle being split: into its own slot first, then appended. */
