@@ -63,21 +63,6 @@ void ism_dual_ball_make(ism_dual_ball *b, const double pt[5], const double box[6
     b->nappes = (int)pt[4];
 }
 
-/* Squared distance from p to the closed box lo..hi. */
-static double box_d2(const double p[3], const double lo[3], const double hi[3])
-{
-    double d2 = 0;
-    for (int a = 0; a < 3; a++) { /* comparisons, not libm's fmax calls: every node asks
-                                     every ball (Barth's 30 nodes: 166M instructions of
-                                     fmax in a 5.0G run); the same values for finite input */
-        double below = lo[a] - p[a], above = p[a] - hi[a];
-        double e = below > above ? below : above;
-        e = e > 0 ? e : 0;
-        d2 += e * e;
-    }
-    return d2;
-}
-
 /* The cover's cells: at most this many along an axis (the balls' limits set the side; a
  * tiny limit would make the grid huge for no gain: a cell then lists one ball or none). */
 #define COVER_MAX_DIM 64
@@ -215,7 +200,7 @@ int ism_dual_balls_node(const ism_dual_ball *b, size_t n, const ism_dual_ball_co
     ball_scan sc = scan_of(cv, n, lo, hi);
     for (size_t i = 0; i < sc.n; i++) {
         size_t k = scan_at(&sc, i);
-        double d2 = box_d2(b[k].p, lo, hi);
+        double d2 = ism_sqdist_box3(b[k].p, lo, hi);
         if (d2 <= b[k].r0 * b[k].r0)
             return size <= b[k].leaf || at_max ? 1 : 0;
         if (d2 <= GRADE * GRADE * b[k].r0 * b[k].r0 && size > b[k].leaf && !at_max)
@@ -230,7 +215,7 @@ bool ism_dual_balls_near(const ism_dual_ball *b, size_t n, const ism_dual_ball_c
     ball_scan sc = scan_of(cv, n, lo, hi);
     for (size_t i = 0; i < sc.n; i++) {
         size_t k = scan_at(&sc, i);
-        if (size <= b[k].leaf && box_d2(b[k].p, lo, hi) < b[k].limit * b[k].limit)
+        if (size <= b[k].leaf && ism_sqdist_box3(b[k].p, lo, hi) < b[k].limit * b[k].limit)
             return true;
     }
     return false;

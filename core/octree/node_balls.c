@@ -1,6 +1,7 @@
 /* node_balls.c — does a node meet a ball around a certified node or along a double curve
  * finer than itself (see node_balls.h)? */
 #include "core/octree/node_balls.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 
@@ -28,12 +29,7 @@ static bool meets(const double *b, double side, const double lo[3], const double
 {
     if (!(b[ISM_NODE_BALL_CELL] < side))
         return false;
-    double d2 = 0; /* squared distance from the centre to the closed box */
-    for (int a = 0; a < 3; a++) {
-        double e = fmax(lo[a] - b[a], fmax(b[a] - hi[a], 0.0));
-        d2 += e * e;
-    }
-    return d2 <= b[ISM_NODE_BALL_R] * b[ISM_NODE_BALL_R];
+    return ism_sqdist_box3(b, lo, hi) <= b[ISM_NODE_BALL_R] * b[ISM_NODE_BALL_R];
 }
 
 /* A query's box and size, for the grid's visit (ism_ball_grid_any). */

@@ -1,6 +1,7 @@
 /* quiet.c — does a box lie in one of the quiet balls (see quiet.h)? The balls' grid
  * (ball_grid.h) is read in the cells that can hold the centre of a ball holding the box. */
 #include "core/octree/quiet.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 
@@ -68,12 +69,8 @@ bool ism_quiet_holds(const ism_quiet *q, const double lo[3], const double hi[3])
 /* Does the box come within max(radius, reach) of ball b's centre? */
 static bool near(const double *b, const double lo[3], const double hi[3], double reach)
 {
-    double d2 = 0, r = b[3] > reach ? b[3] : reach;
-    for (int a = 0; a < 3; a++) {
-        double d = b[a] < lo[a] ? lo[a] - b[a] : b[a] > hi[a] ? b[a] - hi[a] : 0;
-        d2 += d * d;
-    }
-    return d2 < r * r;
+    double r = b[3] > reach ? b[3] : reach;
+    return ism_sqdist_box3(b, lo, hi) < r * r;
 }
 
 static bool near_box(uint32_t ball, const void *arg)

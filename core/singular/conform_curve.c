@@ -5,6 +5,7 @@
  * nearest segment found so far is not read (a segment's nearest point to q lies in one of
  * the cells it is filed in, inside that cell's box). */
 #include "core/singular/conform_internal.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -191,11 +192,7 @@ static bool cell_may_hold(const cf_polyline *pl, size_t c, const double q[3], do
     if (!(best < INFINITY))
         return true;
     const double *b = pl->g_box[pl->g_start[c]];
-    double d2 = 0;
-    for (int k = 0; k < 3; k++) {
-        double e = cf_max2(0, cf_max2(b[k] - q[k], q[k] - b[3 + k]));
-        d2 += e * e;
-    }
+    double d2 = ism_sqdist_box3(q, b, b + 3);
     double r = sqrt(best);
     r += CF_QUERY_SLACK * (r + mag);
     return d2 <= r * r;
@@ -319,12 +316,7 @@ static double nearest_distance(const cf_polyline *pl, const double q[3], double 
 
 double cf_polyline_box_distance(const cf_polyline *pl, const double q[3])
 {
-    double d2 = 0;
-    for (int k = 0; k < 3; k++) {
-        double e = cf_max2(0, cf_max2(pl->lo[k] - q[k], q[k] - pl->hi[k]));
-        d2 += e * e;
-    }
-    return sqrt(d2);
+    return sqrt(ism_sqdist_box3(q, pl->lo, pl->hi));
 }
 
 double cf_polyline_nearest(const cf_polyline *pl, const double q[3], double within, double *s,

@@ -116,3 +116,26 @@ Test(vec3, fibonacci_directions_spread_over_the_sphere)
     cr_assert(worst >= RAYS_COVER_COS, "a probe %.2f° from every ray",
               acos(worst) * 180 / M_PI);
 }
+
+/* ism_sqdist_box3 against the distance to the nearest point of the box, found another way:
+ * p clamped into the box (fmin/fmax per axis), |p − clamp(p)|²; 0 inside and on the faces, the
+ * corner's distance beyond a corner, an edge's beyond an edge. */
+Test(vec3, box_distance_is_the_distance_to_the_clamped_point)
+{
+    const double lo[3] = {-1, 0.5, 2}, hi[3] = {1, 0.75, 5};
+    int n = 0;
+    for (double x = -3; x <= 3; x += 0.25)
+        for (double y = -0.5; y <= 1.5; y += 0.125)
+            for (double z = 0; z <= 7; z += 0.5) {
+                double p[3] = {x, y, z}, c[3];
+                for (int a = 0; a < 3; a++)
+                    c[a] = fmin(hi[a], fmax(lo[a], p[a]));
+                double want = ism_sqdist3(p, c), got = ism_sqdist_box3(p, lo, hi);
+                cr_assert(got == want, "p (%g, %g, %g): %.17g, clamped %.17g", x, y, z, got,
+                          want);
+                n += got == 0;
+            }
+    cr_assert(n > 0, "some probes inside");
+    const double corner[3] = {2, 2, 8}; /* beyond hi on every axis: (1, 1.25, 3) away */
+    cr_assert(ism_sqdist_box3(corner, lo, hi) == 1 + 1.5625 + 9);
+}
