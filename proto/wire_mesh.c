@@ -24,10 +24,7 @@ static bool is_zero3(const float *v) { return v[0] == 0 && v[1] == 0 && v[2] == 
 static void face_cross(const ism_mesh *m, size_t t, double cr[3])
 {
     const uint32_t *v = m->tri + 3 * t;
-    const double *a = m->pos + 3 * v[0], *b = m->pos + 3 * v[1], *c = m->pos + 3 * v[2];
-    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    ism_cross3(u, w, cr);
+    ism_tri_cross3(m->pos + 3 * v[0], m->pos + 3 * v[1], m->pos + 3 * v[2], cr);
 }
 
 static void fill_missing_normals(const ism_mesh *m, float *normal)

@@ -14,20 +14,6 @@
 
 #define NONE UINT32_MAX
 
-static double tri_area(const ism_mesh *m, const uint32_t *t)
-{
-    const double *a = m->pos + 3 * (size_t)t[0], *b = m->pos + 3 * (size_t)t[1],
-                 *c = m->pos + 3 * (size_t)t[2];
-    double u[3], v[3];
-    for (int i = 0; i < 3; i++) {
-        u[i] = b[i] - a[i];
-        v[i] = c[i] - a[i];
-    }
-    double n[3];
-    ism_cross3(u, v, n);
-    return 0.5 * ism_norm3(n);
-}
-
 /* Dense ids 0.. for the roots of parent, in order of each set's smallest member. */
 static size_t number_sets(uint32_t *parent, size_t n, uint32_t *id)
 {
@@ -119,7 +105,8 @@ static void measure_face(const ism_mesh *m, const arr_mesh_edges *e, face_scratc
     face->area = 0;
     for (size_t t = face->first; t < face->first + face->ntris; t++) {
         const uint32_t *tv = m->tri + 3 * t;
-        face->area += tri_area(m, tv);
+        face->area += ism_tri_area3(m->pos + 3 * (size_t)tv[0], m->pos + 3 * (size_t)tv[1],
+                                    m->pos + 3 * (size_t)tv[2]);
         for (int i = 0; i < 3; i++) {
             uint32_t v = tv[i], k = e->tri_edge[3 * t + i];
             if (s->vstamp[v] != f + 1) {

@@ -91,14 +91,10 @@ typedef struct refine_state {
 static double side_miss(ism_branches *br, uint32_t A, const double *a, const double *b,
                         const double *c)
 {
-    double u[3], v[3], mid[3], g[3];
-    for (int i = 0; i < 3; i++) {
-        u[i] = b[i] - a[i];
-        v[i] = c[i] - a[i];
+    double mid[3], g[3], n[3];
+    for (int i = 0; i < 3; i++)
         mid[i] = 0.5 * (a[i] + b[i]);
-    }
-    double n[3];
-    ism_cross3(u, v, n);
+    ism_tri_cross3(a, b, c, n);
     ism_branches_gradient(br, A, mid, g);
     double nn = ism_norm3(n) * ism_norm3(g);
     if (!(nn > 0) || !isfinite(nn))

@@ -217,14 +217,7 @@ static bool grid_size(cut_state *s, double lo[3], double hi[3])
                 hi[a] = q[k][a] > hi[a] ? q[k][a] : hi[a];
             }
         }
-        double u[3], w[3];
-        for (int a = 0; a < 3; a++) {
-            u[a] = q[1][a] - q[0][a];
-            w[a] = q[2][a] - q[0][a];
-        }
-        double n[3];
-        ism_cross3(u, w, n);
-        area += 0.5 * ism_norm3(n);
+        area += ism_tri_area3(q[0], q[1], q[2]);
     }
     double ext = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
     if (!isfinite(ext))

@@ -187,12 +187,7 @@ void cut_tri_normal(const ism_mesh *m, const uint32_t *tv, uint32_t moved, const
     const double *q[3];
     for (int i = 0; i < 3; i++)
         q[i] = tv[i] == moved ? p : m->pos + 3 * (size_t)tv[i];
-    double u[3], w[3];
-    for (int c = 0; c < 3; c++) {
-        u[c] = q[1][c] - q[0][c];
-        w[c] = q[2][c] - q[0][c];
-    }
-    ism_cross3(u, w, n);
+    ism_tri_cross3(q[0], q[1], q[2], n);
 }
 
 bool cut_can_move(cut_state *s, const uint32_t *tris, size_t nt, uint32_t u,

@@ -13,11 +13,8 @@ size_t ism_stl_size(const ism_mesh *m) { return 84 + m->ntris * 50; }
 
 static void facet_normal(const ism_mesh *m, const uint32_t *v, float out[3])
 {
-    const double *a = m->pos + 3 * v[0], *b = m->pos + 3 * v[1], *c = m->pos + 3 * v[2];
-    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
     double n[3];
-    ism_cross3(u, w, n);
+    ism_tri_cross3(m->pos + 3 * v[0], m->pos + 3 * v[1], m->pos + 3 * v[2], n);
     double len = ism_norm3(n);
     for (int k = 0; k < 3; k++)
         out[k] = len > 0 ? (float)(n[k] / len) : 0.0f;

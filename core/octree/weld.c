@@ -324,12 +324,8 @@ static void fill_missing_normals(ism_mesh *m, ism_pool *pool, ism_par_cost *cost
             ism_pool_for(pool, tblocks, list_touching, &f, cost);
             for (size_t i = 0; i < ntouch; i++) {
                 const uint32_t *tri = m->tri + 3 * f.touching[i];
-                const double *a = m->pos + 3 * tri[0], *b = m->pos + 3 * tri[1],
-                             *c = m->pos + 3 * tri[2];
-                double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-                double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
                 double n[3];
-                ism_cross3(u, v, n);
+                ism_tri_cross3(m->pos + 3 * tri[0], m->pos + 3 * tri[1], m->pos + 3 * tri[2], n);
                 for (int k = 0; k < 3; k++)
                     if (f.number[tri[k]])
                         for (int j = 0; j < 3; j++)

@@ -81,12 +81,8 @@ static void grid_free(seg_grid *g)
  * 0 when two of them coincide. */
 static double curvature3(const double p[3], const double q[3], const double r[3])
 {
-    double u[3], v[3], x[3];
-    for (int k = 0; k < 3; k++) {
-        u[k] = q[k] - p[k];
-        v[k] = r[k] - p[k];
-    }
-    ism_cross3(u, v, x);
+    double x[3];
+    ism_tri_cross3(p, q, r, x);
     double sides = ism_dist3(p, q) * ism_dist3(q, r) * ism_dist3(p, r);
     return sides > 0 ? 2 * ism_norm3(x) / sides : 0;
 }

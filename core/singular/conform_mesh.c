@@ -326,12 +326,9 @@ static void singular_normals(cf_ctx *c)
         if (!((c->singular[v[0]] | c->singular[v[1]] | c->singular[v[2]]) &
               CF_VERTEX_SINGULAR))
             continue;
-        const double *a = m->pos + 3 * (size_t)v[0], *b = m->pos + 3 * (size_t)v[1],
-                     *d = m->pos + 3 * (size_t)v[2];
-        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-        double w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
         double n[3];
-        ism_cross3(u, w, n);
+        ism_tri_cross3(m->pos + 3 * (size_t)v[0], m->pos + 3 * (size_t)v[1],
+                       m->pos + 3 * (size_t)v[2], n);
         for (int k = 0; k < 3; k++)
             if (c->singular[v[k]] & CF_VERTEX_SINGULAR)
                 for (int j = 0; j < 3; j++)

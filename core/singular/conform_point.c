@@ -98,28 +98,20 @@ static double loop_mean_dist(const cf_ctx *c, const cf_loop *l, const double p[3
     return s;
 }
 
-/* (a − p) × (b − p) */
-static void turn_round(const double *a, const double *b, const double p[3], double out[3])
-{
-    double u[3] = {a[0] - p[0], a[1] - p[1], a[2] - p[2]};
-    double w[3] = {b[0] - p[0], b[1] - p[1], b[2] - p[2]};
-    ism_cross3(u, w, out);
-}
-
 /* Closed loop l steps backwards round p somewhere: the turn (a − p) × (b − p) of one of its
  * edges ab does not point along the sum of them all. */
 static bool steps_backwards(const cf_ctx *c, const cf_loop *l, const double p[3])
 {
     double sum[3] = {0, 0, 0}, t[3];
     for (size_t i = 0; l->closed && i < l->n; i++) {
-        turn_round(c->m->pos + 3 * (size_t)l->v[i], c->m->pos + 3 * (size_t)l->v[(i + 1) % l->n],
-                   p, t);
+        ism_tri_cross3(p, c->m->pos + 3 * (size_t)l->v[i],
+                       c->m->pos + 3 * (size_t)l->v[(i + 1) % l->n], t);
         for (int k = 0; k < 3; k++)
             sum[k] += t[k];
     }
     for (size_t i = 0; l->closed && i < l->n; i++) {
-        turn_round(c->m->pos + 3 * (size_t)l->v[i], c->m->pos + 3 * (size_t)l->v[(i + 1) % l->n],
-                   p, t);
+        ism_tri_cross3(p, c->m->pos + 3 * (size_t)l->v[i],
+                       c->m->pos + 3 * (size_t)l->v[(i + 1) % l->n], t);
         if (!(ism_dot3(t, sum) > 0))
             return true;
     }
@@ -150,12 +142,12 @@ static bool folded_near(cf_ctx *c, const double p[3], double r, bool *found)
             continue;
         const uint32_t *v = c->m->tri + 3 * (size_t)t;
         double n[3], m[3];
-        turn_round(P + 3 * (size_t)v[1], P + 3 * (size_t)v[2], P + 3 * (size_t)v[0], n);
+        ism_tri_cross3(P + 3 * (size_t)v[0], P + 3 * (size_t)v[1], P + 3 * (size_t)v[2], n);
         for (int k = 0; k < 3 && !*found; k++) {
             if (cf_live_on_edge(c, v[k], v[(k + 1) % 3], tt, 3) != 2)
                 continue;
             const uint32_t *w = c->m->tri + 3 * (size_t)(tt[0] == t ? tt[1] : tt[0]);
-            turn_round(P + 3 * (size_t)w[1], P + 3 * (size_t)w[2], P + 3 * (size_t)w[0], m);
+            ism_tri_cross3(P + 3 * (size_t)w[0], P + 3 * (size_t)w[1], P + 3 * (size_t)w[2], m);
             *found = ism_dot3(n, m) < 0;
         }
     }

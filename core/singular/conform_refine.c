@@ -102,11 +102,8 @@
 static void tri_normal(const ism_mesh *m, uint32_t t, double n[3])
 {
     const uint32_t *v = m->tri + 3 * (size_t)t;
-    const double *a = m->pos + 3 * (size_t)v[0], *b = m->pos + 3 * (size_t)v[1],
-                 *d = m->pos + 3 * (size_t)v[2];
-    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    double w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-    ism_cross3(u, w, n);
+    ism_tri_cross3(m->pos + 3 * (size_t)v[0], m->pos + 3 * (size_t)v[1],
+                   m->pos + 3 * (size_t)v[2], n);
 }
 
 /* Triangle t faces against ∇f: at its centroid, or at two of its corners (their normals, ∇f's

@@ -17,15 +17,6 @@ static uint32_t find_root(uint32_t *parent, uint32_t i)
     return i;
 }
 
-static double triangle_area(const double *a, const double *b, const double *c)
-{
-    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    double n[3];
-    ism_cross3(u, w, n);
-    return 0.5 * ism_norm3(n);
-}
-
 /* Component number (0, 1, ... in order of first triangle) of each triangle; returns how
  * many components there are, or SIZE_MAX when out of memory. */
 static size_t label_components(const ism_sheet_tris *t, uint32_t *comp)
@@ -77,7 +68,7 @@ static double append_component(const ism_sheet_tris *t, const size_t *order, siz
         }
         if (!ism_mesh_add_triangle(mesh, v[0], v[1], v[2]))
             return -1;
-        area += triangle_area(mesh->pos + 3 * v[0], mesh->pos + 3 * v[1], mesh->pos + 3 * v[2]);
+        area += ism_tri_area3(mesh->pos + 3 * v[0], mesh->pos + 3 * v[1], mesh->pos + 3 * v[2]);
     }
     return area;
 }
@@ -100,7 +91,7 @@ static bool find_scraps(const ism_sheet_tris *t, const uint32_t *comp, size_t nc
     bool ok = area != NULL;
     for (size_t i = 0; ok && i < t->ntris; i++) {
         const uint32_t *v = t->tri + 3 * i;
-        area[comp[i]] += triangle_area(t->x[v[0]].p, t->x[v[1]].p, t->x[v[2]].p);
+        area[comp[i]] += ism_tri_area3(t->x[v[0]].p, t->x[v[1]].p, t->x[v[2]].p);
         for (int k = 0; ok && k < 3; k++) {
             bool added;
             uint32_t e = ism_key_map_add(&edges, edge_key(v[k], v[(k + 1) % 3]), &added);

@@ -85,15 +85,11 @@ static xedge make_xedge(const ism_sheet_field *sf, uint32_t u, uint32_t v)
 static void add_ctri(const ism_sheet_field *sf, xedge e0, xedge e1, xedge e2, const double d[3],
                      ctri *out, int *n)
 {
-    double q[3][3], u[3], v[3], nrm[3];
+    double q[3][3], nrm[3];
     xedge_point(sf, e0, q[0]);
     xedge_point(sf, e1, q[1]);
     xedge_point(sf, e2, q[2]);
-    for (int k = 0; k < 3; k++) {
-        u[k] = q[1][k] - q[0][k];
-        v[k] = q[2][k] - q[0][k];
-    }
-    ism_cross3(u, v, nrm);
+    ism_tri_cross3(q[0], q[1], q[2], nrm);
     out[*n] = ism_dot3(nrm, d) >= 0 ? (ctri){{e0, e1, e2}} : (ctri){{e0, e2, e1}};
     (*n)++;
 }

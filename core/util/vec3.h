@@ -1,7 +1,8 @@
 /* vec3.h — the small vector helpers on double[3] that the polygoniser, the singular locus,
  * the curves and the analysis share (dot and cross products, length, normalising, distance,
- * the distance to a box, frames across a direction, the Fibonacci sphere's directions),
- * inline, each written once (the same arithmetic, in the same order, wherever it is used). */
+ * a triangle's normal and area, the distance to a box, frames across a direction, the
+ * Fibonacci sphere's directions), inline, each written once (the same arithmetic, in the same
+ * order, wherever it is used). */
 #ifndef ISM_VEC3_H
 #define ISM_VEC3_H
 
@@ -61,6 +62,24 @@ static inline void ism_cross3(const double a[3], const double b[3], double c[3])
     c[0] = a[1] * b[2] - a[2] * b[1];
     c[1] = a[2] * b[0] - a[0] * b[2];
     c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* n = (b − a) × (c − a): triangle a b c's normal as it is wound (right hand), twice its area
+ * long (n is none of a, b, c). */
+static inline void ism_tri_cross3(const double a[3], const double b[3], const double c[3],
+                                  double n[3])
+{
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    ism_cross3(u, w, n);
+}
+
+/* The area of triangle a b c, |(b − a) × (c − a)| / 2. */
+static inline double ism_tri_area3(const double a[3], const double b[3], const double c[3])
+{
+    double n[3];
+    ism_tri_cross3(a, b, c, n);
+    return 0.5 * ism_norm3(n);
 }
 
 /* The squared distance from p to the closed box lo..hi (lo ≤ hi), 0 inside: per axis the

@@ -117,6 +117,40 @@ Test(vec3, fibonacci_directions_spread_over_the_sphere)
               acos(worst) * 180 / M_PI);
 }
 
+/* ism_tri_cross3 / ism_tri_area3 against closed forms: the triangle (0,0,0) (a,0,0) (0,b,0)
+ * turned about z by θ and moved by t has normal (0, 0, ab) whatever θ and t (wound
+ * counter-clockwise seen from +z), area ab/2; the reversed winding flips the normal; a
+ * degenerate triangle (three points on a line) has none. The tolerance: a few roundings of
+ * coordinates of size |t| + max(a, b). */
+Test(vec3, triangle_cross_and_area_closed_forms)
+{
+    const double sizes[][2] = {{1, 1}, {3, 0.5}, {1e-3, 2e-3}, {0.25, 7}};
+    const double moves[][3] = {{0, 0, 0}, {1e-3, -2e-3, 0.5}, {10, 10, -10}};
+    for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++)
+        for (size_t j = 0; j < sizeof moves / sizeof moves[0]; j++)
+            for (int k = 0; k < 12; k++) {
+                double a = sizes[i][0], b = sizes[i][1], th = k * M_PI / 6 + 0.1;
+                const double *t = moves[j];
+                double p[3][3] = {{0, 0, 0}, {a, 0, 0}, {0, b, 0}};
+                for (int v = 0; v < 3; v++) {
+                    double x = p[v][0], y = p[v][1];
+                    p[v][0] = cos(th) * x - sin(th) * y + t[0];
+                    p[v][1] = sin(th) * x + cos(th) * y + t[1];
+                    p[v][2] += t[2];
+                }
+                double tol = 1e-14 * (ism_norm3(t) + fmax(a, b)) * fmax(a, b), n[3], r[3];
+                ism_tri_cross3(p[0], p[1], p[2], n);
+                cr_assert(fabs(n[0]) < tol && fabs(n[1]) < tol && fabs(n[2] - a * b) < tol,
+                          "a %g b %g θ %g: n (%g, %g, %g)", a, b, th, n[0], n[1], n[2]);
+                ism_tri_cross3(p[0], p[2], p[1], r);
+                cr_assert(fabs(r[2] + a * b) < tol, "reversed: %g", r[2]);
+                cr_assert(fabs(ism_tri_area3(p[0], p[1], p[2]) - 0.5 * a * b) < tol);
+            }
+    const double l[3][3] = {{1, 2, 3}, {2, 4, 6}, {-1, -2, -3}};
+    cr_assert(ism_tri_area3(l[0], l[1], l[2]) == 0, "collinear: %g",
+              ism_tri_area3(l[0], l[1], l[2]));
+}
+
 /* ism_sqdist_box3 against the distance to the nearest point of the box, found another way:
  * p clamped into the box (fmin/fmax per axis), |p − clamp(p)|²; 0 inside and on the faces, the
  * corner's distance beyond a corner, an edge's beyond an edge. */
