@@ -4,6 +4,7 @@
 #include "core/remesh/rm_brec.h"
 #include "core/remesh/rm_bound.h"
 #include "core/remesh/rm_cbound.h"
+#include "core/eval/interval_jet.h"
 #include "core/util/vec3.h"
 
 #include <math.h>
@@ -33,14 +34,26 @@ static inline double *slot_of(const rm_pass *p, uint32_t t, int s)
     return p->brec + RM_BREC_REC * (size_t)t + SLOT * s;
 }
 
+/* Whether record e carries a normal. */
+static inline bool has_normal(const double *e)
+{
+    return e[SLOT_N] != 0 || e[SLOT_N + 1] != 0 || e[SLOT_N + 2] != 0;
+}
+
 /* The record e moved to y (into w, when not NULL): a bound on y's distance from f = 0 where
- * f's level sets bend by at most kappa (radians per unit length) about the fan. The distance
- * to a set moves by at most as far as the point does (u + |δ|, δ = y − e's place, always);
- * where e has a normal n, turned by at most a since its point was measured, the surface's
- * nearest point to e's lies within u along a normal within a + κu of n, and the surface
- * leaves its tangent plane there by at most κ|δ|²/2 over |δ|: u + |n·δ| + (a + κu)|δ| +
- * κ|δ|²/2, the smaller of the two. A relaxation moves a fan's points along the surface
- * (n·δ about 0), where the first bound grows by all of |δ| and this one by its square. */
+ * f's unit normal ∇f/|∇f| turns by at most kappa (radians per unit length) in a box holding
+ * e's place, y and everything within max_error of the segment between them (fan_bend). The
+ * distance to a set moves by at most as far as the point does (u + |δ|, δ = y − e's place,
+ * always); where e has a normal n, turned by at most a since its point was measured, the
+ * surface's nearest point q to e's lies within u along the normal there (e − q is normal to
+ * the surface at q), which is within a + κu of n; the surface through q leaves its tangent
+ * plane by at most a circle's sagitta of curvature κ over the tangential part of δ (its
+ * normal turning by at most κ along it: a circle bends the most), r = |δ| at most, so y lies
+ * within u + |n·δ| + (a + κu)|δ| + r κr / (1 + √(1 − κ²r²)) (κr ≤ 1: the circle's reach) of
+ * it, the smaller of the two. A relaxation moves a fan's points along the surface (n·δ about
+ * 0), where the first bound grows by all of |δ| and this one by its square. Whatever the
+ * bent bound, only a point it puts within max_error / ISM_RM_CBOUND_RATIO is not measured
+ * (bound_of): q and the surface's points used then lie within max_error of the segment. */
 static double moved_bound(const double *e, const double y[3], double kappa, double *w,
                           double *plain)
 {
@@ -48,11 +61,10 @@ static double moved_bound(const double *e, const double y[3], double kappa, doub
     double len = ism_norm3(dx), u = e[SLOT_U] + len;
     *plain = u;
     double turn = e[SLOT_TURN] + kappa * len; /* n's turn at y */
-    double along = fabs(ism_dot3(e + SLOT_N, dx));
-    bool normal = e[SLOT_N] != 0 || e[SLOT_N + 1] != 0 || e[SLOT_N + 2] != 0;
-    double bent = e[SLOT_U] + along + (e[SLOT_TURN] + kappa * e[SLOT_U]) * len +
-                  0.5 * kappa * len * len;
-    bool use = normal && bent < u; /* never NaN: kappa finite here */
+    double along = fabs(ism_dot3(e + SLOT_N, dx)), reach = kappa * len;
+    double sagitta = reach <= 1 ? len * reach / (1 + sqrt(1 - reach * reach)) : INFINITY;
+    double bent = e[SLOT_U] + along + (e[SLOT_TURN] + kappa * e[SLOT_U]) * len + sagitta;
+    bool use = has_normal(e) && bent < u; /* NaN (κ infinite, no move): not used */
     if (w) { /* kept at y: the bent bound while n may have turned by at most
                 RM_BREC_TURN_MAX, else the one that holds whatever f's bend (no normal) */
         bool keep = use && turn <= RM_BREC_TURN_MAX;
@@ -77,14 +89,18 @@ bool rm_brec_open(rm_pass *p)
     p->brec = malloc(RM_BREC_REC * n * sizeof *p->brec);
     size_t nv = p->r.cap_verts ? p->r.cap_verts : 1;
     p->offset = malloc(4 * nv * sizeof *p->offset);
+    p->bend = malloc(RM_BREC_BEND_REC * nv * sizeof *p->bend);
+    p->jws = ism_ivjet_ws_new(p->f);
     p->cen_keep_v = UINT32_MAX;
-    if (!p->brec || !p->offset)
+    if (!p->brec || !p->offset || !p->bend || !p->jws)
         return false;
     /* no point (NaN matches no place): measured when asked */
     for (size_t i = 0; i < RM_BREC_REC * n; i++)
         p->brec[i] = NAN;
     for (size_t i = 0; i < 4 * nv; i++)
         p->offset[i] = NAN;
+    for (size_t i = 0; i < RM_BREC_BEND_REC * nv; i++) /* no box: NaN holds nothing */
+        p->bend[i] = NAN;
     return true;
 }
 
@@ -107,16 +123,26 @@ static double *keep_for(rm_pass *p, uint32_t v, const double x[3])
     return p->cen_keep;
 }
 
+static double fan_bend(rm_pass *p, uint32_t v, const double x[3]);
+
 /* The bound at y, which lies where slot s of triangle t's point was before the move (at
- * y0), with its record into w: that slot's moved to y (moved_bound, level sets bending by at
- * most kappa) when ISM_RM_CBOUND_RATIO times it is within max_error; else measured (with
- * ∇f's direction there, from the pass's memo: no evaluation more). */
+ * y0), with its record into w: that slot's moved to y (moved_bound, f's normal turning by at
+ * most *kappa) when ISM_RM_CBOUND_RATIO times it is within max_error; else measured (with
+ * ∇f's direction there, from the pass's memo: no evaluation more). *kappa is fan_bend's for
+ * v moving to x, NAN until a record asks for it: one whose bent bound could spare its point
+ * where the plain one cannot (with no turn at all, κ = 0, the bent bound is at its least).
+ * Elsewhere the point is measured, or spared by the plain bound, whatever κ (the record then
+ * keeps no normal): on gyroid-ball's default bound 35,000 fans asked -> 23,000. */
 static double bound_of(rm_pass *p, uint32_t t, int s, const double y0[3], const double y[3],
-                       double kappa, double *w)
+                       uint32_t v, const double x[3], double *kappa, double *w)
 {
     const double *e = slot_of(p, t, s);
     if (e[0] == y0[0] && e[1] == y0[1] && e[2] == y0[2]) {
-        double plain, u = moved_bound(e, y, kappa, w, &plain);
+        double plain0, least = has_normal(e) ? moved_bound(e, y, 0, NULL, &plain0) : INFINITY;
+        if (isnan(*kappa) && ISM_RM_CBOUND_RATIO * least <= p->max_error &&
+            !(ISM_RM_CBOUND_RATIO * plain0 <= p->max_error))
+            *kappa = fan_bend(p, v, x);
+        double plain, u = moved_bound(e, y, isnan(*kappa) ? INFINITY : *kappa, w, &plain);
         p->brec_known++;
         p->brec_skipped += ISM_RM_CBOUND_RATIO * plain <= p->max_error; /* rm_brec_pays */
         if (ISM_RM_CBOUND_RATIO * u <= p->max_error)
@@ -134,45 +160,95 @@ static double bound_of(rm_pass *p, uint32_t t, int s, const double y0[3], const 
     return u;
 }
 
-/* How fast f's level sets may turn about v's fan (radians per unit length), for moved_bound:
- * RM_BREC_BEND_MARGIN times the largest turn of ∇f's direction between v and a corner of its
- * fan over their distance (the pass's unit normals at the vertices: measured, kept as the
- * vertices move); INFINITY where one vanishes (beside a singular point), the normals part by
- * more than RM_BREC_BEND_MAX (a crease: ∇f jumps, no bend bounds it) or a corner is
- * protected (rm_locks.c: a crease's vertices; beside them the fan's points may lie where the
- * other branch of f's min/max rules: on gyroid-ball's 1e-3 box, without this, points taken
- * from records measured up to 0.0057 against E 0.0052). */
-static double fan_bend(const rm_pass *p, uint32_t v)
+/* The smallest |∇f| the enclosures d allow: the norm of their smallest magnitudes. */
+static double least_norm(const ism_interval d[3])
+{
+    double g2 = 0;
+    for (int k = 0; k < 3; k++) {
+        double least = d[k].lo > 0 ? d[k].lo : d[k].hi < 0 ? -d[k].hi : 0;
+        g2 += least * least;
+    }
+    return sqrt(g2);
+}
+
+/* A bound on how fast f's unit normal ∇f/|∇f| turns (radians per unit length, in any
+ * direction) over the box lo..hi, from f's interval jet there (interval_jet.h): its
+ * derivative along a unit d is (I − n nᵀ) H d / |∇f|, at most |H|_F / |∇f|, with the
+ * Hessian's entries at most their enclosures' magnitudes and |∇f| at least the norm of the
+ * gradient enclosures' smallest magnitudes. INFINITY where ∇f may vanish in the box (a
+ * singular point, or a min/max whose branches may cross there: a crease, its derivatives the
+ * whole line) or the jet is not bounded. */
+static double box_bend(rm_pass *p, const double *lo, const double *hi)
+{
+    ism_interval b[3] = {{lo[0], hi[0]}, {lo[1], hi[1]}, {lo[2], hi[2]}};
+    /* ∇f's enclosures first, without the Hessian's (half the work): where ∇f may vanish, or a
+       min/max may switch branches in the box (gyroid-ball: 8 boxes in 10, beside its crease)
+       the Hessian is not needed */
+    ism_ivgrad d;
+    if (ism_eval_interval_grad(p->f, p->jws, b, NULL, NULL, &d) != 0 || !(least_norm(d.d) > 0))
+        return INFINITY;
+    ism_ivjet j;
+    if (ism_eval_interval_jet(p->f, p->jws, b, NULL, NULL, &j) == (size_t)-1)
+        return INFINITY;
+    double gn = least_norm(j.d), h2 = 0;
+    for (int k = 0; k < 6; k++) { /* xx xy xz yy yz zz: the mixed ones twice in |H|_F */
+        double most = fmax(fabs(j.h[k].lo), fabs(j.h[k].hi));
+        h2 += (k == 1 || k == 2 || k == 4 ? 2 : 1) * most * most;
+    }
+    /* the few roundings of the sums and the root: far under the margin's relative 2^-40 */
+    double kappa = sqrt(h2) / gn * (1 + 0x1p-40);
+    return kappa >= 0 ? kappa : INFINITY; /* 0/0, ∞/∞: NaN */
+}
+
+/* How fast f's unit normal may turn where moved_bound uses it for v's fan with v at x: the
+ * box round v's place, x and the fan's corners, grown by max_error (the points the bent bound
+ * relies on, moved_bound), bounded by box_bend over a box that holds it: the one kept for v
+ * (bend) when it does, else that box grown by RM_BREC_BOX_GROW of its largest side each way,
+ * bounded and kept (a relaxation moves v and its neighbours by fractions of an edge: later
+ * checks find their boxes inside). INFINITY where a corner is protected (rm_locks.c: a
+ * crease's vertices; beside them the fan's points may lie where the other branch of f's
+ * min/max rules, and the measure there is not a distance: on gyroid-ball's 1e-3 box, without
+ * this, points taken from records measured up to 0.0057 against E 0.0052). */
+static double fan_bend(rm_pass *p, uint32_t v, const double x[3])
 {
     const rm_mesh *r = &p->r;
-    const double *nv = p->normal + 3 * (size_t)v, *x = r->m->pos + 3 * (size_t)v;
-    double worst = 0, apart = cos(RM_BREC_BEND_MAX);
-    if (ism_dot3(nv, nv) == 0)
-        return INFINITY;
+    double lo[3], hi[3], side = 0;
+    for (int k = 0; k < 3; k++)
+        lo[k] = hi[k] = x[k];
     for (uint32_t i = 0; i < r->count[v]; i++) {
         const uint32_t *c = r->m->tri + 3 * (size_t)r->vt[r->start[v] + i];
-        for (int k = 0; k < 3; k++) {
-            if (r->locked[c[k]])
+        for (int j = 0; j < 3; j++) {
+            if (r->locked[c[j]])
                 return INFINITY;
-            if (c[k] == v)
-                continue;
-            const double *nw = p->normal + 3 * (size_t)c[k];
-            double cosine = ism_dot3(nv, nw);
-            if (!(cosine >= apart))
-                return INFINITY;
-            double chord[3] = {nv[0] - nw[0], nv[1] - nw[1], nv[2] - nw[2]};
-            /* the angle from its chord (2 asin(c/2) <= c × π/3 for angles up to π/3) */
-            double turn = ism_norm3(chord) * (M_PI / 3) / rm_dist(x, r->m->pos + 3 * (size_t)c[k]);
-            worst = turn > worst ? turn : worst;
+            const double *q = r->m->pos + 3 * (size_t)c[j];
+            for (int k = 0; k < 3; k++) {
+                lo[k] = q[k] < lo[k] ? q[k] : lo[k];
+                hi[k] = q[k] > hi[k] ? q[k] : hi[k];
+            }
         }
     }
-    return RM_BREC_BEND_MARGIN * worst;
+    double *kept = p->bend + RM_BREC_BEND_REC * (size_t)v;
+    bool inside = true;
+    for (int k = 0; k < 3; k++) {
+        lo[k] -= p->max_error, hi[k] += p->max_error;
+        inside = inside && kept[k] <= lo[k] && hi[k] <= kept[3 + k]; /* NaN: no box */
+        side = fmax(side, hi[k] - lo[k]);
+    }
+    if (!inside) {
+        for (int k = 0; k < 3; k++) {
+            kept[k] = lo[k] - RM_BREC_BOX_GROW * side;
+            kept[3 + k] = hi[k] + RM_BREC_BOX_GROW * side;
+        }
+        kept[6] = box_bend(p, kept, kept + 3);
+        p->bend_boxes++;
+    }
+    return kept[6];
 }
 
 bool rm_brec_fan_within(rm_pass *p, uint32_t v, const double x[3])
 {
     const double *pos = p->r.m->pos + 3 * (size_t)v;
-    double e = p->max_error, *keep = keep_for(p, v, x), kappa = fan_bend(p, v);
+    double e = p->max_error, *keep = keep_for(p, v, x), kappa = NAN; /* not asked yet */
     if (!(rm_bound_upper(p, x) <= e))
         return rm_brec_drop(p), false;
     for (uint32_t i = 0; i < p->r.count[v]; i++) {
@@ -182,8 +258,8 @@ bool rm_brec_fan_within(rm_pass *p, uint32_t v, const double x[3])
         double *w = keep ? keep + KEEP_REC * i : scratch;
         rm_fan_point(p, v, i, pos, &t, &k, g0, m0);
         rm_fan_point(p, v, i, x, &t, &k, g, m);
-        if (!(bound_of(p, t, 0, g0, g, kappa, w) <= e) ||
-            !(bound_of(p, t, 1 + k, m0, m, kappa, w + SLOT) <= e))
+        if (!(bound_of(p, t, 0, g0, g, v, x, &kappa, w) <= e) ||
+            !(bound_of(p, t, 1 + k, m0, m, v, x, &kappa, w + SLOT) <= e))
             return rm_brec_drop(p), false;
     }
     return true;

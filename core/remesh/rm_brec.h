@@ -15,12 +15,17 @@
  * fails without the ratio). A record says something about its point only, whatever the
  * mesh did since: a slot whose point is not the one asked about knows nothing. A record also
  * keeps the unit normal of f's level set where its point was measured: a relaxation moves the
- * fan's points along the surface, and with the level sets bending at most as fast as ∇f's
- * direction turns between the fan's vertices (RM_BREC_BEND_MARGIN times it) the bound grows
- * by the move's normal part and the square of its length rather than by its whole length
- * (rm_brec.c's moved_bound; not where the fan has a protected vertex or crosses a crease).
- * gyroid-ball, default bound: pass 1,538M -> 1,437M instructions, the same meshes. Only for
- * the quality pass (the simplification keeps its own measures, rm_memo.h). */
+ * fan's points along the surface, and with f's unit normal turning by at most κ per unit
+ * length about the fan the bound grows by the move's normal part and the square of its
+ * length rather than by its whole length (rm_brec.c's moved_bound; not where the fan has a
+ * protected vertex). κ is certified: |H|_F / |∇f| over a box holding the fan grown by
+ * max_error, from f's interval jet (rm_brec.c's box_bend; none where ∇f may vanish or a
+ * min/max may switch branches in the box). Until session 18 it was twice the turn of the
+ * vertices' sampled normals per unit length, which a bend narrower than an edge between them
+ * escapes (test remesh_brec/a_bump_between_the_vertices_is_not_carried_over: a centroid
+ * 3.5 E off the surface was taken as within E). gyroid-ball, default bound: pass 1,538M ->
+ * 1,437M instructions with the sampled turn, the same meshes. Only for the quality pass (the
+ * simplification keeps its own measures, rm_memo.h). */
 #ifndef ISM_RM_BREC_H
 #define ISM_RM_BREC_H
 
@@ -30,17 +35,14 @@
  * known yet. False when out of memory. rm_pass_close frees it. */
 bool rm_brec_open(rm_pass *p);
 
-/* moved_bound (rm_brec.c) takes f's level sets to turn about a fan by at most this times the
- * fastest turn of ∇f's direction between its vertices (per unit length): the turn between
- * vertices an edge apart averages the curvature over the edge, and the fan's points lie
- * within that edge. */
-#define RM_BREC_BEND_MARGIN 2.0
-/* Unit normals of two vertices of a fan more than this apart (radians) say the fan lies across
- * a crease (f's max or min switching branches: ∇f jumps), not on a bend: no turn rate bounds
- * the level set there, and a moved point's bound is its old one plus how far it moved. 60°:
- * the polygoniser's smooth fans turn by a few degrees an edge (about 4° on the sphere preset,
- * rarely 25°, rm_pass.h's ISM_RM_CREASE_DEG), a min/max crease by tens. */
-#define RM_BREC_BEND_MAX (M_PI / 3)
+/* Doubles per vertex of rm_pass.bend: a box (low corner, high corner) and how fast f's unit
+ * normal may turn in it (rm_brec.c's fan_bend). */
+#define RM_BREC_BEND_REC 7
+/* fan_bend (rm_brec.c) bounds the normal's turn over a box about v's fan grown by this share
+ * of its largest side each way, kept for v: a relaxation moves vertices by fractions of an
+ * edge, so later checks of v's fan find their box inside and ask no interval jet again; a
+ * larger box bounds the turn more loosely (its interval enclosures widen). */
+#define RM_BREC_BOX_GROW 0.25
 /* A record not measured at its point (a bound carried by moved_bound) keeps its normal while
  * the normal may have turned by at most this (radians) since it was measured; beyond, it
  * keeps the bound that needs no normal and the point is measured the next time the records

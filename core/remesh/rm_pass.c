@@ -3,6 +3,7 @@
  * protection; at the end the renumbering without what collapses removed, and the frees. The
  * quality pass (remesh.c) and the simplification (simplify.c) both run on it. */
 #include "core/remesh/rm_pass.h"
+#include "core/eval/interval_jet.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -42,6 +43,8 @@ bool rm_pass_close(rm_pass *p, size_t nverts_before, size_t ntris_before,
     free(p->cen_keep);
     free(p->brec);
     free(p->offset);
+    free(p->bend);
+    ism_ivjet_ws_free(p->jws);
     ism_eval_ws_free(p->ws);
     memset(p, 0, sizeof *p);
     return ok;

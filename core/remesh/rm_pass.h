@@ -118,6 +118,11 @@ typedef struct rm_pass {
     double *offset;         /* 4 per vertex, with brec: a place and rm_bound_signed there */
     size_t brec_known, brec_skipped; /* points whose slot held them, and of those the ones
                                         the plain bound spares (rm_brec_pays) */
+    double *bend;           /* RM_BREC_BEND_REC per vertex, with brec: a box about its fan and
+                               a certified bound on how fast f's unit normal turns in it
+                               (rm_brec.c's fan_bend; NAN: none yet) */
+    struct ism_ivjet_ws *jws; /* f's interval jets (interval_jet.h), for bend */
+    size_t bend_boxes;      /* boxes bend was worked out for (a count for measuring) */
     size_t flips, moves, collapses, inserts;
 } rm_pass;
 
