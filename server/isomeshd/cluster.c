@@ -845,7 +845,7 @@ static bool start_entry(ismd_cluster *c, const redisReply *r)
     snprintf(j->name, sizeof j->name, "%s", name);
     snprintf(j->id, sizeof j->id, "%s", id);
     snprintf(j->user, sizeof j->user, "%s", user);
-    ismd_prefetch_surface(c->cache, c->redis, c->limits, request, NULL); /* encode, not polygonise */
+    ismd_prefetch_surface(c->cache, c->redis, c->limits, request, NULL, true); /* encode */
     bool ok = false;
     if (ismd_redis_tasks_enter(c->tasks)) {
         ismd_submit st = ismd_sched_submit_here(c->sched, key, fmt, request, user, NULL,

@@ -28,7 +28,8 @@
 #define REMOTE_POLL_NS 20000000LL     /* a computation on the cluster queue is looked at */
 
 /* T_SURFACE: holding the entry's lock, waiting for another daemon's polygonisation of its
- * surface (for another format: that daemon holds the surface's lock) to be stored. */
+ * surface (for another format: that daemon holds the surface's lock) to be stored; with
+ * --cluster, also another flight's of this daemon (it may run anywhere). */
 typedef enum tstate { T_LOOK, T_WAIT, T_HOLD, T_REMOTE, T_SURFACE } tstate;
 
 struct ismd_shared {
@@ -276,23 +277,25 @@ static ism_blob *flight_request(task *k)
 
 static void renew_lock(task *k, ism_cache_tier *t, long long now);
 
-/* Holding the entry's lock, the flight is computed here: encoded from its surface when that
- * is stored (copied from Redis first); else polygonised here under the surface's own lock,
- * or, when another daemon holds that one (it polygonises the surface for another format and
- * is storing it), queued once that daemon has stored it, to be encoded from it. */
-static long long start_here(task *k, ism_cache_tier *t, long long now)
+/* Holding the entry's lock, the flight is computed (here, or on the cluster queue): encoded
+ * from its surface when that is stored (copied from Redis first when computed here; the
+ * executor copies it on the cluster queue, cluster.c); else polygonised under the surface's
+ * own lock, or, when another daemon holds that one (it polygonises the surface for another
+ * format and is storing it), started once that daemon has stored it, to be encoded from it. */
+static long long start(task *k, ism_cache_tier *t, long long now)
 {
     ismd_shared *sh = k->sh;
     ism_blob *req = flight_request(k);
-    int have = ismd_prefetch_surface(sh->cache, t, sh->limits, req, k->surface);
+    int have = ismd_prefetch_surface(sh->cache, t, sh->limits, req, k->surface, !sh->cluster);
     ism_blob_unref(req);
     if (have == 0 && !k->surface_locked) {
         /* kin: polygonised by this daemon for another format: the pool holds this flight
-         * behind it (worker_pool.c), no need to wait for Redis */
+         * behind it (worker_pool.c), no need to wait for Redis; not so with --cluster,
+         * where the two may run on two daemons */
         char kin[sizeof sh->instance + 1];
         snprintf(kin, sizeof kin, "%s/", sh->instance);
         int got = ism_cache_redis_lock_kin(t, k->surface, k->token, sh->ttl_ms, kin);
-        if (got == 0) { /* polygonised elsewhere: look again as for a lock (wait_more) */
+        if (got == 0 || (got == 2 && sh->cluster)) { /* look again as for a lock (wait_more) */
             if (k->state != T_SURFACE) {
                 k->state = T_SURFACE;
                 k->poll_ns = POLL_MIN_NS;
@@ -303,9 +306,11 @@ static long long start_here(task *k, ism_cache_tier *t, long long now)
             renew_lock(k, t, now);
             return now + k->poll_ns;
         }
-        k->surface_locked = got == 1; /* -1, Redis failed: polygonised here all the same */
+        k->surface_locked = got == 1; /* -1, Redis failed: polygonised all the same */
     }
     k->state = T_HOLD;
+    if (sh->cluster)
+        return to_cluster(k, t, now);
     if (!to_queue(k))
         return task_end(k, t); /* gone meanwhile, or refused by the queue: release the lock */
     return now + HOLD_TICK_NS;
@@ -317,7 +322,7 @@ static long long surface_wait(task *k, ism_cache_tier *t, long long now)
     bool need_request = false;
     if (!still_wanted(k, &need_request))
         return task_end(k, t);
-    return start_here(k, t, now);
+    return start(k, t, now);
 }
 
 /* Look in Redis; answer, wait, or take the lock and queue the flight. */
@@ -385,9 +390,7 @@ static long long look(task *k, ism_cache_tier *t, long long now)
     k->state = T_HOLD;
     atomic_fetch_sub(&sh->counters->asking, 1);
     k->renew_at_ns = now + sh->ttl_ms * 1000000LL / 3;
-    if (sh->cluster)
-        return to_cluster(k, t, now);
-    return start_here(k, t, now);
+    return start(k, t, now);
 }
 
 /* Extends the lock (and the surface's, when held) every third of its lifetime. */

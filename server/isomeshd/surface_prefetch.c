@@ -7,7 +7,7 @@
 
 int ismd_prefetch_surface(ism_cache *cache, ism_cache_tier *redis,
                           const ism_pipeline_limits *limits, const ism_blob *request,
-                          char *name)
+                          char *name, bool copy)
 {
     char own[ISM_CACHE_NAME_MAX];
     if (!name)
@@ -27,6 +27,10 @@ int ismd_prefetch_surface(ism_cache *cache, ism_cache_tier *redis,
     if (ism_cache_has(cache, name))
         return 1;
     const char *argv[1] = {name};
+    if (!copy) {
+        int n = ism_cache_redis_count(redis, argv, 1);
+        return n < 0 ? -1 : n > 0;
+    }
     ism_blob *got = NULL;
     if (ism_cache_redis_fetch(redis, argv, 1, &got) != 0)
         return -1;

@@ -117,6 +117,41 @@ class OneComputationClusterTest(unittest.TestCase):
             s.cleanup()
             shutil.rmtree(tmp, ignore_errors=True)
 
+    def test_cluster_another_format_waits_for_the_surface(self):
+        # The same with --cluster, both daemons' surface stores held by one gate: whichever
+        # daemon executes A's drc, A (its origin) holds the surface's lock until the executor
+        # has stored the surface, and B, asked for a ply meanwhile, waits for it instead of
+        # putting a second polygonisation on the queue. (A's own answer, when B executes it,
+        # comes from Redis once the executor reports: after the surface, so it waits too.)
+        tmp = tempfile.mkdtemp(prefix="isomesh_gate_")
+        gate = os.path.join(tmp, "open")
+        env = dict(os.environ, ISOMESHD_TEST_SURFACE_GATE=gate)
+        s = stack.Stack(n=2, daemon_args=["--cluster"], with_nginx=False, env_for=lambda i: env)
+        s.start()
+        try:
+            a, b = s.daemons
+            req = dict(BASE, params={"b": 1.33})
+            with ThreadPoolExecutor(2) as ex:
+                first = ex.submit(a.post, "/v1/mesh", req)
+                self.assertTrue(stack.wait_until(
+                    lambda: sum(d.metric("isomesh_workers_storing") for d in s.daemons) == 1,
+                    60), a.log()[-2000:] + b.log()[-2000:])
+                self.assertEqual(surfaces(s.redis), [])
+                other = ex.submit(b.post, "/v1/mesh?format=ply", req)
+                self.assertTrue(b.wait_metric("isomesh_redis_lock_waits_total", 1),
+                                b.log()[-2000:])
+                self.assertFalse(other.done())
+                open(gate, "w").close()
+                r1, r2 = first.result(), other.result()
+            self.assertEqual(r1.status, 200, r1.body[:300])
+            self.assertEqual(r2.status, 200, r2.body[:300])
+            self.assertEqual(polygonisations(s.daemons), 1, a.log()[-2000:] + b.log()[-2000:])
+            self.assertEqual(encodings(s.daemons), 1)
+            self.assertEqual(len(surfaces(s.redis)), 1)
+        finally:
+            s.cleanup()
+            shutil.rmtree(tmp, ignore_errors=True)
+
     def test_two_daemons_sharing_redis(self):
         self.run_on([], 1.31)
 
