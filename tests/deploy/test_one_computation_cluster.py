@@ -114,8 +114,9 @@ class OneComputationClusterTest(unittest.TestCase):
             self.assertTrue(stack.wait_until(
                 lambda: s.redis.command("KEYS", "isomesh:v1:lock:*") == [], 10))
         finally:
-            s.cleanup()
+            reports = s.cleanup()
             shutil.rmtree(tmp, ignore_errors=True)
+        self.assertEqual(reports, [], "sanitizer reports")
 
     def test_cluster_another_format_waits_for_the_surface(self):
         # The same with --cluster, both daemons' surface stores held by one gate: whichever
@@ -149,8 +150,9 @@ class OneComputationClusterTest(unittest.TestCase):
             self.assertEqual(encodings(s.daemons), 1)
             self.assertEqual(len(surfaces(s.redis)), 1)
         finally:
-            s.cleanup()
+            reports = s.cleanup()
             shutil.rmtree(tmp, ignore_errors=True)
+        self.assertEqual(reports, [], "sanitizer reports")
 
     def test_two_daemons_sharing_redis(self):
         self.run_on([], 1.31)
