@@ -421,6 +421,13 @@ def start_ceiling(build, tmp, body):
     return wait_serving(p, port, "/")
 
 
+def own_answers(d):
+    """Answers the daemon's own sender sent (from the cache file or from memory)."""
+    m = d.metrics()
+    return m.get("isomesh_sendfile_responses_total", 0) + \
+        m.get("isomesh_own_memory_responses_total", 0)
+
+
 def variant_rows(build, tmp, args, label, conns_list, secs, nginx_all, req=MESH_REQ):
     """Rows of a daemon started with args beside nginx (a worker per core): {conns: figures}."""
     d = start_daemon(build, tmp, "--workers", "2", *args)
@@ -428,8 +435,13 @@ def variant_rows(build, tmp, args, label, conns_list, secs, nginx_all, req=MESH_
     try:
         url, _ = cached_url(d, req)
         for conns in conns_list:
+            before = own_answers(d)
             r = out[conns] = wrk(url, conns, secs, pid=d.proc.pid)
             row(label, conns, r)
+            # a connection the own sender declines is libmicrohttpd's for good: say whose
+            # answers the row measured (the first row follows cached_url's computation)
+            print("  answered by the own sender: %d of %d" % (
+                own_answers(d) - before, round(r["rps"] * secs)))
             if conns in nginx_all:
                 n = nginx_all[conns]
                 print("  beside nginx (a worker per core): req/s %.2fx, p99 %.2fx, CPU/req "
