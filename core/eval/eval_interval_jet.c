@@ -12,9 +12,19 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* kept[i]: instruction i's value and first partials from the last
+ * ism_eval_interval_grad_kept (kept_t over kept_box), when kept_ok: every instruction of
+ * kept_t is one whose Hessian hess_only can take from them. */
+typedef ism_interval ism_kept_vd[4];
+
 struct ism_ivjet_ws {
     uint32_t nregs;
     ism_ivjet *r;
+    size_t kept_cap;
+    ism_kept_vd *kept;
+    const ism_tape *kept_t;
+    ism_interval kept_box[3];
+    bool kept_ok;
 };
 
 /* The (i, j) index pairs of the six Hessian entries. */
@@ -30,7 +40,13 @@ ism_ivjet_ws *ism_ivjet_ws_new(const ism_tape *t)
         return NULL;
     ws->nregs = t->nregs;
     ws->r = ism_line_alloc(t->nregs * sizeof *ws->r);
-    if (!ws->r) {
+    ws->kept_cap = t->len;
+    ws->kept = ism_line_alloc((t->len ? t->len : 1) * sizeof *ws->kept);
+    ws->kept_t = NULL;
+    ws->kept_ok = false;
+    if (!ws->r || !ws->kept) {
+        free(ws->r);
+        free(ws->kept);
         free(ws);
         return NULL;
     }
@@ -42,6 +58,7 @@ void ism_ivjet_ws_free(ism_ivjet_ws *ws)
     if (!ws)
         return;
     free(ws->r);
+    free(ws->kept);
     free(ws);
 }
 
@@ -504,8 +521,36 @@ static ALWAYS_INLINE void sanitize(ism_ivjet *o, unsigned w)
     }
 }
 
+/* Operations whose Hessian hess_only computes from the operands' kept values and first
+ * partials alone: the affine ones, +, −, ×, squares and integer powers (no branch, no pole,
+ * no libm function whose value the chain rule would need again). */
+static bool hess_from_kept(int op)
+{
+    switch (op) {
+    case ISM_OP_CONST: case ISM_OP_COPY: case ISM_OP_ADD_RC: case ISM_OP_SUB_CR:
+    case ISM_OP_MUL_RC: case ISM_OP_DIV_RC: case ISM_OP_NEG: case ISM_OP_ADD_RR:
+    case ISM_OP_SUB_RR: case ISM_OP_MUL_RR: case ISM_OP_SQUARE: case ISM_OP_POWI:
+        return true;
+    default:
+        return false;
+    }
+}
+
+/* The input registers over box (a bound not a number, or lo > hi: the whole line). */
+static ALWAYS_INLINE void load_box(ism_ivjet *r, const ism_interval box[3], unsigned all)
+{
+    _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++) {
+        r[k].v = box[k].lo <= box[k].hi ? box[k] : ism_iv_whole();
+        set_zero_derivs(&r[k], all);
+        r[k].d[k] = ivc(1.0);
+    }
+}
+
+/* keep: NULL, or the gradient pass's (second = 0) record of every instruction's value and
+ * first partials as written to its register (ism_eval_interval_grad_kept). */
 static ALWAYS_INLINE size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
-                                const uint8_t *force, uint8_t *kinks, int second, ism_ivjet *out)
+                                const uint8_t *force, uint8_t *kinks, int second, ism_ivjet *out,
+                                ism_kept_vd *keep)
 {
     const unsigned all = want_of(7u, second, false);
     if (!ws || !t || ws->nregs < t->nregs) {
@@ -515,11 +560,7 @@ static ALWAYS_INLINE size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_i
         return (size_t)-1;
     }
     ism_ivjet *r = ws->r;
-    _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++) {
-        r[k].v = box[k].lo <= box[k].hi ? box[k] : ism_iv_whole();
-        set_zero_derivs(&r[k], all);
-        r[k].d[k] = ivc(1.0);
-    }
+    load_box(r, box, all);
     size_t nkinks = 0;
     for (size_t i = 0; i < t->len; i++) {
         const ism_instr *in = &t->code[i];
@@ -536,24 +577,175 @@ static ALWAYS_INLINE size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_i
         nkinks += (size_t)kink;
         if (kinks)
             kinks[i] = (uint8_t)kink;
+        if (keep) {
+            const ism_ivjet *o = &r[in->out];
+            keep[i][0] = o->v;
+            _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
+                keep[i][k + 1] = o->d[k];
+        }
     }
     *out = r[t->result];
     return nkinks;
+}
+
+/* The Hessian part of one instruction (hess_from_kept(in->op)), the second-order pass's
+ * want bits w: the h lines of jet_op's steps for it, reading the operands' registers as
+ * they stand (values and first partials replayed from the kept record). */
+static ALWAYS_INLINE void hess_op(const ism_instr *in, ism_ivjet *r, unsigned w)
+{
+    ism_ivjet *o = &r[in->out];
+    const ism_ivjet *a = &r[in->a];
+    switch (in->op) {
+    case ISM_OP_CONST:
+        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+            o->h[e] = ivc(0.0);
+        return;
+    case ISM_OP_COPY: case ISM_OP_ADD_RC:
+        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+            o->h[e] = !DO_H(w, e) ? ivc(0.0) : a->h[e];
+        return;
+    case ISM_OP_SUB_CR: case ISM_OP_NEG:
+        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+            o->h[e] = !DO_H(w, e) ? ivc(0.0) : is_zero(a->h[e]) ? a->h[e] : iv_neg(a->h[e]);
+        return;
+    case ISM_OP_MUL_RC:
+        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+            o->h[e] = !DO_H(w, e)        ? ivc(0.0)
+                      : is_zero(a->h[e]) ? a->h[e]
+                                         : iv_mul_c(a->h[e], in->imm);
+        return;
+    case ISM_OP_DIV_RC:
+        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+            o->h[e] = !DO_H(w, e)        ? ivc(0.0)
+                      : is_zero(a->h[e]) ? a->h[e]
+                                         : iv_div_c(a->h[e], in->imm);
+        return;
+    case ISM_OP_ADD_RR: case ISM_OP_SUB_RR: {
+        const ism_ivjet *b = &r[in->b];
+        bool sub = in->op == ISM_OP_SUB_RR;
+        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+            o->h[e] = !DO_H(w, e) ? ivc(0.0)
+                      : sub       ? subz(a->h[e], b->h[e])
+                                  : addz(a->h[e], b->h[e]);
+        return;
+    }
+    case ISM_OP_MUL_RR: {
+        const ism_ivjet *b = &r[in->b];
+        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++) {
+            if (!DO_H(w, e)) {
+                o->h[e] = ivc(0.0);
+                continue;
+            }
+            int i = HI[e], j = HJ[e];
+            ism_interval cross = addz(mulz(a->d[i], b->d[j]), mulz(a->d[j], b->d[i]));
+            o->h[e] = addz(addz(mulz(a->h[e], b->v), mulz(a->v, b->h[e])), cross);
+        }
+        return;
+    }
+    default: { /* SQUARE, POWI: chain's Hessian with g' and g'' as op_unary takes them */
+        ism_interval u = a->v, g1;
+        if (in->op == ISM_OP_SQUARE)
+            g1 = iv_mul_c(u, 2.0);
+        else
+            g1 = iv_mul_c(iv_powi(u, in->b - 1), (double)in->b);
+        ism_interval g2 = second_factor(in, u, o->v, g1); /* o->v unused for these two */
+        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+            o->h[e] = DO_H(w, e) ? addz(mulz(g1, a->h[e]), mulz(g2, dd(a, e))) : ivc(0.0);
+        return;
+    }
+    }
+}
+
+/* Whether some Hessian bound of o is NaN (any_nan's test on the h part alone). */
+static ALWAYS_INLINE bool any_nan_h(const ism_ivjet *o)
+{
+#if defined(__SSE2__)
+    __m128d bad = _mm_setzero_pd();
+    _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+        bad = _mm_or_pd(bad, _mm_cmpunord_pd(_mm_loadu_pd(&o->h[e].lo),
+                                             _mm_loadu_pd(&o->h[e].lo)));
+    return _mm_movemask_pd(bad) != 0;
+#else
+    (void)o;
+    return true;
+#endif
+}
+
+/* The second-order pass over the kept record of the gradient pass over the same box: each
+ * instruction's value and first partials copied from it (the second-order pass computes
+ * them with the same operations on the same operands, and cleans them the same way: a
+ * NaN-free bound is kept as it is), its Hessian computed as run's would be. */
+static size_t hess_only(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
+                        uint8_t *kinks, ism_ivjet *out)
+{
+    const unsigned all = want_of(7u, 1, false);
+    ism_ivjet *r = ws->r;
+    load_box(r, box, all);
+    for (size_t i = 0; i < t->len; i++) {
+        const ism_instr *in = &t->code[i];
+        ism_ivjet *o = &r[in->out];
+        unsigned w = in->free_of == 0
+                         ? all
+                         : want_of(ISM_FREE_ALL & ~(unsigned)in->free_of, 1, in->smooth);
+        o->v = ws->kept[i][0];
+        _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
+            o->d[k] = ws->kept[i][k + 1];
+        hess_op(in, r, w);
+        if (any_nan_h(o)) {
+            _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+                if (DO_H(w, e))
+                    o->h[e] = ism_iv_sane(o->h[e]);
+        }
+        if (kinks)
+            kinks[i] = 0;
+    }
+    *out = r[t->result];
+    return 0;
+}
+
+static bool same_box(const ism_interval a[3], const ism_interval b[3])
+{
+    return memcmp(a, b, 3 * sizeof *a) == 0;
 }
 
 size_t ism_eval_interval_grad(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
                               const uint8_t *force, uint8_t *kinks, ism_ivgrad *out)
 {
     ism_ivjet j;
-    size_t n = run(t, ws, box, force, kinks, 0, &j);
+    size_t n = run(t, ws, box, force, kinks, 0, &j, NULL);
     out->v = j.v;
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         out->d[k] = j.d[k];
     return n;
 }
 
+size_t ism_eval_interval_grad_kept(const ism_tape *t, ism_ivjet_ws *ws,
+                                   const ism_interval box[3], ism_ivgrad *out)
+{
+    bool keep = ws && t && ws->nregs >= t->nregs && t->len <= ws->kept_cap;
+    if (!keep)
+        return ism_eval_interval_grad(t, ws, box, NULL, NULL, out);
+    ws->kept_ok = false;
+    ism_ivjet j;
+    size_t n = run(t, ws, box, NULL, NULL, 0, &j, ws->kept);
+    out->v = j.v;
+    _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
+        out->d[k] = j.d[k];
+    bool ok = n == 0;
+    for (size_t i = 0; ok && i < t->len; i++)
+        ok = hess_from_kept(t->code[i].op);
+    ws->kept_t = t;
+    memcpy(ws->kept_box, box, sizeof ws->kept_box);
+    ws->kept_ok = ok;
+    return n;
+}
+
 size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
                              const uint8_t *force, uint8_t *kinks, ism_ivjet *out)
 {
-    return run(t, ws, box, force, kinks, 1, out);
+    if (ws && ws->kept_ok && ws->kept_t == t && !force && same_box(box, ws->kept_box)) {
+        ws->kept_ok = false; /* once: the record is of one gradient pass */
+        return hess_only(t, ws, box, kinks, out);
+    }
+    return run(t, ws, box, force, kinks, 1, out, NULL);
 }

@@ -46,6 +46,15 @@ void ism_ivjet_ws_free(ism_ivjet_ws *ws);
 size_t ism_eval_interval_grad(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
                               const uint8_t *force, uint8_t *kinks, ism_ivgrad *out);
 
+/* ism_eval_interval_grad with no branch forced and no kinks wanted, keeping in ws every
+ * instruction's value and first partials: a following ism_eval_interval_jet of t over the
+ * same box (bit for bit) on ws, with no branch forced, then computes only the Hessian (once;
+ * other evaluations on ws between the two do not matter), where t holds only affine
+ * operations, +, −, ×, squares and integer powers — the results are the same bits either
+ * way. t must stay allocated until then. */
+size_t ism_eval_interval_grad_kept(const ism_tape *t, ism_ivjet_ws *ws,
+                                   const ism_interval box[3], ism_ivgrad *out);
+
 /* The same with the Hessian. For a degenerate box [c, c] this encloses the exact jet at c. */
 size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
                              const uint8_t *force, uint8_t *kinks, ism_ivjet *out);

@@ -46,6 +46,12 @@ bool ism_dual_over(const ism_dual_model *m, const double lo[3], const double hi[
 ism_interval ism_dual_second_order(const ism_dual_model *m, const double lo[3],
                                    const double hi[3]);
 
+/* ism_dual_second_order's bounds on each sub-box k of lo..hi halved at mid (NULL: the
+ * centre; bit a of k the upper half along a), from terms taken once per half and pair of
+ * halves (the proofs on the sub-boxes take them so). */
+void ism_dual_sub_forms(const ism_dual_model *m, const double lo[3], const double *mid,
+                        const double hi[3], ism_interval f[8]);
+
 /* Both in one: f and ∇f over lo..hi by its own model. */
 bool ism_dual_enclose(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
                       const double hi[3], ism_ivgrad *g, uint64_t *intervals);

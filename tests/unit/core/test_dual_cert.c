@@ -7,6 +7,7 @@
  * cheapest-first order gives the plain sub-box rule's verdicts. */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <string.h>
 #include "core/eval/eval.h"
 #include "core/eval/interval_ops.h"
 #include "core/octree/dual_cert.h"
@@ -432,6 +433,46 @@ Test(dual_cert, halves_shown_free_are_free)
     cr_expect(moved_apart > 0, "no sub-box free at the centre's halving meets the torus at 0.3");
     cr_expect(opened > 100, "%d boxes tried with open_whole", opened);
     ism_eval_ws_free(ws);
+    ism_ivjet_ws_free(jw);
+    ism_tape_free(t);
+}
+
+/* ism_dual_sub_forms (the terms taken once per half and pair of halves, as the proofs on the
+ * sub-boxes take them) gives each sub-box ism_dual_second_order's bounds on its own box, to
+ * the bit: cells round the torus's tube of three sizes, on and off the lattice (1e-3 and
+ * √2 − 1 of a cell), halved at the centre (NULL) and at 0.3 / 0.7 of each side. A half or a
+ * pair of halves taken for the wrong sub-box shows as a differing bound. */
+Test(dual_cert, sub_box_forms_are_their_own_forms)
+{
+    ism_tape *t = pf_compile(&pf_ring_torus);
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+    cr_assert(jw);
+    size_t boxes = 0;
+    for (int i = 0; i < 2592; i += 7) {
+        double lo[3], hi[3];
+        tube_cell(i, lo, hi);
+        ism_dual_model m;
+        uint64_t n = 0;
+        if (!ism_dual_taylor(t, jw, lo, hi, &m, &n))
+            continue;
+        for (int at = 0; at < 3; at++) {
+            double mid[3], frac = at == 1 ? 0.3 : 0.7;
+            for (int a = 0; a < 3; a++)
+                mid[a] = at == 0 ? 0.5 * lo[a] + 0.5 * hi[a] : lo[a] + frac * (hi[a] - lo[a]);
+            ism_interval f[8];
+            ism_dual_sub_forms(&m, lo, at == 0 ? NULL : mid, hi, f);
+            for (int k = 0; k < 8; k++) {
+                double sl[3], sh[3];
+                halve(lo, mid, hi, k, sl, sh);
+                ism_interval want = ism_dual_second_order(&m, sl, sh);
+                cr_assert(memcmp(&f[k], &want, sizeof want) == 0,
+                          "cell %d, halving %d, sub-box %d: [%a, %a] vs [%a, %a]", i, at, k,
+                          f[k].lo, f[k].hi, want.lo, want.hi);
+            }
+            boxes++;
+        }
+    }
+    cr_assert(boxes > 1000, "%zu", boxes);
     ism_ivjet_ws_free(jw);
     ism_tape_free(t);
 }

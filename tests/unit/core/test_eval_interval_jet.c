@@ -427,3 +427,62 @@ Test(eval_interval_jet, no_nan_bound_in_any_partial)
         ism_tape_free(t);
     }
 }
+
+/* A gradient kept (ism_eval_interval_grad_kept) then the jet of the same box: the jet computes
+ * only the Hessian where the tape allows, and must give the jet of a fresh second-order pass
+ * to the bit — with other boxes evaluated on the workspace in between (registers overwritten:
+ * the values and first partials come from the record), with free_of cleared, and the kept
+ * gradient itself the plain one's bits. */
+static void kept_then_jet(const char *name, ism_tape *t, const double *within, uint64_t seed)
+{
+    ism_ivjet_ws *plain = ism_ivjet_ws_new(t), *kept = ism_ivjet_ws_new(t);
+    cr_assert(plain && kept);
+    test_rng rng = { seed };
+    size_t nboxes = test_scaled(200);
+    for (size_t n = 0; n < nboxes; n++) {
+        ism_interval b[3], other[3];
+        random_box(&rng, within, b);
+        random_box(&rng, within, other);
+        ism_ivjet J1, J2, scratch;
+        ism_ivgrad G1, G2, gs;
+        size_t k1 = ism_eval_interval_jet(t, plain, b, NULL, NULL, &J1);
+        size_t g1 = ism_eval_interval_grad(t, plain, b, NULL, NULL, &G1);
+        size_t g2 = ism_eval_interval_grad_kept(t, kept, b, &G2);
+        cr_assert(g1 == g2 && same_bits(&G1, &G2, sizeof G1), "%s: kept gradient differs", name);
+        if (n % 3 == 1)
+            ism_eval_interval_grad(t, kept, other, NULL, NULL, &gs);
+        if (n % 3 == 2)
+            ism_eval_interval_jet(t, kept, other, NULL, NULL, &scratch);
+        uint8_t kinks[64];
+        cr_assert(t->len <= sizeof kinks);
+        memset(kinks, 7, sizeof kinks);
+        size_t k2 = ism_eval_interval_jet(t, kept, b, NULL, kinks, &J2);
+        cr_assert(k1 == k2 && same_bits(&J1, &J2, sizeof J1), "%s: jet after a kept gradient",
+                  name);
+        for (size_t i = 0; i < t->len; i++)
+            cr_assert(kinks[i] <= 1, "%s: kinks not written", name);
+        size_t k3 = ism_eval_interval_jet(t, kept, b, NULL, NULL, &J2); /* the record is spent */
+        cr_assert(k1 == k3 && same_bits(&J1, &J2, sizeof J1), "%s: second jet", name);
+    }
+    ism_ivjet_ws_free(plain);
+    ism_ivjet_ws_free(kept);
+}
+
+Test(eval_interval_jet, kept_gradient_then_jet_changes_no_bit)
+{
+    const double within[6] = { -2, -2, -2, 2, 2, 2 };
+    for (size_t i = 0; i < sizeof OPS_EXPRS / sizeof OPS_EXPRS[0]; i++) {
+        ism_tape *t = compile(OPS_EXPRS[i]), *bare = compile(OPS_EXPRS[i]);
+        for (size_t k = 0; k < bare->len; k++)
+            bare->code[k].free_of = bare->code[k].smooth = 0;
+        kept_then_jet(OPS_EXPRS[i], t, within, 1300 + i);
+        kept_then_jet(OPS_EXPRS[i], bare, within, 1400 + i);
+        ism_tape_free(t);
+        ism_tape_free(bare);
+    }
+    for (size_t s = 0; s < TEST_NSURFACES; s++) {
+        ism_tape *t = test_surface_compile(&TEST_SURFACES[s]);
+        kept_then_jet(TEST_SURFACES[s].name, t, TEST_SURFACES[s].box, 1500 + s);
+        ism_tape_free(t);
+    }
+}
