@@ -168,6 +168,15 @@ static ALWAYS_INLINE ism_interval dd(const ism_ivjet *a, int e)
     return i == j ? iv_square(a->d[i]) : iv_mul(a->d[i], a->d[j]);
 }
 
+/* The Hessian parts of the steps below, one function each: the second-order pass computes
+ * them after the value and the first partials, and hess_only alone. */
+static ALWAYS_INLINE void chain_hess(ism_ivjet *o, const ism_ivjet *a, ism_interval g1,
+                                     ism_interval g2, unsigned w)
+{
+    _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+        o->h[e] = DO_H(w, e) ? addz(mulz(g1, a->h[e]), mulz(g2, dd(a, e))) : ivc(0.0);
+}
+
 /* The chain rule for out = g(a) given g(U), g'(U), g''(U). */
 static ALWAYS_INLINE void chain(ism_ivjet *o, const ism_ivjet *a, ism_interval g, ism_interval g1,
                   ism_interval g2, unsigned w)
@@ -175,16 +184,22 @@ static ALWAYS_INLINE void chain(ism_ivjet *o, const ism_ivjet *a, ism_interval g
     o->v = g;
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         o->d[k] = DO_D(w, k) ? mulz(g1, a->d[k]) : ivc(0.0);
-    if (w & SECOND) {
-        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-            o->h[e] = DO_H(w, e) ? addz(mulz(g1, a->h[e]), mulz(g2, dd(a, e))) : ivc(0.0);
-    }
+    if (w & SECOND)
+        chain_hess(o, a, g1, g2, w);
 }
 
 static ism_interval lin_copy(ism_interval u, double c) { (void)c; return u; }
 static ism_interval lin_neg(ism_interval u, double c) { (void)c; return iv_neg(u); }
 static ism_interval lin_mul(ism_interval u, double c) { return iv_mul_c(u, c); }
 static ism_interval lin_div(ism_interval u, double c) { return iv_div_c(u, c); }
+
+static ALWAYS_INLINE void each_hess(ism_ivjet *o, const ism_ivjet *a,
+                                    ism_interval (*fn)(ism_interval, double), double c,
+                                    unsigned w)
+{
+    _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+        o->h[e] = !DO_H(w, e) ? ivc(0.0) : is_zero(a->h[e]) ? a->h[e] : fn(a->h[e], c);
+}
 
 /* Applies fn(., c) to the value and every derivative of a. */
 static ALWAYS_INLINE void each(ism_ivjet *o, const ism_ivjet *a, ism_interval (*fn)(ism_interval, double),
@@ -193,10 +208,8 @@ static ALWAYS_INLINE void each(ism_ivjet *o, const ism_ivjet *a, ism_interval (*
     o->v = fn(a->v, c);
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         o->d[k] = !DO_D(w, k) ? ivc(0.0) : is_zero(a->d[k]) ? a->d[k] : fn(a->d[k], c);
-    if (w & SECOND) {
-        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-            o->h[e] = !DO_H(w, e) ? ivc(0.0) : is_zero(a->h[e]) ? a->h[e] : fn(a->h[e], c);
-    }
+    if (w & SECOND)
+        each_hess(o, a, fn, c, w);
 }
 
 /* out = s * a + shift for a constant factor s: derivatives scale exactly as the value. */
@@ -331,17 +344,36 @@ static ALWAYS_INLINE void op_unary(ism_ivjet *o, const ism_instr *in, const ism_
     chain(o, a, g, g1, (w & SECOND) ? second_factor(in, u, g, g1) : ivc(0.0), w);
 }
 
+static ALWAYS_INLINE void add_hess(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b,
+                                   int sub, unsigned w)
+{
+    _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+        o->h[e] = !DO_H(w, e) ? ivc(0.0)
+                  : sub       ? subz(a->h[e], b->h[e])
+                              : addz(a->h[e], b->h[e]);
+}
+
 static ALWAYS_INLINE void op_add(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, int sub, unsigned w)
 {
     ism_interval (*fn)(ism_interval, ism_interval) = sub ? subz : addz;
     o->v = sub ? iv_sub(a->v, b->v) : iv_add(a->v, b->v);
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         o->d[k] = DO_D(w, k) ? fn(a->d[k], b->d[k]) : ivc(0.0);
-    if (w & SECOND) {
-        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-            o->h[e] = !DO_H(w, e) ? ivc(0.0)
-                      : sub       ? subz(a->h[e], b->h[e])
-                                  : addz(a->h[e], b->h[e]);
+    if (w & SECOND)
+        add_hess(o, a, b, sub, w);
+}
+
+static ALWAYS_INLINE void mul_hess(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b,
+                                   unsigned w)
+{
+    _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++) {
+        if (!DO_H(w, e)) {
+            o->h[e] = ivc(0.0);
+            continue;
+        }
+        int i = HI[e], j = HJ[e];
+        ism_interval cross = addz(mulz(a->d[i], b->d[j]), mulz(a->d[j], b->d[i]));
+        o->h[e] = addz(addz(mulz(a->h[e], b->v), mulz(a->v, b->h[e])), cross);
     }
 }
 
@@ -351,17 +383,8 @@ static ALWAYS_INLINE void op_mul(ism_ivjet *o, const ism_ivjet *a, const ism_ivj
     o->v = iv_mul(a->v, b->v);
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         o->d[k] = DO_D(w, k) ? addz(mulz(a->d[k], b->v), mulz(a->v, b->d[k])) : ivc(0.0);
-    if (w & SECOND) {
-        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++) {
-            if (!DO_H(w, e)) {
-                o->h[e] = ivc(0.0);
-                continue;
-            }
-            int i = HI[e], j = HJ[e];
-            ism_interval cross = addz(mulz(a->d[i], b->d[j]), mulz(a->d[j], b->d[i]));
-            o->h[e] = addz(addz(mulz(a->h[e], b->v), mulz(a->v, b->h[e])), cross);
-        }
-    }
+    if (w & SECOND)
+        mul_hess(o, a, b, w);
 }
 
 /* q = a / b: q' = (a' - q b') / b, q'' = (a'' - q' b'^T - b' q'^T - q b'') / b. */
@@ -600,57 +623,20 @@ static ALWAYS_INLINE void hess_op(const ism_instr *in, ism_ivjet *r, unsigned w)
         _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
             o->h[e] = ivc(0.0);
         return;
-    case ISM_OP_COPY: case ISM_OP_ADD_RC:
-        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-            o->h[e] = !DO_H(w, e) ? ivc(0.0) : a->h[e];
-        return;
-    case ISM_OP_SUB_CR: case ISM_OP_NEG:
-        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-            o->h[e] = !DO_H(w, e) ? ivc(0.0) : is_zero(a->h[e]) ? a->h[e] : iv_neg(a->h[e]);
-        return;
-    case ISM_OP_MUL_RC:
-        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-            o->h[e] = !DO_H(w, e)        ? ivc(0.0)
-                      : is_zero(a->h[e]) ? a->h[e]
-                                         : iv_mul_c(a->h[e], in->imm);
-        return;
-    case ISM_OP_DIV_RC:
-        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-            o->h[e] = !DO_H(w, e)        ? ivc(0.0)
-                      : is_zero(a->h[e]) ? a->h[e]
-                                         : iv_div_c(a->h[e], in->imm);
-        return;
-    case ISM_OP_ADD_RR: case ISM_OP_SUB_RR: {
-        const ism_ivjet *b = &r[in->b];
-        bool sub = in->op == ISM_OP_SUB_RR;
-        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-            o->h[e] = !DO_H(w, e) ? ivc(0.0)
-                      : sub       ? subz(a->h[e], b->h[e])
-                                  : addz(a->h[e], b->h[e]);
-        return;
-    }
-    case ISM_OP_MUL_RR: {
-        const ism_ivjet *b = &r[in->b];
-        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++) {
-            if (!DO_H(w, e)) {
-                o->h[e] = ivc(0.0);
-                continue;
-            }
-            int i = HI[e], j = HJ[e];
-            ism_interval cross = addz(mulz(a->d[i], b->d[j]), mulz(a->d[j], b->d[i]));
-            o->h[e] = addz(addz(mulz(a->h[e], b->v), mulz(a->v, b->h[e])), cross);
-        }
-        return;
-    }
-    default: { /* SQUARE, POWI: chain's Hessian with g' and g'' as op_unary takes them */
+    case ISM_OP_COPY: case ISM_OP_ADD_RC: each_hess(o, a, lin_copy, in->imm, w); return;
+    case ISM_OP_SUB_CR: case ISM_OP_NEG: each_hess(o, a, lin_neg, in->imm, w); return;
+    case ISM_OP_MUL_RC: each_hess(o, a, lin_mul, in->imm, w); return;
+    case ISM_OP_DIV_RC: each_hess(o, a, lin_div, in->imm, w); return;
+    case ISM_OP_ADD_RR: add_hess(o, a, &r[in->b], 0, w); return;
+    case ISM_OP_SUB_RR: add_hess(o, a, &r[in->b], 1, w); return;
+    case ISM_OP_MUL_RR: mul_hess(o, a, &r[in->b], w); return;
+    default: { /* SQUARE, POWI: g' and g'' as op_unary takes them */
         ism_interval u = a->v, g1;
         if (in->op == ISM_OP_SQUARE)
             g1 = iv_mul_c(u, 2.0);
         else
             g1 = iv_mul_c(iv_powi(u, in->b - 1), (double)in->b);
-        ism_interval g2 = second_factor(in, u, o->v, g1); /* o->v unused for these two */
-        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-            o->h[e] = DO_H(w, e) ? addz(mulz(g1, a->h[e]), mulz(g2, dd(a, e))) : ivc(0.0);
+        chain_hess(o, a, g1, second_factor(in, u, o->v, g1), w); /* o->v unused for these */
         return;
     }
     }
