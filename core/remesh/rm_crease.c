@@ -64,8 +64,8 @@ static double turn_rate(const rm_pass *p, uint32_t v, const double t[3], rm_curv
     if (!(len > p->gthresh) || !isfinite(len))
         return 0;
     double n[3] = {g[0] / len, g[1] / len, g[2] / len};
-    double u[3] = {n[1] * t[2] - n[2] * t[1], n[2] * t[0] - n[0] * t[2],
-                   n[0] * t[1] - n[1] * t[0]};
+    double u[3];
+    ism_cross3(n, t, u);
     if (!(ism_normalise3(u) > 0))
         return 0;
     double hu[3] = {h[0] * u[0] + h[1] * u[1] + h[2] * u[2],

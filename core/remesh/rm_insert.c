@@ -103,9 +103,7 @@ static bool place_in_needle(const rm_pass *p, const uint32_t abc[3], double x[3]
         e1[k] = (b[k] - a[k]) / len;
     }
     /* e2 = n × e1: in the plane, perpendicular to ab, on c's side (the winding a, b, c) */
-    e2[0] = n[1] * e1[2] - n[2] * e1[1];
-    e2[1] = n[2] * e1[0] - n[0] * e1[2];
-    e2[2] = n[0] * e1[1] - n[1] * e1[0];
+    ism_cross3(n, e1, e2);
     double s = len * sin(beta) / sin(alpha + beta);
     for (int k = 0; k < 3; k++)
         x[k] = a[k] + s * (cos(alpha) * e1[k] + sin(alpha) * e2[k]);

@@ -11,6 +11,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include "core/mesh/mesh.h"
+#include "core/util/vec3.h"
 
 /* Room kept in each vertex's slot beyond its starting degree: a flip adds one triangle to
  * each of two vertices, so a vertex may gain at most this many before flips stop touching it
@@ -96,18 +97,10 @@ bool rm_slot_reserve(rm_mesh *r, uint32_t v, uint32_t n);
 /* (b - a) x (c - a), not normalised; returns its length. */
 static inline double rm_cross(const double *a, const double *b, const double *c, double n[3])
 {
-    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    n[0] = u[1] * v[2] - u[2] * v[1];
-    n[1] = u[2] * v[0] - u[0] * v[2];
-    n[2] = u[0] * v[1] - u[1] * v[0];
-    return sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    ism_tri_cross3(a, b, c, n);
+    return ism_norm3(n);
 }
-static inline double rm_dist(const double *p, const double *q)
-{
-    double d[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
-    return sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-}
+static inline double rm_dist(const double *p, const double *q) { return ism_dist3(p, q); }
 /* The angle at p between p->q and p->s (radians, 0 for a zero-length side). */
 double rm_angle(const double *p, const double *q, const double *s);
 /* The smallest of the triangle's three angles (radians). */
