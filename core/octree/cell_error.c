@@ -123,9 +123,8 @@ static bool loop_tris(ism_sampler *s, const double (*p)[3], int n, ism_cell_out 
 
 /* The node's edge roots, each with the two faces its edge lies on. A corner exactly on the
  * surface is one root, on the two faces the surface enters there (none: it only touches the
- * node); false when an edge lies in f = 0 (two such corners joined: a lattice plane of the
- * surface), where the roots make no clean polygon. */
-static bool edge_roots(ism_sampler *s, const ism_corners *k, double shift, const double *box,
+ * node; ism_zero_corner_faces). */
+static void edge_roots(ism_sampler *s, const ism_corners *k, double shift, const double *box,
                        root_pt *r, int *n)
 {
     *n = 0;
@@ -133,8 +132,6 @@ static bool edge_roots(ism_sampler *s, const ism_corners *k, double shift, const
         if (k->f[c] != 0)
             continue;
         unsigned m = ism_zero_corner_faces(k->f, c);
-        if (m & ISM_ZERO_EDGE)
-            return false;
         if (!m)
             continue;
         for (int f = 0, j = 0; f < 6; f++)
@@ -164,7 +161,6 @@ static bool edge_roots(ism_sampler *s, const ism_corners *k, double shift, const
         ism_straddle_point(s, shift, box, p, r[*n].p);
         (*n)++;
     }
-    return true;
 }
 
 /* The polygons through the node's edge roots, measured one by one (cut NULL) or
@@ -174,8 +170,7 @@ static bool cell_loops(ism_sampler *s, const ism_corners *k, ism_cell_out *cut, 
 {
     root_pt r[MAX_ROOTS];
     int n;
-    if (!edge_roots(s, k, shift, box, r, &n))
-        return false;
+    edge_roots(s, k, shift, box, r, &n);
     /* on_face[f]: the roots on face f; exactly two or none make clean polygons */
     int on_face[6][2], count[6] = {0};
     for (int i = 0; i < n; i++)

@@ -15,8 +15,9 @@
 
 /* The largest distance measured on the polygons through the node's edge roots; corners
  * k of the node lo..hi. Returns false (and leaves *err alone) when the roots do not form
- * clean polygons — a corner exactly on the surface, a face crossed at one or more than two
- * points — so that the caller decides by another rule. *err is +inf when f or ∇f is not
+ * clean polygons — a face crossed at one or more than two points (a corner exactly on the
+ * surface is one root, corners.h's ism_zero_corner_faces) — so that the caller decides by
+ * another rule. *err is +inf when f or ∇f is not
  * finite at a measuring point. The measuring stops at the first point beyond bound (*err is
  * then its distance): whether the node meets bound is the same as with every point
  * measured (INFINITY measures them all). shift > 0: the roots are first moved as

@@ -17,9 +17,7 @@ unsigned ism_zero_corner_faces(const double f[8], int c)
     unsigned faces = 0;
     for (int t = 0; t < 3; t++) { /* the face across axis t, spanned by the other two */
         int a = c ^ (1 << (t + 1) % 3), b = c ^ (1 << (t + 2) % 3);
-        if (f[a] == 0 || f[b] == 0)
-            return ISM_ZERO_EDGE;
-        if ((f[a] < 0) != (f[b] < 0))
+        if ((f[a] < 0) != (f[b] < 0)) /* 0 reads as positive */
             faces |= 1u << (t * 2 + ((c >> t) & 1));
     }
     return faces;

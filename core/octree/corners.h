@@ -24,9 +24,12 @@ void ism_cube_edge(int e, int *c0, int *c1, int faces[2]);
 /* Corner c where f is exactly 0 (a lattice point on the surface, its gradient not zero): the
  * faces (bit face) the surface enters there, those whose two edges at c lead to corners of
  * opposite signs (f ≈ ∇f · (q − c) near c: where both lead to one sign the face's quadrant
- * lies on that side and the surface only touches it at c), so 0 or 2 of them;
- * ISM_ZERO_EDGE when an edge at c lies in f = 0 too (its other end is 0). f: the 8 values. */
-#define ISM_ZERO_EDGE (1u << 6)
+ * lies on that side and the surface only touches it at c), so 0 or 2 of them. A neighbour
+ * also on f = 0 (the edge between lies in the surface, or is a chord of it) reads as on the
+ * positive side, as if f were raised by an infinitesimal: of the nodes on both sides of a
+ * lattice plane of the surface the negative one takes the plane's polygon, and a node the
+ * surface only touches along an edge (the Whitney umbrella's fold line x = 0 on z = 0, from
+ * below) has none. f: the 8 values. */
 unsigned ism_zero_corner_faces(const double f[8], int c);
 
 #endif

@@ -294,10 +294,7 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
             continue; /* the edge lies in f = 0 (a plane of the surface on the lattice) */
         if (f[c0] == 0 || f[c1] == 0) { /* its root is that corner: one root, below */
             int z = f[c0] == 0 ? c0 : c1;
-            unsigned m = ism_zero_corner_faces(f, z);
-            /* beside an edge in f = 0 (a lattice plane of the surface) as before: a root on
-             * this edge's faces */
-            zero_faces[z] |= m & ISM_ZERO_EDGE ? 1u << faces[0] | 1u << faces[1] : m;
+            zero_faces[z] = ism_zero_corner_faces(f, z);
             continue;
         }
         bool crosses = (f[c0] < 0) != (f[c1] < 0);
