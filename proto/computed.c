@@ -105,6 +105,12 @@ static void put_locus(ism_frame_builder *b, const ism_locus *l)
             ism_frame_put_u32(b, (uint32_t)cv->end_point[e]); /* -1: UINT32_MAX */
         }
         put_f64(b, cv->split_cell);
+        ism_frame_put_u32(b, cv->certified);
+        ism_frame_put_u64(b, cv->uncertified_points);
+        ism_frame_put_u64(b, (uint64_t)cv->first_uncertified); /* -1: UINT64_MAX */
+        put_f64(b, cv->first_residual_f);
+        put_f64(b, cv->first_residual_grad);
+        put_f64(b, cv->cert_radius);
         put_array(b, cv->xyz, 3 * cv->n, sizeof(double));
     }
 }
@@ -270,6 +276,12 @@ static bool get_locus(reader *r, ism_locus *l)
             cv.end_point[e] = point == UINT32_MAX ? -1 : (int)point;
         }
         cv.split_cell = get_f64(&r->cur);
+        cv.certified = ism_frame_get_u32(&r->cur) != 0;
+        cv.uncertified_points = (size_t)ism_frame_get_u64(&r->cur);
+        cv.first_uncertified = (long)(int64_t)ism_frame_get_u64(&r->cur);
+        cv.first_residual_f = get_f64(&r->cur);
+        cv.first_residual_grad = get_f64(&r->cur);
+        cv.cert_radius = get_f64(&r->cur);
         size_t len;
         ism_frame_cursor peek = r->cur;
         ism_frame_get_bytes(&peek, &len);
@@ -278,6 +290,9 @@ static bool get_locus(reader *r, ism_locus *l)
             len % (3 * sizeof(double)))
             return bad(r, "singular curve");
         cv.n = len / (3 * sizeof(double));
+        if (cv.uncertified_points > cv.n || cv.first_uncertified < -1 ||
+            cv.first_uncertified >= (long)cv.n)
+            return bad(r, "singular curve certificate");
         void *xyz;
         if (!get_array(r, 3 * cv.n, sizeof(double), false, &xyz, "singular curve"))
             return false;

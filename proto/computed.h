@@ -4,10 +4,11 @@
  * (server/common/pipeline.h), so asking for a second format never polygonises again.
  *
  * Its binary form is the cache entry "<surface key>.mesh" (the surface key names the surface
- * and its accuracy, not the encoding: proto/request.h). Entry format, version 6 (5: the
+ * and its accuracy, not the encoding: proto/request.h). Entry format, version 7 (5: the
  * corners' locus marks added, so the PLY keeps one row per vertex at the singular locus; 6:
  * the same layout, the locus corners' normals joined per half-sheet (proto/sheet_groups.h),
- * so a version 5 entry would still send one point per corner), all numbers little endian,
+ * so a version 5 entry would still send one point per corner; 7: each singular curve's
+ * certificate), all numbers little endian,
  * built from the length-prefixed fields of proto/frame.h:
  *
  *   bytes "ISMS", u32 version (ISM_COMPUTED_VERSION), string surface key (64 hex),
@@ -23,7 +24,9 @@
  *   u64 singular points, each: bytes xyz (f64 x 3), u32 type, u32 certified,
  *   u64 singular curves, each: u32 kind, u32 closed, per end (2): u32 end type, u32 end point
  *   (index into the singular points; 0xffffffff: none), u64 split cell (the bits of an f64:
- *   the cell the octree split its nodes to along it, 0: the depth's), bytes xyz (f64 x 3 x n),
+ *   the cell the octree split its nodes to along it, 0: the depth's), u32 certified,
+ *   u64 uncertified points, u64 first uncertified (0xffffffffffffffff: none), u64 x 3 (f64
+ *   bits: |f| and |∇f| there, the largest certificate half-width), bytes xyz (f64 x 3 x n),
  *   bytes corner_at (u32 x n, ascending corner indices 3 t + k < 3 ntris),
  *   bytes corner_normal (f32 x 3 x n) (both empty when no corner has a normal of its own),
  *   bytes corner_locus (u8 x n: 1 for a sheet normal at the singular locus, 0 for a crease
@@ -46,7 +49,7 @@
 #include "proto/stats.h"
 #include "proto/wire_mesh.h"
 
-#define ISM_COMPUTED_VERSION 6
+#define ISM_COMPUTED_VERSION 7
 /* The cache entry's extension ("<surface key>.mesh"). */
 #define ISM_COMPUTED_EXT "mesh"
 

@@ -197,6 +197,27 @@ static void write_singular_curve(ism_jw *w, const ism_sing_curve *c, const ism_l
     for (int e = 0; e < 2 && !c->closed && c->n; e++)
         write_curve_end(w, c, e, l);
     ism_jw_array_end(w);
+    ism_jw_key(w, "certified");
+    ism_jw_bool(w, c->certified);
+    ism_jw_key(w, "uncertified_points");
+    ism_jw_uint(w, c->uncertified_points);
+    ism_jw_key(w, "certificate_radius");
+    ism_jw_number(w, c->cert_radius);
+    ism_jw_key(w, "first_uncertified");
+    if (c->uncertified_points && c->first_uncertified >= 0 && (size_t)c->first_uncertified < c->n) {
+        ism_jw_object(w);
+        ism_jw_key(w, "index");
+        ism_jw_int(w, (int)c->first_uncertified);
+        ism_jw_key(w, "xyz");
+        ism_jw_numbers(w, c->xyz + 3 * (size_t)c->first_uncertified, 3);
+        ism_jw_key(w, "residual_f");
+        ism_jw_number(w, c->first_residual_f);
+        ism_jw_key(w, "residual_grad");
+        ism_jw_number(w, c->first_residual_grad);
+        ism_jw_object_end(w);
+    } else {
+        ism_jw_null(w);
+    }
     ism_jw_object_end(w);
 }
 
@@ -204,14 +225,17 @@ static void write_singular_curve(ism_jw *w, const ism_sing_curve *c, const ism_l
 void ism_locus_counts_json(ism_jw *w, const ism_locus *l)
 {
     size_t by_type[ISM_SING_TYPES] = {0}, certified = 0, by_kind[ISM_CURVE_KINDS] = {0};
+    size_t curves_certified = 0;
     for (size_t i = 0; l && i < l->npoints; i++) {
         if (l->points[i].type >= 0 && l->points[i].type < ISM_SING_TYPES)
             by_type[l->points[i].type]++;
         certified += l->points[i].certified;
     }
-    for (size_t i = 0; l && i < l->ncurves; i++)
+    for (size_t i = 0; l && i < l->ncurves; i++) {
         if (l->curves[i].kind >= 0 && l->curves[i].kind < ISM_CURVE_KINDS)
             by_kind[l->curves[i].kind]++;
+        curves_certified += l->curves[i].certified;
+    }
     ism_jw_key(w, "singular_points");
     ism_jw_uint(w, l ? l->npoints : 0);
     ism_jw_key(w, "certified");
@@ -233,6 +257,10 @@ void ism_locus_counts_json(ism_jw *w, const ism_locus *l)
         ism_jw_key(w, key);
         ism_jw_uint(w, by_kind[k]);
     }
+    ism_jw_key(w, "certified_curves");
+    ism_jw_uint(w, curves_certified);
+    ism_jw_key(w, "uncertified_curves");
+    ism_jw_uint(w, (l ? l->ncurves : 0) - curves_certified);
     ism_jw_key(w, "double_sheets");
     ism_jw_uint(w, l ? l->nsheets : 0);
 }

@@ -1,5 +1,5 @@
 /* krawczyk.c — the Krawczyk operator on ∇f (krawczyk.h), with the preconditioner Y the
- * inverse of the Hessian enclosure's midpoint by cofactors. */
+ * inverse of the Hessian enclosure's midpoint by cofactors; and its 2-D form on a square. */
 #include "core/singular/krawczyk.h"
 #include "core/eval/interval_ops.h"
 
@@ -71,6 +71,35 @@ int ism_krawczyk(const ism_interval x[3], const double c[3], const ism_interval 
             k[i] = acc;
         inner = inner && acc.lo > x[i].lo && acc.hi < x[i].hi;
         empty = empty || acc.hi < x[i].lo || acc.lo > x[i].hi;
+    }
+    return empty ? ISM_KRAWCZYK_EMPTY : inner ? ISM_KRAWCZYK_UNIQUE : ISM_KRAWCZYK_UNKNOWN;
+}
+
+int ism_krawczyk2(double r, const ism_interval gc[2], const ism_interval j[3])
+{
+    double m[3];
+    for (int e = 0; e < 3; e++)
+        m[e] = 0.5 * j[e].lo + 0.5 * j[e].hi;
+    double det = m[0] * m[2] - m[1] * m[1];
+    if (!(det != 0.0) || !isfinite(det))
+        return ISM_KRAWCZYK_UNKNOWN;
+    double y[2][2] = { { m[2] / det, -m[1] / det }, { -m[1] / det, m[0] / det } };
+    static const int at[2][2] = { { 0, 1 }, { 1, 2 } };
+    ism_interval dx = iv(-r, r);
+    bool inner = true, empty = false;
+    for (int i = 0; i < 2; i++) {
+        if (!isfinite(y[i][0]) || !isfinite(y[i][1]))
+            return ISM_KRAWCZYK_UNKNOWN;
+        ism_interval acc = iv_neg(iv_add(iv_mul_c(gc[0], y[i][0]), iv_mul_c(gc[1], y[i][1])));
+        for (int c = 0; c < 2; c++) {
+            ism_interval e = iv(i == c ? 1.0 : 0.0, i == c ? 1.0 : 0.0);
+            for (int k = 0; k < 2; k++)
+                e = iv_sub(e, iv_mul_c(j[at[k][c]], y[i][k]));
+            acc = iv_add(acc, iv_mul(ism_iv_sane(e), dx));
+        }
+        acc = ism_iv_sane(acc);
+        inner = inner && acc.lo > -r && acc.hi < r;
+        empty = empty || acc.hi < -r || acc.lo > r;
     }
     return empty ? ISM_KRAWCZYK_EMPTY : inner ? ISM_KRAWCZYK_UNIQUE : ISM_KRAWCZYK_UNKNOWN;
 }

@@ -21,4 +21,10 @@ enum ism_krawczyk_answer {
 int ism_krawczyk(const ism_interval x[3], const double c[3], const ism_interval gc[3],
                  const ism_interval h[6], ism_interval k[3]);
 
+/* The same test for a 2-D system G(a, b) = 0 on the square [−r, r]² centred on (0, 0): gc an
+ * enclosure of G(0, 0), j an enclosure of its (symmetric) Jacobian over the square (aa ab
+ * bb), Y the inverse of j's midpoint. Used on the normal-plane gradient of a singular curve
+ * (curve_cert.h). */
+int ism_krawczyk2(double r, const ism_interval gc[2], const ism_interval j[3]);
+
 #endif

@@ -120,6 +120,14 @@ typedef struct ism_sing_curve {
     int end_point[2];      /* index into ism_locus.points of the point it ends at, or -1 */
     double split_cell;     /* the cell the octree split its nodes to along it, finer than
                               the depth's (core/singular/curve_cell.h), or 0: the depth's */
+    /* Its certificate (core/singular/curve_cert.h): certified when every point passed. */
+    bool certified;
+    size_t uncertified_points;   /* points that did not pass (all n when not checked) */
+    long first_uncertified;      /* index of the first of them; -1 when none, or when the
+                                    certification was cut short before this curve */
+    double first_residual_f;     /* |f| and |∇f| at that point (0 when none) */
+    double first_residual_grad;
+    double cert_radius;          /* the largest half-width of a certificate box used */
 } ism_sing_curve;
 
 /* A candidate box of the search: neither excluded by intervals nor certified as one point. */

@@ -195,7 +195,7 @@ describe('box and inspection', { timeout: 300000 }, () => {
     await page.uncheck('#clip-on');
   });
 
-  it('picking a double curve shows its kind, a point on it (closed form) and f = 0, grad f = 0 there', async () => {
+  it('picking a double curve shows its kind, that it is certified, a point on it (closed form) and f = 0, grad f = 0 there', async () => {
     // Two planes x = -0.3 z and y = 0.2 z (box off the lattice): they cross in the line
     // t (-0.3, 0.2, 1), where f = (x + 0.3 z)(y - 0.2 z) and its gradient vanish.
     const n = await loads(page);
@@ -214,7 +214,12 @@ describe('box and inspection', { timeout: 300000 }, () => {
     await page.waitForSelector('#pick-info[data-what=curve][data-probe]:not([hidden])');
     const info = await page.$eval('#pick-info', (e) => ({ ...e.dataset, text: e.textContent }));
     assert.equal(info.type, 'double');
-    assert.match(info.text, /^double curve, \d+ points, box – box\nnear \(.*\)\nf = .*\|∇f\| = .*\nH = /);
+    // certified: every point of the line passed its certificate (core/singular/curve_cert.h),
+    // within a square of half-width <= 0.5e-9 x the box diagonal (~1.7e-9)
+    assert.equal(info.certified, 'true');
+    const m = info.text.match(/^double curve \(certified within ([0-9.e-]+)\), \d+ points, box – box\nnear \(.*\)\nf = .*\|∇f\| = .*\nH = /);
+    assert.ok(m, info.text);
+    assert.ok(Number(m[1]) > 0 && Number(m[1]) <= 1.8e-9, `certificate radius ${m[1]}`);
     const p = info.xyz.split(',').map(Number);
     const d = [-0.3, 0.2, 1], dd = Math.hypot(...d);
     const t = (p[0] * d[0] + p[1] * d[1] + p[2] * d[2]) / dd;

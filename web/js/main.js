@@ -374,6 +374,19 @@ function certificateText(p) {
   return ` (certified${p.certificate ? ' by ' + p.certificate : ''} within ${sig(p.radius, 2)}${eps})`;
 }
 
+// The same for a singular curve: every point certified (the largest square's half-width), or
+// how many points failed and the first of them with its residuals. An older server's JSON
+// has no certified field: nothing is said.
+function curveCertificateText(c) {
+  if (c.certified === undefined) return '';
+  if (c.certified) return ` (certified within ${sig(c.certificate_radius, 2)})`;
+  const n = c.uncertified_points || 0;
+  const first = c.first_uncertified;
+  const at = first ? `, first at point ${first.index}: |f| ${sig(first.residual_f, 2)}, ` +
+    `|∇f| ${sig(first.residual_grad, 2)}` : '';
+  return ` (not certified: ${n} point${n === 1 ? '' : 's'} failed${at})`;
+}
+
 // Clicking near a singular point or curve says what it is.
 function pickAt(e) {
   const info = $('pick-info');
@@ -398,12 +411,14 @@ function pickAt(e) {
   } else {
     const c = hit.p;
     const ends = c.closed ? 'closed' : (c.ends || []).map((e) => e.type).join(' – ');
-    info.textContent = `${c.kind} curve, ${c.xyz.length / 3} points, ${ends}\nnear (${xyz})`;
+    info.textContent = `${c.kind} curve${curveCertificateText(c)}, ${c.xyz.length / 3} points, ` +
+      `${ends}\nnear (${xyz})`;
   }
   info.dataset.what = hit.what;
   info.dataset.xyz = hit.xyz.join(',');
   info.dataset.type = hit.what === 'point' ? hit.p.type : hit.p.kind;
-  if (hit.what === 'point') info.dataset.certified = String(!!hit.p.certified);
+  if (hit.what === 'point' || (hit.what === 'curve' && hit.p.certified !== undefined))
+    info.dataset.certified = String(!!hit.p.certified);
   else delete info.dataset.certified;
   delete info.dataset.cell;
   delete info.dataset.probe;

@@ -73,7 +73,9 @@ static void make(ism_computed *c)
     ism_locus_add_point(&c->locus, &sp);
     ism_sing_curve cv = {.kind = ISM_CURVE_WHISKER, .closed = true, .n = 2,
                          .end_type = {ISM_END_POINT, ISM_END_BOX}, .end_point = {0, -1},
-                         .split_cell = 0.0625};
+                         .split_cell = 0.0625, .certified = false, .uncertified_points = 2,
+                         .first_uncertified = 1, .first_residual_f = 1e-7,
+                         .first_residual_grad = 2e-6, .cert_radius = 1e-10};
     cv.xyz = malloc(6 * sizeof(double));
     for (int i = 0; i < 6; i++)
         cv.xyz[i] = i / 7.0;
@@ -150,6 +152,13 @@ Test(computed, round_trip)
     cr_assert_eq(c.locus.curves[0].end_point[0], 0);
     cr_assert_eq(c.locus.curves[0].end_point[1], -1);
     cr_assert_eq(c.locus.curves[0].split_cell, 0.0625); /* the octree's cell along it */
+    /* its certificate (curve_cert.h) */
+    cr_assert(!c.locus.curves[0].certified);
+    cr_assert_eq(c.locus.curves[0].uncertified_points, 2);
+    cr_assert_eq(c.locus.curves[0].first_uncertified, 1);
+    cr_assert_eq(c.locus.curves[0].first_residual_f, 1e-7);
+    cr_assert_eq(c.locus.curves[0].first_residual_grad, 2e-6);
+    cr_assert_eq(c.locus.curves[0].cert_radius, 1e-10);
     cr_assert_str_eq(c.features_json, "{\"version\":2}");
     cr_assert_str_eq(c.stats_json, "{\"warnings\":[]}");
     cr_assert_eq(c.timings_ms[ISM_TIME_POLYGONISE], 12.5);

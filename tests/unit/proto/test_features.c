@@ -151,7 +151,8 @@ Test(features, empty_mesh_has_empty_features)
                            "{\"singular_points\":0,\"certified\":0,\"uncertified\":0,"
                            "\"by_type\":{\"node\":0,\"isolated\":0,\"cusp\":0,"
                            "\"degenerate\":0,\"pinch\":0,\"triple\":0},\"curves\":0,"
-                           "\"double_curves\":0,\"whisker_curves\":0,\"double_sheets\":0,"
+                           "\"double_curves\":0,\"whisker_curves\":0,"
+                           "\"certified_curves\":0,\"uncertified_curves\":0,\"double_sheets\":0,"
                            "\"nonmanifold_chains\":0,\"nonmanifold_edges\":0,"
                            "\"nonmanifold_points\":0,\"artefacts\":null,\"boundaries\":0,"
                            "\"boundary_edges\":0}}");
