@@ -7,10 +7,8 @@
 #include "core/singular/krawczyk.h"
 #include "core/singular/point_cert.h"
 #include "core/eval/interval_ops.h"
-#include "core/util/clock.h"
 #include "core/util/sym3.h"
 
-#include <stdio.h>
 
 /* The first square tried is CCERT_FIRST × the largest allowed half-width: K contracts when
  * the square holds x* with room to spare, and the smallest square that works is the best
@@ -134,20 +132,6 @@ bool ism_curve_cert_point(const ism_tape *t, ism_ivjet_ws *jw, const double p[3]
     }
 }
 
-static bool out_of_time(const ism_locus_options *o, ism_locus *l)
-{
-    bool cancel = o->cancel && *o->cancel;
-    if (!cancel && !(o->deadline_ms > 0 && ism_now_ms() > o->deadline_ms))
-        return false;
-    if (!l->incomplete) {
-        l->incomplete = true;
-        snprintf(l->incomplete_why, sizeof l->incomplete_why, "%s",
-                 cancel ? "cancelled during the certification of curves"
-                        : "deadline reached during the certification of curves");
-    }
-    return true;
-}
-
 /* Whether point i of c is an end at a certified point of l within reach. */
 static bool end_at_certified(const ism_locus *l, const ism_sing_curve *c, size_t i,
                              double reach)
@@ -181,7 +165,8 @@ bool ism_sing_certify_curves(const ism_tape *f, const ism_locus_options *o, ism_
     ism_ivjet_ws *jw = ism_ivjet_ws_new(f);
     if (!jw)
         return ism_error_set(err, "singular curve certificates: out of memory");
-    for (size_t c = 0; c < out->ncurves && !out_of_time(o, out); c++) {
+    const char *during = "the certification of curves";
+    for (size_t c = 0; c < out->ncurves && !ism_locus_out_of_time(o, out, during); c++) {
         ism_sing_curve *cv = &out->curves[c];
         cv->uncertified_points = 0;
         for (size_t i = 0; i < cv->n; i++) {

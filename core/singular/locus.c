@@ -1,10 +1,12 @@
 /* locus.c — the singular locus's containers (growable arrays of points, curves, candidate
  * boxes and double sheets) and the names its enums take in JSON and stats. */
 #include "core/singular/locus.h"
+#include "core/util/clock.h"
 #include "core/util/grow.h"
 #include "core/util/vec3.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -71,6 +73,19 @@ bool ism_locus_add_sheet(ism_locus *l, const ism_double_sheet *s)
     if (!ism_grow((void **)&l->sheets, &l->cap_sheets, l->nsheets + 1, sizeof *s, LOCUS_FIRST))
         return false;
     l->sheets[l->nsheets++] = *s;
+    return true;
+}
+
+bool ism_locus_out_of_time(const ism_locus_options *o, ism_locus *l, const char *during)
+{
+    bool cancel = o->cancel && *o->cancel;
+    if (!cancel && !(o->deadline_ms > 0 && ism_now_ms() > o->deadline_ms))
+        return false;
+    if (!l->incomplete) {
+        l->incomplete = true;
+        snprintf(l->incomplete_why, sizeof l->incomplete_why, "%s during %s",
+                 cancel ? "cancelled" : "deadline reached", during);
+    }
     return true;
 }
 

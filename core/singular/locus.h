@@ -206,6 +206,10 @@ bool ism_locus_add_curve(ism_locus *l, const ism_sing_curve *c);
 bool ism_locus_add_box(ism_locus *l, const ism_lbox *b);
 bool ism_locus_add_sheet(ism_locus *l, const ism_double_sheet *s);
 
+/* Whether o's deadline has passed or its cancel flag is set; the first time, marks l
+ * incomplete with "deadline reached during <during>" or "cancelled during <during>". */
+bool ism_locus_out_of_time(const ism_locus_options *o, ism_locus *l, const char *during);
+
 /* 1 + i when triangle t of the polygoniser's mesh is in double sheet i's range, else 0
  * (O(sheets)). */
 uint32_t ism_locus_sheet_of(const ism_locus *l, size_t t);

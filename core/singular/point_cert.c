@@ -6,10 +6,8 @@
 #include "core/singular/search.h"
 #include "core/singular/typecert.h"
 #include "core/eval/interval_ops.h"
-#include "core/util/clock.h"
 #include "core/util/sym3.h"
 
-#include <stdio.h>
 #include <string.h>
 
 /* Certificate boxes are tried from CERT_FIRST × the largest allowed half-width, growing by
@@ -145,20 +143,6 @@ bool ism_pcert_point(ism_pcert *c, ism_sing_point *pt, int rank, const double nu
  * within 1e-10 × diagonal, so any farther solution is another point. */
 #define CURVE_POINT_REACH_CELLS 0.1
 
-static bool out_of_time(const ism_locus_options *o, ism_locus *l)
-{
-    bool cancel = o->cancel && *o->cancel;
-    if (!cancel && !(o->deadline_ms > 0 && ism_now_ms() > o->deadline_ms))
-        return false;
-    if (!l->incomplete) {
-        l->incomplete = true;
-        snprintf(l->incomplete_why, sizeof l->incomplete_why, "%s",
-                 cancel ? "cancelled during the certification of curve points"
-                        : "deadline reached during the certification of curve points");
-    }
-    return true;
-}
-
 /* Hessian eigen-decomposition and residuals at pt->p. */
 static void measure(const ism_tape *f, ism_eval_ws *ws, ism_sing_point *pt, double vec[3][3],
                     uint64_t *evals)
@@ -182,7 +166,8 @@ bool ism_sing_certify_curve_points(const ism_tape *f, const ism_locus_options *o
     ism_pcert c;
     ism_eval_ws *ws = ism_eval_ws_new(f);
     bool ok = ism_pcert_init(&c, f, sqrt(d2), out->hessian_scale, &out->evals_jet) && ws;
-    for (size_t i = 0; ok && i < out->npoints && !out_of_time(o, out); i++) {
+    const char *during = "the certification of curve points";
+    for (size_t i = 0; ok && i < out->npoints && !ism_locus_out_of_time(o, out, during); i++) {
         ism_sing_point *pt = &out->points[i];
         if (pt->certified || pt->uncertified_why != ISM_UNCERT_NONE)
             continue;

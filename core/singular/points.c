@@ -816,19 +816,6 @@ static void settle_boxes(ism_locus *l, const uint32_t *label, const uint8_t *clu
     l->nboxes = n;
 }
 
-/* Deadline or cancel: the points found so far are kept, the rest is reported missing. */
-static bool out_of_time(const ism_locus_options *o, ism_locus *l)
-{
-    bool stop = (o->cancel && *o->cancel) || (o->deadline_ms > 0 && ism_now_ms() > o->deadline_ms);
-    if (stop && !l->incomplete) {
-        l->incomplete = true;
-        snprintf(l->incomplete_why, sizeof l->incomplete_why, "%s",
-                 o->cancel && *o->cancel ? "cancelled during the singular-point certification"
-                                         : "deadline reached during the singular-point certification");
-    }
-    return stop;
-}
-
 static bool run(ctx *x, const ism_locus_options *o)
 {
     ism_locus *l = x->out;
@@ -841,10 +828,11 @@ static bool run(ctx *x, const ism_locus_options *o)
     bool ok = label && box_fate && fate;
     if (ok)
         gather(l, label, ci, nclusters);
-    for (size_t i = 0; ok && i < n && !out_of_time(o, l); i++)
+    const char *during = "the singular-point certification";
+    for (size_t i = 0; ok && i < n && !ism_locus_out_of_time(o, l, during); i++)
         if (l->boxes[i].flags & ISM_LBOX_UNIQUE)
             ok = from_unique_box(x, i, box_fate);
-    for (size_t c = 0; ok && c < nclusters && !out_of_time(o, l); c++)
+    for (size_t c = 0; ok && c < nclusters && !ism_locus_out_of_time(o, l, during); c++)
         if (ci[c].projected)
             ok = from_cluster(x, &ci[c], (uint32_t)c, label, &fate[c]);
     ok = ok && publish(x);

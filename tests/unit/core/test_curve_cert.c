@@ -109,17 +109,26 @@ Test(curve_cert, whisker_circle)
     assert_all_certified("whisker circle", "(x^2 + y^2 - 0.25)^2 + z^2", 1.0, 0, 1, 1);
 }
 
+/* expr's tape and a workspace of its interval jets, for the certifier called directly (the
+ * cube ±1: diagonal 2√3). */
+static ism_tape *certifier(const char *expr, ism_ivjet_ws **jw)
+{
+    ism_error err;
+    ism_tape *t = ism_tape_compile(expr, NULL, 0, NULL, 0, NULL, &err);
+    cr_assert_not_null(t, "%s: %s", expr, err.message);
+    *jw = ism_ivjet_ws_new(t);
+    cr_assert_not_null(*jw);
+    return t;
+}
+
 /* The certifier itself on the Whitney double line (the z axis, x² − y²z: ∇f = (2x, −2yz,
  * −y²), Hessian across diag(2, −2z)): a point of it passes, one moved along it (still on the
  * locus) passes, one moved off it across by 1e-6 × diagonal (in x, in y, or both) does not —
  * ∇f there is 2e-6 × diag ≠ 0 and the square of half-width ≤ 0.5e-9 × diag holds no zero. */
 Test(curve_cert, a_point_off_the_locus_is_not_certified)
 {
-    ism_error err;
-    ism_tape *t = ism_tape_compile("x^2 - y^2*z", NULL, 0, NULL, 0, NULL, &err);
-    cr_assert_not_null(t);
-    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
-    cr_assert_not_null(jw);
+    ism_ivjet_ws *jw;
+    ism_tape *t = certifier("x^2 - y^2*z", &jw);
     double diag = 2.0 * sqrt(3.0), rmax = ISM_SING_CERT_REL * diag, d = 1e-6 * diag;
     uint64_t evals = 0;
     const double on[][3] = { { 0, 0, 0.3 }, { 0, 0, 0.3 + d }, { 0, 0, -0.7 } };
@@ -149,11 +158,8 @@ Test(curve_cert, a_point_off_the_locus_is_not_certified)
  * itself passes. */
 Test(curve_cert, only_krawczyk_refutes_a_point_of_the_sheet_beside_the_curve)
 {
-    ism_error err;
-    ism_tape *t = ism_tape_compile("x^2 - y^2", NULL, 0, NULL, 0, NULL, &err);
-    cr_assert_not_null(t);
-    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
-    cr_assert_not_null(jw);
+    ism_ivjet_ws *jw;
+    ism_tape *t = certifier("x^2 - y^2", &jw);
     double diag = 2.0 * sqrt(3.0), rmax = ISM_SING_CERT_REL * diag, d = 1e-6 * diag;
     uint64_t evals = 0;
     ism_ccert c;
