@@ -6,6 +6,7 @@ and two threads, request files through the service pipeline."""
 import json
 import math
 import os
+import re
 import struct
 import subprocess
 import sys
@@ -484,6 +485,22 @@ class TestIsomesh(unittest.TestCase):
                      "--gradient-test", "--double-root-eps", "--double-root-iters",
                      "--stitch-tol", "--flat-normal", "--flat-plane"):
             self.assertIn(flag, p.stdout)
+
+    def test_help_gives_the_published_tolerance_defaults(self):
+        """--help's line for each tolerance says the default proto/request.schema.json
+        publishes for requests (issue 15: one table, core/octree/tolerances.h, drives both;
+        the comments and help once said 0.8 / 0.1 where the code used 0.9 / 0.05)."""
+        p = run("--help")
+        with open(os.path.join(ROOT, "proto", "request.schema.json")) as f:
+            tol = json.load(f)["properties"]["tolerances"]["properties"]
+        flags = {"gradient": "--gradient-test", "stitch": "--stitch-tol"}
+        for key, spec in tol.items():
+            flag = flags.get(key, "--" + key.replace("_", "-"))
+            line = next((ln for ln in p.stdout.splitlines() if ln.split()[:1] == [flag]), None)
+            self.assertIsNotNone(line, flag)
+            m = re.search(r"\(default ([-+0-9.e]+)\)", line)
+            self.assertIsNotNone(m, line)
+            self.assertEqual(float(m.group(1)), spec["default"], line)
 
     def test_tolerances_have_the_published_ranges(self):
         """The CLI accepts each tolerance at the limits proto/request.schema.json publishes for
