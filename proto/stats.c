@@ -220,6 +220,8 @@ static void write_analysis(ism_jw *w, const ism_analysis *a, double max_error)
     write_fields(w, a, topology_fields, NFIELDS(topology_fields));
     ism_jw_key(w, "orientable");
     ism_jw_bool(w, a->orientable);
+    ism_jw_key(w, "inconsistent_edges");
+    ism_jw_uint(w, a->inconsistent_edges);
     ism_jw_key(w, "genus");
     ism_jw_int(w, a->genus);
     write_fields(w, a, measure_fields, NFIELDS(measure_fields));

@@ -57,15 +57,51 @@ static void newell(const ism_fpoint *p, size_t n, double nrm[3])
     }
 }
 
-static bool reversed(const ism_fpoint *p, size_t n)
+/* The node's corners' vote on the polygon's normal nrm through its centre c: the sum of
+ * sign(f) × the corner's height over the polygon's plane, > 0 when the normal points from
+ * the corners where f < 0 toward those where f > 0 (as ∇f does), < 0 when turned over, 0
+ * when the corners do not say. */
+static double corner_vote(ism_sampler *s, const double node[6], const double c[3],
+                          const double nrm[3])
 {
-    double nrm[3], g[3] = {0, 0, 0};
+    double sum = 0;
+    for (int i = 0; i < 8; i++) {
+        double q[3] = {node[i & 1 ? 3 : 0], node[i & 2 ? 4 : 1], node[i & 4 ? 5 : 2]};
+        double d[3] = {q[0] - c[0], q[1] - c[1], q[2] - c[2]};
+        sum += ism_sign(ism_sample_f(s, q)) * ism_dot3(d, nrm);
+    }
+    return isfinite(sum) ? sum : 0;
+}
+
+/* Is the polygon wound against ∇f? Its Newell normal against the mean unit gradient at its
+ * points — unless the points split the vote (some gradients face the normal, others face
+ * away: a polygon across a sharp CSG crease, such as the chord of cube-minus-ball's 40°
+ * wedge between the ball and a face, two points on the ball and one on the face, whose mean
+ * follows the majority and turns the polygon against all its neighbours). Then, given the
+ * node (s and node not NULL) and f with a min/max, the corners decide, as a sign-based
+ * polygoniser would: the polygon separates the corners where f < 0 from those where f > 0.
+ * Without a min/max the mean is kept: a split vote there comes from singular structure,
+ * where a node's corners may be separated by two sheets and say nothing of one polygon. */
+static bool reversed(ism_sampler *s, const double node[6], const ism_fpoint *p, size_t n)
+{
+    double nrm[3], g[3] = {0, 0, 0}, c[3] = {0, 0, 0};
     newell(p, n, nrm);
+    bool facing = false, away = false;
     for (size_t i = 0; i < n; i++) {
         double u[3] = {p[i].g[0], p[i].g[1], p[i].g[2]};
         if (ism_normalise3(u) > 0)
             for (int k = 0; k < 3; k++)
                 g[k] += u[k];
+        double d = ism_dot3(u, nrm);
+        facing = facing || d > 0;
+        away = away || d < 0;
+        for (int k = 0; k < 3; k++)
+            c[k] += p[i].p[k] / (double)n;
+    }
+    if (facing && away && s && node && ism_tape_has_min_max(s->tape)) {
+        double v = corner_vote(s, node, c, nrm);
+        if (v != 0)
+            return v < 0;
     }
     return ism_dot3(nrm, g) < 0;
 }
@@ -357,7 +393,7 @@ bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, doubl
 {
     if (n < 3)
         return true;
-    bool flip = reversed(pts, n);
+    bool flip = reversed(s, node, pts, n);
     size_t base = out->nverts;
     for (size_t i = 0; i < n; i++) {
         uint32_t idx;
@@ -426,7 +462,7 @@ bool ism_triangulate_fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex
 {
     if (n < 2)
         return true;
-    return fan(pts, n, apex, n >= 3 && reversed(pts, n), out);
+    return fan(pts, n, apex, n >= 3 && reversed(NULL, NULL, pts, n), out);
 }
 
 bool ism_triangulate_tent(const ism_fpoint *pts, size_t n, const ism_fpoint *apex,
