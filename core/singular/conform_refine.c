@@ -42,6 +42,7 @@
  *     ring   r1 ──── r0            neighbour puts it back between them
  */
 #include "core/singular/conform_internal.h"
+#include "core/singular/key_map.h"
 #include "core/util/vec3.h"
 
 #include <math.h>
@@ -417,13 +418,64 @@ static bool split_edge(cf_ctx *c, uint32_t a, uint32_t b, cf_tris *removed, bool
     return true;
 }
 
+/* The midpoints measured in one round of split_over, by edge: the two triangles on an edge
+ * measure the same point ((a + b) / 2 is (b + a) / 2 to the bit), and no vertex moves while a
+ * round measures, so the second asks the memo (crossing-spheres: 63k gradient evaluations in
+ * the refill, most of them midpoints met twice). */
+typedef struct edge_memo {
+    ism_key_map map;
+    double *d;      /* by the map's index */
+    size_t cap;
+} edge_memo;
+
+static void edge_memo_reset(edge_memo *m)
+{
+    ism_key_map_free(&m->map);
+    ism_key_map_init(&m->map);
+}
+
+static void edge_memo_free(edge_memo *m)
+{
+    ism_key_map_free(&m->map);
+    free(m->d);
+}
+
+/* measure() of the midpoint q of the edge (a, b), once per round; *ok false when out of
+ * memory (then the value is measured but not kept). */
+static double edge_measure(cf_ctx *c, edge_memo *m, uint32_t a, uint32_t b, const double q[3],
+                           double E, bool *ok)
+{
+    uint64_t key = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+    bool added;
+    uint32_t i = ism_key_map_add(&m->map, key, &added);
+    if (i == ISM_KEY_NONE) {
+        *ok = false;
+        return measure(c, q, E);
+    }
+    if (!added)
+        return m->d[i];
+    if (i >= m->cap) {
+        size_t cap = m->cap ? 2 * m->cap : 256;
+        double *d = realloc(m->d, cap * sizeof *d);
+        if (!d) {
+            *ok = false;
+            return measure(c, q, E);
+        }
+        m->d = d;
+        m->cap = cap;
+    }
+    return m->d[i] = measure(c, q, E);
+}
+
 static bool split_over(cf_ctx *c, size_t nt0, double E, double min_edge, cf_tris *removed)
 {
     cf_tris edges = {0}, overs = {0}; /* edges as pairs a, b; the triangles over E */
+    edge_memo memo = {0};
     bool ok = true;
     size_t lo = nt0, stuck = 0; /* triangles from lo on not measured yet; over E, unsplit */
     for (int round = 0; ok && round < SPLIT_ROUNDS && !c->stopped; round++) {
         edges.n = overs.n = 0;
+        edge_memo_reset(&memo);
         size_t split = 0, hi = c->m->ntris;
         /* a triangle measured within E stays so (a split only replaces the two triangles
          * on its edge, by halves appended): each round measures the halves of the last */
@@ -440,8 +492,9 @@ static bool split_over(cf_ctx *c, size_t nt0, double E, double min_edge, cf_tris
                     q[1 + j][k] = (p[j][k] + p[(j + 1) % 3][k]) / 2;
             }
             bool far = false;
-            for (int j = 0; j < 4 && !far; j++)
-                far = measure(c, q[j], E) > E;
+            for (int j = 0; j < 4 && !far && ok; j++)
+                far = (j ? edge_measure(c, &memo, v[j - 1], v[j % 3], q[j], E, &ok)
+                         : measure(c, q[j], E)) > E;
             if (!far)
                 continue;
             int k = edge_to_split(c, (uint32_t)t, min_edge);
@@ -462,6 +515,7 @@ static bool split_over(cf_ctx *c, size_t nt0, double E, double min_edge, cf_tris
     c->st->refill_over_error = stuck;
     free(edges.t);
     free(overs.t);
+    edge_memo_free(&memo);
     return ok;
 }
 
