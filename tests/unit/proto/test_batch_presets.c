@@ -17,6 +17,7 @@
 #include "core/mesh/mesh.h"
 #include "core/octree/polygonise.h"
 #include "proto/presets.h"
+#include "tests/unit/proto/preset_tape.h"
 
 /* Depth 4: a few hundred leaves a preset, the whole file in seconds; the bound run goes to 6
  * at a coarse bound so that it takes several rounds without costing more than the depth run. */
@@ -65,12 +66,8 @@ static bool same_mesh(const ism_mesh *a, const ism_mesh *b)
 
 static ism_tape *compile(const ism_preset *p)
 {
-    ism_param params[16];
-    cr_assert(p->nparams <= 16);
-    for (size_t i = 0; i < p->nparams; i++)
-        params[i] = (ism_param){ p->params[i].name, p->params[i].value };
     ism_error err;
-    ism_tape *t = ism_tape_compile(p->expr, params, p->nparams, p->lets, p->nlets, NULL, &err);
+    ism_tape *t = test_preset_tape(p, &err);
     cr_assert_not_null(t, "%s: %s", p->name, err.message);
     return t;
 }

@@ -14,6 +14,7 @@
 #include "core/eval/eval.h"
 #include "core/expr/tape.h"
 #include "proto/presets.h"
+#include "tests/unit/proto/preset_tape.h"
 
 enum { BOXES = 48, GRID = 5, RANDOM_POINTS = 64, PTS = GRID * GRID * GRID + RANDOM_POINTS };
 
@@ -173,12 +174,8 @@ static void sample(const ism_interval box[3], rng *g, double *x, double *y, doub
 
 static void check_preset(const ism_preset *p, uint64_t seed, size_t *checked)
 {
-    ism_param params[16];
-    cr_assert(p->nparams <= 16);
-    for (size_t i = 0; i < p->nparams; i++)
-        params[i] = (ism_param){ p->params[i].name, p->params[i].value };
     ism_error err;
-    ism_tape *t = ism_tape_compile(p->expr, params, p->nparams, p->lets, p->nlets, NULL, &err);
+    ism_tape *t = test_preset_tape(p, &err);
     cr_assert(t, "%s: %s", p->name, err.message);
     ism_eval_ws *ws = ism_eval_ws_new(t);
     long double *regs = malloc(t->nregs * sizeof *regs);
