@@ -158,6 +158,20 @@ static long long go_local(task *k, ism_cache_tier *t)
 
 /* ---- steps --------------------------------------------------------------------------- */
 
+/* Look again later in state st: first at POLL_MIN_NS after entering it (one more lock wait
+ * counted), then 1.5x longer each time up to POLL_MAX_NS. The time of the next look. */
+static long long poll_again(task *k, tstate st, long long now)
+{
+    if (k->state != st) {
+        k->state = st;
+        k->poll_ns = POLL_MIN_NS;
+        atomic_fetch_add(&k->sh->counters->lock_waits, 1);
+    } else {
+        k->poll_ns = k->poll_ns * 3 / 2 > POLL_MAX_NS ? POLL_MAX_NS : k->poll_ns * 3 / 2;
+    }
+    return now + k->poll_ns;
+}
+
 /* The lock is another daemon's: wait (with --cluster, saying so in Redis, so that its origin
  * does not cancel the computation when its own requests leave). */
 static long long wait_more(task *k, long long now)
@@ -168,23 +182,17 @@ static long long wait_more(task *k, long long now)
         k->wanting = true;
         k->want_at_ns = now + sh->ttl_ms * 1000000LL / 3;
     }
-    if (k->state != T_WAIT) {
-        k->state = T_WAIT;
-        k->poll_ns = POLL_MIN_NS;
-        atomic_fetch_add(&k->sh->counters->lock_waits, 1);
-    } else {
-        k->poll_ns = k->poll_ns * 3 / 2 > POLL_MAX_NS ? POLL_MAX_NS : k->poll_ns * 3 / 2;
-    }
-    return now + k->poll_ns;
+    return poll_again(k, T_WAIT, now);
 }
 
-/* Whether the flight still waits here; *need_request when it has no canonical request. */
+/* Whether the flight still waits here; *need_request (unless NULL) when it has no canonical
+ * request. */
 static bool still_wanted(task *k, bool *need_request)
 {
     if (!ismd_redis_tasks_enter(k->sh->tasks))
         return false;
     ismd_flight *f = my_flight(k, true);
-    if (f)
+    if (f && need_request)
         *need_request = f->request == NULL;
     ismd_redis_tasks_leave(k->sh->tasks);
     return f != NULL;
@@ -296,15 +304,8 @@ static long long start(task *k, ism_cache_tier *t, long long now)
         snprintf(kin, sizeof kin, "%s/", sh->instance);
         int got = ism_cache_redis_lock_kin(t, k->surface, k->token, sh->ttl_ms, kin);
         if (got == 0 || (got == 2 && sh->cluster)) { /* look again as for a lock (wait_more) */
-            if (k->state != T_SURFACE) {
-                k->state = T_SURFACE;
-                k->poll_ns = POLL_MIN_NS;
-                atomic_fetch_add(&sh->counters->lock_waits, 1);
-            } else {
-                k->poll_ns = k->poll_ns * 3 / 2 > POLL_MAX_NS ? POLL_MAX_NS : k->poll_ns * 3 / 2;
-            }
-            renew_lock(k, t, now);
-            return now + k->poll_ns;
+            renew_lock(k, t, now); /* reads neither state nor poll_ns */
+            return poll_again(k, T_SURFACE, now);
         }
         k->surface_locked = got == 1; /* -1, Redis failed: polygonised all the same */
     }
@@ -319,8 +320,7 @@ static long long start(task *k, ism_cache_tier *t, long long now)
 /* T_SURFACE: while the flight still waits here, look at the surface again. */
 static long long surface_wait(task *k, ism_cache_tier *t, long long now)
 {
-    bool need_request = false;
-    if (!still_wanted(k, &need_request))
+    if (!still_wanted(k, NULL))
         return task_end(k, t);
     return start(k, t, now);
 }
