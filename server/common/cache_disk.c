@@ -239,19 +239,22 @@ static int payload_equals(int fd, const unsigned char *payload, size_t len)
  * kept file is let go. */
 static int kept_payload(disk_tier *d, const char *name, size_t len, ism_fd_lease **lease)
 {
-    int fd = lease ? ism_fd_keep_borrow(d->kept, name, lease) : ism_fd_keep_get(d->kept, name);
+    ism_fd_lease *l;
+    int fd = ism_fd_keep_borrow(d->kept, name, &l);
     if (fd < 0)
         return -1;
     struct stat st;
     if (fstat(fd, &st) == 0 && st.st_nlink > 0 && (uint64_t)st.st_size == (uint64_t)len + HEADER_SIZE &&
-        ism_file_memo_holds(d->sent_ok, name, &st))
+        ism_file_memo_holds(d->sent_ok, name, &st)) {
+        if (!lease) {
+            int dup = fcntl(fd, F_DUPFD_CLOEXEC, 0);
+            ism_fd_keep_give_back(l);
+            return dup;
+        }
+        *lease = l;
         return fd;
-    if (lease) {
-        ism_fd_keep_give_back(*lease);
-        *lease = NULL;
-    } else {
-        close(fd);
     }
+    ism_fd_keep_give_back(l);
     ism_fd_keep_drop(d->kept, name);
     return -1;
 }

@@ -1,11 +1,11 @@
 /* fd_keep.c — the table of fd_keep.h: FD_KEEP_SLOTS slots, direct-mapped by the name's hash (a
  * newer name takes a slot over), under one read-write lock. Each kept descriptor is a
  * reference-counted lease (the slot holds one reference, each borrower one more); it is
- * duplicated, or lent, under the lock (read), so a slot taken over (its reference let go,
- * under the write lock) never hands out a closed or reused number, and a lent one is closed
- * by the last give-back. Why not a mutex: every cached mesh the own sender
- * answers duplicates its file here, on any polling thread; under one mutex the dup syscall
- * made the threads queue (16 connections on 2 threads, one mesh: 0.44 futex calls per
+ * lent under the lock (read), so a slot taken over (its reference let go, under the write
+ * lock) never hands out a closed or reused number, and a lent one is closed by the last
+ * give-back; a duplicate is made from a lent one, outside the lock. Why not a mutex: every
+ * cached mesh the own sender answers takes its file here, on any polling thread; under one
+ * mutex the dup syscall made the threads queue (16 connections on 2 threads, one mesh: 0.44 futex calls per
  * request under strace, most of them here), readers now pass each other. */
 #include "server/common/fd_keep.h"
 
@@ -83,13 +83,13 @@ static slot *slot_of(ism_fd_keep *k, const char *name)
 
 int ism_fd_keep_get(ism_fd_keep *k, const char *name)
 {
-    if (!k)
+    ism_fd_lease *l;
+    int fd = ism_fd_keep_borrow(k, name, &l);
+    if (fd < 0)
         return -1;
-    pthread_rwlock_rdlock(&k->lock);
-    slot *s = slot_of(k, name);
-    int fd = s->kept && !strcmp(s->name, name) ? fcntl(s->kept->fd, F_DUPFD_CLOEXEC, 0) : -1;
-    pthread_rwlock_unlock(&k->lock);
-    return fd;
+    int dup = fcntl(fd, F_DUPFD_CLOEXEC, 0); /* outside the lock: the lease keeps fd open */
+    ism_fd_keep_give_back(l);
+    return dup;
 }
 
 int ism_fd_keep_borrow(ism_fd_keep *k, const char *name, ism_fd_lease **lease)
