@@ -8,6 +8,7 @@
  * process is worker_spawn.h's; Server-Timing entries from the stats server_timing.h's. */
 #include "server/isomeshd/worker_pool.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
@@ -335,10 +336,13 @@ static void cache_entry(ismd_pool *p, worker *w, bool later, const char *key, co
     char name[ISM_CACHE_NAME_MAX];
     if (!b || !ism_cache_name(name, key, ext))
         return;
-    if (!later || w->nlater == LATER_MAX) {
+    if (!later) {
         ism_cache_put(p->cache, name, b);
         return;
     }
+    /* cache_result's LATER_MAX calls per result, and every exit from W_STORING (end_storing)
+     * empties the list */
+    assert(w->nlater < LATER_MAX);
     ism_cache_put_local(p->cache, name, b);
     memcpy(w->later_names[w->nlater], name, sizeof name);
     w->later[w->nlater++] = ism_blob_ref(b);
