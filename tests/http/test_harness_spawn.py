@@ -37,14 +37,13 @@ os.rename(os.path.join(d, "pids.tmp"), os.path.join(d, "pids"))
 time.sleep(60)
 """
 
-# The "test": starts the server (owned or plain), writes its own pid, then waits.
+# The "test": starts the server through spawn_owned, writes its own pid, then waits.
 TEST = r"""
 import os, subprocess, sys, time
-sys.path.insert(0, sys.argv[3])
+sys.path.insert(0, sys.argv[2])
 from harness import spawn_owned
-d, how = sys.argv[1], sys.argv[2]
-start = spawn_owned if how == "owned" else subprocess.Popen
-start([sys.executable, "-c", sys.argv[4], d], stdin=subprocess.DEVNULL)
+d = sys.argv[1]
+spawn_owned([sys.executable, "-c", sys.argv[3], d], stdin=subprocess.DEVNULL)
 with open(os.path.join(d, "test.tmp"), "w") as f:
     f.write("%d\n" % os.getpid())
 os.rename(os.path.join(d, "test.tmp"), os.path.join(d, "test"))
@@ -91,13 +90,13 @@ class SpawnOwnedTest(unittest.TestCase):
             p.kill()
             p.wait(10)
 
-    def orphan_a_group_with_a_stopped_worker(self, how):
+    def orphan_a_group_with_a_stopped_worker(self):
         """LINK (its own group) -> TEST -> SERVER -> WORKER; WORKER stopped, then LINK killed:
         TEST's group loses its tie to the session. Returns (server got SIGHUP, worker state)."""
         tmp = tempfile.TemporaryDirectory()
         d = tmp.name
-        link = subprocess.Popen([sys.executable, "-c", LINK, sys.executable, "-c", TEST, d, how,
-                                 HERE, SERVER], stdin=subprocess.DEVNULL, process_group=0)
+        link = subprocess.Popen([sys.executable, "-c", LINK, sys.executable, "-c", TEST, d, HERE,
+                                 SERVER], stdin=subprocess.DEVNULL, process_group=0)
         pids = []
         try:
             self.assertTrue(wait_for(lambda: os.path.exists(os.path.join(d, "pids")) and
@@ -115,10 +114,9 @@ class SpawnOwnedTest(unittest.TestCase):
             hupped = os.path.exists(os.path.join(d, "hup"))
             worker_state = state(worker)
             # the tie: the test's process gone, its owned server is sent SIGTERM
-            if how == "owned":
-                kill_quietly(pids[0])
-                self.assertTrue(wait_for(lambda: not process_alive(server)),
-                                "the server outlived the test that started it")
+            kill_quietly(pids[0])
+            self.assertTrue(wait_for(lambda: not process_alive(server)),
+                            "the server outlived the test that started it")
             return hupped, worker_state
         finally:
             if link.poll() is None:
@@ -129,7 +127,7 @@ class SpawnOwnedTest(unittest.TestCase):
             tmp.cleanup()
 
     def test_an_owned_server_is_not_hupped_when_the_test_group_is_orphaned(self):
-        hupped, worker_state = self.orphan_a_group_with_a_stopped_worker("owned")
+        hupped, worker_state = self.orphan_a_group_with_a_stopped_worker()
         self.assertFalse(hupped, "the server got SIGHUP")
         self.assertEqual(worker_state, "T", "the paused worker was continued")
 

@@ -281,6 +281,11 @@ def fd_count(pid):
     return len(os.listdir("/proc/%d/fd" % pid))
 
 
+def cache_files(cache, name):
+    """The paths of the files called name under the cache directory cache."""
+    return [os.path.join(top, f) for top, _, fs in os.walk(cache) for f in fs if f == name]
+
+
 def big_get(d):
     """POST of BIG -> (its body, a GET of it as bytes), once the own sender answers that GET:
     the cache file is written after the answer (a queue) and is sent from only once settled
@@ -461,8 +466,7 @@ class EvictedMidAnswer(unittest.TestCase):
         try:
             body, get = big_get(d)
             name = re.search(rb"/v1/meshes/(\w+\.stl)", get).group(1).decode()
-            files = [os.path.join(top, f) for top, _, fs in os.walk(cache) for f in fs
-                     if f == name]
+            files = cache_files(cache, name)
             self.assertEqual(len(files), 1)
             s = small_window_socket(d.port)
             sent = d.metric(SENT)
@@ -500,8 +504,7 @@ class EvictedMidAnswer(unittest.TestCase):
         try:
             body, get = big_get(d)  # sent once by the own sender: its file is kept now
             name = re.search(rb"/v1/meshes/(\w+\.stl)", get).group(1).decode()
-            files = [os.path.join(top, f) for top, _, fs in os.walk(cache) for f in fs
-                     if f == name]
+            files = cache_files(cache, name)
             self.assertEqual(len(files), 1)
 
             def open_on_file():
@@ -553,8 +556,7 @@ class MemoryBody(unittest.TestCase):
             self.assertEqual(r.status, 200)
             key = r.header("ETag").strip('"')
             name = key + ".drc"
-            files = wait_until("the mesh's cache file", lambda: [
-                os.path.join(top, f) for top, _, fs in os.walk(cache) for f in fs if f == name])
+            files = wait_until("the mesh's cache file", lambda: cache_files(cache, name))
             os.unlink(files[0])
             get = b"GET /v1/meshes/%s HTTP/1.1\r\nHost: t\r\n\r\n" % name.encode()
             mem, sent = d.metric(MEM), d.metric(SENT)
