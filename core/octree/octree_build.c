@@ -619,6 +619,41 @@ static bool conformed(const build *b, const double lo[3], const double hi[3])
     return b->p->flatness.max_error > 0 && ism_quiet_holds(&b->quiet, lo, hi);
 }
 
+/* Do two of a crossed leaf's corner gradients point more than 120 degrees apart
+ * (cos < TURNED_COS)? On the depth path (no max_error) a leaf at depth.max whose corners
+ * oppose lies within about a cell of a critical point or line of f with f = 0 through it: a
+ * feature about a cell across (a tube of radius r < h along a lattice line inside it, a small
+ * ball over a corner). The same feature between the lattice lines is a hidden piece, found
+ * and resolved ISM_THIN_RESOLVE_LEVELS deeper; seen by the corners it was meshed at the
+ * cell's size: the tube r = 0.004 along x at y = z = h/2 (h = 2/128) in the box moved by
+ * (sqrt 2 - 1) h, depth 7, has the lattice line y = z = 0.00647 inside it, each of the four
+ * cells round that line holds one side of a 4-gon inscribed in the tube's section (vertices
+ * where the four lattice edges from the line cross the circle), area -12.57% at depths 6, 7
+ * and 8 alike (the 4-gon is the same at every depth where h/2 > 0.0051). Smooth surfaces
+ * resolved by the lattice turn by about a cell's size over a cell's radius of curvature:
+ * 120 degrees needs a radius under ~ a cell. Singular points and curves (their quiet balls)
+ * and kinks are left out by unflat(). */
+#define TURNED_COS (-0.5)
+static bool turned_over(const double g[8][3])
+{
+    double n[8][3];
+    for (int c = 0; c < 8; c++) {
+        double len = sqrt(g[c][0] * g[c][0] + g[c][1] * g[c][1] + g[c][2] * g[c][2]);
+        if (!isfinite(len))
+            return false;
+        if (!(len > 0))
+            return true; /* a critical point of f at the corner: the tube's axis on a lattice
+                            line (own box, depth 8): an inscribed square, -9.97% */
+        for (int a = 0; a < 3; a++)
+            n[c][a] = g[c][a] / len;
+    }
+    for (int c = 0; c < 8; c++)
+        for (int d = c + 1; d < 8; d++)
+            if (n[c][0] * n[d][0] + n[c][1] * n[d][1] + n[c][2] * n[d][2] < TURNED_COS)
+                return true;
+    return false;
+}
+
 /* Decides node v->v[i] and grows its subtree. Nodes that fail the flatness test are split
  * down to level `limit` (depth.max, or ISM_THIN_RESOLVE_LEVELS deeper below a hidden
  * piece); a would-be leaf that hides a piece is split in any case, down to thin_depth. When
@@ -699,6 +734,13 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
              * 13,232 triangles with the resolve levels, 7,424 without; 5,456 losing the bars) */
             if (!(v->v[i].thin & ISM_NODE_THIN_AT_KINK))
                 limit = resolve_limit(b, limit);
+        }
+        if (leaf && !flat && !kept && nd.level >= limit && !(v->v[i].thin & ISM_NODE_THIN_FOUND) &&
+            limit < resolve_limit(b, limit) && turned_over(k.g) && unflat(b, sub, lo, hi)) {
+            /* a feature about a cell across that the corners see (see turned_over) is
+             * resolved as deep as a hidden one would be */
+            leaf = false;
+            limit = resolve_limit(b, limit);
         }
         if (leaf && !flat) {
             v->v[i].flags |= ISM_NODE_UNRESOLVED | (kept ? ISM_NODE_CONFORMED : 0);
