@@ -77,6 +77,9 @@ double ism_eval_hessian(const ism_tape *t, ism_eval_ws *ws, double x, double y, 
 /* Whether t holds a min or max (f may have a C0 crease where its operands are equal). */
 bool ism_tape_has_min_max(const ism_tape *t);
 
+/* Whether t holds a min, max or abs (f may have a C0 kink: its gradient jumps). */
+bool ism_tape_has_kink(const ism_tape *t);
+
 /* Whether t's only min, max or abs is its last instruction, min(a, b) or max(a, b) of two
  * registers giving f (a CSG union or intersection of two smooth branches: one crease, where
  * they are equal; ism_eval_top_branches gives both). */

@@ -39,6 +39,14 @@ bool ism_tape_has_min_max(const ism_tape *t)
     return false;
 }
 
+bool ism_tape_has_kink(const ism_tape *t)
+{
+    for (size_t i = 0; i < t->len; i++)
+        if (is_min_max(t->code[i].op) || t->code[i].op == ISM_OP_ABS)
+            return true;
+    return false;
+}
+
 bool ism_tape_top_min_max_only(const ism_tape *t)
 {
     static const double any[2] = {0, 0};

@@ -631,8 +631,10 @@ static bool conformed(const build *b, const double lo[3], const double hi[3])
  * where the four lattice edges from the line cross the circle), area -12.57% at depths 6, 7
  * and 8 alike (the 4-gon is the same at every depth where h/2 > 0.0051). Smooth surfaces
  * resolved by the lattice turn by about a cell's size over a cell's radius of curvature:
- * 120 degrees needs a radius under ~ a cell. Singular points and curves (their quiet balls)
- * and kinks are left out by unflat(). */
+ * 120 degrees needs a radius under ~ a cell. Singular points and curves are left out by
+ * unflat() and beside_locus(), kinks (min, max and abs: an abs crease turns the gradients
+ * at every depth; crease/narrow_bump_under_a_plane lost a piece, 1 instead of 2) by the
+ * caller. */
 #define TURNED_COS (-0.5)
 static bool turned_over(const double g[8][3])
 {
@@ -752,6 +754,7 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         }
         if (leaf && !flat && !kept && nd.level >= limit && !(v->v[i].thin & ISM_NODE_THIN_FOUND) &&
             limit < resolve_limit(b, limit) && turned_over(k.g) && unflat(b, sub, lo, hi) &&
+            !ism_tape_has_kink(sub) &&
             !beside_locus(b, lo, hi)) {
             /* a feature about a cell across that the corners see (see turned_over) is
              * resolved as deep as a hidden one would be */
