@@ -620,7 +620,7 @@ static bool conformed(const build *b, const double lo[3], const double hi[3])
 }
 
 /* Do two of a crossed leaf's corner gradients point more than 120 degrees apart
- * (cos < TURNED_COS)? On the depth path (no max_error) a leaf at depth.max whose corners
+ * (cos < -1/2)? On the depth path (no max_error) a leaf at depth.max whose corners
  * oppose lies within about a cell of a critical point or line of f with f = 0 through it: a
  * feature about a cell across (a tube of radius r < h along a lattice line inside it, a small
  * ball over a corner). The same feature between the lattice lines is a hidden piece, found
@@ -635,24 +635,23 @@ static bool conformed(const build *b, const double lo[3], const double hi[3])
  * unflat() and beside_locus(), kinks (min, max and abs: an abs crease turns the gradients
  * at every depth; crease/narrow_bump_under_a_plane lost a piece, 1 instead of 2) by the
  * caller. */
-#define TURNED_COS (-0.5)
 static bool turned_over(const double g[8][3])
 {
-    double n[8][3];
+    double len2[8]; /* squared lengths: cos < -1/2 as dot < 0 and 4 dot^2 > |a|^2 |b|^2 */
     for (int c = 0; c < 8; c++) {
-        double len = sqrt(g[c][0] * g[c][0] + g[c][1] * g[c][1] + g[c][2] * g[c][2]);
-        if (!isfinite(len))
+        len2[c] = g[c][0] * g[c][0] + g[c][1] * g[c][1] + g[c][2] * g[c][2];
+        if (!isfinite(len2[c]))
             return false;
-        if (!(len > 0))
+        if (!(len2[c] > 0))
             return true; /* a critical point of f at the corner: the tube's axis on a lattice
                             line (own box, depth 8): an inscribed square, -9.97% */
-        for (int a = 0; a < 3; a++)
-            n[c][a] = g[c][a] / len;
     }
     for (int c = 0; c < 8; c++)
-        for (int d = c + 1; d < 8; d++)
-            if (n[c][0] * n[d][0] + n[c][1] * n[d][1] + n[c][2] * n[d][2] < TURNED_COS)
+        for (int d = c + 1; d < 8; d++) {
+            double dot = g[c][0] * g[d][0] + g[c][1] * g[d][1] + g[c][2] * g[d][2];
+            if (dot < 0 && 4 * dot * dot > len2[c] * len2[d])
                 return true;
+        }
     return false;
 }
 
