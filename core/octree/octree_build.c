@@ -13,6 +13,7 @@
 #include "core/octree/thin_search.h"
 #include "core/octree/zero_free.h"
 #include "core/util/parallel.h"
+#include "core/util/sym3.h"
 #include "core/util/grow.h"
 #include "core/util/zeroed.h"
 
@@ -655,6 +656,54 @@ static bool turned_over(const double g[8][3])
     return false;
 }
 
+/* The radius of the feature f's nearby critical point stands for, in units of the leaf's
+ * size: Newton on grad f = 0 (the Hessian's pseudo-inverse: directions whose eigenvalue is
+ * under 1e-6 of the largest, along a tube's axis, are left) from the corner with the
+ * smallest gradient, NEWTON_STEPS steps; then rho = sqrt(2 |f| / |lambda|max) — a tube
+ * (y^2 + z^2 - r^2) or ball gives its radius r exactly, a crossing of two sheets (f = 0 at
+ * the critical point: Klein's self-intersection, the lattice planes of f = xyz, with no
+ * singular stage to guard them) ~ 0. 0 when no critical point lies within 2 sizes. */
+#define NEWTON_STEPS 3
+static double critical_radius(thread_state *th, const ism_tape *sub, const ism_corners *k,
+                              double size)
+{
+    int c0 = 0;
+    double best = INFINITY;
+    for (int c = 0; c < 8; c++) {
+        double l2 = k->g[c][0] * k->g[c][0] + k->g[c][1] * k->g[c][1] + k->g[c][2] * k->g[c][2];
+        if (l2 < best)
+            best = l2, c0 = c;
+    }
+    double x[3] = {k->p[c0][0], k->p[c0][1], k->p[c0][2]}, f = 0, lmax = 0;
+    for (int it = 0; it <= NEWTON_STEPS; it++) {
+        double g[3], h[6], eig[3], vec[3][3];
+        f = ism_eval_hessian(sub, th->s.ws, x[0], x[1], x[2], g, h);
+        ism_sym3_eigen(h, eig, vec);
+        lmax = fmax(fabs(eig[0]), fabs(eig[2]));
+        if (!(lmax > 0) || !isfinite(lmax) || !isfinite(f))
+            return 0;
+        if (it == NEWTON_STEPS)
+            break;
+        for (int i = 0; i < 3; i++) {
+            if (!(fabs(eig[i]) > 1e-6 * lmax))
+                continue;
+            double t = (g[0] * vec[i][0] + g[1] * vec[i][1] + g[2] * vec[i][2]) / eig[i];
+            for (int a = 0; a < 3; a++)
+                x[a] -= t * vec[i][a];
+        }
+        double d2 = 0;
+        for (int a = 0; a < 3; a++)
+            d2 += (x[a] - k->p[c0][a]) * (x[a] - k->p[c0][a]);
+        if (!(d2 <= 4 * size * size))
+            return 0;
+    }
+    return sqrt(2 * fabs(f) / lmax) / size;
+}
+
+/* A crossing's critical point has f = 0 (rho ~ rounding); a tube thinner than this fraction
+ * of a cell is left as thin as the cell shows it. */
+#define TURNED_MIN_RADIUS 0.02
+
 /* Is a quiet ball's centre within size / plane_frac of box lo..hi (20 sizes at the default
  * 0.05: four times the cone's reach polygonise.c measure_unflat asks for)? Beside the
  * singular locus the corner gradients turn apart at every depth (they vanish on it).
@@ -754,7 +803,8 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         if (leaf && !flat && !kept && nd.level >= limit && !(v->v[i].thin & ISM_NODE_THIN_FOUND) &&
             limit < resolve_limit(b, limit) && turned_over(k.g) && unflat(b, sub, lo, hi) &&
             !ism_tape_has_kink(sub) &&
-            !beside_locus(b, lo, hi)) {
+            !beside_locus(b, lo, hi) &&
+            critical_radius(th, sub, &k, hi[0] - lo[0]) > TURNED_MIN_RADIUS) {
             /* a feature about a cell across that the corners see (see turned_over) is
              * resolved as deep as a hidden one would be */
             leaf = false;
