@@ -803,8 +803,8 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         if (leaf && !flat && !kept && nd.level >= limit && !(v->v[i].thin & ISM_NODE_THIN_FOUND) &&
             limit < resolve_limit(b, limit) && turned_over(k.g) && unflat(b, sub, lo, hi) &&
             !ism_tape_has_kink(sub) &&
-            !beside_locus(b, lo, hi) &&
-            critical_radius(th, sub, &k, hi[0] - lo[0]) > TURNED_MIN_RADIUS) {
+            critical_radius(th, sub, &k, hi[0] - lo[0]) > TURNED_MIN_RADIUS &&
+            !beside_locus(b, lo, hi)) { /* the wide ball query last: Steiner +53M before it */
             /* a feature about a cell across that the corners see (see turned_over) is
              * resolved as deep as a hidden one would be */
             leaf = false;
