@@ -633,7 +633,7 @@ static bool conformed(const build *b, const double lo[3], const double hi[3])
  * and 8 alike (the 4-gon is the same at every depth where h/2 > 0.0051). Smooth surfaces
  * resolved by the lattice turn by about a cell's size over a cell's radius of curvature:
  * 120 degrees needs a radius under ~ a cell. Singular points and curves are left out by
- * unflat() and beside_locus(), kinks (min, max and abs: an abs crease turns the gradients
+ * unflat(), critical_radius() (f = 0 at the critical point) and beside_locus(), kinks (min, max and abs: an abs crease turns the gradients
  * at every depth; crease/narrow_bump_under_a_plane lost a piece, 1 instead of 2) by the
  * caller. */
 static bool turned_over(const double g[8][3])
