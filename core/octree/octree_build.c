@@ -11,9 +11,9 @@
 #include "core/octree/node_balls.h"
 #include "core/octree/quiet.h"
 #include "core/octree/thin_search.h"
+#include "core/octree/turned.h"
 #include "core/octree/zero_free.h"
 #include "core/util/parallel.h"
-#include "core/util/sym3.h"
 #include "core/util/grow.h"
 #include "core/util/zeroed.h"
 
@@ -620,108 +620,36 @@ static bool conformed(const build *b, const double lo[3], const double hi[3])
     return b->p->flatness.max_error > 0 && ism_quiet_holds(&b->quiet, lo, hi);
 }
 
-/* Do two of a crossed leaf's corner gradients point more than 120 degrees apart
- * (cos < -1/2)? On the depth path (no max_error) a leaf at depth.max whose corners
- * oppose lies within about a cell of a critical point or line of f with f = 0 through it: a
- * feature about a cell across (a tube of radius r < h along a lattice line inside it, a small
- * ball over a corner). The same feature between the lattice lines is a hidden piece, found
- * and resolved ISM_THIN_RESOLVE_LEVELS deeper; seen by the corners it was meshed at the
- * cell's size: the tube r = 0.004 along x at y = z = h/2 (h = 2/128) in the box moved by
- * (sqrt 2 - 1) h, depth 7, has the lattice line y = z = 0.00647 inside it, each of the four
- * cells round that line holds one side of a 4-gon inscribed in the tube's section (vertices
- * where the four lattice edges from the line cross the circle), area -12.57% at depths 6, 7
- * and 8 alike (the 4-gon is the same at every depth where h/2 > 0.0051). Smooth surfaces
- * resolved by the lattice turn by about a cell's size over a cell's radius of curvature:
- * 120 degrees needs a radius under ~ a cell. Singular points and curves are left out by
- * unflat(), critical_radius() (f = 0 at the critical point) and beside_locus(), kinks (min, max and abs: an abs crease turns the gradients
- * at every depth; crease/narrow_bump_under_a_plane lost a piece, 1 instead of 2) by the
- * caller. */
-static bool turned_over(const double g[8][3])
-{
-    double len2[8]; /* squared lengths: cos < -1/2 as dot < 0 and 4 dot^2 > |a|^2 |b|^2 */
-    for (int c = 0; c < 8; c++) {
-        len2[c] = g[c][0] * g[c][0] + g[c][1] * g[c][1] + g[c][2] * g[c][2];
-        if (!isfinite(len2[c]))
-            return false;
-        if (!(len2[c] > 0))
-            return true; /* a critical point of f at the corner: the tube's axis on a lattice
-                            line (own box, depth 8): an inscribed square, -9.97% */
-    }
-    for (int c = 0; c < 8; c++)
-        for (int d = c + 1; d < 8; d++) {
-            double dot = g[c][0] * g[d][0] + g[c][1] * g[d][1] + g[c][2] * g[d][2];
-            if (dot < 0 && 4 * dot * dot > len2[c] * len2[d])
-                return true;
-        }
-    return false;
-}
-
-/* The radius of the feature f's nearby critical point stands for, in units of the leaf's
- * size: Newton on grad f = 0 (the Hessian's pseudo-inverse: directions whose eigenvalue is
- * under 1e-6 of the largest, along a tube's axis, are left) from the corner with the
- * smallest gradient, NEWTON_STEPS steps; then rho = sqrt(2 |f| / |lambda|max) — a tube
- * (y^2 + z^2 - r^2) or ball gives its radius r exactly, a crossing of two sheets (f = 0 at
- * the critical point: Klein's self-intersection, the lattice planes of f = xyz, with no
- * singular stage to guard them) ~ 0. 0 when no critical point lies within 2 sizes. */
-#define NEWTON_STEPS 3
-static double critical_radius(thread_state *th, const ism_tape *sub, const ism_corners *k,
-                              double size)
-{
-    int c0 = 0;
-    double best = INFINITY;
-    for (int c = 0; c < 8; c++) {
-        double l2 = k->g[c][0] * k->g[c][0] + k->g[c][1] * k->g[c][1] + k->g[c][2] * k->g[c][2];
-        if (l2 < best)
-            best = l2, c0 = c;
-    }
-    double x[3] = {k->p[c0][0], k->p[c0][1], k->p[c0][2]}, f = 0, lmax = 0;
-    for (int it = 0; it <= NEWTON_STEPS; it++) {
-        double g[3], h[6], eig[3], vec[3][3];
-        f = ism_eval_hessian(sub, th->s.ws, x[0], x[1], x[2], g, h);
-        ism_sym3_eigen(h, eig, vec);
-        lmax = fmax(fabs(eig[0]), fabs(eig[2]));
-        if (!(lmax > 0) || !isfinite(lmax) || !isfinite(f))
-            return 0;
-        if (it == NEWTON_STEPS)
-            break;
-        for (int i = 0; i < 3; i++) {
-            if (!(fabs(eig[i]) > 1e-6 * lmax))
-                continue;
-            double t = (g[0] * vec[i][0] + g[1] * vec[i][1] + g[2] * vec[i][2]) / eig[i];
-            for (int a = 0; a < 3; a++)
-                x[a] -= t * vec[i][a];
-        }
-        double d2 = 0;
-        for (int a = 0; a < 3; a++)
-            d2 += (x[a] - k->p[c0][a]) * (x[a] - k->p[c0][a]);
-        if (!(d2 <= 4 * size * size))
-            return 0;
-    }
-    return sqrt(2 * fabs(f) / lmax) / size;
-}
-
-/* A crossing's critical point has f = 0 (rho ~ rounding); a tube thinner than this fraction
- * of a cell is left as thin as the cell shows it. */
-#define TURNED_MIN_RADIUS 0.02
-
-/* Is a quiet ball's centre within size / plane_frac of box lo..hi (20 sizes at the default
- * 0.05: four times the cone's reach polygonise.c measure_unflat asks for)? Beside the
- * singular locus the corner gradients turn apart at every depth (they vanish on it).
- * Steiner's Roman surface at its own depth 8, resolved there 3 levels deeper: with the
- * cone's reach (5 sizes) 9 patches round its 6 pinch points, up to 14 cells from them, came
- * loose (10 edge components instead of 1, 9 non-manifold artefact points, +20% triangles);
- * with 20 sizes its mesh is the same as without the resolve. Asked only of turned leaves at
- * depth.max. */
+/* Is a quiet ball's centre within ISM_TURNED_LOCUS_CELLS sizes of box lo..hi? Beside the
+ * singular locus the corner gradients turn apart at every depth (they vanish on it). Asked
+ * only of turned leaves at depth.max, last (the wide query: Steiner d8 +53M instructions
+ * when asked first). */
 static bool beside_locus(const build *b, const double lo[3], const double hi[3])
 {
-    double pf = b->p->flatness.plane_frac;
-    double reach = pf > 0 ? (hi[0] - lo[0]) / pf : 0;
-    return ism_quiet_near(&b->quiet, lo, hi, reach);
+    return ism_quiet_near(&b->quiet, lo, hi, ISM_TURNED_LOCUS_CELLS * (hi[0] - lo[0]));
+}
+
+/* Is a crossed leaf at depth.max that failed the flatness test a feature about a cell
+ * across that its corners see (turned.h), to be resolved as deep as a hidden one? Its corner
+ * gradients turn over; the depth path (unflat: no max_error, no min/max, no quiet ball
+ * meeting it); no kink in its tape (min, max and abs: an abs crease turns the gradients at
+ * every depth — crease/narrow_bump_under_a_plane lost a piece, 1 instead of 2); f's nearby
+ * critical point stands for a feature wider than ISM_TURNED_MIN_RADIUS (not a crossing of
+ * two sheets); no singular locus near. Cheapest first. */
+static bool visible_feature(const build *b, thread_state *th, const ism_tape *sub,
+                            const ism_corners *k, const double lo[3], const double hi[3])
+{
+    return ism_corners_turned(k->g, ISM_TURNED_COS) && unflat(b, sub, lo, hi) &&
+           !ism_tape_has_kink(sub) &&
+           ism_critical_radius(sub, th->s.ws, k, hi[0] - lo[0], ISM_TURNED_NEWTON_STEPS,
+                               ISM_TURNED_PINV_REL, ISM_TURNED_NEWTON_REACH) >
+               ISM_TURNED_MIN_RADIUS &&
+           !beside_locus(b, lo, hi);
 }
 
 /* Decides node v->v[i] and grows its subtree. Nodes that fail the flatness test are split
  * down to level `limit` (depth.max, or ISM_THIN_RESOLVE_LEVELS deeper below a hidden
- * piece); a would-be leaf that hides a piece is split in any case, down to thin_depth. When
+ * piece or a visible feature about a cell across, visible_feature); a would-be leaf that hides a piece is split in any case, down to thin_depth. When
  * defer is not NULL, nodes at its level are left for tasks (appended to it). pi: the same
  * node in the last round's tree (b->previous), or -1. */
 static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_tape *tape,
@@ -801,13 +729,8 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
                 limit = resolve_limit(b, limit);
         }
         if (leaf && !flat && !kept && nd.level >= limit && !(v->v[i].thin & ISM_NODE_THIN_FOUND) &&
-            limit < resolve_limit(b, limit) && turned_over(k.g) && unflat(b, sub, lo, hi) &&
-            !ism_tape_has_kink(sub) &&
-            critical_radius(th, sub, &k, hi[0] - lo[0]) > TURNED_MIN_RADIUS &&
-            !beside_locus(b, lo, hi)) { /* the wide ball query last: Steiner +53M before it */
-            /* a feature about a cell across that the corners see (see turned_over) is
-             * resolved as deep as a hidden one would be */
-            leaf = false;
+            limit < resolve_limit(b, limit) && visible_feature(b, th, sub, &k, lo, hi)) {
+            leaf = false; /* resolved as deep as a hidden piece would be */
             limit = resolve_limit(b, limit);
         }
         if (leaf && !flat) {

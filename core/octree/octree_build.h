@@ -2,7 +2,8 @@
  * min/max tape shortening on the way down), unconditional subdivision to the minimum depth,
  * then the flatness test until the maximum depth; a node that would be a leaf but hides a
  * piece of the surface from its corners (thin_search.h) is split further, below the
- * maximum depth when it must (thin_depth). Subtrees are built in parallel and joined
+ * maximum depth when it must (thin_depth), and so is one whose corners see a feature
+ * about a cell across (turned.h). Subtrees are built in parallel and joined
  * in a fixed order, so the tree is identical for any number of threads. */
 #ifndef ISM_OCTREE_BUILD_H
 #define ISM_OCTREE_BUILD_H
@@ -21,6 +22,42 @@
  * short of its area with 2 levels, 0.6% with 3. Deeper than that a node is split only while
  * it still hides a piece (the chase ends where the piece crosses the cells' edges). */
 #define ISM_THIN_RESOLVE_LEVELS 3
+
+/* A crossed leaf at depth.max on the depth path whose corners see a feature about a cell
+ * across (turned.h: the tube r = 0.004 with a lattice line inside it, a small ball over a
+ * lattice corner) is split down ISM_THIN_RESOLVE_LEVELS further too, as the same feature
+ * hidden between the lattice lines is. The tests it must pass, and why each threshold is
+ * what it is:
+ * - ISM_TURNED_COS: two corner gradients more than 120° apart (or one zero). A surface the
+ *   cells resolve turns by about a cell's size over its radius of curvature across a cell:
+ *   120° needs a radius under about a cell. The tube's cells have corners on both sides of its
+ *   axis (up to 180°); the presets' meshes are unchanged (mesh_identity.py).
+ * - ISM_TURNED_MIN_RADIUS: the feature f's nearby critical point stands for, √(2|f| / max|λ|)
+ *   there, is wider than this fraction of the leaf. A crossing of two sheets has f = 0 at its
+ *   critical point (ρ ≈ 0): without the test the Klein bottle's
+ *   self-intersection and the lattice planes of xyz (the paper suite, no singular stage) were
+ *   resolved; the tube r = 0.004 at depth 7 is 0.26 cell. A real tube thinner than 0.02 cell
+ *   whose critical set f = 0 also reaches is not told from a crossing: it stays as coarse
+ *   as the cells show it.
+ * - ISM_TURNED_LOCUS_CELLS: no quiet ball (the singular stage's locus) has its centre within
+ *   this many leaf sizes. Beside a pinch point or double curve the corner gradients turn at
+ *   every depth: Steiner's Roman surface at its depth 8 with the cone's reach (5 sizes, as
+ *   polygonise.c's measure_unflat) had 9 patches up to 14 cells from its 6 pinch points come
+ *   loose (10 edge components, 9 non-manifold artefact points, +20% triangles); 20 leaves its
+ *   mesh as without the resolve. A fixed count, not the flatness plane_frac it equalled: a
+ *   request's flat_plane must not narrow it.
+ * - ISM_TURNED_NEWTON_STEPS, _REACH, _PINV_REL: Newton on ∇f = 0 from the corner with the
+ *   least gradient. A quadratic feature (tube, ball) is found in one step, 3 leave room for a
+ *   quartic's slower start; a critical point further than 2 leaf sizes is not this leaf's
+ *   feature (0 then); eigenvalues under 1e-6 of the largest (a tube's axis, exactly 0 for
+ *   y² + z² − r²) take no step, well above a Hessian's rounding (~1e-16), well below any
+ *   curvature ratio across a cell. */
+#define ISM_TURNED_COS (-0.5)
+#define ISM_TURNED_MIN_RADIUS 0.02
+#define ISM_TURNED_LOCUS_CELLS 20.0
+#define ISM_TURNED_NEWTON_STEPS 3
+#define ISM_TURNED_NEWTON_REACH 2.0
+#define ISM_TURNED_PINV_REL 1e-6
 
 typedef struct ism_octree_build_params {
     const ism_tape *tape;

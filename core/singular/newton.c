@@ -5,48 +5,6 @@
 
 #include <math.h>
 
-/* Loops over the three directions are unrolled by pragma here and in search.c's interval
- * tests (gcc -O2 keeps them rolled): the heart's singular stage -1M instructions. */
-bool ism_sing_pinv_step(const double g[3], const double h[6], double rel, double trust,
-                        double step[3])
-{
-    double eig[3], vec[3][3];
-    ism_sym3_eigen(h, eig, vec);
-    double big = fmax(fabs(eig[0]), fmax(fabs(eig[1]), fabs(eig[2])));
-    if (!(big > 0.0) || !isfinite(big))
-        return false;
-    /* directions by decreasing |λ| */
-    int order[3] = { 0, 1, 2 };
-    _Pragma("GCC unroll 3") for (int i = 0; i < 3; i++)
-        for (int j = i + 1; j < 3; j++)
-            if (fabs(eig[order[j]]) > fabs(eig[order[i]])) {
-                int t = order[i];
-                order[i] = order[j];
-                order[j] = t;
-            }
-    double part[3][3] = { { 0 } }; /* part[i]: the step along the i-th largest direction */
-    int kept = 0;
-    _Pragma("GCC unroll 3") for (int r = 0; r < 3; r++) {
-        int i = order[r];
-        if (!(fabs(eig[i]) > rel * big))
-            break;
-        double c = -(vec[i][0] * g[0] + vec[i][1] * g[1] + vec[i][2] * g[2]) / eig[i];
-        _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
-            part[r][k] = c * vec[i][k];
-        kept++;
-    }
-    for (; kept > 0; kept--) {
-        _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
-            step[k] = part[0][k] + (kept > 1 ? part[1][k] : 0.0) + (kept > 2 ? part[2][k] : 0.0);
-        if (!(ism_norm3(step) > trust))
-            break;
-    }
-    if (kept == 0)
-        _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
-            step[k] = part[0][k];
-    return isfinite(step[0]) && isfinite(step[1]) && isfinite(step[2]);
-}
-
 static bool inside(const double p[3], const double lo[3], const double hi[3])
 {
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
@@ -121,7 +79,7 @@ ism_newton_result ism_sing_newton(const ism_tape *t, ism_eval_ws *ws, double p[3
             r.converged = true;
             return r;
         }
-        if (!ism_sing_pinv_step(g, h, o->rel, o->trust, step))
+        if (!ism_sym3_pinv_step(g, h, o->rel, o->trust, step))
             return r;
         if (o->extrapolate)
             extrapolate(&hist, step, p, o);

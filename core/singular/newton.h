@@ -18,14 +18,8 @@
  * where an eigenvalue fades as the zero is approached: a few ulps of the largest. */
 #define ISM_SING_PINV_REL_POINT 1e-15
 
-/* step = -H⁺ g (h = xx xy xz yy yz zz) over the eigen-directions of H whose eigenvalues are
- * above ISM_SING_PINV_REL of the largest — and, while the step is longer than trust, over
- * one direction fewer (smallest |λ| dropped first): near a curve or sheet of zeros of ∇f,
- * H's eigenvalues along the set are small but not 0, and stepping along them would throw
- * the point far along the set; the truncated step goes to the set across it. False when H
- * is zero or not finite. */
-bool ism_sing_pinv_step(const double g[3], const double h[6], double rel, double trust,
-                        double step[3]);
+/* The step itself, -H⁺∇f truncated to a trust length, is ism_sym3_pinv_step (sym3.h), which
+ * the octree's critical-radius test (core/octree/turned.h) shares. */
 
 /* Converged means a step below tol and |∇f| <= this × tol × |H| (Frobenius): the gradient
  * a few thousand step tolerances of curvature would give — far below where a truncated
