@@ -629,18 +629,18 @@ static bool beside_locus(const build *b, const double lo[3], const double hi[3])
     return ism_quiet_near(&b->quiet, lo, hi, ISM_TURNED_LOCUS_CELLS * (hi[0] - lo[0]));
 }
 
-/* Is a crossed leaf at depth.max that failed the flatness test a feature about a cell
- * across that its corners see (turned.h), to be resolved as deep as a hidden one? Its corner
- * gradients turn over; the depth path (unflat: no max_error, no min/max, no quiet ball
- * meeting it); no kink in its tape (min, max and abs: an abs crease turns the gradients at
- * every depth — crease/narrow_bump_under_a_plane lost a piece, 1 instead of 2); f's nearby
- * critical point stands for a feature wider than ISM_TURNED_MIN_RADIUS (not a crossing of
- * two sheets); no singular locus near. Cheapest first. */
+/* Is a crossed leaf at depth.max that failed the flatness test, on the depth path (unflat:
+ * no max_error, no min/max, no quiet ball meeting it; the caller asks that first, as it
+ * needs it anyway), a feature about a cell across that its corners see (turned.h), to be
+ * resolved as deep as a hidden one? Its corner gradients turn over; no kink in its tape
+ * (min, max and abs: an abs crease turns the gradients at every depth —
+ * crease/narrow_bump_under_a_plane lost a piece, 1 instead of 2); f's nearby critical point
+ * stands for a feature wider than ISM_TURNED_MIN_RADIUS (not a crossing of two sheets); no
+ * singular locus near. Cheapest first. */
 static bool visible_feature(const build *b, thread_state *th, const ism_tape *sub,
                             const ism_corners *k, const double lo[3], const double hi[3])
 {
-    return ism_corners_turned(k->g, ISM_TURNED_COS) && unflat(b, sub, lo, hi) &&
-           !ism_tape_has_kink(sub) &&
+    return ism_corners_turned(k->g, ISM_TURNED_COS) && !ism_tape_has_kink(sub) &&
            ism_critical_radius(sub, th->s.ws, k, hi[0] - lo[0], ISM_TURNED_NEWTON_STEPS,
                                ISM_TURNED_PINV_REL, ISM_TURNED_NEWTON_REACH) >
                ISM_TURNED_MIN_RADIUS &&
@@ -728,15 +728,17 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
             if (!(v->v[i].thin & ISM_NODE_THIN_AT_KINK))
                 limit = resolve_limit(b, limit);
         }
+        int uf = -1; /* unflat(b, sub, lo, hi) once asked */
         if (leaf && !flat && !kept && nd.level >= limit && !(v->v[i].thin & ISM_NODE_THIN_FOUND) &&
-            limit < resolve_limit(b, limit) && visible_feature(b, th, sub, &k, lo, hi)) {
+            limit < resolve_limit(b, limit) && (uf = unflat(b, sub, lo, hi)) &&
+            visible_feature(b, th, sub, &k, lo, hi)) {
             leaf = false; /* resolved as deep as a hidden piece would be */
             limit = resolve_limit(b, limit);
         }
         if (leaf && !flat) {
             v->v[i].flags |= ISM_NODE_UNRESOLVED | (kept ? ISM_NODE_CONFORMED : 0);
             th->unresolved++;
-            if (unflat(b, sub, lo, hi))
+            if (uf < 0 ? unflat(b, sub, lo, hi) : uf)
                 v->v[i].flags |= ISM_NODE_UNFLAT;
         }
         th->deep_leaves += leaf && nd.level > b->p->max_depth;
