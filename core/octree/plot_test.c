@@ -4,7 +4,6 @@
  * the distance of the node's would-be triangles to the surface (cell_error.h). */
 #include "core/octree/plot_test.h"
 #include "core/eval/eval.h"
-#include "core/expr/tape.h"
 #include "core/octree/cell_cache.h"
 #include "core/octree/cell_error.h"
 #include "core/octree/crease_split.h"
@@ -134,17 +133,6 @@ static int crease_cell(ism_sampler *s, const ism_flatness *fl, const ism_corners
     return 1; /* polygons the estimate cannot follow: the measurement after decides */
 }
 
-/* t has an instruction that may kink (min, max, abs). */
-static bool may_kink(const ism_tape *t)
-{
-    if (ism_tape_has_min_max(t))
-        return true;
-    for (size_t i = 0; i < t->len; i++)
-        if (t->code[i].op == ISM_OP_ABS)
-            return true;
-    return false;
-}
-
 /* A node judged by its measure alone that used an allowance of CREASE_CELL_ERRORS is proven
  * one graph when its tape keeps a kink over the box (two crossing surfaces: ism_graph_
  * certified across it); true also where the tape keeps none (the sampled rule, see there).
@@ -171,7 +159,7 @@ static bool crossing_ok(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *f
                         const double lo[3], const double hi[3], const double (*n)[3],
                         bool allowed)
 {
-    if (!may_kink(s->tape) || (!allowed && normals_agree(n, fl->normal_cos)))
+    if (!ism_tape_has_kink(s->tape) || (!allowed && normals_agree(n, fl->normal_cos)))
         return true;
     return crossing_graphs(s, jet, lo, hi);
 }
