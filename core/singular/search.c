@@ -20,9 +20,9 @@
 #include "core/singular/krawczyk.h"
 #include "core/singular/newton.h"
 #include "core/octree/dual_cert.h"
+#include "core/eval/eval.h"
 #include "core/eval/interval_jet.h"
 #include "core/eval/interval_ops.h"
-#include "core/expr/tape.h"
 #include "core/util/clock.h"
 #include "core/util/parallel.h"
 #include "core/util/sym3.h"
@@ -357,20 +357,6 @@ static double hessian_scale(search *s)
     return best;
 }
 
-/* Whether t holds an instruction whose gradient may have a kink (min, max, abs). */
-static bool has_branches(const ism_tape *t)
-{
-    for (size_t i = 0; i < ism_tape_length(t); i++)
-        switch (t->code[i].op) {
-        case ISM_OP_MIN_RR: case ISM_OP_MIN_RC: case ISM_OP_MAX_RR: case ISM_OP_MAX_RC:
-        case ISM_OP_ABS:
-            return true;
-        default:
-            break;
-        }
-    return false;
-}
-
 static uint64_t cell_key(const scell *c)
 {
     return (uint64_t)c->i[2] << 39 | (uint64_t)c->i[1] << 22 | (uint64_t)c->i[0] << 5 | c->level;
@@ -614,7 +600,7 @@ bool ism_sing_search(const ism_tape *f, const ism_locus_options *o, ism_locus *o
     if (!check_options(o, err))
         return false;
     search s = { .t = f, .o = o, .depth = o->max_depth, .unit = ldexp(1.0, -o->max_depth),
-                 .branches = has_branches(f) };
+                 .branches = ism_tape_has_kink(f) };
     for (int k = 0; k < 3; k++) {
         s.lo[k] = o->box[k];
         s.hi[k] = o->box[k + 3];
