@@ -123,6 +123,8 @@ typedef struct ism_req_error {
     char path[160];            /* JSON path like "$.depth.max", "" when none */
     int line, column;          /* 1-based position in the JSON text or the expression; 0 none */
     char message[400];         /* one line, starting with the path when there is one */
+    double max_error_that_fits; /* too_big under a bound: an E the same request was seen to
+                                   mesh within the triangle budget; 0 none */
 } ism_req_error;
 
 /* The error bound a request (or the CLI) gets when it does not give one:
@@ -196,7 +198,8 @@ bool ism_key_valid(const char *key);
 bool ism_req_error_set(ism_req_error *err, int status, const char *code, const char *path,
                        const char *fmt, ...) __attribute__((format(printf, 5, 6)));
 
-/* The error JSON: {"error": {"code", "message", "path"?, "line"?, "column"?}}. malloc'd. */
+/* The error JSON: {"error": {"code", "message", "path"?, "line"?, "column"?,
+ * "max_error_that_fits"?}}. malloc'd. */
 char *ism_req_error_json(const ism_req_error *err, size_t *len);
 
 #endif

@@ -1,7 +1,8 @@
 /* request_error.c — request errors: setting one (the path leads its message) and the error
  * document every non-200 answer carries:
  * {"error": {"code": "...", "message": "...", "path": "$.x", "line": L, "column": C}}
- * (path, line and column only when known). */
+ * (path, line and column only when known; "max_error_that_fits": E on a too_big answer
+ * under a bound, when one was found). */
 #include "proto/request.h"
 #include "proto/json_writer.h"
 
@@ -94,6 +95,10 @@ char *ism_req_error_json(const ism_req_error *err, size_t *len)
     if (err->column > 0) {
         ism_jw_key(&w, "column");
         ism_jw_int(&w, err->column);
+    }
+    if (err->max_error_that_fits > 0) {
+        ism_jw_key(&w, "max_error_that_fits");
+        ism_jw_number(&w, err->max_error_that_fits);
     }
     ism_jw_object_end(&w);
     ism_jw_object_end(&w);

@@ -4,6 +4,7 @@
  * write the stats. Every outcome fills the result: a status, and either the file or the
  * error JSON in body. No geometry is computed here: core does it, proto encodes it. */
 #include "server/common/pipeline.h"
+#include "server/common/fit_error.h"
 #include "core/util/clock.h"
 
 #include "core/analysis/analysis.h"
@@ -203,8 +204,35 @@ static void polygoniser_progress(void *ctx, double f)
 
 static bool cancelled(const ism_pipeline_hooks *h) { return h && h->cancel && *h->cancel; }
 
+/* The 422 for a mesh over the triangle budget. Under a bound depth.max is not what makes
+ * the mesh big (the bound is), so the answer names a larger max_error that fits, found by
+ * coarse passes (server/common/fit_error.h); on the depth path, a lower depth.max. */
+static bool too_big(ism_pipeline_result *r, const ism_error *err, const ism_tape *tape,
+                    const ism_poly_options *o, bool preview)
+{
+    if (!(o->max_error > 0))
+        return fail_with(r, 422, "too_big", "%s (lower depth.max or shrink the box)",
+                         err->message);
+    double fit = ism_fit_error(tape, o, preview);
+    ism_req_error e;
+    char buf[32];
+    if (fit > 0)
+        ism_req_error_set(&e, 422, "too_big", "",
+                          "%s under max_error %s; max_error %s fits (max_error_that_fits)",
+                          err->message, ism_three_digits(o->max_error, 0, buf),
+                          ism_three_digits(fit, 1, (char[32]){0}));
+    else
+        ism_req_error_set(&e, 422, "too_big", "",
+                          "%s under max_error %s; no max_error up to the box diagonal fits "
+                          "(shrink the box)",
+                          err->message, ism_three_digits(o->max_error, 0, buf));
+    e.max_error_that_fits = fit;
+    return fail(r, &e);
+}
+
 static bool polygonise_status(ism_pipeline_result *r, enum ism_poly_status st,
-                              const ism_error *err)
+                              const ism_error *err, const ism_tape *tape,
+                              const ism_poly_options *o, bool preview)
 {
     switch (st) {
     case ISM_POLY_OK:
@@ -212,8 +240,7 @@ static bool polygonise_status(ism_pipeline_result *r, enum ism_poly_status st,
     case ISM_POLY_BAD_OPTIONS:
         return fail_with(r, 400, "bad_request", "%s", err->message);
     case ISM_POLY_TOO_BIG:
-        return fail_with(r, 422, "too_big", "%s (lower depth.max or shrink the box)",
-                         err->message);
+        return too_big(r, err, tape, o, preview);
     case ISM_POLY_CANCELLED:
         return fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
     case ISM_POLY_NO_MEMORY:
@@ -474,7 +501,7 @@ static bool polygonise_preview(const ism_tape *tape, const ism_poly_options *po,
     double t = ism_now_ms();
     enum ism_poly_status st = ism_polygonise(tape, &o, &c->mesh, &s->ps, &err);
     c->timings_ms[ISM_TIME_POLYGONISE] = ism_now_ms() - t;
-    if (!polygonise_status(r, st, &err))
+    if (!polygonise_status(r, st, &err, tape, &o, true))
         return false;
     if (cancelled(hooks))
         return fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
@@ -516,7 +543,7 @@ static bool polygonise_and_analyse(const ism_request *req, const ism_tape *tape,
         ism_mesh_surface(tape, &o, &c->mesh, &c->locus, &s->ps, &s->cs, &times, &err);
     c->timings_ms[ISM_TIME_SINGULAR] = times.singular_ms;
     c->timings_ms[ISM_TIME_POLYGONISE] = times.polygonise_ms;
-    if (!polygonise_status(r, st, &err))
+    if (!polygonise_status(r, st, &err, tape, &o, false))
         return false;
     if (cancelled(hooks))
         return fail_with(r, 499, "cancelled", "%s", "the request was cancelled");

@@ -15,6 +15,7 @@
 #include "core/singular/check.h"
 #include "core/singular/surface.h"
 #include "core/remesh/quality_pass.h"
+#include "server/common/fit_error.h"
 #include "server/common/fd_io.h"
 #include "server/common/pipeline.h"
 
@@ -457,12 +458,22 @@ int ism_cli_run_surface(ism_cli_run *run)
     double t2 = ism_now_ms();
     int status = 0;
     if (ps_status != ISM_POLY_OK) {
-        /* the budget's flag and the knobs that make the mesh smaller */
+        /* the budget's flag and the knobs that make the mesh smaller; under a bound, the
+         * --max-error that fits (coarse passes, server/common/fit_error.h) */
         const char *hint = ps_status != ISM_POLY_TOO_BIG ? ""
                            : run->options.max_error > 0
                                ? ": --max-triangles raises it, a larger --max-error makes fewer"
                                : ": --max-triangles raises it, a smaller -d MAX makes fewer";
-        fprintf(stderr, "isomesh: %s%s\n", ism_error_format(&err, msg, sizeof msg), hint);
+        char fit_hint[96] = "";
+        double fit = ps_status == ISM_POLY_TOO_BIG && run->options.max_error > 0
+                         ? ism_fit_error(tape, &run->options, false)
+                         : 0;
+        char buf[32];
+        if (fit > 0)
+            snprintf(fit_hint, sizeof fit_hint, " (--max-error %s fits)",
+                     ism_three_digits(fit, 1, buf));
+        fprintf(stderr, "isomesh: %s%s%s\n", ism_error_format(&err, msg, sizeof msg), hint,
+                fit_hint);
         status = ps_status == ISM_POLY_BAD_OPTIONS ? 2 : 1;
         goto done;
     }

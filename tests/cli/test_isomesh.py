@@ -215,6 +215,32 @@ class TestIsomesh(unittest.TestCase):
             self.assertIn(f"MiB): --max-triangles raises it, {knob}", p.stderr)
             self.assertEqual(os.listdir(self.dir), [])
 
+    def test_a_bound_over_the_budget_names_an_error_that_fits(self):
+        # issue 15: under --max-error, the budget's message names a --max-error that fits,
+        # found by coarse passes. The sphere takes 5016 triangles under 1e-3, 1128 under 4e-3,
+        # 828 under 8e-3: the smallest E that fits 1000 lies in (4e-3, 8e-3]. The suggestion
+        # meshes; a quarter of it does not (within 4x of the smallest that fits).
+        path = self.out("s.ply")
+        p = run("--surface", "sphere", "--max-error", "1e-3", "--max-triangles", "1000",
+                "-o", path)
+        self.assertEqual(p.returncode, 1, p.stderr)
+        m = re.search(r"\(--max-error ([0-9.e+-]+) fits\)", p.stderr)
+        self.assertTrue(m, p.stderr)
+        fit = float(m.group(1))
+        self.assertGreater(fit, 1e-3)
+        p = run("--surface", "sphere", "--max-error", m.group(1), "--max-triangles", "1000",
+                "-o", path)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        p = run("--surface", "sphere", "--max-error", repr(fit / 4), "--max-triangles", "1000",
+                "-o", path)
+        self.assertEqual(p.returncode, 1, p.stderr)
+        self.assertIn("budget", p.stderr)
+        # the depth path names no E
+        p = run("--surface", "sphere", "--max-error", "off", "-d", "3:8", "--max-triangles",
+                "1000", "-o", path)
+        self.assertEqual(p.returncode, 1, p.stderr)
+        self.assertNotIn("fits", p.stderr)
+
     def test_surfaces_file(self):
         path = self.out("ring.ply")
         p = run("--surface", "ring", "--surfaces", FIXTURE, "-d", "3:6", "-o", path)
