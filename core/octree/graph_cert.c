@@ -81,8 +81,10 @@ static bool graph_across_kinks(const ism_tape *t, ism_ivjet_ws *jet, const ism_i
 }
 
 bool ism_graph_certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
-                         const double hi[3], uint64_t *intervals)
+                         const double hi[3], uint64_t *intervals, size_t *nkinks)
 {
+    if (nkinks)
+        *nkinks = (size_t)-1;
     if (!jet)
         return false;
     ism_interval box[3];
@@ -91,6 +93,8 @@ bool ism_graph_certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3
     ism_ivgrad g;
     (*intervals)++;
     size_t nk = ism_eval_interval_grad(t, jet, box, NULL, NULL, &g);
+    if (nkinks)
+        *nkinks = nk;
     if (nk == 0)
         return ism_graph_from_enclosure(&g);
     if (nk > GRAPH_MAX_KINKS || t->len > GRAPH_MAX_TAPE)

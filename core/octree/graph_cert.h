@@ -18,9 +18,11 @@
  * branches the box allows; up to 3), ∇f is enclosed once for each combination of their
  * branches and d is the sum of those midpoints: every enclosure must clear 0 along it, with
  * one sign (a CSG crease of two branches each monotone along d: the cube's edges, whose
- * nodes once split until 4 E across, plot_test.c). *intervals counts the evaluations. */
+ * nodes once split until 4 E across, plot_test.c). *intervals counts the evaluations;
+ * nkinks, when not NULL, receives the kink count of the first, free evaluation over the box
+ * ((size_t)-1 when jet is NULL or does not fit t), so that a caller need not ask it again. */
 bool ism_graph_certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
-                         const double hi[3], uint64_t *intervals);
+                         const double hi[3], uint64_t *intervals, size_t *nkinks);
 
 /* The same verdict from an enclosure g of ∇f over a box already computed
  * (ism_eval_interval_grad): ∇f · d clears 0 over it for d the midpoint of g's gradient. */

@@ -140,16 +140,8 @@ static int crease_cell(ism_sampler *s, const ism_flatness *fl, const ism_corners
 static bool crossing_graphs(ism_sampler *s, ism_ivjet_ws *jet, const double lo[3],
                             const double hi[3])
 {
-    if (ism_graph_certified(s->tape, jet, lo, hi, &s->n_interval))
-        return true;
-    if (!jet)
-        return false;
-    ism_interval box[3];
-    for (int a = 0; a < 3; a++)
-        box[a] = (ism_interval){lo[a], hi[a]};
-    ism_ivgrad g;
-    s->n_interval++;
-    return ism_eval_interval_grad(s->tape, jet, box, NULL, NULL, &g) == 0;
+    size_t nk; /* the certificate's own free evaluation: (size_t)-1 without a jet */
+    return ism_graph_certified(s->tape, jet, lo, hi, &s->n_interval, &nk) || nk == 0;
 }
 
 /* A node judged by its measure alone passes crossing_graphs when it used an allowance: an
@@ -194,7 +186,7 @@ static bool graph_node_passes(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatn
         if (!(ism_sample_dist(s, c) <= room))
             return false;
     }
-    if (!ism_graph_certified(s->tape, jet, lo, hi, &s->n_interval))
+    if (!ism_graph_certified(s->tape, jet, lo, hi, &s->n_interval, NULL))
         return false;
     return edges_rootless(s, fl, k, disagree, ndisagree);
 }
@@ -274,17 +266,11 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
 
     double roots[12][3], centroid[3] = {0, 0, 0};
     int nroots = 0, face_cross[6] = {0}, ndisagree = 0, disagree[12];
-    unsigned zero_faces[8] = {0}; /* per corner on f = 0: the faces its one root lies on */
     for (int e = 0; e < 12; e++) {
         int c0, c1, faces[2];
         ism_cube_edge(e, &c0, &c1, faces);
-        if (f[c0] == 0 && f[c1] == 0)
-            continue; /* the edge lies in f = 0 (a plane of the surface on the lattice) */
-        if (f[c0] == 0 || f[c1] == 0) { /* its root is that corner: one root, below */
-            int z = f[c0] == 0 ? c0 : c1;
-            zero_faces[z] = ism_zero_corner_faces(f, z);
-            continue;
-        }
+        if (f[c0] == 0 || f[c1] == 0)
+            continue; /* no root here (the edge lies in f = 0), or the corner's (below) */
         bool crosses = (f[c0] < 0) != (f[c1] < 0);
         if (!crosses) {
             /* signs agree, gradients do not: maybe two roots (a small node under an error
@@ -316,7 +302,8 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
      * nodes along them all went to that level: 32,488 triangles against ~3,700 in boxes
      * moved off the lattice (default bound, depth 10). */
     for (int c = 0; c < 8; c++) {
-        if (!zero_faces[c])
+        unsigned zf = f[c] == 0 ? ism_zero_corner_faces(f, c) : 0;
+        if (!zf)
             continue;
         for (int a = 0; a < 3; a++) {
             roots[nroots][a] = p[c][a];
@@ -324,7 +311,7 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
         }
         nroots++;
         for (int fc = 0; fc < 6; fc++)
-            face_cross[fc] += (zero_faces[c] >> fc) & 1;
+            face_cross[fc] += (zf >> fc) & 1;
     }
     for (int k = 0; k < 6; k++)
         if (face_cross[k] > 2) {
