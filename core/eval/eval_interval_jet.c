@@ -504,26 +504,54 @@ static ALWAYS_INLINE int jet_op(const ism_instr *in, ism_ivjet *r, uint8_t force
     }
 }
 
+#if defined(__SSE2__)
+#define NAN_LANES(u) _mm_cmpunord_pd(_mm_loadu_pd(&(u).lo), _mm_loadu_pd(&(u).lo))
+/* The NaN lanes of o's Hessian bounds, or'ed: one unordered compare per interval. */
+static ALWAYS_INLINE __m128d h_nan_lanes(const ism_ivjet *o)
+{
+    __m128d bad = NAN_LANES(o->h[0]);
+    _Pragma("GCC unroll 5") for (int e = 1; e < 6; e++)
+        bad = _mm_or_pd(bad, NAN_LANES(o->h[e]));
+    return bad;
+}
+#endif
+
 /* Whether some bound of o's value, first partials and (second) Hessian is NaN: one
  * unordered compare per interval in SSE2 lanes, the masks or'ed and read once. */
 static ALWAYS_INLINE bool any_nan(const ism_ivjet *o, bool second)
 {
 #if defined(__SSE2__)
-#define NAN_LANES(u) _mm_cmpunord_pd(_mm_loadu_pd(&(u).lo), _mm_loadu_pd(&(u).lo))
     __m128d bad = NAN_LANES(o->v);
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         bad = _mm_or_pd(bad, NAN_LANES(o->d[k]));
-    if (second) {
-        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-            bad = _mm_or_pd(bad, NAN_LANES(o->h[e]));
-    }
-#undef NAN_LANES
+    if (second)
+        bad = _mm_or_pd(bad, h_nan_lanes(o));
     return _mm_movemask_pd(bad) != 0;
 #else
     (void)o;
     (void)second;
     return true;
 #endif
+}
+
+/* Whether some Hessian bound of o is NaN (any_nan's test on the h part alone). */
+static ALWAYS_INLINE bool any_nan_h(const ism_ivjet *o)
+{
+#if defined(__SSE2__)
+    return _mm_movemask_pd(h_nan_lanes(o)) != 0;
+#else
+    (void)o;
+    return true;
+#endif
+}
+#undef NAN_LANES
+
+/* The Hessian entries of o in w made NaN-free (sanitize's h part; hess_only's too). */
+static ALWAYS_INLINE void sanitize_h(ism_ivjet *o, unsigned w)
+{
+    _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
+        if (DO_H(w, e))
+            o->h[e] = ism_iv_sane(o->h[e]);
 }
 
 /* The partials outside w are 0 already. Nothing to do when no bound is NaN (nearly always:
@@ -537,11 +565,8 @@ static ALWAYS_INLINE void sanitize(ism_ivjet *o, unsigned w)
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         if (DO_D(w, k))
             o->d[k] = ism_iv_sane(o->d[k]);
-    if (w & SECOND) {
-        _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-            if (DO_H(w, e))
-                o->h[e] = ism_iv_sane(o->h[e]);
-    }
+    if (w & SECOND)
+        sanitize_h(o, w);
 }
 
 /* Operations whose Hessian hess_only computes from the operands' kept values and first
@@ -642,21 +667,6 @@ static ALWAYS_INLINE void hess_op(const ism_instr *in, ism_ivjet *r, unsigned w)
     }
 }
 
-/* Whether some Hessian bound of o is NaN (any_nan's test on the h part alone). */
-static ALWAYS_INLINE bool any_nan_h(const ism_ivjet *o)
-{
-#if defined(__SSE2__)
-    __m128d bad = _mm_setzero_pd();
-    _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-        bad = _mm_or_pd(bad, _mm_cmpunord_pd(_mm_loadu_pd(&o->h[e].lo),
-                                             _mm_loadu_pd(&o->h[e].lo)));
-    return _mm_movemask_pd(bad) != 0;
-#else
-    (void)o;
-    return true;
-#endif
-}
-
 /* The second-order pass over the kept record of the gradient pass over the same box: each
  * instruction's value and first partials copied from it (the second-order pass computes
  * them with the same operations on the same operands, and cleans them the same way: a
@@ -677,11 +687,8 @@ static size_t hess_only(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval 
         _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
             o->d[k] = ws->kept[i][k + 1];
         hess_op(in, r, w);
-        if (any_nan_h(o)) {
-            _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-                if (DO_H(w, e))
-                    o->h[e] = ism_iv_sane(o->h[e]);
-        }
+        if (any_nan_h(o))
+            sanitize_h(o, w);
         if (kinks)
             kinks[i] = 0;
     }
