@@ -595,10 +595,11 @@ static ALWAYS_INLINE void load_box(ism_ivjet *r, const ism_interval box[3], unsi
 }
 
 /* keep: NULL, or the gradient pass's (second = 0) record of every instruction's value and
- * first partials as written to its register (ism_eval_interval_grad_kept). */
+ * first partials as written to its register (ism_eval_interval_grad_kept); with it *keep_ok
+ * is cleared unless every instruction is hess_from_kept. */
 static ALWAYS_INLINE size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
                                 const uint8_t *force, uint8_t *kinks, int second, ism_ivjet *out,
-                                ism_kept_vd *keep)
+                                ism_kept_vd *keep, bool *keep_ok)
 {
     const unsigned all = want_of(7u, second, false);
     if (!ws || !t || ws->nregs < t->nregs) {
@@ -626,6 +627,7 @@ static ALWAYS_INLINE size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_i
         if (kinks)
             kinks[i] = (uint8_t)kink;
         if (keep) {
+            *keep_ok = *keep_ok && hess_from_kept(in->op);
             const ism_ivjet *o = &r[in->out];
             keep[i][0] = o->v;
             _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
@@ -705,7 +707,7 @@ size_t ism_eval_interval_grad(const ism_tape *t, ism_ivjet_ws *ws, const ism_int
                               const uint8_t *force, uint8_t *kinks, ism_ivgrad *out)
 {
     ism_ivjet j;
-    size_t n = run(t, ws, box, force, kinks, 0, &j, NULL);
+    size_t n = run(t, ws, box, force, kinks, 0, &j, NULL, NULL);
     out->v = j.v;
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         out->d[k] = j.d[k];
@@ -720,16 +722,14 @@ size_t ism_eval_interval_grad_kept(const ism_tape *t, ism_ivjet_ws *ws,
         return ism_eval_interval_grad(t, ws, box, NULL, NULL, out);
     ws->kept_ok = false;
     ism_ivjet j;
-    size_t n = run(t, ws, box, NULL, NULL, 0, &j, ws->kept);
+    bool ok = true;
+    size_t n = run(t, ws, box, NULL, NULL, 0, &j, ws->kept, &ok);
     out->v = j.v;
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         out->d[k] = j.d[k];
-    bool ok = n == 0;
-    for (size_t i = 0; ok && i < t->len; i++)
-        ok = hess_from_kept(t->code[i].op);
     ws->kept_t = t;
     memcpy(ws->kept_box, box, sizeof ws->kept_box);
-    ws->kept_ok = ok;
+    ws->kept_ok = n == 0 && ok;
     return n;
 }
 
@@ -740,5 +740,5 @@ size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_inte
         ws->kept_ok = false; /* once: the record is of one gradient pass */
         return hess_only(t, ws, box, kinks, out);
     }
-    return run(t, ws, box, force, kinks, 1, out, NULL);
+    return run(t, ws, box, force, kinks, 1, out, NULL, NULL);
 }
