@@ -189,14 +189,15 @@ static void halves_terms_of(const ism_dual_model *m, const double lo[3], const d
         }
 }
 
-/* Sub-box k's x − c and its form's bounds (second_order's). */
+/* Sub-box k's form's bounds (second_order's), and its x − c into dx unless NULL. */
 static ism_interval sub_form(const ism_dual_model *m, const halves_terms *h, int k,
-                             ism_interval dx[3])
+                             ism_interval *dx)
 {
     ism_dual_terms t;
     for (int a = 0; a < 3; a++) {
         int s = k >> a & 1;
-        dx[a] = h->dx[a][s];
+        if (dx)
+            dx[a] = h->dx[a][s];
         t.lin[a] = h->lin[a][s];
         t.quad[ism_dual_hess_at(a, a)] = h->diag[a][s];
         for (int b = a + 1; b < 3; b++)
@@ -210,10 +211,8 @@ void ism_dual_sub_forms(const ism_dual_model *m, const double lo[3], const doubl
 {
     halves_terms h;
     halves_terms_of(m, lo, mid, hi, &h);
-    for (int k = 0; k < 8; k++) {
-        ism_interval dx[3];
-        f[k] = sub_form(m, &h, k, dx);
-    }
+    for (int k = 0; k < 8; k++)
+        f[k] = sub_form(m, &h, k, NULL);
 }
 
 /* How nearly f's enclosure v (holding 0) is centred on 0: min(−lo, hi) / width, in [0, ½].

@@ -48,7 +48,8 @@ ism_interval ism_dual_second_order(const ism_dual_model *m, const double lo[3],
 
 /* ism_dual_second_order's bounds on each sub-box k of lo..hi halved at mid (NULL: the
  * centre; bit a of k the upper half along a), from terms taken once per half and pair of
- * halves (the proofs on the sub-boxes take them so). */
+ * halves (the proofs on the sub-boxes take them so). Kept public as the unit tests' view
+ * of that halving (test_dual_cert.c: bit for bit ism_dual_second_order on each sub-box). */
 void ism_dual_sub_forms(const ism_dual_model *m, const double lo[3], const double *mid,
                         const double hi[3], ism_interval f[8]);
 
