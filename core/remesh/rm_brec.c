@@ -138,10 +138,12 @@ static double bound_of(rm_pass *p, uint32_t t, int s, const double y0[3], const 
 {
     const double *e = slot_of(p, t, s);
     if (e[0] == y0[0] && e[1] == y0[1] && e[2] == y0[2]) {
-        double plain0, least = has_normal(e) ? moved_bound(e, y, 0, NULL, &plain0) : INFINITY;
-        if (isnan(*kappa) && ISM_RM_CBOUND_RATIO * least <= p->max_error &&
-            !(ISM_RM_CBOUND_RATIO * plain0 <= p->max_error))
-            *kappa = fan_bend(p, v, x);
+        if (isnan(*kappa) && has_normal(e)) {
+            double plain0, least = moved_bound(e, y, 0, NULL, &plain0);
+            if (ISM_RM_CBOUND_RATIO * least <= p->max_error &&
+                !(ISM_RM_CBOUND_RATIO * plain0 <= p->max_error))
+                *kappa = fan_bend(p, v, x);
+        }
         double plain, u = moved_bound(e, y, isnan(*kappa) ? INFINITY : *kappa, w, &plain);
         p->brec_known++;
         p->brec_skipped += ISM_RM_CBOUND_RATIO * plain <= p->max_error; /* rm_brec_pays */
@@ -185,7 +187,7 @@ static double box_bend(rm_pass *p, const double *lo, const double *hi)
        min/max may switch branches in the box (gyroid-ball: 8 boxes in 10, beside its crease)
        the Hessian is not needed */
     ism_ivgrad d;
-    if (ism_eval_interval_grad(p->f, p->jws, b, NULL, NULL, &d) != 0 || !(least_norm(d.d) > 0))
+    if (ism_eval_interval_grad_kept(p->f, p->jws, b, &d) != 0 || !(least_norm(d.d) > 0))
         return INFINITY;
     ism_ivjet j;
     if (ism_eval_interval_jet(p->f, p->jws, b, NULL, NULL, &j) == (size_t)-1)
