@@ -343,9 +343,10 @@ static bool tri_ok(const rm_pass *p, const crease_frame *cf, uint32_t t, uint32_
 {
     if (rm_crease_tri_ok(p, t, a, b, o, q))
         return true;
-    double n[3], m[3], ln = rm_cross(q[0], q[1], q[2], n), lo = rm_cross(o[0], o[1], o[2], m);
+    double n[3], ln = rm_cross(q[0], q[1], q[2], n);
     if (!cf || !(ln > 0))
         return false;
+    double m[3], lo = rm_cross(o[0], o[1], o[2], m);
     /* or no farther from the nearer branch's normal than o was (a wall of the chamfer) */
     double was = lo > 0 ? fmax(ism_dot3(m, cf->n[0]), ism_dot3(m, cf->n[1])) / lo : -1;
     double face = fmin(cf->cos_face, was) * ln;

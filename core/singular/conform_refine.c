@@ -41,6 +41,7 @@
  *             │   ╳   │            crosses itself; r1 to the mean of a1, r0, r2 and its inner
  *     ring   r1 ──── r0            neighbour puts it back between them
  */
+#include "core/octree/edge_keys.h"
 #include "core/singular/conform_internal.h"
 #include "core/singular/key_map.h"
 #include "core/util/vec3.h"
@@ -445,7 +446,7 @@ static void edge_memo_free(edge_memo *m)
 static double edge_measure(cf_ctx *c, edge_memo *m, uint32_t a, uint32_t b, const double q[3],
                            double E, bool *ok)
 {
-    uint64_t key = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+    uint64_t key = ism_edge_key(a, b);
     bool added;
     uint32_t i = ism_key_map_add(&m->map, key, &added);
     if (i == ISM_KEY_NONE) {

@@ -2,6 +2,7 @@
  * crossings), a stable grouping of the triangles by component, and the append to the mesh
  * with each component's area (see sheet_assemble.h). */
 #include "core/singular/sheet_assemble.h"
+#include "core/octree/edge_keys.h"
 #include "core/util/vec3.h"
 
 #include <math.h>
@@ -73,11 +74,6 @@ static double append_component(const ism_sheet_tris *t, const size_t *order, siz
     return area;
 }
 
-static uint64_t edge_key(uint32_t a, uint32_t b)
-{
-    return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
-}
-
 /* Marks in drop[c] the components that are scraps: a boundary edge (an edge of one
  * triangle) and an area below min_area. False when out of memory. */
 static bool find_scraps(const ism_sheet_tris *t, const uint32_t *comp, size_t ncomp,
@@ -94,7 +90,7 @@ static bool find_scraps(const ism_sheet_tris *t, const uint32_t *comp, size_t nc
         area[comp[i]] += ism_tri_area3(t->x[v[0]].p, t->x[v[1]].p, t->x[v[2]].p);
         for (int k = 0; ok && k < 3; k++) {
             bool added;
-            uint32_t e = ism_key_map_add(&edges, edge_key(v[k], v[(k + 1) % 3]), &added);
+            uint32_t e = ism_key_map_add(&edges, ism_edge_key(v[k], v[(k + 1) % 3]), &added);
             if (e != ISM_KEY_NONE && e >= cap) {
                 uint8_t *u = realloc(uses, (cap = 2 * e + 1024));
                 ok = u != NULL;
@@ -110,7 +106,7 @@ static bool find_scraps(const ism_sheet_tris *t, const uint32_t *comp, size_t nc
     for (size_t i = 0; ok && i < t->ntris; i++)
         for (int k = 0; k < 3; k++) {
             const uint32_t *v = t->tri + 3 * i;
-            uint32_t e = ism_key_map_find(&edges, edge_key(v[k], v[(k + 1) % 3]));
+            uint32_t e = ism_key_map_find(&edges, ism_edge_key(v[k], v[(k + 1) % 3]));
             if (uses[e] == 1 && area[comp[i]] < min_area)
                 drop[comp[i]] = 1;
         }
