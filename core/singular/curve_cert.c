@@ -8,6 +8,7 @@
 #include "core/singular/point_cert.h"
 #include "core/eval/interval_ops.h"
 #include "core/util/sym3.h"
+#include "core/util/vec3.h"
 
 
 /* The first square tried is CCERT_FIRST × the largest allowed half-width: K contracts when
@@ -109,7 +110,7 @@ bool ism_curve_cert_point(const ism_tape *t, ism_ivjet_ws *jw, const double p[3]
     for (int k = 0; k < 3; k++)
         g[k] = 0.5 * at.d[k].lo + 0.5 * at.d[k].hi;
     *out = (ism_ccert){ .residual_f = fabs(0.5 * at.v.lo + 0.5 * at.v.hi),
-                        .residual_grad = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]) };
+                        .residual_grad = ism_norm3(g) };
     double r = CCERT_FIRST * rmax;
     for (;;) {
         ism_ivjet j;
@@ -119,7 +120,7 @@ bool ism_curve_cert_point(const ism_tape *t, ism_ivjet_ws *jw, const double p[3]
         ism_interval gc[2] = { dot_iv(fr[1], at.d), dot_iv(fr[2], at.d) };
         out->radius = r;
         if (passes(&j, fr, gc, r))
-            return out->certified = true;
+            return true;
         if (r >= rmax)
             return false;
         /* the Newton step left in the plane (G(0, 0) through the block's inverse) says
@@ -142,17 +143,13 @@ static bool end_at_certified(const ism_locus *l, const ism_sing_curve *c, size_t
     if (j < 0 || (size_t)j >= l->npoints || !l->points[j].certified)
         return false;
     const double *q = l->points[j].p, *x = c->xyz + 3 * i;
-    double dx = q[0] - x[0], dy = q[1] - x[1], dz = q[2] - x[2];
-    return sqrt(dx * dx + dy * dy + dz * dz) <= reach;
+    return ism_dist3(q, x) <= reach;
 }
 
 bool ism_sing_certify_curves(const ism_tape *f, const ism_locus_options *o, ism_locus *out,
                              ism_error *err)
 {
-    double d2 = 0.0;
-    for (int k = 0; k < 3; k++)
-        d2 += (o->box[k + 3] - o->box[k]) * (o->box[k + 3] - o->box[k]);
-    double rmax = ISM_SING_CERT_REL * sqrt(d2);
+    double rmax = ISM_SING_CERT_REL * ism_dist3(o->box, o->box + 3);
     for (size_t c = 0; c < out->ncurves; c++) {
         ism_sing_curve *cv = &out->curves[c];
         cv->certified = false;

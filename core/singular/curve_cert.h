@@ -36,14 +36,13 @@
 #include "core/singular/locus.h"
 
 typedef struct ism_ccert {
-    bool certified;
     double radius;        /* the square's half-width used (the last tried when it failed) */
     double residual_f;    /* |f(p)| */
     double residual_grad; /* |∇f(p)| */
 } ism_ccert;
 
 /* Certifies the curve point p with half-widths growing up to rmax (jw: a workspace of t's
- * interval jets; *evals counts them). Returns out->certified. */
+ * interval jets; *evals counts them). Returns whether p passed. */
 bool ism_curve_cert_point(const ism_tape *t, ism_ivjet_ws *jw, const double p[3], double rmax,
                           ism_ccert *out, uint64_t *evals);
 

@@ -45,7 +45,7 @@ static const csg_preset PRESETS[] = {
 #define DMAX 7
 /* Box moves in finest cells: the own box, 1e-3, and three placements where the defect was
  * found (0.37, √2 − 1, 0.6). */
-static const double SHIFTS[] = {0, 1e-3, 0.37, 0.41421356237309503, 0.6};
+static const double SHIFTS[] = {0, 1e-3, 0.37, PF_IRR, 0.6};
 
 static int cmp_u64(const void *a, const void *b)
 {
