@@ -22,14 +22,20 @@ static double finest_cell(const double box[6], int depth)
 }
 
 /* Under max_error the singular stage's scale (locus search depth, conformance tube and
- * balls, the curves' split cells) is the first depth whose cell is at most this many E, not
- * depth.max, which is then only a safety limit. 4: Klein bottle at E 1e-2 (box 8) gets depth
- * 8, the mesh depth.max 8 gave (31,834 triangles; depth.max 10 made 42,792, 16 made 605,632
- * in the tube); on klein, steiner-roman, whitney-umbrella, cross-cap and crossing-spheres at
- * depth.max 10 in the own, +1e-3 and 0.37-cell boxes the singular report (points, curves,
- * χ, components, non-manifold points/curves, boundary, certified, artefacts) was identical
- * to the depth-10 stage's and every centroid/midpoint within E. */
-#define SINGULAR_CELLS_PER_E 4.0
+ * balls, the curves' split cells) is the first depth whose cell c is at most this many E, not
+ * depth.max, which is then only a safety limit. The error argument: the tube's triangles span
+ * about a cell of a sheet, and a flat chord of span c on a sheet of curvature radius R sags
+ * c^2 / (8R), which is <= E while R >= (c / E) c / 8: with c <= k E that is every sheet whose
+ * radius is at least k/8 of a cell. 4 (R >= c/2) was the first value that kept Klein bottle
+ * at E 1e-2 (box 8) at depth 8 (3.1 E; depth 7 is 6.25 E) and was checked by measurement
+ * only. 4.6 (R >= 0.575 c) moves cube boxes under the default bound (E = 1e-3 diagonal)
+ * from depth 8 (2.26 E) to 7 (4.51 E), where the depth path already runs: the presets'
+ * sheets beside their loci have radii of many cells there. Checked: pinch_error's exact
+ * distances <= E, the singular/conform/tube_folds/curve_cert suites, and sweep_singular's
+ * bounded rows (E = 1e-3 diagonal, depth.max 10) on the singular presets in the own, +1e-3
+ * and irrational boxes: counts as at depth 10, 0 artefacts, every centroid/midpoint within E.
+ * Klein at E 1e-2 and at E 1e-3 (box 8) keep depths 8 and 11. */
+#define SINGULAR_CELLS_PER_E 4.6
 /* ... and never shallower than the locus search's own default depth, at which every
  * preset's points and curves are found: a coarse E must not make the search miss one. */
 #define SINGULAR_MIN_DEPTH ISM_LOCUS_DEFAULT_DEPTH

@@ -18,8 +18,9 @@
               "16*x*z*(x^2 + y^2 + z^2 - 2*y - 1)"
 #define E 1e-2
 
-/* The rule itself: no bound -> depth.max; box 8 at E 1e-2 -> 8 (cell 1/32 <= 4 E), never
- * below 7 (a coarse E), never above depth.max. */
+/* The rule itself: no bound -> depth.max; box 8 at E 1e-2 -> 8 (cell 1/32 <= 4.6 E; 1/16 is
+ * 6.25 E), never below 7 (a coarse E), never above depth.max; a cube box at the default
+ * bound E = 1e-3 x diagonal -> 7 (cell 1/128 of the side = 4.51 E <= 4.6 E). */
 Test(singular_depth, from_the_bound)
 {
     ism_poly_options po;
@@ -32,8 +33,12 @@ Test(singular_depth, from_the_bound)
     cr_expect_eq(ism_singular_depth(&po), 8);
     po.max_depth = 16;
     cr_expect_eq(ism_singular_depth(&po), 8);
-    po.max_error = 1e-3; /* cell <= 4e-3: 8 / 2^11 */
+    po.max_error = 1e-3; /* cell <= 4.6e-3: 8 / 2^11 (8 / 2^10 is 7.8e-3) */
     cr_expect_eq(ism_singular_depth(&po), 11);
+    po.max_error = 1e-3 * 8 * sqrt(3.0); /* the default bound: 1/16 = 4.51 E, 1/8 = 9.0 E */
+    cr_expect_eq(ism_singular_depth(&po), 7, "default bound on a cube box");
+    po.max_error = 1e-3 * 8 * sqrt(3.0) * 0.9; /* 1/16 = 5.01 E > 4.6 E: one deeper */
+    cr_expect_eq(ism_singular_depth(&po), 8);
     po.max_error = 1;
     cr_expect_eq(ism_singular_depth(&po), 7);
     po.max_depth = 6;
