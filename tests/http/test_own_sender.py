@@ -458,6 +458,18 @@ class EvictedMidAnswer(unittest.TestCase):
     holds one such mesh: the next evicts it) and its file unlinked (as the disk pruner does)
     while a slow reader is mid-body, the bytes that reader gets are still the mesh's, whole."""
 
+    def slow_reader_begun(self, d, get):
+        """A small-window socket that sent get and read the answer's first 64 KiB, the rest
+        left queued; the own sender counted the answer as its own."""
+        s = small_window_socket(d.port)
+        sent = d.metric(SENT)
+        s.sendall(get)
+        got = b""
+        while len(got) < 65536:
+            got += s.recv(65536)
+        self.assertEqual(d.metric(SENT), sent + 1)
+        return s, got
+
     def test_a_mesh_evicted_mid_answer_still_arrives_whole(self):
         tmp = tempfile.mkdtemp(prefix="isomeshd_evict_")
         cache = os.path.join(tmp, "cache")
@@ -468,13 +480,7 @@ class EvictedMidAnswer(unittest.TestCase):
             name = re.search(rb"/v1/meshes/(\w+\.stl)", get).group(1).decode()
             files = cache_files(cache, name)
             self.assertEqual(len(files), 1)
-            s = small_window_socket(d.port)
-            sent = d.metric(SENT)
-            s.sendall(get)
-            got = b""
-            while len(got) < 65536:
-                got += s.recv(65536)
-            self.assertEqual(d.metric(SENT), sent + 1)
+            s, got = self.slow_reader_begun(d, get)
             evicted = d.metric("isomesh_cache_evictions_total", tier="memory")
             r = d.post("/v1/mesh", dict(BIG, params={"k": 10.5}))  # another ~4.4 MB mesh
             self.assertEqual(r.status, 200)
@@ -517,13 +523,7 @@ class EvictedMidAnswer(unittest.TestCase):
                         pass
                 return n
             wait_until("only the table's own descriptor", lambda: open_on_file() == 1)
-            s = small_window_socket(d.port)
-            sent = d.metric(SENT)
-            s.sendall(get)
-            got = b""
-            while len(got) < 65536:
-                got += s.recv(65536)
-            self.assertEqual(d.metric(SENT), sent + 1)
+            s, got = self.slow_reader_begun(d, get)
             self.assertEqual(open_on_file(), 1)  # lent, not duplicated
             os.unlink(files[0])
             status, other, own = answer_of(d, get)

@@ -11,6 +11,7 @@
 #include <string.h>
 #include "poly_fixture.h"
 #include "test_eval_surfaces.h"
+#include "tests/unit/same_mesh.h"
 
 #define DEPTH_MAX 4   /* a few hundred leaves a surface: about a second for the whole file */
 #define SHIFT_CELLS PF_IRR
@@ -31,21 +32,6 @@ static void mesh_of(const ism_tape *t, const double box[6], int dmax, double max
     cr_assert_eq(ism_polygonise(t, &o, m, st, &err), ISM_POLY_OK, "%s", err.message);
 }
 
-/* n bytes at p and q equal (either may be NULL when n is 0). */
-static bool same_bytes(const void *p, const void *q, size_t n)
-{
-    return n == 0 || memcmp(p, q, n) == 0;
-}
-
-static bool same_mesh(const ism_mesh *a, const ism_mesh *b)
-{
-    return a->nverts == b->nverts && a->ntris == b->ntris && a->nsegs == b->nsegs &&
-           same_bytes(a->pos, b->pos, a->nverts * 3 * sizeof *a->pos) &&
-           same_bytes(a->normal, b->normal, a->nverts * 3 * sizeof *a->normal) &&
-           same_bytes(a->tri, b->tri, a->ntris * 3 * sizeof *a->tri) &&
-           same_bytes(a->seg, b->seg, a->nsegs * 2 * sizeof *a->seg);
-}
-
 /* The scalar mesh on one thread against the batched one on 1, 2 and 4; returns the
  * evaluations (points + gradients) of the scalar and the one-thread batched run. */
 static void check(const test_surface *s, const double box[6], int dmax, double max_error,
@@ -62,7 +48,7 @@ static void check(const test_surface *s, const double box[6], int dmax, double m
         mesh_of(t, box, dmax, max_error, threads[i], false, &m, &st);
         if (i == 0)
             evals[1] = st.evals_point + st.evals_gradient;
-        cr_expect(same_mesh(&ref, &m), "%s (box %g.., E %g): batched on %d threads differs",
+        cr_expect(test_same_mesh(&ref, &m), "%s (box %g.., E %g): batched on %d threads differs",
                   s->name, box[0], max_error, threads[i]);
         ism_mesh_free(&m);
     }

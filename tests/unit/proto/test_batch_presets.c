@@ -18,6 +18,7 @@
 #include "core/octree/polygonise.h"
 #include "proto/presets.h"
 #include "tests/unit/proto/preset_tape.h"
+#include "tests/unit/same_mesh.h"
 
 /* Depth 4: a few hundred leaves a preset, the whole file in seconds; the bound run goes to 6
  * at a coarse bound so that it takes several rounds without costing more than the depth run. */
@@ -50,20 +51,6 @@ static void mesh_of(const ism_tape *t, const double box[6], int dmax, double max
     cr_assert_eq(ism_polygonise(t, &o, m, &st, &err), ISM_POLY_OK, "%s", err.message);
 }
 
-static bool same_bytes(const void *p, const void *q, size_t n)
-{
-    return n == 0 || memcmp(p, q, n) == 0;
-}
-
-static bool same_mesh(const ism_mesh *a, const ism_mesh *b)
-{
-    return a->nverts == b->nverts && a->ntris == b->ntris && a->nsegs == b->nsegs &&
-           same_bytes(a->pos, b->pos, a->nverts * 3 * sizeof *a->pos) &&
-           same_bytes(a->normal, b->normal, a->nverts * 3 * sizeof *a->normal) &&
-           same_bytes(a->tri, b->tri, a->ntris * 3 * sizeof *a->tri) &&
-           same_bytes(a->seg, b->seg, a->nsegs * 2 * sizeof *a->seg);
-}
-
 static ism_tape *compile(const ism_preset *p)
 {
     ism_error err;
@@ -83,7 +70,7 @@ static size_t check(const ism_preset *p, const ism_tape *t, const double box[6],
         {1, false}, {2, false}, {4, false}, {2, true}};
     for (size_t i = 0; i < sizeof runs / sizeof runs[0]; i++) {
         mesh_of(t, box, dmax, max_error, runs[i].threads, runs[i].scalar, &m);
-        cr_expect(same_mesh(&ref, &m),
+        cr_expect(test_same_mesh(&ref, &m),
                   "%s (box %.17g.., depth %d, E %g): %s on %d threads differs from scalar on 1 "
                   "(%zu/%zu triangles)", p->name, box[0], dmax, max_error,
                   runs[i].scalar ? "scalar" : "batched", runs[i].threads, m.ntris, ref.ntris);
