@@ -649,9 +649,10 @@ static bool visible_feature(const build *b, thread_state *th, const ism_tape *su
 
 /* Decides node v->v[i] and grows its subtree. Nodes that fail the flatness test are split
  * down to level `limit` (depth.max, or ISM_THIN_RESOLVE_LEVELS deeper below a hidden
- * piece or a visible feature about a cell across, visible_feature); a would-be leaf that hides a piece is split in any case, down to thin_depth. When
- * defer is not NULL, nodes at its level are left for tasks (appended to it). pi: the same
- * node in the last round's tree (b->previous), or -1. */
+ * piece or a visible feature about a cell across, visible_feature); a would-be leaf that
+ * hides a piece is split in any case, down to thin_depth. When defer is not NULL, nodes at
+ * its level are left for tasks (appended to it). pi: the same node in the last round's tree
+ * (b->previous), or -1. */
 static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_tape *tape,
                  int limit, defer_list *defer, int32_t pi, const ism_interval *known)
 {

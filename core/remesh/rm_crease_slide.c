@@ -33,11 +33,12 @@
  * fan's mean normal says nothing) and no outer edge bends past the crease angle by more
  * than ISM_RM_CROWD_BEND_DEG over what it did (rm_crease_tri_ok) — or, a chamfer triangle
  * ending on one of the two surfaces, faces within ISM_RM_CREASE_FACE_DEG of that branch's
- * normal at the crease point (or no farther from the nearer one than before) and bends by no more than the crease's own angle and
- * ISM_RM_CROWD_BEND_DEG (tri_ok) —, the smallest angle of the fan
- * (of both fans, for a merge) grows, and the distances the pass keeps are kept (centroids:
- * rm_centroids_stay for a move, the fans' farthest or the mesh's for a merge, midpoints too;
- * under max_error every centroid and edge midpoint of the fan within it, rm_bound.h). */
+ * normal at the crease point (or no farther from the nearer one than before) and bends by no
+ * more than the crease's own angle and ISM_RM_CROWD_BEND_DEG (tri_ok) —, the smallest angle of
+ * the fan (of both fans, for a merge) grows, and the distances the pass keeps are kept
+ * (centroids: rm_centroids_stay for a move, the fans' farthest or the mesh's for a merge,
+ * midpoints too; under max_error every centroid and edge midpoint of the fan within it,
+ * rm_bound.h). */
 #include "core/remesh/rm_bound.h"
 #include "core/remesh/rm_cbound.h"
 #include "core/remesh/rm_merge.h"

@@ -5,8 +5,8 @@
  * lock) never hands out a closed or reused number, and a lent one is closed by the last
  * give-back; a duplicate is made from a lent one, outside the lock. Why not a mutex: every
  * cached mesh the own sender answers takes its file here, on any polling thread; under one
- * mutex the dup syscall made the threads queue (16 connections on 2 threads, one mesh: 0.44 futex calls per
- * request under strace, most of them here), readers now pass each other. */
+ * mutex the dup syscall made the threads queue (16 connections on 2 threads, one mesh: 0.44
+ * futex calls per request under strace, most of them here), readers now pass each other. */
 #include "server/common/fd_keep.h"
 
 #include <fcntl.h>

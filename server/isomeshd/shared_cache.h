@@ -14,11 +14,11 @@
  *      surface's own lock ("<surface key>.mesh") is taken too, so that a daemon asked for
  *      another format of it meanwhile waits (polling as in 1, holding its own lock) for the
  *      stored surface instead of polygonising it again; held by another daemon, this flight
- *      waits so (with --cluster the origin holds it for the executor, and waits for it
- *      held by any other flight, its own daemon's too: the two may run on two daemons). While it computes, the locks are extended every third of their lifetime;
- *      when the flight has ended and its results are in the tiers (the surface first: the
- *      mesh's entries reach Redis only after it, worker_pool.c), they are written out and
- *      the locks released.
+ *      waits so (with --cluster the origin holds it for the executor, and waits for it held by
+ *      any other flight, its own daemon's too: the two may run on two daemons). While it
+ *      computes, the locks are extended every third of their lifetime; when the flight has
+ *      ended and its results are in the tiers (the surface first: the mesh's entries reach
+ *      Redis only after it, worker_pool.c), they are written out and the locks released.
  *   A GET of a key unknown here (no local request.json) fetches the canonical request from
  *   Redis in step 2, checks that it still gives its key, and computes the other format.
  *   Redis unreachable at any step: the flight is queued at once and computed here (counted as
