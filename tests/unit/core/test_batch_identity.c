@@ -16,22 +16,6 @@
 #define DEPTH_MAX 4   /* a few hundred leaves a surface: about a second for the whole file */
 #define SHIFT_CELLS PF_IRR
 
-static void mesh_of(const ism_tape *t, const double box[6], int dmax, double max_error,
-                    int threads, bool scalar, ism_mesh *m, ism_poly_stats *st)
-{
-    ism_poly_options o;
-    ism_poly_options_default(&o);
-    memcpy(o.box, box, sizeof o.box);
-    o.min_depth = 2;
-    o.max_depth = dmax;
-    o.max_error = max_error;
-    o.threads = threads;
-    o.scalar_eval = scalar;
-    ism_error err;
-    ism_mesh_init(m);
-    cr_assert_eq(ism_polygonise(t, &o, m, st, &err), ISM_POLY_OK, "%s", err.message);
-}
-
 /* The scalar mesh on one thread against the batched one on 1, 2 and 4; returns the
  * evaluations (points + gradients) of the scalar and the one-thread batched run. */
 static void check(const test_surface *s, const double box[6], int dmax, double max_error,
@@ -40,12 +24,12 @@ static void check(const test_surface *s, const double box[6], int dmax, double m
     ism_tape *t = test_surface_compile(s);
     ism_mesh ref, m;
     ism_poly_stats st;
-    mesh_of(t, box, dmax, max_error, 1, true, &ref, &st);
+    test_mesh_of(t, box, dmax, max_error, 1, true, &ref, &st);
     evals[0] = st.evals_point + st.evals_gradient;
     cr_expect_gt(ref.ntris, 0, "%s: no triangles", s->name);
     const int threads[] = {1, 2, 4};
     for (size_t i = 0; i < sizeof threads / sizeof threads[0]; i++) {
-        mesh_of(t, box, dmax, max_error, threads[i], false, &m, &st);
+        test_mesh_of(t, box, dmax, max_error, threads[i], false, &m, &st);
         if (i == 0)
             evals[1] = st.evals_point + st.evals_gradient;
         cr_expect(test_same_mesh(&ref, &m), "%s (box %g.., E %g): batched on %d threads differs",

@@ -34,23 +34,6 @@ static int quick(void)
     return q && strcmp(q, "1") == 0;
 }
 
-static void mesh_of(const ism_tape *t, const double box[6], int dmax, double max_error,
-                    int threads, bool scalar, ism_mesh *m)
-{
-    ism_poly_options o;
-    ism_poly_options_default(&o);
-    memcpy(o.box, box, sizeof o.box);
-    o.min_depth = 2;
-    o.max_depth = dmax;
-    o.max_error = max_error;
-    o.threads = threads;
-    o.scalar_eval = scalar;
-    ism_poly_stats st;
-    ism_error err;
-    ism_mesh_init(m);
-    cr_assert_eq(ism_polygonise(t, &o, m, &st, &err), ISM_POLY_OK, "%s", err.message);
-}
-
 static ism_tape *compile(const ism_preset *p)
 {
     ism_error err;
@@ -65,11 +48,12 @@ static size_t check(const ism_preset *p, const ism_tape *t, const double box[6],
                     double max_error)
 {
     ism_mesh ref, m;
-    mesh_of(t, box, dmax, max_error, 1, true, &ref);
+    ism_poly_stats st;
+    test_mesh_of(t, box, dmax, max_error, 1, true, &ref, &st);
     static const struct { int threads; bool scalar; } runs[] = {
         {1, false}, {2, false}, {4, false}, {2, true}};
     for (size_t i = 0; i < sizeof runs / sizeof runs[0]; i++) {
-        mesh_of(t, box, dmax, max_error, runs[i].threads, runs[i].scalar, &m);
+        test_mesh_of(t, box, dmax, max_error, runs[i].threads, runs[i].scalar, &m, &st);
         cr_expect(test_same_mesh(&ref, &m),
                   "%s (box %.17g.., depth %d, E %g): %s on %d threads differs from scalar on 1 "
                   "(%zu/%zu triangles)", p->name, box[0], dmax, max_error,
