@@ -48,6 +48,27 @@ void ism_eval_interval_batch(const ism_tape *t, ism_eval_ws *ws, const ism_inter
 double ism_eval_gradient(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
                          double grad[3]);
 
+/* Points per inner chunk of ism_eval_gradient_batch (its registers: value and three partials
+ * of this many lanes each; 1 KB a register, so a tape's registers stay in L1/L2). The
+ * polygoniser's batches are a cell's edges or its triangles' points: tens, not hundreds. */
+#define ISM_GRAD_BATCH 32
+
+/* f[i] = f(x[i], y[i], z[i]) and g[i] = its gradient for i < n: lane by lane bit for bit what
+ * ism_eval_gradient gives at that point (the same operations in the same order, a lane's
+ * rounding never depends on another's), one pass over the tape per chunk of ISM_GRAD_BATCH
+ * lanes instead of one per point. */
+void ism_eval_gradient_batch(const ism_tape *t, ism_eval_ws *ws, const double *x,
+                             const double *y, const double *z, double *f, double (*g)[3],
+                             size_t n);
+
+/* out[i] = f(x[i], y[i], z[i]) for i < n, lane by lane bit for bit ism_eval_point's value,
+ * for the short batches of the polygoniser (a cell's edges): unlike ism_eval_batch it pads no
+ * lane up to a group of 32 (a batch of 5 costs 5 lanes) and takes sines and cosines through
+ * the workspace's memo as ism_eval_point does (two of a root search's three coordinates
+ * repeat from step to step). n may be any size; chunks of ISM_EVAL_BATCH. */
+void ism_eval_points(const ism_tape *t, ism_eval_ws *ws, const double *x, const double *y,
+                     const double *z, double *out, size_t n);
+
 /* When t's last instruction is min(a, b) or max(a, b) of two registers (a CSG union or
  * intersection at the top of f): true, with the two branches' values and gradients at the
  * point; false otherwise (nothing evaluated). */

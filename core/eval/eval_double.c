@@ -2,7 +2,9 @@
  * batches, where each register is an array of ISM_EVAL_BATCH lanes and each instruction is
  * one loop over the lanes. The lanes are walked in groups of 8 with a constant inner trip
  * count and restrict pointers (no instruction writes a register it reads), which is what
- * lets gcc -O2 vectorise them without run-time alias or remainder checks. */
+ * lets gcc -O2 vectorise them without run-time alias or remainder checks. Short batches
+ * (ism_eval_points: a cell's edges) loop over just their lanes and take sines and cosines
+ * through the workspace's memo, as one point does. */
 #include "core/eval/workspace.h"
 #include "core/eval/trig_pair.h"
 #include "core/expr/scalar_ops.h"
@@ -12,24 +14,26 @@
 
 #define LANES 32
 
-static double point_op(const ism_instr *in, const double *r)
+/* One instruction's value from its operands' values a and b (b: only for the two-register
+ * operations). */
+static inline double op_value(const ism_instr *in, double a, double b)
 {
-    double a = r[in->a], c = in->imm;
+    double c = in->imm;
     switch (in->op) {
     case ISM_OP_CONST: return c;
     case ISM_OP_COPY: return a;
-    case ISM_OP_ADD_RR: return a + r[in->b];
+    case ISM_OP_ADD_RR: return a + b;
     case ISM_OP_ADD_RC: return a + c;
-    case ISM_OP_SUB_RR: return a - r[in->b];
+    case ISM_OP_SUB_RR: return a - b;
     case ISM_OP_SUB_CR: return c - a;
-    case ISM_OP_MUL_RR: return a * r[in->b];
+    case ISM_OP_MUL_RR: return a * b;
     case ISM_OP_MUL_RC: return a * c;
-    case ISM_OP_DIV_RR: return a / r[in->b];
+    case ISM_OP_DIV_RR: return a / b;
     case ISM_OP_DIV_RC: return a / c;
     case ISM_OP_DIV_CR: return c / a;
-    case ISM_OP_MIN_RR: return ism_min(a, r[in->b]);
+    case ISM_OP_MIN_RR: return ism_min(a, b);
     case ISM_OP_MIN_RC: return ism_min(a, c);
-    case ISM_OP_MAX_RR: return ism_max(a, r[in->b]);
+    case ISM_OP_MAX_RR: return ism_max(a, b);
     case ISM_OP_MAX_RC: return ism_max(a, c);
     case ISM_OP_NEG: return -a;
     case ISM_OP_SQUARE: return a * a;
@@ -44,6 +48,11 @@ static double point_op(const ism_instr *in, const double *r)
     case ISM_OP_ABS: return fabs(a);
     default: return NAN;
     }
+}
+
+static double point_op(const ism_instr *in, const double *r)
+{
+    return op_value(in, r[in->a], ism_op_has_reg_b(in->op) ? r[in->b] : 0.0);
 }
 
 /* The first n instructions of t at (x, y, z) into ws->scalar. */
@@ -277,5 +286,58 @@ void ism_eval_batch(const ism_tape *t, ism_eval_ws *ws, const double *x, const d
     for (size_t done = 0; done < n; done += ISM_EVAL_BATCH) {
         size_t k = n - done < ISM_EVAL_BATCH ? n - done : ISM_EVAL_BATCH;
         eval_chunk(t, ws->batch, x + done, y + done, z + done, out + done, k);
+    }
+}
+
+/* One instruction over n lanes of registers ISM_EVAL_BATCH apart: the frequent operations as
+ * loops, sines and cosines through the memo (as run_point), the rest lane by lane through
+ * op_value — each lane's arithmetic is run_point's. */
+static void narrow_op(const ism_instr *in, double *regs, ism_trig_cache *trig, size_t n)
+{
+    double *restrict o = regs + (size_t)in->out * ISM_EVAL_BATCH;
+    const double *restrict a = regs + (size_t)in->a * ISM_EVAL_BATCH;
+    const double *restrict b = regs + (size_t)(ism_op_has_reg_b(in->op) ? in->b : in->a)
+                               * ISM_EVAL_BATCH;
+    const double c = in->imm;
+    switch (in->op) {
+    case ISM_OP_ADD_RR: for (size_t j = 0; j < n; j++) o[j] = a[j] + b[j]; return;
+    case ISM_OP_SUB_RR: for (size_t j = 0; j < n; j++) o[j] = a[j] - b[j]; return;
+    case ISM_OP_MUL_RR: for (size_t j = 0; j < n; j++) o[j] = a[j] * b[j]; return;
+    case ISM_OP_ADD_RC: for (size_t j = 0; j < n; j++) o[j] = a[j] + c; return;
+    case ISM_OP_MUL_RC: for (size_t j = 0; j < n; j++) o[j] = a[j] * c; return;
+    case ISM_OP_SUB_CR: for (size_t j = 0; j < n; j++) o[j] = c - a[j]; return;
+    case ISM_OP_SQUARE: for (size_t j = 0; j < n; j++) o[j] = a[j] * a[j]; return;
+    case ISM_OP_SIN:
+    case ISM_OP_COS:
+        for (size_t j = 0; j < n; j++) {
+            double sv, cv;
+            ism_trig_pair(trig, a[j], &sv, &cv);
+            o[j] = in->op == ISM_OP_SIN ? sv : cv;
+        }
+        return;
+    default:
+        for (size_t j = 0; j < n; j++)
+            o[j] = op_value(in, a[j], b[j]);
+        return;
+    }
+}
+
+void ism_eval_points(const ism_tape *t, ism_eval_ws *ws, const double *x, const double *y,
+                     const double *z, double *out, size_t n)
+{
+    if (!ism_ws_fits(ws, t)) {
+        for (size_t i = 0; i < n; i++)
+            out[i] = NAN;
+        return;
+    }
+    double *regs = ws->batch;
+    for (size_t done = 0; done < n; done += ISM_EVAL_BATCH) {
+        size_t k = n - done < ISM_EVAL_BATCH ? n - done : ISM_EVAL_BATCH;
+        memcpy(regs + ISM_REG_X * ISM_EVAL_BATCH, x + done, k * sizeof(double));
+        memcpy(regs + ISM_REG_Y * ISM_EVAL_BATCH, y + done, k * sizeof(double));
+        memcpy(regs + ISM_REG_Z * ISM_EVAL_BATCH, z + done, k * sizeof(double));
+        for (size_t i = 0; i < t->len; i++)
+            narrow_op(&t->code[i], regs, ws->trig, k);
+        memcpy(out + done, regs + (size_t)t->result * ISM_EVAL_BATCH, k * sizeof(double));
     }
 }

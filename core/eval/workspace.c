@@ -25,11 +25,12 @@ ism_eval_ws *ism_eval_ws_new(const ism_tape *t)
     ws->iv_lo = ism_line_alloc(n * ISM_IV_CHUNK * sizeof(double));
     ws->iv_hi = ism_line_alloc(n * ISM_IV_CHUNK * sizeof(double));
     ws->dual = ism_line_alloc(n * sizeof *ws->dual);
+    ws->gbatch = ism_line_alloc(n * 4 * ISM_GRAD_BATCH * sizeof(double));
     ws->jet = ism_line_alloc(n * sizeof *ws->jet);
     ws->choice = ism_line_alloc(cap);
     ws->needed = ism_line_alloc(n);
     ws->trig = ism_line_alloc(sizeof *ws->trig);
-    if (!ws->trig || !ws->batch || !ws->scalar || !ws->iv || !ws->iv_lo || !ws->iv_hi || !ws->dual || !ws->jet || !ws->choice
+    if (!ws->trig || !ws->batch || !ws->scalar || !ws->iv || !ws->iv_lo || !ws->iv_hi || !ws->dual || !ws->gbatch || !ws->jet || !ws->choice
         || !ws->needed) {
         ism_eval_ws_free(ws);
         return NULL;
@@ -49,6 +50,7 @@ void ism_eval_ws_free(ism_eval_ws *ws)
     free(ws->iv_lo);
     free(ws->iv_hi);
     free(ws->dual);
+    free(ws->gbatch);
     free(ws->jet);
     free(ws->choice);
     free(ws->needed);

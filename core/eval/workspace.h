@@ -28,6 +28,7 @@ struct ism_eval_ws {
     ism_interval *iv;         /* nregs */
     double *iv_lo, *iv_hi;    /* nregs * ISM_IV_CHUNK each: batched lower bounds, negated upper */
     ism_dual *dual;           /* nregs */
+    double *gbatch;           /* nregs * 4 * ISM_GRAD_BATCH: value, d/dx, d/dy, d/dz lanes */
     ism_jet *jet;             /* nregs */
     uint8_t *choice;          /* code_cap: min/max branch proved by the last interval pass */
     uint8_t *needed;          /* nregs: scratch for shortening */
