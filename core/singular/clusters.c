@@ -53,17 +53,12 @@ static uint64_t box_key(const ism_locus_options *o, const ism_lbox *b)
     return key;
 }
 
-static uint64_t shifted(uint64_t key, int dx, int dy, int dz)
+/* Lattice coordinate c of a key moved by d, or -1 off the key's range (0 is kept for "no
+ * key", so a coordinate 0 is off it too). */
+static int64_t moved(int64_t c, int d)
 {
-    int64_t d[3] = { dx, dy, dz };
-    uint64_t r = 0;
-    for (int k = 0; k < 3; k++) {
-        int64_t c = (int64_t)((key >> (21 * k)) & 0x1fffff) + d[k];
-        if (c <= 0 || c >= (1 << 21))
-            return 0;
-        r |= (uint64_t)c << (21 * k);
-    }
-    return r;
+    c += d;
+    return c <= 0 || c >= (1 << 21) ? -1 : c;
 }
 
 static void flood(const table *t, const uint64_t *keys, uint32_t *label, uint32_t *queue,
@@ -74,8 +69,16 @@ static void flood(const table *t, const uint64_t *keys, uint32_t *label, uint32_
     queue[tail++] = start;
     while (head < tail) {
         uint32_t b = queue[head++];
+        int64_t c[3];
+        for (int k = 0; k < 3; k++)
+            c[k] = (int64_t)((keys[b] >> (21 * k)) & 0x1fffff);
+        /* the 27 neighbours (b itself among them), x fastest: the order the queue grows in */
         for (int m = 0; m < 27; m++) {
-            uint64_t k = shifted(keys[b], m % 3 - 1, m / 3 % 3 - 1, m / 9 - 1);
+            int64_t x = moved(c[0], m % 3 - 1), y = moved(c[1], m / 3 % 3 - 1),
+                    z = moved(c[2], m / 9 - 1);
+            uint64_t k = x < 0 || y < 0 || z < 0
+                             ? 0
+                             : (uint64_t)x | (uint64_t)y << 21 | (uint64_t)z << 42;
             uint32_t nb = k ? lookup(t, k) : NO_BOX;
             if (nb != NO_BOX && label[nb] == NO_BOX) {
                 label[nb] = id;

@@ -97,26 +97,28 @@ static void visit(ism_cindex *x, const double lo[3], const double hi[3], visit_f
         memset(x->stamp, 0, x->nboxes * sizeof *x->stamp);
         x->query = 1;
     }
+    /* The cells (i, j, a[2] .. b[2]) of one row are consecutive keys (k in the low bits), so
+     * their entries are one run of the sorted keys, in the same order as cell by cell: one
+     * binary search a row instead of one a cell (curve tracing on the cross-cap: 64 → 16). */
     for (int i = a[0]; i <= b[0]; i++)
-        for (int j = a[1]; j <= b[1]; j++)
-            for (int k = a[2]; k <= b[2]; k++) {
-                uint64_t key = cell_key(i, j, k);
-                size_t l = 0, r = x->nkeys;
-                while (l < r) {
-                    size_t m = l + (r - l) / 2;
-                    if (x->keys[m].key < key)
-                        l = m + 1;
-                    else
-                        r = m;
-                }
-                for (; l < x->nkeys && x->keys[l].key == key; l++) {
-                    uint32_t box = x->keys[l].box;
-                    if (x->stamp[box] != x->query) {
-                        x->stamp[box] = x->query;
-                        fn(x, box, ctx);
-                    }
+        for (int j = a[1]; j <= b[1]; j++) {
+            uint64_t first = cell_key(i, j, a[2]), last = cell_key(i, j, b[2]);
+            size_t l = 0, r = x->nkeys;
+            while (l < r) {
+                size_t m = l + (r - l) / 2;
+                if (x->keys[m].key < first)
+                    l = m + 1;
+                else
+                    r = m;
+            }
+            for (; l < x->nkeys && x->keys[l].key <= last; l++) {
+                uint32_t box = x->keys[l].box;
+                if (x->stamp[box] != x->query) {
+                    x->stamp[box] = x->query;
+                    fn(x, box, ctx);
                 }
             }
+        }
 }
 
 /* Does the segment a→b meet the box [lo − g, hi + g]? (slab test) */
