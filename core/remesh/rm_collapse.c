@@ -236,8 +236,28 @@ static bool crease_merge_find(const rm_pass *p, uint32_t v, uint32_t w, uint32_t
     return true;
 }
 
+/* For merging free v into w when vw is shorter than ISM_RM_CROWD × v's mean edge: v's
+ * triangles then move by a hair, and each is held to its own normal before as along a crease
+ * (rm_crease_tri_ok) instead of the fan's mean normal, which says nothing where the fan is
+ * folded. Kummer-16's conformance rims leave such pairs 1e-4 apart in folded fans (new
+ * triangles 70°-160° from the fan's normal); while the bends there locked them as creases
+ * crease_merge_find took them, and once kink-free surfaces had no creases (rm_locks.c) they
+ * stayed: smallest angle 2.79° -> 0.25° in the preset's own box. */
+static bool crowd_merge_find(const rm_pass *p, uint32_t v, uint32_t w, uint32_t deg,
+                             rm_merge *g)
+{
+    if (!rm_merge_find(&p->r, v, w, deg, g))
+        return false;
+    uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE], nnb = (uint32_t)rm_merge_neighbours(&p->r, v, nb);
+    if (!(rm_dist(P(p, v), P(p, w)) <= ISM_RM_CROWD * mean_edge(p, v, nb, nnb)))
+        return false;
+    g->along = true;
+    return true;
+}
+
 /* The better of merging a into b and b into a, when either passes every test (along a
- * crease when both are locked). */
+ * crease when both are locked; a free pair much closer than its edges, as a crowd when the
+ * plain merge fails both ways). */
 static bool best_merge(rm_pass *p, uint32_t a, uint32_t b, rm_merge *best)
 {
     rm_merge g;
@@ -248,6 +268,13 @@ static bool best_merge(rm_pass *p, uint32_t a, uint32_t b, rm_merge *best)
         *best = g, found = true;
     if ((crease ? crease_merge_find(p, b, a, deg, &g) : rm_merge_find(&p->r, b, a, deg, &g)) &&
         merge_ok(p, &g) && (!found || g.after > best->after))
+        *best = g, found = true;
+    if (found || crease)
+        return found;
+    if (crowd_merge_find(p, a, b, deg, &g) && merge_ok(p, &g))
+        *best = g, found = true;
+    if (crowd_merge_find(p, b, a, deg, &g) && merge_ok(p, &g) &&
+        (!found || g.after > best->after))
         *best = g, found = true;
     return found;
 }

@@ -4,15 +4,35 @@
  * quality pass (remesh.c) and the simplification (simplify.c) both run on it. */
 #include "core/remesh/rm_pass.h"
 #include "core/eval/interval_jet.h"
+#include "core/expr/tape.h"
 
 #include <stdlib.h>
 #include <string.h>
+
+/* Whether f's gradient may jump across a curve of the surface: only at a min, max or abs
+ * switching branch (a CSG crease), or where sqrt, a fractional power or log meets its clamp at
+ * 0 (sqrt(max(x, 0)) + y = 0 bends by 90° along x = 0). Every other op of the tape is C¹ where
+ * f is finite, so on a tape without these every bend of the mesh is the surface's own
+ * curvature, a fold, or singular structure (non-manifold edges, vanishing ∇f: locked by their
+ * own rules, rm_locks.c). */
+static bool may_crease(const ism_tape *t)
+{
+    if (ism_tape_has_kink(t))
+        return true;
+    for (size_t i = 0; i < t->len; i++) {
+        enum ism_opcode op = t->code[i].op;
+        if (op == ISM_OP_SQRT || op == ISM_OP_POWC || op == ISM_OP_LOG)
+            return true;
+    }
+    return false;
+}
 
 bool rm_pass_open(rm_pass *p, ism_mesh *m, const ism_remesh_options *o, size_t extra)
 {
     memset(p, 0, sizeof *p);
     p->f = o->f;
     p->max_error = o->max_error > 0 ? o->max_error : 0;
+    p->may_crease = o->f && may_crease(o->f);
     p->r.label = o->tri_label;
     p->ws = ism_eval_ws_new(o->f);
     bool ok = p->ws && rm_mesh_build(&p->r, m, extra);

@@ -71,6 +71,8 @@ typedef struct rm_pass {
     double *normal;        /* 3 per vertex: ∇f / |∇f| (0 where it vanishes) */
     double gthresh;        /* |∇f| at or below this vanishes */
     double max_error;
+    bool may_crease;       /* f's gradient may jump across a curve of f = 0 (rm_pass.c
+                              rm_may_crease): without that no edge is a crease */
     uint8_t *active;       /* per vertex: relaxed in this round (near a poor triangle) */
     uint8_t *slide;        /* per vertex: on a box face's boundary curve, may slide along it */
     uint8_t *touched;      /* per vertex: near a collapse of this sweep (rm_collapse.c), or
