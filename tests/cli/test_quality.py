@@ -218,6 +218,75 @@ class SingularSurfaces(unittest.TestCase):
                                             f"{preset}: boundary point {p} left its face: {q}")
 
 
+class GoalsUnderTheDefaultBound(unittest.TestCase):
+    """Issue 15's angle goals with --quality good under the default bound (passed explicitly:
+    1e-3 x the box diagonal), in each preset's own box (proto/presets.c, its depth range) and
+    shifted off its finest lattice by 1e-3 and by the irrational fractions (boxes.py). The
+    pretzel (smooth, closed): no triangle under 20 degrees. Steiner's surface, Kummer's 16-node
+    quartic and Whitney's umbrella: no triangle under 10 degrees but those with a vertex the pass
+    may not move: a singular point's (features JSON), a non-manifold edge's (an edge of three or
+    more triangles: the double curves, whose vertices the curves stage spaces 8x finer than the
+    sheets' triangles beside Whitney's line in the shifted boxes: 323 / 331 needles there, none
+    in its own box) or the box cut's (an edge of one triangle: where the surface passes within
+    a thousandth of a box edge, two cut points lie that close). On a82687f (before the pass
+    treated kink-free surfaces as crease-free) this fails: pretzel 11.32 / 7.28 degrees in the
+    shifted boxes, Kummer 22 / 31 / 29 triangles under 10 degrees on its smooth part, Steiner 2
+    in the irrational box."""
+
+    # preset: (box, finest depth) as proto/presets.c gives them
+    PRESETS = {"pretzel-genus2": ([-0.5, -1.5, -1.5, 2.5, 1.5, 1.5], 7),
+               "steiner-roman": ([-1, -1, -1, 1, 1, 1], 8),
+               "kummer-16-nodes": ([-3, -3, -3, 3, 3, 3], 9),
+               "whitney-umbrella": ([-1, -1, -1, 1, 1, 1], 7)}
+    SMOOTH_DEG = GOAL_DEG
+    SINGULAR_DEG = 10.0
+
+    def mesh(self, preset, box):
+        """(vertices, triangles, singular points) of the preset in box, the pass on."""
+        e = 1e-3 * math.dist(box[:3], box[3:])
+        with tempfile.TemporaryDirectory() as tmp:
+            out, feats = os.path.join(tmp, "m.ply"), os.path.join(tmp, "f.json")
+            r = subprocess.run([ISOMESH, "--surface", preset, "-b",
+                                ",".join(repr(v) for v in box), "--max-error", repr(e),
+                                "--quality", "good", "--threads", "2", "--features", feats,
+                                "-o", out], capture_output=True, text=True, timeout=300)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            verts, tris = read_ply(out)
+            with open(feats) as f:
+                points = [p["xyz"] for p in json.load(f)["singular_points"]]
+        return verts, tris, points
+
+    def test_no_needle_but_at_a_feature_the_pass_keeps(self):
+        for preset, (box0, depth) in self.PRESETS.items():
+            cell = tuple((box0[a + 3] - box0[a]) / 2 ** depth for a in range(3))
+            for box in placements(box0, cell):
+                with self.subTest(preset=preset, box=box):
+                    verts, tris, points = self.mesh(preset, box)
+                    angles = [min_angle_deg(*(verts[i] for i in t)) for t in tris]
+                    if preset == "pretzel-genus2":
+                        self.assertEqual(points, [])
+                        self.assertEqual(euler(verts, tris), -2)
+                        self.assertGreaterEqual(min(angles), self.SMOOTH_DEG)
+                        continue
+                    near = 1e-6 * math.dist(box[:3], box[3:])
+                    count = {}
+                    for t in tris:
+                        for k in range(3):
+                            e = tuple(sorted((t[k], t[(k + 1) % 3])))
+                            count[e] = count.get(e, 0) + 1
+                    kept = {v for e, n in count.items() if n != 2 for v in e}
+                    kept |= {i for i, p in enumerate(verts)
+                             if any(math.dist(p, q) < near for q in points)}
+                    needles = [(round(a, 2), [verts[i] for i in t])
+                               for a, t in zip(angles, tris)
+                               if a < self.SINGULAR_DEG and not kept.intersection(t)]
+                    self.assertEqual(needles, [])
+                    # the exception is no blanket: most triangles are free of it (0.72 of
+                    # them on Whitney's irrational box, the least: its box cut is long)
+                    free = sum(1 for t in tris if not kept.intersection(t))
+                    self.assertGreater(free, 2 / 3 * len(tris))
+
+
 class BadValues(unittest.TestCase):
     def test_cli_rejects_an_unknown_quality(self):
         r = subprocess.run([ISOMESH, "--surface", "sphere", "--quality", "best", "-o",
