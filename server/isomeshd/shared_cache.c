@@ -520,7 +520,17 @@ static long long remote(task *k, ism_cache_tier *t, long long now)
         return task_end(k, t);
     ismd_flight *f = my_flight(k, false);
     bool here = f && !f->shared;
+    /* gone because it is done: this daemon's executor took the entry and finished it between
+     * two looks (a small mesh takes less than REMOTE_POLL_NS), and its entries wait for its
+     * surface (sched.h storing). Not a cancel: the locks are kept until they are written, as
+     * for a flight seen running here (hold), so that another daemon asked for another format
+     * meanwhile waits for the surface instead of polygonising it again */
+    bool storing = !f && ismd_sched_storing(sh->sched, k->name);
     ismd_redis_tasks_leave(sh->tasks);
+    if (storing) {
+        k->state = T_HOLD;
+        return hold(k, t, now);
+    }
     if (!f) { /* nobody waits any more (or past its deadline): cancel */
         /* again while Redis does not take it (a command timeout on a loaded machine, a
          * reconnect), for at most a lock lifetime: lost, the computation ran on elsewhere

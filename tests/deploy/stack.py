@@ -433,6 +433,15 @@ def gunzip(data):
 
 # ---- the whole service --------------------------------------------------------------------
 
+# The counters Stack.story shows: who computed, who waited, what fell back or failed.
+STORY_METRICS = ("isomesh_polygonisations_total", "isomesh_stored_encodings_total",
+                 "isomesh_redis_lock_waits_total", "isomesh_redis_locks_acquired_total",
+                 "isomesh_redis_fallbacks_total", "isomesh_redis_errors_total",
+                 "isomesh_redis_outages_total", "isomesh_cluster_submitted_total",
+                 "isomesh_cluster_taken_total", "isomesh_singleflight_joins_total",
+                 "isomesh_workers_storing", "isomesh_flights_held")
+
+
 class Stack:
     """Redis, n daemons sharing it, nginx in front. Stopped by cleanup() whatever happened."""
 
@@ -467,6 +476,20 @@ class Stack:
             self.cleanup()
             raise
         return self
+
+    def story(self, last=60):
+        """For a failure message: each daemon's counters of the shared stage and the cluster
+        queue, then its log's last lines other than the scrapes of /metrics (harness's
+        Daemon.story)."""
+        out = []
+        for i, d in enumerate(self.daemons):
+            try:
+                m = d.metrics()
+                counts = " ".join("%s=%g" % (n[len("isomesh_"):], m.get(n, 0)) for n in STORY_METRICS)
+            except OSError as e:
+                counts = "(no metrics: %s)" % e
+            out.append("--- daemon %d (port %s): %s\n%s" % (i, d.port, counts, d.story(last)))
+        return "\n".join(out)
 
     def pause_workers(self, daemons=None, timeout=30):
         """SIGSTOPs the ready workers of daemons (default: all) not paused yet. A computation

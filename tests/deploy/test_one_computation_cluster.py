@@ -25,6 +25,10 @@ SKIP = stack.missing_programs()
 BASE = {"expr": "x^2 + y^2 - z^2 - 0.2 + b*x*y*z", "params": {"b": 1.3},
         "box": [-1.1, -1.1, -1.1, 1.1, 1.1, 1.1], "depth": {"min": 3, "max": 6}}
 TWELVE = dict(BASE, output={"position_bits": 12})
+# Surfaces test_the_origin_keeps_its_locks_while_its_own_executor_stores_the_surface asks
+# for in turn: the old code let go of the locks in 1 round in 4 to 1 in 2 at load 15 (when
+# its origin looked after the flight's end); with 4 rounds it failed 8 runs of 8.
+ROUNDS = 4
 
 
 def surfaces(redis):
@@ -58,7 +62,7 @@ class OneComputationClusterTest(unittest.TestCase):
                 r = b.post("/v1/mesh?format=" + fmt, req)
                 self.assertEqual(r.status, 200, r.body[:300])
                 self.assertGreater(len(r.body), 1000)
-            self.assertEqual(polygonisations(s.daemons), 1, a.log()[-2000:] + b.log()[-2000:])
+            self.assertEqual(polygonisations(s.daemons), 1, s.story())
             self.assertEqual(encodings(s.daemons), 3)
         finally:
             s.cleanup()
@@ -82,7 +86,7 @@ class OneComputationClusterTest(unittest.TestCase):
             r = a.post("/v1/mesh", req)
             self.assertEqual(r.status, 200, r.body[:300])
             key = r.header("ETag").strip('"')
-            self.assertTrue(a.wait_metric("isomesh_workers_storing", 1), a.log()[-2000:])
+            self.assertTrue(a.wait_metric("isomesh_workers_storing", 1), s.story())
             entries = ["isomesh:v1:%s.%s" % (key, ext)
                        for ext in ("drc", "stats.json", "features.json", "request.json")]
 
@@ -99,14 +103,14 @@ class OneComputationClusterTest(unittest.TestCase):
                 same = ex.submit(b.post, "/v1/mesh", req)
                 other = ex.submit(b.post, "/v1/mesh?format=ply", req)
                 self.assertTrue(b.wait_metric("isomesh_redis_lock_waits_total", 2),
-                                b.log()[-2000:])
+                                s.story())
                 self.assertFalse(same.done() or other.done())
                 open(gate, "w").close()
                 r2, r3 = same.result(), other.result()
             self.assertEqual(r2.status, 200, r2.body[:300])
             self.assertEqual(r2.header("X-Cache"), "shared")
             self.assertEqual(r3.status, 200, r3.body[:300])
-            self.assertEqual(b.metric("isomesh_polygonisations_total"), 0, b.log()[-2000:])
+            self.assertEqual(b.metric("isomesh_polygonisations_total"), 0, s.story())
             self.assertEqual(b.metric("isomesh_stored_encodings_total"), 1)
             self.assertEqual(a.metric("isomesh_polygonisations_total"), 1)
             self.assertTrue(stack.wait_stored(s.redis, key))
@@ -136,19 +140,72 @@ class OneComputationClusterTest(unittest.TestCase):
                 first = ex.submit(a.post, "/v1/mesh", req)
                 self.assertTrue(stack.wait_until(
                     lambda: sum(d.metric("isomesh_workers_storing") for d in s.daemons) == 1,
-                    60), a.log()[-2000:] + b.log()[-2000:])
+                    60), s.story())
                 self.assertEqual(surfaces(s.redis), [])
                 other = ex.submit(b.post, "/v1/mesh?format=ply", req)
                 self.assertTrue(b.wait_metric("isomesh_redis_lock_waits_total", 1),
-                                b.log()[-2000:])
+                                s.story())
                 self.assertFalse(other.done())
                 open(gate, "w").close()
                 r1, r2 = first.result(), other.result()
             self.assertEqual(r1.status, 200, r1.body[:300])
             self.assertEqual(r2.status, 200, r2.body[:300])
-            self.assertEqual(polygonisations(s.daemons), 1, a.log()[-2000:] + b.log()[-2000:])
+            self.assertEqual(polygonisations(s.daemons), 1, s.story())
             self.assertEqual(encodings(s.daemons), 1)
             self.assertEqual(len(surfaces(s.redis)), 1)
+        finally:
+            reports = s.cleanup()
+            shutil.rmtree(tmp, ignore_errors=True)
+        self.assertEqual(reports, [], "sanitizer reports")
+
+    def test_the_origin_keeps_its_locks_while_its_own_executor_stores_the_surface(self):
+        # One daemon with --cluster: its own executor takes its drc's entry. A small mesh is
+        # often done before the origin's next look at the entry (shared_cache.c
+        # REMOTE_POLL_NS, 20 ms); the origin took the flight's end for a cancel: it canceled
+        # the entry and let go of the mesh's lock and the surface's while the surface was
+        # still held by the gate, so that another daemon asked for another format polygonised
+        # the surface a second time (test_cluster_another_format_waits_for_the_surface failed
+        # so in CI, and 1 run in 4 at load 15). Whether the origin looks first is the
+        # machine's timing, so ROUNDS surfaces are asked for in turn, the gate closed again
+        # for each: both locks must stay until the surface is stored, and the entry end done,
+        # not canceled.
+        tmp = tempfile.mkdtemp(prefix="isomesh_gate_")
+        gate = os.path.join(tmp, "open")
+        env = dict(os.environ, ISOMESHD_TEST_SURFACE_GATE=gate)
+        s = stack.Stack(n=1, daemon_args=["--cluster"], with_nginx=False, env_for=lambda i: env)
+        s.start()
+        try:
+            a = s.daemons[0]
+
+            def locks():
+                return sorted(k.decode() for k in s.redis.command("KEYS", "isomesh:v1:lock:*"))
+            for i in range(ROUNDS):
+                req = dict(BASE, params={"b": 1.41 + 0.01 * i}, depth={"min": 2, "max": 3})
+                r = a.post("/v1/mesh", req)
+                self.assertEqual(r.status, 200, r.body[:300])
+                key = r.header("ETag").strip('"')
+                self.assertTrue(a.wait_metric("isomesh_workers_storing", 1), s.story())
+                name = "%s.drc" % key
+                # the origin looks every 20 ms: on the old code the locks were gone by then
+                stack.wait_until(lambda: len(locks()) < 2, 0.5)
+                held = locks()
+                self.assertIn("isomesh:v1:lock:" + name, held,
+                              "round %d: the mesh's lock went early\n%s" % (i, s.story()))
+                self.assertEqual(len([k for k in held if k.endswith(".mesh")]), 1,
+                                 "round %d: the surface's lock went early: %s\n%s"
+                                 % (i, held, s.story()))
+                job = "isomesh:v1:job:" + name
+                self.assertIsNone(s.redis.command("HGET", job, "cancel"), s.story())
+                self.assertEqual(len(surfaces(s.redis)), i)
+                open(gate, "w").close()
+                self.assertTrue(stack.wait_stored(s.redis, key), s.story())
+                self.assertEqual(len(surfaces(s.redis)), i + 1)
+                self.assertTrue(stack.wait_until(lambda: locks() == [], 10), s.story())
+                self.assertTrue(stack.wait_until(
+                    lambda: s.redis.command("HGET", job, "state") == b"done", 10), s.story())
+                self.assertIsNone(s.redis.command("HGET", job, "cancel"), s.story())
+                os.unlink(gate)
+            self.assertEqual(a.metric("isomesh_polygonisations_total"), ROUNDS)
         finally:
             reports = s.cleanup()
             shutil.rmtree(tmp, ignore_errors=True)

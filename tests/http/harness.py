@@ -245,6 +245,13 @@ class Daemon:
     def log(self):
         return "\n".join(self._log_lines(last=200))
 
+    def story(self, last=60):
+        """The log's last lines other than the scrapes of /metrics (a test polling a metric
+        writes one every 20 ms: log()'s tail is then nothing else), for failure messages."""
+        lines = [line for line in self._log_lines() if "path=/metrics " not in line
+                 and '"path":"/metrics"' not in line]
+        return "\n".join(lines[-last:])
+
     def log_count(self, text, want, timeout=10):
         """How often text occurs in the whole log, waiting (bounded) until it reaches want:
         a line is written after the counter it goes with, and log() sees only the tail."""
