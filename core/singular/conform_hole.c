@@ -447,9 +447,10 @@ void cf_undo(cf_ctx *c, const uint32_t *removed, size_t nremoved, size_t ntris, 
 /* Samples of f per side along a rim vertex's normal when looking for another sheet. */
 #define CLEAR_SAMPLES 8
 /* Rim vertices whose samples are evaluated together: their 2 CLEAR_SAMPLES points each fill
- * one batch of the evaluator (one pass over the tape for all of them; one at a time, the
- * samples cost crossing-spheres' conformance 11.3M instructions, callgrind). A vertex found
- * unclear ends the check after its batch, not at once: at most this many vertices more. */
+ * one batch of the evaluator (ism_eval_points: one pass over the tape for all of them, each
+ * value ism_eval_point's to the bit; one at a time, the samples cost crossing-spheres'
+ * conformance 11.3M instructions, callgrind). A vertex found unclear ends the check after
+ * its batch, not at once: at most this many vertices more. */
 #define CLEAR_BATCH_VERTICES (ISM_EVAL_BATCH / (2 * CLEAR_SAMPLES))
 
 /* True when the samples v[0 .. CLEAR_SAMPLES) along one side change sign beyond the first. */
@@ -499,7 +500,7 @@ bool cf_rim_clear(cf_ctx *c, const cf_loops *ls, double clearance)
             bool last = j + 1 == ls->l[i].n && i + 1 == ls->n;
             if (n < ISM_EVAL_BATCH && !last)
                 continue;
-            ism_eval_batch(c->f, c->ws, x, y, z, v, n);
+            ism_eval_points(c->f, c->ws, x, y, z, v, n);
             for (size_t k = 0; k < n; k += CLEAR_SAMPLES)
                 if (sheet_along(v + k))
                     return false;
