@@ -172,9 +172,11 @@ void cf_polyline_free(cf_polyline *pl)
 }
 
 /* Squared distance from q to segment sg of the polyline, its parameter t on the segment and
- * the foot f = p0 + t (p1 - p0). */
-static double seg_dist2(const cf_polyline *pl, size_t sg, const double q[3], double *t_out,
-                        double f[3])
+ * the foot f = p0 + t (p1 - p0) (each when not NULL: the ring search asks the distance
+ * alone, inlined without them). */
+static inline __attribute__((always_inline)) double seg_dist2(const cf_polyline *pl, size_t sg,
+                                                            const double q[3], double *t_out,
+                                                            double *f)
 {
     const double *p0 = pt(pl, sg), *p1 = pt(pl, sg + 1);
     double d[3], w[3], dd = 0, dw = 0;
@@ -186,31 +188,13 @@ static double seg_dist2(const cf_polyline *pl, size_t sg, const double q[3], dou
     }
     double t = dd > 0 ? cf_min2(1, cf_max2(0, dw / dd)) : 0, e = 0;
     for (int m = 0; m < 3; m++) {
-        f[m] = p0[m] + t * d[m];
-        e += (q[m] - f[m]) * (q[m] - f[m]);
+        double fm = p0[m] + t * d[m];
+        if (f)
+            f[m] = fm;
+        e += (q[m] - fm) * (q[m] - fm);
     }
-    *t_out = t;
-    return e;
-}
-
-/* seg_dist2's squared distance alone (the same operations: the same bits), for the
- * distance-only queries. */
-static inline __attribute__((always_inline)) double seg_dist2_only(const cf_polyline *pl,
-                                                                 size_t sg, const double q[3])
-{
-    const double *p0 = pt(pl, sg), *p1 = pt(pl, sg + 1);
-    double d[3], w[3], dd = 0, dw = 0;
-    for (int m = 0; m < 3; m++) {
-        d[m] = p1[m] - p0[m];
-        w[m] = q[m] - p0[m];
-        dd += d[m] * d[m];
-        dw += d[m] * w[m];
-    }
-    double t = dd > 0 ? cf_min2(1, cf_max2(0, dw / dd)) : 0, e = 0;
-    for (int m = 0; m < 3; m++) {
-        double f = p0[m] + t * d[m];
-        e += (q[m] - f) * (q[m] - f);
-    }
+    if (t_out)
+        *t_out = t;
     return e;
 }
 
@@ -281,7 +265,7 @@ static inline __attribute__((always_inline)) double cell_min2(const cf_polyline 
     if (!cell_may_hold(pl, c, q, best, mag))
         return best;
     for (uint32_t x = pl->g_start[c]; x < pl->g_start[c + 1]; x++)
-        best = cf_min2(best, seg_dist2_only(pl, pl->g_seg[x], q));
+        best = cf_min2(best, seg_dist2(pl, pl->g_seg[x], q, NULL, NULL));
     return best;
 }
 
