@@ -656,7 +656,7 @@ static void set_defaults(ism_request *req, int depth_limit)
     req->position_bits = ISM_REQ_DEFAULT_POSITION_BITS;
     req->normal_bits = ISM_REQ_DEFAULT_NORMAL_BITS;
     req->curvature_bits = ISM_REQ_DEFAULT_CURVATURE_BITS;
-    req->attributes = ISM_ATTR_ALL;
+    req->attributes = ISM_ATTR_DEFAULT;
 }
 
 static bool apply_preset(ism_request *req, const ism_preset *p, int depth_limit,

@@ -15,6 +15,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
 ISOMESH = os.path.join(BUILD, "isomesh")
 VALIDATOR = os.path.join(ROOT, "tests", "unit", "proto", "validate_gltf.mjs")
+DECODE = os.path.join(ROOT, "tests", "cli", "decode_drc.mjs")  # npm draco3d
+EVERY_ATTRIBUTE = ["normal", "mean_curvature", "gauss_curvature", "class"]
 
 TORUS = {"preset": "torus", "depth": {"max": 5}}
 
@@ -59,7 +61,10 @@ class RequestFileTest(unittest.TestCase):
         self.assertEqual(stats["analysis"]["euler"], 0, "a torus has Euler characteristic 0")
 
     def test_glb_is_valid_and_decodes(self):
-        stats, out, _ = self.run_request({"preset": "klein-bottle", "depth": {"max": 6}}, "glb")
+        every = ["normal", "mean_curvature", "gauss_curvature", "class"]  # the default: normals
+        stats, out, _ = self.run_request({"preset": "klein-bottle", "depth": {"max": 6},
+                                          "max_error": None, "output": {"attributes": every}},
+                                         "glb")
         self.assertGreater(stats["analysis"]["nonmanifold_edges"], 0)
         proc = subprocess.run(["node", VALIDATOR, out], capture_output=True, text=True,
                               timeout=120, cwd=ROOT)
@@ -100,6 +105,60 @@ class RequestFileTest(unittest.TestCase):
             lines = f.read().splitlines()
         self.assertEqual(sum(l.startswith("v ") for l in lines), stats["mesh"]["vertices"])
         self.assertEqual(sum(l.startswith("f ") for l in lines), stats["mesh"]["triangles"])
+
+    def decode(self, path):
+        proc = subprocess.run(["node", DECODE, path], capture_output=True, text=True,
+                              timeout=120, cwd=ROOT)
+        self.assertEqual(proc.returncode, 0, proc.stderr)
+        return json.loads(proc.stdout)
+
+    def drc_of(self, request):
+        """(stats, bytes, decoded by draco3d) of request as .drc."""
+        stats, out, _ = self.run_request(request, "drc")
+        with open(out, "rb") as f:
+            data = f.read()
+        return stats, data, self.decode(out)
+
+    def test_default_payload_is_normals_only_and_curvature_comes_when_asked(self):
+        """A request that leaves output.attributes out gets positions and normals, what the
+        viewer's shaded view draws: draco3d decodes no curvature and no class, and naming
+        ["normal"] is the same key and the same bytes. Asked for, the curvatures arrive under
+        their fixed ids with the sphere's closed-form values (|H| = 1/r, K = 1/r^2 at
+        vertices on f = 0: the depth path), in boxes on and off the octree lattice; and
+        they cost bytes: on gyroid-ball the default payload is smaller than with them."""
+        r = 0.8
+        cell = 2.0 / 2 ** 5
+        for shift in (0.0, 1e-3, (2 ** 0.5 - 1) * cell):
+            box = [-1 + shift, -1 + shift / 2, -1 - shift, 1 + shift, 1 + shift / 2, 1 - shift]
+            sphere = {"expr": "x^2 + y^2 + z^2 - 0.64", "box": box, "depth": {"min": 3, "max": 5},
+                      "max_error": None}
+            stats, plain, d = self.drc_of(sphere)
+            self.assertEqual(d["attributes"], {"position": 0, "normal": 1}, shift)
+            self.assertNotIn("mean_curvature", d)
+            named, same, _ = self.drc_of(dict(sphere, output={"attributes": ["normal"]}))
+            self.assertEqual(named["key"], stats["key"], "the default named is the same request")
+            self.assertEqual(same, plain)
+            curved, data, c = self.drc_of(dict(sphere, output={"attributes": EVERY_ATTRIBUTE}))
+            self.assertNotEqual(curved["key"], stats["key"])
+            self.assertEqual(c["attributes"], {"position": 0, "normal": 1, "mean_curvature": 2,
+                                               "gauss_curvature": 3, "class": 4}, shift)
+            self.assertEqual(c["faces"], d["faces"])
+            self.assertEqual(len(c["mean_curvature"]), c["points"])
+            for h, k in zip(c["mean_curvature"], c["gauss_curvature"]):
+                self.assertAlmostEqual(abs(h), 1 / r, delta=1e-4 / r)
+                self.assertAlmostEqual(k, 1 / r ** 2, delta=1e-4 / r ** 2)
+            self.assertGreater(len(data), len(plain))
+        # (its crease cells' labels travel whatever the attributes: openapi "cell")
+        gyroid = {"preset": "gyroid-ball", "depth": {"max": 5}, "max_error": None}
+        stats, plain, d = self.drc_of(gyroid)
+        self.assertEqual(d["attributes"], {"position": 0, "normal": 1, "cell": 5})
+        for attributes in (["normal", "mean_curvature"], EVERY_ATTRIBUTE):
+            curved, data, c = self.drc_of(dict(gyroid, output={"attributes": attributes}))
+            self.assertEqual(sorted(c["attributes"]), sorted(attributes + ["position", "cell"]))
+            self.assertEqual(c["faces"], d["faces"])
+            print("# gyroid-ball d5 drc bytes: default %d, %s %d" % (len(plain), "+".join(attributes),
+                                                                  len(data)))
+            self.assertLess(len(plain), len(data))
 
     def test_one_key_for_every_format_and_every_equivalent_request(self):
         keys = set()

@@ -185,7 +185,9 @@ class OneComputationTest(unittest.TestCase):
         required), from the same stored surface; the glTF validator finds no error; its
         positions lie on the sphere and its vertex count is the stats'."""
         sphere = {"expr": "x^2 + y^2 + z^2 - 0.64", "box": [-1.0037, -0.9963, -1, 1, 1.0029, 1],
-                  "depth": {"min": 3, "max": 5}, "max_error": None}  # vertices on f = 0
+                  "depth": {"min": 3, "max": 5}, "max_error": None,  # vertices on f = 0
+                  "output": {"attributes": ["normal", "mean_curvature", "gauss_curvature",
+                                            "class"]}}  # every accessor (the default: normals)
         with Daemon("--workers", "1") as d:
             drc = d.post("/v1/mesh", sphere)
             p0, _ = self.counters(d)

@@ -104,7 +104,8 @@ class PythonClientTest(unittest.TestCase):
         # a cylinder of radius r cut by the box (off the octree lattice): two boundary circles
         r = math.sqrt(0.5)
         cyl = {"expr": "x^2 + y^2 - 0.5", "box": [-1.0037, -0.9963, -1.0013, 0.9971, 1.0029, 0.9987],
-               "depth": {"min": 3, "max": 6}}
+               "depth": {"min": 3, "max": 6}, "max_error": None,
+               "output": {"attributes": ["normal", "mean_curvature", "gauss_curvature", "class"]}}
         m = self.c.mesh(cyl, format="ply")
         ply = m.load("ply")
         self.assertEqual(sorted(ply.props), ["class", "gauss_curvature", "mean_curvature",

@@ -47,18 +47,28 @@ const keyOfRequest = new Map();   // request body text -> mesh key
 const meshes = new Map();         // mesh key -> loaded result (insertion order = LRU order)
 const ofSurface = new Map();      // surface text (splitBody) -> [{key, attributes}] held
 
-// What the server sends when a request leaves output.attributes out.
+// What the server sends when a request leaves output.attributes out (proto/request.h
+// ISM_ATTR_DEFAULT: what the shaded view draws).
+export const DEFAULT_ATTRIBUTES = ['normal'];
+// Every attribute a request may ask for (the downloads carry them all).
 export const ALL_ATTRIBUTES = ['normal', 'mean_curvature', 'gauss_curvature', 'class'];
 
 // body (request JSON text) as {surface: the request without output.attributes, attributes}.
 export function splitBody(body) {
   const b = JSON.parse(body);
-  const attributes = (b.output && b.output.attributes) || ALL_ATTRIBUTES;
+  const attributes = (b.output && b.output.attributes) || DEFAULT_ATTRIBUTES;
   if (b.output) {
     delete b.output.attributes;
     if (!Object.keys(b.output).length) delete b.output;
   }
   return { surface: JSON.stringify(b), attributes };
+}
+
+// surface (splitBody's) as a request body asking for attributes.
+export function withAttributes(surface, attributes) {
+  const b = JSON.parse(surface);
+  b.output = { ...(b.output || {}), attributes };
+  return JSON.stringify(b);
 }
 
 function remember(result, body) {

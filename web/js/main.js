@@ -904,7 +904,8 @@ let downloads = { key: null, pending: null };
 function setDownloads(result, body) {
   const { surface, attributes } = loader.splitBody(body);
   const complete = loader.ALL_ATTRIBUTES.every((a) => attributes.includes(a));
-  downloads = { key: result.mesh ? result.key : null, pending: result.mesh && !complete ? surface : null };
+  const pending = loader.withAttributes(surface, loader.ALL_ATTRIBUTES);
+  downloads = { key: result.mesh ? result.key : null, pending: result.mesh && !complete ? pending : null };
   linkDownloads(downloads.key);
 }
 

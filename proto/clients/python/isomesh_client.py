@@ -33,7 +33,8 @@ class IsomeshError(Exception):
 
 class Mesh:
     """A loaded mesh: vertices [(x, y, z)], faces [(a, b, c)] (0-based), props {name: [per
-    vertex]} (PLY: nx ny nz mean_curvature gauss_curvature class), lines [[vertex indices]]
+    vertex]} (PLY: nx ny nz, and mean_curvature gauss_curvature class when the request's
+    output.attributes names them), lines [[vertex indices]]
     (OBJ `l` lines: the features)."""
 
     def __init__(self, vertices, faces, props=None, lines=None):

@@ -46,8 +46,7 @@ static const char *const same[][7] = {
      "{\"expr\": \"x^2 + y^2 - 0.25\", \"depth\": {\"min\": 3, \"max\": 10}, "
      "\"tolerances\": {\"gradient\": 0.9, \"double_root_eps\": 1e-9, \"double_root_iters\": 25, "
      "\"stitch\": 0.001}, \"output\": {\"format\": \"glb\", \"position_bits\": 14, "
-     "\"normal_bits\": 10, \"curvature_bits\": 14, \"attributes\": [\"class\", \"normal\", "
-     "\"gauss_curvature\", \"mean_curvature\"]}}",
+     "\"normal_bits\": 10, \"curvature_bits\": 14, \"attributes\": [\"normal\"]}}",
      "{\"expr\": \"x^2 + y^2 - 0.25\", \"box\": [-1, -1, -1, 1, 1, 1], \"output\": {\"format\": \"stl\"}}",
      "{\"expr\": \"x^2 + y^2 - 0.25\", \"box\": [-1, -1, -1.0, 1, 1, 1], \"depth\": {\"min\": 3}}",
      NULL},
@@ -88,6 +87,18 @@ static const char *const same[][7] = {
      * (the server's rule, proto/request.c; the viewer sends null itself) */
     {"{\"preset\": \"torus\", \"preview\": true}",
      "{\"preset\": \"torus\", \"preview\": true, \"max_error\": null}",
+     NULL},
+    /* the default attributes (normals only) left out or named: one key; the curvature bits
+     * do not matter while no curvature is sent */
+    {"{\"expr\": \"x^2 + y^2 + z^2 - 1\"}",
+     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"output\": {\"attributes\": [\"normal\"]}}",
+     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"output\": {\"curvature_bits\": 16}}",
+     NULL},
+    /* a curvature request names its set in any order */
+    {"{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"output\": {\"attributes\": [\"normal\", \"class\", "
+     "\"mean_curvature\", \"gauss_curvature\"]}}",
+     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"output\": {\"attributes\": [\"gauss_curvature\", "
+     "\"mean_curvature\", \"class\", \"normal\"], \"curvature_bits\": 14}}",
      NULL},
     /* bits of attributes that are not sent do not matter */
     {"{\"expr\": \"x - y\", \"output\": {\"attributes\": [\"class\"], \"normal_bits\": 12, \"curvature_bits\": 16}}",
@@ -133,8 +144,15 @@ static const char *const different[] = {
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"tolerances\": {\"flat_plane\": 0.2}}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"output\": {\"position_bits\": 16}}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"output\": {\"normal_bits\": 12}}",
-    "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"output\": {\"curvature_bits\": 12}}",
-    "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"output\": {\"attributes\": [\"normal\"]}}",
+    /* a curvature is sent only when asked (the default is normals only), each set its own key,
+     * and then its bits matter */
+    "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"output\": {\"attributes\": [\"normal\", \"mean_curvature\"]}}",
+    "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"output\": {\"attributes\": [\"normal\", \"mean_curvature\"], "
+    "\"curvature_bits\": 12}}",
+    "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"output\": {\"attributes\": [\"normal\", \"gauss_curvature\"]}}",
+    "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"output\": {\"attributes\": [\"normal\", \"mean_curvature\", "
+    "\"gauss_curvature\", \"class\"]}}",
+    "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"output\": {\"attributes\": [\"normal\", \"class\"]}}",
     "{\"expr\": \"x^2 + y^2 + z^2 - 1\", \"output\": {\"attributes\": []}}",
     "{\"preset\": \"sphere\"}",
     "{\"preset\": \"sphere\", \"params\": {\"r\": 0.5}}",

@@ -457,7 +457,7 @@ Test(request, defaults_come_from_the_polygoniser)
     cr_expect_eq(req.format, ISM_FORMAT_DRC);
     cr_expect_eq(req.position_bits, 14);
     cr_expect_eq(req.normal_bits, 10);
-    cr_expect_eq(req.attributes, (unsigned)ISM_ATTR_ALL);
+    cr_expect_eq(req.attributes, (unsigned)ISM_ATTR_NORMAL); /* the viewer's shaded view */
     cr_expect_null(req.preset);
 
     ism_poly_options p;

@@ -113,6 +113,19 @@ Test(schema, defaults_are_the_decoders)
                          json_object_get(json_object_get(json_object_get(props, "output"),
                                                          "properties"), "format"), "default")),
                      ism_format_name(req.format));
+    /* the schema's attributes default, named in a request, is what leaving them out gets */
+    json_t *attrs = json_object_get(json_object_get(json_object_get(json_object_get(props,
+                                        "output"), "properties"), "attributes"), "default");
+    cr_assert(json_is_array(attrs), "output.attributes has no default");
+    char listed[200];
+    ism_request named;
+    char *text = json_dumps(attrs, JSON_COMPACT);
+    snprintf(listed, sizeof listed, "{\"expr\": \"x\", \"max_error\": null, \"output\": "
+             "{\"attributes\": %s}}", text);
+    free(text);
+    cr_assert(ism_request_decode(listed, strlen(listed), NULL, &named, &err), "%s", err.message);
+    cr_expect_eq(named.attributes, req.attributes, "the schema's default is not the decoder's");
+    ism_request_free(&named);
     ism_request_free(&req);
     json_decref(s);
 }
