@@ -175,8 +175,9 @@ static bool merge_ok(rm_pass *p, rm_merge *g)
     }
     /* along a crease the needles come in strips: a merge that leaves fewer poor triangles
        is a gain even where the strip's next needle keeps the fan's smallest angle, as long
-       as no angle falls below ISM_RM_CROWD_SINE_FLOOR of it */
-    bool fewer = g->along && poor_after < poor_before &&
+       as no angle falls below ISM_RM_CROWD_SINE_FLOOR of it (a crease vertex: locked; a
+       free crowding pair, crowd_merge_find, must raise the smallest angle) */
+    bool fewer = g->along && r->locked[g->v] && poor_after < poor_before &&
                  g->after > ISM_RM_CROWD_SINE_FLOOR * f.min_sine;
     return (fewer || (g->after > f.min_sine && poor_after <= poor_before)) && distance_ok(p, g);
 }
@@ -236,13 +237,14 @@ static bool crease_merge_find(const rm_pass *p, uint32_t v, uint32_t w, uint32_t
     return true;
 }
 
-/* For merging free v into w when vw is shorter than ISM_RM_CROWD × v's mean edge: v's
- * triangles then move by a hair, and each is held to its own normal before as along a crease
- * (rm_crease_tri_ok) instead of the fan's mean normal, which says nothing where the fan is
- * folded. Kummer-16's conformance rims leave such pairs 1e-4 apart in folded fans (new
- * triangles 70°-160° from the fan's normal); while the bends there locked them as creases
- * crease_merge_find took them, and once kink-free surfaces had no creases (rm_locks.c) they
- * stayed: smallest angle 2.79° -> 0.25° in the preset's own box. */
+/* For merging free v into w, on a surface without creases (may_crease false), when vw is
+ * shorter than ISM_RM_CROWD × v's mean edge: v's triangles then move by a hair, and each is
+ * held to its own normal before as along a crease (rm_crease_tri_ok) instead of the fan's
+ * mean normal, which says nothing where the fan is folded. Kummer-16's conformance rims leave
+ * such pairs 1e-4 apart in folded fans (new triangles 70°-160° from the fan's normal); while
+ * the bends there locked them as creases crease_merge_find took them, and once kink-free
+ * surfaces had no creases (rm_locks.c) they stayed: smallest angle 2.79° -> 0.25° in the
+ * preset's own box. */
 static bool crowd_merge_find(const rm_pass *p, uint32_t v, uint32_t w, uint32_t deg,
                              rm_merge *g)
 {
@@ -269,8 +271,9 @@ static bool best_merge(rm_pass *p, uint32_t a, uint32_t b, rm_merge *best)
     if ((crease ? crease_merge_find(p, b, a, deg, &g) : rm_merge_find(&p->r, b, a, deg, &g)) &&
         merge_ok(p, &g) && (!found || g.after > best->after))
         *best = g, found = true;
-    if (found || crease)
-        return found;
+    if (found || crease || p->may_crease)
+        return found; /* where f may crease, crease_merge_find has the crowds (free pairs
+                         as a crowd too: gyroid-ball 1 / 4 / 6 needles -> 3 / 0 / 7) */
     if (crowd_merge_find(p, a, b, deg, &g) && merge_ok(p, &g))
         *best = g, found = true;
     if (crowd_merge_find(p, b, a, deg, &g) && merge_ok(p, &g) &&
