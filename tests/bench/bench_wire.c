@@ -1,7 +1,8 @@
 /* bench_wire.c — what a mesh costs on the wire: Draco bytes per triangle and encode time for
  * polygoniser meshes of about 10k, 100k and 1M triangles at 11, 14 and 16 position bits, with
- * positions only, with normals, and with the service's default attributes; the encoder speed
- * settings; curvature quantisation; the non-manifold side data beside the payload. Each mesh
+ * positions only, with normals (the service's default attributes) and with every attribute;
+ * the encoder speed settings; curvature quantisation; the non-manifold side data beside the
+ * payload. Each mesh
  * is also written as binary PLY into the directory given with --out (the reference tools of
  * bench_wire.py read it). Prints one JSON object per line.
  *
@@ -121,10 +122,16 @@ static size_t glb_side_bytes(const ism_features *f)
     return b + f->npoints * 12;
 }
 
-/* Draco's tool choices on the service's default payload (all attributes, 14 bits), each beside
- * the service's: the table that chose ism_draco_default_tools. */
+/* Draco's tool choices on the service's default payload (normals, 14 bits) and on every
+ * attribute, each beside the service's: the table that chose ism_draco_default_tools. These
+ * meshes carry no crease-side split points or cell labels, unlike the service's payload on a
+ * CSG surface (draco_encode.cc gives both). */
 static bool run_tools(const bench_case *c, const ism_wire_mesh *w)
 {
+    static const struct {
+        const char *name;
+        unsigned attrs;
+    } payloads[] = {{"default", ISM_ATTR_DEFAULT}, {"all", ISM_ATTR_ALL}};
     static const struct {
         const char *name;
         ism_draco_tools t;
@@ -137,21 +144,26 @@ static bool run_tools(const bench_case *c, const ism_wire_mesh *w)
         {"speed8+parallelogram", {8, ISM_DRACO_CONN_BY_SPEED, ISM_DRACO_PRED_PARALLELOGRAM}},
         {"speed8+valence", {8, ISM_DRACO_CONN_VALENCE, ISM_DRACO_PRED_BY_SPEED}},
         {"speed9", {9, ISM_DRACO_CONN_BY_SPEED, ISM_DRACO_PRED_BY_SPEED}},
+        {"speed9+valence", {9, ISM_DRACO_CONN_VALENCE, ISM_DRACO_PRED_BY_SPEED}},
+        {"speed10", {10, ISM_DRACO_CONN_BY_SPEED, ISM_DRACO_PRED_BY_SPEED}},
     };
-    for (size_t i = 0; i < sizeof tools / sizeof tools[0]; i++) {
-        ism_draco_input in = input_of(w, ISM_ATTR_ALL, 14, ISM_REQ_DEFAULT_CURVATURE_BITS,
-                                      &tools[i].t);
-        size_t bytes;
-        double ms;
-        if (!measure(&in, c->repeats, &bytes, &ms))
-            return false;
-        const ism_draco_tools *t = &tools[i].t, *d = &ism_draco_default_tools;
-        bool is_default = t->speed == d->speed && t->connectivity == d->connectivity &&
-                          t->position_prediction == d->position_prediction;
-        printf("{\"case\":\"%s\",\"kind\":\"tools\",\"tools\":\"%s\",\"bytes\":%zu,"
-               "\"ms\":%.3f,\"default\":%s}\n",
-               c->name, tools[i].name, bytes, ms, is_default ? "true" : "false");
-        fflush(stdout);
+    for (size_t p = 0; p < sizeof payloads / sizeof payloads[0]; p++) {
+        for (size_t i = 0; i < sizeof tools / sizeof tools[0]; i++) {
+            ism_draco_input in = input_of(w, payloads[p].attrs, 14, ISM_REQ_DEFAULT_CURVATURE_BITS,
+                                          &tools[i].t);
+            size_t bytes;
+            double ms;
+            if (!measure(&in, c->repeats, &bytes, &ms))
+                return false;
+            const ism_draco_tools *t = &tools[i].t, *d = &ism_draco_default_tools;
+            bool is_default = t->speed == d->speed && t->connectivity == d->connectivity &&
+                              t->position_prediction == d->position_prediction;
+            printf("{\"case\":\"%s\",\"kind\":\"tools\",\"payload\":\"%s\",\"tools\":\"%s\","
+                   "\"bytes\":%zu,\"ms\":%.3f,\"default\":%s}\n",
+                   c->name, payloads[p].name, tools[i].name, bytes, ms,
+                   is_default ? "true" : "false");
+            fflush(stdout);
+        }
     }
     return true;
 }
@@ -229,8 +241,8 @@ static bool run_case(const bench_case *c, const char *out_dir, bool tools_only)
         const char *name;
         unsigned attrs;
     } variants[] = {{"positions", 0},
-                    {"normals", ISM_ATTR_NORMAL},
-                    {"default", ISM_ATTR_ALL}};
+                    {"normals", ISM_ATTR_DEFAULT},
+                    {"all", ISM_ATTR_ALL}};
     static const int bits[] = {11, 14, 16};
     for (size_t b = 0; b < 3; b++)
         for (size_t v = 0; v < 3; v++) {

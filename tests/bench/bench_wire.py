@@ -50,21 +50,26 @@ def draco_cli(ply, bits, normals):
 
 
 def print_tools(rows, meshes):
-    """Draco's tool choices on the default payload as ratios to speed 4 (the default until issue
-    16; its goal: within 5% of that size at <= 1/2 its encode time)."""
-    tools = [r for r in rows if r["kind"] == "tools"]
-    names = list(dict.fromkeys(r["tools"] for r in tools))
-    print("\nDraco tools on the default payload (14 bits, all attributes): size and encode time "
-          "as ratios to speed 4 (before issue 16); * = the service's default now")
-    print(f"{'mesh':<12}{'tris':>9}{'speed4 B':>10}{'ms':>8}" +
-          "".join(f"{n + ('*' if any(r['default'] for r in tools if r['tools'] == n) else ''):>22}"
-                  for n in names[1:]))
-    for name, m in meshes.items():
-        row = {r["tools"]: r for r in tools if r["case"] == name}
-        base = row[names[0]]
-        cells = "".join(f"{row[n]['bytes'] / base['bytes']:>11.3f}{row[n]['ms'] / base['ms']:>11.2f}"
-                        for n in names[1:])
-        print(f"{name:<12}{m['triangles']:>9}{base['bytes']:>10}{base['ms']:>8.1f}{cells}")
+    """Draco's tool choices as ratios to speed 4 (the default until issue 16; its goal: within 5%
+    of that size at <= 1/2 its encode time), on the default payload (normals) and on every
+    attribute."""
+    for payload, what in (("default", "the default payload: normals"),
+                          ("all", "every attribute: normals, curvatures, class")):
+        tools = [r for r in rows if r["kind"] == "tools" and r.get("payload") == payload]
+        if not tools:
+            continue
+        names = list(dict.fromkeys(r["tools"] for r in tools))
+        print(f"\nDraco tools on {what} (14 bits): size and encode time as ratios to speed 4 "
+              "(before issue 16); * = the service's default now")
+        print(f"{'mesh':<12}{'tris':>9}{'speed4 B':>10}{'ms':>8}" +
+              "".join(f"{n + ('*' if any(r['default'] for r in tools if r['tools'] == n) else ''):>22}"
+                      for n in names[1:]))
+        for name, m in meshes.items():
+            row = {r["tools"]: r for r in tools if r["case"] == name}
+            base = row[names[0]]
+            cells = "".join(f"{row[n]['bytes'] / base['bytes']:>11.3f}"
+                            f"{row[n]['ms'] / base['ms']:>11.2f}" for n in names[1:])
+            print(f"{name:<12}{m['triangles']:>9}{base['bytes']:>10}{base['ms']:>8.1f}{cells}")
     print("  each cell: size ratio, time ratio (fastest of several encodes; goal <= 1.05, <= 0.5)")
 
 
@@ -99,7 +104,7 @@ def main():
             for bits in (11, 14, 16):
                 p = by[(name, bits, "positions")]
                 n = by[(name, bits, "normals")]
-                a = by[(name, bits, "default")]
+                a = by[(name, bits, "all")]
                 cli_p = draco_cli(ply, bits, False)
                 cli_n = draco_cli(ply, bits, True)
                 cli = (f"{cli_p[0] / t:8.3f}{cli_n[0] / t:9.3f}{cli_n[1]:7.2f}"
@@ -107,8 +112,9 @@ def main():
                 print(f"{name:<12}{t:>9}{bits:>5} | {p['bytes'] / t:6.3f}{n['bytes'] / t:6.3f}"
                       f"{a['bytes'] / t:6.3f}{t / n['ms'] / 1000:8.2f} | "
                       f"{m['raw_bytes'] / t:6.2f}{m['ply_bytes'] / t:6.2f}{zbytes / t:7.2f} | {cli}")
-        print("  pos = positions + connectivity; +nrm = with 10-bit normals; +all = the default "
-              "attributes (normals, 14-bit mean and Gaussian curvature, class); Mtri/s for +nrm;\n"
+        print("  pos = positions + connectivity; +nrm = with 10-bit normals (the default "
+              "attributes); +all = every attribute (normals, 14-bit mean and Gaussian curvature, "
+              "class); Mtri/s for +nrm;\n"
               "  raw = float32 xyz + uint32 indices; PLY+z = binary PLY through zlib -6; cli = "
               "Debian draco_encoder on the PLY (its -cl 7, i.e. speed 3; time incl. PLY read)")
 
@@ -139,12 +145,11 @@ def main():
                          and r["case"] == name and r["curvature_bits"] == b) / t for b in cb]
             print(f"{name:<12}" + "".join(f"{v:>10.3f}" for v in vals))
 
-        print("\nNon-manifold side data beside the default Draco payload (14 bits, all "
-              "attributes)")
+        print("\nNon-manifold side data beside the default Draco payload (14 bits, normals)")
         print(f"{'mesh':<12}{'nm edges':>9}{'points':>7}{'bnd edges':>10}{'payload':>10}"
               f"{'features':>10}{'share':>7}{'glb side':>10}{'share':>7}")
         for name, m in meshes.items():
-            payload = by[(name, 14, "default")]["bytes"]
+            payload = by[(name, 14, "normals")]["bytes"]
             fj, gs = m["features_json_bytes"], m["glb_side_bytes"]
             print(f"{name:<12}{m['nonmanifold_edges']:>9}{m['nonmanifold_points']:>7}"
                   f"{m['boundary_edges']:>10}{payload:>10}{fj:>10}{100 * fj / payload:>6.1f}%"
