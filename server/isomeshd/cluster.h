@@ -66,7 +66,10 @@
  * The origin (shared_cache.c, on the Redis thread) adds a computation it holds the lock of to
  * its user's stream (refused when the user already has its --user-jobs there: cluster-wide),
  * then follows its job hash until it is done (the mesh is then read from the shared cache) or
- * failed (the error is answered), and cancels it when nobody waits for it any more.
+ * failed (the error is answered), and cancels it when nobody waits for it any more (not when
+ * this daemon's executor ran it and its flight has ended while its surface is still being
+ * stored: the origin then keeps its locks until the entries are written, as it does for a
+ * flight it sees running here).
  *
  * The executor (a task per daemon, on the Redis thread) takes entries while this daemon has
  * idle workers: first one pending on a daemon that has not heart-beaten for a lock lifetime

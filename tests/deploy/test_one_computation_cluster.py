@@ -9,7 +9,9 @@ the answer, in a SURFACE frame of its own (proto/frame.h); the mesh, its stats, 
 request go to Redis only after that surface (worker_pool.c, W_STORING), on one connection, so
 a daemon that finds the mesh in Redis finds the surface there too (stack.wait_stored is
 enough), and the daemon that computed keeps its lock until then. The gated test holds the
-surface's store to show the order without depending on timing."""
+surface's store to show the order without depending on timing. With --cluster the daemon that
+queued the computation (its origin) keeps its locks until then too, also when its own executor
+ran it and finished before the origin looked (the gated rounds)."""
 import os
 import shutil
 import sys
