@@ -3,6 +3,7 @@
 #include "core/singular/krawczyk.h"
 #include "core/eval/interval_ops.h"
 
+#include <math.h>
 #include <stdbool.h>
 
 /* Index of entry (i, j) of a symmetric 3×3 matrix in xx xy xz yy yz zz order. */
@@ -46,11 +47,63 @@ static bool mid_inverse(const ism_interval h[6], double y[3][3])
     return true;
 }
 
+/* Relative slack of undecided's plain-double estimates: far above their rounding (a few
+ * ulps of the magnitudes summed, ~1e-15), far below any margin that matters. */
+#define KRAWCZYK_SLACK 1e-9
+
+/* Whether every row of K(X) is sure to be neither inside X nor apart from it, from plain
+ * doubles: K's answer is then UNKNOWN, and its interval pass is spared. Row i of K holds
+ * [a − W/2, a + W/2] with a = c_i − Σ_m y_im mid(gc_m) and
+ * W/2 = Σ_m |y_im| rad(gc_m) + Σ_j r_j Σ_m |y_im| rad(h_mj), r_j the smaller distance from c_j
+ * to X_j's ends: the term (I − Y H) (X − c) holds e_ij [−r_j, r_j], whose half-width is
+ * mag(e_ij) r_j ≥ rad(e_ij) r_j, and the outward-rounded K holds the exact one. So W ≥ w(X_i)
+ * rules out "inside", and [a ± W/2] meeting X_i rules out "apart". Each comparison keeps
+ * KRAWCZYK_SLACK of its sides; anything non-finite answers false (the full pass decides).
+ * On the singular search's cells along a curve (the cross-cap's axis: the Hessian singular
+ * along it, Y large) every row is undecided: 1,065 of 1,065 calls. */
+static bool undecided(const ism_interval x[3], const double c[3], const ism_interval gc[3],
+                      const ism_interval h[6], const double y[3][3])
+{
+    double r[3], gm[3], gr[3];
+    for (int j = 0; j < 3; j++) {
+        r[j] = fmin(c[j] - x[j].lo, x[j].hi - c[j]) * (1.0 - KRAWCZYK_SLACK);
+        gm[j] = 0.5 * gc[j].lo + 0.5 * gc[j].hi;
+        gr[j] = 0.5 * gc[j].hi - 0.5 * gc[j].lo;
+        if (!(r[j] > 0.0))
+            return false;
+    }
+    for (int i = 0; i < 3; i++) {
+        double a = c[i], size = fabs(c[i]), half = 0.0;
+        for (int m = 0; m < 3; m++) {
+            a -= y[i][m] * gm[m];
+            size += fabs(y[i][m] * gm[m]);
+            half += fabs(y[i][m]) * gr[m];
+        }
+        for (int j = 0; j < 3; j++) {
+            double rad = 0.0;
+            for (int m = 0; m < 3; m++) {
+                ism_interval e = h[sym(m, j)];
+                rad += fabs(y[i][m]) * (0.5 * e.hi - 0.5 * e.lo);
+            }
+            half += rad * r[j];
+        }
+        half *= 1.0 - KRAWCZYK_SLACK;
+        double err = KRAWCZYK_SLACK * (size + half + fabs(x[i].lo) + fabs(x[i].hi));
+        bool wide = 2.0 * half >= (x[i].hi - x[i].lo) * (1.0 + KRAWCZYK_SLACK);
+        bool meets = a - half + err <= x[i].hi && a + half - err >= x[i].lo;
+        if (!(wide && meets))
+            return false;
+    }
+    return true;
+}
+
 int ism_krawczyk(const ism_interval x[3], const double c[3], const ism_interval gc[3],
                  const ism_interval h[6], ism_interval k[3])
 {
     double y[3][3];
     if (!mid_inverse(h, y))
+        return ISM_KRAWCZYK_UNKNOWN;
+    if (!k && undecided(x, c, gc, h, y))
         return ISM_KRAWCZYK_UNKNOWN;
     ism_interval dx[3];
     _Pragma("GCC unroll 3") for (int j = 0; j < 3; j++)

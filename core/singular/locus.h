@@ -133,7 +133,8 @@ typedef struct ism_sing_curve {
 /* A candidate box of the search: neither excluded by intervals nor certified as one point. */
 enum ism_lbox_flags {
     ISM_LBOX_PROJECTED = 1, /* q holds a point of ∇f = 0 (Gauss–Newton converged in the box
-                               grown by half its width) */
+                               grown by half its width, or an earlier box's such point lying
+                               on this box: search.c's project_all) */
     ISM_LBOX_USED = 2,      /* explained by a point, a curve or a sheet */
     ISM_LBOX_UNIQUE = 4,    /* Krawczyk proved exactly one zero of ∇f in the box (which may
                                then be larger than the finest cells); the points stage

@@ -15,7 +15,9 @@
  *   f(c) + ∇f(c)·(X − c) + ½ (X − c)ᵀ H (X − c) ∌ 0,
  *   or Krawczyk's K(X) ∩ X = ∅  ─▶ dropped;   K(X) ⊂ int X  ─▶ one zero of ∇f: kept whole
  *
- * Cells reaching the finest size are the candidates (projected onto ∇f = 0 and ranked). */
+ * Cells reaching the finest size are the candidates, projected onto ∇f = 0 and ranked after
+ * the subdivision, in key order (project_all): a candidate on whose closure an earlier
+ * candidate's projection lies takes that projection instead of a Newton run of its own. */
 #include "core/singular/search.h"
 #include "core/singular/krawczyk.h"
 #include "core/singular/newton.h"
@@ -45,6 +47,17 @@
 #define SEARCH_GN_TOL 1e-10
 /* Frontier cells per parallel task, and tasks between two looks at the clock. */
 #define SEARCH_CELLS_PER_TASK 16
+/* Candidates per projection task (project_all), in key order: a candidate shares a projection
+ * only with the earlier candidates of its own run, so runs are fixed by the order alone (the
+ * thread count changes nothing). Cells round a curve on a lattice line (the cross-cap's axis:
+ * four cells at each height) sit a few keys apart, well inside one run. */
+#define SEARCH_PROJECT_RUN 64
+/* An earlier candidate's projection q serves a candidate X when q lies in X grown by this
+ * fraction of its width on each side: on X's face, edge or corner to Newton's own precision
+ * (SEARCH_GN_TOL), not beside it. q is then a point of ∇f = 0 in X's closure, which is what
+ * X's own Newton run would have found in its grown box: the four cells round the cross-cap's
+ * axis, a lattice line, all converge onto the axis at their common height. */
+#define SEARCH_SHARE_REL 1e-6
 /* Below this many frontier cells a level runs on the calling thread (thread start-up
  * costs more than the work). */
 #define SEARCH_PARALLEL_MIN 64
@@ -68,6 +81,7 @@ _Static_assert(sizeof(scell) == 20, "a frontier cell is its lattice position, le
 typedef struct keyed_box {
     uint64_t key; /* z, y, x lattice coordinates of the lower corner, then the level */
     ism_lbox box;
+    bool pending; /* a finest candidate not projected yet (project_all) */
 } keyed_box;
 
 /* A growable array of one element type. */
@@ -296,6 +310,23 @@ static int classify(const search *s, worker *w, const ism_interval x[3], ism_int
     return some_piece_may_vanish(s, w, x, nk) ? SURVIVES : EXCLUDED;
 }
 
+/* A finest candidate left at its centre (Newton did not converge), the Hessian's rank there. */
+static ism_lbox centre_rank(const search *s, worker *w, const ism_interval x[3])
+{
+    ism_lbox b = { .rank = 0, .flags = 0 };
+    double g[3], h[6], eig[3];
+    for (int k = 0; k < 3; k++) {
+        b.lo[k] = x[k].lo;
+        b.hi[k] = x[k].hi;
+        b.q[k] = x[k].lo + 0.5 * (x[k].hi - x[k].lo);
+    }
+    ism_eval_hessian(s->t, w->ws, b.q[0], b.q[1], b.q[2], g, h);
+    w->evals_jet++;
+    ism_sym3_eigen(h, eig, NULL);
+    b.rank = (uint8_t)ism_sing_rank(eig, s->hscale);
+    return b;
+}
+
 /* A finest candidate: the centre projected onto ∇f = 0, the Hessian's rank there. */
 static ism_lbox candidate(const search *s, worker *w, const ism_interval x[3])
 {
@@ -313,15 +344,10 @@ static ism_lbox candidate(const search *s, worker *w, const ism_interval x[3])
     ism_newton_opts no = { ISM_SING_PINV_REL, width, SEARCH_GN_TOL * width, SEARCH_GN_ITERS,
                            lo, hi, true };
     ism_newton_result r = ism_sing_newton(s->t, w->ws, b.q, &no, &w->evals_jet);
+    if (!r.converged)
+        return centre_rank(s, w, x);
+    b.flags |= ISM_LBOX_PROJECTED; /* Newton's last jet is the one at b.q */
     double eig[3];
-    if (r.converged) { /* Newton's last jet is the one at b.q */
-        b.flags |= ISM_LBOX_PROJECTED;
-    } else {
-        for (int k = 0; k < 3; k++)
-            b.q[k] = x[k].lo + 0.5 * (x[k].hi - x[k].lo);
-        ism_eval_hessian(s->t, w->ws, b.q[0], b.q[1], b.q[2], r.grad, r.hess);
-        w->evals_jet++;
-    }
     ism_sym3_eigen(r.hess, eig, NULL);
     b.rank = (uint8_t)ism_sing_rank(eig, s->hscale);
     return b;
@@ -357,9 +383,13 @@ static double hessian_scale(search *s)
     return best;
 }
 
+/* The lattice z of a cell's key (cell_key). */
+#define KEY_Z_SHIFT 39
+
 static uint64_t cell_key(const scell *c)
 {
-    return (uint64_t)c->i[2] << 39 | (uint64_t)c->i[1] << 22 | (uint64_t)c->i[0] << 5 | c->level;
+    return (uint64_t)c->i[2] << KEY_Z_SHIFT | (uint64_t)c->i[1] << 22 | (uint64_t)c->i[0] << 5
+           | c->level;
 }
 
 /* Keeps a tested child (whose F interval is f; m: its model when the verdict is SMOOTH): a
@@ -377,11 +407,17 @@ static void keep(search *s, worker *w, task_out *out, scell c, const ism_dual_mo
         ok = (verdict != SMOOTH || vec_push(&out->models, m, sizeof *m))
              && vec_push(&out->cells, &c, sizeof c);
     } else {
-        keyed_box kb = { cell_key(&c), { .rank = 0 } };
-        if (verdict != UNIQUE) {
-            kb.box = candidate(s, w, x);
-            if (!(kb.box.flags & ISM_LBOX_PROJECTED) && !(isfinite(f.lo) && isfinite(f.hi)))
+        keyed_box kb = { cell_key(&c), { .rank = 0 }, false };
+        if (verdict != UNIQUE && !(isfinite(f.lo) && isfinite(f.hi))) {
+            kb.box = candidate(s, w, x); /* kept only if projected: decided here */
+            if (!(kb.box.flags & ISM_LBOX_PROJECTED))
                 return;
+        } else if (verdict != UNIQUE) {
+            for (int k = 0; k < 3; k++) {
+                kb.box.lo[k] = x[k].lo;
+                kb.box.hi[k] = x[k].hi;
+            }
+            kb.pending = true;
         } else {
             for (int k = 0; k < 3; k++) {
                 kb.box.lo[k] = x[k].lo;
@@ -412,6 +448,77 @@ static bool should_stop(search *s)
         return true;
     }
     return false;
+}
+
+/* Whether q lies in b grown by SEARCH_SHARE_REL of its width. */
+static bool on_box(const double q[3], const ism_lbox *b)
+{
+    for (int k = 0; k < 3; k++) {
+        double g = SEARCH_SHARE_REL * (b->hi[k] - b->lo[k]);
+        if (!(q[k] >= b->lo[k] - g && q[k] <= b->hi[k] + g))
+            return false;
+    }
+    return true;
+}
+
+typedef struct projection {
+    search *s;
+    keyed_box *boxes;
+    size_t n;
+} projection;
+
+/* One run of candidates in key order: each pending one takes the projection of an earlier
+ * projected box of the run lying on it (the nearest before it), else its own (candidate). */
+static void project_run(void *ctx, size_t task, int thread)
+{
+    projection *pr = ctx;
+    search *s = pr->s;
+    worker *w = &s->workers[thread];
+    size_t a = task * SEARCH_PROJECT_RUN, b = a + SEARCH_PROJECT_RUN;
+    if (b > pr->n)
+        b = pr->n;
+    /* past the deadline or cancelled: centres and their ranks only (a spent box budget
+     * stops the subdivision, not this) */
+    should_stop(s);
+    int why = atomic_load(&s->stop);
+    bool late = why == 1 || why == 2;
+    for (size_t i = a; i < b; i++) {
+        keyed_box *kb = &pr->boxes[i];
+        if (!kb->pending)
+            continue;
+        kb->pending = false;
+        ism_lbox *bx = &kb->box;
+        const ism_lbox *from = NULL;
+        /* back through the run while the lattice z (the key's top bits) can still touch:
+         * every projected box is a finest cell, whose lower corner then lies at most one
+         * cell below */
+        uint64_t z = kb->key >> KEY_Z_SHIFT;
+        for (size_t j = i; j-- > a && (pr->boxes[j].key >> KEY_Z_SHIFT) + 1 >= z;) {
+            const ism_lbox *o = &pr->boxes[j].box;
+            if ((o->flags & ISM_LBOX_PROJECTED) && on_box(o->q, bx)) {
+                from = o;
+                break;
+            }
+        }
+        if (from) {
+            memcpy(bx->q, from->q, sizeof bx->q);
+            bx->rank = from->rank;
+            bx->flags = ISM_LBOX_PROJECTED;
+            continue;
+        }
+        ism_interval x[3];
+        for (int k = 0; k < 3; k++)
+            x[k] = iv(bx->lo[k], bx->hi[k]);
+        *bx = late ? centre_rank(s, w, x) : candidate(s, w, x);
+    }
+}
+
+/* Projects the pending candidates of boxes (sorted by key), in runs of SEARCH_PROJECT_RUN. */
+static void project_all(search *s, keyed_box *boxes, size_t n)
+{
+    projection pr = { s, boxes, n };
+    size_t runs = (n + SEARCH_PROJECT_RUN - 1) / SEARCH_PROJECT_RUN;
+    ism_parallel_for(runs < 2 ? 1 : s->threads, runs, project_run, &pr);
 }
 
 static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
@@ -620,6 +727,7 @@ bool ism_sing_search(const ism_tape *f, const ism_locus_options *o, ism_locus *o
         if (boxes.n)
             qsort(boxes.p, boxes.n, sizeof(keyed_box), by_key);
         size_t n = boxes.n < o->max_boxes ? boxes.n : o->max_boxes;
+        project_all(&s, boxes.p, n);
         for (size_t i = 0; ok && i < n; i++)
             ok = ism_locus_add_box(out, &((keyed_box *)boxes.p)[i].box);
     }

@@ -7,7 +7,9 @@
  * exactly one zero of ∇f is not cut further (flag ISM_LBOX_UNIQUE). Cells that survive to the
  * finest size (box side / 2^max_depth) are the candidates: each with its centre projected
  * onto ∇f = 0 by pseudo-inverse Newton (flag ISM_LBOX_PROJECTED when that converged within
- * the cell grown by half its width) and the Hessian's numerical rank there. */
+ * the cell grown by half its width) and the Hessian's numerical rank there; a candidate on
+ * which an earlier one's projection lies (in key order, within a run of candidates) takes
+ * that projection and its rank instead of a Newton run of its own. */
 #ifndef ISM_SING_SEARCH_H
 #define ISM_SING_SEARCH_H
 
