@@ -125,12 +125,14 @@ static const ism_preset presets[] = {
      "A sphere crossing itself along a segment that ends in two pinch points.",
      "4*x^2*(x^2 + y^2 + z^2 + z) + y^2*(y^2 + z^2 - 1)", NULL, 0, NOPARAMS, BOX(1.2), 3, 7,
      "the quartic cross-cap (a model of the real projective plane)", .facts = 0},
-    /* bound_depth 7: the planes are met exactly at any depth, but the cells along their
-     * double lines fail the plot test at every level and split to the safety depth, where
-     * the conformance rebuilds the mesh anyway. Under the default bound (1e-3 x diagonal)
-     * at the operator's depth 10 they cost 5.4x / 4.4x the depth path's instructions
-     * (callgrind, one thread: 324M -> 1,738M, 929M -> 4,091M; depth 8 gives depth 10's
-     * mesh); at 7, 2.0x / 1.55x (648M, 1,443M) and the bound is met. */
+    /* bound_depth 7 (this preset and the next): the planes are met exactly at any depth.
+     * It was set when the cells along their double lines failed the plot test at every
+     * level and split to the safety depth (depth 10 cost 5.4x / 4.4x the depth path). Since
+     * a lattice corner on f = 0 counts as one root (core/octree/corners.c), those cells pass
+     * at the singular stage's depth (7 at the default bound), and depth.max 7, 8 and 10 give
+     * the same mesh at the same cost (callgrind, one thread, `isomesh --surface P [-d 3:10]`,
+     * whole run: crossing-planes 191.9M, coordinate-planes 573.3M at each, PLY md5 equal,
+     * the bound met; the depth path 305.8M / 898.6M). The cap stays as a safety limit. */
     {"crossing-planes", "Two crossing planes", "x y = 0: a double line along the z axis.", "x*y",
      NULL, 0, NOPARAMS, BOX(1), 3, 6, "the simplest double curve", .facts = 0,
      .bound_depth = 7},
