@@ -16,7 +16,8 @@
 
 /* One instruction's value from its operands' values a and b (b: only for the two-register
  * operations). */
-static inline double op_value(const ism_instr *in, double a, double b)
+static inline __attribute__((always_inline)) double op_value(const ism_instr *in, double a,
+                                                          double b)
 {
     double c = in->imm;
     switch (in->op) {

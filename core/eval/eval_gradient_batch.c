@@ -3,12 +3,19 @@
  * instruction one loop over the lanes. Every lane computes exactly what ism_eval_gradient
  * computes at its point, operation for operation (min and max pass on the whole chosen
  * operand; the chain rule gives 0 where g' is 0; sines and cosines through the same memo of
- * sincos pairs), so the two agree bit for bit: the polygoniser may use either. */
+ * sincos pairs), so the two agree bit for bit: the polygoniser may use either.
+ *
+ * The lanes are walked in groups of VL, each group one value of GCC's vector extension (the
+ * IEEE operations of the scalar code, element by element; the chain rule's and min/max's
+ * choices as bit masks with the same outcome, NaN included); a batch is padded up to a whole
+ * group by repeating its last point. The tape loop is compiled for AVX2 and for the
+ * x86-64 baseline, chosen at run time (as eval_double.c does). */
 #include "core/eval/deriv_rules.h"
 #include "core/eval/trig_pair.h"
 #include "core/eval/workspace.h"
 
 #define GL ISM_GRAD_BATCH
+#define VL 4 /* lanes per group: one AVX2 vector, two SSE2 ones */
 
 /* Component k (0: value, 1-3: d/dx, d/dy, d/dz) of register r. */
 static inline double *comp(double *regs, uint32_t r, int k)
@@ -16,98 +23,182 @@ static inline double *comp(double *regs, uint32_t r, int k)
     return regs + ((size_t)r * 4 + (size_t)k) * GL;
 }
 
-/* The chain rule's partials of out = g(a) given g' per lane, as dual_chain writes them. */
-static inline void chain_partials(double *regs, const ism_instr *in, const double *g1,
-                                  size_t n)
+#define INLINE static inline __attribute__((always_inline))
+
+/* VL lanes as one value of GCC's vector extension: AVX2 registers in the AVX2 clone, pairs
+ * of SSE2 ones in the baseline; element by element the same IEEE operations as the scalar
+ * code. Loads and stores through memcpy (no alignment or aliasing assumption). */
+#pragma GCC diagnostic ignored "-Wpsabi" /* v4d is only passed between always_inline helpers:
+                                             no call ever uses the AVX return convention */
+typedef double v4d __attribute__((vector_size(VL * sizeof(double))));
+typedef long long v4i __attribute__((vector_size(VL * sizeof(double))));
+
+INLINE v4d ld(const double *p)
+{
+    v4d v;
+    __builtin_memcpy(&v, p, sizeof v);
+    return v;
+}
+
+INLINE void st(double *p, v4d v)
+{
+    __builtin_memcpy(p, &v, sizeof v);
+}
+
+/* c where m is set, else +0.0: the chain rule's "0 where g' is 0" as a mask */
+INLINE v4d keep(v4d c, v4i m)
+{
+    return (v4d)((v4i)c & m);
+}
+
+/* a where m is set, else b */
+INLINE v4d pick(v4i m, v4d a, v4d b)
+{
+    return (v4d)(((v4i)a & m) | ((v4i)b & ~m));
+}
+
+INLINE void k_add(double *o, const double *a, const double *b)
+{
+    st(o, ld(a) + ld(b));
+}
+
+INLINE void k_sub(double *o, const double *a, const double *b)
+{
+    st(o, ld(a) - ld(b));
+}
+
+INLINE void k_mul(double *o, const double *a, const double *b)
+{
+    st(o, ld(a) * ld(b));
+}
+
+/* d(a b) = a' b + a b' (dual_step's order of terms) */
+INLINE void k_mul_d(double *o, const double *ad, const double *bv, const double *av,
+                    const double *bd)
+{
+    st(o, ld(ad) * ld(bv) + ld(av) * ld(bd));
+}
+
+INLINE void k_div(double *o, const double *a, const double *b)
+{
+    st(o, ld(a) / ld(b));
+}
+
+/* d(a / b) = (a' − (a / b) b') / b (dual_binary's) */
+INLINE void k_div_d(double *o, const double *ad, const double *q, const double *bd,
+                    const double *bv)
+{
+    st(o, (ld(ad) - ld(q) * ld(bd)) / ld(bv));
+}
+
+/* min: a's component where a.v < b.v, else b's; max: where a.v > b.v */
+INLINE void k_pick(double *o, const double *av, const double *bv, const double *ak,
+                   const double *bk, bool is_min)
+{
+    v4i m = is_min ? (v4i)(ld(av) < ld(bv)) : (v4i)(ld(av) > ld(bv));
+    st(o, pick(m, ld(ak), ld(bk)));
+}
+
+/* the chain rule's partial g' a': 0 where g' is 0 (even where a' is not finite) */
+INLINE void k_chain(double *o, const double *g1, const double *a)
+{
+    v4d g = ld(g1);
+    st(o, keep(g * ld(a), (v4i)(g != 0.0)));
+}
+
+INLINE void k_chain_c(double *o, double g1, const double *a)
+{
+    v4d g = {g1, g1, g1, g1};
+    st(o, keep(g * ld(a), (v4i)(g != 0.0)));
+}
+
+INLINE void k_fill(double *o, double c)
+{
+    st(o, (v4d){c, c, c, c});
+}
+
+/* The three partials of out = g(a) from per-lane g' (g1v) or one g' for all (g1c). */
+INLINE void chain_partials(double *regs, const ism_instr *in, const double *g1v, double g1c,
+                           size_t ng)
 {
     for (int k = 1; k < 4; k++) {
-        double *restrict o = comp(regs, in->out, k);
-        const double *restrict a = comp(regs, in->a, k);
-        for (size_t j = 0; j < n; j++)
-            o[j] = g1[j] == 0.0 ? 0.0 : g1[j] * a[j];
+        double *o = comp(regs, in->out, k);
+        const double *a = comp(regs, in->a, k);
+        for (size_t g = 0; g < ng; g++) {
+            if (g1v)
+                k_chain(o + g * VL, g1v + g * VL, a + g * VL);
+            else
+                k_chain_c(o + g * VL, g1c, a + g * VL);
+        }
     }
 }
 
-/* min or max: each lane takes all four components of the operand it chooses. */
-static void select_lanes(double *regs, const ism_instr *in, bool is_min, size_t n)
+INLINE void grad_step(const ism_instr *in, double *regs, ism_trig_cache *trig, size_t ng)
 {
-    const double *av = comp(regs, in->a, 0), *bv = comp(regs, in->b, 0);
-    for (size_t j = 0; j < n; j++) {
-        bool take_a = is_min ? av[j] < bv[j] : av[j] > bv[j];
-        uint32_t src = take_a ? in->a : in->b;
-        for (int k = 0; k < 4; k++)
-            comp(regs, in->out, k)[j] = comp(regs, src, k)[j];
-    }
-}
-
-static void grad_step(const ism_instr *in, double *regs, ism_trig_cache *trig, size_t n)
-{
+    const size_t n = ng * VL;
     double *ov = comp(regs, in->out, 0);
     const double *av = comp(regs, in->a, 0);
+    const double *bv = comp(regs, ism_op_has_reg_b(in->op) ? in->b : in->a, 0);
     double g1[GL];
     switch (in->op) {
     case ISM_OP_ADD_RR:
-    case ISM_OP_SUB_RR: {
-        bool add = in->op == ISM_OP_ADD_RR;
+    case ISM_OP_SUB_RR:
         for (int k = 0; k < 4; k++) {
-            double *restrict o = comp(regs, in->out, k);
-            const double *restrict a = comp(regs, in->a, k), *restrict b = comp(regs, in->b, k);
-            if (add)
-                for (size_t j = 0; j < n; j++)
-                    o[j] = a[j] + b[j];
-            else
-                for (size_t j = 0; j < n; j++)
-                    o[j] = a[j] - b[j];
+            double *o = comp(regs, in->out, k);
+            const double *a = comp(regs, in->a, k), *b = comp(regs, in->b, k);
+            for (size_t g = 0; g < ng; g++) {
+                if (in->op == ISM_OP_ADD_RR)
+                    k_add(o + g * VL, a + g * VL, b + g * VL);
+                else
+                    k_sub(o + g * VL, a + g * VL, b + g * VL);
+            }
         }
         return;
-    }
-    case ISM_OP_MUL_RR: {
-        const double *restrict bv = comp(regs, in->b, 0);
+    case ISM_OP_MUL_RR:
         for (int k = 1; k < 4; k++) {
-            double *restrict o = comp(regs, in->out, k);
-            const double *restrict a = comp(regs, in->a, k), *restrict b = comp(regs, in->b, k);
-            for (size_t j = 0; j < n; j++)
-                o[j] = a[j] * bv[j] + av[j] * b[j];
+            double *o = comp(regs, in->out, k);
+            const double *a = comp(regs, in->a, k), *b = comp(regs, in->b, k);
+            for (size_t g = 0; g < ng; g++)
+                k_mul_d(o + g * VL, a + g * VL, bv + g * VL, av + g * VL, b + g * VL);
         }
-        for (size_t j = 0; j < n; j++)
-            ov[j] = av[j] * bv[j];
+        for (size_t g = 0; g < ng; g++)
+            k_mul(ov + g * VL, av + g * VL, bv + g * VL);
         return;
-    }
-    case ISM_OP_DIV_RR: { /* dual_binary: v = a / b, d = (a' - v b') / b */
-        const double *restrict bv = comp(regs, in->b, 0);
-        for (size_t j = 0; j < n; j++)
-            ov[j] = av[j] / bv[j];
+    case ISM_OP_DIV_RR:
+        for (size_t g = 0; g < ng; g++)
+            k_div(ov + g * VL, av + g * VL, bv + g * VL);
         for (int k = 1; k < 4; k++) {
-            double *restrict o = comp(regs, in->out, k);
-            const double *restrict a = comp(regs, in->a, k), *restrict b = comp(regs, in->b, k);
-            for (size_t j = 0; j < n; j++)
-                o[j] = (a[j] - ov[j] * b[j]) / bv[j];
+            double *o = comp(regs, in->out, k);
+            const double *a = comp(regs, in->a, k), *b = comp(regs, in->b, k);
+            for (size_t g = 0; g < ng; g++)
+                k_div_d(o + g * VL, a + g * VL, ov + g * VL, b + g * VL, bv + g * VL);
         }
         return;
-    }
     case ISM_OP_MIN_RR:
     case ISM_OP_MAX_RR:
-        select_lanes(regs, in, in->op == ISM_OP_MIN_RR, n);
+        for (int k = 0; k < 4; k++) {
+            double *o = comp(regs, in->out, k);
+            const double *a = comp(regs, in->a, k), *b = comp(regs, in->b, k);
+            for (size_t g = 0; g < ng; g++)
+                k_pick(o + g * VL, av + g * VL, bv + g * VL, a + g * VL, b + g * VL,
+                       in->op == ISM_OP_MIN_RR);
+        }
         return;
     case ISM_OP_CONST:
-        for (size_t j = 0; j < n; j++)
-            ov[j] = in->imm;
-        for (int k = 1; k < 4; k++)
-            for (size_t j = 0; j < n; j++)
-                comp(regs, in->out, k)[j] = 0.0;
+        for (int k = 0; k < 4; k++)
+            for (size_t g = 0; g < ng; g++)
+                k_fill(comp(regs, in->out, k) + g * VL, k ? 0.0 : in->imm);
         return;
     case ISM_OP_ADD_RC:
-        for (size_t j = 0; j < n; j++) {
+        for (size_t j = 0; j < n; j++)
             ov[j] = av[j] + in->imm;
-            g1[j] = 1.0;
-        }
-        break;
+        chain_partials(regs, in, NULL, 1.0, ng);
+        return;
     case ISM_OP_MUL_RC:
-        for (size_t j = 0; j < n; j++) {
+        for (size_t j = 0; j < n; j++)
             ov[j] = av[j] * in->imm;
-            g1[j] = in->imm;
-        }
-        break;
+        chain_partials(regs, in, NULL, in->imm, ng);
+        return;
     case ISM_OP_SQUARE:
         for (size_t j = 0; j < n; j++) {
             ov[j] = av[j] * av[j];
@@ -115,16 +206,14 @@ static void grad_step(const ism_instr *in, double *regs, ism_trig_cache *trig, s
         }
         break;
     case ISM_OP_SIN:
-    case ISM_OP_COS: {
-        bool is_sin = in->op == ISM_OP_SIN;
+    case ISM_OP_COS:
         for (size_t j = 0; j < n; j++) {
             double s, c;
             ism_trig_pair(trig, av[j], &s, &c);
-            ov[j] = is_sin ? s : c;
-            g1[j] = is_sin ? c : -s;
+            ov[j] = in->op == ISM_OP_SIN ? s : c;
+            g1[j] = in->op == ISM_OP_SIN ? c : -s;
         }
         break;
-    }
     default: /* the other one-operand steps, by the rules the scalar evaluator uses */
         for (size_t j = 0; j < n; j++) {
             ism_chain ch = ism_unary_chain(in, av[j]);
@@ -133,26 +222,47 @@ static void grad_step(const ism_instr *in, double *regs, ism_trig_cache *trig, s
         }
         break;
     }
-    chain_partials(regs, in, g1, n);
+    chain_partials(regs, in, g1, 0.0, ng);
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx2")))
+static void run_tape_avx2(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ng)
+{
+    for (size_t i = 0; i < t->len; i++)
+        grad_step(&t->code[i], regs, trig, ng);
+}
+#define HAVE_AVX2_PATH 1
+#endif
+
+static void run_tape_base(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ng)
+{
+    for (size_t i = 0; i < t->len; i++)
+        grad_step(&t->code[i], regs, trig, ng);
 }
 
 static void grad_chunk(const ism_tape *t, ism_eval_ws *ws, const double *x, const double *y,
                        const double *z, double *f, double (*g)[3], size_t n)
 {
     double *regs = ws->gbatch;
+    size_t ng = (n + VL - 1) / VL;
     const double *src[3] = {x, y, z};
     for (uint32_t v = 0; v < 3; v++) {
         double *val = comp(regs, v, 0);
-        for (size_t j = 0; j < n; j++)
-            val[j] = src[v][j];
+        for (size_t j = 0; j < ng * VL; j++) /* lanes past n repeat the last point */
+            val[j] = src[v][j < n ? j : n - 1];
         for (int k = 1; k < 4; k++) {
             double *d = comp(regs, v, k), one = (uint32_t)(k - 1) == v ? 1.0 : 0.0;
-            for (size_t j = 0; j < n; j++)
+            for (size_t j = 0; j < ng * VL; j++)
                 d[j] = one;
         }
     }
-    for (size_t i = 0; i < t->len; i++)
-        grad_step(&t->code[i], regs, ws->trig, n);
+#ifdef HAVE_AVX2_PATH
+    if (__builtin_cpu_supports("avx2"))
+        run_tape_avx2(t, regs, ws->trig, ng);
+    else
+#endif
+        run_tape_base(t, regs, ws->trig, ng);
     for (size_t j = 0; j < n; j++) {
         f[j] = comp(regs, t->result, 0)[j];
         for (int k = 0; k < 3; k++)

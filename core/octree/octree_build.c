@@ -831,6 +831,7 @@ static bool init_threads(build *b, int nthreads)
         th->s.tape = b->p->tape;
         th->s.dist_above = b->p->flatness.max_error;
         th->s.rays_below = b->p->nquiet ? INFINITY : 0;
+        th->s.batch = !b->p->scalar_eval;
         th->s.ws = ism_eval_ws_new(b->p->tape);
         th->corners = b->corner_memos + (size_t)t * memo;
         if (b->root_memos) {

@@ -62,10 +62,11 @@ typedef struct ism_poly_options {
                                its lattice box at 1e-2..1e-3, gyroid-ball) the failed try
                                costs 35-75% more than the primal polygons alone */
     bool scalar_eval;       /* evaluate the octree node by node: no batched intervals over a
-                               node's children, no zero-free leaves (octree.h) and no memo of
+                               node's children, no zero-free leaves (octree.h), no memo of
                                edge roots and crease labels between nodes (cell_cache.h's
-                               ism_node_memo) — the same mesh bit for bit, for more; on is
-                               for tests (default off) */
+                               ism_node_memo) and no batched gradients (a leaf's measured
+                               points: sampler.h's batch) — the same mesh bit for bit, for
+                               more; on is for tests (default off) */
     bool full_tape;         /* every leaf evaluates f itself, not f shortened by intervals over
                                its box (octree.h) — the same mesh bit for bit, for more; on is
                                for tests (default off) */

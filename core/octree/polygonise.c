@@ -473,6 +473,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         cx->s.tape = f;
         cx->s.dist_above = o->max_error;
         cx->s.rays_below = o->nquiet ? INFINITY : 0;
+        cx->s.batch = !o->scalar_eval;
         cx->tree = tree;
         cx->parent = parent;
         cx->breaks = &breaks;

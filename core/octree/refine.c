@@ -38,29 +38,68 @@ static bool has_side(const uint32_t *t, uint32_t a, uint32_t b)
     return false;
 }
 
+/* Points measured in one batch: whole triangles (each at most a centroid and three
+ * midpoints) up to this many; under a finite bound the points after the first beyond it are
+ * evaluated for nothing, so no more than the gradient evaluator's chunk. */
+#define MEASURE_BATCH ISM_GRAD_BATCH
+
+/* A point to measure and the corners of its element (a triangle's or a side's). */
+typedef struct measured {
+    const double *v[3];
+    int n;
+} measured;
+
+/* Triangle t's points in ism_emitted_error's order: the centroid, then the midpoints of the
+ * sides not shared with the triangle before (a fan's or a quad's triangles come in order,
+ * each sharing a side with the one before: that side's midpoint, the same bits either way
+ * round, was measured already). Returns how many (1..4). */
+static int tri_points(const ism_cell_out *out, size_t first_tri, size_t t, double (*p)[3],
+                      measured *m)
+{
+    const uint32_t *tri = &out->tris[3 * t];
+    const double *v[3];
+    for (int k = 0; k < 3; k++)
+        v[k] = out->verts[tri[k]].p;
+    for (int a = 0; a < 3; a++)
+        p[0][a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
+    m[0] = (measured){{v[0], v[1], v[2]}, 3};
+    int np = 1;
+    for (int k = 0; k < 3; k++) {
+        if (t > first_tri && has_side(tri - 3, tri[k], tri[(k + 1) % 3]))
+            continue;
+        const double *a = v[k], *b = v[(k + 1) % 3];
+        for (int c = 0; c < 3; c++)
+            p[np][c] = (a[c] + b[c]) / 2;
+        m[np++] = (measured){{a, b, NULL}, 2};
+    }
+    return np;
+}
+
 double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
                          double bound)
 {
     double worst = 0;
-    for (size_t t = first_tri; t < out->ntris && !(worst > bound); t++) {
-        const uint32_t *tri = &out->tris[3 * t];
-        const double *v[3];
-        for (int k = 0; k < 3; k++)
-            v[k] = out->verts[tri[k]].p;
-        double c[3];
-        for (int a = 0; a < 3; a++)
-            c[a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
-        worst = fmax(worst, ism_sample_dist_between(s, c, v, 3));
-        for (int k = 0; k < 3; k++) {
-            /* a fan's or a quad's triangles come in order, each sharing a side with the
-             * one before: that side's midpoint (the same bits either way round) was
-             * measured already */
-            if (t > first_tri && has_side(tri - 3, tri[k], tri[(k + 1) % 3]))
-                continue;
-            const double *p = v[k], *q = v[(k + 1) % 3];
-            double m[3] = {(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2};
-            worst = fmax(worst, ism_sample_dist_between(s, m, (const double *[2]){p, q}, 2));
+    size_t t = first_tri;
+    while (t < out->ntris && !(worst > bound)) {
+        /* the gradients of whole triangles' points in one batch, then each point's figure in
+         * order (ism_sample_dist_between's), stopping after the first triangle beyond bound
+         * as a point-by-point walk does */
+        double p[MEASURE_BATCH][3], f[MEASURE_BATCH], g[MEASURE_BATCH][3];
+        measured m[MEASURE_BATCH];
+        size_t ends[MEASURE_BATCH], ntri = 0;
+        int np = 0;
+        while (t + ntri < out->ntris && np + 4 <= MEASURE_BATCH) {
+            np += tri_points(out, first_tri, t + ntri, p + np, m + np);
+            ends[ntri++] = (size_t)np;
         }
+        ism_sample_grad_batch(s, (const double (*)[3])p, f, g, (size_t)np);
+        for (size_t k = 0, i = 0; k < ntri && !(worst > bound); k++, t++)
+            for (; i < ends[k]; i++) {
+                double d = ism_first_order_dist(f[i], g[i]);
+                if (d > s->dist_above && isfinite(d))
+                    d = ism_dist_capped(s, p[i], d, m[i].v, m[i].n);
+                worst = fmax(worst, d);
+            }
     }
     return worst;
 }

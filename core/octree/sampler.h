@@ -28,6 +28,11 @@ typedef struct ism_sampler {
      * where the caller knows a singular locus (∇f vanishes on the surface there, and beside it
      * the estimate and the foot overstate), 0 elsewhere (the foot only). */
     double rays_below;
+    /* Points a caller holds together (a leaf's triangles' centroids and midpoints) are
+     * evaluated in one pass over the tape (ism_sample_grad_batch): bit for bit the values
+     * one point at a time gives (eval.h), for less. Off on the scalar reference path
+     * (poly_options.h's scalar_eval), which the tests compare with it. */
+    bool batch;
     uint64_t n_point, n_gradient, n_interval;
 } ism_sampler;
 
@@ -52,6 +57,12 @@ static inline double ism_sample_grad(ism_sampler *s, const double p[3], double g
     s->n_gradient++;
     return ism_eval_gradient(ism_sampler_tape_at(s, p), s->ws, p[0], p[1], p[2], g);
 }
+
+/* f and ∇f at p[i] into f[i], g[i] for i < n, each through the tape ism_sample_grad would
+ * use there: in batches when s->batch, else one point at a time (the same values bit for
+ * bit). */
+void ism_sample_grad_batch(ism_sampler *s, const double (*p)[3], double *f, double (*g)[3],
+                           size_t n);
 
 /* |f| / |∇f| from f and ∇f at a point: the first-order distance to f = 0. 0 where f is
  * exactly 0 (on the surface, even where ∇f vanishes: a cone's apex); +inf where there is no

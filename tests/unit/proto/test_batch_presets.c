@@ -7,7 +7,8 @@
  * depth ≤ BOUND_DEPTH: the rounds and, on smooth surfaces, the dual mesher) in its own box:
  * the node-by-node reference (scalar_eval, one thread) against the batched path on 1, 2 and
  * 4 threads, and the reference on 2 threads, bit for bit (positions, normals, triangles,
- * segments). */
+ * segments). batch_on_and_off_in_the_other_boxes covers the other placements (1e-3,
+ * placements.h, on the depth path; 1e-3 and the irrational one under the bound). */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -40,6 +41,14 @@ static ism_tape *compile(const ism_preset *p)
     ism_tape *t = test_preset_tape(p, &err);
     cr_assert_not_null(t, "%s: %s", p->name, err.message);
     return t;
+}
+
+static double diagonal(const double box[6])
+{
+    double d = 0;
+    for (int k = 0; k < 3; k++)
+        d += (box[k + 3] - box[k]) * (box[k + 3] - box[k]);
+    return sqrt(d);
 }
 
 /* The reference against the batched path on 1, 2, 4 threads and itself on 2; returns how
@@ -93,15 +102,48 @@ Test(batch_presets, every_preset_depth_path_two_boxes)
                   meshed, 2 * ism_preset_count());
 }
 
+/* The batched points and gradients (a cell's root searches, a leaf's measured centroids and
+ * midpoints: sampler.h's batch) on and off, in the placements the two tests above leave out:
+ * the depth path 1e-3 off the lattice, the bound 1e-3 and √2 − 1 of a cell off it (the
+ * bound's measuring is where most of the batches are). One thread each way. */
+Test(batch_presets, batch_on_and_off_in_the_other_boxes)
+{
+    size_t meshed = 0, runs = 0;
+    static const double OFF[3] = {PF_OFF_X, PF_OFF_Y, PF_OFF_Z};
+    for (size_t i = 0; i < ism_preset_count(); i++) {
+        const ism_preset *p = ism_preset_at(i);
+        ism_tape *t = compile(p);
+        for (int run = 0; run < 3; run++) {
+            bool bound = run > 0;
+            int dmax = (bound ? BOUND_DEPTH : DEPTH_MAX) - quick();
+            double box[6], e = bound ? BOUND_REL * diagonal(p->box) : 0;
+            for (int k = 0; k < 6; k++) {
+                double w = p->box[k % 3 + 3] - p->box[k % 3];
+                box[k] = p->box[k] + (run < 2 ? OFF[k % 3] : PF_IRR * w / (1 << dmax));
+            }
+            ism_mesh on, off;
+            ism_poly_stats st;
+            test_mesh_of(t, box, dmax, e, 1, false, &on, &st);
+            test_mesh_of(t, box, dmax, e, 1, true, &off, &st);
+            cr_expect(test_same_mesh(&on, &off),
+                      "%s (box %.17g.., depth %d, E %g): batched %zu triangles, scalar %zu, "
+                      "not the same bytes", p->name, box[0], dmax, e, on.ntris, off.ntris);
+            meshed += on.ntris > 0;
+            runs++;
+            ism_mesh_free(&on);
+            ism_mesh_free(&off);
+        }
+        ism_tape_free(t);
+    }
+    cr_expect_geq(meshed, runs * 9 / 10, "only %zu of %zu runs meshed", meshed, runs);
+}
+
 Test(batch_presets, every_preset_under_a_bound)
 {
     for (size_t i = 0; i < ism_preset_count(); i++) {
         const ism_preset *p = ism_preset_at(i);
         ism_tape *t = compile(p);
-        double d = 0;
-        for (int k = 0; k < 3; k++)
-            d += (p->box[k + 3] - p->box[k]) * (p->box[k + 3] - p->box[k]);
-        check(p, t, p->box, BOUND_DEPTH - quick(), BOUND_REL * sqrt(d));
+        check(p, t, p->box, BOUND_DEPTH - quick(), BOUND_REL * diagonal(p->box));
         ism_tape_free(t);
     }
 }
