@@ -12,6 +12,7 @@
 #include "core/util/vec3.h"
 
 #include <math.h>
+#include <string.h>
 #include <stdlib.h>
 
 /* Newton steps projecting a ring vertex (quadratic convergence from a fraction of a cell:
@@ -30,10 +31,11 @@
  * rings: a ring of a few chords sags far off a thin, round sheet. */
 #define FINE_RING_MIN 8
 
-double cf_project(cf_ctx *c, double p[3], double max_move)
+double cf_project_keep(cf_ctx *c, double p[3], double max_move, cf_grad *kept)
 {
     cf_poll(c, 1);
     double q[3] = {p[0], p[1], p[2]}, g[3], fv;
+    double at[3] = {q[0], q[1], q[2]}; /* where g was evaluated */
     double d0 = cf_distance_estimate(c, q, g, &fv), d = d0;
     for (int it = 0; it < PROJECT_STEPS && d > PROJECT_DONE * c->cell && isfinite(d); it++) {
         double gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2], before[3] = {q[0], q[1], q[2]};
@@ -42,12 +44,22 @@ double cf_project(cf_ctx *c, double p[3], double max_move)
         if (q[0] == before[0] && q[1] == before[1] && q[2] == before[2])
             break; /* a fixed point: the steps left would repeat this one exactly */
         d = cf_distance_estimate(c, q, g, &fv);
+        memcpy(at, q, sizeof at);
     }
-    if (!(isfinite(d) && d < d0 && ism_dist3(p, q) <= max_move))
-        return d0;
-    for (int k = 0; k < 3; k++)
-        p[k] = q[k];
-    return d;
+    bool moved = isfinite(d) && d < d0 && ism_dist3(p, q) <= max_move;
+    if (moved)
+        for (int k = 0; k < 3; k++)
+            p[k] = q[k];
+    if (kept) {
+        kept->at = memcmp(at, p, sizeof at) == 0; /* the very point (bits, signed zeros) */
+        memcpy(kept->g, g, sizeof kept->g);
+    }
+    return moved ? d : d0;
+}
+
+double cf_project(cf_ctx *c, double p[3], double max_move)
+{
+    return cf_project_keep(c, p, max_move, NULL);
 }
 
 int cf_ring_count(double width, double edge)
@@ -100,8 +112,9 @@ static bool make_ring(cf_ctx *c, const double *dirs, size_t m, const double apex
         double p[3];
         for (int k = 0; k < 3; k++)
             p[k] = apex[k] + t * (v[k] - apex[k]);
-        cf_project(c, p, 0.5 * t * ism_dist3(v, apex));
-        r[i] = cf_add_vertex(c, p, false);
+        cf_grad kept;
+        cf_project_keep(c, p, 0.5 * t * ism_dist3(v, apex), &kept);
+        r[i] = cf_add_vertex_kept(c, p, false, &kept);
         if (r[i] == CF_NONE)
             return false;
         c->st->vertices_added++;
@@ -180,8 +193,9 @@ bool cf_fan_centroid(cf_ctx *c, const cf_loop *l)
     for (size_t i = 0; i < l->n; i++)
         for (int k = 0; k < 3; k++)
             p[k] += c->m->pos[3 * (size_t)l->v[i] + k] / (double)l->n;
-    cf_project(c, p, cf_loop_mean_edge(c, l));
-    uint32_t v = cf_add_vertex(c, p, false);
+    cf_grad kept;
+    cf_project_keep(c, p, cf_loop_mean_edge(c, l), &kept);
+    uint32_t v = cf_add_vertex_kept(c, p, false, &kept);
     if (v == CF_NONE)
         return false;
     c->st->vertices_added++;

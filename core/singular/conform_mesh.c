@@ -11,10 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-bool cf_grow(void **v, size_t *cap, size_t need, size_t sz)
+bool cf_grow_room(void **v, size_t *cap, size_t need, size_t sz)
 {
-    if (need <= *cap)
-        return true;
     size_t c = *cap ? *cap : 64;
     while (c < need)
         c *= 2;
@@ -122,20 +120,12 @@ void cf_ctx_free(cf_ctx *c)
     cf_tgrid_free(&c->grid);
 }
 
-bool cf_poll(cf_ctx *c, size_t work)
+bool cf_poll_clock(cf_ctx *c)
 {
-    if (c->stopped)
-        return true;
-    c->st->work += work;
-    c->since_poll += work;
-    if (c->work_max && c->st->work > c->work_max)
+    c->since_poll = 0;
+    c->st->polls++;
+    if ((c->cancel && *c->cancel) || (c->deadline_ms > 0 && ism_now_ms() > c->deadline_ms))
         c->stopped = true;
-    if (c->since_poll >= ISM_CONFORM_POLL_WORK) {
-        c->since_poll = 0;
-        c->st->polls++;
-        if ((c->cancel && *c->cancel) || (c->deadline_ms > 0 && ism_now_ms() > c->deadline_ms))
-            c->stopped = true;
-    }
     return c->stopped;
 }
 
@@ -229,6 +219,17 @@ bool cf_inc_next(const cf_ctx *c, cf_inc *it, uint32_t *t)
     return false;
 }
 
+/* The unit normal g / |g| into n; false (n left as it was) where |g| is 0 or not finite. */
+static inline __attribute__((always_inline)) bool normal_of(const double g[3], float n[3])
+{
+    double len = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    if (!(len > 0 && isfinite(len)))
+        return false;
+    for (int k = 0; k < 3; k++)
+        n[k] = (float)(g[k] / len);
+    return true;
+}
+
 /* The unit normal ∇f / |∇f| at p into n; false (n left as it was) where |∇f| is 0 or not
  * finite. Inlined into both callers: cf_add_vertex as cheap as when it held these lines. */
 static inline __attribute__((always_inline)) bool normal_at(cf_ctx *c, const double p[3],
@@ -236,12 +237,7 @@ static inline __attribute__((always_inline)) bool normal_at(cf_ctx *c, const dou
 {
     double g[3];
     ism_eval_gradient(c->f, c->ws, p[0], p[1], p[2], g);
-    double len = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-    if (!(len > 0 && isfinite(len)))
-        return false;
-    for (int k = 0; k < 3; k++)
-        n[k] = (float)(g[k] / len);
-    return true;
+    return normal_of(g, n);
 }
 
 void cf_set_normal(cf_ctx *c, uint32_t v)
@@ -252,17 +248,23 @@ void cf_set_normal(cf_ctx *c, uint32_t v)
         c->m->normal[3 * (size_t)v + k] = n[k];
 }
 
-uint32_t cf_add_vertex(cf_ctx *c, const double p[3], uint8_t flags)
+uint32_t cf_add_vertex_kept(cf_ctx *c, const double p[3], uint8_t flags, const cf_grad *kept)
 {
     if (!cf_grow((void **)&c->singular, &c->cap_singular, c->m->nverts + 1, 1))
         return CF_NONE;
     float n[3] = {0, 0, 0};
-    if (!(flags & CF_VERTEX_SINGULAR) && !normal_at(c, p, n))
+    if (!(flags & CF_VERTEX_SINGULAR) &&
+        !(kept && kept->at ? normal_of(kept->g, n) : normal_at(c, p, n)))
         flags |= CF_VERTEX_SINGULAR;
     uint32_t v = ism_mesh_add_vertex(c->m, p, n);
     if (v != CF_NONE)
         c->singular[v] = flags;
     return v;
+}
+
+uint32_t cf_add_vertex(cf_ctx *c, const double p[3], uint8_t flags)
+{
+    return cf_add_vertex_kept(c, p, flags, NULL);
 }
 
 double cf_triangle_longest_edge2(const ism_mesh *m, uint32_t tri)

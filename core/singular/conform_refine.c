@@ -465,10 +465,11 @@ static bool split_edge(cf_ctx *c, uint32_t a, uint32_t b, cf_tris *removed, bool
     const double *pa = c->m->pos + 3 * (size_t)a, *pb = c->m->pos + 3 * (size_t)b;
     double mid[3] = {(pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2, (pa[2] + pb[2]) / 2};
     double len = ism_dist3(pa, pb);
-    if (!(cf_project(c, mid, 0.5 * len) <= RELAX_ON_SURFACE * c->cell))
+    cf_grad kept;
+    if (!(cf_project_keep(c, mid, 0.5 * len, &kept) <= RELAX_ON_SURFACE * c->cell))
         return false;
     size_t nt = c->m->ntris, nv = c->m->nverts;
-    uint32_t m = cf_add_vertex(c, mid, false), h[2][2][3];
+    uint32_t m = cf_add_vertex_kept(c, mid, false, &kept), h[2][2][3];
     if (m == CF_NONE || !halves(c, tt[0], a, b, m, h[0]) || !halves(c, tt[1], a, b, m, h[1])) {
         *ok = m != CF_NONE;
         if (m != CF_NONE)

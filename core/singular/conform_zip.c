@@ -226,12 +226,13 @@ static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot, cons
         for (size_t i = 0; i < l->n; i++) {
             const double *v = q + 3 * i, *ft = foot + 3 * i;
             double p[3];
+            cf_grad kept = {.at = false};
             if (ch[i]) {
                 cf_pinch_ring_point(c, ch[i], v, t, p);
             } else {
                 for (int k = 0; k < 3; k++)
                     p[k] = ft[k] + t * (v[k] - ft[k]);
-                cf_project(c, p, 0.5 * t * ism_dist3(v, ft));
+                cf_project_keep(c, p, 0.5 * t * ism_dist3(v, ft), &kept);
             }
             /* a ring on the fold (cf_pinch_rim_points) stays there (pinned): its vertex
              * normals (∇f along the curve's tangent) are square to both sheets' triangles,
@@ -239,7 +240,7 @@ static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot, cons
              * which joined the two sheets again (Steiner, depth 5, +1e-3 box, conform/
              * steiner_roman_pinch_and_triple_points: a centroid 0.31 cell off f = 0 beside a
              * pinch point, 0.20 pinned and 0.25 before the rings on the fold) */
-            inner[i] = cf_add_vertex(c, p, on_fold[i] ? CF_VERTEX_PINNED : 0);
+            inner[i] = cf_add_vertex_kept(c, p, on_fold[i] ? CF_VERTEX_PINNED : 0, &kept);
             if (inner[i] == CF_NONE) {
                 free(rows);
                 rows = NULL;
