@@ -5,7 +5,8 @@
  * tight round a regular matrix (UNIQUE or EMPTY) to wide round a singular one (UNKNOWN), and
  * on boxes placed right at the edge between answers. Closed forms: ∇(x² + y² + z²) = 2x,
  * H = 2I, has its one zero at 0 (a box round it: UNIQUE; a box beside it: EMPTY); on the
- * cross-cap's axis (H singular along z) no box round the axis can be decided. */
+ * cross-cap's and the Whitney umbrella's axes (H singular there) no box round the axis can
+ * be decided. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdint.h>
@@ -48,22 +49,30 @@ static int sphere_box(double cx, double cy, double cz, double r)
     return both_ways(x, c, gc, h);
 }
 
+static void axis_cells(const char *expr, double z0);
+
 Test(singular_krawczyk, closed_forms)
 {
     cr_assert_eq(sphere_box(0.01, -0.02, 0.005, 0.1), ISM_KRAWCZYK_UNIQUE);
     cr_assert_eq(sphere_box(0.5, 0.0, 0.0, 0.1), ISM_KRAWCZYK_EMPTY);
-    /* the cross-cap 4x²(x² + y² + z² + z) + y²(y² + z² − 1), singular all along its axis
-     * (H of rank 2 there): the cells touching the axis at z = −1/2, h = 1/64 a side, with ∇f
-     * at the centre and H over the cell enclosed by the evaluators as the search does */
+    axis_cells("4*x^2*(x^2+y^2+z^2+z) + y^2*(y^2+z^2-1)", -0.5);
+    axis_cells("x^2 - y^2*z", 0.5);
+}
+
+/* The four cells (h = 1/64 a side) touching the z axis at height z0 of a surface singular
+ * all along it (H of rank ≤ 2 there: the cross-cap 4x²(x² + y² + z² + z) + y²(y² + z² − 1),
+ * the Whitney umbrella x² − y²z), with ∇f at the centre and H over the cell enclosed by the
+ * evaluators as the search does: no answer but UNKNOWN, both ways. */
+static void axis_cells(const char *expr, double z0)
+{
     ism_error err;
-    ism_tape *t = ism_tape_compile("4*x^2*(x^2+y^2+z^2+z) + y^2*(y^2+z^2-1)", NULL, 0, NULL, 0,
-                                   NULL, &err);
+    ism_tape *t = ism_tape_compile(expr, NULL, 0, NULL, 0, NULL, &err);
     cr_assert_not_null(t, "%s", err.message);
     ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
     cr_assert_not_null(jw);
     double hw = 1.0 / 64;
     for (int q = 0; q < 4; q++) {
-        double lo[3] = { q & 1 ? 0.0 : -hw, q & 2 ? 0.0 : -hw, -0.5 - hw / 2 };
+        double lo[3] = { q & 1 ? 0.0 : -hw, q & 2 ? 0.0 : -hw, z0 - hw / 2 };
         double c[3];
         ism_interval x[3], cx[3];
         for (int k = 0; k < 3; k++) {
@@ -75,7 +84,7 @@ Test(singular_krawczyk, closed_forms)
         ism_ivjet j;
         ism_eval_interval_grad(t, jw, cx, NULL, NULL, &g);
         ism_eval_interval_jet(t, jw, x, NULL, NULL, &j);
-        cr_assert_eq(both_ways(x, c, g.d, j.h), ISM_KRAWCZYK_UNKNOWN, "cell %d", q);
+        cr_assert_eq(both_ways(x, c, g.d, j.h), ISM_KRAWCZYK_UNKNOWN, "%s: cell %d", expr, q);
     }
     ism_ivjet_ws_free(jw);
     ism_tape_free(t);
