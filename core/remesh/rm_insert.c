@@ -22,9 +22,6 @@
 /* The thin halves' Lawson test must pass by this much (radians): rm_flip.c's margin keeps
  * four points of a circle from flipping, and the flip must happen for the split to pay. */
 #define ISM_RM_INSERT_FLIP_MARGIN 1e-6
-/* Needles under this smallest angle (degrees) are mended by insertion: the count the issue
- * measures; between it and 20° the flips and moves do well enough. */
-#define ISM_RM_INSERT_DEG 10.0
 /* The apex lies at least this many equilateral heights from the short edge (else the
  * triangle is no needle of a short edge: a cap, left to the flips). */
 #define ISM_RM_INSERT_TALL 2.0

@@ -139,10 +139,17 @@ bool rm_pass_close(rm_pass *p, size_t nverts_before, size_t ntris_before,
                    ism_remesh_renumber *ren);
 
 /* Room for insertions (rm_insert.c): at most ntris / ISM_RM_INSERT_SHARE + ISM_RM_INSERT_MIN
- * vertices per pass (steiner-roman's box needs about 300 for its 64,000 triangles; the bound
- * keeps the pass's memory within a few per cent of the mesh's). */
+ * vertices per pass, and one more for each triangle of the mesh as found whose smallest angle
+ * is under ISM_RM_INSERT_DEG (remesh.c). Steiner's box needs about 300 for its 64,000
+ * triangles; beside a double curve whose vertices lie closer than its sheets' triangles are
+ * wide every needle takes one: whitney-umbrella's 1e-3 box took the 164 of the fixed share and
+ * left 320 needles on its double line, and with room takes 518 (of 904 raw needles) and leaves
+ * 1. A mesh without needles reserves what it did. */
 #define ISM_RM_INSERT_SHARE 32
 #define ISM_RM_INSERT_MIN 64
+/* Needles under this smallest angle (degrees) are mended by insertion: the count the issue
+ * measures; between it and 20° the flips and moves do well enough. */
+#define ISM_RM_INSERT_DEG 10.0
 
 /* Unit normals and the vanishing threshold from ∇f at every vertex. False when out of memory. */
 bool rm_normals(rm_pass *p);

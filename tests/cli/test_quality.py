@@ -224,14 +224,15 @@ class GoalsUnderTheDefaultBound(unittest.TestCase):
     shifted off its finest lattice by 1e-3 and by the irrational fractions (boxes.py). The
     pretzel (smooth, closed): no triangle under 20 degrees. Steiner's surface, Kummer's 16-node
     quartic and Whitney's umbrella: no triangle under 10 degrees but those with a vertex the pass
-    may not move: a singular point's (features JSON), a non-manifold edge's (an edge of three or
-    more triangles: the double curves, whose vertices the curves stage spaces 8x finer than the
-    sheets' triangles beside Whitney's line in the shifted boxes: 323 / 331 needles there, none
-    in its own box) or the box cut's (an edge of one triangle: where the surface passes within
-    a thousandth of a box edge, two cut points lie that close). On a82687f (before the pass
-    treated kink-free surfaces as crease-free) this fails: pretzel 11.32 / 7.28 degrees in the
+    may not move off its feature: a singular point's (features JSON) or the box cut's (an edge
+    of one triangle: where the surface passes within a thousandth of a box edge, two cut points
+    lie that close; Kummer 1 / 3 / 3, Whitney 0 / 4 / 2 such triangles). Vertices on the double
+    curves get no exception: beside Whitney's line, whose vertices the curves stage spaces 8x
+    finer than the sheets' triangles in the shifted boxes, the pass inserts what it needs (320 /
+    331 needles there while its room for insertions was a fixed share of the triangles).
+    With the pass as it was on 7aa83e9 this fails 8 of 12: pretzel 11.32 / 7.28 degrees in the
     shifted boxes, Kummer 22 / 31 / 29 triangles under 10 degrees on its smooth part, Steiner 2
-    in the irrational box."""
+    in the irrational box, Whitney 320 / 331 beside its double line."""
 
     # preset: (box, finest depth) as proto/presets.c gives them
     PRESETS = {"pretzel-genus2": ([-0.5, -1.5, -1.5, 2.5, 1.5, 1.5], 7),
@@ -274,17 +275,17 @@ class GoalsUnderTheDefaultBound(unittest.TestCase):
                         for k in range(3):
                             e = tuple(sorted((t[k], t[(k + 1) % 3])))
                             count[e] = count.get(e, 0) + 1
-                    kept = {v for e, n in count.items() if n != 2 for v in e}
+                    kept = {v for e, n in count.items() if n == 1 for v in e}
                     kept |= {i for i, p in enumerate(verts)
                              if any(math.dist(p, q) < near for q in points)}
                     needles = [(round(a, 2), [verts[i] for i in t])
                                for a, t in zip(angles, tris)
                                if a < self.SINGULAR_DEG and not kept.intersection(t)]
                     self.assertEqual(needles, [])
-                    # the exception is no blanket: most triangles are free of it (0.72 of
-                    # them on Whitney's irrational box, the least: its box cut is long)
+                    # the exception is no blanket: most triangles are free of it (0.92 of
+                    # them in Whitney's irrational box, the least: its box cut is long)
                     free = sum(1 for t in tris if not kept.intersection(t))
-                    self.assertGreater(free, 2 / 3 * len(tris))
+                    self.assertGreater(free, 0.8 * len(tris))
 
 
 class BadValues(unittest.TestCase):
