@@ -77,6 +77,26 @@ def cpu_ticks(pid):
         return 0
 
 
+# The computing worker leads the idle one by this many CPU ticks (10 ms each) before it is
+# taken for the busy one: one 0.3 s look at load 20 under asan can show both at 0, and then
+# max() picked the idle worker and the slow job ran into its deadline (504, seen in CI).
+BUSY_LEAD_TICKS = 5
+BUSY_LOOK_S = 30   # the slow job runs far longer (its deadline is 60 s)
+
+
+def busy_worker(pids):
+    """The pid among pids that keeps gaining CPU while the others do not, or None."""
+    start = {pid: cpu_ticks(pid) for pid in pids}
+    deadline = time.time() + BUSY_LOOK_S
+    while time.time() < deadline:
+        time.sleep(0.1)
+        gained = sorted(((cpu_ticks(pid) - t0, pid) for pid, t0 in start.items()),
+                        reverse=True)
+        if len(gained) == 1 or gained[0][0] - gained[1][0] >= BUSY_LEAD_TICKS:
+            return gained[0][1]
+    return None
+
+
 def kill_while_writing(pid, cache, timeout):
     """Watches pid's open files and SIGKILLs it as soon as one is a temporary cache file (a
     write in progress). 1 when it caught one, 0 when the bound passed (then it kills anyway)."""
@@ -120,10 +140,8 @@ class WorkerFaultTest(unittest.TestCase):
                     r=request(d.port, "POST", "/v1/mesh", SLOW, timeout=120)))
                 t.start()
                 self.assertTrue(d.wait_metric("isomesh_workers_busy", 1))
-                before = {pid: cpu_ticks(pid) for pid in d.workers()}
-                time.sleep(0.3)
-                gained = {pid: cpu_ticks(pid) - t0 for pid, t0 in before.items()}
-                victim = max(gained, key=gained.get)
+                victim = busy_worker(d.workers())
+                self.assertIsNotNone(victim, "no worker was seen computing")
                 os.kill(victim, signal.SIGKILL)
                 t.join(120)
                 status, _, body = box["r"]
