@@ -62,10 +62,12 @@ void ism_eval_gradient_batch(const ism_tape *t, ism_eval_ws *ws, const double *x
                              size_t n);
 
 /* out[i] = f(x[i], y[i], z[i]) for i < n, lane by lane bit for bit ism_eval_point's value,
- * for the short batches of the polygoniser (a cell's edges): unlike ism_eval_batch it pads no
- * lane up to a group of 32 (a batch of 5 costs 5 lanes) and takes sines and cosines through
- * the workspace's memo as ism_eval_point does (two of a root search's three coordinates
- * repeat from step to step). n may be any size; chunks of ISM_EVAL_BATCH. */
+ * for short batches: unlike ism_eval_batch it pads no lane up to a group of 32 (a batch of 5
+ * costs 5 lanes) and takes sines and cosines through the workspace's memo as ism_eval_point
+ * does (two of a root search's three coordinates repeat from step to step). n may be any
+ * size; chunks of ISM_EVAL_BATCH. Not on the meshing path: a node's edge root searches in
+ * lockstep were 1.7 wide on average (the root memo answers the rest) and cost more than one
+ * at a time (gyroid-ball +12.7M instructions); batching them across nodes is the next step. */
 void ism_eval_points(const ism_tape *t, ism_eval_ws *ws, const double *x, const double *y,
                      const double *z, double *out, size_t n);
 
