@@ -138,7 +138,7 @@ static double bound_of(rm_pass *p, uint32_t t, int s, const double y0[3], const 
 {
     const double *e = slot_of(p, t, s);
     if (e[0] == y0[0] && e[1] == y0[1] && e[2] == y0[2]) {
-        if (isnan(*kappa) && has_normal(e)) {
+        if (isnan(*kappa) && !p->bend_stopped && has_normal(e)) {
             double plain0, least = moved_bound(e, y, 0, NULL, &plain0);
             if (ISM_RM_CBOUND_RATIO * least <= p->max_error &&
                 !(ISM_RM_CBOUND_RATIO * plain0 <= p->max_error))
@@ -147,14 +147,18 @@ static double bound_of(rm_pass *p, uint32_t t, int s, const double y0[3], const 
         double plain, u = moved_bound(e, y, isnan(*kappa) ? INFINITY : *kappa, w, &plain);
         p->brec_known++;
         p->brec_skipped += ISM_RM_CBOUND_RATIO * plain <= p->max_error; /* rm_brec_pays */
-        if (ISM_RM_CBOUND_RATIO * u <= p->max_error)
+        if (ISM_RM_CBOUND_RATIO * u <= p->max_error) {
+            p->bend_spared += !(ISM_RM_CBOUND_RATIO * plain <= p->max_error); /* fan_bend */
             return u;
+        }
     }
     double u = rm_bound_upper(p, y), g[3] = {0, 0, 0};
     memcpy(w, y, 3 * sizeof *w);
     w[SLOT_U] = u;
     w[SLOT_N] = w[SLOT_N + 1] = w[SLOT_N + 2] = w[SLOT_TURN] = 0;
-    if (p->memo && isfinite(u) && rm_bound_gradient(p, y, g)) { /* a lookup: just measured */
+    /* the normal serves the bent bound only: none once no box is asked (fan_bend) */
+    if (p->memo && !p->bend_stopped && isfinite(u) && rm_bound_gradient(p, y, g)) {
+        /* a lookup: just measured */
         double l = ism_norm3(g);
         for (int k = 0; k < 3; k++)
             w[SLOT_N + k] = g[k] / l;
@@ -237,6 +241,11 @@ static double fan_bend(rm_pass *p, uint32_t v, const double x[3])
         side = fmax(side, hi[k] - lo[k]);
     }
     if (!inside) {
+        if (p->bend_boxes == RM_BREC_BEND_TRIAL &&
+            (double)p->bend_spared < RM_BREC_BEND_MIN_SPARED * RM_BREC_BEND_TRIAL)
+            p->bend_stopped = true; /* the boxes have not paid (rm_brec.h) */
+        if (p->bend_stopped)
+            return INFINITY; /* the plain bound alone */
         for (int k = 0; k < 3; k++) {
             kept[k] = lo[k] - RM_BREC_BOX_GROW * side;
             kept[3 + k] = hi[k] + RM_BREC_BOX_GROW * side;

@@ -24,8 +24,10 @@
  * vertices' sampled normals per unit length, which a bend narrower than an edge between them
  * escapes (test remesh_brec/a_bump_between_the_vertices_is_not_carried_over: a centroid
  * 3.5 E off the surface was taken as within E). gyroid-ball, default bound: pass 1,538M ->
- * 1,437M instructions with the sampled turn, the same meshes. Only for the quality pass (the
- * simplification keeps its own measures, rm_memo.h). */
+ * 1,437M instructions with the sampled turn, the same meshes. The boxes cost more than they
+ * spare on every preset measured, so the bent bound is asked only while its first boxes pay
+ * (RM_BREC_BEND_TRIAL). Only for the quality pass (the simplification keeps its own
+ * measures, rm_memo.h). */
 #ifndef ISM_RM_BREC_H
 #define ISM_RM_BREC_H
 
@@ -45,6 +47,25 @@ bool rm_brec_open(rm_pass *p);
  * bound, pass instructions at 0.1 / 0.25 / 0.5 / 1: gyroid-ball 1,766M / 1,763M / 1,725M /
  * 1,724M, klein-bottle 948M / 917M / 902M / 898M; sphere and torus within 0.1%. */
 #define RM_BREC_BOX_GROW 0.5
+/* A new box's bound costs f's interval gradient over it, and its interval jet where that
+ * leaves ∇f bounded away from 0 with no kink: gyroid-ball ~7,500 + ~11,700 instructions,
+ * against ~1,050 for an evaluation and gradient at a point (~1,500 with the measure's
+ * bookkeeping); torus ~3,000 against ~390. Once RM_BREC_BEND_TRIAL boxes have been worked
+ * out, if the bent bound has spared fewer than RM_BREC_BEND_MIN_SPARED points per box where
+ * the plain bound could not, the bent bound is not asked for the rest of the pass (the plain
+ * bound alone; records then keep no normal, which serves nothing else). Stopping only new
+ * boxes, with the ask and the normals kept, cost gyroid-ball 42M more than no box at all.
+ * Measured (callgrind, default bound, session 19): points so spared per box gyroid-ball 0.6
+ * (9,933 boxes, 8 in 10 infinite beside the crease), sphere 3.4, torus 0.4 (half of its
+ * boxes leave |∇f| unbounded from 0: the quartic's enclosures), klein-bottle 0.25. With
+ * the rule (and RM_BREC_TRIAL 512) the pass costs gyroid-ball 1,643M -> 1,579M instructions,
+ * sphere 11.70M -> 11.63M, the same meshes (no box at all, normals kept: 1,601M, 11.47M).
+ * 4 points a box: about where a box's gradient pays for itself in evaluations spared. The
+ * trial keeps the certified bend at work where boxes are few or pay (test
+ * remesh_brec/a_bump_between_the_vertices_is_not_carried_over works out one). */
+#define RM_BREC_BEND_TRIAL 64
+#define RM_BREC_BEND_MIN_SPARED 4.0
+
 /* A record not measured at its point (a bound carried by moved_bound) keeps its normal while
  * the normal may have turned by at most this (radians) since it was measured; beyond, it
  * keeps the bound that needs no normal and the point is measured the next time the records
@@ -76,8 +97,14 @@ bool rm_brec_fan_within(rm_pass *p, uint32_t v, const double x[3]);
  * for the rest of the pass (the decisions are the same either way). The share counts what the
  * plain bound (u + |δ|, moved_bound) spares, the measure the threshold was set on: the bent
  * bound spares more on every surface, and counted in, the torus kept its records (its pass
- * 86.6M -> 99.8M instructions, where an evaluation costs ~390). */
-#define RM_BREC_TRIAL 2048
+ * 86.6M -> 99.8M instructions, where an evaluation costs ~390). The trial was 2,048 points
+ * until session 19; 512 decides the same way on gyroid-ball (kept: 4 in 10 spared) and costs
+ * the surfaces where they do not pay a quarter as much: pass instructions, default bound,
+ * sphere 13.30M -> 11.70M, torus 88.70M -> 86.81M, pretzel-genus2 76.61M -> 74.47M,
+ * cube-minus-ball 1,427M -> 1,424M, the same meshes; klein-bottle's records, kept at 2,048
+ * though they did not pay there, are dropped: 689M -> 640M (with the bend's rule above, at
+ * 2,048 657M). */
+#define RM_BREC_TRIAL 512
 #define RM_BREC_MIN_SHARE 0.15
 /* True while the records are kept (rm_bound_fan asks before each check); frees them when
  * they have not paid (above). */

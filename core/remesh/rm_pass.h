@@ -124,7 +124,10 @@ typedef struct rm_pass {
                                a certified bound on how fast f's unit normal turns in it
                                (rm_brec.c's fan_bend; NAN: none yet) */
     struct ism_ivjet_ws *jws; /* f's interval jets (interval_jet.h), for bend */
-    size_t bend_boxes;      /* boxes bend was worked out for (a count for measuring) */
+    size_t bend_boxes;      /* boxes bend was worked out for */
+    size_t bend_spared;     /* points the bent bound spared where the plain one could not */
+    bool bend_stopped;      /* the bent bound no longer asked: its first boxes did not pay
+                               (rm_brec.h RM_BREC_BEND_TRIAL) */
     size_t flips, moves, collapses, inserts;
 } rm_pass;
 
