@@ -44,7 +44,7 @@ ifeq ($(SAN),1)
 endif
 
 PKG_PROTO  := jansson libsodium
-PKG_SERVER := libmicrohttpd libseccomp hiredis
+PKG_SERVER := libmicrohttpd libseccomp hiredis zlib
 pkgcflags = $(shell pkg-config --cflags $(1) 2>/dev/null)
 pkglibs   = $(shell pkg-config --libs $(1) 2>/dev/null)
 

@@ -21,7 +21,7 @@ done
 
 # Build and serve: compiler, pkg-config, the libraries the daemon links, node for the viewer.
 run_pkgs="build-essential pkg-config libmicrohttpd-dev libdraco-dev libjansson-dev
-libsodium-dev libseccomp-dev libhiredis-dev nodejs npm ca-certificates"
+libsodium-dev libseccomp-dev libhiredis-dev zlib1g-dev nodejs npm ca-certificates"
 # Tests: unit-test framework, Draco's own decoder, sanitizer/fuzzer runtime, a browser,
 # Python for HTTP tests, the servers the deploy tests start, load and leak tools.
 test_pkgs="libcriterion-dev draco clang libclang-rt-14-dev chromium python3 redis-server

@@ -4,6 +4,7 @@
 #include "proto/features.h"
 #include "proto/json_writer.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -167,14 +168,34 @@ static void write_singular_point(ism_jw *w, const ism_sing_point *p, int cones)
     ism_jw_object_end(w);
 }
 
-static void write_curve_end(ism_jw *w, const ism_sing_curve *c, int e, const ism_locus *l)
+int ism_features_decimals(double tol)
+{
+    if (!isfinite(tol) || !(tol > 0))
+        return -1;
+    for (int d = 0; d <= ISM_FEATURES_MAX_DECIMALS; d++)
+        if (ISM_FEATURES_ROUNDING(d) <= tol)
+            return d;
+    return -1; /* finer than a double near 1 prints: in full */
+}
+
+/* n coordinates of a singular curve at d decimals (d < 0: in full). */
+static void write_curve_xyz(ism_jw *w, const double *v, size_t n, int d)
+{
+    if (d < 0)
+        ism_jw_numbers(w, v, n);
+    else
+        ism_jw_numbers_decimals(w, v, n, d);
+}
+
+static void write_curve_end(ism_jw *w, const ism_sing_curve *c, int e, const ism_locus *l,
+                            int d)
 {
     size_t at = e == 0 ? 0 : c->n - 1;
     ism_jw_object(w);
     ism_jw_key(w, "type");
     ism_jw_string(w, ism_end_type_name(c->end_type[e]));
     ism_jw_key(w, "xyz");
-    ism_jw_numbers(w, c->xyz + 3 * at, 3);
+    write_curve_xyz(w, c->xyz + 3 * at, 3, d);
     ism_jw_key(w, "point");
     if (c->end_point[e] >= 0 && (size_t)c->end_point[e] < l->npoints)
         ism_jw_int(w, c->end_point[e]);
@@ -185,31 +206,32 @@ static void write_curve_end(ism_jw *w, const ism_sing_curve *c, int e, const ism
 
 static void write_singular_curve(ism_jw *w, const ism_sing_curve *c, const ism_locus *l)
 {
+    int d = ism_features_decimals(c->cert_radius); /* the table in features.h */
     ism_jw_object(w);
     ism_jw_key(w, "kind");
     ism_jw_string(w, ism_curve_kind_name(c->kind));
     ism_jw_key(w, "closed");
     ism_jw_bool(w, c->closed);
     ism_jw_key(w, "xyz");
-    ism_jw_numbers(w, c->xyz, 3 * c->n);
+    write_curve_xyz(w, c->xyz, 3 * c->n, d);
     ism_jw_key(w, "ends");
     ism_jw_array(w);
     for (int e = 0; e < 2 && !c->closed && c->n; e++)
-        write_curve_end(w, c, e, l);
+        write_curve_end(w, c, e, l, d);
     ism_jw_array_end(w);
     ism_jw_key(w, "certified");
     ism_jw_bool(w, c->certified);
     ism_jw_key(w, "uncertified_points");
     ism_jw_uint(w, c->uncertified_points);
     ism_jw_key(w, "certificate_radius");
-    ism_jw_number(w, c->cert_radius);
+    ism_jw_number(w, d < 0 ? c->cert_radius : c->cert_radius + ISM_FEATURES_ROUNDING(d));
     ism_jw_key(w, "first_uncertified");
     if (c->uncertified_points && c->first_uncertified >= 0 && (size_t)c->first_uncertified < c->n) {
         ism_jw_object(w);
         ism_jw_key(w, "index");
         ism_jw_int(w, (int)c->first_uncertified);
         ism_jw_key(w, "xyz");
-        ism_jw_numbers(w, c->xyz + 3 * (size_t)c->first_uncertified, 3);
+        write_curve_xyz(w, c->xyz + 3 * (size_t)c->first_uncertified, 3, d);
         ism_jw_key(w, "residual_f");
         ism_jw_number(w, c->first_residual_f);
         ism_jw_key(w, "residual_grad");

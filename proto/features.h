@@ -6,8 +6,8 @@
  * (GET /v1/meshes/{key}/features, `isomesh --features FILE`) and as LINES / POINTS
  * primitives inside a .glb.
  *
- * Features JSON (version 2; locus coordinates in full double precision, mesh coordinates as
- * the float32 positions before quantisation):
+ * Features JSON (version 2; locus coordinates as printed by the table below, mesh coordinates
+ * as the float32 positions before quantisation):
  *   {"version": 2,
  *    "classes": ["manifold", "boundary", "nonmanifold_edge", "nonmanifold_point", "isolated"],
  *    "singular_points": [{"xyz", "radius", "type", "certified", "hessian_eigenvalues",
@@ -34,6 +34,32 @@
 
 #define ISM_FEATURES_VERSION 2
 
+/* How many digits the features JSON prints, from each value's own stated tolerance (the one
+ * table; digits below the tolerance are noise and were most of the bytes: 17 significant
+ * digits per coordinate made the features of klein-bottle 49% of its default .drc):
+ *   singular curves' points ("curves"[k].xyz, .ends[].xyz, .first_uncertified.xyz, kinds
+ *     double / whisker): d = ism_features_decimals(r) decimals, r the curve's certificate
+ *     radius (the largest half-width of a Krawczyk square: a zero of the gradient across the
+ *     curve lies in the square of half-width r round each certified point). Rounding moves each
+ *     coordinate by <= 0.5 * 10^-d, the point by <= ISM_FEATURES_ROUNDING(d) = (sqrt 3 / 2) *
+ *     10^-d <= r; the JSON states certificate_radius = r + ISM_FEATURES_ROUNDING(d) (<= 2 r), so
+ *     the printed point lies within sqrt 2 * that of the zero, as the full one lay within
+ *     sqrt 2 * r. The curve's stated 1e-9 x diagonal (r <= 0.5e-9 x diagonal) still holds.
+ *     A curve without a finite r > 0 is printed in full.
+ *   every other double: the shortest text that reads back to the same double.
+ *   mesh positions (nonmanifold_edges, nonmanifold_points, boundaries, arcs): the shortest
+ *     text that reads back to the same float32 (scripts match them to the mesh's vertices).
+ * Only the printed text changes: the computed entry keeps full doubles, so its version and the
+ * features version stay. */
+#define ISM_FEATURES_MAX_DECIMALS 17 /* what %.*f can carry of a double near 1 */
+/* How far printing a point's three coordinates with d decimals can move it. */
+#define ISM_FEATURES_ROUNDING(d) (0.8660254037844386 * pow(10.0, -(d)))
+
+/* The fewest decimals d (0..ISM_FEATURES_MAX_DECIMALS) with ISM_FEATURES_ROUNDING(d) <= tol;
+ * -1 when tol is not finite and > 0, or finer than that (print in full). */
+int ism_features_decimals(double tol);
+
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdbool.h>

@@ -172,6 +172,43 @@ void ism_jw_numbers(ism_jw *w, const double *v, size_t n)
     ism_jw_array_end(w);
 }
 
+void ism_jw_number_decimals(ism_jw *w, double v, int decimals)
+{
+    /* %f of a double below 1e300 with <= 17 decimals fits 340 bytes. */
+    char buf[340];
+    before_value(w);
+    if (!isfinite(v) || fabs(v) >= 1e300) {
+        ism_jw_format_double(v, buf);
+        put(w, buf, strlen(buf));
+        return;
+    }
+    decimals = decimals < 0 ? 0 : decimals > 17 ? 17 : decimals;
+    int n = snprintf(buf, sizeof buf, "%.*f", decimals, v);
+    if (n < 0 || (size_t)n >= sizeof buf) {
+        w->failed = true;
+        return;
+    }
+    if (strchr(buf, '.')) { /* drop trailing zeros, then a bare point */
+        while (n > 0 && buf[n - 1] == '0')
+            n--;
+        if (n > 0 && buf[n - 1] == '.')
+            n--;
+    }
+    buf[n] = '\0';
+    if (strcmp(buf, "-0") == 0) /* a value that rounds to zero prints as 0 */
+        put(w, "0", 1);
+    else
+        put(w, buf, (size_t)n);
+}
+
+void ism_jw_numbers_decimals(ism_jw *w, const double *v, size_t n, int decimals)
+{
+    ism_jw_array(w);
+    for (size_t i = 0; i < n; i++)
+        ism_jw_number_decimals(w, v[i], decimals);
+    ism_jw_array_end(w);
+}
+
 void ism_jw_float(ism_jw *w, float v)
 {
     char buf[32];

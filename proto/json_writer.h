@@ -34,6 +34,11 @@ void ism_jw_string_n(ism_jw *w, const char *s, size_t n);
 void ism_jw_number(ism_jw *w, double v);  /* shortest round trip; null when not finite */
 void ism_jw_numbers(ism_jw *w, const double *v, size_t n); /* [v0, ..., vn-1] */
 void ism_jw_float(ism_jw *w, float v);    /* shortest text that reads back to the same float */
+/* v rounded to `decimals` places after the point (0..17; off by at most 0.5 * 10^-decimals),
+ * trailing zeros dropped, -0 as 0: for values whose own tolerance makes further digits noise
+ * (the caller derives decimals from that tolerance); null when not finite. */
+void ism_jw_number_decimals(ism_jw *w, double v, int decimals);
+void ism_jw_numbers_decimals(ism_jw *w, const double *v, size_t n, int decimals);
 void ism_jw_int(ism_jw *w, long long v);
 void ism_jw_uint(ism_jw *w, uint64_t v);
 void ism_jw_bool(ism_jw *w, bool v);

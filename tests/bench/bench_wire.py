@@ -10,6 +10,10 @@ ball ~1M, plus Klein bottle, Steiner and Kummer for the non-manifold side data).
 
   bench_wire.py --build build/release [--quick]   (--quick: skip the 1M-triangle mesh)
 
+The side-data table runs the CLI's request-file path (the service's pipeline: the singular
+locus, certified curves) on the singular presets and prints the features JSON beside the
+default .drc, as written and gzipped (what the daemon sends a client that accepts gzip).
+
 Goals (from the tracker): at 14 position bits <= 1.5 B/triangle for positions and
 connectivity, <= 2.5 with normals; non-manifold side data <= 10% of the payload; >= 2M
 triangles/s at the default speed. Printed beside the figures, never asserted."""
@@ -71,6 +75,47 @@ def print_tools(rows, meshes):
                             f"{row[n]['ms'] / base['ms']:>11.2f}" for n in names[1:])
             print(f"{name:<12}{m['triangles']:>9}{base['bytes']:>10}{base['ms']:>8.1f}{cells}")
     print("  each cell: size ratio, time ratio (fastest of several encodes; goal <= 1.05, <= 0.5)")
+
+
+# The presets whose features JSON is largest beside their mesh, then the other singular ones.
+SIDE_PRESETS = ("klein-bottle", "steiner-roman", "kummer-16-nodes", "cross-cap",
+                "whitney-umbrella", "crossing-spheres", "kummer-4-nodes", "heart")
+
+
+def side_data(build, tmp, preset):
+    """(default .drc bytes, features JSON text) of one preset as the service makes it: the
+    request file path of the CLI, default bound, the daemon's depth limit 10."""
+    req = os.path.join(tmp, preset + ".req.json")
+    with open(req, "w") as f:
+        json.dump({"preset": preset, "depth": {"max": 10}}, f)
+    drc, feats = (os.path.join(tmp, preset + ext) for ext in (".drc", ".features.json"))
+    subprocess.run([os.path.join(build, "isomesh"), req, "-o", drc, "--features", feats],
+                   stdout=subprocess.DEVNULL, timeout=600, check=True)
+    with open(feats, "rb") as f:
+        return os.path.getsize(drc), f.read()
+
+
+def field_bytes(doc):
+    """{top-level field: its compact JSON bytes}, the largest first."""
+    sizes = {k: len(json.dumps(v, separators=(",", ":"))) for k, v in doc.items()}
+    return dict(sorted(sizes.items(), key=lambda kv: -kv[1]))
+
+
+def print_side_data(build, tmp, quick):
+    """The features JSON the viewer fetches beside the default .drc (the goal: <= 10% of the
+    payload): as written, and gzipped as the daemon sends it to a client whose
+    Accept-Encoding takes gzip (browsers' fetch always does: server/common/gzip_body.h)."""
+    print("\nFeatures JSON beside the default .drc (normals), as the service makes them "
+          "(default bound, depth.max 10); gz = gzip level 6, what the daemon sends a browser")
+    print(f"{'preset':<18}{'drc':>9}{'features':>10}{'share':>7}{'gz':>8}{'share':>7}  "
+          "largest fields (bytes)")
+    for preset in SIDE_PRESETS[:3] if quick else SIDE_PRESETS:
+        drc, text = side_data(build, tmp, preset)
+        gz = len(zlib.compress(text, 6)) + 12  # gzip's header and trailer beside zlib's
+        top = ", ".join(f"{k} {v}" for k, v in list(field_bytes(json.loads(text)).items())[:3])
+        flag = "" if gz <= 0.10 * drc else "  over 10%"
+        print(f"{preset:<18}{drc:>9}{len(text):>10}{100 * len(text) / drc:>6.1f}%{gz:>8}"
+              f"{100 * gz / drc:>6.1f}%  {top}{flag}")
 
 
 def main():
@@ -145,15 +190,18 @@ def main():
                          and r["case"] == name and r["curvature_bits"] == b) / t for b in cb]
             print(f"{name:<12}" + "".join(f"{v:>10.3f}" for v in vals))
 
-        print("\nNon-manifold side data beside the default Draco payload (14 bits, normals)")
+        print("\nThe mesh's own non-manifold elements beside the default Draco payload (14 bits, "
+              "normals; polygoniser meshes without the singular locus: see the next table)")
         print(f"{'mesh':<12}{'nm edges':>9}{'points':>7}{'bnd edges':>10}{'payload':>10}"
-              f"{'features':>10}{'share':>7}{'glb side':>10}{'share':>7}")
+              f"{'elements':>10}{'share':>7}{'glb side':>10}{'share':>7}")
         for name, m in meshes.items():
             payload = by[(name, 14, "normals")]["bytes"]
             fj, gs = m["features_json_bytes"], m["glb_side_bytes"]
             print(f"{name:<12}{m['nonmanifold_edges']:>9}{m['nonmanifold_points']:>7}"
                   f"{m['boundary_edges']:>10}{payload:>10}{fj:>10}{100 * fj / payload:>6.1f}%"
                   f"{gs:>10}{100 * gs / payload:>6.1f}%")
+
+        print_side_data(args.build, tmp, args.quick)
 
         print("\nGoals at 14 bits, default speed:")
         for name, m in meshes.items():

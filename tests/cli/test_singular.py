@@ -301,6 +301,22 @@ class PresetsOffTheLatticeTest(unittest.TestCase):
             kinds = sorted(c["kind"] for c in feats["curves"])
             self.assertEqual(kinds, ["double"] * 6 + ["whisker"] * 6)
             self.assertEqual(stats["analysis"]["euler"], 5)
+            # every curve lies on an axis: each point as printed (rounded by the digits its
+            # certificate allows, proto/features.h) is within sqrt 2 x the stated radius of it
+            for c in feats["curves"]:
+                self.assert_printed_within(c, lambda p: sorted(abs(v) for v in p)[:2])
+
+    def assert_printed_within(self, curve, off):
+        """Each printed point p of a certified curve lies within sqrt 2 x its stated
+        certificate_radius of the closed form: off(p) lists p's offsets from it."""
+        self.assertTrue(curve["certified"])
+        r = curve["certificate_radius"]
+        self.assertGreater(r, 0)
+        self.assertLess(r, 1e-9, "r + rounding stays far below the 1e-9 x diagonal trace bound")
+        xyz = curve["xyz"]
+        for i in range(0, len(xyz), 3):
+            d = math.hypot(*off(xyz[i:i + 3]))
+            self.assertLessEqual(d, math.sqrt(2) * r + 1e-15, (xyz[i:i + 3], d, r))
 
     def test_cross_cap_chains_close_round_the_zero_axis(self):
         # 4x²(x² + y² + z² + z) + y²(y² + z² − 1) is 0 (and ∇f with it) on the whole z axis: a
@@ -338,6 +354,9 @@ class PresetsOffTheLatticeTest(unittest.TestCase):
             for i in range(0, len(xyz), 3):
                 self.assertLess(abs(xyz[i + 2]), 1e-6)
                 self.assertLess(abs(math.hypot(xyz[i], xyz[i + 1] - 1) - math.sqrt(2)), 1e-6)
+            # as printed (features.h's digits), within sqrt 2 x the stated radius of the circle
+            self.assert_printed_within(curves[0], lambda p: (
+                p[2], math.hypot(p[0], p[1] - 1) - math.sqrt(2)))
             self.assertEqual(stats["analysis"]["euler"], 0)
 
 

@@ -258,6 +258,38 @@ class ApiTest(unittest.TestCase):
         self.assertEqual(feats.status, 200)
         self.assertIsInstance(feats.json(), dict)
 
+    def test_features_go_gzipped_to_a_client_that_takes_it(self):
+        """The features JSON (side data beside the mesh, mostly digits) is sent with
+        Content-Encoding: gzip when Accept-Encoding takes gzip (browsers' fetch always sends
+        it), as it is otherwise; the two decode to the same bytes and carry their own ETags.
+        Steiner's double lines make a features JSON of several KB on the depth path."""
+        import gzip
+        body = {"preset": "steiner-roman", "max_error": None, "depth": {"max": 6}}
+        key = self.d.post("/v1/mesh", body).header("ETag").strip('"')
+        path = "/v1/meshes/%s/features" % key
+        plain = self.d.get(path)
+        self.assertEqual(plain.status, 200)
+        self.assertIsNone(plain.header("Content-Encoding"))
+        self.assertEqual(plain.header("Vary"), "Accept-Encoding")
+        self.assertGreater(len(plain.body), 1024)
+        doc = json.loads(plain.body)
+        self.assertEqual(len(doc["curves"]), doc["counts"]["curves"])
+        for accept in ("gzip", "gzip, deflate, br", "br;q=1.0, gzip;q=0.5", "*", "x-gzip"):
+            got = self.d.get(path, headers={"Accept-Encoding": accept})
+            self.assertEqual(got.status, 200, accept)
+            self.assertEqual(got.header("Content-Encoding"), "gzip", accept)
+            self.assertEqual(got.header("Vary"), "Accept-Encoding", accept)
+            self.assertNotEqual(got.header("ETag"), plain.header("ETag"), accept)
+            self.assertEqual(gzip.decompress(got.body), plain.body, accept)
+            self.assertLess(len(got.body), len(plain.body) / 2, accept)
+        for accept in ("identity", "br", "gzip;q=0", "*, gzip;q=0", "gzipped"):
+            got = self.d.get(path, headers={"Accept-Encoding": accept})
+            self.assertIsNone(got.header("Content-Encoding"), accept)
+            self.assertEqual(got.body, plain.body, accept)
+        # the stats stay plain (small; the CLI and scripts read them as they are)
+        stats = self.d.get("/v1/meshes/%s/stats" % key, headers={"Accept-Encoding": "gzip"})
+        self.assertIsNone(stats.header("Content-Encoding"))
+
     def test_unknown_meshes_are_404(self):
         self.error_of(self.d.get("/v1/meshes/%s.drc" % ("ab" * 32)), 404)
         self.error_of(self.d.get("/v1/meshes/%s/stats" % ("cd" * 32)), 404)

@@ -233,3 +233,129 @@ Test(features, locus_and_check_in_the_json)
     ism_analysis_free(&a);
     ism_mesh_free(&m);
 }
+
+/* The digits of each decimal in a number's text after the point (0 without one). */
+static int decimals_of(const char *s, size_t n)
+{
+    const char *dot = memchr(s, '.', n);
+    if (!dot)
+        return 0;
+    int d = 0;
+    for (const char *c = dot + 1; c < s + n && *c >= '0' && *c <= '9'; c++)
+        d++;
+    return d;
+}
+
+/* A singular curve's points are printed with the fewest decimals d whose rounding
+ * ((sqrt 3 / 2) 10^-d for a point) is within the curve's certificate radius r (the table in
+ * features.h), and the JSON states r + that rounding. Closed forms: a circle of radius 1/3
+ * round (1/7, 0, 0) in z = 0 through irrational angles, with a node at its first point, and
+ * its z printed as 1e-30 noise where the true value is 0 reads back as exactly 0. A curve with
+ * no radius reads back bit for bit. */
+Test(features, curve_points_printed_within_their_certificate)
+{
+    ism_mesh m;
+    test_mesh_crossing_planes(&m, 4);
+    ism_analysis a;
+    ism_error err;
+    cr_assert(ism_analyse(&m, NULL, NULL, &a, &err));
+    const double radii[] = {6.928203230275509e-12, 1.7320508075688772e-12, 3e-7, 0.0};
+    for (size_t t = 0; t < sizeof radii / sizeof radii[0]; t++) {
+        double r = radii[t];
+        ism_locus l;
+        ism_locus_init(&l);
+        const size_t n = 40;
+        ism_sing_curve c = {.kind = ISM_CURVE_DOUBLE, .n = n, .closed = false,
+                            .end_type = {ISM_END_POINT, ISM_END_BOX}, .end_point = {0, -1},
+                            .certified = r > 0, .cert_radius = r, .first_uncertified = -1};
+        c.xyz = malloc(3 * n * sizeof *c.xyz);
+        cr_assert_not_null(c.xyz);
+        for (size_t i = 0; i < n; i++) {
+            double th = 0.1 + i * (M_SQRT2 - 1.0); /* irrational steps */
+            c.xyz[3 * i] = 1.0 / 7 + cos(th) / 3;
+            c.xyz[3 * i + 1] = sin(th) / 3;
+            c.xyz[3 * i + 2] = (i % 2 ? -1e-30 : 1e-30);
+        }
+        ism_sing_point p = {.p = {c.xyz[0], c.xyz[1], 0}, .type = ISM_SING_NODE,
+                            .certified = true, .cones = -1};
+        cr_assert(ism_locus_add_curve(&l, &c));
+        cr_assert(ism_locus_add_point(&l, &p));
+        ism_features f;
+        cr_assert(ism_features_build(&a, &f));
+        f.locus = &l;
+        size_t len;
+        char *text = ism_features_json(&m, &f, &len);
+        cr_assert_not_null(text);
+        json_error_t je;
+        json_t *doc = json_loadb(text, len, JSON_REJECT_DUPLICATES, &je);
+        cr_assert_not_null(doc, "%s", je.text);
+        json_t *curve = json_array_get(json_object_get(doc, "curves"), 0);
+        json_t *xyz = json_object_get(curve, "xyz");
+        cr_assert_eq(json_array_size(xyz), 3 * n);
+        double stated = json_number_value(json_object_get(curve, "certificate_radius"));
+        int d = ism_features_decimals(r);
+        if (r > 0) {
+            cr_assert_geq(d, 0);
+            double rounding = 0.8660254037844386 * pow(10.0, -d);
+            cr_expect_leq(rounding, r, "d %d rounds by %g > r %g", d, rounding, r);
+            cr_expect_gt(10 * rounding, r, "d %d is more decimals than r %g needs", d, r);
+            cr_expect_eq(stated, r + rounding);
+        } else {
+            cr_expect_eq(d, -1);
+            cr_expect_eq(stated, 0.0);
+        }
+        for (size_t i = 0; i < n; i++) {
+            double q[3], dist2 = 0;
+            for (int k = 0; k < 3; k++) {
+                q[k] = json_number_value(json_array_get(xyz, 3 * i + k));
+                double e = q[k] - c.xyz[3 * i + k];
+                dist2 += e * e;
+                if (r > 0)
+                    cr_expect_leq(fabs(e), 0.5 * pow(10.0, -d) * (1 + 1e-9),
+                                  "coordinate %zu.%d off by %g at %d decimals", i, k, e, d);
+                else
+                    cr_expect_eq(q[k], c.xyz[3 * i + k], "a curve without radius is exact");
+            }
+            /* the printed point is within the stated radius minus r of the full one (so a
+             * zero within r of the full one is within the stated radius of the printed one) */
+            cr_expect_leq(sqrt(dist2), stated - r + 1e-18, "point %zu moved %g", i,
+                          sqrt(dist2));
+            /* the circle's closed form: |(x - 1/7, y)| = 1/3 within the rounding, z = 0 */
+            if (r > 0) {
+                cr_expect_leq(fabs(hypot(q[0] - 1.0 / 7, q[1]) - 1.0 / 3), stated);
+                cr_expect_eq(q[2], 0.0, "1e-30 noise prints as 0 at %d decimals", d);
+            }
+        }
+        /* the ends and the node agree with the curve's printed points, and each number's text
+         * has at most d decimals */
+        json_t *end0 = json_object_get(json_array_get(json_object_get(curve, "ends"), 0), "xyz");
+        json_t *end1 = json_object_get(json_array_get(json_object_get(curve, "ends"), 1), "xyz");
+        for (int k = 0; k < 3; k++) {
+            cr_expect_eq(json_number_value(json_array_get(end0, k)),
+                         json_number_value(json_array_get(xyz, k)));
+            cr_expect_eq(json_number_value(json_array_get(end1, k)),
+                         json_number_value(json_array_get(xyz, 3 * (n - 1) + k)));
+        }
+        const char *at = strstr(strstr(text, "\"curves\":["), "\"xyz\":[") + 7;
+        const char *stop = strchr(at, ']');
+        int most = 0;
+        for (const char *s = at; s < stop;) {
+            const char *comma = memchr(s, ',', (size_t)(stop - s));
+            const char *e = comma ? comma : stop;
+            int dd = decimals_of(s, (size_t)(e - s));
+            most = dd > most ? dd : most;
+            s = e + 1;
+        }
+        if (r > 0)
+            cr_expect_leq(most, d, "a coordinate printed with %d > %d decimals", most, d);
+        else
+            cr_expect_geq(most, 15, "a curve without radius prints in full");
+        json_decref(doc);
+        free(text);
+        f.locus = NULL;
+        ism_features_free(&f);
+        ism_locus_free(&l);
+    }
+    ism_analysis_free(&a);
+    ism_mesh_free(&m);
+}
