@@ -164,13 +164,20 @@ Test(features, empty_mesh_has_empty_features)
  * lists the x axis as a double curve makes every non-manifold edge lie on it (no artefact);
  * a locus that lists a line elsewhere makes every one an artefact. The JSON carries the
  * locus in full precision and the check per element. */
+/* The test mesh of crossing planes y = 0 and z = 0 with n cells a side, analysed. */
+static void analysed_crossing_planes(int n, ism_mesh *m, ism_analysis *a)
+{
+    ism_error err;
+    test_mesh_crossing_planes(m, n);
+    cr_assert(ism_analyse(m, NULL, NULL, a, &err), "%s", err.message);
+}
+
 Test(features, locus_and_check_in_the_json)
 {
     ism_mesh m;
-    test_mesh_crossing_planes(&m, 6);
     ism_analysis a;
     ism_error err;
-    cr_assert(ism_analyse(&m, NULL, NULL, &a, &err));
+    analysed_crossing_planes(6, &m, &a);
     cr_assert_gt(a.nonmanifold_edges, 0);
     double lo[3], hi[3];
     cr_assert(ism_mesh_bounds(&m, lo, hi));
@@ -255,10 +262,8 @@ static int decimals_of(const char *s, size_t n)
 Test(features, curve_points_printed_within_their_certificate)
 {
     ism_mesh m;
-    test_mesh_crossing_planes(&m, 4);
     ism_analysis a;
-    ism_error err;
-    cr_assert(ism_analyse(&m, NULL, NULL, &a, &err));
+    analysed_crossing_planes(4, &m, &a);
     const double radii[] = {6.928203230275509e-12, 1.7320508075688772e-12, 3e-7, 0.0};
     for (size_t t = 0; t < sizeof radii / sizeof radii[0]; t++) {
         double r = radii[t];
