@@ -225,14 +225,15 @@ class GoalsUnderTheDefaultBound(unittest.TestCase):
     pretzel (smooth, closed): no triangle under 20 degrees. Steiner's surface, Kummer's 16-node
     quartic and Whitney's umbrella: no triangle under 10 degrees but those with a vertex the pass
     may not move off its feature: a singular point's (features JSON) or the box cut's (an edge
-    of one triangle: where the surface passes within a thousandth of a box edge, two cut points
-    lie that close; Kummer 1 / 3 / 3, Whitney 0 / 4 / 2 such triangles). Vertices on the double
-    curves get no exception: beside Whitney's line, whose vertices the curves stage spaces 8x
-    finer than the sheets' triangles in the shifted boxes, the pass inserts what it needs (320 /
-    331 needles there while its room for insertions was a fixed share of the triangles).
-    With the pass as it was on 7aa83e9 this fails 8 of 12: pretzel 11.32 / 7.28 degrees in the
-    shifted boxes, Kummer 22 / 31 / 29 triangles under 10 degrees on its smooth part, Steiner 2
-    in the irrational box, Whitney 320 / 331 beside its double line."""
+    of one triangle: Whitney's surface passes within a thousandth of a box edge, so two cut
+    points on two box edges lie that close; Kummer 1 / 1 / 1, Whitney 0 / 4 / 2 such triangles
+    in the three boxes). Vertices on the double curves get no exception: beside Whitney's line,
+    whose vertices the curves stage spaces 8x finer than the sheets' triangles in the shifted
+    boxes, the pass inserts what it needs (320 / 331 needles there while its room for
+    insertions was a fixed share of the triangles). With the pass as it was on 7aa83e9 this
+    fails 8 of 12: pretzel 11.32 / 7.28 degrees in the shifted boxes, Kummer 19 / 26 / 23
+    triangles under 10 degrees off its nodes and box cut, Steiner 3 in the irrational box,
+    Whitney 305 / 315 beside its double line."""
 
     # preset: (box, finest depth) as proto/presets.c gives them
     PRESETS = {"pretzel-genus2": ([-0.5, -1.5, -1.5, 2.5, 1.5, 1.5], 7),
