@@ -57,7 +57,8 @@ ism_blob *ism_gzip_blob(const void *data, size_t len)
     z_stream z;
     memset(&z, 0, sizeof z);
     /* windowBits 15 + 16: a gzip header and trailer instead of zlib's */
-    if (deflateInit2(&z, ISM_GZIP_LEVEL, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
+    int level = len > ISM_GZIP_FAST_ABOVE ? ISM_GZIP_FAST_LEVEL : ISM_GZIP_LEVEL;
+    if (deflateInit2(&z, level, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
         return NULL;
     uLong bound = deflateBound(&z, (uLong)len);
     ism_blob *b = ism_blob_new(bound);

@@ -15,19 +15,28 @@
  * request's CPU outweigh what a few hundred bytes of JSON would save (a stats or error body). */
 #define ISM_GZIP_MIN_BODY 1024
 
-/* zlib's level, measured on the features JSON at the default bound (full-precision digits;
- * bytes and CPU ms per compression): klein-bottle 28,462 B -> 13,642 / 0.21 at 1, 12,173 / 0.93
- * at 6, 11,516 / 1.62 at 9; steiner-roman 31,980 -> 3,972 / 3,307 / 3,122 (0.06 / 0.22 / 1.19
- * ms); kummer-16-nodes 17,771 -> 6,551 / 5,990 / 5,992. 6 (zlib's default) is within 6% of 9's
- * size at 0.2-0.85x its CPU; 1 gives up 8-20%. */
+/* zlib's level. The answer is compressed on the HTTP thread, per request, so its CPU is a
+ * pause for every other connection of that thread. Measured on the features JSON of session
+ * 19 (default bound; bytes and CPU ms per compression at load 15-30, zlib 1.2.13):
+ *   klein-bottle 20,195 B -> level 1 9,586 / 0.24 ms, level 6 8,584 / 0.63 ms
+ *   crossing-spheres 61,852 -> 28,240 / 0.60, 26,423 / 3.09
+ *   cube-minus-ball 177,360 -> 35,627 / 0.92, 23,821 / 3.66
+ *   three-balls 326,709 -> 139,534 / 2.98, 126,517 / 17.5
+ *   gyroid-ball 1,258,122 -> 554,084 / 11.8, 521,023 / 76.2 (level 9: no smaller than 6 by
+ *   more than 6% on the singular presets, at 1.7-5.4x 6's CPU)
+ * So: 6 (zlib's default) up to ISM_GZIP_FAST_ABOVE, where it costs a few ms; 1 above it,
+ * where 6 would stall the thread for tens of ms to save 6-10%. */
 #define ISM_GZIP_LEVEL 6
+#define ISM_GZIP_FAST_LEVEL 1
+#define ISM_GZIP_FAST_ABOVE (128u * 1024u)
 
 /* Whether an Accept-Encoding header value (NULL: absent) accepts gzip (RFC 9110 12.5.3):
  * "gzip", "x-gzip" or "*" listed with a q-value other than 0 (an explicit "gzip;q=0" refuses
  * it even beside "*"). */
 bool ism_accepts_gzip(const char *accept_encoding);
 
-/* A new blob holding data's gzip stream (RFC 1952); NULL when out of memory. */
+/* A new blob holding data's gzip stream (RFC 1952), at the level above for its size; NULL when
+ * out of memory. */
 ism_blob *ism_gzip_blob(const void *data, size_t len);
 
 #endif
