@@ -2,6 +2,7 @@
  * (finer neighbours' tiles where they exist — crack repair), stitched into polygons, each
  * polygon triangulated; one-edge polygons are kept as segments. */
 #include "core/octree/cell.h"
+#include "core/octree/crease_split.h"
 #include "core/octree/face_lines.h"
 #include "core/octree/face_flat.h"
 #include "core/octree/singular.h"
@@ -256,7 +257,12 @@ bool ism_cell_polygonise(ism_cell_ctx *cx, int32_t node, ism_cell_out *out)
         int face = ism_face_plane(box, p, lp->n);
         if (face >= 0 && !face_polygon(cx, nd, p, lp->n, face, reach, box, out))
             return false;
-        if (face < 0 && !ism_triangulate_loop(&cx->s, p, lp->n, reach, box, cx->max_error, out))
+        bool cut = false;
+        if (face < 0 && cx->max_error > 0 &&
+            !ism_crease_cut_loop(&cx->s, p, lp->n, reach, box, cx->max_error, out, &cut))
+            return false;
+        if (face < 0 && !cut &&
+            !ism_triangulate_loop(&cx->s, p, lp->n, reach, box, cx->max_error, out))
             return false;
     }
     cx->stats.polygons += polygons;

@@ -18,6 +18,7 @@ enum ism_fpoint_flags {
     ISM_FP_MANY = 8,       /* on a segment suspected of more than two roots */
     ISM_FP_INTERIOR = 16,  /* a polygon's centre (not on the node boundary) */
     ISM_FP_SINGULAR = 32,  /* an isolated singular point inside the node (see singular.h) */
+    ISM_FP_CREASE = 64,    /* on a min/max crease, a = b = 0 (crease_split.h): either branch */
 };
 
 typedef struct ism_fpoint {

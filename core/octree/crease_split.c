@@ -13,8 +13,11 @@
  * are tangent (the linear estimate is kept then). */
 #define CREASE_NEWTON_STEPS 8
 /* A Newton result farther than this many edge lengths from the edge is not the edge's
- * crease point (a distant part of the crease curve): the linear estimate is kept. */
-#define CREASE_REACH_EDGES 1.0
+ * crease point (a distant part of the crease curve): the linear estimate is kept. Not 1: a
+ * short edge across a sharp wedge has the wedge's tip beyond its ends (an isosceles tip of
+ * angle θ lies 1 / (2 sin(θ/2)) edge lengths from each end: 1.46 at cube-minus-ball's 40°;
+ * measured there 1.02–1.36), and the linear estimate it fell back to is no crease point. */
+#define CREASE_REACH_EDGES 2.0
 /* The branches' gradients count as parallel (no crease line through x, the 2 × 2 normal
  * system singular) when |ga|²|gb|² − (ga·gb)² is below this share of |ga|²|gb|²: a sine
  * of the crossing angle under 1e-6 rad, where a step would run along the crease. */
@@ -25,6 +28,8 @@
 #define LABELS_ON_STACK 256
 /* A vertex whose branch is not looked up yet. */
 #define LABEL_UNKNOWN 2
+/* A crease point: on both branches, so no corner of a triangle is alone on its branch for it. */
+#define LABEL_ANY 3
 
 /* Does t still end in f's top min/max (not decided by the intervals it was shortened by)? */
 static bool top_undecided(const ism_tape *t)
@@ -104,8 +109,9 @@ bool ism_crease_newton(ism_sampler *s, double x[3])
 }
 
 /* The crease point of edge p-q (branches differ at its ends): Newton on a = b = 0 from
- * where a - b changes sign along the edge, or that linear estimate itself. */
-static void crease_point(ism_sampler *s, const double *p0, const double *q0, ism_fpoint *out)
+ * where a - b changes sign along the edge (flagged ISM_FP_CREASE; true), or that linear
+ * estimate moved onto f = 0 (false). */
+static bool crease_point(ism_sampler *s, const double *p0, const double *q0, ism_fpoint *out)
 {
     const double *p = before(q0, p0) ? q0 : p0, *q = p == p0 ? q0 : p0;
     double v[2], d[2];
@@ -122,7 +128,8 @@ static void crease_point(ism_sampler *s, const double *p0, const double *q0, ism
     for (int k = 0; k < 3; k++)
         lin[k] = x[k] = p[k] + t * (q[k] - p[k]);
     bool ok = ism_crease_newton(s, x);
-    if (!ok || !(ism_dist3(x, lin) <= CREASE_REACH_EDGES * ism_dist3(p, q))) {
+    ok = ok && ism_dist3(x, lin) <= CREASE_REACH_EDGES * ism_dist3(p, q);
+    if (!ok) {
         memcpy(x, lin, sizeof x); /* onto f = 0 along ∇f at least */
         for (int it = 0; it < CREASE_NEWTON_STEPS; it++) {
             double gf[3];
@@ -137,13 +144,17 @@ static void crease_point(ism_sampler *s, const double *p0, const double *q0, ism
     }
     memcpy(out->p, x, sizeof out->p);
     ism_sample_grad(s, x, out->g);
-    out->flags = ISM_FP_INTERIOR;
+    out->flags = ok ? ISM_FP_INTERIOR | ISM_FP_CREASE : ISM_FP_INTERIOR;
+    return ok;
 }
 
-/* The branch of vertex v (labels[v - first], looked up once). */
+/* The branch of vertex v (labels[v - first], looked up once); LABEL_ANY for a crease point
+ * a polygon was cut at (ism_crease_cut_loop), which lies on both. */
 static int vertex_branch(ism_sampler *s, const ism_cell_out *out, uint8_t *labels,
                          uint32_t first, uint32_t v)
 {
+    if (out->verts[v].flags & ISM_FP_CREASE)
+        return LABEL_ANY;
     uint8_t *l = &labels[v - first];
     if (*l == LABEL_UNKNOWN)
         *l = (uint8_t)ism_crease_branch(s, out->verts[v].p, NULL);
@@ -159,6 +170,8 @@ static bool split_labelled(ism_sampler *s, ism_cell_out *out, size_t first_tri, 
         int br[3];
         for (int k = 0; k < 3; k++)
             br[k] = vertex_branch(s, out, labels, first, out->tris[3 * t + k]);
+        if (br[0] == LABEL_ANY || br[1] == LABEL_ANY || br[2] == LABEL_ANY)
+            continue; /* a cut polygon's triangle: its other corners share one branch */
         if (br[0] == br[1] && br[1] == br[2])
             continue;
         /* r: the corner alone on its branch; the others follow it in winding order */
@@ -218,4 +231,160 @@ bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
     if (labels != stack)
         free(labels);
     return ok;
+}
+
+/* A triangle faces against ∇f at its centroid when their directions are more than 120° apart
+ * (a smooth patch's triangles, even bent beside a crease, face within a few tens of degrees
+ * of it). */
+#define CREASE_TURNED_COS (-0.5)
+
+/* A chord between two crease points whose middle lies farther than this share of max_error
+ * from the crease (Newton from the middle) leaves its leaf to be split: the chord's
+ * triangles on either side lie that far off their branches near it. */
+#define CREASE_CHORD_SAG 0.5
+
+/* A cut polygon has at most this many corners (a leaf's polygons have a few dozen at most:
+ * crack repair adds the finer neighbours' points to a face); a larger one is triangulated
+ * whole and its triangles split (ism_crease_split). */
+#define CUT_MAX_CORNERS 64
+
+/* A crease point within this share of its edge's length from an end is that corner (on the
+ * crease, up to rounding: the double torus's corners on its mirror plane x = 1.1): the polygon
+ * is not cut there, since cut pieces would join a corner and a point a rounding error apart,
+ * two vertices the weld keeps apart (an edge in four triangles, the regression box of
+ * test_polygonise_crease.c's double_torus_closed_under_a_bound). */
+#define CUT_CORNER_SHARE 1e-6
+
+/* Branch b's gradient at p, into the crease point x's g; false when a value is not finite. */
+static bool branch_gradient(ism_sampler *s, int b, ism_fpoint *x)
+{
+    double v[2], g[2][3];
+    s->n_gradient++;
+    if (!ism_eval_top_branches(top_tape(s, x->p), s->ws, x->p[0], x->p[1], x->p[2], v, g))
+        return false;
+    memcpy(x->g, g[b], sizeof x->g);
+    return isfinite(x->g[0]) && isfinite(x->g[1]) && isfinite(x->g[2]);
+}
+
+/* The run of corners from + 1 .. to (cyclically) of pts between crease points a and b into
+ * sub, in the polygon's order: a, the run, b (the chord b-a closes it); its length. */
+static size_t branch_polygon(const ism_fpoint *pts, size_t n, size_t from, size_t to,
+                             const ism_fpoint *a, const ism_fpoint *b, ism_fpoint *sub)
+{
+    size_t m = 0;
+    sub[m++] = *a;
+    for (size_t i = (from + 1) % n;; i = (i + 1) % n) {
+        sub[m++] = pts[i];
+        if (i == to)
+            break;
+    }
+    sub[m++] = *b;
+    return m;
+}
+
+bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
+                         const double node[6], double max_error, ism_cell_out *out, bool *done)
+{
+    *done = false;
+    if (n < 3 || n > CUT_MAX_CORNERS || !top_undecided(s->tape))
+        return true; /* f does not end in min/max */
+    if (s->local && !top_undecided(s->local)) {
+        size_t i = 0;
+        while (i < n && ism_sampler_tape_at(s, pts[i].p) == s->local)
+            i++;
+        if (i == n)
+            return true; /* one branch over the whole leaf (one_branch) */
+    }
+    int br[CUT_MAX_CORNERS];
+    size_t mixed[2], nmixed = 0;
+    for (size_t i = 0; i < n; i++)
+        if ((br[i] = ism_crease_branch(s, pts[i].p, NULL)) < 0)
+            return true; /* no min/max at the top of the tape */
+    for (size_t i = 0; i < n; i++)
+        if (br[i] != br[(i + 1) % n] && nmixed++ < 2)
+            mixed[nmixed - 1] = i;
+    if (nmixed != 2)
+        return true; /* one branch, or the crease crossing the polygon more than once */
+    ism_fpoint x[2];
+    for (int k = 0; k < 2; k++) {
+        const double *p = pts[mixed[k]].p, *q = pts[(mixed[k] + 1) % n].p;
+        double near = CUT_CORNER_SHARE * ism_dist3(p, q);
+        if (!crease_point(s, p, q, &x[k]) || !(ism_dist3(x[k].p, p) > near) ||
+            !(ism_dist3(x[k].p, q) > near))
+            return true; /* no crease point found on that edge, or a corner on the crease */
+    }
+    if (!memcmp(x[0].p, x[1].p, sizeof x[0].p))
+        return true;
+    bool flip = ism_loop_reversed(s, node, pts, n);
+    /* end[k]: the crease points as corners of the run after mixed edge k, with its branch's
+       gradients (so the run's own fans are judged on one smooth surface) */
+    ism_fpoint end[2][2], sub[CUT_MAX_CORNERS + 2];
+    for (int k = 0; k < 2; k++) {
+        int b = br[(mixed[k] + 1) % n];
+        end[k][0] = x[k];
+        end[k][1] = x[1 - k];
+        if (!branch_gradient(s, b, &end[k][0]) || !branch_gradient(s, b, &end[k][1]))
+            return true;
+    }
+    for (int k = 0; k < 2; k++) {
+        size_t m = branch_polygon(pts, n, mixed[k], mixed[1 - k], &end[k][0], &end[k][1], sub);
+        if (!ism_triangulate_wound(s, sub, m, reach, node, max_error, flip, out))
+            return false;
+    }
+    *done = true;
+    return true;
+}
+
+/* Does the crease pass between triangle v's corners unseen: an edge whose two ends lie off
+ * the crease on one branch with its midpoint on the other, or three such corners with the
+ * centroid on the other; or an edge between two crease points whose middle lies farther than
+ * sag from the crease (Newton from it)? */
+static bool unseen_crease(ism_sampler *s, const ism_cell_out *out, const uint32_t *v,
+                          double sag)
+{
+    const double *p[3];
+    int b[3];
+    for (int k = 0; k < 3; k++) {
+        p[k] = out->verts[v[k]].p;
+        b[k] = out->verts[v[k]].flags & ISM_FP_CREASE ? -1 : ism_crease_branch(s, p[k], NULL);
+    }
+    double m[3], x[3];
+    for (int e = 0; e < 3; e++) {
+        const double *a = p[e], *c = p[(e + 1) % 3];
+        for (int k = 0; k < 3; k++)
+            m[k] = x[k] = (a[k] + c[k]) / 2;
+        if (b[e] < 0 && b[(e + 1) % 3] < 0) { /* a chord of the crease */
+            if (ism_crease_newton(s, x) && ism_dist3(x, m) > sag)
+                return true;
+        } else if (b[e] >= 0 && b[e] == b[(e + 1) % 3] && ism_crease_branch(s, m, NULL) != b[e])
+            return true;
+    }
+    if (b[0] < 0 || b[0] != b[1] || b[1] != b[2])
+        return false;
+    for (int k = 0; k < 3; k++)
+        m[k] = (p[0][k] + p[1][k] + p[2][k]) / 3;
+    return ism_crease_branch(s, m, NULL) != b[0];
+}
+
+bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
+                       double max_error)
+{
+    if (first_tri == out->ntris || !top_undecided(s->tape) ||
+        one_branch(s, out, first_tri, out->ntris))
+        return false;
+    for (size_t t = first_tri; t < out->ntris; t++) {
+        const uint32_t *v = out->tris + 3 * t;
+        if (unseen_crease(s, out, v, CREASE_CHORD_SAG * max_error))
+            return true;
+        const double *a = out->verts[v[0]].p, *b = out->verts[v[1]].p, *c = out->verts[v[2]].p;
+        double m[3], n[3], g[3];
+        for (int k = 0; k < 3; k++)
+            m[k] = (a[k] + b[k] + c[k]) / 3;
+        ism_tri_cross3(a, b, c, n);
+        ism_sample_grad(s, m, g);
+        double d = ism_dot3(n, g), l = ism_norm3(n) * ism_norm3(g);
+        if (l > 0 && d < CREASE_TURNED_COS * l)
+            return true;
+    }
+    return false;
 }

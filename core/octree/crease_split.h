@@ -20,6 +20,30 @@
  * point bit for bit and the weld joins them. False when out of memory. */
 bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri);
 
+/* Under an error bound, a polygon of a leaf (ism_triangulate_loop's arguments) whose corners
+ * lie on both branches, two runs of them, is cut along the chord between the crease points
+ * of its two mixed edges (the points ism_crease_split puts there, flagged ISM_FP_CREASE), and
+ * each branch's polygon is triangulated on its own, wound as the whole polygon is: fanned
+ * whole and split after, a fan from a point on one branch to two on the other crosses the
+ * wedge between them and its pieces turn over (cube-minus-ball's face z = −1 beside its
+ * crease circle: triangles facing +z). *done false (nothing emitted) when the polygon is
+ * not cut: one branch, more than two mixed edges, or no crease point found. False when out
+ * of memory. */
+bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
+                         const double node[6], double max_error, ism_cell_out *out, bool *done);
+
+/* Is the crease unresolved by out's triangles from first_tri on (one leaf's, after
+ * ism_crease_split)? A triangle faces against ∇f at its centroid (the directions more than
+ * 120° apart); or the crease passes between corners unseen — an edge whose ends lie on one
+ * branch with its midpoint on the other, or a triangle's three corners on one branch and its
+ * centroid on the other (the gyroid ball's ball beside (−0.63, −0.80, −0.96) in a leaf 0.085
+ * wide under E = 3e-3, a gyroid bump inside: an edge midpoint no zero could be shown within E
+ * of, and a triangle facing the ball's way at a centroid where the gyroid's gradient holds);
+ * or an edge between two crease points whose middle lies farther than max_error / 2 from the
+ * crease. Only where the leaf keeps f's top min/max; false elsewhere. */
+bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
+                           double max_error);
+
 /* The branch of f's top min/max active at p (0 or 1), or -1 when the tape does not end in
  * min/max. g: that branch's gradient there (may be NULL). */
 int ism_crease_branch(ism_sampler *s, const double p[3], double g[3]);

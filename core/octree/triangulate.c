@@ -393,12 +393,24 @@ static bool corner_fan_within(ism_sampler *s, ism_cell_out *out, size_t base, si
     return fan_from_corner(out, base, n, c);
 }
 
+bool ism_loop_reversed(ism_sampler *s, const double node[6], const ism_fpoint *pts, size_t n)
+{
+    return n >= 3 && reversed(s, node, pts, n);
+}
+
 bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
                           const double node[6], double max_error, ism_cell_out *out)
 {
+    return n < 3 ||
+           ism_triangulate_wound(s, pts, n, reach, node, max_error, reversed(s, node, pts, n),
+                                 out);
+}
+
+bool ism_triangulate_wound(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
+                           const double node[6], double max_error, bool flip, ism_cell_out *out)
+{
     if (n < 3)
         return true;
-    bool flip = reversed(s, node, pts, n);
     size_t base = out->nverts;
     for (size_t i = 0; i < n; i++) {
         uint32_t idx;

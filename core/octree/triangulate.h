@@ -18,6 +18,16 @@
 bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
                           const double node[6], double max_error, ism_cell_out *out);
 
+/* Is the closed polygon pts[0..n) wound against ∇f (ism_triangulate_loop reverses it)? Its
+ * Newell normal against the mean unit gradient at its points, or, where those split the vote
+ * and node is given, against the node's corners' signs. */
+bool ism_loop_reversed(ism_sampler *s, const double node[6], const ism_fpoint *pts, size_t n);
+
+/* ism_triangulate_loop with the winding decided by the caller: pts taken in reverse order
+ * when flip. */
+bool ism_triangulate_wound(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
+                           const double node[6], double max_error, bool flip, ism_cell_out *out);
+
 /* Triangulates the closed polygon pts[0..n) (n >= 2) as a fan around apex, a point inside
  * the node where the polygon's sheet meets other sheets. */
 bool ism_triangulate_fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex,

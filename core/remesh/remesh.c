@@ -187,6 +187,8 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
                 ok = (p.flipped = calloc(p.r.cap_verts ? p.r.cap_verts : 1, 1)) != NULL;
             if (ok && rm_flip_active(&p, &ok) && round == 0)
                 rm_lock_vertices(&p, o, p.flipped); /* caps flipped away: false creases go */
+            if (ok && round == 0)
+                rm_crease_lock_on(&p);
             free(p.flipped);
             p.flipped = NULL;
             if (!ok || stopped(o))

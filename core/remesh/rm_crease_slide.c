@@ -619,3 +619,23 @@ size_t rm_crease_slide_sweep(rm_pass *p)
     p->moves += moves;
     return moves;
 }
+
+size_t rm_crease_lock_on(rm_pass *p)
+{
+    rm_mesh *r = &p->r;
+    if (!ism_tape_has_min_max(p->f))
+        return 0;
+    size_t locked = 0;
+    for (size_t v = 0; v < r->m->nverts; v++) {
+        if (r->locked[v] || !r->count[v] || r->gone[v])
+            continue;
+        rm_fan f;
+        rm_fan_measure(p, (uint32_t)v, &f);
+        if (on_crease(p, p->f, P(p, (uint32_t)v), ISM_RM_CREASE_ON_REL * f.mean_edge, NULL,
+                      NULL)) {
+            r->locked[v] = 1; /* on the crease: kept there, as a vertex moved onto it is */
+            locked++;
+        }
+    }
+    return locked;
+}

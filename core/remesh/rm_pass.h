@@ -305,6 +305,13 @@ size_t rm_slide_sweep(rm_pass *p);
  * made (merges also count in collapses). */
 size_t rm_crease_slide_sweep(rm_pass *p);
 
+/* Locks the free vertices lying on a min/max crease of f's top (both branches within
+ * rm_crease_slide.c's ISM_RM_CREASE_ON_REL of their mean edge: the polygoniser's own crease
+ * points, crease_split.h), as a vertex the sweep moves onto it is locked: the relaxation
+ * would move them off it (the cube minus a ball under its default bound: 408 vertices on the
+ * crease before the pass, 32 after). Returns how many. */
+size_t rm_crease_lock_on(rm_pass *p);
+
 /* The fan of v: the sine of its smallest angle, mean edge length, the area-weighted centroid
  * and normal (the sum of the triangles' cross products: well defined even where a needle's
  * own normal is rounding noise). */
