@@ -519,17 +519,17 @@ static long long remote(task *k, ism_cache_tier *t, long long now)
     if (!ismd_redis_tasks_enter(sh->tasks))
         return task_end(k, t);
     ismd_flight *f = my_flight(k, false);
-    bool here = f && !f->shared;
-    /* gone because it is done: this daemon's executor took the entry and finished it between
-     * two looks (a small mesh takes less than REMOTE_POLL_NS), and its entries wait for its
-     * surface (sched.h storing). Not a cancel: the locks are kept until they are written, as
-     * for a flight seen running here (hold), so that another daemon asked for another format
-     * meanwhile waits for the surface instead of polygonising it again */
-    bool storing = !f && ismd_sched_storing(sh->sched, k->name);
+    /* this daemon's executor took it; or, gone, because it is done: the executor took the
+     * entry and finished it between two looks (a small mesh takes less than REMOTE_POLL_NS),
+     * and its entries wait for its surface (sched.h storing). Not a cancel: the locks are kept
+     * until they are written, as for a flight seen running here (hold), so that another
+     * daemon asked for another format meanwhile waits for the surface instead of
+     * polygonising it again */
+    bool here = f ? !f->shared : ismd_sched_storing(sh->sched, k->name);
     ismd_redis_tasks_leave(sh->tasks);
-    if (storing) {
+    if (here) {
         k->state = T_HOLD;
-        return hold(k, t, now);
+        return now + HOLD_TICK_NS;
     }
     if (!f) { /* nobody waits any more (or past its deadline): cancel */
         /* again while Redis does not take it (a command timeout on a loaded machine, a
@@ -544,10 +544,6 @@ static long long remote(task *k, ism_cache_tier *t, long long now)
         }
         k->state = T_HOLD; /* made or given up */
         return task_end(k, t);
-    }
-    if (here) {                /* this daemon's executor took it */
-        k->state = T_HOLD;
-        return now + HOLD_TICK_NS;
     }
     renew_lock(k, t, now);
     ismd_cj_view v;
