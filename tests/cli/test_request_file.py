@@ -8,8 +8,12 @@ import os
 import shutil
 import struct
 import subprocess
+import sys
 import tempfile
 import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from boxes import placements  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
@@ -61,10 +65,9 @@ class RequestFileTest(unittest.TestCase):
         self.assertEqual(stats["analysis"]["euler"], 0, "a torus has Euler characteristic 0")
 
     def test_glb_is_valid_and_decodes(self):
-        every = ["normal", "mean_curvature", "gauss_curvature", "class"]  # the default: normals
         stats, out, _ = self.run_request({"preset": "klein-bottle", "depth": {"max": 6},
-                                          "max_error": None, "output": {"attributes": every}},
-                                         "glb")
+                                          "max_error": None,
+                                          "output": {"attributes": EVERY_ATTRIBUTE}}, "glb")
         self.assertGreater(stats["analysis"]["nonmanifold_edges"], 0)
         proc = subprocess.run(["node", VALIDATOR, out], capture_output=True, text=True,
                               timeout=120, cwd=ROOT)
@@ -128,12 +131,11 @@ class RequestFileTest(unittest.TestCase):
         they cost bytes: on gyroid-ball the default payload is smaller than with them."""
         r = 0.8
         cell = 2.0 / 2 ** 5
-        for shift in (0.0, 1e-3, (2 ** 0.5 - 1) * cell):
-            box = [-1 + shift, -1 + shift / 2, -1 - shift, 1 + shift, 1 + shift / 2, 1 - shift]
+        for box in placements([-1, -1, -1, 1, 1, 1], cell):
             sphere = {"expr": "x^2 + y^2 + z^2 - 0.64", "box": box, "depth": {"min": 3, "max": 5},
                       "max_error": None}
             stats, plain, d = self.drc_of(sphere)
-            self.assertEqual(d["attributes"], {"position": 0, "normal": 1}, shift)
+            self.assertEqual(d["attributes"], {"position": 0, "normal": 1}, box)
             self.assertNotIn("mean_curvature", d)
             named, same, _ = self.drc_of(dict(sphere, output={"attributes": ["normal"]}))
             self.assertEqual(named["key"], stats["key"], "the default named is the same request")
@@ -141,7 +143,7 @@ class RequestFileTest(unittest.TestCase):
             curved, data, c = self.drc_of(dict(sphere, output={"attributes": EVERY_ATTRIBUTE}))
             self.assertNotEqual(curved["key"], stats["key"])
             self.assertEqual(c["attributes"], {"position": 0, "normal": 1, "mean_curvature": 2,
-                                               "gauss_curvature": 3, "class": 4}, shift)
+                                               "gauss_curvature": 3, "class": 4}, box)
             self.assertEqual(c["faces"], d["faces"])
             self.assertEqual(len(c["mean_curvature"]), c["points"])
             for h, k in zip(c["mean_curvature"], c["gauss_curvature"]):
