@@ -36,11 +36,11 @@ import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from boxes import IRR  # noqa: E402  (the placements' table: sqrt(2) - 1 of a cell)
+from drc import decode_drc  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
 ISOMESH = os.path.join(BUILD, "isomesh")
-DECODE = os.path.join(ROOT, "tests", "cli", "decode_drc.mjs")
 
 DEPTH = 6
 SIDE = 2.6
@@ -61,16 +61,6 @@ def tri_area(p, q, r):
     w = [r[k] - p[k] for k in range(3)]
     c = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]]
     return 0.5 * math.sqrt(sum(v * v for v in c))
-
-
-def decode_drc(data, tmp):
-    path = os.path.join(tmp, "decode.drc")
-    with open(path, "wb") as f:
-        f.write(data)
-    r = subprocess.run(["node", DECODE, path], capture_output=True, text=True, timeout=120)
-    if r.returncode != 0:
-        raise AssertionError("decode_drc.mjs failed: " + r.stderr)
-    return json.loads(r.stdout)
 
 
 def glb_chunks(data):

@@ -14,12 +14,12 @@ import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from boxes import placements  # noqa: E402
+from drc import decode_drc  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
 ISOMESH = os.path.join(BUILD, "isomesh")
 VALIDATOR = os.path.join(ROOT, "tests", "unit", "proto", "validate_gltf.mjs")
-DECODE = os.path.join(ROOT, "tests", "cli", "decode_drc.mjs")  # npm draco3d
 EVERY_ATTRIBUTE = ["normal", "mean_curvature", "gauss_curvature", "class"]
 
 TORUS = {"preset": "torus", "depth": {"max": 5}}
@@ -109,18 +109,12 @@ class RequestFileTest(unittest.TestCase):
         self.assertEqual(sum(l.startswith("v ") for l in lines), stats["mesh"]["vertices"])
         self.assertEqual(sum(l.startswith("f ") for l in lines), stats["mesh"]["triangles"])
 
-    def decode(self, path):
-        proc = subprocess.run(["node", DECODE, path], capture_output=True, text=True,
-                              timeout=120, cwd=ROOT)
-        self.assertEqual(proc.returncode, 0, proc.stderr)
-        return json.loads(proc.stdout)
-
     def drc_of(self, request):
         """(stats, bytes, decoded by draco3d) of request as .drc."""
         stats, out, _ = self.run_request(request, "drc")
         with open(out, "rb") as f:
             data = f.read()
-        return stats, data, self.decode(out)
+        return stats, data, decode_drc(data, self.dir)
 
     def test_default_payload_is_normals_only_and_curvature_comes_when_asked(self):
         """A request that leaves output.attributes out gets positions and normals, what the
