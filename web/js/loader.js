@@ -49,7 +49,7 @@ const ofSurface = new Map();      // surface text (splitBody) -> [{key, attribut
 
 // What the server sends when a request leaves output.attributes out (proto/request.h
 // ISM_ATTR_DEFAULT: what the shaded view draws).
-export const DEFAULT_ATTRIBUTES = ['normal'];
+const DEFAULT_ATTRIBUTES = ['normal'];
 // Every attribute a request may ask for (the downloads carry them all).
 export const ALL_ATTRIBUTES = ['normal', 'mean_curvature', 'gauss_curvature', 'class'];
 

@@ -904,8 +904,10 @@ let downloads = { key: null, pending: null };
 function setDownloads(result, body) {
   const { surface, attributes } = loader.splitBody(body);
   const complete = loader.ALL_ATTRIBUTES.every((a) => attributes.includes(a));
-  const pending = loader.withAttributes(surface, loader.ALL_ATTRIBUTES);
-  downloads = { key: result.mesh ? result.key : null, pending: result.mesh && !complete ? pending : null };
+  downloads = {
+    key: result.mesh ? result.key : null,
+    pending: result.mesh && !complete ? loader.withAttributes(surface, loader.ALL_ATTRIBUTES) : null,
+  };
   linkDownloads(downloads.key);
 }
 
