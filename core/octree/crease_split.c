@@ -340,13 +340,14 @@ bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double
  * centroid on the other; or an edge between two crease points whose middle lies farther than
  * sag from the crease (Newton from it)? */
 static bool unseen_crease(ism_sampler *s, const ism_cell_out *out, const uint32_t *v,
-                          double sag)
+                          double sag, uint8_t *labels, uint32_t first)
 {
     const double *p[3];
     int b[3];
     for (int k = 0; k < 3; k++) {
         p[k] = out->verts[v[k]].p;
-        b[k] = out->verts[v[k]].flags & ISM_FP_CREASE ? -1 : ism_crease_branch(s, p[k], NULL);
+        b[k] = vertex_branch(s, out, labels, first, v[k]);
+        b[k] = b[k] == LABEL_ANY ? -1 : b[k];
     }
     double m[3], x[3];
     for (int e = 0; e < 3; e++) {
@@ -367,24 +368,36 @@ static bool unseen_crease(ism_sampler *s, const ism_cell_out *out, const uint32_
 }
 
 bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
-                       double max_error)
+                           double max_error)
 {
     if (first_tri == out->ntris || !top_undecided(s->tape) ||
         one_branch(s, out, first_tri, out->ntris))
         return false;
-    for (size_t t = first_tri; t < out->ntris; t++) {
+    uint32_t lo = UINT32_MAX, hi = 0;
+    for (size_t i = 3 * first_tri; i < 3 * out->ntris; i++) {
+        lo = out->tris[i] < lo ? out->tris[i] : lo;
+        hi = out->tris[i] > hi ? out->tris[i] : hi;
+    }
+    size_t n = (size_t)hi - lo + 1;
+    uint8_t stack[LABELS_ON_STACK], *labels = n <= LABELS_ON_STACK ? stack : malloc(n);
+    if (!labels)
+        return false; /* out of memory: the leaf is kept as measured */
+    memset(labels, LABEL_UNKNOWN, n);
+    bool unresolved = false;
+    for (size_t t = first_tri; t < out->ntris && !unresolved; t++) {
         const uint32_t *v = out->tris + 3 * t;
-        if (unseen_crease(s, out, v, CREASE_CHORD_SAG * max_error))
-            return true;
+        if ((unresolved = unseen_crease(s, out, v, CREASE_CHORD_SAG * max_error, labels, lo)))
+            break;
         const double *a = out->verts[v[0]].p, *b = out->verts[v[1]].p, *c = out->verts[v[2]].p;
-        double m[3], n[3], g[3];
+        double m[3], nrm[3], g[3];
         for (int k = 0; k < 3; k++)
             m[k] = (a[k] + b[k] + c[k]) / 3;
-        ism_tri_cross3(a, b, c, n);
+        ism_tri_cross3(a, b, c, nrm);
         ism_sample_grad(s, m, g);
-        double d = ism_dot3(n, g), l = ism_norm3(n) * ism_norm3(g);
-        if (l > 0 && d < CREASE_TURNED_COS * l)
-            return true;
+        double d = ism_dot3(nrm, g), l = ism_norm3(nrm) * ism_norm3(g);
+        unresolved = l > 0 && d < CREASE_TURNED_COS * l;
     }
-    return false;
+    if (labels != stack)
+        free(labels);
+    return unresolved;
 }
