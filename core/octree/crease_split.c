@@ -18,6 +18,28 @@
  * angle θ lies 1 / (2 sin(θ/2)) edge lengths from each end: 1.46 at cube-minus-ball's 40°;
  * measured there 1.02–1.36), and the linear estimate it fell back to is no crease point. */
 #define CREASE_REACH_EDGES 2.0
+/* How far beyond CREASE_REACH_EDGES a short edge p-q's (s->wedge_edges_below) crease point x
+ * may lie from its linear estimate, as a multiple of the planar bound |pq| / sin(min(w,
+ * 90°)), w the solid's wedge angle at x (π
+ * minus the angle between the branches' gradients there): with planar branches meeting on
+ * a straight crease, p on one at distance d1 from the crease and q on the other at d2,
+ * |pq| ≥ max(d1, d2) sin w for w ≤ 90° (≥ max(d1, d2) beyond), and the crease point nearest
+ * the segment lies within max(d1, d2) of it. Twice that leaves room for the branches' and the
+ * crease's bending over the cell. Where the gyroid ball's gyroid meets its sphere at w = 21°
+ * a lattice edge of a depth-10 leaf crosses both sides of the blade 0.00036 apart, its crease
+ * point 2.1 edges away (at w = 52°, 1.007 edges); a reach of one edge left that point on
+ * one branch and the triangles across the crease 10 E off at E = 1e-4 at depth 10 and 12
+ * alike, and two edges still miss the thinnest wedges.
+ * Only short edges: on a leaf that can still be split, a crease point far off its edge
+ * (the crease outside the polygon) made a level-5 leaf of the gyroid ball at the default
+ * bound, a 19-gon fanned across the crease, pass E wound against its neighbours (21 edges
+ * run the same way twice, test_winding.c); such leaves split instead, as before. */
+#define CREASE_REACH_SLACK 2.0
+/* "Short": at most the diagonal of a cell this many levels above depth.max. Depth.max alone
+ * (0) left leaves one level above it that appeared in the last refinement round beyond E
+ * (1 cell in each shifted box at E = 1e-4, 1.15 E and 1.20 E); one level meets E in all
+ * three boxes. Two levels would reach the 19-gon's edges on the depth-7 default bound. */
+#define CREASE_WEDGE_LEVELS 1
 /* The branches' gradients count as parallel (no crease line through x, the 2 × 2 normal
  * system singular) when |ga|²|gb|² − (ga·gb)² is below this share of |ga|²|gb|²: a sine
  * of the crossing angle under 1e-6 rad, where a step would run along the crease. */
@@ -108,6 +130,26 @@ bool ism_crease_newton(ism_sampler *s, double x[3])
     return true;
 }
 
+/* Is crease point x (a = b = 0) near enough lin, the linear estimate on an edge of length
+ * len: within CREASE_REACH_EDGES, or on a short edge within CREASE_REACH_SLACK planar bounds
+ * (the wedge is looked up only then)? */
+static bool within_reach(ism_sampler *s, const double x[3], const double lin[3], double len)
+{
+    double d = ism_dist3(x, lin);
+    if (d <= CREASE_REACH_EDGES * len)
+        return true;
+    if (!(len <= s->wedge_edges_below))
+        return false;
+    double v[2], g[2][3];
+    s->n_gradient++;
+    if (!ism_eval_top_branches(top_tape(s, x), s->ws, x[0], x[1], x[2], v, g))
+        return false;
+    double aa = ism_dot3(g[0], g[0]), bb = ism_dot3(g[1], g[1]), ab = ism_dot3(g[0], g[1]);
+    /* sin w = sin of the gradients' angle; w ≥ 90° (ab ≥ 0): sin taken as 1 */
+    double sin2 = ab >= 0 ? 1 : (aa * bb - ab * ab) / (aa * bb);
+    return sin2 > 0 && d * d * sin2 <= CREASE_REACH_SLACK * CREASE_REACH_SLACK * len * len;
+}
+
 /* The crease point of edge p-q (branches differ at its ends): Newton on a = b = 0 from
  * where a - b changes sign along the edge (flagged ISM_FP_CREASE; true), or that linear
  * estimate moved onto f = 0 (false). */
@@ -128,7 +170,7 @@ static bool crease_point(ism_sampler *s, const double *p0, const double *q0, ism
     for (int k = 0; k < 3; k++)
         lin[k] = x[k] = p[k] + t * (q[k] - p[k]);
     bool ok = ism_crease_newton(s, x);
-    ok = ok && ism_dist3(x, lin) <= CREASE_REACH_EDGES * ism_dist3(p, q);
+    ok = ok && within_reach(s, x, lin, ism_dist3(p, q));
     if (!ok) {
         memcpy(x, lin, sizeof x); /* onto f = 0 along ∇f at least */
         for (int it = 0; it < CREASE_NEWTON_STEPS; it++) {
@@ -400,4 +442,16 @@ bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first
     if (labels != stack)
         free(labels);
     return unresolved;
+}
+
+double ism_crease_wedge_edges(const ism_grid *g, int max_depth)
+{
+    int level = max_depth > CREASE_WEDGE_LEVELS ? max_depth - CREASE_WEDGE_LEVELS : 0;
+    int32_t steps = ism_grid_cell_steps(g, level);
+    double d2 = 0;
+    for (int a = 0; a < 3; a++) {
+        double side = ism_grid_coord(g, a, steps) - ism_grid_coord(g, a, 0);
+        d2 += side * side;
+    }
+    return sqrt(d2);
 }

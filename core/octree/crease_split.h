@@ -9,6 +9,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include "core/octree/cell_types.h"
+#include "core/octree/grid.h"
 #include "core/octree/sampler.h"
 
 /* Splits out's triangles from first_tri on (one leaf's) along the crease of s's tape; does
@@ -43,6 +44,11 @@ bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double
  * crease. Only where the leaf keeps f's top min/max; false elsewhere. */
 bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
                            double max_error);
+
+/* The sampler's wedge_edges_below under an error bound (sampler.h): the diagonal of a cell of
+ * grid g one level above max_depth (crease_split.c CREASE_WEDGE_LEVELS), the longest edge of
+ * the leaves that can no longer, or hardly, be split to follow the crease. */
+double ism_crease_wedge_edges(const ism_grid *g, int max_depth);
 
 /* The branch of f's top min/max active at p (0 or 1), or -1 when the tape does not end in
  * min/max. g: that branch's gradient there (may be NULL). */

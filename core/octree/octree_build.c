@@ -5,6 +5,7 @@
 #include "core/octree/octree_build.h"
 #include "core/octree/sampler.h"
 #include "core/octree/cell_cache.h"
+#include "core/octree/crease_split.h"
 #include "core/octree/edge_roots.h"
 #include "core/octree/face_memo.h"
 #include "core/octree/leaf_tapes.h"
@@ -832,6 +833,9 @@ static bool init_threads(build *b, int nthreads)
         th->s.dist_above = b->p->flatness.max_error;
         th->s.rays_below = b->p->nquiet ? INFINITY : 0;
         th->s.batch = !b->p->scalar_eval;
+        th->s.wedge_edges_below = b->p->flatness.max_error > 0
+                                      ? ism_crease_wedge_edges(b->grid, b->p->max_depth)
+                                      : 0;
         th->s.ws = ism_eval_ws_new(b->p->tape);
         th->corners = b->corner_memos + (size_t)t * memo;
         if (b->root_memos) {

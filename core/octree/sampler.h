@@ -33,6 +33,10 @@ typedef struct ism_sampler {
      * one point at a time gives (eval.h), for less. Off on the scalar reference path
      * (poly_options.h's scalar_eval), which the tests compare with it. */
     bool batch;
+    /* crease_split.c: a mixed edge at most this long may take its crease point as far as a
+     * thin wedge puts it (|pq| / sin w): under max_error the diagonal of a cell one level
+     * above depth.max (ism_crease_wedge_edges); 0: one edge's length only. */
+    double wedge_edges_below;
     uint64_t n_point, n_gradient, n_interval;
 } ism_sampler;
 
