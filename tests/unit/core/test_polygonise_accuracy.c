@@ -399,8 +399,9 @@ Test(accuracy, crease_cut_meets_the_bound_above_the_crease_depth)
  * puts it (crease_split.c), an edge crossing both sides of a thin wedge (21-52° there) kept
  * a point on one branch and its triangles were up to 10 E off at depth 10 and at depth 12
  * alike (1,467 cells missed E at depth 10, 1,391 in the irrational box: this test failed in
- * all three boxes); now 650,150 / 655,098 / 654,800 triangles (685,038 before in the own
- * box), none missed, the farthest 0.9999 E. About 8 s of CPU a box: under ISOMESH_TEST_QUICK
+ * all three boxes; with two edges' reach, b9322d1, still 54 cells and 3.76 E in the own box);
+ * now 657,094 / 661,742 / 661,382 triangles (685,038 at first in the own box), none missed,
+ * the farthest 0.9999 E. About 8 s of CPU a box: under ISOMESH_TEST_QUICK
  * (the sanitizer build, 5-10x slower) it is skipped — crease_split's paths run there in the
  * coarser crease tests above. */
 #define GYROID_K 4.0
