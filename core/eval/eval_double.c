@@ -14,27 +14,30 @@
 
 #define LANES 32
 
-/* One instruction's value from its operands' values a and b (b: only for the two-register
- * operations). */
+/* One instruction's value from its first operand's value a. The two-register operations read
+ * their second operand, register in->b, as r[in->b * stride + lane] inside their own case
+ * (one point: stride 1, lane 0; a lane of ism_eval_points' registers: ISM_EVAL_BATCH and j),
+ * so ism_eval_point pays no test of whether b exists and no load it does not use. */
 static inline __attribute__((always_inline)) double op_value(const ism_instr *in, double a,
-                                                          double b)
+                                                          const double *r, size_t stride,
+                                                          size_t lane)
 {
     double c = in->imm;
     switch (in->op) {
     case ISM_OP_CONST: return c;
     case ISM_OP_COPY: return a;
-    case ISM_OP_ADD_RR: return a + b;
+    case ISM_OP_ADD_RR: return a + r[(size_t)in->b * stride + lane];
     case ISM_OP_ADD_RC: return a + c;
-    case ISM_OP_SUB_RR: return a - b;
+    case ISM_OP_SUB_RR: return a - r[(size_t)in->b * stride + lane];
     case ISM_OP_SUB_CR: return c - a;
-    case ISM_OP_MUL_RR: return a * b;
+    case ISM_OP_MUL_RR: return a * r[(size_t)in->b * stride + lane];
     case ISM_OP_MUL_RC: return a * c;
-    case ISM_OP_DIV_RR: return a / b;
+    case ISM_OP_DIV_RR: return a / r[(size_t)in->b * stride + lane];
     case ISM_OP_DIV_RC: return a / c;
     case ISM_OP_DIV_CR: return c / a;
-    case ISM_OP_MIN_RR: return ism_min(a, b);
+    case ISM_OP_MIN_RR: return ism_min(a, r[(size_t)in->b * stride + lane]);
     case ISM_OP_MIN_RC: return ism_min(a, c);
-    case ISM_OP_MAX_RR: return ism_max(a, b);
+    case ISM_OP_MAX_RR: return ism_max(a, r[(size_t)in->b * stride + lane]);
     case ISM_OP_MAX_RC: return ism_max(a, c);
     case ISM_OP_NEG: return -a;
     case ISM_OP_SQUARE: return a * a;
@@ -51,9 +54,10 @@ static inline __attribute__((always_inline)) double op_value(const ism_instr *in
     }
 }
 
-static double point_op(const ism_instr *in, const double *r)
+static inline __attribute__((always_inline)) double point_op(const ism_instr *in,
+                                                           const double *r)
 {
-    return op_value(in, r[in->a], ism_op_has_reg_b(in->op) ? r[in->b] : 0.0);
+    return op_value(in, r[in->a], r, 1, 0);
 }
 
 /* The first n instructions of t at (x, y, z) into ws->scalar. */
@@ -318,7 +322,7 @@ static void narrow_op(const ism_instr *in, double *regs, ism_trig_cache *trig, s
         return;
     default:
         for (size_t j = 0; j < n; j++)
-            o[j] = op_value(in, a[j], b[j]);
+            o[j] = op_value(in, a[j], regs, ISM_EVAL_BATCH, j);
         return;
     }
 }
