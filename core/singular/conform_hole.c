@@ -446,13 +446,8 @@ void cf_undo(cf_ctx *c, const uint32_t *removed, size_t nremoved, size_t ntris, 
 
 /* Samples of f per side along a rim vertex's normal when looking for another sheet. */
 #define CLEAR_SAMPLES 8
-/* Rim vertices whose samples are evaluated together: their 2 CLEAR_SAMPLES points each fill
- * one batch of the evaluator (ism_eval_points: one pass over the tape for all of them, each
- * value ism_eval_point's to the bit; one at a time, the samples cost crossing-spheres'
- * conformance 11.3M instructions, callgrind). A vertex found unclear ends the check after
- * its batch, not at once: at most this many vertices more. */
-#define CLEAR_BATCH_VERTICES (ISM_EVAL_BATCH / (2 * CLEAR_SAMPLES))
-
+/* batch_clear takes whole vertices: a full batch holds a whole number of them. */
+_Static_assert(ISM_EVAL_BATCH % (2 * CLEAR_SAMPLES) == 0, "a batch holds whole vertices");
 /* True when the samples v[0 .. CLEAR_SAMPLES) along one side change sign beyond the first. */
 static bool sheet_along(const double *v)
 {
@@ -479,6 +474,22 @@ static void samples_along(const double p[3], const double n[3], double len, doub
     }
 }
 
+/* Evaluates the n waiting samples (whole runs of CLEAR_SAMPLES) in one pass and says whether no
+ * run meets another sheet. The rim vertices' samples are evaluated a batch at a time
+ * (ism_eval_points: one pass over the tape for ISM_EVAL_BATCH / (2 CLEAR_SAMPLES) vertices, each
+ * value ism_eval_point's to the bit; one at a time, the samples cost crossing-spheres'
+ * conformance 11.3M instructions, callgrind). A vertex found unclear ends the check after its
+ * batch, not at once. */
+static bool batch_clear(cf_ctx *c, const double *x, const double *y, const double *z, double *v,
+                        size_t n)
+{
+    ism_eval_points(c->f, c->ws, x, y, z, v, n);
+    for (size_t k = 0; k < n; k += CLEAR_SAMPLES)
+        if (sheet_along(v + k))
+            return false;
+    return true;
+}
+
 bool cf_rim_clear(cf_ctx *c, const cf_loops *ls, double clearance)
 {
     double x[ISM_EVAL_BATCH], y[ISM_EVAL_BATCH], z[ISM_EVAL_BATCH], v[ISM_EVAL_BATCH];
@@ -497,16 +508,13 @@ bool cf_rim_clear(cf_ctx *c, const cf_loops *ls, double clearance)
             samples_along(p, nu, clearance, x, y, z, n);
             samples_along(p, m, clearance, x, y, z, n + CLEAR_SAMPLES);
             n += 2 * CLEAR_SAMPLES;
-            bool last = j + 1 == ls->l[i].n && i + 1 == ls->n;
-            if (n < ISM_EVAL_BATCH && !last)
-                continue;
-            ism_eval_points(c->f, c->ws, x, y, z, v, n);
-            for (size_t k = 0; k < n; k += CLEAR_SAMPLES)
-                if (sheet_along(v + k))
+            if (n == ISM_EVAL_BATCH) {
+                if (!batch_clear(c, x, y, z, v, n))
                     return false;
-            n = 0;
+                n = 0;
+            }
         }
-    return true;
+    return n == 0 || batch_clear(c, x, y, z, v, n);
 }
 
 bool cf_cut_clean(cf_ctx *c, const cf_cutter *cut, double *radius, double max_radius,
