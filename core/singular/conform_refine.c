@@ -112,14 +112,13 @@ static void tri_normal(const ism_mesh *m, uint32_t t, double n[3])
  * evaluates f and ∇f at each refill triangle's centroid (its first measure), and turned()
  * asks the same point again (crossing-spheres: 15.8k gradients, 7.5M instructions,
  * callgrind). An entry holds while none of the triangle's vertices has moved (the untangling
- * marks a vertex before it moves it): the same point, the same bits. */
+ * clears a vertex's triangles' entries before it moves it; it adds no triangles): the same
+ * point, the same bits. */
 typedef struct centroids {
     size_t nt0;             /* entry t − nt0 for triangle t */
     double (*g)[4];         /* ∇f and f */
     uint8_t *has;
     size_t cap_g, cap_has;
-    uint8_t *moved;         /* per vertex, from the untangling on (NULL before) */
-    size_t nmoved;
 } centroids;
 
 /* Room for the triangles below nt (a round of the halving measures no other). */
@@ -142,14 +141,10 @@ static void centroids_keep(centroids *cm, uint32_t t, const double g[3], double 
 }
 
 /* The kept ∇f and f at triangle t's centroid, or NULL. */
-static const double *centroids_find(const cf_ctx *c, const centroids *cm, uint32_t t)
+static const double *centroids_find(const centroids *cm, uint32_t t)
 {
     if (!cm || t < cm->nt0 || t - cm->nt0 >= cm->cap_has || !cm->has[t - cm->nt0])
         return NULL;
-    const uint32_t *v = c->m->tri + 3 * (size_t)t;
-    for (int k = 0; k < 3 && cm->moved; k++)
-        if (v[k] < cm->nmoved && cm->moved[v[k]])
-            return NULL;
     return cm->g[t - cm->nt0];
 }
 
@@ -157,7 +152,6 @@ static void centroids_free(centroids *cm)
 {
     free(cm->g);
     free(cm->has);
-    free(cm->moved);
 }
 
 /* Triangle t faces against ∇f: at its centroid, or at two of its corners (their normals, ∇f's
@@ -178,7 +172,7 @@ static bool turned(cf_ctx *c, uint32_t t, double *off, const centroids *cm)
     }
     if (against >= 2 && !off)
         return true;
-    const double *kept = centroids_find(c, cm, t);
+    const double *kept = centroids_find(cm, t);
     if (kept) {
         for (int k = 0; k < 3; k++)
             g[k] = kept[k];
@@ -244,8 +238,10 @@ static bool relax(cf_ctx *c, uint32_t v, double reach, centroids *cm)
     double worst0, worst1 = INFINITY;
     size_t before = turned_round(c, v, &worst0, cm);
     double g[3], fv, off0 = cf_distance_estimate(c, old, g, &fv);
-    if (v < cm->nmoved)
-        cm->moved[v] = 1; /* its triangles' kept centroids no longer hold */
+    cf_inc_begin(c, v, &it); /* its triangles' kept centroids no longer hold */
+    while (cf_inc_next(c, &it, &t))
+        if (t >= cm->nt0 && t - cm->nt0 < cm->cap_has)
+            cm->has[t - cm->nt0] = 0;
     for (int j = 0; j < 3; j++)
         p[j] = mean[j];
     /* back onto f = 0, by at most half the neighbours' mean distance: never onto another
@@ -359,10 +355,6 @@ static bool untangle(cf_ctx *c, size_t nt0, const ism_locus *l, double reach, ce
 {
     cf_tris vs = {0}, polys = {0};
     bool ok = list_polygoniser_turned(c, nt0, l, &polys);
-    cm->moved = calloc(c->m->nverts + 1, 1);
-    cm->nmoved = cm->moved ? c->m->nverts : 0;
-    if (!cm->moved) /* out of memory: nothing kept is read */
-        cm->cap_has = 0;
     for (int round = 0; ok && round < UNTANGLE_ROUNDS && !c->stopped; round++) {
         size_t nturned;
         ok = collect_turned(c, nt0, &polys, &vs, &nturned, cm);
