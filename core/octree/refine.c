@@ -94,12 +94,9 @@ double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_t
         }
         ism_sample_grad_batch(s, (const double (*)[3])p, f, g, (size_t)np);
         for (size_t k = 0, i = 0; k < ntri && !(worst > bound); k++, t++)
-            for (; i < ends[k]; i++) {
-                double d = ism_first_order_dist(f[i], g[i]);
-                if (d > s->dist_above && isfinite(d))
-                    d = ism_dist_capped(s, p[i], d, m[i].v, m[i].n);
-                worst = fmax(worst, d);
-            }
+            for (; i < ends[k]; i++)
+                worst = fmax(worst, ism_dist_beyond(s, p[i], ism_first_order_dist(f[i], g[i]),
+                                                    m[i].v, m[i].n));
     }
     return worst;
 }

@@ -24,11 +24,17 @@
  * on f = 0, so the figure stays an upper bound of the distance wherever it was lowered. */
 double ism_dist_capped(ism_sampler *s, const double p[3], double d, const double *const *v,
                        int n);
+/* d (p's first-order estimate) lowered by ism_dist_capped when it is finite and beyond
+ * dist_above; d itself otherwise. */
+static inline double ism_dist_beyond(ism_sampler *s, const double p[3], double d,
+                                     const double *const *v, int n)
+{
+    return d > s->dist_above && isfinite(d) ? ism_dist_capped(s, p, d, v, n) : d;
+}
 static inline double ism_sample_dist_between(ism_sampler *s, const double p[3],
                                              const double *const *v, int n)
 {
-    double d = ism_sample_dist(s, p);
-    return d > s->dist_above && isfinite(d) ? ism_dist_capped(s, p, d, v, n) : d;
+    return ism_dist_beyond(s, p, ism_sample_dist(s, p), v, n);
 }
 
 /* The largest distance (ism_sample_dist_between) at the centroids and edge midpoints of out's
