@@ -27,16 +27,11 @@ static const double *pt(const cf_polyline *pl, size_t i)
     return pl->p + 3 * (i % pl->n);
 }
 
-/* The grid cell of coordinate offset u (in steps) along an axis of dim cells: floor(u)
- * clamped to [0, dim − 1], without libm's call (every query asks two per axis); u is
- * clamped first, so truncation is floor (0 for a NaN, never asked). */
+/* The grid cell of coordinate offset u (in steps) along an axis of dim cells (every query
+ * asks two per axis). */
 static inline int cell_of(double u, int dim)
 {
-    if (!(u >= 0))
-        return 0; /* floor(u) < 0 too */
-    if (u >= dim)
-        return dim - 1;
-    return (int)u; /* 0 <= u < dim: truncation is floor */
+    return (int)cf_floor_clamped(u, dim);
 }
 
 static void cell_range(const cf_polyline *pl, const double lo[3], const double hi[3],

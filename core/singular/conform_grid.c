@@ -41,13 +41,11 @@ static uint64_t pack(int level, const int64_t c[3])
            (uint64_t)c[1] << COORD_BITS | (uint64_t)c[2];
 }
 
-/* floor((x − lo) / s) clamped to [0, COORD_MAX] (0 for a NaN): the offset is clamped
- * first, so truncation is floor, without libm's call (three per triangle filed, six per
- * level of every query). */
+/* floor((x − lo) / s) clamped to [0, COORD_MAX] (0 for a NaN; three per triangle filed, six
+ * per level of every query). */
 static int64_t coord(const cf_tgrid *g, double x, int k, double s)
 {
-    double u = (x - g->lo[k]) / s;
-    return !(u >= 1) ? 0 : u >= COORD_MAX ? COORD_MAX : (int64_t)u;
+    return cf_floor_clamped((x - g->lo[k]) / s, (int64_t)COORD_MAX + 1);
 }
 
 static void tri_box(const ism_mesh *m, uint32_t t, double lo[3], double hi[3])

@@ -287,6 +287,13 @@ static inline double cf_max2(double a, double b)
 {
     return b > a ? b : a;
 }
+
+/* floor(u) clamped to [0, n − 1], 0 for a NaN, without libm's floor call (the grids ask it per
+ * axis of every triangle filed and every query): u is clamped first, so truncation is floor. */
+static inline int64_t cf_floor_clamped(double u, int64_t n)
+{
+    return !(u >= 0) ? 0 : u >= (double)n ? n - 1 : (int64_t)u;
+}
 /* The box around the segment ab (a point when a = b) grown by r and the slack. */
 void cf_query_box(const double a[3], const double b[3], double r, double lo[3], double hi[3]);
 
