@@ -50,7 +50,8 @@ double ism_eval_gradient(const ism_tape *t, ism_eval_ws *ws, double x, double y,
 
 /* Points per inner chunk of ism_eval_gradient_batch (its registers: value and three partials
  * of this many lanes each; 1 KB a register, so a tape's registers stay in L1/L2). The
- * polygoniser's batches are a cell's edges or its triangles' points: tens, not hundreds. */
+ * polygoniser's batches are a leaf's triangles' centroids and edge midpoints
+ * (ism_emitted_error): tens, not hundreds. */
 #define ISM_GRAD_BATCH 32
 
 /* f[i] = f(x[i], y[i], z[i]) and g[i] = its gradient for i < n: lane by lane bit for bit what
@@ -64,10 +65,8 @@ void ism_eval_gradient_batch(const ism_tape *t, ism_eval_ws *ws, const double *x
 /* out[i] = f(x[i], y[i], z[i]) for i < n, lane by lane bit for bit ism_eval_point's value,
  * for short batches: unlike ism_eval_batch it pads no lane up to a group of 32 (a batch of 5
  * costs 5 lanes) and takes sines and cosines through the workspace's memo as ism_eval_point
- * does (two of a root search's three coordinates repeat from step to step). n may be any
- * size; chunks of ISM_EVAL_BATCH. Not on the meshing path: a node's edge root searches in
- * lockstep were 1.7 wide on average (the root memo answers the rest) and cost more than one
- * at a time (gyroid-ball +12.7M instructions); batching them across nodes is the next step. */
+ * does. n may be any size; chunks of ISM_EVAL_BATCH. Its caller: the conformance pass's rim
+ * clearance samples (cf_rim_clear; edge root searches in lockstep cost more: batch19 notes). */
 void ism_eval_points(const ism_tape *t, ism_eval_ws *ws, const double *x, const double *y,
                      const double *z, double *out, size_t n);
 

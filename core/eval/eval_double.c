@@ -3,8 +3,8 @@
  * one loop over the lanes. The lanes are walked in groups of 8 with a constant inner trip
  * count and restrict pointers (no instruction writes a register it reads), which is what
  * lets gcc -O2 vectorise them without run-time alias or remainder checks. Short batches
- * (ism_eval_points: a cell's edges) loop over just their lanes and take sines and cosines
- * through the workspace's memo, as one point does. */
+ * (ism_eval_points: the conformance pass's rim samples) loop over just their lanes and take
+ * sines and cosines through the workspace's memo, as one point does. */
 #include "core/eval/workspace.h"
 #include "core/eval/trig_pair.h"
 #include "core/expr/scalar_ops.h"
