@@ -207,6 +207,14 @@ static double mean_edge(const rm_pass *p, uint32_t v, const uint32_t *nb, uint32
     return n ? sum / n : 0;
 }
 
+/* v's distinct neighbours into nb (*nnb of them; room for 2 × ISM_RM_MERGE_MAX_DEGREE), and
+ * whether vw is shorter than ISM_RM_CROWD × v's mean edge: a pair that crowds. */
+static bool crowds(const rm_pass *p, uint32_t v, uint32_t w, uint32_t *nb, uint32_t *nnb)
+{
+    *nnb = (uint32_t)rm_merge_neighbours(&p->r, v, nb);
+    return rm_dist(P(p, v), P(p, w)) <= ISM_RM_CROWD * mean_edge(p, v, nb, *nnb);
+}
+
 /* For merging v into w along the short edge vw of a crease: v is locked but no given
  * point's vertex or segment end, ∇f does not vanish there, its triangles are one closed fan
  * of manifold edges with one label, none on the caller's locked list — so what holds v is
@@ -222,9 +230,9 @@ static bool crease_merge_find(const rm_pass *p, uint32_t v, uint32_t w, uint32_t
     if (r->locked[v] == RM_PINNED || (n[0] == 0 && n[1] == 0 && n[2] == 0) ||
         !rm_merge_find_any(r, v, w, deg, g))
         return false;
-    uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE], nnb = (uint32_t)rm_merge_neighbours(r, v, nb);
-    if (nnb != r->count[v] || /* one closed fan: as many neighbours as triangles */
-        !(rm_dist(P(p, v), P(p, w)) <= ISM_RM_CROWD * mean_edge(p, v, nb, nnb)))
+    uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE], nnb;
+    if (!crowds(p, v, w, nb, &nnb) ||
+        nnb != r->count[v]) /* one closed fan: as many neighbours as triangles */
         return false;
     for (uint32_t j = 0; j < nnb; j++) {
         uint32_t two[2];
@@ -237,48 +245,40 @@ static bool crease_merge_find(const rm_pass *p, uint32_t v, uint32_t w, uint32_t
     return true;
 }
 
-/* For merging free v into w, on a surface without creases (may_crease false), when vw is
- * shorter than ISM_RM_CROWD × v's mean edge: v's triangles then move by a hair, and each is
- * held to its own normal before as along a crease (rm_crease_tri_ok) instead of the fan's
- * mean normal, which says nothing where the fan is folded. Kummer-16's conformance rims leave
- * such pairs 1e-4 apart in folded fans (new triangles 70°-160° from the fan's normal); while
- * the bends there locked them as creases crease_merge_find took them, and once kink-free
- * surfaces had no creases (rm_locks.c) they stayed: smallest angle 2.79° -> 0.25° in the
- * preset's own box. */
-static bool crowd_merge_find(const rm_pass *p, uint32_t v, uint32_t w, uint32_t deg,
-                             rm_merge *g)
-{
-    if (!rm_merge_find(&p->r, v, w, deg, g))
-        return false;
-    uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE], nnb = (uint32_t)rm_merge_neighbours(&p->r, v, nb);
-    if (!(rm_dist(P(p, v), P(p, w)) <= ISM_RM_CROWD * mean_edge(p, v, nb, nnb)))
-        return false;
-    g->along = true;
-    return true;
-}
-
 /* The better of merging a into b and b into a, when either passes every test (along a
  * crease when both are locked; a free pair much closer than its edges, as a crowd when the
  * plain merge fails both ways). */
 static bool best_merge(rm_pass *p, uint32_t a, uint32_t b, rm_merge *best)
 {
-    rm_merge g;
-    bool found = false, crease = p->r.locked[a] && p->r.locked[b];
+    rm_merge g[2];
+    bool have[2], found = false, crease = p->r.locked[a] && p->r.locked[b];
     uint32_t deg = ISM_RM_COLLAPSE_MAX_DEGREE;
-    if ((crease ? crease_merge_find(p, a, b, deg, &g) : rm_merge_find(&p->r, a, b, deg, &g)) &&
-        merge_ok(p, &g))
-        *best = g, found = true;
-    if ((crease ? crease_merge_find(p, b, a, deg, &g) : rm_merge_find(&p->r, b, a, deg, &g)) &&
-        merge_ok(p, &g) && (!found || g.after > best->after))
-        *best = g, found = true;
+    for (int k = 0; k < 2; k++) {
+        uint32_t v = k ? b : a, w = k ? a : b;
+        have[k] = crease ? crease_merge_find(p, v, w, deg, &g[k])
+                         : rm_merge_find(&p->r, v, w, deg, &g[k]);
+        if (have[k] && merge_ok(p, &g[k]) && (!found || g[k].after > best->after))
+            *best = g[k], found = true;
+    }
     if (found || crease || p->may_crease)
         return found; /* where f may crease, crease_merge_find has the crowds (free pairs
                          as a crowd too: gyroid-ball 1 / 4 / 6 needles -> 3 / 0 / 7) */
-    if (crowd_merge_find(p, a, b, deg, &g) && merge_ok(p, &g))
-        *best = g, found = true;
-    if (crowd_merge_find(p, b, a, deg, &g) && merge_ok(p, &g) &&
-        (!found || g.after > best->after))
-        *best = g, found = true;
+    /* For merging free v into w, on a surface without creases (may_crease false), when vw is
+     * shorter than ISM_RM_CROWD × v's mean edge: v's triangles then move by a hair, and each is
+     * held to its own normal before as along a crease (rm_crease_tri_ok) instead of the fan's
+     * mean normal, which says nothing where the fan is folded. Kummer-16's conformance rims leave
+     * such pairs 1e-4 apart in folded fans (new triangles 70°-160° from the fan's normal); while
+     * the bends there locked them as creases crease_merge_find took them, and once kink-free
+     * surfaces had no creases (rm_locks.c) they stayed: smallest angle 2.79° -> 0.25° in the
+     * preset's own box. */
+    for (int k = 0; k < 2; k++) {
+        uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE], nnb;
+        if (have[k] && crowds(p, g[k].v, g[k].w, nb, &nnb)) {
+            g[k].along = true; /* merge_ok wrote only g[k].after: the plain find's g stands */
+            if (merge_ok(p, &g[k]) && (!found || g[k].after > best->after))
+                *best = g[k], found = true;
+        }
+    }
     return found;
 }
 

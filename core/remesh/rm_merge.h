@@ -16,7 +16,8 @@
 typedef struct rm_merge {
     uint32_t v, w, t1, t2, c, d;
     double after; /* the caller's score (the new fan's smallest sine) */
-    bool along;   /* the caller's: merged along a crease (rm_collapse.c) */
+    bool along;   /* the caller's: each new triangle held to its own normal (a crease
+                     merge, or a free crowding pair: rm_collapse.c) */
 } rm_merge;
 
 /* Fills g for merging v into w when vw is an oriented manifold edge, neither is gone, v is
