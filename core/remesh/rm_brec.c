@@ -146,9 +146,10 @@ static double bound_of(rm_pass *p, uint32_t t, int s, const double y0[3], const 
         }
         double plain, u = moved_bound(e, y, isnan(*kappa) ? INFINITY : *kappa, w, &plain);
         p->brec_known++;
-        p->brec_skipped += ISM_RM_CBOUND_RATIO * plain <= p->max_error; /* rm_brec_pays */
+        bool plain_ok = ISM_RM_CBOUND_RATIO * plain <= p->max_error;
+        p->brec_skipped += plain_ok; /* rm_brec_pays */
         if (ISM_RM_CBOUND_RATIO * u <= p->max_error) {
-            p->bend_spared += !(ISM_RM_CBOUND_RATIO * plain <= p->max_error); /* fan_bend */
+            p->bend_spared += !plain_ok; /* fan_bend */
             return u;
         }
     }
@@ -241,11 +242,12 @@ static double fan_bend(rm_pass *p, uint32_t v, const double x[3])
         side = fmax(side, hi[k] - lo[k]);
     }
     if (!inside) {
+        /* bound_of asks no bend once stopped: the flag is only ever set here */
         if (p->bend_boxes == RM_BREC_BEND_TRIAL &&
-            (double)p->bend_spared < RM_BREC_BEND_MIN_SPARED * RM_BREC_BEND_TRIAL)
+            (double)p->bend_spared < RM_BREC_BEND_MIN_SPARED * RM_BREC_BEND_TRIAL) {
             p->bend_stopped = true; /* the boxes have not paid (rm_brec.h) */
-        if (p->bend_stopped)
-            return INFINITY; /* the plain bound alone */
+            return INFINITY;        /* the plain bound alone */
+        }
         for (int k = 0; k < 3; k++) {
             kept[k] = lo[k] - RM_BREC_BOX_GROW * side;
             kept[3 + k] = hi[k] + RM_BREC_BOX_GROW * side;
