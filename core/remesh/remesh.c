@@ -155,16 +155,14 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
     double *found_sine = malloc((nt ? nt : 1) * sizeof *found_sine);
     st->min_angle_before = min_angle_of(m, found_sine);
     size_t needles = 0;
-    double needle = sin(ISM_RM_INSERT_DEG * M_PI / 180);
+    double needle = rm_insert_poor();
     for (size_t t = 0; found_sine && t < nt; t++)
         needles += found_sine[t] < needle;
     bool ok = rm_pass_open(&p, m, o, nt / ISM_RM_INSERT_SHARE + ISM_RM_INSERT_MIN + needles);
-    if (ok) {
-        rm_sine_open(&p, found_sine ? m->ntris : 0);
-        if (p.sine && found_sine)
-            memcpy(p.sine, found_sine, nt * sizeof *p.sine);
-    }
-    free(found_sine);
+    if (ok)
+        rm_sine_open(&p, found_sine, found_sine ? nt : 0);
+    else
+        free(found_sine);
     /* under an error bound every step keeps it, measured at centroids and edge midpoints
        (rm_bound.h), whatever the mesh before: the simplified mesh's vertices sit off f = 0 */
     p.bounded = o->max_error > 0;

@@ -223,7 +223,7 @@ static bool split(rm_pass *p, uint32_t t, const uint32_t abc[3], const double *x
 size_t rm_insert_active(rm_pass *p, bool last, bool *ok)
 {
     rm_mesh *r = &p->r;
-    double poor = sin(ISM_RM_INSERT_DEG * M_PI / 180);
+    double poor = rm_insert_poor();
     size_t made = 0, nt = r->m->ntris;
     *ok = true;
     memset(p->touched, 0, r->cap_verts);

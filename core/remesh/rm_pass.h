@@ -11,6 +11,7 @@
 #include "core/remesh/remesh_types.h"
 #include "core/remesh/rm_mesh.h"
 
+#include <math.h>
 #include <stdlib.h>
 
 /* |∇f| at most this × the median over the vertices counts as vanishing (a singular point or
@@ -71,8 +72,8 @@ typedef struct rm_pass {
     double *normal;        /* 3 per vertex: ∇f / |∇f| (0 where it vanishes) */
     double gthresh;        /* |∇f| at or below this vanishes */
     double max_error;
-    bool may_crease;       /* f's gradient may jump across a curve of f = 0 (rm_pass.c
-                              rm_may_crease): without that no edge is a crease */
+    bool may_crease;       /* f's gradient may jump across a curve of f = 0 (rm_pass.c's
+                              may_crease): without that no edge is a crease */
     uint8_t *active;       /* per vertex: relaxed in this round (near a poor triangle) */
     uint8_t *slide;        /* per vertex: on a box face's boundary curve, may slide along it */
     uint8_t *touched;      /* per vertex: near a collapse of this sweep (rm_collapse.c), or
@@ -249,15 +250,22 @@ static inline void rm_shape_changed(rm_pass *p, uint32_t t)
         p->sine[t] = NAN;
 }
 
-/* Allocates sine for every triangle the pass may hold, those from `from` on not measured yet
- * (NAN; the caller fills the ones before). Out of memory it stays NULL and rm_tri_sine
- * measures every time. */
-static inline void rm_sine_open(rm_pass *p, size_t from)
+/* Makes sine room for every triangle the pass may hold, taking over `found` (the caller's
+ * measured sines of triangles 0 to from - 1, or NULL with from 0), those from `from` on not
+ * measured yet (NAN). Out of memory it stays NULL (found freed) and rm_tri_sine measures
+ * every time. */
+static inline void rm_sine_open(rm_pass *p, double *found, size_t from)
 {
-    if ((p->sine = malloc((p->r.cap_tris ? p->r.cap_tris : 1) * sizeof *p->sine)))
-        for (size_t t = from; t < p->r.cap_tris; t++)
-            p->sine[t] = NAN;
+    p->sine = realloc(found, (p->r.cap_tris ? p->r.cap_tris : 1) * sizeof *p->sine);
+    if (!p->sine)
+        free(found);
+    for (size_t t = from; p->sine && t < p->r.cap_tris; t++)
+        p->sine[t] = NAN;
 }
+
+/* A triangle whose smallest angle's sine is below this is a needle to split (rm_insert.c)
+ * and sizes the room for insertions (remesh.c). */
+static inline double rm_insert_poor(void) { return sin(ISM_RM_INSERT_DEG * M_PI / 180); }
 
 /* The sine of triangle t's smallest angle (rm_min_sine of its corners in order), measured
  * once while its shape holds (sine). */
