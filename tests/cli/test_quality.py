@@ -79,17 +79,23 @@ def euler(verts, tris):
     return len(used) - len(edges) + len(tris)
 
 
-def run_surface(name, box, quality, extra=()):
-    """(vertices, triangles, stats) of `isomesh --surface name` in box."""
+def run_surface(name, box, quality, extra=(), depth=f"3:{MAX_DEPTH}", features=False):
+    """(vertices, triangles, stats) of `isomesh --surface name` in box (depth None: no -d);
+    features: also the singular points' xyz of its --features file."""
     with tempfile.TemporaryDirectory() as tmp:
-        out = os.path.join(tmp, "m.ply")
+        out, feats = os.path.join(tmp, "m.ply"), os.path.join(tmp, "f.json")
         r = subprocess.run([ISOMESH, "--surface", name, "-b", ",".join(repr(v) for v in box),
-                            "-d", f"3:{MAX_DEPTH}", "--quality", quality, *extra, "--stats",
+                            *(("-d", depth) if depth else ()), "--quality", quality, *extra,
+                            *(("--features", feats) if features else ()), "--stats",
                             "-o", out], capture_output=True, text=True, timeout=300)
         if r.returncode != 0:
             raise AssertionError(f"isomesh failed ({r.returncode}): {r.stderr}")
         verts, tris = read_ply(out)
-        return verts, tris, json.loads(r.stdout)
+        if not features:
+            return verts, tris, json.loads(r.stdout)
+        with open(feats) as f:
+            points = [p["xyz"] for p in json.load(f)["singular_points"]]
+        return verts, tris, json.loads(r.stdout), points
 
 
 def sphere_distance(p):
@@ -246,16 +252,9 @@ class GoalsUnderTheDefaultBound(unittest.TestCase):
     def mesh(self, preset, box):
         """(vertices, triangles, singular points) of the preset in box, the pass on."""
         e = 1e-3 * math.dist(box[:3], box[3:])
-        with tempfile.TemporaryDirectory() as tmp:
-            out, feats = os.path.join(tmp, "m.ply"), os.path.join(tmp, "f.json")
-            r = subprocess.run([ISOMESH, "--surface", preset, "-b",
-                                ",".join(repr(v) for v in box), "--max-error", repr(e),
-                                "--quality", "good", "--threads", "2", "--features", feats,
-                                "-o", out], capture_output=True, text=True, timeout=300)
-            self.assertEqual(r.returncode, 0, r.stderr)
-            verts, tris = read_ply(out)
-            with open(feats) as f:
-                points = [p["xyz"] for p in json.load(f)["singular_points"]]
+        verts, tris, _, points = run_surface(preset, box, "good",
+                                             ("--max-error", repr(e), "--threads", "2"),
+                                             depth=None, features=True)
         return verts, tris, points
 
     def test_no_needle_but_at_a_feature_the_pass_keeps(self):
