@@ -176,7 +176,7 @@ static bool merge_ok(rm_pass *p, rm_merge *g)
     /* along a crease the needles come in strips: a merge that leaves fewer poor triangles
        is a gain even where the strip's next needle keeps the fan's smallest angle, as long
        as no angle falls below ISM_RM_CROWD_SINE_FLOOR of it (a crease vertex: locked; a
-       free crowding pair, crowd_merge_find, must raise the smallest angle) */
+       free crowding pair, best_merge's crowd retry, must raise the smallest angle) */
     bool fewer = g->along && r->locked[g->v] && poor_after < poor_before &&
                  g->after > ISM_RM_CROWD_SINE_FLOOR * f.min_sine;
     return (fewer || (g->after > f.min_sine && poor_after <= poor_before)) && distance_ok(p, g);
