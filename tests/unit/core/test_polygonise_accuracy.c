@@ -11,6 +11,7 @@
 #include <math.h>
 #include <string.h>
 #include "core/eval/eval.h"
+#include "core/util/vec3.h"
 #include "poly_fixture.h"
 
 static const ism_param sphere_r[] = {{"r", 1}};
@@ -420,12 +421,6 @@ static double gyroid_grad(const double p[3], double g[3])
 
 static double ball_value(const double p[3]) { return p[0] * p[0] + p[1] * p[1] + p[2] * p[2] - BALL_R2; }
 
-static double dist3(const double a[3], const double b[3])
-{
-    return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
-                (a[2] - b[2]) * (a[2] - b[2]));
-}
-
 /* Newton steps on the pieces: quadratic convergence from within a cell reaches rounding in
  * 4-6; a foot whose residual is still above FOOT_TOL is not counted. */
 #define FOOT_STEPS 12
@@ -448,7 +443,7 @@ static double gyroid_ball_dist(const double q[3])
             x[a] -= v * g[a] / gg;
     }
     if (fabs(gyroid_grad(x, g)) < FOOT_TOL && ball_value(x) <= 0)
-        best = fmin(best, dist3(x, q));
+        best = fmin(best, ism_dist3(x, q));
     memcpy(x, q, sizeof x);
     for (int it = 0; it < FOOT_STEPS; it++) { /* (g, s) = 0: x −= J^T (J J^T)^-1 (g, s) */
         double vg = gyroid_grad(x, g), vs = ball_value(x), b[3] = {2 * x[0], 2 * x[1], 2 * x[2]};
@@ -461,7 +456,7 @@ static double gyroid_ball_dist(const double q[3])
             x[a] -= l0 * g[a] + l1 * b[a];
     }
     if (fabs(gyroid_grad(x, g)) < FOOT_TOL && fabs(ball_value(x)) < FOOT_TOL)
-        best = fmin(best, dist3(x, q));
+        best = fmin(best, ism_dist3(x, q));
     return best;
 }
 
