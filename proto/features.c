@@ -178,15 +178,6 @@ int ism_features_decimals(double tol)
     return -1; /* finer than a double near 1 prints: in full */
 }
 
-/* n coordinates of a singular curve at d decimals (d < 0: in full). */
-static void write_curve_xyz(ism_jw *w, const double *v, size_t n, int d)
-{
-    if (d < 0)
-        ism_jw_numbers(w, v, n);
-    else
-        ism_jw_numbers_decimals(w, v, n, d);
-}
-
 static void write_curve_end(ism_jw *w, const ism_sing_curve *c, int e, const ism_locus *l,
                             int d)
 {
@@ -195,7 +186,7 @@ static void write_curve_end(ism_jw *w, const ism_sing_curve *c, int e, const ism
     ism_jw_key(w, "type");
     ism_jw_string(w, ism_end_type_name(c->end_type[e]));
     ism_jw_key(w, "xyz");
-    write_curve_xyz(w, c->xyz + 3 * at, 3, d);
+    ism_jw_numbers_decimals(w, c->xyz + 3 * at, 3, d);
     ism_jw_key(w, "point");
     if (c->end_point[e] >= 0 && (size_t)c->end_point[e] < l->npoints)
         ism_jw_int(w, c->end_point[e]);
@@ -213,7 +204,7 @@ static void write_singular_curve(ism_jw *w, const ism_sing_curve *c, const ism_l
     ism_jw_key(w, "closed");
     ism_jw_bool(w, c->closed);
     ism_jw_key(w, "xyz");
-    write_curve_xyz(w, c->xyz, 3 * c->n, d);
+    ism_jw_numbers_decimals(w, c->xyz, 3 * c->n, d);
     ism_jw_key(w, "ends");
     ism_jw_array(w);
     for (int e = 0; e < 2 && !c->closed && c->n; e++)
@@ -231,7 +222,7 @@ static void write_singular_curve(ism_jw *w, const ism_sing_curve *c, const ism_l
         ism_jw_key(w, "index");
         ism_jw_int(w, (int)c->first_uncertified);
         ism_jw_key(w, "xyz");
-        write_curve_xyz(w, c->xyz + 3 * (size_t)c->first_uncertified, 3, d);
+        ism_jw_numbers_decimals(w, c->xyz + 3 * (size_t)c->first_uncertified, 3, d);
         ism_jw_key(w, "residual_f");
         ism_jw_number(w, c->first_residual_f);
         ism_jw_key(w, "residual_grad");

@@ -177,12 +177,12 @@ void ism_jw_number_decimals(ism_jw *w, double v, int decimals)
     /* %f of a double below 1e300 with <= 17 decimals fits 340 bytes. */
     char buf[340];
     before_value(w);
-    if (!isfinite(v) || fabs(v) >= 1e300) {
+    if (decimals < 0 || !isfinite(v) || fabs(v) >= 1e300) { /* in full */
         ism_jw_format_double(v, buf);
         put(w, buf, strlen(buf));
         return;
     }
-    decimals = decimals < 0 ? 0 : decimals > 17 ? 17 : decimals;
+    decimals = decimals > 17 ? 17 : decimals;
     int n = snprintf(buf, sizeof buf, "%.*f", decimals, v);
     if (n < 0 || (size_t)n >= sizeof buf) {
         w->failed = true;

@@ -36,7 +36,8 @@ void ism_jw_numbers(ism_jw *w, const double *v, size_t n); /* [v0, ..., vn-1] */
 void ism_jw_float(ism_jw *w, float v);    /* shortest text that reads back to the same float */
 /* v rounded to `decimals` places after the point (0..17; off by at most 0.5 * 10^-decimals),
  * trailing zeros dropped, -0 as 0: for values whose own tolerance makes further digits noise
- * (the caller derives decimals from that tolerance); null when not finite. */
+ * (the caller derives decimals from that tolerance); null when not finite. decimals < 0: in
+ * full, as ism_jw_number prints it. */
 void ism_jw_number_decimals(ism_jw *w, double v, int decimals);
 void ism_jw_numbers_decimals(ism_jw *w, const double *v, size_t n, int decimals);
 void ism_jw_int(ism_jw *w, long long v);

@@ -109,3 +109,26 @@ Test(json_writer, misuse_fails_instead_of_emitting_broken_text)
     cr_expect(w.failed);
     ism_jw_free(&w);
 }
+
+/* decimals >= 0 rounds (trailing zeros and -0 dropped); decimals < 0 prints in full, the same
+ * text as ism_jw_numbers (a clamp to 0 decimals would print [0,-3,1]). */
+Test(json_writer, decimals_round_or_print_in_full)
+{
+    const double v[] = {0.123456789, -2.5, 1.0 / 3, -1e-4};
+    ism_jw w;
+    ism_jw_init(&w);
+    ism_jw_numbers_decimals(&w, v, 4, 3);
+    char *t = ism_jw_take(&w, NULL);
+    cr_expect_str_eq(t, "[0.123,-2.5,0.333,0]");
+    free(t);
+    ism_jw_init(&w);
+    ism_jw_numbers_decimals(&w, v, 4, -1);
+    t = ism_jw_take(&w, NULL);
+    ism_jw_init(&w);
+    ism_jw_numbers(&w, v, 4);
+    char *full = ism_jw_take(&w, NULL);
+    cr_expect_str_eq(t, full);
+    cr_expect_str_eq(t, "[0.123456789,-2.5,0.3333333333333333,-0.0001]");
+    free(t);
+    free(full);
+}
