@@ -257,13 +257,14 @@ bool ism_cell_polygonise(ism_cell_ctx *cx, int32_t node, ism_cell_out *out)
         int face = ism_face_plane(box, p, lp->n);
         if (face >= 0 && !face_polygon(cx, nd, p, lp->n, face, reach, box, out))
             return false;
-        bool cut = false;
-        if (face < 0 && cx->max_error > 0 &&
-            !ism_crease_cut_loop(&cx->s, p, lp->n, reach, box, cx->max_error, out, &cut))
-            return false;
-        if (face < 0 && !cut &&
-            !ism_triangulate_loop(&cx->s, p, lp->n, reach, box, cx->max_error, out))
-            return false;
+        if (face < 0) {
+            bool cut = false;
+            if (cx->max_error > 0 &&
+                !ism_crease_cut_loop(&cx->s, p, lp->n, reach, box, cx->max_error, out, &cut))
+                return false;
+            if (!cut && !ism_triangulate_loop(&cx->s, p, lp->n, reach, box, cx->max_error, out))
+                return false;
+        }
     }
     cx->stats.polygons += polygons;
     if (polygons == 2)

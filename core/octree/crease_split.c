@@ -444,8 +444,10 @@ bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first
     return unresolved;
 }
 
-double ism_crease_wedge_edges(const ism_grid *g, int max_depth)
+double ism_crease_wedge_edges(const ism_grid *g, int max_depth, double max_error)
 {
+    if (!(max_error > 0))
+        return 0;
     int level = max_depth > CREASE_WEDGE_LEVELS ? max_depth - CREASE_WEDGE_LEVELS : 0;
     int32_t steps = ism_grid_cell_steps(g, level);
     double d2 = 0;

@@ -45,10 +45,11 @@ bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double
 bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
                            double max_error);
 
-/* The sampler's wedge_edges_below under an error bound (sampler.h): the diagonal of a cell of
- * grid g one level above max_depth (crease_split.c CREASE_WEDGE_LEVELS), the longest edge of
- * the leaves that can no longer, or hardly, be split to follow the crease. */
-double ism_crease_wedge_edges(const ism_grid *g, int max_depth);
+/* The sampler's wedge_edges_below (sampler.h): under an error bound (max_error > 0) the
+ * diagonal of a cell of grid g one level above max_depth (crease_split.c CREASE_WEDGE_LEVELS),
+ * the longest edge of the leaves that can no longer, or hardly, be split to follow the crease;
+ * 0 without a bound (max_error <= 0: one edge's length only). */
+double ism_crease_wedge_edges(const ism_grid *g, int max_depth, double max_error);
 
 /* The branch of f's top min/max active at p (0 or 1), or -1 when the tape does not end in
  * min/max. g: that branch's gradient there (may be NULL). */

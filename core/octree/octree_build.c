@@ -833,9 +833,8 @@ static bool init_threads(build *b, int nthreads)
         th->s.dist_above = b->p->flatness.max_error;
         th->s.rays_below = b->p->nquiet ? INFINITY : 0;
         th->s.batch = !b->p->scalar_eval;
-        th->s.wedge_edges_below = b->p->flatness.max_error > 0
-                                      ? ism_crease_wedge_edges(b->grid, b->p->max_depth)
-                                      : 0;
+        th->s.wedge_edges_below =
+            ism_crease_wedge_edges(b->grid, b->p->max_depth, b->p->flatness.max_error);
         th->s.ws = ism_eval_ws_new(b->p->tape);
         th->corners = b->corner_memos + (size_t)t * memo;
         if (b->root_memos) {

@@ -487,8 +487,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         cx->s.dist_above = o->max_error;
         cx->s.rays_below = o->nquiet ? INFINITY : 0;
         cx->s.batch = !o->scalar_eval;
-        cx->s.wedge_edges_below =
-            o->max_error > 0 ? ism_crease_wedge_edges(&tree->grid, o->max_depth) : 0;
+        cx->s.wedge_edges_below = ism_crease_wedge_edges(&tree->grid, o->max_depth, o->max_error);
         cx->tree = tree;
         cx->parent = parent;
         cx->breaks = &breaks;
