@@ -234,17 +234,41 @@ static bool split_labelled(ism_sampler *s, ism_cell_out *out, size_t first_tri, 
     return true;
 }
 
-/* Do all vertices of triangles first_tri..ntris - 1 lie on one branch because the leaf's
- * shortened tape decides f's top min/max (strictly) over its closed box and holds them all? */
+/* Does the leaf's shortened tape decide f's top min/max (strictly) over its closed box and
+ * hold p (so p lies on the one branch it keeps)? */
+static bool local_holds(const ism_sampler *s, const double p[3])
+{
+    return s->local && !top_undecided(s->local) && ism_sampler_tape_at(s, p) == s->local;
+}
+
+/* Do all vertices of triangles first_tri..ntris - 1 (at least one) lie on one branch
+ * (local_holds)? */
 static bool one_branch(const ism_sampler *s, const ism_cell_out *out, size_t first_tri,
                        size_t ntris)
 {
-    if (!s->local || top_undecided(s->local))
-        return false;
     for (size_t i = 3 * first_tri; i < 3 * ntris; i++)
-        if (ism_sampler_tape_at(s, out->verts[out->tris[i]].p) != s->local)
+        if (!local_holds(s, out->verts[out->tris[i]].p))
             return false;
     return true;
+}
+
+/* Branch labels for the vertices of triangles first_tri..ntris - 1, all LABEL_UNKNOWN: stack
+ * when they fit, else malloc'd (the caller frees what is not stack; NULL: out of memory);
+ * *lo: the lowest of those vertices, labels[v - *lo] vertex v's. */
+static uint8_t *leaf_labels(const ism_cell_out *out, size_t first_tri,
+                            uint8_t stack[LABELS_ON_STACK], uint32_t *lo)
+{
+    uint32_t hi = 0;
+    *lo = UINT32_MAX;
+    for (size_t i = 3 * first_tri; i < 3 * out->ntris; i++) {
+        *lo = out->tris[i] < *lo ? out->tris[i] : *lo;
+        hi = out->tris[i] > hi ? out->tris[i] : hi;
+    }
+    size_t n = (size_t)hi - *lo + 1;
+    uint8_t *labels = n <= LABELS_ON_STACK ? stack : malloc(n);
+    if (labels)
+        memset(labels, LABEL_UNKNOWN, n);
+    return labels;
 }
 
 bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
@@ -258,16 +282,10 @@ bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
     s->n_point++;
     if (!ism_eval_top_values(t0, s->ws, p0[0], p0[1], p0[2], v))
         return true; /* no min/max at the top of the tape */
-    uint32_t lo = UINT32_MAX, hi = 0;
-    for (size_t i = 3 * first_tri; i < 3 * ntris; i++) {
-        lo = out->tris[i] < lo ? out->tris[i] : lo;
-        hi = out->tris[i] > hi ? out->tris[i] : hi;
-    }
-    size_t n = (size_t)hi - lo + 1;
-    uint8_t stack[LABELS_ON_STACK], *labels = n <= LABELS_ON_STACK ? stack : malloc(n);
+    uint32_t lo;
+    uint8_t stack[LABELS_ON_STACK], *labels = leaf_labels(out, first_tri, stack, &lo);
     if (!labels)
         return false;
-    memset(labels, LABEL_UNKNOWN, n);
     labels[out->tris[3 * first_tri] - lo] = (uint8_t)ism_top_active_branch(t0, v);
     bool ok = split_labelled(s, out, first_tri, ntris, labels, lo);
     if (labels != stack)
@@ -330,13 +348,11 @@ bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double
     *done = false;
     if (n < 3 || n > CUT_MAX_CORNERS || !top_undecided(s->tape))
         return true; /* f does not end in min/max */
-    if (s->local && !top_undecided(s->local)) {
-        size_t i = 0;
-        while (i < n && ism_sampler_tape_at(s, pts[i].p) == s->local)
-            i++;
-        if (i == n)
-            return true; /* one branch over the whole leaf (one_branch) */
-    }
+    size_t held = 0;
+    while (held < n && local_holds(s, pts[held].p))
+        held++;
+    if (held == n)
+        return true; /* one branch over the whole leaf (one_branch) */
     int br[CUT_MAX_CORNERS];
     size_t mixed[2], nmixed = 0;
     for (size_t i = 0; i < n; i++)
@@ -415,16 +431,10 @@ bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first
     if (first_tri == out->ntris || !top_undecided(s->tape) ||
         one_branch(s, out, first_tri, out->ntris))
         return false;
-    uint32_t lo = UINT32_MAX, hi = 0;
-    for (size_t i = 3 * first_tri; i < 3 * out->ntris; i++) {
-        lo = out->tris[i] < lo ? out->tris[i] : lo;
-        hi = out->tris[i] > hi ? out->tris[i] : hi;
-    }
-    size_t n = (size_t)hi - lo + 1;
-    uint8_t stack[LABELS_ON_STACK], *labels = n <= LABELS_ON_STACK ? stack : malloc(n);
+    uint32_t lo;
+    uint8_t stack[LABELS_ON_STACK], *labels = leaf_labels(out, first_tri, stack, &lo);
     if (!labels)
         return false; /* out of memory: the leaf is kept as measured */
-    memset(labels, LABEL_UNKNOWN, n);
     bool unresolved = false;
     for (size_t t = first_tri; t < out->ntris && !unresolved; t++) {
         const uint32_t *v = out->tris + 3 * t;
