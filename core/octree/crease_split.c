@@ -315,15 +315,10 @@ bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
  * test_polygonise_crease.c's double_torus_closed_under_a_bound). */
 #define CUT_CORNER_SHARE 1e-6
 
-/* Branch b's gradient at p, into the crease point x's g; false when a value is not finite. */
-static bool branch_gradient(ism_sampler *s, int b, ism_fpoint *x)
+/* Is every component of g finite? */
+static bool finite3(const double g[3])
 {
-    double v[2], g[2][3];
-    s->n_gradient++;
-    if (!ism_eval_top_branches(top_tape(s, x->p), s->ws, x->p[0], x->p[1], x->p[2], v, g))
-        return false;
-    memcpy(x->g, g[b], sizeof x->g);
-    return isfinite(x->g[0]) && isfinite(x->g[1]) && isfinite(x->g[2]);
+    return isfinite(g[0]) && isfinite(g[1]) && isfinite(g[2]);
 }
 
 /* The run of corners from + 1 .. to (cyclically) of pts between crease points a and b into
@@ -377,11 +372,18 @@ bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double
     /* end[k]: the crease points as corners of the run after mixed edge k, with its branch's
        gradients (so the run's own fans are judged on one smooth surface) */
     ism_fpoint end[2][2], sub[CUT_MAX_CORNERS + 2];
-    for (int k = 0; k < 2; k++) {
-        int b = br[(mixed[k] + 1) % n];
-        end[k][0] = x[k];
-        end[k][1] = x[1 - k];
-        if (!branch_gradient(s, b, &end[k][0]) || !branch_gradient(s, b, &end[k][1]))
+    for (int j = 0; j < 2; j++) { /* x[j] starts run j and ends run 1 - j: both branches */
+        double v[2], g[2][3];
+        s->n_gradient++;
+        if (!ism_eval_top_branches(top_tape(s, x[j].p), s->ws, x[j].p[0], x[j].p[1], x[j].p[2],
+                                   v, g))
+            return true;
+        int bj = br[(mixed[j] + 1) % n], bo = br[(mixed[1 - j] + 1) % n];
+        end[j][0] = x[j];
+        memcpy(end[j][0].g, g[bj], sizeof end[j][0].g);
+        end[1 - j][1] = x[j];
+        memcpy(end[1 - j][1].g, g[bo], sizeof end[1 - j][1].g);
+        if (!finite3(end[j][0].g) || !finite3(end[1 - j][1].g))
             return true;
     }
     for (int k = 0; k < 2; k++) {
