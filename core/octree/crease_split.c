@@ -234,20 +234,24 @@ static bool split_labelled(ism_sampler *s, ism_cell_out *out, size_t first_tri, 
     return true;
 }
 
-/* Does the leaf's shortened tape decide f's top min/max (strictly) over its closed box and
- * hold p (so p lies on the one branch it keeps)? */
-static bool local_holds(const ism_sampler *s, const double p[3])
+/* The leaf's shortened tape when it decides f's top min/max (strictly) over its closed box,
+ * so the points it holds (ism_sampler_tape_at) lie on the one branch it keeps; else NULL.
+ * Looked up once per leaf: a lookup per point cost 0.3% more instructions on
+ * cube-minus-ball (callgrind). */
+static const ism_tape *deciding_local(const ism_sampler *s)
 {
-    return s->local && !top_undecided(s->local) && ism_sampler_tape_at(s, p) == s->local;
+    return s->local && !top_undecided(s->local) ? s->local : NULL;
 }
 
-/* Do all vertices of triangles first_tri..ntris - 1 (at least one) lie on one branch
- * (local_holds)? */
+/* Do all vertices of triangles first_tri..ntris - 1 lie on one branch (deciding_local)? */
 static bool one_branch(const ism_sampler *s, const ism_cell_out *out, size_t first_tri,
                        size_t ntris)
 {
+    const ism_tape *local = deciding_local(s);
+    if (!local)
+        return false;
     for (size_t i = 3 * first_tri; i < 3 * ntris; i++)
-        if (!local_holds(s, out->verts[out->tris[i]].p))
+        if (ism_sampler_tape_at(s, out->verts[out->tris[i]].p) != local)
             return false;
     return true;
 }
@@ -343,8 +347,9 @@ bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double
     *done = false;
     if (n < 3 || n > CUT_MAX_CORNERS || !top_undecided(s->tape))
         return true; /* f does not end in min/max */
+    const ism_tape *local = deciding_local(s);
     size_t held = 0;
-    while (held < n && local_holds(s, pts[held].p))
+    while (local && held < n && ism_sampler_tape_at(s, pts[held].p) == local)
         held++;
     if (held == n)
         return true; /* one branch over the whole leaf (one_branch) */
