@@ -9,6 +9,7 @@
 
 #include "core/expr/expr.h"
 #include "core/singular/conform_internal.h"
+#include "tests/unit/placements.h"
 
 #define H 0.5
 
@@ -46,10 +47,10 @@ static bool rim_clear(const uint32_t *const *loops, const size_t *len, size_t nl
 }
 
 /* Vertices on z = 0 (one of them in each box shift: on the lattice, by 1e-3, and by an
- * irrational fraction, (√2 − 1) / 64). */
+ * irrational fraction, PF_IRR / 64: tests/unit/placements.h). */
 Test(conform_rim, other_sheet_within_clearance)
 {
-    const double shifts[] = {0, 1e-3, (sqrt(2.0) - 1) / 64};
+    const double shifts[] = {0, 1e-3, PF_IRR / 64};
     for (int s = 0; s < 3; s++) {
         double o = shifts[s];
         const double pos[3][3] = {{o, o, 0}, {1 + o, o, 0}, {o, 1 + o, 0}};
