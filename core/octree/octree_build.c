@@ -730,9 +730,8 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
             if (!(v->v[i].thin & ISM_NODE_THIN_AT_KINK))
                 limit = resolve_limit(b, limit);
         }
-        int uf = -1; /* unflat(b, sub, lo, hi) once asked */
-        if (leaf && !flat && !kept && nd.level >= limit && !(v->v[i].thin & ISM_NODE_THIN_FOUND) &&
-            limit < resolve_limit(b, limit) && (uf = unflat(b, sub, lo, hi)) &&
+        bool uf = leaf && !flat && unflat(b, sub, lo, hi); /* asked once per unflat leaf */
+        if (uf && !kept && nd.level >= limit && limit < resolve_limit(b, limit) &&
             visible_feature(b, th, sub, &k, lo, hi)) {
             leaf = false; /* resolved as deep as a hidden piece would be */
             limit = resolve_limit(b, limit);
@@ -740,7 +739,7 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         if (leaf && !flat) {
             v->v[i].flags |= ISM_NODE_UNRESOLVED | (kept ? ISM_NODE_CONFORMED : 0);
             th->unresolved++;
-            if (uf < 0 ? unflat(b, sub, lo, hi) : uf)
+            if (uf)
                 v->v[i].flags |= ISM_NODE_UNFLAT;
         }
         th->deep_leaves += leaf && nd.level > b->p->max_depth;

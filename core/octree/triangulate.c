@@ -401,9 +401,8 @@ bool ism_loop_reversed(ism_sampler *s, const double node[6], const ism_fpoint *p
 bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
                           const double node[6], double max_error, ism_cell_out *out)
 {
-    return n < 3 ||
-           ism_triangulate_wound(s, pts, n, reach, node, max_error, reversed(s, node, pts, n),
-                                 out);
+    return ism_triangulate_wound(s, pts, n, reach, node, max_error,
+                                 ism_loop_reversed(s, node, pts, n), out);
 }
 
 bool ism_triangulate_wound(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
