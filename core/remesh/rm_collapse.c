@@ -354,12 +354,24 @@ static double farthest(rm_pass *p, const double *pos, const uint32_t *tri, size_
 
 void rm_collapse_bounds(rm_pass *p, const double *pos, const uint32_t *tri, size_t ntris)
 {
-    int64_t top[ISM_RM_MIDPOINT_LOW_TRIS];
     p->found_pos = pos;
     p->found_tri = tri;
     p->found_ntris = ntris;
     p->midpoint_known = false;
-    p->centroid_bound = farthest(p, pos, tri, ntris, false, top);
+    p->bounds_known = false;
+    if (!p->bounded) /* flips and moves keep to centroid_bound, through farthest's records */
+        rm_collapse_bounds_need(p);
+}
+
+void rm_collapse_bounds_need(rm_pass *p)
+{
+    if (p->bounds_known)
+        return;
+    int64_t top[ISM_RM_MIDPOINT_LOW_TRIS];
+    const double *pos = p->found_pos;
+    const uint32_t *tri = p->found_tri;
+    p->bounds_known = true;
+    p->centroid_bound = farthest(p, pos, tri, p->found_ntris, false, top);
     double low = 0;
     for (int i = 0; i < ISM_RM_MIDPOINT_LOW_TRIS && top[i] >= 0; i++) {
         const uint32_t *v = tri + 3 * top[i];

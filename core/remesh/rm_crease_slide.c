@@ -589,6 +589,7 @@ size_t rm_crease_slide_sweep(rm_pass *p)
     double poor = sin(ISM_RM_COLLAPSE_DEG * M_PI / 180);
     if (!ism_tape_has_min_max(p->f) || !(p->poorest < poor))
         return 0; /* no min/max: no crease of branches; no triangle under 20°: no need */
+    rm_collapse_bounds_need(p); /* what merges onto the crease keep to */
     if (!p->crease_tried &&
         (p->crease_tried = malloc((r->cap_verts ? r->cap_verts : 1) * sizeof *p->crease_tried)))
         for (size_t v = 0; v < r->cap_verts; v++)
