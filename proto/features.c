@@ -292,7 +292,7 @@ static void write_locus(ism_jw *w, const ism_mesh *m, const ism_features *f)
     ism_jw_array(w);
     for (size_t i = 0; l && i < l->ncurves; i++)
         write_singular_curve(w, &l->curves[i], l);
-    ism_features_cut_curves_json(w, m, f->arrangement, f->cut_fns);
+    ism_features_cut_curves_json(w, m, f->arrangement, f->cut_fns, f->crease_tol);
     ism_jw_array_end(w);
     ism_jw_key(w, "double_sheets");
     ism_jw_array(w);

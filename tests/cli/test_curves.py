@@ -16,13 +16,21 @@ the closed-form lengths; V - E + F per component matches on the two nappes. Thre
 overlapping balls (min of three spheres, in the lattice box and two shifted off it): the
 crease is three arcs between the two triple points where all three spheres meet (closed
 form: the circumcentre of the centres, +-z), each a vertex of degree 3 within 1e-9 x diagonal,
-every arc point within that of two of the spheres; the mesh stays a sphere (chi 2); cut by
+every crease vertex of the mesh (the .obj's crease_curves) within that of two of the spheres
+and every printed crease point within that plus its rounding (the depth path: printed within
+a tenth of a finest cell); the mesh stays a sphere (chi 2); cut by
 planes a tenth and a fiftieth of a cell past the triple points' heights (two loops each, one
 a small curved triangle round the triple point's dimple), 14 / 27 / 15 with no mesh edge
 across the crease. The
-gyroid-ball preset (max of the gyroid G and the ball B, its box and the two shifted ones):
-every point of its crease arcs (the mesh's crease vertices in full precision) lies within
-1e-9 x diagonal of G = 0 and of B = 0, each evaluated here in closed form. The seven
+gyroid-ball preset (max of the gyroid G and the ball B, its box and the two shifted ones, the
+default bound E named): every crease vertex of the mesh (the .obj's crease_curves, with the
+.obj's own rounding) lies within 1e-9 x diagonal of G = 0 and of B = 0, each evaluated here in
+closed form, and every point of the features' crease arcs within that plus the rounding of
+the decimals it is printed with. Both crease tests check features.h's rule for the printed
+crease: it states "tolerance" = a tenth of E (of a finest cell on the depth path), no number
+has more decimals than d (the fewest with (sqrt 3 / 2) 10^-d <= tolerance / 2), each printed
+point is a mesh crease vertex rounded, the ends are kept, and every dropped vertex lies
+within the tolerance of the printed segment across it. The seven
 presets with nodes cut by the viewer's three z planes (-0.5, 0, 0.5), in their own boxes and
 the two shifted ones: the arrangement's V - E + F equals V - E + T counted here from the
 written mesh's own triangles, and its check passes (a node off the curves, where two cones
@@ -31,6 +39,7 @@ The crossing-spheres preset cut by the same planes (three boxes): the six cut ve
 within 1e-9 of the closed-form double circle x = 0, y^2 + z^2 = 1 - d^2/4, and they and the
 double-curve chain count as on the locus (artefacts 0): the check allows each chord of the
 traced circle its bulge (it counted 10 edges off, the chain 305 in the viewer)."""
+import decimal
 import json
 import math
 import os
@@ -62,6 +71,41 @@ BALLS3_Z0 = math.sqrt(0.5 - (0.6 - BALLS3_X0) ** 2)
 SHIFT = IRR * SIDE / 2 ** DEPTH
 
 
+def obj_crease_chains(path):
+    """The mesh's crease chains of an .obj (`l` lines of group crease_curves, every vertex
+    of the chain) as lists of (point, its rounding bound): %.9g keeps 9 significant digits,
+    so a coordinate x is off by <= 0.5e-8 x 10^floor(log10 |x|)."""
+    verts, chains, group = [], [], None
+    with open(path) as f:
+        for line in f:
+            w = line.split()
+            if w and w[0] == "v":
+                p = tuple(map(float, w[1:4]))
+                r = math.sqrt(sum((0.5e-8 * 10 ** math.floor(math.log10(abs(x)))) ** 2
+                                  for x in p if x != 0))
+                verts.append((p, r))
+            elif w and w[0] == "g":
+                group = w[1]
+            elif w and w[0] == "l" and group == "crease_curves":
+                chains.append([verts[int(t) - 1] for t in w[1:]])
+    return chains
+
+
+def crease_decimals(tol):
+    """features.h's rule, restated: the fewest decimals d with (sqrt 3 / 2) 10^-d <= tol / 2."""
+    d = 0
+    while math.sqrt(3) / 2 * 10 ** -d > tol / 2:
+        d += 1
+    return d
+
+
+def seg_dist(p, a, b):
+    ab = [b[k] - a[k] for k in range(3)]
+    l2 = sum(v * v for v in ab)
+    t = 0 if l2 == 0 else max(0, min(1, sum((p[k] - a[k]) * ab[k] for k in range(3)) / l2))
+    return math.dist(p, [a[k] + t * ab[k] for k in range(3)])
+
+
 class CurvesTest(unittest.TestCase):
     def setUp(self):
         self.dir = tempfile.mkdtemp(prefix="isomesh-curves-")
@@ -82,6 +126,66 @@ class CurvesTest(unittest.TestCase):
             return None, proc
         with open(feat) as f:
             return json.load(f), proc
+
+    def crease_printed_and_meshed(self, request, tol_want):
+        """The crease of request, as the features JSON prints it and as the mesh has it (the
+        .obj's crease_curves): checks features.h's rule, that each crease curve states
+        "tolerance" tol_want, prints no number with more decimals than d (the fewest with
+        (sqrt 3 / 2) 10^-d <= tol / 2), and that every crease vertex of the mesh lies within
+        tol of the printed polyline. Returns (the features, the printed points, their
+        rounding bound, the mesh's chains of (point, its .obj rounding))."""
+        f, proc = self.run_request(request, out="out.obj")
+        self.assertIsNotNone(f, proc.stderr)
+        with open(os.path.join(self.dir, "f.json")) as fj:  # the numbers as printed
+            text = json.load(fj, parse_float=decimal.Decimal)
+        crease = [c for c in text["curves"] if c["kind"] == "crease"]
+        self.assertTrue(crease)
+        tol = float(crease[0]["tolerance"])
+        self.assertAlmostEqual(tol, tol_want, delta=1e-12 * tol_want)
+        d = crease_decimals(tol)
+        pts = []
+        for c in crease:
+            self.assertEqual(float(c["tolerance"]), tol)
+            for arc in c["arcs"]:
+                for v in arc:
+                    self.assertLessEqual(-decimal.Decimal(v).as_tuple().exponent, d, v)
+                arc = [float(v) for v in arc]
+                pts += [arc[i:i + 3] for i in range(0, len(arc), 3)]
+        rounding = math.sqrt(3) / 2 * 10 ** -d
+        chains = obj_crease_chains(os.path.join(self.dir, "out.obj"))
+        self.assertTrue(chains)
+        # Each printed point is a chain vertex rounded: find it by rounding the vertex (and
+        # its neighbours one unit of the last decimal off, for the .obj's own rounding).
+        unit = 10 ** -d
+
+        def keys(p):  # p rounded to d decimals, and one unit of the last decimal either side
+            return [(round(p[0] + dx * unit, d), round(p[1] + dy * unit, d),
+                     round(p[2] + dz * unit, d))
+                    for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1)]
+
+        printed = {tuple(round(x, d) for x in q) for q in pts}
+        meshed = {}
+        for p, r in (v for ch in chains for v in ch):
+            meshed.setdefault(tuple(round(x, d) for x in p), []).append((p, r))
+        for q in pts:  # each printed point a crease vertex of the mesh, rounded
+            self.assertTrue(any(math.dist(p, q) <= rounding + r
+                                for k in keys(q) for p, r in meshed.get(k, ())), q)
+
+        def printed_of(p, r):  # the printed point nearest to p, if it may be p's rounding
+            near = [q for q in keys(p) if q in printed and math.dist(p, q) <= rounding + r]
+            return min(near, key=lambda q: math.dist(p, q)) if near else None
+
+        worst = 0.0
+        for ch in chains:  # every dropped vertex within tol of its printed segment
+            kept = [(i, printed_of(p, r)) for i, (p, r) in enumerate(ch)]
+            kept = [(i, q) for i, q in kept if q]
+            self.assertEqual((kept[0][0], kept[-1][0]), (0, len(ch) - 1))
+            for (i, a), (j, b) in zip(kept, kept[1:]):
+                for p, r in ch[i + 1:j]:
+                    worst = max(worst, seg_dist(p, a, b) - r)
+        self.assertLessEqual(worst, tol, "a crease vertex of the mesh off the printed crease")
+        self.assertLess(len(pts), sum(len(ch) for ch in chains))
+        return f, pts, rounding, chains
 
     def sphere(self, shift, curves):
         lo, hi = -SIDE / 2 + shift, SIDE / 2 + shift
@@ -235,9 +339,9 @@ class CurvesTest(unittest.TestCase):
                 d = [shift, 0.61 * shift, -0.83 * shift]
                 box = [-side / 2 + d[0], -side / 2 + d[1], -side / 2 + d[2],
                        side / 2 + d[0], side / 2 + d[1], side / 2 + d[2]]
-                f, proc = self.run_request({"expr": expr, "box": box,
-                                            "depth": {"max": depth}})
-                self.assertIsNotNone(f, proc.stderr)
+                # the depth path: the crease printed within a tenth of a finest cell
+                f, pts, rounding, chains = self.crease_printed_and_meshed(
+                    {"expr": expr, "box": box, "depth": {"max": depth}}, 0.1 * cell)
                 a = f["arrangement"]
                 self.assertTrue(a["euler"]["ok"])
                 self.assertEqual(a["euler"]["mesh"], 2)
@@ -248,10 +352,13 @@ class CurvesTest(unittest.TestCase):
                     self.assertLess(math.dist(v["xyz"], (x0, 0, sz * z0)), tol, v)
                 arcs = [arc for c in f["curves"] if c["kind"] == "crease" for arc in c["arcs"]]
                 self.assertEqual(len(arcs), 3)
-                for arc in arcs:
-                    for i in range(0, len(arc), 3):
-                        near = sorted(sphere_dist(arc[i:i + 3], c) for c in centres)
-                        self.assertLess(near[1], tol, arc[i:i + 3])
+                self.assertEqual(len(chains), 3)
+                for p, r in (v for ch in chains for v in ch):  # the mesh's: every vertex
+                    near = sorted(sphere_dist(p, c) for c in centres)
+                    self.assertLess(near[1], tol + r, p)
+                for p in pts:  # as printed: within the rounding
+                    near = sorted(sphere_dist(p, c) for c in centres)
+                    self.assertLess(near[1], tol + rounding, p)
 
     def test_three_balls_sections_beside_the_triple_points(self):
         """Planes z = c a fraction of a cell off the triple points' heights +-z0 (issue 14's
@@ -326,19 +433,24 @@ class CurvesTest(unittest.TestCase):
         tol = 1e-9 * math.sqrt(3) * side
         for box in placements([-side / 2] * 3 + [side / 2] * 3, side / 2 ** depth):
             with self.subTest(box=box):
-                f, proc = self.run_request({"preset": "gyroid-ball", "box": box,
-                                            "depth": {"max": depth}})
-                self.assertIsNotNone(f, proc.stderr)
-                pts = [arc[i:i + 3] for c in f["curves"] if c["kind"] == "crease"
-                       for arc in c["arcs"] for i in range(0, len(arc), 3)]
-                self.assertGreater(len(pts), 1000)
-                worst = [0.0, 0.0]
-                for p in pts:
-                    for k, (v, g) in enumerate(((gyroid(p), gyroid_grad(p)),
-                                                (ball(p), ball_grad(p)))):
-                        worst[k] = max(worst[k], abs(v) / math.sqrt(sum(x * x for x in g)))
-                self.assertLess(max(worst), tol, f"{len(pts)} crease points: off G {worst[0]:.2e},"
-                                f" off B {worst[1]:.2e}")
+                # the default bound, named: the crease printed within a tenth of it
+                e = 1e-3 * math.sqrt(3) * side
+                _, printed, rounding, chains = self.crease_printed_and_meshed(
+                    {"preset": "gyroid-ball", "box": box, "depth": {"max": depth},
+                     "max_error": e}, 0.1 * e)
+                meshed = [v for ch in chains for v in ch]
+                self.assertGreater(len(meshed), 1000)
+                for what, pts, slack in (("meshed", meshed, None),
+                                         ("printed", [(p, rounding) for p in printed], 1.01)):
+                    worst = [0.0, 0.0]
+                    for p, r in pts:
+                        for k, (v, g) in enumerate(((gyroid(p), gyroid_grad(p)),
+                                                    (ball(p), ball_grad(p)))):
+                            off = abs(v) / math.sqrt(sum(x * x for x in g))
+                            # a first-order distance: the printed points' rounding, 1 % more
+                            worst[k] = max(worst[k], off - (r * slack if slack else r))
+                    self.assertLess(max(worst), tol, f"{len(pts)} {what} crease points: off G "
+                                    f"{worst[0]:.2e}, off B {worst[1]:.2e}")
 
     def test_presets_with_nodes_euler_of_the_arrangement(self):
         # (preset, its box) at depth.max 6: the presets' own 7-9 took 90 s under load, and
