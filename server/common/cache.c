@@ -10,7 +10,8 @@
 
 /* What else an entry can be besides a mesh file (the formats are proto/format.c's). */
 static const char *const DOCUMENTS[] = {"stats.json", "features.json", "request.json",
-                                        ISM_COMPUTED_EXT};
+                                        ISM_COMPUTED_EXT,
+                                        "features.json.gz"}; /* gzip_body.h */
 
 bool ism_cache_name_valid(const char *name)
 {

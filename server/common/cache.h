@@ -6,7 +6,8 @@
  *
  * Entries are named "<key>.<ext>": the 64-hex-digit cache key of a request (pipeline.h) and
  * what the bytes are: a mesh file ("drc", "glb", "ply", "obj", "stl"), its statistics
- * ("stats.json"), its non-manifold features ("features.json") or the canonical request that
+ * ("stats.json"), its non-manifold features ("features.json") and their gzip bytes
+ * ("features.json.gz", server/common/gzip_body.h) or the canonical request that
  * produced it ("request.json"); or, under a surface key, the computed surface every encoding
  * is made from ("mesh", versioned format in proto/computed.h). Content-addressed: one name
  * always means the same bytes. */

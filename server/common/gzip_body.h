@@ -15,8 +15,9 @@
  * request's CPU outweigh what a few hundred bytes of JSON would save (a stats or error body). */
 #define ISM_GZIP_MIN_BODY 1024
 
-/* zlib's level. The answer is compressed on the HTTP thread, per request, so its CPU is a
- * pause for every other connection of that thread. Measured on the features JSON of session
+/* zlib's level. A document is compressed once per cache entry (ISM_GZIP_FEATURES_EXT), by
+ * the worker pool's thread or, for an entry stored without it, by the HTTP thread, where its
+ * CPU is a pause for every other connection of that thread. Measured on the features JSON of session
  * 19 (default bound; bytes and CPU ms per compression at load 15-30, zlib 1.2.13):
  *   klein-bottle 20,195 B -> level 1 9,586 / 0.24 ms, level 6 8,584 / 0.63 ms
  *   crossing-spheres 61,852 -> 28,240 / 0.60, 26,423 / 3.09
@@ -29,6 +30,11 @@
 #define ISM_GZIP_LEVEL 6
 #define ISM_GZIP_FAST_LEVEL 1
 #define ISM_GZIP_FAST_ABOVE (128u * 1024u)
+
+/* The cache entry of a features document's gzip bytes, beside "<key>.features.json": made
+ * once per entry (the worker pool when it stores a fresh result, else the first request that
+ * takes gzip), so a client fetching the document again never costs a compression. */
+#define ISM_GZIP_FEATURES_EXT "features.json.gz"
 
 /* Whether an Accept-Encoding header value (NULL: absent) accepts gzip (RFC 9110 12.5.3):
  * "gzip", "x-gzip" or "*" listed with a q-value other than 0 (an explicit "gzip;q=0" refuses

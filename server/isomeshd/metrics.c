@@ -262,6 +262,11 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
     header(&o, "isomesh_cache_misses_total", "counter",
            "Mesh, stats and features lookups that needed a computation.");
     emit(&o, "isomesh_cache_misses_total %llu\n", ld(&m->mesh_misses));
+    header(&o, "isomesh_features_gzip_total", "counter",
+           "Features documents gzipped, once per cache entry: as the result was stored, or by "
+           "the HTTP thread for an entry stored without its gzip bytes.");
+    emit(&o, "isomesh_features_gzip_total{where=\"store\"} %llu\n", ld(&m->gzip_on_store));
+    emit(&o, "isomesh_features_gzip_total{where=\"request\"} %llu\n", ld(&m->gzip_on_request));
     render_cache(&o, cache);
     if (m->redis)
         render_redis(&o, m->redis);

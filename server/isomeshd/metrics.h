@@ -51,6 +51,10 @@ typedef struct ismd_metrics {
     ismd_histogram latency[ISMD_R_COUNT];
     atomic_ullong response_bytes;
     atomic_ullong mesh_hits, mesh_misses;    /* mesh lookups answered from cache or not */
+    atomic_ullong gzip_on_store;             /* features documents gzipped as they were stored
+                                                (the worker pool's thread) */
+    atomic_ullong gzip_on_request;           /* ... gzipped by the HTTP thread (an entry stored
+                                                without its gzip bytes: once per entry) */
     atomic_ullong computations_started;      /* worker jobs dispatched to a new computation */
     atomic_ullong computations[ISMD_OUT_COUNT];
     atomic_ullong singleflight_joins;        /* requests that joined a computation in flight */

@@ -20,6 +20,9 @@
 #include "server/isomeshd/worker_pool.h"
 
 #define IMMUTABLE "public, max-age=31536000, immutable"
+/* The gzip variant's entity tag is the plain one's key with this tail (RFC 9110 8.8.3: each
+ * content coding its own strong tag). */
+#define GZIP_TAG "-gzip"
 
 /* The Server-Timing value of r's answer. */
 static void timing_of(ismd_req *r, char t[512])
@@ -170,26 +173,32 @@ enum MHD_Result ismd_route_mesh_post(ismd_req *r)
     return ret;
 }
 
-/* If-None-Match holds our tag (or *). */
-static bool etag_matches(const char *inm, const char *key)
+/* If-None-Match (a list of entity tags, or *) names tag ("\"...\"") or is *. A weak
+ * W/ tag compares weakly, as RFC 9110 13.1.2 asks of If-None-Match. */
+static bool tag_listed(const char *inm, const char *tag)
 {
-    if (!inm)
-        return false;
-    for (const char *p = inm; *p;) {
+    size_t n = strlen(tag);
+    for (const char *p = inm; p && *p;) {
         while (*p == ' ' || *p == ',')
             p++;
         if (!strncmp(p, "W/", 2))
             p += 2;
-        size_t n = strcspn(p, ",");
-        while (n && p[n - 1] == ' ')
-            n--;
-        bool quoted_key = n == ISM_KEY_HEX_LEN + 2 && p[0] == '"' &&
-                          !strncmp(p + 1, key, ISM_KEY_HEX_LEN) && p[ISM_KEY_HEX_LEN + 1] == '"';
-        if ((n == 1 && *p == '*') || quoted_key)
+        size_t len = strcspn(p, ",");
+        while (len && p[len - 1] == ' ')
+            len--;
+        if ((len == 1 && *p == '*') || (len == n && !strncmp(p, tag, n)))
             return true;
         p += strcspn(p, ",");
     }
     return false;
+}
+
+/* If-None-Match holds the plain tag of key (or *). */
+static bool etag_matches(const char *inm, const char *key)
+{
+    char tag[ISM_KEY_HEX_LEN + 3];
+    snprintf(tag, sizeof tag, "\"%s\"", key);
+    return tag_listed(inm, tag);
 }
 
 /* The stored canonical request of r->key, checked to still produce that key (a new mesher
@@ -249,6 +258,24 @@ enum MHD_Result ismd_route_mesh_get(ismd_req *r)
     return ret;
 }
 
+/* The gzip bytes of r's features document b: the stored "<key>.features.json.gz" (the
+ * worker pool makes it when it stores a fresh result, worker_pool.c), else compressed here
+ * once and kept beside the plain entry in the local tiers (a document stored before, or one
+ * fetched from a peer). NULL when out of memory. */
+static ism_blob *features_gzip(ismd_req *r, const ism_blob *b)
+{
+    char name[ISM_CACHE_NAME_MAX];
+    bool named = ism_cache_name(name, r->key, ISM_GZIP_FEATURES_EXT);
+    ism_blob *gz = named ? ism_cache_get(&r->srv->cache, name, NULL) : NULL;
+    if (gz)
+        return gz;
+    gz = ism_gzip_blob(b->data, b->len);
+    atomic_fetch_add(&r->srv->metrics.gzip_on_request, 1);
+    if (gz && named)
+        ism_cache_put_local(&r->srv->cache, name, gz);
+    return gz;
+}
+
 static enum MHD_Result answer_json(ismd_req *r)
 {
     if (r->r_status != 200)
@@ -257,30 +284,37 @@ static enum MHD_Result answer_json(ismd_req *r)
     if (!b)
         return ismd_respond_error(r, 404, "not_found", "the pipeline produced no such document");
     /* The features JSON goes gzipped to a client that takes it (browsers' fetch always do):
-     * it is the side data beside the mesh, mostly digits (gzip_body.h). Compressed per
-     * request on this thread: under 4 ms up to 128 KB, 12 ms for gyroid-ball's 1.26 MB at
-     * zlib's fast level (gzip_body.h's table; caching the gzip bytes is the next step). */
+     * it is the side data beside the mesh, mostly digits (gzip_body.h). Its gzip bytes are an
+     * entry of their own beside the plain one, made once (features_gzip): a client that
+     * fetches it again costs this thread a lookup, not a compression. */
     bool features = r->want != ISMD_WANT_STATS;
     ism_blob *gz = features && b->len >= ISM_GZIP_MIN_BODY &&
                            ism_accepts_gzip(ismd_header(r, MHD_HTTP_HEADER_ACCEPT_ENCODING))
-                       ? ism_gzip_blob(b->data, b->len)
+                       ? features_gzip(r, b)
                        : NULL;
-    size_t sent = gz ? gz->len : b->len;
-    struct MHD_Response *resp = ismd_response_blob(gz ? gz : b, "application/json");
+    char etag[80]; /* each encoding its own strong tag (RFC 9110 8.8.3) */
+    snprintf(etag, sizeof etag, "\"%s%s\"", r->key, gz ? GZIP_TAG : "");
+    struct MHD_Response *resp;
+    int status = 200;
+    if (features && tag_listed(ismd_header(r, MHD_HTTP_HEADER_IF_NONE_MATCH), etag)) {
+        resp = MHD_create_response_from_buffer(0, "", MHD_RESPMEM_PERSISTENT);
+        status = 304;
+    } else {
+        resp = ismd_response_blob(gz ? gz : b, "application/json");
+    }
+    size_t sent = status == 304 ? 0 : gz ? gz->len : b->len;
     ism_blob_unref(gz); /* the response holds its own reference */
     if (!resp)
         return MHD_NO;
-    char etag[80]; /* each encoding its own strong tag (RFC 9110 8.8.3) */
-    snprintf(etag, sizeof etag, "\"%s%s\"", r->key, gz ? "-gzip" : "");
     MHD_add_response_header(resp, MHD_HTTP_HEADER_ETAG, etag);
     if (features)
         MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY, MHD_HTTP_HEADER_ACCEPT_ENCODING);
-    if (gz)
+    if (gz && status == 200)
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_ENCODING, "gzip");
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "public, max-age=3600");
     MHD_add_response_header(resp, "X-Cache", r->cache ? r->cache : "miss");
     r->bytes = sent;
-    return ismd_send(r, 200, resp);
+    return ismd_send(r, status, resp);
 }
 
 enum MHD_Result ismd_route_mesh_json(ismd_req *r)

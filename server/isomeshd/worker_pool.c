@@ -26,6 +26,7 @@
 #include "proto/computed.h"
 #include "proto/frame.h"
 #include "proto/request.h"
+#include "server/common/gzip_body.h"
 #include "server/common/pipeline.h"
 #include "server/common/log.h"
 #include "server/isomeshd/errors.h"
@@ -356,6 +357,18 @@ static void cache_result(ismd_pool *p, worker *w, bool later, ism_blob *body, is
     cache_entry(p, w, later, f->key, "stats.json", stats);
     cache_entry(p, w, later, f->key, "features.json", features);
     cache_entry(p, w, later, f->key, "request.json", canonical);
+    /* the features' gzip bytes, made here once rather than on the HTTP thread per request
+     * (gzip_body.h); local tiers only: a peer that fetches the plain entry makes its own */
+    char name[ISM_CACHE_NAME_MAX];
+    if (features && features->len >= ISM_GZIP_MIN_BODY &&
+        ism_cache_name(name, f->key, ISM_GZIP_FEATURES_EXT)) {
+        ism_blob *gz = ism_gzip_blob(features->data, features->len);
+        if (gz) {
+            ism_cache_put_local(p->cache, name, gz);
+            atomic_fetch_add(&p->metrics->gzip_on_store, 1);
+        }
+        ism_blob_unref(gz);
+    }
 }
 
 /* Answers w's flight with r; w then waits for the surface_len bytes of its SURFACE frame

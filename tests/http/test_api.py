@@ -290,6 +290,92 @@ class ApiTest(unittest.TestCase):
         stats = self.d.get("/v1/meshes/%s/stats" % key, headers={"Accept-Encoding": "gzip"})
         self.assertIsNone(stats.header("Content-Encoding"))
 
+    def test_features_gzip_is_made_once_and_answers_if_none_match_per_variant(self):
+        """The features' gzip bytes are an entry of their own (server/common/gzip_body.h),
+        made once as the worker pool stores the result: fetching them again costs the HTTP
+        thread no compression (isomesh_features_gzip_total where="request" stays). Each
+        variant answers If-None-Match with its own tag: 304 for the tag of the variant the
+        request would get (with that tag and Vary), 200 for the other variant's tag."""
+        import gzip
+        body = {"preset": "steiner-roman", "max_error": None, "depth": {"max": 5}}
+        stored = self.d.metric("isomesh_features_gzip_total", where="store")
+        on_request = self.d.metric("isomesh_features_gzip_total", where="request")
+        key = self.d.post("/v1/mesh", body).header("ETag").strip('"')
+        self.assertEqual(self.d.metric("isomesh_features_gzip_total", where="store"), stored + 1)
+        path = "/v1/meshes/%s/features" % key
+        gz = {"Accept-Encoding": "gzip, deflate, br"}
+        plain = self.d.get(path)
+        firsts = [self.d.get(path, headers=gz) for _ in range(3)]
+        self.assertEqual(len({g.body for g in firsts}), 1)
+        self.assertEqual(gzip.decompress(firsts[0].body), plain.body)
+        self.assertEqual(self.d.metric("isomesh_features_gzip_total", where="request"),
+                         on_request)
+        tags = {'"%s"' % key: plain, '"%s-gzip"' % key: firsts[0]}
+        self.assertEqual({plain.header("ETag"), firsts[0].header("ETag")}, set(tags))
+        for headers, mine in (({}, '"%s"' % key), (gz, '"%s-gzip"' % key)):
+            for tag in tags:
+                for inm in (tag, 'W/' + tag, '"other", ' + tag):
+                    r = self.d.get(path, headers={**headers, "If-None-Match": inm})
+                    want = 304 if tag == mine else 200
+                    self.assertEqual(r.status, want, (headers, inm))
+                    self.assertEqual(r.header("ETag"), mine, (headers, inm))
+                    self.assertEqual(r.header("Vary"), "Accept-Encoding", (headers, inm))
+                    if want == 304:
+                        self.assertEqual(r.body, b"")
+                    else:
+                        self.assertEqual(r.body, tags[mine].body)
+            r = self.d.get(path, headers={**headers, "If-None-Match": "*"})
+            self.assertEqual(r.status, 304)
+
+    def test_features_gzip_of_an_entry_stored_without_it_is_made_once(self):
+        """A features document stored without its gzip bytes (a cache written before them,
+        or a peer's) is compressed by the first request that takes gzip and kept beside it:
+        later requests, and the disk after a restart, find it."""
+        import gzip
+        import shutil
+        import tempfile
+        tmp = tempfile.mkdtemp(prefix="isomeshd_gzip_")
+        cache = os.path.join(tmp, "cache")
+        body = {"preset": "steiner-roman", "max_error": None, "depth": {"max": 5}}
+
+        def gz_files(key):
+            return [os.path.join(top, f) for top, _, fs in os.walk(cache) for f in fs
+                    if f == key + ".features.json.gz"]
+        try:
+            d = Daemon("--workers", "1", cache_dir=cache).start()
+            try:
+                key = d.post("/v1/mesh", body).header("ETag").strip('"')
+                plain = d.get("/v1/meshes/%s/features" % key).body
+                deadline = time.time() + 10  # the disk tier writes behind a queue
+                while not gz_files(key) and time.time() < deadline:
+                    time.sleep(0.05)
+            finally:
+                rc = d.stop()
+                d.cleanup()
+                self.assertEqual(rc, 0)
+            files = gz_files(key)
+            self.assertEqual(len(files), 1)
+            os.unlink(files[0])
+            d = Daemon("--workers", "1", cache_dir=cache).start()
+            try:
+                path = "/v1/meshes/%s/features" % key
+                for i in range(4):
+                    r = d.get(path, headers={"Accept-Encoding": "gzip"})
+                    self.assertEqual(r.header("Content-Encoding"), "gzip")
+                    self.assertEqual(gzip.decompress(r.body), plain)
+                    self.assertEqual(d.metric("isomesh_features_gzip_total", where="request"), 1)
+                self.assertEqual(d.metric("isomesh_features_gzip_total", where="store"), 0)
+                deadline = time.time() + 10
+                while not gz_files(key) and time.time() < deadline:
+                    time.sleep(0.05)
+                self.assertEqual(len(gz_files(key)), 1)
+            finally:
+                rc = d.stop()
+                d.cleanup()
+                self.assertEqual(rc, 0)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+
     def test_unknown_meshes_are_404(self):
         self.error_of(self.d.get("/v1/meshes/%s.drc" % ("ab" * 32)), 404)
         self.error_of(self.d.get("/v1/meshes/%s/stats" % ("cd" * 32)), 404)

@@ -55,6 +55,9 @@ Test(cache_names, only_keys_and_known_kinds)
     cr_assert_str_eq(name, KEY_A ".drc");
     cr_assert(ism_cache_name_valid(KEY_B ".stats.json"));
     cr_assert(ism_cache_name_valid(KEY_B ".request.json"));
+    cr_assert(ism_cache_name_valid(KEY_B ".features.json.gz")); /* gzip_body.h */
+    cr_assert_not(ism_cache_name_valid(KEY_B ".stats.json.gz"));
+    cr_assert_not(ism_cache_name_valid(KEY_B ".drc.gz"));
     cr_assert_not(ism_cache_name_valid(KEY_B ".exe"));
     cr_assert_not(ism_cache_name_valid(KEY_B ".drc/../x"));
     cr_assert_not(ism_cache_name_valid("../" KEY_B ".drc"));
