@@ -2,30 +2,11 @@
  * explicit stack (a chain of a CSG preset's crease has thousands of vertices: no recursion
  * depth that grows with it). */
 #include "proto/polyline_thin.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-
-/* Distance from p to the segment a b (to a when the segment has no length). */
-static double segment_distance(const double *p, const double *a, const double *b)
-{
-    double ab[3], ap[3], len2 = 0, dot = 0;
-    for (int k = 0; k < 3; k++) {
-        ab[k] = b[k] - a[k];
-        ap[k] = p[k] - a[k];
-        len2 += ab[k] * ab[k];
-        dot += ab[k] * ap[k];
-    }
-    double t = len2 > 0 ? dot / len2 : 0;
-    t = t < 0 ? 0 : t > 1 ? 1 : t;
-    double d2 = 0;
-    for (int k = 0; k < 3; k++) {
-        double e = ap[k] - t * ab[k];
-        d2 += e * e;
-    }
-    return sqrt(d2);
-}
 
 size_t ism_polyline_thin(const double *pos, const uint32_t *idx, size_t n, double tol,
                          uint8_t *keep)
@@ -57,7 +38,7 @@ size_t ism_polyline_thin(const double *pos, const uint32_t *idx, size_t n, doubl
         double far = -1;
         size_t at = a + 1;
         for (size_t i = a + 1; i < b; i++) {
-            double d = segment_distance(pos + 3 * (size_t)idx[i], pa, pb);
+            double d = sqrt(ism_sqdist_segment3(pos + 3 * (size_t)idx[i], pa, pb));
             if (d > far) {
                 far = d;
                 at = i;

@@ -10,22 +10,8 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "core/util/vec3.h"
 #include "proto/polyline_thin.h"
-
-static double seg_dist(const double *p, const double *a, const double *b)
-{
-    double ab[3], ap[3], l2 = 0, t = 0, d2 = 0;
-    for (int k = 0; k < 3; k++) {
-        ab[k] = b[k] - a[k];
-        ap[k] = p[k] - a[k];
-        l2 += ab[k] * ab[k];
-        t += ab[k] * ap[k];
-    }
-    t = l2 > 0 ? fmin(1, fmax(0, t / l2)) : 0;
-    for (int k = 0; k < 3; k++)
-        d2 += (ap[k] - t * ab[k]) * (ap[k] - t * ab[k]);
-    return sqrt(d2);
-}
 
 /* The largest distance of a dropped vertex to the nearest segment of the kept polyline. */
 static double worst_dropped(const double *pos, const uint32_t *idx, size_t n,
@@ -40,7 +26,8 @@ static double worst_dropped(const double *pos, const uint32_t *idx, size_t n,
         for (size_t j = 1; j < n; j++) {
             if (!keep[j])
                 continue;
-            best = fmin(best, seg_dist(pos + 3 * idx[i], pos + 3 * idx[prev], pos + 3 * idx[j]));
+            best = fmin(best, sqrt(ism_sqdist_segment3(pos + 3 * idx[i], pos + 3 * idx[prev],
+                                                       pos + 3 * idx[j])));
             prev = j;
         }
         worst = fmax(worst, best);
