@@ -121,7 +121,7 @@ static const stat_field quality_fields[] = {
 #define C(m) FIELD(ism_conform_stats, m)
 static const stat_field conform_fields[] = {
     C(points_conformed), C(points_failed), C(points_short_cones), C(curves_conformed),
-    C(curves_failed), C(loops_fallback), C(triangles_removed), C(triangles_added),
+    C(curves_kept), C(curves_failed), C(loops_fallback), C(triangles_removed), C(triangles_added),
     MS("time_ms", ism_conform_stats, time_ms),
 };
 #undef C

@@ -456,4 +456,13 @@ bool cf_conform_point(cf_run *r, size_t i);
  * edges. False only when out of memory (the mesh is then as before). */
 bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n);
 
+/* ---- conform_kept.c: curves the polygoniser's mesh already follows ---- */
+/* True when the live mesh holds each of the n open polylines pl (of curves cu, no end at a
+ * pinch point) as a chain of edges from its first point to its last, each edge with two
+ * sheets' triangles and no other non-manifold edge at the chain (conform_kept.c); the
+ * chains' vertices are then marked CF_VERTEX_SINGULAR and the curves' end points given
+ * their end vertices (r->point_vertex). False (nothing changed) otherwise, also when out of
+ * memory or stopped. */
+bool cf_curves_kept(cf_run *r, const cf_polyline *pl, const ism_sing_curve *const *cu, size_t n);
+
 #endif

@@ -14,6 +14,8 @@ typedef struct ism_conform_stats {
     size_t points_skipped;     /* isolated points (no sheet), pinch and triple points (made
                                   vertices as ends of their curves) */
     size_t curves_conformed;   /* double curves zipped into the mesh */
+    size_t curves_kept;        /* ... of them found a chain of edges in the polygoniser's
+                                  mesh already (conform_kept.c): no surgery */
     size_t curves_failed;      /* double curves with no hole loop along them */
     size_t curves_skipped;     /* whiskers (no sheet; they stay in the locus) */
     size_t loops_fallback;     /* hole loops that could not be zipped to their curve and were

@@ -309,6 +309,13 @@ static bool conform_group(cf_run *r, const size_t *idx, size_t n)
         group_free(&g);
         return ok;
     }
+    /* on lattice lines the polygoniser's mesh may hold the curves already: no surgery */
+    if (cf_curves_kept(r, g.pl, g.cu, g.n)) {
+        c->st->curves_conformed += g.n;
+        c->st->curves_kept += g.n;
+        group_free(&g);
+        return true;
+    }
     /* the tube's radius and reach from the longest edge near the curves, measured with a
      * reach of r0 (the finest cells' edges are shorter) */
     double r0 = CF_RHO_CELLS * c->cell, longest = 0;

@@ -80,12 +80,10 @@ static void centroid_distances(const ism_mesh *m, const ism_tape *t, double cell
     ism_eval_ws_free(ws);
 }
 
-/* Polygonises t in box to dmax, conforms to l, analyses the result. */
-static void run(const ism_tape *t, const double box[6], int dmax, ism_locus *l,
-                locus_dist_fn dist, const void *arg, ism_mesh *m, run_result *r)
+/* Conforms the mesh m of t in box (depth dmax) to l, analyses the result. */
+static void conform_run(const ism_tape *t, const double box[6], int dmax, ism_locus *l,
+                        locus_dist_fn dist, const void *arg, ism_mesh *m, run_result *r)
 {
-    ism_poly_stats ps;
-    pf_run(t, box, 3, dmax, 1, m, &ps);
     ism_locus_options o;
     ism_locus_options_default(&o);
     memcpy(o.box, box, sizeof o.box);
@@ -103,6 +101,15 @@ static void run(const ism_tape *t, const double box[6], int dmax, ism_locus *l,
     r->artefact_vertices = chk.nonmanifold_points_off;
     ism_locus_check_free(&chk);
     centroid_distances(m, t, pf_cell(box, dmax), dist, arg, r);
+}
+
+/* Polygonises t in box to dmax, conforms to l, analyses the result. */
+static void run(const ism_tape *t, const double box[6], int dmax, ism_locus *l,
+                locus_dist_fn dist, const void *arg, ism_mesh *m, run_result *r)
+{
+    ism_poly_stats ps;
+    pf_run(t, box, 3, dmax, 1, m, &ps);
+    conform_run(t, box, dmax, l, dist, arg, m, r);
     if (getenv("CONFORM_DEBUG"))
         fprintf(stderr, "poly %.0f ms conform %.0f ms: removed %zu added %zu tris, %zu verts; "
                 "fallback %zu widened %zu; near %g far %g; tris %zu\n", ps.total_ms, r->st.time_ms,
@@ -412,6 +419,25 @@ static void nm_edges(const ism_mesh *m, locus_dist_fn dist, size_t *n, size_t *f
     free(e);
 }
 
+/* The double curves as chains: exactly `edges` non-manifold edges, four triangles each, their
+ * vertices within 1e-9 of the locus (dist); χ = euler, one component, no artefact, centroids
+ * near the locus no farther from f = 0 than twice the rest. */
+static void expect_chains(const ism_mesh *m, const run_result *r, locus_dist_fn dist,
+                          size_t edges, long euler, const char *what)
+{
+    size_t n, four;
+    double far;
+    nm_edges(m, dist, &n, &four, &far);
+    cr_expect_eq(n, edges, "%s: %zu non-manifold edges, expected %zu", what, n, edges);
+    cr_expect_eq(four, n, "%s: %zu of %zu non-manifold edges have 4 triangles", what, four, n);
+    cr_expect_leq(far, 1e-9, "%s: a non-manifold edge's vertex %g off the locus", what, far);
+    cr_expect_eq(r->a.components, 1, "%s: %zu components", what, r->a.components);
+    cr_expect_eq(r->a.euler, euler, "%s: χ = %ld, expected %ld", what, r->a.euler, euler);
+    cr_expect_eq(r->artefact_edges + r->artefact_vertices, 0, "%s: artefacts %zu + %zu", what,
+                 r->artefact_edges, r->artefact_vertices);
+    expect_accuracy(r, what);
+}
+
 Test(conform, crossing_spheres_zipped_along_the_circle)
 {
     const pf_surface s = {"((x-0.5)^2 + y^2 + z^2 - 1)*((x+0.5)^2 + y^2 + z^2 - 1)", NULL, 0,
@@ -564,7 +590,7 @@ Test(conform, three_planes_triple_point)
     ism_tape *t = pf_compile(&s);
     const double base[6] = {-1, -1, -1, 1, 1, 1};
     int dmax = 5 - pf_quick();
-    for (int w = 1; w < 3; w++) { /* symmetric: the planes lie on the lattice */
+    for (int w = 0; w < 3; w++) {
         double box[6];
         shifted_box(base, shift_amount(w, base, dmax), box);
         ism_locus l;
@@ -578,21 +604,89 @@ Test(conform, three_planes_triple_point)
         run(t, box, dmax, &l, dist_to_axes, NULL, &m, &r);
         char what[64];
         snprintf(what, sizeof what, "xyz = 0, shift %d", w);
-        size_t n, four;
-        double far;
-        nm_edges(&m, dist_to_axes, &n, &four, &far);
         cr_expect_eq(r.st.curves_conformed, 6, "%s: %zu curves conformed", what,
                      r.st.curves_conformed);
-        cr_expect_eq(n, edges, "%s: %zu non-manifold edges, expected %zu", what, n, edges);
-        cr_expect_eq(four, n, "%s: %zu of %zu non-manifold edges have 4 triangles", what, four, n);
-        cr_expect_leq(far, 1e-9, "%s: a non-manifold edge's vertex %g off the axes", what, far);
+        /* symmetric: the axes lie on lattice lines, where the polygoniser's mesh holds them
+         * already (conform_kept.c) — nothing cut; off the lattice, every curve by surgery */
+        cr_expect_eq(r.st.curves_kept, w == 0 ? 6 : 0, "%s: %zu curves kept", what,
+                     r.st.curves_kept);
+        if (w == 0)
+            cr_expect_eq(r.st.triangles_removed + r.st.triangles_added, 0,
+                         "%s: %zu triangles cut, %zu made", what, r.st.triangles_removed,
+                         r.st.triangles_added);
         cr_expect_neq(vertex_at(&m, (const double[3]){0, 0, 0}), UINT32_MAX,
                       "%s: no vertex at the triple point", what);
-        cr_expect_eq(r.a.components, 1, "%s: %zu components", what, r.a.components);
-        /* three squares crossing pairwise in segments, all three at a point: 3 − 3 + 1 */
-        cr_expect_eq(r.a.euler, 1, "%s: χ = %ld, expected 1", what, r.a.euler);
-        cr_expect_eq(r.artefact_edges + r.artefact_vertices, 0, "%s: artefacts %zu + %zu",
-                     what, r.artefact_edges, r.artefact_vertices);
+        /* one edge per finest cell along the axes (the polygoniser's lattice edges when kept,
+         * the curves' steps of a cell after surgery); three squares crossing pairwise in
+         * segments, all three at a point: χ = 3 − 3 + 1 */
+        expect_chains(&m, &r, dist_to_axes, edges, 1, what);
+        ism_analysis_free(&r.a);
+        ism_mesh_free(&m);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
+}
+
+/* ---- two planes crossing on a lattice line: kept only where the mesh holds the chain ---- */
+
+static double dist_to_z_axis(const double p[3], const void *arg)
+{
+    (void)arg;
+    return hypot(p[0], p[1]);
+}
+
+/* x y = 0 in a box symmetric about both planes: the z axis is a lattice line, and the
+ * polygoniser's mesh already holds it as a chain of edges with four triangles each, which the
+ * pass keeps (conform_kept.c). With one of those triangles taken away (an edge of the chain
+ * left with three) the mesh no longer does: the pass must see it and cut and zip the curve as
+ * off the lattice. Both ways: one edge per finest cell on the axis, four triangles each, χ of
+ * two squares crossing in a segment (1 + 1 − 1), one component, no artefact. */
+Test(conform, crossing_planes_kept_only_where_the_mesh_holds_the_chain)
+{
+    const pf_surface s = {"x*y", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double box[6] = {-1, -1, -1, 1, 1, 1};
+    int dmax = 5 - pf_quick();
+    double cell = pf_cell(box, dmax);
+    size_t edges = (size_t)llround(2 / cell);
+    for (int broken = 0; broken < 2; broken++) {
+        ism_locus l;
+        ism_locus_init(&l);
+        ism_sing_curve c = {.kind = ISM_CURVE_DOUBLE, .closed = false, .n = edges + 1,
+                            .end_type = {ISM_END_BOX, ISM_END_BOX}, .end_point = {-1, -1}};
+        cr_assert(c.xyz = calloc(3 * c.n, sizeof *c.xyz));
+        for (size_t i = 0; i < c.n; i++)
+            c.xyz[3 * i + 2] = -1 + 2 * (double)i / (double)edges;
+        cr_assert(ism_locus_add_curve(&l, &c));
+        ism_mesh m;
+        ism_poly_stats ps;
+        pf_run(t, box, 3, dmax, 1, &m, &ps);
+        if (broken) { /* a triangle with an edge on the axis near z = 0 goes */
+            size_t i = 0;
+            for (; i < m.ntris; i++) {
+                int on = 0;
+                for (int k = 0; k < 3; k++) {
+                    const double *p = m.pos + 3 * (size_t)m.tri[3 * i + k];
+                    on += p[0] == 0 && p[1] == 0 && fabs(p[2]) < 0.25;
+                }
+                if (on == 2)
+                    break;
+            }
+            cr_assert_lt(i, m.ntris, "no triangle on the axis");
+            memcpy(m.tri + 3 * i, m.tri + 3 * (m.ntris - 1), 3 * sizeof *m.tri);
+            m.ntris--;
+        }
+        run_result r;
+        conform_run(t, box, dmax, &l, dist_to_z_axis, NULL, &m, &r);
+        char what[64];
+        snprintf(what, sizeof what, "x y = 0, %s", broken ? "a triangle taken" : "whole");
+        cr_expect_eq(r.st.curves_conformed, 1, "%s: %zu curves conformed", what,
+                     r.st.curves_conformed);
+        cr_expect_eq(r.st.curves_kept, broken ? 0 : 1, "%s: %zu curves kept", what,
+                     r.st.curves_kept);
+        cr_expect_eq(r.st.triangles_removed > 0, broken, "%s: %zu triangles cut", what,
+                     r.st.triangles_removed);
+        expect_chains(&m, &r, dist_to_z_axis, edges, 1, what);
         ism_analysis_free(&r.a);
         ism_mesh_free(&m);
         ism_locus_free(&l);
@@ -665,22 +759,12 @@ Test(conform, steiner_roman_pinch_and_triple_points)
         run(t, box, dmax, &l, dist_to_segments, NULL, &m, &r);
         char what[64];
         snprintf(what, sizeof what, "steiner, depth %d shift %d", dmax, w);
-        size_t n, four;
-        double far;
-        nm_edges(&m, dist_to_segments, &n, &four, &far);
         cr_expect_eq(r.st.curves_conformed, 6, "%s: %zu curves conformed", what,
                      r.st.curves_conformed);
-        cr_expect_eq(n, edges, "%s: %zu non-manifold edges, expected %zu", what, n, edges);
-        cr_expect_eq(four, n, "%s: %zu of %zu non-manifold edges have 4 triangles", what, four, n);
-        cr_expect_leq(far, 1e-9, "%s: a non-manifold edge's vertex %g off the segments", what, far);
-        cr_expect_eq(r.a.components, 1, "%s: %zu components", what, r.a.components);
         /* RP² immersed: χ(image) = χ(RP²) − Σ (preimages − 1) χ(stratum) over the double
          * set = 1 − (6 open half-segments × 1 × (−1) + triple point × 2 × 1) = 5 */
-        cr_expect_eq(r.a.euler, 5, "%s: χ = %ld, expected 5", what, r.a.euler);
+        expect_chains(&m, &r, dist_to_segments, edges, 5, what);
         cr_expect_eq(r.a.boundary_edges, 0, "%s: %zu boundary edges", what, r.a.boundary_edges);
-        cr_expect_eq(r.artefact_edges + r.artefact_vertices, 0, "%s: artefacts %zu + %zu",
-                     what, r.artefact_edges, r.artefact_vertices);
-        expect_accuracy(&r, what);
         ism_analysis_free(&r.a);
         ism_mesh_free(&m);
         ism_locus_free(&l);

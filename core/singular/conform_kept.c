@@ -1,0 +1,237 @@
+/* conform_kept.c — double curves the polygoniser's mesh already follows: where a curve lies on
+ * a lattice line (the planes of x y z = 0 in a box symmetric about them), the polygoniser puts
+ * vertices on it at zero corners and the four cells round each lattice edge give that edge
+ * two triangles from each sheet. The tube surgery (conform_tube.c) would cut those triangles
+ * and zip them back with rings of its own: the same chain of edges, at the cost of most of
+ * the mesh beside the curve (x y z = 0: 9,000 of 12,672 triangles cut and 10,240 made), and
+ * with worse triangles. A group of curves whose every curve is found to be such a chain is
+ * kept as it is:
+ *
+ *        sheet B                  each chain edge v-w: exactly four live triangles, their
+ *           │                     third vertices pairwise more than KEPT_MIN_ANGLE apart
+ *    ───────●─────── sheet A      round the edge (two sheets, two sides each); every other
+ *           │                     edge at a chain vertex one or two triangles (no other
+ *        v ─●─ w  (the curve)     non-manifold edge); chain vertices and edge midpoints
+ *                                 within the locus's own accuracy of the curve's polyline,
+ *                                 the chain running from its first point to its last.
+ *
+ * Anything else (a curve through cells, an end at a pinch point where the sheets fold into
+ * each other, a closed curve, a shallow crossing) goes to the surgery as before. */
+#include "core/singular/conform_internal.h"
+#include "core/util/vec3.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+/* Chain vertices and edge midpoints lie within this fraction of the box diagonal of the
+ * curve's polyline: the accuracy the locus gives its traced points (locus.h, 1e-9 ×
+ * diagonal) and the surgery its curve vertices (the traced points themselves). */
+#define KEPT_TOL_REL 1e-9
+/* The four half-sheets at a chain edge are pairwise at least this far apart round it (cos of
+ * 10°): two sheets crossing, not a fold or a sheet counted twice; sheets crossing more
+ * shallowly than that need the surgery's widened tube (conform_angle.c) anyway. */
+#define KEPT_MAX_COS 0.984807753012208
+/* A chain vertex with more neighbours than this is not read (none of the polygoniser's has:
+ * a lattice vertex has at most 26 neighbours per sheet through it, two sheets here). */
+#define KEPT_MAX_NEIGH 64
+
+typedef struct nb {
+    uint32_t v;
+    int mult; /* live triangles on the edge to v */
+} nb;
+
+/* The neighbours of v over its live triangles, each with its edge's triangle count; -1 when
+ * there are more than KEPT_MAX_NEIGH. */
+static int neighbours(const cf_ctx *c, uint32_t v, nb *out)
+{
+    int n = 0;
+    cf_inc it;
+    uint32_t t;
+    for (cf_inc_begin(c, v, &it); cf_inc_next(c, &it, &t);) {
+        const uint32_t *tv = c->m->tri + 3 * (size_t)t;
+        for (int k = 0; k < 3; k++) {
+            if (tv[k] == v)
+                continue;
+            int i = 0;
+            while (i < n && out[i].v != tv[k])
+                i++;
+            if (i == n) {
+                if (n == KEPT_MAX_NEIGH)
+                    return -1;
+                out[n++] = (nb){tv[k], 0};
+            }
+            out[i].mult++;
+        }
+    }
+    return n;
+}
+
+/* The four triangles on edge (a, b) lie on four different half-sheets round it. */
+static bool four_sheets(const cf_ctx *c, uint32_t a, uint32_t b)
+{
+    uint32_t t4[4];
+    if (cf_live_on_edge(c, a, b, t4, 4) != 4)
+        return false;
+    const double *pa = c->m->pos + 3 * (size_t)a, *pb = c->m->pos + 3 * (size_t)b;
+    double e[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]}, ee = ism_dot3(e, e), d[4][3];
+    if (!(ee > 0))
+        return false;
+    for (int i = 0; i < 4; i++) {
+        const uint32_t *tv = c->m->tri + 3 * (size_t)t4[i];
+        uint32_t x = tv[0] != a && tv[0] != b ? tv[0] : tv[1] != a && tv[1] != b ? tv[1] : tv[2];
+        double w[3];
+        for (int k = 0; k < 3; k++)
+            w[k] = c->m->pos[3 * (size_t)x + k] - pa[k];
+        double along = ism_dot3(w, e) / ee;
+        for (int k = 0; k < 3; k++)
+            d[i][k] = w[k] - along * e[k];
+        double len = sqrt(ism_dot3(d[i], d[i]));
+        if (!(len > 0))
+            return false;
+        for (int k = 0; k < 3; k++)
+            d[i][k] /= len;
+    }
+    for (int i = 0; i < 4; i++)
+        for (int j = i + 1; j < 4; j++)
+            if (!(ism_dot3(d[i], d[j]) <= KEPT_MAX_COS))
+                return false;
+    return true;
+}
+
+/* Live triangles at v: at least one. */
+static bool live(const cf_ctx *c, uint32_t v)
+{
+    cf_inc it;
+    uint32_t t;
+    cf_inc_begin(c, v, &it);
+    return cf_inc_next(c, &it, &t);
+}
+
+/* The chain of curve pl from vertex v (at its first point) to its last point: its vertices
+ * appended to chain (room for cap), *end the last one. False where the mesh does not hold
+ * the curve so. */
+static bool walk(cf_ctx *c, const cf_polyline *pl, uint32_t v, double tol, uint32_t *chain,
+                 size_t *nchain, size_t cap, uint32_t *end)
+{
+    const double *last = pl->p + 3 * (pl->n - 1);
+    uint32_t prev = CF_NONE;
+    double s = 0;
+    nb list[KEPT_MAX_NEIGH];
+    while (*nchain < cap && !cf_poll(c, 1)) {
+        chain[(*nchain)++] = v;
+        int n = neighbours(c, v, list);
+        if (n < 0)
+            return false;
+        int four = 0;
+        uint32_t next = CF_NONE;
+        double s_next = 0;
+        for (int i = 0; i < n; i++) {
+            if (list[i].mult > 2 && list[i].mult != 4)
+                return false; /* another non-manifold edge at the chain */
+            if (list[i].mult != 4)
+                continue;
+            four++;
+            if (list[i].v == prev)
+                continue;
+            double sw;
+            const double *pw = c->m->pos + 3 * (size_t)list[i].v;
+            if (!isfinite(cf_polyline_nearest(pl, pw, tol, &sw, NULL)) || !(sw > s))
+                continue; /* another curve's chain at a shared end */
+            if (next != CF_NONE)
+                return false; /* two ways on */
+            next = list[i].v;
+            s_next = sw;
+        }
+        const double *pv = c->m->pos + 3 * (size_t)v;
+        if (ism_sqdist3(pv, last) <= tol * tol) {
+            *end = v;
+            return fabs(s - pl->length) <= tol;
+        }
+        if (next == CF_NONE || (prev != CF_NONE && four != 2))
+            return false;
+        const double *pn = c->m->pos + 3 * (size_t)next;
+        double mid[3] = {(pv[0] + pn[0]) / 2, (pv[1] + pn[1]) / 2, (pv[2] + pn[2]) / 2};
+        if (!isfinite(cf_polyline_nearest(pl, mid, tol, NULL, NULL)) || !four_sheets(c, v, next))
+            return false;
+        prev = v;
+        v = next;
+        s = s_next;
+    }
+    return false;
+}
+
+/* The one vertex with a live triangle within tol of p (CF_NONE when none or several). */
+static uint32_t vertex_at(const cf_ctx *c, const double p[3], double tol)
+{
+    uint32_t found = CF_NONE;
+    for (size_t v = 0; v < c->m->nverts; v++) {
+        const double *q = c->m->pos + 3 * v;
+        if (fabs(q[0] - p[0]) > tol || fabs(q[1] - p[1]) > tol || fabs(q[2] - p[2]) > tol ||
+            ism_sqdist3(q, p) > tol * tol || !live(c, (uint32_t)v))
+            continue;
+        if (found != CF_NONE)
+            return CF_NONE;
+        found = (uint32_t)v;
+    }
+    return found;
+}
+
+/* Every end vertex has as many four-triangle edges as chains end there. */
+static bool ends_closed(const cf_ctx *c, const uint32_t *ends, size_t nends)
+{
+    nb list[KEPT_MAX_NEIGH];
+    for (size_t i = 0; i < nends; i++) {
+        size_t at = 0;
+        for (size_t j = 0; j < nends; j++)
+            at += ends[j] == ends[i];
+        int n = neighbours(c, ends[i], list), four = 0;
+        if (n < 0)
+            return false;
+        for (int k = 0; k < n; k++)
+            four += list[k].mult == 4;
+        if ((size_t)four != at)
+            return false;
+    }
+    return true;
+}
+
+bool cf_curves_kept(cf_run *r, const cf_polyline *pl, const ism_sing_curve *const *cu, size_t n)
+{
+    cf_ctx *c = &r->c;
+    const double *b = r->o->box;
+    double tol = KEPT_TOL_REL * sqrt((b[3] - b[0]) * (b[3] - b[0]) + (b[4] - b[1]) * (b[4] - b[1]) +
+                                     (b[5] - b[2]) * (b[5] - b[2]));
+    for (size_t k = 0; k < n; k++)
+        if (pl[k].closed || pl[k].pinch[0] || pl[k].pinch[1] || cu[k]->closed)
+            return false;
+    /* room for every vertex once and the ends again (chains share only their ends) */
+    size_t cap = c->m->nverts + 2 * n + 1, nchain = 0;
+    uint32_t *chain = malloc(cap * sizeof *chain), *ends = malloc(2 * n * sizeof *ends);
+    bool kept = chain && ends;
+    for (size_t k = 0; kept && k < n; k++) {
+        uint32_t start = vertex_at(c, pl[k].p, tol);
+        kept = start != CF_NONE &&
+               walk(c, &pl[k], start, tol, chain, &nchain, cap, &ends[2 * k + 1]);
+        ends[2 * k] = start;
+        for (int e = 0; kept && e < 2; e++) {
+            int p = cu[k]->end_point[e];
+            uint32_t at = ends[2 * k + e];
+            kept = p < 0 || (size_t)p >= r->l->npoints || r->point_vertex[p] == CF_NONE ||
+                   r->point_vertex[p] == at;
+        }
+    }
+    kept = kept && !c->stopped && ends_closed(c, ends, 2 * n);
+    /* kept: the chains' vertices are the curves' (their normals from their triangles, as
+     * the surgery's curve vertices, cf_compact), the ends the points' shared vertices */
+    for (size_t i = 0; kept && i < nchain; i++)
+        c->singular[chain[i]] |= CF_VERTEX_SINGULAR;
+    for (size_t k = 0; kept && k < n; k++)
+        for (int e = 0; e < 2; e++) {
+            int p = cu[k]->end_point[e];
+            if (p >= 0 && (size_t)p < r->l->npoints)
+                r->point_vertex[p] = ends[2 * k + e];
+        }
+    free(chain);
+    free(ends);
+    return kept;
+}
