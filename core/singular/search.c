@@ -29,6 +29,7 @@
 #include "core/util/parallel.h"
 #include "core/util/sym3.h"
 
+#include <float.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -68,15 +69,20 @@ enum { EXCLUDED = 0, SURVIVES = 1, UNIQUE = 2, SMOOTH = 3 };
 /* A cell. A frontier cell on which f is smooth has a Taylor model (centre, f and ∇f there,
  * the jet over the cell: what smooth_tests evaluated), from which its children's ∇f is
  * enclosed with no evaluation (parent_excludes); the models (~250 bytes) sit beside the
- * frontier, in its own order, so a cell carries only its model's index. */
+ * frontier, in its own order, so a cell carries only its model's index. edges and lines are
+ * the cell's certified singular segments (locus_edges). */
 typedef struct scell {
     uint32_t i[3];
-    uint32_t level;
+    uint8_t level;
+    uint8_t lines;  /* bit a: the line along axis a through the centre, across the cell */
+    uint16_t edges; /* bit edge_bit(a, sb, sc): that edge of the cell */
     uint32_t model; /* NO_MODEL: none (f not smooth on it, or the root untested) */
 } scell;
 
 #define NO_MODEL UINT32_MAX
-_Static_assert(sizeof(scell) == 20, "a frontier cell is its lattice position, level and model");
+_Static_assert(sizeof(scell) == 20,
+               "a frontier cell is its lattice position, level, certified segments and model");
+_Static_assert(SEARCH_MAX_DEPTH < 256, "a level fits scell.level");
 
 typedef struct keyed_box {
     uint64_t key; /* z, y, x lattice coordinates of the lower corner, then the level */
@@ -288,12 +294,137 @@ static bool parent_excludes(const ism_dual_model *pm, const ism_interval x[3])
     return some_row_excludes(&pm->at, &pm->box, dx);
 }
 
+/* Segments of the locus on lattice lines (cells along a lattice line: the three axes of
+ * xyz = 0, the double line of xy = 0 and Whitney's x² = y²z, the cross-cap's and Steiner's
+ * axes).
+ *
+ * A closed segment S of X on which f and ∇f vanish is a segment of singular points. Then no
+ * test of classify drops X — each encloses f or ∇f over X, or over the parent holding X, or
+ * a Taylor form round a singular point of X, and S's points are such — and Krawczyk answers
+ * neither EMPTY (S's points are zeros of ∇f in X) nor UNIQUE (there are more than one): the
+ * verdict is SMOOTH whatever those tests compute. So such a cell is not tested; it only gets
+ * the model its children are tested by (a finest one, which has no children, not even that).
+ *
+ * S is taken as such when the interval f and ∇f over S (a degenerate box) lie within
+ * SEARCH_ZERO: outward rounding widens an exact 0 by one subnormal step per operation
+ * (interval_ops.h down1/up1), so an exact 0 never comes back as [0, 0]; no f a person writes
+ * has |f| or |∇f| below the smallest normal double at a point that is not singular. Were S
+ * not singular after all, the cell would merely be kept (and cut on) where the tests might
+ * have dropped it, or kept whole by Krawczyk: the search only ever keeps more, never loses a
+ * point of the locus.
+ *
+ * Where segments come from: a cell whose interval f and ∇f at the centre (which smooth_tests
+ * evaluates anyway) vanish so has its three centre lines, across the whole cell, evaluated as
+ * degenerate boxes (3 interval gradients; a centre on the locus is the lattice-line case,
+ * elsewhere it does not happen); a line that vanishes is half an edge of each of the four
+ * children on either side. A certified edge of a cell is, halved, an edge of the two
+ * children along it. The root's centre on coordinate-planes, crossing-planes, Whitney, the
+ * cross-cap and Steiner is such a point, and from there every cell along the axes is taken
+ * at every level. Lines through a face centre only (not the cell's) are not looked for.
+ * Tapes with min, max or abs are left out: their interval gradient over a kink is a hull of
+ * branches. */
+
+/* |f|, |∇f| at most this over a segment: 0 to the last bit (the smallest normal double; see
+ * above). */
+#define SEARCH_ZERO DBL_MIN
+
+/* An edge of a cell along axis a, at the lower (0) or upper (1) side sb of the next axis
+ * (a + 1) % 3 and sc of the one after. */
+static inline unsigned edge_bit(int a, unsigned sb, unsigned sc)
+{
+    return 4u * (unsigned)a + sb + 2u * sc;
+}
+
+static bool within_zero(ism_interval r) { return r.lo >= -SEARCH_ZERO && r.hi <= SEARCH_ZERO; }
+
+/* Whether an enclosure of f and ∇f is 0 to the last bit (SEARCH_ZERO; NaN bounds are not). */
+static bool vanishes(const ism_ivgrad *g)
+{
+    return within_zero(g->v) && within_zero(g->d[0]) && within_zero(g->d[1])
+           && within_zero(g->d[2]);
+}
+
+/* Child m's certified edges (bit k of m: its upper half along axis k) from its parent's
+ * edges and centre lines. Along axis a, with (mb, mc) child m's halves along the next two
+ * axes: the parent's edge at sides (mb, mc) is, halved, the child's edge at the same sides
+ * (edge_bit unchanged); the parent's centre line along a is the child's edge at the sides
+ * facing the parent's centre, (1 − mb, 1 − mc). No other child edge lies on a parent's edge
+ * or centre line. */
+static uint16_t child_edges(const scell *p, unsigned m)
+{
+    if (!p->edges && !p->lines)
+        return 0;
+    unsigned e = 0;
+    _Pragma("GCC unroll 3") for (int a = 0; a < 3; a++) {
+        unsigned mb = (m >> ((a + 1) % 3)) & 1u, mc = (m >> ((a + 2) % 3)) & 1u;
+        e |= p->edges & (1u << edge_bit(a, mb, mc));
+        if ((p->lines >> a) & 1u)
+            e |= 1u << edge_bit(a, 1u - mb, 1u - mc);
+    }
+    return (uint16_t)e;
+}
+
+/* The centre lines of a cell c whose model m was just built (see above). */
+static uint8_t centre_lines(const search *s, worker *w, const scell *c, const ism_dual_model *m)
+{
+    if (s->branches || (int)c->level >= s->depth || !vanishes(&m->at))
+        return 0;
+    uint32_t size = 1u << (s->depth - (int)c->level), half = size >> 1;
+    uint8_t lines = 0;
+    for (int a = 0; a < 3; a++) {
+        ism_interval x[3];
+        for (int k = 0; k < 3; k++) {
+            double mid = coord(s, k, c->i[k] + half);
+            x[k] = k == a ? iv(coord(s, k, c->i[k]), coord(s, k, c->i[k] + size)) : iv(mid, mid);
+        }
+        ism_ivgrad g;
+        ism_eval_interval_grad(s->t, w->jw, x, NULL, NULL, &g);
+        w->evals_interval++;
+        /* a line of one point (a box so far off the origin that the cell's bounds round
+         * together) certifies no segment */
+        if (x[a].lo < x[a].hi && vanishes(&g))
+            lines |= (uint8_t)(1u << a);
+    }
+    return lines;
+}
+
+/* Whether the cell c (box x) holds a certified segment of more than one point (a box so far
+ * off the origin that a cell's bounds round together has none). */
+static bool holds_segment(const scell *c, const ism_interval x[3])
+{
+    for (int a = 0; c->edges && a < 3; a++)
+        if ((c->edges >> (4 * a)) & 0xFu && x[a].lo < x[a].hi)
+            return true;
+    return false;
+}
+
+/* The model of a cell holding a certified segment (its verdict is SMOOTH without a test):
+ * what smooth_tests builds, bit for bit (the jet without the kept gradient pass is the same
+ * bits, interval_jet.h). */
+static void certified_model(const search *s, worker *w, const ism_interval x[3], ism_dual_model *m)
+{
+    ism_interval cx[3];
+    for (int k = 0; k < 3; k++) {
+        m->c[k] = 0.5 * x[k].lo + 0.5 * x[k].hi;
+        cx[k] = iv(m->c[k], m->c[k]);
+    }
+    ism_eval_interval_grad(s->t, w->jw, cx, NULL, NULL, &m->at);
+    ism_eval_interval_jet(s->t, w->jw, x, NULL, NULL, &m->box);
+    w->evals_interval++;
+    w->evals_jet++;
+}
+
 /* Whether a cell (whose F interval is f; pm: its parent's model, or NULL) may hold a singular
  * point; SMOOTH leaves the cell's model in *m. */
-static int classify(const search *s, worker *w, const ism_interval x[3], ism_interval f,
-                    const ism_dual_model *pm, ism_dual_model *m)
+static int classify(const search *s, worker *w, const scell *c, const ism_interval x[3],
+                    ism_interval f, const ism_dual_model *pm, ism_dual_model *m)
 {
     w->visited++;
+    if (holds_segment(c, x)) { /* a certified segment (above): SMOOTH; the finest need no model */
+        if ((int)c->level < s->depth)
+            certified_model(s, w, x, m);
+        return SMOOTH;
+    }
     if (!holds0(f) || parent_excludes(pm, x))
         return EXCLUDED;
     ism_ivgrad g;
@@ -521,13 +652,28 @@ static void project_all(search *s, keyed_box *boxes, size_t n)
     ism_parallel_for(runs < 2 ? 1 : s->threads, runs, project_run, &pr);
 }
 
+/* Tests a cell c (box x, F interval f; pm: its parent's model, or NULL) and keeps it unless
+ * excluded, with its centre lines when it joins the frontier with a model (m: scratch). */
+static void tested(search *s, worker *w, task_out *out, scell *c, const ism_interval x[3],
+                   ism_interval f, const ism_dual_model *pm, ism_dual_model *m)
+{
+    int v = classify(s, w, c, x, f, pm, m);
+    if (v == EXCLUDED)
+        return;
+    if (v == SMOOTH)
+        c->lines = centre_lines(s, w, c, m);
+    keep(s, w, out, *c, m, x, f, v);
+}
+
 static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
 {
     ism_interval bx[8], by[8], bz[8], f[8];
     scell kids[8];
     uint32_t half = 1u << (s->depth - (int)p->level - 1);
     for (int m = 0; m < 8; m++) {
-        kids[m].level = p->level + 1; /* .model: keep sets it */
+        kids[m].level = (uint8_t)(p->level + 1); /* .model: keep sets it */
+        kids[m].lines = 0;                        /* .lines: set once tested (tested) */
+        kids[m].edges = child_edges(p, (unsigned)m);
         for (int k = 0; k < 3; k++)
             kids[m].i[k] = p->i[k] + ((m >> k) & 1u ? half : 0u);
         ism_interval x[3];
@@ -542,9 +688,7 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
     ism_dual_model km; /* a child's model, built by its tests */
     for (int m = 0; m < 8; m++) {
         ism_interval x[3] = { bx[m], by[m], bz[m] };
-        int v = classify(s, w, x, f[m], pm, &km);
-        if (v != EXCLUDED)
-            keep(s, w, out, kids[m], &km, x, f[m], v);
+        tested(s, w, out, &kids[m], x, f[m], pm, &km);
     }
 }
 
@@ -650,18 +794,15 @@ static const char *stop_reason(int why)
 /* The root cell: tested like any child (its F interval computed alone). */
 static bool seed(search *s, level *l, vec *boxes)
 {
-    scell root = { .level = 0, .model = NO_MODEL };
+    scell root = { .level = 0, .lines = 0, .edges = 0, .model = NO_MODEL };
     ism_interval x[3];
     cell_box(s, &root, x);
     worker *w = &s->workers[0];
     ism_interval f = ism_eval_interval(s->t, w->ws, x[0], x[1], x[2]);
     w->evals_interval++;
     ism_dual_model m;
-    int v = classify(s, w, x, f, NULL, &m);
-    if (v == EXCLUDED)
-        return true;
     task_out out = { .oom = false };
-    keep(s, w, &out, root, &m, x, f, v);
+    tested(s, w, &out, &root, x, f, NULL, &m);
     return join(&out, l, boxes, true);
 }
 
