@@ -1,6 +1,7 @@
 /* clusters.c — 26-connected clusters of finest candidate boxes (clusters.h): the boxes'
- * lattice coordinates go into an open-addressing hash table, and each unlabelled box floods
- * its cluster through the table breadth first. */
+ * lattice coordinates go into an open-addressing hash table, each box is joined with its 13
+ * neighbours after it in (z, y, x) order found there (union-find, a set's root its first
+ * box), and the sets are numbered in the order of their first boxes. */
 #include "core/singular/clusters.h"
 
 #include <math.h>
@@ -53,39 +54,39 @@ static uint64_t box_key(const ism_locus_options *o, const ism_lbox *b)
     return key;
 }
 
-/* Lattice coordinate c of a key moved by d, or -1 off the key's range (0 is kept for "no
- * key", so a coordinate 0 is off it too). */
-static int64_t moved(int64_t c, int d)
+/* Offsets of the 13 neighbours after a box in (z, y, x) order, added to its key: a key's
+ * fields hold coordinates + 1 in 1 .. 2^20, so moving one by ±1 stays within its 21 bits (0
+ * or 2^20 + 1, which no box has: such a key is in no table). The other 13 neighbours see the
+ * box as one of theirs, so every adjacent pair is joined once. */
+static void forward_offsets(uint64_t off[13])
 {
-    c += d;
-    return c <= 0 || c >= (1 << 21) ? -1 : c;
+    int n = 0;
+    for (int m = 14; m < 27; m++) {
+        int64_t d = (int64_t)(m % 3 - 1) + (int64_t)(m / 3 % 3 - 1) * ((int64_t)1 << 21)
+                    + (int64_t)(m / 9 - 1) * ((int64_t)1 << 42);
+        off[n++] = (uint64_t)d;
+    }
 }
 
-static void flood(const table *t, const uint64_t *keys, uint32_t *label, uint32_t *queue,
-                  uint32_t start, uint32_t id)
+/* The root of box i's set (path halving). */
+static uint32_t root_of(uint32_t *up, uint32_t i)
 {
-    size_t head = 0, tail = 0;
-    label[start] = id;
-    queue[tail++] = start;
-    while (head < tail) {
-        uint32_t b = queue[head++];
-        int64_t c[3];
-        for (int k = 0; k < 3; k++)
-            c[k] = (int64_t)((keys[b] >> (21 * k)) & 0x1fffff);
-        /* the 27 neighbours (b itself among them), x fastest: the order the queue grows in */
-        for (int m = 0; m < 27; m++) {
-            int64_t x = moved(c[0], m % 3 - 1), y = moved(c[1], m / 3 % 3 - 1),
-                    z = moved(c[2], m / 9 - 1);
-            uint64_t k = x < 0 || y < 0 || z < 0
-                             ? 0
-                             : (uint64_t)x | (uint64_t)y << 21 | (uint64_t)z << 42;
-            uint32_t nb = k ? lookup(t, k) : NO_BOX;
-            if (nb != NO_BOX && label[nb] == NO_BOX) {
-                label[nb] = id;
-                queue[tail++] = nb;
-            }
-        }
+    while (up[i] != i) {
+        up[i] = up[up[i]];
+        i = up[i];
     }
+    return i;
+}
+
+/* Joins the sets of a and b under the smaller root: a set's root is its first box. */
+static void join(uint32_t *up, uint32_t a, uint32_t b)
+{
+    a = root_of(up, a);
+    b = root_of(up, b);
+    if (a < b)
+        up[b] = a;
+    else if (b < a)
+        up[a] = b;
 }
 
 size_t ism_sing_clusters(const ism_locus_options *o, const ism_lbox *boxes, size_t n,
@@ -96,38 +97,46 @@ size_t ism_sing_clusters(const ism_locus_options *o, const ism_lbox *boxes, size
         cap *= 2;
     table t = { calloc(cap, sizeof(uint64_t)), malloc(cap * sizeof(uint32_t)), cap - 1 };
     uint64_t *keys = malloc((n ? n : 1) * sizeof *keys);
-    uint32_t *queue = malloc((n ? n : 1) * sizeof *queue);
-    if (!t.key || !t.val || !keys || !queue || n >= NO_BOX) {
+    uint32_t *up = label; /* the union-find forest, then the labels */
+    if (!t.key || !t.val || !keys || n >= NO_BOX) {
         free(t.key);
         free(t.val);
         free(keys);
-        free(queue);
         return (size_t)-1;
     }
     for (size_t s = 0; s < cap; s++)
         t.val[s] = NO_BOX;
     for (size_t i = 0; i < n; i++) {
         keys[i] = box_key(o, &boxes[i]);
-        label[i] = NO_BOX;
+        up[i] = (uint32_t)i;
         if (keys[i]) {
             size_t s = slot_of(&t, keys[i]);
+            if (t.val[s] != NO_BOX) /* the same cell twice (the search's are distinct) */
+                join(up, t.val[s], (uint32_t)i);
             t.key[s] = keys[i];
             t.val[s] = (uint32_t)i;
         }
     }
+    uint64_t off[13];
+    forward_offsets(off);
+    for (size_t i = 0; i < n; i++)
+        for (int m = 0; keys[i] && m < 13; m++) {
+            uint32_t nb = lookup(&t, keys[i] + off[m]);
+            if (nb != NO_BOX)
+                join(up, (uint32_t)i, nb);
+        }
+    /* numbered in the order of each cluster's first box, its root: every box points at its
+     * root first (a root r <= i), then label[i] replaces up[i] in order, so label[r] is
+     * written before any box of r's set after it reads it */
+    for (size_t i = 0; i < n; i++)
+        up[i] = root_of(up, (uint32_t)i);
     uint32_t count = 0;
     for (size_t i = 0; i < n; i++) {
-        if (label[i] != NO_BOX)
-            continue;
-        if (keys[i])
-            flood(&t, keys, label, queue, (uint32_t)i, count);
-        else
-            label[i] = count;
-        count++;
+        uint32_t r = up[i];
+        label[i] = r == i ? count++ : label[r];
     }
     free(t.key);
     free(t.val);
     free(keys);
-    free(queue);
     return count;
 }
