@@ -13,6 +13,7 @@ import yaml
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from harness import SLOW, SLOWER, Daemon, draco_counts, in_background, process_alive, sphere  # noqa: E402
+from boxes import placements  # noqa: E402  (tests/cli; path set by harness)
 
 
 with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "proto",
@@ -205,11 +206,10 @@ class WorkerTest(unittest.TestCase):
         # (4e-3, 8e-3]. The suggestion, sent back, is served; a quarter of it is not (so it is
         # within 4x of the smallest E that fits).
         with Daemon("--workers", "1", "--max-triangles", "1000") as d:
-            for box in (None, 1e-3, 0.3819660112501051 / 64):  # off the lattice: by 1e-3, by
-                req = {"preset": "sphere", "max_error": 1e-3}  # an irrational part of a cell
-                if box is not None:
-                    req["box"] = [-1.5 + box, -1.5 + box, -1.5 + box, 1.5 + box, 1.5 + box,
-                                  1.5 + box]
+            # the preset's box and its placements off the lattice (tests/cli/boxes.py; the
+            # finest cell at the safety depth the bound runs at, 10)
+            for box in placements([-1.5] * 3 + [1.5] * 3, 3.0 / 2 ** 10):
+                req = {"preset": "sphere", "max_error": 1e-3, "box": box}
                 r = d.post("/v1/mesh", req)
                 self.assertEqual(r.status, 422, r.body[:300])
                 err = r.json()["error"]
