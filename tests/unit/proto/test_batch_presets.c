@@ -2,19 +2,23 @@
  * every preset, and 1, 2 and 4 threads produce the same mesh", on every preset of
  * proto/presets.c (tests/unit/core/test_batch_identity.c covers the 9 example surfaces of
  * shared/surfaces.json only; the presets add the singular, CSG and periodic ones). Each preset
- * is polygonised on the depth path (max_error 0, depths 2..DEPTH_MAX) in its own box and
- * √2 − 1 of a finest cell off the lattice, and under a bound (BOUND_REL × its box's diagonal,
- * depth ≤ BOUND_DEPTH: the rounds and, on smooth surfaces, the dual mesher) in its own box:
+ * is polygonised on the depth path (max_error 0, depths 2..DEPTH_MAX) and under a bound
+ * (BOUND_REL × its box's diagonal, depth ≤ BOUND_DEPTH: the rounds and, on smooth surfaces,
+ * the dual mesher), each in one of the three placements of tests/unit/placements.h (own, 1e-3,
+ * irrational), every placement also taking presets enough to meet every opcode (assign()):
  * the node-by-node reference (scalar_eval, one thread) against the batched path on 1, 2 and
  * 4 threads, and the reference on 2 threads, bit for bit (positions, normals, triangles,
- * segments). batch_on_and_off_in_the_other_boxes covers the other placements (1e-3,
- * placements.h, on the depth path; 1e-3 and the irrational one under the bound). */
+ * segments). batch_on_and_off_in_the_other_boxes runs every preset off the lattice, batched
+ * and scalar on one thread (1e-3 on the depth path; 1e-3 and the irrational one under the
+ * bound). */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "core/expr/expr.h"
+#include "core/expr/tape.h"
 #include "core/mesh/mesh.h"
 #include "core/octree/polygonise.h"
 #include "proto/presets.h"
@@ -74,42 +78,111 @@ static size_t check(const ism_preset *p, const ism_tape *t, const double box[6],
     return n;
 }
 
+/* The three placements (tests/unit/placements.h): 0 the preset's own box, 1 moved by
+ * (PF_OFF_X, PF_OFF_Y, PF_OFF_Z), 2 moved by (PF_IRR_X, PF_IRR_Y, PF_IRR_Z) of a finest
+ * cell at depth dmax of each axis. */
+enum { PLACEMENTS = 3 };
+
+static void place(const ism_preset *p, int placement, int dmax, double box[6])
+{
+    static const double OFF[3] = {PF_OFF_X, PF_OFF_Y, PF_OFF_Z};
+    static const double IRR[3] = {PF_IRR_X, PF_IRR_Y, PF_IRR_Z};
+    for (int k = 0; k < 6; k++) {
+        double w = p->box[k % 3 + 3] - p->box[k % 3];
+        box[k] = p->box[k] + (placement == 0   ? 0
+                              : placement == 1 ? OFF[k % 3]
+                                               : IRR[k % 3] * w / (1 << dmax));
+    }
+}
+
+/* Bit op set: the tape of p has an instruction with opcode op. */
+static uint32_t ops_of(const ism_tape *t)
+{
+    uint32_t m = 0;
+    for (size_t i = 0; i < t->len; i++)
+        m |= 1u << t->code[i].op;
+    return m;
+}
+
+/* Which presets run in which placement (run[i] bit j: preset i in placement j). Every preset
+ * runs once on each path, in placement i mod 3, and each placement also takes, for every
+ * opcode its third leaves out, the first preset that has it: each placement covers every
+ * opcode the presets use (the batched evaluators' per-op code) at about a third of the
+ * presets, so three placements cost what one did. Under ISOMESH_TEST_QUICK=1 (the sanitizer
+ * run) every preset in the irrational placement only, as tests/cli/boxes.py does. */
+static void assign(uint8_t *run, size_t n)
+{
+    uint32_t *ops = malloc(n * sizeof *ops);
+    cr_assert_not_null(ops);
+    for (size_t i = 0; i < n; i++) {
+        ism_tape *t = compile(ism_preset_at(i));
+        ops[i] = ops_of(t);
+        ism_tape_free(t);
+        run[i] = quick() ? 1u << 2 : 1u << (i % PLACEMENTS);
+    }
+    for (int j = 0; j < PLACEMENTS && !quick(); j++) {
+        uint32_t all = 0, have = 0;
+        for (size_t i = 0; i < n; i++) {
+            all |= ops[i];
+            have |= run[i] >> j & 1u ? ops[i] : 0;
+        }
+        for (size_t i = 0; i < n && have != all; i++)
+            if (ops[i] & ~have) {
+                run[i] |= (uint8_t)(1u << j);
+                have |= ops[i];
+            }
+    }
+    free(ops);
+}
+
+/* Every preset on one path (dmax; max_error BOUND_REL x the box's diagonal when bound, else
+ * the depth path) in the placements assign() gives it; returns how many runs had a mesh
+ * (and their number in *runs). */
+static size_t check_placed(int dmax, bool bound, size_t *runs)
+{
+    size_t n = ism_preset_count(), meshed = 0;
+    uint8_t *run = malloc(n);
+    cr_assert_not_null(run);
+    assign(run, n);
+    *runs = 0;
+    for (size_t i = 0; i < n; i++) {
+        const ism_preset *p = ism_preset_at(i);
+        ism_tape *t = compile(p);
+        for (int j = 0; j < PLACEMENTS; j++) {
+            if (!(run[i] >> j & 1u))
+                continue;
+            double box[6];
+            place(p, j, dmax, box);
+            meshed += check(p, t, box, dmax, bound ? BOUND_REL * diagonal(box) : 0) > 0;
+            ++*runs;
+        }
+        ism_tape_free(t);
+    }
+    free(run);
+    return meshed;
+}
+
 /* No .timeout on these two (the suite's own timeout in tests/run_suites.py bounds a hang):
  * Criterion 2.4.1's runner leaks 48 bytes when a test with a timeout ends while another
  * with a timeout runs beside it (--jobs=2), and these long ones overlap draco's and glb's
  * timed tests, so LeakSanitizer failed unit_proto [asan+ubsan] (reproduced with three empty
  * timed tests, one sleeping 2 s). */
-Test(batch_presets, every_preset_depth_path_two_boxes)
+Test(batch_presets, every_preset_depth_path)
 {
-    size_t meshed = 0;
-    int dmax = DEPTH_MAX - quick();
-    for (size_t i = 0; i < ism_preset_count(); i++) {
-        const ism_preset *p = ism_preset_at(i);
-        ism_tape *t = compile(p);
-        for (int placed = 0; placed < 2; placed++) {
-            double box[6];
-            memcpy(box, p->box, sizeof box);
-            for (int k = 0; k < 6; k++)
-                box[k] += placed ? PF_IRR * (p->box[k % 3 + 3] - p->box[k % 3]) / (1 << dmax)
-                                 : 0;
-            meshed += check(p, t, box, dmax, 0) > 0;
-        }
-        ism_tape_free(t);
-    }
+    size_t runs, meshed = check_placed(DEPTH_MAX - quick(), false, &runs);
     /* the comparison means something only where there is a mesh: nearly every preset has
      * one at depth 3-4 (a thin or small one may not) */
-    cr_expect_geq(meshed, 2 * ism_preset_count() * 9 / 10, "only %zu of %zu runs meshed",
-                  meshed, 2 * ism_preset_count());
+    cr_expect_geq(meshed, runs * 9 / 10, "only %zu of %zu runs meshed", meshed, runs);
 }
 
 /* The batched points and gradients (a cell's root searches, a leaf's measured centroids and
- * midpoints: sampler.h's batch) on and off, in the placements the two tests above leave out:
- * the depth path 1e-3 off the lattice, the bound 1e-3 and √2 − 1 of a cell off it (the
- * bound's measuring is where most of the batches are). One thread each way. */
+ * midpoints: sampler.h's batch) on and off for every preset (the two tests above take about
+ * a third of them per placement) off the lattice: the depth path 1e-3 off, the bound 1e-3
+ * and the irrational fractions of a cell off (the bound's measuring is where most of the
+ * batches are). One thread each way. */
 Test(batch_presets, batch_on_and_off_in_the_other_boxes)
 {
     size_t meshed = 0, runs = 0;
-    static const double OFF[3] = {PF_OFF_X, PF_OFF_Y, PF_OFF_Z};
     for (size_t i = 0; i < ism_preset_count(); i++) {
         const ism_preset *p = ism_preset_at(i);
         ism_tape *t = compile(p);
@@ -117,10 +190,7 @@ Test(batch_presets, batch_on_and_off_in_the_other_boxes)
             bool bound = run > 0;
             int dmax = (bound ? BOUND_DEPTH : DEPTH_MAX) - quick();
             double box[6], e = bound ? BOUND_REL * diagonal(p->box) : 0;
-            for (int k = 0; k < 6; k++) {
-                double w = p->box[k % 3 + 3] - p->box[k % 3];
-                box[k] = p->box[k] + (run < 2 ? OFF[k % 3] : PF_IRR * w / (1 << dmax));
-            }
+            place(p, run < 2 ? 1 : 2, dmax, box);
             ism_mesh on, off;
             ism_poly_stats st;
             test_mesh_of(t, box, dmax, e, 1, false, &on, &st);
@@ -140,10 +210,6 @@ Test(batch_presets, batch_on_and_off_in_the_other_boxes)
 
 Test(batch_presets, every_preset_under_a_bound)
 {
-    for (size_t i = 0; i < ism_preset_count(); i++) {
-        const ism_preset *p = ism_preset_at(i);
-        ism_tape *t = compile(p);
-        check(p, t, p->box, BOUND_DEPTH - quick(), BOUND_REL * diagonal(p->box));
-        ism_tape_free(t);
-    }
+    size_t runs, meshed = check_placed(BOUND_DEPTH - quick(), true, &runs);
+    cr_expect_geq(meshed, runs * 9 / 10, "only %zu of %zu runs meshed", meshed, runs);
 }
