@@ -7,6 +7,7 @@
 #include "proto/presets.h"
 #include "proto/json_writer.h"
 #include "core/octree/tolerances.h"
+#include "core/util/vec3.h"
 
 #include <jansson.h>
 #include <math.h>
@@ -436,18 +437,9 @@ const char *ism_three_digits(double v, int dir, char buf[32])
     return buf;
 }
 
-/* The box's diagonal (the scale of max_error's default and limits). */
-static double box_diagonal(const double box[6])
-{
-    double d2 = 0;
-    for (int k = 0; k < 3; k++)
-        d2 += (box[k + 3] - box[k]) * (box[k + 3] - box[k]);
-    return sqrt(d2);
-}
-
 double ism_request_default_error(const double box[6])
 {
-    return ISM_REQ_DEFAULT_ERROR_REL * box_diagonal(box);
+    return ISM_REQ_DEFAULT_ERROR_REL * ism_box_diagonal(box);
 }
 
 /* "max_error": E > 0 in model units, at least ISM_REQ_MIN_ERROR_REL of the box diagonal and
@@ -464,7 +456,7 @@ static bool decode_max_error(const json_t *v, const json_t *depth, const ism_pre
         req->poly.max_error = 0;
         return true;
     }
-    double e, diag = box_diagonal(req->poly.box);
+    double e, diag = ism_box_diagonal(req->poly.box);
     if (!v)
         e = ism_request_default_error(req->poly.box);
     else if (!read_number(v, "$.max_error", &e, err))

@@ -374,8 +374,7 @@ enum ism_box_clip_status ism_dual_box_clip(ism_mesh *m, ism_sampler *s, const do
                                            ism_box_clip_stats *cs)
 {
     bclip c = {.m = m, .s = s, .box = box, .snap = ISM_DUAL_BOX_SNAP * max_error};
-    double d[3] = {box[3] - box[0], box[4] - box[1], box[5] - box[2]};
-    c.diag = ism_norm3(d);
+    c.diag = ism_box_diagonal(box);
     memset(cs, 0, sizeof *cs);
     enum ism_box_clip_status st = ISM_BOX_CLIP_OK;
     size_t nt0 = m->ntris;

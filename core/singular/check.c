@@ -412,10 +412,7 @@ bool ism_locus_check_mesh(const ism_locus *l, const double box[6], const ism_mes
                           const ism_analysis *a, ism_locus_check *out, ism_error *err)
 {
     memset(out, 0, sizeof *out);
-    double diag = 0;
-    for (int k = 0; k < 3; k++)
-        diag += (box[k + 3] - box[k]) * (box[k + 3] - box[k]);
-    double tol = ISM_LOCUS_ON_REL * sqrt(diag);
+    double tol = ISM_LOCUS_ON_REL * ism_box_diagonal(box);
     seg_grid g;
     point_grid pg;
     double *best2 = malloc((l->npoints ? l->npoints : 1) * sizeof *best2);

@@ -111,13 +111,10 @@ static void tracer_init(ism_ctracer *tr, const ism_locus_options *o, ism_locus *
     tr->io = io;
     tr->o = o;
     memcpy(tr->box, o->box, sizeof tr->box);
-    double side = INFINITY, d2 = 0.0;
-    for (int k = 0; k < 3; k++) {
-        double s = o->box[k + 3] - o->box[k];
-        side = fmin(side, s);
-        d2 += s * s;
-    }
-    tr->diag = sqrt(d2);
+    double side = INFINITY;
+    for (int k = 0; k < 3; k++)
+        side = fmin(side, o->box[k + 3] - o->box[k]);
+    tr->diag = ism_box_diagonal(o->box);
     tr->cell = ldexp(side, -o->max_depth);
     tr->hmax = CURVES_HMAX_CELLS * tr->cell;
     tr->hmin = CURVES_HMIN_CELLS * tr->cell;

@@ -854,13 +854,10 @@ bool ism_sing_points(const ism_tape *f, const ism_locus_options *o, ism_locus *o
 {
     double t0 = ism_now_ms();
     ctx x = { .t = f, .o = o, .box = o->box, .out = out };
-    double cells = ldexp(1.0, o->max_depth), d2 = 0.0;
-    for (int k = 0; k < 3; k++) {
-        double ext = o->box[k + 3] - o->box[k];
-        x.cell = fmax(x.cell, ext / cells);
-        d2 += ext * ext;
-    }
-    x.diag = sqrt(d2);
+    double cells = ldexp(1.0, o->max_depth);
+    for (int k = 0; k < 3; k++)
+        x.cell = fmax(x.cell, (o->box[k + 3] - o->box[k]) / cells);
+    x.diag = ism_box_diagonal(o->box);
     x.ws = ism_eval_ws_new(f);
     bool ok = ism_pcert_init(&x.pc, f, x.diag, out->hessian_scale, &out->evals_jet) && x.ws && run(&x, o)
               && !x.pc.oom;

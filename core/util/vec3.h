@@ -1,6 +1,6 @@
 /* vec3.h — the small vector helpers on double[3] that the polygoniser, the singular locus,
  * the curves and the analysis share (dot and cross products, length, normalising, distance,
- * a triangle's normal and area, the distance to a box, frames across a direction, the
+ * a triangle's normal and area, the distance to a box, a box's diagonal, frames across a direction, the
  * Fibonacci sphere's directions), inline, each written once (the same arithmetic, in the same
  * order, wherever it is used). */
 #ifndef ISM_VEC3_H
@@ -36,6 +36,10 @@ static inline double ism_dist3(const double a[3], const double b[3])
 {
     return sqrt(ism_sqdist3(a, b));
 }
+
+/* The diagonal of a box [lo x, lo y, lo z, hi x, hi y, hi z]: the scale of max_error's default
+ * and limits (proto/request.c), of the curves' and the locus check's tolerances. */
+static inline double ism_box_diagonal(const double box[6]) { return ism_dist3(box, box + 3); }
 
 /* The squared distance from p to the segment a–b (to a when a = b). */
 static inline double ism_sqdist_segment3(const double p[3], const double a[3], const double b[3])

@@ -13,6 +13,7 @@
 #include "server/common/fit_error.h"
 
 #include "core/singular/surface.h"
+#include "core/util/vec3.h"
 #include "proto/request.h"
 
 #include <math.h>
@@ -78,13 +79,9 @@ static double shown(double e)
 
 double ism_fit_error(const ism_tape *f, const ism_poly_options *po, bool preview)
 {
-    const double *box = po->box;
-    double diag = 0;
-    for (int k = 0; k < 3; k++)
-        diag += (box[k + 3] - box[k]) * (box[k + 3] - box[k]);
-    diag = sqrt(diag);
     if (!(po->max_error > 0) || !(po->max_triangles > 0))
         return 0;
+    double diag = ism_box_diagonal(po->box);
     double fits = 0;                /* the smallest E seen to fit */
     double over = po->max_error;    /* the largest E seen not to */
     size_t n = 0;

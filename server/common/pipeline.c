@@ -14,6 +14,7 @@
 #include "core/octree/resolvable.h"
 #include "core/singular/check.h"
 #include "core/singular/surface.h"
+#include "core/util/vec3.h"
 #include "proto/computed.h"
 #include "proto/corner_split.h"
 #include "proto/curve_fns.h"
@@ -470,9 +471,8 @@ static bool cut_curves(const ism_request *req, const ism_tape *tape,
         return true;
     t = ism_now_ms();
     const double *b = req->poly.box; /* curve ends on the locus: as the locus check's */
-    double diag = sqrt((b[3] - b[0]) * (b[3] - b[0]) + (b[4] - b[1]) * (b[4] - b[1]) +
-                       (b[5] - b[2]) * (b[5] - b[2]));
-    if (!ism_arrangement_build(&c->mesh, &s->cut, &c->locus, ISM_LOCUS_ON_REL * diag, &s->arr))
+    if (!ism_arrangement_build(&c->mesh, &s->cut, &c->locus, ISM_LOCUS_ON_REL * ism_box_diagonal(b),
+                               &s->arr))
         return fail_with(r, 500, "no_memory", "%s", "out of memory building the arrangement");
     c->timings_ms[ISM_TIME_SINGULAR] += ism_now_ms() - t;
     s->have_curves = true;

@@ -8,6 +8,7 @@
 #include <string.h>
 #include "core/eval/eval.h"
 #include "core/singular/surface.h"
+#include "core/util/vec3.h"
 
 int pf_first_box(void)
 {
@@ -127,10 +128,7 @@ bool pf_inside_box(const double a[3], const double b[3], const void *arg)
 
 double pf_default_error(const double box[6])
 {
-    double d2 = 0;
-    for (int a = 0; a < 3; a++)
-        d2 += (box[a + 3] - box[a]) * (box[a + 3] - box[a]);
-    return 1e-3 * sqrt(d2);
+    return 1e-3 * ism_box_diagonal(box);
 }
 
 double pf_cell(const double box[6], int d)

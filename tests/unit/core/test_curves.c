@@ -28,6 +28,7 @@
 #include "poly_fixture.h"
 #include "core/curves/arrangement.h"
 #include "core/curves/cut.h"
+#include "core/util/vec3.h"
 
 /* Mesh accuracy: the triangles lie within this of f = 0 (area deficit ~ 2E/R ≪ 0.5%). */
 #define MESH_ERROR 1e-3
@@ -45,12 +46,6 @@ static void shifted(const double base[6], int which, int dmax, double box[6])
         box[k] = base[k] + s * shift_dir[k];
         box[k + 3] = base[k + 3] + s * shift_dir[k];
     }
-}
-
-static double diagonal(const double b[6])
-{
-    return sqrt((b[3] - b[0]) * (b[3] - b[0]) + (b[4] - b[1]) * (b[4] - b[1]) +
-                (b[5] - b[2]) * (b[5] - b[2]));
 }
 
 typedef struct cut_run {
@@ -75,7 +70,7 @@ static void run(const pf_surface *s, const double box[6], const ism_cut_fn *fns,
     ism_mesh_init(&r->m);
     cr_assert_eq(ism_polygonise(t, &o, &r->m, &st, &err), ISM_POLY_OK, "%s", err.message);
     cr_assert(ism_mesh_drop_loose(&r->m));
-    r->diag = diagonal(box);
+    r->diag = ism_box_diagonal(box);
     ism_cut_eval ev;
     cr_assert(ism_cut_eval_init(&ev, t, fns, n));
     memset(&r->cut, 0, sizeof r->cut);
@@ -417,7 +412,7 @@ static void gyroid_crease(int which)
         ism_cut_eval ev;
         cr_assert(ism_cut_eval_init(&ev, t, &crease, 1));
         memset(&r.cut, 0, sizeof r.cut);
-        r.diag = diagonal(box);
+        r.diag = ism_box_diagonal(box);
         cr_assert(ism_cut_mesh(&ev, 1e-3 * CURVE_TOL_REL * r.diag, &r.m, &r.cut));
         ism_cut_eval_free(&ev);
         ism_tape_free(t);

@@ -21,6 +21,7 @@
 #include "core/octree/dual_box.h"
 #include "core/octree/mesher.h"
 #include "core/singular/surface.h"
+#include "core/util/vec3.h"
 #include "poly_fixture.h"
 
 #define DEPTH 9
@@ -132,8 +133,7 @@ static size_t boundary_loops(const ism_mesh *m, const ism_tape *t, const double 
     for (uint32_t v = 0; v < m->nverts; v++)
         up[v] = v;
     ism_eval_ws *ws = ism_eval_ws_new(t);
-    double diag = sqrt(pow(box[3] - box[0], 2) + pow(box[4] - box[1], 2) +
-                       pow(box[5] - box[2], 2)), worst_f = 0;
+    double diag = ism_box_diagonal(box), worst_f = 0;
     size_t off_plane = 0;
     *nm = 0;
     for (size_t i = 0; i < ne;) {

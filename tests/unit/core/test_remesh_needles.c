@@ -1030,23 +1030,15 @@ static void cube_minus_ball_case(const ism_tape *t, const double box[6], int d, 
     crease_case_in(t, box, d, 0, which, "cube-minus-ball", &CUBE_PAIR, &cube_left);
 }
 
-/* The box's default bound: 1e-3 of its diagonal. */
-static double default_bound(const double box[6])
-{
-    return 1e-3 * sqrt((box[3] - box[0]) * (box[3] - box[0]) +
-                       (box[4] - box[1]) * (box[4] - box[1]) +
-                       (box[5] - box[2]) * (box[5] - box[2]));
-}
-
 static void gyroid_ball_bounded(const ism_tape *t, const double box[6], int d, int which)
 {
-    crease_case_in(t, box, d, default_bound(box), which, "gyroid-ball bounded", &GYROID_PAIR,
+    crease_case_in(t, box, d, pf_default_error(box), which, "gyroid-ball bounded", &GYROID_PAIR,
                    &crease_left_bounded);
 }
 
 static void cube_minus_ball_bounded(const ism_tape *t, const double box[6], int d, int which)
 {
-    crease_case_in(t, box, d, default_bound(box), which, "cube-minus-ball bounded",
+    crease_case_in(t, box, d, pf_default_error(box), which, "cube-minus-ball bounded",
                    &CUBE_PAIR, &cube_left_bounded);
 }
 

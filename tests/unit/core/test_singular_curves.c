@@ -15,6 +15,7 @@
 #include "core/singular/curves.h"
 #include "core/singular/find.h"
 #include "core/util/sym3.h"
+#include "core/util/vec3.h"
 #include "tests/unit/placements.h"
 
 #define DEPTH 6
@@ -52,12 +53,9 @@ static double setup_lets(fixture *fx, const char *expr, const ism_let *lets, siz
     cr_assert_not_null(fx->t, "%s: %s", expr, err.message);
     fx->ws = ism_eval_ws_new(fx->t);
     ism_locus_options_default(&fx->o);
-    double d2 = 0;
     for (int k = 0; k < 6; k++)
         fx->o.box[k] = box[k] + shift;
-    for (int k = 0; k < 3; k++)
-        d2 += (box[k + 3] - box[k]) * (box[k + 3] - box[k]);
-    fx->diag = sqrt(d2);
+    fx->diag = ism_box_diagonal(box);
     fx->o.max_depth = DEPTH;
     ism_locus_init(&fx->l);
     return shift;

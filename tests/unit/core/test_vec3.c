@@ -2,7 +2,7 @@
  * ism_across_least3 normal to the axis least along it), and the Fibonacci sphere's directions
  * (ism_fibonacci_dir): unit, evenly spaced heights, and the covering nearest.c's 64 rays rely
  * on (every direction within 19.6° of a ray), measured on a latitude-longitude grid of
- * probes, not on the set's own construction. */
+ * probes, not on the set's own construction; a box's diagonal against integer closed forms. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include "core/util/vec3.h"
@@ -172,4 +172,24 @@ Test(vec3, box_distance_is_the_distance_to_the_clamped_point)
     cr_assert(n > 0, "some probes inside");
     const double corner[3] = {2, 2, 8}; /* beyond hi on every axis: (1, 1.25, 3) away */
     cr_assert(ism_sqdist_box3(corner, lo, hi) == 1 + 1.5625 + 9);
+}
+
+/* ism_box_diagonal on boxes whose diagonal is an integer (Pythagorean quadruples: 1² + 2² +
+ * 2² = 3², 2² + 3² + 6² = 7²), in any corner order of the widths and off the origin, and the
+ * same bits as the sum of the squared widths in x, y, z order then sqrt (what proto/request.c
+ * and the tolerances it scales computed before it was shared). */
+Test(vec3, box_diagonal_closed_forms)
+{
+    static const double boxes[][6] = {{0, 0, 0, 1, 2, 2}, {-1, -2, -2, 0, 0, 0},
+                                      {10, -3, 0.5, 12, 0, 6.5}, {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5}};
+    static const double want[] = {3, 3, 7, 3 * 1.7320508075688772};
+    for (int i = 0; i < 4; i++) {
+        const double *b = boxes[i];
+        double d = ism_box_diagonal(b), d2 = 0;
+        for (int k = 0; k < 3; k++)
+            d2 += (b[k + 3] - b[k]) * (b[k + 3] - b[k]);
+        cr_assert(fabs(d - want[i]) <= 1e-15 * want[i], "box %d: %.17g, want %.17g", i, d,
+                  want[i]);
+        cr_assert(d == sqrt(d2), "box %d: %.17g, the loop's %.17g", i, d, sqrt(d2));
+    }
 }

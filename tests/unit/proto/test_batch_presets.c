@@ -21,6 +21,7 @@
 #include "core/expr/tape.h"
 #include "core/mesh/mesh.h"
 #include "core/octree/polygonise.h"
+#include "core/util/vec3.h"
 #include "proto/presets.h"
 #include "tests/unit/placements.h"
 #include "tests/unit/proto/preset_tape.h"
@@ -45,14 +46,6 @@ static ism_tape *compile(const ism_preset *p)
     ism_tape *t = test_preset_tape(p, &err);
     cr_assert_not_null(t, "%s: %s", p->name, err.message);
     return t;
-}
-
-static double diagonal(const double box[6])
-{
-    double d = 0;
-    for (int k = 0; k < 3; k++)
-        d += (box[k + 3] - box[k]) * (box[k + 3] - box[k]);
-    return sqrt(d);
 }
 
 /* The reference against the batched path on 1, 2, 4 threads and itself on 2; returns how
@@ -153,7 +146,7 @@ static size_t check_placed(int dmax, bool bound, size_t *runs)
                 continue;
             double box[6];
             place(p, j, dmax, box);
-            meshed += check(p, t, box, dmax, bound ? BOUND_REL * diagonal(box) : 0) > 0;
+            meshed += check(p, t, box, dmax, bound ? BOUND_REL * ism_box_diagonal(box) : 0) > 0;
             ++*runs;
         }
         ism_tape_free(t);
@@ -189,7 +182,7 @@ Test(batch_presets, batch_on_and_off_in_the_other_boxes)
         for (int run = 0; run < 3; run++) {
             bool bound = run > 0;
             int dmax = (bound ? BOUND_DEPTH : DEPTH_MAX) - quick();
-            double box[6], e = bound ? BOUND_REL * diagonal(p->box) : 0;
+            double box[6], e = bound ? BOUND_REL * ism_box_diagonal(p->box) : 0;
             place(p, run < 2 ? 1 : 2, dmax, box);
             ism_mesh on, off;
             ism_poly_stats st;
