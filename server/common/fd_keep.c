@@ -3,10 +3,10 @@
  * reference-counted lease (the slot holds one reference, each borrower one more); it is
  * lent under the lock (read), so a slot taken over (its reference let go, under the write
  * lock) never hands out a closed or reused number, and a lent one is closed by the last
- * give-back; a duplicate is made from a lent one, outside the lock. Why not a mutex: every
- * cached mesh the own sender answers takes its file here, on any polling thread; under one
- * mutex the dup syscall made the threads queue (16 connections on 2 threads, one mesh: 0.44
- * futex calls per request under strace, most of them here), readers now pass each other. */
+ * give-back. Why not a mutex: every cached mesh the own sender answers takes its file here,
+ * on any polling thread; under one mutex (when a lookup made a dup under it) the threads
+ * queued (16 connections on 2 threads, one mesh: 0.44 futex calls per request under strace,
+ * most of them here), readers now pass each other. */
 #include "server/common/fd_keep.h"
 
 #include <fcntl.h>
@@ -79,17 +79,6 @@ void ism_fd_keep_free(ism_fd_keep *k)
 static slot *slot_of(ism_fd_keep *k, const char *name)
 {
     return &k->slots[ism_text_hash(name) % FD_KEEP_SLOTS];
-}
-
-int ism_fd_keep_get(ism_fd_keep *k, const char *name)
-{
-    ism_fd_lease *l;
-    int fd = ism_fd_keep_borrow(k, name, &l);
-    if (fd < 0)
-        return -1;
-    int dup = fcntl(fd, F_DUPFD_CLOEXEC, 0); /* outside the lock: the lease keeps fd open */
-    ism_fd_keep_give_back(l);
-    return dup;
 }
 
 int ism_fd_keep_borrow(ism_fd_keep *k, const char *name, ism_fd_lease **lease)

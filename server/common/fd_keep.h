@@ -1,9 +1,9 @@
 /* fd_keep.h — a bounded table of open files kept by name, so that a file sent often is opened
- * once, not once per send. A lookup either hands out a duplicate of the kept descriptor (the
- * caller owns and closes it: a sender that closes what it is given, libmicrohttpd) or lends
- * the kept descriptor itself (no syscall), to be given back. The table's own copy stays open
- * until the name's slot is taken by another name, the name is dropped, or the table is freed,
- * and, while lent, until the last borrower gives it back. */
+ * once, not once per send. A lookup lends the kept descriptor itself (no syscall), to be
+ * given back (a sender that closes what it is given, libmicrohttpd, gets a duplicate made by
+ * the borrower: server/common/cache_disk.c). The table's own copy stays open until the name's
+ * slot is taken by another name, the name is dropped, or the table is freed, and, while lent,
+ * until the last borrower gives it back. */
 #ifndef ISM_FD_KEEP_H
 #define ISM_FD_KEEP_H
 
@@ -16,9 +16,6 @@ ism_fd_keep *ism_fd_keep_new(void);
 /* Closes every kept descriptor and frees the table (NULL: nothing). */
 void ism_fd_keep_free(ism_fd_keep *k);
 
-/* A new descriptor (close-on-exec) for the file kept under name, -1 when none is kept (or
- * the duplicate could not be made). */
-int ism_fd_keep_get(ism_fd_keep *k, const char *name);
 /* The kept descriptor of name, lent: *lease gets what ism_fd_keep_give_back takes; the
  * descriptor stays open (and its number unused by anything else) until then, whatever
  * happens to its slot meanwhile. -1 (and *lease NULL) when none is kept. The borrower must

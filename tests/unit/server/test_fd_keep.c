@@ -1,8 +1,7 @@
-/* test_fd_keep.c — the table of kept files (server/common/fd_keep.h): a lookup hands out a new
- * descriptor of the kept file (not the table's own, which the caller may close), names do not
- * mix, a dropped name and a freed table hold no descriptor; a borrow lends the table's own
- * descriptor, which stays open through a drop, a take-over or the table's end until the last
- * borrower gives it back. */
+/* test_fd_keep.c — the table of kept files (server/common/fd_keep.h): a borrow reads the file
+ * kept under its name (the newest put), names do not mix, a dropped name and a freed table
+ * hold no descriptor; a borrow lends the table's own descriptor, which stays open through a
+ * drop, a take-over or the table's end until the last borrower gives it back. */
 #include <criterion/criterion.h>
 #include <dirent.h>
 #include <fcntl.h>
@@ -47,35 +46,41 @@ static void assert_reads(int fd, const char *text)
     cr_assert_str_eq(buf, text);
 }
 
-Test(fd_keep, a_lookup_gives_a_new_descriptor_of_the_kept_file_and_names_do_not_mix)
+/* name's kept descriptor, borrowed and given back at once (-1: none kept); reads it as text
+ * when text is not NULL. */
+static int borrow_reads(ism_fd_keep *k, const char *name, const char *text)
+{
+    ism_fd_lease *l;
+    int fd = ism_fd_keep_borrow(k, name, &l);
+    cr_assert_eq(fd < 0, l == NULL, "%s: fd %d, lease %p", name, fd, (void *)l);
+    if (text)
+        assert_reads(fd, text);
+    ism_fd_keep_give_back(l);
+    return fd;
+}
+
+Test(fd_keep, a_borrow_reads_the_kept_file_and_names_do_not_mix)
 {
     int before = open_descriptors();
     ism_fd_keep *k = ism_fd_keep_new();
     cr_assert_not_null(k);
-    cr_assert_eq(ism_fd_keep_get(k, NAME_A), -1);
+    cr_assert_eq(borrow_reads(k, NAME_A, NULL), -1);
     int a = temp_file("first file");
     ism_fd_keep_put(k, NAME_A, a);
     close(a); /* the table holds its own */
-    cr_assert_eq(ism_fd_keep_get(k, NAME_B), -1);
-    int got1 = ism_fd_keep_get(k, NAME_A), got2 = ism_fd_keep_get(k, NAME_A);
-    cr_assert_geq(got1, 0);
-    cr_assert_neq(got1, got2);
-    assert_reads(got1, "first file");
-    close(got1); /* the caller's copy: the next lookup still works */
-    assert_reads(got2, "first file");
-    close(got2);
-    int got = ism_fd_keep_get(k, NAME_A);
+    cr_assert_eq(borrow_reads(k, NAME_B, NULL), -1);
+    int got = borrow_reads(k, NAME_A, "first file");
+    cr_assert_geq(got, 0);
     cr_assert(fcntl(got, F_GETFD) & FD_CLOEXEC);
-    close(got);
+    cr_assert_eq(borrow_reads(k, NAME_A, "first file"), got); /* given back: still kept */
     /* a newer file under the same name replaces the kept one */
     int b = temp_file("second file");
     ism_fd_keep_put(k, NAME_A, b);
     close(b);
-    int got3 = ism_fd_keep_get(k, NAME_A);
-    assert_reads(got3, "second file");
-    close(got3);
+    borrow_reads(k, NAME_A, "second file");
+    cr_assert_eq(open_descriptors(), before + 1); /* the first one closed */
     ism_fd_keep_drop(k, NAME_A);
-    cr_assert_eq(ism_fd_keep_get(k, NAME_A), -1);
+    cr_assert_eq(borrow_reads(k, NAME_A, NULL), -1);
     ism_fd_keep_free(k);
     cr_assert_eq(open_descriptors(), before);
 }
@@ -119,7 +124,7 @@ Test(fd_keep, a_lent_descriptor_outlives_its_slot_until_the_last_give_back)
     cr_assert_eq(ism_fd_keep_borrow(k, NAME_B, &other), -1);
     /* evicted while lent (the pruner drops the name): both borrowers still read it */
     ism_fd_keep_drop(k, NAME_A);
-    cr_assert_eq(ism_fd_keep_get(k, NAME_A), -1);
+    cr_assert_eq(borrow_reads(k, NAME_A, NULL), -1);
     assert_reads(b1, "lent file");
     ism_fd_keep_give_back(l1);
     assert_reads(b2, "lent file");
