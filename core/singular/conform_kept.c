@@ -1,25 +1,30 @@
-/* conform_kept.c — double curves the polygoniser's mesh already follows: where a curve lies on
- * a lattice line (the planes of x y z = 0 in a box symmetric about them), the polygoniser puts
- * vertices on it at zero corners and the four cells round each lattice edge give that edge
- * two triangles from each sheet. The tube surgery (conform_tube.c) would cut those triangles
- * and zip them back with rings of its own: the same chain of edges, at the cost of most of
- * the mesh beside the curve (x y z = 0: 9,000 of 12,672 triangles cut and 10,240 made), and
- * with worse triangles. A group of curves whose every curve is found to be such a chain is
- * kept as it is:
+/* conform_kept.c — double curves the polygoniser's mesh already follows: where flat sheets lie
+ * on lattice planes (x y z = 0 in a box symmetric about them), their crossing lines are
+ * lattice lines, the polygoniser puts vertices on them at zero corners, and the four cells
+ * round each lattice edge give that edge two triangles from each sheet. The tube surgery
+ * (conform_tube.c) would cut those triangles and zip them back with rings of its own: the
+ * same chain of edges, at the cost of most of the mesh beside the curve (x y z = 0: 9,000 of
+ * 12,672 triangles cut and 10,240 made), and with worse triangles. A group of curves whose
+ * every curve is found to be such a chain is kept as it is:
  *
  *        sheet B                  each chain edge v-w: exactly four live triangles, their
- *           │                     third vertices pairwise more than KEPT_MIN_ANGLE apart
- *    ───────●─────── sheet A      round the edge (two sheets, two sides each); every other
- *           │                     edge at a chain vertex one or two triangles (no other
- *        v ─●─ w  (the curve)     non-manifold edge); chain vertices and edge midpoints
- *                                 within the locus's own accuracy of the curve's polyline,
- *                                 the chain running from its first point to its last.
+ *           │                     third vertices pairwise more than 10° apart round the edge
+ *    ───────●─────── sheet A      (two sheets, two sides each); every other edge at a chain
+ *           │                     vertex one or two triangles (no other non-manifold edge);
+ *        v ─●─ w  (the curve)     chain vertices and edge midpoints within the locus's own
+ *                                 accuracy of the curve's polyline, the chain running from
+ *                                 its first point to its last; every triangle with a corner
+ *                                 within the surgery's first radius on f = 0 exactly (f's
+ *                                 interval over its box is 0: f's own structure says the
+ *                                 sheets there are flat and where the mesh puts them).
  *
- * Anything else (a curve through cells, an end at a pinch point where the sheets fold into
- * each other, a closed curve, a shallow crossing) goes to the surgery as before. */
+ * Anything else (a curve through cells, curved sheets — which the polygoniser leaves coarse
+ * near the locus under a bound, for the surgery to mesh again —, an end at a pinch point, a
+ * closed curve, a shallow crossing) goes to the surgery as before. */
 #include "core/singular/conform_internal.h"
 #include "core/util/vec3.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 
@@ -31,6 +36,9 @@
  * 10°): two sheets crossing, not a fold or a sheet counted twice; sheets crossing more
  * shallowly than that need the surgery's widened tube (conform_angle.c) anyway. */
 #define KEPT_MAX_COS 0.984807753012208
+/* f's interval over a kept triangle's box holds no value farther from 0 than the smallest
+ * normal double: 0 rounded outwards (the evaluator widens an exact 0 by a denormal). */
+#define KEPT_ZERO DBL_MIN
 /* A chain vertex with more neighbours than this is not read (none of the polygoniser's has:
  * a lattice vertex has at most 26 neighbours per sheet through it, two sheets here). */
 #define KEPT_MAX_NEIGH 64
@@ -176,6 +184,81 @@ static uint32_t vertex_at(const cf_ctx *c, const double p[3], double tol)
     return found;
 }
 
+/* The first of the n polylines, curve `first` asked first, whose points' box lies within r
+ * of p (n when none): a vertex beside a chain is mostly near the chain's own curve. The box
+ * holds the curve (a straight one along an axis is its own box), so the vertices within r
+ * of a curve are all found, and a few more (a query of the box costs a tenth of one of the
+ * polyline's segments, x y z = 0: 5.4M instructions for 11.8k queries). */
+static size_t near_curve(const cf_polyline *pl, size_t n, size_t first, const double p[3],
+                         double r)
+{
+    if (cf_polyline_box_distance(&pl[first], p) <= r)
+        return first;
+    for (size_t k = 0; k < n; k++)
+        if (k != first && cf_polyline_box_distance(&pl[k], p) <= r)
+            return k;
+    return n;
+}
+
+/* f vanishes on triangle t: the interval of f over its bounding box holds nothing but a
+ * rounded 0 (KEPT_ZERO), as on a plane of the lattice where one of f's factors is [0, 0]. */
+static bool on_zero_set(cf_ctx *c, uint32_t t)
+{
+    const uint32_t *tv = c->m->tri + 3 * (size_t)t;
+    ism_interval box[3];
+    for (int k = 0; k < 3; k++) {
+        double a = c->m->pos[3 * (size_t)tv[0] + k], b = c->m->pos[3 * (size_t)tv[1] + k],
+               d = c->m->pos[3 * (size_t)tv[2] + k];
+        box[k] = (ism_interval){cf_min2(a, cf_min2(b, d)), cf_max2(a, cf_max2(b, d))};
+    }
+    ism_interval f = ism_eval_interval(c->f, c->ws, box[0], box[1], box[2]);
+    return fabs(f.lo) <= KEPT_ZERO && fabs(f.hi) <= KEPT_ZERO;
+}
+
+/* Every live triangle with a corner within r of the n curves (found from the chains'
+ * vertices over the incidence, near_curve; chain[i] on curve of[i]) lies on f = 0
+ * (on_zero_set). */
+static bool region_exact(cf_ctx *c, const cf_polyline *pl, size_t n, const uint32_t *chain,
+                         const uint32_t *of, size_t nchain, double r)
+{
+    const ism_mesh *m = c->m;
+    uint8_t *seen_t = calloc(m->ntris + 1, 1), *seen_v = calloc(m->nverts + 1, 1);
+    uint32_t *queue = malloc(2 * (m->nverts + 1) * sizeof *queue); /* vertex, its curve */
+    bool ok = seen_t && seen_v && queue;
+    size_t head = 0, tail = 0;
+    for (size_t i = 0; ok && i < nchain; i++)
+        if (!seen_v[chain[i]]) {
+            seen_v[chain[i]] = 1;
+            queue[2 * tail] = chain[i];
+            queue[2 * tail++ + 1] = of[i];
+        }
+    while (ok && head < tail) {
+        cf_inc it;
+        uint32_t t, curve = queue[2 * head + 1];
+        for (cf_inc_begin(c, queue[2 * head++], &it); ok && cf_inc_next(c, &it, &t);) {
+            if (seen_t[t])
+                continue;
+            seen_t[t] = 1;
+            ok = !cf_poll(c, 1) && on_zero_set(c, t);
+            for (int k = 0; ok && k < 3; k++) {
+                uint32_t w = m->tri[3 * (size_t)t + k];
+                if (seen_v[w])
+                    continue;
+                seen_v[w] = 1;
+                size_t near = near_curve(pl, n, curve, m->pos + 3 * (size_t)w, r);
+                if (near < n) {
+                    queue[2 * tail] = w;
+                    queue[2 * tail++ + 1] = (uint32_t)near;
+                }
+            }
+        }
+    }
+    free(seen_t);
+    free(seen_v);
+    free(queue);
+    return ok;
+}
+
 /* Every end vertex has as many four-triangle edges as chains end there. */
 static bool ends_closed(const cf_ctx *c, const uint32_t *ends, size_t nends)
 {
@@ -198,21 +281,23 @@ static bool ends_closed(const cf_ctx *c, const uint32_t *ends, size_t nends)
 bool cf_curves_kept(cf_run *r, const cf_polyline *pl, const ism_sing_curve *const *cu, size_t n)
 {
     cf_ctx *c = &r->c;
-    const double *b = r->o->box;
-    double tol = KEPT_TOL_REL * sqrt((b[3] - b[0]) * (b[3] - b[0]) + (b[4] - b[1]) * (b[4] - b[1]) +
-                                     (b[5] - b[2]) * (b[5] - b[2]));
+    double tol = KEPT_TOL_REL * ism_box_diagonal(r->o->box);
     for (size_t k = 0; k < n; k++)
         if (pl[k].closed || pl[k].pinch[0] || pl[k].pinch[1] || cu[k]->closed)
             return false;
     /* room for every vertex once and the ends again (chains share only their ends) */
     size_t cap = c->m->nverts + 2 * n + 1, nchain = 0;
-    uint32_t *chain = malloc(cap * sizeof *chain), *ends = malloc(2 * n * sizeof *ends);
-    bool kept = chain && ends;
+    uint32_t *chain = malloc(cap * sizeof *chain), *of = malloc(cap * sizeof *of);
+    uint32_t *ends = malloc(2 * n * sizeof *ends);
+    bool kept = chain && of && ends;
     for (size_t k = 0; kept && k < n; k++) {
         uint32_t start = vertex_at(c, pl[k].p, tol);
+        size_t from = nchain;
         kept = start != CF_NONE &&
                walk(c, &pl[k], start, tol, chain, &nchain, cap, &ends[2 * k + 1]);
         ends[2 * k] = start;
+        for (size_t i = from; i < nchain; i++)
+            of[i] = (uint32_t)k;
         for (int e = 0; kept && e < 2; e++) {
             int p = cu[k]->end_point[e];
             uint32_t at = ends[2 * k + e];
@@ -220,7 +305,11 @@ bool cf_curves_kept(cf_run *r, const cf_polyline *pl, const ism_sing_curve *cons
                    r->point_vertex[p] == at;
         }
     }
-    kept = kept && !c->stopped && ends_closed(c, ends, 2 * n);
+    /* the tube the surgery would cut first (CF_RHO_CELLS cells) lies on f = 0: the
+     * polygoniser left nodes whole there under a bound for the surgery to mesh again
+     * (octree_build.c conformed()), and triangles on the zero set need nothing of it */
+    kept = kept && !c->stopped && ends_closed(c, ends, 2 * n) &&
+           region_exact(c, pl, n, chain, of, nchain, CF_RHO_CELLS * c->cell);
     /* kept: the chains' vertices are the curves' (their normals from their triangles, as
      * the surgery's curve vertices, cf_compact), the ends the points' shared vertices */
     for (size_t i = 0; kept && i < nchain; i++)
@@ -232,6 +321,7 @@ bool cf_curves_kept(cf_run *r, const cf_polyline *pl, const ism_sing_curve *cons
                 r->point_vertex[p] = ends[2 * k + e];
         }
     free(chain);
+    free(of);
     free(ends);
     return kept;
 }

@@ -636,11 +636,13 @@ static double dist_to_z_axis(const double p[3], const void *arg)
 }
 
 /* x y = 0 in a box symmetric about both planes: the z axis is a lattice line, and the
- * polygoniser's mesh already holds it as a chain of edges with four triangles each, which the
- * pass keeps (conform_kept.c). With one of those triangles taken away (an edge of the chain
- * left with three) the mesh no longer does: the pass must see it and cut and zip the curve as
- * off the lattice. Both ways: one edge per finest cell on the axis, four triangles each, χ of
- * two squares crossing in a segment (1 + 1 − 1), one component, no artefact. */
+ * polygoniser's mesh already holds it as a chain of edges with four triangles each, on f = 0
+ * exactly, which the pass keeps (conform_kept.c). With one of those triangles taken away (an
+ * edge of the chain left with three), or a vertex beside the chain moved a quarter cell off
+ * its plane (the chain whole, a triangle near it no longer on f = 0), the mesh no longer
+ * does: the pass must see it and cut and zip the curve as off the lattice. Every way: one
+ * edge per finest cell on the axis, four triangles each, χ of two squares crossing in a
+ * segment (1 + 1 − 1), one component, no artefact. */
 Test(conform, crossing_planes_kept_only_where_the_mesh_holds_the_chain)
 {
     const pf_surface s = {"x*y", NULL, 0, NULL, 0};
@@ -649,7 +651,7 @@ Test(conform, crossing_planes_kept_only_where_the_mesh_holds_the_chain)
     int dmax = 5 - pf_quick();
     double cell = pf_cell(box, dmax);
     size_t edges = (size_t)llround(2 / cell);
-    for (int broken = 0; broken < 2; broken++) {
+    for (int broken = 0; broken < 3; broken++) {
         ism_locus l;
         ism_locus_init(&l);
         ism_sing_curve c = {.kind = ISM_CURVE_DOUBLE, .closed = false, .n = edges + 1,
@@ -661,7 +663,17 @@ Test(conform, crossing_planes_kept_only_where_the_mesh_holds_the_chain)
         ism_mesh m;
         ism_poly_stats ps;
         pf_run(t, box, 3, dmax, 1, &m, &ps);
-        if (broken) { /* a triangle with an edge on the axis near z = 0 goes */
+        if (broken == 2) { /* a vertex of the plane x = 0 a cell from the axis moves */
+            size_t v = 0;
+            for (; v < m.nverts; v++) {
+                double *p = m.pos + 3 * v;
+                if (p[0] == 0 && fabs(fabs(p[1]) - cell) < 1e-12 && fabs(p[2]) < 0.25)
+                    break;
+            }
+            cr_assert_lt(v, m.nverts, "no vertex a cell from the axis");
+            m.pos[3 * v] = cell / 4;
+        }
+        if (broken == 1) { /* a triangle with an edge on the axis near z = 0 goes */
             size_t i = 0;
             for (; i < m.ntris; i++) {
                 int on = 0;
@@ -679,12 +691,13 @@ Test(conform, crossing_planes_kept_only_where_the_mesh_holds_the_chain)
         run_result r;
         conform_run(t, box, dmax, &l, dist_to_z_axis, NULL, &m, &r);
         char what[64];
-        snprintf(what, sizeof what, "x y = 0, %s", broken ? "a triangle taken" : "whole");
+        snprintf(what, sizeof what, "x y = 0, %s",
+                 broken == 2 ? "a vertex moved" : broken ? "a triangle taken" : "whole");
         cr_expect_eq(r.st.curves_conformed, 1, "%s: %zu curves conformed", what,
                      r.st.curves_conformed);
         cr_expect_eq(r.st.curves_kept, broken ? 0 : 1, "%s: %zu curves kept", what,
                      r.st.curves_kept);
-        cr_expect_eq(r.st.triangles_removed > 0, broken, "%s: %zu triangles cut", what,
+        cr_expect_eq(r.st.triangles_removed > 0, broken > 0, "%s: %zu triangles cut", what,
                      r.st.triangles_removed);
         expect_chains(&m, &r, dist_to_z_axis, edges, 1, what);
         ism_analysis_free(&r.a);
