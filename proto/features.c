@@ -3,6 +3,7 @@
  * beside a Draco mesh (format in features.h). */
 #include "proto/features.h"
 #include "proto/json_writer.h"
+#include "proto/polyline_thin.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -91,17 +92,41 @@ void ism_features_free(ism_features *f)
     memset(f, 0, sizeof *f);
 }
 
-static void write_xyz(ism_jw *w, const ism_mesh *m, uint32_t v)
+void ism_features_chain_xyz(ism_jw *w, const ism_mesh *m, const uint32_t *verts, size_t n,
+                            double tol, int d, bool full_doubles)
 {
-    for (int k = 0; k < 3; k++)
-        ism_jw_float(w, (float)m->pos[3 * (size_t)v + k]);
+    uint8_t *keep = NULL;
+    if (tol > 0 && d >= 0 && n > 2) {
+        keep = malloc(n);
+        if (!keep || !ism_polyline_thin(m->pos, verts, n, tol - ISM_FEATURES_ROUNDING(d), keep)) {
+            free(keep);
+            w->failed = true; /* out of memory: the text is unusable */
+            return;
+        }
+    }
+    ism_jw_array(w);
+    for (size_t i = 0; i < n; i++) {
+        if (keep && !keep[i])
+            continue;
+        const double *p = m->pos + 3 * (size_t)verts[i];
+        for (int k = 0; k < 3; k++)
+            if (d >= 0)
+                ism_jw_number_decimals(w, p[k], d);
+            else if (full_doubles)
+                ism_jw_number(w, p[k]);
+            else
+                ism_jw_float(w, (float)p[k]);
+    }
+    ism_jw_array_end(w);
+    free(keep);
 }
 
 /* Polylines of mesh vertices; on (may be NULL) gives each line's "on_locus" and vert_on (per
  * polyline vertex) its "off_edges": the edges with an end off the locus, the ones the check
- * counts. Returns edges. */
+ * counts. Positions with d decimals (d < 0: float32); a chain with every edge on the locus
+ * thinned within tol (> 0; the digits table in features.h). Returns edges. */
 static size_t write_lines(ism_jw *w, const ism_mesh *m, const ism_polylines *p,
-                          const uint8_t *on, const uint8_t *vert_on)
+                          const uint8_t *on, const uint8_t *vert_on, double tol, int d)
 {
     size_t edges = 0;
     ism_jw_array(w);
@@ -110,21 +135,22 @@ static size_t write_lines(ism_jw *w, const ism_mesh *m, const ism_polylines *p,
         ism_jw_object(w);
         ism_jw_key(w, "closed");
         ism_jw_bool(w, e - s > 1 && p->verts[s] == p->verts[e - 1]);
+        bool all_on = on != NULL;
         if (on) {
             ism_jw_key(w, "on_locus");
             ism_jw_bool(w, on[i]);
             ism_jw_key(w, "off_edges");
             ism_jw_array(w);
             for (uint32_t j = s; j + 1 < e; j++)
-                if (!(vert_on[j] && vert_on[j + 1]))
+                if (!(vert_on[j] && vert_on[j + 1])) {
                     ism_jw_uint(w, j - s);
+                    all_on = false;
+                }
             ism_jw_array_end(w);
+            all_on = all_on && on[i];
         }
         ism_jw_key(w, "xyz");
-        ism_jw_array(w);
-        for (uint32_t j = s; j < e; j++)
-            write_xyz(w, m, p->verts[j]);
-        ism_jw_array_end(w);
+        ism_features_chain_xyz(w, m, p->verts + s, e - s, all_on ? tol : 0, d, false);
         ism_jw_object_end(w);
         edges += e > s ? e - s - 1 : 0;
     }
@@ -292,7 +318,7 @@ static void write_locus(ism_jw *w, const ism_mesh *m, const ism_features *f)
     ism_jw_array(w);
     for (size_t i = 0; l && i < l->ncurves; i++)
         write_singular_curve(w, &l->curves[i], l);
-    ism_features_cut_curves_json(w, m, f->arrangement, f->cut_fns, f->crease_tol);
+    ism_features_cut_curves_json(w, m, f->arrangement, f->cut_fns, f->draw_tol);
     ism_jw_array_end(w);
     ism_jw_key(w, "double_sheets");
     ism_jw_array(w);
@@ -309,15 +335,13 @@ static void write_locus(ism_jw *w, const ism_mesh *m, const ism_features *f)
     ism_jw_array_end(w);
 }
 
-static void write_mesh_points(ism_jw *w, const ism_mesh *m, const ism_features *f)
+static void write_mesh_points(ism_jw *w, const ism_mesh *m, const ism_features *f, int d)
 {
     ism_jw_array(w);
     for (size_t i = 0; i < f->npoints; i++) {
         ism_jw_object(w);
         ism_jw_key(w, "xyz");
-        ism_jw_array(w);
-        write_xyz(w, m, f->points[i]);
-        ism_jw_array_end(w);
+        ism_features_chain_xyz(w, m, f->points + i, 1, 0, d, false);
         ism_jw_key(w, "class");
         ism_jw_int(w, f->point_class[i]);
         ism_jw_key(w, "kind");
@@ -344,18 +368,25 @@ char *ism_features_json(const ism_mesh *m, const ism_features *f, size_t *len)
         ism_jw_string(&w, class_names[i]);
     ism_jw_array_end(&w);
     write_locus(&w, m, f);
+    /* the table in features.h: mesh positions within half the drawing tolerance */
+    int d = ism_features_decimals(0.5 * f->draw_tol);
+    double tol = d >= 0 ? f->draw_tol : 0;
     ism_jw_key(&w, "nonmanifold_edges");
     const ism_locus_check *chk = f->check;
     bool check_fits = chk && chk->curve_on && chk->curve_vert_on && chk->point_on;
     size_t curve_edges = write_lines(&w, m, &f->curves, check_fits ? chk->curve_on : NULL,
-                                     check_fits ? chk->curve_vert_on : NULL);
+                                     check_fits ? chk->curve_vert_on : NULL, tol, d);
     ism_jw_key(&w, "nonmanifold_points");
-    write_mesh_points(&w, m, f);
+    write_mesh_points(&w, m, f, d);
     ism_jw_key(&w, "boundaries");
-    size_t boundary_edges = write_lines(&w, m, &f->boundaries, NULL, NULL);
+    size_t boundary_edges = write_lines(&w, m, &f->boundaries, NULL, NULL, tol, d);
     if (f->arrangement) {
         ism_jw_key(&w, "arrangement");
         ism_features_arrangement_json(&w, m, f->arrangement);
+    }
+    if (tol > 0) {
+        ism_jw_key(&w, "tolerance");
+        ism_jw_number(&w, tol);
     }
     bool incomplete = f->locus && f->locus->incomplete;
     ism_jw_key(&w, "incomplete");

@@ -27,6 +27,7 @@
  *    "nonmanifold_points": [{"xyz", "class", "kind", "on_locus"}],
  *    "boundaries": [{"closed", "xyz"}],
  *    "incomplete": bool, "incomplete_why": string (only when incomplete),
+ *    "tolerance": number (only when the mesh positions are drawn within one: the table below),
  *    "counts": {...}}
  * "class" is the vertex class (index into "classes", the same numbers as the Draco "class"
  * attribute). An element with "on_locus": false is an artefact of the polygoniser. */
@@ -47,37 +48,43 @@
  *     the printed point lies within sqrt 2 * that of the zero, as the full one lay within
  *     sqrt 2 * r. The curve's stated 1e-9 x diagonal (r <= 0.5e-9 x diagonal) still holds.
  *     A curve without a finite r > 0 is printed in full.
- *   crease arcs ("curves"[k].arcs of kind crease: the cut the pipeline adds where f's top
- *     min/max changes branch, not a curve the request asked for), when the features are
- *     given a crease tolerance t > 0 (ism_features.crease_tol; the pipeline's is
- *     ISM_CREASE_TOL_REL x the mesh's bound E, or x the finest cell's edge on the depth
- *     path): each arc is thinned to the crease vertices of the mesh that keep every other
- *     one within t - ISM_FEATURES_ROUNDING(d) of the polyline through them
- *     (polyline_thin.h), printed with d = ism_features_decimals(t / 2) decimals; so every
- *     crease vertex of the mesh lies within t of the printed polyline, and every printed
- *     point within ISM_FEATURES_ROUNDING(d) <= t / 2 of a crease vertex. The curve states t
- *     as "tolerance". The mesh's own crease chains, every vertex, travel in the .obj (`l`
- *     lines of group crease_curves) and the .glb (LINES). At t = 0 they print in full, as
- *     the requested curves' arcs always do (their points are within the curve tolerance
- *     1e-10 x diagonal of the curve the request named).
+ *   the drawn mesh polylines, when the features are given a drawing tolerance t > 0
+ *     (ism_features.draw_tol; the pipeline's is ISM_FEATURES_DRAW_TOL_REL x the mesh's bound
+ *     E, or x the finest cell's edge on the depth path; stated as the top-level "tolerance"):
+ *     - crease arcs ("curves"[k].arcs of kind crease: the cut the pipeline adds where f's
+ *       top min/max changes branch, not a curve the request asked for) and the
+ *       nonmanifold_edges chains with every edge on the locus (on_locus, off_edges empty:
+ *       the singular curve is drawn from "curves"; the viewer draws none of these chains):
+ *       each thinned to the mesh vertices that keep every other one within
+ *       t - ISM_FEATURES_ROUNDING(d) of the polyline through them (polyline_thin.h);
+ *     - every mesh position printed (those, the other nonmanifold_edges chains, which keep
+ *       every vertex so that off_edges index them, nonmanifold_points, boundaries): with
+ *       d = ism_features_decimals(t / 2) decimals.
+ *     So every printed point lies within ISM_FEATURES_ROUNDING(d) <= t / 2 of its mesh vertex,
+ *     and every vertex of a thinned chain within t of the printed polyline. A crease curve
+ *     states t as its "tolerance" too. The mesh's own chains, every vertex in full, travel in
+ *     the .obj (`l` lines of groups crease_curves, nonmanifold_curves, boundaries) and the
+ *     .glb (LINES). At t = 0 (isomesh -e's features) mesh positions print as float32 (below)
+ *     and crease arcs in full, as the requested curves' arcs always do (their points are
+ *     within the curve tolerance 1e-10 x diagonal of the curve the request named).
  *   every other double: the shortest text that reads back to the same double.
- *   mesh positions (nonmanifold_edges, nonmanifold_points, boundaries, arrangement and end
- *     vertices): the shortest text that reads back to the same float32 (scripts match them
- *     to the mesh's vertices).
+ *   mesh positions at t = 0 and the arrangement's and curve ends' vertices: the shortest text
+ *     that reads back to the same float32.
  * Only the printed text changes: the computed entry keeps full doubles, so its version and the
  * features version stay. */
 #define ISM_FEATURES_MAX_DECIMALS 17 /* what %.*f can carry of a double near 1 */
 /* How far printing a point's three coordinates with d decimals can move it. */
 #define ISM_FEATURES_ROUNDING(d) (0.8660254037844386 * pow(10.0, -(d)))
 
-/* The crease arcs' tolerance, relative to the mesh's bound E (ism_features.crease_tol =
- * this x E). The mesh lies within E of the surface; a crease drawn within E / 10 of the
- * mesh's crease chain is well inside that, and at the default bound (E = 1e-3 x diagonal)
- * it is about a fifth of a pixel of a 1,000-pixel view of the box. Measured (session 20,
- * features JSON gzipped beside the default .drc): gyroid-ball's crease of 6,376 vertices in
- * full digits made the features 101% of the .drc; thinned within E / 10 (1,369 points at 4
- * decimals) 6.4%, within E / 4 4.1%, within E 2.1%; cube-minus-ball 22.5% -> 8.0%. */
-#define ISM_CREASE_TOL_REL 0.1
+/* The drawing tolerance, relative to the mesh's bound E (ism_features.draw_tol = this x E).
+ * The mesh lies within E of the surface; a polyline drawn within E / 10 of the mesh's is well
+ * inside that, and at the default bound (E = 1e-3 x diagonal) it is about a fifth of a pixel
+ * of a 1,000-pixel view of the box (the .drc's 14-bit positions move vertices by up to
+ * diagonal / 2^15, E / 33). Measured (session 20, features JSON gzipped beside the default
+ * .drc): gyroid-ball's crease of 6,376 vertices in full digits made the features 101% of the
+ * .drc; thinned within E / 10 (1,369 points at 4 decimals) 6.3%, within E / 4 4.1%, within E
+ * 2.1%; cube-minus-ball 22.5% -> 7.8%. */
+#define ISM_FEATURES_DRAW_TOL_REL 0.1
 
 /* The fewest decimals d (0..ISM_FEATURES_MAX_DECIMALS) with ISM_FEATURES_ROUNDING(d) <= tol;
  * -1 when tol is not finite and > 0, or finer than that (print in full). */
@@ -119,8 +126,8 @@ typedef struct ism_features {
     uint8_t *arc_kind;         /* per arc: enum ism_cut_kind */
     uint32_t *arc_curve;       /* per arc: its curve (the order of the requested curves in the
                                   features JSON) */
-    double crease_tol;         /* > 0: the crease arcs thinned and rounded within it (the
-                                  digits table above); 0: printed in full */
+    double draw_tol;           /* > 0: the drawn mesh polylines thinned and rounded within it
+                                  (the digits table above); 0: printed in full */
 } ism_features;
 
 /* Collects the features of a mesh from its analysis a (NULL for an empty mesh: every list
@@ -138,15 +145,22 @@ char *ism_features_json(const ism_mesh *m, const ism_features *f, size_t *len);
 struct ism_jw;
 /* features_curves.c: the requested curves as items of the open "curves" array (kinds
  * section, level, intersection, silhouette, crease; "arcs" polylines in full precision, the
- * crease's within crease_tol when it is > 0 (the digits table above), "ends"), and
+ * crease's within draw_tol when it is > 0 (the digits table above), "ends"), and
  * the "arrangement" object (vertices, edges, faces with triangle ranges of m's order, area,
  * euler, boundary cycles; components; euler {mesh, arrangement, ok}). */
 void ism_features_cut_curves_json(struct ism_jw *w, const ism_mesh *m,
                                   const ism_arrangement *a, const ism_cut_fn *fns,
-                                  double crease_tol);
+                                  double draw_tol);
 void ism_features_arrangement_json(struct ism_jw *w, const ism_mesh *m,
                                    const ism_arrangement *a);
 void ism_locus_counts_json(struct ism_jw *w, const ism_locus *l);
+
+/* The mesh polyline verts[0..n) as a JSON array of x0, y0, z0, ... (features.h's digits
+ * table): thinned by ism_polyline_thin within tol - ISM_FEATURES_ROUNDING(d) when tol > 0
+ * (d >= 0 then), each coordinate with d decimals when d >= 0, else in full (full_doubles) or
+ * as float32. Out of memory fails w. */
+void ism_features_chain_xyz(struct ism_jw *w, const ism_mesh *m, const uint32_t *verts,
+                            size_t n, double tol, int d, bool full_doubles);
 
 /* Copies a's edges into f->arcs, arc_kind (from fns) and arc_curve, for the formats that draw
  * them (glb LINES, OBJ `l`). False when out of memory. */

@@ -1,12 +1,11 @@
 /* features_curves.c — the requested curves and their arrangement in the features JSON:
  * curves of kinds section / level / intersection / silhouette (each its arcs as polylines in
  * full double precision, with its ends), the crease (its arcs thinned and rounded within the
- * crease tolerance: features.h's digits table), and the "arrangement" object (vertices,
+ * drawing tolerance: features.h's digits table), and the "arrangement" object (vertices,
  * edges, faces with their triangle ranges, areas and Euler characteristics, and the Euler
  * check). */
 #include "proto/features.h"
 #include "proto/json_writer.h"
-#include "proto/polyline_thin.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -51,37 +50,6 @@ static void write_vertex_xyz(ism_jw *w, const ism_mesh *m, uint32_t v)
 {
     ism_jw_key(w, "xyz");
     ism_jw_numbers(w, m->pos + 3 * (size_t)v, 3);
-}
-
-/* One arc's points: every chain vertex in full when tol is 0, else the ones
- * ism_polyline_thin keeps within tol - the rounding of d decimals, printed with d. False when
- * out of memory. */
-static bool write_arc(ism_jw *w, const ism_mesh *m, const ism_arrangement *a,
-                      const ism_arr_edge *e, double tol, int d)
-{
-    const uint32_t *chain = a->chain + e->first;
-    uint8_t *keep = NULL;
-    if (tol > 0 && e->count > 2) {
-        keep = malloc(e->count);
-        if (!keep || !ism_polyline_thin(m->pos, chain, e->count,
-                                        tol - ISM_FEATURES_ROUNDING(d), keep)) {
-            free(keep);
-            return false;
-        }
-    }
-    ism_jw_array(w);
-    for (size_t i = 0; i < e->count; i++) {
-        if (keep && !keep[i])
-            continue;
-        for (int k = 0; k < 3; k++)
-            if (tol > 0)
-                ism_jw_number_decimals(w, m->pos[3 * (size_t)chain[i] + k], d);
-            else
-                ism_jw_number(w, m->pos[3 * (size_t)chain[i] + k]);
-    }
-    ism_jw_array_end(w);
-    free(keep);
-    return true;
 }
 
 /* What a curve ending at a vertex of type t ends on: "box", "double_curve",
@@ -130,15 +98,15 @@ static void write_ends(ism_jw *w, const ism_mesh *m, const ism_arrangement *a, s
 }
 
 void ism_features_cut_curves_json(ism_jw *w, const ism_mesh *m, const ism_arrangement *a,
-                                  const ism_cut_fn *fns, double crease_tol)
+                                  const ism_cut_fn *fns, double draw_tol)
 {
     for (size_t c = 0; a && c < a->ncurves; c++) {
         const ism_arr_curve *cv = &a->curves[c];
         const ism_cut_fn *fn = &fns[cv->fn];
         /* the table in features.h: only the crease is thinned; d from half the tolerance,
          * the thinning gets the other half or more */
-        int d = fn->kind == ISM_CUT_CREASE ? ism_features_decimals(0.5 * crease_tol) : -1;
-        double tol = d >= 0 ? crease_tol : 0;
+        int d = fn->kind == ISM_CUT_CREASE ? ism_features_decimals(0.5 * draw_tol) : -1;
+        double tol = d >= 0 ? draw_tol : 0;
         ism_jw_object(w);
         ism_jw_key(w, "kind");
         ism_jw_string(w, kind_names[fn->kind]);
@@ -163,8 +131,9 @@ void ism_features_cut_curves_json(ism_jw *w, const ism_mesh *m, const ism_arrang
         ism_jw_key(w, "arcs");
         ism_jw_array(w);
         for (size_t i = 0; i < a->nedges; i++)
-            if (a->edges[i].curve == c && !write_arc(w, m, a, &a->edges[i], tol, d))
-                w->failed = true; /* out of memory: the text is unusable */
+            if (a->edges[i].curve == c)
+                ism_features_chain_xyz(w, m, a->chain + a->edges[i].first, a->edges[i].count,
+                                       tol, d, true);
         ism_jw_array_end(w);
         write_ends(w, m, a, c);
         ism_jw_object_end(w);

@@ -594,17 +594,17 @@ static bool label_triangles(ism_computed *c, const scratch *s)
     return true;
 }
 
-/* The crease arcs' tolerance in the features JSON (proto/features.h's digits table): a part
- * of the mesh's bound E, or on the depth path (no E) of the finest cell's edge, which sets
+/* The drawing tolerance of the features JSON's mesh polylines (proto/features.h's digits
+ * table): a part of the mesh's bound E, or on the depth path (no E) of the finest cell's edge, which sets
  * how far that mesh is from the surface there. */
-static double crease_tolerance(const ism_request *req)
+static double draw_tolerance(const ism_request *req)
 {
     if (req->poly.max_error > 0)
-        return ISM_CREASE_TOL_REL * req->poly.max_error;
+        return ISM_FEATURES_DRAW_TOL_REL * req->poly.max_error;
     double side = 0;
     for (int k = 0; k < 3; k++)
         side = fmax(side, req->poly.box[k + 3] - req->poly.box[k]);
-    return ISM_CREASE_TOL_REL * ldexp(side, -req->poly.max_depth);
+    return ISM_FEATURES_DRAW_TOL_REL * ldexp(side, -req->poly.max_depth);
 }
 
 /* Wire attributes (with the crease sides' normals), features and the surface's stats into c. */
@@ -642,7 +642,7 @@ static bool gather(const ism_request *req, const ism_tape *tape, ism_pipeline_re
     c->features.check = c->empty || !an ? NULL : &s->check;
     c->features.arrangement = s->have_curves ? &s->arr : NULL;
     c->features.cut_fns = s->cf.fns;
-    c->features.crease_tol = crease_tolerance(req);
+    c->features.draw_tol = draw_tolerance(req);
     c->features_json = ism_features_json(fm, &c->features, &c->features_len);
     c->features.check = NULL; /* the check does not outlive the computation */
     c->features.arrangement = NULL;

@@ -39,7 +39,6 @@ The crossing-spheres preset cut by the same planes (three boxes): the six cut ve
 within 1e-9 of the closed-form double circle x = 0, y^2 + z^2 = 1 - d^2/4, and they and the
 double-curve chain count as on the locus (artefacts 0): the check allows each chord of the
 traced circle its bulge (it counted 10 edges off, the chain 305 in the viewer)."""
-import decimal
 import json
 import math
 import os
@@ -50,6 +49,7 @@ import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import drawn  # noqa: E402
 from boxes import IRR, placements  # noqa: E402
 from test_curve_outputs import ball, ball_grad, gyroid, gyroid_grad  # noqa: E402
 from test_surfaces_file import read_obj  # noqa: E402
@@ -69,41 +69,6 @@ BALLS3_EXPR = "min(" + ", ".join(f"(x - {cx})^2 + (y - {cy})^2 + z^2 - 0.5"
 BALLS3_X0 = (0.36 - 0.09 - 0.52 ** 2) / 1.8
 BALLS3_Z0 = math.sqrt(0.5 - (0.6 - BALLS3_X0) ** 2)
 SHIFT = IRR * SIDE / 2 ** DEPTH
-
-
-def obj_crease_chains(path):
-    """The mesh's crease chains of an .obj (`l` lines of group crease_curves, every vertex
-    of the chain) as lists of (point, its rounding bound): %.9g keeps 9 significant digits,
-    so a coordinate x is off by <= 0.5e-8 x 10^floor(log10 |x|)."""
-    verts, chains, group = [], [], None
-    with open(path) as f:
-        for line in f:
-            w = line.split()
-            if w and w[0] == "v":
-                p = tuple(map(float, w[1:4]))
-                r = math.sqrt(sum((0.5e-8 * 10 ** math.floor(math.log10(abs(x)))) ** 2
-                                  for x in p if x != 0))
-                verts.append((p, r))
-            elif w and w[0] == "g":
-                group = w[1]
-            elif w and w[0] == "l" and group == "crease_curves":
-                chains.append([verts[int(t) - 1] for t in w[1:]])
-    return chains
-
-
-def crease_decimals(tol):
-    """features.h's rule, restated: the fewest decimals d with (sqrt 3 / 2) 10^-d <= tol / 2."""
-    d = 0
-    while math.sqrt(3) / 2 * 10 ** -d > tol / 2:
-        d += 1
-    return d
-
-
-def seg_dist(p, a, b):
-    ab = [b[k] - a[k] for k in range(3)]
-    l2 = sum(v * v for v in ab)
-    t = 0 if l2 == 0 else max(0, min(1, sum((p[k] - a[k]) * ab[k] for k in range(3)) / l2))
-    return math.dist(p, [a[k] + t * ab[k] for k in range(3)])
 
 
 class CurvesTest(unittest.TestCase):
@@ -129,62 +94,22 @@ class CurvesTest(unittest.TestCase):
 
     def crease_printed_and_meshed(self, request, tol_want):
         """The crease of request, as the features JSON prints it and as the mesh has it (the
-        .obj's crease_curves): checks features.h's rule, that each crease curve states
-        "tolerance" tol_want, prints no number with more decimals than d (the fewest with
-        (sqrt 3 / 2) 10^-d <= tol / 2), and that every crease vertex of the mesh lies within
-        tol of the printed polyline. Returns (the features, the printed points, their
-        rounding bound, the mesh's chains of (point, its .obj rounding))."""
+        .obj's crease_curves): each crease curve and the document state "tolerance" tol_want,
+        and the printed crease follows features.h's rule for thinned chains (drawn.py).
+        Returns (the features, the printed points, their rounding bound, the mesh's chains of
+        (point, its .obj rounding))."""
         f, proc = self.run_request(request, out="out.obj")
         self.assertIsNotNone(f, proc.stderr)
-        with open(os.path.join(self.dir, "f.json")) as fj:  # the numbers as printed
-            text = json.load(fj, parse_float=decimal.Decimal)
+        text = drawn.printed_text(os.path.join(self.dir, "f.json"))
         crease = [c for c in text["curves"] if c["kind"] == "crease"]
         self.assertTrue(crease)
-        tol = float(crease[0]["tolerance"])
+        tol = float(text["tolerance"])
         self.assertAlmostEqual(tol, tol_want, delta=1e-12 * tol_want)
-        d = crease_decimals(tol)
-        pts = []
-        for c in crease:
-            self.assertEqual(float(c["tolerance"]), tol)
-            for arc in c["arcs"]:
-                for v in arc:
-                    self.assertLessEqual(-decimal.Decimal(v).as_tuple().exponent, d, v)
-                arc = [float(v) for v in arc]
-                pts += [arc[i:i + 3] for i in range(0, len(arc), 3)]
-        rounding = math.sqrt(3) / 2 * 10 ** -d
-        chains = obj_crease_chains(os.path.join(self.dir, "out.obj"))
+        self.assertEqual({float(c["tolerance"]) for c in crease}, {tol})
+        chains = drawn.obj_chains(os.path.join(self.dir, "out.obj"), "crease_curves")
         self.assertTrue(chains)
-        # Each printed point is a chain vertex rounded: find it by rounding the vertex (and
-        # its neighbours one unit of the last decimal off, for the .obj's own rounding).
-        unit = 10 ** -d
-
-        def keys(p):  # p rounded to d decimals, and one unit of the last decimal either side
-            return [(round(p[0] + dx * unit, d), round(p[1] + dy * unit, d),
-                     round(p[2] + dz * unit, d))
-                    for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1)]
-
-        printed = {tuple(round(x, d) for x in q) for q in pts}
-        meshed = {}
-        for p, r in (v for ch in chains for v in ch):
-            meshed.setdefault(tuple(round(x, d) for x in p), []).append((p, r))
-        for q in pts:  # each printed point a crease vertex of the mesh, rounded
-            self.assertTrue(any(math.dist(p, q) <= rounding + r
-                                for k in keys(q) for p, r in meshed.get(k, ())), q)
-
-        def printed_of(p, r):  # the printed point nearest to p, if it may be p's rounding
-            near = [q for q in keys(p) if q in printed and math.dist(p, q) <= rounding + r]
-            return min(near, key=lambda q: math.dist(p, q)) if near else None
-
-        worst = 0.0
-        for ch in chains:  # every dropped vertex within tol of its printed segment
-            kept = [(i, printed_of(p, r)) for i, (p, r) in enumerate(ch)]
-            kept = [(i, q) for i, q in kept if q]
-            self.assertEqual((kept[0][0], kept[-1][0]), (0, len(ch) - 1))
-            for (i, a), (j, b) in zip(kept, kept[1:]):
-                for p, r in ch[i + 1:j]:
-                    worst = max(worst, seg_dist(p, a, b) - r)
-        self.assertLessEqual(worst, tol, "a crease vertex of the mesh off the printed crease")
-        self.assertLess(len(pts), sum(len(ch) for ch in chains))
+        pts, rounding = drawn.check_thinned(self, [a for c in crease for a in c["arcs"]],
+                                            chains, tol)
         return f, pts, rounding, chains
 
     def sphere(self, shift, curves):
@@ -427,6 +352,48 @@ class CurvesTest(unittest.TestCase):
                 self.assertGreater(len(sec), 20)
                 for v in sec:
                     self.assertLess(min(abs(verts[v][2] - h) for h in heights), tol)
+
+    def test_mesh_chains_drawn_within_the_tolerance(self):
+        """features.h's drawing rule on the mesh's own polylines, the default bound E named,
+        in three boxes: the document states "tolerance" E / 10; the Klein bottle's
+        non-manifold chains, every edge on the locus (the double circle x^2 + (y - 1)^2 = 2,
+        z = 0), are thinned (drawn.py's rule against the .obj's nonmanifold_curves), each
+        printed point off that circle by no more than the mesh's own chain vertices plus the
+        rounding; Kummer's boundary chains (where the box cuts it) print every vertex, rounded,
+        each on a face of the box within the rounding."""
+        for name, half, depth in (("klein-bottle", 3.0, 6), ("kummer-16-nodes", 3.0, 5)):
+            side = 2 * half
+            e = 1e-3 * math.sqrt(3) * side
+            for box in placements([-half] * 3 + [half] * 3, side / 2 ** depth):
+                with self.subTest(preset=name, box=box):
+                    f, proc = self.run_request({"preset": name, "box": box, "max_error": e,
+                                                "depth": {"max": depth}}, out="out.obj")
+                    self.assertIsNotNone(f, proc.stderr)
+                    text = drawn.printed_text(os.path.join(self.dir, "f.json"))
+                    tol = float(text["tolerance"])
+                    self.assertAlmostEqual(tol, 0.1 * e, delta=1e-12 * e)
+                    obj = os.path.join(self.dir, "out.obj")
+                    if name == "klein-bottle":
+                        chains = text["nonmanifold_edges"]
+                        self.assertTrue(chains)
+                        self.assertTrue(all(c["on_locus"] and not c["off_edges"] for c in chains))
+                        mesh = drawn.obj_chains(obj, "nonmanifold_curves")
+                        pts, rounding = drawn.check_thinned(self, [c["xyz"] for c in chains],
+                                                            mesh, tol)
+
+                        def off(p):
+                            return math.hypot(p[2], math.hypot(p[0], p[1] - 1) - math.sqrt(2))
+                        own = max(off(p) + r for ch in mesh for p, r in ch)
+                        self.assertLess(own, 1e-3)
+                        self.assertLessEqual(max(off(p) for p in pts), own + rounding)
+                    else:
+                        mesh = drawn.obj_chains(obj, "boundaries")
+                        self.assertTrue(mesh)
+                        pts, rounding = drawn.check_every_vertex(
+                            self, [c["xyz"] for c in text["boundaries"]], mesh, tol)
+                        for p in pts:
+                            face = min(abs(p[k] - box[k + j]) for k in range(3) for j in (0, 3))
+                            self.assertLessEqual(face, rounding, p)
 
     def test_gyroid_ball_crease_vertices_on_both_branches(self):
         side, depth = 3.0, 6
