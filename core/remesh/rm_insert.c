@@ -9,9 +9,13 @@
  * (closer to the edge where the needle's angle at one end is under 120°, so it stays inside),
  * put on f = 0 by Newton along the needle's normal; the needle becomes three triangles, the
  * first well shaped, the two thin ones next to the apex left to the Lawson flips that follow
- * (their long sides are free edges, so the flips can replace them). The new triangles keep
- * the needle's origin (its label, its place in a range of triangles); χ is kept (one vertex,
- * three edges, two triangles more). */
+ * (their long sides are free edges, so the flips can replace them). Where the needle across
+ * a long side has the same apex and its short edge continues this one's (a fan of needles
+ * from one sheet vertex to a row of a double curve's vertices), that shared side is split
+ * instead, at a vertex beside the chord of both short edges (split_pair): each round of
+ * splits halves the row, so a fan of k needles is gone in about log2 k rounds. The new
+ * triangles keep the needle's origin (its label, its place in a range of triangles); χ is
+ * kept (one vertex, three edges, two triangles more, either way). */
 #include "core/remesh/rm_cbound.h"
 #include "core/remesh/rm_pass.h"
 #include "core/util/vec3.h"
@@ -32,6 +36,13 @@
  * fraction of an edge (rm_relax.c's ISM_RM_NEWTON_STEPS and _REL). */
 #define ISM_RM_INSERT_NEWTON_STEPS 8
 #define ISM_RM_INSERT_NEWTON_REL 1e-6
+/* Two needles split at once (split_pair) only when the two triangles on their short edges get
+ * no angle under this (degrees): the collapses' poor level, so the pair's split makes no new
+ * needle there (b at the chord's middle gives 30°; short edges 1 : 2 about 19°). */
+#define ISM_RM_INSERT_PAIR_DEG 20.0
+/* Sweeps of splits per call, the flips between them: a fan of k needles takes about log2 k
+ * (coordinate-planes in the irrational box: fans of 12 to 40+ needles, 0.19 / 0.0078). */
+#define ISM_RM_INSERT_LEVELS 6
 
 static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * v; }
 
@@ -107,43 +118,43 @@ static bool place_in_needle(const rm_pass *p, const uint32_t abc[3], double x[3]
     return true;
 }
 
-/* The new vertex's place on f = 0 (along the needle's normal); g gets ∇f there. */
-static bool new_place(rm_pass *p, const uint32_t abc[3], double x[3], double g[3])
+/* The new vertex's place on f = 0 beside chord ab of triangle abc (a needle's short edge, or
+ * the chord of two needles' short edges), along the triangle's normal n (unit); g gets ∇f
+ * there. */
+static bool new_place(rm_pass *p, const uint32_t abc[3], double x[3], double n[3], double g[3])
 {
-    double n[3];
     return place_in_needle(p, abc, x, n) &&
            project_along(p, x, n, rm_dist(P(p, abc[0]), P(p, abc[1])), g);
 }
 
-/* The three triangles (a, b, x), (b, c, x), (c, a, x) face the needle's way. */
-static bool faces_kept(const rm_pass *p, const uint32_t abc[3], const double *x)
+/* The triangles (ring[k], ring[k + 1], x) round the ring of n corners (a needle's three, a
+ * split edge's quad's four) face the way of normal n0. */
+static bool faces_kept(const rm_pass *p, const uint32_t *ring, int n, const double n0[3],
+                       const double *x)
 {
-    double n[3], m[3];
-    rm_cross(P(p, abc[0]), P(p, abc[1]), P(p, abc[2]), n);
-    for (int k = 0; k < 3; k++) {
-        rm_cross(P(p, abc[k]), P(p, abc[(k + 1) % 3]), x, m);
-        if (!(ism_dot3(n, m) > 0))
+    double m[3];
+    for (int k = 0; k < n; k++) {
+        rm_cross(P(p, ring[k]), P(p, ring[(k + 1) % n]), x, m);
+        if (!(ism_dot3(n0, m) > 0))
             return false;
     }
     return true;
 }
 
-/* No centroid of the three triangles farther from f = 0 than the needle's, or than the
- * mesh's farthest before the pass (centroid_bound, as collapses keep); under a bound
- * (bounded), no midpoint of the three new edges farther than the needle's centroid or the
- * mesh's farthest midpoint (midpoint_bound) either. */
-static bool centroids_ok(rm_pass *p, const uint32_t abc[3], const double *x)
+/* No centroid of the triangles round x (faces_kept's) farther from f = 0 than the farthest
+ * centroid own of the triangles they replace, or than the mesh's farthest before the pass
+ * (centroid_bound, as collapses keep); under a bound (bounded), no midpoint of the new edges
+ * from x farther than own or the mesh's farthest midpoint (midpoint_bound) either. */
+static bool centroids_ok(rm_pass *p, const uint32_t *ring, int n, double own, const double *x)
 {
-    const double *a = P(p, abc[0]), *b = P(p, abc[1]), *c = P(p, abc[2]);
-    double own = rm_centroid_distance(p, a, b, c), bound = fmax(own, p->centroid_bound);
-    if (!(rm_centroid_distance(p, a, b, x) <= bound &&
-          rm_centroid_distance(p, b, c, x) <= bound && rm_centroid_distance(p, c, a, x) <= bound))
-        return false;
+    double bound = fmax(own, p->centroid_bound);
+    for (int k = 0; k < n; k++)
+        if (!(rm_centroid_distance(p, P(p, ring[k]), P(p, ring[(k + 1) % n]), x) <= bound))
+            return false;
     if (!p->bounded)
         return true;
-    const double *end[3] = {a, b, c};
-    for (int k = 0; k < 3; k++) {
-        double d = rm_midpoint_distance(p, end[k], x);
+    for (int k = 0; k < n; k++) {
+        double d = rm_midpoint_distance(p, P(p, ring[k]), x);
         if (!(d <= own || rm_midpoint_within(p, d)))
             return false;
     }
@@ -220,24 +231,158 @@ static bool split(rm_pass *p, uint32_t t, const uint32_t abc[3], const double *x
     return true;
 }
 
-size_t rm_insert_active(rm_pass *p, bool last, bool *ok)
+/* Splits the long side bc shared by needle t = (a, b, c) and needle u = (c, b, d) (abcd the
+ * quad's corners in t's winding: a, b, d, c) at the new vertex x: t becomes (a, b, x), u
+ * (b, d, x), and the thin halves (d, c, x), (c, a, x) are new. False when out of memory. */
+static bool split_edge(rm_pass *p, uint32_t t, uint32_t u, const uint32_t abdc[4],
+                       const double *x, const double *g)
+{
+    rm_mesh *r = &p->r;
+    uint32_t a = abdc[0], b = abdc[1], d = abdc[2], c = abdc[3];
+    if (!rm_slot_reserve(r, a, 1) || !rm_slot_reserve(r, d, 1))
+        return false;
+    uint32_t v = ism_mesh_add_vertex(r->m, x, NULL);
+    r->start[v] = r->room[v] = r->count[v] = 0;
+    r->locked[v] = r->gone[v] = 0;
+    p->slide[v] = 0;
+    if (!rm_slot_reserve(r, v, 4))
+        return false;
+    memcpy(r->m->normal + 3 * v, r->m->normal + 3 * c, 3 * sizeof *r->m->normal);
+    rm_commit_move(p, v, x, g);
+    uint32_t *tt = r->m->tri + 3 * t, *tu = r->m->tri + 3 * u;
+    tt[0] = a, tt[1] = b, tt[2] = v;
+    tu[0] = b, tu[1] = d, tu[2] = v;
+    uint32_t t1 = add_triangle(p, u, d, c, v), t2 = add_triangle(p, t, c, a, v);
+    uint32_t all[4] = {t, u, t1, t2};
+    for (int k = 0; k < 4; k++)
+        rm_shape_changed(p, all[k]);
+    rm_cbound_copy(p, t1, u);
+    rm_cbound_copy(p, t2, t);
+    rm_slot_remove(r, c, t);
+    rm_slot_remove(r, c, u);
+    rm_slot_add(r, a, t2);
+    rm_slot_add(r, d, t1);
+    rm_slot_add(r, c, t1);
+    rm_slot_add(r, c, t2);
+    for (int k = 0; k < 4; k++)
+        rm_slot_add(r, v, all[k]);
+    const uint32_t touched[5] = {a, b, c, d, v};
+    for (int k = 0; k < 5; k++)
+        p->active[touched[k]] = p->touched[touched[k]] = 1;
+    return true;
+}
+
+/* The needle u beside needle t = (a, b, c) (as needle() reads it) across its long side bc
+ * (near false: u = (c, b, d), its short edge bd) or ca (near true: u = (a, c, e), its short
+ * edge ea), with the same apex c, so that the two short edges run on from each other:
+ * quad gets the pair's corners in the winding, a, b, d, c or e, a, b, c; first and second
+ * the needles in that order (t then u, or u then t). */
+static bool partner(rm_pass *p, uint32_t t, const uint32_t abc[3], bool near, uint32_t quad[4],
+                    uint32_t *first, uint32_t *second)
+{
+    uint32_t two[2], uabc[3], u, b = abc[near ? 0 : 1];
+    int n;
+    if (!rm_edge_triangles(&p->r, b, abc[2], two, &n))
+        return false;
+    u = two[near ? 0 : 1]; /* the triangle on the other side: runs c -> b, or a -> c */
+    if (p->r.dead[u] || !(rm_tri_sine(p, u) < rm_insert_poor()) || !needle(p, u, uabc) ||
+        uabc[2] != abc[2] || uabc[near ? 1 : 0] != b || uabc[near ? 0 : 1] == abc[near ? 1 : 0])
+        return false;
+    if (near) {
+        quad[0] = uabc[0], quad[1] = abc[0], quad[2] = abc[1], quad[3] = abc[2];
+        *first = u, *second = t;
+    } else {
+        quad[0] = abc[0], quad[1] = abc[1], quad[2] = uabc[1], quad[3] = abc[2];
+        *first = t, *second = u;
+    }
+    return true;
+}
+
+/* Both needles t = (a, b, c) and u = (c, b, d), b between a and d on their short edges, split
+ * at once at a vertex beside the chord ad (place_in_needle on (a, d, c)): the two triangles on
+ * the short edges, (a, b, x) and (b, d, x), are no needles while b lies near the chord's
+ * middle, and the thin halves toward c stand on a side twice as long. Beside a double curve
+ * whose vertices lie much closer than the sheet's triangles are wide (coordinate-planes in the
+ * irrational box: 0.0078 along the axes, apexes 0.19 away, 3,052 needles) each round of
+ * splits then halves the row's vertices where one split per needle kept them all and left the
+ * row's needles as thin as the first. True when split; false when the pair does not qualify
+ * (t may still be split alone) or out of memory (*ok false). */
+static bool split_pair(rm_pass *p, uint32_t t, uint32_t u, const uint32_t abdc[4], bool last,
+                       bool *ok)
+{
+    const uint32_t adc[3] = {abdc[0], abdc[2], abdc[3]};
+    double x[3], g[3], n[3];
+    if (!new_place(p, adc, x, n, g) || !faces_kept(p, abdc, 4, n, x))
+        return false;
+    double pair = sin(ISM_RM_INSERT_PAIR_DEG * M_PI / 180);
+    if (!(rm_min_sine(P(p, abdc[0]), P(p, abdc[1]), x) >= pair) ||
+        !(rm_min_sine(P(p, abdc[1]), P(p, abdc[2]), x) >= pair))
+        return false;
+    double own = fmax(rm_centroid_distance(p, P(p, abdc[0]), P(p, abdc[1]), P(p, abdc[3])),
+                      rm_centroid_distance(p, P(p, abdc[3]), P(p, abdc[1]), P(p, abdc[2])));
+    if (!centroids_ok(p, abdc, 4, own, x) || !flippable(p, abdc[2], abdc[3], x, last) ||
+        !flippable(p, abdc[3], abdc[0], x, last))
+        return false;
+    *ok = split_edge(p, t, u, abdc, x, g);
+    return *ok;
+}
+
+/* Splits needle t (abc as needle() reads it) alone, as the header says. */
+static bool split_alone(rm_pass *p, uint32_t t, const uint32_t abc[3], bool last, bool *ok)
+{
+    double x[3], g[3], n[3];
+    if (!new_place(p, abc, x, n, g) || !faces_kept(p, abc, 3, n, x))
+        return false;
+    double own = rm_centroid_distance(p, P(p, abc[0]), P(p, abc[1]), P(p, abc[2]));
+    if (!centroids_ok(p, abc, 3, own, x) || !flippable(p, abc[1], abc[2], x, last) ||
+        !flippable(p, abc[2], abc[0], x, last))
+        return false;
+    *ok = split(p, t, abc, x, g);
+    return *ok;
+}
+
+/* One sweep over the first nt triangles: each needle split with its partner, else alone. */
+static size_t insert_sweep(rm_pass *p, size_t nt, bool last, bool *ok)
 {
     rm_mesh *r = &p->r;
     double poor = rm_insert_poor();
-    size_t made = 0, nt = r->m->ntris;
-    *ok = true;
-    memset(p->touched, 0, r->cap_verts);
+    size_t made = 0;
     for (size_t t = 0; t < nt && *ok; t++) {
         uint32_t abc[3];
-        double x[3], g[3];
         if (r->dead[t] || r->m->nverts >= r->cap_verts || r->m->ntris + 2 > r->cap_tris ||
-            !(rm_tri_sine(p, (uint32_t)t) < poor) ||
-            !needle(p, (uint32_t)t, abc) || !new_place(p, abc, x, g) ||
-            !faces_kept(p, abc, x) || !centroids_ok(p, abc, x) ||
-            !flippable(p, abc[1], abc[2], x, last) || !flippable(p, abc[2], abc[0], x, last))
+            !(rm_tri_sine(p, (uint32_t)t) < poor) || !needle(p, (uint32_t)t, abc))
             continue;
-        *ok = split(p, (uint32_t)t, abc, x, g);
-        made += *ok;
+        /* paired with the needle across its long side bc, else across ca, else alone */
+        bool split = false;
+        for (int near = 0; near < 2 && !split && *ok; near++) {
+            uint32_t quad[4], first, second;
+            split = partner(p, (uint32_t)t, abc, near, quad, &first, &second) &&
+                    split_pair(p, first, second, quad, last, ok);
+        }
+        if (split || (*ok && split_alone(p, (uint32_t)t, abc, last, ok)))
+            made++;
+    }
+    return made;
+}
+
+size_t rm_insert_active(rm_pass *p, bool last, bool *ok)
+{
+    size_t made = 0, level = 0, nt = p->r.m->ntris;
+    *ok = true;
+    memset(p->touched, 0, p->r.cap_verts);
+    for (;;) {
+        size_t now = insert_sweep(p, nt, last, ok);
+        made += now;
+        if (!now || !*ok || ++level == ISM_RM_INSERT_LEVELS)
+            break;
+        /* the thin halves flipped away from this level's splits (their corners, touched),
+           then the next level on every triangle there is now: the pairs' rows stand over
+           the last ones'; the caller flips from the last level's corners */
+        rm_flip_from(p, p->touched, ok);
+        if (!*ok)
+            break;
+        memset(p->touched, 0, p->r.cap_verts);
+        nt = p->r.m->ntris;
     }
     p->inserts += made;
     return made;

@@ -35,7 +35,8 @@ int rm_merge_neighbours(const rm_mesh *r, uint32_t v, uint32_t *nb);
 
 /* The link condition: no neighbour of w other than v, c, d is a neighbour of v (counted over
  * every sheet at w), and where v has three triangles, w has none on c and d already. Then
- * the merge keeps χ, components, cones and boundary loops. */
+ * the merge keeps χ, components, cones and boundary loops. g as rm_merge_find(_any) fills it
+ * (false when v has more than ISM_RM_MERGE_MAX_DEGREE triangles). */
 bool rm_merge_link_ok(const rm_mesh *r, const rm_merge *g);
 
 /* The corners of triangle t with v's corner read at x (x may be v's own position). */
