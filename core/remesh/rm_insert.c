@@ -41,8 +41,13 @@
  * needle there (b at the chord's middle gives 30°; short edges 1 : 2 about 19°). */
 #define ISM_RM_INSERT_PAIR_DEG 20.0
 /* Sweeps of splits per call, the flips between them: a fan of k needles takes about log2 k
- * (coordinate-planes in the irrational box: fans of 12 to 40+ needles, 0.19 / 0.0078). */
-#define ISM_RM_INSERT_LEVELS 6
+ * (coordinate-planes in the irrational box: fans of 12 to 40+ needles, 0.19 / 0.0078), but
+ * the relaxation between the rounds' calls mends the rows' last needles with fewer vertices
+ * (callgrind pass, default bound, coordinate-planes / crossing-planes irrational box, 1 to 6
+ * and 10 levels: 341.7 / 346.6 / 304.7 / 312.7 / 325.1 / 331.9M, 119.0 / 102.7 / 95.7 /
+ * 95.3 / 97.7 / 102.2M; Whitney's 1e-3 box 107.1M at 1, 104.0M from 3; 3 levels: 8,766
+ * triangles, 6 levels 9,520, no needle off the box cut either way). */
+#define ISM_RM_INSERT_LEVELS 3
 
 static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * v; }
 
