@@ -168,20 +168,39 @@ static bool walk(cf_ctx *c, const cf_polyline *pl, uint32_t v, double tol, uint3
     return false;
 }
 
-/* The one vertex with a live triangle within tol of p (CF_NONE when none or several). */
-static uint32_t vertex_at(const cf_ctx *c, const double p[3], double tol)
+/* start[k]: the one vertex with a live triangle within tol of the first point of pl[k]
+ * (CF_NONE when none or several), for the n polylines in one pass over the vertices: those
+ * outside the first points' box (grown by tol) are passed over at once (a group's curves
+ * mostly start at one junction). */
+static void start_vertices(const cf_ctx *c, const cf_polyline *pl, size_t n, double tol,
+                           uint32_t *start)
 {
-    uint32_t found = CF_NONE;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t k = 0; k < n; k++) {
+        start[k] = CF_NONE;
+        for (int j = 0; j < 3; j++) {
+            lo[j] = cf_min2(lo[j], pl[k].p[j] - tol);
+            hi[j] = cf_max2(hi[j], pl[k].p[j] + tol);
+        }
+    }
+    bool *several = calloc(n, sizeof *several);
+    if (!several)
+        return; /* none found: not kept */
     for (size_t v = 0; v < c->m->nverts; v++) {
         const double *q = c->m->pos + 3 * v;
-        if (fabs(q[0] - p[0]) > tol || fabs(q[1] - p[1]) > tol || fabs(q[2] - p[2]) > tol ||
-            ism_sqdist3(q, p) > tol * tol || !live(c, (uint32_t)v))
+        if (!(q[0] >= lo[0] && q[0] <= hi[0] && q[1] >= lo[1] && q[1] <= hi[1] &&
+              q[2] >= lo[2] && q[2] <= hi[2]))
             continue;
-        if (found != CF_NONE)
-            return CF_NONE;
-        found = (uint32_t)v;
+        for (size_t k = 0; k < n; k++)
+            if (ism_sqdist3(q, pl[k].p) <= tol * tol && live(c, (uint32_t)v)) {
+                several[k] |= start[k] != CF_NONE;
+                start[k] = (uint32_t)v;
+            }
     }
-    return found;
+    for (size_t k = 0; k < n; k++)
+        if (several[k])
+            start[k] = CF_NONE;
+    free(several);
 }
 
 /* The first of the n polylines, curve `first` asked first, whose points' box lies within r
@@ -288,14 +307,15 @@ bool cf_curves_kept(cf_run *r, const cf_polyline *pl, const ism_sing_curve *cons
     /* room for every vertex once and the ends again (chains share only their ends) */
     size_t cap = c->m->nverts + 2 * n + 1, nchain = 0;
     uint32_t *chain = malloc(cap * sizeof *chain), *of = malloc(cap * sizeof *of);
-    uint32_t *ends = malloc(2 * n * sizeof *ends);
-    bool kept = chain && of && ends;
+    uint32_t *ends = malloc(2 * n * sizeof *ends), *start = malloc(n * sizeof *start);
+    bool kept = chain && of && ends && start;
+    if (kept)
+        start_vertices(c, pl, n, tol, start);
     for (size_t k = 0; kept && k < n; k++) {
-        uint32_t start = vertex_at(c, pl[k].p, tol);
         size_t from = nchain;
-        kept = start != CF_NONE &&
-               walk(c, &pl[k], start, tol, chain, &nchain, cap, &ends[2 * k + 1]);
-        ends[2 * k] = start;
+        kept = start[k] != CF_NONE &&
+               walk(c, &pl[k], start[k], tol, chain, &nchain, cap, &ends[2 * k + 1]);
+        ends[2 * k] = start[k];
         for (size_t i = from; i < nchain; i++)
             of[i] = (uint32_t)k;
         for (int e = 0; kept && e < 2; e++) {
@@ -323,5 +343,6 @@ bool cf_curves_kept(cf_run *r, const cf_polyline *pl, const ism_sing_curve *cons
     free(chain);
     free(of);
     free(ends);
+    free(start);
     return kept;
 }
