@@ -221,16 +221,67 @@ static void write_curve_end(ism_jw *w, const ism_sing_curve *c, int e, const ism
     ism_jw_object_end(w);
 }
 
-static void write_singular_curve(ism_jw *w, const ism_sing_curve *c, const ism_locus *l)
+/* The trace points of c to print (keep, c->n bytes): every one when tol is 0, else those
+ * ism_polyline_thin keeps within tol on either side of the first uncertified point (kept, so
+ * that its index can be given). False when out of memory. */
+static bool curve_keep(const ism_sing_curve *c, double tol, uint8_t *keep)
+{
+    if (!(tol > 0) || c->n <= 2) {
+        memset(keep, 1, c->n);
+        return true;
+    }
+    uint32_t *idx = malloc(c->n * sizeof *idx);
+    if (!idx)
+        return false;
+    for (size_t i = 0; i < c->n; i++)
+        idx[i] = (uint32_t)i;
+    size_t cut = c->first_uncertified >= 0 && (size_t)c->first_uncertified < c->n
+                     ? (size_t)c->first_uncertified
+                     : 0;
+    bool ok = ism_polyline_thin(c->xyz, idx, cut + 1, tol, keep) &&
+              ism_polyline_thin(c->xyz, idx + cut, c->n - cut, tol, keep + cut);
+    free(idx);
+    return ok;
+}
+
+/* A singular curve: its points with its certificate's decimals, thinned within draw_tol
+ * (> 0; the table in features.h). */
+static void write_singular_curve(ism_jw *w, const ism_sing_curve *c, const ism_locus *l,
+                                 double draw_tol)
 {
     int d = ism_features_decimals(c->cert_radius); /* the table in features.h */
+    double tol = draw_tol > 0 ? draw_tol - (d < 0 ? 0 : ISM_FEATURES_ROUNDING(d)) : 0;
+    uint8_t *keep = malloc(c->n ? c->n : 1);
+    if (!keep || !curve_keep(c, tol, keep)) {
+        free(keep);
+        w->failed = true; /* out of memory: the text is unusable */
+        return;
+    }
+    long printed_uncertified = -1; /* the first uncertified point's place among the printed */
     ism_jw_object(w);
     ism_jw_key(w, "kind");
     ism_jw_string(w, ism_curve_kind_name(c->kind));
     ism_jw_key(w, "closed");
     ism_jw_bool(w, c->closed);
+    ism_jw_key(w, "points");
+    ism_jw_uint(w, c->n);
+    if (tol > 0) {
+        ism_jw_key(w, "tolerance");
+        ism_jw_number(w, draw_tol);
+    }
     ism_jw_key(w, "xyz");
-    ism_jw_numbers_decimals(w, c->xyz, 3 * c->n, d);
+    ism_jw_array(w);
+    for (size_t i = 0, at = 0; i < c->n; i++) {
+        if (!keep[i])
+            continue;
+        if ((long)i == c->first_uncertified)
+            printed_uncertified = (long)at;
+        at++;
+        for (int k = 0; k < 3; k++)
+            ism_jw_number_decimals(w, c->xyz[3 * i + k], d);
+    }
+    ism_jw_array_end(w);
+    free(keep);
     ism_jw_key(w, "ends");
     ism_jw_array(w);
     for (int e = 0; e < 2 && !c->closed && c->n; e++)
@@ -243,10 +294,10 @@ static void write_singular_curve(ism_jw *w, const ism_sing_curve *c, const ism_l
     ism_jw_key(w, "certificate_radius");
     ism_jw_number(w, d < 0 ? c->cert_radius : c->cert_radius + ISM_FEATURES_ROUNDING(d));
     ism_jw_key(w, "first_uncertified");
-    if (c->uncertified_points && c->first_uncertified >= 0 && (size_t)c->first_uncertified < c->n) {
+    if (c->uncertified_points && printed_uncertified >= 0) {
         ism_jw_object(w);
         ism_jw_key(w, "index");
-        ism_jw_int(w, (int)c->first_uncertified);
+        ism_jw_int(w, printed_uncertified);
         ism_jw_key(w, "xyz");
         ism_jw_numbers_decimals(w, c->xyz + 3 * (size_t)c->first_uncertified, 3, d);
         ism_jw_key(w, "residual_f");
@@ -317,7 +368,7 @@ static void write_locus(ism_jw *w, const ism_mesh *m, const ism_features *f)
     ism_jw_key(w, "curves");
     ism_jw_array(w);
     for (size_t i = 0; l && i < l->ncurves; i++)
-        write_singular_curve(w, &l->curves[i], l);
+        write_singular_curve(w, &l->curves[i], l, f->draw_tol);
     ism_features_cut_curves_json(w, m, f->arrangement, f->cut_fns, f->draw_tol);
     ism_jw_array_end(w);
     ism_jw_key(w, "double_sheets");

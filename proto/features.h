@@ -12,7 +12,8 @@
  *    "classes": ["manifold", "boundary", "nonmanifold_edge", "nonmanifold_point", "isolated"],
  *    "singular_points": [{"xyz", "radius", "type", "certified", "hessian_eigenvalues",
  *                         "residual_f", "residual_grad", "cones"}],
- *    "curves": [{"kind": "double"|"whisker", "closed", "xyz": [x0, y0, z0, ...],
+ *    "curves": [{"kind": "double"|"whisker", "closed", "points", "tolerance",
+ *                "xyz": [x0, y0, z0, ...],
  *                "ends": [{"type", "xyz", "point"}]}],        (ends: [] when closed)
  *              then the requested curves: {"kind": "section"|"level"|"intersection"|
  *                "silhouette"|"crease", "source", "index", "closed", "length", "edges",
@@ -47,7 +48,11 @@
  *     10^-d <= r; the JSON states certificate_radius = r + ISM_FEATURES_ROUNDING(d) (<= 2 r), so
  *     the printed point lies within sqrt 2 * that of the zero, as the full one lay within
  *     sqrt 2 * r. The curve's stated 1e-9 x diagonal (r <= 0.5e-9 x diagonal) still holds.
- *     A curve without a finite r > 0 is printed in full.
+ *     A curve without a finite r > 0 is printed in full. With a drawing tolerance t > 0
+ *     (below) only the traced points that keep every other one within t - that rounding of
+ *     the polyline through them are printed (polyline_thin.h; the first uncertified point
+ *     always, first_uncertified.index counts the printed ones); the curve states t as
+ *     "tolerance" and the traced count as "points".
  *   the drawn mesh polylines, when the features are given a drawing tolerance t > 0
  *     (ism_features.draw_tol; the pipeline's is ISM_FEATURES_DRAW_TOL_REL x the mesh's bound
  *     E, or x the finest cell's edge on the depth path; stated as the top-level "tolerance"):

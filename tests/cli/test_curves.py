@@ -353,13 +353,36 @@ class CurvesTest(unittest.TestCase):
                 for v in sec:
                     self.assertLess(min(abs(verts[v][2] - h) for h in heights), tol)
 
+    def check_double_circle(self, text, tol, off):
+        """The Klein bottle's double curve as printed (features.h: the certified trace points
+        that keep every other one within tol, with their certificate's decimals): each
+        printed point within sqrt 2 x certificate_radius of the circle of radius sqrt 2
+        (off), the chord between two printed points bulging from the circle by no more than
+        tol (the trace between them lay within tol of it), and no fewer points than any such
+        polygon needs (chords of angle <= 2 acos(1 - tol / R))."""
+        curves = [c for c in text["curves"] if c["kind"] == "double"]
+        self.assertEqual(len(curves), 1)
+        c = curves[0]
+        self.assertTrue(c["closed"])
+        self.assertEqual(float(c["tolerance"]), tol)
+        r = float(c["certificate_radius"])
+        pts = [[float(v) for v in c["xyz"][i:i + 3]] for i in range(0, len(c["xyz"]), 3)]
+        self.assertLess(len(pts), c["points"])
+        R = math.sqrt(2)
+        self.assertGreaterEqual(len(pts), 2 * math.pi / (2 * math.acos(1 - tol / R)))
+        for p in pts:
+            self.assertLessEqual(off(p), math.sqrt(2) * r + 1e-15, p)
+        for a, b in zip(pts, pts[1:] + pts[:1]):  # closed: the last joins the first
+            half = math.dist(a, b) / 2
+            self.assertLessEqual(R - math.sqrt(max(0, R * R - half * half)), 1.01 * tol, (a, b))
+
     def test_mesh_chains_drawn_within_the_tolerance(self):
         """features.h's drawing rule on the mesh's own polylines, the default bound E named,
         in three boxes: the document states "tolerance" E / 10; the Klein bottle's
         non-manifold chains, every edge on the locus (the double circle x^2 + (y - 1)^2 = 2,
         z = 0), are thinned (drawn.py's rule against the .obj's nonmanifold_curves), each
         printed point off that circle by no more than the mesh's own chain vertices plus the
-        rounding; Kummer's boundary chains (where the box cuts it) print every vertex, rounded,
+        rounding, and its double curve likewise (check_double_circle); Kummer's boundary chains (where the box cuts it) print every vertex, rounded,
         each on a face of the box within the rounding."""
         for name, half, depth in (("klein-bottle", 3.0, 6), ("kummer-16-nodes", 3.0, 5)):
             side = 2 * half
@@ -386,6 +409,7 @@ class CurvesTest(unittest.TestCase):
                         own = max(off(p) + r for ch in mesh for p, r in ch)
                         self.assertLess(own, 1e-3)
                         self.assertLessEqual(max(off(p) for p in pts), own + rounding)
+                        self.check_double_circle(text, tol, off)
                     else:
                         mesh = drawn.obj_chains(obj, "boundaries")
                         self.assertTrue(mesh)
