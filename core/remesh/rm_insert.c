@@ -199,22 +199,39 @@ static uint32_t add_triangle(rm_pass *p, uint32_t t, uint32_t a, uint32_t b, uin
     return s;
 }
 
+/* The new vertex *v at x (∇f there g) with room for slots triangles, its normal's side from
+ * vertex like's (the apex's normal says which side of ∇f the mesh's normals take here). False
+ * when out of memory. */
+static bool new_vertex(rm_pass *p, const double *x, const double *g, uint32_t like,
+                       uint32_t slots, uint32_t *v)
+{
+    rm_mesh *r = &p->r;
+    *v = ism_mesh_add_vertex(r->m, x, NULL);
+    r->start[*v] = r->room[*v] = r->count[*v] = 0;
+    r->locked[*v] = r->gone[*v] = 0;
+    p->slide[*v] = 0;
+    if (!rm_slot_reserve(r, *v, slots))
+        return false;
+    memcpy(r->m->normal + 3 * *v, r->m->normal + 3 * like, 3 * sizeof *r->m->normal);
+    rm_commit_move(p, *v, x, g);
+    return true;
+}
+
+/* The n corners of a split, active and touched. */
+static void mark_corners(rm_pass *p, const uint32_t *v, int n)
+{
+    for (int k = 0; k < n; k++)
+        p->active[v[k]] = p->touched[v[k]] = 1;
+}
+
 /* Splits needle t = (a, b, c) at the new vertex x. False when out of memory. */
 static bool split(rm_pass *p, uint32_t t, const uint32_t abc[3], const double *x, const double *g)
 {
     rm_mesh *r = &p->r;
-    uint32_t a = abc[0], b = abc[1], c = abc[2];
-    if (!rm_slot_reserve(r, a, 1) || !rm_slot_reserve(r, b, 1) || !rm_slot_reserve(r, c, 1))
+    uint32_t a = abc[0], b = abc[1], c = abc[2], v;
+    if (!rm_slot_reserve(r, a, 1) || !rm_slot_reserve(r, b, 1) || !rm_slot_reserve(r, c, 1) ||
+        !new_vertex(p, x, g, c, 3, &v))
         return false;
-    uint32_t v = ism_mesh_add_vertex(r->m, x, NULL);
-    r->start[v] = r->room[v] = r->count[v] = 0;
-    r->locked[v] = r->gone[v] = 0;
-    p->slide[v] = 0;
-    if (!rm_slot_reserve(r, v, 3))
-        return false;
-    /* the apex's normal says which side of ∇f the mesh's normals take here */
-    memcpy(r->m->normal + 3 * v, r->m->normal + 3 * c, 3 * sizeof *r->m->normal);
-    rm_commit_move(p, v, x, g);
     uint32_t *tri = r->m->tri + 3 * t;
     tri[0] = a, tri[1] = b, tri[2] = v;
     uint32_t t1 = add_triangle(p, t, b, c, v), t2 = add_triangle(p, t, c, a, v);
@@ -231,8 +248,8 @@ static bool split(rm_pass *p, uint32_t t, const uint32_t abc[3], const double *x
     rm_slot_add(r, v, t);
     rm_slot_add(r, v, t1);
     rm_slot_add(r, v, t2);
-    p->active[a] = p->active[b] = p->active[c] = p->active[v] = 1;
-    p->touched[a] = p->touched[b] = p->touched[c] = p->touched[v] = 1;
+    const uint32_t corners[4] = {a, b, c, v};
+    mark_corners(p, corners, 4);
     return true;
 }
 
@@ -243,17 +260,9 @@ static bool split_edge(rm_pass *p, uint32_t t, uint32_t u, const uint32_t abdc[4
                        const double *x, const double *g)
 {
     rm_mesh *r = &p->r;
-    uint32_t a = abdc[0], b = abdc[1], d = abdc[2], c = abdc[3];
-    if (!rm_slot_reserve(r, a, 1) || !rm_slot_reserve(r, d, 1))
+    uint32_t a = abdc[0], b = abdc[1], d = abdc[2], c = abdc[3], v;
+    if (!rm_slot_reserve(r, a, 1) || !rm_slot_reserve(r, d, 1) || !new_vertex(p, x, g, c, 4, &v))
         return false;
-    uint32_t v = ism_mesh_add_vertex(r->m, x, NULL);
-    r->start[v] = r->room[v] = r->count[v] = 0;
-    r->locked[v] = r->gone[v] = 0;
-    p->slide[v] = 0;
-    if (!rm_slot_reserve(r, v, 4))
-        return false;
-    memcpy(r->m->normal + 3 * v, r->m->normal + 3 * c, 3 * sizeof *r->m->normal);
-    rm_commit_move(p, v, x, g);
     uint32_t *tt = r->m->tri + 3 * t, *tu = r->m->tri + 3 * u;
     tt[0] = a, tt[1] = b, tt[2] = v;
     tu[0] = b, tu[1] = d, tu[2] = v;
@@ -271,9 +280,8 @@ static bool split_edge(rm_pass *p, uint32_t t, uint32_t u, const uint32_t abdc[4
     rm_slot_add(r, c, t2);
     for (int k = 0; k < 4; k++)
         rm_slot_add(r, v, all[k]);
-    const uint32_t touched[5] = {a, b, c, d, v};
-    for (int k = 0; k < 5; k++)
-        p->active[touched[k]] = p->touched[touched[k]] = 1;
+    const uint32_t corners[5] = {a, b, c, d, v};
+    mark_corners(p, corners, 5);
     return true;
 }
 
