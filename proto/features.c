@@ -123,8 +123,9 @@ void ism_features_chain_xyz(ism_jw *w, const ism_mesh *m, const uint32_t *verts,
 
 /* Polylines of mesh vertices; on (may be NULL) gives each line's "on_locus" and vert_on (per
  * polyline vertex) its "off_edges": the edges with an end off the locus, the ones the check
- * counts. Positions with d decimals (d < 0: float32); a chain with every edge on the locus
- * thinned within tol (> 0; the digits table in features.h). Returns edges. */
+ * counts. Positions with d decimals (d < 0: float32); thinned within tol (> 0; the digits
+ * table in features.h): every chain when on is NULL (boundaries), else a chain with every
+ * edge on the locus. Returns edges. */
 static size_t write_lines(ism_jw *w, const ism_mesh *m, const ism_polylines *p,
                           const uint8_t *on, const uint8_t *vert_on, double tol, int d)
 {
@@ -135,7 +136,7 @@ static size_t write_lines(ism_jw *w, const ism_mesh *m, const ism_polylines *p,
         ism_jw_object(w);
         ism_jw_key(w, "closed");
         ism_jw_bool(w, e - s > 1 && p->verts[s] == p->verts[e - 1]);
-        bool all_on = on != NULL;
+        bool thin = true;
         if (on) {
             ism_jw_key(w, "on_locus");
             ism_jw_bool(w, on[i]);
@@ -144,13 +145,13 @@ static size_t write_lines(ism_jw *w, const ism_mesh *m, const ism_polylines *p,
             for (uint32_t j = s; j + 1 < e; j++)
                 if (!(vert_on[j] && vert_on[j + 1])) {
                     ism_jw_uint(w, j - s);
-                    all_on = false;
+                    thin = false; /* off_edges index every vertex */
                 }
             ism_jw_array_end(w);
-            all_on = all_on && on[i];
+            thin = thin && on[i];
         }
         ism_jw_key(w, "xyz");
-        ism_features_chain_xyz(w, m, p->verts + s, e - s, all_on ? tol : 0, d, false);
+        ism_features_chain_xyz(w, m, p->verts + s, e - s, thin ? tol : 0, d, false);
         ism_jw_object_end(w);
         edges += e > s ? e - s - 1 : 0;
     }

@@ -57,13 +57,15 @@
  *     (ism_features.draw_tol; the pipeline's is ISM_FEATURES_DRAW_TOL_REL x the mesh's bound
  *     E, or x the finest cell's edge on the depth path; stated as the top-level "tolerance"):
  *     - crease arcs ("curves"[k].arcs of kind crease: the cut the pipeline adds where f's
- *       top min/max changes branch, not a curve the request asked for) and the
+ *       top min/max changes branch, not a curve the request asked for), boundaries, and the
  *       nonmanifold_edges chains with every edge on the locus (on_locus, off_edges empty:
- *       the singular curve is drawn from "curves"; the viewer draws none of these chains):
- *       each thinned to the mesh vertices that keep every other one within
- *       t - ISM_FEATURES_ROUNDING(d) of the polyline through them (polyline_thin.h);
+ *       the singular curve is drawn from "curves"; the viewer draws none of these chains;
+ *       every chain when the mesh was not checked against a locus): each thinned to the
+ *       mesh vertices that keep every other one within t - ISM_FEATURES_ROUNDING(d) of the
+ *       polyline through them (polyline_thin.h); counts.boundary_edges and
+ *       counts.nonmanifold_edges still count the mesh's edges;
  *     - every mesh position printed (those, the other nonmanifold_edges chains, which keep
- *       every vertex so that off_edges index them, nonmanifold_points, boundaries): with
+ *       every vertex so that off_edges index them, nonmanifold_points): with
  *       d = ism_features_decimals(t / 2) decimals.
  *     So every printed point lies within ISM_FEATURES_ROUNDING(d) <= t / 2 of its mesh vertex,
  *     and every vertex of a thinned chain within t of the printed polyline. A crease curve

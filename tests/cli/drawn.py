@@ -1,12 +1,11 @@
 """drawn.py — checks of proto/features.h's drawing rule for the mesh polylines the features
 JSON prints (crease arcs, nonmanifold_edges, boundaries), against the mesh's own chains in the
-.obj (`l` lines: every vertex, %.9g), shared by test_curves and test_singular.
+.obj (`l` lines: every vertex, %.9g), for test_curves.
 
 The rule, restated here: with the features' "tolerance" t, every number is printed with at
 most d decimals, d the fewest with (sqrt 3 / 2) 10^-d <= t / 2; every printed point is a mesh
 vertex of its chain rounded (within that rounding); a thinned chain keeps its ends and every
-vertex it drops lies within t of the printed segment across it; a chain that is not thinned
-prints every vertex, in order."""
+vertex it drops lies within t of the printed segment across it."""
 import decimal
 import json
 import math
@@ -97,17 +96,3 @@ def check_thinned(tc, printed, chains, tol):
     tc.assertLess(len(pts), sum(len(ch) for ch in chains))
     return pts, rounding
 
-
-def check_every_vertex(tc, printed, chains, tol):
-    """As check_thinned for chains printed whole: printed[i] is chains[i], vertex by vertex,
-    each within the rounding (plus the .obj's). Returns (the points, their rounding bound)."""
-    d, rounding = decimals(tol)
-    tc.assertEqual(len(printed), len(chains))
-    pts = []
-    for line, ch in zip(printed, chains):
-        got = points(line, tc, d)
-        tc.assertEqual(len(got), len(ch))
-        for q, (p, r) in zip(got, ch):
-            tc.assertLessEqual(math.dist(p, q), rounding + r, (p, q))
-        pts += got
-    return pts, rounding

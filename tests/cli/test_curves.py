@@ -382,8 +382,10 @@ class CurvesTest(unittest.TestCase):
         non-manifold chains, every edge on the locus (the double circle x^2 + (y - 1)^2 = 2,
         z = 0), are thinned (drawn.py's rule against the .obj's nonmanifold_curves), each
         printed point off that circle by no more than the mesh's own chain vertices plus the
-        rounding, and its double curve likewise (check_double_circle); Kummer's boundary chains (where the box cuts it) print every vertex, rounded,
-        each on a face of the box within the rounding."""
+        rounding, and its double curve likewise (check_double_circle); Kummer's boundary
+        chains (where the box cuts it) are thinned too (against the .obj's boundaries), each
+        printed point on a face of the box within the rounding, counts.boundary_edges the
+        mesh's."""
         for name, half, depth in (("klein-bottle", 3.0, 6), ("kummer-16-nodes", 3.0, 5)):
             side = 2 * half
             e = 1e-3 * math.sqrt(3) * side
@@ -413,7 +415,9 @@ class CurvesTest(unittest.TestCase):
                     else:
                         mesh = drawn.obj_chains(obj, "boundaries")
                         self.assertTrue(mesh)
-                        pts, rounding = drawn.check_every_vertex(
+                        self.assertEqual(text["counts"]["boundary_edges"],
+                                         sum(len(ch) - 1 for ch in mesh))
+                        pts, rounding = drawn.check_thinned(
                             self, [c["xyz"] for c in text["boundaries"]], mesh, tol)
                         for p in pts:
                             face = min(abs(p[k] - box[k + j]) for k in range(3) for j in (0, 3))

@@ -117,7 +117,8 @@ export function buildFeatures(f, radius, clippingPlanes) {
     made.boundary.name = 'boundary-edges';
     group.add(made.boundary);
   }
-  made.counts.boundary = boundPos.length / 6;
+  // the mesh's boundary edges: the JSON draws its chains thinned (features.h's tolerance)
+  made.counts.boundary = f.counts && Number.isInteger(f.counts.boundary_edges) ? f.counts.boundary_edges : boundPos.length / 6;
 
   made.points = new THREE.Group();
   made.points.name = 'singular-points';
