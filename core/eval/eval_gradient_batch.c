@@ -13,6 +13,7 @@
 #include "core/eval/deriv_rules.h"
 #include "core/eval/trig_pair.h"
 #include "core/eval/workspace.h"
+#include <string.h>
 
 #define GL ISM_GRAD_BATCH
 #define VL 4 /* lanes per group: one AVX2 vector, two SSE2 ones */
@@ -190,21 +191,22 @@ INLINE void grad_step(const ism_instr *in, double *regs, ism_trig_cache *trig, s
                 k_fill(comp(regs, in->out, k) + g * VL, k ? 0.0 : in->imm);
         return;
     case ISM_OP_ADD_RC:
-        for (size_t j = 0; j < n; j++)
-            ov[j] = av[j] + in->imm;
-        chain_partials(regs, in, NULL, 1.0, ng);
+    case ISM_OP_MUL_RC: {
+        v4d c = {in->imm, in->imm, in->imm, in->imm};
+        for (size_t g = 0; g < ng; g++)
+            st(ov + g * VL, in->op == ISM_OP_ADD_RC ? ld(av + g * VL) + c : ld(av + g * VL) * c);
+        chain_partials(regs, in, NULL, in->op == ISM_OP_ADD_RC ? 1.0 : in->imm, ng);
         return;
-    case ISM_OP_MUL_RC:
-        for (size_t j = 0; j < n; j++)
-            ov[j] = av[j] * in->imm;
-        chain_partials(regs, in, NULL, in->imm, ng);
-        return;
-    case ISM_OP_SQUARE:
-        for (size_t j = 0; j < n; j++) {
-            ov[j] = av[j] * av[j];
-            g1[j] = 2.0 * av[j];
+    }
+    case ISM_OP_SQUARE: {
+        v4d two = {2.0, 2.0, 2.0, 2.0};
+        for (size_t g = 0; g < ng; g++) {
+            v4d a = ld(av + g * VL);
+            st(ov + g * VL, a * a);
+            st(g1 + g * VL, two * a);
         }
         break;
+    }
     case ISM_OP_SIN:
     case ISM_OP_COS:
         for (size_t j = 0; j < n; j++) {
@@ -249,13 +251,12 @@ static void grad_chunk(const ism_tape *t, ism_eval_ws *ws, const double *x, cons
     const double *src[3] = {x, y, z};
     for (uint32_t v = 0; v < 3; v++) {
         double *val = comp(regs, v, 0);
-        for (size_t j = 0; j < ng * VL; j++) /* lanes past n repeat the last point */
-            val[j] = src[v][j < n ? j : n - 1];
-        for (int k = 1; k < 4; k++) {
-            double *d = comp(regs, v, k), one = (uint32_t)(k - 1) == v ? 1.0 : 0.0;
-            for (size_t j = 0; j < ng * VL; j++)
-                d[j] = one;
-        }
+        memcpy(val, src[v], n * sizeof *val);
+        for (size_t j = n; j < ng * VL; j++) /* lanes past n repeat the last point */
+            val[j] = src[v][n - 1];
+        for (int k = 1; k < 4; k++)
+            for (size_t g = 0; g < ng; g++)
+                k_fill(comp(regs, v, k) + g * VL, (uint32_t)(k - 1) == v ? 1.0 : 0.0);
     }
 #ifdef HAVE_AVX2_PATH
     if (__builtin_cpu_supports("avx2"))
@@ -263,10 +264,13 @@ static void grad_chunk(const ism_tape *t, ism_eval_ws *ws, const double *x, cons
     else
 #endif
         run_tape_base(t, regs, ws->trig, ng);
+    const double *rv = comp(regs, t->result, 0), *rx = comp(regs, t->result, 1),
+                 *ry = comp(regs, t->result, 2), *rz = comp(regs, t->result, 3);
+    memcpy(f, rv, n * sizeof *f);
     for (size_t j = 0; j < n; j++) {
-        f[j] = comp(regs, t->result, 0)[j];
-        for (int k = 0; k < 3; k++)
-            g[j][k] = comp(regs, t->result, k + 1)[j];
+        g[j][0] = rx[j];
+        g[j][1] = ry[j];
+        g[j][2] = rz[j];
     }
 }
 

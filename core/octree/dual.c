@@ -226,7 +226,7 @@ typedef struct worker {
 typedef struct dual {
     const ism_poly_options *o;
     ism_grid g;
-    double finest_step; /* the least of g's finest steps (set_grid): sample_corner's scale */
+    double finest_step; /* the least of g's finest steps (set_grid): sample_corners' scale */
     ism_pool *pool;
     worker *w;        /* one per thread of the pool */
     int nw;
@@ -838,21 +838,50 @@ static int classify(dual *d, worker *w, dnode *n, corner_view *v)
     return plain_edges(d, w, n, v) ? DN_SURF : DN_INNER;
 }
 
-/* f and the unit gradient at lattice point q into *f, p, g (f 0 where its sign is rounding
- * noise: ism_sample_zero_by_rounding): through the point memo, as
+/* f and the unit gradients at the lattice points q[0..n) (n <= 27) into f, p, g (f 0 where
+ * its sign is rounding noise: ism_sample_zero_by_rounding), through the point memo, as
  * neighbouring nodes share corners (a split's 27 points hold the parent's 8 and the 18 on
- * its faces and edges that the neighbours' splits sample too). */
-static void sample_corner(dual *d, worker *w, const int32_t q[3], double *f, double p[3],
-                          double g[3])
+ * its faces and edges that the neighbours' splits sample too). The memo is looked up point
+ * by point (a miss takes its slot at once, so the memo ends as ism_point_memo's one point
+ * at a time leaves it, with the same evaluations counted), then the misses' f and ∇f are
+ * taken in one batch (ism_sample_grad_batch: bit for bit ism_sample_grad's, for less). */
+static void sample_corners(dual *d, worker *w, const int32_t (*q)[3], size_t n, double *f,
+                           double (*p)[3], double (*g)[3])
 {
-    for (int a = 0; a < 3; a++)
-        p[a] = ism_grid_coord(&d->g, a, q[a]);
-    const ism_point_entry *e = ism_point_memo(w->points, w->bits, q, p, &w->s);
-    *f = e->f;
-    memcpy(g, e->g, sizeof e->g);
-    double gn = ism_normalise3(g); /* 0 at a critical point: no agreement there */
-    if (*f != 0 && ism_sample_zero_by_rounding(&w->s, p, *f, gn, d->finest_step))
-        *f = 0; /* a zero for every node sharing the point, as the primal tiles take it */
+    ism_point_entry *slot[27];
+    uint64_t key[27];
+    size_t at[27], nm = 0;
+    double mp[27][3], mf[27], mg[27][3];
+    for (size_t j = 0; j < n; j++) {
+        for (int a = 0; a < 3; a++)
+            p[j][a] = ism_grid_coord(&d->g, a, q[j][a]);
+        key[j] = ism_lattice_key(q[j]);
+        ism_point_entry *e = ism_point_slot(w->points, w->bits, q[j]);
+        if (e->key == key[j]) {
+            f[j] = e->f;
+            memcpy(g[j], e->g, sizeof g[j]);
+            continue;
+        }
+        e->key = key[j];
+        slot[nm] = e;
+        memcpy(mp[nm], p[j], sizeof mp[nm]);
+        at[nm++] = j;
+    }
+    ism_sample_grad_batch(&w->s, (const double (*)[3])mp, mf, mg, nm);
+    for (size_t k = 0; k < nm; k++) {
+        size_t j = at[k];
+        f[j] = mf[k];
+        memcpy(g[j], mg[k], sizeof g[j]);
+        if (slot[k]->key == key[j]) { /* not taken since by a later miss */
+            slot[k]->f = mf[k];
+            memcpy(slot[k]->g, mg[k], sizeof mg[k]);
+        }
+    }
+    for (size_t j = 0; j < n; j++) {
+        double gn = ism_normalise3(g[j]); /* 0 at a critical point: no agreement there */
+        if (f[j] != 0 && ism_sample_zero_by_rounding(&w->s, p[j], f[j], gn, d->finest_step))
+            f[j] = 0; /* a zero for every node sharing the point, as the primal tiles take it */
+    }
 }
 
 /* Bytes the tree and the vertices hold (the triangles are bounded by max_triangles). */
@@ -1009,11 +1038,13 @@ static void split_task(void *ctx, size_t k, int thread)
     split_out *out = &((split_out *)job->out)[k];
     int32_t half = ism_grid_cell_steps(&d->g, parent->level + 1);
     double f[27], p[27][3], g[27][3];
+    int32_t q[27][3];
     for (int j = 0; j < 27; j++) {
-        int32_t q[3] = {parent->o.v[0] + j % 3 * half, parent->o.v[1] + j / 3 % 3 * half,
-                        parent->o.v[2] + j / 9 * half};
-        sample_corner(d, w, q, &f[j], p[j], g[j]);
+        q[j][0] = parent->o.v[0] + j % 3 * half;
+        q[j][1] = parent->o.v[1] + j / 3 % 3 * half;
+        q[j][2] = parent->o.v[2] + j / 9 * half;
     }
+    sample_corners(d, w, (const int32_t (*)[3])q, 27, f, p, g);
     out->bad = false;
     out->kinked = 0;
     uint8_t known = parent->free_kids |
@@ -1361,13 +1392,19 @@ static uint64_t pair_key(uint32_t a, uint32_t b)
     return (a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a) + 1;
 }
 
-/* The distance to f = 0 (ism_sample_dist) of the midpoint of the pair key stands for. */
-static double pair_dist(dual *d, worker *w, uint64_t key)
+/* The midpoint of the pair key stands for into m. */
+static void pair_mid(const dual *d, uint64_t key, double m[3])
 {
     uint32_t a = (uint32_t)((key - 1) >> 32), b = (uint32_t)(key - 1);
-    double m[3];
     for (int k = 0; k < 3; k++)
         m[k] = 0.5 * (d->pos[3 * a + k] + d->pos[3 * b + k]);
+}
+
+/* The distance to f = 0 (ism_dual_dist) of the midpoint of the pair key stands for. */
+static double pair_dist(dual *d, worker *w, uint64_t key)
+{
+    double m[3];
+    pair_mid(d, key, m);
     return ism_dual_dist(&w->s, m, d->o->max_error);
 }
 
@@ -1382,11 +1419,42 @@ static double mid_dist(dual *d, uint32_t a, uint32_t b)
     return known && !isnan(*known) ? *known : pair_dist(d, &d->w[0], key);
 }
 
+/* What a task of measure_pairs or measure_triangles measures: up to MEASURE_LANES points,
+ * their gradients in one batch (ism_sample_grad_batch: bit for bit ism_dual_dist's first
+ * sample, for less). */
+#define MEASURE_LANES ISM_GRAD_BATCH
+
+/* Task k's share of n items in chunks of MEASURE_LANES: its first item into *lo, and how
+ * many it has. */
+static size_t chunk_of(size_t k, size_t n, size_t *lo)
+{
+    *lo = k * MEASURE_LANES;
+    return n - *lo < MEASURE_LANES ? n - *lo : MEASURE_LANES;
+}
+
+/* A chunk of measure_pairs' work: its pairs and where their distances go. */
+typedef struct pair_job {
+    struct dual *d;
+    const uint64_t *keys;
+    double *dist;
+    size_t n;
+} pair_job;
+
+/* Task k: the midpoint distances of keys[MEASURE_LANES k ..] (ism_dual_dist's, with the
+ * first gradients in one batch). */
 static void pair_task(void *ctx, size_t k, int thread)
 {
-    task_ctx *job = ctx;
-    const uint64_t *keys = job->in;
-    ((double *)job->out)[k] = pair_dist(job->d, &job->d->w[thread], keys[k]);
+    pair_job *job = ctx;
+    dual *d = job->d;
+    worker *w = &d->w[thread];
+    size_t lo, n = chunk_of(k, job->n, &lo);
+    double m[MEASURE_LANES][3], f[MEASURE_LANES], g[MEASURE_LANES][3], e = d->o->max_error;
+    for (size_t j = 0; j < n; j++)
+        pair_mid(d, job->keys[lo + j], m[j]);
+    ism_sample_grad_batch(&w->s, (const double (*)[3])m, f, g, n);
+    for (size_t j = 0; j < n; j++)
+        job->dist[lo + j] =
+            ism_dual_kink_dist(&w->s, m[j], ism_dual_plain_dist(&w->s, m[j], f[j], g[j], e), e);
 }
 
 /* The midpoint distances of the n vertex pairs in pairs[0..2n) into the memo: those not
@@ -1415,8 +1483,8 @@ static void measure_pairs(dual *d, const uint32_t *pairs, size_t n)
         keys[m] = key;
         slot[m++] = i;
     }
-    task_ctx job = {d, keys, dist};
-    ism_pool_for(d->pool, m, pair_task, &job, NULL);
+    pair_job job = {d, keys, dist, m};
+    ism_pool_for(d->pool, (m + MEASURE_LANES - 1) / MEASURE_LANES, pair_task, &job, NULL);
     for (size_t j = 0; j < m; j++)
         k->val[slot[j]] = dist[j];
     free(keys);
@@ -1708,21 +1776,43 @@ static int edge_misses(dual *d, size_t t)
     return miss;
 }
 
-/* Triangle t's centroid within E of f = 0 and its normal along ∇f there? 0 when so, else 7
- * (every leaf of t to split). */
-static int centroid_misses(dual *d, worker *w, size_t t)
+/* Triangle t's corners into p. */
+static void tri_corners(const dual *d, size_t t, const double *p[3])
 {
-    const double *p[3];
     for (int k = 0; k < 3; k++)
         p[k] = &d->pos[3 * d->tri[3 * t + k]];
-    return ism_dual_centroid_within(&w->s, p, d->o->max_error) ? 0 : 7;
 }
 
+/* A chunk of measure_triangles' centroids: the triangles and their miss masks. */
+typedef struct centroid_job {
+    struct dual *d;
+    const uint32_t *tris;
+    uint8_t *miss;
+    size_t n;
+} centroid_job;
+
+/* Task k: for triangles tris[MEASURE_LANES k ..], 0 when the centroid is within E of f = 0
+ * and the normal along ∇f there (ism_dual_centroid_within, the centroids' gradients in one
+ * batch), else 7 (every leaf of the triangle to split). */
 static void centroid_task(void *ctx, size_t k, int thread)
 {
-    task_ctx *job = ctx;
-    ((uint8_t *)job->out)[k] =
-        (uint8_t)centroid_misses(job->d, &job->d->w[thread], ((const uint32_t *)job->in)[k]);
+    centroid_job *job = ctx;
+    dual *d = job->d;
+    worker *w = &d->w[thread];
+    size_t lo, n = chunk_of(k, job->n, &lo);
+    double c[MEASURE_LANES][3], f[MEASURE_LANES], g[MEASURE_LANES][3];
+    for (size_t j = 0; j < n; j++) {
+        const double *p[3];
+        tri_corners(d, job->tris[lo + j], p);
+        ism_dual_centroid(p, c[j]);
+    }
+    ism_sample_grad_batch(&w->s, (const double (*)[3])c, f, g, n);
+    for (size_t j = 0; j < n; j++) {
+        const double *p[3];
+        tri_corners(d, job->tris[lo + j], p);
+        job->miss[lo + j] =
+            ism_dual_centroid_within_at(&w->s, p, c[j], f[j], g[j], d->o->max_error) ? 0 : 7;
+    }
 }
 
 /* Triangle t's vertices, sorted, in one word (+1: never 0); 0 when the vertices are too
@@ -1769,7 +1859,7 @@ static int clip_of(const dual *d, size_t t)
 }
 
 /* The miss masks of triangles list[0..n) (list NULL: triangles 0..n) into miss[0..n)
- * (edge_misses, else centroid_misses; 0: within E). Triangles that met E in an earlier round
+ * (edge_misses, else centroid_task; 0: within E). Triangles that met E in an earlier round
  * (d->passed) read 0 unmeasured; the rest have their edges, then the centroids of those whose
  * edges pass, measured on the pool, and are remembered when they pass. */
 static void measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t *miss)
@@ -1803,8 +1893,8 @@ static void measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t *
         if (!emiss[k])
             cen[nc++] = open[k];
     }
-    task_ctx job = {d, cen, cmiss};
-    ism_pool_for(d->pool, nc, centroid_task, &job, NULL);
+    centroid_job job = {d, cen, cmiss, nc};
+    ism_pool_for(d->pool, (nc + MEASURE_LANES - 1) / MEASURE_LANES, centroid_task, &job, NULL);
     for (size_t k = 0, c = 0; k < np; k++) {
         int m = emiss[k] ? emiss[k] : cmiss[c++];
         miss[at[k]] = (uint8_t)m;
@@ -2258,12 +2348,12 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
     v.placed = FOOT_UNKNOWN;
     v.known_free = false;
     v.free_kids = 0;
-    int32_t last = (int32_t)1 << d->g.depth;
+    int32_t last = (int32_t)1 << d->g.depth, q[8][3];
     dnode *r0 = &d->n[root];
-    for (int c = 0; c < 8; c++) {
-        int32_t q[3] = {(c & 1) * last, (c >> 1 & 1) * last, (c >> 2 & 1) * last};
-        sample_corner(d, &d->w[0], q, &r0->f[c], v.p[c], v.n[c]);
-    }
+    for (int c = 0; c < 8; c++)
+        for (int a = 0; a < 3; a++)
+            q[c][a] = (c >> a & 1) * last;
+    sample_corners(d, &d->w[0], (const int32_t (*)[3])q, 8, r0->f, v.p, v.n);
     bool cut = false;
     r0->kind = (uint8_t)leaf_kind(d, &d->w[0], r0, &v, &cut);
     r0->free_kids = v.free_kids;
@@ -2495,6 +2585,7 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
         worker *w = &d.w[k];
         w->s.tape = f;
         w->s.ws = ism_eval_ws_new(f);
+        w->s.batch = !o->scalar_eval; /* the measure's gradients in batches */
         w->jet = ism_ivjet_ws_new(f);
         w->bits = DUAL_POINT_MIN_BITS;
         w->points = calloc((size_t)1 << w->bits, sizeof *w->points);

@@ -573,15 +573,29 @@ static long count_loops(const clip *c, size_t k, const uint32_t *next_of, uint8_
     return loops;
 }
 
+void ism_dual_centroid(const double *p[3], double c[3])
+{
+    for (int a = 0; a < 3; a++)
+        c[a] = (p[0][a] + p[1][a] + p[2][a]) / 3;
+}
+
 bool ism_dual_centroid_within(ism_sampler *s, const double *p[3], double e)
 {
-    double c[3], u[3], v[3], nrm[3], g[3];
+    double c[3], g[3];
+    ism_dual_centroid(p, c);
+    double f = ism_sample_grad(s, c, g);
+    return ism_dual_centroid_within_at(s, p, c, f, g, e);
+}
+
+bool ism_dual_centroid_within_at(ism_sampler *s, const double *p[3], const double c[3],
+                                 double f, const double g[3], double e)
+{
+    double u[3], v[3], nrm[3];
     for (int a = 0; a < 3; a++) {
-        c[a] = (p[0][a] + p[1][a] + p[2][a]) / 3;
         u[a] = p[1][a] - p[0][a];
         v[a] = p[2][a] - p[0][a];
     }
-    double f = ism_sample_grad(s, c, g), gl = ism_norm3(g);
+    double gl = ism_norm3(g);
     if (!isfinite(f) || !(gl > 0) ||
         !(ism_dual_kink_dist(s, c, ism_dual_plain_dist(s, c, f, g, e), e) <= e))
         return false;
