@@ -133,6 +133,34 @@ static inline __attribute__((always_inline)) void dual_step(const ism_instr *in,
         *o = a->v < b->v ? *a : *b;
         return;
     }
+    /* the one-operand steps of CSG and distance tapes, ism_unary_chain's g and g' written
+     * out (through dual_op they cost cube-minus-ball ~810 instructions a gradient) */
+    case ISM_OP_COPY:
+        dual_chain(o, a->v, 1.0, a);
+        return;
+    case ISM_OP_NEG:
+        dual_chain(o, -a->v, -1.0, a);
+        return;
+    case ISM_OP_SUB_CR:
+        dual_chain(o, in->imm - a->v, -1.0, a);
+        return;
+    case ISM_OP_DIV_RC:
+        dual_chain(o, a->v / in->imm, 1.0 / in->imm, a);
+        return;
+    case ISM_OP_MIN_RC:
+        dual_chain(o, ism_min(a->v, in->imm), a->v < in->imm ? 1.0 : 0.0, a);
+        return;
+    case ISM_OP_MAX_RC:
+        dual_chain(o, ism_max(a->v, in->imm), a->v > in->imm ? 1.0 : 0.0, a);
+        return;
+    case ISM_OP_ABS:
+        dual_chain(o, fabs(a->v), a->v < 0.0 ? -1.0 : a->v > 0.0 ? 1.0 : 0.0, a);
+        return;
+    case ISM_OP_SQRT: {
+        double g = ism_sqrt_clip(a->v);
+        dual_chain(o, g, a->v > 0.0 ? 0.5 / g : 0.0, a);
+        return;
+    }
     default:
         *o = dual_op(in, r, trig);
     }

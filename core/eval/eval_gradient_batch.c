@@ -134,8 +134,12 @@ INLINE void chain_partials(double *regs, const ism_instr *in, const double *g1v,
     }
 }
 
-INLINE void grad_step(const ism_instr *in, double *regs, ism_trig_cache *trig, size_t ng)
+INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig, size_t ng)
 {
+    /* the instruction in a local: the lanes' stores go through memcpy, which may alias the
+     * tape, so fields read through `code` were loaded again after every store (callgrind:
+     * a third of the torus's batched steps were address arithmetic) */
+    const ism_instr ins = *code, *in = &ins;
     const size_t n = ng * VL;
     double *ov = comp(regs, in->out, 0);
     const double *av = comp(regs, in->a, 0);
