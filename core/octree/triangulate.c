@@ -57,6 +57,16 @@ static void newell(const ism_fpoint *p, size_t n, double nrm[3])
     }
 }
 
+/* The mean of the polygon's points (each point's share divided first, the order the meshes
+ * were made with). */
+static void centroid(const ism_fpoint *p, size_t n, double c[3])
+{
+    c[0] = c[1] = c[2] = 0;
+    for (size_t i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++)
+            c[k] += p[i].p[k] / (double)n;
+}
+
 /* The node's corners' vote on the polygon's normal nrm through its centre c: the sum of
  * sign(f) × the corner's height over the polygon's plane, > 0 when the normal points from
  * the corners where f < 0 toward those where f > 0 (as ∇f does), < 0 when turned over, 0
@@ -89,7 +99,7 @@ static double corner_vote(ism_sampler *s, const double node[6], const double c[3
  * 12 / 14 / 33 of the horn's in the last three. */
 static bool reversed(ism_sampler *s, const double node[6], const ism_fpoint *p, size_t n)
 {
-    double nrm[3], g[3] = {0, 0, 0}, c[3] = {0, 0, 0};
+    double nrm[3], g[3] = {0, 0, 0};
     newell(p, n, nrm);
     bool facing = false, away = false;
     for (size_t i = 0; i < n; i++) {
@@ -100,10 +110,10 @@ static bool reversed(ism_sampler *s, const double node[6], const ism_fpoint *p, 
         double d = ism_dot3(u, nrm);
         facing = facing || d > 0;
         away = away || d < 0;
-        for (int k = 0; k < 3; k++)
-            c[k] += p[i].p[k] / (double)n;
     }
-    if (facing && away && s && node) {
+    if (facing && away && s && node) { /* rare: the centre only for the corners' vote */
+        double c[3];
+        centroid(p, n, c);
         double v = corner_vote(s, node, c, nrm);
         if (v != 0)
             return v < 0;
@@ -117,10 +127,8 @@ static bool reversed(ism_sampler *s, const double node[6], const ism_fpoint *p, 
 static bool centre_point(ism_sampler *s, const ism_fpoint *p, size_t n, double reach,
                          const double node[6], ism_fpoint *c)
 {
-    double m[3] = {0, 0, 0};
-    for (size_t i = 0; i < n; i++)
-        for (int k = 0; k < 3; k++)
-            m[k] += p[i].p[k] / (double)n;
+    double m[3];
+    centroid(p, n, m);
     double q[3] = {m[0], m[1], m[2]}, g[3], f = 0;
     bool landed = false;
     for (int it = 0; it < 5; it++) {
