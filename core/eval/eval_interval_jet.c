@@ -13,8 +13,9 @@
 #include <string.h>
 
 /* kept[i]: instruction i's value and first partials from the last
- * ism_eval_interval_grad_kept (kept_t over kept_box), when kept_ok: every instruction of
- * kept_t is one whose Hessian hess_only can take from them. */
+ * ism_eval_interval_grad_kept (kept_t over kept_box), when kept_ok: that pass met no kink
+ * and its record is unused (the jet that uses it asks whether every instruction of kept_t
+ * is one whose Hessian hess_only can take from them). */
 typedef ism_interval ism_kept_vd[4];
 
 struct ism_ivjet_ws {
@@ -595,11 +596,10 @@ static ALWAYS_INLINE void load_box(ism_ivjet *r, const ism_interval box[3], unsi
 }
 
 /* keep: NULL, or the gradient pass's (second = 0) record of every instruction's value and
- * first partials as written to its register (ism_eval_interval_grad_kept); with it *keep_ok
- * is cleared unless every instruction is hess_from_kept. */
+ * first partials as written to its register (ism_eval_interval_grad_kept). */
 static ALWAYS_INLINE size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
                                 const uint8_t *force, uint8_t *kinks, int second, ism_ivjet *out,
-                                ism_kept_vd *keep, bool *keep_ok)
+                                ism_kept_vd *keep)
 {
     const unsigned all = want_of(7u, second, false);
     if (!ws || !t || ws->nregs < t->nregs) {
@@ -627,7 +627,6 @@ static ALWAYS_INLINE size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_i
         if (kinks)
             kinks[i] = (uint8_t)kink;
         if (keep) {
-            *keep_ok = *keep_ok && hess_from_kept(in->op);
             const ism_ivjet *o = &r[in->out];
             keep[i][0] = o->v;
             _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
@@ -707,7 +706,7 @@ size_t ism_eval_interval_grad(const ism_tape *t, ism_ivjet_ws *ws, const ism_int
                               const uint8_t *force, uint8_t *kinks, ism_ivgrad *out)
 {
     ism_ivjet j;
-    size_t n = run(t, ws, box, force, kinks, 0, &j, NULL, NULL);
+    size_t n = run(t, ws, box, force, kinks, 0, &j, NULL);
     out->v = j.v;
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         out->d[k] = j.d[k];
@@ -722,15 +721,24 @@ size_t ism_eval_interval_grad_kept(const ism_tape *t, ism_ivjet_ws *ws,
         return ism_eval_interval_grad(t, ws, box, NULL, NULL, out);
     ws->kept_ok = false;
     ism_ivjet j;
-    bool ok = true;
-    size_t n = run(t, ws, box, NULL, NULL, 0, &j, ws->kept, &ok);
+    size_t n = run(t, ws, box, NULL, NULL, 0, &j, ws->kept);
     out->v = j.v;
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         out->d[k] = j.d[k];
     ws->kept_t = t;
     memcpy(ws->kept_box, box, sizeof ws->kept_box);
-    ws->kept_ok = n == 0 && ok;
+    ws->kept_ok = n == 0; /* the tape's operations are asked when a jet would use the record */
     return n;
+}
+
+/* Every instruction of t is one hess_only computes (a fact of the tape, not of the box:
+ * scanned only where a kept record would be used, not tested in run's loop). */
+static bool all_hess_from_kept(const ism_tape *t)
+{
+    for (size_t i = 0; i < t->len; i++)
+        if (!hess_from_kept(t->code[i].op))
+            return false;
+    return true;
 }
 
 size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
@@ -738,7 +746,8 @@ size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_inte
 {
     if (ws && ws->kept_ok && ws->kept_t == t && !force && same_box(box, ws->kept_box)) {
         ws->kept_ok = false; /* once: the record is of one gradient pass */
-        return hess_only(t, ws, box, kinks, out);
+        if (all_hess_from_kept(t))
+            return hess_only(t, ws, box, kinks, out);
     }
-    return run(t, ws, box, force, kinks, 1, out, NULL, NULL);
+    return run(t, ws, box, force, kinks, 1, out, NULL);
 }
