@@ -10,6 +10,7 @@
 #include "core/analysis/analysis.h"
 #include "proto/features.h"
 #include "core/singular/check.h"
+#include "tests/unit/placements.h"
 #include "tests/unit/proto/meshes_for_tests.h"
 
 /* Number of triangles that use the undirected edge a-b, and whether one runs it a -> b. */
@@ -172,6 +173,33 @@ static void analysed_crossing_planes(int n, ism_mesh *m, ism_analysis *a)
     cr_assert(ism_analyse(m, NULL, NULL, a, &err), "%s", err.message);
 }
 
+/* A locus of one double curve, the line through c along x from lo[0] to hi[0], and a node at
+ * c + (0.1 / 3, 0, 0). */
+static void x_axis_locus(const double lo[3], const double hi[3], const double c[3],
+                         ism_locus *l)
+{
+    ism_locus_init(l);
+    ism_sing_curve cv = {.kind = ISM_CURVE_DOUBLE, .n = 2, .end_type = {ISM_END_BOX, ISM_END_BOX},
+                         .end_point = {-1, -1}};
+    cv.xyz = malloc(6 * sizeof *cv.xyz);
+    double ends[6] = {lo[0], c[1], c[2], hi[0], c[1], c[2]};
+    memcpy(cv.xyz, ends, sizeof ends);
+    cr_assert(ism_locus_add_curve(l, &cv));
+    ism_sing_point p = {.p = {c[0] + 0.1 / 3, c[1], c[2]}, .type = ISM_SING_NODE,
+                        .certified = true, .cones = -1};
+    cr_assert(ism_locus_add_point(l, &p));
+}
+
+/* Frees what a locus test's JSON run made. */
+static void drop(json_t *doc, char *text, ism_features *f, ism_locus_check *chk, ism_locus *l)
+{
+    json_decref(doc);
+    free(text);
+    ism_features_free(f);
+    ism_locus_check_free(chk);
+    ism_locus_free(l);
+}
+
 Test(features, locus_and_check_in_the_json)
 {
     ism_mesh m;
@@ -184,17 +212,7 @@ Test(features, locus_and_check_in_the_json)
     double box[6] = {lo[0] - 1, lo[1] - 1, lo[2] - 1, hi[0] + 1, hi[1] + 1, hi[2] + 1};
     for (int wrong = 0; wrong < 2; wrong++) {
         ism_locus l;
-        ism_locus_init(&l);
-        ism_sing_curve c = {.kind = ISM_CURVE_DOUBLE, .n = 2, .end_type = {ISM_END_BOX, ISM_END_BOX},
-                            .end_point = {-1, -1}};
-        c.xyz = malloc(6 * sizeof *c.xyz);
-        double off = wrong ? 0.25 * (hi[1] - lo[1]) : 0.0;
-        double ends[6] = {lo[0], off, 0, hi[0], off, 0};
-        memcpy(c.xyz, ends, sizeof ends);
-        cr_assert(ism_locus_add_curve(&l, &c));
-        ism_sing_point p = {.p = {0.1 / 3, 0, 0}, .type = ISM_SING_NODE, .certified = true,
-                            .cones = -1};
-        cr_assert(ism_locus_add_point(&l, &p));
+        x_axis_locus(lo, hi, (double[3]){0, wrong ? 0.25 * (hi[1] - lo[1]) : 0.0, 0}, &l);
         ism_locus_check chk;
         cr_assert(ism_locus_check_mesh(&l, box, &m, &a, &chk, &err));
         cr_expect_eq(chk.nonmanifold_edges, a.nonmanifold_edges);
@@ -231,11 +249,7 @@ Test(features, locus_and_check_in_the_json)
         cr_expect_eq(counted, chk.nonmanifold_edges_off);
         json_t *first = json_array_get(json_object_get(chain, "off_edges"), 0);
         cr_expect(wrong ? json_integer_value(first) == 0 : first == NULL);
-        json_decref(doc);
-        free(text);
-        ism_features_free(&f);
-        ism_locus_check_free(&chk);
-        ism_locus_free(&l);
+        drop(doc, text, &f, &chk, &l);
     }
     ism_analysis_free(&a);
     ism_mesh_free(&m);
@@ -363,4 +377,88 @@ Test(features, curve_points_printed_within_their_certificate)
     }
     ism_analysis_free(&a);
     ism_mesh_free(&m);
+}
+
+/* features.h's drawing table on crossing planes y = 0, z = 0 over [-1, 1]^2 (n = 6), moved by
+ * nothing and by an irrational fraction of a cell (tests/unit/placements.h), with a drawing
+ * tolerance t = 0.01: the document states it, every printed position has d = 3 decimals (the
+ * fewest with (sqrt 3 / 2) 10^-d <= t / 2) and lies within that rounding of the closed form;
+ * the chain on the double line (on the locus) prints its two ends, the same chain off a
+ * locus line elsewhere every one of its 7 vertices (off_edges index them); each of the four
+ * boundary chains, a U round one half-plane from the line's end to its other end, its four
+ * corners; counts.boundary_edges and nonmanifold_edges are still the mesh's. */
+Test(features, mesh_polylines_drawn_within_the_tolerance)
+{
+    const double t = 0.01, rounding = ISM_FEATURES_ROUNDING(3);
+    cr_assert_eq(ism_features_decimals(0.5 * t), 3);
+    for (int moved = 0; moved < 2; moved++)
+        for (int wrong = 0; wrong < 2; wrong++) {
+            ism_mesh m;
+            ism_analysis a;
+            ism_error err;
+            test_mesh_crossing_planes(&m, 6);
+            double s[3] = {0, 0, 0};
+            if (moved) { /* a third of a cell, irrational, per axis (placements.h) */
+                s[0] = PF_IRR_X / 3, s[1] = PF_IRR_Y / 3, s[2] = PF_IRR_Z / 3;
+                for (size_t v = 0; v < m.nverts; v++)
+                    for (int k = 0; k < 3; k++)
+                        m.pos[3 * v + k] += s[k];
+            }
+            cr_assert(ism_analyse(&m, NULL, NULL, &a, &err), "%s", err.message);
+            double lo[3], hi[3];
+            cr_assert(ism_mesh_bounds(&m, lo, hi));
+            double box[6] = {lo[0] - 1, lo[1] - 1, lo[2] - 1, hi[0] + 1, hi[1] + 1, hi[2] + 1};
+            ism_locus l;
+            x_axis_locus(lo, hi, (double[3]){s[0], s[1] + (wrong ? 0.5 : 0), s[2]}, &l);
+            ism_locus_check chk;
+            cr_assert(ism_locus_check_mesh(&l, box, &m, &a, &chk, &err));
+            ism_features f;
+            cr_assert(ism_features_build(&a, &f));
+            f.locus = &l;
+            f.check = &chk;
+            f.draw_tol = t;
+            size_t n;
+            char *text = ism_features_json(&m, &f, &n);
+            json_error_t je;
+            json_t *doc = json_loadb(text, n, JSON_REJECT_DUPLICATES, &je);
+            cr_assert_not_null(doc, "%s", je.text);
+            cr_expect_eq(json_real_value(json_object_get(doc, "tolerance")), t);
+            json_t *counts = json_object_get(doc, "counts");
+            cr_expect_eq(json_integer_value(json_object_get(counts, "boundary_edges")),
+                         (json_int_t)a.boundary_edges);
+            cr_expect_eq(json_integer_value(json_object_get(counts, "nonmanifold_edges")),
+                         (json_int_t)a.nonmanifold_edges);
+            json_t *chains = json_object_get(doc, "nonmanifold_edges");
+            cr_assert_eq(json_array_size(chains), 1);
+            json_t *xyz = json_object_get(json_array_get(chains, 0), "xyz");
+            cr_expect_eq(json_array_size(xyz), wrong ? 3 * 7 : 3 * 2);
+            for (size_t i = 0; i < json_array_size(xyz); i += 3) { /* on the line y = z = 0 */
+                double x = json_number_value(json_array_get(xyz, i));
+                cr_expect_leq(fabs(json_number_value(json_array_get(xyz, i + 1)) - s[1]) +
+                                  fabs(json_number_value(json_array_get(xyz, i + 2)) - s[2]),
+                              1e-3);
+                cr_expect_eq(x, round(x * 1e3) / 1e3, "%.17g has more than 3 decimals", x);
+            }
+            json_t *bounds = json_object_get(doc, "boundaries");
+            cr_assert_eq(json_array_size(bounds), 4);
+            for (size_t b = 0; b < 4; b++) {
+                json_t *p = json_object_get(json_array_get(bounds, b), "xyz");
+                cr_expect_eq(json_array_size(p), 3 * 4, "boundary %zu: %zu numbers", b,
+                             json_array_size(p));
+                for (size_t i = 0; i < json_array_size(p); i += 3) {
+                    /* a corner of a half-plane: each coordinate -1, 0 or 1 moved by s */
+                    double off2 = 0;
+                    for (int k = 0; k < 3; k++) {
+                        double v = json_number_value(json_array_get(p, i + (size_t)k));
+                        cr_expect_eq(v, round(v * 1e3) / 1e3, "%.17g: over 3 decimals", v);
+                        double c = round(v - s[k]);
+                        off2 += (v - s[k] - c) * (v - s[k] - c);
+                    }
+                    cr_expect_leq(sqrt(off2), rounding, "boundary %zu point %zu", b, i / 3);
+                }
+            }
+            drop(doc, text, &f, &chk, &l);
+            ism_analysis_free(&a);
+            ism_mesh_free(&m);
+        }
 }
