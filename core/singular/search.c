@@ -670,17 +670,24 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
     ism_interval bx[8], by[8], bz[8], f[8];
     scell kids[8];
     uint32_t half = 1u << (s->depth - (int)p->level - 1);
+    /* the parent's low, middle and high lattice coordinates per axis: each child's bounds
+     * are two of them (cell_box's, bit for bit) */
+    ism_interval lower[3], upper[3];
+    for (int k = 0; k < 3; k++) {
+        double lo = coord(s, k, p->i[k]), mid = coord(s, k, p->i[k] + half),
+               hi = coord(s, k, p->i[k] + 2 * half);
+        lower[k] = iv(lo, mid);
+        upper[k] = iv(mid, hi);
+    }
     for (int m = 0; m < 8; m++) {
         kids[m].level = (uint8_t)(p->level + 1); /* .model: keep sets it */
         kids[m].lines = 0;                        /* .lines: set once tested (tested) */
         kids[m].edges = child_edges(p, (unsigned)m);
         for (int k = 0; k < 3; k++)
             kids[m].i[k] = p->i[k] + ((m >> k) & 1u ? half : 0u);
-        ism_interval x[3];
-        cell_box(s, &kids[m], x);
-        bx[m] = x[0];
-        by[m] = x[1];
-        bz[m] = x[2];
+        bx[m] = m & 1 ? upper[0] : lower[0];
+        by[m] = m & 2 ? upper[1] : lower[1];
+        bz[m] = m & 4 ? upper[2] : lower[2];
     }
     ism_eval_interval_batch(s->t, w->ws, bx, by, bz, f, 8);
     w->evals_interval += 8;
