@@ -640,70 +640,75 @@ static double dist_to_z_axis(const double p[3], const void *arg)
  * exactly, which the pass keeps (conform_kept.c). With one of those triangles taken away (an
  * edge of the chain left with three), or a vertex beside the chain moved a quarter cell off
  * its plane (the chain whole, a triangle near it no longer on f = 0), the mesh no longer
- * does: the pass must see it and cut and zip the curve as off the lattice. Every way: one
- * edge per finest cell on the axis, four triangles each, χ of two squares crossing in a
- * segment (1 + 1 − 1), one component, no artefact. */
+ * does: the pass must see it and cut and zip the curve as off the lattice. The whole mesh
+ * also in the shifted boxes, where the axis runs through cells: nothing kept, the curve cut
+ * and zipped. Every way: one edge per finest cell on the axis, four triangles each, χ of two
+ * squares crossing in a segment (1 + 1 − 1), one component, no artefact. */
 Test(conform, crossing_planes_kept_only_where_the_mesh_holds_the_chain)
 {
     const pf_surface s = {"x*y", NULL, 0, NULL, 0};
     ism_tape *t = pf_compile(&s);
-    const double box[6] = {-1, -1, -1, 1, 1, 1};
+    const double base[6] = {-1, -1, -1, 1, 1, 1};
     int dmax = 5 - pf_quick();
-    double cell = pf_cell(box, dmax);
+    double cell = pf_cell(base, dmax);
     size_t edges = (size_t)llround(2 / cell);
-    for (int broken = 0; broken < 3; broken++) {
-        ism_locus l;
-        ism_locus_init(&l);
-        ism_sing_curve c = {.kind = ISM_CURVE_DOUBLE, .closed = false, .n = edges + 1,
-                            .end_type = {ISM_END_BOX, ISM_END_BOX}, .end_point = {-1, -1}};
-        cr_assert(c.xyz = calloc(3 * c.n, sizeof *c.xyz));
-        for (size_t i = 0; i < c.n; i++)
-            c.xyz[3 * i + 2] = -1 + 2 * (double)i / (double)edges;
-        cr_assert(ism_locus_add_curve(&l, &c));
-        ism_mesh m;
-        ism_poly_stats ps;
-        pf_run(t, box, 3, dmax, 1, &m, &ps);
-        if (broken == 2) { /* a vertex of the plane x = 0 a cell from the axis moves */
-            size_t v = 0;
-            for (; v < m.nverts; v++) {
-                double *p = m.pos + 3 * v;
-                if (p[0] == 0 && fabs(fabs(p[1]) - cell) < 1e-12 && fabs(p[2]) < 0.25)
-                    break;
-            }
-            cr_assert_lt(v, m.nverts, "no vertex a cell from the axis");
-            m.pos[3 * v] = cell / 4;
-        }
-        if (broken == 1) { /* a triangle with an edge on the axis near z = 0 goes */
-            size_t i = 0;
-            for (; i < m.ntris; i++) {
-                int on = 0;
-                for (int k = 0; k < 3; k++) {
-                    const double *p = m.pos + 3 * (size_t)m.tri[3 * i + k];
-                    on += p[0] == 0 && p[1] == 0 && fabs(p[2]) < 0.25;
+    for (int broken = 0; broken < 3; broken++)
+        for (int w = 0; w < (broken ? 1 : 3); w++) { /* the mesh whole: in the three boxes */
+            double box[6];
+            shifted_box(base, shift_amount(w, base, dmax), box);
+            ism_locus l;
+            ism_locus_init(&l);
+            ism_sing_curve c = {.kind = ISM_CURVE_DOUBLE, .closed = false, .n = edges + 1,
+                                .end_type = {ISM_END_BOX, ISM_END_BOX}, .end_point = {-1, -1}};
+            cr_assert(c.xyz = calloc(3 * c.n, sizeof *c.xyz));
+            for (size_t i = 0; i < c.n; i++)
+                c.xyz[3 * i + 2] = box[2] + (box[5] - box[2]) * (double)i / (double)edges;
+            cr_assert(ism_locus_add_curve(&l, &c));
+            ism_mesh m;
+            ism_poly_stats ps;
+            pf_run(t, box, 3, dmax, 1, &m, &ps);
+            if (broken == 2) { /* a vertex of the plane x = 0 a cell from the axis moves */
+                size_t v = 0;
+                for (; v < m.nverts; v++) {
+                    double *p = m.pos + 3 * v;
+                    if (p[0] == 0 && fabs(fabs(p[1]) - cell) < 1e-12 && fabs(p[2]) < 0.25)
+                        break;
                 }
-                if (on == 2)
-                    break;
+                cr_assert_lt(v, m.nverts, "no vertex a cell from the axis");
+                m.pos[3 * v] = cell / 4;
             }
-            cr_assert_lt(i, m.ntris, "no triangle on the axis");
-            memcpy(m.tri + 3 * i, m.tri + 3 * (m.ntris - 1), 3 * sizeof *m.tri);
-            m.ntris--;
+            if (broken == 1) { /* a triangle with an edge on the axis near z = 0 goes */
+                size_t i = 0;
+                for (; i < m.ntris; i++) {
+                    int on = 0;
+                    for (int k = 0; k < 3; k++) {
+                        const double *p = m.pos + 3 * (size_t)m.tri[3 * i + k];
+                        on += p[0] == 0 && p[1] == 0 && fabs(p[2]) < 0.25;
+                    }
+                    if (on == 2)
+                        break;
+                }
+                cr_assert_lt(i, m.ntris, "no triangle on the axis");
+                memcpy(m.tri + 3 * i, m.tri + 3 * (m.ntris - 1), 3 * sizeof *m.tri);
+                m.ntris--;
+            }
+            run_result r;
+            conform_run(t, box, dmax, &l, dist_to_z_axis, NULL, &m, &r);
+            char what[64];
+            snprintf(what, sizeof what, "x y = 0, %s, shift %d",
+                     broken == 2 ? "a vertex moved" : broken ? "a triangle taken" : "whole", w);
+            bool lattice = broken == 0 && w == 0;
+            cr_expect_eq(r.st.curves_conformed, 1, "%s: %zu curves conformed", what,
+                         r.st.curves_conformed);
+            cr_expect_eq(r.st.curves_kept, lattice ? 1 : 0, "%s: %zu curves kept", what,
+                         r.st.curves_kept);
+            cr_expect_eq(r.st.triangles_removed > 0, !lattice, "%s: %zu triangles cut", what,
+                         r.st.triangles_removed);
+            expect_chains(&m, &r, dist_to_z_axis, edges, 1, what);
+            ism_analysis_free(&r.a);
+            ism_mesh_free(&m);
+            ism_locus_free(&l);
         }
-        run_result r;
-        conform_run(t, box, dmax, &l, dist_to_z_axis, NULL, &m, &r);
-        char what[64];
-        snprintf(what, sizeof what, "x y = 0, %s",
-                 broken == 2 ? "a vertex moved" : broken ? "a triangle taken" : "whole");
-        cr_expect_eq(r.st.curves_conformed, 1, "%s: %zu curves conformed", what,
-                     r.st.curves_conformed);
-        cr_expect_eq(r.st.curves_kept, broken ? 0 : 1, "%s: %zu curves kept", what,
-                     r.st.curves_kept);
-        cr_expect_eq(r.st.triangles_removed > 0, broken > 0, "%s: %zu triangles cut", what,
-                     r.st.triangles_removed);
-        expect_chains(&m, &r, dist_to_z_axis, edges, 1, what);
-        ism_analysis_free(&r.a);
-        ism_mesh_free(&m);
-        ism_locus_free(&l);
-    }
     ism_tape_free(t);
 }
 
