@@ -27,7 +27,8 @@
  * 1,437M instructions with the sampled turn, the same meshes. The boxes cost more than they
  * spare on every preset measured, so the bent bound is asked only while its first boxes pay
  * (RM_BREC_BEND_TRIAL). Only for the quality pass (the simplification keeps its own
- * measures, rm_memo.h). */
+ * measures, rm_memo.h), and only where f cannot crease (remesh.c: across a min/max crease
+ * the measure jumps by more than the point moved, and the ratio does not cover it). */
 #ifndef ISM_RM_BREC_H
 #define ISM_RM_BREC_H
 

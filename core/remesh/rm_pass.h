@@ -102,6 +102,9 @@ typedef struct rm_pass {
                                rm_mark_active last looked: flips, moves and collapses never
                                make a triangle worse than that, so while it is at least
                                sin(ISM_RM_COLLAPSE_DEG) there is no needle to mend */
+    size_t poor;            /* the triangles under ISM_RM_COLLAPSE_DEG then */
+    double relax_min_step;  /* a relaxation step shorter than this × the fan's mean edge is
+                               not tried (rm_relax_vertex; 0: every one) */
     double *sine;           /* per triangle, or NULL: the sine of its smallest angle as
                                rm_mark_active last measured it (NAN: its shape changed
                                since, rm_shape_changed) */
@@ -247,7 +250,7 @@ bool rm_midpoint_within(rm_pass *p, double d);
 bool rm_compact(rm_mesh *r, size_t nverts_before, size_t ntris_before, ism_remesh_renumber *ren);
 
 /* Marks the active vertices: those of triangles whose smallest angle is below
- * ISM_RM_COMFORT_DEG, and their neighbours; sets poorest. Returns how many there are. Each
+ * ISM_RM_COMFORT_DEG, and their neighbours; sets poorest and poor. Returns how many there are. Each
  * triangle's sine is measured again only when its shape changed since (sine). */
 size_t rm_mark_active(rm_pass *p);
 

@@ -316,6 +316,8 @@ bool rm_relax_vertex(rm_pass *p, uint32_t v)
     double dn = ism_dot3(d, n);
     for (int k = 0; k < 3; k++)
         d[k] -= dn * n[k];
+    if (ism_dot3(d, d) < p->relax_min_step * p->relax_min_step * f.mean_edge * f.mean_edge)
+        return false; /* near enough its fan's centroid (remesh.c's ISM_RM_MIN_STEP) */
     for (double step = 1; step >= 0.5; step *= 0.5) {
         double x[3] = {pos[0] + step * d[0], pos[1] + step * d[1], pos[2] + step * d[2]}, g[3];
         double tangent[3] = {x[0], x[1], x[2]};
@@ -343,7 +345,9 @@ size_t rm_mark_active(rm_pass *p)
     const rm_mesh *r = &p->r;
     double comfort = sin(ISM_RM_COMFORT_DEG * M_PI / 180);
     memset(p->active, 0, m->nverts);
+    double needle = sin(ISM_RM_COLLAPSE_DEG * M_PI / 180);
     p->poorest = 1;
+    p->poor = 0;
     for (size_t t = 0; t < m->ntris; t++) {
         const uint32_t *v = m->tri + 3 * t;
         if (r->dead[t])
@@ -351,6 +355,7 @@ size_t rm_mark_active(rm_pass *p)
         double s = rm_tri_sine(p, (uint32_t)t);
         if (s < p->poorest)
             p->poorest = s;
+        p->poor += s < needle;
         if (s < comfort)
             p->active[v[0]] = p->active[v[1]] = p->active[v[2]] = 1;
     }
