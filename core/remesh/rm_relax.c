@@ -200,6 +200,7 @@ bool rm_fan_accepts(const rm_pass *p, uint32_t v, const double x[3], const rm_fa
     const rm_mesh *r = &p->r;
     const double *P = r->m->pos;
     double worst = INFINITY, turn = cos(ISM_RM_MAX_TURN_DEG * M_PI / 180);
+    double comfort = sin(ISM_RM_COMFORT_DEG * M_PI / 180);
     double ln = sqrt(ism_dot3(f->normal, f->normal));
     for (uint32_t i = 0; i < r->count[v]; i++) {
         const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
@@ -210,9 +211,11 @@ bool rm_fan_accepts(const rm_pass *p, uint32_t v, const double x[3], const rm_fa
         if (!(ism_dot3(f->normal, n1) > turn * ln * l1))
             return false;
         double sine = rm_sine_of(l1, rm_dist(q[0], q[1]), rm_dist(q[1], q[2]), rm_dist(q[2], q[0]));
+        if (sine < f->min_sine && sine < comfort)
+            return false; /* the worst can only fall from here (most refused tries) */
         worst = sine < worst ? sine : worst;
     }
-    return worst >= f->min_sine || worst >= sin(ISM_RM_COMFORT_DEG * M_PI / 180);
+    return worst >= f->min_sine || worst >= comfort;
 }
 
 void rm_commit_move(rm_pass *p, uint32_t v, const double x[3], const double g[3])
