@@ -319,8 +319,10 @@ bool rm_relax_vertex(rm_pass *p, uint32_t v)
     double dn = ism_dot3(d, n);
     for (int k = 0; k < 3; k++)
         d[k] -= dn * n[k];
-    if (ism_dot3(d, d) < p->relax_min_step * p->relax_min_step * f.mean_edge * f.mean_edge)
-        return false; /* near enough its fan's centroid (remesh.c's ISM_RM_MIN_STEP) */
+    if (ism_dot3(d, d) < p->relax_min_step * p->relax_min_step * f.mean_edge * f.mean_edge &&
+        f.min_sine >= sin(ISM_RM_COLLAPSE_DEG * M_PI / 180))
+        return false; /* near enough its fan's centroid, no needle in its fan (remesh.c's
+                         ISM_RM_MIN_STEP) */
     for (double step = 1; step >= 0.5; step *= 0.5) {
         double x[3] = {pos[0] + step * d[0], pos[1] + step * d[1], pos[2] + step * d[2]}, g[3];
         double tangent[3] = {x[0], x[1], x[2]};
