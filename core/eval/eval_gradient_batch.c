@@ -13,6 +13,7 @@
 #include "core/eval/deriv_rules.h"
 #include "core/eval/trig_pair.h"
 #include "core/eval/workspace.h"
+#include <stdint.h>
 #include <string.h>
 
 #define GL ISM_GRAD_BATCH
@@ -201,6 +202,35 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
             st(ov + g * VL, in->op == ISM_OP_ADD_RC ? ld(av + g * VL) + c : ld(av + g * VL) * c);
         chain_partials(regs, in, NULL, in->op == ISM_OP_ADD_RC ? 1.0 : in->imm, ng);
         return;
+    }
+    case ISM_OP_COPY:
+    case ISM_OP_NEG:
+    case ISM_OP_SUB_CR:
+    case ISM_OP_DIV_RC: { /* g' one constant: ism_unary_chain's g and g' */
+        v4d c = {in->imm, in->imm, in->imm, in->imm};
+        for (size_t g = 0; g < ng; g++) {
+            v4d a = ld(av + g * VL);
+            st(ov + g * VL, in->op == ISM_OP_COPY  ? a
+                            : in->op == ISM_OP_NEG ? -a
+                            : in->op == ISM_OP_SUB_CR ? c - a
+                                                      : a / c);
+        }
+        chain_partials(regs, in, NULL,
+                       in->op == ISM_OP_COPY     ? 1.0
+                       : in->op == ISM_OP_DIV_RC ? 1.0 / in->imm
+                                                 : -1.0,
+                       ng);
+        return;
+    }
+    case ISM_OP_ABS: { /* |a|, g' = -1, +1 or 0 (a NaN: neither side, 0) */
+        v4d zero = {0.0, 0.0, 0.0, 0.0}, one = {1.0, 1.0, 1.0, 1.0};
+        v4i sign = {INT64_MIN, INT64_MIN, INT64_MIN, INT64_MIN};
+        for (size_t g = 0; g < ng; g++) {
+            v4d a = ld(av + g * VL);
+            st(ov + g * VL, (v4d)((v4i)a & ~sign));
+            st(g1 + g * VL, pick((v4i)(a < zero), -one, keep(one, (v4i)(a > zero))));
+        }
+        break;
     }
     case ISM_OP_SQUARE: {
         v4d two = {2.0, 2.0, 2.0, 2.0};
