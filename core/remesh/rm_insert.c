@@ -40,7 +40,9 @@
  * no angle under this (degrees): the collapses' poor level, so the pair's split makes no new
  * needle there (b at the chord's middle gives 30°; short edges 1 : 2 about 19°). */
 #define ISM_RM_INSERT_PAIR_DEG 20.0
-/* Sweeps of splits per call, the flips between them: a fan of k needles takes about log2 k
+/* Sweeps of splits per call, the flips between them, while the last sweep split a pair (a
+ * needle alone needs no next level: gyroid-ball's crease needles, pass 1,248.3M with every
+ * level swept, 1,240.7M so): a fan of k needles takes about log2 k
  * (coordinate-planes in the irrational box: fans of 12 to 40+ needles, 0.19 / 0.0078), but
  * the relaxation between the rounds' calls mends the rows' last needles with fewer vertices
  * (callgrind pass, default bound, coordinate-planes / crossing-planes irrational box, 1 to 6
@@ -354,12 +356,14 @@ static bool split_alone(rm_pass *p, uint32_t t, const uint32_t abc[3], bool last
     return *ok;
 }
 
-/* One sweep over the first nt triangles: each needle split with its partner, else alone. */
-static size_t insert_sweep(rm_pass *p, size_t nt, bool last, bool *ok)
+/* One sweep over the first nt triangles: each needle split with its partner, else alone;
+ * *pairs gets how many pairs were split. */
+static size_t insert_sweep(rm_pass *p, size_t nt, bool last, bool *ok, size_t *pairs)
 {
     rm_mesh *r = &p->r;
     double poor = rm_insert_poor();
     size_t made = 0;
+    *pairs = 0;
     for (size_t t = 0; t < nt && *ok; t++) {
         uint32_t abc[3];
         if (r->dead[t] || r->m->nverts >= r->cap_verts || r->m->ntris + 2 > r->cap_tris ||
@@ -372,6 +376,7 @@ static size_t insert_sweep(rm_pass *p, size_t nt, bool last, bool *ok)
             split = partner(p, (uint32_t)t, abc, near, quad, &first, &second) &&
                     split_pair(p, first, second, quad, last, ok);
         }
+        *pairs += split;
         if (split || (*ok && split_alone(p, (uint32_t)t, abc, last, ok)))
             made++;
     }
@@ -384,9 +389,9 @@ size_t rm_insert_active(rm_pass *p, bool last, bool *ok)
     *ok = true;
     memset(p->touched, 0, p->r.cap_verts);
     for (;;) {
-        size_t now = insert_sweep(p, nt, last, ok);
+        size_t pairs, now = insert_sweep(p, nt, last, ok, &pairs);
         made += now;
-        if (!now || !*ok || ++level == ISM_RM_INSERT_LEVELS)
+        if (!pairs || !*ok || ++level == ISM_RM_INSERT_LEVELS)
             break;
         /* the thin halves flipped away from this level's splits (their corners, touched),
            then the next level on every triangle there is now: the pairs' rows stand over
