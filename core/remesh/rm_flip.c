@@ -10,6 +10,7 @@
 #include "core/remesh/rm_bound.h"
 #include "core/remesh/rm_cbound.h"
 #include "core/remesh/rm_pass.h"
+#include "core/util/sort_u64.h"
 #include "core/util/vec3.h"
 
 #include <math.h>
@@ -77,15 +78,20 @@ static bool bend_ok(const double *n1, double l1, const double *n2, double l2)
     return l1 > 0 && l2 > 0 && ism_dot3(n1, n2) >= cos(ISM_RM_FLIP_MAX_BEND_DEG * M_PI / 180) * l1 * l2;
 }
 
+/* The dot product of the sides from C to A and to B: the cosine of the angle at C times
+ * their lengths (the same bits with A and B swapped: each product commutes). */
+static double corner_dot(const double *A, const double *B, const double *C)
+{
+    return ism_dot3((double[3]){A[0] - C[0], A[1] - C[1], A[2] - C[2]},
+                    (double[3]){B[0] - C[0], B[1] - C[1], B[2] - C[2]});
+}
+
 /* The angles at c and d of the quad sum above π: sin(γ + δ) < 0 written with the sides'
  * cross and dot products (no arc tangents; both angles lie in [0, π]). */
 static bool not_delaunay(const double *A, const double *B, const double *C, const double *D)
 {
     double n[3], sc = rm_cross(C, A, B, n), sd = rm_cross(D, B, A, n);
-    double cc = ism_dot3((double[3]){A[0] - C[0], A[1] - C[1], A[2] - C[2]},
-                     (double[3]){B[0] - C[0], B[1] - C[1], B[2] - C[2]});
-    double cd = ism_dot3((double[3]){A[0] - D[0], A[1] - D[1], A[2] - D[2]},
-                     (double[3]){B[0] - D[0], B[1] - D[1], B[2] - D[2]});
+    double cc = corner_dot(A, B, C), cd = corner_dot(A, B, D);
     /* sin(γ + δ) |CA||CB||DA||DB| = sc cd + cc sd */
     double sum = sc * cd + cc * sd;
     if (!(sum < 0))
@@ -231,19 +237,57 @@ size_t rm_flip_active(rm_pass *p, bool *ok)
     return rm_flip_from(p, p->active, ok);
 }
 
+/* The sorted keys (rm_edge_key) of the edges opposite a corner of a live triangle whose
+ * angle is not acute or right by corner_dot (obtuse, or NaN) into *keys (*n of them; NULL
+ * when out of memory). An edge whose angles opposite it, in both its triangles, are at most
+ * 90° fails not_delaunay: sc cd + cc sd is a sum of products of non-negative numbers. On the
+ * presets' meshes most are: the Delaunay test for an edge pushed first needs its quad found
+ * (rm_edge_triangles), the key a binary search. */
+static uint64_t *obtuse_edges(const rm_pass *p, size_t *n)
+{
+    const ism_mesh *m = p->r.m;
+    uint64_t *keys = malloc((m->ntris ? 3 * m->ntris : 1) * sizeof *keys);
+    *n = 0;
+    for (size_t t = 0; keys && t < m->ntris; t++) {
+        const uint32_t *v = m->tri + 3 * t;
+        for (int k = 0; !p->r.dead[t] && k < 3; k++)
+            if (!(corner_dot(P(p, v[k]), P(p, v[(k + 1) % 3]), P(p, v[(k + 2) % 3])) >= 0))
+                keys[(*n)++] = rm_edge_key(v[k], v[(k + 1) % 3]);
+    }
+    if (keys)
+        ism_sort_u64(keys, *n);
+    return keys;
+}
+
+static bool has_key(const uint64_t *keys, size_t n, uint64_t key)
+{
+    size_t lo = 0, hi = n;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (keys[mid] < key)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < n && keys[lo] == key;
+}
+
 size_t rm_flip_from(rm_pass *p, const uint8_t *seed, bool *ok)
 {
     const ism_mesh *m = p->r.m;
     edge_stack s = {0};
-    size_t flips = 0, limit = ISM_RM_FLIPS_PER_TRIANGLE * m->ntris;
+    size_t flips = 0, limit = ISM_RM_FLIPS_PER_TRIANGLE * m->ntris, nobtuse;
+    uint64_t *obtuse = obtuse_edges(p, &nobtuse); /* (out of memory: every edge pushed) */
     *ok = true;
     for (size_t t = 0; t < m->ntris && *ok; t++) {
         const uint32_t *v = m->tri + 3 * t;
         if (!p->r.dead[t] && (seed[v[0]] || seed[v[1]] || seed[v[2]]))
             for (int k = 0; k < 3 && *ok; k++)
-                if (v[k] < v[(k + 1) % 3])
+                if (v[k] < v[(k + 1) % 3] &&
+                    (!obtuse || has_key(obtuse, nobtuse, rm_edge_key(v[k], v[(k + 1) % 3]))))
                     *ok = push(&s, v[k], v[(k + 1) % 3]);
     }
+    free(obtuse);
     while (*ok && s.n && flips < limit) {
         uint32_t b = s.e[--s.n], a = s.e[--s.n];
         quad q;
