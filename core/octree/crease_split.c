@@ -433,7 +433,7 @@ static bool unseen_crease(ism_sampler *s, const ism_cell_out *out, const uint32_
 }
 
 bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
-                           double max_error)
+                           double max_error, const double (*centroid_g)[3])
 {
     if (first_tri == out->ntris || !top_undecided(s->tape) ||
         one_branch(s, out, first_tri, out->ntris))
@@ -449,10 +449,14 @@ bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first
             break;
         const double *a = out->verts[v[0]].p, *b = out->verts[v[1]].p, *c = out->verts[v[2]].p;
         double m[3], nrm[3], g[3];
-        for (int k = 0; k < 3; k++)
-            m[k] = (a[k] + b[k] + c[k]) / 3;
         ism_tri_cross3(a, b, c, nrm);
-        ism_sample_grad(s, m, g);
+        if (centroid_g) {
+            memcpy(g, centroid_g[t - first_tri], sizeof g);
+        } else {
+            for (int k = 0; k < 3; k++)
+                m[k] = (a[k] + b[k] + c[k]) / 3;
+            ism_sample_grad(s, m, g);
+        }
         double d = ism_dot3(nrm, g), l = ism_norm3(nrm) * ism_norm3(g);
         unresolved = l > 0 && d < CREASE_TURNED_COS * l;
     }

@@ -41,9 +41,11 @@ bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double
  * wide under E = 3e-3, a gyroid bump inside: an edge midpoint no zero could be shown within E
  * of, and a triangle facing the ball's way at a centroid where the gyroid's gradient holds);
  * or an edge between two crease points whose middle lies farther than max_error / 2 from the
- * crease. Only where the leaf keeps f's top min/max; false elsewhere. */
+ * crease. Only where the leaf keeps f's top min/max; false elsewhere. centroid_g: NULL, or
+ * ∇f at each triangle's centroid as ism_emitted_error_kept measured it (the same bits as
+ * sampling it here). */
 bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
-                           double max_error);
+                           double max_error, const double (*centroid_g)[3]);
 
 /* The sampler's wedge_edges_below (sampler.h): under an error bound (max_error > 0) the
  * diagonal of a cell of grid g one level above max_depth (crease_split.c CREASE_WEDGE_LEVELS),

@@ -34,6 +34,9 @@
  * cost 2 threads a quarter more evaluations on the gyroid. */
 #define CHUNKS_PER_THREAD 16
 #define MIN_CHUNK_LEAVES 64
+/* A leaf's centroid gradients kept on the stack up to this many triangles (a leaf makes a
+ * few to a few dozen; more are malloc'd). */
+#define CENTROIDS_ON_STACK 64
 /* The flatness tolerance (edge roots off their plane, their centroid off the surface) is
  * plane_frac × node size but never more than this fraction of the finest cell h. Without the
  * cap a large node that is flat enough relative to its own size stays coarse whatever
@@ -224,10 +227,20 @@ static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell
                   /* under max_error: cut along a CSG crease before measuring */
                   (!p->leaf_error || ism_crease_split(&cx->s, out, t0));
         double e = 0;
-        if (ok && p->leaf_error && p->straddle > 0)
+        /* the crease test below may take the measuring's centroid gradients (not the
+           straddle's: it measures moved vertices) */
+        bool crease_test = p->leaf_error && !p->last_round &&
+                           p->tree->nodes[p->leaves[i]].level < p->o->max_depth;
+        double(*cg)[3] = NULL, cg_stack[CENTROIDS_ON_STACK][3];
+        if (ok && p->leaf_error && p->straddle > 0) {
             ok = ism_straddle_emitted_error(&cx->s, p->straddle, p->o->box, out, v0, t0, &e);
-        else if (ok && p->leaf_error)
-            e = ism_emitted_error(&cx->s, out, t0, INFINITY);
+        } else if (ok && p->leaf_error) {
+            size_t n = out->ntris - t0;
+            cg = !crease_test            ? NULL
+                 : n <= CENTROIDS_ON_STACK ? cg_stack
+                                         : malloc(n * sizeof *cg); /* NULL: sampled again */
+            e = ism_emitted_error_kept(&cx->s, out, t0, INFINITY, cg);
+        }
         /* a crease the leaf's triangles do not follow (a triangle turned against ∇f, a
            bump of the other branch between corners, a chord of the crease E / 2 off it):
            split while the leaf may be; at depth.max or in the last round what was measured
@@ -235,10 +248,12 @@ static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell
            no zero was proved within E of, test_polygonise_accuracy.c; marked in the last
            round, 6 leaves of the gyroid ball at E = 1e-4 within E by the closed forms were
            counted missed with an infinite worst distance) */
-        if (ok && p->leaf_error && !p->last_round && e <= p->o->max_error &&
-            p->tree->nodes[p->leaves[i]].level < p->o->max_depth &&
-            ism_crease_unresolved(&cx->s, out, t0, p->o->max_error))
+        if (ok && crease_test && e <= p->o->max_error &&
+            ism_crease_unresolved(&cx->s, out, t0, p->o->max_error,
+                                  (const double(*)[3])cg))
             e = INFINITY;
+        if (cg != cg_stack)
+            free(cg);
         err = (float)e;
         if (ok && !p->leaf_error)
             measure_unflat(p, pc, p->leaves[i], out, t0);

@@ -5,6 +5,7 @@
 #include "core/util/grow.h"
 
 #include <math.h>
+#include <string.h>
 #include <stdbool.h>
 #include <stdlib.h>
 
@@ -78,6 +79,12 @@ static int tri_points(const ism_cell_out *out, size_t first_tri, size_t t, doubl
 double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
                          double bound)
 {
+    return ism_emitted_error_kept(s, out, first_tri, bound, NULL);
+}
+
+double ism_emitted_error_kept(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
+                              double bound, double (*centroid_g)[3])
+{
     double worst = 0;
     size_t t = first_tri;
     while (t < out->ntris && !(worst > bound)) {
@@ -93,6 +100,8 @@ double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_t
             ends[ntri++] = (size_t)np;
         }
         ism_sample_grad_batch(s, (const double (*)[3])p, f, g, (size_t)np);
+        for (size_t k = 0; centroid_g && k < ntri; k++) /* point 0 of each: its centroid */
+            memcpy(centroid_g[t + k - first_tri], g[k ? ends[k - 1] : 0], sizeof g[0]);
         for (size_t k = 0, i = 0; k < ntri && !(worst > bound); k++, t++)
             for (; i < ends[k]; i++)
                 worst = fmax(worst, ism_dist_beyond(s, p[i], ism_first_order_dist(f[i], g[i]),

@@ -44,6 +44,11 @@ static inline double ism_sample_dist_between(ism_sampler *s, const double p[3],
  * same; INFINITY measures them all. */
 double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
                          double bound);
+/* The same, and with bound INFINITY each triangle's centroid gradient (the measuring's own)
+ * into centroid_g[t - first_tri] (out->ntris - first_tri rows; NULL: none kept), for
+ * ism_crease_unresolved's turned test. */
+double ism_emitted_error_kept(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
+                              double bound, double (*centroid_g)[3]);
 
 /* A node's identity across rounds (its level and lattice origin). */
 uint64_t ism_node_key(const ism_node *nd);
