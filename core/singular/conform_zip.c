@@ -200,7 +200,8 @@ static bool zip_open_seq(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv,
  * becomes the parameter of the innermost ring's vertex), scaled from the rim points
  * (cf_pinch_rim_points). */
 static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot, const cf_polyline *pl,
-                           const cf_pinch *ends, const int *cid, double *u, double rho)
+                           const cf_pinch *ends, const int *cid, double *u, double rho,
+                           bool *moved)
 {
     const cf_pinch **ch = malloc(l->n * sizeof *ch);
     double *q = malloc(3 * l->n * sizeof *q);
@@ -261,7 +262,8 @@ static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot, cons
         rows[i] = outer[i]; /* innermost first */
         /* a ring vertex moved along the tangent (onto the fold, beside a pinch point) is
          * zipped by where it went */
-        if (ch[i] && rings > 0)
+        moved[i] = ch[i] && rings > 0;
+        if (moved[i])
             u[i] = cf_pinch_param(ch[i], &pl[cid[i]], c->m->pos + 3 * (size_t)outer[i]);
     }
 done:
@@ -514,7 +516,8 @@ static double shared_end(const cf_polyline *pl, const uint32_t *const *cv, int k
  * the 0.37-cell box: the corner's rim vertex lay 1.55 ρ from one axis and 2.003 ρ along the
  * other, and the triangle beside the triple point at the origin was missing (χ 8 for 9). */
 static bool zip_multi(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv,
-                      const cf_loop *l, const int *cid, const uint32_t *row, double rho)
+                      const cf_loop *l, const int *cid, const uint32_t *row, double rho,
+                      const double *uring, const bool *moved)
 {
     size_t n = l->n, start = 0;
     if (l->closed) /* begin at a change of curve */
@@ -537,6 +540,14 @@ static bool zip_multi(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *c
             rw[j] = row[i];
             feet = feet && isfinite(cf_polyline_nearest(&pl[k], c->m->pos + 3 * (size_t)v[j],
                                                         FOOT_SEARCH_RHO * rho, &u[j], foot));
+            /* a ring vertex moved along the tangent beside a pinch point (make_rows) is
+             * zipped by where it went, as in zip_loop: its rim's foot lay 0.38 cell
+             * farther from the pinch (Steiner, depth 9, irrational box: two ring vertices
+             * 8.6e-5 apart at 0.0011 from (−1/2, 0, 0) read 0.0026, past the curve
+             * vertex at 0.00258, and were fanned to the one at 0.0058 across their own
+             * slanted edge: one edge turned over) */
+            if (moved[i] && cid[i] == k)
+                u[j] = uring[i];
         }
         int prev = l->closed || done > 0 ? cid[(i0 + n - 1) % n] : -1;
         int next = cid[(i0 + len - 1) % n];
@@ -636,10 +647,12 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
             /* every loop's rings beside a pinch point are made in its chart (a loop along
              * several curves too, zipped by its rim's feet: each of Steiner's four loops
              * passes three pinch points), those below a rim edge across the fold on it */
-            uint32_t *row = make_rows(c, l, foot, pl, ends, cid, u, rho);
-            ok = row && (multi ? zip_multi(c, pl, cv, l, cid, row, rho)
+            bool *moved = calloc(l->n ? l->n : 1, sizeof *moved);
+            uint32_t *row = moved ? make_rows(c, l, foot, pl, ends, cid, u, rho, moved) : NULL;
+            ok = row && (multi ? zip_multi(c, pl, cv, l, cid, row, rho, u, moved)
                                : zip_loop(c, &pl[cid[0]], cv[cid[0]], l, u, row, rho));
             free(row);
+            free(moved);
         }
         free(own.v);
         free(u);

@@ -362,3 +362,15 @@ Test(tube_folds, pinch_points_default_bound)
         for (int which = pf_first_box() - 1; which <= 1; which++)
             run_case_at(&k[i], 8, which, true);
 }
+
+/* Steiner at depth 9 on the depth path in the irrational box: one edge 2 cells from the pinch
+ * point (−1/2, 0, 0) turned over until the zip of a loop along several curves read its ring
+ * vertices' parameters from where they went (conform_zip.c zip_multi), not from their rim's
+ * feet. ~4 s CPU; skipped under ISOMESH_TEST_QUICK. */
+Test(tube_folds, steiner_d9_irrational_box)
+{
+    if (pf_quick())
+        return;
+    const case_ k[3] = PINCH_CASES;
+    run_case(&k[1], 9, 1);
+}
