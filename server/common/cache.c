@@ -2,6 +2,7 @@
  * everywhere, and the entry-name rules every tier relies on (no tier ever sees a name that
  * could escape a directory). */
 #include "server/common/cache.h"
+#include "server/common/gzip_body.h"
 #include "proto/computed.h"
 #include "proto/request.h"
 
@@ -10,8 +11,7 @@
 
 /* What else an entry can be besides a mesh file (the formats are proto/format.c's). */
 static const char *const DOCUMENTS[] = {"stats.json", "features.json", "request.json",
-                                        ISM_COMPUTED_EXT,
-                                        "features.json.gz"}; /* gzip_body.h */
+                                        ISM_COMPUTED_EXT, ISM_GZIP_FEATURES_EXT};
 
 bool ism_cache_name_valid(const char *name)
 {

@@ -288,18 +288,22 @@ static enum MHD_Result answer_json(ismd_req *r)
      * entry of their own beside the plain one, made once (features_gzip): a client that
      * fetches it again costs this thread a lookup, not a compression. */
     bool features = r->want != ISMD_WANT_STATS;
-    ism_blob *gz = features && b->len >= ISM_GZIP_MIN_BODY &&
-                           ism_accepts_gzip(ismd_header(r, MHD_HTTP_HEADER_ACCEPT_ENCODING))
-                       ? features_gzip(r, b)
-                       : NULL;
+    /* The tag depends on whether gzip is wanted, not on its bytes: a revalidation that ends
+     * in 304 never fetches (or makes) them. */
+    bool want_gz = features && b->len >= ISM_GZIP_MIN_BODY &&
+                   ism_accepts_gzip(ismd_header(r, MHD_HTTP_HEADER_ACCEPT_ENCODING));
     char etag[80]; /* each encoding its own strong tag (RFC 9110 8.8.3) */
-    snprintf(etag, sizeof etag, "\"%s%s\"", r->key, gz ? GZIP_TAG : "");
+    snprintf(etag, sizeof etag, "\"%s%s\"", r->key, want_gz ? GZIP_TAG : "");
+    ism_blob *gz = NULL;
     struct MHD_Response *resp;
     int status = 200;
     if (features && tag_listed(ismd_header(r, MHD_HTTP_HEADER_IF_NONE_MATCH), etag)) {
         resp = MHD_create_response_from_buffer(0, "", MHD_RESPMEM_PERSISTENT);
         status = 304;
     } else {
+        gz = want_gz ? features_gzip(r, b) : NULL;
+        if (want_gz && !gz) /* out of memory: the plain body goes, under its own tag */
+            snprintf(etag, sizeof etag, "\"%s\"", r->key);
         resp = ismd_response_blob(gz ? gz : b, "application/json");
     }
     size_t sent = status == 304 ? 0 : gz ? gz->len : b->len;
