@@ -121,6 +121,15 @@ void ism_cache_put_remote(ism_cache *c, const char *name, ism_blob *b)
     put_where(c, name, b, true);
 }
 
+ism_blob *ism_cache_put_features_gzip(ism_cache *c, const char *key, const ism_blob *plain)
+{
+    ism_blob *gz = ism_gzip_blob(plain->data, plain->len);
+    char name[ISM_CACHE_NAME_MAX];
+    if (gz && ism_cache_name(name, key, ISM_GZIP_FEATURES_EXT))
+        ism_cache_put_local(c, name, gz);
+    return gz;
+}
+
 void ism_cache_close(ism_cache *c)
 {
     for (size_t i = c->ntiers; i-- > 0;)

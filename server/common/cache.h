@@ -66,6 +66,10 @@ void ism_cache_put(ism_cache *c, const char *name, ism_blob *b);
 void ism_cache_put_local(ism_cache *c, const char *name, ism_blob *b);
 /* Stores into the remote tiers only (the rest of a put_local). */
 void ism_cache_put_remote(ism_cache *c, const char *name, ism_blob *b);
+/* The gzip bytes of key's features document plain (gzip_body.h), stored as its
+ * ISM_GZIP_FEATURES_EXT entry in the local tiers only (a peer that fetches the plain entry
+ * makes its own): a new reference to them, or NULL when out of memory (nothing stored). */
+ism_blob *ism_cache_put_features_gzip(ism_cache *c, const char *key, const ism_blob *plain);
 /* Closes every tier, slowest last. */
 void ism_cache_close(ism_cache *c);
 

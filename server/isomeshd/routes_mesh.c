@@ -265,15 +265,13 @@ enum MHD_Result ismd_route_mesh_get(ismd_req *r)
 static ism_blob *features_gzip(ismd_req *r, const ism_blob *b)
 {
     char name[ISM_CACHE_NAME_MAX];
-    bool named = ism_cache_name(name, r->key, ISM_GZIP_FEATURES_EXT);
-    ism_blob *gz = named ? ism_cache_get(&r->srv->cache, name, NULL) : NULL;
+    ism_blob *gz = ism_cache_name(name, r->key, ISM_GZIP_FEATURES_EXT)
+                       ? ism_cache_get(&r->srv->cache, name, NULL)
+                       : NULL;
     if (gz)
         return gz;
-    gz = ism_gzip_blob(b->data, b->len);
     atomic_fetch_add(&r->srv->metrics.gzip_on_request, 1);
-    if (gz && named)
-        ism_cache_put_local(&r->srv->cache, name, gz);
-    return gz;
+    return ism_cache_put_features_gzip(&r->srv->cache, r->key, b);
 }
 
 static enum MHD_Result answer_json(ismd_req *r)

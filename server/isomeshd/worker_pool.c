@@ -359,14 +359,10 @@ static void cache_result(ismd_pool *p, worker *w, bool later, ism_blob *body, is
     cache_entry(p, w, later, f->key, "request.json", canonical);
     /* the features' gzip bytes, made here once rather than on the HTTP thread per request
      * (gzip_body.h); local tiers only: a peer that fetches the plain entry makes its own */
-    char name[ISM_CACHE_NAME_MAX];
-    if (features && features->len >= ISM_GZIP_MIN_BODY &&
-        ism_cache_name(name, f->key, ISM_GZIP_FEATURES_EXT)) {
-        ism_blob *gz = ism_gzip_blob(features->data, features->len);
-        if (gz) {
-            ism_cache_put_local(p->cache, name, gz);
+    if (features && features->len >= ISM_GZIP_MIN_BODY) {
+        ism_blob *gz = ism_cache_put_features_gzip(p->cache, f->key, features);
+        if (gz)
             atomic_fetch_add(&p->metrics->gzip_on_store, 1);
-        }
         ism_blob_unref(gz);
     }
 }
