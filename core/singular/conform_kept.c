@@ -27,6 +27,7 @@
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* Chain vertices and edge midpoints lie within this fraction of the box diagonal of the
  * curve's polyline: the accuracy the locus gives its traced points (locus.h, 1e-9 ×
@@ -278,23 +279,27 @@ static bool region_exact(cf_ctx *c, const cf_polyline *pl, size_t n, const uint3
     return ok;
 }
 
-/* Every end vertex has as many four-triangle edges as chains end there. */
+/* Every end vertex has as many four-triangle edges as chains end there: the ends sorted
+ * (a copy), each vertex's neighbours read once for its run of equal ends. */
 static bool ends_closed(const cf_ctx *c, const uint32_t *ends, size_t nends)
 {
+    uint32_t *e = malloc(nends * sizeof *e);
+    if (!e)
+        return false; /* out of memory: not kept */
+    memcpy(e, ends, nends * sizeof *e);
+    cf_sort_u32(e, nends);
     nb list[KEPT_MAX_NEIGH];
-    for (size_t i = 0; i < nends; i++) {
-        size_t at = 0;
-        for (size_t j = 0; j < nends; j++)
-            at += ends[j] == ends[i];
-        int n = neighbours(c, ends[i], list), four = 0;
-        if (n < 0)
-            return false;
+    bool ok = true;
+    for (size_t i = 0, at; ok && i < nends; i += at) {
+        for (at = 1; i + at < nends && e[i + at] == e[i]; at++)
+            ;
+        int n = neighbours(c, e[i], list), four = 0;
         for (int k = 0; k < n; k++)
             four += list[k].mult == 4;
-        if ((size_t)four != at)
-            return false;
+        ok = n >= 0 && (size_t)four == at;
     }
-    return true;
+    free(e);
+    return ok;
 }
 
 bool cf_curves_kept(cf_run *r, const cf_polyline *pl, const ism_sing_curve *const *cu, size_t n)
@@ -302,7 +307,7 @@ bool cf_curves_kept(cf_run *r, const cf_polyline *pl, const ism_sing_curve *cons
     cf_ctx *c = &r->c;
     double tol = KEPT_TOL_REL * ism_box_diagonal(r->o->box);
     for (size_t k = 0; k < n; k++)
-        if (pl[k].closed || pl[k].pinch[0] || pl[k].pinch[1] || cu[k]->closed)
+        if (cu[k]->closed || pl[k].pinch[0] || pl[k].pinch[1]) /* pl closed: cu too */
             return false;
     /* room for every vertex once and the ends again (chains share only their ends) */
     size_t cap = c->m->nverts + 2 * n + 1, nchain = 0;
