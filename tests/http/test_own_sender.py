@@ -482,7 +482,11 @@ class EvictedMidAnswer(unittest.TestCase):
             self.assertEqual(len(files), 1)
             s, got = self.slow_reader_begun(d, get)
             evicted = d.metric("isomesh_cache_evictions_total", tier="memory")
-            r = d.post("/v1/mesh", dict(BIG, params={"k": 10.5}))  # another ~4.4 MB mesh
+            # another mesh of the same size (k 4.05: STL 4.47 MB, its surface 4.9 MB; each
+            # under half the 12M tier, so both are kept and push the first mesh out). k 10.5
+            # made a 23 MB STL the tier never keeps: the eviction came only from its features
+            # JSON, ~1 MB before the features were thinned (e2d05b9), 41 KB after
+            r = d.post("/v1/mesh", dict(BIG, params={"k": 4.05}))
             self.assertEqual(r.status, 200)
             self.assertGreater(d.metric("isomesh_cache_evictions_total", tier="memory"), evicted)
             os.unlink(files[0])
