@@ -9,6 +9,7 @@
 
 #include <stddef.h>
 #include <stdbool.h>
+#include <stdint.h>
 #include "core/expr/expr.h"
 
 /* A closed interval [lo, hi]. lo may be -INFINITY and hi +INFINITY (the whole line). An
@@ -91,6 +92,32 @@ bool ism_eval_top_values(const ism_tape *t, ism_eval_ws *ws, double x, double y,
  * branch whose value f takes given their values val (min: the smaller, max: the larger; 0 on
  * a tie); -1 when t does not end so. */
 int ism_top_active_branch(const ism_tape *t, const double val[2]);
+
+/* A smooth piece of f: which branch each min, max and abs on f's active path takes. For the
+ * k-th such instruction of the tape (k < ISM_PIECE_KINKS, in tape order) bits 2k and 2k + 1
+ * hold 1 (min/max: its first operand; abs(a): +a), 2 (the second operand or the constant;
+ * abs: −a), or 0 when f's value does not read it through the branches taken above it (the
+ * cube's |y| on its face x = 1, every kink of the cube in cube-minus-ball's ball). Two points
+ * with equal pieces lie on one smooth function of the tape's (f with those branches forced);
+ * where neighbouring pieces' surfaces meet, f has a crease (the cube's edges inside
+ * max(cube, ball)'s top branch) or a corner where three meet. */
+typedef uint64_t ism_piece;
+#define ISM_PIECE_KINKS 32
+/* Not a piece: the tape has more than ISM_PIECE_KINKS kinks (or the workspace does not fit). */
+#define ISM_PIECE_NONE UINT64_MAX
+
+/* The number of min, max and abs instructions in t. */
+size_t ism_tape_kinks(const ism_tape *t);
+
+/* The piece of f at the point (the branches ism_eval_gradient takes there; a tie takes the
+ * branch it does). ISM_PIECE_NONE when t has more than ISM_PIECE_KINKS kinks. */
+ism_piece ism_eval_piece(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z);
+
+/* f on piece pc at the point: every kink pc names takes pc's branch, the others the one the
+ * point gives them; value and gradient (a smooth function past the piece's own region: the
+ * face x = 1's plane beyond the cube's edge). NAN when ws does not fit t. */
+double ism_eval_piece_gradient(const ism_tape *t, ism_eval_ws *ws, ism_piece pc, double x,
+                               double y, double z, double grad[3]);
 
 /* f, gradient and Hessian (hess = xx, xy, xz, yy, yz, zz). Returns f. */
 double ism_eval_hessian(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,

@@ -1,5 +1,5 @@
-/* crease_split.c — a leaf's triangles cut where f's top min/max changes branch (see
- * crease_split.h). */
+/* crease_split.c — a leaf's triangles cut where f's top min/max changes branch, or where f
+ * changes smooth piece (see crease_split.h). */
 #include "core/octree/crease_split.h"
 #include "core/octree/triangulate.h"
 #include "core/util/min_norm.h"
@@ -40,6 +40,12 @@
  * (1 cell in each shifted box at E = 1e-4, 1.15 E and 1.20 E); one level meets E in all
  * three boxes. Two levels would reach the 19-gon's edges on the depth-7 default bound. */
 #define CREASE_WEDGE_LEVELS 1
+/* The point where three pieces meet (Newton on the three from the centroid of the crease
+ * points between them) is kept within this many times the crease points' largest distance
+ * from that centroid: the three creases cross a polygon (or triangle) running round the
+ * meeting point, so it lies about that far in; farther, Newton found another meeting point
+ * (the cube's next corner) and the centroid on f = 0 stands in. */
+#define CORNER_REACH 2.0
 /* The branches' gradients count as parallel (no crease line through x, the 2 × 2 normal
  * system singular) when |ga|²|gb|² − (ga·gb)² is below this share of |ga|²|gb|²: a sine
  * of the crossing angle under 1e-6 rad, where a step would run along the crease. */
@@ -48,10 +54,27 @@
 /* Branch labels of a leaf's vertices kept on the stack up to this many vertices (a leaf
  * emits a few dozen); more take the heap. */
 #define LABELS_ON_STACK 256
-/* A vertex whose branch is not looked up yet. */
-#define LABEL_UNKNOWN 2
-/* A crease point: on both branches, so no corner of a triangle is alone on its branch for it. */
-#define LABEL_ANY 3
+
+/* A vertex's label: its branch of f's top min/max (0 or 1), or, where f has kinks below its
+ * top or passes its min/max on (pieces mode: cube-minus-ball's cube max(|x|, |y|, |z|) − 1
+ * inside its top max, the cube itself), its smooth piece (ism_eval_piece): the crease
+ * between two labels is where their functions (the top's branches, or f on each piece) are
+ * both 0. In either mode a pair of labels is taken in increasing order (lo, hi): the top's
+ * branches 0 and 1 as ism_eval_top_branches gives them. */
+typedef ism_piece label_t;
+/* A vertex whose label is not looked up yet (no piece: pieces mode asks ≤ ISM_PIECE_KINKS). */
+#define LABEL_UNKNOWN ISM_PIECE_NONE
+/* A crease point: on both branches, so no corner of a triangle is alone on its branch for it.
+ * (Two bits 11 name no branch: no piece is this.) */
+#define LABEL_ANY (ISM_PIECE_NONE - 1)
+
+/* Is f's crease read off its pieces (see label_t): f has a kink that is not its top min/max
+ * of two registers, and few enough for a piece to name? */
+static bool pieces_mode(const ism_tape *f)
+{
+    return ism_tape_has_kink(f) && !ism_tape_top_min_max_only(f) &&
+           ism_tape_kinks(f) <= ISM_PIECE_KINKS;
+}
 
 /* Does t still end in f's top min/max (not decided by the intervals it was shortened by)? */
 static bool top_undecided(const ism_tape *t)
@@ -95,16 +118,45 @@ static bool before(const double *a, const double *b)
     return false;
 }
 
-/* One minimum-norm Newton step on (a, b) = 0 from x; false when the branches' gradients
- * are parallel there or a value is not finite. */
-static bool newton_step(ism_sampler *s, double x[3])
+/* The label of point p (label_t): its piece in pieces mode (pm), else its top branch. */
+static label_t label_at(ism_sampler *s, bool pm, const double p[3])
 {
-    double v[2], g[2][3];
+    if (!pm)
+        return (label_t)ism_crease_branch(s, p, NULL);
+    s->n_point++;
+    return ism_eval_piece(s->tape, s->ws, p[0], p[1], p[2]);
+}
+
+/* The values and gradients at x of labels lo < hi's functions (v[0], g[0]: lo's): in pieces
+ * mode f on each piece, else the top's two branches (lo, hi = 0, 1). False when f has no top
+ * min/max (not in pieces mode). */
+static bool pair_at(ism_sampler *s, bool pm, const double x[3], label_t lo, label_t hi,
+                    double v[2], double g[2][3])
+{
     s->n_gradient++;
-    ism_eval_top_branches(top_tape(s, x), s->ws, x[0], x[1], x[2], v, g);
+    if (!pm)
+        return ism_eval_top_branches(top_tape(s, x), s->ws, x[0], x[1], x[2], v, g);
+    const label_t l[2] = {lo, hi};
+    for (int k = 0; k < 2; k++)
+        v[k] = ism_eval_piece_gradient(s->tape, s->ws, l[k], x[0], x[1], x[2], g[k]);
+    return true;
+}
+
+/* One minimum-norm Newton step on m = 2 or 3 equations (labels l[0..m), each 0 on its
+ * function) from x; false when their gradients are dependent there or a value is not finite. */
+static bool newton_step(ism_sampler *s, bool pm, double x[3], int m, const label_t *l)
+{
+    double v[3], g[3][3];
+    pair_at(s, pm, x, l[0], l[1], v, g);
+    if (m == 3) {
+        s->n_gradient++;
+        v[2] = ism_eval_piece_gradient(s->tape, s->ws, l[2], x[0], x[1], x[2], g[2]);
+    }
     double step[3];
-    if (!isfinite(v[0]) || !isfinite(v[1]) ||
-        !ism_min_norm_step(2, (const double (*)[3])g, v, CREASE_PARALLEL_SIN2, step))
+    for (int k = 0; k < m; k++)
+        if (!isfinite(v[k]))
+            return false;
+    if (!ism_min_norm_step(m, (const double (*)[3])g, v, CREASE_PARALLEL_SIN2, step))
         return false;
     for (int k = 0; k < 3; k++)
         x[k] += step[k];
@@ -114,12 +166,12 @@ static bool newton_step(ism_sampler *s, double x[3])
 /* CREASE_NEWTON_STEPS steps from x (false when one fails), ending early where x comes back
  * to where it was two steps before — a fixed point, or a 2-cycle of rounding: the steps left
  * would only repeat those two, so the last one's result is known. */
-bool ism_crease_newton(ism_sampler *s, double x[3])
+static bool newton(ism_sampler *s, bool pm, double x[3], int m, const label_t *l)
 {
     double back[2][3]; /* back[it % 2]: x before step it */
     for (int it = 0; it < CREASE_NEWTON_STEPS; it++) {
         memcpy(back[it % 2], x, sizeof back[0]);
-        if (!newton_step(s, x))
+        if (!newton_step(s, pm, x, m, l))
             return false;
         if (it >= 1 && memcmp(x, back[(it + 1) % 2], sizeof back[0]) == 0) {
             if ((CREASE_NEWTON_STEPS - it - 1) % 2)
@@ -130,10 +182,17 @@ bool ism_crease_newton(ism_sampler *s, double x[3])
     return true;
 }
 
-/* Is crease point x (a = b = 0) near enough lin, the linear estimate on an edge of length
+bool ism_crease_newton(ism_sampler *s, double x[3])
+{
+    static const label_t top[2] = {0, 1};
+    return newton(s, false, x, 2, top);
+}
+
+/* Is crease point x (lo = hi = 0) near enough lin, the linear estimate on an edge of length
  * len: within CREASE_REACH_EDGES, or on a short edge within CREASE_REACH_SLACK planar bounds
  * (the wedge is looked up only then)? */
-static bool within_reach(ism_sampler *s, const double x[3], const double lin[3], double len)
+static bool within_reach(ism_sampler *s, bool pm, const double x[3], const double lin[3],
+                         double len, label_t lo, label_t hi)
 {
     double d = ism_dist3(x, lin);
     if (d <= CREASE_REACH_EDGES * len)
@@ -141,8 +200,7 @@ static bool within_reach(ism_sampler *s, const double x[3], const double lin[3],
     if (!(len <= s->wedge_edges_below))
         return false;
     double v[2], g[2][3];
-    s->n_gradient++;
-    if (!ism_eval_top_branches(top_tape(s, x), s->ws, x[0], x[1], x[2], v, g))
+    if (!pair_at(s, pm, x, lo, hi, v, g))
         return false;
     double aa = ism_dot3(g[0], g[0]), bb = ism_dot3(g[1], g[1]), ab = ism_dot3(g[0], g[1]);
     /* sin w = sin of the gradients' angle; w ≥ 90° (ab ≥ 0): sin taken as 1 */
@@ -150,83 +208,201 @@ static bool within_reach(ism_sampler *s, const double x[3], const double lin[3],
     return sin2 > 0 && d * d * sin2 <= CREASE_REACH_SLACK * CREASE_REACH_SLACK * len * len;
 }
 
-/* The crease point of edge p-q (branches differ at its ends): Newton on a = b = 0 from
- * where a - b changes sign along the edge (flagged ISM_FP_CREASE; true), or that linear
- * estimate moved onto f = 0 (false). */
-static bool crease_point(ism_sampler *s, const double *p0, const double *q0, ism_fpoint *out)
+/* lo − hi's value at p: the top's a − b (its values alone), or f on piece lo minus f on hi. */
+static double label_gap(ism_sampler *s, bool pm, const double p[3], label_t lo, label_t hi)
+{
+    double v[2], g[2][3];
+    if (pm) {
+        pair_at(s, pm, p, lo, hi, v, g);
+    } else {
+        s->n_point++;
+        ism_eval_top_values(top_tape(s, p), s->ws, p[0], p[1], p[2], v);
+    }
+    return v[0] - v[1];
+}
+
+/* x moved onto f = 0 along ∇f (up to CREASE_NEWTON_STEPS steps, fewer where ∇f vanishes or
+ * f is not finite). */
+static void onto_surface(ism_sampler *s, double x[3])
+{
+    for (int it = 0; it < CREASE_NEWTON_STEPS; it++) {
+        double gf[3];
+        double f = ism_sample_grad(s, x, gf), gg = ism_dot3(gf, gf);
+        if (!(gg > 0) || !isfinite(f))
+            break;
+        for (int k = 0; k < 3; k++)
+            x[k] -= f * gf[k] / gg;
+    }
+}
+
+/* Pieces whose gradients at their crease point face one way within this sine (0.57°) meet
+ * almost flat there: Steinmetz's cylinders x² + y² and x² + z² touch at (1, 0, 0), their
+ * crease y = ±z crossing there at a vanishing angle. Cut at such a point, the triangles beside
+ * it were slivers facing any way (normals from rounding: leaves split for "turned" triangles
+ * at every level, the mesh at depth.max 10 no longer the one at 8); folded across it, a
+ * triangle h wide lies about h × 0.01 / 4 off, which the measurement judges as anywhere. */
+#define CREASE_FLAT_SIN 0.01
+
+/* Do labels l[0], l[1] (pieces mode) meet almost flat at x (CREASE_FLAT_SIN)? */
+static bool flat_crease(ism_sampler *s, const double x[3], const label_t l[2])
+{
+    double v[2], g[2][3];
+    pair_at(s, true, x, l[0], l[1], v, g);
+    double aa = ism_dot3(g[0], g[0]), bb = ism_dot3(g[1], g[1]), ab = ism_dot3(g[0], g[1]);
+    return ab > 0 && aa * bb - ab * ab < CREASE_FLAT_SIN * CREASE_FLAT_SIN * aa * bb;
+}
+
+/* The crease point of edge p-q, whose ends carry labels lp != lq: Newton on lo = hi = 0 from
+ * where lo − hi changes sign along the edge (flagged ISM_FP_CREASE; true), or that linear
+ * estimate moved onto f = 0 (false). *flat (may be NULL): in pieces mode, the point found
+ * where the pieces meet almost flat (flat_crease; the edge is then better left whole). */
+static bool crease_point(ism_sampler *s, bool pm, const double *p0, const double *q0,
+                         label_t lp, label_t lq, ism_fpoint *out, bool *flat)
 {
     const double *p = before(q0, p0) ? q0 : p0, *q = p == p0 ? q0 : p0;
-    double v[2], d[2];
+    label_t l[2] = {lp < lq ? lp : lq, lp < lq ? lq : lp};
+    double d[2];
     const double *ends[2] = {p, q};
-    for (int e = 0; e < 2; e++) {
-        s->n_point++;
-        ism_eval_top_values(top_tape(s, ends[e]), s->ws, ends[e][0], ends[e][1], ends[e][2], v);
-        d[e] = v[0] - v[1];
-    }
+    for (int e = 0; e < 2; e++)
+        d[e] = label_gap(s, pm, ends[e], l[0], l[1]);
     double t = d[0] / (d[0] - d[1]);
     if (!(t >= 0 && t <= 1))
         t = 0.5;
     double lin[3], x[3];
     for (int k = 0; k < 3; k++)
         lin[k] = x[k] = p[k] + t * (q[k] - p[k]);
-    bool ok = ism_crease_newton(s, x);
-    ok = ok && within_reach(s, x, lin, ism_dist3(p, q));
+    bool ok = newton(s, pm, x, 2, l);
+    ok = ok && within_reach(s, pm, x, lin, ism_dist3(p, q), l[0], l[1]);
     if (!ok) {
         memcpy(x, lin, sizeof x); /* onto f = 0 along ∇f at least */
-        for (int it = 0; it < CREASE_NEWTON_STEPS; it++) {
-            double gf[3];
-            double f = ism_sample_grad(s, x, gf), gg = ism_dot3(gf, gf);
-            if (!(gg > 0) || !isfinite(f))
-                break;
-            for (int k = 0; k < 3; k++)
-                x[k] -= f * gf[k] / gg;
-        }
+        onto_surface(s, x);
         if (!(ism_dist3(x, lin) <= CREASE_REACH_EDGES * ism_dist3(p, q)))
             memcpy(x, ism_dist3(lin, p) <= ism_dist3(lin, q) ? p : q, sizeof x);
     }
     memcpy(out->p, x, sizeof out->p);
     ism_sample_grad(s, x, out->g);
     out->flags = ok ? ISM_FP_INTERIOR | ISM_FP_CREASE : ISM_FP_INTERIOR;
+    if (flat)
+        *flat = pm && ok && flat_crease(s, x, l);
     return ok;
 }
 
-/* The branch of vertex v (labels[v - first], looked up once); LABEL_ANY for a crease point
+/* Where the creases between crease points x[0..k) meet (k = 3 or 4), the pieces of l[0..m)
+ * all 0 there (m = 3: three pieces meet, the cube's corner, three faces' planes; m = 2: one
+ * crease crossing itself, Steinmetz's y = ±z on its cylinders x² + y² and x² + z² at
+ * (1, 0, 0)): Newton on the m from the crease points' centroid, kept when it lands within
+ * CORNER_REACH times their spread (largest distance from the centroid; true, flagged
+ * ISM_FP_CREASE); else the centroid moved onto f = 0 (false). */
+static bool corner_point(ism_sampler *s, const ism_fpoint *x, int k, const label_t *l, int m,
+                         ism_fpoint *out)
+{
+    double c[3] = {0, 0, 0}, p[3], spread = 0;
+    for (int j = 0; j < k; j++)
+        for (int a = 0; a < 3; a++)
+            c[a] += x[j].p[a] / k;
+    for (int j = 0; j < k; j++)
+        spread = fmax(spread, ism_dist3(x[j].p, c));
+    label_t o[3] = {l[0], l[1], m == 3 ? l[2] : 0}; /* increasing: the same bits in every leaf */
+    for (int i = 0; i < m - 1; i++)
+        for (int j = 0; j < m - 1 - i; j++)
+            if (o[j] > o[j + 1]) {
+                label_t t = o[j];
+                o[j] = o[j + 1], o[j + 1] = t;
+            }
+    memcpy(p, c, sizeof p);
+    bool ok = newton(s, true, p, m, o) && ism_dist3(p, c) <= CORNER_REACH * spread;
+    if (!ok) {
+        memcpy(p, c, sizeof p);
+        onto_surface(s, p);
+    }
+    memcpy(out->p, p, sizeof out->p);
+    ism_sample_grad(s, p, out->g);
+    out->flags = ok ? ISM_FP_INTERIOR | ISM_FP_CREASE : ISM_FP_INTERIOR;
+    return ok;
+}
+
+/* The label of vertex v (labels[v - first], looked up once); LABEL_ANY for a crease point
  * a polygon was cut at (ism_crease_cut_loop), which lies on both. */
-static int vertex_branch(ism_sampler *s, const ism_cell_out *out, uint8_t *labels,
-                         uint32_t first, uint32_t v)
+static label_t vertex_label(ism_sampler *s, bool pm, const ism_cell_out *out, label_t *labels,
+                            uint32_t first, uint32_t v)
 {
     if (out->verts[v].flags & ISM_FP_CREASE)
         return LABEL_ANY;
-    uint8_t *l = &labels[v - first];
+    label_t *l = &labels[v - first];
     if (*l == LABEL_UNKNOWN)
-        *l = (uint8_t)ism_crease_branch(s, out->verts[v].p, NULL);
+        *l = label_at(s, pm, out->verts[v].p);
     return *l;
+}
+
+/* Triangle t (corners a, b, c on three pieces) cut at its edges' crease points and the
+ * point where the three pieces meet, into six: each corner's quadrilateral (corner, crease
+ * point, meeting point, crease point) on its piece alone. */
+static bool split_three(ism_sampler *s, ism_cell_out *out, size_t t, const label_t br[3])
+{
+    uint32_t c[3], x[3], m;
+    ism_fpoint e[3], mid;
+    memcpy(c, out->tris + 3 * t, sizeof c);
+    for (int k = 0; k < 3; k++) /* e[k]: on edge c[k]-c[k+1] */
+        crease_point(s, true, out->verts[c[k]].p, out->verts[c[(k + 1) % 3]].p, br[k],
+                     br[(k + 1) % 3], &e[k], NULL);
+    corner_point(s, e, 3, br, 3, &mid);
+    for (int k = 0; k < 3; k++)
+        if (!ism_cell_out_vert(out, &e[k], &x[k]))
+            return false;
+    if (!ism_cell_out_vert(out, &mid, &m))
+        return false;
+    uint32_t *tri = out->tris + 3 * t;
+    tri[0] = c[0], tri[1] = x[0], tri[2] = m;
+    return ism_cell_out_tri(out, c[0], m, x[2]) && ism_cell_out_tri(out, c[1], x[1], m) &&
+           ism_cell_out_tri(out, c[1], m, x[0]) && ism_cell_out_tri(out, c[2], x[2], m) &&
+           ism_cell_out_tri(out, c[2], m, x[1]);
 }
 
 /* Splits triangles first_tri..ntris - 1, whose vertices lie in first..first + n - 1 (labels:
  * n entries of LABEL_UNKNOWN). */
-static bool split_labelled(ism_sampler *s, ism_cell_out *out, size_t first_tri, size_t ntris,
-                           uint8_t *labels, uint32_t first)
+static bool split_labelled(ism_sampler *s, bool pm, ism_cell_out *out, size_t first_tri,
+                           size_t ntris, label_t *labels, uint32_t first)
 {
     for (size_t t = first_tri; t < ntris; t++) {
-        int br[3];
+        label_t br[3];
         for (int k = 0; k < 3; k++)
-            br[k] = vertex_branch(s, out, labels, first, out->tris[3 * t + k]);
+            br[k] = vertex_label(s, pm, out, labels, first, out->tris[3 * t + k]);
         if (br[0] == LABEL_ANY || br[1] == LABEL_ANY || br[2] == LABEL_ANY)
             continue; /* a cut polygon's triangle: its other corners share one branch */
         if (br[0] == br[1] && br[1] == br[2])
             continue;
+        if (br[0] != br[1] && br[1] != br[2] && br[0] != br[2]) { /* pieces mode only */
+            if (!split_three(s, out, t, br))
+                return false;
+            continue;
+        }
         /* r: the corner alone on its branch; the others follow it in winding order */
         int r = br[0] == br[1] ? 2 : br[0] == br[2] ? 1 : 0;
         uint32_t a = out->tris[3 * t + r], b = out->tris[3 * t + (r + 1) % 3],
                  c = out->tris[3 * t + (r + 2) % 3];
+        label_t la = br[r], lo = br[(r + 1) % 3];
         ism_fpoint ab, ac;
-        crease_point(s, out->verts[a].p, out->verts[b].p, &ab);
-        crease_point(s, out->verts[a].p, out->verts[c].p, &ac);
-        uint32_t iab, iac;
-        if (!ism_cell_out_vert(out, &ab, &iab) || !ism_cell_out_vert(out, &ac, &iac))
+        bool fab, fac; /* an edge whose crease is almost flat stays whole (pieces mode) */
+        crease_point(s, pm, out->verts[a].p, out->verts[b].p, la, lo, &ab, &fab);
+        crease_point(s, pm, out->verts[a].p, out->verts[c].p, la, lo, &ac, &fac);
+        uint32_t iab, iac, *tri = out->tris + 3 * t;
+        if ((!fab && !ism_cell_out_vert(out, &ab, &iab)) ||
+            (!fac && !ism_cell_out_vert(out, &ac, &iac)))
             return false;
-        uint32_t *tri = out->tris + 3 * t;
+        if (fab && fac)
+            continue;
+        if (fab) { /* a-c alone cut: (a, b, ac), (ac, b, c) */
+            tri[0] = a, tri[1] = b, tri[2] = iac;
+            if (!ism_cell_out_tri(out, iac, b, c))
+                return false;
+            continue;
+        }
+        if (fac) { /* a-b alone cut: (a, ab, c), (ab, b, c) */
+            tri[0] = a, tri[1] = iab, tri[2] = c;
+            if (!ism_cell_out_tri(out, iab, b, c))
+                return false;
+            continue;
+        }
         tri[0] = a, tri[1] = iab, tri[2] = iac;
         if (!ism_cell_out_tri(out, iab, b, c) || !ism_cell_out_tri(out, iab, c, iac))
             return false;
@@ -234,20 +410,22 @@ static bool split_labelled(ism_sampler *s, ism_cell_out *out, size_t first_tri, 
     return true;
 }
 
-/* The leaf's shortened tape when it decides f's top min/max (strictly) over its closed box,
- * so the points it holds (ism_sampler_tape_at) lie on the one branch it keeps; else NULL.
- * Looked up once per leaf: a lookup per point cost 0.3% more instructions on
- * cube-minus-ball (callgrind). */
-static const ism_tape *deciding_local(const ism_sampler *s)
+/* The leaf's shortened tape when it holds f to one label over its closed box — it decides
+ * f's top min/max (strictly), or in pieces mode keeps no kink — so the points it holds
+ * (ism_sampler_tape_at) lie on the one branch it keeps; else NULL. Looked up once per leaf:
+ * a lookup per point cost 0.3% more instructions on cube-minus-ball (callgrind). */
+static const ism_tape *deciding_local(const ism_sampler *s, bool pm)
 {
-    return s->local && !top_undecided(s->local) ? s->local : NULL;
+    if (!s->local)
+        return NULL;
+    return (pm ? !ism_tape_has_kink(s->local) : !top_undecided(s->local)) ? s->local : NULL;
 }
 
 /* Do all vertices of triangles first_tri..ntris - 1 lie on one branch (deciding_local)? */
-static bool one_branch(const ism_sampler *s, const ism_cell_out *out, size_t first_tri,
-                       size_t ntris)
+static bool one_branch(const ism_sampler *s, bool pm, const ism_cell_out *out,
+                       size_t first_tri, size_t ntris)
 {
-    const ism_tape *local = deciding_local(s);
+    const ism_tape *local = deciding_local(s, pm);
     if (!local)
         return false;
     for (size_t i = 3 * first_tri; i < 3 * ntris; i++)
@@ -256,11 +434,11 @@ static bool one_branch(const ism_sampler *s, const ism_cell_out *out, size_t fir
     return true;
 }
 
-/* Branch labels for the vertices of triangles first_tri..ntris - 1, all LABEL_UNKNOWN: stack
- * when they fit, else malloc'd (the caller frees what is not stack; NULL: out of memory);
- * *lo: the lowest of those vertices, labels[v - *lo] vertex v's. */
-static uint8_t *leaf_labels(const ism_cell_out *out, size_t first_tri,
-                            uint8_t stack[LABELS_ON_STACK], uint32_t *lo)
+/* Labels for the vertices of triangles first_tri..ntris - 1, all LABEL_UNKNOWN: stack when
+ * they fit, else malloc'd (the caller frees what is not stack; NULL: out of memory); *lo: the
+ * lowest of those vertices, labels[v - *lo] vertex v's. */
+static label_t *leaf_labels(const ism_cell_out *out, size_t first_tri,
+                            label_t stack[LABELS_ON_STACK], uint32_t *lo)
 {
     uint32_t hi = 0;
     *lo = UINT32_MAX;
@@ -269,29 +447,33 @@ static uint8_t *leaf_labels(const ism_cell_out *out, size_t first_tri,
         hi = out->tris[i] > hi ? out->tris[i] : hi;
     }
     size_t n = (size_t)hi - *lo + 1;
-    uint8_t *labels = n <= LABELS_ON_STACK ? stack : malloc(n);
-    if (labels)
-        memset(labels, LABEL_UNKNOWN, n);
+    label_t *labels = n <= LABELS_ON_STACK ? stack : malloc(n * sizeof *labels);
+    for (size_t i = 0; labels && i < n; i++)
+        labels[i] = LABEL_UNKNOWN;
     return labels;
 }
 
 bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
 {
     size_t ntris = out->ntris;
-    if (first_tri == ntris || one_branch(s, out, first_tri, ntris))
+    bool pm = pieces_mode(s->tape);
+    if (first_tri == ntris || one_branch(s, pm, out, first_tri, ntris))
         return true;
     double v[2];
     const double *p0 = out->verts[out->tris[3 * first_tri]].p;
     const ism_tape *t0 = top_tape(s, p0);
-    s->n_point++;
-    if (!ism_eval_top_values(t0, s->ws, p0[0], p0[1], p0[2], v))
-        return true; /* no min/max at the top of the tape */
+    if (!pm) {
+        s->n_point++;
+        if (!ism_eval_top_values(t0, s->ws, p0[0], p0[1], p0[2], v))
+            return true; /* no min/max at the top of the tape */
+    }
     uint32_t lo;
-    uint8_t stack[LABELS_ON_STACK], *labels = leaf_labels(out, first_tri, stack, &lo);
+    label_t stack[LABELS_ON_STACK], *labels = leaf_labels(out, first_tri, stack, &lo);
     if (!labels)
         return false;
-    labels[out->tris[3 * first_tri] - lo] = (uint8_t)ism_top_active_branch(t0, v);
-    bool ok = split_labelled(s, out, first_tri, ntris, labels, lo);
+    if (!pm)
+        labels[out->tris[3 * first_tri] - lo] = (label_t)ism_top_active_branch(t0, v);
+    bool ok = split_labelled(s, pm, out, first_tri, ntris, labels, lo);
     if (labels != stack)
         free(labels);
     return ok;
@@ -319,6 +501,24 @@ bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
  * test_polygonise_crease.c's double_torus_closed_under_a_bound). */
 #define CUT_CORNER_SHARE 1e-6
 
+/* Runs of one label a cut polygon may have: 2 (one crease across it), 3 (three pieces
+ * meeting in it) or 4 (two pieces, their crease crossing itself in it). */
+#define CUT_MAX_RUNS 4
+
+/* Do the runs after mixed edges mixed[0..k) (pieces mode) meet in one point: three runs on
+ * three pieces, or four alternating on two? */
+static bool meeting_runs(const label_t *br, size_t n, const size_t *mixed, size_t k)
+{
+    label_t r[CUT_MAX_RUNS];
+    if (k != 3 && k != 4)
+        return false;
+    for (size_t j = 0; j < k; j++)
+        r[j] = br[(mixed[j] + 1) % n];
+    if (k == 3)
+        return r[0] != r[1] && r[1] != r[2] && r[0] != r[2];
+    return r[0] == r[2] && r[1] == r[3] && r[0] != r[1];
+}
+
 /* Is every component of g finite? */
 static bool finite3(const double g[3])
 {
@@ -326,9 +526,11 @@ static bool finite3(const double g[3])
 }
 
 /* The run of corners from + 1 .. to (cyclically) of pts between crease points a and b into
- * sub, in the polygon's order: a, the run, b (the chord b-a closes it); its length. */
+ * sub, in the polygon's order: a, the run, b (the chord b-a closes it), then c when not NULL
+ * (the point where three pieces meet); its length. */
 static size_t branch_polygon(const ism_fpoint *pts, size_t n, size_t from, size_t to,
-                             const ism_fpoint *a, const ism_fpoint *b, ism_fpoint *sub)
+                             const ism_fpoint *a, const ism_fpoint *b, const ism_fpoint *c,
+                             ism_fpoint *sub)
 {
     size_t m = 0;
     sub[m++] = *a;
@@ -338,61 +540,113 @@ static size_t branch_polygon(const ism_fpoint *pts, size_t n, size_t from, size_
             break;
     }
     sub[m++] = *b;
+    if (c)
+        sub[m++] = *c;
     return m;
+}
+
+/* p with the gradient of f on piece l there (pieces mode): false when not finite. */
+static bool on_piece(ism_sampler *s, ism_fpoint *p, label_t l)
+{
+    s->n_gradient++;
+    ism_eval_piece_gradient(s->tape, s->ws, l, p->p[0], p->p[1], p->p[2], p->g);
+    return finite3(p->g);
+}
+
+/* A polygon whose corners run on k = 3 pieces, or on two pieces in k = 4 alternating runs
+ * (mixed edges mixed[0..k)), cut at its mixed edges' crease points x and the point where those
+ * creases meet (corner_point): each run's polygon (the crease point before it, the run, the one
+ * after it, the meeting point) triangulated on its own. *done false when the meeting point is
+ * not found. */
+static bool cut_runs(ism_sampler *s, const ism_fpoint *pts, size_t n, const label_t *br,
+                     const size_t *mixed, int k, const ism_fpoint *x, double reach,
+                     const double node[6], double max_error, ism_cell_out *out, bool *done)
+{
+    label_t run[CUT_MAX_RUNS];
+    for (int j = 0; j < k; j++)
+        run[j] = br[(mixed[j] + 1) % n];
+    ism_fpoint c;
+    if (!corner_point(s, x, k, run, k == 3 ? 3 : 2, &c))
+        return true;
+    /* run j (after mixed edge j, up to mixed edge j + 1): its crease points and the meeting
+       point with its piece's gradients (its fans judged on one smooth surface) */
+    ism_fpoint a[CUT_MAX_RUNS], b[CUT_MAX_RUNS], m[CUT_MAX_RUNS], sub[CUT_MAX_CORNERS + 3];
+    for (int j = 0; j < k; j++) {
+        a[j] = x[j], b[j] = x[(j + 1) % k], m[j] = c;
+        if (!on_piece(s, &a[j], run[j]) || !on_piece(s, &b[j], run[j]) ||
+            !on_piece(s, &m[j], run[j]))
+            return true;
+    }
+    bool flip = ism_loop_reversed(s, node, pts, n);
+    for (int j = 0; j < k; j++) {
+        size_t len = branch_polygon(pts, n, mixed[j], mixed[(j + 1) % k], &a[j], &b[j], &m[j],
+                                    sub);
+        if (!ism_triangulate_wound(s, sub, len, reach, node, max_error, flip, out))
+            return false;
+    }
+    *done = true;
+    return true;
 }
 
 bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
                          const double node[6], double max_error, ism_cell_out *out, bool *done)
 {
     *done = false;
-    if (n < 3 || n > CUT_MAX_CORNERS || !top_undecided(s->tape))
+    bool pm = pieces_mode(s->tape);
+    if (n < 3 || n > CUT_MAX_CORNERS || (!pm && !top_undecided(s->tape)))
         return true; /* f does not end in min/max */
-    const ism_tape *local = deciding_local(s);
+    const ism_tape *local = deciding_local(s, pm);
     size_t held = 0;
     while (local && held < n && ism_sampler_tape_at(s, pts[held].p) == local)
         held++;
     if (held == n)
         return true; /* one branch over the whole leaf (one_branch) */
-    int br[CUT_MAX_CORNERS];
-    size_t mixed[2], nmixed = 0;
+    label_t br[CUT_MAX_CORNERS];
+    size_t mixed[CUT_MAX_RUNS], nmixed = 0;
     for (size_t i = 0; i < n; i++)
-        if ((br[i] = ism_crease_branch(s, pts[i].p, NULL)) < 0)
-            return true; /* no min/max at the top of the tape */
+        if ((br[i] = label_at(s, pm, pts[i].p)) == ISM_PIECE_NONE)
+            return true; /* no min/max at the top of the tape (-1 as a label_t) */
     for (size_t i = 0; i < n; i++)
-        if (br[i] != br[(i + 1) % n] && nmixed++ < 2)
+        if (br[i] != br[(i + 1) % n] && nmixed++ < CUT_MAX_RUNS)
             mixed[nmixed - 1] = i;
-    if (nmixed != 2)
+    if (nmixed != 2 && !(pm && meeting_runs(br, n, mixed, nmixed)))
         return true; /* one branch, or the crease crossing the polygon more than once */
-    ism_fpoint x[2];
-    for (int k = 0; k < 2; k++) {
-        const double *p = pts[mixed[k]].p, *q = pts[(mixed[k] + 1) % n].p;
+    ism_fpoint x[CUT_MAX_RUNS];
+    for (size_t k = 0; k < nmixed; k++) {
+        size_t i = mixed[k], j = (i + 1) % n;
+        const double *p = pts[i].p, *q = pts[j].p;
         double near = CUT_CORNER_SHARE * ism_dist3(p, q);
-        if (!crease_point(s, p, q, &x[k]) || !(ism_dist3(x[k].p, p) > near) ||
-            !(ism_dist3(x[k].p, q) > near))
-            return true; /* no crease point found on that edge, or a corner on the crease */
+        bool flat;
+        if (!crease_point(s, pm, p, q, br[i], br[j], &x[k], &flat) || flat ||
+            !(ism_dist3(x[k].p, p) > near) || !(ism_dist3(x[k].p, q) > near))
+            return true; /* no crease point found on that edge (or an almost flat one), or a
+                            corner on the crease */
     }
+    if (nmixed > 2)
+        return cut_runs(s, pts, n, br, mixed, (int)nmixed, x, reach, node, max_error, out, done);
     if (!memcmp(x[0].p, x[1].p, sizeof x[0].p))
         return true;
     bool flip = ism_loop_reversed(s, node, pts, n);
     /* end[k]: the crease points as corners of the run after mixed edge k, with its branch's
        gradients (so the run's own fans are judged on one smooth surface) */
-    ism_fpoint end[2][2], sub[CUT_MAX_CORNERS + 2];
+    ism_fpoint end[2][2], sub[CUT_MAX_CORNERS + 3];
+    label_t r0 = br[(mixed[0] + 1) % n], r1 = br[(mixed[1] + 1) % n]; /* the runs' labels */
+    label_t lo = r0 < r1 ? r0 : r1, hi = r0 < r1 ? r1 : r0;
     for (int j = 0; j < 2; j++) { /* x[j] starts run j and ends run 1 - j: both branches */
         double v[2], g[2][3];
-        s->n_gradient++;
-        if (!ism_eval_top_branches(top_tape(s, x[j].p), s->ws, x[j].p[0], x[j].p[1], x[j].p[2],
-                                   v, g))
+        if (!pair_at(s, pm, x[j].p, lo, hi, v, g))
             return true;
-        int bj = br[(mixed[j] + 1) % n], bo = br[(mixed[1 - j] + 1) % n];
+        label_t bj = br[(mixed[j] + 1) % n], bo = br[(mixed[1 - j] + 1) % n];
         end[j][0] = x[j];
-        memcpy(end[j][0].g, g[bj], sizeof end[j][0].g);
+        memcpy(end[j][0].g, g[bj == lo ? 0 : 1], sizeof end[j][0].g);
         end[1 - j][1] = x[j];
-        memcpy(end[1 - j][1].g, g[bo], sizeof end[1 - j][1].g);
+        memcpy(end[1 - j][1].g, g[bo == lo ? 0 : 1], sizeof end[1 - j][1].g);
         if (!finite3(end[j][0].g) || !finite3(end[1 - j][1].g))
             return true;
     }
     for (int k = 0; k < 2; k++) {
-        size_t m = branch_polygon(pts, n, mixed[k], mixed[1 - k], &end[k][0], &end[k][1], sub);
+        size_t m = branch_polygon(pts, n, mixed[k], mixed[1 - k], &end[k][0], &end[k][1], NULL,
+                                  sub);
         if (!ism_triangulate_wound(s, sub, m, reach, node, max_error, flip, out))
             return false;
     }
@@ -400,52 +654,83 @@ bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double
     return true;
 }
 
+/* A crease point whose distance to lo = hi = 0 (one Newton step's length) is within this
+ * share of the chord sag lies on that crease: Newton leaves it there to rounding, while a
+ * crease point of another crease (the cube's next edge, a cut polygon's chord across a face
+ * from one edge to the next) lies a part of a cell away. */
+#define ON_CREASE_SHARE 1e-3
+
+/* Does x lie on the crease of labels l[0] < l[1] (pieces mode), to within ON_CREASE_SHARE ×
+ * sag? */
+static bool on_crease(ism_sampler *s, const double x[3], const label_t l[2], double sag)
+{
+    double v[2], g[2][3], step[3];
+    pair_at(s, true, x, l[0], l[1], v, g);
+    return isfinite(v[0]) && isfinite(v[1]) &&
+           ism_min_norm_step(2, (const double (*)[3])g, v, CREASE_PARALLEL_SIN2, step) &&
+           ism_norm3(step) <= ON_CREASE_SHARE * sag;
+}
+
 /* Does the crease pass between triangle v's corners unseen: an edge whose two ends lie off
  * the crease on one branch with its midpoint on the other, or three such corners with the
  * centroid on the other; or an edge between two crease points whose middle lies farther than
- * sag from the crease (Newton from it)? */
-static bool unseen_crease(ism_sampler *s, const ism_cell_out *out, const uint32_t *v,
-                          double sag, uint8_t *labels, uint32_t first)
+ * sag from the crease (Newton from it; in pieces mode on the pieces of the third corner and
+ * of its mirror image across the edge)? */
+static bool unseen_crease(ism_sampler *s, bool pm, const ism_cell_out *out, const uint32_t *v,
+                          double sag, label_t *labels, uint32_t first)
 {
     const double *p[3];
-    int b[3];
+    label_t b[3];
     for (int k = 0; k < 3; k++) {
         p[k] = out->verts[v[k]].p;
-        b[k] = vertex_branch(s, out, labels, first, v[k]);
-        b[k] = b[k] == LABEL_ANY ? -1 : b[k];
+        b[k] = vertex_label(s, pm, out, labels, first, v[k]);
     }
     double m[3], x[3];
     for (int e = 0; e < 3; e++) {
         const double *a = p[e], *c = p[(e + 1) % 3];
         for (int k = 0; k < 3; k++)
             m[k] = x[k] = (a[k] + c[k]) / 2;
-        if (b[e] < 0 && b[(e + 1) % 3] < 0) { /* a chord of the crease */
-            if (ism_crease_newton(s, x) && ism_dist3(x, m) > sag)
+        if (b[e] == LABEL_ANY && b[(e + 1) % 3] == LABEL_ANY) { /* a chord of the crease */
+            label_t l[2] = {0, 1}, third = b[(e + 2) % 3];
+            if (pm) {
+                double mirror[3];
+                for (int k = 0; k < 3; k++)
+                    mirror[k] = 2 * m[k] - p[(e + 2) % 3][k];
+                label_t other = label_at(s, pm, mirror);
+                if (third == LABEL_ANY || other == third)
+                    continue;
+                l[0] = third < other ? third : other, l[1] = third < other ? other : third;
+                if (!on_crease(s, a, l, sag) || !on_crease(s, c, l, sag))
+                    continue; /* crease points of two creases: a chord across one piece */
+            }
+            if (newton(s, pm, x, 2, l) && ism_dist3(x, m) > sag)
                 return true;
-        } else if (b[e] >= 0 && b[e] == b[(e + 1) % 3] && ism_crease_branch(s, m, NULL) != b[e])
+        } else if (b[e] != LABEL_ANY && b[e] == b[(e + 1) % 3] && label_at(s, pm, m) != b[e])
             return true;
     }
-    if (b[0] < 0 || b[0] != b[1] || b[1] != b[2])
+    if (b[0] == LABEL_ANY || b[0] != b[1] || b[1] != b[2])
         return false;
     for (int k = 0; k < 3; k++)
         m[k] = (p[0][k] + p[1][k] + p[2][k]) / 3;
-    return ism_crease_branch(s, m, NULL) != b[0];
+    return label_at(s, pm, m) != b[0];
 }
 
 bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
                            double max_error, const double (*centroid_g)[3])
 {
-    if (first_tri == out->ntris || !top_undecided(s->tape) ||
-        one_branch(s, out, first_tri, out->ntris))
+    bool pm = pieces_mode(s->tape);
+    if (first_tri == out->ntris || (!pm && !top_undecided(s->tape)) ||
+        one_branch(s, pm, out, first_tri, out->ntris))
         return false;
     uint32_t lo;
-    uint8_t stack[LABELS_ON_STACK], *labels = leaf_labels(out, first_tri, stack, &lo);
+    label_t stack[LABELS_ON_STACK], *labels = leaf_labels(out, first_tri, stack, &lo);
     if (!labels)
         return false; /* out of memory: the leaf is kept as measured */
     bool unresolved = false;
     for (size_t t = first_tri; t < out->ntris && !unresolved; t++) {
         const uint32_t *v = out->tris + 3 * t;
-        if ((unresolved = unseen_crease(s, out, v, CREASE_CHORD_SAG * max_error, labels, lo)))
+        if ((unresolved = unseen_crease(s, pm, out, v, CREASE_CHORD_SAG * max_error, labels,
+                                        lo)))
             break;
         const double *a = out->verts[v[0]].p, *b = out->verts[v[1]].p, *c = out->verts[v[2]].p;
         double m[3], nrm[3], g[3];

@@ -2,7 +2,15 @@
  * surface, f = min(a, b) or max(a, b) at the top of its tape: each triangle whose corners
  * lie on both branches is split at points of a = b = 0 on its two mixed edges, so every
  * piece lies on one smooth branch and its distance to f = 0 shrinks with the square of its
- * size, not linearly as a triangle folded across the crease does. */
+ * size, not linearly as a triangle folded across the crease does.
+ *
+ * Where f has kinks below its top min/max, or passes it on through later steps (the cube
+ * max(|x|, |y|, |z|) − 1 inside cube-minus-ball's top max, the cube and Steinmetz alone), the
+ * branches are f's smooth pieces instead (eval.h ism_eval_piece: the branch every min, max
+ * and abs on f's active path takes), the crease between two pieces where f on each (their
+ * kinks forced) is 0, and where three pieces meet (the cube's corners) a triangle or polygon
+ * round that point is cut there too: the cube's edges, folded, left triangles half a depth-10
+ * cell off at any bound (cube-minus-ball at E = 1e-4: 14.3 E, 9,440 cells missed). */
 #ifndef ISM_CREASE_SPLIT_H
 #define ISM_CREASE_SPLIT_H
 
@@ -23,7 +31,8 @@ bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri);
 
 /* Under an error bound, a polygon of a leaf (ism_triangulate_loop's arguments) whose corners
  * lie on both branches, two runs of them, is cut along the chord between the crease points
- * of its two mixed edges (the points ism_crease_split puts there, flagged ISM_FP_CREASE), and
+ * of its two mixed edges (on f's pieces also three runs on three pieces, or four alternating
+ * on two, cut from each mixed edge's crease point to the point where those creases meet) (the points ism_crease_split puts there, flagged ISM_FP_CREASE), and
  * each branch's polygon is triangulated on its own, wound as the whole polygon is: fanned
  * whole and split after, a fan from a point on one branch to two on the other crosses the
  * wedge between them and its pieces turn over (cube-minus-ball's face z = −1 beside its
