@@ -110,8 +110,15 @@ typedef uint64_t ism_piece;
 size_t ism_tape_kinks(const ism_tape *t);
 
 /* The piece of f at the point (the branches ism_eval_gradient takes there; a tie takes the
- * branch it does). ISM_PIECE_NONE when t has more than ISM_PIECE_KINKS kinks. */
+ * branch it does: min/max's second operand, abs(0)'s +a). ISM_PIECE_NONE when t has more
+ * than ISM_PIECE_KINKS kinks. */
 ism_piece ism_eval_piece(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z);
+
+/* Is f one piece over the box: every kink on f's active path decided by intervals (a
+ * min/max's operands apart, an abs's operand of one sign)? False also when t has more than
+ * ISM_PIECE_KINKS kinks. */
+bool ism_tape_one_piece(const ism_tape *t, ism_eval_ws *ws, ism_interval x, ism_interval y,
+                        ism_interval z);
 
 /* f on piece pc at the point: every kink pc names takes pc's branch, the others the one the
  * point gives them; value and gradient (a smooth function past the piece's own region: the

@@ -60,16 +60,27 @@ static inline __attribute__((always_inline)) double point_op(const ism_instr *in
     return op_value(in, r[in->a], r, 1, 0);
 }
 
-/* The first n instructions of t at (x, y, z) into ws->scalar. */
-static void run_point(const ism_tape *t, ism_eval_ws *ws, size_t n, double x, double y,
-                      double z)
+static unsigned natural_branch(const ism_instr *in, double a, const double *r);
+
+/* The first n instructions of t at (x, y, z) into ws->scalar; with record (a constant at
+ * every call: the plain loop stays as it was), each kink's branch into ws->choice and the
+ * number of kinks returned (0 without). */
+static inline __attribute__((always_inline)) size_t run_point(const ism_tape *t,
+                                                              ism_eval_ws *ws, size_t n,
+                                                              double x, double y, double z,
+                                                              bool record)
 {
+    size_t kinks = 0;
     double *r = ws->scalar;
     r[ISM_REG_X] = x;
     r[ISM_REG_Y] = y;
     r[ISM_REG_Z] = z;
     for (size_t i = 0; i < n; i++) {
         const ism_instr *in = &t->code[i];
+        if (record && ism_op_is_kink(in->op)) {
+            ws->choice[i] = (uint8_t)natural_branch(in, r[in->a], r);
+            kinks++;
+        }
         if (in->op == ISM_OP_SIN || in->op == ISM_OP_COS) {
             double s, c;
             ism_trig_pair(ws->trig, r[in->a], &s, &c);
@@ -78,13 +89,14 @@ static void run_point(const ism_tape *t, ism_eval_ws *ws, size_t n, double x, do
             r[in->out] = point_op(in, r);
         }
     }
+    return kinks;
 }
 
 double ism_eval_point(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z)
 {
     if (!ism_ws_fits(ws, t))
         return NAN;
-    run_point(t, ws, t->len, x, y, z);
+    run_point(t, ws, t->len, x, y, z, false);
     return ws->scalar[t->result];
 }
 
@@ -96,10 +108,31 @@ bool ism_eval_top_values(const ism_tape *t, ism_eval_ws *ws, double x, double y,
     const ism_instr *top = &t->code[t->len - 1];
     if ((top->op != ISM_OP_MIN_RR && top->op != ISM_OP_MAX_RR) || top->out != t->result)
         return false;
-    run_point(t, ws, t->len - 1, x, y, z);
+    run_point(t, ws, t->len - 1, x, y, z, false);
     val[0] = ws->scalar[top->a];
     val[1] = ws->scalar[top->b];
     return true;
+}
+
+/* The branch (1 or 2, as ism_piece) kink in takes with operand value a, r the registers
+ * (min/max: the one ism_eval_gradient's result is, a tie the second operand; abs(0): +a). */
+static unsigned natural_branch(const ism_instr *in, double a, const double *r)
+{
+    switch (in->op) {
+    case ISM_OP_MIN_RR: return a < r[in->b] ? 1 : 2;
+    case ISM_OP_MAX_RR: return a > r[in->b] ? 1 : 2;
+    case ISM_OP_MIN_RC: return a < in->imm ? 1 : 2;
+    case ISM_OP_MAX_RC: return a > in->imm ? 1 : 2;
+    default: return a < 0.0 ? 2 : 1; /* ISM_OP_ABS */
+    }
+}
+
+ism_piece ism_eval_piece(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z)
+{
+    if (!ism_ws_fits(ws, t))
+        return ISM_PIECE_NONE;
+    size_t kinks = run_point(t, ws, t->len, x, y, z, true);
+    return kinks > ISM_PIECE_KINKS ? ISM_PIECE_NONE : ism_piece_walk(t, ws, kinks, NULL);
 }
 
 int ism_top_active_branch(const ism_tape *t, const double val[2])

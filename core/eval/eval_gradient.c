@@ -236,35 +236,7 @@ bool ism_eval_crease_branches(const ism_tape *t, ism_eval_ws *ws, double x, doub
     return branches_at(t, crease_top(t, true), ws, x, y, z, val, grad);
 }
 
-static bool is_kink(int op)
-{
-    return op == ISM_OP_MIN_RR || op == ISM_OP_MAX_RR || op == ISM_OP_MIN_RC ||
-           op == ISM_OP_MAX_RC || op == ISM_OP_ABS;
-}
-
-size_t ism_tape_kinks(const ism_tape *t)
-{
-    size_t n = 0;
-    for (size_t i = 0; i < t->len; i++)
-        n += is_kink(t->code[i].op);
-    return n;
-}
-
-/* The branch (1 or 2, as ism_piece) kink in takes with its operands' values in r: the one
- * dual_step's result is (a tie: the second operand; abs(0): +a). */
-static unsigned natural_branch(const ism_instr *in, const ism_dual *r)
-{
-    double a = r[in->a].v;
-    switch (in->op) {
-    case ISM_OP_MIN_RR: return a < r[in->b].v ? 1 : 2;
-    case ISM_OP_MAX_RR: return a > r[in->b].v ? 1 : 2;
-    case ISM_OP_MIN_RC: return a < in->imm ? 1 : 2;
-    case ISM_OP_MAX_RC: return a > in->imm ? 1 : 2;
-    default: return a < 0.0 ? 2 : 1; /* ISM_OP_ABS */
-    }
-}
-
-/* Kink in on branch br (1 or 2). */
+/* Kink in on branch br (1 or 2, as ism_piece). */
 static void forced_step(const ism_instr *in, ism_dual *r, unsigned br)
 {
     ism_dual *o = &r[in->out];
@@ -281,62 +253,6 @@ static void forced_step(const ism_instr *in, ism_dual *r, unsigned br)
     }
 }
 
-/* f at the point with the kinks pc names forced (pc 0: none); with record, every kink's
- * natural branch into ws->choice (per instruction). */
-static void piece_run(const ism_tape *t, ism_eval_ws *ws, ism_piece pc, bool record, double x,
-                      double y, double z)
-{
-    ism_dual *r = ws->dual;
-    r[ISM_REG_X] = (ism_dual){ x, { 1.0, 0.0, 0.0 } };
-    r[ISM_REG_Y] = (ism_dual){ y, { 0.0, 1.0, 0.0 } };
-    r[ISM_REG_Z] = (ism_dual){ z, { 0.0, 0.0, 1.0 } };
-    unsigned k = 0;
-    for (size_t i = 0; i < t->len; i++) {
-        const ism_instr *in = &t->code[i];
-        if (!is_kink(in->op)) {
-            dual_step(in, r, ws->trig);
-            continue;
-        }
-        unsigned br = (unsigned)(pc >> (2 * k++)) & 3u;
-        if (record)
-            ws->choice[i] = (uint8_t)natural_branch(in, r);
-        if (br)
-            forced_step(in, r, br);
-        else
-            dual_step(in, r, ws->trig);
-    }
-}
-
-ism_piece ism_eval_piece(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z)
-{
-    size_t nk = ism_tape_kinks(t);
-    if (nk > ISM_PIECE_KINKS || !ism_ws_fits(ws, t))
-        return ISM_PIECE_NONE;
-    piece_run(t, ws, 0, true, x, y, z);
-    /* back from the result through the operands the branches taken read */
-    uint8_t *needed = ws->needed;
-    memset(needed, 0, t->nregs);
-    needed[t->result] = 1;
-    ism_piece pc = 0;
-    size_t k = nk;
-    for (size_t i = t->len; i-- > 0;) {
-        const ism_instr *in = &t->code[i];
-        bool kink = is_kink(in->op);
-        k -= kink;
-        if (!needed[in->out])
-            continue;
-        needed[in->out] = 0;
-        unsigned br = kink ? ws->choice[i] : 0;
-        if (kink)
-            pc |= (ism_piece)br << (2 * k);
-        if (ism_op_has_reg_a(in->op) && (br != 2 || in->op == ISM_OP_ABS))
-            needed[in->a] = 1; /* abs reads a on both branches */
-        if (ism_op_has_reg_b(in->op) && br != 1)
-            needed[in->b] = 1;
-    }
-    return pc;
-}
-
 double ism_eval_piece_gradient(const ism_tape *t, ism_eval_ws *ws, ism_piece pc, double x,
                                double y, double z, double grad[3])
 {
@@ -344,8 +260,25 @@ double ism_eval_piece_gradient(const ism_tape *t, ism_eval_ws *ws, ism_piece pc,
         grad[0] = grad[1] = grad[2] = NAN;
         return NAN;
     }
-    piece_run(t, ws, pc, false, x, y, z);
-    const ism_dual *f = &ws->dual[t->result];
+    ism_dual *r = ws->dual;
+    r[ISM_REG_X] = (ism_dual){ x, { 1.0, 0.0, 0.0 } };
+    r[ISM_REG_Y] = (ism_dual){ y, { 0.0, 1.0, 0.0 } };
+    r[ISM_REG_Z] = (ism_dual){ z, { 0.0, 0.0, 1.0 } };
+    unsigned k = 0;
+    for (size_t i = 0; i < t->len; i++) {
+        const ism_instr *in = &t->code[i];
+        if (!ism_op_is_kink(in->op)) {
+            dual_step(in, r, ws->trig);
+            continue;
+        }
+        unsigned br = k < ISM_PIECE_KINKS ? (unsigned)(pc >> (2 * k)) & 3u : 0;
+        k++;
+        if (br)
+            forced_step(in, r, br);
+        else
+            dual_step(in, r, ws->trig);
+    }
+    const ism_dual *f = &r[t->result];
     memcpy(grad, f->d, sizeof f->d);
     return f->v;
 }

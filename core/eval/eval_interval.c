@@ -65,7 +65,7 @@ static ism_interval interval_op(const ism_instr *in, const ism_interval *r, uint
     case ISM_OP_TAN: return iv_tan(a);
     case ISM_OP_EXP: return iv_exp(a);
     case ISM_OP_LOG: return iv_log(a);
-    case ISM_OP_ABS: return iv_abs(a);
+    case ISM_OP_ABS: *choice = a.lo >= 0 ? ONLY_A : a.hi < 0 ? ONLY_B : BOTH; return iv_abs(a);
     default: return ism_iv_whole();
     }
 }

@@ -6,8 +6,9 @@
 #include "core/eval/eval.h"
 
 /* Evaluates t over the box; when choices is not NULL, choices[i] is set for every min/max
- * instruction i: 0 both operands matter, 1 only a, 2 only b (or the immediate). ws must
- * fit t. */
+ * instruction i: 0 both operands matter, 1 only a, 2 only b (or the immediate); and for every
+ * abs: 1 where its operand is ≥ 0 over the box, 2 where < 0, 0 else (the branches of an
+ * ism_piece; shortening reads min/max's alone). ws must fit t. */
 ism_interval ism_interval_run(const ism_tape *t, ism_eval_ws *ws, ism_interval x,
                               ism_interval y, ism_interval z, uint8_t *choices);
 

@@ -12,6 +12,9 @@
 
 enum { BOTH = 0, ONLY_A = 1, ONLY_B = 2 };
 
+#define KEEP 4u        /* flag bit set in ws->choice[i] when instruction i is kept */
+#define CHOICE_MASK 3u
+
 ism_tape *ism_tape_new_like(const ism_tape *t)
 {
     if (!t)
@@ -42,9 +45,56 @@ bool ism_tape_has_min_max(const ism_tape *t)
 bool ism_tape_has_kink(const ism_tape *t)
 {
     for (size_t i = 0; i < t->len; i++)
-        if (is_min_max(t->code[i].op) || t->code[i].op == ISM_OP_ABS)
+        if (ism_op_is_kink(t->code[i].op))
             return true;
     return false;
+}
+
+size_t ism_tape_kinks(const ism_tape *t)
+{
+    size_t n = 0;
+    for (size_t i = 0; i < t->len; i++)
+        n += ism_op_is_kink(t->code[i].op);
+    return n;
+}
+
+ism_piece ism_piece_walk(const ism_tape *t, ism_eval_ws *ws, size_t kinks, bool *open)
+{
+    uint8_t *needed = ws->needed;
+    memset(needed, 0, t->nregs);
+    needed[t->result] = 1;
+    ism_piece pc = 0;
+    size_t k = kinks;
+    for (size_t i = t->len; i-- > 0;) {
+        const ism_instr *in = &t->code[i];
+        bool kink = ism_op_is_kink(in->op);
+        k -= kink;
+        if (!needed[in->out])
+            continue;
+        needed[in->out] = 0;
+        unsigned br = kink ? ws->choice[i] & CHOICE_MASK : BOTH;
+        if (kink && br == BOTH && open)
+            *open = true;
+        pc |= (ism_piece)br << (2 * k);
+        if (ism_op_has_reg_a(in->op) && (br != ONLY_B || in->op == ISM_OP_ABS))
+            needed[in->a] = 1; /* abs reads a on both branches */
+        if (ism_op_has_reg_b(in->op) && br != ONLY_A)
+            needed[in->b] = 1;
+    }
+    return pc;
+}
+
+bool ism_tape_one_piece(const ism_tape *t, ism_eval_ws *ws, ism_interval x, ism_interval y,
+                        ism_interval z)
+{
+    size_t kinks = ism_tape_kinks(t);
+    if (!ism_ws_fits(ws, t) || kinks > ISM_PIECE_KINKS)
+        return false;
+    memset(ws->choice, BOTH, t->len);
+    ism_interval_run(t, ws, x, y, z, ws->choice);
+    bool open = false;
+    ism_piece_walk(t, ws, kinks, &open);
+    return !open;
 }
 
 bool ism_tape_top_min_max_only(const ism_tape *t)
@@ -77,8 +127,7 @@ static ism_instr decided(const ism_instr *in, uint8_t choice)
     return r;
 }
 
-#define KEEP 4u        /* flag bit set in ws->choice[i] when instruction i is kept */
-#define CHOICE_MASK 3u
+
 
 /* Walks backwards from the result, flagging the instructions it still needs given the
  * recorded choices; returns how many are kept. */

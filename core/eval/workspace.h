@@ -41,4 +41,17 @@ static inline int ism_ws_fits(const ism_eval_ws *ws, const ism_tape *t)
     return ws && t && ws->nregs >= t->nregs && ws->code_cap >= t->len;
 }
 
+/* Is op a kink: min, max or abs (an ism_piece names its branch)? */
+static inline bool ism_op_is_kink(int op)
+{
+    return op == ISM_OP_MIN_RR || op == ISM_OP_MAX_RR || op == ISM_OP_MIN_RC ||
+           op == ISM_OP_MAX_RC || op == ISM_OP_ABS;
+}
+
+/* The piece ws->choice (one byte per instruction of t: a kink's branch, 1 or 2, or 0 for
+ * both) names: back from f's result through the operands the branches taken read. kinks: t's
+ * number of kinks (ism_tape_kinks), at most ISM_PIECE_KINKS. *open (may be NULL): set when a
+ * kink on that path has choice 0 (the piece is then not determined). (shorten.c) */
+ism_piece ism_piece_walk(const ism_tape *t, ism_eval_ws *ws, size_t kinks, bool *open);
+
 #endif
