@@ -166,6 +166,17 @@ static inline __attribute__((always_inline)) void dual_step(const ism_instr *in,
     }
 }
 
+/* ws's dual registers with x, y, z seeded (each its own unit derivative). */
+static inline __attribute__((always_inline)) ism_dual *dual_inputs(ism_eval_ws *ws, double x,
+                                                                   double y, double z)
+{
+    ism_dual *r = ws->dual;
+    r[ISM_REG_X] = (ism_dual){ x, { 1.0, 0.0, 0.0 } };
+    r[ISM_REG_Y] = (ism_dual){ y, { 0.0, 1.0, 0.0 } };
+    r[ISM_REG_Z] = (ism_dual){ z, { 0.0, 0.0, 1.0 } };
+    return r;
+}
+
 double ism_eval_gradient(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
                          double grad[3])
 {
@@ -173,10 +184,7 @@ double ism_eval_gradient(const ism_tape *t, ism_eval_ws *ws, double x, double y,
         grad[0] = grad[1] = grad[2] = NAN;
         return NAN;
     }
-    ism_dual *r = ws->dual;
-    r[ISM_REG_X] = (ism_dual){ x, { 1.0, 0.0, 0.0 } };
-    r[ISM_REG_Y] = (ism_dual){ y, { 0.0, 1.0, 0.0 } };
-    r[ISM_REG_Z] = (ism_dual){ z, { 0.0, 0.0, 1.0 } };
+    ism_dual *r = dual_inputs(ws, x, y, z);
     for (size_t i = 0; i < t->len; i++)
         dual_step(&t->code[i], r, ws->trig);
     const ism_dual *f = &r[t->result];
@@ -207,10 +215,7 @@ static bool branches_at(const ism_tape *t, size_t top, ism_eval_ws *ws, double x
     if (top >= t->len || !ism_ws_fits(ws, t))
         return false;
     const ism_instr *mm = &t->code[top];
-    ism_dual *r = ws->dual;
-    r[ISM_REG_X] = (ism_dual){ x, { 1.0, 0.0, 0.0 } };
-    r[ISM_REG_Y] = (ism_dual){ y, { 0.0, 1.0, 0.0 } };
-    r[ISM_REG_Z] = (ism_dual){ z, { 0.0, 0.0, 1.0 } };
+    ism_dual *r = dual_inputs(ws, x, y, z);
     for (size_t i = 0; i < top; i++)
         dual_step(&t->code[i], r, ws->trig);
     const ism_dual br[2] = {r[mm->a], r[mm->b]}; /* the steps after may reuse a's, b's */
@@ -260,10 +265,7 @@ double ism_eval_piece_gradient(const ism_tape *t, ism_eval_ws *ws, ism_piece pc,
         grad[0] = grad[1] = grad[2] = NAN;
         return NAN;
     }
-    ism_dual *r = ws->dual;
-    r[ISM_REG_X] = (ism_dual){ x, { 1.0, 0.0, 0.0 } };
-    r[ISM_REG_Y] = (ism_dual){ y, { 0.0, 1.0, 0.0 } };
-    r[ISM_REG_Z] = (ism_dual){ z, { 0.0, 0.0, 1.0 } };
+    ism_dual *r = dual_inputs(ws, x, y, z);
     unsigned k = 0;
     for (size_t i = 0; i < t->len; i++) {
         const ism_instr *in = &t->code[i];

@@ -56,7 +56,7 @@
 #define LABELS_ON_STACK 256
 
 /* A vertex's label: its branch of f's top min/max (0 or 1), or, where f has kinks below its
- * top or passes its min/max on (pieces mode: cube-minus-ball's cube max(|x|, |y|, |z|) − 1
+ * top or passes its min/max on (pieces mode, s->crease_pieces: cube-minus-ball's cube max(|x|, |y|, |z|) − 1
  * inside its top max, the cube itself), its smooth piece (ism_eval_piece): the crease
  * between two labels is where their functions (the top's branches, or f on each piece) are
  * both 0. In either mode a pair of labels is taken in increasing order (lo, hi): the top's
@@ -68,9 +68,7 @@ typedef ism_piece label_t;
  * (Two bits 11 name no branch: no piece is this.) */
 #define LABEL_ANY (ISM_PIECE_NONE - 1)
 
-/* Is f's crease read off its pieces (see label_t): f has a kink that is not its top min/max
- * of two registers, and few enough for a piece to name? */
-static bool pieces_mode(const ism_tape *f)
+bool ism_crease_pieces(const ism_tape *f)
 {
     return ism_tape_has_kink(f) && !ism_tape_top_min_max_only(f) &&
            ism_tape_kinks(f) <= ISM_PIECE_KINKS;
@@ -461,7 +459,7 @@ static label_t *leaf_labels(const ism_cell_out *out, size_t first_tri,
 bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
 {
     size_t ntris = out->ntris;
-    bool pm = pieces_mode(s->tape);
+    bool pm = s->crease_pieces;
     if (first_tri == ntris || one_branch(s, pm, out, first_tri, ntris))
         return true;
     double v[2];
@@ -597,7 +595,7 @@ bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double
                          const double node[6], double max_error, ism_cell_out *out, bool *done)
 {
     *done = false;
-    bool pm = pieces_mode(s->tape);
+    bool pm = s->crease_pieces;
     if (n < 3 || n > CUT_MAX_CORNERS || (!pm && !top_undecided(s->tape)))
         return true; /* f does not end in min/max */
     const ism_tape *local = deciding_local(s, pm);
@@ -723,7 +721,7 @@ static bool unseen_crease(ism_sampler *s, bool pm, const ism_cell_out *out, cons
 bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
                            double max_error, const double (*centroid_g)[3])
 {
-    bool pm = pieces_mode(s->tape);
+    bool pm = s->crease_pieces;
     if (first_tri == out->ntris || (!pm && !top_undecided(s->tape)) ||
         one_branch(s, pm, out, first_tri, out->ntris))
         return false;

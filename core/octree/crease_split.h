@@ -62,6 +62,11 @@ bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first
  * 0 without a bound (max_error <= 0: one edge's length only). */
 double ism_crease_wedge_edges(const ism_grid *g, int max_depth, double max_error);
 
+/* Is f's crease read off its smooth pieces (the sampler's crease_pieces): f has a kink that is
+ * not its top min/max of two registers (a kink below it, or a min/max passed on through later
+ * steps), and at most ISM_PIECE_KINKS kinks? */
+bool ism_crease_pieces(const ism_tape *f);
+
 /* The branch of f's top min/max active at p (0 or 1), or -1 when the tape does not end in
  * min/max. g: that branch's gradient there (may be NULL). */
 int ism_crease_branch(ism_sampler *s, const double p[3], double g[3]);

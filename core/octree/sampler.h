@@ -37,6 +37,11 @@ typedef struct ism_sampler {
      * thin wedge puts it (|pq| / sin w): under max_error the diagonal of a cell one level
      * above depth.max (ism_crease_wedge_edges); 0: one edge's length only. */
     double wedge_edges_below;
+    /* crease_split.c: f's crease read off its smooth pieces (ism_crease_pieces: kinks below
+     * its top min/max, or a min/max passed on); false: f's top min/max's two branches. Set
+     * with wedge_edges_below (asked once per run, not per leaf: the tape scan cost gyroid-ball
+     * +1.5% instructions). */
+    bool crease_pieces;
     uint64_t n_point, n_gradient, n_interval;
 } ism_sampler;
 
