@@ -460,14 +460,14 @@ static double gyroid_ball_dist(const double q[3])
     return best;
 }
 
-Test(accuracy, gyroid_ball_tight_bound_by_its_pieces)
+/* t at E = 1e-4, depth 3:SAFETY_DEPTH, in base placed by pf_sweep_box from placement first
+ * to 1: every centroid and edge midpoint within E by dist, no cell missed, more than 100,000
+ * triangles. */
+static void check_tight_bound(const ism_tape *t, const double base[6], int first,
+                              double (*dist)(const double *))
 {
-    if (pf_quick())
-        cr_skip_test("about 8 s of CPU a box in release: not under the sanitizer");
-    static const double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
     const double e = 1e-4;
-    ism_tape *t = pf_compile(&gyroid_ball);
-    for (int which = -1; which <= 1; which++) {
+    for (int which = first; which <= 1; which++) {
         double box[6];
         pf_sweep_box(base, SAFETY_DEPTH, which, box);
         ism_poly_options o;
@@ -478,7 +478,7 @@ Test(accuracy, gyroid_ball_tight_bound_by_its_pieces)
         pf_run_options(t, &o, &m, &st);
         cr_assert_gt(m.ntris, 100000, "box %d: %zu triangles", which, m.ntris);
         double cen, mid;
-        between_vertices(&m, gyroid_ball_dist, &cen, &mid);
+        between_vertices(&m, dist, &cen, &mid);
         cr_expect_leq(cen, e, "box %d: a centroid is %g (%.4f E) from the surface", which, cen,
                       cen / e);
         cr_expect_leq(mid, e, "box %d: an edge midpoint is %g (%.4f E) from the surface", which,
@@ -487,6 +487,15 @@ Test(accuracy, gyroid_ball_tight_bound_by_its_pieces)
                      (unsigned long long)st.error_missed_nodes, st.error_worst);
         ism_mesh_free(&m);
     }
+}
+
+Test(accuracy, gyroid_ball_tight_bound_by_its_pieces)
+{
+    if (pf_quick())
+        cr_skip_test("about 8 s of CPU a box in release: not under the sanitizer");
+    static const double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
+    ism_tape *t = pf_compile(&gyroid_ball);
+    check_tight_bound(t, base, -1, gyroid_ball_dist);
     ism_tape_free(t);
 }
 
@@ -543,27 +552,7 @@ Test(accuracy, cube_minus_ball_tight_bound_by_its_pieces)
     static const pf_surface cmb = {"max(max(abs(x), abs(y), abs(z)) - 1, 1.69 - (x^2 + y^2 + z^2))",
                                    NULL, 0, NULL, 0};
     static const double base[6] = {-CMB_R, -CMB_R, -CMB_R, CMB_R, CMB_R, CMB_R};
-    const double e = 1e-4;
     ism_tape *t = pf_compile(&cmb);
-    for (int which = pf_first_box() - 1; which <= 1; which++) {
-        double box[6];
-        pf_sweep_box(base, SAFETY_DEPTH, which, box);
-        ism_poly_options o;
-        pf_options(&o, box, 3, SAFETY_DEPTH);
-        o.max_error = e;
-        ism_mesh m;
-        ism_poly_stats st;
-        pf_run_options(t, &o, &m, &st);
-        cr_assert_gt(m.ntris, 100000, "box %d: %zu triangles", which, m.ntris);
-        double cen, mid;
-        between_vertices(&m, cube_minus_ball_dist, &cen, &mid);
-        cr_expect_leq(cen, e, "box %d: a centroid is %g (%.4f E) from the surface", which, cen,
-                      cen / e);
-        cr_expect_leq(mid, e, "box %d: an edge midpoint is %g (%.4f E) from the surface", which,
-                      mid, mid / e);
-        cr_expect_eq(st.error_missed_nodes, 0, "box %d: %llu cells missed E (worst %g)", which,
-                     (unsigned long long)st.error_missed_nodes, st.error_worst);
-        ism_mesh_free(&m);
-    }
+    check_tight_bound(t, base, pf_first_box() - 1, cube_minus_ball_dist);
     ism_tape_free(t);
 }
