@@ -358,13 +358,20 @@ static bool encode_body(encode_job *j, ism_buf *body, char *why, size_t n)
     return ok;
 }
 
-/* Curvature the mesh can show: its finest cells have size box / 2^max_depth. */
-static double curvature_limit(const ism_request *req)
+/* The edge of req's finest cells: the box's longest side / 2^max_depth. */
+static double finest_cell(const ism_request *req)
 {
     double side = 0;
     for (int k = 0; k < 3; k++)
         side = fmax(side, req->poly.box[k + 3] - req->poly.box[k]);
-    return ldexp(1.0, req->poly.max_depth) / side;
+    return ldexp(side, -req->poly.max_depth);
+}
+
+/* Curvature the mesh can show: one over its finest cell (the same bits as 2^max_depth / side:
+ * ldexp scales by a power of 2 exactly). */
+static double curvature_limit(const ism_request *req)
+{
+    return 1 / finest_cell(req);
 }
 
 /* The encoding of c that req asks for: body, stats, features; status 200. */
@@ -601,10 +608,7 @@ static double draw_tolerance(const ism_request *req)
 {
     if (req->poly.max_error > 0)
         return ISM_FEATURES_DRAW_TOL_REL * req->poly.max_error;
-    double side = 0;
-    for (int k = 0; k < 3; k++)
-        side = fmax(side, req->poly.box[k + 3] - req->poly.box[k]);
-    return ISM_FEATURES_DRAW_TOL_REL * ldexp(side, -req->poly.max_depth);
+    return ISM_FEATURES_DRAW_TOL_REL * finest_cell(req);
 }
 
 /* Wire attributes (with the crease sides' normals), features and the surface's stats into c. */
