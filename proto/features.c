@@ -231,18 +231,11 @@ static bool curve_keep(const ism_sing_curve *c, double tol, uint8_t *keep)
         memset(keep, 1, c->n);
         return true;
     }
-    uint32_t *idx = malloc(c->n * sizeof *idx);
-    if (!idx)
-        return false;
-    for (size_t i = 0; i < c->n; i++)
-        idx[i] = (uint32_t)i;
     size_t cut = c->first_uncertified >= 0 && (size_t)c->first_uncertified < c->n
                      ? (size_t)c->first_uncertified
                      : 0;
-    bool ok = ism_polyline_thin(c->xyz, idx, cut + 1, tol, keep) &&
-              ism_polyline_thin(c->xyz, idx + cut, c->n - cut, tol, keep + cut);
-    free(idx);
-    return ok;
+    return ism_polyline_thin(c->xyz, NULL, cut + 1, tol, keep) &&
+           ism_polyline_thin(c->xyz + 3 * cut, NULL, c->n - cut, tol, keep + cut);
 }
 
 /* A singular curve: its points with its certificate's decimals, thinned within draw_tol
@@ -356,7 +349,7 @@ void ism_locus_counts_json(ism_jw *w, const ism_locus *l)
     ism_jw_uint(w, l ? l->nsheets : 0);
 }
 
-static void write_locus(ism_jw *w, const ism_mesh *m, const ism_features *f)
+static void write_locus(ism_jw *w, const ism_mesh *m, const ism_features *f, double tol, int d)
 {
     const ism_locus *l = f->locus;
     ism_jw_key(w, "singular_points");
@@ -370,7 +363,7 @@ static void write_locus(ism_jw *w, const ism_mesh *m, const ism_features *f)
     ism_jw_array(w);
     for (size_t i = 0; l && i < l->ncurves; i++)
         write_singular_curve(w, &l->curves[i], l, f->draw_tol);
-    ism_features_cut_curves_json(w, m, f->arrangement, f->cut_fns, f->draw_tol);
+    ism_features_cut_curves_json(w, m, f->arrangement, f->cut_fns, tol, d);
     ism_jw_array_end(w);
     ism_jw_key(w, "double_sheets");
     ism_jw_array(w);
@@ -419,10 +412,10 @@ char *ism_features_json(const ism_mesh *m, const ism_features *f, size_t *len)
     for (size_t i = 0; i < sizeof class_names / sizeof class_names[0]; i++)
         ism_jw_string(&w, class_names[i]);
     ism_jw_array_end(&w);
-    write_locus(&w, m, f);
     /* the table in features.h: mesh positions within half the drawing tolerance */
     int d = ism_features_decimals(0.5 * f->draw_tol);
     double tol = d >= 0 ? f->draw_tol : 0;
+    write_locus(&w, m, f, tol, d);
     ism_jw_key(&w, "nonmanifold_edges");
     const ism_locus_check *chk = f->check;
     bool check_fits = chk && chk->curve_on && chk->curve_vert_on && chk->point_on;

@@ -152,12 +152,13 @@ char *ism_features_json(const ism_mesh *m, const ism_features *f, size_t *len);
 struct ism_jw;
 /* features_curves.c: the requested curves as items of the open "curves" array (kinds
  * section, level, intersection, silhouette, crease; "arcs" polylines in full precision, the
- * crease's within draw_tol when it is > 0 (the digits table above), "ends"), and
+ * crease's within tol with d decimals when tol > 0 (ism_features_json's: the digits table
+ * above), "ends"), and
  * the "arrangement" object (vertices, edges, faces with triangle ranges of m's order, area,
  * euler, boundary cycles; components; euler {mesh, arrangement, ok}). */
 void ism_features_cut_curves_json(struct ism_jw *w, const ism_mesh *m,
                                   const ism_arrangement *a, const ism_cut_fn *fns,
-                                  double draw_tol);
+                                  double tol, int d);
 void ism_features_arrangement_json(struct ism_jw *w, const ism_mesh *m,
                                    const ism_arrangement *a);
 void ism_locus_counts_json(struct ism_jw *w, const ism_locus *l);

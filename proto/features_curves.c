@@ -98,15 +98,14 @@ static void write_ends(ism_jw *w, const ism_mesh *m, const ism_arrangement *a, s
 }
 
 void ism_features_cut_curves_json(ism_jw *w, const ism_mesh *m, const ism_arrangement *a,
-                                  const ism_cut_fn *fns, double draw_tol)
+                                  const ism_cut_fn *fns, double tol, int d)
 {
     for (size_t c = 0; a && c < a->ncurves; c++) {
         const ism_arr_curve *cv = &a->curves[c];
         const ism_cut_fn *fn = &fns[cv->fn];
-        /* the table in features.h: only the crease is thinned; d from half the tolerance,
-         * the thinning gets the other half or more */
-        int d = fn->kind == ISM_CUT_CREASE ? ism_features_decimals(0.5 * draw_tol) : -1;
-        double tol = d >= 0 ? draw_tol : 0;
+        /* the table in features.h: only the crease is thinned and rounded */
+        int dc = fn->kind == ISM_CUT_CREASE ? d : -1;
+        double tc = fn->kind == ISM_CUT_CREASE ? tol : 0;
         ism_jw_object(w);
         ism_jw_key(w, "kind");
         ism_jw_string(w, kind_names[fn->kind]);
@@ -124,16 +123,16 @@ void ism_features_cut_curves_json(ism_jw *w, const ism_mesh *m, const ism_arrang
             if (a->edges[i].curve == c)
                 ism_jw_uint(w, i);
         ism_jw_array_end(w);
-        if (tol > 0) {
+        if (tc > 0) {
             ism_jw_key(w, "tolerance");
-            ism_jw_number(w, tol);
+            ism_jw_number(w, tc);
         }
         ism_jw_key(w, "arcs");
         ism_jw_array(w);
         for (size_t i = 0; i < a->nedges; i++)
             if (a->edges[i].curve == c)
                 ism_features_chain_xyz(w, m, a->chain + a->edges[i].first, a->edges[i].count,
-                                       tol, d, true);
+                                       tc, dc, true);
         ism_jw_array_end(w);
         write_ends(w, m, a, c);
         ism_jw_object_end(w);

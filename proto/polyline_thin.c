@@ -21,6 +21,8 @@ size_t ism_polyline_thin(const double *pos, const uint32_t *idx, size_t n, doubl
      * spans each, plus the first */
     size_t cap = 2 * n, top = 0, kept = 2;
     size_t *stack = malloc(cap * sizeof *stack);
+/* vertex i's position; idx NULL: the identity */
+#define AT(i) (pos + 3 * (size_t)(idx ? idx[i] : (uint32_t)(i)))
     if (!stack)
         return 0;
     memset(keep, 0, n);
@@ -31,14 +33,14 @@ size_t ism_polyline_thin(const double *pos, const uint32_t *idx, size_t n, doubl
         size_t b = stack[--top], a = stack[--top];
         if (b <= a + 1)
             continue;
-        const double *pa = pos + 3 * (size_t)idx[a], *pb = pos + 3 * (size_t)idx[b];
+        const double *pa = AT(a), *pb = AT(b);
         /* a closed chain's first span has a = b in space: its farthest vertex is kept
          * whatever tol says, so that the printed chain is a loop and not a point */
-        bool loop = a == 0 && b == n - 1 && idx[a] == idx[b];
+        bool loop = idx && a == 0 && b == n - 1 && idx[a] == idx[b];
         double far = -1;
         size_t at = a + 1;
         for (size_t i = a + 1; i < b; i++) {
-            double d = sqrt(ism_sqdist_segment3(pos + 3 * (size_t)idx[i], pa, pb));
+            double d = sqrt(ism_sqdist_segment3(AT(i), pa, pb));
             if (d > far) {
                 far = d;
                 at = i;
@@ -55,4 +57,5 @@ size_t ism_polyline_thin(const double *pos, const uint32_t *idx, size_t n, doubl
     }
     free(stack);
     return kept;
+#undef AT
 }

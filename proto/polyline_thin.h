@@ -9,7 +9,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* The chain's n vertices are pos[3 idx[i] ..]. Sets keep[i] (n bytes) to 1 for the vertices
+/* The chain's n vertices are pos[3 idx[i] ..] (idx NULL: pos[3 i ..], a chain that is never
+ * taken as closed). Sets keep[i] (n bytes) to 1 for the vertices
  * to keep, 0 for the others: the first and the last always (a closed chain, first == last,
  * keeps at least one more, the farthest from its first), and each dropped vertex i within
  * tol of the segment between the kept vertices on either side of it. Returns the number

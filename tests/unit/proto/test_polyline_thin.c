@@ -5,7 +5,8 @@
  * fewest any polyline through the samples can have (chords whose sagitta R (1 - cos(a / 2))
  * is <= tol: a <= 2 acos(1 - tol / R)) and twice that (Douglas-Peucker halves a circle's arcs);
  * a finer tol keeps more; an open helix keeps its ends; collinear points keep two; a
- * zigzag farther than tol from every chord that skips a vertex keeps every point; tol <= 0 keeps every point. */
+ * zigzag farther than tol from every chord that skips a vertex keeps every point; tol <= 0 keeps every point;
+ * no index (NULL) keeps what the identity index keeps. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -121,4 +122,26 @@ Test(polyline_thin, zigzag_above_tol_and_tol_zero_keep_every_point)
         cr_assert(keep[i]);
     cr_assert_eq(ism_polyline_thin(pos, idx, 0, 1, keep), 0);
     cr_assert_lt(ism_polyline_thin(pos, idx, N, 1.7e-3, keep), N);
+}
+
+Test(polyline_thin, no_index_is_the_identity)
+{
+    enum { N = 300 };
+    double pos[3 * N];
+    uint32_t idx[N];
+    uint8_t keep[N], keep_null[N];
+    for (int i = 0; i < N; i++) { /* an open helix at an irrational step, as above */
+        double t = i * 0.0234567891;
+        pos[3 * i] = cos(t);
+        pos[3 * i + 1] = sin(t);
+        pos[3 * i + 2] = 0.07 * t;
+        idx[i] = (uint32_t)i;
+    }
+    double tol = 2e-3; /* a chord of sagitta tol spans 2 acos(1 - tol) = 5.4 steps */
+    size_t kept = ism_polyline_thin(pos, idx, N, tol, keep);
+    cr_assert_eq(ism_polyline_thin(pos, NULL, N, tol, keep_null), kept);
+    cr_assert_lt(kept, N / 2);
+    for (int i = 0; i < N; i++)
+        cr_assert_eq(keep_null[i], keep[i], "vertex %d", i);
+    cr_assert_leq(worst_dropped(pos, idx, N, keep_null), tol);
 }
