@@ -2288,15 +2288,28 @@ static void split_marked(dual *d)
     free(list);
 }
 
+/* A chunk of to_mesh's normals: the vertices and where their normals go. */
+typedef struct normal_job {
+    struct dual *d;
+    const uint32_t *used;
+    float *nrm;
+    size_t n;
+} normal_job;
+
+/* Task k: the unit ∇f at vertices used[MEASURE_LANES k ..], their gradients in one batch. */
 static void normal_task(void *ctx, size_t k, int thread)
 {
-    task_ctx *job = ctx;
-    double g[3];
-    uint32_t v = ((const uint32_t *)job->in)[k];
-    ism_sample_grad(&job->d->w[thread].s, &job->d->pos[3 * v], g);
-    ism_normalise3(g);
-    for (int a = 0; a < 3; a++)
-        ((float *)job->out)[3 * k + a] = (float)g[a];
+    normal_job *job = ctx;
+    size_t lo, n = chunk_of(k, job->n, &lo);
+    double p[MEASURE_LANES][3], f[MEASURE_LANES], g[MEASURE_LANES][3];
+    for (size_t j = 0; j < n; j++)
+        memcpy(p[j], &job->d->pos[3 * (size_t)job->used[lo + j]], sizeof p[j]);
+    ism_sample_grad_batch(&job->d->w[thread].s, (const double (*)[3])p, f, g, n);
+    for (size_t j = 0; j < n; j++) {
+        ism_normalise3(g[j]);
+        for (int a = 0; a < 3; a++)
+            job->nrm[3 * (lo + j) + a] = (float)g[j][a];
+    }
 }
 
 /* The vertices the triangles use (their normals from ∇f, on the pool) and the triangles,
@@ -2317,8 +2330,8 @@ static bool to_mesh(dual *d, ism_mesh *mesh)
                 used[nu++] = v;
             }
         }
-        task_ctx job = {d, used, nrm};
-        ism_pool_for(d->pool, nu, normal_task, &job, NULL);
+        normal_job job = {d, used, nrm, nu};
+        ism_pool_for(d->pool, (nu + MEASURE_LANES - 1) / MEASURE_LANES, normal_task, &job, NULL);
     }
     for (size_t k = 0; k < nu && ok; k++)
         ok = ism_mesh_add_vertex(mesh, &d->pos[3 * used[k]], &nrm[3 * k]) == k;
