@@ -15,6 +15,7 @@ import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from boxes import placements  # noqa: E402
+from drawn import obj_chains  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BUILD = os.environ.get("ISOMESH_BUILD", os.path.join(ROOT, "build", "release"))
@@ -227,26 +228,16 @@ class SingularSurfaces(unittest.TestCase):
 
 
 def obj_boundaries(path):
-    """The boundary chains of an .obj written by isomesh: its "g boundaries" group's `l`
-    lines (1-based vertex indices; a closed chain repeats its first vertex), each as
-    {"closed", "xyz"} with xyz the chain's vertices (the closing repeat left out) flattened."""
-    verts, chains, group = [], [], None
-    with open(path) as f:
-        for line in f:
-            w = line.split()
-            if not w:
-                continue
-            if w[0] == "v":
-                verts.append([float(t) for t in w[1:4]])
-            elif w[0] == "g":
-                group = w[1] if len(w) > 1 else None
-            elif w[0] == "l" and group == "boundaries":
-                idx = [int(t) - 1 for t in w[1:]]
-                closed = len(idx) > 2 and idx[0] == idx[-1]
-                chains.append({"closed": closed,
-                               "xyz": [c for i in (idx[:-1] if closed else idx)
-                                       for c in verts[i]]})
-    return chains
+    """The .obj's "boundaries" group (every boundary vertex, drawn.obj_chains) as
+    {"closed", "xyz"}: a closed chain repeats its first vertex (the repeat left out), xyz the
+    chain's points flattened."""
+    out = []
+    for c in obj_chains(path, "boundaries"):
+        pts = [p for p, _ in c]
+        closed = len(pts) > 2 and pts[0] == pts[-1]
+        out.append({"closed": closed,
+                    "xyz": [x for p in (pts[:-1] if closed else pts) for x in p]})
+    return out
 
 
 class GoalsUnderTheDefaultBound(unittest.TestCase):
