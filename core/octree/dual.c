@@ -201,11 +201,12 @@ typedef struct quads {
 } quads;
 
 /* What a parallel loop's tasks share: the mesher, their inputs and their outputs (slot k of
- * out is task k's alone). */
+ * out is task k's alone), and for the chunked measures (chunk_of) how many items in all. */
 typedef struct task_ctx {
     struct dual *d;
     const void *in;
     void *out;
+    size_t n; /* the chunked loops' item count; 0 where a task is one item */
 } task_ctx;
 
 /* What one thread evaluates f with: its sampler (counters), interval workspace, lattice
@@ -1148,7 +1149,7 @@ static void expand(dual *d, const int32_t *list, size_t n)
             free(next);
             break;
         }
-        task_ctx job = {d, cur, out};
+        task_ctx job = {d, cur, out, 0};
         d->batch_on = d->batch_freed >= BATCH_PAYS * d->batches;
         ism_pool_for(d->pool, n, split_task, &job, NULL);
         for (size_t k = 0; k < n; k++) {
@@ -1368,7 +1369,7 @@ static void make_vertices(dual *d)
             }
             leaves[n++] = (int32_t)i;
         }
-    task_ctx job = {d, leaves, NULL};
+    task_ctx job = {d, leaves, NULL, 0};
     ism_pool_for(d->pool, n, vertex_task, &job, NULL);
     free(leaves);
     if (d->crease && n)
@@ -1432,29 +1433,28 @@ static size_t chunk_of(size_t k, size_t n, size_t *lo)
     return n - *lo < MEASURE_LANES ? n - *lo : MEASURE_LANES;
 }
 
-/* A chunk of measure_pairs' work: its pairs and where their distances go. */
-typedef struct pair_job {
-    struct dual *d;
-    const uint64_t *keys;
-    double *dist;
-    size_t n;
-} pair_job;
+/* How many chunks of MEASURE_LANES n items make (chunk_of's tasks). */
+static size_t chunks(size_t n)
+{
+    return (n + MEASURE_LANES - 1) / MEASURE_LANES;
+}
 
-/* Task k: the midpoint distances of keys[MEASURE_LANES k ..] (ism_dual_dist's, with the
- * first gradients in one batch). */
+/* Task k (job: in the pair keys, out their distances, n how many): the midpoint distances
+ * of keys[MEASURE_LANES k ..] (ism_dual_dist's, with the first gradients in one batch). */
 static void pair_task(void *ctx, size_t k, int thread)
 {
-    pair_job *job = ctx;
+    task_ctx *job = ctx;
     dual *d = job->d;
     worker *w = &d->w[thread];
+    const uint64_t *keys = job->in;
+    double *dist = job->out;
     size_t lo, n = chunk_of(k, job->n, &lo);
     double m[MEASURE_LANES][3], f[MEASURE_LANES], g[MEASURE_LANES][3], e = d->o->max_error;
     for (size_t j = 0; j < n; j++)
-        pair_mid(d, job->keys[lo + j], m[j]);
+        pair_mid(d, keys[lo + j], m[j]);
     ism_sample_grad_batch(&w->s, (const double (*)[3])m, f, g, n);
     for (size_t j = 0; j < n; j++)
-        job->dist[lo + j] =
-            ism_dual_kink_dist(&w->s, m[j], ism_dual_plain_dist(&w->s, m[j], f[j], g[j], e), e);
+        dist[lo + j] = ism_dual_dist_at(&w->s, m[j], f[j], g[j], e);
 }
 
 /* The midpoint distances of the n vertex pairs in pairs[0..2n) into the memo: those not
@@ -1483,8 +1483,8 @@ static void measure_pairs(dual *d, const uint32_t *pairs, size_t n)
         keys[m] = key;
         slot[m++] = i;
     }
-    pair_job job = {d, keys, dist, m};
-    ism_pool_for(d->pool, (m + MEASURE_LANES - 1) / MEASURE_LANES, pair_task, &job, NULL);
+    task_ctx job = {d, keys, dist, m};
+    ism_pool_for(d->pool, chunks(m), pair_task, &job, NULL);
     for (size_t j = 0; j < m; j++)
         k->val[slot[j]] = dist[j];
     free(keys);
@@ -1742,7 +1742,7 @@ static void make_quads(dual *d)
         d->nomem = true;
         return;
     }
-    task_ctx job = {d, wk.defer, part};
+    task_ctx job = {d, wk.defer, part, 0};
     ism_pool_for(d->pool, wk.nd, walk_task, &job, NULL);
     for (size_t k = 0; k < wk.nd; k++) {
         d->nomem |= part[k].nomem;
@@ -1783,36 +1783,27 @@ static void tri_corners(const dual *d, size_t t, const double *p[3])
         p[k] = &d->pos[3 * d->tri[3 * t + k]];
 }
 
-/* A chunk of measure_triangles' centroids: the triangles and their miss masks. */
-typedef struct centroid_job {
-    struct dual *d;
-    const uint32_t *tris;
-    uint8_t *miss;
-    size_t n;
-} centroid_job;
-
-/* Task k: for triangles tris[MEASURE_LANES k ..], 0 when the centroid is within E of f = 0
+/* Task k (job: in the triangles, out their miss masks, n how many): for triangles tris[MEASURE_LANES k ..], 0 when the centroid is within E of f = 0
  * and the normal along ∇f there (ism_dual_centroid_within, the centroids' gradients in one
  * batch), else 7 (every leaf of the triangle to split). */
 static void centroid_task(void *ctx, size_t k, int thread)
 {
-    centroid_job *job = ctx;
+    task_ctx *job = ctx;
     dual *d = job->d;
     worker *w = &d->w[thread];
+    const uint32_t *tris = job->in;
+    uint8_t *miss = job->out;
     size_t lo, n = chunk_of(k, job->n, &lo);
     double c[MEASURE_LANES][3], f[MEASURE_LANES], g[MEASURE_LANES][3];
+    const double *p[MEASURE_LANES][3]; /* the corners (d->pos), kept for the second pass */
     for (size_t j = 0; j < n; j++) {
-        const double *p[3];
-        tri_corners(d, job->tris[lo + j], p);
-        ism_dual_centroid(p, c[j]);
+        tri_corners(d, tris[lo + j], p[j]);
+        ism_dual_centroid(p[j], c[j]);
     }
     ism_sample_grad_batch(&w->s, (const double (*)[3])c, f, g, n);
-    for (size_t j = 0; j < n; j++) {
-        const double *p[3];
-        tri_corners(d, job->tris[lo + j], p);
-        job->miss[lo + j] =
-            ism_dual_centroid_within_at(&w->s, p, c[j], f[j], g[j], d->o->max_error) ? 0 : 7;
-    }
+    for (size_t j = 0; j < n; j++)
+        miss[lo + j] =
+            ism_dual_centroid_within_at(&w->s, p[j], c[j], f[j], g[j], d->o->max_error) ? 0 : 7;
 }
 
 /* Triangle t's vertices, sorted, in one word (+1: never 0); 0 when the vertices are too
@@ -1893,8 +1884,8 @@ static void measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t *
         if (!emiss[k])
             cen[nc++] = open[k];
     }
-    centroid_job job = {d, cen, cmiss, nc};
-    ism_pool_for(d->pool, (nc + MEASURE_LANES - 1) / MEASURE_LANES, centroid_task, &job, NULL);
+    task_ctx job = {d, cen, cmiss, nc};
+    ism_pool_for(d->pool, chunks(nc), centroid_task, &job, NULL);
     for (size_t k = 0, c = 0; k < np; k++) {
         int m = emiss[k] ? emiss[k] : cmiss[c++];
         miss[at[k]] = (uint8_t)m;
@@ -2216,7 +2207,7 @@ static void emit_quads(dual *d)
     centre = ok ? malloc((nf ? nf : 1) * 3 * sizeof *centre) : NULL;
     ok = ok && centre && reserve_vertices(d, nf);
     if (ok) {
-        task_ctx job = {d, fq, centre};
+        task_ctx job = {d, fq, centre, 0};
         ism_pool_for(d->pool, nf, fan_task, &job, NULL);
         ok = keyed_reserve(&d->fans, nf);
     }
@@ -2288,27 +2279,22 @@ static void split_marked(dual *d)
     free(list);
 }
 
-/* A chunk of to_mesh's normals: the vertices and where their normals go. */
-typedef struct normal_job {
-    struct dual *d;
-    const uint32_t *used;
-    float *nrm;
-    size_t n;
-} normal_job;
-
-/* Task k: the unit ∇f at vertices used[MEASURE_LANES k ..], their gradients in one batch. */
+/* Task k (job: in the vertices, out their normals, n how many): the unit ∇f at vertices
+ * used[MEASURE_LANES k ..], their gradients in one batch. */
 static void normal_task(void *ctx, size_t k, int thread)
 {
-    normal_job *job = ctx;
+    task_ctx *job = ctx;
+    const uint32_t *used = job->in;
+    float *nrm = job->out;
     size_t lo, n = chunk_of(k, job->n, &lo);
     double p[MEASURE_LANES][3], f[MEASURE_LANES], g[MEASURE_LANES][3];
     for (size_t j = 0; j < n; j++)
-        memcpy(p[j], &job->d->pos[3 * (size_t)job->used[lo + j]], sizeof p[j]);
+        memcpy(p[j], &job->d->pos[3 * (size_t)used[lo + j]], sizeof p[j]);
     ism_sample_grad_batch(&job->d->w[thread].s, (const double (*)[3])p, f, g, n);
     for (size_t j = 0; j < n; j++) {
         ism_normalise3(g[j]);
         for (int a = 0; a < 3; a++)
-            job->nrm[3 * (lo + j) + a] = (float)g[j][a];
+            nrm[3 * (lo + j) + a] = (float)g[j][a];
     }
 }
 
@@ -2330,8 +2316,8 @@ static bool to_mesh(dual *d, ism_mesh *mesh)
                 used[nu++] = v;
             }
         }
-        normal_job job = {d, used, nrm, nu};
-        ism_pool_for(d->pool, (nu + MEASURE_LANES - 1) / MEASURE_LANES, normal_task, &job, NULL);
+        task_ctx job = {d, used, nrm, nu};
+        ism_pool_for(d->pool, chunks(nu), normal_task, &job, NULL);
     }
     for (size_t k = 0; k < nu && ok; k++)
         ok = ism_mesh_add_vertex(mesh, &d->pos[3 * used[k]], &nrm[3 * k]) == k;

@@ -568,11 +568,16 @@ double ism_dual_plain_dist(ism_sampler *s, const double p[3], double f, const do
     return plain + ism_sample_dist(s, x);
 }
 
+double ism_dual_dist_at(ism_sampler *s, const double p[3], double f, const double g[3], double e)
+{
+    return ism_dual_kink_dist(s, p, ism_dual_plain_dist(s, p, f, g, e), e);
+}
+
 double ism_dual_dist(ism_sampler *s, const double p[3], double e)
 {
     double g[3];
     double f = ism_sample_grad(s, p, g);
-    return ism_dual_kink_dist(s, p, ism_dual_plain_dist(s, p, f, g, e), e);
+    return ism_dual_dist_at(s, p, f, g, e);
 }
 
 /* A vertex's x and its place in ids, sorted by x. */

@@ -107,6 +107,10 @@ double ism_dual_plain_dist(ism_sampler *s, const double p[3], double f, const do
 /* ism_dual_kink_dist at p from ism_dual_plain_dist. */
 double ism_dual_dist(ism_sampler *s, const double p[3], double e);
 
+/* ism_dual_dist with f and ∇f at p given: the same answer, for callers that take the points'
+ * gradients in one batch. */
+double ism_dual_dist_at(ism_sampler *s, const double p[3], double f, const double g[3], double e);
+
 /* Crease vertices that two leaves found at one point (the crease on their common face: the
  * lens's x = 0 in a box centred on 0), for the n vertices ids[0..n) at pos[3 id ..]: to[k]
  * the least id of those within tol of ids[k] along every axis (joined transitively), ids[k]
