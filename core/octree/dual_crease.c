@@ -83,6 +83,7 @@
  * leaves sharing a face crossed four times: non-manifold at depth.max), and a failed try
  * costs up to 75% of the primal path's CPU on top: hence the option, still off. */
 #include "core/octree/dual_crease.h"
+#include "core/analysis/unionfind.h" /* its find (path halving) on this file's own joins */
 #include "core/octree/corners.h"
 #include "core/octree/crease_split.h"
 #include "core/octree/edge_keys.h"
@@ -593,14 +594,6 @@ static int cmp_x(const void *a, const void *b)
 }
 
 
-/* The root of v's group in up[] (halved on the way). */
-static uint32_t group_of(uint32_t *up, uint32_t v)
-{
-    while (up[v] != v)
-        v = up[v] = up[up[v]];
-    return v;
-}
-
 bool ism_dual_weld(const double *pos, const uint32_t *ids, size_t n, double tol,
                    uint32_t *to)
 {
@@ -622,8 +615,8 @@ bool ism_dual_weld(const double *pos, const uint32_t *ids, size_t n, double tol,
             const double *a = &pos[3 * (size_t)ids[o[i].k]], *b = &pos[3 * (size_t)ids[o[j].k]];
             if (!(fabs(a[1] - b[1]) <= tol && fabs(a[2] - b[2]) <= tol))
                 continue;
-            uint32_t ra = group_of(parent, (uint32_t)o[i].k);
-            uint32_t rb = group_of(parent, (uint32_t)o[j].k);
+            uint32_t ra = ism_an_uf_find(parent, (uint32_t)o[i].k);
+            uint32_t rb = ism_an_uf_find(parent, (uint32_t)o[j].k);
             if (ra == rb)
                 continue;
             /* the group's root: the entry with the least id (ties: the first) */
@@ -631,7 +624,7 @@ bool ism_dual_weld(const double *pos, const uint32_t *ids, size_t n, double tol,
             parent[a_first ? rb : ra] = a_first ? ra : rb;
         }
     for (size_t k = 0; k < n; k++)
-        to[k] = ids[group_of(parent, (uint32_t)k)];
+        to[k] = ids[ism_an_uf_find(parent, (uint32_t)k)];
     free(o);
     free(parent);
     return true;
@@ -678,14 +671,14 @@ size_t ism_dual_not_manifold(const uint32_t *tri, size_t nt, size_t nv, uint32_t
             const uint32_t *q = &tri[3 * (uint32_t)key[j]];
             int at = q[0] == v ? 0 : q[1] == v ? 1 : 2;
             uint32_t b = q[(at + 1) % 3], c = q[(at + 2) % 3];
-            up[group_of(up, b)] = group_of(up, c);
+            up[ism_an_uf_find(up, b)] = ism_an_uf_find(up, c);
         }
         uint32_t first = UINT32_MAX;
         bool one = true;
         for (size_t k = i; k < j; k++) {
             const uint32_t *q = &tri[3 * (uint32_t)key[k]];
             int at = q[0] == v ? 0 : q[1] == v ? 1 : 2;
-            uint32_t g = group_of(up, q[(at + 1) % 3]);
+            uint32_t g = ism_an_uf_find(up, q[(at + 1) % 3]);
             first = first == UINT32_MAX ? g : first;
             one = one && g == first;
         }

@@ -1,8 +1,9 @@
 /* clusters.c — 26-connected clusters of finest candidate boxes (clusters.h): the boxes'
  * lattice coordinates go into an open-addressing hash table, each box is joined with its 13
- * neighbours after it in (z, y, x) order found there (union-find, a set's root its first
- * box), and the sets are numbered in the order of their first boxes. */
+ * neighbours after it in (z, y, x) order found there (core/analysis/unionfind.h: a set's root
+ * its first box), and the sets are numbered in the order of their first boxes. */
 #include "core/singular/clusters.h"
+#include "core/analysis/unionfind.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -68,27 +69,6 @@ static void forward_offsets(uint64_t off[13])
     }
 }
 
-/* The root of box i's set (path halving). */
-static uint32_t root_of(uint32_t *up, uint32_t i)
-{
-    while (up[i] != i) {
-        up[i] = up[up[i]];
-        i = up[i];
-    }
-    return i;
-}
-
-/* Joins the sets of a and b under the smaller root: a set's root is its first box. */
-static void join(uint32_t *up, uint32_t a, uint32_t b)
-{
-    a = root_of(up, a);
-    b = root_of(up, b);
-    if (a < b)
-        up[b] = a;
-    else if (b < a)
-        up[a] = b;
-}
-
 size_t ism_sing_clusters(const ism_locus_options *o, const ism_lbox *boxes, size_t n,
                          uint32_t *label)
 {
@@ -112,7 +92,7 @@ size_t ism_sing_clusters(const ism_locus_options *o, const ism_lbox *boxes, size
         if (keys[i]) {
             size_t s = slot_of(&t, keys[i]);
             if (t.val[s] != NO_BOX) /* the same cell twice (the search's are distinct) */
-                join(up, t.val[s], (uint32_t)i);
+                ism_an_uf_union(up, t.val[s], (uint32_t)i);
             t.key[s] = keys[i];
             t.val[s] = (uint32_t)i;
         }
@@ -123,13 +103,13 @@ size_t ism_sing_clusters(const ism_locus_options *o, const ism_lbox *boxes, size
         for (int m = 0; keys[i] && m < 13; m++) {
             uint32_t nb = lookup(&t, keys[i] + off[m]);
             if (nb != NO_BOX)
-                join(up, (uint32_t)i, nb);
+                ism_an_uf_union(up, (uint32_t)i, nb);
         }
     /* numbered in the order of each cluster's first box, its root: every box points at its
      * root first (a root r <= i), then label[i] replaces up[i] in order, so label[r] is
      * written before any box of r's set after it reads it */
     for (size_t i = 0; i < n; i++)
-        up[i] = root_of(up, (uint32_t)i);
+        up[i] = ism_an_uf_find(up, (uint32_t)i);
     uint32_t count = 0;
     for (size_t i = 0; i < n; i++) {
         uint32_t r = up[i];
