@@ -247,6 +247,20 @@ static bool jet_excludes(const ism_ivgrad *gc, const ism_ivjet *j, const ism_int
            || !holds0(ism_dual_terms_f(gc->v, &t));
 }
 
+/* The cell x's centre into m->c and cx (a point interval) and f's interval gradient there
+ * into m->at (one evaluation counted): the start of every cell model (smooth_tests,
+ * certified_model). */
+static void centre_at(const search *s, worker *w, const ism_interval x[3], ism_dual_model *m,
+                      ism_interval cx[3])
+{
+    _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++) {
+        m->c[k] = 0.5 * x[k].lo + 0.5 * x[k].hi;
+        cx[k] = iv(m->c[k], m->c[k]);
+    }
+    ism_eval_interval_grad(s->t, w->jw, cx, NULL, NULL, &m->at);
+    w->evals_interval++;
+}
+
 /* The tests that need f smooth on the cell: mean-value forms of F and ∇F, the second-order
  * form of F, and Krawczyk (pm: the parent's model, or NULL). The cell's own model is built in
  * *m as they go: valid when the verdict is SMOOTH. */
@@ -254,13 +268,9 @@ static int smooth_tests(const search *s, worker *w, const ism_interval x[3], con
                         const ism_dual_model *pm, ism_dual_model *m)
 {
     ism_interval cx[3], dx[3];
-    _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++) {
-        m->c[k] = 0.5 * x[k].lo + 0.5 * x[k].hi;
-        cx[k] = iv(m->c[k], m->c[k]);
+    centre_at(s, w, x, m, cx);
+    _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         dx[k] = iv_sub(x[k], cx[k]);
-    }
-    ism_eval_interval_grad(s->t, w->jw, cx, NULL, NULL, &m->at);
-    w->evals_interval++;
     if (!holds0(add_linear(m->at.v, g->d, dx)))
         return EXCLUDED;
     /* The parent's jet (no evaluation) round the cell's own centre. Its row test is not
@@ -404,13 +414,8 @@ static bool holds_segment(const scell *c, const ism_interval x[3])
 static void certified_model(const search *s, worker *w, const ism_interval x[3], ism_dual_model *m)
 {
     ism_interval cx[3];
-    for (int k = 0; k < 3; k++) {
-        m->c[k] = 0.5 * x[k].lo + 0.5 * x[k].hi;
-        cx[k] = iv(m->c[k], m->c[k]);
-    }
-    ism_eval_interval_grad(s->t, w->jw, cx, NULL, NULL, &m->at);
+    centre_at(s, w, x, m, cx);
     ism_eval_interval_jet(s->t, w->jw, x, NULL, NULL, &m->box);
-    w->evals_interval++;
     w->evals_jet++;
 }
 
