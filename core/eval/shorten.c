@@ -103,7 +103,7 @@ bool ism_tape_top_min_max_only(const ism_tape *t)
     if (ism_top_active_branch(t, any) < 0)
         return false;
     for (size_t i = 0; i + 1 < t->len; i++)
-        if (is_min_max(t->code[i].op) || t->code[i].op == ISM_OP_ABS)
+        if (ism_op_is_kink(t->code[i].op))
             return false;
     return true;
 }

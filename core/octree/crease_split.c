@@ -70,8 +70,8 @@ typedef ism_piece label_t;
 
 bool ism_crease_pieces(const ism_tape *f)
 {
-    return ism_tape_has_kink(f) && !ism_tape_top_min_max_only(f) &&
-           ism_tape_kinks(f) <= ISM_PIECE_KINKS;
+    size_t k = ism_tape_kinks(f);
+    return k && k <= ISM_PIECE_KINKS && !ism_tape_top_min_max_only(f);
 }
 
 /* Does t still end in f's top min/max (not decided by the intervals it was shortened by)? */
@@ -125,6 +125,26 @@ static label_t label_at(ism_sampler *s, bool pm, const double p[3])
     return ism_eval_piece(s->tape, s->ws, p[0], p[1], p[2]);
 }
 
+/* l[0], l[1] swapped when out of increasing order. */
+static void order_pair(label_t *l)
+{
+    if (l[0] > l[1]) {
+        label_t t = l[0];
+        l[0] = l[1], l[1] = t;
+    }
+}
+
+/* Labels l[0..m) (m = 2 or 3) put in increasing order, as every pair and triple of labels is
+ * taken: the same bits in every leaf. */
+static void order_labels(label_t *l, int m)
+{
+    order_pair(l);
+    if (m == 3) {
+        order_pair(l + 1);
+        order_pair(l);
+    }
+}
+
 /* The values and gradients at x of labels lo < hi's functions (v[0], g[0]: lo's): in pieces
  * mode f on each piece, else the top's two branches (lo, hi = 0, 1). False when f has no top
  * min/max (not in pieces mode). */
@@ -140,9 +160,10 @@ static bool pair_at(ism_sampler *s, bool pm, const double x[3], label_t lo, labe
     return true;
 }
 
-/* One minimum-norm Newton step on m = 2 or 3 equations (labels l[0..m), each 0 on its
- * function) from x; false when their gradients are dependent there or a value is not finite. */
-static bool newton_step(ism_sampler *s, bool pm, double x[3], int m, const label_t *l)
+/* The minimum-norm Newton step from x on m = 2 or 3 equations (labels l[0..m), each 0 on
+ * its function); false when their gradients are dependent there or a value is not finite. */
+static bool newton_delta(ism_sampler *s, bool pm, const double x[3], int m, const label_t *l,
+                         double step[3])
 {
     double v[3], g[3][3];
     pair_at(s, pm, x, l[0], l[1], v, g);
@@ -150,11 +171,17 @@ static bool newton_step(ism_sampler *s, bool pm, double x[3], int m, const label
         s->n_gradient++;
         v[2] = ism_eval_piece_gradient(s->tape, s->ws, l[2], x[0], x[1], x[2], g[2]);
     }
-    double step[3];
     for (int k = 0; k < m; k++)
         if (!isfinite(v[k]))
             return false;
-    if (!ism_min_norm_step(m, (const double (*)[3])g, v, CREASE_PARALLEL_SIN2, step))
+    return ism_min_norm_step(m, (const double (*)[3])g, v, CREASE_PARALLEL_SIN2, step);
+}
+
+/* x moved by one newton_delta step; false (x as it was) when that fails. */
+static bool newton_step(ism_sampler *s, bool pm, double x[3], int m, const label_t *l)
+{
+    double step[3];
+    if (!newton_delta(s, pm, x, m, l, step))
         return false;
     for (int k = 0; k < 3; k++)
         x[k] += step[k];
@@ -258,7 +285,8 @@ static bool crease_point(ism_sampler *s, bool pm, const double *p0, const double
                          label_t lp, label_t lq, ism_fpoint *out, bool *flat)
 {
     const double *p = before(q0, p0) ? q0 : p0, *q = p == p0 ? q0 : p0;
-    label_t l[2] = {lp < lq ? lp : lq, lp < lq ? lq : lp};
+    label_t l[2] = {lp, lq};
+    order_labels(l, 2);
     double d[2];
     const double *ends[2] = {p, q};
     for (int e = 0; e < 2; e++)
@@ -300,13 +328,8 @@ static bool corner_point(ism_sampler *s, const ism_fpoint *x, int k, const label
             c[a] += x[j].p[a] / k;
     for (int j = 0; j < k; j++)
         spread = fmax(spread, ism_dist3(x[j].p, c));
-    label_t o[3] = {l[0], l[1], m == 3 ? l[2] : 0}; /* increasing: the same bits in every leaf */
-    for (int i = 0; i < m - 1; i++)
-        for (int j = 0; j < m - 1 - i; j++)
-            if (o[j] > o[j + 1]) {
-                label_t t = o[j];
-                o[j] = o[j + 1], o[j + 1] = t;
-            }
+    label_t o[3] = {l[0], l[1], m == 3 ? l[2] : 0};
+    order_labels(o, m);
     memcpy(p, c, sizeof p);
     bool ok = newton(s, true, p, m, o) && ism_dist3(p, c) <= CORNER_REACH * spread;
     if (!ok) {
@@ -633,8 +656,9 @@ bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double
     /* end[k]: the crease points as corners of the run after mixed edge k, with its branch's
        gradients (so the run's own fans are judged on one smooth surface) */
     ism_fpoint end[2][2], sub[CUT_MAX_CORNERS + 3];
-    label_t r0 = br[(mixed[0] + 1) % n], r1 = br[(mixed[1] + 1) % n]; /* the runs' labels */
-    label_t lo = r0 < r1 ? r0 : r1, hi = r0 < r1 ? r1 : r0;
+    label_t run[2] = {br[(mixed[0] + 1) % n], br[(mixed[1] + 1) % n]}; /* the runs' labels */
+    order_labels(run, 2);
+    label_t lo = run[0], hi = run[1];
     for (int j = 0; j < 2; j++) { /* x[j] starts run j and ends run 1 - j: both branches */
         double v[2], g[2][3];
         if (!pair_at(s, pm, x[j].p, lo, hi, v, g))
@@ -667,11 +691,8 @@ bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double
  * sag? */
 static bool on_crease(ism_sampler *s, const double x[3], const label_t l[2], double sag)
 {
-    double v[2], g[2][3], step[3];
-    pair_at(s, true, x, l[0], l[1], v, g);
-    return isfinite(v[0]) && isfinite(v[1]) &&
-           ism_min_norm_step(2, (const double (*)[3])g, v, CREASE_PARALLEL_SIN2, step) &&
-           ism_norm3(step) <= ON_CREASE_SHARE * sag;
+    double step[3];
+    return newton_delta(s, true, x, 2, l, step) && ism_norm3(step) <= ON_CREASE_SHARE * sag;
 }
 
 /* Does the crease pass between triangle v's corners unseen: an edge whose two ends lie off
@@ -702,7 +723,8 @@ static bool unseen_crease(ism_sampler *s, bool pm, const ism_cell_out *out, cons
                 label_t other = label_at(s, pm, mirror);
                 if (third == LABEL_ANY || other == third)
                     continue;
-                l[0] = third < other ? third : other, l[1] = third < other ? other : third;
+                l[0] = third, l[1] = other;
+                order_labels(l, 2);
                 if (!on_crease(s, a, l, sag) || !on_crease(s, c, l, sag))
                     continue; /* crease points of two creases: a chord across one piece */
             }
