@@ -434,24 +434,32 @@ static bool split_labelled(ism_sampler *s, bool pm, ism_cell_out *out, size_t fi
 /* The leaf's shortened tape when it holds f to one label over its closed box — it decides
  * f's top min/max (strictly), or in pieces mode its intervals decide every kink on f's
  * path (ism_tape_one_piece: one interval pass of the short tape) — so the points it holds
- * (ism_sampler_tape_at) lie on the one branch it keeps; else NULL. Looked up once per leaf:
- * a lookup per point cost 0.3% more instructions on cube-minus-ball (callgrind). */
-static const ism_tape *deciding_local(const ism_sampler *s, bool pm)
+ * (ism_sampler_tape_at) lie on the one branch it keeps; else NULL. Looked up once per leaf,
+ * at its first use there (kept in s->local_deciding): a lookup per point cost 0.3% more
+ * instructions on cube-minus-ball (callgrind), and one per polygon repeated the pieces mode's
+ * tape scan and interval pass for the same local and box. */
+static const ism_tape *deciding_local(ism_sampler *s)
 {
-    if (!s->local)
-        return NULL;
-    if (!pm)
-        return !top_undecided(s->local) ? s->local : NULL;
-    const double *b = s->local_box;
-    ism_interval x = {b[0], b[3]}, y = {b[1], b[4]}, z = {b[2], b[5]};
-    return ism_tape_one_piece(s->local, s->ws, x, y, z) ? s->local : NULL;
+    if (s->local_decided)
+        return s->local_deciding;
+    const ism_tape *d = NULL;
+    if (s->local && !s->crease_pieces) {
+        d = !top_undecided(s->local) ? s->local : NULL;
+    } else if (s->local) {
+        const double *b = s->local_box;
+        ism_interval x = {b[0], b[3]}, y = {b[1], b[4]}, z = {b[2], b[5]};
+        d = ism_tape_one_piece(s->local, s->ws, x, y, z) ? s->local : NULL;
+    }
+    s->local_deciding = d;
+    s->local_decided = true;
+    return d;
 }
 
 /* Do all vertices of triangles first_tri..ntris - 1 lie on one branch (deciding_local)? */
-static bool one_branch(const ism_sampler *s, bool pm, const ism_cell_out *out,
-                       size_t first_tri, size_t ntris)
+static bool one_branch(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
+                       size_t ntris)
 {
-    const ism_tape *local = deciding_local(s, pm);
+    const ism_tape *local = deciding_local(s);
     if (!local)
         return false;
     for (size_t i = 3 * first_tri; i < 3 * ntris; i++)
@@ -483,7 +491,7 @@ bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
 {
     size_t ntris = out->ntris;
     bool pm = s->crease_pieces;
-    if (first_tri == ntris || one_branch(s, pm, out, first_tri, ntris))
+    if (first_tri == ntris || one_branch(s, out, first_tri, ntris))
         return true;
     double v[2];
     const double *p0 = out->verts[out->tris[3 * first_tri]].p;
@@ -621,7 +629,7 @@ bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double
     bool pm = s->crease_pieces;
     if (n < 3 || n > CUT_MAX_CORNERS || (!pm && !top_undecided(s->tape)))
         return true; /* f does not end in min/max */
-    const ism_tape *local = deciding_local(s, pm);
+    const ism_tape *local = deciding_local(s);
     size_t held = 0;
     while (local && held < n && ism_sampler_tape_at(s, pts[held].p) == local)
         held++;
@@ -745,7 +753,7 @@ bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first
 {
     bool pm = s->crease_pieces;
     if (first_tri == out->ntris || (!pm && !top_undecided(s->tape)) ||
-        one_branch(s, pm, out, first_tri, out->ntris))
+        one_branch(s, out, first_tri, out->ntris))
         return false;
     uint32_t lo;
     label_t stack[LABELS_ON_STACK], *labels = leaf_labels(out, first_tri, stack, &lo);

@@ -175,6 +175,7 @@ static void leaf_sampler(ism_cell_ctx *cx, int32_t leaf)
 {
     const ism_node *nd = &cx->tree->nodes[leaf];
     cx->s.local = ism_leaf_tape(cx->tree, nd);
+    cx->s.local_decided = false;
     int32_t steps = ism_grid_cell_steps(&cx->tree->grid, nd->level);
     for (int a = 0; a < 3; a++) {
         cx->s.local_box[a] = ism_grid_coord(&cx->tree->grid, a, nd->org[a]);
@@ -258,6 +259,7 @@ static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell
         if (ok && !p->leaf_error)
             measure_unflat(p, pc, p->leaves[i], out, t0);
         cx->s.local = NULL;
+        cx->s.local_decided = false;
         if (!ok)
             return false;
     }

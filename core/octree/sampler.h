@@ -18,6 +18,11 @@ typedef struct ism_sampler {
      * its box (octree.h) — used there by ism_sample_f / ism_sample_grad; NULL for none. */
     const ism_tape *local;
     double local_box[6];
+    /* crease_split.c's answer for local over local_box (its deciding_local: local when it
+     * holds f to one label there, else NULL), looked up at its first use in a leaf and kept
+     * while local is (valid when local_decided; whoever sets local clears that). */
+    const ism_tape *local_deciding;
+    bool local_decided;
     /* ism_sample_dist_between (refine.h) seeks the bound through the corners only where
      * the estimate passes this: the polygoniser's max_error, which every figure it measures
      * is held against (one within it needs no bound; seeking it everywhere cost the Klein
