@@ -259,19 +259,6 @@ static uint64_t *obtuse_edges(const rm_pass *p, size_t *n)
     return keys;
 }
 
-static bool has_key(const uint64_t *keys, size_t n, uint64_t key)
-{
-    size_t lo = 0, hi = n;
-    while (lo < hi) {
-        size_t mid = lo + (hi - lo) / 2;
-        if (keys[mid] < key)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo < n && keys[lo] == key;
-}
-
 size_t rm_flip_from(rm_pass *p, const uint8_t *seed, bool *ok)
 {
     const ism_mesh *m = p->r.m;
@@ -284,7 +271,7 @@ size_t rm_flip_from(rm_pass *p, const uint8_t *seed, bool *ok)
         if (!p->r.dead[t] && (seed[v[0]] || seed[v[1]] || seed[v[2]]))
             for (int k = 0; k < 3 && *ok; k++)
                 if (v[k] < v[(k + 1) % 3] &&
-                    (!obtuse || has_key(obtuse, nobtuse, rm_edge_key(v[k], v[(k + 1) % 3]))))
+                    (!obtuse || rm_keys_has(obtuse, nobtuse, rm_edge_key(v[k], v[(k + 1) % 3]))))
                     *ok = push(&s, v[k], v[(k + 1) % 3]);
     }
     free(obtuse);

@@ -64,18 +64,22 @@ void rm_mesh_free(rm_mesh *r)
     memset(r, 0, sizeof *r);
 }
 
-bool rm_edge_locked(const rm_mesh *r, uint32_t a, uint32_t b)
+bool rm_keys_has(const uint64_t *keys, size_t n, uint64_t key)
 {
-    uint64_t key = rm_edge_key(a, b);
-    size_t lo = 0, hi = r->nlocked_edges;
+    size_t lo = 0, hi = n;
     while (lo < hi) {
         size_t mid = lo + (hi - lo) / 2;
-        if (r->locked_edges[mid] < key)
+        if (keys[mid] < key)
             lo = mid + 1;
         else
             hi = mid;
     }
-    return lo < r->nlocked_edges && r->locked_edges[lo] == key;
+    return lo < n && keys[lo] == key;
+}
+
+bool rm_edge_locked(const rm_mesh *r, uint32_t a, uint32_t b)
+{
+    return rm_keys_has(r->locked_edges, r->nlocked_edges, rm_edge_key(a, b));
 }
 
 bool rm_edge_triangles(const rm_mesh *r, uint32_t a, uint32_t b, uint32_t t[2], int *n)

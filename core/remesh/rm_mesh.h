@@ -60,6 +60,9 @@ static inline uint64_t rm_edge_key(uint32_t a, uint32_t b)
     return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
 }
 
+/* True when key is among the n sorted keys (binary search). */
+bool rm_keys_has(const uint64_t *keys, size_t n, uint64_t key);
+
 /* True when {a, b} is in the locked edge list. */
 bool rm_edge_locked(const rm_mesh *r, uint32_t a, uint32_t b);
 
