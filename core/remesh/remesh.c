@@ -152,7 +152,7 @@ static void drop_found(found *k)
  * split needles' thin halves (from the split needles' corners only). */
 static void mend_needles(rm_pass *p, bool last, bool *ok)
 {
-    if (!(p->poorest < sin(ISM_RM_COLLAPSE_DEG * M_PI / 180)))
+    if (!(p->poorest < rm_collapse_poor()))
         return; /* no triangle under ISM_RM_COLLAPSE_DEG since rm_mark_active looked */
     rm_collapse_bounds_need(p); /* what collapses and insertions keep to */
     rm_collapse_active(p, ok);

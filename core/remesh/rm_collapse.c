@@ -157,7 +157,7 @@ static bool merge_ok(rm_pass *p, rm_merge *g)
         return false;
     rm_fan f;
     rm_fan_measure(p, g->v, &f);
-    double poor = sin(ISM_RM_COLLAPSE_DEG * M_PI / 180);
+    double poor = rm_collapse_poor();
     int poor_before = 0, poor_after = 0;
     g->after = INFINITY;
     for (uint32_t i = 0; i < r->count[g->v]; i++) {
@@ -396,7 +396,7 @@ bool rm_midpoint_within(rm_pass *p, double d)
 size_t rm_collapse_active(rm_pass *p, bool *ok)
 {
     const ism_mesh *m = p->r.m;
-    double poor = sin(ISM_RM_COLLAPSE_DEG * M_PI / 180);
+    double poor = rm_collapse_poor();
     size_t total = 0;
     *ok = true;
     memset(p->touched, 1, m->nverts);

@@ -426,7 +426,7 @@ static bool merged_fan_ok(rm_pass *p, const rm_merge *g, const double *x,
                           const crease_frame *cf)
 {
     const rm_mesh *r = &p->r;
-    double old_sine = INFINITY, new_sine = INFINITY, poor = sin(ISM_RM_COLLAPSE_DEG * M_PI / 180);
+    double old_sine = INFINITY, new_sine = INFINITY, poor = rm_collapse_poor();
     int poor_before = 0, poor_after = 0; /* t1 and t2 counted once, from v's fan */
     uint32_t ends[2] = {g->v, g->w};
     for (int e = 0; e < 2; e++) /* shapes first: the distances cost 20 times as much */
@@ -586,7 +586,7 @@ static bool corner_of_poor(rm_pass *p, uint32_t v, double poor, double *key)
 size_t rm_crease_slide_sweep(rm_pass *p)
 {
     const rm_mesh *r = &p->r;
-    double poor = sin(ISM_RM_COLLAPSE_DEG * M_PI / 180);
+    double poor = rm_collapse_poor();
     if (!ism_tape_has_min_max(p->f) || !(p->poorest < poor))
         return 0; /* no min/max: no crease of branches; no triangle under 20°: no need */
     rm_collapse_bounds_need(p); /* what merges onto the crease keep to */

@@ -36,10 +36,6 @@
  * fraction of an edge (rm_relax.c's ISM_RM_NEWTON_STEPS and _REL). */
 #define ISM_RM_INSERT_NEWTON_STEPS 8
 #define ISM_RM_INSERT_NEWTON_REL 1e-6
-/* Two needles split at once (split_pair) only when the two triangles on their short edges get
- * no angle under this (degrees): the collapses' poor level, so the pair's split makes no new
- * needle there (b at the chord's middle gives 30°; short edges 1 : 2 about 19°). */
-#define ISM_RM_INSERT_PAIR_DEG 20.0
 /* Sweeps of splits per call, the flips between them, while the last sweep split a pair (a
  * needle alone needs no next level: gyroid-ball's crease needles, pass 1,248.3M with every
  * level swept, 1,240.7M so): a fan of k needles takes about log2 k
@@ -329,7 +325,10 @@ static bool split_pair(rm_pass *p, uint32_t t, uint32_t u, const uint32_t abdc[4
     double x[3], g[3], n[3];
     if (!new_place(p, adc, x, n, g) || !faces_kept(p, abdc, 4, n, x))
         return false;
-    double pair = sin(ISM_RM_INSERT_PAIR_DEG * M_PI / 180);
+    /* the two triangles on the short edges get no angle under the collapses' poor level, so
+     * the pair's split makes no new needle there (b at the chord's middle gives 30°; short
+     * edges 1 : 2 about 19°) */
+    double pair = rm_collapse_poor();
     if (!(rm_min_sine(P(p, abdc[0]), P(p, abdc[1]), x) >= pair) ||
         !(rm_min_sine(P(p, abdc[1]), P(p, abdc[2]), x) >= pair))
         return false;

@@ -279,6 +279,10 @@ static inline void rm_sine_open(rm_pass *p, double *found, size_t from)
  * and sizes the room for insertions (remesh.c). */
 static inline double rm_insert_poor(void) { return sin(ISM_RM_INSERT_DEG * M_PI / 180); }
 
+/* The sine of ISM_RM_COLLAPSE_DEG: a triangle whose smallest angle's sine is below it is poor
+ * (the collapses' level). */
+static inline double rm_collapse_poor(void) { return sin(ISM_RM_COLLAPSE_DEG * M_PI / 180); }
+
 /* The sine of triangle t's smallest angle (rm_min_sine of its corners in order), measured
  * once while its shape holds (sine). */
 static inline double rm_tri_sine(rm_pass *p, uint32_t t)

@@ -320,7 +320,7 @@ bool rm_relax_vertex(rm_pass *p, uint32_t v)
     for (int k = 0; k < 3; k++)
         d[k] -= dn * n[k];
     if (ism_dot3(d, d) < p->relax_min_step * p->relax_min_step * f.mean_edge * f.mean_edge &&
-        f.min_sine >= sin(ISM_RM_COLLAPSE_DEG * M_PI / 180))
+        f.min_sine >= rm_collapse_poor())
         return false; /* near enough its fan's centroid, no needle in its fan (remesh.c's
                          ISM_RM_MIN_STEP) */
     for (double step = 1; step >= 0.5; step *= 0.5) {
@@ -350,7 +350,7 @@ size_t rm_mark_active(rm_pass *p)
     const rm_mesh *r = &p->r;
     double comfort = sin(ISM_RM_COMFORT_DEG * M_PI / 180);
     memset(p->active, 0, m->nverts);
-    double needle = sin(ISM_RM_COLLAPSE_DEG * M_PI / 180);
+    double needle = rm_collapse_poor();
     p->poorest = 1;
     p->poor = 0;
     for (size_t t = 0; t < m->ntris; t++) {
