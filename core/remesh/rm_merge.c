@@ -57,18 +57,28 @@ static bool link_has(const uint32_t *table, uint32_t x)
     return false;
 }
 
-int rm_merge_neighbours(const rm_mesh *r, uint32_t v, uint32_t *nb)
+/* v's distinct neighbours (of its first ISM_RM_MERGE_MAX_DEGREE triangles) into the cleared
+ * table, and into nb unless NULL; returns how many. */
+static int link_fill(const rm_mesh *r, uint32_t v, uint32_t *table, uint32_t *nb)
 {
-    uint32_t table[LINK_SLOTS];
     int n = 0;
-    memset(table, 0xff, sizeof table);
+    memset(table, 0xff, LINK_SLOTS * sizeof *table);
     for (uint32_t i = 0; i < r->count[v] && i < ISM_RM_MERGE_MAX_DEGREE; i++) {
         const uint32_t *t = r->m->tri + 3 * slot(r, v, i);
         for (int k = 0; k < 3; k++)
-            if (t[k] != v && link_put(table, t[k]))
-                nb[n++] = t[k];
+            if (t[k] != v && link_put(table, t[k])) {
+                if (nb)
+                    nb[n] = t[k];
+                n++;
+            }
     }
     return n;
+}
+
+int rm_merge_neighbours(const rm_mesh *r, uint32_t v, uint32_t *nb)
+{
+    uint32_t table[LINK_SLOTS];
+    return link_fill(r, v, table, nb);
 }
 
 bool rm_merge_link_ok(const rm_mesh *r, const rm_merge *g)
@@ -76,13 +86,7 @@ bool rm_merge_link_ok(const rm_mesh *r, const rm_merge *g)
     uint32_t table[LINK_SLOTS];
     if (r->count[g->v] > ISM_RM_MERGE_MAX_DEGREE)
         return false; /* no g of rm_merge_find's: the table would not hold v's neighbours */
-    memset(table, 0xff, sizeof table);
-    for (uint32_t i = 0; i < r->count[g->v]; i++) {
-        const uint32_t *t = r->m->tri + 3 * slot(r, g->v, i);
-        for (int k = 0; k < 3; k++)
-            if (t[k] != g->v)
-                (void)link_put(table, t[k]);
-    }
+    (void)link_fill(r, g->v, table, NULL);
     for (uint32_t i = 0; i < r->count[g->w]; i++) {
         const uint32_t *t = r->m->tri + 3 * slot(r, g->w, i);
         int cd = 0;
