@@ -186,6 +186,25 @@ static bool flippable(rm_pass *p, uint32_t a, uint32_t b, const double *x, bool 
            M_PI + ISM_RM_INSERT_FLIP_MARGIN;
 }
 
+/* A split's new vertex x (∇f there g) beside the chord of place (new_place), the triangles
+ * round it over the ring of n corners (the needle's three, the pair's four) facing as
+ * place's (faces_kept). */
+static bool place_kept(rm_pass *p, const uint32_t place[3], const uint32_t *ring, int n,
+                       double x[3], double g[3])
+{
+    double nrm[3];
+    return new_place(p, place, x, nrm, g) && faces_kept(p, ring, n, nrm, x);
+}
+
+/* ... and x fits: centroids_ok against own (the replaced triangles' farthest centroid), and
+ * the ring's two sides into its apex ring[n - 1] flippable. */
+static bool place_fits(rm_pass *p, const uint32_t *ring, int n, double own, const double *x,
+                       bool last)
+{
+    return centroids_ok(p, ring, n, own, x) && flippable(p, ring[n - 2], ring[n - 1], x, last) &&
+           flippable(p, ring[n - 1], ring[0], x, last);
+}
+
 /* Appends triangle (a, b, c) cut from triangle t (its origin); its index. */
 static uint32_t add_triangle(rm_pass *p, uint32_t t, uint32_t a, uint32_t b, uint32_t c)
 {
@@ -322,8 +341,8 @@ static bool split_pair(rm_pass *p, uint32_t t, uint32_t u, const uint32_t abdc[4
                        bool *ok)
 {
     const uint32_t adc[3] = {abdc[0], abdc[2], abdc[3]};
-    double x[3], g[3], n[3];
-    if (!new_place(p, adc, x, n, g) || !faces_kept(p, abdc, 4, n, x))
+    double x[3], g[3];
+    if (!place_kept(p, adc, abdc, 4, x, g))
         return false;
     /* the two triangles on the short edges get no angle under the collapses' poor level, so
      * the pair's split makes no new needle there (b at the chord's middle gives 30°; short
@@ -334,8 +353,7 @@ static bool split_pair(rm_pass *p, uint32_t t, uint32_t u, const uint32_t abdc[4
         return false;
     double own = fmax(rm_centroid_distance(p, P(p, abdc[0]), P(p, abdc[1]), P(p, abdc[3])),
                       rm_centroid_distance(p, P(p, abdc[3]), P(p, abdc[1]), P(p, abdc[2])));
-    if (!centroids_ok(p, abdc, 4, own, x) || !flippable(p, abdc[2], abdc[3], x, last) ||
-        !flippable(p, abdc[3], abdc[0], x, last))
+    if (!place_fits(p, abdc, 4, own, x, last))
         return false;
     *ok = split_edge(p, t, u, abdc, x, g);
     return *ok;
@@ -344,12 +362,11 @@ static bool split_pair(rm_pass *p, uint32_t t, uint32_t u, const uint32_t abdc[4
 /* Splits needle t (abc as needle() reads it) alone, as the header says. */
 static bool split_alone(rm_pass *p, uint32_t t, const uint32_t abc[3], bool last, bool *ok)
 {
-    double x[3], g[3], n[3];
-    if (!new_place(p, abc, x, n, g) || !faces_kept(p, abc, 3, n, x))
+    double x[3], g[3];
+    if (!place_kept(p, abc, abc, 3, x, g))
         return false;
     double own = rm_centroid_distance(p, P(p, abc[0]), P(p, abc[1]), P(p, abc[2]));
-    if (!centroids_ok(p, abc, 3, own, x) || !flippable(p, abc[1], abc[2], x, last) ||
-        !flippable(p, abc[2], abc[0], x, last))
+    if (!place_fits(p, abc, 3, own, x, last))
         return false;
     *ok = split(p, t, abc, x, g);
     return *ok;
