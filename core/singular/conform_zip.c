@@ -197,8 +197,8 @@ static bool zip_open_seq(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv,
 }
 
 /* The loop's rings (rings of the vertices beside a pinch point in its chart; u[i] then
- * becomes the parameter of the innermost ring's vertex), scaled from the rim points
- * (cf_pinch_rim_points). */
+ * becomes the parameter of the innermost ring's vertex, and moved[i], when moved is not
+ * NULL, says so), scaled from the rim points (cf_pinch_rim_points). */
 static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot, const cf_polyline *pl,
                            const cf_pinch *ends, const int *cid, double *u, double rho,
                            bool *moved)
@@ -262,8 +262,10 @@ static uint32_t *make_rows(cf_ctx *c, const cf_loop *l, const double *foot, cons
         rows[i] = outer[i]; /* innermost first */
         /* a ring vertex moved along the tangent (onto the fold, beside a pinch point) is
          * zipped by where it went */
-        moved[i] = ch[i] && rings > 0;
-        if (moved[i])
+        bool mv = ch[i] && rings > 0;
+        if (moved)
+            moved[i] = mv;
+        if (mv)
             u[i] = cf_pinch_param(ch[i], &pl[cid[i]], c->m->pos + 3 * (size_t)outer[i]);
     }
 done:
@@ -647,8 +649,10 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
             /* every loop's rings beside a pinch point are made in its chart (a loop along
              * several curves too, zipped by its rim's feet: each of Steiner's four loops
              * passes three pinch points), those below a rim edge across the fold on it */
-            bool *moved = calloc(l->n ? l->n : 1, sizeof *moved);
-            uint32_t *row = moved ? make_rows(c, l, foot, pl, ends, cid, u, rho, moved) : NULL;
+            bool *moved = multi ? calloc(l->n ? l->n : 1, sizeof *moved) : NULL; /* zip_multi */
+            uint32_t *row = !multi || moved
+                                ? make_rows(c, l, foot, pl, ends, cid, u, rho, moved)
+                                : NULL;
             ok = row && (multi ? zip_multi(c, pl, cv, l, cid, row, rho, u, moved)
                                : zip_loop(c, &pl[cid[0]], cv[cid[0]], l, u, row, rho));
             free(row);

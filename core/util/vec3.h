@@ -1,7 +1,7 @@
 /* vec3.h — the small vector helpers on double[3] that the polygoniser, the singular locus,
  * the curves and the analysis share (dot and cross products, length, normalising, distance,
- * a triangle's normal and area, the distance to a box, a box's diagonal, frames across a direction, the
- * Fibonacci sphere's directions), inline, each written once (the same arithmetic, in the same
+ * a triangle's normal and area, the distance to a box, a box's diagonal, frames across a
+ * direction, the Fibonacci sphere's directions), inline, each written once (the same arithmetic, in the same
  * order, wherever it is used). */
 #ifndef ISM_VEC3_H
 #define ISM_VEC3_H
