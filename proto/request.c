@@ -442,6 +442,27 @@ double ism_request_default_error(const double box[6])
     return ISM_REQ_DEFAULT_ERROR_REL * ism_box_diagonal(box);
 }
 
+bool ism_request_error_in_range(double e, const double box[6], const char *path,
+                                ism_req_error *err)
+{
+    char b[32], c[32], d[32], g[32];
+    if (!(e > 0))
+        return over(err, path, "%s must be above 0 (a distance in model units)", num(e, b));
+    /* the limits to three digits, rounded inwards: a value copied from the message passes */
+    double diag = ism_box_diagonal(box), lo = ISM_REQ_MIN_ERROR_REL * diag;
+    if (!in_range_shown(e, lo, diag, ism_three_digits(lo, 1, c), ism_three_digits(diag, -1, g),
+                        path, err)) {
+        size_t at = strlen(err->message);
+        if (e < lo)
+            snprintf(err->message + at, sizeof err->message - at, " (%s of the box diagonal %s)",
+                     num(ISM_REQ_MIN_ERROR_REL, d), ism_three_digits(diag, 0, g));
+        else
+            snprintf(err->message + at, sizeof err->message - at, " (the box diagonal)");
+        return false;
+    }
+    return true;
+}
+
 /* "max_error": E > 0 in model units, at least ISM_REQ_MIN_ERROR_REL of the box diagonal and
  * at most the diagonal; left out, ISM_REQ_DEFAULT_ERROR_REL of the diagonal (resolved here,
  * so the key and the canonical request hold the number: an explicit E equal to the default
@@ -456,27 +477,13 @@ static bool decode_max_error(const json_t *v, const json_t *depth, const ism_pre
         req->poly.max_error = 0;
         return true;
     }
-    double e, diag = ism_box_diagonal(req->poly.box);
+    double e;
     if (!v)
         e = ism_request_default_error(req->poly.box);
     else if (!read_number(v, "$.max_error", &e, err))
         return false;
-    char b[32], c[32], d[32], g[32];
-    if (!(e > 0))
-        return over(err, "$.max_error", "%s must be above 0 (a distance in model units)",
-                    num(e, b));
-    /* the limits to three digits, rounded inwards: a value copied from the message passes */
-    double lo = ISM_REQ_MIN_ERROR_REL * diag;
-    if (!in_range_shown(e, lo, diag, ism_three_digits(lo, 1, c), ism_three_digits(diag, -1, g),
-                        "$.max_error", err)) {
-        size_t at = strlen(err->message);
-        if (e < lo)
-            snprintf(err->message + at, sizeof err->message - at, " (%s of the box diagonal %s)",
-                     num(ISM_REQ_MIN_ERROR_REL, d), ism_three_digits(diag, 0, g));
-        else
-            snprintf(err->message + at, sizeof err->message - at, " (the box diagonal)");
+    if (!ism_request_error_in_range(e, req->poly.box, "$.max_error", err))
         return false;
-    }
     req->poly.max_error = e;
     if (!(depth && json_object_get(depth, "max")))
         req->poly.max_depth = ism_preset_bound_depth(p, depth_limit);

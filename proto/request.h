@@ -137,6 +137,11 @@ typedef struct ism_req_error {
  * ISM_REQ_DEFAULT_ERROR_REL of box's diagonal. */
 double ism_request_default_error(const double box[6]);
 
+/* A bound E for box: above 0, at least ISM_REQ_MIN_ERROR_REL of its diagonal and at most the
+ * diagonal, or a 422 naming path ("$.max_error"; the CLI's "--max-error") and the limit. */
+bool ism_request_error_in_range(double e, const double box[6], const char *path,
+                                ism_req_error *err);
+
 /* v > 0 to three significant digits into buf, rounded up (dir 1), down (-1) or to nearest (0),
  * returning buf: a limit or a bound in a message, without 17 digits of a box diagonal. */
 const char *ism_three_digits(double v, int dir, char buf[32]);

@@ -421,6 +421,14 @@ int ism_cli_run_surface(ism_cli_run *run)
         return st;
     if (!run->error_given) /* as a request does: 1e-3 of the box diagonal */
         run->options.max_error = ism_request_default_error(run->options.box);
+    else if (run->options.max_error > 0) { /* a request's range, once the box is known */
+        ism_req_error rerr;
+        if (!ism_request_error_in_range(run->options.max_error, run->options.box,
+                                        "--max-error", &rerr)) {
+            fprintf(stderr, "isomesh: %s\n", rerr.message);
+            return 2;
+        }
+    }
     if (run->options.max_error > 0 && !run->depth_given) /* as a request does: the bound */
         run->options.max_depth = /* decides, not the depth */
             ism_preset_bound_depth(run->preset, ISM_REQ_DEFAULT_MAX_DEPTH_LIMIT);

@@ -192,6 +192,13 @@ class TestIsomesh(unittest.TestCase):
             (["-e", "x", "--max-error", "0", "--straddle", "-o", "a.ply"],
              "--straddle needs a bound, not --max-error off"),
             (["-e", "x", "--max-error", "-1e-3", "-o", "a.ply"], "below 0"),
+            # a request's range (proto/request.c ism_request_error_in_range), once the box is
+            # known (default box: diagonal 2 sqrt 3); the CLI once meshed 1e-12 until the budget
+            (["-e", "x", "--max-error", "nan", "-o", "a.ply"], "--max-error: 'nan' is not a finite"),
+            (["-e", "x", "--max-error", "1e-12", "-o", "a.ply"],
+             "--max-error: 1e-12 is below the minimum 3.47e-09 (1e-09 of the box diagonal 3.46)"),
+            (["-e", "x", "--max-error", "3.5", "-o", "a.ply"],
+             "--max-error: 3.5 is above the limit 3.46 (the box diagonal)"),
             (["-e", "x", "--max-error", "of", "-o", "a.ply"], "--max-error"),
             (["-e", "x", "--max-error", "0.1", "--dual", "--no-dual", "-o", "a.ply"],
              "--dual and --no-dual"),
