@@ -92,6 +92,19 @@ static void between_vertices(const ism_mesh *m, double (*dist)(const double *), 
 /* The box. */
 static const double BOX15[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
 
+/* t under the bound e at depths 3:SAFETY_DEPTH in base placed by pf_sweep_box (which −1 own,
+ * 0 the 1e-3 shift, 1 the irrational one). */
+static void run_placed(const ism_tape *t, const double base[6], int which, double e,
+                       ism_mesh *m, ism_poly_stats *st)
+{
+    double box[6];
+    pf_sweep_box(base, SAFETY_DEPTH, which, box);
+    ism_poly_options o;
+    pf_options(&o, box, 3, SAFETY_DEPTH);
+    o.max_error = e;
+    pf_run_options(t, &o, m, st);
+}
+
 /* t under the bound e, depth 3:SAFETY_DEPTH, in base placed by pf_sweep_box from placement
  * first to 1 (−1 own, 0 the 1e-3 shift, 1 the irrational one: tests/unit/placements.h): every
  * centroid and edge midpoint within e × (1 + slack) by dist, no cell missed, more than
@@ -101,14 +114,9 @@ static void check_within_slack(const ism_tape *t, const double base[6], int firs
                                size_t min_tris)
 {
     for (int which = first; which <= 1; which++) {
-        double box[6];
-        pf_sweep_box(base, SAFETY_DEPTH, which, box);
-        ism_poly_options o;
-        pf_options(&o, box, 3, SAFETY_DEPTH);
-        o.max_error = e;
         ism_mesh m;
         ism_poly_stats st;
-        pf_run_options(t, &o, &m, &st);
+        run_placed(t, base, which, e, &m, &st);
         cr_assert_gt(m.ntris, min_tris, "E %g box %d: %zu triangles", e, which, m.ntris);
         double cen, mid;
         between_vertices(&m, dist, &cen, &mid);
@@ -145,8 +153,8 @@ Test(accuracy, torus_within_the_bound) { check_bound(&torus, torus_dist, 1e-3); 
 Test(accuracy, sphere_tight_bound) { check_bound(&sphere, sphere_dist, 4e-4); }
 
 /* The issue's test at E = 1e-4 (box ±1.5, depth.max 10 as the safety limit), the primal
- * polygons: about 0.5 s of CPU a box for the sphere, 0.75 s
- * for the torus in release; under ISOMESH_TEST_QUICK the irrational box alone. */
+ * polygons: about 0.5 s of CPU a box for the sphere, 0.75 s for the torus in release; under
+ * ISOMESH_TEST_QUICK the irrational box alone. */
 Test(accuracy, sphere_within_1e_4) { check_bound(&sphere, sphere_dist, 1e-4); }
 
 Test(accuracy, torus_within_1e_4) { check_bound(&torus, torus_dist, 1e-4); }
@@ -220,16 +228,11 @@ Test(accuracy, halving_the_bound_about_doubles_the_triangles)
 {
     ism_tape *t = pf_compile(&sphere);
     for (int which = pf_first_box() - 1; which <= 1; which++) {
-        double box[6];
-        pf_sweep_box(BOX15, SAFETY_DEPTH, which, box);
         size_t prev = 0;
         for (double e = 4e-3; e >= 1e-3; e /= 2) {
-            ism_poly_options o;
-            pf_options(&o, box, 3, SAFETY_DEPTH);
-            o.max_error = e;
             ism_mesh m;
             ism_poly_stats st;
-            pf_run_options(t, &o, &m, &st);
+            run_placed(t, BOX15, which, e, &m, &st);
             if (prev)
                 cr_expect(m.ntris <= 4 * prev && m.ntris > prev,
                           "box %d E %g: %zu triangles after %zu at 2E", which, e, m.ntris, prev);
