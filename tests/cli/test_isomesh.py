@@ -457,21 +457,25 @@ class TestIsomesh(unittest.TestCase):
             with self.subTest(box=box):
                 self.check_met(["-e", "x^2 + y^2 + z^2 - 1", "-b", ",".join(map(repr, box))],
                                path)
-        # missed: depth 4 cannot reach 1e-3; one warning with the count and the worst
-        p = run(*sphere, "--max-error", "0.001", "-d", "3:4", "-o", path, "--stats")
-        s = json.loads(p.stdout)
-        acc = s["analysis"]["accuracy"]
-        self.assertIs(acc["met"], False)
-        worst = self.sphere_between_vertices(path)
-        self.assertGreater(worst, 0.001)
-        self.assertEqual(len(s["warnings"]), 1, s["warnings"])
-        self.assertIn("max_error 0.001 was not met", s["warnings"][0])
-        self.assertIn(f"{s['polygoniser']['error_missed_nodes']} cells could not be split further",
-                      s["warnings"][0])
-        self.assertGreater(s["polygoniser"]["error_missed_nodes"], 0)
-        # depth 4 is too coarse for the dual mesh as well: the primal polygons, and why
-        self.assertEqual(s["polygoniser"]["mesher"], "primal")
-        self.assertEqual(s["polygoniser"]["dual_declined"], "error_at_max_depth")
+        # missed: depth 4 cannot reach 1e-3; one warning with the count and the worst (in the
+        # lattice box and off it, as above)
+        for box in placements([-1.5] * 3 + [1.5] * 3, 3 / 2 ** 10):
+            with self.subTest(box=box, bound="missed"):
+                p = run("-e", "x^2 + y^2 + z^2 - 1", "-b", ",".join(map(repr, box)),
+                        "--max-error", "0.001", "-d", "3:4", "-o", path, "--stats")
+                s = json.loads(p.stdout)
+                acc = s["analysis"]["accuracy"]
+                self.assertIs(acc["met"], False)
+                worst = self.sphere_between_vertices(path)
+                self.assertGreater(worst, 0.001)
+                self.assertEqual(len(s["warnings"]), 1, s["warnings"])
+                self.assertIn("max_error 0.001 was not met", s["warnings"][0])
+                self.assertIn(f"{s['polygoniser']['error_missed_nodes']} cells could not be "
+                              "split further", s["warnings"][0])
+                self.assertGreater(s["polygoniser"]["error_missed_nodes"], 0)
+                # depth 4 is too coarse for the dual mesh as well: the primal polygons, and why
+                self.assertEqual(s["polygoniser"]["mesher"], "primal")
+                self.assertEqual(s["polygoniser"]["dual_declined"], "error_at_max_depth")
         # no bound (off, or 0 as before): met and max_error are null, the primal polygons
         for off in ("off", "0"):
             p = run(*sphere, "-d", "3:5", "--max-error", off, "--stats")
