@@ -6,6 +6,7 @@
 #include "core/remesh/remesh.h"
 #include "core/remesh/rm_brec.h"
 #include "core/remesh/rm_cbound.h"
+#include "core/remesh/rm_hcell.h"
 #include "core/remesh/rm_memo.h"
 #include "core/remesh/rm_pass.h"
 #include "core/util/clock.h"
@@ -206,6 +207,9 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
        simplification's point-keyed memo answers the repeats (NULL: measured afresh) */
     if (ok && p.bounded)
         p.memo = rm_memo_new();
+    /* under a bound the Hessian cells bound second steps (rm_hcell.h; NULL: both taken) */
+    if (ok && p.bounded)
+        p.hcell = rm_hcell_new(&p);
     if (ok) {
         rm_collapse_bounds(&p, k.pos, k.tri, k.ntris);
         p.relax_min_step = p.bounded || !p.may_crease ? ISM_RM_MIN_STEP : 0;
@@ -260,6 +264,8 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
     drop_found(&k);
     rm_memo_free(p.memo);
     p.memo = NULL;
+    rm_hcell_free(p.hcell);
+    p.hcell = NULL;
     double after = ok && p.r.dead ? pass_min_angle(&p) : NAN;
     st->flips = p.flips;
     st->moves = p.moves;

@@ -1,6 +1,7 @@
 /* rm_bound.c — distances to f = 0 measured with a Newton step, and the bound checks built on
  * them (rm_bound.h). */
 #include "core/remesh/rm_bound.h"
+#include "core/remesh/rm_hcell.h"
 #include "core/remesh/rm_memo.h"
 #include "core/util/vec3.h"
 
@@ -70,10 +71,32 @@ bool rm_bound_gradient(rm_pass *p, const double x[3], double g[3])
  * byte-identical but klein-bottle's at 0.0251 (12,402 -> 12,394 triangles). */
 #define RM_BOUND_ONE_STEP_SHARE 0.5
 
+/* With a finite limit and the pass's Hessian cells (rm_hcell.h), a second step not yet taken
+ * at x (first step e, |s1| at most max_error: the cell's grown box holds the step's segment)
+ * is bounded instead when s1 and the bound on its term stay within limit: into *s2 that
+ * bound, which is at least the step's term, so the sum is within limit exactly when the
+ * measured one would be — a caller comparing with the limit decides as it would have.
+ * False (the step is taken) otherwise. */
+static bool residual_within(rm_pass *p, const rm_memo_entry *e, const double x[3], double limit,
+                            double *s2)
+{
+    double a = fabs(e->s1);
+    if (!p->hcell || !isfinite(limit) || !(a <= p->max_error))
+        return false;
+    double r = rm_hcell_residual(p, x, e->s1, sqrt(ism_dot3(e->g, e->g)));
+    if (!(a + r <= limit))
+        return false;
+    rm_hcell_spared(p);
+    *s2 = r;
+    return true;
+}
+
 /* f/|∇f| at x into *s1 and, unless |*s1| is above limit or within its one-step share, where
- * the Newton step from x lands into *s2 (0 otherwise). False where ∇f vanishes or f is not
- * finite. Each step is taken once per point while the pass's memo (rm_memo.h) remembers it. */
-static bool two_steps(rm_pass *p, const double x[3], double limit, double *s1, double *s2)
+ * the Newton step from x lands into *s2 (0 otherwise; with bounded, where residual_within
+ * allows, a bound on it). False where ∇f vanishes or f is not finite. Each step is taken
+ * once per point while the pass's memo (rm_memo.h) remembers it. */
+static bool two_steps(rm_pass *p, const double x[3], double limit, bool bounded, double *s1,
+                      double *s2)
 {
     rm_memo_entry own; /* stepped empties it when it is used: no 92-byte clear per measure */
     rm_memo_entry *e = stepped(p, x, &own);
@@ -83,6 +106,8 @@ static bool two_steps(rm_pass *p, const double x[3], double limit, double *s1, d
     *s1 = e->s1;
     double scale = isfinite(limit) ? limit : p->max_error;
     if (fabs(*s1) > limit || fabs(*s1) <= RM_BOUND_ONE_STEP_SHARE * scale)
+        return true;
+    if (e->state == RM_MEMO_S1 && bounded && residual_within(p, e, x, limit, s2))
         return true;
     if (e->state == RM_MEMO_S1)
         second_step(p, e);
@@ -95,7 +120,7 @@ static bool two_steps(rm_pass *p, const double x[3], double limit, double *s1, d
 double rm_bound_distance(rm_pass *p, const double x[3], double limit)
 {
     double s1, s2;
-    return two_steps(p, x, limit, &s1, &s2) ? fabs(s1) + fabs(s2) : INFINITY;
+    return two_steps(p, x, limit, true, &s1, &s2) ? fabs(s1) + fabs(s2) : INFINITY;
 }
 
 /* The residual of a first step of length s1 bends by at most κ s1² / 2; the one-step rule
@@ -107,7 +132,7 @@ double rm_bound_distance(rm_pass *p, const double x[3], double limit)
 double rm_bound_upper(rm_pass *p, const double x[3])
 {
     double s1, s2, e = p->max_error;
-    if (!two_steps(p, x, e, &s1, &s2))
+    if (!two_steps(p, x, e, false, &s1, &s2))
         return INFINITY;
     double a = fabs(s1);
     return a <= RM_BOUND_ONE_STEP_SHARE * e ? a + RM_BOUND_RESIDUAL_REL * a * a / e
@@ -117,7 +142,7 @@ double rm_bound_upper(rm_pass *p, const double x[3])
 double rm_bound_signed(rm_pass *p, const double x[3])
 {
     double s1, s2;
-    return two_steps(p, x, -1, &s1, &s2) ? s1 : INFINITY;
+    return two_steps(p, x, -1, false, &s1, &s2) ? s1 : INFINITY;
 }
 
 bool rm_bound_edge(rm_pass *p, const double *a, const double *b)

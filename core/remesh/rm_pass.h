@@ -96,6 +96,9 @@ typedef struct rm_pass {
                                Newton step, whatever they were before; collapses, insertions
                                and slides measure with the step too, midpoints included */
     struct rm_memo *memo;   /* distances measured by point (rm_memo.h; NULL: none kept) */
+    struct rm_hcell *hcell; /* Hessian bounds by grid cell (rm_hcell.h), in the quality pass
+                               under a bound: a measure against a finite limit may leave out
+                               its second evaluation (NULL: both taken) */
     uint8_t *flipped;       /* per vertex, when not NULL: set on the four corners of every
                                flip (remesh.c asks, to look at only their protection again) */
     double poorest;         /* the smallest sine of a triangle's smallest angle when

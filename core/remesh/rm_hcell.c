@@ -1,0 +1,180 @@
+/* rm_hcell.c — the grid of Hessian bounds (rm_hcell.h): cells keyed by their integer
+ * coordinates in an open-addressed table, each cell's bound worked out from f's interval jet
+ * the first time a point in it asks. */
+#include "core/remesh/rm_hcell.h"
+#include "core/eval/interval_jet.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Cell coordinates are kept in 21 bits each (offset by half that range) in one key. */
+#define HC_BITS 21
+#define HC_HALF (1 << (HC_BITS - 1))
+/* A key no cell has (coordinates out of range are not asked). */
+#define HC_EMPTY UINT64_MAX
+
+typedef struct hc_slot {
+    uint64_t key;
+    double m; /* the Hessian bound of the cell (INFINITY: none) */
+} hc_slot;
+
+struct rm_hcell {
+    double lo[3], side, inv_side;
+    uint64_t last_key;   /* the cell asked last and its bound: consecutive points of a fan */
+    double last_m;       /* mostly share a cell (HC_EMPTY: none yet) */
+    hc_slot *slot;
+    size_t cap, n;       /* slots (a power of two), cells held */
+    size_t worked, asked, spared; /* cells whose jet was worked out; points asked of a
+                                     cell's bound, and those it spared a second step */
+    bool stopped;        /* no new cell is worked out (rm_hcell.h's trial) */
+    ism_ivjet_ws *jws;
+};
+
+struct rm_hcell *rm_hcell_new(const rm_pass *p)
+{
+    const ism_mesh *m = p->r.m;
+    double sum = 0, lo[3] = {INFINITY, INFINITY, INFINITY};
+    size_t n = 0;
+    for (size_t t = 0; t < m->ntris; t++) {
+        const uint32_t *v = m->tri + 3 * t;
+        for (int k = 0; k < 3; k++)
+            sum += rm_dist(m->pos + 3 * (size_t)v[k], m->pos + 3 * (size_t)v[(k + 1) % 3]), n++;
+    }
+    for (size_t v = 0; v < m->nverts; v++)
+        for (int k = 0; k < 3; k++)
+            lo[k] = fmin(lo[k], m->pos[3 * v + k]);
+    double side = n ? RM_HCELL_EDGES * sum / (double)n : 0;
+    if (!(side > 0) || !isfinite(side) || !isfinite(lo[0] + lo[1] + lo[2]))
+        return NULL;
+    struct rm_hcell *h = calloc(1, sizeof *h);
+    if (!h)
+        return NULL;
+    h->cap = 256;
+    h->slot = malloc(h->cap * sizeof *h->slot);
+    h->jws = ism_ivjet_ws_new(p->f);
+    if (!h->slot || !h->jws) {
+        rm_hcell_free(h);
+        return NULL;
+    }
+    for (size_t i = 0; i < h->cap; i++)
+        h->slot[i].key = HC_EMPTY;
+    memcpy(h->lo, lo, sizeof lo);
+    h->side = side;
+    h->inv_side = 1 / side;
+    h->last_key = HC_EMPTY;
+    return h;
+}
+
+void rm_hcell_free(struct rm_hcell *h)
+{
+    if (!h)
+        return;
+    free(h->slot);
+    ism_ivjet_ws_free(h->jws);
+    free(h);
+}
+
+static size_t hash_of(uint64_t key, size_t cap)
+{
+    uint64_t x = key * 0x9e3779b97f4a7c15ull;
+    return (size_t)(x ^ (x >> 29)) & (cap - 1);
+}
+
+/* The slot of key: its own, or the empty one where it would go. */
+static hc_slot *find(const struct rm_hcell *h, uint64_t key)
+{
+    size_t i = hash_of(key, h->cap);
+    while (h->slot[i].key != key && h->slot[i].key != HC_EMPTY)
+        i = (i + 1) & (h->cap - 1);
+    return &h->slot[i];
+}
+
+/* Twice the slots; false when out of memory (the table is as it was). */
+static bool grow(struct rm_hcell *h)
+{
+    struct rm_hcell g = *h;
+    g.cap = 2 * h->cap;
+    g.slot = malloc(g.cap * sizeof *g.slot);
+    if (!g.slot)
+        return false;
+    for (size_t i = 0; i < g.cap; i++)
+        g.slot[i].key = HC_EMPTY;
+    for (size_t i = 0; i < h->cap; i++)
+        if (h->slot[i].key != HC_EMPTY)
+            *find(&g, h->slot[i].key) = h->slot[i];
+    free(h->slot);
+    *h = g;
+    return true;
+}
+
+/* ‖H‖_F over the cell c (integer coordinates) grown by grow each way, from the Hessian's
+ * enclosures; INFINITY where the jet has a kink or an unbounded entry. */
+static double cell_bound(const rm_pass *p, struct rm_hcell *h, const int64_t c[3], double grow)
+{
+    ism_interval b[3];
+    for (int k = 0; k < 3; k++) {
+        b[k].lo = h->lo[k] + (double)c[k] * h->side - grow;
+        b[k].hi = h->lo[k] + (double)(c[k] + 1) * h->side + grow;
+    }
+    ism_ivjet j;
+    if (ism_eval_interval_jet(p->f, h->jws, b, NULL, NULL, &j) != 0)
+        return INFINITY; /* a kink, or the workspace does not fit ((size_t)-1) */
+    double h2 = 0;
+    for (int k = 0; k < 6; k++) { /* xx xy xz yy yz zz: the mixed ones twice in ‖H‖_F */
+        double most = fmax(fabs(j.h[k].lo), fabs(j.h[k].hi));
+        h2 += (k == 1 || k == 2 || k == 4 ? 2 : 1) * most * most;
+    }
+    /* the few roundings of the sums and the root: far under the margin's relative 2^-40 */
+    double m = sqrt(h2) * (1 + 0x1p-40);
+    return m >= 0 && isfinite(m) ? m : INFINITY; /* NaN: none */
+}
+
+/* The Hessian bound of x's cell: known, or worked out now (unless the trial stopped new
+ * ones, or out of memory: INFINITY). */
+static double bound_at(rm_pass *p, struct rm_hcell *h, const double x[3])
+{
+    int64_t c[3];
+    uint64_t key = 0;
+    for (int k = 0; k < 3; k++) {
+        /* shifted by half the range before the truncation: a floor for every cell kept */
+        double q = (x[k] - h->lo[k]) * h->inv_side + HC_HALF;
+        if (!(q >= 0 && q < 2.0 * HC_HALF))
+            return INFINITY;
+        c[k] = (int64_t)q - HC_HALF;
+        key = key << HC_BITS | (uint64_t)(c[k] + HC_HALF);
+    }
+    if (key == h->last_key)
+        return h->last_m;
+    hc_slot *s = find(h, key);
+    if (s->key != key) {
+        if (!h->stopped && h->worked >= RM_HCELL_TRIAL &&
+            (double)h->spared < RM_HCELL_MIN_SHARE * (double)h->asked)
+            h->stopped = true; /* the cells have not paid (rm_hcell.h) */
+        if (h->stopped || (2 * (h->n + 1) > h->cap && !grow(h)))
+            return INFINITY;
+        s = find(h, key);
+        s->key = key;
+        s->m = cell_bound(p, h, c, p->max_error);
+        h->n++;
+        h->worked++;
+    }
+    h->last_key = key;
+    h->last_m = s->m;
+    return s->m;
+}
+
+double rm_hcell_residual(rm_pass *p, const double x[3], double s1, double gn)
+{
+    if (!p->hcell)
+        return INFINITY;
+    p->hcell->asked++;
+    double m = bound_at(p, p->hcell, x), a = fabs(s1), den = gn - m * a;
+    return den > 0 ? 0.5 * m * a * a / den * (1 + 0x1p-40) : INFINITY;
+}
+
+void rm_hcell_spared(rm_pass *p)
+{
+    if (p->hcell)
+        p->hcell->spared++;
+}
