@@ -323,6 +323,11 @@ typedef struct corner_view {
     int monotone; /* bit a: ∇f's a-th component keeps a sign over the box */
     uint8_t placed; /* what sag_split found (dnode.placed); FOOT_AT: the vertex in at */
     double at[3];
+    /* In: the centre's foot (foot_in_node) when the split pass took it beforehand with
+     * other nodes' (split_pass): FOOT_AT, in foot_at; FOOT_OUT: outside the node (or Newton
+     * failed); FOOT_UNKNOWN: not taken (sag_split takes it itself). */
+    uint8_t foot;
+    double foot_at[3];
     /* In: the node's box was shown free of f = 0 by its parent's proofs (the parent's
      * free_kids) or its natural interval (children_free). Out: bit c, child c's box shown
      * free by this node's proofs (dnode). */
@@ -742,6 +747,50 @@ static bool foot_in_node(worker *w, const double lo[3], const double hi[3], doub
     return inside;
 }
 
+/* foot_in_node for n boxes at once (lo[k]..hi[k] of side size[k], n <= ISM_GRAD_BATCH):
+ * newton_onto's steps in lanes, their gradients in one batch a step (ism_sample_grad_batch:
+ * bit for bit ism_sample_grad's), a lane leaving where its own scalar run would stop. Into
+ * m[k] and state[k]: FOOT_AT when the foot lands in the closed box, else FOOT_OUT. */
+static void feet_in_nodes(worker *w, const double (*lo)[3], const double (*hi)[3],
+                          const double *size, size_t n, double (*m)[3], uint8_t *state)
+{
+    size_t live[ISM_GRAD_BATCH], nl = 0;
+    bool ok[ISM_GRAD_BATCH];
+    for (size_t k = 0; k < n; k++) {
+        for (int a = 0; a < 3; a++)
+            m[k][a] = 0.5 * lo[k][a] + 0.5 * hi[k][a];
+        ok[k] = true;
+        live[nl++] = k;
+    }
+    for (int it = 0; it < NEWTON_STEPS && nl; it++) {
+        double p[ISM_GRAD_BATCH][3], f[ISM_GRAD_BATCH], g[ISM_GRAD_BATCH][3];
+        for (size_t j = 0; j < nl; j++)
+            memcpy(p[j], m[live[j]], sizeof p[j]);
+        ism_sample_grad_batch(&w->s, (const double (*)[3])p, f, g, nl);
+        size_t kept = 0;
+        for (size_t j = 0; j < nl; j++) { /* newton_onto's step, lane by lane */
+            size_t k = live[j];
+            double gg = ism_dot3(g[j], g[j]);
+            if (!isfinite(f[j]) || !(gg > 0) || !isfinite(gg)) {
+                ok[k] = false;
+                continue;
+            }
+            double step = fabs(f[j]) / sqrt(gg);
+            for (int a = 0; a < 3; a++)
+                m[k][a] -= f[j] * g[j][a] / gg;
+            if (!(step < NEWTON_STOP * size[k]))
+                live[kept++] = k;
+        }
+        nl = kept;
+    }
+    for (size_t k = 0; k < n; k++) {
+        bool inside = ok[k];
+        for (int a = 0; a < 3; a++)
+            inside &= m[k][a] >= lo[k][a] && m[k][a] <= hi[k][a];
+        state[k] = inside ? FOOT_AT : FOOT_OUT;
+    }
+}
+
 /* Does the box lo..hi lie in the request's box (always, but in the grown box: dual_box.h)? */
 static bool in_request_box(const dual *d, const double lo[3], const double hi[3])
 {
@@ -765,10 +814,14 @@ static bool sag_split(dual *d, worker *w, const dnode *n, corner_view *v)
         !in_request_box(d, v->p[0], v->p[7]))
         return false;
     double size = ism_grid_cell_size(&d->g, n->level), m[3], bend;
-    if (!foot_in_node(w, v->p[0], v->p[7], size, m)) {
+    bool inside = v->foot == FOOT_UNKNOWN ? foot_in_node(w, v->p[0], v->p[7], size, m)
+                                          : v->foot == FOOT_AT;
+    if (!inside) {
         v->placed = FOOT_OUT;
         return false;
     }
+    if (v->foot == FOOT_AT)
+        memcpy(m, v->foot_at, sizeof m);
     ism_straddle_balanced_point(&w->s, d->shift, d->o->box, m, v->at, &bend);
     bool split = bend * size * size > 8 * SAG_SPLIT * (d->o->max_error + d->shift);
     v->placed = split ? FOOT_UNKNOWN : FOOT_AT;
@@ -1028,33 +1081,145 @@ static uint8_t children_free(const dual *d, worker *w, const dnode *parent,
     return free_bits;
 }
 
-/* Task k of a split pass: node nodes[k]'s children classified, from f and ∇f at the 27
- * lattice points of their corners (each taken once). Reads the tree, writes out[k] only. */
-static void split_task(void *ctx, size_t k, int thread)
+/* Bit j of CHILD_CORNERS[c]: point j of a split's 27 (corners_task's order, x fastest) is
+ * a corner of child c. */
+#define CORNER_BITS(o) (0x361Bu << (o)) /* points o + {0, 1, 3, 4, 9, 10, 12, 13} */
+static const uint32_t CHILD_CORNERS[8] = {CORNER_BITS(0), CORNER_BITS(1), CORNER_BITS(3),
+                                          CORNER_BITS(4), CORNER_BITS(9), CORNER_BITS(10),
+                                          CORNER_BITS(12), CORNER_BITS(13)};
+
+/* Bit c: sag_split will ask for child c's centre foot (f and p at the 27 points): corners
+ * of both signs, finite, under the straddle move, between min_depth and depth.max, inside
+ * the request's box. A child that asks for none after all (classify's earlier answers) only
+ * costs its lane. */
+static uint8_t wanted_feet(const dual *d, int level, const double f[27], const double (*p)[3])
 {
-    task_ctx *job = ctx;
+    if (!(d->shift > 0) || d->crease || d->nballs || level >= d->o->max_depth ||
+        level < d->o->min_depth)
+        return 0;
+    uint32_t neg = 0, finite = 0;
+    for (int j = 0; j < 27; j++) {
+        neg |= (uint32_t)(f[j] < 0) << j;
+        finite |= (uint32_t)(isfinite(f[j]) != 0) << j;
+    }
+    uint8_t want = 0;
+    for (int c = 0; c < 8; c++) {
+        uint32_t m = CHILD_CORNERS[c], first = (uint32_t)__builtin_ctz(m);
+        if ((finite & m) == m && (neg & m) && (neg & m) != m &&
+            in_request_box(d, p[first], p[first + 13]))
+            want |= (uint8_t)(1u << c);
+    }
+    return want;
+}
+
+/* What a split pass learns of a node before its children are classified (corners_task,
+ * feet_task): f, the points and the unit ∇f at the 27 lattice points of their corners, the
+ * children known free and their centre feet. */
+typedef struct split_in {
+    double f[27], p[27][3], g[27][3];
+    uint8_t known;   /* bit c: child c's box known free (the parent's or children_free) */
+    uint8_t wants;   /* bit c: sag_split will ask for child c's foot (wanted_feet) */
+    uint8_t foot[8]; /* child c's centre foot (corner_view.foot) */
+    double foot_at[8][3];
+} split_in;
+
+/* Nodes per block of a split pass: its three tasks run block by block, so split_in (1.7 KB
+ * a node) is held for SPLIT_BLOCK nodes however large the pass (10^5 nodes: 170 MB); 1,024
+ * is many more tasks than threads, and fills the feet's 32-lane batches. */
+#define SPLIT_BLOCK 1024
+
+/* A block of a split pass: nodes[0..), what the first tasks learn of each (in), what the
+ * last leaves (out), and the feet asked for (lane: 8 × a node's place in the block +
+ * child). */
+typedef struct split_job {
+    dual *d;
+    const int32_t *nodes;
+    split_in *in;
+    split_out *out;
+    uint32_t *lane;
+    size_t nlanes;
+} split_job;
+
+/* First task of a split pass: f and ∇f at the 27 lattice points of node nodes[k]'s
+ * children's corners (each taken once), the children known free and those whose feet
+ * sag_split will ask for, into in[k]. */
+static void corners_task(void *ctx, size_t k, int thread)
+{
+    split_job *job = ctx;
     dual *d = job->d;
     worker *w = &d->w[thread];
-    const dnode *parent = &d->n[((const int32_t *)job->in)[k]];
-    split_out *out = &((split_out *)job->out)[k];
+    const dnode *parent = &d->n[job->nodes[k]];
+    split_in *in = &job->in[k];
+    split_out *out = &job->out[k];
     int32_t half = ism_grid_cell_steps(&d->g, parent->level + 1);
-    double f[27], p[27][3], g[27][3];
     int32_t q[27][3];
     for (int j = 0; j < 27; j++) {
         q[j][0] = parent->o.v[0] + j % 3 * half;
         q[j][1] = parent->o.v[1] + j / 3 % 3 * half;
         q[j][2] = parent->o.v[2] + j / 9 * half;
     }
-    sample_corners(d, w, (const int32_t (*)[3])q, 27, f, p, g);
+    sample_corners(d, w, (const int32_t (*)[3])q, 27, in->f, in->p, in->g);
+    in->known = parent->free_kids |
+                children_free(d, w, parent, in->f, (const double (*)[3])in->p, &out->batched);
+    out->batch_free = (uint8_t)(in->known & ~parent->free_kids);
+    in->wants = wanted_feet(d, parent->level + 1, in->f, (const double (*)[3])in->p);
+    memset(in->foot, FOOT_UNKNOWN, sizeof in->foot);
+}
+
+/* Lanes of feet per task of feet_task: the gradient evaluator's chunk (eval.h). A child's
+ * foot alone, as sag_split took it, cost ~375 instructions a Newton step on the torus; a
+ * batch of two or three lanes (one node's children) cost more than that, one of 32 less. */
+#define FEET_LANES ISM_GRAD_BATCH
+
+/* Second task of a split pass: the feet of lanes FEET_LANES k .. (feet_in_nodes) into
+ * their nodes' split_in. */
+static void feet_task(void *ctx, size_t k, int thread)
+{
+    split_job *job = ctx;
+    dual *d = job->d;
+    const uint32_t *lane = job->lane + k * FEET_LANES;
+    size_t n = job->nlanes - k * FEET_LANES < FEET_LANES ? job->nlanes - k * FEET_LANES
+                                                         : FEET_LANES;
+    double lo[FEET_LANES][3], hi[FEET_LANES][3], m[FEET_LANES][3], size[FEET_LANES];
+    uint8_t state[FEET_LANES];
+    for (size_t j = 0; j < n; j++) {
+        const split_in *in = &job->in[lane[j] / 8];
+        int first = __builtin_ctz(CHILD_CORNERS[lane[j] % 8]);
+        size[j] = ism_grid_cell_size(&d->g, d->n[job->nodes[lane[j] / 8]].level + 1);
+        memcpy(lo[j], in->p[first], sizeof lo[j]);
+        memcpy(hi[j], in->p[first + 13], sizeof hi[j]);
+    }
+    feet_in_nodes(&d->w[thread], (const double (*)[3])lo, (const double (*)[3])hi, size, n, m,
+                  state);
+    for (size_t j = 0; j < n; j++) {
+        split_in *in = &job->in[lane[j] / 8];
+        in->foot[lane[j] % 8] = state[j];
+        memcpy(in->foot_at[lane[j] % 8], m[j], sizeof m[j]);
+    }
+}
+
+/* Last task of a split pass: node nodes[k]'s children classified from what the first two
+ * left in in[k]. Reads the tree, writes out[k] only. */
+static void split_task(void *ctx, size_t k, int thread)
+{
+    split_job *job = ctx;
+    dual *d = job->d;
+    worker *w = &d->w[thread];
+    const dnode *parent = &d->n[job->nodes[k]];
+    const split_in *in = &job->in[k];
+    split_out *out = &job->out[k];
+    int32_t half = ism_grid_cell_steps(&d->g, parent->level + 1);
+    const double *f = in->f;
+    const double (*p)[3] = (const double (*)[3])in->p, (*g)[3] = (const double (*)[3])in->g;
+    uint8_t known = in->known;
     out->bad = false;
     out->kinked = 0;
-    uint8_t known = parent->free_kids |
-                    children_free(d, w, parent, f, (const double (*)[3])p, &out->batched);
-    out->batch_free = (uint8_t)(known & ~parent->free_kids);
     for (int c = 0; c < 8; c++) {
         corner_view v;
         v.kinked = false;
         v.placed = FOOT_UNKNOWN;
+        v.foot = in->foot[c];
+        memcpy(v.foot_at, in->foot_at[c], sizeof v.foot_at);
         v.known_free = known >> c & 1;
         v.free_kids = 0;
         dnode n;
@@ -1078,6 +1243,34 @@ static void split_task(void *ctx, size_t k, int thread)
         if (v.placed == FOOT_AT)
             memcpy(out->at[c], v.at, sizeof v.at);
     }
+}
+
+/* The split pass of nodes[0..n): their children classified into out[0..n), block by block:
+ * corners_task, the feet sag_split will ask for (FEET_LANES at a time), split_task. Out of
+ * memory for a block's scratch: node by node, every foot left to sag_split. */
+static void split_pass(dual *d, const int32_t *nodes, split_out *out, size_t n)
+{
+    split_in *in = malloc((n < SPLIT_BLOCK ? n : SPLIT_BLOCK) * sizeof *in), one;
+    uint32_t *lane = malloc(8 * SPLIT_BLOCK * sizeof *lane);
+    if (!in || !lane) {
+        free(in);
+        free(lane);
+        in = NULL;
+        lane = NULL;
+    }
+    for (size_t b = 0; b < n;) {
+        size_t m = !in ? 1 : n - b < SPLIT_BLOCK ? n - b : SPLIT_BLOCK;
+        split_job job = {d, nodes + b, in ? in : &one, out + b, lane, 0};
+        ism_pool_for(d->pool, m, corners_task, &job, NULL);
+        for (size_t k = 0; lane && k < m; k++)
+            for (unsigned w = job.in[k].wants; w; w &= w - 1)
+                lane[job.nlanes++] = (uint32_t)(8 * k + (size_t)__builtin_ctz(w));
+        ism_pool_for(d->pool, (job.nlanes + FEET_LANES - 1) / FEET_LANES, feet_task, &job, NULL);
+        ism_pool_for(d->pool, m, split_task, &job, NULL);
+        b += m;
+    }
+    free(in);
+    free(lane);
 }
 
 /* Every surface flag again, from the leaves up (children come after their parent). */
@@ -1149,9 +1342,8 @@ static void expand(dual *d, const int32_t *list, size_t n)
             free(next);
             break;
         }
-        task_ctx job = {d, cur, out, 0};
         d->batch_on = d->batch_freed >= BATCH_PAYS * d->batches;
-        ism_pool_for(d->pool, n, split_task, &job, NULL);
+        split_pass(d, cur, out, n);
         for (size_t k = 0; k < n; k++) {
             d->batches += out[k].batched;
             d->batch_freed += (uint64_t)__builtin_popcount(out[k].batch_free);
@@ -2345,6 +2537,7 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
     corner_view v;
     v.kinked = false;
     v.placed = FOOT_UNKNOWN;
+    v.foot = FOOT_UNKNOWN;
     v.known_free = false;
     v.free_kids = 0;
     int32_t last = (int32_t)1 << d->g.depth, q[8][3];
