@@ -200,6 +200,16 @@ typedef struct quads {
     bool nomem, bad; /* bad: a leaf round a crossed edge without a vertex */
 } quads;
 
+/* The tree walk's calls put off to the pool in the last round, and their quads
+ * (make_quads): a call whose nodes' subtrees have not changed since gives the same quads
+ * again. */
+typedef struct walk_memo {
+    struct walk_call *calls;
+    quads *parts;
+    size_t n;
+    size_t nodes; /* the tree's nodes then (nodes are only ever added) */
+} walk_memo;
+
 /* What a parallel loop's tasks share: the mesher, their inputs and their outputs (slot k of
  * out is task k's alone), and for the chunked measures (chunk_of) how many items in all. */
 typedef struct task_ctx {
@@ -243,6 +253,7 @@ typedef struct dual {
     uint32_t *tri;    /* this round's triangles */
     size_t nt, capt;
     quads q;          /* this round's quads (make_quads) */
+    walk_memo memo;   /* the last round's put-off walk calls and their quads */
     keyed passed;       /* triangles (tri_key) that met E */
     keyed mid;          /* vertex pairs (pair_key): the distance of their midpoint to f = 0 */
     keyed fans;         /* quads (quad_key) cut as a fan: their centre vertex */
@@ -1905,12 +1916,21 @@ static void cell_proc(walk *wk, int32_t i)
         }
 }
 
-/* Deferred walk call k (in) made into its own quads (out[k]). */
-static void walk_task(void *ctx, size_t k, int thread)
+/* The put-off walk calls (calls) to make into their own quads (parts, by call): todo[0..). */
+typedef struct walk_job {
+    dual *d;
+    const walk_call *calls;
+    quads *parts;
+    const size_t *todo;
+} walk_job;
+
+/* Put-off walk call todo[t] made into its own quads. */
+static void walk_task(void *ctx, size_t t, int thread)
 {
-    task_ctx *job = ctx;
-    const walk_call *call = &((const walk_call *)job->in)[k];
-    walk wk = {job->d, &((quads *)job->out)[k], false, NULL, 0, 0, false, &job->d->w[thread]};
+    walk_job *job = ctx;
+    size_t k = job->todo[t];
+    const walk_call *call = &job->calls[k];
+    walk wk = {job->d, &job->parts[k], false, NULL, 0, 0, false, &job->d->w[thread]};
     if (call->kind == WALK_CELL)
         cell_proc(&wk, call->c[0]);
     else if (call->kind == WALK_FACE)
@@ -1919,23 +1939,76 @@ static void walk_task(void *ctx, size_t k, int thread)
         edge_proc(&wk, call->c, call->axis);
 }
 
+/* The memo's quads and calls freed (the struct left for the caller to zero or refill). */
+static void memo_free(walk_memo *m)
+{
+    for (size_t k = 0; m->parts && k < m->n; k++)
+        free(m->parts[k].q);
+    free(m->parts);
+    free(m->calls);
+}
+
+/* By node: 1 when its subtree changed since the memo's walk (a node added since, or one
+ * with a child that did); NULL when out of memory. Children come after their parent. */
+static uint8_t *changed_nodes(const dual *d)
+{
+    uint8_t *ch = malloc(d->nn ? d->nn : 1);
+    size_t old = d->memo.nodes;
+    for (size_t i = d->nn; ch && i-- > 0;) {
+        const dnode *n = &d->n[i];
+        uint8_t c = i >= old || (n->child >= 0 && (size_t)n->child >= old);
+        for (int k = 0; !c && n->child >= 0 && k < 8; k++)
+            c = ch[n->child + k];
+        ch[i] = c;
+    }
+    return ch;
+}
+
+/* Put-off call k of this round's walk (calls[0..n)) as the memo's call k, on nodes whose
+ * subtrees have not changed (ch): its quads are the memo's. The calls are the same list
+ * while the walk's top levels (above WALK_SPLIT_LEVEL) keep their shape. */
+static bool memo_holds(const dual *d, const uint8_t *ch, const walk_call *calls, size_t n,
+                       size_t k)
+{
+    const walk_memo *m = &d->memo;
+    if (!ch || !m->calls || m->n != n || memcmp(&m->calls[k], &calls[k], sizeof calls[k]))
+        return false;
+    int nodes = calls[k].kind == WALK_CELL ? 1 : calls[k].kind == WALK_FACE ? 2 : 4;
+    for (int j = 0; j < nodes; j++)
+        if (ch[calls[k].c[j]])
+            return false;
+    return true;
+}
+
 /* The round's quads into d->q: the walk's top levels on this thread, the calls below them
- * on the pool, their quads joined in the calls' order (the same on any number of
- * threads). */
+ * on the pool — but for those the last round's memo holds — their quads joined in the
+ * calls' order (the same on any number of threads), and kept as the next round's memo. */
 static void make_quads(dual *d)
 {
     d->q.n = 0;
     walk wk = {d, &d->q, true, NULL, 0, 0, false, &d->w[0]};
     cell_proc(&wk, 0);
     quads *part = calloc(wk.nd ? wk.nd : 1, sizeof *part);
-    if (!part || wk.nomem) {
+    size_t *todo = malloc((wk.nd ? wk.nd : 1) * sizeof *todo), nt = 0;
+    uint8_t *ch = d->memo.calls ? changed_nodes(d) : NULL;
+    if (!part || !todo || wk.nomem) {
         free(part);
+        free(todo);
+        free(ch);
         free(wk.defer);
         d->nomem = true;
         return;
     }
-    task_ctx job = {d, wk.defer, part, 0};
-    ism_pool_for(d->pool, wk.nd, walk_task, &job, NULL);
+    for (size_t k = 0; k < wk.nd; k++) {
+        if (memo_holds(d, ch, wk.defer, wk.nd, k)) {
+            part[k] = d->memo.parts[k]; /* taken: the memo no longer frees it */
+            d->memo.parts[k].q = NULL;
+        } else
+            todo[nt++] = k;
+    }
+    free(ch);
+    walk_job job = {d, wk.defer, part, todo};
+    ism_pool_for(d->pool, nt, walk_task, &job, NULL);
     for (size_t k = 0; k < wk.nd; k++) {
         d->nomem |= part[k].nomem;
         if (part[k].bad) /* a crossed edge without a vertex (edge_quad) */
@@ -1947,13 +2020,13 @@ static void make_quads(dual *d)
             } else
                 d->nomem = true;
         }
-        free(part[k].q);
     }
     d->nomem |= d->q.nomem;
     if (d->q.bad)
         decline(d, ISM_DUAL_WHY_OPEN_EDGE);
-    free(part);
-    free(wk.defer);
+    free(todo);
+    memo_free(&d->memo);
+    d->memo = (walk_memo){wk.defer, part, wk.nd, d->nn};
 }
 
 /* Triangle t's corners (bit k: vertex k) whose leaves to split for its edges: the two ends
@@ -2611,6 +2684,7 @@ static void forget(dual *d)
     free(d->vtwin);
     free(d->tri);
     free(d->q.q);
+    memo_free(&d->memo);
     keyed_free(&d->passed);
     keyed_free(&d->mid);
     keyed_free(&d->fans);
@@ -2622,6 +2696,7 @@ static void forget(dual *d)
     d->tri = NULL;
     d->nn = d->capn = d->capat = d->nv = d->capv = d->nt = d->capt = 0;
     memset(&d->q, 0, sizeof d->q);
+    memset(&d->memo, 0, sizeof d->memo);
     memset(&d->passed, 0, sizeof d->passed);
     memset(&d->mid, 0, sizeof d->mid);
     memset(&d->fans, 0, sizeof d->fans);
