@@ -1653,11 +1653,13 @@ static void pair_task(void *ctx, size_t k, int thread)
     double *dist = job->out;
     size_t lo, n = chunk_of(k, job->n, &lo);
     double m[MEASURE_LANES][3], f[MEASURE_LANES], g[MEASURE_LANES][3], e = d->o->max_error;
+    double plain[MEASURE_LANES];
     for (size_t j = 0; j < n; j++)
         pair_mid(d, keys[lo + j], m[j]);
     ism_sample_grad_batch(&w->s, (const double (*)[3])m, f, g, n);
-    for (size_t j = 0; j < n; j++)
-        dist[lo + j] = ism_dual_dist_at(&w->s, m[j], f[j], g[j], e);
+    ism_dual_plain_dists(&w->s, (const double (*)[3])m, f, (const double (*)[3])g, e, plain, n);
+    for (size_t j = 0; j < n; j++) /* ism_dual_dist's */
+        dist[lo + j] = ism_dual_kink_dist(&w->s, m[j], plain[j], e);
 }
 
 /* The midpoint distances of the n vertex pairs in pairs[0..2n) into the memo: those not
@@ -2065,10 +2067,13 @@ static void centroid_task(void *ctx, size_t k, int thread)
         tri_corners(d, tris[lo + j], p[j]);
         ism_dual_centroid(p[j], c[j]);
     }
+    double plain[MEASURE_LANES], e = d->o->max_error;
     ism_sample_grad_batch(&w->s, (const double (*)[3])c, f, g, n);
+    ism_dual_plain_dists(&w->s, (const double (*)[3])c, f, (const double (*)[3])g, e, plain, n);
     for (size_t j = 0; j < n; j++)
-        miss[lo + j] =
-            ism_dual_centroid_within_at(&w->s, p[j], c[j], f[j], g[j], d->o->max_error) ? 0 : 7;
+        miss[lo + j] = ism_dual_centroid_within_at(&w->s, p[j], c[j], f[j], g[j], plain[j], e)
+                           ? 0
+                           : 7;
 }
 
 /* Triangle t's vertices, sorted, in one word (+1: never 0); 0 when the vertices are too

@@ -584,11 +584,11 @@ bool ism_dual_centroid_within(ism_sampler *s, const double *p[3], double e)
     double c[3], g[3];
     ism_dual_centroid(p, c);
     double f = ism_sample_grad(s, c, g);
-    return ism_dual_centroid_within_at(s, p, c, f, g, e);
+    return ism_dual_centroid_within_at(s, p, c, f, g, ism_dual_plain_dist(s, c, f, g, e), e);
 }
 
 bool ism_dual_centroid_within_at(ism_sampler *s, const double *p[3], const double c[3],
-                                 double f, const double g[3], double e)
+                                 double f, const double g[3], double plain, double e)
 {
     double u[3], v[3], nrm[3];
     for (int a = 0; a < 3; a++) {
@@ -597,7 +597,7 @@ bool ism_dual_centroid_within_at(ism_sampler *s, const double *p[3], const doubl
     }
     double gl = ism_norm3(g);
     if (!isfinite(f) || !(gl > 0) ||
-        !(ism_dual_kink_dist(s, c, ism_dual_plain_dist(s, c, f, g, e), e) <= e))
+        !(ism_dual_kink_dist(s, c, plain, e) <= e))
         return false;
     ism_cross3(u, v, nrm);
     if (ism_dot3(nrm, g) > TURNED_COS * ism_norm3(nrm) * gl)

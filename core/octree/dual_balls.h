@@ -93,10 +93,11 @@ bool ism_dual_centroid_within(ism_sampler *s, const double *p[3], double e);
 /* The centroid of p[0..3), as ism_dual_centroid_within takes it, into c. */
 void ism_dual_centroid(const double *p[3], double c[3]);
 
-/* ism_dual_centroid_within with f and ∇f at the centroid c (ism_dual_centroid) given: the
- * same answer, for callers that take the centroids' gradients in one batch. */
+/* ism_dual_centroid_within with f and ∇f at the centroid c (ism_dual_centroid) and its
+ * ism_dual_plain_dist there (plain) given: the same answer, for callers that take the
+ * centroids' gradients in batches (ism_dual_plain_dists). */
 bool ism_dual_centroid_within_at(ism_sampler *s, const double *p[3], const double c[3],
-                                 double f, const double g[3], double e);
+                                 double f, const double g[3], double plain, double e);
 
 /* Triangle v[0..3) of m meets E as the dual mesh's own do (dual.c): its centroid
  * (ism_dual_centroid_within) and edge midpoints within e of f = 0, its normal along ∇f at

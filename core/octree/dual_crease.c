@@ -569,16 +569,30 @@ double ism_dual_plain_dist(ism_sampler *s, const double p[3], double f, const do
     return plain + ism_sample_dist(s, x);
 }
 
-double ism_dual_dist_at(ism_sampler *s, const double p[3], double f, const double g[3], double e)
+void ism_dual_plain_dists(ism_sampler *s, const double (*p)[3], const double *f,
+                          const double (*g)[3], double e, double *out, size_t n)
 {
-    return ism_dual_kink_dist(s, p, ism_dual_plain_dist(s, p, f, g, e), e);
+    double x[ISM_GRAD_BATCH][3], fx[ISM_GRAD_BATCH], gx[ISM_GRAD_BATCH][3];
+    size_t at[ISM_GRAD_BATCH], m = 0;
+    for (size_t i = 0; i < n; i++) { /* ism_dual_plain_dist's first half, point by point */
+        out[i] = ism_first_order_dist(f[i], g[i]);
+        if (!(out[i] > FIRST_ORDER_SURE * e && out[i] <= e))
+            continue;
+        double gg = ism_dot3(g[i], g[i]);
+        for (int a = 0; a < 3; a++)
+            x[m][a] = p[i][a] - f[i] * g[i][a] / gg;
+        at[m++] = i;
+    }
+    ism_sample_grad_batch(s, (const double (*)[3])x, fx, gx, m);
+    for (size_t k = 0; k < m; k++)
+        out[at[k]] += ism_first_order_dist(fx[k], gx[k]);
 }
 
 double ism_dual_dist(ism_sampler *s, const double p[3], double e)
 {
     double g[3];
     double f = ism_sample_grad(s, p, g);
-    return ism_dual_dist_at(s, p, f, g, e);
+    return ism_dual_kink_dist(s, p, ism_dual_plain_dist(s, p, f, g, e), e);
 }
 
 /* A vertex's x and its place in ids, sorted by x. */

@@ -104,12 +104,14 @@ bool ism_dual_kink_faces(ism_sampler *s, const double c[3], const double nrm[3],
 double ism_dual_plain_dist(ism_sampler *s, const double p[3], double f, const double g[3],
                            double e);
 
+/* ism_dual_plain_dist of the n points p[0..n) (n <= ISM_GRAD_BATCH; f, g: f and ∇f there)
+ * into out, the second steps' gradients in one batch (ism_sample_grad_batch): the same
+ * values, for callers that measure points in batches. */
+void ism_dual_plain_dists(ism_sampler *s, const double (*p)[3], const double *f,
+                          const double (*g)[3], double e, double *out, size_t n);
+
 /* ism_dual_kink_dist at p from ism_dual_plain_dist. */
 double ism_dual_dist(ism_sampler *s, const double p[3], double e);
-
-/* ism_dual_dist with f and ∇f at p given: the same answer, for callers that take the points'
- * gradients in one batch. */
-double ism_dual_dist_at(ism_sampler *s, const double p[3], double f, const double g[3], double e);
 
 /* Crease vertices that two leaves found at one point (the crease on their common face: the
  * lens's x = 0 in a box centred on 0), for the n vertices ids[0..n) at pos[3 id ..]: to[k]
