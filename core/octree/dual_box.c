@@ -52,10 +52,35 @@ void ism_dual_box_grow(const double box[6], int level, double grown[6])
     }
 }
 
+/* Points of the first look evaluated together (ism_eval_points: ism_eval_point's values,
+ * lane by lane, for about a third of the instructions on the sphere's tape). A chunk past
+ * the first sign change is evaluated whole: at most this many points more than one by one,
+ * and the same answer. */
+#define LOOK_CHUNK 64
+
+/* The look's verdict on f at the next points v[0..n) in order (*first: the sign of the first
+ * finite value so far, 0 before one): true at a zero or a change of sign. */
+static bool look_sees_cut(const double *v, size_t n, int *first)
+{
+    for (size_t k = 0; k < n; k++) {
+        if (v[k] == 0)
+            return true;
+        if (!isfinite(v[k]))
+            continue;
+        int sg = v[k] < 0 ? -1 : 1;
+        if (*first && sg != *first)
+            return true;
+        *first = sg;
+    }
+    return false;
+}
+
 bool ism_dual_box_seen_cut(ism_sampler *s, const double box[6], int level)
 {
     int n = 1 << level;
     int first = 0; /* the sign of the first finite value: -1 or 1 */
+    double x[LOOK_CHUNK], y[LOOK_CHUNK], z[LOOK_CHUNK], f[LOOK_CHUNK];
+    size_t m = 0;
     for (int a = 0; a < 3; a++)
         for (int side = 0; side < 2; side++)
             for (int i = 0; i <= n; i++)
@@ -65,15 +90,21 @@ bool ism_dual_box_seen_cut(ism_sampler *s, const double box[6], int level)
                     p[a] = box[a + 3 * side];
                     p[u] = box[u] + (box[u + 3] - box[u]) * i / n;
                     p[v] = box[v] + (box[v + 3] - box[v]) * j / n;
-                    double f = ism_sample_f(s, p);
-                    if (f == 0)
-                        return true;
-                    if (!isfinite(f))
+                    if (s->local) { /* another tape inside its box (sampler.h): one by one */
+                        f[0] = ism_sample_f(s, p);
+                        if (look_sees_cut(f, 1, &first))
+                            return true;
                         continue;
-                    int sg = f < 0 ? -1 : 1;
-                    if (first && sg != first)
+                    }
+                    x[m] = p[0], y[m] = p[1], z[m] = p[2];
+                    bool last = a == 2 && side == 1 && i == n && j == n;
+                    if (++m < LOOK_CHUNK && !last)
+                        continue;
+                    s->n_point += m;
+                    ism_eval_points(s->tape, s->ws, x, y, z, f, m);
+                    if (look_sees_cut(f, m, &first))
                         return true;
-                    first = sg;
+                    m = 0;
                 }
     return false;
 }
