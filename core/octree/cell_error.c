@@ -23,18 +23,32 @@ typedef struct root_pt {
     int face[2];
 } root_pt;
 
-static double midpoint_dist(ism_sampler *s, const double *a, const double *b)
+/* A point loop_error measures: its distance is ism_sample_dist_between's over the n (2: an
+ * edge's midpoint, 3: a centroid) vertices v, or ism_sample_dist's alone (n 0). */
+typedef struct loop_pt {
+    double p[3];
+    const double *v[3];
+    int n;
+} loop_pt;
+
+/* Points per polygon at most: its n edge midpoints, then a fan's centre and its n spokes'
+ * midpoints and n centroids. */
+#define LOOP_PTS (3 * MAX_ROOTS + 1)
+
+static void midpoint_at(loop_pt *q, const double *a, const double *b)
 {
-    double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
-    return ism_sample_dist_between(s, m, (const double *[2]){a, b}, 2);
+    for (int k = 0; k < 3; k++)
+        q->p[k] = 0.5 * (a[k] + b[k]);
+    q->v[0] = a, q->v[1] = b, q->v[2] = NULL;
+    q->n = 2;
 }
 
-static double centroid_dist(ism_sampler *s, const double *a, const double *b, const double *c)
+static void centroid_at(loop_pt *q, const double *a, const double *b, const double *c)
 {
-    double m[3];
     for (int k = 0; k < 3; k++)
-        m[k] = (a[k] + b[k] + c[k]) / 3;
-    return ism_sample_dist_between(s, m, (const double *[3]){a, b, c}, 3);
+        q->p[k] = (a[k] + b[k] + c[k]) / 3;
+    q->v[0] = a, q->v[1] = b, q->v[2] = c;
+    q->n = 3;
 }
 
 /* The polygon's centre moved toward f = 0 along ∇f, as triangulate.c fans from it. */
@@ -61,34 +75,56 @@ static bool beyond(double *worst, double d, double bound)
     return *worst > bound;
 }
 
+/* The points q[0..n) measured in order into *worst, their gradients in one batch
+ * (ism_sample_grad_batch: ism_sample_grad's values); true at the first beyond bound (the
+ * points after it were evaluated for nothing: the same answer as one by one). */
+static bool measure_beyond(ism_sampler *s, const loop_pt *q, int n, double *worst,
+                           double bound)
+{
+    double p[LOOP_PTS][3], f[LOOP_PTS], g[LOOP_PTS][3];
+    for (int i = 0; i < n; i++)
+        memcpy(p[i], q[i].p, sizeof p[i]);
+    ism_sample_grad_batch(s, (const double (*)[3])p, f, g, (size_t)n);
+    for (int i = 0; i < n; i++) {
+        double d = ism_first_order_dist(f[i], g[i]);
+        if (q[i].n)
+            d = ism_dist_beyond(s, q[i].p, d, q[i].v, q[i].n);
+        if (beyond(worst, d, bound))
+            return true;
+    }
+    return false;
+}
+
 /* The worst distance on one polygon p[0..n), triangulated as triangulate.c does; the
- * measuring stops at the first point beyond bound. */
+ * measuring stops at the first point beyond bound. Its points in two batches: the edges'
+ * midpoints and a triangle's or a quad's other three, or a fan's centre (moved onto f = 0
+ * only when the edges pass) and spokes. */
 static double loop_error(ism_sampler *s, const double (*p)[3], int n, double bound)
 {
-    double worst = 0;
+    double worst = 0, c[3];
+    loop_pt q[LOOP_PTS];
+    int m = 0;
     for (int i = 0; i < n; i++)
-        if (beyond(&worst, midpoint_dist(s, p[i], p[(i + 1) % n]), bound))
-            return worst;
-    if (n == 3) {
-        beyond(&worst, centroid_dist(s, p[0], p[1], p[2]), bound);
-        return worst;
-    }
+        midpoint_at(&q[m++], p[i], p[(i + 1) % n]);
+    if (n == 3)
+        centroid_at(&q[m++], p[0], p[1], p[2]);
     if (n == 4) {
         int a = ism_dist3(p[0], p[2]) <= ism_dist3(p[1], p[3]) ? 0 : 1;
         const double *d0 = p[a], *d1 = p[a + 2];
-        if (!beyond(&worst, midpoint_dist(s, d0, d1), bound) &&
-            !beyond(&worst, centroid_dist(s, d0, p[a + 1], d1), bound))
-            beyond(&worst, centroid_dist(s, d0, d1, p[(a + 3) % 4]), bound);
-        return worst;
+        midpoint_at(&q[m++], d0, d1);
+        centroid_at(&q[m++], d0, p[a + 1], d1);
+        centroid_at(&q[m++], d0, d1, p[(a + 3) % 4]);
     }
-    double c[3];
-    centre_on_surface(s, p, n, c);
-    if (beyond(&worst, ism_sample_dist(s, c), bound))
+    if (measure_beyond(s, q, m, &worst, bound) || n == 3 || n == 4)
         return worst;
-    for (int i = 0; i < n; i++)
-        if (beyond(&worst, midpoint_dist(s, c, p[i]), bound) ||
-            beyond(&worst, centroid_dist(s, c, p[i], p[(i + 1) % n]), bound))
-            return worst;
+    centre_on_surface(s, p, n, c);
+    m = 0;
+    q[m++] = (loop_pt){{c[0], c[1], c[2]}, {NULL, NULL, NULL}, 0};
+    for (int i = 0; i < n; i++) {
+        midpoint_at(&q[m++], c, p[i]);
+        centroid_at(&q[m++], c, p[i], p[(i + 1) % n]);
+    }
+    measure_beyond(s, q, m, &worst, bound);
     return worst;
 }
 
