@@ -155,7 +155,6 @@ static void mend_needles(rm_pass *p, bool last, bool *ok)
 {
     if (!(p->poorest < rm_collapse_poor()))
         return; /* no triangle under ISM_RM_COLLAPSE_DEG since rm_mark_active looked */
-    rm_collapse_bounds_need(p); /* what collapses and insertions keep to */
     rm_collapse_active(p, ok);
     if (*ok && rm_insert_active(p, last, ok) && *ok)
         rm_flip_from(p, p->touched, ok);

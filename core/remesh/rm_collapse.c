@@ -134,6 +134,7 @@ static bool distance_ok(rm_pass *p, const rm_merge *g)
 {
     double new_c, new_m, old_c, old_m;
     fan_distances(p, g, true, &new_c, &new_m);
+    rm_collapse_bounds_need(p);
     bool c_ok = new_c <= p->centroid_bound;
     if (c_ok && new_m <= p->midpoint_low)
         return true; /* within the mesh's before: the fan's own need not be asked */
@@ -427,6 +428,7 @@ void rm_collapse_bounds_need(rm_pass *p)
 
 bool rm_midpoint_within(rm_pass *p, double d)
 {
+    rm_collapse_bounds_need(p);
     if (d <= p->midpoint_low)
         return true;
     if (!p->midpoint_known) {

@@ -237,13 +237,30 @@ size_t rm_flip_active(rm_pass *p, bool *ok)
     return rm_flip_from(p, p->active, ok);
 }
 
+/* Triangle t's corners whose angle is not acute or right by corner_dot (obtuse, or NaN): bit
+ * k for corner k, kept in rm_pass.obtuse while its shape holds (most triangles keep theirs
+ * from one call of rm_flip_from to the next). */
+static uint8_t obtuse_corners(const rm_pass *p, size_t t)
+{
+    if (p->obtuse && p->obtuse[t] != RM_OBTUSE_UNKNOWN)
+        return p->obtuse[t];
+    const uint32_t *v = p->r.m->tri + 3 * t;
+    uint8_t bits = 0;
+    for (int k = 0; k < 3; k++)
+        if (!(corner_dot(P(p, v[k]), P(p, v[(k + 1) % 3]), P(p, v[(k + 2) % 3])) >= 0))
+            bits |= (uint8_t)(1u << k);
+    if (p->obtuse)
+        p->obtuse[t] = bits;
+    return bits;
+}
+
 /* The keys (rm_edge_key) of the edges opposite a corner of a live triangle whose angle is
- * not acute or right by corner_dot (obtuse, or NaN) into set; false when out of memory (set
- * then empty). An edge whose angles opposite it, in both its triangles, are at most 90°
- * fails not_delaunay: sc cd + cc sd is a sum of products of non-negative numbers. On the
- * presets' meshes most are: the Delaunay test for an edge pushed first needs its quad found
- * (rm_edge_triangles), the key a hash lookup. (A sorted array and binary searches were 19%
- * of the flips' instructions on the torus under its default bound, the sort 6%.) */
+ * not acute or right (obtuse_corners) into set; false when out of memory (set then empty). An
+ * edge whose angles opposite it, in both its triangles, are at most 90° fails not_delaunay:
+ * sc cd + cc sd is a sum of products of non-negative numbers. On the presets' meshes most
+ * are: the Delaunay test for an edge pushed first needs its quad found (rm_edge_triangles),
+ * the key a hash lookup. (A sorted array and binary searches were 19% of the flips'
+ * instructions on the torus under its default bound, the sort 6%.) */
 static bool obtuse_edges(const rm_pass *p, ism_key_map *set)
 {
     const ism_mesh *m = p->r.m;
@@ -251,8 +268,9 @@ static bool obtuse_edges(const rm_pass *p, ism_key_map *set)
     ism_key_map_init(set);
     for (size_t t = 0; t < m->ntris; t++) {
         const uint32_t *v = m->tri + 3 * t;
-        for (int k = 0; !p->r.dead[t] && k < 3; k++)
-            if (!(corner_dot(P(p, v[k]), P(p, v[(k + 1) % 3]), P(p, v[(k + 2) % 3])) >= 0) &&
+        uint8_t bits = p->r.dead[t] ? 0 : obtuse_corners(p, t);
+        for (int k = 0; bits && k < 3; k++)
+            if ((bits >> k & 1) &&
                 ism_key_map_add(set, rm_edge_key(v[k], v[(k + 1) % 3]), &added) == ISM_KEY_NONE) {
                 ism_key_map_free(set);
                 return false;

@@ -150,6 +150,7 @@ static bool faces_kept(const rm_pass *p, const uint32_t *ring, int n, const doub
  * from x farther than own or the mesh's farthest midpoint (midpoint_bound) either. */
 static bool centroids_ok(rm_pass *p, const uint32_t *ring, int n, double own, const double *x)
 {
+    rm_collapse_bounds_need(p);
     double bound = fmax(own, p->centroid_bound);
     for (int k = 0; k < n; k++)
         if (!(rm_centroid_distance(p, P(p, ring[k]), P(p, ring[(k + 1) % n]), x) <= bound))

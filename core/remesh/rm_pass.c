@@ -42,6 +42,10 @@ bool rm_pass_open(rm_pass *p, ism_mesh *m, const ism_remesh_options *o, size_t e
         p->active = calloc(cv, 1);
         p->slide = calloc(cv, 1);
         p->touched = calloc(cv, 1);
+        /* (out of memory: NULL, every triangle measured each time) */
+        p->obtuse = malloc(p->r.cap_tris ? p->r.cap_tris : 1);
+        if (p->obtuse)
+            memset(p->obtuse, RM_OBTUSE_UNKNOWN, p->r.cap_tris ? p->r.cap_tris : 1);
     }
     return ok && p->normal && p->active && p->slide && p->touched && rm_normals(p) &&
            rm_lock_features(p, o);
@@ -58,6 +62,7 @@ bool rm_pass_close(rm_pass *p, size_t nverts_before, size_t ntris_before,
     free(p->slide);
     free(p->touched);
     free(p->sine);
+    free(p->obtuse);
     free(p->crease_tried);
     free(p->cen_ref);
     free(p->cen_keep);

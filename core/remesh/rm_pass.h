@@ -111,6 +111,9 @@ typedef struct rm_pass {
     double *sine;           /* per triangle, or NULL: the sine of its smallest angle as
                                rm_mark_active last measured it (NAN: its shape changed
                                since, rm_shape_changed) */
+    uint8_t *obtuse;        /* per triangle, or NULL: bit k set when its corner k's angle is
+                               not acute (rm_flip.c's obtuse_edges), RM_OBTUSE_UNKNOWN when its
+                               shape changed since (rm_shape_changed) */
     double *crease_tried;   /* per vertex, or NULL: its fan's sines summed when
                                rm_crease_slide_sweep last asked it and nothing passed (NAN:
                                not asked): a fan that has not changed fails again */
@@ -257,12 +260,17 @@ bool rm_compact(rm_mesh *r, size_t nverts_before, size_t ntris_before, ism_remes
  * triangle's sine is measured again only when its shape changed since (sine). */
 size_t rm_mark_active(rm_pass *p);
 
+/* rm_pass.obtuse's mark of a triangle not measured since its shape changed. */
+#define RM_OBTUSE_UNKNOWN 0xff
+
 /* Triangle t changed its corners or their places (a move, flip, collapse or split): what
  * the pass remembers of its shape is gone. */
 static inline void rm_shape_changed(rm_pass *p, uint32_t t)
 {
     if (p->sine)
         p->sine[t] = NAN;
+    if (p->obtuse)
+        p->obtuse[t] = RM_OBTUSE_UNKNOWN;
 }
 
 /* Makes sine room for every triangle the pass may hold, taking over `found` (the caller's
