@@ -87,6 +87,8 @@ typedef struct cf_ctx {
     double origin[3], extent; /* the box's low corner and longest side */
     double cell;            /* finest octree cell: the scale of the surgery */
     int threads;            /* the grid's passes over the mesh run on this many */
+    struct cf_grade *grade; /* the rows graded toward the curve of the loop being zipped
+                               (conform_grade.c), NULL: zipped straight to the curve */
     ism_conform_stats *st;
 } cf_ctx;
 
@@ -416,6 +418,35 @@ bool cf_pinch_rim_points(cf_ctx *c, const cf_loop *l, const cf_pinch *const *ch,
  * point) of the curves it runs along, by arclength. */
 bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, size_t npl,
                   const cf_loops *ls, double rho);
+
+/* ---- conform_grade.c: rows graded between a zip's row and its curve ---- */
+/* Rows at most (a row 2^(K + 1) times as coarse as the curve gets K: 128 times, past the
+ * planes' 98 curve edges under one row edge in the irrational box). */
+#define CF_GRADE_MAX_ROWS 6
+/* A side of a strip: row vertex r above curve vertex c, and the rows' vertices between. */
+typedef struct cf_grade_side {
+    uint32_t r, c, v[CF_GRADE_MAX_ROWS + 1]; /* v[1 .. rows] */
+} cf_grade_side;
+/* One loop's grading: its rows, where they lie and the sides made so far (shared by the
+ * loop's stretches). refused: a stretch could not be graded (the caller zips the loop again
+ * without). */
+typedef struct cf_grade {
+    int rows;
+    double t[CF_GRADE_MAX_ROWS + 2]; /* row k at t[k] of the way from the curve to the row */
+    cf_grade_side *side;
+    size_t nside, cap;
+    bool refused;
+} cf_grade;
+/* Rows to grade a row of mean edge row_edge, width from the curve, down to a curve of
+ * curve_edge (0: none). */
+int cf_grade_rows(double row_edge, double curve_edge, double width);
+void cf_grade_init(cf_grade *g, int rows);
+void cf_grade_free(cf_grade *g);
+/* Fills the strip between row top[0 .. nt) (its parameters tx, non-decreasing) and the curve
+ * vertices bot[0 .. nb) (bx, increasing) with g's rows: 1 done, 0 out of memory, -1 it cannot
+ * (a stretch of no length). */
+int cf_grade_strip(cf_ctx *c, cf_grade *g, const uint32_t *top, const double *tx, size_t nt,
+                   const uint32_t *bot, const double *bx, size_t nb);
 
 /* ---- conform_ears.c: a rim loop's backward steps clipped ---- */
 /* Loop l along the curves pl (cid[i] the curve of vertex i, NULL: all on pl[0]; u[i] its

@@ -135,11 +135,49 @@ static long curve_index_near(const cf_polyline *pl, double x)
     return base + period_steps(pl) - nearest_point(pl, pl->n - 1, 2 * pl->length - y);
 }
 
+/* zip_seq through the loop's graded rows (conform_grade.c): 1 done, 0 out of memory, -1 the
+ * stretch cannot be graded (no length, or it turns round an end of its curve). */
+static int grade_seq(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv, const uint32_t *row,
+                     const double *U, size_t len, long Ja, long Jb, int dir)
+{
+    size_t nb = (size_t)labs(Jb - Ja) + 1;
+    uint32_t *bot = malloc(nb * sizeof *bot);
+    double *bx = malloc(nb * sizeof *bx), *tx = malloc(len * sizeof *tx);
+    int ret = 0;
+    if (!bot || !bx || !tx)
+        goto done;
+    ret = -1;
+    for (size_t j = 0; j < nb; j++) {
+        long J = Ja + dir * (long)j;
+        double p;
+        size_t k = fold_index(pl, J, &p);
+        /* a fold inside: the rows would cross the end of the curve between its sheets */
+        if (!pl->closed && j > 0 && j + 1 < nb && (k == 0 || k == pl->n - 1))
+            goto done;
+        bot[j] = cv[k];
+        bx[j] = dir * p;
+    }
+    for (size_t i = 0; i < len; i++) /* the row's keys, made monotone (as zip_seq's) */
+        tx[i] = i ? fmax(tx[i - 1], dir * U[i]) : dir * U[0];
+    ret = cf_grade_strip(c, c->grade, row, tx, len, bot, bx, nb);
+done:
+    free(bot);
+    free(bx);
+    free(tx);
+    return ret;
+}
+
 /* Zips row[0..len) (unfolded parameters U) to the curve's unfolded indices Ja .. Jb. */
 static bool zip_seq(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv, const uint32_t *row,
                     const double *U, size_t len, long Ja, long Jb)
 {
     int dir = Jb > Ja || (Jb == Ja && U[len - 1] >= U[0]) ? 1 : -1;
+    if (c->grade) {
+        int g = grade_seq(c, pl, cv, row, U, len, Ja, Jb, dir);
+        if (g < 0)
+            c->grade->refused = true; /* the loop is zipped again without */
+        return g != 0;
+    }
     size_t i = 0, m = len - 1;
     long J = Ja;
     double key = dir * U[0]; /* the row's keys, made monotone */
@@ -603,6 +641,60 @@ static void smooth_ids(int *cid, size_t n, bool closed)
     }
 }
 
+/* The rows the loop's row is graded toward its curve by (0: zipped straight). Not near a
+ * pinch point: there the rows are made in the umbrella's chart and the zip turns round the
+ * curve's end between the sheets (conform_pinch.c). The row's spacing is its mean edge, its
+ * width its vertices' mean distance to their feet, the curve's spacing the mean of its
+ * vertices' curves' edges. */
+static int loop_grade_rows(const cf_ctx *c, const cf_polyline *pl, const cf_pinch *ends,
+                           const cf_loop *l, const uint32_t *row, const int *cid,
+                           const double *u, const double *foot, double rho)
+{
+    double width = 0, curve_edge = 0;
+    for (size_t i = 0; i < l->n; i++) {
+        const cf_polyline *p = &pl[cid[i]];
+        if (cf_pinch_near(ends, pl, cid[i], u[i], CF_PINCH_REACH_RHO * rho))
+            return 0;
+        size_t segs = p->closed ? p->n : p->n - 1;
+        curve_edge += (segs ? p->length / (double)segs : 0.0) / (double)l->n;
+        width += ism_dist3(c->m->pos + 3 * (size_t)row[i], foot + 3 * i) / (double)l->n;
+    }
+    cf_loop r = {(uint32_t *)row, l->n, l->closed};
+    return cf_grade_rows(cf_loop_mean_edge(c, &r), curve_edge, width);
+}
+
+/* Zips the loop's row to its curves (zip_multi or zip_loop), through `rows` graded rows
+ * (conform_grade.c) when rows > 0 (a copy of u zipped); where a stretch refuses them, the
+ * loop is zipped again straight (u unwrapped in place, as ever). False when out of memory. */
+static bool zip_graded(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv,
+                       const cf_loop *l, const int *cid, const uint32_t *row, double rho,
+                       double *u, const bool *moved, bool multi, int rows)
+{
+    cf_grade g;
+    cf_grade_init(&g, rows);
+    size_t nt0 = c->m->ntris, nv0 = c->m->nverts, added0 = c->st->vertices_added;
+    bool ok = true;
+    for (int pass = rows > 0 ? 0 : 1; ok && pass < 2; pass++) {
+        c->grade = pass == 0 ? &g : NULL;
+        double *uz = u; /* zip_loop unwraps u in place: the second pass reads it again */
+        if (pass == 0 && !(uz = malloc(l->n * sizeof *uz)))
+            ok = false;
+        for (size_t i = 0; ok && uz != u && i < l->n; i++)
+            uz[i] = u[i];
+        ok = ok && (multi ? zip_multi(c, pl, cv, l, cid, row, rho, uz, moved)
+                          : zip_loop(c, &pl[cid[0]], cv[cid[0]], l, uz, row, rho));
+        if (uz != u)
+            free(uz);
+        c->grade = NULL;
+        if (!ok || !g.refused || c->stopped)
+            break;
+        cf_truncate(c, nt0, nv0); /* a stretch refused: the loop straight to its curve */
+        c->st->vertices_added = added0;
+    }
+    cf_grade_free(&g);
+    return ok;
+}
+
 bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, size_t npl,
                   const cf_loops *ls, double rho)
 {
@@ -653,8 +745,8 @@ bool cf_zip_loops(cf_ctx *c, const cf_polyline *pl, const uint32_t *const *cv, s
             uint32_t *row = !multi || moved
                                 ? make_rows(c, l, foot, pl, ends, cid, u, rho, moved)
                                 : NULL;
-            ok = row && (multi ? zip_multi(c, pl, cv, l, cid, row, rho, u, moved)
-                               : zip_loop(c, &pl[cid[0]], cv[cid[0]], l, u, row, rho));
+            ok = row && zip_graded(c, pl, cv, l, cid, row, rho, u, moved, multi,
+                                   loop_grade_rows(c, pl, ends, l, row, cid, u, foot, rho));
             free(row);
             free(moved);
         }

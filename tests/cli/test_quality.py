@@ -314,6 +314,63 @@ class GoalsUnderTheDefaultBound(unittest.TestCase):
                     self.assertGreater(free, 0.8 * len(tris))
 
 
+class ZipBesideTheDoubleLines(unittest.TestCase):
+    """The raw mesh beside the planes' double lines (x y = 0, x y z = 0; no --quality), in each
+    preset's own box and the two shifted ones (boxes.py). Where the octree stays coarse beside
+    a flat sheet (the shifted boxes: its cells 0.125 to 0.25 wide, the tube's rim 0.11 to 0.18
+    from the axes) and the curve's vertices are 0.0078 apart, the conformance once zipped each
+    rim vertex straight to the curve: up to 98 curve edges under one vertex (x y z = 0,
+    irrational box), every triangle on a curve edge under 30 degrees (3,052 of them, the
+    smallest 0.13), and the quality pass then cost 2.8 x the polygonisation. Rows graded
+    toward the curve (core/singular/conform_grade.c) put each row vertex over two edges of the
+    row below (three at an odd row's end). Counted here from the PLY: the curve edges are the
+    edges with more than two triangles, a triangle's fan the curve edges it stands on."""
+
+    PRESETS = ("crossing-planes", "coordinate-planes")
+    BOX, DEPTH = [-1, -1, -1, 1, 1, 1], 6  # proto/presets.c
+    # a row vertex stands on two curve edges, three at the end of a row of odd count
+    MAX_FAN = 3
+    # graded rows make 38.7 degrees and more (conform_grade.c); under 30 only where a strip's
+    # side leans to a junction's corner or the box cut: 34 / 15 of ~3,050 (x y z = 0), 6 / 5
+    # of 1,020 (x y = 0) in the shifted boxes; all of them before
+    SHARE_UNDER_30 = 0.02
+
+    def test_rows_graded_toward_the_double_lines(self):
+        cell = (self.BOX[3] - self.BOX[0]) / 2 ** self.DEPTH
+        for preset in self.PRESETS:
+            for box in placements(self.BOX, cell):
+                with self.subTest(preset=preset, box=box):
+                    verts, tris, _ = run_surface(preset, box, "raw", depth=None)
+                    count = {}
+                    for t in tris:
+                        for k in range(3):
+                            e = tuple(sorted((t[k], t[(k + 1) % 3])))
+                            count[e] = count.get(e, 0) + 1
+                    curve = {e for e, n in count.items() if n > 2}
+                    self.assertGreater(len(curve), 0)
+                    fan, on_curve = {}, []
+                    for t in tris:
+                        edges = [tuple(sorted((t[k], t[(k + 1) % 3]))) for k in range(3)]
+                        for k, e in enumerate(edges):
+                            if e in curve:
+                                apex = t[(k + 2) % 3]
+                                fan[apex] = fan.get(apex, 0) + 1
+                        if any(e in curve for e in edges):
+                            on_curve.append(t)
+                    self.assertLessEqual(max(fan.values()), self.MAX_FAN)
+                    poor = sum(1 for t in on_curve
+                               if min_angle_deg(*(verts[i] for i in t)) < 30)
+                    self.assertLessEqual(poor, self.SHARE_UNDER_30 * len(on_curve))
+                    # the rows' ends on the box cut stay on the box's faces (the cut's
+                    # boundary is the same line, with vertices between); the PLY's floats
+                    # hold a coordinate near 1 to 6e-8
+                    near = 1e-6 * math.dist(box[:3], box[3:])
+                    rim = {v for e, n in count.items() if n == 1 for v in e}
+                    off = [verts[v] for v in rim
+                           if min(abs(verts[v][a % 3] - box[a]) for a in range(6)) > near]
+                    self.assertEqual(off, [])
+
+
 class BadValues(unittest.TestCase):
     def test_cli_rejects_an_unknown_quality(self):
         r = subprocess.run([ISOMESH, "--surface", "sphere", "--quality", "best", "-o",
