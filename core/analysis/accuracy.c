@@ -147,7 +147,8 @@ static bool measure_largest(sample_pass *sp, ism_pool *pool, double *first, size
     sp->again = again;
     for (;;) {
         want = want < count ? want : count;
-        double below = ism_an_select_double(tmp, count, count - want); /* the want-th largest */
+        /* the want-th largest */
+        double below = ism_an_select_double_on(pool, tmp, count, count - want);
         sp->nagain = 0;
         double left = -INFINITY; /* the largest estimate not measured again */
         for (size_t i = 0; i < sp->nitems; i++) {
@@ -171,7 +172,7 @@ static bool measure_largest(sample_pass *sp, ism_pool *pool, double *first, size
     }
 }
 
-void ism_an_distance_figures(double *dist, size_t n, ism_an_distances *out)
+void ism_an_distance_figures(double *dist, size_t n, ism_pool *pool, ism_an_distances *out)
 {
     size_t count = 0;
     double sum = 0, max = 0;
@@ -184,7 +185,9 @@ void ism_an_distance_figures(double *dist, size_t n, ism_an_distances *out)
     }
     out->max = max;
     out->mean = count ? sum / (double)count : 0;
-    out->p99 = count ? ism_an_select_double(dist, count, (size_t)(PERCENTILE * (count - 1))) : 0;
+    out->p99 = count ? ism_an_select_double_on(pool, dist, count,
+                                               (size_t)(PERCENTILE * (count - 1)))
+                      : 0;
     out->skipped = n - count;
 }
 
@@ -214,7 +217,7 @@ static bool sample(const ism_mesh *m, const ism_tape *f, const ism_an_edge_table
                                 &sp) &&
               measure_largest(&sp, pool, first, again, tmp);
     if (ok)
-        ism_an_distance_figures(sp.dist, nitems, out);
+        ism_an_distance_figures(sp.dist, nitems, pool, out);
     free(sp.dist);
     free(first);
     free(tmp);

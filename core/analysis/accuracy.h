@@ -11,13 +11,14 @@
 #include "core/analysis/edges.h"
 #include "core/util/pool.h"
 
-/* Maximum, mean and 99th percentile of the distances that are not NaN (reorders dist);
- * skipped: how many were NaN. */
+/* Maximum, mean and 99th percentile of the distances that are not NaN (reorders dist; the
+ * percentile found on the threads of pool, NULL: the calling thread); skipped: how many were
+ * NaN. */
 typedef struct ism_an_distances {
     double max, mean, p99;
     size_t skipped;
 } ism_an_distances;
-void ism_an_distance_figures(double *dist, size_t n, ism_an_distances *out);
+void ism_an_distance_figures(double *dist, size_t n, ism_pool *pool, ism_an_distances *out);
 
 /* Distances at triangle centroids and edge midpoints (after ism_an_implicit_figures with
  * accuracy, which sets the singular threshold and the vertices' distances: false without), evaluated on the threads of pool (NULL: the calling thread);

@@ -29,6 +29,7 @@ typedef struct implicit_pass {
     ism_analysis *a;
     double *fval, *gnorm, *newton; /* per vertex; gnorm NaN where f misbehaves */
     double threshold;
+    ism_pool *pool; /* the threads of the medians and percentiles (NULL: the caller's) */
 } implicit_pass;
 
 float ism_an_finite_float(double x)
@@ -109,7 +110,7 @@ static bool gradient_scale(implicit_pass *ip)
     for (size_t v = 0; v < nv; v++)
         if (isfinite(ip->gnorm[v]))
             tmp[n++] = ip->gnorm[v];
-    ip->a->gradient_scale = n ? ism_an_select_double(tmp, n, n / 2) : 0;
+    ip->a->gradient_scale = n ? ism_an_select_double_on(ip->pool, tmp, n, n / 2) : 0;
     ip->threshold = ip->o->singular_rel * ip->a->gradient_scale;
     ip->a->singular_threshold = ip->threshold;
     free(tmp);
@@ -157,7 +158,7 @@ static void vertex_figures(implicit_pass *ip)
     if (counted)
         a->mean_newton_dist = newton_sum / (double)counted;
     ism_an_distances vd;
-    ism_an_distance_figures(ip->fval, ip->m->nverts, &vd);
+    ism_an_distance_figures(ip->fval, ip->m->nverts, ip->pool, &vd);
     a->max_dist_vertex = vd.max;
     a->mean_dist_vertex = vd.mean;
     a->p99_dist_vertex = vd.p99;
@@ -187,7 +188,7 @@ bool ism_an_implicit_figures(const ism_mesh *m, const ism_tape *f, const ism_ana
         return true;
     size_t n = m->nverts ? m->nverts : 1;
     size_t vblocks = ism_blocks(m->nverts, ISM_AN_EVAL_BLOCK);
-    implicit_pass ip = {.m = m, .f = f, .o = o, .vf = vf, .a = a};
+    implicit_pass ip = {.m = m, .f = f, .o = o, .vf = vf, .a = a, .pool = pool};
     ip.fval = malloc(n * sizeof *ip.fval);
     ip.gnorm = malloc(n * sizeof *ip.gnorm);
     ip.newton = calloc(n, sizeof *ip.newton);

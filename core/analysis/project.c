@@ -75,7 +75,7 @@ static bool find_threshold(project_pass *pp, const ism_analysis_options *o)
     for (size_t v = 0; v < nv; v++)
         if (pp->a->vertex_class[v] != ISM_VERTEX_ISOLATED && isfinite(pp->gnorm[v]))
             pp->gnorm[n++] = pp->gnorm[v];
-    pp->threshold = n ? o->singular_rel * ism_an_select_double(pp->gnorm, n, n / 2) : 0;
+    pp->threshold = n ? o->singular_rel * ism_an_select_double_on(pp->pool, pp->gnorm, n, n / 2) : 0;
     return true;
 }
 

@@ -66,7 +66,7 @@ static double measure_triangle(const ism_mesh *m, size_t t, double *angle, doubl
     return twice_area;
 }
 
-static void aspect_statistics(ism_analysis *a, float *aspect, size_t n)
+static void aspect_statistics(ism_analysis *a, ism_pool *pool, float *aspect, size_t n)
 {
     if (n == 0)
         return;
@@ -76,10 +76,10 @@ static void aspect_statistics(ism_analysis *a, float *aspect, size_t n)
         a->aspect_max = fmax(a->aspect_max, aspect[i]);
     }
     a->aspect_mean = sum / (double)n;
-    a->aspect_p99 = ism_an_select_float(aspect, n, (size_t)(0.99 * (double)(n - 1)));
+    a->aspect_p99 = ism_an_select_float_on(pool, aspect, n, (size_t)(0.99 * (double)(n - 1)));
 }
 
-static void angle_statistics(ism_analysis *a, float *good, size_t ngood)
+static void angle_statistics(ism_analysis *a, ism_pool *pool, float *good, size_t ngood)
 {
     if (ngood == 0)
         return;
@@ -92,11 +92,14 @@ static void angle_statistics(ism_analysis *a, float *good, size_t ngood)
     }
     a->share_under_10 = (double)under_10 / (double)ngood;
     size_t mid = ngood / 2;
-    double upper = ism_an_select_float(good, ngood, mid);
+    double upper = ism_an_select_float_on(pool, good, ngood, mid);
     if (ngood % 2 == 1) {
         a->median_angle = upper;
+    } else if (ism_pool_threads(pool) > 1) {
+        float lower = ism_an_select_float_on(pool, good, ngood, mid - 1);
+        a->median_angle = 0.5 * ((double)lower + upper);
     } else {
-        float lower = good[0]; /* after selection good[0 .. mid) are all <= upper */
+        float lower = good[0]; /* after the quickselect good[0 .. mid) are all <= upper */
         for (size_t i = 1; i < mid; i++)
             if (good[i] > lower)
                 lower = good[i];
@@ -157,8 +160,8 @@ bool ism_an_triangle_quality(const ism_mesh *m, ism_pool *pool, ism_analysis *a)
                 good[ngood++] = (float)angle;
             }
         }
-        angle_statistics(a, good, ngood);
-        aspect_statistics(a, aspect, ngood);
+        angle_statistics(a, pool, good, ngood);
+        aspect_statistics(a, pool, aspect, ngood);
     }
     free(good);
     free(aspect);

@@ -1,11 +1,21 @@
-/* select.h — the k-th smallest of an array (select.c), for medians. */
+/* select.h — the k-th smallest of an array (select.c), for medians and percentiles: in place
+ * on the calling thread, or on a pool's threads for large arrays. */
 #ifndef ISM_AN_SELECT_H
 #define ISM_AN_SELECT_H
 
 #include <stddef.h>
 
+#include "core/util/pool.h"
+
 /* The k-th smallest (0-based) of v[0..n), reordering v. n > k. */
 double ism_an_select_double(double *v, size_t n, size_t k);
 float ism_an_select_float(float *v, size_t n, size_t k);
+
+/* The same value (bit for bit, for any number of threads) found on the threads of pool by
+ * a radix selection, without reordering v; on the calling thread alone (reordering v as
+ * above) when pool is NULL, n is small, or scratch memory cannot be had. Values are finite
+ * (a -0 sorts below +0 here: callers pass distances, norms and angles, never -0). */
+double ism_an_select_double_on(ism_pool *pool, double *v, size_t n, size_t k);
+float ism_an_select_float_on(ism_pool *pool, float *v, size_t n, size_t k);
 
 #endif
