@@ -1,9 +1,10 @@
 /* test_polygonise_cases.c — behaviour around the edges of the polygoniser: near-touching
  * parts stay apart, an empty box gives an empty mesh, adaptivity pays, output is
- * deterministic and independent of the thread count (gyroid; nodal sextic off the lattice),
- * budgets and bad options fail clearly. */
+ * deterministic and independent of the thread count (the gyroid ball and Barth's nodal sextic,
+ * each in the three placements), budgets and bad options fail clearly. */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 #include "poly_fixture.h"
 
@@ -73,27 +74,49 @@ static void expect_same_mesh(const ism_mesh *a, const ism_mesh *b, const char *w
     cr_expect(memcmp(a->tri, b->tri, a->ntris * 3 * sizeof *a->tri) == 0, "%s: triangles", what);
 }
 
+/* t in base's three placements (pf_sweep_box at depth d): 1, 2 and 4 threads make the same
+ * bytes, each mesh with more than min_tris triangles and (registry) more than 2^15 leaf
+ * corners when asked, so the break-point registry's parallel path runs. */
+static void same_on_1_2_4_threads(const ism_tape *t, const double base[6], int d, size_t min_tris,
+                                  bool registry, const char *name)
+{
+    for (int which = pf_first_box() - 1; which <= 1; which++) {
+        double box[6];
+        pf_sweep_box(base, d, which, box);
+        ism_mesh m[3];
+        ism_poly_stats st;
+        static const int threads[3] = {1, 2, 4};
+        for (int k = 0; k < 3; k++)
+            pf_run(t, box, 3, d, threads[k], &m[k], &st);
+        cr_assert_gt(m[0].ntris, min_tris, "%s, placement %d: %zu triangles", name, which,
+                     m[0].ntris);
+        if (registry)
+            cr_assert_gt(8 * st.nodes_visited, (uint64_t)1 << 15,
+                         "%s, placement %d: %llu nodes: the registry's serial path", name, which,
+                         (unsigned long long)st.nodes_visited);
+        char what[96];
+        snprintf(what, sizeof what, "%s, placement %d: one thread vs two", name, which);
+        expect_same_mesh(&m[0], &m[1], what);
+        snprintf(what, sizeof what, "%s, placement %d: one thread vs four", name, which);
+        expect_same_mesh(&m[0], &m[2], what);
+        for (int k = 0; k < 3; k++)
+            ism_mesh_free(&m[k]);
+    }
+}
+
+/* The gyroid in a ball (the thread-scaling goal's surface, a crease where the two meet) in
+ * the three placements. */
 Test(cases, deterministic_and_thread_independent)
 {
     ism_tape *t = pf_compile(&gyroid);
-    int d = 6 - pf_quick();
-    ism_mesh a, b, c;
-    ism_poly_stats st;
-    pf_run(t, cube15, 3, d, 2, &a, &st);
-    pf_run(t, cube15, 3, d, 4, &b, &st);
-    pf_run(t, cube15, 3, d, 1, &c, &st);
-    cr_assert_gt(a.ntris, 1000);
-    expect_same_mesh(&a, &b, "two threads vs four");
-    expect_same_mesh(&a, &c, "one thread vs two");
-    ism_mesh_free(&a);
-    ism_mesh_free(&b);
-    ism_mesh_free(&c);
+    same_on_1_2_4_threads(t, cube15, 6 - pf_quick(), 1000, false, "gyroid-ball");
     ism_tape_free(t);
 }
 
-/* Barth's sextic (65 nodes) in a ball, in a box off the octree lattice by √2 − 1 of a finest
- * cell: the break-point registry, the work stealing and the weld on 1, 2 and 4 threads make
- * the same bytes (the registry's parallel path starts at 2^15 corners: reached here). */
+/* Barth's sextic (65 nodes) in a ball in the three placements, the last off the octree
+ * lattice by irrational fractions of a finest cell: the break-point registry, the work
+ * stealing and the weld on 1, 2 and 4 threads make the same bytes (the registry's parallel
+ * path starts at 2^15 corners: reached here). */
 Test(cases, nodal_sextic_thread_independent_off_lattice)
 {
     static const ism_param phi[] = {{"phi", 1.6180339887498949}};
@@ -101,26 +124,9 @@ Test(cases, nodal_sextic_thread_independent_off_lattice)
         "max(4*(phi^2*x^2 - y^2)*(phi^2*y^2 - z^2)*(phi^2*z^2 - x^2) - "
         "(1 + 2*phi)*(x^2 + y^2 + z^2 - 1)^2, x^2 + y^2 + z^2 - 2.25)",
         phi, 1, NULL, 0};
+    const double base[6] = {-1.6, -1.6, -1.6, 1.6, 1.6, 1.6};
     ism_tape *t = pf_compile(&barth);
-    int d = 6 - pf_quick();
-    double box[6], cell = 3.2 / (1 << d);
-    for (int k = 0; k < 3; k++) {
-        box[k] = -1.6 + PF_IRR * cell;
-        box[3 + k] = 1.6 + PF_IRR * cell;
-    }
-    ism_mesh a, b, c;
-    ism_poly_stats st;
-    pf_run(t, box, 3, d, 1, &a, &st);
-    pf_run(t, box, 3, d, 2, &b, &st);
-    pf_run(t, box, 3, d, 4, &c, &st);
-    cr_assert_gt(a.ntris, 5000, "%zu triangles", a.ntris);
-    cr_assert_gt(8 * st.nodes_visited, (uint64_t)1 << 15, "%llu nodes: the registry's serial path",
-                 (unsigned long long)st.nodes_visited);
-    expect_same_mesh(&a, &b, "one thread vs two");
-    expect_same_mesh(&a, &c, "one thread vs four");
-    ism_mesh_free(&a);
-    ism_mesh_free(&b);
-    ism_mesh_free(&c);
+    same_on_1_2_4_threads(t, base, 6 - pf_quick(), 5000, true, "barth-sextic");
     ism_tape_free(t);
 }
 
