@@ -125,6 +125,133 @@ static void nearest_block(void *ctx, ism_eval_ws *ws, size_t block)
     }
 }
 
+/* measure_largest's scans over the items, in blocks of ISM_AN_TRI_BLOCK on the pool: each
+ * block counts into its own slot, the counts become offsets, and a second pass writes each
+ * block's items there, so the lists are in item order on any number of threads. */
+typedef struct scan_pass {
+    sample_pass *sp;
+    double *first, *tmp; /* the estimates, and those that are points */
+    size_t *again;       /* the items measured again now */
+    size_t *at;          /* per block: its count, then where its items go */
+    double *left;        /* per block: its largest estimate not measured again */
+    double below, done_above; /* measured again now: estimates in [below, done_above) */
+} scan_pass;
+
+static size_t scan_end(const scan_pass *s, size_t blk)
+{
+    return ism_block_end(blk, ISM_AN_TRI_BLOCK, s->sp->nitems);
+}
+
+/* first := the estimates; counts those that are points. */
+static void copy_block(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    scan_pass *s = ctx;
+    size_t n = 0;
+    for (size_t i = blk * ISM_AN_TRI_BLOCK, end = scan_end(s, blk); i < end; i++) {
+        s->first[i] = s->sp->dist[i];
+        n += !isnan(s->first[i]);
+    }
+    s->at[blk] = n;
+}
+
+static void points_block(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    scan_pass *s = ctx;
+    size_t o = s->at[blk];
+    for (size_t i = blk * ISM_AN_TRI_BLOCK, end = scan_end(s, blk); i < end; i++)
+        if (!isnan(s->first[i]))
+            s->tmp[o++] = s->first[i];
+}
+
+static bool again_now(const scan_pass *s, double e)
+{
+    return !isnan(e) && e < s->done_above && e >= s->below;
+}
+
+/* Counts the items measured again now; the largest estimate of the rest not yet measured. */
+static void count_again_block(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    scan_pass *s = ctx;
+    size_t n = 0;
+    double left = -INFINITY;
+    for (size_t i = blk * ISM_AN_TRI_BLOCK, end = scan_end(s, blk); i < end; i++) {
+        double e = s->first[i];
+        if (again_now(s, e))
+            n++;
+        else if (!isnan(e) && e < s->done_above)
+            left = fmax(left, e);
+    }
+    s->at[blk] = n;
+    s->left[blk] = left;
+}
+
+static void again_block(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    scan_pass *s = ctx;
+    size_t o = s->at[blk];
+    for (size_t i = blk * ISM_AN_TRI_BLOCK, end = scan_end(s, blk); i < end; i++)
+        if (again_now(s, s->first[i]))
+            s->again[o++] = i;
+}
+
+/* Counts the points measured again at or above `below` whose distance is at least the
+ * largest estimate left (left[0]). */
+static void settled_block(void *ctx, size_t blk, int thread)
+{
+    (void)thread;
+    scan_pass *s = ctx;
+    size_t n = 0;
+    for (size_t i = blk * ISM_AN_TRI_BLOCK, end = scan_end(s, blk); i < end; i++)
+        n += !isnan(s->first[i]) && s->first[i] >= s->below && s->sp->dist[i] >= s->left[0];
+    s->at[blk] = n;
+}
+
+/* The sum of the blocks' counts (at: the counts, then where each block's items go). */
+static size_t scan_offsets(scan_pass *s, size_t nblocks)
+{
+    return ism_counts_to_offsets(s->at, nblocks);
+}
+
+/* measure_largest's rounds (s: its scans' slots, nblocks of items). */
+static bool measure_rounds(scan_pass *s, ism_pool *pool, size_t nblocks)
+{
+    sample_pass *sp = s->sp;
+    ism_pool_for(pool, nblocks, copy_block, s, NULL);
+    size_t count = scan_offsets(s, nblocks);
+    if (count == 0)
+        return true;
+    ism_pool_for(pool, nblocks, points_block, s, NULL);
+    size_t need = count - (size_t)(PERCENTILE * (count - 1)); /* ranks from the p99's up */
+    size_t want = need + NEAREST_EXTRA;
+    sp->first = s->first;
+    sp->again = s->again;
+    for (;;) {
+        want = want < count ? want : count;
+        /* the want-th largest */
+        s->below = ism_an_select_double_on(pool, s->tmp, count, count - want);
+        ism_pool_for(pool, nblocks, count_again_block, s, NULL);
+        double left = -INFINITY; /* the largest estimate not measured again */
+        for (size_t b = 0; b < nblocks; b++)
+            left = fmax(left, s->left[b]);
+        sp->nagain = scan_offsets(s, nblocks);
+        ism_pool_for(pool, nblocks, again_block, s, NULL);
+        if (!ism_an_run_blocks(sp->f, pool, ism_blocks(sp->nagain, NEAREST_BLOCK),
+                               nearest_block, sp))
+            return false;
+        s->done_above = s->below; /* estimates at or above this were measured again */
+        s->left[0] = left;
+        ism_pool_for(pool, nblocks, settled_block, s, NULL);
+        size_t settled = scan_offsets(s, nblocks);
+        if (settled >= need || want == count)
+            return true;
+        want *= 4;
+    }
+}
+
 /* Measures again, largest estimate first, until the values at or above the 99th percentile's
  * rank are all measured ones at least as large as every estimate left (which can only come
  * down): the maximum and the 99th percentile are then those of every point measured again.
@@ -132,44 +259,13 @@ static void nearest_block(void *ctx, ism_eval_ws *ws, size_t block)
 static bool measure_largest(sample_pass *sp, ism_pool *pool, double *first, size_t *again,
                             double *tmp)
 {
-    size_t count = 0;
-    for (size_t i = 0; i < sp->nitems; i++) {
-        first[i] = sp->dist[i];
-        if (!isnan(first[i]))
-            tmp[count++] = first[i];
-    }
-    if (count == 0)
-        return true;
-    size_t need = count - (size_t)(PERCENTILE * (count - 1)); /* ranks from the p99's up */
-    size_t want = need + NEAREST_EXTRA;
-    double done_above = INFINITY; /* estimates at or above this were measured again */
-    sp->first = first;
-    sp->again = again;
-    for (;;) {
-        want = want < count ? want : count;
-        /* the want-th largest */
-        double below = ism_an_select_double_on(pool, tmp, count, count - want);
-        sp->nagain = 0;
-        double left = -INFINITY; /* the largest estimate not measured again */
-        for (size_t i = 0; i < sp->nitems; i++) {
-            if (isnan(first[i]) || first[i] >= done_above)
-                continue;
-            if (first[i] >= below)
-                again[sp->nagain++] = i;
-            else
-                left = fmax(left, first[i]);
-        }
-        if (!ism_an_run_blocks(sp->f, pool, ism_blocks(sp->nagain, NEAREST_BLOCK),
-                               nearest_block, sp))
-            return false;
-        done_above = below;
-        size_t settled = 0;
-        for (size_t i = 0; i < sp->nitems; i++)
-            settled += !isnan(first[i]) && first[i] >= below && sp->dist[i] >= left;
-        if (settled >= need || want == count)
-            return true;
-        want *= 4;
-    }
+    size_t nblocks = ism_blocks(sp->nitems, ISM_AN_TRI_BLOCK), room = nblocks ? nblocks : 1;
+    scan_pass s = {sp, first, tmp, again, malloc(room * sizeof *s.at),
+                   malloc(room * sizeof *s.left), 0, INFINITY};
+    bool ok = s.at && s.left && measure_rounds(&s, pool, nblocks);
+    free(s.at);
+    free(s.left);
+    return ok;
 }
 
 void ism_an_distance_figures(double *dist, size_t n, ism_pool *pool, ism_an_distances *out)

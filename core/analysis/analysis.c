@@ -53,7 +53,7 @@ bool ism_analyse(const ism_mesh *m, const ism_tape *f, const ism_analysis_option
     bool ok = ism_an_edge_table_build_on(m, pool, &et);
     ok = ok && ism_an_classify_vertices(m, &et, &vf, a) && ism_an_find_curves(m, &et, &vf, a) &&
          ism_an_find_points(m, &vf, a) && ism_an_topology(m, &et, &vf, a) &&
-         ism_an_count_duplicates(m, &et, a) && ism_an_triangle_quality(m, pool, a);
+         ism_an_count_duplicates(m, &et, pool, a) && ism_an_triangle_quality(m, pool, a);
     free(vf.cone_sets); /* the rest needs only per-vertex facts and the edges */
     vf.cone_sets = NULL;
     ok = ok && ism_an_implicit_figures(m, f, o, &vf, pool, a);

@@ -11,9 +11,10 @@
 
 /* Items per task of the analysis's parallel loops. Fixed, so what a task writes (its own
  * slots) never depends on the number of threads; a task is tens of microseconds, far above
- * what handing it out costs. Triangles per task of the loops over triangles (the edge
- * table's, the quality measures); vertices or edges per task of the loops that evaluate f
- * (a few evaluations each, so fewer per task). */
+ * what handing it out costs. Triangles or edges per task of the loops that do not evaluate
+ * f (the edge table's, the quality measures, the duplicates, the accuracy's scans); vertices
+ * or edges per task of the loops that evaluate f (a few evaluations each, so fewer per
+ * task). */
 #define ISM_AN_TRI_BLOCK 4096
 #define ISM_AN_EVAL_BLOCK 1024
 

@@ -3,8 +3,11 @@
  * faces, so the count says whether non-manifold figures come from the surface or from a
  * mesher's duplicate output. Found edge by edge: two triangles with the same vertices share
  * all three edges and have the same opposite vertex on each; each triangle is looked at only
- * on its lowest-numbered edge, where its group's opposite vertices are sorted. */
+ * on its lowest-numbered edge, where its group's opposite vertices are sorted. Edges are
+ * independent: blocks of them run on the analysis's threads, their counts added after. */
 #include "core/analysis/duplicates.h"
+#include "core/analysis/blocks.h"
+#include "core/util/parallel.h"
 
 #include <stdlib.h>
 
@@ -56,11 +59,39 @@ static bool duplicates_on_edge(const ism_mesh *m, const ism_an_edge_table *et, u
     return true;
 }
 
-bool ism_an_count_duplicates(const ism_mesh *m, const ism_an_edge_table *et, ism_analysis *a)
+typedef struct dup_pass {
+    const ism_mesh *m;
+    const ism_an_edge_table *et;
+    size_t *count; /* per block; SIZE_MAX: out of memory */
+} dup_pass;
+
+static void dup_block(void *ctx, size_t blk, int thread)
 {
-    for (uint32_t e = 0; e < et->nedges; e++)
-        if (ism_an_edge_count(et, e) >= 2 &&
-            !duplicates_on_edge(m, et, e, &a->duplicate_triangles))
-            return false;
-    return true;
+    (void)thread;
+    dup_pass *d = ctx;
+    size_t n = 0, end = ism_block_end(blk, ISM_AN_TRI_BLOCK, d->et->nedges);
+    for (size_t e = blk * ISM_AN_TRI_BLOCK; e < end; e++)
+        if (ism_an_edge_count(d->et, (uint32_t)e) >= 2 &&
+            !duplicates_on_edge(d->m, d->et, (uint32_t)e, &n)) {
+            n = SIZE_MAX;
+            break;
+        }
+    d->count[blk] = n;
+}
+
+bool ism_an_count_duplicates(const ism_mesh *m, const ism_an_edge_table *et, ism_pool *pool,
+                             ism_analysis *a)
+{
+    size_t nblocks = ism_blocks(et->nedges, ISM_AN_TRI_BLOCK);
+    dup_pass d = {m, et, malloc((nblocks ? nblocks : 1) * sizeof *d.count)};
+    if (!d.count)
+        return false;
+    ism_pool_for(pool, nblocks, dup_block, &d, NULL);
+    bool ok = true;
+    for (size_t b = 0; b < nblocks; b++) {
+        ok = ok && d.count[b] != SIZE_MAX;
+        a->duplicate_triangles += ok ? d.count[b] : 0;
+    }
+    free(d.count);
+    return ok;
 }
