@@ -1,6 +1,9 @@
 /* analysis.c — the analysis as one call: checks the mesh, builds the edge table, then runs
  * the passes in order (vertex classes by cones of faces, non-manifold curves and points,
- * topology, triangle quality, the figures from f) and releases everything on failure.
+ * topology, triangle quality, the figures from f) and releases everything on failure. On
+ * more than one thread the connectivity passes (classes to topology: serial union-finds and
+ * walks) run on a side thread beside the others, which share no data with them but the
+ * mesh, the edge table and the vertices' corners, all read-only by then.
  * Each pass has its own header, included below and only here; the passes include the
  * low-level headers (edges.h, vertices.h, analysis_types.h, ...), never this driver's. */
 #include "core/analysis/analysis.h"
@@ -15,6 +18,7 @@
 #include "core/analysis/implicit.h"
 #include "core/analysis/accuracy.h"
 #include "core/analysis/blocks.h"
+#include "core/util/side.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -27,6 +31,25 @@ static void count_collapsed(const ism_mesh *m, ism_analysis *a)
 {
     for (size_t t = 0; t < m->ntris; t++)
         a->collapsed_triangles += ism_an_tri_collapsed(m->tri, t);
+}
+
+/* The connectivity passes and what they share with the rest (see the top comment). */
+typedef struct connectivity {
+    const ism_mesh *m;
+    const ism_an_edge_table *et;
+    ism_an_vertex_facts *vf;
+    ism_analysis *a;
+    bool ok;
+} connectivity;
+
+static void run_connectivity(void *arg)
+{
+    connectivity *c = arg;
+    c->ok = ism_an_classify_vertices(c->m, c->et, c->vf, c->a) &&
+            ism_an_find_curves(c->m, c->et, c->vf, c->a) && ism_an_find_points(c->m, c->vf, c->a) &&
+            ism_an_topology(c->m, c->et, c->vf, c->a);
+    free(c->vf->cone_sets); /* the rest needs only per-vertex facts and the edges */
+    c->vf->cone_sets = NULL;
 }
 
 bool ism_analyse(const ism_mesh *m, const ism_tape *f, const ism_analysis_options *o,
@@ -50,15 +73,20 @@ bool ism_analyse(const ism_mesh *m, const ism_tape *f, const ism_analysis_option
      * evaluations each, far more than the triangle passes' work per item) */
     bool evaluates = f && (o->curvature || o->accuracy) && m->nverts > ISM_AN_EVAL_BLOCK;
     ism_pool *pool = ism_an_pool_new(o->threads, m->ntris >= POOL_MIN_TRIANGLES || evaluates);
-    bool ok = ism_an_edge_table_build_on(m, pool, &et);
-    ok = ok && ism_an_classify_vertices(m, &et, &vf, a) && ism_an_find_curves(m, &et, &vf, a) &&
-         ism_an_find_points(m, &vf, a) && ism_an_topology(m, &et, &vf, a) &&
-         ism_an_count_duplicates(m, &et, pool, a) && ism_an_triangle_quality(m, pool, a);
-    free(vf.cone_sets); /* the rest needs only per-vertex facts and the edges */
-    vf.cone_sets = NULL;
+    bool ok = ism_an_edge_table_build_on(m, pool, &et) && ism_an_count_corners(m, &vf);
+    connectivity c = {m, &et, &vf, a, false};
+    ism_side side;
+    bool beside = ok; /* the side job was started (and must be joined) */
+    if (beside)
+        ism_side_start(&side, ism_pool_threads(pool) > 1, run_connectivity, &c);
+    ok = ok && ism_an_count_duplicates(m, &et, pool, a) && ism_an_triangle_quality(m, pool, a);
     ok = ok && ism_an_implicit_figures(m, f, o, &vf, pool, a);
     if (ok && f && o->accuracy)
         ok = ism_an_between_vertices(m, f, &et, pool, a);
+    if (beside) {
+        ism_side_join(&side);
+        ok = ok && c.ok;
+    }
     ism_pool_free(pool);
     ism_an_edge_table_free(&et);
     ism_an_vertex_facts_free(&vf);

@@ -22,12 +22,16 @@ void ism_an_vertex_facts_free(ism_an_vertex_facts *vf)
     memset(vf, 0, sizeof *vf);
 }
 
-static void count_corners(const ism_mesh *m, uint32_t *corners)
+bool ism_an_count_corners(const ism_mesh *m, ism_an_vertex_facts *vf)
 {
+    memset(vf, 0, sizeof *vf);
+    if (!(vf->corners = calloc(m->nverts ? m->nverts : 1, sizeof *vf->corners)))
+        return false;
     for (size_t t = 0; t < m->ntris; t++)
         if (!ism_an_tri_collapsed(m->tri, t))
             for (int k = 0; k < 3; k++)
-                corners[m->tri[3 * t + k]]++;
+                vf->corners[m->tri[3 * t + k]]++;
+    return true;
 }
 
 /* Joins, at both ends of the manifold edge with half-edges h1 and h2, the corners of its two
@@ -93,8 +97,6 @@ bool ism_an_classify_vertices(const ism_mesh *m, const ism_an_edge_table *et,
                               ism_an_vertex_facts *vf, ism_analysis *a)
 {
     size_t nv = m->nverts, n = nv ? nv : 1;
-    memset(vf, 0, sizeof *vf);
-    vf->corners = calloc(n, sizeof *vf->corners);
     vf->cones = calloc(n, sizeof *vf->cones);
     vf->nm_degree = calloc(n, sizeof *vf->nm_degree);
     a->vertex_class = malloc(n);
@@ -102,10 +104,7 @@ bool ism_an_classify_vertices(const ism_mesh *m, const ism_an_edge_table *et,
     uint32_t *merges = calloc(n, sizeof *merges);
     bool ok = vf->corners && vf->cones && vf->nm_degree && a->vertex_class && on_boundary &&
               merges;
-    if (ok) {
-        count_corners(m, vf->corners);
-        ok = scan_edges(m, et, vf, on_boundary, merges, a);
-    }
+    ok = ok && scan_edges(m, et, vf, on_boundary, merges, a);
     if (ok) {
         for (size_t v = 0; v < nv; v++) {
             vf->cones[v] = vf->corners[v] - merges[v];

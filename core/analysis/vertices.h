@@ -18,7 +18,11 @@ typedef struct ism_an_vertex_facts {
 
 void ism_an_vertex_facts_free(ism_an_vertex_facts *vf);
 
-/* Cones of faces and vertex classes: fills vf and a->vertex_class, class counts. */
+/* Starts vf (all else empty): the corners at each vertex (false when out of memory). */
+bool ism_an_count_corners(const ism_mesh *m, ism_an_vertex_facts *vf);
+
+/* Cones of faces and vertex classes: fills the rest of vf (after ism_an_count_corners) and
+ * a->vertex_class, class counts. */
 bool ism_an_classify_vertices(const ism_mesh *m, const ism_an_edge_table *et,
                               ism_an_vertex_facts *vf, ism_analysis *a);
 
