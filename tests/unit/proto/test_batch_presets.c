@@ -102,15 +102,14 @@ static uint32_t ops_of(const ism_tape *t)
  * opcode its third leaves out, the first preset that has it: each placement covers every
  * opcode the presets use (the batched evaluators' per-op code) at about a third of the
  * presets, so three placements cost what one did. Under ISOMESH_TEST_QUICK=1 (the sanitizer
- * run) every preset in the irrational placement only, as tests/cli/boxes.py does. */
-static void assign(uint8_t *run, size_t n)
+ * run) every preset in the irrational placement only, as tests/cli/boxes.py does. tapes[i] is
+ * preset i's tape (compiled once, by check_placed). */
+static void assign(ism_tape *const *tapes, uint8_t *run, size_t n)
 {
     uint32_t *ops = malloc(n * sizeof *ops);
     cr_assert_not_null(ops);
     for (size_t i = 0; i < n; i++) {
-        ism_tape *t = compile(ism_preset_at(i));
-        ops[i] = ops_of(t);
-        ism_tape_free(t);
+        ops[i] = ops_of(tapes[i]);
         run[i] = quick() ? 1u << 2 : 1u << (i % PLACEMENTS);
     }
     for (int j = 0; j < PLACEMENTS && !quick(); j++) {
@@ -135,22 +134,26 @@ static size_t check_placed(int dmax, bool bound, size_t *runs)
 {
     size_t n = ism_preset_count(), meshed = 0;
     uint8_t *run = malloc(n);
-    cr_assert_not_null(run);
-    assign(run, n);
+    ism_tape **tapes = malloc(n * sizeof *tapes);
+    cr_assert(run && tapes);
+    for (size_t i = 0; i < n; i++)
+        tapes[i] = compile(ism_preset_at(i));
+    assign(tapes, run, n);
     *runs = 0;
     for (size_t i = 0; i < n; i++) {
         const ism_preset *p = ism_preset_at(i);
-        ism_tape *t = compile(p);
         for (int j = 0; j < PLACEMENTS; j++) {
             if (!(run[i] >> j & 1u))
                 continue;
             double box[6];
             place(p, j, dmax, box);
-            meshed += check(p, t, box, dmax, bound ? BOUND_REL * ism_box_diagonal(box) : 0) > 0;
+            meshed += check(p, tapes[i], box, dmax,
+                            bound ? BOUND_REL * ism_box_diagonal(box) : 0) > 0;
             ++*runs;
         }
-        ism_tape_free(t);
+        ism_tape_free(tapes[i]);
     }
+    free(tapes);
     free(run);
     return meshed;
 }
