@@ -241,20 +241,19 @@ bool ism_eval_crease_branches(const ism_tape *t, ism_eval_ws *ws, double x, doub
     return branches_at(t, crease_top(t, true), ws, x, y, z, val, grad);
 }
 
-/* Kink in on branch br (1 or 2, as ism_piece). */
-static void forced_step(const ism_instr *in, ism_dual *r, unsigned br)
+/* Kink in on branch br (1 or 2, as ism_piece): what ism_kink_source says it passes. */
+static inline void forced_step(const ism_instr *in, ism_dual *r, unsigned br)
 {
+    bool neg;
+    uint32_t src = ism_kink_source(in, br, &neg);
     ism_dual *o = &r[in->out];
-    if (in->op == ISM_OP_ABS) {
-        const ism_dual *a = &r[in->a];
-        double sg = br == 1 ? 1.0 : -1.0;
-        *o = (ism_dual){sg * a->v, {sg * a->d[0], sg * a->d[1], sg * a->d[2]}};
-    } else if (br == 1) {
-        *o = r[in->a];
-    } else if (in->op == ISM_OP_MIN_RR || in->op == ISM_OP_MAX_RR) {
-        *o = r[in->b];
-    } else {
+    if (src == ISM_KINK_IMM) {
         *o = (ism_dual){in->imm, {0.0, 0.0, 0.0}};
+    } else if (neg) {
+        const ism_dual *a = &r[src];
+        *o = (ism_dual){-a->v, {-a->d[0], -a->d[1], -a->d[2]}};
+    } else {
+        *o = r[src];
     }
 }
 

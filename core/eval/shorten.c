@@ -108,26 +108,24 @@ bool ism_tape_top_min_max_only(const ism_tape *t)
     return true;
 }
 
-/* The instruction a decided min/max becomes. */
-static ism_instr decided(const ism_instr *in, uint8_t choice)
+/* The instruction a decided min/max becomes: a copy of what it passes on that branch
+ * (ism_kink_source), or the constant. */
+static ism_instr decided(const ism_instr *in, unsigned choice)
 {
+    bool neg; /* never, for a min/max */
+    uint32_t src = ism_kink_source(in, choice, &neg);
     ism_instr r = *in;
     r.b = 0;
-    if (choice == ONLY_A) {
-        r.op = ISM_OP_COPY;
-        r.imm = 0.0;
-    } else if (in->op == ISM_OP_MIN_RR || in->op == ISM_OP_MAX_RR) {
-        r.op = ISM_OP_COPY;
-        r.a = in->b;
-        r.imm = 0.0;
-    } else {
+    if (src == ISM_KINK_IMM) {
         r.op = ISM_OP_CONST;
         r.a = 0;
+    } else {
+        r.op = ISM_OP_COPY;
+        r.a = src;
+        r.imm = 0.0;
     }
     return r;
 }
-
-
 
 /* Walks backwards from the result, flagging the instructions it still needs given the
  * recorded choices; returns how many are kept. */
@@ -175,7 +173,7 @@ bool ism_tape_shorten(const ism_tape *t, ism_eval_ws *ws, ism_interval x, ism_in
             continue;
         const ism_instr *in = &t->code[i];
         unsigned choice = is_min_max(in->op) ? ws->choice[i] & CHOICE_MASK : BOTH;
-        out->code[n++] = choice == BOTH ? *in : decided(in, (uint8_t)choice);
+        out->code[n++] = choice == BOTH ? *in : decided(in, choice);
     }
     out->len = n;
     out->nregs = t->nregs;

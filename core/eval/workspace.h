@@ -48,6 +48,20 @@ static inline bool ism_op_is_kink(int op)
            op == ISM_OP_MAX_RC || op == ISM_OP_ABS;
 }
 
+/* What kink in passes on its branch br (1 or 2, as an ism_piece names it and as shortening
+ * records a decided min/max): the register returned, negated when *neg is set (abs on
+ * branch 2, a < 0), or, returned ISM_KINK_IMM (the _RC forms' branch 2), the constant
+ * in->imm. One rule for the shortened tapes (shorten.c) and the forced gradients
+ * (ism_eval_piece_gradient). */
+#define ISM_KINK_IMM UINT32_MAX
+static inline uint32_t ism_kink_source(const ism_instr *in, unsigned br, bool *neg)
+{
+    *neg = in->op == ISM_OP_ABS && br != 1;
+    if (br == 1 || in->op == ISM_OP_ABS)
+        return in->a;
+    return in->op == ISM_OP_MIN_RR || in->op == ISM_OP_MAX_RR ? in->b : ISM_KINK_IMM;
+}
+
 /* The piece ws->choice (one byte per instruction of t: a kink's branch, 1 or 2, or 0 for
  * both) names: back from f's result through the operands the branches taken read. kinks: t's
  * number of kinks (ism_tape_kinks), at most ISM_PIECE_KINKS. *open (may be NULL): set when a
