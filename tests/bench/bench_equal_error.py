@@ -35,10 +35,24 @@ Asserts nothing; exits 0 unless it cannot run.
   bench_equal_error.py --build build/release [--quick] [--only NAME] [--libfive DIR]
                        [--tools isomesh,libfive,vtk,skimage] [--primal] [--straddle]
                        [--raw | --simplify] [--measure centroid|all] [--verbose]
+                       [--instructions]
 (isomesh as a request under max_error by default: the dual mesh where it applies, the primal
 polygons elsewhere, neither simplified; --simplify: then simplified within E (the fewest
 triangles; the primal polygons' default up to mesher-18); --raw: the default, kept for old
 command lines; --primal: the default before mesher-17)
+
+--instructions: the cost is valgrind's instruction count instead of CPU seconds (isomesh and
+libfive only): the same search for the settings that meet E, then the COUNTED of them with the
+fewest triangles counted under callgrind (one run each; the count does not move with the
+machine's load, where CPU seconds do) and the one with the fewest instructions kept. Counted:
+isomesh's ism_mesh_surface (and ism_simplify_pass with --simplify) on one thread; libfive's
+Mesh::render on its calling thread plus the bodies of its worker threads (LIBFIVE_TOGGLES),
+each thread counted apart (--separate-threads=yes) and summed. The table then prints
+instructions per call and per triangle, and isomesh / libfive instructions.
+
+The peer: libfive built from source (git clone https://github.com/libfive/libfive into
+LIBFIVE_DIR, then tests/bench/build_libfive.sh LIBFIVE_DIR: its library alone, Release, no
+-march=native so that valgrind runs it); libfive_mesher.cc is compiled against it here.
 """
 import argparse
 import json
@@ -71,7 +85,17 @@ TIE_FRACTION = 0.05       # means within 5% of the least are a tie (fewer triang
 #                           in-process repeats of one setting spread 1-3% at load 15-25
 CPU_RESOLUTION_S = 1e-4   # shorter CPU times are read as this (no ratio by a zero)
 MAX_RUNS_PER_TARGET = 12
+COUNTED = 2               # --instructions: settings that met E counted (the fewest triangles
+#                           first): a callgrind run costs ~50x the call, and the one with the
+#                           fewest triangles was the cheapest in most CPU searches
 MEASURE = "max_c"         # bench_error's key the targets are met by (--measure: max_c or max_all)
+INSTRUCTIONS = False      # --instructions: callgrind counts instead of CPU seconds
+# Where each tool's meshing call runs, for callgrind's --toggle-collect (instructions counted
+# only inside them): isomesh's surface pipeline (bench_error's timed call); libfive's render
+# call and its worker threads' bodies (std::async even with one worker: the octree build and
+# the dual walk run outside render's frame; the mesher process has no other threads).
+ISOMESH_TOGGLES = ("ism_mesh_surface", "ism_simplify_pass")
+LIBFIVE_TOGGLES = ("libfive::Mesh::render(*", "std::thread::_State_impl<*>::_M_run()")
 
 
 def run(argv):
@@ -97,6 +121,35 @@ def timing(r):
     """A run's CPU figures: the per-call mean, its standard deviation, the calls made."""
     return dict(cpu_s=max(r["cpu_s"], CPU_RESOLUTION_S), cpu_sd=r.get("cpu_sd", 0.0),
                 runs=r.get("runs", 1))
+
+
+def instructions(argv, toggles, tmp):
+    """Instructions callgrind counts in argv's run inside the toggles' functions, every thread
+    apart (--separate-threads=yes) and summed; None when the run fails."""
+    out = os.path.join(tmp, "callgrind.out")
+    for f in os.listdir(tmp):
+        if f.startswith("callgrind.out"):
+            os.unlink(os.path.join(tmp, f))
+    vg = ["valgrind", "--tool=callgrind", "--separate-threads=yes", f"--callgrind-out-file={out}"]
+    vg += [f"--toggle-collect={t}" for t in toggles]
+    try:
+        r = subprocess.run(vg + argv, capture_output=True, text=True, cwd=ROOT,
+                           timeout=RUN_WALL_LIMIT_S * 4)  # valgrind runs ~50x slower
+    except subprocess.TimeoutExpired:
+        return None
+    if r.returncode != 0:
+        return None
+    total, files = 0, 0
+    for f in os.listdir(tmp):
+        if not f.startswith("callgrind.out"):
+            continue
+        files += 1
+        with open(os.path.join(tmp, f)) as fh:
+            for line in fh:
+                if line.startswith("summary:") or line.startswith("totals:"):
+                    total += int(line.split()[1])
+                    break
+    return total if files else None
 
 
 # ---- the tools: each maps a resolution x (larger = finer) to {cpu_s, cpu_sd, runs, triangles,
@@ -136,10 +189,16 @@ class Isomesh(Tool):
     def setting(self, s, x):
         return f"E={1 / x:.3g} d<={ISO_DEPTH}"
 
+    def argv(self, s, x, repeat=1):
+        return [self.bench, "mesh", s["name"], repr(1 / x), str(ISO_DEPTH), *self.words,
+                f"repeat={repeat}"]
+
     def run(self, s, x, repeat=1, timing_only=False):
-        r = run([self.bench, "mesh", s["name"], repr(1 / x), str(ISO_DEPTH), *self.words,
-                 f"repeat={repeat}"])
+        r = run(self.argv(s, x, repeat))
         return r and dict(timing(r), triangles=r["triangles"], max_c=r[MEASURE])
+
+    def count(self, s, x):
+        return instructions(self.argv(s, x), ISOMESH_TOGGLES, self.tmp)
 
 
 class Grid(Tool):
@@ -191,10 +250,19 @@ class Libfive(Tool):
         side = s["box"][3] - s["box"][0]
         return f"mf={1 / x:.3g} d{max(0, math.ceil(math.log2(side * x)))}"
 
+    def argv(self, s, x, ply, repeat=1):
+        return [self.exe, "mesh", s["name"], repr(1 / x), "1e-8", ply, str(repeat)]
+
     def run(self, s, x, repeat=1, timing_only=False):
         ply = os.path.join(self.tmp, f"libfive-{s['name']}.ply")
-        return self.measure(s, ply, run([self.exe, "mesh", s["name"], repr(1 / x), "1e-8", ply,
-                                         str(repeat)]), repeat > 1 or timing_only)
+        return self.measure(s, ply, run(self.argv(s, x, ply, repeat)), repeat > 1 or timing_only)
+
+    def count(self, s, x):
+        ply = os.path.join(self.tmp, f"libfive-{s['name']}.ply")
+        n = instructions(self.argv(s, x, ply), LIBFIVE_TOGGLES, self.tmp)
+        if os.path.exists(ply):
+            os.unlink(ply)
+        return n
 
 
 def step(tool, x, up):
@@ -270,6 +338,8 @@ def pick(tool, s, met):
     tie (TIE_FRACTION, or twice the standard error of the difference) the fewest triangles."""
     if not met:
         return None
+    if INSTRUCTIONS:
+        return pick_counted(tool, s, met)
     by_cpu = sorted(met, key=lambda x: met[x]["cpu_s"])
     least = met[by_cpu[0]]["cpu_s"]
     factor, slack = ((CANDIDATE_FACTOR, CANDIDATE_SLACK_S) if least < TIMED_WORK_S
@@ -300,7 +370,43 @@ def pick(tool, s, met):
     return best
 
 
+def pick_counted(tool, s, met):
+    """--instructions: of the settings that met E, the COUNTED with the fewest triangles
+    counted under callgrind (deterministic: one run each); the fewest instructions win."""
+    chosen = sorted(met, key=lambda x: (met[x]["triangles"], -x))[:COUNTED]
+    counts = {x: tool.count(s, x) for x in chosen}
+    counts = {x: n for x, n in counts.items() if n}
+    if not counts:
+        return None
+    best_x = min(counts, key=lambda x: (counts[x], met[x]["triangles"]))
+    best = dict(met[best_x], instr=counts[best_x], setting=tool.setting(s, best_x))
+    best["candidates"] = [
+        f"{tool.setting(s, x)}: {met[x]['triangles']} tri, {MEASURE} {met[x]['max_c']:.3g}, "
+        f"{counts[x] / 1e6:.1f} M instr" + (" <" if x == best_x else "")
+        for x in sorted(counts, key=counts.get)]
+    return best
+
+
 # ---- libfive -----------------------------------------------------------------------------------
+
+def libfive_arch(libfive_dir):
+    """The -m flags libfive was compiled with, read from its CMake cache: its CMakeLists.txt
+    adds -march=native unless MARCH_SUPPORTED was preset OFF (build_libfive.sh does, with
+    CMAKE_CXX_FLAGS=-march=x86-64-v2)."""
+    cache = {}
+    try:
+        with open(os.path.join(libfive_dir, "build", "CMakeCache.txt")) as f:
+            for line in f:
+                key, sep, value = line.strip().partition("=")
+                if sep and not line.startswith(("#", "//")):
+                    cache[key.split(":")[0]] = value
+    except OSError:
+        return ["-march=native"]
+    flags = [w for w in cache.get("CMAKE_CXX_FLAGS", "").split() if w.startswith("-m")]
+    if cache.get("MARCH_SUPPORTED", "1").upper() in ("1", "ON", "TRUE", "YES"):
+        flags.append("-march=native")
+    return flags
+
 
 def build_libfive_mesher(build, libfive_dir):
     """g++ libfive_mesher.cc against a libfive built from source in libfive_dir; (exe, None)
@@ -308,9 +414,11 @@ def build_libfive_mesher(build, libfive_dir):
     lib = os.path.join(libfive_dir, "build", "libfive", "src", "libfive.so")
     inc = os.path.join(libfive_dir, "libfive", "include")
     if not os.path.exists(lib):
-        return None, (f"no libfive at {libfive_dir} (build/libfive/src/libfive.so: fetch its "
-                      f"source there, cmake -DBUILD_STUDIO_APP=OFF -DBUILD_GUILE_BINDINGS=OFF "
-                      f"-DBUILD_PYTHON_BINDINGS=OFF -DBUILD_TESTS=OFF, make libfive)")
+        return None, (f"no libfive at {libfive_dir} (no build/libfive/src/libfive.so). To "
+                      f"measure beside it: git clone https://github.com/libfive/libfive "
+                      f"{libfive_dir} && tests/bench/build_libfive.sh {libfive_dir} (Debian's "
+                      f"cmake, libeigen3-dev, libboost-dev, libpng-dev; ~30 min of one core), "
+                      f"or --libfive DIR / LIBFIVE_DIR for another checkout")
     src = os.path.join(HERE, "libfive_mesher.cc")
     exe = os.path.join(build, "bench", "libfive_mesher")
     if os.path.exists(exe) and os.path.getmtime(exe) >= max(os.path.getmtime(src),
@@ -318,12 +426,12 @@ def build_libfive_mesher(build, libfive_dir):
                                                             os.path.getmtime(__file__)):
         return exe, None
     os.makedirs(os.path.dirname(exe), exist_ok=True)
-    # libfive's CMakeLists.txt compiles with -march=native: Eigen's alignment (hence the
-    # layout of libfive::Mesh) must match, or freeing the mesh corrupts the heap ("double
-    # free or corruption", every run counted as not reaching the target)
-    argv = ["g++", "-std=c++17", "-O2", "-march=native", "-DEIGEN_NO_DEBUG", "-I", inc, "-I",
-            "/usr/include/eigen3", "-o", exe, src, lib, f"-Wl,-rpath,{os.path.dirname(lib)}",
-            "-pthread"]
+    # the -march libfive was compiled with: Eigen's alignment (hence the layout of
+    # libfive::Mesh) must match, or freeing the mesh corrupts the heap ("double free or
+    # corruption", every run counted as not reaching the target)
+    argv = ["g++", "-std=c++17", "-O2", *libfive_arch(libfive_dir), "-DEIGEN_NO_DEBUG", "-I",
+            inc, "-I", "/usr/include/eigen3", "-o", exe, src, lib,
+            f"-Wl,-rpath,{os.path.dirname(lib)}", "-pthread"]
     r = subprocess.run(argv, capture_output=True, text=True)
     if r.returncode != 0:
         return None, "libfive_mesher did not build: " + r.stderr.strip()[-300:]
@@ -357,10 +465,19 @@ def check_formulas(bench, s, libfive):
 
 # ---- the report --------------------------------------------------------------------------------
 
+def cost(b):
+    """A result's cost: instructions under --instructions, else CPU seconds per call."""
+    return b["instr"] if INSTRUCTIONS else b["cpu_s"]
+
+
 def bench_surface(s, tools, verbose):
     print(f"\n=== {s['name']}  box {s['box']}  targets {s['targets']}")
-    head = (f"{'E':>8} {'tool':<9}{'setting':>17}{'CPU s':>9}{'± sd':>8}{'runs':>6}"
-            f"{'triangles':>11}{'µs/tri':>8}{'max c':>10}{'iso/tool':>9}")
+    if INSTRUCTIONS:
+        head = (f"{'E':>8} {'tool':<9}{'setting':>17}{'M instr':>10}{'triangles':>11}"
+                f"{'instr/tri':>10}{'max c':>10}{'iso/tool':>9}")
+    else:
+        head = (f"{'E':>8} {'tool':<9}{'setting':>17}{'CPU s':>9}{'± sd':>8}{'runs':>6}"
+                f"{'triangles':>11}{'µs/tri':>8}{'max c':>10}{'iso/tool':>9}")
     print(head)
     print("-" * len(head))
     caches = {t.name: {} for t in tools}
@@ -373,13 +490,19 @@ def bench_surface(s, tools, verbose):
             if b is None:
                 print(f"{e:>8.2g} {t.name:<9}{'not reached within the limits':>45}")
                 continue
-            us = 1e6 * b["cpu_s"] / max(b["triangles"], 1)
-            ratio = "" if t.name == "isomesh" or not iso else f"{iso['cpu_s'] / b['cpu_s']:9.2f}"
-            print(f"{e:>8.2g} {t.name:<9}{b['setting']:>17}{b['cpu_s']:9.4f}"
-                  f"{b['cpu_sd']:8.4f}{b['runs']:>6}{b['triangles']:>11}"
-                  f"{us:8.2f}{b['max_c']:10.3g}{ratio}")
+            ratio = "" if t.name == "isomesh" or not iso else f"{cost(iso) / cost(b):9.2f}"
+            if INSTRUCTIONS:
+                per = b["instr"] / max(b["triangles"], 1)
+                print(f"{e:>8.2g} {t.name:<9}{b['setting']:>17}{b['instr'] / 1e6:10.1f}"
+                      f"{b['triangles']:>11}{per:10.0f}{b['max_c']:10.3g}{ratio}")
+            else:
+                us = 1e6 * b["cpu_s"] / max(b["triangles"], 1)
+                print(f"{e:>8.2g} {t.name:<9}{b['setting']:>17}{b['cpu_s']:9.4f}"
+                      f"{b['cpu_sd']:8.4f}{b['runs']:>6}{b['triangles']:>11}"
+                      f"{us:8.2f}{b['max_c']:10.3g}{ratio}")
             if verbose:
-                print("           timed: " + "; ".join(b["candidates"]))
+                print(f"           {'counted' if INSTRUCTIONS else 'timed'}: "
+                      + "; ".join(b["candidates"]))
         sys.stdout.flush()
         rows.append((e, found))
     return rows
@@ -393,11 +516,21 @@ def goal_lines(name, rows):
         if not pairs:
             continue
         txt = ", ".join(
-            f"{e:.2g}: " + ("-" if not (i and o) else f"{i['cpu_s'] / o['cpu_s']:.2f}")
+            f"{e:.2g}: " + ("-" if not (i and o) else f"{cost(i) / cost(o):.2f}")
             for e, i, o in pairs)
-        met = all(i and (not o or i["cpu_s"] / o["cpu_s"] <= goal) for _, i, o in pairs)
-        lines.append(f"[{'PASS' if met else 'MISS'}] {name}: isomesh / {other} CPU at equal "
-                     f"error {txt} (goal <= {goal:g})")
+        met = all(i and (not o or cost(i) / cost(o) <= goal) for _, i, o in pairs)
+        lines.append(f"[{'PASS' if met else 'MISS'}] {name}: isomesh / {other} "
+                     f"{'instructions' if INSTRUCTIONS else 'CPU'} at equal error {txt} "
+                     f"(goal <= {goal:g})")
+    if name == "gyroid-ball" and INSTRUCTIONS:
+        per = [(e, f["isomesh"]["instr"] / f["isomesh"]["triangles"])
+               for e, f in rows if f.get("isomesh")]
+        if per:  # the µs goal cannot be read from instructions: reported, not judged
+            lines.append("[----] gyroid-ball: isomesh instructions per triangle "
+                         + ", ".join(f"{e:.2g}: {n:,.0f}" for e, n in per)
+                         + " (the goal is µs CPU: run without --instructions on an idle "
+                           "machine)")
+        return lines
     if name == "gyroid-ball":
         us = [(e, 1e6 * f["isomesh"]["cpu_s"] / f["isomesh"]["triangles"])
               for e, f in rows if f.get("isomesh")]
@@ -441,9 +574,16 @@ def main():
                          "distance; all: the largest at centroids, edge midpoints and corners "
                          "(isomesh's own bound; for smooth surfaces: a corner on a singular "
                          "point, where Newton does not converge, reads as far)")
+    ap.add_argument("--instructions", action="store_true",
+                    help="cost in instructions counted by valgrind's callgrind instead of CPU "
+                         "seconds (isomesh and libfive only; for a loaded machine, where CPU "
+                         "seconds spread)")
     args = ap.parse_args()
-    global MEASURE
+    global MEASURE, INSTRUCTIONS
     MEASURE = "max_all" if args.measure == "all" else "max_c"
+    INSTRUCTIONS = args.instructions
+    if INSTRUCTIONS and not shutil.which("valgrind"):
+        sys.exit("bench_equal_error: --instructions needs valgrind (apt-get install valgrind)")
     build = os.path.abspath(args.build)
     bench = os.path.join(build, "bench", "bench_error")
     if not os.path.exists(bench):
@@ -472,6 +612,10 @@ def main():
         for t, module in (("vtk", "vtkmodules.vtkFiltersCore"), ("skimage", "skimage.measure")):
             if t not in wanted:
                 continue
+            if INSTRUCTIONS:
+                print(f"bench_equal_error: {t} skipped: --instructions counts the two "
+                      f"meshers' own calls (a grid tool's cost is numpy's)")
+                continue
             if subprocess.run([DEBIAN_PYTHON, "-c", f"import {module}"],
                               capture_output=True).returncode != 0:
                 print(f"bench_equal_error: {t} skipped: {DEBIAN_PYTHON} cannot import {module} "
@@ -479,8 +623,10 @@ def main():
                 continue
             tools.append(Grid(bench, tmp, t))
         where = "centroid" if MEASURE == "max_c" else "centroid, midpoint and corner"
-        print(f"bench_equal_error: tools {[t.name for t in tools]}; one thread; CPU s inside "
-              f"each process; max c = max {where} distance to f = 0 (bench_error.c); load "
+        what = ("instructions (callgrind) of each meshing call" if INSTRUCTIONS
+                else "CPU s inside each process")
+        print(f"bench_equal_error: tools {[t.name for t in tools]}; one thread; {what}; "
+              f"max c = max {where} distance to f = 0 (bench_error.c); load "
               f"average {load0:.1f} on {os.cpu_count()} cores")
         goals = []
         for s in json.loads(subprocess.check_output([bench, "list"], text=True)):
@@ -498,7 +644,7 @@ def main():
             print(g)
         load1 = os.getloadavg()[0]
         note = " (above the core count: CPU times are inflated by cache sharing)" \
-            if max(load0, load1) > (os.cpu_count() or 1) else ""
+            if max(load0, load1) > (os.cpu_count() or 1) and not INSTRUCTIONS else ""
         print(f"\nbench_equal_error: {time.perf_counter() - started:.0f} s, load average "
               f"{load0:.1f} -> {load1:.1f}{note}")
     finally:
