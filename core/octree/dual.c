@@ -1663,23 +1663,26 @@ static void pair_task(void *ctx, size_t k, int thread)
 }
 
 /* The midpoint distances of the n vertex pairs in pairs[0..2n) into the memo: those not
- * known yet, each once, measured on the pool. */
-static void measure_pairs(dual *d, const uint32_t *pairs, size_t n)
+ * known yet, each once, measured on the pool; and every pair's into out[0..n) (out NULL:
+ * none). False (nothing measured) when out of memory. */
+static bool measure_pairs(dual *d, const uint32_t *pairs, size_t n, double *out)
 {
     uint64_t *keys = malloc((n ? n : 1) * sizeof *keys);
-    size_t *slot = malloc((n ? n : 1) * sizeof *slot);
+    size_t *slot = malloc((n ? n : 1) * sizeof *slot), *at = malloc((n ? n : 1) * sizeof *at);
     double *dist = malloc((n ? n : 1) * sizeof *dist);
-    if (!keys || !slot || !dist || !keyed_reserve(&d->mid, n)) {
+    if (!keys || !slot || !at || !dist || !keyed_reserve(&d->mid, n)) {
         free(keys);
         free(slot);
+        free(at);
         free(dist);
-        return; /* mid_dist measures them one by one */
+        return false; /* mid_dist measures them one by one */
     }
     size_t m = 0;
     keyed *k = &d->mid;
     for (size_t j = 0; j < n; j++) {
         uint64_t key = pair_key(pairs[2 * j], pairs[2 * j + 1]);
         size_t i = keyed_slot(k, key);
+        at[j] = i; /* slots stay put till the end (reserved) */
         if (k->key[i])
             continue;
         k->key[i] = key; /* asked for: not again in this batch; no growth till the end */
@@ -1692,9 +1695,13 @@ static void measure_pairs(dual *d, const uint32_t *pairs, size_t n)
     ism_pool_for(d->pool, chunks(m), pair_task, &job, NULL);
     for (size_t j = 0; j < m; j++)
         k->val[slot[j]] = dist[j];
+    for (size_t j = 0; out && j < n; j++) /* mid_dist's answer, without its look-up */
+        out[j] = k->val[at[j]];
     free(keys);
     free(slot);
+    free(at);
     free(dist);
+    return true;
 }
 
 /* A call of the tree walk put off to run on the pool: a cell (c[0]), a face (c[0] below
@@ -2033,13 +2040,15 @@ static void make_quads(dual *d)
 
 /* Triangle t's corners (bit k: vertex k) whose leaves to split for its edges: the two ends
  * of each edge whose midpoint lies beyond E (splitting the third leaf would leave that edge
- * as it is). */
-static int edge_misses(dual *d, size_t t)
+ * as it is). dist: the midpoints' distances (edge k from vertex k), or NULL: the memo's. */
+static int edge_misses(dual *d, size_t t, const double *dist)
 {
     int miss = 0;
-    for (int k = 0; k < 3; k++)
-        if (!(mid_dist(d, d->tri[3 * t + k], d->tri[3 * t + (k + 1) % 3]) <= d->o->max_error))
+    for (int k = 0; k < 3; k++) {
+        double m = dist ? dist[k] : mid_dist(d, d->tri[3 * t + k], d->tri[3 * t + (k + 1) % 3]);
+        if (!(m <= d->o->max_error))
             miss |= 1 << k | 1 << (k + 1) % 3;
+    }
     return miss;
 }
 
@@ -2131,6 +2140,7 @@ static void measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t *
     uint32_t *cen = malloc((n ? n : 1) * sizeof *cen);
     size_t *at = malloc((n ? n : 1) * sizeof *at);
     uint8_t *emiss = malloc(n ? n : 1), *cmiss = malloc(n ? n : 1);
+    double *pdist = malloc((n ? n : 1) * 3 * sizeof *pdist); /* NULL: mid_dist looks up */
     if (!open || !pairs || !cen || !at || !emiss || !cmiss) {
         d->nomem = true;
         goto done;
@@ -2148,9 +2158,9 @@ static void measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t *
             pairs[6 * (np - 1) + 2 * e + 1] = d->tri[3 * t + (e + 1) % 3];
         }
     }
-    measure_pairs(d, pairs, 3 * np);
+    bool known = pdist && measure_pairs(d, pairs, 3 * np, pdist);
     for (size_t k = 0; k < np; k++) {
-        emiss[k] = (uint8_t)edge_misses(d, open[k]);
+        emiss[k] = (uint8_t)edge_misses(d, open[k], known ? &pdist[3 * k] : NULL);
         if (!emiss[k])
             cen[nc++] = open[k];
     }
@@ -2170,6 +2180,7 @@ done:
     free(at);
     free(emiss);
     free(cmiss);
+    free(pdist);
 }
 
 /* Marks the leaves of triangles that miss E (centroid and edge midpoints within E of f = 0,
@@ -2434,7 +2445,7 @@ static void emit_quads(dual *d)
         memcpy(&diag[4 * nd++], pairs, sizeof pairs);
     }
     if (ok)
-        measure_pairs(d, diag, 2 * nd);
+        measure_pairs(d, diag, 2 * nd, NULL);
     d->nt = 0;
     for (size_t q = 0; q < nq && ok; q++) {
         const uint32_t *u = &d->q.q[4 * q];
