@@ -135,6 +135,39 @@ ism_piece ism_eval_piece(const ism_tape *t, ism_eval_ws *ws, double x, double y,
     return kinks > ISM_PIECE_KINKS ? ISM_PIECE_NONE : ism_piece_walk(t, ws, kinks, NULL);
 }
 
+double ism_eval_piece_value(const ism_tape *t, ism_eval_ws *ws, ism_piece pc, double x,
+                            double y, double z)
+{
+    if (!ism_ws_fits(ws, t))
+        return NAN;
+    double *r = ws->scalar;
+    r[ISM_REG_X] = x;
+    r[ISM_REG_Y] = y;
+    r[ISM_REG_Z] = z;
+    unsigned k = 0;
+    for (size_t i = 0; i < t->len; i++) {
+        const ism_instr *in = &t->code[i];
+        unsigned br = 0;
+        if (ism_op_is_kink(in->op)) {
+            br = k < ISM_PIECE_KINKS ? (unsigned)(pc >> (2 * k)) & 3u : 0;
+            k++;
+        }
+        if (br) { /* what the branch passes on (ism_kink_source) */
+            bool neg;
+            uint32_t src = ism_kink_source(in, br, &neg);
+            double v = src == ISM_KINK_IMM ? in->imm : r[src];
+            r[in->out] = neg ? -v : v;
+        } else if (in->op == ISM_OP_SIN || in->op == ISM_OP_COS) {
+            double sn, cs;
+            ism_trig_pair(ws->trig, r[in->a], &sn, &cs);
+            r[in->out] = in->op == ISM_OP_SIN ? sn : cs;
+        } else {
+            r[in->out] = point_op(in, r);
+        }
+    }
+    return r[t->result];
+}
+
 int ism_top_active_branch(const ism_tape *t, const double val[2])
 {
     if (!t->len)

@@ -5,6 +5,7 @@
  * gradient) on both sides of the cube's edges, where f itself takes another face. */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <string.h>
 
 #include "core/eval/eval.h"
 #include "core/expr/expr.h"
@@ -107,4 +108,36 @@ Test(eval_piece, constant_operands_and_abs_signs)
     cr_expect_eq(g[1], 1.0);
     ism_eval_ws_free(ws);
     ism_tape_free(t);
+}
+
+/* ism_eval_piece_value is ism_eval_piece_gradient's value, bit for bit, for every piece of
+ * cube-minus-ball and of the three balls (min of three spheres) and the gyroid ball (sin, cos
+ * through the trig memo), at points on and off each piece's own region. */
+Test(eval_piece, value_alone_is_the_gradient_pass_value)
+{
+    static const char *exprs[] = {
+        CMB,
+        "min((x - 0.6)^2 + y^2 + z^2 - 0.5, (x + 0.3)^2 + (y - 0.52)^2 + z^2 - 0.5, "
+        "(x + 0.3)^2 + (y + 0.52)^2 + z^2 - 0.5)",
+        "max(sin(3*x)*cos(3*y) + sin(3*y)*cos(3*z) + sin(3*z)*cos(3*x), x^2 + y^2 + z^2 - 1.96)",
+        "min(abs(x) - 1, max(y, 0.5))"};
+    for (size_t e = 0; e < sizeof exprs / sizeof *exprs; e++) {
+        ism_tape *t = compile(exprs[e]);
+        ism_eval_ws *ws = ism_eval_ws_new(t);
+        int compared = 0;
+        for (int i = 0; i < 40; i++) { /* pieces from one point, values at another */
+            double p[3] = {sin(1.3 * i) * 1.4, cos(0.7 * i) * 1.3, sin(0.37 * i + 1) * 1.2};
+            double q[3] = {cos(0.9 * i) * 1.1, sin(1.9 * i) * 1.2, cos(0.53 * i) * 1.3};
+            ism_piece pc = ism_eval_piece(t, ws, p[0], p[1], p[2]);
+            cr_assert_neq(pc, ISM_PIECE_NONE);
+            double g[3], v = ism_eval_piece_gradient(t, ws, pc, q[0], q[1], q[2], g);
+            double w = ism_eval_piece_value(t, ws, pc, q[0], q[1], q[2]);
+            cr_expect(memcmp(&v, &w, sizeof v) == 0, "%s, point %d: %.17g vs %.17g", exprs[e], i,
+                      v, w);
+            compared++;
+        }
+        cr_expect_eq(compared, 40);
+        ism_eval_ws_free(ws);
+        ism_tape_free(t);
+    }
 }
