@@ -116,13 +116,29 @@ static bool before(const double *a, const double *b)
     return false;
 }
 
-/* The label of point p (label_t): its piece in pieces mode (pm), else its top branch. */
+/* The label of point p (label_t): its piece in pieces mode (pm; through the sampler's label
+ * memo: the same point's piece once), else its top branch. */
 static label_t label_at(ism_sampler *s, bool pm, const double p[3])
 {
     if (!pm)
         return (label_t)ism_crease_branch(s, p, NULL);
+    if (!s->label_memo_on) {
+        s->n_point++;
+        return ism_eval_piece(s->tape, s->ws, p[0], p[1], p[2]);
+    }
+    uint64_t b[3];
+    memcpy(b, p, sizeof b);
+    uint64_t h = (b[0] * 0x9e3779b97f4a7c15u) ^ (b[1] * 0xc2b2ae3d27d4eb4fu) ^
+                 (b[2] * 0x165667b19e3779f9u);
+    struct ism_label_memo *e = &s->label_memo[(h >> 32) % ISM_LABEL_MEMO];
+    if (e->tape == s->tape && !memcmp(e->p, p, sizeof e->p))
+        return e->label;
     s->n_point++;
-    return ism_eval_piece(s->tape, s->ws, p[0], p[1], p[2]);
+    label_t l = ism_eval_piece(s->tape, s->ws, p[0], p[1], p[2]);
+    memcpy(e->p, p, sizeof e->p);
+    e->tape = s->tape;
+    e->label = l;
+    return l;
 }
 
 /* l[0], l[1] swapped when out of increasing order. */
@@ -233,12 +249,15 @@ static bool within_reach(ism_sampler *s, bool pm, const double x[3], const doubl
     return sin2 > 0 && d * d * sin2 <= CREASE_REACH_SLACK * CREASE_REACH_SLACK * len * len;
 }
 
-/* lo − hi's value at p: the top's a − b (its values alone), or f on piece lo minus f on hi. */
+/* lo − hi's value at p: the top's a − b, or f on piece lo minus f on hi (values alone, the
+ * bits pair_at's gradient passes give: ism_eval_piece_value). */
 static double label_gap(ism_sampler *s, bool pm, const double p[3], label_t lo, label_t hi)
 {
-    double v[2], g[2][3];
+    double v[2];
     if (pm) {
-        pair_at(s, pm, p, lo, hi, v, g);
+        s->n_point += 2;
+        v[0] = ism_eval_piece_value(s->tape, s->ws, lo, p[0], p[1], p[2]);
+        v[1] = ism_eval_piece_value(s->tape, s->ws, hi, p[0], p[1], p[2]);
     } else {
         s->n_point++;
         ism_eval_top_values(top_tape(s, p), s->ws, p[0], p[1], p[2], v);
@@ -268,21 +287,84 @@ static void onto_surface(ism_sampler *s, double x[3])
  * triangle h wide lies about h × 0.01 / 4 off, which the measurement judges as anywhere. */
 #define CREASE_FLAT_SIN 0.01
 
-/* Do labels l[0], l[1] (pieces mode) meet almost flat at x (CREASE_FLAT_SIN)? */
-static bool flat_crease(ism_sampler *s, const double x[3], const label_t l[2])
+/* In pieces mode a mixed edge on which f lies within this share of max_error of 0 where its
+ * pieces' values cross (fold_within) is left whole, the crease folded across it. A cut turns
+ * one triangle into three and slivers them where the crease passes near a corner; folds within
+ * the bound need none (default bound, own box: the cube 12,000 triangles cut everywhere,
+ * 9,624 folded where they may; three balls 8,686 -> 8,230). Decided from the edge alone, so
+ * the leaves sharing it agree (a leaf's own choice, fold or cut, left cracks where its
+ * neighbour chose the other: three balls at E = 1e-4, χ −216). Not the whole bound: near a
+ * point where three pieces meet a third piece bends the fold's triangles beyond what their
+ * edges measure (Steinmetz at E = 1e-4 in the 1e-3 box: at 1.0 two depth-10 leaves beside its
+ * corner (1, −1, 1) / √2 missed, 1.17 E; at 0.75 none). A leaf whose folds and bending
+ * together miss the bound is split, as any leaf that misses it. */
+#define CREASE_FOLD_SHARE 0.75
+
+double ism_crease_fold_below(double max_error)
 {
-    double v[2], g[2][3];
+    return max_error > 0 ? CREASE_FOLD_SHARE * max_error : 0;
+}
+
+/* Is f within s->fold_below of 0 at lin, the point of a mixed edge where its pieces' values
+ * cross (|f| / |∇f|)? For two planar pieces f on the edge is the larger (or smaller) of two
+ * linear functions, so its distance peaks there; and on a triangle folded across one crease
+ * it peaks on the kink line's ends, which are such points of its mixed edges: the triangle is
+ * within what its edges are. */
+static bool fold_within(ism_sampler *s, const double lin[3])
+{
+    if (!(s->fold_below > 0))
+        return false;
+    double g[3], f = ism_sample_grad(s, lin, g), gn = ism_norm3(g);
+    return gn > 0 && fabs(f) <= s->fold_below * gn;
+}
+
+/* A fold is allowed only where the pieces' gradients at the crease point are at most this
+ * cosine's angle apart (120°: a wedge of 60° or more, the cube's 90° edges, the three balls'
+ * valleys): across a sharper wedge (cube-minus-ball's 40° between a face and its ball) a
+ * folded triangle faces more than 120° from the gradient at its centroid on one side, the
+ * turned test (CREASE_TURNED_COS) splits its leaf, and the default bound's mesh doubled
+ * (17,704 -> 34,736 triangles). */
+#define CREASE_FOLD_COS (-0.5)
+
+/* A crease point within this share of its edge's length from an end is that corner (on the
+ * crease, up to rounding: the double torus's corners on its mirror plane x = 1.1): the polygon
+ * is not cut there, since cut pieces would join a corner and a point a rounding error apart,
+ * two vertices the weld keeps apart (an edge in four triangles, the regression box of
+ * test_polygonise_crease.c's double_torus_closed_under_a_bound). */
+#define CUT_CORNER_SHARE 1e-6
+
+/* Why a mixed edge is left whole (crease_point's *whole; 0: it is cut at its crease point):
+ * folded within the bound, its pieces almost flat at the crease, or the crease through one of
+ * its ends (CUT_CORNER_SHARE: a new vertex there would be a second, unwelded copy of that
+ * corner, its triangles flat — three balls' crease in the lattice plane y = 0 of its own box,
+ * 4 such triangles; Steinmetz's corners on x = y, an edge in four triangles). */
+enum { WHOLE_FOLD = 1, WHOLE_FLAT = 2, WHOLE_END = 3 };
+
+/* Is a mixed edge p-q with crease point x of labels l[0], l[1] (pieces mode) better left
+ * whole: WHOLE_FLAT where the pieces meet almost flat at x (CREASE_FLAT_SIN), WHOLE_FOLD where
+ * the fold is within the bound at lin (fold_within, lin the point where the pieces' values
+ * cross on the edge) across a wedge no sharper than CREASE_FOLD_COS allows; WHOLE_END where x
+ * is one of its ends; else 0. */
+static int whole_edge(ism_sampler *s, const double *p, const double *q, const double lin[3],
+                      const double x[3], const label_t l[2])
+{
+    double v[2], g[2][3], near = CUT_CORNER_SHARE * ism_dist3(p, q);
+    if (!(ism_dist3(x, p) > near) || !(ism_dist3(x, q) > near))
+        return WHOLE_END;
     pair_at(s, true, x, l[0], l[1], v, g);
     double aa = ism_dot3(g[0], g[0]), bb = ism_dot3(g[1], g[1]), ab = ism_dot3(g[0], g[1]);
-    return ab > 0 && aa * bb - ab * ab < CREASE_FLAT_SIN * CREASE_FLAT_SIN * aa * bb;
+    if (ab > 0 && aa * bb - ab * ab < CREASE_FLAT_SIN * CREASE_FLAT_SIN * aa * bb)
+        return WHOLE_FLAT;
+    return ab >= CREASE_FOLD_COS * sqrt(aa * bb) && fold_within(s, lin) ? WHOLE_FOLD : 0;
 }
 
 /* The crease point of edge p-q, whose ends carry labels lp != lq: Newton on lo = hi = 0 from
  * where lo − hi changes sign along the edge (flagged ISM_FP_CREASE; true), or that linear
- * estimate moved onto f = 0 (false). *flat (may be NULL): in pieces mode, the point found
- * where the pieces meet almost flat (flat_crease; the edge is then better left whole). */
+ * estimate moved onto f = 0 (false). *whole: in pieces mode, nonzero where the edge is better
+ * left whole (whole_edge: the pieces meet almost flat there, or the fold is within the
+ * bound). */
 static bool crease_point(ism_sampler *s, bool pm, const double *p0, const double *q0,
-                         label_t lp, label_t lq, ism_fpoint *out, bool *flat)
+                         label_t lp, label_t lq, ism_fpoint *out, int *whole)
 {
     const double *p = before(q0, p0) ? q0 : p0, *q = p == p0 ? q0 : p0;
     label_t l[2] = {lp, lq};
@@ -308,8 +390,7 @@ static bool crease_point(ism_sampler *s, bool pm, const double *p0, const double
     memcpy(out->p, x, sizeof out->p);
     ism_sample_grad(s, x, out->g);
     out->flags = ok ? ISM_FP_INTERIOR | ISM_FP_CREASE : ISM_FP_INTERIOR;
-    if (flat)
-        *flat = pm && ok && flat_crease(s, x, l);
+    *whole = pm && ok ? whole_edge(s, p, q, lin, x, l) : 0;
     return ok;
 }
 
@@ -357,26 +438,55 @@ static label_t vertex_label(ism_sampler *s, bool pm, const ism_cell_out *out, la
 
 /* Triangle t (corners a, b, c on three pieces) cut at its edges' crease points and the
  * point where the three pieces meet, into six: each corner's quadrilateral (corner, crease
- * point, meeting point, crease point) on its piece alone. */
+ * point, meeting point, crease point) on its piece alone. An edge left whole (crease_point's
+ * whole: the fold within s->fold_below, or almost flat) is not cut, its triangle with the
+ * meeting point folded across it; the meeting point is inserted even when all three are
+ * whole: a fold's distance is bounded by its edges' only where one crease crosses it, and the
+ * corner where three meet (the cube's) stands off the triangle across all three (Steinmetz at
+ * E = 1e-4 in the 1e-3 box: 2 leaves missed, 1.17 E). */
 static bool split_three(ism_sampler *s, ism_cell_out *out, size_t t, const label_t br[3])
 {
     uint32_t c[3], x[3], m;
     ism_fpoint e[3], mid;
+    int whole[3];
     memcpy(c, out->tris + 3 * t, sizeof c);
     for (int k = 0; k < 3; k++) /* e[k]: on edge c[k]-c[k+1] */
         crease_point(s, true, out->verts[c[k]].p, out->verts[c[(k + 1) % 3]].p, br[k],
-                     br[(k + 1) % 3], &e[k], NULL);
+                     br[(k + 1) % 3], &e[k], &whole[k]);
     corner_point(s, e, 3, br, 3, &mid);
     for (int k = 0; k < 3; k++)
-        if (!ism_cell_out_vert(out, &e[k], &x[k]))
+        if (!whole[k] && !ism_cell_out_vert(out, &e[k], &x[k]))
             return false;
-    if (!ism_cell_out_vert(out, &mid, &m))
+    /* the meeting point on a corner or a crease point (to rounding: the three balls' in the
+       irrational box, on its edge) is that vertex, not a copy the weld keeps apart */
+    double size = 0;
+    for (int k = 0; k < 3; k++)
+        size = fmax(size, ism_dist3(out->verts[c[k]].p, out->verts[c[(k + 1) % 3]].p));
+    m = UINT32_MAX;
+    for (int k = 0; k < 6 && m == UINT32_MAX; k++) {
+        uint32_t v = k < 3 ? c[k] : whole[k - 3] ? UINT32_MAX : x[k - 3];
+        if (v != UINT32_MAX && !(ism_dist3(out->verts[v].p, mid.p) > CUT_CORNER_SHARE * size))
+            m = v;
+    }
+    if (m == UINT32_MAX && !ism_cell_out_vert(out, &mid, &m))
         return false;
-    uint32_t *tri = out->tris + 3 * t;
-    tri[0] = c[0], tri[1] = x[0], tri[2] = m;
-    return ism_cell_out_tri(out, c[0], m, x[2]) && ism_cell_out_tri(out, c[1], x[1], m) &&
-           ism_cell_out_tri(out, c[1], m, x[0]) && ism_cell_out_tri(out, c[2], x[2], m) &&
-           ism_cell_out_tri(out, c[2], m, x[1]);
+    /* corner k's triangles: toward its next corner (or that edge's point), and back to the
+       point on the edge before it (a whole edge's one triangle is the corner before's); the
+       first replaces t, none with a repeated vertex (m on one of them) */
+    uint32_t tris[6][3];
+    int n = 0;
+    for (int k = 0; k < 3; k++) {
+        uint32_t next = whole[k] ? c[(k + 1) % 3] : x[k], prev = x[(k + 2) % 3];
+        if (next != m && c[k] != m)
+            tris[n][0] = c[k], tris[n][1] = next, tris[n][2] = m, n++;
+        if (!whole[(k + 2) % 3] && prev != m && c[k] != m)
+            tris[n][0] = c[k], tris[n][1] = m, tris[n][2] = prev, n++;
+    }
+    memcpy(out->tris + 3 * t, tris[0], sizeof tris[0]);
+    for (int j = 1; j < n; j++)
+        if (!ism_cell_out_tri(out, tris[j][0], tris[j][1], tris[j][2]))
+            return false;
+    return true;
 }
 
 /* Splits triangles first_tri..ntris - 1, whose vertices lie in first..first + n - 1 (labels:
@@ -403,7 +513,7 @@ static bool split_labelled(ism_sampler *s, bool pm, ism_cell_out *out, size_t fi
                  c = out->tris[3 * t + (r + 2) % 3];
         label_t la = br[r], lo = br[(r + 1) % 3];
         ism_fpoint ab, ac;
-        bool fab, fac; /* an edge whose crease is almost flat stays whole (pieces mode) */
+        int fab, fac; /* an edge better left whole stays so (pieces mode, whole_edge) */
         crease_point(s, pm, out->verts[a].p, out->verts[b].p, la, lo, &ab, &fab);
         crease_point(s, pm, out->verts[a].p, out->verts[c].p, la, lo, &ac, &fac);
         uint32_t iab, iac, *tri = out->tris + 3 * t;
@@ -528,12 +638,6 @@ bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
  * whole and its triangles split (ism_crease_split). */
 #define CUT_MAX_CORNERS 64
 
-/* A crease point within this share of its edge's length from an end is that corner (on the
- * crease, up to rounding: the double torus's corners on its mirror plane x = 1.1): the polygon
- * is not cut there, since cut pieces would join a corner and a point a rounding error apart,
- * two vertices the weld keeps apart (an edge in four triangles, the regression box of
- * test_polygonise_crease.c's double_torus_closed_under_a_bound). */
-#define CUT_CORNER_SHARE 1e-6
 
 /* Runs of one label a cut polygon may have: 2 (one crease across it), 3 (three pieces
  * meeting in it) or 4 (two pieces, their crease crossing itself in it). */
@@ -561,19 +665,22 @@ static bool finite3(const double g[3])
 
 /* The run of corners from + 1 .. to (cyclically) of pts between crease points a and b into
  * sub, in the polygon's order: a, the run, b (the chord b-a closes it), then c when not NULL
- * (the point where three pieces meet); its length. */
+ * (the point where three pieces meet); a or b NULL: the run's edge there is left whole (its
+ * end corner closes the polygon instead); its length. */
 static size_t branch_polygon(const ism_fpoint *pts, size_t n, size_t from, size_t to,
                              const ism_fpoint *a, const ism_fpoint *b, const ism_fpoint *c,
                              ism_fpoint *sub)
 {
     size_t m = 0;
-    sub[m++] = *a;
+    if (a)
+        sub[m++] = *a;
     for (size_t i = (from + 1) % n;; i = (i + 1) % n) {
         sub[m++] = pts[i];
         if (i == to)
             break;
     }
-    sub[m++] = *b;
+    if (b)
+        sub[m++] = *b;
     if (c)
         sub[m++] = *c;
     return m;
@@ -590,11 +697,16 @@ static bool on_piece(ism_sampler *s, ism_fpoint *p, label_t l)
 /* A polygon whose corners run on k = 3 pieces, or on two pieces in k = 4 alternating runs
  * (mixed edges mixed[0..k)), cut at its mixed edges' crease points x and the point where those
  * creases meet (corner_point): each run's polygon (the crease point before it, the run, the one
- * after it, the meeting point) triangulated on its own. *done false when the meeting point is
- * not found. */
+ * after it, the meeting point) triangulated on its own. A mixed edge left whole (whole[j], a
+ * fold within the bound: whole_edge) is not cut: the runs beside it end at its corners, and
+ * its one triangle with the meeting point folds across it (the meeting point is kept: the
+ * corner where three pieces meet stands off any triangle folded round it, Steinmetz's corner
+ * (1, −1, 1) / √2 at E = 1e-4 two leaves 1.17 E off). *done false when the meeting point is not
+ * found. */
 static bool cut_runs(ism_sampler *s, const ism_fpoint *pts, size_t n, const label_t *br,
-                     const size_t *mixed, int k, const ism_fpoint *x, double reach,
-                     const double node[6], double max_error, ism_cell_out *out, bool *done)
+                     const size_t *mixed, int k, const ism_fpoint *x, const int *whole,
+                     double reach, const double node[6], double max_error, ism_cell_out *out,
+                     bool *done)
 {
     label_t run[CUT_MAX_RUNS];
     for (int j = 0; j < k; j++)
@@ -613,9 +725,15 @@ static bool cut_runs(ism_sampler *s, const ism_fpoint *pts, size_t n, const labe
     }
     bool flip = ism_loop_reversed(s, node, pts, n);
     for (int j = 0; j < k; j++) {
-        size_t len = branch_polygon(pts, n, mixed[j], mixed[(j + 1) % k], &a[j], &b[j], &m[j],
-                                    sub);
+        size_t len = branch_polygon(pts, n, mixed[j], mixed[(j + 1) % k], whole[j] ? NULL : &a[j],
+                                    whole[(j + 1) % k] ? NULL : &b[j], &m[j], sub);
         if (!ism_triangulate_wound(s, sub, len, reach, node, max_error, flip, out))
+            return false;
+        if (!whole[j])
+            continue;
+        /* the whole edge before run j and the meeting point */
+        sub[0] = pts[mixed[j]], sub[1] = pts[(mixed[j] + 1) % n], sub[2] = m[j];
+        if (!ism_triangulate_wound(s, sub, 3, reach, node, max_error, flip, out))
             return false;
     }
     *done = true;
@@ -646,18 +764,21 @@ bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double
     if (nmixed != 2 && !(pm && meeting_runs(br, n, mixed, nmixed)))
         return true; /* one branch, or the crease crossing the polygon more than once */
     ism_fpoint x[CUT_MAX_RUNS];
+    int whole[CUT_MAX_RUNS];
     for (size_t k = 0; k < nmixed; k++) {
         size_t i = mixed[k], j = (i + 1) % n;
         const double *p = pts[i].p, *q = pts[j].p;
         double near = CUT_CORNER_SHARE * ism_dist3(p, q);
-        bool flat;
-        if (!crease_point(s, pm, p, q, br[i], br[j], &x[k], &flat) || flat ||
+        if (!crease_point(s, pm, p, q, br[i], br[j], &x[k], &whole[k]) ||
+            whole[k] == WHOLE_FLAT || (whole[k] && nmixed == 2) ||
             !(ism_dist3(x[k].p, p) > near) || !(ism_dist3(x[k].p, q) > near))
-            return true; /* no crease point found on that edge (or an almost flat one), or a
+            return true; /* no crease point found on that edge (or an almost flat one, or a
+                            fold across the one crease: its triangles split alone), or a
                             corner on the crease */
     }
     if (nmixed > 2)
-        return cut_runs(s, pts, n, br, mixed, (int)nmixed, x, reach, node, max_error, out, done);
+        return cut_runs(s, pts, n, br, mixed, (int)nmixed, x, whole, reach, node, max_error,
+                        out, done);
     if (!memcmp(x[0].p, x[1].p, sizeof x[0].p))
         return true;
     bool flip = ism_loop_reversed(s, node, pts, n);

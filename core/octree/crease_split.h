@@ -62,6 +62,11 @@ bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first
  * 0 without a bound (max_error <= 0: one edge's length only). */
 double ism_crease_wedge_edges(const ism_grid *g, int max_depth, double max_error);
 
+/* The sampler's fold_below under an error bound (max_error > 0; 0 without one): in pieces
+ * mode a mixed edge whose crease point lies within CREASE_FOLD_SHARE × max_error of it is left
+ * whole (crease_split.c). */
+double ism_crease_fold_below(double max_error);
+
 /* Is f's crease read off its smooth pieces (the sampler's crease_pieces): f has a kink that is
  * not its top min/max of two registers (a kink below it, or a min/max passed on through later
  * steps), and at most ISM_PIECE_KINKS kinks? */

@@ -506,6 +506,8 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         cx->s.batch = !o->scalar_eval;
         cx->s.wedge_edges_below = ism_crease_wedge_edges(&tree->grid, o->max_depth, o->max_error);
         cx->s.crease_pieces = ism_crease_pieces(f);
+        cx->s.fold_below = ism_crease_fold_below(o->max_error);
+        cx->s.label_memo_on = true;
         cx->tree = tree;
         cx->parent = parent;
         cx->breaks = &breaks;

@@ -10,6 +10,10 @@
 #include "core/eval/eval.h"
 #include "core/util/vec3.h"
 
+/* Entries of the sampler's label memo (a leaf labels a few dozen points; its neighbours share
+ * a face's). */
+#define ISM_LABEL_MEMO 64
+
 typedef struct ism_sampler {
     const ism_tape *tape;
     ism_eval_ws *ws;
@@ -47,6 +51,22 @@ typedef struct ism_sampler {
      * with wedge_edges_below (asked once per run, not per leaf: the tape scan cost gyroid-ball
      * +1.5% instructions). */
     bool crease_pieces;
+    /* crease_split.c, pieces mode: a mixed edge whose crease point lies within this of the
+     * edge is left whole, the crease folded there (ism_crease_fold_below: a share of
+     * max_error); 0: every mixed edge cut. */
+    double fold_below;
+    /* crease_split.c, pieces mode, when label_memo_on (polygonise.c, whose tape stays f for
+     * the run: the octree's build swaps node tapes in and out of one buffer): the last labels
+     * looked up (ism_eval_piece of tape at p), direct-mapped by p's bits; an entry counts only
+     * for the tape it names (zeroed: none). A leaf labels a vertex up to three times (its
+     * polygon cut, its triangles split, the crease test), and its neighbours the shared ones
+     * again. */
+    bool label_memo_on;
+    struct ism_label_memo {
+        double p[3];
+        const ism_tape *tape;
+        uint64_t label;
+    } label_memo[ISM_LABEL_MEMO];
     uint64_t n_point, n_gradient, n_interval;
 } ism_sampler;
 

@@ -253,3 +253,50 @@ Test(crease, steinmetz_creases_stop_where_the_bound_is_met)
 {
     check_crease_stops("max(x^2 + y^2, y^2 + z^2, z^2 + x^2) - 1", steinmetz_dist, 8);
 }
+
+/* The three balls' creases at the default bound (1e-3 × the diagonal of the box ±1.5, depth.max
+ * 10) in the three placements: every triangle's smallest angle at least THREE_BALLS_FLOOR. The
+ * creases, all cut (nested min: each ball a piece), made triangles no raw mesh of a smooth
+ * surface has: two copies of one point a rounding error apart where a crease point or the
+ * balls' meeting point landed on a vertex (its own box: the crease of the two balls
+ * mirrored in y = 0 lies in that lattice plane; the irrational box: the meeting point
+ * (0, 0, ±0.374) computed by each triangle round it), zero-area triangles, 4 in the own and
+ * the irrational box; and a crease point 3 µm off a cell's corner cut to the 0.0042° / 0.0022°
+ * / 0.0046° slivers the own / 1e-3 / irrational boxes had. Folded where the fold meets the
+ * bound, a crease through a corner left whole and the meeting point snapped to the vertex it
+ * lands on, the smallest are 0.067° / 0.025° / 0.012°, the lattice's own: two edge roots a
+ * few millionths of a cell from one grid corner, the marching-cubes sliver (--quality good's to
+ * mend). The floor sits under those, above what the cuts made. */
+#define THREE_BALLS_FLOOR 0.01
+
+Test(crease, three_balls_no_sliver_where_the_pieces_meet)
+{
+    const pf_surface s = {"min((x - 0.6)^2 + y^2 + z^2 - 0.5, (x + 0.3)^2 + (y - 0.52)^2 + z^2 - "
+                          "0.5, (x + 0.3)^2 + (y + 0.52)^2 + z^2 - 0.5)",
+                          NULL, 0, NULL, 0};
+    const double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
+    ism_tape *t = pf_compile(&s);
+    for (int w = pf_first_box() - 1; w < 2; w++) {
+        ism_poly_options o;
+        pf_options(&o, base, 3, 10);
+        pf_sweep_box(base, 10, w, o.box);
+        o.max_error = pf_default_error(o.box);
+        ism_mesh m;
+        ism_poly_stats st;
+        pf_run_options(t, &o, &m, &st);
+        double worst = 180;
+        size_t under = 0;
+        for (size_t k = 0; k < m.ntris; k++) {
+            double a = pf_tri_min_angle(&m, k);
+            under += !(a >= THREE_BALLS_FLOOR); /* NaN: two corners at one place */
+            worst = a < worst ? a : worst;
+        }
+        cr_expect_eq(under, 0, "placement %d: %zu triangles under %g° (smallest %g°)", w, under,
+                     THREE_BALLS_FLOOR, worst);
+        pf_props p;
+        pf_measure(&m, t, &p);
+        cr_expect_eq(p.euler, 2, "placement %d: χ %ld", w, p.euler);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
