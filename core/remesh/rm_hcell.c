@@ -169,8 +169,11 @@ double rm_hcell_residual(rm_pass *p, const double x[3], double s1, double gn)
     if (!p->hcell)
         return INFINITY;
     p->hcell->asked++;
+    /* den bounds |∇f| where the step lands from below: it must clear the threshold at which
+     * the second step would call ∇f vanished (rm_bound.c), or the bound would accept a point
+     * the measure rejects */
     double m = bound_at(p, p->hcell, x), a = fabs(s1), den = gn - m * a;
-    return den > 0 ? 0.5 * m * a * a / den * (1 + 0x1p-40) : INFINITY;
+    return den > p->gthresh ? 0.5 * m * a * a / den * (1 + 0x1p-40) : INFINITY;
 }
 
 void rm_hcell_spared(rm_pass *p)

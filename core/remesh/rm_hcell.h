@@ -40,7 +40,9 @@ void rm_hcell_free(struct rm_hcell *h);
 
 /* A bound on the second term of the measure at x (rm_bound.c's s2) for a first step of s1
  * (|s1| ≤ max_error) with gradient norm gn at x: ½ M s1² / (gn − M |s1|) with M the Hessian
- * bound of x's cell; INFINITY where the cell has none or the denominator is not positive. */
+ * bound of x's cell; INFINITY where the cell has none or the denominator (a lower bound on
+ * |∇f| where the step lands) is not above the pass's gthresh, where the second step would
+ * find ∇f vanished. */
 double rm_hcell_residual(rm_pass *p, const double x[3], double s1, double gn);
 
 /* A second evaluation the bound spared (counted for the trial above). */

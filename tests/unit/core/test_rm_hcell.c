@@ -168,3 +168,27 @@ Test(remesh_hcell, no_bound_where_a_min_switches_branches)
         hc_close(&c);
     }
 }
+
+Test(remesh_hcell, no_bound_where_the_landing_gradient_is_below_the_threshold)
+{
+    /* The unit sphere f = |x − o|² − 1 (‖H‖_F = 2√3, |∇f| = 2ρ at radius ρ). From radius
+     * ρ = 1 + d the Newton step (length (ρ² − 1) / 2ρ, about d) lands at radius (ρ² + 1) / 2ρ,
+     * where |∇f| = (ρ² + 1) / ρ ≈ 2 + d²; with the pass's threshold set to 2 + d the first
+     * step stands (2 + 2d) and the second finds ∇f vanished, so the measure is INFINITY,
+     * while the cells' denominator 2 + 2d − 2√3 d stays positive. */
+    const double d = 0.7 * BOUND_E, rho = 1 + d;
+    for (int o = 0; o < 3; o++) {
+        hc_case c;
+        hc_open(&c, "(x-a)^2 + (y-b)^2 + (z-c)^2 - 1", OFFS[o]);
+        c.p.gthresh = 2 + d;
+        cr_assert_gt(2 * rho, c.p.gthresh);                 /* the first step stands */
+        cr_assert_leq((rho * rho + 1) / rho, c.p.gthresh); /* the second does not */
+        for (int i = 0; i < 8; i++) {
+            double u = 2 * M_PI * i / 8 + 0.1;
+            double x[3] = {OFFS[o][0] + rho * cos(u), OFFS[o][1] + rho * sin(u), OFFS[o][2]};
+            double got = rm_bound_distance(&c.p, x, BOUND_E);
+            cr_expect(isinf(got), "placement %d point %d: %g, the measure rejects it", o, i, got);
+        }
+        hc_close(&c);
+    }
+}
