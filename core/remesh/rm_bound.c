@@ -61,15 +61,8 @@ bool rm_bound_gradient(rm_pass *p, const double x[3], double g[3])
     return true;
 }
 
-/* A point whose first step is at most this share of the limit it is measured against (of
- * max_error when the limit is infinite) is measured by that step alone: the second is the
- * residual of a Newton step, about κ s1² / 2 (κ the curvature of f's level set along the
- * step), within the rest of the limit whenever κ × limit <= 2 (1 - share) / share² = 4 — a
- * level set bending with a radius under a quarter of the bound, which no mesh within the
- * bound follows anyway. bench_error at bench_accuracy's E: evaluations of f and ∇f in the
- * simplification -22% (sphere), -26% (torus), -35% (gyroid-ball, klein-bottle); the meshes
- * byte-identical but klein-bottle's at 0.0251 (12,402 -> 12,394 triangles). */
-#define RM_BOUND_ONE_STEP_SHARE 0.5
+/* RM_BOUND_ONE_STEP_SHARE (rm_bound.h): a first step within that share of the limit is the
+ * measure. */
 
 /* With a finite limit and the pass's Hessian cells (rm_hcell.h), a second step not yet taken
  * at x (first step e, |s1| at most max_error: the cell's grown box holds the step's segment)

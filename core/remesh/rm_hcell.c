@@ -181,3 +181,9 @@ void rm_hcell_spared(rm_pass *p)
     if (p->hcell)
         p->hcell->spared++;
 }
+
+void rm_hcell_counts(const rm_pass *p, size_t *asked, size_t *spared)
+{
+    *asked = p->hcell ? p->hcell->asked : 0;
+    *spared = p->hcell ? p->hcell->spared : 0;
+}

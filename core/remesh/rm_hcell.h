@@ -48,4 +48,8 @@ double rm_hcell_residual(rm_pass *p, const double x[3], double s1, double gn);
 /* A second evaluation the bound spared (counted for the trial above). */
 void rm_hcell_spared(rm_pass *p);
 
+/* The points asked of the cells' bounds so far and those spared a second evaluation (0, 0
+ * without cells). */
+void rm_hcell_counts(const rm_pass *p, size_t *asked, size_t *spared);
+
 #endif

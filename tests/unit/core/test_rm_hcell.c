@@ -135,8 +135,8 @@ Test(remesh_hcell, the_bound_holds_the_second_step_and_decides_as_it)
                 cr_expect_geq(r, s2, "placement %d point %d: bound %g under the term %g", o, i,
                               r, s2);
             }
-            /* the exact measure's verdict (rm_bound_distance: one step within half of E) */
-            bool exact = fabs(s1) <= 0.5 * BOUND_E || fabs(s1) + s2 <= BOUND_E;
+            /* the exact measure's verdict (rm_bound_distance: one step within its share of E) */
+            bool exact = fabs(s1) <= RM_BOUND_ONE_STEP_SHARE * BOUND_E || fabs(s1) + s2 <= BOUND_E;
             bool got = rm_bound_distance(p, x, BOUND_E) <= BOUND_E;
             within += got;
             cr_expect_eq(got, exact, "placement %d point %d: s1 %g s2 %g", o, i, s1, s2);
@@ -145,6 +145,10 @@ Test(remesh_hcell, the_bound_holds_the_second_step_and_decides_as_it)
         cr_expect_gt(bounded, asked * 9 / 10, "placement %d: %d of %d bounded", o, bounded,
                      asked);
         cr_expect_gt(within, 0, "placement %d", o);
+        /* the verdicts above hold with or without the shortcut: it must have been taken */
+        size_t n_asked, n_spared;
+        rm_hcell_counts(p, &n_asked, &n_spared);
+        cr_expect_gt(n_spared, 0, "placement %d: no second step spared", o);
         ism_eval_ws_free(ws);
         hc_close(&c);
     }
