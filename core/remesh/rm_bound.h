@@ -23,7 +23,14 @@
  * when the landing point's estimate is (second order there). INFINITY where ∇f vanishes or
  * f is not finite; above limit, or at most half of it (of max_error when limit is infinite),
  * the first term alone: the step is not taken (its residual, second order, cannot carry a
- * point from half the bound beyond it; rm_bound.c). */
+ * point from half the bound beyond it; rm_bound.c).
+ *
+ * With the pass's Hessian cells (rm_hcell.h) and a finite limit, a value at most limit may
+ * be a bound on the measure rather than the measure (|s1| plus a bound on the second term,
+ * rm_bound.c's residual_within): never below it, and at most limit exactly when the measure
+ * is. So a comparison `<= limit` against the limit passed decides as the measure does; any
+ * other use (a strict `<`, a different threshold, a max over values) decides as the measure
+ * does or more strictly (sp_place.c's `< before` may refuse a move the measure would take). */
 double rm_bound_distance(rm_pass *p, const double x[3], double limit);
 
 /* An upper bound on the distance from x to f = 0, as far as the bound max_error needs one:
