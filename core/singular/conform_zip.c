@@ -172,6 +172,8 @@ static bool zip_seq(cf_ctx *c, const cf_polyline *pl, const uint32_t *cv, const 
                     const double *U, size_t len, long Ja, long Jb)
 {
     int dir = Jb > Ja || (Jb == Ja && U[len - 1] >= U[0]) ? 1 : -1;
+    if (c->grade && c->grade->refused)
+        return true; /* the loop is zipped again straight: grading the rest is wasted */
     if (c->grade) {
         int g = grade_seq(c, pl, cv, row, U, len, Ja, Jb, dir);
         if (g < 0)
