@@ -84,7 +84,8 @@ static uint32_t row_vertex(cf_ctx *c, const double a[3], const double b[3], doub
 }
 
 /* The side from row vertex r down to curve vertex cv: its row vertices (rows 1 .. K), made
- * the first time it is asked for. NULL when out of memory. */
+ * the first time it is asked for. NULL when out of memory. A linear scan of the loop's sides
+ * (quadratic in its stretches) is enough: a loop has few stretches, two sides each. */
 static const uint32_t *side(cf_ctx *c, cf_grade *g, uint32_t r, uint32_t cv)
 {
     for (size_t i = 0; i < g->nside; i++)
