@@ -37,7 +37,13 @@
 #define GRADE_BETA_MIN 0.8
 #define GRADE_BETA_MAX 1.25
 /* A row coarser than the curve by less than this keeps its zip straight: its fans are of two
- * or three curve edges, as the octree leaves them wherever it refines toward the curve. */
+ * or three curve edges, as the octree leaves them wherever it refines toward the curve. The
+ * octree's levels halve the edge, so a row one level coarser than the curve spans about
+ * GRADE_RATIO (2) curve edges an edge, two levels 4: 2.83 is 2√2 rounded, half-way between
+ * them in levels (log scale) — a row one level coarser stays straight, one two or more
+ * levels coarser is graded, with room for the edges' spread about their level. (c09129c
+ * recorded no measurement for the value; the straight fans it leaves are at most 3 curve
+ * edges, test_quality.ZipBesideTheDoubleLines.) */
 #define GRADE_MIN_RATIO 2.83
 
 int cf_grade_rows(double row_edge, double curve_edge, double width)
