@@ -1,30 +1,29 @@
 /* rm_hcell.c — the grid of Hessian bounds (rm_hcell.h): cells keyed by their integer
- * coordinates in an open-addressed table, each cell's bound worked out from f's interval jet
- * the first time a point in it asks. */
+ * coordinates (a lattice key, lattice_key.h) in a key map (key_map.h) whose indices address
+ * the bounds, each cell's bound worked out from f's interval jet the first time a point in it
+ * asks. */
 #include "core/remesh/rm_hcell.h"
 #include "core/eval/interval_jet.h"
+#include "core/singular/key_map.h"
+#include "core/singular/lattice_key.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* Cell coordinates are kept in 21 bits each (offset by half that range) in one key. */
-#define HC_BITS 21
-#define HC_HALF (1 << (HC_BITS - 1))
-/* A key no cell has (coordinates out of range are not asked). */
+/* Cell coordinates are offset by half a lattice key's range per axis (out of range: not
+ * asked). */
+#define HC_HALF (1 << (ISM_LKEY_BITS - 1))
+/* A key no cell has (a lattice key uses 63 bits). */
 #define HC_EMPTY UINT64_MAX
-
-typedef struct hc_slot {
-    uint64_t key;
-    double m; /* the Hessian bound of the cell (INFINITY: none) */
-} hc_slot;
 
 struct rm_hcell {
     double lo[3], side, inv_side;
     uint64_t last_key;   /* the cell asked last and its bound: consecutive points of a fan */
     double last_m;       /* mostly share a cell (HC_EMPTY: none yet) */
-    hc_slot *slot;
-    size_t cap, n;       /* slots (a power of two), cells held */
+    ism_key_map cells;   /* cell key -> index into m */
+    double *m;           /* by index: the Hessian bound of the cell (INFINITY: none) */
+    size_t mcap;         /* m's length */
     size_t worked, asked, spared; /* cells whose jet was worked out; points asked of a
                                      cell's bound, and those it spared a second step */
     bool stopped;        /* no new cell is worked out (rm_hcell.h's trial) */
@@ -50,15 +49,12 @@ struct rm_hcell *rm_hcell_new(const rm_pass *p)
     struct rm_hcell *h = calloc(1, sizeof *h);
     if (!h)
         return NULL;
-    h->cap = 256;
-    h->slot = malloc(h->cap * sizeof *h->slot);
+    ism_key_map_init(&h->cells);
     h->jws = ism_ivjet_ws_new(p->f);
-    if (!h->slot || !h->jws) {
+    if (!h->jws) {
         rm_hcell_free(h);
         return NULL;
     }
-    for (size_t i = 0; i < h->cap; i++)
-        h->slot[i].key = HC_EMPTY;
     memcpy(h->lo, lo, sizeof lo);
     h->side = side;
     h->inv_side = 1 / side;
@@ -70,42 +66,10 @@ void rm_hcell_free(struct rm_hcell *h)
 {
     if (!h)
         return;
-    free(h->slot);
+    ism_key_map_free(&h->cells);
+    free(h->m);
     ism_ivjet_ws_free(h->jws);
     free(h);
-}
-
-static size_t hash_of(uint64_t key, size_t cap)
-{
-    uint64_t x = key * 0x9e3779b97f4a7c15ull;
-    return (size_t)(x ^ (x >> 29)) & (cap - 1);
-}
-
-/* The slot of key: its own, or the empty one where it would go. */
-static hc_slot *find(const struct rm_hcell *h, uint64_t key)
-{
-    size_t i = hash_of(key, h->cap);
-    while (h->slot[i].key != key && h->slot[i].key != HC_EMPTY)
-        i = (i + 1) & (h->cap - 1);
-    return &h->slot[i];
-}
-
-/* Twice the slots; false when out of memory (the table is as it was). */
-static bool grow(struct rm_hcell *h)
-{
-    struct rm_hcell g = *h;
-    g.cap = 2 * h->cap;
-    g.slot = malloc(g.cap * sizeof *g.slot);
-    if (!g.slot)
-        return false;
-    for (size_t i = 0; i < g.cap; i++)
-        g.slot[i].key = HC_EMPTY;
-    for (size_t i = 0; i < h->cap; i++)
-        if (h->slot[i].key != HC_EMPTY)
-            *find(&g, h->slot[i].key) = h->slot[i];
-    free(h->slot);
-    *h = g;
-    return true;
 }
 
 /* ‖H‖_F over the cell c (integer coordinates) grown by grow each way, from the Hessian's
@@ -130,38 +94,52 @@ static double cell_bound(const rm_pass *p, struct rm_hcell *h, const int64_t c[3
     return m >= 0 && isfinite(m) ? m : INFINITY; /* NaN: none */
 }
 
+/* Room in m for one more cell; false when out of memory (m is as it was). */
+static bool room(struct rm_hcell *h)
+{
+    if (h->cells.n < h->mcap)
+        return true;
+    size_t cap = h->mcap ? 2 * h->mcap : 256; /* four trials of cells (rm_hcell.h) */
+    double *m = realloc(h->m, cap * sizeof *m);
+    if (!m)
+        return false;
+    h->m = m;
+    h->mcap = cap;
+    return true;
+}
+
 /* The Hessian bound of x's cell: known, or worked out now (unless the trial stopped new
  * ones, or out of memory: INFINITY). */
 static double bound_at(rm_pass *p, struct rm_hcell *h, const double x[3])
 {
     int64_t c[3];
-    uint64_t key = 0;
     for (int k = 0; k < 3; k++) {
         /* shifted by half the range before the truncation: a floor for every cell kept */
         double q = (x[k] - h->lo[k]) * h->inv_side + HC_HALF;
         if (!(q >= 0 && q < 2.0 * HC_HALF))
             return INFINITY;
         c[k] = (int64_t)q - HC_HALF;
-        key = key << HC_BITS | (uint64_t)(c[k] + HC_HALF);
     }
+    uint64_t key = ism_lkey((int32_t)(c[0] + HC_HALF), (int32_t)(c[1] + HC_HALF),
+                            (int32_t)(c[2] + HC_HALF));
     if (key == h->last_key)
         return h->last_m;
-    hc_slot *s = find(h, key);
-    if (s->key != key) {
+    uint32_t i = ism_key_map_find(&h->cells, key);
+    if (i == ISM_KEY_NONE) {
         if (!h->stopped && h->worked >= RM_HCELL_TRIAL &&
             (double)h->spared < RM_HCELL_MIN_SHARE * (double)h->asked)
             h->stopped = true; /* the cells have not paid (rm_hcell.h) */
-        if (h->stopped || (2 * (h->n + 1) > h->cap && !grow(h)))
+        if (h->stopped || !room(h))
             return INFINITY;
-        s = find(h, key);
-        s->key = key;
-        s->m = cell_bound(p, h, c, p->max_error);
-        h->n++;
+        bool added;
+        if ((i = ism_key_map_add(&h->cells, key, &added)) == ISM_KEY_NONE)
+            return INFINITY;
+        h->m[i] = cell_bound(p, h, c, p->max_error);
         h->worked++;
     }
     h->last_key = key;
-    h->last_m = s->m;
-    return s->m;
+    h->last_m = h->m[i];
+    return h->m[i];
 }
 
 double rm_hcell_residual(rm_pass *p, const double x[3], double s1, double gn)
