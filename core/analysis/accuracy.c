@@ -1,7 +1,10 @@
 /* accuracy.c — how far the mesh lies from f = 0 between its vertices: the distance at every
  * triangle's centroid and every edge's midpoint, with the maximum, the mean and the 99th
  * percentile of each (and of the vertex distances implicit.c measured).
- * Every point first gets the estimate |f| / |∇f|, capped by the bound through the element's
+ * Every point first gets the estimate |f| / |∇f| (in the band below the polygoniser's bound
+ * where it may fall short by its curvature term, ism_first_order_unsure, one Newton step
+ * further: the step's length and the foot's own estimate, an upper bound as the polygoniser
+ * takes it), capped by the bound through the element's
  * corners (dist_bound.h: |p − v| + v's own distance, which implicit.c measured). The
  * estimate overstates beside singular points and curves (∇f vanishes on the surface there):
  * the points whose estimate could reach the maximum or the 99th percentile are measured again
@@ -41,6 +44,7 @@ typedef struct sample_pass {
     const ism_tape *f;
     const ism_an_edge_table *et;
     double threshold; /* |∇f| at or below this vanishes */
+    double max_error; /* the mesh's bound (0: none): estimates just within it step further */
     const float *vdist;      /* per vertex: its distance (implicit.c) */
     const uint8_t *singular; /* per vertex: ∇f vanishes there (no distance) */
     double *dist;     /* per item: distance, NaN when skipped or not a point */
@@ -54,6 +58,18 @@ typedef struct sample_pass {
     size_t nagain;
 } sample_pass;
 
+/* The first-order distance at p's Newton foot (ism_newton_foot; f and g = ∇f at p): 0 where
+ * it has none (the step's length alone then stands, the estimate as before). */
+static double foot_dist(const sample_pass *sp, ism_eval_ws *ws, const double p[3], double f,
+                        const double g[3])
+{
+    double x[3], gx[3];
+    ism_newton_foot(p, f, g, x);
+    double fx = ism_eval_gradient(sp->f, ws, x[0], x[1], x[2], gx);
+    double d = fabs(fx) / ism_norm3(gx);
+    return isfinite(d) ? d : 0;
+}
+
 /* The distance at p between vertices idx[0..n) (n <= ISM_DIST_CORNERS): the estimate, capped
  * by the bound through the corners where it passes the nearest (dist_bound.h); NaN (skipped)
  * where there is no estimate. */
@@ -65,6 +81,8 @@ static double distance_at(const sample_pass *sp, ism_eval_ws *ws, const double p
     double gn = ism_norm3(g), d = fabs(fv) / gn;
     if (!(gn > sp->threshold && isfinite(d)))
         d = NAN;
+    else if (ism_first_order_unsure(d, sp->max_error))
+        d += foot_dist(sp, ws, p, fv, g);
     const double *v[ISM_DIST_CORNERS];
     for (int k = 0; k < n; k++)
         v[k] = sp->m->pos + 3 * (size_t)idx[k];
@@ -288,7 +306,7 @@ void ism_an_distance_figures(double *dist, size_t n, ism_pool *pool, ism_an_dist
 }
 
 static bool sample(const ism_mesh *m, const ism_tape *f, const ism_an_edge_table *et,
-                   const ism_analysis *a, ism_pool *pool, size_t nitems,
+                   const ism_analysis *a, double max_error, ism_pool *pool, size_t nitems,
                    int (*point)(const sample_pass *, size_t, double[3], uint32_t[3]),
                    ism_an_distances *out)
 {
@@ -297,6 +315,7 @@ static bool sample(const ism_mesh *m, const ism_tape *f, const ism_an_edge_table
                       f,
                       et,
                       a->singular_threshold,
+                      max_error,
                       a->distance,
                       a->singular,
                       malloc(n * sizeof(double)),
@@ -322,13 +341,13 @@ static bool sample(const ism_mesh *m, const ism_tape *f, const ism_an_edge_table
 }
 
 bool ism_an_between_vertices(const ism_mesh *m, const ism_tape *f, const ism_an_edge_table *et,
-                             ism_pool *pool, ism_analysis *a)
+                             double max_error, ism_pool *pool, ism_analysis *a)
 {
     ism_an_distances c = {0}, e = {0};
     if (!a->distance || !a->singular)
         return false; /* ism_an_implicit_figures with accuracy first */
-    if (!sample(m, f, et, a, pool, m->ntris, centroid_of, &c) ||
-        !sample(m, f, et, a, pool, et->nedges, midpoint_of, &e))
+    if (!sample(m, f, et, a, max_error, pool, m->ntris, centroid_of, &c) ||
+        !sample(m, f, et, a, max_error, pool, et->nedges, midpoint_of, &e))
         return false;
     a->max_dist_centroid = c.max;
     a->mean_dist_centroid = c.mean;

@@ -82,7 +82,7 @@ bool ism_analyse(const ism_mesh *m, const ism_tape *f, const ism_analysis_option
     ok = ok && ism_an_count_duplicates(m, &et, pool, a) && ism_an_triangle_quality(m, pool, a);
     ok = ok && ism_an_implicit_figures(m, f, o, &vf, pool, a);
     if (ok && f && o->accuracy)
-        ok = ism_an_between_vertices(m, f, &et, pool, a);
+        ok = ism_an_between_vertices(m, f, &et, o->max_error, pool, a);
     if (beside) {
         ism_side_join(&side);
         ok = ok && c.ok;

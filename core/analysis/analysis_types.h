@@ -45,6 +45,10 @@ typedef struct ism_analysis_options {
     double singular_rel; /* |∇f| <= singular_rel * gradient_scale counts as vanishing
                             (default 1e-6); see gradient_scale below */
     int newton_steps;    /* Newton steps for the projection distance and projection (4) */
+    double max_error;    /* the bound the mesh was made under (0: none, the default): the
+                            distances between vertices whose first-order estimate lies just
+                            within it are measured a Newton step further (accuracy.c), as
+                            the polygoniser measured them, so "met" holds them to E */
 } ism_analysis_options;
 
 /* One connected component (triangles joined by shared edges, of any kind). */

@@ -37,5 +37,7 @@ bool ism_an_check_options(const ism_analysis_options *o, ism_error *err)
         return ism_an_fail(err, "analysis: newton_steps must be in 0..%d", MAX_NEWTON_STEPS);
     if (o->threads < 0 || o->threads > MAX_THREADS)
         return ism_an_fail(err, "analysis: threads must be in 0..%d", MAX_THREADS);
+    if (!(o->max_error >= 0 && isfinite(o->max_error)))
+        return ism_an_fail(err, "analysis: max_error must be finite and at least 0");
     return true;
 }

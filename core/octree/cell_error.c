@@ -24,7 +24,7 @@ typedef struct root_pt {
 } root_pt;
 
 /* A point loop_error measures: its distance is ism_sample_dist_between's over the n (2: an
- * edge's midpoint, 3: a centroid) vertices v, or ism_sample_dist's alone (n 0). */
+ * edge's midpoint, 3: a centroid) vertices v, or ism_plain_dist's alone (n 0). */
 typedef struct loop_pt {
     double p[3];
     const double *v[3];
@@ -85,8 +85,11 @@ static bool measure_beyond(ism_sampler *s, const loop_pt *q, int n, double *wors
     for (int i = 0; i < n; i++)
         memcpy(p[i], q[i].p, sizeof p[i]);
     ism_sample_grad_batch(s, (const double (*)[3])p, f, g, (size_t)n);
+    double plain[LOOP_PTS];
+    ism_plain_dists(s, (const double (*)[3])p, f, (const double (*)[3])g, s->dist_above, plain,
+                    (size_t)n);
     for (int i = 0; i < n; i++) {
-        double d = ism_first_order_dist(f[i], g[i]);
+        double d = plain[i];
         if (q[i].n)
             d = ism_dist_beyond(s, q[i].p, d, q[i].v, q[i].n);
         if (beyond(worst, d, bound))

@@ -13,6 +13,7 @@
 #include "core/octree/dual_box.h"
 #include "core/octree/dual_cert.h"
 #include "core/octree/dual_crease.h"
+#include "core/octree/refine.h"
 #include "core/octree/edge_roots.h"
 #include "core/octree/graph_cert.h"
 #include "core/octree/grid.h"
@@ -1657,7 +1658,7 @@ static void pair_task(void *ctx, size_t k, int thread)
     for (size_t j = 0; j < n; j++)
         pair_mid(d, keys[lo + j], m[j]);
     ism_sample_grad_batch(&w->s, (const double (*)[3])m, f, g, n);
-    ism_dual_plain_dists(&w->s, (const double (*)[3])m, f, (const double (*)[3])g, e, plain, n);
+    ism_plain_dists(&w->s, (const double (*)[3])m, f, (const double (*)[3])g, e, plain, n);
     for (size_t j = 0; j < n; j++) /* ism_dual_dist's */
         dist[lo + j] = ism_dual_kink_dist(&w->s, m[j], plain[j], e);
 }
@@ -2078,7 +2079,7 @@ static void centroid_task(void *ctx, size_t k, int thread)
     }
     double plain[MEASURE_LANES], e = d->o->max_error;
     ism_sample_grad_batch(&w->s, (const double (*)[3])c, f, g, n);
-    ism_dual_plain_dists(&w->s, (const double (*)[3])c, f, (const double (*)[3])g, e, plain, n);
+    ism_plain_dists(&w->s, (const double (*)[3])c, f, (const double (*)[3])g, e, plain, n);
     for (size_t j = 0; j < n; j++)
         miss[lo + j] = ism_dual_centroid_within_at(&w->s, p[j], c[j], f[j], g[j], plain[j], e)
                            ? 0

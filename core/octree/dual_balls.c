@@ -3,6 +3,7 @@
 #include "core/octree/dual_balls.h"
 #include "core/octree/edge_keys.h"
 #include "core/octree/dual_crease.h"
+#include "core/octree/refine.h"
 #include "core/util/grow.h"
 #include "core/util/vec3.h"
 
@@ -584,7 +585,7 @@ bool ism_dual_centroid_within(ism_sampler *s, const double *p[3], double e)
     double c[3], g[3];
     ism_dual_centroid(p, c);
     double f = ism_sample_grad(s, c, g);
-    return ism_dual_centroid_within_at(s, p, c, f, g, ism_dual_plain_dist(s, c, f, g, e), e);
+    return ism_dual_centroid_within_at(s, p, c, f, g, ism_plain_dist(s, c, f, g, e), e);
 }
 
 bool ism_dual_centroid_within_at(ism_sampler *s, const double *p[3], const double c[3],

@@ -94,8 +94,8 @@ bool ism_dual_centroid_within(ism_sampler *s, const double *p[3], double e);
 void ism_dual_centroid(const double *p[3], double c[3]);
 
 /* ism_dual_centroid_within with f and ∇f at the centroid c (ism_dual_centroid) and its
- * ism_dual_plain_dist there (plain) given: the same answer, for callers that take the
- * centroids' gradients in batches (ism_dual_plain_dists). */
+ * ism_plain_dist there (plain) given: the same answer, for callers that take the
+ * centroids' gradients in batches (ism_plain_dists). */
 bool ism_dual_centroid_within_at(ism_sampler *s, const double *p[3], const double c[3],
                                  double f, const double g[3], double plain, double e);
 

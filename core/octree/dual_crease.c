@@ -83,6 +83,7 @@
  * leaves sharing a face crossed four times: non-manifold at depth.max), and a failed try
  * costs up to 75% of the primal path's CPU on top: hence the option, still off. */
 #include "core/octree/dual_crease.h"
+#include "core/octree/refine.h"
 #include "core/analysis/unionfind.h" /* its find (path halving) on this file's own joins */
 #include "core/octree/corners.h"
 #include "core/octree/crease_split.h"
@@ -100,13 +101,6 @@
 /* ... stopping once a step is below this share of the bound: the residual then adds at most
  * a thousandth of E to the distance. */
 #define FOOT_STOP 1e-3
-/* A point whose first-order distance d1 = |f| / |∇f| lies within E but above this share of
- * it is measured one Newton step further (ism_dual_plain_dist): d1 is off by the factor
- * 1 − f_nn d / (2 |∇f|) to second order (f_nn: f's second derivative along ∇f, d the
- * distance), 1.5% at E = 1e-2 on the ring torus's tube (r = 0.3: a midpoint 1.00006 E from
- * it measured 0.985 E); below half of E only a gradient changing by its own size within d
- * could put the point beyond E. */
-#define FIRST_ORDER_SURE 0.5
 /* A point whose first-order distance to the switch surface a = b exceeds this many times its
  * first-order distance to f = 0 is measured by |f| / |∇f|: its foot along the active branch
  * stays on that branch's side (2: the first-order estimates may each be off by their
@@ -557,42 +551,11 @@ bool ism_dual_kink_faces(ism_sampler *s, const double c[3], const double nrm[3],
     return false;
 }
 
-double ism_dual_plain_dist(ism_sampler *s, const double p[3], double f, const double g[3],
-                           double e)
-{
-    double plain = ism_first_order_dist(f, g);
-    if (!(plain > FIRST_ORDER_SURE * e && plain <= e))
-        return plain;
-    double gg = ism_dot3(g, g), x[3];
-    for (int a = 0; a < 3; a++)
-        x[a] = p[a] - f * g[a] / gg;
-    return plain + ism_sample_dist(s, x);
-}
-
-void ism_dual_plain_dists(ism_sampler *s, const double (*p)[3], const double *f,
-                          const double (*g)[3], double e, double *out, size_t n)
-{
-    double x[ISM_GRAD_BATCH][3], fx[ISM_GRAD_BATCH], gx[ISM_GRAD_BATCH][3];
-    size_t at[ISM_GRAD_BATCH], m = 0;
-    for (size_t i = 0; i < n; i++) { /* ism_dual_plain_dist's first half, point by point */
-        out[i] = ism_first_order_dist(f[i], g[i]);
-        if (!(out[i] > FIRST_ORDER_SURE * e && out[i] <= e))
-            continue;
-        double gg = ism_dot3(g[i], g[i]);
-        for (int a = 0; a < 3; a++)
-            x[m][a] = p[i][a] - f[i] * g[i][a] / gg;
-        at[m++] = i;
-    }
-    ism_sample_grad_batch(s, (const double (*)[3])x, fx, gx, m);
-    for (size_t k = 0; k < m; k++)
-        out[at[k]] += ism_first_order_dist(fx[k], gx[k]);
-}
-
 double ism_dual_dist(ism_sampler *s, const double p[3], double e)
 {
     double g[3];
     double f = ism_sample_grad(s, p, g);
-    return ism_dual_kink_dist(s, p, ism_dual_plain_dist(s, p, f, g, e), e);
+    return ism_dual_kink_dist(s, p, ism_plain_dist(s, p, f, g, e), e);
 }
 
 /* A vertex's x and its place in ids, sorted by x. */

@@ -94,23 +94,8 @@ double ism_dual_kink_dist(ism_sampler *s, const double p[3], double plain, doubl
 bool ism_dual_kink_faces(ism_sampler *s, const double c[3], const double nrm[3], double reach,
                          double cos_min);
 
-/* The distance from p to f = 0 to decide "within e", from f and g = ∇f at p: the first-order
- * d1 = |f| / |∇f| (ism_first_order_dist) where it is at most e/2 or beyond e; between, d1 +
- * |f(x)| / |∇f(x)| for x = p − f ∇f / |∇f|², Newton's step from p (f = 0 is that far along
- * the step and its residual, measured to first order again: its error is second order in
- * the residual, ~2e-4 of it), where d1 alone falls short by its curvature term (∇f(p) in
- * place of ∇f(x) does too: the ring torus's 1.00006 E midpoint read 0.9996 E so). INFINITY
- * where the residual has no estimate (ism_sample_dist). */
-double ism_dual_plain_dist(ism_sampler *s, const double p[3], double f, const double g[3],
-                           double e);
 
-/* ism_dual_plain_dist of the n points p[0..n) (n <= ISM_GRAD_BATCH; f, g: f and ∇f there)
- * into out, the second steps' gradients in one batch (ism_sample_grad_batch): the same
- * values, for callers that measure points in batches. */
-void ism_dual_plain_dists(ism_sampler *s, const double (*p)[3], const double *f,
-                          const double (*g)[3], double e, double *out, size_t n);
-
-/* ism_dual_kink_dist at p from ism_dual_plain_dist. */
+/* ism_dual_kink_dist at p from ism_plain_dist. */
 double ism_dual_dist(ism_sampler *s, const double p[3], double e);
 
 /* Crease vertices that two leaves found at one point (the crease on their common face: the

@@ -28,6 +28,37 @@ double ism_dist_capped(ism_sampler *s, const double p[3], double d, const double
     return d;
 }
 
+double ism_plain_dist(ism_sampler *s, const double p[3], double f, const double g[3],
+                      double e)
+{
+    double plain = ism_first_order_dist(f, g);
+    if (!ism_first_order_unsure(plain, e))
+        return plain;
+    double x[3];
+    ism_newton_foot(p, f, g, x);
+    return plain + ism_sample_dist(s, x);
+}
+
+void ism_plain_dists(ism_sampler *s, const double (*p)[3], const double *f,
+                     const double (*g)[3], double e, double *out, size_t n)
+{
+    double x[ISM_GRAD_BATCH][3], fx[ISM_GRAD_BATCH], gx[ISM_GRAD_BATCH][3];
+    size_t at[ISM_GRAD_BATCH], m = 0;
+    for (size_t i = 0; i < n; i++) { /* ism_plain_dist's first half, point by point */
+        out[i] = ism_first_order_dist(f[i], g[i]);
+        if (ism_first_order_unsure(out[i], e)) {
+            ism_newton_foot(p[i], f[i], g[i], x[m]);
+            at[m++] = i;
+        }
+        if (m == ISM_GRAD_BATCH || (i + 1 == n && m)) { /* the second steps, a batch full */
+            ism_sample_grad_batch(s, (const double (*)[3])x, fx, gx, m);
+            for (size_t k = 0; k < m; k++)
+                out[at[k]] += ism_first_order_dist(fx[k], gx[k]);
+            m = 0;
+        }
+    }
+}
+
 /* Is a-b (vertex indices, either way round) a side of triangle t? */
 static bool has_side(const uint32_t *t, uint32_t a, uint32_t b)
 {
@@ -100,12 +131,14 @@ double ism_emitted_error_kept(ism_sampler *s, const ism_cell_out *out, size_t fi
             ends[ntri++] = (size_t)np;
         }
         ism_sample_grad_batch(s, (const double (*)[3])p, f, g, (size_t)np);
+        double plain[MEASURE_BATCH];
+        ism_plain_dists(s, (const double (*)[3])p, f, (const double (*)[3])g, s->dist_above,
+                        plain, (size_t)np);
         for (size_t k = 0; centroid_g && k < ntri; k++) /* point 0 of each: its centroid */
             memcpy(centroid_g[t + k - first_tri], g[k ? ends[k - 1] : 0], sizeof g[0]);
         for (size_t k = 0, i = 0; k < ntri && !(worst > bound); k++, t++)
             for (; i < ends[k]; i++)
-                worst = fmax(worst, ism_dist_beyond(s, p[i], ism_first_order_dist(f[i], g[i]),
-                                                    m[i].v, m[i].n));
+                worst = fmax(worst, ism_dist_beyond(s, p[i], plain[i], m[i].v, m[i].n));
     }
     return worst;
 }

@@ -24,8 +24,24 @@
  * on f = 0, so the figure stays an upper bound of the distance wherever it was lowered. */
 double ism_dist_capped(ism_sampler *s, const double p[3], double d, const double *const *v,
                        int n);
-/* d (p's first-order estimate) lowered by ism_dist_capped when it is finite and beyond
- * dist_above; d itself otherwise. */
+/* The distance from p to f = 0 to decide "within e", from f and g = ∇f at p: the first-order
+ * d1 = |f| / |∇f| (ism_first_order_dist) outside the band ism_first_order_unsure
+ * (core/util/dist_bound.h: above e/2, within e); in it, d1 + |f(x)| / |∇f(x)| for x Newton's
+ * step from p (ism_newton_foot), where d1 alone falls short by its curvature term (∇f(p) in
+ * place of ∇f(x) does too: the ring torus's 1.00006 E midpoint read 0.9996 E so). INFINITY
+ * where the residual has no estimate (ism_sample_dist). The dual mesher's measures and the
+ * polygoniser's (ism_sample_dist_between, ism_emitted_error) both take it. */
+double ism_plain_dist(ism_sampler *s, const double p[3], double f, const double g[3],
+                      double e);
+
+/* ism_plain_dist of the n points p[0..n) (f, g: f and ∇f there) into out, the second steps'
+ * gradients in batches (ism_sample_grad_batch, ISM_GRAD_BATCH at a time): the same values,
+ * for callers that measure points in batches. */
+void ism_plain_dists(ism_sampler *s, const double (*p)[3], const double *f,
+                     const double (*g)[3], double e, double *out, size_t n);
+
+/* d (p's estimate: ism_plain_dist's under s->dist_above) lowered by ism_dist_capped when it
+ * is finite and beyond dist_above; d itself otherwise. */
 static inline double ism_dist_beyond(ism_sampler *s, const double p[3], double d,
                                      const double *const *v, int n)
 {
@@ -34,7 +50,9 @@ static inline double ism_dist_beyond(ism_sampler *s, const double p[3], double d
 static inline double ism_sample_dist_between(ism_sampler *s, const double p[3],
                                              const double *const *v, int n)
 {
-    return ism_dist_beyond(s, p, ism_sample_dist(s, p), v, n);
+    double g[3];
+    double f = ism_sample_grad(s, p, g);
+    return ism_dist_beyond(s, p, ism_plain_dist(s, p, f, g, s->dist_above), v, n);
 }
 
 /* The largest distance (ism_sample_dist_between) at the centroids and edge midpoints of out's

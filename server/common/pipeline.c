@@ -564,6 +564,7 @@ static bool polygonise_and_analyse(const ism_request *req, const ism_tape *tape,
     ao.curvature = true;
     ao.accuracy = true;
     ao.threads = lim->threads;
+    ao.max_error = o.max_error; /* measured as the polygoniser did (0: none) */
     if (!ism_analyse(&c->mesh, tape, &ao, &s->an, &err))
         return fail_with(r, 500, "internal", "mesh analysis failed: %s", err.message);
     s->have_analysis = true;

@@ -414,6 +414,7 @@ static bool analyse_run(const ism_cli_run *run, const ism_mesh *mesh, const ism_
     ism_analysis_options ao;
     ism_analysis_options_default(&ao);
     ao.threads = run->options.threads; /* --threads: the whole run's */
+    ao.max_error = run->options.max_error; /* measured as the polygoniser did (0: none) */
     ism_error err;
     if (!ism_analyse(mesh, tape, &ao, an, &err))
         return false;

@@ -192,7 +192,7 @@ Test(dual, coarse_bound_within_and_small)
     check(&pf_unit_sphere, pf_unit_sphere_dist, 1e-2, 4 * M_PI, 1.0, 2, SPHERE_ROOM);
     /* In the irrational box a midpoint of the torus's first-order measure 0.985 E is 1.00006 E
      * from the tube (closed form): the mesher measures it one Newton step further
-     * (dual_crease.c ism_dual_plain_dist) and splits. */
+     * (refine.c ism_plain_dist) and splits. */
     check(&pf_ring_torus, pf_ring_torus_dist, 1e-2, 4 * M_PI * M_PI * 1.0 * 0.3, 1 / 0.3, 0,
           COARSE_TORUS_ROOM);
 }
