@@ -728,22 +728,46 @@ static bool zero_corner_transverse(const corner_view *v, int c)
     return down;
 }
 
+/* What one Newton step did (newton_step). */
+enum { STEP_FAIL, STEP_GO, STEP_STOP };
+
+/* One Newton step of m along ∇f towards f = 0 (f and g = ∇f at m): STEP_FAIL without
+ * moving m when ∇f vanishes or f, ∇f are not finite; else m moved, and STEP_STOP once the
+ * step was below NEWTON_STOP of size. newton_onto and feet_in_nodes both step so. */
+static int newton_step(double m[3], double f, const double g[3], double size)
+{
+    double gg = ism_dot3(g, g);
+    if (!isfinite(f) || !(gg > 0) || !isfinite(gg))
+        return STEP_FAIL;
+    double step = fabs(f) / sqrt(gg);
+    for (int a = 0; a < 3; a++)
+        m[a] -= f * g[a] / gg;
+    return step < NEWTON_STOP * size ? STEP_STOP : STEP_GO;
+}
+
 /* m moved onto f = 0 by Newton along ∇f, stopping once a step is below NEWTON_STOP of
  * size; false when it could not finish a step (∇f vanishing or not finite). */
 static bool newton_onto(worker *w, double m[3], double size)
 {
     for (int it = 0; it < NEWTON_STEPS; it++) {
         double g[3];
-        double f = ism_sample_grad(&w->s, m, g), gg = ism_dot3(g, g);
-        if (!isfinite(f) || !(gg > 0) || !isfinite(gg))
+        double f = ism_sample_grad(&w->s, m, g);
+        int r = newton_step(m, f, g, size);
+        if (r == STEP_FAIL)
             return false;
-        double step = fabs(f) / sqrt(gg);
-        for (int a = 0; a < 3; a++)
-            m[a] -= f * g[a] / gg;
-        if (step < NEWTON_STOP * size)
+        if (r == STEP_STOP)
             break;
     }
     return true;
+}
+
+/* Is m in the closed box lo..hi? */
+static bool in_closed_box(const double m[3], const double lo[3], const double hi[3])
+{
+    bool inside = true;
+    for (int a = 0; a < 3; a++)
+        inside &= m[a] >= lo[a] && m[a] <= hi[a];
+    return inside;
 }
 
 /* The centre of the box lo..hi (side size) moved onto f = 0 by Newton into m; true when
@@ -753,10 +777,7 @@ static bool foot_in_node(worker *w, const double lo[3], const double hi[3], doub
 {
     for (int a = 0; a < 3; a++)
         m[a] = 0.5 * lo[a] + 0.5 * hi[a];
-    bool inside = newton_onto(w, m, size);
-    for (int a = 0; a < 3; a++)
-        inside &= m[a] >= lo[a] && m[a] <= hi[a];
-    return inside;
+    return newton_onto(w, m, size) && in_closed_box(m, lo, hi);
 }
 
 /* foot_in_node for n boxes at once (lo[k]..hi[k] of side size[k], n <= ISM_GRAD_BATCH):
@@ -782,25 +803,15 @@ static void feet_in_nodes(worker *w, const double (*lo)[3], const double (*hi)[3
         size_t kept = 0;
         for (size_t j = 0; j < nl; j++) { /* newton_onto's step, lane by lane */
             size_t k = live[j];
-            double gg = ism_dot3(g[j], g[j]);
-            if (!isfinite(f[j]) || !(gg > 0) || !isfinite(gg)) {
-                ok[k] = false;
-                continue;
-            }
-            double step = fabs(f[j]) / sqrt(gg);
-            for (int a = 0; a < 3; a++)
-                m[k][a] -= f[j] * g[j][a] / gg;
-            if (!(step < NEWTON_STOP * size[k]))
+            int r = newton_step(m[k], f[j], g[j], size[k]);
+            ok[k] = r != STEP_FAIL;
+            if (r == STEP_GO)
                 live[kept++] = k;
         }
         nl = kept;
     }
-    for (size_t k = 0; k < n; k++) {
-        bool inside = ok[k];
-        for (int a = 0; a < 3; a++)
-            inside &= m[k][a] >= lo[k][a] && m[k][a] <= hi[k][a];
-        state[k] = inside ? FOOT_AT : FOOT_OUT;
-    }
+    for (size_t k = 0; k < n; k++)
+        state[k] = ok[k] && in_closed_box(m[k], lo[k], hi[k]) ? FOOT_AT : FOOT_OUT;
 }
 
 /* Does the box lo..hi lie in the request's box (always, but in the grown box: dual_box.h)? */
