@@ -823,6 +823,23 @@ static bool in_request_box(const dual *d, const double lo[3], const double hi[3]
     return true;
 }
 
+/* May sag_split split any node at all (the straddle move on, no crease, no points)? Those
+ * leaves place vertices otherwise. */
+static bool sag_may_split_any(const dual *d)
+{
+    return d->shift > 0 && !d->crease && !d->nballs;
+}
+
+/* May sag_split split a node of this level in the box lo..hi: sag_may_split_any, between
+ * depth.min and depth.max (classify answers above depth.min before asking sag_split, so
+ * min_depth only spares split passes' lanes there), inside the request's box. sag_split
+ * and wanted_feet (the split pass's feet taken beforehand) both ask this. */
+static bool sag_may_split(const dual *d, int level, const double lo[3], const double hi[3])
+{
+    return sag_may_split_any(d) && level < d->o->max_depth && level >= d->o->min_depth &&
+           in_request_box(d, lo, hi);
+}
+
 /* Node n, with both signs at its corners, split at once for the sag of a chord its size
  * (SAG_SPLIT)? Under the straddle move and above depth.max only (no crease, no points:
  * their leaves place vertices otherwise), and only inside the request's box: in the grown
@@ -833,8 +850,7 @@ static bool in_request_box(const dual *d, const double lo[3], const double hi[3]
  * curvature), and a foot outside the node is remembered: place_vertex repeats neither. */
 static bool sag_split(dual *d, worker *w, const dnode *n, corner_view *v)
 {
-    if (!(d->shift > 0) || d->crease || d->nballs || n->level >= d->o->max_depth ||
-        !in_request_box(d, v->p[0], v->p[7]))
+    if (!sag_may_split(d, n->level, v->p[0], v->p[7]))
         return false;
     double size = ism_grid_cell_size(&d->g, n->level), m[3], bend;
     bool inside = v->foot == FOOT_UNKNOWN ? foot_in_node(w, v->p[0], v->p[7], size, m)
@@ -1117,8 +1133,7 @@ static const uint32_t CHILD_CORNERS[8] = {CORNER_BITS(0), CORNER_BITS(1), CORNER
  * costs its lane. */
 static uint8_t wanted_feet(const dual *d, int level, const double f[27], const double (*p)[3])
 {
-    if (!(d->shift > 0) || d->crease || d->nballs || level >= d->o->max_depth ||
-        level < d->o->min_depth)
+    if (!sag_may_split_any(d) || level >= d->o->max_depth || level < d->o->min_depth)
         return 0;
     uint32_t neg = 0, finite = 0;
     for (int j = 0; j < 27; j++) {
@@ -1129,7 +1144,7 @@ static uint8_t wanted_feet(const dual *d, int level, const double f[27], const d
     for (int c = 0; c < 8; c++) {
         uint32_t m = CHILD_CORNERS[c], first = (uint32_t)__builtin_ctz(m);
         if ((finite & m) == m && (neg & m) && (neg & m) != m &&
-            in_request_box(d, p[first], p[first + 13]))
+            sag_may_split(d, level, p[first], p[first + 13]))
             want |= (uint8_t)(1u << c);
     }
     return want;
