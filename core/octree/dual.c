@@ -1289,8 +1289,9 @@ static void split_task(void *ctx, size_t k, int thread)
 static void split_pass(dual *d, const int32_t *nodes, split_out *out, size_t n)
 {
     split_in *in = malloc((n < SPLIT_BLOCK ? n : SPLIT_BLOCK) * sizeof *in), one;
-    uint32_t *lane = malloc(8 * SPLIT_BLOCK * sizeof *lane);
-    if (!in || !lane) {
+    /* no lanes where sag_split never asks for a foot (wanted_feet is 0 throughout) */
+    uint32_t *lane = sag_may_split_any(d) ? malloc(8 * SPLIT_BLOCK * sizeof *lane) : NULL;
+    if (!in || (!lane && sag_may_split_any(d))) {
         free(in);
         free(lane);
         in = NULL;
