@@ -203,7 +203,9 @@ typedef struct quads {
 
 /* The tree walk's calls put off to the pool in the last round, and their quads
  * (make_quads): a call whose nodes' subtrees have not changed since gives the same quads
- * again. */
+ * again. Its quads are a second copy of the round's deferred quads beside d->q, so a round
+ * holds up to twice the quads, bounded as they are by max_triangles (checked after each
+ * round's triangles); run frees it once the rounds end. */
 typedef struct walk_memo {
     struct walk_call *calls;
     quads *parts;
@@ -2646,7 +2648,7 @@ bool ism_dual_wanted(const ism_tape *f, const ism_poly_options *o)
     return ism_dual_declined_before(f, &asked) == ISM_DUAL_WHY_NONE;
 }
 
-static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
+static enum ism_dual_status mesh_rounds(dual *d, ism_mesh *mesh, ism_dual_stats *st)
 {
     int32_t root;
     if (!new_node(d, (ism_ipt){{0, 0, 0}}, 0, &root))
@@ -2715,6 +2717,16 @@ static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
     for (size_t i = 0; i < d->nn; i++)
         st->leaves += d->n[i].child < 0 && has_sheet(d->n[i].kind);
     return to_mesh(d, mesh) ? ISM_DUAL_OK : ISM_DUAL_NO_MEMORY;
+}
+
+/* The mesh of the request (mesh_rounds), the walk memo freed after it: it only serves the
+ * next round, and a mesher kept for reuse would hold a full set of quads while idle. */
+static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
+{
+    enum ism_dual_status status = mesh_rounds(d, mesh, st);
+    memo_free(&d->memo);
+    memset(&d->memo, 0, sizeof d->memo);
+    return status;
 }
 
 /* The tree, the vertices, the triangles and the memos freed and zeroed (the pool, the
