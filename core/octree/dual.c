@@ -1,7 +1,9 @@
 /* dual.c — dual contouring on an octree under an error bound, for surfaces without features
  * (dual.h): the tree and its leaf tests (the interval proofs in dual_cert.c), the vertices,
- * the minimal-edge walk that makes the quads, their triangles (two, or four round a centre),
- * and the measure-and-split rounds. The work is
+ * the split passes (the children's corners, then the feet sag_split will ask for in batched
+ * lanes, then the children classified), the minimal-edge walk that makes the quads (with
+ * its memo of the last round's put-off calls and their quads), their triangles (two, or
+ * four round a centre), and the measure-and-split rounds. The work is
  * cut into tasks for the pool whose outputs land in their own slots and are joined in a
  * fixed order (children level by level, walk calls, vertex pairs, triangles), so the mesh
  * does not depend on the number of threads. */
