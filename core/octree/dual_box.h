@@ -55,8 +55,8 @@
  * leaf of that level touching the grown box lies beyond the given one. */
 void ism_dual_box_grow(const double box[6], int level, double grown[6]);
 
-/* The first look's lattice on the box's faces: 6 × 17² points (1,734 evaluations in batches,
- * ~0.2M instructions: 3% of the cheapest dual mesh here, the sphere's at 1e-2). */
+/* The first look's lattice on the box's faces: 6 × 17² points (1,734 evaluations, taken
+ * LOOK_CHUNK at a time in batches: dual_box.c). */
 #define ISM_DUAL_BOX_LOOK 4
 
 /* Does f change sign (or vanish) among the points of box's faces on the lattice of level
