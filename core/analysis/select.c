@@ -1,8 +1,8 @@
 /* select.c — the k-th smallest of an array in expected linear time (quickselect with a
  * median-of-three pivot and a three-way partition, so runs of equal values cost nothing),
  * for medians of angles and gradient norms; and the same value found on a pool's threads by
- * a radix selection (the analysis's percentiles and medians, which were a sixth of its
- * serial instructions). Deterministic: no random pivots. Callers pass finite values only. */
+ * a radix selection (the analysis's percentiles and medians). Deterministic: no random
+ * pivots. Callers pass finite values only. */
 #include "core/analysis/select.h"
 #include "core/util/parallel.h"
 
@@ -49,15 +49,21 @@ static DEFINE_SELECT(select_key, uint64_t)
 /* The radix selection: each pass counts the items' next digit of their order key (per block
  * of SELECT_BLOCK items, on the pool), finds the bucket holding the k-th, and copies that
  * bucket's keys out (each block at its own offset) for the next pass; a few thousand left
- * are finished by select_key. Digits of 12 bits: the first pass splits by sign and exponent
- * (distances and norms spread over octaves), the second by 12 bits of mantissa — a bucket of
- * 1/4096 of an octave, left with a few items. A block is tens of microseconds. */
+ * are finished by select_key. Digits of 12 bits: for doubles the first pass splits by sign
+ * and exponent (distances and norms spread over octaves), the second by 12 bits of mantissa —
+ * a bucket of 1/4096 of an octave, left with a few items; for floats the first takes sign,
+ * exponent and 3 mantissa bits, and the third (shift FLOAT_LAST_SHIFT) the last of their 32.
+ * A block is tens of microseconds. */
 #define SELECT_BLOCK 32768
 #define DIGIT_BITS 12
 #define BUCKETS (1u << DIGIT_BITS)
 /* Up to this many items (or items left after a pass) the quickselect runs on the calling
  * thread: under a millisecond, less than the passes' hand-offs would save. */
 #define SELECT_SERIAL 16384
+/* A float's key is the upper 32 bits: the passes at shifts 52, 40 and 28 cover bits 28..63,
+ * so after the one at 28 every float bit is decided and further passes would only count
+ * ties; a double's key needs the passes down to shift 0. */
+#define FLOAT_LAST_SHIFT (64 - 3 * DIGIT_BITS)
 
 /* Order keys: unsigned integers ordered as the values are (IEEE bits; negative values
  * inverted, positive ones with the sign bit set), floats in the upper 32 bits. */
@@ -98,6 +104,7 @@ typedef struct radix {
     uint64_t *dst;       /* where the chosen bucket's keys go */
     size_t n;            /* items in this pass */
     int shift;           /* the digit: key >> shift, DIGIT_BITS of it */
+    int last_shift;      /* the lowest shift that still decides bits: FLOAT_LAST_SHIFT or 0 */
     uint32_t *hist;      /* per block, BUCKETS counts */
     size_t *at;          /* per block, where its chosen keys go */
     uint32_t chosen;
@@ -182,7 +189,7 @@ static bool radix_select(ism_pool *pool, radix *r, size_t k, uint64_t *out)
             r->src = owned = r->dst;
             r->n = in;
         }
-        if (r->n <= SELECT_SERIAL || r->shift == 0)
+        if (r->n <= SELECT_SERIAL || r->shift <= r->last_shift)
             break;
         /* the digits may overlap bits already equal in every key left: harmless */
         r->shift = r->shift > DIGIT_BITS ? r->shift - DIGIT_BITS : 0;
@@ -212,7 +219,7 @@ double ism_an_select_double_on(ism_pool *pool, double *v, size_t n, size_t k)
 
 float ism_an_select_float_on(ism_pool *pool, float *v, size_t n, size_t k)
 {
-    radix r = {.vf = v, .n = n};
+    radix r = {.vf = v, .n = n, .last_shift = FLOAT_LAST_SHIFT};
     uint64_t key;
     if (on_threads(pool, n) && radix_select(pool, &r, k, &key))
         return float_of_key(key);
