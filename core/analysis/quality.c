@@ -92,17 +92,11 @@ static void angle_statistics(ism_analysis *a, ism_pool *pool, float *good, size_
     }
     a->share_under_10 = (double)under_10 / (double)ngood;
     size_t mid = ngood / 2;
-    double upper = ism_an_select_float_on(pool, good, ngood, mid);
     if (ngood % 2 == 1) {
-        a->median_angle = upper;
-    } else if (ism_pool_threads(pool) > 1) {
-        float lower = ism_an_select_float_on(pool, good, ngood, mid - 1);
-        a->median_angle = 0.5 * ((double)lower + upper);
+        a->median_angle = ism_an_select_float_on(pool, good, ngood, mid);
     } else {
-        float lower = good[0]; /* after the quickselect good[0 .. mid) are all <= upper */
-        for (size_t i = 1; i < mid; i++)
-            if (good[i] > lower)
-                lower = good[i];
+        float lower;
+        double upper = ism_an_select_float_pair_on(pool, good, ngood, mid, &lower);
         a->median_angle = 0.5 * ((double)lower + upper);
     }
 }

@@ -225,3 +225,22 @@ float ism_an_select_float_on(ism_pool *pool, float *v, size_t n, size_t k)
         return float_of_key(key);
     return ism_an_select_float(v, n, k);
 }
+
+float ism_an_select_float_pair_on(ism_pool *pool, float *v, size_t n, size_t k, float *below)
+{
+    radix r = {.vf = v, .n = n, .last_shift = FLOAT_LAST_SHIFT};
+    radix r_below = r;
+    uint64_t key, key_below;
+    if (on_threads(pool, n) && radix_select(pool, &r, k, &key) &&
+        radix_select(pool, &r_below, k - 1, &key_below)) {
+        *below = float_of_key(key_below);
+        return float_of_key(key);
+    }
+    float at = ism_an_select_float(v, n, k);
+    float lower = v[0]; /* the quickselect left v[0 .. k) all <= at: element k-1 is their max */
+    for (size_t i = 1; i < k; i++)
+        if (v[i] > lower)
+            lower = v[i];
+    *below = lower;
+    return at;
+}

@@ -18,4 +18,8 @@ float ism_an_select_float(float *v, size_t n, size_t k);
 double ism_an_select_double_on(ism_pool *pool, double *v, size_t n, size_t k);
 float ism_an_select_float_on(ism_pool *pool, float *v, size_t n, size_t k);
 
+/* Elements k-1 (into *below) and k of the sorted order, as two calls of
+ * ism_an_select_float_on would give them (for even-length medians); 0 < k < n. */
+float ism_an_select_float_pair_on(ism_pool *pool, float *v, size_t n, size_t k, float *below);
+
 #endif

@@ -2,7 +2,8 @@
  * selection on 2 and 4 threads returns, bit for bit, element k of a sorted copy (qsort, the
  * independent answer), for doubles and floats spread over many octaves, with negatives,
  * with heavy ties (every candidate left in one bucket down to the last digit), all equal, and
- * at the ranks the analysis asks for (0, the median, the 99th percentile, the last). */
+ * at the ranks the analysis asks for (0, the median, the 99th percentile, the last); and the
+ * pair of elements k-1 and k (the even-length median) on 1, 2 and 4 threads. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdint.h>
@@ -81,6 +82,42 @@ Test(select, radix_on_threads_is_the_sorted_element)
         ism_pool *pool = threads > 1 ? ism_pool_new(threads) : NULL;
         for (int kind = 0; kind < 5; kind++)
             check_kind(kind, pool, threads);
+        ism_pool_free(pool);
+    }
+}
+
+/* The pair (elements k-1 and k, the even-length median's two) against the sorted copy, for n
+ * above the serial cut-off and below it (where the threads fall back to the quickselect). */
+static void check_pair(int kind, ism_pool *pool, int threads, size_t n)
+{
+    float *vf = malloc(n * sizeof *vf), *sortedf = malloc(n * sizeof *sortedf);
+    cr_assert(vf && sortedf);
+    for (size_t i = 0; i < n; i++)
+        vf[i] = sortedf[i] = (float)value(kind, i);
+    qsort(sortedf, n, sizeof *sortedf, cmp_float);
+    const size_t ranks[] = {1, n / 2, (size_t)(0.99 * (double)(n - 1)), n - 1};
+    for (size_t r = 0; r < sizeof ranks / sizeof *ranks; r++) {
+        size_t k = ranks[r];
+        float below = -1;
+        float at = ism_an_select_float_pair_on(pool, vf, n, k, &below);
+        cr_expect(memcmp(&at, &sortedf[k], sizeof at) == 0 &&
+                      memcmp(&below, &sortedf[k - 1], sizeof below) == 0,
+                  "kind %d, %d threads, n %zu, k %zu: %.9g %.9g, sorted %.9g %.9g", kind,
+                  threads, n, k, (double)below, (double)at, (double)sortedf[k - 1],
+                  (double)sortedf[k]);
+    }
+    free(vf);
+    free(sortedf);
+}
+
+Test(select, pair_is_the_sorted_elements_k_minus_1_and_k)
+{
+    for (int threads = 1; threads <= 4; threads *= 2) {
+        ism_pool *pool = threads > 1 ? ism_pool_new(threads) : NULL;
+        for (int kind = 0; kind < 5; kind++) {
+            check_pair(kind, pool, threads, N - 1);
+            check_pair(kind, pool, threads, 1000);
+        }
         ism_pool_free(pool);
     }
 }
