@@ -153,6 +153,7 @@ typedef struct scan_pass {
     size_t *at;          /* per block: its count, then where its items go */
     double *left;        /* per block: its largest estimate not measured again */
     double below, done_above; /* measured again now: estimates in [below, done_above) */
+    double left_max;          /* the largest of left[], for settled_block */
 } scan_pass;
 
 static size_t scan_end(const scan_pass *s, size_t blk)
@@ -217,14 +218,14 @@ static void again_block(void *ctx, size_t blk, int thread)
 }
 
 /* Counts the points measured again at or above `below` whose distance is at least the
- * largest estimate left (left[0]). */
+ * largest estimate left (left_max). */
 static void settled_block(void *ctx, size_t blk, int thread)
 {
     (void)thread;
     scan_pass *s = ctx;
     size_t n = 0;
     for (size_t i = blk * ISM_AN_TRI_BLOCK, end = scan_end(s, blk); i < end; i++)
-        n += !isnan(s->first[i]) && s->first[i] >= s->below && s->sp->dist[i] >= s->left[0];
+        n += !isnan(s->first[i]) && s->first[i] >= s->below && s->sp->dist[i] >= s->left_max;
     s->at[blk] = n;
 }
 
@@ -252,16 +253,15 @@ static bool measure_rounds(scan_pass *s, ism_pool *pool, size_t nblocks)
         /* the want-th largest */
         s->below = ism_an_select_double_on(pool, s->tmp, count, count - want);
         ism_pool_for(pool, nblocks, count_again_block, s, NULL);
-        double left = -INFINITY; /* the largest estimate not measured again */
+        s->left_max = -INFINITY; /* the largest estimate not measured again */
         for (size_t b = 0; b < nblocks; b++)
-            left = fmax(left, s->left[b]);
+            s->left_max = fmax(s->left_max, s->left[b]);
         sp->nagain = scan_offsets(s, nblocks);
         ism_pool_for(pool, nblocks, again_block, s, NULL);
         if (!ism_an_run_blocks(sp->f, pool, ism_blocks(sp->nagain, NEAREST_BLOCK),
                                nearest_block, sp))
             return false;
         s->done_above = s->below; /* estimates at or above this were measured again */
-        s->left[0] = left;
         ism_pool_for(pool, nblocks, settled_block, s, NULL);
         size_t settled = scan_offsets(s, nblocks);
         if (settled >= need || want == count)
@@ -279,7 +279,7 @@ static bool measure_largest(sample_pass *sp, ism_pool *pool, double *first, size
 {
     size_t nblocks = ism_blocks(sp->nitems, ISM_AN_TRI_BLOCK), room = nblocks ? nblocks : 1;
     scan_pass s = {sp, first, tmp, again, malloc(room * sizeof *s.at),
-                   malloc(room * sizeof *s.left), 0, INFINITY};
+                   malloc(room * sizeof *s.left), 0, INFINITY, -INFINITY};
     bool ok = s.at && s.left && measure_rounds(&s, pool, nblocks);
     free(s.at);
     free(s.left);
