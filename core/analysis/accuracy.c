@@ -25,7 +25,6 @@
 #include <math.h>
 #include <stdlib.h>
 
-#define PERCENTILE 0.99 /* the "p99" figures: 99 of 100 points are at most this far */
 /* Points measured again per task: each is a few hundred evaluations of f. */
 #define NEAREST_BLOCK 16
 /* The first round measures again the points from the 99th percentile's rank up and
@@ -244,7 +243,7 @@ static bool measure_rounds(scan_pass *s, ism_pool *pool, size_t nblocks)
     if (count == 0)
         return true;
     ism_pool_for(pool, nblocks, points_block, s, NULL);
-    size_t need = count - (size_t)(PERCENTILE * (count - 1)); /* ranks from the p99's up */
+    size_t need = count - ism_an_p99_rank(count); /* ranks from the p99's up */
     size_t want = need + NEAREST_EXTRA;
     sp->first = s->first;
     sp->again = s->again;
@@ -299,9 +298,7 @@ void ism_an_distance_figures(double *dist, size_t n, ism_pool *pool, ism_an_dist
     }
     out->max = max;
     out->mean = count ? sum / (double)count : 0;
-    out->p99 = count ? ism_an_select_double_on(pool, dist, count,
-                                               (size_t)(PERCENTILE * (count - 1)))
-                      : 0;
+    out->p99 = count ? ism_an_select_double_on(pool, dist, count, ism_an_p99_rank(count)) : 0;
     out->skipped = n - count;
 }
 

@@ -11,9 +11,9 @@
 #include "core/analysis/edges.h"
 #include "core/util/pool.h"
 
-/* Maximum, mean and 99th percentile of the distances that are not NaN (reorders dist; the
- * percentile found on the threads of pool, NULL: the calling thread); skipped: how many were
- * NaN. */
+/* Maximum, mean and 99th percentile of the distances that are not NaN (moves those to the
+ * front of dist and may reorder them; the percentile found on the threads of pool, NULL: the
+ * calling thread); skipped: how many were NaN. */
 typedef struct ism_an_distances {
     double max, mean, p99;
     size_t skipped;

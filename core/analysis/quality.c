@@ -76,7 +76,7 @@ static void aspect_statistics(ism_analysis *a, ism_pool *pool, float *aspect, si
         a->aspect_max = fmax(a->aspect_max, aspect[i]);
     }
     a->aspect_mean = sum / (double)n;
-    a->aspect_p99 = ism_an_select_float_on(pool, aspect, n, (size_t)(0.99 * (double)(n - 1)));
+    a->aspect_p99 = ism_an_select_float_on(pool, aspect, n, ism_an_p99_rank(n));
 }
 
 static void angle_statistics(ism_analysis *a, ism_pool *pool, float *good, size_t ngood)

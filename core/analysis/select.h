@@ -22,4 +22,11 @@ float ism_an_select_float_on(ism_pool *pool, float *v, size_t n, size_t k);
  * ism_an_select_float_on would give them (for even-length medians); 0 < k < n. */
 float ism_an_select_float_pair_on(ism_pool *pool, float *v, size_t n, size_t k, float *below);
 
+/* The rank of the "p99" figures (aspect ratio, distances): 99 of 100 items are at most the
+ * value at rank floor(0.99 (n - 1)) in ascending order. n > 0. */
+static inline size_t ism_an_p99_rank(size_t n)
+{
+    return (size_t)(0.99 * (double)(n - 1));
+}
+
 #endif

@@ -303,9 +303,8 @@ static bool write_mesh(const char *path, const ism_mesh *m)
     return ok;
 }
 
-/* The mesh file, written beside the analysis (both only read the mesh): the PLY writer was
- * 32-59M of the 190-280M instructions a 2-thread run of Barth's sextic (depth 8) or the
- * gyroid ball (depth 9) with --stats spent on one thread (callgrind). */
+/* The mesh file, written beside the analysis (both only read the mesh), so that writing a
+ * large PLY does not wait for the analysis's passes on one thread. */
 typedef struct mesh_write {
     const char *path;
     const ism_mesh *mesh;
