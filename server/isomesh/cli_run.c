@@ -528,14 +528,18 @@ int ism_cli_run_surface(ism_cli_run *run)
     memset(&chk, 0, sizeof chk);
     mesh_write mw = {run->output, &mesh, true};
     ism_side writer;
-    if (run->output) /* on a thread of its own when the run has several and analyses */
-        ism_side_start(&writer, run->options.threads != 1 &&
-                                    (run->print_stats || run->features_output),
-                       write_job, &mw);
+    /* on a thread of its own when the run has several and analyses; else after the analysis's
+     * time is taken, so that "analyse" never counts the writing */
+    bool beside = run->output && run->options.threads != 1 &&
+                  (run->print_stats || run->features_output);
+    if (beside)
+        ism_side_start(&writer, true, write_job, &mw);
     bool analysed = analyse_run(run, &mesh, tape, &locus, &an, &chk);
     timings[ISM_TIME_ANALYSE] = ism_now_ms() - t2;
-    if (run->output)
+    if (beside)
         ism_side_join(&writer);
+    else if (run->output)
+        write_job(&mw);
     if (!mw.ok)
         status = 1;
     run_products prod = {&mesh, &ps, analysed ? &an : NULL, &locus, analysed ? &chk : NULL, &cs,
