@@ -631,3 +631,69 @@ Test(analysis, vertex_only_in_collapsed_triangles_joins_nothing)
     ism_analysis_free(&an);
     ism_mesh_free(&m);
 }
+
+/* The parallel passes (duplicate count per edge block, the connectivity passes on the side
+ * thread) on a mesh past the pool's cut-off (analysis.c's POOL_MIN_TRIANGLES, 8192): a flat
+ * 70 x 70 grid (9522 triangles) with 5 interior triangles copied at the ends of the mesh,
+ * chosen on both sides of the triangle blocks' boundaries (ISM_AN_TRI_BLOCK 4096) and sharing
+ * no edge: 5 duplicates, each edge of a copy carries 3 triangles (15 non-manifold edges);
+ * the same counts, classes, curves and genus on 1, 2 and 4 threads (revB 4). */
+static ism_analysis analyse_on(const ism_mesh *m, int threads)
+{
+    ism_analysis_options o;
+    ism_analysis_options_default(&o);
+    o.threads = threads;
+    ism_analysis a;
+    ism_error err;
+    cr_assert(ism_analyse(m, NULL, &o, &a, &err), "analysis failed: %s", err.message);
+    return a;
+}
+
+Test(analysis, duplicates_and_curves_on_threads_past_the_pool_cutoff)
+{
+    enum { G = 70 };
+    ism_mesh m;
+    ism_mesh_init(&m);
+    for (int r = 0; r < G; r++)
+        for (int c = 0; c < G; c++)
+            ta_vertex(&m, c, r, 0);
+    for (uint32_t r = 0; r + 1 < G; r++)
+        for (uint32_t c = 0; c + 1 < G; c++) {
+            uint32_t v00 = r * G + c, v10 = v00 + 1, v01 = v00 + G, v11 = v01 + 1;
+            ta_triangle(&m, v00, v10, v11);
+            ta_triangle(&m, v00, v11, v01);
+        }
+    cr_assert_eq(m.ntris, 2 * (G - 1) * (G - 1));
+    const size_t copied[] = {4095, 4096, 6000, 8191, 8192};
+    for (size_t i = 0; i < 5; i++) {
+        const uint32_t *t = m.tri + 3 * copied[i];
+        uint32_t a = t[0], b = t[1], c = t[2];
+        if (i % 2)
+            ta_triangle(&m, c, b, a); /* flipped */
+        else
+            ta_triangle(&m, b, c, a); /* rotated */
+    }
+    ism_analysis one = analyse_on(&m, 1);
+    cr_expect_eq(one.duplicate_triangles, 5);
+    cr_expect_eq(one.nonmanifold_edges, 15);
+    cr_expect_eq(one.ncurves, 5, "curves %zu: one closed loop around each copy", one.ncurves);
+    for (int threads = 2; threads <= 4; threads *= 2) {
+        ism_analysis a = analyse_on(&m, threads);
+        cr_expect_eq(a.duplicate_triangles, 5, "%d threads", threads);
+        cr_expect_eq(a.nonmanifold_edges, 15, "%d threads", threads);
+        cr_expect_eq(a.nonmanifold_vertices, one.nonmanifold_vertices, "%d threads", threads);
+        cr_expect_eq(a.genus, one.genus, "%d threads", threads);
+        cr_expect_eq(a.nboundaries, one.nboundaries, "%d threads", threads);
+        cr_expect(memcmp(a.vertex_class, one.vertex_class, m.nverts * sizeof *a.vertex_class)
+                      == 0, "%d threads: vertex classes differ", threads);
+        cr_assert_eq(a.ncurves, one.ncurves, "%d threads", threads);
+        cr_expect(memcmp(a.curve_start, one.curve_start,
+                         (one.ncurves + 1) * sizeof *a.curve_start) == 0 &&
+                      memcmp(a.curve_verts, one.curve_verts,
+                             one.curve_start[one.ncurves] * sizeof *a.curve_verts) == 0,
+                  "%d threads: curves differ", threads);
+        ism_analysis_free(&a);
+    }
+    ism_analysis_free(&one);
+    ism_mesh_free(&m);
+}
