@@ -412,7 +412,7 @@ static bool analyse_run(const ism_cli_run *run, const ism_mesh *mesh, const ism_
         return false;
     ism_analysis_options ao;
     ism_analysis_options_default(&ao);
-    ao.threads = run->options.threads; /* --threads: the whole run's */
+    ao.threads = run->options.threads; /* --threads: the pool's (side.h: the side jobs add) */
     ao.max_error = run->options.max_error; /* measured as the polygoniser did (0: none) */
     ism_error err;
     if (!ism_analyse(mesh, tape, &ao, an, &err))
