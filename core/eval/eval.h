@@ -37,6 +37,12 @@ void ism_eval_batch(const ism_tape *t, ism_eval_ws *ws, const double *x, const d
 ism_interval ism_eval_interval(const ism_tape *t, ism_eval_ws *ws, ism_interval x,
                                ism_interval y, ism_interval z);
 
+/* When t's last instruction is min(a, b) or max(a, b) of two registers giving f: a's and b's
+ * intervals over the box x × y × z into val (outward rounded, as ism_eval_interval's), and 1
+ * for max, 0 for min; -1 (nothing evaluated) when t does not end so or ws does not fit it. */
+int ism_eval_interval_top(const ism_tape *t, ism_eval_ws *ws, ism_interval x, ism_interval y,
+                          ism_interval z, ism_interval val[2]);
+
 /* The intervals of n boxes at once: out[i] encloses f over x[i] × y[i] × z[i] (outward
  * rounded), no wider than ism_eval_interval's for that box but for the last bits of libm
  * results (its bounds are rounded outward exactly, the single box's one ulp further),

@@ -10,9 +10,6 @@
  * combination of their branches is one enclosure, 2^3 = 8 at most. The cube's corner holds
  * two (max(max(|x|, |y|), |z|)), a crease of two solids one; more is a node that splits. */
 #define GRAPH_MAX_KINKS 3
-/* The branch bytes of a forced evaluation are on the stack: longer tapes are not certified
- * across a kink (the CSG presets' tapes are 10-60 instructions). */
-#define GRAPH_MAX_TAPE 256
 
 /* The directional derivative must clear 0 by this fraction of the largest |∇f| the box
  * allows: the enclosure is rounded outward, so a bound of exactly 0 is never proof; a
@@ -61,7 +58,7 @@ bool ism_graph_from_enclosure(const ism_ivgrad *g)
 static bool graph_across_kinks(const ism_tape *t, ism_ivjet_ws *jet, const ism_interval box[3],
                                const size_t *at, int n, uint64_t *intervals)
 {
-    uint8_t force[GRAPH_MAX_TAPE];
+    uint8_t force[ISM_GRAPH_MAX_TAPE];
     ism_ivgrad g[1 << GRAPH_MAX_KINKS];
     memset(force, ISM_BRANCH_FREE, t->len);
     double d[3] = {0, 0, 0};
@@ -80,8 +77,11 @@ static bool graph_across_kinks(const ism_tape *t, ism_ivjet_ws *jet, const ism_i
     return sign != 0;
 }
 
-bool ism_graph_certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
-                         const double hi[3], uint64_t *intervals, size_t *nkinks)
+/* ism_graph_certified with the branches in force (NULL: none) taken over the whole box;
+ * with force, kinks it leaves free are not certified across. */
+static bool certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
+                      const double hi[3], const uint8_t *force, uint64_t *intervals,
+                      size_t *nkinks)
 {
     if (nkinks)
         *nkinks = (size_t)-1;
@@ -92,15 +92,15 @@ bool ism_graph_certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3
         box[a] = iv(lo[a], hi[a]);
     ism_ivgrad g;
     (*intervals)++;
-    size_t nk = ism_eval_interval_grad(t, jet, box, NULL, NULL, &g);
+    size_t nk = ism_eval_interval_grad(t, jet, box, force, NULL, &g);
     if (nkinks)
         *nkinks = nk;
     if (nk == 0)
         return ism_graph_from_enclosure(&g);
-    if (nk > GRAPH_MAX_KINKS || t->len > GRAPH_MAX_TAPE)
+    if (force || nk > GRAPH_MAX_KINKS || t->len > ISM_GRAPH_MAX_TAPE)
         return false; /* too many kinks (or a workspace misfit: (size_t)-1), a long tape */
     /* where the kinks are: asked again, only of such a box (the bytes cost every box) */
-    uint8_t kinks[GRAPH_MAX_TAPE];
+    uint8_t kinks[ISM_GRAPH_MAX_TAPE];
     (*intervals)++;
     ism_eval_interval_grad(t, jet, box, NULL, kinks, &g);
     size_t at[GRAPH_MAX_KINKS];
@@ -109,4 +109,16 @@ bool ism_graph_certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3
         if (kinks[i])
             at[n++] = i;
     return graph_across_kinks(t, jet, box, at, n, intervals);
+}
+
+bool ism_graph_certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
+                         const double hi[3], uint64_t *intervals, size_t *nkinks)
+{
+    return certified(t, jet, lo, hi, NULL, intervals, nkinks);
+}
+
+bool ism_graph_certified_piece(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
+                               const double hi[3], const uint8_t *force, uint64_t *intervals)
+{
+    return certified(t, jet, lo, hi, force, intervals, NULL);
 }

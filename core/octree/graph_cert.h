@@ -12,6 +12,10 @@
 #include <stdint.h>
 #include "core/eval/interval_jet.h"
 
+/* The branch bytes of a forced evaluation are on the stack: longer tapes are not certified
+ * across a kink (the CSG presets' tapes are 10-60 instructions). */
+#define ISM_GRAPH_MAX_TAPE 256
+
 /* True when ∇f(box) · d > 0 (or < 0) at every point of the box lo..hi, for d the midpoint
  * of ∇f's enclosure; false when that cannot be shown (the enclosure holds a direction
  * across d, or jet does not fit t). Where f has kinks in the box (min, max, abs whose both
@@ -23,6 +27,13 @@
  * ((size_t)-1 when jet is NULL or does not fit t), so that a caller need not ask it again. */
 bool ism_graph_certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
                          const double hi[3], uint64_t *intervals, size_t *nkinks);
+
+/* The same verdict for the smooth piece of f that force picks (t's length of enum ism_branch
+ * bytes: the natural enclosure of that piece's ∇f over the box, interval_jet.h): its zero set
+ * is one graph in the box, which is f's zero set there when the caller knows so (the other
+ * operand of a top min/max kept from 0 over the box). */
+bool ism_graph_certified_piece(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
+                               const double hi[3], const uint8_t *force, uint64_t *intervals);
 
 /* The same verdict from an enclosure g of ∇f over a box already computed
  * (ism_eval_interval_grad): ∇f · d clears 0 over it for d the midpoint of g's gradient. */

@@ -1,9 +1,13 @@
 /* plot_test.c — flatness of an octree node: corner gradient divergence, the sign-and-gradient
  * edge test, at most one crossing curve per face, then either planarity of the edge roots
  * and the distance of their centroid to the surface (the paper), or, under an error bound,
- * the distance of the node's would-be triangles to the surface (cell_error.h). */
+ * the distance of the node's would-be triangles to the surface (cell_error.h); at a CSG
+ * crease, each branch's corner gradients, or the one branch whose zero set is f's proven one
+ * graph (one_branch_graph). */
 #include "core/octree/plot_test.h"
 #include "core/eval/eval.h"
+#include "core/eval/interval_ops.h"
+#include "core/expr/tape.h"
 #include "core/octree/cell_cache.h"
 #include "core/octree/cell_error.h"
 #include "core/octree/crease_split.h"
@@ -98,6 +102,41 @@ static int corner_branch(ism_sampler *s, const ism_corners *k, int c)
     return b;
 }
 
+/* A crease node whose corners on one branch disagree (crease_cell) where f = 0 is one branch's
+ * zero set alone: the other operand of f's top max is below 0 over the box (min: above), so
+ * f = max(a, b) vanishes exactly where a does and has a's sign. That branch's zero set is
+ * then proven one graph over the box by its own gradient's enclosure (graph_cert.h). Barth's
+ * sextic B cut by the ball, max(B, r² − 2.25): on the spikes' walls toward the ball the
+ * sphere's branch is active just off the sheet on its negative side, so the crease
+ * B = r² − 2.25 hugs the sheet without meeting it there, and these nodes were split until
+ * B's corner gradients agreed to 26°, whatever E: at E 0.1 / 1e-2 / 3e-3, 65,336 /
+ * 79,776 / 111,200 triangles, with this 50,952 / 64,536 / 104,912 (χ −28, 30 nodes, max
+ * centroid and midpoint distances unchanged; bench_error barth-sextic, depth.max 10). The
+ * piece's Taylor form (dual_cert.h) would prove more but needs the piece's gradient at the
+ * box's centre, which the forced interval jet gives only where the centre does not decide
+ * the branch itself (interval_jet.h: a decided branch wins over the force). */
+static bool one_branch_graph(ism_sampler *s, ism_ivjet_ws *jet, const ism_corners *k)
+{
+    const ism_tape *t = s->tape;
+    if (t->len > ISM_GRAPH_MAX_TAPE)
+        return false; /* the force bytes are on the stack */
+    ism_interval v[2];
+    int is_max = ism_eval_interval_top(t, s->ws, iv(k->p[0][0], k->p[7][0]),
+                                       iv(k->p[0][1], k->p[7][1]), iv(k->p[0][2], k->p[7][2]),
+                                       v);
+    if (is_max < 0)
+        return false;
+    s->n_interval++;
+    int live = is_max ? (v[1].hi < 0 ? 0 : v[0].hi < 0 ? 1 : -1)
+                      : (v[1].lo > 0 ? 0 : v[0].lo > 0 ? 1 : -1);
+    if (live < 0)
+        return false;
+    uint8_t force[ISM_GRAPH_MAX_TAPE];
+    memset(force, ISM_BRANCH_FREE, t->len);
+    force[t->len - 1] = live == 0 ? ISM_BRANCH_A : ISM_BRANCH_B;
+    return ism_graph_certified_piece(t, jet, k->p[0], k->p[7], force, &s->n_interval);
+}
+
 /* Under an error bound, a node whose corners lie on both branches of f's top min/max (a
  * CSG crease may pass through it): f's own corner gradients mix the two branches' and never
  * agree, so the node is judged by each branch's gradients at its own corners instead, and
@@ -105,7 +144,8 @@ static int corner_branch(ism_sampler *s, const ism_corners *k, int c)
  * polygonising (a leaf that misses E is split in the next round). -1: not such a node. The
  * gyroid ball at E = 3e-3 (box ±1.5, depth 7): 312,508 -> 45,482 triangles; at 1e-3, depth
  * 10: 586,994 -> 117,882, max centroid distance 2.3e-3 -> 1.18e-3. */
-static int crease_cell(ism_sampler *s, const ism_flatness *fl, const ism_corners *k)
+static int crease_cell(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
+                       const ism_corners *k)
 {
     static const double any[2] = {0, 0};
     if (ism_top_active_branch(s->tape, any) < 0)
@@ -125,7 +165,8 @@ static int crease_cell(ism_sampler *s, const ism_flatness *fl, const ism_corners
     }
     for (int i = 0; i < 8; i++)
         for (int j = i + 1; j < 8; j++)
-            if (branch[i] == branch[j] && ism_dot3(n[i], n[j]) < fl->normal_cos)
+            if (branch[i] == branch[j] && ism_dot3(n[i], n[j]) < fl->normal_cos &&
+                !one_branch_graph(s, jet, k))
                 return 0;
     double err;
     if (ism_cell_error_cut(s, k, fl->max_error, &err))
@@ -250,7 +291,7 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
      * agree are left out, as the test without a bound leaves them: a tube inside a node turns
      * them apart. */
     bool may_be_blind = blind && measured_only && one_sign(f);
-    int crease = fl->max_error > 0 ? crease_cell(s, fl, k) : -1;
+    int crease = fl->max_error > 0 ? crease_cell(s, jet, fl, k) : -1;
     if (crease >= 0)
         return passes(crease, may_be_blind, n, fl->normal_cos, blind);
     /* under an error bound a node whose corners disagree may still be one graph (graph

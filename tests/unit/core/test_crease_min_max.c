@@ -7,7 +7,9 @@
  * at the spheres' angle, acos((1 − |c|² + r²) / 2r) = 117.5°, within 2°; both meshes are closed
  * spheres (χ 2, one piece), no cell misses the bound, and their triangle counts agree within
  * EQUIV_TRIS_REL. The small ball's normals turn fast, so a crease cell judged by the wrong
- * branch's normals (min's dominated one) shows in the count. */
+ * branch's normals (min's dominated one) shows in the count.
+ * A crease that never meets the surface (max(a, b) with b < 0 all over the box, active only
+ * inside it) leaves f = 0 a's zero set: its primal polygons are as coarse as a's own. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -284,4 +286,76 @@ Test(crease_min_max, crease_on_a_lattice_plane)
 {
     for (int w = pf_first_box() - 1; w < 2; w++)
         lattice_crease(w);
+}
+
+/* The unit sphere a = |p|² − 1 and max(a, b) with b = x / 100 − 0.3, below 0 all over the
+ * box: the same zero set (max(a, b) = 0 exactly where a = 0, with a's sign), but b is the
+ * active branch inside r² < 0.7 + x / 100, a crease 0.16 inside the sphere. Nodes straddling
+ * the sphere have corners on both branches (crease cells, plot_test.c), and the sphere's
+ * corner gradients there disagree beyond acos(flat_normal) at the nodes E allows; they were
+ * split until they agreed, whatever E (at E 3e-2, depth.max 8: 1,256 / 1,328 / 1,304
+ * triangles in the three boxes against a's 344 in each). Now b's interval over the box proves it below 0 and a's
+ * zero set one graph (graph_cert.h): each box's mesh is a closed sphere (χ 2, one piece)
+ * with every centroid and edge midpoint within E of it (closed form ||p| − 1|), and no more
+ * than HUG_TRIS_REL of a's own primal polygons in that box. */
+#define HUG_E 3e-2
+#define HUG_DEPTH 8
+#define HUG_TRIS_REL 1.05
+
+static size_t primal_sphere(const pf_surface *s, const double box[6], double *worst, long *euler,
+                            size_t *pieces)
+{
+    ism_tape *t = pf_compile(s);
+    ism_poly_options o;
+    ism_poly_options_default(&o);
+    memcpy(o.box, box, sizeof o.box);
+    o.max_depth = HUG_DEPTH, o.max_error = HUG_E, o.dual = false;
+    ism_poly_stats st;
+    ism_error err;
+    ism_mesh m;
+    ism_mesh_init(&m);
+    cr_assert_eq(ism_polygonise(t, &o, &m, &st, &err), ISM_POLY_OK, "%s", err.message);
+    cr_assert(ism_mesh_drop_loose(&m));
+    pf_props p;
+    pf_measure(&m, t, &p);
+    *euler = p.euler, *pieces = p.components, *worst = 0;
+    for (size_t i = 0; i < m.ntris; i++) {
+        const double *v[3];
+        for (int j = 0; j < 3; j++)
+            v[j] = m.pos + 3 * (size_t)m.tri[3 * i + j];
+        for (int j = 0; j < 4; j++) { /* three edge midpoints, then the centroid */
+            double q[3];
+            for (int a = 0; a < 3; a++)
+                q[a] = j == 3 ? (v[0][a] + v[1][a] + v[2][a]) / 3
+                              : 0.5 * (v[j][a] + v[(j + 1) % 3][a]);
+            *worst = fmax(*worst, fabs(sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]) - 1));
+        }
+    }
+    size_t n = m.ntris;
+    ism_mesh_free(&m);
+    ism_tape_free(t);
+    return n;
+}
+
+Test(crease_min_max, crease_off_the_surface_splits_nothing)
+{
+    static const pf_surface sphere = {"x^2 + y^2 + z^2 - 1", NULL, 0, NULL, 0};
+    static const pf_surface hugged = {"max(x^2 + y^2 + z^2 - 1, x / 100 - 0.3)", NULL, 0, NULL,
+                                      0};
+    const double base[6] = {-1.3, -1.3, -1.3, 1.3, 1.3, 1.3};
+    for (int w = pf_first_box() - 1; w < 2; w++) {
+        double box[6], worst[2];
+        long euler[2];
+        size_t pieces[2], n[2];
+        pf_sweep_box(base, HUG_DEPTH, w, box);
+        n[0] = primal_sphere(&sphere, box, &worst[0], &euler[0], &pieces[0]);
+        n[1] = primal_sphere(&hugged, box, &worst[1], &euler[1], &pieces[1]);
+        for (int k = 0; k < 2; k++) {
+            cr_expect_eq(euler[k], 2, "box %d form %d: χ %ld", w, k, euler[k]);
+            cr_expect_eq(pieces[k], 1, "box %d form %d: %zu pieces", w, k, pieces[k]);
+            cr_expect_leq(worst[k], HUG_E, "box %d form %d: a point %g off", w, k, worst[k]);
+        }
+        cr_expect_leq((double)n[1], HUG_TRIS_REL * (double)n[0],
+                      "box %d: %zu triangles with the crease, %zu without", w, n[1], n[0]);
+    }
 }
