@@ -77,6 +77,17 @@ static void cut_crease(const ism_tape *t, double diag, ism_mesh *m, ism_cut *cut
     ism_cut_eval_free(&ev);
 }
 
+/* Polygonises t under o into m (loose pieces dropped) and measures it into p. */
+static void mesh_measured(const ism_tape *t, const ism_poly_options *o, ism_mesh *m,
+                          ism_poly_stats *st, pf_props *p)
+{
+    ism_error err;
+    ism_mesh_init(m);
+    cr_assert_eq(ism_polygonise(t, o, m, st, &err), ISM_POLY_OK, "%s", err.message);
+    cr_assert(ism_mesh_drop_loose(m));
+    pf_measure(m, t, p);
+}
+
 static void mesh_crease(const pf_surface *s, const double box[6], crease_run *r)
 {
     ism_tape *t = pf_compile(s);
@@ -85,13 +96,9 @@ static void mesh_crease(const pf_surface *s, const double box[6], crease_run *r)
     memcpy(o.box, box, sizeof o.box);
     o.min_depth = 3, o.max_depth = DEPTH, o.max_error = MESH_E;
     ism_poly_stats st;
-    ism_error err;
     ism_mesh m;
-    ism_mesh_init(&m);
-    cr_assert_eq(ism_polygonise(t, &o, &m, &st, &err), ISM_POLY_OK, "%s", err.message);
-    cr_assert(ism_mesh_drop_loose(&m));
     pf_props p;
-    pf_measure(&m, t, &p);
+    mesh_measured(t, &o, &m, &st, &p);
     memset(r, 0, sizeof *r);
     r->ntris = m.ntris, r->euler = p.euler, r->components = p.components;
     r->missed = (size_t)st.error_missed_nodes;
@@ -311,13 +318,9 @@ static size_t primal_sphere(const pf_surface *s, const double box[6], double *wo
     memcpy(o.box, box, sizeof o.box);
     o.max_depth = HUG_DEPTH, o.max_error = HUG_E, o.dual = false;
     ism_poly_stats st;
-    ism_error err;
     ism_mesh m;
-    ism_mesh_init(&m);
-    cr_assert_eq(ism_polygonise(t, &o, &m, &st, &err), ISM_POLY_OK, "%s", err.message);
-    cr_assert(ism_mesh_drop_loose(&m));
     pf_props p;
-    pf_measure(&m, t, &p);
+    mesh_measured(t, &o, &m, &st, &p);
     *euler = p.euler, *pieces = p.components, *worst = 0;
     for (size_t i = 0; i < m.ntris; i++) {
         const double *v[3];
