@@ -124,7 +124,7 @@ Test(eval_piece, value_alone_is_the_gradient_pass_value)
     for (size_t e = 0; e < sizeof exprs / sizeof *exprs; e++) {
         ism_tape *t = compile(exprs[e]);
         ism_eval_ws *ws = ism_eval_ws_new(t);
-        int compared = 0;
+        int forced = 0; /* pairs whose piece at q is not f's own there: a kink really forced */
         for (int i = 0; i < 40; i++) { /* pieces from one point, values at another */
             double p[3] = {sin(1.3 * i) * 1.4, cos(0.7 * i) * 1.3, sin(0.37 * i + 1) * 1.2};
             double q[3] = {cos(0.9 * i) * 1.1, sin(1.9 * i) * 1.2, cos(0.53 * i) * 1.3};
@@ -134,9 +134,9 @@ Test(eval_piece, value_alone_is_the_gradient_pass_value)
             double w = ism_eval_piece_value(t, ws, pc, q[0], q[1], q[2]);
             cr_expect(memcmp(&v, &w, sizeof v) == 0, "%s, point %d: %.17g vs %.17g", exprs[e], i,
                       v, w);
-            compared++;
+            forced += w != ism_eval_point(t, ws, q[0], q[1], q[2]);
         }
-        cr_expect_eq(compared, 40);
+        cr_expect_gt(forced, 0, "%s: every piece was f's own at q", exprs[e]);
         ism_eval_ws_free(ws);
         ism_tape_free(t);
     }
