@@ -446,7 +446,7 @@ static label_t vertex_label(ism_sampler *s, bool pm, const ism_cell_out *out, la
  * E = 1e-4 in the 1e-3 box: 2 leaves missed, 1.17 E). */
 static bool split_three(ism_sampler *s, ism_cell_out *out, size_t t, const label_t br[3])
 {
-    uint32_t c[3], x[3], m;
+    uint32_t c[3], x[3] = {UINT32_MAX, UINT32_MAX, UINT32_MAX}, m;
     ism_fpoint e[3], mid;
     int whole[3];
     memcpy(c, out->tris + 3 * t, sizeof c);
@@ -454,20 +454,28 @@ static bool split_three(ism_sampler *s, ism_cell_out *out, size_t t, const label
         crease_point(s, true, out->verts[c[k]].p, out->verts[c[(k + 1) % 3]].p, br[k],
                      br[(k + 1) % 3], &e[k], &whole[k]);
     corner_point(s, e, 3, br, 3, &mid);
-    for (int k = 0; k < 3; k++)
-        if (!whole[k] && !ism_cell_out_vert(out, &e[k], &x[k]))
-            return false;
     /* the meeting point on a corner or a crease point (to rounding: the three balls' in the
-       irrational box, on its edge) is that vertex, not a copy the weld keeps apart */
+       irrational box, on its edge) is that vertex, not a copy the weld keeps apart; on a
+       corner, an edge whose crease point is that corner too (within the same tolerance,
+       though further than its own edge's WHOLE_END share) is left whole, else its cut
+       triangles would join two copies of one point */
     double size = 0;
     for (int k = 0; k < 3; k++)
         size = fmax(size, ism_dist3(out->verts[c[k]].p, out->verts[c[(k + 1) % 3]].p));
+    double tol = CUT_CORNER_SHARE * size;
     m = UINT32_MAX;
-    for (int k = 0; k < 6 && m == UINT32_MAX; k++) {
-        uint32_t v = k < 3 ? c[k] : whole[k - 3] ? UINT32_MAX : x[k - 3];
-        if (v != UINT32_MAX && !(ism_dist3(out->verts[v].p, mid.p) > CUT_CORNER_SHARE * size))
-            m = v;
-    }
+    for (int k = 0; k < 3 && m == UINT32_MAX; k++)
+        if (!(ism_dist3(out->verts[c[k]].p, mid.p) > tol))
+            m = c[k];
+    for (int k = 0; k < 3 && m != UINT32_MAX; k++)
+        if (!whole[k] && !(ism_dist3(e[k].p, out->verts[m].p) > tol))
+            whole[k] = WHOLE_END;
+    for (int k = 0; k < 3; k++)
+        if (!whole[k] && !ism_cell_out_vert(out, &e[k], &x[k]))
+            return false;
+    for (int k = 0; k < 3 && m == UINT32_MAX; k++)
+        if (!whole[k] && !(ism_dist3(out->verts[x[k]].p, mid.p) > tol))
+            m = x[k];
     if (m == UINT32_MAX && !ism_cell_out_vert(out, &mid, &m))
         return false;
     /* corner k's triangles: toward its next corner (or that edge's point), and back to the
