@@ -149,7 +149,7 @@ double ism_eval_piece_value(const ism_tape *t, ism_eval_ws *ws, ism_piece pc, do
         const ism_instr *in = &t->code[i];
         unsigned br = 0;
         if (ism_op_is_kink(in->op)) {
-            br = k < ISM_PIECE_KINKS ? (unsigned)(pc >> (2 * k)) & 3u : 0;
+            br = ism_piece_branch(pc, k);
             k++;
         }
         if (br) { /* what the branch passes on (ism_kink_source) */

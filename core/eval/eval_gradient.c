@@ -272,7 +272,7 @@ double ism_eval_piece_gradient(const ism_tape *t, ism_eval_ws *ws, ism_piece pc,
             dual_step(in, r, ws->trig);
             continue;
         }
-        unsigned br = k < ISM_PIECE_KINKS ? (unsigned)(pc >> (2 * k)) & 3u : 0;
+        unsigned br = ism_piece_branch(pc, k);
         k++;
         if (br)
             forced_step(in, r, br);

@@ -62,6 +62,14 @@ static inline uint32_t ism_kink_source(const ism_instr *in, unsigned br, bool *n
     return in->op == ISM_OP_MIN_RR || in->op == ISM_OP_MAX_RR ? in->b : ISM_KINK_IMM;
 }
 
+/* The branch piece pc takes at the tape's k-th kink (bits 2k, 2k + 1, eval.h): 1 or 2, or 0
+ * (both, as f) there and past ISM_PIECE_KINKS. The one decoder of the passes that force a
+ * piece (ism_eval_piece_value, ism_eval_piece_gradient). */
+static inline unsigned ism_piece_branch(ism_piece pc, unsigned k)
+{
+    return k < ISM_PIECE_KINKS ? (unsigned)(pc >> (2 * k)) & 3u : 0;
+}
+
 /* The piece ws->choice (one byte per instruction of t: a kink's branch, 1 or 2, or 0 for
  * both) names: back from f's result through the operands the branches taken read. kinks: t's
  * number of kinks (ism_tape_kinks), at most ISM_PIECE_KINKS. *open (may be NULL): set when a
