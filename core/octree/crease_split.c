@@ -361,8 +361,8 @@ static int whole_edge(ism_sampler *s, const double *p, const double *q, const do
 /* The crease point of edge p-q, whose ends carry labels lp != lq: Newton on lo = hi = 0 from
  * where lo − hi changes sign along the edge (flagged ISM_FP_CREASE; true), or that linear
  * estimate moved onto f = 0 (false). *whole: in pieces mode, nonzero where the edge is better
- * left whole (whole_edge: the pieces meet almost flat there, or the fold is within the
- * bound). */
+ * left whole (whole_edge: the crease point on one of its ends, the pieces almost flat there,
+ * or the fold within the bound). */
 static bool crease_point(ism_sampler *s, bool pm, const double *p0, const double *q0,
                          label_t lp, label_t lq, ism_fpoint *out, int *whole)
 {

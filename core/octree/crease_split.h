@@ -63,8 +63,9 @@ bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first
 double ism_crease_wedge_edges(const ism_grid *g, int max_depth, double max_error);
 
 /* The sampler's fold_below under an error bound (max_error > 0; 0 without one): in pieces
- * mode a mixed edge whose crease point lies within CREASE_FOLD_SHARE × max_error of it is left
- * whole (crease_split.c). */
+ * mode a mixed edge is left whole, folded, where |f|/|∇f| at the point its two pieces' values
+ * cross along it is within CREASE_FOLD_SHARE × max_error and their wedge is no sharper than
+ * CREASE_FOLD_COS allows (crease_split.c whole_edge). */
 double ism_crease_fold_below(double max_error);
 
 /* Is f's crease read off its smooth pieces (the sampler's crease_pieces): f has a kink that is

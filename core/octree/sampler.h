@@ -51,9 +51,10 @@ typedef struct ism_sampler {
      * with wedge_edges_below (asked once per run, not per leaf: the tape scan cost gyroid-ball
      * +1.5% instructions). */
     bool crease_pieces;
-    /* crease_split.c, pieces mode: a mixed edge whose crease point lies within this of the
-     * edge is left whole, the crease folded there (ism_crease_fold_below: a share of
-     * max_error); 0: every mixed edge cut. */
+    /* crease_split.c, pieces mode: a mixed edge is left whole, the crease folded there, where
+     * |f|/|∇f| at the point its pieces' values cross along it is within this and their wedge
+     * passes CREASE_FOLD_COS (whole_edge; ism_crease_fold_below: a share of max_error); 0:
+     * no edge folded. */
     double fold_below;
     /* crease_split.c, pieces mode, when label_memo_on (polygonise.c, whose tape stays f for
      * the run: the octree's build swaps node tapes in and out of one buffer): the last labels
