@@ -7,7 +7,7 @@
 #include "core/octree/plot_test.h"
 #include "core/eval/eval.h"
 #include "core/eval/interval_ops.h"
-#include "core/expr/tape.h"
+#include "core/expr/expr.h"
 #include "core/octree/cell_cache.h"
 #include "core/octree/cell_error.h"
 #include "core/octree/crease_split.h"
@@ -118,7 +118,8 @@ static int corner_branch(ism_sampler *s, const ism_corners *k, int c)
 static bool one_branch_graph(ism_sampler *s, ism_ivjet_ws *jet, const ism_corners *k)
 {
     const ism_tape *t = s->tape;
-    if (t->len > ISM_GRAPH_MAX_TAPE)
+    const size_t len = ism_tape_length(t);
+    if (len > ISM_GRAPH_MAX_TAPE)
         return false; /* the force bytes are on the stack */
     ism_interval v[2];
     int is_max = ism_eval_interval_top(t, s->ws, iv(k->p[0][0], k->p[7][0]),
@@ -132,8 +133,8 @@ static bool one_branch_graph(ism_sampler *s, ism_ivjet_ws *jet, const ism_corner
     if (live < 0)
         return false;
     uint8_t force[ISM_GRAPH_MAX_TAPE];
-    memset(force, ISM_BRANCH_FREE, t->len);
-    force[t->len - 1] = live == 0 ? ISM_BRANCH_A : ISM_BRANCH_B;
+    memset(force, ISM_BRANCH_FREE, len);
+    force[len - 1] = live == 0 ? ISM_BRANCH_A : ISM_BRANCH_B;
     return ism_graph_certified_piece(t, jet, k->p[0], k->p[7], force, &s->n_interval);
 }
 
@@ -163,11 +164,12 @@ static int crease_cell(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl
         ism_crease_branch(s, k->p[c], n[c]);
         ism_normalise3(n[c]);
     }
-    for (int i = 0; i < 8; i++)
-        for (int j = i + 1; j < 8; j++)
-            if (branch[i] == branch[j] && ism_dot3(n[i], n[j]) < fl->normal_cos &&
-                !one_branch_graph(s, jet, k))
-                return 0;
+    bool disagree = false; /* two corners of one branch whose normals part past normal_cos */
+    for (int i = 0; i < 8 && !disagree; i++)
+        for (int j = i + 1; j < 8 && !disagree; j++)
+            disagree = branch[i] == branch[j] && ism_dot3(n[i], n[j]) < fl->normal_cos;
+    if (disagree && !one_branch_graph(s, jet, k)) /* asked once: one box, one answer */
+        return 0;
     double err;
     if (ism_cell_error_cut(s, k, fl->max_error, &err))
         return err <= fl->max_error;
