@@ -7,9 +7,10 @@
  * fold), vertices on any of them, vertices where several cones meet, where ∇f vanishes, and
  * the vertex at each given point (singular points). Needles and caps that flips and moves
  * cannot mend lose an edge by collapse (a free vertex merged into a neighbour, where the
- * link condition holds: the topology is kept), and the mesh is renumbered after; each
- * triangle keeps its label, features keep their vertices, so χ, components, non-manifold
- * edges and points and boundary loops cannot change. */
+ * link condition holds: the topology is kept; a locked vertex only along a crease or a curve
+ * of zeros of ∇f, into a crowding neighbour: rm_collapse.c), and the mesh is renumbered
+ * after; each triangle keeps its label, features keep their vertices, so χ, components,
+ * non-manifold edges and points and boundary loops cannot change. */
 #ifndef ISM_REMESH_H
 #define ISM_REMESH_H
 

@@ -3,7 +3,8 @@
  * not in the caller's locked list and it is no crease; a vertex is free when every edge at it
  * is free, its triangles form one closed fan, ∇f does not vanish there, it ends no segment of
  * the mesh (a one-dimensional part) and it is not at a given point. Everything else keeps its
- * place and its edges. */
+ * place and its edges, except that a locked vertex crowding a neighbour along a crease or a
+ * curve of zeros of ∇f may merge into it (rm_collapse.c, crease_merge_find). */
 #include "core/remesh/rm_pass.h"
 #include "core/util/vec3.h"
 
