@@ -7,6 +7,7 @@
 #include "core/eval/interval_eval.h"
 #include "core/eval/workspace.h"
 
+#include <assert.h>
 #include <math.h>
 #include <string.h>
 
@@ -114,6 +115,7 @@ static ism_instr decided(const ism_instr *in, unsigned choice)
 {
     bool neg; /* never, for a min/max */
     uint32_t src = ism_kink_source(in, choice, &neg);
+    assert(!neg); /* a shortened tape has no NEG to put here: only min/max are decided */
     ism_instr r = *in;
     r.b = 0;
     if (src == ISM_KINK_IMM) {

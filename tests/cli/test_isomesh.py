@@ -468,6 +468,7 @@ class TestIsomesh(unittest.TestCase):
             with self.subTest(box=box, bound="missed"):
                 p = run("-e", "x^2 + y^2 + z^2 - 1", "-b", ",".join(map(repr, box)),
                         "--max-error", "0.001", "-d", "3:4", "-o", path, "--stats")
+                self.assertEqual(p.returncode, 0, p.stderr)
                 s = json.loads(p.stdout)
                 acc = s["analysis"]["accuracy"]
                 self.assertIs(acc["met"], False)
