@@ -340,25 +340,67 @@ static size_t primal_sphere(const pf_surface *s, const double box[6], double *wo
     return n;
 }
 
+/* Which operand of f's top min/max (0 a, 1 b, as the compiler ordered them) is the sphere
+ * over the box: the one whose interval holds 0 (the plane's lies wholly on one side of 0);
+ * -1 if neither or both. */
+static int sphere_operand(const pf_surface *s, const double box[6])
+{
+    ism_tape *t = pf_compile(s);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    ism_interval v[2];
+    int top = ism_eval_interval_top(t, ws, (ism_interval){box[0], box[3]},
+                                    (ism_interval){box[1], box[4]},
+                                    (ism_interval){box[2], box[5]}, v);
+    int in[2] = {0, 0};
+    for (int k = 0; k < 2; k++)
+        in[k] = v[k].lo < 0 && v[k].hi > 0;
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+    return top < 0 || in[0] == in[1] ? -1 : in[1];
+}
+
 Test(crease_min_max, crease_off_the_surface_splits_nothing)
 {
     static const pf_surface sphere = {"x^2 + y^2 + z^2 - 1", NULL, 0, NULL, 0};
-    static const pf_surface hugged = {"max(x^2 + y^2 + z^2 - 1, x / 100 - 0.3)", NULL, 0, NULL,
-                                      0};
+    /* The plane below 0 under max, above 0 under min (there the crease lies outside the
+     * sphere), spelled so that the compiler's operand order (by structural hash) puts the
+     * sphere second in one form and first in the other of each: the certificate forces branch
+     * B, then A (sphere_operand checks it). */
+    static const pf_surface hugged[] = {
+        {"max(x^2 + y^2 + z^2 - 1, x / 100 - 0.3)", NULL, 0, NULL, 0},
+        {"max(x^2 + y^2 + z^2 - 1, x / 100 - 0.5)", NULL, 0, NULL, 0},
+        {"min(x^2 + y^2 + z^2 - 1, 0.3 - x / 100)", NULL, 0, NULL, 0},
+        {"min(x^2 + y^2 + z^2 - 1, 0.3 - z / 100)", NULL, 0, NULL, 0},
+    };
+    enum { NH = sizeof hugged / sizeof hugged[0] };
     const double base[6] = {-1.3, -1.3, -1.3, 1.3, 1.3, 1.3};
     for (int w = pf_first_box() - 1; w < 2; w++) {
-        double box[6], worst[2];
-        long euler[2];
-        size_t pieces[2], n[2];
+        double box[6], worst[NH + 1];
+        long euler[NH + 1];
+        size_t pieces[NH + 1], n[NH + 1];
+        int reached[2][2] = {{0, 0}, {0, 0}}; /* [max][sphere operand] */
         pf_sweep_box(base, HUG_DEPTH, w, box);
         n[0] = primal_sphere(&sphere, box, &worst[0], &euler[0], &pieces[0]);
-        n[1] = primal_sphere(&hugged, box, &worst[1], &euler[1], &pieces[1]);
-        for (int k = 0; k < 2; k++) {
+        for (int h = 0; h < NH; h++) {
+            int op = sphere_operand(&hugged[h], box);
+            cr_expect_geq(op, 0, "box %d form %d: no top min/max with the sphere alone", w, h);
+            if (op >= 0)
+                reached[hugged[h].expr[1] == 'a'][op] = 1;
+            n[h + 1] = primal_sphere(&hugged[h], box, &worst[h + 1], &euler[h + 1],
+                                     &pieces[h + 1]);
+        }
+        for (int m = 0; m < 2; m++)
+            for (int op = 0; op < 2; op++)
+                cr_expect(reached[m][op], "box %d: no %s form with the sphere as operand %d", w,
+                          m ? "max" : "min", op);
+        for (int k = 0; k <= NH; k++) {
             cr_expect_eq(euler[k], 2, "box %d form %d: χ %ld", w, k, euler[k]);
             cr_expect_eq(pieces[k], 1, "box %d form %d: %zu pieces", w, k, pieces[k]);
             cr_expect_leq(worst[k], HUG_E, "box %d form %d: a point %g off", w, k, worst[k]);
         }
-        cr_expect_leq((double)n[1], HUG_TRIS_REL * (double)n[0],
-                      "box %d: %zu triangles with the crease, %zu without", w, n[1], n[0]);
+        for (int k = 1; k <= NH; k++)
+            cr_expect_leq((double)n[k], HUG_TRIS_REL * (double)n[0],
+                          "box %d form %d: %zu triangles with the crease, %zu without", w, k,
+                          n[k], n[0]);
     }
 }
