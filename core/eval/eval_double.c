@@ -103,10 +103,8 @@ double ism_eval_point(const ism_tape *t, ism_eval_ws *ws, double x, double y, do
 bool ism_eval_top_values(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
                          double val[2])
 {
-    if (!t->len || !ism_ws_fits(ws, t))
-        return false;
-    const ism_instr *top = &t->code[t->len - 1];
-    if ((top->op != ISM_OP_MIN_RR && top->op != ISM_OP_MAX_RR) || top->out != t->result)
+    const ism_instr *top = ism_tape_top_minmax(t);
+    if (!top || !ism_ws_fits(ws, t))
         return false;
     run_point(t, ws, t->len - 1, x, y, z, false);
     val[0] = ws->scalar[top->a];
@@ -170,10 +168,8 @@ double ism_eval_piece_value(const ism_tape *t, ism_eval_ws *ws, ism_piece pc, do
 
 int ism_top_active_branch(const ism_tape *t, const double val[2])
 {
-    if (!t->len)
-        return -1;
-    const ism_instr *top = &t->code[t->len - 1];
-    if ((top->op != ISM_OP_MIN_RR && top->op != ISM_OP_MAX_RR) || top->out != t->result)
+    const ism_instr *top = ism_tape_top_minmax(t);
+    if (!top)
         return -1;
     return top->op == ISM_OP_MIN_RR ? val[1] < val[0] : val[1] > val[0];
 }

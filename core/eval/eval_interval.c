@@ -103,10 +103,8 @@ ism_interval ism_eval_interval(const ism_tape *t, ism_eval_ws *ws, ism_interval 
 int ism_eval_interval_top(const ism_tape *t, ism_eval_ws *ws, ism_interval x, ism_interval y,
                           ism_interval z, ism_interval val[2])
 {
-    if (t->len == 0 || !ism_ws_fits(ws, t))
-        return -1;
-    const ism_instr *top = &t->code[t->len - 1];
-    if ((top->op != ISM_OP_MIN_RR && top->op != ISM_OP_MAX_RR) || top->out != t->result)
+    const ism_instr *top = ism_tape_top_minmax(t);
+    if (!top || !ism_ws_fits(ws, t))
         return -1;
     ism_interval_run(t, ws, x, y, z, NULL);
     val[0] = ws->iv[top->a];

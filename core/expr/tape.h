@@ -100,6 +100,18 @@ static inline int ism_op_has_reg_b(int op)
     }
 }
 
+/* f's top min/max: the last instruction when it is a register min or max writing the result
+ * (the one kink whose two operands crease-aware code reads as f's branches), else NULL. */
+static inline const ism_instr *ism_tape_top_minmax(const ism_tape *t)
+{
+    if (!t->len)
+        return NULL;
+    const ism_instr *top = &t->code[t->len - 1];
+    if ((top->op != ISM_OP_MIN_RR && top->op != ISM_OP_MAX_RR) || top->out != t->result)
+        return NULL;
+    return top;
+}
+
 /* True for opcodes that read register a. */
 static inline int ism_op_has_reg_a(int op)
 {
