@@ -114,7 +114,10 @@ static int corner_branch(ism_sampler *s, const ism_corners *k, int c)
  * centroid and midpoint distances unchanged; bench_error barth-sextic, depth.max 10). The
  * piece's Taylor form (dual_cert.h) would prove more but needs the piece's gradient at the
  * box's centre, which the forced interval jet gives only where the centre does not decide
- * the branch itself (interval_jet.h: a decided branch wins over the force). */
+ * the branch itself (interval_jet.h: a decided branch wins over the force). One graph is
+ * not yet within E: a node this admits still goes to ism_cell_error_cut in crease_cell, and
+ * where that cannot estimate, to the measurement after polygonising (a leaf missing E is
+ * split in the next round), now also with corner normals apart past normal_cos. */
 static bool one_branch_graph(ism_sampler *s, ism_ivjet_ws *jet, const ism_corners *k)
 {
     const ism_tape *t = s->tape;

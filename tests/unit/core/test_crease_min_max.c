@@ -321,6 +321,8 @@ static size_t primal_sphere(const pf_surface *s, const double box[6], double *wo
     ism_mesh m;
     pf_props p;
     mesh_measured(t, &o, &m, &st, &p);
+    cr_expect_eq(st.error_missed_nodes, 0, "%s: %zu nodes miss E", s->expr,
+                 (size_t)st.error_missed_nodes);
     *euler = p.euler, *pieces = p.components, *worst = 0;
     for (size_t i = 0; i < m.ntris; i++) {
         const double *v[3];
