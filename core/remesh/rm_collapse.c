@@ -218,13 +218,6 @@ static bool crowds(const rm_pass *p, uint32_t v, uint32_t w, uint32_t *nb, uint3
     return rm_dist(P(p, v), P(p, w)) <= ISM_RM_CROWD * mean_edge(p, v, nb, *nnb);
 }
 
-/* ∇f vanishes at v (its normal was left zero). */
-static bool zero_normal(const rm_pass *p, uint32_t v)
-{
-    const double *n = p->normal + 3 * (size_t)v;
-    return n[0] == 0 && n[1] == 0 && n[2] == 0;
-}
-
 /* For merging v into w along the short edge vw of a crease: v is locked but no given
  * point's vertex or segment end, its triangles are one closed fan of manifold edges with one
  * label, none on the caller's locked list — so what holds v is the bend of some edge as a
@@ -240,7 +233,7 @@ static bool crease_merge_find(const rm_pass *p, uint32_t v, uint32_t w, uint32_t
                               rm_merge *g)
 {
     const rm_mesh *r = &p->r;
-    if (r->locked[v] == RM_PINNED || (zero_normal(p, v) && !zero_normal(p, w)) ||
+    if (r->locked[v] == RM_PINNED || (rm_normal_zero(p, v) && !rm_normal_zero(p, w)) ||
         !rm_merge_find_any(r, v, w, deg, g))
         return false; /* a lone zero of ∇f (an unlisted singular point) keeps its place */
     uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE], nnb;

@@ -604,10 +604,9 @@ size_t rm_crease_slide_sweep(rm_pass *p)
        every poor triangle's corners each time 58M, now 38.6M (1.011), for the same
        needles */
     for (size_t v = 0; v < r->m->nverts; v++) {
-        const double *n = p->normal + 3 * v;
         double key;
         if (p->active[v] != 1 || r->locked[v] == RM_PINNED || !r->count[v] || r->gone[v] ||
-            p->slide[v] || (n[0] == 0 && n[1] == 0 && n[2] == 0) ||
+            p->slide[v] || rm_normal_zero(p, (uint32_t)v) ||
             !corner_of_poor(p, (uint32_t)v, poor, &key) ||
             (p->crease_tried && p->crease_tried[v] == key))
             continue;

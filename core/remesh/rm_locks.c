@@ -27,9 +27,9 @@ static int cmp_u64(const void *a, const void *b)
  * and the edge's other end decides. */
 static bool turned_at(const rm_pass *p, uint32_t v, const double *n1, const double *n2)
 {
-    const double *g = p->normal + 3 * v;
-    if (g[0] == 0 && g[1] == 0 && g[2] == 0)
+    if (rm_normal_zero(p, v))
         return true;
+    const double *g = p->normal + 3 * v;
     return (ism_dot3(n1, g) > 0) != (ism_dot3(n2, g) > 0);
 }
 
@@ -215,8 +215,7 @@ void rm_lock_vertices(rm_pass *p, const ism_remesh_options *o, const uint8_t *on
     for (size_t v = 0; v < r->m->nverts; v++) {
         if (only && !only[v])
             continue; /* its fan and normal as they were: its protection too */
-        const double *n = p->normal + 3 * v;
-        bool vanishes = n[0] == 0 && n[1] == 0 && n[2] == 0;
+        bool vanishes = rm_normal_zero(p, (uint32_t)v);
         r->locked[v] = vanishes || !fan_free(p, (uint32_t)v, &memo, &em);
         p->slide[v] = !vanishes && r->locked[v] && r->count[v] && box_slidable(p, (uint32_t)v);
     }

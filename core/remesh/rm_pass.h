@@ -286,6 +286,13 @@ static inline void rm_sine_open(rm_pass *p, double *found, size_t from)
         p->sine[t] = NAN;
 }
 
+/* ∇f vanishes at v: its normal was left zero (rm_pass.normal). */
+static inline bool rm_normal_zero(const rm_pass *p, uint32_t v)
+{
+    const double *n = p->normal + 3 * (size_t)v;
+    return n[0] == 0 && n[1] == 0 && n[2] == 0;
+}
+
 /* A triangle whose smallest angle's sine is below this is a needle to split (rm_insert.c)
  * and sizes the room for insertions (remesh.c). */
 static inline double rm_insert_poor(void) { return sin(ISM_RM_INSERT_DEG * M_PI / 180); }
