@@ -133,6 +133,18 @@ ism_piece ism_eval_piece(const ism_tape *t, ism_eval_ws *ws, double x, double y,
     return kinks > ISM_PIECE_KINKS ? ISM_PIECE_NONE : ism_piece_walk(t, ws, kinks, NULL);
 }
 
+/* Kink in on branch br (1 or 2, as ism_piece): what ism_kink_pass says it passes. */
+static inline double forced_value(const ism_instr *in, const double *r, unsigned br)
+{
+    switch (ism_kink_pass(in, br)) {
+    case ISM_PASS_A: return r[in->a];
+    case ISM_PASS_B: return r[in->b];
+    case ISM_PASS_NEG_A: return -r[in->a];
+    case ISM_PASS_IMM: return in->imm;
+    }
+    return NAN; /* not reached: every pass is named above */
+}
+
 double ism_eval_piece_value(const ism_tape *t, ism_eval_ws *ws, ism_piece pc, double x,
                             double y, double z)
 {
@@ -150,11 +162,8 @@ double ism_eval_piece_value(const ism_tape *t, ism_eval_ws *ws, ism_piece pc, do
             br = ism_piece_branch(pc, k);
             k++;
         }
-        if (br) { /* what the branch passes on (ism_kink_source) */
-            bool neg;
-            uint32_t src = ism_kink_source(in, br, &neg);
-            double v = src == ISM_KINK_IMM ? in->imm : r[src];
-            r[in->out] = neg ? -v : v;
+        if (br) {
+            r[in->out] = forced_value(in, r, br);
         } else if (in->op == ISM_OP_SIN || in->op == ISM_OP_COS) {
             double sn, cs;
             ism_trig_pair(ws->trig, r[in->a], &sn, &cs);

@@ -241,19 +241,16 @@ bool ism_eval_crease_branches(const ism_tape *t, ism_eval_ws *ws, double x, doub
     return branches_at(t, crease_top(t, true), ws, x, y, z, val, grad);
 }
 
-/* Kink in on branch br (1 or 2, as ism_piece): what ism_kink_source says it passes. */
+/* Kink in on branch br (1 or 2, as ism_piece): what ism_kink_pass says it passes. */
 static inline void forced_step(const ism_instr *in, ism_dual *r, unsigned br)
 {
-    bool neg;
-    uint32_t src = ism_kink_source(in, br, &neg);
     ism_dual *o = &r[in->out];
-    if (src == ISM_KINK_IMM) {
-        *o = (ism_dual){in->imm, {0.0, 0.0, 0.0}};
-    } else if (neg) {
-        const ism_dual *a = &r[src];
-        *o = (ism_dual){-a->v, {-a->d[0], -a->d[1], -a->d[2]}};
-    } else {
-        *o = r[src];
+    const ism_dual *a = &r[in->a];
+    switch (ism_kink_pass(in, br)) {
+    case ISM_PASS_A: *o = *a; return;
+    case ISM_PASS_B: *o = r[in->b]; return;
+    case ISM_PASS_NEG_A: *o = (ism_dual){-a->v, {-a->d[0], -a->d[1], -a->d[2]}}; return;
+    case ISM_PASS_IMM: *o = (ism_dual){in->imm, {0.0, 0.0, 0.0}}; return;
     }
 }
 

@@ -109,21 +109,21 @@ bool ism_tape_top_min_max_only(const ism_tape *t)
     return true;
 }
 
-/* The instruction a decided min/max becomes: a copy of what it passes on that branch
- * (ism_kink_source), or the constant. */
+/* The instruction a decided min/max becomes: a copy of the operand it passes on that branch
+ * (ism_kink_pass), or its constant. */
 static ism_instr decided(const ism_instr *in, unsigned choice)
 {
-    bool neg; /* never, for a min/max */
-    uint32_t src = ism_kink_source(in, choice, &neg);
-    assert(!neg); /* a shortened tape has no NEG to put here: only min/max are decided */
+    enum ism_kink_pass pass = ism_kink_pass(in, choice);
+    assert(pass != ISM_PASS_NEG_A); /* a shortened tape has no NEG to put here: only min/max
+                                      are decided */
     ism_instr r = *in;
     r.b = 0;
-    if (src == ISM_KINK_IMM) {
+    if (pass == ISM_PASS_IMM) {
         r.op = ISM_OP_CONST;
         r.a = 0;
     } else {
         r.op = ISM_OP_COPY;
-        r.a = src;
+        r.a = pass == ISM_PASS_B ? in->b : in->a;
         r.imm = 0.0;
     }
     return r;

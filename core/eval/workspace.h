@@ -49,17 +49,17 @@ static inline bool ism_op_is_kink(int op)
 }
 
 /* What kink in passes on its branch br (1 or 2, as an ism_piece names it and as shortening
- * records a decided min/max): the register returned, negated when *neg is set (abs on
- * branch 2, a < 0), or, returned ISM_KINK_IMM (the _RC forms' branch 2), the constant
- * in->imm. One rule for the shortened tapes (shorten.c) and the forced gradients
- * (ism_eval_piece_gradient). */
-#define ISM_KINK_IMM UINT32_MAX
-static inline uint32_t ism_kink_source(const ism_instr *in, unsigned br, bool *neg)
+ * records a decided min/max): its operand a, its register b, its constant (the _RC forms'
+ * branch 2) or -a (abs on branch 2). One rule for the shortened tapes (shorten.c) and the
+ * forced pieces (ism_eval_piece_value, ism_eval_piece_gradient), each switching on it. */
+enum ism_kink_pass { ISM_PASS_A, ISM_PASS_B, ISM_PASS_IMM, ISM_PASS_NEG_A };
+static inline enum ism_kink_pass ism_kink_pass(const ism_instr *in, unsigned br)
 {
-    *neg = in->op == ISM_OP_ABS && br != 1;
-    if (br == 1 || in->op == ISM_OP_ABS)
-        return in->a;
-    return in->op == ISM_OP_MIN_RR || in->op == ISM_OP_MAX_RR ? in->b : ISM_KINK_IMM;
+    if (in->op == ISM_OP_ABS)
+        return br == 1 ? ISM_PASS_A : ISM_PASS_NEG_A;
+    if (br == 1)
+        return ISM_PASS_A;
+    return in->op == ISM_OP_MIN_RR || in->op == ISM_OP_MAX_RR ? ISM_PASS_B : ISM_PASS_IMM;
 }
 
 /* The branch piece pc takes at the tape's k-th kink (bits 2k, 2k + 1, eval.h): 1 or 2, or 0
