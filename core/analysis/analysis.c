@@ -3,7 +3,8 @@
  * topology, triangle quality, the figures from f) and releases everything on failure. On
  * more than one thread the connectivity passes (classes to topology: serial union-finds and
  * walks) run on a side thread beside the others, which share no data with them but the
- * mesh, the edge table and the vertices' corners, all read-only by then.
+ * mesh, the edge table and the vertices' corners, all read-only by then; the others' pool is
+ * then one thread smaller, so the threads option counts every thread the analysis runs.
  * Each pass has its own header, included below and only here; the passes include the
  * low-level headers (edges.h, vertices.h, analysis_types.h, ...), never this driver's. */
 #include "core/analysis/analysis.h"
@@ -70,15 +71,21 @@ bool ism_analyse(const ism_mesh *m, const ism_tape *f, const ism_analysis_option
     ism_an_vertex_facts vf = {0};
     /* the passes' threads, made once for all of them: worth it for a mesh of many
      * triangles, or when f is evaluated at more than one block of vertices (a few
-     * evaluations each, far more than the triangle passes' work per item) */
+     * evaluations each, far more than the triangle passes' work per item). On several, the
+     * connectivity passes take one for their side thread and the pool the others, so that
+     * the analysis runs o->threads threads in all (the CLI's --threads, a daemon worker's
+     * limit) */
     bool evaluates = f && (o->curvature || o->accuracy) && m->nverts > ISM_AN_EVAL_BLOCK;
-    ism_pool *pool = ism_an_pool_new(o->threads, m->ntris >= POOL_MIN_TRIANGLES || evaluates);
+    bool worth = m->ntris >= POOL_MIN_TRIANGLES || evaluates;
+    int threads = ism_an_threads(o->threads);
+    bool side_thread = worth && threads > 1;
+    ism_pool *pool = ism_an_pool_new(side_thread ? threads - 1 : threads, worth);
     bool ok = ism_an_edge_table_build_on(m, pool, &et) && ism_an_count_corners(m, &vf);
     connectivity c = {m, &et, &vf, a, false};
     ism_side side;
     bool beside = ok; /* the side job was started (and must be joined) */
     if (beside)
-        ism_side_start(&side, ism_pool_threads(pool) > 1, run_connectivity, &c);
+        ism_side_start(&side, side_thread, run_connectivity, &c);
     ok = ok && ism_an_count_duplicates(m, &et, pool, a) && ism_an_triangle_quality(m, pool, a);
     ok = ok && ism_an_implicit_figures(m, f, o, &vf, pool, a);
     if (ok && f && o->accuracy)

@@ -41,7 +41,8 @@ typedef struct ism_analysis_options {
                             ism_analyse never moves anything (its mesh is const): a caller
                             that sets this runs ism_analysis_project and then analyses the
                             moved mesh again. */
-    int threads;         /* threads for the f evaluations (0 = online cores; at most 64) */
+    int threads;         /* threads the analysis runs in all, its side thread included
+                          * (0 = online cores; at most 64) */
     double singular_rel; /* |∇f| <= singular_rel * gradient_scale counts as vanishing
                             (default 1e-6); see gradient_scale below */
     int newton_steps;    /* Newton steps for the projection distance and projection (4) */

@@ -2,10 +2,10 @@
  * joined: for serial passes that share no data with what the caller does meanwhile (the
  * analysis's connectivity passes beside its evaluations on the pool), so the cores the pool
  * leaves idle between and inside its loops work on them. Inline when asked for no thread or
- * when a thread cannot be started; the result never depends on which. The thread is not
- * counted in any thread budget: beside a pool of N threads there are N + 1 runnable (the
- * CLI's --threads and the daemon's per-worker limit are the pools' widths; see
- * server/isomesh/main.c's help). */
+ * when a thread cannot be started; the result never depends on which. The thread counts in
+ * its caller's thread budget: who starts one beside a pool makes the pool one thread smaller
+ * (the analysis for its connectivity passes, the CLI for its mesh writer), so that the CLI's
+ * --threads and a daemon worker's limit hold every thread a run has. */
 #ifndef ISM_SIDE_H
 #define ISM_SIDE_H
 

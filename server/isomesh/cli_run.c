@@ -4,6 +4,7 @@
  * the service pipeline; or list the built-in surfaces. */
 #include "server/isomesh/cli.h"
 #include "core/util/clock.h"
+#include "core/util/parallel.h"
 #include "core/util/side.h"
 
 #include "core/analysis/analysis.h"
@@ -404,15 +405,17 @@ static bool nothing_to_do(const ism_cli_run *run)
     return true;
 }
 
-/* Analysis and the check against the locus, when stats or features are asked for. */
+/* Analysis and the check against the locus, when stats or features are asked for, on
+ * `threads` threads in all. */
 static bool analyse_run(const ism_cli_run *run, const ism_mesh *mesh, const ism_tape *tape,
-                        const ism_locus *locus, ism_analysis *an, ism_locus_check *chk)
+                        const ism_locus *locus, int threads, ism_analysis *an,
+                        ism_locus_check *chk)
 {
     if (!run->print_stats && !run->features_output)
         return false;
     ism_analysis_options ao;
     ism_analysis_options_default(&ao);
-    ao.threads = run->options.threads; /* --threads: the pool's (side.h: the side jobs add) */
+    ao.threads = threads;
     ao.max_error = run->options.max_error; /* measured as the polygoniser did (0: none) */
     ism_error err;
     if (!ism_analyse(mesh, tape, &ao, an, &err))
@@ -528,13 +531,15 @@ int ism_cli_run_surface(ism_cli_run *run)
     memset(&chk, 0, sizeof chk);
     mesh_write mw = {run->output, &mesh, true};
     ism_side writer;
-    /* on a thread of its own when the run has several and analyses; else after the analysis's
-     * time is taken, so that "analyse" never counts the writing */
-    bool beside = run->output && run->options.threads != 1 &&
-                  (run->print_stats || run->features_output);
+    /* on a thread of its own when the run has several and analyses, taken from the
+     * analysis's so that the run keeps to --threads; else after the analysis's time is
+     * taken, so that "analyse" never counts the writing */
+    int threads = run->options.threads > 0 ? run->options.threads : ism_cpu_count();
+    bool beside = run->output && threads > 1 && (run->print_stats || run->features_output);
     if (beside)
         ism_side_start(&writer, true, write_job, &mw);
-    bool analysed = analyse_run(run, &mesh, tape, &locus, &an, &chk);
+    bool analysed = analyse_run(run, &mesh, tape, &locus, beside ? threads - 1 : threads, &an,
+                                &chk);
     timings[ISM_TIME_ANALYSE] = ism_now_ms() - t2;
     if (beside)
         ism_side_join(&writer);

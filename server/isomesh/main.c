@@ -43,9 +43,8 @@ static const char usage_text[] =
     "  -b, --box X0,Y0,Z0,X1,Y1,Z1   search box, the octree root (default -1,-1,-1,1,1,1\n"
     "                           or the surface's own box)\n"
     "  -d, --depth MIN:MAX      subdivision depths (default 3:7; MAX at most 16)\n"
-    "      --threads N          threads for this run (default: all cores; output identical);\n"
-    "                           with --stats or --features, the analysis's serial passes and\n"
-    "                           the mesh file's writing each take one more thread beside them\n"
+    "      --threads N          threads for this run, every one counted (default: all\n"
+    "                           cores; output identical)\n"
     "%s"   /* the tolerances, from core/octree/tolerances.h */
     "      --max-error E|off    subdivide until the triangles lie within E of the surface\n"
     "                           (model units, measured at centroids and edge midpoints);\n"

@@ -11,6 +11,7 @@ import struct
 import subprocess
 import sys
 import tempfile
+import time
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -24,6 +25,26 @@ FIXTURE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "surfaces_fix
 
 def run(*args, timeout=120):
     return subprocess.run([ISOMESH, *args], capture_output=True, text=True, timeout=timeout)
+
+
+def run_counting_threads(*args, timeout=120):
+    """run(), and the most threads the process was seen running at once: its /proc/PID/task
+    entries, read every millisecond until it exits. A count read is one it had, so a peak can
+    be missed but never overstated; a thread running beside the analysis lasts all of it
+    (100+ ms for the meshes of 8,192+ triangles below: a hundred reads)."""
+    with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
+        p = subprocess.Popen([ISOMESH, *args], stdout=out, stderr=err, text=True)
+        task, peak = "/proc/%d/task" % p.pid, 0
+        while p.poll() is None:
+            try:
+                peak = max(peak, len(os.listdir(task)))
+            except OSError:  # exited between the poll and the read
+                break
+            time.sleep(0.001)
+        p.wait(timeout=timeout)
+        out.seek(0)
+        err.seek(0)
+        return subprocess.CompletedProcess(p.args, p.returncode, out.read(), err.read()), peak
 
 
 def slurp(path, mode="rb"):
@@ -283,7 +304,8 @@ class TestIsomesh(unittest.TestCase):
         PLY, the features file and every figure of the stats (the analysis's edge table,
         triangle quality, medians and percentiles run on the threads) are the same on 1, 2
         and 4 threads; only the times and the evaluation counts (each thread's own memo of
-        f) may differ."""
+        f) may differ. No run has more threads at once than --threads says (the analysis's
+        side thread and the PLY writer are counted in it)."""
         barth = ["-e", "max(4*(phi^2*x^2 - y^2)*(phi^2*y^2 - z^2)*(phi^2*z^2 - x^2) - "
                        "(1 + 2*phi)*(x^2 + y^2 + z^2 - 1)^2, x^2 + y^2 + z^2 - 2.25)",
                  "-p", "phi=1.6180339887498949"]
@@ -307,9 +329,11 @@ class TestIsomesh(unittest.TestCase):
         runs = []
         for threads in ("1", "2", "4"):
             ply, feats = self.out("t%s.ply" % threads), self.out("t%s.json" % threads)
-            p = run(*surface, "-b", ",".join(repr(v) for v in box), "-d", "3:6",
-                    "--threads", threads, "--stats", "-o", ply, "--features", feats)
+            p, peak = run_counting_threads(
+                *surface, "-b", ",".join(repr(v) for v in box), "-d", "3:6",
+                "--threads", threads, "--stats", "-o", ply, "--features", feats)
             self.assertEqual(p.returncode, 0, p.stderr)
+            self.assertLessEqual(peak, int(threads), (surface, box))
             stats = json.loads(p.stdout)
             self.assertEqual(stats["analysis"]["nonmanifold_points"] > 0, nodes, surface)
             self.assertGreater(stats["mesh"]["triangles"], 8192)  # the analysis's pool runs
@@ -318,6 +342,29 @@ class TestIsomesh(unittest.TestCase):
             self.assertEqual(runs[0][0], other[0], (surface, box))
             self.assertEqual(runs[0][1], other[1], (surface, box))
             self.assertEqual(runs[0][2], other[2], (surface, box))
+
+    def test_a_request_file_keeps_to_its_threads(self):
+        """The service pipeline (a daemon worker's run; here through a request file) on 1, 2
+        and 4 threads, in the three placements: the same PLY and stats figures, and never
+        more threads at once than --threads (its analysis evaluates f at every vertex, so its
+        pool and its connectivity passes' side thread run; they share the worker's limit)."""
+        box = [-1.5, -1.5, -1.5, 1.5, 1.5, 1.5]
+        for shifted in placements(box, (box[3] - box[0]) / 64):
+            req = self.out("req.json")
+            with open(req, "w") as f:
+                json.dump({"preset": "gyroid-ball", "box": shifted,
+                           "depth": {"min": 3, "max": 6}}, f)
+            runs = []
+            for threads in ("1", "2", "4"):
+                ply = self.out("r%s.ply" % threads)
+                p, peak = run_counting_threads(req, "--threads", threads, "--stats", "-o", ply)
+                self.assertEqual(p.returncode, 0, p.stderr)
+                self.assertLessEqual(peak, int(threads), shifted)
+                stats = json.loads(p.stdout)
+                self.assertGreater(stats["mesh"]["triangles"], 8192)
+                runs.append((slurp(ply), stats["analysis"], stats["mesh"]))
+            for other in runs[1:]:
+                self.assertEqual(runs[0], other, shifted)
 
     def test_request_file_through_the_pipeline(self):
         req = self.out("req.json")
