@@ -47,7 +47,8 @@ fewest triangles counted under callgrind (one run each; the count does not move 
 machine's load, where CPU seconds do) and the one with the fewest instructions kept. Counted:
 isomesh's ism_mesh_surface (and ism_simplify_pass with --simplify) on one thread; libfive's
 Mesh::render on its calling thread plus the bodies of its worker threads (LIBFIVE_TOGGLES),
-each thread counted apart (--separate-threads=yes) and summed. The table then prints
+each thread counted apart (--separate-threads=yes) and summed; a toggle no function of
+the run matched (renamed) stops the bench with its name. The table then prints
 instructions per call and per triangle, and isomesh / libfive instructions.
 
 The peer: libfive built from source (git clone https://github.com/libfive/libfive into
@@ -55,6 +56,7 @@ LIBFIVE_DIR, then tests/bench/build_libfive.sh LIBFIVE_DIR: its library alone, R
 -march=native so that valgrind runs it); libfive_mesher.cc is compiled against it here.
 """
 import argparse
+import fnmatch
 import json
 import math
 import os
@@ -94,7 +96,8 @@ INSTRUCTIONS = False      # --instructions: callgrind counts instead of CPU seco
 # only inside them): isomesh's surface pipeline (bench_error's timed call); libfive's render
 # call and its worker threads' bodies (std::async even with one worker: the octree build and
 # the dual walk run outside render's frame; the mesher process has no other threads).
-ISOMESH_TOGGLES = ("ism_mesh_surface", "ism_simplify_pass")
+ISOMESH_TOGGLES = ("ism_mesh_surface",)
+ISOMESH_SIMPLIFY_TOGGLE = "ism_simplify_pass"  # ... and with "simplify" this one too
 LIBFIVE_TOGGLES = ("libfive::Mesh::render(*", "std::thread::_State_impl<*>::_M_run()")
 
 
@@ -125,7 +128,9 @@ def timing(r):
 
 def instructions(argv, toggles, tmp):
     """Instructions callgrind counts in argv's run inside the toggles' functions, every thread
-    apart (--separate-threads=yes) and summed; None when the run fails."""
+    apart (--separate-threads=yes) and summed; None when the run fails. A run that succeeds
+    without entering one of the toggles (a function renamed, or its pattern no longer
+    matching) stops the bench, naming it: its count would read 0, which is no cost."""
     out = os.path.join(tmp, "callgrind.out")
     for f in os.listdir(tmp):
         if f.startswith("callgrind.out"):
@@ -139,17 +144,43 @@ def instructions(argv, toggles, tmp):
         return None
     if r.returncode != 0:
         return None
-    total, files = 0, 0
-    for f in os.listdir(tmp):
-        if not f.startswith("callgrind.out"):
-            continue
-        files += 1
+    total, names, ids = 0, set(), {}
+    files = sorted(f for f in os.listdir(tmp) if f.startswith("callgrind.out"))
+    for f in files:  # in thread order: a compressed name is spelt out once, in the first
         with open(os.path.join(tmp, f)) as fh:
-            for line in fh:
-                if line.startswith("summary:") or line.startswith("totals:"):
-                    total += int(line.split()[1])
-                    break
-    return total if files else None
+            n, fns = callgrind_totals(fh, ids)
+        total, names = total + n, names | fns
+    if not files:
+        return None
+    missed = [t for t in toggles if not any(fnmatch.fnmatchcase(n, t) for n in names)]
+    if missed or total == 0:
+        sys.exit(f"bench_equal_error: callgrind counted {total} instructions in "
+                 f"{' '.join(argv[:3])} ...: no function matching --toggle-collect="
+                 f"{', --toggle-collect='.join(missed or toggles)} ran (renamed? change the "
+                 f"bench's toggles: ISOMESH_TOGGLES, LIBFIVE_TOGGLES)")
+    return total
+
+
+def callgrind_totals(lines, ids):
+    """One callgrind output file: its total instructions (the summary or totals line) and the
+    names of the functions it holds costs for (fn= lines). Names are compressed across all of
+    a run's files: "fn=(id) name" or "cfn=(id) name" spells one out (into ids), "fn=(id)"
+    repeats it."""
+    total, names = 0, set()
+    for line in lines:
+        if line.startswith(("summary:", "totals:")) and not total:
+            total = int(line.split()[1])
+        elif line.startswith(("fn=", "cfn=")):
+            name = line.partition("=")[2].strip()
+            if name.startswith("("):
+                key, _, name = name[1:].partition(")")
+                name = name.strip()
+                if name:
+                    ids[key] = name
+                name = ids.get(key, "")
+            if name and line.startswith("fn="):
+                names.add(name)
+    return total, names
 
 
 # ---- the tools: each maps a resolution x (larger = finer) to {cpu_s, cpu_sd, runs, triangles,
@@ -198,7 +229,9 @@ class Isomesh(Tool):
         return r and dict(timing(r), triangles=r["triangles"], max_c=r[MEASURE])
 
     def count(self, s, x):
-        return instructions(self.argv(s, x), ISOMESH_TOGGLES, self.tmp)
+        toggles = ISOMESH_TOGGLES + ((ISOMESH_SIMPLIFY_TOGGLE,) if "simplify" in self.words
+                                     else ())
+        return instructions(self.argv(s, x), toggles, self.tmp)
 
 
 class Grid(Tool):
