@@ -35,7 +35,12 @@ def run_counting_threads(*args, timeout=120):
     with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
         p = subprocess.Popen([ISOMESH, *args], stdout=out, stderr=err, text=True)
         task, peak = "/proc/%d/task" % p.pid, 0
+        deadline = time.monotonic() + timeout
         while p.poll() is None:
+            if time.monotonic() > deadline:  # a hung run stops here, as run()'s would
+                p.kill()
+                p.wait()
+                raise subprocess.TimeoutExpired(p.args, timeout)
             try:
                 peak = max(peak, len(os.listdir(task)))
             except OSError:  # exited between the poll and the read
