@@ -1,8 +1,9 @@
 /* remesh.c — the quality pass in order (remesh.h): ∇f normals, protection, then rounds of
  * Lawson flips (to a fixed point or the sweep limit), collapses of the needles left, one
  * relaxation, one sweep onto and along min/max creases (rm_crease_slide.c) and one slide
- * sweep, ending with flips so the last moves' quads are Delaunay too and a last mending of
- * the needles those leave; then the mesh is renumbered without what collapses removed. */
+ * sweep, ending with flips so the last moves' quads are Delaunay too, a last mending of the
+ * needles those leave and the thin tubes' tips merged into their points (rm_horn.c); then the
+ * mesh is renumbered without what collapses removed. */
 #include "core/remesh/remesh.h"
 #include "core/remesh/rm_brec.h"
 #include "core/remesh/rm_cbound.h"
@@ -276,6 +277,9 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
            under 10° in its own / 1e-3 / 0.37-cell boxes -> 0, kummer-16 0.37-cell 16 -> 1 */
         if (ok && !stopped(o))
             mend_needles(&p, true, &ok);
+        /* what no mending could shape, thin tubes ending at a given point: merged into it */
+        if (ok && !stopped(o))
+            rm_horn_tips(&p, o, &ok);
         for (size_t v = 0; v < m->nverts; v++)
             st->locked_vertices += p.r.locked[v] && p.r.count[v];
     }

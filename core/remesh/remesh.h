@@ -9,7 +9,9 @@
  * cannot mend lose an edge by collapse (a free vertex merged into a neighbour, where the
  * link condition holds: the topology is kept; a locked vertex only along a crease or a curve
  * of zeros of ∇f, into a crowding neighbour: rm_collapse.c), and the mesh is renumbered
- * after; each triangle keeps its label, features keep their vertices, so χ, components,
+ * after; thin tubes ending at a given point (the horn cyclide's horns), where needles lie on
+ * them, are merged into the point's vertex tip first (rm_horn.c); each triangle keeps its
+ * label, features keep their vertices, so χ, components,
  * non-manifold edges and points and boundary loops cannot change. */
 #ifndef ISM_REMESH_H
 #define ISM_REMESH_H

@@ -106,9 +106,6 @@ static bool new_triangle_ok(const rm_pass *p, const rm_merge *g, uint32_t t, con
            fmin(cos_bend(m, lo, u, lu), cos(ISM_RM_COLLAPSE_MAX_BEND_DEG * M_PI / 180));
 }
 
-/* No new centroid or new edge's midpoint farther from f = 0 than the farthest of the old
- * fan's centroids, resp. midpoints of v's edges, or than the mesh's farthest before the pass
- * (within the error bound). */
 /* The farthest of the fan's centroids and of the midpoints of v's edges from f = 0, with v
  * at x (before: x is v's place) or merged into w (after: the removed triangles and the edges
  * to c and d, which are w's already, left out). */
@@ -130,7 +127,7 @@ static void fan_distances(rm_pass *p, const rm_merge *g, bool after, double *cen
     }
 }
 
-static bool distance_ok(rm_pass *p, const rm_merge *g)
+bool rm_merge_distance_ok(rm_pass *p, const rm_merge *g)
 {
     double new_c, new_m, old_c, old_m;
     fan_distances(p, g, true, &new_c, &new_m);
@@ -182,12 +179,11 @@ static bool merge_ok(rm_pass *p, rm_merge *g)
        free crowding pair, best_merge's crowd retry, must raise the smallest angle) */
     bool fewer = g->along && r->locked[g->v] && poor_after < poor_before &&
                  g->after > ISM_RM_CROWD_SINE_FLOOR * f.min_sine;
-    return (fewer || (g->after > f.min_sine && poor_after <= poor_before)) && distance_ok(p, g);
+    return (fewer || (g->after > f.min_sine && poor_after <= poor_before)) &&
+           rm_merge_distance_ok(p, g);
 }
 
-/* Merges g->v into g->w, marking the corners of its new triangles active and touched. False
- * when out of memory (nothing changed). */
-static bool do_merge(rm_pass *p, const rm_merge *g)
+bool rm_merge_do(rm_pass *p, const rm_merge *g)
 {
     uint32_t fan[ISM_RM_MERGE_MAX_DEGREE], n;
     if (!rm_merge_apply(&p->r, g, fan, &n))
@@ -306,7 +302,7 @@ static bool collapse_triangle(rm_pass *p, uint32_t t, bool *ok)
         int k = order[i];
         rm_merge g;
         if (best_merge(p, v[k], v[(k + 1) % 3], &g)) {
-            *ok = do_merge(p, &g);
+            *ok = rm_merge_do(p, &g);
             return *ok;
         }
     }

@@ -133,8 +133,7 @@ static bool fan_free(const rm_pass *p, uint32_t v, rm_curvature_memo *memo, edge
     return t == t0 && steps + 1 == n;
 }
 
-/* The nearest vertex to x used by some triangle (UINT32_MAX when none). */
-static uint32_t nearest_vertex(const rm_mesh *r, const double *x)
+uint32_t rm_point_vertex(const rm_mesh *r, const double *x)
 {
     uint32_t best = UINT32_MAX;
     double bd = INFINITY;
@@ -225,7 +224,7 @@ void rm_lock_vertices(rm_pass *p, const ism_remesh_options *o, const uint8_t *on
     for (size_t s = 0; s < 2 * r->m->nsegs; s++)
         r->locked[r->m->seg[s]] = RM_PINNED, p->slide[r->m->seg[s]] = 0;
     for (size_t i = 0; i < o->nlocked_points; i++) {
-        uint32_t v = nearest_vertex(r, o->locked_points + 3 * i);
+        uint32_t v = rm_point_vertex(r, o->locked_points + 3 * i);
         if (v != UINT32_MAX)
             r->locked[v] = RM_PINNED, p->slide[v] = 0;
     }

@@ -11,13 +11,12 @@ bool rm_merge_find(const rm_mesh *r, uint32_t v, uint32_t w, uint32_t max_degree
     return !r->locked[v] && rm_merge_find_any(r, v, w, max_degree, g);
 }
 
-bool rm_merge_find_any(const rm_mesh *r, uint32_t v, uint32_t w, uint32_t max_degree,
+/* g for merging v (at most max_degree triangles) into w, whatever w's degree. */
+static bool merge_fill(const rm_mesh *r, uint32_t v, uint32_t w, uint32_t max_degree,
                        rm_merge *g)
 {
     uint32_t t[2];
     int n;
-    if (max_degree > ISM_RM_MERGE_MAX_DEGREE)
-        max_degree = ISM_RM_MERGE_MAX_DEGREE;
     if (r->gone[v] || r->gone[w] || r->count[v] < 3 ||
         r->count[v] > max_degree || !rm_edge_triangles(r, v, w, t, &n))
         return false;
@@ -25,7 +24,20 @@ bool rm_merge_find_any(const rm_mesh *r, uint32_t v, uint32_t w, uint32_t max_de
     g->v = v, g->w = w, g->t1 = t[0], g->t2 = t[1], g->along = false;
     g->c = tri[3 * t[0] + (rm_corner(r->m, t[0], v) + 2) % 3];
     g->d = tri[3 * t[1] + (rm_corner(r->m, t[1], w) + 2) % 3];
-    return g->c != g->d && r->count[w] + r->count[v] - 4 <= max_degree;
+    return g->c != g->d;
+}
+
+bool rm_merge_find_any(const rm_mesh *r, uint32_t v, uint32_t w, uint32_t max_degree,
+                       rm_merge *g)
+{
+    if (max_degree > ISM_RM_MERGE_MAX_DEGREE)
+        max_degree = ISM_RM_MERGE_MAX_DEGREE;
+    return merge_fill(r, v, w, max_degree, g) && r->count[w] + r->count[v] - 4 <= max_degree;
+}
+
+bool rm_merge_find_into(const rm_mesh *r, uint32_t v, uint32_t w, rm_merge *g)
+{
+    return !r->locked[v] && merge_fill(r, v, w, ISM_RM_MERGE_MAX_DEGREE, g);
 }
 
 /* A vertex's neighbours are kept in an open-addressed table of this many slots (a power of

@@ -29,6 +29,11 @@ bool rm_merge_find(const rm_mesh *r, uint32_t v, uint32_t w, uint32_t max_degree
 bool rm_merge_find_any(const rm_mesh *r, uint32_t v, uint32_t w, uint32_t max_degree,
                        rm_merge *g);
 
+/* rm_merge_find with no limit on w's degree (only v's, ISM_RM_MERGE_MAX_DEGREE: its fan is
+ * held on the stack; w's slot grows): a singular point's vertex taking a tube's rings
+ * (rm_horn.c). */
+bool rm_merge_find_into(const rm_mesh *r, uint32_t v, uint32_t w, rm_merge *g);
+
 /* v's distinct neighbours into nb (room for 2 × ISM_RM_MERGE_MAX_DEGREE, v having at most
  * ISM_RM_MERGE_MAX_DEGREE triangles); returns how many. */
 int rm_merge_neighbours(const rm_mesh *r, uint32_t v, uint32_t *nb);

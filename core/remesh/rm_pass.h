@@ -173,6 +173,10 @@ bool rm_normals(rm_pass *p);
  * memory. */
 bool rm_lock_features(rm_pass *p, const ism_remesh_options *o);
 
+/* The vertex a given point pins (RM_PINNED): the nearest to x used by some triangle
+ * (UINT32_MAX when none). */
+uint32_t rm_point_vertex(const rm_mesh *r, const double *x);
+
 /* Recomputes the vertex protection (r.locked, slide) from the mesh as it is now: after flips
  * have replaced caps, whose noisy normals looked like creases. Features that flips never
  * change (boundary, non-manifold, labels, locked edges and points) stay protected. With
@@ -226,6 +230,19 @@ bool rm_crease_tri_ok(const rm_pass *p, uint32_t t, uint32_t a, uint32_t b,
  * triangles are marked dead and removed vertices gone (rm_compact drops them). *ok false
  * when out of memory. */
 size_t rm_collapse_active(rm_pass *p, bool *ok);
+/* No new centroid or new edge's midpoint of merging g->v into g->w (rm_merge.h) farther from
+ * f = 0 than the farthest of the old fan's centroids, resp. midpoints of v's edges, or than
+ * the mesh's farthest before the pass (within the error bound): the collapses' rule
+ * (rm_collapse.c), which the horn tips' merges share (rm_horn.c). */
+struct rm_merge;
+bool rm_merge_distance_ok(rm_pass *p, const struct rm_merge *g);
+/* Merges g->v into g->w, marking the corners of its new triangles active and touched (their
+ * shapes changed). False when out of memory (nothing changed). */
+bool rm_merge_do(rm_pass *p, const struct rm_merge *g);
+/* Merges the rings of thin tubes that end at a given point (the horn cyclide's horns) into
+ * the point's vertex, tip first, where a needle lies on the tube (rm_horn.c); returns the
+ * merges made (they count in collapses). *ok false when out of memory. */
+size_t rm_horn_tips(rm_pass *p, const ism_remesh_options *o, bool *ok);
 /* Splits needles under 10° that the collapses left (their short edge joins two locked
  * vertices, or its collapse was refused) at a new vertex beside that edge (rm_insert.c),
  * within the room reserved; returns the insertions made. With last

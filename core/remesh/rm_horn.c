@@ -1,0 +1,311 @@
+/* rm_horn.c — thin tubes that end at a given point, merged into the point's vertex tip first
+ * (rm_horn_tips, the quality pass's last step). Near the horn cyclide's point (a, 0, 0) its
+ * two horns are tubes of radius about y²/96 at y from the point, far thinner than E there;
+ * the polygoniser meshes such a tube as rings a few hundredths apart along it whose
+ * circumference is far below that (a flat ribbon 0.1 E thick at y = 0.9), and no flip, move,
+ * insertion or shape-raising collapse can make a good triangle of it: the pass left 105-115
+ * triangles under 10° within 1.06 (19 E) of the point in each of the preset's three boxes.
+ * Merging the tube's vertices into the point's vertex, nearest first, leaves a cone from the
+ * point to the ring where the merges stop; every triangle a merge makes has the point as a
+ * corner (v's fan is re-fanned to it), so the needles are gone or touch the singular point
+ * (issue 15's exception), and nothing else changes. A cone from the point to a ring of
+ * radius ρ lies within about ρ of a horn (the straight cone against a tube whose axis bends
+ * like y²: ρ/4 on a straight one): each merge is measured as a collapse is (new centroids and
+ * edge midpoints within the bound, rm_merge_distance_ok) and keeps the topology (the link
+ * condition, counted over both cones at the point).
+ *
+ * What is a thin tube is measured: from each cone at the point (its fan, one sheet) the mesh
+ * is walked in rings (breadth first); a ring is thin while its vertices lie within E of the
+ * line from the point through the ring's centroid (its radius), and the walk stops at the
+ * first ring that is not. Merges are made only up to the farthest corner of a needle (under
+ * 10°, no corner at a given point) lying wholly in those thin rings: a mesh without such
+ * needles is left as it was. */
+#include "core/remesh/rm_merge.h"
+#include "core/remesh/rm_pass.h"
+#include "core/util/vec3.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* A ring of more vertices than this is no thin tube's (the horn's have 3 to 10 in its three
+ * boxes; a disc around a point grows by about 6 per ring): the walk stops there. */
+#define RM_HORN_RING_MAX 64
+/* A ring is thin while its radius is at most this × E: a cone to it then lies within about
+ * E of the tube (rm_merge_distance_ok measures each merge anyway). The horn's walk stops
+ * 1.8-2.0 from the point (radius y²/96 reaches E = 0.0554 at y = 2.3), its needles end at
+ * 0.63-1.06. */
+#define RM_HORN_THIN 1.0
+/* A merge may make no triangle whose smallest angle's sine is under this (0.057°): the cone's
+ * triangles, as thin as the ring's edges are short against its distance from the point
+ * (the horn's: 0.6° and more), keep an area that float32 positions hold. */
+#define RM_HORN_MIN_SINE 1e-3
+
+/* The tag of a vertex the walk saw and left out of the thin rings (or merged), and of one
+ * refused since the cone's last merge. */
+#define RM_HORN_OUT UINT32_MAX
+#define RM_HORN_REFUSED (UINT32_MAX - 1)
+
+static const double *X(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * (size_t)v; }
+
+static uint32_t slot(const rm_mesh *r, uint32_t v, uint32_t i) { return r->vt[r->start[v] + i]; }
+
+/* The walk's state: per vertex the cone it was reached from (0: not seen), the thin rings'
+ * vertices in order, and the current ring. */
+typedef struct horn_walk {
+    uint32_t *tag;
+    uint32_t *seen; /* vertices in the order seen: thin rings, then the ring being judged */
+    size_t nseen;
+    uint32_t *refused; /* the cone's vertices refused since its last merge */
+    size_t nrefused;
+} horn_walk;
+
+/* A needle the merges are for: under 10°, no corner at a given point or a segment's end. */
+static bool is_needle(rm_pass *p, uint32_t t)
+{
+    const uint32_t *c = p->r.m->tri + 3 * (size_t)t;
+    return !p->r.dead[t] && rm_tri_sine(p, t) < rm_insert_poor() &&
+           p->r.locked[c[0]] != RM_PINNED && p->r.locked[c[1]] != RM_PINNED &&
+           p->r.locked[c[2]] != RM_PINNED;
+}
+
+/* The largest distance of the n vertices ring[] from the line from x through their
+ * centroid (from x itself when the centroid is there). */
+static double ring_radius(const rm_pass *p, const double *x, const uint32_t *ring, size_t n)
+{
+    double c[3] = {0, 0, 0}, a[3], rad = 0;
+    for (size_t i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++)
+            c[k] += X(p, ring[i])[k] / (double)n;
+    for (int k = 0; k < 3; k++)
+        a[k] = c[k] - x[k];
+    double la = ism_norm3(a);
+    for (size_t i = 0; i < n; i++) {
+        double d[3], q[3];
+        for (int k = 0; k < 3; k++)
+            d[k] = X(p, ring[i])[k] - x[k];
+        ism_cross3(d, a, q);
+        rad = fmax(rad, la > 0 ? ism_norm3(q) / la : ism_norm3(d));
+    }
+    return rad;
+}
+
+/* Adds w's neighbours not seen yet (but the point c) to the walk under tag g. */
+static void see_neighbours(const rm_pass *p, horn_walk *h, uint32_t w, uint32_t c, uint32_t g)
+{
+    const rm_mesh *r = &p->r;
+    for (uint32_t i = 0; i < r->count[w]; i++) {
+        const uint32_t *t = r->m->tri + 3 * (size_t)slot(r, w, i);
+        for (int k = 0; k < 3; k++)
+            if (t[k] != c && !h->tag[t[k]]) {
+                h->tag[t[k]] = g;
+                h->seen[h->nseen++] = t[k];
+            }
+    }
+}
+
+/* Walks from the cone of c's triangles containing triangle t0 (tag g) ring by ring while the
+ * rings are thin (radius at most thin); the thin rings' vertices keep tag g, the first ring
+ * that is not (or too large) gets RM_HORN_OUT. */
+static void walk_cone(const rm_pass *p, horn_walk *h, uint32_t c, uint32_t t0, uint32_t g,
+                      double thin)
+{
+    const rm_mesh *r = &p->r;
+    size_t from = h->nseen;
+    /* the cone's ring: the corners of the triangles at c reached from t0 across manifold
+       edges at c */
+    const uint32_t *tri = r->m->tri;
+    uint32_t t = t0;
+    for (uint32_t steps = 0; steps <= r->count[c]; steps++) {
+        int k = rm_corner(r->m, t, c);
+        uint32_t a = tri[3 * t + (k + 1) % 3], b = tri[3 * t + (k + 2) % 3], two[2];
+        int n;
+        for (int j = 0; j < 2; j++) {
+            uint32_t x = j ? b : a;
+            if (!h->tag[x]) {
+                h->tag[x] = g;
+                h->seen[h->nseen++] = x;
+            }
+        }
+        if (!rm_edge_triangles(r, c, a, two, &n) || two[1] == t0)
+            break; /* open or back at the start */
+        t = two[1];
+    }
+    while (h->nseen > from) {
+        size_t n = h->nseen - from;
+        if (n > RM_HORN_RING_MAX || ring_radius(p, X(p, c), h->seen + from, n) > thin) {
+            for (size_t i = from; i < h->nseen; i++)
+                h->tag[h->seen[i]] = RM_HORN_OUT;
+            h->nseen = from;
+            return;
+        }
+        size_t end = h->nseen;
+        for (size_t i = from; i < end; i++)
+            see_neighbours(p, h, h->seen[i], c, g);
+        from = end;
+    }
+}
+
+/* x is a vertex of cone g within reach of c that a later merge may take into c: a triangle
+ * of it the merges make now is re-fanned again then. */
+static bool pending(const rm_pass *p, const horn_walk *h, uint32_t x, uint32_t c, uint32_t g,
+                    double reach)
+{
+    return (h->tag[x] == g || h->tag[x] == RM_HORN_REFUSED) && !p->r.locked[x] &&
+           rm_dist(X(p, x), X(p, c)) <= reach;
+}
+
+/* The merge of v into c (cone g, reach) passes: the link condition, each new triangle's
+ * centroid and new edge's midpoint stay within the bound, and each new triangle whose two
+ * other corners no later merge takes (the cone's end) is no flatter than RM_HORN_MIN_SINE
+ * (or v's thinnest now) and faces ∇f's side at those corners where it did before. On the
+ * way there the tip's triangles are as thin as the ribbon (sines down to 5e-5) and stand
+ * edge-on, either way, to ∇f; held to the end's rules they stopped the merges at 0.54 and
+ * 0.63 of the horn's 1.06. */
+static bool horn_merge_ok(rm_pass *p, const horn_walk *h, uint32_t v, uint32_t c, uint32_t g,
+                          double reach, rm_merge *m)
+{
+    const rm_mesh *r = &p->r;
+    double floor = INFINITY; /* the thinnest of v's triangles now */
+    for (uint32_t i = 0; i < r->count[v]; i++)
+        floor = fmin(floor, rm_tri_sine(p, slot(r, v, i)));
+    if (!rm_merge_find_into(r, v, c, m) || !rm_merge_link_ok(r, m))
+        return false;
+    for (uint32_t i = 0; i < r->count[v]; i++) {
+        uint32_t t = slot(r, v, i);
+        const uint32_t *k = r->m->tri + 3 * (size_t)t;
+        int at = rm_corner(r->m, t, v);
+        uint32_t a = k[(at + 1) % 3], b = k[(at + 2) % 3];
+        if (t == m->t1 || t == m->t2 || pending(p, h, a, c, g, reach) ||
+            pending(p, h, b, c, g, reach))
+            continue;
+        const double *q[3], *o[3];
+        rm_merge_corners(r, t, v, X(p, c), q);
+        rm_merge_corners(r, t, v, X(p, v), o);
+        double n[3], was[3];
+        rm_cross(q[0], q[1], q[2], n);
+        rm_cross(o[0], o[1], o[2], was);
+        if (!(rm_min_sine(q[0], q[1], q[2]) >= fmin(RM_HORN_MIN_SINE, floor)))
+            return false;
+        for (int j = 0; j < 2; j++) {
+            const double *gn = p->normal + 3 * (size_t)(j ? b : a);
+            if (ism_dot3(was, gn) > 0 && !(ism_dot3(n, gn) > 0))
+                return false;
+        }
+    }
+    return rm_merge_distance_ok(p, m);
+}
+
+/* Merges cone g's thin vertices within reach of c into c, nearest first; returns how many. */
+static size_t merge_cone(rm_pass *p, horn_walk *h, uint32_t c, uint32_t g, double reach,
+                         bool *ok)
+{
+    const rm_mesh *r = &p->r;
+    size_t made = 0;
+    h->nrefused = 0;
+    while (*ok) {
+        uint32_t best = UINT32_MAX;
+        double bd = INFINITY;
+        for (uint32_t i = 0; i < r->count[c]; i++) {
+            const uint32_t *t = r->m->tri + 3 * (size_t)slot(r, c, i);
+            for (int k = 0; k < 3; k++) {
+                double d = rm_dist(X(p, t[k]), X(p, c));
+                if (t[k] != c && h->tag[t[k]] == g && !r->locked[t[k]] && d <= reach &&
+                    d < bd)
+                    bd = d, best = t[k];
+            }
+        }
+        if (best == UINT32_MAX)
+            break;
+        rm_merge m;
+        if (!horn_merge_ok(p, h, best, c, g, reach, &m)) {
+            h->tag[best] = RM_HORN_REFUSED; /* until a merge changes the cone */
+            h->refused[h->nrefused++] = best;
+            continue;
+        }
+        if (!(*ok = rm_merge_do(p, &m)))
+            break;
+        h->tag[best] = RM_HORN_OUT;
+        made++;
+        /* a vertex refused for the link condition (a neighbour of c's across the ring, which
+           the walk's order reaches from the other side) may pass once its neighbours have
+           gone into c */
+        while (h->nrefused)
+            h->tag[h->refused[--h->nrefused]] = g;
+    }
+    while (h->nrefused)
+        h->tag[h->refused[--h->nrefused]] = RM_HORN_OUT;
+    return made;
+}
+
+/* The farthest corner from c of the needles lying wholly in cone g's thin rings (0: none). */
+static double needle_reach(rm_pass *p, const horn_walk *h, size_t from, uint32_t c, uint32_t g)
+{
+    const rm_mesh *r = &p->r;
+    double reach = 0;
+    for (size_t i = from; i < h->nseen; i++) {
+        uint32_t v = h->seen[i];
+        if (h->tag[v] != g)
+            continue;
+        for (uint32_t j = 0; j < r->count[v]; j++) {
+            uint32_t t = slot(r, v, j);
+            const uint32_t *k = r->m->tri + 3 * (size_t)t;
+            if (h->tag[k[0]] == g && h->tag[k[1]] == g && h->tag[k[2]] == g &&
+                is_needle(p, t))
+                for (int e = 0; e < 3; e++)
+                    reach = fmax(reach, rm_dist(X(p, k[e]), X(p, c)));
+        }
+    }
+    return reach;
+}
+
+/* A triangle at c whose cone has not been walked (its corners not seen), or UINT32_MAX: asked
+ * afresh after each cone, whose merges reorder c's triangles. */
+static uint32_t unwalked(const rm_mesh *r, const horn_walk *h, uint32_t c)
+{
+    for (uint32_t j = 0; j < r->count[c]; j++) {
+        uint32_t t = slot(r, c, j);
+        const uint32_t *k = r->m->tri + 3 * (size_t)t;
+        if (!h->tag[k[(rm_corner(r->m, t, c) + 1) % 3]])
+            return t;
+    }
+    return UINT32_MAX;
+}
+
+size_t rm_horn_tips(rm_pass *p, const ism_remesh_options *o, bool *ok)
+{
+    const rm_mesh *r = &p->r;
+    size_t needles = 0, made = 0;
+    for (size_t t = 0; o->nlocked_points && t < r->m->ntris && !needles; t++)
+        needles += is_needle(p, (uint32_t)t);
+    if (!needles)
+        return 0;
+    /* without a bound the mesh's own farthest centroid is the scale a tube is thin against */
+    rm_collapse_bounds_need(p);
+    double thin = RM_HORN_THIN * (p->max_error > 0 ? p->max_error : p->centroid_bound);
+    size_t nv = r->m->nverts ? r->m->nverts : 1;
+    horn_walk h = {calloc(nv, sizeof *h.tag), malloc(nv * sizeof *h.seen), 0,
+                   malloc(nv * sizeof *h.refused), 0};
+    uint32_t g = 0;
+    for (size_t i = 0; h.tag && h.seen && h.refused && i < o->nlocked_points && *ok; i++) {
+        uint32_t c = rm_point_vertex(r, o->locked_points + 3 * i);
+        if (c == UINT32_MAX || r->locked[c] != RM_PINNED)
+            continue;
+        h.tag[c] = RM_HORN_OUT;
+        uint32_t t0;
+        while (*ok && (t0 = unwalked(r, &h, c)) != UINT32_MAX) {
+            size_t from = h.nseen;
+            walk_cone(p, &h, c, t0, ++g, thin);
+            double reach = needle_reach(p, &h, from, c, g);
+            if (reach > 0)
+                made += merge_cone(p, &h, c, g, reach, ok);
+        }
+    }
+    if (!h.tag || !h.seen || !h.refused)
+        *ok = false;
+    free(h.tag);
+    free(h.seen);
+    free(h.refused);
+    p->collapses += made;
+    return made;
+}
