@@ -3,9 +3,10 @@
  * analysis's connectivity passes beside its evaluations on the pool), so the cores the pool
  * leaves idle between and inside its loops work on them. Inline when asked for no thread or
  * when a thread cannot be started; the result never depends on which. The thread counts in
- * its caller's thread budget: who starts one beside a pool makes the pool one thread smaller
- * (the analysis for its connectivity passes, the CLI for its mesh writer), so that the CLI's
- * --threads and a daemon worker's limit hold every thread a run has. */
+ * its caller's thread budget: who starts one gives what runs beside it one thread fewer (the
+ * analysis's pool, beside its connectivity passes; the analysis, beside the CLI's mesh
+ * writer), so that the CLI's --threads and a daemon worker's limit hold every thread a run
+ * has. */
 #ifndef ISM_SIDE_H
 #define ISM_SIDE_H
 
