@@ -113,7 +113,7 @@ bool ism_tape_top_min_max_only(const ism_tape *t)
  * (ism_kink_pass), or its constant. */
 static ism_instr decided(const ism_instr *in, unsigned choice)
 {
-    enum ism_kink_pass pass = ism_kink_pass(in, choice);
+    enum ism_kink_passed pass = ism_kink_pass(in, choice);
     assert(pass != ISM_PASS_NEG_A); /* a shortened tape has no NEG to put here: only min/max
                                       are decided */
     ism_instr r = *in;

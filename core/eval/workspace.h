@@ -52,8 +52,8 @@ static inline bool ism_op_is_kink(int op)
  * records a decided min/max): its operand a, its register b, its constant (the _RC forms'
  * branch 2) or -a (abs on branch 2). One rule for the shortened tapes (shorten.c) and the
  * forced pieces (ism_eval_piece_value, ism_eval_piece_gradient), each switching on it. */
-enum ism_kink_pass { ISM_PASS_A, ISM_PASS_B, ISM_PASS_IMM, ISM_PASS_NEG_A };
-static inline enum ism_kink_pass ism_kink_pass(const ism_instr *in, unsigned br)
+enum ism_kink_passed { ISM_PASS_A, ISM_PASS_B, ISM_PASS_IMM, ISM_PASS_NEG_A };
+static inline enum ism_kink_passed ism_kink_pass(const ism_instr *in, unsigned br)
 {
     if (in->op == ISM_OP_ABS)
         return br == 1 ? ISM_PASS_A : ISM_PASS_NEG_A;

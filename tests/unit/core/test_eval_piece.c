@@ -2,12 +2,14 @@
  * cube-minus-ball, f = max(max(|x|, |y|, |z|) − 1, 1.69 − |p|²), against its closed form: the
  * six faces and the ball are seven pieces, a ball point's piece does not depend on which
  * coordinate is largest there, and f on a face's piece is that face's plane (value and
- * gradient) on both sides of the cube's edges, where f itself takes another face. */
+ * gradient) on both sides of the cube's edges, where f itself takes another face; and what
+ * each kink passes on each branch. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <string.h>
 
 #include "core/eval/eval.h"
+#include "core/eval/workspace.h"
 #include "core/expr/expr.h"
 
 #define CMB "max(max(abs(x), abs(y), abs(z)) - 1, 1.69 - (x^2 + y^2 + z^2))"
@@ -139,5 +141,27 @@ Test(eval_piece, value_alone_is_the_gradient_pass_value)
         cr_expect_gt(forced, 0, "%s: every piece was f's own at q", exprs[e]);
         ism_eval_ws_free(ws);
         ism_tape_free(t);
+    }
+}
+
+/* What each kink passes on each branch (workspace.h ism_kink_pass), against eval.h's meaning
+ * of a piece's branches: 1 is min/max's first operand and abs's +a, 2 the second operand (a
+ * register for the _RR forms, the constant for the _RC forms) and abs's -a. The one table
+ * that shortening and the forced pieces both switch on. */
+Test(eval_piece, kinks_pass_what_their_branch_names)
+{
+    const struct {
+        int op;
+        enum ism_kink_passed br1, br2;
+    } rows[] = {
+        {ISM_OP_MIN_RR, ISM_PASS_A, ISM_PASS_B},   {ISM_OP_MAX_RR, ISM_PASS_A, ISM_PASS_B},
+        {ISM_OP_MIN_RC, ISM_PASS_A, ISM_PASS_IMM}, {ISM_OP_MAX_RC, ISM_PASS_A, ISM_PASS_IMM},
+        {ISM_OP_ABS, ISM_PASS_A, ISM_PASS_NEG_A},
+    };
+    for (size_t i = 0; i < sizeof rows / sizeof *rows; i++) {
+        ism_instr in = {.op = rows[i].op, .out = 3, .a = 1, .b = 2, .imm = 0.5};
+        cr_expect(ism_op_is_kink(in.op), "op %d", in.op);
+        cr_expect_eq(ism_kink_pass(&in, 1), rows[i].br1, "op %d branch 1", in.op);
+        cr_expect_eq(ism_kink_pass(&in, 2), rows[i].br2, "op %d branch 2", in.op);
     }
 }
