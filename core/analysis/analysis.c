@@ -19,6 +19,7 @@
 #include "core/analysis/implicit.h"
 #include "core/analysis/accuracy.h"
 #include "core/analysis/blocks.h"
+#include "core/util/parallel.h"
 #include "core/util/side.h"
 
 #include <stdlib.h>
@@ -77,7 +78,7 @@ bool ism_analyse(const ism_mesh *m, const ism_tape *f, const ism_analysis_option
      * limit) */
     bool evaluates = f && (o->curvature || o->accuracy) && m->nverts > ISM_AN_EVAL_BLOCK;
     bool worth = m->ntris >= POOL_MIN_TRIANGLES || evaluates;
-    int threads = ism_an_threads(o->threads);
+    int threads = ism_threads_resolve(o->threads);
     bool side_thread = worth && threads > 1;
     ism_pool *pool = ism_an_pool_new(side_thread ? threads - 1 : threads, worth);
     bool ok = ism_an_edge_table_build_on(m, pool, &et) && ism_an_count_corners(m, &vf);

@@ -6,9 +6,6 @@
 #include "core/util/parallel.h"
 
 #include <stdlib.h>
-#include <unistd.h>
-
-#define MAX_THREADS 64
 
 typedef struct block_run {
     ism_an_block_fn fn;
@@ -16,18 +13,9 @@ typedef struct block_run {
     ism_eval_ws **ws; /* per thread of the pool */
 } block_run;
 
-int ism_an_threads(int t)
-{
-    if (t <= 0) {
-        long n = sysconf(_SC_NPROCESSORS_ONLN);
-        t = n > 0 ? (int)(n < MAX_THREADS ? n : MAX_THREADS) : 1;
-    }
-    return t < MAX_THREADS ? t : MAX_THREADS;
-}
-
 ism_pool *ism_an_pool_new(int t, bool worth)
 {
-    int threads = ism_an_threads(t);
+    int threads = ism_threads_resolve(t);
     return threads > 1 && worth ? ism_pool_new(threads) : NULL;
 }
 

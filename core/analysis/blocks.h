@@ -26,9 +26,6 @@ typedef void (*ism_an_block_fn)(void *ctx, ism_eval_ws *ws, size_t block);
 bool ism_an_run_blocks(const ism_tape *f, ism_pool *pool, size_t nblocks, ism_an_block_fn fn,
                        void *ctx);
 
-/* Threads to use for option value t (0 = online cores), at most 64. */
-int ism_an_threads(int t);
-
 /* The threads option t asks for, made once for all of a call's parallel loops: NULL (the
  * calling thread alone) when that is one thread or the work is not `worth` starting
  * threads for (or the pool cannot be allocated). Freed with ism_pool_free. */

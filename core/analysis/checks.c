@@ -1,13 +1,13 @@
 /* checks.c — the input checks shared by ism_analyse and ism_analysis_project: sizes the
  * 32-bit indices can hold, finite coordinates, indices in range, options in range. */
 #include "core/analysis/checks.h"
+#include "core/util/pool.h"
 
 #include <math.h>
 #include <stdint.h>
 
 #define MAX_COORD 1e100 /* larger coordinates would overflow squared lengths */
 #define MAX_NEWTON_STEPS 100 /* Newton converges in a handful; more is a typo, and costs */
-#define MAX_THREADS 64       /* blocks.c runs at most this many threads */
 
 /* Bad input gets a message naming the first offending vertex or triangle. */
 bool ism_an_check_mesh(const ism_mesh *m, ism_error *err)
@@ -35,8 +35,8 @@ bool ism_an_check_options(const ism_analysis_options *o, ism_error *err)
         return ism_an_fail(err, "analysis: singular_rel must be in [0, 1)");
     if (o->newton_steps < 0 || o->newton_steps > MAX_NEWTON_STEPS)
         return ism_an_fail(err, "analysis: newton_steps must be in 0..%d", MAX_NEWTON_STEPS);
-    if (o->threads < 0 || o->threads > MAX_THREADS)
-        return ism_an_fail(err, "analysis: threads must be in 0..%d", MAX_THREADS);
+    if (o->threads < 0 || o->threads > ISM_MAX_THREADS)
+        return ism_an_fail(err, "analysis: threads must be in 0..%d", ISM_MAX_THREADS);
     if (!(o->max_error >= 0 && isfinite(o->max_error)))
         return ism_an_fail(err, "analysis: max_error must be finite and at least 0");
     return true;

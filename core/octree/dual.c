@@ -58,7 +58,6 @@
  * threads to share evenly. */
 #define WALK_SPLIT_LEVEL 3
 /* Threads at most: the options' own limit (polygonise.c checks o->threads against it). */
-#define DUAL_MAX_THREADS 64
 /* A crease leaf this many E across or less is judged by the measurement alone (crease_kind,
  * dual_crease.h's `small`): the primal path's rule for such nodes (cell_error.c, 4 E). */
 #define CREASE_MEASURED_CELLS 4.0
@@ -2878,11 +2877,10 @@ static enum ism_dual_status run_in_grown_box(dual *d, ism_mesh *mesh, ism_dual_s
     return status;
 }
 
-/* Threads for the call: o->threads, or every core (0), at most MAX_THREADS. */
+/* Threads for the call: o->threads, or every core (0), at most ISM_MAX_THREADS. */
 static int thread_count(const ism_poly_options *o)
 {
-    int n = o->threads > 0 ? o->threads : ism_cpu_count();
-    return n > DUAL_MAX_THREADS ? DUAL_MAX_THREADS : n;
+    return ism_threads_resolve(o->threads);
 }
 
 enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o, ism_mesh *mesh,

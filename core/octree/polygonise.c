@@ -49,7 +49,6 @@
 #ifndef ISM_FLAT_ABS_FRACTION
 #define ISM_FLAT_ABS_FRACTION 0.25
 #endif
-#define MAX_THREADS 64
 
 /* The flatness test's cap in world units (above). */
 static double flat_abs_tol(const ism_octree *tree, const ism_poly_options *o)
@@ -102,8 +101,8 @@ bool ism_poly_options_check(const ism_poly_options *o, ism_error *err)
     }
     if (!in_range(o->max_error, 0, 1e300))
         return ism_error_set(err, "max_error: must be a finite number >= 0 (0: off)");
-    if (o->threads < 0 || o->threads > MAX_THREADS)
-        return ism_error_set(err, "threads: must be in 0..%d", MAX_THREADS);
+    if (o->threads < 0 || o->threads > ISM_MAX_THREADS)
+        return ism_error_set(err, "threads: must be in 0..%d", ISM_MAX_THREADS);
     if (o->max_triangles < 1)
         return ism_error_set(err, "max_triangles: must be at least 1");
     if (!in_range(o->deadline_ms, 0, 1e300))
@@ -331,8 +330,7 @@ static void meter_stop_inside(const phase_meter *m, ism_poly_stats *st, enum ism
 
 static int thread_count(const ism_poly_options *o)
 {
-    int n = o->threads > 0 ? o->threads : ism_cpu_count();
-    return n > MAX_THREADS ? MAX_THREADS : n;
+    return ism_threads_resolve(o->threads);
 }
 
 static void add_cell_stats(ism_poly_stats *st, const ism_cell_ctx *cx)

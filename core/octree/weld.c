@@ -12,6 +12,7 @@
  * shared table; resolve (count new vertices); place (write them); map (count kept
  * triangles); write the triangles. */
 #include "core/octree/weld.h"
+#include "core/util/pool.h"
 #include "core/util/vec3.h"
 #include "core/util/zeroed.h"
 
@@ -25,7 +26,6 @@
 /* Vertex numbers, and the slot numbers of a table of up to 4 slots per vertex (2 rounded up
  * to a power of two), fit in 32 bits below this. */
 #define MAX_PIECE_VERTICES ((size_t)1 << 30)
-#define MAX_THREADS 64 /* as many as ism_parallel_for runs */
 
 /* g scaled to unit length, or 0 0 0 when g is zero or not finite. Dividing by the largest
  * component first keeps the squared length from underflowing (∇f ~ 1e-160 where f = g^64
@@ -400,7 +400,7 @@ bool ism_weld(const ism_cell_out *pieces, size_t npieces, ism_pool *pool, ism_me
     w.pieces = pieces;
     w.mesh = mesh;
     int threads = ism_pool_threads(pool);
-    threads = threads > MAX_THREADS ? MAX_THREADS : threads;
+    threads = threads > ISM_MAX_THREADS ? ISM_MAX_THREADS : threads;
     size_t n = npieces ? npieces : 1;
     w.voff = malloc((n + 1) * sizeof *w.voff);
     w.new_verts = malloc(n * sizeof *w.new_verts);

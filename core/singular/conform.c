@@ -171,7 +171,7 @@ bool ism_conform_mesh(const ism_tape *f, const ism_locus_options *o, ism_locus *
                    .origin = {o->box[0], o->box[1], o->box[2]}, .extent = side,
                    .cancel = o->cancel, .deadline_ms = o->deadline_ms,
                    .work_max = o->conform_work_max,
-                   .threads = o->threads > 0 ? o->threads : ism_cpu_count()};
+                   .threads = ism_threads_resolve(o->threads)};
     r.c.ws = ism_eval_ws_new(f);
     r.point_vertex = malloc((locus->npoints + 1) * sizeof *r.point_vertex);
     bool ok = r.c.ws && r.point_vertex;

@@ -866,7 +866,7 @@ bool ism_sing_search(const ism_tape *f, const ism_locus_options *o, ism_locus *o
         s.hi[k] = o->box[k + 3];
         s.ext[k] = s.hi[k] - s.lo[k];
     }
-    s.threads = o->threads > 0 ? o->threads : ism_cpu_count();
+    s.threads = ism_threads_resolve(o->threads);
     atomic_init(&s.stop, 0);
     atomic_init(&s.kept, 0);
     vec boxes = { 0 };

@@ -24,8 +24,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Threads one request may use (as the polygoniser). */
-#define SHEET_MAX_THREADS 64
 /* A search box is a finest cell of the lattice when its corners are lattice points to
  * within this fraction of a step (both are computed as lo + i·step, so they agree to a few
  * ulps). */
@@ -208,9 +206,7 @@ static bool run_stage(const ism_tape *f, const ism_locus_options *o, ism_locus *
     if (!check_options(o, err))
         return false;
     double t0 = ism_now_ms();
-    int threads = o->threads > 0 ? o->threads : ism_cpu_count();
-    if (threads > SHEET_MAX_THREADS)
-        threads = SHEET_MAX_THREADS;
+    int threads = ism_threads_resolve(o->threads);
     stage s = {.o = o, .io = io};
     ism_key_map_init(&s.boxes);
     /* one finest cell per box is no lattice to contour on: depth 0 runs as depth 1 */

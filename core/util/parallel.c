@@ -14,8 +14,6 @@
 #include <stdint.h>
 #include <unistd.h>
 
-#define MAX_THREADS 64
-
 /* Task numbers [lo, hi) packed as lo << 32 | hi (task counts stay below 2^32). */
 typedef struct block {
     alignas(ISM_CACHE_LINE) _Atomic uint64_t range; /* a line each: claims do not bounce */
@@ -35,8 +33,8 @@ typedef struct loop {
     void *ctx;
     int threads;
     bool timed;        /* each task's CPU is read (for an ism_par_cost) */
-    block blocks[MAX_THREADS];
-    worker w[MAX_THREADS];
+    block blocks[ISM_MAX_THREADS];
+    worker w[ISM_MAX_THREADS];
 } loop;
 
 static uint64_t pack(uint32_t lo, uint32_t hi) { return (uint64_t)lo << 32 | hi; }
@@ -125,8 +123,8 @@ void ism_pool_for(ism_pool *pool, size_t ntasks, void (*fn)(void *, size_t, int)
         return;
     }
     int threads = ism_pool_threads(pool);
-    if (threads > MAX_THREADS)
-        threads = MAX_THREADS;
+    if (threads > ISM_MAX_THREADS)
+        threads = ISM_MAX_THREADS;
     if ((size_t)threads > ntasks)
         threads = (int)ntasks;
     if (threads < 1)
@@ -160,8 +158,8 @@ void ism_pool_for(ism_pool *pool, size_t ntasks, void (*fn)(void *, size_t, int)
 void ism_parallel_for_costed(int threads, size_t ntasks, void (*fn)(void *, size_t, int),
                              void *ctx, ism_par_cost *cost)
 {
-    if (threads > MAX_THREADS)
-        threads = MAX_THREADS;
+    if (threads > ISM_MAX_THREADS)
+        threads = ISM_MAX_THREADS;
     if ((size_t)threads > ntasks)
         threads = (int)ntasks;
     ism_pool *pool = threads > 1 ? ism_pool_new(threads) : NULL;
@@ -201,4 +199,9 @@ int ism_cpu_count(void)
 {
     long n = sysconf(_SC_NPROCESSORS_ONLN);
     return n < 1 ? 1 : (int)n;
+}
+
+int ism_threads_resolve(int requested)
+{
+    return ism_threads_given(requested, ism_cpu_count());
 }

@@ -63,4 +63,15 @@ static inline size_t ism_block_end(size_t blk, size_t per, size_t n)
 /* Number of online processors (at least 1). */
 int ism_cpu_count(void);
 
+/* Threads a computation that asked for `requested` runs on, given `cores` online: requested,
+ * or every core when 0 (the rule of every threads option), in 1..ISM_MAX_THREADS. */
+static inline int ism_threads_given(int requested, int cores)
+{
+    int n = requested > 0 ? requested : cores;
+    return n < 1 ? 1 : n > ISM_MAX_THREADS ? ISM_MAX_THREADS : n;
+}
+
+/* The same on this machine's cores (ism_cpu_count). */
+int ism_threads_resolve(int requested);
+
 #endif

@@ -10,9 +10,6 @@
 #include <stdint.h>
 #include <stdlib.h>
 
-/* Threads a pool holds at most (the polygoniser's option allows 64). */
-#define POOL_MAX_THREADS 64
-
 typedef struct worker {
     ism_pool *pool;
     int id;
@@ -29,8 +26,8 @@ struct ism_pool {
     void (*job)(void *, int);
     void *arg;
     int nthreads;         /* 1 + workers started */
-    pthread_t tid[POOL_MAX_THREADS];
-    worker w[POOL_MAX_THREADS];
+    pthread_t tid[ISM_MAX_THREADS];
+    worker w[ISM_MAX_THREADS];
 };
 
 static void *worker_main(void *a)
@@ -64,8 +61,8 @@ ism_pool *ism_pool_new(int threads)
     ism_pool *p = calloc(1, sizeof *p);
     if (!p)
         return NULL;
-    if (threads > POOL_MAX_THREADS)
-        threads = POOL_MAX_THREADS;
+    if (threads > ISM_MAX_THREADS)
+        threads = ISM_MAX_THREADS;
     pthread_mutex_init(&p->lock, NULL);
     pthread_cond_init(&p->start, NULL);
     pthread_cond_init(&p->done, NULL);

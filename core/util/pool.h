@@ -9,6 +9,12 @@
 
 typedef struct ism_pool ism_pool;
 
+/* Threads one computation runs at most: a pool's size, a parallel loop's width, and the
+ * range every threads option accepts (--threads, a request's field, ism_*_options.threads).
+ * Why a cap at all: per-thread state lives in fixed-size arrays (a parallel loop's on its
+ * caller's stack). */
+#define ISM_MAX_THREADS 64
+
 /* A pool of `threads` threads in all: the calling thread (number 0) and threads - 1
  * workers. If a worker cannot be started the pool has fewer (ism_pool_threads says how
  * many); NULL only when the pool itself cannot be allocated. */

@@ -534,7 +534,7 @@ int ism_cli_run_surface(ism_cli_run *run)
     /* on a thread of its own when the run has several and analyses, taken from the
      * analysis's so that the run keeps to --threads; else after the analysis's time is
      * taken, so that "analyse" never counts the writing */
-    int threads = run->options.threads > 0 ? run->options.threads : ism_cpu_count();
+    int threads = ism_threads_resolve(run->options.threads);
     bool beside = run->output && threads > 1 && (run->print_stats || run->features_output);
     if (beside)
         ism_side_start(&writer, true, write_job, &mw);

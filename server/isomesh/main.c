@@ -12,6 +12,7 @@
 #include "server/isomesh/cli.h"
 #include "core/octree/tolerances.h"
 #include "core/remesh/quality_pass.h"
+#include "core/util/pool.h"
 #include "server/isomesh/sandbox.h"
 #include "server/isomesh/worker.h"
 
@@ -240,7 +241,7 @@ static bool apply_option(ism_cli_run *run, int opt, const char *arg)
     case 'b': return ism_cli_parse_box(arg, o->box) && (run->box_given = true);
     case 'd': return ism_cli_parse_depth(arg, &o->min_depth, &o->max_depth) &&
                      (run->depth_given = true);
-    case OPT_THREADS: return ism_cli_parse_int("--threads", arg, 0, 64, &o->threads);
+    case OPT_THREADS: return ism_cli_parse_int("--threads", arg, 0, ISM_MAX_THREADS, &o->threads);
     case OPT_MAX_ERROR:
         run->error_given = true;
         if (strcmp(arg, "off") == 0) {

@@ -228,7 +228,7 @@ int ism_worker_main(int in_fd, int out_fd)
         }
         out_fd = chan;
     }
-    default_threads = ism_cpu_count();
+    default_threads = ism_threads_resolve(0);
     warm_up();
     char why[256];
     if (!ism_sandbox_enter(in_fd, out_fd, why, sizeof why)) {

@@ -1,10 +1,12 @@
 /* test_parallel.c — the fork/join loop with work stealing (core/util/parallel.h): every task
  * runs exactly once on a thread number below the thread count, for task counts below, at and
  * above it, with uneven task lengths that make threads run dry and steal; what the loop cost
- * keeps its order (all threads >= busiest >= even share, caller <= all). */
+ * keeps its order (all threads >= busiest >= even share, caller <= all); the threads an
+ * option asks for resolve by one rule. */
 #include <criterion/criterion.h>
 #include <stdatomic.h>
 #include <stdlib.h>
+#include <unistd.h>
 
 #include "core/util/parallel.h"
 
@@ -112,4 +114,22 @@ Test(parallel, no_pool_runs_on_the_caller)
     cr_expect_eq(atomic_load(&t->bad_thread), 0);
     cr_expect_eq(ism_pool_threads(NULL), 1);
     free(t);
+}
+
+/* The "0 = every online core" rule of every threads option, with its cap: a count asked for
+ * is kept, 0 takes the cores, and neither passes 64 (on a machine of 100 cores the CLI's
+ * copy of the rule gave 100, where the analysis's gave 64). The machine's own count is read
+ * here from sysconf, not from ism_cpu_count. */
+Test(parallel, threads_resolve)
+{
+    cr_expect_eq(ism_threads_given(0, 100), 64);
+    cr_expect_eq(ism_threads_given(0, 3), 3);
+    cr_expect_eq(ism_threads_given(5, 100), 5);
+    cr_expect_eq(ism_threads_given(64, 1), 64);
+    cr_expect_eq(ism_threads_given(200, 1), 64);
+    cr_expect_eq(ism_threads_given(0, 0), 1);
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    int want = cores < 1 ? 1 : cores > 64 ? 64 : (int)cores;
+    cr_expect_eq(ism_threads_resolve(0), want);
+    cr_expect_eq(ism_threads_resolve(7), 7);
 }
