@@ -15,6 +15,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "core/util/parallel.h"
 #include "core/version.h"
 #include "proto/presets.h"
 #include "server/common/cache_disk.h"
@@ -245,8 +246,9 @@ int main(int argc, char **argv)
         ism_log_async(false);
         return 1;
     }
-    long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    int threads = cores > cfg.workers ? (int)(cores / cfg.workers) : 1;
+    /* each worker an even share of the cores, at least 1 and at most what one computation
+     * runs (a share above ISM_MAX_THREADS would make every request's mesher refuse it) */
+    int threads = ism_threads_given(ism_cpu_count() / cfg.workers, 1);
     ismd_pool_config pc = {
         .workers = cfg.workers,
         .worker_path = cfg.worker_path,
