@@ -169,12 +169,22 @@ static uint8_t relax_reach(const rm_pass *p)
 }
 
 /* Collapses, then insertions beside the needles collapses cannot reach, then flips of the
- * split needles' thin halves (from the split needles' corners only). */
+ * split needles' thin halves (from the split needles' corners only). The last mending's
+ * collapses may also bend an edge past the crease angle where f's curvature accounts for
+ * it (rm_pass.h bend_curvature): a tube thinner than its edges, that a few triangles go
+ * round, can shed a needle no other way (cusp-a2 beside its cusp, 1e-3 box: a 4.09° needle
+ * 2 E from it, none since; at-the-cusp ones 2.29° -> 6.33° at the least). Not in the
+ * rounds: the moves and flips that follow work on the fans so bent, and beside a fold
+ * tighter than the cells they leave needles of their own (Whitney's umbrella beside its y
+ * axis, z = x²/y², bent 100°-140° per edge: 0.37-cell box 0 -> 1 needle under 10°, at its
+ * pinch point 0 -> 3, when every mending could). */
 static void mend_needles(rm_pass *p, bool last, bool *ok)
 {
     if (!(p->poorest < rm_collapse_poor()))
         return; /* no triangle under ISM_RM_COLLAPSE_DEG since rm_mark_active looked */
+    p->bend_curvature = last;
     rm_collapse_active(p, ok);
+    p->bend_curvature = false;
     if (*ok && rm_insert_active(p, last, ok) && *ok)
         rm_flip_from(p, p->touched, ok);
 }

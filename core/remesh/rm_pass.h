@@ -106,6 +106,8 @@ typedef struct rm_pass {
                                make a triangle worse than that, so while it is at least
                                sin(ISM_RM_COLLAPSE_DEG) there is no needle to mend */
     size_t poor;            /* the triangles under ISM_RM_COLLAPSE_DEG then */
+    bool bend_curvature;    /* collapses accept a new bend that f's curvature accounts for
+                               (rm_collapse.c; the last mending only: remesh.c) */
     double relax_min_step;  /* a relaxation step shorter than this × the fan's mean edge is
                                not tried (rm_relax_vertex; 0: every one) */
     double *sine;           /* per triangle, or NULL: the sine of its smallest angle as
