@@ -5,6 +5,7 @@
 #include "core/octree/crease_split.h"
 #include "core/octree/edge_roots.h"
 #include "core/octree/refine.h"
+#include "core/octree/sample_dist.h"
 #include "core/octree/straddle.h"
 #include "core/octree/triangulate.h"
 

@@ -15,7 +15,7 @@
 #include "core/octree/dual_box.h"
 #include "core/octree/dual_cert.h"
 #include "core/octree/dual_crease.h"
-#include "core/octree/refine.h"
+#include "core/octree/sample_dist.h"
 #include "core/octree/edge_roots.h"
 #include "core/octree/graph_cert.h"
 #include "core/octree/grid.h"

@@ -3,7 +3,7 @@
 #include "core/octree/dual_balls.h"
 #include "core/octree/edge_keys.h"
 #include "core/octree/dual_crease.h"
-#include "core/octree/refine.h"
+#include "core/octree/sample_dist.h"
 #include "core/util/grow.h"
 #include "core/util/vec3.h"
 

@@ -83,7 +83,7 @@
  * leaves sharing a face crossed four times: non-manifold at depth.max), and a failed try
  * costs up to 75% of the primal path's CPU on top: hence the option, still off. */
 #include "core/octree/dual_crease.h"
-#include "core/octree/refine.h"
+#include "core/octree/sample_dist.h"
 #include "core/analysis/unionfind.h" /* its find (path halving) on this file's own joins */
 #include "core/octree/corners.h"
 #include "core/octree/crease_split.h"

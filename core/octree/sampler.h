@@ -1,6 +1,7 @@
 /* sampler.h — one thread's access to f during polygonisation: the compiled tape, that
  * thread's evaluation workspace, and counters of every kind of evaluation (the statistics
- * report them), and the first-order distance to f = 0 measured through it. */
+ * report them), and the first-order distance to f = 0 measured through it
+ * (ism_first_order_dist, core/util/dist_bound.h). */
 #ifndef ISM_SAMPLER_H
 #define ISM_SAMPLER_H
 
@@ -8,6 +9,7 @@
 #include <stdint.h>
 #include <math.h>
 #include "core/eval/eval.h"
+#include "core/util/dist_bound.h"
 #include "core/util/vec3.h"
 
 /* Entries of the sampler's label memo (a leaf labels a few dozen points; its neighbours share
@@ -27,7 +29,7 @@ typedef struct ism_sampler {
      * while local is (valid when local_decided; whoever sets local clears that). */
     const ism_tape *local_deciding;
     bool local_decided;
-    /* ism_sample_dist_between (refine.h) seeks the bound through the corners only where
+    /* ism_sample_dist_between (sample_dist.h) seeks the bound through the corners only where
      * the estimate passes this: the polygoniser's max_error, which every figure it measures
      * is held against (one within it needs no bound; seeking it everywhere cost the Klein
      * bottle's default run 1.6% more instructions for the same mesh); 0: wherever. */
@@ -98,20 +100,6 @@ static inline double ism_sample_grad(ism_sampler *s, const double p[3], double g
  * bit). */
 void ism_sample_grad_batch(ism_sampler *s, const double (*p)[3], double *f, double (*g)[3],
                            size_t n);
-
-/* |f| / |∇f| from f and ∇f at a point: the first-order distance to f = 0. 0 where f is
- * exactly 0 (on the surface, even where ∇f vanishes: a cone's apex); +inf where there is no
- * estimate: f or ∇f not finite, or ∇f vanishing where f is not 0 (a critical point of f off
- * the surface is not on it, however small f). */
-static inline double ism_first_order_dist(double f, const double g[3])
-{
-    if (f == 0)
-        return 0;
-    double gl = ism_norm3(g);
-    if (!isfinite(f) || !isfinite(gl) || !(gl > 0))
-        return INFINITY;
-    return fabs(f) / gl;
-}
 
 /* ism_first_order_dist of f and ∇f at p. */
 static inline double ism_sample_dist(ism_sampler *s, const double p[3])

@@ -6,7 +6,7 @@
  * gradient at its points: consistent orientation wherever ∇f does. */
 #include "core/octree/triangulate.h"
 #include "core/octree/face_flat.h"
-#include "core/octree/refine.h"
+#include "core/octree/sample_dist.h"
 #include "core/util/grow.h"
 #include "core/util/vec3.h"
 

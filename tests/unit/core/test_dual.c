@@ -190,9 +190,9 @@ Test(dual, sphere_and_torus_within_1e_4)
 Test(dual, coarse_bound_within_and_small)
 {
     check(&pf_unit_sphere, pf_unit_sphere_dist, 1e-2, 4 * M_PI, 1.0, 2, SPHERE_ROOM);
-    /* In the irrational box a midpoint of the torus's first-order measure 0.985 E is 1.00006 E
-     * from the tube (closed form): the mesher measures it one Newton step further
-     * (refine.c ism_plain_dist) and splits. */
+    /* In the irrational box a midpoint of the torus lies just beyond E while its first-order
+     * measure is within (core/util/dist_bound.h, ISM_FIRST_ORDER_SURE, has the figures): the
+     * mesher measures it one Newton step further (sample_dist.c ism_plain_dist) and splits. */
     check(&pf_ring_torus, pf_ring_torus_dist, 1e-2, 4 * M_PI * M_PI * 1.0 * 0.3, 1 / 0.3, 0,
           COARSE_TORUS_ROOM);
 }
