@@ -22,8 +22,9 @@ void ism_an_distance_figures(double *dist, size_t n, ism_pool *pool, ism_an_dist
 
 /* Distances at triangle centroids and edge midpoints (after ism_an_implicit_figures with
  * accuracy, which sets the singular threshold and the vertices' distances: false without),
- * those just within max_error (the mesh's bound, 0: none) a Newton step further, evaluated
- * on the threads of pool (NULL: the calling thread); false when out of memory. */
+ * the maxima taking those just within max_error (the mesh's bound, 0: none) a Newton step
+ * further (the means and 99th percentiles do not depend on it), evaluated on the threads of
+ * pool (NULL: the calling thread); false when out of memory. */
 bool ism_an_between_vertices(const ism_mesh *m, const ism_tape *f, const ism_an_edge_table *et,
                              double max_error, ism_pool *pool, ism_analysis *a);
 

@@ -49,7 +49,10 @@ typedef struct ism_analysis_options {
     double max_error;    /* the bound the mesh was made under (0: none, the default): the
                             distances between vertices whose first-order estimate lies just
                             within it are measured a Newton step further (accuracy.c), as
-                            the polygoniser measured them, so "met" holds them to E */
+                            the polygoniser measured them, for the largest distances only
+                            (max_dist_midpoint, max_dist_centroid), so "met" holds them to
+                            E; the means and 99th percentiles are the first-order figures
+                            whatever the bound, the same bits with it or without */
 } ism_analysis_options;
 
 /* One connected component (triangles joined by shared edges, of any kind). */

@@ -3,12 +3,16 @@
  * (core/analysis/accuracy.c): ism_plain_dist one point at a time and ism_plain_dists in
  * batches give the same figures bit for bit, at a few hundred points of the band on the
  * sphere, the torus and the gyroid ball in the three boxes (tests/unit/placements.h); where
- * Newton's foot has no estimate both give INFINITY. */
+ * Newton's foot has no estimate both give INFINITY, and the analysis does not count the
+ * point within the bound on the step's length alone (its maximum is the bound through the
+ * corners, a proof), while its mean and 99th percentile are the same with a bound or
+ * without. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/analysis/analysis.h"
 #include "core/octree/sample_dist.h"
 #include "core/util/dist_bound.h"
 #include "core/util/vec3.h"
@@ -179,5 +183,52 @@ Test(stepped_dist, no_foot_estimate_is_infinite_in_the_polygoniser)
     cr_expect(isinf(ism_stepped_dist(d1, 1e-3, gz)));
     cr_expect_eq(ism_stepped_dist(d1, 0, gz), d1, "f = 0 at the foot: on the surface");
     ism_eval_ws_free(s.ws);
+    ism_tape_free(t);
+}
+
+/* The analysis of one triangle of the plane x = X0 (every centroid and midpoint at d1 in the
+ * band, its foot with no estimate): under the bound the largest centroid and midpoint figures
+ * are the bounds through the corners, |p − v| + d1 at the nearest corner (the step's length
+ * alone, d1, would read "within E"), so the worst distance passes E (not met); without the
+ * bound they are d1; the mean and 99th percentile are the same bits either way. */
+Test(stepped_dist, no_foot_estimate_is_beyond_the_bound_in_the_analysis)
+{
+    ism_tape *t = pf_compile(&foot_less);
+    ism_mesh m;
+    ism_mesh_init(&m);
+    const double v[3][3] = {{FOOT_X0, 0, 0}, {FOOT_X0, 0.1, 0}, {FOOT_X0, 0, 0.1}};
+    for (int k = 0; k < 3; k++)
+        ism_mesh_add_vertex(&m, v[k], NULL);
+    cr_assert(ism_mesh_add_triangle(&m, 0, 1, 2));
+    ism_analysis_options o;
+    ism_analysis_options_default(&o);
+    o.curvature = false;
+    o.threads = 1;
+    ism_analysis bounded, plain;
+    ism_error err;
+    o.max_error = BOUND;
+    cr_assert(ism_analyse(&m, t, &o, &bounded, &err), "%s", err.message);
+    o.max_error = 0;
+    cr_assert(ism_analyse(&m, t, &o, &plain, &err), "%s", err.message);
+    double d1 = foot_less_d1(), c[3], near_c = INFINITY, near_m = 0;
+    for (int a = 0; a < 3; a++)
+        c[a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
+    for (int k = 0; k < 3; k++) {
+        near_c = fmin(near_c, ism_dist3(c, v[k]));
+        near_m = fmax(near_m, ism_dist3(v[k], v[(k + 1) % 3]) / 2); /* a midpoint's corners */
+    }
+    /* the vertices' distances are stored as floats */
+    cr_expect_float_eq(bounded.max_dist_centroid, near_c + d1, 1e-7 * (near_c + d1));
+    cr_expect_float_eq(bounded.max_dist_midpoint, near_m + d1, 1e-7 * (near_m + d1));
+    cr_expect_gt(bounded.max_dist_centroid, BOUND);
+    cr_expect_float_eq(plain.max_dist_centroid, d1, 1e-12);
+    cr_expect_float_eq(plain.max_dist_midpoint, d1, 1e-12);
+    cr_expect(memcmp(&bounded.mean_dist_centroid, &plain.mean_dist_centroid, sizeof(double)) == 0);
+    cr_expect(memcmp(&bounded.p99_dist_centroid, &plain.p99_dist_centroid, sizeof(double)) == 0);
+    cr_expect(memcmp(&bounded.mean_dist_midpoint, &plain.mean_dist_midpoint, sizeof(double)) == 0);
+    cr_expect(memcmp(&bounded.p99_dist_midpoint, &plain.p99_dist_midpoint, sizeof(double)) == 0);
+    ism_analysis_free(&bounded);
+    ism_analysis_free(&plain);
+    ism_mesh_free(&m);
     ism_tape_free(t);
 }
