@@ -302,7 +302,13 @@ class GoalsUnderTheDefaultBound(unittest.TestCase):
                # the collapses took for creases): one 4.09-degree needle 2 E from the cusp in
                # the 1e-3 box on ecf69b2; either the horn tips' merges (rm_horn.c) or the last
                # mending's collapses, which ask grad f's curvature (remesh.c), take it alone
-               "cusp-a2": ([-1, -1, -1, 1, 1, 1], 7)}
+               "cusp-a2": ([-1, -1, -1, 1, 1, 1], 7),
+               # two tori's union, creased where they meet on x = 1.1: in its own box that is
+               # the grid's middle plane, where the polygoniser puts each crease point twice,
+               # 1e-15 apart; 12 zero-area triangles (0.0000 degrees) stayed while the merges
+               # measured their missing normals (core/remesh/rm_collapse.c merge_ok: one point
+               # twice merges on the link condition alone)
+               "double-torus": ([-1.8, -1.8, -0.8, 4, 1.8, 0.8], 7)}
     SMOOTH_DEG = GOAL_DEG
     SINGULAR_DEG = 10.0
 
