@@ -171,6 +171,19 @@ Test(singular_points, cusp_moved_and_turned)
     check_deflated(src, UNIT, 6, want, 1);
 }
 
+/* The cusp moved to (0.3, 0.1, 0.2), inside cells in every placement: Krawczyk cannot
+ * decide its cells (H is singular there), so they are cut on, and each is tested, as the
+ * child of a cell with a model, by f at its centre against the parent's Taylor form round a
+ * singular point (search.c, children_quad) — at levels 3 to 6 here, f(c) inside the form
+ * by less than a factor 4: the same test on a form a quarter as wide (the cell's half-width
+ * taken for its width) drops the point in every placement. */
+Test(singular_points, cusp_inside_cells_the_centre_test_sees)
+{
+    static const double want[1][3] = { { 0.3, 0.1, 0.2 } };
+    const char *src = "(x - 0.3)^2 + (z - 0.2)^2 - (y - 0.1)^3";
+    check_surface(src, UNIT, 6, want, 1, 1e-9, ISM_SING_CUSP, true);
+}
+
 /* Taubin's heart f = A³ − z³B, A = x² + 9/4 y² + z² − 1, B = x² + 9/80 y². ∇f = 3A²∇A −
  * 3z²B e_z − z³∇B vanishes on f = 0 where A = 0 and z = 0 (the ring x² + 9/4 y² = 1: f
  * vanishes to third order there, H = 0, and the zero set A = z·B^(1/3) is a smooth sheet —
