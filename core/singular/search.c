@@ -786,6 +786,15 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
     ism_eval_interval_batch(s->t, w->ws, bx, by, bz, f, 8);
     w->evals_interval += 8;
     const ism_dual_model *pm = p->model == NO_MODEL ? NULL : &s->models[p->model];
+    ism_dual_model km; /* a child's model, built by its tests */
+    if (!pm) { /* no centre test: each child at once */
+        for (int m = 0; m < 8; m++) {
+            ism_interval x[3] = { bx[m], by[m], bz[m] };
+            int v = screen(w, &kids[m], x, f[m], NULL);
+            finish(s, w, out, &kids[m], x, f[m], v, NULL, iv(0.0, 0.0), NULL, &km);
+        }
+        return;
+    }
     int v[8];
     ism_interval cx[8], cy[8], cz[8], fc[8], q = iv(0.0, 0.0);
     size_t lane[8], open = 0;
@@ -795,7 +804,7 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
         double c[3];
         v[m] = screen(w, &kids[m], x, f[m], pm);
         lane[m] = SIZE_MAX;
-        if (v[m] != OPEN || !pm)
+        if (v[m] != OPEN)
             continue;
         if (!have_q) {
             q = children_quad(pm, lower, upper);
@@ -813,7 +822,6 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
         ism_eval_interval_batch(s->t, w->ws, cx, cy, cz, fc, open);
         w->evals_interval += open;
     }
-    ism_dual_model km; /* a child's model, built by its tests */
     for (int m = 0; m < 8; m++) {
         ism_interval x[3] = { bx[m], by[m], bz[m] };
         const ism_interval *at = lane[m] == SIZE_MAX ? NULL : &fc[lane[m]];
