@@ -648,6 +648,30 @@ static bool visible_feature(const build *b, thread_state *th, const ism_tape *su
            !beside_locus(b, lo, hi);
 }
 
+/* The tape of a node split in the last round, asked for only when a node below it is decided
+ * afresh: a subtree the new round does not force anywhere is taken over node by node and
+ * evaluates nothing, yet its split nodes shortened their tapes again (Barth's sextic at
+ * E 1e-2: 17M of each later round's ~65M octree). `tape` is the node's once resolved (NULL
+ * before); its parent's is `above` when that is itself pending, else `parent`. node_range
+ * writes th->tapes[level] as it would have when the node was reached: the levels below a
+ * pending node are written only inside its subtree, so a resolved tape stays valid for
+ * the rest of it. */
+typedef struct tape_link {
+    struct tape_link *above;
+    const ism_tape *parent, *tape;
+    ism_node nd;
+} tape_link;
+
+static const ism_tape *resolve_tape(build *b, thread_state *th, tape_link *l)
+{
+    if (!l->tape) {
+        ism_interval range;
+        const ism_tape *parent = l->above ? resolve_tape(b, th, l->above) : l->parent;
+        l->tape = node_range(b, th, &l->nd, parent, &range);
+    }
+    return l->tape;
+}
+
 /* Decides node v->v[i] and grows its subtree. Nodes that fail the flatness test are split
  * down to level `limit` (depth.max, or ISM_THIN_RESOLVE_LEVELS deeper below a hidden
  * piece or a visible feature about a cell across, visible_feature); a would-be leaf that
@@ -655,7 +679,8 @@ static bool visible_feature(const build *b, thread_state *th, const ism_tape *su
  * its level are left for tasks (appended to it). pi: the same node in the last round's tree
  * (b->previous), or -1. */
 static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_tape *tape,
-                 int limit, defer_list *defer, int32_t pi, const ism_interval *known)
+                 tape_link *above, int limit, defer_list *defer, int32_t pi,
+                 const ism_interval *known)
 {
     if (atomic_load(&b->failed) != ISM_BUILD_OK)
         return false;
@@ -677,8 +702,13 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     const ism_node *pv = pi >= 0 ? &b->previous->nodes[pi] : NULL;
     if (pv && take_over(b, th, v, i, pi, forced))
         return true;
+    bool was_split = pv && pv->state == ISM_NODE_SPLIT;
+    /* a node split again: its tape only when a node below asks (tape_link) */
+    tape_link link = {above, tape, NULL, nd};
+    if (!was_split && above)
+        tape = resolve_tape(b, th, above);
     ism_interval range = known ? *known : (ism_interval){0, 0};
-    const ism_tape *sub = known ? tape : node_range(b, th, &nd, tape, &range);
+    const ism_tape *sub = known || was_split ? tape : node_range(b, th, &nd, tape, &range);
     if (!pv && !(range.lo <= 0 && range.hi >= 0)) {
         v->v[i].state = ISM_NODE_EMPTY;
         th->excluded++;
@@ -763,7 +793,6 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     }
     v->v[i].state = ISM_NODE_SPLIT;
     v->v[i].child = (int32_t)first;
-    bool was_split = pv && pv->state == ISM_NODE_SPLIT;
     /* the children's intervals at once, unless each child may shorten its own tape (sub
      * still holds a min/max), is taken over from the last round, or is left for a task */
     bool batch = !b->p->scalar_eval && !was_split && !(defer && nd.level + 1 == defer->level) &&
@@ -772,8 +801,8 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     if (batch)
         children_ranges(b, th, &nd, sub, ranges);
     for (int k = 0; k < 8; k++)
-        if (!grow(b, th, v, first + k, sub, limit, defer, was_split ? pv->child + k : -1,
-                  batch ? &ranges[k] : NULL))
+        if (!grow(b, th, v, first + k, was_split ? NULL : sub, was_split ? &link : NULL, limit,
+                  defer, was_split ? pv->child + k : -1, batch ? &ranges[k] : NULL))
             return false;
     return true;
 }
@@ -794,8 +823,8 @@ static void run_task(void *ctx, size_t task, int thread)
     thread_state *th = &b->threads[thread];
     node_vec *out = &b->task_out[task];
     /* The task's tape: shorten from the full tape over the task's own box on the way. */
-    if (grow(b, th, out, 0, b->p->tape, b->tasks[task].limit, NULL, b->tasks[task].previous,
-             NULL))
+    if (grow(b, th, out, 0, b->p->tape, NULL, b->tasks[task].limit, NULL,
+             b->tasks[task].previous, NULL))
         count_nodes(b, th);
     report_progress(b);
 }
@@ -973,7 +1002,8 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
         goto done;
     }
     deferred.level = p->max_depth < TOP_LEVEL ? p->max_depth : TOP_LEVEL;
-    if (grow(&b, &b.threads[0], &top, 0, p->tape, p->max_depth, &deferred, b.previous ? 0 : -1,
+    if (grow(&b, &b.threads[0], &top, 0, p->tape, NULL, p->max_depth, &deferred,
+             b.previous ? 0 : -1,
              NULL))
         count_nodes(&b, &b.threads[0]);
     if ((status = atomic_load(&b.failed)) != ISM_BUILD_OK)

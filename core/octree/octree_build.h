@@ -88,7 +88,10 @@ typedef struct ism_octree_build_params {
                                          nodes split again with the hidden-piece verdict they
                                          keep (a node's decision depends on nothing else), so
                                          the tree is the one a fresh build makes, counters
-                                         included but thin_boxes (boxes searched now) */
+                                         included but thin_boxes (boxes searched now) and
+                                         the evaluation counts (n_point ..: a node split
+                                         again shortens its tape only when a node below is
+                                         decided afresh) */
     bool scalar_eval;                 /* no batched intervals, no zero-free leaves (the
                                          reference path: ism_poly_options.scalar_eval) */
     bool full_tape;                   /* leaves evaluate f itself, not a shortened tape (the
