@@ -126,11 +126,14 @@ typedef struct ism_label_entry {
 } ism_label_entry;
 
 /* A build thread's memos (tables of 2^ISM_ROOT_MEMO_BITS, 2^ISM_LABEL_MEMO_BITS and
- * 2^ISM_PAIR_MEMO_BITS entries; all NULL on the scalar reference path). */
+ * 2^ISM_PAIR_MEMO_BITS entries; all NULL on the scalar reference path), and its log of the
+ * roots searched for the cells. */
 typedef struct ism_node_memo {
     ism_root_entry *roots;
     ism_label_entry *labels;
     ism_pair_entry *pairs;
+    struct ism_root_log *log; /* every root searched is appended here too (root_table.h), or
+                                 NULL */
 } ism_node_memo;
 
 static inline ism_label_entry *ism_label_slot(ism_label_entry *table, uint64_t key)

@@ -19,6 +19,8 @@ typedef struct ism_cell_ctx {
     const ism_octree *tree;
     const int32_t *parent;    /* each node's parent in tree (ism_octree_parents) */
     const ism_breaks *breaks;
+    const struct ism_root_table *found; /* the roots the octree build searched on node edges
+                                           (root_table.h), or NULL */
     ism_root_params roots;
     double stitch_tol;        /* two roots closer than this × segment length are one */
     double max_error;         /* > 0: polygons may be fanned from a corner within this

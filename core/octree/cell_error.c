@@ -5,6 +5,7 @@
 #include "core/octree/crease_split.h"
 #include "core/octree/edge_roots.h"
 #include "core/octree/refine.h"
+#include "core/octree/root_table.h"
 #include "core/octree/sample_dist.h"
 #include "core/octree/straddle.h"
 #include "core/octree/triangulate.h"
@@ -194,6 +195,8 @@ static void edge_roots(ism_sampler *s, const ism_corners *k, double shift, const
             t = ism_regula_falsi(s, k->p[c0], k->p[c1], k->f[c0], k->f[c1]);
             if (m)
                 *m = (ism_root_entry){k->key[c0], k->key[c1], t};
+            if (m && k->memo->log)
+                ism_root_log_push(k->memo->log, k->key[c0], k->key[c1], t);
         }
         double p[3];
         for (int a = 0; a < 3; a++)

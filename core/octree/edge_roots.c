@@ -203,14 +203,15 @@ bool ism_segment_rootless(const ism_root_params *prm, const double a[3], const d
 
 void ism_segment_roots(ism_sampler *s, const ism_root_params *prm, const double a[3],
                        const double b[3], double fa, double fb, const double ga[3],
-                       const double gb[3], ism_seg_roots *out)
+                       const double gb[3], const double *known, ism_seg_roots *out)
 {
     out->n = 0;
     out->flags = 0;
     if (ism_segment_rootless(prm, a, b, fa, fb, ga, gb))
         return;
     if ((fa < 0) != (fb < 0)) {
-        make_root(s, a, b, ism_regula_falsi(s, a, b, fa, fb), ISM_ROOT_CROSS, &out->r[0]);
+        make_root(s, a, b, known ? *known : ism_regula_falsi(s, a, b, fa, fb), ISM_ROOT_CROSS,
+                  &out->r[0]);
         out->n = 1;
         /* Sign test says one root; if the gradient swings against both ends on the way,
          * an odd number of three or more is possible. */

@@ -54,10 +54,12 @@ bool ism_segment_rootless_normed(const ism_root_params *prm, const double a[3],
 
 /* Roots of f on the segment a→b with f(a) = fa, f(b) = fb and gradients ga, gb. When fa
  * or fb is exactly 0 the segment reports no interior root: that end point is a root of
- * its own, handled by whoever owns the lattice point. */
+ * its own, handled by whoever owns the lattice point. known: where the signs differ, the
+ * parameter ism_regula_falsi(s, a, b, fa, fb) returns, found earlier (root_table.h), or
+ * NULL to search. */
 void ism_segment_roots(ism_sampler *s, const ism_root_params *prm, const double a[3],
                        const double b[3], double fa, double fb, const double ga[3],
-                       const double gb[3], ism_seg_roots *out);
+                       const double gb[3], const double *known, ism_seg_roots *out);
 
 /* One root of f on a→b by regula falsi (Illinois), given fa·fb < 0. Returns t in (0, 1). */
 double ism_regula_falsi(ism_sampler *s, const double a[3], const double b[3], double fa,

@@ -13,6 +13,7 @@
  * Everything here depends only on the tile, so both nodes that share it agree. */
 #include "core/octree/face_lines.h"
 #include "core/octree/face_flat.h"
+#include "core/octree/root_table.h"
 #include "core/octree/singular.h"
 #include "core/util/grow.h"
 #include "core/util/vec3.h"
@@ -201,7 +202,7 @@ static ism_fpoint root_point(const ism_root *r, uint8_t flags)
 }
 
 static void compute_segment(ism_cell_ctx *cx, const ism_bpoint *lo, const ism_bpoint *hi,
-                            ism_seg_roots *out);
+                            uint64_t ka, uint64_t kb, ism_seg_roots *out);
 
 /* Is a→b the segment's canonical direction (increasing lattice coordinate)? */
 static bool is_forward(const ism_bpoint *a, const ism_bpoint *b)
@@ -255,7 +256,7 @@ static void walk_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint
     if (e->a == ka && e->b == kb) {
         *out = e->roots;
     } else {
-        compute_segment(cx, lo, hi, out);
+        compute_segment(cx, lo, hi, ka, kb, out);
         e->a = ka;
         e->b = kb;
         e->roots = *out;
@@ -277,9 +278,13 @@ static void walk_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint
  * 2e-6 apart, f −1e-6 between; merged, both faces at that edge joined their two crossings
  * through the one touching point, and the node's loop passed through it twice). */
 static void compute_segment(ism_cell_ctx *cx, const ism_bpoint *lo, const ism_bpoint *hi,
-                            ism_seg_roots *out)
+                            uint64_t ka, uint64_t kb, ism_seg_roots *out)
 {
-    ism_segment_roots(&cx->s, &cx->roots, lo->p, hi->p, lo->f, hi->f, lo->g, hi->g, out);
+    /* a single root the octree build searched on this edge (root_table.h): not again */
+    double t;
+    bool known = (lo->f < 0) != (hi->f < 0) && ism_root_table_find(cx->found, ka, kb, &t);
+    ism_segment_roots(&cx->s, &cx->roots, lo->p, hi->p, lo->f, hi->f, lo->g, hi->g,
+                      known ? &t : NULL, out);
     if (out->n == 2 && out->r[1].t - out->r[0].t < cx->stitch_tol) {
         ism_root m = out->r[0];
         m.t = 0.5 * (out->r[0].t + out->r[1].t);

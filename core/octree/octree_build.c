@@ -11,6 +11,7 @@
 #include "core/octree/leaf_tapes.h"
 #include "core/octree/node_balls.h"
 #include "core/octree/quiet.h"
+#include "core/octree/root_table.h"
 #include "core/octree/thin_search.h"
 #include "core/octree/turned.h"
 #include "core/octree/zero_free.h"
@@ -65,6 +66,7 @@ typedef struct thread_state {
     ism_leaf_tapes_cache tape_cache; /* this thread's hits in build.leaf_tapes */
     ism_thin_ws thin;         /* the hidden-piece search's scratch */
     ism_face_memo faces;      /* its verdicts on faces, for the node across (face_memo.h) */
+    ism_root_log roots;       /* the roots memo.roots was filled with (root_table.h) */
     uint64_t visited, excluded, unresolved;
     uint64_t thin_searched, thin_found, thin_undecided, deep_leaves;
     uint64_t tape_misses;     /* leaves whose shortened tape found no room in leaf_tapes */
@@ -871,6 +873,7 @@ static bool init_threads(build *b, int nthreads)
             th->memo.roots = b->root_memos + (size_t)t * roots;
             th->memo.labels = b->label_memos + (size_t)t * labels;
             th->memo.pairs = b->pair_memos + (size_t)t * pairs;
+            th->memo.log = b->p->roots ? &th->roots : NULL;
         }
         if (!th->s.ws || !ism_thin_ws_init(&th->thin, b->p->tape))
             return false;
@@ -906,6 +909,7 @@ static void free_threads(build *b, int nthreads, ism_octree_build_stats *st)
         for (int l = 0; l <= ISM_GRID_MAX_DEPTH; l++)
             if (th->tapes[l])
                 ism_tape_free(th->tapes[l]);
+        ism_root_log_free(&th->roots);
     }
     free(b->threads);
     free(b->corner_memos);
@@ -970,6 +974,16 @@ static bool join_tasks(build *b, node_vec *top, int nthreads)
     return true;
 }
 
+/* The threads' logged roots into p->roots (empty when the build failed). */
+static void hand_roots(build *b, int nthreads, bool ok)
+{
+    ism_root_log *logs = ok && b->threads ? malloc((size_t)nthreads * sizeof *logs) : NULL;
+    for (int t = 0; logs && t < nthreads; t++)
+        logs[t] = b->threads[t].roots;
+    ism_root_table_build(b->p->roots, logs, logs ? nthreads : 0);
+    free(logs);
+}
+
 enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_params *p,
                                        ism_octree_build_stats *stats)
 {
@@ -1032,6 +1046,8 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
         status = ISM_BUILD_NO_MEMORY;
 
 done:
+    if (p->roots)
+        hand_roots(&b, nthreads, status == ISM_BUILD_OK);
     free_threads(&b, nthreads, stats);
     ism_quiet_free(&b.quiet);
     ism_node_balls_free(&b.node_balls);

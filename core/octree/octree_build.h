@@ -101,6 +101,9 @@ typedef struct ism_octree_build_params {
     void *progress_ctx;
     ism_par_cost *cost;               /* what the parallel part cost is added here (parallel.h),
                                          or NULL */
+    struct ism_root_table *roots;     /* when not NULL, filled with the single roots the
+                                         flatness test searched on node edges, for the cells
+                                         (root_table.h; empty on failure) */
 } ism_octree_build_params;
 
 typedef struct ism_octree_build_stats {

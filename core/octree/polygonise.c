@@ -14,6 +14,7 @@
 #include "core/octree/octree_build.h"
 #include "core/octree/quiet.h"
 #include "core/octree/refine.h"
+#include "core/octree/root_table.h"
 #include "core/octree/straddle.h"
 #include "core/octree/weld.h"
 #include "core/util/parallel.h"
@@ -445,7 +446,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
                                               progress *prog, ism_mesh *mesh,
                                               ism_poly_stats *st, double *t_weld,
                                               phase_meter *outer, ism_split_set *next,
-                                              carry *c)
+                                              carry *c, const ism_root_table *found)
 {
     int32_t *reuse = NULL, *parent = NULL;
     ism_breaks breaks = {0};
@@ -509,6 +510,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         cx->tree = tree;
         cx->parent = parent;
         cx->breaks = &breaks;
+        cx->found = found;
         cx->roots = roots;
         cx->stitch_tol = o->stitch_tol;
         /* corner fans only where no singular locus is known: beside a double curve they
@@ -620,6 +622,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     prog->span = span * 0.4 / 0.95; /* the octree's share of this round's progress */
     ism_octree tree;
     memset(&tree, 0, sizeof tree);
+    ism_root_table found; /* the build's edge roots, for the cells (root_table.h) */
     int thin_depth = o->max_depth + (!o->thin_search ? 0
                                      : o->quiet ? ISM_THIN_EXTRA_DEPTH
                                                 : ISM_THIN_BLIND_DEPTH);
@@ -655,6 +658,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
         .progress = report,
         .progress_ctx = prog,
         .cost = &m.par,
+        .roots = &found,
     };
     memcpy(bp.flatness.box, o->box, sizeof bp.flatness.box);
     ism_octree_build_stats bs;
@@ -670,8 +674,10 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     double t_tree = ism_now_ms();
     st->time_ms[ISM_PHASE_OCTREE] = t_tree - t_start;
     meter_stop(&m, st, ISM_PHASE_OCTREE);
-    if (status != ISM_POLY_OK)
+    if (status != ISM_POLY_OK) {
+        ism_root_table_free(&found);
         return status;
+    }
     count_leaves(&tree, st);
 
     prog->from = from + span * 0.4 / 0.95;
@@ -679,7 +685,8 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     double t_weld = 0;
     meter_start(&m);
     status = polygonise_leaves(f, o, &tree, pool, prog, mesh, st, &t_weld, &m, next,
-                               prev);
+                               prev, &found);
+    ism_root_table_free(&found);
     ism_octree_free(&prev->tree);
     if (next && next->n)
         prev->tree = tree;
