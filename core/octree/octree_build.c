@@ -698,10 +698,13 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         return true;
     }
     th->visited++;
-    bool forced = (nd.level < b->p->max_depth &&
-                   ism_split_set_has(b->p->force_split, ism_node_key(&nd))) ||
-                  near_node(b, &nd);
     const ism_node *pv = pi >= 0 ? &b->previous->nodes[pi] : NULL;
+    /* asked only where it decides: a node the last round left empty stays empty and one it
+     * split is split again, forced or not (take_over) */
+    bool forced = (!pv || pv->state == ISM_NODE_LEAF) &&
+                  ((nd.level < b->p->max_depth &&
+                    ism_split_set_has(b->p->force_split, ism_node_key(&nd))) ||
+                   near_node(b, &nd));
     if (pv && take_over(b, th, v, i, pi, forced))
         return true;
     bool was_split = pv && pv->state == ISM_NODE_SPLIT;
