@@ -1,16 +1,11 @@
 /* corners.c — the numbering of a node's edges and faces (see corners.h). */
 #include "core/octree/corners.h"
 
-void ism_cube_edge(int e, int *c0, int *c1, int faces[2])
-{
-    int axis = e / 4, rest = e % 4;
-    int o1 = (axis + 1) % 3, o2 = (axis + 2) % 3;
-    int base = ((rest & 1) << o1) | (((rest >> 1) & 1) << o2);
-    *c0 = base;
-    *c1 = base | (1 << axis);
-    faces[0] = o1 * 2 + (rest & 1);
-    faces[1] = o2 * 2 + ((rest >> 1) & 1);
-}
+const unsigned char ism_cube_edges[12][4] = {
+    {0, 1, 2, 4}, {2, 3, 3, 4}, {4, 5, 2, 5}, {6, 7, 3, 5}, /* along x */
+    {0, 2, 4, 0}, {4, 6, 5, 0}, {1, 3, 4, 1}, {5, 7, 5, 1}, /* along y */
+    {0, 4, 0, 2}, {1, 5, 1, 2}, {2, 6, 0, 3}, {3, 7, 1, 3}, /* along z */
+};
 
 unsigned ism_zero_corner_faces(const double f[8], int c)
 {

@@ -17,9 +17,22 @@ typedef struct ism_corners {
     const struct ism_node_memo *memo;
 } ism_corners;
 
-/* Edge e (0..11) of a node: its corners c0 -> c1 (c1 one step along axis e / 4) and the two
- * faces it lies on (face = axis * 2 + side). */
-void ism_cube_edge(int e, int *c0, int *c1, int faces[2]);
+/* Edge e (0..11) of a node: its corners c0 -> c1 (c1 one step along axis a = e / 4) and the
+ * two faces it lies on (face = axis * 2 + side). With r = e % 4, o1 = (a + 1) % 3 and
+ * o2 = (a + 2) % 3: c0 = (r & 1) << o1 | (r >> 1 & 1) << o2, c1 = c0 | 1 << a, the faces
+ * o1 * 2 + (r & 1) and o2 * 2 + (r >> 1 & 1); written out in ism_cube_edges (corners.c) and
+ * read inline: the plot test's and the cells' edge loops ask for it millions of times (as a
+ * call with those divisions, 41M instructions of Barth's sextic at E 1e-2). */
+extern const unsigned char ism_cube_edges[12][4]; /* c0, c1, faces[0], faces[1] */
+
+static inline void ism_cube_edge(int e, int *c0, int *c1, int faces[2])
+{
+    const unsigned char *t = ism_cube_edges[e];
+    *c0 = t[0];
+    *c1 = t[1];
+    faces[0] = t[2];
+    faces[1] = t[3];
+}
 
 /* Corner c where f is exactly 0 (a lattice point on the surface, its gradient not zero): the
  * faces (bit face) the surface enters there, those whose two edges at c lead to corners of

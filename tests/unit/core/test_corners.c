@@ -1,0 +1,28 @@
+/* test_corners.c — the numbering of a node's edges (corners.h's ism_cube_edge, a written-out
+ * table): every one of the cube's 12 edges once, each joining two corners one step apart
+ * along its axis (edges 4a .. 4a + 3 along axis a, c0 the lower end), and its two faces the
+ * ones both its corners lie on across the two other axes (corner c lies on face
+ * 2 × axis + side when bit `axis` of c is `side`). */
+#include <criterion/criterion.h>
+#include "core/octree/corners.h"
+
+Test(corners, cube_edges_join_neighbours_on_their_faces)
+{
+    int seen[8][8] = {{0}};
+    for (int e = 0; e < 12; e++) {
+        int c0, c1, faces[2];
+        ism_cube_edge(e, &c0, &c1, faces);
+        int axis = e / 4;
+        cr_assert(c0 >= 0 && c0 < 8 && c1 >= 0 && c1 < 8, "edge %d", e);
+        cr_expect_eq(c1 ^ c0, 1 << axis, "edge %d: %d -> %d", e, c0, c1);
+        cr_expect_eq(c0 & (1 << axis), 0, "edge %d starts at its upper end", e);
+        cr_expect_eq(seen[c0][c1]++, 0, "edge %d repeats %d -> %d", e, c0, c1);
+        cr_expect_neq(faces[0] / 2, faces[1] / 2, "edge %d", e);
+        for (int k = 0; k < 2; k++) {
+            int fa = faces[k] / 2, side = faces[k] % 2;
+            cr_expect_neq(fa, axis, "edge %d lies across its own axis", e);
+            cr_expect_eq((c0 >> fa) & 1, side, "edge %d corner %d off face %d", e, c0, faces[k]);
+            cr_expect_eq((c1 >> fa) & 1, side, "edge %d corner %d off face %d", e, c1, faces[k]);
+        }
+    }
+}
