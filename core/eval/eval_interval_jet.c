@@ -4,6 +4,7 @@
  * outward-rounded operations of interval_ops.h; one-argument operations go through the chain
  * rule d = g'(U) u', h = g'(U) u'' + g''(U) u' u'^T with interval g'(U), g''(U). */
 #include "core/eval/interval_jet.h"
+#include "core/eval/interval_jet_ws.h"
 #include "core/eval/interval_ops.h"
 #include "core/expr/tape.h"
 #include "core/util/cache_line.h"
@@ -11,22 +12,6 @@
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
-
-/* kept[i]: instruction i's value and first partials from the last
- * ism_eval_interval_grad_kept (kept_t over kept_box), when kept_ok: that pass met no kink
- * and its record is unused (the jet that uses it asks whether every instruction of kept_t
- * is one whose Hessian hess_only can take from them). */
-typedef ism_interval ism_kept_vd[4];
-
-struct ism_ivjet_ws {
-    uint32_t nregs;
-    ism_ivjet *r;
-    size_t kept_cap;
-    ism_kept_vd *kept;
-    const ism_tape *kept_t;
-    ism_interval kept_box[3];
-    bool kept_ok;
-};
 
 /* The (i, j) index pairs of the six Hessian entries. */
 static const int HI[6] = { 0, 0, 0, 1, 1, 2 };
@@ -45,6 +30,11 @@ ism_ivjet_ws *ism_ivjet_ws_new(const ism_tape *t)
     ws->kept = ism_line_alloc((t->len ? t->len : 1) * sizeof *ws->kept);
     ws->kept_t = NULL;
     ws->kept_ok = false;
+    ws->lane_regs = ws->lane_kept = NULL;
+    ws->lane_cap = 0;
+    ws->lane_t = ws->lane_tape = NULL;
+    ws->lane_fits = false;
+    ws->lane_ok = 0;
     if (!ws->r || !ws->kept) {
         free(ws->r);
         free(ws->kept);
@@ -60,6 +50,8 @@ void ism_ivjet_ws_free(ism_ivjet_ws *ws)
         return;
     free(ws->r);
     free(ws->kept);
+    free(ws->lane_regs);
+    free(ws->lane_kept);
     free(ws);
 }
 
@@ -573,7 +565,7 @@ static ALWAYS_INLINE void sanitize(ism_ivjet *o, unsigned w)
 /* Operations whose Hessian hess_only computes from the operands' kept values and first
  * partials alone: the affine ones, +, −, ×, squares and integer powers (no branch, no pole,
  * no libm function whose value the chain rule would need again). */
-static bool hess_from_kept(int op)
+bool ism_ivjet_hess_from_kept(int op)
 {
     switch (op) {
     case ISM_OP_CONST: case ISM_OP_COPY: case ISM_OP_ADD_RC: case ISM_OP_SUB_CR:
@@ -668,12 +660,27 @@ static ALWAYS_INLINE void hess_op(const ism_instr *in, ism_ivjet *r, unsigned w)
     }
 }
 
+/* A kept record: instruction i's component c (0 value, 1-3 the first partials) has its
+ * lower bound at at[i * step_i + c * step_c] and its upper one step_b further (the scalar
+ * pass's ism_kept_vd, or one lane of the batched pass's: interval_jet_ws.h). */
+typedef struct kept_rec {
+    const double *at;
+    size_t step_i, step_c, step_b;
+} kept_rec;
+
+static ALWAYS_INLINE ism_interval kept_of(const kept_rec *k, size_t i, int c)
+{
+    const double *p = k->at + i * k->step_i + (size_t)c * k->step_c;
+    return iv(p[0], p[k->step_b]);
+}
+
 /* The second-order pass over the kept record of the gradient pass over the same box: each
  * instruction's value and first partials copied from it (the second-order pass computes
  * them with the same operations on the same operands, and cleans them the same way: a
- * NaN-free bound is kept as it is), its Hessian computed as run's would be. */
-static size_t hess_only(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
-                        uint8_t *kinks, ism_ivjet *out)
+ * NaN-free bound is kept as it is), its Hessian computed as run's would be. Inlined into
+ * each caller, whose record's steps are constants. */
+static ALWAYS_INLINE size_t hess_only(const ism_tape *t, ism_ivjet_ws *ws, const kept_rec *kept,
+                        const ism_interval box[3], uint8_t *kinks, ism_ivjet *out)
 {
     const unsigned all = want_of(7u, 1, false);
     ism_ivjet *r = ws->r;
@@ -684,9 +691,9 @@ static size_t hess_only(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval 
         unsigned w = in->free_of == 0
                          ? all
                          : want_of(ISM_FREE_ALL & ~(unsigned)in->free_of, 1, in->smooth);
-        o->v = ws->kept[i][0];
+        o->v = kept_of(kept, i, 0);
         _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
-            o->d[k] = ws->kept[i][k + 1];
+            o->d[k] = kept_of(kept, i, k + 1);
         hess_op(in, r, w);
         if (any_nan_h(o))
             sanitize_h(o, w);
@@ -736,9 +743,23 @@ size_t ism_eval_interval_grad_kept(const ism_tape *t, ism_ivjet_ws *ws,
 static bool all_hess_from_kept(const ism_tape *t)
 {
     for (size_t i = 0; i < t->len; i++)
-        if (!hess_from_kept(t->code[i].op))
+        if (!ism_ivjet_hess_from_kept(t->code[i].op))
             return false;
     return true;
+}
+
+/* The lane of the batched pass (eval_interval_grad_batch.c) whose unused record is of t
+ * over box, or -1. */
+static int kept_lane(const ism_ivjet_ws *ws, const ism_tape *t, const ism_interval box[3])
+{
+    if (ws->lane_t != t)
+        return -1;
+    for (uint32_t m = ws->lane_ok; m; m &= m - 1) {
+        int k = __builtin_ctz(m);
+        if (same_box(box, ws->lane_box[k]))
+            return k;
+    }
+    return -1;
 }
 
 size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
@@ -746,8 +767,18 @@ size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_inte
 {
     if (ws && ws->kept_ok && ws->kept_t == t && !force && same_box(box, ws->kept_box)) {
         ws->kept_ok = false; /* once: the record is of one gradient pass */
-        if (all_hess_from_kept(t))
-            return hess_only(t, ws, box, kinks, out);
+        if (all_hess_from_kept(t)) {
+            kept_rec k = {(const double *)ws->kept, 8, 2, 1};
+            return hess_only(t, ws, &k, box, kinks, out);
+        }
+    }
+    int lane = ws && !force ? kept_lane(ws, t, box) : -1;
+    if (lane >= 0) { /* the batch took only tapes hess_only computes */
+        ws->lane_ok &= ~(1u << lane);
+        size_t g = (size_t)lane / ISM_IVG_VL, j = (size_t)lane % ISM_IVG_VL;
+        kept_rec k = {ws->lane_kept + g * 8 * ISM_IVG_VL + j, ISM_IVG_REG, 2 * ISM_IVG_VL,
+                      ISM_IVG_VL};
+        return hess_only(t, ws, &k, box, kinks, out);
     }
     return run(t, ws, box, force, kinks, 1, out, NULL);
 }

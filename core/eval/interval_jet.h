@@ -55,6 +55,18 @@ size_t ism_eval_interval_grad(const ism_tape *t, ism_ivjet_ws *ws, const ism_int
 size_t ism_eval_interval_grad_kept(const ism_tape *t, ism_ivjet_ws *ws,
                                    const ism_interval box[3], ism_ivgrad *out);
 
+/* Boxes ism_eval_interval_grad_batch takes at once. */
+#define ISM_IVGRAD_BATCH 8
+
+/* ism_eval_interval_grad_kept over box[0..n) (n <= ISM_IVGRAD_BATCH) at once, bit for bit:
+ * out[k] the enclosure over box[k], each box's record kept in ws so that a following
+ * ism_eval_interval_jet of t over any of them (unforced, once each) computes only the
+ * Hessian; no kinks (t holds none of the operations that have them). False, computing
+ * nothing, when t holds an operation besides the affine ones, +, −, ×, squares and integer
+ * powers, or ws does not fit t or cannot grow: then take the boxes one by one. */
+bool ism_eval_interval_grad_batch(const ism_tape *t, ism_ivjet_ws *ws,
+                                  const ism_interval (*box)[3], size_t n, ism_ivgrad *out);
+
 /* The same with the Hessian. For a degenerate box [c, c] this encloses the exact jet at c. */
 size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
                              const uint8_t *force, uint8_t *kinks, ism_ivjet *out);

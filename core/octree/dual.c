@@ -348,6 +348,11 @@ typedef struct corner_view {
      * free by this node's proofs (dnode). */
     bool known_free;
     uint8_t free_kids;
+    /* classify_head's count of corners < 0, for classify_tail */
+    int neg;
+    /* In (classify_tail): f and ∇f's natural enclosure over the box is in g already, taken
+     * in one batch with the node's siblings' (kid_kinds); classify_head clears it. */
+    bool pre_g;
 } corner_view;
 
 /* Where surface leaf n lies on the request's box: -1 when f changes sign between its
@@ -870,14 +875,21 @@ static bool sag_split(dual *d, worker *w, const dnode *n, corner_view *v)
     return split;
 }
 
+/* classify_head's answer when the corners leave the node to classify_tail. */
+#define UNDECIDED (-1)
+
 /* What node n is (f and the unit gradients at its corners in n->f and v): empty (proven
  * free of f = 0), a surface leaf with one sheet (corner gradients agreeing, or one graph
  * proven by interval gradients), or to be split. The interval is taken only where the
- * corners cannot decide: a node whose corners share a sign, or disagree. */
-static int classify(dual *d, worker *w, dnode *n, corner_view *v)
+ * corners cannot decide: a node whose corners share a sign, or disagree. In two steps (a
+ * split classifies a node's children's heads first, then takes the enclosures their tails
+ * want in one batch: kid_kinds): classify_head answers what the corners (and sag_split)
+ * decide, else UNDECIDED, and classify_tail the rest. */
+static int classify_head(dual *d, worker *w, dnode *n, corner_view *v)
 {
     int neg = 0;
     v->placed = FOOT_UNKNOWN;
+    v->pre_g = false;
     for (int c = 0; c < 8; c++) {
         if (!isfinite(n->f[c]) || !isfinite(v->n[c][0] + v->n[c][1] + v->n[c][2]))
             return DN_INNER;
@@ -901,10 +913,24 @@ static int classify(dual *d, worker *w, dnode *n, corner_view *v)
         return DN_EMPTY; /* shown by its parent's proofs or its interval (known_free) */
     if (mixed && sag_split(d, w, n, v))
         return DN_INNER;
+    v->neg = neg;
     v->agree = mixed && normals_agree((const double (*)[3])v->n, d->o->flat_normal);
     v->have_g = v->have_model = false;
     v->monotone = 0;
-    if (!v->agree || d->crease) { /* with a crease, agreeing corners may straddle it */
+    return UNDECIDED;
+}
+
+/* Does classify_tail take f and ∇f's enclosure over the node (classify_head UNDECIDED)? */
+static bool tail_wants_g(const dual *d, const corner_view *v)
+{
+    return !v->agree || d->crease; /* with a crease, agreeing corners may straddle it */
+}
+
+static int classify_tail(dual *d, worker *w, dnode *n, corner_view *v)
+{
+    int neg = v->neg;
+    bool mixed = neg != 0 && neg != 8;
+    if (tail_wants_g(d, v)) {
         /* the natural interval first (one evaluation, enough on the sphere), then the
          * Taylor form (two), then the sub-boxes */
         ism_interval box[3];
@@ -913,7 +939,8 @@ static int classify(dual *d, worker *w, dnode *n, corner_view *v)
         w->s.n_interval++;
         /* kept: the Taylor model of the same box (tighten) then computes only the Hessian
          * (interval_jet.h); torus at 1e-2, 680 of 1,392 such nodes */
-        size_t kinks = ism_eval_interval_grad_kept(w->s.tape, w->jet, box, &v->g);
+        size_t kinks =
+            v->pre_g ? 0 : ism_eval_interval_grad_kept(w->s.tape, w->jet, box, &v->g);
         v->have_g = kinks == 0;
         if (!v->have_g) /* a kink in the node */
             return d->crease && kinks != (size_t)-1 ? crease_kind(d, w, n, v) : DN_INNER;
@@ -932,6 +959,12 @@ static int classify(dual *d, worker *w, dnode *n, corner_view *v)
             v->monotone |= (v->g.d[a].lo > 0 || v->g.d[a].hi < 0) << a;
     }
     return plain_edges(d, w, n, v) ? DN_SURF : DN_INNER;
+}
+
+static int classify(dual *d, worker *w, dnode *n, corner_view *v)
+{
+    int kind = classify_head(d, w, n, v);
+    return kind != UNDECIDED ? kind : classify_tail(d, w, n, v);
 }
 
 /* f and the unit gradients at the lattice points q[0..n) (n <= 27) into f, p, g (f 0 where
@@ -1025,22 +1058,14 @@ static void decline(dual *d, enum ism_dual_reason why)
     d->bad = true;
 }
 
-/* Node kind after classification and the check on the request's box: empty, a surface
- * leaf, or inner (to split; bad set when the box cuts the surface). */
-static int leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad)
+/* Node kind (kind: classify's) after the checks near points and on the request's box:
+ * empty, a surface leaf, or inner (to split; bad set when the box cuts the surface). */
+static inline __attribute__((always_inline)) int box_kind(dual *d, worker *w, dnode *n,
+                                                         corner_view *v, int kind, bool *bad)
 {
-    double size = ism_grid_cell_size(&d->g, n->level);
-    if (d->nballs) { /* round a singular point: split, or a hole leaf (dual_balls.h) */
-        int hole = ism_dual_balls_node(d->balls, d->nballs, &d->cover, v->p[0], v->p[7], size,
-                                       n->level >= d->o->max_depth);
-        if (hole == 0 || (hole == 1 && n->level < d->o->min_depth))
-            return DN_INNER;
-        if (hole == 1)
-            return DN_HOLE;
-    }
-    int kind = classify(d, w, n, v);
     if (kind == DN_INNER && d->nballs &&
-        ism_dual_balls_near(d->balls, d->nballs, &d->cover, v->p[0], v->p[7], size))
+        ism_dual_balls_near(d->balls, d->nballs, &d->cover, v->p[0], v->p[7],
+                            ism_grid_cell_size(&d->g, n->level)))
         return DN_HOLE; /* not plain near a point, as small as its hole's leaves (near_point) */
     if (has_sheet(kind) && touches_box(d, n)) {
         if (d->inner) {
@@ -1055,6 +1080,22 @@ static int leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad)
         }
     }
     return kind;
+}
+
+/* Node kind after classification and the check on the request's box: empty, a surface
+ * leaf, a hole leaf round a singular point, or inner (box_kind). */
+static int leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad)
+{
+    if (d->nballs) { /* round a singular point: split, or a hole leaf (dual_balls.h) */
+        int hole = ism_dual_balls_node(d->balls, d->nballs, &d->cover, v->p[0], v->p[7],
+                                       ism_grid_cell_size(&d->g, n->level),
+                                       n->level >= d->o->max_depth);
+        if (hole == 0 || (hole == 1 && n->level < d->o->min_depth))
+            return DN_INNER;
+        if (hole == 1)
+            return DN_HOLE;
+    }
+    return box_kind(d, w, n, v, classify(d, w, n, v), bad);
 }
 
 /* Does node n (of side size; 0: any) lie within a singular point's limit (dual_balls.h)?
@@ -1239,8 +1280,51 @@ static void feet_task(void *ctx, size_t k, int thread)
     }
 }
 
+/* Children whose classify_tail takes f and ∇f's natural enclosure, at least this many,
+ * take them in one batch (ism_eval_interval_grad_batch): the batch runs groups of 4 boxes,
+ * a group ~2,100 instructions on the torus against ~1,700 for one box alone. */
+#define BATCH_ENCLOSURES 2
+
+/* leaf_kind of the children kids[0..8) of a split node (views: their corners) into kind:
+ * every child's classify_head first, then the natural enclosures the undecided ones' tails
+ * take in one batch (bit for bit the box-by-box pass's, its records kept for the Taylor
+ * models' jets over the same boxes: classify_tail takes them from v->g), then the tails and
+ * box_kind. Child by child near singular points (leaf_kind's balls come first). */
+static void kid_kinds(dual *d, worker *w, dnode *kids, corner_view *views, int kind[8],
+                      bool *bad)
+{
+    if (d->nballs) {
+        for (int c = 0; c < 8; c++)
+            kind[c] = leaf_kind(d, w, &kids[c], &views[c], bad);
+        return;
+    }
+    ism_interval box[8][3];
+    ism_ivgrad g[8];
+    int at[8], nb = 0;
+    for (int c = 0; c < 8; c++) {
+        kind[c] = classify_head(d, w, &kids[c], &views[c]);
+        if (kind[c] != UNDECIDED || !tail_wants_g(d, &views[c]) || d->crease)
+            continue; /* a crease's tape has its min/max: not one the batch takes */
+        for (int a = 0; a < 3; a++)
+            box[nb][a] = (ism_interval){views[c].p[0][a], views[c].p[7][a]};
+        at[nb++] = c;
+    }
+    if (nb >= BATCH_ENCLOSURES &&
+        ism_eval_interval_grad_batch(w->s.tape, w->jet, (const ism_interval (*)[3])box,
+                                     (size_t)nb, g))
+        for (int k = 0; k < nb; k++) {
+            views[at[k]].g = g[k];
+            views[at[k]].pre_g = true;
+        }
+    for (int c = 0; c < 8; c++) {
+        if (kind[c] == UNDECIDED)
+            kind[c] = classify_tail(d, w, &kids[c], &views[c]);
+        kind[c] = box_kind(d, w, &kids[c], &views[c], kind[c], bad);
+    }
+}
+
 /* Last task of a split pass: node nodes[k]'s children classified from what the first two
- * left in in[k]. Reads the tree, writes out[k] only. */
+ * left in in[k] (kid_kinds). Reads the tree, writes out[k] only. */
 static void split_task(void *ctx, size_t k, int thread)
 {
     split_job *job = ctx;
@@ -1255,34 +1339,41 @@ static void split_task(void *ctx, size_t k, int thread)
     uint8_t known = in->known;
     out->bad = false;
     out->kinked = 0;
+    dnode kids[8];
+    corner_view views[8];
     for (int c = 0; c < 8; c++) {
-        corner_view v;
-        v.kinked = false;
-        v.placed = FOOT_UNKNOWN;
-        v.foot = in->foot[c];
-        memcpy(v.foot_at, in->foot_at[c], sizeof v.foot_at);
-        v.known_free = known >> c & 1;
-        v.free_kids = 0;
-        dnode n;
-        memset(&n, 0, sizeof n);
-        n.o = parent->o;
+        corner_view *v = &views[c];
+        v->kinked = false;
+        v->placed = FOOT_UNKNOWN;
+        v->foot = in->foot[c];
+        memcpy(v->foot_at, in->foot_at[c], sizeof v->foot_at);
+        v->known_free = known >> c & 1;
+        v->free_kids = 0;
+        dnode *n = &kids[c];
+        memset(n, 0, sizeof *n);
+        n->o = parent->o;
         for (int a = 0; a < 3; a++)
-            n.o.v[a] += ((c >> a) & 1) * half;
-        n.level = (uint8_t)(parent->level + 1);
+            n->o.v[a] += ((c >> a) & 1) * half;
+        n->level = (uint8_t)(parent->level + 1);
         for (int j = 0; j < 8; j++) {
             int at = ((c & 1) + (j & 1)) + 3 * ((c >> 1 & 1) + (j >> 1 & 1)) +
                      9 * ((c >> 2 & 1) + (j >> 2 & 1));
-            n.f[j] = f[at];
-            memcpy(v.p[j], p[at], sizeof v.p[j]);
-            memcpy(v.n[j], g[at], sizeof v.n[j]);
+            n->f[j] = f[at];
+            memcpy(v->p[j], p[at], sizeof v->p[j]);
+            memcpy(v->n[j], g[at], sizeof v->n[j]);
         }
-        memcpy(out->f[c], n.f, sizeof n.f);
-        out->kind[c] = (uint8_t)leaf_kind(d, w, &n, &v, &out->bad);
-        out->kinked |= (uint8_t)(v.kinked << c);
-        out->placed[c] = v.placed;
-        out->free_kids[c] = v.free_kids;
-        if (v.placed == FOOT_AT)
-            memcpy(out->at[c], v.at, sizeof v.at);
+    }
+    int kind[8];
+    kid_kinds(d, w, kids, views, kind, &out->bad);
+    for (int c = 0; c < 8; c++) {
+        corner_view *v = &views[c];
+        memcpy(out->f[c], kids[c].f, sizeof kids[c].f);
+        out->kind[c] = (uint8_t)kind[c];
+        out->kinked |= (uint8_t)(v->kinked << c);
+        out->placed[c] = v->placed;
+        out->free_kids[c] = v->free_kids;
+        if (v->placed == FOOT_AT)
+            memcpy(out->at[c], v->at, sizeof v->at);
     }
 }
 

@@ -1,0 +1,314 @@
+/* eval_interval_grad_batch.c — interval enclosures of f and ∇f over up to ISM_IVGRAD_BATCH
+ * boxes at once (interval_jet.h's ism_eval_interval_grad_batch): the gradient pass of
+ * eval_interval_jet.c on tapes of affine operations, +, −, ×, squares and integer powers,
+ * each instruction one step over every box. Each lane computes exactly what
+ * ism_eval_interval_grad_kept computes over its box, operation for operation: the same
+ * outward rounding (interval_ops.h's down1 / up1, as IEEE operations element by element),
+ * products' bounds from their four corner products in iv_mul's order (a NaN corner counted
+ * as 0), the exact zeros of derivatives kept and skipped as mulz / addz / subz do (as bit
+ * masks with the same outcome), the partials a value does not depend on (free_of) written
+ * as 0, and NaN bounds turned into infinities; so the two agree bit for bit and a caller
+ * may use either. Its records (one per lane, interval_jet_ws.h) let the jet over the same
+ * box compute only the Hessian, as the scalar pass's record does.
+ *
+ * Why: the dual mesher takes f and ∇f's natural enclosure over most children of a split
+ * node (octree/dual.c classify); one box costs ~1,700 instructions on the torus's short
+ * tape, most of them the instruction dispatch and the zero tests a batch shares.
+ *
+ * The lanes are walked in groups of ISM_IVG_VL, each one value of GCC's vector extension
+ * (AVX2 registers in the AVX2 clone, chosen at run time, pairs of SSE2 ones otherwise); a
+ * batch is padded up to whole groups by repeating its last box. */
+#include "core/eval/interval_jet_ws.h"
+#include "core/eval/interval_ops.h"
+#include "core/expr/tape.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define VL ISM_IVG_VL
+#define INLINE static inline __attribute__((always_inline))
+
+#pragma GCC diagnostic ignored "-Wpsabi" /* v4d only passes between always_inline helpers */
+typedef double v4d __attribute__((vector_size(VL * sizeof(double))));
+typedef long long v4i __attribute__((vector_size(VL * sizeof(double))));
+typedef unsigned long long v4u __attribute__((vector_size(VL * sizeof(double))));
+
+/* An interval per lane. */
+typedef struct vi {
+    v4d lo, hi;
+} vi;
+
+/* One register of a group: the value and the three first partials (the records' layout:
+ * interval_jet_ws.h). */
+typedef struct vj {
+    vi v, d[3];
+} vj;
+_Static_assert(sizeof(vj) == 8 * VL * sizeof(double), "a group's register is 8 vectors");
+
+INLINE v4d splat(double x) { return (v4d){x, x, x, x}; }
+
+/* a where m is set, else b */
+INLINE v4d pick(v4i m, v4d a, v4d b) { return (v4d)(((v4i)a & m) | ((v4i)b & ~m)); }
+
+INLINE v4d vabs(v4d x) { return (v4d)((v4u)x & (v4u){~0ull >> 1, ~0ull >> 1, ~0ull >> 1, ~0ull >> 1}); }
+
+/* interval_ops.h's down1 / up1, min / max (ism_min: a < b ? a : b) and nan_to */
+INLINE v4d vdown1(v4d x) { return (x - splat(0x1p-1074)) - vabs(x) * splat(0x1p-52); }
+INLINE v4d vup1(v4d x) { return (x + splat(0x1p-1074)) + vabs(x) * splat(0x1p-52); }
+INLINE v4d vmin(v4d a, v4d b) { return pick(a < b, a, b); }
+INLINE v4d vmax(v4d a, v4d b) { return pick(a > b, a, b); }
+INLINE v4d vnan_to(v4d x, double c) { return pick(x == x, x, splat(c)); }
+
+INLINE vi ivz(void) { return (vi){splat(0.0), splat(0.0)}; }
+
+/* is_zero: both bounds ±0 */
+INLINE v4i iz(vi u) { return (v4i)((((v4u)u.lo | (v4u)u.hi) << 1) == (v4u){0, 0, 0, 0}); }
+
+INLINE vi vpick(v4i m, vi a, vi b) { return (vi){pick(m, a.lo, b.lo), pick(m, a.hi, b.hi)}; }
+
+INLINE vi v_add(vi a, vi b) { return (vi){vdown1(a.lo + b.lo), vup1(a.hi + b.hi)}; }
+INLINE vi v_sub(vi a, vi b) { return (vi){vdown1(a.lo - b.hi), vup1(a.hi - b.lo)}; }
+INLINE vi v_neg(vi a) { return (vi){-a.hi, -a.lo}; }
+
+/* iv_mul: the four corner products (a NaN one, 0 × inf, as 0), min / max in min4's order */
+INLINE vi v_mul(vi a, vi b)
+{
+    v4d p1 = vnan_to(a.lo * b.lo, 0.0), p2 = vnan_to(a.lo * b.hi, 0.0);
+    v4d p3 = vnan_to(a.hi * b.lo, 0.0), p4 = vnan_to(a.hi * b.hi, 0.0);
+    return (vi){vdown1(vmin(vmin(p1, p2), vmin(p3, p4))), vup1(vmax(vmax(p1, p2), vmax(p3, p4)))};
+}
+
+INLINE vi v_mul_c(vi a, double c)
+{
+    if (c == 0.0)
+        return ivz();
+    v4d k = splat(c);
+    return c > 0.0 ? (vi){vdown1(a.lo * k), vup1(a.hi * k)} : (vi){vdown1(a.hi * k), vup1(a.lo * k)};
+}
+
+INLINE vi v_div_c(vi a, double c)
+{
+    v4d p = a.lo / splat(c), q = a.hi / splat(c);
+    return c > 0.0 ? (vi){vdown1(p), vup1(q)} : (vi){vdown1(q), vup1(p)};
+}
+
+INLINE vi v_add_c(vi a, double c) { return (vi){vdown1(a.lo + splat(c)), vup1(a.hi + splat(c))}; }
+INLINE vi v_c_sub(double c, vi a) { return (vi){vdown1(splat(c) - a.hi), vup1(splat(c) - a.lo)}; }
+
+INLINE vi v_square(vi a)
+{
+    v4d l2 = a.lo * a.lo, h2 = a.hi * a.hi;
+    v4d inner = pick(a.hi <= splat(0.0), h2, splat(0.0));
+    v4d lo = pick(a.lo >= splat(0.0), l2, inner);
+    return (vi){vmax(vdown1(lo), splat(0.0)), vup1(vmax(l2, h2))};
+}
+
+/* iv_powi lane by lane (its branches differ by lane; integer powers are rare) */
+INLINE vi v_powi(vi a, unsigned n)
+{
+    double lo[VL], hi[VL];
+    __builtin_memcpy(lo, &a.lo, sizeof lo);
+    __builtin_memcpy(hi, &a.hi, sizeof hi);
+    for (int j = 0; j < VL; j++) {
+        ism_interval r = iv_powi(iv(lo[j], hi[j]), n);
+        lo[j] = r.lo;
+        hi[j] = r.hi;
+    }
+    vi r;
+    __builtin_memcpy(&r.lo, lo, sizeof lo);
+    __builtin_memcpy(&r.hi, hi, sizeof hi);
+    return r;
+}
+
+/* mulz / addz / subz: exact zeros stay exact */
+INLINE vi mulz(vi a, vi b) { return vpick(iz(a) | iz(b), ivz(), v_mul(a, b)); }
+INLINE vi addz(vi a, vi b) { return vpick(iz(a), b, vpick(iz(b), a, v_add(a, b))); }
+INLINE vi subz(vi a, vi b) { return vpick(iz(b), a, vpick(iz(a), v_neg(b), v_sub(a, b))); }
+
+/* The affine operations' map of one interval (lin_copy / lin_neg / lin_mul / lin_div). */
+enum { LIN_COPY, LIN_NEG, LIN_MUL, LIN_DIV };
+
+INLINE vi lin(vi u, int kind, double c)
+{
+    switch (kind) {
+    case LIN_NEG: return v_neg(u);
+    case LIN_MUL: return v_mul_c(u, c);
+    case LIN_DIV: return v_div_c(u, c);
+    default: return u;
+    }
+}
+
+/* eval_interval_jet.c's each(): the map on the value and on every partial in w that is not
+ * exactly 0 (kept as it is). */
+INLINE void each(vj *o, const vj *a, int kind, double c, unsigned w)
+{
+    o->v = lin(a->v, kind, c);
+    _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
+        o->d[k] = !(w >> k & 1) ? ivz() : vpick(iz(a->d[k]), a->d[k], lin(a->d[k], kind, c));
+}
+
+/* One instruction of the gradient pass (jet_op with second = 0), on registers r, in jet_op's
+ * order of reads and writes (an output register may be an operand's). */
+INLINE void step(const ism_instr *in, vj *r, unsigned w)
+{
+    vj *o = &r[in->out];
+    const vj *a = &r[in->a];
+    double c = in->imm;
+    switch (in->op) {
+    case ISM_OP_CONST:
+        o->v = (vi){splat(c), splat(c)};
+        _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
+            o->d[k] = ivz();
+        break;
+    case ISM_OP_NEG: each(o, a, LIN_NEG, c, w); break;
+    case ISM_OP_SUB_CR:
+        each(o, a, LIN_NEG, c, w);
+        o->v = v_c_sub(c, a->v);
+        break;
+    case ISM_OP_MUL_RC: each(o, a, LIN_MUL, c, w); break;
+    case ISM_OP_DIV_RC: each(o, a, LIN_DIV, c, w); break;
+    case ISM_OP_ADD_RC:
+        each(o, a, LIN_COPY, c, w);
+        o->v = v_add_c(a->v, c);
+        break;
+    case ISM_OP_ADD_RR: case ISM_OP_SUB_RR: {
+        const vj *b = &r[in->b];
+        bool sub = in->op == ISM_OP_SUB_RR;
+        o->v = sub ? v_sub(a->v, b->v) : v_add(a->v, b->v);
+        _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
+            o->d[k] = !(w >> k & 1) ? ivz() : sub ? subz(a->d[k], b->d[k]) : addz(a->d[k], b->d[k]);
+        break;
+    }
+    case ISM_OP_MUL_RR: {
+        const vj *b = &r[in->b];
+        o->v = v_mul(a->v, b->v);
+        _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
+            o->d[k] = !(w >> k & 1) ? ivz() : addz(mulz(a->d[k], b->v), mulz(a->v, b->d[k]));
+        break;
+    }
+    case ISM_OP_SQUARE: case ISM_OP_POWI: { /* chain(): g(U), g'(U) from U first */
+        vi u = a->v, g, g1;
+        if (in->op == ISM_OP_SQUARE) {
+            g = v_square(u);
+            g1 = v_mul_c(u, 2.0);
+        } else {
+            g = v_powi(u, in->b);
+            g1 = v_mul_c(v_powi(u, in->b - 1), (double)in->b);
+        }
+        o->v = g;
+        _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
+            o->d[k] = !(w >> k & 1) ? ivz() : mulz(g1, a->d[k]);
+        break;
+    }
+    default: /* COPY */
+        each(o, a, LIN_COPY, c, w);
+        break;
+    }
+    /* sanitize(): NaN bounds to the infinity on their side (a partial outside w is 0), all
+     * of them once one is NaN (nearly never: one test for the whole register) */
+    v4i bad = (v4i)(o->v.lo != o->v.lo) | (v4i)(o->v.hi != o->v.hi);
+    _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
+        bad |= (v4i)(o->d[k].lo != o->d[k].lo) | (v4i)(o->d[k].hi != o->d[k].hi);
+    if (__builtin_expect((bad[0] | bad[1] | bad[2] | bad[3]) != 0, 0)) {
+        o->v = (vi){vnan_to(o->v.lo, -INFINITY), vnan_to(o->v.hi, INFINITY)};
+        _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
+            o->d[k] = (vi){vnan_to(o->d[k].lo, -INFINITY), vnan_to(o->d[k].hi, INFINITY)};
+    }
+}
+
+/* The tape over one group's registers r (the variables loaded), each instruction's
+ * register recorded in keep (ISM_IVG_REG doubles an instruction, this group's part). */
+INLINE void run_group(const ism_tape *t, vj *r, vj *keep)
+{
+    for (size_t i = 0; i < t->len; i++) {
+        const ism_instr *in = &t->code[i];
+        unsigned w = in->free_of == 0 ? 7u : ISM_FREE_ALL & ~(unsigned)in->free_of;
+        step(in, r, w);
+        keep[i * ISM_IVG_GROUPS] = r[in->out];
+    }
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx2"))) static void run_avx2(const ism_tape *t, vj *r, vj *keep)
+{
+    run_group(t, r, keep);
+}
+#define HAVE_AVX2_PATH 1
+#endif
+
+static void run_base(const ism_tape *t, vj *r, vj *keep) { run_group(t, r, keep); }
+
+/* Does the pass compute every operation of t (the ones hess_only takes)? Asked once per
+ * tape (lane_tape). */
+static bool fits(ism_ivjet_ws *ws, const ism_tape *t)
+{
+    if (ws->lane_tape != t) {
+        ws->lane_tape = t;
+        ws->lane_fits = true;
+        for (size_t i = 0; i < t->len; i++)
+            ws->lane_fits &= ism_ivjet_hess_from_kept(t->code[i].op);
+    }
+    return ws->lane_fits;
+}
+
+/* The pass's registers and records for t, made or grown; false when out of memory. */
+static bool reserve(ism_ivjet_ws *ws, const ism_tape *t)
+{
+    if (!ws->lane_regs) {
+        ws->lane_regs = aligned_alloc(64, (size_t)ws->nregs * ISM_IVG_REG * sizeof(double));
+        if (!ws->lane_regs)
+            return false;
+    }
+    if (ws->lane_cap < t->len) {
+        free(ws->lane_kept);
+        ws->lane_cap = 0;
+        ws->lane_kept = aligned_alloc(64, t->len * ISM_IVG_REG * sizeof(double));
+        if (!ws->lane_kept)
+            return false;
+        ws->lane_cap = t->len;
+    }
+    return true;
+}
+
+bool ism_eval_interval_grad_batch(const ism_tape *t, ism_ivjet_ws *ws,
+                                  const ism_interval (*box)[3], size_t n, ism_ivgrad *out)
+{
+    if (!ws || !t || !n || n > ISM_IVGRAD_BATCH || ws->nregs < t->nregs || !fits(ws, t) ||
+        !reserve(ws, t))
+        return false;
+    ws->lane_ok = 0;
+    size_t ng = (n + VL - 1) / VL;
+    for (size_t g = 0; g < ng; g++) {
+        vj *r = (vj *)ws->lane_regs + g * ws->nregs, *keep = (vj *)ws->lane_kept + g;
+        /* load_box: a bound not a number, or lo > hi, gives the whole line */
+        size_t b[VL];
+        for (size_t j = 0; j < VL; j++)
+            b[j] = g * VL + j < n ? g * VL + j : n - 1;
+        for (int k = 0; k < 3; k++) {
+            vi u = {{box[b[0]][k].lo, box[b[1]][k].lo, box[b[2]][k].lo, box[b[3]][k].lo},
+                    {box[b[0]][k].hi, box[b[1]][k].hi, box[b[2]][k].hi, box[b[3]][k].hi}};
+            v4i ok = u.lo <= u.hi;
+            r[k].v = (vi){pick(ok, u.lo, splat(-INFINITY)), pick(ok, u.hi, splat(INFINITY))};
+            for (int m = 0; m < 3; m++)
+                r[k].d[m] = m == k ? (vi){splat(1.0), splat(1.0)} : ivz();
+        }
+#ifdef HAVE_AVX2_PATH
+        if (__builtin_cpu_supports("avx2"))
+            run_avx2(t, r, keep);
+        else
+#endif
+            run_base(t, r, keep);
+    }
+    for (size_t b = 0; b < n; b++) {
+        const double *res = (const double *)((const vj *)ws->lane_regs +
+                                             (b / VL) * ws->nregs + t->result);
+        size_t j = b % VL;
+        out[b].v = iv(res[j], res[VL + j]);
+        for (int k = 0; k < 3; k++)
+            out[b].d[k] = iv(res[(2 + 2 * k) * VL + j], res[(3 + 2 * k) * VL + j]);
+        memcpy(ws->lane_box[b], box[b], sizeof ws->lane_box[b]);
+    }
+    ws->lane_t = t;
+    ws->lane_ok = (1u << n) - 1;
+    return true;
+}
