@@ -142,6 +142,17 @@ double ism_eval_piece_value(const ism_tape *t, ism_eval_ws *ws, ism_piece pc, do
 double ism_eval_hessian(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
                         double grad[3], double hess[6]);
 
+/* Points per inner chunk of ism_eval_hessian_batch (its registers: ten partials of this
+ * many lanes, 2.5 KB a register): the dual mesher's batches are a split pass's feet, up to
+ * ISM_GRAD_BATCH at a time. */
+#define ISM_HESS_BATCH 32
+
+/* f[i], g[i] and h[i] at p[i] for i < n: lane by lane bit for bit what ism_eval_hessian gives
+ * at that point (the same operations in the same order), one pass over the tape per chunk
+ * of ISM_HESS_BATCH lanes instead of one per point. */
+void ism_eval_hessian_batch(const ism_tape *t, ism_eval_ws *ws, const double (*p)[3],
+                            double *f, double (*g)[3], double (*h)[6], size_t n);
+
 /* Whether t holds a min or max (f may have a C0 crease where its operands are equal). */
 bool ism_tape_has_min_max(const ism_tape *t);
 

@@ -52,6 +52,7 @@ void ism_eval_ws_free(ism_eval_ws *ws)
     free(ws->dual);
     free(ws->gbatch);
     free(ws->jet);
+    free(ws->hbatch);
     free(ws->choice);
     free(ws->needed);
     free(ws->trig);

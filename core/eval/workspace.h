@@ -30,6 +30,7 @@ struct ism_eval_ws {
     ism_dual *dual;           /* nregs */
     double *gbatch;           /* nregs * 4 * ISM_GRAD_BATCH: value, d/dx, d/dy, d/dz lanes */
     ism_jet *jet;             /* nregs */
+    void *hbatch;             /* ism_eval_hessian_batch's registers (made on its first call) */
     uint8_t *choice;          /* code_cap: min/max branch proved by the last interval pass */
     uint8_t *needed;          /* nregs: scratch for shortening */
     ism_trig_cache *trig;     /* sines and cosines of recent arguments (pure: never stale) */

@@ -343,6 +343,7 @@ typedef struct corner_view {
      * failed); FOOT_UNKNOWN: not taken (sag_split takes it itself). */
     uint8_t foot;
     double foot_at[3];
+    ism_straddle_jet foot_jet; /* with FOOT_AT: f's jet at foot_at (feet_task) */
     /* In: the node's box was shown free of f = 0 by its parent's proofs (the parent's
      * free_kids) or its natural interval (children_free). Out: bit c, child c's box shown
      * free by this node's proofs (dnode). */
@@ -869,7 +870,8 @@ static bool sag_split(dual *d, worker *w, const dnode *n, corner_view *v)
     }
     if (v->foot == FOOT_AT)
         memcpy(m, v->foot_at, sizeof m);
-    ism_straddle_balanced_point(&w->s, d->shift, d->o->box, m, v->at, &bend);
+    ism_straddle_balanced_point_at(&w->s, d->shift, d->o->box, m,
+                                   v->foot == FOOT_AT ? &v->foot_jet : NULL, v->at, &bend);
     bool split = bend * size * size > 8 * SAG_SPLIT * (d->o->max_error + d->shift);
     v->placed = split ? FOOT_UNKNOWN : FOOT_AT;
     return split;
@@ -1126,6 +1128,12 @@ typedef struct split_out {
     bool bad;
 } split_out;
 
+/* Of a split's 27 lattice points (x fastest, 3 a row, 9 a layer), the offset of the step
+ * b (bit 0: + x, 1: + y, 2: + z): child c's first corner is point SPLIT_OFF[c], its
+ * corner j SPLIT_OFF[c] + SPLIT_OFF[j]. A table: computing them from the bits was ~10
+ * instructions a corner, 1% of the torus at 3e-3. */
+static const uint8_t SPLIT_OFF[8] = {0, 1, 3, 4, 9, 10, 12, 13};
+
 /* Bit c: child c's box is free of f = 0 by the natural interval of f over it (the 27
  * points in split_task's order). One batch of eight boxes (ism_eval_interval_batch) costs
  * less than one box's interval alone — callgrind, per call: torus 912 instructions for the
@@ -1145,9 +1153,9 @@ static uint8_t children_free(const dual *d, worker *w, const dnode *parent,
     bool any = false;
     ism_interval x[8], y[8], z[8], out[8];
     for (int c = 0; c < 8; c++) {
-        int lo = (c & 1) + 3 * (c >> 1 & 1) + 9 * (c >> 2 & 1), neg = 0;
+        int lo = SPLIT_OFF[c], neg = 0;
         for (int j = 0; j < 8; j++)
-            neg += f[lo + (j & 1) + 3 * (j >> 1 & 1) + 9 * (j >> 2 & 1)] < 0;
+            neg += f[lo + SPLIT_OFF[j]] < 0;
         any |= neg == 0 || neg == 8;
         x[c] = (ism_interval){p[lo][0], p[lo + 13][0]};
         y[c] = (ism_interval){p[lo][1], p[lo + 13][1]};
@@ -1203,10 +1211,11 @@ typedef struct split_in {
     uint8_t wants;   /* bit c: sag_split will ask for child c's foot (wanted_feet) */
     uint8_t foot[8]; /* child c's centre foot (corner_view.foot) */
     double foot_at[8][3];
+    ism_straddle_jet foot_jet[8]; /* child c's with FOOT_AT (corner_view.foot_jet) */
 } split_in;
 
-/* Nodes per block of a split pass: its three tasks run block by block, so split_in (1.7 KB
- * a node) is held for SPLIT_BLOCK nodes however large the pass (10^5 nodes: 170 MB); 1,024
+/* Nodes per block of a split pass: its three tasks run block by block, so split_in (2.3 KB
+ * a node) is held for SPLIT_BLOCK nodes however large the pass (10^5 nodes: 230 MB); 1,024
  * is many more tasks than threads, and fills the feet's 32-lane batches. */
 #define SPLIT_BLOCK 1024
 
@@ -1254,7 +1263,9 @@ static void corners_task(void *ctx, size_t k, int thread)
 #define FEET_LANES ISM_GRAD_BATCH
 
 /* Second task of a split pass: the feet of lanes FEET_LANES k .. (feet_in_nodes) into
- * their nodes' split_in. */
+ * their nodes' split_in, and f's jet at those in their nodes (one batch,
+ * ism_eval_hessian_batch: bit for bit the scalar Hessian sag_split's balanced point would
+ * take there, ~1,000 instructions a point alone on the torus). */
 static void feet_task(void *ctx, size_t k, int thread)
 {
     split_job *job = ctx;
@@ -1271,12 +1282,27 @@ static void feet_task(void *ctx, size_t k, int thread)
         memcpy(lo[j], in->p[first], sizeof lo[j]);
         memcpy(hi[j], in->p[first + 13], sizeof hi[j]);
     }
-    feet_in_nodes(&d->w[thread], (const double (*)[3])lo, (const double (*)[3])hi, size, n, m,
-                  state);
+    worker *w = &d->w[thread];
+    feet_in_nodes(w, (const double (*)[3])lo, (const double (*)[3])hi, size, n, m, state);
+    double at[FEET_LANES][3], f[FEET_LANES], g[FEET_LANES][3], h[FEET_LANES][6];
+    size_t nat = 0;
     for (size_t j = 0; j < n; j++) {
         split_in *in = &job->in[lane[j] / 8];
         in->foot[lane[j] % 8] = state[j];
         memcpy(in->foot_at[lane[j] % 8], m[j], sizeof m[j]);
+        if (state[j] == FOOT_AT)
+            memcpy(at[nat++], m[j], sizeof at[0]);
+    }
+    if (nat)
+        ism_eval_hessian_batch(w->s.tape, w->s.ws, (const double (*)[3])at, f, g, h, nat);
+    for (size_t j = 0, q = 0; j < n; j++) {
+        if (state[j] != FOOT_AT)
+            continue;
+        ism_straddle_jet *jet = &job->in[lane[j] / 8].foot_jet[lane[j] % 8];
+        jet->f = f[q];
+        memcpy(jet->g, g[q], sizeof jet->g);
+        memcpy(jet->h, h[q], sizeof jet->h);
+        q++;
     }
 }
 
@@ -1347,6 +1373,8 @@ static void split_task(void *ctx, size_t k, int thread)
         v->placed = FOOT_UNKNOWN;
         v->foot = in->foot[c];
         memcpy(v->foot_at, in->foot_at[c], sizeof v->foot_at);
+        if (v->foot == FOOT_AT)
+            v->foot_jet = in->foot_jet[c];
         v->known_free = known >> c & 1;
         v->free_kids = 0;
         dnode *n = &kids[c];
@@ -1356,8 +1384,7 @@ static void split_task(void *ctx, size_t k, int thread)
             n->o.v[a] += ((c >> a) & 1) * half;
         n->level = (uint8_t)(parent->level + 1);
         for (int j = 0; j < 8; j++) {
-            int at = ((c & 1) + (j & 1)) + 3 * ((c >> 1 & 1) + (j >> 1 & 1)) +
-                     9 * ((c >> 2 & 1) + (j >> 2 & 1));
+            int at = SPLIT_OFF[c] + SPLIT_OFF[j];
             n->f[j] = f[at];
             memcpy(v->p[j], p[at], sizeof v->p[j]);
             memcpy(v->n[j], g[at], sizeof v->n[j]);

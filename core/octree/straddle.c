@@ -45,15 +45,23 @@ static bool on_box_face(const double box[6], const double p[3])
 
 /* The unit normal n = ∇f/|∇f| at p and f's tangential Hessian there (a, b, c as
  * tangential() gives them; *gl: |∇f|, when gl is not NULL); false at the box's faces and
- * where f, ∇f or |∇f| is not usable. */
-static bool local_form(ism_sampler *s, const double box[6], const double p[3], double n[3],
-                       double *a, double *b, double *c, double *glen)
+ * where f, ∇f or |∇f| is not usable. j: f, ∇f and the Hessian at p taken beforehand
+ * (ism_eval_hessian's bits), or NULL: evaluated here. */
+static bool local_form(ism_sampler *s, const double box[6], const double p[3],
+                       const ism_straddle_jet *j, double n[3], double *a, double *b, double *c,
+                       double *glen)
 {
     if (on_box_face(box, p))
         return false;
-    double g[3], h[6];
+    double g[3], h[6], f;
     s->n_gradient++;
-    double f = ism_eval_hessian(s->tape, s->ws, p[0], p[1], p[2], g, h);
+    if (j) {
+        f = j->f;
+        memcpy(g, j->g, sizeof g);
+        memcpy(h, j->h, sizeof h);
+    } else {
+        f = ism_eval_hessian(s->tape, s->ws, p[0], p[1], p[2], g, h);
+    }
     double gl = ism_norm3(g);
     if (!isfinite(f) || !(gl > 0) || !isfinite(gl))
         return false;
@@ -70,7 +78,7 @@ bool ism_straddle_point(ism_sampler *s, double shift, const double box[6], const
 {
     memcpy(q, p, 3 * sizeof *q);
     double n[3], a, b, c;
-    if (!(shift > 0) || !local_form(s, box, p, n, &a, &b, &c, NULL))
+    if (!(shift > 0) || !local_form(s, box, p, NULL, n, &a, &b, &c, NULL))
         return false;
     if (!(a * c - b * b > 0) || !isfinite(a))
         return false; /* a saddle, a parabolic point, or no Hessian: chords on both sides */
@@ -86,11 +94,18 @@ bool ism_straddle_point(ism_sampler *s, double shift, const double box[6], const
 bool ism_straddle_balanced_point(ism_sampler *s, double shift, const double box[6],
                                  const double p[3], double q[3], double *bend)
 {
+    return ism_straddle_balanced_point_at(s, shift, box, p, NULL, q, bend);
+}
+
+bool ism_straddle_balanced_point_at(ism_sampler *s, double shift, const double box[6],
+                                    const double p[3], const ism_straddle_jet *j, double q[3],
+                                    double *bend)
+{
     memcpy(q, p, 3 * sizeof *q);
     double n[3], a, b, c, gl;
     if (bend)
         *bend = 0;
-    if (!(shift > 0) || !local_form(s, box, p, n, &a, &b, &c, &gl))
+    if (!(shift > 0) || !local_form(s, box, p, j, n, &a, &b, &c, &gl))
         return false;
     /* the tangential Hessian's eigenvalues l1 >= l2: their sum and difference */
     double sum = a + c, diff = sqrt((a - c) * (a - c) + 4 * b * b);

@@ -35,6 +35,18 @@ bool ism_straddle_point(ism_sampler *s, double shift, const double box[6], const
 bool ism_straddle_balanced_point(ism_sampler *s, double shift, const double box[6],
                                  const double p[3], double q[3], double *bend);
 
+/* f, ∇f and the Hessian (xx xy xz yy yz zz) at a point, as ism_eval_hessian gives them. */
+typedef struct ism_straddle_jet {
+    double f, g[3], h[6];
+} ism_straddle_jet;
+
+/* ism_straddle_balanced_point with f's jet at p taken beforehand (j: bit for bit
+ * ism_eval_hessian's at p on s's tape, e.g. by ism_eval_hessian_batch; NULL: evaluated
+ * here): the same answer and the same count of gradients. */
+bool ism_straddle_balanced_point_at(ism_sampler *s, double shift, const double box[6],
+                                    const double p[3], const ism_straddle_jet *j, double q[3],
+                                    double *bend);
+
 /* The distance to f = 0 (refine.h's measure, every point) of out's triangles from first_tri
  * on with the vertices from first_vert on moved; out is left as it was. False when out of
  * memory. */

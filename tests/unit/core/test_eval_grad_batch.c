@@ -1,6 +1,7 @@
 /* test_eval_grad_batch.c — the short-batch evaluators against the one-point ones, bit for
- * bit: ism_eval_gradient_batch against ism_eval_gradient (value and three partials) and
- * ism_eval_points against ism_eval_point, lane by lane, on every example surface and on
+ * bit: ism_eval_gradient_batch against ism_eval_gradient (value and three partials),
+ * ism_eval_hessian_batch against ism_eval_hessian (value, gradient and Hessian, with the
+ * tapes' free_of and without it) and ism_eval_points against ism_eval_point, lane by lane, on every example surface and on
  * expressions using every operation — including where the scalar rules take a branch (min
  * and max ties, the chain rule's 0 where g' is 0, clipped sqrt/log/pow, division by 0, abs at
  * 0) — over batches of many sizes (1, a chunk less one, a chunk, a chunk and a bit), with the
@@ -11,6 +12,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "core/expr/tape.h"
 #include "test_eval_surfaces.h"
 
 /* Every operation, and places where each takes its other branch. */
@@ -68,15 +70,23 @@ static void check_tape(const char *name, const ism_tape *t, uint64_t seed)
         size_t n = SIZES[s];
         double x[MAXN], y[MAXN], z[MAXN], f[MAXN], g[MAXN][3], v[MAXN];
         fill_points(&rng, x, y, z, n);
+        double p[MAXN][3], hf[MAXN], hg[MAXN][3], hh[MAXN][6];
         ism_eval_gradient_batch(t, ws, x, y, z, f, g, n);
         ism_eval_points(t, ws, x, y, z, v, n);
         for (size_t i = 0; i < n; i++) {
-            double g1[3];
+            p[i][0] = x[i], p[i][1] = y[i], p[i][2] = z[i];
+        }
+        ism_eval_hessian_batch(t, ws, (const double (*)[3])p, hf, hg, hh, n);
+        for (size_t i = 0; i < n; i++) {
+            double g1[3], g2[3], h2[6];
             double f1 = ism_eval_gradient(t, ws1, x[i], y[i], z[i], g1);
             double v1 = ism_eval_point(t, ws1, x[i], y[i], z[i]);
-            bool ok = same_bits(f[i], f1) && same_bits(v[i], v1);
+            double f2 = ism_eval_hessian(t, ws1, x[i], y[i], z[i], g2, h2);
+            bool ok = same_bits(f[i], f1) && same_bits(v[i], v1) && same_bits(hf[i], f2);
             for (int k = 0; k < 3; k++)
-                ok = ok && same_bits(g[i][k], g1[k]);
+                ok = ok && same_bits(g[i][k], g1[k]) && same_bits(hg[i][k], g2[k]);
+            for (int k = 0; k < 6; k++)
+                ok = ok && same_bits(hh[i][k], h2[k]);
             if (!ok && mismatch++ < 3)
                 cr_log_error("%s, lane %zu of %zu at (%.17g, %.17g, %.17g): batch f %.17g "
                              "g (%.17g, %.17g, %.17g) points %.17g; scalar f %.17g g (%.17g, "
@@ -98,6 +108,9 @@ Test(eval_grad_batch, every_operation_bit_for_bit)
         ism_tape *t = ism_tape_compile(EXPRS[i], NULL, 0, NULL, 0, NULL, &err);
         cr_assert_not_null(t, "%s: %s", EXPRS[i], err.message);
         check_tape(EXPRS[i], t, 77 + i);
+        for (size_t k = 0; k < t->len; k++) /* the Hessians' general rules, not one_var's */
+            t->code[k].free_of = 0;
+        check_tape(EXPRS[i], t, 177 + i);
         ism_tape_free(t);
     }
 }
