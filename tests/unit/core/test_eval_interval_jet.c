@@ -384,6 +384,20 @@ Test(eval_interval_jet, free_of_changes_no_bit)
     }
 }
 
+/* Boxes at the edges of the doubles: infinite, huge (inf − inf, 0 · inf, overflow), zero
+ * width, subnormal. */
+static const ism_interval EDGE_BOXES[][3] = {
+    { { -INFINITY, INFINITY }, { -INFINITY, INFINITY }, { -INFINITY, INFINITY } },
+    { { 0, 0 }, { -INFINITY, INFINITY }, { 1, 2 } },
+    { { 1e300, 1e308 }, { -1e308, -1e300 }, { 1e200, 1e300 } },
+    { { 1000, 2000 }, { 1000, 2000 }, { -2000, 1000 } },
+    { { -5, 0 }, { 0, 0 }, { 0, 0 } },
+    { { INFINITY, INFINITY }, { -INFINITY, -INFINITY }, { 0, INFINITY } },
+    { { -1e-320, 1e-320 }, { 5e-324, 1e-310 }, { -1e-300, 0 } },
+    { { 1e150, 1e160 }, { 1e150, 1e160 }, { 1e150, 1e160 } },
+};
+#define N_EDGE_BOXES (sizeof EDGE_BOXES / sizeof EDGE_BOXES[0])
+
 /* No bound of a jet or a gradient is NaN (interval_jet.h), whatever the box: infinite and
  * huge boxes (inf − inf, 0 · inf, overflow in the second partials), poles and domain edges.
  * The evaluator tests the whole jet of an instruction for NaN at once and cleans it bound by
@@ -396,21 +410,12 @@ Test(eval_interval_jet, no_nan_bound_in_any_partial)
         "abs(x)*log(y)", "(x^2 + y^2 + z^2 + 0.91)^2 - 4*(x^2 + y^2)", "tan(x)*y^3",
         "pow(x, 2.5) * z",
     };
-    const ism_interval boxes[][3] = {
-        { { -INFINITY, INFINITY }, { -INFINITY, INFINITY }, { -INFINITY, INFINITY } },
-        { { 0, 0 }, { -INFINITY, INFINITY }, { 1, 2 } },
-        { { 1e300, 1e308 }, { -1e308, -1e300 }, { 1e200, 1e300 } },
-        { { 1000, 2000 }, { 1000, 2000 }, { -2000, 1000 } },
-        { { -5, 0 }, { 0, 0 }, { 0, 0 } },
-        { { INFINITY, INFINITY }, { -INFINITY, -INFINITY }, { 0, INFINITY } },
-        { { -1e-320, 1e-320 }, { 5e-324, 1e-310 }, { -1e-300, 0 } },
-        { { 1e150, 1e160 }, { 1e150, 1e160 }, { 1e150, 1e160 } },
-    };
+    const ism_interval (*boxes)[3] = EDGE_BOXES;
     for (size_t i = 0; i < sizeof exprs / sizeof exprs[0]; i++) {
         ism_tape *t = compile(exprs[i]);
         ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
         cr_assert(jw);
-        for (size_t b = 0; b < sizeof boxes / sizeof boxes[0]; b++) {
+        for (size_t b = 0; b < N_EDGE_BOXES; b++) {
             ism_ivjet J;
             ism_ivgrad G;
             ism_eval_interval_jet(t, jw, boxes[b], NULL, NULL, &J);
@@ -526,21 +531,15 @@ static bool batch_matches(const char *name, ism_tape *t, const ism_interval (*b)
     return true;
 }
 
-/* Random batches of 1-8 boxes (one in eight a point), then the edge boxes of
- * no_nan_bound_in_any_partial (infinite, huge, zero-width, subnormal) in batches. */
+/* Random batches of 1-8 boxes (one in eight a point), then the edge boxes (EDGE_BOXES and
+ * one with lo > hi and a NaN bound) in batches. */
 static size_t batch_check(const char *name, ism_tape *t, const double *within, uint64_t seed)
 {
-    static const ism_interval edges[][3] = {
-        { { -INFINITY, INFINITY }, { -INFINITY, INFINITY }, { -INFINITY, INFINITY } },
-        { { 0, 0 }, { -INFINITY, INFINITY }, { 1, 2 } },
-        { { 1e300, 1e308 }, { -1e308, -1e300 }, { 1e200, 1e300 } },
-        { { 1000, 2000 }, { 1000, 2000 }, { -2000, 1000 } },
-        { { -5, 0 }, { 0, 0 }, { 0, 0 } },
-        { { INFINITY, INFINITY }, { -INFINITY, -INFINITY }, { 0, INFINITY } },
-        { { -1e-320, 1e-320 }, { 5e-324, 1e-310 }, { -1e-300, 0 } },
-        { { 1e150, 1e160 }, { 1e150, 1e160 }, { 1e150, 1e160 } },
-        { { 2, 1 }, { NAN, 1 }, { 0, 0 } },
-    };
+    ism_interval edges[N_EDGE_BOXES + 1][3];
+    memcpy(edges, EDGE_BOXES, sizeof EDGE_BOXES);
+    edges[N_EDGE_BOXES][0] = (ism_interval){ 2, 1 };
+    edges[N_EDGE_BOXES][1] = (ism_interval){ NAN, 1 };
+    edges[N_EDGE_BOXES][2] = (ism_interval){ 0, 0 };
     ism_ivjet_ws *plain = ism_ivjet_ws_new(t), *batch = ism_ivjet_ws_new(t);
     cr_assert(plain && batch);
     test_rng rng = { seed };
@@ -556,7 +555,8 @@ static size_t batch_check(const char *name, ism_tape *t, const double *within, u
     size_t ne = sizeof edges / sizeof edges[0];
     for (size_t first = 0; first < ne; first += ISM_IVGRAD_BATCH) {
         size_t n = ne - first < ISM_IVGRAD_BATCH ? ne - first : ISM_IVGRAD_BATCH;
-        batches += batch_matches(name, t, edges + first, n, plain, batch, &rng, within);
+        batches += batch_matches(name, t, (const ism_interval (*)[3])(edges + first), n, plain,
+                                 batch, &rng, within);
     }
     ism_ivjet_ws_free(plain);
     ism_ivjet_ws_free(batch);
