@@ -108,17 +108,17 @@ static inline bool is_zero(ism_interval u)
     return ((lo | hi) << 1) == 0;
 }
 
-static inline ism_interval mulz(ism_interval a, ism_interval b)
+static ALWAYS_INLINE ism_interval mulz(ism_interval a, ism_interval b)
 {
     return is_zero(a) || is_zero(b) ? ivc(0.0) : iv_mul(a, b);
 }
 
-static inline ism_interval addz(ism_interval a, ism_interval b)
+static ALWAYS_INLINE ism_interval addz(ism_interval a, ism_interval b)
 {
     return is_zero(a) ? b : is_zero(b) ? a : iv_add(a, b);
 }
 
-static inline ism_interval subz(ism_interval a, ism_interval b)
+static ALWAYS_INLINE ism_interval subz(ism_interval a, ism_interval b)
 {
     return is_zero(b) ? a : is_zero(a) ? iv_neg(b) : iv_sub(a, b);
 }
@@ -677,9 +677,8 @@ static ALWAYS_INLINE ism_interval kept_of(const kept_rec *k, size_t i, int c)
 /* The second-order pass over the kept record of the gradient pass over the same box: each
  * instruction's value and first partials copied from it (the second-order pass computes
  * them with the same operations on the same operands, and cleans them the same way: a
- * NaN-free bound is kept as it is), its Hessian computed as run's would be. Inlined into
- * each caller, whose record's steps are constants. */
-static ALWAYS_INLINE size_t hess_only(const ism_tape *t, ism_ivjet_ws *ws, const kept_rec *kept,
+ * NaN-free bound is kept as it is), its Hessian computed as run's would be. */
+static size_t hess_only(const ism_tape *t, ism_ivjet_ws *ws, const kept_rec *kept,
                         const ism_interval box[3], uint8_t *kinks, ism_ivjet *out)
 {
     const unsigned all = want_of(7u, 1, false);
