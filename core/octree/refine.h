@@ -5,7 +5,6 @@
 #ifndef ISM_REFINE_H
 #define ISM_REFINE_H
 
-#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdbool.h>
