@@ -1,18 +1,18 @@
 /* dist_bound.h — the distance to f = 0 at a point between a mesh element's corners (a
- * triangle's centroid, an edge's midpoint) bounded through those corners: a corner v whose
- * own distance to f = 0 is dv puts the surface within |p − v| + dv of p (the triangle
- * inequality). The first-order estimate |f| / |∇f| that the polygoniser and the analysis
- * measure with grows without bound where ∇f vanishes off the surface — on a thin tube's core
+ * triangle's centroid, an edge's midpoint), the one set of rules the polygoniser
+ * (octree/sample_dist.h) and the analysis (accuracy.c) measure it by: the first-order
+ * estimate |f| / |∇f| (ism_first_order_dist); one Newton step further where that estimate is
+ * just within a bound E (ism_first_order_unsure, ism_newton_foot, ism_stepped_dist), since
+ * it can fall short by its curvature term; and the bound through the corners
+ * (ism_dist_through_corners): a corner v whose own distance to f = 0 is dv puts the surface
+ * within |p − v| + dv of p (the triangle inequality).
+ * The estimate grows without bound where ∇f vanishes off the surface — on a thin tube's core
  * line, beside a singular point — while the surface is near: the horn cyclide's tube (radius
  * y² / 96 beside its point (10, 0, 0)) gave 0.0623 at an edge midpoint that lies 0.0137 from
  * the surface by the canal form (an edge across the tube, half as long as it is 0.0158), and
- * its default bound 0.0554 read "not met". The smaller of the two figures is kept: the bound
- * is a proof, the estimate the usual figure; so a measurement never grows and only an
- * estimate shown too large by the bound shrinks. The polygoniser (octree/refine.h) and the
- * analysis (accuracy.c) both measure this way.
- * The estimate can also fall short, by its curvature term: near E it is measured one Newton
- * step further (ism_first_order_unsure, ism_newton_foot, ism_stepped_dist: the one rule the
- * polygoniser's ism_plain_dist(s), octree/sample_dist.h, and the analysis take). */
+ * its default bound 0.0554 read "not met". The smaller of the estimate and the corners' bound
+ * is kept: the bound is a proof, the estimate the usual figure; so a measurement never grows
+ * and only an estimate shown too large by the bound shrinks. */
 #ifndef ISM_DIST_BOUND_H
 #define ISM_DIST_BOUND_H
 
