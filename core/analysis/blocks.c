@@ -28,6 +28,8 @@ static void run_block(void *ctx, size_t block, int thread)
 bool ism_an_run_blocks(const ism_tape *f, ism_pool *pool, size_t nblocks, ism_an_block_fn fn,
                        void *ctx)
 {
+    if (nblocks == 0) /* nothing to run: no workspaces (band_max's usual case, accuracy.c) */
+        return true;
     int nt = ism_pool_threads(pool);
     ism_eval_ws **ws = calloc((size_t)nt, sizeof *ws);
     bool ok = ws != NULL;

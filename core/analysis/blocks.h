@@ -21,7 +21,7 @@
 /* Runs fn(ctx, ws, block) for every block < nblocks on the threads of pool (NULL: on the
  * calling thread), each thread with its own workspace for f, made for this call. Blocks are
  * independent; results must not depend on which thread ran which block. False when a
- * workspace could not be made. */
+ * workspace could not be made; with no blocks none is made. */
 typedef void (*ism_an_block_fn)(void *ctx, ism_eval_ws *ws, size_t block);
 bool ism_an_run_blocks(const ism_tape *f, ism_pool *pool, size_t nblocks, ism_an_block_fn fn,
                        void *ctx);
