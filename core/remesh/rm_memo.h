@@ -40,4 +40,7 @@ void rm_memo_free(rm_memo *m);
  * and keyed on x for the caller to fill. */
 rm_memo_entry *rm_memo_slot(rm_memo *m, const double x[3]);
 
+/* True when x's slot knows x (its entry is not empty); nothing changes. */
+bool rm_memo_known(const rm_memo *m, const double x[3]);
+
 #endif
