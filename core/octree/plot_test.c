@@ -149,7 +149,7 @@ static bool one_branch_graph(ism_sampler *s, ism_ivjet_ws *jet, const ism_corner
  * gyroid ball at E = 3e-3 (box ±1.5, depth 7): 312,508 -> 45,482 triangles; at 1e-3, depth
  * 10: 586,994 -> 117,882, max centroid distance 2.3e-3 -> 1.18e-3. */
 static int crease_cell(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
-                       const ism_corners *k)
+                       const ism_corners *k, bool critical)
 {
     static const double any[2] = {0, 0};
     if (ism_top_active_branch(s->tape, any) < 0)
@@ -164,9 +164,12 @@ static int crease_cell(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl
     if (seen != 3)
         return -1;
     /* two corners of one branch whose normals part past normal_cos, or a corner where its
-     * branch's gradient vanishes (its normal is no direction: only the certificate can
-     * vouch for the node) */
-    bool disagree = false;
+     * branch's gradient or f's (critical) vanishes (its normal is no direction: only the
+     * certificate can vouch for the node). f's is asked apart: at a corner on the crease
+     * (a == b) f's derivative takes b (eval_gradient.c) but the label a
+     * (ism_top_active_branch), so ∇f = ∇b = 0 may sit beside a labelled ∇a that is not
+     * (test_plot_test_tie.c). */
+    bool disagree = critical;
     for (int c = 0; c < 8; c++) {
         ism_crease_branch(s, k->p[c], n[c]);
         double len = ism_normalise3(n[c]);
@@ -309,7 +312,7 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
      * and the nodes round them were split as singular whatever E, 1,016 triangles against
      * the sphere's 344 at E 3e-2). Elsewhere such a corner is singular or a critical point
      * of f the node may hide: look closer. */
-    int crease = fl->max_error > 0 ? crease_cell(s, jet, fl, k) : -1;
+    int crease = fl->max_error > 0 ? crease_cell(s, jet, fl, k, critical) : -1;
     if (crease >= 0)
         return passes(crease, may_be_blind, n, fl->normal_cos, blind);
     if (critical)
