@@ -28,10 +28,10 @@ static void put(ism_root_table *t, const ism_root_entry *r)
     for (size_t s = ism_edge_slot(r->a, r->b, 63) & t->mask;; s = (s + 1) & t->mask) {
         ism_root_entry *e = &t->slots[s];
         if (!e->a) {
-            *e = (ism_root_entry){r->a + 1, r->b + 1, r->t};
+            *e = *r;
             return;
         }
-        if (e->a == r->a + 1 && e->b == r->b + 1)
+        if (e->a == r->a && e->b == r->b)
             return; /* the same search's answer (a pure function of the edge) */
     }
 }

@@ -30,7 +30,8 @@ void ism_root_log_push(ism_root_log *l, uint64_t a, uint64_t b, double t);
 void ism_root_log_free(ism_root_log *l);
 
 typedef struct ism_root_table {
-    ism_root_entry *slots; /* keys stored + 1 (0: an empty slot), linear probing */
+    ism_root_entry *slots; /* linear probing; a = 0 marks an empty slot (a lattice key is
+                              never 0: grid.h ism_lattice_key) */
     size_t mask;           /* slot count - 1 (a power of two); 0 with no slots */
 } ism_root_table;
 
@@ -46,7 +47,7 @@ static inline bool ism_root_table_find(const ism_root_table *t, uint64_t a, uint
         return false;
     for (size_t s = ism_edge_slot(a, b, 63) & t->mask;; s = (s + 1) & t->mask) {
         const ism_root_entry *e = &t->slots[s];
-        if (e->a == a + 1 && e->b == b + 1) {
+        if (e->a == a && e->b == b) {
             *out = e->t;
             return true;
         }
