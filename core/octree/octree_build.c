@@ -877,6 +877,7 @@ static bool init_threads(build *b, int nthreads)
             th->memo.labels = b->label_memos + (size_t)t * labels;
             th->memo.pairs = b->pair_memos + (size_t)t * pairs;
             th->memo.log = b->p->roots ? &th->roots : NULL;
+            th->roots.limit = b->p->max_roots / (size_t)nthreads;
         }
         if (!th->s.ws || !ism_thin_ws_init(&th->thin, b->p->tape))
             return false;
@@ -977,14 +978,16 @@ static bool join_tasks(build *b, node_vec *top, int nthreads)
     return true;
 }
 
-/* The threads' logged roots into p->roots (empty when the build failed). */
+/* The threads' logged roots into p->roots (empty when the build failed), each log freed as
+ * soon as it is in. */
 static void hand_roots(build *b, int nthreads, bool ok)
 {
-    ism_root_log *logs = ok && b->threads ? malloc((size_t)nthreads * sizeof *logs) : NULL;
-    for (int t = 0; logs && t < nthreads; t++)
-        logs[t] = b->threads[t].roots;
-    ism_root_table_build(b->p->roots, logs, logs ? nthreads : 0);
-    free(logs);
+    size_t roots = 0;
+    for (int t = 0; b->threads && t < nthreads; t++)
+        roots += b->threads[t].roots.n;
+    ism_root_table_init(b->p->roots, ok ? roots : 0);
+    for (int t = 0; b->threads && t < nthreads; t++)
+        ism_root_table_take(b->p->roots, &b->threads[t].roots);
 }
 
 enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_params *p,

@@ -104,6 +104,8 @@ typedef struct ism_octree_build_params {
     struct ism_root_table *roots;     /* when not NULL, filled with the single roots the
                                          flatness test searched on node edges, for the cells
                                          (root_table.h; empty on failure) */
+    size_t max_roots;                 /* ... of which the build's logs keep at most this many
+                                         (past it the cells search for themselves) */
 } ism_octree_build_params;
 
 typedef struct ism_octree_build_stats {

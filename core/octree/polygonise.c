@@ -63,6 +63,12 @@ static double flat_abs_tol(const ism_octree *tree, const ism_poly_options *o)
  * gyroid ball at 1e-2 one, the sphere none; what is left is counted (error_missed_nodes). */
 #define ISM_ERROR_ROUNDS 6
 #define BYTES_PER_TRIANGLE 256 /* node outputs + welded mesh + analysis, per triangle */
+/* The build's edge roots handed to the cells (root_table.h) may hold 1/ROOT_MEMORY_SHARE of
+ * max_memory at ISM_ROOT_BYTES a root, a share of the budget as the nodes have theirs (a
+ * quarter: max_nodes); small, since the cache is only speed (past it the cells search for
+ * themselves: the same mesh). 1/16 of the default
+ * 2 GiB is ~0.9M roots, 29x Barth's sextic's 31,390 at E 1e-2: no gallery run reaches it. */
+#define ROOT_MEMORY_SHARE 16
 
 void ism_poly_options_default(ism_poly_options *o)
 {
@@ -659,6 +665,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
         .progress_ctx = prog,
         .cost = &m.par,
         .roots = &found,
+        .max_roots = o->max_memory / ROOT_MEMORY_SHARE / ISM_ROOT_BYTES,
     };
     memcpy(bp.flatness.box, o->box, sizeof bp.flatness.box);
     ism_octree_build_stats bs;

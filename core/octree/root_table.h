@@ -8,8 +8,10 @@
  * them and f along it (cell_cache.h ism_root_entry), so a hit is the parameter the cell's own
  * search would find, bit for bit: the mesh does not change.
  *
- * Each build thread appends what it searches to a log of its own (no lock); after the build
- * the logs go into one read-only open-addressing table that every cell thread asks. */
+ * Each build thread appends what it searches to a log of its own (no lock), up to the log's
+ * limit (a share of the polygoniser's memory budget: polygonise.c ROOT_MEMORY_SHARE); after
+ * the build the logs go one by one into one read-only open-addressing table that every cell
+ * thread asks, each freed once in it (the logs and the table do not coexist whole). */
 #ifndef ISM_ROOT_TABLE_H
 #define ISM_ROOT_TABLE_H
 
@@ -23,9 +25,16 @@
 typedef struct ism_root_log {
     ism_root_entry *v;
     size_t n, cap;
+    size_t limit; /* roots it may hold (0: none) */
 } ism_root_log;
 
-/* Appends a root; out of memory it is not kept (the table is a cache: the cell searches). */
+/* Heap bytes per root the logs and the table hold at worst, for the logs' limit: a log's
+ * array doubles (under 2 entries a root), and the table's power of two at SLOTS_PER_ROOT
+ * (root_table.c) rounds up to under twice that (4). */
+#define ISM_ROOT_BYTES (6 * sizeof(ism_root_entry))
+
+/* Appends a root; past l->limit or out of memory it is not kept (the table is a cache: the
+ * cell searches). */
 void ism_root_log_push(ism_root_log *l, uint64_t a, uint64_t b, double t);
 void ism_root_log_free(ism_root_log *l);
 
@@ -35,8 +44,11 @@ typedef struct ism_root_table {
     size_t mask;           /* slot count - 1 (a power of two); 0 with no slots */
 } ism_root_table;
 
-/* The table of every root in logs[0..n) (an empty table when out of memory). */
-void ism_root_table_build(ism_root_table *t, const ism_root_log *logs, int n);
+/* An empty table with room for `roots` roots (no slots when roots is 0 or out of memory:
+ * then every find misses). */
+void ism_root_table_init(ism_root_table *t, size_t roots);
+/* Puts log l's roots into t (an edge already there keeps its first root), then frees l. */
+void ism_root_table_take(ism_root_table *t, ism_root_log *l);
 void ism_root_table_free(ism_root_table *t);
 
 /* The root parameter from lattice key a to key b, when the build searched it. */
