@@ -26,3 +26,21 @@ Test(corners, cube_edges_join_neighbours_on_their_faces)
         }
     }
 }
+
+/* The exact order corners.h documents, which callers that tabulate by e rely on (dual.c's
+ * per-edge corner and face tables): with a = e / 4, r = e % 4, o1 = (a + 1) % 3, o2 = (a + 2)
+ * % 3, c0 = (r & 1) << o1 | (r >> 1 & 1) << o2, c1 = c0 | 1 << a, faces o1 * 2 + (r & 1) and
+ * o2 * 2 + (r >> 1 & 1) (a table swapping two edges of one axis passes the test above). */
+Test(corners, cube_edges_in_the_documented_order)
+{
+    for (int e = 0; e < 12; e++) {
+        int a = e / 4, r = e % 4, o1 = (a + 1) % 3, o2 = (a + 2) % 3;
+        int want0 = (r & 1) << o1 | (r >> 1 & 1) << o2;
+        int c0, c1, faces[2];
+        ism_cube_edge(e, &c0, &c1, faces);
+        cr_expect_eq(c0, want0, "edge %d: c0 %d, documented %d", e, c0, want0);
+        cr_expect_eq(c1, want0 | 1 << a, "edge %d: c1 %d", e, c1);
+        cr_expect_eq(faces[0], o1 * 2 + (r & 1), "edge %d: face %d", e, faces[0]);
+        cr_expect_eq(faces[1], o2 * 2 + (r >> 1 & 1), "edge %d: face %d", e, faces[1]);
+    }
+}
