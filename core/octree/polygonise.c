@@ -335,11 +335,6 @@ static void meter_stop_inside(const phase_meter *m, ism_poly_stats *st, enum ism
     outer->caller0 += ism_thread_cpu_ms() - m->caller0;
 }
 
-static int thread_count(const ism_poly_options *o)
-{
-    return ism_threads_resolve(o->threads);
-}
-
 static void add_cell_stats(ism_poly_stats *st, const ism_cell_ctx *cx)
 {
     st->polygons += cx->stats.polygons;
@@ -769,7 +764,7 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
         return ds == ISM_POLY_OK ? ISM_POLY_OK : fail_with(ds, o, err);
     double t_start = ism_now_ms();
     /* one pool for every round and phase: threads made once per call */
-    ism_pool *pool = ism_pool_new(thread_count(o));
+    ism_pool *pool = ism_pool_new(ism_threads_resolve(o->threads));
     int threads = ism_pool_threads(pool);
     ism_split_set split = {0}, next = {0};
     carry prev;
