@@ -126,8 +126,9 @@ typedef struct ism_label_entry {
 } ism_label_entry;
 
 /* A build thread's memos (tables of 2^ISM_ROOT_MEMO_BITS, 2^ISM_LABEL_MEMO_BITS and
- * 2^ISM_PAIR_MEMO_BITS entries; all NULL on the scalar reference path), and its log of the
- * roots searched for the cells. */
+ * 2^ISM_PAIR_MEMO_BITS entries; all NULL on the scalar reference path), and beside them,
+ * not a memo, its append-only log of the roots searched for the cells (root_table.h): NULL
+ * on that path and whenever the build hands no roots on (octree_build.h's roots). */
 typedef struct ism_node_memo {
     ism_root_entry *roots;
     ism_label_entry *labels;
