@@ -6,6 +6,7 @@
 #include "core/util/vec3.h"
 
 #include "core/eval/eval.h"
+#include "core/expr/tape.h"
 
 #include <math.h>
 #include <string.h>
@@ -14,23 +15,18 @@
  * batched evaluator (ISM_GRAD_BATCH), room for a fan of 31 triangles (x, and a centroid and
  * a midpoint each); a larger fan's last points are measured one by one. */
 #define RM_FAN_BATCH (2 * ISM_GRAD_BATCH)
+/* The batch pays where an evaluation costs more than its bookkeeping: a tape this long or
+ * longer. callgrind, --quality good, default bound, pass instructions with the batch for
+ * every tape: chmutov-quartic -3.3%, tanglecube -4%, blob-pair -3%, spindle-cyclide -2%,
+ * catenoid -0.4%, but cube +3-5%, ding-dong +3.6%, helicoid +5.3% (tapes of a few
+ * instructions, where one evaluation costs about what the batch's bookkeeping does). */
+#define RM_FAN_BATCH_MIN_TAPE 12
 
-/* The Newton step at x into e: s1 = f/|∇f|, ∇f and y, where the step lands (state S1), or
- * FAIL1 where ∇f vanishes or f is not finite. */
-static void first_step_from(rm_pass *p, double fv, const double g[3], rm_memo_entry *e);
-
-static void first_step(rm_pass *p, const double x[3], rm_memo_entry *e)
+/* e's first step from f's value fv and gradient e->g at x (first_step evaluates them;
+ * fan_first_steps takes them from a batch). */
+static inline void first_step_from(rm_pass *p, const double x[3], double fv, rm_memo_entry *e)
 {
-    double g[3], fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
-    memcpy(e->x, x, sizeof e->x);
-    first_step_from(p, fv, g, e);
-}
-
-/* e's first step from f's value fv and gradient g at e's point (as first_step, which
- * evaluates them itself). */
-static void first_step_from(rm_pass *p, double fv, const double g[3], rm_memo_entry *e)
-{
-    memcpy(e->g, g, sizeof e->g);
+    const double *g = e->g;
     double g2 = ism_dot3(g, g), gn = sqrt(g2);
     if (!isfinite(fv) || !(gn > p->gthresh)) {
         e->state = RM_MEMO_FAIL1;
@@ -39,8 +35,15 @@ static void first_step_from(rm_pass *p, double fv, const double g[3], rm_memo_en
     e->s1 = fv / gn;
     double s = fv / g2;
     for (int k = 0; k < 3; k++)
-        e->y[k] = e->x[k] - s * g[k];
+        e->y[k] = x[k] - s * g[k];
     e->state = RM_MEMO_S1;
+}
+
+/* The Newton step at x into e: s1 = f/|∇f|, ∇f and y, where the step lands (state S1), or
+ * FAIL1 where ∇f vanishes or f is not finite. */
+static void first_step(rm_pass *p, const double x[3], rm_memo_entry *e)
+{
+    first_step_from(p, x, ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], e->g), e);
 }
 
 /* f/|∇f| where the step lands into e->s2 (state S2), or FAIL2. (f alone over |∇f| at x
@@ -216,14 +219,16 @@ static void fan_first_steps(rm_pass *p, uint32_t v, const double *x)
     for (size_t i = 0; i < n; i++) {
         double q[3] = {px[i], py[i], pz[i]};
         rm_memo_entry *e = rm_memo_slot(p->memo, q);
-        if (e->state == RM_MEMO_EMPTY)
-            first_step_from(p, fv[i], g[i], e);
+        if (e->state == RM_MEMO_EMPTY) {
+            memcpy(e->g, g[i], sizeof e->g);
+            first_step_from(p, q, fv[i], e);
+        }
     }
 }
 
 double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x, double limit, double stop)
 {
-    if (p->memo)
+    if (p->memo && p->f->len >= RM_FAN_BATCH_MIN_TAPE)
         fan_first_steps(p, v, x);
     double worst = rm_bound_distance(p, x, limit);
     for (uint32_t i = 0; i < p->r.count[v] && worst <= stop; i++) {
