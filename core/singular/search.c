@@ -65,8 +65,10 @@
  * costs more than the work). */
 #define SEARCH_PARALLEL_MIN 64
 
-/* A tested cell's verdict; SMOOTH: it survives, f is smooth on it and its model was filled. */
-enum { EXCLUDED = 0, SURVIVES = 1, UNIQUE = 2, SMOOTH = 3 };
+/* A tested cell's verdict; SMOOTH: it survives, f is smooth on it and its model was filled.
+ * OPEN: screen's cheap tests left it undecided (only screen returns it; classify, which
+ * decides such a cell, never does). */
+enum { EXCLUDED = 0, SURVIVES = 1, UNIQUE = 2, SMOOTH = 3, OPEN = 4 };
 
 /* A cell. A frontier cell on which f is smooth has a Taylor model (centre, f and ∇f there,
  * the jet over the cell: what smooth_tests evaluated), from which its children's ∇f is
@@ -487,9 +489,6 @@ static void certified_model(const search *s, worker *w, const ism_interval x[3],
     ism_eval_interval_jet(s->t, w->jw, x, NULL, NULL, &m->box);
     w->evals_jet++;
 }
-
-/* screen's verdict on a cell its cheap tests leave open (classify decides). */
-#define OPEN 4
 
 /* The tests of a cell that evaluate nothing beyond its F interval f (pm: its parent's
  * model, or NULL): SMOOTH for a certified segment (above; its model not built yet),
