@@ -380,11 +380,13 @@ static bool centre_worth(const ism_dual_model *pm, const double c[3], ism_interv
  * axes).
  *
  * A closed segment S of X on which f and ∇f vanish is a segment of singular points. Then no
- * test of classify drops X — each encloses f or ∇f over X, or over the parent holding X, or
- * a Taylor form round a singular point of X, and S's points are such — and Krawczyk answers
- * neither EMPTY (S's points are zeros of ∇f in X) nor UNIQUE (there are more than one): the
- * verdict is SMOOTH whatever those tests compute. So such a cell is not tested; it only gets
- * the model its children are tested by (a finest one, which has no children, not even that).
+ * test of screen, the centre test (children_quad) or classify drops X — each encloses f or
+ * ∇f over X, or over the parent holding X, or f(c) against a Taylor form round a singular
+ * point of X, and S's points are such (f(c) ∈ q) — and Krawczyk answers neither EMPTY (S's
+ * points are zeros of ∇f in X) nor UNIQUE (there are more than one): the verdict is SMOOTH
+ * whatever those tests compute. So such a cell is not tested (screen answers SMOOTH); finish
+ * only gives it the model its children are tested by (a finest one, which has no children,
+ * not even that).
  *
  * S is taken as such when the interval f and ∇f over S (a degenerate box) lie within
  * SEARCH_ZERO: outward rounding widens an exact 0 by one subnormal step per operation
@@ -774,7 +776,7 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
     }
     for (int m = 0; m < 8; m++) {
         kids[m].level = (uint8_t)(p->level + 1); /* .model: keep sets it */
-        kids[m].lines = 0;                        /* .lines: set once tested (tested) */
+        kids[m].lines = 0;                        /* .lines: set once tested (finish) */
         kids[m].edges = child_edges(p, (unsigned)m);
         for (int k = 0; k < 3; k++)
             kids[m].i[k] = p->i[k] + ((m >> k) & 1u ? half : 0u);
