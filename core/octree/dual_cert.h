@@ -74,17 +74,37 @@ typedef struct ism_dual_terms {
     ism_interval lin[3], quad[6];
 } ism_dual_terms;
 
+/* The quadratic form's term (a, b ≥ a) over x − c ∈ dx (j: the jet over a box holding x):
+ * ½ H_aa dxa² on the diagonal, H_ab dxa dxb off it (the pair counted once, whole). The one
+ * copy of the term: ism_dual_terms_of and ism_dual_quad. */
+static inline ism_interval ism_dual_quad_term(const ism_ivjet *j, const ism_interval dx[3],
+                                              int a, int b)
+{
+    if (a == b)
+        return iv_mul_c(iv_mul(j->h[ism_dual_hess_at(a, a)], iv_square(dx[a])), 0.5);
+    return iv_mul(j->h[ism_dual_hess_at(a, b)], iv_mul(dx[a], dx[b]));
+}
+
 static inline void ism_dual_terms_of(const ism_ivgrad *at, const ism_ivjet *j,
                                      const ism_interval dx[3], ism_dual_terms *t)
 {
     _Pragma("GCC unroll 3") for (int a = 0; a < 3; a++) {
         t->lin[a] = iv_mul(at->d[a], dx[a]);
-        t->quad[ism_dual_hess_at(a, a)] =
-            iv_mul_c(iv_mul(j->h[ism_dual_hess_at(a, a)], iv_square(dx[a])), 0.5);
-        _Pragma("GCC unroll 2") for (int b = a + 1; b < 3; b++)
-            t->quad[ism_dual_hess_at(a, b)] =
-                iv_mul(j->h[ism_dual_hess_at(a, b)], iv_mul(dx[a], dx[b]));
+        _Pragma("GCC unroll 3") for (int b = a; b < 3; b++)
+            t->quad[ism_dual_hess_at(a, b)] = ism_dual_quad_term(j, dx, a, b);
     }
+}
+
+/* ½ (x − c)ᵀ H (x − c) over x − c ∈ dx, H the Hessian enclosure of j: the terms of
+ * ism_dual_quad_term summed from 0 in ism_ivjet's order (the singular search's centre test,
+ * search.c children_quad). */
+static inline ism_interval ism_dual_quad(const ism_ivjet *j, const ism_interval dx[3])
+{
+    ism_interval q = iv(0.0, 0.0);
+    _Pragma("GCC unroll 3") for (int a = 0; a < 3; a++)
+        _Pragma("GCC unroll 3") for (int b = a; b < 3; b++)
+            q = iv_add(q, ism_dual_quad_term(j, dx, a, b));
+    return q;
 }
 
 /* fc + Σ lin + Σ quad: f's second-order form, summed in ism_dual_second_order's order (the

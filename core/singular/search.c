@@ -315,19 +315,6 @@ static bool parent_excludes(const ism_dual_model *pm, const ism_interval x[3])
     return some_row_excludes(&pm->at, &pm->box, dx);
 }
 
-/* ½ (X − c)ᵀ H (X − c) over X − c ∈ dx, H the Hessian enclosure of the jet j: each term
- * enclosed alone (H symmetric: the pair ab, a < b, counted once, whole). */
-static ism_interval quad_form(const ism_ivjet *j, const ism_interval dx[3])
-{
-    ism_interval q = iv(0.0, 0.0);
-    _Pragma("GCC unroll 3") for (int a = 0; a < 3; a++) {
-        q = iv_add(q, iv_mul_c(iv_mul(j->h[ism_dual_hess_at(a, a)], iv_square(dx[a])), 0.5));
-        _Pragma("GCC unroll 2") for (int b = a + 1; b < 3; b++)
-            q = iv_add(q, iv_mul(j->h[ism_dual_hess_at(a, b)], iv_mul(dx[a], dx[b])));
-    }
-    return q;
-}
-
 /* Taylor round a singular point for the children of a cell P with a model pm (lower and
  * upper: their lower and upper halves of P per axis), from f at a child's centre alone: no
  * gradient evaluated. The form q returned serves all eight children.
@@ -338,7 +325,7 @@ static ism_interval quad_form(const ism_ivjet *j, const ism_interval dx[3])
  * f(c) = f(p) + ∇f(p)·(c − p) + ½ (c − p)ᵀ Ĥ (c − p) = ½ (c − p)ᵀ Ĥ (c − p), with
  * Ĥ = 2 ∫₀¹ (1 − t) H(p + t (c − p)) dt: each entry a weighted mean (weights ≥ 0, summing
  * to 1) of values of that entry of H on X, so inside its enclosure over P. c − p lies in
- * c − X = −(X − c) and the form is even in it, so f(c) ∈ quad_form(P's jet, X − c) ⊂ q, q
+ * c − X = −(X − c) and the form is even in it, so f(c) ∈ ism_dual_quad(P's jet, X − c) ⊂ q, q
  * the form over the hull of every child's X − c (inclusion-monotone): an enclosure of f(c)
  * apart from q rules p out.
  *
@@ -358,7 +345,7 @@ static ism_interval children_quad(const ism_dual_model *pm, const ism_interval l
         ism_interval a = iv_sub(lower[k], iv(cl[k], cl[k])), b = iv_sub(upper[k], iv(cu[k], cu[k]));
         dx[k] = iv(fmin(a.lo, b.lo), fmax(a.hi, b.hi));
     }
-    return quad_form(&pm->box, dx);
+    return ism_dual_quad(&pm->box, dx);
 }
 
 /* Whether f at a child's centre c is worth evaluating for children_quad's test (q): its
