@@ -192,6 +192,9 @@ typedef struct ism_locus {
                                    right, but something may be missing */
     char incomplete_why[96];
     uint64_t boxes_visited, evals_interval, evals_jet;
+    uint64_t centre_dropped;    /* cells the search dropped by f at their centre against the
+                                   parent's Taylor form (search.c, children_quad): tests see
+                                   that test ran; not in the JSON stats */
     double time_ms;
     double hessian_scale;       /* the largest Hessian norm sampled over the box (set by the
                                    search; 0 = unknown): the absolute scale below which a

@@ -558,6 +558,7 @@ static bool search_below(ctx *x, const ism_lbox *b, const double lo[3], const do
     bool ok = ism_sing_search(x->t, &so, &sub, &err);
     x->out->evals_interval += sub.evals_interval;
     x->out->evals_jet += sub.evals_jet;
+    x->out->centre_dropped += sub.centre_dropped;
     for (size_t j = 0; ok && j < sub.nboxes; j++)
         if ((sub.boxes[j].flags & ISM_LBOX_UNIQUE)
             || ((sub.boxes[j].flags & ISM_LBOX_PROJECTED) && sub.boxes[j].rank >= min_rank))

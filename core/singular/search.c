@@ -127,6 +127,7 @@ typedef struct worker {
     ism_ivjet_ws *jw;
     uint8_t *kinks, *force;
     uint64_t visited, evals_interval, evals_jet;
+    uint64_t centre_dropped; /* cells the centre test (children_quad) dropped */
 } worker;
 
 /* One task's output: surviving children (their models indexed within models) and boxes, in
@@ -497,8 +498,10 @@ static int screen(worker *w, const scell *c, const ism_interval x[3], ism_interv
 static int classify(const search *s, worker *w, const ism_interval x[3], const ism_interval *fc,
                     ism_interval q, const ism_dual_model *pm, ism_dual_model *m)
 {
-    if (fc && f_off_singular_taylor(*fc, q))
+    if (fc && f_off_singular_taylor(*fc, q)) {
+        w->centre_dropped++;
         return EXCLUDED;
+    }
     ism_ivgrad g;
     /* Without min, max or abs there is no kink to list: the pass keeps its values and first
      * partials instead, and smooth_tests' jet over the same box then computes only the
@@ -1006,6 +1009,7 @@ bool ism_sing_search(const ism_tape *f, const ism_locus_options *o, ism_locus *o
         out->boxes_visited += s.workers[i].visited;
         out->evals_interval += s.workers[i].evals_interval;
         out->evals_jet += s.workers[i].evals_jet;
+        out->centre_dropped += s.workers[i].centre_dropped;
     }
     free(boxes.p);
     free_workers(&s);

@@ -476,3 +476,36 @@ Test(dual_cert, sub_box_forms_are_their_own_forms)
     ism_ivjet_ws_free(jw);
     ism_tape_free(t);
 }
+
+/* ism_dual_quad, the quadratic form ½ δᵀ H δ over δ ∈ dx (the singular search's centre test,
+ * search.c children_quad), on constant Hessians with off-diagonal entries, against the form
+ * in closed form at the 27 points δ ∈ {−d, 0, d}³: each value lies in the enclosure, and the
+ * enclosure's top is the largest value (to rounding). Each H's off-diagonal signs agree with
+ * one corner's δa δb, so that corner reaches ½ Σ H_aa d² + Σ |H_ab| d², which the
+ * term-by-term enclosure also reaches: a form missing or halving its off-diagonal terms, or
+ * halved whole, loses that corner; one twice as wide is not tight. */
+Test(dual_cert, quad_form_of_a_turned_hessian)
+{
+    /* xx xy xz yy yz zz: the turned cusp's H (u² + w², u = (x − y)/√2), and a full one */
+    static const double HS[2][6] = { { 1, -1, 0, 1, 0, 2 }, { 2, 1, -1, 3, -0.5, 1 } };
+    const double d = 0.25;
+    for (int k = 0; k < 2; k++) {
+        ism_ivjet j;
+        memset(&j, 0, sizeof j);
+        for (int e = 0; e < 6; e++)
+            j.h[e] = iv(HS[k][e], HS[k][e]);
+        ism_interval dx[3] = { iv(-d, d), iv(-d, d), iv(-d, d) };
+        ism_interval q = ism_dual_quad(&j, dx);
+        double top = -INFINITY;
+        for (int s = 0; s < 27; s++) {
+            double del[3] = { d * (s % 3 - 1), d * (s / 3 % 3 - 1), d * (s / 9 - 1) }, f = 0.0;
+            for (int a = 0; a < 3; a++)
+                for (int b = 0; b < 3; b++)
+                    f += 0.5 * HS[k][ism_dual_hess_at(a, b)] * del[a] * del[b];
+            cr_expect(q.lo <= f && f <= q.hi, "H %d, delta (%g, %g, %g): %g outside [%g, %g]",
+                      k, del[0], del[1], del[2], f, q.lo, q.hi);
+            top = fmax(top, f);
+        }
+        cr_expect_leq(q.hi, top * (1 + 1e-12), "H %d: top %g, largest value %g", k, q.hi, top);
+    }
+}

@@ -171,17 +171,30 @@ Test(singular_points, cusp_moved_and_turned)
     check_deflated(src, UNIT, 6, want, 1);
 }
 
-/* The cusp moved to (0.3, 0.1, 0.2), inside cells in every placement: Krawczyk cannot
- * decide its cells (H is singular there), so they are cut on, and each is tested, as the
- * child of a cell with a model, by f at its centre against the parent's Taylor form round a
- * singular point (search.c, children_quad) — at levels 3 to 6 here, f(c) inside the form
- * by less than a factor 4: the same test on a form a quarter as wide (the cell's half-width
- * taken for its width) drops the point in every placement. */
+/* cusp_moved_and_turned's cusp moved to (0.3, 0.1, 0.2), inside cells in every placement:
+ * Krawczyk cannot decide its cells (H is singular there), so they are cut on, and each is
+ * tested, as the child of a cell with a model, by f at its centre against the parent's
+ * Taylor form round a singular point (search.c, children_quad). Turned, H at the point is
+ * [[1, −1, 0], [−1, 1, 0], [0, 0, 2]]: the form's off-diagonal term counts. The point is
+ * kept, and the test ran in every placement (it dropped cells: ism_locus.centre_dropped).
+ * Whether the cells holding the point get the test at all rests on centre_worth's guess,
+ * so the form's own bounds are checked apart, against closed forms, where a form without
+ * its off-diagonal terms or halved fails (test_dual_cert.c quad_form_of_a_turned_hessian). */
 Test(singular_points, cusp_inside_cells_the_centre_test_sees)
 {
     static const double want[1][3] = { { 0.3, 0.1, 0.2 } };
-    const char *src = "(x - 0.3)^2 + (z - 0.2)^2 - (y - 0.1)^3";
+    const char *src = "((x - 0.3 - (y - 0.1))/sqrt(2))^2 + (z - 0.2)^2"
+                      " - ((x - 0.3 + (y - 0.1))/sqrt(2))^3";
     check_surface(src, UNIT, 6, want, 1, 1e-9, ISM_SING_CUSP, true);
+    ism_tape *t = compile(src);
+    for (int placement = 0; placement < 3; placement++) {
+        ism_locus l;
+        find(t, UNIT, 6, placement, 0, &l);
+        cr_expect_gt(l.centre_dropped, 0, "placement %d: the centre test dropped no cell",
+                     placement);
+        ism_locus_free(&l);
+    }
+    ism_tape_free(t);
 }
 
 /* Taubin's heart f = A³ − z³B, A = x² + 9/4 y² + z² − 1, B = x² + 9/80 y². ∇f = 3A²∇A −
