@@ -200,9 +200,11 @@ INLINE void step(const ism_instr *in, vj *r, unsigned w)
             o->d[k] = !(w >> k & 1) ? ivz() : mulz(g1, a->d[k]);
         break;
     }
-    default: /* COPY */
+    case ISM_OP_COPY:
         each(o, a, LIN_COPY, c, w);
         break;
+    default: /* ism_ivjet_tape_hess_from_kept lets no other operation in */
+        __builtin_trap();
     }
     /* sanitize(): NaN bounds to the infinity on their side (a partial outside w is 0), all
      * of them once one is NaN (nearly never: one test for the whole register) */
@@ -238,19 +240,6 @@ __attribute__((target("avx2"))) static void run_avx2(const ism_tape *t, vj *r, v
 
 static void run_base(const ism_tape *t, vj *r, vj *keep) { run_group(t, r, keep); }
 
-/* Does the pass compute every operation of t (the ones hess_only takes)? Asked once per
- * tape (lane_tape). */
-static bool fits(ism_ivjet_ws *ws, const ism_tape *t)
-{
-    if (ws->lane_tape != t) {
-        ws->lane_tape = t;
-        ws->lane_fits = true;
-        for (size_t i = 0; i < t->len; i++)
-            ws->lane_fits &= ism_ivjet_hess_from_kept(t->code[i].op);
-    }
-    return ws->lane_fits;
-}
-
 /* The pass's registers and records for t, made or grown; false when out of memory. */
 static bool reserve(ism_ivjet_ws *ws, const ism_tape *t)
 {
@@ -273,8 +262,8 @@ static bool reserve(ism_ivjet_ws *ws, const ism_tape *t)
 bool ism_eval_interval_grad_batch(const ism_tape *t, ism_ivjet_ws *ws,
                                   const ism_interval (*box)[3], size_t n, ism_ivgrad *out)
 {
-    if (!ws || !t || !n || n > ISM_IVGRAD_BATCH || ws->nregs < t->nregs || !fits(ws, t) ||
-        !reserve(ws, t))
+    if (!ws || !t || !n || n > ISM_IVGRAD_BATCH || ws->nregs < t->nregs ||
+        !ism_ivjet_tape_hess_from_kept(t) || !reserve(ws, t))
         return false;
     ws->lane_ok = 0;
     size_t ng = (n + VL - 1) / VL;

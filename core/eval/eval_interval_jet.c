@@ -32,8 +32,7 @@ ism_ivjet_ws *ism_ivjet_ws_new(const ism_tape *t)
     ws->kept_ok = false;
     ws->lane_regs = ws->lane_kept = NULL;
     ws->lane_cap = 0;
-    ws->lane_t = ws->lane_tape = NULL;
-    ws->lane_fits = false;
+    ws->lane_t = NULL;
     ws->lane_ok = 0;
     if (!ws->r || !ws->kept) {
         free(ws->r);
@@ -739,7 +738,7 @@ size_t ism_eval_interval_grad_kept(const ism_tape *t, ism_ivjet_ws *ws,
 
 /* Every instruction of t is one hess_only computes (a fact of the tape, not of the box:
  * scanned only where a kept record would be used, not tested in run's loop). */
-static bool all_hess_from_kept(const ism_tape *t)
+bool ism_ivjet_tape_hess_from_kept(const ism_tape *t)
 {
     for (size_t i = 0; i < t->len; i++)
         if (!ism_ivjet_hess_from_kept(t->code[i].op))
@@ -766,7 +765,7 @@ size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_inte
 {
     if (ws && ws->kept_ok && ws->kept_t == t && !force && same_box(box, ws->kept_box)) {
         ws->kept_ok = false; /* once: the record is of one gradient pass */
-        if (all_hess_from_kept(t)) {
+        if (ism_ivjet_tape_hess_from_kept(t)) {
             kept_rec k = {(const double *)ws->kept, 8, 2, 1};
             return hess_only(t, ws, &k, box, kinks, out);
         }

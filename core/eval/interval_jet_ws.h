@@ -36,13 +36,11 @@ struct ism_ivjet_ws {
     /* The batched gradient pass (made on its first use): its registers (nregs of
      * ISM_IVG_REG doubles) and its records (lane_cap instructions of ISM_IVG_REG), lane k's
      * of lane_t over lane_box[k] while bit k of lane_ok is set (unused; lane_t holds only
-     * operations hess_only takes). lane_tape: the tape last checked for the pass, and
-     * lane_fits whether it holds only operations the pass computes. */
+     * operations hess_only takes). */
     double *lane_regs;
     double *lane_kept;
     size_t lane_cap;
-    const ism_tape *lane_t, *lane_tape;
-    bool lane_fits;
+    const ism_tape *lane_t;
     ism_interval lane_box[ISM_IVGRAD_BATCH][3];
     uint32_t lane_ok;
 };
@@ -50,5 +48,9 @@ struct ism_ivjet_ws {
 /* Operations whose Hessian hess_only computes from the operands' kept values and first
  * partials alone (eval_interval_jet.c), and the only ones the batched pass computes. */
 bool ism_ivjet_hess_from_kept(int op);
+
+/* Every instruction of t is one of those (a fact of the tape: asked on every use, never
+ * remembered by the tape's address, which a tape compiled after another's free may reuse). */
+bool ism_ivjet_tape_hess_from_kept(const ism_tape *t);
 
 #endif

@@ -5,8 +5,10 @@
  * box; forced branches give the branch's derivatives; affine gradients come out exact. */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 
 #include "core/eval/interval_jet.h"
 #include "core/expr/tape.h"
@@ -593,4 +595,34 @@ Test(eval_interval_jet, batched_gradient_changes_no_bit)
         batch_check(TEST_SURFACES[s].name, t, TEST_SURFACES[s].box, 2000 + s);
         ism_tape_free(t);
     }
+}
+
+/* revF 1: the batch asks each call's tape whether it takes it, not the tape's address. One
+ * block holds a polynomial's tape, then sin(x) + y*z's: the batch must refuse the second
+ * (it computes no sine) or enclose its values; taking it as the first gives x + y*z. */
+Test(eval_interval_jet, batch_asks_the_tape_not_its_address)
+{
+    ism_tape *a = compile("x*y + z"), *b = compile("sin(x) + y*z");
+    size_t na = sizeof *a + a->len * sizeof a->code[0];
+    size_t nb = sizeof *b + b->len * sizeof b->code[0];
+    ism_tape *slot = malloc(na > nb ? na : nb);
+    cr_assert_not_null(slot);
+    ism_ivjet_ws *ws = ism_ivjet_ws_new(a->nregs >= b->nregs ? a : b);
+    cr_assert_not_null(ws);
+    const ism_interval box[1][3] = { { { 2, 3 }, { 1, 1.5 }, { 0.5, 1 } } };
+    ism_ivgrad G[1];
+    memcpy(slot, a, na);
+    cr_assert(ism_eval_interval_grad_batch(slot, ws, box, 1, G), "the polynomial is batched");
+    memcpy(slot, b, nb);
+    if (ism_eval_interval_grad_batch(slot, ws, box, 1, G))
+        for (int i = 0; i < 8; i++) {
+            double x = box[0][0].lo + (i & 1) * 0.5 + 0.25, y = box[0][1].lo + (i >> 1 & 1) * 0.25;
+            double z = box[0][2].lo + (i >> 2 & 1) * 0.25;
+            cr_assert(holds(G[0].v, sin(x) + y * z), "[%g, %g] lacks f(%g, %g, %g)", G[0].v.lo,
+                      G[0].v.hi, x, y, z);
+        }
+    ism_ivjet_ws_free(ws);
+    free(slot);
+    ism_tape_free(a);
+    ism_tape_free(b);
 }
