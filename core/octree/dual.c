@@ -57,7 +57,6 @@
  * minimum depth 3, up to 512 cells and their faces and edges, enough tasks for a few
  * threads to share evenly. */
 #define WALK_SPLIT_LEVEL 3
-/* Threads at most: the options' own limit (polygonise.c checks o->threads against it). */
 /* A crease leaf this many E across or less is judged by the measurement alone (crease_kind,
  * dual_crease.h's `small`): the primal path's rule for such nodes (cell_error.c, 4 E). */
 #define CREASE_MEASURED_CELLS 4.0
