@@ -263,9 +263,11 @@ bool ism_eval_interval_grad_batch(const ism_tape *t, ism_ivjet_ws *ws,
                                   const ism_interval (*box)[3], size_t n, ism_ivgrad *out)
 {
     if (!ws || !t || !n || n > ISM_IVGRAD_BATCH || ws->nregs < t->nregs ||
-        !ism_ivjet_tape_hess_from_kept(t) || !reserve(ws, t))
+        !ism_ivjet_tape_hess_from_kept(t))
         return false;
-    ws->lane_ok = 0;
+    ws->lane_ok = 0; /* before reserve, which may free the records and fail to grow them */
+    if (!reserve(ws, t))
+        return false;
     size_t ng = (n + VL - 1) / VL;
     for (size_t g = 0; g < ng; g++) {
         vj *r = (vj *)ws->lane_regs + g * ws->nregs, *keep = (vj *)ws->lane_kept + g;

@@ -626,3 +626,41 @@ Test(eval_interval_jet, batch_asks_the_tape_not_its_address)
     ism_tape_free(a);
     ism_tape_free(b);
 }
+
+/* revF 2: a batch that cannot grow its records (the address space capped just above what
+ * the process uses) leaves no record standing: the next jet over the previous batch's box
+ * is a fresh pass's, to the bit. */
+Test(eval_interval_jet, batch_failing_to_grow_leaves_no_record)
+{
+    char src[16384] = "z";
+    for (int i = 1; i <= 400; i++) /* ~1200 instructions: records of ~600 KB, mapped apart */
+        snprintf(src + strlen(src), sizeof src - strlen(src), " + (x + %d)*y", i);
+    ism_tape *a = compile("x*y + z"), *big = compile(src);
+    cr_assert_gt(big->len, 1000);
+    ism_ivjet_ws *ws = ism_ivjet_ws_new(a->nregs >= big->nregs ? a : big);
+    ism_ivjet_ws *plain = ism_ivjet_ws_new(a);
+    cr_assert(ws && plain);
+    const ism_interval box[1][3] = { { { 0.5, 1 }, { -1, 2 }, { 0, 0.25 } } };
+    ism_ivgrad G[1];
+    cr_assert(ism_eval_interval_grad_batch(a, ws, box, 1, G));
+    long pages = 0;
+    FILE *f = fopen("/proc/self/statm", "r");
+    cr_assert(f && fscanf(f, "%ld", &pages) == 1);
+    fclose(f);
+    struct rlimit old, cap;
+    cr_assert(getrlimit(RLIMIT_AS, &old) == 0);
+    cap = old;
+    cap.rlim_cur = (rlim_t)pages * 4096 + (64u << 10); /* 64 KB more than in use */
+    cr_assert(setrlimit(RLIMIT_AS, &cap) == 0);
+    bool grown = ism_eval_interval_grad_batch(big, ws, box, 1, G);
+    cr_assert(setrlimit(RLIMIT_AS, &old) == 0);
+    cr_assert(!grown, "the records grew under the cap: the test probes nothing");
+    ism_ivjet J1, J2;
+    ism_eval_interval_jet(a, plain, box[0], NULL, NULL, &J1);
+    ism_eval_interval_jet(a, ws, box[0], NULL, NULL, &J2);
+    cr_assert(memcmp(&J1, &J2, sizeof J1) == 0);
+    ism_ivjet_ws_free(ws);
+    ism_ivjet_ws_free(plain);
+    ism_tape_free(a);
+    ism_tape_free(big);
+}
