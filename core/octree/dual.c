@@ -355,6 +355,14 @@ typedef struct corner_view {
     bool pre_g;
 } corner_view;
 
+/* The node's box from its corners 0 and 7: one builder, since a jet takes a batch's record
+ * only for a box equal to the bit (kid_kinds's batch, classify_tail's jet). */
+static void node_box(const corner_view *v, ism_interval box[3])
+{
+    for (int a = 0; a < 3; a++)
+        box[a] = (ism_interval){v->p[0][a], v->p[7][a]};
+}
+
 /* Where surface leaf n lies on the request's box: -1 when f changes sign between its
  * corners on a face of the box (the box cuts the surface), 1 when f is proven free of 0 on
  * every such face, 0 when neither is known (split it). */
@@ -935,8 +943,7 @@ static int classify_tail(dual *d, worker *w, dnode *n, corner_view *v)
         /* the natural interval first (one evaluation, enough on the sphere), then the
          * Taylor form (two), then the sub-boxes */
         ism_interval box[3];
-        for (int a = 0; a < 3; a++)
-            box[a] = (ism_interval){v->p[0][a], v->p[7][a]};
+        node_box(v, box);
         w->s.n_interval++;
         /* kept: the Taylor model of the same box (tighten) then computes only the Hessian
          * (interval_jet.h); torus at 1e-2, 680 of 1,392 such nodes */
@@ -1330,8 +1337,7 @@ static void kid_kinds(dual *d, worker *w, dnode *kids, corner_view *views, int k
         kind[c] = classify_head(d, w, &kids[c], &views[c]);
         if (kind[c] != UNDECIDED || !tail_wants_g(d, &views[c]) || d->crease)
             continue; /* a crease's tape has its min/max: not one the batch takes */
-        for (int a = 0; a < 3; a++)
-            box[nb][a] = (ism_interval){views[c].p[0][a], views[c].p[7][a]};
+        node_box(&views[c], box[nb]);
         at[nb++] = c;
     }
     if (nb >= BATCH_ENCLOSURES &&
