@@ -15,6 +15,7 @@
  * the affine ones and squares take g, g' and g'' lane by lane (deriv_rules.h). */
 #include "core/eval/deriv_rules.h"
 #include "core/eval/workspace.h"
+#include "core/util/cache_line.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -252,7 +253,7 @@ void ism_eval_hessian_batch(const ism_tape *t, ism_eval_ws *ws, const double (*p
                             double *f, double (*g)[3], double (*h)[6], size_t n)
 {
     if (ism_ws_fits(ws, t) && !ws->hbatch)
-        ws->hbatch = aligned_alloc(64, (size_t)ws->nregs * NG * sizeof(hj));
+        ws->hbatch = ism_line_alloc((size_t)ws->nregs * NG * sizeof(hj));
     if (!ism_ws_fits(ws, t) || !ws->hbatch) { /* no room: what ism_eval_hessian gives */
         for (size_t i = 0; i < n; i++)
             f[i] = ism_eval_hessian(t, ws, p[i][0], p[i][1], p[i][2], g[i], h[i]);

@@ -21,6 +21,7 @@
 #include "core/eval/interval_jet_ws.h"
 #include "core/eval/interval_ops.h"
 #include "core/expr/tape.h"
+#include "core/util/cache_line.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -244,14 +245,14 @@ static void run_base(const ism_tape *t, vj *r, vj *keep) { run_group(t, r, keep)
 static bool reserve(ism_ivjet_ws *ws, const ism_tape *t)
 {
     if (!ws->lane_regs) {
-        ws->lane_regs = aligned_alloc(64, (size_t)ws->nregs * ISM_IVG_REG * sizeof(double));
+        ws->lane_regs = ism_line_alloc((size_t)ws->nregs * ISM_IVG_REG * sizeof(double));
         if (!ws->lane_regs)
             return false;
     }
     if (ws->lane_cap < t->len) {
         free(ws->lane_kept);
         ws->lane_cap = 0;
-        ws->lane_kept = aligned_alloc(64, t->len * ISM_IVG_REG * sizeof(double));
+        ws->lane_kept = ism_line_alloc(t->len * ISM_IVG_REG * sizeof(double));
         if (!ws->lane_kept)
             return false;
         ws->lane_cap = t->len;
