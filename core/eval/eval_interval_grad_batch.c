@@ -54,8 +54,14 @@ INLINE v4d pick(v4i m, v4d a, v4d b) { return (v4d)(((v4i)a & m) | ((v4i)b & ~m)
 INLINE v4d vabs(v4d x) { return (v4d)((v4u)x & (v4u){~0ull >> 1, ~0ull >> 1, ~0ull >> 1, ~0ull >> 1}); }
 
 /* interval_ops.h's down1 / up1, min / max (ism_min: a < b ? a : b) and nan_to */
-INLINE v4d vdown1(v4d x) { return (x - splat(0x1p-1074)) - vabs(x) * splat(0x1p-52); }
-INLINE v4d vup1(v4d x) { return (x + splat(0x1p-1074)) + vabs(x) * splat(0x1p-52); }
+INLINE v4d vdown1(v4d x)
+{
+    return (x - splat(ISM_ROUND1_ABS)) - vabs(x) * splat(ISM_ROUND1_REL);
+}
+INLINE v4d vup1(v4d x)
+{
+    return (x + splat(ISM_ROUND1_ABS)) + vabs(x) * splat(ISM_ROUND1_REL);
+}
 INLINE v4d vmin(v4d a, v4d b) { return pick(a < b, a, b); }
 INLINE v4d vmax(v4d a, v4d b) { return pick(a > b, a, b); }
 INLINE v4d vnan_to(v4d x, double c) { return pick(x == x, x, splat(c)); }

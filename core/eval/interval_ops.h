@@ -25,8 +25,10 @@
 /* (x - 2^-1074) is x itself for a normal x and exact below; subtracting |x| * 2^-52 (at
  * least one ulp of x) then lands at or below the next double under x. The two halves are
  * independent, which keeps the latency of the single-box evaluator's chain short. */
-static inline double down1(double x) { return (x - 0x1p-1074) - fabs(x) * 0x1p-52; }
-static inline double up1(double x) { return (x + 0x1p-1074) + fabs(x) * 0x1p-52; }
+#define ISM_ROUND1_ABS 0x1p-1074 /* the least subnormal: a step below x even near 0 */
+#define ISM_ROUND1_REL 0x1p-52   /* at least one ulp of x, relative to |x| */
+static inline double down1(double x) { return (x - ISM_ROUND1_ABS) - fabs(x) * ISM_ROUND1_REL; }
+static inline double up1(double x) { return (x + ISM_ROUND1_ABS) + fabs(x) * ISM_ROUND1_REL; }
 static inline double down4(double x) { return (x - 0x1p-1072) - fabs(x) * 0x1p-50; }
 static inline double up4(double x) { return (x + 0x1p-1072) + fabs(x) * 0x1p-50; }
 
