@@ -205,11 +205,12 @@ static bool merge_ok(rm_pass *p, rm_merge *g)
            rm_merge_distance_ok(p, g);
 }
 
-bool rm_merge_do(rm_pass *p, const rm_merge *g)
+bool rm_merge_do(rm_pass *p, const rm_merge *g, uint32_t *fan, uint32_t *nfan)
 {
-    uint32_t fan[ISM_RM_MERGE_MAX_DEGREE], n;
+    uint32_t n;
     if (!rm_merge_apply(&p->r, g, fan, &n))
         return false;
+    *nfan = n;
     for (uint32_t i = 0; i < n; i++) {
         const uint32_t *c = p->r.m->tri + 3 * fan[i];
         rm_shape_changed(p, fan[i]);
@@ -324,7 +325,8 @@ static bool collapse_triangle(rm_pass *p, uint32_t t, bool *ok)
         int k = order[i];
         rm_merge g;
         if (best_merge(p, v[k], v[(k + 1) % 3], &g)) {
-            *ok = rm_merge_do(p, &g);
+            uint32_t fan[ISM_RM_MERGE_MAX_DEGREE], nfan;
+            *ok = rm_merge_do(p, &g, fan, &nfan);
             return *ok;
         }
     }

@@ -40,6 +40,11 @@
  * triangles, as thin as the ring's edges are short against its distance from the point
  * (the horn's: 0.6° and more), keep an area that float32 positions hold. */
 #define RM_HORN_MIN_SINE 1e-3
+/* A cone takes at most this many merges (revB 4), each asking the link condition over c's
+ * fan, which may grow by RM_HORN_RING_MAX triangles at most (a thin ring's size): the horn's
+ * cones take 112 / 119, 32 / 90, 39 / 42 in its own / 1e-3 / irr boxes; a tube thin within E
+ * over 8 times that many merges is no horn's. It also sizes the log cone_settle undoes. */
+#define RM_HORN_MERGES_MAX 1024
 
 /* The tag of a vertex the walk saw and left out of the thin rings (or merged), and of one
  * refused since the cone's last merge. */
@@ -52,12 +57,21 @@ static uint32_t slot(const rm_mesh *r, uint32_t v, uint32_t i) { return r->vt[r-
 
 /* The walk's state: per vertex the cone it was reached from (0: not seen), the thin rings'
  * vertices in order, and the current ring. */
+/* One merge of a cone, as cone_settle needs it to ask the end's rules again or undo it. */
+typedef struct horn_step {
+    rm_merge m;
+    uint32_t fan[ISM_RM_MERGE_MAX_DEGREE], nfan; /* the triangles it made */
+    double floor;                                /* v's thinnest triangle before */
+    uint8_t active, slide;                       /* v's marks before */
+} horn_step;
+
 typedef struct horn_walk {
     uint32_t *tag;
     uint32_t *seen; /* vertices in the order seen: thin rings, then the ring being judged */
     size_t nseen;
     uint32_t *refused; /* the cone's vertices refused since its last merge */
     size_t nrefused;
+    horn_step *log; /* the cone's merges (RM_HORN_MERGES_MAX) */
 } horn_walk;
 
 /* A needle the merges are for: under 10°, no corner at a given point or a segment's end. */
@@ -155,21 +169,48 @@ static bool pending(const rm_pass *p, const horn_walk *h, uint32_t x, uint32_t c
            rm_dist(X(p, x), X(p, c)) <= reach;
 }
 
-/* The merge of v into c (cone g, reach) passes: the link condition, each new triangle's
- * centroid and new edge's midpoint stay within the bound, and each new triangle whose two
- * other corners no later merge takes (the cone's end) is no flatter than RM_HORN_MIN_SINE
- * (or v's thinnest now) and faces ∇f's side at those corners where it did before. On the
- * way there the tip's triangles are as thin as the ribbon (sines down to 5e-5) and stand
- * edge-on, either way, to ∇f; held to the end's rules they stopped the merges at 0.54 and
- * 0.63 of the horn's 1.06. */
+/* The cone's end rules for a triangle of corners q (its corner at c where v was) that had
+ * corners o (v's at v's place), outer corners a and b: no flatter than RM_HORN_MIN_SINE (or
+ * floor, v's thinnest before its merge), and facing ∇f's side at a and b where it did. */
+static bool end_ok(const rm_pass *p, const double *q[3], const double *o[3], uint32_t a,
+                   uint32_t b, double floor)
+{
+    double n[3], was[3];
+    rm_cross(q[0], q[1], q[2], n);
+    rm_cross(o[0], o[1], o[2], was);
+    if (!(rm_min_sine(q[0], q[1], q[2]) >= fmin(RM_HORN_MIN_SINE, floor)))
+        return false;
+    for (int j = 0; j < 2; j++) {
+        const double *gn = p->normal + 3 * (size_t)(j ? b : a);
+        if (ism_dot3(was, gn) > 0 && !(ism_dot3(n, gn) > 0))
+            return false;
+    }
+    return true;
+}
+
+/* The thinnest of v's triangles now. */
+static double fan_floor(rm_pass *p, uint32_t v)
+{
+    double floor = INFINITY;
+    for (uint32_t i = 0; i < p->r.count[v]; i++)
+        floor = fmin(floor, rm_tri_sine(p, slot(&p->r, v, i)));
+    return floor;
+}
+
+/* The merge of v into c (cone g, reach) passes: c keeps at most deg triangles, the link
+ * condition, each new triangle's centroid and new edge's midpoint stay within the bound, and
+ * each new triangle whose two other corners no later merge takes (the cone's end) keeps the
+ * end's rules (end_ok). On the way there the tip's triangles are as thin as the ribbon
+ * (sines down to 5e-5) and stand edge-on, either way, to ∇f; held to the end's rules they
+ * stopped the merges at 0.54 and 0.63 of the horn's 1.06. Whether a later merge does take
+ * them is known only when the cone stops: cone_settle asks the rules again then. */
 static bool horn_merge_ok(rm_pass *p, const horn_walk *h, uint32_t v, uint32_t c, uint32_t g,
-                          double reach, rm_merge *m)
+                          double reach, uint32_t deg, rm_merge *m, double *floor)
 {
     const rm_mesh *r = &p->r;
-    double floor = INFINITY; /* the thinnest of v's triangles now */
-    for (uint32_t i = 0; i < r->count[v]; i++)
-        floor = fmin(floor, rm_tri_sine(p, slot(r, v, i)));
-    if (!rm_merge_find_into(r, v, c, m) || !rm_merge_link_ok(r, m))
+    *floor = fan_floor(p, v);
+    if (!rm_merge_find_into(r, v, c, m) || r->count[c] + r->count[v] - 4 > deg ||
+        !rm_merge_link_ok(r, m))
         return false;
     for (uint32_t i = 0; i < r->count[v]; i++) {
         uint32_t t = slot(r, v, i);
@@ -182,28 +223,70 @@ static bool horn_merge_ok(rm_pass *p, const horn_walk *h, uint32_t v, uint32_t c
         const double *q[3], *o[3];
         rm_merge_corners(r, t, v, X(p, c), q);
         rm_merge_corners(r, t, v, X(p, v), o);
-        double n[3], was[3];
-        rm_cross(q[0], q[1], q[2], n);
-        rm_cross(o[0], o[1], o[2], was);
-        if (!(rm_min_sine(q[0], q[1], q[2]) >= fmin(RM_HORN_MIN_SINE, floor)))
+        if (!end_ok(p, q, o, a, b, *floor))
             return false;
-        for (int j = 0; j < 2; j++) {
-            const double *gn = p->normal + 3 * (size_t)(j ? b : a);
-            if (ism_dot3(was, gn) > 0 && !(ism_dot3(n, gn) > 0))
-                return false;
-        }
     }
     return rm_merge_distance_ok(p, m);
 }
 
-/* Merges cone g's thin vertices within reach of c into c, nearest first; returns how many. */
+/* Every triangle step s's merge made (alive: a later merge of the cone may have removed it)
+ * keeps the end's rules. */
+static bool step_ends_ok(rm_pass *p, const horn_step *s)
+{
+    const rm_mesh *r = &p->r;
+    uint32_t c = s->m.w;
+    for (uint32_t i = 0; i < s->nfan; i++) {
+        uint32_t t = s->fan[i];
+        if (r->dead[t])
+            continue;
+        const uint32_t *k = r->m->tri + 3 * (size_t)t;
+        int at = rm_corner(r->m, t, c);
+        const double *q[3], *o[3];
+        rm_merge_corners(r, t, c, X(p, c), q);
+        rm_merge_corners(r, t, c, X(p, s->m.v), o);
+        if (!end_ok(p, q, o, k[(at + 1) % 3], k[(at + 2) % 3], s->floor))
+            return false;
+    }
+    return true;
+}
+
+/* The cone's merges undone, last first, until every triangle they made keeps the end's rules
+ * (revB 1: a triangle let pass for a corner a later merge was to take, whose merge was then
+ * refused, would stay unchecked); returns how many were undone. Each triangle a merge makes
+ * has c and two outer corners: a later merge of the cone either removes it (taking an outer
+ * corner into c) or leaves it as made, so the rules are asked of each as its own merge
+ * left it. */
+static size_t cone_settle(rm_pass *p, horn_step *log, size_t n)
+{
+    size_t undone = 0;
+    for (;;) {
+        size_t i = 0;
+        while (i < n && step_ends_ok(p, log + i))
+            i++;
+        if (i == n)
+            return undone;
+        const horn_step *s = log + --n;
+        rm_merge_unapply(&p->r, &s->m, s->fan, s->nfan);
+        for (uint32_t j = 0; j < s->nfan; j++)
+            rm_shape_changed(p, s->fan[j]);
+        rm_shape_changed(p, s->m.t1);
+        rm_shape_changed(p, s->m.t2);
+        p->active[s->m.v] = s->active, p->slide[s->m.v] = s->slide;
+        undone++;
+    }
+}
+
+/* Merges cone g's thin vertices within reach of c into c, nearest first, at most
+ * RM_HORN_MERGES_MAX of them with c keeping at most RM_HORN_RING_MAX triangles more than it
+ * had; returns how many stand (cone_settle). */
 static size_t merge_cone(rm_pass *p, horn_walk *h, uint32_t c, uint32_t g, double reach,
                          bool *ok)
 {
     const rm_mesh *r = &p->r;
     size_t made = 0;
+    uint32_t deg = r->count[c] + RM_HORN_RING_MAX;
     h->nrefused = 0;
-    while (*ok) {
+    while (*ok && made < RM_HORN_MERGES_MAX) {
         uint32_t best = UINT32_MAX;
         double bd = INFINITY;
         for (uint32_t i = 0; i < r->count[c]; i++) {
@@ -217,13 +300,14 @@ static size_t merge_cone(rm_pass *p, horn_walk *h, uint32_t c, uint32_t g, doubl
         }
         if (best == UINT32_MAX)
             break;
-        rm_merge m;
-        if (!horn_merge_ok(p, h, best, c, g, reach, &m)) {
+        horn_step *s = h->log + made;
+        if (!horn_merge_ok(p, h, best, c, g, reach, deg, &s->m, &s->floor)) {
             h->tag[best] = RM_HORN_REFUSED; /* until a merge changes the cone */
             h->refused[h->nrefused++] = best;
             continue;
         }
-        if (!(*ok = rm_merge_do(p, &m)))
+        s->active = p->active[best], s->slide = p->slide[best];
+        if (!(*ok = rm_merge_do(p, &s->m, s->fan, &s->nfan)))
             break;
         h->tag[best] = RM_HORN_OUT;
         made++;
@@ -235,7 +319,7 @@ static size_t merge_cone(rm_pass *p, horn_walk *h, uint32_t c, uint32_t g, doubl
     }
     while (h->nrefused)
         h->tag[h->refused[--h->nrefused]] = RM_HORN_OUT;
-    return made;
+    return *ok ? made - cone_settle(p, h->log, made) : made;
 }
 
 /* The farthest corner from c of the needles lying wholly in cone g's thin rings (0: none). */
@@ -285,9 +369,10 @@ size_t rm_horn_tips(rm_pass *p, const ism_remesh_options *o, bool *ok)
     double thin = RM_HORN_THIN * (p->max_error > 0 ? p->max_error : p->centroid_bound);
     size_t nv = r->m->nverts ? r->m->nverts : 1;
     horn_walk h = {calloc(nv, sizeof *h.tag), malloc(nv * sizeof *h.seen), 0,
-                   malloc(nv * sizeof *h.refused), 0};
+                   malloc(nv * sizeof *h.refused), 0, malloc(RM_HORN_MERGES_MAX * sizeof *h.log)};
     uint32_t g = 0;
-    for (size_t i = 0; h.tag && h.seen && h.refused && i < o->nlocked_points && *ok; i++) {
+    for (size_t i = 0; h.tag && h.seen && h.refused && h.log && i < o->nlocked_points && *ok;
+         i++) {
         uint32_t c = rm_point_vertex(r, o->locked_points + 3 * i);
         if (c == UINT32_MAX || r->locked[c] != RM_PINNED)
             continue;
@@ -301,8 +386,9 @@ size_t rm_horn_tips(rm_pass *p, const ism_remesh_options *o, bool *ok)
                 made += merge_cone(p, &h, c, g, reach, ok);
         }
     }
-    if (!h.tag || !h.seen || !h.refused)
+    if (!h.tag || !h.seen || !h.refused || !h.log)
         *ok = false;
+    free(h.log);
     free(h.tag);
     free(h.seen);
     free(h.refused);

@@ -156,3 +156,19 @@ bool rm_merge_apply(rm_mesh *r, const rm_merge *g, uint32_t *fan, uint32_t *nfan
     r->gone[g->v] = r->locked[g->v] = 1;
     return true;
 }
+
+void rm_merge_unapply(rm_mesh *r, const rm_merge *g, const uint32_t *fan, uint32_t nfan)
+{
+    for (uint32_t i = 0; i < nfan; i++) {
+        r->m->tri[3 * (size_t)fan[i] + rm_corner(r->m, fan[i], g->w)] = g->v;
+        rm_slot_remove(r, g->w, fan[i]);
+    }
+    const uint32_t two[2] = {g->t1, g->t2}, other[2] = {g->c, g->d};
+    for (int i = 0; i < 2; i++) {
+        r->dead[two[i]] = 0;
+        rm_slot_add(r, g->w, two[i]);
+        rm_slot_add(r, other[i], two[i]);
+    }
+    r->count[g->v] = nfan + 2;
+    r->gone[g->v] = r->locked[g->v] = 0;
+}

@@ -57,4 +57,11 @@ uint32_t rm_merge_across(const rm_mesh *r, uint32_t a, uint32_t b, uint32_t t);
  * (nothing changed). */
 bool rm_merge_apply(rm_mesh *r, const rm_merge *g, uint32_t *fan, uint32_t *nfan);
 
+/* Undoes rm_merge_apply(r, g, fan, nfan) when nothing has changed since (or every later merge
+ * has been undone, last first): t1 and t2 live again on w, c and d, the fan's triangles take v
+ * back, v is neither gone nor locked (rm_merge_find_into's v was free). v's slot still holds
+ * its triangles (apply only empties its count); each slot a triangle returns to had it
+ * before, so has the room. */
+void rm_merge_unapply(rm_mesh *r, const rm_merge *g, const uint32_t *fan, uint32_t nfan);
+
 #endif

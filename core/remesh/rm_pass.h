@@ -247,8 +247,9 @@ size_t rm_collapse_active(rm_pass *p, bool *ok);
 struct rm_merge;
 bool rm_merge_distance_ok(rm_pass *p, const struct rm_merge *g);
 /* Merges g->v into g->w, marking the corners of its new triangles active and touched (their
- * shapes changed). False when out of memory (nothing changed). */
-bool rm_merge_do(rm_pass *p, const struct rm_merge *g);
+ * shapes changed); the new triangles into fan (room for ISM_RM_MERGE_MAX_DEGREE), *nfan how
+ * many. False when out of memory (nothing changed). */
+bool rm_merge_do(rm_pass *p, const struct rm_merge *g, uint32_t *fan, uint32_t *nfan);
 /* Merges the rings of thin tubes that end at a given point (the horn cyclide's horns) into
  * the point's vertex, tip first, where a needle lies on the tube (rm_horn.c); returns the
  * merges made (they count in collapses). *ok false when out of memory. */
