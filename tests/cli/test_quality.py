@@ -107,6 +107,44 @@ def torus_distance(p, big=1.0, small=0.3):
     return abs(math.hypot(math.hypot(p[0], p[1]) - big, p[2]) - small)
 
 
+def horn_cyclide(p, a=10.0, r=2.0, f=2.0):
+    """The horn cyclide's f (proto/presets.c) and its gradient at p."""
+    x, y, z = p
+    s = x * x + y * y + z * z + a * a - f * f - r * r
+    u = a * x - f * r
+    val = s * s - 4 * u * u - 4 * (a * a - f * f) * y * y
+    return val, (4 * s * x - 8 * u * a, 4 * s * y - 8 * (a * a - f * f) * y, 4 * s * z)
+
+
+def surface_distance(fn, p, on):
+    """An upper bound on p's distance from fn = 0: to the foot Newton steps along grad fn reach
+    (|fn| / |grad fn| under 1e-12 there), or to `on`, a point known to lie on it."""
+    best, x = math.dist(p, on), list(p)
+    for _ in range(100):
+        v, g = fn(x)
+        gg = sum(c * c for c in g)
+        if gg == 0:
+            break
+        if abs(v) / math.sqrt(gg) < 1e-12:
+            return min(best, math.dist(p, x))
+        x = [x[k] - v / gg * g[k] for k in range(3)]
+    return best
+
+
+def normal(a, b, c):
+    """(b - a) x (c - a)."""
+    e, f = [b[k] - a[k] for k in range(3)], [c[k] - a[k] for k in range(3)]
+    return (e[1] * f[2] - e[2] * f[1], e[2] * f[0] - e[0] * f[2], e[0] * f[1] - e[1] * f[0])
+
+
+def orientation(verts, tris, fn):
+    """+1 when most triangles' normals point along grad fn at their first corner, else -1."""
+    along = sum(1 for t in tris
+                if sum(n * g for n, g in zip(normal(*(verts[i] for i in t)),
+                                             fn(verts[t[0]])[1])) > 0)
+    return 1 if 2 * along > len(tris) else -1
+
+
 class SmoothSurfaces(unittest.TestCase):
     """Sphere (chi 2), torus (0), pretzel (-2): the raw mesh has slivers, the pass removes all
     of them, the surface and its topology stay, and under an error bound E every vertex stays
@@ -185,9 +223,10 @@ class SingularSurfaces(unittest.TestCase):
     # the presets' own boxes (proto/presets.c), cubes around the origin: their half sides
     HALF = {"klein-bottle": 4.0, "steiner-roman": 1.0, "kummer-16-nodes": 3.0}
 
-    def report(self, preset, quality, box, bounded=False):
+    def report(self, preset, quality, box, bounded=False, point=None):
         """The topology report and the boundaries of the preset in box on the depth path
-        (3:MAX_DEPTH), or with bounded under the default bound at the preset's depths."""
+        (3:MAX_DEPTH), or with bounded under the default bound at the preset's depths; with
+        point, also how far from it the triangles at its nearest vertex reach."""
         with tempfile.TemporaryDirectory() as tmp:
             req = os.path.join(tmp, "r.json")
             fields = {"preset": preset, "quality": quality, "box": box}
@@ -203,6 +242,7 @@ class SingularSurfaces(unittest.TestCase):
             with open(feats) as f:
                 features = json.load(f)  # the locus, nm edges and points, boundaries
             boundaries = obj_boundaries(obj)
+            reach = obj_fan_reach(obj, point) if point else None
         # the features' boundaries are thinned within the drawing tolerance (moved vertices
         # thin differently): the .obj's "boundaries" group holds every boundary vertex
         features.pop("boundaries")
@@ -212,7 +252,8 @@ class SingularSurfaces(unittest.TestCase):
                 "boundary_chains", "orientable"]
         topo = {k: a[k] for k in keys}
         topo["artefacts"] = stats["singular"]["artefacts"]
-        return json.dumps(topo, sort_keys=True) + json.dumps(features, sort_keys=True), boundaries
+        report = json.dumps(topo, sort_keys=True) + json.dumps(features, sort_keys=True)
+        return (report, boundaries, reach) if point else (report, boundaries)
 
     def test_topology_report_identical_where_horns_merge_into_their_point(self):
         # the horn cyclide under the default bound (E = 0.055): its horns' thin tips merged
@@ -221,9 +262,50 @@ class SingularSurfaces(unittest.TestCase):
         cell = tuple((box0[a + 3] - box0[a]) / 2 ** depth for a in range(3))
         for box in placements(box0, cell):
             with self.subTest(box=box):
-                (raw, _), (good, _) = (self.report("horn-cyclide", "raw", box, True),
-                                       self.report("horn-cyclide", "good", box, True))
+                (raw, _, raw_reach), (good, _, good_reach) = (
+                    self.report("horn-cyclide", "raw", box, True, (10, 0, 0)),
+                    self.report("horn-cyclide", "good", box, True, (10, 0, 0)))
+                # the merges ran (revB 2): the point's fan reaches 0.64 and more, raw 0.13
+                self.assertGreater(good_reach, raw_reach + 2 * max(cell))
                 self.assertEqual(raw, good)
+
+    def test_horn_cone_within_e_and_facing_grad_f(self):
+        # the cone rm_horn.c leaves at the horn cyclide's point (10, 0, 0) under the default
+        # bound, from the closed form (proto/presets.c, a = 10, r = f = 2) in the three boxes:
+        # every centroid and edge midpoint of the triangles at the point's vertex within E of
+        # f = 0, and none of them turned against grad f at a corner other than the point
+        # (where grad f vanishes). Measured: within 0.36 / 0.22 / 0.11 E, cosines to grad f
+        # at least 0.60 / 0.44 / 0.29 (raw: -0.20 / -0.33 / -0.41). The fan reaches
+        # 1.13 / 0.89 / 0.64 from the point, raw 0.12 / 0.13 / 0.11: that it reaches 2 finest
+        # cells (0.25) farther than raw says the merges ran (revB 2, 3).
+        box0, depth = GoalsUnderTheDefaultBound.PRESETS["horn-cyclide"]
+        cell = tuple((box0[a + 3] - box0[a]) / 2 ** depth for a in range(3))
+        point = (10.0, 0.0, 0.0)
+        for box in placements(box0, cell):
+            with self.subTest(box=box):
+                e = 1e-3 * math.dist(box[:3], box[3:])
+                reach = {}
+                for quality in ("raw", "good"):
+                    verts, tris, _ = run_surface("horn-cyclide", box, quality,
+                                                 ("--max-error", repr(e)), depth=None)
+                    pv = min(range(len(verts)), key=lambda i: math.dist(verts[i], point))
+                    fan = [t for t in tris if pv in t]
+                    reach[quality] = max(math.dist(verts[i], point) for t in fan for i in t)
+                self.assertLess(math.dist(verts[pv], point), 1e-9)
+                self.assertGreater(reach["good"], reach["raw"] + 2 * max(cell))
+                side = orientation(verts, tris, horn_cyclide)
+                for t in fan:
+                    q = [verts[i] for i in t]
+                    for x in [[sum(c[a] for c in q) / 3 for a in range(3)]] + \
+                            [[(q[k][a] + q[(k + 1) % 3][a]) / 2 for a in range(3)]
+                             for k in range(3)]:
+                        self.assertLessEqual(surface_distance(horn_cyclide, x, point), e, x)
+                    n = normal(*q)
+                    for i in t:
+                        if i != pv:
+                            g = horn_cyclide(verts[i])[1]
+                            self.assertGreater(side * sum(n[a] * g[a] for a in range(3)), 0,
+                                               (t, i))
 
     def test_topology_report_identical(self):
         # in the preset's own box and shifted off the lattice (1e-3, irrational: boxes.py)
@@ -240,6 +322,20 @@ class SingularSurfaces(unittest.TestCase):
                             p, q = rb["xyz"][i:i + 3], gb["xyz"][i:i + 3]
                             self.assertTrue(any(p[k] == q[k] for k in range(3)),
                                             f"{preset}: boundary point {p} left its face: {q}")
+
+
+def obj_fan_reach(path, point):
+    """How far from point the triangles at the .obj's vertex nearest it reach."""
+    verts, faces = [], []
+    with open(path) as f:
+        for line in f:
+            w = line.split()
+            if w[:1] == ["v"]:
+                verts.append(tuple(float(x) for x in w[1:4]))
+            elif w[:1] == ["f"]:
+                faces.append([int(x.split("/")[0]) - 1 for x in w[1:]])
+    pv = min(range(len(verts)), key=lambda i: math.dist(verts[i], point))
+    return max(math.dist(verts[i], point) for t in faces if pv in t for i in t)
 
 
 def obj_boundaries(path):
