@@ -18,8 +18,13 @@
  * is walked in rings (breadth first); a ring is thin while its vertices lie within E of the
  * line from the point through the ring's centroid (its radius), and the walk stops at the
  * first ring that is not. Merges are made only up to the farthest corner of a needle (under
- * 10°, no corner at a given point) lying wholly in those thin rings: a mesh without such
- * needles is left as it was. */
+ * 10°, no corner at a given point or a segment's end) lying wholly in those thin rings: a
+ * mesh without such needles is left as it was. The test is of thinness, not of a tube's
+ * shape: near the apex of a conical point (Kummer's nodes, a pinch point, a cusp) the rings
+ * within E / tan θ of it are thin too, and a needle there is merged the same way, on purpose
+ * (revB 5): the cone left from the point is measured as the horn's is (its new centroids
+ * and midpoints within the bound, the link condition, the end's rules), and its triangles
+ * touch the point. In the gallery only horn-cyclide's cones and cusp-a2's (1e-3 box) merge. */
 #include "core/remesh/rm_merge.h"
 #include "core/remesh/rm_pass.h"
 #include "core/util/vec3.h"

@@ -31,7 +31,9 @@ bool rm_merge_find_any(const rm_mesh *r, uint32_t v, uint32_t w, uint32_t max_de
 
 /* rm_merge_find with no limit on w's degree (only v's, ISM_RM_MERGE_MAX_DEGREE: its fan is
  * held on the stack; w's slot grows): a singular point's vertex taking a tube's rings
- * (rm_horn.c). */
+ * (rm_horn.c). w may then have more than ISM_RM_MERGE_MAX_DEGREE triangles: a later
+ * rm_merge_neighbours(w) sees only its first ISM_RM_MERGE_MAX_DEGREE, and rm_merge_link_ok
+ * refuses w as the vertex merged away; safe while rm_horn_tips is the pass's last step. */
 bool rm_merge_find_into(const rm_mesh *r, uint32_t v, uint32_t w, rm_merge *g);
 
 /* v's distinct neighbours into nb (room for 2 × ISM_RM_MERGE_MAX_DEGREE, v having at most
@@ -40,8 +42,9 @@ int rm_merge_neighbours(const rm_mesh *r, uint32_t v, uint32_t *nb);
 
 /* The link condition: no neighbour of w other than v, c, d is a neighbour of v (counted over
  * every sheet at w), and where v has three triangles, w has none on c and d already. Then
- * the merge keeps χ, components, cones and boundary loops. g as rm_merge_find(_any) fills it
- * (false when v has more than ISM_RM_MERGE_MAX_DEGREE triangles). */
+ * the merge keeps χ, components, cones and boundary loops. g as rm_merge_find(_any) or
+ * rm_merge_find_into fills it (false when v has more than ISM_RM_MERGE_MAX_DEGREE
+ * triangles). */
 bool rm_merge_link_ok(const rm_mesh *r, const rm_merge *g);
 
 /* The corners of triangle t with v's corner read at x (x may be v's own position). */
