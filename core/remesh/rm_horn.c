@@ -72,7 +72,7 @@ typedef struct horn_step {
 
 typedef struct horn_walk {
     uint32_t *tag;
-    uint32_t *seen; /* vertices in the order seen: thin rings, then the ring being judged */
+    uint32_t *seen; /* the point's walks' vertices in the order seen (a cone's from its start) */
     size_t nseen;
     uint32_t *refused; /* the cone's vertices refused since its last merge */
     size_t nrefused;
@@ -153,9 +153,8 @@ static void walk_cone(const rm_pass *p, horn_walk *h, uint32_t c, uint32_t t0, u
     while (h->nseen > from) {
         size_t n = h->nseen - from;
         if (n > RM_HORN_RING_MAX || ring_radius(p, X(p, c), h->seen + from, n) > thin) {
-            for (size_t i = from; i < h->nseen; i++)
+            for (size_t i = from; i < h->nseen; i++) /* kept in seen: the next point clears */
                 h->tag[h->seen[i]] = RM_HORN_OUT;
-            h->nseen = from;
             return;
         }
         size_t end = h->nseen;
@@ -375,13 +374,20 @@ size_t rm_horn_tips(rm_pass *p, const ism_remesh_options *o, bool *ok)
     size_t nv = r->m->nverts ? r->m->nverts : 1;
     horn_walk h = {calloc(nv, sizeof *h.tag), malloc(nv * sizeof *h.seen), 0,
                    malloc(nv * sizeof *h.refused), 0, malloc(RM_HORN_MERGES_MAX * sizeof *h.log)};
-    uint32_t g = 0;
+    uint32_t g = 0, prev = UINT32_MAX; /* the last point's vertex */
     for (size_t i = 0; h.tag && h.seen && h.refused && h.log && i < o->nlocked_points && *ok;
          i++) {
         uint32_t c = rm_point_vertex(r, o->locked_points + 3 * i);
         if (c == UINT32_MAX || r->locked[c] != RM_PINNED)
             continue;
-        h.tag[c] = RM_HORN_OUT;
+        /* each point's walk starts afresh (revB 6): the last point's tags would keep a tube
+           it saw, thin or not, from this one; the walks cost the vertices they see, at most
+           the mesh's per point */
+        while (h.nseen)
+            h.tag[h.seen[--h.nseen]] = 0;
+        if (prev != UINT32_MAX)
+            h.tag[prev] = 0;
+        h.tag[prev = c] = RM_HORN_OUT;
         uint32_t t0;
         while (*ok && (t0 = unwalked(r, &h, c)) != UINT32_MAX) {
             size_t from = h.nseen;
