@@ -39,10 +39,6 @@
 /* Sweeps over the triangles per call: a collapse leaves its neighbours' needles for the next. */
 #define ISM_RM_COLLAPSE_SWEEPS 3
 
-static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * v; }
-
-static uint32_t slot(const rm_mesh *r, uint32_t v, uint32_t i) { return r->vt[r->start[v] + i]; }
-
 static void corners(const rm_pass *p, uint32_t t, uint32_t v, const double *x, const double *q[3])
 {
     rm_merge_corners(&p->r, t, v, x, q);
@@ -65,7 +61,7 @@ bool rm_crease_tri_ok(const rm_pass *p, uint32_t t, uint32_t a, uint32_t b,
     if (s == UINT32_MAX)
         return true; /* not manifold: its bend is no crease test's */
     const uint32_t *z = p->r.m->tri + 3 * (size_t)s;
-    double lu = rm_cross(P(p, z[0]), P(p, z[1]), P(p, z[2]), u);
+    double lu = rm_cross(rm_pos(p, z[0]), rm_pos(p, z[1]), rm_pos(p, z[2]), u);
     double now = cos_bend(n, ln, u, lu), before = cos_bend(m, lo, u, lu);
     /* a crease's edge bends as it did, give or take the hair moved */
     before = cos(fmin(M_PI, acos(fmax(-1, fmin(1, before))) + ISM_RM_CROWD_BEND_DEG * M_PI / 180));
@@ -81,8 +77,8 @@ static bool new_triangle_ok(const rm_pass *p, const rm_merge *g, uint32_t t, con
                             double *sine)
 {
     const double *q[3], *o[3];
-    corners(p, t, g->v, P(p, g->w), q);
-    corners(p, t, g->v, P(p, g->v), o);
+    corners(p, t, g->v, rm_pos(p, g->w), q);
+    corners(p, t, g->v, rm_pos(p, g->v), o);
     const uint32_t *c = p->r.m->tri + 3 * t;
     int k = rm_corner(p->r.m, t, g->v);
     uint32_t a = c[(k + 1) % 3], b = c[(k + 2) % 3];
@@ -101,7 +97,7 @@ static bool new_triangle_ok(const rm_pass *p, const rm_merge *g, uint32_t t, con
     if (s == UINT32_MAX)
         return true;
     const uint32_t *z = p->r.m->tri + 3 * s;
-    double lu = rm_cross(P(p, z[0]), P(p, z[1]), P(p, z[2]), u);
+    double lu = rm_cross(rm_pos(p, z[0]), rm_pos(p, z[1]), rm_pos(p, z[2]), u);
     double now = cos_bend(n, ln, u, lu);
     if (now >= fmin(cos_bend(m, lo, u, lu), cos(ISM_RM_COLLAPSE_MAX_BEND_DEG * M_PI / 180)))
         return true;
@@ -109,7 +105,7 @@ static bool new_triangle_ok(const rm_pass *p, const rm_merge *g, uint32_t t, con
        in the last mending (bend_curvature): beside cusp-a2's cusp the surface is a tube of
        radius z^1.5 (6e-4 at z = 0.007, its edges 2e-3) that a few triangles go round, every
        edge bending by 50°-115°, and each collapse there bent some edge more than before */
-    double ab = rm_dist(P(p, a), P(p, b));
+    double ab = rm_dist(rm_pos(p, a), rm_pos(p, b));
     return p->bend_curvature && ab > 0 &&
            rm_bend_is_curvature(p, a, b, acos(fmax(-1, fmin(1, now))), (ln + lu) / ab, NULL);
 }
@@ -120,10 +116,10 @@ static bool new_triangle_ok(const rm_pass *p, const rm_merge *g, uint32_t t, con
 static void fan_distances(rm_pass *p, const rm_merge *g, bool after, double *cen, double *mid)
 {
     const rm_mesh *r = &p->r;
-    const double *x = P(p, after ? g->w : g->v);
+    const double *x = rm_pos(p, after ? g->w : g->v);
     *cen = *mid = 0;
     for (uint32_t i = 0; i < r->count[g->v]; i++) {
-        uint32_t t = slot(r, g->v, i);
+        uint32_t t = rm_slot(r, g->v, i);
         if (after && (t == g->t1 || t == g->t2))
             continue;
         const double *q[3];
@@ -131,7 +127,7 @@ static void fan_distances(rm_pass *p, const rm_merge *g, bool after, double *cen
         *cen = fmax(*cen, rm_centroid_distance(p, q[0], q[1], q[2]));
         uint32_t next = r->m->tri[3 * t + (rm_corner(r->m, t, g->v) + 1) % 3];
         if (!after || (next != g->c && next != g->d))
-            *mid = fmax(*mid, rm_midpoint_distance(p, x, P(p, next)));
+            *mid = fmax(*mid, rm_midpoint_distance(p, x, rm_pos(p, next)));
     }
 }
 
@@ -162,7 +158,7 @@ static bool hair(const rm_pass *p, uint32_t v, uint32_t w)
 {
     uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE];
     uint32_t n = (uint32_t)rm_merge_neighbours(&p->r, v, nb);
-    return rm_dist(P(p, v), P(p, w)) <= ISM_RM_HAIR_REL * mean_edge(p, v, nb, n);
+    return rm_dist(rm_pos(p, v), rm_pos(p, w)) <= ISM_RM_HAIR_REL * mean_edge(p, v, nb, n);
 }
 
 /* Every test of merging g->v into g->w; g->after gets the new fan's smallest sine. The
@@ -183,9 +179,9 @@ static bool merge_ok(rm_pass *p, rm_merge *g)
     int poor_before = 0, poor_after = 0;
     g->after = INFINITY;
     for (uint32_t i = 0; i < r->count[g->v]; i++) {
-        uint32_t t = slot(r, g->v, i);
+        uint32_t t = rm_slot(r, g->v, i);
         const double *q[3];
-        corners(p, t, g->v, P(p, g->v), q);
+        corners(p, t, g->v, rm_pos(p, g->v), q);
         poor_before += rm_min_sine(q[0], q[1], q[2]) < poor;
         double s;
         if (t == g->t1 || t == g->t2)
@@ -225,7 +221,7 @@ static double mean_edge(const rm_pass *p, uint32_t v, const uint32_t *nb, uint32
 {
     double sum = 0;
     for (uint32_t j = 0; j < n; j++)
-        sum += rm_dist(P(p, v), P(p, nb[j]));
+        sum += rm_dist(rm_pos(p, v), rm_pos(p, nb[j]));
     return n ? sum / n : 0;
 }
 
@@ -234,7 +230,7 @@ static double mean_edge(const rm_pass *p, uint32_t v, const uint32_t *nb, uint32
 static bool crowds(const rm_pass *p, uint32_t v, uint32_t w, uint32_t *nb, uint32_t *nnb)
 {
     *nnb = (uint32_t)rm_merge_neighbours(&p->r, v, nb);
-    return rm_dist(P(p, v), P(p, w)) <= ISM_RM_CROWD * mean_edge(p, v, nb, *nnb);
+    return rm_dist(rm_pos(p, v), rm_pos(p, w)) <= ISM_RM_CROWD * mean_edge(p, v, nb, *nnb);
 }
 
 /* For merging v into w along the short edge vw of a crease: v is locked but no given
@@ -315,7 +311,7 @@ static bool collapse_triangle(rm_pass *p, uint32_t t, bool *ok)
     double len[3];
     int order[3] = {0, 1, 2};
     for (int k = 0; k < 3; k++)
-        len[k] = rm_dist(P(p, v[k]), P(p, v[(k + 1) % 3]));
+        len[k] = rm_dist(rm_pos(p, v[k]), rm_pos(p, v[(k + 1) % 3]));
     for (int i = 1; i < 3; i++) /* edges by length: three elements */
         for (int j = i; j > 0 && len[order[j]] < len[order[j - 1]]; j--) {
             int s = order[j];

@@ -130,8 +130,6 @@ typedef struct crease_fan {
     double val[2], gn[2]; /* the branches' values and gradient lengths at v in f */
 } crease_fan;
 
-static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * (size_t)v; }
-
 /* How far from both surfaces a vertex of mean edge `edge` counts as beside the crease, and
  * how far from its start Newton may land (without a bound: shares of the edge alone). */
 static double near_tol(const rm_pass *p, double edge)
@@ -205,7 +203,7 @@ static const ism_tape *fan_tape(rm_pass *p, uint32_t v, double tol, ism_tape *lo
                                 double val[2], double gn[2])
 {
     const rm_mesh *r = &p->r;
-    const double *x = P(p, v);
+    const double *x = rm_pos(p, v);
     if (on_crease(p, p->f, x, tol, val, gn))
         return p->f;
     if (!local)
@@ -217,8 +215,8 @@ static const ism_tape *fan_tape(rm_pass *p, uint32_t v, double tol, ism_tape *lo
         const uint32_t *t = r->m->tri + 3 * (size_t)r->vt[r->start[v] + i];
         for (int j = 0; j < 3; j++)
             for (int k = 0; k < 3; k++) {
-                box[k].lo = fmin(box[k].lo, P(p, t[j])[k]);
-                box[k].hi = fmax(box[k].hi, P(p, t[j])[k]);
+                box[k].lo = fmin(box[k].lo, rm_pos(p, t[j])[k]);
+                box[k].hi = fmax(box[k].hi, rm_pos(p, t[j])[k]);
             }
     }
     if (!ism_tape_shorten(p->f, p->ws, box[0], box[1], box[2], local, NULL))
@@ -232,7 +230,7 @@ static void fan_corners(const rm_pass *p, const crease_fan *c, uint32_t v, uint3
 {
     const uint32_t *t = p->r.m->tri + 3 * (size_t)c->tri[i];
     for (int k = 0; k < 3; k++)
-        q[k] = t[k] == v ? x : P(p, t[k]);
+        q[k] = t[k] == v ? x : rm_pos(p, t[k]);
 }
 
 /* v's fan and what it may do: 1 snap onto the crease (v near it, not on it), 2 slide along
@@ -251,7 +249,7 @@ static int find_chain(rm_pass *p, uint32_t v, double mean_edge, ism_tape *local,
             return 1;
     int ends = 0;
     for (uint32_t i = 0; i < c->n; i++)
-        if (on_crease(p, c->f, P(p, c->ring[i]), on, NULL, NULL)) {
+        if (on_crease(p, c->f, rm_pos(p, c->ring[i]), on, NULL, NULL)) {
             if (ends == 2)
                 return 0; /* a corner, or a crease met again */
             c->end[ends++] = c->ring[i];
@@ -357,7 +355,7 @@ static bool tri_ok(const rm_pass *p, const crease_frame *cf, uint32_t t, uint32_
     if (s == UINT32_MAX)
         return true;
     const uint32_t *z = p->r.m->tri + 3 * (size_t)s;
-    double u[3], lu = rm_cross(P(p, z[0]), P(p, z[1]), P(p, z[2]), u);
+    double u[3], lu = rm_cross(rm_pos(p, z[0]), rm_pos(p, z[1]), rm_pos(p, z[2]), u);
     return lu > 0 && ism_dot3(n, u) >= cf->cos_bend * ln * lu;
 }
 
@@ -366,7 +364,7 @@ static bool tri_ok(const rm_pass *p, const crease_frame *cf, uint32_t t, uint32_
 static bool fan_shape_ok(rm_pass *p, uint32_t v, const crease_fan *c, const double *x,
                          const crease_frame *cf, double min_sine)
 {
-    const double *pos = P(p, v);
+    const double *pos = rm_pos(p, v);
     double sine = INFINITY;
     for (uint32_t i = 0; i < c->n; i++) {
         const double *q[3], *o[3];
@@ -389,7 +387,7 @@ static void merge_corners(const rm_pass *p, const rm_merge *g, uint32_t t, const
 {
     const uint32_t *c = p->r.m->tri + 3 * (size_t)t;
     for (int k = 0; k < 3; k++) {
-        o[k] = P(p, c[k]);
+        o[k] = rm_pos(p, c[k]);
         q[k] = c[k] == g->v || c[k] == g->w ? x : o[k];
     }
 }
@@ -473,13 +471,13 @@ static bool merge_onto_crease(rm_pass *p, uint32_t v, uint32_t w, const crease_f
     crease_fan cw;
     rm_merge g;
     if (!walk_fan(p, w, &cw) ||
-        !on_crease(p, c->f, P(p, w), near_tol(p, f->mean_edge), NULL, NULL) ||
+        !on_crease(p, c->f, rm_pos(p, w), near_tol(p, f->mean_edge), NULL, NULL) ||
         !rm_merge_find_any(r, v, w, ISM_RM_COLLAPSE_MAX_DEGREE, &g) ||
         !rm_merge_link_ok(r, &g))
         return false;
     double x[3], mid[3], grad[3];
     for (int k = 0; k < 3; k++)
-        x[k] = mid[k] = 0.5 * (P(p, v)[k] + P(p, w)[k]);
+        x[k] = mid[k] = 0.5 * (rm_pos(p, v)[k] + rm_pos(p, w)[k]);
     crease_frame cf;
     bool framed = false;
     if (!to_crease(p, c->f, x, f->mean_edge, &cf, &framed) ||
@@ -516,7 +514,7 @@ static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan
         uint32_t w = UINT32_MAX;
         double best = ISM_RM_CREASE_MERGE_REL * f->mean_edge;
         for (uint32_t i = 0; i < c->n; i++) {
-            double d = rm_dist(P(p, v), P(p, c->ring[i]));
+            double d = rm_dist(rm_pos(p, v), rm_pos(p, c->ring[i]));
             if (d < best && d > after && r->locked[c->ring[i]] != RM_PINNED)
                 best = d, w = c->ring[i];
         }
@@ -542,8 +540,9 @@ static bool slide_vertex(rm_pass *p, uint32_t v, ism_tape *local)
         return true;
     if (kind == 3)
         return false; /* on the crease, no chain to slide along */
-    const double *pos = P(p, v);
-    const double *a = kind == 2 ? P(p, c.end[0]) : pos, *b = kind == 2 ? P(p, c.end[1]) : pos;
+    const double *pos = rm_pos(p, v);
+    const double *a = kind == 2 ? rm_pos(p, c.end[0]) : pos;
+    const double *b = kind == 2 ? rm_pos(p, c.end[1]) : pos;
     /* a slide tries the whole way to the middle, then a half and a quarter; a snap the
        nearest crease point only */
     for (double step = 1; step >= (kind == 2 ? 0.25 : 1); step *= 0.5) {
@@ -631,7 +630,7 @@ size_t rm_crease_lock_on(rm_pass *p)
             continue;
         rm_fan f;
         rm_fan_measure(p, (uint32_t)v, &f);
-        if (on_crease(p, p->f, P(p, (uint32_t)v), ISM_RM_CREASE_ON_REL * f.mean_edge, NULL,
+        if (on_crease(p, p->f, rm_pos(p, (uint32_t)v), ISM_RM_CREASE_ON_REL * f.mean_edge, NULL,
                       NULL)) {
             r->locked[v] = 1; /* on the crease: kept there, as a vertex moved onto it is */
             locked++;

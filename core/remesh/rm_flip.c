@@ -35,8 +35,6 @@ typedef struct quad {
                          (rm_cbound.h: a point and the distance there), for the flip to keep */
 } quad;
 
-static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * v; }
-
 /* The quad around edge {a, b} when it is a free edge; false otherwise. */
 static bool find_quad(const rm_pass *p, uint32_t a, uint32_t b, quad *q)
 {
@@ -168,7 +166,8 @@ static bool flip_improves_at(rm_pass *p, const double *A, const double *B, const
 
 static bool flip_improves(rm_pass *p, quad *q)
 {
-    return flip_improves_at(p, P(p, q->a), P(p, q->b), P(p, q->c), P(p, q->d), q);
+    return flip_improves_at(p, rm_pos(p, q->a), rm_pos(p, q->b), rm_pos(p, q->c),
+                            rm_pos(p, q->d), q);
 }
 
 bool rm_flip_would_pass(rm_pass *p, const double *A, const double *B, const double *C,
@@ -224,7 +223,7 @@ static bool try_flip(rm_pass *p, uint32_t a, uint32_t b, quad *q)
 {
     rm_mesh *r = &p->r;
     if (!find_quad(p, a, b, q) || /* the Delaunay test first: most edges fail it, cheaply */
-        !not_delaunay(P(p, q->a), P(p, q->b), P(p, q->c), P(p, q->d)) ||
+        !not_delaunay(rm_pos(p, q->a), rm_pos(p, q->b), rm_pos(p, q->c), rm_pos(p, q->d)) ||
         edge_exists(r, q->c, q->d) || !degree_allows(r, a) || !degree_allows(r, b) ||
         !flip_improves(p, q) || !rm_slot_reserve(r, q->c, 1) || !rm_slot_reserve(r, q->d, 1))
         return false; /* (out of memory growing a slot: that flip is not made) */
@@ -247,7 +246,8 @@ static uint8_t obtuse_corners(const rm_pass *p, size_t t)
     const uint32_t *v = p->r.m->tri + 3 * t;
     uint8_t bits = 0;
     for (int k = 0; k < 3; k++)
-        if (!(corner_dot(P(p, v[k]), P(p, v[(k + 1) % 3]), P(p, v[(k + 2) % 3])) >= 0))
+        if (!(corner_dot(rm_pos(p, v[k]), rm_pos(p, v[(k + 1) % 3]),
+                         rm_pos(p, v[(k + 2) % 3])) >= 0))
             bits |= (uint8_t)(1u << k);
     if (p->obtuse)
         p->obtuse[t] = bits;

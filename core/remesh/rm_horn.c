@@ -56,10 +56,6 @@
 #define RM_HORN_OUT UINT32_MAX
 #define RM_HORN_REFUSED (UINT32_MAX - 1)
 
-static const double *X(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * (size_t)v; }
-
-static uint32_t slot(const rm_mesh *r, uint32_t v, uint32_t i) { return r->vt[r->start[v] + i]; }
-
 /* The walk's state: per vertex the cone it was reached from (0: not seen), the thin rings'
  * vertices in order, and the current ring. */
 /* One merge of a cone, as cone_settle needs it to ask the end's rules again or undo it. */
@@ -95,14 +91,14 @@ static double ring_radius(const rm_pass *p, const double *x, const uint32_t *rin
     double c[3] = {0, 0, 0}, a[3], rad = 0;
     for (size_t i = 0; i < n; i++)
         for (int k = 0; k < 3; k++)
-            c[k] += X(p, ring[i])[k] / (double)n;
+            c[k] += rm_pos(p, ring[i])[k] / (double)n;
     for (int k = 0; k < 3; k++)
         a[k] = c[k] - x[k];
     double la = ism_norm3(a);
     for (size_t i = 0; i < n; i++) {
         double d[3], q[3];
         for (int k = 0; k < 3; k++)
-            d[k] = X(p, ring[i])[k] - x[k];
+            d[k] = rm_pos(p, ring[i])[k] - x[k];
         ism_cross3(d, a, q);
         rad = fmax(rad, la > 0 ? ism_norm3(q) / la : ism_norm3(d));
     }
@@ -114,7 +110,7 @@ static void see_neighbours(const rm_pass *p, horn_walk *h, uint32_t w, uint32_t 
 {
     const rm_mesh *r = &p->r;
     for (uint32_t i = 0; i < r->count[w]; i++) {
-        const uint32_t *t = r->m->tri + 3 * (size_t)slot(r, w, i);
+        const uint32_t *t = r->m->tri + 3 * (size_t)rm_slot(r, w, i);
         for (int k = 0; k < 3; k++)
             if (t[k] != c && !h->tag[t[k]]) {
                 h->tag[t[k]] = g;
@@ -152,7 +148,7 @@ static void walk_cone(const rm_pass *p, horn_walk *h, uint32_t c, uint32_t t0, u
     }
     while (h->nseen > from) {
         size_t n = h->nseen - from;
-        if (n > RM_HORN_RING_MAX || ring_radius(p, X(p, c), h->seen + from, n) > thin) {
+        if (n > RM_HORN_RING_MAX || ring_radius(p, rm_pos(p, c), h->seen + from, n) > thin) {
             for (size_t i = from; i < h->nseen; i++) /* kept in seen: the next point clears */
                 h->tag[h->seen[i]] = RM_HORN_OUT;
             return;
@@ -170,7 +166,7 @@ static bool pending(const rm_pass *p, const horn_walk *h, uint32_t x, uint32_t c
                     double reach)
 {
     return (h->tag[x] == g || h->tag[x] == RM_HORN_REFUSED) && !p->r.locked[x] &&
-           rm_dist(X(p, x), X(p, c)) <= reach;
+           rm_dist(rm_pos(p, x), rm_pos(p, c)) <= reach;
 }
 
 /* The cone's end rules for a triangle of corners q (its corner at c where v was) that had
@@ -197,7 +193,7 @@ static double fan_floor(rm_pass *p, uint32_t v)
 {
     double floor = INFINITY;
     for (uint32_t i = 0; i < p->r.count[v]; i++)
-        floor = fmin(floor, rm_tri_sine(p, slot(&p->r, v, i)));
+        floor = fmin(floor, rm_tri_sine(p, rm_slot(&p->r, v, i)));
     return floor;
 }
 
@@ -217,7 +213,7 @@ static bool horn_merge_ok(rm_pass *p, const horn_walk *h, uint32_t v, uint32_t c
         !rm_merge_link_ok(r, m))
         return false;
     for (uint32_t i = 0; i < r->count[v]; i++) {
-        uint32_t t = slot(r, v, i);
+        uint32_t t = rm_slot(r, v, i);
         const uint32_t *k = r->m->tri + 3 * (size_t)t;
         int at = rm_corner(r->m, t, v);
         uint32_t a = k[(at + 1) % 3], b = k[(at + 2) % 3];
@@ -225,8 +221,8 @@ static bool horn_merge_ok(rm_pass *p, const horn_walk *h, uint32_t v, uint32_t c
             pending(p, h, b, c, g, reach))
             continue;
         const double *q[3], *o[3];
-        rm_merge_corners(r, t, v, X(p, c), q);
-        rm_merge_corners(r, t, v, X(p, v), o);
+        rm_merge_corners(r, t, v, rm_pos(p, c), q);
+        rm_merge_corners(r, t, v, rm_pos(p, v), o);
         if (!end_ok(p, q, o, a, b, *floor))
             return false;
     }
@@ -246,8 +242,8 @@ static bool step_ends_ok(rm_pass *p, const horn_step *s)
         const uint32_t *k = r->m->tri + 3 * (size_t)t;
         int at = rm_corner(r->m, t, c);
         const double *q[3], *o[3];
-        rm_merge_corners(r, t, c, X(p, c), q);
-        rm_merge_corners(r, t, c, X(p, s->m.v), o);
+        rm_merge_corners(r, t, c, rm_pos(p, c), q);
+        rm_merge_corners(r, t, c, rm_pos(p, s->m.v), o);
         if (!end_ok(p, q, o, k[(at + 1) % 3], k[(at + 2) % 3], s->floor))
             return false;
     }
@@ -294,9 +290,9 @@ static size_t merge_cone(rm_pass *p, horn_walk *h, uint32_t c, uint32_t g, doubl
         uint32_t best = UINT32_MAX;
         double bd = INFINITY;
         for (uint32_t i = 0; i < r->count[c]; i++) {
-            const uint32_t *t = r->m->tri + 3 * (size_t)slot(r, c, i);
+            const uint32_t *t = r->m->tri + 3 * (size_t)rm_slot(r, c, i);
             for (int k = 0; k < 3; k++) {
-                double d = rm_dist(X(p, t[k]), X(p, c));
+                double d = rm_dist(rm_pos(p, t[k]), rm_pos(p, c));
                 if (t[k] != c && h->tag[t[k]] == g && !r->locked[t[k]] && d <= reach &&
                     d < bd)
                     bd = d, best = t[k];
@@ -336,12 +332,12 @@ static double needle_reach(rm_pass *p, const horn_walk *h, size_t from, uint32_t
         if (h->tag[v] != g)
             continue;
         for (uint32_t j = 0; j < r->count[v]; j++) {
-            uint32_t t = slot(r, v, j);
+            uint32_t t = rm_slot(r, v, j);
             const uint32_t *k = r->m->tri + 3 * (size_t)t;
             if (h->tag[k[0]] == g && h->tag[k[1]] == g && h->tag[k[2]] == g &&
                 is_needle(p, t))
                 for (int e = 0; e < 3; e++)
-                    reach = fmax(reach, rm_dist(X(p, k[e]), X(p, c)));
+                    reach = fmax(reach, rm_dist(rm_pos(p, k[e]), rm_pos(p, c)));
         }
     }
     return reach;
@@ -352,7 +348,7 @@ static double needle_reach(rm_pass *p, const horn_walk *h, size_t from, uint32_t
 static uint32_t unwalked(const rm_mesh *r, const horn_walk *h, uint32_t c)
 {
     for (uint32_t j = 0; j < r->count[c]; j++) {
-        uint32_t t = slot(r, c, j);
+        uint32_t t = rm_slot(r, c, j);
         const uint32_t *k = r->m->tri + 3 * (size_t)t;
         if (!h->tag[k[(rm_corner(r->m, t, c) + 1) % 3]])
             return t;

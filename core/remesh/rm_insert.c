@@ -47,8 +47,6 @@
  * triangles, 6 levels 9,520, no needle off the box cut either way). */
 #define ISM_RM_INSERT_LEVELS 3
 
-static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * v; }
-
 /* The needle t as (a, b, c) in its winding, ab its shortest side; false when t is no needle
  * of a short edge with free long sides. The short edge's ends may be locked or free: the
  * collapses have had their try (cross-cap's own box, preset depth: needles under 10° away
@@ -61,13 +59,13 @@ static bool needle(const rm_pass *p, uint32_t t, uint32_t abc[3])
     int k = 0;
     double best = INFINITY;
     for (int i = 0; i < 3; i++) {
-        double l = rm_dist(P(p, v[i]), P(p, v[(i + 1) % 3]));
+        double l = rm_dist(rm_pos(p, v[i]), rm_pos(p, v[(i + 1) % 3]));
         if (l < best)
             best = l, k = i;
     }
     for (int i = 0; i < 3; i++)
         abc[i] = v[(k + i) % 3];
-    double n[3], twice_area = rm_cross(P(p, abc[0]), P(p, abc[1]), P(p, abc[2]), n);
+    double n[3], twice_area = rm_cross(rm_pos(p, abc[0]), rm_pos(p, abc[1]), rm_pos(p, abc[2]), n);
     double height = best > 0 ? twice_area / best : 0;
     return height >= ISM_RM_INSERT_TALL * sqrt(0.75) * best && rm_edge_free(p, abc[1], abc[2]) &&
            rm_edge_free(p, abc[2], abc[0]);
@@ -102,7 +100,7 @@ static bool project_along(rm_pass *p, double x[3], const double n[3], double len
  * allow), in the needle's plane; n gets the needle's unit normal. */
 static bool place_in_needle(const rm_pass *p, const uint32_t abc[3], double x[3], double n[3])
 {
-    const double *a = P(p, abc[0]), *b = P(p, abc[1]), *c = P(p, abc[2]);
+    const double *a = rm_pos(p, abc[0]), *b = rm_pos(p, abc[1]), *c = rm_pos(p, abc[2]);
     double ln = rm_cross(a, b, c, n), len = rm_dist(a, b);
     double alpha = fmin(M_PI / 3, 0.5 * rm_angle(a, b, c));
     double beta = fmin(M_PI / 3, 0.5 * rm_angle(b, c, a));
@@ -127,7 +125,7 @@ static bool place_in_needle(const rm_pass *p, const uint32_t abc[3], double x[3]
 static bool new_place(rm_pass *p, const uint32_t abc[3], double x[3], double n[3], double g[3])
 {
     return place_in_needle(p, abc, x, n) &&
-           project_along(p, x, n, rm_dist(P(p, abc[0]), P(p, abc[1])), g);
+           project_along(p, x, n, rm_dist(rm_pos(p, abc[0]), rm_pos(p, abc[1])), g);
 }
 
 /* The triangles (ring[k], ring[k + 1], x) round the ring of n corners (a needle's three, a
@@ -137,7 +135,7 @@ static bool faces_kept(const rm_pass *p, const uint32_t *ring, int n, const doub
 {
     double m[3];
     for (int k = 0; k < n; k++) {
-        rm_cross(P(p, ring[k]), P(p, ring[(k + 1) % n]), x, m);
+        rm_cross(rm_pos(p, ring[k]), rm_pos(p, ring[(k + 1) % n]), x, m);
         if (!(ism_dot3(n0, m) > 0))
             return false;
     }
@@ -153,12 +151,13 @@ static bool centroids_ok(rm_pass *p, const uint32_t *ring, int n, double own, co
     rm_collapse_bounds_need(p);
     double bound = fmax(own, p->centroid_bound);
     for (int k = 0; k < n; k++)
-        if (!(rm_centroid_distance(p, P(p, ring[k]), P(p, ring[(k + 1) % n]), x) <= bound))
+        if (!(rm_centroid_distance(p, rm_pos(p, ring[k]), rm_pos(p, ring[(k + 1) % n]), x) <=
+              bound))
             return false;
     if (!p->bounded)
         return true;
     for (int k = 0; k < n; k++) {
-        double d = rm_midpoint_distance(p, P(p, ring[k]), x);
+        double d = rm_midpoint_distance(p, rm_pos(p, ring[k]), x);
         if (!(d <= own || rm_midpoint_within(p, d)))
             return false;
     }
@@ -180,10 +179,10 @@ static bool flippable(rm_pass *p, uint32_t a, uint32_t b, const double *x, bool 
     if (!rm_edge_triangles(&p->r, a, b, two, &n))
         return false;
     const uint32_t *o = p->r.m->tri + 3 * two[1]; /* runs b -> a */
-    const double *y = P(p, o[(rm_corner(p->r.m, two[1], a) + 1) % 3]);
+    const double *y = rm_pos(p, o[(rm_corner(p->r.m, two[1], a) + 1) % 3]);
     if (last)
-        return rm_flip_would_pass(p, P(p, a), P(p, b), x, y);
-    return rm_angle(x, P(p, a), P(p, b)) + rm_angle(y, P(p, a), P(p, b)) >
+        return rm_flip_would_pass(p, rm_pos(p, a), rm_pos(p, b), x, y);
+    return rm_angle(x, rm_pos(p, a), rm_pos(p, b)) + rm_angle(y, rm_pos(p, a), rm_pos(p, b)) >
            M_PI + ISM_RM_INSERT_FLIP_MARGIN;
 }
 
@@ -349,11 +348,13 @@ static bool split_pair(rm_pass *p, uint32_t t, uint32_t u, const uint32_t abdc[4
      * the pair's split makes no new needle there (b at the chord's middle gives 30°; short
      * edges 1 : 2 about 19°) */
     double pair = rm_collapse_poor();
-    if (!(rm_min_sine(P(p, abdc[0]), P(p, abdc[1]), x) >= pair) ||
-        !(rm_min_sine(P(p, abdc[1]), P(p, abdc[2]), x) >= pair))
+    if (!(rm_min_sine(rm_pos(p, abdc[0]), rm_pos(p, abdc[1]), x) >= pair) ||
+        !(rm_min_sine(rm_pos(p, abdc[1]), rm_pos(p, abdc[2]), x) >= pair))
         return false;
-    double own = fmax(rm_centroid_distance(p, P(p, abdc[0]), P(p, abdc[1]), P(p, abdc[3])),
-                      rm_centroid_distance(p, P(p, abdc[3]), P(p, abdc[1]), P(p, abdc[2])));
+    const double *c[4] = {rm_pos(p, abdc[0]), rm_pos(p, abdc[1]), rm_pos(p, abdc[2]),
+                          rm_pos(p, abdc[3])};
+    double own = fmax(rm_centroid_distance(p, c[0], c[1], c[3]),
+                      rm_centroid_distance(p, c[3], c[1], c[2]));
     if (!place_fits(p, abdc, 4, own, x, last))
         return false;
     *ok = split_edge(p, t, u, abdc, x, g);
@@ -366,7 +367,7 @@ static bool split_alone(rm_pass *p, uint32_t t, const uint32_t abc[3], bool last
     double x[3], g[3];
     if (!place_kept(p, abc, abc, 3, x, g))
         return false;
-    double own = rm_centroid_distance(p, P(p, abc[0]), P(p, abc[1]), P(p, abc[2]));
+    double own = rm_centroid_distance(p, rm_pos(p, abc[0]), rm_pos(p, abc[1]), rm_pos(p, abc[2]));
     if (!place_fits(p, abc, 3, own, x, last))
         return false;
     *ok = split(p, t, abc, x, g);

@@ -4,8 +4,6 @@
 
 #include <string.h>
 
-static uint32_t slot(const rm_mesh *r, uint32_t v, uint32_t i) { return r->vt[r->start[v] + i]; }
-
 bool rm_merge_find(const rm_mesh *r, uint32_t v, uint32_t w, uint32_t max_degree, rm_merge *g)
 {
     return !r->locked[v] && rm_merge_find_any(r, v, w, max_degree, g);
@@ -76,7 +74,7 @@ static int link_fill(const rm_mesh *r, uint32_t v, uint32_t *table, uint32_t *nb
     int n = 0;
     memset(table, 0xff, LINK_SLOTS * sizeof *table);
     for (uint32_t i = 0; i < r->count[v] && i < ISM_RM_MERGE_MAX_DEGREE; i++) {
-        const uint32_t *t = r->m->tri + 3 * slot(r, v, i);
+        const uint32_t *t = r->m->tri + 3 * rm_slot(r, v, i);
         for (int k = 0; k < 3; k++)
             if (t[k] != v && link_put(table, t[k])) {
                 if (nb)
@@ -100,7 +98,7 @@ bool rm_merge_link_ok(const rm_mesh *r, const rm_merge *g)
         return false; /* no g of rm_merge_find's: the table would not hold v's neighbours */
     (void)link_fill(r, g->v, table, NULL);
     for (uint32_t i = 0; i < r->count[g->w]; i++) {
-        const uint32_t *t = r->m->tri + 3 * slot(r, g->w, i);
+        const uint32_t *t = r->m->tri + 3 * rm_slot(r, g->w, i);
         int cd = 0;
         for (int k = 0; k < 3; k++) {
             uint32_t x = t[k];

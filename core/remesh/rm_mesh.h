@@ -47,6 +47,12 @@ typedef struct rm_mesh {
  * 2 × extra triangles more (in m too). False when out of memory. */
 bool rm_mesh_build(rm_mesh *r, ism_mesh *m, size_t extra);
 
+/* The i-th triangle at vertex v (i < r->count[v]). */
+static inline uint32_t rm_slot(const struct rm_mesh *r, uint32_t v, uint32_t i)
+{
+    return r->vt[r->start[v] + i];
+}
+
 /* The label of triangle t (0 without labels). */
 static inline uint32_t rm_label(const struct rm_mesh *r, uint32_t t)
 {

@@ -314,6 +314,12 @@ static inline void rm_sine_open(rm_pass *p, double *found, size_t from)
         p->sine[t] = NAN;
 }
 
+/* Vertex v's position. */
+static inline const double *rm_pos(const rm_pass *p, uint32_t v)
+{
+    return p->r.m->pos + 3 * (size_t)v;
+}
+
 /* ∇f vanishes at v: its normal was left zero (rm_pass.normal). */
 static inline bool rm_normal_zero(const rm_pass *p, uint32_t v)
 {

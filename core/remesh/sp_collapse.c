@@ -78,8 +78,6 @@ static edge *sort_edges(edge *e, edge *tmp, size_t n)
     return from;
 }
 
-static const double *P(const rm_pass *p, uint32_t v) { return p->r.m->pos + 3 * (size_t)v; }
-
 bool sp_history_open(sp_history *h, const rm_pass *p)
 {
     h->clock = 0;
@@ -150,7 +148,7 @@ static edge *candidate_edges(const rm_pass *p, const sp_history *h, size_t *n)
             uint32_t a = c[k], b = c[(k + 1) % 3], corner = (uint32_t)(3 * t + k);
             if (a < b && !(p->r.locked[a] && p->r.locked[b]) &&
                 (p->active[a] || p->active[b]) && !refused_still(p, h, corner, a, b))
-                e[(*n)++] = (edge){rm_dist(P(p, a), P(p, b)), a, b, corner};
+                e[(*n)++] = (edge){rm_dist(rm_pos(p, a), rm_pos(p, b)), a, b, corner};
         }
     }
     edge *tmp = e ? malloc((*n + 1) * sizeof *tmp) : NULL;
@@ -174,7 +172,7 @@ static double fan_sine(const rm_pass *p, const rm_merge *g, uint32_t t, const do
     const uint32_t *c = p->r.m->tri + 3 * t;
     const double *q[3], *o[3];
     for (int k = 0; k < 3; k++) {
-        o[k] = P(p, c[k]);
+        o[k] = rm_pos(p, c[k]);
         q[k] = c[k] == g->v || c[k] == g->w ? x : o[k];
     }
     double n[3], m[3], ln = rm_cross(q[0], q[1], q[2], n), lo = rm_cross(o[0], o[1], o[2], m);
@@ -217,7 +215,7 @@ static double fans_min_sine(const rm_pass *p, const rm_merge *g)
         uint32_t u = side ? g->w : g->v;
         for (uint32_t i = 0; i < r->count[u]; i++) {
             const uint32_t *c = r->m->tri + 3 * r->vt[r->start[u] + i];
-            s = fmin(s, rm_min_sine(P(p, c[0]), P(p, c[1]), P(p, c[2])));
+            s = fmin(s, rm_min_sine(rm_pos(p, c[0]), rm_pos(p, c[1]), rm_pos(p, c[2])));
         }
     }
     return s;
@@ -233,7 +231,7 @@ static bool distances_ok(rm_pass *p, const rm_merge *g, const uint32_t *fan, uin
         const uint32_t *c = p->r.m->tri + 3 * fan[i];
         const double *q[3];
         for (int k = 0; k < 3; k++)
-            q[k] = c[k] == g->v || c[k] == g->w ? x : P(p, c[k]);
+            q[k] = c[k] == g->v || c[k] == g->w ? x : rm_pos(p, c[k]);
         if (!rm_bound_triangle(p, q[0], q[1], q[2]))
             return false;
         for (int k = 0; k < 3; k++) {
@@ -245,7 +243,7 @@ static bool distances_ok(rm_pass *p, const rm_merge *g, const uint32_t *fan, uin
             if (j < nseen)
                 continue;
             seen[nseen++] = u;
-            if (!rm_bound_edge(p, x, P(p, u)))
+            if (!rm_bound_edge(p, x, rm_pos(p, u)))
                 return false;
         }
     }
@@ -354,7 +352,7 @@ static bool into(rm_pass *p, uint32_t v, uint32_t w, bool *ok)
     rm_merge g;
     if (!rm_merge_find(&p->r, v, w, ISM_SP_MAX_DEGREE, &g))
         return false;
-    double x[3] = {P(p, w)[0], P(p, w)[1], P(p, w)[2]};
+    double x[3] = {rm_pos(p, w)[0], rm_pos(p, w)[1], rm_pos(p, w)[2]};
     merged mg;
     enum verdict vd = shapes_ok(p, &g, x, false, &mg) && distances_ok(p, &g, mg.fan, mg.n, x)
                           ? WITHIN
@@ -369,7 +367,7 @@ static bool at_middle(rm_pass *p, uint32_t a, uint32_t b, bool *ok)
 {
     rm_merge g;
     merged mg;
-    const double *A = P(p, a), *B = P(p, b);
+    const double *A = rm_pos(p, a), *B = rm_pos(p, b);
     double len = rm_dist(A, B), x[3], mid[3], gx[3];
     for (int k = 0; k < 3; k++)
         x[k] = mid[k] = 0.5 * (A[k] + B[k]);
