@@ -186,57 +186,71 @@ bool rm_bound_triangle(rm_pass *p, const double *a, const double *b, const doubl
     return rm_bound_distance(p, m, p->max_error) <= p->max_error;
 }
 
-/* The first steps of the points of v's fan with v at x that the memo does not know, taken
- * in one batch (ism_eval_gradient_batch: bit for bit ism_eval_gradient's values, one pass
- * over the tape for all of them) and kept in the memo, where rm_bound_fan_worst's measures
- * find them: the same measures at a third of the cost. A fan's check almost always measures
+/* The points rm_bound_fan_worst measures, in its order: x, then each triangle's centroid
+ * and the midpoint of its edge from v to the next corner; at most room of them (a fan of
+ * more than (room - 1) / 2 triangles: the rest are worked out as they are measured).
+ * Returns how many. */
+static size_t fan_points(const rm_pass *p, uint32_t v, const double *x, double (*q)[3],
+                         size_t room)
+{
+    memcpy(q[0], x, sizeof q[0]);
+    size_t n = 1;
+    for (uint32_t i = 0; i < p->r.count[v] && n + 2 <= room; i++, n += 2) {
+        uint32_t t;
+        int k;
+        rm_fan_point(p, v, i, x, &t, &k, q[n], q[n + 1]);
+    }
+    return n;
+}
+
+/* The first steps of the fan's points q[0..n) that the memo does not know, taken in one
+ * batch (ism_eval_gradient_batch: bit for bit ism_eval_gradient's values, one pass over the
+ * tape for all of them) and kept in the memo, where rm_bound_fan_worst's measures find
+ * them: the same measures at a third of the cost. A fan's check almost always measures
  * every point (chmutov-quartic, own box: 8 in 1,000 relaxation checks stop early), so
  * taking all first steps at once spares more than the points a stop leaves unmeasured
  * cost. Points that share a memo slot are kept as the measures would keep them: the last. */
-static void fan_first_steps(rm_pass *p, uint32_t v, const double *x)
+static void fan_first_steps(rm_pass *p, const double (*q)[3], size_t n)
 {
     double px[RM_FAN_BATCH], py[RM_FAN_BATCH], pz[RM_FAN_BATCH], fv[RM_FAN_BATCH];
     double g[RM_FAN_BATCH][3];
-    size_t n = 0;
-    for (uint32_t i = 0; i <= p->r.count[v] && n + 2 <= RM_FAN_BATCH; i++) {
-        double q[2][3];
-        int nq = 1;
-        if (i == 0)
-            memcpy(q[0], x, sizeof q[0]);
-        else {
-            uint32_t t;
-            int k;
-            rm_fan_point(p, v, i - 1, x, &t, &k, q[0], q[1]);
-            nq = 2;
-        }
-        for (int j = 0; j < nq; j++)
-            if (!rm_memo_known(p->memo, q[j]))
-                px[n] = q[j][0], py[n] = q[j][1], pz[n] = q[j][2], n++;
-    }
-    if (n < 2)
+    size_t m = 0;
+    for (size_t j = 0; j < n; j++)
+        if (!rm_memo_known(p->memo, q[j]))
+            px[m] = q[j][0], py[m] = q[j][1], pz[m] = q[j][2], m++;
+    if (m < 2)
         return; /* one point: the measure's own evaluation costs no more */
-    ism_eval_gradient_batch(p->f, p->ws, px, py, pz, fv, g, n);
-    for (size_t i = 0; i < n; i++) {
-        double q[3] = {px[i], py[i], pz[i]};
-        rm_memo_entry *e = rm_memo_slot(p->memo, q);
+    ism_eval_gradient_batch(p->f, p->ws, px, py, pz, fv, g, m);
+    for (size_t i = 0; i < m; i++) {
+        double y[3] = {px[i], py[i], pz[i]};
+        rm_memo_entry *e = rm_memo_slot(p->memo, y);
         if (e->state == RM_MEMO_EMPTY) {
             memcpy(e->g, g[i], sizeof e->g);
-            first_step_from(p, q, fv[i], e);
+            first_step_from(p, y, fv[i], e);
         }
     }
 }
 
 double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x, double limit, double stop)
 {
-    if (p->memo && p->f->len >= RM_FAN_BATCH_MIN_TAPE)
-        fan_first_steps(p, v, x);
-    double worst = rm_bound_distance(p, x, limit);
-    for (uint32_t i = 0; i < p->r.count[v] && worst <= stop; i++) {
+    /* the points worked out once, for the batch and the measures; without a batch, each
+       as it is measured (a stop leaves the rest unworked) */
+    bool batch = p->memo && p->f->len >= RM_FAN_BATCH_MIN_TAPE;
+    double q[RM_FAN_BATCH][3];
+    size_t n = fan_points(p, v, x, q, batch ? RM_FAN_BATCH : 1);
+    if (batch)
+        fan_first_steps(p, (const double (*)[3])q, n);
+    double worst = -INFINITY;
+    for (size_t j = 0; j < n && worst <= stop; j++) {
+        double d = rm_bound_distance(p, q[j], limit); /* never NaN: no libm fmax call */
+        worst = d > worst ? d : worst;
+    }
+    for (uint32_t i = (uint32_t)(n - 1) / 2; i < p->r.count[v] && worst <= stop; i++) {
         uint32_t t;
         int k;
         double g[3], m[3];
         rm_fan_point(p, v, i, x, &t, &k, g, m);
-        double dg = rm_bound_distance(p, g, limit); /* never NaN: no libm fmax call */
+        double dg = rm_bound_distance(p, g, limit);
         worst = dg > worst ? dg : worst;
         if (worst <= stop) {
             double dm = rm_bound_distance(p, m, limit);
