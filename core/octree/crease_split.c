@@ -340,17 +340,21 @@ static bool fold_within(ism_sampler *s, const double lin[3])
  * 4 such triangles; Steinmetz's corners on x = y, an edge in four triangles). */
 enum { WHOLE_FOLD = 1, WHOLE_FLAT = 2, WHOLE_END = 3 };
 
+/* Is crease point x one of edge p-q's ends, to within CUT_CORNER_SHARE of its length? */
+static bool at_end(const double *p, const double *q, const double x[3])
+{
+    double near = CUT_CORNER_SHARE * ism_dist3(p, q);
+    return !(ism_dist3(x, p) > near) || !(ism_dist3(x, q) > near);
+}
+
 /* Is a mixed edge p-q with crease point x of labels l[0], l[1] (pieces mode) better left
  * whole: WHOLE_FLAT where the pieces meet almost flat at x (CREASE_FLAT_SIN), WHOLE_FOLD where
  * the fold is within the bound at lin (fold_within, lin the point where the pieces' values
- * cross on the edge) across a wedge no sharper than CREASE_FOLD_COS allows; WHOLE_END where x
- * is one of its ends; else 0. */
-static int whole_edge(ism_sampler *s, const double *p, const double *q, const double lin[3],
-                      const double x[3], const label_t l[2])
+ * cross on the edge) across a wedge no sharper than CREASE_FOLD_COS allows; else 0 (x is
+ * not one of its ends: at_end, tested first). */
+static int whole_edge(ism_sampler *s, const double lin[3], const double x[3], const label_t l[2])
 {
-    double v[2], g[2][3], near = CUT_CORNER_SHARE * ism_dist3(p, q);
-    if (!(ism_dist3(x, p) > near) || !(ism_dist3(x, q) > near))
-        return WHOLE_END;
+    double v[2], g[2][3];
     pair_at(s, true, x, l[0], l[1], v, g);
     double aa = ism_dot3(g[0], g[0]), bb = ism_dot3(g[1], g[1]), ab = ism_dot3(g[0], g[1]);
     if (ab > 0 && aa * bb - ab * ab < CREASE_FLAT_SIN * CREASE_FLAT_SIN * aa * bb)
@@ -360,9 +364,12 @@ static int whole_edge(ism_sampler *s, const double *p, const double *q, const do
 
 /* The crease point of edge p-q, whose ends carry labels lp != lq: Newton on lo = hi = 0 from
  * where lo − hi changes sign along the edge (flagged ISM_FP_CREASE; true), or that linear
- * estimate moved onto f = 0 (false). *whole: in pieces mode, nonzero where the edge is better
- * left whole (whole_edge: the crease point on one of its ends, the pieces almost flat there,
- * or the fold within the bound). */
+ * estimate moved onto f = 0 (false). *whole: nonzero where the edge is better left whole:
+ * WHOLE_END where that point is one of its ends (at_end; in either mode, found by Newton or
+ * not: a crease through a corner, as the double torus's on its own box's middle plane x = 1.1,
+ * gives a point a rounding error from it, 1e-16 to 1e-14 off, which a cut would add as a second,
+ * unwelded copy of the corner beside zero-area triangles); in pieces mode also where the
+ * pieces meet almost flat there or the fold is within the bound (whole_edge). */
 static bool crease_point(ism_sampler *s, bool pm, const double *p0, const double *q0,
                          label_t lp, label_t lq, ism_fpoint *out, int *whole)
 {
@@ -390,7 +397,7 @@ static bool crease_point(ism_sampler *s, bool pm, const double *p0, const double
     memcpy(out->p, x, sizeof out->p);
     ism_sample_grad(s, x, out->g);
     out->flags = ok ? ISM_FP_INTERIOR | ISM_FP_CREASE : ISM_FP_INTERIOR;
-    *whole = pm && ok ? whole_edge(s, p, q, lin, x, l) : 0;
+    *whole = at_end(p, q, x) ? WHOLE_END : pm && ok ? whole_edge(s, lin, x, l) : 0;
     return ok;
 }
 
@@ -521,7 +528,7 @@ static bool split_labelled(ism_sampler *s, bool pm, ism_cell_out *out, size_t fi
                  c = out->tris[3 * t + (r + 2) % 3];
         label_t la = br[r], lo = br[(r + 1) % 3];
         ism_fpoint ab, ac;
-        int fab, fac; /* an edge better left whole stays so (pieces mode, whole_edge) */
+        int fab, fac; /* an edge better left whole stays so (crease_point's *whole) */
         crease_point(s, pm, out->verts[a].p, out->verts[b].p, la, lo, &ab, &fab);
         crease_point(s, pm, out->verts[a].p, out->verts[c].p, la, lo, &ac, &fac);
         uint32_t iab, iac, *tri = out->tris + 3 * t;
@@ -775,11 +782,8 @@ bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double
     int whole[CUT_MAX_RUNS];
     for (size_t k = 0; k < nmixed; k++) {
         size_t i = mixed[k], j = (i + 1) % n;
-        const double *p = pts[i].p, *q = pts[j].p;
-        double near = CUT_CORNER_SHARE * ism_dist3(p, q);
-        if (!crease_point(s, pm, p, q, br[i], br[j], &x[k], &whole[k]) ||
-            whole[k] == WHOLE_FLAT || (whole[k] && nmixed == 2) ||
-            !(ism_dist3(x[k].p, p) > near) || !(ism_dist3(x[k].p, q) > near))
+        if (!crease_point(s, pm, pts[i].p, pts[j].p, br[i], br[j], &x[k], &whole[k]) ||
+            whole[k] == WHOLE_FLAT || whole[k] == WHOLE_END || (whole[k] && nmixed == 2))
             return true; /* no crease point found on that edge (or an almost flat one, or a
                             fold across the one crease: its triangles split alone), or a
                             corner on the crease */

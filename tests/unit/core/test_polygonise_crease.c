@@ -10,6 +10,8 @@
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include "core/util/vec3.h"
 #include "poly_fixture.h"
 
 /* Polygonises s at depth 7 in both shifted boxes of base (under sanitizers, ISOMESH_TEST_QUICK,
@@ -299,4 +301,88 @@ Test(crease, three_balls_no_sliver_where_the_pieces_meet)
         ism_mesh_free(&m);
     }
     ism_tape_free(t);
+}
+
+/* Vertex positions ordered by x (then y, z), for nearest_pair. */
+static int by_x(const void *a, const void *b)
+{
+    const double *p = *(const double *const *)a, *q = *(const double *const *)b;
+    for (int k = 0; k < 3; k++)
+        if (p[k] != q[k])
+            return p[k] < q[k] ? -1 : 1;
+    return 0;
+}
+
+/* The distance between the two nearest vertices of m, measured here over the positions alone
+ * (sorted by x: a pair nearer than the best so far differs by less in x); INFINITY for fewer
+ * than two vertices. */
+static double nearest_pair(const ism_mesh *m)
+{
+    const double **p = malloc((m->nverts ? m->nverts : 1) * sizeof *p);
+    cr_assert_not_null(p);
+    for (size_t i = 0; i < m->nverts; i++)
+        p[i] = m->pos + 3 * i;
+    qsort(p, m->nverts, sizeof *p, by_x);
+    double best = INFINITY;
+    for (size_t i = 0; i < m->nverts; i++)
+        for (size_t j = i + 1; j < m->nverts && p[j][0] - p[i][0] < best; j++) {
+            double d = hypot(hypot(p[j][0] - p[i][0], p[j][1] - p[i][1]), p[j][2] - p[i][2]);
+            best = d < best ? d : best;
+        }
+    free(p);
+    return best;
+}
+
+/* Two vertices of a raw mesh nearer than this × the box diagonal are one point written twice:
+ * a vertex's rounding is 1e-16 of its coordinates, the copies the crease cut made 1e-16 to
+ * 1.4e-14 apart (the double torus's own box), while the nearest distinct vertices of the
+ * meshes below are 8.0e-6 / 1.5e-6 / 5.4e-6 of the diagonal apart in the own / 1e-3 / irr
+ * boxes (two edge roots beside one grid corner). */
+#define ONE_POINT_REL 1e-9
+
+/* A crease in a lattice plane is cut at each crease point once. Under the default bound
+ * (1e-3 × the box diagonal) a triangle with corners on both branches of f's top min is cut at
+ * its mixed edges' crease points (crease_split.c); where the crease lies in a lattice plane
+ * its edge roots there are crease points already, and Newton's crease point on an edge from
+ * such a corner landed 1e-16 to 1e-14 beside it: a second vertex the exact weld kept apart,
+ * with zero-area triangles between the copies (the double torus in its own box, whose tori
+ * meet in x = 1.1, the middle plane: 1.1 − (−1.8) = 5.8 / 2; 392 such pairs, 498 zero-area
+ * triangles; in the irrational box 17 pairs where edge roots fell within rounding of the
+ * crease). Three placements (own: the crease in a lattice plane by construction; 1e-3, irr:
+ * beside it): no two vertices nearer than ONE_POINT_REL × the diagonal, and still closed with
+ * the solid's χ. (Two balls meeting in a lattice plane, min((x + 0.2)² + y² + z² − 0.5,
+ * (x − 0.8)² + y² + z² − 0.5) in the box x ∈ [−1.2, 1.8], never showed it: Newton's steps
+ * from such a corner stay below the rounding of its coordinates there.) */
+static void check_one_vertex_per_point(const char *expr, const double base[6], int depth,
+                                       long euler)
+{
+    const pf_surface s = {expr, NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    for (int w = pf_first_box() - 1; w < 2; w++) {
+        ism_poly_options o;
+        pf_options(&o, base, 3, depth);
+        pf_sweep_box(base, depth, w, o.box);
+        o.max_error = pf_default_error(o.box);
+        ism_mesh m;
+        ism_poly_stats st;
+        pf_run_options(t, &o, &m, &st);
+        double near = nearest_pair(&m), diag = ism_box_diagonal(o.box);
+        cr_expect_geq(near, ONE_POINT_REL * diag, "%s, placement %d: two vertices %g apart "
+                      "(%g of the diagonal)", expr, w, near, near / diag);
+        pf_props p;
+        pf_measure(&m, t, &p);
+        cr_expect_eq(p.boundary_edges + p.nonmanifold_edges, 0, "%s, placement %d: not closed",
+                     expr, w);
+        cr_expect_eq(p.euler, euler, "%s, placement %d: χ %ld", expr, w, p.euler);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
+
+Test(crease, double_torus_one_vertex_per_crease_point)
+{
+    const double box[6] = {-1.8, -1.8, -0.8, 4, 1.8, 0.8};
+    check_one_vertex_per_point("min((x^2 + y^2 + z^2 + 0.75)^2 - 4*(x^2 + y^2), "
+                               "((x - 2.2)^2 + y^2 + z^2 + 0.75)^2 - 4*((x - 2.2)^2 + y^2))",
+                               box, 7, -2);
 }
