@@ -151,16 +151,6 @@ bool rm_merge_distance_ok(rm_pass *p, const rm_merge *g)
                     : rm_midpoint_within(p, new_m);
 }
 
-static double mean_edge(const rm_pass *p, uint32_t v, const uint32_t *nb, uint32_t n);
-
-/* Whether v and w are one point (ISM_RM_HAIR_REL of v's mean edge apart). */
-static bool hair(const rm_pass *p, uint32_t v, uint32_t w)
-{
-    uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE];
-    uint32_t n = (uint32_t)rm_merge_neighbours(&p->r, v, nb);
-    return rm_dist(rm_pos(p, v), rm_pos(p, w)) <= ISM_RM_HAIR_REL * mean_edge(p, v, nb, n);
-}
-
 /* Every test of merging g->v into g->w; g->after gets the new fan's smallest sine. The
  * smallest angle must grow, and no more triangles be poor (under ISM_RM_COLLAPSE_DEG) than
  * before: a needle traded for two thin triangles is no gain. */
@@ -169,10 +159,6 @@ static bool merge_ok(rm_pass *p, rm_merge *g)
     const rm_mesh *r = &p->r;
     if (!rm_merge_link_ok(r, g))
         return false;
-    if (hair(p, g->v, g->w)) {
-        g->after = 0; /* one point twice: nothing moves that a test could measure */
-        return true;
-    }
     rm_fan f;
     rm_fan_measure(p, g->v, &f);
     double poor = rm_collapse_poor();

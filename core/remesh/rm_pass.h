@@ -60,14 +60,6 @@
  * edges at v, 0.1 left 246 / 245 / 335 needles in bench_remesh's boxes, 0.25 240 / 239 /
  * 321). */
 #define ISM_RM_CROWD 0.25
-/* Two vertices nearer than this × the merged one's mean edge are one point: the
- * polygoniser's crease points where a crease lies on a cell face come twice, 1e-16 to 1e-14
- * apart (double-torus in its own box: its tori meet on x = 1.1, the grid's middle plane, and
- * their zero-area triangles have no normal for a merge's tests to measure). A merge moves
- * its triangles by that much, a billionth of their edges: it is taken on the link condition
- * alone (rm_collapse.c merge_ok), far above rounding (1e-12 of an edge) and far below the
- * nearest distinct crease points (the gyroid ball's 2e-3 of a cell). */
-#define ISM_RM_HAIR_REL 1e-9
 /* A vertex slid along a curve (rm_slide.c's box boundaries, rm_crease_slide.c's creases)
  * is refused outside this fraction of the span between its two neighbours on the curve
  * (measured along their chord): the curve stays in order with room to spare. */

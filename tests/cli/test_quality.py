@@ -400,10 +400,11 @@ class GoalsUnderTheDefaultBound(unittest.TestCase):
                # mending's collapses, which ask grad f's curvature (remesh.c), take it alone
                "cusp-a2": ([-1, -1, -1, 1, 1, 1], 7),
                # two tori's union, creased where they meet on x = 1.1: in its own box that is
-               # the grid's middle plane, where the polygoniser puts each crease point twice,
+               # the grid's middle plane, where the polygoniser put each crease point twice,
                # 1e-15 apart; 12 zero-area triangles (0.0000 degrees) stayed while the merges
-               # measured their missing normals (core/remesh/rm_collapse.c merge_ok: one point
-               # twice merges on the link condition alone)
+               # measured their missing normals (the crease cut makes one vertex per point
+               # since: core/octree/crease_split.c at_end; the raw mesh's own test is
+               # test_polygonise_crease.c double_torus_one_vertex_per_crease_point)
                "double-torus": ([-1.8, -1.8, -0.8, 4, 1.8, 0.8], 7)}
     SMOOTH_DEG = GOAL_DEG
     SINGULAR_DEG = 10.0
