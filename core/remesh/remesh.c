@@ -287,6 +287,11 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
            under 10° in its own / 1e-3 / 0.37-cell boxes -> 0, kummer-16 0.37-cell 16 -> 1 */
         if (ok && !stopped(o))
             mend_needles(&p, true, &ok);
+        /* needles among crowded crease points, where three or more sheets meet and beside:
+           no single merge passes there, the whole cluster collapses into one of its vertices
+           (rm_junction.c) */
+        if (ok && !stopped(o) && p.may_crease && p.poorest < rm_insert_poor())
+            rm_junction_collapse(&p, &ok);
         /* what no mending could shape, thin tubes ending at a given point: merged into it */
         if (ok && !stopped(o))
             rm_horn_tips(&p, o, &ok);

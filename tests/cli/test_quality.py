@@ -448,6 +448,63 @@ class GoalsUnderTheDefaultBound(unittest.TestCase):
                     self.assertGreater(free, 0.8 * len(tris))
 
 
+def three_balls_triple_points():
+    """Where the three spheres of `three-balls` (proto/presets.c: radius^2 0.5 around (0.6, 0,
+    0), (-0.3, +-0.52, 0)) meet: the second minus the third gives y = 0, the first minus the
+    second -1.8 x = 0.52^2 - 0.6^2 + 0.3^2, then z from the first."""
+    x = (0.6 ** 2 - 0.3 ** 2 - 0.52 ** 2) / 1.8
+    z = math.sqrt(0.5 - (x - 0.6) ** 2)
+    return [(x, 0.0, z), (x, 0.0, -z)]
+
+
+class CreaseJunctions(unittest.TestCase):
+    """Where three crease sheets meet — the triple points of three balls, a cube's corners (the
+    cube minus a ball of radius 1.3 keeps them: they lie at sqrt 3) — --quality good under the
+    default bound leaves no triangle under 10 degrees within JUNCTION_BALL of the point, and
+    the raw mesh's vertex there (the polygoniser puts one within 1e-8) stays. The points come
+    from the closed forms here. The polygoniser crowds locked crease vertices about them (7
+    within 7.4e-4 of three-balls' lower triple point in the 1e-3 box, edges down to 5.6e-5),
+    whose needles no single merge mends: before core/remesh/rm_junction.c collapsed the
+    whole crowd, three-balls had 2 / 6 / 0 needles there in the own / 1e-3 / irr boxes (down
+    to 1.88 degrees), the cube and the cube minus a ball 0 / 0 / 2 (5.09 degrees)."""
+
+    PRESETS = {"three-balls": ([-1.5, -1.5, -1.5, 1.5, 1.5, 1.5], 7),
+               "cube": ([-1.3, -1.3, -1.3, 1.3, 1.3, 1.3], 7),
+               "cube-minus-ball": ([-1.3, -1.3, -1.3, 1.3, 1.3, 1.3], 7)}
+    JUNCTION_BALL = 0.01  # one to two of the mesh's edges there (5e-3 to 1e-2)
+    CORNERS = [(x, y, z) for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)]
+    # junctions whose vertex the pass's earlier merges (core/remesh/rm_collapse.c's merges
+    # along a crease) took away before rm_junction.c looks, as on fa46e70: the upper triple
+    # point in three-balls' own box (the nearest vertex 4.2e-3 away), the corner (1, -1, -1)
+    # in the cube's irrational box (6.8e-4); there only a vertex within E is asked
+    MERGED_BEFORE = {("three-balls", 0, 0), ("cube", 2, 4), ("cube-minus-ball", 2, 4)}
+
+    def test_no_needle_at_a_junction_and_its_vertex_kept(self):
+        for preset, (box0, depth) in self.PRESETS.items():
+            cell = tuple((box0[a + 3] - box0[a]) / 2 ** depth for a in range(3))
+            points = three_balls_triple_points() if preset == "three-balls" else self.CORNERS
+            boxes = placements(box0, cell)  # (QUICK: the irrational one alone)
+            for b, box in zip(range(3 - len(boxes), 3), boxes):
+                with self.subTest(preset=preset, box=box):
+                    diag = math.dist(box[:3], box[3:])
+                    e = 1e-3 * diag
+                    verts, tris, _ = run_surface(preset, box, "good",
+                                                 ("--max-error", repr(e), "--threads", "2"),
+                                                 depth=None)
+                    needles = []
+                    for i, q in enumerate(points):
+                        near = min(math.dist(v, q) for v in verts)
+                        lost = (preset, b, i) in self.MERGED_BEFORE
+                        self.assertLess(near, e if lost else 1e-8 * diag, q)
+                        for t in tris:
+                            c = [verts[k] for k in t]
+                            if any(math.dist(v, q) < self.JUNCTION_BALL for v in c):
+                                a = min_angle_deg(*c)
+                                if a < GoalsUnderTheDefaultBound.SINGULAR_DEG:
+                                    needles.append((q, round(a, 2)))
+                    self.assertEqual(needles, [])
+
+
 class ZipBesideTheDoubleLines(unittest.TestCase):
     """The raw mesh beside the planes' double lines (x y = 0, x y z = 0; no --quality), in each
     preset's own box and the two shifted ones (boxes.py). Where the octree stays coarse beside

@@ -1,0 +1,498 @@
+/* rm_junction.c — needles where three or more crease sheets meet (a cube's corner, the triple
+ * points of three balls), collapsed as one cluster (rm_junction_collapse, after the quality
+ * pass's last mending). The polygoniser puts a locked vertex on such a point and others on
+ * each crease around it, as close as 6e-5 where the cells are 6e-3; the needles between them
+ * survive every single merge (each re-fans neighbours that are themselves 1e-4 triangles, or
+ * fails the link condition across a corner's three-triangle cap): junction22's trial on the
+ * pass's output found that only collapsing the whole cluster into one of its vertices leaves
+ * good triangles (17.8°-23.4°, none under 10°).
+ *
+ * A cluster grows from a needle's edge between two locked vertices, the vertex nearest that
+ * edge's middle joining first: a locked neighbour of the cluster, or a vertex off it that its
+ * rim passes twice or not at all (the cluster wraps round it), within ISM_RM_JUNCTION_REACH
+ * of the longest edge at the seed's ends; each cluster so grown, up to ISM_RM_JUNCTION_MAX
+ * vertices, is tried when the ∇f normals at its rim fall into two sheets or more. Two are
+ * enough: beside the junction the crowd runs on along each crease (three-balls' own box: a
+ * 6.89° needle from the lower triple point's crowd to two locked vertices 2.9e-3 apart
+ * astride the first two balls' crease, 1.6e-2 out, which single merges refused too, and
+ * whose collapse lets the triple point's own then keep its vertex); with three or more the
+ * member nearest where the sheets' tangent planes meet, the junction's vertex, is the
+ * target whenever it leaves no needle (it keeps the point; junction22's trial found the
+ * best target elsewhere at times). A collapse renames every cluster vertex to one locked
+ * target among them (it keeps its place, on its creases) and drops the triangles with two
+ * corners or more in the cluster; it is taken only when the triangles touching the cluster
+ * were a disc of one label, its inner edges on no caller's locked list (the curves stage's
+ * creases stay as cut), whose rim is one cycle that each new triangle spans once (a disc
+ * for a disc: χ, components, cones and boundaries kept exactly), every new triangle lies
+ * within ISM_RM_COLLAPSE_MAX_TURN_DEG of its own sheet's normal (∇f at one of its outer
+ * corners, not its old normal: the cluster's triangles are 1e-4 across and their normals
+ * noise), bends against its outer neighbour no more than the crease angle, than it did plus
+ * ISM_RM_CROWD_BEND_DEG, or than f's curvature explains (rm_bend_is_curvature), makes no
+ * crease through a free vertex, raises the star's smallest angle, and puts no new centroid
+ * or midpoint farther from f = 0 than the farthest there before or in the mesh as found
+ * (rm_merge_distance_ok's rule). Of the clusters and targets that pass, the one with the
+ * largest smallest angle is taken. */
+#include "core/remesh/rm_merge.h"
+#include "core/remesh/rm_pass.h"
+#include "core/util/vec3.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* A cluster reaches at most this × the longest edge at the needle's short edge's ends from
+ * that edge's middle: those edges run out of the crowd to the ring around the junction, about
+ * a cell (6e-3 on three-balls, 1e-2 on the cube), where the clusters measured 7.4e-4 and
+ * 2.4e-3 across (junction22); a locked vertex farther out is a crease point of the ring,
+ * which the ring's triangles need. */
+#define ISM_RM_JUNCTION_REACH 0.5
+/* At most this many vertices in a cluster (three-balls' measured 7, the cube's corner 4). */
+#define ISM_RM_JUNCTION_MAX 12
+/* The triangles touching a cluster, at most this many (the cluster's fans: each of its
+ * vertices has about 6; its rim, the target's fan after, at most ISM_RM_COLLAPSE_MAX_DEGREE). */
+#define ISM_RM_JUNCTION_STAR 96
+
+/* A cluster, its star (the triangles with a corner in it) and what a collapse into a target
+ * would make of it. */
+typedef struct junction {
+    uint32_t v[ISM_RM_JUNCTION_MAX];
+    int n;
+    uint32_t star[ISM_RM_JUNCTION_STAR];
+    int nstar;
+    uint32_t keep[ISM_RM_COLLAPSE_MAX_DEGREE]; /* the star's triangles with one corner in it */
+    int nkeep;
+} junction;
+
+static bool in_cluster(const junction *j, uint32_t x)
+{
+    for (int i = 0; i < j->n; i++)
+        if (j->v[i] == x)
+            return true;
+    return false;
+}
+
+/* Corners of triangle t in the cluster. */
+static int inside(const rm_pass *p, const junction *j, uint32_t t)
+{
+    const uint32_t *c = p->r.m->tri + 3 * (size_t)t;
+    return in_cluster(j, c[0]) + in_cluster(j, c[1]) + in_cluster(j, c[2]);
+}
+
+/* The star of the cluster into j (false when larger than ISM_RM_JUNCTION_STAR). */
+static bool gather_star(const rm_pass *p, junction *j)
+{
+    const rm_mesh *r = &p->r;
+    j->nstar = 0;
+    for (int i = 0; i < j->n; i++)
+        for (uint32_t s = 0; s < r->count[j->v[i]]; s++) {
+            uint32_t t = rm_slot(r, j->v[i], s);
+            bool have = false;
+            for (int k = 0; k < j->nstar && !have; k++)
+                have = j->star[k] == t;
+            if (have)
+                continue;
+            if (j->nstar == ISM_RM_JUNCTION_STAR)
+                return false;
+            j->star[j->nstar++] = t;
+        }
+    return true;
+}
+
+/* The corner after / before x in triangle t. */
+static uint32_t next_of(const ism_mesh *m, uint32_t t, uint32_t x)
+{
+    return m->tri[3 * (size_t)t + (rm_corner(m, t, x) + 1) % 3];
+}
+
+/* The triangles touching the cluster are one disc of one label, its inner edges oriented
+ * manifold and on no locked list, whose rim (the outer edges of the triangles with one corner
+ * in the cluster) is a single cycle: renaming the cluster to one vertex then gives a cone
+ * over that cycle, a disc for a disc. j->keep gets the cone's triangles. */
+static bool disc_ok(const rm_pass *p, junction *j)
+{
+    const rm_mesh *r = &p->r;
+    const ism_mesh *m = r->m;
+    j->nkeep = 0;
+    uint32_t label = rm_label(r, j->star[0]);
+    uint64_t edge[3 * ISM_RM_JUNCTION_STAR];
+    uint32_t rim[3 * ISM_RM_JUNCTION_STAR];
+    int ne = 0, nrim = 0;
+    for (int i = 0; i < j->nstar; i++) {
+        uint32_t t = j->star[i];
+        const uint32_t *c = m->tri + 3 * (size_t)t;
+        if (rm_label(r, t) != label)
+            return false;
+        if (inside(p, j, t) == 1) {
+            if (j->nkeep == ISM_RM_COLLAPSE_MAX_DEGREE)
+                return false;
+            j->keep[j->nkeep++] = t;
+        }
+        for (int k = 0; k < 3; k++) {
+            uint32_t a = c[k], b = c[(k + 1) % 3], two[2];
+            int n, h = 0;
+            if (in_cluster(j, a) || in_cluster(j, b)) { /* an inner edge */
+                if (!rm_edge_triangles(r, a, b, two, &n) || rm_edge_locked(r, a, b))
+                    return false;
+            }
+            uint64_t key = rm_edge_key(a, b);
+            while (h < ne && edge[h] != key)
+                h++;
+            if (h == ne)
+                edge[ne++] = key;
+            h = 0;
+            while (!in_cluster(j, a) && h < nrim && rim[h] != a)
+                h++;
+            if (!in_cluster(j, a) && h == nrim)
+                rim[nrim++] = a;
+        }
+    }
+    /* χ of the star (its vertices: the cluster's and the rim's) is a disc's, and every vertex
+       off the cluster is on the rim: one per cone triangle */
+    if (j->n + nrim - ne + j->nstar != 1 || nrim != j->nkeep || j->nkeep < 3)
+        return false;
+    /* the rim: each cone triangle's outer edge a -> b; one cycle through nkeep distinct
+       vertices */
+    uint32_t from[ISM_RM_COLLAPSE_MAX_DEGREE], to[ISM_RM_COLLAPSE_MAX_DEGREE];
+    for (int i = 0; i < j->nkeep; i++) {
+        uint32_t t = j->keep[i], s = UINT32_MAX;
+        const uint32_t *c = m->tri + 3 * (size_t)t;
+        for (int k = 0; k < 3; k++)
+            if (in_cluster(j, c[k]))
+                s = c[k];
+        from[i] = next_of(m, t, s);
+        to[i] = next_of(m, t, from[i]);
+        for (int k = 0; k < i; k++)
+            if (from[k] == from[i] || to[k] == to[i])
+                return false;
+    }
+    int i = 0, steps = 0;
+    do {
+        int k = 0;
+        while (k < j->nkeep && from[k] != to[i])
+            k++;
+        if (k == j->nkeep)
+            return false;
+        i = k;
+        steps++;
+    } while (i != 0 && steps <= j->nkeep);
+    return steps == j->nkeep;
+}
+
+/* How many sheets the ∇f normals at the rim fall into (groups more than the crease angle
+ * apart: on a single crease two, at a junction three or more); with three or more, x gets
+ * the point where the first three's tangent planes (each through its first rim vertex)
+ * meet: the junction, up to the sheets' curvature over the rim's reach (three-balls: about
+ * 3e-5 against the cluster's 7e-4). */
+static int sheets(const rm_pass *p, const junction *j, double x[3])
+{
+    const double *g[ISM_RM_COLLAPSE_MAX_DEGREE];
+    double d[ISM_RM_COLLAPSE_MAX_DEGREE];
+    int groups = 0;
+    double near = cos(ISM_RM_CREASE_DEG * M_PI / 180);
+    for (int i = 0; i < j->nkeep; i++) {
+        const uint32_t *c = p->r.m->tri + 3 * (size_t)j->keep[i];
+        for (int k = 0; k < 3; k++) {
+            if (in_cluster(j, c[k]) || rm_normal_zero(p, c[k]))
+                continue;
+            const double *n = p->normal + 3 * (size_t)c[k];
+            int h = 0;
+            while (h < groups && !(ism_dot3(g[h], n) >= near))
+                h++;
+            if (h == groups && groups < ISM_RM_COLLAPSE_MAX_DEGREE)
+                d[groups] = ism_dot3(n, rm_pos(p, c[k])), g[groups++] = n;
+        }
+    }
+    if (groups < 3)
+        return groups;
+    double c12[3], c23[3], c31[3];
+    ism_cross3(g[1], g[2], c23);
+    ism_cross3(g[2], g[0], c31);
+    ism_cross3(g[0], g[1], c12);
+    double det = ism_dot3(g[0], c23);
+    for (int k = 0; k < 3; k++)
+        x[k] = det != 0 ? (d[0] * c23[k] + d[1] * c31[k] + d[2] * c12[k]) / det : NAN;
+    return groups;
+}
+
+/* cos of the angle between normals n (length ln) and m (lm); -1 when either vanishes. */
+static double cos_between(const double *n, double ln, const double *m, double lm)
+{
+    return ln > 0 && lm > 0 ? ism_dot3(n, m) / (ln * lm) : -1;
+}
+
+/* Cone triangle t (its cluster corner s read at w's place: corners q; at s's own: o, outer
+ * corners a -> b) faces its own sheet (∇f at a or b within ISM_RM_COLLAPSE_MAX_TURN_DEG) and
+ * bends against the triangle across ab no more than the crease angle, than it did plus
+ * ISM_RM_CROWD_BEND_DEG, or than f's curvature explains. n gets its normal (length *ln). */
+static bool cone_tri_ok(const rm_pass *p, uint32_t t, uint32_t a, uint32_t b,
+                        const double *q[3], const double *o[3], double n[3], double *ln)
+{
+    double m[3], u[3];
+    *ln = rm_cross(q[0], q[1], q[2], n);
+    double lo = rm_cross(o[0], o[1], o[2], m);
+    const double *ga = p->normal + 3 * (size_t)a, *gb = p->normal + 3 * (size_t)b;
+    double turn = cos(ISM_RM_COLLAPSE_MAX_TURN_DEG * M_PI / 180);
+    if (!(*ln > 0) || !(fmax(cos_between(n, *ln, ga, 1), cos_between(n, *ln, gb, 1)) > turn))
+        return false;
+    uint32_t s = rm_merge_across(&p->r, a, b, t);
+    if (s == UINT32_MAX)
+        return true; /* not manifold: no bend to measure */
+    const uint32_t *z = p->r.m->tri + 3 * (size_t)s;
+    double lu = rm_cross(rm_pos(p, z[0]), rm_pos(p, z[1]), rm_pos(p, z[2]), u);
+    double now = cos_between(n, *ln, u, lu), before = cos_between(m, lo, u, lu);
+    before = cos(fmin(M_PI, acos(fmax(-1, fmin(1, before))) + ISM_RM_CROWD_BEND_DEG * M_PI / 180));
+    if (now >= fmin(before, cos(ISM_RM_CREASE_DEG * M_PI / 180)))
+        return true;
+    double ab = rm_dist(rm_pos(p, a), rm_pos(p, b));
+    return ab > 0 &&
+           rm_bend_is_curvature(p, a, b, acos(fmax(-1, fmin(1, now))), (*ln + lu) / ab, NULL);
+}
+
+/* The cluster corner of cone triangle t. */
+static uint32_t cluster_corner(const rm_pass *p, const junction *j, uint32_t t)
+{
+    const uint32_t *c = p->r.m->tri + 3 * (size_t)t;
+    return in_cluster(j, c[0]) ? c[0] : in_cluster(j, c[1]) ? c[1] : c[2];
+}
+
+/* The smallest sine of the cone over the rim with apex w (a cluster vertex), or -1 when a
+ * cone triangle fails cone_tri_ok, an edge w -> x to a free x bends past the crease angle
+ * (and f's curvature does not explain it), or a new centroid or midpoint lies farther from
+ * f = 0 than the farthest of the star's before and of the mesh as found. */
+static double cone_score(rm_pass *p, const junction *j, uint32_t w)
+{
+    const ism_mesh *m = p->r.m;
+    const double *x = rm_pos(p, w);
+    double n[ISM_RM_COLLAPSE_MAX_DEGREE][3], ln[ISM_RM_COLLAPSE_MAX_DEGREE];
+    uint32_t from[ISM_RM_COLLAPSE_MAX_DEGREE];
+    double score = INFINITY, new_c = 0, new_m = 0;
+    for (int i = 0; i < j->nkeep; i++) {
+        uint32_t t = j->keep[i], s = cluster_corner(p, j, t);
+        uint32_t a = next_of(m, t, s), b = next_of(m, t, a);
+        const double *q[3], *o[3];
+        rm_merge_corners(&p->r, t, s, x, q);
+        rm_merge_corners(&p->r, t, s, rm_pos(p, s), o);
+        if (!cone_tri_ok(p, t, a, b, q, o, n[i], &ln[i]))
+            return -1;
+        score = fmin(score, rm_min_sine(q[0], q[1], q[2]));
+        from[i] = a;
+        new_c = fmax(new_c, rm_centroid_distance(p, q[0], q[1], q[2]));
+        new_m = fmax(new_m, rm_midpoint_distance(p, x, rm_pos(p, a)));
+    }
+    /* the edges w -> x: between the cone triangle leaving x (from) and the one arriving */
+    for (int i = 0; i < j->nkeep; i++) {
+        uint32_t t = j->keep[i], s = cluster_corner(p, j, t);
+        uint32_t b = next_of(m, t, next_of(m, t, s));
+        int k = 0;
+        while (k < j->nkeep && from[k] != b)
+            k++;
+        if (k == j->nkeep || p->r.locked[b])
+            continue; /* a crease leaves w toward a locked x: it bends as it must */
+        double c = cos_between(n[i], ln[i], n[k], ln[k]);
+        double wb = rm_dist(x, rm_pos(p, b));
+        if (!(c >= cos(ISM_RM_CREASE_DEG * M_PI / 180)) &&
+            !(wb > 0 && rm_bend_is_curvature(p, w, b, acos(fmax(-1, fmin(1, c))),
+                                             (ln[i] + ln[k]) / wb, NULL)))
+            return -1;
+    }
+    double old_c = 0, old_m = 0;
+    for (int i = 0; i < j->nstar; i++) {
+        const uint32_t *c = m->tri + 3 * (size_t)j->star[i];
+        const double *q[3] = {rm_pos(p, c[0]), rm_pos(p, c[1]), rm_pos(p, c[2])};
+        old_c = fmax(old_c, rm_centroid_distance(p, q[0], q[1], q[2]));
+        for (int k = 0; k < 3; k++)
+            if (in_cluster(j, c[k]))
+                old_m = fmax(old_m, rm_midpoint_distance(p, q[k], q[(k + 1) % 3]));
+    }
+    rm_collapse_bounds_need(p);
+    if (!(new_c <= fmax(old_c, p->centroid_bound)) ||
+        !(new_m <= old_m || rm_midpoint_within(p, new_m)))
+        return -1;
+    return score;
+}
+
+/* The smallest sine of the star's triangles now. */
+static double star_sine(rm_pass *p, const junction *j)
+{
+    double s = INFINITY;
+    for (int i = 0; i < j->nstar; i++)
+        s = fmin(s, rm_tri_sine(p, j->star[i]));
+    return s;
+}
+
+/* Renames the cluster to w: the star's triangles with two corners or more in it die, the
+ * cone's take w, the others are gone. False when out of memory (nothing changed). */
+static bool collapse(rm_pass *p, const junction *j, uint32_t w)
+{
+    rm_mesh *r = &p->r;
+    if (!rm_slot_reserve(r, w, (uint32_t)j->nkeep))
+        return false;
+    for (int i = 0; i < j->nstar; i++) {
+        uint32_t t = j->star[i];
+        uint32_t *c = r->m->tri + 3 * (size_t)t;
+        for (int k = 0; k < 3; k++)
+            if (!in_cluster(j, c[k]) && inside(p, j, t) > 1)
+                rm_slot_remove(r, c[k], t);
+        if (inside(p, j, t) > 1)
+            r->dead[t] = 1;
+    }
+    for (int i = 0; i < j->n; i++)
+        r->count[j->v[i]] = 0;
+    for (int i = 0; i < j->nkeep; i++) {
+        uint32_t t = j->keep[i], *c = r->m->tri + 3 * (size_t)t;
+        c[rm_corner(r->m, t, cluster_corner(p, j, t))] = w;
+        rm_slot_add(r, w, t);
+        rm_shape_changed(p, t);
+        for (int k = 0; k < 3; k++)
+            p->active[c[k]] = 1, p->touched[c[k]] = 2;
+    }
+    for (int i = 0; i < j->n; i++) {
+        uint32_t v = j->v[i];
+        if (v != w)
+            r->gone[v] = r->locked[v] = 1, p->active[v] = p->slide[v] = 0;
+    }
+    if (p->crease_tried)
+        p->crease_tried[w] = NAN;
+    return true;
+}
+
+/* The vertex off the cluster nearest c that the rim does not pass exactly once (the cluster
+ * wraps round it, and a collapse would pinch the surface there or leave it inside), or
+ * UINT32_MAX. */
+static uint32_t pinched(const rm_pass *p, const junction *j, const double *c)
+{
+    const ism_mesh *m = p->r.m;
+    uint32_t x[3 * ISM_RM_JUNCTION_STAR], best = UINT32_MAX;
+    int times[3 * ISM_RM_JUNCTION_STAR], n = 0;
+    for (int i = 0; i < j->nstar; i++) {
+        uint32_t t = j->star[i];
+        for (int k = 0; k < 3; k++) {
+            uint32_t y = m->tri[3 * (size_t)t + k];
+            if (in_cluster(j, y))
+                continue;
+            int h = 0;
+            while (h < n && x[h] != y)
+                h++;
+            if (h == n)
+                x[n] = y, times[n++] = 0;
+            /* the rim leaves y in a triangle with one corner in the cluster, after it */
+            times[h] += inside(p, j, t) == 1 && next_of(m, t, cluster_corner(p, j, t)) == y;
+        }
+    }
+    for (int h = 0; h < n; h++)
+        if (times[h] != 1 &&
+            (best == UINT32_MAX || rm_dist(rm_pos(p, x[h]), c) < rm_dist(rm_pos(p, best), c)))
+            best = x[h];
+    return best;
+}
+
+/* The nearest locked, unpinned neighbour of the cluster to c within reach, or UINT32_MAX. */
+static uint32_t nearest_locked(const rm_pass *p, const junction *j, const double *c,
+                               double reach)
+{
+    const rm_mesh *r = &p->r;
+    uint32_t best = UINT32_MAX;
+    double bd = reach;
+    for (int i = 0; i < j->n; i++)
+        for (uint32_t s = 0; s < r->count[j->v[i]]; s++) {
+            const uint32_t *t = r->m->tri + 3 * (size_t)rm_slot(r, j->v[i], s);
+            for (int k = 0; k < 3; k++) {
+                uint32_t x = t[k];
+                double d = rm_dist(rm_pos(p, x), c);
+                if (r->locked[x] && r->locked[x] != RM_PINNED && !r->gone[x] &&
+                    !in_cluster(j, x) && d <= bd)
+                    bd = d, best = x;
+            }
+        }
+    return best;
+}
+
+/* The longest edge at v: out of a crowd at a junction to the ring around it, about a cell. */
+static double longest_edge(const rm_pass *p, uint32_t v)
+{
+    double l = 0;
+    for (uint32_t i = 0; i < p->r.count[v]; i++) {
+        const uint32_t *t = p->r.m->tri + 3 * (size_t)rm_slot(&p->r, v, i);
+        for (int k = 0; k < 3; k++)
+            l = fmax(l, rm_dist(rm_pos(p, v), rm_pos(p, t[k])));
+    }
+    return l;
+}
+
+/* Grows clusters from needle t's shortest edge between two locked vertices and collapses
+ * the best that passes (into *best's target); true when one was. *ok false when out of
+ * memory. */
+static bool mend_junction(rm_pass *p, uint32_t t, bool *ok)
+{
+    const rm_mesh *r = &p->r;
+    const uint32_t *c = r->m->tri + 3 * (size_t)t;
+    int e = -1;
+    double shortest = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        uint32_t a = c[k], b = c[(k + 1) % 3];
+        double l = rm_dist(rm_pos(p, a), rm_pos(p, b));
+        if (r->locked[a] && r->locked[b] && r->locked[a] != RM_PINNED &&
+            r->locked[b] != RM_PINNED && l < shortest)
+            shortest = l, e = k;
+    }
+    if (e < 0)
+        return false;
+    junction j = {.v = {c[e], c[(e + 1) % 3]}, .n = 2}, best;
+    double mid[3], best_key = -1;
+    double reach = ISM_RM_JUNCTION_REACH * fmax(longest_edge(p, j.v[0]), longest_edge(p, j.v[1]));
+    double needle = rm_insert_poor();
+    uint32_t target = UINT32_MAX;
+    for (int k = 0; k < 3; k++)
+        mid[k] = (rm_pos(p, j.v[0])[k] + rm_pos(p, j.v[1])[k]) / 2;
+    for (;;) {
+        double x[3];
+        int ns = gather_star(p, &j) && disc_ok(p, &j) ? sheets(p, &j, x) : 0;
+        if (ns >= 2) {
+            double floor = star_sine(p, &j);
+            int at = ns >= 3 ? 0 : -1; /* the junction's vertex: the member nearest where the
+                                          sheets meet */
+            for (int i = 1; at >= 0 && i < j.n; i++)
+                if (rm_dist(rm_pos(p, j.v[i]), x) < rm_dist(rm_pos(p, j.v[at]), x))
+                    at = i;
+            for (int i = 0; i < j.n; i++) {
+                if (!r->locked[j.v[i]])
+                    continue; /* a free vertex the cluster wrapped round is on no crease */
+                double s = cone_score(p, &j, j.v[i]);
+                /* the junction's vertex keeps the point where the sheets meet: taken
+                   whenever it leaves no needle, otherwise the best target */
+                double key = s + (i == at && s >= needle ? 2 : 0);
+                if (s > floor && key > best_key)
+                    best_key = key, best = j, target = j.v[i];
+            }
+        }
+        if (j.n == ISM_RM_JUNCTION_MAX)
+            break;
+        /* the nearer of a vertex the cluster wraps round (locked or not: it lies inside) and
+           the nearest locked neighbour */
+        uint32_t y = j.nstar ? pinched(p, &j, mid) : UINT32_MAX;
+        uint32_t z = nearest_locked(p, &j, mid, reach);
+        if (y == UINT32_MAX || r->locked[y] == RM_PINNED || rm_dist(rm_pos(p, y), mid) > reach ||
+            (z != UINT32_MAX && rm_dist(rm_pos(p, z), mid) < rm_dist(rm_pos(p, y), mid)))
+            y = z;
+        if (y == UINT32_MAX)
+            break;
+        j.v[j.n++] = y;
+    }
+    if (target == UINT32_MAX)
+        return false;
+    *ok = collapse(p, &best, target);
+    return *ok;
+}
+
+size_t rm_junction_collapse(rm_pass *p, bool *ok)
+{
+    const ism_mesh *m = p->r.m;
+    double needle = rm_insert_poor();
+    size_t made = 0;
+    for (size_t t = 0; t < m->ntris && *ok; t++)
+        if (!p->r.dead[t] && rm_tri_sine(p, (uint32_t)t) < needle &&
+            mend_junction(p, (uint32_t)t, ok))
+            made++;
+    p->collapses += made;
+    return made;
+}
