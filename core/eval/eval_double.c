@@ -14,13 +14,25 @@
 
 #define LANES 32
 
+/* sin(u) or cos(u) (sine: true) through the workspace's memo. */
+static inline __attribute__((always_inline)) double trig_value(ism_trig_cache *trig, double u,
+                                                            bool sine)
+{
+    double sn, cs;
+    ism_trig_pair(trig, u, &sn, &cs);
+    return sine ? sn : cs;
+}
+
 /* One instruction's value from its first operand's value a. The two-register operations read
  * their second operand, register in->b, as r[in->b * stride + lane] inside their own case
  * (one point: stride 1, lane 0; a lane of ism_eval_points' registers: ISM_EVAL_BATCH and j),
- * so ism_eval_point pays no test of whether b exists and no load it does not use. */
+ * so ism_eval_point pays no test of whether b exists and no load it does not use. Sines and
+ * cosines go through the memo trig when there is one (one point), inside their own cases
+ * too: a test before the switch for them cost every instruction ~4 of the ~17 it took (the
+ * Klein bottle's tape, callgrind). */
 static inline __attribute__((always_inline)) double op_value(const ism_instr *in, double a,
                                                           const double *r, size_t stride,
-                                                          size_t lane)
+                                                          size_t lane, ism_trig_cache *trig)
 {
     double c = in->imm;
     switch (in->op) {
@@ -44,8 +56,8 @@ static inline __attribute__((always_inline)) double op_value(const ism_instr *in
     case ISM_OP_POWI: return ism_powi(a, in->b);
     case ISM_OP_POWC: return ism_powc(a, c);
     case ISM_OP_SQRT: return ism_sqrt_clip(a);
-    case ISM_OP_SIN: return sin(a);
-    case ISM_OP_COS: return cos(a);
+    case ISM_OP_SIN: return trig ? trig_value(trig, a, true) : sin(a);
+    case ISM_OP_COS: return trig ? trig_value(trig, a, false) : cos(a);
     case ISM_OP_TAN: return tan(a);
     case ISM_OP_EXP: return exp(a);
     case ISM_OP_LOG: return ism_log_clip(a);
@@ -55,9 +67,10 @@ static inline __attribute__((always_inline)) double op_value(const ism_instr *in
 }
 
 static inline __attribute__((always_inline)) double point_op(const ism_instr *in,
-                                                           const double *r)
+                                                           const double *r,
+                                                           ism_trig_cache *trig)
 {
-    return op_value(in, r[in->a], r, 1, 0);
+    return op_value(in, r[in->a], r, 1, 0, trig);
 }
 
 static unsigned natural_branch(const ism_instr *in, double a, const double *r);
@@ -81,13 +94,7 @@ static inline __attribute__((always_inline)) size_t run_point(const ism_tape *t,
             ws->choice[i] = (uint8_t)natural_branch(in, r[in->a], r);
             kinks++;
         }
-        if (in->op == ISM_OP_SIN || in->op == ISM_OP_COS) {
-            double s, c;
-            ism_trig_pair(ws->trig, r[in->a], &s, &c);
-            r[in->out] = in->op == ISM_OP_SIN ? s : c;
-        } else {
-            r[in->out] = point_op(in, r);
-        }
+        r[in->out] = point_op(in, r, ws->trig);
     }
     return kinks;
 }
@@ -162,15 +169,7 @@ double ism_eval_piece_value(const ism_tape *t, ism_eval_ws *ws, ism_piece pc, do
             br = ism_piece_branch(pc, k);
             k++;
         }
-        if (br) {
-            r[in->out] = forced_value(in, r, br);
-        } else if (in->op == ISM_OP_SIN || in->op == ISM_OP_COS) {
-            double sn, cs;
-            ism_trig_pair(ws->trig, r[in->a], &sn, &cs);
-            r[in->out] = in->op == ISM_OP_SIN ? sn : cs;
-        } else {
-            r[in->out] = point_op(in, r);
-        }
+        r[in->out] = br ? forced_value(in, r, br) : point_op(in, r, ws->trig);
     }
     return r[t->result];
 }
@@ -393,7 +392,7 @@ static void narrow_op(const ism_instr *in, double *regs, ism_trig_cache *trig, s
         return;
     default:
         for (size_t j = 0; j < n; j++)
-            o[j] = op_value(in, a[j], regs, ISM_EVAL_BATCH, j);
+            o[j] = op_value(in, a[j], regs, ISM_EVAL_BATCH, j, NULL); /* trig: above */
         return;
     }
 }
