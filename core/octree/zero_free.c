@@ -58,15 +58,16 @@ static bool mean_value_free(const ism_tape *t, ism_ivjet_ws *jet, const ism_inte
         double m = 0.5 * box[a].lo + 0.5 * box[a].hi;
         c[a] = iv(m, m);
     }
-    ism_ivgrad over, at;
+    ism_ivgrad over;
+    ism_interval at; /* f at the centre: the value alone (its slopes are not used) */
     if (ism_eval_interval_grad(t, jet, box, NULL, NULL, &over) != 0)
         return false; /* a kink (the slopes are unbounded there) or a workspace misfit */
-    if (ism_eval_interval_grad(t, jet, c, NULL, NULL, &at) != 0)
+    if (ism_eval_interval_value(t, jet, c, &at) != 0)
         return false;
-    ism_interval mv = at.v;
+    ism_interval mv = at;
     for (int a = 0; a < 3; a++)
         mv = iv_add(mv, iv_mul(over.d[a], iv_sub(box[a], c[a])));
-    return beyond(mv, sign, eps + ROUNDING_MARGIN * (at.v.hi - at.v.lo));
+    return beyond(mv, sign, eps + ROUNDING_MARGIN * (at.hi - at.lo));
 }
 
 bool ism_box_zero_free(const ism_tape *t, ism_eval_ws *ws, ism_ivjet_ws *jet,

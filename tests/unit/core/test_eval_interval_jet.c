@@ -435,6 +435,52 @@ Test(eval_interval_jet, no_nan_bound_in_any_partial)
     }
 }
 
+/* The value alone (ism_eval_interval_value, zero_free.c's f at a node's centre) against the
+ * gradient pass's value and kink count, to the bit: random boxes (one in eight a point) of
+ * every example surface and every operation's expression, and the edge boxes (where the
+ * whole pass cleans NaN partials). */
+static void value_alone(const char *name, const ism_tape *t, const ism_interval b[3])
+{
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+    cr_assert(jw);
+    ism_ivgrad G;
+    ism_interval v;
+    size_t kg = ism_eval_interval_grad(t, jw, b, NULL, NULL, &G);
+    size_t kv = ism_eval_interval_value(t, jw, b, &v);
+    cr_assert(kg == kv && same_bits(&G.v, &v, sizeof v),
+              "%s over [%g, %g] x [%g, %g] x [%g, %g]: [%.17g, %.17g] vs [%.17g, %.17g]", name,
+              b[0].lo, b[0].hi, b[1].lo, b[1].hi, b[2].lo, b[2].hi, v.lo, v.hi, G.v.lo, G.v.hi);
+    ism_ivjet_ws_free(jw);
+}
+
+Test(eval_interval_jet, value_alone_changes_no_bit)
+{
+    const double within[6] = { -2, -2, -2, 2, 2, 2 };
+    size_t nboxes = test_scaled(100);
+    for (size_t i = 0; i < sizeof OPS_EXPRS / sizeof OPS_EXPRS[0]; i++) {
+        ism_tape *t = compile(OPS_EXPRS[i]);
+        test_rng rng = { 1200 + i };
+        for (size_t n = 0; n < nboxes; n++) {
+            ism_interval b[3];
+            random_box(&rng, within, b);
+            value_alone(OPS_EXPRS[i], t, b);
+        }
+        for (size_t b = 0; b < N_EDGE_BOXES; b++)
+            value_alone(OPS_EXPRS[i], t, EDGE_BOXES[b]);
+        ism_tape_free(t);
+    }
+    for (size_t s = 0; s < TEST_NSURFACES; s++) {
+        ism_tape *t = test_surface_compile(&TEST_SURFACES[s]);
+        test_rng rng = { 1300 + s };
+        for (size_t n = 0; n < nboxes; n++) {
+            ism_interval b[3];
+            random_box(&rng, TEST_SURFACES[s].box, b);
+            value_alone(TEST_SURFACES[s].name, t, b);
+        }
+        ism_tape_free(t);
+    }
+}
+
 /* A gradient kept (ism_eval_interval_grad_kept) then the jet of the same box: the jet computes
  * only the Hessian where the tape allows, and must give the jet of a fresh second-order pass
  * to the bit — with other boxes evaluated on the workspace in between (registers overwritten:
