@@ -327,10 +327,12 @@ static bool fold_within(ism_sampler *s, const double lin[3])
 #define CREASE_FOLD_COS (-0.5)
 
 /* A crease point within this share of its edge's length from an end is that corner (on the
- * crease, up to rounding: the double torus's corners on its mirror plane x = 1.1): the polygon
- * is not cut there, since cut pieces would join a corner and a point a rounding error apart,
- * two vertices the weld keeps apart (an edge in four triangles, the regression box of
- * test_polygonise_crease.c's double_torus_closed_under_a_bound). */
+ * crease, up to rounding: the double torus's corners on its mirror plane x = 1.1): neither the
+ * polygon cut nor the triangle split (crease_point's at_end, both modes) cuts there, since the
+ * pieces would join a corner and a point a rounding error apart, two vertices the weld keeps
+ * apart (an edge in four triangles: test_polygonise_crease.c's
+ * double_torus_closed_under_a_bound; zero-area triangles: its
+ * double_torus_one_vertex_per_crease_point). */
 #define CUT_CORNER_SHARE 1e-6
 
 /* Why a mixed edge is left whole (crease_point's *whole; 0: it is cut at its crease point):
@@ -446,7 +448,8 @@ static label_t vertex_label(ism_sampler *s, bool pm, const ism_cell_out *out, la
 /* Triangle t (corners a, b, c on three pieces) cut at its edges' crease points and the
  * point where the three pieces meet, into six: each corner's quadrilateral (corner, crease
  * point, meeting point, crease point) on its piece alone. An edge left whole (crease_point's
- * whole: the fold within s->fold_below, or almost flat) is not cut, its triangle with the
+ * whole: the fold within s->fold_below, almost flat, or its crease point one of its ends,
+ * at_end) is not cut, its triangle with the
  * meeting point folded across it; the meeting point is inserted even when all three are
  * whole: a fold's distance is bounded by its edges' only where one crease crosses it, and the
  * corner where three meet (the cube's) stands off the triangle across all three (Steinmetz at

@@ -17,8 +17,8 @@ import tempfile
 # The first seven since issue 15's pass began; the rest where a sweep of all 42 presets in five
 # boxes found the pass dearer than the polygonisation (chmutov 1.41, catenoid 1.25, cube 1.2,
 # spindle 1.2, tanglecube, ding-dong, helicoid, blob-pair ~1.0-1.1: cusp22 / passcost22,
-# callgrind) or where it merges horn tips and coincident crease points (horn-cyclide, cusp-a2,
-# double-torus).
+# callgrind), where it merges horn tips (horn-cyclide, cusp-a2), and double-torus (its crease
+# points on a lattice plane were written twice before 1f4b8c6; its pass merged the copies).
 SURFACES = ["sphere", "torus", "pretzel-genus2", "gyroid-ball", "klein-bottle", "steiner-roman",
             "kummer-16-nodes", "chmutov-quartic", "catenoid", "cube", "spindle-cyclide",
             "tanglecube", "ding-dong", "helicoid", "blob-pair", "horn-cyclide", "cusp-a2",
