@@ -155,7 +155,7 @@ typedef struct padded_ctx {
 typedef struct phase2 {
     const ism_poly_options *o;
     const ism_octree *tree;
-    const ism_breaks *breaks;
+    ism_breaks *breaks;          /* built once the leaves to copy are known */
     int32_t *leaves;
     size_t nleaves, nchunks, chunk_leaves;
     ism_cell_out *out;           /* one per chunk */
@@ -428,6 +428,21 @@ static bool match_last_round(phase2 *p, const carry *c, int32_t **reuse)
     return ism_leaf_memo_match(&c->tree, p->tree, *reuse);
 }
 
+/* The break-point registry (breaks.h) p's leaves to polygonise query: of every leaf, or,
+ * when the last round's outputs are copied, of those near a leaf polygonised again
+ * (ism_breaks_near: the same answers to these queries; rounds after the first polygonise a
+ * few leaves and rebuilt the whole registry each time, a twelfth of Barth's sextic's cost). */
+static bool build_breaks(phase2 *p, ism_pool *pool, ism_par_cost *cost)
+{
+    uint8_t *take = NULL;
+    if (p->reuse && !(take = malloc(p->tree->n ? p->tree->n : 1)))
+        return false;
+    bool ok = (!take || ism_breaks_near(p->tree, p->leaves, p->nleaves, p->reuse, take)) &&
+              ism_breaks_build(p->breaks, p->tree, take, pool, cost);
+    free(take);
+    return ok;
+}
+
 /* This round's leaf outputs become the memo the next round copies from. */
 static void keep_for_next_round(phase2 *p, carry *c)
 {
@@ -464,14 +479,8 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     p.straddle = straddle_shift(f, o);
     enum ism_poly_status status = ISM_POLY_NO_MEMORY;
     int threads = ism_pool_threads(pool);
-
-    double t0 = ism_now_ms();
+    double t0;
     phase_meter m;
-    meter_start(&m);
-    if (!ism_breaks_build(&breaks, tree, pool, &m.par))
-        goto done;
-    meter_stop_inside(&m, st, ISM_PHASE_CRACKS, outer);
-    st->time_ms[ISM_PHASE_CRACKS] = ism_now_ms() - t0;
     p.leaves = malloc((tree->n ? tree->n : 1) * sizeof *p.leaves);
     parent = ism_octree_parents(tree);
     if (!p.leaves || !parent)
@@ -479,6 +488,14 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     for (size_t i = 0; i < tree->n; i++)
         if (tree->nodes[i].state == ISM_NODE_LEAF)
             p.leaves[p.nleaves++] = (int32_t)i;
+    if (!match_last_round(&p, c, &reuse))
+        goto done;
+    t0 = ism_now_ms();
+    meter_start(&m);
+    if (!build_breaks(&p, pool, &m.par))
+        goto done;
+    meter_stop_inside(&m, st, ISM_PHASE_CRACKS, outer);
+    st->time_ms[ISM_PHASE_CRACKS] = ism_now_ms() - t0;
     p.chunk_leaves = p.nleaves / ((size_t)threads * CHUNKS_PER_THREAD);
     if (p.chunk_leaves < MIN_CHUNK_LEAVES)
         p.chunk_leaves = MIN_CHUNK_LEAVES;
@@ -492,7 +509,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
     if (next && !o->fresh_rounds &&
         !(p.rec = malloc((p.nleaves ? p.nleaves : 1) * sizeof *p.rec)))
         goto done;
-    if (!p.out || !p.ctx || !match_last_round(&p, c, &reuse))
+    if (!p.out || !p.ctx)
         goto done;
     if (!p.leaf_error && !ism_quiet_init(&p.quiet, o->quiet, o->nquiet))
         goto done;
