@@ -116,16 +116,24 @@ static bool before(const double *a, const double *b)
     return false;
 }
 
-/* The label of point p (label_t): its piece in pieces mode (pm; through the sampler's label
- * memo: the same point's piece once), else its top branch. */
-static label_t label_at(ism_sampler *s, bool pm, const double p[3])
+/* The label of point p computed: its piece in pieces mode (pm), else its top branch (a
+ * pure function of p: top_tape gives f's branches bit for bit). */
+static label_t label_fresh(ism_sampler *s, bool pm, const double p[3])
 {
     if (!pm)
         return (label_t)ism_crease_branch(s, p, NULL);
-    if (!s->label_memo_on) {
-        s->n_point++;
-        return ism_eval_piece(s->tape, s->ws, p[0], p[1], p[2]);
-    }
+    s->n_point++;
+    return ism_eval_piece(s->tape, s->ws, p[0], p[1], p[2]);
+}
+
+/* The label of point p (label_t), through the sampler's label memo when it is on: the same
+ * point's label once (pm is the sampler's crease_pieces, fixed for its run). Barth's sextic
+ * at 1e-2 labelled its top branch 226,880 times without the memo, 123.6M of 3,205M
+ * instructions (a leaf's vertices up to three times, its neighbours' shared ones again). */
+static label_t label_at(ism_sampler *s, bool pm, const double p[3])
+{
+    if (!s->label_memo_on)
+        return label_fresh(s, pm, p);
     uint64_t b[3];
     memcpy(b, p, sizeof b);
     uint64_t h = (b[0] * 0x9e3779b97f4a7c15u) ^ (b[1] * 0xc2b2ae3d27d4eb4fu) ^
@@ -133,8 +141,7 @@ static label_t label_at(ism_sampler *s, bool pm, const double p[3])
     struct ism_label_memo *e = &s->label_memo[(h >> 32) % ISM_LABEL_MEMO];
     if (e->tape == s->tape && !memcmp(e->p, p, sizeof e->p))
         return e->label;
-    s->n_point++;
-    label_t l = ism_eval_piece(s->tape, s->ws, p[0], p[1], p[2]);
+    label_t l = label_fresh(s, pm, p);
     memcpy(e->p, p, sizeof e->p);
     e->tape = s->tape;
     e->label = l;
