@@ -98,8 +98,25 @@ static int corner_branch(ism_sampler *s, const ism_corners *k, int c)
         return m->label;
     int b = ism_crease_branch(s, k->p[c], NULL);
     if (m && b >= 0)
-        *m = (ism_label_entry){k->key[c], b};
+        *m = (ism_label_entry){k->key[c], b, 0, {0, 0, 0}};
     return b;
+}
+
+/* The gradient of f's top min/max branch at corner c (ism_crease_branch's g), through the
+ * thread's memo when the corner's label is there (corner_branch has just asked). A pure
+ * function of the point as the label is: a tape keeping that min/max gives f's branches'
+ * values and gradients bit for bit (octree.h). */
+static void corner_gradient(ism_sampler *s, const ism_corners *k, int c, double g[3])
+{
+    ism_label_entry *m = k->memo ? ism_label_slot(k->memo->labels, k->key[c]) : NULL;
+    if (m && m->key == k->key[c] && m->has_g) {
+        memcpy(g, m->g, sizeof m->g);
+        return;
+    }
+    if (ism_crease_branch(s, k->p[c], g) >= 0 && m && m->key == k->key[c]) {
+        memcpy(m->g, g, sizeof m->g);
+        m->has_g = 1;
+    }
 }
 
 /* A crease node whose corners on one branch disagree (crease_cell) where f = 0 is one branch's
@@ -171,7 +188,7 @@ static int crease_cell(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl
      * (test_plot_test_tie.c). */
     bool disagree = critical;
     for (int c = 0; c < 8; c++) {
-        ism_crease_branch(s, k->p[c], n[c]);
+        corner_gradient(s, k, c, n[c]);
         double len = ism_normalise3(n[c]);
         disagree |= !(len > 0) || !isfinite(len);
     }
