@@ -225,7 +225,8 @@ static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell
     ism_cell_stats before = cx->stats;
     size_t v0 = out->nverts, t0 = out->ntris, s0 = out->nsegs;
     float err = 0;
-    if (p->reuse && p->reuse[i] >= 0) {
+    bool copied = p->reuse && p->reuse[i] >= 0;
+    if (copied) {
         if (!ism_leaf_memo_copy(p->memo, (size_t)p->reuse[i], out, &cx->stats, &err))
             return false;
     } else {
@@ -271,10 +272,11 @@ static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell
     }
     if (p->leaf_error)
         p->leaf_error[i] = err;
-    if (p->rec)
+    if (p->rec) /* a copied leaf added its record's counters (ism_leaf_memo_copy) */
         p->rec[i] = (ism_leaf_rec){chunk, v0, t0, s0, out->nverts - v0, out->ntris - t0,
                                    out->nsegs - s0, err,
-                                   ism_cell_stats_minus(&cx->stats, &before)};
+                                   copied ? p->memo->rec[p->reuse[i]].stats
+                                          : ism_cell_stats_minus(&cx->stats, &before)};
     return true;
 }
 
