@@ -506,16 +506,42 @@ static void bit_set(uint64_t *bits, size_t side, size_t x, size_t y, size_t z)
     bits[c >> 6] |= (uint64_t)1 << (c & 63);
 }
 
-/* Marks cell (x, y, z), and in the summary its cell and the 7 below. */
-static void near_mark(near_grid *g, size_t x, size_t y, size_t z)
+/* Calls fn(g, x, y, z) for each cell on the shell of the range lo .. hi (every cell of it
+ * with a coordinate at an end); stops at the first call returning true, and returns that. */
+static bool on_shell(near_grid *g, const size_t lo[3], const size_t hi[3],
+                     bool (*fn)(near_grid *, size_t, size_t, size_t))
+{
+    for (size_t z = lo[2]; z <= hi[2]; z++)
+        for (size_t y = lo[1]; y <= hi[1]; y++) {
+            bool side = z == lo[2] || z == hi[2] || y == lo[1] || y == hi[1];
+            size_t step = side || hi[0] == lo[0] ? 1 : hi[0] - lo[0];
+            for (size_t x = lo[0]; x <= hi[0]; x += step)
+                if (fn(g, x, y, z))
+                    return true;
+        }
+    return false;
+}
+
+static bool mark_cell(near_grid *g, size_t x, size_t y, size_t z)
 {
     bit_set(g->mark, g->side, x, y, z);
-    x >>= NEAR_SUM_SHIFT, y >>= NEAR_SUM_SHIFT, z >>= NEAR_SUM_SHIFT;
+    return false;
+}
+
+/* Marks summary cell (x, y, z) and the 7 below it. */
+static bool mark_summary(near_grid *g, size_t x, size_t y, size_t z)
+{
     for (int d = 0; d < 8; d++) {
         size_t sx = x - (d & 1), sy = y - (d >> 1 & 1), sz = z - (d >> 2);
         if (sx < g->sside && sy < g->sside && sz < g->sside) /* below 0 wraps past sside */
             bit_set(g->sum, g->sside, sx, sy, sz);
     }
+    return false;
+}
+
+static bool marked(near_grid *g, size_t x, size_t y, size_t z)
+{
+    return bit_get(g->mark, g->side, x, y, z);
 }
 
 /* The cells node nd's closed box meets, per axis: lo[a] .. hi[a]. */
@@ -529,21 +555,19 @@ static void near_range(const near_grid *g, const ism_octree *t, const ism_node *
     }
 }
 
-/* Marks the cells on the shell of nd's range (set), or tells whether one of them is marked. */
+/* Marks the cells on the shell of nd's range and, in the summary, their summary cells (the
+ * summary range's shell) with the 7 below each (set); or tells whether a cell on the shell is
+ * marked. */
 static bool near_shell(near_grid *g, const ism_octree *t, const ism_node *nd, bool set)
 {
     size_t lo[3], hi[3];
     near_range(g, t, nd, lo, hi);
-    for (size_t z = lo[2]; z <= hi[2]; z++)
-        for (size_t y = lo[1]; y <= hi[1]; y++) {
-            bool side = z == lo[2] || z == hi[2] || y == lo[1] || y == hi[1];
-            size_t step = side || hi[0] == lo[0] ? 1 : hi[0] - lo[0];
-            for (size_t x = lo[0]; x <= hi[0]; x += step)
-                if (set)
-                    near_mark(g, x, y, z);
-                else if (bit_get(g->mark, g->side, x, y, z))
-                    return true;
-        }
+    if (!set)
+        return on_shell(g, lo, hi, marked);
+    on_shell(g, lo, hi, mark_cell);
+    for (int a = 0; a < 3; a++)
+        lo[a] >>= NEAR_SUM_SHIFT, hi[a] >>= NEAR_SUM_SHIFT;
+    on_shell(g, lo, hi, mark_summary);
     return false;
 }
 
