@@ -261,13 +261,15 @@ static uint8_t obtuse_corners(const rm_pass *p, size_t t)
  * are: the Delaunay test for an edge pushed first needs its quad found (rm_edge_triangles),
  * the key a hash lookup. (A sorted array and binary searches were 19% of the flips'
  * instructions on the torus under its default bound, the sort 6%.) */
-static bool obtuse_edges(const rm_pass *p, ism_key_map *set)
+static bool obtuse_edges(const rm_pass *p, const uint8_t *near, ism_key_map *set)
 {
     const ism_mesh *m = p->r.m;
     bool added;
     ism_key_map_init(set);
     for (size_t t = 0; t < m->ntris; t++) {
         const uint32_t *v = m->tri + 3 * t;
+        if (near && !(near[v[0]] | near[v[1]] | near[v[2]]))
+            continue;
         uint8_t bits = p->r.dead[t] ? 0 : obtuse_corners(p, t);
         for (int k = 0; bits && k < 3; k++)
             if ((bits >> k & 1) &&
@@ -279,13 +281,31 @@ static bool obtuse_edges(const rm_pass *p, ism_key_map *set)
     return true;
 }
 
+/* The corners of the triangles with a corner in seed, into a new array (NULL when out of
+ * memory): every triangle on an edge of such a triangle has one of them. */
+static uint8_t *seeded_corners(const rm_pass *p, const uint8_t *seed)
+{
+    const ism_mesh *m = p->r.m;
+    uint8_t *near = calloc(m->nverts ? m->nverts : 1, 1);
+    for (size_t t = 0; near && t < m->ntris; t++) {
+        const uint32_t *v = m->tri + 3 * t;
+        if (!p->r.dead[t] && (seed[v[0]] || seed[v[1]] || seed[v[2]]))
+            near[v[0]] = near[v[1]] = near[v[2]] = 1;
+    }
+    return near;
+}
+
 size_t rm_flip_from(rm_pass *p, const uint8_t *seed, bool *ok)
 {
     const ism_mesh *m = p->r.m;
     edge_stack s = {0};
     size_t flips = 0, limit = ISM_RM_FLIPS_PER_TRIANGLE * m->ntris;
     ism_key_map obtuse;
-    bool known = obtuse_edges(p, &obtuse); /* (out of memory: every edge pushed) */
+    /* only the edges of seeded triangles are asked of the set, and both triangles on such an
+       edge have a seeded triangle's corner (NULL, out of memory: every triangle's) */
+    uint8_t *near = seeded_corners(p, seed);
+    bool known = obtuse_edges(p, near, &obtuse); /* (out of memory: every edge pushed) */
+    free(near);
     *ok = true;
     for (size_t t = 0; t < m->ntris && *ok; t++) {
         const uint32_t *v = m->tri + 3 * t;
