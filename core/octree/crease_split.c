@@ -211,9 +211,10 @@ static bool newton_step(ism_sampler *s, bool pm, double x[3], int m, const label
     return true;
 }
 
-/* CREASE_NEWTON_STEPS steps from x (false when one fails), ending early where x comes back
- * to where it was two steps before — a fixed point, or a 2-cycle of rounding: the steps left
- * would only repeat those two, so the last one's result is known. */
+/* CREASE_NEWTON_STEPS steps from x (false when one fails), ending early where a step leaves
+ * x where it was (a fixed point: each step left would evaluate the same point and take the
+ * same step) or x comes back to where it was two steps before (a 2-cycle of rounding: the
+ * steps left would only repeat those two, so the last one's result is known). */
 static bool newton(ism_sampler *s, bool pm, double x[3], int m, const label_t *l)
 {
     double back[2][3]; /* back[it % 2]: x before step it */
@@ -221,6 +222,8 @@ static bool newton(ism_sampler *s, bool pm, double x[3], int m, const label_t *l
         memcpy(back[it % 2], x, sizeof back[0]);
         if (!newton_step(s, pm, x, m, l))
             return false;
+        if (memcmp(x, back[it % 2], sizeof back[0]) == 0)
+            return true;
         if (it >= 1 && memcmp(x, back[(it + 1) % 2], sizeof back[0]) == 0) {
             if ((CREASE_NEWTON_STEPS - it - 1) % 2)
                 memcpy(x, back[it % 2], sizeof back[0]);
