@@ -1,16 +1,18 @@
 /* cell_cache.h — per-thread memo of what neighbouring nodes compute again and again: f and
  * ∇f at lattice points (with the points' successors on their lattice lines, copied from the
  * break-point registry, so that walking a tile's side and sampling it cost one lookup a
- * point), and the roots of lattice segments. All are pure functions of their lattice
- * coordinates, so a hit returns exactly what a recomputation would: the cache only saves
- * time, never changes the mesh. Direct-mapped: a collision simply overwrites. The octree
- * build memoises node corners through a lookup of the same kind (ism_point_memo), and what
- * its flatness test finds on node edges and at corners (ism_node_memo). */
+ * point), the roots of lattice segments, and the lines of tiles walked once. All are pure
+ * functions of their lattice coordinates, so a hit returns exactly what a recomputation
+ * would: the cache only saves time, never changes the mesh. Direct-mapped: a collision
+ * simply overwrites. The octree build memoises node corners through a lookup of the same
+ * kind (ism_point_memo), and what its flatness test finds on node edges and at corners
+ * (ism_node_memo). */
 #ifndef ISM_CELL_CACHE_H
 #define ISM_CELL_CACHE_H
 
 #include <stdbool.h>
 #include <stdint.h>
+#include "core/octree/cell_types.h"
 #include "core/octree/edge_roots.h"
 #include "core/octree/grid.h"
 #include "core/octree/sampler.h"
@@ -48,10 +50,28 @@ typedef struct ism_quiet_tile {
     uint64_t span;  /* v0, u1, v1 */
 } ism_quiet_tile;
 
+/* A tile some line of f = 0 crosses, as its first walk left it: the lines it appended and
+ * what it added to each counter of ism_cell_stats. The walk is a function of the tile alone
+ * (face_lines.c: its lattice points, its sides' break points and roots, f on the tile, which
+ * both nodes' shortened tapes give bit for bit on their shared closed face), so the second
+ * node that shares the tile copies the first one's lines instead of walking it again. */
+#define ISM_TILE_MEMO_BITS 12 /* 4,096 entries of 352 bytes, 1.4 MB a thread: the two nodes of
+                                 a face are polygonised close together (depth first), and the
+                                 second walk of a crossed tile then mostly hits */
+#define ISM_TILE_MEMO_LINES 2 /* one curve across the tile, or its chord lifted into two lines
+                                 (face_flat.h): nearly every crossed tile; more are walked again */
+typedef struct ism_tile_memo {
+    ism_quiet_tile key;    /* the tile (quiet-tile key; where = 0: empty) */
+    size_t nlines;
+    ism_cell_stats counted; /* what the walk added to the counters */
+    ism_fline lines[ISM_TILE_MEMO_LINES];
+} ism_tile_memo;
+
 typedef struct ism_cell_cache {
     ism_lattice_entry *points;
     ism_segment_entry *segments;
     ism_quiet_tile *quiet;
+    ism_tile_memo *tiles;
     uint32_t round;  /* the current max_error round (from 1) */
 } ism_cell_cache;
 
@@ -62,8 +82,8 @@ void ism_cell_cache_free(ism_cell_cache *c);
 
 /* The memo kept for another max_error round of the same f and lattice: f, ∇f and segment
  * roots stay (pure), the points' registry successors are read again on their first use
- * (the leaves, so the break points, changed) and the quiet tiles are forgotten (a tile's
- * sides may have gained break points). */
+ * (the leaves, so the break points, changed) and the quiet and crossed tiles are forgotten
+ * (a tile's sides may have gained break points). */
 void ism_cell_cache_next_round(ism_cell_cache *c);
 
 /* The octree build's memo of single roots on node edges (cell_error.c: regula falsi between

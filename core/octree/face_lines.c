@@ -10,8 +10,10 @@
  *   - a tangent root or zero point at the apex of a wedge between two sheets joins the two
  *     crossings around it (paper Fig. 3c);
  *   - lattice segments where f vanishes are lines of their own (double lines on edges).
- * Everything here depends only on the tile, so both nodes that share it agree. */
+ * Everything here depends only on the tile, so both nodes that share it agree, and the
+ * second of them copies the first one's lines (cell_cache.h: the tile memo). */
 #include "core/octree/face_lines.h"
+#include "core/octree/cell_stats.h"
 #include "core/octree/face_flat.h"
 #include "core/octree/root_table.h"
 #include "core/octree/singular.h"
@@ -1050,10 +1052,17 @@ static ism_quiet_tile *quiet_slot(ism_cell_ctx *cx, const ism_quiet_tile *k)
                             (((uint64_t)1 << ISM_QUIET_CACHE_BITS) - 1)];
 }
 
+static ism_tile_memo *memo_slot(ism_cell_ctx *cx, const ism_quiet_tile *k)
+{
+    return &cx->cache.tiles[ism_cache_mix(k->where * 37 + k->span) &
+                            (((uint64_t)1 << ISM_TILE_MEMO_BITS) - 1)];
+}
+
 void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *t)
 {
     ism_quiet_tile key = quiet_key(t);
     __builtin_prefetch(quiet_slot(cx, &key), 0);
+    __builtin_prefetch(memo_slot(cx, &key), 0);
     int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
     int32_t cu[4] = {t->u0, t->u1, t->u1, t->u0}, cv[4] = {t->v0, t->v0, t->v1, t->v1};
     for (int c = 0; c < 4; c++) {
@@ -1065,12 +1074,34 @@ void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *t)
     }
 }
 
-bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
+/* The walk's lines (cx->lines from `first`) and counts (against `before`) into memo entry m,
+ * when they fit; else m is left as it was. */
+static void remember(ism_cell_ctx *cx, ism_tile_memo *m, const ism_quiet_tile *key,
+                     size_t first, const ism_cell_stats *before)
 {
-    cx->zero_tile = false;
-    ism_quiet_tile key = quiet_key(t), *q = quiet_slot(cx, &key);
-    if (q->where == key.where && q->span == key.span)
-        return true; /* walked before: nothing crosses its boundary */
+    size_t n = cx->lines.n - first;
+    if (n > ISM_TILE_MEMO_LINES)
+        return;
+    m->counted = ism_cell_stats_minus(&cx->stats, before);
+    memcpy(m->lines, &cx->lines.v[first], n * sizeof *m->lines);
+    m->nlines = n;
+    m->key = *key;
+}
+
+/* The tile's first walk again: its lines appended, its counts added. */
+static bool replay(ism_cell_ctx *cx, const ism_tile_memo *m)
+{
+    ism_cell_stats_add(&cx->stats, &m->counted);
+    for (size_t l = 0; l < m->nlines; l++)
+        if (!ism_flines_push(&cx->lines, &m->lines[l].a, &m->lines[l].b, m->lines[l].kind))
+            return false;
+    return true;
+}
+
+/* ism_tile_lines's walk of a tile neither memo holds (q: its quiet-tile slot). */
+static bool walk_tile(ism_cell_ctx *cx, const ism_tile *t, const ism_quiet_tile *key,
+                      ism_quiet_tile *q)
+{
     if (!tile_boundary(cx, t))
         return false;
     if (is_zero_tile(cx, t)) {
@@ -1080,7 +1111,7 @@ bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
     if (!tile_events(cx))
         return false;
     if (cx->nev == 0) { /* nothing crosses the tile's boundary (most tiles): no lines */
-        *q = key;
+        *q = *key;
         return true;
     }
     int ne = (int)cx->nev;
@@ -1204,5 +1235,23 @@ bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
     for (int l = 0; l < nl; l++)
         if (!line_used[l] && !emit_regular(cx, t, lines[l].a, lines[l].b))
             return false;
+    return true;
+}
+
+bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
+{
+    cx->zero_tile = false;
+    ism_quiet_tile key = quiet_key(t), *q = quiet_slot(cx, &key);
+    if (q->where == key.where && q->span == key.span)
+        return true; /* walked before: nothing crosses its boundary */
+    ism_tile_memo *m = memo_slot(cx, &key);
+    if (m->key.where == key.where && m->key.span == key.span)
+        return replay(cx, m); /* walked before: lines cross it */
+    size_t first = cx->lines.n;
+    ism_cell_stats before = cx->stats;
+    if (!walk_tile(cx, t, &key, q))
+        return false;
+    if (!cx->zero_tile && cx->nev > 0)
+        remember(cx, m, &key, first, &before);
     return true;
 }

@@ -131,29 +131,9 @@ bool ism_leaf_memo_copy(const ism_leaf_memo *m, size_t leaf, ism_cell_out *out,
     for (size_t i = 0; i < 2 * r->ns; i++)
         out->segs[2 * out->nsegs + i] = src->segs[2 * r->s0 + i] + shift;
     out->nsegs += r->ns;
-    uint64_t add[sizeof *st / sizeof(uint64_t)], sum[sizeof *st / sizeof(uint64_t)];
-    memcpy(add, &r->stats, sizeof add);
-    memcpy(sum, st, sizeof sum);
-    for (size_t k = 0; k < sizeof sum / sizeof sum[0]; k++)
-        sum[k] += add[k];
-    memcpy(st, sum, sizeof sum);
+    ism_cell_stats_add(st, &r->stats);
     *error = r->error;
     return true;
-}
-
-_Static_assert(sizeof(ism_cell_stats) % sizeof(uint64_t) == 0,
-               "ism_cell_stats holds uint64_t counters only");
-
-ism_cell_stats ism_cell_stats_minus(const ism_cell_stats *after, const ism_cell_stats *before)
-{
-    uint64_t a[sizeof *after / sizeof(uint64_t)], b[sizeof *after / sizeof(uint64_t)];
-    memcpy(a, after, sizeof a);
-    memcpy(b, before, sizeof b);
-    for (size_t k = 0; k < sizeof a / sizeof a[0]; k++)
-        a[k] -= b[k];
-    ism_cell_stats d;
-    memcpy(&d, a, sizeof d);
-    return d;
 }
 
 void ism_leaf_memo_free(ism_leaf_memo *m)

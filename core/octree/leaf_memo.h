@@ -10,6 +10,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdbool.h>
+#include "core/octree/cell_stats.h"
 #include "core/octree/cell_types.h"
 #include "core/octree/octree.h"
 
@@ -38,9 +39,6 @@ bool ism_leaf_memo_match(const ism_octree *before, const ism_octree *now, int32_
  * counters to st and returns its measured error. False when out of memory. */
 bool ism_leaf_memo_copy(const ism_leaf_memo *m, size_t leaf, ism_cell_out *out,
                         ism_cell_stats *st, float *error);
-
-/* Counter differences after - before (what one leaf added). */
-ism_cell_stats ism_cell_stats_minus(const ism_cell_stats *after, const ism_cell_stats *before);
 
 void ism_leaf_memo_free(ism_leaf_memo *m);
 

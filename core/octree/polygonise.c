@@ -10,6 +10,7 @@
 #include "core/octree/cell.h"
 #include "core/octree/crease_split.h"
 #include "core/octree/dual.h"
+#include "core/octree/cell_stats.h"
 #include "core/octree/leaf_memo.h"
 #include "core/octree/octree_build.h"
 #include "core/octree/quiet.h"
