@@ -48,6 +48,13 @@
 #define ISM_RM_JUNCTION_REACH 0.5
 /* At most this many vertices in a cluster (three-balls' measured 7, the cube's corner 4). */
 #define ISM_RM_JUNCTION_MAX 12
+/* The three sheets' unit normals must span space at least this much (their triple product)
+ * for the tangent planes' meeting point to be a junction: two normals the crease angle apart
+ * (ISM_RM_CREASE_DEG, 40°: they are in different groups) and a third the crease angle out of
+ * their plane give sin² 40° = 0.41; under it the third sheet is one of the first two bent
+ * (a curved sheet read as two groups beside a crease) and the planes meet far off or along a
+ * line (a cube's corner: 1, three balls' triple points: 0.99). */
+#define ISM_RM_JUNCTION_DET 0.41
 /* The triangles touching a cluster, at most this many (the cluster's fans: each of its
  * vertices has about 6; its rim, the target's fan after, at most ISM_RM_COLLAPSE_MAX_DEGREE). */
 #define ISM_RM_JUNCTION_STAR 96
@@ -182,7 +189,8 @@ static bool disc_ok(const rm_pass *p, junction *j)
  * apart: on a single crease two, at a junction three or more); with three or more, x gets
  * the point where the first three's tangent planes (each through its first rim vertex)
  * meet: the junction, up to the sheets' curvature over the rim's reach (three-balls: about
- * 3e-5 against the cluster's 7e-4). */
+ * 3e-5 against the cluster's 7e-4); NAN where the three normals are too near one plane for
+ * that point to mean anything (ISM_RM_JUNCTION_DET). */
 static int sheets(const rm_pass *p, const junction *j, double x[3])
 {
     const double *g[ISM_RM_COLLAPSE_MAX_DEGREE];
@@ -209,8 +217,9 @@ static int sheets(const rm_pass *p, const junction *j, double x[3])
     ism_cross3(g[2], g[0], c31);
     ism_cross3(g[0], g[1], c12);
     double det = ism_dot3(g[0], c23);
+    bool point = fabs(det) >= ISM_RM_JUNCTION_DET;
     for (int k = 0; k < 3; k++)
-        x[k] = det != 0 ? (d[0] * c23[k] + d[1] * c31[k] + d[2] * c12[k]) / det : NAN;
+        x[k] = point ? (d[0] * c23[k] + d[1] * c31[k] + d[2] * c12[k]) / det : NAN;
     return groups;
 }
 
@@ -449,8 +458,9 @@ static bool mend_junction(rm_pass *p, uint32_t t, bool *ok)
         int ns = gather_star(p, &j) && disc_ok(p, &j) ? sheets(p, &j, x) : 0;
         if (ns >= 2) {
             double floor = star_sine(p, &j);
-            int at = ns >= 3 ? 0 : -1; /* the junction's vertex: the member nearest where the
-                                          sheets meet */
+            /* the junction's vertex: the member nearest where the sheets meet, when they
+               meet at a point within the cluster's reach */
+            int at = ns >= 3 && rm_dist(x, mid) <= reach ? 0 : -1;
             for (int i = 1; at >= 0 && i < j.n; i++)
                 if (rm_dist(rm_pos(p, j.v[i]), x) < rm_dist(rm_pos(p, j.v[at]), x))
                     at = i;
