@@ -68,6 +68,9 @@ typedef struct junction {
     int nstar;
     uint32_t keep[ISM_RM_COLLAPSE_MAX_DEGREE]; /* the star's triangles with one corner in it */
     int nkeep;
+    const double *sheet[ISM_RM_COLLAPSE_MAX_DEGREE]; /* a unit ∇f normal of each sheet at the
+                                                        rim (sheets()) */
+    int nsheet;
 } junction;
 
 static bool in_cluster(const junction *j, uint32_t x)
@@ -191,9 +194,9 @@ static bool disc_ok(const rm_pass *p, junction *j)
  * meet: the junction, up to the sheets' curvature over the rim's reach (three-balls: about
  * 3e-5 against the cluster's 7e-4); NAN where the three normals are too near one plane for
  * that point to mean anything (ISM_RM_JUNCTION_DET). */
-static int sheets(const rm_pass *p, const junction *j, double x[3])
+static int sheets(const rm_pass *p, junction *j, double x[3])
 {
-    const double *g[ISM_RM_COLLAPSE_MAX_DEGREE];
+    const double **g = j->sheet;
     double d[ISM_RM_COLLAPSE_MAX_DEGREE];
     int groups = 0;
     double near = cos(ISM_RM_CREASE_DEG * M_PI / 180);
@@ -210,6 +213,7 @@ static int sheets(const rm_pass *p, const junction *j, double x[3])
                 d[groups] = ism_dot3(n, rm_pos(p, c[k])), g[groups++] = n;
         }
     }
+    j->nsheet = groups;
     if (groups < 3)
         return groups;
     double c12[3], c23[3], c31[3];
@@ -257,6 +261,16 @@ static bool cone_tri_ok(const rm_pass *p, uint32_t t, uint32_t a, uint32_t b,
            rm_bend_is_curvature(p, a, b, acos(fmax(-1, fmin(1, now))), (*ln + lu) / ab, NULL);
 }
 
+/* The sheet (sheets()) whose normal is nearest normal n: the one a cone triangle faces. */
+static int sheet_of(const junction *j, const double *n)
+{
+    int best = 0;
+    for (int h = 1; h < j->nsheet; h++)
+        if (ism_dot3(j->sheet[h], n) > ism_dot3(j->sheet[best], n))
+            best = h;
+    return best;
+}
+
 /* The cluster corner of cone triangle t. */
 static uint32_t cluster_corner(const rm_pass *p, const junction *j, uint32_t t)
 {
@@ -265,9 +279,10 @@ static uint32_t cluster_corner(const rm_pass *p, const junction *j, uint32_t t)
 }
 
 /* The smallest sine of the cone over the rim with apex w (a cluster vertex), or -1 when a
- * cone triangle fails cone_tri_ok, an edge w -> x to a free x bends past the crease angle
- * (and f's curvature does not explain it), or a new centroid or midpoint lies farther from
- * f = 0 than the farthest of the star's before and of the mesh as found. */
+ * cone triangle fails cone_tri_ok, an edge w -> x bends past the crease angle (and f's
+ * curvature does not explain it) where x is free or the triangles on either side face one
+ * sheet, or a new centroid or midpoint lies farther from f = 0 than the farthest of the
+ * star's before and of the mesh as found. */
 static double cone_score(rm_pass *p, const junction *j, uint32_t w)
 {
     const ism_mesh *m = p->r.m;
@@ -295,8 +310,12 @@ static double cone_score(rm_pass *p, const junction *j, uint32_t w)
         int k = 0;
         while (k < j->nkeep && from[k] != b)
             k++;
-        if (k == j->nkeep || p->r.locked[b])
-            continue; /* a crease leaves w toward a locked x: it bends as it must */
+        /* a crease leaves w toward a locked x where the triangles on either side face
+           different sheets: it bends as it must; a vertex locked otherwise (the box cut, a
+           bend read as curvature, a crease not through w) gets the free vertex's test */
+        if (k == j->nkeep ||
+            (p->r.locked[b] && sheet_of(j, n[i]) != sheet_of(j, n[k])))
+            continue;
         double c = cos_between(n[i], ln[i], n[k], ln[k]);
         double wb = rm_dist(x, rm_pos(p, b));
         if (!(c >= cos(ISM_RM_CREASE_DEG * M_PI / 180)) &&
