@@ -134,24 +134,35 @@ static void fan_distances(rm_pass *p, const rm_merge *g, bool after, double *cen
     }
 }
 
+bool rm_distances_within(rm_pass *p, double new_c, double new_m)
+{
+    rm_collapse_bounds_need(p);
+    return new_c <= p->centroid_bound && new_m <= p->midpoint_low;
+}
+
 bool rm_merge_distance_ok(rm_pass *p, const rm_merge *g)
 {
     double new_c, new_m, old_c, old_m;
     fan_distances(p, g, true, &new_c, &new_m);
-    rm_collapse_bounds_need(p);
-    bool c_ok = new_c <= p->centroid_bound;
-    if (c_ok && new_m <= p->midpoint_low)
+    if (rm_distances_within(p, new_c, new_m))
         return true; /* within the mesh's before: the fan's own need not be asked */
     fan_distances(p, g, false, &old_c, &old_m);
-    if (!(c_ok || new_c <= old_c))
+    return rm_distances_ok(p, new_c, new_m, old_c, old_m, g->along);
+}
+
+bool rm_distances_ok(rm_pass *p, double new_c, double new_m, double old_c, double old_m,
+                     bool along)
+{
+    rm_collapse_bounds_need(p);
+    if (!(new_c <= p->centroid_bound || new_c <= old_c))
         return false;
     if (new_m <= old_m)
         return true;
     /* the found mesh's midpoints (rm_midpoint_within: 177M instructions on the gyroid ball)
        asked last, and never for a merge along a crease, where the farthest midpoints lie
        (once known, they still bound it) */
-    return g->along ? p->midpoint_known && new_m <= p->midpoint_bound
-                    : rm_midpoint_within(p, new_m);
+    return along ? p->midpoint_known && new_m <= p->midpoint_bound
+                 : rm_midpoint_within(p, new_m);
 }
 
 /* What merge_shape_ok asks of v's fan as it is, without measuring it afresh

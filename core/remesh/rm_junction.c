@@ -281,8 +281,8 @@ static uint32_t cluster_corner(const rm_pass *p, const junction *j, uint32_t t)
 /* The smallest sine of the cone over the rim with apex w (a cluster vertex), or -1 when a
  * cone triangle fails cone_tri_ok, an edge w -> x bends past the crease angle (and f's
  * curvature does not explain it) where x is free or the triangles on either side face one
- * sheet, or a new centroid or midpoint lies farther from f = 0 than the farthest of the
- * star's before and of the mesh as found. */
+ * sheet, or a new centroid or midpoint lies farther from f = 0 than rm_distances_ok allows
+ * a merge along a crease (the star's farthest before, or the mesh's as found). */
 static double cone_score(rm_pass *p, const junction *j, uint32_t w)
 {
     const ism_mesh *m = p->r.m;
@@ -323,6 +323,8 @@ static double cone_score(rm_pass *p, const junction *j, uint32_t w)
                                              (ln[i] + ln[k]) / wb, NULL)))
             return -1;
     }
+    if (rm_distances_within(p, new_c, new_m))
+        return score;
     double old_c = 0, old_m = 0;
     for (int i = 0; i < j->nstar; i++) {
         const uint32_t *c = m->tri + 3 * (size_t)j->star[i];
@@ -332,11 +334,8 @@ static double cone_score(rm_pass *p, const junction *j, uint32_t w)
             if (in_cluster(j, c[k]))
                 old_m = fmax(old_m, rm_midpoint_distance(p, q[k], q[(k + 1) % 3]));
     }
-    rm_collapse_bounds_need(p);
-    if (!(new_c <= fmax(old_c, p->centroid_bound)) ||
-        !(new_m <= old_m || rm_midpoint_within(p, new_m)))
-        return -1;
-    return score;
+    /* a collapse merges along creases: rm_merge_distance_ok's rule for those */
+    return rm_distances_ok(p, new_c, new_m, old_c, old_m, true) ? score : -1;
 }
 
 /* The smallest sine of the star's triangles now. */
