@@ -473,7 +473,9 @@ static bool mend_junction(rm_pass *p, uint32_t t, bool *ok)
         mid[k] = (rm_pos(p, j.v[0])[k] + rm_pos(p, j.v[1])[k]) / 2;
     for (;;) {
         double x[3];
-        int ns = gather_star(p, &j) && disc_ok(p, &j) ? sheets(p, &j, x) : 0;
+        if (!gather_star(p, &j))
+            break; /* the star only grows with the cluster */
+        int ns = disc_ok(p, &j) ? sheets(p, &j, x) : 0;
         if (ns >= 2) {
             double floor = star_sine(p, &j);
             /* the junction's vertex: the member nearest where the sheets meet, when they
@@ -497,7 +499,7 @@ static bool mend_junction(rm_pass *p, uint32_t t, bool *ok)
             break;
         /* the nearer of a vertex the cluster wraps round (locked or not: it lies inside) and
            the nearest locked neighbour */
-        uint32_t y = j.nstar ? pinched(p, &j, mid) : UINT32_MAX;
+        uint32_t y = pinched(p, &j, mid);
         uint32_t z = nearest_locked(p, &j, mid, reach);
         if (y == UINT32_MAX || r->locked[y] == RM_PINNED || rm_dist(rm_pos(p, y), mid) > reach ||
             (z != UINT32_MAX && rm_dist(rm_pos(p, z), mid) < rm_dist(rm_pos(p, y), mid)))
@@ -512,15 +514,53 @@ static bool mend_junction(rm_pass *p, uint32_t t, bool *ok)
     return *ok;
 }
 
+/* A needle and its smallest sine, to visit the worst first. */
+typedef struct seed {
+    double sine;
+    uint32_t t;
+} seed;
+
+static int seed_cmp(const void *x, const void *y)
+{
+    const seed *a = x, *b = y;
+    if (a->sine != b->sine)
+        return a->sine < b->sine ? -1 : 1;
+    return a->t < b->t ? -1 : a->t > b->t;
+}
+
+/* The needles are visited worst first (ties by index), not in triangle order, so that which
+ * cluster collapses first, and so which keeps the junction's vertex, follows the needles'
+ * shapes and not the polygoniser's numbering; a needle a collapse mended or removed is
+ * skipped. */
 size_t rm_junction_collapse(rm_pass *p, bool *ok)
 {
     const ism_mesh *m = p->r.m;
     double needle = rm_insert_poor();
-    size_t made = 0;
-    for (size_t t = 0; t < m->ntris && *ok; t++)
-        if (!p->r.dead[t] && rm_tri_sine(p, (uint32_t)t) < needle &&
-            mend_junction(p, (uint32_t)t, ok))
+    size_t made = 0, n = 0, room = 0;
+    seed *s = NULL;
+    for (size_t t = 0; t < m->ntris; t++) {
+        double sine = p->r.dead[t] ? INFINITY : rm_tri_sine(p, (uint32_t)t);
+        if (!(sine < needle))
+            continue;
+        if (n == room) {
+            room = room ? 2 * room : 64;
+            seed *more = realloc(s, room * sizeof *s);
+            if (!more) {
+                free(s);
+                *ok = false;
+                return 0;
+            }
+            s = more;
+        }
+        s[n++] = (seed){sine, (uint32_t)t};
+    }
+    if (n > 1)
+        qsort(s, n, sizeof *s, seed_cmp);
+    for (size_t i = 0; i < n && *ok; i++)
+        if (!p->r.dead[s[i].t] && rm_tri_sine(p, s[i].t) < needle &&
+            mend_junction(p, s[i].t, ok))
             made++;
+    free(s);
     p->collapses += made;
     return made;
 }
