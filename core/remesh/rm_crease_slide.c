@@ -96,14 +96,6 @@
  * crease whose neighbours on it are not (no chain to slide along). */
 #define ISM_RM_CREASE_NEAR_ERRORS 2.0
 #define ISM_RM_CREASE_REACH_ERRORS 4.0
-/* A triangle of a fan moved onto the crease may face within this (degrees) of either
- * branch's normal there, whatever it faced before (tri_ok): a chamfer triangle between the
- * two surfaces faces neither, and turns by up to the crease's angle (140° on the
- * cube-minus-ball) once its corner is on the crease; 60° is the turn limit's own
- * (ISM_RM_COLLAPSE_MAX_TURN_DEG). bench_remesh cube-minus-ball, 0.37-cell box: 359 needles
- * with the turn limit alone, 174 with 30°, 119 with 45°, 108 with 60°; gyroid-ball own /
- * 1e-3 / 0.37-cell / √2−1 boxes 19 / 22 / 35 / 23 with 45°, 19 / 20 / 24 / 19 with 60°. */
-#define ISM_RM_CREASE_FACE_DEG 60.0
 
 /* A vertex beside the crease is merged onto it with a neighbour closer than this × its mean
  * edge, the nearest first and at most ISM_RM_CREASE_MERGE_TRIES of them (snap_merge). Under

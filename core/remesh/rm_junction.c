@@ -24,7 +24,7 @@
  * were a disc of one label, its inner edges on no caller's locked list (the curves stage's
  * creases stay as cut), whose rim is one cycle that each new triangle spans once (a disc
  * for a disc: χ, components, cones and boundaries kept exactly), every new triangle lies
- * within ISM_RM_COLLAPSE_MAX_TURN_DEG of its own sheet's normal (∇f at one of its outer
+ * within ISM_RM_CREASE_FACE_DEG of its own sheet's normal (∇f at one of its outer
  * corners, not its old normal: the cluster's triangles are 1e-4 across and their normals
  * noise), bends against its outer neighbour no more than the crease angle, than it did plus
  * ISM_RM_CROWD_BEND_DEG, or than f's curvature explains (rm_bend_is_curvature), makes no
@@ -234,7 +234,7 @@ static double cos_between(const double *n, double ln, const double *m, double lm
 }
 
 /* Cone triangle t (its cluster corner s read at w's place: corners q; at s's own: o, outer
- * corners a -> b) faces its own sheet (∇f at a or b within ISM_RM_COLLAPSE_MAX_TURN_DEG) and
+ * corners a -> b) faces its own sheet (∇f at a or b within ISM_RM_CREASE_FACE_DEG) and
  * bends against the triangle across ab no more than the crease angle, than it did plus
  * ISM_RM_CROWD_BEND_DEG, or than f's curvature explains. n gets its normal (length *ln). */
 static bool cone_tri_ok(const rm_pass *p, uint32_t t, uint32_t a, uint32_t b,
@@ -244,7 +244,7 @@ static bool cone_tri_ok(const rm_pass *p, uint32_t t, uint32_t a, uint32_t b,
     *ln = rm_cross(q[0], q[1], q[2], n);
     double lo = rm_cross(o[0], o[1], o[2], m);
     const double *ga = p->normal + 3 * (size_t)a, *gb = p->normal + 3 * (size_t)b;
-    double turn = cos(ISM_RM_COLLAPSE_MAX_TURN_DEG * M_PI / 180);
+    double turn = cos(ISM_RM_CREASE_FACE_DEG * M_PI / 180);
     if (!(*ln > 0) || !(fmax(cos_between(n, *ln, ga, 1), cos_between(n, *ln, gb, 1)) > turn))
         return false;
     uint32_t s = rm_merge_across(&p->r, a, b, t);
