@@ -44,28 +44,33 @@ static void corners(const rm_pass *p, uint32_t t, uint32_t v, const double *x, c
     rm_merge_corners(&p->r, t, v, x, q);
 }
 
-/* cos of the bend between normals n (length ln) and m (lm). */
-static double cos_bend(const double *n, double ln, const double *m, double lm)
-{
-    return ln > 0 && lm > 0 ? ism_dot3(n, m) / (ln * lm) : -1;
-}
-
 bool rm_crease_tri_ok(const rm_pass *p, uint32_t t, uint32_t a, uint32_t b,
                       const double *o[3], const double *q[3])
 {
-    double n[3], m[3], u[3];
+    double n[3], m[3];
     double ln = rm_cross(q[0], q[1], q[2], n), lo = rm_cross(o[0], o[1], o[2], m);
-    if (!(cos_bend(m, lo, n, ln) > cos(ISM_RM_COLLAPSE_MAX_TURN_DEG * M_PI / 180)))
+    if (!(rm_cos_bend(m, lo, n, ln) > cos(ISM_RM_COLLAPSE_MAX_TURN_DEG * M_PI / 180)))
         return false;
+    return rm_crease_bend_ok(p, t, a, b, n, ln, m, lo, false);
+}
+
+bool rm_crease_bend_ok(const rm_pass *p, uint32_t t, uint32_t a, uint32_t b, const double *n,
+                       double ln, const double *m, double lo, bool curvature)
+{
+    double u[3];
     uint32_t s = rm_merge_across(&p->r, a, b, t);
     if (s == UINT32_MAX)
         return true; /* not manifold: its bend is no crease test's */
     const uint32_t *z = p->r.m->tri + 3 * (size_t)s;
     double lu = rm_cross(rm_pos(p, z[0]), rm_pos(p, z[1]), rm_pos(p, z[2]), u);
-    double now = cos_bend(n, ln, u, lu), before = cos_bend(m, lo, u, lu);
+    double now = rm_cos_bend(n, ln, u, lu), before = rm_cos_bend(m, lo, u, lu);
     /* a crease's edge bends as it did, give or take the hair moved */
     before = cos(fmin(M_PI, acos(fmax(-1, fmin(1, before))) + ISM_RM_CROWD_BEND_DEG * M_PI / 180));
-    return now >= fmin(before, cos(ISM_RM_CREASE_DEG * M_PI / 180));
+    if (now >= fmin(before, cos(ISM_RM_CREASE_DEG * M_PI / 180)))
+        return true;
+    double ab = rm_dist(rm_pos(p, a), rm_pos(p, b));
+    return curvature && ab > 0 &&
+           rm_bend_is_curvature(p, a, b, acos(fmax(-1, fmin(1, now))), (ln + lu) / ab, NULL);
 }
 
 /* New triangle t (v at w's place) faces the fan's way, does not turn over against ∇f where
@@ -92,7 +97,7 @@ static bool new_triangle_ok(const rm_pass *p, const rm_merge *g, uint32_t t, con
         return rm_crease_tri_ok(p, t, a, b, o, q);
     double n[3], m[3], u[3];
     double ln = rm_cross(q[0], q[1], q[2], n), lo = rm_cross(o[0], o[1], o[2], m);
-    if (!(cos_bend(fan_n, sqrt(ism_dot3(fan_n, fan_n)), n, ln) >
+    if (!(rm_cos_bend(fan_n, sqrt(ism_dot3(fan_n, fan_n)), n, ln) >
           cos(ISM_RM_COLLAPSE_MAX_TURN_DEG * M_PI / 180)) ||
         rm_turns_over(p, c, g->v, p->normal + 3 * (size_t)g->w, n))
         return false;
@@ -101,8 +106,8 @@ static bool new_triangle_ok(const rm_pass *p, const rm_merge *g, uint32_t t, con
         return true;
     const uint32_t *z = p->r.m->tri + 3 * s;
     double lu = rm_cross(rm_pos(p, z[0]), rm_pos(p, z[1]), rm_pos(p, z[2]), u);
-    double now = cos_bend(n, ln, u, lu);
-    if (now >= fmin(cos_bend(m, lo, u, lu), cos(ISM_RM_COLLAPSE_MAX_BEND_DEG * M_PI / 180)))
+    double now = rm_cos_bend(n, ln, u, lu);
+    if (now >= fmin(rm_cos_bend(m, lo, u, lu), cos(ISM_RM_COLLAPSE_MAX_BEND_DEG * M_PI / 180)))
         return true;
     /* a bend f's curvature accounts for is no crease (rm_locks.c asks the same of an edge),
        in the last mending (bend_curvature): beside cusp-a2's cusp the surface is a tube of

@@ -227,12 +227,6 @@ static int sheets(const rm_pass *p, junction *j, double x[3])
     return groups;
 }
 
-/* cos of the angle between normals n (length ln) and m (lm); -1 when either vanishes. */
-static double cos_between(const double *n, double ln, const double *m, double lm)
-{
-    return ln > 0 && lm > 0 ? ism_dot3(n, m) / (ln * lm) : -1;
-}
-
 /* Cone triangle t (its cluster corner s read at w's place: corners q; at s's own: o, outer
  * corners a -> b) faces its own sheet (∇f at a or b within ISM_RM_CREASE_FACE_DEG) and
  * bends against the triangle across ab no more than the crease angle, than it did plus
@@ -240,25 +234,14 @@ static double cos_between(const double *n, double ln, const double *m, double lm
 static bool cone_tri_ok(const rm_pass *p, uint32_t t, uint32_t a, uint32_t b,
                         const double *q[3], const double *o[3], double n[3], double *ln)
 {
-    double m[3], u[3];
+    double m[3];
     *ln = rm_cross(q[0], q[1], q[2], n);
     double lo = rm_cross(o[0], o[1], o[2], m);
     const double *ga = p->normal + 3 * (size_t)a, *gb = p->normal + 3 * (size_t)b;
     double turn = cos(ISM_RM_CREASE_FACE_DEG * M_PI / 180);
-    if (!(*ln > 0) || !(fmax(cos_between(n, *ln, ga, 1), cos_between(n, *ln, gb, 1)) > turn))
+    if (!(*ln > 0) || !(fmax(rm_cos_bend(n, *ln, ga, 1), rm_cos_bend(n, *ln, gb, 1)) > turn))
         return false;
-    uint32_t s = rm_merge_across(&p->r, a, b, t);
-    if (s == UINT32_MAX)
-        return true; /* not manifold: no bend to measure */
-    const uint32_t *z = p->r.m->tri + 3 * (size_t)s;
-    double lu = rm_cross(rm_pos(p, z[0]), rm_pos(p, z[1]), rm_pos(p, z[2]), u);
-    double now = cos_between(n, *ln, u, lu), before = cos_between(m, lo, u, lu);
-    before = cos(fmin(M_PI, acos(fmax(-1, fmin(1, before))) + ISM_RM_CROWD_BEND_DEG * M_PI / 180));
-    if (now >= fmin(before, cos(ISM_RM_CREASE_DEG * M_PI / 180)))
-        return true;
-    double ab = rm_dist(rm_pos(p, a), rm_pos(p, b));
-    return ab > 0 &&
-           rm_bend_is_curvature(p, a, b, acos(fmax(-1, fmin(1, now))), (*ln + lu) / ab, NULL);
+    return rm_crease_bend_ok(p, t, a, b, n, *ln, m, lo, true);
 }
 
 /* The sheet (sheets()) whose normal is nearest normal n: the one a cone triangle faces. */
@@ -316,7 +299,7 @@ static double cone_score(rm_pass *p, const junction *j, uint32_t w)
         if (k == j->nkeep ||
             (p->r.locked[b] && sheet_of(j, n[i]) != sheet_of(j, n[k])))
             continue;
-        double c = cos_between(n[i], ln[i], n[k], ln[k]);
+        double c = rm_cos_bend(n[i], ln[i], n[k], ln[k]);
         double wb = rm_dist(x, rm_pos(p, b));
         if (!(c >= cos(ISM_RM_CREASE_DEG * M_PI / 180)) &&
             !(wb > 0 && rm_bend_is_curvature(p, w, b, acos(fmax(-1, fmin(1, c))),

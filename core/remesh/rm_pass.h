@@ -10,6 +10,7 @@
 #include "core/eval/eval.h"
 #include "core/remesh/remesh_types.h"
 #include "core/remesh/rm_mesh.h"
+#include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -236,6 +237,13 @@ bool rm_flip_would_pass(rm_pass *p, const double *A, const double *B, const doub
  * A degenerate q or o fails (rm_collapse.c). */
 bool rm_crease_tri_ok(const rm_pass *p, uint32_t t, uint32_t a, uint32_t b,
                       const double *o[3], const double *q[3]);
+/* rm_crease_tri_ok's bend part: new triangle t (normal n, length ln; m / lo its normal
+ * before) bends against the triangle across its outer edge a -> b by at most the crease
+ * angle or by ISM_RM_CROWD_BEND_DEG more than before, or (curvature) by what f's curvature
+ * explains (rm_bend_is_curvature); true where ab is no manifold edge. rm_junction.c's cone
+ * triangles, which face their sheet's ∇f instead, share it. */
+bool rm_crease_bend_ok(const rm_pass *p, uint32_t t, uint32_t a, uint32_t b, const double *n,
+                       double ln, const double *m, double lo, bool curvature);
 
 /* Collapses edges of triangles with a small angle (rm_collapse.c) where the topology, the
  * features and the distance to f = 0 allow it; returns the collapses made. Removed
@@ -344,6 +352,11 @@ static inline bool rm_normal_zero(const rm_pass *p, uint32_t v)
 
 /* A triangle whose smallest angle's sine is below this is a needle to split (rm_insert.c)
  * and sizes the room for insertions (remesh.c). */
+/* cos of the angle between normals n (length ln) and m (lm); -1 when either vanishes. */
+static inline double rm_cos_bend(const double *n, double ln, const double *m, double lm)
+{
+    return ln > 0 && lm > 0 ? ism_dot3(n, m) / (ln * lm) : -1;
+}
 static inline double rm_insert_poor(void) { return sin(ISM_RM_INSERT_DEG * M_PI / 180); }
 
 /* The sine of ISM_RM_COLLAPSE_DEG: a triangle whose smallest angle's sine is below it is poor
