@@ -1,5 +1,6 @@
-/* rm_junction.c — needles where three or more crease sheets meet (a cube's corner, the triple
- * points of three balls), collapsed as one cluster (rm_junction_collapse, after the quality
+/* rm_junction.c — needles among crowded crease vertices where two or more crease sheets meet
+ * (beside a junction of three: a cube's corner, the triple points of three balls, and the
+ * junction itself), collapsed as one cluster (rm_junction_collapse, after the quality
  * pass's last mending). The polygoniser puts a locked vertex on such a point and others on
  * each crease around it, as close as 6e-5 where the cells are 6e-3; the needles between them
  * survive every single merge (each re-fans neighbours that are themselves 1e-4 triangles, or
@@ -55,8 +56,10 @@
  * (a curved sheet read as two groups beside a crease) and the planes meet far off or along a
  * line (a cube's corner: 1, three balls' triple points: 0.99). */
 #define ISM_RM_JUNCTION_DET 0.41
-/* The triangles touching a cluster, at most this many (the cluster's fans: each of its
- * vertices has about 6; its rim, the target's fan after, at most ISM_RM_COLLAPSE_MAX_DEGREE). */
+/* The triangles touching a cluster, at most this many: ISM_RM_JUNCTION_MAX vertices of
+ * degree up to 8 sharing no triangle (a crowded crease vertex has 6 to 8; the fans of a
+ * cluster share most of theirs). A cluster whose star is larger is grown no further (its
+ * star only grows); the cone after has its own limit, ISM_RM_COLLAPSE_MAX_DEGREE. */
 #define ISM_RM_JUNCTION_STAR 96
 
 /* A cluster, its star (the triangles with a corner in it) and what a collapse into a target
@@ -430,7 +433,7 @@ static double longest_edge(const rm_pass *p, uint32_t v)
 }
 
 /* Grows clusters from needle t's shortest edge between two locked vertices and collapses
- * the best that passes (into *best's target); true when one was. *ok false when out of
+ * the best that passes into its best target; true when one was. *ok false when out of
  * memory. */
 static bool mend_junction(rm_pass *p, uint32_t t, bool *ok)
 {

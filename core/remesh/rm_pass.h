@@ -272,7 +272,7 @@ bool rm_merge_do(rm_pass *p, const struct rm_merge *g, uint32_t *fan, uint32_t *
  * merges made (they count in collapses). *ok false when out of memory. */
 size_t rm_horn_tips(rm_pass *p, const ism_remesh_options *o, bool *ok);
 /* Collapses the crowds of locked crease vertices that needles under 10° still join (where
- * three or more crease sheets meet: a cube's corner, three balls' triple points, and along
+ * two or more crease sheets meet: a cube's corner, three balls' triple points, and along
  * the creases beside them), each into one of its vertices, where the star stays a disc and
  * every new triangle keeps to its own sheet (rm_junction.c); returns the collapses made
  * (they count in collapses). *ok false when out of memory. */
