@@ -433,9 +433,9 @@ static double longest_edge(const rm_pass *p, uint32_t v)
 }
 
 /* Grows clusters from needle t's shortest edge between two locked vertices and collapses
- * the best that passes into its best target; true when one was. *ok false when out of
- * memory. */
-static bool mend_junction(rm_pass *p, uint32_t t, bool *ok)
+ * the best that passes (of at most `most` sheets: 2, or 3 for any) into its best target;
+ * true when one was. *ok false when out of memory. */
+static bool mend_junction(rm_pass *p, uint32_t t, int most, bool *ok)
 {
     const rm_mesh *r = &p->r;
     const uint32_t *c = r->m->tri + 3 * (size_t)t;
@@ -462,7 +462,7 @@ static bool mend_junction(rm_pass *p, uint32_t t, bool *ok)
         if (!gather_star(p, &j))
             break; /* the star only grows with the cluster */
         int ns = disc_ok(p, &j) ? sheets(p, &j, x) : 0;
-        if (ns >= 2) {
+        if (ns >= 2 && (most > 2 || ns == 2)) {
             double floor = star_sine(p, &j);
             /* the junction's vertex: the member nearest where the sheets meet, when they
                meet at a point within the cluster's reach */
@@ -514,39 +514,61 @@ static int seed_cmp(const void *x, const void *y)
     return a->t < b->t ? -1 : a->t > b->t;
 }
 
-/* The needles are visited worst first (ties by index), not in triangle order, so that which
- * cluster collapses first, and so which keeps the junction's vertex, follows the needles'
- * shapes and not the polygoniser's numbering; a needle a collapse mended or removed is
- * skipped. */
-size_t rm_junction_collapse(rm_pass *p, bool *ok)
+/* The needles under 10° now, worst first (ties by index), into *s (*n of them; NULL when
+ * none); false when out of memory. */
+static bool needles(rm_pass *p, seed **s, size_t *n)
 {
     const ism_mesh *m = p->r.m;
     double needle = rm_insert_poor();
-    size_t made = 0, n = 0, room = 0;
-    seed *s = NULL;
+    size_t room = 0;
+    *s = NULL;
+    *n = 0;
     for (size_t t = 0; t < m->ntris; t++) {
         double sine = p->r.dead[t] ? INFINITY : rm_tri_sine(p, (uint32_t)t);
         if (!(sine < needle))
             continue;
-        if (n == room) {
+        if (*n == room) {
             room = room ? 2 * room : 64;
-            seed *more = realloc(s, room * sizeof *s);
+            seed *more = realloc(*s, room * sizeof **s);
             if (!more) {
-                free(s);
-                *ok = false;
-                return 0;
+                free(*s);
+                *s = NULL;
+                return false;
             }
-            s = more;
+            *s = more;
         }
-        s[n++] = (seed){sine, (uint32_t)t};
+        (*s)[(*n)++] = (seed){sine, (uint32_t)t};
     }
-    if (n > 1)
-        qsort(s, n, sizeof *s, seed_cmp);
-    for (size_t i = 0; i < n && *ok; i++)
-        if (!p->r.dead[s[i].t] && rm_tri_sine(p, s[i].t) < needle &&
-            mend_junction(p, s[i].t, ok))
-            made++;
-    free(s);
+    if (*n > 1)
+        qsort(*s, *n, sizeof **s, seed_cmp);
+    return true;
+}
+
+/* Two sweeps over the needles, each worst first: the first collapses only clusters of two
+ * sheets (the crowds along each crease beside a junction), the second any. A junction's
+ * cluster can keep the junction's vertex only once the crowds beside it are gone
+ * (three-balls' own box: a 6.89° needle astride the first two balls' crease 1.6e-2 from the
+ * lower triple point, whose collapse lets the triple point's cluster take its vertex); the
+ * sweeps make that order the rule rather than a matter of the polygoniser's numbering, as
+ * is which needle seeds first within a sweep. A needle a collapse mended or removed is
+ * skipped. */
+size_t rm_junction_collapse(rm_pass *p, bool *ok)
+{
+    double needle = rm_insert_poor();
+    size_t made = 0;
+    for (int most = 2; most <= 3 && *ok; most++) {
+        seed *s;
+        size_t n;
+        if (!needles(p, &s, &n)) {
+            *ok = false;
+            break;
+        }
+        for (size_t i = 0; i < n && *ok; i++)
+            if (!p->r.dead[s[i].t] && rm_tri_sine(p, s[i].t) < needle &&
+                mend_junction(p, s[i].t, most, ok))
+                made++;
+        free(s);
+    }
     p->collapses += made;
     return made;
 }
