@@ -2844,8 +2844,11 @@ static enum ism_dual_status mesh_rounds(dual *d, ism_mesh *mesh, ism_dual_stats 
         st->rounds++;
         split_marked(d);
     }
-    for (size_t i = 0; i < d->nn; i++)
+    st->coarse_nodes = 0;
+    for (size_t i = 0; i < d->nn; i++) {
         st->leaves += d->n[i].child < 0 && has_sheet(d->n[i].kind);
+        st->coarse_nodes += d->n[i].level <= d->o->min_depth;
+    }
     return to_mesh(d, mesh) ? ISM_DUAL_OK : ISM_DUAL_NO_MEMORY;
 }
 

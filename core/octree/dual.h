@@ -48,6 +48,8 @@ typedef struct ism_dual_stats {
     uint64_t missed;      /* triangles beyond E with every leaf at max_depth (then the call
                              says "not applicable") */
     uint64_t leaves;      /* leaves with a vertex */
+    uint64_t coarse_nodes; /* the tree's nodes of levels up to depth.min (those its parent's
+                              batch shows free are empty leaves, their subtrees never made) */
     uint64_t evals_point, evals_gradient, evals_interval;
     int threads;          /* threads the call ran on (o->threads, 0: every core) */
     enum ism_dual_reason declined; /* why "not applicable" (mesher.h), else NONE */

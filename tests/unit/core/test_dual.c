@@ -15,6 +15,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include "core/octree/dual.h"
 #include "poly_fixture.h"
 
 /* Two spheres of radius 1/2, 0.01 apart: between them the product's gradient nearly
@@ -256,6 +257,48 @@ Test(dual, sag_split_spares_the_proofs)
 Test(dual, free_children_skip_their_proofs)
 {
     torus_proofs_within(FREE_KIDS_TORUS_E, FREE_KIDS_INTERVALS);
+}
+
+/* Children their parent's batch shows free of f = 0 are empty leaves above depth.min too
+ * (dual.c children_free): the unit sphere in the box ±1.5 (three placements) at depth.min 3.
+ * Its level-2 cells are 0.75 across and reach 1.3 from the centre, so none lies inside the
+ * ball, and one holds f = 0 iff its nearest point lies within 1 of the centre (closed form
+ * below: 32 of the 64, the 8 at the centre and the 24 beside their faces, the rest 1.06
+ * away). The natural interval of a sum of squares is exact, so exactly those are split:
+ * 1 + 8 + 64 + 8 × 32 = 329 nodes to level 3, against 585 when every level-2 cell was split
+ * (the batches gated past depth.min alone). */
+Test(dual, free_children_above_min_depth_not_split)
+{
+    static const pf_surface unit = {"x^2 + y^2 + z^2 - 1", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&unit);
+    for (int i = pf_first_box(); i < 3; i++) {
+        double box[6];
+        cube_box(1.5, shifts[i], box);
+        uint64_t k = 0;
+        for (int c = 0; c < 64; c++) {
+            double near2 = 0;
+            for (int a = 0; a < 3; a++) {
+                double w = (box[a + 3] - box[a]) / 4, lo = box[a] + w * ((c >> (2 * a)) & 3);
+                double d = lo > 0 ? lo : lo + w < 0 ? -(lo + w) : 0;
+                near2 += d * d;
+            }
+            k += near2 <= 1;
+        }
+        ism_poly_options o;
+        pf_options(&o, box, 3, SAFETY_DEPTH);
+        o.max_error = 1e-2;
+        o.dual = true;
+        ism_mesh m;
+        ism_mesh_init(&m);
+        ism_dual_stats st;
+        cr_assert_eq(ism_dual_mesh(t, &o, &m, &st), ISM_DUAL_OK, "box %d", i);
+        cr_expect_eq(k, 32, "box %d: %llu level-2 cells meet the sphere", i,
+                     (unsigned long long)k);
+        cr_expect_eq(st.coarse_nodes, 1 + 8 + 64 + 8 * k, "box %d: %llu nodes to level 3", i,
+                     (unsigned long long)st.coarse_nodes);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
 }
 
 /* A torus of tube radius 1/4 round the unit circle: its outer equator (x² + y² = 25/16)

@@ -224,6 +224,37 @@ Test(dual_box, grown_box_margins_over_a_cell)
     }
 }
 
+/* The faces' interval proof before the first look (dual_box.c faces_free): the unit sphere
+ * in the box ±1.5 lies 0.5 inside every face (f >= 1.25 on them), so the faces are shown
+ * free and none of the look's 6 × 17² points is evaluated (answer false: no cut seen; 1,734
+ * points without the proof); in ±0.9 every face cuts it (f = -0.19 at a face's centre, 1.43
+ * at its corners), so the proof fails and the look evaluates points and sees the cut. In
+ * the three placements. */
+Test(dual_box, free_faces_skip_the_look)
+{
+    static const pf_surface unit = {"x^2 + y^2 + z^2 - 1", NULL, 0, NULL, 0};
+    static const double far[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5},
+                        near[6] = {-0.9, -0.9, -0.9, 0.9, 0.9, 0.9};
+    ism_tape *t = pf_compile(&unit);
+    for (int which = pf_first_box() - 1; which < 2; which++) {
+        double box[6];
+        ism_sampler s = {.tape = t, .ws = ism_eval_ws_new(t)};
+        cr_assert(s.ws);
+        pf_sweep_box(far, DEPTH, which, box);
+        cr_expect_not(ism_dual_box_seen_cut(&s, box, ISM_DUAL_BOX_LOOK), "box %d", which);
+        cr_expect_eq(s.n_point, 0, "box %d: %llu look points on free faces", which,
+                     (unsigned long long)s.n_point);
+        cr_expect_gt(s.n_interval, 0, "box %d: no faces' proof", which);
+        s.n_point = s.n_interval = 0;
+        pf_sweep_box(near, DEPTH, which, box);
+        cr_expect(ism_dual_box_seen_cut(&s, box, ISM_DUAL_BOX_LOOK), "box %d: cut unseen",
+                  which);
+        cr_expect_gt(s.n_point, 0, "box %d: the look skipped on cut faces", which);
+        ism_eval_ws_free(s.ws);
+    }
+    ism_tape_free(t);
+}
+
 Test(dual_box, sphere_cut_by_every_face_six_circles)
 {
     static const double base[6] = {-1, -1, -1, 1, 1, 1};
