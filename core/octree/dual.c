@@ -1142,6 +1142,13 @@ typedef struct split_out {
  * instructions a corner, 1% of the torus at 3e-3. */
 static const uint8_t SPLIT_OFF[8] = {0, 1, 3, 4, 9, 10, 12, 13};
 
+/* Are a split's children past min_depth, where batch_on's own judgement applies and the
+ * batches are counted for it (expand), rather than above it, where they are always made? */
+static bool batch_judged(const dual *d, int parent_level)
+{
+    return parent_level + 1 >= d->o->min_depth;
+}
+
 /* Bit c: child c's box is free of f = 0 by the natural interval of f over it (the 27
  * points in split_task's order). One batch of eight boxes (ism_eval_interval_batch) costs
  * less than one box's interval alone — callgrind, per call: torus 912 instructions for the
@@ -1159,7 +1166,7 @@ static uint8_t children_free(const dual *d, worker *w, const dnode *parent,
                              const double f[27], const double (*p)[3], bool *batched)
 {
     *batched = false;
-    if (!d->batch_on && parent->level + 1 >= d->o->min_depth)
+    if (!d->batch_on && batch_judged(d, parent->level))
         return 0;
     bool any = false;
     ism_interval x[8], y[8], z[8], out[8];
@@ -1515,7 +1522,7 @@ static void expand(dual *d, const int32_t *list, size_t n)
         d->batch_on = d->batch_freed >= BATCH_PAYS * d->batches;
         split_pass(d, cur, out, n);
         for (size_t k = 0; k < n; k++)
-            if (d->n[cur[k]].level + 1 >= d->o->min_depth) { /* batch_on's own passes */
+            if (batch_judged(d, d->n[cur[k]].level)) {
                 d->batches += out[k].batched;
                 d->batch_freed += (uint64_t)__builtin_popcount(out[k].batch_free);
             }
