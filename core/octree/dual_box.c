@@ -1,5 +1,6 @@
-/* dual_box.c — the grown box, the first look at the box's faces and the clip of the dual mesh
- * by the request's box (the design and its figure: dual_box.h). */
+/* dual_box.c — the grown box, the first look at the box's faces (after the faces' interval
+ * proof, which may spare it) and the clip of the dual mesh by the request's box (the design
+ * and its figure: dual_box.h). */
 #include "core/octree/dual_box.h"
 #include "core/octree/dual_balls.h"
 #include "core/octree/edge_keys.h"
@@ -76,14 +77,19 @@ static bool look_sees_cut(const double *v, size_t n, int *first)
 }
 
 /* The faces' proof before the look (faces_free): each face whole, then the tiles whose
- * interval holds 0 quartered, down to tiles 2^-FACE_TILE_LEVEL of a face's side, while a
- * level's tiles number at most FACE_TILES (then the look decides). The look's 1,734 points
- * cost ~196K instructions on the sphere's and the torus's tapes; a batch of 8 tiles ~900.
- * The sphere's faces are shown free whole, kummer-4-nodes' at level 3 (260 tiles), the
- * torus's at level 4 beside its outer equator (382 tiles: the natural interval of its
- * quartic is wide there); kummer-16-nodes, which its box cuts, stops at level 2 (126 tiles,
- * +34K instructions before the look sees the cut). */
-#define FACE_TILE_LEVEL 5
+ * interval holds 0 quartered, down to the look's own cells (2^-level of a face's side: a
+ * finer tile would be sampled by no look point), while a level's tiles number at most
+ * FACE_TILES (then the look decides). The look's 1,734 points cost ~196K instructions on
+ * the sphere's and the torus's tapes; a batch of 8 tiles ~900. The sphere's faces are shown
+ * free whole, kummer-4-nodes' at level 3 (260 tiles), the torus's at level 4 beside its
+ * outer equator (382 tiles: the natural interval of its quartic is wide there);
+ * kummer-16-nodes, which its box cuts, stops at level 2 (126 tiles, +34K instructions before
+ * the look sees the cut). The worst case, f near 0 along much of the faces (a sheet in a
+ * face), evaluates at most 6 + 24 + 96 + 256 + 256 = 638 tiles at the look's level 4 (80
+ * batches, ~72K instructions, a third of the whole look's) once per mesh, before a look
+ * that may see the cut in its first chunk of 64 points. */
+/* At most this many tiles a level: 32 batches, ~29K instructions, 15% of the whole look;
+ * past it 0 is in the interval over so much of the faces that the look likely sees a cut. */
 #define FACE_TILES 256
 
 /* Tile (i, j) of 2^level a side on face a (side 0: box's low plane, 1: high) into x: the
@@ -104,11 +110,14 @@ static void face_tile(const double box[6], int a, int side, int level, int i, in
 }
 
 /* Is f free of 0 on the box's faces by its natural interval over tiles of them (each face
- * whole, then the tiles holding 0 quartered, to FACE_TILE_LEVEL)? Then f is finite and of one
- * sign over the whole boundary (the closed tiles cover it and meet along their edges), so
- * every point the look samples there has that sign and the look answers false: the same
- * answer, without its points. */
-static bool faces_free(ism_sampler *s, const double box[6])
+ * whole, then the tiles holding 0 quartered, to the look's level `last`)? Then f is finite
+ * and of one sign over the whole boundary (the closed tiles cover it and meet along their
+ * edges), so every point the look samples there has that sign and the look would answer
+ * false, which is answered without its points. (Tiles of both signs can meet only where f
+ * is not finite along their common edge, 0/0 say: the look, skipping such values, might
+ * then see a cut and answer true; false is never a proof, and a cut it misses is found by
+ * the tree, box_cut.) */
+static bool faces_free(ism_sampler *s, const double box[6], int last)
 {
     int16_t tile[FACE_TILES][4], next[FACE_TILES][4]; /* face a, side, i, j */
     ism_interval x[FACE_TILES], y[FACE_TILES], z[FACE_TILES], f[FACE_TILES];
@@ -128,7 +137,7 @@ static bool faces_free(ism_sampler *s, const double box[6])
         for (size_t k = 0; k < n; k++) {
             if (f[k].lo > 0 || f[k].hi < 0)
                 continue; /* free of 0 (a NaN bound is not) */
-            if (level == FACE_TILE_LEVEL || m + 4 > FACE_TILES)
+            if (level == last || m + 4 > FACE_TILES)
                 return false;
             for (int q = 0; q < 4; q++) {
                 next[m][0] = tile[k][0], next[m][1] = tile[k][1];
@@ -145,7 +154,7 @@ static bool faces_free(ism_sampler *s, const double box[6])
 
 bool ism_dual_box_seen_cut(ism_sampler *s, const double box[6], int level)
 {
-    if (!s->local && faces_free(s, box))
+    if (!s->local && faces_free(s, box, level))
         return false;
     int n = 1 << level;
     int first = 0; /* the sign of the first finite value: -1 or 1 */

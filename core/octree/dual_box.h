@@ -56,12 +56,15 @@
 void ism_dual_box_grow(const double box[6], int level, double grown[6]);
 
 /* The first look's lattice on the box's faces: 6 × 17² points (1,734 evaluations, taken
- * LOOK_CHUNK at a time in batches: dual_box.c). */
+ * LOOK_CHUNK at a time in batches: dual_box.c), unless the faces' interval proof spares
+ * them. */
 #define ISM_DUAL_BOX_LOOK 4
 
 /* Does f change sign (or vanish) among the points of box's faces on the lattice of level
  * `level`? A first look: true proves the box cuts the surface; false does not prove it
- * does not. */
+ * does not. First f's natural interval over tiles of the faces, down to that lattice's
+ * cells, may show f free of 0 on them: then false without the points (the tiles counted
+ * in s->n_interval, the points in s->n_point). */
 bool ism_dual_box_seen_cut(ism_sampler *s, const double box[6], int level);
 
 enum ism_box_clip_status {
