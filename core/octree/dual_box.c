@@ -92,9 +92,16 @@ static bool look_sees_cut(const double *v, size_t n, int *first)
  * past it 0 is in the interval over so much of the faces that the look likely sees a cut. */
 #define FACE_TILES 256
 
+/* Coordinate i of n + 1 on the box's axis b: the look's points and the faces' tiles both
+ * (a tile's bounds are look coordinates, so every look point lies in a closed tile). */
+static double look_coord(const double box[6], int b, int i, int n)
+{
+    return box[b] + (box[b + 3] - box[b]) * i / n;
+}
+
 /* Tile (i, j) of 2^level a side on face a (side 0: box's low plane, 1: high) into x: the
- * look's own coordinate formula, the last tile stretched to the box's edge (the faces'
- * tiles then meet along the box's edges whatever that formula rounds to). */
+ * look's own coordinates, the last tile stretched to the box's edge (the faces' tiles then
+ * meet along the box's edges whatever look_coord rounds to). */
 static void face_tile(const double box[6], int a, int side, int level, int i, int j,
                       ism_interval x[3])
 {
@@ -102,9 +109,8 @@ static void face_tile(const double box[6], int a, int side, int level, int i, in
     x[a] = (ism_interval){box[a + 3 * side], box[a + 3 * side]};
     for (int k = 0; k < 2; k++) {
         int b = ax[k];
-        double w = box[b + 3] - box[b];
-        double lo = at[k] ? box[b] + w * at[k] / n : box[b];
-        double hi = box[b] + w * (at[k] + 1) / n;
+        double lo = at[k] ? look_coord(box, b, at[k], n) : box[b];
+        double hi = look_coord(box, b, at[k] + 1, n);
         x[b] = (ism_interval){lo, at[k] + 1 == n ? fmax(hi, box[b + 3]) : hi};
     }
 }
@@ -167,8 +173,8 @@ bool ism_dual_box_seen_cut(ism_sampler *s, const double box[6], int level)
                     int u = (a + 1) % 3, v = (a + 2) % 3;
                     double p[3];
                     p[a] = box[a + 3 * side];
-                    p[u] = box[u] + (box[u + 3] - box[u]) * i / n;
-                    p[v] = box[v] + (box[v + 3] - box[v]) * j / n;
+                    p[u] = look_coord(box, u, i, n);
+                    p[v] = look_coord(box, v, j, n);
                     if (s->local) { /* another tape inside its box (sampler.h): one by one */
                         f[0] = ism_sample_f(s, p);
                         if (look_sees_cut(f, 1, &first))
