@@ -21,7 +21,7 @@
 
 /* Published limits (also in request.schema.json and openapi.yaml). */
 #define ISM_REQ_MAX_BYTES       (256 * 1024) /* request body */
-#define ISM_REQ_MAX_MIN_DEPTH   6            /* unconditional subdivision: 8^6 nodes */
+#define ISM_REQ_MAX_MIN_DEPTH   6            /* subdivision regardless of flatness: 8^6 nodes */
 #define ISM_REQ_DEFAULT_MAX_DEPTH_LIMIT 10   /* operator's limit unless set otherwise */
 #define ISM_REQ_MAX_COORD       1e6          /* |box coordinate| */
 #define ISM_REQ_MIN_SIDE_REL    1e-6         /* box side >= this * max(1, largest |coord|) */

@@ -9,7 +9,9 @@
 
 typedef struct ism_poly_options {
     double box[6];          /* xmin ymin zmin xmax ymax zmax: the octree root */
-    int min_depth;          /* subdivide unconditionally to here (default 3) */
+    int min_depth;          /* subdivide to here whatever the flatness (default 3); the dual
+                               mesher leaves a node its parent's interval batch shows free of
+                               f = 0 empty above it too (dual.c children_free) */
     int max_depth;          /* never deeper than here (default 7) */
     /* The six tolerances; their defaults, ranges and reasons are the table in
      * tolerances.h. */
