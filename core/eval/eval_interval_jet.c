@@ -587,14 +587,12 @@ static ALWAYS_INLINE void load_box(ism_ivjet *r, const ism_interval box[3], unsi
 }
 
 /* keep: NULL, or the gradient pass's (second = 0) record of every instruction's value and
- * first partials as written to its register (ism_eval_interval_grad_kept). vars: the
- * variables whose partials are computed (7: all; 0 with second = 0: the value alone, whose
- * steps never read a partial, so its bits are the same either way). */
+ * first partials as written to its register (ism_eval_interval_grad_kept). */
 static ALWAYS_INLINE size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
-                                const uint8_t *force, uint8_t *kinks, unsigned vars, int second,
-                                ism_ivjet *out, ism_kept_vd *keep)
+                                const uint8_t *force, uint8_t *kinks, int second, ism_ivjet *out,
+                                ism_kept_vd *keep)
 {
-    const unsigned all = want_of(vars, second, false);
+    const unsigned all = want_of(7u, second, false);
     if (!ws || !t || ws->nregs < t->nregs) {
         ism_ivjet any = { .d = { { -1.0, 1.0 } } }; /* depends on x: whole everywhere */
         out->v = ism_iv_whole();
@@ -612,8 +610,7 @@ static ALWAYS_INLINE size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_i
             kink = jet_op(in, r, f, all);
             sanitize(&r[in->out], all);
         } else {
-            unsigned w = want_of(vars & ISM_FREE_ALL & ~(unsigned)in->free_of, second,
-                                 in->smooth);
+            unsigned w = want_of(ISM_FREE_ALL & ~(unsigned)in->free_of, second, in->smooth);
             kink = jet_op(in, r, f, w);
             sanitize(&r[in->out], w);
         }
@@ -714,19 +711,10 @@ size_t ism_eval_interval_grad(const ism_tape *t, ism_ivjet_ws *ws, const ism_int
                               const uint8_t *force, uint8_t *kinks, ism_ivgrad *out)
 {
     ism_ivjet j;
-    size_t n = run(t, ws, box, force, kinks, 7u, 0, &j, NULL);
+    size_t n = run(t, ws, box, force, kinks, 0, &j, NULL);
     out->v = j.v;
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         out->d[k] = j.d[k];
-    return n;
-}
-
-size_t ism_eval_interval_value(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
-                               ism_interval *out)
-{
-    ism_ivjet j;
-    size_t n = run(t, ws, box, NULL, NULL, 0u, 0, &j, NULL);
-    *out = j.v;
     return n;
 }
 
@@ -738,7 +726,7 @@ size_t ism_eval_interval_grad_kept(const ism_tape *t, ism_ivjet_ws *ws,
         return ism_eval_interval_grad(t, ws, box, NULL, NULL, out);
     ws->kept_ok = false;
     ism_ivjet j;
-    size_t n = run(t, ws, box, NULL, NULL, 7u, 0, &j, ws->kept);
+    size_t n = run(t, ws, box, NULL, NULL, 0, &j, ws->kept);
     out->v = j.v;
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         out->d[k] = j.d[k];
@@ -790,5 +778,5 @@ size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_inte
                       ISM_IVG_VL};
         return hess_only(t, ws, &k, box, kinks, out);
     }
-    return run(t, ws, box, force, kinks, 7u, 1, out, NULL);
+    return run(t, ws, box, force, kinks, 1, out, NULL);
 }

@@ -46,13 +46,6 @@ void ism_ivjet_ws_free(ism_ivjet_ws *ws);
 size_t ism_eval_interval_grad(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
                               const uint8_t *force, uint8_t *kinks, ism_ivgrad *out);
 
-/* ism_eval_interval_grad's value alone (no branch forced), bit for bit its out->v, and the
- * same count of kinks: the steps that make a value read only values, so the partials it
- * skips change none (a NaN partial that made the whole pass clean its value left a value
- * with no NaN bound as it was). */
-size_t ism_eval_interval_value(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
-                               ism_interval *out);
-
 /* ism_eval_interval_grad with no branch forced and no kinks wanted, keeping in ws every
  * instruction's value and first partials: a following ism_eval_interval_jet of t over the
  * same box (bit for bit) on ws, with no branch forced, then computes only the Hessian (once;

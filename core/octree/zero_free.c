@@ -49,9 +49,11 @@ static bool octants_free(const ism_tape *t, ism_eval_ws *ws, const ism_interval 
     return true;
 }
 
-/* f(c) + ∇f(box) · (box − c), c the centre; not where f has a kink in the box. */
-static bool mean_value_free(const ism_tape *t, ism_ivjet_ws *jet, const ism_interval box[3],
-                            int sign, double eps)
+/* f(c) + ∇f(box) · (box − c), c the centre; not where f has a kink in the box. f(c) is the
+ * natural enclosure at the point c (ism_eval_interval): the slopes come from the box, which
+ * the kink test already covers, so a min/max tie or abs(0) at c itself changes nothing. */
+static bool mean_value_free(const ism_tape *t, ism_eval_ws *ws, ism_ivjet_ws *jet,
+                            const ism_interval box[3], int sign, double eps)
 {
     ism_interval c[3];
     for (int a = 0; a < 3; a++) {
@@ -59,11 +61,9 @@ static bool mean_value_free(const ism_tape *t, ism_ivjet_ws *jet, const ism_inte
         c[a] = iv(m, m);
     }
     ism_ivgrad over;
-    ism_interval at; /* f at the centre: the value alone (its slopes are not used) */
     if (ism_eval_interval_grad(t, jet, box, NULL, NULL, &over) != 0)
         return false; /* a kink (the slopes are unbounded there) or a workspace misfit */
-    if (ism_eval_interval_value(t, jet, c, &at) != 0)
-        return false;
+    ism_interval at = ism_eval_interval(t, ws, c[0], c[1], c[2]);
     ism_interval mv = at;
     for (int a = 0; a < 3; a++)
         mv = iv_add(mv, iv_mul(over.d[a], iv_sub(box[a], c[a])));
@@ -86,5 +86,5 @@ bool ism_box_zero_free(const ism_tape *t, ism_eval_ws *ws, ism_ivjet_ws *jet,
     if (octants_free(t, ws, box, sign, eps))
         return true;
     *intervals += 2;
-    return jet && mean_value_free(t, jet, box, sign, eps);
+    return jet && mean_value_free(t, ws, jet, box, sign, eps);
 }
