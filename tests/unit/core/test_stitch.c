@@ -1,0 +1,184 @@
+/* test_stitch.c — ism_stitch on lines whose polygons are known by construction: a closed
+ * n-gon around the 32-end line where the graph leaves the stack for the heap (n = 16: 32
+ * ends, the last kept inline; n = 17: the first allocated), two sheets crossing at one point
+ * (four single-polygon ends there, paired by their far gradients), and two sheets closed
+ * through copies of one shared (double) line, each below and above 32 ends. Each loop must
+ * be closed, hold the expected number of points, and step only along given lines. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/octree/stitch.h"
+
+enum { MAX_LINES = 64 };
+
+typedef struct lineset {
+    ism_fline v[MAX_LINES];
+    size_t n;
+} lineset;
+
+static ism_fpoint fpoint(double x, double y, double z, const double g[3])
+{
+    ism_fpoint p = { { x, y, z }, { g[0], g[1], g[2] }, 0 };
+    return p;
+}
+
+static void add_line(lineset *s, ism_fpoint a, ism_fpoint b, uint8_t kind)
+{
+    cr_assert(s->n < MAX_LINES);
+    /* every other line runs backwards: the stitcher must not rely on a line's direction */
+    bool flip = s->n & 1;
+    s->v[s->n++] = (ism_fline){ flip ? b : a, flip ? a : b, kind };
+}
+
+/* Shuffles the lines (a fixed LCG): the stitcher must not rely on their order either. */
+static void shuffle(lineset *s, uint32_t seed)
+{
+    for (size_t i = s->n; i > 1; i--) {
+        seed = seed * 1664525u + 1013904223u;
+        size_t j = (seed >> 8) % i;
+        ism_fline t = s->v[i - 1];
+        s->v[i - 1] = s->v[j];
+        s->v[j] = t;
+    }
+}
+
+/* The points of a sheet: pts[0..n) on a circle of radius 1 about `centre` in the plane
+ * spanned by axes u and w, starting at angle pi (pts[0] = centre - e_u exactly, the origin
+ * for the crossing sheets); g is the sheet's normal. */
+static void circle(ism_fpoint *pts, int n, const double centre[3], int u, int w,
+                   const double g[3])
+{
+    for (int i = 0; i < n; i++) {
+        double t = M_PI + 2.0 * M_PI * i / n, q[3] = { centre[0], centre[1], centre[2] };
+        q[u] += i == 0 ? -1.0 : cos(t);
+        q[w] += i == 0 ? 0.0 : sin(t);
+        pts[i] = fpoint(q[0], q[1], q[2], g);
+    }
+}
+
+static bool same_point(const ism_fpoint *a, const ism_fpoint *b)
+{
+    return memcmp(a->p, b->p, sizeof a->p) == 0;
+}
+
+/* Is a–b one of the lines (either direction)? */
+static bool is_line(const lineset *s, const ism_fpoint *a, const ism_fpoint *b)
+{
+    for (size_t k = 0; k < s->n; k++)
+        if ((same_point(&s->v[k].a, a) && same_point(&s->v[k].b, b)) ||
+            (same_point(&s->v[k].a, b) && same_point(&s->v[k].b, a)))
+            return true;
+    return false;
+}
+
+/* Stitches s and checks: nloops loops, each closed, each of npts points, consecutive
+ * points (and last to first) joined by a given line, no point twice in a loop, every point
+ * of a loop on one sheet (the same normal). */
+static void expect_loops(const char *what, const lineset *s, size_t nloops, size_t npts)
+{
+    ism_flines l = { (ism_fline *)s->v, s->n, s->n };
+    ism_loops out = { 0 };
+    cr_assert(ism_stitch(&l, &out), "%s: stitch failed", what);
+    cr_assert_eq(out.nloops, nloops, "%s: %zu loops, expected %zu", what, out.nloops, nloops);
+    for (size_t i = 0; i < out.nloops; i++) {
+        const ism_loop *lp = &out.loops[i];
+        cr_expect(lp->closed, "%s: loop %zu open", what, i);
+        cr_assert_eq(lp->n, npts, "%s: loop %zu has %zu points, expected %zu", what, i, lp->n,
+                     npts);
+        const ism_fpoint *p = out.pts + lp->first;
+        for (size_t j = 0; j < lp->n; j++) {
+            const ism_fpoint *q = &p[(j + 1) % lp->n];
+            cr_expect(is_line(s, &p[j], q), "%s: loop %zu steps %zu -> %zu off the lines", what,
+                      i, j, (j + 1) % lp->n);
+            cr_expect(memcmp(p[j].g, p[0].g, sizeof p[0].g) == 0,
+                      "%s: loop %zu leaves its sheet at %zu", what, i, j);
+            for (size_t k = j + 1; k < lp->n; k++)
+                cr_expect(!same_point(&p[j], &p[k]), "%s: loop %zu repeats a point", what, i);
+        }
+    }
+    ism_loops_free(&out);
+}
+
+static const double NZ[3] = { 0, 0, 1 }, NY[3] = { 0, 1, 0 };
+
+/* One n-gon of single-polygon lines. */
+static void ngon(int n)
+{
+    ism_fpoint pts[MAX_LINES];
+    const double centre[3] = { 0.25, -0.5, 0.125 };
+    circle(pts, n, centre, 0, 1, NZ);
+    lineset s = { .n = 0 };
+    for (int i = 0; i < n; i++)
+        add_line(&s, pts[i], pts[(i + 1) % n], ISM_LINE_REGULAR);
+    shuffle(&s, (uint32_t)n);
+    char what[32];
+    snprintf(what, sizeof what, "%d-gon", n);
+    expect_loops(what, &s, 1, (size_t)n);
+}
+
+Test(stitch, one_polygon_inline_and_heap)
+{
+    for (int n = 3; n <= 40; n++)
+        ngon(n); /* 16 lines = 32 ends, the last inline graph; 17 the first on the heap */
+}
+
+/* Two n-gons through the origin, one in z = 0 (normal z), one in y = 0 (normal y): four
+ * single-polygon ends meet there, and pairing by the far ends' gradients keeps each sheet's
+ * polygon apart. */
+static void crossing(int n)
+{
+    ism_fpoint a[MAX_LINES / 2], b[MAX_LINES / 2];
+    const double ca[3] = { 1, 0, 0 }, cb[3] = { 0, 0, 1 };
+    circle(a, n, ca, 0, 1, NZ); /* z = 0: meets y = 0 at the origin and (2, 0, 0) */
+    circle(b, n, cb, 2, 0, NY); /* y = 0: meets z = 0 at the origin only */
+    cr_assert(same_point(&a[0], &b[0]) && a[0].p[0] == 0 && a[0].p[1] == 0 && a[0].p[2] == 0);
+    lineset s = { .n = 0 };
+    for (int i = 0; i < n; i++) {
+        add_line(&s, a[i], a[(i + 1) % n], ISM_LINE_REGULAR);
+        add_line(&s, b[i], b[(i + 1) % n], ISM_LINE_REGULAR);
+    }
+    shuffle(&s, 7u + (uint32_t)n);
+    char what[48];
+    snprintf(what, sizeof what, "crossing %d-gons (%d ends)", n, 4 * n);
+    expect_loops(what, &s, 2, (size_t)n);
+}
+
+Test(stitch, crossing_sheets_inline_and_heap)
+{
+    for (int n = 3; n <= 12; n++)
+        crossing(n); /* 8 lines (32 ends) inline; 9 and more (36+ ends) on the heap */
+}
+
+/* Two sheets sharing the line from P to Q, a double line on a face: each sheet's chain of
+ * n - 1 single-polygon lines runs from P to Q and is closed by one copy of the double line. */
+static void shared_line(int n)
+{
+    ism_fpoint a[MAX_LINES / 2], b[MAX_LINES / 2];
+    const double ca[3] = { 1, 0, 0 }, cb[3] = { 0, 0, 1 };
+    circle(a, n, ca, 0, 1, NZ); /* a[0] = b[0] = the origin, as in crossing() */
+    circle(b, n, cb, 2, 0, NY);
+    b[0] = a[0];
+    b[n - 1] = a[n - 1]; /* a second shared point: the double line runs a[n-1] -> a[0] */
+    b[n - 1].g[0] = NY[0], b[n - 1].g[1] = NY[1], b[n - 1].g[2] = NY[2];
+    b[0].g[0] = NY[0], b[0].g[1] = NY[1], b[0].g[2] = NY[2];
+    lineset s = { .n = 0 };
+    for (int i = 0; i + 1 < n; i++) {
+        add_line(&s, a[i], a[i + 1], ISM_LINE_REGULAR);
+        add_line(&s, b[i], b[i + 1], ISM_LINE_REGULAR);
+    }
+    add_line(&s, a[n - 1], a[0], ISM_LINE_DOUBLE);
+    add_line(&s, b[n - 1], b[0], ISM_LINE_DOUBLE);
+    shuffle(&s, 11u + (uint32_t)n);
+    char what[48];
+    snprintf(what, sizeof what, "sheets sharing a line, %d-gons (%d ends)", n, 4 * n);
+    expect_loops(what, &s, 2, (size_t)n);
+}
+
+Test(stitch, shared_line_closes_each_sheet)
+{
+    for (int n = 4; n <= 12; n++)
+        shared_line(n);
+}
