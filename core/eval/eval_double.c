@@ -27,9 +27,9 @@ static inline __attribute__((always_inline)) double trig_value(ism_trig_cache *t
  * their second operand, register in->b, as r[in->b * stride + lane] inside their own case
  * (one point: stride 1, lane 0; a lane of ism_eval_points' registers: ISM_EVAL_BATCH and j),
  * so ism_eval_point pays no test of whether b exists and no load it does not use. Sines and
- * cosines go through the memo trig when there is one (one point), inside their own cases
- * too: a test before the switch for them cost every instruction ~4 of the ~17 it took (the
- * Klein bottle's tape, callgrind). */
+ * cosines go through the memo trig (never NULL: every workspace has one), inside their own
+ * cases too: a test before the switch for them cost every instruction ~4 of the ~17 it took
+ * (the Klein bottle's tape, callgrind). */
 static inline __attribute__((always_inline)) double op_value(const ism_instr *in, double a,
                                                           const double *r, size_t stride,
                                                           size_t lane, ism_trig_cache *trig)
@@ -56,8 +56,8 @@ static inline __attribute__((always_inline)) double op_value(const ism_instr *in
     case ISM_OP_POWI: return ism_powi(a, in->b);
     case ISM_OP_POWC: return ism_powc(a, c);
     case ISM_OP_SQRT: return ism_sqrt_clip(a);
-    case ISM_OP_SIN: return trig ? trig_value(trig, a, true) : sin(a);
-    case ISM_OP_COS: return trig ? trig_value(trig, a, false) : cos(a);
+    case ISM_OP_SIN: return trig_value(trig, a, true);
+    case ISM_OP_COS: return trig_value(trig, a, false);
     case ISM_OP_TAN: return tan(a);
     case ISM_OP_EXP: return exp(a);
     case ISM_OP_LOG: return ism_log_clip(a);
@@ -365,8 +365,8 @@ void ism_eval_batch(const ism_tape *t, ism_eval_ws *ws, const double *x, const d
 }
 
 /* One instruction over n lanes of registers ISM_EVAL_BATCH apart: the frequent operations as
- * loops, sines and cosines through the memo (as run_point), the rest lane by lane through
- * op_value — each lane's arithmetic is run_point's. */
+ * loops, the rest lane by lane through op_value (sines and cosines through the memo trig) —
+ * each lane's arithmetic is run_point's. */
 static void narrow_op(const ism_instr *in, double *regs, ism_trig_cache *trig, size_t n)
 {
     double *restrict o = regs + (size_t)in->out * ISM_EVAL_BATCH;
@@ -382,17 +382,9 @@ static void narrow_op(const ism_instr *in, double *regs, ism_trig_cache *trig, s
     case ISM_OP_MUL_RC: for (size_t j = 0; j < n; j++) o[j] = a[j] * c; return;
     case ISM_OP_SUB_CR: for (size_t j = 0; j < n; j++) o[j] = c - a[j]; return;
     case ISM_OP_SQUARE: for (size_t j = 0; j < n; j++) o[j] = a[j] * a[j]; return;
-    case ISM_OP_SIN:
-    case ISM_OP_COS:
-        for (size_t j = 0; j < n; j++) {
-            double sv, cv;
-            ism_trig_pair(trig, a[j], &sv, &cv);
-            o[j] = in->op == ISM_OP_SIN ? sv : cv;
-        }
-        return;
     default:
         for (size_t j = 0; j < n; j++)
-            o[j] = op_value(in, a[j], regs, ISM_EVAL_BATCH, j, NULL); /* trig: above */
+            o[j] = op_value(in, a[j], regs, ISM_EVAL_BATCH, j, trig);
         return;
     }
 }
