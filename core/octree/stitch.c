@@ -104,6 +104,8 @@ static void pair_point(graph *g, const end_ref *group, int n)
     }
 }
 
+/* Sets g->heap and the four arrays first (allocated ones possibly NULL), so free_graph may
+ * run whatever this returns. */
 static bool build_graph(graph *g, const ism_flines *l)
 {
     size_t ne = 2 * l->n;
@@ -307,8 +309,7 @@ bool ism_stitch(const ism_flines *l, ism_loops *out)
     size_t ne = 2 * l->n;
     if (ne == 0)
         return true;
-    graph g;
-    memset(&g, 0, sizeof g);
+    graph g; /* build_graph sets what free_graph reads before anything can fail */
     bool ok = build_graph(&g, l);
     /* chains that start at a terminal point or a dangling end */
     for (size_t e = 0; e < ne && ok; e++)
