@@ -1,5 +1,5 @@
 /* test_stitch.c — ism_stitch on lines whose polygons are known by construction: a closed
- * n-gon around the 32-end line where the graph leaves the stack for the heap (n = 16: 32
+ * n-gon around the 32-end line (FEW_ENDS) where the graph leaves the stack for the heap (n = 16: 32
  * ends, the last kept inline; n = 17: the first allocated), two sheets crossing at one point
  * (four single-polygon ends there, paired by their far gradients), and two sheets closed
  * through copies of one shared (double) line, each below and above 32 ends. Each loop must
