@@ -125,60 +125,41 @@ Test(stitch, one_polygon_inline_and_heap)
         ngon(n); /* 16 lines = 32 ends, the last inline graph; 17 the first on the heap */
 }
 
-/* Two n-gons through the origin, one in z = 0 (normal z), one in y = 0 (normal y): four
- * single-polygon ends meet there, and pairing by the far ends' gradients keeps each sheet's
- * polygon apart. */
-static void crossing(int n)
+/* Two n-gons through the origin, one in z = 0 (normal z), one in y = 0 (normal y).
+ * Crossing (shared false): four single-polygon ends meet at the origin, and pairing by the
+ * far ends' gradients keeps each sheet's polygon apart. Shared: the sheets also share the
+ * point Q = a[n-1], and each sheet's chain of n - 1 single-polygon lines from the origin to
+ * Q is closed by its own copy of the double line Q -> origin (a double line on a face). */
+static void two_sheets(int n, bool shared)
 {
     ism_fpoint a[MAX_LINES / 2], b[MAX_LINES / 2];
     const double ca[3] = { 1, 0, 0 }, cb[3] = { 0, 0, 1 };
     circle(a, n, ca, 0, 1, NZ); /* z = 0: meets y = 0 at the origin and (2, 0, 0) */
     circle(b, n, cb, 2, 0, NY); /* y = 0: meets z = 0 at the origin only */
     cr_assert(same_point(&a[0], &b[0]) && a[0].p[0] == 0 && a[0].p[1] == 0 && a[0].p[2] == 0);
+    if (shared)
+        memcpy(b[n - 1].p, a[n - 1].p, sizeof a[n - 1].p);
     lineset s = { .n = 0 };
     for (int i = 0; i < n; i++) {
-        add_line(&s, a[i], a[(i + 1) % n], ISM_LINE_REGULAR);
-        add_line(&s, b[i], b[(i + 1) % n], ISM_LINE_REGULAR);
+        uint8_t kind = shared && i == n - 1 ? ISM_LINE_DOUBLE : ISM_LINE_REGULAR;
+        add_line(&s, a[i], a[(i + 1) % n], kind);
+        add_line(&s, b[i], b[(i + 1) % n], kind);
     }
-    shuffle(&s, 7u + (uint32_t)n);
-    char what[48];
-    snprintf(what, sizeof what, "crossing %d-gons (%d ends)", n, 4 * n);
+    shuffle(&s, (shared ? 11u : 7u) + (uint32_t)n);
+    char what[64];
+    snprintf(what, sizeof what, "%s %d-gons (%d ends)",
+             shared ? "sheets sharing a line," : "crossing", n, 4 * n);
     expect_loops(what, &s, 2, (size_t)n);
 }
 
 Test(stitch, crossing_sheets_inline_and_heap)
 {
     for (int n = 3; n <= 12; n++)
-        crossing(n); /* 8 lines (32 ends) inline; 9 and more (36+ ends) on the heap */
-}
-
-/* Two sheets sharing the line from P to Q, a double line on a face: each sheet's chain of
- * n - 1 single-polygon lines runs from P to Q and is closed by one copy of the double line. */
-static void shared_line(int n)
-{
-    ism_fpoint a[MAX_LINES / 2], b[MAX_LINES / 2];
-    const double ca[3] = { 1, 0, 0 }, cb[3] = { 0, 0, 1 };
-    circle(a, n, ca, 0, 1, NZ); /* a[0] = b[0] = the origin, as in crossing() */
-    circle(b, n, cb, 2, 0, NY);
-    b[0] = a[0];
-    b[n - 1] = a[n - 1]; /* a second shared point: the double line runs a[n-1] -> a[0] */
-    b[n - 1].g[0] = NY[0], b[n - 1].g[1] = NY[1], b[n - 1].g[2] = NY[2];
-    b[0].g[0] = NY[0], b[0].g[1] = NY[1], b[0].g[2] = NY[2];
-    lineset s = { .n = 0 };
-    for (int i = 0; i + 1 < n; i++) {
-        add_line(&s, a[i], a[i + 1], ISM_LINE_REGULAR);
-        add_line(&s, b[i], b[i + 1], ISM_LINE_REGULAR);
-    }
-    add_line(&s, a[n - 1], a[0], ISM_LINE_DOUBLE);
-    add_line(&s, b[n - 1], b[0], ISM_LINE_DOUBLE);
-    shuffle(&s, 11u + (uint32_t)n);
-    char what[48];
-    snprintf(what, sizeof what, "sheets sharing a line, %d-gons (%d ends)", n, 4 * n);
-    expect_loops(what, &s, 2, (size_t)n);
+        two_sheets(n, false); /* 8 lines (32 ends) inline; 9 and more (36+ ends) on the heap */
 }
 
 Test(stitch, shared_line_closes_each_sheet)
 {
     for (int n = 4; n <= 12; n++)
-        shared_line(n);
+        two_sheets(n, true);
 }
