@@ -169,6 +169,12 @@ static bool branches(rm_pass *p, const ism_tape *f, const double x[3], double va
            isfinite(val[1]);
 }
 
+/* Both branches' values v within tol × their gradients' lengths n: on the crease. */
+static bool within_both(const double v[2], const double n[2], double tol)
+{
+    return fabs(v[0]) <= tol * n[0] && fabs(v[1]) <= tol * n[1];
+}
+
 /* x lies within tol of both branches' zero sets (first order). val and gn, when not NULL,
  * get the branches' values and gradient lengths there (when they are finite). */
 static bool on_crease(rm_pass *p, const ism_tape *f, const double x[3], double tol,
@@ -182,10 +188,7 @@ static bool on_crease(rm_pass *p, const ism_tape *f, const double x[3], double t
         if (val)
             val[s] = v[s], gn[s] = n[s];
     }
-    for (int s = 0; s < 2; s++)
-        if (!(fabs(v[s]) <= tol * n[s]))
-            return false;
-    return true;
+    return within_both(v, n, tol);
 }
 
 /* The tape for v's fan: f, or f shortened over the fan's box when f's top branches do not
@@ -299,7 +302,8 @@ static bool to_crease(rm_pass *p, const ism_tape *f, double x[3], double scale,
         /* on: one step more, already measured: from within tol it lands at rounding (a
            merged vertex's fan has edges up to ISM_RM_CREASE_MERGE_REL long, so tol alone
            left the cube-minus-ball's merged vertices 1.03e-10 off its sphere) */
-        bool on = fabs(val[0]) <= tol * ism_norm3(g[0]) && fabs(val[1]) <= tol * ism_norm3(g[1]);
+        double gn[2] = {ism_norm3(g[0]), ism_norm3(g[1])};
+        bool on = within_both(val, gn, tol);
         if (on)
             *framed = frame_of((const double (*)[3])g, cf);
         else if (it == ISM_RM_CREASE_NEWTON_STEPS)
@@ -623,8 +627,9 @@ size_t rm_crease_slide_sweep(rm_pass *p)
     return moves;
 }
 
-/* An upper bound on v's mean edge (rm_fan_measure's): its longest edge, at most the root of
- * the summed squares from v to its fan's corners, with room for rounding. */
+/* An upper bound on v's mean edge (rm_fan_measure's): the root of the summed squares from v
+ * to its fan's corners already bounds its longest edge, so the mean; the factor 2 is margin
+ * only, for rounding in either sum (~1e-16 relative). */
 static double mean_edge_above(const rm_pass *p, uint32_t v)
 {
     const rm_mesh *r = &p->r;
@@ -653,13 +658,14 @@ size_t rm_crease_lock_on(rm_pass *p)
         /* off the crease by more than the widest tolerance its fan could give: most free
            vertices (cube, 0.37-cell box: 8,883 fans measured, 10.3M of the pass's 742M
            instructions, for a tolerance only) */
+        double val[2], gn[2];
         if (!on_crease(p, p->f, rm_pos(p, (uint32_t)v),
-                       ISM_RM_CREASE_ON_REL * mean_edge_above(p, (uint32_t)v), NULL, NULL))
+                       ISM_RM_CREASE_ON_REL * mean_edge_above(p, (uint32_t)v), val, gn))
             continue;
         rm_fan f;
         rm_fan_measure(p, (uint32_t)v, &f);
-        if (on_crease(p, p->f, rm_pos(p, (uint32_t)v), ISM_RM_CREASE_ON_REL * f.mean_edge, NULL,
-                      NULL)) {
+        /* the same test at the fan's own tolerance, on the values just measured */
+        if (within_both(val, gn, ISM_RM_CREASE_ON_REL * f.mean_edge)) {
             r->locked[v] = 1; /* on the crease: kept there, as a vertex moved onto it is */
             locked++;
         }
