@@ -174,7 +174,9 @@ double rm_min_angle(const double *a, const double *b, const double *c)
 }
 
 /* A corner whose cosine's square is under this is no cap (cos² 160° = 0.883): the arc
- * tangent is not asked. Far enough under it that rounding in the squares cannot matter. */
+ * tangent is not asked. Far enough under it that rounding in the squares cannot matter
+ * while they are normal numbers: sides over ~1e-77. Under that |u|²|w|² is subnormal, and so
+ * is rm_angle's squared cross product: the arc tangent fails there too (test_rm_cap.c). */
 #define ISM_RM_CAP_COS2_SCREEN 0.8
 
 /* The angle at p of (p, q, s) is at least ISM_RM_CAP_DEG. An angle whose sides' dot
