@@ -165,7 +165,13 @@ bool rm_distances_ok(rm_pass *p, double new_c, double new_m, double old_c, doubl
         return true;
     /* the found mesh's midpoints (rm_midpoint_within: 177M instructions on the gyroid ball)
        asked last, and never for a merge along a crease, where the farthest midpoints lie
-       (once known, they still bound it) */
+       (once known, they still bound it). So the verdict along a crease depends on history:
+       it passes here only once some earlier merge off the creases asked them (midpoint_known;
+       best_merge skips the second direction's distances once the first passes, so that can
+       be later or never). revE found this branch reached 0 times in the cube, three-balls,
+       gyroid-ball, double-torus and cube-minus-ball (own box, --quality good); asking
+       rm_midpoint_within here too (order-free) kept all 217 meshes of mesh_identity.py before
+       rm_junction's collapses (revB 2) came to share this rule. */
     return along ? p->midpoint_known && new_m <= p->midpoint_bound
                  : rm_midpoint_within(p, new_m);
 }
