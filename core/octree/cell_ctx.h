@@ -38,6 +38,9 @@ typedef struct ism_cell_ctx {
     ism_loops loops;
     ism_cell_cache cache;     /* must be initialised (ism_cell_cache_init) */
     bool zero_tile;           /* set by ism_tile_lines: f vanishes on the whole tile */
+    bool unregistered;        /* set by ism_tile_lines when a tile's side met a lattice point
+                                 the registry lacks (it then returns false: ISM_POLY_INTERNAL,
+                                 not out of memory) */
     ism_tile *tiles;          /* the current node's tiles, face by face */
     size_t ntiles, cap_tiles;
     ism_tile *zero;           /* the current node's tiles lying in f = 0 */

@@ -123,8 +123,8 @@ static const ism_lattice_entry *lattice_entry(ism_cell_ctx *cx, const int32_t ip
 
 /* The break points of the lattice line along `axis` through p that lie in [lo, hi],
  * ascending, into cx->coords; lo and hi always. The point at lo is a corner of a non-empty
- * leaf (every side of a tile is an edge of one), so it is registered: false when it is not,
- * or when memory runs out. */
+ * leaf (every side of a tile is an edge of one), so it is registered: false when it is not
+ * (a bug; cx->unregistered is then set), or when memory runs out. */
 static bool side_breaks(ism_cell_ctx *cx, int axis, const int32_t p[3], int32_t lo, int32_t hi)
 {
     ism_coords *out = &cx->coords;
@@ -134,8 +134,10 @@ static bool side_breaks(ism_cell_ctx *cx, int axis, const int32_t p[3], int32_t 
         return false;
     for (q[axis] = lo;;) {
         const ism_lattice_entry *e = lattice_entry(cx, q);
-        if (e->next[0] == ISM_LATTICE_UNREGISTERED)
+        if (e->next[0] == ISM_LATTICE_UNREGISTERED) {
+            cx->unregistered = true;
             return false;
+        }
         if (e->next[axis] >= hi)
             return ism_coords_push(out, hi);
         q[axis] = e->next[axis];

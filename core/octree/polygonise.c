@@ -296,7 +296,7 @@ static void run_chunk(void *arg, size_t chunk, int thread)
     size_t last = first + p->chunk_leaves < p->nleaves ? first + p->chunk_leaves : p->nleaves;
     for (size_t i = first; i < last; i++)
         if (!one_leaf(p, pc, chunk, i, out)) {
-            atomic_store(&p->status, ISM_POLY_NO_MEMORY);
+            atomic_store(&p->status, pc->c.unregistered ? ISM_POLY_INTERNAL : ISM_POLY_NO_MEMORY);
             return;
         }
     if (atomic_fetch_add(&p->triangles, out->ntris) + out->ntris > p->max_triangles) {
@@ -624,6 +624,9 @@ static enum ism_poly_status fail_with(enum ism_poly_status s, const ism_poly_opt
         ism_error_set(err, "cancelled");
     else if (s == ISM_POLY_NO_MEMORY)
         ism_error_set(err, "out of memory");
+    else if (s == ISM_POLY_INTERNAL)
+        ism_error_set(err, "internal error: a tile met a lattice point the break-point "
+                           "registry does not hold");
     return s;
 }
 

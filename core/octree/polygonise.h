@@ -117,6 +117,9 @@ enum ism_poly_status {
     ISM_POLY_TOO_BIG,       /* triangle budget or memory bound exceeded */
     ISM_POLY_CANCELLED,
     ISM_POLY_NO_MEMORY,
+    ISM_POLY_INTERNAL,      /* a broken invariant (err says which): a bug, never the input's
+                               fault; e.g. a tile's side met a lattice point the break-point
+                               registry (ism_breaks_near's partial one) does not hold */
 };
 
 /* Polygonises f = 0 inside o->box. The mesh is replaced (mesh must be initialised). The

@@ -244,6 +244,8 @@ static bool polygonise_status(ism_pipeline_result *r, enum ism_poly_status st,
         return too_big(r, err, tape, o, preview);
     case ISM_POLY_CANCELLED:
         return fail_with(r, 499, "cancelled", "%s", "the request was cancelled");
+    case ISM_POLY_INTERNAL:
+        return fail_with(r, 500, "internal", "the polygoniser failed: %s", err->message);
     case ISM_POLY_NO_MEMORY:
     default:
         return fail_with(r, 500, "no_memory", "the polygoniser ran out of memory: %s",
