@@ -109,7 +109,7 @@ bool ism_leaf_memo_match(const ism_octree *before, const ism_octree *now, int32_
 }
 
 bool ism_leaf_memo_copy(const ism_leaf_memo *m, size_t leaf, ism_cell_out *out,
-                        ism_cell_stats *st, float *error)
+                        ism_cell_stats *st, ism_cell_stats *added, float *error)
 {
     const ism_leaf_rec *r = &m->rec[leaf];
     const ism_cell_out *src = &m->out[r->chunk];
@@ -132,6 +132,7 @@ bool ism_leaf_memo_copy(const ism_leaf_memo *m, size_t leaf, ism_cell_out *out,
         out->segs[2 * out->nsegs + i] = src->segs[2 * r->s0 + i] + shift;
     out->nsegs += r->ns;
     ism_cell_stats_add(st, &r->stats);
+    *added = r->stats;
     *error = r->error;
     return true;
 }

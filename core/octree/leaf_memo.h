@@ -36,9 +36,10 @@ typedef struct ism_leaf_memo {
 bool ism_leaf_memo_match(const ism_octree *before, const ism_octree *now, int32_t *reuse);
 
 /* Appends leaf `leaf`'s recorded output to out (vertex indices moved to out's), adds its
- * counters to st and returns its measured error. False when out of memory. */
+ * counters to st, and returns the counters added in *added and its measured error in
+ * *error. False when out of memory. */
 bool ism_leaf_memo_copy(const ism_leaf_memo *m, size_t leaf, ism_cell_out *out,
-                        ism_cell_stats *st, float *error);
+                        ism_cell_stats *st, ism_cell_stats *added, float *error);
 
 void ism_leaf_memo_free(ism_leaf_memo *m);
 

@@ -223,14 +223,15 @@ static void measure_unflat(const phase2 *p, padded_ctx *pc, int32_t leaf,
 static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell_out *out)
 {
     ism_cell_ctx *cx = &pc->c;
-    ism_cell_stats before = cx->stats;
+    ism_cell_stats added; /* the counters this leaf added to cx->stats */
     size_t v0 = out->nverts, t0 = out->ntris, s0 = out->nsegs;
     float err = 0;
     bool copied = p->reuse && p->reuse[i] >= 0;
     if (copied) {
-        if (!ism_leaf_memo_copy(p->memo, (size_t)p->reuse[i], out, &cx->stats, &err))
+        if (!ism_leaf_memo_copy(p->memo, (size_t)p->reuse[i], out, &cx->stats, &added, &err))
             return false;
     } else {
+        ism_cell_stats before = cx->stats;
         leaf_sampler(cx, p->leaves[i]);
         bool ok = ism_cell_polygonise(cx, p->leaves[i], out) &&
                   /* under max_error: cut along a CSG crease before measuring */
@@ -270,14 +271,14 @@ static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell
         cx->s.local_decided = false;
         if (!ok)
             return false;
+        if (p->rec)
+            added = ism_cell_stats_minus(&cx->stats, &before);
     }
     if (p->leaf_error)
         p->leaf_error[i] = err;
-    if (p->rec) /* a copied leaf added its record's counters (ism_leaf_memo_copy) */
+    if (p->rec)
         p->rec[i] = (ism_leaf_rec){chunk, v0, t0, s0, out->nverts - v0, out->ntris - t0,
-                                   out->nsegs - s0, err,
-                                   copied ? p->memo->rec[p->reuse[i]].stats
-                                          : ism_cell_stats_minus(&cx->stats, &before)};
+                                   out->nsegs - s0, err, added};
     return true;
 }
 
