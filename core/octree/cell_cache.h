@@ -138,16 +138,20 @@ static inline ism_pair_entry *ism_pair_slot(ism_pair_entry *table, uint64_t a, u
  * up to 8 nodes of a level and of nodes of every level below). Only labels of nodes whose
  * shortened tape keeps the top min/max are asked for, and those give f's own label bit for
  * bit (crease_split.h): a pure function of the lattice point. */
+/* 2^13 entries of 40 bytes: 320 KB a build thread (was 128 KB at 16 bytes an entry before
+ * the gradient joined the label, 5394f96: the gradient a crease cell asks for at corners on
+ * both branches is kept beside the label it needs, so one table holds both). */
 #define ISM_LABEL_MEMO_BITS 13
 
 typedef struct ism_label_entry {
     uint64_t key;  /* lattice key of the point (+1), 0: empty */
     int32_t label; /* 0 or 1: ism_crease_branch's answer (never -1: not kept) */
-    int32_t has_g; /* g holds ism_crease_branch's gradient there (crease_cell asks for it at
+    bool has_g;    /* g holds ism_crease_branch's gradient there (crease_cell asks for it at
                       the corners of nodes on both branches: Barth's sextic at 1e-2, 100,864
                       times, 76M instructions) */
     double g[3];
 } ism_label_entry;
+_Static_assert(sizeof(ism_label_entry) == 40, "ISM_LABEL_MEMO_BITS's comment gives 40 bytes");
 
 /* A build thread's memos (tables of 2^ISM_ROOT_MEMO_BITS, 2^ISM_LABEL_MEMO_BITS and
  * 2^ISM_PAIR_MEMO_BITS entries; all NULL on the scalar reference path), and beside them,
