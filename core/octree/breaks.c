@@ -485,8 +485,11 @@ bool ism_breaks_build(ism_breaks *b, const ism_octree *t, const uint8_t *take, i
  * of every marked cell and the 7 below it, so the summary cell of a leaf's lowest corner is
  * marked whenever a cell of a leaf no wider than a summary cell is (that cell's summary cell
  * is the corner's or one above on each axis): one lookup answers most leaves, which touch
- * nothing polygonised. */
+ * nothing polygonised. That holds only for leaves at most 2^NEAR_SUM_SHIFT cells wide;
+ * near_asked checks the width itself, so NEAR_BIG may exceed it (wider leaves would then
+ * skip the summary and walk their shell), but as set every leaf it asks is that narrow. */
 #define NEAR_SUM_SHIFT 2
+_Static_assert(NEAR_BIG <= 1 << NEAR_SUM_SHIFT, "every asked leaf takes the one summary lookup");
 
 typedef struct near_grid {
     uint64_t *mark, *sum;
