@@ -7,6 +7,7 @@
 #include "core/octree/tolerances.h"
 #include "core/util/clock.h"
 #include "core/octree/breaks.h"
+#include "core/octree/breaks_near.h"
 #include "core/octree/cell.h"
 #include "core/octree/crease_split.h"
 #include "core/octree/dual.h"

@@ -1,5 +1,5 @@
 /* test_breaks_near.c — a later max_error round registers the break points of the leaves near
- * those it polygonises again (ism_breaks_near, breaks.h): every leaf whose closed box touches
+ * those it polygonises again (ism_breaks_near, breaks_near.h): every leaf whose closed box touches
  * a polygonised leaf's is taken (found here by comparing every leaf's box with every
  * polygonised one's), and inside a polygonised leaf's closed box the smaller registry holds
  * the same points as the whole tree's, each with the same successor on its three lattice
@@ -15,6 +15,7 @@
 #include <string.h>
 #include "core/expr/tape.h"
 #include "core/octree/breaks.h"
+#include "core/octree/breaks_near.h"
 #include "core/octree/octree_build.h"
 #include "poly_fixture.h"
 
