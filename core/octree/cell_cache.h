@@ -1,9 +1,11 @@
 /* cell_cache.h — per-thread memo of what neighbouring nodes compute again and again: f and
  * ∇f at lattice points (with the points' successors on their lattice lines, copied from the
  * break-point registry, so that walking a tile's side and sampling it cost one lookup a
- * point), the roots of lattice segments, and the lines of tiles walked once. All are pure
- * functions of their lattice coordinates, so a hit returns exactly what a recomputation
- * would: the cache only saves time, never changes the mesh. Direct-mapped: a collision
+ * point), the roots of lattice segments, and the lines of tiles walked once. Within one
+ * max_error round all are pure functions of their lattice coordinates (quiet and crossed
+ * tiles also read the round's break points, so they are cleared between rounds:
+ * ism_cell_cache_next_round), so a hit returns exactly what a recomputation would: the cache
+ * only saves time, never changes the mesh. Direct-mapped: a collision
  * simply overwrites. The octree build memoises node corners through a lookup of the same
  * kind (ism_point_memo), and what its flatness test finds on node edges and at corners
  * (ism_node_memo). */
@@ -66,6 +68,9 @@ typedef struct ism_tile_memo {
     ism_cell_stats counted; /* what the walk added to the counters */
     ism_fline lines[ISM_TILE_MEMO_LINES];
 } ism_tile_memo;
+/* The size ISM_TILE_MEMO_BITS's comment states (all of ism_cell_stats is kept, though a walk
+ * moves only five of its counters). */
+_Static_assert(sizeof(ism_tile_memo) == 352, "ISM_TILE_MEMO_BITS's comment gives 352 bytes");
 
 typedef struct ism_cell_cache {
     ism_lattice_entry *points;
