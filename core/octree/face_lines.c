@@ -1085,7 +1085,8 @@ static void remember(ism_cell_ctx *cx, ism_tile_memo *m, const ism_quiet_tile *k
     if (n > ISM_TILE_MEMO_LINES)
         return;
     m->counted = ism_cell_stats_minus(&cx->stats, before);
-    memcpy(m->lines, &cx->lines.v[first], n * sizeof *m->lines);
+    if (n) /* a walk may add no line, and cx->lines.v is NULL until a first line is pushed */
+        memcpy(m->lines, &cx->lines.v[first], n * sizeof *m->lines);
     m->nlines = n;
     m->key = *key;
 }
