@@ -1,40 +1,17 @@
 /* leaf_memo.c — the leaves of the last max_error round whose output the next round copies:
  * the two trees walked side by side, then every leaf touching a split one struck out. */
 #include "core/octree/leaf_memo.h"
+#include "core/octree/node_lbox.h"
 #include "core/util/grow.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-/* A node's closed box in lattice steps: lo[a] .. hi[a]. */
-typedef struct lbox {
-    int32_t lo[3], hi[3];
-} lbox;
-
-static lbox node_lbox(const ism_octree *t, const ism_node *nd)
-{
-    int32_t s = ism_grid_cell_steps(&t->grid, nd->level);
-    lbox b;
-    for (int a = 0; a < 3; a++) {
-        b.lo[a] = nd->org[a];
-        b.hi[a] = nd->org[a] + s;
-    }
-    return b;
-}
-
-static bool touch(const lbox *x, const lbox *y)
-{
-    for (int a = 0; a < 3; a++)
-        if (x->hi[a] < y->lo[a] || y->hi[a] < x->lo[a])
-            return false;
-    return true;
-}
-
 typedef struct walk {
     const ism_octree *before, *now;
     const int32_t *before_leaf; /* node of before -> its leaf index, or -1 */
     int32_t *match;             /* node of now -> leaf of before, or -1 */
-    lbox *split;                /* boxes of before's leaves that now splits */
+    ism_node_lbox *split;       /* boxes of before's leaves that now splits */
     size_t nsplit, cap_split;
     bool ok;
 } walk;
@@ -61,15 +38,15 @@ static void pair(walk *w, int32_t a, int32_t b)
         w->ok = false;
         return;
     }
-    w->split[w->nsplit++] = node_lbox(w->before, x);
+    w->split[w->nsplit++] = ism_node_lbox_of(w->before, x);
 }
 
 /* Strikes out the leaves of now under node i that touch box c. */
-static void strike(walk *w, int32_t i, const lbox *c)
+static void strike(walk *w, int32_t i, const ism_node_lbox *c)
 {
     const ism_node *nd = &w->now->nodes[i];
-    lbox b = node_lbox(w->now, nd);
-    if (!touch(&b, c))
+    ism_node_lbox b = ism_node_lbox_of(w->now, nd);
+    if (!ism_node_lboxes_touch(&b, c))
         return;
     if (nd->state == ISM_NODE_SPLIT)
         for (int k = 0; k < 8; k++)

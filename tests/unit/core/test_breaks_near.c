@@ -16,6 +16,7 @@
 #include "core/expr/tape.h"
 #include "core/octree/breaks.h"
 #include "core/octree/breaks_near.h"
+#include "core/octree/node_lbox.h"
 #include "core/octree/octree_build.h"
 #include "poly_fixture.h"
 
@@ -54,30 +55,6 @@ static void build(const ism_tape *t, const double box[6], int min_depth, int max
     cr_assert_eq(ism_octree_build(tree, &p, &st), ISM_BUILD_OK);
 }
 
-typedef struct lbox {
-    int32_t lo[3], hi[3];
-} lbox;
-
-static lbox box_of(const ism_octree *t, int32_t node)
-{
-    const ism_node *nd = &t->nodes[node];
-    int32_t s = ism_grid_cell_steps(&t->grid, nd->level);
-    lbox b;
-    for (int a = 0; a < 3; a++) {
-        b.lo[a] = nd->org[a];
-        b.hi[a] = nd->org[a] + s;
-    }
-    return b;
-}
-
-static bool touch(const lbox *x, const lbox *y)
-{
-    for (int a = 0; a < 3; a++)
-        if (x->hi[a] < y->lo[a] || y->hi[a] < x->lo[a])
-            return false;
-    return true;
-}
-
 /* The lattice point of a registry key (the inverse of ism_lattice_key). */
 static void point_of(uint64_t key, int32_t p[3])
 {
@@ -90,7 +67,7 @@ static void point_of(uint64_t key, int32_t p[3])
 /* Every point of `whole` (its n entries, listed in e) inside box b is in `part` with the same
  * successors up to b's end. */
 static void same_inside(const ism_break_point *const *e_of, size_t n, const ism_breaks *part,
-                        const lbox *b)
+                        const ism_node_lbox *b)
 {
     for (size_t s = 0; s < n; s++) {
         const ism_break_point *e = e_of[s];
@@ -138,13 +115,13 @@ static void check_near(const ism_tape *t, const double box[6], int min_depth, in
     size_t nleaves = 0, npol = 0;
     int32_t *leaves = malloc(tree.n * sizeof *leaves), *reuse = malloc(tree.n * sizeof *reuse);
     uint8_t *take = malloc(tree.n);
-    lbox *pb = malloc(tree.n * sizeof *pb);
+    ism_node_lbox *pb = malloc(tree.n * sizeof *pb);
     cr_assert(leaves && reuse && take && pb);
     for (size_t i = 0; i < tree.n; i++)
         if (tree.nodes[i].state == ISM_NODE_LEAF) {
             reuse[nleaves] = nleaves % stride == 0 ? -1 : (int32_t)nleaves;
             if (reuse[nleaves] < 0)
-                pb[npol++] = box_of(&tree, (int32_t)i);
+                pb[npol++] = ism_node_lbox_of(&tree, &tree.nodes[i]);
             leaves[nleaves++] = (int32_t)i;
         }
     cr_assert(ism_breaks_near(&tree, leaves, nleaves, reuse, take));
@@ -159,10 +136,10 @@ static void check_near(const ism_tape *t, const double box[6], int min_depth, in
                 deepest, level);
     size_t taken = 0, touching = 0;
     for (size_t k = 0; k < nleaves; k++) {
-        lbox x = box_of(&tree, leaves[k]);
+        ism_node_lbox x = ism_node_lbox_of(&tree, &tree.nodes[leaves[k]]);
         bool near = false;
         for (size_t j = 0; j < npol && !near; j++)
-            near = touch(&x, &pb[j]);
+            near = ism_node_lboxes_touch(&x, &pb[j]);
         touching += near;
         taken += take[leaves[k]] != 0;
         cr_assert(!near || take[leaves[k]], "box %d: leaf %zu touches a polygonised one, "
