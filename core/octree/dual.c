@@ -1,13 +1,15 @@
 /* dual.c — dual contouring on an octree under an error bound, for surfaces without features
  * (dual.h): the tree and its leaf tests (the interval proofs in dual_cert.c), the vertices,
  * the split passes (the children's corners, then the feet sag_split will ask for in batched
- * lanes, then the children classified), the minimal-edge walk that makes the quads (with
- * its memo of the last round's put-off calls and their quads), their triangles (two, or
- * four round a centre), and the measure-and-split rounds. The work is
+ * lanes, then the children classified), their triangles (two, or four round a centre), and
+ * the measure-and-split rounds; the quads come from the minimal-edge walk (dual_walk.c),
+ * and the state all of them share is dual_tree.h's. The work is
  * cut into tasks for the pool whose outputs land in their own slots and are joined in a
  * fixed order (children level by level, walk calls, vertex pairs, triangles), so the mesh
  * does not depend on the number of threads. */
 #include "core/octree/dual.h"
+#include "core/octree/dual_tree.h"
+#include "core/octree/dual_walk.h"
 #include "core/eval/interval_jet.h"
 #include "core/octree/cell_cache.h"
 #include "core/octree/corners.h"
@@ -53,10 +55,6 @@
  * ∇f at lattice points, so what the memo holds changes no mesh. */
 #define DUAL_POINT_MIN_BITS 11
 #define DUAL_POINT_ENTRIES_PER_NODE 4
-/* The tree walk's calls on nodes of this level or below run on the pool: at the default
- * minimum depth 3, up to 512 cells and their faces and edges, enough tasks for a few
- * threads to share evenly. */
-#define WALK_SPLIT_LEVEL 3
 /* A crease leaf this many E across or less is judged by the measurement alone (crease_kind,
  * dual_crease.h's `small`): the primal path's rule for such nodes (cell_error.c, 4 E). */
 #define CREASE_MEASURED_CELLS 4.0
@@ -89,46 +87,6 @@
 /* Crease vertices of two leaves this close (a share of the box's smallest side) are one
  * point (weld_crease). */
 #define WELD_TOL 1e-12
-
-/* DN_HOLE: a leaf meeting a point's hole; DN_CREASE: a surface leaf whose vertex lies on f's
- * crease (dual_crease.h); DN_PAIR: a leaf at depth.max beside the crease holding a piece of
- * each branch apart (vert on a, vert2 on b: dual_crease.h ISM_CREASE_PAIR) */
-enum { DN_INNER, DN_EMPTY, DN_SURF, DN_HOLE, DN_CREASE, DN_PAIR };
-
-/* A leaf with a vertex: plain, on the crease, or one per branch. */
-static bool has_sheet(int kind) { return kind == DN_SURF || kind == DN_CREASE || kind == DN_PAIR; }
-
-/* What sag_split learnt of a node's centre foot (dnode.placed): nothing (it did not look,
- * or it split the node), the vertex of a node kept as a leaf (in d->at), or a foot outside
- * the node (place_vertex goes to the secant roots at once). */
-enum { FOOT_UNKNOWN, FOOT_AT, FOOT_OUT };
-
-typedef struct dnode {
-    ism_ipt o;      /* lattice origin */
-    int32_t child;  /* first of the 8 children (bit 0 = x, 1 = y, 2 = z), -1 for a leaf */
-    int32_t vert;   /* the leaf's vertex, -1 for none yet */
-    int32_t vert2;  /* a DN_PAIR leaf's second (branch b's) vertex, else -1 */
-    uint8_t level;
-    uint8_t kind;
-    uint8_t split;  /* a triangle of this leaf missed E this round */
-    uint8_t surf;   /* a surface leaf in the subtree (the walk skips the others) */
-    uint8_t placed; /* FOOT_AT: d->at holds the vertex place_vertex would make (sag_split
-                     * made it); FOOT_OUT: the centre's Newton left the node */
-    uint8_t free_kids; /* bit c: child c's box shown free of f = 0 by this node's own proofs
-                        * (corner_view.free_kids): the child is empty without its own */
-    double f[8];    /* f at the corners */
-} dnode;
-/* The mesher's hot array (expand and every sweep over d->n move it): the flags fit in the
- * padding before f, 96 bytes on LP64; a kept leaf's sag_split vertex lives in d->at. */
-_Static_assert(sizeof(dnode) <= 96, "dnode grew past 96 bytes");
-
-/* An open-addressed map from 64-bit keys (never 0; 0 marks an empty slot) to doubles, kept
- * at most half full. */
-typedef struct keyed {
-    uint64_t *key;
-    double *val;
-    size_t n, cap;
-} keyed;
 
 static size_t keyed_slot(const keyed *k, uint64_t key)
 {
@@ -193,26 +151,6 @@ static void keyed_free(keyed *k)
     free(k->val);
 }
 
-/* Quads (4 vertices each, counter-clockwise seen from ∇f; u[3] = UINT32_MAX for a
- * triangle) and what went wrong making them. */
-typedef struct quads {
-    uint32_t *q;
-    size_t n, cap;
-    bool nomem, bad; /* bad: a leaf round a crossed edge without a vertex */
-} quads;
-
-/* The tree walk's calls put off to the pool in the last round, and their quads
- * (make_quads): a call whose nodes' subtrees have not changed since gives the same quads
- * again. Its quads are a second copy of the round's deferred quads beside d->q, so a round
- * holds up to twice the quads, bounded as they are by max_triangles (checked after each
- * round's triangles); run frees it once the rounds end. */
-typedef struct walk_memo {
-    struct walk_call *calls;
-    quads *parts;
-    size_t n;
-    size_t nodes; /* the tree's nodes then (nodes are only ever added) */
-} walk_memo;
-
 /* What a parallel loop's tasks share: the mesher, their inputs and their outputs (slot k of
  * out is task k's alone), and for the chunked measures (chunk_of) how many items in all. */
 typedef struct task_ctx {
@@ -221,79 +159,6 @@ typedef struct task_ctx {
     void *out;
     size_t n; /* the chunked loops' item count; 0 where a task is one item */
 } task_ctx;
-
-/* What one thread evaluates f with: its sampler (counters), interval workspace, lattice
- * point memo and same-sign edge memo. */
-typedef struct worker {
-    ism_sampler s;
-    ism_ivjet_ws *jet;
-    ism_point_entry *points;
-    int bits; /* points holds 2^bits entries */
-    /* Same-sign edges' root searches (same_sign_edge_clear), made on the first search only
-     * (a sphere never searches: no 128 KB to fault in); NULL: none yet, or no memory. */
-    ism_pair_entry *pairs; /* 2^ISM_PAIR_MEMO_BITS entries (cell_cache.h), or NULL */
-    bool pairs_tried;
-    uint8_t *force; /* with a crease: a tape-length zeroed buffer, the top's branch forced by
-                       dual_crease.c's enclosures (ism_dual_crease_node); else NULL */
-} worker;
-
-typedef struct dual {
-    const ism_poly_options *o;
-    ism_grid g;
-    double finest_step; /* the least of g's finest steps (set_grid): sample_corners' scale */
-    ism_pool *pool;
-    worker *w;        /* one per thread of the pool */
-    int nw;
-    dnode *n;
-    size_t nn, capn;
-    double (*at)[3]; /* by node: the vertex of a node placed FOOT_AT (read only there) */
-    size_t capat;
-    double *pos;      /* 3 per vertex */
-    int32_t *vleaf;   /* the leaf each vertex belongs to */
-    int32_t *vtwin;   /* the next vertex of a leaf sharing this one's point, -1: none (two
-                         leaves' crease vertices welded: weld_crease) */
-    size_t nv, capv;
-    uint32_t *tri;    /* this round's triangles */
-    size_t nt, capt;
-    quads q;          /* this round's quads (make_quads) */
-    walk_memo memo;   /* the last round's put-off walk calls and their quads */
-    keyed passed;       /* triangles (tri_key) that met E */
-    keyed mid;          /* vertex pairs (pair_key): the distance of their midpoint to f = 0 */
-    keyed fans;         /* quads (quad_key) cut as a fan: their centre vertex */
-    int ec0[12], ec1[12], ef[12][2]; /* the cube's edges: ends and faces (ism_cube_edge) */
-    double shift;     /* vertices move at most this far along ∇f (straddle.h), or 0 */
-    const ism_dual_ball *balls; /* round the isolated singular points (dual_balls.h) */
-    size_t nballs;
-    ism_dual_ball_cover cover; /* the balls by where they reach (nodes ask only those) */
-    const double *inner; /* the request's box when the tree's is grown round it (dual_box.h) */
-    bool crease; /* f = min/max(a, b), its only one: nodes with the kink go to dual_crease.h */
-    /* children_free's batches so far and the children they showed free; batch_on while
-     * they pay (BATCH_PAYS), decided between split passes (the same on any threads) */
-    uint64_t batches, batch_freed;
-    bool batch_on;
-    bool bad, nomem, too_big;
-    enum ism_dual_reason why; /* the first reason bad was set for (mesher.h) */
-} dual;
-
-/* The cells round an edge along axis e, in counter-clockwise order seen from +e: their
- * offsets along axes e + 1 and e + 2 (mod 3). */
-static const int AROUND_U[4] = {0, 1, 1, 0};
-static const int AROUND_V[4] = {0, 0, 1, 1};
-
-/* The arrays below start at 64 elements (ism_grow's first allocation). */
-static bool grow(void **p, size_t *cap, size_t need, size_t size)
-{
-    return ism_grow(p, cap, need, size, 64);
-}
-
-static int child_at(const int bits[3]) { return bits[0] | bits[1] << 1 | bits[2] << 2; }
-
-static void corner_point(const dual *d, const dnode *n, int c, double p[3])
-{
-    int32_t step = ism_grid_cell_steps(&d->g, n->level);
-    for (int a = 0; a < 3; a++)
-        p[a] = ism_grid_coord(&d->g, a, n->o.v[a] + ((c >> a) & 1) * step);
-}
 
 static bool touches_box(const dual *d, const dnode *n)
 {
@@ -1058,14 +923,6 @@ static bool keep_at(dual *d, int32_t i, const double p[3])
     }
     memcpy(d->at[i], p, sizeof d->at[i]);
     return true;
-}
-
-/* The dual mesh cannot be made, for reason why (the first one given is kept). */
-static void decline(dual *d, enum ism_dual_reason why)
-{
-    if (!d->bad)
-        d->why = why;
-    d->bad = true;
 }
 
 /* Node kind (kind: classify's) after the checks near points and on the request's box:
@@ -1876,340 +1733,6 @@ static bool measure_pairs(dual *d, const uint32_t *pairs, size_t n, double *out)
     return true;
 }
 
-/* A call of the tree walk put off to run on the pool: a cell (c[0]), a face (c[0] below
- * c[1] across axis) or an edge (c[0..4) round an edge along axis). */
-typedef struct walk_call {
-    int32_t c[4];
-    int8_t kind, axis;
-} walk_call;
-
-enum { WALK_CELL, WALK_FACE, WALK_EDGE };
-
-/* The walk's state: the tree, where quads go, and — on the calling thread only — the calls
- * reaching WALK_SPLIT_LEVEL, put off instead of made. */
-typedef struct walk {
-    const dual *d;
-    quads *out;
-    bool deferring;   /* false: make every call */
-    walk_call *defer;
-    size_t nd, capd;
-    bool nomem;
-    worker *w;        /* evaluates f for edges beside a pair leaf (edge_quad) */
-} walk;
-
-/* Put off a call on nodes c[0..n) when the walk defers and one of them reaches the level;
- * true when it did (or could not: then nomem). */
-static bool put_off(walk *wk, int kind, int axis, const int32_t *c, int n)
-{
-    if (!wk->deferring)
-        return false;
-    int level = 0;
-    for (int k = 0; k < n; k++)
-        level = wk->d->n[c[k]].level > level ? wk->d->n[c[k]].level : level;
-    if (level < WALK_SPLIT_LEVEL)
-        return false;
-    if (!grow((void **)&wk->defer, &wk->capd, wk->nd + 1, sizeof *wk->defer)) {
-        wk->nomem = true;
-        return true;
-    }
-    walk_call *call = &wk->defer[wk->nd++];
-    memset(call, 0, sizeof *call);
-    memcpy(call->c, c, (size_t)n * sizeof *c);
-    call->kind = (int8_t)kind;
-    call->axis = (int8_t)axis;
-    return true;
-}
-
-/* The quad v[0..4) into out; a repeated vertex (two sides of the edge in one larger leaf)
- * leaves a triangle. */
-static void add_quad(quads *out, const uint32_t v[4])
-{
-    uint32_t u[4] = {0, 0, 0, UINT32_MAX};
-    int m = 0;
-    for (int k = 0; k < 4; k++)
-        if (v[k] != v[(k + 3) % 4])
-            u[m++] = v[k];
-    if (m < 3)
-        return;
-    if (!grow((void **)&out->q, &out->cap, out->n + 1, 4 * sizeof *out->q)) {
-        out->nomem = true;
-        return;
-    }
-    memcpy(&out->q[4 * out->n++], u, sizeof u);
-}
-
-/* Which branch's zero (dual_crease.h ism_dual_edge_branch) the root of node n's edge c0 -> c1
- * is; -1 when it cannot tell. */
-static int pair_edge_branch(const dual *d, worker *w, const dnode *n, int c0, int c1)
-{
-    double p[2][3], bv[2][2];
-    for (int j = 0; j < 2; j++) {
-        corner_point(d, n, j ? c1 : c0, p[j]);
-        w->s.n_point++;
-        if (!ism_eval_top_values(w->s.tape, w->s.ws, p[j][0], p[j][1], p[j][2], bv[j]))
-            return -1;
-    }
-    return ism_dual_edge_branch(&w->s, p[0], p[1], bv[0], bv[1]);
-}
-
-/* Four leaves round an edge along axis e: the quad across the smallest one's edge there when
- * f changes sign along it (beside a pair leaf, its vertex of the edge's branch). */
-static void edge_quad(walk *wk, const int32_t c[4], int e)
-{
-    const dual *d = wk->d;
-    int deepest = 0;
-    for (int k = 1; k < 4; k++)
-        if (d->n[c[k]].level > d->n[c[deepest]].level)
-            deepest = k;
-    const dnode *n = &d->n[c[deepest]];
-    int bits[3];
-    bits[e] = 0;
-    bits[(e + 1) % 3] = 1 - AROUND_U[deepest];
-    bits[(e + 2) % 3] = 1 - AROUND_V[deepest];
-    int c0 = child_at(bits);
-    bits[e] = 1;
-    int c1 = child_at(bits);
-    bool in0 = n->f[c0] < 0, in1 = n->f[c1] < 0;
-    if (in0 == in1)
-        return;
-    int branch = 0; /* beside a pair leaf: the branch whose zero the edge's root is */
-    for (int k = 0; k < 4; k++)
-        if (d->n[c[k]].kind == DN_PAIR) {
-            branch = pair_edge_branch(d, wk->w, n, c0, c1);
-            if (branch < 0) {
-                wk->out->bad = true;
-                return;
-            }
-            break;
-        }
-    uint32_t v[4];
-    for (int k = 0; k < 4; k++) {
-        int32_t vert = branch && d->n[c[k]].kind == DN_PAIR ? d->n[c[k]].vert2 : d->n[c[k]].vert;
-        if (vert < 0) {
-            wk->out->bad = true; /* cannot happen for plain leaves; never emit a hole */
-            return;
-        }
-        v[in0 ? k : 3 - k] = (uint32_t)vert;
-    }
-    add_quad(wk->out, v);
-}
-
-static bool is_leaf(const dual *d, int32_t i) { return d->n[i].child < 0; }
-
-/* Node i itself when a leaf, else its child at bits. */
-static int32_t sub(const dual *d, int32_t i, const int bits[3])
-{
-    return is_leaf(d, i) ? i : d->n[i].child + child_at(bits);
-}
-
-static void edge_proc(walk *wk, const int32_t c[4], int e)
-{
-    const dual *d = wk->d;
-    if (!d->n[c[0]].surf || !d->n[c[1]].surf || !d->n[c[2]].surf || !d->n[c[3]].surf)
-        return; /* a quad needs a surface leaf on every side */
-    if (is_leaf(d, c[0]) && is_leaf(d, c[1]) && is_leaf(d, c[2]) && is_leaf(d, c[3])) {
-        edge_quad(wk, c, e);
-        return;
-    }
-    if (put_off(wk, WALK_EDGE, e, c, 4))
-        return;
-    for (int h = 0; h < 2; h++) {
-        int32_t nc[4];
-        for (int k = 0; k < 4; k++) {
-            int bits[3];
-            bits[e] = h;
-            bits[(e + 1) % 3] = 1 - AROUND_U[k];
-            bits[(e + 2) % 3] = 1 - AROUND_V[k];
-            nc[k] = sub(d, c[k], bits);
-        }
-        edge_proc(wk, nc, e);
-    }
-}
-
-/* Two nodes sharing a face across axis a (c0 below, c1 above). */
-static void face_proc(walk *wk, int32_t c0, int32_t c1, int a)
-{
-    const dual *d = wk->d;
-    if (!d->n[c0].surf || !d->n[c1].surf)
-        return;
-    if (is_leaf(d, c0) && is_leaf(d, c1))
-        return;
-    int32_t pair[2] = {c0, c1};
-    if (put_off(wk, WALK_FACE, a, pair, 2))
-        return;
-    for (int q = 0; q < 4; q++) {
-        int b0[3], b1[3];
-        b0[a] = 1;
-        b1[a] = 0;
-        b0[(a + 1) % 3] = b1[(a + 1) % 3] = q & 1;
-        b0[(a + 2) % 3] = b1[(a + 2) % 3] = q >> 1;
-        face_proc(wk, sub(d, c0, b0), sub(d, c1, b1), a);
-    }
-    for (int j = 1; j < 3; j++) {
-        int e = (a + j) % 3, t = 3 - a - e; /* the edge's axis and the face's other axis */
-        for (int h = 0; h < 2; h++) {
-            int32_t nc[4];
-            for (int k = 0; k < 4; k++) {
-                int ou = AROUND_U[k], ov = AROUND_V[k];
-                int oa = (e + 1) % 3 == a ? ou : ov, ot = (e + 1) % 3 == a ? ov : ou;
-                int bits[3];
-                bits[e] = h;
-                bits[a] = 1 - oa;
-                bits[t] = ot;
-                nc[k] = sub(d, oa ? c1 : c0, bits);
-            }
-            edge_proc(wk, nc, e);
-        }
-    }
-}
-
-static void cell_proc(walk *wk, int32_t i)
-{
-    const dual *d = wk->d;
-    if (is_leaf(d, i) || !d->n[i].surf)
-        return;
-    if (put_off(wk, WALK_CELL, 0, &i, 1))
-        return;
-    int32_t first = d->n[i].child;
-    for (int c = 0; c < 8; c++)
-        cell_proc(wk, first + c);
-    for (int a = 0; a < 3; a++)
-        for (int q = 0; q < 4; q++) {
-            int b[3];
-            b[(a + 1) % 3] = q & 1;
-            b[(a + 2) % 3] = q >> 1;
-            b[a] = 0;
-            int32_t lo = first + child_at(b);
-            b[a] = 1;
-            face_proc(wk, lo, first + child_at(b), a);
-        }
-    for (int e = 0; e < 3; e++)
-        for (int h = 0; h < 2; h++) {
-            int32_t nc[4];
-            for (int k = 0; k < 4; k++) {
-                int bits[3];
-                bits[e] = h;
-                bits[(e + 1) % 3] = AROUND_U[k];
-                bits[(e + 2) % 3] = AROUND_V[k];
-                nc[k] = first + child_at(bits);
-            }
-            edge_proc(wk, nc, e);
-        }
-}
-
-/* The put-off walk calls (calls) to make into their own quads (parts, by call): todo[0..). */
-typedef struct walk_job {
-    dual *d;
-    const walk_call *calls;
-    quads *parts;
-    const size_t *todo;
-} walk_job;
-
-/* Put-off walk call todo[t] made into its own quads. */
-static void walk_task(void *ctx, size_t t, int thread)
-{
-    walk_job *job = ctx;
-    size_t k = job->todo[t];
-    const walk_call *call = &job->calls[k];
-    walk wk = {job->d, &job->parts[k], false, NULL, 0, 0, false, &job->d->w[thread]};
-    if (call->kind == WALK_CELL)
-        cell_proc(&wk, call->c[0]);
-    else if (call->kind == WALK_FACE)
-        face_proc(&wk, call->c[0], call->c[1], call->axis);
-    else
-        edge_proc(&wk, call->c, call->axis);
-}
-
-/* The memo's quads and calls freed (the struct left for the caller to zero or refill). */
-static void memo_free(walk_memo *m)
-{
-    for (size_t k = 0; m->parts && k < m->n; k++)
-        free(m->parts[k].q);
-    free(m->parts);
-    free(m->calls);
-}
-
-/* By node: 1 when its subtree changed since the memo's walk (a node added since, or one
- * with a child that did); NULL when out of memory. Children come after their parent. */
-static uint8_t *changed_nodes(const dual *d)
-{
-    uint8_t *ch = malloc(d->nn ? d->nn : 1);
-    size_t old = d->memo.nodes;
-    for (size_t i = d->nn; ch && i-- > 0;) {
-        const dnode *n = &d->n[i];
-        uint8_t c = i >= old || (n->child >= 0 && (size_t)n->child >= old);
-        for (int k = 0; !c && n->child >= 0 && k < 8; k++)
-            c = ch[n->child + k];
-        ch[i] = c;
-    }
-    return ch;
-}
-
-/* Put-off call k of this round's walk (calls[0..n)) as the memo's call k, on nodes whose
- * subtrees have not changed (ch): its quads are the memo's. The calls are the same list
- * while the walk's top levels (above WALK_SPLIT_LEVEL) keep their shape. */
-static bool memo_holds(const dual *d, const uint8_t *ch, const walk_call *calls, size_t n,
-                       size_t k)
-{
-    const walk_memo *m = &d->memo;
-    if (!ch || !m->calls || m->n != n || memcmp(&m->calls[k], &calls[k], sizeof calls[k]))
-        return false;
-    int nodes = calls[k].kind == WALK_CELL ? 1 : calls[k].kind == WALK_FACE ? 2 : 4;
-    for (int j = 0; j < nodes; j++)
-        if (ch[calls[k].c[j]])
-            return false;
-    return true;
-}
-
-/* The round's quads into d->q: the walk's top levels on this thread, the calls below them
- * on the pool — but for those the last round's memo holds — their quads joined in the
- * calls' order (the same on any number of threads), and kept as the next round's memo. */
-static void make_quads(dual *d)
-{
-    d->q.n = 0;
-    walk wk = {d, &d->q, true, NULL, 0, 0, false, &d->w[0]};
-    cell_proc(&wk, 0);
-    quads *part = calloc(wk.nd ? wk.nd : 1, sizeof *part);
-    size_t *todo = malloc((wk.nd ? wk.nd : 1) * sizeof *todo), nt = 0;
-    uint8_t *ch = d->memo.calls ? changed_nodes(d) : NULL;
-    if (!part || !todo || wk.nomem) {
-        free(part);
-        free(todo);
-        free(ch);
-        free(wk.defer);
-        d->nomem = true;
-        return;
-    }
-    for (size_t k = 0; k < wk.nd; k++) {
-        if (memo_holds(d, ch, wk.defer, wk.nd, k)) {
-            part[k] = d->memo.parts[k]; /* taken: the memo no longer frees it */
-            d->memo.parts[k].q = NULL;
-        } else
-            todo[nt++] = k;
-    }
-    free(ch);
-    walk_job job = {d, wk.defer, part, todo};
-    ism_pool_for(d->pool, nt, walk_task, &job, NULL);
-    for (size_t k = 0; k < wk.nd; k++) {
-        d->nomem |= part[k].nomem;
-        if (part[k].bad) /* a crossed edge without a vertex (edge_quad) */
-            decline(d, ISM_DUAL_WHY_OPEN_EDGE);
-        if (!d->nomem && part[k].n) {
-            if (grow((void **)&d->q.q, &d->q.cap, d->q.n + part[k].n, 4 * sizeof *d->q.q)) {
-                memcpy(&d->q.q[4 * d->q.n], part[k].q, 4 * part[k].n * sizeof *d->q.q);
-                d->q.n += part[k].n;
-            } else
-                d->nomem = true;
-        }
-    }
-    d->nomem |= d->q.nomem;
-    if (d->q.bad)
-        decline(d, ISM_DUAL_WHY_OPEN_EDGE);
-    free(todo);
-    memo_free(&d->memo);
-    d->memo = (walk_memo){wk.defer, part, wk.nd, d->nn};
-}
-
 /* Triangle t's corners (bit k: vertex k) whose leaves to split for its edges: the two ends
  * of each edge whose midpoint lies beyond E (splitting the third leaf would leave that edge
  * as it is). dist: the midpoints' distances (edge k from vertex k), or NULL: the memo's. */
@@ -2829,7 +2352,7 @@ static enum ism_dual_status mesh_rounds(dual *d, ism_mesh *mesh, ism_dual_stats 
         if (!d->nomem && d->inner && !margin_vertices_outside(d))
             decline(d, ISM_DUAL_WHY_BOX_CUT);
         if (!d->nomem && !d->bad)
-            make_quads(d);
+            ism_dual_make_quads(d);
         if (!d->nomem && !d->bad)
             emit_quads(d);
         if (d->nomem)
@@ -2869,7 +2392,7 @@ static enum ism_dual_status mesh_rounds(dual *d, ism_mesh *mesh, ism_dual_stats 
 static enum ism_dual_status run(dual *d, ism_mesh *mesh, ism_dual_stats *st)
 {
     enum ism_dual_status status = mesh_rounds(d, mesh, st);
-    memo_free(&d->memo);
+    ism_dual_walk_memo_free(&d->memo);
     memset(&d->memo, 0, sizeof d->memo);
     return status;
 }
@@ -2885,7 +2408,7 @@ static void forget(dual *d)
     free(d->vtwin);
     free(d->tri);
     free(d->q.q);
-    memo_free(&d->memo);
+    ism_dual_walk_memo_free(&d->memo);
     keyed_free(&d->passed);
     keyed_free(&d->mid);
     keyed_free(&d->fans);

@@ -1,0 +1,354 @@
+/* dual_walk.c — the dual mesher's minimal-edge walk (dual_walk.h): cell, face and edge
+ * calls down the octree (the tree of dual_tree.h) to the leaves round each edge, a quad
+ * across every crossed minimal edge; the calls below WALK_SPLIT_LEVEL put off to the pool and
+ * joined in a fixed order, and kept as a memo that a later round's unchanged subtrees take
+ * their quads from. */
+#include "core/octree/dual_walk.h"
+#include "core/octree/dual_crease.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* The tree walk's calls on nodes of this level or below run on the pool: at the default
+ * minimum depth 3, up to 512 cells and their faces and edges, enough tasks for a few
+ * threads to share evenly. */
+#define WALK_SPLIT_LEVEL 3
+
+/* The cells round an edge along axis e, in counter-clockwise order seen from +e: their
+ * offsets along axes e + 1 and e + 2 (mod 3). */
+static const int AROUND_U[4] = {0, 1, 1, 0};
+static const int AROUND_V[4] = {0, 0, 1, 1};
+
+/* A call of the tree walk put off to run on the pool: a cell (c[0]), a face (c[0] below
+ * c[1] across axis) or an edge (c[0..4) round an edge along axis). */
+typedef struct walk_call {
+    int32_t c[4];
+    int8_t kind, axis;
+} walk_call;
+
+enum { WALK_CELL, WALK_FACE, WALK_EDGE };
+
+/* The walk's state: the tree, where quads go, and — on the calling thread only — the calls
+ * reaching WALK_SPLIT_LEVEL, put off instead of made. */
+typedef struct walk {
+    const dual *d;
+    quads *out;
+    bool deferring;   /* false: make every call */
+    walk_call *defer;
+    size_t nd, capd;
+    bool nomem;
+    worker *w;        /* evaluates f for edges beside a pair leaf (edge_quad) */
+} walk;
+
+/* Put off a call on nodes c[0..n) when the walk defers and one of them reaches the level;
+ * true when it did (or could not: then nomem). */
+static bool put_off(walk *wk, int kind, int axis, const int32_t *c, int n)
+{
+    if (!wk->deferring)
+        return false;
+    int level = 0;
+    for (int k = 0; k < n; k++)
+        level = wk->d->n[c[k]].level > level ? wk->d->n[c[k]].level : level;
+    if (level < WALK_SPLIT_LEVEL)
+        return false;
+    if (!grow((void **)&wk->defer, &wk->capd, wk->nd + 1, sizeof *wk->defer)) {
+        wk->nomem = true;
+        return true;
+    }
+    walk_call *call = &wk->defer[wk->nd++];
+    memset(call, 0, sizeof *call);
+    memcpy(call->c, c, (size_t)n * sizeof *c);
+    call->kind = (int8_t)kind;
+    call->axis = (int8_t)axis;
+    return true;
+}
+
+/* The quad v[0..4) into out; a repeated vertex (two sides of the edge in one larger leaf)
+ * leaves a triangle. */
+static void add_quad(quads *out, const uint32_t v[4])
+{
+    uint32_t u[4] = {0, 0, 0, UINT32_MAX};
+    int m = 0;
+    for (int k = 0; k < 4; k++)
+        if (v[k] != v[(k + 3) % 4])
+            u[m++] = v[k];
+    if (m < 3)
+        return;
+    if (!grow((void **)&out->q, &out->cap, out->n + 1, 4 * sizeof *out->q)) {
+        out->nomem = true;
+        return;
+    }
+    memcpy(&out->q[4 * out->n++], u, sizeof u);
+}
+
+/* Which branch's zero (dual_crease.h ism_dual_edge_branch) the root of node n's edge c0 -> c1
+ * is; -1 when it cannot tell. */
+static int pair_edge_branch(const dual *d, worker *w, const dnode *n, int c0, int c1)
+{
+    double p[2][3], bv[2][2];
+    for (int j = 0; j < 2; j++) {
+        corner_point(d, n, j ? c1 : c0, p[j]);
+        w->s.n_point++;
+        if (!ism_eval_top_values(w->s.tape, w->s.ws, p[j][0], p[j][1], p[j][2], bv[j]))
+            return -1;
+    }
+    return ism_dual_edge_branch(&w->s, p[0], p[1], bv[0], bv[1]);
+}
+
+/* Four leaves round an edge along axis e: the quad across the smallest one's edge there when
+ * f changes sign along it (beside a pair leaf, its vertex of the edge's branch). */
+static void edge_quad(walk *wk, const int32_t c[4], int e)
+{
+    const dual *d = wk->d;
+    int deepest = 0;
+    for (int k = 1; k < 4; k++)
+        if (d->n[c[k]].level > d->n[c[deepest]].level)
+            deepest = k;
+    const dnode *n = &d->n[c[deepest]];
+    int bits[3];
+    bits[e] = 0;
+    bits[(e + 1) % 3] = 1 - AROUND_U[deepest];
+    bits[(e + 2) % 3] = 1 - AROUND_V[deepest];
+    int c0 = child_at(bits);
+    bits[e] = 1;
+    int c1 = child_at(bits);
+    bool in0 = n->f[c0] < 0, in1 = n->f[c1] < 0;
+    if (in0 == in1)
+        return;
+    int branch = 0; /* beside a pair leaf: the branch whose zero the edge's root is */
+    for (int k = 0; k < 4; k++)
+        if (d->n[c[k]].kind == DN_PAIR) {
+            branch = pair_edge_branch(d, wk->w, n, c0, c1);
+            if (branch < 0) {
+                wk->out->bad = true;
+                return;
+            }
+            break;
+        }
+    uint32_t v[4];
+    for (int k = 0; k < 4; k++) {
+        int32_t vert = branch && d->n[c[k]].kind == DN_PAIR ? d->n[c[k]].vert2 : d->n[c[k]].vert;
+        if (vert < 0) {
+            wk->out->bad = true; /* cannot happen for plain leaves; never emit a hole */
+            return;
+        }
+        v[in0 ? k : 3 - k] = (uint32_t)vert;
+    }
+    add_quad(wk->out, v);
+}
+
+static bool is_leaf(const dual *d, int32_t i) { return d->n[i].child < 0; }
+
+/* Node i itself when a leaf, else its child at bits. */
+static int32_t sub(const dual *d, int32_t i, const int bits[3])
+{
+    return is_leaf(d, i) ? i : d->n[i].child + child_at(bits);
+}
+
+static void edge_proc(walk *wk, const int32_t c[4], int e)
+{
+    const dual *d = wk->d;
+    if (!d->n[c[0]].surf || !d->n[c[1]].surf || !d->n[c[2]].surf || !d->n[c[3]].surf)
+        return; /* a quad needs a surface leaf on every side */
+    if (is_leaf(d, c[0]) && is_leaf(d, c[1]) && is_leaf(d, c[2]) && is_leaf(d, c[3])) {
+        edge_quad(wk, c, e);
+        return;
+    }
+    if (put_off(wk, WALK_EDGE, e, c, 4))
+        return;
+    for (int h = 0; h < 2; h++) {
+        int32_t nc[4];
+        for (int k = 0; k < 4; k++) {
+            int bits[3];
+            bits[e] = h;
+            bits[(e + 1) % 3] = 1 - AROUND_U[k];
+            bits[(e + 2) % 3] = 1 - AROUND_V[k];
+            nc[k] = sub(d, c[k], bits);
+        }
+        edge_proc(wk, nc, e);
+    }
+}
+
+/* Two nodes sharing a face across axis a (c0 below, c1 above). */
+static void face_proc(walk *wk, int32_t c0, int32_t c1, int a)
+{
+    const dual *d = wk->d;
+    if (!d->n[c0].surf || !d->n[c1].surf)
+        return;
+    if (is_leaf(d, c0) && is_leaf(d, c1))
+        return;
+    int32_t pair[2] = {c0, c1};
+    if (put_off(wk, WALK_FACE, a, pair, 2))
+        return;
+    for (int q = 0; q < 4; q++) {
+        int b0[3], b1[3];
+        b0[a] = 1;
+        b1[a] = 0;
+        b0[(a + 1) % 3] = b1[(a + 1) % 3] = q & 1;
+        b0[(a + 2) % 3] = b1[(a + 2) % 3] = q >> 1;
+        face_proc(wk, sub(d, c0, b0), sub(d, c1, b1), a);
+    }
+    for (int j = 1; j < 3; j++) {
+        int e = (a + j) % 3, t = 3 - a - e; /* the edge's axis and the face's other axis */
+        for (int h = 0; h < 2; h++) {
+            int32_t nc[4];
+            for (int k = 0; k < 4; k++) {
+                int ou = AROUND_U[k], ov = AROUND_V[k];
+                int oa = (e + 1) % 3 == a ? ou : ov, ot = (e + 1) % 3 == a ? ov : ou;
+                int bits[3];
+                bits[e] = h;
+                bits[a] = 1 - oa;
+                bits[t] = ot;
+                nc[k] = sub(d, oa ? c1 : c0, bits);
+            }
+            edge_proc(wk, nc, e);
+        }
+    }
+}
+
+static void cell_proc(walk *wk, int32_t i)
+{
+    const dual *d = wk->d;
+    if (is_leaf(d, i) || !d->n[i].surf)
+        return;
+    if (put_off(wk, WALK_CELL, 0, &i, 1))
+        return;
+    int32_t first = d->n[i].child;
+    for (int c = 0; c < 8; c++)
+        cell_proc(wk, first + c);
+    for (int a = 0; a < 3; a++)
+        for (int q = 0; q < 4; q++) {
+            int b[3];
+            b[(a + 1) % 3] = q & 1;
+            b[(a + 2) % 3] = q >> 1;
+            b[a] = 0;
+            int32_t lo = first + child_at(b);
+            b[a] = 1;
+            face_proc(wk, lo, first + child_at(b), a);
+        }
+    for (int e = 0; e < 3; e++)
+        for (int h = 0; h < 2; h++) {
+            int32_t nc[4];
+            for (int k = 0; k < 4; k++) {
+                int bits[3];
+                bits[e] = h;
+                bits[(e + 1) % 3] = AROUND_U[k];
+                bits[(e + 2) % 3] = AROUND_V[k];
+                nc[k] = first + child_at(bits);
+            }
+            edge_proc(wk, nc, e);
+        }
+}
+
+/* The put-off walk calls (calls) to make into their own quads (parts, by call): todo[0..). */
+typedef struct walk_job {
+    dual *d;
+    const walk_call *calls;
+    quads *parts;
+    const size_t *todo;
+} walk_job;
+
+/* Put-off walk call todo[t] made into its own quads. */
+static void walk_task(void *ctx, size_t t, int thread)
+{
+    walk_job *job = ctx;
+    size_t k = job->todo[t];
+    const walk_call *call = &job->calls[k];
+    walk wk = {job->d, &job->parts[k], false, NULL, 0, 0, false, &job->d->w[thread]};
+    if (call->kind == WALK_CELL)
+        cell_proc(&wk, call->c[0]);
+    else if (call->kind == WALK_FACE)
+        face_proc(&wk, call->c[0], call->c[1], call->axis);
+    else
+        edge_proc(&wk, call->c, call->axis);
+}
+
+/* The memo's quads and calls freed (the struct left for the caller to zero or refill). */
+void ism_dual_walk_memo_free(walk_memo *m)
+{
+    for (size_t k = 0; m->parts && k < m->n; k++)
+        free(m->parts[k].q);
+    free(m->parts);
+    free(m->calls);
+}
+
+/* By node: 1 when its subtree changed since the memo's walk (a node added since, or one
+ * with a child that did); NULL when out of memory. Children come after their parent. */
+static uint8_t *changed_nodes(const dual *d)
+{
+    uint8_t *ch = malloc(d->nn ? d->nn : 1);
+    size_t old = d->memo.nodes;
+    for (size_t i = d->nn; ch && i-- > 0;) {
+        const dnode *n = &d->n[i];
+        uint8_t c = i >= old || (n->child >= 0 && (size_t)n->child >= old);
+        for (int k = 0; !c && n->child >= 0 && k < 8; k++)
+            c = ch[n->child + k];
+        ch[i] = c;
+    }
+    return ch;
+}
+
+/* Put-off call k of this round's walk (calls[0..n)) as the memo's call k, on nodes whose
+ * subtrees have not changed (ch): its quads are the memo's. The calls are the same list
+ * while the walk's top levels (above WALK_SPLIT_LEVEL) keep their shape. */
+static bool memo_holds(const dual *d, const uint8_t *ch, const walk_call *calls, size_t n,
+                       size_t k)
+{
+    const walk_memo *m = &d->memo;
+    if (!ch || !m->calls || m->n != n || memcmp(&m->calls[k], &calls[k], sizeof calls[k]))
+        return false;
+    int nodes = calls[k].kind == WALK_CELL ? 1 : calls[k].kind == WALK_FACE ? 2 : 4;
+    for (int j = 0; j < nodes; j++)
+        if (ch[calls[k].c[j]])
+            return false;
+    return true;
+}
+
+/* The round's quads into d->q: the walk's top levels on this thread, the calls below them
+ * on the pool — but for those the last round's memo holds — their quads joined in the
+ * calls' order (the same on any number of threads), and kept as the next round's memo. */
+void ism_dual_make_quads(dual *d)
+{
+    d->q.n = 0;
+    walk wk = {d, &d->q, true, NULL, 0, 0, false, &d->w[0]};
+    cell_proc(&wk, 0);
+    quads *part = calloc(wk.nd ? wk.nd : 1, sizeof *part);
+    size_t *todo = malloc((wk.nd ? wk.nd : 1) * sizeof *todo), nt = 0;
+    uint8_t *ch = d->memo.calls ? changed_nodes(d) : NULL;
+    if (!part || !todo || wk.nomem) {
+        free(part);
+        free(todo);
+        free(ch);
+        free(wk.defer);
+        d->nomem = true;
+        return;
+    }
+    for (size_t k = 0; k < wk.nd; k++) {
+        if (memo_holds(d, ch, wk.defer, wk.nd, k)) {
+            part[k] = d->memo.parts[k]; /* taken: the memo no longer frees it */
+            d->memo.parts[k].q = NULL;
+        } else
+            todo[nt++] = k;
+    }
+    free(ch);
+    walk_job job = {d, wk.defer, part, todo};
+    ism_pool_for(d->pool, nt, walk_task, &job, NULL);
+    for (size_t k = 0; k < wk.nd; k++) {
+        d->nomem |= part[k].nomem;
+        if (part[k].bad) /* a crossed edge without a vertex (edge_quad) */
+            decline(d, ISM_DUAL_WHY_OPEN_EDGE);
+        if (!d->nomem && part[k].n) {
+            if (grow((void **)&d->q.q, &d->q.cap, d->q.n + part[k].n, 4 * sizeof *d->q.q)) {
+                memcpy(&d->q.q[4 * d->q.n], part[k].q, 4 * part[k].n * sizeof *d->q.q);
+                d->q.n += part[k].n;
+            } else
+                d->nomem = true;
+        }
+    }
+    d->nomem |= d->q.nomem;
+    if (d->q.bad)
+        decline(d, ISM_DUAL_WHY_OPEN_EDGE);
+    free(todo);
+    ism_dual_walk_memo_free(&d->memo);
+    d->memo = (walk_memo){wk.defer, part, wk.nd, d->nn};
+}
