@@ -13,6 +13,7 @@
 #include "core/octree/cell_cache.h"
 #include "core/octree/dual.h"
 #include "core/octree/dual_balls.h"
+#include "core/octree/dual_keyed.h"
 #include "core/octree/grid.h"
 #include "core/octree/sampler.h"
 #include "core/util/grow.h"
@@ -49,14 +50,6 @@ typedef struct dnode {
 /* The mesher's hot array (expand and every sweep over d->n move it): the flags fit in the
  * padding before f, 96 bytes on LP64; a kept leaf's sag_split vertex lives in d->at. */
 _Static_assert(sizeof(dnode) <= 96, "dnode grew past 96 bytes");
-
-/* An open-addressed map from 64-bit keys (never 0; 0 marks an empty slot) to doubles, kept
- * at most half full. */
-typedef struct keyed {
-    uint64_t *key;
-    double *val;
-    size_t n, cap;
-} keyed;
 
 /* Quads (4 vertices each, counter-clockwise seen from ∇f; u[3] = UINT32_MAX for a
  * triangle) and what went wrong making them. */
@@ -153,5 +146,40 @@ static inline void decline(dual *d, enum ism_dual_reason why)
         d->why = why;
     d->bad = true;
 }
+
+/* What a parallel loop's tasks share: the mesher, their inputs and their outputs (slot k of
+ * out is task k's alone), and for the chunked measures (chunk_of) how many items in all. */
+typedef struct task_ctx {
+    struct dual *d;
+    const void *in;
+    void *out;
+    size_t n; /* the chunked loops' item count; 0 where a task is one item */
+} task_ctx;
+
+/* What a task of measure_pairs or measure_triangles measures: up to MEASURE_LANES points,
+ * their gradients in one batch (ism_sample_grad_batch: bit for bit ism_dual_dist's first
+ * sample, for less). */
+#define MEASURE_LANES ISM_GRAD_BATCH
+
+/* Task k's share of n items in chunks of MEASURE_LANES: its first item into *lo, and how
+ * many it has. */
+static inline size_t chunk_of(size_t k, size_t n, size_t *lo)
+{
+    *lo = k * MEASURE_LANES;
+    return n - *lo < MEASURE_LANES ? n - *lo : MEASURE_LANES;
+}
+
+/* How many chunks of MEASURE_LANES n items make (chunk_of's tasks). */
+static inline size_t chunks(size_t n)
+{
+    return (n + MEASURE_LANES - 1) / MEASURE_LANES;
+}
+
+/* m moved onto f = 0 by Newton along ∇f, stopping once a step is below NEWTON_STOP of
+ * size (dual.c); false when it could not finish a step (∇f vanishing or not finite). */
+bool ism_dual_newton_onto(worker *w, double m[3], double size);
+
+/* Room for n more vertices (positions and leaves, dual.c); false when out of memory. */
+bool ism_dual_reserve_vertices(dual *d, size_t n);
 
 #endif

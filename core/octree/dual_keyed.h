@@ -1,0 +1,82 @@
+/* dual_keyed.h — the dual mesher's memos by 64-bit key (dual_tree.h: triangles that met E,
+ * vertex pairs' midpoint distances, quads cut as fans): an open-addressed map to doubles. */
+#ifndef ISM_DUAL_KEYED_H
+#define ISM_DUAL_KEYED_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+
+/* An open-addressed map from 64-bit keys (never 0; 0 marks an empty slot) to doubles, kept
+ * at most half full. */
+typedef struct keyed {
+    uint64_t *key;
+    double *val;
+    size_t n, cap;
+} keyed;
+
+static inline size_t keyed_slot(const keyed *k, uint64_t key)
+{
+    size_t mask = k->cap - 1, i = (size_t)(key * 0x9E3779B97F4A7C15ull >> 17) & mask;
+    while (k->key[i] && k->key[i] != key)
+        i = (i + 1) & mask;
+    return i;
+}
+
+/* key's value, or NULL. */
+static inline const double *keyed_get(const keyed *k, uint64_t key)
+{
+    if (!k->cap)
+        return NULL;
+    size_t i = keyed_slot(k, key);
+    return k->key[i] ? &k->val[i] : NULL;
+}
+
+/* Room for `more` new keys without growing (so slots stay put meanwhile); false when out of
+ * memory. */
+static inline bool keyed_reserve(keyed *k, size_t more)
+{
+    size_t cap = k->cap ? k->cap : 1024;
+    while (2 * (k->n + more) > cap)
+        cap *= 2;
+    if (cap == k->cap)
+        return true;
+    keyed old = *k, grown = {NULL, NULL, old.n, cap};
+    grown.key = calloc(cap, sizeof *grown.key);
+    grown.val = malloc(cap * sizeof *grown.val);
+    if (!grown.key || !grown.val) {
+        free(grown.key);
+        free(grown.val);
+        return false;
+    }
+    for (size_t i = 0; i < old.cap; i++)
+        if (old.key[i]) {
+            size_t j = keyed_slot(&grown, old.key[i]);
+            grown.key[j] = old.key[i];
+            grown.val[j] = old.val[i];
+        }
+    free(old.key);
+    free(old.val);
+    *k = grown;
+    return true;
+}
+
+/* Sets key's value; out of memory, nothing is kept (a memo then recomputes, no more). */
+static inline void keyed_put(keyed *k, uint64_t key, double val)
+{
+    if (!keyed_get(k, key) && !keyed_reserve(k, 1))
+        return;
+    size_t i = keyed_slot(k, key);
+    k->n += !k->key[i];
+    k->key[i] = key;
+    k->val[i] = val;
+}
+
+static inline void keyed_free(keyed *k)
+{
+    free(k->key);
+    free(k->val);
+}
+
+#endif
