@@ -161,6 +161,20 @@ static inline __attribute__((always_inline)) void dual_step(const ism_instr *in,
         dual_chain(o, g, a->v > 0.0 ? 0.5 / g : 0.0, a);
         return;
     }
+    /* integer powers and exp, ism_unary_chain's g and g' written out (its g'' unasked):
+       through dual_op a power cost chmutov-quartic's x^4 about 225 instructions, exp
+       catenoid's cosh about 60 besides exp itself */
+    case ISM_OP_POWI: {
+        unsigned n = in->b;
+        double u = a->v, p2 = ism_powi(u, n - 2);
+        dual_chain(o, ism_powi(u, n), n * (p2 * u), a);
+        return;
+    }
+    case ISM_OP_EXP: {
+        double g = exp(a->v);
+        dual_chain(o, g, g, a);
+        return;
+    }
     default:
         *o = dual_op(in, r, trig);
     }
