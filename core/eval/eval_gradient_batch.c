@@ -119,7 +119,8 @@ INLINE void k_fill(double *o, double c)
     st(o, (v4d){c, c, c, c});
 }
 
-/* ism_powi lane by lane: a^n by the same repeated squaring */
+/* ism_powi lane by lane: a^n by the same repeated squaring (a^4 and a^3, the powers presets
+ * use, written out at their call: (a²)² and a (a²), ism_powi's products, its 1 × p exact) */
 INLINE v4d v_powi(v4d a, unsigned n)
 {
     v4d r = {1.0, 1.0, 1.0, 1.0}, p = a;
@@ -270,9 +271,9 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         unsigned e = in->b;
         v4d nv = {(double)e, (double)e, (double)e, (double)e};
         for (size_t g = 0; g < ng; g++) {
-            v4d a = ld(av + g * VL);
-            st(ov + g * VL, v_powi(a, e));
-            st(g1 + g * VL, nv * (v_powi(a, e - 2) * a));
+            v4d a = ld(av + g * VL), p2 = e == 4 ? a * a : e == 3 ? a : v_powi(a, e - 2);
+            st(ov + g * VL, e == 4 ? p2 * p2 : e == 3 ? a * (a * a) : v_powi(a, e));
+            st(g1 + g * VL, nv * (p2 * a));
         }
         break;
     }
