@@ -73,6 +73,19 @@
  * torus 3e-3 113.5M -> 91.7M, same triangle count; the box-cut presets at E/3 up to 2.4%
  * fewer triangles (the rounds' order changes which coarse leaves a miss splits). */
 #define SAG_SPLIT 2.0
+/* ... and where the surface bends one way (both principal curvatures of one sign, the least
+ * k2 in magnitude), every chord through the foot, in any direction, sags at least k2 L² / 8:
+ * a node is split at once when k2 h² / 8 > SAG_ROUND (E + shift), the sag of a chord its
+ * size beyond the room by a margin (vertices of neighbouring leaves are about a cell apart,
+ * some nearer). SAG_SPLIT, judged by the largest curvature for saddles too, keeps the
+ * sphere's nodes that every measure splits: bench sphere r 1 in ±1.5 (k2 = k1), level-3
+ * nodes at E 0.0141 have k2 h² / 8 / (E + shift) = 0.66 (104 of 128 kept), level 3 at
+ * 7.14e-3 1.30 and level 4 at 1.3e-3 1.78 (each a whole round of vertices, fans and measures
+ * made, every leaf then split). Whole runs (bench_error mesh S E 10, callgrind, ism_mesh_surface):
+ * sphere 7.14e-3 10.61M -> 9.10M, 1.3e-3 42.40M -> 38.70M, the same triangle counts and max
+ * centroid errors; 0.0141 and the torus at 0.0141 / 3.57e-3 / 1.19e-3 unchanged (its k2 h² / 8
+ * stays below; SAG_ROUND 1.0 and 1.5 measured the same but for 1.5 at 7.14e-3). */
+#define SAG_ROUND 1.2
 /* children_free's batches are made while the children they showed free (each spared the
  * interval of f and ∇f, 2-3x a batch's cost) are at least this many per batch so far (the
  * first split pass past min_depth always batches). With every batch made: kummer-16-nodes
@@ -651,7 +664,7 @@ static bool sag_may_split(const dual *d, int level, const double lo[3], const do
 }
 
 /* Node n, with both signs at its corners, split at once for the sag of a chord its size
- * (SAG_SPLIT)? Under the straddle move and above depth.max only (no crease, no points:
+ * (SAG_SPLIT, SAG_ROUND)? Under the straddle move and above depth.max only (no crease, no points:
  * their leaves place vertices otherwise), and only inside the request's box: in the grown
  * box's margin the triangles the clip drops are not measured, so leaves there stay coarse
  * (helicoid at 1.6e-3: kept leaves up to k h² / 8 / (E + shift) = 12 there, 1.27 inside;
@@ -662,7 +675,7 @@ static bool sag_split(dual *d, worker *w, const dnode *n, corner_view *v)
 {
     if (!sag_may_split(d, n->level, v->p[0], v->p[7]))
         return false;
-    double size = ism_grid_cell_size(&d->g, n->level), m[3], bend;
+    double size = ism_grid_cell_size(&d->g, n->level), m[3], bend[2];
     bool inside = v->foot == FOOT_UNKNOWN ? foot_in_node(w, v->p[0], v->p[7], size, m)
                                           : v->foot == FOOT_AT;
     if (!inside) {
@@ -672,8 +685,10 @@ static bool sag_split(dual *d, worker *w, const dnode *n, corner_view *v)
     if (v->foot == FOOT_AT)
         memcpy(m, v->foot_at, sizeof m);
     ism_straddle_balanced_point_at(&w->s, d->shift, d->o->box, m,
-                                   v->foot == FOOT_AT ? &v->foot_jet : NULL, v->at, &bend);
-    bool split = bend * size * size > 8 * SAG_SPLIT * (d->o->max_error + d->shift);
+                                   v->foot == FOOT_AT ? &v->foot_jet : NULL, v->at, bend);
+    double room = 8 * (d->o->max_error + d->shift);
+    bool split = bend[0] * size * size > SAG_SPLIT * room ||
+                 bend[1] * size * size > SAG_ROUND * room;
     v->placed = split ? FOOT_UNKNOWN : FOOT_AT;
     return split;
 }

@@ -94,23 +94,30 @@ bool ism_straddle_point(ism_sampler *s, double shift, const double box[6], const
 bool ism_straddle_balanced_point(ism_sampler *s, double shift, const double box[6],
                                  const double p[3], double q[3], double *bend)
 {
-    return ism_straddle_balanced_point_at(s, shift, box, p, NULL, q, bend);
+    double bends[2];
+    bool moved = ism_straddle_balanced_point_at(s, shift, box, p, NULL, q, bends);
+    if (bend)
+        *bend = bends[0];
+    return moved;
 }
 
 bool ism_straddle_balanced_point_at(ism_sampler *s, double shift, const double box[6],
                                     const double p[3], const ism_straddle_jet *j, double q[3],
-                                    double *bend)
+                                    double bend[2])
 {
     memcpy(q, p, 3 * sizeof *q);
     double n[3], a, b, c, gl;
     if (bend)
-        *bend = 0;
+        bend[0] = bend[1] = 0;
     if (!(shift > 0) || !local_form(s, box, p, j, n, &a, &b, &c, &gl))
         return false;
     /* the tangential Hessian's eigenvalues l1 >= l2: their sum and difference */
     double sum = a + c, diff = sqrt((a - c) * (a - c) + 4 * b * b);
-    if (bend && isfinite(sum) && isfinite(diff))
-        *bend = 0.5 * (fabs(sum) + diff) / gl; /* max(|l1|, |l2|) / |∇f| */
+    if (bend && isfinite(sum) && isfinite(diff)) {
+        bend[0] = 0.5 * (fabs(sum) + diff) / gl; /* max(|l1|, |l2|) / |∇f| */
+        if (fabs(sum) > diff) /* l1, l2 of one sign: min(|l1|, |l2|) / |∇f| */
+            bend[1] = 0.5 * (fabs(sum) - diff) / gl;
+    }
     if (!isfinite(sum) || !isfinite(diff) || !(fabs(sum) > 0))
         return false; /* no Hessian, or chords as far to each side: no move */
     /* (l1 + l2) / (l1 - l2) capped at ±STRADDLE_SHARE: the full shift wherever the cap

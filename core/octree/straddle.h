@@ -42,10 +42,13 @@ typedef struct ism_straddle_jet {
 
 /* ism_straddle_balanced_point with f's jet at p taken beforehand (j: bit for bit
  * ism_eval_hessian's at p on s's tape, e.g. by ism_eval_hessian_batch; NULL: evaluated
- * here): the same answer and the same count of gradients. */
+ * here): the same answer and the same count of gradients. bend (may be NULL): bend[0] as
+ * ism_straddle_balanced_point's, bend[1] the least principal curvature in magnitude
+ * (min(|l1|, |l2|) / |∇f|) where both bend one way (l1 l2 > 0), else 0 — every chord
+ * through p, whatever its direction, bends at least that much. */
 bool ism_straddle_balanced_point_at(ism_sampler *s, double shift, const double box[6],
                                     const double p[3], const ism_straddle_jet *j, double q[3],
-                                    double *bend);
+                                    double bend[2]);
 
 /* The distance to f = 0 (refine.h's measure, every point) of out's triangles from first_tri
  * on with the vertices from first_vert on moved; out is left as it was. False when out of
