@@ -198,6 +198,16 @@ Test(dual, coarse_bound_within_and_small)
           COARSE_TORUS_ROOM);
 }
 
+/* The bench's box ±1.5 in placement i (shifts) into box, and o: its options at depth.min 3,
+ * dual, under max_error e. */
+static void bench_dual_options(int i, double e, double box[6], ism_poly_options *o)
+{
+    cube_box(1.5, shifts[i], box);
+    pf_options(o, box, 3, SAFETY_DEPTH);
+    o->max_error = e;
+    o->dual = true;
+}
+
 /* The bench's torus (box ±1.5, three placements) under max_error e, dual: fewer than
  * `most` interval evaluations, and within e at every vertex, midpoint and centroid. */
 static void torus_proofs_within(double e, uint64_t most)
@@ -205,11 +215,8 @@ static void torus_proofs_within(double e, uint64_t most)
     ism_tape *t = pf_compile(&pf_ring_torus);
     for (int i = pf_first_box(); i < 3; i++) {
         double box[6];
-        cube_box(1.5, shifts[i], box);
         ism_poly_options o;
-        pf_options(&o, box, 3, SAFETY_DEPTH);
-        o.max_error = e;
-        o.dual = true;
+        bench_dual_options(i, e, box, &o);
         ism_poly_stats st;
         ism_mesh m;
         pf_run_options(t, &o, &m, &st);
@@ -257,11 +264,8 @@ Test(dual, one_way_bend_splits_before_the_round)
     const double e = 7.14e-3;
     for (int i = pf_first_box(); i < 3; i++) {
         double box[6];
-        cube_box(1.5, shifts[i], box);
         ism_poly_options o;
-        pf_options(&o, box, 3, SAFETY_DEPTH);
-        o.max_error = e;
-        o.dual = true;
+        bench_dual_options(i, e, box, &o);
         ism_mesh m;
         ism_mesh_init(&m);
         ism_dual_stats st;
