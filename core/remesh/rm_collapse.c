@@ -289,7 +289,8 @@ static bool crowds(const rm_pass *p, uint32_t v, uint32_t w, uint32_t *nb, uint3
  * f = q³ - z³(x² + 9/80 y²), whose ∇f vanishes along q = 0 on its smooth sheet at z = 0; in
  * its own box the polygoniser puts vertices on that curve 2e-4 apart, and refusing them left
  * 31 triangles under 10° (0.39°) there, none after. No edge's crease test is asked (its
- * Hessians made the pass 17% dearer on the gyroid ball, for 3 needles fewer of 240). */
+ * Hessians made the pass 17% dearer on the gyroid ball, for 3 needles fewer of 240). A
+ * junction's vertex (rm_junction_vertex: three sheets or more meet there) is not v. */
 static bool crease_merge_find(const rm_pass *p, uint32_t v, uint32_t w, uint32_t deg,
                               rm_merge *g)
 {
@@ -308,6 +309,8 @@ static bool crease_merge_find(const rm_pass *p, uint32_t v, uint32_t w, uint32_t
             rm_label(r, two[0]) != rm_label(r, two[1]))
             return false;
     }
+    if (rm_junction_vertex(p, v))
+        return false; /* the junction's vertex stays: w may merge into it */
     g->along = true;
     return true;
 }

@@ -523,7 +523,8 @@ static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan
         double best = ISM_RM_CREASE_MERGE_REL * f->mean_edge;
         for (uint32_t i = 0; i < c->n; i++) {
             double d = rm_dist(rm_pos(p, v), rm_pos(p, c->ring[i]));
-            if (d < best && d > after && r->locked[c->ring[i]] != RM_PINNED)
+            if (d < best && d > after && r->locked[c->ring[i]] != RM_PINNED &&
+                !rm_junction_vertex(p, c->ring[i])) /* a junction's vertex stays put */
                 best = d, w = c->ring[i];
         }
         if (w == UINT32_MAX)

@@ -61,6 +61,10 @@
  * cluster share most of theirs). A cluster whose star is larger is grown no further (its
  * star only grows); the cone after has its own limit, ISM_RM_COLLAPSE_MAX_DEGREE. */
 #define ISM_RM_JUNCTION_STAR 96
+/* A junction vertex's sheets are read off the vertices at most two edges from it, at most
+ * this many (rm_junction_vertex): 8 + 8 x 8 = 72 for crease vertices of degree up to 8, with
+ * room; where there are more the farthest are left out. */
+#define ISM_RM_JUNCTION_RING 96
 
 /* A cluster, its star (the triangles with a corner in it) and what a collapse into a target
  * would make of it. */
@@ -71,9 +75,7 @@ typedef struct junction {
     int nstar;
     uint32_t keep[ISM_RM_COLLAPSE_MAX_DEGREE]; /* the star's triangles with one corner in it */
     int nkeep;
-    const double *sheet[ISM_RM_COLLAPSE_MAX_DEGREE]; /* a unit ∇f normal of each sheet at the
-                                                        rim (sheets()) */
-    int nsheet;
+    rm_sheets sheet; /* the sheets of the ∇f normals at the rim (sheets()) */
 } junction;
 
 static bool in_cluster(const junction *j, uint32_t x)
@@ -191,43 +193,101 @@ static bool disc_ok(const rm_pass *p, junction *j)
     return steps == j->nkeep;
 }
 
-/* How many sheets the ∇f normals at the rim fall into (groups more than the crease angle
- * apart: on a single crease two, at a junction three or more); with three or more, x gets
- * the point where the first three's tangent planes (each through its first rim vertex)
- * meet: the junction, up to the sheets' curvature over the rim's reach (three-balls: about
- * 3e-5 against the cluster's 7e-4); NAN where the three normals are too near one plane for
- * that point to mean anything (ISM_RM_JUNCTION_DET). */
-static int sheets(const rm_pass *p, junction *j, double x[3])
+void rm_sheets_add(const rm_pass *p, rm_sheets *s, uint32_t v)
 {
-    const double **g = j->sheet;
-    double d[ISM_RM_COLLAPSE_MAX_DEGREE];
-    int groups = 0;
+    if (rm_normal_zero(p, v))
+        return;
+    const double *n = p->normal + 3 * (size_t)v;
     double near = cos(ISM_RM_CREASE_DEG * M_PI / 180);
-    for (int i = 0; i < j->nkeep; i++) {
-        const uint32_t *c = p->r.m->tri + 3 * (size_t)j->keep[i];
-        for (int k = 0; k < 3; k++) {
-            if (in_cluster(j, c[k]) || rm_normal_zero(p, c[k]))
-                continue;
-            const double *n = p->normal + 3 * (size_t)c[k];
-            int h = 0;
-            while (h < groups && !(ism_dot3(g[h], n) >= near))
-                h++;
-            if (h == groups && groups < ISM_RM_COLLAPSE_MAX_DEGREE)
-                d[groups] = ism_dot3(n, rm_pos(p, c[k])), g[groups++] = n;
-        }
-    }
-    j->nsheet = groups;
-    if (groups < 3)
-        return groups;
+    int h = 0;
+    while (h < s->n && !(ism_dot3(s->normal[h], n) >= near))
+        h++;
+    if (h == s->n && s->n < ISM_RM_COLLAPSE_MAX_DEGREE)
+        s->d[s->n] = ism_dot3(n, rm_pos(p, v)), s->normal[s->n++] = n;
+}
+
+bool rm_sheets_meet(const rm_sheets *s, double x[3])
+{
+    const double *const *g = s->normal;
+    if (s->n < 3)
+        return false;
     double c12[3], c23[3], c31[3];
     ism_cross3(g[1], g[2], c23);
     ism_cross3(g[2], g[0], c31);
     ism_cross3(g[0], g[1], c12);
     double det = ism_dot3(g[0], c23);
-    bool point = fabs(det) >= ISM_RM_JUNCTION_DET;
+    if (!(fabs(det) >= ISM_RM_JUNCTION_DET))
+        return false;
     for (int k = 0; k < 3; k++)
-        x[k] = point ? (d[0] * c23[k] + d[1] * c31[k] + d[2] * c12[k]) / det : NAN;
-    return groups;
+        x[k] = (s->d[0] * c23[k] + s->d[1] * c31[k] + s->d[2] * c12[k]) / det;
+    return true;
+}
+
+/* Adds x (not v) to ring[0..*n) unless there, nearest v first (dist[]: the distances); past
+ * ISM_RM_JUNCTION_RING the farthest go. */
+static void ring_add(const rm_pass *p, uint32_t v, uint32_t x, uint32_t *ring, double *dist,
+                     int *n)
+{
+    double d = rm_dist(rm_pos(p, v), rm_pos(p, x));
+    for (int k = 0; k < *n; k++)
+        if (ring[k] == x)
+            return;
+    if (x == v || (*n == ISM_RM_JUNCTION_RING && !(d < dist[*n - 1])))
+        return;
+    int i = *n < ISM_RM_JUNCTION_RING ? (*n)++ : *n - 1;
+    for (; i > 0 && dist[i - 1] > d; i--)
+        ring[i] = ring[i - 1], dist[i] = dist[i - 1];
+    ring[i] = x, dist[i] = d;
+}
+
+bool rm_junction_vertex(const rm_pass *p, uint32_t v)
+{
+    const rm_mesh *r = &p->r;
+    uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE], ring[ISM_RM_JUNCTION_RING];
+    double dist[ISM_RM_JUNCTION_RING];
+    if (r->count[v] > ISM_RM_MERGE_MAX_DEGREE)
+        return false;
+    int n = rm_merge_neighbours(r, v, nb), nr = 0;
+    for (int i = 0; i < n; i++)
+        for (uint32_t s = 0; s < r->count[nb[i]]; s++) {
+            const uint32_t *c = r->m->tri + 3 * (size_t)rm_slot(r, nb[i], s);
+            for (int k = 0; k < 3; k++)
+                ring_add(p, v, c[k], ring, dist, &nr);
+        }
+    rm_sheets s = {.n = 0};
+    double x[3], sum = 0;
+    rm_sheets_add(p, &s, v);
+    for (int i = 0; i < nr; i++)
+        rm_sheets_add(p, &s, ring[i]);
+    if (!rm_sheets_meet(&s, x))
+        return false;
+    double d = rm_dist(rm_pos(p, v), x);
+    for (int i = 0; i < n; i++) {
+        double e = rm_dist(rm_pos(p, nb[i]), x);
+        if (!(d < e))
+            return false; /* a neighbour is nearer the junction */
+        sum += rm_dist(rm_pos(p, v), rm_pos(p, nb[i]));
+    }
+    return d <= sum / n; /* the point within v's mean edge: the sheets meet at v */
+}
+
+/* How many sheets the ∇f normals at the rim fall into (rm_sheets_add: on a single crease
+ * two, at a junction three or more); with three or more, x gets the point where the first
+ * three's tangent planes meet (rm_sheets_meet): the junction, up to the sheets' curvature
+ * over the rim's reach (three-balls: about 3e-5 against the cluster's 7e-4); NAN where there
+ * is none. */
+static int sheets(const rm_pass *p, junction *j, double x[3])
+{
+    j->sheet.n = 0;
+    for (int i = 0; i < j->nkeep; i++) {
+        const uint32_t *c = p->r.m->tri + 3 * (size_t)j->keep[i];
+        for (int k = 0; k < 3; k++)
+            if (!in_cluster(j, c[k]))
+                rm_sheets_add(p, &j->sheet, c[k]);
+    }
+    if (j->sheet.n >= 3 && !rm_sheets_meet(&j->sheet, x))
+        x[0] = x[1] = x[2] = NAN;
+    return j->sheet.n;
 }
 
 /* Cone triangle t (its cluster corner s read at w's place: corners q; at s's own: o, outer
@@ -250,9 +310,10 @@ static bool cone_tri_ok(const rm_pass *p, uint32_t t, uint32_t a, uint32_t b,
 /* The sheet (sheets()) whose normal is nearest normal n: the one a cone triangle faces. */
 static int sheet_of(const junction *j, const double *n)
 {
+    const double *const *g = j->sheet.normal;
     int best = 0;
-    for (int h = 1; h < j->nsheet; h++)
-        if (ism_dot3(j->sheet[h], n) > ism_dot3(j->sheet[best], n))
+    for (int h = 1; h < j->sheet.n; h++)
+        if (ism_dot3(g[h], n) > ism_dot3(g[best], n))
             best = h;
     return best;
 }

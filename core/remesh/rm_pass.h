@@ -277,6 +277,35 @@ size_t rm_horn_tips(rm_pass *p, const ism_remesh_options *o, bool *ok);
  * every new triangle keeps to its own sheet (rm_junction.c); returns the collapses made
  * (they count in collapses). *ok false when out of memory. */
 size_t rm_junction_collapse(rm_pass *p, bool *ok);
+/* The sheets that ∇f's unit normals at some vertices fall into, each group's first normal
+ * and its tangent plane's offset (n · x at that vertex): a normal more than the crease angle
+ * (ISM_RM_CREASE_DEG) from every group's starts a new one. Two on a crease, three or more at
+ * a junction. rm_junction.c's clusters and crease_merge_find's junction vertices read it. */
+typedef struct rm_sheets {
+    const double *normal[ISM_RM_COLLAPSE_MAX_DEGREE];
+    double d[ISM_RM_COLLAPSE_MAX_DEGREE];
+    int n;
+} rm_sheets;
+/* Adds v's normal to s (none where ∇f vanishes at v; none past ISM_RM_COLLAPSE_MAX_DEGREE
+ * groups). */
+void rm_sheets_add(const rm_pass *p, rm_sheets *s, uint32_t v);
+/* True, x the point where the first three sheets' tangent planes meet, when s has three or
+ * more and their normals span space enough for that point to be a junction
+ * (ISM_RM_JUNCTION_DET). */
+bool rm_sheets_meet(const rm_sheets *s, double x[3]);
+/* v is a junction's vertex: the ∇f normals at v and the vertices up to two edges from it
+ * fall into three sheets or more whose tangent planes (each through the sheet's vertex
+ * nearest v) meet at a point (rm_sheets_meet) within v's mean edge, and v is nearer that
+ * point than each neighbour. Two edges: in a crowd the junction's own fan may be three
+ * triangles to crease vertices whose ∇f shows only two of the sheets (a crease vertex's
+ * normal is one branch's; three-balls' own box, upper triple point). The polygoniser puts a
+ * vertex on such a point (three balls' triple points, a cube's corners: within 1e-8). The
+ * crease merges keep it: crease_merge_find (rm_collapse.c) does not merge it away, and
+ * rm_crease_slide.c's merges onto a crease do not move it as the vertex that stays; it may
+ * still go as the vertex merged there (kept from that too, three-balls' 1e-4 box kept a
+ * 9.18° needle beside it that rm_junction.c's collapse into it could not mend; that box lost
+ * it before as well), and rm_junction.c's clusters may collapse into it. */
+bool rm_junction_vertex(const rm_pass *p, uint32_t v);
 /* Splits needles under 10° that the collapses left (their short edge joins two locked
  * vertices, or its collapse was refused) at a new vertex beside that edge (rm_insert.c),
  * within the room reserved; returns the insertions made. With last

@@ -461,7 +461,11 @@ class CreaseJunctions(unittest.TestCase):
     """Where three crease sheets meet — the triple points of three balls, a cube's corners (the
     cube minus a ball of radius 1.3 keeps them: they lie at sqrt 3) — --quality good under the
     default bound leaves no triangle under 10 degrees within JUNCTION_BALL of the point, and
-    the raw mesh's vertex there (the polygoniser puts one within 1e-8) stays. The points come
+    the raw mesh's vertex there (the polygoniser puts one within 1e-8) stays, in every box:
+    the crease merges (rm_crease_slide.c's onto the crease, which put the vertex kept at the
+    pair's middle) once moved it by a crowd's edge (three-balls' own box, upper triple point:
+    4.2e-3; the cube's irrational box, corner (1, -1, -1): 6.8e-4); rm_junction_vertex keeps
+    it now. The points come
     from the closed forms here. The polygoniser crowds locked crease vertices about them (7
     within 7.4e-4 of three-balls' lower triple point in the 1e-3 box, edges down to 5.6e-5),
     whose needles no single merge mends: before core/remesh/rm_junction.c collapsed the
@@ -473,11 +477,6 @@ class CreaseJunctions(unittest.TestCase):
                "cube-minus-ball": ([-1.3, -1.3, -1.3, 1.3, 1.3, 1.3], 7)}
     JUNCTION_BALL = 0.01  # one to two of the mesh's edges there (5e-3 to 1e-2)
     CORNERS = [(x, y, z) for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)]
-    # junctions whose vertex the pass's earlier merges (core/remesh/rm_collapse.c's merges
-    # along a crease) took away before rm_junction.c looks, as on fa46e70: the upper triple
-    # point in three-balls' own box (the nearest vertex 4.2e-3 away), the corner (1, -1, -1)
-    # in the cube's irrational box (6.8e-4); there only a vertex within E is asked
-    MERGED_BEFORE = {("three-balls", 0, 0), ("cube", 2, 4), ("cube-minus-ball", 2, 4)}
     # χ of each closed surface: the union of three balls and the cube are spheres; the cube
     # minus the ball (radius 1.3 > 1: it opens each face; < sqrt 2: the edges stay) is the
     # cube's 12 edges thickened, a handlebody of genus 12 - 8 + 1 = 5, χ = 2 - 2 x 5
@@ -500,10 +499,7 @@ class CreaseJunctions(unittest.TestCase):
                     needles = []
                     for i, q in enumerate(points):
                         near = min(math.dist(v, q) for v in verts)
-                        lost = (preset, b, i) in self.MERGED_BEFORE
-                        self.assertLess(near, e if lost else 1e-8 * diag, q)
-                        if lost:  # fails once the vertex stays: drop the entry then
-                            self.assertGreaterEqual(near, 1e-8 * diag, q)
+                        self.assertLess(near, 1e-8 * diag, q)
                         for t in tris:
                             c = [verts[k] for k in t]
                             if any(math.dist(v, q) < self.JUNCTION_BALL for v in c):
