@@ -152,28 +152,22 @@ bool rm_merge_distance_ok(rm_pass *p, const rm_merge *g)
     if (rm_distances_within(p, new_c, new_m))
         return true; /* within the mesh's before: the fan's own need not be asked */
     fan_distances(p, g, false, &old_c, &old_m);
-    return rm_distances_ok(p, new_c, new_m, old_c, old_m, g->along);
+    return rm_distances_ok(p, new_c, new_m, old_c, old_m);
 }
 
-bool rm_distances_ok(rm_pass *p, double new_c, double new_m, double old_c, double old_m,
-                     bool along)
+bool rm_distances_ok(rm_pass *p, double new_c, double new_m, double old_c, double old_m)
 {
     rm_collapse_bounds_need(p);
     if (!(new_c <= p->centroid_bound || new_c <= old_c))
         return false;
     if (new_m <= old_m)
         return true;
-    /* the found mesh's midpoints (rm_midpoint_within: 177M instructions on the gyroid ball)
-       asked last, and never for a merge along a crease, where the farthest midpoints lie
-       (once known, they still bound it). So the verdict along a crease depends on history:
-       it passes here only once some earlier merge off the creases asked them (midpoint_known;
-       best_merge skips the second direction's distances once the first passes, so that can
-       be later or never). revE found this branch reached 0 times in the cube, three-balls,
-       gyroid-ball, double-torus and cube-minus-ball (own box, --quality good); asking
-       rm_midpoint_within here too (order-free) kept all 217 meshes of mesh_identity.py before
-       rm_junction's collapses (revB 2) came to share this rule. */
-    return along ? p->midpoint_known && new_m <= p->midpoint_bound
-                 : rm_midpoint_within(p, new_m);
+    /* the found mesh's midpoints (rm_midpoint_within, its scan stopped at max_error) asked
+       last, along a crease and for a junction's collapse too: the verdict is the found
+       mesh's, not the history's (a merge along a crease once passed here only after some
+       earlier merge off the creases had measured them, midpoint_known, and best_merge skips
+       the second direction's distances once the first passes: revE 1) */
+    return rm_midpoint_within(p, new_m);
 }
 
 /* What merge_shape_ok asks of v's fan as it is, without measuring it afresh

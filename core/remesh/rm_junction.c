@@ -329,7 +329,7 @@ static uint32_t cluster_corner(const rm_pass *p, const junction *j, uint32_t t)
  * cone triangle fails cone_tri_ok, an edge w -> x bends past the crease angle (and f's
  * curvature does not explain it) where x is free or the triangles on either side face one
  * sheet, or a new centroid or midpoint lies farther from f = 0 than rm_distances_ok allows
- * a merge along a crease (the star's farthest before, or the mesh's as found). */
+ * a merge (the star's farthest before, or the mesh's as found). */
 static double cone_score(rm_pass *p, const junction *j, uint32_t w)
 {
     const ism_mesh *m = p->r.m;
@@ -381,8 +381,8 @@ static double cone_score(rm_pass *p, const junction *j, uint32_t w)
             if (in_cluster(j, c[k]))
                 old_m = fmax(old_m, rm_midpoint_distance(p, q[k], q[(k + 1) % 3]));
     }
-    /* a collapse merges along creases: rm_merge_distance_ok's rule for those */
-    return rm_distances_ok(p, new_c, new_m, old_c, old_m, true) ? score : -1;
+    /* a collapse merges along creases: rm_merge_distance_ok's rule */
+    return rm_distances_ok(p, new_c, new_m, old_c, old_m) ? score : -1;
 }
 
 /* The smallest sine of the star's triangles now. */

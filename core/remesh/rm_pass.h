@@ -258,11 +258,10 @@ struct rm_merge;
 bool rm_merge_distance_ok(rm_pass *p, const struct rm_merge *g);
 /* rm_merge_distance_ok's rule on figures measured elsewhere: new_c / new_m the farthest new
  * centroid / midpoint from f = 0, old_c / old_m the farthest there before (asked only when
- * rm_distances_within does not decide); along: a merge along a crease, where the found
- * mesh's midpoints bound new_m only once measured (rm_junction.c's collapses are). */
+ * rm_distances_within does not decide); rm_junction.c's collapses share it. The verdict
+ * reads only the found mesh and the figures given, never which merges came before. */
 bool rm_distances_within(rm_pass *p, double new_c, double new_m);
-bool rm_distances_ok(rm_pass *p, double new_c, double new_m, double old_c, double old_m,
-                     bool along);
+bool rm_distances_ok(rm_pass *p, double new_c, double new_m, double old_c, double old_m);
 /* Merges g->v into g->w, marking the corners of its new triangles active and touched (their
  * shapes changed); the new triangles into fan (room for ISM_RM_MERGE_MAX_DEGREE), *nfan how
  * many. False when out of memory (nothing changed). */

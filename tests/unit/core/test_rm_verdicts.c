@@ -1,0 +1,101 @@
+/* test_rm_verdicts.c — verdicts of the quality pass's mendings (core/remesh) that must not
+ * depend on how they were reached: a merge's distance rule (rm_distances_ok) gives the same
+ * answer whether or not an earlier merge had the found mesh's farthest midpoint measured
+ * (revE 1: a merge along a crease once passed only after one had). On a polygonised unit
+ * sphere in the box on the lattice and both shifted ones (placements.h). */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/remesh/rm_pass.h"
+#include "tests/unit/core/poly_fixture.h"
+
+/* The unit sphere in ±1.5 at depths 3..DEPTH. */
+static const double BOX[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
+#define DEPTH 4
+
+/* The found mesh a pass measures its bounds on: m's triangles and one sliver more, a -> b a
+ * chord of the unit circle z = 0 over 0.6 rad (its midpoint 1 - cos 0.3 = 0.0447 inside) and
+ * c over the chord's middle, 2 (1 - cos 0.3) outside, so that the sliver's centroid lies on
+ * the sphere: the farthest midpoint of the found mesh is then not on a triangle with a far
+ * centroid (the polygoniser's meshes have it there: midpoint_low = midpoint_bound), and a
+ * midpoint between the two tells measured from unmeasured. */
+typedef struct found {
+    double *pos;
+    uint32_t *tri;
+    size_t ntris;
+} found;
+
+static void found_with_sliver(const ism_mesh *m, found *f)
+{
+    size_t nv = m->nverts;
+    double h = 1 - cos(0.3), c = 1 + 2 * h;
+    double add[9] = {1, 0, 0, cos(0.6), sin(0.6), 0, c * cos(0.3), c * sin(0.3), 0};
+    f->pos = malloc((nv + 3) * 3 * sizeof *f->pos);
+    f->tri = malloc((m->ntris + 1) * 3 * sizeof *f->tri);
+    cr_assert(f->pos && f->tri);
+    memcpy(f->pos, m->pos, nv * 3 * sizeof *f->pos);
+    memcpy(f->pos + 3 * nv, add, sizeof add);
+    memcpy(f->tri, m->tri, m->ntris * 3 * sizeof *f->tri);
+    for (int k = 0; k < 3; k++)
+        f->tri[3 * m->ntris + k] = (uint32_t)(nv + k);
+    f->ntris = m->ntris + 1;
+}
+
+/* A pass over m under the bound e (0: none) with its bounds measured on fd. */
+static void open_pass(rm_pass *p, ism_mesh *m, const ism_tape *t, double e, const found *fd)
+{
+    ism_remesh_options o = {.f = t, .max_error = e};
+    cr_assert(rm_pass_open(p, m, &o, 0));
+    p->bounded = e > 0;
+    rm_collapse_bounds(p, fd->pos, fd->tri, fd->ntris);
+}
+
+static void close_pass(rm_pass *p, ism_mesh *m)
+{
+    rm_pass_close(p, m->nverts, m->ntris, NULL);
+}
+
+Test(rm_verdicts, merge_distances_do_not_depend_on_what_was_asked_before)
+{
+    ism_tape *t = pf_compile(&pf_unit_sphere);
+    for (int which = pf_first_box() - 1; which < 2; which++) {
+        double box[6];
+        ism_mesh m;
+        ism_poly_stats st;
+        pf_sweep_box(BOX, DEPTH, which, box);
+        pf_run(t, box, 3, DEPTH, 1, &m, &st);
+        found fd;
+        found_with_sliver(&m, &fd);
+        /* b has the found mesh's farthest midpoint measured (as an earlier merge off the
+           creases would have it), a not */
+        rm_pass a, b;
+        open_pass(&a, &m, t, 1, &fd);
+        open_pass(&b, &m, t, 1, &fd);
+        rm_collapse_bounds_need(&a);
+        (void)rm_midpoint_within(&b, INFINITY); /* past midpoint_low: measures the mesh */
+        cr_assert(b.midpoint_known);
+        double low = b.midpoint_low, bound = b.midpoint_bound;
+        /* a midpoint beyond the farthest of the triangles with the farthest centroids but
+           within the mesh's: where the old rule along a crease said no until measured */
+        cr_assert_lt(low, bound, "box %d: no room between %g and %g", which, low, bound);
+        double probe[] = {0.5 * low, 0.5 * (low + bound), bound, 1.5 * bound};
+        bool want[] = {true, true, true, false};
+        for (int i = 0; i < 4; i++) {
+            /* a's first ask is the middle one: nothing measured the midpoints before */
+            int k = i == 0 ? 1 : i == 1 ? 0 : i;
+            bool va = rm_distances_ok(&a, 0, probe[k], 0, 0);
+            bool vb = rm_distances_ok(&b, 0, probe[k], 0, 0);
+            cr_assert_eq(va, vb, "box %d, midpoint %g: %d unmeasured, %d measured", which,
+                         probe[k], va, vb);
+            cr_assert_eq(va, want[k], "box %d, midpoint %g against %g", which, probe[k], bound);
+        }
+        close_pass(&a, &m);
+        close_pass(&b, &m);
+        free(fd.pos);
+        free(fd.tri);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
