@@ -173,28 +173,20 @@ bool rm_distances_ok(rm_pass *p, double new_c, double new_m, double old_c, doubl
 /* What merge_shape_ok asks of v's fan as it is, without measuring it afresh
  * (rm_fan_measure, 12M of the cube's pass): its smallest sine from the sines the pass keeps
  * (rm_tri_sine, rm_fan_measure's bit for bit), how many of its triangles are under poor,
- * and, with normal, its triangles' normals summed in slot order (rm_fan_measure's). */
+ * and, with normal, the fan's normal (rm_fan_normal, as rm_fan_measure has it). */
 static double fan_before(rm_pass *p, uint32_t v, double poor, int *poor_before,
                          double *normal)
 {
     const rm_mesh *r = &p->r;
     double least = INFINITY;
     *poor_before = 0;
-    if (normal)
-        normal[0] = normal[1] = normal[2] = 0;
     for (uint32_t i = 0; i < r->count[v]; i++) {
-        uint32_t t = rm_slot(r, v, i);
-        double s = rm_tri_sine(p, t);
+        double s = rm_tri_sine(p, rm_slot(r, v, i));
         least = s < least ? s : least;
         *poor_before += s < poor;
-        if (normal) {
-            const uint32_t *c = r->m->tri + 3 * (size_t)t;
-            double n[3];
-            rm_cross(rm_pos(p, c[0]), rm_pos(p, c[1]), rm_pos(p, c[2]), n);
-            for (int k = 0; k < 3; k++)
-                normal[k] += n[k];
-        }
     }
+    if (normal)
+        rm_fan_normal(p, v, normal);
     return least;
 }
 

@@ -452,6 +452,10 @@ typedef struct rm_fan {
 } rm_fan;
 
 void rm_fan_measure(const rm_pass *p, uint32_t v, rm_fan *f);
+/* v's fan normal as rm_fan_measure has it: its triangles' unnormalised normals (rm_cross, in
+ * corner order) summed in slot order; what the collapses test new triangles against
+ * (rm_collapse.c's fan_before) reads the same bits. */
+void rm_fan_normal(const rm_pass *p, uint32_t v, double normal[3]);
 
 /* The (unnormalised) normal of v's i-th triangle (in its incidence slot) with v read at x;
  * returns its length (twice the area). */

@@ -101,7 +101,9 @@ bool rm_project(rm_pass *p, double x[3], double scale, int axis, double g[3])
     return false;
 }
 
-void rm_fan_measure(const rm_pass *p, uint32_t v, rm_fan *f)
+/* rm_fan_measure, or with shape false only f->normal: one loop, so that the normal the
+ * collapses read (rm_fan_normal) is rm_fan_measure's bit for bit. */
+static void fan_sum(const rm_pass *p, uint32_t v, rm_fan *f, bool shape)
 {
     const rm_mesh *r = &p->r;
     const double *P = r->m->pos;
@@ -114,14 +116,16 @@ void rm_fan_measure(const rm_pass *p, uint32_t v, rm_fan *f)
         const uint32_t *t = r->m->tri + 3 * r->vt[r->start[v] + i];
         const double *a = P + 3 * t[0], *b = P + 3 * t[1], *c = P + 3 * t[2];
         double n[3], twice = rm_cross(a, b, c, n), w = 0.5 * twice;
+        for (int k = 0; k < 3; k++)
+            f->normal[k] += n[k];
+        if (!shape)
+            continue;
         /* side[k] joins corners k and k + 1: each side measured once */
         double side[3] = {rm_dist(a, b), rm_dist(b, c), rm_dist(c, a)};
         double sine = rm_sine_of(twice, side[0], side[1], side[2]);
         f->min_sine = sine < f->min_sine ? sine : f->min_sine; /* no libm call */
-        for (int k = 0; k < 3; k++) {
+        for (int k = 0; k < 3; k++)
             f->centroid[k] += w * (a[k] + b[k] + c[k]) / 3;
-            f->normal[k] += n[k];
-        }
         /* the sides at v's corner j, one per other corner k in order (side[k] joins corners k
            and k + 1): j = 0: sides 0, 2; j = 1: 0, 1; j = 2: 2, 1 */
         int j = t[0] == v ? 0 : t[1] == v ? 1 : 2;
@@ -138,9 +142,18 @@ void rm_fan_measure(const rm_pass *p, uint32_t v, rm_fan *f)
         }
         area += w;
     }
-    for (int k = 0; k < 3; k++)
+    for (int k = 0; shape && k < 3; k++)
         f->centroid[k] = area > 0 ? f->centroid[k] / area : P[3 * v + k];
     f->mean_edge /= edges > 0 ? edges : 1;
+}
+
+void rm_fan_measure(const rm_pass *p, uint32_t v, rm_fan *f) { fan_sum(p, v, f, true); }
+
+void rm_fan_normal(const rm_pass *p, uint32_t v, double normal[3])
+{
+    rm_fan f;
+    fan_sum(p, v, &f, false);
+    memcpy(normal, f.normal, sizeof f.normal);
 }
 
 bool rm_turns_over(const rm_pass *p, const uint32_t *t, uint32_t v, const double gv[3],
