@@ -119,11 +119,11 @@ static uint32_t next_of(const ism_mesh *m, uint32_t t, uint32_t x)
     return m->tri[3 * (size_t)t + (rm_corner(m, t, x) + 1) % 3];
 }
 
-/* The triangles touching the cluster are one disc of one label, its inner edges oriented
- * manifold and on no locked list, whose rim (the outer edges of the triangles with one corner
- * in the cluster) is a single cycle: renaming the cluster to one vertex then gives a cone
- * over that cycle, a disc for a disc. j->keep gets the cone's triangles. */
-static bool disc_ok(const rm_pass *p, junction *j)
+/* The triangles touching the cluster (its star) are one disc of one label: its inner edges
+ * oriented manifold and on no locked list, χ a disc's (its vertices: the cluster's and the
+ * rim's) and every vertex off the cluster on the rim, one per cone triangle. j->keep gets
+ * the cone's triangles (one corner in the cluster). */
+static bool star_is_disc(const rm_pass *p, junction *j)
 {
     const rm_mesh *r = &p->r;
     const ism_mesh *m = r->m;
@@ -161,12 +161,14 @@ static bool disc_ok(const rm_pass *p, junction *j)
                 rim[nrim++] = a;
         }
     }
-    /* χ of the star (its vertices: the cluster's and the rim's) is a disc's, and every vertex
-       off the cluster is on the rim: one per cone triangle */
-    if (j->n + nrim - ne + j->nstar != 1 || nrim != j->nkeep || j->nkeep < 3)
-        return false;
-    /* the rim: each cone triangle's outer edge a -> b; one cycle through nkeep distinct
-       vertices */
+    return j->n + nrim - ne + j->nstar == 1 && nrim == j->nkeep && j->nkeep >= 3;
+}
+
+/* The rim, each cone triangle's outer edge a -> b, is one cycle through j->nkeep distinct
+ * vertices. */
+static bool rim_is_cycle(const rm_pass *p, const junction *j)
+{
+    const ism_mesh *m = p->r.m;
     uint32_t from[ISM_RM_COLLAPSE_MAX_DEGREE], to[ISM_RM_COLLAPSE_MAX_DEGREE];
     for (int i = 0; i < j->nkeep; i++) {
         uint32_t t = j->keep[i], s = UINT32_MAX;
@@ -191,6 +193,13 @@ static bool disc_ok(const rm_pass *p, junction *j)
         steps++;
     } while (i != 0 && steps <= j->nkeep);
     return steps == j->nkeep;
+}
+
+/* Renaming the cluster to one vertex gives a cone over the rim, a disc for a disc: the star
+ * is a disc and its rim a single cycle. j->keep gets the cone's triangles. */
+static bool disc_ok(const rm_pass *p, junction *j)
+{
+    return star_is_disc(p, j) && rim_is_cycle(p, j);
 }
 
 void rm_sheets_add(const rm_pass *p, rm_sheets *s, uint32_t v)
@@ -325,18 +334,17 @@ static uint32_t cluster_corner(const rm_pass *p, const junction *j, uint32_t t)
     return in_cluster(j, c[0]) ? c[0] : in_cluster(j, c[1]) ? c[1] : c[2];
 }
 
-/* The smallest sine of the cone over the rim with apex w (a cluster vertex), or -1 when a
- * cone triangle fails cone_tri_ok, an edge w -> x bends past the crease angle (and f's
- * curvature does not explain it) where x is free or the triangles on either side face one
- * sheet, or a new centroid or midpoint lies farther from f = 0 than rm_distances_ok allows
- * a merge (the star's farthest before, or the mesh's as found). */
-static double cone_score(rm_pass *p, const junction *j, uint32_t w)
+/* The cone over the rim with apex w (at x): the smallest sine of its triangles, or -1 when
+ * one fails cone_tri_ok; n / ln get each cone triangle's normal and its length, from its
+ * outer edge's first corner, *new_c / *new_m the farthest new centroid / midpoint of w's
+ * edges from f = 0. */
+static double cone_shape(rm_pass *p, const junction *j, const double *x,
+                         double n[][3], double *ln, uint32_t *from, double *new_c,
+                         double *new_m)
 {
     const ism_mesh *m = p->r.m;
-    const double *x = rm_pos(p, w);
-    double n[ISM_RM_COLLAPSE_MAX_DEGREE][3], ln[ISM_RM_COLLAPSE_MAX_DEGREE];
-    uint32_t from[ISM_RM_COLLAPSE_MAX_DEGREE];
-    double score = INFINITY, new_c = 0, new_m = 0;
+    double score = INFINITY;
+    *new_c = *new_m = 0;
     for (int i = 0; i < j->nkeep; i++) {
         uint32_t t = j->keep[i], s = cluster_corner(p, j, t);
         uint32_t a = next_of(m, t, s), b = next_of(m, t, a);
@@ -347,10 +355,20 @@ static double cone_score(rm_pass *p, const junction *j, uint32_t w)
             return -1;
         score = fmin(score, rm_min_sine(q[0], q[1], q[2]));
         from[i] = a;
-        new_c = fmax(new_c, rm_centroid_distance(p, q[0], q[1], q[2]));
-        new_m = fmax(new_m, rm_midpoint_distance(p, x, rm_pos(p, a)));
+        *new_c = fmax(*new_c, rm_centroid_distance(p, q[0], q[1], q[2]));
+        *new_m = fmax(*new_m, rm_midpoint_distance(p, x, rm_pos(p, a)));
     }
-    /* the edges w -> x: between the cone triangle leaving x (from) and the one arriving */
+    return score;
+}
+
+/* The edges w -> x of the cone (between the cone triangle leaving x, from, and the one
+ * arriving) bend at most the crease angle, or what f's curvature explains, where x is free
+ * or the triangles on either side face one sheet. */
+static bool spokes_ok(rm_pass *p, const junction *j, uint32_t w, const double n[][3],
+                      const double *ln, const uint32_t *from)
+{
+    const ism_mesh *m = p->r.m;
+    const double *x = rm_pos(p, w);
     for (int i = 0; i < j->nkeep; i++) {
         uint32_t t = j->keep[i], s = cluster_corner(p, j, t);
         uint32_t b = next_of(m, t, next_of(m, t, s));
@@ -368,10 +386,18 @@ static double cone_score(rm_pass *p, const junction *j, uint32_t w)
         if (!(c >= cos(ISM_RM_CREASE_DEG * M_PI / 180)) &&
             !(wb > 0 && rm_bend_is_curvature(p, w, b, acos(fmax(-1, fmin(1, c))),
                                              (ln[i] + ln[k]) / wb, NULL)))
-            return -1;
+            return false;
     }
+    return true;
+}
+
+/* The new centroids and midpoints (farthest new_c, new_m) within what rm_distances_ok allows
+ * a merge: the star's farthest before, or the mesh's as found. */
+static bool cone_distances_ok(rm_pass *p, const junction *j, double new_c, double new_m)
+{
+    const ism_mesh *m = p->r.m;
     if (rm_distances_within(p, new_c, new_m))
-        return score;
+        return true;
     double old_c = 0, old_m = 0;
     for (int i = 0; i < j->nstar; i++) {
         const uint32_t *c = m->tri + 3 * (size_t)j->star[i];
@@ -382,7 +408,20 @@ static double cone_score(rm_pass *p, const junction *j, uint32_t w)
                 old_m = fmax(old_m, rm_midpoint_distance(p, q[k], q[(k + 1) % 3]));
     }
     /* a collapse merges along creases: rm_merge_distance_ok's rule */
-    return rm_distances_ok(p, new_c, new_m, old_c, old_m) ? score : -1;
+    return rm_distances_ok(p, new_c, new_m, old_c, old_m);
+}
+
+/* The smallest sine of the cone over the rim with apex w (a cluster vertex), or -1 when it
+ * fails cone_shape, spokes_ok or cone_distances_ok. */
+static double cone_score(rm_pass *p, const junction *j, uint32_t w)
+{
+    double n[ISM_RM_COLLAPSE_MAX_DEGREE][3], ln[ISM_RM_COLLAPSE_MAX_DEGREE];
+    uint32_t from[ISM_RM_COLLAPSE_MAX_DEGREE];
+    double new_c, new_m;
+    double score = cone_shape(p, j, rm_pos(p, w), n, ln, from, &new_c, &new_m);
+    if (score < 0 || !spokes_ok(p, j, w, (const double(*)[3])n, ln, from))
+        return -1;
+    return cone_distances_ok(p, j, new_c, new_m) ? score : -1;
 }
 
 /* The smallest sine of the star's triangles now. */
@@ -493,6 +532,38 @@ static double longest_edge(const rm_pass *p, uint32_t v)
     return l;
 }
 
+/* The best collapse found so far: its cluster, target and key (choose_target). */
+typedef struct choice {
+    junction j;
+    uint32_t target;
+    double key;
+} choice;
+
+/* Scores every locked member of cluster j (ns sheets at its rim, meeting at x when three or
+ * more; mid, reach: the seed's middle and the cluster's reach) as a target and keeps the
+ * best in *best: the largest smallest angle over the star's now, the junction's vertex (the
+ * member nearest where the sheets meet, when they meet at a point within reach) before any
+ * other whenever it leaves no needle. */
+static void choose_target(rm_pass *p, const junction *j, int ns, const double x[3],
+                          const double mid[3], double reach, choice *best)
+{
+    double floor = star_sine(p, j), needle = rm_insert_poor();
+    int at = ns >= 3 && rm_dist(x, mid) <= reach ? 0 : -1;
+    for (int i = 1; at >= 0 && i < j->n; i++)
+        if (rm_dist(rm_pos(p, j->v[i]), x) < rm_dist(rm_pos(p, j->v[at]), x))
+            at = i;
+    for (int i = 0; i < j->n; i++) {
+        if (!p->r.locked[j->v[i]])
+            continue; /* a free vertex the cluster wrapped round is on no crease */
+        double s = cone_score(p, j, j->v[i]);
+        /* the junction's vertex keeps the point where the sheets meet: taken whenever it
+           leaves no needle, otherwise the best target */
+        double key = s + (i == at && s >= needle ? 2 : 0);
+        if (s > floor && key > best->key)
+            best->key = key, best->j = *j, best->target = j->v[i];
+    }
+}
+
 /* Grows clusters from needle t's shortest edge between two locked vertices and collapses
  * the best that passes (of at most `most` sheets: 2, or 3 for any) into its best target;
  * true when one was. *ok false when out of memory. */
@@ -511,11 +582,10 @@ static bool mend_junction(rm_pass *p, uint32_t t, int most, bool *ok)
     }
     if (e < 0)
         return false;
-    junction j = {.v = {c[e], c[(e + 1) % 3]}, .n = 2}, best;
-    double mid[3], best_key = -1;
+    junction j = {.v = {c[e], c[(e + 1) % 3]}, .n = 2};
+    choice best = {.key = -1, .target = UINT32_MAX};
+    double mid[3];
     double reach = ISM_RM_JUNCTION_REACH * fmax(longest_edge(p, j.v[0]), longest_edge(p, j.v[1]));
-    double needle = rm_insert_poor();
-    uint32_t target = UINT32_MAX;
     for (int k = 0; k < 3; k++)
         mid[k] = (rm_pos(p, j.v[0])[k] + rm_pos(p, j.v[1])[k]) / 2;
     for (;;) {
@@ -523,25 +593,8 @@ static bool mend_junction(rm_pass *p, uint32_t t, int most, bool *ok)
         if (!gather_star(p, &j))
             break; /* the star only grows with the cluster */
         int ns = disc_ok(p, &j) ? sheets(p, &j, x) : 0;
-        if (ns >= 2 && (most > 2 || ns == 2)) {
-            double floor = star_sine(p, &j);
-            /* the junction's vertex: the member nearest where the sheets meet, when they
-               meet at a point within the cluster's reach */
-            int at = ns >= 3 && rm_dist(x, mid) <= reach ? 0 : -1;
-            for (int i = 1; at >= 0 && i < j.n; i++)
-                if (rm_dist(rm_pos(p, j.v[i]), x) < rm_dist(rm_pos(p, j.v[at]), x))
-                    at = i;
-            for (int i = 0; i < j.n; i++) {
-                if (!r->locked[j.v[i]])
-                    continue; /* a free vertex the cluster wrapped round is on no crease */
-                double s = cone_score(p, &j, j.v[i]);
-                /* the junction's vertex keeps the point where the sheets meet: taken
-                   whenever it leaves no needle, otherwise the best target */
-                double key = s + (i == at && s >= needle ? 2 : 0);
-                if (s > floor && key > best_key)
-                    best_key = key, best = j, target = j.v[i];
-            }
-        }
+        if (ns >= 2 && (most > 2 || ns == 2))
+            choose_target(p, &j, ns, x, mid, reach, &best);
         if (j.n == ISM_RM_JUNCTION_MAX)
             break;
         /* the nearer of a vertex the cluster wraps round (locked or not: it lies inside) and
@@ -555,9 +608,9 @@ static bool mend_junction(rm_pass *p, uint32_t t, int most, bool *ok)
             break;
         j.v[j.n++] = y;
     }
-    if (target == UINT32_MAX)
+    if (best.target == UINT32_MAX)
         return false;
-    *ok = collapse(p, &best, target);
+    *ok = collapse(p, &best.j, best.target);
     return *ok;
 }
 
