@@ -1,8 +1,10 @@
 /* test_rm_verdicts.c — verdicts of the quality pass's mendings (core/remesh) that must not
  * depend on how they were reached: a merge's distance rule (rm_distances_ok) gives the same
  * answer whether or not an earlier merge had the found mesh's farthest midpoint measured
- * (revE 1: a merge along a crease once passed only after one had). On a polygonised unit
- * sphere in the box on the lattice and both shifted ones (placements.h). */
+ * (revE 1: a merge along a crease once passed only after one had), and the found mesh's
+ * farthest midpoint, whose scan stops at max_error, answers as the whole scan would (revE 6).
+ * On a polygonised unit sphere in the box on the lattice and both shifted ones
+ * (placements.h). */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -95,6 +97,67 @@ Test(rm_verdicts, merge_distances_do_not_depend_on_what_was_asked_before)
         close_pass(&b, &m);
         free(fd.pos);
         free(fd.tri);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
+
+/* The farthest edge midpoint of the found mesh from f = 0 as pass p measures it, over every
+ * edge (no stop). */
+static double farthest_midpoint(rm_pass *p, const found *fd)
+{
+    double far = 0;
+    for (size_t t = 0; t < fd->ntris; t++)
+        for (int k = 0; k < 3; k++) {
+            const uint32_t *v = fd->tri + 3 * t;
+            far = fmax(far, rm_midpoint_distance(p, fd->pos + 3 * (size_t)v[k],
+                                                 fd->pos + 3 * (size_t)v[(k + 1) % 3]));
+        }
+    return far;
+}
+
+/* The found mesh's farthest midpoint is measured with its scan stopped once a midpoint
+ * reaches max_error (rm_collapse.c's farthest: nothing past it can change the figure, which
+ * is capped at max_error): under bounds E below, at and above the farthest midpoint, the
+ * figure is the whole scan's (farthest_midpoint, with the pass's own measure) capped at E,
+ * and every verdict of rm_midpoint_within is the one that figure gives. */
+Test(rm_verdicts, the_midpoint_scan_stopped_at_the_bound_keeps_every_verdict)
+{
+    ism_tape *t = pf_compile(&pf_unit_sphere);
+    for (int which = pf_first_box() - 1; which < 2; which++) {
+        double box[6];
+        ism_mesh m;
+        ism_poly_stats st;
+        pf_sweep_box(BOX, DEPTH, which, box);
+        pf_run(t, box, 3, DEPTH, 1, &m, &st);
+        /* as polygonised, and with the sliver last: its midpoint the farthest, after all */
+        found as_is = {m.pos, m.tri, m.ntris}, sliver;
+        found_with_sliver(&m, &sliver);
+        for (int i = 0; i < 10; i++) {
+            const found *fd = i < 5 ? &as_is : &sliver;
+            rm_pass whole;
+            open_pass(&whole, &m, t, 1e3, fd); /* no midpoint here is 1e3 off */
+            double far0 = farthest_midpoint(&whole, fd);
+            cr_assert_gt(far0, 0);
+            close_pass(&whole, &m);
+            static const double scale[] = {0.3, 0.999, 1, 1.001, 3};
+            double e = scale[i % 5] * far0;
+            rm_pass a;
+            open_pass(&a, &m, t, e, fd);
+            double want = fmin(farthest_midpoint(&a, fd), e);
+            double probe[] = {0.5 * want, nextafter(want, 0), want, nextafter(want, INFINITY),
+                              2 * want};
+            for (int k = 0; k < 5; k++)
+                cr_assert_eq(rm_midpoint_within(&a, probe[k]), probe[k] <= want,
+                             "box %d, E %g x the farthest: midpoint %.17g against %.17g", which,
+                             scale[i % 5], probe[k], want);
+            cr_assert(a.midpoint_known);
+            cr_assert_eq(a.midpoint_bound, want, "box %d, E %g x the farthest: %.17g, not %.17g",
+                         which, scale[i % 5], a.midpoint_bound, want);
+            close_pass(&a, &m);
+        }
+        free(sliver.pos);
+        free(sliver.tri);
         ism_mesh_free(&m);
     }
     ism_tape_free(t);
