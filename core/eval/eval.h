@@ -73,7 +73,11 @@ void ism_eval_gradient_batch(const ism_tape *t, ism_eval_ws *ws, const double *x
  * for short batches: unlike ism_eval_batch it pads no lane up to a group of 32 (a batch of 5
  * costs 5 lanes) and takes sines and cosines through the workspace's memo as ism_eval_point
  * does. n may be any size; chunks of ISM_EVAL_BATCH. Its caller: the conformance pass's rim
- * clearance samples (cf_rim_clear; edge root searches in lockstep cost more: batch19 notes). */
+ * clearance samples (cf_rim_clear). Edge root searches in lockstep cost more: a node's are
+ * 1.3 wide (batch19 notes), a split node's 8 children's 6 (5.3 lanes a step: Klein bottle at
+ * E 3.27e-3 +131M instructions of 4,048M, gyroid-ball at 1.09e-2 +26M of 850M; edges24
+ * notes). Instructions per point (callgrind): Klein bottle 410 one at a time, here 293 / 205 /
+ * 161 / 139 at n = 4 / 8 / 16 / 32; gyroid-ball 680, here 610 / 511 / 464 / 499. */
 void ism_eval_points(const ism_tape *t, ism_eval_ws *ws, const double *x, const double *y,
                      const double *z, double *out, size_t n);
 
