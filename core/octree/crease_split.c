@@ -1,6 +1,7 @@
 /* crease_split.c — a leaf's triangles cut where f's top min/max changes branch, or where f
  * changes smooth piece (see crease_split.h). */
 #include "core/octree/crease_split.h"
+#include "core/octree/crease_memo.h"
 #include "core/octree/triangulate.h"
 #include "core/util/min_norm.h"
 
@@ -132,7 +133,7 @@ static label_t label_fresh(ism_sampler *s, bool pm, const double p[3])
  * instructions (a leaf's vertices up to three times, its neighbours' shared ones again). */
 static label_t label_at(ism_sampler *s, bool pm, const double p[3])
 {
-    if (!s->label_memo_on)
+    if (s->memo_tape != s->tape)
         return label_fresh(s, pm, p);
     uint64_t b[3];
     memcpy(b, p, sizeof b);
@@ -374,20 +375,17 @@ static int whole_edge(ism_sampler *s, const double lin[3], const double x[3], co
     return ab >= CREASE_FOLD_COS * sqrt(aa * bb) && fold_within(s, lin) ? WHOLE_FOLD : 0;
 }
 
-/* The crease point of edge p-q, whose ends carry labels lp != lq: Newton on lo = hi = 0 from
- * where lo − hi changes sign along the edge (flagged ISM_FP_CREASE; true), or that linear
- * estimate moved onto f = 0 (false). *whole: nonzero where the edge is better left whole:
+/* The crease point of edge p-q (p before q), whose ends carry labels l[0] < l[1]: Newton on
+ * l[0] = l[1] = 0 from where l[0] − l[1] changes sign along the edge (flagged ISM_FP_CREASE;
+ * true), or that linear estimate moved onto f = 0 (false). *whole: nonzero where the edge is better left whole:
  * WHOLE_END where that point is one of its ends (at_end; in either mode, found by Newton or
  * not: a crease through a corner, as the double torus's on its own box's middle plane x = 1.1,
  * gives a point a rounding error from it, 1e-16 to 1e-14 off, which a cut would add as a second,
  * unwelded copy of the corner beside zero-area triangles); in pieces mode also where the
  * pieces meet almost flat there or the fold is within the bound (whole_edge). */
-static bool crease_point(ism_sampler *s, bool pm, const double *p0, const double *q0,
-                         label_t lp, label_t lq, ism_fpoint *out, int *whole)
+static bool crease_point_fresh(ism_sampler *s, bool pm, const double *p, const double *q,
+                               const label_t l[2], ism_fpoint *out, int *whole)
 {
-    const double *p = before(q0, p0) ? q0 : p0, *q = p == p0 ? q0 : p0;
-    label_t l[2] = {lp, lq};
-    order_labels(l, 2);
     double d[2];
     const double *ends[2] = {p, q};
     for (int e = 0; e < 2; e++)
@@ -410,6 +408,36 @@ static bool crease_point(ism_sampler *s, bool pm, const double *p0, const double
     ism_sample_grad(s, x, out->g);
     out->flags = ok ? ISM_FP_INTERIOR | ISM_FP_CREASE : ISM_FP_INTERIOR;
     *whole = at_end(p, q, x) ? WHOLE_END : pm && ok ? whole_edge(s, lin, x, l) : 0;
+    return ok;
+}
+
+/* crease_point_fresh's answer for edge p0-q0 (its ends taken in before()'s order, its labels
+ * lp != lq in increasing order: the same bits from either leaf beside it), through the
+ * sampler's crease memo when it has one for the tape it evaluates (crease_memo.h: a hit is
+ * that answer, stored). */
+static bool crease_point(ism_sampler *s, bool pm, const double *p0, const double *q0,
+                         label_t lp, label_t lq, ism_fpoint *out, int *whole)
+{
+    const double *p = before(q0, p0) ? q0 : p0, *q = p == p0 ? q0 : p0;
+    label_t l[2] = {lp, lq};
+    order_labels(l, 2);
+    ism_crease_memo *m = s->memo_tape == s->tape ? s->crease_memo : NULL;
+    ism_crease_entry *e = m ? ism_crease_memo_slot(m, p, q) : NULL;
+    if (e && ism_crease_memo_holds(e, p, q, l[0], l[1])) {
+        m->hits++;
+        *out = e->x;
+        *whole = e->whole;
+        return e->found;
+    }
+    bool ok = crease_point_fresh(s, pm, p, q, l, out, whole);
+    if (e && l[0] != l[1]) {
+        memcpy(e->p, p, sizeof e->p);
+        memcpy(e->q, q, sizeof e->q);
+        e->lo = l[0], e->hi = l[1];
+        e->x = *out;
+        e->whole = *whole;
+        e->found = ok;
+    }
     return ok;
 }
 
@@ -849,13 +877,63 @@ static bool on_crease(ism_sampler *s, const double x[3], const label_t l[2], dou
     return newton_delta(s, true, x, 2, l, step) && ism_norm3(step) <= ON_CREASE_SHARE * sag;
 }
 
+/* Does the middle of chord a-c between two crease points lie farther than sag from the
+ * crease of labels l[0] < l[1] (Newton from it)? In pieces mode only where a and c both lie
+ * on that crease (on_crease): else they are crease points of two creases, a chord across
+ * one piece. */
+static bool chord_far(ism_sampler *s, bool pm, const double *a, const double *c,
+                      const label_t l[2], double sag)
+{
+    if (pm && (!on_crease(s, a, l, sag) || !on_crease(s, c, l, sag)))
+        return false;
+    double m[3], x[3];
+    for (int k = 0; k < 3; k++)
+        m[k] = x[k] = (a[k] + c[k]) / 2;
+    return newton(s, pm, x, 2, l) && ism_dist3(x, m) > sag;
+}
+
+/* The chords one leaf's triangles asked chord_far about, while they are tested: the chord
+ * between a cut's two crease points is the edge the triangles each side of it share, so both
+ * ask (gyroid-ball E = 0.0109 at depth 10: 2,303 chords' Newton, 17.0M of 822.6M
+ * instructions, half of them repeats). A leaf cuts a few polygons: this many recent chords. */
+#define CHORD_MEMO 8
+
+typedef struct chord_memo {
+    struct {
+        double a[3], c[3]; /* the chord's ends, a before c (the two sides' triangles hold
+                              them as vertices of their own: each side's gradients) */
+        label_t lo, hi;    /* its crease's labels */
+        bool far;       /* chord_far's answer: a pure function of these within the leaf */
+    } e[CHORD_MEMO];
+    unsigned n; /* chords asked (the newest in e[(n - 1) % CHORD_MEMO]) */
+} chord_memo;
+
+/* chord_far for the chord va-vc, through memo. */
+static bool chord_far_memo(ism_sampler *s, bool pm, const double *va, const double *vc,
+                           const label_t l[2], double sag, chord_memo *memo)
+{
+    const double *a = before(vc, va) ? vc : va, *c = a == va ? vc : va;
+    for (unsigned i = 0; i < memo->n && i < CHORD_MEMO; i++)
+        if (memo->e[i].lo == l[0] && memo->e[i].hi == l[1] &&
+            !memcmp(memo->e[i].a, a, sizeof memo->e[i].a) &&
+            !memcmp(memo->e[i].c, c, sizeof memo->e[i].c))
+            return memo->e[i].far;
+    bool far = chord_far(s, pm, va, vc, l, sag);
+    unsigned slot = memo->n++ % CHORD_MEMO;
+    memcpy(memo->e[slot].a, a, sizeof memo->e[slot].a);
+    memcpy(memo->e[slot].c, c, sizeof memo->e[slot].c);
+    memo->e[slot].lo = l[0], memo->e[slot].hi = l[1];
+    memo->e[slot].far = far;
+    return far;
+}
+
 /* Does the crease pass between triangle v's corners unseen: an edge whose two ends lie off
  * the crease on one branch with its midpoint on the other, or three such corners with the
  * centroid on the other; or an edge between two crease points whose middle lies farther than
  * sag from the crease (Newton from it; in pieces mode on the pieces of the third corner and
  * of its mirror image across the edge)? */
 static bool unseen_crease(ism_sampler *s, bool pm, const ism_cell_out *out, const uint32_t *v,
-                          double sag, label_t *labels, uint32_t first)
+                          double sag, label_t *labels, uint32_t first, chord_memo *chords)
 {
     const double *p[3];
     label_t b[3];
@@ -863,11 +941,11 @@ static bool unseen_crease(ism_sampler *s, bool pm, const ism_cell_out *out, cons
         p[k] = out->verts[v[k]].p;
         b[k] = vertex_label(s, pm, out, labels, first, v[k]);
     }
-    double m[3], x[3];
+    double m[3];
     for (int e = 0; e < 3; e++) {
         const double *a = p[e], *c = p[(e + 1) % 3];
         for (int k = 0; k < 3; k++)
-            m[k] = x[k] = (a[k] + c[k]) / 2;
+            m[k] = (a[k] + c[k]) / 2;
         if (b[e] == LABEL_ANY && b[(e + 1) % 3] == LABEL_ANY) { /* a chord of the crease */
             label_t l[2] = {0, 1}, third = b[(e + 2) % 3];
             if (pm) {
@@ -879,10 +957,8 @@ static bool unseen_crease(ism_sampler *s, bool pm, const ism_cell_out *out, cons
                     continue;
                 l[0] = third, l[1] = other;
                 order_labels(l, 2);
-                if (!on_crease(s, a, l, sag) || !on_crease(s, c, l, sag))
-                    continue; /* crease points of two creases: a chord across one piece */
             }
-            if (newton(s, pm, x, 2, l) && ism_dist3(x, m) > sag)
+            if (chord_far_memo(s, pm, a, c, l, sag, chords))
                 return true;
         } else if (b[e] != LABEL_ANY && b[e] == b[(e + 1) % 3] && label_at(s, pm, m) != b[e])
             return true;
@@ -906,10 +982,11 @@ bool ism_crease_unresolved(ism_sampler *s, const ism_cell_out *out, size_t first
     if (!labels)
         return false; /* out of memory: the leaf is kept as measured */
     bool unresolved = false;
+    chord_memo chords = {.n = 0};
     for (size_t t = first_tri; t < out->ntris && !unresolved; t++) {
         const uint32_t *v = out->tris + 3 * t;
         if ((unresolved = unseen_crease(s, pm, out, v, CREASE_CHORD_SAG * max_error, labels,
-                                        lo)))
+                                        lo, &chords)))
             break;
         const double *a = out->verts[v[0]].p, *b = out->verts[v[1]].p, *c = out->verts[v[2]].p;
         double m[3], nrm[3], g[3];

@@ -66,7 +66,8 @@ typedef struct ism_poly_options {
     bool scalar_eval;       /* evaluate the octree node by node: no batched intervals over a
                                node's children, no zero-free leaves (octree.h), no memo of
                                edge roots and crease labels between nodes (cell_cache.h's
-                               ism_node_memo) and no batched gradients (a leaf's measured
+                               ism_node_memo) or of crease points between leaves
+                               (crease_memo.h) and no batched gradients (a leaf's measured
                                points: sampler.h's batch) — the same mesh bit for bit, for
                                more; on is for tests (default off) */
     bool full_tape;         /* every leaf evaluates f itself, not f shortened by intervals over

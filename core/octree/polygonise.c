@@ -9,6 +9,7 @@
 #include "core/octree/breaks.h"
 #include "core/octree/breaks_near.h"
 #include "core/octree/cell.h"
+#include "core/octree/crease_memo.h"
 #include "core/octree/crease_split.h"
 #include "core/octree/dual.h"
 #include "core/octree/cell_stats.h"
@@ -468,7 +469,8 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
                                               progress *prog, ism_mesh *mesh,
                                               ism_poly_stats *st, double *t_weld,
                                               phase_meter *outer, ism_split_set *next,
-                                              carry *c, const ism_root_table *found)
+                                              carry *c, const ism_root_table *found,
+                                              ism_crease_memo *crease)
 {
     int32_t *reuse = NULL, *parent = NULL;
     ism_breaks breaks = {0};
@@ -530,7 +532,8 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         cx->s.wedge_edges_below = ism_crease_wedge_edges(&tree->grid, o->max_depth, o->max_error);
         cx->s.crease_pieces = ism_crease_pieces(f);
         cx->s.fold_below = ism_crease_fold_below(o->max_error);
-        cx->s.label_memo_on = true;
+        cx->s.memo_tape = f;
+        cx->s.crease_memo = crease ? &crease[t] : NULL;
         cx->tree = tree;
         cx->parent = parent;
         cx->breaks = &breaks;
@@ -656,6 +659,10 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     if (thin_depth > ISM_GRID_MAX_DEPTH)
         thin_depth = ISM_GRID_MAX_DEPTH;
     ism_grid_init(&tree.grid, o->box, thin_depth);
+    /* the threads' crease-point memos for this round (none on the scalar reference path) */
+    ism_crease_memo *crease = NULL;
+    if (!o->scalar_eval && !(crease = ism_crease_memo_new(ism_pool_threads(pool))))
+        return ISM_POLY_NO_MEMORY;
     ism_octree_build_params bp = {
         .tape = f,
         .min_depth = o->min_depth,
@@ -687,6 +694,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
         .cost = &m.par,
         .roots = &found,
         .max_roots = o->max_memory / ROOT_MEMORY_SHARE / ISM_ROOT_BYTES,
+        .crease_memos = crease,
     };
     memcpy(bp.flatness.box, o->box, sizeof bp.flatness.box);
     ism_octree_build_stats bs;
@@ -704,6 +712,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     meter_stop(&m, st, ISM_PHASE_OCTREE);
     if (status != ISM_POLY_OK) {
         ism_root_table_free(&found);
+        ism_crease_memo_free(crease);
         return status;
     }
     count_leaves(&tree, st);
@@ -713,8 +722,9 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     double t_weld = 0;
     meter_start(&m);
     status = polygonise_leaves(f, o, &tree, pool, prog, mesh, st, &t_weld, &m, next,
-                               prev, &found);
+                               prev, &found, crease);
     ism_root_table_free(&found);
+    ism_crease_memo_free(crease);
     ism_octree_free(&prev->tree);
     if (next && next->n)
         prev->tree = tree;

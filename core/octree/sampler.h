@@ -60,19 +60,26 @@ typedef struct ism_sampler {
      * passes CREASE_FOLD_COS (whole_edge; ism_crease_fold_below: a share of max_error); 0:
      * no edge folded. */
     double fold_below;
-    /* crease_split.c, when label_memo_on (polygonise.c, whose tape stays f for the run: the
-     * octree's build swaps node tapes in and out of one buffer): the last labels looked up
-     * (ism_eval_piece of tape at p in pieces mode, else the top branch at p), direct-mapped
-     * by p's bits; an entry counts only
-     * for the tape it names (zeroed: none). A leaf labels a vertex up to three times (its
-     * polygon cut, its triangles split, the crease test), and its neighbours the shared ones
-     * again. */
-    bool label_memo_on;
+    /* crease_split.c's memos (label_memo, crease_memo) serve only while tape is this one
+     * (f: set by polygonise.c, whose tape stays f for the run, and by the octree build, whose
+     * nodes swap shortened tapes in and out of one buffer — a shortened tape holds f only
+     * inside its node, and a buffer's contents change); NULL: none. */
+    const ism_tape *memo_tape;
+    /* crease_split.c, while tape is memo_tape: the last labels looked up (ism_eval_piece of
+     * tape at p in pieces mode, else the top branch at p), direct-mapped by p's bits; an
+     * entry counts only for the tape it names (zeroed: none). A leaf labels a vertex up to
+     * three times (its polygon cut, its triangles split, the crease test), and its
+     * neighbours the shared ones again. */
     struct ism_label_memo {
         double p[3];
         const ism_tape *tape;
         uint64_t label;
     } label_memo[ISM_LABEL_MEMO];
+    /* crease_split.c: mixed edges' crease points (crease_memo.h), the thread's for one
+     * max_error round (polygonise.c's one_round, through the octree build and the
+     * polygonisation; none on the scalar reference path), used while tape is memo_tape;
+     * NULL: every crease point computed afresh. */
+    struct ism_crease_memo *crease_memo;
     uint64_t n_point, n_gradient, n_interval;
 } ism_sampler;
 
