@@ -1048,23 +1048,34 @@ static ism_quiet_tile quiet_key(const ism_tile *t)
         (uint64_t)t->v0 << 40 | (uint64_t)t->u1 << 20 | (uint64_t)t->v1};
 }
 
-static ism_quiet_tile *quiet_slot(ism_cell_ctx *cx, const ism_quiet_tile *k)
+/* The tile's hash, which each tile table masks to its own size (a tile is quiet or crossed
+ * in a round, never both, and the tables are apart: one hash serves both). The key's two
+ * words are folded into one before the mixer as `where` times an odd constant plus `span`:
+ * a plain sum would add u0 to v1 and the plane to u1, so tiles with those swapped would fold
+ * alike, while an odd multiplier is a bijection on 64 bits that moves `where`'s fields off
+ * the span's (31 is what the quiet table always used; the tile memo's 37 had no reason of
+ * its own). A fold collision only costs a miss: each slot compares the whole key. */
+static uint64_t tile_hash(const ism_quiet_tile *k)
 {
-    return &cx->cache.quiet[ism_cache_mix(k->where * 31 + k->span) &
-                            (((uint64_t)1 << ISM_QUIET_CACHE_BITS) - 1)];
+    return ism_cache_mix(k->where * 31 + k->span);
 }
 
-static ism_tile_memo *memo_slot(ism_cell_ctx *cx, const ism_quiet_tile *k)
+static ism_quiet_tile *quiet_slot(ism_cell_ctx *cx, uint64_t hash)
 {
-    return &cx->cache.tiles[ism_cache_mix(k->where * 37 + k->span) &
-                            (((uint64_t)1 << ISM_TILE_MEMO_BITS) - 1)];
+    return &cx->cache.quiet[hash & (((uint64_t)1 << ISM_QUIET_CACHE_BITS) - 1)];
+}
+
+static ism_tile_memo *memo_slot(ism_cell_ctx *cx, uint64_t hash)
+{
+    return &cx->cache.tiles[hash & (((uint64_t)1 << ISM_TILE_MEMO_BITS) - 1)];
 }
 
 void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *t)
 {
     ism_quiet_tile key = quiet_key(t);
-    __builtin_prefetch(quiet_slot(cx, &key), 0);
-    __builtin_prefetch(memo_slot(cx, &key), 0);
+    uint64_t hash = tile_hash(&key);
+    __builtin_prefetch(quiet_slot(cx, hash), 0);
+    __builtin_prefetch(memo_slot(cx, hash), 0);
     int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
     int32_t cu[4] = {t->u0, t->u1, t->u1, t->u0}, cv[4] = {t->v0, t->v0, t->v1, t->v1};
     for (int c = 0; c < 4; c++) {
@@ -1091,13 +1102,14 @@ static void remember(ism_cell_ctx *cx, ism_tile_memo *m, const ism_quiet_tile *k
     m->key = *key;
 }
 
-/* The tile's first walk again: its lines appended, its counts added. */
+/* The tile's first walk again: its lines appended, then its counts added (none when a push
+ * runs out of memory, so the counters never count lines that were not appended). */
 static bool replay(ism_cell_ctx *cx, const ism_tile_memo *m)
 {
-    ism_cell_stats_add(&cx->stats, &m->counted);
     for (size_t l = 0; l < m->nlines; l++)
         if (!ism_flines_push(&cx->lines, &m->lines[l].a, &m->lines[l].b, m->lines[l].kind))
             return false;
+    ism_cell_stats_add(&cx->stats, &m->counted);
     return true;
 }
 
@@ -1244,10 +1256,14 @@ static bool walk_tile(ism_cell_ctx *cx, const ism_tile *t, const ism_quiet_tile 
 bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
 {
     cx->zero_tile = false;
-    ism_quiet_tile key = quiet_key(t), *q = quiet_slot(cx, &key);
+    ism_quiet_tile key = quiet_key(t), unused;
+    if (cx->cache.walk_every_tile)
+        return walk_tile(cx, t, &key, &unused);
+    uint64_t hash = tile_hash(&key);
+    ism_quiet_tile *q = quiet_slot(cx, hash);
     if (q->where == key.where && q->span == key.span)
         return true; /* walked before: nothing crosses its boundary */
-    ism_tile_memo *m = memo_slot(cx, &key);
+    ism_tile_memo *m = memo_slot(cx, hash);
     if (m->key.where == key.where && m->key.span == key.span)
         return replay(cx, m); /* walked before: lines cross it */
     size_t first = cx->lines.n;

@@ -546,6 +546,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         if (!(cx->s.ws = ism_eval_ws_new(f)) ||
             !round_cache(c, pool, &outer->par, t, &cx->cache))
             goto done;
+        cx->cache.walk_every_tile = o->walk_every_tile;
     }
     ism_pool_for(pool, p.nchunks, run_chunk, &p, &outer->par);
     status = atomic_load(&p.status);
