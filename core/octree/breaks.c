@@ -13,7 +13,6 @@
  * A later max_error round polygonises only the leaves near its splits (leaf_memo.h) and
  * registers only the leaves near those (breaks_near.h). */
 #include "core/octree/breaks.h"
-#include "core/util/grow.h"
 #include "core/util/zeroed.h"
 
 #include <stdlib.h>
@@ -469,19 +468,4 @@ void ism_breaks_free(ism_breaks *b)
 {
     free(b->slots);
     memset(b, 0, sizeof *b);
-}
-
-bool ism_coords_push(ism_coords *c, int32_t v)
-{
-    if (!ism_grow((void **)&c->v, &c->cap, c->n + 1, sizeof *c->v, 16))
-        return false;
-    c->v[c->n++] = v;
-    return true;
-}
-
-void ism_coords_free(ism_coords *c)
-{
-    free(c->v);
-    c->v = NULL;
-    c->n = c->cap = 0;
 }

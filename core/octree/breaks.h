@@ -55,15 +55,4 @@ static inline void ism_breaks_prefetch(const ism_breaks *b, const int32_t p[3])
     __builtin_prefetch(&b->slots[ism_cache_mix(ism_lattice_key(p)) & b->mask]);
 }
 
-/* A growable list of lattice coordinates. */
-typedef struct ism_coords {
-    int32_t *v;
-    size_t n, cap;
-} ism_coords;
-
-/* Appends v; false when out of memory. */
-bool ism_coords_push(ism_coords *c, int32_t v);
-
-void ism_coords_free(ism_coords *c);
-
 #endif

@@ -276,7 +276,6 @@ bool ism_cell_polygonise(ism_cell_ctx *cx, int32_t node, ism_cell_out *out)
 
 void ism_cell_ctx_free(ism_cell_ctx *cx)
 {
-    ism_coords_free(&cx->coords);
     free(cx->bp);
     free(cx->ev);
     free(cx->lines.v);

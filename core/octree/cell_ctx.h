@@ -27,7 +27,6 @@ typedef struct ism_cell_ctx {
                                  distance of f = 0 (triangulate.h); 0: from their centre
                                  (no bound, or a singular locus is known: options.quiet) */
     /* scratch, reused from node to node */
-    ism_coords coords;
     ism_bpoint *bp;
     size_t nbp, cap_bp;
     ism_fevent *ev;

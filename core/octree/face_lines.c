@@ -121,52 +121,58 @@ static const ism_lattice_entry *lattice_entry(ism_cell_ctx *cx, const int32_t ip
     return e;
 }
 
-/* The break points of the lattice line along `axis` through p that lie in [lo, hi],
- * ascending, into cx->coords; lo and hi always. The point at lo is a corner of a non-empty
- * leaf (every side of a tile is an edge of one), so it is registered: false when it is not
- * (a bug; cx->unregistered is then set), or when memory runs out. */
-static bool side_breaks(ism_cell_ctx *cx, int axis, const int32_t p[3], int32_t lo, int32_t hi)
-{
-    ism_coords *out = &cx->coords;
-    out->n = 0;
-    int32_t q[3] = {p[0], p[1], p[2]};
-    if (!ism_coords_push(out, lo))
-        return false;
-    for (q[axis] = lo;;) {
-        const ism_lattice_entry *e = lattice_entry(cx, q);
-        if (e->next[0] == ISM_LATTICE_UNREGISTERED) {
-            cx->unregistered = true;
-            return false;
-        }
-        if (e->next[axis] >= hi)
-            return ism_coords_push(out, hi);
-        q[axis] = e->next[axis];
-        if (!ism_coords_push(out, q[axis]))
-            return false;
-    }
-}
-
-/* Appends a lattice point of the boundary with its f and ∇f (the walk has just asked the
- * memo for it, or for its side's end: the lookup hits). */
-static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3])
+/* Appends a lattice point of the boundary with f and ∇f from its memo entry e (just asked
+ * for: the entry is copied before another lookup may take its slot). */
+static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3], const ism_lattice_entry *e)
 {
     if (!ism_grow((void **)&cx->bp, &cx->cap_bp, cx->nbp + 1, sizeof *cx->bp, 64))
         return false;
     ism_bpoint *b = &cx->bp[cx->nbp++];
     memcpy(b->ip, ip, sizeof b->ip);
     ism_grid_point(&cx->tree->grid, (ism_ipt){{ip[0], ip[1], ip[2]}}, b->p);
-    const ism_lattice_entry *e = lattice_entry(cx, ip);
     b->f = e->f;
     memcpy(b->g, e->g, sizeof b->g);
     b->gn = e->gn;
     return true;
 }
 
-static bool push_event(ism_cell_ctx *cx, const ism_fpoint *pt, int before, int after, size_t seg)
+/* Appends one side of the tile in walking order, from its point p (coordinate `from` along
+ * `along`) toward `to`, which is left out (it starts the next side): the break points of
+ * the lattice line between them, found ascending from the lower end through the registry's
+ * successors (one memo lookup a point, each pushed as it is found; a descending side's
+ * upper end is looked up first and its points in between reversed after). The lower end
+ * is a corner of a non-empty leaf (every side of a tile is an edge of one), so it is
+ * registered: false when it is not (a bug; cx->unregistered is then set), or when memory
+ * runs out. */
+static bool tile_side(ism_cell_ctx *cx, int along, const int32_t p[3], int32_t from,
+                      int32_t to)
 {
-    if (!ism_grow((void **)&cx->ev, &cx->cap_ev, cx->nev + 1, sizeof *cx->ev, 64))
-        return false;
-    cx->ev[cx->nev++] = (ism_fevent){*pt, before, after, (int)seg};
+    bool up = from < to;
+    int32_t lo = up ? from : to, hi = up ? to : from;
+    int32_t q[3] = {p[0], p[1], p[2]};
+    if (!up) {
+        q[along] = hi;
+        if (!push_bpoint(cx, q, lattice_entry(cx, q)))
+            return false;
+    }
+    size_t first = cx->nbp; /* a descending side's points between its ends start here */
+    for (q[along] = lo;;) {
+        const ism_lattice_entry *e = lattice_entry(cx, q);
+        if (e->next[0] == ISM_LATTICE_UNREGISTERED) {
+            cx->unregistered = true;
+            return false;
+        }
+        if ((up || q[along] != lo) && !push_bpoint(cx, q, e))
+            return false;
+        if (e->next[along] >= hi)
+            break;
+        q[along] = e->next[along];
+    }
+    for (size_t i = first, j = cx->nbp; !up && i + 1 < j; i++, j--) {
+        ism_bpoint b = cx->bp[i];
+        cx->bp[i] = cx->bp[j - 1];
+        cx->bp[j - 1] = b;
+    }
     return true;
 }
 
@@ -182,17 +188,18 @@ static bool tile_boundary(ism_cell_ctx *cx, const ism_tile *t)
         p[t->axis] = t->plane;
         p[u] = cu[side];
         p[v] = cv[side];
-        int32_t from = p[along], to = along == u ? cu[(side + 1) % 4] : cv[(side + 1) % 4];
-        int32_t lo = from < to ? from : to, hi = from < to ? to : from;
-        if (!side_breaks(cx, along, p, lo, hi))
+        int32_t to = along == u ? cu[(side + 1) % 4] : cv[(side + 1) % 4];
+        if (!tile_side(cx, along, p, p[along], to))
             return false;
-        size_t n = cx->coords.n;
-        for (size_t k = 0; k + 1 < n; k++) { /* the last point starts the next side */
-            p[along] = from < to ? cx->coords.v[k] : cx->coords.v[n - 1 - k];
-            if (!push_bpoint(cx, p))
-                return false;
-        }
     }
+    return true;
+}
+
+static bool push_event(ism_cell_ctx *cx, const ism_fpoint *pt, int before, int after, size_t seg)
+{
+    if (!ism_grow((void **)&cx->ev, &cx->cap_ev, cx->nev + 1, sizeof *cx->ev, 64))
+        return false;
+    cx->ev[cx->nev++] = (ism_fevent){*pt, before, after, (int)seg};
     return true;
 }
 
