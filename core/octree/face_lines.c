@@ -1091,6 +1091,7 @@ void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *t)
         q[u] = cu[c];
         q[v] = cv[c];
         __builtin_prefetch(lattice_slot(cx, q), 1);
+        ism_breaks_prefetch(cx->breaks, q);
     }
 }
 

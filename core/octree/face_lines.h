@@ -11,8 +11,9 @@
 bool ism_flines_push(ism_flines *l, const ism_fpoint *a, const ism_fpoint *b, int kind);
 
 /* Asks the memory for what ism_tile_lines will read first about this tile (its quiet-tile
- * memo slot, the first cache line of its crossed-tile memo slot, its corners' memo entries): the node's tiles are prefetched together, so that these misses overlap.
- * Changes nothing. */
+ * memo slot, the first cache line of its crossed-tile memo slot, its corners' memo entries
+ * and their break-point registry slots, which a memo miss probes): the node's tiles are
+ * prefetched together, so that these misses overlap. Changes nothing. */
 void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *tile);
 
 /* Appends to cx->lines the lines of f = 0 on one tile (a face or part of a face): walked, or
