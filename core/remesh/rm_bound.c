@@ -110,11 +110,20 @@ static bool residual_within(rm_pass *p, const rm_memo_entry *e, const double x[3
  * the Newton step from x lands into *s2 (0 otherwise; with bounded, where residual_within
  * allows, a bound on it). False where ∇f vanishes or f is not finite. Each step is taken
  * once per point while the pass's memo (rm_memo.h) remembers it. */
+static bool steps_at(rm_pass *p, rm_memo_entry *e, const double x[3], double limit,
+                     bool bounded, double *s1, double *s2);
+
 static bool two_steps(rm_pass *p, const double x[3], double limit, bool bounded, double *s1,
                       double *s2)
 {
     rm_memo_entry own; /* stepped empties it when it is used: no 92-byte clear per measure */
-    rm_memo_entry *e = stepped(p, x, &own);
+    return steps_at(p, stepped(p, x, &own), x, limit, bounded, s1, s2);
+}
+
+/* two_steps with x's entry e, its first step taken (stepped's). */
+static bool steps_at(rm_pass *p, rm_memo_entry *e, const double x[3], double limit,
+                     bool bounded, double *s1, double *s2)
+{
     *s2 = 0;
     if (e->state == RM_MEMO_FAIL1)
         return false;
@@ -209,26 +218,38 @@ static size_t fan_points(const rm_pass *p, uint32_t v, const double *x, double (
  * them: the same measures at a third of the cost. A fan's check almost always measures
  * every point (chmutov-quartic, own box: 8 in 1,000 relaxation checks stop early), so
  * taking all first steps at once spares more than the points a stop leaves unmeasured
- * cost. Points that share a memo slot are kept as the measures would keep them: the last. */
-static void fan_first_steps(rm_pass *p, const double (*q)[3], size_t n)
+ * cost. Points that share a memo slot are kept as the measures would keep them: the last.
+ * Each point's slot into slot[j] (found once: the measures read them, point_measure). */
+static void fan_first_steps(rm_pass *p, const double (*q)[3], size_t n, rm_memo_entry **slot)
 {
     double px[RM_FAN_BATCH], py[RM_FAN_BATCH], pz[RM_FAN_BATCH], fv[RM_FAN_BATCH];
     double g[RM_FAN_BATCH][3];
-    size_t m = 0;
-    for (size_t j = 0; j < n; j++)
-        if (!rm_memo_known(p->memo, q[j]))
-            px[m] = q[j][0], py[m] = q[j][1], pz[m] = q[j][2], m++;
+    size_t m = 0, at[RM_FAN_BATCH];
+    for (size_t j = 0; j < n; j++) {
+        slot[j] = rm_memo_peek(p->memo, q[j]);
+        if (!rm_memo_holds(slot[j], q[j]))
+            at[m] = j, px[m] = q[j][0], py[m] = q[j][1], pz[m] = q[j][2], m++;
+    }
     if (m < 2)
         return; /* one point: the measure's own evaluation costs no more */
     ism_eval_gradient_batch(p->f, p->ws, px, py, pz, fv, g, m);
     for (size_t i = 0; i < m; i++) {
-        double y[3] = {px[i], py[i], pz[i]};
-        rm_memo_entry *e = rm_memo_slot(p->memo, y);
+        rm_memo_entry *e = rm_memo_claim(slot[at[i]], q[at[i]]);
         if (e->state == RM_MEMO_EMPTY) {
             memcpy(e->g, g[i], sizeof e->g);
-            first_step_from(p, y, fv[i], e);
+            first_step_from(p, q[at[i]], fv[i], e);
         }
     }
+}
+
+/* rm_bound_distance at x, whose memo slot is e (rm_memo_peek's): read there while it holds
+ * x (what rm_bound_distance's lookup would find), else measured through that lookup. */
+static double point_measure(rm_pass *p, rm_memo_entry *e, const double x[3], double limit)
+{
+    double s1, s2;
+    if (!rm_memo_holds(e, x))
+        return rm_bound_distance(p, x, limit);
+    return steps_at(p, e, x, limit, true, &s1, &s2) ? fabs(s1) + fabs(s2) : INFINITY;
 }
 
 double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x, double limit, double stop)
@@ -237,12 +258,14 @@ double rm_bound_fan_worst(rm_pass *p, uint32_t v, const double *x, double limit,
        as it is measured (a stop leaves the rest unworked) */
     bool batch = p->memo && p->f->len >= RM_FAN_BATCH_MIN_TAPE;
     double q[RM_FAN_BATCH][3];
+    rm_memo_entry *slot[RM_FAN_BATCH];
     size_t n = fan_points(p, v, x, q, batch ? RM_FAN_BATCH : 1);
     if (batch)
-        fan_first_steps(p, (const double (*)[3])q, n);
+        fan_first_steps(p, (const double (*)[3])q, n, slot);
     double worst = -INFINITY;
     for (size_t j = 0; j < n && worst <= stop; j++) {
-        double d = rm_bound_distance(p, q[j], limit); /* never NaN: no libm fmax call */
+        double d = batch ? point_measure(p, slot[j], q[j], limit)
+                         : rm_bound_distance(p, q[j], limit); /* never NaN: no fmax call */
         worst = d > worst ? d : worst;
     }
     for (uint32_t i = (uint32_t)(n - 1) / 2; i < p->r.count[v] && worst <= stop; i++) {

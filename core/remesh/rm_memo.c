@@ -43,18 +43,26 @@ static rm_memo_entry *slot_of(const rm_memo *m, const double x[3])
     return &m->e[(h * 0xd6e8feb86659fd93ull) >> (64 - m->bits)];
 }
 
-bool rm_memo_known(const rm_memo *m, const double x[3])
+rm_memo_entry *rm_memo_peek(rm_memo *m, const double x[3])
 {
-    const rm_memo_entry *e = slot_of(m, x);
+    return slot_of(m, x);
+}
+
+bool rm_memo_holds(const rm_memo_entry *e, const double x[3])
+{
     return e->state != RM_MEMO_EMPTY && memcmp(e->x, x, sizeof e->x) == 0;
+}
+
+rm_memo_entry *rm_memo_claim(rm_memo_entry *e, const double x[3])
+{
+    if (!rm_memo_holds(e, x)) {
+        memcpy(e->x, x, sizeof e->x);
+        e->state = RM_MEMO_EMPTY;
+    }
+    return e;
 }
 
 rm_memo_entry *rm_memo_slot(rm_memo *m, const double x[3])
 {
-    rm_memo_entry *e = slot_of(m, x);
-    if (e->state != RM_MEMO_EMPTY && memcmp(e->x, x, sizeof e->x) == 0)
-        return e;
-    memcpy(e->x, x, sizeof e->x);
-    e->state = RM_MEMO_EMPTY;
-    return e;
+    return rm_memo_claim(slot_of(m, x), x);
 }

@@ -37,10 +37,17 @@ rm_memo *rm_memo_new(void);
 void rm_memo_free(rm_memo *m);
 
 /* The entry for x: x's own (its state says what it knows) or, on a miss, the slot emptied
- * and keyed on x for the caller to fill. */
+ * and keyed on x for the caller to fill. rm_memo_claim(rm_memo_peek(m, x), x). */
 rm_memo_entry *rm_memo_slot(rm_memo *m, const double x[3]);
 
-/* True when x's slot knows x (its entry is not empty); nothing changes. */
-bool rm_memo_known(const rm_memo *m, const double x[3]);
+/* x's slot, whatever it holds; nothing changes (a caller asking of one point more than once
+ * finds its slot once). */
+rm_memo_entry *rm_memo_peek(rm_memo *m, const double x[3]);
+
+/* True when slot e (x's, rm_memo_peek) knows x: its entry is x's and not empty. */
+bool rm_memo_holds(const rm_memo_entry *e, const double x[3]);
+
+/* x's slot e as rm_memo_slot leaves it: kept when it holds x, else emptied and keyed on x. */
+rm_memo_entry *rm_memo_claim(rm_memo_entry *e, const double x[3]);
 
 #endif
