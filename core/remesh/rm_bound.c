@@ -19,8 +19,16 @@
  * longer. callgrind, --quality good, default bound, pass instructions with the batch for
  * every tape: chmutov-quartic -3.3%, tanglecube -4%, blob-pair -3%, spindle-cyclide -2%,
  * catenoid -0.4%, but cube +3-5%, ding-dong +3.6%, helicoid +5.3% (tapes of a few
- * instructions, where one evaluation costs about what the batch's bookkeeping does). */
-#define RM_FAN_BATCH_MIN_TAPE 12
+ * instructions, where one evaluation costs about what the batch's bookkeeping does). Since
+ * the batch computes powers and exp in its lanes and each point's memo slot is found once
+ * (point_measure), 7 instead of 12, own box, ism_quality_pass: ding-dong (7 instructions)
+ * 47.96M -> 46.66M, ellipsoid (8) 8.93M -> 8.71M, steinmetz (9) 252.5M -> 242.9M, torus
+ * (10) 46.86M -> 44.62M, catenoid (10) 66.80M -> 64.43M, pretzel-genus2 (11) 33.41M ->
+ * 31.66M, steiner-roman (11) 389.6M -> 357.6M, cayley-cubic (11) 132.5M -> 124.6M,
+ * isolated-point (11) 17.84M -> 16.95M, tooth (11) 151.3M -> 139.8M, clebsch-cubic (11)
+ * 79.52M -> 76.47M (10 at the time; the 7-9 ones at 7); every PLY byte-identical. Shorter
+ * tapes (cube, helicoid, sphere: 6) not measured again. */
+#define RM_FAN_BATCH_MIN_TAPE 7
 
 /* e's first step from f's value fv and gradient e->g at x (first_step evaluates them;
  * fan_first_steps takes them from a batch). */
