@@ -182,4 +182,9 @@ bool ism_dual_newton_onto(worker *w, double m[3], double size);
 /* Room for n more vertices (positions and leaves, dual.c); false when out of memory. */
 bool ism_dual_reserve_vertices(dual *d, size_t n);
 
+/* fmin and fmax as the comparisons they are (a NaN argument gives the other one; the sign of
+ * a zero aside): libm's are calls, ~150,000 of each per torus mesh at 1e-2 (2% of it). */
+static inline double min_of(double x, double y) { return y < x || x != x ? y : x; }
+static inline double max_of(double x, double y) { return y > x || x != x ? y : x; }
+
 #endif

@@ -1,0 +1,650 @@
+/* dual_classify.c — the dual mesher's leaf tests (dual_classify.h): a node's corners, its
+ * natural interval and Taylor model (dual_cert.c), the emptiness and one-graph proofs, the
+ * crease kinds (dual_crease.c), the corner cases (a sheet through a lattice point, a cap
+ * through a face at depth.max), and sag_split, which splits a node whose chords would sag
+ * past E before it makes a vertex; the centre's foot by Newton. */
+#include "core/octree/dual_classify.h"
+#include "core/eval/interval_jet.h"
+#include "core/octree/cell_cache.h"
+#include "core/octree/dual_crease.h"
+#include "core/octree/edge_roots.h"
+#include "core/octree/graph_cert.h"
+#include "core/octree/grid.h"
+#include "core/octree/sampler.h"
+#include "core/util/vec3.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Newton steps moving a leaf's mean edge root onto f = 0, stopping once a step is below
+ * NEWTON_STOP of the leaf's size (far below any bound a request may ask for). */
+#define NEWTON_STEPS 6
+#define NEWTON_STOP 1e-9
+/* Sub-boxes tried by the proofs below a node's own enclosure, each first by the node's
+ * Taylor model (no evaluation), then by its own (two). Measured on the torus at 1e-2 /
+ * 3e-3 / 1e-3 (instructions, raw triangles): no halving 70.4M / 120.2M / 293.6M, 3,344 /
+ * 7,096 / 19,484; one 75.3M / 117.9M / 329.9M, 3,280 / 5,968 / 20,464; two 79.1M / 120.4M /
+ * 300.5M, 3,280 / 6,128 / 19,264. One: the fewest triangles at 3e-3 for about the cost. */
+#define CERT_HALVINGS 1
+/* A crease leaf this many E across or less is judged by the measurement alone (crease_kind,
+ * dual_crease.h's `small`): the primal path's rule for such nodes (cell_error.c, 4 E). */
+#define CREASE_MEASURED_CELLS 4.0
+/* A node with both signs at its corners is split without its proofs when the surface at its
+ * centre's foot bends so fast (largest principal curvature k) that a chord as long as the
+ * node (h) sags this many times the room a leaf's chords have, E + the straddle shift:
+ * k h² / 8 > SAG_SPLIT (E + shift). Such a node is split anyway — as not plain, or as a
+ * leaf whose triangles miss E — after proofs, a vertex, triangles and a measure it did not
+ * need. Measured, k h² / 8 / (E + shift) of every two-signed node the mesher made (bench
+ * torus r 0.3 and sphere r 1, E 0.0141 / 3.57e-3 / 1e-3): leaves kept at most 1.93 (torus
+ * 1e-3, 40 of 7,624 depth-5 leaves; every other run 0.55-0.66); nodes split from 2.18 (the
+ * torus's depth-3 cells at 0.0141, 0.375 wide against its tube's radius 0.3) up. A leaf
+ * the rule splits that the measure would have kept costs triangles, never the bound (the
+ * measure still judges every leaf kept). Whole runs (callgrind, isomesh --threads 1):
+ * torus 3e-3 113.5M -> 91.7M, same triangle count; the box-cut presets at E/3 up to 2.4%
+ * fewer triangles (the rounds' order changes which coarse leaves a miss splits). */
+#define SAG_SPLIT 2.0
+/* ... and where the surface bends one way (both principal curvatures of one sign, the least
+ * k2 in magnitude), every chord through the foot, in any direction, sags at least k2 L² / 8:
+ * a node is split at once when k2 h² / 8 > SAG_ROUND (E + shift), the sag of a chord its
+ * size beyond the room by a margin (vertices of neighbouring leaves are about a cell apart,
+ * some nearer). SAG_SPLIT, judged by the largest curvature for saddles too, keeps the
+ * sphere's nodes that every measure splits: bench sphere r 1 in ±1.5 (k2 = k1), level-3
+ * nodes at E 0.0141 have k2 h² / 8 / (E + shift) = 0.66 (104 of 128 kept), level 3 at
+ * 7.14e-3 1.30 and level 4 at 1.3e-3 1.78 (each a whole round of vertices, fans and measures
+ * made, every leaf then split). Whole runs (bench_error mesh S E 10, callgrind, ism_mesh_surface):
+ * sphere 7.14e-3 10.61M -> 9.10M, 1.3e-3 42.40M -> 38.70M, the same triangle counts and max
+ * centroid errors; 0.0141 and the torus at 0.0141 / 3.57e-3 / 1.19e-3 unchanged (its k2 h² / 8
+ * stays below; SAG_ROUND 1.0 and 1.5 measured the same but for 1.5 at 7.14e-3). */
+#define SAG_ROUND 1.2
+
+/* f kept from 0 along edge c0 -> c1 (axis a, length h) by the mean-value form from both
+ * ends (g: ∇f enclosed over the node, so over the edge). */
+static bool edge_free(const dnode *n, const ism_ivgrad *g, int a, int c0, int c1, double h)
+{
+    double lo = g->d[a].lo * h, hi = g->d[a].hi * h;
+    double low = max_of(n->f[c0] + min_of(0, lo), n->f[c1] - max_of(0, hi));
+    double high = min_of(n->f[c0] + max_of(0, hi), n->f[c1] - min_of(0, lo));
+    return low > 0 || high < 0;
+}
+
+/* Where surface leaf n lies on the request's box: -1 when f changes sign between its
+ * corners on a face of the box (the box cuts the surface), 1 when f is proven free of 0 on
+ * every such face, 0 when neither is known (split it). */
+int ism_dual_box_faces_clear(dual *d, worker *w, const dnode *n, const corner_view *v)
+{
+    int32_t step = ism_grid_cell_steps(&d->g, n->level), last = (int32_t)1 << d->g.depth;
+    for (int a = 0; a < 3; a++)
+        for (int side = 0; side < 2; side++) {
+            if (n->o.v[a] != (side ? last - step : 0))
+                continue;
+            int neg = 0;
+            for (int c = 0; c < 8; c++)
+                neg += ((c >> a & 1) == side) && n->f[c] < 0;
+            if (neg != 0 && neg != 4)
+                return -1;
+            double lo[3], hi[3];
+            memcpy(lo, v->p[0], sizeof lo);
+            memcpy(hi, v->p[7], sizeof hi);
+            lo[a] = hi[a] = side ? v->p[7][a] : v->p[0][a];
+            /* the node's model holds over its face; else the face's own */
+            ism_dual_model fm;
+            const ism_tape *t = w->s.tape;
+            uint64_t *count = &w->s.n_interval;
+            if (!(v->have_model &&
+                  ism_dual_free(t, w->jet, &v->model, lo, hi, CERT_HALVINGS, count)) &&
+                !(ism_dual_taylor(t, w->jet, lo, hi, &fm, count) &&
+                  ism_dual_free(t, w->jet, &fm, lo, hi, CERT_HALVINGS, count)))
+                return 0;
+        }
+    return 1;
+}
+
+/* The search for a root pair on edge c0 -> c1 of node n (ends of one sign): 0 when there
+ * is none. A function of the edge's two lattice points alone (f on the full tape between
+ * their coordinates), and up to four nodes of a level share an edge (torus at 1e-2: 432
+ * searches of 11.7K instructions each, 5.1M of 68M), so the answer is kept per thread under
+ * the ends' lattice keys (cell_cache.h ism_pair_entry): a hit answers what the search would, bit for bit. */
+static int edge_root_pair(dual *d, worker *w, const dnode *n, const corner_view *v, int c0,
+                          int c1)
+{
+    const ism_poly_options *o = d->o;
+    int32_t step = ism_grid_cell_steps(&d->g, n->level), q0[3], q1[3];
+    for (int a = 0; a < 3; a++) {
+        q0[a] = n->o.v[a] + ((c0 >> a) & 1) * step;
+        q1[a] = n->o.v[a] + ((c1 >> a) & 1) * step;
+    }
+    uint64_t k0 = ism_lattice_key(q0) + 1, k1 = ism_lattice_key(q1) + 1;
+    if (!w->pairs_tried) {
+        w->pairs_tried = true;
+        /* NULL: every search made */
+        w->pairs = calloc((size_t)1 << ISM_PAIR_MEMO_BITS, sizeof *w->pairs);
+    }
+    ism_pair_entry none = {0}, *m = w->pairs ? ism_pair_slot(w->pairs, k0, k1) : &none;
+    if (m->a == k0 && m->b == k1) /* keys are + 1: none never answers */
+        return m->found;
+    int found = 0;
+    double t = 0;
+    if (ism_segment_may_reach(&w->s, v->p[c0], v->p[c1], o->double_root_eps)) {
+        ism_root_params prm = {o->gradient_test, o->double_root_eps, o->double_root_iters,
+                               false};
+        found = ism_double_root_search(&w->s, &prm, v->p[c0], v->p[c1], n->f[c0], n->f[c1],
+                                       &t);
+    }
+    *m = (ism_pair_entry){k0, k1, t, found};
+    return found;
+}
+
+/* No root on an edge whose ends share a sign: f monotone along its axis or kept from 0 by
+ * the mean-value form (proofs), else the primal polygons' edge test (plot_test.c): the
+ * paper's same-sheet test (eq. 1) on the ends' gradients, then its double-root search. */
+static bool same_sign_edge_clear(dual *d, worker *w, const dnode *n, const corner_view *v,
+                                 int e, int c0, int c1)
+{
+    int a = e / 4;
+    if (v->have_g && (v->monotone >> a & 1 ||
+                      edge_free(n, &v->g, a, c0, c1, v->p[c1][a] - v->p[c0][a])))
+        return true;
+    if (ism_dot3(v->n[c0], v->n[c1]) > d->o->gradient_test)
+        return true;
+    return edge_root_pair(d, w, n, v, c0, c1) == 0;
+}
+
+/* Crossed edges on every face 0 or 2 (one curve): from the corners' signs alone. */
+static bool plain_faces(const dual *d, const dnode *n)
+{
+    int crossed[6] = {0};
+    for (int e = 0; e < 12; e++) {
+        int c0 = d->ec0[e], c1 = d->ec1[e];
+        if ((n->f[c0] < 0) != (n->f[c1] < 0)) {
+            crossed[d->ef[e][0]]++;
+            crossed[d->ef[e][1]]++;
+        }
+    }
+    for (int k = 0; k < 6; k++)
+        if (crossed[k] > 2)
+            return false;
+    return true;
+}
+
+/* Crossed edges on every face 0 or 2 (one curve), and no root on an edge whose ends share
+ * a sign (the faces first: signs alone). */
+static bool plain_edges(dual *d, worker *w, const dnode *n, const corner_view *v)
+{
+    if (!plain_faces(d, n))
+        return false;
+    for (int e = 0; e < 12; e++) {
+        int c0 = d->ec0[e], c1 = d->ec1[e];
+        if ((n->f[c0] < 0) == (n->f[c1] < 0) && !same_sign_edge_clear(d, w, n, v, e, c0, c1))
+            return false;
+    }
+    return true;
+}
+
+/* f kept from 0 over the node by the mean-value form from each corner: f(x) = f(c) +
+ * ∇f(ξ)·(x − c) with ∇f in its enclosure g; the 8 enclosures intersected. The natural
+ * interval of a polynomial like the torus's loses to its own dependencies (width ~0.07 in a
+ * cell 0.003 across, 0.02 off the surface, where f is 0.05): cells beside the surface would
+ * be split to the last level. */
+static bool mean_value_free(const dnode *n, const ism_ivgrad *g, const double lo[3],
+                            const double hi[3])
+{
+    return ism_dual_mean_value_sign(n->f, g, lo, hi) != 0;
+}
+
+/* What node i is: empty (proven free of f = 0), a surface leaf, or to be split. */
+
+/* Any two corner gradients within acos(flat_normal): the paper's one-sheet test, which the
+ * primal polygons use too (plot_test.c). */
+static bool normals_agree(const double (*n)[3], double cos_min)
+{
+    for (int i = 0; i < 8; i++)
+        for (int j = i + 1; j < 8; j++)
+            if (!(ism_dot3(n[i], n[j]) >= cos_min))
+                return false;
+    return true;
+}
+
+/* v->g (the node's natural enclosure) replaced by the Taylor model's (dual_cert.h), the
+ * model kept in v; false when that cannot be had (g kept). */
+static bool tighten(worker *w, corner_view *v)
+{
+    ism_ivgrad g;
+    v->have_model = ism_dual_taylor(w->s.tape, w->jet, v->p[0], v->p[7], &v->model,
+                                    &w->s.n_interval);
+    if (!v->have_model || !ism_dual_over(&v->model, v->p[0], v->p[7], &g))
+        return false;
+    v->g = g;
+    return true;
+}
+
+/* The proof on the sub-boxes of node n's box (empty when d is NULL, else one graph along
+ * d: ism_dual_prove_halves, with v->model), halved at its lattice centre so each sub-box is
+ * a child's box; the children it shows free of f = 0 are kept in v->free_kids, for a split. */
+static bool prove_on_halves(dual *d, worker *w, const dnode *n, corner_view *v,
+                            const double *dir, bool open_whole)
+{
+    double mid[3];
+    const double *at = NULL; /* no children (max_depth): halved at the centre */
+    if (n->level < d->o->max_depth) {
+        for (int a = 0; a < 3; a++)
+            mid[a] = ism_grid_coord(&d->g, a,
+                                    n->o.v[a] + ism_grid_cell_steps(&d->g, n->level + 1));
+        at = mid;
+    }
+    return ism_dual_prove_halves(w->s.tape, w->jet, &v->model, v->p[0], at, v->p[7], dir,
+                                 CERT_HALVINGS, open_whole, &v->free_kids, &w->s.n_interval);
+}
+
+/* f free of 0 over node n, whose corners share a sign (v->g: its natural enclosure): by the
+ * enclosure or the mean-value form from the corners, then both on the Taylor form, then on
+ * the sub-boxes. */
+static bool empty_proven(dual *d, worker *w, const dnode *n, corner_view *v)
+{
+    for (int k = 0; k < 2; k++) {
+        if (ism_dual_encl_free(&v->g) || mean_value_free(n, &v->g, v->p[0], v->p[7]))
+            return true;
+        if (k == 0 && !tighten(w, v))
+            return false;
+    }
+    /* v->g is the model's enclosure of the whole box (tighten), just seen to hold 0 */
+    return prove_on_halves(d, w, n, v, NULL, true);
+}
+
+/* f >= 0 over node n, whose corners are all >= 0 and one of them, c, exactly 0 (a sheet
+ * through a lattice point, tangent there to a lattice plane as the sphere of radius 1 is at
+ * (1, 0, 0) in the box +-2): with "f >= 0 is outside" the node is empty, but no enclosure
+ * shows it (f is 0 at c, and every bound is pushed an ulp outward, so f's lower bound is
+ * below 0 however tight the form). Taylor's theorem from c instead, in signs: with
+ * w_a = s_a (x − c)_a >= 0 (s_a = +1 when c is on the node's low side along a),
+ * f(x) = f(c) + Σ ∇f(c)_a s_a w_a + ½ Σ_ab s_a s_b H_ab(ξ) w_a w_b, ξ in the node;
+ * each linear term is >= 0 when ∇f(c)_a s_a >= 0, and the quadratic one when every
+ * s_a s_b H_ab's enclosure (m: the node's Taylor model) has its lower bound, minus the
+ * negative parts t_ab (an ulp below 0 where H_ab is 0 at the node's face) beside it, >= 0:
+ * w_a w_b <= (w_a² + w_b²) / 2 gives ½ Σ_a w_a² (H_aa − Σ_{b≠a} t_ab). The sum of
+ * the t_ab is doubled against its own rounding. ∇f(c) is the sampled gradient, taken as
+ * exact as the sampled 0 at c is (corner signs are samples everywhere in this file).
+ *
+ * The same expansion proves a node empty from a corner where f(c) > 0 is tiny and some
+ * ∇f(c)_a s_a < 0 but small: a sheet passing a corner at a critical value of one coordinate
+ * (tanglecube's z⁴ − 5 z² at z = √2.5, box ±3 moved by 0.37 / −0.23 / 0.41 of a depth-9
+ * cell, E = 3e-3: f(c) = 1.44e-5, ∂f/∂z = −3.2e-3, min f in the node 1.41e-5; the enclosures
+ * round the centre are 8.6e-5 wide, so the node was split to depth.max and the dual mesh
+ * declined, not_plain, in that box only). There each axis adds at least the minimum of
+ * G_a w + ½ D_a w² over w in [0, h_a], with G_a the lower bound of s_a ∇f(c)_a — from the
+ * model, ∇f(centre) + H (c − centre), not a sample — and D_a = H_aa − 2 Σ_{b≠a} t_ab; the
+ * node is empty when f(c) plus these minima stays above CORNER_ROUNDING of their sizes. */
+/* The sums above are of a few products in plain floating point (the enclosures themselves
+ * are rounded outward): their error is ~1e-15 of the terms' sizes, kept far below this. The
+ * d9 cells of that tanglecube box have f(c) = 3.4e-4 and a dip of 3.3e-4 along z (min f in
+ * the node 1.41e-5): a margin of half f(c) did not prove them. */
+#define CORNER_ROUNDING 1e-9
+static bool touch_empty(const dnode *n, const corner_view *v)
+{
+    if (!v->have_model)
+        return false;
+    const ism_interval *h = v->model.box.h;
+    for (int c = 0; c < 8; c++) {
+        if (!(n->f[c] >= 0))
+            continue;
+        double s[3], low = 0; /* low: the sum of the axes' minima (f(c) > 0) */
+        bool ok = true;
+        for (int a = 0; a < 3; a++) {
+            s[a] = (c >> a & 1) ? -1.0 : 1.0;
+            ok = ok && (n->f[c] != 0 || v->n[c][a] * s[a] >= 0);
+        }
+        for (int a = 0; a < 3 && ok; a++) {
+            double t = 0;
+            for (int b = 0; b < 3; b++) {
+                ism_interval hab = h[ism_dual_hess_at(a, b)];
+                ok = ok && hab.lo <= hab.hi; /* not NaN */
+                if (b != a)
+                    t += s[a] * s[b] > 0 ? max_of(0, -hab.lo) : max_of(0, hab.hi);
+            }
+            double d_a = h[ism_dual_hess_at(a, a)].lo - 2 * t;
+            if (n->f[c] == 0) {
+                ok = ok && d_a >= 0;
+                continue;
+            }
+            /* G_a: s_a ∇f(c)_a's lower bound, ∇f(c) in ∇f(centre) + H (c − centre) */
+            ism_interval g = v->model.at.d[a];
+            for (int b = 0; b < 3; b++) {
+                ism_interval hab = h[ism_dual_hess_at(a, b)];
+                double off = v->p[c][b] - v->model.c[b];
+                g.lo += off >= 0 ? hab.lo * off : hab.hi * off;
+                g.hi += off >= 0 ? hab.hi * off : hab.lo * off;
+            }
+            double g_a = s[a] > 0 ? g.lo : -g.hi, w = fabs(v->p[7][a] - v->p[0][a]);
+            double at_w = g_a * w + 0.5 * d_a * w * w, least = fmin(0, at_w);
+            if (g_a < 0 && d_a > 0 && -g_a / d_a < w)
+                least = -g_a * g_a / (2 * d_a); /* the parabola's vertex inside [0, w] */
+            ok = ok && isfinite(least);
+            low += least;
+        }
+        if (ok && (n->f[c] == 0 || n->f[c] + low > CORNER_ROUNDING * (n->f[c] - low)))
+            return true;
+    }
+    return false;
+}
+
+/* The slab widths face_cap tries, as shares of the node's side: the first that proves it. */
+#define CAP_SLABS 3
+
+/* At depth.max, a node whose corners share a sign and which is not proven empty: is every
+ * zero of f in it a cap of a sheet that crosses one of its faces, at most min(E, side / 2)
+ * deep? Proven when, for a slab of depth δ along that face, f has no zero in the rest of
+ * the node (so f keeps the corners' sign there) and every line across the slab meets f = 0
+ * at most once (ism_dual_graph_along): each zero then lies on a line from a point of the face
+ * where f has the other sign, within δ of it. The sheet crosses the face; the leaf beyond it
+ * holds the rest, and that leaf's own corner signs already pass over the crossing curve on
+ * their shared face (no lattice point inside it): the dual mesh misses the cap, no more —
+ * δ ≤ E from the mesh there. Why: a convex fold whose extreme point lies within ~h² / 4R
+ * beyond a lattice plane (R its radius of curvature; h the finest cell) pokes through a face
+ * between the face's lattice points at every depth. Kummer's tropes fold with R 0.1 between
+ * two nodes (1.241, 0, −0.79 between 1.207, ±0.207, −0.707): kummer-16-nodes in its own box
+ * declined not_plain at 1e-2 and 3e-3. Only at depth.max, where the node would decline: no
+ * mesh the dual mesher made before changes. */
+static bool face_cap(dual *d, worker *w, corner_view *v)
+{
+    if (!v->have_model && !tighten(w, v))
+        return false;
+    double h = v->p[7][0] - v->p[0][0];
+    for (int k = 1; k <= CAP_SLABS; k++) {
+        double slab = ldexp(h, -k);
+        if (!(slab <= d->o->max_error))
+            continue;
+        for (int a = 0; a < 3; a++)
+            for (int side = 0; side < 2; side++) {
+                double lo[3], hi[3], slo[3], shi[3], dir[3] = {0, 0, 0};
+                memcpy(lo, v->p[0], sizeof lo);
+                memcpy(hi, v->p[7], sizeof hi);
+                memcpy(slo, lo, sizeof slo);
+                memcpy(shi, hi, sizeof shi);
+                if (side) { /* the face hi[a]: the rest below it */
+                    hi[a] -= slab;
+                    slo[a] = hi[a];
+                } else {
+                    lo[a] += slab;
+                    shi[a] = lo[a];
+                }
+                if (!ism_dual_free(w->s.tape, w->jet, &v->model, lo, hi, CERT_HALVINGS,
+                                   &w->s.n_interval))
+                    continue;
+                for (int sign = -1; sign <= 1; sign += 2) {
+                    dir[a] = sign;
+                    if (ism_dual_graph_along(w->s.tape, w->jet, &v->model, slo, shi, dir,
+                                             CERT_HALVINGS, &w->s.n_interval))
+                        return true;
+                }
+            }
+    }
+    return false;
+}
+
+/* One graph along the corner gradients' mean (the direction the sheet in the node faces)
+ * wherever f may vanish in the node's sub-boxes (the node's own enclosure failed). */
+static bool graph_on_sub_boxes(dual *d, worker *w, const dnode *n, corner_view *v)
+{
+    double m[3] = {0, 0, 0};
+    for (int c = 0; c < 8; c++)
+        for (int a = 0; a < 3; a++)
+            m[a] += v->n[c][a];
+    if (!(ism_dot3(m, m) > 0))
+        return false;
+    return prove_on_halves(d, w, n, v, m, false);
+}
+
+/* What a node with f's crease kink in its box is (dual_crease.h): empty, a leaf with its
+ * vertex on the crease or a plain leaf of one branch (each with plain edges), or to split
+ * (v->kinked). */
+static int crease_kind(dual *d, worker *w, dnode *n, corner_view *v)
+{
+    bool small = ism_grid_cell_size(&d->g, n->level) <= CREASE_MEASURED_CELLS * d->o->max_error;
+    bool last = n->level >= d->o->max_depth;
+    const double (*p)[3] = (const double (*)[3])v->p;
+    enum ism_crease_node k = ism_dual_crease_node(&w->s, w->jet, w->force, p, n->f,
+                                                  d->o->flat_normal, small, last);
+    int kind = k == ISM_CREASE_EMPTY    ? DN_EMPTY
+               : k == ISM_CREASE_VERTEX ? DN_CREASE
+               : k == ISM_CREASE_SMOOTH ? DN_SURF
+               : k == ISM_CREASE_PAIR   ? DN_PAIR
+                                        : DN_INNER;
+    /* a leaf with the kink at most 4 E across is judged by the measurement alone (as
+     * cell_error.c judges the primal polygons'): the crease's wedge pokes through the
+     * same-sign edges beside it at every level (two roots), so splitting for them went on
+     * to depth.max. Its faces still hold one crossing curve each (two on a face made
+     * Barth's sextic at 1e-2 non-manifold along 4 edges by the crease). */
+    if (has_sheet(kind) && kind != DN_PAIR &&
+        (small ? !plain_faces(d, n) : !plain_edges(d, w, n, v)))
+        /* at depth.max a crease leaf may have a face crossed four times by two branches'
+           curves (the ridge along its diagonal): its neighbour there is a pair leaf */
+        kind = kind == DN_CREASE && small && last &&
+                       ism_dual_crease_branch_faces(&w->s, p, n->f) >= 0
+                   ? DN_CREASE
+                   : DN_INNER;
+    /* at depth.max a small leaf with plain faces whose crease point Newton missed (more than
+       half a cell outside, or not converging) is a plain leaf: the measurement judges it */
+    if (kind == DN_INNER && k == ISM_CREASE_SPLIT && small && last && plain_faces(d, n))
+        kind = DN_SURF;
+    v->kinked = kind == DN_INNER;
+    return kind;
+}
+
+/* Does f fall from its zero at corner c into the node along each of the node's three edges
+ * from c (the unit gradient's component along each, taken into the node, below 0)? Then the
+ * sheet through c crosses the node transversally, cutting off the corner: the node's three
+ * crossed edges (the other seven corners < 0, 0 counting as > 0) have their roots at c and
+ * the node is a plain leaf whose vertex is c, the nodes round c having theirs elsewhere
+ * (Barth's sextic through the lattice point (1/2, 1/2, 1/2) with ∇f along (1, 1, 1), the
+ * sphere r = 1.5 through (1.4, -0.2, -0.5) in the box ±1.6: at every level). Not so where
+ * the sheet is tangent to a lattice line through c (tooth at (0, 1, 1)) or ∇f vanishes
+ * there (a cone's apex). */
+static bool zero_corner_transverse(const corner_view *v, int c)
+{
+    bool down = true;
+    for (int a = 0; a < 3; a++) {
+        double into = (c >> a & 1) ? -v->n[c][a] : v->n[c][a];
+        down &= into < 0;
+    }
+    return down;
+}
+
+/* What one Newton step did (newton_step). */
+enum { STEP_FAIL, STEP_GO, STEP_STOP };
+
+/* One Newton step of m along ∇f towards f = 0 (f and g = ∇f at m): STEP_FAIL without
+ * moving m when ∇f vanishes or f, ∇f are not finite; else m moved, and STEP_STOP once the
+ * step was below NEWTON_STOP of size. newton_onto and feet_in_nodes both step so. */
+static int newton_step(double m[3], double f, const double g[3], double size)
+{
+    double gg = ism_dot3(g, g);
+    if (!isfinite(f) || !(gg > 0) || !isfinite(gg))
+        return STEP_FAIL;
+    double step = fabs(f) / sqrt(gg);
+    for (int a = 0; a < 3; a++)
+        m[a] -= f * g[a] / gg;
+    return step < NEWTON_STOP * size ? STEP_STOP : STEP_GO;
+}
+
+/* m moved onto f = 0 by Newton along ∇f, stopping once a step is below NEWTON_STOP of
+ * size; false when it could not finish a step (∇f vanishing or not finite). */
+bool ism_dual_newton_onto(worker *w, double m[3], double size)
+{
+    for (int it = 0; it < NEWTON_STEPS; it++) {
+        double g[3];
+        double f = ism_sample_grad(&w->s, m, g);
+        int r = newton_step(m, f, g, size);
+        if (r == STEP_FAIL)
+            return false;
+        if (r == STEP_STOP)
+            break;
+    }
+    return true;
+}
+
+/* Is m in the closed box lo..hi? */
+static bool in_closed_box(const double m[3], const double lo[3], const double hi[3])
+{
+    bool inside = true;
+    for (int a = 0; a < 3; a++)
+        inside &= m[a] >= lo[a] && m[a] <= hi[a];
+    return inside;
+}
+
+/* The centre of the box lo..hi (side size) moved onto f = 0 by Newton into m; true when
+ * that lands in the closed box. */
+bool ism_dual_foot_in_node(worker *w, const double lo[3], const double hi[3], double size,
+                         double m[3])
+{
+    for (int a = 0; a < 3; a++)
+        m[a] = 0.5 * lo[a] + 0.5 * hi[a];
+    return ism_dual_newton_onto(w, m, size) && in_closed_box(m, lo, hi);
+}
+
+/* foot_in_node for n boxes at once (lo[k]..hi[k] of side size[k], n <= ISM_GRAD_BATCH):
+ * newton_onto's steps in lanes, their gradients in one batch a step (ism_sample_grad_batch:
+ * bit for bit ism_sample_grad's), a lane leaving where its own scalar run would stop. Into
+ * m[k] and state[k]: FOOT_AT when the foot lands in the closed box, else FOOT_OUT. */
+void ism_dual_feet_in_nodes(worker *w, const double (*lo)[3], const double (*hi)[3],
+                          const double *size, size_t n, double (*m)[3], uint8_t *state)
+{
+    size_t live[ISM_GRAD_BATCH], nl = 0;
+    bool ok[ISM_GRAD_BATCH];
+    for (size_t k = 0; k < n; k++) {
+        for (int a = 0; a < 3; a++)
+            m[k][a] = 0.5 * lo[k][a] + 0.5 * hi[k][a];
+        ok[k] = true;
+        live[nl++] = k;
+    }
+    for (int it = 0; it < NEWTON_STEPS && nl; it++) {
+        double p[ISM_GRAD_BATCH][3], f[ISM_GRAD_BATCH], g[ISM_GRAD_BATCH][3];
+        for (size_t j = 0; j < nl; j++)
+            memcpy(p[j], m[live[j]], sizeof p[j]);
+        ism_sample_grad_batch(&w->s, (const double (*)[3])p, f, g, nl);
+        size_t kept = 0;
+        for (size_t j = 0; j < nl; j++) { /* newton_onto's step, lane by lane */
+            size_t k = live[j];
+            int r = newton_step(m[k], f[j], g[j], size[k]);
+            ok[k] = r != STEP_FAIL;
+            if (r == STEP_GO)
+                live[kept++] = k;
+        }
+        nl = kept;
+    }
+    for (size_t k = 0; k < n; k++)
+        state[k] = ok[k] && in_closed_box(m[k], lo[k], hi[k]) ? FOOT_AT : FOOT_OUT;
+}
+
+/* Node n, with both signs at its corners, split at once for the sag of a chord its size
+ * (SAG_SPLIT, SAG_ROUND)? Under the straddle move and above depth.max only (no crease, no points:
+ * their leaves place vertices otherwise), and only inside the request's box: in the grown
+ * box's margin the triangles the clip drops are not measured, so leaves there stay coarse
+ * (helicoid at 1.6e-3: kept leaves up to k h² / 8 / (E + shift) = 12 there, 1.27 inside;
+ * splitting them cost 7% more instructions). The centre's foot, moved as place_vertex moves
+ * it, is kept in v for a node kept as a leaf (the Hessian that moves it gives the
+ * curvature), and a foot outside the node is remembered: place_vertex repeats neither. */
+static bool sag_split(dual *d, worker *w, const dnode *n, corner_view *v)
+{
+    if (!sag_may_split(d, n->level, v->p[0], v->p[7]))
+        return false;
+    double size = ism_grid_cell_size(&d->g, n->level), m[3], bend[2];
+    bool inside = v->foot == FOOT_UNKNOWN ? ism_dual_foot_in_node(w, v->p[0], v->p[7], size, m)
+                                          : v->foot == FOOT_AT;
+    if (!inside) {
+        v->placed = FOOT_OUT;
+        return false;
+    }
+    if (v->foot == FOOT_AT)
+        memcpy(m, v->foot_at, sizeof m);
+    ism_straddle_balanced_point_at(&w->s, d->shift, d->o->box, m,
+                                   v->foot == FOOT_AT ? &v->foot_jet : NULL, v->at, bend);
+    double room = 8 * (d->o->max_error + d->shift);
+    bool split = bend[0] * size * size > SAG_SPLIT * room ||
+                 bend[1] * size * size > SAG_ROUND * room;
+    v->placed = split ? FOOT_UNKNOWN : FOOT_AT;
+    return split;
+}
+
+/* What node n is (f and the unit gradients at its corners in n->f and v): empty (proven
+ * free of f = 0), a surface leaf with one sheet (corner gradients agreeing, or one graph
+ * proven by interval gradients), or to be split. The interval is taken only where the
+ * corners cannot decide: a node whose corners share a sign, or disagree. In two steps (a
+ * split classifies a node's children's heads first, then takes the enclosures their tails
+ * want in one batch: kid_kinds): classify_head answers what the corners (and sag_split)
+ * decide, else UNDECIDED, and classify_tail the rest. */
+int ism_dual_classify_head(dual *d, worker *w, dnode *n, corner_view *v)
+{
+    int neg = 0;
+    v->placed = FOOT_UNKNOWN;
+    v->pre_g = false;
+    for (int c = 0; c < 8; c++) {
+        if (!isfinite(n->f[c]) || !isfinite(v->n[c][0] + v->n[c][1] + v->n[c][2]))
+            return DN_INNER;
+        neg += n->f[c] < 0;
+    }
+    bool mixed = neg != 0 && neg != 8;
+    /* shown free by its parent's proofs or its interval (known_free): above depth.min too,
+     * as nothing in it is meshed at any depth (children_free's batches start at level 1) */
+    if (!mixed && v->known_free)
+        return DN_EMPTY;
+    if (n->level < d->o->min_depth)
+        return DN_INNER;
+    /* a sheet through the one corner >= 0, where f is exactly 0 (tooth at (0, 1, 1), tangent
+     * to the lattice edge along x; spindle-cyclide at the origin): every crossed edge's root
+     * is that corner, so is the leaf's vertex, and so are those of the leaves round it —
+     * triangles of no area, at every level alike. Split, so the mesh declines at depth.max
+     * (not_plain) before vertices and measurements: meshing them to find the misses cost
+     * tooth 1e-2 +11.5% and spindle-cyclide +30.8% of the whole run (callgrind). A sheet
+     * crossing the lattice point transversally (zero_corner_transverse) is a plain case. */
+    if (neg == 7)
+        for (int c = 0; c < 8; c++)
+            if (n->f[c] == 0 && !zero_corner_transverse(v, c))
+                return DN_INNER;
+    if (mixed && sag_split(d, w, n, v))
+        return DN_INNER;
+    v->neg = neg;
+    v->agree = mixed && normals_agree((const double (*)[3])v->n, d->o->flat_normal);
+    v->have_g = v->have_model = false;
+    v->monotone = 0;
+    return UNDECIDED;
+}
+
+int ism_dual_classify_tail(dual *d, worker *w, dnode *n, corner_view *v)
+{
+    int neg = v->neg;
+    bool mixed = neg != 0 && neg != 8;
+    if (tail_wants_g(d, v)) {
+        /* the natural interval first (one evaluation, enough on the sphere), then the
+         * Taylor form (two), then the sub-boxes */
+        ism_interval box[3];
+        ism_dual_node_box(v, box);
+        w->s.n_interval++;
+        /* kept: the Taylor model of the same box (tighten) then computes only the Hessian
+         * (interval_jet.h); torus at 1e-2, 680 of 1,392 such nodes */
+        size_t kinks =
+            v->pre_g ? 0 : ism_eval_interval_grad_kept(w->s.tape, w->jet, box, &v->g);
+        v->have_g = kinks == 0;
+        if (!v->have_g) /* a kink in the node */
+            return d->crease && kinks != (size_t)-1 ? crease_kind(d, w, n, v) : DN_INNER;
+        if (v->agree)
+            return plain_edges(d, w, n, v) ? DN_SURF : DN_INNER;
+        if (!mixed) /* empty, or maybe a piece no corner sees */
+            return empty_proven(d, w, n, v) || (neg == 0 && touch_empty(n, v)) ||
+                           (n->level >= d->o->max_depth && face_cap(d, w, v))
+                       ? DN_EMPTY
+                       : DN_INNER;
+        if (!ism_graph_from_enclosure(&v->g) &&
+            !(tighten(w, v) &&
+              (ism_graph_from_enclosure(&v->g) || graph_on_sub_boxes(d, w, n, v))))
+            return DN_INNER;
+        for (int a = 0; a < 3; a++)
+            v->monotone |= (v->g.d[a].lo > 0 || v->g.d[a].hi < 0) << a;
+    }
+    return plain_edges(d, w, n, v) ? DN_SURF : DN_INNER;
+}
+
+int ism_dual_classify(dual *d, worker *w, dnode *n, corner_view *v)
+{
+    int kind = ism_dual_classify_head(d, w, n, v);
+    return kind != UNDECIDED ? kind : ism_dual_classify_tail(d, w, n, v);
+}

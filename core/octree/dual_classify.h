@@ -1,0 +1,110 @@
+/* dual_classify.h — what the dual mesher (dual_tree.h's state) makes of one node: empty
+ * (proven free of f = 0), a surface leaf with one sheet, or to be split; and the centre's
+ * foot (Newton onto f = 0) that sag_split and the vertices start from. */
+#ifndef ISM_DUAL_CLASSIFY_H
+#define ISM_DUAL_CLASSIFY_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include "core/octree/dual_cert.h"
+#include "core/octree/dual_tree.h"
+#include "core/octree/straddle.h"
+
+/* What the node's corners and interval say: f and ∇f at the corners, the enclosure of f and
+ * ∇f over the box (have_g false when it has a kink), and the corner gradients' agreement. */
+typedef struct corner_view {
+    double p[8][3], n[8][3];
+    ism_ivgrad g;
+    ism_dual_model model; /* f's Taylor model over the box (dual_cert.h), when have_model */
+    bool have_g, have_model, agree;
+    bool kinked;  /* split for the crease (dual_crease.h): at depth.max it declines min_max */
+    int monotone; /* bit a: ∇f's a-th component keeps a sign over the box */
+    uint8_t placed; /* what sag_split found (dnode.placed); FOOT_AT: the vertex in at */
+    double at[3];
+    /* In: the centre's foot (foot_in_node) when the split pass took it beforehand with
+     * other nodes' (split_pass): FOOT_AT, in foot_at; FOOT_OUT: outside the node (or Newton
+     * failed); FOOT_UNKNOWN: not taken (sag_split takes it itself). */
+    uint8_t foot;
+    double foot_at[3];
+    ism_straddle_jet foot_jet; /* with FOOT_AT: f's jet at foot_at (feet_task) */
+    /* In: the node's box was shown free of f = 0 by its parent's proofs (the parent's
+     * free_kids) or its natural interval (children_free). Out: bit c, child c's box shown
+     * free by this node's proofs (dnode). */
+    bool known_free;
+    uint8_t free_kids;
+    /* classify_head's count of corners < 0, for classify_tail */
+    int neg;
+    /* In (classify_tail): f and ∇f's natural enclosure over the box is in g already, taken
+     * in one batch with the node's siblings' (kid_kinds); classify_head clears it. */
+    bool pre_g;
+} corner_view;
+
+/* classify_head's answer when the corners leave the node to classify_tail. */
+#define UNDECIDED (-1)
+
+/* The node's box from its corners 0 and 7: one builder, since a jet takes a batch's record
+ * only for a box equal to the bit (kid_kinds's batch, classify_tail's jet). */
+static inline void ism_dual_node_box(const corner_view *v, ism_interval box[3])
+{
+    for (int a = 0; a < 3; a++)
+        box[a] = (ism_interval){v->p[0][a], v->p[7][a]};
+}
+
+/* Does the box lo..hi lie in the request's box (always, but in the grown box: dual_box.h)? */
+static inline bool in_request_box(const dual *d, const double lo[3], const double hi[3])
+{
+    for (int a = 0; d->inner && a < 3; a++)
+        if (lo[a] < d->inner[a] || hi[a] > d->inner[a + 3])
+            return false;
+    return true;
+}
+
+/* May sag_split split any node at all (the straddle move on, no crease, no points)? Those
+ * leaves place vertices otherwise. */
+static inline bool sag_may_split_any(const dual *d)
+{
+    return d->shift > 0 && !d->crease && !d->nballs;
+}
+
+/* May sag_split split a node of this level in the box lo..hi: sag_may_split_any, between
+ * depth.min and depth.max (classify answers above depth.min before asking sag_split, so
+ * min_depth only spares split passes' lanes there), inside the request's box. sag_split
+ * and wanted_feet (the split pass's feet taken beforehand) both ask this. */
+static inline bool sag_may_split(const dual *d, int level, const double lo[3], const double hi[3])
+{
+    return sag_may_split_any(d) && level < d->o->max_depth && level >= d->o->min_depth &&
+           in_request_box(d, lo, hi);
+}
+
+/* Does classify_tail take f and ∇f's enclosure over the node (classify_head UNDECIDED)? */
+static inline bool tail_wants_g(const dual *d, const corner_view *v)
+{
+    return !v->agree || d->crease; /* with a crease, agreeing corners may straddle it */
+}
+
+/* What node n is (f and the unit gradients at its corners in n->f and v): DN_EMPTY, a
+ * surface leaf (DN_SURF, or DN_CREASE / DN_PAIR with a crease), DN_INNER (to split). In two
+ * steps for a split's children (dual.c kid_kinds): ism_dual_classify_head answers what the
+ * corners (and sag_split) decide, else UNDECIDED, and ism_dual_classify_tail the rest (with
+ * v->g taken beforehand when v->pre_g). */
+int ism_dual_classify(dual *d, worker *w, dnode *n, corner_view *v);
+int ism_dual_classify_head(dual *d, worker *w, dnode *n, corner_view *v);
+int ism_dual_classify_tail(dual *d, worker *w, dnode *n, corner_view *v);
+
+/* Where surface leaf n lies on the request's box: -1 when f changes sign between its
+ * corners on a face of the box (the box cuts the surface), 1 when f is proven free of 0 on
+ * every such face, 0 when neither is known (split it). */
+int ism_dual_box_faces_clear(dual *d, worker *w, const dnode *n, const corner_view *v);
+
+/* The centre of the box lo..hi (size across) moved onto f = 0 by Newton into m; true when it
+ * stays in the closed box. */
+bool ism_dual_foot_in_node(worker *w, const double lo[3], const double hi[3], double size,
+                           double m[3]);
+
+/* ism_dual_foot_in_node for n <= ISM_GRAD_BATCH boxes at once (each Newton step's
+ * gradients in one batch, bit for bit the scalar run's): m[k] and state[k] (FOOT_AT when the
+ * foot lands in the closed box, else FOOT_OUT). */
+void ism_dual_feet_in_nodes(worker *w, const double (*lo)[3], const double (*hi)[3],
+                            const double *size, size_t n, double (*m)[3], uint8_t *state);
+
+#endif
