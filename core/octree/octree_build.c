@@ -80,6 +80,8 @@ typedef struct build {
     ism_quiet quiet;             /* index of p->quiet */
     ism_node_balls node_balls;   /* index of p->node_balls */
     const ism_octree *previous;  /* p->previous when it may be used, else NULL */
+    uint8_t *forced_below;       /* per node of previous: 1 when a force_split key's descent
+                                    passes it (subtree_copy); NULL: no subtree copied */
     thread_state *threads;
     ism_point_entry *corner_memos; /* the threads' memos, end to end (thread_state.corners) */
     ism_root_entry *root_memos;    /* ... and thread_state.memo's */
@@ -651,6 +653,104 @@ static bool visible_feature(const build *b, thread_state *th, const ism_tape *su
            !beside_locus(b, lo, hi);
 }
 
+/* Later rounds re-grow the last round's tree node by node, though below a split node whose
+ * subtree holds no forced leaf nothing is decided afresh (take_over keeps every leaf and
+ * empty node, and split nodes split again): Barth's sextic at E 0.0259 walked ~28M
+ * instructions of octree in each of its 5 later rounds to change a few dozen nodes. Such a
+ * subtree is copied whole instead, with the nodes, flags, verdicts, tape numbers and counters
+ * the walk gives. A grown subtree lies in one run of nodes after its root's children (grow
+ * appends a node's 8 children, then grows each in turn), so the copy is a run with its child
+ * indices moved. forced_below marks the nodes on the descent to each key of force_split
+ * (a superset of the ancestors of the leaves forced now); none is computed, and no subtree
+ * copied, when node balls may force a leaf (near_node). */
+static uint8_t *mark_forced(const ism_octree *t, const ism_split_set *set)
+{
+    uint8_t *mark = calloc(t->n, 1);
+    for (size_t k = 0; mark && set && k < set->n; k++) {
+        uint64_t key = set->keys[k];
+        int level = (int)(key >> 57);
+        int32_t o[3] = {(int32_t)(key >> 38 & 0x7ffff), (int32_t)(key >> 19 & 0x7ffff),
+                        (int32_t)(key & 0x7ffff)};
+        int32_t i = 0;
+        for (;;) {
+            const ism_node *nd = &t->nodes[i];
+            mark[i] = 1;
+            if (nd->state != ISM_NODE_SPLIT || nd->level >= level)
+                break;
+            int32_t half = ism_grid_cell_steps(&t->grid, nd->level + 1), c = 0;
+            for (int a = 0; a < 3; a++) {
+                int32_t d = o[a] - nd->org[a];
+                if (d < 0 || d >= 2 * half)
+                    c = -1; /* outside the tree: forces nothing */
+                else if (c >= 0 && d >= half)
+                    c |= 1 << a;
+            }
+            if (c < 0)
+                break;
+            i = nd->child + c;
+        }
+    }
+    return mark;
+}
+
+/* One past the last node of split node i's subtree in tree t: the children of its last split
+ * node in grow's order (the last split child's, recursively) are appended last. */
+static size_t subtree_end(const ism_octree *t, int32_t i)
+{
+    for (;;) {
+        int32_t first = t->nodes[i].child, last = -1;
+        for (int k = 7; k >= 0 && last < 0; k--)
+            if (t->nodes[first + k].state == ISM_NODE_SPLIT)
+                last = first + k;
+        if (last < 0)
+            return (size_t)first + 8;
+        i = last;
+    }
+}
+
+/* Node v->v[i], split in the last round as node pi with no forced leaf below, and its
+ * subtree copied from the last round's tree: what grow makes of them node by node (split
+ * nodes keep their verdicts, leaves their flags, verdicts and tapes: take_over), counted
+ * as it counts them. Its root is visited already. */
+static bool copy_subtree(build *b, thread_state *th, node_vec *v, size_t i, int32_t pi)
+{
+    const ism_octree *t = b->previous;
+    size_t from = (size_t)t->nodes[pi].child, end = subtree_end(t, pi), n = end - from;
+    if (!vec_reserve(b, v, n))
+        return fail(b, ISM_BUILD_NO_MEMORY);
+    int32_t shift = (int32_t)v->n - (int32_t)from;
+    v->v[i].state = ISM_NODE_SPLIT;
+    v->v[i].child = (int32_t)v->n;
+    v->v[i].thin = t->nodes[pi].thin;
+    count_thin(th, t->nodes[pi].thin);
+    size_t splits = 1;
+    for (size_t j = from; j < end; j++) {
+        const ism_node *q = &t->nodes[j];
+        ism_node c = {{q->org[0], q->org[1], q->org[2]}, -1, q->level, q->state, 0, 0};
+        uint16_t tape = 0;
+        if (q->state == ISM_NODE_SPLIT) {
+            c.child = q->child + shift;
+            c.thin = q->thin;
+            count_thin(th, q->thin);
+            splits++;
+        } else if (q->state == ISM_NODE_LEAF) {
+            c.flags = q->flags;
+            c.thin = q->thin;
+            tape = previous_tape(b, (int32_t)j);
+            count_thin(th, q->thin);
+            th->unresolved += (q->flags & ISM_NODE_UNRESOLVED) != 0;
+            th->deep_leaves += q->level > b->p->max_depth;
+        } else {
+            th->excluded++;
+        }
+        vec_put(v, &c, tape);
+    }
+    th->visited += n;
+    if ((th->new_nodes += 8 * splits) >= NODE_BATCH && !count_nodes(b, th))
+        return false;
+    return true;
+}
+
 /* The tape of a node split in the last round, asked for only when a node below it is decided
  * afresh: a subtree the new round does not force anywhere is taken over node by node and
  * evaluates nothing, yet its split nodes shortened their tapes again (Barth's sextic at
@@ -700,6 +800,9 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     }
     th->visited++;
     const ism_node *pv = pi >= 0 ? &b->previous->nodes[pi] : NULL;
+    if (pv && pv->state == ISM_NODE_SPLIT && !defer && b->forced_below &&
+        !b->forced_below[pi])
+        return copy_subtree(b, th, v, i, pi);
     /* asked only where it decides: a node the last round left empty stays empty and one it
      * split is split again, forced or not (take_over) */
     bool forced = (!pv || pv->state == ISM_NODE_LEAF) &&
@@ -1019,6 +1122,9 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
         status = ISM_BUILD_NO_MEMORY;
         goto done;
     }
+    /* none (every node grown) when node balls may force a leaf or out of memory */
+    if (b.previous && p->nnode_balls == 0)
+        b.forced_below = mark_forced(b.previous, p->force_split);
     ism_node root = {{0, 0, 0}, -1, 0, ISM_NODE_LEAF, 0, 0};
     if (!vec_push(&b, &top, &root, 0)) {
         status = ISM_BUILD_NO_MEMORY;
@@ -1066,6 +1172,7 @@ done:
             free(b.task_out[k].tape);
         }
     free(b.task_out);
+    free(b.forced_below);
     free(deferred.v);
     pthread_mutex_destroy(&b.progress_lock);
     if (status != ISM_BUILD_OK) {
