@@ -85,17 +85,39 @@ bool ism_leaf_memo_match(const ism_octree *before, const ism_octree *now, int32_
     return w.ok;
 }
 
+/* Room in out for nv more vertices, nt triangles and ns segments. */
+static bool room(ism_cell_out *out, size_t nv, size_t nt, size_t ns)
+{
+    return ism_grow((void **)&out->verts, &out->cap_verts, out->nverts + nv, sizeof *out->verts,
+                    256) &&
+           ism_grow((void **)&out->tris, &out->cap_tris, out->ntris + nt, 3 * sizeof *out->tris,
+                    256) &&
+           ism_grow((void **)&out->segs, &out->cap_segs, out->nsegs + ns, 2 * sizeof *out->segs,
+                    16);
+}
+
+bool ism_leaf_memo_reserve(const ism_leaf_memo *m, const int32_t *reuse, size_t n,
+                           ism_cell_out *out)
+{
+    size_t nv = 0, nt = 0, ns = 0, most_v = 0, most_t = 0, fresh = 0;
+    for (size_t i = 0; i < n; i++)
+        if (reuse[i] >= 0) {
+            const ism_leaf_rec *r = &m->rec[reuse[i]];
+            nv += r->nv, nt += r->nt, ns += r->ns;
+            most_v = r->nv > most_v ? r->nv : most_v;
+            most_t = r->nt > most_t ? r->nt : most_t;
+        } else {
+            fresh++;
+        }
+    return room(out, nv + fresh * most_v, nt + fresh * most_t, ns);
+}
+
 bool ism_leaf_memo_copy(const ism_leaf_memo *m, size_t leaf, ism_cell_out *out,
                         ism_cell_stats *st, ism_cell_stats *added, float *error)
 {
     const ism_leaf_rec *r = &m->rec[leaf];
     const ism_cell_out *src = &m->out[r->chunk];
-    if (!ism_grow((void **)&out->verts, &out->cap_verts, out->nverts + r->nv,
-                  sizeof *out->verts, 256) ||
-        !ism_grow((void **)&out->tris, &out->cap_tris, out->ntris + r->nt,
-                  3 * sizeof *out->tris, 256) ||
-        !ism_grow((void **)&out->segs, &out->cap_segs, out->nsegs + r->ns,
-                  2 * sizeof *out->segs, 16))
+    if (!room(out, r->nv, r->nt, r->ns))
         return false;
     /* indices were local to src (from r->v0 on); they become local to out */
     uint32_t shift = (uint32_t)out->nverts - (uint32_t)r->v0;

@@ -35,6 +35,16 @@ typedef struct ism_leaf_memo {
  * with leaves split; reuse holds one entry per leaf of `now`. False when out of memory. */
 bool ism_leaf_memo_match(const ism_octree *before, const ism_octree *now, int32_t *reuse);
 
+/* Room in out for the outputs of leaves reuse[0..n) (as ism_leaf_memo_match gives them),
+ * taken at once: the copied ones' (reuse[i] >= 0) and, for each leaf polygonised afresh,
+ * the most a copied one emitted (the leaves a later round polygonises are those beside the
+ * split ones, of their neighbours' sizes). A later round copies most of a chunk's leaves,
+ * and growing out leaf by leaf reallocated it about log2 of its size times (Barth's sextic
+ * at E 0.0259: 29M of its 2,358M instructions moving the arrays over 5 later rounds,
+ * callgrind counting each byte `rep movsb` moves). False when out of memory. */
+bool ism_leaf_memo_reserve(const ism_leaf_memo *m, const int32_t *reuse, size_t n,
+                           ism_cell_out *out);
+
 /* Appends leaf `leaf`'s recorded output to out (vertex indices moved to out's), adds its
  * counters to st, and returns the counters added in *added and its measured error in
  * *error. False when out of memory. */

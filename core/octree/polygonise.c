@@ -297,6 +297,10 @@ static void run_chunk(void *arg, size_t chunk, int thread)
     ism_cell_out *out = &p->out[chunk];
     size_t first = chunk * p->chunk_leaves;
     size_t last = first + p->chunk_leaves < p->nleaves ? first + p->chunk_leaves : p->nleaves;
+    if (p->reuse && !ism_leaf_memo_reserve(p->memo, p->reuse + first, last - first, out)) {
+        atomic_store(&p->status, ISM_POLY_NO_MEMORY);
+        return;
+    }
     for (size_t i = first; i < last; i++)
         if (!one_leaf(p, pc, chunk, i, out)) {
             atomic_store(&p->status, pc->c.unregistered ? ISM_POLY_INTERNAL : ISM_POLY_NO_MEMORY);
