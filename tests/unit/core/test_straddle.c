@@ -162,12 +162,22 @@ Test(straddle, balanced_move_on_saddles_and_bowls)
         cr_assert(fabs(q[0]) == 0 && fabs(q[1]) == 0 && fabs(q[2] - want) < 1e-12 * e,
                   "a %g b %g: moved to (%g, %g, %g), expected z %g", cases[i].a, cases[i].b,
                   q[0], q[1], q[2], want);
-        /* the same move with the curvature beside it: max(|2a|, |2b|) (|∇f| = 1) */
-        double q2[3], bend;
+        /* the same move with the curvatures beside it (|∇f| = 1, principal curvatures 2a and
+         * -2b): the largest max(|2a|, |2b|); the least min(|2a|, |2b|) where both bend one way
+         * (a b < 0), else 0 */
+        double q2[3], bend, bends[2] = {-1, -1};
         cr_assert_eq(ism_straddle_balanced_point(&smp, 0.9 * e, box, p, q2, &bend), moved);
         cr_assert(memcmp(q, q2, sizeof q) == 0, "a %g b %g", cases[i].a, cases[i].b);
         cr_assert(fabs(bend - fmax(fabs(2 * cases[i].a), fabs(2 * cases[i].b))) < 1e-12,
                   "a %g b %g: bend %g", cases[i].a, cases[i].b, bend);
+        cr_assert_eq(ism_straddle_balanced_point_at(&smp, 0.9 * e, box, p, NULL, q2, bends),
+                     moved);
+        cr_assert(memcmp(q, q2, sizeof q) == 0, "a %g b %g", cases[i].a, cases[i].b);
+        double least = cases[i].a * cases[i].b < 0
+                           ? fmin(fabs(2 * cases[i].a), fabs(2 * cases[i].b)) : 0;
+        cr_assert(bends[0] == bend && fabs(bends[1] - least) < 1e-12,
+                  "a %g b %g: bends %g %g, expected %g %g", cases[i].a, cases[i].b, bends[0],
+                  bends[1], bend, least);
         if (fabs(cases[i].share) == 0.9) { /* the cap: ism_straddle_point's move, bit for bit */
             bool one_way = ism_straddle_point(&smp, 0.9 * e, box, p, r);
             cr_assert(!one_way || memcmp(q, r, sizeof q) == 0, "a %g b %g", cases[i].a,
@@ -178,13 +188,15 @@ Test(straddle, balanced_move_on_saddles_and_bowls)
     }
 }
 
-/* The curvature beside the move (ism_straddle_balanced_point's bend, dual.c's sag_split reads it) is
- * the surface's largest principal curvature in magnitude, from f's scale-free form: sphere
- * r 0.8 anywhere 1.25; ellipsoid x² + y²/4 + 4z² = 1 at (1, 0, 0) a / c² = 4 (a / b² =
- * 1/4 the other); the torus R 1, r 0.3 at its outer (1.3, 0, 0) and inner (0.7, 0, 0)
- * equator 1 / r (1 / 1.3 and −1 / 0.7 the other); the hyperboloid x² + y² − z² = 1 at
- * (1, 0, 0) 1 (a saddle of ±1: no move, the curvature still given); 0 on a box face. */
-Test(straddle, bend_is_the_largest_principal_curvature)
+/* The curvatures beside the move (ism_straddle_balanced_point_at's bend[2], dual.c's sag_split
+ * reads them) are the surface's largest principal curvature in magnitude and, where both bend
+ * one way, its least (else 0), from f's scale-free form: sphere r 0.8 anywhere 1.25 and
+ * 1.25; ellipsoid x² + y²/4 + 4z² = 1 at (1, 0, 0) a / c² = 4 and a / b² = 1/4; the torus
+ * R 1, r 0.3 at its outer equator (1.3, 0, 0) 1 / r and 1 / 1.3, at its inner one
+ * (0, 0.7, 0) 1 / r and 0 (a saddle: −1 / 0.7 the other); the hyperboloid x² + y² − z² = 1
+ * at (1, 0, 0) 1 and 0 (a saddle of ±1: no move, the curvature still given); 0 and 0 on a
+ * box face. ism_straddle_balanced_point's one bend is bend[0]. */
+Test(straddle, bends_are_the_largest_and_least_principal_curvatures)
 {
     static const ism_param sphere_08[] = {{"r", 0.8}};
     const pf_surface ellipsoid = {"x^2 + y^2/4 + 4*z^2 - 1", NULL, 0, NULL, 0};
@@ -193,12 +205,12 @@ Test(straddle, bend_is_the_largest_principal_curvature)
     const double k = 0.8 / sqrt(3);
     const struct {
         const pf_surface *s;
-        double p[3], bend;
+        double p[3], bend, least;
         bool moves;
     } cases[] = {
-        {&ball, {k, -k, k}, 1.25, true},       {&ellipsoid, {1, 0, 0}, 4, true},
-        {&torus, {1.3, 0, 0}, 1 / 0.3, true},  {&torus, {0, 0.7, 0}, 1 / 0.3, true},
-        {&hyperboloid, {1, 0, 0}, 1, false},   {&ball, {0.8, 0, 0}, 0, false},
+        {&ball, {k, -k, k}, 1.25, 1.25, true},      {&ellipsoid, {1, 0, 0}, 4, 0.25, true},
+        {&torus, {1.3, 0, 0}, 1 / 0.3, 1 / 1.3, true}, {&torus, {0, 0.7, 0}, 1 / 0.3, 0, true},
+        {&hyperboloid, {1, 0, 0}, 1, 0, false},     {&ball, {0.8, 0, 0}, 0, 0, false},
     };
     const double shift = 0.9e-2, box[6] = {-2, -2, -2, 2, 2, 2};
     const double faced[6] = {-2, -2, -2, 0.8, 2, 2}; /* the last case's point on x = 0.8 */
@@ -216,6 +228,14 @@ Test(straddle, bend_is_the_largest_principal_curvature)
         cr_expect_eq(moved, cases[i].moves, "case %zu", i);
         cr_expect(fabs(bend - cases[i].bend) < 1e-12 * (1 + cases[i].bend),
                   "case %zu: bend %.15g, expected %.15g", i, bend, cases[i].bend);
+        double q2[3], bends[2] = {-1, -1};
+        cr_expect_eq(ism_straddle_balanced_point_at(&smp, shift, last ? faced : box, cases[i].p,
+                                                    NULL, q2, bends),
+                     moved, "case %zu", i);
+        cr_expect(memcmp(q, q2, sizeof q) == 0, "case %zu", i);
+        cr_expect(bends[0] == bend, "case %zu: bend[0] %.15g, bend %.15g", i, bends[0], bend);
+        cr_expect(fabs(bends[1] - cases[i].least) < 1e-12 * (1 + cases[i].least),
+                  "case %zu: bend[1] %.15g, expected %.15g", i, bends[1], cases[i].least);
         ism_eval_ws_free(smp.ws);
         ism_tape_free(t);
     }
