@@ -257,19 +257,32 @@ Test(dual, sag_split_spares_the_proofs)
  * against E + 0.9 E = 0.0136, 1.30 times, so none is kept; level 4 is 0.33 times, so the
  * first mesh is the level-4 mesh and meets E with no measure-and-split round (before the
  * rule: the level-3 mesh first, 126 quads fanned, every leaf then split — one round). Still
- * within E at every vertex, midpoint and centroid (closed form), closed, χ 2. */
+ * within E at every vertex, midpoint and centroid (closed form), closed, χ 2. That it is
+ * the level-4 mesh, not a finer one (a rule splitting too much needs no round either):
+ * the same options with depth.max 4 (no node split past level 4; sag_split asks none at
+ * depth.max) give as many leaves and triangles (536 and 1,068 in each box), with depth.min 5
+ * more of both (2,048 and 4,188, what SAG_ROUND 0.3 made: it fails here). */
+static void sphere_dual(int i, double e, int dmin, int dmax, ism_mesh *m, ism_dual_stats *st)
+{
+    ism_tape *t = pf_compile(&pf_unit_sphere);
+    double box[6];
+    ism_poly_options o;
+    bench_dual_options(i, e, box, &o);
+    o.min_depth = dmin;
+    o.max_depth = dmax;
+    ism_mesh_init(m);
+    cr_assert_eq(ism_dual_mesh(t, &o, m, st), ISM_DUAL_OK, "box %d", i);
+    ism_tape_free(t);
+}
+
 Test(dual, one_way_bend_splits_before_the_round)
 {
     ism_tape *t = pf_compile(&pf_unit_sphere);
     const double e = 7.14e-3;
     for (int i = pf_first_box(); i < 3; i++) {
-        double box[6];
-        ism_poly_options o;
-        bench_dual_options(i, e, box, &o);
-        ism_mesh m;
-        ism_mesh_init(&m);
-        ism_dual_stats st;
-        cr_assert_eq(ism_dual_mesh(t, &o, &m, &st), ISM_DUAL_OK, "box %d", i);
+        ism_mesh m, four, five;
+        ism_dual_stats st, st4, st5;
+        sphere_dual(i, e, 3, SAFETY_DEPTH, &m, &st);
         cr_expect_eq(st.rounds, 0, "box %d: %llu rounds after the first mesh", i,
                      (unsigned long long)st.rounds);
         double worst = pf_worst_distance(&m, pf_unit_sphere_dist);
@@ -278,7 +291,20 @@ Test(dual, one_way_bend_splits_before_the_round)
         pf_measure(&m, t, &p);
         cr_expect_eq(p.boundary_edges + p.nonmanifold_edges, 0, "box %d", i);
         cr_expect_eq(p.euler, 2, "box %d: χ %ld", i, p.euler);
+        sphere_dual(i, e, 3, 4, &four, &st4);
+        sphere_dual(i, e, 5, SAFETY_DEPTH, &five, &st5);
+        cr_expect_eq(st4.rounds + st4.missed, 0, "box %d: the level-4 mesh misses E", i);
+        cr_expect_eq(st.leaves, st4.leaves, "box %d: %llu leaves, the level-4 mesh %llu", i,
+                     (unsigned long long)st.leaves, (unsigned long long)st4.leaves);
+        cr_expect_eq(m.ntris, four.ntris, "box %d: %zu triangles, the level-4 mesh %zu", i,
+                     m.ntris, four.ntris);
+        cr_expect_lt(st.leaves, st5.leaves, "box %d: %llu leaves, the level-5 mesh %llu", i,
+                     (unsigned long long)st.leaves, (unsigned long long)st5.leaves);
+        cr_expect_lt(m.ntris, five.ntris, "box %d: %zu triangles, the level-5 mesh %zu", i,
+                     m.ntris, five.ntris);
         ism_mesh_free(&m);
+        ism_mesh_free(&four);
+        ism_mesh_free(&five);
     }
     ism_tape_free(t);
 }
