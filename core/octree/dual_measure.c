@@ -487,16 +487,8 @@ static bool fan_helps(dual *d, const uint32_t *tri)
     return false;
 }
 
-/* The round's quads as triangles. Each is cut across the diagonal whose midpoint lies nearer
- * f = 0 — where the surface is a saddle (the torus's inner half) the two diagonals sag to
- * opposite sides and the shorter one is as often the worse: choosing by distance took the
- * torus's triangles under 1e-2 / 3e-3 / 1e-3 from 3,616 / 7,120 / 23,744 to 3,280 / 5,968
- * / 20,464 for two distance samples per quad —, and when those two triangles miss E, into
- * four round a centre on f = 0 (fan_task) instead: their longest edges are the quad's sides,
- * which sag half as far as its diagonal (κ s² / 8 against κ s² / 4 for a square of side s),
- * so a quad that the diagonal would have split its leaves for (four times the quads, twice
- * the triangles' count each) may meet E as it is. Whether a fan meets E is measured like
- * any triangle (mark_misses); a quad once cut as a fan keeps its centre (d->fans). */
+/* Quads cut across the nearer diagonal or fanned: why, and the measured counts, in
+ * dual_measure.h. */
 void ism_dual_emit_quads(dual *d)
 {
     size_t nq = d->q.n;
