@@ -87,7 +87,7 @@ enum ism_fan_status {
 
 /* The centroid of triangle p[0..3) within e of f = 0 (|f| / |∇f| there) and the triangle's
  * normal not turned over against ∇f there: the centroid half of the measure the dual mesh's
- * triangles (dual.c) and the fans (ism_dual_balls_fan) meet. */
+ * triangles (dual_measure.c) and the fans (ism_dual_balls_fan) meet. */
 bool ism_dual_centroid_within(ism_sampler *s, const double *p[3], double e);
 
 /* The centroid of p[0..3), as ism_dual_centroid_within takes it, into c. */
@@ -99,7 +99,7 @@ void ism_dual_centroid(const double *p[3], double c[3]);
 bool ism_dual_centroid_within_at(ism_sampler *s, const double *p[3], const double c[3],
                                  double f, const double g[3], double plain, double e);
 
-/* Triangle v[0..3) of m meets E as the dual mesh's own do (dual.c): its centroid
+/* Triangle v[0..3) of m meets E as the dual mesh's own do (dual_measure.c): its centroid
  * (ism_dual_centroid_within) and edge midpoints within e of f = 0, its normal along ∇f at
  * the centroid. The fans and cuts round the balls and the box's cuts (dual_box.h) are
  * measured so. */

@@ -23,7 +23,7 @@
  * f = 0 ∩ the faces (the tests count them from f's signs on the faces). The cut triangles
  * are measured as the dual mesh's own (centroid and edge midpoints within E, facing along
  * ∇f); the dual mesher clips each round's mesh so, splits the leaves of every triangle with
- * a piece beyond E and makes the mesh again, as for its own misses (dual.c). A cut point
+ * a piece beyond E and makes the mesh again, as for its own misses (dual_measure.c). A cut point
  * Newton cannot settle, or a dual vertex of a margin leaf inside the given box, declines
  * (the caller polygonises as before). */
 #ifndef ISM_DUAL_BOX_H

@@ -41,11 +41,11 @@
  * makes a quad that needs its vertex (called empty unproven, Barth's sextic had holes
  * there); where no crossed edge asks for it, the vertex is not used. What the measurement
  * cannot see — a mesh edge in more than two triangles, a vertex joining two fans (two crease
- * pieces meeting in one small leaf) — splits the leaves there (dual.c mark_not_manifold; at
- * depth.max: `min_max`). A node whose corners share a sign is empty when one branch's own
- * enclosure (the top max forced to that branch: ism_eval_interval_grad's force), or both
- * on its halves, keep it from 0 as f's max/min needs. Two leaves that found one crease
- * point share its vertex (dual.c weld_crease).
+ * pieces meeting in one small leaf) — splits the leaves there (ism_dual_mark_not_manifold,
+ * dual_measure.c; at depth.max: `min_max`). A node whose corners share a sign is empty when
+ * one branch's own enclosure (the top max forced to that branch: ism_eval_interval_grad's
+ * force), or both on its halves, keep it from 0 as f's max/min needs. Two leaves that found
+ * one crease point share its vertex (dual.c weld_crease).
  *
  * The ridge along a face's diagonal. Where the wedge of a max (the solid between the two
  * sheets beside the crease) runs along a face diagonal, the face is crossed four times, two
@@ -55,7 +55,7 @@
  * active) with at most two of a branch on any face is then meshed rather than declined: with
  * a crease point, its one vertex on the crease; without, when each branch has a piece (three
  * crossed edges or more), a pair leaf with a vertex per branch (ism_dual_pair_vertex), the
- * quads round an edge taking the vertex of that edge's branch (dual.c edge_quad) — so the
+ * quads round an edge taking the vertex of that edge's branch (dual_walk.c edge_quad) — so the
  * mesh edge from the crease vertex across the four-crossed face is in two quads per branch,
  * not four. Only at depth.max: where the split would decline, so no mesh made before
  * changes. A small leaf at depth.max with plain faces whose crease point Newton missed is a

@@ -17,7 +17,7 @@
  * which sag half as far as its diagonal (κ s² / 8 against κ s² / 4 for a square of side s),
  * so a quad that the diagonal would have split its leaves for (four times the quads, twice
  * the triangles' count each) may meet E as it is. Whether a fan meets E is measured like
- * any triangle (mark_misses); a quad once cut as a fan keeps its centre (d->fans). */
+ * any triangle (ism_dual_mark_misses); a quad once cut as a fan keeps its centre (d->fans). */
 void ism_dual_emit_quads(dual *d);
 
 /* Marks the leaves of triangles that miss E (centroid and edge midpoints within E of f = 0,

@@ -60,7 +60,7 @@ typedef struct quads {
 } quads;
 
 /* The tree walk's calls put off to the pool in the last round, and their quads
- * (make_quads): a call whose nodes' subtrees have not changed since gives the same quads
+ * (ism_dual_make_quads): a call whose nodes' subtrees have not changed since gives the same quads
  * again. Its quads are a second copy of the round's deferred quads beside d->q, so a round
  * holds up to twice the quads, bounded as they are by max_triangles (checked after each
  * round's triangles); run frees it once the rounds end. */
@@ -104,7 +104,7 @@ typedef struct dual {
     size_t nv, capv;
     uint32_t *tri;    /* this round's triangles */
     size_t nt, capt;
-    quads q;          /* this round's quads (make_quads) */
+    quads q;          /* this round's quads (ism_dual_make_quads) */
     walk_memo memo;   /* the last round's put-off walk calls and their quads */
     keyed passed;       /* triangles (tri_key) that met E */
     keyed mid;          /* vertex pairs (pair_key): the distance of their midpoint to f = 0 */
