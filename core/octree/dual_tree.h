@@ -11,7 +11,8 @@
 #include <stdint.h>
 #include "core/eval/interval_jet.h"
 #include "core/octree/cell_cache.h"
-#include "core/octree/dual.h"
+#include "core/octree/mesher.h"
+#include "core/octree/poly_options.h"
 #include "core/octree/dual_balls.h"
 #include "core/octree/dual_keyed.h"
 #include "core/octree/grid.h"
