@@ -127,7 +127,8 @@ static label_t label_fresh(ism_sampler *s, bool pm, const double p[3])
     return ism_eval_piece(s->tape, s->ws, p[0], p[1], p[2]);
 }
 
-/* The label of point p (label_t), through the sampler's label memo when it is on: the same
+/* The label of point p (label_t), through the sampler's label memo while s->tape is
+ * s->memo_tape (sampler.h; none on the scalar reference path): the same
  * point's label once (pm is the sampler's crease_pieces, fixed for its run). Barth's sextic
  * at 1e-2 labelled its top branch 226,880 times without the memo, 123.6M of 3,205M
  * instructions (a leaf's vertices up to three times, its neighbours' shared ones again). */

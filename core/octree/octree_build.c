@@ -974,7 +974,7 @@ static bool init_threads(build *b, int nthreads)
             ism_crease_wedge_edges(b->grid, b->p->max_depth, b->p->flatness.max_error);
         th->s.crease_pieces = ism_crease_pieces(b->p->tape);
         th->s.fold_below = ism_crease_fold_below(b->p->flatness.max_error);
-        th->s.memo_tape = b->p->tape;
+        th->s.memo_tape = b->p->scalar_eval ? NULL : b->p->tape; /* poly_options.h */
         th->s.crease_memo = b->p->crease_memos ? &b->p->crease_memos[t] : NULL;
         th->s.ws = ism_eval_ws_new(b->p->tape);
         th->corners = b->corner_memos + (size_t)t * memo;

@@ -66,10 +66,13 @@ typedef struct ism_poly_options {
     bool scalar_eval;       /* evaluate the octree node by node: no batched intervals over a
                                node's children, no zero-free leaves (octree.h), no memo of
                                edge roots and crease labels between nodes (cell_cache.h's
-                               ism_node_memo) or of crease points between leaves
+                               ism_node_memo), of points' crease labels in the build or the
+                               leaves (sampler.h's label_memo) or of crease points
                                (crease_memo.h) and no batched gradients (a leaf's measured
                                points: sampler.h's batch) — the same mesh bit for bit, for
-                               more; on is for tests (default off) */
+                               more, and a wrong memo hit cannot hide by showing up on both
+                               sides of the tests' comparison; on is for tests (default
+                               off) */
     bool walk_every_tile;   /* every node walks each tile of its faces itself: no memo of the
                                tiles another node of the thread walked in the round (quiet
                                ones, and crossed ones whose lines and counts a hit copies:

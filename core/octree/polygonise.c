@@ -536,7 +536,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         cx->s.wedge_edges_below = ism_crease_wedge_edges(&tree->grid, o->max_depth, o->max_error);
         cx->s.crease_pieces = ism_crease_pieces(f);
         cx->s.fold_below = ism_crease_fold_below(o->max_error);
-        cx->s.memo_tape = f;
+        cx->s.memo_tape = o->scalar_eval ? NULL : f; /* poly_options.h */
         cx->s.crease_memo = crease ? &crease[t] : NULL;
         cx->tree = tree;
         cx->parent = parent;

@@ -63,7 +63,8 @@ typedef struct ism_sampler {
     /* crease_split.c's memos (label_memo, crease_memo) serve only while tape is this one
      * (f: set by polygonise.c, whose tape stays f for the run, and by the octree build, whose
      * nodes swap shortened tapes in and out of one buffer — a shortened tape holds f only
-     * inside its node, and a buffer's contents change); NULL: none. */
+     * inside its node, and a buffer's contents change); NULL: none (the scalar reference
+     * path, poly_options.h's scalar_eval). */
     const ism_tape *memo_tape;
     /* crease_split.c, while tape is memo_tape: the last labels looked up (ism_eval_piece of
      * tape at p in pieces mode, else the top branch at p), direct-mapped by p's bits; an
