@@ -4,9 +4,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-ism_crease_memo *ism_crease_memo_new(int n)
+#include "core/util/zeroed.h"
+
+ism_crease_memo *ism_crease_memo_new(ism_pool *pool, int n, ism_par_cost *cost)
 {
-    return calloc(n > 0 ? (size_t)n : 1, sizeof(ism_crease_memo));
+    return ism_zeroed_alloc(pool, n > 0 ? (size_t)n : 1, sizeof(ism_crease_memo), cost);
 }
 
 void ism_crease_memo_free(ism_crease_memo *m)

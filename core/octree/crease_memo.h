@@ -22,6 +22,7 @@
 #include <stdint.h>
 #include "core/eval/eval.h"
 #include "core/octree/cell_types.h"
+#include "core/util/parallel.h"
 
 /* 1,024 entries of 128 bytes, 128 KB a thread: gyroid-ball E = 0.0109 at depth 10 on one
  * thread finds 2,931 of its 3,441 repeated edges (a repeat comes a median 5 edges after
@@ -46,9 +47,10 @@ typedef struct ism_crease_memo {
     uint64_t hits; /* lookups answered (for tests and measurements) */
 } ism_crease_memo;
 
-/* n empty memos (one a thread), or NULL when out of memory; ism_crease_memo_free releases
- * all n. */
-ism_crease_memo *ism_crease_memo_new(int n);
+/* n empty memos (one a thread), or NULL when out of memory; zeroed on pool's threads, what
+ * that cost added to *cost (zeroed.h: a NULL pool zeroes on the calling thread, a NULL cost
+ * counts nothing); ism_crease_memo_free releases all n. */
+ism_crease_memo *ism_crease_memo_new(ism_pool *pool, int n, ism_par_cost *cost);
 void ism_crease_memo_free(ism_crease_memo *m);
 
 /* The slot of edge p-q (its ends as crease_point orders them). */

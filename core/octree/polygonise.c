@@ -664,9 +664,13 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     if (thin_depth > ISM_GRID_MAX_DEPTH)
         thin_depth = ISM_GRID_MAX_DEPTH;
     ism_grid_init(&tree.grid, o->box, thin_depth);
-    /* the threads' crease-point memos for this round (none on the scalar reference path) */
+    /* the threads' crease-point memos for this round: none on the scalar reference path,
+       nor where f has no kink (no min, max or abs: crease_split.c asks for no crease point
+       without a top min/max or pieces); zeroed on the pool's threads, the cost in the
+       octree's meter as the build's own memos' */
     ism_crease_memo *crease = NULL;
-    if (!o->scalar_eval && !(crease = ism_crease_memo_new(ism_pool_threads(pool))))
+    if (!o->scalar_eval && ism_tape_has_kink(f) &&
+        !(crease = ism_crease_memo_new(pool, ism_pool_threads(pool), &m.par)))
         return ISM_POLY_NO_MEMORY;
     ism_octree_build_params bp = {
         .tape = f,

@@ -75,7 +75,7 @@ Test(crease_memo, hit_is_the_fresh_crease_point)
                                {PF_IRR_X * step, PF_IRR_Y * step, PF_IRR_Z * step}};
     for (int placed = 0; placed < 3; placed++) {
         const double *off = offs[placed];
-        ism_crease_memo *m = ism_crease_memo_new(1);
+        ism_crease_memo *m = ism_crease_memo_new(NULL, 1, NULL);
         cr_assert_not_null(m);
         ism_cell_out fresh, first, again;
         strip(off, &fresh);
