@@ -1,20 +1,25 @@
-/* crease_memo.h — a polygonising thread's memo of mixed edges' crease points
- * (crease_split.c's crease_point): the point, its gradient and flags, and what the edge's
- * whole-or-cut verdict and Newton's success were, keyed by the edge's two ends (in the one
- * order crease_point takes them) and its two labels (in increasing order). Within one
- * max_error round (polygonise.c's one_round: a thread's memo serves its octree build, then
- * its polygonisation, and goes) a crease point is a pure function of those while the
- * sampler evaluates f itself (s->tape == s->memo_tape == f: always in the polygonisation, whose leaves'
+/* crease_memo.h — a thread's memo of mixed edges' crease points (crease_split.c's
+ * crease_point) for one max_error round, its octree build's and then its polygonisation's:
+ * the point, its gradient and flags, and what the edge's whole-or-cut verdict and Newton's
+ * success were, keyed by the edge's two ends (in the one order crease_point takes them) and
+ * its two labels (in increasing order). Within one max_error round (polygonise.c's
+ * one_round: a thread's memo serves its octree build, then its polygonisation, and goes) a
+ * crease point is a pure function of those while the sampler evaluates f itself
+ * (s->tape == s->memo_tape == f: always in the polygonisation, whose leaves' local
  * shortened tapes give f's branches bit for bit; in the build only at nodes whose tape
  * intervals left unshortened, since a shortened node tape holds f only inside the node and
  * Newton may step out), its wedge_edges_below, fold_below and crease_pieces fixed for the
  * round. So a hit returns exactly what a recomputation would: the memo only saves time,
- * never changes the mesh. The leaves beside an edge of a face both cut it, a leaf's
- * triangles beside one mixed edge ask for its point twice, and the build's error test cuts
- * the polygons the leaf cuts again (measured, gyroid-ball E = 0.0109 at depth 10: 5,644
- * crease points asked for, 2,203 distinct edges; 3,138 asked by the build, 1,868
- * distinct, 607 of the polygonisation's 942 among them). Direct-mapped: a collision
- * simply overwrites. */
+ * never changes the mesh. How much it saves depends on which edges a thread met before (the
+ * memo is the thread's own, and chunks land on threads as they come), so the evaluation
+ * counts --stats shows (n_point, n_gradient) and `hits` vary with the thread count and
+ * scheduling, as the sampler's label memo already made them vary; the mesh does not (no
+ * test compares those counts across thread counts). The leaves beside an edge of a face
+ * both cut it, a leaf's triangles beside one mixed edge ask for its point twice, and the
+ * build's error test cuts the polygons the leaf cuts again (measured, gyroid-ball
+ * E = 0.0109 at depth 10: 5,644 crease points asked for, 2,203 distinct edges; 3,138 asked
+ * by the build, 1,868 distinct, 607 of the polygonisation's 942 among them).
+ * Direct-mapped: a collision simply overwrites. */
 #ifndef ISM_CREASE_MEMO_H
 #define ISM_CREASE_MEMO_H
 

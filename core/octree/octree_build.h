@@ -106,8 +106,11 @@ typedef struct ism_octree_build_params {
                                          (root_table.h; empty on failure) */
     size_t max_roots;                 /* ... of which the build's logs keep at most this many
                                          (past it the cells search for themselves) */
-    struct ism_crease_memo *crease_memos; /* one crease-point memo per thread (crease_memo.h,
-                                         handed on to the polygonisation), or NULL */
+    struct ism_crease_memo *crease_memos; /* one crease-point memo per thread the build
+                                         runs on, indexed by thread (crease_memo.h, handed
+                                         on to the polygonisation): as many as
+                                         ism_pool_threads(pool), or `threads` when pool is
+                                         NULL; or NULL for none */
 } ism_octree_build_params;
 
 typedef struct ism_octree_build_stats {
