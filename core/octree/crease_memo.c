@@ -16,19 +16,35 @@ void ism_crease_memo_free(ism_crease_memo *m)
     free(m);
 }
 
-ism_crease_entry *ism_crease_memo_slot(ism_crease_memo *m, const double p[3], const double q[3])
+/* Is a before b: the first coordinate where they differ smaller? */
+static bool before(const double *a, const double *b)
 {
-    uint64_t b[6], h = 0;
-    memcpy(b, p, 3 * sizeof *p);
-    memcpy(b + 3, q, 3 * sizeof *q);
-    for (int k = 0; k < 6; k++) /* odd multipliers mix every bit of the six coordinates */
-        h = (h ^ b[k]) * 0x9e3779b97f4a7c15u;
-    return &m->e[(h >> 32) & (((uint64_t)1 << ISM_CREASE_MEMO_BITS) - 1)];
+    for (int k = 0; k < 3; k++)
+        if (a[k] != b[k])
+            return a[k] < b[k];
+    return false;
 }
 
-bool ism_crease_memo_holds(const ism_crease_entry *e, const double p[3], const double q[3],
-                           ism_piece lo, ism_piece hi)
+void ism_edge_key_set(ism_edge_key *k, const double a[3], const double b[3], ism_piece lo,
+                      ism_piece hi)
 {
-    return e->lo == lo && e->hi == hi && lo != hi && !memcmp(e->p, p, sizeof e->p) &&
-           !memcmp(e->q, q, sizeof e->q);
+    bool swap = before(b, a);
+    memcpy(k->p, swap ? b : a, sizeof k->p);
+    memcpy(k->q, swap ? a : b, sizeof k->q);
+    k->lo = lo, k->hi = hi;
+}
+
+bool ism_edge_key_same(const ism_edge_key *a, const ism_edge_key *b)
+{
+    return a->lo != a->hi && !memcmp(a, b, sizeof *a);
+}
+
+ism_crease_entry *ism_crease_memo_slot(ism_crease_memo *m, const ism_edge_key *k)
+{
+    uint64_t b[6], h = 0;
+    memcpy(b, k->p, sizeof k->p);
+    memcpy(b + 3, k->q, sizeof k->q);
+    for (int i = 0; i < 6; i++) /* odd multipliers mix every bit of the six coordinates */
+        h = (h ^ b[i]) * 0x9e3779b97f4a7c15u;
+    return &m->e[(h >> 32) & (((uint64_t)1 << ISM_CREASE_MEMO_BITS) - 1)];
 }

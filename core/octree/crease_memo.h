@@ -37,9 +37,25 @@
  * not worth four times the memory. */
 #define ISM_CREASE_MEMO_BITS 10
 
+/* A mixed edge as the memos key it (this one, and crease_split.c's chord memo): its two
+ * ends in one order whichever way it was walked, its two labels lo < hi; compared bit for
+ * bit, so -0 against +0 or a NaN end can only miss. */
+typedef struct ism_edge_key {
+    double p[3], q[3]; /* the ends, p before q (first differing coordinate smaller) */
+    ism_piece lo, hi;  /* the labels, lo < hi; lo == hi: no edge (a zeroed entry) */
+} ism_edge_key;
+
+_Static_assert(sizeof(ism_edge_key) == 64, "no padding: ism_edge_key_same compares bytes");
+
+/* *k: edge a-b (either order) with labels lo < hi. */
+void ism_edge_key_set(ism_edge_key *k, const double a[3], const double b[3], ism_piece lo,
+                      ism_piece hi);
+
+/* Do a and b name the same edge, bit for bit (an empty key names none)? */
+bool ism_edge_key_same(const ism_edge_key *a, const ism_edge_key *b);
+
 typedef struct ism_crease_entry {
-    double p[3], q[3];   /* the edge's ends, as crease_point orders them */
-    ism_piece lo, hi;    /* its labels, lo < hi; lo == hi: empty (zeroed) */
+    ism_edge_key k;      /* the edge (crease_point's ends and ordered labels) */
     ism_fpoint x;        /* the crease point as crease_point returned it */
     int32_t whole;       /* crease_point's *whole */
     bool found;          /* crease_point's result */
@@ -58,11 +74,7 @@ typedef struct ism_crease_memo {
 ism_crease_memo *ism_crease_memo_new(ism_pool *pool, int n, ism_par_cost *cost);
 void ism_crease_memo_free(ism_crease_memo *m);
 
-/* The slot of edge p-q (its ends as crease_point orders them). */
-ism_crease_entry *ism_crease_memo_slot(ism_crease_memo *m, const double p[3], const double q[3]);
-
-/* Does slot e hold edge p-q with labels lo < hi (bit for bit)? */
-bool ism_crease_memo_holds(const ism_crease_entry *e, const double p[3], const double q[3],
-                           ism_piece lo, ism_piece hi);
+/* The slot of edge k (by its ends; the entry holds k when ism_edge_key_same(&slot->k, k)). */
+ism_crease_entry *ism_crease_memo_slot(ism_crease_memo *m, const ism_edge_key *k);
 
 #endif

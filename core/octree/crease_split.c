@@ -109,14 +109,6 @@ int ism_crease_branch(ism_sampler *s, const double p[3], double g[3])
     return b;
 }
 
-static bool before(const double *a, const double *b)
-{
-    for (int k = 0; k < 3; k++)
-        if (a[k] != b[k])
-            return a[k] < b[k];
-    return false;
-}
-
 /* The label of point p computed: its piece in pieces mode (pm), else its top branch (a
  * pure function of p: top_tape gives f's branches bit for bit). */
 static label_t label_fresh(ism_sampler *s, bool pm, const double p[3])
@@ -412,29 +404,28 @@ static bool crease_point_fresh(ism_sampler *s, bool pm, const double *p, const d
     return ok;
 }
 
-/* crease_point_fresh's answer for edge p0-q0 (its ends taken in before()'s order, its labels
- * lp != lq in increasing order: the same bits from either leaf beside it), through the
- * sampler's crease memo when it has one for the tape it evaluates (crease_memo.h: a hit is
- * that answer, stored). */
+/* crease_point_fresh's answer for edge p0-q0 (its ends in ism_edge_key_set's order, its
+ * labels lp != lq in increasing order: the same bits from either leaf beside it), through
+ * the sampler's crease memo when it has one for the tape it evaluates (crease_memo.h: a hit
+ * is that answer, stored). */
 static bool crease_point(ism_sampler *s, bool pm, const double *p0, const double *q0,
                          label_t lp, label_t lq, ism_fpoint *out, int *whole)
 {
-    const double *p = before(q0, p0) ? q0 : p0, *q = p == p0 ? q0 : p0;
     label_t l[2] = {lp, lq};
     order_labels(l, 2);
+    ism_edge_key k;
+    ism_edge_key_set(&k, p0, q0, l[0], l[1]);
     ism_crease_memo *m = s->memo_tape == s->tape ? s->crease_memo : NULL;
-    ism_crease_entry *e = m ? ism_crease_memo_slot(m, p, q) : NULL;
-    if (e && ism_crease_memo_holds(e, p, q, l[0], l[1])) {
+    ism_crease_entry *e = m ? ism_crease_memo_slot(m, &k) : NULL;
+    if (e && ism_edge_key_same(&e->k, &k)) {
         m->hits++;
         *out = e->x;
         *whole = e->whole;
         return e->found;
     }
-    bool ok = crease_point_fresh(s, pm, p, q, l, out, whole);
+    bool ok = crease_point_fresh(s, pm, k.p, k.q, l, out, whole);
     if (e && l[0] != l[1]) {
-        memcpy(e->p, p, sizeof e->p);
-        memcpy(e->q, q, sizeof e->q);
-        e->lo = l[0], e->hi = l[1];
+        e->k = k;
         e->x = *out;
         e->whole = *whole;
         e->found = ok;
@@ -901,10 +892,9 @@ static bool chord_far(ism_sampler *s, bool pm, const double *a, const double *c,
 
 typedef struct chord_memo {
     struct {
-        double a[3], c[3]; /* the chord's ends, a before c (the two sides' triangles hold
-                              them as vertices of their own: each side's gradients) */
-        label_t lo, hi;    /* its crease's labels */
-        bool far;       /* chord_far's answer: a pure function of these within the leaf */
+        ism_edge_key k; /* the chord's ends (the two sides' triangles hold them as vertices
+                           of their own: each side's gradients) and its crease's labels */
+        bool far;       /* chord_far's answer: a pure function of k within the leaf */
     } e[CHORD_MEMO];
     unsigned n; /* chords asked (the newest in e[(n - 1) % CHORD_MEMO]) */
 } chord_memo;
@@ -913,17 +903,14 @@ typedef struct chord_memo {
 static bool chord_far_memo(ism_sampler *s, bool pm, const double *va, const double *vc,
                            const label_t l[2], double sag, chord_memo *memo)
 {
-    const double *a = before(vc, va) ? vc : va, *c = a == va ? vc : va;
+    ism_edge_key k;
+    ism_edge_key_set(&k, va, vc, l[0], l[1]);
     for (unsigned i = 0; i < memo->n && i < CHORD_MEMO; i++)
-        if (memo->e[i].lo == l[0] && memo->e[i].hi == l[1] &&
-            !memcmp(memo->e[i].a, a, sizeof memo->e[i].a) &&
-            !memcmp(memo->e[i].c, c, sizeof memo->e[i].c))
+        if (ism_edge_key_same(&memo->e[i].k, &k))
             return memo->e[i].far;
     bool far = chord_far(s, pm, va, vc, l, sag);
     unsigned slot = memo->n++ % CHORD_MEMO;
-    memcpy(memo->e[slot].a, a, sizeof memo->e[slot].a);
-    memcpy(memo->e[slot].c, c, sizeof memo->e[slot].c);
-    memo->e[slot].lo = l[0], memo->e[slot].hi = l[1];
+    memo->e[slot].k = k;
     memo->e[slot].far = far;
     return far;
 }
