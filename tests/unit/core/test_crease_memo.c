@@ -1,12 +1,14 @@
 /* test_crease_memo.c — the crease-point memo (crease_memo.h) changes nothing but the work: a
- * strip of triangles across the crease circle of a unit ball cut by the plane z = 0.3
- * (f = max(|p|² − 1, z − 0.3), the top's two branches) split by ism_crease_split with the
- * memo gives bit for bit the triangles and vertices it gives without one, both the first
- * time (edges that two triangles share hit within the one call) and again with every edge in
- * the memo; hits are counted, so a memo that never answered would fail. Independently of the
- * code, every crease point (ISM_FP_CREASE) lies on the circle: |p|² = 1 and z = 0.3 to
- * CIRCLE_TOL. The strip (not the surface) is placed as given, moved by PF_OFF_* and by
- * PF_IRR_* of its step: its edges cross the circle at other points. */
+ * strip of triangles across the crease circle of a unit ball cut by the plane z = 0.3 split
+ * by ism_crease_split with the memo gives bit for bit the triangles and vertices it gives
+ * without one, both the first time (edges that two triangles share hit within the one call)
+ * and again with every edge in the memo; hits are counted, so a memo that never answered
+ * would fail. Two contexts: the top's two branches (f = max(|p|² − 1, z − 0.3)); f's pieces
+ * (a third piece below the top, pieces mode) with folds allowed, the strip's lower row moved
+ * inside the ball by differing amounts so that some mixed edges are left whole and others cut
+ * (a memo that dropped the whole verdict would fail). Independently of the code, every
+ * crease point (ISM_FP_CREASE) lies on the circle: |p|² = 1 and z = 0.3 to CIRCLE_TOL. The strip (not the surface) is placed as given, moved
+ * by PF_OFF_* and by PF_IRR_* of its step: its edges cross the circle at other points. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <string.h>
@@ -17,25 +19,46 @@
 #include "core/octree/crease_split.h"
 #include "core/octree/triangulate.h"
 
-#define STRIP_N 12          /* quads round the circle: 24 triangles, 36 mixed edges */
+#define STRIP_N 12          /* quads round the circle: 24 triangles, 25 mixed edges */
 #define STRIP_ARC 0.6       /* radians the strip spans */
 #define BELOW_Z 0.2         /* the strip's lower row, on the ball's branch (z − 0.3 < |p|² − 1) */
 #define ABOVE_Z 0.4         /* its upper row, on the plane's branch */
 #define CIRCLE_TOL 1e-12    /* Newton's crease points on both zero sets, to rounding */
+/* A split of the strip asks for 4 STRIP_N crease points (each triangle its two mixed edges'),
+ * 2 STRIP_N + 1 distinct edges. With them all in the memo, every ask hits but those of two
+ * edges that share a direct-mapped slot (45 and 46 of 48 hits in the placements here): at
+ * least this many. */
+#define SECOND_HITS (3 * STRIP_N)
+/* Pieces mode: the lower row's vertex i moved inside the ball by INSET_STEP × (i mod 3) of
+ * its radius, so f where a mixed edge's pieces' values cross on it (fold_within) lies at
+ * differing distances from 0: under FOLD_ERROR (fold bound 0.75 × it) some edges fold and
+ * the others are cut (measured: 32 of the 48 crease points a full cut adds in the own
+ * placement; on the sphere, no inset, every edge folds, f being 0 there). */
+#define INSET_STEP 0.02
+#define FOLD_ERROR 0.005
 
 static const pf_surface cut_ball = {"max(x^2 + y^2 + z^2 - 1, z - 0.3)", NULL, 0, NULL, 0};
+/* The same surface near the strip (3 − x > 1.5 there), with a kink below its top: pieces
+ * mode (ism_crease_pieces), and a tape that intervals over a box round the strip shorten
+ * (min(z − 0.3, 3 − x) decided) while keeping the top max. */
+static const pf_surface cut_ball_pieces = {"max(x^2 + y^2 + z^2 - 1, min(z - 0.3, 3 - x))",
+                                           NULL, 0, NULL, 0};
 
 /* The strip: row k (0 below, 1 above) of points on the unit sphere at height BELOW_Z or
- * ABOVE_Z, moved by off; triangles (a_i, a_i+1, b_i) and (a_i+1, b_i+1, b_i). */
-static void strip(const double off[3], ism_cell_out *out)
+ * ABOVE_Z, the lower row's moved inward by inset × (i mod 3) of the radius, all moved by off;
+ * triangles (a_i, a_i+1, b_i) and (a_i+1, b_i+1, b_i). */
+static void strip(const double off[3], double inset, ism_cell_out *out)
 {
     memset(out, 0, sizeof *out);
     const double zs[2] = {BELOW_Z, ABOVE_Z};
     for (int k = 0; k < 2; k++)
         for (int i = 0; i <= STRIP_N; i++) {
             double th = STRIP_ARC * i / STRIP_N, r = sqrt(1 - zs[k] * zs[k]);
-            ism_fpoint v = {{r * cos(th) + off[0], r * sin(th) + off[1], zs[k] + off[2]},
-                            {0, 0, 1}, 0};
+            double in = k ? 1 : 1 - inset * (i % 3);
+            ism_fpoint v = {{in * r * cos(th) + off[0], in * r * sin(th) + off[1],
+                             in * zs[k] + off[2]},
+                            {0, 0, 1},
+                            0};
             uint32_t idx;
             cr_assert(ism_cell_out_vert(out, &v, &idx));
         }
@@ -45,10 +68,26 @@ static void strip(const double off[3], ism_cell_out *out)
     }
 }
 
-/* out split along f's crease by a sampler with memo m (NULL: none). */
-static void split(const ism_tape *t, ism_eval_ws *ws, ism_crease_memo *m, ism_cell_out *out)
+/* How a strip is split: the sampler's tape (f, or a node's shortened one), its crease mode
+ * and fold bound, a leaf's local tape over local_box (NULL: none), the memo (NULL: none). */
+typedef struct split_ctx {
+    const ism_tape *f, *tape, *local;
+    double local_box[6];
+    bool pieces;
+    double fold_below;
+    ism_crease_memo *memo;
+} split_ctx;
+
+static void split(const split_ctx *c, ism_eval_ws *ws, ism_cell_out *out)
 {
-    ism_sampler s = {.tape = t, .ws = ws, .memo_tape = m ? t : NULL, .crease_memo = m};
+    ism_sampler s = {.tape = c->tape ? c->tape : c->f,
+                     .ws = ws,
+                     .local = c->local,
+                     .crease_pieces = c->pieces,
+                     .fold_below = c->fold_below,
+                     .memo_tape = c->memo ? c->f : NULL,
+                     .crease_memo = c->memo};
+    memcpy(s.local_box, c->local_box, sizeof s.local_box);
     cr_assert(ism_crease_split(&s, out, 0));
 }
 
@@ -65,48 +104,95 @@ static bool same_out(const ism_cell_out *a, const ism_cell_out *b)
     return true;
 }
 
+/* The crease points of out (ISM_FP_CREASE), each asserted on the circle. */
+static size_t crease_points(const ism_cell_out *out, int placed)
+{
+    size_t n = 0;
+    for (size_t v = 0; v < out->nverts; v++) {
+        const double *p = out->verts[v].p;
+        if (!(out->verts[v].flags & ISM_FP_CREASE))
+            continue;
+        n++;
+        cr_expect_leq(fabs(p[0] * p[0] + p[1] * p[1] + p[2] * p[2] - 1), CIRCLE_TOL,
+                      "placement %d", placed);
+        cr_expect_leq(fabs(p[2] - 0.3), CIRCLE_TOL, "placement %d", placed);
+    }
+    return n;
+}
+
+static void placements(double offs[3][3])
+{
+    double step = STRIP_ARC / STRIP_N;
+    const double o[3][3] = {{0, 0, 0},
+                            {PF_OFF_X, PF_OFF_Y, PF_OFF_Z},
+                            {PF_IRR_X * step, PF_IRR_Y * step, PF_IRR_Z * step}};
+    memcpy(offs, o, sizeof o);
+}
+
+/* The strip split fresh (c without memo), then twice through a new memo: both bit for bit
+ * the fresh split, the second with almost every ask answered again (SECOND_HITS). Returns
+ * the fresh split's crease points. */
+static size_t fresh_first_again(split_ctx c, ism_eval_ws *ws, const double off[3],
+                                double inset, int placed)
+{
+    ism_crease_memo *m = ism_crease_memo_new(NULL, 1, NULL);
+    cr_assert_not_null(m);
+    ism_cell_out fresh, first, again;
+    strip(off, inset, &fresh);
+    strip(off, inset, &first);
+    strip(off, inset, &again);
+    split(&c, ws, &fresh);
+    c.memo = m;
+    split(&c, ws, &first);
+    uint64_t hits_first = m->hits;
+    split(&c, ws, &again);
+    /* the first pass: each mixed edge but the strip's two ends is shared by two triangles */
+    cr_expect_gt(hits_first, 0, "placement %d: no edge answered from the memo", placed);
+    /* the second: every ask but a collision's */
+    cr_expect_geq(m->hits - hits_first, SECOND_HITS, "placement %d: %llu hits again",
+                  placed, (unsigned long long)(m->hits - hits_first));
+    cr_expect(same_out(&fresh, &first), "placement %d: memo's first pass differs", placed);
+    cr_expect(same_out(&fresh, &again), "placement %d: memo's hits differ", placed);
+    size_t n = crease_points(&fresh, placed);
+    ism_cell_out_free(&fresh);
+    ism_cell_out_free(&first);
+    ism_cell_out_free(&again);
+    ism_crease_memo_free(m);
+    return n;
+}
+
 Test(crease_memo, hit_is_the_fresh_crease_point)
 {
     ism_tape *t = pf_compile(&cut_ball);
     ism_eval_ws *ws = ism_eval_ws_new(t);
-    double step = STRIP_ARC / STRIP_N;
-    const double offs[3][3] = {{0, 0, 0},
-                               {PF_OFF_X, PF_OFF_Y, PF_OFF_Z},
-                               {PF_IRR_X * step, PF_IRR_Y * step, PF_IRR_Z * step}};
+    double offs[3][3];
+    placements(offs);
     for (int placed = 0; placed < 3; placed++) {
-        const double *off = offs[placed];
-        ism_crease_memo *m = ism_crease_memo_new(NULL, 1, NULL);
-        cr_assert_not_null(m);
-        ism_cell_out fresh, first, again;
-        strip(off, &fresh);
-        strip(off, &first);
-        strip(off, &again);
-        split(t, ws, NULL, &fresh);
-        split(t, ws, m, &first);
-        uint64_t hits_first = m->hits;
-        split(t, ws, m, &again);
-        /* each mixed edge but the strip's two ends is shared by two triangles */
-        cr_expect_gt(hits_first, 0, "placement %d: no edge answered from the memo", placed);
-        cr_expect_geq(m->hits - hits_first, 3 * STRIP_N, "placement %d: %llu hits again",
-                      placed, (unsigned long long)(m->hits - hits_first));
-        cr_expect(same_out(&fresh, &first), "placement %d: memo's first pass differs", placed);
-        cr_expect(same_out(&fresh, &again), "placement %d: memo's hits differ", placed);
-        size_t crease = 0;
-        for (size_t v = 0; v < fresh.nverts; v++) {
-            const double *p = fresh.verts[v].p;
-            if (!(fresh.verts[v].flags & ISM_FP_CREASE))
-                continue;
-            crease++;
-            cr_expect_leq(fabs(p[0] * p[0] + p[1] * p[1] + p[2] * p[2] - 1), CIRCLE_TOL,
-                          "placement %d", placed);
-            cr_expect_leq(fabs(p[2] - 0.3), CIRCLE_TOL, "placement %d", placed);
-        }
-        cr_expect_geq(crease, 2 * STRIP_N + 1, "placement %d: %zu crease points", placed,
-                      crease);
-        ism_cell_out_free(&fresh);
-        ism_cell_out_free(&first);
-        ism_cell_out_free(&again);
-        ism_crease_memo_free(m);
+        split_ctx c = {.f = t};
+        size_t n = fresh_first_again(c, ws, offs[placed], 0, placed);
+        cr_expect_geq(n, 2 * STRIP_N + 1, "placement %d: %zu crease points", placed, n);
+    }
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+}
+
+/* Pieces mode under a fold bound: some mixed edges folded whole, others cut, through a hit
+ * as without one. */
+Test(crease_memo, hit_keeps_the_pieces_whole_verdicts)
+{
+    ism_tape *t = pf_compile(&cut_ball_pieces);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    cr_assert(ism_crease_pieces(t));
+    double offs[3][3];
+    placements(offs);
+    for (int placed = 0; placed < 3; placed++) {
+        split_ctx c = {.f = t, .pieces = true, .fold_below = ism_crease_fold_below(FOLD_ERROR)};
+        size_t n = fresh_first_again(c, ws, offs[placed], INSET_STEP, placed);
+        /* a whole edge adds no crease point; each triangle adds its own for each of its
+           two mixed edges it cuts (4 STRIP_N when all are cut) */
+        cr_expect(n > 0 && n < 4 * STRIP_N,
+                  "placement %d: %zu crease points, want some edges whole and some cut",
+                  placed, n);
     }
     ism_eval_ws_free(ws);
     ism_tape_free(t);
