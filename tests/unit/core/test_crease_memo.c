@@ -3,11 +3,14 @@
  * by ism_crease_split with the memo gives bit for bit the triangles and vertices it gives
  * without one, both the first time (edges that two triangles share hit within the one call)
  * and again with every edge in the memo; hits are counted, so a memo that never answered
- * would fail. Two contexts: the top's two branches (f = max(|p|² − 1, z − 0.3)); f's pieces
+ * would fail. Four contexts: the top's two branches (f = max(|p|² − 1, z − 0.3)); f's pieces
  * (a third piece below the top, pieces mode) with folds allowed, the strip's lower row moved
  * inside the ball by differing amounts so that some mixed edges are left whole and others cut
- * (a memo that dropped the whole verdict would fail). Independently of the code, every
- * crease point (ISM_FP_CREASE) lies on the circle: |p|² = 1 and z = 0.3 to CIRCLE_TOL. The strip (not the surface) is placed as given, moved
+ * (a memo that dropped the whole verdict would fail); the memo filled beside one leaf's
+ * shortened tape and read beside another's (polygonise.c's leaves: one memo, each leaf its own
+ * local tape); and a node's shortened tape in the octree build, which must neither read nor
+ * write it. Independently of the code, every crease point (ISM_FP_CREASE) lies on the circle:
+ * |p|² = 1 and z = 0.3 to CIRCLE_TOL. The strip (not the surface) is placed as given, moved
  * by PF_OFF_* and by PF_IRR_* of its step: its edges cross the circle at other points. */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -193,6 +196,134 @@ Test(crease_memo, hit_keeps_the_pieces_whole_verdicts)
         cr_expect(n > 0 && n < 4 * STRIP_N,
                   "placement %d: %zu crease points, want some edges whole and some cut",
                   placed, n);
+    }
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+}
+
+/* t shortened over box b (lo xyz, hi xyz): must shorten (the fixture's point). */
+static ism_tape *shortened(const ism_tape *t, ism_eval_ws *ws, const double b[6])
+{
+    ism_tape *s = ism_tape_new_like(t);
+    cr_assert_not_null(s);
+    cr_assert(ism_tape_shorten(t, ws, (ism_interval){b[0], b[3]}, (ism_interval){b[1], b[4]},
+                               (ism_interval){b[2], b[5]}, s, NULL));
+    return s;
+}
+
+/* The strip's bounding box, cut at y = cut into the part below (half 0) or above (1). */
+static void half_box(const double off[3], double cut, int half, double b[6])
+{
+    double r = sqrt(1 - BELOW_Z * BELOW_Z);
+    const double lo[3] = {r * cos(STRIP_ARC) - 0.1, -0.1, BELOW_Z - 0.1};
+    const double hi[3] = {1.1, r * sin(STRIP_ARC) + 0.1, ABOVE_Z + 0.1};
+    for (int k = 0; k < 3; k++)
+        b[k] = lo[k] + off[k], b[3 + k] = hi[k] + off[k];
+    b[half ? 1 : 4] = cut;
+}
+
+/* One memo, two leaves: filled while the sampler evaluates one leaf's shortened tape inside
+ * its box (f beyond it), read while it evaluates the next leaf's (polygonise.c hands each
+ * leaf's local tape to the thread's sampler, the memo stays): the second leaf's every edge a
+ * hit, and both splits bit for bit the split by f alone. In both modes. */
+Test(crease_memo, a_hit_made_beside_one_leaf_serves_the_next)
+{
+    ism_tape *t = pf_compile(&cut_ball_pieces);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    double offs[3][3];
+    placements(offs);
+    for (int placed = 0; placed < 3; placed++)
+        for (int pm = 0; pm < 2; pm++) {
+            const double *off = offs[placed];
+            /* the leaves meet at the strip's middle column of vertices */
+            double cut = sin(STRIP_ARC / 2) * sqrt(1 - BELOW_Z * BELOW_Z) + off[1];
+            split_ctx c[2];
+            ism_tape *leaf[2];
+            for (int h = 0; h < 2; h++) {
+                c[h] = (split_ctx){.f = t, .pieces = pm};
+                half_box(off, cut, h, c[h].local_box);
+                c[h].local = leaf[h] = shortened(t, ws, c[h].local_box);
+            }
+            ism_cell_out fresh, a, b;
+            strip(off, 0, &fresh);
+            strip(off, 0, &a);
+            strip(off, 0, &b);
+            split_ctx plain = {.f = t, .pieces = pm};
+            split(&plain, ws, &fresh);
+            ism_crease_memo *m = ism_crease_memo_new(NULL, 1, NULL);
+            cr_assert_not_null(m);
+            c[0].memo = c[1].memo = m;
+            split(&c[0], ws, &a);
+            uint64_t hits_a = m->hits;
+            split(&c[1], ws, &b);
+            cr_expect_geq(m->hits - hits_a, SECOND_HITS,
+                          "placement %d, pieces %d: %llu hits beside the second leaf", placed,
+                          pm, (unsigned long long)(m->hits - hits_a));
+            cr_expect(same_out(&fresh, &a), "placement %d, pieces %d: first leaf", placed, pm);
+            cr_expect(same_out(&fresh, &b), "placement %d, pieces %d: second leaf", placed, pm);
+            crease_points(&fresh, placed);
+            ism_cell_out_free(&fresh);
+            ism_cell_out_free(&a);
+            ism_cell_out_free(&b);
+            ism_crease_memo_free(m);
+            ism_tape_free(leaf[0]);
+            ism_tape_free(leaf[1]);
+        }
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+}
+
+/* The octree build evaluates a node's shortened tape as the sampler's tape itself (no f
+ * beyond the node's box). That tape gives f only inside the box, and crease_point's Newton
+ * may leave it (within_reach: CREASE_REACH_EDGES edges from the edge, or a thin wedge's
+ * reach), where the node tape's dropped branches give other values: an entry made there
+ * could differ from f's answer the polygonisation would read. So crease_split.c's guard
+ * (tape == memo_tape) keeps such a sampler off the memo. Tested with a memo filled through f
+ * and then spoilt (every entry's point moved, its verdicts flipped): a split through the
+ * node's tape must return what it returns without the memo, count no hit and write nothing. */
+Test(crease_memo, a_node_tape_neither_reads_nor_writes_the_memo)
+{
+    ism_tape *t = pf_compile(&cut_ball_pieces);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    double offs[3][3];
+    placements(offs);
+    for (int placed = 0; placed < 3; placed++) {
+        const double *off = offs[placed];
+        double box[6];
+        half_box(off, 0, 0, box);
+        box[4] = 1.1 + off[1]; /* the whole strip */
+        ism_tape *node = shortened(t, ws, box);
+        ism_crease_memo *m = ism_crease_memo_new(NULL, 1, NULL);
+        cr_assert_not_null(m);
+        ism_cell_out filled, fresh, guarded;
+        strip(off, 0, &filled);
+        strip(off, 0, &fresh);
+        strip(off, 0, &guarded);
+        split(&(split_ctx){.f = t, .memo = m}, ws, &filled);
+        size_t spoilt = 0;
+        for (size_t i = 0; i < sizeof m->e / sizeof m->e[0]; i++)
+            if (m->e[i].k.lo != m->e[i].k.hi) {
+                m->e[i].x.p[0] += 0.25;
+                m->e[i].whole = !m->e[i].whole;
+                m->e[i].found = !m->e[i].found;
+                spoilt++;
+            }
+        cr_assert_geq(spoilt, STRIP_N, "placement %d: %zu entries", placed, spoilt);
+        ism_crease_memo *kept = ism_crease_memo_new(NULL, 1, NULL);
+        cr_assert_not_null(kept);
+        memcpy(kept, m, sizeof *m);
+        split(&(split_ctx){.f = t, .tape = node}, ws, &fresh);
+        split(&(split_ctx){.f = t, .tape = node, .memo = m}, ws, &guarded);
+        cr_expect(same_out(&fresh, &guarded), "placement %d: the node tape read the memo",
+                  placed);
+        cr_expect(!memcmp(kept, m, sizeof *m), "placement %d: the node tape wrote the memo",
+                  placed);
+        ism_cell_out_free(&filled);
+        ism_cell_out_free(&fresh);
+        ism_cell_out_free(&guarded);
+        ism_crease_memo_free(m);
+        ism_crease_memo_free(kept);
+        ism_tape_free(node);
     }
     ism_eval_ws_free(ws);
     ism_tape_free(t);
