@@ -27,6 +27,7 @@
 #include "core/remesh/rm_cbound.h"
 #include "core/remesh/rm_merge.h"
 #include "core/remesh/rm_pass.h"
+#include "core/util/sort_u64.h"
 #include "core/util/vec3.h"
 
 #include <math.h>
@@ -423,6 +424,39 @@ static void top_list(const double *d, size_t n, int64_t *top)
             top_insert(top, topd, t, d[t]);
 }
 
+/* The farthest from f = 0 of the midpoints of the edges a -> b with a > b of the ntris
+ * triangles tri (none with a repeated corner) that no triangle runs b -> a: what farthest's
+ * scan of the edges a < b leaves out, an open found mesh's boundary edges listed larger index
+ * first (a surface the box clips; revE 2). Every such edge when the keys cannot be had. */
+static double boundary_midpoints(rm_pass *p, const double *pos, const uint32_t *tri,
+                                 size_t ntris)
+{
+    uint64_t *key = malloc((ntris ? 3 * ntris : 1) * sizeof *key);
+    size_t n = 0;
+    for (size_t t = 0; key && t < ntris; t++) {
+        const uint32_t *v = tri + 3 * t;
+        for (int k = 0; k < 3 && v[0] != v[1] && v[1] != v[2] && v[0] != v[2]; k++)
+            if (v[k] < v[(k + 1) % 3])
+                key[n++] = rm_edge_key(v[k], v[(k + 1) % 3]);
+    }
+    if (n)
+        ism_sort_u64(key, n);
+    double far = 0;
+    for (size_t t = 0; t < ntris; t++) {
+        const uint32_t *v = tri + 3 * t;
+        if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2])
+            continue;
+        for (int k = 0; k < 3; k++) {
+            uint32_t a = v[k], b = v[(k + 1) % 3];
+            if (a > b && !(key && rm_keys_has(key, n, rm_edge_key(a, b))))
+                far = fmax(far, rm_midpoint_distance(p, pos + 3 * (size_t)a,
+                                                     pos + 3 * (size_t)b));
+        }
+    }
+    free(key);
+    return far;
+}
+
 /* The farthest from f = 0 of the centroids (or, with midpoints, of the edge midpoints) of
  * the ntris triangles tri over the places pos, at most max_error when there is one. With
  * top (centroids only; ISM_RM_MIDPOINT_LOW_TRIS entries, -1 where none), the triangles with
@@ -455,7 +489,8 @@ static double farthest(rm_pass *p, const double *pos, const uint32_t *tri, size_
                 top_insert(top, topd, t, d);
         }
         for (int k = 0; midpoints && k < 3; k++)
-            if (v[k] < v[(k + 1) % 3]) /* each edge once from each side: twice at most */
+            if (v[k] < v[(k + 1) % 3]) /* an oriented edge with its twin: once (the rest
+                                          after the loop, boundary_midpoints) */
                 far = fmax(far, rm_midpoint_distance(p, q[k], q[(k + 1) % 3]));
         /* the midpoints' figure is capped at max_error: once there, the rest cannot change
            it (cube, 0.37-cell box: a midpoint at max_error, and the found mesh's 50,000
@@ -463,6 +498,8 @@ static double farthest(rm_pass *p, const double *pos, const uint32_t *tri, size_
         if (midpoints && p->max_error > 0 && far >= p->max_error)
             break;
     }
+    if (midpoints && !(p->max_error > 0 && far >= p->max_error))
+        far = fmax(far, boundary_midpoints(p, pos, tri, ntris));
     if (ds)
         top_list(ds, ntris, top);
     free(ds);
