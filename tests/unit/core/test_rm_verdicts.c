@@ -81,6 +81,14 @@ Test(rm_verdicts, merge_distances_do_not_depend_on_what_was_asked_before)
         (void)rm_midpoint_within(&b, INFINITY); /* past midpoint_low: measures the mesh */
         cr_assert(b.midpoint_known);
         double low = b.midpoint_low, bound = b.midpoint_bound;
+        /* the farthest midpoint is the sliver's chord's, 1 - cos 0.3 inside the sphere (the
+           mesh's own, at depth 4, are under a tenth of it); rm_midpoint_distance's measure
+           is never below the distance and off it at second order: for f = r² - 1 the first
+           step |f|/|∇f| = d (2 - d) / (2 (1 - d)) = d + d²/2 + ..., its landing's as much
+           again, so within d² + O(d³) — 2 d² here (revE 6: not the code's own figure) */
+        double h = 1 - cos(0.3);
+        cr_assert(bound >= h && bound <= h + 2 * h * h,
+                  "box %d: the farthest midpoint %.17g, not the chord's %.17g", which, bound, h);
         /* a midpoint beyond the farthest of the triangles with the farthest centroids but
            within the mesh's: where the old rule along a crease said no until measured */
         cr_assert_lt(low, bound, "box %d: no room between %g and %g", which, low, bound);
